@@ -1,0 +1,624 @@
+"""The shared closed-form axis model.
+
+Implements design.md principle 2, *physics is closed-form and event-driven*: an :class:`Axis` is a
+list of constant-acceleration :class:`Segment` objects; its position, velocity and acceleration at
+any instant are computed from that list, never integrated tick by tick.  Reaching a target,
+crossing a switch position (:meth:`Axis.watch`, :class:`RegionSwitch`) or passing the encoder's
+index mark (:meth:`Axis.watch_index`) are events whose times are solved analytically (a quadratic
+per segment) and scheduled as timers on the device's :class:`~devsim.core.clock.Clock`
+(principle 3).  An axis at rest schedules no timers at all.
+
+Units are the device's raw units: positions in increments, velocities in inc/s, accelerations in
+inc/s²; unit scaling is the device's business.
+
+Plans are built so that every segment is monotonic in position (a reversal is split at v = 0);
+a crossing is therefore detected by comparing the watch's *stored* side with the segment's end
+position, which keeps event firing exact under floating point: a crossing is never reported twice
+and never lost because a re-plan happened at the crossing instant.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal
+
+from devsim.core.clock import Clock, Timer
+
+__all__ = ["Axis", "Phase", "RegionSwitch", "Segment", "Watch"]
+
+Phase = Literal["idle", "accel", "const", "decel"]
+Callback = Callable[[], None]
+CrossingCallback = Callable[[int], None]
+
+_REL_X = 1e-11  # relative position tolerance (positions are up to ~1e9 inc)
+_ABS_X = 1e-9
+_REL_T = 1e-12  # phases shorter than this (relative to the clock) are dropped
+_HISTORY = 64
+
+
+def _sgn(x: float) -> int:
+    return (x > 0) - (x < 0)
+
+
+@dataclass(frozen=True)
+class Segment:
+    """Constant acceleration ``a`` from ``t0`` to ``t1`` starting at ``x0`` with velocity ``v0``.
+
+    ``t1`` is ``math.inf`` for an endless cruise (a jog).
+    """
+
+    t0: float
+    t1: float
+    x0: float
+    v0: float
+    a: float
+
+    def position(self, t: float) -> float:
+        dt = t - self.t0
+        return self.x0 + (self.v0 + 0.5 * self.a * dt) * dt
+
+    def velocity(self, t: float) -> float:
+        return self.v0 + self.a * (t - self.t0)
+
+    @property
+    def direction(self) -> int:
+        """+1/-1: the way the position moves (segments never reverse inside)."""
+        return _sgn(self.v0) or _sgn(self.a)
+
+    def solve(self, p: float) -> float:
+        """Time at which the position reaches ``p`` (first root, moving in :attr:`direction`).
+
+        Uses the cancellation-free form ``tau = 2 dx / (v0 + dir*sqrt(v0² + 2 a dx))``; a slightly
+        negative discriminant (``p`` at the segment's turning point) is treated as zero.
+        """
+        dx = p - self.x0
+        if self.a == 0.0:
+            tau = dx / self.v0 if self.v0 != 0.0 else 0.0
+        else:
+            disc = self.v0 * self.v0 + 2.0 * self.a * dx
+            den = self.v0 + self.direction * (math.sqrt(disc) if disc > 0.0 else 0.0)
+            tau = 2.0 * dx / den if den != 0.0 else 0.0
+        return self.t0 + tau
+
+
+# --------------------------------------------------------------------------------------------
+# watches
+
+
+class _Rule:
+    """How a watch divides the axis into numbered zones and where the zone borders are."""
+
+    def state_of(self, x: float) -> int:
+        raise NotImplementedError
+
+    def up(self, state: int) -> tuple[float, bool] | None:
+        """Border above zone ``state`` as ``(position, strict)``; strict: beyond means ``x > p``."""
+        raise NotImplementedError
+
+    def down(self, state: int) -> tuple[float, bool] | None:
+        """Border below zone ``state``; strict: below it means ``x <= p``, else ``x < p``."""
+        raise NotImplementedError
+
+
+class _RangeRule(_Rule):
+    """Zones 0: x < low, 1: low <= x <= high, 2: x > high (a point watch is low=p, high=inf)."""
+
+    def __init__(self, low: float, high: float) -> None:
+        self.low = low
+        self.high = high
+
+    def state_of(self, x: float) -> int:
+        if x < self.low:
+            return 0
+        return 1 if x <= self.high else 2
+
+    def up(self, state: int) -> tuple[float, bool] | None:
+        if state == 0:
+            return (self.low, False)
+        if state == 1 and self.high != math.inf:
+            return (self.high, True)
+        return None
+
+    def down(self, state: int) -> tuple[float, bool] | None:
+        if state == 2:
+            return (self.high, True)
+        if state == 1 and self.low != -math.inf:
+            return (self.low, False)
+        return None
+
+
+class _IndexRule(_Rule):
+    """Zone n: mark(n) <= x < mark(n+1) with mark(k) = k*period + offset."""
+
+    def __init__(self, period: float, offset: float) -> None:
+        self.period = period
+        self.offset = offset
+
+    def mark(self, k: int) -> float:
+        return k * self.period + self.offset
+
+    def state_of(self, x: float) -> int:
+        n = math.floor((x - self.offset) / self.period)
+        while x < self.mark(n):
+            n -= 1
+        while x >= self.mark(n + 1):
+            n += 1
+        return n
+
+    def up(self, state: int) -> tuple[float, bool] | None:
+        return (self.mark(state + 1), False)
+
+    def down(self, state: int) -> tuple[float, bool] | None:
+        return (self.mark(state), False)
+
+
+class Watch:
+    """A registered crossing watch (from :meth:`Axis.watch` / :meth:`Axis.watch_index`)."""
+
+    def __init__(self, axis: Axis, rule: _Rule, callback: CrossingCallback, teleport_fires: bool) -> None:
+        self._axis = axis
+        self._rule = rule
+        self._callback = callback
+        self._teleport_fires = teleport_fires
+        self._state = rule.state_of(axis.position())
+        self._timer: Timer | None = None
+        self._token: object | None = None
+        self._cancelled = False
+
+    @property
+    def cancelled(self) -> bool:
+        return self._cancelled
+
+    def cancel(self) -> None:
+        """Stop watching; idempotent."""
+        if self._cancelled:
+            return
+        self._cancelled = True
+        self._unschedule()
+        self._axis._watches.remove(self)
+
+    def _unschedule(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+        self._timer = None
+        self._token = None
+
+
+# --------------------------------------------------------------------------------------------
+# the axis
+
+
+class Axis:
+    """One simulated axis: a plan of constant-acceleration segments on a clock.
+
+    ``counts_per_rev`` and ``index_offset`` place the encoder's index marks for
+    :meth:`watch_index`.  All commands re-plan from the exact current state (position and velocity
+    stay continuous); a new command supersedes the previous plan, its ``on_done`` and its timers.
+    """
+
+    def __init__(
+        self,
+        clock: Clock,
+        *,
+        position: float = 0.0,
+        counts_per_rev: int = 12800,
+        index_offset: float = 0.0,
+        name: str = "axis",
+    ) -> None:
+        if counts_per_rev <= 0:
+            raise ValueError("counts_per_rev must be positive")
+        self.clock = clock
+        self.name = name
+        self.counts_per_rev = counts_per_rev
+        self.index_offset = index_offset
+        self._plan: list[Segment] = []
+        self._rest = float(position)  # where the plan ends (or where the idle axis stands)
+        self._idle_since = clock.now()
+        self._history: deque[Segment] = deque(maxlen=_HISTORY)
+        self._watches: list[Watch] = []
+        self._gen = 0  # bumped by every plan change; stale timers and loops check it
+        self._done_timer: Timer | None = None
+        self._on_done: Callback | None = None
+
+    def __repr__(self) -> str:
+        return f"<Axis {self.name} x={self.position():.3f} v={self.velocity():.3f} {self.phase()}>"
+
+    # -- state ---------------------------------------------------------------------------------
+    def _state(self, t: float | None) -> tuple[float, float, float]:
+        if t is None:
+            t = self.clock.now()
+        plan = self._plan
+        if plan and t >= plan[0].t0:
+            for seg in plan:
+                if t < seg.t1:
+                    return seg.position(t), seg.velocity(t), seg.a
+            return self._rest, 0.0, 0.0
+        if not plan and t >= self._idle_since:
+            return self._rest, 0.0, 0.0
+        for seg in reversed(self._history):  # the recent past
+            if t >= seg.t0:
+                tt = min(t, seg.t1)
+                return seg.position(tt), seg.velocity(tt), seg.a if t < seg.t1 else 0.0
+        first = self._history[0] if self._history else (plan[0] if plan else None)
+        if first is None:
+            return self._rest, 0.0, 0.0
+        return first.x0, first.v0, 0.0
+
+    def position(self, t: float | None = None) -> float:
+        """Position at ``t`` (default: now)."""
+        return self._state(t)[0]
+
+    def velocity(self, t: float | None = None) -> float:
+        return self._state(t)[1]
+
+    def acceleration(self, t: float | None = None) -> float:
+        return self._state(t)[2]
+
+    def _plan_end(self) -> float:
+        return self._plan[-1].t1 if self._plan else self._idle_since
+
+    @property
+    def moving(self) -> bool:
+        """True while a plan with motion remains (including an instant of v = 0 at a reversal)."""
+        return bool(self._plan) and self.clock.now() < self._plan[-1].t1
+
+    def phase(self, t: float | None = None) -> Phase:
+        """``idle``, ``accel`` (|v| increasing), ``const`` (cruising) or ``decel``."""
+        _, v, a = self._state(t)
+        if a == 0.0:
+            return "const" if v != 0.0 else "idle"
+        if v == 0.0 or _sgn(a) == _sgn(v):
+            return "accel"
+        return "decel"
+
+    def stopping_distance(self, decel: float) -> float:
+        """Distance needed to brake from the current velocity with ``decel``: v²/(2·decel)."""
+        if decel <= 0:
+            raise ValueError("decel must be positive")
+        v = self.velocity()
+        return v * v / (2.0 * decel)
+
+    def final_position(self) -> float:
+        """Where the current plan comes to rest; ±inf while a jog cruises for ever."""
+        if self._plan and self._plan[-1].t1 == math.inf:
+            return math.inf * self._plan[-1].v0
+        return self._rest
+
+    def segments(self) -> list[Segment]:
+        """The current plan (empty when idle)."""
+        return list(self._plan)
+
+    # -- commands ------------------------------------------------------------------------------
+    def move_to(
+        self,
+        target: float,
+        speed: float,
+        accel: float,
+        decel: float | None = None,
+        on_done: Callback | None = None,
+    ) -> float:
+        """Plan from the current state to stand still exactly at ``target``; returns the end time.
+
+        Trapezoid or triangle with ``|v| <= speed``, accelerating with ``accel`` and braking with
+        ``decel`` (default ``accel``).  Moving away from the target, or too fast to stop before
+        it, first brakes to zero (with ``decel``) and comes back; faster than ``speed`` first
+        slows to ``speed`` with ``decel``.  ``on_done`` runs from a clock timer on arrival.
+        """
+        decel = accel if decel is None else decel
+        if not (speed > 0 and accel > 0 and decel > 0):
+            raise ValueError("speed, accel and decel must be positive")
+        if not math.isfinite(target):
+            raise ValueError("target must be finite")
+        now = self.clock.now()
+        x_now, v_now, _ = self._state(now)
+        x0, v0 = x_now, v_now
+        phases: list[tuple[float, float, float]] = []  # (acceleration, duration, end velocity)
+        tol = max(_ABS_X, _REL_X * max(abs(x0), abs(target)))
+        dist = target - x0
+        sd = v0 * v0 / (2.0 * decel)
+        if v0 != 0.0:
+            toward = _sgn(dist) == _sgn(v0)
+            if toward and abs(abs(dist) - sd) <= tol and abs(dist) > 0.0:
+                # brakes onto the target exactly (decel adjusted by a rounding error at most)
+                d_exact = v0 * v0 / (2.0 * abs(dist))
+                phases.append((-_sgn(v0) * d_exact, abs(v0) / d_exact, 0.0))
+                return self._install(now, x0, v0, phases, target, on_done)
+            if not toward or sd > abs(dist):
+                phases.append((-_sgn(v0) * decel, abs(v0) / decel, 0.0))
+                x0 += _sgn(v0) * sd
+                v0 = 0.0
+                dist = target - x0
+        if abs(dist) > 0.0:
+            s = _sgn(dist)
+            length = abs(dist)
+            u = abs(v0)  # toward the target, 0 <= u and u²/(2 decel) <= length
+            if u > speed:
+                phases.append((-s * decel, (u - speed) / decel, s * speed))
+                peak = speed
+                cruise = length - u * u / (2.0 * decel)
+            else:
+                peak = math.sqrt((2.0 * accel * decel * length + decel * u * u) / (accel + decel))
+                peak = max(peak, u)
+                if peak > speed:
+                    peak = speed
+                    cruise = length - (speed * speed - u * u) / (2.0 * accel) - speed * speed / (2.0 * decel)
+                else:
+                    cruise = 0.0
+                phases.append((s * accel, (peak - u) / accel, s * peak))
+            if cruise > 0.0:
+                phases.append((0.0, cruise / peak, s * peak))
+            phases.append((-s * decel, peak / decel, 0.0))
+        return self._install(now, x_now, v_now, phases, target, on_done)
+
+    def jog(self, direction: int, speed: float, accel: float, on_done: Callback | None = None) -> None:
+        """Ramp with ``accel`` to velocity ``sign(direction)*speed`` and cruise for ever.
+
+        ``on_done`` runs (from a clock timer) when the cruise speed is reached.  ``direction == 0``
+        is a ramped :meth:`stop` with ``accel``.
+        """
+        if not (speed > 0 and accel > 0):
+            raise ValueError("speed and accel must be positive")
+        if direction == 0:
+            self.stop(accel, on_done)
+            return
+        now = self.clock.now()
+        x0, v0, _ = self._state(now)
+        vt = _sgn(direction) * float(speed)
+        phases: list[tuple[float, float, float]] = []
+        if v0 != 0.0 and _sgn(v0) != _sgn(vt):
+            phases.append((-_sgn(v0) * accel, abs(v0) / accel, 0.0))
+            phases.append((_sgn(vt) * accel, speed / accel, vt))
+        elif v0 != vt:
+            phases.append((_sgn(vt - v0) * accel, abs(vt - v0) / accel, vt))
+        self._install(now, x0, v0, phases, None, on_done, cruise=vt)
+
+    def stop(self, decel: float, on_done: Callback | None = None) -> float:
+        """Ramp the velocity to 0 with ``decel``; returns the time the axis stands still."""
+        if decel <= 0:
+            raise ValueError("decel must be positive")
+        now = self.clock.now()
+        x0, v0, _ = self._state(now)
+        phases: list[tuple[float, float, float]] = []
+        if v0 != 0.0:
+            phases.append((-_sgn(v0) * decel, abs(v0) / decel, 0.0))
+        return self._install(now, x0, v0, phases, None, on_done)
+
+    def quick_stop(self) -> None:
+        """Velocity 0 at once at the current position (torque off); the old on_done is dropped."""
+        now = self.clock.now()
+        x0 = self._state(now)[0]
+        self._install(now, x0, 0.0, [], x0, None)
+
+    def set_position(self, position: float) -> None:
+        """Teleport a standing axis (power-on restore, setting the actual position).
+
+        Point watches and region switches whose side changes are called; index watches are
+        re-synchronised silently.  Raises :class:`RuntimeError` while moving.
+        """
+        if self.moving:
+            raise RuntimeError(f"{self.name}: set_position while moving")
+        now = self.clock.now()
+        self._archive(now)
+        self._cancel_plan()
+        self._plan = []
+        self._rest = float(position)
+        self._idle_since = now
+        self._gen += 1
+        gen = self._gen
+        for w in list(self._watches):
+            if not w._teleport_fires and not w._cancelled:
+                w._state = w._rule.state_of(self._rest)
+        self._sync_watches(gen)
+
+    # -- watches -------------------------------------------------------------------------------
+    def watch(self, position: float, callback: CrossingCallback) -> Watch:
+        """Call ``callback(+1)`` when the axis becomes ``>= position``, ``callback(-1)`` when it
+        becomes ``< position`` again (each time, exactly at the solved instant)."""
+        return self._add_watch(_RangeRule(float(position), math.inf), callback, teleport_fires=True)
+
+    def watch_index(self, callback: CrossingCallback) -> Watch:
+        """Like :meth:`watch` for every index mark ``k*counts_per_rev + index_offset``."""
+        return self._add_watch(
+            _IndexRule(float(self.counts_per_rev), self.index_offset), callback, teleport_fires=False
+        )
+
+    def _add_watch(self, rule: _Rule, callback: CrossingCallback, teleport_fires: bool) -> Watch:
+        w = Watch(self, rule, callback, teleport_fires)
+        self._watches.append(w)
+        self._schedule_watch(w)
+        return w
+
+    def _next_crossing(self, w: Watch, now: float) -> tuple[float, int] | None:
+        plan = self._plan
+        state = w._state
+        for i, seg in enumerate(plan):
+            if seg.t1 <= now:
+                continue
+            d = seg.direction
+            if i + 1 < len(plan):
+                xe = plan[i + 1].x0
+            elif seg.t1 == math.inf:
+                xe = d * math.inf
+            else:
+                xe = self._rest
+            if d > 0:
+                border = w._rule.up(state)
+                if border is not None and (xe > border[0] if border[1] else xe >= border[0]):
+                    return self._crossing_time(seg, border[0], xe, now), +1
+            elif d < 0:
+                border = w._rule.down(state)
+                if border is not None and (xe <= border[0] if border[1] else xe < border[0]):
+                    return self._crossing_time(seg, border[0], xe, now), -1
+        return None
+
+    @staticmethod
+    def _crossing_time(seg: Segment, p: float, xe: float, now: float) -> float:
+        if p == xe and seg.t1 < math.inf:
+            # ends exactly on p: the root is (near) a double root at a stop, badly conditioned
+            # (1 ulp of position is ~1e-8 s); the segment's end time is the exact answer
+            return max(seg.t1, now)
+        return min(max(seg.solve(p), seg.t0, now), seg.t1)
+
+    def _schedule_watch(self, w: Watch) -> None:
+        w._unschedule()
+        if w._cancelled or not self._plan:
+            return
+        found = self._next_crossing(w, self.clock.now())
+        if found is None:
+            return
+        when, direction = found
+        token = object()
+
+        def fire() -> None:
+            if w._token is not token or w._cancelled:
+                return
+            w._timer = None
+            w._token = None
+            w._state += direction
+            self._schedule_watch(w)  # the next crossing; a re-plan in the callback redoes it
+            w._callback(direction)
+
+        w._token = token
+        w._timer = self.clock.call_at(when, fire)
+
+    def _sync_watches(self, gen: int) -> None:
+        """Bring every watch's side in line with the exact rest position (axis just stopped or
+        was teleported), firing the crossings that happened at this instant."""
+        for w in list(self._watches):
+            w._unschedule()
+        for w in list(self._watches):
+            while not w._cancelled:
+                if self._gen != gen:
+                    return  # a callback re-planned; that re-plan rescheduled everything
+                target = w._rule.state_of(self._rest)
+                if target == w._state:
+                    break
+                direction = 1 if target > w._state else -1
+                # a range (switch) jumps straight to its new zone: a teleport across a region
+                # must not flicker it; index marks are counted one by one
+                w._state = target if isinstance(w._rule, _RangeRule) else w._state + direction
+                w._callback(direction)
+
+    # -- planning machinery --------------------------------------------------------------------
+    def _archive(self, now: float) -> None:
+        """Keep the part of the old plan that lies in the past, for queries of past instants."""
+        for seg in self._plan:
+            if seg.t0 >= now:
+                break
+            self._history.append(Segment(seg.t0, min(seg.t1, now), seg.x0, seg.v0, seg.a))
+        end = self._plan_end()
+        if end < now:
+            self._history.append(Segment(end, now, self._rest, 0.0, 0.0))
+
+    def _cancel_plan(self) -> None:
+        if self._done_timer is not None:
+            self._done_timer.cancel()
+        self._done_timer = None
+        self._on_done = None
+
+    def _install(
+        self,
+        now: float,
+        x0: float,
+        v0: float,
+        phases: list[tuple[float, float, float]],
+        rest: float | None,
+        on_done: Callback | None,
+        cruise: float | None = None,
+    ) -> float:
+        """Replace the plan with ``phases`` from ``(now, x0, v0)``; ``rest`` is the exact end
+        position (``None``: wherever the phases end).  ``cruise`` appends an endless segment."""
+        segs: list[Segment] = []
+        t, x, v = now, x0, v0
+        for a, dur, v_end in phases:
+            if dur > _REL_T * max(1.0, abs(t)):
+                segs.append(Segment(t, t + dur, x, v, a))
+                x += 0.5 * (v + v_end) * dur
+                t += dur
+            v = v_end
+        ramp_end = t
+        if cruise is not None and cruise != 0.0:
+            segs.append(Segment(t, math.inf, x, cruise, 0.0))
+            t = math.inf
+        self._archive(now)
+        self._cancel_plan()
+        self._gen += 1
+        gen = self._gen
+        self._plan = segs
+        self._rest = x if rest is None or cruise is not None else rest
+        if not segs:
+            self._idle_since = now
+        self._on_done = on_done
+        if t < math.inf and segs:
+            self._done_timer = self.clock.call_at(t, lambda: self._finish(gen))
+        elif on_done is not None:  # already there, or a jog reaching its cruise speed
+            self._done_timer = self.clock.call_at(ramp_end, lambda: self._run_done(gen))
+        if segs:
+            for w in list(self._watches):
+                self._schedule_watch(w)
+        else:
+            self._sync_watches(gen)
+        return t if t < math.inf else ramp_end
+
+    def _run_done(self, gen: int) -> None:
+        if gen != self._gen:
+            return
+        self._done_timer = None
+        on_done, self._on_done = self._on_done, None
+        if on_done is not None:
+            on_done()
+
+    def _finish(self, gen: int) -> None:
+        """The plan's last segment ended: stand still at the exact end position."""
+        if gen != self._gen:
+            return
+        self._done_timer = None
+        on_done, self._on_done = self._on_done, None
+        end = self._plan[-1].t1
+        self._archive(end)
+        self._plan = []
+        self._idle_since = end
+        self._gen += 1
+        gen = self._gen
+        self._sync_watches(gen)
+        if gen == self._gen and on_done is not None:
+            on_done()
+
+
+class RegionSwitch:
+    """A switch (limit, reference cam) that is active while low <= position <= high (either bound
+    may be +/-inf).  ``on_change(active)`` runs at the exact instant the axis enters or leaves the
+    region, however fast it moves."""
+
+    def __init__(
+        self,
+        axis: Axis,
+        low: float,
+        high: float,
+        on_change: Callable[[bool], None] | None = None,
+    ) -> None:
+        if low > high:
+            raise ValueError("low must not exceed high")
+        self.axis = axis
+        self.low = low
+        self.high = high
+        self.on_change = on_change
+        self._watch = axis._add_watch(_RangeRule(low, high), self._crossed, teleport_fires=True)
+        self._active = self._watch._state == 1
+
+    @property
+    def active(self) -> bool:
+        return self._active
+
+    def _crossed(self, direction: int) -> None:
+        active = self._watch._state == 1
+        if active != self._active:
+            self._active = active
+            if self.on_change is not None:
+                self.on_change(active)
+
+    def cancel(self) -> None:
+        self._watch.cancel()
