@@ -1,0 +1,129 @@
+"""SERS line framing (manual §4.1, §4.2; spec §3.1, G-HASH, G-CRLF, G-LINE).
+
+Pure and byte-at-a-time: :meth:`Framer.feed` takes one received byte and returns what it
+means for the line being assembled.  The device decides what to echo, execute and answer.
+
+* Bytes before ``#`` are noise and ignored (no echo, no answer).
+* ``#`` starts a line; decimal digits directly after it are the drive address, ``*`` the
+  broadcast address.  A ``#`` inside a line restarts statement parsing (and may carry a new
+  address), like a separator.
+* CR or LF ends a line; the other terminator directly after it is the second half of a pair
+  and produces no second acknowledgement.
+* At most 60 characters per line are kept; the rest is dropped and reported at the line end.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["MAX_LINE", "Address", "Framer", "Ignored", "LineEnd", "Noise", "Restart", "TextChar"]
+
+MAX_LINE = 60
+CR, LF, HASH = 0x0D, 0x0A, 0x23
+
+
+@dataclass(frozen=True)
+class Ignored:
+    """Noise outside a line, or the second half of a CR/LF pair (``pair``)."""
+
+    pair: bool = False
+
+
+Noise = Ignored
+
+
+@dataclass(frozen=True)
+class Restart:
+    """``#`` arrived: a new line (``mid_line`` False) or a restart inside the line."""
+
+    mid_line: bool
+
+
+@dataclass(frozen=True)
+class AddressChar:
+    """A digit (or ``*``) of the address; its echo is held until the address is complete."""
+
+
+@dataclass(frozen=True)
+class Address:
+    """The address token is complete: a drive number, ``"*"`` or ``None`` (no address given)."""
+
+    value: int | str | None
+
+
+@dataclass(frozen=True)
+class TextChar:
+    """A character of the statement text; ``dropped`` when beyond the 60-character limit."""
+
+    char: str
+    dropped: bool = False
+
+
+@dataclass(frozen=True)
+class LineEnd:
+    """CR or LF ended the line; ``overflow`` if characters were dropped."""
+
+    overflow: bool
+
+
+class Framer:
+    """Assembles SERS command lines from bytes."""
+
+    def __init__(self) -> None:
+        self.reset()
+
+    def reset(self) -> None:
+        self.in_line = False
+        self._addr: str | None = None  # digits collected, None once the address phase ended
+        self._length = 0
+        self._overflow = False
+        self._last_end: int | None = None
+
+    def feed(self, byte: int) -> list[object]:
+        events: list[object] = []
+        last_end, self._last_end = self._last_end, None
+        if byte in (CR, LF):
+            if not self.in_line:
+                pair = last_end is not None and last_end != byte
+                events.append(Ignored(pair=pair))
+                return events
+            if self._addr is not None:
+                events.append(self._end_address())
+            events.append(LineEnd(self._overflow))
+            self.in_line = False
+            self._last_end = byte
+            return events
+        if byte == HASH:
+            events.append(Restart(mid_line=self.in_line))
+            if not self.in_line:
+                self._length = 0
+                self._overflow = False
+            self.in_line = True
+            self._addr = ""
+            self._length += 1
+            return events
+        if not self.in_line:
+            events.append(Ignored())
+            return events
+        self._length += 1
+        if self._addr is not None:
+            ch = chr(byte)
+            if (ch.isdigit() and self._addr != "*") or (ch == "*" and self._addr == ""):
+                self._addr += ch
+                events.append(AddressChar())
+                return events
+            events.append(self._end_address())
+        if self._length > MAX_LINE:
+            self._overflow = True
+            events.append(TextChar(chr(byte), dropped=True))
+        else:
+            events.append(TextChar(chr(byte)))
+        return events
+
+    def _end_address(self) -> Address:
+        digits, self._addr = self._addr, None
+        if not digits:
+            return Address(None)
+        if digits == "*":
+            return Address("*")
+        return Address(int(digits))

@@ -1,0 +1,285 @@
+"""The simulated Stögra SERS (manual "SERS Version V04, Firmware ab 120901"; spec sers.md).
+
+This module is the serial face of the drive: framing, drive selection on a multidrop line,
+echo modes (P1017, §4.8.6.9), acknowledgements (§4.1), error messages (§4.8.3.1), parameter
+queries (§4.7) and the execution of interactive statements (§4.2).  The physics behind it –
+positioning, jog, homing, limit switches, faults – lives in :mod:`.drive`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from devsim.core.clock import Clock
+from devsim.core.device import SerialSettings, UnknownName
+from devsim.core.nvram import NonVolatileMemory
+from devsim.devices.sers import codec
+from devsim.devices.sers import statements as st
+from devsim.devices.sers.config import SersConfig
+from devsim.devices.sers.drive import SersDrive
+from devsim.devices.sers.errors import SersError, message
+from devsim.devices.sers.program import ProgramMemory
+
+__all__ = ["SersDevice"]
+
+
+@dataclass
+class _Line:
+    """What the device knows about the command line being received."""
+
+    execute: bool = False  # this drive carries out the statements
+    reply: bool = False  # this drive echoes and answers
+    held: bytearray = field(default_factory=bytearray)  # echo of '#' and address digits
+    text: str = ""  # statement text of the current segment
+    executed: int = 0  # statements of the segment already executed
+    error: bool = False
+    skip_next: bool = False  # single-statement IF was false
+    skip_block: int = 0  # inside a false IF..THEN block (depth)
+    deferred: bytearray = field(default_factory=bytearray)  # RS-485 mode: answers until line end
+
+
+class SersDevice(SersDrive):
+    """One SERS drive on a serial line (RS-232, or RS-485 multidrop with others)."""
+
+    kind: ClassVar[str] = "sers"
+    description: ClassVar[str] = "Stögra SERS stepper driver with positioning control (ASCII, RS-232/RS-485)"
+    config_model: ClassVar[type[SersConfig]] = SersConfig
+
+    def __init__(
+        self,
+        *,
+        clock: Clock,
+        config: dict[str, Any] | None = None,
+        nvram: NonVolatileMemory | None = None,
+        name: str | None = None,
+    ) -> None:
+        self.framer = codec.Framer()
+        self._line: _Line | None = None
+        self._last_replied = False
+        self._selected: bool | None = None
+        self._spontaneous: list[bytes] = []
+        self.shared_line = False
+        self.program = ProgramMemory(nvram if nvram is not None else NonVolatileMemory(None))
+        super().__init__(clock=clock, config=config, nvram=nvram, name=name)
+        self.program = ProgramMemory(self.nvram)
+
+    # -- line settings -------------------------------------------------------------------
+    @property
+    def serial_settings(self) -> SerialSettings:
+        return SerialSettings(self.cfg.baud, 8, "N", 1)
+
+    # -- power ---------------------------------------------------------------------------
+    def _reset_serial(self) -> None:
+        self.framer.reset()
+        self._line = None
+        self._last_replied = False
+        self._selected = None
+        self._spontaneous.clear()
+
+    @property
+    def selected(self) -> bool:
+        if self._selected is None:
+            initially = self.cfg.initially_selected
+            self._selected = (not self.shared_line) if initially is None else initially
+        return self._selected
+
+    # -- bytes from the host -------------------------------------------------------------
+    def feed(self, data: bytes) -> None:
+        for byte in data:
+            if not self.logic_alive or self.booting:
+                continue  # G-BOOT: input during the 2 s initialisation is discarded
+            for event in self.framer.feed(byte):
+                self._on_event(event, byte)
+
+    def host_disconnected(self) -> None:
+        """A host that leaves mid-line leaves a partial line; the next '#' restarts anyway."""
+
+    def _on_event(self, event: object, byte: int) -> None:
+        line = self._line
+        if isinstance(event, codec.Ignored):
+            if event.pair and self._last_replied and self.echo:
+                self.send(bytes([byte]))
+            return
+        if isinstance(event, codec.Restart):
+            if event.mid_line and line is not None:
+                self._progress(line, final=True)
+                line.text, line.executed = "", 0
+                line.held = bytearray(b"#")
+            else:
+                self._line = _Line(held=bytearray(b"#"))
+            return
+        if line is None:
+            return
+        if isinstance(event, codec.AddressChar):
+            line.held.append(byte)
+            return
+        if isinstance(event, codec.Address):
+            self._select(line, event.value)
+            return
+        if isinstance(event, codec.TextChar):
+            if line.reply and self.echo:
+                self.send(bytes([byte]))
+            if event.dropped or line.error or not line.execute:
+                return
+            line.text += event.char
+            self._progress(line, final=False)
+            return
+        if isinstance(event, codec.LineEnd):
+            if line.reply and self.echo:
+                self.send(bytes([byte]))
+            if line.execute and not line.error:
+                self._progress(line, final=True)
+                if event.overflow and not line.error:
+                    self.warn(1024)
+                    self._error(line, 124)
+            if line.reply:
+                if line.deferred:
+                    self.send(bytes(line.deferred))
+                if not line.error:
+                    self.send(b"\n" + self.ack_text().encode("latin-1") + b"\n\r")
+            self._last_replied = line.reply
+            self._line = None
+            self._flush_spontaneous()
+
+    def _select(self, line: _Line, address: int | str | None) -> None:
+        mine = self.cfg.address if self.cfg.address != 0 else 200
+        if address is None:
+            line.execute = line.reply = self.selected
+        elif address == "*":
+            line.execute = True
+            line.reply = False  # G-ADDR: nobody answers a broadcast
+        elif address == mine:
+            self._selected = True
+            line.execute = line.reply = True
+        else:
+            self._selected = False
+            line.execute = line.reply = False
+        if line.reply and self.echo:
+            self.send(bytes(line.held))
+        line.held.clear()
+
+    # -- statements ----------------------------------------------------------------------
+    def _progress(self, line: _Line, final: bool) -> None:
+        if line.error or not line.execute:
+            return
+        result = st.parse(line.text, final)
+        for stmt, end in result.statements[line.executed :]:
+            if not final and end == len(line.text) and _answers(stmt):
+                break  # §3.2.4a: a statement with an answer completes with the next character
+            line.executed += 1
+            try:
+                self._statement(line, stmt)
+            except SersError as exc:
+                self._error(line, exc.errno, exc.detail)
+                return
+        if result.errno is not None and line.executed == len(result.statements):
+            self._error(line, result.errno)
+
+    def _statement(self, line: _Line, stmt: st.Statement) -> None:
+        if self.program.editing and self._stores_in_program(stmt):
+            self.program.add(stmt.text, new_line=line.executed == 1)
+            return
+        if line.skip_block:
+            if isinstance(stmt, st.If) and stmt.then:
+                line.skip_block += 1
+            elif isinstance(stmt, st.End):
+                line.skip_block -= 1
+            elif isinstance(stmt, st.Else) and line.skip_block == 1:
+                line.skip_block = 0
+            return
+        if line.skip_next:
+            line.skip_next = False
+            return
+        if isinstance(stmt, st.If):
+            true = self.evaluate(stmt.cond)
+            if stmt.then:
+                if not true:
+                    line.skip_block = 1
+            else:
+                line.skip_next = not true
+            return
+        if isinstance(stmt, st.Else):
+            line.skip_block = 1  # the THEN part ran: skip to END
+            return
+        if isinstance(stmt, st.End):
+            return
+        if isinstance(stmt, st.Query):
+            self._out(line, self.query_text(stmt) + "\n\r")
+            return
+        if isinstance(stmt, st.ListCmd):
+            if stmt.params:
+                self._out(line, "".join(f"{row}\n\r" for row in self.list_parameters(stmt.arg)))
+            else:
+                self._out(line, "".join(f"{row}\n\r" for row in self.program.listing(self.list_options)))
+            return
+        if isinstance(stmt, st.Command) and stmt.name == "VER":
+            self._out(line, f"P1133={self.firmware}\n\r")
+            return
+        if isinstance(stmt, st.Trace) and stmt.query:
+            self._out(line, f"TR={int(self.trace_mode)}\n\r")
+            return
+        self.execute(stmt)
+
+    def _stores_in_program(self, stmt: st.Statement) -> bool:
+        """In programming mode everything is stored except LIST, DEL, TR…, C n and QUIT."""
+        if isinstance(stmt, st.ListCmd | st.Trace | st.Change):
+            return False
+        if isinstance(stmt, st.Command) and stmt.name in ("DEL", "QUIT"):
+            return False
+        if isinstance(stmt, st.Assign) and stmt.target.kind == "P" and stmt.target.ref == 0:
+            return False  # P0=0 leaves programming mode
+        return True
+
+    # -- output ----------------------------------------------------------------------------
+    @property
+    def echo(self) -> bool:
+        return self.handshake_mode in (0, 1)
+
+    def _out(self, line: _Line, text: str) -> None:
+        if not line.reply:
+            return
+        data = text.encode(self.cfg.encoding, errors="replace")
+        if self.handshake_mode == 2:
+            line.deferred += data
+        else:
+            self.send(data)
+
+    def _error(self, line: _Line, errno: int, detail: str = "") -> None:
+        line.error = True
+        self.record_error(errno)
+        self._out(line, "\n*" + message(errno, self.english, detail) + "\n\r")
+
+    def spontaneous(self, text: str) -> None:
+        """Messages such as ``@2POS=1`` go out between lines, never inside one (G-SPONT)."""
+        self._spontaneous.append(text.encode(self.cfg.encoding, errors="replace") + b"\n\r")
+        if self._line is None:
+            self._flush_spontaneous()
+
+    def _flush_spontaneous(self) -> None:
+        while self._spontaneous:
+            self.send(self._spontaneous.pop(0))
+
+    # -- control API -----------------------------------------------------------------------
+    def read(self, name: str) -> Any:
+        if name == "selected":
+            return self.selected
+        try:
+            return super().read(name)
+        except UnknownName:
+            raise
+
+    def state(self) -> dict[str, Any]:
+        data = super().state()
+        data["selected"] = self.selected
+        data["program"] = self.program.lines()
+        return data
+
+
+def _answers(stmt: st.Statement) -> bool:
+    """Statements that send text: their output must follow the echo of the next character."""
+    if isinstance(stmt, st.Query | st.ListCmd):
+        return True
+    if isinstance(stmt, st.Trace):
+        return stmt.query
+    return isinstance(stmt, st.Command) and stmt.name == "VER"

@@ -1,0 +1,488 @@
+"""The SERS statement language: parsing a line's text into statements (manual §4.2).
+
+Pure functions, no I/O.  :func:`parse` reads the text of one line (after ``#`` and the drive
+address) and returns the statements found so far.  It is meant to be called again as each
+character arrives: with ``final=False`` a statement that might still grow (``W=50`` could
+become ``W=500``, ``E`` could become ``ELSE``, ``P11?`` could become ``P11??``) is reported as
+pending instead of complete, which is how the device executes statements "before the CR"
+(§4.1) without executing them too early.
+
+Tokenisation follows spec G-TOKEN: keywords are case-insensitive, statements may abut
+(``GT1``, ``X=V*ADC+100``, ``W=5000E``), and the longest keyword wins (``WAIT`` before ``WA``,
+``ELSE`` before ``E``, ``ADC`` before ``A`` ...).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+__all__ = [
+    "Address",
+    "Arith",
+    "Assign",
+    "Command",
+    "Comment",
+    "Condition",
+    "Else",
+    "End",
+    "Goto",
+    "If",
+    "Jog",
+    "Label",
+    "ListCmd",
+    "ParseResult",
+    "Query",
+    "Run",
+    "Statement",
+    "Text",
+    "Unary",
+    "Wait",
+    "parse",
+]
+
+SEPARATORS = " ,;\t"
+OPERATORS = "+-*/&|^"
+COMPARISONS = ("<=", ">=", "<>", "<", ">", "=")
+
+# Simple aliases that name a parameter (spec §3.4); bit-type operands (I, J, O) are separate.
+ALIAS_WORDS = (
+    "ADC", "A", "B", "C1", "C2", "C3", "D2", "DB", "D", "M1", "M2", "M3", "IN", "POS", "V", "W",
+    "WA", "WR", "WP", "WRP", "WAP", "WPT", "WRPT", "WAPT", "X", "Z", "R0", "R1", "R2", "R3", "R4",
+    "R5", "LP",
+)
+# Keyword statements without arguments.
+COMMAND_WORDS = (
+    "E", "H", "S", "ON", "OFF", "PSAVE", "POSSAVE", "POS0", "POSR", "NEW", "PGM", "QUIT", "DEL",
+    "PE", "VER", "TRON", "TROFF", "NOT", "NEG", "RETURN", "RT",
+)
+ARG_WORDS = ("IF", "THEN", "ELSE", "END", "WAIT", "GOTO", "GT", "GOSUB", "GS", "RUN", "LIST", "LISTP",
+             "TR", "RS", "RF", "LS", "LF")
+ALL_WORDS = tuple(sorted(set(ALIAS_WORDS + COMMAND_WORDS + ARG_WORDS), key=len, reverse=True))
+
+
+class NeedMore(Exception):
+    """The text ends where more characters could still change its meaning."""
+
+
+class SyntaxFault(Exception):
+    """The text cannot become valid: carries the device's errno."""
+
+    def __init__(self, errno: int, pos: int) -> None:
+        super().__init__(errno, pos)
+        self.errno = errno
+        self.pos = pos
+
+
+# -- statement classes --------------------------------------------------------------------
+@dataclass(frozen=True)
+class Address:
+    """An operand naming device state: ``P91``, ``V``, ``I3``, ``J1``, ``O2``, ``IN``."""
+
+    kind: str  # "P" (parameter by number), "alias", "I", "J", "O", "IN"
+    ref: str | int  # P-number, alias word, or bit number
+    text: str  # as written, upper-cased (used as the identifier in query answers)
+
+
+@dataclass(frozen=True)
+class Number:
+    text: str
+
+    @property
+    def value(self) -> float:
+        return float(self.text)
+
+
+Operand = Address | Number
+
+
+@dataclass(frozen=True)
+class Statement:
+    text: str = field(default="", compare=False)
+
+
+@dataclass(frozen=True)
+class Assign(Statement):
+    target: Address = Address("P", 0, "P0")
+    value: Operand | str = Number("0")  # "*" for Z=* / P1=*
+
+
+@dataclass(frozen=True)
+class Query(Statement):
+    target: Address = Address("P", 0, "P0")
+    name: bool = False  # P?? designation query
+
+
+@dataclass(frozen=True)
+class Arith(Statement):
+    op: str = "+"
+    operand: Operand = Number("0")
+
+
+@dataclass(frozen=True)
+class Unary(Statement):
+    op: str = "NOT"
+
+
+@dataclass(frozen=True)
+class Command(Statement):
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class Condition:
+    left: Address
+    op: str | None = None  # None: true when the value is non-zero
+    right: Operand | None = None
+    negate: bool = False  # legacy "!"
+
+
+@dataclass(frozen=True)
+class If(Statement):
+    cond: Condition | None = None
+    then: bool = False
+
+
+@dataclass(frozen=True)
+class Else(Statement):
+    pass
+
+
+@dataclass(frozen=True)
+class End(Statement):
+    pass
+
+
+@dataclass(frozen=True)
+class Wait(Statement):
+    cond: Condition | None = None
+
+
+@dataclass(frozen=True)
+class Jog(Statement):
+    name: str = "RS"
+    until: Condition | None = None
+
+
+@dataclass(frozen=True)
+class Goto(Statement):
+    label: int = 0
+    sub: bool = False  # GOSUB/GS
+
+
+@dataclass(frozen=True)
+class Label(Statement):
+    number: int = 0
+
+
+@dataclass(frozen=True)
+class Run(Statement):
+    label: int | None = None
+
+
+@dataclass(frozen=True)
+class ListCmd(Statement):
+    params: bool = False  # LISTP
+    arg: str = ""
+
+
+@dataclass(frozen=True)
+class Trace(Statement):
+    query: bool = False  # TR?
+
+
+@dataclass(frozen=True)
+class Change(Statement):
+    value: Number = Number("0")
+
+
+@dataclass(frozen=True)
+class Text(Statement):
+    body: str = ""
+
+
+@dataclass(frozen=True)
+class Comment(Statement):
+    pass
+
+
+@dataclass
+class ParseResult:
+    """Statements found in a line's text.
+
+    ``statements`` are complete (``(statement, end_offset)``).  ``pending`` is True when the
+    text ends inside a statement that may still grow.  ``errno``/``error_pos`` are set when the
+    text cannot become valid; nothing after ``error_pos`` is parsed.
+    """
+
+    statements: list[tuple[Statement, int]]
+    pending: bool = False
+    errno: int | None = None
+    error_pos: int | None = None
+
+
+# -- the scanner --------------------------------------------------------------------------
+class _Cursor:
+    def __init__(self, text: str, final: bool) -> None:
+        self.text = text
+        self.upper = text.upper()
+        self.pos = 0
+        self.final = final
+
+    def at_end(self) -> bool:
+        return self.pos >= len(self.text)
+
+    def peek(self, n: int = 1) -> str:
+        """The next ``n`` characters (upper-case); NeedMore if the text ends before them."""
+        chunk = self.upper[self.pos : self.pos + n]
+        if len(chunk) < n and not self.final:
+            raise NeedMore
+        return chunk
+
+    def skip_spaces(self) -> None:
+        while self.pos < len(self.text) and self.text[self.pos] in " \t":
+            self.pos += 1
+
+    def word(self) -> str | None:
+        """Longest keyword at the cursor (consumed), or None."""
+        rest = self.upper[self.pos :]
+        if not self.final and any(len(w) > len(rest) and w.startswith(rest) for w in ALL_WORDS):
+            raise NeedMore
+        for w in ALL_WORDS:
+            if rest.startswith(w):
+                self.pos += len(w)
+                return w
+        return None
+
+    def number(self, errno: int, signed: bool = False) -> Number:
+        start = self.pos
+        if signed and self.peek() == "-":
+            self.pos += 1
+        digits = 0
+        while self.peek().isdigit() and self.peek():
+            self.pos += 1
+            digits += 1
+        if self.peek() == ".":
+            self.pos += 1
+            while self.peek().isdigit() and self.peek():
+                self.pos += 1
+                digits += 1
+        if digits == 0:
+            raise SyntaxFault(errno, start)
+        return Number(self.text[start : self.pos])
+
+    def integer(self, errno: int) -> int:
+        self.skip_spaces()
+        start = self.pos
+        while self.peek().isdigit() and self.peek():
+            self.pos += 1
+        if self.pos == start:
+            raise SyntaxFault(errno, start)
+        return int(self.text[start : self.pos])
+
+
+def _address(cur: _Cursor, errno: int = 61) -> Address:
+    """An operand naming state (parameter, alias, input/output bit)."""
+    start = cur.pos
+    c = cur.peek()
+    if c == "P" and cur.peek(2)[1:].isdigit():
+        cur.pos += 1
+        number = cur.integer(13)
+        return Address("P", number, cur.upper[start : cur.pos])
+    if c in ("I", "J", "O") and cur.peek(2)[1:].isdigit():
+        cur.pos += 1
+        bit = cur.integer(errno)
+        return Address(c, bit, cur.upper[start : cur.pos])
+    word = cur.word()
+    if word in ALIAS_WORDS:
+        if word == "IN" and cur.peek().isdigit() and cur.peek():
+            value = cur.integer(errno)  # legacy IN0..IN255 means IN=value
+            return Address("IN", value, cur.upper[start : cur.pos])
+        return Address("alias", word, word)
+    cur.pos = start
+    raise SyntaxFault(errno, start)
+
+
+def _operand(cur: _Cursor, errno: int = 61, signed: bool = True) -> Operand:
+    c = cur.peek()
+    if c.isdigit() or c == "." or (signed and c == "-"):
+        return cur.number(errno, signed=signed)
+    return _address(cur, errno)
+
+
+def _condition(cur: _Cursor) -> Condition:
+    cur.skip_spaces()
+    negate = False
+    if cur.peek() == "!":
+        negate = True
+        cur.pos += 1
+        cur.skip_spaces()
+    left = _address(cur, 24)
+    if left.kind == "IN" and isinstance(left.ref, int) and left.text != "IN":
+        # legacy "IF IN5" == "IF IN=5"
+        return Condition(Address("alias", "IN", "IN"), "=", Number(str(left.ref)), negate)
+    cur.skip_spaces()
+    two = cur.peek(2)
+    op = None
+    for candidate in COMPARISONS:
+        if two.startswith(candidate):
+            op = candidate
+            break
+    if op is None:
+        return Condition(left, None, None, negate)
+    cur.pos += len(op)
+    cur.skip_spaces()
+    right = _operand(cur, 24)
+    return Condition(left, op, right, negate)
+
+
+def _statement(cur: _Cursor) -> Statement:  # noqa: C901 - one branch per statement form
+    start = cur.pos
+    c = cur.peek()
+    if c == "/":
+        if cur.peek(2) == "//":
+            cur.pos = len(cur.text)
+            if not cur.final:
+                raise NeedMore
+            return Comment(cur.text[start:])
+    if c == '"':
+        end = cur.text.find('"', start + 1)
+        if end < 0:
+            if not cur.final:
+                raise NeedMore
+            raise SyntaxFault(15, start)
+        cur.pos = end + 1
+        return Text(cur.text[start : cur.pos], cur.text[start + 1 : end])
+    if c in OPERATORS:
+        cur.pos += 1
+        operand = _operand(cur, 61, signed=False)
+        return Arith(cur.text[start : cur.pos], c, operand)
+    if c == "C" and cur.peek(2) in ("C ", "C\t"):
+        cur.pos += 1
+        cur.skip_spaces()
+        value = cur.number(49, signed=True)
+        return Change(cur.text[start : cur.pos], value)
+    if c == "L" and (cur.peek(2)[1:].isdigit() or cur.peek(2) == "L "):
+        if cur.peek(2) == "L ":
+            cur.pos += 1
+            cur.skip_spaces()
+            if not cur.peek().isdigit():
+                raise SyntaxFault(21, start)
+        else:
+            cur.pos += 1
+        number = cur.integer(37)
+        return Label(cur.text[start : cur.pos], number)
+    if c == "O" and cur.peek(2) == "O=":
+        raise SyntaxFault(4, start)  # "O=1" (manual §4.1 example): no such output (spec §7.3)
+    if c == "T" and cur.peek(3) == "TR?":
+        cur.pos += 3
+        return Trace(cur.text[start : cur.pos], query=True)
+
+    if c in ("P", "I", "J", "O") and cur.peek(2)[1:].isdigit():
+        return _assign_or_query(cur, start, _address(cur))
+    word = cur.word()
+    if word is None:
+        raise SyntaxFault(21, start)
+    text = lambda: cur.text[start : cur.pos]  # noqa: E731
+    if word in ALIAS_WORDS:
+        cur.pos = start
+        return _assign_or_query(cur, start, _address(cur))
+    if word in ("NOT", "NEG"):
+        return Unary(text(), word)
+    if word == "TR":
+        return Trace(text())
+    if word in COMMAND_WORDS:
+        return Command(text(), "RETURN" if word == "RT" else word)
+    if word == "IF":
+        cond = _condition(cur)
+        save = cur.pos
+        cur.skip_spaces()
+        then = False
+        if cur.peek(4) == "THEN":
+            cur.pos += 4
+            then = True
+        else:
+            cur.pos = save
+        return If(text(), cond, then)
+    if word == "THEN":
+        raise SyntaxFault(23, start)
+    if word == "ELSE":
+        return Else(text())
+    if word == "END":
+        return End(text())
+    if word == "WAIT":
+        cond = _condition(cur)
+        return Wait(text(), cond)
+    if word in ("GOTO", "GT"):
+        label = cur.integer(28 if word == "GOTO" else 25)
+        return Goto(text(), label, sub=False)
+    if word in ("GOSUB", "GS"):
+        label = cur.integer(30)
+        return Goto(text(), label, sub=True)
+    if word == "RUN":
+        save = cur.pos
+        cur.skip_spaces()
+        if cur.peek().isdigit() and cur.peek():
+            label = cur.integer(37)
+            return Run(text(), label)
+        cur.pos = save
+        return Run(text(), None)
+    if word in ("LIST", "LISTP"):
+        save = cur.pos
+        cur.skip_spaces()
+        arg_start = cur.pos
+        while cur.peek() and (cur.peek().isdigit() or cur.peek() in ".+-"):
+            cur.pos += 1
+        arg = cur.text[arg_start : cur.pos]
+        if not arg:
+            cur.pos = save
+        return ListCmd(text(), params=word == "LISTP", arg=arg)
+    if word in ("RS", "RF", "LS", "LF"):
+        until = None
+        if cur.peek() == ":":
+            cur.pos += 1
+            until = _condition(cur)
+        return Jog(text(), word, until)
+    raise SyntaxFault(21, start)
+
+
+def _assign_or_query(cur: _Cursor, start: int, target: Address) -> Statement:
+    c = cur.peek()
+    if c == "?":
+        cur.pos += 1
+        if cur.peek() == "?":
+            cur.pos += 1
+            return Query(cur.text[start : cur.pos], target, name=True)
+        return Query(cur.text[start : cur.pos], target)
+    if c == "=":
+        cur.pos += 1
+        if cur.peek() == "*":
+            cur.pos += 1
+            return Assign(cur.text[start : cur.pos], target, "*")
+        value = _operand(cur, 48, signed=True)
+        return Assign(cur.text[start : cur.pos], target, value)
+    raise SyntaxFault(34, cur.pos)
+
+
+def parse(text: str, final: bool) -> ParseResult:
+    """Parse a line's statement text (without ``#`` and address).
+
+    ``final`` says the line has ended (CR/LF arrived), so nothing at the end is pending.
+    """
+    cur = _Cursor(text, final)
+    result = ParseResult([])
+    while True:
+        while cur.pos < len(text) and text[cur.pos] in SEPARATORS:
+            cur.pos += 1
+        if cur.pos >= len(text):
+            return result
+        start = cur.pos
+        try:
+            stmt = _statement(cur)
+        except NeedMore:
+            result.pending = True
+            return result
+        except SyntaxFault as fault:
+            result.errno = fault.errno
+            result.error_pos = start
+            return result
+        result.statements.append((stmt, cur.pos))
