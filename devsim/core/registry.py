@@ -1,0 +1,60 @@
+"""Device kinds, found through the ``devsim.devices`` entry-point group.
+
+Another package can add a kind by declaring, in its own ``pyproject.toml``::
+
+    [project.entry-points."devsim.devices"]
+    mykind = "mypackage.mydevice:MyDevice"
+
+where ``MyDevice`` subclasses :class:`devsim.core.device.Device`.
+
+Without installing anything, the environment variable ``DEVSIM_EXTRA_KINDS`` adds kinds too
+(tests use it): ``DEVSIM_EXTRA_KINDS="echo=tests.support.echo:EchoDevice,other=pkg.mod:Cls"``.
+"""
+
+from __future__ import annotations
+
+import os
+from importlib.metadata import entry_points
+
+from devsim.core.device import Device
+
+__all__ = ["ENV_EXTRA_KINDS", "GROUP", "UnknownKind", "device_class", "kinds"]
+
+GROUP = "devsim.devices"
+ENV_EXTRA_KINDS = "DEVSIM_EXTRA_KINDS"
+
+# Kinds shipped with devsim, used when the distribution's metadata is not installed
+# (e.g. running from a source checkout without `pip install -e`).
+_BUILTIN = {"sers": "devsim.devices.sers:SersDevice"}
+
+
+class UnknownKind(LookupError):
+    pass
+
+
+def _targets() -> dict[str, str]:
+    found = dict(_BUILTIN)
+    for ep in entry_points(group=GROUP):
+        found[ep.name] = ep.value
+    for item in os.environ.get(ENV_EXTRA_KINDS, "").replace(";", ",").split(","):
+        kind, sep, target = item.strip().partition("=")
+        if sep and kind.strip() and ":" in target:
+            found[kind.strip()] = target.strip()
+    return found
+
+
+def kinds() -> dict[str, str]:
+    """Kind name → ``module:Class`` of every registered device kind."""
+    return dict(sorted(_targets().items()))
+
+
+def device_class(kind: str) -> type[Device]:
+    target = _targets().get(kind)
+    if target is None:
+        raise UnknownKind(f"unknown device kind {kind!r} (known: {', '.join(kinds())})")
+    module_name, _, attr = target.partition(":")
+    module = __import__(module_name, fromlist=[attr])
+    cls = getattr(module, attr)
+    if not (isinstance(cls, type) and issubclass(cls, Device)):
+        raise UnknownKind(f"{target} is not a devsim Device")
+    return cls

@@ -1,0 +1,246 @@
+"""The runtime: one event loop, one clock, the devices and the ports they are served on.
+
+A :class:`Runtime` runs either in a background thread (``start()`` / ``stop()``; what tests and
+the CLI use, so that blocking host code such as pyserial can run in the caller's thread) or in
+the caller's own loop (``async with runtime``).  All device code runs in the runtime's loop
+thread; the control methods (:meth:`read`, :meth:`set`, :meth:`advance`, ...) are thread-safe
+and hop into that thread.  This is the in-process form of the control API; the out-of-process
+form (``--control``) is a JSON front end to the same methods (:mod:`devsim.core.control`).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import threading
+from collections.abc import Callable, Coroutine, Mapping, Sequence
+from pathlib import Path
+from typing import Any, TypeVar
+
+from devsim.core.bus import Bus
+from devsim.core.clock import Clock, RealClock, VirtualClock
+from devsim.core.device import Device, UnknownName
+from devsim.core.nvram import NonVolatileMemory
+from devsim.core.registry import device_class
+
+__all__ = ["Runtime", "UnknownDevice"]
+
+T = TypeVar("T")
+
+
+class UnknownDevice(KeyError):
+    pass
+
+
+class Runtime:
+    """Owns the loop, the clock, devices, lines and transports of one simulator process."""
+
+    def __init__(
+        self,
+        *,
+        virtual: bool = False,
+        speed: float = 1.0,
+        state_dir: str | Path | None = None,
+        clock: Clock | None = None,
+    ) -> None:
+        self.clock: Clock = clock or (VirtualClock() if virtual else RealClock(speed))
+        self.state_dir = Path(state_dir) if state_dir is not None else None
+        self.devices: dict[str, Device] = {}
+        self.lines: dict[str, Any] = {}  # device name -> Line serving it
+        self.ports: dict[str, str] = {}  # device name -> URL/path of the port serving it
+        self.transports: list[Any] = []
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._thread: threading.Thread | None = None
+        self._stopped = threading.Event()
+
+    # -- loop ownership ------------------------------------------------------------------
+    @property
+    def loop(self) -> asyncio.AbstractEventLoop:
+        if self._loop is None:
+            raise RuntimeError("runtime not started")
+        return self._loop
+
+    def start(self) -> Runtime:
+        """Run the loop in a daemon thread; returns once it is running."""
+        if self._loop is not None:
+            return self
+        ready = threading.Event()
+
+        def main() -> None:
+            loop = asyncio.new_event_loop()
+            asyncio.set_event_loop(loop)
+            self._loop = loop
+            loop.call_soon(ready.set)
+            try:
+                loop.run_forever()
+            finally:
+                loop.run_until_complete(loop.shutdown_asyncgens())
+                loop.close()
+                self._stopped.set()
+
+        self._thread = threading.Thread(target=main, name="devsim-runtime", daemon=True)
+        self._thread.start()
+        ready.wait()
+        return self
+
+    def stop(self) -> None:
+        """Close every port and device, then end the loop thread."""
+        if self._loop is None:
+            return
+        if self._thread is not None and threading.current_thread() is not self._thread:
+            try:
+                self.run(self.aclose())
+            finally:
+                self._loop.call_soon_threadsafe(self._loop.stop)
+                self._thread.join(timeout=10)
+                self._loop = None
+                self._thread = None
+
+    async def __aenter__(self) -> Runtime:
+        self._loop = asyncio.get_running_loop()
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self.aclose()
+        self._loop = None
+
+    async def aclose(self) -> None:
+        for transport in reversed(self.transports):
+            await transport.close()
+        self.transports.clear()
+        for line in {id(line): line for line in self.lines.values()}.values():
+            line.close()
+        self.lines.clear()
+        self.ports.clear()
+        for device in self.devices.values():
+            device.close()
+        if isinstance(self.clock, VirtualClock):
+            self.clock.stop_auto()
+
+    def _in_loop_thread(self) -> bool:
+        try:
+            return asyncio.get_running_loop() is self._loop
+        except RuntimeError:
+            return False
+
+    def call(self, fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
+        """Run ``fn`` in the loop thread and return its result (directly if already there)."""
+        if self._in_loop_thread():
+            return fn(*args, **kwargs)
+        fut: concurrent.futures.Future[T] = concurrent.futures.Future()
+
+        def invoke() -> None:
+            try:
+                fut.set_result(fn(*args, **kwargs))
+            except BaseException as exc:  # handed to the caller
+                fut.set_exception(exc)
+
+        self.loop.call_soon_threadsafe(invoke)
+        return fut.result()
+
+    def run(self, coro: Coroutine[Any, Any, T], timeout: float | None = None) -> T:
+        """Run a coroutine in the loop thread from another thread and wait for it."""
+        return asyncio.run_coroutine_threadsafe(coro, self.loop).result(timeout)
+
+    # -- building a plant ----------------------------------------------------------------
+    def add_device(self, kind: str, name: str | None = None, config: Mapping[str, Any] | None = None) -> Device:
+        """Create a device of ``kind`` (in the loop thread); its NVRAM lives in the state dir."""
+
+        def create() -> Device:
+            cls = device_class(kind)
+            dev_name = name or kind
+            if dev_name in self.devices:
+                raise ValueError(f"a device named {dev_name!r} exists already")
+            nvram = NonVolatileMemory.for_device(self.state_dir, dev_name)
+            device = cls(clock=self.clock, config=config, nvram=nvram, name=dev_name)
+            self.devices[dev_name] = device
+            return device
+
+        return self.call(create)
+
+    async def serve(
+        self,
+        devices: Device | Sequence[Device],
+        transport: Any,
+        *,
+        pacing: bool = False,
+        trace: str | Path | None = None,
+    ) -> Any:
+        """Serve one device, or several on a multidrop bus, on ``transport``; returns the Line."""
+        from devsim.transports.line import Line
+        from devsim.transports.trace import Tracer
+
+        group = [devices] if isinstance(devices, Device) else list(devices)
+        target: Any = group[0] if len(group) == 1 else Bus(group)
+        tracer = Tracer(trace) if trace is not None else None
+        line = Line(target, self.clock, pacing=pacing, tracer=tracer)
+        await transport.start(line)
+        self.transports.append(transport)
+        for device in group:
+            self.lines[device.name] = line
+            self.ports[device.name] = str(getattr(transport, "url", "") or getattr(transport, "address", ""))
+        return line
+
+    def serve_sync(self, devices: Device | Sequence[Device], transport: Any, **kwargs: Any) -> Any:
+        return self.run(self.serve(devices, transport, **kwargs))
+
+    # -- control API (thread-safe) -------------------------------------------------------
+    def device(self, name: str) -> Device:
+        try:
+            return self.devices[name]
+        except KeyError:
+            raise UnknownDevice(f"no device named {name!r} (have: {', '.join(self.devices)})") from None
+
+    def read(self, device: str, name: str) -> Any:
+        if name.startswith("line."):
+            return self.call(lambda: self._line_status(device)[name[5:]])
+        return self.call(lambda: self.device(device).read(name))
+
+    def set(self, device: str, name: str, value: Any) -> None:
+        self.call(lambda: self.device(device).set(name, value))
+
+    def state(self, device: str) -> dict[str, Any]:
+        def snapshot() -> dict[str, Any]:
+            data = self.device(device).state()
+            if device in self.lines:
+                data["line"] = self._line_status(device)
+            return data
+
+        return self.call(snapshot)
+
+    def power_cycle(self, device: str, *, wipe: bool = False) -> None:
+        self.call(lambda: self.device(device).power_cycle(wipe=wipe))
+
+    def line_status(self, device: str) -> dict[str, Any]:
+        """The status of the line serving ``device`` (settings, mismatch, counters)."""
+        return self.call(lambda: self._line_status(device))
+
+    def now(self) -> float:
+        return self.call(self.clock.now)
+
+    def advance(self, seconds: float) -> float:
+        """Advance virtual time (refused on a real clock); returns the new time."""
+        clock = self.clock
+        if not isinstance(clock, VirtualClock):
+            raise RuntimeError("advance needs virtual time (the runtime runs on a real clock)")
+
+        def go() -> float:
+            clock.advance(seconds)
+            return clock.now()
+
+        return self.call(go)
+
+    def run_until(self, predicate: Callable[[], bool], timeout: float) -> bool:
+        """Virtual time: jump from event to event until ``predicate`` (run in the loop thread)
+        holds or ``timeout`` simulated seconds pass."""
+        clock = self.clock
+        if not isinstance(clock, VirtualClock):
+            raise RuntimeError("run_until needs virtual time")
+        return self.call(lambda: clock.run_until(predicate, timeout))
+
+    def _line_status(self, device: str) -> dict[str, Any]:
+        line = self.lines.get(device)
+        if line is None:
+            raise UnknownName(f"device {device!r} is not on a line")
+        status: dict[str, Any] = line.status()
+        return status

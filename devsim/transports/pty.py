@@ -1,0 +1,356 @@
+"""A pseudo-terminal that looks like a serial port (POSIX only).
+
+The host opens the pty's *slave* side (``/dev/pts/N``, or the stable symlink given as ``link``)
+exactly as it would open ``/dev/ttyS0``; the simulator serves the *master* side.
+
+Three things make a pty behave like a serial port rather than a terminal (see the pitfalls in
+``design.md``):
+
+* **Raw mode on both sides.**  A fresh pty cooks data: CR/LF rewriting, echo, XON/XOFF flow
+  control, erase/kill characters, signals.  Both master and slave are put in raw mode
+  (``cfmakeraw`` plus input flow control off), so 0x00, CR, LF, XON, XOFF and DEL pass unchanged.
+  A host that reconfigures the port (pyserial does on open) sets its own termios; that is its
+  business, as on a real port.
+* **The slave stays open.**  The transport holds its own slave descriptor for its whole life.
+  Without it, the master reports EIO/hang-up whenever no host has the port open and a naive read
+  loop spins; with it, hosts can close and reopen the port any number of times.  The price: a
+  pty cannot tell when a host closes the port, so this transport never calls
+  ``endpoint.host_disconnected()``.
+* **The host's line settings are the slave's termios.**  Host and transport share the slave
+  tty, so ``tcgetattr`` on the held descriptor shows the baud rate, data bits, parity and stop
+  bits the host asked for.  Before every chunk from the host (and every write to it) the termios
+  are read and a change is reported through ``endpoint.host_settings()``.  At start the slave is
+  preset to the endpoint's own ``serial_settings`` when it has them (a
+  :class:`~devsim.transports.line.Line` does); as long as nobody has touched the termios since,
+  the host counts as matching and nothing is reported.
+
+  Linux's pty driver forces CS8 without parity whatever a host sets (``pty_set_termios``), so
+  there only the baud rate and the stop bits are visible; data bits and parity are reported as
+  the device's own (the host is assumed to match in what cannot be seen).  The transport probes
+  this at start rather than assuming it.
+
+Writes towards the host never block the event loop: they are buffered and flushed when the
+master is writable.  If nobody reads (no host, or a host that does not read) and more than
+``max_buffer`` bytes pile up, the oldest are dropped – like a UART transmitting into an unplugged
+cable.
+"""
+
+from __future__ import annotations
+
+import array
+import asyncio
+import contextlib
+import errno
+import fcntl
+import os
+import sys
+import termios
+from dataclasses import replace
+
+from devsim.core.device import SerialSettings
+from devsim.transports.base import Endpoint, Transport
+
+__all__ = ["PtyTransport", "make_raw", "settings_from_termios", "apply_settings"]
+
+_IFLAG, _OFLAG, _CFLAG, _LFLAG, _ISPEED, _OSPEED, _CC = range(7)
+
+#: termios speed code → baud rate, from the ``termios.B*`` constants of this platform.
+_SPEEDS: dict[int, int] = {
+    getattr(termios, name): int(name[1:])
+    for name in dir(termios)
+    if name.startswith("B") and name[1:].isdigit() and int(name[1:]) > 0
+}
+_CODES: dict[int, int] = {baud: code for code, baud in _SPEEDS.items()}
+
+# Linux extras pyserial uses for non-standard rates and mark/space parity.
+_BOTHER = 0o010000
+_TCGETS2 = 0x802C542A
+_CMSPAR = getattr(termios, "CMSPAR", 0o10000000000 if sys.platform.startswith("linux") else 0)
+
+_CSIZE_BITS = {termios.CS5: 5, termios.CS6: 6, termios.CS7: 7, termios.CS8: 8}
+_BITS_CSIZE = {bits: flag for flag, bits in _CSIZE_BITS.items()}
+
+_READ_SIZE = 4096
+
+
+def make_raw(attrs: list) -> list:
+    """``cfmakeraw`` on a ``tcgetattr`` list (plus IXOFF/IXANY off); returns a new list."""
+    attrs = list(attrs)
+    attrs[_CC] = list(attrs[_CC])
+    iflag_off = (
+        termios.IGNBRK
+        | termios.BRKINT
+        | termios.PARMRK
+        | termios.ISTRIP
+        | termios.INLCR
+        | termios.IGNCR
+        | termios.ICRNL
+        | termios.IXON
+        | termios.IXOFF
+        | getattr(termios, "IXANY", 0)
+        | getattr(termios, "IUCLC", 0)
+        | getattr(termios, "IMAXBEL", 0)
+    )
+    attrs[_IFLAG] &= ~iflag_off
+    attrs[_OFLAG] &= ~termios.OPOST
+    attrs[_LFLAG] &= ~(termios.ECHO | termios.ECHONL | termios.ICANON | termios.ISIG | termios.IEXTEN)
+    attrs[_CFLAG] &= ~(termios.CSIZE | termios.PARENB)
+    attrs[_CFLAG] |= termios.CS8 | termios.CREAD
+    attrs[_CC][termios.VMIN] = 1
+    attrs[_CC][termios.VTIME] = 0
+    return attrs
+
+
+def _custom_speed(fd: int) -> int | None:
+    """The baud rate set through ``BOTHER`` (Linux ``termios2``), if it can be read."""
+    try:
+        buf = array.array("i", [0] * 64)
+        fcntl.ioctl(fd, _TCGETS2, buf)
+    except OSError:
+        return None
+    return buf[10] or buf[9] or None
+
+
+def settings_from_termios(attrs: list, fd: int | None = None) -> SerialSettings:
+    """Line settings from a ``tcgetattr`` list (``fd`` lets non-standard rates be read)."""
+    cflag = attrs[_CFLAG]
+    code = attrs[_OSPEED] or attrs[_ISPEED]
+    baud = _SPEEDS.get(code)
+    if baud is None and code == _BOTHER and fd is not None:
+        baud = _custom_speed(fd)
+    if baud is None:
+        baud = 0
+    bytesize = _CSIZE_BITS.get(cflag & termios.CSIZE, 8)
+    if not cflag & termios.PARENB:
+        parity = "N"
+    elif _CMSPAR and cflag & _CMSPAR:
+        parity = "M" if cflag & termios.PARODD else "S"
+    else:
+        parity = "O" if cflag & termios.PARODD else "E"
+    stopbits = 2 if cflag & termios.CSTOPB else 1
+    return SerialSettings(baudrate=baud, bytesize=bytesize, parity=parity, stopbits=stopbits)
+
+
+def apply_settings(attrs: list, settings: SerialSettings) -> list:
+    """A ``tcgetattr`` list with the speed and frame format of ``settings`` (standard rates
+    only; an unknown rate keeps the current speed)."""
+    attrs = list(attrs)
+    code = _CODES.get(int(settings.baudrate))
+    if code is not None:
+        attrs[_ISPEED] = attrs[_OSPEED] = code  # tcsetattr applies them with cfset*speed
+    cflag = attrs[_CFLAG] & ~(termios.CSIZE | termios.PARENB | termios.PARODD | termios.CSTOPB | _CMSPAR)
+    cflag |= _BITS_CSIZE.get(settings.bytesize, termios.CS8)
+    parity = settings.parity.upper()
+    if parity != "N":
+        cflag |= termios.PARENB
+        if parity in ("O", "M"):
+            cflag |= termios.PARODD
+        if parity in ("M", "S") and _CMSPAR:
+            cflag |= _CMSPAR
+    if float(settings.stopbits) > 1:
+        cflag |= termios.CSTOPB
+    attrs[_CFLAG] = cflag
+    return attrs
+
+
+class PtyTransport(Transport):
+    """Serves an endpoint on a new pty; ``link`` is an optional stable symlink to the slave."""
+
+    def __init__(self, link: str | os.PathLike[str] | None = None, *, max_buffer: int = 64 * 1024) -> None:
+        self.link = os.fspath(link) if link is not None else None
+        self.max_buffer = max_buffer
+        self.address = ""
+        self._master: int | None = None
+        self._slave: int | None = None
+        self._endpoint: Endpoint | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._out = bytearray()
+        self._writing = False
+        self._baseline: list | None = None
+        self._touched = False
+        self._reported: SerialSettings | None = None
+        self._preset: SerialSettings | None = None
+        self._frame_visible = True
+        #: Bytes dropped because nobody read them.
+        self.dropped = 0
+
+    @property
+    def url(self) -> str:
+        """The stable link when there is one, else the slave path."""
+        return self.link or self.address
+
+    async def start(self, endpoint: Endpoint) -> None:
+        if self._master is not None:
+            raise RuntimeError("transport already started")
+        loop = asyncio.get_running_loop()
+        master, slave = os.openpty()
+        try:
+            termios.tcsetattr(master, termios.TCSANOW, make_raw(termios.tcgetattr(master)))
+            attrs = make_raw(termios.tcgetattr(slave))
+            self._frame_visible = _pty_keeps_frame_format(slave, attrs)
+            preset = getattr(endpoint, "serial_settings", None)
+            if isinstance(preset, SerialSettings):
+                self._preset = preset
+                attrs = apply_settings(attrs, preset)
+            termios.tcsetattr(slave, termios.TCSANOW, attrs)
+            self._baseline = termios.tcgetattr(slave)
+            os.set_blocking(master, False)
+            self.address = os.ttyname(slave)
+            if self.link is not None:
+                _replace_symlink(self.address, self.link)
+        except BaseException:
+            os.close(master)
+            os.close(slave)
+            raise
+        self._master, self._slave = master, slave
+        self._loop = loop
+        self._endpoint = endpoint
+        endpoint.attach(self._write)
+        loop.add_reader(master, self._on_readable)
+
+    async def close(self) -> None:
+        if self._master is None:
+            return
+        loop = self._loop
+        assert loop is not None
+        loop.remove_reader(self._master)
+        if self._writing:
+            loop.remove_writer(self._master)
+            self._writing = False
+        if self._endpoint is not None:
+            self._endpoint.attach(None)
+            self._endpoint = None
+        for fd in (self._master, self._slave):
+            if fd is not None:
+                with contextlib.suppress(OSError):
+                    os.close(fd)
+        self._master = self._slave = None
+        self._out.clear()
+        if self.link is not None:
+            with contextlib.suppress(OSError):
+                if os.path.islink(self.link) and os.readlink(self.link) == self.address:
+                    os.unlink(self.link)
+
+    # -- host settings ----------------------------------------------------------------------
+    def host_settings(self) -> SerialSettings | None:
+        """The host's current settings, ``None`` while it has not touched the port."""
+        if self._slave is None:
+            return None
+        try:
+            attrs = termios.tcgetattr(self._slave)
+        except termios.error:
+            return None
+        if not self._touched:
+            if attrs == self._baseline:
+                return None
+            self._touched = True
+        settings = settings_from_termios(attrs, self._slave)
+        if not self._frame_visible:
+            # The pty forced CS8 / no parity: what the host asked for is unknowable, so it
+            # counts as matching the device.
+            known = self._preset or SerialSettings()
+            settings = replace(settings, bytesize=known.bytesize, parity=known.parity)
+        return settings
+
+    def _check_settings(self) -> None:
+        settings = self.host_settings()
+        if settings is not None and settings != self._reported and self._endpoint is not None:
+            self._reported = settings
+            self._endpoint.host_settings(settings)
+
+    # -- host → device ----------------------------------------------------------------------
+    def _on_readable(self) -> None:
+        if self._master is None:
+            return
+        try:
+            data = os.read(self._master, _READ_SIZE)
+        except BlockingIOError:
+            return
+        except OSError as exc:
+            if exc.errno == errno.EIO:  # cannot happen while we hold the slave; be safe
+                return
+            raise
+        if not data or self._endpoint is None:
+            return
+        self._check_settings()
+        self._endpoint.feed(data)
+
+    # -- device → host ----------------------------------------------------------------------
+    def _write(self, data: bytes) -> None:
+        if self._master is None or not data:
+            return
+        self._check_settings()
+        self._out += data
+        if not self._writing:
+            self._flush()
+        self._trim()
+
+    def _trim(self) -> None:
+        excess = len(self._out) - self.max_buffer
+        if excess > 0:
+            del self._out[:excess]
+            self.dropped += excess
+
+    def _flush(self) -> None:
+        master = self._master
+        if master is None:
+            return
+        while self._out:
+            try:
+                n = os.write(master, self._out)
+            except (BlockingIOError, InterruptedError):
+                break
+            except OSError as exc:
+                if exc.errno in (errno.EIO, errno.EAGAIN):
+                    break
+                raise
+            if n <= 0:
+                break
+            del self._out[:n]
+        assert self._loop is not None
+        if self._out and not self._writing:
+            self._loop.add_writer(master, self._flush)
+            self._writing = True
+        elif not self._out and self._writing:
+            self._loop.remove_writer(master)
+            self._writing = False
+
+    @property
+    def frame_visible(self) -> bool:
+        """Whether the host's data bits and parity can be seen (not on Linux ptys)."""
+        return self._frame_visible
+
+    @property
+    def pending(self) -> int:
+        """Bytes waiting for the host to read."""
+        return len(self._out)
+
+
+def _pty_keeps_frame_format(fd: int, attrs: list) -> bool:
+    """Whether this platform's pty keeps data bits and parity a host sets (Linux does not:
+    ``pty_set_termios`` forces CS8 without parity)."""
+    probe = list(attrs)
+    probe[_CFLAG] = (probe[_CFLAG] & ~termios.CSIZE) | termios.CS7 | termios.PARENB
+    try:
+        termios.tcsetattr(fd, termios.TCSANOW, probe)
+        cflag = termios.tcgetattr(fd)[_CFLAG]
+    except termios.error:
+        return False
+    return (cflag & termios.CSIZE) == termios.CS7 and bool(cflag & termios.PARENB)
+
+
+def _replace_symlink(target: str, link: str) -> None:
+    """Point ``link`` at ``target``, atomically replacing an existing symlink; refuse to
+    replace anything that is not a symlink."""
+    if os.path.lexists(link) and not os.path.islink(link):
+        raise FileExistsError(f"{link} exists and is not a symlink; not replacing it")
+    tmp = f"{link}.{os.getpid()}.tmp"
+    with contextlib.suppress(FileNotFoundError):
+        os.unlink(tmp)
+    os.symlink(target, tmp)
+    try:
+        os.replace(tmp, link)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise

@@ -1,0 +1,189 @@
+"""Raw TCP, like a serial device server (Moxa NPort, Lantronix in "TCP server" mode).
+
+Bytes on the socket are bytes on the serial line, nothing else: a raw client cannot tell the
+device its line settings, so the line treats it as matching.  Open it with pyserial as
+``socket://HOST:PORT`` (:attr:`TcpTransport.url`).
+
+**One host at a time.**  A serial port has one host, so the transport serves clients one after
+another: a client that connects while another one is being served is accepted by the kernel but
+*waits* – nothing is read from it and nothing is sent to it – until every earlier client has
+disconnected; then it becomes the host, and whatever it sent in the meantime reaches the device
+in order.  A waiting client that gives up is noticed only when its turn comes.
+
+When the serving client disconnects, the endpoint gets ``host_disconnected()``.  Output that a
+client does not read piles up in the socket; beyond ``max_buffer`` bytes further output is
+dropped, as on a line nobody listens to.  The server binds to loopback unless told otherwise.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import socket
+from collections import deque
+
+from devsim.transports.base import Endpoint, Transport
+
+__all__ = ["TcpTransport"]
+
+
+class _Session(asyncio.Protocol):
+    """One TCP client; the owning transport decides whether it is the host or waits."""
+
+    def __init__(self, owner: TcpTransport) -> None:
+        self.owner = owner
+        self.transport: asyncio.Transport | None = None
+        self.closed = False
+        self.state: object = None  # per-client protocol state of subclasses (RFC 2217)
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        assert isinstance(transport, asyncio.Transport)
+        self.transport = transport
+        sock = transport.get_extra_info("socket")
+        if sock is not None:
+            with contextlib.suppress(OSError):
+                sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.owner._connected(self)
+
+    def data_received(self, data: bytes) -> None:
+        self.owner._received(self, data)
+
+    def eof_received(self) -> bool:
+        return False  # half-close ends the session
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        self.closed = True
+        self.owner._lost(self)
+
+    def send(self, data: bytes) -> None:
+        if self.closed or self.transport is None or self.transport.is_closing():
+            return
+        if self.transport.get_write_buffer_size() > self.owner.max_buffer:
+            self.owner.dropped += len(data)
+            return
+        self.transport.write(data)
+
+
+class TcpTransport(Transport):
+    """A raw TCP server port serving one endpoint, one client at a time."""
+
+    scheme = "socket"
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 0, *, max_buffer: int = 64 * 1024) -> None:
+        self.host = host
+        self.port = port
+        self.max_buffer = max_buffer
+        self.address = ""
+        #: Bytes dropped because the client did not read them.
+        self.dropped = 0
+        self._server: asyncio.Server | None = None
+        self._endpoint: Endpoint | None = None
+        self._active: _Session | None = None
+        self._waiting: deque[_Session] = deque()
+
+    @property
+    def url(self) -> str:
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        return f"{self.scheme}://{host}:{self.port}"
+
+    @property
+    def connected(self) -> bool:
+        """Whether a client is being served."""
+        return self._active is not None
+
+    @property
+    def waiting(self) -> int:
+        """Clients queued behind the one being served."""
+        return len(self._waiting)
+
+    async def start(self, endpoint: Endpoint) -> None:
+        if self._server is not None:
+            raise RuntimeError("transport already started")
+        loop = asyncio.get_running_loop()
+        self._endpoint = endpoint
+        server = await loop.create_server(lambda: _Session(self), self.host, self.port)
+        self._server = server
+        self.port = server.sockets[0].getsockname()[1]
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        self.address = f"{host}:{self.port}"
+
+    async def close(self) -> None:
+        server, self._server = self._server, None
+        if server is None:
+            return
+        server.close()
+        sessions = ([self._active] if self._active else []) + list(self._waiting)
+        self._waiting.clear()
+        for session in sessions:
+            if session.transport is not None:
+                session.transport.abort()
+        if self._active is not None:  # abort() reports connection_lost on the next loop turn
+            self._deactivate(self._active)
+        self._endpoint = None
+        with contextlib.suppress(Exception):
+            await asyncio.wait_for(server.wait_closed(), 1.0)
+
+    # -- sessions ---------------------------------------------------------------------------
+    def _connected(self, session: _Session) -> None:
+        if self._server is None:
+            assert session.transport is not None
+            session.transport.abort()
+            return
+        if self._active is None:
+            self._activate(session)
+        else:
+            assert session.transport is not None
+            session.transport.pause_reading()
+            self._waiting.append(session)
+
+    def _activate(self, session: _Session) -> None:
+        self._active = session
+        endpoint = self._endpoint
+        if endpoint is None:
+            return
+        self._session_started(session, endpoint)
+
+        def write(data: bytes) -> None:
+            if self._active is session:
+                self._send(session, data)
+
+        endpoint.attach(write)
+
+    def _deactivate(self, session: _Session) -> None:
+        if self._active is not session:
+            return
+        self._active = None
+        endpoint = self._endpoint
+        if endpoint is not None:
+            endpoint.attach(None)
+            endpoint.host_disconnected()
+
+    def _received(self, session: _Session, data: bytes) -> None:
+        if self._active is session and self._endpoint is not None:
+            self._session_data(session, data, self._endpoint)
+
+    def _lost(self, session: _Session) -> None:
+        if self._active is session:
+            self._deactivate(session)
+            while self._waiting and self._active is None:
+                nxt = self._waiting.popleft()
+                if nxt.closed:
+                    continue
+                self._activate(nxt)
+                if nxt.transport is not None:
+                    nxt.transport.resume_reading()
+        else:
+            with contextlib.suppress(ValueError):
+                self._waiting.remove(session)
+
+    # -- hooks for protocol variants (RFC 2217) ---------------------------------------------
+    def _session_started(self, session: _Session, endpoint: Endpoint) -> None:
+        """A client became the host."""
+
+    def _session_data(self, session: _Session, data: bytes, endpoint: Endpoint) -> None:
+        """Bytes from the serving client."""
+        endpoint.feed(data)
+
+    def _send(self, session: _Session, data: bytes) -> None:
+        """Device output to the serving client."""
+        session.send(data)

@@ -1,0 +1,84 @@
+"""A wire trace: one text line per chunk that crossed a line, in simulated time.
+
+Format of a data line::
+
+    12.345678 H>D 23 4f 4e 0d "#ON\\r"
+    12.347120 D>H 4f 4b 0d "OK\\r"  (host read "\\x9e\\xfc")
+
+* simulated timestamp (the device clock's ``now()``, six decimals),
+* direction: ``H>D`` host to device, ``D>H`` device to host,
+* the bytes in hex,
+* the same bytes as an escaped ASCII rendering in double quotes,
+* optionally a note in parentheses (e.g. what the other side actually read on a mismatched line).
+
+Events that are not data (host settings, disconnects) are written as ``TIME -- text``.  Every line
+is flushed at once, so a trace survives a crash and can be followed with ``tail -f``.
+"""
+
+from __future__ import annotations
+
+import os
+from types import TracebackType
+
+__all__ = ["Tracer", "render"]
+
+_ESCAPES = {0x0D: "\\r", 0x0A: "\\n", 0x09: "\\t", 0x22: '\\"', 0x5C: "\\\\"}
+
+
+def render(data: bytes) -> str:
+    """Printable, unambiguous ASCII rendering of ``data`` in double quotes."""
+    parts = []
+    for byte in data:
+        if byte in _ESCAPES:
+            parts.append(_ESCAPES[byte])
+        elif 0x20 <= byte < 0x7F:
+            parts.append(chr(byte))
+        else:
+            parts.append(f"\\x{byte:02x}")
+    return '"' + "".join(parts) + '"'
+
+
+class Tracer:
+    """Writes a trace file (truncated when opened)."""
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        self.path = os.fspath(path)
+        self._file = open(self.path, "w", encoding="ascii", newline="\n")
+
+    @property
+    def closed(self) -> bool:
+        return self._file.closed
+
+    def record(self, direction: str, data: bytes, when: float, note: str | None = None) -> None:
+        """One chunk; ``direction`` is ``"H>D"`` or ``"D>H"``."""
+        if direction not in ("H>D", "D>H"):
+            raise ValueError(f"direction must be 'H>D' or 'D>H', not {direction!r}")
+        if not data or self._file.closed:
+            return
+        line = f"{when:.6f} {direction} {data.hex(' ')} {render(data)}"
+        if note:
+            line += f"  ({note})"
+        self._write(line)
+
+    def note(self, text: str, when: float) -> None:
+        """A non-data event."""
+        if not self._file.closed:
+            self._write(f"{when:.6f} -- {text}")
+
+    def _write(self, line: str) -> None:
+        self._file.write(line + "\n")
+        self._file.flush()
+
+    def close(self) -> None:
+        self._file.close()
+
+    def __enter__(self) -> Tracer:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()

@@ -1,0 +1,224 @@
+"""PtyTransport with pyserial (and a plain file descriptor) as the host."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import select
+import sys
+
+import pytest
+import serial
+
+from devsim.core.clock import RealClock
+from devsim.core.device import SerialSettings
+from devsim.transports.line import Line, garble
+from devsim.transports.pty import PtyTransport
+from tests.transports.transport_helpers import EchoTarget, Recorder
+
+pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="ptys are POSIX only")
+
+RAW = bytes([0x00, 0x0D, 0x0A, 0x11, 0x13, 0x7F, 0x03, 0x1A, 0x04, 0xFF])
+
+
+def _serial_exchange(path: str, data: bytes, expect: int, baudrate: int = 9600) -> bytes:
+    with serial.Serial(path, baudrate=baudrate, timeout=3) as port:
+        port.write(data)
+        port.flush()
+        return port.read(expect)
+
+
+def _fd_exchange(path: str, data: bytes, expect: int) -> bytes:
+    """A host that does not touch termios at all: plain open/write/read."""
+    fd = os.open(path, os.O_RDWR | os.O_NOCTTY)
+    try:
+        os.write(fd, data)
+        got = b""
+        while len(got) < expect:
+            ready, _, _ = select.select([fd], [], [], 3)
+            if not ready:
+                break
+            got += os.read(fd, 1024)
+        return got
+    finally:
+        os.close(fd)
+
+
+async def test_round_trip_with_pyserial(echo: Recorder) -> None:
+    transport = PtyTransport()
+    await transport.start(echo)
+    try:
+        assert transport.address.startswith("/dev/")
+        got = await asyncio.to_thread(_serial_exchange, transport.address, b"#ON\r", 4)
+        assert got == b"#ON\r"
+        assert echo.data == b"#ON\r"
+    finally:
+        await transport.close()
+    assert echo.write is None
+
+
+@pytest.mark.parametrize("host", [_serial_exchange, _fd_exchange], ids=["pyserial", "plain-fd"])
+async def test_control_bytes_pass_unchanged_both_ways(echo: Recorder, host) -> None:
+    transport = PtyTransport()
+    await transport.start(echo)
+    try:
+        got = await asyncio.to_thread(host, transport.address, RAW, len(RAW))
+        assert bytes(echo.data) == RAW  # host → device
+        assert got == RAW  # device → host
+    finally:
+        await transport.close()
+
+
+async def test_device_initiated_output_is_raw(recorder: Recorder) -> None:
+    transport = PtyTransport()
+    await transport.start(recorder)
+    try:
+        fd = os.open(transport.address, os.O_RDWR | os.O_NOCTTY)
+        try:
+            assert recorder.write is not None
+            recorder.write(RAW + b"\r\n")
+
+            def read() -> bytes:
+                got = b""
+                while len(got) < len(RAW) + 2 and select.select([fd], [], [], 3)[0]:
+                    got += os.read(fd, 1024)
+                return got
+
+            assert await asyncio.to_thread(read) == RAW + b"\r\n"
+        finally:
+            os.close(fd)
+    finally:
+        await transport.close()
+
+
+async def test_survives_twenty_close_reopen_cycles(echo: Recorder) -> None:
+    transport = PtyTransport()
+    await transport.start(echo)
+    try:
+
+        def cycles() -> list[bytes]:
+            answers = []
+            for i in range(20):
+                msg = f"#{i:02d}\r".encode()
+                answers.append(_serial_exchange(transport.address, msg, len(msg)))
+            return answers
+
+        answers = await asyncio.to_thread(cycles)
+        assert answers == [f"#{i:02d}\r".encode() for i in range(20)]
+        # the loop did not spin on EIO between hosts and still serves
+        assert await asyncio.to_thread(_fd_exchange, transport.address, b"ok", 2) == b"ok"
+    finally:
+        await transport.close()
+
+
+async def test_stable_symlink_replaces_stale_link_and_is_removed(tmp_path, echo: Recorder) -> None:
+    link = tmp_path / "sers0"
+    os.symlink("/dev/pts/does-not-exist", link)  # left over by a crashed run
+    transport = PtyTransport(link=str(link))
+    await transport.start(echo)
+    try:
+        assert os.readlink(link) == transport.address
+        assert transport.url == str(link)
+        got = await asyncio.to_thread(_serial_exchange, str(link), b"hi", 2)
+        assert got == b"hi"
+    finally:
+        await transport.close()
+    assert not os.path.lexists(link)
+
+
+async def test_refuses_to_replace_a_regular_file(tmp_path, echo: Recorder) -> None:
+    path = tmp_path / "important"
+    path.write_text("keep me")
+    transport = PtyTransport(link=str(path))
+    with pytest.raises(FileExistsError):
+        await transport.start(echo)
+    assert path.read_text() == "keep me"
+
+
+async def test_host_settings_reported_from_slave_termios(recorder: Recorder) -> None:
+    transport = PtyTransport()
+    await transport.start(recorder)
+    try:
+
+        def host() -> None:
+            with serial.Serial(transport.address, baudrate=4800, bytesize=7, parity="E", stopbits=2) as p:
+                p.write(b"x")
+                p.flush()
+
+        await asyncio.to_thread(host)
+        await recorder.wait_for(lambda: recorder.data == b"x")
+        # Linux ptys force CS8 without parity: data bits and parity are reported as the
+        # endpoint's own (a Recorder has none: 8N); baud and stop bits are the host's.
+        reported = recorder.settings[-1]
+        assert (reported.baudrate, reported.stopbits) == (4800, 2)
+        if not transport.frame_visible:
+            assert (reported.bytesize, reported.parity) == (8, "N")
+        else:
+            assert (reported.bytesize, reported.parity) == (7, "E")
+    finally:
+        await transport.close()
+
+
+async def test_baud_mismatch_garbles_and_matching_is_clean() -> None:
+    device = SerialSettings(19200)
+    target = EchoTarget(device)
+    line = Line(target, RealClock())
+    transport = PtyTransport()
+    await transport.start(line)
+    try:
+        # Untouched port: preset to the device's settings, host assumed matching.
+        assert line.host is None and not line.mismatch
+
+        sent = b"#ON\r"
+        seen = garble(sent, SerialSettings(9600), device)
+        back = garble(seen, device, SerialSettings(9600))
+        got = await asyncio.to_thread(_serial_exchange, transport.address, sent, len(back), 9600)
+        assert line.host == SerialSettings(9600)
+        assert line.mismatch
+        assert bytes(target.received) == seen != sent
+        assert got == back
+
+        target.received.clear()
+        got = await asyncio.to_thread(_serial_exchange, transport.address, sent, len(sent), 19200)
+        assert not line.mismatch
+        assert target.received == sent
+        assert got == sent
+    finally:
+        await transport.close()
+        line.close()
+
+
+async def test_output_nobody_reads_never_blocks_and_is_bounded(recorder: Recorder) -> None:
+    transport = PtyTransport(max_buffer=64 * 1024)
+    await transport.start(recorder)
+    try:
+        assert recorder.write is not None
+        chunk = bytes(range(256)) * 16
+        for _ in range(100):  # 400 KiB, far beyond the kernel's pty buffer
+            recorder.write(chunk)
+        assert transport.pending <= 64 * 1024
+        assert transport.dropped > 0
+    finally:
+        await transport.close()
+
+
+async def test_seven_bit_device_and_seven_bit_host_match() -> None:
+    device = SerialSettings(9600, 7, "E", 1)
+    target = EchoTarget(device)
+    line = Line(target, RealClock())
+    transport = PtyTransport()
+    await transport.start(line)
+    try:
+
+        def host() -> bytes:
+            with serial.Serial(transport.address, 9600, bytesize=7, parity="E", timeout=3) as port:
+                port.write(b"#ON\r")
+                return port.read(4)
+
+        assert await asyncio.to_thread(host) == b"#ON\r"
+        assert line.host is not None and line.host.baudrate == 9600
+        assert not line.mismatch
+        assert target.received == b"#ON\r"
+    finally:
+        await transport.close()
+        line.close()

@@ -1,0 +1,78 @@
+"""Rfc2217Transport with pyserial's rfc2217:// client as the host."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+import serial
+
+from devsim.core.clock import RealClock
+from devsim.core.device import SerialSettings
+from devsim.transports.line import Line, garble
+from devsim.transports.rfc2217 import Rfc2217Transport
+from tests.transports.transport_helpers import EchoTarget, Recorder
+
+# pyserial's own client thread uses deprecated threading setters.
+pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning:serial.rfc2217")
+
+
+async def test_negotiated_settings_and_round_trip(echo: Recorder) -> None:
+    transport = Rfc2217Transport()
+    await transport.start(echo)
+    assert transport.url == f"rfc2217://127.0.0.1:{transport.port}"
+    try:
+        data = b"#ON\r\xff\x00\x11\x13"  # 0xFF is Telnet IAC: must be escaped both ways
+
+        def host() -> tuple[bytes, bytes]:
+            port = serial.serial_for_url(transport.url, baudrate=4800, timeout=3)
+            try:
+                port.write(data)
+                first = port.read(len(data))
+                port.baudrate = 19200  # reconfigured while open
+                port.write(b"Z")
+                second = port.read(1)
+            finally:
+                port.close()
+            return first, second
+
+        first, second = await asyncio.to_thread(host)
+        assert first == data
+        assert second == b"Z"
+        assert echo.data == data + b"Z"
+        assert echo.settings[0].baudrate == 4800
+        assert echo.settings[0] == SerialSettings(4800, 8, "N", 1)
+        assert echo.settings[-1].baudrate == 19200
+        await echo.wait_for(lambda: echo.disconnects == 1)
+    finally:
+        await transport.close()
+
+
+async def test_frame_format_mismatch_reaches_the_line() -> None:
+    device = SerialSettings(9600, 7, "E", 1)
+    target = EchoTarget(device)
+    line = Line(target, RealClock())
+    mismatch_seen: list[bool] = []
+    original_feed = target.feed
+
+    def feed(data: bytes) -> None:
+        mismatch_seen.append(line.mismatch)
+        original_feed(data)
+
+    target.feed = feed  # type: ignore[method-assign]
+    transport = Rfc2217Transport()
+    await transport.start(line)
+    try:
+
+        def host() -> None:
+            with serial.serial_for_url(transport.url, baudrate=9600, timeout=3) as port:
+                port.write(b"#ON\r")
+                port.flush()
+
+        await asyncio.to_thread(host)
+        await asyncio.wait_for(target.event.wait(), 3)
+        assert mismatch_seen == [True]  # 8N1 host, 7E1 device
+        assert bytes(target.received) == garble(b"#ON\r", SerialSettings(9600), device) != b"#ON\r"
+    finally:
+        await transport.close()
+        line.close()

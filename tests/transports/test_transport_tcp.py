@@ -1,0 +1,100 @@
+"""TcpTransport: raw TCP like a serial device server, one client at a time."""
+
+from __future__ import annotations
+
+import asyncio
+
+from devsim.transports.tcp import TcpTransport
+from tests.transports.transport_helpers import Recorder
+
+
+async def _read_exactly(reader: asyncio.StreamReader, n: int) -> bytes:
+    return await asyncio.wait_for(reader.readexactly(n), 3)
+
+
+async def test_address_url_and_loopback_default(echo: Recorder) -> None:
+    transport = TcpTransport()
+    await transport.start(echo)
+    try:
+        assert transport.port != 0
+        assert transport.address == f"127.0.0.1:{transport.port}"
+        assert transport.url == f"socket://127.0.0.1:{transport.port}"
+    finally:
+        await transport.close()
+
+
+async def test_round_trip_and_disconnect_notification(echo: Recorder) -> None:
+    transport = TcpTransport()
+    await transport.start(echo)
+    try:
+        reader, writer = await asyncio.open_connection("127.0.0.1", transport.port)
+        raw = b"#ON\r\x00\x11\x13\xff"
+        writer.write(raw)
+        assert await _read_exactly(reader, len(raw)) == raw
+        assert echo.data == raw
+        assert echo.settings == []  # a raw client never reports line settings
+        writer.close()
+        await writer.wait_closed()
+        await echo.wait_for(lambda: echo.disconnects == 1)
+        assert echo.write is None
+    finally:
+        await transport.close()
+
+
+async def test_second_client_waits_for_the_first(echo: Recorder) -> None:
+    transport = TcpTransport()
+    await transport.start(echo)
+    try:
+        r1, w1 = await asyncio.open_connection("127.0.0.1", transport.port)
+        w1.write(b"A")
+        assert await _read_exactly(r1, 1) == b"A"
+        r2, w2 = await asyncio.open_connection("127.0.0.1", transport.port)
+        w2.write(b"B")
+        await w2.drain()
+        # A round trip on the first client: had B been delivered, it would be in by now.
+        w1.write(b"C")
+        assert await _read_exactly(r1, 1) == b"C"
+        assert echo.data == b"AC"
+        assert transport.waiting == 1
+
+        w1.close()
+        await w1.wait_closed()
+        # Now the second client is the host; what it sent while waiting arrives in order.
+        await echo.wait_for(lambda: echo.data == b"ACB")
+        assert echo.disconnects == 1
+        assert await _read_exactly(r2, 1) == b"B"
+        w2.write(b"D")
+        assert await _read_exactly(r2, 1) == b"D"
+        w2.close()
+        await w2.wait_closed()
+        await echo.wait_for(lambda: echo.disconnects == 2)
+    finally:
+        await transport.close()
+
+
+async def test_new_client_after_first_left(echo: Recorder) -> None:
+    transport = TcpTransport()
+    await transport.start(echo)
+    try:
+        for i in range(3):
+            reader, writer = await asyncio.open_connection("127.0.0.1", transport.port)
+            msg = f"#{i}\r".encode()
+            writer.write(msg)
+            assert await _read_exactly(reader, len(msg)) == msg
+            writer.close()
+            await writer.wait_closed()
+            await echo.wait_for(lambda n=i + 1: echo.disconnects == n)
+    finally:
+        await transport.close()
+
+
+async def test_close_disconnects_the_host(echo: Recorder) -> None:
+    transport = TcpTransport()
+    await transport.start(echo)
+    reader, writer = await asyncio.open_connection("127.0.0.1", transport.port)
+    writer.write(b"x")
+    assert await _read_exactly(reader, 1) == b"x"
+    await transport.close()
+    assert echo.disconnects == 1
+    assert await asyncio.wait_for(reader.read(), 3) == b""
+    writer.close()
