@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -72,6 +73,14 @@ class Plant:
 
     def advance(self, seconds: float) -> None:
         self.runtime.advance(seconds)
+
+    def wait_received(self, count: int, timeout: float = 5.0) -> None:
+        """Wait (in real time, polling) until the line has delivered ``count`` host bytes."""
+        deadline = time.monotonic() + timeout
+        line = self.runtime.lines[self.name]
+        while self.runtime.call(lambda: line.status()["bytes_in"]) < count:
+            assert time.monotonic() < deadline, "the device never received the bytes"
+            time.sleep(0.001)
 
     def settle(self, device: str | None = None, timeout: float = 60.0) -> float:
         """Run virtual time until the drive stands still; returns the simulated time taken."""
