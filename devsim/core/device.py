@@ -89,7 +89,7 @@ class Device(ABC):
     def feed(self, data: bytes) -> None:
         """Bytes from the host, in arrival order, possibly split anywhere."""
 
-    def host_disconnected(self) -> None:
+    def host_disconnected(self) -> None:  # noqa: B027 - optional hook, default does nothing
         """The host closed the port (or its TCP connection dropped); default: nothing."""
 
     @property
@@ -115,5 +115,5 @@ class Device(ABC):
         if wipe:
             self.nvram.wipe()
 
-    def close(self) -> None:
+    def close(self) -> None:  # noqa: B027 - optional hook, default does nothing
         """Cancel timers; the device is not used afterwards."""

@@ -890,12 +890,12 @@ class SersDrive(Device):
         w = float(self.ram[47])
         p51 = self.p51_inc()
         if mode == 1:
-            start, target = 0.0, w
+            start, target = 0.0, float(round(w))
         elif mode == 2:
-            start, target = p51, w
+            start, target = p51, float(round(w))
         else:
-            start, target = p51, p51 + w
-        target = float(round(self._leave_zero_phase(target)))  # whole increments (§5.1)
+            start, target = p51, p51 + round(w)  # W in whole increments (§5.1)
+        target = self._leave_zero_phase(target)
         direction = (target > start) - (target < start)
         self._motion_checks(direction)
         lo, hi = self.scaling.pos_range()
@@ -905,6 +905,8 @@ class SersDrive(Device):
             raise SersError(85 if target_user > hi else 86)
         if mode == 1:
             self.offset = self.axis.position()
+        elif target == p51:
+            return  # already there: nothing moves, POS stays 1
         self._speed = float(self.ram[91])
         self._accel = float(self.ram[138])
         self._target_physical = target + self.offset
@@ -921,13 +923,13 @@ class SersDrive(Device):
         keep = level * 0.1 * INC_PER_REV / 360
         nearest = round(target / step) * step
         if abs(target - nearest) < keep - 1e-9:
-            return nearest + (keep if target >= nearest else -keep)
+            return float(round(nearest + (keep if target >= nearest else -keep)))
         return target
 
     def _positioning_done(self) -> None:
         mode = int(self.ram[1014])
         if mode == 3:
-            modulo = self.scaling.pos_to_inc(float(self.ram.get(103, 360) or 0))
+            modulo = float(self.ram.get(103, 0))
             if modulo > 0:
                 while self.p51_inc() >= modulo - 1e-6:
                     self.offset += modulo

@@ -1,0 +1,229 @@
+"""Round-trip latency of a simulated device on a pty, against a bare asyncio echo server.
+
+Starts a :class:`~devsim.core.runtime.Runtime` (real clock) in a thread with one device of
+``--kind`` (default ``sers``) on a :class:`~devsim.transports.pty.PtyTransport`, opens the pty
+with pyserial at the device's baud rate and times ``--n`` queries ``#P11?\\r`` (default echo
+mode), each until the final acknowledgement line (``\\nok1\\n\\r``, or any ``\\nok...\\r``)
+has arrived.  Then it does the same against a minimal asyncio server on a pty in this process
+that answers every CR-terminated line with a fixed reply of the same length, and prints p50/p99
+of both and their ratio.
+
+Targets: p50 ratio sers/echo ≤ 1.5, p99 < 2 ms.
+
+    python benchmarks/latency.py [--n 5000] [--kind sers|stub]
+
+``--kind stub`` uses a tiny stand-in device defined here (for checking the plumbing).
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import os
+import statistics
+import sys
+import threading
+import time
+import tty
+from typing import Any, ClassVar
+
+import serial
+
+try:
+    import devsim  # noqa: F401
+except ImportError:  # running from a source checkout without installing
+    sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+QUERY = b"#P11?\r"
+ACK = b"\nok"
+
+
+# -- a stand-in device (only with --kind stub) ---------------------------------------------
+def _stub_class() -> type:
+    from devsim.core.device import Device, UnknownName
+
+    class StubDevice(Device):
+        """Echoes the command, answers a value and ``ok1`` like the SERS in echo mode."""
+
+        kind: ClassVar[str] = "stub"
+        description: ClassVar[str] = "benchmark stand-in"
+
+        def __init__(self, **kwargs: Any) -> None:
+            super().__init__(**kwargs)
+            self._buf = bytearray()
+
+        def feed(self, data: bytes) -> None:
+            self.send(data)
+            self._buf += data
+            while b"\r" in self._buf:
+                _, _, rest = bytes(self._buf).partition(b"\r")
+                self._buf = bytearray(rest)
+                self.send(b"\n0\nok1\n\r")
+
+        def read(self, name: str) -> Any:
+            raise UnknownName(name)
+
+        def set(self, name: str, value: Any) -> None:
+            raise UnknownName(name)
+
+        def state(self) -> dict[str, Any]:
+            return {}
+
+    return StubDevice
+
+
+StubDevice = _stub_class()
+
+
+# -- the measurement -------------------------------------------------------------------------
+def complete(buf: bytes) -> bool:
+    """True once an acknowledgement line (``\\nok...\\r``) has arrived in full."""
+    at = buf.rfind(ACK)
+    return at >= 0 and buf.find(b"\r", at + len(ACK)) >= 0
+
+
+def round_trips(path: str, baud: int, n: int, warmup: int = 200) -> tuple[list[float], int]:
+    """Time ``n`` queries on ``path``; returns seconds per query and the reply length."""
+    times: list[float] = []
+    reply_len = 0
+    with serial.Serial(path, baud, timeout=2) as port:
+        port.reset_input_buffer()
+        for i in range(warmup + n):
+            buf = b""
+            start = time.perf_counter()
+            port.write(QUERY)
+            while not complete(buf):
+                chunk = port.read(port.in_waiting or 1)
+                if not chunk:
+                    raise SystemExit(f"no complete answer to {QUERY!r} from {path} (got {buf!r})")
+                buf += chunk
+            elapsed = time.perf_counter() - start
+            if i >= warmup:
+                times.append(elapsed)
+            reply_len = len(buf)
+    return times, reply_len
+
+
+def percentile(values: list[float], q: float) -> float:
+    ordered = sorted(values)
+    index = min(len(ordered) - 1, max(0, round(q / 100 * (len(ordered) - 1))))
+    return ordered[index]
+
+
+def wait_for_answers(path: str, baud: int, timeout: float = 10.0) -> None:
+    """Wait until the device answers (a SERS shows '-' while it boots)."""
+    deadline = time.monotonic() + timeout
+    with serial.Serial(path, baud, timeout=0.3) as port:
+        while time.monotonic() < deadline:
+            port.write(QUERY)
+            buf = b""
+            while chunk := port.read(64):
+                buf += chunk
+                if complete(buf):
+                    return
+    raise SystemExit(f"the device on {path} does not answer {QUERY!r}")
+
+
+def measure_device(kind: str, n: int) -> tuple[list[float], int]:
+    if kind == "stub":
+        os.environ["DEVSIM_EXTRA_KINDS"] = "stub=__main__:StubDevice"
+    from devsim.core.runtime import Runtime
+    from devsim.transports.pty import PtyTransport
+
+    runtime = Runtime().start()
+    try:
+        config = {"boot_time": 0.0} if kind == "sers" else None
+        device = runtime.add_device(kind, config=config)
+        transport = PtyTransport()
+        runtime.serve_sync(device, transport)
+        baud = runtime.call(lambda: device.serial_settings.baudrate)
+        wait_for_answers(transport.address, baud)
+        return round_trips(transport.address, baud, n)
+    finally:
+        runtime.stop()
+
+
+class EchoServer:
+    """A bare asyncio server on a pty: every CR-terminated line gets ``reply``."""
+
+    def __init__(self, reply: bytes) -> None:
+        self.reply = reply
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.master)
+        tty.setraw(self.slave)
+        self.path = os.ttyname(self.slave)
+        self._loop = asyncio.new_event_loop()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._buf = bytearray()
+
+    def _run(self) -> None:
+        asyncio.set_event_loop(self._loop)
+        self._loop.add_reader(self.master, self._readable)
+        self._loop.run_forever()
+
+    def _readable(self) -> None:
+        try:
+            data = os.read(self.master, 4096)
+        except OSError:
+            return
+        self._buf += data
+        while b"\r" in self._buf:
+            _, _, rest = bytes(self._buf).partition(b"\r")
+            self._buf = bytearray(rest)
+            os.write(self.master, self.reply)
+
+    def __enter__(self) -> EchoServer:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        def stop() -> None:
+            self._loop.remove_reader(self.master)
+            self._loop.stop()
+
+        self._loop.call_soon_threadsafe(stop)
+        self._thread.join(5)
+        os.close(self.master)
+        os.close(self.slave)
+
+
+def measure_echo(reply_len: int, n: int) -> list[float]:
+    tail = b"\nok1\n\r"
+    reply = b"x" * max(0, reply_len - len(tail)) + tail
+    with EchoServer(reply) as server:
+        times, _ = round_trips(server.path, 9600, n)
+    return times
+
+
+def summary(name: str, times: list[float]) -> tuple[float, float]:
+    p50 = percentile(times, 50) * 1e3
+    p99 = percentile(times, 99) * 1e3
+    print(
+        f"  {name:<8} p50 {p50:7.3f} ms   p99 {p99:7.3f} ms   mean {statistics.fmean(times) * 1e3:7.3f} ms"
+        f"   max {max(times) * 1e3:7.3f} ms"
+    )
+    return p50, p99
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--n", type=int, default=5000, help="timed queries per target (default 5000)")
+    parser.add_argument("--kind", default="sers", help="device kind (default sers; 'stub' = stand-in)")
+    args = parser.parse_args(argv)
+
+    device_times, reply_len = measure_device(args.kind, args.n)
+    echo_times = measure_echo(reply_len, args.n)
+
+    print(f"latency: {args.n} round trips of {QUERY!r} on a pty ({reply_len}-byte answer)")
+    d50, d99 = summary(args.kind, device_times)
+    e50, e99 = summary("echo", echo_times)
+    ratio50 = d50 / e50 if e50 else float("inf")
+    ratio99 = d99 / e99 if e99 else float("inf")
+    print(f"  ratio    p50 {ratio50:7.2f}      p99 {ratio99:7.2f}      (target p50 ratio <= 1.5)")
+    ok = ratio50 <= 1.5 and d99 < 2.0
+    print(f"  {args.kind} p99 {d99:.3f} ms (target < 2 ms): {'PASS' if ok else 'MISS'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,480 @@
+"""The ``devsim`` command line.
+
+* ``devsim list`` – the device kinds, one per line.
+* ``devsim run KIND [--pty | --link PATH | --tcp [HOST:]PORT | --rfc2217 [HOST:]PORT] ...`` – serve
+  one device (or several on one RS-485 line with ``--drives``) until Ctrl-C / SIGTERM.  Every
+  port and the control address are printed on stdout, one per line, for scripts to parse::
+
+      sers: pty /dev/pts/5
+      control: unix:/tmp/sers.sock
+
+* ``devsim ctl --control ADDR devices|read|set|state|power-cycle|advance|now|line`` – talk to a
+  running simulator's control API and print the JSON result.
+
+Usage and configuration errors are one line on stderr (``Error: config.yaml:3: baud: ...``) and
+exit with status 2; failures at run time (a port in use) exit with status 1.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import signal
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, NoReturn
+
+import click
+from pydantic import BaseModel, ValidationError
+
+from devsim import __version__
+from devsim.core.config import ConfigError, load_yaml, plain, validate
+from devsim.core.control import (
+    ControlAddress,
+    ControlAddressError,
+    ControlClient,
+    ControlError,
+    parse_address,
+)
+from devsim.core.device import Device
+from devsim.core.registry import UnknownKind, device_class, kinds
+
+__all__ = ["cli", "main"]
+
+
+# -- one-line errors -------------------------------------------------------------------------
+class ConfigUsageError(click.ClickException):
+    """A bad option value or configuration file (exit status 2)."""
+
+    exit_code = 2
+
+
+class _Cli(click.Group):
+    """A group that reports every usage error as a single line (no usage block, no traceback)."""
+
+    def main(  # type: ignore[override]
+        self,
+        args: Sequence[str] | None = None,
+        prog_name: str | None = None,
+        complete_var: str | None = None,
+        standalone_mode: bool = True,
+        **extra: Any,
+    ) -> Any:
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        try:
+            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click.UsageError as exc:
+            hint = ""
+            if exc.ctx is not None:
+                hint = f" (see '{exc.ctx.command_path} --help')"
+            _fail(f"{exc.format_message()}{hint}", exc.exit_code)
+        except click.ClickException as exc:
+            _fail(exc.format_message(), exc.exit_code)
+        except click.Abort:
+            _fail("aborted", 1)
+        except BrokenPipeError:
+            sys.exit(1)
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+
+def _fail(message: str, code: int) -> NoReturn:
+    click.echo(f"Error: {message}", err=True)
+    sys.exit(code)
+
+
+@click.group(cls=_Cli, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="devsim")
+def cli() -> None:
+    """Software twins of legacy motion controllers on virtual serial ports."""
+
+
+def main() -> None:
+    """Entry point of the ``devsim`` command."""
+    cli.main(prog_name="devsim")
+
+
+# -- devsim list -----------------------------------------------------------------------------
+@cli.command("list")
+def list_kinds() -> None:
+    """List the device kinds, one per line: kind and description."""
+    for kind, target in kinds().items():
+        try:
+            description = device_class(kind).description or "-"
+        except Exception as exc:  # a broken plug-in must not hide the others
+            description = f"(cannot load {target}: {type(exc).__name__}: {exc})"
+        click.echo(f"{kind:<12} {description}")
+
+
+# -- devsim run ------------------------------------------------------------------------------
+@dataclass
+class _Port:
+    scheme: str  # "pty", "tcp" or "rfc2217"
+    host: str = "127.0.0.1"
+    port: int = 0
+    link: str | None = None
+
+
+@dataclass
+class _Plan:
+    kind: str
+    devices: list[tuple[str, dict[str, Any]]]
+    port: _Port
+    state_dir: str | None
+    speed: float
+    virtual: bool
+    trace: str | None
+    pacing: bool
+    control: ControlAddress | None
+    allow_remote: bool
+    printed: list[str] = field(default_factory=list)
+
+
+def _host_port(option: str, text: str) -> tuple[str, int]:
+    host, sep, port_text = text.rpartition(":")
+    if not sep:
+        host = "127.0.0.1"
+    host = host.strip("[]") or "127.0.0.1"
+    try:
+        port = int(port_text)
+    except ValueError:
+        raise click.UsageError(f"{option}: expected [HOST:]PORT, got {text!r}") from None
+    if not 0 <= port <= 65535:
+        raise click.UsageError(f"{option}: port {port} is not in 0..65535")
+    return host, port
+
+
+def _parse_drives(text: str) -> list[int]:
+    drives: list[int] = []
+    for item in text.split(","):
+        item = item.strip()
+        if not item:
+            continue
+        try:
+            if "-" in item[1:]:
+                low, _, high = item.partition("-")
+                numbers = list(range(int(low), int(high) + 1))
+                if not numbers:
+                    raise ValueError
+            else:
+                numbers = [int(item)]
+        except ValueError:
+            raise click.UsageError(f"--drives: expected addresses like 1,2,3 (or 1-3), got {item!r}") from None
+        for number in numbers:
+            if number in drives:
+                raise click.UsageError(f"--drives: address {number} given twice")
+            drives.append(number)
+    if not drives:
+        raise click.UsageError("--drives: expected at least one address, e.g. --drives 1,2,3")
+    return drives
+
+
+def _device_configs(cls: type[Device], kind: str, config_file: str | None, drives: list[int] | None) -> list[
+    tuple[str, dict[str, Any]]
+]:
+    """Validate the configuration file and the drive addresses; name the devices."""
+    model: type[BaseModel] | None = getattr(cls, "config_model", None)
+    data: Any = None
+    try:
+        if config_file is not None:
+            data = load_yaml(config_file)
+            if model is not None:
+                validate(data, model, config_file)
+            elif data is not None and not isinstance(data, dict):
+                raise ConfigError(f"{config_file}:1: expected a mapping at the top level")
+    except ConfigError as exc:
+        raise ConfigUsageError(str(exc)) from None
+    base: dict[str, Any] = plain(data) if isinstance(data, dict) else {}
+
+    def finish(raw: dict[str, Any], source: str) -> dict[str, Any]:
+        if model is None:
+            return raw
+        try:
+            return model.model_validate(raw).model_dump()
+        except ValidationError as exc:
+            error = exc.errors()[0]
+            where = ".".join(str(p) for p in error.get("loc", ()))
+            msg = str(error.get("msg", "invalid")).removeprefix("Value error, ")
+            raise ConfigUsageError(f"{source}: {where}: {msg}") from None
+
+    if not drives:
+        return [(kind, finish(base, config_file or "config"))]
+    names = [kind] if len(drives) == 1 else [f"{kind}{n}" for n in drives]
+    return [(name, finish({**base, "address": n}, "--drives")) for name, n in zip(names, drives, strict=True)]
+
+
+@cli.command()
+@click.argument("kind")
+@click.option("--pty", "use_pty", is_flag=True, help="Serve on a new pseudo-terminal (the default).")
+@click.option("--link", metavar="PATH", help="Stable symlink to the pty, e.g. /tmp/ttySERS (implies --pty).")
+@click.option("--tcp", metavar="[HOST:]PORT", help="Raw TCP port, like a serial device server (host 127.0.0.1).")
+@click.option("--rfc2217", metavar="[HOST:]PORT", help="RFC 2217 port: line settings travel with the data.")
+@click.option("--config", "config_file", metavar="FILE.yaml", help="DIP switches, parameters, axis geometry.")
+@click.option("--state-dir", metavar="DIR", help="Where non-volatile memory (EEPROM) is kept.")
+@click.option("--speed", type=float, default=1.0, show_default=True, metavar="F", help="Time speed factor.")
+@click.option("--virtual", is_flag=True, help="Virtual time: it moves only through 'devsim ctl advance'.")
+@click.option("--trace", metavar="FILE", help="Write a timestamped trace of the line traffic.")
+@click.option("--control", metavar="ADDR", help="Serve the control API on unix:/path.sock or [HOST:]PORT.")
+@click.option("--control-allow-remote", is_flag=True, help="Allow a non-loopback --control host.")
+@click.option("--drives", metavar="1,2,3", help="RS-485 multidrop: one device per address on one line.")
+@click.option("--pacing", is_flag=True, help="Pace output at the configured baud rate.")
+def run(
+    kind: str,
+    use_pty: bool,
+    link: str | None,
+    tcp: str | None,
+    rfc2217: str | None,
+    config_file: str | None,
+    state_dir: str | None,
+    speed: float,
+    virtual: bool,
+    trace: str | None,
+    control: str | None,
+    control_allow_remote: bool,
+    drives: str | None,
+    pacing: bool,
+) -> None:
+    """Serve a simulated KIND device until Ctrl-C.
+
+    Prints one line per device port (NAME: pty|tcp|rfc2217 ADDRESS) and the control address.
+    """
+    try:
+        cls = device_class(kind)
+    except UnknownKind as exc:
+        raise click.UsageError(str(exc)) from None
+    except Exception as exc:
+        raise click.ClickException(f"cannot load device kind {kind!r}: {type(exc).__name__}: {exc}") from None
+
+    chosen = [name for name, given in (("--pty/--link", use_pty or link), ("--tcp", tcp), ("--rfc2217", rfc2217)) if given]
+    if len(chosen) > 1:
+        raise click.UsageError(f"choose one port: {' or '.join(chosen)}")
+    if tcp is not None:
+        port = _Port("tcp", *_host_port("--tcp", tcp))
+    elif rfc2217 is not None:
+        port = _Port("rfc2217", *_host_port("--rfc2217", rfc2217))
+    else:
+        port = _Port("pty", link=link)
+    if speed <= 0:
+        raise click.UsageError("--speed: must be positive")
+    if virtual and speed != 1.0:
+        raise click.UsageError("--speed and --virtual exclude each other")
+
+    control_addr: ControlAddress | None = None
+    if control is not None:
+        try:
+            control_addr = parse_address(control)
+        except ControlAddressError as exc:
+            raise click.UsageError(f"--control: {exc}") from None
+        if not control_allow_remote and not control_addr.is_loopback():
+            raise click.UsageError(
+                f"--control: refusing non-loopback host {control_addr.host!r} (add --control-allow-remote)"
+            )
+
+    plan = _Plan(
+        kind=kind,
+        devices=_device_configs(cls, kind, config_file, _parse_drives(drives) if drives is not None else None),
+        port=port,
+        state_dir=state_dir,
+        speed=speed,
+        virtual=virtual,
+        trace=trace,
+        pacing=pacing,
+        control=control_addr,
+        allow_remote=control_allow_remote,
+    )
+    try:
+        asyncio.run(_serve(plan))
+    except KeyboardInterrupt:  # Ctrl-C before the handlers were in place
+        sys.exit(130)
+    except _StartError as exc:
+        raise click.ClickException(str(exc)) from None
+
+
+class _StartError(Exception):
+    pass
+
+
+def _make_transport(port: _Port) -> Any:
+    if port.scheme == "tcp":
+        from devsim.transports.tcp import TcpTransport
+
+        return TcpTransport(host=port.host, port=port.port)
+    if port.scheme == "rfc2217":
+        from devsim.transports.rfc2217 import Rfc2217Transport
+
+        return Rfc2217Transport(host=port.host, port=port.port)
+    from devsim.transports.pty import PtyTransport
+
+    return PtyTransport(link=port.link)
+
+
+def _say(line: str) -> None:
+    print(line, flush=True)
+
+
+async def _serve(plan: _Plan) -> None:
+    from devsim.core.control import ControlServer
+    from devsim.core.runtime import Runtime
+
+    loop = asyncio.get_running_loop()
+    stop = asyncio.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(signum, stop.set)
+
+    runtime = Runtime(virtual=plan.virtual, speed=plan.speed, state_dir=plan.state_dir)
+    async with runtime:
+        stage = "create the devices"
+        server: ControlServer | None = None
+        try:
+            if plan.state_dir is not None:
+                Path(plan.state_dir).mkdir(parents=True, exist_ok=True)
+            devices = [runtime.add_device(plan.kind, name, config) for name, config in plan.devices]
+            stage = f"open the {plan.port.scheme} port"
+            transport = _make_transport(plan.port)
+            await runtime.serve(devices, transport, pacing=plan.pacing, trace=plan.trace)
+            if plan.control is not None:
+                stage = f"serve the control API on {plan.control}"
+                server = ControlServer(runtime, plan.control, allow_remote=plan.allow_remote)
+                address = await server.start()
+        except Exception as exc:  # one line, no traceback: a port in use, a bad path, ...
+            if server is not None:
+                await server.close()
+            detail = str(exc) if isinstance(exc, OSError | ValueError) else f"{type(exc).__name__}: {exc}"
+            raise _StartError(f"cannot {stage}: {detail}") from None
+
+        try:
+            for device in devices:
+                _say(f"{device.name}: {plan.port.scheme} {_port_text(transport, plan.port.scheme)}")
+                if plan.port.link:
+                    _say(f"{device.name}: link {plan.port.link}")
+            if server is not None:
+                _say(f"control: {address}")
+            names = ", ".join(device.name for device in devices)
+            print(f"devsim: serving {names}; Ctrl-C to stop", file=sys.stderr, flush=True)
+            await stop.wait()
+        finally:
+            if server is not None:
+                await server.close()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        loop.remove_signal_handler(signum)
+
+
+def _port_text(transport: Any, scheme: str) -> str:
+    """The pty's device path (its link gets a line of its own), or the pyserial URL of a port."""
+    address = str(getattr(transport, "address", "") or "")
+    url = str(getattr(transport, "url", "") or "")
+    if scheme == "pty":
+        return address or url
+    return url or address
+
+
+# -- devsim ctl ------------------------------------------------------------------------------
+def _parse_value(text: str) -> Any:
+    try:
+        return json.loads(text)
+    except ValueError:
+        return text
+
+
+def _emit(result: Any) -> None:
+    if isinstance(result, dict | list):
+        click.echo(json.dumps(result, indent=2, sort_keys=False))
+    else:
+        click.echo(json.dumps(result))
+
+
+def _call(ctx: click.Context, method: str, *args: Any, **kwargs: Any) -> None:
+    addr: str = ctx.obj
+    try:
+        client = ControlClient(addr)
+    except ControlAddressError as exc:
+        raise click.UsageError(f"--control: {exc}") from None
+    except OSError as exc:
+        raise click.ClickException(f"cannot connect to {addr}: {exc.strerror or exc}") from None
+    try:
+        with client:
+            result = getattr(client, method)(*args, **kwargs)
+    except ControlError as exc:
+        raise click.ClickException(str(exc)) from None
+    except (OSError, ValueError) as exc:
+        raise click.ClickException(f"control connection to {addr} failed: {exc}") from None
+    _emit(result)
+
+
+@cli.group()
+@click.option(
+    "--control", "addr", envvar="DEVSIM_CONTROL", required=True, metavar="ADDR",
+    help="Control address of a running 'devsim run' (unix:/path.sock or [HOST:]PORT; env DEVSIM_CONTROL).",
+)
+@click.pass_context
+def ctl(ctx: click.Context, addr: str) -> None:
+    """Control a running simulator; prints JSON results."""
+    ctx.obj = addr
+
+
+@ctl.command("devices")
+@click.pass_context
+def ctl_devices(ctx: click.Context) -> None:
+    """The devices: name, kind and port."""
+    _call(ctx, "devices")
+
+
+@ctl.command("read")
+@click.argument("device")
+@click.argument("name")
+@click.pass_context
+def ctl_read(ctx: click.Context, device: str, name: str) -> None:
+    """Read NAME (e.g. axis.position) of DEVICE."""
+    _call(ctx, "read", device, name)
+
+
+@ctl.command("set")
+@click.argument("device")
+@click.argument("name")
+@click.argument("value")
+@click.pass_context
+def ctl_set(ctx: click.Context, device: str, name: str, value: str) -> None:
+    """Set NAME of DEVICE to VALUE (JSON if it parses, e.g. false or 12.5; else a string)."""
+    _call(ctx, "set", device, name, _parse_value(value))
+
+
+@ctl.command("state")
+@click.argument("device")
+@click.pass_context
+def ctl_state(ctx: click.Context, device: str) -> None:
+    """A snapshot of DEVICE's state."""
+    _call(ctx, "state", device)
+
+
+@ctl.command("power-cycle")
+@click.argument("device")
+@click.option("--wipe", is_flag=True, help="Erase non-volatile memory first.")
+@click.pass_context
+def ctl_power_cycle(ctx: click.Context, device: str, wipe: bool) -> None:
+    """Switch DEVICE off and on."""
+    _call(ctx, "power_cycle", device, wipe=wipe)
+
+
+@ctl.command("advance")
+@click.argument("seconds", type=float)
+@click.pass_context
+def ctl_advance(ctx: click.Context, seconds: float) -> None:
+    """Advance virtual time by SECONDS (needs 'devsim run --virtual'); prints the new time."""
+    _call(ctx, "advance", seconds)
+
+
+@ctl.command("now")
+@click.pass_context
+def ctl_now(ctx: click.Context) -> None:
+    """The simulator's current time in seconds."""
+    _call(ctx, "now")
+
+
+@ctl.command("line")
+@click.argument("device")
+@click.pass_context
+def ctl_line(ctx: click.Context, device: str) -> None:
+    """Status of the line serving DEVICE (settings, mismatch)."""
+    _call(ctx, "line", device)

@@ -1,0 +1,220 @@
+"""YAML configuration files with line-numbered validation errors.
+
+A configuration file (``devsim run --config``, later plant and scenario files) is YAML, loaded
+with a :class:`yaml.SafeLoader` subclass that remembers the line of every mapping key and list
+item, then validated against a pydantic model.  Every problem is reported as one line that an
+editor can jump to::
+
+    config.yaml:3: baud: baud must be one of 1200, 2400, ...
+    config.yaml:7: axis.limit_left: Input should be a valid number
+    config.yaml:4: mapping values are not allowed here
+
+Use :func:`load_config` for the common case, or :func:`load_yaml` + :func:`validate` when the
+data needs reshaping in between.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Hashable
+from pathlib import Path
+from typing import Any, TypeVar
+
+import yaml
+from pydantic import BaseModel, ValidationError
+
+__all__ = ["ConfigError", "LineDict", "LineList", "LineLoader", "load_config", "load_yaml", "plain", "validate"]
+
+M = TypeVar("M", bound=BaseModel)
+
+
+class ConfigError(ValueError):
+    """A configuration file is unreadable, not YAML, or does not validate.
+
+    ``str(error)`` is one line, ``file:line: dotted.field: message``; ``messages`` holds one such
+    line per problem found (the first is the message).
+    """
+
+    def __init__(self, message: str, messages: list[str] | None = None) -> None:
+        super().__init__(message)
+        self.messages = messages or [message]
+
+
+class LineDict(dict[Any, Any]):
+    """A YAML mapping that knows its own line and each key's line (1-based)."""
+
+    line: int = 1
+    key_lines: dict[Hashable, int]
+
+
+class LineList(list[Any]):
+    """A YAML sequence that knows its own line and each item's line (1-based)."""
+
+    line: int = 1
+    item_lines: list[int]
+
+
+class LineLoader(yaml.SafeLoader):
+    """A safe loader whose mappings and sequences record line numbers; duplicate keys fail."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> LineDict:  # type: ignore[override]
+        seen: dict[tuple[str, str], int] = {}
+        for key_node, _ in node.value:
+            if isinstance(key_node, yaml.ScalarNode) and key_node.tag != "tag:yaml.org,2002:merge":
+                ident = (key_node.tag, key_node.value)
+                if ident in seen:
+                    raise yaml.constructor.ConstructorError(
+                        None, None, f"duplicate key {key_node.value!r} (first on line {seen[ident]})",
+                        key_node.start_mark,
+                    )
+                seen[ident] = key_node.start_mark.line + 1
+        self.flatten_mapping(node)
+        result = LineDict()
+        result.line = node.start_mark.line + 1
+        result.key_lines = {}
+        for key_node, value_node in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if not isinstance(key, Hashable):
+                raise yaml.constructor.ConstructorError(
+                    "while constructing a mapping", node.start_mark, "found an unhashable key", key_node.start_mark
+                )
+            result[key] = self.construct_object(value_node, deep=deep)
+            result.key_lines[key] = key_node.start_mark.line + 1
+        return result
+
+    def construct_line_sequence(self, node: yaml.SequenceNode) -> LineList:
+        result = LineList(self.construct_object(child, deep=True) for child in node.value)
+        result.line = node.start_mark.line + 1
+        result.item_lines = [child.start_mark.line + 1 for child in node.value]
+        return result
+
+    def construct_line_mapping(self, node: yaml.MappingNode) -> LineDict:
+        return self.construct_mapping(node, deep=True)
+
+
+LineLoader.add_constructor("tag:yaml.org,2002:map", LineLoader.construct_line_mapping)
+LineLoader.add_constructor("tag:yaml.org,2002:seq", LineLoader.construct_line_sequence)
+
+
+def _display(path: str | os.PathLike[str]) -> str:
+    return os.fspath(path)
+
+
+def load_yaml(path: str | os.PathLike[str], text: str | None = None) -> Any:
+    """Parse a YAML file (or ``text``, reported as ``path``) keeping line numbers.
+
+    Mappings come back as :class:`LineDict`, sequences as :class:`LineList`; an empty document
+    is ``None``.  Raises :class:`ConfigError` (``file:line: problem``) for unreadable files and
+    YAML syntax errors.
+    """
+    name = _display(path)
+    if text is None:
+        try:
+            text = Path(path).read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise ConfigError(f"{name}: no such file") from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ConfigError(f"{name}: cannot read: {exc}") from None
+    try:
+        return yaml.load(text, Loader=LineLoader)  # noqa: S506 - LineLoader is a SafeLoader
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        line = mark.line + 1 if mark is not None else 1
+        problem = exc.problem or exc.context or "invalid YAML"
+        if exc.context and exc.problem and exc.context != exc.problem:
+            problem = f"{problem} ({exc.context})"
+        raise ConfigError(f"{name}:{line}: {problem}") from None
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{name}:1: {exc}") from None
+
+
+def _locate(data: Any, loc: tuple[int | str, ...]) -> tuple[int, list[str]]:
+    """The best YAML line for a pydantic error location, and the location's printable parts.
+
+    Walks ``data`` along ``loc`` as far as the data goes.  A key missing from a mapping (a
+    required field) is still named and reported at the mapping's line; location parts that
+    pydantic adds beyond the data (union member tags such as ``float``) are dropped.
+    """
+    line = getattr(data, "line", 1)
+    parts: list[str] = []
+    node = data
+    for step in loc:
+        if isinstance(node, LineDict):
+            if step in node:
+                line = node.key_lines.get(step, line)
+                parts.append(str(step))
+                node = node[step]
+                continue
+            # an integer-looking key given as a string by pydantic, or a missing field
+            parts.append(str(step))
+            break
+        if isinstance(node, LineList) and isinstance(step, int) and 0 <= step < len(node):
+            line = node.item_lines[step]
+            parts.append(str(step))
+            node = node[step]
+            continue
+        break
+    return line, parts
+
+
+def _message(error: dict[str, Any]) -> str:
+    msg = str(error.get("msg", "invalid"))
+    for prefix in ("Value error, ", "Assertion failed, "):
+        if msg.startswith(prefix):
+            msg = msg[len(prefix):]
+    if error.get("type") == "extra_forbidden":
+        msg = "unknown field"
+    return msg
+
+
+def _kind(data: Any) -> str:
+    if isinstance(data, list):
+        return "a list"
+    if isinstance(data, str):
+        return "a string"
+    return type(data).__name__
+
+
+def validate(data: Any, model: type[M], path: str | os.PathLike[str]) -> M:
+    """Validate YAML data from :func:`load_yaml` against ``model``; errors name file and line."""
+    name = _display(path)
+    if data is None:
+        data = LineDict()
+        data.key_lines = {}
+    try:
+        return model.model_validate(data)
+    except ValidationError as exc:
+        messages: list[str] = []
+        seen: set[tuple[int, str]] = set()
+        for error in exc.errors():
+            line, parts = _locate(data, tuple(error.get("loc", ())))
+            field = ".".join(parts)
+            if (line, field) in seen:  # e.g. one error per member of a union: keep the first
+                continue
+            seen.add((line, field))
+            text = _message(error)
+            if not parts and not isinstance(data, dict):
+                text = f"expected a mapping at the top level, got {_kind(data)}"
+            messages.append(f"{name}:{line}: {field}: {text}" if field else f"{name}:{line}: {text}")
+        first = messages[0]
+        if len(messages) > 1:
+            first += f" (and {len(messages) - 1} more)"
+        raise ConfigError(first, messages) from None
+
+
+def load_config(path: str | os.PathLike[str], model: type[M]) -> M:
+    """Load a YAML file and validate it against ``model``.
+
+    Raises :class:`ConfigError` whose message is one line, ``file:line: dotted.field: message``
+    (or ``file:line: message`` for YAML syntax errors).
+    """
+    return validate(load_yaml(path), model, path)
+
+
+def plain(data: Any) -> Any:
+    """``data`` from :func:`load_yaml` as plain dicts and lists (line information dropped)."""
+    if isinstance(data, dict):
+        return {key: plain(value) for key, value in data.items()}
+    if isinstance(data, list):
+        return [plain(value) for value in data]
+    return data

@@ -1,0 +1,208 @@
+"""SERS motion through the pty under virtual time (§4.6.6, §4.8.4, §5 of the spec)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from tests.sers.conftest import Plant
+
+DEG = 12800 / 360  # increments per degree at the default weighting
+
+
+def test_w_update_during_constant_phase_adds_to_relative_move(sers: Plant) -> None:
+    host = sers.host
+    host.ask("#ON V=100 A=1000 WR=3600 E\r")
+    sers.advance(1.0)
+    assert sers.read("axis.phase") == "const"
+    assert host.ask("#W=360\r") == b"#W=360\r\nok0\n\r"
+    sers.settle()
+    assert sers.read("param.P51") == pytest.approx(3960)
+
+
+def test_w_update_during_acceleration_is_refused(sers: Plant) -> None:
+    host = sers.host
+    host.ask("#ON V=1000 A=10 WR=36000 E\r")
+    sers.advance(0.2)
+    reply = host.ask("#W=100\r")
+    assert reply == b"#W=100\r\n*Antrieb muss konstant fahren oder stehen\n\r"
+
+
+def test_absolute_mode(sers: Plant) -> None:
+    host = sers.host
+    host.ask("#ON WA=90 E\r")
+    sers.settle()
+    assert sers.read("param.P1014") == 2
+    assert sers.read("param.P51") == 90
+    assert host.ask("#WA=90 E\r") == b"#WA=90 E\r\nok1\n\r"  # already there: no motion
+    sers.settle()
+    assert sers.read("param.P51") == 90
+
+
+def test_relative_clear_mode(plant_factory) -> None:
+    plant = plant_factory({"params": {"P1014": 1}})
+    host = plant.host
+    host.ask("#ON W=360 E\r")
+    plant.settle()
+    host.ask("#E\r")
+    plant.settle()
+    assert plant.read("param.P51") == 360
+    assert plant.read("axis.position") == pytest.approx(720 * DEG)
+
+
+def test_overflow_counter_mode(plant_factory) -> None:
+    plant = plant_factory({"params": {"P1014": 3, "P103": 360}})
+    plant.host.ask("#ON W=270 E\r")
+    plant.settle()
+    plant.host.ask("#E\r")
+    plant.settle()
+    assert plant.read("param.P51") == pytest.approx(180)
+    assert plant.read("param.C1") == 1
+
+
+def test_e_while_moving_is_refused(sers: Plant) -> None:
+    sers.host.ask("#ON W=3600 E\r")
+    assert sers.host.ask("#E\r") == b"#E\r\n*Antrieb muss stehen\n\r"
+
+
+def test_stop_decelerates_with_a(sers: Plant) -> None:
+    host = sers.host
+    host.ask("#ON V=600 A=100 W=36000 E\r")
+    sers.advance(3.0)  # cruising at 600 rpm = 20π rad/s
+    at_stop = sers.read("axis.position")
+    assert host.ask("#S\r") == b"#S\r\nok0\n\r"
+    sers.settle()
+    braking = (20 * math.pi) ** 2 / (2 * 100)  # rad
+    assert sers.read("axis.position") - at_stop == pytest.approx(math.degrees(braking) * DEG, rel=1e-6)
+    assert host.ask("#POS?\r") == b"#POS?\rPOS=1\n\r\nok1\n\r"
+
+
+def test_off_while_moving_stops_at_once(sers: Plant) -> None:
+    sers.host.ask("#ON W=3600 E\r")
+    sers.advance(0.5)
+    here = sers.read("axis.position")
+    assert sers.host.ask("#OFF\r") == b"#OFF\r\nok1\n\r"
+    assert sers.read("axis.position") == pytest.approx(here)
+    assert sers.read("display") == {"char": "4", "blinking": False}
+    assert sers.read("output.READY") is False
+
+
+def test_limit_switch_hit_mid_move(plant_factory) -> None:
+    plant = plant_factory({"axis": {"limit_right": 1000 * DEG}, "params": {"P1030": 1000}})
+    host = plant.host
+    host.ask("#ON V=300 W=3600 E\r")
+    dev = plant.runtime.device("sers")
+    assert plant.runtime.run_until(lambda: dev.read("P11") != 0, 10)
+    assert plant.read("axis.position") == pytest.approx(1000 * DEG)
+    plant.settle()
+    # braked with P1030 = 1000 rad/s² from 300 rpm = 10π rad/s
+    overrun = math.degrees((10 * math.pi) ** 2 / 2000)
+    assert plant.read("axis.position") == pytest.approx((1000 + overrun) * DEG, rel=1e-6)
+    assert plant.read("P11") == 8192
+    assert plant.read("output.READY") is False
+    assert plant.read("energized") is True  # phases go off 50 ms after the relay opens
+    plant.advance(0.05)
+    assert plant.read("energized") is False
+    assert plant.read("display") == {"char": "c", "blinking": False}
+    assert host.ask("#\r") == b"#\r\nok4\n\r"
+    host.send("#ON\r")
+    # ON is carried out at its last character, so the refusal precedes the CR's echo
+    host.expect(b"#ON\n*Antrieb ist nicht freigegeben\n\r\r")
+
+
+def test_stop_input(sers: Plant) -> None:
+    host = sers.host
+    host.ask("#ON W=36000 E\r")
+    sers.advance(1.0)
+    sers.set("input.stop", True)
+    sers.settle()
+    assert sers.read("display") == {"char": "5", "blinking": True}
+    assert host.ask("#P12=0\r")
+    assert host.ask("#E\r") == b"#E\r\n*Stop Schalter ist offen\n\r"
+    assert host.ask("#P1013?\r") == b"#P1013?\rP1013=140\n\r\nok3\n\r"  # STOP open, ref and service open
+    sers.set("input.stop", False)
+    assert host.ask("#P12=0 E\r") == b"#P12=0 E\r\nok0\n\r"
+
+
+def test_software_limits(sers: Plant) -> None:
+    host = sers.host
+    host.ask("#P1040=-100 P1041=100\r")
+    host.ask("#ON V=60 A=1000 W=360 E\r")
+    sers.settle()
+    p51 = sers.read("param.P51")
+    assert 100 < p51 < 110
+    assert sers.read("P12") & 1
+    assert host.ask("#LP?\r") == b"#LP?\rLP=1\n\r\nok3\n\r"
+    assert sers.read("display") == {"char": "L", "blinking": True}
+    assert host.ask("#P1040=200\r") == "#P1040=200\r\n*Die negative Grenzposition ist größer als die positive\n\r".encode(
+        "latin-1"
+    )
+
+
+def test_compare_position_sets_output(sers: Plant) -> None:
+    sers.host.ask("#P1024=90 P1025=2\r")
+    sers.host.ask("#ON W=180 E\r")
+    dev = sers.runtime.device("sers")
+    assert sers.runtime.run_until(lambda: dev.read("output.O2") is True, 10)
+    assert sers.read("param.P51") == pytest.approx(90, abs=1e-3)
+
+
+def test_in_position_output(plant_factory) -> None:
+    plant = plant_factory({"params": {"P1125": 1}})
+    plant.host.ask("#ON\r")
+    assert plant.read("output.O1") is True
+    plant.host.ask("#W=90 E\r")
+    assert plant.read("output.O1") is False
+    plant.settle()
+    assert plant.read("output.O1") is True
+
+
+def test_jog_via_inputs(plant_factory) -> None:
+    plant = plant_factory({"params": {"P1021": 1 | 32}})
+    plant.set("input.I1", True)  # I1 = left slow; auto-energises
+    plant.advance(1.0)
+    assert plant.read("energized") is True
+    assert plant.read("axis.velocity") == pytest.approx(-30 * 12800 / 60)
+    plant.set("input.I1", False)
+    plant.settle()
+    assert plant.read("motion") is None
+    plant.set("input.I6", True)  # rising edge toggles the motor off
+    assert plant.read("energized") is False
+
+
+def test_p1031_jog_command(sers: Plant) -> None:
+    sers.host.ask("#ON P1035=0 P1031=8\r")
+    sers.advance(5.0)
+    assert sers.read("axis.velocity") == pytest.approx(300 * 12800 / 60)
+
+
+def test_jog_until_condition(sers: Plant) -> None:
+    sers.host.ask("#ON P1035=0\r")
+    sers.host.ask("#RS:I1=1\r")
+    sers.advance(2.0)
+    assert sers.read("motion") == "jog"
+    sers.set("input.I1", True)
+    sers.settle()
+    assert sers.read("motion") is None
+
+
+def test_feed_rate_override_scales_jog(sers: Plant) -> None:
+    sers.host.ask("#ON P1035=0 P108=50 LF\r")
+    sers.advance(5.0)
+    assert sers.read("axis.velocity") == pytest.approx(-150 * 12800 / 60)
+
+
+def test_homing_negative_with_limit_switch_as_reference(plant_factory) -> None:
+    plant = plant_factory({"axis": {"limit_left": -50 * DEG}, "params": {"P147": 3}})
+    plant.host.ask("#ON H\r")
+    plant.settle()
+    assert plant.read("P11") == 0
+    assert plant.read("axis.position") == pytest.approx(-50 * DEG)
+    assert plant.read("homed") is True
+
+
+def test_speed_factor_does_not_change_simulated_timing(sers: Plant) -> None:
+    """Virtual time: the T-05 move takes 1.321 simulated seconds however fast the test runs."""
+    sers.host.ask("#ON V=1000 W=2500 E\r")
+    assert sers.settle() == pytest.approx(1.321, abs=1e-3)

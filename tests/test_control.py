@@ -1,0 +1,216 @@
+"""The out-of-process control API: JSON lines over Unix sockets and loopback TCP."""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import tempfile
+from collections.abc import Iterator
+
+import pytest
+
+from devsim.core.control import (
+    ControlAddress,
+    ControlAddressError,
+    ControlClient,
+    ControlError,
+    ControlServer,
+    parse_address,
+)
+from devsim.core.runtime import Runtime
+
+ECHO = "echo=tests.support.echo:EchoDevice"
+
+
+@pytest.fixture(autouse=True)
+def _echo_kind(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("DEVSIM_EXTRA_KINDS", ECHO)
+
+
+@pytest.fixture
+def sockdir() -> Iterator[str]:
+    # A short directory: Unix socket paths are limited to ~100 bytes.
+    with tempfile.TemporaryDirectory(prefix="dsc") as path:
+        yield path
+
+
+@pytest.fixture
+def runtime() -> Iterator[Runtime]:
+    rt = Runtime(virtual=True).start()
+    rt.add_device("echo", "echo1", {"address": 4})
+    rt.add_device("echo", "echo2")
+    try:
+        yield rt
+    finally:
+        rt.stop()
+
+
+@pytest.fixture(params=["unix", "tcp"])
+def served(request: pytest.FixtureRequest, runtime: Runtime, sockdir: str) -> Iterator[tuple[Runtime, str]]:
+    addr = f"unix:{sockdir}/ctl.sock" if request.param == "unix" else "127.0.0.1:0"
+    server = ControlServer(runtime, addr)
+    bound = server.start_sync()
+    try:
+        yield runtime, str(bound)
+    finally:
+        server.close_sync()
+
+
+def test_read_set_state_over_one_connection(served: tuple[Runtime, str]) -> None:
+    runtime, addr = served
+    with ControlClient(addr) as client:
+        assert client.read("echo1", "address") == 4
+        assert client.read("echo1", "input.mute") is False
+        client.set("echo1", "input.mute", True)
+        assert client.read("echo1", "input.mute") is True
+        assert runtime.read("echo1", "input.mute") is True  # the same state as in process
+        state = client.state("echo1")
+        assert state["address"] == 4
+        assert state["signals"]["input.mute"] is True
+        names = [d["name"] for d in client.devices()]
+        assert names == ["echo1", "echo2"]
+        assert {d["kind"] for d in client.devices()} == {"echo"}
+
+
+def test_advance_moves_virtual_time_and_fires_timers(served: tuple[Runtime, str]) -> None:
+    _, addr = served
+    with ControlClient(addr) as client:
+        assert client.now() == 0.0
+        client.set("echo2", "timer", 1.5)
+        assert client.advance(1.0) == pytest.approx(1.0)
+        assert client.read("echo2", "fired") is False
+        assert client.advance(0.5) == pytest.approx(1.5)
+        assert client.read("echo2", "fired") is True
+        assert client.now() == pytest.approx(1.5)
+
+
+def test_power_cycle_with_and_without_wipe(served: tuple[Runtime, str]) -> None:
+    _, addr = served
+    with ControlClient(addr) as client:
+        client.set("echo1", "nvram.note", "kept")
+        client.power_cycle("echo1")
+        assert client.read("echo1", "boots") == 2
+        assert client.read("echo1", "nvram.note") == "kept"
+        client.power_cycle("echo1", wipe=True)
+        assert client.read("echo1", "nvram.note") is None
+
+
+def test_errors_are_typed_and_the_connection_survives(served: tuple[Runtime, str]) -> None:
+    _, addr = served
+    with ControlClient(addr) as client:
+        with pytest.raises(ControlError) as info:
+            client.read("echo1", "no.such.name")
+        assert info.value.type == "UnknownName"
+        assert "no.such.name" in info.value.args[0]
+        with pytest.raises(ControlError) as info:
+            client.read("nobody", "address")
+        assert info.value.type == "UnknownDevice"
+        assert info.value.args[0].startswith("no device named 'nobody'")
+        with pytest.raises(ControlError) as info:
+            client.request("read", device="echo1")
+        assert info.value.type == "BadRequest"
+        with pytest.raises(ControlError) as info:
+            client.request("explode")
+        assert info.value.type == "BadRequest"
+        with pytest.raises(ControlError) as info:
+            client.line("echo1")  # not served on any line
+        assert info.value.type == "UnknownName"
+        assert client.read("echo1", "address") == 4
+
+
+def test_advance_refused_on_a_real_clock(sockdir: str) -> None:
+    rt = Runtime().start()
+    try:
+        server = ControlServer(rt, f"unix:{sockdir}/real.sock")
+        server.start_sync()
+        with ControlClient(str(server.address)) as client:
+            with pytest.raises(ControlError) as info:
+                client.advance(1)
+            assert info.value.type == "RuntimeError"
+            assert client.now() >= 0.0
+        server.close_sync()
+    finally:
+        rt.stop()
+
+
+def test_raw_protocol(served: tuple[Runtime, str]) -> None:
+    _, addr = served
+    parsed = parse_address(addr)
+    if parsed.path is not None:
+        sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        sock.connect(parsed.path)
+    else:
+        sock = socket.create_connection((parsed.host, parsed.port))
+    with sock, sock.makefile("rwb") as stream:
+
+        def ask(payload: bytes) -> dict[str, object]:
+            stream.write(payload + b"\n")
+            stream.flush()
+            return json.loads(stream.readline())
+
+        assert ask(b'{"id": 1, "op": "read", "device": "echo1", "name": "address"}') == {
+            "id": 1,
+            "ok": True,
+            "result": 4,
+        }
+        assert ask(b'{"id": "x", "op": "set", "device": "echo1", "name": "value", "value": 2.5}') == {
+            "id": "x",
+            "ok": True,
+            "result": None,
+        }
+        reply = ask(b'{"id": 3, "op": "read", "device": "echo1", "name": "bogus"}')
+        assert reply["ok"] is False and reply["type"] == "UnknownName" and reply["id"] == 3
+        reply = ask(b"this is not json")
+        assert reply == {"id": None, "ok": False, "error": reply["error"], "type": "BadRequest"}
+        reply = ask(b'{"id": 5, "op": "now", "colour": "red"}')
+        assert reply["type"] == "BadRequest" and reply["id"] == 5 and "colour" in str(reply["error"])
+        reply = ask(b'{"id": 6, "op": "advance", "seconds": -1}')
+        assert reply["type"] == "BadRequest"
+        assert ask(b'{"id": 7, "op": "read", "device": "echo1", "name": "value"}')["result"] == 2.5
+
+
+def test_non_loopback_host_is_refused(runtime: Runtime) -> None:
+    with pytest.raises(ControlAddressError, match="non-loopback"):
+        ControlServer(runtime, "0.0.0.0:0")
+    with pytest.raises(ControlAddressError, match="non-loopback"):
+        ControlServer(runtime, "192.0.2.1:7000")
+    ControlServer(runtime, "0.0.0.0:0", allow_remote=True)  # allowed when asked for (not started)
+    ControlServer(runtime, "localhost:0")
+    ControlServer(runtime, "[::1]:0")
+
+
+def test_parse_address() -> None:
+    assert parse_address("unix:/tmp/x.sock") == ControlAddress(path="/tmp/x.sock")
+    assert parse_address("7000") == ControlAddress(host="127.0.0.1", port=7000)
+    assert parse_address("tcp:localhost:7000") == ControlAddress(host="localhost", port=7000)
+    assert parse_address("[::1]:7000") == ControlAddress(host="::1", port=7000)
+    assert str(parse_address("[::1]:7000")) == "[::1]:7000"
+    assert str(parse_address("unix:/a.sock")) == "unix:/a.sock"
+    for bad in ("unix:", "x", "host:port", "99999", "[::1]7"):
+        with pytest.raises(ControlAddressError):
+            parse_address(bad)
+
+
+def test_stale_socket_is_replaced_but_a_live_one_is_not(runtime: Runtime, sockdir: str) -> None:
+    path = os.path.join(sockdir, "s.sock")
+    stale = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    stale.bind(path)
+    stale.close()  # leaves the socket file behind, nobody listening
+    first = ControlServer(runtime, f"unix:{path}")
+    first.start_sync()
+    try:
+        with pytest.raises(ControlAddressError, match="another process"):
+            ControlServer(runtime, f"unix:{path}").start_sync()
+    finally:
+        first.close_sync()
+    assert not os.path.exists(path)
+
+
+def test_clients_in_parallel(served: tuple[Runtime, str]) -> None:
+    _, addr = served
+    with ControlClient(addr) as a, ControlClient(addr) as b:
+        a.set("echo1", "value", 1)
+        b.set("echo2", "value", 2)
+        assert a.read("echo2", "value") == 2
+        assert b.read("echo1", "value") == 1
