@@ -41,16 +41,6 @@ def invoke(*args: str) -> tuple[int, str, str]:
     return result.exit_code, result.stdout, result.stderr
 
 
-def sers_available() -> bool:
-    try:
-        from devsim.core.registry import device_class
-
-        device_class("sers")
-    except Exception:
-        return False
-    return True
-
-
 # -- in process (CliRunner) ----------------------------------------------------------------
 def test_list_shows_kinds_with_descriptions() -> None:
     code, out, _ = invoke("list")
@@ -119,7 +109,6 @@ def test_missing_config_file(tmp_path: Path) -> None:
     assert err == f"Error: {tmp_path / 'nope.yaml'}: no such file\n"
 
 
-@pytest.mark.skipif(not sers_available(), reason="SERS device not available")
 def test_sers_config_error(tmp_path: Path) -> None:
     path = tmp_path / "config.yaml"
     path.write_text("address: 3\nparams:\n  P1017: 2\nbaud: 9601\n")
@@ -308,7 +297,6 @@ def test_python_m_devsim_list() -> None:
     assert "echo" in done.stdout.split()
 
 
-@pytest.mark.skipif(not sers_available(), reason="SERS device not available")
 def test_run_sers_smoke(tmp_path: Path, sockdir: str) -> None:
     config = tmp_path / "sers.yaml"
     config.write_text("address: 1\nbaud: 9600\nboot_time: 0\naxis:\n  limit_left: -1000\n  limit_right: 5000\n")
