@@ -14,6 +14,7 @@ Tokenisation follows spec G-TOKEN: keywords are case-insensitive, statements may
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 __all__ = [
@@ -58,6 +59,14 @@ COMMAND_WORDS = (
 ARG_WORDS = ("IF", "THEN", "ELSE", "END", "WAIT", "GOTO", "GT", "GOSUB", "GS", "RUN", "LIST", "LISTP",
              "TR", "RS", "RF", "LS", "LF")
 ALL_WORDS = tuple(sorted(set(ALIAS_WORDS + COMMAND_WORDS + ARG_WORDS), key=len, reverse=True))
+_WORD_SET = frozenset(ALL_WORDS)
+_PROPER_PREFIXES = frozenset(w[:i] for w in ALL_WORDS for i in range(1, len(w)))
+_LONGEST = len(ALL_WORDS[0])
+
+
+_DIGITS = re.compile(r"[0-9]+")
+_NUMBER = re.compile(r"[0-9]*\.?[0-9]*")
+_SIGNED_NUMBER = re.compile(r"-?[0-9]*\.?[0-9]*")
 
 
 class NeedMore(Exception):
@@ -244,40 +253,36 @@ class _Cursor:
 
     def word(self) -> str | None:
         """Longest keyword at the cursor (consumed), or None."""
-        rest = self.upper[self.pos :]
-        if not self.final and any(len(w) > len(rest) and w.startswith(rest) for w in ALL_WORDS):
+        rest = self.upper[self.pos : self.pos + _LONGEST]
+        if not self.final and rest in _PROPER_PREFIXES and self.pos + len(rest) == len(self.text):
             raise NeedMore
-        for w in ALL_WORDS:
-            if rest.startswith(w):
-                self.pos += len(w)
-                return w
+        for size in range(len(rest), 0, -1):
+            if rest[:size] in _WORD_SET:
+                self.pos += size
+                return rest[:size]
         return None
 
     def number(self, errno: int, signed: bool = False) -> Number:
         start = self.pos
-        if signed and self.peek() == "-":
-            self.pos += 1
-        digits = 0
-        while self.peek().isdigit() and self.peek():
-            self.pos += 1
-            digits += 1
-        if self.peek() == ".":
-            self.pos += 1
-            while self.peek().isdigit() and self.peek():
-                self.pos += 1
-                digits += 1
-        if digits == 0:
+        match = (_SIGNED_NUMBER if signed else _NUMBER).match(self.text, self.pos)
+        if match is not None and match.end() >= len(self.text) and not self.final:
+            raise NeedMore
+        if match is None or not any(ch.isdigit() for ch in match.group()):
             raise SyntaxFault(errno, start)
-        return Number(self.text[start : self.pos])
+        self.pos = match.end()
+        self.peek()  # a number at the end of the text may still grow
+        return Number(match.group())
 
     def integer(self, errno: int) -> int:
         self.skip_spaces()
-        start = self.pos
-        while self.peek().isdigit() and self.peek():
-            self.pos += 1
-        if self.pos == start:
-            raise SyntaxFault(errno, start)
-        return int(self.text[start : self.pos])
+        match = _DIGITS.match(self.text, self.pos)
+        if match is None:
+            if self.pos >= len(self.text) and not self.final:
+                raise NeedMore
+            raise SyntaxFault(errno, self.pos)
+        self.pos = match.end()
+        self.peek()  # more digits may follow
+        return int(match.group())
 
 
 def _address(cur: _Cursor, errno: int = 61) -> Address:
