@@ -1,0 +1,84 @@
+"""Fuzzing the pure SERS codec and parser, and the device behind them (no I/O needed)."""
+
+from __future__ import annotations
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from devsim.core.clock import VirtualClock
+from devsim.core.nvram import NonVolatileMemory
+from devsim.devices.sers import SersDevice, codec
+from devsim.devices.sers.statements import parse
+
+ALPHABET = "#*?=<>!:.,;-+/&|^\" \t\r\n0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+COMMANDS = ["#ON", "#OFF", "#E", "#S", "#H", "#W=360", "#V=1000", "#P11?", "#P12=0", "#RS", "#LS",
+            "#IF I1=1 O1=1", "#X=V*ADC+100", "#LIST", "#LISTP 0.1", "#VER", "#P1017=2", "#P1017=1"]
+
+
+@given(st.text(alphabet=ALPHABET, max_size=80), st.booleans())
+def test_parser_never_raises_and_is_prefix_stable(text: str, final: bool) -> None:
+    result = parse(text, final)
+    assert result.errno is None or 1 <= result.errno <= 125
+    ends = [end for _stmt, end in result.statements]
+    assert ends == sorted(ends) and all(0 < end <= len(text) for end in ends)
+    if not final:
+        # what is complete now stays complete, unchanged, when more text arrives
+        longer = parse(text + "X", False)
+        assert [s for s, _ in longer.statements[: len(result.statements)]] == [
+            s for s, _ in result.statements
+        ]
+
+
+@given(st.binary(max_size=200))
+def test_framer_accepts_any_bytes(data: bytes) -> None:
+    framer = codec.Framer()
+    for byte in data:
+        for event in framer.feed(byte):
+            assert isinstance(
+                event,
+                codec.Ignored | codec.Restart | codec.AddressChar | codec.Address | codec.TextChar | codec.LineEnd,
+            )
+
+
+def _device() -> tuple[SersDevice, VirtualClock, bytearray, NonVolatileMemory]:
+    clock = VirtualClock()
+    nvram = NonVolatileMemory(None)
+    device = SersDevice(clock=clock, config={"boot_time": 0}, nvram=nvram)
+    out = bytearray()
+    device.attach(out.extend)
+    device.feed(b"#P1019=45 PSAVE\r#NEW\r#ON\r#W=360 E\r#QUIT\r")
+    return device, clock, out, nvram
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.one_of(st.binary(max_size=40), st.sampled_from([c + "\r" for c in COMMANDS]).map(str.encode)),
+                max_size=25),
+       st.lists(st.floats(min_value=0, max_value=2), max_size=25))
+def test_device_survives_any_input_and_keeps_its_memory(chunks: list[bytes], pauses: list[float]) -> None:
+    device, clock, out, nvram = _device()
+    stored = (nvram.get("params"), nvram.get("program"))
+    for i, chunk in enumerate(chunks):
+        device.feed(chunk)
+        if i < len(pauses):
+            clock.advance(pauses[i])
+    clock.advance(5)
+    # still answering, and nothing stored was damaged by the input (only PSAVE/NEW may change it)
+    out.clear()
+    device.feed(b"\r#1\r#QUIT\r#P1017=1\r")
+    out.clear()
+    device.feed(b"#P1019?\r")
+    assert b"P1019=" in bytes(out) and bytes(out).endswith(b"\n\r")
+    writers = (b"PSAVE", b"NEW", b"PGM", b"P1004", b"P0")
+    if not any(w in b"".join(chunks).upper() for w in writers):
+        assert (nvram.get("params"), nvram.get("program")) == stored
+
+
+def test_program_survives_a_flood_of_garbage() -> None:
+    device, clock, out, nvram = _device()
+    program = nvram.get("program")
+    device.feed(bytes(range(256)) * 20)
+    device.feed(b"#" + b"A" * 5000 + b"\r")
+    assert nvram.get("program") == program
+    out.clear()
+    device.feed(b"#\r#P1019?\r")
+    assert b"P1019=45U/min" in bytes(out)
