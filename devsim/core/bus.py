@@ -25,6 +25,7 @@ class Bus:
         self.devices = list(devices)
         self._write: ByteSink | None = None
         for device in self.devices:
+            device.shared_line = len(self.devices) > 1
             device.attach(self._emit)
 
     def _emit(self, data: bytes) -> None:

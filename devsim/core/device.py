@@ -73,6 +73,8 @@ class Device(ABC):
         self.nvram = nvram if nvram is not None else NonVolatileMemory(None)
         self.name = name or self.kind
         self.signals = SignalBank()
+        #: True when other devices share the line (RS-485 multidrop); set by the bus.
+        self.shared_line = False
         self._write: ByteSink | None = None
 
     # -- byte interface ------------------------------------------------------------------

@@ -97,8 +97,6 @@ def start_plant(configs: list[dict[str, Any]], state_dir: Any = None, boot: bool
     for i, config in enumerate(configs):
         name = "sers" if len(configs) == 1 else f"sers{config.get('address', i + 1)}"
         device = runtime.add_device("sers", name, config)
-        if len(configs) > 1:
-            runtime.call(setattr, device, "shared_line", True)
         devices.append(device)
         names.append(name)
     transport = PtyTransport()

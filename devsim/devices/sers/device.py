@@ -60,7 +60,6 @@ class SersDevice(SersDrive):
         self._selected: bool | None = None
         self._spontaneous: list[bytes] = []
         self._batch: bytearray | None = None
-        self.shared_line = False
         self.program = ProgramMemory(nvram if nvram is not None else NonVolatileMemory(None))
         super().__init__(clock=clock, config=config, nvram=nvram, name=name)
         self.program = ProgramMemory(self.nvram)
