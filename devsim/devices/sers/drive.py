@@ -156,6 +156,8 @@ class SersDrive(Device):
         self._w_updated = False
         self._homing: dict[str, Any] | None = None
         self._jog_timer: Timer | None = None
+        self._standstill_watches: list[Watch] = []
+        self._legs: list[tuple[float, float]] = []
         self._jog_dir = 0
         self._jog_until: st.Condition | None = None
         self._short_latched = False
@@ -213,9 +215,10 @@ class SersDrive(Device):
         for timer in self._timers:
             timer.cancel()
         self._timers.clear()
-        for watch in self._watches:
+        for watch in self._watches + getattr(self, "_standstill_watches", []):
             watch.cancel()
         self._watches.clear()
+        self._standstill_watches = []
         if getattr(self, "_jog_timer", None) is not None:
             self._jog_timer.cancel()
             self._jog_timer = None
@@ -615,6 +618,7 @@ class SersDrive(Device):
         self.ram[47] = new
         self._target_physical = target
         self._w_updated = True
+        self._legs = []
         self.axis.move_to(target, self._speed, self._accel, on_done=self._positioning_done)
         self._arm_position_watches()
 
@@ -911,8 +915,29 @@ class SersDrive(Device):
         self._accel = float(self.ram[138])
         self._target_physical = target + self.offset
         self._begin_motion("position", self._accel)
-        self.axis.move_to(self._target_physical, self._speed, self._accel, on_done=self._positioning_done)
+        self._legs = self._backlash_legs(p51 + self.offset, self._target_physical)
+        self._next_leg()
         self._arm_position_watches()
+
+    def _backlash_legs(self, start: float, target: float) -> list[tuple[float, float]]:
+        """Backlash compensation P1037 (§4.8.4.7, spec §5.8 G-BACKLASH): the final approach
+        is always made opposite to the homing direction (P147 bit 0), at speed P1003."""
+        slack = abs(float(self.ram.get(1037, 0)))
+        if not slack or target == start:
+            return [(target, self._speed)]
+        approach = 1 if int(self.ram.get(147, 0)) & 1 else -1
+        creep = float(self.ram[1003])
+        direction = 1 if target > start else -1
+        if direction == approach:
+            if abs(target - start) <= slack:
+                return [(target, creep)]
+            return [(target - direction * slack, self._speed), (target, creep)]
+        return [(start + direction * slack, creep), (target + direction * slack, self._speed), (target, creep)]
+
+    def _next_leg(self) -> None:
+        target, speed = self._legs.pop(0)
+        done = self._next_leg if self._legs else self._positioning_done
+        self.axis.move_to(target, speed, self._accel, on_done=done)
 
     def _leave_zero_phase(self, target: float) -> float:
         """P1001 (§4.8.4.2): keep 0.1°/0.2°/0.3° away from multiples of 1.8° (64 increments)."""
@@ -955,9 +980,10 @@ class SersDrive(Device):
         self._jog_dir = 0
         self._jog_until = None
         self._cancel_jog_timer()
-        for watch in self._watches:
+        for watch in self._watches + self._standstill_watches:
             watch.cancel()
         self._watches.clear()
+        self._standstill_watches = []
         self._update_outputs()
 
     def _end_motion(self, quick: bool) -> None:
@@ -1025,7 +1051,12 @@ class SersDrive(Device):
 
     # -- homing ----------------------------------------------------------------------------
     def home(self, serial: bool = True) -> None:
-        """H (§4.8.4.5, spec §5.5): seek the reference edge at P41, creep back at P1003."""
+        """H (§4.8.4.5, spec §5.5): seek the reference edge at P41, creep back at P1003.
+
+        P147 bit 0 direction, bit 1 limit switch as reference, bit 2 then the next electrical
+        zero, bit 5 centre of the switch, bit 6 encoder zero pulse instead of the switch, bit 7
+        switch, then zero pulse, then electrical zero.
+        """
         if self.motion is not None:
             raise SersError(70)
         p147 = int(self.ram.get(147, 0))
@@ -1037,17 +1068,19 @@ class SersDrive(Device):
             if not self.energized or self.errors & ~LIMIT:
                 raise SersError(79)
         else:
-            signal = "reference"
+            signal = "index" if p147 & 64 and not p147 & 128 else "reference"
             self._motion_checks(0)
         accel = float(self.ram[42])
-        self._homing = {"signal": signal, "direction": direction, "phase": "seek"}
+        self._homing = {"signal": signal, "direction": direction, "phase": "seek", "p147": p147}
         self._begin_motion("home", accel)
-        if self._homing_signal_active():
+        if signal == "index":
+            self._watches.append(self.axis.watch_index(self._on_index))
+        if signal != "index" and self._homing_signal_active():
             self._creep()
         else:
             speed = float(self.ram[41]) * float(self.ram.get(108, 100)) / 100
             self.axis.jog(direction, speed, accel)
-            self._arm_position_watches()
+            self._arm_position_watches(keep=True)
 
     def _homing_signal_active(self) -> bool:
         assert self._homing is not None
@@ -1060,26 +1093,60 @@ class SersDrive(Device):
         self._homing["phase"] = "creep"
         self.axis.jog(-self._homing["direction"], float(self.ram[1003]), float(self.ram[42]))
 
+    def _on_index(self, _direction: int) -> None:
+        """Encoder zero pulse (once per motor revolution) during homing with P147 bit 6/7."""
+        homing = self._homing
+        if homing is None:
+            return
+        if homing["signal"] == "index":
+            self._homing_edge(homing["phase"] == "seek")
+        elif homing["phase"] == "to_index":
+            homing["phase"] = "edge"
+            self.axis.quick_stop()
+            self._electrical_reset()
+
     def _homing_edge(self, active: bool) -> None:
         homing = self._homing
         if homing is None:
             return
-        if homing["phase"] == "seek" and active:
+        phase, p147 = homing["phase"], homing["p147"]
+        if phase == "seek" and active:
             homing["phase"] = "braking"
             self.axis.stop(float(self.ram[42]), on_done=self._creep)
-        elif homing["phase"] == "creep" and not active:
-            self.axis.quick_stop()  # G-HOME: stops exactly at the falling edge
-            p147 = int(self.ram.get(147, 0))
-            if p147 & (4 | 128):
-                here = self.axis.position()
-                step = ELECTRICAL_PERIOD * (-homing["direction"])
-                target = math.ceil(here / ELECTRICAL_PERIOD) * ELECTRICAL_PERIOD if step > 0 else (
-                    math.floor(here / ELECTRICAL_PERIOD) * ELECTRICAL_PERIOD
-                )
-                homing["phase"] = "reset"
-                self.axis.move_to(target, float(self.ram[1003]), float(self.ram[42]), on_done=self._homing_done)
+        elif phase == "creep" and not active:
+            # G-HOME: at creep speed the drive stops exactly at the falling edge
+            if p147 & 32 and homing["signal"] == "reference":
+                homing["phase"] = "measure"
+                self.axis.quick_stop()
+                homing["first_edge"] = self.axis.position()
+                self.axis.jog(homing["direction"], float(self.ram[1003]), float(self.ram[42]))
+            elif p147 & 128:
+                homing["phase"] = "to_index"  # keep creeping to the next zero pulse
+                self._watches.append(self.axis.watch_index(self._on_index))
             else:
-                self._homing_done()
+                homing["phase"] = "edge"
+                self.axis.quick_stop()
+                self._electrical_reset()
+        elif phase == "measure" and not active:
+            homing["phase"] = "centre"
+            self.axis.quick_stop()
+            centre = (homing["first_edge"] + self.axis.position()) / 2
+            self.axis.move_to(centre, float(self.ram[1003]), float(self.ram[42]), on_done=self._homing_done)
+
+    def _electrical_reset(self) -> None:
+        """P147 bit 2/7: move on to the next electrical zero (every 256 increments)."""
+        homing = self._homing
+        assert homing is not None
+        if not homing["p147"] & (4 | 128):
+            self._homing_done()
+            return
+        here = self.axis.position()
+        if -homing["direction"] > 0:
+            target = math.ceil(here / ELECTRICAL_PERIOD - 1e-9) * ELECTRICAL_PERIOD
+        else:
+            target = math.floor(here / ELECTRICAL_PERIOD + 1e-9) * ELECTRICAL_PERIOD
+        homing["phase"] = "reset"
+        self.axis.move_to(target, float(self.ram[1003]), float(self.ram[42]), on_done=self._homing_done)
 
     def _homing_done(self) -> None:
         self.offset = self.axis.position()
@@ -1142,10 +1209,12 @@ class SersDrive(Device):
         p51 = self.p51_inc()
         return p51 < limits[0] or p51 > limits[1]
 
-    def _arm_position_watches(self) -> None:
-        for watch in self._watches:
-            watch.cancel()
-        self._watches.clear()
+    def _arm_position_watches(self, keep: bool = False) -> None:
+        """Software limits, compare positions and standstill monitoring for a new motion."""
+        if not keep:
+            for watch in self._watches:
+                watch.cancel()
+            self._watches.clear()
         limits = self._soft_limits()
         homing = self.motion == "home" and not int(self.ram.get(147, 0)) & 8
         if limits is not None and not homing:
@@ -1156,11 +1225,29 @@ class SersDrive(Device):
                 self._timers.append(self.clock.call_later(0, self._soft_limit_hit))
             self._watches.append(self.axis.watch(upper + 1e-9, lambda d: d > 0 and self._soft_limit_hit()))
             self._watches.append(self.axis.watch(lower - 1e-9, lambda d: d < 0 and self._soft_limit_hit()))
+        self._arm_standstill_monitor()
         for pos_param, action_param in ((1024, 1025), (1026, 1027)):
             action = int(self.ram.get(action_param, 0))
             if action:
                 where = float(self.ram.get(pos_param, 0)) + self.offset
                 self._watches.append(self.axis.watch(where, lambda _d, a=action: self._compare_action(a)))
+
+    def _arm_standstill_monitor(self) -> None:
+        """P1044/P1045 (§4.8.6.8, spec §5.7): while moving, an edge on input P1045 must come
+        at least every P1044; the distance counts from the motion start and from each edge."""
+        for watch in self._standstill_watches:
+            watch.cancel()
+        self._standstill_watches = []
+        distance = abs(float(self.ram.get(1044, 0)))
+        if not distance or self.motion is None:
+            return
+        here = self.axis.position()
+        for where in (here + distance, here - distance):
+            self._standstill_watches.append(self.axis.watch(where, lambda _d: self._standstill_error()))
+
+    def _standstill_error(self) -> None:
+        if self.motion is not None and self.motion != "error-stop":
+            self.drive_error(STANDSTILL)
 
     def _soft_limit_hit(self) -> None:
         self.warn(1)
@@ -1218,6 +1305,10 @@ class SersDrive(Device):
             return
         n = int(name[1:])
         bit = 1 << (n - 1)
+        monitored = int(self.ram.get(1045, 1)) == n and self.ram.get(1044)
+        active_edge = bool(new) != (self.cfg.input_level == "low_active")
+        if monitored and active_edge and self.motion is not None:
+            self._arm_standstill_monitor()
         if self.ram.get(1130) == n and self._homing is not None and self._homing["signal"] == "reference":
             self._homing_edge(bool(new))
         if self._functions_enabled(bit):

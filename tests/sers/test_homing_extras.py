@@ -1,0 +1,97 @@
+"""Homing variants (P147), backlash (P1037) and standstill monitoring (P1044) through the pty."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+DEG = 12800 / 360
+
+
+def test_homing_to_the_next_electrical_zero(plant_factory) -> None:
+    ref = 100.0  # increments: not on a 256-increment phase zero
+    plant = plant_factory({"axis": {"reference_low": ref}, "params": {"P147": 4}})
+    plant.host.ask("#ON H\r")
+    plant.settle()
+    # creeping back (negative) from the edge at 100, the next phase zero is 0
+    assert plant.read("axis.position") == pytest.approx(0.0)
+    assert plant.read("param.P51") == 0
+
+
+def test_homing_on_the_encoder_zero_pulse(plant_factory) -> None:
+    plant = plant_factory({"axis": {"index_offset": 5000}, "params": {"P147": 64}})
+    plant.host.ask("#ON H\r")
+    plant.settle()
+    assert plant.read("axis.position") == pytest.approx(5000)
+    assert plant.read("homed") is True
+
+
+def test_homing_switch_then_zero_pulse_then_electrical_zero(plant_factory) -> None:
+    plant = plant_factory({"axis": {"reference_low": 20000, "index_offset": 6000}, "params": {"P147": 128}})
+    plant.host.ask("#ON H\r")
+    plant.settle()
+    # falling edge at 20000 creeping negative; next zero pulse below is 12800 + 6000 = 18800,
+    # then the next phase zero further negative: 18688 (= 73 × 256)
+    assert plant.read("axis.position") == pytest.approx(18688)
+
+
+def test_homing_to_the_centre_of_the_switch(plant_factory) -> None:
+    plant = plant_factory({"axis": {"reference_low": 3000, "reference_high": 5000}, "params": {"P147": 32}})
+    plant.host.ask("#ON H\r")
+    plant.settle()
+    assert plant.read("axis.position") == pytest.approx(4000)
+    assert plant.host.ask("#P51?\r") == "#P51?\rP51=0°\n\r\nok1\n\r".encode("latin-1")
+
+
+def _move_time(distance_deg: float, rpm: float, accel: float = 100.0) -> float:
+    """Closed-form time of a trapezoid/triangle move (rad, rad/s, rad/s²)."""
+    d = math.radians(distance_deg)
+    v = rpm * 2 * math.pi / 60
+    if d >= v * v / accel:
+        return d / v + v / accel
+    return 2 * math.sqrt(d / accel)
+
+
+def test_backlash_in_the_approach_direction(plant_factory) -> None:
+    # P147 bit 0 = 1: homing negative, so every target is approached in the positive direction:
+    # W - b at V, then b at the backlash speed P1003 (diagram "1A/1B")
+    plant = plant_factory({"params": {"P147": 1, "P1037": 1.8, "P1003": 10}})
+    plant.host.ask("#ON V=600 W=90 E\r")
+    took = plant.settle()
+    assert plant.read("param.P51") == pytest.approx(90)
+    assert took == pytest.approx(_move_time(88.2, 600) + _move_time(1.8, 10), abs=1e-6)
+
+
+def test_backlash_against_the_approach_direction(plant_factory) -> None:
+    plant = plant_factory({"params": {"P147": 1, "P1037": 1.8, "P1003": 10}})
+    host = plant.host
+    host.ask("#ON V=600 W=-90 E\r")
+    dev = plant.runtime.device("sers")
+    lowest = []
+
+    def track() -> bool:
+        lowest.append(dev.axis.position())
+        return dev.read("motion") is None
+
+    assert plant.runtime.run_until(track, 60)
+    # overshoots by the backlash (1.8°) and comes back positive: net displacement = W
+    assert min(lowest) == pytest.approx((-90 - 1.8) * DEG)
+    assert plant.read("param.P51") == pytest.approx(-90)
+
+
+def test_standstill_monitoring(plant_factory) -> None:
+    plant = plant_factory({"params": {"P1044": 10, "P1045": 2}})
+    host = plant.host
+    host.ask("#ON V=60 W=360 E\r")
+    # an edge on I2 at least every 7.2° (0.02 s at 360°/s): the drive keeps going
+    for _ in range(5):
+        plant.advance(0.02)
+        plant.set("input.I2", True)
+        plant.set("input.I2", False)
+    assert plant.read("P11") == 0
+    # no more edges: after 10° the drive stops with error 2048, display 'A'
+    plant.settle()
+    assert plant.read("P11") == 2048
+    assert plant.read("display") == {"char": "A", "blinking": False}
+    assert plant.read("param.P51") < 360
