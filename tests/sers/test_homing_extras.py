@@ -95,3 +95,60 @@ def test_standstill_monitoring(plant_factory) -> None:
     assert plant.read("P11") == 2048
     assert plant.read("display") == {"char": "A", "blinking": False}
     assert plant.read("param.P51") < 360
+
+
+def test_step_loss_drive_error_and_resync(plant_factory) -> None:
+    plant = plant_factory({"options": ["E50"], "params": {"P1053": 8, "P1029": 1}})
+    host = plant.host
+    host.ask("#ON V=60 W=360 E\r")
+    plant.advance(0.2)
+    plant.set("quantity.stall", True)  # the load blocks the rotor
+    stalled_at = plant.read("encoder.position")
+    dev = plant.runtime.device("sers")
+    assert plant.runtime.run_until(lambda: dev.read("P11") != 0, 5)
+    # the error comes when the load angle reaches P1002 = 255 increments
+    assert plant.read("axis.position") - stalled_at == pytest.approx(255)
+    assert plant.read("P11") == 32
+    plant.settle()
+    assert plant.read("display") == {"char": "F", "blinking": False}
+    plant.set("quantity.stall", False)
+    # P11=0 takes the encoder position as P51 (§4.8.6.6)
+    host.ask("#P11=0\r")
+    assert plant.read("axis.position") == pytest.approx(stalled_at)
+    assert plant.read("param.P51") == pytest.approx(round(stalled_at) / DEG, abs=1e-4)
+
+
+def test_step_loss_warning_then_posr_reaches_the_setpoint(plant_factory) -> None:
+    plant = plant_factory({"options": ["E50"], "params": {"P1053": 8, "P1029": 2}})
+    host = plant.host
+    host.ask("#ON V=60 W=360 E\r")
+    plant.advance(0.3)
+    plant.set("quantity.stall", True)
+    plant.settle()
+    plant.set("quantity.stall", False)
+    assert plant.read("P12") & 32
+    assert host.ask("#\r") == b"#\r\nok3\n\r"
+    assert host.ask("#POSR\r") == b"#POSR\r\nok0\n\r"
+    plant.settle()
+    assert plant.read("encoder.position") == pytest.approx(360 * DEG)
+    assert plant.read("param.P51") == pytest.approx(360)
+
+
+def test_posr_without_step_loss_is_refused(sers) -> None:
+    sers.host.send("#ON POSR\r")
+    sers.host.expect("#ON POSR\n*ungültig\n\r\r".encode("latin-1"))
+
+
+def test_automatic_posr_retries(plant_factory) -> None:
+    plant = plant_factory({"options": ["E50"], "params": {"P1053": 8, "P1029": 3, "P1138": 2, "P1139": 5}})
+    plant.host.ask("#ON V=60 W=720 E\r")
+    plant.advance(0.3)
+    plant.set("quantity.stall", True)
+    dev = plant.runtime.device("sers")
+    assert plant.runtime.run_until(lambda: dev.read("P11") != 0, 5)
+    plant.set("quantity.stall", False)
+    # after P1139 × 0.1 s = 0.5 s the drive corrects itself and reaches the target
+    assert plant.runtime.run_until(lambda: dev.read("motion") == "posr", 2)
+    plant.settle()
+    assert plant.read("encoder.position") == pytest.approx(720 * DEG)
+    assert plant.read("P11") == 0

@@ -96,6 +96,7 @@ class SersDrive(Device):
         s.define("heatsink_temperature", "quantity", float(self.cfg.heatsink_temperature), "°C (§3.5)")
         s.define("short_circuit", "quantity", False, "short circuit in motor or power stage")
         s.define("adc_volts", "quantity", 0.0, "voltage at the analog input ADC, 0..5 V")
+        s.define("stall", "quantity", False, "load torque above motor torque: the rotor stands still")
         for name in ("limit_left", "limit_right"):
             s.subscribe(name, self._on_limit)
         s.subscribe("stop", self._on_stop_input)
@@ -105,6 +106,7 @@ class SersDrive(Device):
         s.subscribe("supply_voltage", lambda *_: self._check_supply())
         s.subscribe("heatsink_temperature", lambda *_: self._check_temperature())
         s.subscribe("short_circuit", lambda *_: self._check_short())
+        s.subscribe("stall", self._on_stall)
 
     def _build_switches(self) -> None:
         geo = self.cfg.axis
@@ -158,6 +160,12 @@ class SersDrive(Device):
         self._jog_timer: Timer | None = None
         self._standstill_watches: list[Watch] = []
         self._legs: list[tuple[float, float]] = []
+        self.lost = 0.0  # increments the rotor lags behind the stator field (step loss)
+        self._stall_rotor: float | None = None
+        self._load_watches: list[Watch] = []
+        self._setpoint: float | None = None
+        self._posr_attempts = 0
+        self.max_load_angle = 0.0
         self._jog_dir = 0
         self._jog_until: st.Condition | None = None
         self._short_latched = False
@@ -363,6 +371,8 @@ class SersDrive(Device):
             return int(self.signals.get(f"O{n - 1200}"))
         if n == 1123:
             return 0
+        if n == 1057:
+            return round(max(self.max_load_angle, abs(self.axis.position() - self.encoder_position())))
         return None
 
     @property
@@ -531,6 +541,8 @@ class SersDrive(Device):
             raise SersError(3)
         if self.errors & SHORT and (self.signals.get("short_circuit") or not self._stop_cycled):
             raise SersError(3)
+        if self.errors & STEP_LOSS:
+            self._resync_to_encoder()
         self.errors = 0
         self.ram[1118] = 0
         self.energized = False
@@ -540,6 +552,8 @@ class SersDrive(Device):
     def _write_p12(self, value: float) -> None:
         if value != 0:
             raise SersError(3)
+        if self.warnings & STEP_LOSS:
+            self._resync_to_encoder()
         self.warnings = 0
         self._check_supply()
         self._check_temperature()
@@ -915,6 +929,7 @@ class SersDrive(Device):
         self._accel = float(self.ram[138])
         self._target_physical = target + self.offset
         self._begin_motion("position", self._accel)
+        self._setpoint = self._target_physical
         self._legs = self._backlash_legs(p51 + self.offset, self._target_physical)
         self._next_leg()
         self._arm_position_watches()
@@ -1184,16 +1199,104 @@ class SersDrive(Device):
         self.axis.move_to(target + self.offset, float(self.ram[41]), float(self.ram[42]), on_done=done)
 
     def posr(self, force: bool) -> None:
-        """POSR (§4.8.4.2): only after a step-loss error (P11/P12 = 32) unless P1043=3."""
-        if not force and not (self.errors & STEP_LOSS or self.warnings & 32):
+        """POSR (§4.8.4.2, spec §5.9): after a step loss, follow the motor's real position
+        (encoder) and travel at P41 to the setpoint of the interrupted positioning.  Only with
+        P11/P12 value 32, unless P1043=3."""
+        stepped = self.errors & STEP_LOSS or self.warnings & STEP_LOSS
+        if not force and not stepped:
             raise SersError(3)
         if self.motion is not None:
             raise SersError(70)
-        target = float(self.ram[47]) + self.offset
+        if self.errors & STEP_LOSS:
+            self.errors &= ~STEP_LOSS
+        self.warnings &= ~STEP_LOSS
+        self._resync_to_encoder()
+        target = self._setpoint if self._setpoint is not None else float(self.ram[47]) + self.offset
         direction = (target > self.axis.position()) - (target < self.axis.position())
         self._motion_checks(direction)
         self._begin_motion("posr", float(self.ram[42]))
-        self.axis.move_to(target, float(self.ram[41]), float(self.ram[42]), on_done=self._motion_finished)
+        self.axis.move_to(target, float(self.ram[41]), float(self.ram[42]), on_done=self._posr_done)
+        self._arm_position_watches()
+
+    def _posr_done(self) -> None:
+        if int(self.ram.get(1140, 0)) & 2:
+            self._posr_attempts = 0
+        self._motion_finished()
+
+    # -- load angle / step-loss monitoring (§4.8.6.6, spec §5.9) ----------------------------
+    def encoder_position(self) -> float:
+        """Where the rotor really is (increments): the stator field minus the steps lost."""
+        if self._stall_rotor is not None:
+            return self._stall_rotor
+        return self.axis.position() - self.lost
+
+    def _monitoring(self) -> bool:
+        mode = int(self.ram.get(1053, 0))
+        encoder = mode == 4 or (mode == 8 and "E50" in self.cfg.options)
+        return encoder and int(self.ram.get(1029, 0)) != 0
+
+    def _on_stall(self, name: str, old: Any, new: Any) -> None:
+        if new:
+            self._stall_rotor = self.axis.position() - self.lost
+            self._arm_load_watch()
+        elif self._stall_rotor is not None:
+            self.lost = self.axis.position() - self._stall_rotor
+            self._stall_rotor = None
+            for watch in self._load_watches:
+                watch.cancel()
+            self._load_watches = []
+
+    def _arm_load_watch(self) -> None:
+        for watch in self._load_watches:
+            watch.cancel()
+        self._load_watches = []
+        if self._stall_rotor is None or not self._monitoring():
+            return
+        window = float(self.ram.get(1002, 255))
+        rotor = self._stall_rotor
+        for where in (rotor + window, rotor - window):
+            self._load_watches.append(self.axis.watch(where, lambda _d: self._step_loss()))
+
+    def _step_loss(self) -> None:
+        """The load angle exceeded P1002: P1029 1 = drive error, 2 = warning, 3 = error, motor on."""
+        self.max_load_angle = max(self.max_load_angle, abs(self.axis.position() - self.encoder_position()))
+        reaction = int(self.ram.get(1029, 0))
+        if reaction == 2:
+            self.warn(STEP_LOSS)
+            self.stop_motion()
+        elif reaction in (1, 3):
+            self.drive_error(STEP_LOSS)
+        retries = int(self.ram.get(1138, 0))
+        if retries and self._posr_attempts < retries:
+            self._posr_attempts += 1
+            delay = float(self.ram.get(1139, 1.0)) * 0.1
+            self.pos_ok = False
+            self._timers.append(self.clock.call_later(delay, self._auto_posr))
+
+    def _auto_posr(self) -> None:
+        """P1138/P1139: automatic POSR after a step loss."""
+        if self.motion is not None:
+            self._timers.append(self.clock.call_later(0.01, self._auto_posr))
+            return
+        self.errors &= ~STEP_LOSS
+        if not self.errors:
+            self.energized = self.relay = True
+        try:
+            self.posr(force=True)
+        except SersError as exc:
+            self.record_error(exc.errno)
+
+    def _resync_to_encoder(self) -> None:
+        """Clearing a step loss: P51 takes the encoder's position (§4.8.6.6)."""
+        if self.axis.moving:
+            return
+        rotor = self.encoder_position()
+        if self._stall_rotor is None:
+            self.lost = 0.0
+        if rotor != self.axis.position():
+            self.axis.set_position(rotor)
+            if self._stall_rotor is not None:
+                self._arm_load_watch()
 
     # -- software limits and compare positions (§4.8.6.12, §4.8.1.2) ------------------------
     def _soft_limits(self) -> tuple[float, float] | None:
@@ -1533,6 +1636,8 @@ class SersDrive(Device):
             "motion": self.motion,
             "homed": self.homed,
             "homing": self._homing["phase"] if self._homing else None,
+            "encoder.position": self.encoder_position(),
+            "load_angle": self.axis.position() - self.encoder_position(),
             "booting": self.booting,
             "powered": self.logic_alive,
             "position": self.scaling.inc_to_pos(round(self.p51_inc())),
