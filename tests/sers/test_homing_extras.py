@@ -152,3 +152,31 @@ def test_automatic_posr_retries(plant_factory) -> None:
     plant.settle()
     assert plant.read("encoder.position") == pytest.approx(720 * DEG)
     assert plant.read("P11") == 0
+
+
+def test_handwheel_pulses_move_the_motor(plant_factory) -> None:
+    # P1053=3: quadrature encoder on I3/I4, P1054=1 → 64 increments per count (E50)
+    plant = plant_factory({"params": {"P1053": 3, "P1054": 1}})
+    plant.host.ask("#ON\r")
+    plant.set("encoder.pulses", 200)  # one hand-wheel revolution of an E50
+    plant.settle()
+    assert plant.read("axis.position") == pytest.approx(12800)
+    plant.set("encoder.pulses", -50)
+    plant.settle()
+    assert plant.read("axis.position") == pytest.approx(12800 - 50 * 64)
+    assert plant.read("param.P1119") == 150
+
+
+def test_frequency_measurement(plant_factory) -> None:
+    plant = plant_factory({"params": {"P1053": 9, "P1055": 50}})
+    plant.set("quantity.pulse_frequency", 1000.0)
+    assert plant.host.ask("#P1124?\r") == b"#P1124?\rP1124=100\n\r\nok1\n\r"  # 1 kHz × 100 ms
+
+
+def test_phase_current_reduction_at_standstill(plant_factory) -> None:
+    plant = plant_factory({"params": {"P1010": 6000, "P1011": 1}})
+    plant.host.ask("#ON W=90 E\r")
+    assert plant.read("phase_current") == 6000
+    plant.settle()
+    plant.advance(0.02)
+    assert plant.read("phase_current") == 3000

@@ -97,6 +97,7 @@ class SersDrive(Device):
         s.define("short_circuit", "quantity", False, "short circuit in motor or power stage")
         s.define("adc_volts", "quantity", 0.0, "voltage at the analog input ADC, 0..5 V")
         s.define("stall", "quantity", False, "load torque above motor torque: the rotor stands still")
+        s.define("pulse_frequency", "quantity", 0.0, "frequency (Hz) of the pulses at I3 / ENC (P1053=9/10, P1143=5)")
         for name in ("limit_left", "limit_right"):
             s.subscribe(name, self._on_limit)
         s.subscribe("stop", self._on_stop_input)
@@ -164,6 +165,8 @@ class SersDrive(Device):
         self._stall_rotor: float | None = None
         self._load_watches: list[Watch] = []
         self._setpoint: float | None = None
+        self._follow_target = 0.0
+        self._stopped_at = 0.0
         self._posr_attempts = 0
         self.max_load_angle = 0.0
         self._jog_dir = 0
@@ -371,6 +374,10 @@ class SersDrive(Device):
             return int(self.signals.get(f"O{n - 1200}"))
         if n == 1123:
             return 0
+        if n in (1124, 1146):
+            window = float(self.ram.get(1055 if n == 1124 else 1145, 1)) * 0.002
+            measuring = int(self.ram.get(1053, 0)) in (9, 10) if n == 1124 else int(self.ram.get(1143, 0)) == 5
+            return round(float(self.signals.get("pulse_frequency")) * window) if measuring else 0
         if n == 1057:
             return round(max(self.max_load_angle, abs(self.axis.position() - self.encoder_position())))
         return None
@@ -989,6 +996,7 @@ class SersDrive(Device):
         self._update_outputs()
 
     def _motion_finished(self) -> None:
+        self._stopped_at = self.clock.now()
         self.motion = None
         self.pos_ok = True
         self._homing = None
@@ -1222,6 +1230,37 @@ class SersDrive(Device):
         if int(self.ram.get(1140, 0)) & 2:
             self._posr_attempts = 0
         self._motion_finished()
+
+    # -- pulse input, hand-wheel, electronic gear (§3.4, §4.8.6.6, spec §5.9) ---------------
+    def pulses(self, count: int) -> None:
+        """``count`` pulses (signed; 4× evaluated encoder counts) arrive at I3/I4 or ENC.
+
+        With P1053 = 1/2/3 (I3/I4) or 5/6/7 (ENC), or P1143 = 1/2/3, the motor follows
+        by count × P1054 × 64 increments, limited by A and V (hand-wheel, electric shaft)."""
+        mode, alt = int(self.ram.get(1053, 0)), int(self.ram.get(1143, 0))
+        if mode in (1, 2, 3, 5, 6, 7):
+            weight, counter = float(self.ram.get(1054, 1)), 1119
+        elif alt in (1, 2, 3):
+            weight, counter = float(self.ram.get(1144, 1)), 1120
+        else:
+            return
+        if mode in (5, 6, 7) and "E50" not in self.cfg.options:
+            return
+        self.ram[counter] = int(self.ram.get(counter, 0)) + count
+        if not self.energized or self.errors or self.motion not in (None, "follow"):
+            return
+        step = count * weight * INC_PER_REV / 200
+        base = self._follow_target if self.motion == "follow" else self.axis.position()
+        target = base + step
+        direction = (step > 0) - (step < 0)
+        try:
+            self._motion_checks(direction)
+        except SersError:
+            return  # pulses toward a blocked direction are ignored (P1094=0)
+        self._follow_target = target
+        if self.motion is None:
+            self._begin_motion("follow", float(self.ram[138]))
+        self.axis.move_to(target, float(self.ram[91]), float(self.ram[138]), on_done=self._motion_finished)
 
     # -- load angle / step-loss monitoring (§4.8.6.6, spec §5.9) ----------------------------
     def encoder_position(self) -> float:
@@ -1507,6 +1546,21 @@ class SersDrive(Device):
             off = not self.energized
             self.signals.set(f"O{abs(brake)}", off if brake > 0 else not off)
 
+    def phase_current(self) -> float:
+        """Commanded phase current in mA (§4.8.6.1, spec §5.11): P1010; with P1011 bit 0
+        50 % at standstill from 20 ms after the last motion; +20 % boost per bits 1/2."""
+        if not self.energized:
+            return 0.0
+        current = float(self.ram.get(1010, 0))
+        bits = int(self.ram.get(1011, 0))
+        standing = self.motion is None and self.clock.now() - self._stopped_at >= 0.02
+        if standing and bits & 1:
+            current *= 0.5
+        accel = abs(self.axis.acceleration())
+        if (bits & 2 and accel > float(self.ram.get(1012, 0))) or (bits & 4 and standing):
+            current *= 1.2
+        return current
+
     def display(self) -> dict[str, Any]:
         """7-segment display (§3.5, spec §4.7 priority)."""
         if not self.logic_alive:
@@ -1637,6 +1691,7 @@ class SersDrive(Device):
             "homed": self.homed,
             "homing": self._homing["phase"] if self._homing else None,
             "encoder.position": self.encoder_position(),
+            "phase_current": self.phase_current(),
             "load_angle": self.axis.position() - self.encoder_position(),
             "booting": self.booting,
             "powered": self.logic_alive,
@@ -1663,6 +1718,9 @@ class SersDrive(Device):
                 self.write_param(number, value)
             except SersError as exc:
                 raise ValueError(str(exc)) from exc
+            return
+        if name == "encoder.pulses":
+            self.pulses(int(value))
             return
         if name == "dip.service_switch":
             self.cfg = self.cfg.model_copy(update={"service_switch": bool(value)})
