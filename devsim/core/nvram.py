@@ -29,6 +29,10 @@ class NonVolatileMemory:
     def __init__(self, path: str | os.PathLike[str] | None = None) -> None:
         self.path = Path(path) if path is not None else None
         self._image: dict[str, Any] = {}
+        if self.path is not None:
+            # temp files of a write that was killed half-way: the old image is intact
+            for stale in self.path.parent.glob(self.path.name + ".*.tmp"):
+                stale.unlink(missing_ok=True)
         if self.path is not None and self.path.exists():
             try:
                 self._image = json.loads(self.path.read_text("utf-8"))

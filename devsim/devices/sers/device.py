@@ -227,7 +227,8 @@ class SersDevice(SersDrive):
             if stmt.params:
                 self._out(line, "".join(f"{row}\n\r" for row in self.list_parameters(stmt.arg)))
             else:
-                self._out(line, "".join(f"{row}\n\r" for row in self.program.listing(self.list_options)))
+                rows = self.program.listing(self.list_options, self.render_statement)
+                self._out(line, "".join(f"{row}\n\r" for row in rows))
             return
         if isinstance(stmt, st.Command) and stmt.name == "VER":
             self._out(line, f"P1133={self.firmware}\n\r")

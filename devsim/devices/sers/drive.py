@@ -173,6 +173,10 @@ class SersDrive(Device):
         self._jog_until: st.Condition | None = None
         self._short_latched = False
         self._stop_cycled = True
+        self._stop_opened = False
+        program = getattr(self, "program", None)
+        if program is not None:
+            program.reload()  # programming mode does not survive a power loss (P0 = 0)
         self.program_state = 0
         self.trace_mode = False
         self._load_parameters()
@@ -211,9 +215,6 @@ class SersDrive(Device):
         self._power_off()
         if wipe:
             self.nvram.wipe()
-        program = getattr(self, "program", None)
-        if program is not None:
-            program.reload()
         self._power_on()
 
     def close(self) -> None:
@@ -1426,8 +1427,10 @@ class SersDrive(Device):
         self._check_until()
 
     def _on_stop_input(self, name: str, old: Any, new: Any) -> None:
+        if not new and self._stop_opened:
+            self._stop_cycled = True  # opened and closed again: a short may now be cleared
         if new:
-            self._stop_cycled = True
+            self._stop_opened = True
             if self.motion is not None:
                 self.stop_motion()
         self._check_until()
@@ -1523,6 +1526,7 @@ class SersDrive(Device):
     def _check_short(self) -> None:
         if self.logic_alive and self.signals.get("short_circuit"):
             self._stop_cycled = False
+            self._stop_opened = False
             self.drive_error(SHORT, immediate=True)
 
     # ======================================================================================
@@ -1617,6 +1621,25 @@ class SersDrive(Device):
         if isinstance(value, float) and value.is_integer():
             return str(int(value))
         return str(value)
+
+    def render_statement(self, text: str) -> str:
+        """A stored statement as LIST shows it (G-LIST): keywords upper-case, constants of
+        weighted parameters with all decimals of the weighting, the unit with P1028 bit 1."""
+        result = st.parse(text, final=True)
+        if result.errno is not None or len(result.statements) != 1:
+            return text
+        stmt = result.statements[0][0]
+        if isinstance(stmt, st.Assign) and isinstance(stmt.value, st.Number) and stmt.target.kind != "I":
+            try:
+                pdef = PARAMETERS.get(self.address_number(stmt.target))
+            except (SersError, KeyError):
+                pdef = None
+            if pdef is not None and pdef.kind in WEIGHTED:
+                scaling = self.scaling
+                value = format_fixed(stmt.value.value, scaling.decimals(pdef.kind))
+                unit = scaling.unit(pdef.kind) if self.list_options & 2 else ""
+                return f"{stmt.target.text}={value}{unit}"
+        return text.upper() if not isinstance(stmt, st.Text | st.Comment) else text
 
     def query_text(self, stmt: st.Query) -> str:
         target = stmt.target
@@ -1787,5 +1810,3 @@ def _sign(x: float) -> int:
 def _raise(errno: int) -> None:
     raise SersError(errno)
 
-
-_ = format_fixed  # re-exported for LIST rendering

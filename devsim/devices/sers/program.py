@@ -9,6 +9,8 @@ programs is the program interpreter's job.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.sers.errors import SersError
 
@@ -89,18 +91,24 @@ class ProgramMemory:
             self._lines[-1].append(text)
         self._store()
 
-    def listing(self, options: int) -> list[str]:
-        """LIST output (G-LIST): one statement per row, numbered when P1028 bit 0 is set;
-        with bit 3 the user's lines are kept, numbered by their first statement."""
+    def listing(self, options: int, render: Callable[[str], str] = str) -> list[str]:
+        """LIST output (spec G-LIST, manual §4.3, P1028): one statement per row, numbered
+        ``n: `` with bit 0; with bit 3 the user's lines are kept, numbered by their first
+        statement; with bit 2 labels start in column 1 and statements in column 4.
+        ``render`` turns a stored statement into its listed form (full decimals, units)."""
         rows: list[str] = []
         number = 1
         for line in self._lines:
-            if options & 8:
-                text = " ".join(line)
+            groups = [line] if options & 8 else [[stmt] for stmt in line]
+            for group in groups:
+                text = " ".join(render(stmt) for stmt in group)
+                if options & 4 and not _is_label(group[0]):
+                    text = "   " + text
                 rows.append(f"{number}: {text}" if options & 1 else text)
-                number += len(line)
-            else:
-                for stmt in line:
-                    rows.append(f"{number}: {stmt}" if options & 1 else stmt)
-                    number += 1
+                number += len(group)
         return rows
+
+
+def _is_label(text: str) -> bool:
+    stripped = text.strip().upper()
+    return stripped.startswith("L") and stripped[1:2].isdigit()

@@ -1,0 +1,463 @@
+"""SERS non-volatile memory through a real pty: PSAVE/POSSAVE/P1004, power-on values,
+program storage (T-20), simulator restarts and `kill -9` during EEPROM writes
+(sers.md §3.5.9, §3.5.12, §4.1, §4.9, T-20, T-21)."""
+
+from __future__ import annotations
+
+import json
+import os
+import queue
+import random
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+import serial
+
+from tests.sers.conftest import Host, Plant
+
+ROOT = Path(__file__).resolve().parents[2]
+DEG = 12800 / 360
+LIST_ROW = re.compile(r"(\d+): (.*)")
+
+
+def power_cycle(plant: Plant, wipe: bool = False) -> None:
+    plant.runtime.power_cycle(plant.name, wipe=wipe)
+    plant.advance(2.0)  # display '-' for 2 s, input discarded meanwhile (§4.1)
+
+
+def query(host: Host, name: str) -> str:
+    """``#<name>?`` → the value text of the answer (after ``=``), checking the framing."""
+    answer = host.ask(f"#{name}?\r").decode("latin-1")
+    match = re.fullmatch(rf"#{re.escape(name)}\?\r{re.escape(name.upper())}=(.*)\n\r\nok\d\n\r", answer)
+    assert match, f"unexpected answer to {name}?: {answer!r}"
+    return match.group(1)
+
+
+def normalise(statement: str) -> str:
+    """``W=360.0000`` and ``W=360`` are the same stored constant (G-LIST decimals)."""
+    return re.sub(r"(\d)\.0+\b", r"\1", statement.strip())
+
+
+def listing(host: Host) -> list[tuple[int, str]]:
+    """``#LIST`` → [(number, statement)]; checks every row is ``<n>: <statement>\\n\\r``."""
+    answer = host.ask("#LIST\r").decode("latin-1")
+    assert answer.startswith("#LIST\r"), answer
+    body, ack = re.fullmatch(r"#LIST\r(.*?)(\n(?:ok\d|pgm)\n\r)", answer, re.S).groups()
+    rows = body.split("\n\r")
+    assert rows[-1] == "", f"listing does not end with LF CR: {answer!r}"
+    result = []
+    for row in rows[:-1]:
+        match = LIST_ROW.fullmatch(row)
+        assert match, f"garbage row {row!r} in listing {answer!r}"
+        result.append((int(match.group(1)), normalise(match.group(2))))
+    return result
+
+
+def cost(statement: str) -> int:
+    """Bytes of a statement in the spec's memory model (§4.9 G-MEM)."""
+    return 6 if any(ch.isdigit() for ch in statement) else 2
+
+
+# ======================================================================================
+# parameters
+# ======================================================================================
+@pytest.mark.parametrize("save", ["PSAVE", "P1004=2"])
+def test_psave_keeps_parameters_across_power_cycle(plant_factory, tmp_path, save: str) -> None:
+    plant = plant_factory({}, state_dir=tmp_path)
+    host = plant.host
+    assert host.ask("#P1019=45 V=500 P1028=9\r") == b"#P1019=45 V=500 P1028=9\r\nok1\n\r"
+    assert host.ask(f"#{save}\r") == f"#{save}\r\nok1\n\r".encode()
+    power_cycle(plant)
+    assert query(host, "P1019") == "45U/min"
+    assert query(host, "V") == "500U/min"
+    assert query(host, "P1028") == "9"
+
+
+def test_change_without_psave_reverts_after_power_cycle(plant_factory, tmp_path) -> None:
+    plant = plant_factory({}, state_dir=tmp_path)
+    host = plant.host
+    host.ask("#P1019=45\r")
+    host.ask("#PSAVE\r")
+    assert host.ask("#P1019=60 V=700\r") == b"#P1019=60 V=700\r\nok1\n\r"
+    assert query(host, "P1019") == "60U/min"  # RAM has the new value ...
+    power_cycle(plant)
+    assert query(host, "P1019") == "45U/min"  # ... the EEPROM the saved one
+    assert query(host, "V") == "100U/min"  # never saved: factory default
+
+
+def test_p1004_3_restores_factory_defaults(plant_factory, tmp_path) -> None:
+    plant = plant_factory({}, state_dir=tmp_path)
+    host = plant.host
+    host.ask("#P1019=45 V=500\r")
+    host.ask("#PSAVE\r")
+    power_cycle(plant)
+    assert query(host, "P1019") == "45U/min"
+    assert host.ask("#P1004=3\r") == b"#P1004=3\r\nok1\n\r"
+    assert query(host, "P1019") == "30U/min"  # RAM too [SIM, §4.9]
+    assert query(host, "V") == "100U/min"
+    power_cycle(plant)
+    assert query(host, "P1019") == "30U/min"  # EEPROM parameters were destroyed
+    assert query(host, "V") == "100U/min"
+
+
+def test_possave_restores_p51(plant_factory, tmp_path) -> None:
+    plant = plant_factory({}, state_dir=tmp_path)
+    host = plant.host
+    host.ask("#ON W=720 E\r")
+    plant.settle()
+    assert query(host, "P51") == "720°"
+    assert host.ask("#POSSAVE\r") == b"#POSSAVE\r\nok1\n\r"
+    host.ask("#W=90 E\r")
+    plant.settle()
+    assert query(host, "P51") == "810°"
+    power_cycle(plant)
+    assert query(host, "P51") == "720°"  # the saved position, not the last one
+    assert plant.read("energized") is False
+
+
+def test_without_possave_p51_is_zero_after_power_cycle(plant_factory, tmp_path) -> None:
+    plant = plant_factory({}, state_dir=tmp_path)
+    host = plant.host
+    host.ask("#ON W=720 E\r")
+    plant.settle()
+    host.ask("#PSAVE\r")  # PSAVE does not store the position
+    assert query(host, "P51") == "720°"
+    power_cycle(plant)
+    assert query(host, "P51") == "0°"
+
+
+def test_non_stored_parameters_take_power_on_values(plant_factory, tmp_path) -> None:
+    plant = plant_factory({"axis": {"reference_low": 20 * DEG}}, state_dir=tmp_path)
+    host = plant.host
+    host.ask("#ON H\r")
+    plant.settle()
+    assert query(host, "P403") == "0"  # homed
+    assert host.ask("#P1035=0 P1110=0 W=500 R0=1.5\r") == b"#P1035=0 P1110=0 W=500 R0=1.5\r\nok1\n\r"
+    host.ask("#P1019=45\r")
+    host.ask("#PSAVE\r")
+    assert (query(host, "P1035"), query(host, "P1110"), query(host, "W")) == ("0", "0", "500°")
+    power_cycle(plant)
+    assert query(host, "P1019") == "45U/min"  # the PSAVE did happen
+    assert query(host, "P1035") == "1"
+    assert query(host, "P1110") == "1"
+    assert query(host, "W") == "0°"  # P1117=0: W not stored
+    assert query(host, "R0") == "0"
+    assert query(host, "P403") == "3"  # no valid reference after power-on
+
+
+def test_p1117_makes_psave_keep_w_and_registers(plant_factory, tmp_path) -> None:
+    plant = plant_factory({}, state_dir=tmp_path)
+    host = plant.host
+    line = "#P1117=1 W=500 R0=1.5 R5=-2.25\r"
+    assert host.ask(line) == line.encode() + b"\nok1\n\r"
+    host.ask("#PSAVE\r")
+    host.ask("#W=7 R0=3 R5=4\r")  # changed after the save: not kept
+    power_cycle(plant)
+    assert query(host, "P1117") == "1"
+    assert query(host, "W") == "500°"
+    assert query(host, "R0") == "1.5"
+    assert query(host, "R5") == "-2.25"
+
+
+def test_restart_of_the_simulator_keeps_saved_values_and_program(plant_factory, tmp_path) -> None:
+    first = plant_factory({}, state_dir=tmp_path)
+    host = first.host
+    host.ask("#P1019=45 V=500\r")
+    host.ask("#PSAVE\r")
+    host.ask("#P51=123.75\r")  # 4400 increments: representable exactly (§5.1)
+    host.ask("#POSSAVE\r")
+    host.ask("#NEW\r")
+    host.ask("#ON V=20\r")
+    host.ask("#W=360 E\r")
+    host.ask("#QUIT\r")
+    host.ask("#P1020=99\r")  # not saved
+    first.host.close()
+    first.runtime.stop()
+
+    second = plant_factory({}, state_dir=tmp_path)
+    host = second.host
+    assert query(host, "P1019") == "45U/min"
+    assert query(host, "V") == "500U/min"
+    assert query(host, "P1020") == "300U/min"
+    assert query(host, "P51") == "123.75°"
+    assert listing(host) == [(1, "ON"), (2, "V=20"), (3, "W=360"), (4, "E")]
+    assert query(host, "P1122") == str(1024 - (2 + 6 + 6 + 2) // 2)
+
+
+def test_power_cycle_with_wipe_erases_everything(plant_factory, tmp_path) -> None:
+    plant = plant_factory({}, state_dir=tmp_path)
+    host = plant.host
+    host.ask("#P1019=45 P1117=1 W=500\r")
+    host.ask("#PSAVE\r")
+    host.ask("#P51=90\r")
+    host.ask("#POSSAVE\r")
+    host.ask("#NEW\r")
+    host.ask("#ON\r")
+    host.ask("#QUIT\r")
+    power_cycle(plant)
+    assert query(host, "P1019") == "45U/min"  # stored before the wipe ...
+    assert query(host, "P1122") == "1023"
+    power_cycle(plant, wipe=True)
+    assert query(host, "P1019") == "30U/min"  # ... and gone after it
+    assert query(host, "P1117") == "0"
+    assert query(host, "W") == "0°"
+    assert query(host, "P51") == "0°"
+    assert query(host, "P1122") == "1024"
+    assert listing(host) == []
+    image = json.loads((tmp_path / "sers.nvram.json").read_text("utf-8"))
+    assert not image.get("params") and not image.get("position")
+    assert not image.get("program", {}).get("lines")
+
+
+# ======================================================================================
+# programming mode (T-20, T-21)
+# ======================================================================================
+def test_t20_programming_mode(plant_factory, tmp_path) -> None:
+    plant = plant_factory({}, state_dir=tmp_path)
+    host = plant.host
+    assert query(host, "P1122") == "1024"
+    assert host.ask("#NEW\r") == b"#NEW\r\npgm\n\r"
+    assert host.ask("#ON\r") == b"#ON\r\npgm\n\r"
+    assert plant.read("energized") is False  # stored, not executed
+    assert plant.read("display") == {"char": "4", "blinking": False}
+    assert host.ask("#W=360 E\r") == b"#W=360 E\r\npgm\n\r"
+    assert plant.read("motion") is None
+    assert plant.read("param.W") == 0  # the assignment went into the program, not into W
+    answer = host.ask("#LIST\r")
+    assert answer.endswith(b"\npgm\n\r")  # LIST is executed, still in programming mode
+    assert listing(host) == [(1, "ON"), (2, "W=360"), (3, "E")]
+    assert host.ask("#QUIT\r") == b"#QUIT\r\nok1\n\r"
+    assert plant.read("energized") is False
+    assert host.ask("#P0?\r") == b"#P0?\rP0=0\n\r\nok1\n\r"
+    # the program survives a power cycle, and takes 2 + 6 + 2 bytes = 5 words (G-MEM)
+    power_cycle(plant)
+    assert listing(host) == [(1, "ON"), (2, "W=360"), (3, "E")]
+    assert query(host, "P1122") == "1019"
+
+
+def test_t21_listing_one_statement_per_row(sers: Plant) -> None:
+    host = sers.host
+    host.ask("#NEW\r")
+    assert host.ask("#1 ON V=1000 W=5000 E\r") == b"#1 ON V=1000 W=5000 E\r\npgm\n\r"
+    assert host.ask("#O1=1 D=10 W=2000 E\r") == b"#O1=1 D=10 W=2000 E\r\npgm\n\r"
+    host.ask("#QUIT\r")
+    assert listing(host) == [
+        (1, "ON"), (2, "V=1000"), (3, "W=5000"), (4, "E"),
+        (5, "O1=1"), (6, "D=10"), (7, "W=2000"), (8, "E"),
+    ]
+    assert sers.read("output.O1") is False  # stored, not executed
+    host.ask("#P1028=9\r")  # bit 3: the user's lines, numbered by their first statement
+    assert listing(host) == [(1, "ON V=1000 W=5000 E"), (5, "O1=1 D=10 W=2000 E")]
+
+
+def test_new_deletes_the_old_program(plant_factory, tmp_path) -> None:
+    plant = plant_factory({}, state_dir=tmp_path)
+    host = plant.host
+    host.ask("#NEW\r")
+    host.ask("#ON W=360 E\r")
+    host.ask("#QUIT\r")
+    host.ask("#NEW\r")
+    host.ask("#OFF\r")
+    host.ask("#QUIT\r")
+    power_cycle(plant)
+    assert listing(host) == [(1, "OFF")]
+    assert query(host, "P1122") == "1023"
+
+
+# ======================================================================================
+# kill -9 while the EEPROM is written
+# ======================================================================================
+class SimProcess:
+    """``devsim run sers --pty --state-dir DIR`` as a separate process (real time)."""
+
+    def __init__(self, state_dir: Path, config: Path) -> None:
+        env = dict(os.environ)
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "devsim", "run", "sers", "--pty", "--config", str(config),
+             "--state-dir", str(state_dir)],
+            cwd=ROOT,
+            env=env,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            text=True,
+        )
+        self._lines: queue.Queue[str | None] = queue.Queue()
+        threading.Thread(target=self._pump, daemon=True).start()
+        self.path = self._pty_path()
+
+    def _pump(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            self._lines.put(line.rstrip("\n"))
+        self._lines.put(None)
+
+    def _pty_path(self, timeout: float = 15.0) -> str:
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                line = self._lines.get(timeout=max(0.01, deadline - time.monotonic()))
+            except queue.Empty:
+                self.kill()
+                raise AssertionError("the simulator printed no 'sers: pty' line") from None
+            assert line is not None, f"the simulator ended early (exit {self.proc.wait()})"
+            if line.startswith("sers: pty "):
+                return line.split(" ", 2)[2]
+
+    def kill(self) -> None:
+        if self.proc.poll() is None:
+            os.kill(self.proc.pid, signal.SIGKILL)
+        self.proc.wait(timeout=15)
+        if self.proc.stdout is not None:
+            self.proc.stdout.close()
+
+
+ACKED = re.compile(rb"\nok\d\n\r|\npgm\n\r")
+
+
+def stream_and_kill(
+    sim: SimProcess, lines: list[str], kill_after: int, phase: float, window: int = 3
+) -> tuple[int, int]:
+    """Send ``lines`` back to back, keeping ``window`` of them unacknowledged so that the drive
+    always has work queued, and SIGKILL the simulator once ``kill_after`` were acknowledged.
+
+    The drive answers a whole chunk of lines at once, so right after an acknowledgement it is
+    idle; the kill therefore comes ``phase`` seconds (busy-waited, a fraction of one line's
+    EEPROM write) after the lines queued last, i.e. at a random point of the drive's work on
+    them.  Returns (acknowledged, sent)."""
+    port = serial.Serial(sim.path, 9600, timeout=0.005)
+    sent = acked = 0
+    buf = bytearray()
+    deadline = time.monotonic() + 10
+    try:
+        while True:
+            while sent < len(lines) and sent - acked < window:
+                port.write(lines[sent].encode("ascii"))
+                sent += 1
+            if acked >= kill_after:
+                break
+            buf += port.read(max(1, port.in_waiting))
+            acked = len(ACKED.findall(buf))
+            assert b"\n*" not in buf, f"error message while streaming: {bytes(buf)!r}"
+            assert time.monotonic() < deadline, f"only {acked} of {kill_after} acknowledgements: {bytes(buf)!r}"
+        kill_at = time.perf_counter() + phase
+        while time.perf_counter() < kill_at:
+            pass
+        sim.kill()
+    finally:
+        sim.kill()
+        port.close()
+    return acked, sent
+
+
+def check_nvram_file(state_dir: Path) -> dict:
+    data = json.loads((state_dir / "sers.nvram.json").read_text("utf-8"))
+    assert isinstance(data, dict)
+    return data
+
+
+def write_config(tmp_path: Path) -> Path:
+    config = tmp_path / "sers.yaml"
+    config.write_text("address: 1\nboot_time: 0\n")
+    return config
+
+
+def test_kill_9_during_psave_keeps_a_written_value(tmp_path: Path) -> None:
+    config = write_config(tmp_path)
+    state = tmp_path / "state"
+    rng = random.Random()
+    kill_points = [rng.randint(1, 25) for _ in range(5)]
+    expected: range | None = None  # values P1019 may have after the last kill
+    for round_no in range(len(kill_points) + 1):
+        sim = SimProcess(state, config)
+        try:
+            host = Host(sim.path)
+            try:
+                value = int(query(host, "P1019").removesuffix("U/min"))
+            finally:
+                host.close()
+            if expected is None:
+                assert value == 30  # factory default, nothing saved yet
+            else:
+                assert value in expected, f"P1019={value}, expected one of {expected} (kills {kill_points})"
+                check_nvram_file(state)
+            if round_no == len(kill_points):
+                break
+            base = 100 + 1000 * round_no
+            values = list(range(base + 1, base + 61))
+            lines = [f"#P1019={n} PSAVE\r" for n in values]
+            acked, sent = stream_and_kill(sim, lines, kill_points[round_no], rng.uniform(0, 0.003))
+            assert acked >= 1
+            expected = range(values[acked - 1], values[sent - 1] + 1)
+        finally:
+            sim.kill()
+
+
+def test_kill_9_during_program_download_leaves_old_or_prefix_of_new(tmp_path: Path) -> None:
+    config = write_config(tmp_path)
+    state = tmp_path / "state"
+    rng = random.Random()
+    kill_points = [0] + [rng.randint(1, 20) for _ in range(4)]
+    old: list[str] = []
+    written = False  # an acknowledged line has reached the EEPROM
+    candidates: list[list[str]] = [[]]
+    for round_no in range(len(kill_points) + 1):
+        sim = SimProcess(state, config)
+        try:
+            host = Host(sim.path)
+            try:
+                rows = listing(host)
+                assert [n for n, _ in rows] == list(range(1, len(rows) + 1)), rows
+                program = [stmt for _, stmt in rows]
+                assert program in candidates, (
+                    f"after kill {round_no} at {kill_points}: listing {program} is neither the old program "
+                    f"nor a prefix of the new one ({candidates[:1]} ... {candidates[-1:]})"
+                )
+                free = int(query(host, "P1122"))
+                assert free == 1024 - sum(cost(s) for s in program) // 2
+                if written:
+                    check_nvram_file(state)
+            finally:
+                host.close()
+            if round_no == len(kill_points):
+                break
+            old = program
+            lines = ["#NEW\r"]
+            statements: list[list[str]] = []
+            for k in range(1, 31):
+                line = [f"V={100 * round_no + k}"] if k % 3 else [f"W={k}", "E", f"O1={k % 2}"]
+                statements.append(line)
+                lines.append("#" + " ".join(line) + "\r")
+            acked, sent = stream_and_kill(sim, lines, kill_points[round_no], rng.uniform(0, 0.003))
+            written = written or acked > 0
+            flat = [s for line in statements for s in line]
+            done = sum(len(line) for line in statements[: max(0, acked - 1)])
+            upto = sum(len(line) for line in statements[: max(0, sent - 1)])
+            candidates = [flat[:m] for m in range(done, upto + 1)]
+            if acked == 0:
+                candidates.append(old)  # NEW may not have happened at all
+        finally:
+            sim.kill()
+
+
+def test_t21_exact_rendering_with_full_decimals_and_units(sers: Plant) -> None:
+    host = sers.host
+    host.ask("#NEW\r")
+    host.ask("#1 ON V=1000 W=5000 E\r")
+    host.ask("#L1 O1=1 D=10 W=2000 E\r")
+    host.ask("#QUIT\r")
+    assert host.ask("#LIST\r") == (
+        b"#LIST\r1: ON\n\r2: V=1000.0000\n\r3: W=5000.0000\n\r4: E\n\r5: L1\n\r6: O1=1\n\r7: D=10\n\r"
+        b"8: W=2000.0000\n\r9: E\n\r\nok1\n\r"
+    )
+    host.ask("#P1028=7\r")  # numbers, units, indented (labels in column 1)
+    assert host.ask("#LIST\r").startswith(
+        "#LIST\r1:    ON\n\r2:    V=1000.0000U/min\n\r3:    W=5000.0000°\n\r4:    E\n\r5: L1\n\r".encode("latin-1")
+    )
