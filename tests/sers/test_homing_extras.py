@@ -180,3 +180,28 @@ def test_phase_current_reduction_at_standstill(plant_factory) -> None:
     plant.settle()
     plant.advance(0.02)
     assert plant.read("phase_current") == 3000
+
+
+def test_servo_mode_loses_no_steps_and_catches_up(plant_factory) -> None:
+    plant = plant_factory({"options": ["E50", "SERVO"], "params": {"P1152": 1, "P1162": 1, "P1163": 600, "P1160": 5}})
+    host = plant.host
+    host.ask("#ON\r")
+    plant.advance(0.1)  # load-angle zero taken 100 ms after ON
+    host.ask("#V=60 W=360 E\r")
+    plant.advance(0.3)
+    plant.set("quantity.stall", True)
+    assert plant.read("output.O1") is True  # P1160=5: O1 while overloaded
+    held = plant.read("axis.position")
+    plant.advance(1.0)
+    assert plant.read("axis.position") == pytest.approx(held)  # waits, no step loss
+    plant.set("quantity.stall", False)
+    assert plant.read("output.O1") is False
+    plant.settle()
+    assert plant.read("param.P51") == pytest.approx(360)
+    assert plant.read("P11") == 0 and plant.read("P12") == 0
+
+
+def test_servo_positioning_before_calibration_warns(plant_factory) -> None:
+    plant = plant_factory({"options": ["E50", "SERVO"], "params": {"P1152": 1}})
+    plant.host.ask("#ON W=90 E\r")
+    assert plant.read("P12") & 2048

@@ -167,6 +167,9 @@ class SersDrive(Device):
         self._setpoint: float | None = None
         self._follow_target = 0.0
         self._stopped_at = 0.0
+        self.servo_calibrated = False
+        self.servo_overload = False
+        self._servo_resume = False
         self._posr_attempts = 0
         self.max_load_angle = 0.0
         self._jog_dir = 0
@@ -831,7 +834,42 @@ class SersDrive(Device):
             raise SersError(79)
         self.energized = True
         self.relay = True
+        if self.ram.get(1152) == 1 and not int(self.ram.get(147, 0)) & 256 and not self.servo_calibrated:
+            # SERVO: the load-angle zero is taken 100 ms after ON (§4.8.6.7, P147 bit 8 = 0)
+            self._timers.append(self.clock.call_later(0.1, self._servo_calibrate))
         self._update_outputs()
+
+    # -- SERVO mode (option E50/C, P1152=1; §4.8.6.7, spec §5.10) ---------------------------
+    def _servo_calibrate(self) -> None:
+        if self.energized:
+            self.servo_calibrated = True
+
+    def _servo_check(self) -> None:
+        """Positioning or jogging before the load angle is calibrated: warning 2048."""
+        if self.ram.get(1152) == 1 and not self.servo_calibrated:
+            self.warn(2048)
+
+    def _servo_overload(self, overloaded: bool) -> None:
+        """Under overload the SERVO drive loses no steps: the stator field holds at the rotor
+        and the move resumes when the load goes away, at P1163 if P1162=1 (catch-up), else at
+        V (arriving later).  P1160 signals the overload on an output."""
+        self.servo_overload = overloaded
+        sel = int(self.ram.get(1160, 0))
+        if sel:
+            port, value = abs(sel) if abs(sel) <= 4 else abs(sel) - 4, sel > 0
+            if overloaded or abs(sel) > 4:
+                self.signals.set(f"O{port}", value if overloaded else not value)
+        if overloaded:
+            if self.motion == "position":
+                self.axis.quick_stop()
+                self._servo_resume = True
+            return
+        if getattr(self, "_servo_resume", False) and self.motion == "position":
+            self._servo_resume = False
+            speed = self._speed
+            if self.ram.get(1162) == 1:
+                speed = max(speed, float(self.ram.get(1163, speed)))
+            self.axis.move_to(self._target_physical, speed, self._accel, on_done=self._positioning_done)
 
     def switch_off(self) -> None:
         """OFF = P134=0: torque off at once (spec G-OFFMOVE), relay open."""
@@ -936,6 +974,7 @@ class SersDrive(Device):
         self._speed = float(self.ram[91])
         self._accel = float(self.ram[138])
         self._target_physical = target + self.offset
+        self._servo_check()
         self._begin_motion("position", self._accel)
         self._setpoint = self._target_physical
         self._legs = self._backlash_legs(p51 + self.offset, self._target_physical)
@@ -1036,6 +1075,7 @@ class SersDrive(Device):
         speed = float(self.ram[1019 if name[1] == "S" else 1020]) * float(self.ram.get(108, 100)) / 100
         accel = float(self.ram[1018])
         if not (self.motion == "jog" and self._jog_dir == direction and self._jog_speed == speed):
+            self._servo_check()
             self._begin_motion("jog", accel)
             self._jog_dir = direction
             self._jog_speed = speed
@@ -1276,6 +1316,9 @@ class SersDrive(Device):
         return encoder and int(self.ram.get(1029, 0)) != 0
 
     def _on_stall(self, name: str, old: Any, new: Any) -> None:
+        if self.ram.get(1152) == 1:
+            self._servo_overload(bool(new))
+            return
         if new:
             self._stall_rotor = self.axis.position() - self.lost
             self._arm_load_watch()
