@@ -1,12 +1,17 @@
 """The shared closed-form axis model.
 
 Implements design.md principle 2, *physics is closed-form and event-driven*: an :class:`Axis` is a
-list of constant-acceleration :class:`Segment` objects; its position, velocity and acceleration at
-any instant are computed from that list, never integrated tick by tick.  Reaching a target,
-crossing a switch position (:meth:`Axis.watch`, :class:`RegionSwitch`) or passing the encoder's
-index mark (:meth:`Axis.watch_index`) are events whose times are solved analytically (a quadratic
-per segment) and scheduled as timers on the device's :class:`~devsim.core.clock.Clock`
-(principle 3).  An axis at rest schedules no timers at all.
+list of :class:`Segment` objects (constant acceleration, or a raised-cosine "sine" velocity ramp);
+its position, velocity and acceleration at any instant are computed from that list, never
+integrated tick by tick.  Reaching a target, crossing a switch position (:meth:`Axis.watch`,
+:class:`RegionSwitch`) or passing the encoder's index mark (:meth:`Axis.watch_index`) are events
+whose times are solved per segment (a quadratic; a safeguarded Newton iteration on a sine segment)
+and scheduled as timers on the device's :class:`~devsim.core.clock.Clock` (principle 3).  An axis
+at rest schedules no timers at all.
+
+Ramp shapes (SERS P1032/P1005–P1008, spec §5.2) are described by a :class:`RampProfile`, passed to
+:meth:`Axis.move_to`, :meth:`Axis.jog` and :meth:`Axis.stop`; without one the ramps are plain
+constant-acceleration ramps.
 
 Units are the device's raw units: positions in increments, velocities in inc/s, accelerations in
 inc/s²; unit scaling is the device's business.
@@ -19,17 +24,20 @@ and never lost because a re-plan happened at the crossing instant.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Literal
 
 from devsim.core.clock import Clock, Timer
 
-__all__ = ["Axis", "Phase", "RegionSwitch", "Segment", "Watch"]
+__all__ = ["Axis", "Phase", "RampProfile", "RegionSwitch", "Segment", "Shape", "Watch"]
 
 Phase = Literal["idle", "accel", "const", "decel"]
+Shape = Literal["linear", "sine"]
+_PhaseSpec = tuple[float, float, float, Shape]  # (acceleration, duration, end velocity, shape)
 Callback = Callable[[], None]
 CrossingCallback = Callable[[int], None]
 
@@ -43,11 +51,133 @@ def _sgn(x: float) -> int:
     return (x > 0) - (x < 0)
 
 
+def _theta_minus_sin(th: float) -> float:
+    """``th - sin(th)`` without the cancellation for small ``th`` (series below 0.25)."""
+    if th < 0.25:
+        q = th * th
+        return th * q / 6.0 * (1.0 - q / 20.0 * (1.0 - q / 42.0 * (1.0 - q / 72.0 * (1.0 - q / 110.0))))
+    return th - math.sin(th)
+
+
+@dataclass(frozen=True)
+class RampProfile:
+    """SERS P1032/P1005–P1008 (spec §5.2): up to three speed sections per ramp.
+
+    Section 1: 0 → v1 = ``speed1``·V with acceleration ``accel1``·A; section 2: v1 → v2 =
+    ``speed2``·V with ``accel2``·A; section 3: v2 → V with A (and beyond V, when an axis that is
+    faster than the new V slows down, A as well).  Deceleration mirrors the same sections with the
+    deceleration as base (braking from V to v2 with D, v2 → v1 with ``accel2``·D, v1 → 0 with
+    ``accel1``·D).  The fractions are in 0..1 (P1007 = ``speed1``·100 %, P1005 = ``accel1``·100 %,
+    P1008 = ``speed2``·100 %, P1006 = ``accel2``·100 %).  A section whose speed range is empty
+    (v1 = 0, v2 <= v1) or whose acceleration fraction is 0 is absent: its speed range belongs to
+    the next section present.
+
+    ``shape`` (P1032): ``"linear"`` is constant acceleration in each section; ``"sine"`` makes each
+    section's velocity change a raised cosine ``v(t) = va + (vb-va)·(1-cos(pi·t/T))/2`` with the
+    linear section's duration ``T = (vb-va)/a``: the average acceleration is the section's, the
+    peak pi/2 of it, and durations and distances equal the linear ones.  With every fraction 1.0
+    and ``"linear"`` this is the plain trapezoid (exactly the plan made without a profile).
+    """
+
+    speed1: float = 1.0
+    accel1: float = 1.0
+    speed2: float = 1.0
+    accel2: float = 1.0
+    shape: Shape = "linear"
+
+    def __post_init__(self) -> None:
+        for name in ("speed1", "accel1", "speed2", "accel2"):
+            value = getattr(self, name)
+            if not 0.0 <= value <= 1.0:  # also rejects nan
+                raise ValueError(f"{name} must be in 0..1, not {value!r}")
+        if self.shape not in ("linear", "sine"):
+            raise ValueError(f"shape must be 'linear' or 'sine', not {self.shape!r}")
+
+
+class _Ramp:
+    """A :class:`RampProfile` made concrete for reference speed ``vref`` and base acceleration
+    ``base``: speed sections ``[bounds[i-1], bounds[i])`` (from 0; the last bound is inf) with
+    acceleration ``accs[i]``.  Distances and durations are those of constant acceleration per
+    section, whatever the shape (a raised cosine has the linear section's average velocity)."""
+
+    def __init__(self, profile: RampProfile, vref: float, base: float) -> None:
+        self.shape: Shape = profile.shape
+        self.bounds: list[float] = []
+        self.accs: list[float] = []
+        fracs: list[float] = []
+        lo = 0.0
+        for fv, fa in ((profile.speed1, profile.accel1), (profile.speed2, profile.accel2), (math.inf, 1.0)):
+            if fa == 0.0:
+                continue
+            hi = math.inf if fv == math.inf else fv * vref
+            if not hi > lo:
+                continue
+            if fracs and fracs[-1] == fa and self.shape == "linear":
+                self.bounds[-1] = hi  # the same constant acceleration: one section
+            else:
+                self.bounds.append(hi)
+                self.accs.append(fa * base)
+                fracs.append(fa)
+            lo = hi
+
+    @property
+    def trivial(self) -> bool:
+        """One linear section with the base acceleration: the plain ramp."""
+        return self.shape == "linear" and len(self.accs) == 1
+
+    def _overlaps(self, lo: float, hi: float) -> Iterator[tuple[float, float, float]]:
+        """``(a, b, acc)`` for each section's overlap with the speed range ``(lo, hi)``, ascending."""
+        start = 0.0
+        for bound, acc in zip(self.bounds, self.accs, strict=True):
+            a, b = max(start, lo), min(bound, hi)
+            if b > a:
+                yield a, b, acc
+            start = bound
+            if start >= hi:
+                break
+
+    def acc_at(self, v: float) -> float:
+        for bound, acc in zip(self.bounds, self.accs, strict=True):
+            if v < bound:
+                return acc
+        return self.accs[-1]
+
+    def distance(self, lo: float, hi: float) -> float:
+        """Distance covered while the speed changes between ``lo`` and ``hi`` (``lo <= hi``)."""
+        return sum((b - a) * (b + a) / (2.0 * acc) for a, b, acc in self._overlaps(lo, hi))
+
+    def up(self, u: float, w: float, s: int, phases: list[_PhaseSpec]) -> None:
+        """Append the phases speeding up from ``u`` to ``w`` (magnitudes) in direction ``s``."""
+        for a, b, acc in self._overlaps(u, w):
+            phases.append((s * acc, (b - a) / acc, s * b, self.shape))
+
+    def down(self, w: float, u: float, s: int, phases: list[_PhaseSpec], scale: float = 1.0) -> None:
+        """Append the phases slowing down from ``w`` to ``u`` (magnitudes) in direction ``s``;
+        ``scale`` multiplies every section's deceleration."""
+        for a, b, acc in reversed(list(self._overlaps(u, w))):
+            acc *= scale
+            phases.append((-s * acc, (b - a) / acc, s * a, self.shape))
+
+
+def _ramp(profile: RampProfile | None, vref: float, base: float) -> _Ramp | None:
+    """The concrete ramp, or None where it is the plain constant-acceleration ramp."""
+    if profile is None:
+        return None
+    ramp = _Ramp(profile, vref, base)
+    return None if ramp.trivial else ramp
+
+
 @dataclass(frozen=True)
 class Segment:
     """Constant acceleration ``a`` from ``t0`` to ``t1`` starting at ``x0`` with velocity ``v0``.
 
     ``t1`` is ``math.inf`` for an endless cruise (a jog).
+
+    ``shape="sine"``: the velocity is a raised cosine from ``v0`` to ``v0 + a*span`` over
+    ``span`` seconds (``a`` is the average acceleration, ``span`` the full ramp time, equal to
+    ``t1 - t0`` except for a segment cut short in the history):
+    ``v = v0 + a*span*(1 - cos(pi*dt/span))/2``,
+    ``x = x0 + v0*dt + a*span/2*(dt - span/pi*sin(pi*dt/span))``.
     """
 
     t0: float
@@ -55,13 +185,36 @@ class Segment:
     x0: float
     v0: float
     a: float
+    shape: Shape = "linear"
+    span: float = 0.0
 
     def position(self, t: float) -> float:
-        dt = t - self.t0
-        return self.x0 + (self.v0 + 0.5 * self.a * dt) * dt
+        return self._position(t - self.t0)
 
     def velocity(self, t: float) -> float:
-        return self.v0 + self.a * (t - self.t0)
+        if self.shape == "linear":
+            return self.v0 + self.a * (t - self.t0)
+        return self._velocity(t - self.t0)
+
+    def acceleration(self, t: float) -> float:
+        """Instantaneous acceleration (for a sine segment: ``a*pi/2*sin(pi*dt/span)``)."""
+        if self.shape == "linear":
+            return self.a
+        return 0.5 * math.pi * self.a * math.sin(math.pi * (t - self.t0) / self.span)
+
+    def _position(self, dt: float) -> float:
+        if self.shape == "linear":
+            return self.x0 + (self.v0 + 0.5 * self.a * dt) * dt
+        span = self.span
+        return (
+            self.x0
+            + self.v0 * dt
+            + self.a * span * span / (2.0 * math.pi) * _theta_minus_sin(math.pi * dt / span)
+        )
+
+    def _velocity(self, dt: float) -> float:
+        h = math.sin(0.5 * math.pi * dt / self.span)
+        return self.v0 + self.a * self.span * h * h
 
     @property
     def direction(self) -> int:
@@ -72,8 +225,12 @@ class Segment:
         """Time at which the position reaches ``p`` (first root, moving in :attr:`direction`).
 
         Uses the cancellation-free form ``tau = 2 dx / (v0 + dir*sqrt(v0² + 2 a dx))``; a slightly
-        negative discriminant (``p`` at the segment's turning point) is treated as zero.
+        negative discriminant (``p`` at the segment's turning point) is treated as zero.  A sine
+        segment is monotone in position, so its root is bracketed in ``[t0, t0 + span]`` and found
+        by Newton steps safeguarded with bisection, to a few ulp of the segment's time scale.
         """
+        if self.shape != "linear":
+            return self._solve_sine(p)
         dx = p - self.x0
         if self.a == 0.0:
             tau = dx / self.v0 if self.v0 != 0.0 else 0.0
@@ -81,6 +238,37 @@ class Segment:
             disc = self.v0 * self.v0 + 2.0 * self.a * dx
             den = self.v0 + self.direction * (math.sqrt(disc) if disc > 0.0 else 0.0)
             tau = 2.0 * dx / den if den != 0.0 else 0.0
+        return self.t0 + tau
+
+    def _solve_sine(self, p: float) -> float:
+        d = self.direction
+        span = self.span
+        lo, hi = 0.0, span
+        if (self._position(0.0) - p) * d >= 0.0:
+            return self.t0
+        if (self._position(span) - p) * d <= 0.0:
+            return self.t0 + span
+        # start from the linear segment with the same end points
+        tau = Segment(0.0, span, self.x0, self.v0, self.a).solve(p)
+        if not lo < tau < hi:
+            tau = 0.5 * span
+        eps = 4.0 * math.ulp(span)
+        for _ in range(200):
+            g = (self._position(tau) - p) * d
+            if g == 0.0:
+                break
+            if g > 0.0:
+                hi = tau
+            else:
+                lo = tau
+            v = abs(self._velocity(tau))
+            nxt = tau - g / v if v > 0.0 else math.nan
+            if not lo < nxt < hi:  # also catches nan
+                nxt = 0.5 * (lo + hi)
+            step = abs(nxt - tau)
+            tau = nxt
+            if step <= eps or hi - lo <= eps:
+                break
         return self.t0 + tau
 
 
@@ -222,30 +410,37 @@ class Axis:
         self._gen = 0  # bumped by every plan change; stale timers and loops check it
         self._done_timer: Timer | None = None
         self._on_done: Callback | None = None
+        self._vref: float | None = None  # speed of the last move_to/jog: a profile's reference V
 
     def __repr__(self) -> str:
         return f"<Axis {self.name} x={self.position():.3f} v={self.velocity():.3f} {self.phase()}>"
 
     # -- state ---------------------------------------------------------------------------------
     def _state(self, t: float | None) -> tuple[float, float, float]:
+        return self._lookup(t)[:3]
+
+    def _lookup(self, t: float | None) -> tuple[float, float, float, Segment | None]:
+        """``(position, velocity, acceleration, segment)`` at ``t``; the segment is the one moving
+        the axis at ``t`` (None at rest)."""
         if t is None:
             t = self.clock.now()
         plan = self._plan
         if plan and t >= plan[0].t0:
             for seg in plan:
                 if t < seg.t1:
-                    return seg.position(t), seg.velocity(t), seg.a
-            return self._rest, 0.0, 0.0
+                    return seg.position(t), seg.velocity(t), seg.acceleration(t), seg
+            return self._rest, 0.0, 0.0, None
         if not plan and t >= self._idle_since:
-            return self._rest, 0.0, 0.0
+            return self._rest, 0.0, 0.0, None
         for seg in reversed(self._history):  # the recent past
             if t >= seg.t0:
-                tt = min(t, seg.t1)
-                return seg.position(tt), seg.velocity(tt), seg.a if t < seg.t1 else 0.0
+                if t < seg.t1:
+                    return seg.position(t), seg.velocity(t), seg.acceleration(t), seg
+                return seg.position(seg.t1), seg.velocity(seg.t1), 0.0, None
         first = self._history[0] if self._history else (plan[0] if plan else None)
         if first is None:
-            return self._rest, 0.0, 0.0
-        return first.x0, first.v0, 0.0
+            return self._rest, 0.0, 0.0, None
+        return first.x0, first.v0, 0.0, None
 
     def position(self, t: float | None = None) -> float:
         """Position at ``t`` (default: now)."""
@@ -267,19 +462,35 @@ class Axis:
 
     def phase(self, t: float | None = None) -> Phase:
         """``idle``, ``accel`` (|v| increasing), ``const`` (cruising) or ``decel``."""
-        _, v, a = self._state(t)
+        _, v, a, seg = self._lookup(t)
+        if seg is not None and seg.shape != "linear":
+            # a raised cosine starts and ends with zero acceleration: its average decides
+            return "accel" if _sgn(seg.a) == seg.direction else "decel"
         if a == 0.0:
             return "const" if v != 0.0 else "idle"
         if v == 0.0 or _sgn(a) == _sgn(v):
             return "accel"
         return "decel"
 
-    def stopping_distance(self, decel: float) -> float:
-        """Distance needed to brake from the current velocity with ``decel``: v²/(2·decel)."""
+    def stopping_distance(
+        self, decel: float, profile: RampProfile | None = None, *, speed: float | None = None
+    ) -> float:
+        """Distance needed to brake from the current velocity with ``decel``: v²/(2·decel), or
+        with ``profile`` the sum over its sections (reference speed as for :meth:`stop`)."""
         if decel <= 0:
             raise ValueError("decel must be positive")
         v = self.velocity()
+        ramp = _ramp(profile, self._reference_speed(speed, v), decel) if v != 0.0 else None
+        if ramp is not None:
+            return ramp.distance(0.0, abs(v))
         return v * v / (2.0 * decel)
+
+    def _reference_speed(self, speed: float | None, v: float) -> float:
+        if speed is not None:
+            if not speed > 0:
+                raise ValueError("speed must be positive")
+            return float(speed)
+        return self._vref if self._vref is not None else abs(v)
 
     def final_position(self) -> float:
         """Where the current plan comes to rest; ±inf while a jog cruises for ever."""
@@ -299,6 +510,8 @@ class Axis:
         accel: float,
         decel: float | None = None,
         on_done: Callback | None = None,
+        *,
+        profile: RampProfile | None = None,
     ) -> float:
         """Plan from the current state to stand still exactly at ``target``; returns the end time.
 
@@ -306,6 +519,13 @@ class Axis:
         ``decel`` (default ``accel``).  Moving away from the target, or too fast to stop before
         it, first brakes to zero (with ``decel``) and comes back; faster than ``speed`` first
         slows to ``speed`` with ``decel``.  ``on_done`` runs from a clock timer on arrival.
+
+        ``profile`` shapes every ramp by its speed sections (fractions of ``speed``; the bases
+        are ``accel`` and ``decel``); a triangle's peak speed is solved exactly within the right
+        section.  From a moving state the ramps start at the current speed, inside whatever
+        section it lies in; with ``shape="sine"`` every piece (also such a partial first piece,
+        from the current velocity) is a raised cosine, so the acceleration may jump at the re-plan
+        instant while position and velocity stay continuous.
         """
         decel = accel if decel is None else decel
         if not (speed > 0 and accel > 0 and decel > 0):
@@ -314,8 +534,13 @@ class Axis:
             raise ValueError("target must be finite")
         now = self.clock.now()
         x_now, v_now, _ = self._state(now)
+        self._vref = float(speed)
+        acc_ramp = _ramp(profile, speed, accel)
+        dec_ramp = _ramp(profile, speed, decel)
+        if acc_ramp is not None and dec_ramp is not None:
+            return self._move_profiled(now, x_now, v_now, target, speed, acc_ramp, dec_ramp, on_done)
         x0, v0 = x_now, v_now
-        phases: list[tuple[float, float, float]] = []  # (acceleration, duration, end velocity)
+        phases: list[_PhaseSpec] = []
         tol = max(_ABS_X, _REL_X * max(abs(x0), abs(target)))
         dist = target - x0
         sd = v0 * v0 / (2.0 * decel)
@@ -324,10 +549,10 @@ class Axis:
             if toward and abs(abs(dist) - sd) <= tol and abs(dist) > 0.0:
                 # brakes onto the target exactly (decel adjusted by a rounding error at most)
                 d_exact = v0 * v0 / (2.0 * abs(dist))
-                phases.append((-_sgn(v0) * d_exact, abs(v0) / d_exact, 0.0))
+                phases.append((-_sgn(v0) * d_exact, abs(v0) / d_exact, 0.0, "linear"))
                 return self._install(now, x0, v0, phases, target, on_done)
             if not toward or sd > abs(dist):
-                phases.append((-_sgn(v0) * decel, abs(v0) / decel, 0.0))
+                phases.append((-_sgn(v0) * decel, abs(v0) / decel, 0.0, "linear"))
                 x0 += _sgn(v0) * sd
                 v0 = 0.0
                 dist = target - x0
@@ -336,7 +561,7 @@ class Axis:
             length = abs(dist)
             u = abs(v0)  # toward the target, 0 <= u and u²/(2 decel) <= length
             if u > speed:
-                phases.append((-s * decel, (u - speed) / decel, s * speed))
+                phases.append((-s * decel, (u - speed) / decel, s * speed, "linear"))
                 peak = speed
                 cruise = length - u * u / (2.0 * decel)
             else:
@@ -347,43 +572,145 @@ class Axis:
                     cruise = length - (speed * speed - u * u) / (2.0 * accel) - speed * speed / (2.0 * decel)
                 else:
                     cruise = 0.0
-                phases.append((s * accel, (peak - u) / accel, s * peak))
+                phases.append((s * accel, (peak - u) / accel, s * peak, "linear"))
             if cruise > 0.0:
-                phases.append((0.0, cruise / peak, s * peak))
-            phases.append((-s * decel, peak / decel, 0.0))
+                phases.append((0.0, cruise / peak, s * peak, "linear"))
+            phases.append((-s * decel, peak / decel, 0.0, "linear"))
         return self._install(now, x_now, v_now, phases, target, on_done)
 
-    def jog(self, direction: int, speed: float, accel: float, on_done: Callback | None = None) -> None:
+    def _move_profiled(
+        self,
+        now: float,
+        x_now: float,
+        v_now: float,
+        target: float,
+        speed: float,
+        acc_ramp: _Ramp,
+        dec_ramp: _Ramp,
+        on_done: Callback | None,
+    ) -> float:
+        """:meth:`move_to` with sectioned ramps (the same cases as the plain planner)."""
+        x0, v0 = x_now, v_now
+        phases: list[_PhaseSpec] = []
+        tol = max(_ABS_X, _REL_X * max(abs(x0), abs(target)))
+        dist = target - x0
+        sd = dec_ramp.distance(0.0, abs(v0))
+        if v0 != 0.0:
+            toward = _sgn(dist) == _sgn(v0)
+            if toward and abs(abs(dist) - sd) <= tol and abs(dist) > 0.0:
+                # brakes onto the target exactly (decelerations scaled by a rounding error at most)
+                dec_ramp.down(abs(v0), 0.0, _sgn(v0), phases, scale=sd / abs(dist))
+                return self._install(now, x0, v0, phases, target, on_done)
+            if not toward or sd > abs(dist):
+                dec_ramp.down(abs(v0), 0.0, _sgn(v0), phases)
+                x0 += _sgn(v0) * sd
+                v0 = 0.0
+                dist = target - x0
+        if abs(dist) > 0.0:
+            s = _sgn(dist)
+            length = abs(dist)
+            u = abs(v0)  # toward the target, 0 <= u and its braking distance <= length
+            if u > speed:
+                dec_ramp.down(u, speed, s, phases)
+                peak = speed
+                cruise = length - dec_ramp.distance(0.0, u)
+            else:
+                peak, cruise = self._peak(acc_ramp, dec_ramp, u, speed, length)
+                acc_ramp.up(u, peak, s, phases)
+            if cruise > 0.0:
+                phases.append((0.0, cruise / peak, s * peak, "linear"))
+            dec_ramp.down(peak, 0.0, s, phases)
+        return self._install(now, x_now, v_now, phases, target, on_done)
+
+    @staticmethod
+    def _peak(acc_ramp: _Ramp, dec_ramp: _Ramp, u: float, speed: float, length: float) -> tuple[float, float]:
+        """``(peak speed, cruise distance)`` to cover ``length`` from speed ``u``: accelerate to
+        the peak, then brake to 0.  The distance ``f(p)`` is monotone in the peak ``p`` and, between
+        two section bounds, ``f(lo) + (p² - lo²)·(1/(2a) + 1/(2d))``: solved in closed form within
+        the interval that holds the solution."""
+
+        def f(p: float) -> float:
+            return acc_ramp.distance(u, p) + dec_ramp.distance(0.0, p)
+
+        f_top = f(speed)
+        if f_top <= length:
+            return speed, length - f_top
+        inner = {b for b in acc_ramp.bounds + dec_ramp.bounds if u < b < speed}
+        points = [u, *sorted(inner), speed]
+        for lo, hi in zip(points, points[1:], strict=False):
+            if hi < speed and f(hi) < length:
+                continue
+            mid = 0.5 * (lo + hi)
+            k = 0.5 / acc_ramp.acc_at(mid) + 0.5 / dec_ramp.acc_at(mid)
+            p = math.sqrt(max(lo * lo + (length - f(lo)) / k, 0.0))
+            return min(max(p, lo), hi), 0.0
+        return speed, 0.0  # not reached: u == speed has f(speed) <= length
+
+    def jog(
+        self,
+        direction: int,
+        speed: float,
+        accel: float,
+        on_done: Callback | None = None,
+        *,
+        profile: RampProfile | None = None,
+    ) -> None:
         """Ramp with ``accel`` to velocity ``sign(direction)*speed`` and cruise for ever.
 
         ``on_done`` runs (from a clock timer) when the cruise speed is reached.  ``direction == 0``
-        is a ramped :meth:`stop` with ``accel``.
+        is a ramped :meth:`stop` with ``accel``.  ``profile`` shapes the ramps (sections are
+        fractions of ``speed``, base ``accel``), as for :meth:`move_to`.
         """
         if not (speed > 0 and accel > 0):
             raise ValueError("speed and accel must be positive")
         if direction == 0:
-            self.stop(accel, on_done)
+            self.stop(accel, on_done, profile=profile, speed=speed)
             return
         now = self.clock.now()
         x0, v0, _ = self._state(now)
+        self._vref = float(speed)
         vt = _sgn(direction) * float(speed)
-        phases: list[tuple[float, float, float]] = []
-        if v0 != 0.0 and _sgn(v0) != _sgn(vt):
-            phases.append((-_sgn(v0) * accel, abs(v0) / accel, 0.0))
-            phases.append((_sgn(vt) * accel, speed / accel, vt))
+        phases: list[_PhaseSpec] = []
+        ramp = _ramp(profile, speed, accel)
+        if ramp is not None:
+            if v0 != 0.0 and _sgn(v0) != _sgn(vt):
+                ramp.down(abs(v0), 0.0, _sgn(v0), phases)
+                ramp.up(0.0, speed, _sgn(vt), phases)
+            elif abs(v0) < speed:
+                ramp.up(abs(v0), speed, _sgn(vt), phases)
+            elif abs(v0) > speed:
+                ramp.down(abs(v0), speed, _sgn(vt), phases)
+        elif v0 != 0.0 and _sgn(v0) != _sgn(vt):
+            phases.append((-_sgn(v0) * accel, abs(v0) / accel, 0.0, "linear"))
+            phases.append((_sgn(vt) * accel, speed / accel, vt, "linear"))
         elif v0 != vt:
-            phases.append((_sgn(vt - v0) * accel, abs(vt - v0) / accel, vt))
+            phases.append((_sgn(vt - v0) * accel, abs(vt - v0) / accel, vt, "linear"))
         self._install(now, x0, v0, phases, None, on_done, cruise=vt)
 
-    def stop(self, decel: float, on_done: Callback | None = None) -> float:
-        """Ramp the velocity to 0 with ``decel``; returns the time the axis stands still."""
+    def stop(
+        self,
+        decel: float,
+        on_done: Callback | None = None,
+        *,
+        profile: RampProfile | None = None,
+        speed: float | None = None,
+    ) -> float:
+        """Ramp the velocity to 0 with ``decel``; returns the time the axis stands still.
+
+        ``profile`` brakes through its sections (base ``decel``); their speeds are fractions of
+        ``speed``, by default the speed of the last :meth:`move_to`/:meth:`jog` (the current
+        |velocity| if there was none).
+        """
         if decel <= 0:
             raise ValueError("decel must be positive")
         now = self.clock.now()
         x0, v0, _ = self._state(now)
-        phases: list[tuple[float, float, float]] = []
-        if v0 != 0.0:
-            phases.append((-_sgn(v0) * decel, abs(v0) / decel, 0.0))
+        phases: list[_PhaseSpec] = []
+        ramp = _ramp(profile, self._reference_speed(speed, v0), decel) if v0 != 0.0 else None
+        if ramp is not None:
+            ramp.down(abs(v0), 0.0, _sgn(v0), phases)
+        elif v0 != 0.0:
+            phases.append((-_sgn(v0) * decel, abs(v0) / decel, 0.0, "linear"))
         return self._install(now, x0, v0, phases, None, on_done)
 
     def quick_stop(self) -> None:
@@ -508,7 +835,7 @@ class Axis:
         for seg in self._plan:
             if seg.t0 >= now:
                 break
-            self._history.append(Segment(seg.t0, min(seg.t1, now), seg.x0, seg.v0, seg.a))
+            self._history.append(dataclasses.replace(seg, t1=min(seg.t1, now)))
         end = self._plan_end()
         if end < now:
             self._history.append(Segment(end, now, self._rest, 0.0, 0.0))
@@ -524,7 +851,7 @@ class Axis:
         now: float,
         x0: float,
         v0: float,
-        phases: list[tuple[float, float, float]],
+        phases: list[_PhaseSpec],
         rest: float | None,
         on_done: Callback | None,
         cruise: float | None = None,
@@ -533,9 +860,12 @@ class Axis:
         position (``None``: wherever the phases end).  ``cruise`` appends an endless segment."""
         segs: list[Segment] = []
         t, x, v = now, x0, v0
-        for a, dur, v_end in phases:
+        for a, dur, v_end, shape in phases:
             if dur > _REL_T * max(1.0, abs(t)):
-                segs.append(Segment(t, t + dur, x, v, a))
+                if shape == "linear" or a == 0.0:
+                    segs.append(Segment(t, t + dur, x, v, a))
+                else:
+                    segs.append(Segment(t, t + dur, x, v, a, "sine", dur))
                 x += 0.5 * (v + v_end) * dur
                 t += dur
             v = v_end

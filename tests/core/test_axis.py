@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from devsim.core.axis import Axis, RegionSwitch, Segment
+from devsim.core.axis import Axis, RampProfile, RegionSwitch, Segment
 from devsim.core.clock import VirtualClock
 
 
@@ -440,3 +440,212 @@ def test_segment_closed_form() -> None:
     assert s.position(3.0) == pytest.approx(10.0 + 5.0 * 2 - 4.0)
     assert s.velocity(3.0) == pytest.approx(1.0)
     assert s.solve(s.position(2.0)) == pytest.approx(2.0)
+
+
+# -- ramp profiles (SERS P1032/P1005-P1008, spec 5.2) --------------------------------------------
+HALF = RampProfile(speed1=0.5, accel1=0.5)
+HALF_SINE = RampProfile(speed1=0.5, accel1=0.5, shape="sine")
+V, A = 1000.0, 500.0  # section 1: 0..500 inc/s at 250 inc/s^2 (2 s, 500 inc); 2: ..1000 at 500 (1 s, 750 inc)
+
+
+def test_profile_linear_long_move_time_is_closed_form(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    end = axis.move_to(10000.0, V, A, profile=HALF)
+    t_ramp = (0.5 * V) / (0.5 * A) + (0.5 * V) / A
+    d_ramp = (0.5 * V) ** 2 / (2 * 0.5 * A) + (V**2 - (0.5 * V) ** 2) / (2 * A)
+    assert (t_ramp, d_ramp) == (3.0, 1250.0)
+    assert end == pytest.approx(2 * t_ramp + (10000.0 - 2 * d_ramp) / V, abs=1e-12)
+    assert [s.a for s in axis.segments()] == [250.0, 500.0, 0.0, -500.0, -250.0]
+    assert all(s.shape == "linear" for s in axis.segments())
+    check_continuity(axis)
+    assert axis.velocity(2.0) == pytest.approx(500.0)
+    assert axis.position(2.0) == pytest.approx(500.0)
+    assert axis.phase(1.0) == "accel" and axis.phase(5.0) == "const" and axis.phase(end - 1.0) == "decel"
+    assert axis.acceleration(end - 1.0) == -250.0
+    run_idle(clock, axis)
+    assert axis.position() == 10000.0
+
+
+@pytest.mark.parametrize("profile", [HALF, HALF_SINE])
+@pytest.mark.parametrize(
+    ("length", "peak", "t_end"),
+    [
+        # peak inside section 1 (both ramps at 250): v^2 = 250 * 800
+        (800.0, math.sqrt(250.0 * 800.0), 2 * math.sqrt(250.0 * 800.0) / 250.0),
+        # section 1 complete (500 inc each way), the remaining 100 inc in section 2:
+        # 100 = 2 (v^2 - 500^2) / (2*500)
+        (1100.0, math.sqrt(500.0**2 + 100.0 * 500.0), 2 * (2.0 + (math.sqrt(300000.0) - 500.0) / 500.0)),
+    ],
+)
+def test_profile_triangle_solves_peak_exactly(
+    clock: VirtualClock, profile: RampProfile, length: float, peak: float, t_end: float
+) -> None:
+    axis = Axis(clock, position=-100.0)
+    target = length - 100.0
+    done: list[float] = []
+    end = axis.move_to(target, V, A, profile=profile, on_done=lambda: done.append(clock.now()))
+    assert end == pytest.approx(t_end, rel=1e-13)
+    segs = axis.segments()
+    assert all(s.a != 0.0 for s in segs)  # no cruise
+    assert max(abs(s.velocity(s.t1)) for s in segs) == pytest.approx(peak, rel=1e-13)
+    check_continuity(axis)
+    xs = [axis.position(end * i / 2000) for i in range(2001)]
+    assert all(b >= a for a, b in zip(xs, xs[1:], strict=False))  # monotone: never back
+    assert max(xs) <= target + 1e-9  # and never beyond the target
+    run_idle(clock, axis)
+    assert done == [end]
+    assert axis.position() == target and axis.velocity() == 0.0
+
+
+def test_profile_sine_same_duration_and_peak_acceleration(clock: VirtualClock) -> None:
+    lin = Axis(clock)
+    sine = Axis(clock)
+    end_lin = lin.move_to(10000.0, V, A, profile=HALF)
+    end = sine.move_to(10000.0, V, A, profile=HALF_SINE)
+    assert end == end_lin  # durations and distances of the sections are the same
+    assert [s.shape for s in sine.segments()] == ["sine", "sine", "linear", "sine", "sine"]
+    assert [s.t1 for s in sine.segments()] == [s.t1 for s in lin.segments()]
+    check_continuity(sine)
+    # peak acceleration pi/2 of the section's, in the middle of each section
+    assert sine.acceleration(1.0) == pytest.approx(math.pi / 2 * 250.0, rel=1e-12)
+    assert sine.acceleration(2.5) == pytest.approx(math.pi / 2 * 500.0, rel=1e-12)
+    assert sine.acceleration(end - 1.0) == pytest.approx(-math.pi / 2 * 250.0, rel=1e-12)
+    # smooth: zero acceleration at the section ends, the section end speeds as in the linear ramp
+    assert sine.acceleration(0.0) == 0.0
+    assert abs(sine.acceleration(2.0)) < 1e-9
+    assert sine.velocity(2.0) == pytest.approx(500.0, rel=1e-12)
+    assert sine.position(2.0) == pytest.approx(500.0, rel=1e-12)
+    assert sine.position(3.0) == pytest.approx(1250.0, rel=1e-12)
+    assert sine.velocity(1.0) == pytest.approx(250.0, rel=1e-12)  # raised cosine: half way at mid-time
+    assert sine.position(1.0) == pytest.approx(0.5 * 250.0 * 2.0 * (1.0 - 2.0 / math.pi), rel=1e-12)
+    assert sine.phase(0.0) == "accel" and sine.phase(5.0) == "const"
+    assert sine.phase(end - 1e-9) == "decel"
+    run_idle(clock, sine)
+    assert sine.position() == 10000.0 and sine.velocity() == 0.0
+
+
+def test_watch_crossing_inside_sine_segments(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    hits: list[tuple[float, float, int]] = []
+    for p in (1e-3, 100.0, 499.9, 900.0, 9900.0, 9999.9):
+        axis.watch(p, lambda d, p=p: hits.append((p, clock.now(), d)))
+    end = axis.move_to(10000.0, V, A, profile=HALF_SINE)
+    clock.advance(end + 1.0)
+    assert [h[0] for h in hits] == [1e-3, 100.0, 499.9, 900.0, 9900.0, 9999.9]
+    assert all(d == 1 for _, _, d in hits)
+    for p, t, _ in hits:
+        assert 0.0 < t < end
+        assert axis.position(t) == pytest.approx(p, abs=1e-6)
+    # fired at the solved instant, not sampled: 100 inc is reached in the first section
+    t100 = hits[1][1]
+    assert 0.0 < t100 < 2.0
+    assert axis.position(t100 - 1e-6) < 100.0 <= axis.position(t100 + 1e-9)
+    # and back down through a braking sine segment
+    hits.clear()
+    axis.move_to(450.0, V, A, profile=HALF_SINE)
+    clock.advance(20.0)
+    assert [(p, d) for p, _, d in hits] == [(9999.9, -1), (9900.0, -1), (900.0, -1), (499.9, -1)]
+    for p, t, _ in hits:
+        assert axis.position(t) == pytest.approx(p, abs=1e-6)
+
+
+@pytest.mark.parametrize("profile", [HALF, HALF_SINE])
+def test_stop_with_profile_from_cruise(clock: VirtualClock, profile: RampProfile) -> None:
+    axis = Axis(clock)
+    axis.jog(+1, V, A, profile=profile)
+    clock.advance(10.0)
+    assert axis.phase() == "const"
+    x = axis.position()
+    assert x == pytest.approx(1250.0 + 7.0 * V)
+    # mirrored sections: 1000 -> 500 with 500 (1 s, 750 inc), 500 -> 0 with 250 (2 s, 500 inc)
+    assert axis.stopping_distance(A, profile) == pytest.approx(1250.0)
+    assert axis.stopping_distance(A) == pytest.approx(1000.0)  # plain: v^2/(2 decel)
+    done: list[float] = []
+    end = axis.stop(A, on_done=lambda: done.append(clock.now()), profile=profile)
+    assert end == pytest.approx(13.0)
+    assert [s.a for s in axis.segments()] == [-500.0, -250.0]
+    assert axis.final_position() == pytest.approx(x + 1250.0)
+    assert axis.phase(10.5) == "decel" and axis.phase(12.5) == "decel"
+    run_idle(clock, axis)
+    assert done == [end]
+    assert axis.position() == pytest.approx(x + 1250.0)
+
+
+def test_jog_with_profile_and_reversal(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    reached: list[float] = []
+    axis.jog(+1, V, A, on_done=lambda: reached.append(clock.now()), profile=HALF_SINE)
+    clock.advance(5.0)
+    assert reached == [3.0]
+    axis.jog(-1, V, A, profile=HALF_SINE)  # brake through both sections, then the ramp back
+    assert [s.a for s in axis.segments()] == [-500.0, -250.0, -250.0, -500.0, 0.0]
+    assert axis.segments()[2].v0 == 0.0
+    check_continuity(axis)
+    clock.advance(6.0)
+    assert axis.velocity() == pytest.approx(-V)
+
+
+@pytest.mark.parametrize("profile", [HALF, HALF_SINE])
+def test_replan_mid_section_keeps_continuity(clock: VirtualClock, profile: RampProfile) -> None:
+    axis = Axis(clock)
+    axis.move_to(10000.0, V, A, profile=profile)
+    for t_replan, target in ((1.3, 20000.0), (2.6, 3000.0), (4.0, 1500.0)):
+        clock.advance(t_replan - clock.now())  # in section 1, in section 2, at speed (overshoot)
+        x, v, t = axis.position(), axis.velocity(), clock.now()
+        axis.move_to(target, V, A, profile=profile)
+        assert axis.position() == pytest.approx(x, abs=1e-9)
+        assert axis.velocity() == pytest.approx(v, abs=1e-9)
+        seg = axis.segments()[0]
+        assert (seg.t0, seg.x0, seg.v0) == (t, x, v)
+        check_continuity(axis)
+        assert all(s.shape == profile.shape for s in axis.segments() if s.a != 0.0)
+    # the last re-plan brakes through both sections past 1500, then comes back
+    assert axis.final_position() == 1500.0
+    run_idle(clock, axis)
+    assert axis.position() == 1500.0
+
+
+def test_profile_section_rules(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    # accel fraction 0: section 1 absent, section 2 starts at 0
+    axis.move_to(1e6, V, A, profile=RampProfile(speed1=0.5, accel1=0.0, speed2=0.8, accel2=0.5))
+    assert [s.a for s in axis.segments()] == [250.0, 500.0, 0.0, -500.0, -250.0]
+    assert axis.segments()[0].t1 == pytest.approx(800.0 / 250.0)
+    # speed2 below speed1: section 2 empty; equal linear sections merge into one segment
+    axis = Axis(clock, position=1e6)
+    axis.move_to(0.0, V, A, profile=RampProfile(speed1=0.4, accel1=0.5, speed2=0.2, accel2=0.1))
+    assert [s.a for s in axis.segments()] == [-250.0, -500.0, 0.0, 500.0, 250.0]
+    axis = Axis(clock)
+    axis.move_to(1e6, V, A, profile=RampProfile(speed1=0.3, speed2=0.6))
+    assert [s.a for s in axis.segments()] == [500.0, 0.0, -500.0]
+    # ... but three sine sections stay three raised cosines
+    axis = Axis(clock)
+    axis.move_to(1e6, V, A, profile=RampProfile(speed1=0.3, speed2=0.6, shape="sine"))
+    assert [s.a for s in axis.segments()] == [500.0] * 3 + [0.0] + [-500.0] * 3
+    with pytest.raises(ValueError):
+        RampProfile(speed1=1.5)
+    with pytest.raises(ValueError):
+        RampProfile(accel2=-0.1)
+    with pytest.raises(ValueError):
+        RampProfile(shape="cubic")  # type: ignore[arg-type]
+
+
+def test_plain_profile_is_bit_identical_to_no_profile(clock: VirtualClock) -> None:
+    plain, profiled = Axis(clock), Axis(clock)
+    for target, speed, accel, decel in ((5000.0, 700.0, 300.0, 200.0), (-50.0, 900.0, 2000.0, None)):
+        e1 = plain.move_to(target, speed, accel, decel)
+        e2 = profiled.move_to(target, speed, accel, decel, profile=RampProfile())
+        assert e1 == e2 and plain.segments() == profiled.segments()
+        clock.advance(1.7)
+    assert plain.stop(100.0) == profiled.stop(100.0, profile=RampProfile())
+    assert plain.segments() == profiled.segments()
+
+
+def test_segment_sine_closed_form() -> None:
+    s = Segment(1.0, 3.0, 10.0, 5.0, 4.0, "sine", 2.0)
+    assert s.velocity(3.0) == pytest.approx(13.0)
+    assert s.velocity(2.0) == pytest.approx(9.0)
+    assert s.position(3.0) == pytest.approx(10.0 + (5.0 + 13.0) / 2 * 2.0)
+    assert s.acceleration(2.0) == pytest.approx(math.pi / 2 * 4.0)
+    for t in (1.0 + 1e-7, 1.3, 2.0, 2.9999):
+        assert s.solve(s.position(t)) == pytest.approx(t, abs=1e-12)
