@@ -206,3 +206,32 @@ def test_speed_factor_does_not_change_simulated_timing(sers: Plant) -> None:
     """Virtual time: the T-05 move takes 1.321 simulated seconds however fast the test runs."""
     sers.host.ask("#ON V=1000 W=2500 E\r")
     assert sers.settle() == pytest.approx(1.321, abs=1e-3)
+
+
+def _trapezoid_time(d: float, v: float, a: float) -> float:
+    return d / v + v / a if d >= v * v / a else 2 * math.sqrt(d / a)
+
+
+def test_ramp_sections_p1005_to_p1008(plant_factory) -> None:
+    """P1032=0 with sections: 0→50 % V at 50 % A, then 50 %→100 % V at A (spec §5.2)."""
+    plant = plant_factory({"params": {"P1005": 50, "P1007": 50, "P1006": 100, "P1008": 50}})
+    plant.host.ask("#ON V=600 A=100 W=3600 E\r")
+    took = plant.settle()
+    v, a, d = 20 * math.pi, 100.0, math.radians(3600)
+    ramp = (v / 2) / (a / 2) + (v / 2) / a  # per ramp: section 1 at A/2, then A
+    ramp_distance = (v / 4) * (v / 2) / (a / 2) + (3 * v / 4) * (v / 2) / a
+    expected = 2 * ramp + (d - 2 * ramp_distance) / v
+    assert took == pytest.approx(expected, rel=1e-9)
+    assert plant.read("param.P51") == pytest.approx(3600)
+
+
+def test_sinusoidal_ramp_takes_as_long_as_the_linear_one(plant_factory) -> None:
+    plant = plant_factory({"params": {"P1032": 1}})
+    plant.host.ask("#ON V=600 A=100 W=3600 E\r")
+    ramp = 20 * math.pi / 100  # s, the same duration as the linear ramp
+    plant.advance(ramp / 2)
+    # in the middle of the ramp the raised cosine accelerates with π/2·A
+    peak = math.pi / 2 * 100 * 12800 / (2 * math.pi)
+    assert plant.read("axis.acceleration") == pytest.approx(peak, rel=1e-9)
+    took = plant.settle() + ramp / 2
+    assert took == pytest.approx(_trapezoid_time(math.radians(3600), 20 * math.pi, 100), rel=1e-9)

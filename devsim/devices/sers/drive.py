@@ -22,7 +22,7 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from devsim.core.axis import Axis, RegionSwitch, Watch
+from devsim.core.axis import Axis, RampProfile, RegionSwitch, Watch
 from devsim.core.clock import Clock, Timer
 from devsim.core.device import Device, UnknownName
 from devsim.core.nvram import NonVolatileMemory
@@ -637,14 +637,14 @@ class SersDrive(Device):
         position = self.axis.position()
         direction = 1 if self.axis.velocity() > 0 else -1
         remaining = (target - position) * direction
-        if remaining < self.axis.stopping_distance(self._accel):
+        if remaining < self.axis.stopping_distance(self._accel, self.ramp_profile()):
             self.ram[47] = new
             raise SersError(87)
         self.ram[47] = new
         self._target_physical = target
         self._w_updated = True
         self._legs = []
-        self.axis.move_to(target, self._speed, self._accel, on_done=self._positioning_done)
+        self.axis.move_to(target, self._speed, self._accel, on_done=self._positioning_done, profile=self.ramp_profile())
         self._arm_position_watches()
 
     # ======================================================================================
@@ -999,7 +999,17 @@ class SersDrive(Device):
     def _next_leg(self) -> None:
         target, speed = self._legs.pop(0)
         done = self._next_leg if self._legs else self._positioning_done
-        self.axis.move_to(target, speed, self._accel, on_done=done)
+        self.axis.move_to(target, speed, self._accel, on_done=done, profile=self.ramp_profile())
+
+    def ramp_profile(self) -> RampProfile | None:
+        """P1032 ramp shape with the sections P1005–P1008 (§4.8.4.4, spec §5.2)."""
+        r = self.ram
+        shape = "sine" if int(r.get(1032, 0)) == 1 else "linear"
+        fractions = [float(r.get(n, 100)) / 100 for n in (1007, 1005, 1008, 1006)]
+        if shape == "linear" and all(f == 1.0 for f in fractions):
+            return None
+        speed1, accel1, speed2, accel2 = fractions
+        return RampProfile(speed1=speed1, accel1=accel1, speed2=speed2, accel2=accel2, shape=shape)
 
     def _leave_zero_phase(self, target: float) -> float:
         """P1001 (§4.8.4.2): keep 0.1°/0.2°/0.3° away from multiples of 1.8° (64 increments)."""
@@ -1062,8 +1072,9 @@ class SersDrive(Device):
             return
         self._homing = None
         self._cancel_jog_timer()
+        profile = self.ramp_profile() if self.motion == "position" else None
         self.motion = "stopping"
-        self.axis.stop(self._stop_decel, on_done=self._motion_finished)
+        self.axis.stop(self._stop_decel, on_done=self._motion_finished, profile=profile)
 
     # -- jog -------------------------------------------------------------------------------
     def jog(self, name: str, until: st.Condition | None = None, serial: bool = True) -> None:
@@ -1735,6 +1746,7 @@ class SersDrive(Device):
             values = {
                 "position": self.axis.position(),
                 "velocity": self.axis.velocity(),
+                "acceleration": self.axis.acceleration(),
                 "moving": self.axis.moving,
                 "phase": self.axis.phase(),
             }
