@@ -169,6 +169,7 @@ class PtyTransport(Transport):
         self._baseline: list | None = None
         self._touched = False
         self._reported: SerialSettings | None = None
+        self._last_attrs: list | None = None
         self._preset: SerialSettings | None = None
         self._frame_visible = True
         #: Bytes dropped because nobody read them.
@@ -253,6 +254,14 @@ class PtyTransport(Transport):
         return settings
 
     def _check_settings(self) -> None:
+        # The host's termios rarely change: only decode them when the raw attributes differ.
+        try:
+            attrs = termios.tcgetattr(self._slave) if self._slave is not None else None
+        except termios.error:
+            attrs = None
+        if attrs is not None and attrs == self._last_attrs:
+            return
+        self._last_attrs = attrs
         settings = self.host_settings()
         if settings is not None and settings != self._reported and self._endpoint is not None:
             self._reported = settings

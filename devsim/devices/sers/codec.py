@@ -66,6 +66,10 @@ class LineEnd:
     overflow: bool
 
 
+_ADDRESS_CHAR = AddressChar()
+_IGNORED = Ignored()
+
+
 class Framer:
     """Assembles SERS command lines from bytes."""
 
@@ -103,14 +107,14 @@ class Framer:
             self._length += 1
             return events
         if not self.in_line:
-            events.append(Ignored())
+            events.append(_IGNORED)
             return events
         self._length += 1
         if self._addr is not None:
             ch = chr(byte)
             if (ch.isdigit() and self._addr != "*") or (ch == "*" and self._addr == ""):
                 self._addr += ch
-                events.append(AddressChar())
+                events.append(_ADDRESS_CHAR)
                 return events
             events.append(self._end_address())
         if self._length > MAX_LINE:

@@ -23,6 +23,10 @@ from devsim.devices.sers.program import ProgramMemory
 
 __all__ = ["SersDevice"]
 
+# Characters that only ever extend the statement in progress (a number, the '?' of a query):
+# nothing can complete with them, so they need no parse (the next character will do it).
+_EXTENDS_ONLY = frozenset("0123456789.?")
+
 
 @dataclass
 class _Line:
@@ -110,53 +114,69 @@ class SersDevice(SersDrive):
         """A host that leaves mid-line leaves a partial line; the next '#' restarts anyway."""
 
     def _on_event(self, event: object, byte: int) -> None:
+        self._handlers[type(event)](self, event, byte)
+
+    def _on_text(self, event: codec.TextChar, byte: int) -> None:
         line = self._line
-        if isinstance(event, codec.Ignored):
-            if event.pair and self._last_replied and self.echo:
-                self.send(bytes([byte]))
-            return
-        if isinstance(event, codec.Restart):
-            if event.mid_line and line is not None:
-                self._progress(line, final=True)
-                line.text, line.executed = "", 0
-                line.held = bytearray(b"#")
-            else:
-                self._line = _Line(held=bytearray(b"#"))
-            return
         if line is None:
             return
-        if isinstance(event, codec.AddressChar):
-            line.held.append(byte)
+        if line.reply and self.echo:
+            self.send(bytes((byte,)))
+        if event.dropped or line.error or not line.execute:
             return
-        if isinstance(event, codec.Address):
-            self._select(line, event.value)
+        line.text += event.char
+        if event.char not in _EXTENDS_ONLY:
+            self._progress(line, final=False)
+
+    def _on_ignored(self, event: codec.Ignored, byte: int) -> None:
+        if event.pair and self._last_replied and self.echo:
+            self.send(bytes((byte,)))
+
+    def _on_restart(self, event: codec.Restart, byte: int) -> None:
+        line = self._line
+        if event.mid_line and line is not None:
+            self._progress(line, final=True)
+            line.text, line.executed = "", 0
+            line.held = bytearray(b"#")
+        else:
+            self._line = _Line(held=bytearray(b"#"))
+
+    def _on_address_char(self, event: codec.AddressChar, byte: int) -> None:
+        if self._line is not None:
+            self._line.held.append(byte)
+
+    def _on_address(self, event: codec.Address, byte: int) -> None:
+        if self._line is not None:
+            self._select(self._line, event.value)
+
+    def _on_line_end(self, event: codec.LineEnd, byte: int) -> None:
+        line = self._line
+        if line is None:
             return
-        if isinstance(event, codec.TextChar):
-            if line.reply and self.echo:
-                self.send(bytes([byte]))
-            if event.dropped or line.error or not line.execute:
-                return
-            line.text += event.char
-            if not (event.char.isdigit() or event.char == "."):
-                # A digit or point only ever extends a number: nothing completes with it.
-                self._progress(line, final=False)
-            return
-        if isinstance(event, codec.LineEnd):
-            if line.reply and self.echo:
-                self.send(bytes([byte]))
-            if line.execute and not line.error:
-                self._progress(line, final=True)
-                if event.overflow and not line.error:
-                    self.warn(1024)
-                    self._error(line, 124)
-            if line.reply:
-                if line.deferred:
-                    self.send(bytes(line.deferred))
-                if not line.error:
-                    self.send(b"\n" + self.ack_text().encode("latin-1") + b"\n\r")
-            self._last_replied = line.reply
-            self._line = None
-            self._flush_spontaneous()
+        if line.reply and self.echo:
+            self.send(bytes((byte,)))
+        if line.execute and not line.error:
+            self._progress(line, final=True)
+            if event.overflow and not line.error:
+                self.warn(1024)
+                self._error(line, 124)
+        if line.reply:
+            if line.deferred:
+                self.send(bytes(line.deferred))
+            if not line.error:
+                self.send(b"\n" + self.ack_text().encode("latin-1") + b"\n\r")
+        self._last_replied = line.reply
+        self._line = None
+        self._flush_spontaneous()
+
+    _handlers: ClassVar[dict[type, Any]] = {
+        codec.TextChar: _on_text,
+        codec.Ignored: _on_ignored,
+        codec.Restart: _on_restart,
+        codec.AddressChar: _on_address_char,
+        codec.Address: _on_address,
+        codec.LineEnd: _on_line_end,
+    }
 
     def _select(self, line: _Line, address: int | str | None) -> None:
         mine = self.cfg.address if self.cfg.address != 0 else 200
