@@ -19,41 +19,11 @@ import os
 import resource
 import sys
 import time
-from typing import Any, ClassVar
 
 import serial
 
-try:
-    import devsim  # noqa: F401
-except ImportError:  # running from a source checkout without installing
-    sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-
-
-def _stub_class() -> type:
-    from devsim.core.device import Device, UnknownName
-
-    class StubDevice(Device):
-        """A stand-in that does nothing at all (only with --kind stub)."""
-
-        kind: ClassVar[str] = "stub"
-        description: ClassVar[str] = "benchmark stand-in"
-
-        def feed(self, data: bytes) -> None:
-            self.send(data)
-
-        def read(self, name: str) -> Any:
-            raise UnknownName(name)
-
-        def set(self, name: str, value: Any) -> None:
-            raise UnknownName(name)
-
-        def state(self) -> dict[str, Any]:
-            return {}
-
-    return StubDevice
-
-
-StubDevice = _stub_class()
+# the checkout, for benchmarks.stub (and devsim itself when it is not installed)
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
 def cpu_seconds() -> float:
@@ -70,7 +40,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
 
     if args.kind == "stub":
-        os.environ["DEVSIM_EXTRA_KINDS"] = "stub=__main__:StubDevice"
+        os.environ["DEVSIM_EXTRA_KINDS"] = "stub=benchmarks.stub:StubDevice"
     from devsim.core.runtime import Runtime
     from devsim.transports.pty import PtyTransport
 

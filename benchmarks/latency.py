@@ -28,7 +28,6 @@ import tempfile
 import threading
 import time
 import tty
-from typing import Any, ClassVar
 
 import serial
 
@@ -40,43 +39,6 @@ except ImportError:  # running from a source checkout without installing
 
 QUERY = b"#P11?\r"
 ACK = b"\nok"
-
-
-# -- a stand-in device (only with --kind stub) ---------------------------------------------
-def _stub_class() -> type:
-    from devsim.core.device import Device, UnknownName
-
-    class StubDevice(Device):
-        """Echoes the command, answers a value and ``ok1`` like the SERS in echo mode."""
-
-        kind: ClassVar[str] = "stub"
-        description: ClassVar[str] = "benchmark stand-in"
-
-        def __init__(self, **kwargs: Any) -> None:
-            super().__init__(**kwargs)
-            self._buf = bytearray()
-
-        def feed(self, data: bytes) -> None:
-            self.send(data)
-            self._buf += data
-            while b"\r" in self._buf:
-                _, _, rest = bytes(self._buf).partition(b"\r")
-                self._buf = bytearray(rest)
-                self.send(b"\n0\nok1\n\r")
-
-        def read(self, name: str) -> Any:
-            raise UnknownName(name)
-
-        def set(self, name: str, value: Any) -> None:
-            raise UnknownName(name)
-
-        def state(self) -> dict[str, Any]:
-            return {}
-
-    return StubDevice
-
-
-StubDevice = _stub_class()
 
 
 # -- the measurement -------------------------------------------------------------------------
@@ -152,7 +114,7 @@ def measure_device(kind: str, n: int) -> tuple[list[float], int]:
     env_kind = kind
     extra = []
     if kind == "stub":
-        os.environ["DEVSIM_EXTRA_KINDS"] = "stub=benchmarks.latency:StubDevice"
+        os.environ["DEVSIM_EXTRA_KINDS"] = "stub=benchmarks.stub:StubDevice"
         os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [ROOT, os.environ.get("PYTHONPATH")]))
     with tempfile.TemporaryDirectory() as tmp:
         if kind == "sers":
