@@ -262,3 +262,13 @@ def test_t30_broadcast_starts_both_without_reply(plant_factory) -> None:
     assert host.ask("#2 POS?\r") == b"#2 POS?\rPOS=0\n\r\nok0\n\r"
     assert plant.read("motion", "sers1") == "position"
     assert plant.read("motion", "sers2") == "position"
+
+
+def test_t26_opcode_e_over_p1099(sers: Plant) -> None:
+    sers.host.ask("#ON W=90\r")
+    assert sers.host.ask("#P1099=63235\r") == b"#P1099=63235\r\nok0\n\r"  # ≙ E
+    sers.settle()
+    assert sers.read("param.P51") == 90
+    # ≙ RUN 5: refused like RUN without a stored program
+    assert sers.host.ask("#P1099=62213\r") == "#P1099=62213\r\n*kein gültiges Programm vorhanden\n\r".encode("latin-1")
+    assert sers.host.ask("#P1099=63000\r") == b"#P1099=63000\r\n*unbekannter f7xx Opcode\n\r"

@@ -500,6 +500,7 @@ class SersDrive(Device):
             1051: lambda v: self._write_w_mode(v, 0),
             1052: lambda v: self._write_w_mode(v, 2),
             1040: lambda v: self._write_soft_limit(1040, v),
+            1099: self._write_opcode,
             1041: lambda v: self._write_soft_limit(1041, v),
         }
 
@@ -542,6 +543,19 @@ class SersDrive(Device):
         # Program execution is not part of this build: the interpreter (operating modes,
         # IF/GOTO/GOSUB, WAIT, D, D2 ...) comes with the SERS program issue.
         raise SersError(69)
+
+    def _write_opcode(self, value: float) -> None:
+        """P1099 (§4.8.6.16): execute a program opcode, e.g. 62213 (0xF305) = ``RUN 5``,
+        63235 (0xF703) = ``E``.  Only the opcodes the manual documents are known."""
+        code = int(value)
+        if code >> 8 == 0xF3:
+            self.run_program(code & 0xFF or None)
+        elif code == 0xF703:
+            self.start_positioning()
+        elif code >> 8 == 0xF7:
+            raise SersError(77)
+        else:
+            raise SersError(75)
 
     def _write_p11(self, value: float) -> None:
         if value != 0:
