@@ -271,4 +271,5 @@ def test_t26_opcode_e_over_p1099(sers: Plant) -> None:
     assert sers.read("param.P51") == 90
     # ≙ RUN 5: refused like RUN without a stored program
     assert sers.host.ask("#P1099=62213\r") == "#P1099=62213\r\n*kein gültiges Programm vorhanden\n\r".encode("latin-1")
-    assert sers.host.ask("#P1099=63000\r") == b"#P1099=63000\r\n*unbekannter f7xx Opcode\n\r"
+    assert sers.host.ask("#P1099=63236\r") == b"#P1099=63236\r\n*unbekannter f7xx Opcode\n\r"
+    assert sers.host.ask("#P1099=63000\r") == b"#P1099=63000\r\n*unbekannter fxxx Opcode\n\r"
