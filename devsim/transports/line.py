@@ -16,21 +16,28 @@ plain byte pipe does not have:
   wire: the k-th character is released ``k`` character times after the device started sending
   (see :meth:`SerialSettings.char_time`), through the device clock's ``call_later``.
 * **Tracing.**  Every chunk in either direction goes to a :class:`~devsim.transports.trace.Tracer`.
+* **Injected faults** (:meth:`Line.inject` with a :class:`LineFault`): corrupted, dropped, split,
+  delayed or jittered bytes, line noise, a temporary baud-rate mismatch, a pulled cable, a hung
+  or a silent device.  See :class:`LineFault` for what each kind does and in which order
+  several active faults apply.
 
 A line never sleeps; everything that waits goes through the device :class:`~devsim.core.clock.Clock`.
 """
 
 from __future__ import annotations
 
+import math
+import random
 from collections import deque
 from collections.abc import Callable
-from typing import Any, Protocol
+from dataclasses import dataclass, replace
+from typing import Any, Literal, Protocol, get_args
 
 from devsim.core.clock import Clock, Timer
 from devsim.core.device import ByteSink, SerialSettings
 from devsim.transports.trace import Tracer, render
 
-__all__ = ["Line", "LineTarget", "garble", "settings_match"]
+__all__ = ["FaultHandle", "Line", "LineFault", "LineTarget", "garble", "settings_match"]
 
 # A real receiver accepts a byte that arrives a hair early or late; a timer may fire a few
 # nanoseconds before its nominal time.  Bytes due within this margin are released.
@@ -166,6 +173,243 @@ def garble(data: bytes, sender: SerialSettings, receiver: SerialSettings) -> byt
     return bytes(out)
 
 
+# -- injected faults --------------------------------------------------------------------------
+
+FaultKind = Literal[
+    "corrupt", "drop", "split", "delay", "jitter", "noise", "baud_mismatch", "unplug", "hang", "silent"
+]
+FaultDirection = Literal["to_device", "to_host", "both"]
+
+#: Gap between the pieces of a split chunk when the fault does not give one.
+DEFAULT_SPLIT_GAP = 0.005
+
+# Which optional parameters each kind uses ("count" and "duration" are handled separately).
+_PARAMS: dict[str, tuple[str, ...]] = {
+    "corrupt": (),
+    "drop": (),
+    "split": ("delay",),
+    "delay": ("delay",),
+    "jitter": ("delay",),
+    "noise": ("rate",),
+    "baud_mismatch": ("baudrate",),
+    "unplug": (),
+    "hang": (),
+    "silent": (),
+}
+_REQUIRED = {"delay": "delay", "jitter": "delay", "noise": "rate", "baud_mismatch": "baudrate"}
+_COUNTED = ("corrupt", "drop", "split")
+# Kinds whose ``direction`` is fixed by what they are (the field is ignored).
+_UNDIRECTED = ("baud_mismatch", "unplug", "hang", "silent")
+# Noise is emitted in batches no closer than this (a timer per byte would be wasteful at high rates).
+_NOISE_TICK = 0.01
+
+
+@dataclass(frozen=True)
+class LineFault:
+    """A fault injected into a :class:`Line` (see :meth:`Line.inject`).
+
+    ``direction`` is ``"to_device"`` (the host's bytes), ``"to_host"`` (the device's bytes) or
+    ``"both"``.  A fault ends when its ``duration`` (seconds of the line's clock) has passed, when
+    its ``count`` of bytes is used up, when its :class:`FaultHandle` is cancelled or when
+    :meth:`Line.clear_faults` is called; without ``count`` and ``duration`` it lasts until cleared.
+
+    Kinds:
+
+    ``corrupt``
+        each of the next ``count`` bytes (or every byte while active) gets one bit flipped, the
+        bit chosen by ``random.Random(seed)``: same length, wrong data.
+    ``drop``
+        the next ``count`` bytes (or every byte while active) vanish.
+    ``split``
+        chunks are delivered one byte at a time, ``delay`` seconds (default 5 ms) between the
+        pieces, order preserved; ``count`` bytes are split, the rest of the chunk that uses up
+        the count follows as one piece.
+    ``delay``
+        every chunk arrives ``delay`` seconds later, order preserved.
+    ``jitter``
+        every chunk is delayed by ``uniform(0, delay)``; a later chunk never overtakes an earlier
+        one (it waits for it).
+    ``noise``
+        ``rate`` random bytes per second appear on the line (towards the device, the host or
+        both), regularly spaced in time: after ``t`` seconds ``floor(rate * t)`` bytes have been
+        emitted in each direction.
+    ``baud_mismatch``
+        the host is treated as running at ``baudrate`` (its other frame settings unchanged), so
+        both directions are garbled by :func:`garble`.  Always both directions.
+    ``unplug``
+        the cable is out: the target gets ``host_disconnected()`` at the start, nothing passes in
+        either direction (bytes are lost, not queued – including those still in flight on a
+        delayed or paced line).  Always both directions.
+    ``hang``
+        the device hangs with the link up: nothing reaches the device (not even bytes still in
+        flight on a delayed line), nothing comes from it.  Line noise towards the host still
+        arrives.  Always both directions.
+    ``silent``
+        the device's output is dropped; it still acts on its input.  Always towards the host.
+
+    Several active faults combine in a fixed order, per chunk:
+
+    1. gates – ``unplug``, ``hang``, ``silent``: a blocked chunk is lost and nothing else applies;
+    2. ``baud_mismatch`` (the latest injected one decides the host's rate);
+    3. ``drop`` faults, in injection order (dropped bytes do not count for later faults);
+    4. ``corrupt`` faults, in injection order, each on the same next bytes (two faults may flip
+       two bits of one byte, or the same bit twice);
+    5. timing – the sum of all ``delay`` faults plus one ``uniform(0, delay)`` draw per ``jitter``
+       fault is added to the chunk's latency, then the earliest injected ``split`` fault cuts it
+       into pieces;
+    6. output pacing (device → host only, when the line paces).
+
+    Noise is injected at the receiving end: it passes the gates (``unplug`` blocks it both ways,
+    ``hang`` blocks it towards the device) and nothing else.
+
+    A parameter the kind does not use is rejected with :class:`ValueError`, so that a misspelt
+    scenario does not silently inject a fault that never ends.
+    """
+
+    kind: FaultKind
+    direction: FaultDirection = "both"
+    count: int | None = None
+    duration: float | None = None
+    delay: float | None = None
+    rate: float | None = None
+    baudrate: int | None = None
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if self.kind not in _PARAMS:
+            raise ValueError(f"unknown line fault kind {self.kind!r}; one of {', '.join(_PARAMS)}")
+        if self.direction not in get_args(FaultDirection):
+            raise ValueError(f"direction must be to_device, to_host or both, not {self.direction!r}")
+        if self.count is not None:
+            if self.kind not in _COUNTED:
+                raise ValueError(f"count does not apply to a {self.kind} fault (only {', '.join(_COUNTED)})")
+            if self.count < 1:
+                raise ValueError("count must be at least 1")
+        if self.duration is not None and not (self.duration >= 0 and math.isfinite(self.duration)):
+            raise ValueError("duration must be a finite number of seconds >= 0")
+        for name in ("delay", "rate", "baudrate"):
+            value = getattr(self, name)
+            if value is None:
+                if _REQUIRED.get(self.kind) == name:
+                    raise ValueError(f"a {self.kind} fault needs {name}")
+                continue
+            if name not in _PARAMS[self.kind]:
+                raise ValueError(f"{name} does not apply to a {self.kind} fault")
+            if not math.isfinite(value) or value < 0 or (name != "delay" and value == 0):
+                raise ValueError(f"{name} must be positive")
+
+    def applies(self, direction: str) -> bool:
+        """Whether the fault acts on bytes going ``direction`` (``to_device``/``to_host``)."""
+        return self.direction == "both" or self.direction == direction
+
+    def describe(self) -> str:
+        parts = [self.kind]
+        if self.kind not in _UNDIRECTED:
+            parts.append(self.direction)
+        for name in ("count", "duration", "delay", "rate", "baudrate"):
+            value = getattr(self, name)
+            if value is not None:
+                parts.append(f"{name}={value:g}" if isinstance(value, float) else f"{name}={value}")
+        return " ".join(parts)
+
+
+class _Active:
+    """The line's bookkeeping for one injected fault."""
+
+    __slots__ = ("fault", "rng", "remaining", "started", "timers", "emitted", "active")
+
+    def __init__(self, fault: LineFault, started: float) -> None:
+        self.fault = fault
+        self.rng = random.Random(fault.seed)
+        self.remaining = fault.count
+        self.started = started
+        self.timers: list[Timer] = []
+        self.emitted = {"to_device": 0, "to_host": 0}
+        self.active = True
+
+
+class FaultHandle:
+    """Returned by :meth:`Line.inject`: lets the injector end the fault early."""
+
+    __slots__ = ("_line", "_active")
+
+    def __init__(self, line: Line, active: _Active) -> None:
+        self._line = line
+        self._active = active
+
+    @property
+    def fault(self) -> LineFault:
+        return self._active.fault
+
+    @property
+    def active(self) -> bool:
+        """True until the fault has ended (by itself, by :meth:`cancel` or by clearing)."""
+        return self._active.active
+
+    def cancel(self) -> None:
+        """End the fault now (idempotent)."""
+        self._line._end(self._active, "cancelled")
+
+    def __repr__(self) -> str:  # pragma: no cover - debugging aid
+        return f"<FaultHandle {self.fault.describe()} {'active' if self.active else 'ended'}>"
+
+
+class _Stage:
+    """Chunks on their way with extra latency, released in order through the clock.
+
+    Due times never decrease, so a chunk never overtakes an earlier one.  A chunk due now on an
+    idle stage is handed on at once (the fault-free path stays synchronous).
+    """
+
+    __slots__ = ("clock", "sink", "items", "last_due", "timer")
+
+    def __init__(self, clock: Clock, sink: Callable[[bytes, int], None]) -> None:
+        self.clock = clock
+        self.sink = sink
+        self.items: deque[tuple[float, bytes, int]] = deque()
+        self.last_due = -math.inf
+        self.timer: Timer | None = None
+
+    @property
+    def pending(self) -> int:
+        return sum(len(data) for _, data, _ in self.items)
+
+    def put(self, earliest: float, data: bytes, chars: int, gap: float = 0.0) -> None:
+        """Hand ``data`` on no earlier than ``earliest`` and at least ``gap`` after the previous
+        chunk; ``chars`` is what the chunk occupies on the wire (for pacing)."""
+        due = max(earliest, self.last_due + gap)
+        self.last_due = due
+        if not self.items and due <= self.clock.now() + _EPSILON:
+            self.sink(data, chars)
+            return
+        self.items.append((due, data, chars))
+        if self.timer is None:
+            self._schedule()
+
+    def _schedule(self) -> None:
+        self.timer = self.clock.call_at(self.items[0][0], self._release)
+
+    def _release(self) -> None:
+        self.timer = None
+        now = self.clock.now() + _EPSILON
+        out = bytearray()
+        chars = 0
+        while self.items and self.items[0][0] <= now:
+            _, data, n = self.items.popleft()
+            out += data
+            chars += n
+        if out:
+            self.sink(bytes(out), chars)
+        if self.items and self.timer is None:
+            self._schedule()
+
+    def close(self) -> None:
+        if self.timer is not None:
+            self.timer.cancel()
+            self.timer = None
+        self.items.clear()
+
+
 # -- the line ---------------------------------------------------------------------------------
 
 
@@ -199,7 +443,8 @@ class Line:
 
     ``target`` is anything with ``attach``/``feed``/``host_disconnected``/``serial_settings``;
     the line attaches itself as the target's output.  ``pacing`` releases device output at the
-    device's character time; it is ignored on a virtual clock (see :attr:`pacing`).
+    device's character time; it is ignored on a virtual clock (see :attr:`pacing`).  Faults are
+    injected with :meth:`inject` (see :class:`LineFault`).
     """
 
     def __init__(
@@ -218,9 +463,16 @@ class Line:
         self._write: ByteSink | None = None
         self.bytes_in = 0
         self.bytes_out = 0
+        #: bytes handed to the transport for the host (after garbling, faults and pacing)
+        self.bytes_delivered = 0
         self._queue: deque[_Burst] = deque()
         self._tx_free_at = 0.0
         self._timer: Timer | None = None
+        self._faults: list[_Active] = []
+        self._stages = {
+            "to_device": _Stage(clock, self._to_target),
+            "to_host": _Stage(clock, self._paced),
+        }
         target.attach(self._from_device)
 
     # -- Endpoint ---------------------------------------------------------------------------
@@ -229,19 +481,31 @@ class Line:
         self._write = write
 
     def feed(self, data: bytes) -> None:
-        """Bytes from the host; garbled on the way when the line settings do not match."""
+        """Bytes from the host; garbled on the way when the line settings do not match, and
+        subject to the active faults."""
         if not data:
             return
         self.bytes_in += len(data)
         received = data
-        host = self._host
-        if host is not None and not settings_match(host, self.device_settings):
-            received = garble(data, host, self.device_settings)
+        lost = self._gate("to_device") if self._faults else None
+        if lost is not None:
+            received = b""
+        else:
+            host = self._effective_host()
+            if host is not None and not settings_match(host, self.device_settings):
+                received = garble(data, host, self.device_settings)
+            if self._faults:
+                received = self._mangle(received, "to_device")
         if self.tracer is not None:
-            note = None if received == data else f"device read {render(received)}"
+            if lost is not None:
+                note: str | None = f"lost: {lost}"
+            else:
+                note = None if received == data else f"device read {render(received)}"
             self.tracer.record("H>D", data, self.clock.now(), note)
         if received:
-            self.target.feed(received)
+            self._timing(received, len(received), "to_device")
+        if self._faults:
+            self._reap()
 
     def host_settings(self, settings: SerialSettings) -> None:
         """The host (re)configured its port."""
@@ -259,6 +523,169 @@ class Line:
         if self.tracer is not None:
             self.tracer.note("host disconnected", self.clock.now())
         self.target.host_disconnected()
+
+    # -- faults -----------------------------------------------------------------------------
+    def inject(self, fault: LineFault) -> FaultHandle:
+        """Start ``fault`` now; it ends by itself after its ``duration`` or ``count``."""
+        active = _Active(fault, self.clock.now())
+        self._faults.append(active)
+        handle = FaultHandle(self, active)
+        self._note(f"fault start: {fault.describe()}")
+        if fault.kind == "unplug":
+            self.target.host_disconnected()
+        if fault.kind == "noise":
+            assert fault.rate is not None
+            self._schedule_noise(active, 1)
+        if fault.duration is not None:
+            active.timers.append(self.clock.call_later(fault.duration, lambda: self._end(active, "ended")))
+        return handle
+
+    def clear_faults(self) -> None:
+        """End every active fault (bytes already delayed still arrive, in order)."""
+        for active in list(self._faults):
+            self._end(active, "cleared")
+
+    @property
+    def faults(self) -> list[LineFault]:
+        """The active faults, in injection order."""
+        return [a.fault for a in self._faults]
+
+    def _end(self, active: _Active, how: str) -> None:
+        if not active.active:
+            return
+        if active.fault.kind == "noise":
+            self._noise_tick(active)  # what is due up to now
+        active.active = False
+        for timer in active.timers:
+            timer.cancel()
+        active.timers.clear()
+        self._faults.remove(active)
+        self._note(f"fault {how}: {active.fault.describe()}")
+
+    def _note(self, text: str) -> None:
+        if self.tracer is not None:
+            self.tracer.note(text, self.clock.now())
+
+    def _of(self, kind: str, direction: str) -> list[_Active]:
+        return [a for a in self._faults if a.fault.kind == kind and a.fault.applies(direction)]
+
+    def _gate(self, direction: str, noise: bool = False) -> str | None:
+        """The fault that blocks bytes going ``direction`` now, if any."""
+        for active in self._faults:
+            kind = active.fault.kind
+            if kind == "unplug":
+                return kind
+            if kind == "hang" and (direction == "to_device" or not noise):
+                return kind
+            if kind == "silent" and direction == "to_host" and not noise:
+                return kind
+        return None
+
+    def _effective_host(self) -> SerialSettings | None:
+        """The host's settings as the line sees them (a ``baud_mismatch`` fault overrides the
+        host's baud rate)."""
+        for active in reversed(self._faults):
+            if active.fault.kind == "baud_mismatch":
+                assert active.fault.baudrate is not None
+                return replace(self._host or self.device_settings, baudrate=active.fault.baudrate)
+        return self._host
+
+    def _use(self, active: _Active, available: int) -> int:
+        """How many of ``available`` bytes a fault takes (a counted one: at most its rest)."""
+        if active.remaining is None:
+            return available
+        take = min(active.remaining, available)
+        active.remaining -= take
+        return take
+
+    def _mangle(self, data: bytes, direction: str) -> bytes:
+        """Drop, then corrupt (see :class:`LineFault` for the order)."""
+        for active in self._of("drop", direction):
+            data = data[self._use(active, len(data)) :]
+        corrupt = self._of("corrupt", direction)
+        if corrupt and data:
+            buf = bytearray(data)
+            for active in corrupt:  # each one acts on the same next bytes
+                for i in range(self._use(active, len(buf))):
+                    buf[i] ^= 1 << active.rng.randrange(8)
+            data = bytes(buf)
+        return data
+
+    def _reap(self) -> None:
+        """End the counted faults whose count is used up (after the chunk has been traced)."""
+        for active in [a for a in self._faults if a.remaining == 0]:
+            self._end(active, "ended")
+
+    def _timing(self, data: bytes, chars: int, direction: str) -> None:
+        """Delay, jitter and split, then on to the stage of ``direction``."""
+        stage = self._stages[direction]
+        now = self.clock.now()
+        if not self._faults:
+            stage.put(now, data, chars)
+            return
+        latency = 0.0
+        for active in self._faults:
+            fault = active.fault
+            if not fault.applies(direction) or fault.delay is None:
+                continue
+            if fault.kind == "delay":
+                latency += fault.delay
+            elif fault.kind == "jitter":
+                latency += active.rng.uniform(0.0, fault.delay)
+        splits = self._of("split", direction)
+        if not splits:
+            stage.put(now + latency, data, chars)
+            return
+        split = splits[0]
+        gap = DEFAULT_SPLIT_GAP if split.fault.delay is None else split.fault.delay
+        n = self._use(split, len(data))
+        for i in range(n):
+            stage.put(now + latency, data[i : i + 1], 1, gap)
+        if n < len(data):
+            stage.put(now + latency, data[n:], len(data) - n, gap)
+
+    def _directions(self, fault: LineFault) -> list[str]:
+        return [d for d in ("to_device", "to_host") if fault.applies(d)]
+
+    def _schedule_noise(self, active: _Active, k: int) -> None:
+        assert active.fault.rate is not None
+        interval = max(1.0 / active.fault.rate, _NOISE_TICK)
+        when = active.started + k * interval
+
+        def tick() -> None:
+            self._noise_tick(active)
+            if active.active:
+                self._schedule_noise(active, k + 1)
+
+        active.timers = [t for t in active.timers if not t.cancelled]
+        active.timers.append(self.clock.call_at(when, tick))
+
+    def _noise_tick(self, active: _Active) -> None:
+        fault = active.fault
+        assert fault.rate is not None
+        elapsed = self.clock.now() - active.started
+        if fault.duration is not None:
+            elapsed = min(elapsed, fault.duration)
+        due = int(elapsed * fault.rate + 1e-9)
+        for direction in self._directions(fault):
+            n = due - active.emitted[direction]
+            if n <= 0:
+                continue
+            active.emitted[direction] = due
+            noise = bytes(active.rng.randrange(256) for _ in range(n))
+            self._inject_noise(noise, direction)
+
+    def _inject_noise(self, noise: bytes, direction: str) -> None:
+        lost = self._gate(direction, noise=True)
+        if self.tracer is not None:
+            note = "noise" if lost is None else f"noise, lost: {lost}"
+            self.tracer.record("H>D" if direction == "to_device" else "D>H", noise, self.clock.now(), note)
+        if lost is not None:
+            return
+        if direction == "to_device":
+            self._to_target(noise)
+        else:
+            self._paced(noise, len(noise))
 
     # -- state ------------------------------------------------------------------------------
     @property
@@ -279,8 +706,10 @@ class Line:
 
     @property
     def mismatch(self) -> bool:
-        """True when the host's settings are known and differ from the device's."""
-        return self._host is not None and not settings_match(self._host, self.device_settings)
+        """True when the host's settings (or those a ``baud_mismatch`` fault imposes) are known
+        and differ from the device's."""
+        host = self._effective_host()
+        return host is not None and not settings_match(host, self.device_settings)
 
     @property
     def pacing(self) -> bool:
@@ -303,17 +732,27 @@ class Line:
             "pacing": self.pacing,
             "bytes_in": self.bytes_in,
             "bytes_out": self.bytes_out,
-            "pending_out": sum(len(b.data) - b.sent for b in self._queue),
+            "pending_out": sum(len(b.data) - b.sent for b in self._queue) + self._stages["to_host"].pending,
+            "faults": [a.fault.kind for a in self._faults],
         }
 
     def close(self) -> None:
-        """Detach from the target and drop output still on the wire."""
+        """End the faults, detach from the target and drop output still on the wire."""
+        self.clear_faults()
+        for stage in self._stages.values():
+            stage.close()
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
         self._queue.clear()
         self.target.attach(None)
         self._write = None
+
+    # -- host → device ----------------------------------------------------------------------
+    def _to_target(self, data: bytes, chars: int = 0) -> None:
+        if self._faults and self._gate("to_device", noise=True) is not None:
+            return  # in flight when the cable was pulled or the device hung
+        self.target.feed(data)
 
     # -- device → host ----------------------------------------------------------------------
     def _from_device(self, data: bytes) -> None:
@@ -322,27 +761,45 @@ class Line:
         self.bytes_out += len(data)
         device = self.device_settings
         sent = data
-        host = self._host
-        if host is not None and not settings_match(host, device):
-            sent = garble(data, device, host)
+        lost = self._gate("to_host") if self._faults else None
+        if lost is not None:
+            sent = b""
+        else:
+            host = self._effective_host()
+            if host is not None and not settings_match(host, device):
+                sent = garble(data, device, host)
+            if self._faults:
+                sent = self._mangle(sent, "to_host")
         if self.tracer is not None:
-            note = None if sent == data else f"host read {render(sent)}"
+            if lost is not None:
+                note: str | None = f"lost: {lost}"
+            else:
+                note = None if sent == data else f"host read {render(sent)}"
             self.tracer.record("D>H", data, self.clock.now(), note)
-        if not sent:
-            return
+        if sent:
+            self._timing(sent, len(data), "to_host")
+        if self._faults:
+            self._reap()
+
+    def _paced(self, sent: bytes, chars: int) -> None:
+        """Onto the wire towards the host: at once, or paced at the device's character time
+        (``chars`` characters long)."""
         if not self.pacing:
             self._deliver(sent)
             return
         now = self.clock.now()
         start = max(now, self._tx_free_at)
-        duration = len(data) * device.char_time()
+        duration = chars * self.device_settings.char_time()
         self._tx_free_at = start + duration
         self._queue.append(_Burst(sent, start, duration))
         if self._timer is None:
             self._schedule()
 
     def _deliver(self, data: bytes) -> None:
+        if self._faults and self._gate("to_host", noise=True) is not None:
+            return  # in flight when the cable was pulled
         if self._write is not None:
+            self.bytes_delivered += len(data)
             self._write(data)
 
     def _schedule(self) -> None:
