@@ -478,3 +478,12 @@ def ctl_now(ctx: click.Context) -> None:
 def ctl_line(ctx: click.Context, device: str) -> None:
     """Status of the line serving DEVICE (settings, mismatch)."""
     _call(ctx, "line", device)
+
+
+def _register_scenario_commands() -> None:
+    from devsim.scenario.cli import register
+
+    register(cli)
+
+
+_register_scenario_commands()

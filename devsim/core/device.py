@@ -75,6 +75,10 @@ class Device(ABC):
         self.signals = SignalBank()
         #: True when other devices share the line (RS-485 multidrop); set by the bus.
         self.shared_line = False
+        #: True while the device initialises after power-on and does not listen yet.
+        self.booting = False
+        #: (simulated time, name) of notable moments, e.g. ("move_end", 1.321) for timing checks.
+        self.events: list[tuple[float, str]] = []
         self._write: ByteSink | None = None
 
     # -- byte interface ------------------------------------------------------------------
@@ -111,6 +115,21 @@ class Device(ABC):
     @abstractmethod
     def state(self) -> dict[str, Any]:
         """A JSON-serialisable snapshot of the interesting state."""
+
+    def record_event(self, name: str) -> None:
+        """Note a moment (``move_start``, ``move_end``, ``error`` ...) for timing expectations."""
+        self.events.append((self.clock.now(), name))
+        if len(self.events) > 10000:
+            del self.events[:5000]
+
+    def apply_state(self, state: Mapping[str, Any]) -> None:
+        """Initial state from a plant or scenario file: settable names and their values."""
+        for name, value in state.items():
+            self.set(name, value)
+
+    def fault(self, kind: str, active: bool) -> None:
+        """Start (or end) a device fault such as ``blocked_axis`` or ``emergency_stop``."""
+        raise UnknownName(f"{self.kind} has no fault {kind!r}")
 
     def power_cycle(self, *, wipe: bool = False) -> None:
         """Switch the device off and on again; ``wipe`` erases non-volatile memory first."""

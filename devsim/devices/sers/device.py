@@ -297,6 +297,23 @@ class SersDevice(SersDrive):
         while self._spontaneous:
             self.send(self._spontaneous.pop(0))
 
+    def apply_state(self, state: Any) -> None:
+        """Initial state: ``program`` (lines as typed, without ``#``) is stored in the EEPROM
+        as if downloaded with NEW … QUIT; other names as for :meth:`set`."""
+        rest = dict(state)
+        program = rest.pop("program", None)
+        if program is not None:
+            lines = [program] if isinstance(program, str) else list(program)
+            self.program.new()
+            for text in lines:
+                result = st.parse(str(text), final=True)
+                if result.errno is not None:
+                    raise ValueError(f"program line {text!r}: {message(result.errno)}")
+                for index, (stmt, _end) in enumerate(result.statements):
+                    self.program.add(stmt.text, new_line=index == 0)
+            self.program.quit()
+        super().apply_state(rest)
+
     # -- control API -----------------------------------------------------------------------
     def read(self, name: str) -> Any:
         if name == "selected":

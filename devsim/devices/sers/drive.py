@@ -146,6 +146,7 @@ class SersDrive(Device):
         self._reset_serial()
         self.logic_alive = True
         self.booting = self.cfg.boot_time > 0
+        self.record_event("power_on")
         self.eeprom_checksum_error = bool(getattr(self.nvram, "corrupt", False))
         self.errors = 0
         self.warnings = 0
@@ -201,6 +202,7 @@ class SersDrive(Device):
 
     def _boot_done(self) -> None:
         self.booting = False
+        self.record_event("ready")
 
     def _power_off(self) -> None:
         self._cancel_timers()
@@ -219,6 +221,21 @@ class SersDrive(Device):
         if wipe:
             self.nvram.wipe()
         self._power_on()
+
+    def fault(self, kind: str, active: bool) -> None:
+        """Scenario faults: ``blocked_axis`` (the load stalls the rotor: load-angle error or,
+        in SERVO mode, following), ``emergency_stop`` (STOP input opened), ``power`` (supply off)."""
+        if kind == "blocked_axis":
+            self.signals.set("stall", active)
+        elif kind == "emergency_stop":
+            self.signals.set("stop", active)
+        elif kind == "power":
+            if active:
+                self._power_off()
+            else:
+                self._power_on()
+        else:
+            super().fault(kind, active)
 
     def close(self) -> None:
         self._cancel_timers()
@@ -897,6 +914,8 @@ class SersDrive(Device):
         """Set a P11 bit: brake with P1030, open the relay, 50 ms later switch the phases off
         (§2.1.3, §2.1.4); short circuit and U < U_L switch off at once."""
         first = not self.errors & bit
+        if first:
+            self.record_event("error")
         self.errors |= bit
         self._homing = None
         if immediate:
@@ -1053,6 +1072,7 @@ class SersDrive(Device):
             self.spontaneous(f"@{self.cfg.address}POS=1")
 
     def _begin_motion(self, kind: str, decel: float) -> None:
+        self.record_event("move_start")
         self.motion = kind
         self.pos_ok = False
         self._stop_decel = decel
@@ -1060,6 +1080,8 @@ class SersDrive(Device):
         self._update_outputs()
 
     def _motion_finished(self) -> None:
+        if self.motion is not None:
+            self.record_event("move_end")
         self._stopped_at = self.clock.now()
         self.motion = None
         self.pos_ok = True

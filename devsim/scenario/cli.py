@@ -1,0 +1,177 @@
+"""``devsim check``, ``devsim scenario run`` and ``devsim up`` (added to the main command).
+
+* ``devsim check FILE...`` validates scenario and plant files without running them.
+* ``devsim scenario run FILE... [--virtual | --realtime] [--speed F] [--junit OUT.xml]`` runs
+  scenarios, prints a report per scenario and exits non-zero if any failed.
+* ``devsim up PLANT.yaml`` starts every device of a plant, prints each port, serves until Ctrl-C.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import signal
+import sys
+from pathlib import Path
+
+import click
+
+from devsim.core.config import ConfigError, LineDict, load_yaml
+
+__all__ = ["register"]
+
+
+def _load(path: str) -> object:
+    from devsim.scenario.schema import load_plant, load_scenario
+
+    data = load_yaml(path)
+    if isinstance(data, LineDict) and "steps" in data:
+        return load_scenario(path)
+    return load_plant(path)
+
+
+@click.command("check")
+@click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
+def check(files: tuple[str, ...]) -> None:
+    """Validate scenario and plant FILES without running them."""
+    bad = 0
+    for path in files:
+        try:
+            spec = _load(path)
+        except ConfigError as exc:
+            bad += 1
+            for message in exc.messages:
+                click.echo(message, err=True)
+            continue
+        steps = getattr(spec, "steps", None)
+        what = f"scenario, {len(steps)} steps" if steps is not None else "plant"
+        click.echo(f"{path}: ok ({what}, {len(spec.devices)} devices)")  # type: ignore[attr-defined]
+    if bad:
+        sys.exit(1)
+
+
+@click.group("scenario")
+def scenario() -> None:
+    """Run scenario files."""
+
+
+@scenario.command("run")
+@click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.option("--virtual", "mode", flag_value="virtual", help="Virtual time (default when the host is scripted).")
+@click.option("--realtime", "mode", flag_value="realtime", help="Real time (default for an external host).")
+@click.option("--speed", type=float, default=None, metavar="F", help="Real-time speed factor.")
+@click.option("--junit", metavar="OUT.xml", help="Also write the results as JUnit XML.")
+@click.option("--state-dir", metavar="DIR", help="Where the devices' non-volatile memory is kept.")
+@click.option("--trace-dir", metavar="DIR", help="Write a trace of every port's traffic here.")
+def scenario_run(
+    files: tuple[str, ...],
+    mode: str | None,
+    speed: float | None,
+    junit: str | None,
+    state_dir: str | None,
+    trace_dir: str | None,
+) -> None:
+    """Run scenario FILES; exit status 1 if any expectation failed."""
+    from devsim.scenario.report import format_report, write_junit
+    from devsim.scenario.runner import run_scenario
+    from devsim.scenario.schema import load_scenario
+
+    if speed is not None and speed <= 0:
+        raise click.UsageError("--speed: must be positive")
+    scenarios = []
+    for path in files:
+        try:
+            scenarios.append(load_scenario(path))
+        except ConfigError as exc:
+            raise click.ClickException(str(exc)) from None
+    results = []
+    for item in scenarios:
+        chosen = mode or item.mode()
+
+        def announce(plant: object, chosen: str = chosen) -> None:
+            if chosen == "realtime":
+                for row in plant.describe():  # type: ignore[attr-defined]
+                    click.echo(row)
+
+        results.append(
+            run_scenario(item, mode=chosen, speed=speed, state_dir=state_dir, trace_dir=trace_dir, announce=announce)
+        )
+        click.echo(format_report(results[-1]))
+    if junit is not None:
+        write_junit(results, junit)
+    failed = [r for r in results if not r.passed]
+    if len(results) > 1:
+        click.echo(f"{len(results) - len(failed)} of {len(results)} scenarios passed")
+    if failed:
+        sys.exit(1)
+
+
+@click.command("up")
+@click.argument("plant_file", type=click.Path(dir_okay=False))
+@click.option("--state-dir", metavar="DIR", help="Where the devices' non-volatile memory is kept.")
+@click.option("--speed", type=float, default=1.0, show_default=True, metavar="F", help="Time speed factor.")
+@click.option("--control", metavar="ADDR", help="Serve the control API on unix:/path.sock or [HOST:]PORT.")
+@click.option("--trace-dir", metavar="DIR", help="Write a trace of every port's traffic here.")
+def up(plant_file: str, state_dir: str | None, speed: float, control: str | None, trace_dir: str | None) -> None:
+    """Start every device of PLANT_FILE, print every port, serve until Ctrl-C."""
+    from devsim.core.control import ControlAddressError, parse_address
+    from devsim.scenario.schema import load_plant
+
+    try:
+        spec = load_plant(plant_file)
+    except ConfigError as exc:
+        raise click.ClickException(str(exc)) from None
+    if speed <= 0:
+        raise click.UsageError("--speed: must be positive")
+    address = None
+    if control is not None:
+        try:
+            address = parse_address(control)
+        except ControlAddressError as exc:
+            raise click.UsageError(f"--control: {exc}") from None
+        if not address.is_loopback():
+            raise click.UsageError(f"--control: refusing non-loopback host {address.host!r}")
+    try:
+        asyncio.run(_up(spec, state_dir, speed, address, trace_dir))
+    except KeyboardInterrupt:
+        sys.exit(130)
+    except OSError as exc:
+        raise click.ClickException(f"cannot start the plant: {exc}") from None
+
+
+async def _up(spec: object, state_dir: str | None, speed: float, address: object, trace_dir: str | None) -> None:
+    from devsim.core.control import ControlServer
+    from devsim.core.runtime import Runtime
+    from devsim.scenario.plant import build_plant
+
+    loop = asyncio.get_running_loop()
+    stop = asyncio.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(signum, stop.set)
+    if state_dir is not None:
+        Path(state_dir).mkdir(parents=True, exist_ok=True)
+    if trace_dir is not None:
+        Path(trace_dir).mkdir(parents=True, exist_ok=True)
+    async with Runtime(speed=speed, state_dir=state_dir) as runtime:
+        plant = await build_plant(runtime, spec, trace_dir=trace_dir)  # type: ignore[arg-type]
+        server = None
+        if address is not None:
+            server = ControlServer(runtime, address)  # type: ignore[arg-type]
+            shown = await server.start()
+        for row in plant.describe():
+            print(row, flush=True)
+        if server is not None:
+            print(f"control: {shown}", flush=True)
+        print(f"devsim: plant up ({len(plant.devices)} devices); Ctrl-C to stop", file=sys.stderr, flush=True)
+        try:
+            await stop.wait()
+        finally:
+            if server is not None:
+                await server.close()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        loop.remove_signal_handler(signum)
+
+
+def register(group: click.Group) -> None:
+    group.add_command(check)
+    group.add_command(scenario)
+    group.add_command(up)

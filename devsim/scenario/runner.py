@@ -1,0 +1,459 @@
+"""Running a scenario: the timeline against a plant, with the host scripted or external.
+
+The runner works inside the runtime's event loop.  In **virtual** time it is the only one that
+moves the clock: it jumps from event to event up to each trigger, and after every jump lets the
+real ports deliver what the devices wrote (counting bytes, so nothing is left in flight), which
+makes a run exact and repeatable.  In **real** time (``--realtime``, or by default when the
+scenario does not script the host, so that real host software can drive the plant) it waits on
+the real clock, scaled by the speed factor.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import re
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from devsim.core.clock import VirtualClock
+from devsim.core.runtime import Runtime
+from devsim.scenario.host import HostPort, open_host_port
+from devsim.scenario.plant import Plant, build_plant
+from devsim.scenario.schema import Condition, Scenario, Step
+
+__all__ = ["ScenarioResult", "StepResult", "run_scenario", "run_scenario_async"]
+
+# Real-time guard while waiting for bytes that are known to be on their way through a port.
+_IO_GUARD = 5.0
+
+
+@dataclass
+class StepResult:
+    index: int  # 1-based
+    line: int
+    label: str
+    time: float  # simulated seconds since the start of the timeline
+    status: str  # "pass", "fail", "done" (an action), "skipped"
+    message: str = ""
+
+    @property
+    def checked(self) -> bool:
+        return self.status in ("pass", "fail")
+
+
+@dataclass
+class ScenarioResult:
+    name: str
+    path: str
+    mode: str
+    steps: list[StepResult] = field(default_factory=list)
+    sim_time: float = 0.0
+    wall_time: float = 0.0
+    error: str = ""
+    ports: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def passed(self) -> bool:
+        return not self.error and all(step.status != "fail" for step in self.steps)
+
+    @property
+    def failures(self) -> list[StepResult]:
+        return [step for step in self.steps if step.status == "fail"]
+
+
+class _Traffic:
+    """Taps a line: keeps what the host sent and what the device sent (chained to a tracer)."""
+
+    def __init__(self, inner: Any) -> None:
+        self.inner = inner
+        self.host = bytearray()
+        self.device = bytearray()
+
+    def record(self, direction: str, data: bytes, when: float, note: str | None = None) -> None:
+        (self.host if direction == "H>D" else self.device).extend(data)
+        if self.inner is not None:
+            self.inner.record(direction, data, when, note)
+
+    def note(self, text: str, when: float) -> None:
+        if self.inner is not None:
+            self.inner.note(text, when)
+
+    def close(self) -> None:
+        if self.inner is not None:
+            self.inner.close()
+
+
+class _StepFailed(Exception):
+    pass
+
+
+class _Abort(Exception):
+    pass
+
+
+def _show(data: bytes, limit: int = 80) -> str:
+    text = repr(bytes(data))
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _label(step: Step) -> str:
+    action = step.action
+    trigger = ""
+    if step.at is not None:
+        trigger = f"at {step.at:g}s: "
+    elif step.after is not None:
+        trigger = f"after {step.after:g}s: "
+    elif step.when is not None:
+        trigger = f"when {step.when.describe()}: "
+    if action is None:
+        return trigger.rstrip(": ") or "wait"
+    value = getattr(step, action)
+    if action == "send":
+        return trigger + f"send {_show(value.payload())}"
+    if action == "expect":
+        what = _show(value.bytes.encode("latin-1")) if value.bytes is not None else f"/{value.regex}/"
+        return trigger + f"expect {what} within {value.timeout:g}s"
+    if action in ("expect_state",):
+        return trigger + f"expect {value.describe()}"
+    if action == "expect_traffic":
+        return trigger + f"expect {value.direction} sent /{value.regex}/"
+    if action == "expect_timing":
+        low, high = value.between
+        return trigger + f"expect {value.device} {value.event} between {low:g}s and {high:g}s"
+    if action == "set":
+        return trigger + f"set {value.device} " + ", ".join(f"{k}={v!r}" for k, v in value.values.items())
+    if action == "pulse":
+        return trigger + f"pulse {value.device}.{value.input} for {value.width:g}s"
+    if action == "fault":
+        extra = f" for {value.duration:g}s" if value.duration is not None else ""
+        return trigger + f"fault {value.device} {value.kind}{extra}"
+    if action == "line_fault":
+        extra = f" for {value.duration:g}s" if value.duration is not None else ""
+        return trigger + f"line fault {value.kind}{extra}"
+    if action == "power_cycle":
+        return trigger + f"power cycle {value.device}" + (" (memory wiped)" if value.wipe else "")
+    if action == "wait":
+        return trigger + f"wait {value:g}s"
+    return trigger + f"{action} {value}"
+
+
+class Runner:
+    """Executes one scenario against a plant that runs in the current loop."""
+
+    def __init__(self, scenario: Scenario, plant: Plant, mode: str) -> None:
+        self.scenario = scenario
+        self.plant = plant
+        self.runtime: Runtime = plant.runtime
+        self.clock = self.runtime.clock
+        self.mode = mode
+        self.hosts: dict[str, HostPort] = {}
+        self.traffic: dict[str, _Traffic] = {}
+        self.t0 = 0.0
+
+    # -- time ----------------------------------------------------------------------------------
+    @property
+    def virtual(self) -> bool:
+        return isinstance(self.clock, VirtualClock)
+
+    def now(self) -> float:
+        return self.clock.now() - self.t0
+
+    async def _drain(self) -> None:
+        """Virtual time: let every port deliver the bytes that are already on their way."""
+        for _ in range(3):
+            await asyncio.sleep(0)
+        deadline = time.monotonic() + _IO_GUARD
+        for name, host in self.hosts.items():
+            line = self.plant.lines[name]
+            transport = self.plant.transports[name]
+            while True:
+                expected = line.bytes_delivered - getattr(transport, "dropped", 0) - getattr(transport, "pending", 0)
+                if len(host.received) >= expected:
+                    break
+                if time.monotonic() > deadline:
+                    raise _Abort(f"port {name}: {expected - len(host.received)} bytes never arrived at the host")
+                await host.wait_data(0.01)
+
+    async def _wait_until(self, predicate: Callable[[], bool], timeout: float) -> bool:
+        """Until ``predicate()`` holds or ``timeout`` simulated seconds pass."""
+        deadline = self.clock.now() + timeout
+        if self.virtual:
+            clock = self.clock
+            assert isinstance(clock, VirtualClock)
+            while True:
+                await self._drain()
+                if predicate():
+                    return True
+                upcoming = clock.next_event()
+                if upcoming is None or upcoming > deadline:
+                    clock.advance_to(deadline)
+                    await self._drain()
+                    return predicate()
+                clock.advance_to(upcoming)
+        while not predicate():
+            remaining = deadline - self.clock.now()
+            if remaining <= 0:
+                return predicate()
+            await self.clock.sleep(min(remaining, 0.002 * getattr(self.clock, "speed", 1.0)))
+        return True
+
+    async def _sleep_until(self, when: float) -> None:
+        await self._wait_until(lambda: False, max(0.0, when - self.clock.now()))
+
+    # -- ports -----------------------------------------------------------------------------------
+    def _port(self, name: str | None) -> str:
+        return name or self.scenario.default_port()
+
+    def _host(self, name: str | None) -> HostPort:
+        port = self._port(name)
+        if port not in self.hosts:
+            raise _StepFailed(f"port {port} is not held by the scripted host")
+        return self.hosts[port]
+
+    async def _open_hosts(self) -> None:
+        wanted: set[str] = set()
+        for step in self.scenario.steps:
+            for item in (step.send, step.expect):
+                if item is not None:
+                    wanted.add(self._port(item.port))
+        for name in sorted(wanted):
+            members = [d for d in self.scenario.devices if (d.transport.bus or d.name) == name]
+            settings = self.plant.devices[members[0].name].serial_settings
+            host = open_host_port(name, self.plant.kinds[name], self.plant.transports[name], settings)
+            await host.open()
+            self.hosts[name] = host
+
+    def _tap_lines(self) -> None:
+        for name, line in self.plant.lines.items():
+            tap = _Traffic(line.tracer)
+            line.tracer = tap
+            self.traffic[name] = tap
+
+    # -- the run -----------------------------------------------------------------------------------
+    async def run(self) -> ScenarioResult:
+        scenario = self.scenario
+        result = ScenarioResult(scenario.name or "scenario", scenario.path, self.mode)
+        result.ports = {name: self.plant.port(name) for name in self.plant.transports}
+        wall = time.monotonic()
+        self._tap_lines()
+        try:
+            await self._open_hosts()
+            if scenario.start == "after_boot":
+                devices = list(self.plant.devices.values())
+                if not await self._wait_until(lambda: not any(d.booting for d in devices), 60.0):
+                    raise _Abort("the devices did not finish booting")
+            self.t0 = self.clock.now()
+            previous = self.t0
+            for index, step in enumerate(scenario.steps, start=1):
+                if self.clock.now() - self.t0 > scenario.timeout:
+                    raise _Abort(f"the scenario ran longer than its timeout of {scenario.timeout:g}s")
+                outcome = await self._step(index, step, previous)
+                result.steps.append(outcome)
+                previous = self.clock.now()
+                if outcome.status == "fail" and step.when is not None and outcome.message.startswith("condition"):
+                    for rest_index, rest in enumerate(scenario.steps[index:], start=index + 1):
+                        result.steps.append(StepResult(rest_index, rest.line, _label(rest), self.now(), "skipped"))
+                    break
+            if self.virtual:
+                await self._drain()
+        except _Abort as exc:
+            result.error = str(exc)
+        finally:
+            for host in self.hosts.values():
+                await host.close()
+        result.sim_time = self.now()
+        result.wall_time = time.monotonic() - wall
+        return result
+
+    async def _step(self, index: int, step: Step, previous: float) -> StepResult:
+        label = _label(step)
+        # trigger
+        if step.at is not None:
+            await self._sleep_until(self.t0 + step.at)
+        elif step.after is not None:
+            await self._sleep_until(previous + step.after)
+        elif step.when is not None:
+            cond = step.when
+            timeout = step.timeout if step.timeout is not None else 30.0
+            if not await self._wait_until(lambda: self._test(cond), timeout):
+                return StepResult(
+                    index, step.line, label, self.now(), "fail",
+                    f"condition not met within {timeout:g}s: {cond.describe()} (is {self._value(cond)!r})",
+                )
+        action = step.action
+        if action is None:
+            return StepResult(index, step.line, label, self.now(), "pass" if step.when is not None else "done")
+        try:
+            checked = await getattr(self, f"_do_{action}")(getattr(step, action), index)
+        except _StepFailed as exc:
+            return StepResult(index, step.line, label, self.now(), "fail", str(exc))
+        except (KeyError, ValueError, TypeError) as exc:
+            return StepResult(index, step.line, label, self.now(), "fail", f"{type(exc).__name__}: {exc}")
+        return StepResult(index, step.line, label, self.now(), "pass" if checked else "done")
+
+    # -- state -------------------------------------------------------------------------------------
+    def _value(self, cond: Condition) -> Any:
+        try:
+            return self.plant.devices[cond.device].read(cond.name)
+        except KeyError as exc:
+            return f"<cannot read: {exc}>"
+
+    def _test(self, cond: Condition) -> bool:
+        return cond.test(self._value(cond))
+
+    # -- actions (each returns True if it checked something) ---------------------------------------
+    async def _do_send(self, action: Any, index: int) -> bool:
+        host = self._host(action.port)
+        data = action.payload()
+        line = self.plant.lines[self._port(action.port)]
+        before = line.bytes_in
+        await host.send(data)
+        if self.virtual:
+            deadline = time.monotonic() + _IO_GUARD
+            while line.bytes_in < before + len(data):
+                if time.monotonic() > deadline:
+                    raise _Abort(f"port {host.name}: the device never received the bytes sent")
+                await asyncio.sleep(0.0005)
+        return False
+
+    async def _do_expect(self, action: Any, index: int) -> bool:
+        host = self._host(action.port)
+        if action.bytes is not None:
+            wanted = action.bytes.encode("latin-1")
+            await self._wait_until(lambda: len(host.unread) >= len(wanted), action.timeout)
+            got = host.unread[: len(wanted)]
+            host.consume(host.position + len(got))
+            if got != wanted:
+                raise _StepFailed(f"expected {_show(wanted)}, got {_show(got)}")
+            return True
+        pattern = re.compile(action.regex.encode("latin-1"))
+        found: list[re.Match[bytes]] = []
+
+        def matched() -> bool:
+            match = pattern.search(host.unread)
+            if match:
+                found.append(match)
+            return match is not None
+
+        if not await self._wait_until(matched, action.timeout):
+            raise _StepFailed(f"no match for /{action.regex}/ within {action.timeout:g}s; got {_show(host.unread)}")
+        host.consume(host.position + found[-1].end())
+        return True
+
+    async def _do_set(self, action: Any, index: int) -> bool:
+        device = self.plant.devices[action.device]
+        for name, value in action.values.items():
+            device.set(name, value)
+        return False
+
+    async def _do_pulse(self, action: Any, index: int) -> bool:
+        device = self.plant.devices[action.device]
+        name = action.input if "." in action.input else f"input.{action.input}"
+        before = device.read(name)
+        device.set(name, action.value)
+        self.clock.call_later(action.width, lambda: device.set(name, before))
+        return False
+
+    async def _do_fault(self, action: Any, index: int) -> bool:
+        device = self.plant.devices[action.device]
+        kind = action.kind
+        if kind in ("power_cycle", "power_cycle_wipe"):
+            device.power_cycle(wipe=kind == "power_cycle_wipe")
+            return False
+        name = {"power_off": "power", "power_on": "power"}.get(kind, kind)
+        active = kind != "power_on"
+        device.fault(name, active)
+        if action.duration is not None and kind != "power_on":
+            self.clock.call_later(action.duration, lambda: device.fault(name, False))
+        return False
+
+    async def _do_line_fault(self, action: Any, index: int) -> bool:
+        from devsim.transports.line import LineFault
+
+        line = self.plant.lines[self._port(action.port)]
+        line.inject(
+            LineFault(
+                kind=action.kind, direction=action.direction, count=action.count, duration=action.duration,
+                delay=action.delay, rate=action.rate, baudrate=action.baudrate, seed=index,
+            )
+        )
+        return False
+
+    async def _do_power_cycle(self, action: Any, index: int) -> bool:
+        self.plant.devices[action.device].power_cycle(wipe=action.wipe)
+        return False
+
+    async def _do_wait(self, seconds: float, index: int) -> bool:
+        await self._sleep_until(self.clock.now() + seconds)
+        return False
+
+    async def _do_log(self, text: str, index: int) -> bool:
+        return False
+
+    async def _do_expect_state(self, cond: Condition, index: int) -> bool:
+        value = self._value(cond)
+        if not cond.test(value):
+            raise _StepFailed(f"{cond.describe()}: is {value!r}")
+        return True
+
+    async def _do_expect_traffic(self, action: Any, index: int) -> bool:
+        tap = self.traffic[self._port(action.port)]
+        data = bytes(tap.host if action.direction == "host" else tap.device)
+        matches = list(re.finditer(action.regex.encode("latin-1"), data))
+        if action.count is not None:
+            if len(matches) != action.count:
+                raise _StepFailed(f"/{action.regex}/ matched {len(matches)} times, expected {action.count}")
+        elif not matches:
+            raise _StepFailed(f"the {action.direction} never sent anything matching /{action.regex}/")
+        return True
+
+    async def _do_expect_timing(self, action: Any, index: int) -> bool:
+        device = self.plant.devices[action.device]
+        times = [when - self.t0 for when, name in device.events if name == action.event and when >= self.t0]
+        low, high = action.between
+        if not times:
+            raise _StepFailed(f"{action.device} had no {action.event} event")
+        chosen = {"first": times[:1], "last": times[-1:], "any": times}[action.occurrence]
+        if not any(low - 1e-9 <= t <= high + 1e-9 for t in chosen):
+            shown = ", ".join(f"{t:.4f}s" for t in chosen[:5])
+            raise _StepFailed(f"{action.event} at {shown}, not between {low:g}s and {high:g}s")
+        return True
+
+
+async def run_scenario_async(
+    scenario: Scenario,
+    runtime: Runtime,
+    *,
+    trace_dir: str | Path | None = None,
+    announce: Callable[[Plant], None] | None = None,
+) -> ScenarioResult:
+    """Build the scenario's plant in ``runtime`` (running in this loop) and run the timeline."""
+    mode = "virtual" if isinstance(runtime.clock, VirtualClock) else "realtime"
+    plant = await build_plant(runtime, scenario, trace_dir=trace_dir)
+    if announce is not None:
+        announce(plant)
+    return await Runner(scenario, plant, mode).run()
+
+
+def run_scenario(
+    scenario: Scenario,
+    *,
+    mode: str | None = None,
+    speed: float | None = None,
+    state_dir: str | Path | None = None,
+    trace_dir: str | Path | None = None,
+    announce: Callable[[Plant], None] | None = None,
+) -> ScenarioResult:
+    """Run a scenario in a fresh runtime (background thread); ``mode`` virtual or realtime
+    (default: the scenario's own choice)."""
+    chosen = mode or scenario.mode()
+    runtime = Runtime(
+        virtual=chosen == "virtual", speed=speed if speed is not None else scenario.speed, state_dir=state_dir
+    ).start()
+    try:
+        return runtime.run(run_scenario_async(scenario, runtime, trace_dir=trace_dir, announce=announce))
+    finally:
+        runtime.stop()

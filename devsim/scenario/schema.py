@@ -1,0 +1,557 @@
+"""Scenario and plant files: the YAML schema (pydantic v2) with line-numbered errors.
+
+A **plant** file lists devices (and optional multidrop buses) and how each is reached::
+
+    devices:
+      - name: x
+        kind: sers
+        transport: {pty: {link: /tmp/ttyX}}     # or {tcp: {port: 4001}}, {rfc2217: {port: 4002}}, {bus: line1}
+        config: {address: 1, params: {P1017: 1}}
+        axis: {limit_right: 128000}              # axis geometry, merged into the device config
+        state: {input.I1: true, program: ["ON", "W=360 E"]}
+    buses:
+      - name: line1
+        transport: {pty: {}}
+
+A **scenario** file is a plant plus a timeline (``steps``) and expectations.  Each step has at
+most one trigger (``at``: time since the start, ``after``: time since the previous step,
+``when``: a condition on device state, with ``timeout``) and exactly one action or
+expectation; see :data:`ACTIONS`.  Errors read ``scenarios/x.yaml:14: steps.3.after: `after`
+must be a duration like 2s or 150ms``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
+
+from devsim.core.config import ConfigError, LineDict, LineList, load_yaml, plain, validate
+
+__all__ = [
+    "ACTIONS",
+    "Condition",
+    "DeviceSpec",
+    "PlantSpec",
+    "Scenario",
+    "Step",
+    "load_plant",
+    "load_scenario",
+    "parse_duration",
+]
+
+_UNITS = {"ms": 0.001, "s": 1.0, "sec": 1.0, "min": 60.0, "m": 60.0, "h": 3600.0, "us": 1e-6}
+_DURATION = re.compile(r"\s*([0-9]*\.?[0-9]+)\s*(ms|us|s|sec|min|m|h)?\s*")
+
+
+def parse_duration(value: Any, field: str = "duration") -> float:
+    """``2s``, ``150ms``, ``1.5 min`` or a plain number of seconds → seconds."""
+    if isinstance(value, bool):
+        raise ValueError(f"`{field}` must be a duration like 2s or 150ms")
+    if isinstance(value, int | float):
+        if value < 0 or not math.isfinite(value):
+            raise ValueError(f"`{field}` must be a duration like 2s or 150ms")
+        return float(value)
+    if isinstance(value, str):
+        match = _DURATION.fullmatch(value)
+        if match:
+            return float(match.group(1)) * _UNITS[match.group(2) or "s"]
+    raise ValueError(f"`{field}` must be a duration like 2s or 150ms")
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+# -- plant ---------------------------------------------------------------------------------
+class PtySpec(_Model):
+    link: str | None = None
+
+
+class TcpSpec(_Model):
+    port: int = Field(default=0, ge=0, le=65535)
+    host: str = "127.0.0.1"
+
+
+class TransportSpec(_Model):
+    """Exactly one of ``pty``, ``tcp``, ``rfc2217`` or ``bus`` (the name of a bus)."""
+
+    pty: PtySpec | None = None
+    tcp: TcpSpec | None = None
+    rfc2217: TcpSpec | None = None
+    bus: str | None = None
+
+    @model_validator(mode="after")
+    def _one(self) -> TransportSpec:
+        given = [k for k in ("pty", "tcp", "rfc2217", "bus") if getattr(self, k) is not None]
+        if len(given) > 1:
+            raise ValueError(f"give one transport, not {' and '.join(given)}")
+        if not given:
+            self.pty = PtySpec()
+        return self
+
+    @property
+    def kind(self) -> str:
+        return next(k for k in ("pty", "tcp", "rfc2217", "bus") if getattr(self, k) is not None)
+
+
+class DeviceSpec(_Model):
+    name: str = Field(pattern=r"^[A-Za-z_][A-Za-z0-9_-]*$")
+    kind: str
+    transport: TransportSpec = Field(default_factory=TransportSpec)
+    config: dict[str, Any] = Field(default_factory=dict, description="device configuration (DIP switches, parameters)")
+    axis: dict[str, Any] | None = Field(default=None, description="axis geometry, merged into config['axis']")
+    state: dict[str, Any] = Field(default_factory=dict, description="initial state: settable names and 'program'")
+
+    def device_config(self) -> dict[str, Any]:
+        config = dict(self.config)
+        if self.axis is not None:
+            config["axis"] = {**dict(config.get("axis") or {}), **self.axis}
+        return config
+
+
+class BusSpec(_Model):
+    name: str
+    transport: TransportSpec = Field(default_factory=TransportSpec)
+
+    @field_validator("transport")
+    @classmethod
+    def _not_a_bus(cls, value: TransportSpec) -> TransportSpec:
+        if value.bus is not None:
+            raise ValueError("a bus is reached by pty, tcp or rfc2217, not by another bus")
+        return value
+
+
+class PlantSpec(_Model):
+    devices: list[DeviceSpec] = Field(min_length=1)
+    buses: list[BusSpec] = Field(default_factory=list)
+
+    @model_validator(mode="after")
+    def _names(self) -> PlantSpec:
+        names = [d.name for d in self.devices] + [b.name for b in self.buses]
+        for name in names:
+            if names.count(name) > 1:
+                raise ValueError(f"the name {name!r} is used twice")
+        buses = {b.name for b in self.buses}
+        for device in self.devices:
+            if device.transport.bus is not None and device.transport.bus not in buses:
+                raise ValueError(f"device {device.name!r} is on bus {device.transport.bus!r}, which is not defined")
+        return self
+
+    def ports(self) -> list[str]:
+        """Names a host can talk to: devices with their own transport, and buses."""
+        return [d.name for d in self.devices if d.transport.bus is None] + [b.name for b in self.buses]
+
+
+# -- conditions ------------------------------------------------------------------------------
+class Condition(_Model):
+    """A test on one piece of device state: ``{device: x, name: axis.position, ge: 1000}``.
+
+    Operators: ``equals``, ``not_equals``, ``lt``, ``le``, ``gt``, ``ge``, ``approx`` (with
+    ``tolerance``), ``regex`` (on the value's text).  ``equals: null`` tests for None.
+    """
+
+    device: str
+    name: str
+    equals: Any = None
+    not_equals: Any = None
+    lt: float | None = None
+    le: float | None = None
+    gt: float | None = None
+    ge: float | None = None
+    approx: float | None = None
+    tolerance: float = Field(default=1e-6, ge=0)
+    regex: str | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _mark_equals(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "equals" in data:
+            data = dict(data)
+            data["__has_equals__"] = True
+        return data
+
+    has_equals: bool = Field(default=False, alias="__has_equals__")
+
+    @model_validator(mode="after")
+    def _one_operator(self) -> Condition:
+        ops = [op for op in ("not_equals", "lt", "le", "gt", "ge", "approx", "regex") if getattr(self, op) is not None]
+        if self.has_equals:
+            ops.append("equals")
+        if not ops:
+            raise ValueError("give a test: equals, not_equals, lt, le, gt, ge, approx or regex")
+        if self.regex is not None:
+            try:
+                re.compile(self.regex)
+            except re.error as exc:
+                raise ValueError(f"bad regex: {exc}") from None
+        return self
+
+    def test(self, value: Any) -> bool:
+        if self.has_equals and value != self.equals:
+            return False
+        if self.not_equals is not None and value == self.not_equals:
+            return False
+        number = value if isinstance(value, int | float) and not isinstance(value, bool) else None
+        for op, limit in (("lt", self.lt), ("le", self.le), ("gt", self.gt), ("ge", self.ge)):
+            if limit is None:
+                continue
+            if number is None:
+                return False
+            if not {"lt": number < limit, "le": number <= limit, "gt": number > limit, "ge": number >= limit}[op]:
+                return False
+        if self.approx is not None and (number is None or abs(number - self.approx) > self.tolerance):
+            return False
+        return not (self.regex is not None and re.search(self.regex, str(value)) is None)
+
+    def describe(self) -> str:
+        tests = []
+        if self.has_equals:
+            tests.append(f"== {self.equals!r}")
+        for op, sym in (("not_equals", "!="), ("lt", "<"), ("le", "<="), ("gt", ">"), ("ge", ">="), ("regex", "~")):
+            if getattr(self, op) is not None:
+                tests.append(f"{sym} {getattr(self, op)!r}")
+        if self.approx is not None:
+            tests.append(f"≈ {self.approx} ± {self.tolerance}")
+        return f"{self.device}.{self.name} {' and '.join(tests)}"
+
+
+# -- actions and expectations -------------------------------------------------------------------
+def _text_or_bytes(value: Any) -> bytes:
+    """YAML strings are sent as latin-1 bytes (escapes like \\r come from YAML itself)."""
+    if isinstance(value, bytes):
+        return value
+    if isinstance(value, str):
+        return value.encode("latin-1")
+    raise ValueError("must be a string")
+
+
+class SendAction(_Model):
+    port: str | None = None
+    data: str | None = None
+    line: str | None = Field(default=None, description="like data, with CR appended")
+
+    @model_validator(mode="after")
+    def _one(self) -> SendAction:
+        if (self.data is None) == (self.line is None):
+            raise ValueError("give either data or line")
+        _text_or_bytes(self.data if self.data is not None else self.line)
+        return self
+
+    def payload(self) -> bytes:
+        if self.line is not None:
+            return _text_or_bytes(self.line) + b"\r"
+        return _text_or_bytes(self.data)
+
+
+class ExpectAction(_Model):
+    """The device's answer on ``port``: exact ``bytes`` (next bytes) or a ``regex`` match in
+    what arrives, within ``timeout`` (simulated time)."""
+
+    port: str | None = None
+    bytes: str | None = None
+    regex: str | None = None
+    timeout: float = 1.0
+
+    @field_validator("timeout", mode="before")
+    @classmethod
+    def _duration(cls, value: Any, info: ValidationInfo) -> float:
+        return parse_duration(value, str(info.field_name))
+
+    @model_validator(mode="after")
+    def _one(self) -> ExpectAction:
+        if (self.bytes is None) == (self.regex is None):
+            raise ValueError("give either bytes or regex")
+        if self.regex is not None:
+            try:
+                re.compile(self.regex.encode("latin-1"))
+            except re.error as exc:
+                raise ValueError(f"bad regex: {exc}") from None
+        return self
+
+
+class SetAction(_Model):
+    """Set inputs, quantities or parameters: ``{device: x, values: {input.I1: true}}``."""
+
+    device: str
+    values: dict[str, Any] = Field(min_length=1)
+
+
+class PulseAction(_Model):
+    device: str
+    input: str
+    width: float = 0.05
+    value: Any = True
+
+    @field_validator("width", mode="before")
+    @classmethod
+    def _duration(cls, value: Any, info: ValidationInfo) -> float:
+        return parse_duration(value, str(info.field_name))
+
+
+FaultKind = Literal["blocked_axis", "emergency_stop", "power_cycle", "power_cycle_wipe", "power_off", "power_on"]
+
+
+class FaultAction(_Model):
+    """A device fault; ``duration`` makes a lasting fault end by itself."""
+
+    device: str
+    kind: FaultKind
+    duration: float | None = None
+
+    @field_validator("duration", mode="before")
+    @classmethod
+    def _duration(cls, value: Any, info: ValidationInfo) -> float | None:
+        return None if value is None else parse_duration(value, str(info.field_name))
+
+
+LineFaultKind = Literal["corrupt", "drop", "split", "delay", "jitter", "noise", "baud_mismatch", "unplug", "hang", "silent"]
+
+
+class LineFaultAction(_Model):
+    """A fault on the real line of ``port``: see :class:`devsim.transports.line.LineFault`."""
+
+    port: str | None = None
+    kind: LineFaultKind
+    count: int | None = Field(default=None, ge=1, description="bytes affected (corrupt, drop)")
+    duration: float | None = None
+    delay: float | None = None
+    rate: float | None = Field(default=None, gt=0, description="noise bytes per second")
+    baudrate: int | None = Field(default=None, gt=0)
+    direction: Literal["to_device", "to_host", "both"] = "both"
+
+    @field_validator("duration", "delay", mode="before")
+    @classmethod
+    def _duration(cls, value: Any, info: ValidationInfo) -> float | None:
+        return None if value is None else parse_duration(value, str(info.field_name))
+
+
+class PowerCycleAction(_Model):
+    device: str
+    wipe: bool = False
+
+
+class TrafficExpectation(_Model):
+    """Something on the line since the start matched: ``direction`` host (sent by the host)
+    or device (sent by the device)."""
+
+    port: str | None = None
+    direction: Literal["host", "device"] = "host"
+    regex: str
+    count: int | None = Field(default=None, ge=0, description="exact number of matches")
+
+
+class TimingExpectation(_Model):
+    """A device event (e.g. the SERS ``move_end``) happened between two times since the start."""
+
+    device: str
+    event: str
+    between: tuple[float, float]
+    occurrence: Literal["first", "last", "any"] = "any"
+
+    @field_validator("between", mode="before")
+    @classmethod
+    def _durations(cls, value: Any, info: ValidationInfo) -> tuple[float, float]:
+        if not isinstance(value, list | tuple) or len(value) != 2:
+            raise ValueError("`between` must be two durations like [1s, 1.5s]")
+        low, high = (parse_duration(v, "between") for v in value)
+        if low > high:
+            raise ValueError("`between` must go from the earlier to the later time")
+        return low, high
+
+
+#: Step keys that are actions or expectations (exactly one per step).
+ACTIONS = (
+    "send", "expect", "set", "pulse", "fault", "line_fault", "power_cycle", "wait", "expect_state",
+    "expect_traffic", "expect_timing", "log",
+)
+
+
+class Step(_Model):
+    at: float | None = None
+    after: float | None = None
+    when: Condition | None = None
+    timeout: float | None = None
+
+    send: SendAction | None = None
+    expect: ExpectAction | None = None
+    set: SetAction | None = None
+    pulse: PulseAction | None = None
+    fault: FaultAction | None = None
+    line_fault: LineFaultAction | None = None
+    power_cycle: PowerCycleAction | None = None
+    wait: float | None = None
+    expect_state: Condition | None = None
+    expect_traffic: TrafficExpectation | None = None
+    expect_timing: TimingExpectation | None = None
+    log: str | None = None
+
+    #: line of the step in its file (filled in by the loader)
+    line: int = Field(default=0, exclude=True)
+
+    @field_validator("at", "after", "timeout", "wait", mode="before")
+    @classmethod
+    def _duration(cls, value: Any, info: ValidationInfo) -> float | None:
+        return None if value is None else parse_duration(value, str(info.field_name))
+
+    @field_validator("send", mode="before")
+    @classmethod
+    def _send_shorthand(cls, value: Any) -> Any:
+        return {"data": value} if isinstance(value, str) else value
+
+    @field_validator("expect", mode="before")
+    @classmethod
+    def _expect_shorthand(cls, value: Any) -> Any:
+        return {"bytes": value} if isinstance(value, str) else value
+
+    @model_validator(mode="after")
+    def _shape(self) -> Step:
+        triggers = [k for k in ("at", "after", "when") if getattr(self, k) is not None]
+        if len(triggers) > 1:
+            raise ValueError(f"a step has one trigger, not {' and '.join(triggers)}")
+        if self.timeout is not None and self.when is None:
+            raise ValueError("`timeout` goes with `when`")
+        actions = [k for k in ACTIONS if getattr(self, k) is not None]
+        if not actions and triggers:
+            return self  # only a trigger: wait for it (``when`` fails at its timeout)
+        if len(actions) != 1:
+            what = " and ".join(actions) if actions else "none"
+            raise ValueError(f"a step has exactly one action or expectation ({', '.join(ACTIONS)}); got {what}")
+        return self
+
+    @property
+    def action(self) -> str | None:
+        return next((k for k in ACTIONS if getattr(self, k) is not None), None)
+
+
+class Scenario(PlantSpec):
+    name: str | None = None
+    description: str = ""
+    time: Literal["virtual", "realtime"] | None = Field(
+        default=None, description="default: virtual when the scenario scripts the host, else realtime"
+    )
+    speed: float = Field(default=1.0, gt=0)
+    start: Literal["after_boot", "power_on"] = "after_boot"
+    timeout: float = Field(default=300.0, description="limit on the whole run (simulated seconds)")
+    host: dict[str, Any] = Field(default_factory=dict, description="{port: name} the default port of host actions")
+    steps: list[Step] = Field(default_factory=list)
+
+    #: the file it came from (filled in by the loader)
+    path: str = Field(default="", exclude=True)
+
+    @field_validator("timeout", mode="before")
+    @classmethod
+    def _duration(cls, value: Any, info: ValidationInfo) -> float:
+        return parse_duration(value, str(info.field_name))
+
+    @model_validator(mode="after")
+    def _references(self) -> Scenario:
+        devices = {d.name for d in self.devices}
+        ports = set(self.ports())
+        default_port = self.host.get("port")
+        if default_port is not None and default_port not in ports:
+            raise ValueError(f"host.port {default_port!r} is not a device or bus with its own port")
+        for number, step in enumerate(self.steps):
+            where = f"step {number + 1}"
+            for item in (step.when, step.expect_state, step.set, step.pulse, step.fault, step.power_cycle,
+                         step.expect_timing):
+                if item is not None and getattr(item, "device", None) not in devices:
+                    raise ValueError(f"{where}: no device named {item.device!r}")  # type: ignore[union-attr]
+            for item in (step.send, step.expect, step.line_fault, step.expect_traffic):
+                port = getattr(item, "port", None) if item is not None else None
+                if port is not None and port not in ports:
+                    raise ValueError(f"{where}: no port named {port!r} (ports: {', '.join(sorted(ports))})")
+        return self
+
+    @property
+    def scripts_host(self) -> bool:
+        return any(step.send is not None or step.expect is not None for step in self.steps)
+
+    def mode(self) -> str:
+        return self.time or ("virtual" if self.scripts_host else "realtime")
+
+    def default_port(self) -> str:
+        return str(self.host.get("port") or self.ports()[0])
+
+
+def _step_lines(data: Any, scenario: Scenario) -> None:
+    steps = data.get("steps") if isinstance(data, LineDict) else None
+    if isinstance(steps, LineList):
+        for step, line in zip(scenario.steps, steps.item_lines, strict=False):
+            step.line = line
+
+
+def _check_device_configs(data: Any, spec: PlantSpec, path: str) -> None:
+    """Validate each device's config against its kind's model, with the YAML lines."""
+    from devsim.core.registry import UnknownKind, device_class
+
+    raw_devices = data.get("devices") if isinstance(data, LineDict) else None
+    for index, device in enumerate(spec.devices):
+        raw = raw_devices[index] if isinstance(raw_devices, LineList) and index < len(raw_devices) else None
+        line = raw_devices.item_lines[index] if isinstance(raw_devices, LineList) and index < len(raw_devices) else 1
+        try:
+            cls = device_class(device.kind)
+        except UnknownKind as exc:
+            key_line = raw.key_lines.get("kind", line) if isinstance(raw, LineDict) else line
+            raise ConfigError(f"{path}:{key_line}: devices.{index}.kind: {exc}") from None
+        model = getattr(cls, "config_model", None)
+        if model is None:
+            continue
+        config = raw.get("config") if isinstance(raw, LineDict) else None
+        merged = LineDict(config if isinstance(config, LineDict) else {})
+        merged.line = getattr(config, "line", line)
+        merged.key_lines = dict(getattr(config, "key_lines", {}))
+        axis = raw.get("axis") if isinstance(raw, LineDict) else None
+        if isinstance(axis, LineDict):
+            inner = merged.get("axis")
+            combined = LineDict({**(inner if isinstance(inner, dict) else {}), **axis})
+            combined.line = axis.line
+            combined.key_lines = {**getattr(inner, "key_lines", {}), **axis.key_lines}
+            merged["axis"] = combined
+            merged.key_lines["axis"] = raw.key_lines.get("axis", line)
+        try:
+            validate(merged, model, path)
+        except ConfigError as exc:
+            prefix = f"devices.{index}.config."
+            raise ConfigError(_prefix(str(exc), prefix), [_prefix(m, prefix) for m in exc.messages]) from None
+
+
+def _prefix(message: str, prefix: str) -> str:
+    """Insert ``prefix`` before the field of a ``file:line: field: message`` line."""
+    parts = message.split(": ", 2)
+    if len(parts) == 3:
+        return f"{parts[0]}: {prefix}{parts[1]}: {parts[2]}"
+    return message
+
+
+def load_plant(path: str | os.PathLike[str]) -> PlantSpec:
+    """Load and validate a plant file (a scenario file also works: its steps are ignored)."""
+    data = load_yaml(path)
+    if isinstance(data, LineDict) and "steps" in data:
+        return load_scenario(path)
+    spec = validate(data, PlantSpec, path)
+    _check_device_configs(data, spec, os.fspath(path))
+    return spec
+
+
+def load_scenario(path: str | os.PathLike[str]) -> Scenario:
+    """Load and validate a scenario file; raises ConfigError with ``file:line: …``."""
+    data = load_yaml(path)
+    scenario = validate(data, Scenario, path)
+    _step_lines(data, scenario)
+    _check_device_configs(data, scenario, os.fspath(path))
+    scenario.path = os.fspath(path)
+    if scenario.name is None:
+        scenario.name = Path(path).stem
+    return scenario
+
+
+def scenario_from_dict(data: dict[str, Any], name: str = "scenario") -> Scenario:
+    """Build a scenario from Python data (tests, the pytest plugin)."""
+    scenario = Scenario.model_validate(plain(data))
+    scenario.name = scenario.name or name
+    return scenario
