@@ -99,6 +99,11 @@ def _show(data: bytes, limit: int = 80) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
+def _escape(text: str) -> str:
+    """A pattern as one printable line (CR, LF, tab shown as escapes)."""
+    return text.replace("\r", "\\r").replace("\n", "\\n").replace("\t", "\\t")
+
+
 def _label(step: Step) -> str:
     action = step.action
     trigger = ""
@@ -114,12 +119,12 @@ def _label(step: Step) -> str:
     if action == "send":
         return trigger + f"send {_show(value.payload())}"
     if action == "expect":
-        what = _show(value.bytes.encode("latin-1")) if value.bytes is not None else f"/{value.regex}/"
+        what = _show(value.bytes.encode("latin-1")) if value.bytes is not None else f"/{_escape(value.regex)}/"
         return trigger + f"expect {what} within {value.timeout:g}s"
     if action in ("expect_state",):
         return trigger + f"expect {value.describe()}"
     if action == "expect_traffic":
-        return trigger + f"expect {value.direction} sent /{value.regex}/"
+        return trigger + f"expect {value.direction} sent /{_escape(value.regex)}/"
     if action == "expect_timing":
         low, high = value.between
         return trigger + f"expect {value.device} {value.event} between {low:g}s and {high:g}s"

@@ -1,0 +1,62 @@
+"""`devsim up PLANT.yaml`: every device of a plant served, every port printed, clean Ctrl-C."""
+
+from __future__ import annotations
+
+import re
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import serial
+
+PLANT = """\
+devices:
+  - name: left
+    kind: sers
+    config: {address: 1, boot_time: 0}
+    transport: {bus: line}
+  - name: right
+    kind: sers
+    config: {address: 2, boot_time: 0}
+    transport: {bus: line}
+  - name: lift
+    kind: sers
+    config: {address: 5, boot_time: 0}
+    transport: {tcp: {port: 0}}
+buses:
+  - name: line
+"""
+
+
+def test_devsim_up_serves_the_plant(tmp_path: Path) -> None:
+    plant = tmp_path / "plant.yaml"
+    plant.write_text(PLANT)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "devsim", "up", str(plant)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        rows = [proc.stdout.readline().strip() for _ in range(2)]
+        assert re.fullmatch(r"lift: tcp socket://127\.0\.0\.1:\d+", rows[0]), rows
+        assert re.fullmatch(r"line \(left, right\): pty /dev/pts/\d+", rows[1]), rows
+        with serial.Serial(rows[1].split()[-1], 9600, timeout=2) as port:
+            port.write(b"#2 P1050?\r")
+            assert port.read_until(b"ok1\n\r") == b"#2 P1050?\rP1050=2\n\r\nok1\n\r"
+        with serial.serial_for_url(rows[0].split()[-1], timeout=2) as port:
+            port.write(b"#5 P1050?\r")
+            assert port.read_until(b"ok1\n\r") == b"#5 P1050?\rP1050=5\n\r\nok1\n\r"
+    finally:
+        proc.send_signal(signal.SIGINT)
+        _out, err = proc.communicate(timeout=10)
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err
+
+
+def test_devsim_up_reports_a_bad_plant_file(tmp_path: Path) -> None:
+    plant = tmp_path / "plant.yaml"
+    plant.write_text(PLANT.replace("address: 5", "address: 500"))
+    done = subprocess.run([sys.executable, "-m", "devsim", "up", str(plant)], capture_output=True, text=True)
+    assert done.returncode != 0
+    assert done.stderr.strip() == f"Error: {plant}:12: devices.2.config.address: Input should be less than or equal to 127"
