@@ -75,6 +75,8 @@ class Plant:
 async def build_plant(runtime: Runtime, spec: PlantSpec, *, trace_dir: str | Path | None = None) -> Plant:
     """Create the devices of ``spec`` in ``runtime`` (running in this loop) and serve them."""
     plant = Plant(runtime, spec)
+    if trace_dir is not None:
+        Path(trace_dir).mkdir(parents=True, exist_ok=True)
     for dev in spec.devices:
         device = runtime.add_device(dev.kind, dev.name, dev.device_config())
         plant.devices[dev.name] = device

@@ -28,6 +28,8 @@ __all__ = ["ScenarioResult", "StepResult", "run_scenario", "run_scenario_async"]
 
 # Real-time guard while waiting for bytes that are known to be on their way through a port.
 _IO_GUARD = 5.0
+# While an axis moves, `when` conditions are looked at this often (simulated seconds).
+_POLL = 0.001
 
 
 @dataclass
@@ -193,6 +195,10 @@ class Runner:
                 if predicate():
                     return True
                 upcoming = clock.next_event()
+                if self._moving():
+                    # positions change between events: look again every millisecond
+                    step = clock.now() + _POLL
+                    upcoming = step if upcoming is None else min(upcoming, step)
                 if upcoming is None or upcoming > deadline:
                     clock.advance_to(deadline)
                     await self._drain()
@@ -206,7 +212,24 @@ class Runner:
         return True
 
     async def _sleep_until(self, when: float) -> None:
-        await self._wait_until(lambda: False, max(0.0, when - self.clock.now()))
+        """Move to ``when``; virtual time jumps from event to event (no polling needed)."""
+        if self.virtual:
+            clock = self.clock
+            assert isinstance(clock, VirtualClock)
+            while True:
+                await self._drain()
+                upcoming = clock.next_event()
+                if upcoming is None or upcoming > when:
+                    clock.advance_to(max(when, clock.now()))
+                    await self._drain()
+                    return
+                clock.advance_to(upcoming)
+        remaining = when - self.clock.now()
+        if remaining > 0:
+            await self.clock.sleep(remaining)
+
+    def _moving(self) -> bool:
+        return any(getattr(getattr(d, "axis", None), "moving", False) for d in self.plant.devices.values())
 
     # -- ports -----------------------------------------------------------------------------------
     def _port(self, name: str | None) -> str:

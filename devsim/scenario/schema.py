@@ -169,19 +169,23 @@ class Condition(_Model):
 
     @model_validator(mode="before")
     @classmethod
-    def _mark_equals(cls, data: Any) -> Any:
-        if isinstance(data, dict) and "equals" in data:
+    def _mark_given(cls, data: Any) -> Any:
+        if isinstance(data, dict):
             data = dict(data)
-            data["__has_equals__"] = True
+            data["__has_equals__"] = "equals" in data
+            data["__has_not_equals__"] = "not_equals" in data
         return data
 
     has_equals: bool = Field(default=False, alias="__has_equals__")
+    has_not_equals: bool = Field(default=False, alias="__has_not_equals__")
 
     @model_validator(mode="after")
     def _one_operator(self) -> Condition:
-        ops = [op for op in ("not_equals", "lt", "le", "gt", "ge", "approx", "regex") if getattr(self, op) is not None]
+        ops = [op for op in ("lt", "le", "gt", "ge", "approx", "regex") if getattr(self, op) is not None]
         if self.has_equals:
             ops.append("equals")
+        if self.has_not_equals:
+            ops.append("not_equals")
         if not ops:
             raise ValueError("give a test: equals, not_equals, lt, le, gt, ge, approx or regex")
         if self.regex is not None:
@@ -194,7 +198,7 @@ class Condition(_Model):
     def test(self, value: Any) -> bool:
         if self.has_equals and value != self.equals:
             return False
-        if self.not_equals is not None and value == self.not_equals:
+        if self.has_not_equals and value == self.not_equals:
             return False
         number = value if isinstance(value, int | float) and not isinstance(value, bool) else None
         for op, limit in (("lt", self.lt), ("le", self.le), ("gt", self.gt), ("ge", self.ge)):
@@ -212,7 +216,9 @@ class Condition(_Model):
         tests = []
         if self.has_equals:
             tests.append(f"== {self.equals!r}")
-        for op, sym in (("not_equals", "!="), ("lt", "<"), ("le", "<="), ("gt", ">"), ("ge", ">="), ("regex", "~")):
+        if self.has_not_equals:
+            tests.append(f"!= {self.not_equals!r}")
+        for op, sym in (("lt", "<"), ("le", "<="), ("gt", ">"), ("ge", ">="), ("regex", "~")):
             if getattr(self, op) is not None:
                 tests.append(f"{sym} {getattr(self, op)!r}")
         if self.approx is not None:

@@ -314,3 +314,17 @@ def test_realtime_run_waits_for_an_external_host() -> None:
     thread.join(10)
     assert result.mode == "realtime"
     assert result.passed, format_report(result)
+
+
+def test_when_sees_positions_between_events() -> None:
+    """A condition on a position that changes during a cruise is met when it is reached."""
+    result = run([
+        {"send": "#1 ON V=60 WR=3600 E\r"},
+        {"when": {"device": "x", "name": "axis.position", "ge": 12800}, "timeout": "20s"},
+        {"when": {"device": "x", "name": "homing", "not_equals": "creep"}},
+    ])
+    assert result.passed, format_report(result)
+    # one revolution (2π rad) at 60 rpm = 2π rad/s with A = 100 rad/s², seen within 1 ms
+    v, a = 2 * math.pi, 100.0
+    reached = v / a + (2 * math.pi - v * v / (2 * a)) / v
+    assert reached <= result.steps[1].time <= reached + 0.001
