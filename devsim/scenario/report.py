@@ -17,7 +17,8 @@ _MARK = {"pass": "PASS", "fail": "FAIL", "done": "ok", "skipped": "skipped"}
 def format_report(result: ScenarioResult) -> str:
     """Each step with its simulated time and outcome, failures explained, then a summary."""
     where = f" ({result.path})" if result.path else ""
-    lines = [f"scenario {result.name}{where}, {result.mode} time"]
+    mode = "real" if result.mode == "realtime" else result.mode
+    lines = [f"scenario {result.name}{where}, {mode} time"]
     for step in result.steps:
         place = f"line {step.line}" if step.line else f"step {step.index}"
         lines.append(f"  [{step.time:9.3f}s] {place:>8}: {step.label}  {_MARK[step.status]}")
