@@ -19,6 +19,7 @@ from devsim.devices.sers import statements as st
 from devsim.devices.sers.config import SersConfig
 from devsim.devices.sers.drive import SersDrive
 from devsim.devices.sers.errors import SersError, message
+from devsim.devices.sers.interpreter import Interpreter
 from devsim.devices.sers.program import ProgramMemory
 
 __all__ = ["SersDevice"]
@@ -41,6 +42,7 @@ class _Line:
     skip_next: bool = False  # single-statement IF was false
     skip_block: int = 0  # inside a false IF..THEN block (depth)
     deferred: bytearray = field(default_factory=bytearray)  # RS-485 mode: answers until line end
+    store: list[str] = field(default_factory=list)  # programming mode: statements for the EEPROM
 
 
 class SersDevice(SersDrive):
@@ -65,6 +67,7 @@ class SersDevice(SersDrive):
         self._spontaneous: list[bytes] = []
         self._batch: bytearray | None = None
         self.program = ProgramMemory(nvram if nvram is not None else NonVolatileMemory(None))
+        self.interpreter = Interpreter(self)
         super().__init__(clock=clock, config=config, nvram=nvram, name=name)
         self.program = ProgramMemory(self.nvram)
 
@@ -160,6 +163,12 @@ class SersDevice(SersDrive):
             if event.overflow and not line.error:
                 self.warn(1024)
                 self._error(line, 124)
+            if line.store and not line.error:
+                try:
+                    self.program.add_line(line.store, _label_number)
+                except SersError as exc:
+                    self._error(line, exc.errno, exc.detail)
+                line.store = []
         if line.reply:
             if line.deferred:
                 self.send(bytes(line.deferred))
@@ -209,12 +218,21 @@ class SersDevice(SersDrive):
             except SersError as exc:
                 self._error(line, exc.errno, exc.detail)
                 return
+            finally:
+                self.interpreter.poke()
         if result.errno is not None and line.executed == len(result.statements):
             self._error(line, result.errno)
 
     def _statement(self, line: _Line, stmt: st.Statement) -> None:
         if self.program.editing and self._stores_in_program(stmt):
-            self.program.add(stmt.text, new_line=line.executed == 1)
+            if not isinstance(stmt, st.Comment):
+                line.store.append(stmt.text)  # stored when the line ends without an error
+            return
+        if self.program.editing and isinstance(stmt, st.Change):
+            self.program.change(self._changed_statement(stmt))
+            return
+        if self.program.editing and isinstance(stmt, st.Command) and stmt.name == "DEL":
+            self.program.delete()
             return
         if line.skip_block:
             if isinstance(stmt, st.If) and stmt.then:
@@ -247,7 +265,7 @@ class SersDevice(SersDrive):
             if stmt.params:
                 self._out(line, "".join(f"{row}\n\r" for row in self.list_parameters(stmt.arg)))
             else:
-                rows = self.program.listing(self.list_options, self.render_statement)
+                rows = self.program.listing(self.list_options, self.render_statement, stmt.arg)
                 self._out(line, "".join(f"{row}\n\r" for row in rows))
             return
         if isinstance(stmt, st.Command) and stmt.name == "VER":
@@ -256,7 +274,25 @@ class SersDevice(SersDrive):
         if isinstance(stmt, st.Trace) and stmt.query:
             self._out(line, f"TR={int(self.trace_mode)}\n\r")
             return
+        if isinstance(stmt, st.Trace):
+            # TR: one program step; the executed statement is shown like a LIST row (G-TRACE)
+            self.trace_mode = True
+            shown = self.interpreter.trace_step()
+            if shown is not None:
+                self._out(line, shown + "\n\r")
+            return
         self.execute(stmt)
+
+    def _changed_statement(self, stmt: st.Change) -> str:
+        """C n (§4.2): the assignment at the current position with the constant n."""
+        current = self.program.current()
+        parsed = st.parse(current, final=True) if current is not None else None
+        if parsed is None or parsed.errno is not None or len(parsed.statements) != 1:
+            raise SersError(49)
+        old = parsed.statements[0][0]
+        if not isinstance(old, st.Assign) or not isinstance(old.value, st.Number):
+            raise SersError(49)
+        return f"{old.target.text}={stmt.value.text}"
 
     def _stores_in_program(self, stmt: st.Statement) -> bool:
         """In programming mode everything is stored except LIST, DEL, TR…, C n and QUIT."""
@@ -337,3 +373,12 @@ def _answers(stmt: st.Statement) -> bool:
     if isinstance(stmt, st.Trace):
         return stmt.query
     return isinstance(stmt, st.Command) and stmt.name == "VER"
+
+
+def _label_number(text: str) -> int | None:
+    result = st.parse(text, final=True)
+    if result.errno is None and len(result.statements) == 1:
+        stmt = result.statements[0][0]
+        if isinstance(stmt, st.Label):
+            return stmt.number
+    return None

@@ -108,6 +108,8 @@ class SersDrive(Device):
         s.subscribe("heatsink_temperature", lambda *_: self._check_temperature())
         s.subscribe("short_circuit", lambda *_: self._check_short())
         s.subscribe("stall", self._on_stall)
+        for name in s.names():
+            s.subscribe(name, lambda *_: self.interpreter.poke())
 
     def _build_switches(self) -> None:
         geo = self.cfg.axis
@@ -181,7 +183,7 @@ class SersDrive(Device):
         program = getattr(self, "program", None)
         if program is not None:
             program.reload()  # programming mode does not survive a power loss (P0 = 0)
-        self.program_state = 0
+        self.interpreter.reset()
         self.trace_mode = False
         self._load_parameters()
         saved_pos = self.nvram.get("position")
@@ -203,6 +205,21 @@ class SersDrive(Device):
     def _boot_done(self) -> None:
         self.booting = False
         self.record_event("ready")
+        self._autostart()
+
+    def _autostart(self) -> None:
+        """DIP switch 2 bit 8 (§3.1.2): start a valid program after power-on, unless the
+        service switch is on."""
+        if self.cfg.autostart and not self.cfg.service_switch and self.program.valid:
+            try:
+                self.run_program(None)
+            except SersError as exc:
+                self.record_error(exc.errno)
+
+    @property
+    def program_state(self) -> int:
+        """P0: 1 while a program runs."""
+        return 1 if self.interpreter.running else 0
 
     def _power_off(self) -> None:
         self._cancel_timers()
@@ -557,9 +574,48 @@ class SersDrive(Device):
         program = getattr(self, "program", None)
         if program is None or not program.valid:
             raise SersError(69)
-        # Program execution is not part of this build: the interpreter (operating modes,
-        # IF/GOTO/GOSUB, WAIT, D, D2 ...) comes with the SERS program issue.
-        raise SersError(69)
+        if program.editing:
+            program.quit()
+        self.interpreter.start(label)
+
+    def continue_positioning(self) -> None:
+        """P1033=1: a program stopped during ``E`` continues the interrupted move."""
+        if self._setpoint is None:
+            return
+        here = self.axis.position()
+        direction = (self._setpoint > here) - (self._setpoint < here)
+        self._motion_checks(direction)
+        if direction == 0:
+            self.interpreter.on_motion_end()
+            return
+        self._speed = float(self.ram[91])
+        self._accel = float(self.ram[138])
+        self._target_physical = self._setpoint
+        self._begin_motion("position", self._accel)
+        self._legs = [(self._setpoint, self._speed)]
+        self._next_leg()
+        self._arm_position_watches()
+
+    def on_program_state(self) -> None:
+        """The program started or stopped: outputs (P1126) follow."""
+        self._update_outputs()
+
+    def on_program_end(self) -> None:
+        """After a program: the event dispatcher (P1098) and a level start (P1023=1) may
+        start the next one."""
+        if not self.logic_alive or self.interpreter.running:
+            return
+        events = int(self.ram.get(1098, 0))
+        for n in sorted(self.interpreter.pending_events):
+            self.interpreter.pending_events.discard(n)
+            if events & (1 << (n - 1)) and self.signals.get(f"I{n}"):
+                self._start_subroutine(n)
+                return
+        if self._functions_enabled(128) and int(self.ram.get(1023, 0)) == 1 and self.signals.get("I8"):
+            self._clock_start = self.clock.call_later(self.interpreter.cycle, self._start_input)
+
+    def report_program_error(self, errno: int, detail: str) -> None:
+        """A program error is recorded in P12/P1137; nothing is sent (G-FAULTMSG)."""
 
     def _write_opcode(self, value: float) -> None:
         """P1099 (§4.8.6.16): execute a program opcode, e.g. 62213 (0xF305) = ``RUN 5``,
@@ -716,7 +772,7 @@ class SersDrive(Device):
             raise SersError(13)
         return 0 if self.status_word() & bits[n] else 1
 
-    def evaluate(self, cond: st.Condition | None) -> bool:
+    def evaluate(self, cond: st.Condition | None, counters: bool = True) -> bool:
         if cond is None:
             return False
         left = cond.left
@@ -727,7 +783,7 @@ class SersDrive(Device):
         else:
             right = self.operand_value(cond.right) if cond.right is not None else 0
             result = _compare(value, cond.op, right)
-        if counter:  # G-COUNTER: compare the old value, then decrement (saturating at 0)
+        if counter and counters:  # G-COUNTER: compare the old value, then decrement (saturating at 0)
             number = ALIASES[str(left.ref)]
             old = int(self.ram.get(number, 0))
             self.ram[number] = old - 1 if (old > 0 or (number == 100 and self.ram[1014] == 3)) else 0
@@ -807,12 +863,30 @@ class SersDrive(Device):
             raise SersError(22)
         if isinstance(stmt, st.Trace):
             self.trace_mode = True
-            raise SersError(54)
+            self.interpreter.trace_step()
+            return
         if isinstance(stmt, st.Goto):
             raise SersError(54)
         if isinstance(stmt, st.Wait | st.Label | st.Comment):
             return
         raise SersError(21)
+
+    def program_statement(self, stmt: st.Statement) -> str | None:
+        """Execute a statement of a running program; returns what the program must wait for
+        (``position``: until the drive stands, §4.6.6) or None to go on at once."""
+        if isinstance(stmt, st.Command) and stmt.name in ("E", "H", "POS0", "POSR"):
+            self.execute(stmt)
+            if self.motion is None:
+                return None
+            if stmt.name == "E" and self.cfg.address == 0 and int(self.ram.get(1110, 1)) == 0:
+                return None  # master with P1110=0 goes on while it moves (§4.8.5.5)
+            return "position"
+        if isinstance(stmt, st.Jog):
+            self.jog(stmt.name, stmt.until, serial=False)
+            # with ':' the statement lasts until standstill; without, it just starts (G-JOGPROG)
+            return "position" if stmt.until is not None and self.motion is not None else None
+        self.execute(stmt)
+        return None
 
     def _command(self, name: str) -> None:  # noqa: C901
         program = getattr(self, "program", None)
@@ -821,6 +895,7 @@ class SersDrive(Device):
         elif name == "H":
             self.home()
         elif name == "S":
+            self.interpreter.stop()
             self.stop_motion()
         elif name == "ON":
             self.switch_on()
@@ -850,6 +925,8 @@ class SersDrive(Device):
             self.trace_mode = True
         elif name == "TROFF":
             self.trace_mode = False
+            if self.interpreter.running and self.interpreter.waiting is None:
+                self.interpreter._schedule(self.interpreter.cycle)
         elif name in ("PE", "RETURN"):
             if self.program_state != 1:
                 raise SersError(54)
@@ -917,6 +994,8 @@ class SersDrive(Device):
         if first:
             self.record_event("error")
         self.errors |= bit
+        if first:
+            self.interpreter.on_drive_error()
         self._homing = None
         if immediate:
             if self.motion is not None:
@@ -1080,7 +1159,8 @@ class SersDrive(Device):
         self._update_outputs()
 
     def _motion_finished(self) -> None:
-        if self.motion is not None:
+        was_moving = self.motion is not None
+        if was_moving:
             self.record_event("move_end")
         self._stopped_at = self.clock.now()
         self.motion = None
@@ -1094,6 +1174,8 @@ class SersDrive(Device):
         self._watches.clear()
         self._standstill_watches = []
         self._update_outputs()
+        if was_moving:
+            self.interpreter.on_motion_end()
 
     def _end_motion(self, quick: bool) -> None:
         if quick:
@@ -1157,6 +1239,10 @@ class SersDrive(Device):
             self.stop_motion()
 
     def _check_until(self) -> None:
+        self.interpreter.poke()
+        self._check_jog_until()
+
+    def _check_jog_until(self) -> None:
         if self._jog_until is not None and self.motion == "jog" and self.evaluate(self._jog_until):
             self._until_reached()
 
@@ -1521,6 +1607,7 @@ class SersDrive(Device):
             self._stop_cycled = True  # opened and closed again: a short may now be cleared
         if new:
             self._stop_opened = True
+            self.interpreter.stop()
             if self.motion is not None:
                 self.stop_motion()
         self._check_until()
@@ -1551,6 +1638,9 @@ class SersDrive(Device):
                 self._input_function(n, bool(new))
             except SersError as exc:
                 self.record_error(exc.errno)
+        elif n == 8 and new and self._functions_enabled(128):
+            self._start_input()
+        self._event_input(n, bool(new))
         self._check_until()
 
     def _input_function(self, n: int, active: bool) -> None:
@@ -1573,9 +1663,63 @@ class SersDrive(Device):
                 self.errors = 0
                 self.warnings = 0
                 self.switch_on()
-        elif n == 7 and active and self.motion is not None:
-            self.stop_motion()
+        elif n == 7 and active:
+            self.interpreter.stop()
+            if self.motion is not None:
+                self.stop_motion()
+        elif n == 8 and active:
+            self._start_input()
         self._update_outputs()
+
+    # -- operating modes on the inputs (§3.6, §4.5.2) -----------------------------------------------
+    def _start_input(self) -> None:
+        """Start input I8 (P1021 bit 128): stand-alone start from line 1, or in parallel mode
+        (P1022 ≠ 0) the subroutine L(address + 1) of the BCD address on the inputs."""
+        if self.interpreter.running or not self._functions_enabled(128):
+            return
+        mask = int(self.ram.get(1022, 0)) & 0x7F & ~int(self.ram.get(1021, 0))
+        try:
+            if mask:
+                self._run_label((self.inputs_byte(1) & mask) + 1)
+            else:
+                self.run_program(None)
+        except SersError as exc:
+            self.record_error(exc.errno)
+
+    def _run_label(self, label: int) -> None:
+        self._check_start()
+        self.interpreter.start(label, subroutine=True)
+
+    def _check_start(self) -> None:
+        if self.cfg.service_switch or (self.signals.get("service_ext") and self.ram.get(1092)):
+            raise SersError(65)
+        if self.errors:
+            raise SersError(66)
+        if self._i7_stop_active():
+            raise SersError(67)
+        if self.signals.get("stop"):
+            raise SersError(68)
+        if not self.program.valid:
+            raise SersError(69)
+
+    def _start_subroutine(self, n: int) -> None:
+        try:
+            self._run_label(n)
+        except SersError as exc:
+            self.record_error(exc.errno)
+
+    def _event_input(self, n: int, active: bool) -> None:
+        """Event-driven mode P1098 (§4.5.2): a rising edge on In calls Ln if no program runs;
+        an edge during a program is served when it ends if the input is still active."""
+        if not int(self.ram.get(1098, 0)) & (1 << (n - 1)):
+            return
+        if not active:
+            self.interpreter.pending_events.discard(n)
+            return
+        if self.interpreter.running:
+            self.interpreter.pending_events.add(n)
+        else:
+            self._start_subroutine(n)
 
     def _check_supply(self) -> None:
         """§2.1.4: U_W pre-warning (auto-clear), U_B error after braking, U_L torque off."""

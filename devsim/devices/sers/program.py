@@ -1,15 +1,20 @@
-"""Program storage of the SERS in simulated EEPROM (manual §4.3, §4.4, §4.5.3; spec §4.9).
+"""Program storage of the SERS in simulated EEPROM (manual §4.2, §4.3, §4.4, §4.5.3; spec §4.9).
 
-The program is kept as its statement texts, grouped in the lines the user typed, in the
-device's non-volatile memory (section ``program``); every change is written through at once,
-as the real drive writes each character to its E²PROM.  Capacity follows the spec's cost model
-G-MEM (2 KB standard, 8 KB with option P8).  This module stores, edits and lists; running
-programs is the program interpreter's job.
+The program is a sequence of statements, each with its own number (§4.3), grouped in the lines
+the user typed (for LIST with P1028 bit 3).  It lives in the device's non-volatile memory
+(section ``program``) and every change is written through at once, as the real drive writes
+to its E²PROM; a line is stored only when it arrived complete and error-free, so a bad line
+never damages what is stored.  Capacity follows the spec's cost model G-MEM (2 KB standard,
+8 KB with option P8): ``EEPROM Speicher voll`` (errno 5) when full.
+
+Editing (§4.2): ``NEW`` clears, ``PGM`` inserts after the current program position, which the
+LIST forms move (``LIST0`` = before the first statement); ``DEL`` deletes the statement at the
+position, ``C n`` changes the constant of the assignment there.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.sers.errors import SersError
@@ -32,45 +37,58 @@ def statement_cost(text: str) -> int:
 
 
 class ProgramMemory:
-    """The one stored program: a list of lines, each a list of statement texts."""
+    """The one stored program: statement texts, and where the user's lines begin."""
 
     def __init__(self, nvram: NonVolatileMemory, capacity: int = 2048) -> None:
         self.nvram = nvram
         self.capacity = capacity
         self.editing = False
-        self.position = 0  # statement index where PGM inserts
-        stored = nvram.get(SECTION, {"lines": []})
-        self._lines: list[list[str]] = [list(line) for line in stored.get("lines", [])]
+        #: current program position: the number of the current statement (0 = before the first)
+        self.position = 0
+        self._statements: list[str] = []
+        self._starts: list[bool] = []  # statement i begins a user line
+        self.reload()
 
     # -- persistence -----------------------------------------------------------------------
     def _store(self) -> None:
-        self.nvram.put(SECTION, {"lines": self._lines})
+        self.nvram.put(SECTION, {"lines": self.lines()})
 
     def reload(self) -> None:
-        stored = self.nvram.get(SECTION, {"lines": []})
-        self._lines = [list(line) for line in stored.get("lines", [])]
+        stored = self.nvram.get(SECTION, {"lines": []}) or {"lines": []}
+        self._statements, self._starts = [], []
+        for line in stored.get("lines", []):
+            for index, text in enumerate(line):
+                self._statements.append(str(text))
+                self._starts.append(index == 0)
         self.editing = False
+        self.position = min(self.position, len(self._statements))
 
     # -- queries ---------------------------------------------------------------------------
     def lines(self) -> list[list[str]]:
-        return [list(line) for line in self._lines]
+        lines: list[list[str]] = []
+        for text, start in zip(self._statements, self._starts, strict=True):
+            if start or not lines:
+                lines.append([text])
+            else:
+                lines[-1].append(text)
+        return lines
 
     def statements(self) -> list[str]:
-        return [stmt for line in self._lines for stmt in line]
+        return list(self._statements)
 
     @property
     def valid(self) -> bool:
-        return bool(self.statements())
+        return bool(self._statements)
 
     def used_bytes(self) -> int:
-        return sum(statement_cost(s) for s in self.statements())
+        return sum(statement_cost(s) for s in self._statements)
 
     def free_words(self) -> int:
         return max(0, self.capacity - self.used_bytes()) // 2
 
     # -- editing ---------------------------------------------------------------------------
     def new(self) -> None:
-        self._lines = []
+        self._statements, self._starts = [], []
         self.position = 0
         self.editing = True
         self._store()
@@ -81,31 +99,110 @@ class ProgramMemory:
     def quit(self) -> None:
         self.editing = False
 
-    def add(self, text: str, new_line: bool) -> None:
-        """Store a statement typed in programming mode (at the end of the program)."""
-        if self.used_bytes() + statement_cost(text) > self.capacity:
+    def add_line(self, texts: Sequence[str], labels: Callable[[str], int | None] = lambda _t: None) -> None:
+        """Store a complete line typed in programming mode at the current position."""
+        if not texts:
+            return
+        if self.used_bytes() + sum(statement_cost(t) for t in texts) > self.capacity:
             raise SersError(5)
-        if new_line or not self._lines:
-            self._lines.append([text])
-        else:
-            self._lines[-1].append(text)
+        defined = {labels(t) for t in self._statements} - {None}
+        for text in texts:
+            number = labels(text)
+            if number is not None:
+                if number in defined:
+                    raise SersError(83, str(number))
+                defined.add(number)
+        at = self.position
+        self._statements[at:at] = list(texts)
+        self._starts[at:at] = [True] + [False] * (len(texts) - 1)
+        if at + len(texts) < len(self._starts):
+            self._starts[at + len(texts)] = True  # what follows an inserted line starts a line
+        self.position = at + len(texts)
         self._store()
 
-    def listing(self, options: int, render: Callable[[str], str] = str) -> list[str]:
+    def add(self, text: str, new_line: bool) -> None:
+        """Append one statement (initial state of a scenario, tests)."""
+        if self.used_bytes() + statement_cost(text) > self.capacity:
+            raise SersError(5)
+        self._statements.append(text)
+        self._starts.append(new_line or len(self._statements) == 1)
+        self.position = len(self._statements)
+        self._store()
+
+    def delete(self) -> None:
+        """DEL: delete the statement at the current position."""
+        p = self.position
+        if not 1 <= p <= len(self._statements):
+            return
+        starts = self._starts[p - 1]
+        del self._statements[p - 1]
+        del self._starts[p - 1]
+        if starts and p - 1 < len(self._starts):
+            self._starts[p - 1] = True
+        self.position = p - 1
+        self._store()
+
+    def change(self, text: str) -> None:
+        """C n: replace the statement at the current position by ``text``."""
+        p = self.position
+        if not 1 <= p <= len(self._statements):
+            raise SersError(49)
+        self._statements[p - 1] = text
+        self._store()
+
+    def current(self) -> str | None:
+        p = self.position
+        return self._statements[p - 1] if 1 <= p <= len(self._statements) else None
+
+    # -- listing -----------------------------------------------------------------------------
+    def select(self, arg: str) -> tuple[int, int]:
+        """The statement numbers (first, last) a LIST argument names, moving the position
+        (§4.2: every LIST form changes it)."""
+        count = len(self._statements)
+        arg = arg.strip()
+        if not arg:
+            return 1, count
+        if arg == ".":
+            return self.position, self.position
+        if arg == "-":
+            self.position = max(0, self.position - 1)
+            return self.position, self.position
+        if arg == "+":
+            self.position = min(count, self.position + 1)
+            return self.position, self.position
+        if arg.startswith("-") and arg[1:].isdigit():
+            n = min(int(arg[1:]), count)
+            self.position = n
+            return max(1, n - 19), n
+        if "." in arg:
+            first, _, tens = arg.partition(".")
+            n = int(first or 0)
+            self.position = min(n, count)
+            return max(1, n), n + int(tens or 0) * 10 - 1
+        n = min(int(arg), count)
+        self.position = n
+        return n, n
+
+    def listing(self, options: int, render: Callable[[str], str] = str, arg: str = "") -> list[str]:
         """LIST output (spec G-LIST, manual §4.3, P1028): one statement per row, numbered
         ``n: `` with bit 0; with bit 3 the user's lines are kept, numbered by their first
         statement; with bit 2 labels start in column 1 and statements in column 4.
         ``render`` turns a stored statement into its listed form (full decimals, units)."""
+        first, last = self.select(arg)
         rows: list[str] = []
-        number = 1
-        for line in self._lines:
-            groups = [line] if options & 8 else [[stmt] for stmt in line]
-            for group in groups:
-                text = " ".join(render(stmt) for stmt in group)
-                if options & 4 and not _is_label(group[0]):
-                    text = "   " + text
-                rows.append(f"{number}: {text}" if options & 1 else text)
-                number += len(group)
+        groups: list[tuple[int, list[str]]] = []
+        for index, (text, start) in enumerate(zip(self._statements, self._starts, strict=True), start=1):
+            if options & 8 and not start and groups:
+                groups[-1][1].append(text)
+            else:
+                groups.append((index, [text]))
+        for number, group in groups:
+            if number + len(group) - 1 < first or number > last:
+                continue
+            text = " ".join(render(stmt) for stmt in group)
+            if options & 4 and not _is_label(group[0]):
+                text = "   " + text
+            rows.append(f"{number}: {text}" if options & 1 else text)
         return rows
 
 

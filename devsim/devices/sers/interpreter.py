@@ -1,0 +1,452 @@
+"""The SERS sequence-program interpreter (manual §4.5, §4.6; spec §4.4, §4.10).
+
+The stored program is compiled into a flat list of statements with a label table and the
+jumps of the IF…THEN…ELSE…END blocks.  One statement runs per control cycle – 0.5 ms, or 2 ms
+with P1127=1 (§1.2, §4.8.6.10) – scheduled on the device clock, so a program never starves the
+serial interface.  Statements that wait (``E`` until the drive is in position, ``D`` delays,
+``WAIT`` and ``:`` conditions, ``H``, ``POS0``) park the program until their event; conditions
+are looked at again whenever the drive's state changes and, while the axis moves, every cycle.
+
+Starting (``RUN``, ``P0=1``, autostart, start input I8, the parallel and event dispatchers),
+errors (program errors stop the program with P12 value 128; drive errors jump to L65 with
+P1033=2/3), stops and continuation (P1033), the non-blocking timer ``D2`` with its timed jump,
+trace mode and the ``@nP0=0`` message are handled here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from devsim.core.clock import Timer
+from devsim.devices.sers import statements as st
+from devsim.devices.sers.errors import SersError
+
+if TYPE_CHECKING:
+    from devsim.devices.sers.device import SersDevice
+
+__all__ = ["Interpreter", "Program"]
+
+MAX_NESTING = 4  # GOSUB depth (§4.6.4)
+L65 = 65  # error / stop handler label (§4.6.2)
+
+
+@dataclass
+class Program:
+    """A compiled program: statements in order, labels and block jumps."""
+
+    statements: list[st.Statement] = field(default_factory=list)
+    texts: list[str] = field(default_factory=list)
+    labels: dict[int, int] = field(default_factory=dict)  # label number -> statement index
+    block_end: dict[int, int] = field(default_factory=dict)  # IF..THEN index -> ELSE/END index; ELSE -> END
+
+    @classmethod
+    def compile(cls, texts: list[str]) -> Program:
+        program = cls()
+        open_blocks: list[int] = []
+        for text in texts:
+            result = st.parse(text, final=True)
+            if result.errno is not None or len(result.statements) != 1:
+                stmt: st.Statement = st.Comment(text)  # unreadable: skipped (never stored normally)
+            else:
+                stmt = result.statements[0][0]
+            index = len(program.statements)
+            program.statements.append(stmt)
+            program.texts.append(text)
+            if isinstance(stmt, st.Label) and stmt.number not in program.labels:
+                program.labels[stmt.number] = index
+            elif isinstance(stmt, st.If) and stmt.then:
+                open_blocks.append(index)
+            elif isinstance(stmt, st.Else) and open_blocks:
+                program.block_end[open_blocks[-1]] = index
+                open_blocks[-1] = index
+            elif isinstance(stmt, st.End) and open_blocks:
+                program.block_end[open_blocks.pop()] = index
+        return program
+
+
+class Interpreter:
+    """Runs the stored program of one SERS."""
+
+    def __init__(self, drive: SersDevice) -> None:
+        self.drive = drive
+        self.program = Program()
+        self.running = False
+        self.pc = 0
+        self.stack: list[int] = []
+        self.subroutine = False  # started at a label (RUN n, dispatchers): RETURN on empty stack ends it
+        self.waiting: str | None = None  # what a parked program waits for
+        self._wait_cond: st.Condition | None = None
+        self._timer: Timer | None = None
+        self._delay: Timer | None = None
+        self._d2: Timer | None = None
+        self._d2_jump: st.Goto | None = None
+        self._d2_pending = False
+        self.stops = 0  # consecutive stops (P1033=1: the second one restarts)
+        self.resume_pc: int | None = None
+        self._resume_move = False
+        self.in_l65 = False
+        self._poll: Timer | None = None
+        self.pending_events: set[int] = set()
+
+    # -- state ----------------------------------------------------------------------------------
+    @property
+    def cycle(self) -> float:
+        return 0.002 if int(self.drive.ram.get(1127, 0)) == 1 else 0.0005
+
+    def reset(self) -> None:
+        """Power-on: nothing runs."""
+        self._cancel()
+        self.running = False
+        self.waiting = None
+        self.stack.clear()
+        self.stops = 0
+        self.resume_pc = None
+        self.in_l65 = False
+        self.pending_events.clear()
+
+    def _cancel(self) -> None:
+        for timer in (self._timer, self._delay, self._d2, self._poll):
+            if timer is not None:
+                timer.cancel()
+        self._timer = self._delay = self._d2 = self._poll = None
+        self._d2_jump = None
+        self._d2_pending = False
+
+    # -- starting and ending ------------------------------------------------------------------------
+    def start(self, label: int | None = None, *, subroutine: bool | None = None) -> None:
+        """Start at line 1 or at label ``label`` (preconditions are the caller's)."""
+        self.program = Program.compile(self.drive.program.statements())
+        self._cancel()
+        self.stack.clear()
+        self.waiting = None
+        self.in_l65 = False
+        if label is not None:
+            if not 1 <= label <= 128:
+                raise SersError(72)
+            if label not in self.program.labels:
+                raise SersError(71)
+            self.pc = self.program.labels[label]
+            self.subroutine = True if subroutine is None else subroutine
+        elif self.resume_pc is not None and int(self.drive.ram.get(1033, 0)) == 1 and self.stops == 1:
+            self.pc = self.resume_pc  # P1033=1: continue where the stop happened
+            self.subroutine = False
+        else:
+            self.pc = 0
+            self.subroutine = False
+            self.stops = 0
+        self.resume_pc = None
+        self.running = True
+        self.drive.on_program_state()
+        if self._resume_move:
+            self._resume_move = False
+            self.waiting = "position"
+            try:
+                self.drive.continue_positioning()
+            except SersError as exc:
+                self._program_error(exc.errno)
+                return
+            return
+        self._schedule(self.cycle)
+
+    def end(self) -> None:
+        """Normal end (PE, end of the program, RETURN of a dispatched subroutine)."""
+        was = self.running
+        self._cancel()
+        self.running = False
+        self.waiting = None
+        self.stops = 0
+        self.resume_pc = None
+        self.in_l65 = False
+        self.drive.on_program_state()
+        if was and self.drive.ram.get(1129):
+            self.drive.spontaneous(f"@{self.drive.cfg.address}P0=0")
+        self.drive.on_program_end()
+
+    def stop(self) -> None:
+        """A stop command (S) or the STOP input while the program runs (P1033, §4.8.6.2)."""
+        if not self.running:
+            return
+        mode = int(self.drive.ram.get(1033, 0))
+        if mode in (2, 3) and not (mode == 3 and self.in_l65) and L65 in self.program.labels:
+            self._jump_l65()
+            return
+        self.stops += 1
+        self.resume_pc = self.pc if self.stops == 1 else None
+        self._resume_move = mode == 1 and self.stops == 1 and self.waiting == "position"
+        if self._resume_move:
+            self.resume_pc = self.pc + 1
+        self._cancel()
+        self.running = False
+        self.waiting = None
+        self.drive.on_program_state()
+
+    def on_drive_error(self) -> None:
+        """A drive error (P11) stops the program, or jumps to L65 with P1033=2/3 (§4.6.2)."""
+        if not self.running:
+            return
+        mode = int(self.drive.ram.get(1033, 0))
+        if mode in (2, 3) and not (mode == 3 and self.in_l65) and L65 in self.program.labels:
+            self._jump_l65()
+            return
+        self._cancel()
+        self.running = False
+        self.waiting = None
+        self.stops = 0
+        self.resume_pc = None
+        self.drive.on_program_state()
+
+    def _jump_l65(self) -> None:
+        self._cancel()
+        self.waiting = None
+        self.stack.clear()
+        self.pc = self.program.labels[L65]
+        self.in_l65 = True
+        self.drive.ram[1118] = 1
+        self.subroutine = False
+        self._schedule(self.cycle)
+
+    def _program_error(self, errno: int, detail: str = "") -> None:
+        """Unknown jump target, stack overflow, arithmetic error …: the program stops with
+        P12 value 128 (display 'H' blinking) and the errno (§4.8.3.1)."""
+        self.drive.record_error(errno)
+        self.drive.warn(128)
+        self._cancel()
+        self.running = False
+        self.waiting = None
+        self.stops = 0
+        self.resume_pc = None
+        self.drive.on_program_state()
+        self.drive.report_program_error(errno, detail)
+
+    # -- the cycle ------------------------------------------------------------------------------------
+    def _schedule(self, delay: float) -> None:
+        if self.drive.trace_mode:
+            return  # single step: TR executes the next statement
+        if self._timer is not None:
+            self._timer.cancel()
+        self._timer = self.drive.clock.call_later(delay, self._tick)
+
+    def _tick(self) -> None:
+        self._timer = None
+        if not self.running or self.waiting is not None:
+            return
+        if self._d2_pending and not self._position_blocks():
+            self._fire_d2_jump()
+            return
+        self.step()
+
+    def trace_step(self) -> str | None:
+        """TR: execute one statement (starting the program at the current position if it does
+        not run, G-TRACE); returns the listed statement."""
+        if not self.running:
+            self.program = Program.compile(self.drive.program.statements())
+            self.pc = min(self.drive.program.position, max(0, len(self.program.statements) - 1))
+            self.running = True
+            self.subroutine = False
+            self.drive.on_program_state()
+        if self.waiting is not None or self.pc >= len(self.program.statements):
+            return None
+        text = f"{self.pc + 1}: {self.drive.render_statement(self.program.texts[self.pc])}"
+        self.step()
+        return text
+
+    def step(self) -> None:
+        """Execute the statement at ``pc``."""
+        program = self.program
+        if self.pc >= len(program.statements):
+            self.end()  # the end of the stored program ends it (G-PROGEND)
+            return
+        stmt = program.statements[self.pc]
+        self.drive.program.position = self.pc
+        try:
+            advance = self._execute(stmt)
+        except SersError as exc:
+            self._program_error(exc.errno, exc.detail)
+            return
+        if not self.running:
+            return
+        if advance:
+            self.pc += 1
+        if self.waiting is None:
+            self._schedule(self.cycle)
+
+    # -- statements -------------------------------------------------------------------------------------
+    def _execute(self, stmt: st.Statement) -> bool:  # noqa: C901 - one branch per statement kind
+        """Run one statement; True if the program goes on with the next one."""
+        drive = self.drive
+        program = self.program
+        if isinstance(stmt, st.Label | st.Comment | st.Text):
+            return True
+        if isinstance(stmt, st.If):
+            true = drive.evaluate(stmt.cond)
+            if stmt.then:
+                if not true:
+                    self.pc = program.block_end.get(self.pc, len(program.statements) - 1)
+                    # on ELSE continue after it; on END continue after it
+            elif not true:
+                self.pc += 1  # skip the next statement
+            return True
+        if isinstance(stmt, st.Else):
+            self.pc = program.block_end.get(self.pc, self.pc)  # the THEN part ran: skip to END
+            return True
+        if isinstance(stmt, st.End):
+            return True
+        if isinstance(stmt, st.Goto):
+            target = self._label_index(stmt.label)
+            if stmt.sub:
+                if len(self.stack) >= MAX_NESTING:
+                    raise SersError(73)
+                self.stack.append(self.pc + 1)
+            self.pc = target
+            return False
+        if isinstance(stmt, st.Command) and stmt.name == "RETURN":
+            if self.stack:
+                self.pc = self.stack.pop()
+                return False
+            if self.subroutine:
+                self.end()
+                return False
+            raise SersError(72)  # G-RETURN: RETURN without GOSUB in a program from line 1
+        if isinstance(stmt, st.Command) and stmt.name == "PE":
+            self.end()
+            return False
+        if isinstance(stmt, st.Wait):
+            self._park("wait", stmt.cond)
+            return True
+        if isinstance(stmt, st.Run):
+            self.start(stmt.label)
+            return False
+        if isinstance(stmt, st.Assign) and stmt.target.kind == "alias" and stmt.target.ref == "D":
+            value = drive.operand_value(stmt.value) if not isinstance(stmt.value, str) else 0.0
+            factor = 1.0 if int(drive.ram.get(1141, 0)) == 1 else 1.2
+            self.waiting = "delay"
+            self._delay = drive.clock.call_later(max(0.0, float(value)) * 0.1 * factor, self._delay_done)
+            return True
+        if isinstance(stmt, st.Assign) and stmt.target.kind == "alias" and stmt.target.ref == "D2":
+            self._start_d2(stmt)
+            return True
+        if isinstance(stmt, st.Command) and stmt.name in ("NEW", "PGM", "QUIT", "DEL", "VER", "TRON", "TROFF"):
+            return True  # programming and trace commands mean nothing inside a program
+        if isinstance(stmt, st.Query | st.ListCmd | st.Trace | st.Change):
+            return True
+        # everything else the drive does; it says what (if anything) the program waits for
+        self.waiting = drive.program_statement(stmt)
+        return True
+
+    def _label_index(self, label: int) -> int:
+        if not 1 <= label <= 128:
+            raise SersError(72)
+        index = self.program.labels.get(label)
+        if index is None:
+            raise SersError(71)
+        return index
+
+    # -- waiting ----------------------------------------------------------------------------------------
+    def _park(self, what: str, cond: st.Condition | None) -> None:
+        self.waiting = what
+        self._wait_cond = cond
+        self.poke()
+
+    def poke(self) -> None:
+        """The drive's state changed: a parked WAIT may go on."""
+        if self.waiting != "wait" or not self.running:
+            return
+        if self.drive.evaluate(self._wait_cond, counters=False):
+            self.waiting = None
+            self._wait_cond = None
+            if self._poll is not None:
+                self._poll.cancel()
+                self._poll = None
+            self._schedule(self.cycle)
+        elif self.drive.axis.moving and self._poll is None:
+            # positions change continuously: look again every cycle while the axis moves
+            self._poll = self.drive.clock.call_later(self.cycle, self._poll_tick)
+
+    def _poll_tick(self) -> None:
+        self._poll = None
+        self.poke()
+
+    def on_motion_end(self) -> None:
+        if self.waiting == "position" and self.running:
+            self.resume("position")
+        else:
+            self.poke()
+
+    def resume(self, what: str) -> None:
+        """What the parked program waited for (``position``, ``segment``, ``master`` …) came."""
+        if self.waiting != what or not self.running:
+            return
+        self.waiting = None
+        if self._d2_pending:
+            self._fire_d2_jump()
+            return
+        self._schedule(self.cycle)
+
+    def _delay_done(self) -> None:
+        self._delay = None
+        if self.waiting == "delay" and self.running:
+            self.waiting = None
+            self._schedule(self.cycle)
+
+    def _position_blocks(self) -> bool:
+        return self.waiting == "position" and int(self.drive.ram.get(1110, 1)) == 1
+
+    # -- D2 (§4.8.5.1) ---------------------------------------------------------------------------------
+    def _start_d2(self, stmt: st.Assign) -> None:
+        drive = self.drive
+        value = drive.operand_value(stmt.value) if not isinstance(stmt.value, str) else 0.0
+        drive.ram[1164] = float(value)
+        drive.ram[1165] = 0
+        if self._d2 is not None:
+            self._d2.cancel()
+        nxt = self.program.statements[self.pc + 1] if self.pc + 1 < len(self.program.statements) else None
+        self._d2_jump = None
+        if isinstance(nxt, st.Goto):
+            self._d2_jump = nxt
+            self.pc += 1  # the GT/GS belongs to the timer: it is not executed now
+        self._d2 = drive.clock.call_later(max(0.0, float(value)) * 0.1, self._d2_expired)
+
+    def _d2_expired(self) -> None:
+        self._d2 = None
+        self.drive.ram[1165] = 1
+        if self._d2_jump is not None and self.running:
+            if self._position_blocks():
+                self._d2_pending = True  # P1110=1: the jump waits until the drive is in position
+            else:
+                self._fire_d2_jump()
+        self.poke()
+
+    def _fire_d2_jump(self) -> None:
+        """The timed jump: aborts a running D, WAIT or ':' (§4.8.5.1)."""
+        jump = self._d2_jump
+        self._d2_pending = False
+        self._d2_jump = None
+        if jump is None or not self.running:
+            return
+        if self._delay is not None:
+            self._delay.cancel()
+            self._delay = None
+        if self.waiting == "position" and self.drive.motion == "jog":
+            self.drive.stop_motion()
+        self.waiting = None
+        self._wait_cond = None
+        try:
+            target = self._label_index(jump.label)
+            if jump.sub:
+                if len(self.stack) >= MAX_NESTING:
+                    raise SersError(73)
+                self.stack.append(self.pc + 1)
+        except SersError as exc:
+            self._program_error(exc.errno)
+            return
+        self.pc = target
+        self._schedule(self.cycle)
+
+    def describe(self) -> dict[str, Any]:
+        return {
+            "running": self.running,
+            "line": self.pc + 1,
+            "waiting": self.waiting,
+            "stack": [i + 1 for i in self.stack],
+        }
