@@ -30,6 +30,7 @@ from devsim.devices.sers import statements as st
 from devsim.devices.sers.config import SersConfig
 from devsim.devices.sers.errors import SersError
 from devsim.devices.sers.parameters import ALIASES, CURRENT_MAX_MA, PARAMETERS, SUPPLY_THRESHOLDS, ParamDef
+from devsim.devices.sers.polynomial import PolynomialMove
 from devsim.devices.sers.units import Scaling, format_fixed, format_query, quantize
 
 __all__ = ["SersDrive"]
@@ -74,6 +75,7 @@ class SersDrive(Device):
         self.firmware = FIRMWARE
         self.trace_mode = False
         self.ram: dict[int, Any] = {}
+        self.poly = PolynomialMove(self)
         self._power_on()
 
     # ======================================================================================
@@ -184,6 +186,7 @@ class SersDrive(Device):
         if program is not None:
             program.reload()  # programming mode does not survive a power loss (P0 = 0)
         self.interpreter.reset()
+        self.poly.cancel()
         self.trace_mode = False
         self._load_parameters()
         saved_pos = self.nvram.get("position")
@@ -411,7 +414,7 @@ class SersDrive(Device):
         if 1201 <= n <= 1216:
             return int(self.signals.get(f"O{n - 1200}"))
         if n == 1123:
-            return 0
+            return int(self.poly.slot_free)
         if n in (1124, 1146):
             window = float(self.ram.get(1055 if n == 1124 else 1145, 1)) * 0.002
             measuring = int(self.ram.get(1053, 0)) in (9, 10) if n == 1124 else int(self.ram.get(1143, 0)) == 5
@@ -535,6 +538,7 @@ class SersDrive(Device):
             1052: lambda v: self._write_w_mode(v, 2),
             1040: lambda v: self._write_soft_limit(1040, v),
             1099: self._write_opcode,
+            **{n: (lambda v, n=n: self._write_poly(n, v)) for n in range(1111, 1117)},
             1041: lambda v: self._write_soft_limit(1041, v),
         }
 
@@ -616,6 +620,27 @@ class SersDrive(Device):
 
     def report_program_error(self, errno: int, detail: str) -> None:
         """A program error is recorded in P12/P1137; nothing is sent (G-FAULTMSG)."""
+
+    def _write_poly(self, number: int, value: float) -> None:
+        """WP/WRP/WAP/WPT/WRPT/WAPT (P1111–P1116): a polynomial segment, closed by E."""
+        self._check_range(PARAMETERS[number], value)
+        self.poly.define(number, self.scaling.pos_to_inc(float(value)))
+
+    def motion_checks_for(self, target: float) -> None:
+        here = self.axis.position()
+        self._motion_checks((target > here) - (target < here))
+
+    def begin_polynomial(self) -> None:
+        self._speed = float(self.ram[91])
+        self._accel = float(self.ram[138])
+        self._begin_motion("poly", self._accel)
+        self._arm_position_watches()
+
+    def polynomial_finished(self) -> None:
+        if self.motion is not None:
+            self._motion_finished()
+            if self.ram.get(1121):
+                self.spontaneous(f"@{self.cfg.address}POS=1")
 
     def _write_opcode(self, value: float) -> None:
         """P1099 (§4.8.6.16): execute a program opcode, e.g. 62213 (0xF305) = ``RUN 5``,
@@ -874,6 +899,13 @@ class SersDrive(Device):
     def program_statement(self, stmt: st.Statement) -> str | None:
         """Execute a statement of a running program; returns what the program must wait for
         (``position``: until the drive stands, §4.6.6) or None to go on at once."""
+        if isinstance(stmt, st.Command) and stmt.name == "E" and self.poly.definition is not None:
+            last = self.poly.definition[2]
+            started = self.poly.execute() == "started"
+            master_goes_on = self.cfg.address == 0 and int(self.ram.get(1110, 1)) == 0
+            if last:
+                return None if (master_goes_on or self.motion is None) else "position"
+            return None if started else "segment"
         if isinstance(stmt, st.Command) and stmt.name in ("E", "H", "POS0", "POSR"):
             self.execute(stmt)
             if self.motion is None:
@@ -994,6 +1026,7 @@ class SersDrive(Device):
         if first:
             self.record_event("error")
         self.errors |= bit
+        self.poly.cancel()
         if first:
             self.interpreter.on_drive_error()
         self._homing = None
@@ -1057,6 +1090,9 @@ class SersDrive(Device):
 
     def start_positioning(self) -> None:
         """E (§4.6.6) with P1014 mode 0 relative, 1 relative-clear, 2 absolute, 3 overflow."""
+        if self.poly.definition is not None:
+            self.poly.execute()  # E closes a polynomial segment (§4.6.7)
+            return
         if self.motion == "position" and self._w_updated:
             self._w_updated = False
             return  # G-EWHILEMOVE: the running move already took the new W
@@ -1160,6 +1196,7 @@ class SersDrive(Device):
 
     def _motion_finished(self) -> None:
         was_moving = self.motion is not None
+        self.poly.cancel()
         if was_moving:
             self.record_event("move_end")
         self._stopped_at = self.clock.now()
@@ -1189,6 +1226,7 @@ class SersDrive(Device):
         if self.motion is None or self.motion == "error-stop":
             return
         self._homing = None
+        self.poly.cancel()
         self._cancel_jog_timer()
         profile = self.ramp_profile() if self.motion == "position" else None
         self.motion = "stopping"
@@ -1365,7 +1403,11 @@ class SersDrive(Device):
 
     # -- POS0 / POSR -------------------------------------------------------------------------
     def pos0(self) -> None:
-        """POS0 (§4.8.4.2, spec §5.13): go to the nearest phase zero, then P51 := 0."""
+        """POS0 (§4.8.4.2, spec §5.13): go to the nearest phase zero, then P51 := 0.
+        During a polynomial profile it ends polynomial mode instead (§4.6.7)."""
+        if self.motion == "poly":
+            self.stop_motion()
+            return
         if self.motion is not None:
             raise SersError(70)
         p51 = self.p51_inc()
@@ -1384,6 +1426,9 @@ class SersDrive(Device):
         """POSR (§4.8.4.2, spec §5.9): after a step loss, follow the motor's real position
         (encoder) and travel at P41 to the setpoint of the interrupted positioning.  Only with
         P11/P12 value 32, unless P1043=3."""
+        if self.motion == "poly":
+            self.stop_motion()  # POSR also ends polynomial mode (§4.6.7)
+            return
         stepped = self.errors & STEP_LOSS or self.warnings & STEP_LOSS
         if not force and not stepped:
             raise SersError(3)

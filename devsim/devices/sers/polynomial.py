@@ -1,0 +1,168 @@
+"""Polynomial moves – velocity profiles of several path segments (manual §4.6.7, spec §4.10.12).
+
+A segment is defined with ``WP=`` (``WRP=``/``WAP=``; the last one ``WPT=``/``WRPT=``/``WAPT=``)
+and closed with ``E``.  Each segment ramps with the current A from the speed it starts at to its
+own V – the ramp is part of the segment's distance – and then runs at V until its distance is
+covered; only the last one also brakes, with B (P1096), to stop exactly at its end.
+
+Execution model (spec G-POLY): one running segment and a one-deep pending slot.  ``E`` of the
+first segment starts it and the program goes on; a further segment goes to the pending slot and
+the program waits until the running segment has ended (the pending one then runs).  P1123 is 1
+while the slot is free.  A segment arriving with the slot occupied is refused (errno 123); when a
+segment ends with nothing pending and the profile was not closed by a last segment, the drive
+brakes with B to standstill and reports errno 108.  Not allowed with backlash (errno 107); a
+last segment too short to brake with B gives errno 118.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from devsim.core.axis import Watch
+from devsim.devices.sers.errors import SersError
+
+if TYPE_CHECKING:
+    from devsim.devices.sers.drive import SersDrive
+
+__all__ = ["PolynomialMove", "Segment"]
+
+LAST = (1114, 1115, 1116)
+RELATIVE = (1112, 1115)
+ABSOLUTE = (1113, 1116)
+
+
+@dataclass(frozen=True)
+class Segment:
+    end: float  # physical position (increments) where the segment ends
+    speed: float  # inc/s
+    accel: float  # inc/s²
+    brake: float  # inc/s² (B), used by the last segment
+    last: bool
+    exact: float = 0.0  # the end before rounding to whole increments (no drift over segments)
+
+
+class PolynomialMove:
+    """The polynomial mode of one drive."""
+
+    def __init__(self, drive: SersDrive) -> None:
+        self.drive = drive
+        self.definition: tuple[float, int, bool] | None = None  # value (inc), mode, last
+        self.running: Segment | None = None
+        self.pending: Segment | None = None
+        self.closed = False  # the last segment has been given
+        self._watch: Watch | None = None
+
+    @property
+    def active(self) -> bool:
+        return self.running is not None
+
+    @property
+    def slot_free(self) -> bool:
+        """P1123: the next segment may be sent."""
+        return self.active and self.pending is None and not self.closed
+
+    def define(self, number: int, value: float) -> None:
+        """``WP=`` … ``WAPT=`` (P1111–P1116): remember the segment until its ``E``."""
+        drive = self.drive
+        if number in RELATIVE:
+            drive.ram[1014] = 0
+        elif number in ABSOLUTE:
+            drive.ram[1014] = 2
+        self.definition = (value, int(drive.ram.get(1014, 0)), number in LAST)
+
+    def execute(self) -> str:
+        """``E`` after a segment definition: ``started`` (the program goes on), ``queued``
+        (the program waits until the running segment ends)."""
+        drive = self.drive
+        assert self.definition is not None
+        value, mode, last = self.definition
+        self.definition = None
+        if float(drive.ram.get(1037, 0)):
+            raise SersError(107)
+        if self.pending is not None or self.closed:
+            raise SersError(123)
+        base = self.pending.exact if self.pending is not None else (self.running.exact if self.running else None)
+        if base is None:
+            base = drive.axis.position()
+        end = value + drive.offset if mode == 2 else base + value
+        segment = Segment(
+            exact=end,
+            end=float(round(end)),
+            speed=float(drive.ram[91]),
+            accel=float(drive.ram[138]),
+            brake=float(drive.ram.get(1096, drive.ram[138])),
+            last=last,
+        )
+        if last:
+            self.closed = True
+        if self.running is None:
+            if drive.motion is not None:
+                raise SersError(70)
+            drive.motion_checks_for(segment.end)
+            drive.begin_polynomial()
+            self._start(segment)
+            return "started"
+        self.pending = segment
+        return "queued"
+
+    def _start(self, segment: Segment) -> None:
+        drive = self.drive
+        self.running = segment
+        if self._watch is not None:
+            self._watch.cancel()
+            self._watch = None
+        axis = drive.axis
+        here = axis.position()
+        direction = (segment.end > here) - (segment.end < here)
+        if segment.last:
+            v = abs(axis.velocity())
+            if direction == 0 or v * v / (2 * segment.brake) > abs(segment.end - here) + 1e-6:
+                drive.record_error(118)
+                self._abort()
+                return
+            axis.move_to(segment.end, segment.speed, segment.accel, decel=segment.brake, on_done=self._finished)
+            return
+        if direction == 0:
+            self._segment_end(0)
+            return
+        axis.jog(direction, segment.speed, segment.accel)
+        self._watch = axis.watch(segment.end, self._segment_end)
+
+    def _segment_end(self, _direction: int) -> None:
+        if self._watch is not None:
+            self._watch.cancel()
+            self._watch = None
+        if self.running is None:
+            return
+        pending, self.pending = self.pending, None
+        if pending is not None:
+            self._start(pending)
+            self.drive.interpreter.resume("segment")
+            return
+        # nothing to go on with: brake with B and report it (errno 108)
+        segment = self.running
+        self.running = None
+        self.drive.record_error(108)
+        self.drive.axis.stop(segment.brake, on_done=self._finished)
+
+    def _finished(self) -> None:
+        self.running = None
+        self.pending = None
+        self.closed = False
+        self.drive.polynomial_finished()
+
+    def _abort(self) -> None:
+        self.drive.axis.stop(self.running.brake if self.running else float(self.drive.ram[1030]), on_done=self._finished)
+        self.running = None
+        self.pending = None
+
+    def cancel(self) -> None:
+        """The profile ends early (S, a drive error, POS0/POSR): forget the segments."""
+        if self._watch is not None:
+            self._watch.cancel()
+            self._watch = None
+        self.running = None
+        self.pending = None
+        self.closed = False
+        self.definition = None
