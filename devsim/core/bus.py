@@ -1,14 +1,19 @@
 """RS-485 multidrop: several devices on one line.
 
 The bus gives every device every byte (as on a real two-wire bus, each receiver sees all
-traffic) and merges their outputs onto the one line.  Which device answers is the devices' own
-business: each decides from its address whether a telegram is meant for it.  Because all
-devices run in one event loop and answer synchronously from :meth:`feed`, their outputs never
-interleave mid-telegram.
+traffic) and merges their outputs onto the one line.  What one device sends is also heard by
+all the others – that is how a SERS master (address 0) drives its slaves on the same line –
+but never by itself.  Which device answers is the devices' own business: each decides from its
+address whether a telegram is meant for it.
+
+Bytes a device sends while another is still digesting input are queued and handed on once that
+device has finished, so no device is ever fed re-entrantly; the order on the line is the order
+in which they were sent.
 """
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Sequence
 
 from devsim.core.device import ByteSink, Device, SerialSettings
@@ -24,20 +29,41 @@ class Bus:
             raise ValueError("a bus needs at least one device")
         self.devices = list(devices)
         self._write: ByteSink | None = None
+        self._queue: deque[tuple[Device | None, bytes]] = deque()
+        self._busy = False
         for device in self.devices:
             device.shared_line = len(self.devices) > 1
-            device.attach(self._emit)
+            device.attach(lambda data, source=device: self._emit(source, data))
 
-    def _emit(self, data: bytes) -> None:
-        if self._write is not None and data:
+    def _emit(self, source: Device, data: bytes) -> None:
+        if not data:
+            return
+        if self._write is not None:
             self._write(data)
+        if len(self.devices) > 1:
+            self._queue.append((source, data))
+            self._pump()
+
+    def _pump(self) -> None:
+        if self._busy:
+            return  # the outer loop hands it on
+        self._busy = True
+        try:
+            while self._queue:
+                source, data = self._queue.popleft()
+                for device in self.devices:
+                    if device is not source:
+                        device.feed(data)
+        finally:
+            self._busy = False
 
     def attach(self, write: ByteSink | None) -> None:
         self._write = write
 
     def feed(self, data: bytes) -> None:
-        for device in self.devices:
-            device.feed(data)
+        """Bytes from the host: every device hears them."""
+        self._queue.append((None, data))
+        self._pump()
 
     def host_disconnected(self) -> None:
         for device in self.devices:

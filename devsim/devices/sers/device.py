@@ -20,6 +20,7 @@ from devsim.devices.sers.config import SersConfig
 from devsim.devices.sers.drive import SersDrive
 from devsim.devices.sers.errors import SersError, message
 from devsim.devices.sers.interpreter import Interpreter
+from devsim.devices.sers.master import MasterLink
 from devsim.devices.sers.program import ProgramMemory
 
 __all__ = ["SersDevice"]
@@ -68,6 +69,7 @@ class SersDevice(SersDrive):
         self._batch: bytearray | None = None
         self.program = ProgramMemory(nvram if nvram is not None else NonVolatileMemory(None))
         self.interpreter = Interpreter(self)
+        self.master = MasterLink(self)
         super().__init__(clock=clock, config=config, nvram=nvram, name=name)
         self.program = ProgramMemory(self.nvram)
 
@@ -95,6 +97,8 @@ class SersDevice(SersDrive):
     def feed(self, data: bytes) -> None:
         # Answers to one chunk of input leave in one write: same bytes, same order, fewer
         # syscalls (what a UART's transmit FIFO does for the real drive).
+        if self.master.awaiting and self.logic_alive:
+            self.master.feed(data)  # a slave's answer to this master
         self._batch = bytearray()
         try:
             for byte in data:
@@ -268,6 +272,13 @@ class SersDevice(SersDrive):
                 rows = self.program.listing(self.list_options, self.render_statement, stmt.arg)
                 self._out(line, "".join(f"{row}\n\r" for row in rows))
             return
+        if isinstance(stmt, st.Assign) and stmt.target.kind in ("P", "alias") and self._is_master_query(stmt):
+            # a master asks through P2 (IF/WAIT) or P3 (read): answer the value (§4.8.5.5, G-MASTER)
+            number = self.address_number(stmt.target)
+            asked = int(self.operand_value(stmt.value)) if not isinstance(stmt.value, str) else 0
+            self.ram[number] = asked
+            self._out(line, f"P{number}={self.plain_value(asked)}\n\r")
+            return
         if isinstance(stmt, st.Command) and stmt.name == "VER":
             self._out(line, f"P1133={self.firmware}\n\r")
             return
@@ -282,6 +293,12 @@ class SersDevice(SersDrive):
                 self._out(line, shown + "\n\r")
             return
         self.execute(stmt)
+
+    def _is_master_query(self, stmt: st.Assign) -> bool:
+        try:
+            return self.address_number(stmt.target) in (2, 3)
+        except SersError:
+            return False
 
     def _changed_statement(self, stmt: st.Change) -> str:
         """C n (§4.2): the assignment at the current position with the constant n."""

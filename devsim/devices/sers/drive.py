@@ -19,6 +19,7 @@ weighting parameters (P76, P44, P160, P121–P123) only matter at the serial int
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable
 from typing import Any
 
@@ -165,6 +166,7 @@ class SersDrive(Device):
         self._homing: dict[str, Any] | None = None
         self._jog_timer: Timer | None = None
         self._standstill_watches: list[Watch] = []
+        self._dispatch: Timer | None = None
         self._legs: list[tuple[float, float]] = []
         self.lost = 0.0  # increments the rotor lags behind the stator field (step loss)
         self._stall_rotor: float | None = None
@@ -1761,10 +1763,15 @@ class SersDrive(Device):
         if not active:
             self.interpreter.pending_events.discard(n)
             return
-        if self.interpreter.running:
-            self.interpreter.pending_events.add(n)
-        else:
-            self._start_subroutine(n)
+        self.interpreter.pending_events.add(n)
+        if not self.interpreter.running and self._dispatch is None:
+            # edges of one instant are served together, I1 first (§4.5.2): dispatch a cycle later
+            self._dispatch = self.clock.call_later(self.interpreter.cycle, self._dispatch_events)
+            self._timers.append(self._dispatch)
+
+    def _dispatch_events(self) -> None:
+        self._dispatch = None
+        self.on_program_end()
 
     def _check_supply(self) -> None:
         """§2.1.4: U_W pre-warning (auto-clear), U_B error after braking, U_L torque off."""
@@ -1918,7 +1925,24 @@ class SersDrive(Device):
                 value = format_fixed(stmt.value.value, scaling.decimals(pdef.kind))
                 unit = scaling.unit(pdef.kind) if self.list_options & 2 else ""
                 return f"{stmt.target.text}={value}{unit}"
+        legacy_in = re.search(r"\bIN[0-9]", text.upper()) is not None
+        if isinstance(stmt, st.If | st.Wait) and stmt.cond is not None and (stmt.cond.negate or legacy_in):
+            keyword = "IF" if isinstance(stmt, st.If) else "WAIT"
+            then = " THEN" if isinstance(stmt, st.If) and stmt.then else ""
+            return f"{keyword} {_new_syntax(stmt.cond)}{then}"
         return text.upper() if not isinstance(stmt, st.Text | st.Comment) else text
+
+    def plain_value(self, number: int) -> str:
+        """Parameter ``number`` as a bare number (no unit), as a slave answers a master."""
+        if number in (1300, 1301, 1013) or number in PARAMETERS:
+            value = self.param_value(number)
+            pdef = PARAMETERS.get(number)
+            if pdef is not None and pdef.kind in WEIGHTED:
+                return format_query(float(value), self.scaling.decimals(pdef.kind))
+            if pdef is not None and pdef.kind == "fixed":
+                return format_query(float(value), pdef.decimals)
+            return str(int(value)) if float(value).is_integer() else str(value)
+        raise SersError(13)
 
     def query_text(self, stmt: st.Query) -> str:
         target = stmt.target
@@ -2070,6 +2094,24 @@ def _as_number(value: float, pdef: ParamDef) -> float | int:
     if pdef.kind == "fixed":
         return quantize(float(value), pdef.decimals)
     return value
+
+
+_OPPOSITE = {"<": ">=", "<=": ">", "=": "<>", "<>": "=", ">": "<=", ">=": "<"}
+
+
+def _operand_text(operand: st.Operand | None) -> str:
+    if operand is None:
+        return "0"
+    return operand.text if isinstance(operand, st.Number) else operand.text
+
+
+def _new_syntax(cond: st.Condition) -> str:
+    """A legacy condition (``!I5``, ``IN5``) in the syntax LIST shows (§4.6.1)."""
+    left = cond.left.text
+    if cond.op is None:
+        return f"{left}=0" if cond.negate else f"{left}<>0"
+    op = _OPPOSITE[cond.op] if cond.negate else cond.op
+    return f"{left}{op}{_operand_text(cond.right)}"
 
 
 def _compare(left: float, op: str, right: float) -> bool:

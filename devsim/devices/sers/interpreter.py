@@ -85,11 +85,22 @@ class Interpreter:
         self.stops = 0  # consecutive stops (P1033=1: the second one restarts)
         self.resume_pc: int | None = None
         self._resume_move = False
-        self.in_l65 = False
         self._poll: Timer | None = None
         self.pending_events: set[int] = set()
 
     # -- state ----------------------------------------------------------------------------------
+    @property
+    def in_l65(self) -> bool:
+        """The "L65 Fehlerbehandlung" flag is P1118 itself: ``P1118=0`` (or ``P11=0``) ends it."""
+        ram = getattr(self.drive, "ram", None)
+        return bool(ram.get(1118, 0)) if ram is not None else False
+
+    @in_l65.setter
+    def in_l65(self, value: bool) -> None:
+        ram = getattr(self.drive, "ram", None)
+        if ram is not None:
+            ram[1118] = int(value)
+
     @property
     def cycle(self) -> float:
         return 0.002 if int(self.drive.ram.get(1127, 0)) == 1 else 0.0005
@@ -172,10 +183,15 @@ class Interpreter:
             self._jump_l65()
             return
         self.stops += 1
+        # pc is already past a parked statement: after an interrupted E the program goes on
+        # with the next one once the move itself is continued; a WAIT, a ':' jog, H, POS0 …
+        # are executed again
         self.resume_pc = self.pc if self.stops == 1 else None
-        self._resume_move = mode == 1 and self.stops == 1 and self.waiting == "position"
-        if self._resume_move:
-            self.resume_pc = self.pc + 1
+        parked = self.program.statements[self.pc - 1] if 0 < self.pc <= len(self.program.statements) else None
+        is_move = isinstance(parked, st.Command) and parked.name == "E"
+        if self.resume_pc is not None and self.waiting in ("wait", "position") and not is_move:
+            self.resume_pc = self.pc - 1
+        self._resume_move = mode == 1 and self.stops == 1 and self.waiting == "position" and is_move
         self._cancel()
         self.running = False
         self.waiting = None
@@ -186,7 +202,9 @@ class Interpreter:
         if not self.running:
             return
         mode = int(self.drive.ram.get(1033, 0))
-        if mode in (2, 3) and not (mode == 3 and self.in_l65) and L65 in self.program.labels:
+        if mode == 3 and self.in_l65:
+            return  # P1033=3: during the L65 handling further errors neither stop nor jump
+        if mode in (2, 3) and L65 in self.program.labels:
             self._jump_l65()
             return
         self._cancel()
@@ -201,8 +219,7 @@ class Interpreter:
         self.waiting = None
         self.stack.clear()
         self.pc = self.program.labels[L65]
-        self.in_l65 = True
-        self.drive.ram[1118] = 1
+        self.in_l65 = True  # P1118=1
         self.subroutine = False
         self._schedule(self.cycle)
 
@@ -241,7 +258,8 @@ class Interpreter:
         not run, G-TRACE); returns the listed statement."""
         if not self.running:
             self.program = Program.compile(self.drive.program.statements())
-            self.pc = min(self.drive.program.position, max(0, len(self.program.statements) - 1))
+            # the current program position is a statement number (LIST n, 0 = before the first)
+            self.pc = min(max(0, self.drive.program.position - 1), max(0, len(self.program.statements) - 1))
             self.running = True
             self.subroutine = False
             self.drive.on_program_state()
@@ -258,7 +276,7 @@ class Interpreter:
             self.end()  # the end of the stored program ends it (G-PROGEND)
             return
         stmt = program.statements[self.pc]
-        self.drive.program.position = self.pc
+        self.drive.program.position = self.pc + 1  # LIST . shows the line being executed
         try:
             advance = self._execute(stmt)
         except SersError as exc:
@@ -436,7 +454,7 @@ class Interpreter:
             if jump.sub:
                 if len(self.stack) >= MAX_NESTING:
                     raise SersError(73)
-                self.stack.append(self.pc + 1)
+                self.stack.append(self.pc)  # pc is the statement not yet executed
         except SersError as exc:
             self._program_error(exc.errno)
             return
