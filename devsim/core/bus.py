@@ -2,8 +2,8 @@
 
 The bus gives every device every byte (as on a real two-wire bus, each receiver sees all
 traffic) and merges their outputs onto the one line.  What one device sends is also heard by
-all the others – that is how a SERS master (address 0) drives its slaves on the same line –
-but never by itself.  Which device answers is the devices' own business: each decides from its
+the others that listen to the line (``Device.hears_others``) – that is how a SERS master
+(address 0) drives its slaves on the same line – but never by itself.  Which device answers is the devices' own business: each decides from its
 address whether a telegram is meant for it.
 
 Bytes a device sends while another is still digesting input are queued and handed on once that
@@ -52,7 +52,7 @@ class Bus:
             while self._queue:
                 source, data = self._queue.popleft()
                 for device in self.devices:
-                    if device is not source:
+                    if device is not source and (source is None or device.hears_others):
                         device.feed(data)
         finally:
             self._busy = False

@@ -59,6 +59,8 @@ class Device(ABC):
 
     kind: ClassVar[str] = ""
     description: ClassVar[str] = ""
+    #: On a multidrop bus, also hear what the other devices send (not only the host).
+    hears_others: ClassVar[bool] = False
 
     def __init__(
         self,

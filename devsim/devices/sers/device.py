@@ -52,6 +52,7 @@ class SersDevice(SersDrive):
     kind: ClassVar[str] = "sers"
     description: ClassVar[str] = "Stögra SERS stepper driver with positioning control (ASCII, RS-232/RS-485)"
     config_model: ClassVar[type[SersConfig]] = SersConfig
+    hears_others: ClassVar[bool] = True  # a master's statements reach its slaves (§3.6.2)
 
     def __init__(
         self,

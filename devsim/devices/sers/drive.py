@@ -898,6 +898,15 @@ class SersDrive(Device):
             return
         raise SersError(21)
 
+    def master_target(self) -> int | str | None:
+        """In a master (address 0) after ``Z=n`` (P1): the slave statements go to."""
+        if self.cfg.address != 0:
+            return None
+        target = self.ram.get(1, 0)
+        if target == "*":
+            return "*"
+        return int(target) if target else None
+
     def program_statement(self, stmt: st.Statement) -> str | None:
         """Execute a statement of a running program; returns what the program must wait for
         (``position``: until the drive stands, §4.6.6) or None to go on at once."""

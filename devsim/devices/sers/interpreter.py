@@ -27,6 +27,27 @@ if TYPE_CHECKING:
 
 __all__ = ["Interpreter", "Program"]
 
+
+def _wire(drive: Any, operand: st.Operand) -> str:
+    """A master-side operand as the decimal number sent to a slave (``V=X`` → ``V=1000``)."""
+    if isinstance(operand, st.Number):
+        return operand.text
+    value = float(drive.operand_value(operand))
+    return str(int(value)) if value.is_integer() else f"{value:.4f}".rstrip("0").rstrip(".")
+
+
+def _statement_text(stmt: st.Statement) -> str:
+    if isinstance(stmt, st.Run):
+        return "RUN" if stmt.label is None else f"RUN {stmt.label}"
+    if isinstance(stmt, st.Command):
+        return stmt.name
+    return stmt.text.upper()
+
+
+def _compare(left: float, op: str, right: float) -> bool:
+    return {"<": left < right, "<=": left <= right, "=": left == right, ">": left > right,
+            ">=": left >= right, "<>": left != right}[op]
+
 MAX_NESTING = 4  # GOSUB depth (§4.6.4)
 L65 = 65  # error / stop handler label (§4.6.2)
 
@@ -296,14 +317,11 @@ class Interpreter:
         program = self.program
         if isinstance(stmt, st.Label | st.Comment | st.Text):
             return True
+        target = drive.master_target()
+        if target is not None and self._remote(stmt, target):
+            return False  # sent to a slave; the answer moves the program on
         if isinstance(stmt, st.If):
-            true = drive.evaluate(stmt.cond)
-            if stmt.then:
-                if not true:
-                    self.pc = program.block_end.get(self.pc, len(program.statements) - 1)
-                    # on ELSE continue after it; on END continue after it
-            elif not true:
-                self.pc += 1  # skip the next statement
+            self._branch(stmt, drive.evaluate(stmt.cond))
             return True
         if isinstance(stmt, st.Else):
             self.pc = program.block_end.get(self.pc, self.pc)  # the THEN part ran: skip to END
@@ -351,6 +369,96 @@ class Interpreter:
         # everything else the drive does; it says what (if anything) the program waits for
         self.waiting = drive.program_statement(stmt)
         return True
+
+    def _branch(self, stmt: st.If, true: bool) -> None:
+        """IF: without THEN skip the next statement when false; with THEN go to ELSE/END."""
+        if stmt.then:
+            if not true:
+                self.pc = self.program.block_end.get(self.pc, len(self.program.statements) - 1)
+        elif not true:
+            self.pc += 1
+
+    # -- master mode (§3.6.2, §4.8.5.5; spec §3.8) ----------------------------------------------------
+    def _remote(self, stmt: st.Statement, target: int | str) -> bool:
+        """After ``Z=n`` a statement goes to slave n; True if it was sent (the program waits)."""
+        drive = self.drive
+        if isinstance(stmt, st.Assign) and stmt.target.kind in ("P", "alias"):
+            number = drive.address_number(stmt.target)
+            if number == 1:
+                return False  # Z=… is the master's own business
+            if number == 1047 and isinstance(stmt.value, st.Address):
+                asked = drive.address_number(stmt.value)  # Z=1 X=V: read V of slave 1 into X
+                self._send(target, f"P3={asked}", "P3", lambda value: drive.set_x(value or 0.0))
+                return True
+            value = stmt.value if isinstance(stmt.value, str) else _wire(drive, stmt.value)
+            self._send(target, f"{stmt.target.text}={value}")
+            return True
+        if isinstance(stmt, st.Assign):  # O1=1 and the like
+            self._send(target, f"{stmt.target.text}={_wire(drive, stmt.value)}")  # type: ignore[arg-type]
+            return True
+        if isinstance(stmt, st.If | st.Wait) and stmt.cond is not None:
+            self._remote_condition(stmt, target)
+            return True
+        if isinstance(stmt, st.Command) and stmt.name in ("RETURN", "PE"):
+            return False
+        if isinstance(stmt, st.Command | st.Run | st.Jog):
+            self._send(target, _statement_text(stmt))
+            return True
+        return False
+
+    def _send(self, target: int | str, text: str, want: str | None = None, got: Any = None) -> None:
+        """Send to the slave and park until it answered; no answer (100 ms) is a program error."""
+        self.waiting = "master"
+
+        def done(ok: bool, value: float | None, message: str) -> None:
+            if not self.running or self.waiting != "master":
+                return
+            if not ok:
+                self._program_error(64)
+                return
+            if got is not None:
+                got(value)
+            self.pc += 1
+            self.resume("master")
+
+        self.drive.master.request(target, text, done, want)
+
+    def _remote_condition(self, stmt: st.If | st.Wait, target: int | str) -> None:
+        """IF/WAIT on slave data: ``P2=<n>`` returns the value (inputs via P1300, J via P1013)."""
+        cond = stmt.cond
+        assert cond is not None
+        left = cond.left
+        if left.kind == "I":
+            number, bit = 1300, int(left.ref) - 1
+        elif left.kind == "J":
+            number, bit = 1013, {1: 3, 2: 1, 3: 0, 4: 2, 5: 7}[int(left.ref)]
+        else:
+            number, bit = self.drive.address_number(left), None
+        self.waiting = "master"
+
+        def done(ok: bool, value: float | None, message: str) -> None:
+            if not self.running or self.waiting != "master":
+                return
+            if not ok or value is None:
+                self._program_error(64)
+                return
+            if bit is not None:
+                level = (int(value) >> bit) & 1
+                value = float(1 - level if left.kind == "J" else level)
+            right = self.drive.operand_value(cond.right) if cond.right is not None else 0.0
+            true = (value != 0) if cond.op is None else _compare(value, cond.op, right)
+            true = true != cond.negate
+            if isinstance(stmt, st.If):
+                self._branch(stmt, true)
+                self.pc += 1
+                self.resume("master")
+            elif true:
+                self.pc += 1
+                self.resume("master")
+            else:  # WAIT polls the slave every 10 ms (G-MASTER)
+                self._timer = self.drive.clock.call_later(0.01, lambda: self._remote_condition(stmt, target))
+
+        self.drive.master.request(target, f"P2={number}", done, "P2")
 
     def _label_index(self, label: int) -> int:
         if not 1 <= label <= 128:

@@ -1,0 +1,98 @@
+"""Master mode (manual §3.6.2, §4.6.12 "Master Betrieb", spec §3.8, T-17): a master at DIP
+address 0 runs its program and drives slaves 1 and 2 on the same RS-485 line."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.sers.conftest import Plant
+
+MASTER = [
+    "ON", "L1", "X=1000", "Z=1", "ON", "V=X", "W=500", "WAIT I3=1", "E", "WAIT POS=1", "Z=0",
+    "V=2000", "W=1000 E", "Z=2", "RUN 2", "WAIT P0=0", "Z=0", "V=10", "W=20 E", "GT1",
+]
+SLAVE2 = ["L1", "PE", "L2", "ON V=600", "W=90 E", "O1=1", "RT"]
+
+
+def download(plant: Plant, address: int, lines: list[str]) -> None:
+    host = plant.host
+    assert host.ask(f"#{address} NEW\r").endswith(b"\npgm\n\r")
+    for line in lines:
+        assert host.ask(f"#{line}\r").endswith(b"\npgm\n\r"), line
+    assert host.ask("#QUIT\r").endswith(b"ok1\n\r")
+
+
+@pytest.fixture
+def line(plant_factory) -> Plant:
+    plant: Plant = plant_factory({"address": 0}, {"address": 1}, {"address": 2})
+    download(plant, 200, MASTER)  # #200 addresses the master like a slave (§3.1.1)
+    download(plant, 2, SLAVE2)
+    return plant
+
+
+def sent_by_master(plant: Plant) -> list[bytes]:
+    return list(plant.runtime.device("sers0").master.sent)
+
+
+def test_t17_master_drives_two_slaves(line: Plant) -> None:
+    host = line.host
+    assert host.ask("#200 RUN\r").endswith(b"ok1\n\r")
+    line.advance(0.1)
+    # the master has switched slave 1 on, given it V = X = 1000 and W, and now polls I3
+    sent = sent_by_master(line)
+    assert sent[:3] == [b"#1ON\r", b"#1V=1000\r", b"#1W=500\r"]
+    assert sent[3:] and set(sent[3:]) == {b"#1P2=1300\r"}
+    assert line.read("energized", "sers1") is True
+    assert line.read("param.V", "sers1") == 1000
+    assert line.read("motion", "sers1") is None  # waits for I3 of drive 1
+    line.set("input.I3", True, "sers1")
+    line.advance(0.05)
+    assert line.read("motion", "sers1") == "position"
+    # slave 1 positions 500°, then the master itself moves 1000°, then slave 2 runs L2
+    dev2 = line.runtime.device("sers2")
+    assert line.runtime.run_until(lambda: dev2.read("output.O1") is True, 20)
+    assert line.read("param.P51", "sers1") == pytest.approx(500, abs=0.02)
+    assert line.read("param.P51", "sers0") == pytest.approx(1000, abs=0.02)
+    assert line.read("param.P51", "sers2") == pytest.approx(90, abs=0.02)
+    sent = sent_by_master(line)
+    assert b"#1E\r" in sent and b"#2RUN 2\r" in sent
+    assert b"#1P2=336\r" in sent and b"#2P2=0\r" in sent
+    # after slave 2's program ended the master moves 20° and starts over at L1
+    assert line.runtime.run_until(lambda: sent_by_master(line).count(b"#1ON\r") == 2, 20)
+    assert line.read("param.P51", "sers0") == pytest.approx(1020, abs=0.02)
+
+
+def test_master_reads_a_slave_value_into_x(plant_factory) -> None:
+    plant: Plant = plant_factory({"address": 0}, {"address": 1, "params": {"V": 750}})
+    download(plant, 200, ["Z=1", "X=V", "Z=0", "R0=X"])
+    plant.host.ask("#200 RUN\r")
+    plant.advance(0.05)
+    assert b"#1P3=91\r" in sent_by_master(plant)
+    assert plant.read("param.R0", "sers0") == 750
+
+
+def test_master_broadcast_does_not_wait(plant_factory) -> None:
+    plant: Plant = plant_factory({"address": 0}, {"address": 1}, {"address": 2})
+    download(plant, 200, ["Z=*", "ON", "Z=0", "O1=1"])
+    plant.host.ask("#200 RUN\r")
+    plant.advance(0.01)
+    assert sent_by_master(plant) == [b"#*ON\r"]
+    assert plant.read("energized", "sers1") and plant.read("energized", "sers2")
+    assert plant.read("output.O1", "sers0") is True
+
+
+def test_missing_slave_is_a_program_error(plant_factory) -> None:
+    plant: Plant = plant_factory({"address": 0}, {"address": 1})
+    download(plant, 200, ["Z=5", "ON"])
+    plant.host.ask("#200 RUN\r")
+    plant.advance(0.2)  # no answer within 100 ms
+    assert plant.read("param.P0", "sers0") == 0
+    assert plant.read("P12", "sers0") & 128
+
+
+def test_host_sees_the_master_traffic_on_the_line(line: Plant) -> None:
+    assert line.host.ask("#200 RUN\r") == b"#200 RUN\r\nok1\n\r"
+    line.advance(0.01)
+    data = line.host.read_exact(len(b"#1ON\r#1ON\r\nok1\n\r"))
+    # what the master sends, then slave 1's echo and acknowledgement: all on the one line
+    assert data == b"#1ON\r#1ON\r\nok1\n\r"
