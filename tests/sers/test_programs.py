@@ -4,7 +4,7 @@ G-PROGEND, G-PARALLEL, G-TRACE, G-JOGPROG, G-D2; manual §4.5, §4.6, §4.8.5, �
 
 Programs are downloaded the way a host does it (``#NEW`` … ``#QUIT``), started with ``#RUN``
 or by inputs, and observed through queries, outputs and the axis position.  Polynomial moves
-(T-14) and master mode (T-17) are not implemented yet and are not covered here.
+(T-14) and master mode (T-17) have their own files, test_polynomial.py and test_master.py.
 """
 
 from __future__ import annotations
