@@ -367,7 +367,9 @@ class Runner:
             return match is not None
 
         if not await self._wait_until(matched, action.timeout):
-            raise _StepFailed(f"no match for /{action.regex}/ within {action.timeout:g}s; got {_show(host.unread)}")
+            raise _StepFailed(
+                f"no match for /{_escape(action.regex)}/ within {action.timeout:g}s; got {_show(host.unread)}"
+            )
         host.consume(host.position + found[-1].end())
         return True
 
@@ -433,9 +435,9 @@ class Runner:
         matches = list(re.finditer(action.regex.encode("latin-1"), data))
         if action.count is not None:
             if len(matches) != action.count:
-                raise _StepFailed(f"/{action.regex}/ matched {len(matches)} times, expected {action.count}")
+                raise _StepFailed(f"/{_escape(action.regex)}/ matched {len(matches)} times, expected {action.count}")
         elif not matches:
-            raise _StepFailed(f"the {action.direction} never sent anything matching /{action.regex}/")
+            raise _StepFailed(f"the {action.direction} never sent anything matching /{_escape(action.regex)}/")
         return True
 
     async def _do_expect_timing(self, action: Any, index: int) -> bool:

@@ -328,3 +328,53 @@ def test_when_sees_positions_between_events() -> None:
     v, a = 2 * math.pi, 100.0
     reached = v / a + (2 * math.pi - v * v / (2 * a)) / v
     assert reached <= result.steps[1].time <= reached + 0.001
+
+
+def test_power_off_and_on_faults(tmp_path: Path) -> None:
+    result = run_scenario(scenario([
+        {"send": "#1 V=321 PSAVE\r"},
+        {"expect": {"regex": "ok"}},
+        {"fault": {"device": "x", "kind": "power_off", "duration": "1s"}},
+        {"expect_state": {"device": "x", "name": "powered", "equals": False}},
+        {"send": "#1 V?\r"},
+        {"wait": "500ms"},
+        {"expect_traffic": {"direction": "device", "regex": "V=321U/min", "count": 0}},
+        {"after": "600ms", "expect_state": {"device": "x", "name": "booting", "equals": True}},
+        {"after": "2s", "send": "#1 V?\r"},
+        {"expect": {"regex": "V=321U/min"}},
+        {"fault": {"device": "x", "kind": "power_cycle_wipe"}},
+        {"after": "2s", "send": "#1 V?\r"},
+        {"expect": {"regex": "V=100U/min"}},
+    ]), mode="virtual", state_dir=tmp_path)
+    assert result.passed, format_report(result)
+
+
+@pytest.mark.parametrize(
+    ("fault", "answered"),
+    [
+        ({"kind": "drop", "count": 2, "direction": "to_device"}, False),
+        ({"kind": "hang", "duration": "1s"}, False),
+        ({"kind": "silent", "duration": "1s"}, False),
+        ({"kind": "baud_mismatch", "baudrate": 19200, "duration": "1s"}, False),
+        ({"kind": "split", "count": 20, "delay": "5ms"}, True),
+        ({"kind": "delay", "delay": "200ms", "duration": "1s"}, True),
+        ({"kind": "jitter", "delay": "50ms", "duration": "1s", "direction": "to_host"}, True),
+    ],
+)
+def test_line_faults_through_the_runner(fault: dict[str, Any], answered: bool) -> None:
+    """Each line fault on the real pty: the query is lost or garbled, or arrives late but intact."""
+    steps = [
+        {"line_fault": fault},
+        {"send": "#1 P11?\r"},
+        {"expect": {"regex": "P11=0\n\r\nok1", "timeout": "500ms"}},
+    ]
+    result = run(steps)
+    assert result.steps[-1].status == ("pass" if answered else "fail"), format_report(result)
+    # after the fault the line works again
+    recovered = run([
+        {"line_fault": fault},
+        {"wait": "1.5s"},
+        {"send": "\r\r#1 P11?\r"},  # a count fault may still swallow two bytes
+        {"expect": {"regex": "P11=0\n\r\nok1", "timeout": "500ms"}},
+    ])
+    assert recovered.passed, format_report(recovered)
