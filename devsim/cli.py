@@ -2,7 +2,7 @@
 
 * ``devsim list`` – the device kinds, one per line.
 * ``devsim run KIND [--pty | --link PATH | --tcp [HOST:]PORT | --rfc2217 [HOST:]PORT] ...`` – serve
-  one device (or several on one RS-485 line with ``--drives``) until Ctrl-C / SIGTERM.  Every
+  one device (or several on one RS-485 line with ``--drives``, alias ``--addresses``) until Ctrl-C / SIGTERM.  Every
   port and the control address are printed on stdout, one per line, for scripts to parse::
 
       sers: pty /dev/pts/5
@@ -202,7 +202,13 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     if not drives:
         return [(kind, finish(base, config_file or "config"))]
     names = [kind] if len(drives) == 1 else [f"{kind}{n}" for n in drives]
-    return [(name, finish({**base, "address": n}, "--drives")) for name, n in zip(names, drives, strict=True)]
+    def addressed(n: int) -> dict[str, Any]:
+        # the address is a DIL-switch setting on cards that have one (GMS96: dil.address)
+        if model is not None and "address" not in model.model_fields and "dil" in model.model_fields:
+            return {**base, "dil": {**(base.get("dil") or {}), "address": n}}
+        return {**base, "address": n}
+
+    return [(name, finish(addressed(n), "--drives")) for name, n in zip(names, drives, strict=True)]
 
 
 @cli.command()
@@ -218,7 +224,13 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
 @click.option("--trace", metavar="FILE", help="Write a timestamped trace of the line traffic.")
 @click.option("--control", metavar="ADDR", help="Serve the control API on unix:/path.sock or [HOST:]PORT.")
 @click.option("--control-allow-remote", is_flag=True, help="Allow a non-loopback --control host.")
-@click.option("--drives", metavar="1,2,3", help="RS-485 multidrop: one device per address on one line.")
+@click.option(
+    "--drives",
+    "--addresses",
+    "drives",
+    metavar="1,2,3",
+    help="RS-485 multidrop: one device per address on one line (--addresses is the same option).",
+)
 @click.option("--pacing", is_flag=True, help="Pace output at the configured baud rate.")
 def run(
     kind: str,

@@ -25,7 +25,10 @@ ENV_EXTRA_KINDS = "DEVSIM_EXTRA_KINDS"
 
 # Kinds shipped with devsim, used when the distribution's metadata is not installed
 # (e.g. running from a source checkout without `pip install -e`).
-_BUILTIN = {"sers": "devsim.devices.sers:SersDevice"}
+_BUILTIN = {
+    "sers": "devsim.devices.sers:SersDevice",
+    "gms96": "devsim.devices.gms96:Gms96Device",
+}
 
 
 class UnknownKind(LookupError):

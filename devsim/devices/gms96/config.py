@@ -1,0 +1,105 @@
+"""Configuration of one simulated GMS96 card (spec gms96.md §2.2, Appendix A).
+
+DIL switch (manual §2.2): address 0..31 (switches 1..4 inverted + switch 5 = +16), switch 6
+interpolation, switch 7 protocol S/E, switch 8 baud 9600/38400.  The switch is read only at
+power-on or after a reset (emergency-stop release).  Axis geometry is in increments from the
+power-on position: reference cam, index marks, mechanical end stops and optional position
+ranges wired to inputs (the GMS has no limit-switch inputs of its own, spec §5.11).
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+__all__ = ["AxisGeometry", "DilSwitch", "Gms96Config", "LimitSwitch", "LinkOptions", "PlcOptions"]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class DilSwitch(_Strict):
+    """The 8-position DIL switch (manual §2.2), as its meaning rather than switch positions."""
+
+    address: int = Field(default=3, ge=0, le=31, description="switches 1..4 (+16 with switch 5)")
+    interpolation: bool = Field(default=False, description="switch 6: behind a GMS-I card")
+    protocol: Literal["S", "E"] = Field(default="S", description="switch 7: DIN 19244 S- or E-version")
+    baud: Literal[9600, 38400] = Field(default=9600, description="switch 8")
+
+
+class LimitSwitch(_Strict):
+    """A position range that drives an input bit (spec §5.11 a); the PLC decides what it means."""
+
+    input: str = Field(description="input bit, e.g. E0.3")
+    low: float | None = Field(default=None, description="active from here (None: -inf)")
+    high: float | None = Field(default=None, description="active up to here (None: +inf)")
+
+
+class AxisGeometry(_Strict):
+    """Where things sit on the axis, in increments from the power-on position (spec §5.6)."""
+
+    cam: tuple[float, float] | None = Field(
+        default=(-20000.0, -15000.0), description="reference cam [low, high] or null (no cam)"
+    )
+    cam_input: Literal["E2.1", "E2.0"] = "E2.1"
+    cam_polarity: Literal["NO", "NC"] = Field(default="NO", description="NO: 24 V while on the cam")
+    index_period: int = Field(default=4096, gt=0, description="increments between index marks (counts/rev)")
+    index_offset: float = 0.0
+    end_stops: tuple[float, float] | None = Field(default=None, description="mechanical end stops [low, high]")
+    limit_switches: list[LimitSwitch] = Field(default_factory=list)
+    kv_per_n10: float = Field(default=0.2, gt=0, description="Kv [1/s] per unit of N10 (spec §5.7)")
+    position_after_reset: Literal["zero", "keep"] = "zero"
+    brake_stop_ms: float = Field(default=50.0, ge=0)
+    i2t_t_allow_s: float = Field(default=2.0, gt=0)
+
+
+class LinkOptions(_Strict):
+    """Link-layer choices the manual leaves open (spec §3.7, §3.9, Appendix A)."""
+
+    response_delay: float = Field(default=0.0, ge=0, le=0.1, description="seconds before a reply")
+    char_timeout: float = Field(default=0.05, gt=0, description="inter-character timeout (s)")
+    unknown_command_reply: Literal["ack", "none"] = "ack"
+    unknown_short_command_reply: Literal["ack", "none"] = "ack"
+    on_queue_full: Literal["defer", "drop", "nack"] = "defer"
+    e_version_features: list[Literal["fcb", "acd", "dfc"]] = Field(default_factory=lambda: ["fcb", "acd", "dfc"])
+    broadcast_address: int | None = Field(default=None, description="e.g. 255; None = no broadcast")
+
+
+class PlcOptions(_Strict):
+    """The scripted PLC stand-in (spec §4.10.3)."""
+
+    auto_ack_m_functions_ms: float | None = Field(default=None, ge=0)
+
+
+class Gms96Config(_Strict):
+    """What a user can set for one GMS96 card (``--config FILE.yaml`` or a plant file)."""
+
+    dil: DilSwitch = Field(default_factory=DilSwitch)
+    variant: str = Field(default="KSA15-2R", description="K1 | KSA15 | KSA15-2 | KS4 | KS8 | ... (+R)")
+    params: dict[int, int] = Field(default_factory=dict, description="factory N parameters {index: value}")
+    axis: AxisGeometry = Field(default_factory=AxisGeometry)
+    link: LinkOptions = Field(default_factory=LinkOptions)
+    plc: PlcOptions = Field(default_factory=PlcOptions)
+    boot_time: float = Field(default=0.5, ge=0, description="seconds of silence after power-on/reset")
+    flash_erase_s: float = Field(default=3.0, ge=0, le=5.0, description="silence after p1;100 / p3;100")
+    eeprom_write_s: float = Field(default=0.1, ge=0, description="BUSY time of s85;170")
+    queue_capacity: int = Field(default=64, ge=1)
+    max_programs: int = Field(default=100, ge=1, le=100)
+    max_total_commands: int = Field(default=8192, ge=1)
+    out_of_range: Literal["clamp", "ignore"] = "clamp"
+    override_pot_pct: float = Field(default=100.0, ge=0, le=125)
+    tool_offset: int = Field(default=0, description="tool offset T (no command sets it, spec §5.9)")
+
+    @field_validator("params", mode="before")
+    @classmethod
+    def _params(cls, value: object) -> object:
+        """Accept ``{N10: 300}`` as well as ``{10: 300}``."""
+        if isinstance(value, dict):
+            out = {}
+            for key, val in value.items():
+                text = str(key).strip().upper()
+                out[int(text[1:]) if text.startswith("N") else int(text)] = val
+            return out
+        return value

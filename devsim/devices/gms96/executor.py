@@ -1,0 +1,488 @@
+"""The command executor: queued (CNC) commands in order, BUSY, waits and blending.
+
+Manual §2.3.1 (queued letter commands), §2.4.3 (PLC direct commands p10), §2.5 (CNC programs);
+spec §4.2.2 (executor states), §4.2.4 (motion preconditions: a move while IDXOFF = 1 is skipped),
+§4.2.5 (queue capacity), §5.4 (blending: consecutive moves in one direction are one plan to the
+chain's last target; each move completes when the set-point crosses its end point, so
+SETO/RESO/SNDF/SNDM between them act "on the fly"), §5.5 (H2, H7).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from devsim.core.axis import Axis, Watch
+from devsim.core.clock import Timer
+from devsim.devices.gms96 import tables
+from devsim.devices.gms96.reference import ReferenceRun
+
+if TYPE_CHECKING:
+    from devsim.devices.gms96.device import Gms96Device
+
+__all__ = ["Cmd", "Executor", "TRANSPARENT_P10"]
+
+TRANSPARENT_P10 = frozenset({16, 17, 28, 29})  # SETO RESO SNDF SNDM keep blending (M §2.4.3)
+MOVES = frozenset("A+")
+
+
+@dataclass(frozen=True)
+class Cmd:
+    """One queued command: letter, P1..P3 and how many parameters were sent."""
+
+    letter: str
+    p1: int = 0
+    p2: int = 0
+    p3: int = 0
+    n: int = 0
+    program: int | None = None  # "_end" marker: the program that ends here
+
+    def as_list(self) -> list[Any]:
+        return [self.letter, self.p1, self.p2, self.p3, self.n]
+
+
+def transparent(cmd: Cmd) -> bool:
+    """Commands that do not break move blending (spec §5.4)."""
+    return (
+        cmd.letter == "f"
+        or (cmd.letter == "G" and cmd.p1 == 0)
+        or (cmd.letter == "p" and cmd.p1 == 10 and cmd.p2 in TRANSPARENT_P10)
+    )
+
+
+class Executor:
+    """FIFO of queued commands and the one command being executed."""
+
+    def __init__(self, dev: Gms96Device) -> None:
+        self.dev = dev
+        self.queue: deque[Cmd] = deque()
+        self.deferred: deque[tuple[Cmd, Callable[[], None]]] = deque()
+        self.current: Cmd | None = None
+        self.waiting: Callable[[], bool] | None = None
+        self.wait_name = ""
+        self.reference: ReferenceRun | None = None
+        self.rejected_moves = 0
+        self.program_depth = 0
+        self.h7_level: int | None = None
+        self.last_target: float | None = None
+        self._timer: Timer | None = None
+        self._watch: Watch | None = None
+        self._running = False
+        self._stvo_edge = False
+
+    # -- state --------------------------------------------------------------------------------
+    @property
+    def busy(self) -> bool:
+        return self.current is not None or bool(self.queue)
+
+    @property
+    def full(self) -> bool:
+        return len(self.queue) >= self.dev.cfg.queue_capacity
+
+    # -- input --------------------------------------------------------------------------------
+    def submit(self, cmd: Cmd) -> None:
+        self.queue.append(cmd)
+        self._maybe_extend_chain()
+        self.kick()
+
+    def defer(self, cmd: Cmd, reply: Callable[[], None]) -> None:
+        self.deferred.append((cmd, reply))
+
+    def _release_deferred(self) -> None:
+        while self.deferred and not self.full:
+            cmd, reply = self.deferred.popleft()
+            self.queue.append(cmd)
+            reply()
+
+    # -- the loop -----------------------------------------------------------------------------
+    def kick(self) -> None:
+        if self._running:
+            return
+        self._running = True
+        try:
+            while self.current is None and self.queue:
+                cmd = self.queue.popleft()
+                self._release_deferred()
+                self.current = cmd
+                if self._start(cmd):
+                    self.current = None
+        finally:
+            self._running = False
+        self._release_deferred()
+
+    def complete(self) -> None:
+        """The current command finished; go on with the next."""
+        self._clear_wait()
+        self.current = None
+        self.kick()
+        self.dev.changed()
+
+    def poke(self) -> None:
+        """Something changed (marker, input, speed): re-check the wait condition."""
+        if self.waiting is not None and self.current is not None and self.waiting():
+            self.complete()
+
+    def wait(self, name: str, condition: Callable[[], bool]) -> bool:
+        if condition():
+            return True
+        self.waiting = condition
+        self.wait_name = name
+        return False
+
+    def _clear_wait(self) -> None:
+        self.waiting = None
+        self.wait_name = ""
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        if self._watch is not None:
+            self._watch.cancel()
+            self._watch = None
+
+    def after(self, seconds: float, name: str) -> bool:
+        self.wait_name = name
+        self._timer = self.dev.clock.call_later(seconds, self.complete)
+        return False
+
+    def abort(self) -> None:
+        """#0 / M0.1: discard the queue, end the running command (spec §4.2.3)."""
+        self.queue.clear()
+        for _cmd, reply in self.deferred:
+            reply()
+        self.deferred.clear()
+        self.program_depth = 0
+        self.h7_level = None
+        if self.reference is not None:
+            self.reference.abort()
+            self.reference = None
+        self._clear_wait()
+        cur, self.current = self.current, None
+        if cur is not None and (cur.letter in MOVES or cur.letter in "vwQ"):
+            self.current = Cmd("_halt")
+            self.dev.indexer.halt(self.complete)
+        elif self.dev.indexer.target is not None:
+            self.dev.indexer.halt()
+        self.dev.changed()
+
+    def flush(self) -> None:
+        """A fault: the queue is gone and the executor idle at once (spec §4.5.3)."""
+        self.queue.clear()
+        for _cmd, reply in self.deferred:
+            reply()
+        self.deferred.clear()
+        self.program_depth = 0
+        if self.reference is not None:
+            self.reference.abort()
+            self.reference = None
+        self._clear_wait()
+        self.current = None
+
+    # -- execution ----------------------------------------------------------------------------
+    def _start(self, cmd: Cmd) -> bool:
+        """Execute ``cmd``; True if it is complete at once."""
+        d = self.dev
+        handler = getattr(self, "_x_" + {"+": "plus", "_end": "end"}.get(cmd.letter, cmd.letter), None)
+        if handler is None:
+            return d.queued_setting(cmd)
+        return bool(handler(cmd))
+
+    # moves ----------------------------------------------------------------------------------
+    def _target_of(self, cmd: Cmd, base: float) -> float:
+        d = self.dev
+        p1 = max(tables.POSITION_MIN, min(tables.POSITION_MAX, cmd.p1))
+        if cmd.letter == "+" or (cmd.letter == "A" and d.g_relative):
+            return base + p1
+        return d.work_to_physical(p1)
+
+    def _x_A(self, cmd: Cmd) -> bool:
+        return self._move(cmd)
+
+    def _x_plus(self, cmd: Cmd) -> bool:
+        return self._move(cmd)
+
+    def _x_v(self, cmd: Cmd) -> bool:
+        return self._move(cmd, blend=False)
+
+    def _x_w(self, cmd: Cmd) -> bool:
+        if not self.dev.can_move():
+            self.rejected_moves += 1
+            return True
+        self.dev.set_counter_here(0)
+        return self._move(Cmd("v", cmd.p1), blend=False)
+
+    def _move(self, cmd: Cmd, blend: bool = True) -> bool:
+        d = self.dev
+        if not d.can_move():
+            self.rejected_moves += 1
+            d.record_event("move_rejected")
+            return True
+        ix = d.indexer
+        base = self.last_target if (ix.target is not None and self.last_target is not None) else ix.axis.position()
+        x = self._target_of(cmd, base)
+        self.last_target = x
+        if d.n(17) == 1:  # N17: the move runs in time only (M3.4)
+            shadow = Axis(d.clock, position=ix.axis.position())
+            acc, profile = ix.accel()
+            end = shadow.move_to(x, max(ix.speed(), 1.0), acc, profile=profile)
+            return self.after(end - d.clock.now(), "N17")
+        final = self._chain_end(x) if blend else x
+        if ix.target != final or not ix.axis.moving:
+            if ix.axis.position() == x and final == x:
+                return True
+            ix.go(final, "work")
+            d.record_event("move_start")
+        self._complete_at(x)
+        return False
+
+    def _complete_at(self, x: float) -> None:
+        ix = self.dev.indexer
+        direction = 1 if x >= ix.axis.position() else -1
+        point = x if direction > 0 else x + 1e-6
+
+        def crossed(side: int) -> None:
+            if side == direction and self.current is not None:
+                self.dev.record_event("move_end")
+                self.complete()
+
+        self._watch = ix.axis.watch(point, crossed)
+        if ix.axis.position() == x and not ix.axis.moving:
+            self.dev.clock.call_later(0.0, lambda: crossed(direction))
+
+    def _chain_end(self, x: float) -> float:
+        """Last target of the blendable moves queued behind the current one (spec §5.4)."""
+        ix = self.dev.indexer
+        start = ix.axis.position()
+        direction = 1 if x > start else -1
+        end = x
+        for cmd in self.queue:
+            if transparent(cmd):
+                continue
+            if cmd.letter not in MOVES:
+                break
+            nxt = self._target_of(cmd, end)
+            if (nxt - end) * direction <= 0:
+                break
+            end = nxt
+        return end
+
+    def _maybe_extend_chain(self) -> None:
+        cur = self.current
+        ix = self.dev.indexer
+        if cur is None or cur.letter not in MOVES or ix.target is None or not ix.axis.moving:
+            return
+        if ix.axis.phase() == "decel":
+            return  # too late: the move stops, the next one starts from rest
+        if self.last_target is None:
+            return
+        new_end = self._chain_end(self.last_target)
+        if new_end != ix.target:
+            ix.go(new_end, "work")
+
+    # reference runs ---------------------------------------------------------------------------
+    def _x_Q(self, cmd: Cmd) -> bool:
+        d = self.dev
+        if d.estop or d.monitoring_cause():
+            self.rejected_moves += 1
+            return True
+        p1, p2, p3 = cmd.p1, cmd.p2 & 0xFF, cmd.p3
+        if p1 == 8:
+            d.spindle(p2, p3)
+            return True
+        d.activate_controller()
+        if p1 == 3:
+            if p2 & 0x40 and p3 == 0:
+                d.set_counter_here(((int(round(d.indexer.actual())) + 2048) % 4096) - 2048)
+            d.idxoff = False
+            d.i2t_latched = False
+            return True
+        if not (p2 & 0x40 and not d.idxoff):
+            d.idxoff = True
+
+        def done(success: bool) -> None:
+            self.reference = None
+            if success:
+                d.i2t_latched = False
+            if self.current is not None and self.current.letter == "Q":
+                self.complete()
+
+        self.reference = ReferenceRun(d, p1, p2, p3, done)
+        self.reference.start()
+        return self.reference is None or self.reference.finished
+
+    # auxiliary ---------------------------------------------------------------------------------
+    def _x_H(self, cmd: Cmd) -> bool:
+        d = self.dev
+        if cmd.p1 == 2:
+            window = abs(d.n(27))
+            dwell = d.n(28) / 1000.0
+
+            def in_position() -> bool:
+                return not d.indexer.axis.moving and (window == 0 or abs(d.indexer.following_error()) <= window)
+
+            if in_position() and dwell <= 0:
+                return True
+            end = d.indexer.axis.segments()[-1].t1 if d.indexer.axis.moving else d.clock.now()
+            self.wait_name = "H2"
+            d.waiting_in_position = True
+
+            def check() -> None:
+                self._timer = None
+                if in_position():
+                    d.waiting_in_position = False
+                    self.complete()
+                else:
+                    self._timer = d.clock.call_later(max(dwell, 0.001), check)
+
+            self._timer = d.clock.call_at(end + dwell, check)
+            return False
+        if cmd.p1 == 7:
+            self.h7_level = max(0, min(100, cmd.p2))
+            return True
+        if cmd.p1 == 22:
+            d.h22_active = bool(cmd.p2)
+            return True
+        return True
+
+    def _x_m(self, cmd: Cmd) -> bool:
+        d = self.dev
+        img = d.image
+        if 50 <= cmd.p1 <= 89:
+            byte, bit = tables.m_function_marker(cmd.p1)
+            img.markers[11] = cmd.p2 & 0xFF
+        elif cmd.p1 == 100:
+            img.markers[15] = (img.markers[15] & 0x80) | (cmd.p2 & 0x7F)
+            img.markers[16] = (cmd.p3 >> 8) & 0xFF
+            img.markers[17] = cmd.p3 & 0xFF
+            byte, bit = 15, 7
+        elif cmd.p1 == 101:
+            img.markers[18] = (img.markers[18] & 0x80) | (cmd.p2 & 0x7F)
+            img.markers[19] = cmd.p3 & 0xFF
+            d.save_static()
+            byte, bit = 18, 7
+        else:
+            return True  # m49 (synchronous run) and unknown: accepted, no action
+        img.set_marker(byte, bit, True)
+        d.changed()
+        ack = d.cfg.plc.auto_ack_m_functions_ms
+        if ack is not None:
+            d.clock.call_later(ack / 1000.0, lambda: d.write_marker_bit(byte, bit, False))
+        return self.wait(f"m{cmd.p1}", lambda: not img.marker(byte, bit))
+
+    def _x_s(self, cmd: Cmd) -> bool:
+        d = self.dev
+        if (cmd.p1, cmd.p2) != tables.SAVE_KEY:
+            return True
+        d.save_eeprom()
+        if d.cfg.eeprom_write_s <= 0:
+            return True
+        return self.after(d.cfg.eeprom_write_s, "eeprom")
+
+    def _x_p(self, cmd: Cmd) -> bool:
+        d = self.dev
+        if cmd.p1 == 10:
+            return self._direct(cmd.p2, cmd.p3)
+        if cmd.p1 == 12:
+            d.image.outputs[2] = max(0, min(255, cmd.p2))
+            return True
+        if cmd.p1 == 11:
+            d.write_marker_byte(cmd.p2, cmd.p3)
+            return True
+        if cmd.p1 == 1 and cmd.p2 in (1, 2):
+            d.plc_running = cmd.p2 == 1 and d.plc_image is not None
+            return True
+        if cmd.p1 == 3 and cmd.p2 == 1:
+            return self._start_program(cmd.p3)
+        if cmd.p1 == 3 and cmd.p2 == 2:
+            self._stop_program()
+            return True
+        return True
+
+    def _start_program(self, pnr: int) -> bool:
+        d = self.dev
+        program = d.programs.get(pnr)
+        if program is None:
+            return True
+        if self.program_depth >= 8:
+            self._stop_all_programs()
+            return True
+        self.program_depth += 1
+        img = d.image
+        img.markers[2] = pnr & 0xFF
+        img.set_marker(0, 2, True)
+        img.set_marker(1, 0, False)
+        cmds = [Cmd(*row) for row in program] + [Cmd("_end", program=pnr)]
+        self.queue.extendleft(reversed(cmds))
+        return True
+
+    def _stop_program(self) -> None:
+        """p3;2 inside a program: drop the rest of the running program."""
+        while self.queue:
+            cmd = self.queue.popleft()
+            if cmd.letter == "_end":
+                self.queue.appendleft(Cmd("_end", program=-1))
+                return
+
+    def _stop_all_programs(self) -> None:
+        self.queue = deque(c for c in self.queue if c.program is None and c.letter != "_end")
+        self.program_depth = 0
+        self.dev.image.set_marker(0, 2, False)
+
+    def _x_end(self, cmd: Cmd) -> bool:
+        self.program_depth = max(0, self.program_depth - 1)
+        if self.program_depth == 0:
+            self.dev.image.set_marker(0, 2, False)
+            if cmd.program is not None and cmd.program >= 0:
+                self.dev.image.set_marker(1, 0, True)
+        return True
+
+    def _direct(self, op: int, operand: int) -> bool:
+        """PLC direct commands ``p10;OpCode;Operand`` (manual §2.4.3, spec §4.10.4)."""
+        d = self.dev
+        img = d.image
+        if op in (2, 3):
+            name = d.input_name(operand)
+            want = op == 2
+            return self.wait("WOSI" if want else "WORI", lambda: bool(d.signals.get(name)) == want if name else True)
+        if op in (6, 7):
+            want = op == 6
+            return self.wait("WOSO" if want else "WORO", lambda: d.output_bit(operand) == want)
+        if op in (10, 11):
+            want = op == 10
+            return self.wait("WOSF" if want else "WORF", lambda: img.marker(operand // 8 % 256, operand % 8) == want)
+        if op == 14:
+            return self.after(operand / 10.0, "WAIT") if operand > 0 else True
+        if op in (16, 17, 24):
+            if 0 <= operand <= 10:
+                value = True if op == 16 else False if op == 17 else not d.output_bit(operand)
+                d.write_output(operand, value)
+            return True
+        if op == 26:
+            for n in range(11):
+                d.write_output(n, False)
+            return True
+        if op == 28:
+            img.markers[5] = operand & 0xFF
+            return True
+        if op == 29:
+            img.post_message(operand)
+            return True
+        if op == 31:
+            self._stvo_edge = False
+            return self.wait("STVO", lambda: self._stvo_edge)
+        return True
+
+    def input_edge(self, name: str, value: bool) -> None:
+        if name == "E0.1" and value:
+            self._stvo_edge = True
+
+    def state(self) -> dict[str, Any]:
+        return {
+            "current": self.current.as_list() if self.current else None,
+            "waiting": self.wait_name,
+            "queue_length": len(self.queue),
+            "deferred": len(self.deferred),
+            "rejected_moves": self.rejected_moves,
+            "reference": self.reference.phase if self.reference else None,
+        }

@@ -1,0 +1,147 @@
+"""The card's side of the DIN 19244 link (manual §2.1, §2.3, §2.3.2; spec §3.2–§3.10).
+
+Frames are found by structure (:class:`~devsim.devices.gms96.codec.FrameDecoder`); the
+inter-character timeout only discards a stale partial frame (a clock timer, so virtual time
+works).  Frames with a bad checksum, length or end byte, and frames for another address, get
+no reply.  E-version (DIL 7 on, spec §3.9): a Langsatz with FCV = 1 and the same FCB as the last
+accepted one is a repetition — the previous reply is sent again byte-identically and nothing is
+executed; #0, power-on and a reset-of-remote-link frame (FC0, FCV = 0) make the FCB state
+"unknown".  The card is silent during its boot time and during the flash erase after
+``p1;100`` / ``p3;100`` (manual §2.3.1 p).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from devsim.core.clock import Timer
+from devsim.devices.gms96 import codec
+
+if TYPE_CHECKING:
+    from devsim.devices.gms96.device import Gms96Device
+
+__all__ = ["Link", "NO_REPLY"]
+
+NO_REPLY = b""
+
+
+class Link:
+    """Decoder, address filter, duplicate suppression, reply timing."""
+
+    def __init__(self, dev: Gms96Device) -> None:
+        self.dev = dev
+        self.decoder = codec.FrameDecoder(
+            short_extension=codec.short_extension_device, char_timeout=dev.cfg.link.char_timeout
+        )
+        self.silent_until = 0.0
+        self.last_fcb: int | None = None
+        self.last_reply = NO_REPLY
+        self.errors: dict[str, int] = {}
+        self.frames = 0
+        self._expire: Timer | None = None
+
+    def reset(self) -> None:
+        self.decoder.reset()
+        self.last_fcb = None
+        self.last_reply = NO_REPLY
+
+    def silence(self, seconds: float) -> None:
+        self.silent_until = max(self.silent_until, self.dev.clock.now() + seconds)
+
+    @property
+    def silent(self) -> bool:
+        return self.dev.clock.now() < self.silent_until or not self.dev.powered
+
+    # -- input ----------------------------------------------------------------------------------
+    def feed(self, data: bytes) -> None:
+        now = self.dev.clock.now()
+        if self.silent:
+            self.decoder.reset()  # the frame is lost
+            return
+        for item in self.decoder.feed(data, now):
+            self._handle(item)
+        if self._expire is not None:
+            self._expire.cancel()
+            self._expire = None
+        if self.decoder.pending:
+            timeout = self.decoder.char_timeout
+            self._expire = self.dev.clock.call_later(timeout * 1.0001, self._on_expire)
+
+    def _on_expire(self) -> None:
+        self._expire = None
+        for item in self.decoder.expire(self.dev.clock.now()):
+            self._handle(item)
+
+    def _handle(self, item: codec.Frame | codec.FrameError) -> None:
+        if isinstance(item, codec.FrameError):
+            self.errors[item.reason] = self.errors.get(item.reason, 0) + 1
+            return
+        if self.silent:
+            return
+        if isinstance(item, codec.ShortFrame):
+            self._short(item)
+        elif isinstance(item, codec.LongFrame):
+            self._long(item)
+
+    def _mine(self, address: int) -> bool | None:
+        """True: addressed to this card; None: broadcast; False: someone else's."""
+        if address == self.dev.address:
+            return True
+        bc = self.dev.cfg.link.broadcast_address
+        return None if bc is not None and address == bc else False
+
+    def _short(self, frame: codec.ShortFrame) -> None:
+        if self._mine(frame.address) is not True:
+            return
+        self.frames += 1
+        number = codec.short_command_number(frame.control)
+        if number == 0 and self.dev.e_version:
+            self.last_fcb = None
+        reply = self.dev.short_command(number, frame.extension)
+        self.send(reply)
+
+    def _long(self, frame: codec.LongFrame) -> None:
+        mine = self._mine(frame.address)
+        if mine is False:
+            return
+        parsed = codec.parse_letter(frame.data)
+        if parsed is None:
+            self.errors["parameters"] = self.errors.get("parameters", 0) + 1
+            return
+        self.frames += 1
+        control = frame.control
+        fcv, fcb = bool(control & codec.FCV), 1 if control & codec.FCB else 0
+        check = self.dev.e_version and "fcb" in self.dev.cfg.link.e_version_features and mine
+        if check:
+            if not fcv and (control & 0x0F) == 0:
+                self.last_fcb = None
+            elif fcv:
+                if self.last_fcb is not None and fcb == self.last_fcb:
+                    self.dev.record_event("duplicate")
+                    self.send(self.last_reply)
+                    return
+                self.last_fcb = fcb
+        cmd, params, count = parsed
+        reply = self.dev.letter_command(cmd, params, count, frame.data, deferred=self._deferred_reply)
+        if mine is None:
+            return  # broadcast: executed, never answered
+        if check and fcv:
+            self.last_reply = reply if reply is not None else NO_REPLY
+        if reply is not None:
+            self.send(reply)
+
+    def _deferred_reply(self, reply: bytes) -> None:
+        """A queued command's E5h released when a queue slot frees (on_queue_full: defer)."""
+        if self.dev.e_version:
+            self.last_reply = reply
+        self.send(reply)
+
+    # -- output ---------------------------------------------------------------------------------
+    def send(self, data: bytes | None) -> None:
+        if not data:
+            return
+        delay = self.dev.cfg.link.response_delay
+        if delay > 0:
+            self.dev.clock.call_later(delay, lambda: self.dev.send(data))
+        else:
+            self.dev.send(data)
