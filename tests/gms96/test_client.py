@@ -303,3 +303,35 @@ def test_raw_frames_and_errors(rig: Rig) -> None:
     assert client.exchange(bytes.fromhex("10 01 03 04 16")) == k_frame(0x40, 3, None)
     assert client.last_reply == k_frame(0x40, 3, None)
     assert not client.acd and not client.dfc
+
+
+def test_client_works_on_a_pty_opened_with_even_parity() -> None:
+    """A Linux pty refuses parity E re-configuration; the client must still be usable."""
+    import os
+    import threading
+    import tty
+
+    import serial
+
+    from devsim.devices.gms96.client import Gms96Client
+
+    master, slave = os.openpty()
+    tty.setraw(master)
+
+    def card() -> None:  # answers the #0 frame with E5h
+        received = b""
+        while len(received) < 5:
+            received += os.read(master, 5 - len(received))
+        os.write(master, bytes([0xE5]))
+
+    try:
+        port = serial.Serial(os.ttyname(slave), 9600, parity="E", timeout=0.5)
+        client = Gms96Client(port, 3, timeout=1.0)
+        thread = threading.Thread(target=card)
+        thread.start()
+        assert client.exchange(b"\x10\x00\x03\x03\x16") is not None
+        thread.join(2)
+        port.close()
+    finally:
+        os.close(master)
+        os.close(slave)

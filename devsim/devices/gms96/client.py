@@ -22,6 +22,7 @@ exchange.
 
 from __future__ import annotations
 
+import termios
 import time
 
 import serial
@@ -99,7 +100,12 @@ class Gms96Client:
         self.last_reply: Frame | None = None
         #: Framing errors seen while waiting for the last reply.
         self.errors: list[FrameError] = []
-        port.timeout = min(_POLL, timeout) if timeout > 0 else 0
+        try:
+            port.timeout = min(_POLL, timeout) if timeout > 0 else 0
+        except (OSError, termios.error, serial.SerialException):
+            # a Linux pty refuses the re-configuration with parity E (EINVAL); polling then
+            # simply uses the port's own timeout
+            pass
 
     # -- link ------------------------------------------------------------------------------
     def exchange(self, data: bytes) -> Frame | None:
