@@ -10,7 +10,11 @@ of both and their ratio.
 
 Targets: p50 ratio sers/echo ≤ 1.5, p99 < 2 ms.
 
-    python benchmarks/latency.py [--n 5000] [--kind sers|stub]
+The GMS96 part times the Kurzsatz status poll ``#1`` (``10 01 03 04 16`` → ``10 40 03 43 16``)
+the same way, against the echo server answering every frame that ends in 16h with a reply of
+the same length.
+
+    python benchmarks/latency.py [--n 5000] [--kind sers|stub] [--no-gms96]
 
 ``--kind stub`` uses a tiny stand-in device defined here (for checking the plumbing).
 """
@@ -28,6 +32,7 @@ import tempfile
 import threading
 import time
 import tty
+from collections.abc import Callable
 
 import serial
 
@@ -48,7 +53,22 @@ def complete(buf: bytes) -> bool:
     return at >= 0 and buf.find(b"\r", at + len(ACK)) >= 0
 
 
-def round_trips(path: str, baud: int, n: int, warmup: int = 200) -> tuple[list[float], int]:
+GMS96_POLL = bytes.fromhex("1001030416")  # Kurzsatz #1 to card 3
+
+
+def frame_complete(buf: bytes) -> bool:
+    """True once a whole FT1.2 fixed frame (10h … 16h, with or without the MB4 octet) is in."""
+    return len(buf) >= 5 and buf[0] == 0x10 and buf[-1] == 0x16 and len(buf) in (5, 6)
+
+
+def round_trips(
+    path: str,
+    baud: int,
+    n: int,
+    warmup: int = 200,
+    query: bytes = QUERY,
+    done: Callable[[bytes], bool] = complete,
+) -> tuple[list[float], int]:
     """Time ``n`` queries on ``path``; returns seconds per query and the reply length."""
     times: list[float] = []
     reply_len = 0
@@ -57,11 +77,11 @@ def round_trips(path: str, baud: int, n: int, warmup: int = 200) -> tuple[list[f
         for i in range(warmup + n):
             buf = b""
             start = time.perf_counter()
-            port.write(QUERY)
-            while not complete(buf):
+            port.write(query)
+            while not done(buf):
                 chunk = port.read(port.in_waiting or 1)
                 if not chunk:
-                    raise SystemExit(f"no complete answer to {QUERY!r} from {path} (got {buf!r})")
+                    raise SystemExit(f"no complete answer to {query!r} from {path} (got {buf!r})")
                 buf += chunk
             elapsed = time.perf_counter() - start
             if i >= warmup:
@@ -133,8 +153,9 @@ def measure_device(kind: str, n: int) -> tuple[list[float], int]:
 class EchoServer:
     """A bare asyncio server on a pty: every CR-terminated line gets ``reply``."""
 
-    def __init__(self, reply: bytes) -> None:
+    def __init__(self, reply: bytes, terminator: bytes = b"\r") -> None:
         self.reply = reply
+        self.terminator = terminator
         self.master, self.slave = os.openpty()
         tty.setraw(self.master)
         tty.setraw(self.slave)
@@ -154,8 +175,8 @@ class EchoServer:
         except OSError:
             return
         self._buf += data
-        while b"\r" in self._buf:
-            _, _, rest = bytes(self._buf).partition(b"\r")
+        while self.terminator in self._buf:
+            _, _, rest = bytes(self._buf).partition(self.terminator)
             self._buf = bytearray(rest)
             os.write(self.master, self.reply)
 
@@ -174,20 +195,43 @@ class EchoServer:
         os.close(self.slave)
 
 
-def measure_echo(reply_len: int, n: int) -> list[float]:
+def measure_echo(reply_len: int, n: int, binary: bool = False) -> list[float]:
     """The echo server runs in its own process too (``latency.py --serve-echo LEN``)."""
-    proc, path = _spawn([sys.executable, os.path.abspath(__file__), "--serve-echo", str(reply_len)])
+    args = [sys.executable, os.path.abspath(__file__), "--serve-echo", str(reply_len)]
+    if binary:
+        args.append("--binary")
+    proc, path = _spawn(args)
     try:
-        times, _ = round_trips(path, 9600, n)
+        if binary:
+            times, _ = round_trips(path, 9600, n, query=GMS96_POLL, done=frame_complete)
+        else:
+            times, _ = round_trips(path, 9600, n)
     finally:
         _stop(proc)
     return times
 
 
-def serve_echo(reply_len: int) -> None:
-    tail = b"\nok1\n\r"
-    reply = b"x" * max(0, reply_len - len(tail)) + tail
-    with EchoServer(reply) as server:
+def measure_gms96(n: int) -> tuple[list[float], int]:
+    """A GMS96 (card 3, no boot delay) in its own process, polled with Kurzsatz #1."""
+    with tempfile.TemporaryDirectory() as tmp:
+        config = os.path.join(tmp, "gms96.yaml")
+        with open(config, "w") as fh:
+            fh.write("boot_time: 0\n")
+        proc, path = _spawn([sys.executable, "-m", "devsim", "run", "gms96", "--pty", "--config", config])
+        try:
+            return round_trips(path, 9600, n, query=GMS96_POLL, done=frame_complete)
+        finally:
+            _stop(proc)
+
+
+def serve_echo(reply_len: int, binary: bool = False) -> None:
+    if binary:  # a fixed frame of the same length: 10 … 16
+        reply = b"\x10" + b"\x00" * max(0, reply_len - 2) + b"\x16"
+        server = EchoServer(reply, terminator=b"\x16")
+    else:
+        tail = b"\nok1\n\r"
+        server = EchoServer(b"x" * max(0, reply_len - len(tail)) + tail)
+    with server:
         print(f"echo: pty {server.path}", flush=True)
         try:
             signal.sigwait({signal.SIGINT, signal.SIGTERM})
@@ -209,11 +253,13 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=5000, help="timed queries per target (default 5000)")
     parser.add_argument("--kind", default="sers", help="device kind (default sers; 'stub' = stand-in)")
+    parser.add_argument("--no-gms96", action="store_true", help="skip the GMS96 status poll")
     parser.add_argument("--serve-echo", type=int, metavar="LEN", help=argparse.SUPPRESS)
+    parser.add_argument("--binary", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.serve_echo is not None:
         signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
-        serve_echo(args.serve_echo)
+        serve_echo(args.serve_echo, binary=args.binary)
         return 0
 
     device_times, reply_len = measure_device(args.kind, args.n)
@@ -227,6 +273,13 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  ratio    p50 {ratio50:7.2f}      p99 {ratio99:7.2f}      (target p50 ratio <= 1.5)")
     print(f"  ratio target p50 <= 1.5: {'met' if ratio50 <= 1.5 else 'MISSED'}")
     print(f"  {args.kind} p99 {d99:.3f} ms, target < 2 ms: {'met' if d99 < 2.0 else 'MISSED'}")
+    if not args.no_gms96:
+        gms_times, gms_len = measure_gms96(args.n)
+        echo_bin = measure_echo(gms_len, args.n, binary=True)
+        print(f"latency: {args.n} GMS96 status polls #1 {GMS96_POLL.hex(' ')} on a pty ({gms_len}-byte answer)")
+        g50, g99 = summary("gms96", gms_times)
+        b50, _b99 = summary("echo", echo_bin)
+        print(f"  ratio    p50 {g50 / b50 if b50 else float('inf'):7.2f}")
     return 0
 
 
