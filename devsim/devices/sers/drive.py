@@ -569,17 +569,8 @@ class SersDrive(Device):
         """Starting a stored program (RUN, P0=1): preconditions of §4.4.1."""
         if self.program_state == 1:
             raise SersError(44)
-        if self.cfg.service_switch or (self.signals.get("service_ext") and self.ram.get(1092)):
-            raise SersError(65)
-        if self.errors:
-            raise SersError(66)
-        if self._i7_stop_active():
-            raise SersError(67)
-        if self.signals.get("stop"):
-            raise SersError(68)
-        program = getattr(self, "program", None)
-        if program is None or not program.valid:
-            raise SersError(69)
+        self._check_start()
+        program = self.program
         if program.editing:
             program.quit()
         self.interpreter.start(label)
@@ -1747,6 +1738,7 @@ class SersDrive(Device):
         self.interpreter.start(label, subroutine=True)
 
     def _check_start(self) -> None:
+        """Refusals of a program start, in the order of §4.4.1 (errnos 65–69)."""
         if self.cfg.service_switch or (self.signals.get("service_ext") and self.ram.get(1092)):
             raise SersError(65)
         if self.errors:

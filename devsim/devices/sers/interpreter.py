@@ -228,6 +228,10 @@ class Interpreter:
         if mode in (2, 3) and L65 in self.program.labels:
             self._jump_l65()
             return
+        self._halt()
+
+    def _halt(self) -> None:
+        """The program stops for good (an error): the next start begins at line 1."""
         self._cancel()
         self.running = False
         self.waiting = None
@@ -249,12 +253,7 @@ class Interpreter:
         P12 value 128 (display 'H' blinking) and the errno (§4.8.3.1)."""
         self.drive.record_error(errno)
         self.drive.warn(128)
-        self._cancel()
-        self.running = False
-        self.waiting = None
-        self.stops = 0
-        self.resume_pc = None
-        self.drive.on_program_state()
+        self._halt()
         self.drive.report_program_error(errno, detail)
 
     # -- the cycle ------------------------------------------------------------------------------------
