@@ -82,3 +82,12 @@ def test_program_survives_a_flood_of_garbage() -> None:
     out.clear()
     device.feed(b"#\r#P1019?\r")
     assert b"P1019=45U/min" in bytes(out)
+
+
+def test_unicode_digits_are_not_numbers() -> None:
+    """Found by the fuzzer: '²' (0xB2 in latin-1) is a digit to str.isdigit() but not to the SERS."""
+    device, clock, out, nvram = _device()
+    out.clear()
+    device.feed(b"#\xb2\r#V=\xb2\r#P\xb91?\r")
+    device.feed(b"#1 P11?\r")
+    assert bytes(out).endswith(b"P11=0\n\r\nok3\n\r")

@@ -112,7 +112,7 @@ class Framer:
         self._length += 1
         if self._addr is not None:
             ch = chr(byte)
-            if (ch.isdigit() and self._addr != "*") or (ch == "*" and self._addr == ""):
+            if ("0" <= ch <= "9" and self._addr != "*") or (ch == "*" and self._addr == ""):
                 self._addr += ch
                 events.append(_ADDRESS_CHAR)
                 return events

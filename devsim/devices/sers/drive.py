@@ -2080,9 +2080,9 @@ class SersDrive(Device):
 
 def _lookup(token: str) -> ParamDef:
     text = token.strip().upper()
-    if text.startswith("P") and text[1:].isdigit():
+    if text.startswith("P") and text[1:].isascii() and text[1:].isdigit():
         number = int(text[1:])
-    elif text.isdigit():
+    elif text.isascii() and text.isdigit():
         number = int(text)
     else:
         number = ALIASES[text]

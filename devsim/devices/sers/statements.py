@@ -69,6 +69,11 @@ _NUMBER = re.compile(r"[0-9]*\.?[0-9]*")
 _SIGNED_NUMBER = re.compile(r"-?[0-9]*\.?[0-9]*")
 
 
+def _digits(text: str) -> bool:
+    """ASCII decimal digits only ('²' and other Unicode digits are not numbers here)."""
+    return text != "" and text.isascii() and text.isdigit()
+
+
 class NeedMore(Exception):
     """The text ends where more characters could still change its meaning."""
 
@@ -267,7 +272,7 @@ class _Cursor:
         match = (_SIGNED_NUMBER if signed else _NUMBER).match(self.text, self.pos)
         if match is not None and match.end() >= len(self.text) and not self.final:
             raise NeedMore
-        if match is None or not any(ch.isdigit() for ch in match.group()):
+        if match is None or not any(_digits(ch) for ch in match.group()):
             raise SyntaxFault(errno, start)
         self.pos = match.end()
         self.peek()  # a number at the end of the text may still grow
@@ -289,17 +294,17 @@ def _address(cur: _Cursor, errno: int = 61) -> Address:
     """An operand naming state (parameter, alias, input/output bit)."""
     start = cur.pos
     c = cur.peek()
-    if c == "P" and cur.peek(2)[1:].isdigit():
+    if c == "P" and _digits(cur.peek(2)[1:]):
         cur.pos += 1
         number = cur.integer(13)
         return Address("P", number, cur.upper[start : cur.pos])
-    if c in ("I", "J", "O") and cur.peek(2)[1:].isdigit():
+    if c in ("I", "J", "O") and _digits(cur.peek(2)[1:]):
         cur.pos += 1
         bit = cur.integer(errno)
         return Address(c, bit, cur.upper[start : cur.pos])
     word = cur.word()
     if word in ALIAS_WORDS:
-        if word == "IN" and cur.peek().isdigit() and cur.peek():
+        if word == "IN" and _digits(cur.peek()):
             value = cur.integer(errno)  # legacy IN0..IN255 means IN=value
             return Address("IN", value, cur.upper[start : cur.pos])
         return Address("alias", word, word)
@@ -309,7 +314,7 @@ def _address(cur: _Cursor, errno: int = 61) -> Address:
 
 def _operand(cur: _Cursor, errno: int = 61, signed: bool = True) -> Operand:
     c = cur.peek()
-    if c.isdigit() or c == "." or (signed and c == "-"):
+    if _digits(c) or c == "." or (signed and c == "-"):
         return cur.number(errno, signed=signed)
     return _address(cur, errno)
 
@@ -366,11 +371,11 @@ def _statement(cur: _Cursor) -> Statement:  # noqa: C901 - one branch per statem
         cur.skip_spaces()
         value = cur.number(49, signed=True)
         return Change(cur.text[start : cur.pos], value)
-    if c == "L" and (cur.peek(2)[1:].isdigit() or cur.peek(2) == "L "):
+    if c == "L" and (_digits(cur.peek(2)[1:]) or cur.peek(2) == "L "):
         if cur.peek(2) == "L ":
             cur.pos += 1
             cur.skip_spaces()
-            if not cur.peek().isdigit():
+            if not _digits(cur.peek()):
                 raise SyntaxFault(21, start)
         else:
             cur.pos += 1
@@ -382,7 +387,7 @@ def _statement(cur: _Cursor) -> Statement:  # noqa: C901 - one branch per statem
         cur.pos += 3
         return Trace(cur.text[start : cur.pos], query=True)
 
-    if c in ("P", "I", "J", "O") and cur.peek(2)[1:].isdigit():
+    if c in ("P", "I", "J", "O") and _digits(cur.peek(2)[1:]):
         return _assign_or_query(cur, start, _address(cur))
     word = cur.word()
     if word is None:
@@ -426,7 +431,7 @@ def _statement(cur: _Cursor) -> Statement:  # noqa: C901 - one branch per statem
     if word == "RUN":
         save = cur.pos
         cur.skip_spaces()
-        if cur.peek().isdigit() and cur.peek():
+        if _digits(cur.peek()):
             label = cur.integer(37)
             return Run(text(), label)
         cur.pos = save
@@ -435,7 +440,7 @@ def _statement(cur: _Cursor) -> Statement:  # noqa: C901 - one branch per statem
         save = cur.pos
         cur.skip_spaces()
         arg_start = cur.pos
-        while cur.peek() and (cur.peek().isdigit() or cur.peek() in ".+-"):
+        while cur.peek() and (_digits(cur.peek()) or cur.peek() in ".+-"):
             cur.pos += 1
         arg = cur.text[arg_start : cur.pos]
         if not arg:
