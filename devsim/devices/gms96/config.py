@@ -13,7 +13,18 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-__all__ = ["AxisGeometry", "DilSwitch", "Gms96Config", "LimitSwitch", "LinkOptions", "PlcOptions"]
+__all__ = [
+    "AxisGeometry",
+    "DilSwitch",
+    "Gms96Config",
+    "LimitSwitch",
+    "LinkOptions",
+    "PlcCopyRule",
+    "PlcFaultMessages",
+    "PlcLimitRule",
+    "PlcOptions",
+    "PlcStartRule",
+]
 
 
 class _Strict(BaseModel):
@@ -67,10 +78,64 @@ class LinkOptions(_Strict):
     broadcast_address: int | None = Field(default=None, description="e.g. 255; None = no broadcast")
 
 
-class PlcOptions(_Strict):
-    """The scripted PLC stand-in (spec §4.10.3)."""
+class PlcLimitRule(_Strict):
+    """Limit-switch rule (spec §4.10.3, §5.11): an input → STOP (M0.0) or abort (M0.1) + message.
 
+    ``stop``: M0.0 follows the switch (set while active, released when it clears, so the
+    interrupted move continues).  ``abort``: M0.1 is pulsed on the active edge, and again every
+    cycle while the switch is active and the axis is commanded towards ``direction``, so the
+    axis can always be driven back out of the switch."""
+
+    input: str = Field(description="input bit, e.g. E0.3")
+    action: Literal["stop", "abort"] = "abort"
+    message: int = Field(default=0, ge=0, le=255, description="code into MB4 on the active edge (0 = none)")
+    active_low: bool = Field(default=False, description="normally-closed switch: active at 0 V")
+    direction: Literal["+", "-", "any"] = Field(default="any", description="only act on motion this way")
+
+
+class PlcFaultMessages(_Strict):
+    """``message_on_fault`` (spec §4.10.3): MB4 codes posted on the fault's rising edge."""
+
+    following_error: int = Field(default=0, ge=0, le=255)
+    monitoring: int = Field(default=0, ge=0, le=255)
+    emergency_stop: int = Field(default=0, ge=0, le=255)
+
+
+class PlcStartRule(_Strict):
+    """``start_program_on_input`` (spec §4.10.3): MB2 := program, M0.2 := 1 on an input edge."""
+
+    input: str = Field(description="input bit, e.g. E0.2")
+    program: int = Field(ge=0, le=99)
+    edge: Literal["rising", "falling"] = "rising"
+
+
+class PlcCopyRule(_Strict):
+    """A bit follows another bit every cycle: ``{from: E0.4, to: A0.5, invert: false}``."""
+
+    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+
+    source: str = Field(alias="from", description="E/A/M bit read from the process image")
+    to: str = Field(description="A or M bit written")
+    invert: bool = False
+
+
+class PlcOptions(_Strict):
+    """The scripted PLC stand-in for the undocumented Step5 program (spec §4.10.2, §4.10.3)."""
+
+    cycle_ms: float | None = Field(
+        default=None, gt=0, description="PLC cycle; None: variant's plc_ms_per_1000 x instructions/1000"
+    )
+    instructions: int = Field(default=230, ge=1, description="program length for the derived cycle time")
+    loaded: bool | None = Field(
+        default=None, description="a PLC program is in FLASH at power-on; None: iff rules/hook are configured"
+    )
+    flash_bytes: int = Field(default=32768, ge=1, description="PLC program memory (longer download: T3;4 I.0)")
     auto_ack_m_functions_ms: float | None = Field(default=None, ge=0)
+    limit_switches: list[PlcLimitRule] = Field(default_factory=list)
+    message_on_fault: PlcFaultMessages | None = None
+    start_program_on_input: list[PlcStartRule] = Field(default_factory=list)
+    copy_bits: list[PlcCopyRule] = Field(default_factory=list)
+    hook: str | None = Field(default=None, description="'package.module:function' called every cycle")
 
 
 class Gms96Config(_Strict):

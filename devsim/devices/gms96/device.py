@@ -21,10 +21,12 @@ from devsim.core.device import Device, SerialSettings, UnknownName
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.gms96 import codec, tables
 from devsim.devices.gms96.config import DilSwitch, Gms96Config
+from devsim.devices.gms96.counter import CounterInput
 from devsim.devices.gms96.executor import Cmd, Executor
 from devsim.devices.gms96.image import ProcessImage, parse_bit
 from devsim.devices.gms96.link import Link
 from devsim.devices.gms96.motion import Indexer
+from devsim.devices.gms96.plc import Plc
 
 __all__ = ["Gms96Device"]
 
@@ -64,6 +66,10 @@ class Gms96Device(Device):
         self.indexer = Indexer(self, self.axis)
         self.executor = Executor(self)
         self.link = Link(self)
+        self.plc_image: str | None = None
+        self.plc_frames: list[int] = []
+        self.plc = Plc(self)
+        self.counter = CounterInput(self)
         self._define_signals()
         self._switches: list[RegionSwitch] = []
         self._build_switches()
@@ -151,12 +157,14 @@ class Gms96Device(Device):
             self.origin = self.axis.position()
         self.image = ProcessImage()
         self._load_eeprom()
+        self.counter.power_on()
         st = self.nvram.get("static", {}) or {}
         self.image.restore_static(st.get("data"))
         self.image.markers[18] = int(st.get("mb18", 0)) & 0xFF
         flash = self.nvram.get("flash", {}) or {}
         self.programs: dict[int, list[list[Any]]] = {int(k): v for k, v in (flash.get("programs") or {}).items()}
-        self.plc_image: str | None = flash.get("plc")
+        self.plc_image = flash.get("plc")
+        self.plc_frames = list(flash.get("plc_frames") or ([len(self.plc_image) // 2] if self.plc_image else []))
         offs = self.nvram.get("offsets", {}) or {}
         self.zero_table: dict[int, int] = {int(k): int(v) for k, v in (offs.get("table") or {}).items()}
         self.machine_zero = int(offs.get("machine_zero", 0))
@@ -177,7 +185,6 @@ class Gms96Device(Device):
         self.idxoff = True
         self.controller = not self.estop and not self.monitoring_cause() and not self.nv_error
         self.download: tuple[str, int, list[list[Any]]] | None = None
-        self.plc_running = self.plc_image is not None
         self.waiting_in_position = False
         self.h22_active = False
         self.i2t_q = 0.0
@@ -189,6 +196,7 @@ class Gms96Device(Device):
         self.indexer.blocked_at = None
         self._update_block()
         self.record_event("power_on")
+        self.plc.power_on()
         self.changed()
 
     def _boot_done(self) -> None:
@@ -230,7 +238,11 @@ class Gms96Device(Device):
         self.nvram.put("static", {"data": self.image.static_data(), "mb18": self.image.markers[18] & 0x7F})
 
     def save_flash(self) -> None:
-        self.nvram.put("flash", {"programs": {str(k): v for k, v in self.programs.items()}, "plc": self.plc_image})
+        self.nvram.put(
+            "flash",
+            {"programs": {str(k): v for k, v in self.programs.items()}, "plc": self.plc_image,
+             "plc_frames": list(self.plc_frames)},
+        )
 
     def save_offsets(self) -> None:
         self.nvram.put("offsets", {"table": {str(k): v for k, v in self.zero_table.items()}, "machine_zero": self.machine_zero})
@@ -244,6 +256,7 @@ class Gms96Device(Device):
     def _power_off(self) -> None:
         self.save_static()
         self.powered = False
+        self.plc.power_off()
         self.executor.flush()
         self.indexer.power_off(brake=True)
 
@@ -270,6 +283,7 @@ class Gms96Device(Device):
     def close(self) -> None:
         for t in self._timers:
             t.cancel()
+        self.plc.power_off()
         self.executor.flush()
 
     # ======================================================================================
@@ -298,6 +312,8 @@ class Gms96Device(Device):
         return self.n(51) == 1 and not self.signals.get("E0.0")
 
     def can_move(self) -> bool:
+        if self.counter.active:
+            return False  # the counter input is the set-point source (spec §5.10)
         return not (self.estop or self.monitoring_cause() or self.nv_error or not self.controller or self.idxoff)
 
     def activate_controller(self) -> None:
@@ -496,7 +512,9 @@ class Gms96Device(Device):
 
     def memory_status(self) -> int:
         s = tables.MEMORY_STATUS_BITS
-        v = 0 if self.plc_running else s["PLC_NOT_RUNNING"]
+        v = 0 if self.plc.running else s["PLC_NOT_RUNNING"]
+        if self.plc.storage_error and not self.dil.interpolation:
+            v |= s["PLC_STORAGE_ERROR"]
         if self.nv_error:
             v |= s["NV_ERROR"] | s["EEPROM_DEFECTIVE"]
         if getattr(self, "cnc_storage_error", False):
@@ -698,6 +716,8 @@ class Gms96Device(Device):
                 if p1 == 3 and not 0 <= p3 < self.cfg.max_programs:
                     return ACK
                 self.download = ("cnc" if p1 == 3 else "plc", p3, [])
+                if p1 == 1:
+                    self.plc.begin_download()
                 self.link.silence(self.cfg.flash_erase_s)
                 self.record_event("flash_erase")
             return ACK
@@ -713,8 +733,8 @@ class Gms96Device(Device):
                     self.programs = {}
                 self.programs[pnr] = recorded
             else:
-                self.plc_image = "".join(row[0] for row in recorded)
-                self.plc_running = True
+                self.plc.end_download([bytes.fromhex(row[0]) for row in recorded])
+                return ACK
             self.save_flash()
         return ACK
 
@@ -922,6 +942,16 @@ class Gms96Device(Device):
                 raise UnknownName(name) from None
         if section == "data" and rest.isdigit():
             return self.image.data[int(rest)]
+        if section == "counter":
+            counter = self.counter.state()
+            if rest in counter:
+                return counter[rest]
+            raise UnknownName(name)
+        if section == "plc":
+            plc = {**self.plc.state(), "image": self.plc_image, "frames": list(self.plc_frames)}
+            if rest in plc:
+                return plc[rest]
+            raise UnknownName(name)
         if section == "register" and rest.isdigit():
             return int.from_bytes(self.image.data[4 * int(rest) : 4 * int(rest) + 4], "little", signed=True)
         simple = {
@@ -996,6 +1026,18 @@ class Gms96Device(Device):
             data[rest] = value
             self.pending_dil = DilSwitch.model_validate(data)  # read at the next reset (§2.2)
             return
+        if name == "counter.pulses":
+            self.counter.pulses(int(value))
+            return
+        if name == "counter.rate_hz":
+            self.counter.set_rate(float(value))
+            return
+        if name == "plc.running":
+            if value:
+                self.plc.start()
+            else:
+                self.plc.stop()
+            return
         if name == "message":
             self.image.post_message(int(value))
             self.changed()
@@ -1030,6 +1072,8 @@ class Gms96Device(Device):
             "outputs": self.signals.snapshot("output"),
             "quantities": self.signals.snapshot("quantity"),
             "programs": {k: len(v) for k, v in self.programs.items()},
+            "plc": self.plc.state(),
+            "counter": self.counter.state(),
         }
 
 

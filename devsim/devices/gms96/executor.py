@@ -283,8 +283,8 @@ class Executor:
     # reference runs ---------------------------------------------------------------------------
     def _x_Q(self, cmd: Cmd) -> bool:
         d = self.dev
-        if d.estop or d.monitoring_cause():
-            self.rejected_moves += 1
+        if d.estop or d.monitoring_cause() or (d.counter.active and cmd.p1 != 3):
+            self.rejected_moves += 1  # counter-input mode: no indexer runs (spec §5.10)
             return True
         p1, p2, p3 = cmd.p1, cmd.p2 & 0xFF, cmd.p3
         if p1 == 8:
@@ -364,10 +364,7 @@ class Executor:
         else:
             return True  # m49 (synchronous run) and unknown: accepted, no action
         img.set_marker(byte, bit, True)
-        d.changed()
-        ack = d.cfg.plc.auto_ack_m_functions_ms
-        if ack is not None:
-            d.clock.call_later(ack / 1000.0, lambda: d.write_marker_bit(byte, bit, False))
+        d.changed()  # the PLC (plc.auto_ack_m_functions_ms or a scripted rule) resets the bit
         return self.wait(f"m{cmd.p1}", lambda: not img.marker(byte, bit))
 
     def _x_s(self, cmd: Cmd) -> bool:
@@ -389,8 +386,11 @@ class Executor:
         if cmd.p1 == 11:
             d.write_marker_byte(cmd.p2, cmd.p3)
             return True
-        if cmd.p1 == 1 and cmd.p2 in (1, 2):
-            d.plc_running = cmd.p2 == 1 and d.plc_image is not None
+        if cmd.p1 == 1 and cmd.p2 == 1:
+            d.plc.start()
+            return True
+        if cmd.p1 == 1 and cmd.p2 == 2:
+            d.plc.stop()
             return True
         if cmd.p1 == 3 and cmd.p2 == 1:
             return self._start_program(cmd.p3)
@@ -403,6 +403,8 @@ class Executor:
         d = self.dev
         program = d.programs.get(pnr)
         if program is None:
+            if self.program_depth == 0:
+                d.image.set_marker(0, 2, False)  # M0.2 start request of a missing program ends
             return True
         if self.program_depth >= 8:
             self._stop_all_programs()

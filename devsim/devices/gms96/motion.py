@@ -3,8 +3,9 @@
 Spec §5.1–§5.3 (units: Hz = inc/s, B in Hz/ms → a = 1000·B inc/s²; linear or sin² ramps, N24),
 §5.2 (working speed, V-factor quantisation, override), §5.4 (blending: one plan to the chain's
 last target, junctions are crossings), §5.7 (following error e = v/Kv, ``blocked`` actual
-position, trip at |e| > N20 solved as a crossing time), §5.11 (mechanical end stops block the
-axis).  The axis runs in *physical* increments; the card's position counter is
+position, trip at |e| > N20 solved as a crossing time), §5.8 (backlash compensation: on a
+reversal the set-point stands N41/N42 ms while the motor takes up the slack), §5.11 (mechanical
+end stops hold the actual position; the set-point runs on until |e| > N20).  The axis runs in *physical* increments; the card's position counter is
 ``axis.position() - origin`` (the device's business).
 """
 
@@ -25,6 +26,14 @@ __all__ = ["Indexer"]
 _SINE = RampProfile(shape="sine")
 
 
+def _dwell(axis: Axis, seconds: float, on_done: Callable[[], None]) -> None:
+    """A standstill that is part of the plan: ``axis.moving`` stays true (status "motion", no
+    in-position) while no watch sees any motion; ``on_done`` at its end.  The shared axis has
+    no public dwell, so this goes through its plan installer."""
+    x = axis.position()
+    axis._install(axis.clock.now(), x, 0.0, [(0.0, seconds, 0.0, "linear")], x, on_done)
+
+
 class Indexer:
     """Set-point generation and the position-loop model of one card."""
 
@@ -37,6 +46,11 @@ class Indexer:
         self.spindle_speed = 0.0
         self.on_arrive: Callable[[], None] | None = None
         self.blocked_at: float | None = None  # actual position held by a blockage
+        # backlash compensation (spec §5.8): the side the slack was last taken up on (0: unknown,
+        # nothing compensated before the first motion) and a reversal in progress
+        self.last_dir = 0
+        self.comp_dir = 0
+        self.comp_phase = ""  # "" | "brake" (to standstill first) | "dwell" (motor takes up N41)
         self._fe_timer: Timer | None = None
         self._fe_watches: list[Watch] = []
 
@@ -107,16 +121,69 @@ class Indexer:
         """Re-plan from the exact current state after any change of speed, override or STOP."""
         if self.target is None and self.jog_dir == 0:
             return
+        if self.comp_phase and not self.axis.moving:
+            self._cancel_backlash()  # the axis was stopped under the compensation (torque abort)
+        direction = self._direction()
+        if self.comp_phase == "dwell" or (self.comp_phase == "brake" and direction == self.comp_dir):
+            return  # the compensation re-plans when it is over
+        self._cancel_backlash()
         v = self.speed()
         acc, profile = self.accel()
         if v <= 0.0:
             self.axis.stop(acc, profile=profile, speed=max(abs(self.axis.velocity()), 1.0))
-        elif self.target is not None:
-            self.axis.move_to(self.target, v, acc, on_done=self._arrived, profile=profile)
+        elif self._needs_backlash(direction):
+            self.comp_dir = direction
+            if self.axis.velocity() != 0.0:  # still running the other way: brake first
+                self.comp_phase = "brake"
+                self.axis.stop(acc, self._backlash_dwell, profile=profile, speed=max(abs(self.axis.velocity()), 1.0))
+            else:
+                self._backlash_dwell()
         else:
-            self.axis.jog(self.jog_dir, v, acc, profile=profile)
+            if self.target is not None:
+                self.axis.move_to(self.target, v, acc, on_done=self._arrived, profile=profile)
+            else:
+                self.axis.jog(self.jog_dir, v, acc, profile=profile)
+            if direction:
+                self.last_dir = direction
         self.dev.record_event("replan")
         self.arm_following_error()
+
+    # -- backlash compensation (spec §5.8) ------------------------------------------------------
+    def _direction(self) -> int:
+        """The way the running plan wants the set-point to go (0: nowhere)."""
+        if self.target is None:
+            return self.jog_dir
+        x, v = self.axis.position(), self.axis.velocity()
+        if v != 0.0:  # a target short of the braking point means: brake and come back
+            s = 1 if v > 0 else -1
+            stop = x + v * abs(v) / (2.0 * self.accel()[0])
+            return s if (self.target - stop) * s >= 0 else -s
+        d = self.target - x
+        return (d > 0) - (d < 0)
+
+    def _needs_backlash(self, direction: int) -> bool:
+        return self.dev.n(41) > 0 and direction != 0 and self.last_dir != 0 and direction != self.last_dir
+
+    def backlash_time(self) -> float:
+        """N41 increments at N42 inc/ms: N41/N42 ms."""
+        return self.dev.n(41) / (max(self.dev.n(42), 1) * 1000.0)
+
+    def _backlash_dwell(self) -> None:
+        """The motor takes up the slack while the set-point (counter, ``T0``, the load) stands:
+        for the axis a standstill that still counts as motion."""
+        self.comp_phase = "dwell"
+        self.dev.record_event("backlash")
+        _dwell(self.axis, self.backlash_time(), self._backlash_done)
+
+    def _backlash_done(self) -> None:
+        self.last_dir = self.comp_dir
+        self.comp_dir = 0
+        self.comp_phase = ""
+        self.replan()
+
+    def _cancel_backlash(self) -> None:
+        self.comp_dir = 0
+        self.comp_phase = ""
 
     def _arrived(self) -> None:
         self.target = None
@@ -130,6 +197,7 @@ class Indexer:
         self.target = None
         self.jog_dir = 0
         self.on_arrive = None
+        self._cancel_backlash()
         acc, profile = self.accel()
         if self.axis.moving:
             self.axis.stop(acc, on_stopped, profile=profile, speed=max(abs(self.axis.velocity()), 1.0))
@@ -142,9 +210,10 @@ class Indexer:
         self.target = None
         self.jog_dir = 0
         self.on_arrive = None
+        self._cancel_backlash()
         v = abs(self.axis.velocity())
         ms = self.dev.cfg.axis.brake_stop_ms
-        if self.blocked_at is not None or v == 0.0 or ms <= 0 or not brake:
+        if self.blocked_at is not None or v == 0.0 or ms <= 0 or not brake or self._past_end_stop():
             actual = self.actual()
             self.axis.quick_stop()
             if not self.axis.moving:
@@ -164,12 +233,34 @@ class Indexer:
             return self.axis.position() - self.blocked_at
         if self.dev.stepper:
             return 0.0
-        return self.axis.velocity() / self.kv()
+        x = self.axis.position()
+        return x - self._end_stop(x - self.axis.velocity() / self.kv())
 
     def actual(self) -> float:
         if self.blocked_at is not None:
             return self.blocked_at
-        return self.axis.position() - (self.following_error() if self.dev.controller else 0.0)
+        if not self.dev.controller:
+            return self._end_stop(self.axis.position())
+        return self.axis.position() - self.following_error()
+
+    def _end_stop(self, x: float) -> float:
+        """The mechanics end where the end stops are (spec §5.11 b); a stepper card does not see
+        it (no feedback)."""
+        stops = self.dev.cfg.axis.end_stops
+        if stops is None or self.dev.stepper:
+            return x
+        return min(max(x, stops[0]), stops[1])
+
+    def _past_end_stop(self) -> bool:
+        x = self.axis.position()
+        return self._end_stop(x) != x
+
+    def at_end_stop(self) -> bool:
+        """The axis presses against an end stop: the set-point is past it (with the lag)."""
+        if self.blocked_at is not None or not self.dev.controller:
+            return False
+        x = self.axis.position() - (0.0 if self.dev.stepper else self.axis.velocity() / self.kv())
+        return self._end_stop(x) != x
 
     def block(self, active: bool) -> None:
         if active and self.blocked_at is None:
@@ -239,4 +330,5 @@ class Indexer:
             "speed": self.speed() if (self.target is not None or self.jog_dir) else 0.0,
             "override": self.override_pct(),
             "blocked_at": self.blocked_at,
+            "backlash": {"side": self.last_dir, "phase": self.comp_phase},
         }

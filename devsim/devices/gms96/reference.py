@@ -14,6 +14,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from devsim.core.axis import Watch
+from devsim.core.clock import Timer
 
 if TYPE_CHECKING:
     from devsim.devices.gms96.device import Gms96Device
@@ -33,10 +34,14 @@ class ReferenceRun:
         self.finished = False
         self.phase = "start"
         self.cam_phase = False  # FB 254 (Accu1 = 3) = 1 during cam search / drive-off
-        self.travelled = 0.0
+        self.travelled = 0.0  # path length of the finished legs (for the P3 limit)
         self.fast_kind = "work"
+        self.after_success: Callable[[], None] | None = None  # Q-1: the drive-off to N33
         self._leg_start = dev.indexer.axis.position()
+        self._leg_dir = 0
+        self._leg_over = 0.0  # braking overshoot (against the leg's direction) at its start
         self._limit_watch: list[Watch] = []
+        self._limit_timer: Timer | None = None
         self._index_watch: Watch | None = None
         self._unsub: Callable[[], None] | None = None
         self.was_active = not dev.idxoff
@@ -54,10 +59,16 @@ class ReferenceRun:
         level = bool(self.dev.signals.get(self.cam_input()))
         return level == (not self.p2 & 0x01)
 
-    def _cleanup(self) -> None:
+    def _cancel_limit(self) -> None:
         for w in self._limit_watch:
             w.cancel()
         self._limit_watch = []
+        if self._limit_timer is not None:
+            self._limit_timer.cancel()
+            self._limit_timer = None
+
+    def _cleanup(self) -> None:
+        self._cancel_limit()
         if self._index_watch is not None:
             self._index_watch.cancel()
             self._index_watch = None
@@ -66,19 +77,32 @@ class ReferenceRun:
             self._unsub = None
 
     def _leg(self, direction: int, kind: str) -> None:
-        """Start an endless search leg; the P3 distance limit is a watched crossing."""
+        """Start an endless search leg; the P3 distance limit is a watched crossing.
+
+        The limit counts the path travelled (spec §5.6): a leg that reverses a moving axis first
+        brakes past its start point by ``over`` and comes back, which is travel too."""
         axis = self.dev.indexer.axis
-        self.travelled += abs(axis.position() - self._leg_start)
-        self._leg_start = axis.position()
-        for w in self._limit_watch:
-            w.cancel()
-        self._limit_watch = []
+        x = axis.position()
+        if self._leg_dir:
+            gone = 2.0 * self._leg_over + (x - self._leg_start) * self._leg_dir
+            self.travelled += max(gone, abs(x - self._leg_start))
+        v = axis.velocity()
+        over = v * v / (2.0 * self.dev.indexer.accel()[0]) if v * direction < 0 else 0.0
+        self._leg_start, self._leg_dir, self._leg_over = x, direction, over
+        self._cancel_limit()
         if self.p3 > 0:
-            rest = max(self.p3 - self.travelled, 0.0)
-            edge = self._leg_start + direction * rest
-            self._limit_watch.append(
-                axis.watch(edge, lambda s, d=direction: (s == d) and self._distance_limit())
-            )
+            rest = self.p3 - self.travelled
+            if rest <= 0:
+                self._limit_timer = self.dev.clock.call_later(0.0, self._distance_limit)
+            elif rest <= over:  # reached while still braking in the old direction
+                self._limit_watch.append(
+                    axis.watch(x - direction * rest, lambda s, d=-direction: (s == d) and self._distance_limit())
+                )
+            else:
+                edge = x + direction * (rest - 2.0 * over)
+                self._limit_watch.append(
+                    axis.watch(edge, lambda s, d=direction: (s == d) and self._distance_limit())
+                )
         self.dev.indexer.run(direction, kind)
 
     def _watch_cam(self, callback: Callable[[bool], None]) -> None:
@@ -95,7 +119,12 @@ class ReferenceRun:
             self.fast_kind = "rapid_nv"
             self.after_success = self._drive_off
             p1 = self.p1
-        if p1 == 0 or p1 == 2:
+        if p1 == 3:  # only through Q-1 (the executor runs a plain Q3 itself)
+            if self.p2 & 0x40 and self.p3 == 0:
+                self.dev.set_counter_here(self._resolver_position())
+            self.dev.idxoff = False
+            self._succeeded()
+        elif p1 == 0 or p1 == 2:
             self._cam_search()
         elif p1 == 1:
             self._index_search()
@@ -171,18 +200,31 @@ class ReferenceRun:
         if self._index_watch is not None:
             self._index_watch.cancel()
             self._index_watch = None
-        for w in self._limit_watch:
-            w.cancel()
-        self._limit_watch = []
+        if self._unsub is not None:
+            self._unsub()
+            self._unsub = None
+        self._cancel_limit()
         self.dev.indexer.go(point, "search", self._at_point)
 
+    def _resolver_position(self) -> int:
+        """Absolute position within the pole pass, -period/2..period/2-1 (P2.6 with P3 = 0);
+        the pole pass starts at an (electronic) index mark."""
+        axis = self.dev.indexer.axis
+        period, off = axis.counts_per_rev, axis.index_offset
+        half = period // 2
+        return int((round(self.dev.indexer.actual() - off) + half) % period) - half
+
     def _at_point(self) -> None:
-        if not self.p2 & 0x04:
+        if self.p2 & 0x40 and self.p3 == 0:
+            self.dev.set_counter_here(self._resolver_position())
+        elif not self.p2 & 0x04:
             self.dev.set_counter_here(0)
         self.dev.idxoff = False
-        follow = getattr(self, "after_success", None)
-        if follow is not None:
-            follow()
+        self._succeeded()
+
+    def _succeeded(self) -> None:
+        if self.after_success is not None:
+            self.after_success()
         else:
             self._finish(True)
 

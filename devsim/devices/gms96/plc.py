@@ -1,0 +1,399 @@
+"""The scripted PLC of a GMS96 card (manual §1.4, §2.4; spec §4.10, §4.11).
+
+The real card runs a downloaded Step5-like program whose machine-code format is undocumented,
+so the simulator does not execute Step5 (spec §4.10.2).  Instead this module is a small PLC
+that runs *scripted rules* on the card's process image, cyclically on the device clock:
+
+* each cycle: inputs EB0..EB3 → PAE snapshot, the rules (and an optional Python hook) read
+  the PAE, the outputs and the markers MB0..MB255 (with the firmware's status bits overlaid),
+  write markers at once and collect output writes, which go to the outputs (PAA) at the end
+  of the cycle (manual §1.4);
+* the cycle time is ``plc.cycle_ms`` or, when unset, the variant's measured
+  ``plc_ms_per_1000`` (manual §6) × ``plc.instructions`` / 1000 (≈ 20 ms for 230
+  instructions on a KSA card, the spec's default);
+* state: a program is "loaded" when a download ended (`p1;100`, `a` frames stored opaquely,
+  `p1;101`) or the configuration has rules (``plc.loaded`` overrides); it starts by itself at
+  power-on if loaded (manual §2.4), `p1;1` starts and `p1;2` stops it; memory status
+  ``T3;4`` I.1 = PLC not running, I.0 = program storage error (download longer than
+  ``plc.flash_bytes``).  In interpolation mode (DIL 6) the PLC never runs (spec §4.11.6).
+
+Built-in rules (spec §4.10.3, all optional):
+
+* ``auto_ack_m_functions_ms: N`` – M6.0..M10.7, M15.7, M18.7 are reset N ms after the PLC
+  first saw them set (a PLC timer: the reset happens in the first cycle at or after that);
+* ``limit_switches`` – an input → STOP (M0.0 follows the switch) or abort (M0.1 pulse) plus a
+  message code in MB4; ``direction`` restricts the action to motion towards the switch;
+* ``message_on_fault`` – an MB4 code on the rising edge of following error (position
+  controller off with neither emergency stop nor monitoring), monitoring (M0.6) and emergency
+  stop (M0.4 = 0); the message query ``q`` (M3.1) re-posts the codes of faults still present
+  and the PLC resets M3.1 (manual §2.3.1 q);
+* ``start_program_on_input`` – MB2 := program and M0.2 := 1 on an input edge;
+* ``copy_bits`` – a bit follows another bit (optionally inverted), e.g. ``E0.4 → A0.5``;
+* ``hook: "package.module:function"`` – called with the :class:`Plc` every cycle; it can use
+  :meth:`Plc.bit`, :meth:`Plc.set_bit`, :meth:`Plc.marker_byte`, :meth:`Plc.set_marker_byte`
+  and :meth:`Plc.message`.
+
+Bit names are ``E<byte>.<bit>``, ``A<byte>.<bit>``, ``M<byte>.<bit>`` (:func:`.image.parse_bit`).
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from devsim.core.clock import Timer
+from devsim.devices.gms96.image import parse_bit
+
+if TYPE_CHECKING:
+    from devsim.devices.gms96.device import Gms96Device
+
+__all__ = ["M_FUNCTION_BITS", "Plc"]
+
+#: The handshake bits the CNC sets and the PLC resets (spec §3.8.9): M6.0..M10.7, M15.7, M18.7.
+M_FUNCTION_BITS: tuple[tuple[int, int], ...] = tuple((b, k) for b in range(6, 11) for k in range(8)) + (
+    (15, 7),
+    (18, 7),
+)
+OUTPUTS = 11  # A0.0..A1.2 (spec §4.11.1, G27)
+_EPS = 1e-9
+
+Hook = Callable[["Plc"], Any]
+
+
+def load_hook(spec: str) -> Hook:
+    """``"package.module:function"`` → the function."""
+    module, _, attr = spec.partition(":")
+    if not module or not attr:
+        raise ValueError(f"PLC hook must be 'package.module:function', not {spec!r}")
+    fn = getattr(importlib.import_module(module), attr)
+    if not callable(fn):
+        raise ValueError(f"PLC hook {spec!r} is not callable")
+    return fn  # type: ignore[no-any-return]
+
+
+class Plc:
+    """The scripted PLC of one card: run state, download image, cycle and rules."""
+
+    def __init__(self, dev: Gms96Device) -> None:
+        self.dev = dev
+        self.cfg = dev.cfg.plc
+        self.running = False
+        self.storage_error = False
+        self.cycles = 0
+        self.hooks: list[Hook] = [load_hook(self.cfg.hook)] if self.cfg.hook else []
+        self._timer: Timer | None = None
+        self._pae = bytes(4)
+        self._paa_writes: dict[int, bool] = {}
+        self._reset_rule_state()
+
+    # -- configuration ----------------------------------------------------------------------
+    @property
+    def cycle_s(self) -> float:
+        if self.cfg.cycle_ms is not None:
+            return self.cfg.cycle_ms / 1000.0
+        per_1000 = self.dev.hw.plc_ms_per_1000 or 87
+        return per_1000 * self.cfg.instructions / 1000.0 / 1000.0
+
+    def scripted(self) -> bool:
+        """The configuration describes a PLC program (rules or a hook)."""
+        c = self.cfg
+        return bool(
+            c.auto_ack_m_functions_ms is not None
+            or c.limit_switches
+            or c.message_on_fault is not None
+            or c.start_program_on_input
+            or c.copy_bits
+            or self.hooks
+        )
+
+    @property
+    def loaded(self) -> bool:
+        """A PLC program is in FLASH (downloaded, or the scenario's scripted program)."""
+        if self.dev.plc_image is not None:
+            return True
+        return self.cfg.loaded if self.cfg.loaded is not None else self.scripted()
+
+    @property
+    def disabled(self) -> bool:
+        """Behind a GMS-I (DIL 6) the PLC functionality is lost (spec §4.11.6)."""
+        return self.dev.dil.interpolation
+
+    # -- run state ------------------------------------------------------------------------------
+    def power_on(self) -> None:
+        """Power-on / reset: a program in FLASH starts by itself (manual §2.4)."""
+        self._cancel()
+        self.running = False
+        self.storage_error = False
+        self._reset_rule_state()
+        if self.loaded and not self.disabled:
+            self.running = True
+            first = (self.dev.cfg.boot_time if self.dev.booting else 0.0) + self.cycle_s
+            self._timer = self.dev.clock.call_later(first, self._cycle)
+
+    def power_off(self) -> None:
+        self._cancel()
+        self.running = False
+
+    def start(self) -> None:
+        """``p1;1``: start the PLC program (no program: stays stopped, T3;4 I.1 = 1)."""
+        if self.running or self.disabled or not self.loaded:
+            return
+        self.running = True
+        self._reset_rule_state()
+        self.dev.record_event("plc_start")
+        self._schedule()
+
+    def stop(self) -> None:
+        """``p1;2``: stop the PLC (outputs and markers keep their state [R])."""
+        if not self.running:
+            return
+        self._cancel()
+        self.running = False
+        self.dev.record_event("plc_stop")
+
+    def _cancel(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+
+    def _schedule(self) -> None:
+        self._cancel()
+        self._timer = self.dev.clock.call_later(self.cycle_s, self._cycle)
+
+    def _cycle(self) -> None:
+        self._timer = None
+        if not self.running or not self.dev.powered:
+            return
+        self.run_cycle()
+        if self.running:
+            self._schedule()
+
+    # -- download (spec §3.8.24) ---------------------------------------------------------------
+    def begin_download(self) -> None:
+        """``p1;100``: the flash sector is erased: the program is gone, the PLC stops."""
+        self.stop()
+        self.dev.plc_image = None
+        self.dev.plc_frames = []
+        self.dev.save_flash()
+
+    def end_download(self, frames: list[bytes]) -> None:
+        """``p1;101``: store the ``a`` frames' raw data in order as the PLC program image.
+
+        An empty download leaves no program; one longer than ``plc.flash_bytes`` sets the
+        storage error (T3;4 I.0) and is discarded.  The new program is not started: the manual
+        says it "can be started and stopped after a successful download" (`p1;1`) [R]."""
+        size = sum(len(f) for f in frames)
+        if size > self.cfg.flash_bytes:
+            self.storage_error = True
+            self.dev.record_event("plc_storage_error")
+            return
+        self.storage_error = False
+        if frames:
+            self.dev.plc_image = b"".join(frames).hex()
+            self.dev.plc_frames = [len(f) for f in frames]
+        self.dev.save_flash()
+        self.dev.record_event("plc_download")
+
+    # -- process image access for rules and hooks ----------------------------------------------
+    def bit(self, name: str) -> bool:
+        """A bit as the PLC sees it: E from this cycle's PAE, A from the outputs, M markers."""
+        area, byte, bit = parse_bit(name)
+        if area == "E":
+            return bool(self._pae[byte] >> bit & 1) if byte < len(self._pae) else False
+        if area == "A":
+            n = byte * 8 + bit
+            if n in self._paa_writes:
+                return self._paa_writes[n]
+            return n < OUTPUTS and self.dev.output_bit(n)
+        return bool(self.dev.marker_byte(byte) >> bit & 1)
+
+    def set_bit(self, name: str, value: bool) -> None:
+        """Write an output (PAA, transferred at the end of the cycle) or a marker (at once)."""
+        area, byte, bit = parse_bit(name)
+        if area == "A":
+            n = byte * 8 + bit
+            if n < OUTPUTS:
+                self._paa_writes[n] = bool(value)
+        elif area == "M":
+            self.set_marker_bit(byte, bit, bool(value))
+        else:
+            raise ValueError(f"the PLC cannot write input {name}")
+
+    def marker_byte(self, byte: int) -> int:
+        return self.dev.marker_byte(byte)
+
+    def set_marker_byte(self, byte: int, value: int) -> None:
+        if self.dev.image.markers[byte] != value & 0xFF:
+            self.dev.write_marker_byte(byte, value)
+
+    def set_marker_bit(self, byte: int, bit: int, value: bool) -> None:
+        if self.dev.image.marker(byte, bit) != value:
+            self.dev.write_marker_bit(byte, bit, value)
+
+    def message(self, code: int) -> None:
+        """Like SNDM: the code into MB4, buffered behind a waiting one (spec §4.5.1)."""
+        self.dev.image.post_message(code)
+        self.dev.changed()
+
+    @property
+    def now(self) -> float:
+        return self.dev.clock.now()
+
+    # -- one cycle -------------------------------------------------------------------------------
+    def run_cycle(self) -> None:
+        dev = self.dev
+        self.cycles += 1
+        self._pae = bytes(dev.input_byte(b) for b in range(4))
+        self._paa_writes = {}
+        self._auto_ack()
+        self._limit_switches()
+        self._fault_messages()
+        self._start_rules()
+        self._copy_rules()
+        for hook in self.hooks:
+            hook(self)
+        self._prev_pae = self._pae
+        self._flush_paa()
+
+    def _flush_paa(self) -> None:
+        dev = self.dev
+        changed = False
+        for n, value in self._paa_writes.items():
+            if bool(dev.image.outputs[n // 8] >> (n % 8) & 1) != value:
+                byte, bit = divmod(n, 8)
+                if value:
+                    dev.image.outputs[byte] |= 1 << bit
+                else:
+                    dev.image.outputs[byte] &= ~(1 << bit) & 0xFF
+                changed = True
+        self._paa_writes = {}
+        if changed:
+            dev.changed()
+
+    def _reset_rule_state(self) -> None:
+        self._ack_seen: dict[tuple[int, int], float] = {}
+        self._limit_active: list[bool] = [False] * len(self.cfg.limit_switches)
+        self._stop_by_rules = False
+        self._faults: dict[str, bool] = {
+            "following_error": False,
+            "monitoring": False,
+            "emergency_stop": False,
+        }
+        self._prev_pae: bytes | None = None
+        self._fe_pending = False
+        self._controller_was_on = bool(getattr(self.dev, "controller", False))
+
+    # -- rules -----------------------------------------------------------------------------------
+    def _auto_ack(self) -> None:
+        ms = self.cfg.auto_ack_m_functions_ms
+        if ms is None:
+            return
+        now = self.now
+        for byte, bit in M_FUNCTION_BITS:
+            key = (byte, bit)
+            if not self.dev.image.marker(byte, bit):
+                self._ack_seen.pop(key, None)
+                continue
+            seen = self._ack_seen.setdefault(key, now)
+            if now - seen >= ms / 1000.0 - _EPS:
+                del self._ack_seen[key]
+                self.set_marker_bit(byte, bit, False)
+
+    def _commanded_direction(self) -> int:
+        ix = self.dev.indexer
+        if ix.target is not None:
+            d = ix.target - self.dev.axis.position()
+            return (d > 0) - (d < 0)
+        if ix.jog_dir:
+            return ix.jog_dir
+        v = self.dev.axis.velocity()
+        return (v > 0) - (v < 0)
+
+    def _limit_switches(self) -> None:
+        rules = self.cfg.limit_switches
+        if not rules:
+            return
+        direction = self._commanded_direction()
+        want_stop = False
+        for i, rule in enumerate(rules):
+            active = self.bit(rule.input) != rule.active_low
+            towards = rule.direction == "any" or direction == (1 if rule.direction == "+" else -1)
+            edge = active and not self._limit_active[i]
+            self._limit_active[i] = active
+            if edge and rule.message:
+                self.message(rule.message)
+            if rule.action == "stop":
+                want_stop = want_stop or (active and towards)
+            elif active and towards and (edge or (rule.direction != "any" and direction != 0)):
+                self.dev.record_event("plc_limit_abort")
+                self.set_marker_bit(0, 1, True)  # the firmware aborts and clears M0.1
+        if any(r.action == "stop" for r in rules) and want_stop != self._stop_by_rules:
+            self._stop_by_rules = want_stop
+            self.set_marker_bit(0, 0, want_stop)
+
+    def _fault_states(self) -> dict[str, bool]:
+        """Fault levels from MB0: a following error is the position controller (M0.5) going
+        off while neither emergency stop (M0.4 = 0) nor monitoring (M0.6) is present; it stays
+        pending until the controller is on again (Q / Q3)."""
+        mb0 = self.dev.marker_byte(0)
+        estop = not mb0 & 0x10
+        monitoring = bool(mb0 & 0x40)
+        controller = bool(mb0 & 0x20)
+        if controller:
+            self._fe_pending = False
+        elif self._controller_was_on and not estop and not monitoring:
+            self._fe_pending = True
+        self._controller_was_on = controller
+        return {"following_error": self._fe_pending, "monitoring": monitoring, "emergency_stop": estop}
+
+    def _fault_messages(self) -> None:
+        codes = self.cfg.message_on_fault
+        states = self._fault_states()
+        query = self.dev.image.marker(3, 1)
+        if codes is not None:
+            for name, active in states.items():
+                code = getattr(codes, name)
+                if code and active and (query or not self._faults[name]):
+                    self.message(code)
+        self._faults = states
+        if query:
+            self.set_marker_bit(3, 1, False)  # the PLC resets M3.1 after re-reporting (M §2.3.1 q)
+
+    def _start_rules(self) -> None:
+        prev = self._prev_pae
+        if prev is None:
+            return  # no edge in the first cycle after a (re)start
+        for rule in self.cfg.start_program_on_input:
+            _area, byte, bit = parse_bit(rule.input)
+            old, new = bool(prev[byte] >> bit & 1), bool(self._pae[byte] >> bit & 1)
+            if old == new or new != (rule.edge == "rising"):
+                continue
+            if self.dev.image.marker(0, 2):
+                continue  # a program runs: M0.2 is already 1
+            self.dev.record_event("plc_start_program")
+            self.set_marker_byte(2, rule.program)
+            self.set_marker_bit(0, 2, True)
+
+    def _copy_rules(self) -> None:
+        for rule in self.cfg.copy_bits:
+            value = self.bit(rule.source) != rule.invert
+            area, byte, bit = parse_bit(rule.to)
+            if area == "A":
+                n = byte * 8 + bit
+                if n < OUTPUTS and bool(self.dev.image.outputs[byte] >> bit & 1) != value:
+                    self._paa_writes[n] = value
+            elif area == "M":
+                self.set_marker_bit(byte, bit, value)
+
+    # -- inspection --------------------------------------------------------------------------------
+    def state(self) -> dict[str, Any]:
+        return {
+            "loaded": self.loaded,
+            "running": self.running,
+            "cycles": self.cycles,
+            "cycle_ms": self.cycle_s * 1000.0,
+            "storage_error": self.storage_error,
+            "image_bytes": len(self.dev.plc_image or "") // 2,
+            "frames": len(self.dev.plc_frames),
+        }
