@@ -460,6 +460,10 @@ class Axis:
         """True while a plan with motion remains (including an instant of v = 0 at a reversal)."""
         return bool(self._plan) and self.clock.now() < self._plan[-1].t1
 
+    def stopped_since(self) -> float | None:
+        """When the axis came to rest (the end of its last plan); None while it moves."""
+        return None if self.moving else self._plan_end()
+
     def phase(self, t: float | None = None) -> Phase:
         """``idle``, ``accel`` (|v| increasing), ``const`` (cruising) or ``decel``."""
         _, v, a, seg = self._lookup(t)

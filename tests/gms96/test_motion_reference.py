@@ -548,7 +548,6 @@ def test_h7_torque_abort_on_blocked_axis(referenced: Plant) -> None:
     assert c.read(0)[1] == round(x_actual - 100)
 
 
-@pytest.mark.xfail(strict=True, reason="executor/device: H7 arming is not consumed by the next move (spec §5.5)")
 def test_h7_applies_to_the_next_move_only(referenced: Plant) -> None:
     c = referenced.client()
     send(c, "H", 7, 50)
@@ -561,18 +560,18 @@ def test_h7_applies_to_the_next_move_only(referenced: Plant) -> None:
     assert referenced.read("idxoff") is True  # a following error, no torque abort
 
 
-@pytest.mark.xfail(strict=True, reason="device: H7 ignores its level P2; only the 'blocked' quantity aborts")
 def test_h7_aborts_when_the_current_reaches_the_level(referenced: Plant) -> None:
     c = referenced.client()
-    send(c, "H", 7, 30)
+    send(c, "H", 7, 40)  # above the ramp's peak current 0.05 + 0.3 = 35 %
+    t0 = referenced.now()
     send(c, "A", 30000)
     referenced.advance(2.0)
-    referenced.set("quantity.load_pct", 40)  # i = 0.05 + 0.40 > 30 %
+    assert not any(e == "torque_abort" for _t, e in referenced.device().events)
+    referenced.set("quantity.load_pct", 40)  # i = 0.05 + 0.40 >= 40 %
     referenced.advance(0.01)
-    assert any(e == "torque_abort" for _t, e in referenced.device().events)
+    assert last(referenced.device(), "torque_abort") - t0 == pytest.approx(2.0)
 
 
-@pytest.mark.xfail(strict=True, reason="device: pressing against an end stop does not trigger H7 (a following error instead)")
 def test_h7_at_the_end_stop(plant_factory: Any) -> None:
     plant, c = referenced_plant(plant_factory, END)
     send(c, "H", 7, 80)
@@ -582,7 +581,6 @@ def test_h7_at_the_end_stop(plant_factory: Any) -> None:
     assert c.read(0)[1] == 16384
 
 
-@pytest.mark.xfail(strict=True, reason="executor: H2 with N27 = 0 still waits N28 ms (spec §5.5: set-point finished)")
 def test_h2_without_window_is_set_point_finished(referenced: Plant) -> None:
     c = referenced.client()
     send(c, "N", 200, 28)
@@ -591,7 +589,6 @@ def test_h2_without_window_is_set_point_finished(referenced: Plant) -> None:
     assert referenced.read("busy") is False
 
 
-@pytest.mark.xfail(strict=True, reason="device: A0.1 (N27 > 0) is on as soon as the set-point stops, without N28")
 def test_a0_1_in_position_after_n28(referenced: Plant) -> None:
     c = referenced.client()
     send(c, "N", 10, 27)
@@ -602,8 +599,6 @@ def test_a0_1_in_position_after_n28(referenced: Plant) -> None:
     assert referenced.read("output.A0.1") is False
 
 
-@pytest.mark.xfail(strict=True, reason="executor: a negative move completes when the set-point passes x + 1e-6, "
-                   "~134 µs before it stops on a sin² ramp (a positive move completes exactly)")
 def test_negative_move_completes_when_the_set_point_stops(referenced: Plant) -> None:
     c = referenced.client()
     send(c, "A", -10000)
@@ -754,8 +749,6 @@ def test_w_feed_zeroes_the_counter(referenced: Plant) -> None:
     assert physical(referenced) == pytest.approx(x + 5000)
 
 
-@pytest.mark.xfail(strict=True, reason="executor: f between blended moves acts after the junction, spec §5.4 "
-                   "says brake before it so the junction is passed at min(v_k, v_k+1)")
 def test_blending_slower_next_move_brakes_before_the_junction(referenced: Plant) -> None:
     c = referenced.client()
     dev = referenced.device()

@@ -77,6 +77,9 @@ class Gms96Device(Device):
         self.origin = 0.0
         self._changing = False
         self._timers: list[Timer] = []
+        self._h7_timer: Timer | None = None
+        self._inpos_timer: Timer | None = None
+        self._inpos_fired = -math.inf
         self._power_on(first=True)
 
     # ======================================================================================
@@ -413,8 +416,39 @@ class Gms96Device(Device):
         self.changed()
 
     def in_position(self) -> bool:
+        """Spec §5.5: set-point finished and |e| <= |N27| for >= N28 ms (while the axis stands the
+        modelled following error is constant, so the N28 time runs from the set-point's stop);
+        N27 = 0 (or a stepper card): set-point finished."""
+        since = self.axis.stopped_since()
+        if since is None:
+            return False
         window = abs(self.n(27))
-        return not self.axis.moving and (window == 0 or abs(self.indexer.following_error()) <= window)
+        if window == 0 or self.stepper:
+            return True
+        if abs(self.indexer.following_error()) > window:
+            return False
+        return self.clock.now() >= since + self.n(28) / 1000.0
+
+    def arm_in_position(self) -> None:
+        """Re-evaluate the outputs and waits (A0.1, H2) when the set-point stops and N28 later."""
+        if self._inpos_timer is not None:
+            self._inpos_timer.cancel()
+            self._inpos_timer = None
+        segs = self.axis.segments() if self.axis.moving else []
+        end = segs[-1].t1 if segs else self.axis.stopped_since()
+        if end is None or end == math.inf:
+            return
+        now = self.clock.now()
+        for due in (end, end + self.n(28) / 1000.0):
+            if due >= now and due > self._inpos_fired:
+                self._inpos_timer = self.clock.call_at(due, lambda due=due: self._in_position_tick(due))
+                return
+
+    def _in_position_tick(self, due: float) -> None:
+        self._inpos_timer = None
+        self._inpos_fired = due
+        self.arm_in_position()
+        self.changed()
 
     def output_byte(self, byte: int) -> int:
         if byte == 2:
@@ -573,23 +607,90 @@ class Gms96Device(Device):
             self._overload_latched = True  # recovery: 24 V off >= 10 s (a power cycle here)
         self.changed()
 
+    def _blocked(self) -> bool:
+        return bool(self.signals.get("blocked")) or (self.i2t_limiting and self._i2t_demand() > self._i2t_level())
+
     def _update_block(self) -> None:
-        blocked = bool(self.signals.get("blocked")) or (self.i2t_limiting and self._i2t_demand() > self._i2t_level())
-        if blocked and self.executor.h7_level is not None and self.axis.moving:
-            self._torque_abort()
+        self.indexer.block(self._blocked())
+        self.arm_torque_abort(now_only=True)
+
+    def arm_torque_abort(self, now_only: bool = False) -> None:
+        """H7 (spec §5.5): the armed move is aborted when the motor current reaches P2 % of Imax
+        (acceleration and load current, or i_lim when the axis is held by a blockage or an end
+        stop).  The instant is solved from the plan; ``now_only``: abort at once if it is due now,
+        schedule nothing (an external change, synchronous)."""
+        when = self._h7_due()
+        if when is not None and when <= self.clock.now():
+            if self._h7_timer is not None:
+                self._h7_timer.cancel()
+                self._h7_timer = None
+            if now_only:
+                self._torque_abort()
+                return
+        if now_only:
             return
-        self.indexer.block(blocked)
+        if self._h7_timer is not None:
+            self._h7_timer.cancel()
+            self._h7_timer = None
+        if when is not None:
+            self._h7_timer = self.clock.call_at(max(when, self.clock.now()), self._h7_fire)
+
+    def _h7_fire(self) -> None:
+        self._h7_timer = None
+        if self.executor.h7_active() is not None and self.axis.moving:
+            self._torque_abort()
+
+    def _h7_due(self) -> float | None:
+        """The first instant >= now at which the current reaches the armed H7 level, or None."""
+        level = self.executor.h7_active()
+        if level is None or not self.controller or not self.axis.moving:
+            return None
+        now = self.clock.now()
+        cap = self.n(39) / 100.0
+        if self.i2t_limiting:
+            cap = min(cap, self._i2t_level())
+        if level > cap + 1e-12:
+            return None  # the stage never delivers that much
+        if self.indexer.blocked_at is not None or self.indexer.at_end_stop():
+            return now
+        static = I_BASE + float(self.signals.get("load_pct")) / 100.0
+        if static >= level - 1e-12:
+            return now
+        best = self.indexer.end_stop_contact()
+        a_min = (level - static) * A_REF / K_ACC  # the acceleration whose current reaches the level
+        for seg in self.axis.segments():
+            if seg.t1 <= now or (best is not None and seg.t0 >= best):
+                continue
+            t0 = max(seg.t0, now)
+            if seg.shape == "linear":
+                hit = t0 if abs(seg.a) >= a_min else None
+            else:
+                peak = 0.5 * math.pi * abs(seg.a)
+                if peak < a_min:
+                    continue
+                tau = seg.span / math.pi * math.asin(min(1.0, a_min / peak))
+                lo, hi = seg.t0 + tau, seg.t0 + seg.span - tau
+                hit = max(lo, t0) if t0 <= hi else None
+            if hit is not None:
+                best = hit if best is None else min(best, hit)
+                break
+        return best
 
     def _torque_abort(self) -> None:
-        """H7: the move ends where the axis stands, no following error (spec §5.5)."""
+        """H7: the move ends where the axis stands, no following error (spec §5.5).  A blockage
+        that still holds the axis stays (the next move sees it)."""
         self.executor.h7_level = None
         actual = self.indexer.actual()
         self.indexer.target = None
+        self.indexer.set_junction(None)
         self.axis.quick_stop()
         self.axis.set_position(actual)
         self.record_event("torque_abort")
+        self.indexer.block(self._blocked())
         if self.executor.current is not None and self.executor.current.letter in "A+vw":
             self.executor.complete()
+        else:
+            self.executor.h7_in_move = False
 
     # -- I²t (spec §5.7) ------------------------------------------------------------------------
     def _i2t_level(self) -> float:
@@ -604,8 +705,8 @@ class Gms96Device(Device):
         if not self.controller:
             return 0.0
         i_lim = self.n(39) / 100.0
-        if self.indexer.blocked_at is not None and self.axis.moving:
-            i = i_lim
+        if (self.indexer.blocked_at is not None or self.indexer.at_end_stop()) and self.axis.moving:
+            i = i_lim  # held by a blockage or pressing against an end stop
         else:
             i = I_BASE + K_ACC * abs(self.axis.acceleration()) / A_REF + float(self.signals.get("load_pct")) / 100.0
         i = min(i, i_lim)
@@ -781,7 +882,7 @@ class Gms96Device(Device):
                 self.params[8] = value
         else:
             self.params[index] = value
-        if index in (10, 20):
+        if index in (10, 20, 27, 28):
             self.indexer.arm_following_error()
         if index in (15, 39):
             self._i2t_update()

@@ -3,8 +3,10 @@
 Manual §2.3.1 (queued letter commands), §2.4.3 (PLC direct commands p10), §2.5 (CNC programs);
 spec §4.2.2 (executor states), §4.2.4 (motion preconditions: a move while IDXOFF = 1 is skipped),
 §4.2.5 (queue capacity), §5.4 (blending: consecutive moves in one direction are one plan to the
-chain's last target; each move completes when the set-point crosses its end point, so
-SETO/RESO/SNDF/SNDM between them act "on the fly"), §5.5 (H2, H7).
+chain's last target; a move inside the chain completes when the set-point crosses its end point,
+so SETO/RESO/SNDF/SNDM between them act "on the fly", the chain's last move when the set-point
+stops; a slower f/G0 between two moves is reached by braking before the junction), §5.5 (H2:
+in position per N27/N28; H7: armed for the next move only, consumed when it ends).
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 from devsim.core.axis import Axis, Watch
 from devsim.core.clock import Timer
 from devsim.devices.gms96 import tables
-from devsim.devices.gms96.reference import ReferenceRun
+from devsim.devices.gms96.reference import ReferenceRun, resolver_position
 
 if TYPE_CHECKING:
     from devsim.devices.gms96.device import Gms96Device
@@ -66,6 +68,7 @@ class Executor:
         self.rejected_moves = 0
         self.program_depth = 0
         self.h7_level: int | None = None
+        self.h7_in_move = False  # the running move is the one H7 armed (spec §5.5)
         self.last_target: float | None = None
         self._timer: Timer | None = None
         self._watch: Watch | None = None
@@ -115,6 +118,9 @@ class Executor:
     def complete(self) -> None:
         """The current command finished; go on with the next."""
         self._clear_wait()
+        if self.h7_in_move:  # H7 applies to the next move only: that move is over (spec §5.5)
+            self.h7_in_move = False
+            self.h7_level = None
         self.current = None
         self.kick()
         self.dev.changed()
@@ -131,9 +137,20 @@ class Executor:
         self.wait_name = name
         return False
 
+    def h7_active(self) -> float | None:
+        """The torque-abort level (fraction of Imax) while the armed move runs, else None."""
+        if self.h7_level is None or not self.h7_in_move:
+            return None
+        return self.h7_level / 100.0
+
     def _clear_wait(self) -> None:
         self.waiting = None
         self.wait_name = ""
+        self.dev.waiting_in_position = False
+        ix = self.dev.indexer
+        if ix.on_arrive == self._arrival:
+            ix.on_arrive = None
+        ix.set_junction(None)
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
@@ -154,6 +171,7 @@ class Executor:
         self.deferred.clear()
         self.program_depth = 0
         self.h7_level = None
+        self.h7_in_move = False
         if self.reference is not None:
             self.reference.abort()
             self.reference = None
@@ -173,6 +191,8 @@ class Executor:
             reply()
         self.deferred.clear()
         self.program_depth = 0
+        self.h7_level = None
+        self.h7_in_move = False
         if self.reference is not None:
             self.reference.abort()
             self.reference = None
@@ -222,33 +242,76 @@ class Executor:
         base = self.last_target if (ix.target is not None and self.last_target is not None) else ix.axis.position()
         x = self._target_of(cmd, base)
         self.last_target = x
+        if self.h7_level is not None:
+            self.h7_in_move = True  # this move carries the H7 arming (spec §5.5)
         if d.n(17) == 1:  # N17: the move runs in time only (M3.4)
             shadow = Axis(d.clock, position=ix.axis.position())
             acc, profile = ix.accel()
             end = shadow.move_to(x, max(ix.speed(), 1.0), acc, profile=profile)
             return self.after(end - d.clock.now(), "N17")
+        if not ix.axis.moving and ix.axis.position() == x:
+            self._consume_h7()
+            return True  # already there (a blended move behind it starts from rest)
         final = self._chain_end(x) if blend else x
         if ix.target != final or not ix.axis.moving:
-            if ix.axis.position() == x and final == x:
-                return True
             ix.go(final, "work")
             d.record_event("move_start")
         self._complete_at(x)
+        self._plan_junction(x)
+        d.arm_torque_abort()
         return False
 
+    def _consume_h7(self) -> None:
+        if self.h7_in_move:
+            self.h7_in_move = False
+            self.h7_level = None
+
     def _complete_at(self, x: float) -> None:
+        """Complete the running move when the set-point reaches ``x``: on arrival if ``x`` ends the
+        plan (exactly when the set-point stops, either direction), else when the set-point passes
+        the junction ``x`` on the fly (spec §5.4)."""
         ix = self.dev.indexer
+        if self._watch is not None:
+            self._watch.cancel()
+            self._watch = None
+        if ix.on_arrive == self._arrival:
+            ix.on_arrive = None
+        if ix.target == x:
+            ix.on_arrive = self._arrival  # also while held (STOP, override 0): arrival comes later
+            return
         direction = 1 if x >= ix.axis.position() else -1
         point = x if direction > 0 else x + 1e-6
 
         def crossed(side: int) -> None:
             if side == direction and self.current is not None:
-                self.dev.record_event("move_end")
-                self.complete()
+                self._arrival()
 
         self._watch = ix.axis.watch(point, crossed)
-        if ix.axis.position() == x and not ix.axis.moving:
-            self.dev.clock.call_later(0.0, lambda: crossed(direction))
+
+    def _arrival(self) -> None:
+        if self.current is not None and (self.current.letter in MOVES or self.current.letter in "vw"):
+            self.dev.record_event("move_end")
+            self.complete()
+
+    def _plan_junction(self, x: float) -> None:
+        """Spec §5.4: a slower speed for the next blended move (``f``/``G0`` between the moves) is
+        reached *at* the junction ``x``: the indexer brakes before it."""
+        ix = self.dev.indexer
+        if ix.target is None or ix.target == x:
+            ix.set_junction(None)
+            return
+        f, frac = self.dev.f, self.dev.f_frac
+        for cmd in self.queue:
+            if cmd.letter in MOVES:
+                break
+            if cmd.letter == "f":
+                f, frac = max(1, min(cmd.p1, tables.RANGES["f"][1])), max(0, min(255, cmd.p2))
+            elif cmd.letter == "G" and cmd.p1 == 0:
+                f = self.dev.M
+        if (f, frac) == (self.dev.f, self.dev.f_frac):
+            ix.set_junction(None)
+        else:
+            ix.set_junction(x, (f, frac))
 
     def _chain_end(self, x: float) -> float:
         """Last target of the blendable moves queued behind the current one (spec §5.4)."""
@@ -272,13 +335,16 @@ class Executor:
         ix = self.dev.indexer
         if cur is None or cur.letter not in MOVES or ix.target is None or not ix.axis.moving:
             return
-        if ix.axis.phase() == "decel":
+        if ix.final_braking():
             return  # too late: the move stops, the next one starts from rest
         if self.last_target is None:
             return
         new_end = self._chain_end(self.last_target)
         if new_end != ix.target:
             ix.go(new_end, "work")
+            self._complete_at(self.last_target)
+            self._plan_junction(self.last_target)
+            self.dev.arm_torque_abort()
 
     # reference runs ---------------------------------------------------------------------------
     def _x_Q(self, cmd: Cmd) -> bool:
@@ -293,11 +359,12 @@ class Executor:
         d.activate_controller()
         if p1 == 3:
             if p2 & 0x40 and p3 == 0:
-                d.set_counter_here(((int(round(d.indexer.actual())) + 2048) % 4096) - 2048)
+                d.set_counter_here(resolver_position(d))
             d.idxoff = False
             d.i2t_latched = False
             return True
-        if not (p2 & 0x40 and not d.idxoff):
+        ref_p2 = (d.n(19) >> 8) & 0xFF if p1 == -1 else p2  # Q-1: P2 comes from N19 (spec §5.6)
+        if not (ref_p2 & 0x40 and not d.idxoff):
             d.idxoff = True
 
         def done(success: bool) -> None:
@@ -315,28 +382,13 @@ class Executor:
     def _x_H(self, cmd: Cmd) -> bool:
         d = self.dev
         if cmd.p1 == 2:
-            window = abs(d.n(27))
-            dwell = d.n(28) / 1000.0
-
-            def in_position() -> bool:
-                return not d.indexer.axis.moving and (window == 0 or abs(d.indexer.following_error()) <= window)
-
-            if in_position() and dwell <= 0:
+            # spec §5.5: in position (|e| <= |N27| for N28 ms after the set-point stopped); with
+            # N27 = 0 or on a stepper card: as soon as the set-point is finished.  The device
+            # re-checks (changed() -> poke) when the set-point stops and N28 later.
+            if d.in_position():
                 return True
-            end = d.indexer.axis.segments()[-1].t1 if d.indexer.axis.moving else d.clock.now()
-            self.wait_name = "H2"
             d.waiting_in_position = True
-
-            def check() -> None:
-                self._timer = None
-                if in_position():
-                    d.waiting_in_position = False
-                    self.complete()
-                else:
-                    self._timer = d.clock.call_later(max(dwell, 0.001), check)
-
-            self._timer = d.clock.call_at(end + dwell, check)
-            return False
+            return self.wait("H2", d.in_position)
         if cmd.p1 == 7:
             self.h7_level = max(0, min(100, cmd.p2))
             return True

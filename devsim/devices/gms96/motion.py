@@ -2,7 +2,7 @@
 
 Spec §5.1–§5.3 (units: Hz = inc/s, B in Hz/ms → a = 1000·B inc/s²; linear or sin² ramps, N24),
 §5.2 (working speed, V-factor quantisation, override), §5.4 (blending: one plan to the chain's
-last target, junctions are crossings), §5.7 (following error e = v/Kv, ``blocked`` actual
+last target, junctions are crossings; a slower next move is braked for at a watched brake point), §5.7 (following error e = v/Kv, ``blocked`` actual
 position, trip at |e| > N20 solved as a crossing time), §5.8 (backlash compensation: on a
 reversal the set-point stands N41/N42 ms while the motor takes up the slack), §5.11 (mechanical
 end stops hold the actual position; the set-point runs on until |e| > N20).  The axis runs in *physical* increments; the card's position counter is
@@ -53,6 +53,11 @@ class Indexer:
         self.comp_phase = ""  # "" | "brake" (to standstill first) | "dwell" (motor takes up N41)
         self._fe_timer: Timer | None = None
         self._fe_watches: list[Watch] = []
+        # blending (spec §5.4): the next junction and the feed (f, frac) of the move behind it
+        self.junction: float | None = None
+        self.junction_feed: tuple[int, int] | None = None
+        self._junction_braking = False  # past the brake point: the next move's speed applies
+        self._junction_watch: Watch | None = None
 
     # -- speeds ---------------------------------------------------------------------------------
     def v_factor(self) -> int:
@@ -68,18 +73,23 @@ class Indexer:
             return float(d.ext_override)
         return float(d.signals.get("override_pot"))
 
-    def work_speed(self) -> float:
-        """G94: f (≤ M); G95: (f + frac/256) inc/rev × rpm / 60 (spec §5.2)."""
+    def work_speed(self, feed: tuple[int, int] | None = None) -> float:
+        """G94: f (≤ M); G95: (f + frac/256) inc/rev × rpm / 60 (spec §5.2).  ``feed``: an
+        ``(f, frac)`` to use instead of the current one."""
         d = self.dev
+        f, frac = feed if feed is not None else (d.f, d.f_frac)
         if d.feed_mode == 95:
-            v = (d.f + d.f_frac / 256.0) * d.spindle_rpm / 60.0
+            v = (f + frac / 256.0) * d.spindle_rpm / 60.0
         else:
-            v = float(d.f)
+            v = float(f)
         return min(v, float(d.M))
 
-    def speed(self) -> float:
-        """The commanded speed now for the running plan (0: hold)."""
+    def speed(self, feed: tuple[int, int] | None = None) -> float:
+        """The commanded speed now for the running plan (0: hold); ``feed`` as for
+        :meth:`work_speed` (default: the next move's feed once braking for its junction)."""
         d = self.dev
+        if feed is None and self._junction_braking:
+            feed = self.junction_feed
         if d.stop_marker() or (self.kind != "spindle" and d.enable_blocked()):
             return 0.0
         if self.kind == "search":
@@ -89,7 +99,7 @@ class Indexer:
         elif self.kind == "rapid_nv":
             v = float(d.nv_M()) * self.override_pct() / 100.0
         else:
-            v = min(self.work_speed() * self.override_pct() / 100.0, float(d.M))
+            v = min(self.work_speed(feed) * self.override_pct() / 100.0, float(d.M))
         vf = self.v_factor()
         return vf * math.floor(v / vf + 1e-9) if self.kind in ("work", "rapid_nv") else v
 
@@ -147,6 +157,47 @@ class Indexer:
                 self.last_dir = direction
         self.dev.record_event("replan")
         self.arm_following_error()
+        self._arm_junction()
+
+    # -- blending junctions (spec §5.4) ---------------------------------------------------------
+    def set_junction(self, x: float | None, feed: tuple[int, int] | None = None) -> None:
+        """The running chain passes ``x`` where the next move's ``feed`` takes over; if that is
+        slower, the set-point brakes before ``x`` and passes it at the new speed."""
+        if self._junction_watch is not None:
+            self._junction_watch.cancel()
+            self._junction_watch = None
+        self.junction = x
+        self.junction_feed = feed if x is not None else None
+        self._junction_braking = False
+        if x is not None:
+            self._arm_junction()
+
+    def _arm_junction(self) -> None:
+        if self._junction_watch is not None:
+            self._junction_watch.cancel()
+            self._junction_watch = None
+        x = self.junction
+        if x is None or self._junction_braking or self.target is None or self.kind != "work":
+            return
+        v_now, v_next = self.speed(), self.speed(self.junction_feed)
+        if v_next >= v_now:
+            return
+        pos = self.axis.position()
+        s = 1 if x > pos else -1
+        brake = x - s * (v_now * v_now - v_next * v_next) / (2.0 * self.accel()[0])
+        if (brake - pos) * s <= 0:
+            self._junction_brake()
+            return
+        self._junction_watch = self.axis.watch(brake, lambda side: side == s and self._junction_brake())
+
+    def _junction_brake(self) -> None:
+        self._junction_watch = None
+        self._junction_braking = True
+        self.replan()
+
+    def final_braking(self) -> bool:
+        """The plan is in its last deceleration to standstill (too late to blend a next move)."""
+        return self.axis.phase() == "decel" and not self._junction_braking
 
     # -- backlash compensation (spec §5.8) ------------------------------------------------------
     def _direction(self) -> int:
@@ -262,6 +313,50 @@ class Indexer:
         x = self.axis.position() - (0.0 if self.dev.stepper else self.axis.velocity() / self.kv())
         return self._end_stop(x) != x
 
+    def end_stop_contact(self) -> float | None:
+        """The first instant >= now at which the actual position (set-point - v/Kv) reaches an end
+        stop under the current plan (None: not in this plan).  Solved per segment: sign changes
+        on a fine subdivision, then bisection."""
+        stops = self.dev.cfg.axis.end_stops
+        if stops is None or self.dev.stepper or not self.dev.controller or self.blocked_at is not None:
+            return None
+        lo, hi = stops
+        kv = self.kv()
+        now = self.dev.clock.now()
+
+        def outside(seg: Any, t: float) -> bool:
+            x = seg.position(t) - seg.velocity(t) / kv
+            return x > hi or x < lo
+
+        for seg in self.axis.segments():
+            if seg.t1 <= now:
+                continue
+            t0 = max(seg.t0, now)
+            if outside(seg, t0):
+                return t0
+            if seg.t1 == math.inf:  # a cruise: the actual moves linearly
+                v = seg.velocity(t0)
+                edge = hi if v > 0 else lo
+                if v == 0.0:
+                    return None
+                t = t0 + (edge - (seg.position(t0) - v / kv)) / v
+                return t if t >= t0 else None
+            steps = 64
+            prev = t0
+            for k in range(1, steps + 1):
+                t = t0 + (seg.t1 - t0) * k / steps
+                if outside(seg, t):
+                    a, b = prev, t
+                    for _ in range(60):
+                        mid = 0.5 * (a + b)
+                        if outside(seg, mid):
+                            b = mid
+                        else:
+                            a = mid
+                    return b
+                prev = t
+        return None
+
     def block(self, active: bool) -> None:
         if active and self.blocked_at is None:
             self.blocked_at = self.actual()
@@ -271,7 +366,10 @@ class Indexer:
 
     def arm_following_error(self) -> None:
         """Schedule the following-error trip as an event: a crossing of the set-point past the
-        blockage (or an end stop) ± N20, or the instant the planned speed exceeds N20·Kv."""
+        blockage (or an end stop) ± N20, or the instant the planned speed exceeds N20·Kv.  The
+        plan-dependent H7 and in-position events are re-armed with it."""
+        self.dev.arm_torque_abort()
+        self.dev.arm_in_position()
         if self._fe_timer is not None:
             self._fe_timer.cancel()
             self._fe_timer = None

@@ -19,9 +19,19 @@ from devsim.core.clock import Timer
 if TYPE_CHECKING:
     from devsim.devices.gms96.device import Gms96Device
 
-__all__ = ["ReferenceRun", "MESSAGE_DISTANCE_LIMIT"]
+__all__ = ["ReferenceRun", "MESSAGE_DISTANCE_LIMIT", "resolver_position"]
 
 MESSAGE_DISTANCE_LIMIT = 23
+
+
+def resolver_position(dev: Gms96Device) -> int:
+    """Absolute position within the pole pass, -period/2..period/2-1 (P2.6 with P3 = 0, and
+    ``Q3;64``); the pole pass starts at an (electronic) index mark (``index_offset`` +
+    k·``index_period``)."""
+    axis = dev.indexer.axis
+    period, off = axis.counts_per_rev, axis.index_offset
+    half = period // 2
+    return int((round(dev.indexer.actual() - off) + half) % period) - half
 
 
 class ReferenceRun:
@@ -207,12 +217,7 @@ class ReferenceRun:
         self.dev.indexer.go(point, "search", self._at_point)
 
     def _resolver_position(self) -> int:
-        """Absolute position within the pole pass, -period/2..period/2-1 (P2.6 with P3 = 0);
-        the pole pass starts at an (electronic) index mark."""
-        axis = self.dev.indexer.axis
-        period, off = axis.counts_per_rev, axis.index_offset
-        half = period // 2
-        return int((round(self.dev.indexer.actual() - off) + half) % period) - half
+        return resolver_position(self.dev)
 
     def _at_point(self) -> None:
         if self.p2 & 0x40 and self.p3 == 0:
