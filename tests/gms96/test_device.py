@@ -94,11 +94,15 @@ def test_message_fetch_and_t3(card: Plant) -> None:
 def test_link_errors_no_reply(card: Plant) -> None:
     """Spec §3.10 / §8 link_errors_no_reply: every broken frame is silently discarded."""
     host = card.host
-    assert host.silent("68 06 06 68 53 03 41 10 27 00 CF 16")  # bad checksum
-    assert host.silent("68 06 07 68 53 03 41 10 27 00 CE 16")  # L != L
-    assert host.silent("68 06 06 68 53 03 41 10 27 00 CE 17")  # bad stop char
-    assert host.silent("68 06 06 68 53 04 41 10 27 00 CF 16")  # other address
-    assert host.silent("68 04 04 68 53 03 41 10 AA 16 FF")  # malformed parameter count
+    for frame in (
+        "68 06 06 68 53 03 41 10 27 00 CF 16",  # bad checksum
+        "68 06 07 68 53 03 41 10 27 00 CE 16",  # L != L
+        "68 06 06 68 53 03 41 10 27 00 CE 17",  # bad stop char
+        "68 06 06 68 53 04 41 10 27 00 CF 16",  # other address
+        "68 04 04 68 53 03 41 10 AA 16 FF",  # malformed parameter count
+    ):
+        assert host.silent(frame)
+        card.advance(0.01)  # line idle >= 33 bit times before the next frame (R4)
     assert card.read("rejected_moves") == 0 and card.read("queue_length") == 0
     assert host.ask(STATUS) == "10 40 03 43 16"
 
@@ -111,6 +115,7 @@ def test_partial_frame_discarded_after_timeout(card: Plant) -> None:
     card.advance(0.1)  # longer than the 50 ms inter-character timeout
     assert host.silent("03 04 16")  # the rest alone is no frame: never glued
     assert card.read("link_errors").get("timeout") == 1
+    card.advance(0.01)  # "03 04 16" was garbage: line idle before the next frame (R4)
     assert host.ask(STATUS) == "10 40 03 43 16"
 
 

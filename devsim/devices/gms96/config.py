@@ -58,6 +58,9 @@ class AxisGeometry(_Strict):
     cam_polarity: Literal["NO", "NC"] = Field(default="NO", description="NO: 24 V while on the cam")
     index_period: int = Field(default=4096, gt=0, description="increments between index marks (counts/rev)")
     index_offset: float = 0.0
+    counter_marks: list[float] = Field(
+        default_factory=list, description="reference marks of the counter input's scale (Q with P2.5)"
+    )
     end_stops: tuple[float, float] | None = Field(default=None, description="mechanical end stops [low, high]")
     limit_switches: list[LimitSwitch] = Field(default_factory=list)
     kv_per_n10: float = Field(default=0.2, gt=0, description="Kv [1/s] per unit of N10 (spec §5.7)")
@@ -76,6 +79,11 @@ class LinkOptions(_Strict):
     on_queue_full: Literal["defer", "drop", "nack"] = "defer"
     e_version_features: list[Literal["fcb", "acd", "dfc"]] = Field(default_factory=lambda: ["fcb", "acd", "dfc"])
     broadcast_address: int | None = Field(default=None, description="e.g. 255; None = no broadcast")
+    error_line_idle: bool = Field(
+        default=True,
+        description="FT1.2 rule R4: after a detected frame error accept a new frame only after >= 33 bit "
+        "times of line idle (False: resynchronise at once)",
+    )
 
 
 class PlcLimitRule(_Strict):
@@ -156,6 +164,9 @@ class Gms96Config(_Strict):
     out_of_range: Literal["clamp", "ignore"] = "clamp"
     override_pot_pct: float = Field(default=100.0, ge=0, le=125)
     tool_offset: int = Field(default=0, description="tool offset T (no command sets it, spec §5.9)")
+    h22_data_address: int | None = Field(
+        default=None, ge=0, le=240, description="H22;0 copies the measurement to this data byte (FB 254/22)"
+    )
 
     @field_validator("params", mode="before")
     @classmethod

@@ -180,6 +180,7 @@ class Gms96Device(Device):
         self.tool_active = True
         self._before_g53: tuple[int | None, bool] = (None, True)
         self.g92 = 0
+        self.g96: int | None = None  # G96 cutting speed (executor._x_G)
         self.o2_value: int | None = None
         self.ext_override: int | None = None
         self.spindle_rpm = 0
@@ -1075,6 +1076,7 @@ class Gms96Device(Device):
             "override": self.indexer.override_pct(),
             "queue_length": len(self.executor.queue),
             "rejected_moves": self.executor.rejected_moves,
+            "g96_rpm": self.executor.g96_rpm(),
             "programs": {k: len(v) for k, v in self.programs.items()},
             "address": self.address,
             "protocol": self.dil.protocol,

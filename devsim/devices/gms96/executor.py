@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 from devsim.core.axis import Axis, Watch
 from devsim.core.clock import Timer
 from devsim.devices.gms96 import tables
+from devsim.devices.gms96.counter import CounterReferenceRun
 from devsim.devices.gms96.reference import ReferenceRun, resolver_position
 
 if TYPE_CHECKING:
@@ -177,7 +178,10 @@ class Executor:
             self.reference = None
         self._clear_wait()
         cur, self.current = self.current, None
-        if cur is not None and (cur.letter in MOVES or cur.letter in "vwQ"):
+        if self.dev.counter.stop_sync():  # m49 ends: the set-point brakes with the ramp
+            self.current = Cmd("_halt")
+            self.dev.indexer.halt(self.complete)
+        elif cur is not None and (cur.letter in MOVES or cur.letter in "vwQ"):
             self.current = Cmd("_halt")
             self.dev.indexer.halt(self.complete)
         elif self.dev.indexer.target is not None:
@@ -196,6 +200,7 @@ class Executor:
         if self.reference is not None:
             self.reference.abort()
             self.reference = None
+        self.dev.counter.sync = False  # a fault ends m49 (the fault stops the axis itself)
         self._clear_wait()
         self.current = None
 
@@ -374,9 +379,41 @@ class Executor:
             if self.current is not None and self.current.letter == "Q":
                 self.complete()
 
-        self.reference = ReferenceRun(d, p1, p2, p3, done)
+        # P2.5: the index mark from the counter input's reference track (spec §3.8.14)
+        run = CounterReferenceRun if ref_p2 & 0x20 else ReferenceRun
+        self.reference = run(d, p1, p2, p3, done)
         self.reference.start()
         return self.reference is None or self.reference.finished
+
+    # G92 / G96 / G97 ----------------------------------------------------------------------------
+    def _x_G(self, cmd: Cmd) -> bool:
+        """G96 constant cutting speed / G97 deselect (spec §3.8.6, §5.2; manual: "V-version",
+        "further information on request").  Modelled [R] as far as the sources go: the card
+        computes the desired spindle speed ``n = C / r`` [rpm] continuously from the cutting-speed
+        value ``C`` (P2, with P3 as its upper 24 bits; unit inc/min/2π, so that v = 2π·r·n) and the
+        distance ``r`` of the set-point to the active zero point (work coordinates, at least 1 inc),
+        limited by G92 (P2 = rpm limit, 0 = none).  Where the real card sends that speed is not
+        documented, so it only shows in the control API (``g96_rpm``); motion is not affected.
+        Everything else goes to the device's G handling (G92 stores its P2 there)."""
+        d = self.dev
+        if cmd.p1 == 96:
+            d.g96 = ((cmd.p3 & 0xFFFFFF) << 24) | (cmd.p2 & 0xFFFFFF)
+            d.changed()
+            return True
+        if cmd.p1 == 97:
+            d.g96 = None
+            d.changed()
+            return True
+        return d.queued_setting(cmd)
+
+    def g96_rpm(self) -> float | None:
+        """The G96 desired spindle speed now (None: G96 not selected)."""
+        d = self.dev
+        if getattr(d, "g96", None) is None:
+            return None
+        r = max(1, abs(d.setpoint_work()))
+        n = d.g96 / r
+        return float(min(n, d.g92)) if d.g92 > 0 else float(n)
 
     # auxiliary ---------------------------------------------------------------------------------
     def _x_H(self, cmd: Cmd) -> bool:
@@ -392,8 +429,12 @@ class Executor:
         if cmd.p1 == 7:
             self.h7_level = max(0, min(100, cmd.p2))
             return True
-        if cmd.p1 == 22:
+        if cmd.p1 == 22:  # counter-input min/max measurement (spec §3.8.7, counter.py)
             d.h22_active = bool(cmd.p2)
+            if cmd.p2:
+                d.counter.h22_start()
+            else:
+                d.counter.h22_stop()
             return True
         return True
 
@@ -413,11 +454,24 @@ class Executor:
             img.markers[19] = cmd.p3 & 0xFF
             d.save_static()
             byte, bit = 18, 7
+        elif cmd.p1 == 49:
+            return self._sync_run()
         else:
-            return True  # m49 (synchronous run) and unknown: accepted, no action
+            return True  # unknown: accepted, no action
         img.set_marker(byte, bit, True)
         d.changed()  # the PLC (plc.auto_ack_m_functions_ms or a scripted rule) resets the bit
         return self.wait(f"m{cmd.p1}", lambda: not img.marker(byte, bit))
+
+    def _sync_run(self) -> bool:
+        """``m49``: synchronous run to the counter input until #0 / M0.1 / a fault (counter.py)."""
+        d = self.dev
+        if d.counter.active:
+            return True
+        if not d.counter.start_sync():
+            self.rejected_moves += 1
+            d.record_event("move_rejected")
+            return True
+        return self.wait("m49", lambda: not d.counter.sync)
 
     def _x_s(self, cmd: Cmd) -> bool:
         d = self.dev

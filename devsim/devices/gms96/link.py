@@ -8,6 +8,15 @@ accepted one is a repetition — the previous reply is sent again byte-identical
 executed; #0, power-on and a reset-of-remote-link frame (FC0, FCV = 0) make the FCB state
 "unknown".  The card is silent during its boot time and during the flash erase after
 ``p1;100`` / ``p3;100`` (manual §2.3.1 p).
+
+FT1.2 rule R4 (spec §3.2, §3.10; config ``link.error_line_idle``, default on): after a detected
+error (checksum, length, start/end byte, garbage outside a frame — what a parity or framing
+error leaves) the card accepts a new frame only after at least 33 bit times (at the DIL baud
+rate) of line idle, measured on the device clock from the last byte received.  Everything
+arriving earlier — the rest of the chunk that held the error, and chunks back-to-back behind
+it — is discarded without reply, and each such byte restarts the idle interval.  A partial frame
+dropped by the inter-character timeout arms nothing: the line has already been idle for the
+timeout.
 """
 
 from __future__ import annotations
@@ -23,6 +32,7 @@ if TYPE_CHECKING:
 __all__ = ["Link", "NO_REPLY"]
 
 NO_REPLY = b""
+IDLE_BITS = 33  #: FT1.2 R4 minimum line idle after an error, in bit times
 
 
 class Link:
@@ -39,9 +49,17 @@ class Link:
         self.errors: dict[str, int] = {}
         self.frames = 0
         self._expire: Timer | None = None
+        self.error_hold = False  # R4: an error was detected, waiting for line idle
+        self._last_byte = float("-inf")
+
+    @property
+    def idle_after_error(self) -> float:
+        """R4 minimum line idle in seconds: 33 bit times at the DIL baud rate."""
+        return IDLE_BITS / self.dev.dil.baud
 
     def reset(self) -> None:
         self.decoder.reset()
+        self.error_hold = False
         self.last_fcb = None
         self.last_reply = NO_REPLY
 
@@ -58,8 +76,22 @@ class Link:
         if self.silent:
             self.decoder.reset()  # the frame is lost
             return
+        if self.error_hold and data:
+            if now - self._last_byte < self.idle_after_error:
+                self._last_byte = now  # the line is not idle: the bytes are lost (R4)
+                self.decoder.reset()
+                self._count("not_idle")
+                return
+            self.error_hold = False
+        if data:
+            self._last_byte = now
         for item in self.decoder.feed(data, now):
+            if self.error_hold and not isinstance(item, codec.FrameError):
+                self._count("not_idle")  # back-to-back behind an error in the same chunk (R4)
+                continue
             self._handle(item)
+        if self.error_hold:
+            self.decoder.reset()  # a partial frame that began behind the error
         if self._expire is not None:
             self._expire.cancel()
             self._expire = None
@@ -74,7 +106,9 @@ class Link:
 
     def _handle(self, item: codec.Frame | codec.FrameError) -> None:
         if isinstance(item, codec.FrameError):
-            self.errors[item.reason] = self.errors.get(item.reason, 0) + 1
+            self._count(item.reason)
+            if item.reason != "timeout" and self.dev.cfg.link.error_line_idle:
+                self.error_hold = True
             return
         if self.silent:
             return
@@ -82,6 +116,9 @@ class Link:
             self._short(item)
         elif isinstance(item, codec.LongFrame):
             self._long(item)
+
+    def _count(self, reason: str) -> None:
+        self.errors[reason] = self.errors.get(reason, 0) + 1
 
     def _mine(self, address: int) -> bool | None:
         """True: addressed to this card; None: broadcast; False: someone else's."""
@@ -106,7 +143,7 @@ class Link:
             return
         parsed = codec.parse_letter(frame.data)
         if parsed is None:
-            self.errors["parameters"] = self.errors.get("parameters", 0) + 1
+            self._count("parameters")
             return
         self.frames += 1
         control = frame.control
@@ -122,9 +159,10 @@ class Link:
                     return
                 self.last_fcb = fcb
         cmd, params, count = parsed
-        reply = self.dev.letter_command(cmd, params, count, frame.data, deferred=self._deferred_reply)
+        deferred = self._deferred_reply if mine else _no_reply
+        reply = self.dev.letter_command(cmd, params, count, frame.data, deferred=deferred)
         if mine is None:
-            return  # broadcast: executed, never answered
+            return  # broadcast: executed, never answered (not even a deferred E5h)
         if check and fcv:
             self.last_reply = reply if reply is not None else NO_REPLY
         if reply is not None:
@@ -145,3 +183,7 @@ class Link:
             self.dev.clock.call_later(delay, lambda: self.dev.send(data))
         else:
             self.dev.send(data)
+
+
+def _no_reply(reply: bytes) -> None:
+    """The deferred E5h of a broadcast command: dropped (broadcasts are never answered)."""

@@ -236,6 +236,12 @@ class Plc:
         self.dev.image.post_message(code)
         self.dev.changed()
 
+    def fb254(self, accu1: int, accu2: int = 0) -> None:
+        """The FB 254 stand-in for a hook; only function 22 is modelled: copy the H22
+        measurement into the data area from byte ``accu2`` (spec §3.8.7, layout in counter.py)."""
+        if accu1 == 22:
+            self.dev.counter.h22_copy(int(accu2))
+
     @property
     def now(self) -> float:
         return self.dev.clock.now()
