@@ -90,6 +90,34 @@ def round_trips(
     return times, reply_len
 
 
+def interleaved(
+    targets: list[tuple[str, bytes, Callable[[bytes], bool]]], n: int, warmup: int = 200
+) -> list[list[float]]:
+    """Time ``n`` queries on every target, alternating query by query, so that the machine's
+    changing load affects all of them alike.  Returns seconds per query, per target."""
+    ports = [serial.Serial(path, 9600, timeout=2) for path, _q, _d in targets]
+    times: list[list[float]] = [[] for _ in targets]
+    try:
+        for port in ports:
+            port.reset_input_buffer()
+        for i in range(warmup + n):
+            for k, (port, (path, query, done)) in enumerate(zip(ports, targets, strict=True)):
+                buf = b""
+                start = time.perf_counter()
+                port.write(query)
+                while not done(buf):
+                    chunk = port.read(port.in_waiting or 1)
+                    if not chunk:
+                        raise SystemExit(f"no complete answer to {query!r} from {path} (got {buf!r})")
+                    buf += chunk
+                if i >= warmup:
+                    times[k].append(time.perf_counter() - start)
+    finally:
+        for port in ports:
+            port.close()
+    return times
+
+
 def percentile(values: list[float], q: float) -> float:
     ordered = sorted(values)
     index = min(len(ordered) - 1, max(0, round(q / 100 * (len(ordered) - 1))))
@@ -127,6 +155,20 @@ def _stop(proc: subprocess.Popen[str]) -> None:
         proc.wait(10)
     except subprocess.TimeoutExpired:
         proc.kill()
+
+
+def start_device(kind: str) -> tuple[subprocess.Popen[str], str]:
+    """``devsim run KIND --pty`` in its own process (no boot delay); returns it and its pty."""
+    if kind == "stub":
+        os.environ["DEVSIM_EXTRA_KINDS"] = "stub=benchmarks.stub:StubDevice"
+        os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [ROOT, os.environ.get("PYTHONPATH")]))
+    extra: list[str] = []
+    if kind in ("sers", "gms96"):
+        fd, config = tempfile.mkstemp(suffix=".yaml")
+        with os.fdopen(fd, "w") as fh:
+            fh.write("boot_time: 0\n")
+        extra = ["--config", config]
+    return _spawn([sys.executable, "-m", "devsim", "run", kind, "--pty", *extra])
 
 
 def measure_device(kind: str, n: int) -> tuple[list[float], int]:
@@ -262,10 +304,21 @@ def main(argv: list[str] | None = None) -> int:
         serve_echo(args.serve_echo, binary=args.binary)
         return 0
 
-    device_times, reply_len = measure_device(args.kind, args.n)
-    echo_times = measure_echo(reply_len, args.n)
+    device_proc, device_path = start_device(args.kind)
+    try:
+        wait_for_answers(device_path, 9600)
+        _t, reply_len = round_trips(device_path, 9600, 1, warmup=0)
+        echo_proc, echo_path = _spawn([sys.executable, os.path.abspath(__file__), "--serve-echo", str(reply_len)])
+        try:
+            device_times, echo_times = interleaved(
+                [(device_path, QUERY, complete), (echo_path, QUERY, complete)], args.n
+            )
+        finally:
+            _stop(echo_proc)
+    finally:
+        _stop(device_proc)
 
-    print(f"latency: {args.n} round trips of {QUERY!r} on a pty ({reply_len}-byte answer)")
+    print(f"latency: {args.n} round trips of {QUERY!r} on a pty ({reply_len}-byte answer), interleaved with the echo")
     d50, d99 = summary(args.kind, device_times)
     e50, e99 = summary("echo", echo_times)
     ratio50 = d50 / e50 if e50 else float("inf")
@@ -274,10 +327,21 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  ratio target p50 <= 1.5: {'met' if ratio50 <= 1.5 else 'MISSED'}")
     print(f"  {args.kind} p99 {d99:.3f} ms, target < 2 ms: {'met' if d99 < 2.0 else 'MISSED'}")
     if not args.no_gms96:
-        gms_times, gms_len = measure_gms96(args.n)
-        echo_bin = measure_echo(gms_len, args.n, binary=True)
+        gms_proc, gms_path = start_device("gms96")
+        try:
+            _t, gms_len = round_trips(gms_path, 9600, 1, warmup=0, query=GMS96_POLL, done=frame_complete)
+            echo_args = [sys.executable, os.path.abspath(__file__), "--serve-echo", str(gms_len), "--binary"]
+            echo_proc, echo_path = _spawn(echo_args)
+            try:
+                gms_times, echo_bin = interleaved(
+                    [(gms_path, GMS96_POLL, frame_complete), (echo_path, GMS96_POLL, frame_complete)], args.n
+                )
+            finally:
+                _stop(echo_proc)
+        finally:
+            _stop(gms_proc)
         print(f"latency: {args.n} GMS96 status polls #1 {GMS96_POLL.hex(' ')} on a pty ({gms_len}-byte answer)")
-        g50, g99 = summary("gms96", gms_times)
+        g50, _g99 = summary("gms96", gms_times)
         b50, _b99 = summary("echo", echo_bin)
         print(f"  ratio    p50 {g50 / b50 if b50 else float('inf'):7.2f}")
     return 0
