@@ -75,19 +75,24 @@ def round_trips(
     with serial.Serial(path, baud, timeout=2) as port:
         port.reset_input_buffer()
         for i in range(warmup + n):
-            buf = b""
-            start = time.perf_counter()
-            port.write(query)
-            while not done(buf):
-                chunk = port.read(port.in_waiting or 1)
-                if not chunk:
-                    raise SystemExit(f"no complete answer to {query!r} from {path} (got {buf!r})")
-                buf += chunk
-            elapsed = time.perf_counter() - start
+            elapsed, buf = one_query(port, path, query, done)
             if i >= warmup:
                 times.append(elapsed)
             reply_len = len(buf)
     return times, reply_len
+
+
+def one_query(port: serial.Serial, path: str, query: bytes, done: Callable[[bytes], bool]) -> tuple[float, bytes]:
+    """Send ``query`` and read until ``done``; returns the seconds it took and the answer."""
+    buf = b""
+    start = time.perf_counter()
+    port.write(query)
+    while not done(buf):
+        chunk = port.read(port.in_waiting or 1)
+        if not chunk:
+            raise SystemExit(f"no complete answer to {query!r} from {path} (got {buf!r})")
+        buf += chunk
+    return time.perf_counter() - start, buf
 
 
 def interleaved(
@@ -102,16 +107,9 @@ def interleaved(
             port.reset_input_buffer()
         for i in range(warmup + n):
             for k, (port, (path, query, done)) in enumerate(zip(ports, targets, strict=True)):
-                buf = b""
-                start = time.perf_counter()
-                port.write(query)
-                while not done(buf):
-                    chunk = port.read(port.in_waiting or 1)
-                    if not chunk:
-                        raise SystemExit(f"no complete answer to {query!r} from {path} (got {buf!r})")
-                    buf += chunk
+                elapsed, _buf = one_query(port, path, query, done)
                 if i >= warmup:
-                    times[k].append(time.perf_counter() - start)
+                    times[k].append(elapsed)
     finally:
         for port in ports:
             port.close()

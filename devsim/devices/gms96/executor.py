@@ -164,8 +164,8 @@ class Executor:
         self._timer = self.dev.clock.call_later(seconds, self.complete)
         return False
 
-    def abort(self) -> None:
-        """#0 / M0.1: discard the queue, end the running command (spec §4.2.3)."""
+    def _discard(self) -> None:
+        """Forget the queue, deferred acknowledgements (sent now), programs, H7 and Q runs."""
         self.queue.clear()
         for _cmd, reply in self.deferred:
             reply()
@@ -176,6 +176,10 @@ class Executor:
         if self.reference is not None:
             self.reference.abort()
             self.reference = None
+
+    def abort(self) -> None:
+        """#0 / M0.1: discard the queue, end the running command (spec §4.2.3)."""
+        self._discard()
         self._clear_wait()
         cur, self.current = self.current, None
         if self.dev.counter.stop_sync():  # m49 ends: the set-point brakes with the ramp
@@ -190,16 +194,7 @@ class Executor:
 
     def flush(self) -> None:
         """A fault: the queue is gone and the executor idle at once (spec §4.5.3)."""
-        self.queue.clear()
-        for _cmd, reply in self.deferred:
-            reply()
-        self.deferred.clear()
-        self.program_depth = 0
-        self.h7_level = None
-        self.h7_in_move = False
-        if self.reference is not None:
-            self.reference.abort()
-            self.reference = None
+        self._discard()
         self.dev.counter.sync = False  # a fault ends m49 (the fault stops the axis itself)
         self._clear_wait()
         self.current = None
