@@ -619,6 +619,10 @@ class Line:
     def _timing(self, data: bytes, chars: int, direction: str) -> None:
         """Delay, jitter and split, then on to the stage of ``direction``."""
         stage = self._stages[direction]
+        if not self._faults and not stage.items:
+            # nothing delayed or queued: on at once (the common path, kept cheap: no clock read)
+            stage.sink(data, chars)
+            return
         now = self.clock.now()
         if not self._faults:
             stage.put(now, data, chars)

@@ -71,6 +71,8 @@ _CSIZE_BITS = {termios.CS5: 5, termios.CS6: 6, termios.CS7: 7, termios.CS8: 8}
 _BITS_CSIZE = {bits: flag for flag, bits in _CSIZE_BITS.items()}
 
 _READ_SIZE = 4096
+# Device output within this many seconds of host input reuses the settings read with that input.
+_RECHECK = 0.001
 
 
 def make_raw(attrs: list) -> list:
@@ -170,6 +172,7 @@ class PtyTransport(Transport):
         self._touched = False
         self._reported: SerialSettings | None = None
         self._last_attrs: list | None = None
+        self._checked_at = -1.0
         self._preset: SerialSettings | None = None
         self._frame_visible = True
         #: Bytes dropped because nobody read them.
@@ -282,13 +285,17 @@ class PtyTransport(Transport):
         if not data or self._endpoint is None:
             return
         self._check_settings()
+        self._checked_at = self._loop.time() if self._loop is not None else 0.0
         self._endpoint.feed(data)
 
     # -- device → host ----------------------------------------------------------------------
     def _write(self, data: bytes) -> None:
         if self._master is None or not data:
             return
-        self._check_settings()
+        loop = self._loop
+        if loop is None or loop.time() - self._checked_at > _RECHECK:
+            # an answer right after the host's bytes needs no second look at its termios
+            self._check_settings()
         self._out += data
         if not self._writing:
             self._flush()
