@@ -1,0 +1,63 @@
+"""Fuzzing the GMS96 card behind its link layer: any bytes, at any time, never crash it and
+never change what `s85;170` saved (design principle 4)."""
+
+from __future__ import annotations
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from devsim.core.clock import VirtualClock
+from devsim.core.nvram import NonVolatileMemory
+from devsim.devices.gms96 import Gms96Device
+from devsim.devices.gms96.codec import LongFrame, ShortFrame, control_host, encode, letter
+
+SAVE = encode(LongFrame(control_host(0), 3, letter("s", 85, 170)))
+SET_N10 = encode(LongFrame(control_host(1), 3, letter("N", 300, 10)))
+FRAMES = [
+    encode(LongFrame(control_host(0), 3, letter("A", 10000))),
+    encode(LongFrame(control_host(1), 3, letter("T", 3, 0))),
+    encode(LongFrame(control_host(0), 3, letter("Q", 3))),
+    encode(LongFrame(control_host(1), 3, letter("+", -500))),
+    encode(ShortFrame(0x01, 3)),
+    encode(ShortFrame(0x00, 3)),
+    encode(ShortFrame(0x0B, 3, bytes([80]))),
+]
+
+
+def _card() -> tuple[Gms96Device, VirtualClock, NonVolatileMemory, bytearray]:
+    clock = VirtualClock()
+    nvram = NonVolatileMemory(None)
+    card = Gms96Device(clock=clock, config={"boot_time": 0}, nvram=nvram)
+    out = bytearray()
+    card.attach(out.extend)
+    card.feed(SET_N10)
+    clock.advance(0.01)
+    card.feed(SAVE)
+    clock.advance(0.5)
+    return card, clock, nvram, out
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    st.lists(st.one_of(st.binary(max_size=40), st.sampled_from(FRAMES)), max_size=30),
+    st.lists(st.floats(min_value=0, max_value=0.2), max_size=30),
+)
+def test_card_survives_any_input_and_keeps_saved_parameters(chunks: list[bytes], pauses: list[float]) -> None:
+    card, clock, nvram, out = _card()
+    image = {section: nvram.get(section) for section in nvram.sections()}
+    for i, chunk in enumerate(chunks):
+        card.feed(chunk)
+        clock.advance(pauses[i] if i < len(pauses) else 0.001)
+    clock.advance(1.0)
+    # still answering: #1 after the line has been idle
+    out.clear()
+    card.feed(encode(ShortFrame(0x01, 3)))
+    clock.advance(0.01)
+    assert bytes(out[:1]) == b"\x10" and bytes(out[-1:]) == b"\x16"
+    if not any(letter_ in chunk for chunk in chunks for letter_ in (b"s", b"r", b"N", b"p", b"a")):
+        # nothing here could save, reset or download: the stored image is untouched and the
+        # saved N10 comes back after a power cycle
+        assert {section: nvram.get(section) for section in nvram.sections()} == image
+        card.power_cycle()
+        clock.advance(1.0)
+        assert card.read("param.N10") == 300
