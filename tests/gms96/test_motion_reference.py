@@ -5,6 +5,11 @@ the test advances it, so each expectation is a closed form of the spec's motion 
 a = 1000·B inc/s², sin² ramps take π/2 longer than linear ones, i.e. their average acceleration
 is 2a/π).  Defaults after power-on: M = f = 2000 Hz, S = 100 Hz, B = 50 Hz/ms, N24 = 1 (sin²),
 cam [-20000, -15000] on E2.1, an index mark every 4096 inc.
+
+Cam, limit switches and index marks switch on the ACTUAL position (spec §5.6, §5.7, §5.11): while
+cruising at v it lags the set-point by v/Kv (Kv = 0.2·N10 = 40 s⁻¹), so a switch is seen
+``LAG_T`` = 1/Kv later than the set-point passes it, with the set-point v/Kv further on; a
+reference run repositions onto the actual position at the detection instant.
 """
 
 from __future__ import annotations
@@ -22,6 +27,13 @@ A = 50000.0  # B50
 A_SIN = 2.0 * A / math.pi  # average acceleration of a sin² ramp with peak a
 S = 100.0
 TOL = 1e-6
+KV = 40.0  # 0.2 · N10 (200)
+LAG_T = 1.0 / KV  # a cruising actual position passes a point 1/Kv after the set-point
+
+
+def lag(v: float) -> float:
+    """The following error v/Kv while cruising at ``v``."""
+    return v / KV
 
 
 def ramp(v: float, a: float = A_SIN) -> float:
@@ -35,8 +47,9 @@ def dist(v: float, a: float = A_SIN) -> float:
 
 
 def reposition(v: float, a: float = A_SIN) -> float:
-    """Brake from ``v`` past the detected point and come back onto it at the search speed S."""
-    d = dist(v, a)
+    """Brake from ``v`` past the detected point and come back onto it at the search speed S: at
+    detection the set-point is already v/Kv past the (actual) point."""
+    d = dist(v, a) + lag(v)
     back = d / S + S / a if d >= 2 * dist(S, a) else 2.0 * math.sqrt(d / a)
     return ramp(v, a) + back
 
@@ -88,7 +101,7 @@ def test_q1_index_mark_only(plant_factory: Any) -> None:
     plant.idle()
     dev = plant.device()
     # first mark below 0 is 100 - 4096 = -3996
-    t_mark = ramp(S) + (3996 - dist(S)) / S
+    t_mark = ramp(S) + (3996 - dist(S)) / S + LAG_T  # the actual reaches the mark 1/Kv later
     assert last(dev, "reference_done") - t0 == pytest.approx(t_mark + reposition(S), abs=TOL)
     assert physical(plant) == pytest.approx(-3996)
     assert status(c) == 0
@@ -107,9 +120,10 @@ def test_q2_cam_only_at_working_speed(card: Plant) -> None:
     assert card.device().executor.reference.cam_phase is True  # FB 254 (3) = 1
     card.idle()
     dev = card.device()
-    t_cam = ramp(1000) + (15000 - dist(1000)) / 1000
-    # drive off the cam at S (positive): brake, come back, leave the cam at its edge -15000
-    t_off = t_cam + ramp(1000) + ramp(S) + (dist(1000) - dist(S)) / S
+    t_cam = ramp(1000) + (15000 - dist(1000)) / 1000 + LAG_T
+    # drive off the cam at S (positive): brake from lag(1000) past the edge, come back; the actual
+    # leaves the cam at its edge -15000 with the set-point lag(S) beyond it
+    t_off = t_cam + ramp(1000) + ramp(S) + (dist(1000) + lag(1000) - dist(S) + lag(S)) / S
     assert last(dev, "reference_done") - t0 == pytest.approx(t_off + reposition(S), abs=TOL)
     assert physical(card) == pytest.approx(-15000)  # the cam's inactive edge is the point
     assert card.read("position_counter") == 0 and card.read("idxoff") is False
@@ -120,9 +134,10 @@ def test_q0_timing_closed_form(card: Plant) -> None:
     t0 = card.now()
     send(c, "Q", 0)
     card.idle()
-    t_cam = ramp(2000) + (15000 - dist(2000)) / 2000
-    t_off = t_cam + ramp(2000) + ramp(S) + (dist(2000) - dist(S)) / S
-    t_mark = t_off + 2 * ramp(S) + (16384 - 15000) / S  # reversal at S, then down to the mark
+    t_cam = ramp(2000) + (15000 - dist(2000)) / 2000 + LAG_T  # switches on the actual position
+    t_off = t_cam + ramp(2000) + ramp(S) + (dist(2000) + lag(2000) - dist(S) + lag(S)) / S
+    # reversal at S from lag(S) above the edge, then down until the actual reaches the mark
+    t_mark = t_off + 2 * ramp(S) + (16384 - 15000 + 2 * lag(S)) / S
     assert last(card.device(), "reference_done") - t0 == pytest.approx(t_mark + reposition(S), abs=TOL)
     assert physical(card) == pytest.approx(-16384)
 
@@ -135,9 +150,9 @@ def test_q0_reversed_direction_p2_1(plant_factory: Any) -> None:
     plant.advance(1.0)
     assert velocity(plant) == pytest.approx(2000)  # "negative" is positive with P2.1
     plant.idle()
-    t_cam = ramp(2000) + (15000 - dist(2000)) / 2000
-    t_off = t_cam + ramp(2000) + ramp(S) + (dist(2000) - dist(S)) / S
-    t_mark = t_off + 2 * ramp(S) + (16384 - 15000) / S
+    t_cam = ramp(2000) + (15000 - dist(2000)) / 2000 + LAG_T  # switches on the actual position
+    t_off = t_cam + ramp(2000) + ramp(S) + (dist(2000) + lag(2000) - dist(S) + lag(S)) / S
+    t_mark = t_off + 2 * ramp(S) + (16384 - 15000 + 2 * lag(S)) / S
     assert last(plant.device(), "reference_done") - t0 == pytest.approx(t_mark + reposition(S), abs=TOL)
     assert physical(plant) == pytest.approx(16384)
     assert plant.read("position_counter") == 0 and plant.read("idxoff") is False
@@ -206,8 +221,10 @@ def test_p3_limit_single_leg_closed_form(plant_factory: Any) -> None:
 def test_p3_limit_counts_the_path_of_every_leg(card: Plant) -> None:
     """Q0 with P3: travel to the cam, the braking overshoot and its way back both count."""
     c = card.client()
-    p3 = round(15000 + 2 * dist(2000) + 2 * dist(S) + 500)
-    excess = p3 - (15000 + 2 * dist(2000) + 2 * dist(S))
+    # the cam edges are seen lag(v) late, so the set-point overshoots them by lag(v) and comes back
+    used = 15000 + 2 * dist(2000) + 2 * lag(2000) + 2 * dist(S) + 2 * lag(S)
+    p3 = round(used + 500)
+    excess = p3 - used
     send(c, "Q", 0, 0, p3)
     card.idle()
     assert card.read("idxoff") is True
@@ -248,7 +265,7 @@ def test_q6_input_search(card: Plant) -> None:
     card.advance(2.0)
     assert velocity(card) == pytest.approx(-2000)  # working speed
     card.set("input.E2.0", True)
-    x_detect = -(dist(2000) + 2000 * (2.0 - ramp(2000)))
+    x_detect = -(dist(2000) + 2000 * (2.0 - ramp(2000))) + lag(2000)  # the actual at detection
     card.idle()
     assert last(card.device(), "reference_done") - t0 == pytest.approx(2.0 + reposition(2000), abs=TOL)
     assert physical(card) == pytest.approx(x_detect)
@@ -277,7 +294,7 @@ def test_q6_edge_criterion_p2_7(card: Plant) -> None:
     card.set("input.E2.0", True)
     card.idle()
     assert last(card.device(), "reference_done") - t0 == pytest.approx(2.0 + reposition(2000), abs=TOL)
-    assert physical(card) == pytest.approx(-(dist(2000) + 2000 * (2.0 - ramp(2000))))
+    assert physical(card) == pytest.approx(-(dist(2000) + 2000 * (2.0 - ramp(2000))) + lag(2000))
 
 
 def test_q6_normally_closed_p2_0_drives_the_switch_free(card: Plant) -> None:
@@ -288,7 +305,7 @@ def test_q6_normally_closed_p2_0_drives_the_switch_free(card: Plant) -> None:
     card.set("input.E2.0", False)
     card.idle()
     assert card.read("idxoff") is False
-    assert physical(card) == pytest.approx(-(dist(2000) + 2000 * (1.0 - ramp(2000))))
+    assert physical(card) == pytest.approx(-(dist(2000) + 2000 * (1.0 - ramp(2000))) + lag(2000))
 
 
 def test_q8_spindle_simulation(card: Plant) -> None:
@@ -336,9 +353,9 @@ def test_q_minus_1_uses_saved_m_and_drives_off(plant_factory: Any) -> None:
     plant.advance(1.0)
     assert velocity(plant) == pytest.approx(-3000)  # NV M, not f/M in RAM
     plant.idle()
-    t_cam = ramp(3000) + (15000 - dist(3000)) / 3000
-    t_off = t_cam + ramp(3000) + ramp(S) + (dist(3000) - dist(S)) / S
-    t_mark = t_off + 2 * ramp(S) + (16284 - 15000) / S  # mark 100 - 4·4096 = -16284
+    t_cam = ramp(3000) + (15000 - dist(3000)) / 3000 + LAG_T  # switches on the actual position
+    t_off = t_cam + ramp(3000) + ramp(S) + (dist(3000) + lag(3000) - dist(S) + lag(S)) / S
+    t_mark = t_off + 2 * ramp(S) + (16284 - 15000 + 2 * lag(S)) / S  # mark 100 - 4·4096 = -16284
     t_end = t_mark + reposition(S) + trapezoid(5000, 3000)
     assert last(plant.device(), "reference_done") - t0 == pytest.approx(t_end, abs=TOL)
     assert physical(plant) == pytest.approx(-16284 + 5000)
@@ -354,7 +371,7 @@ def test_q_minus_1_reference_type_from_n19(plant_factory: Any) -> None:
     t0 = plant.now()
     send(c, "Q", -1)
     plant.idle()
-    t_mark = ramp(S) + (100 - dist(S)) / S
+    t_mark = ramp(S) + (100 - dist(S)) / S + LAG_T
     t_end = t_mark + reposition(S) + trapezoid(2000, 2000)
     assert last(plant.device(), "reference_done") - t0 == pytest.approx(t_end, abs=TOL)
     assert physical(plant) == pytest.approx(100 - 2000)
@@ -439,7 +456,6 @@ def test_backlash_abort_during_compensation(referenced: Plant) -> None:
 # ================================================================================================
 
 END = {"axis": {"end_stops": [-40000, 0]}}  # after Q0 the upper stop is at counter 16384
-KV = 40.0  # N10 = 200, kv_per_n10 = 0.2
 
 
 def referenced_plant(plant_factory: Any, config: dict[str, Any]) -> tuple[Plant, Gms96Client]:
@@ -501,10 +517,45 @@ def test_limit_switch_input(plant_factory: Any) -> None:
     plant.advance(5.5)
     assert c.read(1, 1, 0)[1] & 0x08  # T1;1;0: EB0 bit 3
     plant.idle()
-    assert seen[0] - t0 == pytest.approx(ramp(2000) + (10000 - dist(2000)) / 2000, abs=1e-6)
+    # the switch sees the actual position: 1/Kv after the set-point passes -6384
+    assert seen[0] - t0 == pytest.approx(ramp(2000) + (10000 - dist(2000)) / 2000 + LAG_T, abs=1e-6)
     send(c, "A", 0)
     plant.idle()
     assert not c.read(1, 1, 0)[1] & 0x08
+
+
+def test_limit_switch_follows_the_actual_position_and_n10(plant_factory: Any) -> None:
+    """Spec §5.7/§5.11: the switch sees set-point - v/Kv; halving N10 halves Kv and doubles the lag."""
+    plant, c = referenced_plant(plant_factory, {"axis": {"limit_switches": [{"input": "E0.3", "low": -6384}]}})
+    dev = plant.device()
+    seen: list[tuple[float, float, float]] = []
+    dev.signals.subscribe("E0.3", lambda *_: seen.append((plant.now(), dev.indexer.actual(), dev.axis.position())))
+    send(c, "N", 100, 10)  # Kv = 20 s⁻¹: 100 inc lag at 2000 Hz
+    plant.idle()
+    t0 = plant.now()
+    send(c, "A", 12000)
+    plant.idle()
+    t, actual, setpoint = seen[0]
+    assert t - t0 == pytest.approx(ramp(2000) + (10000 - dist(2000)) / 2000 + 1.0 / 20.0, abs=1e-6)
+    assert actual == pytest.approx(-6384, abs=1e-6)
+    assert setpoint == pytest.approx(-6384 + 2000 / 20.0, abs=1e-6)
+
+
+def test_switch_does_not_flicker_on_the_lag_dip_at_a_move_start(plant_factory: Any) -> None:
+    """Standing exactly on a switch edge, a move away from the switch region makes the static-lag
+    actual (x - v/Kv) dip back across the edge at the start of the ramp; the position loop never
+    drives the motor against its set-point, so the switch stays put (direction tracking)."""
+    plant, c = referenced_plant(plant_factory, {"axis": {"limit_switches": [{"input": "E0.3", "high": -16384}]}})
+    dev = plant.device()
+    assert plant.read("input.E0.3") is True  # standing on the upper edge: active (x <= high)
+    seen: list[bool] = []
+    dev.signals.subscribe("E0.3", lambda *_: seen.append(bool(plant.read("input.E0.3"))))
+    send(c, "A", -100)  # move down into the switch: the actual dips upwards first
+    plant.idle()
+    assert seen == [] and plant.read("input.E0.3") is True
+    send(c, "A", 100)  # and up out of it: on the way it leaves exactly once
+    plant.idle()
+    assert seen == [False]
 
 
 def test_h2_waits_n28_after_the_set_point(referenced: Plant) -> None:

@@ -15,7 +15,7 @@ import math
 from collections.abc import Callable
 from typing import Any, ClassVar
 
-from devsim.core.axis import Axis, RegionSwitch
+from devsim.core.axis import Axis
 from devsim.core.clock import Clock, Timer
 from devsim.core.device import Device, SerialSettings, UnknownName
 from devsim.core.nvram import NonVolatileMemory
@@ -25,7 +25,7 @@ from devsim.devices.gms96.counter import CounterInput
 from devsim.devices.gms96.executor import Cmd, Executor
 from devsim.devices.gms96.image import ProcessImage, parse_bit
 from devsim.devices.gms96.link import Link
-from devsim.devices.gms96.motion import Indexer
+from devsim.devices.gms96.motion import ActualSwitch, Indexer
 from devsim.devices.gms96.plc import Plc
 
 __all__ = ["Gms96Device"]
@@ -71,7 +71,7 @@ class Gms96Device(Device):
         self.plc = Plc(self)
         self.counter = CounterInput(self)
         self._define_signals()
-        self._switches: list[RegionSwitch] = []
+        self._switches: list[ActualSwitch] = []
         self._build_switches()
         self.powered = False
         self.origin = 0.0
@@ -111,6 +111,8 @@ class Gms96Device(Device):
         s.subscribe("ref_pulse_hz", lambda *_: self._spindle_pulse_speed())
 
     def _build_switches(self) -> None:
+        """Cam and limit switches act on the ACTUAL position (set-point - v/Kv, spec §5.6,
+        §5.11): they switch v/Kv later than the set-point passes them."""
         geo = self.cfg.axis
         if geo.cam is not None:
             lo, hi = geo.cam
@@ -119,7 +121,7 @@ class Gms96Device(Device):
             def cam(active: bool) -> None:
                 self.signals.set(geo.cam_input, active != nc)
 
-            sw = RegionSwitch(self.axis, lo, hi, cam)
+            sw = ActualSwitch(self.indexer, lo, hi, cam)
             self._switches.append(sw)
             self.signals.signal(geo.cam_input).value = sw.active != nc
         for ls in geo.limit_switches:
@@ -128,7 +130,7 @@ class Gms96Device(Device):
             def follow(active: bool, name: str = name) -> None:
                 self.signals.set(name, active)
 
-            sw = RegionSwitch(self.axis, -math.inf if ls.low is None else ls.low, math.inf if ls.high is None else ls.high, follow)
+            sw = ActualSwitch(self.indexer, -math.inf if ls.low is None else ls.low, math.inf if ls.high is None else ls.high, follow)
             self._switches.append(sw)
             self.signals.signal(name).value = sw.active
 

@@ -15,13 +15,13 @@ import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from devsim.core.axis import Axis, RampProfile, Watch
+from devsim.core.axis import Axis, RampProfile, Segment, Watch, _IndexRule, _RangeRule, _Rule
 from devsim.core.clock import Timer
 
 if TYPE_CHECKING:
     from devsim.devices.gms96.device import Gms96Device
 
-__all__ = ["Indexer"]
+__all__ = ["ActualSwitch", "ActualWatch", "Indexer"]
 
 _SINE = RampProfile(shape="sine")
 
@@ -58,6 +58,9 @@ class Indexer:
         self.junction_feed: tuple[int, int] | None = None
         self._junction_braking = False  # past the brake point: the next move's speed applies
         self._junction_watch: Watch | None = None
+        # switches and index marks on the ACTUAL position (spec §5.6, §5.11): re-armed with the
+        # following-error watch, i.e. on every re-plan, arrival, halt, power off, blockage, N10
+        self._actual_watches: list[ActualWatch] = []
 
     # -- speeds ---------------------------------------------------------------------------------
     def v_factor(self) -> int:
@@ -370,6 +373,7 @@ class Indexer:
         plan-dependent H7 and in-position events are re-armed with it."""
         self.dev.arm_torque_abort()
         self.dev.arm_in_position()
+        self.arm_actual_watches()
         if self._fe_timer is not None:
             self._fe_timer.cancel()
             self._fe_timer = None
@@ -396,6 +400,39 @@ class Indexer:
         when = self._speed_exceeds(limit * self.kv())
         if when is not None:
             self._fe_timer = d.clock.call_at(when, self._trip)
+
+    # -- the actual position as a function of time (switches, index marks) -----------------------
+    def actual_now(self) -> float:
+        """:meth:`actual`, usable while the device is still being built."""
+        if not hasattr(self.dev, "controller"):
+            return self._end_stop(self.axis.position())
+        return self.actual()
+
+    def actual_function(self) -> Callable[[Segment | None, float], float] | None:
+        """``f(seg, t)``: the actual position at ``t`` under plan segment ``seg`` (``None``: the
+        plan's rest position) -- the same model as :meth:`actual`; ``None``: it stands still."""
+        if self.blocked_at is not None:
+            return None
+        rest = self.axis.final_position()
+        if not getattr(self.dev, "controller", False):
+            return lambda seg, t: self._end_stop(seg.position(t) if seg is not None else rest)
+        if self.dev.stepper:
+            return lambda seg, t: seg.position(t) if seg is not None else rest
+        kv = self.kv()
+        return lambda seg, t: self._end_stop(seg.position(t) - seg.velocity(t) / kv if seg is not None else rest)
+
+    def watch_actual(self, position: float, callback: Callable[[int], None]) -> ActualWatch:
+        """Like :meth:`Axis.watch` on the actual position."""
+        return ActualWatch(self, _RangeRule(float(position), math.inf), callback, jump_fires=True)
+
+    def watch_actual_index(self, callback: Callable[[int], None]) -> ActualWatch:
+        """Like :meth:`Axis.watch_index` on the actual position (the encoder sees the motor)."""
+        rule = _IndexRule(float(self.axis.counts_per_rev), self.axis.index_offset)
+        return ActualWatch(self, rule, callback, jump_fires=False)
+
+    def arm_actual_watches(self) -> None:
+        for w in list(self._actual_watches):
+            w.arm()
 
     def _trip(self) -> None:
         self.dev.following_error_fault("speed" if self.blocked_at is None else "blocked")
@@ -430,3 +467,166 @@ class Indexer:
             "blocked_at": self.blocked_at,
             "backlash": {"side": self.last_dir, "phase": self.comp_phase},
         }
+
+
+class ActualWatch:
+    """A crossing watch on the actual position (set-point - v/Kv, held by a blockage or an end
+    stop), solved per planned segment like :meth:`Indexer.end_stop_contact`: closed form while
+    cruising, a fine subdivision plus bisection on ramps (linear and sin²).
+
+    Direction tracking: a crossing counts only in the direction the set-point moves (or at
+    standstill).  The static lag model makes the actual dip backwards at the start of a move
+    (and forwards at the start of a reversal) -- the real position loop never moves the motor
+    against its set-point, so such a dip must not flicker a switch or count an index mark.
+    ``jump_fires``: a jump of the actual at a re-arm (teleport, N10 change, power off) fires the
+    callback (switches); otherwise the zone is silently re-synchronised (index marks)."""
+
+    _STEPS = 64
+
+    def __init__(self, indexer: Indexer, rule: _Rule, callback: Callable[[int], None], jump_fires: bool) -> None:
+        self.indexer = indexer
+        self.rule = rule
+        self.callback = callback
+        self.jump_fires = jump_fires
+        self.state = rule.state_of(indexer.actual_now())
+        self._timer: Timer | None = None
+        self._gen = -1
+        self.cancelled = False
+        indexer._actual_watches.append(self)
+        self.arm()
+
+    def cancel(self) -> None:
+        if self.cancelled:
+            return
+        self.cancelled = True
+        self._unschedule()
+        self.indexer._actual_watches.remove(self)
+
+    def _unschedule(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+        self._timer = None
+
+    def _changed(self, x: float, v: float) -> int:
+        """+1/-1: the actual ``x`` (set-point speed ``v``) is a valid crossing out of the zone."""
+        zone = self.rule.state_of(x)
+        if zone == self.state:
+            return 0
+        d = 1 if zone > self.state else -1
+        return d if v == 0.0 or (v > 0) == (d > 0) else 0
+
+    def arm(self) -> None:
+        """(Re)compute the next crossing under the current plan."""
+        self._unschedule()
+        if self.cancelled:
+            return
+        ix = self.indexer
+        axis = ix.axis
+        clock = ix.dev.clock
+        now = clock.now()
+        self._gen = axis._gen
+        f = ix.actual_function()
+        if f is None or not axis.moving:
+            zone = self.rule.state_of(ix.actual_now())
+            if zone != self.state:  # the actual jumped (teleport, N10, power off) or stands there
+                if self.jump_fires:
+                    self._schedule(now, 1 if zone > self.state else -1, zone)
+                else:
+                    self.state = zone
+            return
+        end = None
+        for seg in axis.segments():
+            if seg.t1 <= now:
+                continue
+            t0 = max(seg.t0, now)
+            d = self._changed(f(seg, t0), seg.velocity(t0))
+            if d:
+                self._schedule(t0, d)
+                return
+            if seg.t1 == math.inf:
+                self._cruise(seg, t0, f)
+                return
+            found = self._search(seg, t0, f)
+            if found is not None:
+                self._schedule(*found)
+                return
+            end = seg.t1
+        if end is not None:
+            d = self._changed(f(None, end), 0.0)
+            if d:
+                self._schedule(end, d)
+
+    def _cruise(self, seg: Segment, t0: float, f: Callable[[Segment | None, float], float]) -> None:
+        v = seg.velocity(t0)
+        if v == 0.0:
+            return
+        border = self.rule.up(self.state) if v > 0 else self.rule.down(self.state)
+        if border is None:
+            return
+        x0 = f(seg, t0)
+        t = t0 + (border[0] - x0) / v
+        t = max(t, t0)
+        # the end stops may hold the actual short of the border
+        if self._changed(f(seg, t + 1e-9 * max(1.0, abs(t))), v) or self._changed(f(seg, t), v):
+            self._schedule(t, 1 if v > 0 else -1)
+
+    def _search(self, seg: Segment, t0: float, f: Callable[[Segment | None, float], float]) -> tuple[float, int] | None:
+        def test(t: float) -> int:
+            return self._changed(f(seg, t), seg.velocity(t))
+
+        prev = t0
+        for k in range(1, self._STEPS + 1):
+            t = t0 + (seg.t1 - t0) * k / self._STEPS
+            if test(t):
+                a, b = prev, t
+                for _ in range(60):
+                    mid = 0.5 * (a + b)
+                    if test(mid):
+                        b = mid
+                    else:
+                        a = mid
+                return b, test(b)
+            prev = t
+        return None
+
+    def _schedule(self, when: float, direction: int, zone: int | None = None) -> None:
+        def fire() -> None:
+            self._timer = None
+            if self.cancelled:
+                return
+            if self.indexer.axis._gen != self._gen:
+                self.arm()  # the plan changed under the watch without a re-arm
+                return
+            self.state = self.state + direction if zone is None else zone
+            self.arm()
+            self.callback(direction)
+
+        self._timer = self.indexer.dev.clock.call_at(when, fire)
+
+
+class ActualSwitch:
+    """:class:`~devsim.core.axis.RegionSwitch` on the actual position: active while
+    low <= actual <= high; ``on_change(active)`` at the solved instant."""
+
+    def __init__(self, indexer: Indexer, low: float, high: float, on_change: Callable[[bool], None] | None = None) -> None:
+        if low > high:
+            raise ValueError("low must not exceed high")
+        self.low = low
+        self.high = high
+        self.on_change = on_change
+        self._watch = ActualWatch(indexer, _RangeRule(low, high), self._crossed, jump_fires=True)
+        self._active = self._watch.state == 1
+
+    @property
+    def active(self) -> bool:
+        return self._active
+
+    def _crossed(self, direction: int) -> None:
+        active = self._watch.state == 1
+        if active != self._active:
+            self._active = active
+            if self.on_change is not None:
+                self.on_change(active)
+
+    def cancel(self) -> None:
+        self._watch.cancel()

@@ -5,7 +5,8 @@ absolute position), Q6 search on a 24 V input (P2.7 edge criterion), Q8 spindle 
 Q-1 per N19 with drive-off to N33.  P2 bits: .0 NC cam, .1 reversed direction, .2 keep the
 counter, .3 cam on E2.0, .6 message 23 instead of failure at the P3 distance limit.  After an
 end criterion the axis brakes and repositions onto the detected point (firmware ≥ v3.79).
-Switch and index crossings are solved by the axis (RegionSwitch, ``watch_index``), never sampled.
+Switch and index crossings are solved on the ACTUAL position (``ActualSwitch``,
+``Indexer.watch_actual_index``), never sampled; the detected point is the actual position then.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from typing import TYPE_CHECKING
 
 from devsim.core.axis import Watch
 from devsim.core.clock import Timer
+from devsim.devices.gms96.motion import ActualWatch
 
 if TYPE_CHECKING:
     from devsim.devices.gms96.device import Gms96Device
@@ -52,7 +54,7 @@ class ReferenceRun:
         self._leg_over = 0.0  # braking overshoot (against the leg's direction) at its start
         self._limit_watch: list[Watch] = []
         self._limit_timer: Timer | None = None
-        self._index_watch: Watch | None = None
+        self._index_watch: ActualWatch | None = None
         self._unsub: Callable[[], None] | None = None
         self.was_active = not dev.idxoff
 
@@ -163,19 +165,19 @@ class ReferenceRun:
             self._unsub()
             self._unsub = None
         if self.p1 == 2:
-            self._reposition(self.dev.indexer.axis.position())
+            self._reposition(self.dev.indexer.actual())
         else:
             self._index_search()
 
     def _index_search(self) -> None:
         self.phase = "index_search"
-        axis = self.dev.indexer.axis
+        ix = self.dev.indexer
 
         def mark(direction: int) -> None:
             if self.phase == "index_search" and direction == self.neg:
-                self._reposition(self._nearest_mark(axis.position()))
+                self._reposition(self._nearest_mark(ix.actual()))
 
-        self._index_watch = axis.watch_index(mark)
+        self._index_watch = ix.watch_actual_index(mark)
         self._leg(self.neg, "search")
 
     def _nearest_mark(self, x: float) -> float:
@@ -197,10 +199,10 @@ class ReferenceRun:
                     need_edge = False
                 return
             if active:
-                self._reposition(self.dev.indexer.axis.position())
+                self._reposition(self.dev.indexer.actual())
 
         if self.cam_active() and not need_edge:
-            self._reposition(self.dev.indexer.axis.position())
+            self._reposition(self.dev.indexer.actual())
             return
         self._watch_cam(changed)
         self._leg(self.neg, self.fast_kind)
