@@ -29,7 +29,7 @@ import math
 from collections import deque
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 from devsim.core.clock import Clock, Timer
 
@@ -359,6 +359,11 @@ class Watch:
     @property
     def cancelled(self) -> bool:
         return self._cancelled
+
+    @property
+    def state(self) -> int:
+        """The zone of the rule the watched position is in (for a region: 1 = inside)."""
+        return self._state
 
     def cancel(self) -> None:
         """Stop watching; idempotent."""
@@ -925,7 +930,11 @@ class Axis:
 class RegionSwitch:
     """A switch (limit, reference cam) that is active while low <= position <= high (either bound
     may be +/-inf).  ``on_change(active)`` runs at the exact instant the axis enters or leaves the
-    region, however fast it moves."""
+    region, however fast it moves.
+
+    ``make_watch(rule, callback)`` lets a device watch something other than the axis position
+    with the same region logic (the GMS96 watches its actual position, set-point − v/Kv).
+    """
 
     def __init__(
         self,
@@ -933,6 +942,8 @@ class RegionSwitch:
         low: float,
         high: float,
         on_change: Callable[[bool], None] | None = None,
+        *,
+        make_watch: Callable[[_Rule, CrossingCallback], Any] | None = None,
     ) -> None:
         if low > high:
             raise ValueError("low must not exceed high")
@@ -940,15 +951,19 @@ class RegionSwitch:
         self.low = low
         self.high = high
         self.on_change = on_change
-        self._watch = axis._add_watch(_RangeRule(low, high), self._crossed, teleport_fires=True)
-        self._active = self._watch._state == 1
+        rule = _RangeRule(low, high)
+        if make_watch is None:
+            self._watch = axis._add_watch(rule, self._crossed, teleport_fires=True)
+        else:
+            self._watch = make_watch(rule, self._crossed)
+        self._active = self._watch.state == 1
 
     @property
     def active(self) -> bool:
         return self._active
 
     def _crossed(self, direction: int) -> None:
-        active = self._watch._state == 1
+        active = self._watch.state == 1
         if active != self._active:
             self._active = active
             if self.on_change is not None:

@@ -15,7 +15,7 @@ import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from devsim.core.axis import Axis, RampProfile, Segment, Watch, _IndexRule, _RangeRule, _Rule
+from devsim.core.axis import Axis, RampProfile, RegionSwitch, Segment, Watch, _IndexRule, _RangeRule, _Rule
 from devsim.core.clock import Timer
 
 if TYPE_CHECKING:
@@ -604,29 +604,12 @@ class ActualWatch:
         self._timer = self.indexer.dev.clock.call_at(when, fire)
 
 
-class ActualSwitch:
+class ActualSwitch(RegionSwitch):
     """:class:`~devsim.core.axis.RegionSwitch` on the actual position: active while
     low <= actual <= high; ``on_change(active)`` at the solved instant."""
 
     def __init__(self, indexer: Indexer, low: float, high: float, on_change: Callable[[bool], None] | None = None) -> None:
-        if low > high:
-            raise ValueError("low must not exceed high")
-        self.low = low
-        self.high = high
-        self.on_change = on_change
-        self._watch = ActualWatch(indexer, _RangeRule(low, high), self._crossed, jump_fires=True)
-        self._active = self._watch.state == 1
-
-    @property
-    def active(self) -> bool:
-        return self._active
-
-    def _crossed(self, direction: int) -> None:
-        active = self._watch.state == 1
-        if active != self._active:
-            self._active = active
-            if self.on_change is not None:
-                self.on_change(active)
-
-    def cancel(self) -> None:
-        self._watch.cancel()
+        super().__init__(
+            indexer.axis, low, high, on_change,
+            make_watch=lambda rule, callback: ActualWatch(indexer, rule, callback, jump_fires=True),
+        )
