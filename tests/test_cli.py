@@ -208,11 +208,12 @@ def test_run_pty_control_and_clean_sigint(sockdir: str) -> None:
         assert (done.returncode, done.stdout) == (0, "true\n")
         done = ctl(addr, "set", "echo", "input.mute", "false")
         assert done.returncode == 0, done.stderr
-        done = ctl(addr, "set", "echo", "value", "hello")
-        assert done.returncode == 0
-        assert json.loads(ctl(addr, "read", "echo", "value").stdout) == "hello"
+        assert ctl(addr, "set", "echo", "value", "2.5").returncode == 0
+        done = ctl(addr, "set", "echo", "value", "hello")  # checked before it takes effect
+        assert done.returncode == 1 and "expects a number" in done.stderr
+        assert json.loads(ctl(addr, "read", "echo", "value").stdout) == 2.5
         state = json.loads(ctl(addr, "state", "echo").stdout)
-        assert state["signals"]["input.mute"] is False
+        assert state["input"]["mute"] is False
         done = ctl(addr, "read", "echo", "nothing")
         assert done.returncode == 1
         assert done.stderr.startswith("Error: UnknownName: ") and done.stderr.count("\n") == 1

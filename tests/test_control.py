@@ -67,7 +67,7 @@ def test_read_set_state_over_one_connection(served: tuple[Runtime, str]) -> None
         assert runtime.read("echo1", "input.mute") is True  # the same state as in process
         state = client.state("echo1")
         assert state["address"] == 4
-        assert state["signals"]["input.mute"] is True
+        assert state["input"]["mute"] is True
         names = [d["name"] for d in client.devices()]
         assert names == ["echo1", "echo2"]
         assert {d["kind"] for d in client.devices()} == {"echo"}

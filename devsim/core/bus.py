@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Sequence
 
-from devsim.core.device import ByteSink, Device, SerialSettings
+from devsim.core.device import ByteSink, Device, Port, SerialSettings
 
 __all__ = ["Bus"]
 
@@ -24,18 +24,18 @@ __all__ = ["Bus"]
 class Bus:
     """Looks like one device to a line; fans input out and output in."""
 
-    def __init__(self, devices: Sequence[Device]) -> None:
+    def __init__(self, devices: Sequence[Device | Port], port: str = "main") -> None:
         if not devices:
             raise ValueError("a bus needs at least one device")
-        self.devices = list(devices)
+        self.devices: list[Port] = [d.port(port) if isinstance(d, Device) else d for d in devices]
         self._write: ByteSink | None = None
-        self._queue: deque[tuple[Device | None, bytes]] = deque()
+        self._queue: deque[tuple[Port | None, bytes]] = deque()
         self._busy = False
-        for device in self.devices:
-            device.shared_line = len(self.devices) > 1
-            device.attach(lambda data, source=device: self._emit(source, data))
+        for member in self.devices:
+            member.shared_line = len(self.devices) > 1
+            member.attach(lambda data, source=member: self._emit(source, data))
 
-    def _emit(self, source: Device, data: bytes) -> None:
+    def _emit(self, source: Port, data: bytes) -> None:
         if not data:
             return
         if self._write is not None:

@@ -1,27 +1,45 @@
-"""The device base class and the byte interface between a line and a device.
+"""A device: one model under one protocol face per serial port, described by declared tables.
 
-A device is a byte-in / byte-out state machine with simulated physics behind it.  It never
-touches a socket: a transport hands it the host's bytes through :meth:`Device.feed`, and the
-device emits its answers through the ``write`` callback given to :meth:`Device.attach`.
-Several devices can share one line (RS-485 multidrop): see :class:`devsim.core.bus.Bus`.
+A kind subclasses :class:`Device` and declares, as class attributes:
 
-The control API reaches a device through :meth:`Device.read`, :meth:`Device.set`,
-:meth:`Device.power_cycle` and :meth:`Device.state`; names are dotted paths such as
-``axis.position``, ``param.P51``, ``input.limit_right`` or ``display``.
+* ``model_class`` – the machine (a :class:`~devsim.core.model.Model`): axes, I/O, parameters,
+  programs, faults, memory; it knows no protocol;
+* ``face_classes`` – per port name, the protocol face that decodes the host's bytes with a pure
+  codec and acts on the model (``face_class(model, port)``); a face holds the model, never
+  inherits it;
+* ``ports`` – the serial ports (:class:`~devsim.core.kit.PortDef`, default one port ``main``);
+* ``points`` – every control name (:class:`~devsim.core.points.PointTable`): ``read``, ``set``,
+  ``state`` and ``names`` come from it, values are checked before they take effect;
+* ``faults`` – the declared faults (:class:`~devsim.core.kit.FaultTable`).
+
+A transport's line reaches a port through :meth:`Device.port` (``feed``, ``attach``,
+``host_disconnected``, ``serial_settings``); ``feed``/``attach``/``send`` on the device itself
+mean the ``main`` port.  Several devices can share one line (RS-485 multidrop): see
+:class:`devsim.core.bus.Bus`.
 """
 
 from __future__ import annotations
 
-from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from devsim.core.clock import Clock
+from devsim.core.kit import MAIN_PORT, FaultTable, PortDef, Reference
+from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
-from devsim.core.signals import SignalBank
+from devsim.core.points import BadValue, PointTable, ReadOnlyName, UnknownName
 
-__all__ = ["ByteSink", "Device", "SerialSettings", "UnknownName"]
+__all__ = [
+    "BadValue",
+    "ByteSink",
+    "Device",
+    "Face",
+    "Port",
+    "ReadOnlyName",
+    "SerialSettings",
+    "UnknownName",
+]
 
 ByteSink = Callable[[bytes], None]
 
@@ -45,22 +63,88 @@ class SerialSettings:
         return bits / self.baudrate
 
 
-class UnknownName(KeyError):
-    """The control API asked for a name the device does not have."""
+class Face:
+    """A protocol face on one port: the host's bytes in, answers out, acting on the model.
+
+    Subclasses implement :meth:`feed` and, where the device has them, :attr:`serial_settings`
+    (from its DIP switches), :meth:`host_disconnected` and :meth:`close`.  Answers leave through
+    ``self.port.send``."""
+
+    def __init__(self, model: Any, port: Port) -> None:
+        self.model = model
+        self.port = port
+
+    def feed(self, data: bytes) -> None:
+        """Bytes from the host, in arrival order, possibly split anywhere."""
+        raise NotImplementedError
+
+    def send(self, data: bytes) -> None:
+        self.port.send(data)
+
+    def host_disconnected(self) -> None:
+        """The host closed the port (or its TCP connection dropped); default: nothing."""
+
+    @property
+    def serial_settings(self) -> SerialSettings:
+        return SerialSettings()
+
+    def close(self) -> None:
+        """Cancel the face's timers; it is not used afterwards."""
 
 
-class Device(ABC):
-    """Base class of every simulated controller.
+class Port:
+    """One serial port of a device, as a line or a bus sees it."""
 
-    Subclasses set ``kind`` and ``description`` and implement :meth:`feed`, :meth:`read`,
-    :meth:`set` and :meth:`state`.  ``config`` is the already validated device configuration
-    (DIP switches, parameters, axis geometry) as a plain mapping.
-    """
+    def __init__(self, device: Device, spec: PortDef) -> None:
+        self.device = device
+        self.spec = spec
+        self.name = spec.name
+        self.face: Face | None = None
+        self._write: ByteSink | None = None
+        #: True when other devices share the line (RS-485 multidrop); set by the bus.
+        self.shared_line = False
+
+    @property
+    def hears_others(self) -> bool:
+        return self.device.hears_others
+
+    def attach(self, write: ByteSink | None) -> None:
+        """Connect (or with ``None`` disconnect) the port's output to a line."""
+        self._write = write
+
+    def send(self, data: bytes) -> None:
+        """Emit bytes towards the host (dropped when nothing is attached, like a dead line, and
+        on a receive-only port)."""
+        if data and self._write is not None and not self.spec.receive_only:
+            self._write(data)
+
+    def feed(self, data: bytes) -> None:
+        if self.face is not None:
+            self.face.feed(data)
+
+    def host_disconnected(self) -> None:
+        if self.face is not None:
+            self.face.host_disconnected()
+
+    @property
+    def serial_settings(self) -> SerialSettings:
+        return self.face.serial_settings if self.face is not None else SerialSettings()
+
+
+class Device:
+    """A simulated controller: its model, a face per port, and the declared tables."""
 
     kind: ClassVar[str] = ""
     description: ClassVar[str] = ""
+    #: The validated configuration (DIP switches, options); pydantic model, or None.
+    config_model: ClassVar[Any] = None
     #: On a multidrop bus, also hear what the other devices send (not only the host).
     hears_others: ClassVar[bool] = False
+    ports: ClassVar[tuple[PortDef, ...]] = MAIN_PORT
+    points: ClassVar[PointTable] = PointTable()
+    faults: ClassVar[FaultTable] = FaultTable()
+    model_class: ClassVar[Callable[..., Model]] = Model
+    face_classes: ClassVar[Mapping[str, Callable[[Any, Port], Face]]] = {}
 
     def __init__(
         self,
@@ -71,72 +155,121 @@ class Device(ABC):
         name: str | None = None,
     ) -> None:
         self.clock = clock
-        self.config: dict[str, Any] = dict(config or {})
-        self.nvram = nvram if nvram is not None else NonVolatileMemory(None)
         self.name = name or self.kind
-        self.signals = SignalBank()
-        #: True when other devices share the line (RS-485 multidrop); set by the bus.
-        self.shared_line = False
-        #: True while the device initialises after power-on and does not listen yet.
-        self.booting = False
-        #: (simulated time, name) of notable moments, e.g. ("move_end", 1.321) for timing checks.
-        self.events: list[tuple[float, str]] = []
-        self._write: ByteSink | None = None
+        self.nvram = nvram if nvram is not None else NonVolatileMemory(None)
+        self.config: dict[str, Any] = dict(config or {})
+        self.model = self.model_class(clock=clock, config=self.config, nvram=self.nvram, name=self.name)
+        self._ports = {spec.name: Port(self, spec) for spec in self.ports}
+        for port_name, port in self._ports.items():
+            face_class = self.face_classes.get(port_name)
+            if face_class is not None:
+                port.face = face_class(self.model, port)
 
-    # -- byte interface ------------------------------------------------------------------
+    # -- ports -----------------------------------------------------------------------------
+    def port(self, name: str = "main") -> Port:
+        try:
+            return self._ports[name]
+        except KeyError:
+            raise UnknownName(f"{self.name} has no port {name!r} (ports: {', '.join(self._ports)})") from None
+
+    def port_names(self) -> list[str]:
+        return list(self._ports)
+
+    def face(self, port: str = "main") -> Face:
+        face = self.port(port).face
+        if face is None:
+            raise UnknownName(f"{self.name} has no face on port {port!r}")
+        return face
+
+    @property
+    def main(self) -> Port:
+        return self._ports[self.ports[0].name]
+
     def attach(self, write: ByteSink | None) -> None:
-        """Connect (or with ``None`` disconnect) the device's output to a line."""
-        self._write = write
+        self.main.attach(write)
+
+    def feed(self, data: bytes) -> None:
+        self.main.feed(data)
 
     def send(self, data: bytes) -> None:
-        """Emit bytes towards the host (dropped when nothing is attached, like a dead line)."""
-        if data and self._write is not None:
-            self._write(data)
+        self.main.send(data)
 
-    @abstractmethod
-    def feed(self, data: bytes) -> None:
-        """Bytes from the host, in arrival order, possibly split anywhere."""
-
-    def host_disconnected(self) -> None:  # noqa: B027 - optional hook, default does nothing
-        """The host closed the port (or its TCP connection dropped); default: nothing."""
+    def host_disconnected(self) -> None:
+        self.main.host_disconnected()
 
     @property
     def serial_settings(self) -> SerialSettings:
-        """The UART settings the device is configured for (from its DIP switches)."""
-        return SerialSettings()
+        return self.main.serial_settings
 
-    # -- control API ---------------------------------------------------------------------
-    @abstractmethod
+    @property
+    def shared_line(self) -> bool:
+        return self.main.shared_line
+
+    # -- what the runtime watches ------------------------------------------------------------
+    @property
+    def booting(self) -> bool:
+        return bool(self.model.booting)
+
+    @property
+    def events(self) -> list[tuple[float, str]]:
+        return self.model.events
+
+    @property
+    def signals(self) -> Any:
+        return self.model.signals
+
+    def on_ready(self, listener: Callable[[], None]) -> Callable[[], None]:
+        """Call ``listener`` each time the device finishes booting and listens."""
+        return self.model.listen("ready", listener)
+
+    # -- control API (derived from the declared points and faults) ---------------------------
+    def names(self) -> list[str]:
+        return self.points.names()
+
     def read(self, name: str) -> Any:
-        """Read one piece of state by dotted name; raises :class:`UnknownName`."""
+        return self.points.read(self.model, name, self.name)
 
-    @abstractmethod
     def set(self, name: str, value: Any) -> None:
-        """Set an input or quantity by dotted name; raises :class:`UnknownName`."""
+        self.points.set(self.model, name, value, self.name)
 
-    @abstractmethod
+    def check(self, name: str, value: Any) -> Any:
+        """Validate a value for a settable name without changing anything; returns it parsed."""
+        return self.points.parse(name, value, self.name)[1]
+
     def state(self) -> dict[str, Any]:
-        """A JSON-serialisable snapshot of the interesting state."""
-
-    def record_event(self, name: str) -> None:
-        """Note a moment (``move_start``, ``move_end``, ``error`` ...) for timing expectations."""
-        self.events.append((self.clock.now(), name))
-        if len(self.events) > 10000:
-            del self.events[:5000]
+        data: dict[str, Any] = {"kind": self.kind}
+        data.update(self.points.state(self.model))
+        return data
 
     def apply_state(self, state: Mapping[str, Any]) -> None:
-        """Initial state from a plant or scenario file: settable names and their values."""
-        for name, value in state.items():
-            self.set(name, value)
+        """Initial state from a plant or scenario file: settable names and their values, all
+        checked before the first takes effect."""
+        checked = [self.points.parse(name, value, self.name) for name, value in state.items()]
+        for point, value in checked:
+            assert point.put is not None
+            point.put(self.model, value)
 
-    def fault(self, kind: str, active: bool) -> None:
-        """Start (or end) a device fault such as ``blocked_axis`` or ``emergency_stop``."""
-        raise UnknownName(f"{self.kind} has no fault {kind!r}")
+    def fault(self, kind: str, active: Any) -> None:
+        """Start (or end) a declared device fault such as ``blocked_axis`` or ``emergency_stop``."""
+        self.faults.apply(self.model, kind, active, self.name)
+
+    def record_event(self, name: str) -> None:
+        self.model.record_event(name)
 
     def power_cycle(self, *, wipe: bool = False) -> None:
         """Switch the device off and on again; ``wipe`` erases non-volatile memory first."""
-        if wipe:
-            self.nvram.wipe()
+        self.model.power_cycle(wipe=wipe)
 
-    def close(self) -> None:  # noqa: B027 - optional hook, default does nothing
+    def close(self) -> None:
         """Cancel timers; the device is not used afterwards."""
+        for port in self._ports.values():
+            if port.face is not None:
+                port.face.close()
+        self.model.close()
+
+    # -- the generated reference -------------------------------------------------------------
+    @classmethod
+    def reference(cls) -> Reference:
+        """Commands, parameters, error codes and config keys for ``devsim doc`` (a kind adds
+        its tables here)."""
+        return Reference()

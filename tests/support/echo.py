@@ -7,13 +7,15 @@ with ``DEVSIM_EXTRA_KINDS="echo=tests.support.echo:EchoDevice"``.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from typing import Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from devsim.core.clock import Timer
-from devsim.core.device import Device, SerialSettings, UnknownName
+from devsim.core.device import Device, Face, SerialSettings
+from devsim.core.kit import SignalDef, declare_signals, signal_points
+from devsim.core.model import Model
+from devsim.core.points import Point, PointTable
 
 BAUDS = (1200, 2400, 4800, 9600, 19200)
 
@@ -41,72 +43,28 @@ class EchoConfig(BaseModel):
         return value
 
 
-class EchoDevice(Device):
-    """Echoes bytes back; a test stand-in for a controller."""
-
-    kind: ClassVar[str] = "echo"
-    description: ClassVar[str] = "Echoes every byte back (test device)"
-    config_model: ClassVar[type[BaseModel]] = EchoConfig
+class EchoModel(Model):
+    """The echo "machine": a mute input, a value, a byte counter and a timer on the device clock."""
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.settings = EchoConfig.model_validate(self.config)
-        self.signals.define("input.mute", "input", False)
-        self.signals.define("value", "quantity", 0)
+        declare_signals(self.signals, SIGNALS)
+        self.value: float = 0
         self.received = 0
         self.fired = False
         self._timer: Timer | None = None
         self.boots = 1
 
-    @property
-    def serial_settings(self) -> SerialSettings:
-        return SerialSettings(baudrate=self.settings.baud)
-
-    def feed(self, data: bytes) -> None:
-        self.received += len(data)
-        if not self.signals.get("input.mute"):
-            self.send(data)
-
-    def read(self, name: str) -> Any:
-        if name in self.signals:
-            return self.signals.get(name)
-        simple: Mapping[str, Any] = {
-            "received": self.received,
-            "fired": self.fired,
-            "now": self.clock.now(),
-            "address": self.settings.address,
-            "boots": self.boots,
-            "nvram.note": self.nvram.get("note"),
-        }
-        if name in simple:
-            return simple[name]
-        raise UnknownName(f"echo has no {name!r}")
-
-    def set(self, name: str, value: Any) -> None:
-        if name == "timer":
-            if self._timer is not None:
-                self._timer.cancel()
-            self.fired = False
-            self._timer = self.clock.call_later(float(value), self._fire)
-            return
-        if name == "nvram.note":
-            self.nvram.put("note", value)
-            return
-        if name not in self.signals or self.signals.signal(name).kind == "output":
-            raise UnknownName(f"echo has no settable {name!r}")
-        self.signals.set(name, value)
+    def start_timer(self, seconds: float) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+        self.fired = False
+        self._timer = self.clock.call_later(seconds, self._fire)
 
     def _fire(self) -> None:
         self.fired = True
         self._timer = None
-
-    def state(self) -> dict[str, Any]:
-        return {
-            "address": self.settings.address,
-            "received": self.received,
-            "fired": self.fired,
-            "signals": self.signals.snapshot(),
-        }
 
     def power_cycle(self, *, wipe: bool = False) -> None:
         super().power_cycle(wipe=wipe)
@@ -116,3 +74,52 @@ class EchoDevice(Device):
     def close(self) -> None:
         if self._timer is not None:
             self._timer.cancel()
+
+
+class EchoFace(Face):
+    """Echoes the host's bytes unless ``input.mute`` is set."""
+
+    model: EchoModel
+
+    @property
+    def serial_settings(self) -> SerialSettings:
+        return SerialSettings(baudrate=self.model.settings.baud)
+
+    def feed(self, data: bytes) -> None:
+        self.model.received += len(data)
+        if not self.model.signals.get("mute"):
+            self.send(data)
+
+
+SIGNALS = (SignalDef("mute", "input", False, "echo nothing while set"),)
+
+POINTS = PointTable.of(
+    signal_points(SIGNALS),
+    [
+        Point("value", "float", "a free number", get=lambda m: m.value, put=lambda m, v: setattr(m, "value", v)),
+        Point("received", "int", "bytes received since power-on", get=lambda m: m.received, in_state=True),
+        Point("fired", "bool", "the timer has fired", get=lambda m: m.fired, in_state=True),
+        Point("timer", "float", "start the timer (seconds)", unit="s", put=lambda m, v: m.start_timer(v), minimum=0),
+        Point("now", "float", "the device clock", unit="s", get=lambda m: m.clock.now()),
+        Point("address", "int", "the configured address", get=lambda m: m.settings.address, in_state=True),
+        Point("boots", "int", "power-ons so far", get=lambda m: m.boots),
+        Point(
+            "nvram.note",
+            "json",
+            "a value kept in non-volatile memory",
+            get=lambda m: m.nvram.get("note"),
+            put=lambda m, v: m.nvram.put("note", v),
+        ),
+    ],
+)
+
+
+class EchoDevice(Device):
+    """Echoes bytes back; a test stand-in for a controller."""
+
+    kind: ClassVar[str] = "echo"
+    description: ClassVar[str] = "Echoes every byte back (test device)"
+    config_model: ClassVar[type[BaseModel]] = EchoConfig
+    model_class = EchoModel
+    face_classes: ClassVar[dict[str, Any]] = {"main": EchoFace}
+    points = POINTS

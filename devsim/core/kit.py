@@ -1,0 +1,219 @@
+"""The device kit's tables: ports, faults, commands, signals, parameters and error codes.
+
+Each kind declares these once, each row citing its manual section.  The device runs from them
+(a fault row carries its effect, a command row its handler, a signal row the signal it makes),
+and ``devsim doc`` prints them, so what is documented is what runs.  The *declared points* of a
+kind are in :mod:`devsim.core.points`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass, field
+from typing import Any, Generic, Literal, TypeVar
+
+from devsim.core.points import Point, PointType, UnknownName, parse_bool
+from devsim.core.signals import SignalBank, SignalKind
+
+__all__ = [
+    "Command",
+    "CommandTable",
+    "ErrorCode",
+    "Fault",
+    "FaultTable",
+    "Parameter",
+    "PortDef",
+    "SignalDef",
+    "Table",
+    "declare_signals",
+    "signal_points",
+]
+
+Effect = Literal["simulated", "stored"]
+H = TypeVar("H")
+
+
+@dataclass(frozen=True)
+class PortDef:
+    """A serial port of a kind (``main`` by default; ``v6``, ``v7``, ``v8`` for the CNC)."""
+
+    name: str = "main"
+    doc: str = "the device's serial port"
+    section: str = ""
+    receive_only: bool = False
+
+
+MAIN_PORT = (PortDef(),)
+
+
+@dataclass(frozen=True)
+class Fault:
+    """A fault a scenario, the control API (``fault`` op) or a fixture can switch on and off.
+
+    ``apply(model, active)`` is its effect on the model."""
+
+    name: str
+    doc: str
+    section: str
+    apply: Callable[[Any, bool], None]
+
+
+class FaultTable:
+    """A kind's declared faults by name."""
+
+    def __init__(self, faults: Iterable[Fault] = ()) -> None:
+        self.faults: dict[str, Fault] = {}
+        for fault in faults:
+            if fault.name in self.faults:
+                raise ValueError(f"fault {fault.name!r} declared twice")
+            self.faults[fault.name] = fault
+
+    def __iter__(self) -> Iterator[Fault]:
+        return iter(self.faults.values())
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.faults
+
+    def names(self) -> list[str]:
+        return list(self.faults)
+
+    def apply(self, model: Any, name: str, active: Any, owner: str = "the device") -> None:
+        fault = self.faults.get(name)
+        if fault is None:
+            known = ", ".join(self.faults) or "none"
+            raise UnknownName(f"{owner} has no fault {name!r} (declared: {known})")
+        fault.apply(model, parse_bool(active))
+
+
+@dataclass(frozen=True)
+class Command(Generic[H]):
+    """One row of a command table: the token (or statement type) a host sends, the handler
+    that carries it out, the manual section, and whether it is simulated or only stored."""
+
+    token: str
+    handler: H
+    section: str
+    doc: str = ""
+    effect: Effect = "simulated"
+
+
+class Table(Generic[H]):
+    """Token → :class:`Command`: the one dispatch idiom of every face."""
+
+    def __init__(self, rows: Iterable[Command[H]]) -> None:
+        self.rows: dict[str, Command[H]] = {}
+        for row in rows:
+            if row.token in self.rows:
+                raise ValueError(f"command {row.token!r} declared twice")
+            self.rows[row.token] = row
+
+    def __iter__(self) -> Iterator[Command[H]]:
+        return iter(self.rows.values())
+
+    def __contains__(self, token: object) -> bool:
+        return token in self.rows
+
+    def get(self, token: str) -> H | None:
+        row = self.rows.get(token)
+        return None if row is None else row.handler
+
+    def __getitem__(self, token: str) -> H:
+        return self.rows[token].handler
+
+
+CommandTable = Table
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A parameter as the reference documents it."""
+
+    name: str
+    doc: str
+    section: str
+    unit: str = ""
+    minimum: float | str | None = None
+    maximum: float | str | None = None
+    default: Any = None
+    saved: bool = True
+    effect: Effect = "simulated"
+
+
+@dataclass(frozen=True)
+class ErrorCode:
+    """An error (or status) code the device answers with, and its text."""
+
+    code: str
+    text: str
+    section: str = ""
+
+
+@dataclass(frozen=True)
+class SignalDef:
+    """A digital input, output or analog quantity: makes the signal and its point."""
+
+    name: str
+    kind: SignalKind
+    initial: Any
+    doc: str
+    section: str = ""
+    unit: str = ""
+    type: PointType | None = None  # default: bool for inputs/outputs, float for quantities
+    minimum: float | None = None
+    maximum: float | None = None
+    choices: tuple[Any, ...] | None = None
+
+    @property
+    def point_type(self) -> PointType:
+        if self.type is not None:
+            return self.type
+        return "float" if self.kind == "quantity" else "bool"
+
+
+def declare_signals(bank: SignalBank, defs: Iterable[SignalDef]) -> None:
+    """Define every declared signal in a device's bank."""
+    for d in defs:
+        bank.define(d.name, d.kind, d.initial, d.doc)
+
+
+def signal_points(
+    defs: Iterable[SignalDef], bank: Callable[[Any], SignalBank] = lambda m: m.signals
+) -> list[Point]:
+    """``input.*`` and ``quantity.*`` settable, ``output.*`` read-only, all in ``state``."""
+    points = []
+    for d in defs:
+        name = f"{d.kind}.{d.name}"
+
+        def get(model: Any, key: str = d.name) -> Any:
+            return bank(model).get(key)
+
+        def put(model: Any, value: Any, key: str = d.name) -> None:
+            bank(model).set(key, value)
+
+        points.append(
+            Point(
+                name,
+                d.point_type,
+                d.doc,
+                d.section,
+                d.unit,
+                get=get,
+                put=None if d.kind == "output" else put,
+                minimum=d.minimum,
+                maximum=d.maximum,
+                choices=d.choices,
+                in_state=True,
+                shared=True,
+            )
+        )
+    return points
+
+
+@dataclass
+class Reference:
+    """What ``devsim doc KIND`` prints, gathered from a kind's tables."""
+
+    commands: list[Command[Any]] = field(default_factory=list)
+    parameters: list[Parameter] = field(default_factory=list)
+    errors: list[ErrorCode] = field(default_factory=list)
+    config: list[tuple[str, str, str]] = field(default_factory=list)  # key, type/default, doc

@@ -1,0 +1,74 @@
+"""The base of a kind's model: the machine behind the ports, knowing no protocol.
+
+A model owns axes, I/O (a :class:`~devsim.core.signals.SignalBank`), parameters, programs,
+faults and memory.  Protocol faces (:class:`devsim.core.device.Face`) and facades act on it; it
+never calls them.  What a face must hear from the model (a spontaneous message, the end of a
+boot) travels through listeners the face registers (:meth:`Model.listen`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from devsim.core.clock import Clock
+from devsim.core.nvram import NonVolatileMemory
+from devsim.core.signals import SignalBank
+
+__all__ = ["Model"]
+
+Listener = Callable[..., None]
+
+
+class Model:
+    """Clock, configuration, memory, signals and the event log every model has."""
+
+    def __init__(
+        self,
+        *,
+        clock: Clock,
+        config: Mapping[str, Any] | None = None,
+        nvram: NonVolatileMemory | None = None,
+        name: str = "",
+    ) -> None:
+        self.clock = clock
+        self.config: dict[str, Any] = dict(config or {})
+        self.nvram = nvram if nvram is not None else NonVolatileMemory(None)
+        self.name = name
+        self.signals = SignalBank()
+        #: True while the device initialises after power-on and does not listen yet.
+        self.booting = False
+        #: (simulated time, name) of notable moments, e.g. ``move_end``, for timing checks.
+        self.events: list[tuple[float, str]] = []
+        self._listeners: dict[str, list[Listener]] = {}
+
+    # -- notifications to faces and the runtime ---------------------------------------------
+    def listen(self, topic: str, listener: Listener) -> Callable[[], None]:
+        """Call ``listener(*args)`` whenever the model announces ``topic``; returns an undo."""
+        listeners = self._listeners.setdefault(topic, [])
+        listeners.append(listener)
+        return lambda: listeners.remove(listener) if listener in listeners else None
+
+    def announce(self, topic: str, *args: Any) -> None:
+        for listener in list(self._listeners.get(topic, ())):
+            listener(*args)
+
+    def booted(self) -> None:
+        """The power-on initialisation has finished: the device listens (topic ``ready``)."""
+        self.booting = False
+        self.announce("ready")
+
+    def record_event(self, name: str) -> None:
+        """Note a moment (``move_start``, ``move_end``, ``error`` ...) for timing expectations."""
+        self.events.append((self.clock.now(), name))
+        if len(self.events) > 10000:
+            del self.events[:5000]
+
+    # -- power ------------------------------------------------------------------------------
+    def power_cycle(self, *, wipe: bool = False) -> None:
+        """Switch the device off and on again; ``wipe`` erases non-volatile memory first."""
+        if wipe:
+            self.nvram.wipe()
+
+    def close(self) -> None:
+        """Cancel timers; the model is not used afterwards."""

@@ -1,0 +1,313 @@
+"""Declared points: every control name of a device, once, with its type, unit and access.
+
+A kind declares its points in a table (:class:`PointTable`); ``read``, ``set``, ``state``, the
+list of names (``devsim ctl names``), the generated reference (``devsim doc``), the facade maps and
+the contract tests all come from it.  A value is checked against the point's declared type and
+range *before* it takes effect (:meth:`Point.parse`); nothing non-finite ever enters a device.
+
+The shared vocabulary every drive has (written down in ``docs/points.md``)::
+
+    axis.position   float  inc    actual position, motor increments at the shaft
+    axis.velocity   float  inc/s  actual velocity
+    motion          bool          the axis is moving under the drive's control
+    energized       bool          the power stage drives the motor
+    ready           bool          ready for operation (no fault, enabled)
+    fault           bool          a fault (error state) is active
+    input.*         bool          digital inputs as the machine sets them
+    output.*        bool          digital outputs as the device drives them
+    quantity.*      float         simulated analog quantities (supply voltage, temperature ...)
+
+A kind adds its own names beside them (``param.*``, ``display``, ``marker.*`` ...).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+__all__ = [
+    "BadValue",
+    "Point",
+    "PointTable",
+    "PointType",
+    "ReadOnlyName",
+    "SHARED_VOCABULARY",
+    "UnknownName",
+    "finite",
+    "parse_bool",
+]
+
+PointType = Literal["bool", "int", "float", "str", "json"]
+Access = Literal["r", "rw", "w"]
+
+Getter = Callable[[Any], Any]
+Setter = Callable[[Any, Any], None]
+
+
+class UnknownName(KeyError):
+    """The control API asked for a name the device does not have."""
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return str(self.args[0]) if self.args else "unknown name"
+
+
+class ReadOnlyName(ValueError):
+    """The name exists but cannot be set."""
+
+
+class BadValue(ValueError):
+    """A value that does not fit the point's declared type or range; nothing was changed."""
+
+
+_TRUE = frozenset({"true", "1", "on", "yes"})
+_FALSE = frozenset({"false", "0", "off", "no"})
+
+
+def parse_bool(value: Any) -> bool:
+    """true/false/1/0/on/off (any case) or a real bool; anything else is a :class:`BadValue`."""
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, int) and value in (0, 1):
+        return bool(value)
+    if isinstance(value, float) and value in (0.0, 1.0):
+        return bool(value)
+    if isinstance(value, str):
+        text = value.strip().lower()
+        if text in _TRUE:
+            return True
+        if text in _FALSE:
+            return False
+    raise BadValue(f"expects a boolean (true/false/1/0/on/off), not {_show(value)}")
+
+
+def finite(value: Any) -> float:
+    """A finite float from a number or a numeric string; NaN, ±inf and overflow are refused."""
+    if isinstance(value, bool):
+        raise BadValue(f"expects a number, not {_show(value)}")
+    try:
+        number = float(value)
+    except (TypeError, ValueError, OverflowError):
+        raise BadValue(f"expects a number, not {_show(value)}") from None
+    if not math.isfinite(number):
+        raise BadValue(f"expects a finite number, not {_show(value)}")
+    return number
+
+
+def _parse_int(value: Any) -> int:
+    if isinstance(value, int) and not isinstance(value, bool):
+        return value
+    if isinstance(value, str):
+        text = value.strip()
+        try:
+            return int(text, 0)
+        except ValueError:
+            pass
+    number = finite(value)
+    if not number.is_integer():
+        raise BadValue(f"expects a whole number, not {_show(value)}")
+    return int(number)
+
+
+def _show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _check_json(value: Any, depth: int = 0) -> Any:
+    if depth > 32:
+        raise BadValue("value nested too deeply")
+    if isinstance(value, float) and not math.isfinite(value):
+        raise BadValue(f"expects finite numbers, not {_show(value)}")
+    if isinstance(value, Mapping):
+        for item in value.values():
+            _check_json(item, depth + 1)
+    elif isinstance(value, list | tuple):
+        for item in value:
+            _check_json(item, depth + 1)
+    return value
+
+
+@dataclass(frozen=True)
+class Point:
+    """One control name: ``name``, ``type``, ``unit``, ``access``, ``doc`` and manual ``section``.
+
+    ``get(model)`` reads it; ``put(model, value)`` sets it with a value already parsed and checked
+    (type, ``minimum``/``maximum``, ``choices``); ``check(model, value)`` may refuse a value with
+    a :class:`BadValue` before anything changes (a device's own range).  ``in_state`` points
+    appear in ``state()``.
+    """
+
+    name: str
+    type: PointType
+    doc: str
+    section: str = ""
+    unit: str = ""
+    get: Getter | None = None
+    put: Setter | None = None
+    minimum: float | None = None
+    maximum: float | None = None
+    choices: tuple[Any, ...] | None = None
+    in_state: bool = False
+    shared: bool = False  # one of the shared vocabulary's names
+
+    @property
+    def access(self) -> Access:
+        if self.put is None:
+            return "r"
+        return "rw" if self.get is not None else "w"
+
+    @property
+    def readable(self) -> bool:
+        return self.get is not None
+
+    @property
+    def settable(self) -> bool:
+        return self.put is not None
+
+    def parse(self, value: Any) -> Any:
+        """The value converted to the declared type and checked, or :class:`BadValue`."""
+        kind = self.type
+        if kind == "bool":
+            parsed: Any = parse_bool(value)
+        elif kind == "int":
+            parsed = _parse_int(value)
+        elif kind == "float":
+            parsed = finite(value)
+        elif kind == "str":
+            if not isinstance(value, str):
+                raise BadValue(f"expects text, not {_show(value)}")
+            parsed = value
+        else:
+            parsed = _check_json(value)
+        if self.choices is not None and parsed not in self.choices:
+            options = ", ".join(str(c) for c in self.choices)
+            raise BadValue(f"expects one of {options}, not {_show(value)}")
+        if self.minimum is not None and parsed < self.minimum:
+            raise BadValue(f"{_show(value)} is below the minimum {self.minimum:g}{_unit(self.unit)}")
+        if self.maximum is not None and parsed > self.maximum:
+            raise BadValue(f"{_show(value)} is above the maximum {self.maximum:g}{_unit(self.unit)}")
+        return parsed
+
+    def range_text(self) -> str:
+        if self.choices is not None:
+            return " / ".join(str(c) for c in self.choices)
+        if self.minimum is None and self.maximum is None:
+            return ""
+        low = "" if self.minimum is None else f"{self.minimum:g}"
+        high = "" if self.maximum is None else f"{self.maximum:g}"
+        return f"{low} … {high}"
+
+
+def _unit(unit: str) -> str:
+    return f" {unit}" if unit else ""
+
+
+@dataclass
+class PointTable:
+    """A kind's points by name, with an optional ``alias`` hook that maps a spelling
+    (``param.n15``, ``param.V``) to the declared name."""
+
+    points: dict[str, Point] = field(default_factory=dict)
+    alias: Callable[[str], str | None] | None = None
+
+    @classmethod
+    def of(cls, *groups: Iterable[Point], alias: Callable[[str], str | None] | None = None) -> PointTable:
+        table = cls(alias=alias)
+        for group in groups:
+            for point in group:
+                table.add(point)
+        return table
+
+    def add(self, point: Point) -> None:
+        if point.name in self.points:
+            raise ValueError(f"point {point.name!r} declared twice")
+        self.points[point.name] = point
+
+    def __iter__(self) -> Iterator[Point]:
+        return iter(self.points.values())
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    def __contains__(self, name: object) -> bool:
+        return isinstance(name, str) and self.find(name) is not None
+
+    def names(self) -> list[str]:
+        return list(self.points)
+
+    def find(self, name: str) -> Point | None:
+        point = self.points.get(name)
+        if point is None and self.alias is not None:
+            canonical = self.alias(name)
+            if canonical is not None:
+                point = self.points.get(canonical)
+        return point
+
+    def lookup(self, name: str, owner: str = "the device") -> Point:
+        point = self.find(name)
+        if point is None:
+            raise UnknownName(self.unknown_text(name, owner))
+        return point
+
+    def unknown_text(self, name: str, owner: str) -> str:
+        shown = name if len(name) <= 60 else name[:57] + "..."
+        close = difflib.get_close_matches(name[:60], self.points, n=3, cutoff=0.6)
+        hint = f" (did you mean {', '.join(close)}?)" if close else ""
+        return f"{owner} has no {shown!r}{hint}"
+
+    # -- the derived control API ------------------------------------------------------------
+    def read(self, model: Any, name: str, owner: str = "the device") -> Any:
+        point = self.lookup(name, owner)
+        if point.get is None:
+            raise UnknownName(f"{point.name} of {owner} can only be set")
+        return point.get(model)
+
+    def parse(self, name: str, value: Any, owner: str = "the device", model: Any = None) -> tuple[Point, Any]:
+        """Look the name up and check the value, changing nothing."""
+        point = self.lookup(name, owner)
+        if point.put is None:
+            raise ReadOnlyName(f"{point.name} of {owner} is read-only")
+        try:
+            parsed = point.parse(value)
+        except BadValue as exc:
+            raise BadValue(f"{point.name}: {exc}") from None
+        return point, parsed
+
+    def set(self, model: Any, name: str, value: Any, owner: str = "the device") -> None:
+        point, parsed = self.parse(name, value, owner, model)
+        assert point.put is not None
+        point.put(model, parsed)
+
+    def state(self, model: Any) -> dict[str, Any]:
+        """The ``in_state`` points as a nested mapping (``axis.position`` → ``{"axis": {...}}``)."""
+        data: dict[str, Any] = {}
+        for point in self.points.values():
+            if not point.in_state or point.get is None:
+                continue
+            node = data
+            *parents, leaf = point.name.split(".")
+            for part in parents:
+                child = node.setdefault(part, {})
+                if not isinstance(child, dict):
+                    break
+                node = child
+            else:
+                node[leaf] = point.get(model)
+        return data
+
+
+#: The names every drive shares: name → (type, unit, description).
+SHARED_VOCABULARY: dict[str, tuple[PointType, str, str]] = {
+    "axis.position": ("float", "inc", "actual position in motor increments at the shaft"),
+    "axis.velocity": ("float", "inc/s", "actual velocity in motor increments per second"),
+    "motion": ("bool", "", "the axis moves under the drive's control"),
+    "energized": ("bool", "", "the power stage drives the motor"),
+    "ready": ("bool", "", "ready for operation: powered, booted, enabled, no fault"),
+    "fault": ("bool", "", "a fault (error state) is active"),
+    "input.*": ("bool", "", "digital inputs, as the machine sets them"),
+    "output.*": ("bool", "", "digital outputs, as the device drives them"),
+    "quantity.*": ("float", "", "simulated analog quantities (supply voltage, temperature ...)"),
+}
