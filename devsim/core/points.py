@@ -134,6 +134,8 @@ def _check_json(value: Any, depth: int = 0) -> Any:
 class Point:
     """One control name: ``name``, ``type``, ``unit``, ``access``, ``doc`` and manual ``section``.
 
+    Write one with the name, type, doc and section positionally, the rest by keyword:
+    ``Point("axis.position", "float", "actual position", "§5.1", "inc", get=...)``.
     ``get(model)`` reads it; ``put(model, value)`` sets it with a value already parsed and checked
     (type, ``minimum``/``maximum``, ``choices``); ``check(model, value)`` may refuse a value with
     a :class:`BadValue` before anything changes (a device's own range).  ``in_state`` points
@@ -152,6 +154,9 @@ class Point:
     choices: tuple[Any, ...] | None = None
     in_state: bool = False
     shared: bool = False  # one of the shared vocabulary's names
+    #: A valid value for a write-only point (the contract tests set it; readable points are
+    #: set to the value they read).
+    example: Any = None
 
     @property
     def access(self) -> Access:
