@@ -40,6 +40,7 @@ from devsim.core.control import (
 )
 from devsim.core.device import Device
 from devsim.core.registry import UnknownKind, device_class, kinds
+from devsim.core.runtime import port_key
 
 __all__ = ["cli", "main"]
 
@@ -343,9 +344,14 @@ async def _serve(plan: _Plan) -> None:
             if plan.state_dir is not None:
                 Path(plan.state_dir).mkdir(parents=True, exist_ok=True)
             devices = [runtime.add_device(plan.kind, name, config) for name, config in plan.devices]
-            stage = f"open the {plan.port.scheme} port"
-            transport = _make_transport(plan.port)
-            await runtime.serve(devices, transport, pacing=plan.pacing, trace=plan.trace)
+            served: list[tuple[str, Any, str | None]] = []  # port key, transport, link
+            for index, port_name in enumerate(devices[0].port_names()):
+                spec = _port_for(plan.port, port_name, index, len(devices[0].port_names()))
+                stage = f"open the {spec.scheme} port"
+                transport = _make_transport(spec)
+                trace = _trace_for(plan.trace, port_name, index)
+                await runtime.serve(devices, transport, port=port_name, pacing=plan.pacing, trace=trace)
+                served.append((port_name, transport, spec.link))
             if plan.control is not None:
                 stage = f"serve the control API on {plan.control}"
                 server = ControlServer(runtime, plan.control, allow_remote=plan.allow_remote)
@@ -358,11 +364,15 @@ async def _serve(plan: _Plan) -> None:
 
         try:
             for device in devices:
-                _say(f"{device.name}: {plan.port.scheme} {_port_text(transport, plan.port.scheme)}")
-                if plan.port.link:
-                    _say(f"{device.name}: link {plan.port.link}")
+                for port_name, transport, link in served:
+                    key = port_key(device.name, port_name)
+                    _say(f"{key}: {plan.port.scheme} {_port_text(transport, plan.port.scheme)}")
+                    if link:
+                        _say(f"{key}: link {link}")
             if server is not None:
                 _say(f"control: {address}")
+            for device in devices:
+                _announce_ready(device)
             names = ", ".join(device.name for device in devices)
             print(f"devsim: serving {names}; Ctrl-C to stop", file=sys.stderr, flush=True)
             await stop.wait()
@@ -371,6 +381,30 @@ async def _serve(plan: _Plan) -> None:
                 await server.close()
     for signum in (signal.SIGINT, signal.SIGTERM):
         loop.remove_signal_handler(signum)
+
+
+def _port_for(port: _Port, name: str, index: int, count: int) -> _Port:
+    """The transport of one port of a kind with ``count`` ports: a pty each (``--link PATH``
+    becomes ``PATH-NAME`` beyond the first port), consecutive TCP port numbers from the given one."""
+    if count == 1 or index == 0:
+        return port
+    link = f"{port.link}-{name}" if port.link else None
+    number = port.port + index if port.port else 0
+    return _Port(port.scheme, port.host, number, link)
+
+
+def _trace_for(trace: str | None, name: str, index: int) -> str | None:
+    """``--trace FILE`` for the first port, ``FILE-NAME`` beside it for the others."""
+    if trace is None or index == 0:
+        return trace
+    return f"{trace}-{name}"
+
+
+def _announce_ready(device: Device) -> None:
+    """Print ``NAME: ready`` each time the device has booted and listens (now, if it already has)."""
+    device.on_ready(lambda: _say(f"{device.name}: ready"))
+    if not device.booting:
+        _say(f"{device.name}: ready")
 
 
 def _port_text(transport: Any, scheme: str) -> str:
@@ -383,13 +417,6 @@ def _port_text(transport: Any, scheme: str) -> str:
 
 
 # -- devsim ctl ------------------------------------------------------------------------------
-def _parse_value(text: str) -> Any:
-    try:
-        return json.loads(text)
-    except ValueError:
-        return text
-
-
 def _emit(result: Any) -> None:
     if isinstance(result, dict | list):
         click.echo(json.dumps(result, indent=2, sort_keys=False))
@@ -448,8 +475,9 @@ def ctl_read(ctx: click.Context, device: str, name: str) -> None:
 @click.argument("value")
 @click.pass_context
 def ctl_set(ctx: click.Context, device: str, name: str, value: str) -> None:
-    """Set NAME of DEVICE to VALUE (JSON if it parses, e.g. false or 12.5; else a string)."""
-    _call(ctx, "set", device, name, _parse_value(value))
+    """Set NAME of DEVICE to VALUE, read as NAME's declared type (true/false/on/off/1/0 for a
+    boolean, a finite number, text, or JSON for structured values)."""
+    _call(ctx, "set", device, name, value)
 
 
 @ctl.command("state")
@@ -486,10 +514,29 @@ def ctl_now(ctx: click.Context) -> None:
 
 @ctl.command("line")
 @click.argument("device")
+@click.option("--port", default="main", show_default=True, help="Which serial port of DEVICE.")
 @click.pass_context
-def ctl_line(ctx: click.Context, device: str) -> None:
-    """Status of the line serving DEVICE (settings, mismatch)."""
-    _call(ctx, "line", device)
+def ctl_line(ctx: click.Context, device: str, port: str) -> None:
+    """Status of the line serving a port of DEVICE (settings, mismatch)."""
+    _call(ctx, "line", device, port)
+
+
+@ctl.command("names")
+@click.argument("device")
+@click.pass_context
+def ctl_names(ctx: click.Context, device: str) -> None:
+    """DEVICE's control names with type, unit, access (r, rw, w), description and manual section."""
+    _call(ctx, "names", device)
+
+
+@ctl.command("fault")
+@click.argument("device")
+@click.argument("kind")
+@click.argument("switch", type=click.Choice(["on", "off"]))
+@click.pass_context
+def ctl_fault(ctx: click.Context, device: str, kind: str, switch: str) -> None:
+    """Switch a declared fault KIND of DEVICE on or off (e.g. blocked_axis on)."""
+    _call(ctx, "fault", device, kind, switch == "on")
 
 
 def _register_scenario_commands() -> None:

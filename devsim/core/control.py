@@ -20,7 +20,8 @@ order.  Requests and responses are typed (:class:`Request`, :class:`OkResponse`,
 
 Ops: ``read`` (device, name), ``set`` (device, name, value), ``state`` (device),
 ``power_cycle`` (device, wipe), ``advance`` (seconds; virtual time only), ``now``, ``devices``,
-``line`` (device: status of the line serving it).
+``line`` (device, port: status of the line serving that port), ``names`` (device: its declared
+points), ``fault`` (device, kind, active: a declared device fault on or off).
 """
 
 from __future__ import annotations
@@ -37,12 +38,11 @@ import socket
 import threading
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, ValidationError
 
-if TYPE_CHECKING:
-    from devsim.core.runtime import Runtime
+from devsim.core.runtime import Runtime, port_key
 
 __all__ = [
     "BadRequest",
@@ -58,7 +58,7 @@ __all__ = [
     "parse_address",
 ]
 
-Op = Literal["read", "set", "state", "power_cycle", "advance", "now", "devices", "line"]
+Op = Literal["read", "set", "state", "power_cycle", "advance", "now", "devices", "line", "names", "fault"]
 
 MAX_LINE = 1 << 20
 
@@ -76,6 +76,9 @@ class Request(BaseModel):
     value: Any = None
     wipe: bool = False
     seconds: float | None = None
+    port: str = "main"
+    kind: str | None = None
+    active: Any = True
 
 
 class OkResponse(BaseModel):
@@ -320,7 +323,13 @@ class ControlServer:
             return rt.now()
         if op == "devices":
             return [
-                {"name": name, "kind": dev.kind, "port": rt.ports.get(name)} for name, dev in rt.devices.items()
+                {
+                    "name": name,
+                    "kind": dev.kind,
+                    "port": rt.ports.get(port_key(name, dev.port_names()[0])),
+                    "ports": {p: rt.ports.get(port_key(name, p)) for p in dev.port_names()},
+                }
+                for name, dev in rt.devices.items()
             ]
         if op == "advance":
             if req.seconds is None:
@@ -336,7 +345,12 @@ class ControlServer:
             return None
         if op == "line":
             rt.device(device)
-            return rt.line_status(device)
+            return rt.line_status(device, req.port)
+        if op == "names":
+            return rt.names(device)
+        if op == "fault":
+            rt.fault(device, _need(req.kind, "kind", op), req.active)
+            return None
         name = _need(req.name, "name", op)
         if op == "read":
             return rt.read(device, name)
@@ -449,6 +463,13 @@ class ControlClient:
         result: list[dict[str, Any]] = self.request("devices")
         return result
 
-    def line(self, device: str) -> dict[str, Any]:
-        result: dict[str, Any] = self.request("line", device=device)
+    def line(self, device: str, port: str = "main") -> dict[str, Any]:
+        result: dict[str, Any] = self.request("line", device=device, port=port)
         return result
+
+    def names(self, device: str) -> list[dict[str, Any]]:
+        result: list[dict[str, Any]] = self.request("names", device=device)
+        return result
+
+    def fault(self, device: str, kind: str, active: bool = True) -> None:
+        self.request("fault", device=device, kind=kind, active=active)

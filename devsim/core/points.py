@@ -23,6 +23,7 @@ A kind adds its own names beside them (``param.*``, ``display``, ``marker.*`` ..
 from __future__ import annotations
 
 import difflib
+import json
 import math
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -186,6 +187,11 @@ class Point:
                 raise BadValue(f"expects text, not {_show(value)}")
             parsed = value
         else:
+            if isinstance(value, str):  # text from a command line: JSON if it parses
+                try:
+                    value = json.loads(value)
+                except (ValueError, RecursionError):
+                    pass
             parsed = _check_json(value)
         if self.choices is not None and parsed not in self.choices:
             options = ", ".join(str(c) for c in self.choices)

@@ -23,13 +23,20 @@ from devsim.core.device import Device, UnknownName
 from devsim.core.nvram import NonVolatileMemory
 from devsim.core.registry import device_class
 
-__all__ = ["Runtime", "UnknownDevice"]
+__all__ = ["Runtime", "UnknownDevice", "port_key"]
 
 T = TypeVar("T")
 
 
 class UnknownDevice(KeyError):
-    pass
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else "unknown device"
+
+
+def port_key(device: str, port: str = "main") -> str:
+    """How lines, traces and plant ports name one port of a device: the device's name for its
+    ``main`` port, ``DEVICE.PORT`` for the others (``cnc.v7``)."""
+    return device if port == "main" else f"{device}.{port}"
 
 
 class Runtime:
@@ -46,8 +53,8 @@ class Runtime:
         self.clock: Clock = clock or (VirtualClock() if virtual else RealClock(speed))
         self.state_dir = Path(state_dir) if state_dir is not None else None
         self.devices: dict[str, Device] = {}
-        self.lines: dict[str, Any] = {}  # device name -> Line serving it
-        self.ports: dict[str, str] = {}  # device name -> URL/path of the port serving it
+        self.lines: dict[str, Any] = {}  # port_key(device, port) -> Line serving it
+        self.ports: dict[str, str] = {}  # port_key(device, port) -> URL/path a host opens
         self.transports: list[Any] = []
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
@@ -163,22 +170,25 @@ class Runtime:
         devices: Device | Sequence[Device],
         transport: Any,
         *,
+        port: str = "main",
         pacing: bool = False,
         trace: str | Path | None = None,
     ) -> Any:
-        """Serve one device, or several on a multidrop bus, on ``transport``; returns the Line."""
+        """Serve one port of a device, or the same port of several devices on a multidrop bus,
+        on ``transport``; returns the Line."""
         from devsim.transports.line import Line
         from devsim.transports.trace import Tracer
 
         group = [devices] if isinstance(devices, Device) else list(devices)
-        target: Any = group[0] if len(group) == 1 else Bus(group)
+        target: Any = group[0].port(port) if len(group) == 1 else Bus(group, port)
         tracer = Tracer(trace) if trace is not None else None
         line = Line(target, self.clock, pacing=pacing, tracer=tracer)
         await transport.start(line)
         self.transports.append(transport)
         for device in group:
-            self.lines[device.name] = line
-            self.ports[device.name] = str(getattr(transport, "url", "") or getattr(transport, "address", ""))
+            key = port_key(device.name, port)
+            self.lines[key] = line
+            self.ports[key] = str(getattr(transport, "url", "") or getattr(transport, "address", ""))
         return line
 
     def serve_sync(self, devices: Device | Sequence[Device], transport: Any, **kwargs: Any) -> Any:
@@ -199,6 +209,21 @@ class Runtime:
     def set(self, device: str, name: str, value: Any) -> None:
         self.call(lambda: self.device(device).set(name, value))
 
+    def names(self, device: str) -> list[dict[str, Any]]:
+        """The declared points of a device: name, type, unit, access, doc, section."""
+
+        def describe() -> list[dict[str, Any]]:
+            return [
+                {"name": p.name, "type": p.type, "unit": p.unit, "access": p.access, "doc": p.doc, "section": p.section}
+                for p in self.device(device).points
+            ]
+
+        return self.call(describe)
+
+    def fault(self, device: str, kind: str, active: bool) -> None:
+        """Switch a declared device fault on or off."""
+        self.call(lambda: self.device(device).fault(kind, active))
+
     def state(self, device: str) -> dict[str, Any]:
         def snapshot() -> dict[str, Any]:
             data = self.device(device).state()
@@ -211,9 +236,9 @@ class Runtime:
     def power_cycle(self, device: str, *, wipe: bool = False) -> None:
         self.call(lambda: self.device(device).power_cycle(wipe=wipe))
 
-    def line_status(self, device: str) -> dict[str, Any]:
-        """The status of the line serving ``device`` (settings, mismatch, counters)."""
-        return self.call(lambda: self._line_status(device))
+    def line_status(self, device: str, port: str = "main") -> dict[str, Any]:
+        """The status of the line serving a port of ``device`` (settings, mismatch, counters)."""
+        return self.call(lambda: self._line_status(device, port))
 
     def now(self) -> float:
         return self.call(self.clock.now)
@@ -238,9 +263,10 @@ class Runtime:
             raise RuntimeError("run_until needs virtual time")
         return self.call(lambda: clock.run_until(predicate, timeout))
 
-    def _line_status(self, device: str) -> dict[str, Any]:
-        line = self.lines.get(device)
+    def _line_status(self, device: str, port: str = "main") -> dict[str, Any]:
+        line = self.lines.get(port_key(device, port))
         if line is None:
-            raise UnknownName(f"device {device!r} is not on a line")
+            self.device(device).port(port)
+            raise UnknownName(f"port {port!r} of device {device!r} is not on a line")
         status: dict[str, Any] = line.status()
         return status

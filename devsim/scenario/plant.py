@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from devsim.core.device import Device
-from devsim.core.runtime import Runtime
+from devsim.core.runtime import Runtime, port_key
 from devsim.scenario.schema import PlantSpec, TransportSpec
 
 __all__ = ["Plant", "build_plant", "make_transport", "plant_running", "start_plant"]
@@ -55,19 +55,21 @@ class Plant:
         """The pty path (or the host:port address) of port ``name``."""
         return str(self.transports[name].address)
 
-    def port_of(self, device: str) -> str:
-        """The port name a device is reached through (its own, or its bus)."""
+    def port_of(self, device: str, port: str | None = None) -> str:
+        """The plant port a device's serial port (default: its first) is reached through: its
+        own (``DEVICE`` or ``DEVICE.PORT``), or its bus."""
         for spec in self.spec.devices:
             if spec.name == device:
-                return spec.transport.bus or spec.name
+                port = port or spec.port_names()[0]
+                return spec.transport_of(port).bus or port_key(device, port)
         raise KeyError(device)
 
     def describe(self) -> list[str]:
         """One line per port, as ``devsim up`` prints them."""
         rows = []
         for name in self.transports:
-            members = [d.name for d in self.spec.devices if (d.transport.bus or d.name) == name]
-            who = name if members == [name] else f"{name} ({', '.join(members)})"
+            members = [d.name for d in self.spec.devices if d.transport_of("main").bus == name]
+            who = f"{name} ({', '.join(members)})" if members else name
             rows.append(f"{who}: {self.kinds[name]} {self.port(name)}")
         return rows
 
@@ -80,21 +82,20 @@ async def build_plant(runtime: Runtime, spec: PlantSpec, *, trace_dir: str | Pat
     for dev in spec.devices:
         device = runtime.add_device(dev.kind, dev.name, dev.device_config())
         plant.devices[dev.name] = device
-    groups: dict[str, tuple[TransportSpec, list[Device]]] = {}
-    for dev in spec.devices:
-        if dev.transport.bus is None:
-            groups[dev.name] = (dev.transport, [plant.devices[dev.name]])
+    groups: dict[str, tuple[TransportSpec, list[Device], str]] = {}
+    for name, dev, port in spec.device_ports():
+        groups[name] = (dev.transport_of(port), [plant.devices[dev.name]], port)
     for bus in spec.buses:
-        members = [plant.devices[d.name] for d in spec.devices if d.transport.bus == bus.name]
+        members = [plant.devices[d.name] for d in spec.devices if d.transport_of("main").bus == bus.name]
         if members:
-            groups[bus.name] = (bus.transport, members)
-    for port, (tspec, members) in groups.items():
+            groups[bus.name] = (bus.transport, members, "main")
+    for name, (tspec, members, port) in groups.items():
         transport = make_transport(tspec)
-        trace = Path(trace_dir) / f"{port}.trace" if trace_dir is not None else None
-        line = await runtime.serve(members if len(members) > 1 else members[0], transport, trace=trace)
-        plant.transports[port] = transport
-        plant.lines[port] = line
-        plant.kinds[port] = tspec.kind
+        trace = Path(trace_dir) / f"{name}.trace" if trace_dir is not None else None
+        line = await runtime.serve(members, transport, port=port, trace=trace)
+        plant.transports[name] = transport
+        plant.lines[name] = line
+        plant.kinds[name] = tspec.kind
     for dev in spec.devices:
         if dev.state:
             plant.devices[dev.name].apply_state(dev.state)

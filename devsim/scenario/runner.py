@@ -248,8 +248,7 @@ class Runner:
                 if item is not None:
                     wanted.add(self._port(item.port))
         for name in sorted(wanted):
-            members = [d for d in self.scenario.devices if (d.transport.bus or d.name) == name]
-            settings = self.plant.devices[members[0].name].serial_settings
+            settings = self.plant.lines[name].device_settings
             host = open_host_port(name, self.plant.kinds[name], self.plant.transports[name], settings)
             await host.open()
             self.hosts[name] = host

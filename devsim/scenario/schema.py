@@ -31,6 +31,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 from devsim.core.config import ConfigError, LineDict, LineList, load_yaml, plain, validate
+from devsim.core.runtime import port_key
 
 __all__ = [
     "ACTIONS",
@@ -103,9 +104,34 @@ class DeviceSpec(_Model):
     name: str = Field(pattern=r"^[A-Za-z_][A-Za-z0-9_-]*$")
     kind: str
     transport: TransportSpec = Field(default_factory=TransportSpec)
+    ports: dict[str, TransportSpec] = Field(
+        default_factory=dict, description="per serial port of the kind: its transport (default: a pty each)"
+    )
     config: dict[str, Any] = Field(default_factory=dict, description="device configuration (DIP switches, parameters)")
     axis: dict[str, Any] | None = Field(default=None, description="axis geometry, merged into config['axis']")
     state: dict[str, Any] = Field(default_factory=dict, description="initial state: settable names and 'program'")
+
+    @model_validator(mode="after")
+    def _transport_or_ports(self) -> DeviceSpec:
+        if "transport" in self.model_fields_set and self.ports:
+            raise ValueError("give 'transport' (one port) or 'ports' (per port), not both")
+        for port, spec in self.ports.items():
+            if spec.bus is not None and port != "main":
+                raise ValueError(f"ports.{port}: only the main port can be on a bus")
+        return self
+
+    def port_names(self) -> list[str]:
+        """The kind's declared serial ports (``main`` if the kind cannot be loaded)."""
+        return kind_ports(self.kind)
+
+    def transport_of(self, port: str) -> TransportSpec:
+        """The transport serving one port: ``ports[port]``, else ``transport`` for the first
+        port, else a new pty."""
+        if port in self.ports:
+            return self.ports[port]
+        if port == self.port_names()[0]:
+            return self.transport
+        return TransportSpec()
 
     def device_config(self) -> dict[str, Any]:
         config = dict(self.config)
@@ -126,7 +152,19 @@ class BusSpec(_Model):
         return value
 
 
+def kind_ports(kind: str) -> list[str]:
+    """The serial ports a device kind declares (``["main"]`` when the kind cannot be loaded;
+    the unknown kind is reported with its line elsewhere)."""
+    from devsim.core.registry import device_class
+
+    try:
+        return [p.name for p in device_class(kind).ports]
+    except Exception:
+        return ["main"]
+
+
 class PlantSpec(_Model):
+    name: str | None = Field(default=None, description="a name for the plant (shown by devsim up)")
     devices: list[DeviceSpec] = Field(min_length=1)
     buses: list[BusSpec] = Field(default_factory=list)
 
@@ -138,13 +176,31 @@ class PlantSpec(_Model):
                 raise ValueError(f"the name {name!r} is used twice")
         buses = {b.name for b in self.buses}
         for device in self.devices:
-            if device.transport.bus is not None and device.transport.bus not in buses:
-                raise ValueError(f"device {device.name!r} is on bus {device.transport.bus!r}, which is not defined")
+            for port in device.port_names():
+                bus = device.transport_of(port).bus
+                if bus is not None and bus not in buses:
+                    raise ValueError(f"device {device.name!r} is on bus {bus!r}, which is not defined")
+            unknown = sorted(set(device.ports) - set(device.port_names()))
+            if unknown:
+                raise ValueError(
+                    f"device {device.name!r} ({device.kind}) has no port {unknown[0]!r}"
+                    f" (ports: {', '.join(device.port_names())})"
+                )
         return self
 
+    def device_ports(self) -> list[tuple[str, DeviceSpec, str]]:
+        """(plant port name, device, device port) of every device port with a transport of its
+        own; the plant port name is ``DEVICE`` for a main port, else ``DEVICE.PORT``."""
+        rows = []
+        for device in self.devices:
+            for port in device.port_names():
+                if device.transport_of(port).bus is None:
+                    rows.append((port_key(device.name, port), device, port))
+        return rows
+
     def ports(self) -> list[str]:
-        """Names a host can talk to: devices with their own transport, and buses."""
-        return [d.name for d in self.devices if d.transport.bus is None] + [b.name for b in self.buses]
+        """Names a host can talk to: device ports with their own transport, and buses."""
+        return [name for name, _device, _port in self.device_ports()] + [b.name for b in self.buses]
 
 
 # -- conditions ------------------------------------------------------------------------------
@@ -299,14 +355,15 @@ class PulseAction(_Model):
         return parse_duration(value, str(info.field_name))
 
 
-FaultKind = Literal["blocked_axis", "emergency_stop", "power_cycle", "power_cycle_wipe", "power_off", "power_on"]
+#: Faults every device has through its power supply; the others are declared by each kind.
+POWER_FAULTS = ("power_cycle", "power_cycle_wipe", "power_off", "power_on")
 
 
 class FaultAction(_Model):
     """A device fault; ``duration`` makes a lasting fault end by itself."""
 
     device: str
-    kind: FaultKind
+    kind: str = Field(description="a fault the device's kind declares, or power_cycle(_wipe)/power_off/power_on")
     duration: float | None = None
 
     @field_validator("duration", mode="before")
@@ -457,6 +514,7 @@ class Scenario(PlantSpec):
     @model_validator(mode="after")
     def _references(self) -> Scenario:
         devices = {d.name for d in self.devices}
+        kinds = {d.name: d.kind for d in self.devices}
         ports = set(self.ports())
         default_port = self.host.get("port")
         if default_port is not None and default_port not in ports:
@@ -467,6 +525,8 @@ class Scenario(PlantSpec):
                          step.expect_timing):
                 if item is not None and getattr(item, "device", None) not in devices:
                     raise ValueError(f"{where}: no device named {item.device!r}")  # type: ignore[union-attr]
+            if step.fault is not None:
+                _check_fault(where, step.fault, kinds[step.fault.device])
             for item in (step.send, step.expect, step.line_fault, step.expect_traffic):
                 port = getattr(item, "port", None) if item is not None else None
                 if port is not None and port not in ports:
@@ -482,6 +542,20 @@ class Scenario(PlantSpec):
 
     def default_port(self) -> str:
         return str(self.host.get("port") or self.ports()[0])
+
+
+def _check_fault(where: str, action: FaultAction, kind: str) -> None:
+    from devsim.core.registry import device_class
+
+    if action.kind in POWER_FAULTS:
+        return
+    try:
+        declared = device_class(kind).faults.names()
+    except Exception:
+        return  # the unknown kind is reported with its own line
+    if action.kind not in declared:
+        known = ", ".join([*declared, *POWER_FAULTS])
+        raise ValueError(f"{where}: {kind} has no fault {action.kind!r} (declared: {known})")
 
 
 def _step_lines(data: Any, scenario: Scenario) -> None:
@@ -526,6 +600,62 @@ def _check_device_configs(data: Any, spec: PlantSpec, path: str) -> None:
             raise ConfigError(_prefix(str(exc), prefix), [_prefix(m, prefix) for m in exc.messages]) from None
 
 
+def _check_state(data: Any, spec: PlantSpec, path: str) -> None:
+    """Initial ``state`` names and values, checked against each kind's declared points."""
+    from devsim.core.registry import device_class
+
+    raw_devices = data.get("devices") if isinstance(data, LineDict) else None
+    for index, device in enumerate(spec.devices):
+        raw = raw_devices[index] if isinstance(raw_devices, LineList) and index < len(raw_devices) else None
+        state = raw.get("state") if isinstance(raw, LineDict) else None
+        lines = getattr(state, "key_lines", {})
+        try:
+            points = device_class(device.kind).points
+        except Exception:
+            continue
+        for name, value in device.state.items():
+            _check_point(points, device.name, name, value, f"{path}:{lines.get(name, 1)}: devices.{index}.state.{name}")
+
+
+def _check_point(points: Any, owner: str, name: str, value: Any, where: str) -> None:
+    from devsim.core.points import BadValue, ReadOnlyName, UnknownName
+
+    try:
+        points.parse(name, value, owner)
+    except (UnknownName, ReadOnlyName, BadValue) as exc:
+        raise ConfigError(f"{where}: {exc}") from None
+
+
+def _check_steps(scenario: Scenario, path: str) -> None:
+    """Names in ``set``, ``pulse``, ``when`` and ``expect_state`` steps, checked against the
+    declared points of each device's kind."""
+    from devsim.core.points import UnknownName
+    from devsim.core.registry import device_class
+
+    kinds = {d.name: d.kind for d in scenario.devices}
+    for number, step in enumerate(scenario.steps, 1):
+        where = f"{path}:{step.line or 1}: steps.{number}"
+        target = step.set or step.pulse or step.when or step.expect_state
+        if target is None:
+            continue
+        try:
+            points = device_class(kinds[target.device]).points
+        except Exception:
+            continue
+        if step.set is not None:
+            for name, value in step.set.values.items():
+                _check_point(points, step.set.device, name, value, f"{where}.set.{name}")
+        if step.pulse is not None:
+            name = step.pulse.input if "." in step.pulse.input else f"input.{step.pulse.input}"
+            _check_point(points, step.pulse.device, name, step.pulse.value, f"{where}.pulse")
+        for cond in (step.when, step.expect_state):
+            if cond is not None and not cond.name.startswith("line."):
+                try:
+                    points.lookup(cond.name, cond.device)
+                except UnknownName as exc:
+                    raise ConfigError(f"{where}: {exc}") from None
+
+
 def _prefix(message: str, prefix: str) -> str:
     """Insert ``prefix`` before the field of a ``file:line: field: message`` line."""
     parts = message.split(": ", 2)
@@ -541,6 +671,7 @@ def load_plant(path: str | os.PathLike[str]) -> PlantSpec:
         return load_scenario(path)
     spec = validate(data, PlantSpec, path)
     _check_device_configs(data, spec, os.fspath(path))
+    _check_state(data, spec, os.fspath(path))
     return spec
 
 
@@ -550,6 +681,8 @@ def load_scenario(path: str | os.PathLike[str]) -> Scenario:
     scenario = validate(data, Scenario, path)
     _step_lines(data, scenario)
     _check_device_configs(data, scenario, os.fspath(path))
+    _check_state(data, scenario, os.fspath(path))
+    _check_steps(scenario, os.fspath(path))
     scenario.path = os.fspath(path)
     if scenario.name is None:
         scenario.name = Path(path).stem

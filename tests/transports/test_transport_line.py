@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import asyncio
-from typing import Any
+from typing import Any, ClassVar
 
 import pytest
 
 from devsim.core.bus import Bus
 from devsim.core.clock import RealClock, VirtualClock
-from devsim.core.device import Device, SerialSettings
+from devsim.core.device import Device, Face, SerialSettings
 from devsim.transports.line import Line, garble, settings_match
 from devsim.transports.trace import Tracer, render
 from tests.transports.transport_helpers import EchoTarget
@@ -106,27 +106,21 @@ def test_host_disconnected_forwards_and_forgets_host() -> None:
     assert line.host is None and not line.mismatch
 
 
-class _Addressed(Device):
+class _AddressedFace(Face):
     """Answers ``<addr>?`` with ``<addr>!``."""
 
+    def feed(self, data: bytes) -> None:
+        addr = self.model.config["addr"]
+        if data == addr + b"?":
+            self.send(addr + b"!")
+
+
+class _Addressed(Device):
     kind = "test"
+    face_classes: ClassVar[dict[str, Any]] = {"main": _AddressedFace}
 
     def __init__(self, addr: bytes, **kw: Any) -> None:
-        super().__init__(**kw)
-        self.addr = addr
-
-    def feed(self, data: bytes) -> None:
-        if data == self.addr + b"?":
-            self.send(self.addr + b"!")
-
-    def read(self, name: str) -> Any:
-        raise KeyError(name)
-
-    def set(self, name: str, value: Any) -> None:
-        raise KeyError(name)
-
-    def state(self) -> dict[str, Any]:
-        return {}
+        super().__init__(config={"addr": addr}, **kw)
 
 
 def test_line_in_front_of_a_bus() -> None:
