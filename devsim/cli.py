@@ -109,6 +109,21 @@ def list_kinds() -> None:
         click.echo(f"{kind:<12} {description}")
 
 
+# -- devsim doc ------------------------------------------------------------------------------
+@cli.command("doc")
+@click.argument("kind")
+def doc(kind: str) -> None:
+    """Print KIND's reference in Markdown: ports, control names, faults, commands, parameters,
+    error codes and configuration keys, from the tables that drive the simulator."""
+    from devsim.docgen import reference_markdown
+
+    try:
+        cls = device_class(kind)
+    except UnknownKind as exc:
+        raise click.UsageError(str(exc)) from None
+    click.echo(reference_markdown(cls))
+
+
 # -- devsim run ------------------------------------------------------------------------------
 @dataclass
 class _Port:
@@ -371,8 +386,8 @@ async def _serve(plan: _Plan) -> None:
                         _say(f"{key}: link {link}")
             if server is not None:
                 _say(f"control: {address}")
-            for device in devices:
-                _announce_ready(device)
+            for device in devices:  # NAME: ready, each time it has booted and listens
+                device.on_ready(lambda name=device.name: _say(f"{name}: ready"))
             names = ", ".join(device.name for device in devices)
             print(f"devsim: serving {names}; Ctrl-C to stop", file=sys.stderr, flush=True)
             await stop.wait()
@@ -398,13 +413,6 @@ def _trace_for(trace: str | None, name: str, index: int) -> str | None:
     if trace is None or index == 0:
         return trace
     return f"{trace}-{name}"
-
-
-def _announce_ready(device: Device) -> None:
-    """Print ``NAME: ready`` each time the device has booted and listens (now, if it already has)."""
-    device.on_ready(lambda: _say(f"{device.name}: ready"))
-    if not device.booting:
-        _say(f"{device.name}: ready")
 
 
 def _port_text(transport: Any, scheme: str) -> str:

@@ -23,6 +23,7 @@ from devsim.core.control import ControlClient, ControlError
 
 ROOT = Path(__file__).resolve().parents[1]
 ECHO = "echo=tests.support.echo:EchoDevice"
+TWOPORT = "twoport=tests.support.twoport:TwoPortDevice"
 
 
 @pytest.fixture(autouse=True)
@@ -130,7 +131,7 @@ class Sim:
     def __init__(self, *args: str) -> None:
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
-        env["DEVSIM_EXTRA_KINDS"] = ECHO
+        env["DEVSIM_EXTRA_KINDS"] = f"{ECHO},{TWOPORT}"
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "devsim", "run", *args],
             cwd=ROOT,

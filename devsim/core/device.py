@@ -219,8 +219,12 @@ class Device:
         return self.model.signals
 
     def on_ready(self, listener: Callable[[], None]) -> Callable[[], None]:
-        """Call ``listener`` each time the device finishes booting and listens."""
-        return self.model.listen("ready", listener)
+        """Call ``listener`` each time the device finishes booting and listens, and at once if
+        it listens already."""
+        undo = self.model.listen("ready", listener)
+        if not self.booting:
+            listener()
+        return undo
 
     # -- control API (derived from the declared points and faults) ---------------------------
     def names(self) -> list[str]:

@@ -111,8 +111,12 @@ def scenario_run(
 @click.option("--speed", type=float, default=1.0, show_default=True, metavar="F", help="Time speed factor.")
 @click.option("--control", metavar="ADDR", help="Serve the control API on unix:/path.sock or [HOST:]PORT.")
 @click.option("--trace-dir", metavar="DIR", help="Write a trace of every port's traffic here.")
-def up(plant_file: str, state_dir: str | None, speed: float, control: str | None, trace_dir: str | None) -> None:
-    """Start every device of PLANT_FILE, print every port, serve until Ctrl-C."""
+@click.option("--virtual", is_flag=True, help="Virtual time: it moves only through 'devsim ctl advance'.")
+def up(
+    plant_file: str, state_dir: str | None, speed: float, control: str | None, trace_dir: str | None, virtual: bool
+) -> None:
+    """Start every device of PLANT_FILE, print every port and NAME: ready when a device has
+    booted, serve until Ctrl-C."""
     from devsim.core.control import ControlAddressError, parse_address
     from devsim.scenario.schema import load_plant
 
@@ -122,6 +126,8 @@ def up(plant_file: str, state_dir: str | None, speed: float, control: str | None
         raise click.ClickException(str(exc)) from None
     if speed <= 0:
         raise click.UsageError("--speed: must be positive")
+    if virtual and speed != 1.0:
+        raise click.UsageError("--speed and --virtual exclude each other")
     address = None
     if control is not None:
         try:
@@ -131,14 +137,16 @@ def up(plant_file: str, state_dir: str | None, speed: float, control: str | None
         if not address.is_loopback():
             raise click.UsageError(f"--control: refusing non-loopback host {address.host!r}")
     try:
-        asyncio.run(_up(spec, state_dir, speed, address, trace_dir))
+        asyncio.run(_up(spec, state_dir, speed, address, trace_dir, virtual))
     except KeyboardInterrupt:
         sys.exit(130)
     except OSError as exc:
         raise click.ClickException(f"cannot start the plant: {exc}") from None
 
 
-async def _up(spec: object, state_dir: str | None, speed: float, address: object, trace_dir: str | None) -> None:
+async def _up(
+    spec: object, state_dir: str | None, speed: float, address: object, trace_dir: str | None, virtual: bool
+) -> None:
     from devsim.core.control import ControlServer
     from devsim.core.runtime import Runtime
     from devsim.scenario.plant import build_plant
@@ -151,7 +159,7 @@ async def _up(spec: object, state_dir: str | None, speed: float, address: object
         Path(state_dir).mkdir(parents=True, exist_ok=True)
     if trace_dir is not None:
         Path(trace_dir).mkdir(parents=True, exist_ok=True)
-    async with Runtime(speed=speed, state_dir=state_dir) as runtime:
+    async with Runtime(virtual=virtual, speed=speed, state_dir=state_dir) as runtime:
         plant = await build_plant(runtime, spec, trace_dir=trace_dir)  # type: ignore[arg-type]
         server = None
         if address is not None:
@@ -161,7 +169,10 @@ async def _up(spec: object, state_dir: str | None, speed: float, address: object
             print(row, flush=True)
         if server is not None:
             print(f"control: {shown}", flush=True)
-        print(f"devsim: plant up ({len(plant.devices)} devices); Ctrl-C to stop", file=sys.stderr, flush=True)
+        for device in plant.devices.values():
+            device.on_ready(lambda name=device.name: print(f"{name}: ready", flush=True))
+        title = f"plant {spec.name!r} up" if getattr(spec, "name", None) else "plant up"
+        print(f"devsim: {title} ({len(plant.devices)} devices); Ctrl-C to stop", file=sys.stderr, flush=True)
         try:
             await stop.wait()
         finally:
