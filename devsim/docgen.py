@@ -96,7 +96,11 @@ def reference_markdown(cls: type[Device]) -> str:
         "Every device also has the scenario faults `power_off`, `power_on`, `power_cycle`,",
         "`power_cycle_wipe`.",
         "",
-        *_table(("fault", "effect", "manual"), ((f"`{f.name}`", f.doc, f.section) for f in cls.faults)),
+        *(
+            _table(("fault", "effect", "manual"), ((f"`{f.name}`", f.doc, f.section) for f in cls.faults))
+            if cls.faults.names()
+            else ["This kind declares no faults of its own."]
+        ),
         "",
     ]
     if ref.commands:

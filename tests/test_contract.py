@@ -1,0 +1,153 @@
+"""The contract every registered device kind keeps, checked the moment it registers.
+
+Parametrised over every kind of the registry (the shipped ones and the test kinds): boot, list
+names, read every readable name, set every settable one with a valid and an invalid value (the
+invalid one refused, nothing changed), power cycle, every declared fault on and off, garbage on
+every port.  All under virtual time, through the kit's in-process API.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from devsim.core.clock import VirtualClock
+from devsim.core.device import Device
+from devsim.core.nvram import NonVolatileMemory
+from devsim.core.points import SHARED_VOCABULARY, BadValue, Point
+from devsim.core.registry import device_class, kinds
+
+TEST_KINDS = "echo=tests.support.echo:EchoDevice,twoport=tests.support.twoport:TwoPortDevice"
+SHIPPED = ("sers", "gms96")
+BOOT = 30.0  # simulated seconds a kind may take to boot
+
+
+@pytest.fixture(autouse=True)
+def _test_kinds(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("DEVSIM_EXTRA_KINDS", TEST_KINDS)
+
+
+def _all_kinds() -> list[str]:
+    import os
+
+    old = os.environ.get("DEVSIM_EXTRA_KINDS")
+    os.environ["DEVSIM_EXTRA_KINDS"] = TEST_KINDS
+    try:
+        return list(kinds())
+    finally:
+        if old is None:
+            del os.environ["DEVSIM_EXTRA_KINDS"]
+        else:
+            os.environ["DEVSIM_EXTRA_KINDS"] = old
+
+
+@pytest.fixture(params=_all_kinds())
+def booted(request: pytest.FixtureRequest, tmp_path: Any) -> Iterator[tuple[Device, VirtualClock]]:
+    clock = VirtualClock()
+    cls = device_class(request.param)
+    device = cls(clock=clock, nvram=NonVolatileMemory.for_device(tmp_path, "d"), name="d")
+    assert clock.run_until(lambda: not device.booting, BOOT), f"{cls.kind} did not boot in {BOOT} s"
+    yield device, clock
+    device.close()
+
+
+def _invalid(point: Point) -> list[Any]:
+    return {
+        "bool": ["maybe", 2, "False!"],
+        "int": ["x", 1.5, math.nan],
+        "float": ["hello", math.nan, math.inf, "1e400"],
+        "str": [12345, None],
+        "json": [math.nan, {"a": [math.inf]}],
+    }[point.type]
+
+
+def test_names_are_declared_once_with_doc(booted: tuple[Device, VirtualClock]) -> None:
+    device, _clock = booted
+    names = device.names()
+    assert names and len(names) == len(set(names))
+    for point in device.points:
+        assert point.doc, f"{point.name} has no description"
+        assert point.readable or point.settable
+    if device.kind in SHIPPED:
+        for name in SHARED_VOCABULARY:
+            if not name.endswith("*"):
+                assert name in names, f"{device.kind} lacks the shared name {name}"
+        for point in device.points:
+            assert point.section, f"{device.kind}: {point.name} cites no manual section"
+
+
+def test_read_every_readable_name(booted: tuple[Device, VirtualClock]) -> None:
+    device, _clock = booted
+    for point in device.points:
+        if point.readable:
+            value = device.read(point.name)
+            if isinstance(value, float):
+                assert math.isfinite(value), point.name
+    state = device.state()
+    assert state["kind"] == device.kind
+
+
+def test_set_every_settable_name_valid_and_invalid(booted: tuple[Device, VirtualClock]) -> None:
+    device, clock = booted
+    for point in device.points:
+        if not point.settable:
+            continue
+        valid = device.read(point.name) if point.readable and point.example is None else point.example
+        if valid is None and point.type != "json":
+            continue  # nothing known to be valid (a write-only point without an example)
+        device.set(point.name, valid)
+        before = device.read(point.name) if point.readable else None
+        for bad in _invalid(point):
+            with pytest.raises(BadValue):
+                device.set(point.name, bad)
+            if point.readable:
+                assert device.read(point.name) == before, f"{point.name} changed by a refused value {bad!r}"
+        clock.advance(0.01)
+
+
+def test_power_cycle_boots_again(booted: tuple[Device, VirtualClock]) -> None:
+    device, clock = booted
+    ready: list[float] = []
+    device.on_ready(lambda: ready.append(clock.now()))
+    ready.clear()
+    device.power_cycle()
+    assert clock.run_until(lambda: not device.booting, BOOT)
+    device.power_cycle(wipe=True)
+    assert clock.run_until(lambda: not device.booting, BOOT)
+    for point in device.points:
+        if point.readable:
+            device.read(point.name)
+
+
+def test_every_declared_fault_on_and_off(booted: tuple[Device, VirtualClock]) -> None:
+    device, clock = booted
+    for fault in device.faults:
+        assert fault.doc
+        device.fault(fault.name, True)
+        clock.advance(0.5)
+        device.fault(fault.name, False)
+        clock.advance(0.5)
+        assert clock.run_until(lambda: not device.booting, BOOT)
+    with pytest.raises(KeyError, match="has no fault"):
+        device.fault("no_such_fault", True)
+
+
+def test_garbage_on_every_port(booted: tuple[Device, VirtualClock]) -> None:
+    device, clock = booted
+    rng = random.Random(f"{device.kind}-garbage")
+    for name in device.port_names():
+        port = device.port(name)
+        out = bytearray()
+        port.attach(out.extend)
+        for _ in range(200):
+            port.feed(bytes(rng.randrange(256) for _ in range(rng.randrange(1, 40))))
+            clock.advance(rng.random() * 0.05)
+        port.host_disconnected()
+        port.attach(None)
+    for point in device.points:
+        if point.readable:
+            device.read(point.name)
