@@ -32,7 +32,6 @@ from __future__ import annotations
 import dataclasses
 import os
 import threading
-import time
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
@@ -81,11 +80,18 @@ def _wait_booted(runtime: Runtime, devices: list[Device]) -> None:
         if not runtime.run_until(booted, BOOT_TIMEOUT):
             raise RuntimeError("the device did not finish booting")
         return
-    deadline = time.monotonic() + BOOT_TIMEOUT
-    while not runtime.call(booted):
-        if time.monotonic() > deadline:
+    done = threading.Event()
+
+    def check() -> None:
+        if booted():
+            done.set()
+
+    undo = runtime.call(lambda: [device.on_ready(check) for device in devices])
+    try:
+        if not done.wait(BOOT_TIMEOUT):
             raise RuntimeError("the device did not finish booting")
-        time.sleep(0.01)
+    finally:
+        runtime.call(lambda: [u() for u in undo])
 
 
 def _resolve(path: str | os.PathLike[str], *bases: Path) -> Path:
@@ -124,12 +130,22 @@ class SimDevice:
     pty path or ``host:port``.  All control methods are thread-safe.
     """
 
-    def __init__(self, runtime: Runtime, name: str, kind: str, transport: Any, transport_kind: str) -> None:
+    def __init__(
+        self,
+        runtime: Runtime,
+        name: str,
+        kind: str,
+        transport: Any,
+        transport_kind: str,
+        transports: Mapping[str, Any] | None = None,
+    ) -> None:
         self.runtime = runtime
         self.name = name
         self.kind = kind
         self.transport = transport
         self.transport_kind = transport_kind
+        #: Every served serial port of the device by port name (the first is ``transport``).
+        self.transports: dict[str, Any] = dict(transports or {})
         self._serial = _SerialPorts()
         self._owns_runtime = True
 
@@ -148,6 +164,12 @@ class SimDevice:
     @property
     def address(self) -> str:
         return str(self.transport.address)
+
+    def port_url(self, port: str) -> str:
+        """What a host opens for one serial port of a device with several (``devsim doc KIND``
+        lists them)."""
+        transport = self.transports[port]
+        return str(getattr(transport, "url", "") or transport.address)
 
     @property
     def device(self) -> Device:
@@ -186,6 +208,14 @@ class SimDevice:
 
     def state(self) -> dict[str, Any]:
         return self.runtime.state(self.name)
+
+    def names(self) -> list[str]:
+        """The device's declared control names."""
+        return [row["name"] for row in self.runtime.names(self.name)]
+
+    def fault(self, kind: str, active: bool = True) -> None:
+        """Switch a fault the device's kind declares (``devsim doc KIND``) on or off."""
+        self.runtime.fault(self.name, kind, active)
 
     def power_cycle(self, wipe: bool = False, *, boot: bool = True) -> None:
         """Switch off and on; with ``boot`` (and virtual time) run past the boot again."""
@@ -262,9 +292,12 @@ class DeviceFactory:
         runtime = Runtime(virtual=virtual, state_dir=state_dir).start()
         try:
             device = runtime.add_device(kind, name, dict(config or {}))
-            port = make_transport(spec)
-            runtime.serve_sync(device, port)
-            sim = SimDevice(runtime, name, kind, port, spec.kind)
+            transports = {}
+            for port_name in device.port_names():
+                transports[port_name] = make_transport(spec)
+                runtime.serve_sync(device, transports[port_name], port=port_name)
+            first = transports[device.port_names()[0]]
+            sim = SimDevice(runtime, name, kind, first, spec.kind, transports)
             if boot:
                 sim.wait_booted()
         except BaseException:
@@ -306,6 +339,10 @@ def _make_sim_plant_class() -> type:
 
         def power_cycle(self, device: str, wipe: bool = False) -> None:
             self.runtime.power_cycle(device, wipe=wipe)
+
+        def fault(self, device: str, kind: str, active: bool = True) -> None:
+            """Switch a declared fault of ``device`` on or off."""
+            self.runtime.fault(device, kind, active)
 
         def now(self) -> float:
             return self.runtime.now()

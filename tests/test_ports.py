@@ -125,3 +125,20 @@ def test_doc_lists_ports_names_and_faults() -> None:
     assert "| `a` | echoes and counts |" in result.output
     assert "| `count` | int |  | r |" in result.output
     assert "| `jam` | port a stops echoing |" in result.output
+
+
+def test_fixture_serves_every_port_and_switches_faults(devsim_device) -> None:  # noqa: ANN001
+    drive = devsim_device("twoport")
+    assert drive.names() == ["count", "jammed"]
+    with serial.serial_for_url(drive.port_url("a"), timeout=5) as a, serial.serial_for_url(
+        drive.port_url("b"), timeout=5
+    ) as b:
+        drive.fault("jam", True)
+        a.write(b"xy")
+        b.write(b"\r")
+        assert b.read(2) == b"2\r"  # both counted on a (so a's input was handled) ...
+        assert a.in_waiting == 0  # ... but a is jammed: no echo
+        drive.fault("jam", False)
+        a.write(b"z")
+        assert a.read(1) == b"z"
+    assert drive.read("jammed") is False
