@@ -270,6 +270,7 @@ class Device:
             if port.face is not None:
                 port.face.close()
         self.model.close()
+        self.nvram.close()
 
     # -- the generated reference -------------------------------------------------------------
     @classmethod

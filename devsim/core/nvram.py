@@ -5,18 +5,48 @@ temporary file in the same directory, is flushed and fsync'ed, then renamed over
 (and the directory is fsync'ed).  A ``kill -9`` at any instant therefore leaves either the old
 image or the new one, never a torn file.  Without a state dir the memory lives in RAM only (it
 still survives a simulated power cycle, just not a simulator restart).
+
+One simulator owns a device's memory at a time: an OS file lock (``NAME.nvram.lock``, held
+while the device lives) refuses a second owner with :class:`MemoryInUse`, so that a second
+simulator on the same state dir can neither overwrite an acknowledged save nor delete the
+first one's temporary file.  Nothing non-finite is ever written, and an image holding NaN or
+infinity is refused at load (:class:`PoisonedMemory`).
 """
 
 from __future__ import annotations
 
 import copy
+import fcntl
 import json
 import os
+import re
 import tempfile
 from pathlib import Path
 from typing import Any
 
-__all__ = ["NonVolatileMemory"]
+__all__ = ["MemoryInUse", "NonVolatileMemory", "PoisonedMemory", "check_name"]
+
+_NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,127}$")
+
+
+class MemoryInUse(RuntimeError):
+    """Another simulator holds this device's memory."""
+
+
+class PoisonedMemory(ValueError):
+    """The stored image holds a value no device accepts (NaN, infinity)."""
+
+
+def check_name(name: str, what: str = "device name") -> str:
+    """A name that becomes a file name: letters, digits, ``_ . -``, not starting with a dot,
+    so that it stays inside its directory."""
+    if not _NAME.match(name) or ".." in name:
+        raise ValueError(f"{what} {name!r} cannot name a file (use letters, digits, _ . -; no leading dot)")
+    return name
+
+
+def _reject_constant(token: str) -> Any:
+    raise PoisonedMemory(f"holds a non-finite number ({token})")
 
 
 class NonVolatileMemory:
@@ -29,13 +59,18 @@ class NonVolatileMemory:
     def __init__(self, path: str | os.PathLike[str] | None = None) -> None:
         self.path = Path(path) if path is not None else None
         self._image: dict[str, Any] = {}
+        self._lock: int | None = None
         if self.path is not None:
+            self._take_lock()
             # temp files of a write that was killed half-way: the old image is intact
             for stale in self.path.parent.glob(self.path.name + ".*.tmp"):
                 stale.unlink(missing_ok=True)
         if self.path is not None and self.path.exists():
             try:
-                self._image = json.loads(self.path.read_text("utf-8"))
+                self._image = json.loads(self.path.read_text("utf-8"), parse_constant=_reject_constant)
+            except PoisonedMemory as exc:
+                self.close()
+                raise PoisonedMemory(f"{self.path}: {exc}; refusing to load it (fix or delete the file)") from None
             except (OSError, ValueError):
                 # A file we cannot read is treated like an erased EEPROM; the device decides
                 # what that means (e.g. the SERS shows display '7').
@@ -44,8 +79,32 @@ class NonVolatileMemory:
                 return
         self.corrupt = False
 
+    def _take_lock(self) -> None:
+        assert self.path is not None
+        lock_path = self.path.with_name(self.path.name + ".lock")
+        fd = os.open(lock_path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            owner = os.pread(fd, 32, 0).decode("ascii", "replace").strip() or "?"
+            os.close(fd)
+            raise MemoryInUse(
+                f"{self.path.parent}: the memory of {self.path.name.removesuffix('.nvram.json')!r} is in use by"
+                f" another simulator (pid {owner}); give each simulator its own --state-dir"
+            ) from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        self._lock = fd
+
+    def close(self) -> None:
+        """Release the memory's lock (the device is gone); the image stays on disk."""
+        if self._lock is not None:
+            os.close(self._lock)
+            self._lock = None
+
     @classmethod
     def for_device(cls, state_dir: str | os.PathLike[str] | None, name: str) -> NonVolatileMemory:
+        check_name(name)
         if state_dir is None:
             return cls(None)
         directory = Path(state_dir)
@@ -75,7 +134,10 @@ class NonVolatileMemory:
     def _write(self) -> None:
         if self.path is None:
             return
-        data = json.dumps(self._image, sort_keys=True, indent=1).encode("utf-8")
+        try:
+            data = json.dumps(self._image, sort_keys=True, indent=1, allow_nan=False).encode("utf-8")
+        except ValueError as exc:
+            raise PoisonedMemory(f"{self.path}: refusing to save a non-finite number ({exc})") from None
         directory = self.path.parent
         fd, tmp = tempfile.mkstemp(prefix=self.path.name + ".", suffix=".tmp", dir=directory)
         try:

@@ -1,0 +1,72 @@
+"""Non-volatile memory: one owner per device memory, nothing non-finite in or out, safe names."""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from devsim.core.nvram import MemoryInUse, NonVolatileMemory, PoisonedMemory, check_name
+
+
+def test_a_second_owner_is_refused_and_the_first_keeps_its_files(tmp_path: Path) -> None:
+    first = NonVolatileMemory.for_device(tmp_path, "drive")
+    first.put("params", {"P51": 1})
+    stale = tmp_path / "drive.nvram.json.abc.tmp"
+    stale.write_text("{}")  # as if the first one were writing right now
+    with pytest.raises(MemoryInUse, match=rf"'drive' is in use by another simulator \(pid {os.getpid()}\)"):
+        NonVolatileMemory.for_device(tmp_path, "drive")
+    assert stale.exists()  # the refused one deleted nothing
+    first.close()
+    second = NonVolatileMemory.for_device(tmp_path, "drive")  # free again once released
+    assert second.get("params") == {"P51": 1}
+    assert not stale.exists()  # the new owner cleans up what a killed writer left
+    second.close()
+
+
+def test_the_lock_holds_across_processes(tmp_path: Path) -> None:
+    mine = NonVolatileMemory.for_device(tmp_path, "card")
+    code = (
+        "import sys\n"
+        "from devsim.core.nvram import MemoryInUse, NonVolatileMemory\n"
+        "try:\n"
+        f"    NonVolatileMemory.for_device({str(tmp_path)!r}, 'card')\n"
+        "except MemoryInUse as exc:\n"
+        "    print(exc); sys.exit(3)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 3 and "in use by another simulator" in done.stdout
+    mine.close()
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stdout + done.stderr
+
+
+@pytest.mark.parametrize("token", ["NaN", "Infinity", "-Infinity"])
+def test_a_poisoned_image_is_refused_at_load(tmp_path: Path, token: str) -> None:
+    (tmp_path / "drive.nvram.json").write_text(f'{{"params": {{"V": {token}}}}}')
+    with pytest.raises(PoisonedMemory, match=rf"non-finite number \({token}\); refusing to load"):
+        NonVolatileMemory.for_device(tmp_path, "drive")
+    (tmp_path / "drive.nvram.json").unlink()
+    NonVolatileMemory.for_device(tmp_path, "drive").close()  # the refusal released the lock
+
+
+def test_nothing_non_finite_is_written(tmp_path: Path) -> None:
+    memory = NonVolatileMemory.for_device(tmp_path, "drive")
+    memory.put("params", {"V": 1.5})
+    with pytest.raises(PoisonedMemory):
+        memory.put("params", {"V": math.nan})
+    memory.close()
+    assert '"V": 1.5' in (tmp_path / "drive.nvram.json").read_text()
+
+
+@pytest.mark.parametrize("name", ["../escaped", "a/b", ".hidden", "", "x" * 200])
+def test_names_stay_inside_the_state_dir(tmp_path: Path, name: str) -> None:
+    with pytest.raises(ValueError, match="cannot name a file"):
+        NonVolatileMemory.for_device(tmp_path, name)
+    with pytest.raises(ValueError):
+        check_name(name)
+    assert list(tmp_path.iterdir()) == []
