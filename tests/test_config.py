@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import pytest
 from pydantic import BaseModel, ConfigDict
@@ -148,3 +149,24 @@ def test_readme_example_config_is_valid(tmp_path: Path) -> None:
     block = readme.split("```yaml\n", 1)[1].split("```", 1)[0]
     config = load_config(write(tmp_path, block, "sers.yaml"), SersConfig)
     assert config.params == {"P1017": 2}
+
+
+@pytest.mark.parametrize("value", [".nan", ".inf", "-.inf", "1e400", "'-1e999'"])
+def test_non_finite_numbers_are_refused_with_their_line(tmp_path: Path, value: str) -> None:
+    class Axis(BaseModel):
+        limit: float = 0.0
+        extra: dict[str, Any] = {}
+
+    class Model(BaseModel):
+        axis: Axis = Axis()
+
+    path = tmp_path / "c.yaml"
+    path.write_text(f"axis:\n  limit: {value}\n")
+    with pytest.raises(ConfigError, match=r"c.yaml:2: axis.limit: not a finite number"):
+        load_config(path, Model)
+    path.write_text(f"axis:\n  extra: {{P51: {value}}}\n")
+    if value in ("1e400", "'-1e999'"):
+        load_config(path, Model)  # text in a free mapping: the device's own table parses it
+    else:
+        with pytest.raises(ConfigError, match=r"c.yaml:2: axis.extra.P51: not a finite number"):
+            load_config(path, Model)

@@ -15,6 +15,7 @@ data needs reshaping in between.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Hashable
 from pathlib import Path
@@ -181,8 +182,10 @@ def validate(data: Any, model: type[M], path: str | os.PathLike[str]) -> M:
     if data is None:
         data = LineDict()
         data.key_lines = {}
+    where = _non_finite(data, ())
     try:
-        return model.model_validate(data)
+        result = model.model_validate(data)
+        where = where or _non_finite(result.model_dump(by_alias=True), ())
     except ValidationError as exc:
         messages: list[str] = []
         seen: set[tuple[int, str]] = set()
@@ -200,6 +203,27 @@ def validate(data: Any, model: type[M], path: str | os.PathLike[str]) -> M:
         if len(messages) > 1:
             first += f" (and {len(messages) - 1} more)"
         raise ConfigError(first, messages) from None
+    if where is not None:
+        line, parts = _locate(data, where)
+        raise ConfigError(f"{name}:{line}: {'.'.join(parts) or 'value'}: not a finite number (NaN and infinity are refused)")
+    return result
+
+
+def _non_finite(data: Any, loc: tuple[int | str, ...]) -> tuple[int | str, ...] | None:
+    """Where the first NaN or infinity sits in ``data`` (a number, or nested mappings and lists)."""
+    if isinstance(data, float):
+        return None if math.isfinite(data) else loc
+    if isinstance(data, dict):
+        for key, value in data.items():
+            found = _non_finite(value, (*loc, key))
+            if found is not None:
+                return found
+    elif isinstance(data, list | tuple):
+        for index, value in enumerate(data):
+            found = _non_finite(value, (*loc, index))
+            if found is not None:
+                return found
+    return None
 
 
 def load_config(path: str | os.PathLike[str], model: type[M]) -> M:
