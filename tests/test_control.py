@@ -214,3 +214,65 @@ def test_clients_in_parallel(served: tuple[Runtime, str]) -> None:
         b.set("echo2", "value", 2)
         assert a.read("echo2", "value") == 2
         assert b.read("echo1", "value") == 1
+
+
+def _raw(addr: str, line: bytes) -> dict:
+    path = addr.removeprefix("unix:")
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
+        sock.settimeout(10)
+        sock.connect(path)
+        sock.sendall(line + b"\n")
+        data = b""
+        while not data.endswith(b"\n"):
+            chunk = sock.recv(65536)
+            assert chunk, "connection closed without an answer"
+            data += chunk
+        # the connection still serves the next request
+        sock.sendall(b'{"id": 9, "op": "now"}\n')
+        follow = b""
+        while not follow.endswith(b"\n"):
+            follow += sock.recv(65536)
+        assert json.loads(follow)["ok"] is True
+        return json.loads(data)
+
+
+def test_hostile_requests_get_an_error_and_the_connection_lives(runtime: Runtime, sockdir: str) -> None:
+    server = ControlServer(runtime, f"unix:{sockdir}/ctl.sock")
+    addr = str(server.start_sync())
+    try:
+        deep = _raw(addr, b"[" * 100_000 + b"]" * 100_000)
+        assert deep["type"] == "BadRequest" and "nested deeper than 64" in deep["error"]
+        nested = {"id": 1, "op": "set", "device": "echo1", "name": "nvram.note", "value": {}}
+        node = nested["value"]
+        for _ in range(80):
+            node["x"] = {}
+            node = node["x"]
+        assert "nested deeper" in _raw(addr, json.dumps(nested).encode())["error"]
+        long_name = "n" * 900_000
+        answer = _raw(addr, json.dumps({"id": 2, "op": "read", "device": "echo1", "name": long_name}).encode())
+        assert answer["type"] == "UnknownName" and len(answer["error"]) < 400
+        answer = _raw(addr, json.dumps({"id": 3, "op": "read", "device": long_name, "name": "x"}).encode())
+        assert answer["type"] == "UnknownDevice" and len(answer["error"]) < 400
+        nan = _raw(addr, b'{"id": 4, "op": "set", "device": "echo1", "name": "value", "value": NaN}')
+        assert nan["type"] == "BadValue" and "finite" in nan["error"]
+    finally:
+        server.close_sync()
+
+
+def test_advance_is_bounded(sockdir: str) -> None:
+    rt = Runtime(virtual=True).start()
+    try:
+        with pytest.raises(ValueError, match="advance takes 0 … 1e\\+07 seconds"):
+            rt.advance(1e308)
+        assert rt.now() == 0.0  # the clock did not move (nor freeze)
+        server = ControlServer(rt, f"unix:{sockdir}/v.sock")
+        addr = str(server.start_sync())
+        try:
+            answer = _raw(addr, b'{"id": 1, "op": "advance", "seconds": NaN}')
+            assert answer["type"] == "BadRequest" and "finite" in answer["error"]
+            with ControlClient(addr) as client:
+                assert client.advance(2.5) == 2.5
+        finally:
+            server.close_sync()
+    finally:
+        rt.stop()

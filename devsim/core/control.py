@@ -60,7 +60,8 @@ __all__ = [
 
 Op = Literal["read", "set", "state", "power_cycle", "advance", "now", "devices", "line", "names", "fault"]
 
-MAX_LINE = 1 << 20
+MAX_LINE = 1 << 20  # bytes in one request line
+MAX_DEPTH = 64  # nesting of lists and objects in one request
 
 
 # -- messages ------------------------------------------------------------------------------
@@ -201,6 +202,25 @@ def _jsonable(value: Any) -> Any:
     return str(value)
 
 
+def _clip(text: str, limit: int = 300) -> str:
+    """Error texts never echo a huge request back."""
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _depth(value: Any) -> int:
+    """Nesting depth of parsed JSON, iteratively (no recursion on hostile input)."""
+    deepest = 0
+    stack = [(value, 1)]
+    while stack:
+        node, depth = stack.pop()
+        if isinstance(node, dict | list):
+            deepest = max(deepest, depth)
+            if depth > MAX_DEPTH:
+                return depth
+            stack.extend((child, depth + 1) for child in (node.values() if isinstance(node, dict) else node))
+    return deepest
+
+
 def _error_text(exc: BaseException) -> str:
     if isinstance(exc, KeyError) and len(exc.args) == 1 and isinstance(exc.args[0], str):
         return exc.args[0]  # KeyError's str() would add quotes
@@ -299,8 +319,12 @@ class ControlServer:
         """Answer one request line (runs in the loop thread)."""
         try:
             payload = json.loads(raw)
+        except RecursionError:
+            return ErrorResponse(error=f"request nested deeper than {MAX_DEPTH} levels", type="BadRequest")
         except ValueError as exc:
-            return ErrorResponse(error=f"not JSON: {exc}", type="BadRequest")
+            return ErrorResponse(error=f"not JSON: {_clip(str(exc))}", type="BadRequest")
+        if _depth(payload) > MAX_DEPTH:
+            return ErrorResponse(error=f"request nested deeper than {MAX_DEPTH} levels", type="BadRequest")
         req_id = payload.get("id") if isinstance(payload, dict) else None
         if not isinstance(req_id, int | str):
             req_id = None
@@ -309,11 +333,11 @@ class ControlServer:
         except ValidationError as exc:
             first = exc.errors()[0]
             where = ".".join(str(p) for p in first.get("loc", ())) or "request"
-            return ErrorResponse(id=req_id, error=f"{where}: {first.get('msg')}", type="BadRequest")
+            return ErrorResponse(id=req_id, error=_clip(f"{where}: {first.get('msg')}"), type="BadRequest")
         try:
             return OkResponse(id=request.id, result=self.execute(request))
         except Exception as exc:  # every failure becomes a typed error response
-            return ErrorResponse(id=request.id, error=_error_text(exc), type=type(exc).__name__)
+            return ErrorResponse(id=request.id, error=_clip(_error_text(exc)), type=type(exc).__name__)
 
     def execute(self, req: Request) -> Any:
         """Run one validated request against the runtime."""
@@ -334,8 +358,8 @@ class ControlServer:
         if op == "advance":
             if req.seconds is None:
                 raise BadRequest("advance needs 'seconds'")
-            if req.seconds < 0:
-                raise BadRequest("'seconds' must not be negative")
+            if not math.isfinite(req.seconds) or req.seconds < 0:
+                raise BadRequest("'seconds' must be a finite number, not negative")
             return rt.advance(req.seconds)
         device = _need(req.device, "device", op)
         if op == "state":

@@ -28,6 +28,10 @@ __all__ = ["Runtime", "UnknownDevice", "port_key"]
 T = TypeVar("T")
 
 
+#: The longest step of virtual time one ``advance`` may take (about 116 days).
+MAX_ADVANCE = 1e7
+
+
 class UnknownDevice(KeyError):
     def __str__(self) -> str:
         return str(self.args[0]) if self.args else "unknown device"
@@ -199,7 +203,8 @@ class Runtime:
         try:
             return self.devices[name]
         except KeyError:
-            raise UnknownDevice(f"no device named {name!r} (have: {', '.join(self.devices)})") from None
+            shown = name if len(name) <= 60 else name[:57] + "..."
+            raise UnknownDevice(f"no device named {shown!r} (have: {', '.join(self.devices)})") from None
 
     def read(self, device: str, name: str) -> Any:
         if name.startswith("line."):
@@ -244,10 +249,13 @@ class Runtime:
         return self.call(self.clock.now)
 
     def advance(self, seconds: float) -> float:
-        """Advance virtual time (refused on a real clock); returns the new time."""
+        """Advance virtual time (refused on a real clock) by at most :data:`MAX_ADVANCE`
+        seconds at a time; returns the new time."""
         clock = self.clock
         if not isinstance(clock, VirtualClock):
             raise RuntimeError("advance needs virtual time (the runtime runs on a real clock)")
+        if not 0 <= seconds <= MAX_ADVANCE:
+            raise ValueError(f"advance takes 0 … {MAX_ADVANCE:g} seconds at a time, not {seconds!r}")
 
         def go() -> float:
             clock.advance(seconds)
