@@ -141,7 +141,7 @@ class DeviceSpec(_Model):
 
 
 class BusSpec(_Model):
-    name: str
+    name: str = Field(pattern=r"^[A-Za-z_][A-Za-z0-9_-]*$")
     transport: TransportSpec = Field(default_factory=TransportSpec)
 
     @field_validator("transport")

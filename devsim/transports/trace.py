@@ -17,6 +17,7 @@ is flushed at once, so a trace survives a crash and can be followed with ``tail 
 
 from __future__ import annotations
 
+import errno
 import os
 from types import TracebackType
 
@@ -43,7 +44,13 @@ class Tracer:
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = os.fspath(path)
-        self._file = open(self.path, "w", encoding="ascii", newline="\n")
+        try:  # never truncate through a symlink someone put where the trace goes
+            fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
+        except OSError as exc:
+            if exc.errno == errno.ELOOP:
+                raise OSError(exc.errno, f"refusing to write a trace through the symlink {self.path}") from None
+            raise
+        self._file = open(fd, "w", encoding="ascii", newline="\n")
 
     @property
     def closed(self) -> bool:
