@@ -1,0 +1,46 @@
+"""The generated reference stays current: docs/devices/<kind>.md is `devsim doc KIND`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from devsim.cli import cli
+from devsim.core.registry import device_class
+from devsim.docgen import reference_markdown, shared_vocabulary_markdown
+
+ROOT = Path(__file__).resolve().parents[1]
+SHIPPED = ("sers", "gms96")
+
+
+@pytest.mark.parametrize("kind", SHIPPED)
+def test_generated_reference_is_current(kind: str) -> None:
+    path = ROOT / "docs" / "devices" / f"{kind}.md"
+    expected = reference_markdown(device_class(kind)) + "\n"
+    assert path.read_text(encoding="utf-8") == expected, (
+        f"{path} is stale: run `devsim doc {kind} > docs/devices/{kind}.md`"
+    )
+
+
+@pytest.mark.parametrize("kind", SHIPPED)
+def test_doc_command_prints_it(kind: str) -> None:
+    result = CliRunner().invoke(cli, ["doc", kind])
+    assert result.exit_code == 0
+    assert result.output == (ROOT / "docs" / "devices" / f"{kind}.md").read_text(encoding="utf-8")
+    for heading in ("## Serial ports", "## Control names", "## Faults", "## Commands", "## Parameters",
+                    "## Error codes", "## Configuration keys"):
+        assert heading in result.output
+
+
+def test_readme_shows_the_shared_vocabulary_and_links_the_reference() -> None:
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert "\n".join(shared_vocabulary_markdown()) in readme
+    for kind in SHIPPED:
+        assert f"(docs/devices/{kind}.md)" in readme
+
+
+def test_unknown_kind_is_one_line() -> None:
+    result = CliRunner().invoke(cli, ["doc", "nokind"])
+    assert result.exit_code == 2 and "unknown device kind 'nokind'" in result.output
