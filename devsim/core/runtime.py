@@ -22,6 +22,7 @@ from devsim.core.clock import Clock, RealClock, VirtualClock
 from devsim.core.device import Device, UnknownName
 from devsim.core.nvram import NonVolatileMemory
 from devsim.core.registry import device_class
+from devsim.transports.fdlimit import loop_exception_handler
 
 __all__ = ["Runtime", "UnknownDevice", "port_key"]
 
@@ -80,6 +81,7 @@ class Runtime:
         def main() -> None:
             loop = asyncio.new_event_loop()
             asyncio.set_event_loop(loop)
+            loop.set_exception_handler(loop_exception_handler)
             self._loop = loop
             loop.call_soon(ready.set)
             try:
@@ -109,6 +111,7 @@ class Runtime:
 
     async def __aenter__(self) -> Runtime:
         self._loop = asyncio.get_running_loop()
+        self._loop.set_exception_handler(loop_exception_handler)
         return self
 
     async def __aexit__(self, *exc: object) -> None:

@@ -16,6 +16,7 @@ from pathlib import Path
 import click
 
 from devsim.core.config import ConfigError, LineDict, load_yaml
+from devsim.transports import fdlimit
 
 __all__ = ["register"]
 
@@ -159,8 +160,16 @@ async def _up(
         Path(state_dir).mkdir(parents=True, exist_ok=True)
     if trace_dir is not None:
         Path(trace_dir).mkdir(parents=True, exist_ok=True)
+    limit = fdlimit.fd_limit()
+    print(f"devsim: the file descriptor limit {limit} allows about {fdlimit.capacity(limit)} ports",
+          file=sys.stderr, flush=True)
     async with Runtime(virtual=virtual, speed=speed, state_dir=state_dir) as runtime:
-        plant = await build_plant(runtime, spec, trace_dir=trace_dir)  # type: ignore[arg-type]
+        plant = await build_plant(runtime, spec, trace_dir=trace_dir, keep_going=True)  # type: ignore[arg-type]
+        if plant.refused:
+            causes = sorted(set(plant.refused.values()))
+            print(f"devsim: {len(plant.refused)} ports not opened ({'; '.join(causes)}; ulimit -n {limit}):"
+                  f" {', '.join(list(plant.refused)[:5])}{' ...' if len(plant.refused) > 5 else ''}",
+                  file=sys.stderr, flush=True)
         server = None
         if address is not None:
             server = ControlServer(runtime, address)  # type: ignore[arg-type]

@@ -16,6 +16,7 @@ from typing import Any
 from devsim.core.device import Device
 from devsim.core.runtime import Runtime, port_key
 from devsim.scenario.schema import PlantSpec, TransportSpec
+from devsim.transports.fdlimit import is_out_of_fds, port_budget
 
 __all__ = ["Plant", "build_plant", "make_transport", "plant_running", "start_plant"]
 
@@ -45,6 +46,7 @@ class Plant:
     transports: dict[str, Any] = field(default_factory=dict)  # port name -> transport
     lines: dict[str, Any] = field(default_factory=dict)  # port name -> Line
     kinds: dict[str, str] = field(default_factory=dict)  # port name -> "pty" | "tcp" | "rfc2217"
+    refused: dict[str, str] = field(default_factory=dict)  # port name -> why it is not served
 
     def port(self, name: str) -> str:
         """What a host opens for port ``name`` (a device or bus): pty path or URL."""
@@ -74,8 +76,13 @@ class Plant:
         return rows
 
 
-async def build_plant(runtime: Runtime, spec: PlantSpec, *, trace_dir: str | Path | None = None) -> Plant:
-    """Create the devices of ``spec`` in ``runtime`` (running in this loop) and serve them."""
+async def build_plant(
+    runtime: Runtime, spec: PlantSpec, *, trace_dir: str | Path | None = None, keep_going: bool = False
+) -> Plant:
+    """Create the devices of ``spec`` in ``runtime`` (running in this loop) and serve them.
+
+    With ``keep_going`` a port that cannot be opened because the process is out of file
+    descriptors is left out (listed in ``plant.refused``) and the others are served."""
     plant = Plant(runtime, spec)
     if trace_dir is not None:
         Path(trace_dir).mkdir(parents=True, exist_ok=True)
@@ -89,10 +96,21 @@ async def build_plant(runtime: Runtime, spec: PlantSpec, *, trace_dir: str | Pat
         members = [plant.devices[d.name] for d in spec.devices if d.transport_of("main").bus == bus.name]
         if members:
             groups[bus.name] = (bus.transport, members, "main")
+    budget = port_budget() if keep_going else len(groups)
     for name, (tspec, members, port) in groups.items():
+        if budget <= 0:
+            plant.refused[name] = "not enough file descriptors left"
+            continue
+        budget -= 1
         transport = make_transport(tspec)
         trace = Path(trace_dir) / f"{name}.trace" if trace_dir is not None else None
-        line = await runtime.serve(members, transport, port=port, trace=trace)
+        try:
+            line = await runtime.serve(members, transport, port=port, trace=trace)
+        except OSError as exc:
+            if not (keep_going and is_out_of_fds(exc)):
+                raise
+            plant.refused[name] = exc.strerror or str(exc)
+            continue
         plant.transports[name] = transport
         plant.lines[name] = line
         plant.kinds[name] = tspec.kind

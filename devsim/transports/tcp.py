@@ -13,6 +13,11 @@ in order.  A waiting client that gives up is noticed only when its turn comes.
 When the serving client disconnects, the endpoint gets ``host_disconnected()``.  Output that a
 client does not read piles up in the socket; beyond ``max_buffer`` bytes further output is
 dropped, as on a line nobody listens to.  The server binds to loopback unless told otherwise.
+
+**Out of descriptors.**  When the process cannot accept another connection (``ulimit -n``), the
+waiting connection is accepted with a reserve descriptor and closed at once, and the cause is
+reported once per ten seconds (:mod:`devsim.transports.fdlimit`); the ports and hosts already
+served go on.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ import contextlib
 import socket
 from collections import deque
 
+from devsim.transports import fdlimit
 from devsim.transports.base import Endpoint, Transport
 
 __all__ = ["TcpTransport"]
@@ -76,7 +82,9 @@ class TcpTransport(Transport):
         self.address = ""
         #: Bytes dropped because the client did not read them.
         self.dropped = 0
-        self._server: asyncio.Server | None = None
+        self._server: socket.socket | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._paused: asyncio.TimerHandle | None = None
         self._endpoint: Endpoint | None = None
         self._active: _Session | None = None
         self._waiting: deque[_Session] = deque()
@@ -100,17 +108,67 @@ class TcpTransport(Transport):
         if self._server is not None:
             raise RuntimeError("transport already started")
         loop = asyncio.get_running_loop()
+        family = socket.AF_INET6 if ":" in self.host else socket.AF_INET
+        listener = socket.create_server((self.host, self.port), family=family, backlog=16, reuse_port=False)
+        listener.setblocking(False)
+        self._loop = loop
         self._endpoint = endpoint
-        server = await loop.create_server(lambda: _Session(self), self.host, self.port)
-        self._server = server
-        self.port = server.sockets[0].getsockname()[1]
+        self._server = listener
+        self.port = listener.getsockname()[1]
         host = f"[{self.host}]" if ":" in self.host else self.host
         self.address = f"{host}:{self.port}"
+        fdlimit.keep_reserve()
+        loop.add_reader(listener.fileno(), self._accept)
+
+    def _accept(self) -> None:
+        listener, loop = self._server, self._loop
+        if listener is None or loop is None:
+            return
+        for _ in range(16):  # a bounded share of one loop turn
+            try:
+                conn, _addr = listener.accept()
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:
+                if not fdlimit.is_out_of_fds(exc):
+                    fdlimit.report(f"accept {self.address}", f"{self.address}: accept failed: {exc}")
+                    return
+                refused = fdlimit.shed(listener)
+                fdlimit.report(
+                    "accept",
+                    f"out of file descriptors (limit {fdlimit.fd_limit()}): refusing connections"
+                    f" on {self.address} and other ports",
+                )
+                if not refused:  # no reserve left: look again in a moment instead of spinning
+                    self._pause(loop, listener)
+                return
+            conn.setblocking(False)
+            loop.create_task(self._adopt(loop, conn))
+
+    async def _adopt(self, loop: asyncio.AbstractEventLoop, conn: socket.socket) -> None:
+        try:
+            await loop.connect_accepted_socket(lambda: _Session(self), conn)
+        except OSError:
+            conn.close()
+
+    def _pause(self, loop: asyncio.AbstractEventLoop, listener: socket.socket) -> None:
+        loop.remove_reader(listener.fileno())
+
+        def resume() -> None:
+            self._paused = None
+            if self._server is listener:
+                loop.add_reader(listener.fileno(), self._accept)
+
+        self._paused = loop.call_later(0.5, resume)
 
     async def close(self) -> None:
         server, self._server = self._server, None
         if server is None:
             return
+        if self._paused is not None:
+            self._paused.cancel()
+        if self._loop is not None:
+            self._loop.remove_reader(server.fileno())
         server.close()
         sessions = ([self._active] if self._active else []) + list(self._waiting)
         self._waiting.clear()
@@ -120,8 +178,6 @@ class TcpTransport(Transport):
         if self._active is not None:  # abort() reports connection_lost on the next loop turn
             self._deactivate(self._active)
         self._endpoint = None
-        with contextlib.suppress(Exception):
-            await asyncio.wait_for(server.wait_closed(), 1.0)
 
     # -- sessions ---------------------------------------------------------------------------
     def _connected(self, session: _Session) -> None:
