@@ -5,8 +5,8 @@ Each test runs devsim in a child process with a low ``ulimit -n`` (RLIMIT_NOFILE
 from __future__ import annotations
 
 import os
-import select
 import resource
+import select
 import socket
 import subprocess
 import sys
