@@ -113,8 +113,16 @@ def scenario_run(
 @click.option("--control", metavar="ADDR", help="Serve the control API on unix:/path.sock or [HOST:]PORT.")
 @click.option("--trace-dir", metavar="DIR", help="Write a trace of every port's traffic here.")
 @click.option("--virtual", is_flag=True, help="Virtual time: it moves only through 'devsim ctl advance'.")
+@click.option("--workers", type=click.IntRange(1, 64), default=1, show_default=True, metavar="N",
+              help="Spread the plant's devices over N processes (real or sped-up time).")
 def up(
-    plant_file: str, state_dir: str | None, speed: float, control: str | None, trace_dir: str | None, virtual: bool
+    plant_file: str,
+    state_dir: str | None,
+    speed: float,
+    control: str | None,
+    trace_dir: str | None,
+    virtual: bool,
+    workers: int,
 ) -> None:
     """Start every device of PLANT_FILE, print every port and NAME: ready when a device has
     booted, serve until Ctrl-C."""
@@ -137,6 +145,19 @@ def up(
             raise click.UsageError(f"--control: {exc}") from None
         if not address.is_loopback():
             raise click.UsageError(f"--control: refusing non-loopback host {address.host!r}")
+    if workers > 1 and virtual:
+        click.echo("devsim: under virtual time a plant stays in one process (--workers ignored)", err=True)
+        workers = 1
+    if workers > 1:
+        from devsim.scenario.workers import run_workers
+
+        try:
+            status = asyncio.run(
+                run_workers(spec, workers, control=address, state_dir=state_dir, speed=speed, trace_dir=trace_dir)
+            )
+        except KeyboardInterrupt:
+            sys.exit(130)
+        sys.exit(status)
     try:
         asyncio.run(_up(spec, state_dir, speed, address, trace_dir, virtual))
     except KeyboardInterrupt:

@@ -1,0 +1,230 @@
+"""``devsim up --workers N``: one plant spread over N processes, behind one control address.
+
+A Python process serves its devices on one core.  With ``--workers N`` the plant's ports are
+dealt out to N worker processes (each a plain ``devsim up`` of its share of the plant, a bus
+staying whole with its devices), and this process
+
+* prints what the workers print (every port, ``NAME: ready``), unchanged;
+* serves the control API on the address given with ``--control`` and hands each request to the
+  worker that holds the device (``devices`` gathers them from all, with a ``worker`` number);
+* stops the workers on Ctrl-C / SIGTERM, and stops the others if one dies.
+
+Traces (``--trace-dir``), state (``--state-dir``) and faults work as in one process: the names
+are distinct, each device's memory is locked by its own worker.  Under virtual time a plant
+stays in one process (one clock must order every event), and ``devsim up`` says so.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import os
+import signal
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from devsim.scenario.schema import PlantSpec
+
+__all__ = ["run_workers", "split_plant"]
+
+
+def split_plant(spec: PlantSpec, workers: int) -> list[dict[str, Any]]:
+    """The plant dealt into at most ``workers`` sub-plants (plain data, loadable as YAML): each
+    bus with its devices is one unit, each other device one unit, dealt round-robin."""
+    units: list[tuple[list[Any], list[Any]]] = []
+    by_bus: dict[str, tuple[list[Any], list[Any]]] = {}
+    for bus in spec.buses:
+        by_bus[bus.name] = ([], [bus])
+        units.append(by_bus[bus.name])
+    for device in spec.devices:
+        bus = device.transport_of("main").bus
+        if bus is not None and bus in by_bus:
+            by_bus[bus][0].append(device)
+        else:
+            units.append(([device], []))
+    shares: list[dict[str, Any]] = [{"devices": [], "buses": []} for _ in range(max(1, min(workers, len(units))))]
+    for index, (devices, buses) in enumerate(units):
+        share = shares[index % len(shares)]
+        share["devices"] += [d.model_dump(mode="json", exclude_defaults=True) for d in devices]
+        share["buses"] += [b.model_dump(mode="json", exclude_defaults=True) for b in buses]
+    for number, share in enumerate(shares):
+        share["name"] = f"{spec.name or 'plant'} (worker {number})"
+    return [s for s in shares if s["devices"]]
+
+
+class _Worker:
+    def __init__(self, number: int, proc: asyncio.subprocess.Process, control: str) -> None:
+        self.number = number
+        self.proc = proc
+        self.control = control
+        self.devices: set[str] = set()
+        self._reader: asyncio.StreamReader | None = None
+        self._writer: asyncio.StreamWriter | None = None
+        self._lock = asyncio.Lock()
+
+    async def ask(self, request: dict[str, Any]) -> dict[str, Any]:
+        async with self._lock:
+            if self._writer is None:
+                self._reader, self._writer = await asyncio.open_unix_connection(self.control)
+            assert self._reader is not None
+            self._writer.write((json.dumps(request) + "\n").encode())
+            await self._writer.drain()
+            line = await self._reader.readline()
+            if not line:
+                raise ConnectionError(f"worker {self.number} closed its control connection")
+            answer: dict[str, Any] = json.loads(line)
+            return answer
+
+    async def close(self) -> None:
+        if self._writer is not None:
+            self._writer.close()
+            with contextlib.suppress(Exception):
+                await self._writer.wait_closed()
+
+
+async def _forward(stream: asyncio.StreamReader | None, control_seen: asyncio.Event, out: Any) -> None:
+    if stream is None:
+        return
+    while True:
+        line = await stream.readline()
+        if not line:
+            return
+        text = line.decode(errors="replace")
+        if text.startswith("control: "):
+            control_seen.set()  # the worker's own control address is ours to hide
+            continue
+        out.write(text)
+        out.flush()
+
+
+async def _proxy(workers: list[_Worker], reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+    try:
+        while line := await reader.readline():
+            if not line.strip():
+                continue
+            try:
+                request = json.loads(line)
+                if not isinstance(request, dict):
+                    raise ValueError("a request is a JSON object")
+            except (ValueError, RecursionError) as exc:
+                answer: dict[str, Any] = {"id": None, "ok": False, "error": f"not JSON: {exc}"[:300], "type": "BadRequest"}
+            else:
+                answer = await _route(workers, request)
+            writer.write((json.dumps(answer) + "\n").encode())
+            await writer.drain()
+    except (ConnectionError, asyncio.CancelledError):
+        pass
+    finally:
+        with contextlib.suppress(Exception):
+            writer.close()
+
+
+async def _route(workers: list[_Worker], request: dict[str, Any]) -> dict[str, Any]:
+    op = request.get("op")
+    if op == "devices":
+        rows: list[Any] = []
+        for worker in workers:
+            answer = await worker.ask(request)
+            if not answer.get("ok"):
+                return answer
+            rows += [{**row, "worker": worker.number} for row in answer["result"]]
+        return {"id": request.get("id"), "ok": True, "result": rows}
+    device = request.get("device")
+    if device is None:
+        return await workers[0].ask(request)  # now, advance: every worker has the same time
+    for worker in workers:
+        if device in worker.devices:
+            return await worker.ask(request)
+    known = sorted(name for worker in workers for name in worker.devices)
+    return {
+        "id": request.get("id"),
+        "ok": False,
+        "error": f"no device named {str(device)[:60]!r} (have: {', '.join(known)})",
+        "type": "UnknownDevice",
+    }
+
+
+async def run_workers(
+    spec: PlantSpec,
+    workers: int,
+    *,
+    control: Any = None,
+    state_dir: str | None = None,
+    speed: float = 1.0,
+    trace_dir: str | None = None,
+) -> int:
+    """Serve ``spec`` from ``workers`` processes until Ctrl-C / SIGTERM; returns an exit status."""
+    loop = asyncio.get_running_loop()
+    stop = asyncio.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(signum, stop.set)
+    shares = split_plant(spec, workers)
+    with tempfile.TemporaryDirectory(prefix="devsim-workers-") as tmp:
+        running: list[_Worker] = []
+        try:
+            for number, share in enumerate(shares):
+                plant_file = Path(tmp) / f"worker{number}.yaml"
+                plant_file.write_text(json.dumps(share))
+                sock = str(Path(tmp) / f"w{number}.sock")
+                args = [sys.executable, "-m", "devsim", "up", str(plant_file), "--control", f"unix:{sock}",
+                        "--speed", repr(speed)]
+                if state_dir is not None:
+                    args += ["--state-dir", state_dir]
+                if trace_dir is not None:
+                    args += ["--trace-dir", trace_dir]
+                proc = await asyncio.create_subprocess_exec(
+                    *args, stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE, env=dict(os.environ)
+                )
+                worker = _Worker(number, proc, sock)
+                worker.devices = {d["name"] for d in share["devices"]}
+                running.append(worker)
+            seen = [asyncio.Event() for _ in running]
+            pumps = [asyncio.ensure_future(_forward(w.proc.stdout, seen[i], sys.stdout)) for i, w in enumerate(running)]
+            ended = [asyncio.ensure_future(w.proc.wait()) for w in running]
+            waiting = [asyncio.ensure_future(e.wait()) for e in seen]
+            done, _ = await asyncio.wait([*ended, asyncio.ensure_future(asyncio.gather(*waiting))],
+                                         return_when=asyncio.FIRST_COMPLETED)
+            if any(task in done for task in ended):
+                print("devsim: a worker ended while starting", file=sys.stderr, flush=True)
+                return 1
+            server = None
+            if control is not None:
+                if control.path is not None:
+                    server = await asyncio.start_unix_server(lambda r, w: _proxy(running, r, w), path=control.path)
+                    os.chmod(control.path, 0o600)
+                    shown = f"unix:{control.path}"
+                else:
+                    server = await asyncio.start_server(lambda r, w: _proxy(running, r, w), control.host, control.port)
+                    shown = f"{control.host}:{server.sockets[0].getsockname()[1]}"
+                print(f"control: {shown}", flush=True)
+            print(f"devsim: plant up in {len(running)} worker processes ({len(spec.devices)} devices); Ctrl-C to stop",
+                  file=sys.stderr, flush=True)
+            stopping = asyncio.ensure_future(stop.wait())
+            done, _ = await asyncio.wait([stopping, *ended], return_when=asyncio.FIRST_COMPLETED)
+            status = 0 if stopping in done else 1
+            if status:
+                print("devsim: a worker ended; stopping the others", file=sys.stderr, flush=True)
+            if server is not None:
+                server.close()
+                if control.path is not None:
+                    with contextlib.suppress(OSError):
+                        os.unlink(control.path)
+            for pump in pumps:
+                pump.cancel()
+            return status
+        finally:
+            for worker in running:
+                await worker.close()
+                if worker.proc.returncode is None:
+                    worker.proc.send_signal(signal.SIGTERM)
+            for worker in running:
+                with contextlib.suppress(Exception):
+                    await asyncio.wait_for(worker.proc.wait(), 10)
+                if worker.proc.returncode is None:
+                    worker.proc.kill()
+                    await worker.proc.wait()
+            for signum in (signal.SIGINT, signal.SIGTERM):
+                loop.remove_signal_handler(signum)
