@@ -8,15 +8,12 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from devsim.core.device import Device, UnknownName
+from devsim.core.device import Device, Face
 
 
-class StubDevice(Device):
-    kind: ClassVar[str] = "stub"
-    description: ClassVar[str] = "benchmark stand-in"
-
-    def __init__(self, **kwargs: Any) -> None:
-        super().__init__(**kwargs)
+class StubFace(Face):
+    def __init__(self, model: Any, port: Any) -> None:
+        super().__init__(model, port)
         self._buf = bytearray()
 
     def feed(self, data: bytes) -> None:
@@ -27,11 +24,8 @@ class StubDevice(Device):
             self._buf = bytearray(rest)
             self.send(b"\n0\nok1\n\r")
 
-    def read(self, name: str) -> Any:
-        raise UnknownName(name)
 
-    def set(self, name: str, value: Any) -> None:
-        raise UnknownName(name)
-
-    def state(self) -> dict[str, Any]:
-        return {}
+class StubDevice(Device):
+    kind: ClassVar[str] = "stub"
+    description: ClassVar[str] = "benchmark stand-in"
+    face_classes: ClassVar[dict[str, Any]] = {"main": StubFace}

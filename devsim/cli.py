@@ -24,23 +24,18 @@ import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import click
-from pydantic import BaseModel, ValidationError
 
 from devsim import __version__
-from devsim.core.config import ConfigError, load_yaml, plain, validate
-from devsim.core.control import (
-    ControlAddress,
-    ControlAddressError,
-    ControlClient,
-    ControlError,
-    parse_address,
-)
-from devsim.core.device import Device
 from devsim.core.registry import UnknownKind, device_class, kinds
-from devsim.core.runtime import port_key
+
+if TYPE_CHECKING:  # imported where used: `devsim run` starts faster without them
+    from pydantic import BaseModel
+
+    from devsim.core.control import ControlAddress
+    from devsim.core.device import Device
 
 __all__ = ["cli", "main"]
 
@@ -53,7 +48,16 @@ class ConfigUsageError(click.ClickException):
 
 
 class _Cli(click.Group):
-    """A group that reports every usage error as a single line (no usage block, no traceback)."""
+    """A group that reports every usage error as a single line (no usage block, no traceback),
+    and imports the scenario commands only when one of them runs."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted([*super().list_commands(ctx), *_SCENARIO_COMMANDS])
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        if cmd_name in _SCENARIO_COMMANDS:
+            return _scenario_command(cmd_name)
+        return super().get_command(ctx, cmd_name)
 
     def main(  # type: ignore[override]
         self,
@@ -192,21 +196,25 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
 ]:
     """Validate the configuration file and the drive addresses; name the devices."""
     model: type[BaseModel] | None = getattr(cls, "config_model", None)
-    data: Any = None
-    try:
-        if config_file is not None:
+    base: dict[str, Any] = {}
+    if config_file is not None:  # YAML and the line-numbered checks only when there is a file
+        from devsim.core.config import ConfigError, load_yaml, plain, validate
+
+        try:
             data = load_yaml(config_file)
             if model is not None:
                 validate(data, model, config_file)
             elif data is not None and not isinstance(data, dict):
                 raise ConfigError(f"{config_file}:1: expected a mapping at the top level")
-    except ConfigError as exc:
-        raise ConfigUsageError(str(exc)) from None
-    base: dict[str, Any] = plain(data) if isinstance(data, dict) else {}
+        except ConfigError as exc:
+            raise ConfigUsageError(str(exc)) from None
+        base = plain(data) if isinstance(data, dict) else {}
 
     def finish(raw: dict[str, Any], source: str) -> dict[str, Any]:
         if model is None:
             return raw
+        from pydantic import ValidationError
+
         try:
             return model.model_validate(raw).model_dump()
         except ValidationError as exc:
@@ -291,6 +299,8 @@ def run(
 
     control_addr: ControlAddress | None = None
     if control is not None:
+        from devsim.core.control import ControlAddressError, parse_address
+
         try:
             control_addr = parse_address(control)
         except ControlAddressError as exc:
@@ -343,8 +353,10 @@ def _say(line: str) -> None:
 
 
 async def _serve(plan: _Plan) -> None:
-    from devsim.core.control import ControlServer
-    from devsim.core.runtime import Runtime
+    from devsim.core.runtime import Runtime, port_key
+
+    if plan.control is not None:
+        from devsim.core.control import ControlServer
 
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
@@ -354,7 +366,7 @@ async def _serve(plan: _Plan) -> None:
     runtime = Runtime(virtual=plan.virtual, speed=plan.speed, state_dir=plan.state_dir)
     async with runtime:
         stage = "create the devices"
-        server: ControlServer | None = None
+        server: Any = None
         try:
             if plan.state_dir is not None:
                 Path(plan.state_dir).mkdir(parents=True, exist_ok=True)
@@ -433,6 +445,8 @@ def _emit(result: Any) -> None:
 
 
 def _call(ctx: click.Context, method: str, *args: Any, **kwargs: Any) -> None:
+    from devsim.core.control import ControlAddressError, ControlClient, ControlError
+
     addr: str = ctx.obj
     try:
         client = ControlClient(addr)
@@ -547,10 +561,12 @@ def ctl_fault(ctx: click.Context, device: str, kind: str, switch: str) -> None:
     _call(ctx, "fault", device, kind, switch == "on")
 
 
-def _register_scenario_commands() -> None:
-    from devsim.scenario.cli import register
-
-    register(cli)
+_SCENARIO_COMMANDS = ("check", "scenario", "up")
 
 
-_register_scenario_commands()
+def _scenario_command(name: str) -> click.Command:
+    """``check``, ``scenario`` and ``up`` live in :mod:`devsim.scenario.cli`, imported when used."""
+    from devsim.scenario import cli as scenario_cli
+
+    command: click.Command = getattr(scenario_cli, name)
+    return command

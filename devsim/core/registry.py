@@ -14,7 +14,6 @@ Without installing anything, the environment variable ``DEVSIM_EXTRA_KINDS`` add
 from __future__ import annotations
 
 import os
-from importlib.metadata import entry_points
 
 from devsim.core.device import Device
 
@@ -35,15 +34,28 @@ class UnknownKind(LookupError):
     pass
 
 
-def _targets() -> dict[str, str]:
-    found = dict(_BUILTIN)
-    for ep in entry_points(group=GROUP):
-        found[ep.name] = ep.value
+def _extra() -> dict[str, str]:
+    found = {}
     for item in os.environ.get(ENV_EXTRA_KINDS, "").replace(";", ",").split(","):
         kind, sep, target = item.strip().partition("=")
         if sep and kind.strip() and ":" in target:
             found[kind.strip()] = target.strip()
     return found
+
+
+def _targets() -> dict[str, str]:
+    from importlib.metadata import entry_points  # scanning installed packages takes a while
+
+    found = dict(_BUILTIN)
+    for ep in entry_points(group=GROUP):
+        found[ep.name] = ep.value
+    found.update(_extra())
+    return found
+
+
+def _target(kind: str) -> str | None:
+    """A shipped or ``DEVSIM_EXTRA_KINDS`` kind without scanning the installed packages."""
+    return _extra().get(kind) or _BUILTIN.get(kind) or _targets().get(kind)
 
 
 def kinds() -> dict[str, str]:
@@ -52,7 +64,7 @@ def kinds() -> dict[str, str]:
 
 
 def device_class(kind: str) -> type[Device]:
-    target = _targets().get(kind)
+    target = _target(kind)
     if target is None:
         raise UnknownKind(f"unknown device kind {kind!r} (known: {', '.join(kinds())})")
     module_name, _, attr = target.partition(":")

@@ -11,7 +11,6 @@ form (``--control``) is a JSON front end to the same methods (:mod:`devsim.core.
 from __future__ import annotations
 
 import asyncio
-import concurrent.futures
 import threading
 from collections.abc import Callable, Coroutine, Mapping, Sequence
 from pathlib import Path
@@ -141,6 +140,8 @@ class Runtime:
         """Run ``fn`` in the loop thread and return its result (directly if already there)."""
         if self._in_loop_thread():
             return fn(*args, **kwargs)
+        import concurrent.futures
+
         fut: concurrent.futures.Future[T] = concurrent.futures.Future()
 
         def invoke() -> None:

@@ -1,0 +1,74 @@
+"""Start-up time: from launching ``devsim run KIND --pty`` to a port a host can use.
+
+Each run starts ``python -m devsim run KIND --pty`` and stops the clock at the line that prints
+the port (the pty exists and is served from then on); the reference is the interpreter's own
+floor, ``python -c pass``, measured alternately in the same run so both see the same machine.
+
+Target: < 120 ms for ``sers``.
+
+    python benchmarks/startup.py [--kind sers] [--runs 20]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import statistics
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (ROOT, env.get("PYTHONPATH", "")) if p)
+    env["DEVSIM_EXTRA_KINDS"] = "stub=benchmarks.stub:StubDevice"
+    return env
+
+
+def time_to_port(kind: str, env: dict[str, str]) -> float:
+    start = time.perf_counter()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "devsim", "run", kind, "--pty"],
+        cwd=ROOT, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+    )
+    assert proc.stdout is not None
+    line = proc.stdout.readline()
+    elapsed = time.perf_counter() - start
+    proc.send_signal(signal.SIGTERM)
+    proc.wait(timeout=20)
+    if ": pty /dev/" not in line:
+        raise SystemExit(f"unexpected first line {line!r}")
+    return elapsed
+
+
+def time_floor(env: dict[str, str]) -> float:
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-c", "pass"], env=env, check=True)
+    return time.perf_counter() - start
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--kind", default="sers")
+    parser.add_argument("--runs", type=int, default=20)
+    args = parser.parse_args(argv)
+    env = _env()
+    time_to_port(args.kind, env)  # warm the file cache
+    devsim, floor = [], []
+    for _ in range(args.runs):
+        devsim.append(time_to_port(args.kind, env))
+        floor.append(time_floor(env))
+    med, flo = statistics.median(devsim), statistics.median(floor)
+    print(f"devsim run {args.kind} --pty to a usable port: median {med * 1e3:.0f} ms "
+          f"(min {min(devsim) * 1e3:.0f}, max {max(devsim) * 1e3:.0f}) over {args.runs} runs")
+    print(f"interpreter floor (python -c pass): median {flo * 1e3:.0f} ms")
+    print(f"above the floor: {(med - flo) * 1e3:.0f} ms; target < 120 ms in all: {'met' if med < 0.120 else 'missed'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
