@@ -101,6 +101,7 @@ class Port:
         self.name = spec.name
         self.face: Face | None = None
         self._write: ByteSink | None = None
+        self._batch: bytearray | None = None
         #: True when other devices share the line (RS-485 multidrop); set by the bus.
         self.shared_line = False
 
@@ -115,12 +116,28 @@ class Port:
     def send(self, data: bytes) -> None:
         """Emit bytes towards the host (dropped when nothing is attached, like a dead line, and
         on a receive-only port)."""
-        if data and self._write is not None and not self.spec.receive_only:
+        if not data or self.spec.receive_only:
+            return
+        if self._batch is not None:
+            self._batch += data
+        elif self._write is not None:
             self._write(data)
 
     def feed(self, data: bytes) -> None:
-        if self.face is not None:
+        """Bytes from the host to the face.  What the face answers while it digests them leaves
+        in one write (same bytes, same order, one syscall: what a UART's transmit FIFO does)."""
+        if self.face is None:
+            return
+        if self._batch is not None:  # re-entered (a bus handing on): the outer call flushes
             self.face.feed(data)
+            return
+        self._batch = bytearray()
+        try:
+            self.face.feed(data)
+        finally:
+            batch, self._batch = self._batch, None
+            if batch and self._write is not None:
+                self._write(bytes(batch))
 
     def host_disconnected(self) -> None:
         if self.face is not None:
