@@ -30,7 +30,10 @@ from collections import deque
 from devsim.transports import fdlimit
 from devsim.transports.base import Endpoint, Transport
 
-__all__ = ["TcpTransport"]
+__all__ = ["SLICE", "TcpTransport"]
+
+#: Most host bytes handed to a device in one loop turn (the rest waits for the next turns).
+SLICE = 16 * 1024
 
 
 class _Session(asyncio.Protocol):
@@ -41,6 +44,7 @@ class _Session(asyncio.Protocol):
         self.transport: asyncio.Transport | None = None
         self.closed = False
         self.state: object = None  # per-client protocol state of subclasses (RFC 2217)
+        self.backlog: deque[memoryview] = deque()  # host input not yet handed to the device
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         assert isinstance(transport, asyncio.Transport)
@@ -215,8 +219,39 @@ class TcpTransport(Transport):
             endpoint.host_disconnected()
 
     def _received(self, session: _Session, data: bytes) -> None:
-        if self._active is session and self._endpoint is not None:
+        if self._active is not session or self._endpoint is None:
+            return
+        if session.backlog or len(data) > SLICE:
+            self._queue_input(session, data)
+        else:
             self._session_data(session, data, self._endpoint)
+
+    def _queue_input(self, session: _Session, data: bytes) -> None:
+        """A big chunk (noise, a flood) goes to the device :data:`SLICE` bytes per loop turn,
+        with reading paused meanwhile, so the other ports of the process are served between."""
+        first = not session.backlog
+        session.backlog.append(memoryview(data))
+        if session.transport is not None:
+            session.transport.pause_reading()
+        if first and self._loop is not None:
+            self._loop.call_soon(self._drain, session)
+
+    def _drain(self, session: _Session) -> None:
+        if self._active is not session or self._endpoint is None or session.closed:
+            session.backlog.clear()
+            return
+        head = session.backlog[0]
+        piece, rest = head[:SLICE], head[SLICE:]
+        if len(rest):
+            session.backlog[0] = rest
+        else:
+            session.backlog.popleft()
+        self._session_data(session, bytes(piece), self._endpoint)
+        if session.backlog:
+            assert self._loop is not None
+            self._loop.call_soon(self._drain, session)
+        elif session.transport is not None and not session.transport.is_closing():
+            session.transport.resume_reading()
 
     def _lost(self, session: _Session) -> None:
         if self._active is session:

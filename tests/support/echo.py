@@ -52,6 +52,7 @@ class EchoModel(Model):
         declare_signals(self.signals, SIGNALS)
         self.value: float = 0
         self.received = 0
+        self.largest = 0  # the biggest chunk of host bytes handed over at once
         self.fired = False
         self._timer: Timer | None = None
         self.boots = 1
@@ -87,6 +88,7 @@ class EchoFace(Face):
 
     def feed(self, data: bytes) -> None:
         self.model.received += len(data)
+        self.model.largest = max(self.model.largest, len(data))
         if not self.model.signals.get("mute"):
             self.send(data)
 
@@ -98,6 +100,7 @@ POINTS = PointTable.of(
     [
         Point("value", "float", "a free number", get=lambda m: m.value, put=lambda m, v: setattr(m, "value", v)),
         Point("received", "int", "bytes received since power-on", get=lambda m: m.received, in_state=True),
+        Point("largest", "int", "the biggest chunk of host bytes fed at once", get=lambda m: m.largest),
         Point("fired", "bool", "the timer has fired", get=lambda m: m.fired, in_state=True),
         Point("timer", "float", "start the timer (seconds)", unit="s", put=lambda m, v: m.start_timer(v), minimum=0),
         Point("now", "float", "the device clock", unit="s", get=lambda m: m.clock.now()),

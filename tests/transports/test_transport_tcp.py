@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import asyncio
 
+import pytest
+
 from devsim.transports.tcp import TcpTransport
 from tests.transports.transport_helpers import Recorder
 
@@ -98,3 +100,38 @@ async def test_close_disconnects_the_host(echo: Recorder) -> None:
     assert echo.disconnects == 1
     assert await asyncio.wait_for(reader.read(), 3) == b""
     writer.close()
+
+
+def test_a_flood_on_one_port_does_not_stall_another(monkeypatch: pytest.MonkeyPatch) -> None:
+    import socket
+    import threading
+
+    from devsim.core.runtime import Runtime
+    from devsim.transports.tcp import SLICE, TcpTransport
+
+    monkeypatch.setenv("DEVSIM_EXTRA_KINDS", "echo=tests.support.echo:EchoDevice")
+    flood = 8 * 1024 * 1024
+    rt = Runtime(virtual=True).start()
+    try:
+        noisy, quiet = rt.add_device("echo", "noisy"), rt.add_device("echo", "quiet")
+        rt.set("noisy", "input.mute", True)
+        ports = [TcpTransport(), TcpTransport()]
+        rt.serve_sync(noisy, ports[0])
+        rt.serve_sync(quiet, ports[1])
+        a = socket.create_connection(("127.0.0.1", ports[0].port), timeout=30)
+        b = socket.create_connection(("127.0.0.1", ports[1].port), timeout=30)
+        sender = threading.Thread(target=a.sendall, args=(bytes(flood),), daemon=True)
+        sender.start()
+        while rt.read("noisy", "received") == 0:  # the flood has begun arriving
+            pass
+        b.sendall(b"?")
+        assert b.recv(1) == b"?"  # answered ...
+        assert rt.read("noisy", "received") < flood  # ... while the flood is still being swallowed
+        sender.join(60)
+        while rt.read("noisy", "received") < flood:
+            pass  # and all of it arrives in the end
+        assert rt.read("noisy", "largest") <= SLICE  # never more than a slice per loop turn
+        a.close()
+        b.close()
+    finally:
+        rt.stop()
