@@ -61,7 +61,7 @@ def test_limit_switch_trips_mid_move(devsim_device):
 
     with pytest.raises(DriveError, match="P11=8192"):  # "Fehler Lagegrenzwert"
         home_and_move(drive.port, 3600, wait)
-    assert drive.run_until(lambda device: device.read("motion") is None, timeout=5)  # braked
+    assert drive.run_until(lambda device: not device.read("motion"), timeout=5)  # braked
     assert drive.read("display") == {"char": "c", "blinking": False}
     with serial.Serial(drive.port, 9600, timeout=2) as port:
         with pytest.raises(DriveError, match="Endschalter offen"):

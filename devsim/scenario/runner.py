@@ -229,7 +229,9 @@ class Runner:
             await self.clock.sleep(remaining)
 
     def _moving(self) -> bool:
-        return any(getattr(getattr(d, "axis", None), "moving", False) for d in self.plant.devices.values())
+        """Whether any device moves (the shared ``motion`` name): conditions are then looked at
+        every ``_POLL`` seconds, since positions change between events."""
+        return any("motion" in d.points and d.read("motion") for d in self.plant.devices.values())
 
     # -- ports -----------------------------------------------------------------------------------
     def _port(self, name: str | None) -> str:

@@ -93,7 +93,7 @@ def test_config_set_advance_run_until(devsim_device) -> None:
     assert drive.advance(0.25) == pytest.approx(start + 0.25)
     assert drive.run_until(lambda device: device.read("P11") == 8192, 30)
     assert drive.read("axis.position") == pytest.approx(64000)
-    assert drive.run_until(lambda device: device.read("motion") is None, 10)
+    assert drive.run_until(lambda device: device.read("motion.kind") is None, 10)
     assert ask(port, b"#E\r") == b"#E\r\n*Endschalter offen\n\r"
     assert drive.run_until(lambda device: False, 0.5) is False
     drive.set("input.limit_right", False)
@@ -212,7 +212,7 @@ def test_plant_from_a_file_next_to_the_test(devsim_plant) -> None:
     assert plant.read("x", "axis.position") == pytest.approx(1280)
     plant.set("y2", "input.I1", True)
     assert plant.read("y2", "input.I1") is True
-    assert plant.state("y2")["inputs"]["I1"] is True
+    assert plant.state("y2")["input"]["I1"] is True
     with serial.Serial(plant.port("line"), 9600, timeout=2) as port:
         assert ask(port, b"#2 ON\r") == b"\nok1\n\r"  # P1017=2: no echo, ok at the line end
     assert plant.read("y2", "energized") is True and plant.read("y1", "energized") is False

@@ -76,7 +76,7 @@ def test_at_after_and_wait_move_simulated_time() -> None:
 def test_when_trigger_and_its_timeout() -> None:
     result = run([
         {"send": "#1 ON V=1000 W=2500 E\r"},
-        {"when": {"device": "x", "name": "motion", "equals": None}, "timeout": "5s"},
+        {"when": {"device": "x", "name": "motion.kind", "equals": None}, "timeout": "5s"},
         {"expect_state": {"device": "x", "name": "param.P51", "approx": 2500, "tolerance": 0.01}},
         {"expect_timing": {"device": "x", "event": "move_end", "between": ["1.31s", "1.33s"]}},
     ])
@@ -109,7 +109,7 @@ def test_device_faults() -> None:
     result = run([
         {"send": "#1 ON V=60 W=360 E\r"},
         {"after": "100ms", "fault": {"device": "x", "kind": "emergency_stop", "duration": "1s"}},
-        {"when": {"device": "x", "name": "motion", "equals": None}, "timeout": "1s"},
+        {"when": {"device": "x", "name": "motion.kind", "equals": None}, "timeout": "1s"},
         {"expect_state": {"device": "x", "name": "display", "equals": {"char": "5", "blinking": True}}},
         {"after": "1s", "expect_state": {"device": "x", "name": "input.stop", "equals": False}},
         {"fault": {"device": "x", "kind": "power_cycle"}},
@@ -226,7 +226,7 @@ def test_same_result_in_virtual_and_real_time() -> None:
     steps = [
         {"send": "#1 ON V=600 A=1000 W=90 E\r"},
         {"expect": {"regex": "ok0"}},
-        {"when": {"device": "x", "name": "motion", "equals": None}, "timeout": "2s"},
+        {"when": {"device": "x", "name": "motion.kind", "equals": None}, "timeout": "2s"},
         {"expect_state": {"device": "x", "name": "param.P51", "equals": 90}},
         {"expect_timing": {"device": "x", "event": "move_end", "between": ["0.05s", "0.2s"]}},
         {"send": "#1 POS?\r"},

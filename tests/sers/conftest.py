@@ -86,7 +86,7 @@ class Plant:
         """Run virtual time until the drive stands still; returns the simulated time taken."""
         dev = self.runtime.device(device or self.name)
         start = self.runtime.now()
-        assert self.runtime.run_until(lambda: dev.read("motion") is None, timeout)
+        assert self.runtime.run_until(lambda: dev.read("motion.kind") is None, timeout)
         return self.runtime.now() - start
 
 

@@ -25,7 +25,7 @@ def start_fast_jog(plant: Plant) -> None:
     assert plant.host.ask("#ON P1035=0\r") == b"#ON P1035=0\r\nok1\n\r"
     assert plant.host.ask("#RF\r") == b"#RF\r\nok0\n\r"
     plant.advance(1.0)
-    assert plant.read("motion") == "jog"
+    assert plant.read("motion.kind") == "jog"
     assert plant.read("axis.velocity") == pytest.approx(FAST)
 
 
@@ -86,7 +86,7 @@ def test_undervoltage_prewarning_while_moving_gives_ok2(sers: Plant) -> None:
     start_fast_jog(sers)
     sers.set("quantity.supply_voltage", U_W - 0.5)
     assert sers.host.ask("#\r") == b"#\r\nok2\n\r"
-    assert sers.read("motion") == "jog"  # a warning does not stop the drive
+    assert sers.read("motion.kind") == "jog"  # a warning does not stop the drive
     assert sers.read("display") == display("9", blinking=True)
 
 
@@ -163,7 +163,7 @@ def test_below_u_l_torque_off_immediately(sers: Plant) -> None:
     frozen = sers.read("axis.position")
     assert sers.read("energized") is False  # no braking ramp
     assert sers.read("output.READY") is False
-    assert sers.read("motion") is None
+    assert sers.read("motion.kind") is None
     assert sers.read("P11") == 512
     assert sers.read("display") == display("9")
     sers.advance(1.0)
@@ -278,7 +278,7 @@ def test_short_circuit(sers: Plant) -> None:
     assert sers.read("display") == display("E")
     assert sers.read("energized") is False  # current off at once
     assert sers.read("output.READY") is False
-    assert sers.read("motion") is None
+    assert sers.read("motion.kind") is None
     sers.advance(0.5)
     assert sers.read("axis.position") == frozen
     assert host.ask("#P11=0\r") == b"#P11=0\r" + INVALID  # short still present
@@ -327,7 +327,7 @@ def test_error_stops_a_running_jog(sers: Plant, quantity: str, value: float, p11
     sers.set(f"quantity.{quantity}", value)
     assert sers.read("P11") == p11
     sers.settle()
-    assert sers.read("motion") is None
+    assert sers.read("motion.kind") is None
     assert sers.read("axis.velocity") == 0
     stopped = sers.read("axis.position")
     sers.advance(2.0)  # the jog does not come back

@@ -71,8 +71,8 @@ def test_backlash_against_the_approach_direction(plant_factory) -> None:
     lowest = []
 
     def track() -> bool:
-        lowest.append(dev.axis.position())
-        return dev.read("motion") is None
+        lowest.append(dev.model.axis.position())
+        return dev.read("motion.kind") is None
 
     assert plant.runtime.run_until(track, 60)
     # overshoots by the backlash (1.8°) and comes back positive: net displacement = W
@@ -148,7 +148,7 @@ def test_automatic_posr_retries(plant_factory) -> None:
     assert plant.runtime.run_until(lambda: dev.read("P11") != 0, 5)
     plant.set("quantity.stall", False)
     # after P1139 × 0.1 s = 0.5 s the drive corrects itself and reaches the target
-    assert plant.runtime.run_until(lambda: dev.read("motion") == "posr", 2)
+    assert plant.runtime.run_until(lambda: dev.read("motion.kind") == "posr", 2)
     plant.settle()
     assert plant.read("encoder.position") == pytest.approx(720 * DEG)
     assert plant.read("P11") == 0

@@ -31,7 +31,7 @@ def line(plant_factory) -> Plant:
 
 
 def sent_by_master(plant: Plant) -> list[bytes]:
-    return list(plant.runtime.device("sers0").master.sent)
+    return list(plant.runtime.device("sers0").model.master.sent)
 
 
 def test_t17_master_drives_two_slaves(line: Plant) -> None:
@@ -44,10 +44,10 @@ def test_t17_master_drives_two_slaves(line: Plant) -> None:
     assert sent[3:] and set(sent[3:]) == {b"#1P2=1300\r"}
     assert line.read("energized", "sers1") is True
     assert line.read("param.V", "sers1") == 1000
-    assert line.read("motion", "sers1") is None  # waits for I3 of drive 1
+    assert line.read("motion.kind", "sers1") is None  # waits for I3 of drive 1
     line.set("input.I3", True, "sers1")
     line.advance(0.05)
-    assert line.read("motion", "sers1") == "position"
+    assert line.read("motion.kind", "sers1") == "position"
     # slave 1 positions 500°, then the master itself moves 1000°, then slave 2 runs L2
     dev2 = line.runtime.device("sers2")
     assert line.runtime.run_until(lambda: dev2.read("output.O1") is True, 20)

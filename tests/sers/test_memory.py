@@ -227,7 +227,7 @@ def test_t20_programming_mode(plant_factory, tmp_path) -> None:
     assert plant.read("energized") is False  # stored, not executed
     assert plant.read("display") == {"char": "4", "blinking": False}
     assert host.ask("#W=360 E\r") == b"#W=360 E\r\npgm\n\r"
-    assert plant.read("motion") is None
+    assert plant.read("motion.kind") is None
     assert plant.read("param.W") == 0  # the assignment went into the program, not into W
     answer = host.ask("#LIST\r")
     assert answer.endswith(b"\npgm\n\r")  # LIST is executed, still in programming mode

@@ -166,7 +166,7 @@ def test_jog_via_inputs(plant_factory) -> None:
     assert plant.read("axis.velocity") == pytest.approx(-30 * 12800 / 60)
     plant.set("input.I1", False)
     plant.settle()
-    assert plant.read("motion") is None
+    assert plant.read("motion.kind") is None
     plant.set("input.I6", True)  # rising edge toggles the motor off
     assert plant.read("energized") is False
 
@@ -181,10 +181,10 @@ def test_jog_until_condition(sers: Plant) -> None:
     sers.host.ask("#ON P1035=0\r")
     sers.host.ask("#RS:I1=1\r")
     sers.advance(2.0)
-    assert sers.read("motion") == "jog"
+    assert sers.read("motion.kind") == "jog"
     sers.set("input.I1", True)
     sers.settle()
-    assert sers.read("motion") is None
+    assert sers.read("motion.kind") is None
 
 
 def test_feed_rate_override_scales_jog(sers: Plant) -> None:

@@ -36,7 +36,7 @@ def test_t14_six_segments_outputs_at_segment_ends(sers: Plant) -> None:
     assert 100 <= sers.read("param.P51") < 101.5
     assert sers.read("output.O2") is False
     # O2 follows the end of segment 4 (P51 = 420)
-    assert sers.runtime.run_until(lambda: velocities.append(dev.axis.velocity()) or dev.read("output.O2"), 5)
+    assert sers.runtime.run_until(lambda: velocities.append(dev.model.axis.velocity()) or dev.read("output.O2"), 5)
     assert 420 <= sers.read("param.P51") < 422.2  # one 0.5 ms cycle at up to 700 rpm
     sers.settle()
     assert sers.read("param.P51") == pytest.approx(750, abs=0.01)

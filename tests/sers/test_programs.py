@@ -114,7 +114,7 @@ def running(plant: Plant) -> bool:
 
 def finish(plant: Plant, timeout: float = 30.0) -> float:
     """Run until the program has ended (P0=0); returns the virtual time."""
-    return until(plant, lambda d: not d.interpreter.running, timeout)
+    return until(plant, lambda d: not d.model.interpreter.running, timeout)
 
 
 def degrees(plant: Plant) -> float:
@@ -284,7 +284,7 @@ def test_t13_d2_timed_gosub_waits_for_the_move(sers: Plant) -> None:
     assert sers.read("param.DB") == 0
     sers.advance(0.02)
     assert sers.read("param.DB") == 1  # D2 in exact 0.1 s (no ×1.2)
-    assert sers.read("motion") == "position"  # the move started at once
+    assert sers.read("motion.kind") == "position"  # the move started at once
     assert out(sers, 2) is False  # P1110=1: the jump waits for the positioning
     t_end = sers.runtime.now() + sers.settle()
     assert t_end - t0 > 2.0
@@ -333,7 +333,7 @@ def test_t15_stand_alone_example(plant_factory) -> None:
     download(host, *T15)
     plant.set("input.I2", True)  # hold the program at WAIT I2=0 after the first move
     run(host)
-    until(plant, lambda d: d.interpreter.waiting == "wait" and d.motion is None, 10)
+    until(plant, lambda d: d.model.interpreter.waiting == "wait" and d.model.motion is None, 10)
     assert degrees(plant) == pytest.approx(25.5, abs=INC)
     start = plant.read("axis.position")
     plant.set("input.I4", True)  # IN=8 > 7
@@ -343,13 +343,13 @@ def test_t15_stand_alone_example(plant_factory) -> None:
     for _ in range(10):
         until(plant, lambda d: d.read("output.O2"), 10)
         rise = plant.read("axis.position")
-        until(plant, lambda d: d.motion == "position", 0.01)
+        until(plant, lambda d: d.model.motion == "position", 0.01)
         assert out(plant, 2) is True  # O2 is high during the 5000° move ...
         plant.settle()
         assert out(plant, 2) is True  # ... until it has ended
         until(plant, lambda d: not d.read("output.O2"), 0.01)
         assert (plant.read("axis.position") - rise) / DEG == pytest.approx(5000, abs=INC)
-    until(plant, lambda d: d.interpreter.waiting == "wait" and d.motion is None, 10)
+    until(plant, lambda d: d.model.interpreter.waiting == "wait" and d.model.motion is None, 10)
     assert (plant.read("axis.position") - start) / DEG == pytest.approx(2000 + 10 * 6000, abs=21 * INC)
     assert running(plant)  # an endless loop
 
@@ -367,7 +367,7 @@ def test_t16_parallel_bcd_example(plant_factory) -> None:
     plant.set("input.I2", True)
     plant.set("input.I8", True)  # start edge: address 3 → L4
     plant.advance(0.01)
-    assert plant.read("motion") == "position"
+    assert plant.read("motion.kind") == "position"
     assert running(plant)
     plant.settle()
     plant.advance(0.01)
@@ -463,7 +463,7 @@ def test_t20_programming_mode_and_run(sers: Plant) -> None:
     assert host.ask("#RUN\r") == b"#RUN\r\nok1\n\r"
     sers.advance(0.01)
     assert sers.read("energized") is True
-    assert sers.read("motion") == "position"
+    assert sers.read("motion.kind") == "position"
     finish(sers, 10)
     assert degrees(sers) == pytest.approx(360, abs=1e-3)
     assert query(host, "P0") == "0"
@@ -588,7 +588,7 @@ STOP_PROGRAM = ("ON", "WR=3600 E", "O1=1", "PE", "L65", "X=R0+1 R0=X", "O4=1", "
 def stopped(plant: Plant, after: float = 1.0) -> float:
     """Let the program's move run ``after`` s, stop it with ``#S``; returns P51 at rest."""
     plant.advance(after)
-    assert plant.read("motion") == "position"
+    assert plant.read("motion.kind") == "position"
     assert plant.host.ask("#S\r").startswith(b"#S\r\nok")
     plant.settle()
     return degrees(plant)
@@ -663,7 +663,7 @@ def test_p1033_1_continues_an_interrupted_jog_until_condition(sers: Plant) -> No
     sers.settle()
     run(host)
     sers.advance(0.5)
-    assert sers.read("motion") == "jog"  # jogging again until I1
+    assert sers.read("motion.kind") == "jog"  # jogging again until I1
     sers.set("input.I1", True)
     sers.settle()
     finish(sers, 0.1)
@@ -895,12 +895,12 @@ def test_jog_until_condition_blocks_until_standstill(sers: Plant) -> None:
     download(host, "ON", "RS:I1=1", "O1=1", "PE")
     run(host)
     sers.advance(1.0)
-    assert sers.read("motion") == "jog"
+    assert sers.read("motion.kind") == "jog"
     assert sers.read("axis.velocity") > 0
     assert out(sers, 1) is False
     sers.set("input.I1", True)
     sers.advance(0.001)
-    assert sers.read("motion") is not None
+    assert sers.read("motion.kind") is not None
     assert out(sers, 1) is False  # still braking
     sers.settle()
     until(sers, lambda d: d.read("output.O1"), 0.01)
@@ -927,12 +927,12 @@ def test_plain_jog_in_a_program_continues_at_once(sers: Plant) -> None:
     run(host)
     finish(sers, 0.1)
     assert out(sers, 1) is True
-    assert sers.read("motion") == "jog"
+    assert sers.read("motion.kind") == "jog"
     sers.advance(2.0)
-    assert sers.read("motion") == "jog"  # no 500 ms timeout for a jog from a program
+    assert sers.read("motion.kind") == "jog"  # no 500 ms timeout for a jog from a program
     assert host.ask("#S\r").startswith(b"#S\r\nok")
     sers.settle()
-    assert sers.read("motion") is None
+    assert sers.read("motion.kind") is None
 
 
 # ======================================================================================

@@ -13,7 +13,7 @@ def test_t01_ack_of_simple_command(sers: Plant) -> None:
     sers.host.send("#ON")
     # ON is taken over before the CR arrives (§4.1): read the echo, then look at the drive
     sers.host.expect(b"#ON")
-    assert sers.runtime.run_until(lambda: sers.runtime.device("sers").energized, 0.0)
+    assert sers.runtime.run_until(lambda: sers.runtime.device("sers").model.energized, 0.0)
     sers.host.send("\r")
     sers.host.expect(b"\r\nok1\n\r")
     assert sers.read("display") == {"char": "5", "blinking": False}
@@ -28,7 +28,7 @@ def test_t01_rs485_mode_has_no_echo(plant_factory) -> None:
 def test_t02_several_statements_in_one_line(sers: Plant) -> None:
     assert sers.host.ask("#ON V=1000 W=2500 O1=1 E\r") == b"#ON V=1000 W=2500 O1=1 E\r\nok0\n\r"
     assert sers.read("output.O1") is True
-    assert sers.read("motion") == "position"
+    assert sers.read("motion.kind") == "position"
 
 
 def test_t02_manual_O_without_number_is_refused(sers: Plant) -> None:
@@ -191,10 +191,10 @@ def test_t27_jog_with_timeout(sers: Plant) -> None:
     host.ask("#P1035=0\r")
     host.ask("#RS\r")
     sers.advance(10.0)
-    assert sers.read("motion") == "jog"
+    assert sers.read("motion.kind") == "jog"
     assert host.ask("#S\r") == b"#S\r\nok0\n\r"
     sers.settle()
-    assert sers.read("motion") is None
+    assert sers.read("motion.kind") is None
 
 
 def test_t27_repeating_the_jog_keeps_it_running(sers: Plant) -> None:
@@ -204,10 +204,10 @@ def test_t27_repeating_the_jog_keeps_it_running(sers: Plant) -> None:
     for _ in range(5):
         sers.advance(0.4)
         host.ask("#RF\r")
-    assert sers.read("motion") == "jog"
+    assert sers.read("motion.kind") == "jog"
     sers.advance(0.6)
     sers.settle()
-    assert sers.read("motion") is None
+    assert sers.read("motion.kind") is None
 
 
 def test_t28_homing(plant_factory) -> None:
@@ -260,8 +260,8 @@ def test_t30_broadcast_starts_both_without_reply(plant_factory) -> None:
     host.send("#*E\r")
     # nobody answers a broadcast: the next reply on the line is drive 2's own echo
     assert host.ask("#2 POS?\r") == b"#2 POS?\rPOS=0\n\r\nok0\n\r"
-    assert plant.read("motion", "sers1") == "position"
-    assert plant.read("motion", "sers2") == "position"
+    assert plant.read("motion.kind", "sers1") == "position"
+    assert plant.read("motion.kind", "sers2") == "position"
 
 
 def test_t26_opcode_e_over_p1099(sers: Plant) -> None:

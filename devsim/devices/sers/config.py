@@ -8,13 +8,28 @@ revolution) measured from the power-on position.
 
 from __future__ import annotations
 
-from typing import Literal
+import math
+from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator
+
+from devsim.devices.sers.parameters import lookup
 
 __all__ = ["AxisGeometry", "SersConfig"]
 
 BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200)
+
+
+def _known_parameter(key: str) -> str:
+    try:
+        lookup(str(key))
+    except KeyError:
+        raise ValueError("no such parameter") from None
+    return key
+
+
+#: A parameter named by number (``P1017``, ``1017``) or alias (``V``).
+ParamKey = Annotated[str, AfterValidator(_known_parameter)]
 
 
 class _Strict(BaseModel):
@@ -48,7 +63,7 @@ class SersConfig(_Strict):
     current_class: Literal["01", "02", "03", "04", "06", "08", "12"] = "06"
     supply_class: Literal["24", "60", "85", "120", "240"] = "85"
     options: list[Literal["E50", "IO", "P8", "RS485", "SERVO", "U"]] = Field(default_factory=list)
-    params: dict[str, float | int] = Field(
+    params: dict[ParamKey, float | int] = Field(
         default_factory=dict, description="factory/EEPROM parameter values, e.g. {P1017: 2, V: 500}"
     )
     axis: AxisGeometry = Field(default_factory=AxisGeometry)
@@ -60,6 +75,22 @@ class SersConfig(_Strict):
     broadcast_reply: Literal["none", "lowest_address"] = "none"
     boot_time: float = Field(default=2.0, ge=0, description="seconds of display '-' after power-on (§3.5)")
     encoding: Literal["latin-1", "cp437"] = "latin-1"
+
+    @field_validator("params")
+    @classmethod
+    def _param_ranges(cls, value: dict[str, float | int]) -> dict[str, float | int]:
+        """Each value within the parameter's own range (§4.7), as the drive would check it."""
+        for key, number in value.items():
+            pdef = lookup(key)
+            if not math.isfinite(number):
+                raise ValueError(f"{key}: not a finite number")
+            if pdef.choices is not None and int(number) not in pdef.choices:
+                raise ValueError(f"{key}: {number:g} is not one of {', '.join(map(str, sorted(pdef.choices)))}")
+            if pdef.minimum is not None and number < pdef.minimum:
+                raise ValueError(f"{key}: {number:g} is below the minimum {pdef.minimum:g}")
+            if pdef.maximum is not None and number > pdef.maximum:
+                raise ValueError(f"{key}: {number:g} is above the maximum {pdef.maximum:g}")
+        return value
 
     @field_validator("baud")
     @classmethod

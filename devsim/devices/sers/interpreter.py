@@ -16,14 +16,40 @@ trace mode and the ``@nP0=0`` message are handled here.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
-from devsim.core.clock import Timer
+from devsim.core.clock import Clock, Timer
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.errors import SersError
 
-if TYPE_CHECKING:
-    from devsim.devices.sers.device import SersDevice
+
+class ProgramHost(Protocol):
+    """What the interpreter needs of the drive it runs on (the SERS model)."""
+
+    ram: dict[int, Any]
+    clock: Clock
+    cfg: Any
+    axis: Any
+    motion: str | None
+    trace_mode: bool
+    program: Any
+    master: Any
+
+    def address_number(self, address: st.Address) -> int: ...
+    def operand_value(self, operand: st.Operand) -> float: ...
+    def evaluate(self, cond: st.Condition | None, counters: bool = True) -> bool: ...
+    def set_x(self, value: float) -> None: ...
+    def master_target(self) -> int | str | None: ...
+    def program_statement(self, stmt: st.Statement) -> str | None: ...
+    def continue_positioning(self) -> None: ...
+    def stop_motion(self) -> None: ...
+    def on_program_state(self) -> None: ...
+    def on_program_end(self) -> None: ...
+    def report_program_error(self, errno: int, detail: str) -> None: ...
+    def record_error(self, errno: int) -> None: ...
+    def render_statement(self, text: str) -> str: ...
+    def spontaneous(self, text: str) -> None: ...
+    def warn(self, bit: int) -> None: ...
 
 __all__ = ["Interpreter", "Program"]
 
@@ -44,9 +70,6 @@ def _statement_text(stmt: st.Statement) -> str:
     return stmt.text.upper()
 
 
-def _compare(left: float, op: str, right: float) -> bool:
-    return {"<": left < right, "<=": left <= right, "=": left == right, ">": left > right,
-            ">=": left >= right, "<>": left != right}[op]
 
 MAX_NESTING = 4  # GOSUB depth (§4.6.4)
 L65 = 65  # error / stop handler label (§4.6.2)
@@ -89,7 +112,7 @@ class Program:
 class Interpreter:
     """Runs the stored program of one SERS."""
 
-    def __init__(self, drive: SersDevice) -> None:
+    def __init__(self, drive: ProgramHost) -> None:
         self.drive = drive
         self.program = Program()
         self.running = False
@@ -257,6 +280,10 @@ class Interpreter:
         self.drive.report_program_error(errno, detail)
 
     # -- the cycle ------------------------------------------------------------------------------------
+    def continue_cycle(self) -> None:
+        """Go on at the next control cycle (after trace mode was switched off)."""
+        self._schedule(self.cycle)
+
     def _schedule(self, delay: float) -> None:
         if self.drive.trace_mode:
             return  # single step: TR executes the next statement
@@ -445,7 +472,7 @@ class Interpreter:
                 level = (int(value) >> bit) & 1
                 value = float(1 - level if left.kind == "J" else level)
             right = self.drive.operand_value(cond.right) if cond.right is not None else 0.0
-            true = (value != 0) if cond.op is None else _compare(value, cond.op, right)
+            true = (value != 0) if cond.op is None else st.compare(value, cond.op, right)
             true = true != cond.negate
             if isinstance(stmt, st.If):
                 self._branch(stmt, true)

@@ -12,12 +12,8 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
-from typing import TYPE_CHECKING
 
-from devsim.core.clock import Timer
-
-if TYPE_CHECKING:
-    from devsim.devices.sers.device import SersDevice
+from devsim.core.clock import Clock, Timer
 
 __all__ = ["MasterLink", "REPLY_TIMEOUT"]
 
@@ -30,8 +26,9 @@ Done = Callable[[bool, float | None, str], None]
 class MasterLink:
     """Requests to slaves, one at a time, and what comes back."""
 
-    def __init__(self, device: SersDevice) -> None:
-        self.device = device
+    def __init__(self, clock: Clock, send: Callable[[bytes], None]) -> None:
+        self.clock = clock
+        self.send = send
         self._buffer = bytearray()
         self._want: bytes | None = None
         self._done: Done | None = None
@@ -47,14 +44,14 @@ class MasterLink:
         data = f"#{address}{text}\r".encode("latin-1")
         self.sent.append(data)
         if address == "*":
-            self.device.send(data)
+            self.send(data)
             done(True, None, "")
             return
         self._buffer.clear()
         self._want = want.encode() if want else None
         self._done = done
-        self._timer = self.device.clock.call_later(REPLY_TIMEOUT, self._timeout)
-        self.device.send(data)
+        self._timer = self.clock.call_later(REPLY_TIMEOUT, self._timeout)
+        self.send(data)
 
     def feed(self, data: bytes) -> None:
         """Bytes the master hears on the line while it waits."""

@@ -1561,11 +1561,14 @@ _TOKEN = re.compile(r"P\s*([0-9]+)")
 
 
 def lookup(token: str) -> ParamDef:
-    """Resolve ``P91`` / ``p 91`` / ``V`` / ``wa`` to its definition; ``KeyError`` if unknown."""
-    key = token.strip().upper()
+    """Resolve ``P91`` / ``p 91`` / ``91`` / ``V`` / ``wa`` to its definition; ``KeyError`` if
+    unknown."""
+    key = str(token).strip().upper()
     m = _TOKEN.fullmatch(key)
     if m:
         return PARAMETERS[int(m.group(1))]
+    if key.isascii() and key.isdigit():
+        return PARAMETERS[int(key)]
     return PARAMETERS[ALIASES[key]]
 
 
@@ -1630,3 +1633,8 @@ PROGRAM_MASKS: dict[int, tuple[int, ...]] = {
 }
 
 del _i, _n, _name, _en, _alias, _doc, _d
+
+
+#: Parameters that are kept and answered but have no effect in the simulator (the generated
+#: reference marks them "stored"); every other parameter has the effect the manual gives it.
+STORED_ONLY: frozenset[int] = frozenset()

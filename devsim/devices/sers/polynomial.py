@@ -17,13 +17,25 @@ last segment too short to brake with B gives errno 118.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 from devsim.core.axis import Watch
 from devsim.devices.sers.errors import SersError
 
-if TYPE_CHECKING:
-    from devsim.devices.sers.drive import SersDrive
+
+class PolynomialHost(Protocol):
+    """What a polynomial move needs of its drive (the SERS model)."""
+
+    ram: dict[int, Any]
+    axis: Any
+    motion: str | None
+    offset: float
+    interpreter: Any
+
+    def begin_polynomial(self) -> None: ...
+    def motion_checks_for(self, target: float) -> None: ...
+    def polynomial_finished(self) -> None: ...
+    def record_error(self, errno: int) -> None: ...
 
 __all__ = ["PolynomialMove", "Segment"]
 
@@ -45,7 +57,7 @@ class Segment:
 class PolynomialMove:
     """The polynomial mode of one drive."""
 
-    def __init__(self, drive: SersDrive) -> None:
+    def __init__(self, drive: PolynomialHost) -> None:
         self.drive = drive
         self.definition: tuple[float, int, bool] | None = None  # value (inc), mode, last
         self.running: Segment | None = None

@@ -18,6 +18,7 @@ import re
 from dataclasses import dataclass, field
 
 __all__ = [
+    "compare",
     "Address",
     "Arith",
     "Assign",
@@ -496,3 +497,15 @@ def parse(text: str, final: bool) -> ParseResult:
             result.error_pos = start
             return result
         result.statements.append((stmt, cur.pos))
+
+
+def compare(left: float, op: str, right: float) -> bool:
+    """A condition's comparison (§4.6.1): ``<``, ``<=``, ``=``, ``>``, ``>=``, ``<>``."""
+    return {
+        "<": left < right,
+        "<=": left <= right,
+        "=": left == right,
+        ">": left > right,
+        ">=": left >= right,
+        "<>": left != right,
+    }[op]

@@ -1,0 +1,35 @@
+"""Constants of the SERS model: firmware, motor geometry, display priorities, error bits."""
+
+from __future__ import annotations
+
+__all__ = [
+    "ELECTRICAL_PERIOD",
+    "ERROR_DISPLAY",
+    "FIRMWARE",
+    "INC_PER_REV",
+    "INPUT_NAMES",
+    "LIMIT",
+    "OVERTEMP",
+    "SHORT",
+    "STANDSTILL",
+    "STEP_LOSS",
+    "UNDERVOLTAGE",
+    "WARNING_DISPLAY",
+    "WEIGHTED",
+    "WEIGHTING_PARAMS",
+]
+
+FIRMWARE = 120901
+INC_PER_REV = 12800
+ELECTRICAL_PERIOD = 256  # increments between phase-zero positions (7.2° on a 1.8° motor)
+WEIGHTED = ("position", "velocity", "acceleration")
+WEIGHTING_PARAMS = (76, 44, 160, 121, 122, 123)
+INPUT_NAMES = ("limit_left", "limit_right", "stop", "reference", "service_ext")
+
+# Display characters of the drive errors, in the spec's priority order (§4.7).
+ERROR_DISPLAY = ((128, "E"), (2, "8"), (512, "9"), (32, "F"), (8192, "c"), (2048, "A"))
+WARNING_DISPLAY = ((2, "8"), (4, "9"), (32, "F"), (128, "H"), (1, "L"), (8, "A"), (64, "A"))
+
+# P11 bits that P11=0 may clear only once their cause is gone (spec G-P11CLEAR).
+OVERTEMP, STEP_LOSS, SHORT, UNDERVOLTAGE, STANDSTILL, LIMIT = 2, 32, 128, 512, 2048, 8192
+

@@ -1,0 +1,268 @@
+"""Statement execution and motor power of the SERS model: assignments, commands, program
+statements, ON/OFF, SERVO mode, drive errors and warnings (manual §4.2, §4.8.2, §4.8.3;
+spec §4.3, §4.6)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from devsim.core.kit import Command, Table
+from devsim.devices.sers import statements as st
+from devsim.devices.sers.constants import STEP_LOSS
+from devsim.devices.sers.errors import SersError
+
+__all__ = ["COMMANDS", "STATEMENTS", "Execution"]
+
+
+class Execution:
+    """Part of :class:`~devsim.devices.sers.drive.SersDrive`: statements, commands, power stage, errors."""
+
+    # ======================================================================================
+    # statements
+    # ======================================================================================
+    def execute(self, stmt: st.Statement) -> None:
+        """One statement, interactive or from a program: looked up by its type in
+        :data:`STATEMENTS` (spec §3.3)."""
+        handler = STATEMENTS.get(type(stmt).__name__)
+        if handler is None:
+            raise SersError(21)
+        handler(self, stmt)
+
+    def assign(self, stmt: st.Assign) -> None:
+        target = stmt.target
+        if target.kind in ("I", "J", "IN"):
+            raise SersError(105)
+        if target.kind == "O" and not 1 <= int(target.ref) <= 16:
+            raise SersError(4)
+        number = self.address_number(target)
+        if number == 1047:
+            value = stmt.value
+            self.set_x(self.operand_value(value) if not isinstance(value, str) else 0.0)
+            return
+        value = stmt.value if isinstance(stmt.value, str) else self.operand_value(stmt.value)
+        self.write_param(number, value)
+
+    def master_target(self) -> int | str | None:
+        """In a master (address 0) after ``Z=n`` (P1): the slave statements go to."""
+        if self.cfg.address != 0:
+            return None
+        target = self.ram.get(1, 0)
+        if target == "*":
+            return "*"
+        return int(target) if target else None
+
+    def program_statement(self, stmt: st.Statement) -> str | None:
+        """Execute a statement of a running program; returns what the program must wait for
+        (``position``: until the drive stands, §4.6.6) or None to go on at once."""
+        if isinstance(stmt, st.Command) and stmt.name == "E" and self.poly.definition is not None:
+            last = self.poly.definition[2]
+            started = self.poly.execute() == "started"
+            master_goes_on = self.cfg.address == 0 and int(self.ram.get(1110, 1)) == 0
+            if last:
+                return None if (master_goes_on or self.motion is None) else "position"
+            return None if started else "segment"
+        if isinstance(stmt, st.Command) and stmt.name in ("E", "H", "POS0", "POSR"):
+            self.execute(stmt)
+            if self.motion is None:
+                return None
+            if stmt.name == "E" and self.cfg.address == 0 and int(self.ram.get(1110, 1)) == 0:
+                return None  # master with P1110=0 goes on while it moves (§4.8.5.5)
+            return "position"
+        if isinstance(stmt, st.Jog):
+            self.jog(stmt.name, stmt.until, serial=False)
+            # with ':' the statement lasts until standstill; without, it just starts (G-JOGPROG)
+            return "position" if stmt.until is not None and self.motion is not None else None
+        self.execute(stmt)
+        return None
+
+    def _command(self, name: str) -> None:
+        handler = COMMANDS.get(name)
+        if handler is None:
+            raise SersError(21)
+        handler(self)
+
+    def edit_program(self) -> None:
+        if self.program_state == 1:
+            raise SersError(44)
+        self.program.edit()
+
+    def quit_program(self) -> None:
+        if not self.program_editing:
+            raise SersError(22)
+        self.program.quit()
+
+    def stop_all(self) -> None:
+        self.interpreter.stop()
+        self.stop_motion()
+
+    def trace_off(self) -> None:
+        self.trace_mode = False
+        if self.interpreter.running and self.interpreter.waiting is None:
+            self.interpreter.continue_cycle()
+
+    def trace_step(self) -> None:
+        self.trace_mode = True
+        self.interpreter.trace_step()
+
+    def program_end(self) -> None:
+        if self.program_state != 1:
+            raise SersError(54)
+
+    # ======================================================================================
+    # motor power and errors
+    # ======================================================================================
+    def switch_on(self) -> None:
+        """ON = P134=7 (§4.8.2.2): phases energised, ready relay closed."""
+        if self.errors or self.eeprom_checksum_error:
+            raise SersError(79)
+        self.energized = True
+        self.relay = True
+        if self.ram.get(1152) == 1 and not int(self.ram.get(147, 0)) & 256 and not self.servo_calibrated:
+            # SERVO: the load-angle zero is taken 100 ms after ON (§4.8.6.7, P147 bit 8 = 0)
+            self._timers.append(self.clock.call_later(0.1, self._servo_calibrate))
+        self._update_outputs()
+
+    # -- SERVO mode (option E50/C, P1152=1; §4.8.6.7, spec §5.10) ---------------------------
+    def _servo_calibrate(self) -> None:
+        if self.energized:
+            self.servo_calibrated = True
+
+    def _servo_check(self) -> None:
+        """Positioning or jogging before the load angle is calibrated: warning 2048."""
+        if self.ram.get(1152) == 1 and not self.servo_calibrated:
+            self.warn(2048)
+
+    def _servo_overload(self, overloaded: bool) -> None:
+        """Under overload the SERVO drive loses no steps: the stator field holds at the rotor
+        and the move resumes when the load goes away, at P1163 if P1162=1 (catch-up), else at
+        V (arriving later).  P1160 signals the overload on an output."""
+        self.servo_overload = overloaded
+        sel = int(self.ram.get(1160, 0))
+        if sel:
+            port, value = abs(sel) if abs(sel) <= 4 else abs(sel) - 4, sel > 0
+            if overloaded or abs(sel) > 4:
+                self.signals.set(f"O{port}", value if overloaded else not value)
+        if overloaded:
+            if self.motion == "position":
+                self.axis.quick_stop()
+                self._servo_resume = True
+            return
+        if getattr(self, "_servo_resume", False) and self.motion == "position":
+            self._servo_resume = False
+            speed = self._speed
+            if self.ram.get(1162) == 1:
+                speed = max(speed, float(self.ram.get(1163, speed)))
+            self.axis.move_to(self._target_physical, speed, self._accel, on_done=self._positioning_done)
+
+    def switch_off(self) -> None:
+        """OFF = P134=0: torque off at once (spec G-OFFMOVE), relay open."""
+        if self.motion is not None:
+            self._end_motion(quick=True)
+        self.energized = False
+        self.relay = False
+        self._update_outputs()
+
+    def drive_error(self, bit: int, immediate: bool = False) -> None:
+        """Set a P11 bit: brake with P1030, open the relay, 50 ms later switch the phases off
+        (§2.1.3, §2.1.4); short circuit and U < U_L switch off at once."""
+        first = not self.errors & bit
+        if first:
+            self.record_event("error")
+        self.errors |= bit
+        self.poly.cancel()
+        if first:
+            self.interpreter.on_drive_error()
+        self._homing = None
+        if immediate:
+            if self.motion is not None:
+                self._end_motion(quick=True)
+            self.energized = False
+            self.relay = False
+            self._update_outputs()
+            return
+        if not first and not self.energized:
+            return
+
+        def relay_open() -> None:
+            self.relay = False
+            self._update_outputs()
+            self._timers.append(self.clock.call_later(0.05, self._phases_off))
+
+        if self.motion is not None and self.axis.moving:
+            self._stop_decel = self.ram[1030]
+            self.motion = "error-stop"
+            self._cancel_jog_timer()
+            self.axis.stop(self.ram[1030], on_done=lambda: (self._motion_finished(), relay_open()))
+        else:
+            relay_open()
+        self._update_outputs()
+
+    def _phases_off(self) -> None:
+        if self.errors and not (self.errors & STEP_LOSS and self.ram.get(1029) == 3):
+            self.energized = False
+            self._update_outputs()
+
+    def warn(self, bit: int) -> None:
+        self.warnings |= bit
+        self._update_outputs()
+
+    def record_error(self, errno: int) -> None:
+        """Every error message sets P12 value 16 and P1137 (§4.8.3.1)."""
+        self.errno = errno
+        self.warn(16)
+
+
+
+def _refuse(errno: int) -> Callable[..., None]:
+    def handler(*_args: Any) -> None:
+        raise SersError(errno)
+
+    return handler
+
+
+def _delete(drive: Any) -> None:
+    raise SersError(22 if not drive.program_editing else 21)
+
+
+#: Statement types (spec §3.3) → what the drive does with them.
+STATEMENTS: Table[Callable[[Any, Any], None]] = Table(
+    [
+        Command("Assign", lambda d, s: d.assign(s), "§4.2", "write a parameter or alias (X: the accumulator)"),
+        Command("Arith", lambda d, s: d.arithmetic(s.op, s.operand), "§4.6.10", "X := X op operand"),
+        Command("Unary", lambda d, s: d.arithmetic(s.op, None), "§4.6.10", "NOT, NEG on X"),
+        Command("Jog", lambda d, s: d.jog(s.name, s.until), "§4.5.1", "RS, RF, LS, LF [:condition]"),
+        Command("Command", lambda d, s: d._command(s.name), "§4.2", "a keyword command (see below)"),
+        Command("Text", _refuse(16), "§4.6.11", "text for the SERS-Programmer: stored in programming mode only"),
+        Command("Run", lambda d, s: d.run_program(s.label), "§4.8.6.16", "RUN / RUN n: start the program"),
+        Command("Change", _refuse(22), "§4.2", "C n: only in programming mode"),
+        Command("Trace", lambda d, s: d.trace_step(), "§4.5.4", "TR: one program step"),
+        Command("Goto", _refuse(54), "§4.6.3", "GOTO/GOSUB: only in a program"),
+        Command("Wait", lambda d, s: None, "§4.6.8", "WAIT: only blocks a program"),
+        Command("Label", lambda d, s: None, "§4.6.2", "L n: a jump target"),
+        Command("Comment", lambda d, s: None, "§4.2", "// comment"),
+    ]
+)
+
+#: Keyword commands (spec §3.3) → what the drive does.
+COMMANDS: Table[Callable[[Any], None]] = Table(
+    [
+        Command("E", lambda d: d.start_positioning(), "§4.6.6", "start positioning to W at V with A"),
+        Command("H", lambda d: d.home(), "§4.8.4.5", "start homing (reference run)"),
+        Command("S", lambda d: d.stop_all(), "§4.8.6.2", "stop: the program and the motion"),
+        Command("ON", lambda d: d.switch_on(), "§4.8.2.2", "energise the motor (P134=7)"),
+        Command("OFF", lambda d: d.switch_off(), "§4.8.2.2", "de-energise the motor (P134=0)"),
+        Command("PSAVE", lambda d: d.psave(), "§4.8.6.10", "save the RAM parameters in the EEPROM (P1004=2)"),
+        Command("POSSAVE", lambda d: d.possave(), "§4.8.4.2", "save P51 in the EEPROM (P1004=4)"),
+        Command("POS0", lambda d: d.pos0(), "§4.8.4.2", "move to the next electrical zero, then P51=0"),
+        Command("POSR", lambda d: d.posr(force=False), "§4.8.4.2", "after step loss: back to the set-point W"),
+        Command("NEW", lambda d: d.new_program(), "§4.5.3", "programming mode, deleting the program (P0=2)"),
+        Command("PGM", lambda d: d.edit_program(), "§4.5.3", "programming mode, editing the program"),
+        Command("QUIT", lambda d: d.quit_program(), "§4.2", "leave programming mode (P0=0)"),
+        Command("DEL", _delete, "§4.2", "delete the current line (programming mode)"),
+        Command("TRON", lambda d: setattr(d, "trace_mode", True), "§4.5.4", "trace (single-step) mode on"),
+        Command("TROFF", lambda d: d.trace_off(), "§4.5.4", "trace mode off"),
+        Command("PE", lambda d: d.program_end(), "§4.2", "program end (in a program)"),
+        Command("RETURN", lambda d: d.program_end(), "§4.6.5", "return from a subroutine (in a program)"),
+    ]
+)

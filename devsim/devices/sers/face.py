@@ -1,0 +1,332 @@
+"""The serial face of the Stögra SERS (manual "SERS Version V04, Firmware ab 120901"; spec sers.md).
+
+This module is the ASCII line protocol of the drive, held over the model (:class:`SersDrive`): framing, drive selection on a multidrop line,
+echo modes (P1017, §4.8.6.9), acknowledgements (§4.1), error messages (§4.8.3.1), parameter
+queries (§4.7) and the execution of interactive statements (§4.2).  The physics behind it –
+positioning, jog, homing, limit switches, faults – lives in :mod:`.drive`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from devsim.core.device import Face, Port, SerialSettings
+from devsim.devices.sers import codec
+from devsim.devices.sers import statements as st
+from devsim.devices.sers.drive import SersDrive
+from devsim.devices.sers.errors import SersError, message
+
+__all__ = ["SersFace"]
+
+# Characters that only ever extend the statement in progress (a number, the '?' of a query):
+# nothing can complete with them, so they need no parse (the next character will do it).
+_EXTENDS_ONLY = frozenset("0123456789.?")
+
+
+@dataclass
+class _Line:
+    """What the device knows about the command line being received."""
+
+    execute: bool = False  # this drive carries out the statements
+    reply: bool = False  # this drive echoes and answers
+    held: bytearray = field(default_factory=bytearray)  # echo of '#' and address digits
+    text: str = ""  # statement text of the current segment
+    executed: int = 0  # statements of the segment already executed
+    error: bool = False
+    skip_next: bool = False  # single-statement IF was false
+    skip_block: int = 0  # inside a false IF..THEN block (depth)
+    deferred: bytearray = field(default_factory=bytearray)  # RS-485 mode: answers until line end
+    store: list[str] = field(default_factory=list)  # programming mode: statements for the EEPROM
+
+
+class SersFace(Face):
+    """The ASCII line protocol of one SERS on a serial line (RS-232, or RS-485 multidrop)."""
+
+    model: SersDrive
+
+    def __init__(self, model: SersDrive, port: Port) -> None:
+        super().__init__(model, port)
+        self.framer = codec.Framer()
+        self._line: _Line | None = None
+        self._last_replied = False
+        self._spontaneous: list[bytes] = []
+        model.listen("power_on", self._reset_serial)
+        model.listen("spontaneous", self.spontaneous)
+        model.listen("line_out", self.send)
+
+    # -- line settings -------------------------------------------------------------------
+    @property
+    def serial_settings(self) -> SerialSettings:
+        return SerialSettings(self.model.cfg.baud, 8, "N", 1)
+
+    # -- power ---------------------------------------------------------------------------
+    def _reset_serial(self) -> None:
+        self.framer.reset()
+        self._line = None
+        self._last_replied = False
+        self._spontaneous.clear()
+
+    # -- bytes from the host -------------------------------------------------------------
+    def feed(self, data: bytes) -> None:
+        # (answers to one chunk of input leave in one write: the kit's port batches them)
+        model = self.model
+        model.shared_line = self.port.shared_line
+        if model.master.awaiting and model.logic_alive:
+            model.master.feed(data)  # a slave's answer to this master
+        for byte in data:
+            if not model.logic_alive or model.booting:
+                continue  # G-BOOT: input during the 2 s initialisation is discarded
+            for event in self.framer.feed(byte):
+                self._on_event(event, byte)
+
+    def host_disconnected(self) -> None:
+        """A host that leaves mid-line leaves a partial line; the next '#' restarts anyway."""
+
+    def _on_event(self, event: object, byte: int) -> None:
+        self._handlers[type(event)](self, event, byte)
+
+    def _on_text(self, event: codec.TextChar, byte: int) -> None:
+        line = self._line
+        if line is None:
+            return
+        if line.reply and self.echo:
+            self.send(bytes((byte,)))
+        if event.dropped or line.error or not line.execute:
+            return
+        line.text += event.char
+        if event.char not in _EXTENDS_ONLY:
+            self._progress(line, final=False)
+
+    def _on_ignored(self, event: codec.Ignored, byte: int) -> None:
+        if event.pair and self._last_replied and self.echo:
+            self.send(bytes((byte,)))
+
+    def _on_restart(self, event: codec.Restart, byte: int) -> None:
+        line = self._line
+        if event.mid_line and line is not None:
+            self._progress(line, final=True)
+            line.text, line.executed = "", 0
+            line.held = bytearray(b"#")
+        else:
+            self._line = _Line(held=bytearray(b"#"))
+
+    def _on_address_char(self, event: codec.AddressChar, byte: int) -> None:
+        if self._line is not None:
+            self._line.held.append(byte)
+
+    def _on_address(self, event: codec.Address, byte: int) -> None:
+        if self._line is not None:
+            self._select(self._line, event.value)
+
+    def _on_line_end(self, event: codec.LineEnd, byte: int) -> None:
+        line = self._line
+        if line is None:
+            return
+        if line.reply and self.echo:
+            self.send(bytes((byte,)))
+        if line.execute and not line.error:
+            self._progress(line, final=True)
+            if event.overflow and not line.error:
+                self.model.warn(1024)
+                self._error(line, 124)
+            if line.store and not line.error:
+                try:
+                    self.model.program.add_line(line.store, _label_number)
+                except SersError as exc:
+                    self._error(line, exc.errno, exc.detail)
+                line.store = []
+        if line.reply:
+            if line.deferred:
+                self.send(bytes(line.deferred))
+            if not line.error:
+                self.send(b"\n" + self.model.ack_text().encode("latin-1") + b"\n\r")
+        self._last_replied = line.reply
+        self._line = None
+        self._flush_spontaneous()
+
+    _handlers: ClassVar[dict[type, Any]] = {
+        codec.TextChar: _on_text,
+        codec.Ignored: _on_ignored,
+        codec.Restart: _on_restart,
+        codec.AddressChar: _on_address_char,
+        codec.Address: _on_address,
+        codec.LineEnd: _on_line_end,
+    }
+
+    def _select(self, line: _Line, address: int | str | None) -> None:
+        mine = self.model.cfg.address if self.model.cfg.address != 0 else 200
+        if address is None:
+            line.execute = line.reply = self.model.selected
+        elif address == "*":
+            line.execute = True
+            line.reply = False  # G-ADDR: nobody answers a broadcast
+        elif address == mine:
+            self.model.addressed = True
+            line.execute = line.reply = True
+        else:
+            self.model.addressed = False
+            line.execute = line.reply = False
+        if line.reply and self.echo:
+            self.send(bytes(line.held))
+        line.held.clear()
+
+    # -- statements ----------------------------------------------------------------------
+    def _progress(self, line: _Line, final: bool) -> None:
+        if line.error or not line.execute:
+            return
+        result = st.parse(line.text, final)
+        for stmt, end in result.statements[line.executed :]:
+            if not final and end == len(line.text) and _answers(stmt):
+                break  # §3.2.4a: a statement with an answer completes with the next character
+            line.executed += 1
+            try:
+                self._statement(line, stmt)
+            except SersError as exc:
+                self._error(line, exc.errno, exc.detail)
+                return
+            finally:
+                self.model.interpreter.poke()
+        if result.errno is not None and line.executed == len(result.statements):
+            self._error(line, result.errno)
+
+    def _statement(self, line: _Line, stmt: st.Statement) -> None:
+        if self.model.program.editing and self._stores_in_program(stmt):
+            if not isinstance(stmt, st.Comment):
+                line.store.append(stmt.text)  # stored when the line ends without an error
+            return
+        if self.model.program.editing and isinstance(stmt, st.Change):
+            self.model.program.change(self._changed_statement(stmt))
+            return
+        if self.model.program.editing and isinstance(stmt, st.Command) and stmt.name == "DEL":
+            self.model.program.delete()
+            return
+        if line.skip_block:
+            if isinstance(stmt, st.If) and stmt.then:
+                line.skip_block += 1
+            elif isinstance(stmt, st.End):
+                line.skip_block -= 1
+            elif isinstance(stmt, st.Else) and line.skip_block == 1:
+                line.skip_block = 0
+            return
+        if line.skip_next:
+            line.skip_next = False
+            return
+        if isinstance(stmt, st.If):
+            true = self.model.evaluate(stmt.cond)
+            if stmt.then:
+                if not true:
+                    line.skip_block = 1
+            else:
+                line.skip_next = not true
+            return
+        if isinstance(stmt, st.Else):
+            line.skip_block = 1  # the THEN part ran: skip to END
+            return
+        if isinstance(stmt, st.End):
+            return
+        if isinstance(stmt, st.Query):
+            self._out(line, self.model.query_text(stmt) + "\n\r")
+            return
+        if isinstance(stmt, st.ListCmd):
+            if stmt.params:
+                self._out(line, "".join(f"{row}\n\r" for row in self.model.list_parameters(stmt.arg)))
+            else:
+                rows = self.model.program.listing(self.model.list_options, self.model.render_statement, stmt.arg)
+                self._out(line, "".join(f"{row}\n\r" for row in rows))
+            return
+        if isinstance(stmt, st.Assign) and stmt.target.kind in ("P", "alias") and self._is_master_query(stmt):
+            # a master asks through P2 (IF/WAIT) or P3 (read): answer the value (§4.8.5.5, G-MASTER)
+            number = self.model.address_number(stmt.target)
+            asked = int(self.model.operand_value(stmt.value)) if not isinstance(stmt.value, str) else 0
+            self.model.ram[number] = asked
+            self._out(line, f"P{number}={self.model.plain_value(asked)}\n\r")
+            return
+        if isinstance(stmt, st.Command) and stmt.name == "VER":
+            self._out(line, f"P1133={self.model.firmware}\n\r")
+            return
+        if isinstance(stmt, st.Trace) and stmt.query:
+            self._out(line, f"TR={int(self.model.trace_mode)}\n\r")
+            return
+        if isinstance(stmt, st.Trace):
+            # TR: one program step; the executed statement is shown like a LIST row (G-TRACE)
+            self.model.trace_mode = True
+            shown = self.model.interpreter.trace_step()
+            if shown is not None:
+                self._out(line, shown + "\n\r")
+            return
+        self.model.execute(stmt)
+
+    def _is_master_query(self, stmt: st.Assign) -> bool:
+        try:
+            return self.model.address_number(stmt.target) in (2, 3)
+        except SersError:
+            return False
+
+    def _changed_statement(self, stmt: st.Change) -> str:
+        """C n (§4.2): the assignment at the current position with the constant n."""
+        current = self.model.program.current()
+        parsed = st.parse(current, final=True) if current is not None else None
+        if parsed is None or parsed.errno is not None or len(parsed.statements) != 1:
+            raise SersError(49)
+        old = parsed.statements[0][0]
+        if not isinstance(old, st.Assign) or not isinstance(old.value, st.Number):
+            raise SersError(49)
+        return f"{old.target.text}={stmt.value.text}"
+
+    def _stores_in_program(self, stmt: st.Statement) -> bool:
+        """In programming mode everything is stored except LIST, DEL, TR…, C n and QUIT."""
+        if isinstance(stmt, st.ListCmd | st.Trace | st.Change):
+            return False
+        if isinstance(stmt, st.Command) and stmt.name in ("DEL", "QUIT"):
+            return False
+        if isinstance(stmt, st.Assign) and stmt.target.kind == "P" and stmt.target.ref == 0:
+            return False  # P0=0 leaves programming mode
+        return True
+
+    # -- output ----------------------------------------------------------------------------
+    @property
+    def echo(self) -> bool:
+        return self.model.handshake_mode in (0, 1)
+
+    def _out(self, line: _Line, text: str) -> None:
+        if not line.reply:
+            return
+        data = text.encode(self.model.cfg.encoding, errors="replace")
+        if self.model.handshake_mode == 2:
+            line.deferred += data
+        else:
+            self.send(data)
+
+    def _error(self, line: _Line, errno: int, detail: str = "") -> None:
+        line.error = True
+        self.model.record_error(errno)
+        self._out(line, "\n*" + message(errno, self.model.english, detail) + "\n\r")
+
+    def spontaneous(self, text: str) -> None:
+        """Messages such as ``@2POS=1`` go out between lines, never inside one (G-SPONT)."""
+        self._spontaneous.append(text.encode(self.model.cfg.encoding, errors="replace") + b"\n\r")
+        if self._line is None:
+            self._flush_spontaneous()
+
+    def _flush_spontaneous(self) -> None:
+        while self._spontaneous:
+            self.send(self._spontaneous.pop(0))
+
+
+def _answers(stmt: st.Statement) -> bool:
+    """Statements that send text: their output must follow the echo of the next character."""
+    if isinstance(stmt, st.Query | st.ListCmd):
+        return True
+    if isinstance(stmt, st.Trace):
+        return stmt.query
+    return isinstance(stmt, st.Command) and stmt.name == "VER"
+
+
+def _label_number(text: str) -> int | None:
+    result = st.parse(text, final=True)
+    if result.errno is None and len(result.statements) == 1:
+        stmt = result.statements[0][0]
+        if isinstance(stmt, st.Label):
+            return stmt.number
+    return None

@@ -1,0 +1,183 @@
+"""The SERS's control names and faults, declared once (spec sers.md §7, manual sections per row).
+
+Every name the control API, scenarios, plants and fixtures use is a row here; the parameters
+``param.P<n>`` are generated from the parameter table (aliases such as ``param.V`` resolve to
+their number).  Values are checked by type and range before they take effect; a parameter write
+also gets the drive's own range check and error text.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from devsim.core.kit import Fault, FaultTable, signal_points
+from devsim.core.points import BadValue, Point, PointTable
+from devsim.devices.sers import statements as st
+from devsim.devices.sers.errors import SersError, message
+from devsim.devices.sers.parameters import ALIASES, PARAMETERS, ParamDef
+from devsim.devices.sers.signals import SIGNALS
+
+__all__ = ["FAULTS", "POINTS", "load_program"]
+
+
+def load_program(model: Any, program: Any) -> None:
+    """Store a program (lines as typed, without ``#``) in the EEPROM as if downloaded with
+    NEW … QUIT; a bad line is refused with its error text and nothing is stored."""
+    lines = [program] if isinstance(program, str) else list(program)
+    parsed = []
+    for text in lines:
+        result = st.parse(str(text), final=True)
+        if result.errno is not None:
+            raise BadValue(f"program line {text!r}: {message(result.errno)}")
+        parsed.append(result)
+    model.program.new()
+    for result in parsed:
+        for index, (stmt, _end) in enumerate(result.statements):
+            model.program.add(stmt.text, new_line=index == 0)
+    model.program.quit()
+
+
+def _write_param(number: int) -> Any:
+    def put(model: Any, value: Any) -> None:
+        try:
+            model.write_param(number, value)
+        except SersError as exc:
+            raise BadValue(f"P{number}: {exc}") from None
+
+    return put
+
+
+def _read_param(number: int) -> Any:
+    return lambda model: model.param_value(number)
+
+
+def _param_point(pdef: ParamDef) -> Point:
+    unit = {"position": "P123 unit", "velocity": "P121 unit", "acceleration": "P122 unit"}.get(pdef.kind, "")
+    return Point(
+        f"param.P{pdef.number}",
+        "json" if pdef.number == 1 else "float",  # P1 (Z) also takes '*'
+        pdef.name_en or pdef.name,
+        f"§4.7 P{pdef.number}",
+        unit,
+        get=_read_param(pdef.number) if pdef.readable else None,
+        put=_write_param(pdef.number) if pdef.writable else None,
+        example=_example(pdef) if pdef.writable and not pdef.readable else None,
+    )
+
+
+def _example(pdef: ParamDef) -> Any:
+    """A value a write-only parameter accepts (its default, its first choice, or 0 in range)."""
+    if pdef.default is not None:
+        return pdef.default
+    if pdef.choices:
+        return min(pdef.choices)
+    return 0
+
+
+def _alias(name: str) -> str | None:
+    """``param.V``, ``param.51``, ``param.p51`` → ``param.P51``."""
+    section, dot, rest = name.partition(".")
+    if section != "param" or not dot:
+        return None
+    text = rest.strip().upper()
+    if text.startswith("P") and text[1:].isascii() and text[1:].isdigit():
+        return f"param.P{int(text[1:])}"
+    if text.isascii() and text.isdigit():
+        return f"param.P{int(text)}"
+    number = ALIASES.get(text)
+    return None if number is None else f"param.P{number}"
+
+
+def _set_dip(field: str) -> Any:
+    def put(model: Any, value: Any) -> None:
+        model.cfg = model.cfg.model_copy(update={field: value})
+
+    return put
+
+
+_PLAIN: list[Point] = [
+    # -- the shared vocabulary -------------------------------------------------------------
+    Point("axis.position", "float", "actual position of the stator field, motor increments", "§5.1", "inc",
+          get=lambda m: m.axis.position(), in_state=True, shared=True),
+    Point("axis.velocity", "float", "actual velocity", "§5.1", "inc/s", get=lambda m: m.axis.velocity(),
+          in_state=True, shared=True),
+    Point("motion", "bool", "the drive moves (positioning, jog, homing, POS0/POSR)", "§4.6.6",
+          get=lambda m: m.motion is not None, in_state=True, shared=True),
+    Point("energized", "bool", "the motor phases are energised (ON)", "§4.8.2.2", get=lambda m: m.energized,
+          in_state=True, shared=True),
+    Point("ready", "bool", "the ready relay is closed and no drive error is active", "§2.1.3",
+          get=lambda m: bool(m.relay and not m.errors), in_state=True, shared=True),
+    Point("fault", "bool", "a drive error is active (P11 ≠ 0)", "§4.8.3.1", get=lambda m: bool(m.errors),
+          in_state=True, shared=True),
+    # -- the drive --------------------------------------------------------------------------
+    Point("axis.acceleration", "float", "actual acceleration", "§5.1", "inc/s²",
+          get=lambda m: m.axis.acceleration()),
+    Point("axis.moving", "bool", "the stator field moves", "§5.1", get=lambda m: m.axis.moving),
+    Point("axis.phase", "str", "the ramp phase of the motion (accelerate, constant, brake, idle)", "§5.2",
+          get=lambda m: m.axis.phase()),
+    Point("motion.kind", "str", "what moves the drive: position, jog, homing, pos0, posr (null at rest)",
+          "§4.6.6", get=lambda m: m.motion),
+    Point("display", "json", "the 7-segment display: character and blinking", "§3.5", get=lambda m: m.display(),
+          in_state=True),
+    Point("display.char", "str", "the character the display shows", "§3.5", get=lambda m: m.display()["char"]),
+    Point("display.blinking", "bool", "the display blinks (a warning)", "§3.5",
+          get=lambda m: m.display()["blinking"]),
+    Point("P11", "int", "drive errors (bit field)", "§4.8.3.1", get=lambda m: m.errors, in_state=True),
+    Point("P12", "int", "warnings (bit field)", "§4.8.3.1", get=lambda m: m.warnings, in_state=True),
+    Point("errno", "int", "number of the last error message", "§4.8.3.1", get=lambda m: m.errno, in_state=True),
+    Point("homed", "bool", "a homing run (H) completed since power-on", "§4.8.4.5", get=lambda m: m.homed),
+    Point("homing", "str", "the homing phase (null when not homing)", "§4.8.4.5",
+          get=lambda m: m._homing["phase"] if m._homing else None),
+    Point("encoder.position", "float", "encoder position in motor increments", "§4.8.6.6", "inc",
+          get=lambda m: m.encoder_position()),
+    Point("encoder.pulses", "int", "count pulses at the encoder / pulse input (as if they arrived)", "§4.8.6.14",
+          put=lambda m, v: m.pulses(v), example=0),
+    Point("phase_current", "float", "commanded phase current", "§4.8.6.1", "mA", get=lambda m: m.phase_current()),
+    Point("load_angle", "float", "stator field ahead of the rotor", "§4.8.6.6", "inc",
+          get=lambda m: m.axis.position() - m.encoder_position()),
+    Point("booting", "bool", "initialising after power-on (input is discarded for 2 s)", "§3.5",
+          get=lambda m: m.booting),
+    Point("powered", "bool", "the logic supply is on", "§2.1.4", get=lambda m: m.logic_alive, in_state=True),
+    Point("position", "float", "actual position P51 in the user unit (P123)", "§4.7 P51",
+          get=lambda m: m.scaling.inc_to_pos(round(m.p51_inc())), in_state=True),
+    Point("address", "int", "the drive address (DIP switch 2)", "§3.1.2", get=lambda m: m.cfg.address,
+          in_state=True),
+    Point("selected", "bool", "statements without an address are for this drive", "§3.6.2",
+          get=lambda m: m.selected, in_state=True),
+    Point("dip.service_switch", "bool", "the service switch (DIP 1 bit 8)", "§3.1.1",
+          get=lambda m: m.cfg.service_switch, put=_set_dip("service_switch")),
+    Point("dip.input_level", "str", "the input level (DIP 1 bits 4-5)", "§3.1.1",
+          get=lambda m: m.cfg.input_level, put=_set_dip("input_level"),
+          choices=("plc", "ttl", "low_active", "invalid")),
+    Point("program", "json", "the stored program: lines as typed (set: stored as by NEW … QUIT)", "§4.6",
+          get=lambda m: m.program.lines(), put=load_program, in_state=True),
+]
+
+POINTS = PointTable.of(
+    _PLAIN,
+    signal_points(SIGNALS),
+    (_param_point(pdef) for pdef in PARAMETERS.values()),
+    alias=_alias,
+)
+
+
+def _stall(model: Any, active: bool) -> None:
+    model.signals.set("stall", active)
+
+
+def _stop(model: Any, active: bool) -> None:
+    model.signals.set("stop", active)
+
+
+def _power(model: Any, active: bool) -> None:
+    model.power(not active)
+
+
+FAULTS = FaultTable(
+    [
+        Fault("blocked_axis", "the load stalls the rotor: step loss / load-angle error, in SERVO mode the "
+              "field waits at the rotor", "§4.8.6.6", _stall),
+        Fault("emergency_stop", "the STOP input opens: the motion stops, the display blinks", "§2.1.2", _stop),
+        Fault("power", "the supply is off while active; on again afterwards (a power-on)", "§2.1.4", _power),
+    ]
+)
