@@ -30,6 +30,10 @@ def _table(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> list[str]:
     return lines
 
 
+def _table_rows(header: Sequence[str], *groups: Iterable[Sequence[Any]]) -> list[str]:
+    return _table(header, (row for group in groups for row in group))
+
+
 def _range(low: Any, high: Any) -> str:
     if low is None and high is None:
         return ""
@@ -82,11 +86,15 @@ def reference_markdown(cls: type[Device]) -> str:
         "pytest fixtures and the facades.  Access: `r` read-only, `rw` settable, `w` write-only.",
         "Names marked ★ belong to the vocabulary every kind shares.",
         "",
-        *_table(
+        *_table_rows(
             ("name", "type", "unit", "access", "range", "description", "manual"),
             (
                 (f"`{p.name}`{' ★' if p.shared else ''}", p.type, p.unit, p.access, p.range_text(), p.doc, p.section)
                 for p in cls.points
+            ),
+            (
+                (f"`{f.pattern}`", f.type, "", f.access, "", f.doc, f.section)
+                for f in cls.points.families
             ),
         ),
         "",

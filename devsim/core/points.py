@@ -31,6 +31,7 @@ from typing import Any, Literal
 
 __all__ = [
     "BadValue",
+    "Family",
     "Point",
     "PointTable",
     "PointType",
@@ -216,17 +217,36 @@ def _unit(unit: str) -> str:
     return f" {unit}" if unit else ""
 
 
+@dataclass(frozen=True)
+class Family:
+    """Many names of one shape, made when asked for: ``marker.M<byte>.<bit>`` for 2,048 marker
+    bits.  ``make(name)`` returns the point for a name of the family, or None."""
+
+    pattern: str
+    type: PointType
+    doc: str
+    section: str
+    make: Callable[[str], Point | None]
+    access: Access = "rw"
+
+
 @dataclass
 class PointTable:
     """A kind's points by name, with an optional ``alias`` hook that maps a spelling
-    (``param.n15``, ``param.V``) to the declared name."""
+    (``param.n15``, ``param.V``) to the declared name, and families of names made on demand."""
 
     points: dict[str, Point] = field(default_factory=dict)
     alias: Callable[[str], str | None] | None = None
+    families: tuple[Family, ...] = ()
 
     @classmethod
-    def of(cls, *groups: Iterable[Point], alias: Callable[[str], str | None] | None = None) -> PointTable:
-        table = cls(alias=alias)
+    def of(
+        cls,
+        *groups: Iterable[Point],
+        alias: Callable[[str], str | None] | None = None,
+        families: Iterable[Family] = (),
+    ) -> PointTable:
+        table = cls(alias=alias, families=tuple(families))
         for group in groups:
             for point in group:
                 table.add(point)
@@ -254,7 +274,13 @@ class PointTable:
         if point is None and self.alias is not None:
             canonical = self.alias(name)
             if canonical is not None:
+                name = canonical
                 point = self.points.get(canonical)
+        if point is None:
+            for family in self.families:
+                point = family.make(name)
+                if point is not None:
+                    break
         return point
 
     def lookup(self, name: str, owner: str = "the device") -> Point:

@@ -71,7 +71,12 @@ class Plant:
         return self.names[0]
 
     def device(self, name: str | None = None) -> Any:
-        return self.runtime.device(name or self.name)
+        """The card's model (axis, indexer, executor ...): the device kit's ``.model``."""
+        return self.runtime.device(name or self.name).model
+
+    def face(self, name: str | None = None) -> Any:
+        """The card's FT1.2 face (the link)."""
+        return self.runtime.device(name or self.name).face()
 
     def read(self, name: str, device: str | None = None) -> Any:
         return self.runtime.read(device or self.name, name)

@@ -7,12 +7,12 @@ K frame, and records what it received, so the tests check the client's bytes on 
 from __future__ import annotations
 
 from collections.abc import Iterator
-from typing import Any
+from typing import Any, ClassVar
 
 import pytest
 import serial
 
-from devsim.core.device import Device
+from devsim.core.device import Device, Face
 from devsim.core.runtime import Runtime
 from devsim.devices.gms96.client import (
     Gms96Client,
@@ -46,15 +46,13 @@ from devsim.transports.pty import PtyTransport
 from devsim.transports.tcp import TcpTransport
 
 
-class FakeCard(Device):
+class FakeCard(Face):
     """Answers T0 / T1;0 / T3;0 with a T reply, #1 with a K frame, everything else with E5h;
     ``+`` moves a position.  With ``e_version`` a repeated FCV=1 frame with the same FCB is
     answered again but not executed (spec §3.9)."""
 
-    kind = "fake-gms96"
-
-    def __init__(self, address: int = 3, e_version: bool = False, **kw: Any) -> None:
-        super().__init__(**kw)
+    def __init__(self, model: Any, port: Any, address: int = 3, e_version: bool = False) -> None:
+        super().__init__(model, port)
         self.address = address
         self.e_version = e_version
         self.decoder = FrameDecoder(short_extension=short_extension_device)
@@ -69,7 +67,7 @@ class FakeCard(Device):
         self._last_reply = b""
 
     def feed(self, data: bytes) -> None:
-        for item in self.decoder.feed(data, self.clock.now()):
+        for item in self.decoder.feed(data, self.model.clock.now()):
             if isinstance(item, FrameError):
                 self.errors.append(item)
                 continue
@@ -111,14 +109,10 @@ class FakeCard(Device):
         self._last_reply = reply
         return reply
 
-    def read(self, name: str) -> Any:
-        raise KeyError(name)
 
-    def set(self, name: str, value: Any) -> None:
-        raise KeyError(name)
-
-    def state(self) -> dict[str, Any]:
-        return {}
+class FakeCardDevice(Device):
+    kind = "fake-gms96"
+    face_classes: ClassVar[dict[str, Any]] = {"main": FakeCard}
 
 
 class Rig:
@@ -140,9 +134,12 @@ def rig_factory() -> Iterator[Any]:
 
     def make(*, e_version: bool = False, tcp: bool = False) -> Rig:
         runtime = Runtime().start()
-        card = runtime.call(lambda: FakeCard(clock=runtime.clock, e_version=e_version))
+        device = runtime.call(lambda: FakeCardDevice(clock=runtime.clock))
+        card = device.face()
+        assert isinstance(card, FakeCard)
+        card.e_version = e_version
         transport = TcpTransport() if tcp else PtyTransport()
-        runtime.serve_sync(card, transport)
+        runtime.serve_sync(device, transport)
         port = serial.serial_for_url(transport.url, baudrate=9600, timeout=1.0)
         rig = Rig(runtime, card, port)
         made.append(rig)

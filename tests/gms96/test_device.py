@@ -383,7 +383,7 @@ def test_cnc_program_download_and_run(referenced: Plant) -> None:
     assert referenced.read("position_setpoint") == 0
     assert referenced.read("programs") == {0: 3}
     assert host.ask("68 0C 0C 68 53 03 70 03 00 00 01 00 00 00 00 00 CA 16") == "E5"  # p3;1;0
-    referenced.run_until(lambda d: d.read("marker.M1.0"), 10)
+    referenced.run_until(lambda d: d.marker_byte(1) & 1, 10)
     assert referenced.read("output.A0.2") is True
 
 

@@ -207,7 +207,7 @@ def test_r4_frame_back_to_back_behind_an_error_is_discarded(card: Plant) -> None
 def test_r4_needs_33_bit_times_measured_from_the_last_byte(card: Plant) -> None:
     host = card.host
     bit = 1 / 9600
-    assert card.device().link.idle_after_error == pytest.approx(33 * bit)
+    assert card.face().link.idle_after_error == pytest.approx(33 * bit)
     assert host.silent(BAD_CHECKSUM)
     card.advance(30 * bit)
     assert host.silent(STATUS)  # only 30 bit times idle: lost, and the line was busy again
@@ -261,7 +261,7 @@ def test_r4_at_38400_baud() -> None:
     runtime = Runtime(virtual=True).start()
     try:
         dev: Any = runtime.add_device("gms96", "fast", {"dil": {"baud": 38400}})
-        assert dev.link.idle_after_error == pytest.approx(33 / 38400)
+        assert dev.face().link.idle_after_error == pytest.approx(33 / 38400)
     finally:
         runtime.stop()
 

@@ -52,14 +52,33 @@ monitoring, no following error); the count always counts.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from devsim.core.axis import Watch
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.reference import ReferenceRun
 
-if TYPE_CHECKING:
-    from devsim.devices.gms96.device import Gms96Device
+
+class CounterCard(Protocol):
+    """What this part needs of its card (the GMS96 model): exactly these names."""
+
+    M: Any
+    axis: Any
+    can_move: Any
+    cfg: Any
+    changed: Any
+    clock: Any
+    controller: Any
+    estop: Any
+    image: Any
+    indexer: Any
+    machine_to_physical: Any
+    monitoring_cause: Any
+    n: Any
+    nv_M: Any
+    physical_to_machine: Any
+    record_event: Any
+    save_static: Any
 
 __all__ = ["CounterInput", "CounterReferenceRun", "H22_BYTES"]
 
@@ -68,7 +87,7 @@ H22_BYTES = 16  # min count, position at min, max count, position at max (4 byte
 
 
 class CounterInput:
-    def __init__(self, dev: Gms96Device) -> None:
+    def __init__(self, dev: CounterCard) -> None:
         self.dev = dev
         self.active = False
         self.sync = False

@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from devsim.core.axis import Axis, Watch
 from devsim.core.clock import Timer
@@ -22,8 +22,48 @@ from devsim.devices.gms96 import tables
 from devsim.devices.gms96.counter import CounterReferenceRun
 from devsim.devices.gms96.reference import ReferenceRun, resolver_position
 
-if TYPE_CHECKING:
-    from devsim.devices.gms96.device import Gms96Device
+
+class ExecutorCard(Protocol):
+    """What this part needs of its card (the GMS96 model): exactly these names."""
+
+    M: Any
+    activate_controller: Any
+    arm_torque_abort: Any
+    can_move: Any
+    cfg: Any
+    changed: Any
+    clock: Any
+    counter: Any
+    estop: Any
+    f: Any
+    f_frac: Any
+    g92: Any
+    g96: Any
+    g_relative: Any
+    h22_active: Any
+    i2t_latched: Any
+    idxoff: Any
+    image: Any
+    in_position: Any
+    indexer: Any
+    input_name: Any
+    monitoring_cause: Any
+    n: Any
+    output_bit: Any
+    plc: Any
+    programs: Any
+    queued_setting: Any
+    record_event: Any
+    save_eeprom: Any
+    save_static: Any
+    set_counter_here: Any
+    setpoint_work: Any
+    signals: Any
+    spindle: Any
+    waiting_in_position: Any
+    work_to_physical: Any
+    write_marker_byte: Any
+    write_output: Any
 
 __all__ = ["Cmd", "Executor", "TRANSPARENT_P10"]
 
@@ -58,7 +98,7 @@ def transparent(cmd: Cmd) -> bool:
 class Executor:
     """FIFO of queued commands and the one command being executed."""
 
-    def __init__(self, dev: Gms96Device) -> None:
+    def __init__(self, dev: ExecutorCard) -> None:
         self.dev = dev
         self.queue: deque[Cmd] = deque()
         self.deferred: deque[tuple[Cmd, Callable[[], None]]] = deque()

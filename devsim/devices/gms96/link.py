@@ -21,13 +21,27 @@ timeout.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from collections.abc import Callable
+from typing import Any, Protocol
 
-from devsim.core.clock import Timer
+from devsim.core.clock import Clock, Timer
 from devsim.devices.gms96 import codec
 
-if TYPE_CHECKING:
-    from devsim.devices.gms96.device import Gms96Device
+
+class LinkCard(Protocol):
+    """What the link needs of its card (the GMS96 model)."""
+
+    clock: Clock
+    cfg: Any
+    dil: Any
+    address: int
+    e_version: bool
+    link_errors: dict[str, int]
+
+    @property
+    def silent(self) -> bool: ...
+
+    def record_event(self, name: str) -> None: ...
 
 __all__ = ["Link", "NO_REPLY"]
 
@@ -38,15 +52,23 @@ IDLE_BITS = 33  #: FT1.2 R4 minimum line idle after an error, in bit times
 class Link:
     """Decoder, address filter, duplicate suppression, reply timing."""
 
-    def __init__(self, dev: Gms96Device) -> None:
+    def __init__(
+        self,
+        dev: LinkCard,
+        short_command: Callable[[int, bytes], bytes | None],
+        letter_command: Callable[..., bytes | None],
+        write: Callable[[bytes], None],
+    ) -> None:
         self.dev = dev
+        self.short_command = short_command
+        self.letter_command = letter_command
+        self.write = write
         self.decoder = codec.FrameDecoder(
             short_extension=codec.short_extension_device, char_timeout=dev.cfg.link.char_timeout
         )
-        self.silent_until = 0.0
         self.last_fcb: int | None = None
         self.last_reply = NO_REPLY
-        self.errors: dict[str, int] = {}
+        self.errors = dev.link_errors
         self.frames = 0
         self._expire: Timer | None = None
         self.error_hold = False  # R4: an error was detected, waiting for line idle
@@ -63,12 +85,14 @@ class Link:
         self.last_fcb = None
         self.last_reply = NO_REPLY
 
-    def silence(self, seconds: float) -> None:
-        self.silent_until = max(self.silent_until, self.dev.clock.now() + seconds)
-
     @property
     def silent(self) -> bool:
-        return self.dev.clock.now() < self.silent_until or not self.dev.powered
+        return self.dev.silent
+
+    def close(self) -> None:
+        if self._expire is not None:
+            self._expire.cancel()
+            self._expire = None
 
     # -- input ----------------------------------------------------------------------------------
     def feed(self, data: bytes) -> None:
@@ -134,7 +158,7 @@ class Link:
         number = codec.short_command_number(frame.control)
         if number == 0 and self.dev.e_version:
             self.last_fcb = None
-        reply = self.dev.short_command(number, frame.extension)
+        reply = self.short_command(number, frame.extension)
         self.send(reply)
 
     def _long(self, frame: codec.LongFrame) -> None:
@@ -160,7 +184,7 @@ class Link:
                 self.last_fcb = fcb
         cmd, params, count = parsed
         deferred = self._deferred_reply if mine else _no_reply
-        reply = self.dev.letter_command(cmd, params, count, frame.data, deferred=deferred)
+        reply = self.letter_command(cmd, params, count, frame.data, deferred=deferred)
         if mine is None:
             return  # broadcast: executed, never answered (not even a deferred E5h)
         if check and fcv:
@@ -180,9 +204,9 @@ class Link:
             return
         delay = self.dev.cfg.link.response_delay
         if delay > 0:
-            self.dev.clock.call_later(delay, lambda: self.dev.send(data))
+            self.dev.clock.call_later(delay, lambda: self.write(data))
         else:
-            self.dev.send(data)
+            self.write(data)
 
 
 def _no_reply(reply: bytes) -> None:

@@ -13,13 +13,39 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from devsim.core.axis import Axis, RampProfile, RegionSwitch, Segment, Watch, _IndexRule, _RangeRule, _Rule
 from devsim.core.clock import Timer
 
-if TYPE_CHECKING:
-    from devsim.devices.gms96.device import Gms96Device
+
+class IndexerCard(Protocol):
+    """What this part needs of its card (the GMS96 model): exactly these names."""
+
+    B: Any
+    M: Any
+    S: Any
+    arm_in_position: Any
+    arm_torque_abort: Any
+    cfg: Any
+    clock: Any
+    controller: Any
+    enable_blocked: Any
+    ext_override: Any
+    f: Any
+    f_frac: Any
+    feed_mode: Any
+    following_error_fault: Any
+    n: Any
+    nv_M: Any
+    o2_value: Any
+    override_on: Any
+    record_event: Any
+    signals: Any
+    spindle_rpm: Any
+    stepper: Any
+    stop_marker: Any
+    v_factor: Any
 
 __all__ = ["ActualSwitch", "ActualWatch", "Indexer"]
 
@@ -37,7 +63,7 @@ def _dwell(axis: Axis, seconds: float, on_done: Callable[[], None]) -> None:
 class Indexer:
     """Set-point generation and the position-loop model of one card."""
 
-    def __init__(self, dev: Gms96Device, axis: Axis) -> None:
+    def __init__(self, dev: IndexerCard, axis: Axis) -> None:
         self.dev = dev
         self.axis = axis
         self.target: float | None = None  # physical end of the running plan (chain)

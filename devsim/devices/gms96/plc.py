@@ -40,13 +40,35 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from devsim.core.clock import Timer
 from devsim.devices.gms96.image import parse_bit
 
-if TYPE_CHECKING:
-    from devsim.devices.gms96.device import Gms96Device
+
+class PlcCard(Protocol):
+    """What this part needs of its card (the GMS96 model): exactly these names."""
+
+    axis: Any
+    booting: Any
+    cfg: Any
+    changed: Any
+    clock: Any
+    counter: Any
+    dil: Any
+    hw: Any
+    image: Any
+    indexer: Any
+    input_byte: Any
+    marker_byte: Any
+    output_bit: Any
+    plc_frames: Any
+    plc_image: Any
+    powered: Any
+    record_event: Any
+    save_flash: Any
+    write_marker_bit: Any
+    write_marker_byte: Any
 
 __all__ = ["M_FUNCTION_BITS", "Plc"]
 
@@ -75,7 +97,7 @@ def load_hook(spec: str) -> Hook:
 class Plc:
     """The scripted PLC of one card: run state, download image, cycle and rules."""
 
-    def __init__(self, dev: Gms96Device) -> None:
+    def __init__(self, dev: PlcCard) -> None:
         self.dev = dev
         self.cfg = dev.cfg.plc
         self.running = False

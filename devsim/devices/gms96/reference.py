@@ -12,21 +12,32 @@ Switch and index crossings are solved on the ACTUAL position (``ActualSwitch``,
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 from devsim.core.axis import Watch
 from devsim.core.clock import Timer
 from devsim.devices.gms96.motion import ActualWatch
 
-if TYPE_CHECKING:
-    from devsim.devices.gms96.device import Gms96Device
+
+class ReferenceCard(Protocol):
+    """What this part needs of its card (the GMS96 model): exactly these names."""
+
+    clock: Any
+    idxoff: Any
+    image: Any
+    indexer: Any
+    machine_to_physical: Any
+    n: Any
+    record_event: Any
+    set_counter_here: Any
+    signals: Any
 
 __all__ = ["ReferenceRun", "MESSAGE_DISTANCE_LIMIT", "resolver_position"]
 
 MESSAGE_DISTANCE_LIMIT = 23
 
 
-def resolver_position(dev: Gms96Device) -> int:
+def resolver_position(dev: ReferenceCard) -> int:
     """Absolute position within the pole pass, -period/2..period/2-1 (P2.6 with P3 = 0, and
     ``Q3;64``); the pole pass starts at an (electronic) index mark (``index_offset`` +
     k·``index_period``)."""
@@ -39,7 +50,7 @@ def resolver_position(dev: Gms96Device) -> int:
 class ReferenceRun:
     """One running reference sequence; ``done(success)`` is called exactly once."""
 
-    def __init__(self, dev: Gms96Device, p1: int, p2: int, p3: int, done: Callable[[bool], None]) -> None:
+    def __init__(self, dev: ReferenceCard, p1: int, p2: int, p3: int, done: Callable[[bool], None]) -> None:
         self.dev = dev
         self.p1, self.p2, self.p3 = p1, p2 & 0xFF, p3
         self.done = done

@@ -440,6 +440,10 @@ N_SIMULATOR_DEFAULTS: frozenset[int] = frozenset({8, 19, 22, 28, 32, 33, 39, 42,
 #: N parameters holding two values selected by P3 (0 = lower, 1 = upper): only N8.
 N_DUAL_VALUE: frozenset[int] = frozenset({8})
 
+#: N parameters kept and answered but without an effect in the simulator (the generated
+#: reference marks them "stored"); filled from a search of the card's code for each index.
+N_STORED_ONLY: frozenset[int] = frozenset()
+
 #: N10 range with the stepper software (KS4/KS8): corner frequency in kHz [M N10].
 N10_STEPPER_RANGE: tuple[int, int] = (10, 500)
 

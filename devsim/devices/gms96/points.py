@@ -1,0 +1,308 @@
+"""The GMS96's control names, signals and faults, declared once (spec gms96.md §7, manual per row).
+
+``param.N<k>`` rows are generated from the N-parameter table, ``marker.MB<n>`` and the marker
+bits from the process image's layout; spellings the card's documentation uses (``param.n15``,
+``param.15``, ``marker.M7.0``) resolve through the alias hook.  Values are checked by type and
+range before they take effect; an N parameter also gets the card's own range rule.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from devsim.core.kit import Fault, FaultTable, SignalDef, signal_points
+from devsim.core.points import BadValue, Family, Point, PointTable
+from devsim.devices.gms96 import tables
+from devsim.devices.gms96.config import DilSwitch
+from devsim.devices.gms96.image import parse_bit
+
+__all__ = ["FAULTS", "LEDS", "POINTS", "SIGNALS"]
+
+INPUT_BYTES = 4  # EB0..EB3
+LEDS = {"dc_overvoltage": "red", "dc_undervoltage": "yellow", "overtemperature": "green"}
+
+SIGNALS: tuple[SignalDef, ...] = (
+    *(SignalDef(f"E{byte}.{bit}", "input", False, f"24 V input E{byte}.{bit}", "§4.4")
+      for byte in range(INPUT_BYTES) for bit in range(8)),
+    *(SignalDef(f"A{n // 8}.{n % 8}", "output", False, f"24 V output A{n // 8}.{n % 8}", "§4.4") for n in range(16)),
+    SignalDef("emergency_stop", "input", False, "Notaus input at 0 V (low-active): emergency stop", "§2.2"),
+    SignalDef("override_pot", "quantity", 100.0, "override potentiometer", "§2.3.1 o", "%", minimum=0, maximum=125),
+    SignalDef("load_pct", "quantity", 0.0, "load current in % of the maximum current (I²t)", "§4.5.3", "%",
+              minimum=0, maximum=1000),
+    SignalDef("blocked", "quantity", False, "the mechanics hold the axis (following error grows)", "§4.5.3",
+              type="bool"),
+    SignalDef("monitoring", "quantity", "", "power-stage monitoring cause ('' = none)", "§4.5.3", type="str"),
+    SignalDef("output_overload", "quantity", False, "24 V outputs overloaded / short-circuited", "§4.5.3",
+              type="bool"),
+    SignalDef("ref_pulse_hz", "quantity", 0.0, "pulse rate on the counter input reference track (Q8)", "§5.10",
+              "Hz", minimum=0, maximum=1e7),
+)
+
+
+def _n_point(p: tables.NParam) -> Point:
+    def put(card: Any, value: Any, index: int = p.index) -> None:
+        card.set_n(index, value)
+
+    return Point(
+        f"param.N{p.index}",
+        "int",
+        p.name_en or p.name,
+        f"§2.3.1 N{p.index}",
+        p.unit,
+        get=lambda card, index=p.index: card.n(index),
+        put=put,
+        minimum=tables.INT24_MIN if p.minimum is None else p.minimum,
+        maximum=tables.INT24_MAX if p.maximum is None else p.maximum,
+    )
+
+
+def _marker_byte(n: int) -> Point:
+    def put(card: Any, value: Any) -> None:
+        card.write_marker_byte(n, value)
+
+    return Point(f"marker.MB{n}", "int", f"marker byte MB{n}", "§4.4", get=lambda card: card.marker_byte(n), put=put,
+                 minimum=0, maximum=255)
+
+
+def _marker_bit(byte: int, bit: int) -> Point:
+    def put(card: Any, value: Any) -> None:
+        card.write_marker_bit(byte, bit, value)
+
+    return Point(f"marker.M{byte}.{bit}", "bool", f"marker bit M{byte}.{bit}", "§4.4",
+                 get=lambda card: bool(card.marker_byte(byte) >> bit & 1), put=put)
+
+
+def _alias(name: str) -> str | None:
+    """``param.n15`` / ``param.15`` → ``param.N15``; ``marker.mb4`` → ``marker.MB4``."""
+    section, dot, rest = name.partition(".")
+    if not dot:
+        return None
+    if section == "param":
+        key = rest.upper().lstrip("N")
+        return f"param.N{int(key)}" if key.isascii() and key.isdigit() else None
+    if section == "marker":
+        upper = rest.upper()
+        if upper.startswith("MB") and upper[2:].isdigit():
+            return f"marker.MB{int(upper[2:])}"
+        return f"marker.{upper}"
+    return None
+
+
+def _set_dil(field: str) -> Any:
+    def put(card: Any, value: Any) -> None:
+        data = card.pending_dil.model_dump()
+        data[field] = value
+        try:
+            card.pending_dil = DilSwitch.model_validate(data)  # read at the next reset (§2.2)
+        except ValueError as exc:
+            raise BadValue(f"dil.{field}: {exc.errors()[0]['msg'] if hasattr(exc, 'errors') else exc}") from None
+
+    return put
+
+
+def _set_attr(attr: str) -> Any:
+    return lambda card, value: setattr(card, attr, value)
+
+
+def _plc_running(card: Any, value: bool) -> None:
+    if value:
+        card.plc.start()
+    else:
+        card.plc.stop()
+
+
+def _message(card: Any, value: int) -> None:
+    card.image.post_message(value)
+    card.changed()
+
+
+def _tool_offset(card: Any, value: int) -> None:
+    card.cfg = card.cfg.model_copy(update={"tool_offset": value})
+
+
+def _register(n: int) -> Point:
+    return Point(f"register.{n}", "int", f"data register {n} (4 bytes, signed)", "§4.6",
+                 get=lambda card: int.from_bytes(card.image.data[4 * n : 4 * n + 4], "little", signed=True))
+
+
+_PLAIN: list[Point] = [
+    # -- the shared vocabulary -------------------------------------------------------------
+    Point("axis.position", "float", "actual position (set-point − v/Kv), increments in the machine frame",
+          "§5.1", "inc", get=lambda c: c.physical_to_machine(c.indexer.actual()), in_state=True, shared=True),
+    Point("axis.velocity", "float", "set-point velocity", "§5.1", "inc/s", get=lambda c: c.axis.velocity(),
+          in_state=True, shared=True),
+    Point("motion", "bool", "the axis moves (motion bit of the status byte)", "§4.3", get=lambda c: c.motion(),
+          shared=True),
+    Point("energized", "bool", "the position controller drives the motor", "§4.5.3",
+          get=lambda c: bool(c.controller and c.powered), shared=True),
+    Point("ready", "bool", "powered, booted, no emergency stop and no monitoring fault", "§4.5.3",
+          get=lambda c: bool(c.powered and not c.booting and not c.estop and not c.monitoring_cause()),
+          shared=True),
+    Point("fault", "bool", "an emergency stop or a monitoring fault is active", "§4.5.3",
+          get=lambda c: bool(c.estop or c.monitoring_cause()), shared=True),
+    # -- the axis ---------------------------------------------------------------------------
+    Point("axis.setpoint", "float", "set-point in the machine frame", "§5.1", "inc",
+          get=lambda c: c.physical_to_machine(c.axis.position())),
+    Point("axis.physical", "float", "actual position in the physical frame", "§5.1", "inc",
+          get=lambda c: c.indexer.actual()),
+    Point("axis.acceleration", "float", "set-point acceleration", "§5.1", "inc/s²",
+          get=lambda c: c.axis.acceleration()),
+    Point("axis.moving", "bool", "the set-point moves", "§5.1", get=lambda c: c.axis.moving),
+    Point("axis.phase", "str", "the ramp phase of the set-point", "§5.2", get=lambda c: c.axis.phase()),
+    Point("axis.following_error", "float", "following error", "§5.11", "inc",
+          get=lambda c: c.indexer.following_error()),
+    # -- the card ---------------------------------------------------------------------------
+    Point("status", "int", "status byte (T3;0)", "§4.3", get=lambda c: c.status(), in_state=True),
+    Point("K", "int", "K byte of the status Kurzsatz", "§4.3",
+          get=lambda c: tables.k_from_status(c.status(), bool(c.image.markers[4])), in_state=True),
+    Point("MB4", "int", "message marker byte MB4", "§4.4", get=lambda c: c.image.markers[4], in_state=True),
+    Point("memory_status", "int", "memory status byte (T3;4)", "§4.3", get=lambda c: c.memory_status()),
+    Point("position", "int", "set-point in the work frame (T0)", "§5.1", "inc", get=lambda c: c.setpoint_work(),
+          in_state=True),
+    Point("position_setpoint", "int", "set-point in the work frame", "§5.1", "inc",
+          get=lambda c: c.setpoint_work()),
+    Point("position_counter", "int", "actual position counter", "§5.1", "inc",
+          get=lambda c: round(c.physical_to_machine(c.indexer.actual()))),
+    Point("following_error", "float", "following error", "§5.11", "inc", get=lambda c: c.indexer.following_error(),
+          in_state=True),
+    Point("current", "float", "motor current as a fraction of the maximum (T1;5)", "§5.7",
+          get=lambda c: c.current()),
+    Point("busy", "bool", "BUSY: a command is being executed", "§4.3", get=lambda c: c.busy(), in_state=True),
+    Point("idxoff", "bool", "IDXOFF: no reference", "§4.3", get=lambda c: c.idxoff, in_state=True),
+    Point("estop", "bool", "the emergency stop is active", "§2.2", get=lambda c: c.estop, in_state=True),
+    Point("monitoring", "str", "the monitoring cause ('' = none)", "§4.5.3", get=lambda c: c.monitoring_cause()),
+    Point("controller", "bool", "the position controller is active", "§4.5.3", get=lambda c: c.controller,
+          in_state=True),
+    Point("speed", "float", "set-point speed", "§5.2", "inc/s", get=lambda c: abs(c.axis.velocity())),
+    Point("override", "float", "override in effect", "§2.3.1 o", "%", get=lambda c: c.indexer.override_pct()),
+    Point("queue_length", "int", "commands waiting in the queue", "§4.2.1", get=lambda c: len(c.executor.queue)),
+    Point("rejected_moves", "int", "moves refused since power-on", "§4.2.1", get=lambda c: c.executor.rejected_moves),
+    Point("g96_rpm", "float", "spindle speed computed by G96", "§5.9", "1/min", get=lambda c: c.executor.g96_rpm()),
+    Point("programs", "json", "stored CNC programs: number → commands", "§4.9",
+          get=lambda c: {k: len(v) for k, v in c.programs.items()}, in_state=True),
+    Point("address", "int", "the card address (DIL switch)", "§2.2", get=lambda c: c.address, in_state=True),
+    Point("protocol", "str", "S or E version (DIL 7)", "§2.2", get=lambda c: c.dil.protocol, in_state=True),
+    Point("booting", "bool", "the card boots and does not listen", "§2.3.1", get=lambda c: c.booting),
+    Point("powered", "bool", "the card has power", "§4.1.2", get=lambda c: c.powered, in_state=True),
+    Point("silent", "bool", "the card ignores the line (boot, flash erase)", "§2.3.1 p", get=lambda c: c.silent),
+    Point("i2t_active", "bool", "I²t limits the current", "§4.5.3", get=lambda c: c.i2t_limiting),
+    Point("i2t_latched", "bool", "the I²t fault is latched", "§4.5.3", get=lambda c: c.i2t_latched),
+    Point("leds", "json", "the red, yellow and green LEDs", "§4.5.3",
+          get=lambda c: {color: LEDS.get(c.monitoring_cause()) == color for color in ("red", "yellow", "green")}),
+    Point("link_errors", "json", "frames the link dropped, by reason", "§2.3",
+          get=lambda c: dict(c.link_errors)),
+    Point("param.M", "int", "maximum speed setting M", "§2.3.1 M", get=lambda c: c.M, in_state=True),
+    Point("param.B", "int", "acceleration setting B", "§2.3.1 B", get=lambda c: c.B, in_state=True),
+    Point("param.S", "int", "S setting", "§2.3.1 S", get=lambda c: c.S, in_state=True),
+    Point("param.f", "int", "feed rate f", "§2.3.1 f", get=lambda c: c.f, in_state=True),
+    Point("message", "int", "post a message (MB4 FIFO)", "§4.4", put=_message, minimum=0, maximum=255, example=1),
+    Point("tool_offset", "int", "the tool offset", "§5.9", "inc", get=lambda c: c.cfg.tool_offset, put=_tool_offset),
+    Point("plc", "json", "the PLC's state", "§4.10", get=lambda c: c.plc.state(), in_state=True),
+    Point("plc.running", "bool", "the PLC cycles (p1;1 / p1;2)", "§4.10", get=lambda c: c.plc.state()["running"],
+          put=_plc_running),
+    Point("plc.image", "str", "the PLC image loaded by a download", "§4.10", get=lambda c: c.plc_image),
+    Point("plc.frames", "json", "the downloaded PLC frames", "§4.10", get=lambda c: list(c.plc_frames)),
+    Point("counter", "json", "the counter input's state", "§5.10", get=lambda c: c.counter.state(), in_state=True),
+    Point("counter.pulses", "int", "count pulses at the counter input (as if they arrived)", "§5.10",
+          put=lambda c, v: c.counter.pulses(v), example=0),
+    Point("counter.rate_hz", "float", "pulse rate at the counter input", "§5.10", "Hz",
+          get=lambda c: c.counter.state().get("rate_hz", 0.0), put=lambda c, v: c.counter.set_rate(v),
+          minimum=-1e7, maximum=1e7),
+    *(Point(f"dil.{field}", kind, f"DIL switch {field} (read at the next reset)", "§2.2",
+            get=lambda c, f=field: getattr(c.pending_dil, f), put=_set_dil(field))
+      for field, kind in (("address", "int"), ("protocol", "str"), ("baud", "int"), ("interpolation", "bool"))),
+]
+
+def _marker(name: str) -> Point | None:
+    rest = name.removeprefix("marker.")
+    if rest == name:
+        return None
+    if rest.startswith("MB") and rest[2:].isdigit() and 0 <= int(rest[2:]) < tables.MARKER_BYTE_COUNT:
+        return _marker_byte(int(rest[2:]))
+    try:
+        area, byte, bit = parse_bit(rest)
+    except ValueError:
+        return None
+    if area != "M" or not 0 <= byte < tables.MARKER_BYTE_COUNT or not 0 <= bit < 8:
+        return None
+    return _marker_bit(byte, bit)
+
+
+def _numbered(prefix: str, count: int, make: Any) -> Any:
+    def family(name: str) -> Point | None:
+        rest = name.removeprefix(prefix)
+        if rest != name and rest.isascii() and rest.isdigit() and int(rest) < count:
+            return make(int(rest))
+        return None
+
+    return family
+
+
+def _data(n: int) -> Point:
+    return Point(f"data.{n}", "int", f"data byte {n}", "§4.6", get=lambda c: c.image.data[n])
+
+
+def _plc_key(key: str, doc: str, kind: Any = "int") -> Point:
+    return Point(f"plc.{key}", kind, doc, "§4.10", get=lambda c: c.plc.state()[key])
+
+
+def _counter_key(key: str, doc: str, kind: Any = "int") -> Point:
+    return Point(f"counter.{key}", kind, doc, "§5.10", get=lambda c: c.counter.state()[key])
+
+
+def _set_monitoring(card: Any, value: str) -> None:
+    card.signals.set("monitoring", "" if value == "clear" else value)
+
+
+POINTS = PointTable.of(
+    _PLAIN,
+    signal_points(s for s in SIGNALS if s.name != "monitoring"),
+    [
+        Point("quantity.monitoring", "str", "power-stage monitoring cause, e.g. dc_undervoltage ('' or clear: none)", "§4.5.3",
+              get=lambda c: c.signals.get("monitoring"), put=_set_monitoring,
+              in_state=True, shared=True),
+    ],
+    (_n_point(p) for p in tables.N_PARAMETERS.values()),
+    [
+        _plc_key("loaded", "a PLC program is stored", "bool"),
+        _plc_key("cycles", "PLC cycles run"),
+        _plc_key("cycle_ms", "the PLC cycle time", "float"),
+        _plc_key("storage_error", "the PLC program did not fit", "bool"),
+        _plc_key("image_bytes", "bytes of the PLC image"),
+        _counter_key("mode", "counter-input mode active", "bool"),
+        _counter_key("sync", "the counter is synchronised", "bool"),
+        _counter_key("count", "the counter value"),
+        _counter_key("weight", "the counter weight", "float"),
+        _counter_key("h22", "the H22 min/max measurement", "json"),
+        _counter_key("h22_running", "an H22 measurement runs", "bool"),
+    ],
+    alias=_alias,
+    families=[
+        Family("marker.MB<n>", "int", "marker byte MB0 … MB255 (MB0, MB1 overlaid by the status)", "§4.4", _marker),
+        Family("marker.M<byte>.<bit>", "bool", "marker bit, e.g. M7.0", "§4.4", _marker),
+        Family("data.<n>", "int", "data byte 0 … 255", "§4.6", _numbered("data.", 256, _data), "r"),
+        Family("register.<n>", "int", "data register 0 … 19 (4 bytes, signed)", "§4.6",
+               _numbered("register.", 20, _register), "r"),
+    ],
+)
+
+
+def _signal(name: str, value: Any) -> Any:
+    def apply(card: Any, active: bool) -> None:
+        card.signals.set(name, value(active))
+
+    return apply
+
+
+FAULTS = FaultTable(
+    [
+        Fault("blocked_axis", "the mechanics hold the axis: the following error grows until N20 trips", "§4.5.3",
+              _signal("blocked", bool)),
+        Fault("emergency_stop", "Notaus at 0 V: power stage off, motion aborted, queue flushed", "§2.2",
+              _signal("emergency_stop", bool)),
+        Fault("power", "the supply is off while active; a power-on afterwards", "§4.1.2",
+              lambda card, active: card.power(not active)),
+        Fault("monitoring", "power-stage monitoring trips (DC undervoltage) while active", "§4.5.3",
+              _signal("monitoring", lambda active: "dc_undervoltage" if active else "")),
+    ]
+)
