@@ -11,7 +11,9 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from devsim.devices.gms96.tables import INT24_MAX, INT24_MIN, N_PARAMETERS
 
 __all__ = [
     "AxisGeometry",
@@ -146,6 +148,12 @@ class PlcOptions(_Strict):
     hook: str | None = Field(default=None, description="'package.module:function' called every cycle")
 
 
+#: Keys only a SERS configuration has.
+_SERS_KEYS = frozenset({"address", "autostart", "baud", "input_level", "service_switch", "current_class",
+                        "supply_class", "options", "supply_voltage", "heatsink_temperature", "initially_selected",
+                        "broadcast_reply", "encoding"})
+
+
 class Gms96Config(_Strict):
     """What a user can set for one GMS96 card (``--config FILE.yaml`` or a plant file)."""
 
@@ -168,14 +176,42 @@ class Gms96Config(_Strict):
         default=None, ge=0, le=240, description="H22;0 copies the measurement to this data byte (FB 254/22)"
     )
 
+    @model_validator(mode="before")
+    @classmethod
+    def _not_a_sers_file(cls, value: object) -> object:
+        """A SERS configuration given to a GMS96 says so, instead of 'unknown field'."""
+        if isinstance(value, dict):
+            sers_keys = sorted(set(map(str, value)) & _SERS_KEYS)
+            if sers_keys:
+                raise ValueError(
+                    f"this looks like a SERS configuration ({', '.join(sers_keys)}), not a GMS96 one:"
+                    " a GMS96 has dil, variant, params (N parameters), axis, link, plc ..."
+                )
+        return value
+
     @field_validator("params", mode="before")
     @classmethod
     def _params(cls, value: object) -> object:
-        """Accept ``{N10: 300}`` as well as ``{10: 300}``."""
+        """Accept ``{N10: 300}`` as well as ``{10: 300}``; each N parameter must exist (§2.3.1 N)."""
         if isinstance(value, dict):
             out = {}
             for key, val in value.items():
                 text = str(key).strip().upper()
-                out[int(text[1:]) if text.startswith("N") else int(text)] = val
+                number = text[1:] if text.startswith("N") else text
+                if not (number.isascii() and number.isdigit()) or int(number) not in N_PARAMETERS:
+                    raise ValueError(f"{key}: no such parameter")
+                out[int(number)] = val
             return out
+        return value
+
+    @field_validator("params")
+    @classmethod
+    def _param_ranges(cls, value: dict[int, int]) -> dict[int, int]:
+        """Each value within the parameter's own range, as the manual states it."""
+        for index, number in value.items():
+            pdef = N_PARAMETERS[index]
+            low = INT24_MIN if pdef.minimum is None else pdef.minimum
+            high = INT24_MAX if pdef.maximum is None else pdef.maximum
+            if not low <= number <= high:
+                raise ValueError(f"N{index}: {number} is outside {low} … {high}")
         return value

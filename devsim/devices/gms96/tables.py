@@ -441,8 +441,11 @@ N_SIMULATOR_DEFAULTS: frozenset[int] = frozenset({8, 19, 22, 28, 32, 33, 39, 42,
 N_DUAL_VALUE: frozenset[int] = frozenset({8})
 
 #: N parameters kept and answered but without an effect in the simulator (the generated
-#: reference marks them "stored"); filled from a search of the card's code for each index.
-N_STORED_ONLY: frozenset[int] = frozenset()
+#: reference marks them "stored"): found by searching the card's code for each index.  The
+#: controller gains and sample time act on a loop the simulator replaces by the v/Kv lag model
+#: (N10); resolver, measurement and reserved entries have no effect a host could see; N32
+#: (position monitoring on/off) and N52/N53 (I/O card counts) have one the simulator lacks.
+N_STORED_ONLY: frozenset[int] = frozenset({11, 12, 13, 16, 25, 26, 32, 34, 35, 43, 44, 45, 52, 53, 54, 55, 56})
 
 #: N10 range with the stepper software (KS4/KS8): corner frequency in kHz [M N10].
 N10_STEPPER_RANGE: tuple[int, int] = (10, 500)

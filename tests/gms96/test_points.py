@@ -1,0 +1,86 @@
+"""The GMS96's declared names, checked values, declared faults and checked configuration."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from devsim.core.clock import VirtualClock
+from devsim.core.config import ConfigError, load_config
+from devsim.core.points import BadValue, ReadOnlyName, UnknownName
+from devsim.devices.gms96 import Gms96Device
+from devsim.devices.gms96.config import Gms96Config
+from devsim.scenario.runner import run_scenario
+from devsim.scenario.schema import scenario_from_dict
+
+
+@pytest.fixture
+def card() -> Gms96Device:
+    clock = VirtualClock()
+    device = Gms96Device(clock=clock, config={"boot_time": 0})
+    return device
+
+
+def test_values_are_checked_before_they_take_effect(card: Gms96Device) -> None:
+    card.set("quantity.override_pot", 50)
+    for bad in ("hello", float("nan"), 126, "1e400"):
+        with pytest.raises(BadValue):
+            card.set("quantity.override_pot", bad)
+    assert card.read("quantity.override_pot") == 50.0
+    with pytest.raises(BadValue, match="param.N20: .* above the maximum 15000"):
+        card.set("param.N20", 20000)
+    assert card.read("param.n20") == card.read("param.20")
+
+
+def test_names_read_only_and_suggestions(card: Gms96Device) -> None:
+    with pytest.raises(ReadOnlyName, match="status of gms96 is read-only"):
+        card.set("status", 0)
+    with pytest.raises(UnknownName, match="did you mean following_error"):
+        card.read("folowing_error")
+    card.set("marker.M41.3", True)
+    assert card.read("marker.m41.3") is True and card.read("marker.MB41") == 8
+    with pytest.raises(UnknownName):
+        card.read("marker.M300.1")
+
+
+def test_every_declared_fault(card: Gms96Device) -> None:
+    assert card.faults.names() == ["blocked_axis", "emergency_stop", "power", "monitoring"]
+    card.fault("monitoring", True)
+    assert card.read("monitoring") == "dc_undervoltage" and card.read("fault") is True
+    card.fault("monitoring", False)
+    assert card.read("monitoring") == ""
+    card.fault("power", True)
+    assert card.read("powered") is False
+    card.fault("power", False)
+    assert card.read("powered") is True
+
+
+def test_the_monitoring_fault_from_a_scenario() -> None:
+    result = run_scenario(
+        scenario_from_dict(
+            {
+                "devices": [{"name": "card", "kind": "gms96", "config": {"boot_time": 0}}],
+                "steps": [
+                    {"fault": {"device": "card", "kind": "monitoring", "duration": "1s"}},
+                    {"expect_state": {"device": "card", "name": "monitoring", "equals": "dc_undervoltage"}},
+                    {"after": "2s", "expect_state": {"device": "card", "name": "monitoring", "equals": ""}},
+                ],
+            }
+        ),
+        mode="virtual",
+    )
+    assert result.passed, [s.message for s in result.steps]
+
+
+def test_configuration_checked_against_the_tables(tmp_path: Path) -> None:
+    path = tmp_path / "card.yaml"
+    path.write_text("params:\n  N999: 1\n")
+    with pytest.raises(ConfigError, match=r"card.yaml:1: params: N999: no such parameter"):
+        load_config(path, Gms96Config)
+    path.write_text("params:\n  N20: 999999999\n")
+    with pytest.raises(ConfigError, match=r"N20: 999999999 is outside 10 … 15000"):
+        load_config(path, Gms96Config)
+    path.write_text("address: 1\nbaud: 9600\n")
+    with pytest.raises(ConfigError, match=r"looks like a SERS configuration \(address, baud\)"):
+        load_config(path, Gms96Config)
