@@ -27,326 +27,38 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections import deque
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
-from typing import Any, Literal
+from collections.abc import Callable
+from typing import Any
 
 from devsim.core.clock import Clock, Timer
+from devsim.core.profile import (
+    ABS_X,
+    HISTORY,
+    REL_T,
+    REL_X,
+    IndexRule,
+    Phase,
+    PhaseSpec,
+    Ramp,
+    RampProfile,
+    RangeRule,
+    Rule,
+    Segment,
+    Shape,
+    make_ramp,
+    sign,
+)
 
-__all__ = ["Axis", "Phase", "RampProfile", "RegionSwitch", "Segment", "Shape", "Watch"]
+__all__ = ["Axis", "IndexRule", "Phase", "RampProfile", "RangeRule", "RegionSwitch", "Rule", "Segment", "Shape", "Watch"]
 
-Phase = Literal["idle", "accel", "const", "decel"]
-Shape = Literal["linear", "sine"]
-_PhaseSpec = tuple[float, float, float, Shape]  # (acceleration, duration, end velocity, shape)
+
 Callback = Callable[[], None]
 CrossingCallback = Callable[[int], None]
-
-_REL_X = 1e-11  # relative position tolerance (positions are up to ~1e9 inc)
-_ABS_X = 1e-9
-_REL_T = 1e-12  # phases shorter than this (relative to the clock) are dropped
-_HISTORY = 64
-
-
-def _sgn(x: float) -> int:
-    return (x > 0) - (x < 0)
-
-
-def _theta_minus_sin(th: float) -> float:
-    """``th - sin(th)`` without the cancellation for small ``th`` (series below 0.25)."""
-    if th < 0.25:
-        q = th * th
-        return th * q / 6.0 * (1.0 - q / 20.0 * (1.0 - q / 42.0 * (1.0 - q / 72.0 * (1.0 - q / 110.0))))
-    return th - math.sin(th)
-
-
-@dataclass(frozen=True)
-class RampProfile:
-    """SERS P1032/P1005–P1008 (spec §5.2): up to three speed sections per ramp.
-
-    Section 1: 0 → v1 = ``speed1``·V with acceleration ``accel1``·A; section 2: v1 → v2 =
-    ``speed2``·V with ``accel2``·A; section 3: v2 → V with A (and beyond V, when an axis that is
-    faster than the new V slows down, A as well).  Deceleration mirrors the same sections with the
-    deceleration as base (braking from V to v2 with D, v2 → v1 with ``accel2``·D, v1 → 0 with
-    ``accel1``·D).  The fractions are in 0..1 (P1007 = ``speed1``·100 %, P1005 = ``accel1``·100 %,
-    P1008 = ``speed2``·100 %, P1006 = ``accel2``·100 %).  A section whose speed range is empty
-    (v1 = 0, v2 <= v1) or whose acceleration fraction is 0 is absent: its speed range belongs to
-    the next section present.
-
-    ``shape`` (P1032): ``"linear"`` is constant acceleration in each section; ``"sine"`` makes each
-    section's velocity change a raised cosine ``v(t) = va + (vb-va)·(1-cos(pi·t/T))/2`` with the
-    linear section's duration ``T = (vb-va)/a``: the average acceleration is the section's, the
-    peak pi/2 of it, and durations and distances equal the linear ones.  With every fraction 1.0
-    and ``"linear"`` this is the plain trapezoid (exactly the plan made without a profile).
-    """
-
-    speed1: float = 1.0
-    accel1: float = 1.0
-    speed2: float = 1.0
-    accel2: float = 1.0
-    shape: Shape = "linear"
-
-    def __post_init__(self) -> None:
-        for name in ("speed1", "accel1", "speed2", "accel2"):
-            value = getattr(self, name)
-            if not 0.0 <= value <= 1.0:  # also rejects nan
-                raise ValueError(f"{name} must be in 0..1, not {value!r}")
-        if self.shape not in ("linear", "sine"):
-            raise ValueError(f"shape must be 'linear' or 'sine', not {self.shape!r}")
-
-
-class _Ramp:
-    """A :class:`RampProfile` made concrete for reference speed ``vref`` and base acceleration
-    ``base``: speed sections ``[bounds[i-1], bounds[i])`` (from 0; the last bound is inf) with
-    acceleration ``accs[i]``.  Distances and durations are those of constant acceleration per
-    section, whatever the shape (a raised cosine has the linear section's average velocity)."""
-
-    def __init__(self, profile: RampProfile, vref: float, base: float) -> None:
-        self.shape: Shape = profile.shape
-        self.bounds: list[float] = []
-        self.accs: list[float] = []
-        fracs: list[float] = []
-        lo = 0.0
-        for fv, fa in ((profile.speed1, profile.accel1), (profile.speed2, profile.accel2), (math.inf, 1.0)):
-            if fa == 0.0:
-                continue
-            hi = math.inf if fv == math.inf else fv * vref
-            if not hi > lo:
-                continue
-            if fracs and fracs[-1] == fa and self.shape == "linear":
-                self.bounds[-1] = hi  # the same constant acceleration: one section
-            else:
-                self.bounds.append(hi)
-                self.accs.append(fa * base)
-                fracs.append(fa)
-            lo = hi
-
-    @property
-    def trivial(self) -> bool:
-        """One linear section with the base acceleration: the plain ramp."""
-        return self.shape == "linear" and len(self.accs) == 1
-
-    def _overlaps(self, lo: float, hi: float) -> Iterator[tuple[float, float, float]]:
-        """``(a, b, acc)`` for each section's overlap with the speed range ``(lo, hi)``, ascending."""
-        start = 0.0
-        for bound, acc in zip(self.bounds, self.accs, strict=True):
-            a, b = max(start, lo), min(bound, hi)
-            if b > a:
-                yield a, b, acc
-            start = bound
-            if start >= hi:
-                break
-
-    def acc_at(self, v: float) -> float:
-        for bound, acc in zip(self.bounds, self.accs, strict=True):
-            if v < bound:
-                return acc
-        return self.accs[-1]
-
-    def distance(self, lo: float, hi: float) -> float:
-        """Distance covered while the speed changes between ``lo`` and ``hi`` (``lo <= hi``)."""
-        return sum((b - a) * (b + a) / (2.0 * acc) for a, b, acc in self._overlaps(lo, hi))
-
-    def up(self, u: float, w: float, s: int, phases: list[_PhaseSpec]) -> None:
-        """Append the phases speeding up from ``u`` to ``w`` (magnitudes) in direction ``s``."""
-        for a, b, acc in self._overlaps(u, w):
-            phases.append((s * acc, (b - a) / acc, s * b, self.shape))
-
-    def down(self, w: float, u: float, s: int, phases: list[_PhaseSpec], scale: float = 1.0) -> None:
-        """Append the phases slowing down from ``w`` to ``u`` (magnitudes) in direction ``s``;
-        ``scale`` multiplies every section's deceleration."""
-        for a, b, acc in reversed(list(self._overlaps(u, w))):
-            acc *= scale
-            phases.append((-s * acc, (b - a) / acc, s * a, self.shape))
-
-
-def _ramp(profile: RampProfile | None, vref: float, base: float) -> _Ramp | None:
-    """The concrete ramp, or None where it is the plain constant-acceleration ramp."""
-    if profile is None:
-        return None
-    ramp = _Ramp(profile, vref, base)
-    return None if ramp.trivial else ramp
-
-
-@dataclass(frozen=True)
-class Segment:
-    """Constant acceleration ``a`` from ``t0`` to ``t1`` starting at ``x0`` with velocity ``v0``.
-
-    ``t1`` is ``math.inf`` for an endless cruise (a jog).
-
-    ``shape="sine"``: the velocity is a raised cosine from ``v0`` to ``v0 + a*span`` over
-    ``span`` seconds (``a`` is the average acceleration, ``span`` the full ramp time, equal to
-    ``t1 - t0`` except for a segment cut short in the history):
-    ``v = v0 + a*span*(1 - cos(pi*dt/span))/2``,
-    ``x = x0 + v0*dt + a*span/2*(dt - span/pi*sin(pi*dt/span))``.
-    """
-
-    t0: float
-    t1: float
-    x0: float
-    v0: float
-    a: float
-    shape: Shape = "linear"
-    span: float = 0.0
-
-    def position(self, t: float) -> float:
-        return self._position(t - self.t0)
-
-    def velocity(self, t: float) -> float:
-        if self.shape == "linear":
-            return self.v0 + self.a * (t - self.t0)
-        return self._velocity(t - self.t0)
-
-    def acceleration(self, t: float) -> float:
-        """Instantaneous acceleration (for a sine segment: ``a*pi/2*sin(pi*dt/span)``)."""
-        if self.shape == "linear":
-            return self.a
-        return 0.5 * math.pi * self.a * math.sin(math.pi * (t - self.t0) / self.span)
-
-    def _position(self, dt: float) -> float:
-        if self.shape == "linear":
-            return self.x0 + (self.v0 + 0.5 * self.a * dt) * dt
-        span = self.span
-        return (
-            self.x0
-            + self.v0 * dt
-            + self.a * span * span / (2.0 * math.pi) * _theta_minus_sin(math.pi * dt / span)
-        )
-
-    def _velocity(self, dt: float) -> float:
-        h = math.sin(0.5 * math.pi * dt / self.span)
-        return self.v0 + self.a * self.span * h * h
-
-    @property
-    def direction(self) -> int:
-        """+1/-1: the way the position moves (segments never reverse inside)."""
-        return _sgn(self.v0) or _sgn(self.a)
-
-    def solve(self, p: float) -> float:
-        """Time at which the position reaches ``p`` (first root, moving in :attr:`direction`).
-
-        Uses the cancellation-free form ``tau = 2 dx / (v0 + dir*sqrt(v0² + 2 a dx))``; a slightly
-        negative discriminant (``p`` at the segment's turning point) is treated as zero.  A sine
-        segment is monotone in position, so its root is bracketed in ``[t0, t0 + span]`` and found
-        by Newton steps safeguarded with bisection, to a few ulp of the segment's time scale.
-        """
-        if self.shape != "linear":
-            return self._solve_sine(p)
-        dx = p - self.x0
-        if self.a == 0.0:
-            tau = dx / self.v0 if self.v0 != 0.0 else 0.0
-        else:
-            disc = self.v0 * self.v0 + 2.0 * self.a * dx
-            den = self.v0 + self.direction * (math.sqrt(disc) if disc > 0.0 else 0.0)
-            tau = 2.0 * dx / den if den != 0.0 else 0.0
-        return self.t0 + tau
-
-    def _solve_sine(self, p: float) -> float:
-        d = self.direction
-        span = self.span
-        lo, hi = 0.0, span
-        if (self._position(0.0) - p) * d >= 0.0:
-            return self.t0
-        if (self._position(span) - p) * d <= 0.0:
-            return self.t0 + span
-        # start from the linear segment with the same end points
-        tau = Segment(0.0, span, self.x0, self.v0, self.a).solve(p)
-        if not lo < tau < hi:
-            tau = 0.5 * span
-        eps = 4.0 * math.ulp(span)
-        for _ in range(200):
-            g = (self._position(tau) - p) * d
-            if g == 0.0:
-                break
-            if g > 0.0:
-                hi = tau
-            else:
-                lo = tau
-            v = abs(self._velocity(tau))
-            nxt = tau - g / v if v > 0.0 else math.nan
-            if not lo < nxt < hi:  # also catches nan
-                nxt = 0.5 * (lo + hi)
-            step = abs(nxt - tau)
-            tau = nxt
-            if step <= eps or hi - lo <= eps:
-                break
-        return self.t0 + tau
-
-
-# --------------------------------------------------------------------------------------------
-# watches
-
-
-class _Rule:
-    """How a watch divides the axis into numbered zones and where the zone borders are."""
-
-    def state_of(self, x: float) -> int:
-        raise NotImplementedError
-
-    def up(self, state: int) -> tuple[float, bool] | None:
-        """Border above zone ``state`` as ``(position, strict)``; strict: beyond means ``x > p``."""
-        raise NotImplementedError
-
-    def down(self, state: int) -> tuple[float, bool] | None:
-        """Border below zone ``state``; strict: below it means ``x <= p``, else ``x < p``."""
-        raise NotImplementedError
-
-
-class _RangeRule(_Rule):
-    """Zones 0: x < low, 1: low <= x <= high, 2: x > high (a point watch is low=p, high=inf)."""
-
-    def __init__(self, low: float, high: float) -> None:
-        self.low = low
-        self.high = high
-
-    def state_of(self, x: float) -> int:
-        if x < self.low:
-            return 0
-        return 1 if x <= self.high else 2
-
-    def up(self, state: int) -> tuple[float, bool] | None:
-        if state == 0:
-            return (self.low, False)
-        if state == 1 and self.high != math.inf:
-            return (self.high, True)
-        return None
-
-    def down(self, state: int) -> tuple[float, bool] | None:
-        if state == 2:
-            return (self.high, True)
-        if state == 1 and self.low != -math.inf:
-            return (self.low, False)
-        return None
-
-
-class _IndexRule(_Rule):
-    """Zone n: mark(n) <= x < mark(n+1) with mark(k) = k*period + offset."""
-
-    def __init__(self, period: float, offset: float) -> None:
-        self.period = period
-        self.offset = offset
-
-    def mark(self, k: int) -> float:
-        return k * self.period + self.offset
-
-    def state_of(self, x: float) -> int:
-        n = math.floor((x - self.offset) / self.period)
-        while x < self.mark(n):
-            n -= 1
-        while x >= self.mark(n + 1):
-            n += 1
-        return n
-
-    def up(self, state: int) -> tuple[float, bool] | None:
-        return (self.mark(state + 1), False)
-
-    def down(self, state: int) -> tuple[float, bool] | None:
-        return (self.mark(state), False)
-
 
 class Watch:
     """A registered crossing watch (from :meth:`Axis.watch` / :meth:`Axis.watch_index`)."""
 
-    def __init__(self, axis: Axis, rule: _Rule, callback: CrossingCallback, teleport_fires: bool) -> None:
+    def __init__(self, axis: Axis, rule: Rule, callback: CrossingCallback, teleport_fires: bool) -> None:
         self._axis = axis
         self._rule = rule
         self._callback = callback
@@ -410,7 +122,7 @@ class Axis:
         self._plan: list[Segment] = []
         self._rest = float(position)  # where the plan ends (or where the idle axis stands)
         self._idle_since = clock.now()
-        self._history: deque[Segment] = deque(maxlen=_HISTORY)
+        self._history: deque[Segment] = deque(maxlen=HISTORY)
         self._watches: list[Watch] = []
         self._gen = 0  # bumped by every plan change; stale timers and loops check it
         self._done_timer: Timer | None = None
@@ -474,10 +186,10 @@ class Axis:
         _, v, a, seg = self._lookup(t)
         if seg is not None and seg.shape != "linear":
             # a raised cosine starts and ends with zero acceleration: its average decides
-            return "accel" if _sgn(seg.a) == seg.direction else "decel"
+            return "accel" if sign(seg.a) == seg.direction else "decel"
         if a == 0.0:
             return "const" if v != 0.0 else "idle"
-        if v == 0.0 or _sgn(a) == _sgn(v):
+        if v == 0.0 or sign(a) == sign(v):
             return "accel"
         return "decel"
 
@@ -489,7 +201,7 @@ class Axis:
         if decel <= 0:
             raise ValueError("decel must be positive")
         v = self.velocity()
-        ramp = _ramp(profile, self._reference_speed(speed, v), decel) if v != 0.0 else None
+        ramp = make_ramp(profile, self._reference_speed(speed, v), decel) if v != 0.0 else None
         if ramp is not None:
             return ramp.distance(0.0, abs(v))
         return v * v / (2.0 * decel)
@@ -544,29 +256,29 @@ class Axis:
         now = self.clock.now()
         x_now, v_now, _ = self._state(now)
         self._vref = float(speed)
-        acc_ramp = _ramp(profile, speed, accel)
-        dec_ramp = _ramp(profile, speed, decel)
+        acc_ramp = make_ramp(profile, speed, accel)
+        dec_ramp = make_ramp(profile, speed, decel)
         if acc_ramp is not None and dec_ramp is not None:
             return self._move_profiled(now, x_now, v_now, target, speed, acc_ramp, dec_ramp, on_done)
         x0, v0 = x_now, v_now
-        phases: list[_PhaseSpec] = []
-        tol = max(_ABS_X, _REL_X * max(abs(x0), abs(target)))
+        phases: list[PhaseSpec] = []
+        tol = max(ABS_X, REL_X * max(abs(x0), abs(target)))
         dist = target - x0
         sd = v0 * v0 / (2.0 * decel)
         if v0 != 0.0:
-            toward = _sgn(dist) == _sgn(v0)
+            toward = sign(dist) == sign(v0)
             if toward and abs(abs(dist) - sd) <= tol and abs(dist) > 0.0:
                 # brakes onto the target exactly (decel adjusted by a rounding error at most)
                 d_exact = v0 * v0 / (2.0 * abs(dist))
-                phases.append((-_sgn(v0) * d_exact, abs(v0) / d_exact, 0.0, "linear"))
+                phases.append((-sign(v0) * d_exact, abs(v0) / d_exact, 0.0, "linear"))
                 return self._install(now, x0, v0, phases, target, on_done)
             if not toward or sd > abs(dist):
-                phases.append((-_sgn(v0) * decel, abs(v0) / decel, 0.0, "linear"))
-                x0 += _sgn(v0) * sd
+                phases.append((-sign(v0) * decel, abs(v0) / decel, 0.0, "linear"))
+                x0 += sign(v0) * sd
                 v0 = 0.0
                 dist = target - x0
         if abs(dist) > 0.0:
-            s = _sgn(dist)
+            s = sign(dist)
             length = abs(dist)
             u = abs(v0)  # toward the target, 0 <= u and u²/(2 decel) <= length
             if u > speed:
@@ -594,29 +306,29 @@ class Axis:
         v_now: float,
         target: float,
         speed: float,
-        acc_ramp: _Ramp,
-        dec_ramp: _Ramp,
+        acc_ramp: Ramp,
+        dec_ramp: Ramp,
         on_done: Callback | None,
     ) -> float:
         """:meth:`move_to` with sectioned ramps (the same cases as the plain planner)."""
         x0, v0 = x_now, v_now
-        phases: list[_PhaseSpec] = []
-        tol = max(_ABS_X, _REL_X * max(abs(x0), abs(target)))
+        phases: list[PhaseSpec] = []
+        tol = max(ABS_X, REL_X * max(abs(x0), abs(target)))
         dist = target - x0
         sd = dec_ramp.distance(0.0, abs(v0))
         if v0 != 0.0:
-            toward = _sgn(dist) == _sgn(v0)
+            toward = sign(dist) == sign(v0)
             if toward and abs(abs(dist) - sd) <= tol and abs(dist) > 0.0:
                 # brakes onto the target exactly (decelerations scaled by a rounding error at most)
-                dec_ramp.down(abs(v0), 0.0, _sgn(v0), phases, scale=sd / abs(dist))
+                dec_ramp.down(abs(v0), 0.0, sign(v0), phases, scale=sd / abs(dist))
                 return self._install(now, x0, v0, phases, target, on_done)
             if not toward or sd > abs(dist):
-                dec_ramp.down(abs(v0), 0.0, _sgn(v0), phases)
-                x0 += _sgn(v0) * sd
+                dec_ramp.down(abs(v0), 0.0, sign(v0), phases)
+                x0 += sign(v0) * sd
                 v0 = 0.0
                 dist = target - x0
         if abs(dist) > 0.0:
-            s = _sgn(dist)
+            s = sign(dist)
             length = abs(dist)
             u = abs(v0)  # toward the target, 0 <= u and its braking distance <= length
             if u > speed:
@@ -632,7 +344,7 @@ class Axis:
         return self._install(now, x_now, v_now, phases, target, on_done)
 
     @staticmethod
-    def _peak(acc_ramp: _Ramp, dec_ramp: _Ramp, u: float, speed: float, length: float) -> tuple[float, float]:
+    def _peak(acc_ramp: Ramp, dec_ramp: Ramp, u: float, speed: float, length: float) -> tuple[float, float]:
         """``(peak speed, cruise distance)`` to cover ``length`` from speed ``u``: accelerate to
         the peak, then brake to 0.  The distance ``f(p)`` is monotone in the peak ``p`` and, between
         two section bounds, ``f(lo) + (p² - lo²)·(1/(2a) + 1/(2d))``: solved in closed form within
@@ -678,22 +390,22 @@ class Axis:
         now = self.clock.now()
         x0, v0, _ = self._state(now)
         self._vref = float(speed)
-        vt = _sgn(direction) * float(speed)
-        phases: list[_PhaseSpec] = []
-        ramp = _ramp(profile, speed, accel)
+        vt = sign(direction) * float(speed)
+        phases: list[PhaseSpec] = []
+        ramp = make_ramp(profile, speed, accel)
         if ramp is not None:
-            if v0 != 0.0 and _sgn(v0) != _sgn(vt):
-                ramp.down(abs(v0), 0.0, _sgn(v0), phases)
-                ramp.up(0.0, speed, _sgn(vt), phases)
+            if v0 != 0.0 and sign(v0) != sign(vt):
+                ramp.down(abs(v0), 0.0, sign(v0), phases)
+                ramp.up(0.0, speed, sign(vt), phases)
             elif abs(v0) < speed:
-                ramp.up(abs(v0), speed, _sgn(vt), phases)
+                ramp.up(abs(v0), speed, sign(vt), phases)
             elif abs(v0) > speed:
-                ramp.down(abs(v0), speed, _sgn(vt), phases)
-        elif v0 != 0.0 and _sgn(v0) != _sgn(vt):
-            phases.append((-_sgn(v0) * accel, abs(v0) / accel, 0.0, "linear"))
-            phases.append((_sgn(vt) * accel, speed / accel, vt, "linear"))
+                ramp.down(abs(v0), speed, sign(vt), phases)
+        elif v0 != 0.0 and sign(v0) != sign(vt):
+            phases.append((-sign(v0) * accel, abs(v0) / accel, 0.0, "linear"))
+            phases.append((sign(vt) * accel, speed / accel, vt, "linear"))
         elif v0 != vt:
-            phases.append((_sgn(vt - v0) * accel, abs(vt - v0) / accel, vt, "linear"))
+            phases.append((sign(vt - v0) * accel, abs(vt - v0) / accel, vt, "linear"))
         self._install(now, x0, v0, phases, None, on_done, cruise=vt)
 
     def stop(
@@ -714,12 +426,12 @@ class Axis:
             raise ValueError("decel must be positive")
         now = self.clock.now()
         x0, v0, _ = self._state(now)
-        phases: list[_PhaseSpec] = []
-        ramp = _ramp(profile, self._reference_speed(speed, v0), decel) if v0 != 0.0 else None
+        phases: list[PhaseSpec] = []
+        ramp = make_ramp(profile, self._reference_speed(speed, v0), decel) if v0 != 0.0 else None
         if ramp is not None:
-            ramp.down(abs(v0), 0.0, _sgn(v0), phases)
+            ramp.down(abs(v0), 0.0, sign(v0), phases)
         elif v0 != 0.0:
-            phases.append((-_sgn(v0) * decel, abs(v0) / decel, 0.0, "linear"))
+            phases.append((-sign(v0) * decel, abs(v0) / decel, 0.0, "linear"))
         return self._install(now, x0, v0, phases, None, on_done)
 
     def quick_stop(self) -> None:
@@ -753,15 +465,15 @@ class Axis:
     def watch(self, position: float, callback: CrossingCallback) -> Watch:
         """Call ``callback(+1)`` when the axis becomes ``>= position``, ``callback(-1)`` when it
         becomes ``< position`` again (each time, exactly at the solved instant)."""
-        return self._add_watch(_RangeRule(float(position), math.inf), callback, teleport_fires=True)
+        return self._add_watch(RangeRule(float(position), math.inf), callback, teleport_fires=True)
 
     def watch_index(self, callback: CrossingCallback) -> Watch:
         """Like :meth:`watch` for every index mark ``k*counts_per_rev + index_offset``."""
         return self._add_watch(
-            _IndexRule(float(self.counts_per_rev), self.index_offset), callback, teleport_fires=False
+            IndexRule(float(self.counts_per_rev), self.index_offset), callback, teleport_fires=False
         )
 
-    def _add_watch(self, rule: _Rule, callback: CrossingCallback, teleport_fires: bool) -> Watch:
+    def _add_watch(self, rule: Rule, callback: CrossingCallback, teleport_fires: bool) -> Watch:
         w = Watch(self, rule, callback, teleport_fires)
         self._watches.append(w)
         self._schedule_watch(w)
@@ -835,7 +547,7 @@ class Axis:
                 direction = 1 if target > w._state else -1
                 # a range (switch) jumps straight to its new zone: a teleport across a region
                 # must not flicker it; index marks are counted one by one
-                w._state = target if isinstance(w._rule, _RangeRule) else w._state + direction
+                w._state = target if isinstance(w._rule, RangeRule) else w._state + direction
                 w._callback(direction)
 
     # -- planning machinery --------------------------------------------------------------------
@@ -855,12 +567,23 @@ class Axis:
         self._done_timer = None
         self._on_done = None
 
+    def dwell(self, seconds: float, on_done: Callable[[], None] | None = None) -> None:
+        """A standstill that is part of a plan: ``moving`` stays true for ``seconds`` while the
+        position does not change (a card's planned dwell); ``on_done`` at its end."""
+        x = self.position()
+        self._install(self.clock.now(), x, 0.0, [(0.0, seconds, 0.0, "linear")], x, on_done)
+
+    @property
+    def plan_generation(self) -> int:
+        """Bumped by every change of plan: a watch armed under an older one must re-arm."""
+        return self._gen
+
     def _install(
         self,
         now: float,
         x0: float,
         v0: float,
-        phases: list[_PhaseSpec],
+        phases: list[PhaseSpec],
         rest: float | None,
         on_done: Callback | None,
         cruise: float | None = None,
@@ -870,7 +593,7 @@ class Axis:
         segs: list[Segment] = []
         t, x, v = now, x0, v0
         for a, dur, v_end, shape in phases:
-            if dur > _REL_T * max(1.0, abs(t)):
+            if dur > REL_T * max(1.0, abs(t)):
                 if shape == "linear" or a == 0.0:
                     segs.append(Segment(t, t + dur, x, v, a))
                 else:
@@ -943,7 +666,7 @@ class RegionSwitch:
         high: float,
         on_change: Callable[[bool], None] | None = None,
         *,
-        make_watch: Callable[[_Rule, CrossingCallback], Any] | None = None,
+        make_watch: Callable[[Rule, CrossingCallback], Any] | None = None,
     ) -> None:
         if low > high:
             raise ValueError("low must not exceed high")
@@ -951,7 +674,7 @@ class RegionSwitch:
         self.low = low
         self.high = high
         self.on_change = on_change
-        rule = _RangeRule(low, high)
+        rule = RangeRule(low, high)
         if make_watch is None:
             self._watch = axis._add_watch(rule, self._crossed, teleport_fires=True)
         else:

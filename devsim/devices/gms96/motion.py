@@ -15,7 +15,7 @@ import math
 from collections.abc import Callable
 from typing import Any, Protocol
 
-from devsim.core.axis import Axis, RampProfile, RegionSwitch, Segment, Watch, _IndexRule, _RangeRule, _Rule
+from devsim.core.axis import Axis, IndexRule, RampProfile, RangeRule, RegionSwitch, Rule, Segment, Watch
 from devsim.core.clock import Timer
 
 
@@ -54,10 +54,8 @@ _SINE = RampProfile(shape="sine")
 
 def _dwell(axis: Axis, seconds: float, on_done: Callable[[], None]) -> None:
     """A standstill that is part of the plan: ``axis.moving`` stays true (status "motion", no
-    in-position) while no watch sees any motion; ``on_done`` at its end.  The shared axis has
-    no public dwell, so this goes through its plan installer."""
-    x = axis.position()
-    axis._install(axis.clock.now(), x, 0.0, [(0.0, seconds, 0.0, "linear")], x, on_done)
+    in-position) while no watch sees any motion; ``on_done`` at its end."""
+    axis.dwell(seconds, on_done)
 
 
 class Indexer:
@@ -449,11 +447,11 @@ class Indexer:
 
     def watch_actual(self, position: float, callback: Callable[[int], None]) -> ActualWatch:
         """Like :meth:`Axis.watch` on the actual position."""
-        return ActualWatch(self, _RangeRule(float(position), math.inf), callback, jump_fires=True)
+        return ActualWatch(self, RangeRule(float(position), math.inf), callback, jump_fires=True)
 
     def watch_actual_index(self, callback: Callable[[int], None]) -> ActualWatch:
         """Like :meth:`Axis.watch_index` on the actual position (the encoder sees the motor)."""
-        rule = _IndexRule(float(self.axis.counts_per_rev), self.axis.index_offset)
+        rule = IndexRule(float(self.axis.counts_per_rev), self.axis.index_offset)
         return ActualWatch(self, rule, callback, jump_fires=False)
 
     def arm_actual_watches(self) -> None:
@@ -509,7 +507,7 @@ class ActualWatch:
 
     _STEPS = 64
 
-    def __init__(self, indexer: Indexer, rule: _Rule, callback: Callable[[int], None], jump_fires: bool) -> None:
+    def __init__(self, indexer: Indexer, rule: Rule, callback: Callable[[int], None], jump_fires: bool) -> None:
         self.indexer = indexer
         self.rule = rule
         self.callback = callback
@@ -550,7 +548,7 @@ class ActualWatch:
         axis = ix.axis
         clock = ix.dev.clock
         now = clock.now()
-        self._gen = axis._gen
+        self._gen = axis.plan_generation
         f = ix.actual_function()
         if f is None or not axis.moving:
             zone = self.rule.state_of(ix.actual_now())
@@ -620,7 +618,7 @@ class ActualWatch:
             self._timer = None
             if self.cancelled:
                 return
-            if self.indexer.axis._gen != self._gen:
+            if self.indexer.axis.plan_generation != self._gen:
                 self.arm()  # the plan changed under the watch without a re-arm
                 return
             self.state = self.state + direction if zone is None else zone
