@@ -17,6 +17,7 @@ from devsim.devices.gms96 import tables
 from devsim.devices.gms96.card import Gms96Card
 from devsim.devices.gms96.config import Gms96Config
 from devsim.devices.gms96.face import IMMEDIATE_COMMANDS, QUEUED_COMMANDS, SHORT_COMMANDS, Gms96Face
+from devsim.devices.gms96.nparams import N_STORED_ONLY
 from devsim.devices.gms96.points import FAULTS, POINTS
 
 __all__ = ["Gms96Device"]
@@ -51,7 +52,7 @@ class Gms96Device(Device):
                     p.maximum,
                     p.default,
                     p.saved,
-                    "stored" if p.index in tables.N_STORED_ONLY else "simulated",
+                    "stored" if p.index in N_STORED_ONLY else "simulated",
                 )
                 for p in tables.N_PARAMETERS.values()
             ],

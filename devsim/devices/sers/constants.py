@@ -1,4 +1,4 @@
-"""Constants of the SERS model: firmware, motor geometry, display priorities, error bits."""
+"""Constants of the SERS model: firmware, motor geometry, display priorities (manual §3.5), error bits (§4.8.3.1)."""
 
 from __future__ import annotations
 
