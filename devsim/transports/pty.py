@@ -25,7 +25,8 @@ Three things make a pty behave like a serial port rather than a terminal (see th
   the host counts as matching and nothing is reported.
 
   Linux's pty driver forces CS8 without parity whatever a host sets (``pty_set_termios``), so
-  there only the baud rate and the stop bits are visible; data bits and parity are reported as
+  there only the baud rate and the stop bits are visible.  It keeps PARODD, which the transport
+  leaves set so that a host can open the port at 8E1 again and again (:func:`_mark_parity`); data bits and parity are reported as
   the device's own (the host is assumed to match in what cannot be seen).  The transport probes
   this at start rather than assuming it.
 
@@ -197,6 +198,8 @@ class PtyTransport(Transport):
                 self._preset = preset
                 attrs = apply_settings(attrs, preset)
             termios.tcsetattr(slave, termios.TCSANOW, attrs)
+            if not self._frame_visible:
+                _mark_parity(slave)
             self._baseline = termios.tcgetattr(slave)
             os.set_blocking(master, False)
             self.address = os.ttyname(slave)
@@ -264,6 +267,8 @@ class PtyTransport(Transport):
             attrs = None
         if attrs is not None and attrs == self._last_attrs:
             return
+        if attrs is not None and not self._frame_visible and self._slave is not None:
+            attrs = _mark_parity(self._slave, attrs)
         self._last_attrs = attrs
         settings = self.host_settings()
         if settings is not None and settings != self._reported and self._endpoint is not None:
@@ -342,6 +347,23 @@ class PtyTransport(Transport):
         return len(self._out)
 
 
+def _mark_parity(fd: int, attrs: list | None = None) -> list:
+    """Leave PARODD set on a Linux pty slave (the driver keeps it, while it drops PARENB).
+
+    glibc's ``tcsetattr`` fails with EINVAL when none of the requested changes takes effect: a
+    host asking again for even parity (pyserial on a second open at 8E1, or on changing its
+    ``timeout``) would change nothing but PARENB, which the pty drops.  With PARODD set by the
+    transport, clearing it is a change that does take effect, and the call succeeds.  PARODD
+    without PARENB means nothing to the line."""
+    attrs = list(termios.tcgetattr(fd) if attrs is None else attrs)
+    if not attrs[_CFLAG] & termios.PARODD:
+        attrs[_CFLAG] |= termios.PARODD
+        with contextlib.suppress(termios.error):
+            termios.tcsetattr(fd, termios.TCSANOW, attrs)
+            return termios.tcgetattr(fd)
+    return attrs
+
+
 def _pty_keeps_frame_format(fd: int, attrs: list) -> bool:
     """Whether this platform's pty keeps data bits and parity a host sets (Linux does not:
     ``pty_set_termios`` forces CS8 without parity)."""
@@ -356,10 +378,18 @@ def _pty_keeps_frame_format(fd: int, attrs: list) -> bool:
 
 
 def _replace_symlink(target: str, link: str) -> None:
-    """Point ``link`` at ``target``, atomically replacing an existing symlink; refuse to
-    replace anything that is not a symlink."""
-    if os.path.lexists(link) and not os.path.islink(link):
-        raise FileExistsError(f"{link} exists and is not a symlink; not replacing it")
+    """Point ``link`` at ``target``.  An existing link is replaced only when it is one devsim
+    made and left behind: a symlink to a pseudo-terminal that no longer exists (a simulator that
+    was killed).  Anything else – a file, a symlink elsewhere, a link to a live pty of another
+    simulator – is refused."""
+    if os.path.lexists(link):
+        if not os.path.islink(link):
+            raise FileExistsError(f"{link} exists and is not a symlink; not replacing it")
+        old = os.readlink(link)
+        if not old.startswith("/dev/pts/"):
+            raise FileExistsError(f"{link} points at {old}, not at a pseudo-terminal; not replacing it")
+        if os.path.exists(old):
+            raise FileExistsError(f"{link} points at {old}, a pseudo-terminal in use (another simulator?)")
     tmp = f"{link}.{os.getpid()}.tmp"
     with contextlib.suppress(FileNotFoundError):
         os.unlink(tmp)

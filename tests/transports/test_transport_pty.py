@@ -222,3 +222,47 @@ async def test_seven_bit_device_and_seven_bit_host_match() -> None:
     finally:
         await transport.close()
         line.close()
+
+
+async def test_a_host_reopens_at_8e1_five_times_and_changes_its_timeout() -> None:
+    """A GMS96 host opens 8E1. Linux ptys drop PARENB, and glibc's tcsetattr then fails when
+    nothing else changes; the transport leaves PARODD set so that every open succeeds."""
+    target = EchoTarget(SerialSettings(9600, 8, "E", 1))
+    line = Line(target, RealClock())
+    transport = PtyTransport()
+    await transport.start(line)
+    try:
+
+        def host(round_: int) -> bytes:
+            with serial.Serial(transport.address, 9600, parity=serial.PARITY_EVEN, timeout=2) as port:
+                data = bytes([0x10, round_, 0x16])
+                port.write(data)
+                got = port.read(len(data))
+                port.timeout = 1  # pyserial reconfigures the port: must not fail either
+                port.write(data)
+                return got + port.read(len(data))
+
+        for round_ in range(5):
+            got = await asyncio.to_thread(host, round_)
+            assert got == bytes([0x10, round_, 0x16]) * 2
+    finally:
+        await transport.close()
+
+
+@pytest.mark.parametrize("target", ["elsewhere", "live-pty"])
+async def test_refuses_to_repoint_a_link_devsim_did_not_leave(tmp_path, echo: Recorder, target: str) -> None:
+    """Only a link to a vanished pseudo-terminal (a killed simulator's) is replaced; a symlink to
+    a user's file or to another simulator's live pty stays, and is not deleted on stop."""
+    link = tmp_path / "tty"
+    other = PtyTransport()
+    await other.start(Recorder())
+    try:
+        aim = str(tmp_path / "notes.txt") if target == "elsewhere" else other.address
+        os.symlink(aim, link)
+        transport = PtyTransport(link=str(link))
+        with pytest.raises(FileExistsError, match="not replacing it|in use"):
+            await transport.start(echo)
+        await transport.close()
+        assert os.readlink(link) == aim
+    finally:
+        await other.close()
