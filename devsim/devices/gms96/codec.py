@@ -20,6 +20,7 @@ in exactly one decoded frame, one :class:`FrameError`, or the pending partial fr
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -179,6 +180,7 @@ class FrameDecoder:
         self.char_timeout = char_timeout
         self.accept_single = accept_single
         self._starts = frozenset({START_SHORT, START_LONG} | ({ACK, NACK_CHAR} if accept_single else set()))
+        self._start_re: re.Pattern[bytes] | None = None
         self._buf = bytearray()
         self._last = 0.0
 
@@ -234,11 +236,11 @@ class FrameDecoder:
         return out
 
     def _next_start(self, work: bytes, i: int) -> int:
-        starts = self._starts
-        n = len(work)
-        while i < n and work[i] not in starts:
-            i += 1
-        return i
+        """The next start byte at or after ``i`` (one regex search, not a loop per byte)."""
+        if self._start_re is None:
+            self._start_re = re.compile(b"[" + b"".join(re.escape(bytes([b])) for b in sorted(self._starts)) + b"]")
+        found = self._start_re.search(work, i)
+        return len(work) if found is None else found.start()
 
     def _extension(self, control: int) -> int:
         try:

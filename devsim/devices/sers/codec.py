@@ -14,6 +14,7 @@ means for the line being assembled.  The device decides what to echo, execute an
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 __all__ = ["MAX_LINE", "Address", "Framer", "Ignored", "LineEnd", "Noise", "Restart", "TextChar"]
@@ -70,6 +71,9 @@ _ADDRESS_CHAR = AddressChar()
 _IGNORED = Ignored()
 
 
+_TEXT_END = re.compile(rb"[\r\n#]")
+
+
 class Framer:
     """Assembles SERS command lines from bytes."""
 
@@ -82,6 +86,35 @@ class Framer:
         self._length = 0
         self._overflow = False
         self._last_end: int | None = None
+
+    @property
+    def idle(self) -> bool:
+        """Between lines, with no line end to pair: only a ``#`` can change anything."""
+        return not self.in_line and self._last_end is None
+
+    def skip_idle(self, data: bytes, start: int) -> int:
+        """Where the next byte that matters is (a ``#``), when :attr:`idle`: noise between
+        lines is skipped with one search instead of byte by byte."""
+        found = data.find(b"#", start)
+        return len(data) if found < 0 else found
+
+    @property
+    def in_text(self) -> bool:
+        """Inside a line, past the address: every byte up to CR, LF or ``#`` is text."""
+        return self.in_line and self._addr is None
+
+    def skip_text(self, data: bytes, start: int) -> int:
+        """When :attr:`in_text` and the text is not wanted (a line in error, or for another
+        drive): where the text ends (the next CR, LF or ``#``), counted into the line's length
+        as :meth:`feed` would, in one search."""
+        found = _TEXT_END.search(data, start)
+        end = len(data) if found is None else found.start()
+        self._length += end - start
+        if self._length > MAX_LINE:
+            self._overflow = True
+        if end > start:
+            self._last_end = None
+        return end
 
     def feed(self, byte: int) -> list[object]:
         events: list[object] = []

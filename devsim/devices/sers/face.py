@@ -74,11 +74,29 @@ class SersFace(Face):
         model.shared_line = self.port.shared_line
         if model.master.awaiting and model.logic_alive:
             model.master.feed(data)  # a slave's answer to this master
-        for byte in data:
-            if not model.logic_alive or model.booting:
-                continue  # G-BOOT: input during the 2 s initialisation is discarded
-            for event in self.framer.feed(byte):
+        if not model.logic_alive or model.booting:
+            return  # G-BOOT: input during the 2 s initialisation is discarded
+        framer = self.framer
+        index, end = 0, len(data)
+        while index < end:
+            line = self._line
+            if framer.idle and line is None:
+                index = framer.skip_idle(data, index)  # noise between lines: one search
+                if index >= end:
+                    break
+            elif line is not None and (line.error or not line.execute) and framer.in_text:
+                stop = framer.skip_text(data, index)  # text nobody executes: only echoed
+                if line.reply and self.echo and stop > index:
+                    self.send(data[index:stop])
+                index = stop
+                if index >= end:
+                    break
+            byte = data[index]
+            index += 1
+            for event in framer.feed(byte):
                 self._on_event(event, byte)
+            if not model.logic_alive or model.booting:
+                return
 
     def host_disconnected(self) -> None:
         """A host that leaves mid-line leaves a partial line; the next '#' restarts anyway."""

@@ -1,0 +1,140 @@
+"""Fairness under noise: one port swallows 100 MB of junk while its neighbour is polled.
+
+Starts ``devsim up`` with two devices of ``--kind`` (``sers`` or ``stub``) in one process, each on
+its own pty, and a bare asyncio echo server on a pty in another process (the reference).  Then,
+in alternating phases, it polls the neighbour device (``#P11?``) and the echo server, first on a
+quiet line and then while a writer process pours ``--megabytes`` of noise into the other
+device's port.  It prints the neighbour's p50/p99 in each phase, the echo reference's, and how
+fast the noise was swallowed (bytes the noisy line received, from the control API, over time).
+
+Noise: random bytes without ``#`` (the SERS line start) by default, so no command lines are
+started; ``--raw`` sends plain random bytes.  Targets: the neighbour's p99 < 1 ms while the noise
+flows, and noise swallowed at ≥ 50 MB/s.
+
+    python benchmarks/noise.py [--megabytes 100] [--kind sers] [--raw]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import serial
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)
+
+from benchmarks.latency import _spawn, _stop, complete  # noqa: E402
+
+QUERY = b"#P11?\r"
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (ROOT, env.get("PYTHONPATH", "")) if p)
+    env["DEVSIM_EXTRA_KINDS"] = "stub=benchmarks.stub:StubDevice"
+    return env
+
+
+def poll(port: serial.Serial, count: int) -> list[float]:
+    times = []
+    for _ in range(count):
+        start = time.perf_counter()
+        port.write(QUERY)
+        buf = b""
+        while not complete(buf):
+            buf += port.read(max(1, port.in_waiting))
+        times.append(time.perf_counter() - start)
+    return times
+
+
+def writer(path: str, megabytes: float, raw: bool) -> None:
+    block = bytearray(os.urandom(1 << 16))
+    if not raw:
+        block = block.replace(b"#", b"\x00")
+    total = int(megabytes * 1e6)
+    fd = os.open(path, os.O_WRONLY | os.O_NOCTTY)
+    try:
+        sent = 0
+        while sent < total:
+            sent += os.write(fd, block[: min(len(block), total - sent)])
+    finally:
+        os.close(fd)
+
+
+def _percentiles(times: list[float]) -> str:
+    times = sorted(times)
+    return f"p50 {statistics.median(times) * 1e3:.3f} ms, p99 {times[int(0.99 * (len(times) - 1))] * 1e3:.3f} ms"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--megabytes", type=float, default=100.0)
+    parser.add_argument("--kind", default="sers")
+    parser.add_argument("--raw", action="store_true", help="noise may contain '#'")
+    parser.add_argument("--writer", nargs=2, help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.writer:
+        writer(args.writer[0], float(args.writer[1]), args.raw)
+        return 0
+    from devsim.core.control import ControlClient
+
+    with tempfile.TemporaryDirectory() as tmp:
+        plant = os.path.join(tmp, "plant.yaml")
+        with open(plant, "w") as fh:
+            fh.write(f"devices:\n  - {{name: noisy, kind: {args.kind}}}\n  - {{name: quiet, kind: {args.kind}}}\n")
+        sock = f"unix:{tmp}/ctl.sock"
+        proc = subprocess.Popen([sys.executable, "-m", "devsim", "up", plant, "--control", sock], cwd=ROOT, env=_env(),
+                                stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+        ports: dict[str, str] = {}
+        ready = 0
+        assert proc.stdout is not None
+        while ready < 2:
+            name, _, value = proc.stdout.readline().strip().partition(": ")
+            if value == "ready":
+                ready += 1
+            elif value.startswith("pty "):
+                ports[name] = value.split()[1]
+        echo_proc, echo_path = _spawn([sys.executable, os.path.join(ROOT, "benchmarks", "latency.py"), "--serve-echo",
+                                       str(len(QUERY) + 16)])
+        try:
+            with serial.Serial(ports["quiet"], 9600, timeout=2) as quiet, serial.Serial(echo_path, 9600, timeout=2) as echo, \
+                    ControlClient(sock) as control:
+                poll(quiet, 200)
+                quiet_times, echo_quiet = poll(quiet, 2000), poll(echo, 2000)
+                before = control.line("noisy")["bytes_in"]
+                started = time.perf_counter()
+                noise = subprocess.Popen([sys.executable, __file__, "--writer", ports["noisy"], str(args.megabytes),
+                                          *(["--raw"] if args.raw else [])], env=_env())
+                noisy_times: list[float] = []
+                echo_noisy: list[float] = []
+                while noise.poll() is None:
+                    noisy_times += poll(quiet, 50)
+                    echo_noisy += poll(echo, 50)
+                target = before + int(args.megabytes * 1e6)
+                while control.line("noisy")["bytes_in"] < target:
+                    noisy_times += poll(quiet, 10)
+                elapsed = time.perf_counter() - started
+        finally:
+            _stop(echo_proc)
+            proc.send_signal(signal.SIGINT)
+            proc.wait(timeout=30)
+    rate = args.megabytes / elapsed
+    print(f"neighbour, quiet line:    {_percentiles(quiet_times)}   (echo reference {_percentiles(echo_quiet)})")
+    print(f"neighbour, during noise:  {_percentiles(noisy_times)}   (echo reference {_percentiles(echo_noisy)})")
+    print(f"noise swallowed: {args.megabytes:g} MB in {elapsed:.2f} s = {rate:.0f} MB/s")
+    p99 = sorted(noisy_times)[int(0.99 * (len(noisy_times) - 1))]
+    print(json.dumps({"p99_ms": round(p99 * 1e3, 3), "mb_per_s": round(rate, 1),
+                      "targets_met": p99 < 0.001 and rate >= 50}))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
