@@ -561,6 +561,25 @@ def ctl_fault(ctx: click.Context, device: str, kind: str, switch: str) -> None:
     _call(ctx, "fault", device, kind, switch == "on")
 
 
+@ctl.command("line-fault")
+@click.argument("device")
+@click.argument("kind")
+@click.argument("switch", type=click.Choice(["on", "off"]))
+@click.option("--port", default="main", show_default=True, help="Which serial port of DEVICE.")
+@click.option("--direction", type=click.Choice(["to_device", "to_host", "both"]), help="Which way.")
+@click.option("--count", type=int, help="Bytes affected (corrupt, drop, split).")
+@click.option("--duration", type=float, help="Seconds until the fault ends by itself.")
+@click.option("--delay", type=float, help="Seconds (delay, jitter, split).")
+@click.option("--rate", type=float, help="Noise bytes per second.")
+@click.option("--baudrate", type=int, help="The host's rate (baud_mismatch).")
+@click.pass_context
+def ctl_line_fault(ctx: click.Context, device: str, kind: str, switch: str, port: str, **params: Any) -> None:
+    """Start or end a line fault KIND on a port of DEVICE: corrupt, drop, split, delay, jitter,
+    noise, baud_mismatch, unplug, hang, silent."""
+    given = {name: value for name, value in params.items() if value is not None}
+    _call(ctx, "line_fault", device, kind, switch == "on", port=port, **given)
+
+
 _SCENARIO_COMMANDS = ("check", "scenario", "up")
 
 

@@ -217,6 +217,10 @@ class SimDevice:
         """Switch a fault the device's kind declares (``devsim doc KIND``) on or off."""
         self.runtime.fault(self.name, kind, active)
 
+    def line_fault(self, kind: str, active: bool = True, *, port: str = "main", **params: Any) -> None:
+        """Start or end a fault on the device's line (``corrupt``, ``noise`` with ``rate`` ...)."""
+        self.runtime.line_fault(self.name, kind, active, port=port, **params)
+
     def power_cycle(self, wipe: bool = False, *, boot: bool = True) -> None:
         """Switch off and on; with ``boot`` (and virtual time) run past the boot again."""
         self.runtime.power_cycle(self.name, wipe=wipe)
@@ -343,6 +347,10 @@ def _make_sim_plant_class() -> type:
         def fault(self, device: str, kind: str, active: bool = True) -> None:
             """Switch a declared fault of ``device`` on or off."""
             self.runtime.fault(device, kind, active)
+
+        def line_fault(self, device: str, kind: str, active: bool = True, *, port: str = "main", **params: Any) -> None:
+            """Start or end a fault on the line serving a port of ``device``."""
+            self.runtime.line_fault(device, kind, active, port=port, **params)
 
         def now(self) -> float:
             return self.runtime.now()

@@ -142,3 +142,41 @@ def test_fixture_serves_every_port_and_switches_faults(devsim_device) -> None:  
         a.write(b"z")
         assert a.read(1) == b"z"
     assert drive.read("jammed") is False
+
+
+def test_line_faults_from_the_control_api_and_the_fixture(devsim_device, tmp_path: Path) -> None:  # noqa: ANN001
+    drive = devsim_device("twoport")
+    with serial.serial_for_url(drive.port_url("a"), timeout=5) as a, serial.serial_for_url(
+        drive.port_url("b"), timeout=5
+    ) as b:
+        drive.line_fault("drop", port="a", count=2)  # the next two bytes on port a vanish
+        a.write(b"xyz")
+        assert a.read(1) == b"z"
+        b.write(b"\r")
+        assert b.read(2) == b"1\r"  # port b is not affected, and only z reached the model
+        drive.line_fault("unplug", port="b")
+        b.write(b"\r")
+        drive.line_fault("unplug", False, port="b")
+        b.write(b"\r")
+        assert b.read(2) == b"1\r"  # the first question was lost with the cable out
+        assert b.in_waiting == 0
+    with pytest.raises(ValueError, match="a noise fault needs rate"):
+        drive.line_fault("noise", port="a")
+
+
+def test_ctl_line_fault(tmp_path: Path) -> None:
+    addr = f"unix:{tmp_path}/ctl.sock"
+    sim = Sim("twoport", "--pty", "--control", addr)
+    try:
+        seen = sim.read_until("twoport: ready")
+        path_a = seen["twoport.a"].split()[1]
+        done = ctl(addr, "line-fault", "twoport", "drop", "on", "--port", "a", "--count", "1")
+        assert done.returncode == 0, done.stderr
+        with serial.Serial(path_a, 9600, timeout=5) as a:
+            a.write(b"pq")
+            assert a.read(1) == b"q"
+        done = ctl(addr, "line-fault", "twoport", "noise", "on")
+        assert done.returncode == 1 and "no port 'main'" in done.stderr
+    finally:
+        code, err = sim.stop()
+    assert code == 0 and "Traceback" not in err

@@ -21,7 +21,9 @@ order.  Requests and responses are typed (:class:`Request`, :class:`OkResponse`,
 Ops: ``read`` (device, name), ``set`` (device, name, value), ``state`` (device),
 ``power_cycle`` (device, wipe), ``advance`` (seconds; virtual time only), ``now``, ``devices``,
 ``line`` (device, port: status of the line serving that port), ``names`` (device: its declared
-points), ``fault`` (device, kind, active: a declared device fault on or off).
+points), ``fault`` (device, kind, active: a declared device fault on or off), ``line_fault``
+(device, port, kind, active, params: a fault on the line serving a port, e.g. ``noise`` with
+``{"rate": 100}``).
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, ValidationError
 
+from devsim.core.points import parse_bool
 from devsim.core.runtime import Runtime, port_key
 
 __all__ = [
@@ -58,7 +61,7 @@ __all__ = [
     "parse_address",
 ]
 
-Op = Literal["read", "set", "state", "power_cycle", "advance", "now", "devices", "line", "names", "fault"]
+Op = Literal["read", "set", "state", "power_cycle", "advance", "now", "devices", "line", "names", "fault", "line_fault"]
 
 MAX_LINE = 1 << 20  # bytes in one request line
 MAX_DEPTH = 64  # nesting of lists and objects in one request
@@ -80,6 +83,7 @@ class Request(BaseModel):
     port: str = "main"
     kind: str | None = None
     active: Any = True
+    params: dict[str, Any] = {}
 
 
 class OkResponse(BaseModel):
@@ -375,6 +379,9 @@ class ControlServer:
         if op == "fault":
             rt.fault(device, _need(req.kind, "kind", op), req.active)
             return None
+        if op == "line_fault":
+            rt.line_fault(device, _need(req.kind, "kind", op), parse_bool(req.active), port=req.port, **req.params)
+            return None
         name = _need(req.name, "name", op)
         if op == "read":
             return rt.read(device, name)
@@ -497,3 +504,6 @@ class ControlClient:
 
     def fault(self, device: str, kind: str, active: bool = True) -> None:
         self.request("fault", device=device, kind=kind, active=active)
+
+    def line_fault(self, device: str, kind: str, active: bool = True, *, port: str = "main", **params: Any) -> None:
+        self.request("line_fault", device=device, kind=kind, active=active, port=port, params=params)

@@ -60,6 +60,7 @@ class Runtime:
         self.lines: dict[str, Any] = {}  # port_key(device, port) -> Line serving it
         self.ports: dict[str, str] = {}  # port_key(device, port) -> URL/path a host opens
         self.transports: list[Any] = []
+        self._line_faults: dict[tuple[str, str], list[Any]] = {}
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
         self._stopped = threading.Event()
@@ -232,6 +233,31 @@ class Runtime:
     def fault(self, device: str, kind: str, active: bool) -> None:
         """Switch a declared device fault on or off."""
         self.call(lambda: self.device(device).fault(kind, active))
+
+    def line_fault(
+        self, device: str, kind: str, active: bool = True, *, port: str = "main", **params: Any
+    ) -> None:
+        """Start (``active``) or end a fault on the line serving a port of ``device``: any kind
+        of :class:`~devsim.transports.line.LineFault` (``corrupt``, ``drop``, ``noise`` with
+        ``rate``, ``unplug`` ...), with its parameters; ending it ends every fault of that kind
+        started here."""
+        from devsim.transports.line import LineFault
+
+        def apply() -> None:
+            key = port_key(device, port)
+            line = self.lines.get(key)
+            if line is None:
+                self.device(device).port(port)
+                raise UnknownName(f"port {port!r} of device {device!r} is not on a line")
+            handles = self._line_faults.setdefault((key, kind), [])
+            if active:
+                handles.append(line.inject(LineFault(kind=kind, **params)))  # type: ignore[arg-type]
+            else:
+                for handle in handles:
+                    handle.cancel()
+                handles.clear()
+
+        self.call(apply)
 
     def state(self, device: str) -> dict[str, Any]:
         def snapshot() -> dict[str, Any]:
