@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import socket
+import time
 from pathlib import Path
 
 import pytest
@@ -155,7 +156,11 @@ def test_line_faults_from_the_control_api_and_the_fixture(devsim_device, tmp_pat
         b.write(b"\r")
         assert b.read(2) == b"1\r"  # port b is not affected, and only z reached the model
         drive.line_fault("unplug", port="b")
+        before = drive.runtime.line_status("twoport", "b")["bytes_in"]
         b.write(b"\r")
+        deadline = time.monotonic() + 10
+        while drive.runtime.line_status("twoport", "b")["bytes_in"] == before:
+            assert time.monotonic() < deadline  # until the line has taken the byte (and lost it)
         drive.line_fault("unplug", False, port="b")
         b.write(b"\r")
         assert b.read(2) == b"1\r"  # the first question was lost with the cable out
