@@ -492,3 +492,36 @@ def test_counter_input_mode_after_save_and_restart(plant_factory: Any, tmp_path:
     plant.runtime.power_cycle(plant.name)
     plant.advance(0.6)
     assert plant.read("counter.mode") is False
+
+
+def hook_that_fails(plc: Any) -> None:
+    """A hook that breaks on its third cycle."""
+    plc.calls = getattr(plc, "calls", 0) + 1
+    if plc.calls == 3:
+        raise ZeroDivisionError("division by zero in the user's hook")
+
+
+def test_a_hook_that_raises_stops_the_plc_visibly(plant_factory: Any) -> None:
+    plant = plant_factory({"plc": {**FAST, "hook": "tests.gms96.test_plc:hook_that_fails"}})
+    plant.advance(0.2)
+    assert plant.read("plc.running") is False  # not "running" while it never cycles again
+    assert plant.read("plc.fault") == "ZeroDivisionError: division by zero in the user's hook"
+    assert plant.read("plc.cycles") == 3  # the failing cycle was the last
+    plant.advance(0.2)
+    assert plant.read("plc.cycles") == 3
+    ok(plant, "p", 1, 1, 0)  # p1;1 starts it again (and it fails again on its own count)
+    assert plant.read("plc.fault") is None
+
+
+def test_a_hook_that_cannot_be_loaded_is_one_line(tmp_path: Any) -> None:
+    from devsim.core.config import ConfigError, load_config
+    from devsim.devices.gms96.config import Gms96Config
+
+    path = tmp_path / "card.yaml"
+    path.write_text("plc:\n  hook: no_such_module_here:fn\n")
+    with pytest.raises(ConfigError) as info:
+        load_config(path, Gms96Config)
+    assert "card.yaml:2: plc.hook: PLC hook 'no_such_module_here:fn' cannot be loaded: ModuleNotFoundError" in str(
+        info.value
+    )
+    assert "\n" not in str(info.value)

@@ -145,7 +145,20 @@ class PlcOptions(_Strict):
     message_on_fault: PlcFaultMessages | None = None
     start_program_on_input: list[PlcStartRule] = Field(default_factory=list)
     copy_bits: list[PlcCopyRule] = Field(default_factory=list)
-    hook: str | None = Field(default=None, description="'package.module:function' called every cycle")
+    hook: str | None = Field(
+        default=None,
+        description="'package.module:function' called every cycle: Python code, so the file must be trusted",
+    )
+
+    @field_validator("hook")
+    @classmethod
+    def _hook_loads(cls, value: str | None) -> str | None:
+        """The hook is imported when the file is loaded: a bad one is one line with its place."""
+        if value is not None:
+            from devsim.devices.gms96.plc import load_hook
+
+            load_hook(value)
+        return value
 
 
 #: Keys only a SERS configuration has.

@@ -88,7 +88,10 @@ def load_hook(spec: str) -> Hook:
     module, _, attr = spec.partition(":")
     if not module or not attr:
         raise ValueError(f"PLC hook must be 'package.module:function', not {spec!r}")
-    fn = getattr(importlib.import_module(module), attr)
+    try:
+        fn = getattr(importlib.import_module(module), attr)
+    except Exception as exc:  # one line, not the import's traceback
+        raise ValueError(f"PLC hook {spec!r} cannot be loaded: {type(exc).__name__}: {exc}") from None
     if not callable(fn):
         raise ValueError(f"PLC hook {spec!r} is not callable")
     return fn  # type: ignore[no-any-return]
@@ -104,6 +107,8 @@ class Plc:
         self.storage_error = False
         self.cycles = 0
         self.hooks: list[Hook] = [load_hook(self.cfg.hook)] if self.cfg.hook else []
+        #: Why the PLC stopped by itself (a hook raised), or None.
+        self.fault: str | None = None
         self._timer: Timer | None = None
         self._pae = bytes(4)
         self._paa_writes: dict[int, bool] = {}
@@ -162,6 +167,7 @@ class Plc:
         if self.running or self.disabled or not self.loaded:
             return
         self.running = True
+        self.fault = None
         self._reset_rule_state()
         self.dev.record_event("plc_start")
         self._schedule()
@@ -187,7 +193,13 @@ class Plc:
         self._timer = None
         if not self.running or not self.dev.powered:
             return
-        self.run_cycle()
+        try:
+            self.run_cycle()
+        except Exception as exc:  # a hook (trusted Python from a config file) failed
+            self.running = False
+            self.fault = f"{type(exc).__name__}: {exc}"
+            self.dev.record_event("plc_fault")
+            return
         if self.running:
             self._schedule()
 
@@ -422,6 +434,7 @@ class Plc:
             "cycles": self.cycles,
             "cycle_ms": self.cycle_s * 1000.0,
             "storage_error": self.storage_error,
+            "fault": self.fault,
             "image_bytes": len(self.dev.plc_image or "") // 2,
             "frames": len(self.dev.plc_frames),
         }

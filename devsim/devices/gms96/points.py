@@ -268,6 +268,7 @@ POINTS = PointTable.of(
         _plc_key("cycles", "PLC cycles run"),
         _plc_key("cycle_ms", "the PLC cycle time", "float"),
         _plc_key("storage_error", "the PLC program did not fit", "bool"),
+        _plc_key("fault", "why the PLC stopped by itself (a hook raised), or null", "str"),
         _plc_key("image_bytes", "bytes of the PLC image"),
         _counter_key("mode", "counter-input mode active", "bool"),
         _counter_key("sync", "the counter is synchronised", "bool"),
