@@ -29,7 +29,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 QUERY = b"#P11?\r"
 ACK = b"\nok"
-MOVE = b"#ON V=30 WR=36000000 E\r"  # SERS: a move that outlasts the measurement
+MOVE = b"#ON V=30 WR=200000 E\r"  # SERS: a move that outlasts the measurement
 REPLY = b"#P11?\r\nP11=0\n\r\nok1\n\r"  # what the echo endpoints answer (a SERS answer's length)
 
 
