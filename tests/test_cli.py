@@ -321,3 +321,23 @@ def test_run_sers_smoke(tmp_path: Path, sockdir: str) -> None:
         code, err = sim.stop()
     assert code == 0, err
     assert "Traceback" not in err
+
+
+def test_run_says_ready_when_the_sers_has_booted(sockdir: str) -> None:
+    """The SERS ignores input for 2 s after power-on; `NAME: ready` tells scripts when it listens."""
+    addr = f"unix:{sockdir}/ready.sock"
+    sim = Sim("sers", "--pty", "--virtual", "--control", addr)
+    try:
+        seen = sim.read_until("control:")
+        assert "sers ready" not in seen and seen["sers"].startswith("pty ")
+        assert ctl(addr, "advance", "1.9").returncode == 0
+        assert ctl(addr, "read", "sers", "booting").stdout == "true\n"
+        assert ctl(addr, "advance", "0.2").returncode == 0
+        line = sim.lines.get(timeout=15)
+        assert line == "sers: ready"
+        assert ctl(addr, "power-cycle", "sers").returncode == 0
+        assert ctl(addr, "advance", "2.5").returncode == 0
+        assert sim.lines.get(timeout=15) == "sers: ready"  # again after each power-on
+    finally:
+        code, err = sim.stop()
+    assert code == 0 and "Traceback" not in err

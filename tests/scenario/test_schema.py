@@ -112,3 +112,29 @@ def test_devsim_check(tmp_path: Path) -> None:
     result = CliRunner().invoke(cli, ["check", str(good), str(bad)])
     assert result.exit_code == 1
     assert "bad.yaml:11: steps.2.timeout: `timeout` must be a duration like 2s or 150ms" in result.output
+
+
+def test_check_finds_misspelled_names_and_wrong_types(tmp_path: Path) -> None:
+    plant = tmp_path / "plant.yaml"
+    plant.write_text(
+        "devices:\n"
+        "  - name: x\n"
+        "    kind: sers\n"
+        "    state:\n"
+        "      input.limit_rigth: true\n"
+    )
+    result = CliRunner().invoke(cli, ["check", str(plant)])
+    assert result.exit_code == 1
+    assert "plant.yaml:5: devices.0.state.input.limit_rigth: x has no 'input.limit_rigth' (did you mean " \
+        "input.limit_right" in result.output
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text(
+        "devices:\n"
+        "  - {name: x, kind: sers}\n"
+        "steps:\n"
+        "  - set: {device: x, values: {quantity.supply_voltage: hello}}\n"
+        "  - expect_state: {device: x, name: axis.positon, equals: 0}\n"
+    )
+    result = CliRunner().invoke(cli, ["check", str(scenario)])
+    assert result.exit_code == 1
+    assert "s.yaml:4: steps.1.set.quantity.supply_voltage: quantity.supply_voltage: expects a number" in result.output
