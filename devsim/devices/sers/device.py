@@ -16,7 +16,7 @@ from devsim.devices.sers.config import SersConfig
 from devsim.devices.sers.drive import SersDrive
 from devsim.devices.sers.errors import ERRNO
 from devsim.devices.sers.execution import COMMANDS, STATEMENTS
-from devsim.devices.sers.face import SersFace
+from devsim.devices.sers.face import INTERACTIVE, SersFace
 from devsim.devices.sers.parameters import PARAMETERS, STORED_ONLY
 from devsim.devices.sers.points import FAULTS, POINTS
 
@@ -38,7 +38,7 @@ class SersDevice(Device):
     @classmethod
     def reference(cls) -> Reference:
         return Reference(
-            commands=[*STATEMENTS, *COMMANDS],
+            commands=[*INTERACTIVE, *STATEMENTS, *COMMANDS],
             parameters=[
                 Parameter(
                     f"P{p.number}",

@@ -8,16 +8,18 @@ positioning, jog, homing, limit switches, faults – lives in :mod:`.drive`.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from devsim.core.device import Face, Port, SerialSettings
+from devsim.core.kit import Command, Table
 from devsim.devices.sers import codec
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.drive import SersDrive
 from devsim.devices.sers.errors import SersError, message
 
-__all__ = ["SersFace"]
+__all__ = ["INTERACTIVE", "SersFace"]
 
 # Characters that only ever extend the statement in progress (a number, the '?' of a query):
 # nothing can complete with them, so they need no parse (the next character will do it).
@@ -230,50 +232,63 @@ class SersFace(Face):
         if line.skip_next:
             line.skip_next = False
             return
-        if isinstance(stmt, st.If):
-            true = self.model.evaluate(stmt.cond)
-            if stmt.then:
-                if not true:
-                    line.skip_block = 1
-            else:
-                line.skip_next = not true
-            return
-        if isinstance(stmt, st.Else):
-            line.skip_block = 1  # the THEN part ran: skip to END
-            return
-        if isinstance(stmt, st.End):
-            return
-        if isinstance(stmt, st.Query):
-            self._out(line, self.model.query_text(stmt) + "\n\r")
-            return
-        if isinstance(stmt, st.ListCmd):
-            if stmt.params:
-                self._out(line, "".join(f"{row}\n\r" for row in self.model.list_parameters(stmt.arg)))
-            else:
-                rows = self.model.program.listing(self.model.list_options, self.model.render_statement, stmt.arg)
-                self._out(line, "".join(f"{row}\n\r" for row in rows))
-            return
-        if isinstance(stmt, st.Assign) and stmt.target.kind in ("P", "alias") and self._is_master_query(stmt):
-            # a master asks through P2 (IF/WAIT) or P3 (read): answer the value (§4.8.5.5, G-MASTER)
-            number = self.model.address_number(stmt.target)
-            asked = int(self.model.operand_value(stmt.value)) if not isinstance(stmt.value, str) else 0
-            self.model.ram[number] = asked
-            self._out(line, f"P{number}={self.model.plain_value(asked)}\n\r")
-            return
-        if isinstance(stmt, st.Command) and stmt.name == "VER":
-            self._out(line, f"P1133={self.model.firmware}\n\r")
-            return
-        if isinstance(stmt, st.Trace) and stmt.query:
+        handler = INTERACTIVE.get(type(stmt).__name__)
+        if handler is None or not handler(self, line, stmt):
+            self.model.execute(stmt)  # the drive's own statements (execution.STATEMENTS)
+
+    # -- statements with an answer or line state (the table INTERACTIVE) ---------------------
+    def _if(self, line: _Line, stmt: st.If) -> bool:
+        true = self.model.evaluate(stmt.cond)
+        if stmt.then:
+            if not true:
+                line.skip_block = 1
+        else:
+            line.skip_next = not true
+        return True
+
+    def _else(self, line: _Line, stmt: st.Else) -> bool:
+        line.skip_block = 1  # the THEN part ran: skip to END
+        return True
+
+    def _query(self, line: _Line, stmt: st.Query) -> bool:
+        self._out(line, self.model.query_text(stmt) + "\n\r")
+        return True
+
+    def _list(self, line: _Line, stmt: st.ListCmd) -> bool:
+        model = self.model
+        if stmt.params:
+            rows = model.list_parameters(stmt.arg)
+        else:
+            rows = model.program.listing(model.list_options, model.render_statement, stmt.arg)
+        self._out(line, "".join(f"{row}\n\r" for row in rows))
+        return True
+
+    def _assign(self, line: _Line, stmt: st.Assign) -> bool:
+        if stmt.target.kind not in ("P", "alias") or not self._is_master_query(stmt):
+            return False
+        # a master asks through P2 (IF/WAIT) or P3 (read): answer the value (§4.8.5.5, G-MASTER)
+        number = self.model.address_number(stmt.target)
+        asked = int(self.model.operand_value(stmt.value)) if not isinstance(stmt.value, str) else 0
+        self.model.ram[number] = asked
+        self._out(line, f"P{number}={self.model.plain_value(asked)}\n\r")
+        return True
+
+    def _version(self, line: _Line, stmt: st.Command) -> bool:
+        if stmt.name != "VER":
+            return False
+        self._out(line, f"P1133={self.model.firmware}\n\r")
+        return True
+
+    def _trace(self, line: _Line, stmt: st.Trace) -> bool:
+        if stmt.query:
             self._out(line, f"TR={int(self.model.trace_mode)}\n\r")
-            return
-        if isinstance(stmt, st.Trace):
-            # TR: one program step; the executed statement is shown like a LIST row (G-TRACE)
-            self.model.trace_mode = True
-            shown = self.model.interpreter.trace_step()
-            if shown is not None:
-                self._out(line, shown + "\n\r")
-            return
-        self.model.execute(stmt)
+            return True
+        # TR: one program step; the executed statement is shown like a LIST row (G-TRACE)
+        self.model.trace_mode = True
+        shown = self.model.interpreter.trace_step()
+        if shown is not None:
+            self._out(line, shown + "\n\r")
+        return True
 
     def _is_master_query(self, stmt: st.Assign) -> bool:
         try:
@@ -330,6 +345,22 @@ class SersFace(Face):
     def _flush_spontaneous(self) -> None:
         while self._spontaneous:
             self.send(self._spontaneous.pop(0))
+
+
+#: Statements the serial face answers itself (a value, a listing, the version) or that steer
+#: the line (IF/ELSE/END); a handler returning False leaves the statement to the drive.
+INTERACTIVE: Table[Callable[[SersFace, _Line, Any], bool]] = Table(
+    [
+        Command("If", SersFace._if, "§4.6.1", "IF condition [THEN … ELSE … END]"),
+        Command("Else", SersFace._else, "§4.6.1", "ELSE: skip to END"),
+        Command("End", lambda face, line, stmt: True, "§4.6.1", "END of an IF block"),
+        Command("Query", SersFace._query, "§4.7", "P<n>? / P<n>?? / alias?: the value or the name"),
+        Command("ListCmd", SersFace._list, "§4.2", "LIST / LISTP: the program or the parameters"),
+        Command("Assign", SersFace._assign, "§4.8.5.5", "P2=/P3= from a master: answer the value"),
+        Command("Command", SersFace._version, "§4.8.2.5", "VER: the firmware version"),
+        Command("Trace", SersFace._trace, "§4.5.4", "TR? / TR: trace mode, one step"),
+    ]
+)
 
 
 def _answers(stmt: st.Statement) -> bool:
