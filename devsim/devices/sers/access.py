@@ -120,56 +120,51 @@ class ParameterAccess:
             return quantize(scaling.from_internal(pdef.kind, float(value)), scaling.decimals(pdef.kind))
         return value
 
-    def _special_read(self, n: int) -> float | None:  # noqa: C901 - one line per parameter
-        if n == 0:
-            return 2 if self.program_editing else self.program_state
-        if n == 11:
-            return self.errors
-        if n == 12:
-            return self.warnings
-        if n == 51:
-            scaling = self.scaling
-            return quantize(scaling.inc_to_pos(round(self.p51_inc())), scaling.pos_decimals)
-        if n == 134:
-            return 7 if self.energized else 0
-        if n == 336:
-            return int(self.pos_ok)
-        if n == 403:
-            return 0 if self.homed else 3
-        if n == 1013:
-            return self.status_word()
-        if n == 1015:
-            return int(self.axis.phase() in ("accel", "decel"))
-        if n == 1016:
-            return int(self.axis.phase() == "const")
-        if n == 1042:
-            return int(self._outside_soft_limits())
-        if n == 1046:
-            return self.adc()
-        if n == 1050:
-            return self.cfg.address
-        if n == 1122:
-            program = getattr(self, "program", None)
-            return program.free_words() if program is not None else 1024
-        if n == 1133:
-            return self.firmware
-        if n == 1137:
-            return self.errno
-        if n == 1300:
-            return self.inputs_byte(1)
-        if n == 1301:
-            return self.inputs_byte(9) if "IO" in self.cfg.options else 0
+    def _special_read(self, n: int) -> float | None:
+        """Parameters whose value is the drive's state rather than a stored number (§4.8.3),
+        looked up in :meth:`_special_reads`; None for the stored ones."""
         if 1201 <= n <= 1216:
             return int(self.signals.get(f"O{n - 1200}"))
-        if n == 1123:
-            return int(self.poly.slot_free)
-        if n in (1124, 1146):
-            window = float(self.ram.get(1055 if n == 1124 else 1145, 1)) * 0.002
-            measuring = int(self.ram.get(1053, 0)) in (9, 10) if n == 1124 else int(self.ram.get(1143, 0)) == 5
-            return round(float(self.signals.get("pulse_frequency")) * window) if measuring else 0
-        if n == 1057:
-            return round(max(self.max_load_angle, abs(self.axis.position() - self.encoder_position())))
-        return None
+        reads = self.__dict__.get("_reads")
+        if reads is None:
+            reads = self.__dict__["_reads"] = self._special_reads()
+        reader = reads.get(n)
+        return None if reader is None else reader()
+
+    def _special_reads(self) -> dict[int, Callable[[], float]]:
+        return {
+            0: lambda: 2 if self.program_editing else self.program_state,
+            11: lambda: self.errors,
+            12: lambda: self.warnings,
+            51: self._read_p51,
+            134: lambda: 7 if self.energized else 0,
+            336: lambda: int(self.pos_ok),
+            403: lambda: 0 if self.homed else 3,
+            1013: self.status_word,
+            1015: lambda: int(self.axis.phase() in ("accel", "decel")),
+            1016: lambda: int(self.axis.phase() == "const"),
+            1042: lambda: int(self._outside_soft_limits()),
+            1046: self.adc,
+            1050: lambda: self.cfg.address,
+            1122: lambda: self.program.free_words(),
+            1133: lambda: self.firmware,
+            1137: lambda: self.errno,
+            1300: lambda: self.inputs_byte(1),
+            1301: lambda: self.inputs_byte(9) if "IO" in self.cfg.options else 0,
+            1123: lambda: int(self.poly.slot_free),
+            1124: lambda: self._pulses_in_window(1124),
+            1146: lambda: self._pulses_in_window(1146),
+            1057: lambda: round(max(self.max_load_angle, abs(self.axis.position() - self.encoder_position()))),
+        }
+
+    def _read_p51(self) -> float:
+        scaling = self.scaling
+        return quantize(scaling.inc_to_pos(round(self.p51_inc())), scaling.pos_decimals)
+
+    def _pulses_in_window(self, n: int) -> int:
+        window = float(self.ram.get(1055 if n == 1124 else 1145, 1)) * 0.002
+        measuring = int(self.ram.get(1053, 0)) in (9, 10) if n == 1124 else int(self.ram.get(1143, 0)) == 5
+        return round(float(self.signals.get("pulse_frequency")) * window) if measuring else 0
 
     @property
     def program_editing(self) -> bool:
