@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hypothesis.strategies as hs
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -91,3 +92,28 @@ def test_unicode_digits_are_not_numbers() -> None:
     device.feed(b"#\xb2\r#V=\xb2\r#P\xb91?\r")
     device.feed(b"#1 P11?\r")
     assert bytes(out).endswith(b"P11=0\n\r\nok3\n\r")
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    data=hs.lists(
+        hs.sampled_from(
+            [b"#", b"#1", b"#2", b"\r", b"\n", b"\r\n", b"ON", b" ", b"V=100", b"P11?", b"LIST", b"X", b"\x00", b"E",
+             b"W=360", b"?", b"NEW", b"QUIT", b"PGM", b"L1", b"GOTO 1"]
+        ),
+        max_size=60,
+    ),
+    cut=hs.integers(min_value=1, max_value=64),
+)
+def test_chunks_and_single_bytes_give_the_same_answers(data: list[bytes], cut: int) -> None:
+    """The face's fast paths (noise between lines, text nobody executes) answer exactly as
+    byte-by-byte handling does, wherever the host's chunks happen to be cut."""
+    stream = b"".join(data)
+    outputs = []
+    for size in (1, cut):
+        device, clock, out, _nvram = _device()
+        for start in range(0, len(stream), size):
+            device.feed(stream[start : start + size])
+        clock.advance(0.01)
+        outputs.append((bytes(out), device.read("program"), device.read("P11")))
+    assert outputs[0] == outputs[1]
