@@ -25,10 +25,22 @@ Three things make a pty behave like a serial port rather than a terminal (see th
   the host counts as matching and nothing is reported.
 
   Linux's pty driver forces CS8 without parity whatever a host sets (``pty_set_termios``), so
-  there only the baud rate and the stop bits are visible.  It keeps PARODD, which the transport
-  leaves set so that a host can open the port at 8E1 again and again (:func:`_mark_parity`); data bits and parity are reported as
+  there only the baud rate and the stop bits are visible; data bits and parity are reported as
   the device's own (the host is assumed to match in what cannot be seen).  The transport probes
   this at start rather than assuming it.
+* **Reopening at 8E1 (Linux).**  glibc's ``tcsetattr`` reads the termios back after setting
+  them and fails with EINVAL when nothing changed (``c_cc`` aside) while the PARENB/CSIZE read
+  back differ from the request – which on a pty is every request for parity.  So a host asking
+  for even parity succeeds only if its request changes something the pty keeps: the first
+  open does (speed, CLOCAL, raw mode), a second open or pyserial's reconfiguration on a change
+  of ``timeout`` would not.  The transport therefore keeps the slave *armed*: PARODD and/or
+  CMSPAR (meaningless without PARENB) set to a pattern the host's last request did not leave,
+  so that the host's next request clears or changes them.  It re-arms after every change of the
+  slave's termios, and learns of one at once: the master is in packet mode and the slave has
+  EXTPROC set, so ``pty_set_termios`` signals ``TIOCPKT_IOCTL`` to the master.  Consecutive arms
+  differ, so an arm that lands between a host's ``TCSETS`` and glibc's read-back still leaves
+  it a change (see :func:`_arm`).  What stays impossible: two reconfigurations in a row faster
+  than the transport's event loop can run between them (it is a different process or thread).
 
 Writes towards the host never block the event loop: they are buffered and flushed when the
 master is writable.  If nobody reads (no host, or a host that does not read) and more than
@@ -70,6 +82,15 @@ _CMSPAR = getattr(termios, "CMSPAR", 0o10000000000 if sys.platform.startswith("l
 
 _CSIZE_BITS = {termios.CS5: 5, termios.CS6: 6, termios.CS7: 7, termios.CS8: 8}
 _BITS_CSIZE = {bits: flag for flag, bits in _CSIZE_BITS.items()}
+
+# Linux: local-mode flag that makes the pty report every termios change to a packet-mode master.
+_EXTPROC = 0o200000 if sys.platform.startswith("linux") else 0
+_TIOCPKT = getattr(termios, "TIOCPKT", None)
+_TIOCPKT_DATA = 0
+# The parity bits the transport arms the slave with, in order of preference (PARODD first: a
+# host asking for even parity clears it even when it leaves CMSPAR alone).
+_ARMS = (termios.PARODD | _CMSPAR, termios.PARODD, _CMSPAR, 0)
+_ARM_MASK = termios.PARODD | _CMSPAR
 
 _READ_SIZE = 4096
 # Device output within this many seconds of host input reuses the settings read with that input.
@@ -176,6 +197,8 @@ class PtyTransport(Transport):
         self._checked_at = -1.0
         self._preset: SerialSettings | None = None
         self._frame_visible = True
+        self._packet = False
+        self._armed: list | None = None
         #: Bytes dropped because nobody read them.
         self.dropped = 0
 
@@ -199,7 +222,8 @@ class PtyTransport(Transport):
                 attrs = apply_settings(attrs, preset)
             termios.tcsetattr(slave, termios.TCSANOW, attrs)
             if not self._frame_visible:
-                _mark_parity(slave)
+                self._packet = _packet_mode(master)
+                self._armed = _arm(slave, None, termios.tcgetattr(slave), extproc=self._packet)
             self._baseline = termios.tcgetattr(slave)
             os.set_blocking(master, False)
             self.address = os.ttyname(slave)
@@ -267,8 +291,8 @@ class PtyTransport(Transport):
             attrs = None
         if attrs is not None and attrs == self._last_attrs:
             return
-        if attrs is not None and not self._frame_visible and self._slave is not None:
-            attrs = _mark_parity(self._slave, attrs)
+        if attrs is not None and not self._frame_visible and self._slave is not None and attrs != self._armed:
+            self._armed = attrs = _arm(self._slave, self._armed, attrs, extproc=self._packet)
         self._last_attrs = attrs
         settings = self.host_settings()
         if settings is not None and settings != self._reported and self._endpoint is not None:
@@ -287,6 +311,13 @@ class PtyTransport(Transport):
             if exc.errno == errno.EIO:  # cannot happen while we hold the slave; be safe
                 return
             raise
+        if self._packet and data:
+            status, data = data[0], data[1:]
+            if status != _TIOCPKT_DATA:
+                # a change of the slave's termios (TIOCPKT_IOCTL) or a flush: look at once
+                if self._endpoint is not None:
+                    self._check_settings()
+                return
         if not data or self._endpoint is None:
             return
         self._check_settings()
@@ -347,21 +378,48 @@ class PtyTransport(Transport):
         return len(self._out)
 
 
-def _mark_parity(fd: int, attrs: list | None = None) -> list:
-    """Leave PARODD set on a Linux pty slave (the driver keeps it, while it drops PARENB).
+def _packet_mode(master: int) -> bool:
+    """Put a Linux pty master in packet mode (so that, with EXTPROC on the slave, it hears of
+    every termios change); ``False`` where that is not available."""
+    if _TIOCPKT is None or not _EXTPROC:
+        return False
+    try:
+        fcntl.ioctl(master, _TIOCPKT, array.array("i", [1]))
+    except OSError:
+        return False
+    return True
 
-    glibc's ``tcsetattr`` fails with EINVAL when none of the requested changes takes effect: a
-    host asking again for even parity (pyserial on a second open at 8E1, or on changing its
-    ``timeout``) would change nothing but PARENB, which the pty drops.  With PARODD set by the
-    transport, clearing it is a change that does take effect, and the call succeeds.  PARODD
-    without PARENB means nothing to the line."""
-    attrs = list(termios.tcgetattr(fd) if attrs is None else attrs)
-    if not attrs[_CFLAG] & termios.PARODD:
-        attrs[_CFLAG] |= termios.PARODD
-        with contextlib.suppress(termios.error):
-            termios.tcsetattr(fd, termios.TCSANOW, attrs)
-            return termios.tcgetattr(fd)
-    return attrs
+
+def _arm(fd: int, previous: list | None, attrs: list, *, extproc: bool) -> list:
+    """Arm a Linux pty slave for the host's next ``tcsetattr``; returns the termios now set.
+
+    glibc's ``tcsetattr`` fails with EINVAL when the termios read back after ``TCSETS`` equal
+    those read before it (``c_cc`` is not compared) and the request's PARENB or CSIZE are not
+    what was read back – always the case for parity on a pty, which drops PARENB.  A host that
+    repeats its request (a second open at 8E1, pyserial applying a new ``timeout``) changes
+    nothing unless something differs from what its last request left.  The transport sets the
+    parity-kind bits, PARODD and CMSPAR, which mean nothing without PARENB, to a pattern that
+
+    * differs from the one in ``attrs`` (what the host's last request left, so the same request
+      again changes them), and
+    * differs from the ``previous`` arm (the state the host's call started from: if this arm
+      lands between its ``TCSETS`` and glibc's read-back, the read-back still differs).
+
+    ``extproc`` also keeps EXTPROC set, so that a packet-mode master hears of the next change.
+    Only the transport's own descriptor is touched; the host's speed and framing are kept."""
+    attrs = list(attrs)
+    avoid = {attrs[_CFLAG] & _ARM_MASK}
+    if previous is not None:
+        avoid.add(previous[_CFLAG] & _ARM_MASK)
+    pattern = next(bits for bits in _ARMS if bits not in avoid)
+    attrs[_CFLAG] = (attrs[_CFLAG] & ~_ARM_MASK) | pattern
+    if extproc:
+        attrs[_LFLAG] |= _EXTPROC
+    try:
+        termios.tcsetattr(fd, termios.TCSANOW, attrs)
+        return termios.tcgetattr(fd)
+    except termios.error:
+        return attrs
 
 
 def _pty_keeps_frame_format(fd: int, attrs: list) -> bool:

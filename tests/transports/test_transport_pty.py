@@ -225,8 +225,9 @@ async def test_seven_bit_device_and_seven_bit_host_match() -> None:
 
 
 async def test_a_host_reopens_at_8e1_five_times_and_changes_its_timeout() -> None:
-    """A GMS96 host opens 8E1. Linux ptys drop PARENB, and glibc's tcsetattr then fails when
-    nothing else changes; the transport leaves PARODD set so that every open succeeds."""
+    """A GMS96 host opens 8E1: open, talk, change pyserial's ``timeout`` (which reconfigures
+    the port), talk, close – five times. Linux ptys drop PARENB and glibc's tcsetattr then fails
+    whenever the request changes nothing else; the transport keeps the slave armed."""
     target = EchoTarget(SerialSettings(9600, 8, "E", 1))
     line = Line(target, RealClock())
     transport = PtyTransport()
@@ -245,8 +246,86 @@ async def test_a_host_reopens_at_8e1_five_times_and_changes_its_timeout() -> Non
         for round_ in range(5):
             got = await asyncio.to_thread(host, round_)
             assert got == bytes([0x10, round_, 0x16]) * 2
+        assert not line.mismatch
     finally:
         await transport.close()
+        line.close()
+
+
+# A host in its own process (as a real one is: no GIL shared with the transport's loop) that
+# opens the port, changes its timeout and closes it without sending a byte, then talks once.
+_QUIET_HOST = r"""
+import sys, time, serial
+path, parity, gap = sys.argv[1], sys.argv[2], float(sys.argv[3])
+log = []
+for i in range(5):
+    try:
+        port = serial.Serial(path, 9600, parity=parity, timeout=2)
+    except Exception as exc:
+        log.append(f"open {i}: {exc}")
+        continue
+    time.sleep(gap)
+    try:
+        port.timeout = 1
+    except Exception as exc:
+        log.append(f"timeout {i}: {exc}")
+    port.close()
+    time.sleep(gap)
+with serial.Serial(path, 9600, parity=parity, timeout=2) as port:
+    port.write(b"\x10\x7b\x16")
+    if port.read(3) != b"\x10\x7b\x16":
+        log.append("no echo")
+print("; ".join(log) or "ok")
+"""
+
+
+@pytest.mark.parametrize("parity", ["E", "O", "N"])
+async def test_a_quiet_host_reopens_and_reconfigures_at_any_parity(parity: str) -> None:
+    """No traffic between the opens: the transport hears of each termios change from the pty
+    itself (packet mode, EXTPROC) and re-arms the slave, instead of waiting for data."""
+    target = EchoTarget(SerialSettings(9600, 8, parity, 1))
+    line = Line(target, RealClock())
+    transport = PtyTransport()
+    await transport.start(line)
+    try:
+        proc = await asyncio.create_subprocess_exec(
+            sys.executable,
+            "-c",
+            _QUIET_HOST,
+            transport.address,
+            parity,
+            "0.01",
+            stdout=asyncio.subprocess.PIPE,
+        )
+        out, _ = await asyncio.wait_for(proc.communicate(), 30)
+        assert out.decode().strip() == "ok"
+        assert line.host is not None and line.host.baudrate == 9600
+    finally:
+        await transport.close()
+        line.close()
+
+
+async def test_arming_keeps_the_hosts_speed_and_stop_bits() -> None:
+    """Re-arming touches only PARODD/CMSPAR (and EXTPROC): what the host set stays set."""
+    transport = PtyTransport()
+    target = EchoTarget(SerialSettings(4800, 8, "E", 2))
+    line = Line(target, RealClock())
+    await transport.start(line)
+    try:
+
+        def host() -> None:
+            with serial.Serial(transport.address, 4800, parity="E", stopbits=2, timeout=2) as port:
+                port.write(b"x")
+                assert port.read(1) == b"x"
+                port.timeout = 1
+                port.write(b"y")
+                assert port.read(1) == b"y"
+
+        await asyncio.to_thread(host)
+        assert line.host == SerialSettings(4800, 8, "E", 2) and not line.mismatch
+    finally:
+        await transport.close()
+        line.close()
 
 
 @pytest.mark.parametrize("target", ["elsewhere", "live-pty"])
