@@ -22,22 +22,37 @@ plain byte pipe does not have:
   several active faults apply.
 
 A line never sleeps; everything that waits goes through the device :class:`~devsim.core.clock.Clock`.
+
+The bit-level UART model (:func:`garble`, :func:`settings_match`) is in
+:mod:`devsim.transports.uart`, the fault definitions (:class:`LineFault`, :class:`FaultHandle`)
+in :mod:`devsim.transports.faults`; both are re-exported here.
 """
 
 from __future__ import annotations
 
 import math
-import random
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, replace
-from typing import Any, Literal, Protocol, get_args
+from dataclasses import replace
+from typing import Any, Protocol
 
 from devsim.core.clock import Clock, Timer
 from devsim.core.device import ByteSink, SerialSettings
+from devsim.transports.faults import _NOISE_TICK, _Active
+
+# LineFault, FaultHandle, garble and settings_match live in .faults and .uart; they stay
+# importable from here (explicit re-exports), as do the fault kind and direction types.
+from devsim.transports.faults import DEFAULT_SPLIT_GAP as DEFAULT_SPLIT_GAP
+from devsim.transports.faults import FaultDirection as FaultDirection
+from devsim.transports.faults import FaultHandle as FaultHandle
+from devsim.transports.faults import FaultKind as FaultKind
+from devsim.transports.faults import LineFault as LineFault
 from devsim.transports.trace import Tracer, render
+from devsim.transports.uart import garble as garble
+from devsim.transports.uart import settings_match as settings_match
 
 __all__ = ["FaultHandle", "Line", "LineFault", "LineTarget", "garble", "settings_match"]
+
 
 # A real receiver accepts a byte that arrives a hair early or late; a timer may fire a few
 # nanoseconds before its nominal time.  Bytes due within this margin are released.
@@ -55,303 +70,6 @@ class LineTarget(Protocol):
 
     @property
     def serial_settings(self) -> SerialSettings: ...
-
-
-def settings_match(a: SerialSettings, b: SerialSettings) -> bool:
-    """True when two UARTs with these settings understand each other."""
-    return (
-        a.baudrate == b.baudrate
-        and a.bytesize == b.bytesize
-        and a.parity.upper() == b.parity.upper()
-        and float(a.stopbits) == float(b.stopbits)
-    )
-
-
-# -- bit-level model of a mismatched line ------------------------------------------------------
-
-
-def _parity_bit(value: int, bytesize: int, parity: str) -> int | None:
-    parity = parity.upper()
-    if parity == "N":
-        return None
-    ones = bin(value & ((1 << bytesize) - 1)).count("1")
-    if parity == "E":
-        return ones & 1
-    if parity == "O":
-        return (ones & 1) ^ 1
-    if parity == "M":
-        return 1
-    if parity == "S":
-        return 0
-    raise ValueError(f"unknown parity {parity!r}")
-
-
-def _waveform(data: bytes, tx: SerialSettings) -> list[int]:
-    """The sender's line level in half-bit steps (half bits make 1.5 stop bits exact)."""
-    stop_halves = round(float(tx.stopbits) * 2)
-    levels: list[int] = []
-    for byte in data:
-        levels += [0, 0]  # start bit
-        for i in range(tx.bytesize):
-            bit = (byte >> i) & 1
-            levels += [bit, bit]
-        parity = _parity_bit(byte, tx.bytesize, tx.parity)
-        if parity is not None:
-            levels += [parity, parity]
-        levels += [1] * stop_halves
-    return levels
-
-
-def garble(data: bytes, sender: SerialSettings, receiver: SerialSettings) -> bytes:
-    """What a UART configured with ``receiver`` reads when a UART configured with ``sender``
-    transmits ``data`` back to back (one burst, idle line before and after).
-
-    A deterministic, pure model of the receiver: it waits for the line to be low, confirms the
-    start bit in its middle, samples each data bit, the parity bit and the stop bit in the middle
-    of *its own* bit cells.  A character with a framing error (stop bit sampled low) is handed
-    over as sampled – the garbage a device's UART register holds; a receiver configured for
-    parity checks it and hands over a character with a parity error as NUL (what a POSIX port
-    with ``INPCK`` delivers), so a 7E1 device never mistakes 8N1 ASCII for its own.  After the
-    stop bit sample it looks for the next start bit (resynchronising at once after a framing
-    error, as a 16550 does).
-
-    A faster sender squeezes several characters into one received character; a slower sender's
-    single character is read as a character plus framing garbage.  With matching settings the
-    output equals the input.  Time is counted in integer units (``1 / (4 * tx_baud * rx_baud)``
-    seconds) so the result never depends on floating-point rounding.
-    """
-    if not data:
-        return b""
-    if settings_match(sender, receiver):
-        return bytes(data)
-    tx_baud, rx_baud = int(sender.baudrate), int(receiver.baudrate)
-    if tx_baud <= 0 or rx_baud <= 0:
-        raise ValueError("baud rates must be positive")
-    levels = _waveform(data, sender)
-    half = 2 * rx_baud  # one sender half bit, in time units
-    rx_bit = 4 * tx_baud  # one receiver bit, in time units
-    end = len(levels) * half
-
-    def level(t: int) -> int:
-        h = t // half
-        return levels[h] if 0 <= h < len(levels) else 1
-
-    def next_low(t: int) -> int | None:
-        h = t // half
-        if h < len(levels) and levels[h] == 0:
-            return t
-        h += 1
-        while h < len(levels):
-            if levels[h] == 0:
-                return h * half
-            h += 1
-        return None
-
-    rx_parity = receiver.parity.upper() != "N"
-    out = bytearray()
-    t = 0
-    while t < end:
-        edge = next_low(t)
-        if edge is None:
-            break
-        # Middle of the start bit: a glitch shorter than half a bit is not a start bit.
-        if level(edge + rx_bit // 2) != 0:
-            t = edge + rx_bit // 2 + 1
-            continue
-        value = 0
-        for i in range(receiver.bytesize):
-            value |= level(edge + (2 * (i + 1) + 1) * rx_bit // 2) << i
-        cells = 1 + receiver.bytesize
-        if rx_parity:
-            sampled = level(edge + (2 * cells + 1) * rx_bit // 2)
-            cells += 1
-            if sampled != _parity_bit(value, receiver.bytesize, receiver.parity):
-                value = 0  # parity error: reported as NUL, as a POSIX port with INPCK does
-        stop_sample = edge + (2 * cells + 1) * rx_bit // 2
-        out.append(value)  # a framing error (low stop bit) still delivers what was sampled
-        t = stop_sample
-    return bytes(out)
-
-
-# -- injected faults --------------------------------------------------------------------------
-
-FaultKind = Literal[
-    "corrupt", "drop", "split", "delay", "jitter", "noise", "baud_mismatch", "unplug", "hang", "silent"
-]
-FaultDirection = Literal["to_device", "to_host", "both"]
-
-#: Gap between the pieces of a split chunk when the fault does not give one.
-DEFAULT_SPLIT_GAP = 0.005
-
-# Which optional parameters each kind uses ("count" and "duration" are handled separately).
-_PARAMS: dict[str, tuple[str, ...]] = {
-    "corrupt": (),
-    "drop": (),
-    "split": ("delay",),
-    "delay": ("delay",),
-    "jitter": ("delay",),
-    "noise": ("rate",),
-    "baud_mismatch": ("baudrate",),
-    "unplug": (),
-    "hang": (),
-    "silent": (),
-}
-_REQUIRED = {"delay": "delay", "jitter": "delay", "noise": "rate", "baud_mismatch": "baudrate"}
-_COUNTED = ("corrupt", "drop", "split")
-# Kinds whose ``direction`` is fixed by what they are (the field is ignored).
-_UNDIRECTED = ("baud_mismatch", "unplug", "hang", "silent")
-# Noise is emitted in batches no closer than this (a timer per byte would be wasteful at high rates).
-_NOISE_TICK = 0.01
-
-
-@dataclass(frozen=True)
-class LineFault:
-    """A fault injected into a :class:`Line` (see :meth:`Line.inject`).
-
-    ``direction`` is ``"to_device"`` (the host's bytes), ``"to_host"`` (the device's bytes) or
-    ``"both"``.  A fault ends when its ``duration`` (seconds of the line's clock) has passed, when
-    its ``count`` of bytes is used up, when its :class:`FaultHandle` is cancelled or when
-    :meth:`Line.clear_faults` is called; without ``count`` and ``duration`` it lasts until cleared.
-
-    Kinds:
-
-    ``corrupt``
-        each of the next ``count`` bytes (or every byte while active) gets one bit flipped, the
-        bit chosen by ``random.Random(seed)``: same length, wrong data.
-    ``drop``
-        the next ``count`` bytes (or every byte while active) vanish.
-    ``split``
-        chunks are delivered one byte at a time, ``delay`` seconds (default 5 ms) between the
-        pieces, order preserved; ``count`` bytes are split, the rest of the chunk that uses up
-        the count follows as one piece.
-    ``delay``
-        every chunk arrives ``delay`` seconds later, order preserved.
-    ``jitter``
-        every chunk is delayed by ``uniform(0, delay)``; a later chunk never overtakes an earlier
-        one (it waits for it).
-    ``noise``
-        ``rate`` random bytes per second appear on the line (towards the device, the host or
-        both), regularly spaced in time: after ``t`` seconds ``floor(rate * t)`` bytes have been
-        emitted in each direction.
-    ``baud_mismatch``
-        the host is treated as running at ``baudrate`` (its other frame settings unchanged), so
-        both directions are garbled by :func:`garble`.  Always both directions.
-    ``unplug``
-        the cable is out: the target gets ``host_disconnected()`` at the start, nothing passes in
-        either direction (bytes are lost, not queued – including those still in flight on a
-        delayed or paced line).  Always both directions.
-    ``hang``
-        the device hangs with the link up: nothing reaches the device (not even bytes still in
-        flight on a delayed line), nothing comes from it.  Line noise towards the host still
-        arrives.  Always both directions.
-    ``silent``
-        the device's output is dropped; it still acts on its input.  Always towards the host.
-
-    Several active faults combine in a fixed order, per chunk:
-
-    1. gates – ``unplug``, ``hang``, ``silent``: a blocked chunk is lost and nothing else applies;
-    2. ``baud_mismatch`` (the latest injected one decides the host's rate);
-    3. ``drop`` faults, in injection order (dropped bytes do not count for later faults);
-    4. ``corrupt`` faults, in injection order, each on the same next bytes (two faults may flip
-       two bits of one byte, or the same bit twice);
-    5. timing – the sum of all ``delay`` faults plus one ``uniform(0, delay)`` draw per ``jitter``
-       fault is added to the chunk's latency, then the earliest injected ``split`` fault cuts it
-       into pieces;
-    6. output pacing (device → host only, when the line paces).
-
-    Noise is injected at the receiving end: it passes the gates (``unplug`` blocks it both ways,
-    ``hang`` blocks it towards the device) and nothing else.
-
-    A parameter the kind does not use is rejected with :class:`ValueError`, so that a misspelt
-    scenario does not silently inject a fault that never ends.
-    """
-
-    kind: FaultKind
-    direction: FaultDirection = "both"
-    count: int | None = None
-    duration: float | None = None
-    delay: float | None = None
-    rate: float | None = None
-    baudrate: int | None = None
-    seed: int = 0
-
-    def __post_init__(self) -> None:
-        if self.kind not in _PARAMS:
-            raise ValueError(f"unknown line fault kind {self.kind!r}; one of {', '.join(_PARAMS)}")
-        if self.direction not in get_args(FaultDirection):
-            raise ValueError(f"direction must be to_device, to_host or both, not {self.direction!r}")
-        if self.count is not None:
-            if self.kind not in _COUNTED:
-                raise ValueError(f"count does not apply to a {self.kind} fault (only {', '.join(_COUNTED)})")
-            if self.count < 1:
-                raise ValueError("count must be at least 1")
-        if self.duration is not None and not (self.duration >= 0 and math.isfinite(self.duration)):
-            raise ValueError("duration must be a finite number of seconds >= 0")
-        for name in ("delay", "rate", "baudrate"):
-            value = getattr(self, name)
-            if value is None:
-                if _REQUIRED.get(self.kind) == name:
-                    raise ValueError(f"a {self.kind} fault needs {name}")
-                continue
-            if name not in _PARAMS[self.kind]:
-                raise ValueError(f"{name} does not apply to a {self.kind} fault")
-            if not math.isfinite(value) or value < 0 or (name != "delay" and value == 0):
-                raise ValueError(f"{name} must be positive")
-
-    def applies(self, direction: str) -> bool:
-        """Whether the fault acts on bytes going ``direction`` (``to_device``/``to_host``)."""
-        return self.direction == "both" or self.direction == direction
-
-    def describe(self) -> str:
-        parts = [self.kind]
-        if self.kind not in _UNDIRECTED:
-            parts.append(self.direction)
-        for name in ("count", "duration", "delay", "rate", "baudrate"):
-            value = getattr(self, name)
-            if value is not None:
-                parts.append(f"{name}={value:g}" if isinstance(value, float) else f"{name}={value}")
-        return " ".join(parts)
-
-
-class _Active:
-    """The line's bookkeeping for one injected fault."""
-
-    __slots__ = ("fault", "rng", "remaining", "started", "timers", "emitted", "active")
-
-    def __init__(self, fault: LineFault, started: float) -> None:
-        self.fault = fault
-        self.rng = random.Random(fault.seed)
-        self.remaining = fault.count
-        self.started = started
-        self.timers: list[Timer] = []
-        self.emitted = {"to_device": 0, "to_host": 0}
-        self.active = True
-
-
-class FaultHandle:
-    """Returned by :meth:`Line.inject`: lets the injector end the fault early."""
-
-    __slots__ = ("_line", "_active")
-
-    def __init__(self, line: Line, active: _Active) -> None:
-        self._line = line
-        self._active = active
-
-    @property
-    def fault(self) -> LineFault:
-        return self._active.fault
-
-    @property
-    def active(self) -> bool:
-        """True until the fault has ended (by itself, by :meth:`cancel` or by clearing)."""
-        return self._active.active
-
-    def cancel(self) -> None:
-        """End the fault now (idempotent)."""
-        self._line._end(self._active, "cancelled")
-
-    def __repr__(self) -> str:  # pragma: no cover - debugging aid
-        return f"<FaultHandle {self.fault.describe()} {'active' if self.active else 'ended'}>"
 
 
 class _Stage:

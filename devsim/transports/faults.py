@@ -1,0 +1,199 @@
+"""Faults injected into a :class:`~devsim.transports.line.Line`: what they are
+(:class:`LineFault`, validated on construction), the line's bookkeeping for an active one, and
+the handle an injector gets back (:class:`FaultHandle`).
+
+How an active fault acts on the bytes is the line's business (:mod:`devsim.transports.line`,
+which re-exports the public names here).
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Literal, get_args
+
+from devsim.core.clock import Timer
+
+if TYPE_CHECKING:
+    from devsim.transports.line import Line
+
+__all__ = ["DEFAULT_SPLIT_GAP", "FaultDirection", "FaultHandle", "FaultKind", "LineFault"]
+
+FaultKind = Literal[
+    "corrupt", "drop", "split", "delay", "jitter", "noise", "baud_mismatch", "unplug", "hang", "silent"
+]
+FaultDirection = Literal["to_device", "to_host", "both"]
+
+#: Gap between the pieces of a split chunk when the fault does not give one.
+DEFAULT_SPLIT_GAP = 0.005
+
+# Which optional parameters each kind uses ("count" and "duration" are handled separately).
+_PARAMS: dict[str, tuple[str, ...]] = {
+    "corrupt": (),
+    "drop": (),
+    "split": ("delay",),
+    "delay": ("delay",),
+    "jitter": ("delay",),
+    "noise": ("rate",),
+    "baud_mismatch": ("baudrate",),
+    "unplug": (),
+    "hang": (),
+    "silent": (),
+}
+_REQUIRED = {"delay": "delay", "jitter": "delay", "noise": "rate", "baud_mismatch": "baudrate"}
+_COUNTED = ("corrupt", "drop", "split")
+# Kinds whose ``direction`` is fixed by what they are (the field is ignored).
+_UNDIRECTED = ("baud_mismatch", "unplug", "hang", "silent")
+# Noise is emitted in batches no closer than this (a timer per byte would be wasteful at high rates).
+_NOISE_TICK = 0.01
+
+
+@dataclass(frozen=True)
+class LineFault:
+    """A fault injected into a :class:`Line` (see :meth:`Line.inject`).
+
+    ``direction`` is ``"to_device"`` (the host's bytes), ``"to_host"`` (the device's bytes) or
+    ``"both"``.  A fault ends when its ``duration`` (seconds of the line's clock) has passed, when
+    its ``count`` of bytes is used up, when its :class:`FaultHandle` is cancelled or when
+    :meth:`Line.clear_faults` is called; without ``count`` and ``duration`` it lasts until cleared.
+
+    Kinds:
+
+    ``corrupt``
+        each of the next ``count`` bytes (or every byte while active) gets one bit flipped, the
+        bit chosen by ``random.Random(seed)``: same length, wrong data.
+    ``drop``
+        the next ``count`` bytes (or every byte while active) vanish.
+    ``split``
+        chunks are delivered one byte at a time, ``delay`` seconds (default 5 ms) between the
+        pieces, order preserved; ``count`` bytes are split, the rest of the chunk that uses up
+        the count follows as one piece.
+    ``delay``
+        every chunk arrives ``delay`` seconds later, order preserved.
+    ``jitter``
+        every chunk is delayed by ``uniform(0, delay)``; a later chunk never overtakes an earlier
+        one (it waits for it).
+    ``noise``
+        ``rate`` random bytes per second appear on the line (towards the device, the host or
+        both), regularly spaced in time: after ``t`` seconds ``floor(rate * t)`` bytes have been
+        emitted in each direction.
+    ``baud_mismatch``
+        the host is treated as running at ``baudrate`` (its other frame settings unchanged), so
+        both directions are garbled by :func:`garble`.  Always both directions.
+    ``unplug``
+        the cable is out: the target gets ``host_disconnected()`` at the start, nothing passes in
+        either direction (bytes are lost, not queued – including those still in flight on a
+        delayed or paced line).  Always both directions.
+    ``hang``
+        the device hangs with the link up: nothing reaches the device (not even bytes still in
+        flight on a delayed line), nothing comes from it.  Line noise towards the host still
+        arrives.  Always both directions.
+    ``silent``
+        the device's output is dropped; it still acts on its input.  Always towards the host.
+
+    Several active faults combine in a fixed order, per chunk:
+
+    1. gates – ``unplug``, ``hang``, ``silent``: a blocked chunk is lost and nothing else applies;
+    2. ``baud_mismatch`` (the latest injected one decides the host's rate);
+    3. ``drop`` faults, in injection order (dropped bytes do not count for later faults);
+    4. ``corrupt`` faults, in injection order, each on the same next bytes (two faults may flip
+       two bits of one byte, or the same bit twice);
+    5. timing – the sum of all ``delay`` faults plus one ``uniform(0, delay)`` draw per ``jitter``
+       fault is added to the chunk's latency, then the earliest injected ``split`` fault cuts it
+       into pieces;
+    6. output pacing (device → host only, when the line paces).
+
+    Noise is injected at the receiving end: it passes the gates (``unplug`` blocks it both ways,
+    ``hang`` blocks it towards the device) and nothing else.
+
+    A parameter the kind does not use is rejected with :class:`ValueError`, so that a misspelt
+    scenario does not silently inject a fault that never ends.
+    """
+
+    kind: FaultKind
+    direction: FaultDirection = "both"
+    count: int | None = None
+    duration: float | None = None
+    delay: float | None = None
+    rate: float | None = None
+    baudrate: int | None = None
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if self.kind not in _PARAMS:
+            raise ValueError(f"unknown line fault kind {self.kind!r}; one of {', '.join(_PARAMS)}")
+        if self.direction not in get_args(FaultDirection):
+            raise ValueError(f"direction must be to_device, to_host or both, not {self.direction!r}")
+        if self.count is not None:
+            if self.kind not in _COUNTED:
+                raise ValueError(f"count does not apply to a {self.kind} fault (only {', '.join(_COUNTED)})")
+            if self.count < 1:
+                raise ValueError("count must be at least 1")
+        if self.duration is not None and not (self.duration >= 0 and math.isfinite(self.duration)):
+            raise ValueError("duration must be a finite number of seconds >= 0")
+        for name in ("delay", "rate", "baudrate"):
+            value = getattr(self, name)
+            if value is None:
+                if _REQUIRED.get(self.kind) == name:
+                    raise ValueError(f"a {self.kind} fault needs {name}")
+                continue
+            if name not in _PARAMS[self.kind]:
+                raise ValueError(f"{name} does not apply to a {self.kind} fault")
+            if not math.isfinite(value) or value < 0 or (name != "delay" and value == 0):
+                raise ValueError(f"{name} must be positive")
+
+    def applies(self, direction: str) -> bool:
+        """Whether the fault acts on bytes going ``direction`` (``to_device``/``to_host``)."""
+        return self.direction == "both" or self.direction == direction
+
+    def describe(self) -> str:
+        parts = [self.kind]
+        if self.kind not in _UNDIRECTED:
+            parts.append(self.direction)
+        for name in ("count", "duration", "delay", "rate", "baudrate"):
+            value = getattr(self, name)
+            if value is not None:
+                parts.append(f"{name}={value:g}" if isinstance(value, float) else f"{name}={value}")
+        return " ".join(parts)
+
+
+class _Active:
+    """The line's bookkeeping for one injected fault."""
+
+    __slots__ = ("fault", "rng", "remaining", "started", "timers", "emitted", "active")
+
+    def __init__(self, fault: LineFault, started: float) -> None:
+        self.fault = fault
+        self.rng = random.Random(fault.seed)
+        self.remaining = fault.count
+        self.started = started
+        self.timers: list[Timer] = []
+        self.emitted = {"to_device": 0, "to_host": 0}
+        self.active = True
+
+
+class FaultHandle:
+    """Returned by :meth:`Line.inject`: lets the injector end the fault early."""
+
+    __slots__ = ("_line", "_active")
+
+    def __init__(self, line: Line, active: _Active) -> None:
+        self._line = line
+        self._active = active
+
+    @property
+    def fault(self) -> LineFault:
+        return self._active.fault
+
+    @property
+    def active(self) -> bool:
+        """True until the fault has ended (by itself, by :meth:`cancel` or by clearing)."""
+        return self._active.active
+
+    def cancel(self) -> None:
+        """End the fault now (idempotent)."""
+        self._line._end(self._active, "cancelled")
+
+    def __repr__(self) -> str:  # pragma: no cover - debugging aid
+        return f"<FaultHandle {self.fault.describe()} {'active' if self.active else 'ended'}>"
