@@ -135,7 +135,11 @@ def test_fixture_serves_every_port_and_switches_faults(devsim_device) -> None:  
         drive.port_url("b"), timeout=5
     ) as b:
         drive.fault("jam", True)
+        before = drive.runtime.line_status("twoport", "a")["bytes_in"]
         a.write(b"xy")
+        deadline = time.monotonic() + 10
+        while drive.runtime.line_status("twoport", "a")["bytes_in"] < before + 2:
+            assert time.monotonic() < deadline  # a's bytes are in before b asks (two fds: no order)
         b.write(b"\r")
         assert b.read(2) == b"2\r"  # both counted on a (so a's input was handled) ...
         assert a.in_waiting == 0  # ... but a is jammed: no echo
