@@ -73,13 +73,12 @@ class Face:
     def __init__(self, model: Any, port: Port) -> None:
         self.model = model
         self.port = port
+        #: Answers towards the host (the port's own method: no extra call on the hot path).
+        self.send: Callable[[bytes], None] = port.send
 
     def feed(self, data: bytes) -> None:
         """Bytes from the host, in arrival order, possibly split anywhere."""
         raise NotImplementedError
-
-    def send(self, data: bytes) -> None:
-        self.port.send(data)
 
     def host_disconnected(self) -> None:
         """The host closed the port (or its TCP connection dropped); default: nothing."""

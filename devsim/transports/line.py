@@ -178,6 +178,7 @@ class Line:
         self._pacing_requested = pacing
         self.tracer = tracer
         self._host: SerialSettings | None = None
+        self._matched: tuple[SerialSettings | None, SerialSettings | None] = (None, None)
         self._write: ByteSink | None = None
         self.bytes_in = 0
         self.bytes_out = 0
@@ -204,6 +205,11 @@ class Line:
         if not data:
             return
         self.bytes_in += len(data)
+        if not self._faults and self.tracer is None and self._clean():
+            stage = self._stages["to_device"]
+            if not stage.items:
+                self.target.feed(data)  # the fault-free path: nothing to garble, trace or delay
+                return
         received = data
         lost = self._gate("to_device") if self._faults else None
         if lost is not None:
@@ -298,6 +304,20 @@ class Line:
             if kind == "silent" and direction == "to_host" and not noise:
                 return kind
         return None
+
+    def _clean(self) -> bool:
+        """No mismatch between the host's settings and the device's (remembered for the very
+        objects last compared, so that the fault-free path costs no comparison)."""
+        host = self._host
+        if host is None:
+            return True
+        device = self.device_settings
+        if host is self._matched[0] and device is self._matched[1]:
+            return True
+        if settings_match(host, device):
+            self._matched = (host, device)
+            return True
+        return False
 
     def _effective_host(self) -> SerialSettings | None:
         """The host's settings as the line sees them (a ``baud_mismatch`` fault overrides the
@@ -481,6 +501,11 @@ class Line:
         if not data:
             return
         self.bytes_out += len(data)
+        if not self._faults and self.tracer is None and self._clean():
+            stage = self._stages["to_host"]
+            if not stage.items:
+                stage.sink(data, len(data))  # the fault-free path
+                return
         device = self.device_settings
         sent = data
         lost = self._gate("to_host") if self._faults else None

@@ -320,7 +320,8 @@ class PtyTransport(Transport):
                 return
         if not data or self._endpoint is None:
             return
-        self._check_settings()
+        if not self._packet:
+            self._check_settings()  # (in packet mode every change is signalled: see above)
         self._checked_at = self._loop.time() if self._loop is not None else 0.0
         self._endpoint.feed(data)
 
@@ -329,7 +330,7 @@ class PtyTransport(Transport):
         if self._master is None or not data:
             return
         loop = self._loop
-        if loop is None or loop.time() - self._checked_at > _RECHECK:
+        if not self._packet and (loop is None or loop.time() - self._checked_at > _RECHECK):
             # an answer right after the host's bytes needs no second look at its termios
             self._check_settings()
         self._out += data

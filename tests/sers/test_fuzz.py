@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hypothesis.strategies as hs
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -99,15 +100,16 @@ def test_unicode_digits_are_not_numbers() -> None:
     data=hs.lists(
         hs.sampled_from(
             [b"#", b"#1", b"#2", b"\r", b"\n", b"\r\n", b"ON", b" ", b"V=100", b"P11?", b"LIST", b"X", b"\x00", b"E",
-             b"W=360", b"?", b"NEW", b"QUIT", b"PGM", b"L1", b"GOTO 1"]
+             b"W=360", b"?", b"NEW", b"QUIT", b"PGM", b"L1", b"GOTO 1", b"#*", b"P1017=2", b"P1017=1", b"VER",
+             b"P11??", b"IF X>0 THEN", b"END", b"TR?", b"A" * 30]
         ),
         max_size=60,
     ),
     cut=hs.integers(min_value=1, max_value=64),
 )
 def test_chunks_and_single_bytes_give_the_same_answers(data: list[bytes], cut: int) -> None:
-    """The face's fast paths (noise between lines, text nobody executes) answer exactly as
-    byte-by-byte handling does, wherever the host's chunks happen to be cut."""
+    """The face's fast paths (noise between lines, text nobody executes, runs of text, whole
+    lines) answer exactly as byte-by-byte handling does, wherever the host's chunks are cut."""
     stream = b"".join(data)
     outputs = []
     for size in (1, cut):
@@ -117,3 +119,29 @@ def test_chunks_and_single_bytes_give_the_same_answers(data: list[bytes], cut: i
         clock.advance(0.01)
         outputs.append((bytes(out), device.read("program"), device.read("P11")))
     assert outputs[0] == outputs[1]
+
+
+@pytest.mark.parametrize(
+    "stream",
+    [
+        b"#1\r",  # an address alone (the whole-line pattern must not read '1' as text)
+        b"#*\r#*P11?\r",  # a broadcast executes but never answers
+        b"#P11?\r",  # the poll: one query, answered after the echo of CR
+        b"#P11? \r",  # ... after the echo of the space
+        b"#P11? P12?\r#P11?P12?\n",  # two queries: the first answers mid-line
+        b"#P1017=2 P11?\r#P11?\r#P1017=1\r",  # answers deferred to the line end (mode 2)
+        b"#W=360E\r#E W=3\r#X=1 #2P11?\r#1P11?\r",  # statements run before the line end
+        b"#" + b"P11?" * 16 + b"\r",  # beyond 60 characters
+        b"#P11\x00?\r#Q?\r",  # errors
+    ],
+)
+def test_whole_lines_answer_as_bytes_do(stream: bytes) -> None:
+    outputs = []
+    for size in (1, len(stream)):
+        device, clock, out, _nvram = _device()
+        for start in range(0, len(stream), size):
+            device.feed(stream[start : start + size])
+        clock.advance(0.01)
+        outputs.append(bytes(out))
+    assert outputs[0] == outputs[1]
+    assert outputs[0]

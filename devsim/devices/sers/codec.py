@@ -17,7 +17,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-__all__ = ["MAX_LINE", "Address", "Framer", "Ignored", "LineEnd", "Noise", "Restart", "TextChar"]
+__all__ = ["MAX_LINE", "Address", "address_value", "Framer", "Ignored", "LineEnd", "Noise", "Restart", "TextChar"]
 
 MAX_LINE = 60
 CR, LF, HASH = 0x0D, 0x0A, 0x23
@@ -72,6 +72,7 @@ _IGNORED = Ignored()
 
 
 _TEXT_END = re.compile(rb"[\r\n#]")
+_ADDRESS = re.compile(rb"\*|[0-9]*")
 
 
 class Framer:
@@ -116,6 +117,46 @@ class Framer:
             self._last_end = None
         return end
 
+    def begin_line(self, data: bytes, start: int) -> tuple[bool, int | str | None, int]:
+        """``data[start]`` is a ``#`` outside a line: take it and the address after it at once,
+        as :meth:`feed` would byte by byte.  Returns whether the address is complete (the next
+        byte is text or a line end), its value, and where the bytes taken end; an address the
+        chunk cuts off (or a ``#`` right after it) is left to :meth:`feed`."""
+        stop = _ADDRESS.match(data, start + 1).end()  # type: ignore[union-attr]
+        self.in_line = True
+        self._last_end = None
+        self._overflow = False
+        self._length = stop - start
+        digits = data[start + 1 : stop].decode("ascii")
+        if stop < len(data) and data[stop] != HASH:
+            self._addr = digits
+            return True, self._end_address().value, stop
+        self._addr = digits
+        return False, None, stop
+
+    def whole_line(self, length: int, terminator: int) -> None:
+        """A whole line of ``length`` bytes (``#`` to the text's end, within the limit) and its
+        ``terminator`` were taken at once: the state :meth:`feed` would leave."""
+        self.in_line = False
+        self._addr = None
+        self._length = length
+        self._overflow = False
+        self._last_end = terminator
+
+    def text_run(self, data: bytes, start: int) -> int:
+        """When :attr:`in_text`: where the run of kept text characters from ``start`` ends (the
+        next CR, LF or ``#``, or the 60-character limit).  Changes nothing; :meth:`take_text`
+        then accounts for the characters taken, as :meth:`feed` would one by one."""
+        found = _TEXT_END.search(data, start)
+        end = len(data) if found is None else found.start()
+        return min(end, start + max(0, MAX_LINE - self._length))
+
+    def take_text(self, count: int) -> None:
+        """``count`` text characters (within the limit) were taken by the device."""
+        if count:
+            self._length += count
+            self._last_end = None
+
     def feed(self, byte: int) -> list[object]:
         events: list[object] = []
         last_end, self._last_end = self._last_end, None
@@ -159,8 +200,13 @@ class Framer:
 
     def _end_address(self) -> Address:
         digits, self._addr = self._addr, None
-        if not digits:
-            return Address(None)
-        if digits == "*":
-            return Address("*")
-        return Address(int(digits))
+        return Address(address_value(digits or ""))
+
+
+def address_value(digits: str) -> int | str | None:
+    """The drive address after ``#``: a number, ``"*"`` (broadcast) or ``None`` (none given)."""
+    if not digits:
+        return None
+    if digits == "*":
+        return "*"
+    return int(digits)

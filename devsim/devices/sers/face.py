@@ -8,6 +8,8 @@ positioning, jog, homing, limit switches, faults – lives in :mod:`.drive`.
 
 from __future__ import annotations
 
+import functools
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -24,6 +26,12 @@ __all__ = ["INTERACTIVE", "SersFace"]
 # Characters that only ever extend the statement in progress (a number, the '?' of a query):
 # nothing can complete with them, so they need no parse (the next character will do it).
 _EXTENDS_ONLY = frozenset("0123456789.?")
+# The first character of a text run that is not one of those.
+_COMPLETES = re.compile(rb"[^0-9.?]")
+_HASH = 0x23
+# A whole line: '#', the address, the text and its end (the text within 60 characters).
+_WHOLE_LINE = re.compile(rb"#((?>\*|[0-9]*))([^\r\n#]+)[\r\n]")  # (atomic: as the framer reads)
+_ENDS = (0x0D, 0x0A, _HASH)  # CR, LF and '#' end a run of text
 
 
 @dataclass
@@ -53,6 +61,7 @@ class SersFace(Face):
         self._line: _Line | None = None
         self._last_replied = False
         self._spontaneous: list[bytes] = []
+        self._settings: SerialSettings | None = None
         model.listen("power_on", self._reset_serial)
         model.listen("spontaneous", self.spontaneous)
         model.listen("line_out", self.send)
@@ -60,7 +69,10 @@ class SersFace(Face):
     # -- line settings -------------------------------------------------------------------
     @property
     def serial_settings(self) -> SerialSettings:
-        return SerialSettings(self.model.cfg.baud, 8, "N", 1)
+        settings = self._settings
+        if settings is None or settings.baudrate != self.model.cfg.baud:
+            settings = self._settings = SerialSettings(self.model.cfg.baud, 8, "N", 1)
+        return settings
 
     # -- power ---------------------------------------------------------------------------
     def _reset_serial(self) -> None:
@@ -86,6 +98,16 @@ class SersFace(Face):
                 index = framer.skip_idle(data, index)  # noise between lines: one search
                 if index >= end:
                     break
+            if not framer.in_line and data[index] == _HASH:
+                index = self._begin_line(data, index)  # '#' and the address in one step
+                continue
+            elif line is not None and line.execute and not line.error and framer.in_text and data[index] not in _ENDS:
+                taken = self._take_text(line, data, index)  # a run of text in one step
+                if taken:
+                    index += taken
+                    if not model.logic_alive or model.booting:
+                        return
+                    continue
             elif line is not None and (line.error or not line.execute) and framer.in_text:
                 stop = framer.skip_text(data, index)  # text nobody executes: only echoed
                 if line.reply and self.echo and stop > index:
@@ -99,6 +121,56 @@ class SersFace(Face):
                 self._on_event(event, byte)
             if not model.logic_alive or model.booting:
                 return
+
+    def _begin_line(self, data: bytes, index: int) -> int:
+        """A ``#`` outside a line and the drive address after it (what :meth:`_on_restart`,
+        :meth:`_on_address_char` and :meth:`_on_address` do byte by byte)."""
+        whole = _WHOLE_LINE.match(data, index)
+        if whole is not None and whole.end() - index - 1 <= codec.MAX_LINE and _quiet(whole[2]):
+            return self._whole_line(data, index, whole)
+        complete, address, stop = self.framer.begin_line(data, index)
+        self._line = line = _Line(held=bytearray(data[index:stop]))
+        if complete:
+            self._select(line, address)
+        return stop
+
+    def _whole_line(self, data: bytes, index: int, whole: re.Match[bytes]) -> int:
+        """A whole line in the chunk whose statements all complete only at its end (a host's
+        poll), in one step: nothing runs before the line end, so the echo of the whole line
+        leaves at once and the statements run as at the line end byte by byte."""
+        end = whole.end()
+        self.framer.whole_line(end - index - 1, data[end - 1])
+        self._line = line = _Line()
+        self._select(line, codec.address_value(whole[1].decode("ascii")))
+        if line.reply and self.echo:
+            self.send(data[index:end])
+        if line.execute:
+            line.text = whole[2].decode("latin-1")
+        self._end_line(line, overflow=False)
+        return end
+
+    def _take_text(self, line: _Line, data: bytes, index: int) -> int:
+        """A run of text characters from ``index`` taken at once: what :meth:`_on_text` does
+        character by character.  Each piece up to a character that can complete a statement is
+        echoed in one write, appended, and the line parsed once (a statement's answer so
+        follows the echo of the character that completed it).  Returns how many were taken;
+        it stops early when a statement ends the line's execution (an error, a reset)."""
+        framer, model = self.framer, self.model
+        stop = framer.text_run(data, index)
+        start = index
+        while index < stop:
+            found = _COMPLETES.search(data, index, stop)
+            cut = stop if found is None else found.end()
+            framer.take_text(cut - index)
+            if line.reply and self.echo:
+                self.send(data[index:cut])
+            line.text += data[index:cut].decode("latin-1")
+            index = cut
+            if found is not None:
+                self._progress(line, final=False)
+                if line.error or self._line is not line or not model.logic_alive or model.booting:
+                    break
+        return index - start
 
     def host_disconnected(self) -> None:
         """A host that leaves mid-line leaves a partial line; the next '#' restarts anyway."""
@@ -145,9 +217,14 @@ class SersFace(Face):
             return
         if line.reply and self.echo:
             self.send(bytes((byte,)))
+        self._end_line(line, event.overflow)
+
+    def _end_line(self, line: _Line, overflow: bool) -> None:
+        """The line has ended (its terminator echoed): the rest of its statements run, then
+        the deferred answers and the acknowledgement (§4.1)."""
         if line.execute and not line.error:
             self._progress(line, final=True)
-            if event.overflow and not line.error:
+            if overflow and not line.error:
                 self.model.warn(1024)
                 self._error(line, 124)
             if line.store and not line.error:
@@ -187,9 +264,10 @@ class SersFace(Face):
         else:
             self.model.addressed = False
             line.execute = line.reply = False
-        if line.reply and self.echo:
-            self.send(bytes(line.held))
-        line.held.clear()
+        if line.held:
+            if line.reply and self.echo:
+                self.send(bytes(line.held))
+            line.held.clear()
 
     # -- statements ----------------------------------------------------------------------
     def _progress(self, line: _Line, final: bool) -> None:
@@ -211,16 +289,17 @@ class SersFace(Face):
             self._error(line, result.errno)
 
     def _statement(self, line: _Line, stmt: st.Statement) -> None:
-        if self.model.program.editing and self._stores_in_program(stmt):
-            if not isinstance(stmt, st.Comment):
-                line.store.append(stmt.text)  # stored when the line ends without an error
-            return
-        if self.model.program.editing and isinstance(stmt, st.Change):
-            self.model.program.change(self._changed_statement(stmt))
-            return
-        if self.model.program.editing and isinstance(stmt, st.Command) and stmt.name == "DEL":
-            self.model.program.delete()
-            return
+        if self.model.program.editing:
+            if self._stores_in_program(stmt):
+                if not isinstance(stmt, st.Comment):
+                    line.store.append(stmt.text)  # stored when the line ends without an error
+                return
+            if isinstance(stmt, st.Change):
+                self.model.program.change(self._changed_statement(stmt))
+                return
+            if isinstance(stmt, st.Command) and stmt.name == "DEL":
+                self.model.program.delete()
+                return
         if line.skip_block:
             if isinstance(stmt, st.If) and stmt.then:
                 line.skip_block += 1
@@ -370,6 +449,25 @@ def _answers(stmt: st.Statement) -> bool:
     if isinstance(stmt, st.Trace):
         return stmt.query
     return isinstance(stmt, st.Command) and stmt.name == "VER"
+
+
+@functools.lru_cache(maxsize=1024)
+def _quiet(text: bytes) -> bool:
+    """Whether nothing in this line's text runs, answers or fails before its line end, as the
+    text arrives character by character (so it may be taken in one step, see
+    :meth:`SersFace._begin_line`): at every character that can complete a statement, the text
+    so far holds no error and no statement except one answering at its very end."""
+    chars = text.decode("latin-1")
+    for at, char in enumerate(chars):
+        if char in _EXTENDS_ONLY:
+            continue
+        result = st.parse(chars[: at + 1], False)
+        if result.errno is not None:
+            return False
+        done = result.statements
+        if done and (len(done) > 1 or done[0][1] != at + 1 or not _answers(done[0][0])):
+            return False
+    return True
 
 
 def _label_number(text: str) -> int | None:

@@ -14,6 +14,7 @@ Tokenisation follows spec G-TOKEN: keywords are case-insensitive, statements may
 
 from __future__ import annotations
 
+import functools
 import re
 from dataclasses import dataclass, field
 
@@ -474,10 +475,13 @@ def _assign_or_query(cur: _Cursor, start: int, target: Address) -> Statement:
     raise SyntaxFault(34, cur.pos)
 
 
+@functools.lru_cache(maxsize=2048)
 def parse(text: str, final: bool) -> ParseResult:
     """Parse a line's statement text (without ``#`` and address).
 
     ``final`` says the line has ended (CR/LF arrived), so nothing at the end is pending.
+    Results are cached (a host polls the same lines again and again): callers must not
+    change them.
     """
     cur = _Cursor(text, final)
     result = ParseResult([])
