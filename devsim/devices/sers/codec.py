@@ -93,10 +93,12 @@ class Framer:
         """Between lines, with no line end to pair: only a ``#`` can change anything."""
         return not self.in_line and self._last_end is None
 
-    def skip_idle(self, data: bytes, start: int) -> int:
-        """Where the next byte that matters is (a ``#``), when :attr:`idle`: noise between
-        lines is skipped with one search instead of byte by byte."""
+    def skip_noise(self, data: bytes, start: int) -> int:
+        """Outside a line, when :attr:`idle` or ``data[start]`` is no line end: where the next
+        byte that matters is (a ``#``).  The noise in between is skipped with one search
+        instead of byte by byte (none of it can be the second half of a CR/LF pair)."""
         found = data.find(b"#", start)
+        self._last_end = None
         return len(data) if found < 0 else found
 
     @property
@@ -129,19 +131,17 @@ class Framer:
         self._length = stop - start
         digits = data[start + 1 : stop].decode("ascii")
         if stop < len(data) and data[stop] != HASH:
-            self._addr = digits
-            return True, self._end_address().value, stop
+            self._addr = None
+            return True, address_value(digits), stop
         self._addr = digits
         return False, None, stop
 
-    def whole_line(self, length: int, terminator: int) -> None:
-        """A whole line of ``length`` bytes (``#`` to the text's end, within the limit) and its
-        ``terminator`` were taken at once: the state :meth:`feed` would leave."""
+    def end_line(self, byte: int) -> bool:
+        """When :attr:`in_text`: CR or LF ``byte`` ends the line, as :meth:`feed` would;
+        returns whether characters were dropped (the ``overflow`` of :class:`LineEnd`)."""
         self.in_line = False
-        self._addr = None
-        self._length = length
-        self._overflow = False
-        self._last_end = terminator
+        self._last_end = byte
+        return self._overflow
 
     def text_run(self, data: bytes, start: int) -> int:
         """When :attr:`in_text`: where the run of kept text characters from ``start`` ends (the

@@ -29,9 +29,9 @@ _EXTENDS_ONLY = frozenset("0123456789.?")
 # The first character of a text run that is not one of those.
 _COMPLETES = re.compile(rb"[^0-9.?]")
 _HASH = 0x23
-# A whole line: '#', the address, the text and its end (the text within 60 characters).
-_WHOLE_LINE = re.compile(rb"#((?>\*|[0-9]*))([^\r\n#]+)[\r\n]")  # (atomic: as the framer reads)
-_ENDS = (0x0D, 0x0A, _HASH)  # CR, LF and '#' end a run of text
+# The rest of a line: its text and its end (within 60 characters: checked by the caller).
+_TEXT_TO_END = re.compile(rb"([^\r\n#]+)[\r\n]")
+_LINE_ENDS = (0x0D, 0x0A)
 
 
 @dataclass
@@ -94,28 +94,36 @@ class SersFace(Face):
         index, end = 0, len(data)
         while index < end:
             line = self._line
-            if framer.idle and line is None:
-                index = framer.skip_idle(data, index)  # noise between lines: one search
-                if index >= end:
-                    break
-            if not framer.in_line and data[index] == _HASH:
-                index = self._begin_line(data, index)  # '#' and the address in one step
-                continue
-            elif line is not None and line.execute and not line.error and framer.in_text and data[index] not in _ENDS:
-                taken = self._take_text(line, data, index)  # a run of text in one step
-                if taken:
-                    index += taken
+            byte = data[index]
+            if not framer.in_line:
+                if byte == _HASH:
+                    index = self._begin_line(data, index)  # '#' and the address in one step
+                    continue
+                if framer.idle or byte not in _LINE_ENDS:
+                    index = framer.skip_noise(data, index)  # noise between lines: one search
+                    continue
+                # (a CR or LF right after a line end: the second half of a pair, byte by byte)
+            elif line is not None and framer.in_text:
+                if byte in _LINE_ENDS:
+                    index += 1
+                    self._line_end(line, byte, framer.end_line(byte))
                     if not model.logic_alive or model.booting:
                         return
                     continue
-            elif line is not None and (line.error or not line.execute) and framer.in_text:
-                stop = framer.skip_text(data, index)  # text nobody executes: only echoed
-                if line.reply and self.echo and stop > index:
-                    self.send(data[index:stop])
-                index = stop
-                if index >= end:
-                    break
-            byte = data[index]
+                if byte != _HASH:
+                    if line.execute and not line.error:
+                        taken = self._take_text(line, data, index)  # a run of text in one step
+                        if taken:
+                            index += taken
+                            if not model.logic_alive or model.booting:
+                                return
+                            continue
+                    else:
+                        stop = framer.skip_text(data, index)  # text nobody executes: only echoed
+                        if line.reply and self.echo:
+                            self.send(data[index:stop])
+                        index = stop
+                        continue
             index += 1
             for event in framer.feed(byte):
                 self._on_event(event, byte)
@@ -124,29 +132,28 @@ class SersFace(Face):
 
     def _begin_line(self, data: bytes, index: int) -> int:
         """A ``#`` outside a line and the drive address after it (what :meth:`_on_restart`,
-        :meth:`_on_address_char` and :meth:`_on_address` do byte by byte)."""
-        whole = _WHOLE_LINE.match(data, index)
-        if whole is not None and whole.end() - index - 1 <= codec.MAX_LINE and _quiet(whole[2]):
-            return self._whole_line(data, index, whole)
-        complete, address, stop = self.framer.begin_line(data, index)
-        self._line = line = _Line(held=bytearray(data[index:stop]))
-        if complete:
-            self._select(line, address)
-        return stop
-
-    def _whole_line(self, data: bytes, index: int, whole: re.Match[bytes]) -> int:
-        """A whole line in the chunk whose statements all complete only at its end (a host's
-        poll), in one step: nothing runs before the line end, so the echo of the whole line
-        leaves at once and the statements run as at the line end byte by byte."""
-        end = whole.end()
-        self.framer.whole_line(end - index - 1, data[end - 1])
+        :meth:`_on_address_char` and :meth:`_on_address` do byte by byte).  When this drive
+        executes the line and the chunk holds all of it, and its statements all complete only
+        at its end (a host's poll), the whole line is taken in one step: nothing runs before
+        the line end, so its echo leaves at once and the statements run as at the line end."""
+        framer = self.framer
+        complete, address, stop = framer.begin_line(data, index)
+        if not complete:
+            self._line = _Line(held=bytearray(data[index:stop]))  # echoed once the address ends
+            return stop
         self._line = line = _Line()
-        self._select(line, codec.address_value(whole[1].decode("ascii")))
+        self._select(line, address)
+        whole = _TEXT_TO_END.match(data, stop) if line.execute else None
+        if whole is None or whole.end() - index - 1 > codec.MAX_LINE or not _quiet(whole[1]):
+            if line.reply and self.echo:
+                self.send(data[index:stop])
+            return stop
+        end = whole.end()
+        framer.take_text(end - 1 - stop)
         if line.reply and self.echo:
             self.send(data[index:end])
-        if line.execute:
-            line.text = whole[2].decode("latin-1")
-        self._end_line(line, overflow=False)
+        line.text = whole[1].decode("latin-1")
+        self._end_line(line, framer.end_line(data[end - 1]))
         return end
 
     def _take_text(self, line: _Line, data: bytes, index: int) -> int:
@@ -212,12 +219,13 @@ class SersFace(Face):
             self._select(self._line, event.value)
 
     def _on_line_end(self, event: codec.LineEnd, byte: int) -> None:
-        line = self._line
-        if line is None:
-            return
+        if self._line is not None:
+            self._line_end(self._line, byte, event.overflow)
+
+    def _line_end(self, line: _Line, byte: int, overflow: bool) -> None:
         if line.reply and self.echo:
             self.send(bytes((byte,)))
-        self._end_line(line, event.overflow)
+        self._end_line(line, overflow)
 
     def _end_line(self, line: _Line, overflow: bool) -> None:
         """The line has ended (its terminator echoed): the rest of its statements run, then
