@@ -120,15 +120,18 @@ class Framer:
         return end
 
     def begin_line(self, data: bytes, start: int) -> tuple[bool, int | str | None, int]:
-        """``data[start]`` is a ``#`` outside a line: take it and the address after it at once,
-        as :meth:`feed` would byte by byte.  Returns whether the address is complete (the next
-        byte is text or a line end), its value, and where the bytes taken end; an address the
-        chunk cuts off (or a ``#`` right after it) is left to :meth:`feed`."""
+        """``data[start]`` is a ``#`` outside a line or in its text: take it and the address
+        after it at once, as :meth:`feed` would byte by byte.  Returns whether the address is
+        complete (the next byte is text or a line end), its value, and where the bytes taken
+        end; an address the chunk cuts off (or a ``#`` right after it) is left to :meth:`feed`."""
         stop = _ADDRESS.match(data, start + 1).end()  # type: ignore[union-attr]
-        self.in_line = True
         self._last_end = None
-        self._overflow = False
-        self._length = stop - start
+        if self.in_line:  # a restart inside the line: its length goes on
+            self._length += stop - start
+        else:
+            self.in_line = True
+            self._overflow = False
+            self._length = stop - start
         digits = data[start + 1 : stop].decode("ascii")
         if stop < len(data) and data[stop] != HASH:
             self._addr = None

@@ -110,20 +110,24 @@ class SersFace(Face):
                     if not model.logic_alive or model.booting:
                         return
                     continue
-                if byte != _HASH:
-                    if line.execute and not line.error:
-                        taken = self._take_text(line, data, index)  # a run of text in one step
-                        if taken:
-                            index += taken
-                            if not model.logic_alive or model.booting:
-                                return
-                            continue
-                    else:
-                        stop = framer.skip_text(data, index)  # text nobody executes: only echoed
-                        if line.reply and self.echo:
-                            self.send(data[index:stop])
-                        index = stop
+                if byte == _HASH:
+                    index = self._restart(line, data, index)  # '#' inside the line
+                    if not model.logic_alive or model.booting:
+                        return
+                    continue
+                if line.execute and not line.error:
+                    taken = self._take_text(line, data, index)  # a run of text in one step
+                    if taken:
+                        index += taken
+                        if not model.logic_alive or model.booting:
+                            return
                         continue
+                else:
+                    stop = framer.skip_text(data, index)  # text nobody executes: only echoed
+                    if line.reply and self.echo:
+                        self.send(data[index:stop])
+                    index = stop
+                    continue
             index += 1
             for event in framer.feed(byte):
                 self._on_event(event, byte)
@@ -155,6 +159,19 @@ class SersFace(Face):
         line.text = whole[1].decode("latin-1")
         self._end_line(line, framer.end_line(data[end - 1]))
         return end
+
+    def _restart(self, line: _Line, data: bytes, index: int) -> int:
+        """A ``#`` inside the line's text and the address after it (what :meth:`_on_restart`
+        does, and then the address handlers, byte by byte)."""
+        self._progress(line, final=True)
+        if self._line is not line or not self.model.logic_alive or self.model.booting:
+            return index + 1  # (the statements reset the drive: the '#' is gone with the line)
+        line.text, line.executed = "", 0
+        complete, address, stop = self.framer.begin_line(data, index)
+        line.held = bytearray(data[index:stop])
+        if complete:
+            self._select(line, address)
+        return stop
 
     def _take_text(self, line: _Line, data: bytes, index: int) -> int:
         """A run of text characters from ``index`` taken at once: what :meth:`_on_text` does
