@@ -333,6 +333,18 @@ class PtyTransport(Transport):
         if not self._packet and (loop is None or loop.time() - self._checked_at > _RECHECK):
             # an answer right after the host's bytes needs no second look at its termios
             self._check_settings()
+        if not self._out and not self._writing:
+            try:  # the common case: nothing queued, the host reads – straight out
+                n = os.write(self._master, data)
+            except (BlockingIOError, InterruptedError):
+                n = 0
+            except OSError as exc:
+                if exc.errno not in (errno.EIO, errno.EAGAIN):
+                    raise
+                n = 0
+            if n == len(data):
+                return
+            data = data[n:]
         self._out += data
         if not self._writing:
             self._flush()

@@ -148,15 +148,16 @@ class SersFace(Face):
         self._line = line = _Line()
         self._select(line, address)
         whole = _TEXT_TO_END.match(data, stop) if line.execute else None
-        if whole is None or whole.end() - index - 1 > codec.MAX_LINE or not _quiet(whole[1]):
+        end = whole.end() if whole is not None else 0
+        text = _quiet(whole[1]) if whole is not None and end - index - 1 <= codec.MAX_LINE else None
+        if text is None:
             if line.reply and self.echo:
                 self.send(data[index:stop])
             return stop
-        end = whole.end()
         framer.take_text(end - 1 - stop)
         if line.reply and self.echo:
             self.send(data[index:end])
-        line.text = whole[1].decode("latin-1")
+        line.text = text
         self._end_line(line, framer.end_line(data[end - 1]))
         return end
 
@@ -477,22 +478,23 @@ def _answers(stmt: st.Statement) -> bool:
 
 
 @functools.lru_cache(maxsize=1024)
-def _quiet(text: bytes) -> bool:
-    """Whether nothing in this line's text runs, answers or fails before its line end, as the
-    text arrives character by character (so it may be taken in one step, see
-    :meth:`SersFace._begin_line`): at every character that can complete a statement, the text
-    so far holds no error and no statement except one answering at its very end."""
+def _quiet(text: bytes) -> str | None:
+    """A line's text if nothing in it runs, answers or fails before its line end as the text
+    arrives character by character (so it may be taken in one step, see
+    :meth:`SersFace._begin_line`), else None: at every character that can complete a
+    statement, the text so far holds no error and no statement except one answering at its
+    very end."""
     chars = text.decode("latin-1")
     for at, char in enumerate(chars):
         if char in _EXTENDS_ONLY:
             continue
         result = st.parse(chars[: at + 1], False)
         if result.errno is not None:
-            return False
+            return None
         done = result.statements
         if done and (len(done) > 1 or done[0][1] != at + 1 or not _answers(done[0][0])):
-            return False
-    return True
+            return None
+    return chars
 
 
 def _label_number(text: str) -> int | None:
