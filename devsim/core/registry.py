@@ -27,6 +27,7 @@ ENV_EXTRA_KINDS = "DEVSIM_EXTRA_KINDS"
 _BUILTIN = {
     "sers": "devsim.devices.sers:SersDevice",
     "gms96": "devsim.devices.gms96:Gms96Device",
+    "poselesta": "devsim.devices.poselesta:PoselestaDevice",
 }
 
 

@@ -1,0 +1,5 @@
+"""ELESTA POSELESTA II/III CNC (kind ``poselesta``)."""
+
+from devsim.devices.poselesta.device import PoselestaDevice
+
+__all__ = ["PoselestaDevice"]

@@ -1,0 +1,347 @@
+"""The POSELESTA II/III control as a model: modes, program memory, machine parameters, the
+transfers of V6 and V7 and the V8 keyboard (manual "Schnittstellenbeschreibung POSELESTA II/III"
+§2.4.1, §2.4.5, §2.6; spec poselesta.md §3.2, §3.5–§3.10, §4.1, §4.2, §4.8, §4.9).
+
+The serial faces only hand bytes over (:meth:`PoselestaCnc.port_input`) and send what the model
+announces on ``<port>_out``.  Transfers are started by the operator's panel actions, here the
+points ``panel.mode``, ``panel.program`` and ``v6.transfer`` / ``v7.transfer``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from devsim.core.kit import declare_signals
+from devsim.core.model import Model
+from devsim.core.points import BadValue
+from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF, baud_for_code
+from devsim.devices.poselesta.config import PoselestaConfig
+from devsim.devices.poselesta.keyboard import Keyboard
+from devsim.devices.poselesta.parameters import PARAMETERS, check_parameter
+from devsim.devices.poselesta.signals import SIGNALS
+from devsim.devices.poselesta.tape import Block, Formats, TapeReader, parse_blocks, render
+from devsim.devices.poselesta.transfers import (
+    CASSETTE_LEADER,
+    FUNCTIONS,
+    PRINTER_CR_PAUSE,
+    Output,
+    ReadIn,
+)
+
+__all__ = ["MODES", "PoselestaCnc"]
+
+#: Operating modes and their code on the data bus (§2.4.1; spec §4.1).
+MODES = {
+    "MANUAL": 0x08,
+    "PROGRAM_ENTRY": 0x09,
+    "EXTERNAL_OPERATION": 0x0A,
+    "EXTERNAL_MEDIUM": 0x0B,
+    "AUTO_CONTINUOUS": 0x0C,
+    "AUTO_SINGLE_BLOCK": 0x0D,
+    "MANUAL_SINGLE_BLOCK": 0x0E,
+}
+#: The mode a port's transfers need: Σ for V6, EXT for V7 (§2.6).
+PORT_MODE = {"v6": "EXTERNAL_MEDIUM", "v7": "EXTERNAL_OPERATION"}
+RESERVED_PROGRAMS = (79, 99)  # the diagnostics and the parameter catalogue (spec §4.9)
+
+
+class PoselestaCnc(Model):
+    """One POSELESTA control: what its serial ports and its panel reach."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self.cfg = PoselestaConfig.model_validate(self.config)
+        self.formats = Formats(dict(self.cfg.decimals))
+        declare_signals(self.signals, SIGNALS)
+        self.transfers: dict[str, ReadIn | Output | None] = {"v6": None, "v7": None}
+        self.last_state = {"v6": "idle", "v7": "idle"}
+        self.discarded = {"v6": 0, "v7": 0}
+        self.message = ""
+        self.mode = "MANUAL"
+        self.program = 0
+        self.keyboard = Keyboard(
+            self.clock, external=lambda: bool(self.signals.get("keyboard_external")),
+            accept=self._key, event=lambda what, code: self.transfer_event("v8", what, code),
+        )
+        self.last_key: int | None = None
+        self._buzzer_timer: Any = None
+        self._boot_timer: Any = None
+        self._load()
+        self._power_on()
+
+    # -- memory -------------------------------------------------------------------------------
+    def _load(self) -> None:
+        stored = self.nvram.get("programs") or {}
+        self.programs: dict[int, dict[int, Block]] = {
+            int(p): {int(b["N"]): Block.from_json(b) for b in blocks} for p, blocks in stored.items()
+        }
+        params = {n: p.default for n, p in PARAMETERS.items()}
+        params.update({int(k): float(v) for k, v in (self.nvram.get("params") or {}).items()})
+        if self.nvram.get("params") is None:
+            params.update({int(k): float(v) for k, v in self.cfg.params.items()})
+        self.params = params
+
+    def _save_programs(self) -> None:
+        self.nvram.put(
+            "programs", {str(p): [b.to_json() for _, b in sorted(bs.items())] for p, bs in self.programs.items()}
+        )
+
+    def _save_params(self) -> None:
+        self.nvram.put("params", {str(n): v for n, v in sorted(self.params.items())})
+
+    # -- power ----------------------------------------------------------------------------------
+    def _power_on(self) -> None:
+        self.mode = "MANUAL"
+        self.message = ""
+        self.signals.set("nc_ready", False)
+        self.booting = self.cfg.boot_time > 0
+        if self.booting:
+            self._boot_timer = self.clock.call_later(self.cfg.boot_time, self._boot_done)
+        else:
+            self._boot_done()
+
+    def _boot_done(self) -> None:
+        """§2.4.5: after about 2 s the control is in MANUAL, NC ready, mode code on the bus."""
+        self._boot_timer = None
+        self.signals.set("nc_ready", True)
+        self.signals.set("data_bus", MODES[self.mode])
+        self.booted()
+
+    def power_cycle(self, *, wipe: bool = False) -> None:
+        for port in ("v6", "v7"):
+            self._stop(port, "cancelled")
+        self.keyboard.reset()
+        if self._boot_timer is not None:
+            self._boot_timer.cancel()
+        super().power_cycle(wipe=wipe)
+        self._load()
+        self._power_on()
+
+    def close(self) -> None:
+        for port in ("v6", "v7"):
+            self._stop(port, "cancelled")
+        self.keyboard.reset()
+        if self._boot_timer is not None:
+            self._boot_timer.cancel()
+
+    # -- the panel ------------------------------------------------------------------------------
+    def select_mode(self, mode: str) -> None:
+        busy = [p for p, t in self.transfers.items() if t is not None]
+        if busy and mode != self.mode:
+            raise BadValue(f"a transfer runs on {busy[0]}: cancel it first (v{busy[0][1]}.transfer idle)")
+        if mode != self.mode:
+            self.mode = mode
+            self.message = ""
+            self.signals.set("data_bus", MODES[mode])
+            self.record_event("mode")
+
+    def select_program(self, number: int) -> None:
+        self.program = number
+
+    def clear_message(self) -> None:
+        self.message = ""
+
+    def transfer_name(self, port: str) -> str:
+        running = self.transfers[port]
+        if running is None:
+            return "idle"
+        return next(name for (p, name), f in FUNCTIONS.items() if p == port and f is running.function)
+
+    def transfer_state(self, port: str) -> str:
+        running = self.transfers[port]
+        return running.state if running is not None else self.last_state[port]
+
+    def set_transfer(self, port: str, name: str) -> None:
+        if name == "idle":
+            self._stop(port, "cancelled")
+            return
+        self.start_transfer(port, name)
+
+    def start_transfer(self, port: str, name: str) -> None:
+        """Start T1 … T7 from the panel (spec §3.2.2 ``panel.start_transfer``)."""
+        function = FUNCTIONS[(port, name)]
+        if self.booting:
+            raise BadValue("the control is not ready yet")
+        if self.mode != PORT_MODE[port]:
+            self.transfer_event(port, "wrong_mode", self.mode)
+            raise BadValue(f"{function.name} needs mode {PORT_MODE[port]}, the control is in {self.mode}")
+        if self.transfers[port] is not None:
+            raise BadValue(f"a transfer runs on {port} already (busy)")
+        program = self.program
+        if program in RESERVED_PROGRAMS:
+            raise BadValue(f"P{program:02d} is not an NC program (the parameter catalogue P99 is not simulated yet)")
+        if self.baud(port) is None:
+            self.message = WERTBEREICHES_UEBERLAUF
+            raise BadValue(f"P{68 if port == 'v6' else 70}: baud rate code not available on POS {self.cfg.variant}")
+        self.message = ""
+        self.record_event(f"{function.name}_start")
+        if function.direction == "input":
+            self.programs.pop(program, None)  # "zuerst das vorgewählte Programm gelöscht" (§2.6)
+            self._save_programs()
+            reader = TapeReader(
+                iso=self.iso(port), formats=self.formats, parity_error=self.cfg.parity_error,
+                ascii_bit7=self.cfg.ascii_bit7, strict_block_numbers=self.cfg.strict_block_numbers,
+            )
+            leader = CASSETTE_LEADER if function.name == "T3" else 0.0
+            if port == "v6":
+                self._v6_lines(True, record=function.name != "T3")  # the cassette plays: RTS L
+            self.transfers[port] = ReadIn(self, function, program, reader, leader)
+        else:
+            blocks = list(self.programs.get(program, {}).values())
+            pieces = self._output_pieces(function.name, port, blocks)
+            if port == "v6":
+                self._v6_lines(True)
+            self.transfers[port] = Output(self, function, program, pieces, len(blocks))
+
+    def _output_pieces(self, name: str, port: str, blocks: list[Block]) -> list[tuple[float, bytes]]:
+        iso = self.iso(port)
+        if name == "T1":
+            return self._printer_pieces(blocks, iso)
+        eob = "\r\n" if self.cfg.eob == "CRLF" else "\r"
+        data = render(blocks, iso=iso, formatted=port == "v6", formats=self.formats, eob=eob,
+                      leader_nul=self.cfg.leader_nul, trailer_nul=self.cfg.trailer_nul)
+        return [(CASSETTE_LEADER if name == "T2" else 0.0, data)]
+
+    def _printer_pieces(self, blocks: list[Block], iso: bool) -> list[tuple[float, bytes]]:
+        """§2.6.2.1: one word per line, CR without LF, 820 ms after every CR; 7 bits with bit 7
+        = 0 whatever P69 says (the printer's parity is a ninth bit a byte cannot carry)."""
+        from devsim.devices.poselesta.tape import block_words
+
+        lines = ["%", "", ""]  # "%" CR CR CR
+        for block in sorted(blocks, key=lambda b: b.number):
+            lines += block_words(block, self.formats, formatted=True)
+        lines.append("M 30")
+        pieces: list[tuple[float, bytes]] = []
+        wait = 0.0
+        for line in lines:
+            pieces.append((wait, (line + "\r").encode("ascii")))
+            wait = PRINTER_CR_PAUSE
+        return pieces
+
+    def _stop(self, port: str, state: str) -> None:
+        running = self.transfers[port]
+        if running is None:
+            return
+        running.cancel()
+        self.transfers[port] = None
+        self.last_state[port] = state
+        if port == "v6":
+            self._v6_lines(False)
+        if state == "cancelled":
+            self.transfer_event(port, "cancelled")
+
+    # -- what the transfers call ----------------------------------------------------------------
+    def transfer_event(self, port: str, what: str, detail: Any = None) -> None:
+        self.record_event(f"{port}.{what}")
+        self.announce("event", port, what, detail)
+
+    def transfer_ended(self, port: str, state: str, message: str | None = None) -> None:
+        running = self.transfers[port]
+        if running is not None:
+            running.cancel()
+        self.transfers[port] = None
+        self.last_state[port] = state
+        if port == "v6":
+            self._v6_lines(False)
+        if state == "failed":
+            self.message = WERTBEREICHES_UEBERLAUF
+
+    def store_block(self, program: int, block: Block) -> bool:
+        blocks = self.programs.setdefault(program, {})
+        total = sum(len(b) for b in self.programs.values())
+        if block.number not in blocks and total >= self.cfg.max_blocks_total:
+            return False
+        blocks[block.number] = block
+        self._save_programs()
+        return True
+
+    def send(self, port: str, data: bytes) -> None:
+        self.announce(f"{port}_out", data)
+
+    def char_time(self, port: str) -> float:
+        """Seconds per character on the port: the frame of §2.3 at the port's baud rate."""
+        running = self.transfers[port]
+        if port == "v6" and running is not None and running.function.name == "T1":
+            return (12 if self.params[69] == 0 else 11) / 1200
+        return (11 if self.iso(port) else 10) / (self.baud(port) or 110)
+
+    # -- line settings --------------------------------------------------------------------------
+    def iso(self, port: str) -> bool:
+        return self.params[69 if port == "v6" else 71] == 0 or port == "v8"
+
+    def baud(self, port: str) -> int | None:
+        """The port's baud rate: P68 (V6), P70 (V7); the printer 1200, the POS II cassette 300,
+        V8 1200 (§2.2 of the spec)."""
+        if port == "v8":
+            return 1200
+        running = self.transfers.get(port)
+        name = running.function.name if running is not None else ""
+        if name == "T1":
+            return 1200
+        if name in ("T2", "T3") and self.cfg.variant == "II":
+            return 300
+        if name in ("T2", "T3"):
+            return {1: 300, 3: 1200, 5: 4800}.get(int(self.params[68]), 300)
+        return baud_for_code(int(self.params[68 if port == "v6" else 70]), self.cfg.variant)
+
+    # -- V6 modem lines ---------------------------------------------------------------------------
+    def _v6_lines(self, on: bool, record: bool = True) -> None:
+        """RTS and DTR: H while a V6 transfer runs (printer, punch); the cassette: DTR = run,
+        RTS = record (spec §3.8, G-V6LINES)."""
+        self.signals.set("v6_dtr", on)
+        self.signals.set("v6_rts", on and record)
+
+    # -- bytes from the host ----------------------------------------------------------------------
+    def port_input(self, port: str, data: bytes) -> None:
+        if self.booting:
+            return
+        if port == "v8":
+            self.keyboard.feed(data)
+            return
+        running = self.transfers[port]
+        if running is None:
+            self.discarded[port] += len(data)  # no input function active (spec §2.6)
+            return
+        running.feed(data)
+
+    def _key(self, code: int) -> None:
+        self.last_key = code
+        self.transfer_event("v8", "key", code)
+        if self.params[67] == 0:
+            self.signals.set("buzzer", True)
+            if self._buzzer_timer is not None:
+                self._buzzer_timer.cancel()
+            self._buzzer_timer = self.clock.call_later(0.1, lambda: self.signals.set("buzzer", False))
+
+    # -- programs and parameters as points ----------------------------------------------------------
+    def program_text(self, number: int) -> str:
+        from devsim.devices.poselesta.tape import block_words
+
+        blocks = sorted(self.programs.get(number, {}).values(), key=lambda b: b.number)
+        return "\n".join(" ".join(block_words(b, self.formats, formatted=True)) for b in blocks)
+
+    def set_program_text(self, number: int, text: str) -> None:
+        """Program entry (spec §3.2.2 ``panel.edit_block``): blocks typed as text replace the
+        program; the same rules as a read-in."""
+        if number in RESERVED_PROGRAMS:
+            raise BadValue(f"P{number:02d} is not an NC program")
+        try:
+            blocks = parse_blocks(text, self.formats)
+        except ValueError as exc:
+            raise BadValue(str(exc)) from None
+        others = sum(len(b) for p, b in self.programs.items() if p != number)
+        if others + len(blocks) > self.cfg.max_blocks_total:
+            raise BadValue(f"{WERTBEREICHES_UEBERLAUF}: program memory full")
+        if blocks:
+            self.programs[number] = {b.number: b for b in blocks}
+        else:
+            self.programs.pop(number, None)
+        self._save_programs()
+
+    def set_param(self, number: int, value: float) -> None:
+        try:
+            check_parameter(number, value)
+        except ValueError as exc:
+            raise BadValue(str(exc)) from None
+        self.params[number] = value
+        self._save_params()

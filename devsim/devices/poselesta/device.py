@@ -1,0 +1,58 @@
+"""The ELESTA POSELESTA II/III CNC as a devsim kind: three serial ports over one control.
+
+Manual "Schnittstellenbeschreibung POSELESTA II/III" (seed 004); spec poselesta.md.  The
+control is :class:`~devsim.devices.poselesta.cnc.PoselestaCnc`; the ports V6 (external data
+media), V7 (DNC) and V8 (external keyboard, receive-only) are
+:class:`~devsim.devices.poselesta.face.PoselestaPortFace`; names in
+:mod:`~devsim.devices.poselesta.points`, the tape code in :mod:`~devsim.devices.poselesta.tape`.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+from devsim.core.device import Device
+from devsim.core.kit import Command, ErrorCode, Parameter, PortDef, Reference
+from devsim.devices.poselesta.cnc import PoselestaCnc
+from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF
+from devsim.devices.poselesta.config import PoselestaConfig
+from devsim.devices.poselesta.face import PoselestaPortFace
+from devsim.devices.poselesta.parameters import PARAMETERS
+from devsim.devices.poselesta.points import FAULTS, POINTS
+from devsim.devices.poselesta.transfers import FUNCTIONS
+
+__all__ = ["PoselestaDevice"]
+
+
+class PoselestaDevice(Device):
+    """One POSELESTA II/III control with its serial ports V6, V7 and V8."""
+
+    kind: ClassVar[str] = "poselesta"
+    description: ClassVar[str] = "ELESTA POSELESTA II/III CNC (tape images on V6/V7 DNC, V8 keyboard)"
+    config_model: ClassVar[type[PoselestaConfig]] = PoselestaConfig
+    ports = (
+        PortDef("v6", "external data media: printer, cassette, tape reader/punch, TTY", "§2.6.2"),
+        PortDef("v7", "DNC (20 mA): programs in and out", "§2.6.3"),
+        PortDef("v8", "external keyboard (receive only)", "§2.6.4", receive_only=True),
+    )
+    model_class = PoselestaCnc
+    face_classes: ClassVar[dict[str, Any]] = {"v6": PoselestaPortFace, "v7": PoselestaPortFace,
+                                              "v8": PoselestaPortFace}
+    points = POINTS
+    faults = FAULTS
+
+    @classmethod
+    def reference(cls) -> Reference:
+        return Reference(
+            commands=[
+                Command(f.name, None, f.section, f"{f.port.upper()} {name}: {f.direction} ({f.peer}), "
+                        f"mode digit {f.digit}")
+                for (_, name), f in FUNCTIONS.items()
+            ],
+            parameters=[
+                Parameter(f"P{p.number}", p.name, p.section, "", p.minimum, p.maximum, p.default, True, "simulated")
+                for p in PARAMETERS.values()
+            ],
+            errors=[ErrorCode(WERTBEREICHES_UEBERLAUF, "value range overflow: wrong code, baud, format or "
+                              "too many words; the transfer stops", "§2.6")],
+        )

@@ -1,0 +1,46 @@
+"""The machine parameters the host link depends on (manual §2.4.9, §2.6.2, §2.6.3; spec
+poselesta.md §4.8).  Every number P1 … P98 is stored (default 0) and round-trips; these have a
+declared range and an effect on the serial ports or the buzzer."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+__all__ = ["PARAMETERS", "ParamDef", "check_parameter"]
+
+
+@dataclass(frozen=True)
+class ParamDef:
+    number: int
+    name: str
+    minimum: float
+    maximum: float
+    default: float
+    section: str
+
+
+PARAMETERS: dict[int, ParamDef] = {
+    p.number: p
+    for p in (
+        ParamDef(1, "measuring system of the catalogues (0 = mm, 1 = inch)", 0, 1, 0, "§2.3.14"),
+        ParamDef(67, "buzzer V16/6 (0 = on, 1 = off)", 0, 1, 0, "§2.4.9"),
+        ParamDef(68, "V6 baud rate code (0 = 110 … 5 = 4800)", 0, 5, 3, "§2.6.2.3"),
+        ParamDef(69, "V6 code (0 = ISO, 1 = ASCII)", 0, 1, 0, "§2.6.2.1–3"),
+        ParamDef(70, "V7 baud rate code (0 = 110 … 5 = 4800)", 0, 5, 3, "§2.6.3"),
+        ParamDef(71, "V7 code (0 = ISO, 1 = ASCII)", 0, 1, 0, "§2.6.3"),
+        ParamDef(72, "strobe times t1 = t2 in ms", 0, 99, 20, "§2.4.7"),
+    )
+}
+
+
+def check_parameter(number: int, value: float) -> None:
+    """Refuse a parameter number or value the control would not take (ValueError)."""
+    if not 1 <= number <= 98 or number == 79:
+        raise ValueError(f"P{number}: parameters are P1 … P98 (P79 is the diagnostic program)")
+    if not math.isfinite(value):
+        raise ValueError(f"P{number}: not a finite number")
+    pdef = PARAMETERS.get(number)
+    if pdef is not None:
+        if not pdef.minimum <= value <= pdef.maximum or not float(value).is_integer():
+            raise ValueError(f"P{number}: {value:g} is not a whole number in {pdef.minimum:g} … {pdef.maximum:g}")

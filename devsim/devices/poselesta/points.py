@@ -1,0 +1,91 @@
+"""The names of the POSELESTA (manual §2.4, §2.6; spec poselesta.md §3.2.2, §4.8, §4.9): the
+panel actions that start and stop transfers, the programs, the machine parameters, the
+keyboard and the signals of the host side."""
+
+from __future__ import annotations
+
+import re
+
+from devsim.core.kit import Fault, FaultTable, signal_points
+from devsim.core.points import Family, Point, PointTable
+from devsim.devices.poselesta.cnc import MODES, PoselestaCnc
+from devsim.devices.poselesta.signals import SIGNALS
+from devsim.devices.poselesta.transfers import FUNCTIONS
+
+__all__ = ["FAULTS", "POINTS"]
+
+
+def _transfer_points(port: str) -> list[Point]:
+    names = ("idle", *(name for (p, name) in FUNCTIONS if p == port))
+    functions = ", ".join(f"{name} = {FUNCTIONS[(port, name)].name}" for name in names[1:])
+    return [
+        Point(f"{port}.transfer", "str", f"the transfer on {port.upper()}: {functions}; idle cancels "
+              f"(needs mode {'EXTERNAL_MEDIUM' if port == 'v6' else 'EXTERNAL_OPERATION'})", "§2.6",
+              get=lambda m: m.transfer_name(port), put=lambda m, v: m.set_transfer(port, v), choices=names,
+              in_state=True),
+        Point(f"{port}.state", "str", "idle, leader, wait_start, receiving, sending, done, failed or cancelled",
+              "§2.6", get=lambda m: m.transfer_state(port), in_state=True),
+        Point(f"{port}.discarded", "int", "bytes received while no input transfer ran", "§2.6",
+              get=lambda m: m.discarded[port]),
+        Point(f"{port}.blocks", "int", "blocks of the running transfer", "§2.6",
+              get=lambda m: getattr(m.transfers[port], "blocks", 0)),
+    ]
+
+
+def _program(name: str) -> Point | None:
+    match = re.fullmatch(r"program\.P(\d\d)", name)
+    if match is None:
+        return None
+    number = int(match[1])
+    return Point(name, "str", f"program P{number:02d}, one block per line (setting it enters the program)",
+                 "§2.6.3", get=lambda m: m.program_text(number), put=lambda m, v: m.set_program_text(number, v))
+
+
+def _param(name: str) -> Point | None:
+    match = re.fullmatch(r"param\.P(\d{1,2})", name)
+    if match is None or not 1 <= int(match[1]) <= 98 or int(match[1]) == 79:
+        return None
+    number = int(match[1])
+    return Point(name, "float", f"machine parameter P{number}", "§2.6.2.3",
+                 get=lambda m: m.params.get(number, 0.0), put=lambda m, v: m.set_param(number, v))
+
+
+def _monitoring(model: PoselestaCnc, active: bool) -> None:
+    model.signals.set("nc_ready", not active and not model.booting)
+    model.message = "Fehlermeldung" if active else ""
+
+
+POINTS = PointTable.of(
+    [
+        Point("panel.mode", "str", "operating mode (Betriebsart); EXTERNAL_MEDIUM = Σ (V6), "
+              "EXTERNAL_OPERATION = EXT (V7)", "§2.4.1", get=lambda m: m.mode,
+              put=lambda m, v: m.select_mode(v), choices=tuple(MODES), in_state=True),
+        Point("panel.program", "int", "pre-selected program Pxx (the target or source of a transfer)", "§2.6.3",
+              get=lambda m: m.program, put=lambda m, v: m.select_program(v), minimum=0, maximum=99, in_state=True),
+        Point("panel.message", "str", "screen message, e.g. WERTBEREICHES-UEBERLAUF", "§2.6",
+              get=lambda m: m.message, in_state=True),
+        Point("panel.clear_message", "bool", "clear the screen message", "§2.6",
+              put=lambda m, v: m.clear_message() if v else None, example=True),
+        Point("programs", "json", "numbers of the stored programs", "§2.6.3",
+              get=lambda m: sorted(m.programs), in_state=True),
+        Point("keyboard.last_key", "int", "code of the last key taken from V8 (-1: none)", "§2.6.4",
+              get=lambda m: -1 if m.last_key is None else m.last_key),
+        Point("keyboard.accepted", "int", "keys taken from V8", "§2.6.4", get=lambda m: m.keyboard.accepted),
+        Point("keyboard.lost", "int", "keys lost because they came less than 100 ms apart", "§2.6.4",
+              get=lambda m: m.keyboard.lost),
+    ],
+    _transfer_points("v6"),
+    _transfer_points("v7"),
+    signal_points(SIGNALS),
+    families=[
+        Family("program.P<nn>", "str", "program P00 … P98, one block per line", "§2.6.3", _program),
+        Family("param.P<n>", "float", "machine parameter P1 … P98", "§2.6.2.3", _param),
+    ],
+)
+
+FAULTS = FaultTable(
+    [Fault("monitoring", "internal monitoring error: NC ready goes L, an error message shows", "§2.4.5",
+           _monitoring)]
+)
+
+

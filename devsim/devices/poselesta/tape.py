@@ -1,0 +1,328 @@
+"""NC tape images: reading a program in (T3, T5, T7) and writing one out (T2, T4, T6), manual
+§2.6.2.3 and §2.6.3; spec poselesta.md §3.3–§3.6 (state machine, word assembly, block commit,
+parity errors, output format) and the vectors of §6.6–§6.8.
+
+Pure and incremental: :class:`TapeReader` takes the bytes as they arrive and returns what they
+mean (blocks, the end, a failure); :func:`render` turns stored blocks into the bytes a transfer
+sends.  No clock, no I/O.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field, replace
+from typing import Any, Literal
+
+from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF, encode, parity_ok
+
+__all__ = [
+    "Block",
+    "BlockRead",
+    "Ended",
+    "Failed",
+    "Formats",
+    "Notice",
+    "TapeReader",
+    "parse_blocks",
+    "render",
+]
+
+COORDINATES = "XYZD"
+CENTRES = "IJK"  # I ↔ X, J ↔ Y, K ↔ Z (absolute centre coordinates, spec §6.6)
+ADDRESS_LETTERS = frozenset("NXYZDIJKFSGMTL")
+SIGNED = frozenset(COORDINATES + CENTRES)
+#: Output order inside a block (spec §3.6, G-ORDER): N X Y Z D I J K F S T G M L #.
+ORDER = "NXYZDIJKFSTGML"
+CR, LF, NUL, DEL, SP = 0x0D, 0x0A, 0x00, 0x7F, 0x20
+
+
+@dataclass(frozen=True)
+class Formats:
+    """Digits before and after the point per address (§2.6.3: 7 significant digits, the point
+    placed by each axis's resolution; N xxx, G/M/T xx, F/S xxxx, L xx.xxx)."""
+
+    decimals: Mapping[str, int] = field(default_factory=lambda: dict.fromkeys(COORDINATES, 3))
+
+    def of(self, letter: str) -> tuple[int, int]:
+        if letter in COORDINATES:
+            d = self.decimals[letter]
+            return 7 - d, d
+        if letter in CENTRES:
+            d = self.decimals["XYZ"[CENTRES.index(letter)]]
+            return 7 - d, d
+        return {"N": (3, 0), "G": (2, 0), "M": (2, 0), "T": (2, 0), "F": (4, 0), "S": (4, 0), "L": (2, 3)}[letter]
+
+
+@dataclass(frozen=True)
+class Block:
+    """One NC block: its number and its words.  Coordinates and L are integers in units of the
+    last decimal (``X 10.500`` with 3 decimals is 10500); G and M keep their order of arrival."""
+
+    number: int
+    words: tuple[tuple[str, int], ...] = ()
+    skip: bool = False
+
+    def value(self, letter: str) -> int | None:
+        for key, value in self.words:
+            if key == letter:
+                return value
+        return None
+
+    def values(self, letter: str) -> list[int]:
+        return [value for key, value in self.words if key == letter]
+
+    def to_json(self) -> dict[str, Any]:
+        return {"N": self.number, "words": [list(w) for w in self.words], "skip": self.skip}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Block:
+        return cls(int(data["N"]), tuple((str(k), int(v)) for k, v in data["words"]), bool(data.get("skip")))
+
+
+# -- what the reader reports ------------------------------------------------------------------
+@dataclass(frozen=True)
+class BlockRead:
+    block: Block
+
+
+@dataclass(frozen=True)
+class Ended:
+    """The ``M30`` block arrived: the transfer is complete."""
+
+
+@dataclass(frozen=True)
+class Failed:
+    """The transfer stops with the screen message (``WERTBEREICHES-UEBERLAUF``)."""
+
+    reason: str
+    message: str = WERTBEREICHES_UEBERLAUF
+
+
+@dataclass(frozen=True)
+class Notice:
+    """Something a host developer may want to know that changes nothing (an empty word, a
+    block without number, a duplicate word, comment characters)."""
+
+    what: str
+    detail: str = ""
+
+
+Event = BlockRead | Ended | Failed | Notice
+
+
+@dataclass
+class _Word:
+    letter: str
+    digits: str = ""
+    negative: bool = False
+    sign_invalid: bool = False
+
+
+class TapeReader:
+    """Program read-in after the start of a transfer (spec §3.5): wait for ``%``, then words,
+    blocks and the ``M30`` end.  ``iso`` selects ISO code (parity checked after ``%``) or
+    ASCII (bit 7 masked, or refused with ``ascii_bit7="abort"``)."""
+
+    def __init__(
+        self,
+        *,
+        iso: bool,
+        formats: Formats | None = None,
+        parity_error: Literal["abort", "skip"] = "abort",
+        ascii_bit7: Literal["ignore", "abort"] = "ignore",
+        strict_block_numbers: bool = False,
+    ) -> None:
+        self.iso = iso
+        self.formats = formats or Formats()
+        self.parity_error = parity_error
+        self.ascii_bit7 = ascii_bit7
+        self.strict_block_numbers = strict_block_numbers
+        self.started = False
+        self.finished = False
+        self._word: _Word | None = None
+        self._words: list[tuple[str, int]] = []
+        self._skip = False
+        self._comment_seen = False
+
+    def feed(self, data: bytes) -> list[Event]:
+        events: list[Event] = []
+        for byte in data:
+            if self.finished:
+                break
+            if not self.started:
+                if byte & 0x7F == 0x25:  # '%' recognised on its 7 bits (§3.5.1)
+                    self.started = True
+                continue
+            char = self._character(byte, events)
+            if char is not None:
+                self._interpret(char, events)
+        return events
+
+    def _character(self, byte: int, events: list[Event]) -> int | None:
+        """The 7-bit character of a byte after ``%`` (§3.5.4), None if it is dropped."""
+        if self.iso:
+            if not parity_ok(byte):
+                if self.parity_error == "skip":
+                    events.append(Notice("parity_error", f"{byte:02X}"))
+                    return None
+                self._fail(events, f"parity error in byte {byte:02X} (ISO code expected)")
+                return None
+        elif byte & 0x80 and self.ascii_bit7 == "abort":
+            self._fail(events, f"byte {byte:02X} has bit 7 set (ASCII code expected)")
+            return None
+        return byte & 0x7F
+
+    def _fail(self, events: list[Event], reason: str) -> None:
+        self.finished = True
+        events.append(Failed(reason))
+
+    def _interpret(self, char: int, events: list[Event]) -> None:
+        c = chr(char)
+        word = self._word
+        if c in ADDRESS_LETTERS:
+            self._finish_word(events)
+            self._word = _Word(c)
+        elif c in "-+":
+            if word is None or word.digits:
+                return  # a sign in an undefined position: skipped
+            if word.letter in SIGNED:
+                word.negative = c == "-"
+            else:
+                word.sign_invalid = True
+        elif c.isdigit() or c == ".":
+            if word is None:
+                return
+            if c == "." and "." in word.digits:
+                self._fail(events, f"{word.letter}: a second decimal point")
+                return
+            word.digits += c
+        elif c == "C":
+            if word is not None:
+                word.digits, word.negative, word.sign_invalid = "", False, False
+        elif c == "#":
+            self._skip = True
+        elif char == CR:
+            self._finish_word(events)
+            if not self.finished:
+                self._commit(events)
+        elif char in (LF, NUL, DEL, SP):
+            return
+        elif c in "();:/" and not self._comment_seen:
+            self._comment_seen = True
+            events.append(Notice("comment_characters_seen", c))
+
+    def _finish_word(self, events: list[Event]) -> None:
+        word, self._word = self._word, None
+        if word is None or self.finished:
+            return
+        if not word.digits or word.digits == ".":
+            events.append(Notice("empty_word", word.letter))
+            return
+        if word.sign_invalid:
+            self._fail(events, f"{word.letter}: a sign is not allowed")
+            return
+        whole, _, fraction = word.digits.partition(".")
+        whole, fraction = whole.lstrip("0"), fraction.rstrip("0")
+        before, after = self.formats.of(word.letter)
+        if len(whole) > before or len(fraction) > after:
+            self._fail(events, f"{word.letter}{'-' if word.negative else ''}{word.digits}: beyond the format")
+            return
+        value = int(whole or "0") * 10**after + int((fraction or "0").ljust(after, "0")[:after] or "0")
+        if word.negative:
+            value = -value
+        if word.letter not in "GM":
+            if any(k == word.letter for k, _ in self._words):
+                events.append(Notice("duplicate_word", word.letter))
+                self._words = [(k, v) for k, v in self._words if k != word.letter]
+        self._words.append((word.letter, value))
+
+    def _commit(self, events: list[Event]) -> None:
+        words, skip = self._words, self._skip
+        self._words, self._skip = [], False
+        if not words:
+            return  # an empty block: ignored
+        letters = [k for k, _ in words]
+        if ("M", 30) in words:
+            self.finished = True
+            events.append(Ended())
+            return
+        for kinds, most in ((COORDINATES, 2), (CENTRES, 2), ("G", 4), ("M", 2)):
+            if sum(letter in kinds for letter in letters) > most:
+                self._fail(events, f"more than {most} words of {kinds} in a block")
+                return
+        number = next((v for k, v in words if k == "N"), None)
+        if number is None:
+            if self.strict_block_numbers:
+                self._fail(events, "a block without number")
+            else:
+                events.append(Notice("block_without_number"))
+            return
+        rest = tuple((k, v) for k, v in words if k != "N")
+        events.append(BlockRead(Block(number, rest, skip)))
+
+
+# -- output -----------------------------------------------------------------------------------
+def _value_text(letter: str, value: int, formats: Formats) -> tuple[str, str]:
+    """(sign, digits) of a word on output (spec §3.6)."""
+    before, after = formats.of(letter)
+    sign = "-" if value < 0 else ""
+    value = abs(value)
+    if letter in "GMT":
+        return sign, f"{value:02d}"
+    if after == 0:
+        return sign, str(value)
+    whole, fraction = divmod(value, 10**after)
+    return sign, f"{whole}.{fraction:0{after}d}"
+
+
+def block_words(block: Block, formats: Formats, *, formatted: bool) -> list[str]:
+    """The words of a block on output, in the order of spec §3.6 (``X- 20.000`` formatted,
+    ``X-20.000`` not)."""
+    gap = " " if formatted else ""
+    items = [("N", block.number), *block.words]
+    rank = {letter: i for i, letter in enumerate(ORDER)}
+    ordered = sorted(items, key=lambda kv: (rank[kv[0]], kv[1] if kv[0] in "GM" else 0))
+    words = []
+    for letter, value in ordered:
+        sign, digits = _value_text(letter, value, formats)
+        words.append(f"{letter}{sign}{gap}{digits}")
+    if block.skip:
+        words.append("#")
+    return words
+
+
+def render(
+    blocks: Iterable[Block],
+    *,
+    iso: bool,
+    formatted: bool,
+    formats: Formats | None = None,
+    eob: str = "\r\n",
+    leader_nul: int = 0,
+    trailer_nul: int = 0,
+) -> bytes:
+    """A program as a transfer sends it: ``%``, the blocks in ascending N, the generated
+    ``M30`` block (manual §2.6.3: "M 30 wird automatisch … ausgegeben"), each ended by ``eob``."""
+    formats = formats or Formats()
+    gap = " " if formatted else ""
+    lines = ["%"]
+    for block in sorted(blocks, key=lambda b: b.number):
+        lines.append(gap.join(block_words(block, formats, formatted=formatted)))
+    lines.append(f"M{gap}30")
+    text = "".join(line + eob for line in lines)
+    return b"\x00" * leader_nul + encode(text, iso) + b"\x00" * trailer_nul
+
+
+def parse_blocks(text: str, formats: Formats | None = None) -> list[Block]:
+    """Blocks typed as text (program entry, a plant file): the read-in rules of §3.5 on
+    ``% text M30``, in ASCII; raises ValueError with the screen message on an error."""
+    reader = TapeReader(iso=False, formats=formats)
+    body = text.replace("\r\n", "\n").replace("\n", "\r")
+    events = reader.feed(("%\r" + body + "\rM30\r").encode("latin-1", errors="replace"))
+    blocks: dict[int, Block] = {}
+    for event in events:
+        if isinstance(event, Failed):
+            raise ValueError(f"{event.message}: {event.reason}")
+        if isinstance(event, BlockRead):
+            blocks[event.block.number] = event.block
+    return [replace(b) for _, b in sorted(blocks.items())]

@@ -1,0 +1,157 @@
+"""The running transfers of V6 and V7 (manual §2.6.2, §2.6.3; spec poselesta.md §3.2, §3.5–§3.8).
+
+A transfer is started at the panel (:meth:`PoselestaCnc.start_transfer`) and runs on the device
+clock: a read-in (:class:`ReadIn`: T3, T5, T7) takes what the host sends, an output
+(:class:`Output`: T1, T2, T4, T6) sends a tape image, with the printer's 820 ms after every CR
+and the cassette's 13 s leader as device-clock waits (free under virtual time).  The byte
+pacing of a character frame is the line's (the port's settings give the character time).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from devsim.core.clock import Clock, Timer
+from devsim.devices.poselesta.tape import BlockRead, Ended, Failed, Notice, TapeReader
+
+__all__ = ["CASSETTE_LEADER", "PRINTER_CR_PAUSE", "FUNCTIONS", "Function", "Output", "ReadIn"]
+
+#: The fixed lead time of the cassette (§2.6.2.2: "ca. 13 s").
+CASSETTE_LEADER = 13.0
+#: The printer's pause after every CR (§2.6.2.1: "ca. 820 ms").
+PRINTER_CR_PAUSE = 0.820
+
+
+@dataclass(frozen=True)
+class Function:
+    """A transfer function of the table in spec §3.2.1."""
+
+    name: str  # T1 … T7
+    port: str
+    digit: int
+    direction: str  # "output" | "input"
+    peer: str
+    section: str
+
+
+#: The transfer functions by the name a user selects them with (``v6.transfer`` / ``v7.transfer``).
+FUNCTIONS: dict[tuple[str, str], Function] = {
+    ("v6", "printer"): Function("T1", "v6", 1, "output", "printer Z1 (20 columns)", "§2.6.2.1"),
+    ("v6", "cassette_out"): Function("T2", "v6", 2, "output", "cassette Z2 / ZPS 020", "§2.6.2.2"),
+    ("v6", "cassette_in"): Function("T3", "v6", 3, "input", "cassette Z2 / ZPS 020", "§2.6.2.2"),
+    ("v6", "output"): Function("T4", "v6", 7, "output", "punch / TTY", "§2.6.2.3"),
+    ("v6", "input"): Function("T5", "v6", 8, "input", "tape reader / TTY", "§2.6.2.3"),
+    ("v7", "output"): Function("T6", "v7", 7, "output", "DNC host", "§2.6.3"),
+    ("v7", "input"): Function("T7", "v7", 8, "input", "DNC host", "§2.6.3"),
+}
+
+
+class Cnc(Protocol):
+    """What a transfer uses of the control."""
+
+    clock: Clock
+
+    def transfer_event(self, port: str, what: str, detail: Any = None) -> None: ...
+    def store_block(self, program: int, block: Any) -> bool: ...
+    def transfer_ended(self, port: str, state: str, message: str | None = None) -> None: ...
+    def char_time(self, port: str) -> float: ...
+    def send(self, port: str, data: bytes) -> None: ...
+
+
+class ReadIn:
+    """A program read-in (spec §3.5): the leader wait (cassette), ``%``, blocks, ``M30``."""
+
+    def __init__(self, cnc: Cnc, function: Function, program: int, reader: TapeReader, leader: float = 0.0) -> None:
+        self.cnc = cnc
+        self.function = function
+        self.program = program
+        self.reader = reader
+        self.blocks = 0
+        self.state = "leader" if leader > 0 else "wait_start"
+        self._timer: Timer | None = cnc.clock.call_later(leader, self._leader_over) if leader > 0 else None
+
+    def _leader_over(self) -> None:
+        self._timer = None
+        if self.state == "leader":
+            self.state = "wait_start"
+
+    def feed(self, data: bytes) -> None:
+        if self.state == "leader":
+            return  # the uncoated leader of the cassette: nothing counts yet (§2.6.2.2)
+        events = self.reader.feed(data)
+        if self.reader.started and self.state == "wait_start":
+            self.state = "receiving"
+        for event in events:
+            if self.state not in ("wait_start", "receiving"):
+                break
+            self._on(event)
+
+    def _on(self, event: object) -> None:
+        port = self.function.port
+        if isinstance(event, BlockRead):
+            if not self.cnc.store_block(self.program, event.block):
+                self.cnc.transfer_event(port, "memory_full")
+                self.cnc.transfer_ended(port, "failed", "memory full")
+                return
+            self.blocks += 1
+            self.cnc.transfer_event(port, "block", event.block.number)
+        elif isinstance(event, Ended):
+            self.cnc.transfer_event(port, "transfer_done", (self.program, self.blocks))
+            self.cnc.transfer_ended(port, "done")
+        elif isinstance(event, Failed):
+            self.cnc.transfer_event(port, "failed", event.reason)
+            self.cnc.transfer_ended(port, "failed", event.reason)
+        elif isinstance(event, Notice):
+            self.cnc.transfer_event(port, event.what, event.detail)
+
+    def cancel(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+
+
+class Output:
+    """A program output: ``pieces`` of the tape image, each sent after the wait before it
+    (the leader, the printer's CR pause); the transfer ends when the last character has left,
+    at the port's character time."""
+
+    def __init__(self, cnc: Cnc, function: Function, program: int, pieces: list[tuple[float, bytes]],
+                 blocks: int, on_end: Callable[[], None] | None = None) -> None:
+        self.cnc = cnc
+        self.function = function
+        self.program = program
+        self.blocks = blocks
+        self.state = "sending"
+        self._pieces = list(pieces)
+        self._on_end = on_end
+        self._timer: Timer | None = None
+        self._next()
+
+    def _next(self) -> None:
+        self._timer = None
+        if not self._pieces:
+            self.state = "done"
+            if self._on_end is not None:
+                self._on_end()
+            self.cnc.transfer_event(self.function.port, "transfer_done", (self.program, self.blocks))
+            self.cnc.transfer_ended(self.function.port, "done")
+            return
+        wait, data = self._pieces[0]
+        if wait > 0:
+            self._pieces[0] = (0.0, data)
+            self._timer = self.cnc.clock.call_later(wait, self._next)
+            return
+        self._pieces.pop(0)
+        self.cnc.send(self.function.port, data)
+        self._timer = self.cnc.clock.call_later(len(data) * self.cnc.char_time(self.function.port), self._next)
+
+    def feed(self, data: bytes) -> None:
+        """Input during an output is not read (no handshake, §3.6)."""
+
+    def cancel(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        self._pieces.clear()

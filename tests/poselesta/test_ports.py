@@ -1,0 +1,173 @@
+"""The POSELESTA's three ports through real ptys, as a DNC program, a tape reader or punch
+emulator and a keyboard emulator use them (spec §3.2, §3.5–§3.8, §3.10; vectors §6.7–§6.9)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+import pytest
+import serial
+
+from devsim.devices.poselesta.codes import encode
+
+R1 = bytes.fromhex("00000000 A58D0A 4EB1D8B1302E35592D338D0A 4EB2A0473030A0D830A05930A04D30B28D0A 4D33308D0A")
+O1 = bytes.fromhex(
+    "25 0D 0A 4E 31 58 31 30 2E 35 30 30 59 2D 33 2E 30 30 30 0D 0A"
+    "4E 32 58 30 2E 30 30 30 59 30 2E 30 30 30 47 30 30 4D 30 32 0D 0A 4D 33 30 0D 0A"
+)
+
+
+def until(check: Callable[[], Any], what: str) -> None:
+    """Wait for the runtime thread to have handled the host's bytes (a real pty, no sleeps)."""
+    deadline = time.monotonic() + 10
+    while not check():
+        assert time.monotonic() < deadline, what
+
+
+@pytest.fixture
+def cnc(devsim_device):  # noqa: ANN001, ANN201
+    return devsim_device("poselesta")
+
+
+def open_port(cnc: Any, port: str) -> serial.Serial:
+    return serial.serial_for_url(cnc.port_url(port), baudrate=1200, stopbits=2, timeout=5)
+
+
+def test_boot_gives_manual_mode_and_nc_ready(cnc: Any) -> None:
+    assert cnc.read("panel.mode") == "MANUAL"
+    assert cnc.read("output.nc_ready") is True and cnc.read("output.data_bus") == 0x08
+
+
+def test_dnc_read_in_r1_then_output_o1(cnc: Any) -> None:
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    assert cnc.read("output.data_bus") == 0x0A
+    cnc.set("panel.program", 20)
+    cnc.set("v7.transfer", "input")
+    with open_port(cnc, "v7") as host:
+        host.write(R1)
+        until(lambda: cnc.read("v7.state") == "done", "the read-in ends with M30")
+        assert cnc.read("program.P20") == "N 1 X 10.500 Y- 3.000\nN 2 X 0.000 Y 0.000 G 00 M 02"
+        assert host.in_waiting == 0  # nothing answered (spec §3.5.5)
+        cnc.set("param.P71", 1)  # ASCII
+        cnc.set("v7.transfer", "output")
+        assert host.read(len(O1)) == O1  # O1: unformatted, CR LF, generated M30
+        cnc.advance(1.0)
+        assert cnc.read("v7.transfer") == "idle" and cnc.read("v7.state") == "done"
+
+
+def test_the_selected_program_is_deleted_first_and_a_wrong_code_stops(cnc: Any) -> None:
+    cnc.set("program.P20", "N1 X5\nN2 Y6")
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 20)
+    cnc.set("v7.transfer", "input")
+    assert cnc.read("program.P20") == ""  # deleted at the start (manual §2.6)
+    with open_port(cnc, "v7") as host:
+        host.write(bytes.fromhex("25 0D 0A 4E 31 58 31 0D 0A"))  # R14: ASCII into ISO
+        until(lambda: cnc.read("v7.state") == "failed", "the parity error stops the read-in")
+    assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF"
+    assert cnc.read("programs") == []
+    cnc.set("panel.clear_message", True)
+    assert cnc.read("panel.message") == ""
+
+
+def test_transfers_need_their_mode_and_input_while_idle_is_discarded(cnc: Any) -> None:
+    with pytest.raises(ValueError, match="needs mode EXTERNAL_OPERATION"):
+        cnc.set("v7.transfer", "input")
+    with open_port(cnc, "v6") as host:
+        host.write(b"%\r\nN1 X1\r\n")
+        until(lambda: cnc.read("v6.discarded") == 10, "bytes on an idle port are counted and dropped")
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("v6.transfer", "input")
+    with pytest.raises(ValueError, match="cancel it first"):
+        cnc.set("panel.mode", "MANUAL")
+    with pytest.raises(ValueError, match="busy"):
+        cnc.set("v6.transfer", "output")
+    cnc.set("v6.transfer", "idle")
+    assert cnc.read("v6.state") == "cancelled"
+
+
+def test_tape_punch_output_is_formatted_and_reads_back(cnc: Any) -> None:
+    cnc.set("program.P07", "N1 X0 Y-43.144 F1002\nN2 X-20 F750 G42\nN5 X5 #")
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 7)
+    with open_port(cnc, "v6") as punch:  # (the punch is on before the operator starts)
+        cnc.set("v6.transfer", "output")
+        assert cnc.read("output.v6_rts") is True and cnc.read("output.v6_dtr") is True
+        tape = punch.read_until(encode("M 30\r\n", iso=True))
+    assert tape == encode("%\r\nN 1 X 0.000 Y- 43.144 F 1002\r\nN 2 X- 20.000 F 750 G 42\r\nN 5 X 5.000 #\r\n"
+                          "M 30\r\n", iso=True)
+    cnc.advance(5)
+    assert cnc.read("output.v6_rts") is False
+    cnc.set("panel.program", 8)
+    cnc.set("v6.transfer", "input")
+    with open_port(cnc, "v6") as reader:
+        reader.write(tape)
+        until(lambda: cnc.read("v6.state") == "done", "the punched tape reads back")
+    assert cnc.read("program.P08") == cnc.read("program.P07")
+
+
+def test_cassette_leader_and_printer_pauses_run_on_the_device_clock(cnc: Any) -> None:
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 3)
+    cnc.set("v6.transfer", "cassette_in")
+    assert cnc.read("v6.state") == "leader" and cnc.read("output.v6_rts") is False
+    with open_port(cnc, "v6") as recorder:
+        tape = encode("%\rN1 X1\rM30\r", iso=True)
+        recorder.write(tape)  # within the 13 s leader: lost
+        until(lambda: _bytes_in(cnc, "v6") == len(tape), "the line has taken the bytes")
+        cnc.advance(13.0)
+        assert cnc.read("v6.state") == "wait_start"
+        recorder.write(tape)
+        until(lambda: cnc.read("v6.state") == "done", "read after the leader")
+    assert cnc.read("program.P03") == "N 1 X 1.000"
+    with open_port(cnc, "v6") as printer:
+        cnc.set("v6.transfer", "printer")
+        assert printer.read(2) == b"%\r"
+        assert printer.in_waiting == 0  # 820 ms after every CR (§2.6.2.1)
+        cnc.advance(0.83)  # "%" CR at 1200 baud, 12 bits (P69 = 0): 20 ms, then the 820 ms
+        assert printer.in_waiting == 0
+        cnc.advance(0.02)
+        assert printer.read(1) == b"\r"
+        cnc.advance(0.83)  # one CR: 10 ms and 820 ms
+        assert printer.read(1) == b"\r"
+        cnc.advance(0.83)
+        assert printer.read(4) == b"N 1\r"
+
+
+def _bytes_in(cnc: Any, port: str) -> int:
+    return int(cnc.runtime.line_status(cnc.name, port)["bytes_in"])
+
+
+def test_keyboard_codes_buffer_and_overflow(cnc: Any) -> None:
+    """Spec §6.9 K1, K3–K7 on the V8 pty, with the 100 ms per key on the device clock."""
+    with open_port(cnc, "v8") as keys:
+        keys.write(b"\x48")  # K7: the internal keyboard is selected
+        until(lambda: _bytes_in(cnc, "v8") == 1, "the line has taken the byte")
+        assert cnc.read("keyboard.accepted") == 0
+        cnc.set("input.keyboard_external", True)
+        keys.write(b"\x48")  # K1
+        until(lambda: cnc.read("keyboard.accepted") == 1, "key P accepted")
+        assert cnc.read("keyboard.last_key") == 0x48 and cnc.read("output.buzzer") is True
+        cnc.advance(0.15)
+        keys.write(b"\x48")  # K3: 150 ms later, accepted too
+        until(lambda: cnc.read("keyboard.accepted") == 2, "second key")
+        cnc.advance(0.15)
+        keys.write(b"\x48\x48\x48")  # K4: the third is lost
+        until(lambda: cnc.read("keyboard.lost") == 1, "overflow")
+        assert cnc.read("keyboard.accepted") == 3
+        cnc.advance(0.1)
+        assert cnc.read("keyboard.accepted") == 4  # the buffered one
+        keys.write(b"\xc8\x81")  # K5 wrong parity, K6 no key code
+        until(lambda: _bytes_in(cnc, "v8") == 8, "the line has taken the bytes")
+        cnc.advance(0.2)
+        assert cnc.read("keyboard.accepted") == 4
+        assert keys.in_waiting == 0  # V8 never answers
+
+
+def test_programs_survive_a_power_cycle(cnc: Any) -> None:
+    cnc.set("program.P12", "N10 G01 X1 F100\nN20 M30")
+    cnc.power_cycle()
+    assert cnc.read("programs") == [12]
+    assert cnc.read("program.P12") == "N 10 X 1.000 F 100 G 01"  # (an M30 block ends the entry)
