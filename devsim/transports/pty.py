@@ -334,14 +334,7 @@ class PtyTransport(Transport):
             # an answer right after the host's bytes needs no second look at its termios
             self._check_settings()
         if not self._out and not self._writing:
-            try:  # the common case: nothing queued, the host reads – straight out
-                n = os.write(self._master, data)
-            except (BlockingIOError, InterruptedError):
-                n = 0
-            except OSError as exc:
-                if exc.errno not in (errno.EIO, errno.EAGAIN):
-                    raise
-                n = 0
+            n = _write_some(self._master, data)  # the common case: nothing queued – straight out
             if n == len(data):
                 return
             data = data[n:]
@@ -361,14 +354,7 @@ class PtyTransport(Transport):
         if master is None:
             return
         while self._out:
-            try:
-                n = os.write(master, self._out)
-            except (BlockingIOError, InterruptedError):
-                break
-            except OSError as exc:
-                if exc.errno in (errno.EIO, errno.EAGAIN):
-                    break
-                raise
+            n = _write_some(master, self._out)
             if n <= 0:
                 break
             del self._out[:n]
@@ -389,6 +375,18 @@ class PtyTransport(Transport):
     def pending(self) -> int:
         """Bytes waiting for the host to read."""
         return len(self._out)
+
+
+def _write_some(fd: int, data: bytes | bytearray) -> int:
+    """Write what the pty master takes now; 0 when it takes nothing (full, or no slave)."""
+    try:
+        return os.write(fd, data)
+    except (BlockingIOError, InterruptedError):
+        return 0
+    except OSError as exc:
+        if exc.errno in (errno.EIO, errno.EAGAIN):
+            return 0
+        raise
 
 
 def _packet_mode(master: int) -> bool:

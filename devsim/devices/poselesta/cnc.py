@@ -19,7 +19,7 @@ from devsim.devices.poselesta.config import PoselestaConfig
 from devsim.devices.poselesta.keyboard import Keyboard
 from devsim.devices.poselesta.parameters import PARAMETERS, check_parameter
 from devsim.devices.poselesta.signals import SIGNALS
-from devsim.devices.poselesta.tape import Block, Formats, TapeReader, parse_blocks, render
+from devsim.devices.poselesta.tape import Block, Formats, TapeReader, block_words, parse_blocks, render
 from devsim.devices.poselesta.transfers import (
     CASSETTE_LEADER,
     FUNCTIONS,
@@ -205,8 +205,6 @@ class PoselestaCnc(Model):
     def _printer_pieces(self, blocks: list[Block], iso: bool) -> list[tuple[float, bytes]]:
         """§2.6.2.1: one word per line, CR without LF, 820 ms after every CR; 7 bits with bit 7
         = 0 whatever P69 says (the printer's parity is a ninth bit a byte cannot carry)."""
-        from devsim.devices.poselesta.tape import block_words
-
         lines = ["%", "", ""]  # "%" CR CR CR
         for block in sorted(blocks, key=lambda b: b.number):
             lines += block_words(block, self.formats, formatted=True)
@@ -219,16 +217,10 @@ class PoselestaCnc(Model):
         return pieces
 
     def _stop(self, port: str, state: str) -> None:
-        running = self.transfers[port]
-        if running is None:
-            return
-        running.cancel()
-        self.transfers[port] = None
-        self.last_state[port] = state
-        if port == "v6":
-            self._v6_lines(False)
-        if state == "cancelled":
-            self.transfer_event(port, "cancelled")
+        """The panel ends a running transfer (cancel, power off)."""
+        if self.transfers[port] is not None:
+            self.transfer_ended(port, state)
+            self.transfer_event(port, state)
 
     # -- what the transfers call ----------------------------------------------------------------
     def transfer_event(self, port: str, what: str, detail: Any = None) -> None:
@@ -236,6 +228,8 @@ class PoselestaCnc(Model):
         self.announce("event", port, what, detail)
 
     def transfer_ended(self, port: str, state: str, message: str | None = None) -> None:
+        """A transfer is over (``done``, ``failed``, ``cancelled``): the port is idle again,
+        V6's RTS/DTR drop, and a failure shows its screen message."""
         running = self.transfers[port]
         if running is not None:
             running.cancel()
@@ -315,8 +309,6 @@ class PoselestaCnc(Model):
 
     # -- programs and parameters as points ----------------------------------------------------------
     def program_text(self, number: int) -> str:
-        from devsim.devices.poselesta.tape import block_words
-
         blocks = sorted(self.programs.get(number, {}).values(), key=lambda b: b.number)
         return "\n".join(" ".join(block_words(b, self.formats, formatted=True)) for b in blocks)
 

@@ -8,6 +8,8 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
+from devsim.devices.poselesta.parameters import check_parameter
+
 __all__ = ["PoselestaConfig"]
 
 
@@ -48,8 +50,6 @@ class PoselestaConfig(BaseModel):
     @field_validator("params")
     @classmethod
     def _params(cls, value: dict[int, float]) -> dict[int, float]:
-        from devsim.devices.poselesta.parameters import check_parameter
-
         for number, setting in value.items():
             check_parameter(number, setting)
         return value

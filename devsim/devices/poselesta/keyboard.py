@@ -34,7 +34,6 @@ class Keyboard:
         self._external = external
         self._accept = accept
         self._event = event
-        self.busy_until = -1.0
         self.waiting: int | None = None
         self._timer: Timer | None = None
         self.accepted = 0

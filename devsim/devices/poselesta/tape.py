@@ -10,7 +10,7 @@ sends.  No clock, no I/O.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF, encode, parity_ok
@@ -23,6 +23,7 @@ __all__ = [
     "Formats",
     "Notice",
     "TapeReader",
+    "block_words",
     "parse_blocks",
     "render",
 ]
@@ -325,4 +326,4 @@ def parse_blocks(text: str, formats: Formats | None = None) -> list[Block]:
             raise ValueError(f"{event.message}: {event.reason}")
         if isinstance(event, BlockRead):
             blocks[event.block.number] = event.block
-    return [replace(b) for _, b in sorted(blocks.items())]
+    return [block for _, block in sorted(blocks.items())]

@@ -27,11 +27,10 @@ __all__ = ["INTERACTIVE", "SersFace"]
 # nothing can complete with them, so they need no parse (the next character will do it).
 _EXTENDS_ONLY = frozenset("0123456789.?")
 # The first character of a text run that is not one of those.
-_COMPLETES = re.compile(rb"[^0-9.?]")
-_HASH = 0x23
+_COMPLETES = re.compile(b"[^" + re.escape("".join(sorted(_EXTENDS_ONLY)).encode()) + b"]")
 # The rest of a line: its text and its end (within 60 characters: checked by the caller).
 _TEXT_TO_END = re.compile(rb"([^\r\n#]+)[\r\n]")
-_LINE_ENDS = (0x0D, 0x0A)
+_LINE_ENDS = (codec.CR, codec.LF)
 
 
 @dataclass
@@ -96,7 +95,7 @@ class SersFace(Face):
             line = self._line
             byte = data[index]
             if not framer.in_line:
-                if byte == _HASH:
+                if byte == codec.HASH:
                     index = self._begin_line(data, index)  # '#' and the address in one step
                     continue
                 if framer.idle or byte not in _LINE_ENDS:
@@ -110,7 +109,7 @@ class SersFace(Face):
                     if not model.logic_alive or model.booting:
                         return
                     continue
-                if byte == _HASH:
+                if byte == codec.HASH:
                     index = self._restart(line, data, index)  # '#' inside the line
                     if not model.logic_alive or model.booting:
                         return
