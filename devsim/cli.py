@@ -23,18 +23,16 @@ import json
 import signal
 import sys
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
 import click
 
 from devsim import __version__
+from devsim.core.record import field, record
 from devsim.core.registry import UnknownKind, device_class, kinds
 
 if TYPE_CHECKING:  # imported where used: `devsim run` starts faster without them
-    from pydantic import BaseModel
-
     from devsim.core.control import ControlAddress
     from devsim.core.device import Device
 
@@ -130,7 +128,7 @@ def doc(kind: str) -> None:
 
 
 # -- devsim run ------------------------------------------------------------------------------
-@dataclass
+@record(frozen=False)
 class _Port:
     scheme: str  # "pty", "tcp" or "rfc2217"
     host: str = "127.0.0.1"
@@ -138,7 +136,7 @@ class _Port:
     link: str | None = None
 
 
-@dataclass
+@record(frozen=False)
 class _Plan:
     kind: str
     devices: list[tuple[str, dict[str, Any]]]
@@ -196,7 +194,7 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     tuple[str, dict[str, Any]]
 ]:
     """Validate the configuration file and the drive addresses; name the devices."""
-    model: type[BaseModel] | None = getattr(cls, "config_model", None)
+    model = cls.config_model
     base: dict[str, Any] = {}
     if config_file is not None:  # YAML and the line-numbered checks only when there is a file
         from devsim.core.config import ConfigError, load_yaml, plain, validate
@@ -214,22 +212,17 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     def finish(raw: dict[str, Any], source: str) -> dict[str, Any]:
         if model is None:
             return raw
-        from pydantic import ValidationError
-
         try:
-            return model.model_validate(raw).model_dump()
-        except ValidationError as exc:
-            error = exc.errors()[0]
-            where = ".".join(str(p) for p in error.get("loc", ()))
-            msg = str(error.get("msg", "invalid")).removeprefix("Value error, ")
-            raise ConfigUsageError(f"{source}: {where}: {msg}") from None
+            return model.parse(raw).dump()
+        except ValueError as exc:  # settings.Invalid: "key: message" of the first problem
+            raise ConfigUsageError(f"{source}: {exc}") from None
 
     if not drives:
         return [(kind, finish(base, config_file or "config"))]
     names = [kind] if len(drives) == 1 else [f"{kind}{n}" for n in drives]
     def addressed(n: int) -> dict[str, Any]:
         # the address is a DIL-switch setting on cards that have one (GMS96: dil.address)
-        if model is not None and "address" not in model.model_fields and "dil" in model.model_fields:
+        if model is not None and "address" not in model.names and "dil" in model.names:
             return {**base, "dil": {**(base.get("dil") or {}), "address": n}}
         return {**base, "address": n}
 

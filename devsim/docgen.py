@@ -11,10 +11,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from typing import Any
 
-from pydantic import BaseModel
-
 from devsim.core.device import Device
 from devsim.core.points import SHARED_VOCABULARY
+from devsim.core.settings import Section
 
 __all__ = ["config_rows", "reference_markdown", "shared_vocabulary_markdown"]
 
@@ -40,22 +39,9 @@ def _range(low: Any, high: Any) -> str:
     return f"{'' if low is None else low} … {'' if high is None else high}"
 
 
-def config_rows(model: type[BaseModel] | None, prefix: str = "") -> list[tuple[str, str, str, str]]:
+def config_rows(model: Section | None) -> list[tuple[str, str, str, str]]:
     """(key, type, default, description) of every configuration key, nested keys dotted."""
-    if model is None:
-        return []
-    rows: list[tuple[str, str, str, str]] = []
-    for name, field in model.model_fields.items():
-        key = f"{prefix}{field.alias or name}"
-        annotation = field.annotation
-        if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-            rows.append((key, "mapping", "", field.description or (annotation.__doc__ or "").strip().split("\n")[0]))
-            rows.extend(config_rows(annotation, f"{key}."))
-            continue
-        type_text = getattr(annotation, "__name__", None) or str(annotation).replace("typing.", "")
-        default = "" if field.is_required() else repr(field.get_default(call_default_factory=True))
-        rows.append((key, type_text, default if len(default) <= 40 else default[:37] + "...", field.description or ""))
-    return rows
+    return [] if model is None else list(model.rows())
 
 
 def shared_vocabulary_markdown() -> list[str]:

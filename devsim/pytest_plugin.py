@@ -29,7 +29,6 @@ simulator runs in its own thread and event loop, never in the test's loop.
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import threading
 from collections.abc import Callable, Iterator, Mapping
@@ -40,6 +39,7 @@ import pytest
 
 from devsim.core.clock import VirtualClock
 from devsim.core.device import Device
+from devsim.core.record import fields as record_fields
 from devsim.core.runtime import Runtime
 
 __all__ = [
@@ -378,7 +378,7 @@ def _make_sim_plant_class() -> type:
 
 def _as_sim_plant(plant: Any) -> Any:
     cls = _sim_plant_class()
-    values = {f.name: getattr(plant, f.name) for f in dataclasses.fields(plant)}
+    values = {f.name: getattr(plant, f.name) for f in record_fields(plant)}
     return cls(**values)
 
 

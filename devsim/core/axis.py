@@ -24,7 +24,6 @@ and never lost because a re-plan happened at the crossing instant.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections import deque
 from collections.abc import Callable
@@ -48,6 +47,7 @@ from devsim.core.profile import (
     make_ramp,
     sign,
 )
+from devsim.core.record import replace
 
 __all__ = ["Axis", "IndexRule", "Phase", "RampProfile", "RangeRule", "RegionSwitch", "Rule", "Segment", "Shape", "Watch"]
 
@@ -556,7 +556,7 @@ class Axis:
         for seg in self._plan:
             if seg.t0 >= now:
                 break
-            self._history.append(dataclasses.replace(seg, t1=min(seg.t1, now)))
+            self._history.append(replace(seg, t1=min(seg.t1, now)))
         end = self._plan_end()
         if end < now:
             self._history.append(Segment(end, now, self._rest, 0.0, 0.0))

@@ -2,7 +2,8 @@
 
 A configuration file (``devsim run --config``, later plant and scenario files) is YAML, loaded
 with a :class:`yaml.SafeLoader` subclass that remembers the line of every mapping key and list
-item, then validated against a pydantic model.  Every problem is reported as one line that an
+item, then validated against a kind's configuration table (:class:`devsim.core.settings.Section`)
+or, for scenario and plant files, the scenario schema (a pydantic model).  Every problem is reported as one line that an
 editor can jump to::
 
     config.yaml:3: baud: baud must be one of 1200, 2400, ...
@@ -19,14 +20,18 @@ import math
 import os
 from collections.abc import Hashable
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, NoReturn, TypeVar, overload
 
 import yaml
-from pydantic import BaseModel, ValidationError
+
+from devsim.core.settings import Invalid, Section, Values
+
+if TYPE_CHECKING:
+    from pydantic import BaseModel
 
 __all__ = ["ConfigError", "LineDict", "LineList", "LineLoader", "load_config", "load_yaml", "plain", "validate"]
 
-M = TypeVar("M", bound=BaseModel)
+M = TypeVar("M", bound="BaseModel")
 
 
 class ConfigError(ValueError):
@@ -176,37 +181,57 @@ def _kind(data: Any) -> str:
     return type(data).__name__
 
 
-def validate(data: Any, model: type[M], path: str | os.PathLike[str]) -> M:
-    """Validate YAML data from :func:`load_yaml` against ``model``; errors name file and line."""
+@overload
+def validate(data: Any, model: Section, path: str | os.PathLike[str]) -> Values: ...
+@overload
+def validate(data: Any, model: type[M], path: str | os.PathLike[str]) -> M: ...
+
+
+def validate(data: Any, model: Section | type[M], path: str | os.PathLike[str]) -> Values | M:
+    """Validate YAML data from :func:`load_yaml` against a configuration table or a schema
+    model; errors name file and line."""
     name = _display(path)
     if data is None:
         data = LineDict()
         data.key_lines = {}
     where = _non_finite(data, ())
-    try:
-        result = model.model_validate(data)
+    if isinstance(model, Section):
+        try:
+            result: Values | M = model.parse(data)
+        except Invalid as exc:
+            _refuse(name, data, exc.problems)
+        where = where or _non_finite(result.dump(), ())
+    else:
+        from pydantic import ValidationError
+
+        try:
+            result = model.model_validate(data)
+        except ValidationError as exc:
+            _refuse(name, data, [(tuple(e.get("loc", ())), _message(e)) for e in exc.errors()])
         where = where or _non_finite(result.model_dump(by_alias=True), ())
-    except ValidationError as exc:
-        messages: list[str] = []
-        seen: set[tuple[int, str]] = set()
-        for error in exc.errors():
-            line, parts = _locate(data, tuple(error.get("loc", ())))
-            field = ".".join(parts)
-            if (line, field) in seen:  # e.g. one error per member of a union: keep the first
-                continue
-            seen.add((line, field))
-            text = _message(error)
-            if not parts and not isinstance(data, dict):
-                text = f"expected a mapping at the top level, got {_kind(data)}"
-            messages.append(f"{name}:{line}: {field}: {text}" if field else f"{name}:{line}: {text}")
-        first = messages[0]
-        if len(messages) > 1:
-            first += f" (and {len(messages) - 1} more)"
-        raise ConfigError(first, messages) from None
     if where is not None:
         line, parts = _locate(data, where)
         raise ConfigError(f"{name}:{line}: {'.'.join(parts) or 'value'}: not a finite number (NaN and infinity are refused)")
     return result
+
+
+def _refuse(name: str, data: Any, problems: list[tuple[tuple[int | str, ...], str]]) -> NoReturn:
+    """One ``file:line: key: message`` per problem (the first is the error's message)."""
+    messages: list[str] = []
+    seen: set[tuple[int, str]] = set()
+    for loc, text in problems:
+        line, parts = _locate(data, loc)
+        field = ".".join(parts)
+        if (line, field) in seen:  # e.g. one error per member of a union: keep the first
+            continue
+        seen.add((line, field))
+        if not parts and not isinstance(data, dict):
+            text = f"expected a mapping at the top level, got {_kind(data)}"
+        messages.append(f"{name}:{line}: {field}: {text}" if field else f"{name}:{line}: {text}")
+    first = messages[0]
+    if len(messages) > 1:
+        first += f" (and {len(messages) - 1} more)"
+    raise ConfigError(first, messages) from None
 
 
 def _non_finite(data: Any, loc: tuple[int | str, ...]) -> tuple[int | str, ...] | None:
@@ -226,7 +251,7 @@ def _non_finite(data: Any, loc: tuple[int | str, ...]) -> tuple[int | str, ...] 
     return None
 
 
-def load_config(path: str | os.PathLike[str], model: type[M]) -> M:
+def load_config(path: str | os.PathLike[str], model: Any) -> Any:
     """Load a YAML file and validate it against ``model``.
 
     Raises :class:`ConfigError` whose message is one line, ``file:line: dotted.field: message``

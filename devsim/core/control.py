@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import dataclasses
 import enum
 import ipaddress
 import json
@@ -38,13 +37,13 @@ import math
 import os
 import socket
 import threading
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from devsim.core.points import parse_bool
+from devsim.core.record import asdict, is_record, record
 from devsim.core.runtime import Runtime, port_key
 
 __all__ = [
@@ -116,7 +115,7 @@ class ControlAddressError(ValueError):
 
 
 # -- addresses -----------------------------------------------------------------------------
-@dataclass(frozen=True)
+@record
 class ControlAddress:
     """A parsed control address: ``path`` for a Unix socket, else ``host`` and ``port``."""
 
@@ -186,7 +185,7 @@ def parse_address(addr: str) -> ControlAddress:
 
 # -- server --------------------------------------------------------------------------------
 def _jsonable(value: Any) -> Any:
-    """Make results JSON-safe (tuples, sets, bytes, enums, dataclasses, non-finite floats)."""
+    """Make results JSON-safe (tuples, sets, bytes, enums, records, non-finite floats)."""
     if value is None or isinstance(value, bool | int | str):
         return value
     if isinstance(value, float):
@@ -201,8 +200,8 @@ def _jsonable(value: Any) -> Any:
         return _jsonable(value.model_dump(mode="json"))
     if isinstance(value, enum.Enum):
         return _jsonable(value.value)
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return _jsonable(dataclasses.asdict(value))
+    if is_record(value):
+        return _jsonable(asdict(value))
     return str(value)
 
 

@@ -21,7 +21,6 @@ mean the ``main`` port.  Several devices can share one line (RS-485 multidrop): 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from devsim.core.clock import Clock
@@ -29,6 +28,8 @@ from devsim.core.kit import MAIN_PORT, FaultTable, PortDef, Reference
 from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
 from devsim.core.points import BadValue, PointTable, ReadOnlyName, UnknownName
+from devsim.core.record import record
+from devsim.core.settings import Section
 
 __all__ = [
     "BadValue",
@@ -44,7 +45,7 @@ __all__ = [
 ByteSink = Callable[[bytes], None]
 
 
-@dataclass(frozen=True)
+@record
 class SerialSettings:
     """Line settings of a UART: what the device is configured for, or what the host opened."""
 
@@ -152,8 +153,9 @@ class Device:
 
     kind: ClassVar[str] = ""
     description: ClassVar[str] = ""
-    #: The validated configuration (DIP switches, options); pydantic model, or None.
-    config_model: ClassVar[Any] = None
+    #: What a user can configure (DIP switches, options): a :class:`devsim.core.settings.Section`
+    #: table, or None.
+    config_model: ClassVar[Section | None] = None
     #: On a multidrop bus, also hear what the other devices send (not only the host).
     hears_others: ClassVar[bool] = False
     ports: ClassVar[tuple[PortDef, ...]] = MAIN_PORT

@@ -9,10 +9,10 @@ kind are in :mod:`devsim.core.points`.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass, field
 from typing import Any, Generic, Literal, TypeVar
 
 from devsim.core.points import Point, PointType, UnknownName, parse_bool
+from devsim.core.record import field, record
 from devsim.core.signals import SignalBank, SignalKind
 
 __all__ = [
@@ -33,7 +33,7 @@ Effect = Literal["simulated", "stored"]
 H = TypeVar("H")
 
 
-@dataclass(frozen=True)
+@record
 class PortDef:
     """A serial port of a kind (``main`` by default; ``v6``, ``v7``, ``v8`` for the CNC)."""
 
@@ -46,7 +46,7 @@ class PortDef:
 MAIN_PORT = (PortDef(),)
 
 
-@dataclass(frozen=True)
+@record
 class Fault:
     """A fault a scenario, the control API (``fault`` op) or a fixture can switch on and off.
 
@@ -85,7 +85,7 @@ class FaultTable:
         fault.apply(model, parse_bool(active))
 
 
-@dataclass(frozen=True)
+@record
 class Command(Generic[H]):
     """One row of a command table: the token (or statement type) a host sends, the handler
     that carries it out, the manual section, and whether it is simulated or only stored."""
@@ -124,7 +124,7 @@ class Table(Generic[H]):
 CommandTable = Table
 
 
-@dataclass(frozen=True)
+@record
 class Parameter:
     """A parameter as the reference documents it."""
 
@@ -139,7 +139,7 @@ class Parameter:
     effect: Effect = "simulated"
 
 
-@dataclass(frozen=True)
+@record
 class ErrorCode:
     """An error (or status) code the device answers with, and its text."""
 
@@ -148,7 +148,7 @@ class ErrorCode:
     section: str = ""
 
 
-@dataclass(frozen=True)
+@record
 class SignalDef:
     """A digital input, output or analog quantity: makes the signal and its point."""
 
@@ -209,7 +209,7 @@ def signal_points(
     return points
 
 
-@dataclass
+@record(frozen=False)
 class Reference:
     """What ``devsim doc KIND`` prints, gathered from a kind's tables."""
 

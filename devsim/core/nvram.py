@@ -20,7 +20,6 @@ import fcntl
 import json
 import os
 import re
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -139,6 +138,8 @@ class NonVolatileMemory:
         except ValueError as exc:
             raise PoisonedMemory(f"{self.path}: refusing to save a non-finite number ({exc})") from None
         directory = self.path.parent
+        import tempfile  # only when memory is written: start-up does without it
+
         fd, tmp = tempfile.mkstemp(prefix=self.path.name + ".", suffix=".tmp", dir=directory)
         try:
             with os.fdopen(fd, "wb") as fh:

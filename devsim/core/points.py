@@ -22,12 +22,12 @@ A kind adds its own names beside them (``param.*``, ``display``, ``marker.*`` ..
 
 from __future__ import annotations
 
-import difflib
 import json
 import math
 from collections.abc import Callable, Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
 from typing import Any, Literal
+
+from devsim.core.record import field, record
 
 __all__ = [
     "BadValue",
@@ -132,7 +132,7 @@ def _check_json(value: Any, depth: int = 0) -> Any:
     return value
 
 
-@dataclass(frozen=True)
+@record
 class Point:
     """One control name: ``name``, ``type``, ``unit``, ``access``, ``doc`` and manual ``section``.
 
@@ -217,7 +217,7 @@ def _unit(unit: str) -> str:
     return f" {unit}" if unit else ""
 
 
-@dataclass(frozen=True)
+@record
 class Family:
     """Many names of one shape, made when asked for: ``marker.M<byte>.<bit>`` for 2,048 marker
     bits.  ``make(name)`` returns the point for a name of the family, or None."""
@@ -230,7 +230,7 @@ class Family:
     access: Access = "rw"
 
 
-@dataclass
+@record(frozen=False)
 class PointTable:
     """A kind's points by name, with an optional ``alias`` hook that maps a spelling
     (``param.n15``, ``param.V``) to the declared name, and families of names made on demand."""
@@ -291,6 +291,8 @@ class PointTable:
 
     def unknown_text(self, name: str, owner: str) -> str:
         shown = name if len(name) <= 60 else name[:57] + "..."
+        import difflib  # only for a misspelt name
+
         close = difflib.get_close_matches(name[:60], self.points, n=3, cutoff=0.6)
         hint = f" (did you mean {', '.join(close)}?)" if close else ""
         return f"{owner} has no {shown!r}{hint}"

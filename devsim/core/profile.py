@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass
 from typing import Literal
+
+from devsim.core.record import record
 
 __all__ = [
     "ABS_X",
@@ -55,7 +56,7 @@ def theta_minus_sin(th: float) -> float:
     return th - math.sin(th)
 
 
-@dataclass(frozen=True)
+@record
 class RampProfile:
     """SERS P1032/P1005–P1008 (spec §5.2): up to three speed sections per ramp.
 
@@ -163,7 +164,7 @@ def make_ramp(profile: RampProfile | None, vref: float, base: float) -> Ramp | N
     return None if ramp.trivial else ramp
 
 
-@dataclass(frozen=True)
+@record
 class Segment:
     """Constant acceleration ``a`` from ``t0`` to ``t1`` starting at ``x0`` with velocity ``v0``.
 

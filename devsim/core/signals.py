@@ -9,8 +9,9 @@ subscriptions and writes its outputs.  Each device owns its own bank (no module-
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any, Literal
+
+from devsim.core.record import field, record
 
 __all__ = ["Signal", "SignalBank", "SignalKind"]
 
@@ -18,7 +19,7 @@ SignalKind = Literal["input", "output", "quantity"]
 Listener = Callable[[str, Any, Any], None]
 
 
-@dataclass
+@record(frozen=False)
 class Signal:
     name: str
     kind: SignalKind

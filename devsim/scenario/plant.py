@@ -9,11 +9,11 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from devsim.core.device import Device
+from devsim.core.record import field, record
 from devsim.core.runtime import Runtime, port_key
 from devsim.scenario.schema import PlantSpec, TransportSpec
 from devsim.transports.fdlimit import is_out_of_fds, port_budget
@@ -36,7 +36,7 @@ def make_transport(spec: TransportSpec) -> Any:
     raise ValueError("a bus member has no transport of its own")
 
 
-@dataclass
+@record(frozen=False)
 class Plant:
     """A running plant: its runtime, devices, and per port the transport and the line."""
 

@@ -14,11 +14,11 @@ import asyncio
 import re
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from devsim.core.clock import VirtualClock
+from devsim.core.record import field, record
 from devsim.core.runtime import Runtime
 from devsim.scenario.host import HostPort, open_host_port
 from devsim.scenario.plant import Plant, build_plant
@@ -32,7 +32,7 @@ _IO_GUARD = 5.0
 _POLL = 0.001
 
 
-@dataclass
+@record(frozen=False)
 class StepResult:
     index: int  # 1-based
     line: int
@@ -46,7 +46,7 @@ class StepResult:
         return self.status in ("pass", "fail")
 
 
-@dataclass
+@record(frozen=False)
 class ScenarioResult:
     name: str
     path: str

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import math
 import random
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal, get_args
 
 from devsim.core.clock import Timer
+from devsim.core.record import record
 
 if TYPE_CHECKING:
     from devsim.transports.line import Line
@@ -49,7 +49,7 @@ _UNDIRECTED = ("baud_mismatch", "unplug", "hang", "silent")
 _NOISE_TICK = 0.01
 
 
-@dataclass(frozen=True)
+@record
 class LineFault:
     """A fault injected into a :class:`Line` (see :meth:`Line.inject`).
 

@@ -33,11 +33,11 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Callable
-from dataclasses import replace
 from typing import Any, Protocol
 
 from devsim.core.clock import Clock, Timer
 from devsim.core.device import ByteSink, SerialSettings
+from devsim.core.record import replace
 from devsim.transports.faults import _NOISE_TICK, _Active
 
 # LineFault, FaultHandle, garble and settings_match live in .faults and .uart; they stay

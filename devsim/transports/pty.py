@@ -58,9 +58,9 @@ import fcntl
 import os
 import sys
 import termios
-from dataclasses import replace
 
 from devsim.core.device import SerialSettings
+from devsim.core.record import replace
 from devsim.transports.base import Endpoint, Transport
 
 __all__ = ["PtyTransport", "make_raw", "settings_from_termios", "apply_settings"]

@@ -76,7 +76,7 @@ def test_the_monitoring_fault_from_a_scenario() -> None:
 def test_configuration_checked_against_the_tables(tmp_path: Path) -> None:
     path = tmp_path / "card.yaml"
     path.write_text("params:\n  N999: 1\n")
-    with pytest.raises(ConfigError, match=r"card.yaml:1: params: N999: no such parameter"):
+    with pytest.raises(ConfigError, match=r"card.yaml:2: params.N999: no such parameter"):
         load_config(path, Gms96Config)
     path.write_text("params:\n  N20: 999999999\n")
     with pytest.raises(ConfigError, match=r"N20: 999999999 is outside 10 … 15000"):

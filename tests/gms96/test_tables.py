@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import pytest
 
+from devsim.core import record
 from devsim.devices.gms96 import tables as t
 
 # Every N index of spec §4.6 / manual §2.3.1 N, with the manual's "Grundstellung" where it gives one.
@@ -119,7 +118,7 @@ def test_only_n21_needs_restart() -> None:
 
 
 def test_nparam_is_frozen_with_agreed_fields() -> None:
-    names = [f.name for f in dataclasses.fields(t.NParam)]
+    names = [f.name for f in record.fields(t.NParam)]
     assert names == [
         "index",
         "name",
@@ -132,7 +131,7 @@ def test_nparam_is_frozen_with_agreed_fields() -> None:
         "needs_restart",
         "doc",
     ]
-    with pytest.raises(dataclasses.FrozenInstanceError):
+    with pytest.raises(record.FrozenInstanceError):
         t.N_PARAMETERS[10].default = 1  # type: ignore[misc]
 
 
@@ -362,7 +361,7 @@ def test_resolver_variants_and_feedback() -> None:
         r = t.VARIANTS[base + "R"]
         assert r.feedback == "resolver"
         assert t.VARIANTS[base].feedback == "encoder"
-        assert dataclasses.replace(r, name=base, feedback="encoder", doc="") == dataclasses.replace(
+        assert record.replace(r, name=base, feedback="encoder", doc="") == record.replace(
             t.VARIANTS[base], doc=""
         )
     for name in ("KD8", "KD12", "HD15", "HD50"):

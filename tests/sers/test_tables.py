@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import pytest
 
+from devsim.core import record
 from devsim.devices.sers import errors, parameters, units
 from devsim.devices.sers.errors import ERRNO, SersError, message
 from devsim.devices.sers.parameters import (
@@ -241,7 +241,7 @@ def test_every_listed_parameter_present():
 def test_paramdef_consistency():
     for n, d in PARAMETERS.items():
         assert d.number == n
-        assert dataclasses.is_dataclass(d)
+        assert record.is_record(d)
         assert d.name and d.name_en
         assert d.kind in ("int", "position", "velocity", "acceleration", "fixed")
         if d.kind == "fixed":
@@ -255,7 +255,7 @@ def test_paramdef_consistency():
         if d.saved or d.saved_with_p1117:
             assert d.writable or n == 1034
         d.name.encode("latin-1")
-    with pytest.raises(dataclasses.FrozenInstanceError):
+    with pytest.raises(record.FrozenInstanceError):
         PARAMETERS[91].minimum = 1  # type: ignore[misc]
 
 

@@ -9,38 +9,33 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
-
 from devsim.core.clock import Timer
 from devsim.core.device import Device, Face, SerialSettings
 from devsim.core.kit import SignalDef, declare_signals, signal_points
 from devsim.core.model import Model
 from devsim.core.points import Point, PointTable
+from devsim.core.settings import Float, Int, Maybe, Section, Setting, Text
 
 BAUDS = (1200, 2400, 4800, 9600, 19200)
 
 
-class EchoGeometry(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+def _baud(value: int) -> int:
+    if value not in BAUDS:
+        raise ValueError(f"baud must be one of {', '.join(map(str, BAUDS))}")
+    return value
 
-    limit_left: float | None = None
-    limit_right: float | None = None
 
+ECHO_GEOMETRY = Section("where the (imaginary) switches sit", (
+    Setting("limit_left", Maybe(Float()), None),
+    Setting("limit_right", Maybe(Float()), None),
+))
 
-class EchoConfig(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-
-    address: int = Field(default=1, ge=0, le=127)
-    baud: int = 9600
-    greeting: str = ""
-    axis: EchoGeometry = Field(default_factory=EchoGeometry)
-
-    @field_validator("baud")
-    @classmethod
-    def _baud(cls, value: int) -> int:
-        if value not in BAUDS:
-            raise ValueError(f"baud must be one of {', '.join(map(str, BAUDS))}")
-        return value
+EchoConfig = Section("what a user can set for an echo device", (
+    Setting("address", Int(ge=0, le=127), 1),
+    Setting("baud", Int(), 9600, check=_baud),
+    Setting("greeting", Text(), ""),
+    Setting("axis", ECHO_GEOMETRY, {}),
+))
 
 
 class EchoModel(Model):
@@ -48,7 +43,7 @@ class EchoModel(Model):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
-        self.settings = EchoConfig.model_validate(self.config)
+        self.settings = EchoConfig.parse(self.config)
         declare_signals(self.signals, SIGNALS)
         self.value: float = 0
         self.received = 0
@@ -122,7 +117,7 @@ class EchoDevice(Device):
 
     kind: ClassVar[str] = "echo"
     description: ClassVar[str] = "Echoes every byte back (test device)"
-    config_model: ClassVar[type[BaseModel]] = EchoConfig
+    config_model: ClassVar[Section] = EchoConfig
     model_class = EchoModel
     face_classes: ClassVar[dict[str, Any]] = {"main": EchoFace}
     points = POINTS

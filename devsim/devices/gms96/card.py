@@ -18,8 +18,9 @@ from devsim.core.clock import Clock, Timer
 from devsim.core.kit import declare_signals
 from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
+from devsim.core.settings import Values
 from devsim.devices.gms96 import codec, tables
-from devsim.devices.gms96.config import DilSwitch, Gms96Config
+from devsim.devices.gms96.config import Gms96Config
 from devsim.devices.gms96.counter import CounterInput
 from devsim.devices.gms96.executor import Cmd, Executor
 from devsim.devices.gms96.image import ProcessImage
@@ -47,14 +48,14 @@ class Gms96Card(Settings, Model):
         name: str = "",
     ) -> None:
         super().__init__(clock=clock, config=config, nvram=nvram, name=name)
-        self.cfg = Gms96Config.model_validate(self.config)
+        self.cfg = Gms96Config.parse(self.config)
         self.silent_until = 0.0  # the card ignores the line until then (boot, flash erase)
         #: Frames the link dropped, by reason (checksum, length, not_idle ...).
         self.link_errors: dict[str, int] = {}
         self.hw = tables.variant(self.cfg.variant)
         self.stepper = self.hw.stepper
-        self.pending_dil: DilSwitch = self.cfg.dil
-        self.dil: DilSwitch = self.cfg.dil
+        self.pending_dil: Values = self.cfg.dil
+        self.dil: Values = self.cfg.dil
         geo = self.cfg.axis
         self.axis = Axis(clock, counts_per_rev=geo.index_period, index_offset=geo.index_offset, name=self.name)
         self.image = ProcessImage()

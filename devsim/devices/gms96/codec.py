@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
-from dataclasses import dataclass
+
+from devsim.core.record import record
 
 __all__ = [
     "ACK",
@@ -80,14 +81,14 @@ _MAX_L = 255  # largest Langsatz length field
 _LETTER_PARAMS = 3
 
 
-@dataclass(frozen=True)
+@record
 class SingleChar:
     """A single control character: ``E5h`` (ACK, also "no data") or ``A2h``."""
 
     value: int
 
 
-@dataclass(frozen=True)
+@record
 class ShortFrame:
     """Kurzsatz ``10h C A [AE...] CS 16h``: control field ("F-Feld"), link address and the
     address-extension (AE) octets that carry short-command data or the MB4 message."""
@@ -97,7 +98,7 @@ class ShortFrame:
     extension: bytes = b""
 
 
-@dataclass(frozen=True)
+@record
 class LongFrame:
     """Langsatz ``68h L L 68h C A data CS 16h``; ``data`` is the link user data after A
     (for GMS96: command character and parameters, or identifier and value)."""
@@ -110,7 +111,7 @@ class LongFrame:
 Frame = SingleChar | ShortFrame | LongFrame
 
 
-@dataclass(frozen=True)
+@record
 class FrameError:
     """Bytes that did not form a frame, discarded without reply (spec §3.2 R6, §3.10).
 

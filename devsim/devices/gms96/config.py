@@ -9,156 +9,136 @@ ranges wired to inputs (the GMS has no limit-switch inputs of its own, spec §5.
 
 from __future__ import annotations
 
-from typing import Literal
+from collections.abc import Mapping
+from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
-
+from devsim.core.settings import (
+    Bool,
+    DictOf,
+    Float,
+    Int,
+    ListOf,
+    Maybe,
+    OneOf,
+    PairOf,
+    Section,
+    Setting,
+    Text,
+)
 from devsim.devices.gms96.tables import INT24_MAX, INT24_MIN, N_PARAMETERS
 
 __all__ = [
-    "AxisGeometry",
-    "DilSwitch",
-    "Gms96Config",
-    "LimitSwitch",
-    "LinkOptions",
-    "PlcCopyRule",
-    "PlcFaultMessages",
-    "PlcLimitRule",
-    "PlcOptions",
-    "PlcStartRule",
+    "AXIS_GEOMETRY", "DilSwitch", "Gms96Config", "LIMIT_SWITCH", "LINK_OPTIONS", "PLC_COPY_RULE",
+    "PLC_FAULT_MESSAGES", "PLC_LIMIT_RULE", "PLC_OPTIONS", "PLC_START_RULE",
 ]
 
+_BYTE = Int(ge=0, le=255)
 
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+#: The 8-position DIL switch (manual §2.2), as its meaning rather than switch positions.
+DilSwitch = Section("The 8-position DIL switch (manual §2.2), as its meaning rather than switch positions.", (
+    Setting("address", Int(ge=0, le=31), 3, "switches 1..4 (+16 with switch 5)"),
+    Setting("interpolation", Bool(), False, "switch 6: behind a GMS-I card"),
+    Setting("protocol", OneOf("S", "E"), "S", "switch 7: DIN 19244 S- or E-version"),
+    Setting("baud", OneOf(9600, 38400), 9600, "switch 8"),
+))
 
+#: A position range that drives an input bit (spec §5.11 a); the PLC decides what it means.
+LIMIT_SWITCH = Section("A position range that drives an input bit (spec §5.11 a).", (
+    Setting("input", Text(), doc="input bit, e.g. E0.3"),
+    Setting("low", Maybe(Float()), None, "active from here (None: -inf)"),
+    Setting("high", Maybe(Float()), None, "active up to here (None: +inf)"),
+))
 
-class DilSwitch(_Strict):
-    """The 8-position DIL switch (manual §2.2), as its meaning rather than switch positions."""
+#: Where things sit on the axis, in increments from the power-on position (spec §5.6).
+AXIS_GEOMETRY = Section("Where things sit on the axis, in increments from the power-on position (spec §5.6).", (
+    Setting("cam", Maybe(PairOf(Float())), (-20000.0, -15000.0), "reference cam [low, high] or null (no cam)"),
+    Setting("cam_input", OneOf("E2.1", "E2.0"), "E2.1"),
+    Setting("cam_polarity", OneOf("NO", "NC"), "NO", "NO: 24 V while on the cam"),
+    Setting("index_period", Int(gt=0), 4096, "increments between index marks (counts/rev)"),
+    Setting("index_offset", Float(), 0.0),
+    Setting("counter_marks", ListOf(Float()), [], "reference marks of the counter input's scale (Q with P2.5)"),
+    Setting("end_stops", Maybe(PairOf(Float())), None, "mechanical end stops [low, high]"),
+    Setting("limit_switches", ListOf(LIMIT_SWITCH), []),
+    Setting("kv_per_n10", Float(gt=0), 0.2, "Kv [1/s] per unit of N10 (spec §5.7)"),
+    Setting("position_after_reset", OneOf("zero", "keep"), "zero"),
+    Setting("brake_stop_ms", Float(ge=0), 50.0),
+    Setting("i2t_t_allow_s", Float(gt=0), 2.0),
+))
 
-    address: int = Field(default=3, ge=0, le=31, description="switches 1..4 (+16 with switch 5)")
-    interpolation: bool = Field(default=False, description="switch 6: behind a GMS-I card")
-    protocol: Literal["S", "E"] = Field(default="S", description="switch 7: DIN 19244 S- or E-version")
-    baud: Literal[9600, 38400] = Field(default=9600, description="switch 8")
+#: Link-layer choices the manual leaves open (spec §3.7, §3.9, Appendix A).
+LINK_OPTIONS = Section("Link-layer choices the manual leaves open (spec §3.7, §3.9, Appendix A).", (
+    Setting("response_delay", Float(ge=0, le=0.1), 0.0, "seconds before a reply"),
+    Setting("char_timeout", Float(gt=0), 0.05, "inter-character timeout (s)"),
+    Setting("unknown_command_reply", OneOf("ack", "none"), "ack"),
+    Setting("unknown_short_command_reply", OneOf("ack", "none"), "ack"),
+    Setting("on_queue_full", OneOf("defer", "drop", "nack"), "defer"),
+    Setting("e_version_features", ListOf(OneOf("fcb", "acd", "dfc")), ["fcb", "acd", "dfc"]),
+    Setting("broadcast_address", Maybe(Int()), None, "e.g. 255; None = no broadcast"),
+    Setting("error_line_idle", Bool(), True,
+            "FT1.2 rule R4: after a detected frame error accept a new frame only after >= 33 bit "
+            "times of line idle (False: resynchronise at once)"),
+))
 
+#: Limit-switch rule (spec §4.10.3, §5.11): an input → STOP (M0.0) or abort (M0.1) + message.
+#: ``stop``: M0.0 follows the switch (set while active, released when it clears, so the
+#: interrupted move continues).  ``abort``: M0.1 is pulsed on the active edge, and again every
+#: cycle while the switch is active and the axis is commanded towards ``direction``, so the
+#: axis can always be driven back out of the switch.
+PLC_LIMIT_RULE = Section("Limit-switch rule (spec §4.10.3, §5.11): an input → STOP (M0.0) or abort (M0.1).", (
+    Setting("input", Text(), doc="input bit, e.g. E0.3"),
+    Setting("action", OneOf("stop", "abort"), "abort"),
+    Setting("message", _BYTE, 0, "code into MB4 on the active edge (0 = none)"),
+    Setting("active_low", Bool(), False, "normally-closed switch: active at 0 V"),
+    Setting("direction", OneOf("+", "-", "any"), "any", "only act on motion this way"),
+))
 
-class LimitSwitch(_Strict):
-    """A position range that drives an input bit (spec §5.11 a); the PLC decides what it means."""
+#: ``message_on_fault`` (spec §4.10.3): MB4 codes posted on the fault's rising edge.
+PLC_FAULT_MESSAGES = Section("MB4 codes posted on the fault's rising edge (spec §4.10.3).", (
+    Setting("following_error", _BYTE, 0),
+    Setting("monitoring", _BYTE, 0),
+    Setting("emergency_stop", _BYTE, 0),
+))
 
-    input: str = Field(description="input bit, e.g. E0.3")
-    low: float | None = Field(default=None, description="active from here (None: -inf)")
-    high: float | None = Field(default=None, description="active up to here (None: +inf)")
+#: ``start_program_on_input`` (spec §4.10.3): MB2 := program, M0.2 := 1 on an input edge.
+PLC_START_RULE = Section("MB2 := program, M0.2 := 1 on an input edge (spec §4.10.3).", (
+    Setting("input", Text(), doc="input bit, e.g. E0.2"),
+    Setting("program", Int(ge=0, le=99)),
+    Setting("edge", OneOf("rising", "falling"), "rising"),
+))
 
-
-class AxisGeometry(_Strict):
-    """Where things sit on the axis, in increments from the power-on position (spec §5.6)."""
-
-    cam: tuple[float, float] | None = Field(
-        default=(-20000.0, -15000.0), description="reference cam [low, high] or null (no cam)"
-    )
-    cam_input: Literal["E2.1", "E2.0"] = "E2.1"
-    cam_polarity: Literal["NO", "NC"] = Field(default="NO", description="NO: 24 V while on the cam")
-    index_period: int = Field(default=4096, gt=0, description="increments between index marks (counts/rev)")
-    index_offset: float = 0.0
-    counter_marks: list[float] = Field(
-        default_factory=list, description="reference marks of the counter input's scale (Q with P2.5)"
-    )
-    end_stops: tuple[float, float] | None = Field(default=None, description="mechanical end stops [low, high]")
-    limit_switches: list[LimitSwitch] = Field(default_factory=list)
-    kv_per_n10: float = Field(default=0.2, gt=0, description="Kv [1/s] per unit of N10 (spec §5.7)")
-    position_after_reset: Literal["zero", "keep"] = "zero"
-    brake_stop_ms: float = Field(default=50.0, ge=0)
-    i2t_t_allow_s: float = Field(default=2.0, gt=0)
-
-
-class LinkOptions(_Strict):
-    """Link-layer choices the manual leaves open (spec §3.7, §3.9, Appendix A)."""
-
-    response_delay: float = Field(default=0.0, ge=0, le=0.1, description="seconds before a reply")
-    char_timeout: float = Field(default=0.05, gt=0, description="inter-character timeout (s)")
-    unknown_command_reply: Literal["ack", "none"] = "ack"
-    unknown_short_command_reply: Literal["ack", "none"] = "ack"
-    on_queue_full: Literal["defer", "drop", "nack"] = "defer"
-    e_version_features: list[Literal["fcb", "acd", "dfc"]] = Field(default_factory=lambda: ["fcb", "acd", "dfc"])
-    broadcast_address: int | None = Field(default=None, description="e.g. 255; None = no broadcast")
-    error_line_idle: bool = Field(
-        default=True,
-        description="FT1.2 rule R4: after a detected frame error accept a new frame only after >= 33 bit "
-        "times of line idle (False: resynchronise at once)",
-    )
-
-
-class PlcLimitRule(_Strict):
-    """Limit-switch rule (spec §4.10.3, §5.11): an input → STOP (M0.0) or abort (M0.1) + message.
-
-    ``stop``: M0.0 follows the switch (set while active, released when it clears, so the
-    interrupted move continues).  ``abort``: M0.1 is pulsed on the active edge, and again every
-    cycle while the switch is active and the axis is commanded towards ``direction``, so the
-    axis can always be driven back out of the switch."""
-
-    input: str = Field(description="input bit, e.g. E0.3")
-    action: Literal["stop", "abort"] = "abort"
-    message: int = Field(default=0, ge=0, le=255, description="code into MB4 on the active edge (0 = none)")
-    active_low: bool = Field(default=False, description="normally-closed switch: active at 0 V")
-    direction: Literal["+", "-", "any"] = Field(default="any", description="only act on motion this way")
-
-
-class PlcFaultMessages(_Strict):
-    """``message_on_fault`` (spec §4.10.3): MB4 codes posted on the fault's rising edge."""
-
-    following_error: int = Field(default=0, ge=0, le=255)
-    monitoring: int = Field(default=0, ge=0, le=255)
-    emergency_stop: int = Field(default=0, ge=0, le=255)
-
-
-class PlcStartRule(_Strict):
-    """``start_program_on_input`` (spec §4.10.3): MB2 := program, M0.2 := 1 on an input edge."""
-
-    input: str = Field(description="input bit, e.g. E0.2")
-    program: int = Field(ge=0, le=99)
-    edge: Literal["rising", "falling"] = "rising"
+#: A bit follows another bit every cycle: ``{from: E0.4, to: A0.5, invert: false}``.
+PLC_COPY_RULE = Section("A bit follows another bit every cycle: {from: E0.4, to: A0.5, invert: false}.", (
+    Setting("source", Text(), doc="E/A/M bit read from the process image", alias="from"),
+    Setting("to", Text(), doc="A or M bit written"),
+    Setting("invert", Bool(), False),
+))
 
 
-class PlcCopyRule(_Strict):
-    """A bit follows another bit every cycle: ``{from: E0.4, to: A0.5, invert: false}``."""
+def _hook_loads(value: str | None) -> str | None:
+    """The hook is imported when the file is loaded: a bad one is one line with its place."""
+    if value is not None:
+        from devsim.devices.gms96.plc import load_hook
 
-    model_config = ConfigDict(extra="forbid", populate_by_name=True)
-
-    source: str = Field(alias="from", description="E/A/M bit read from the process image")
-    to: str = Field(description="A or M bit written")
-    invert: bool = False
+        load_hook(value)
+    return value
 
 
-class PlcOptions(_Strict):
-    """The scripted PLC stand-in for the undocumented Step5 program (spec §4.10.2, §4.10.3)."""
-
-    cycle_ms: float | None = Field(
-        default=None, gt=0, description="PLC cycle; None: variant's plc_ms_per_1000 x instructions/1000"
-    )
-    instructions: int = Field(default=230, ge=1, description="program length for the derived cycle time")
-    loaded: bool | None = Field(
-        default=None, description="a PLC program is in FLASH at power-on; None: iff rules/hook are configured"
-    )
-    flash_bytes: int = Field(default=32768, ge=1, description="PLC program memory (longer download: T3;4 I.0)")
-    auto_ack_m_functions_ms: float | None = Field(default=None, ge=0)
-    limit_switches: list[PlcLimitRule] = Field(default_factory=list)
-    message_on_fault: PlcFaultMessages | None = None
-    start_program_on_input: list[PlcStartRule] = Field(default_factory=list)
-    copy_bits: list[PlcCopyRule] = Field(default_factory=list)
-    hook: str | None = Field(
-        default=None,
-        description="'package.module:function' called every cycle: Python code, so the file must be trusted",
-    )
-
-    @field_validator("hook")
-    @classmethod
-    def _hook_loads(cls, value: str | None) -> str | None:
-        """The hook is imported when the file is loaded: a bad one is one line with its place."""
-        if value is not None:
-            from devsim.devices.gms96.plc import load_hook
-
-            load_hook(value)
-        return value
+#: The scripted PLC stand-in for the undocumented Step5 program (spec §4.10.2, §4.10.3).
+PLC_OPTIONS = Section("The scripted PLC stand-in for the undocumented Step5 program (spec §4.10.2, §4.10.3).", (
+    Setting("cycle_ms", Maybe(Float(gt=0)), None,
+            "PLC cycle; None: variant's plc_ms_per_1000 x instructions/1000"),
+    Setting("instructions", Int(ge=1), 230, "program length for the derived cycle time"),
+    Setting("loaded", Maybe(Bool()), None, "a PLC program is in FLASH at power-on; None: iff rules/hook are configured"),
+    Setting("flash_bytes", Int(ge=1), 32768, "PLC program memory (longer download: T3;4 I.0)"),
+    Setting("auto_ack_m_functions_ms", Maybe(Float(ge=0)), None),
+    Setting("limit_switches", ListOf(PLC_LIMIT_RULE), []),
+    Setting("message_on_fault", Maybe(PLC_FAULT_MESSAGES), None),
+    Setting("start_program_on_input", ListOf(PLC_START_RULE), []),
+    Setting("copy_bits", ListOf(PLC_COPY_RULE), []),
+    Setting("hook", Maybe(Text()), None,
+            "'package.module:function' called every cycle: Python code, so the file must be trusted",
+            check=_hook_loads),
+))
 
 
 #: Keys only a SERS configuration has.
@@ -167,64 +147,54 @@ _SERS_KEYS = frozenset({"address", "autostart", "baud", "input_level", "service_
                         "broadcast_reply", "encoding"})
 
 
-class Gms96Config(_Strict):
-    """What a user can set for one GMS96 card (``--config FILE.yaml`` or a plant file)."""
+def _not_a_sers_file(value: Mapping[Any, Any]) -> None:
+    """A SERS configuration given to a GMS96 says so, instead of 'unknown field'."""
+    sers_keys = sorted(set(map(str, value)) & _SERS_KEYS)
+    if sers_keys:
+        raise ValueError(
+            f"this looks like a SERS configuration ({', '.join(sers_keys)}), not a GMS96 one:"
+            " a GMS96 has dil, variant, params (N parameters), axis, link, plc ..."
+        )
 
-    dil: DilSwitch = Field(default_factory=DilSwitch)
-    variant: str = Field(default="KSA15-2R", description="K1 | KSA15 | KSA15-2 | KS4 | KS8 | ... (+R)")
-    params: dict[int, int] = Field(default_factory=dict, description="factory N parameters {index: value}")
-    axis: AxisGeometry = Field(default_factory=AxisGeometry)
-    link: LinkOptions = Field(default_factory=LinkOptions)
-    plc: PlcOptions = Field(default_factory=PlcOptions)
-    boot_time: float = Field(default=0.5, ge=0, description="seconds of silence after power-on/reset")
-    flash_erase_s: float = Field(default=3.0, ge=0, le=5.0, description="silence after p1;100 / p3;100")
-    eeprom_write_s: float = Field(default=0.1, ge=0, description="BUSY time of s85;170")
-    queue_capacity: int = Field(default=64, ge=1)
-    max_programs: int = Field(default=100, ge=1, le=100)
-    max_total_commands: int = Field(default=8192, ge=1)
-    out_of_range: Literal["clamp", "ignore"] = "clamp"
-    override_pot_pct: float = Field(default=100.0, ge=0, le=125)
-    tool_offset: int = Field(default=0, description="tool offset T (no command sets it, spec §5.9)")
-    h22_data_address: int | None = Field(
-        default=None, ge=0, le=240, description="H22;0 copies the measurement to this data byte (FB 254/22)"
-    )
 
-    @model_validator(mode="before")
-    @classmethod
-    def _not_a_sers_file(cls, value: object) -> object:
-        """A SERS configuration given to a GMS96 says so, instead of 'unknown field'."""
-        if isinstance(value, dict):
-            sers_keys = sorted(set(map(str, value)) & _SERS_KEYS)
-            if sers_keys:
-                raise ValueError(
-                    f"this looks like a SERS configuration ({', '.join(sers_keys)}), not a GMS96 one:"
-                    " a GMS96 has dil, variant, params (N parameters), axis, link, plc ..."
-                )
-        return value
+def _n_parameter(key: Any) -> int:
+    """``N10`` or ``10``: each N parameter must exist (§2.3.1 N)."""
+    text = str(key).strip().upper()
+    number = text[1:] if text.startswith("N") else text
+    if not (number.isascii() and number.isdigit()) or int(number) not in N_PARAMETERS:
+        raise ValueError("no such parameter")
+    return int(number)
 
-    @field_validator("params", mode="before")
-    @classmethod
-    def _params(cls, value: object) -> object:
-        """Accept ``{N10: 300}`` as well as ``{10: 300}``; each N parameter must exist (§2.3.1 N)."""
-        if isinstance(value, dict):
-            out = {}
-            for key, val in value.items():
-                text = str(key).strip().upper()
-                number = text[1:] if text.startswith("N") else text
-                if not (number.isascii() and number.isdigit()) or int(number) not in N_PARAMETERS:
-                    raise ValueError(f"{key}: no such parameter")
-                out[int(number)] = val
-            return out
-        return value
 
-    @field_validator("params")
-    @classmethod
-    def _param_ranges(cls, value: dict[int, int]) -> dict[int, int]:
-        """Each value within the parameter's own range, as the manual states it."""
-        for index, number in value.items():
-            pdef = N_PARAMETERS[index]
-            low = INT24_MIN if pdef.minimum is None else pdef.minimum
-            high = INT24_MAX if pdef.maximum is None else pdef.maximum
-            if not low <= number <= high:
-                raise ValueError(f"N{index}: {number} is outside {low} … {high}")
-        return value
+def _param_ranges(value: dict[int, int]) -> dict[int, int]:
+    """Each value within the parameter's own range, as the manual states it."""
+    for index, number in value.items():
+        pdef = N_PARAMETERS[index]
+        low = INT24_MIN if pdef.minimum is None else pdef.minimum
+        high = INT24_MAX if pdef.maximum is None else pdef.maximum
+        if not low <= number <= high:
+            raise ValueError(f"N{index}: {number} is outside {low} … {high}")
+    return value
+
+
+#: What a user can set for one GMS96 card (``--config FILE.yaml`` or a plant file).
+Gms96Config = Section("What a user can set for one GMS96 card (--config FILE.yaml or a plant file).", (
+    Setting("dil", DilSwitch, {}),
+    Setting("variant", Text(), "KSA15-2R", "K1 | KSA15 | KSA15-2 | KS4 | KS8 | ... (+R)"),
+    Setting("params", DictOf(_n_parameter, Int(), "N parameter"), {}, "factory N parameters {index: value}",
+            check=_param_ranges),
+    Setting("axis", AXIS_GEOMETRY, {}),
+    Setting("link", LINK_OPTIONS, {}),
+    Setting("plc", PLC_OPTIONS, {}),
+    Setting("boot_time", Float(ge=0), 0.5, "seconds of silence after power-on/reset"),
+    Setting("flash_erase_s", Float(ge=0, le=5.0), 3.0, "silence after p1;100 / p3;100"),
+    Setting("eeprom_write_s", Float(ge=0), 0.1, "BUSY time of s85;170"),
+    Setting("queue_capacity", Int(ge=1), 64),
+    Setting("max_programs", Int(ge=1, le=100), 100),
+    Setting("max_total_commands", Int(ge=1), 8192),
+    Setting("out_of_range", OneOf("clamp", "ignore"), "clamp"),
+    Setting("override_pot_pct", Float(ge=0, le=125), 100.0),
+    Setting("tool_offset", Int(), 0, "tool offset T (no command sets it, spec §5.9)"),
+    Setting("h22_data_address", Maybe(Int(ge=0, le=240)), None,
+            "H22;0 copies the measurement to this data byte (FB 254/22)"),
+), before=_not_a_sers_file)

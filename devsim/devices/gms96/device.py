@@ -13,6 +13,7 @@ from typing import Any, ClassVar
 
 from devsim.core.device import Device
 from devsim.core.kit import ErrorCode, Parameter, Reference
+from devsim.core.settings import Section
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.card import Gms96Card
 from devsim.devices.gms96.config import Gms96Config
@@ -28,7 +29,7 @@ class Gms96Device(Device):
 
     kind: ClassVar[str] = "gms96"
     description: ClassVar[str] = "GMS96 servo amplifier with indexer and PLC (DIN 19244 / FT1.2, RS422)"
-    config_model: ClassVar[type[Gms96Config]] = Gms96Config
+    config_model: ClassVar[Section] = Gms96Config
     model_class = Gms96Card
     face_classes: ClassVar[dict[str, Any]] = {"main": Gms96Face}
     points = POINTS

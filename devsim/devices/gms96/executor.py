@@ -13,11 +13,11 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any, Protocol
 
 from devsim.core.axis import Axis, Watch
 from devsim.core.clock import Timer
+from devsim.core.record import record
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.counter import CounterReferenceRun
 from devsim.devices.gms96.reference import ReferenceRun, resolver_position
@@ -71,7 +71,7 @@ TRANSPARENT_P10 = frozenset({16, 17, 28, 29})  # SETO RESO SNDF SNDM keep blendi
 MOVES = frozenset("A+")
 
 
-@dataclass(frozen=True)
+@record
 class Cmd:
     """One queued command: letter, P1..P3 and how many parameters were sent."""
 

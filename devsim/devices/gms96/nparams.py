@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from devsim.core.record import record
 
 __all__ = ["INT24_MAX", "INT24_MIN", "N_DUAL_VALUE", "N_PARAMETERS", "N_SIMULATOR_DEFAULTS", "N_STORED_ONLY", "NParam"]
 
@@ -14,7 +14,7 @@ INT24_MIN, INT24_MAX = -0x800000, 0x7FFFFF
 # ---------------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
+@record
 class NParam:
     """One N parameter (machine datum), set with ``N value;index``, read with ``T5;index``.
 

@@ -12,6 +12,7 @@ from typing import Any
 
 from devsim.core.kit import Fault, FaultTable, SignalDef, signal_points
 from devsim.core.points import BadValue, Family, Point, PointTable
+from devsim.core.settings import Invalid
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.config import DilSwitch
 from devsim.devices.gms96.image import parse_bit
@@ -90,12 +91,12 @@ def _alias(name: str) -> str | None:
 
 def _set_dil(field: str) -> Any:
     def put(card: Any, value: Any) -> None:
-        data = card.pending_dil.model_dump()
+        data = card.pending_dil.dump()
         data[field] = value
         try:
-            card.pending_dil = DilSwitch.model_validate(data)  # read at the next reset (§2.2)
-        except ValueError as exc:
-            raise BadValue(f"dil.{field}: {exc.errors()[0]['msg'] if hasattr(exc, 'errors') else exc}") from None
+            card.pending_dil = DilSwitch.parse(data)  # read at the next reset (§2.2)
+        except Invalid as exc:
+            raise BadValue(f"dil.{exc}") from None
 
     return put
 
@@ -117,7 +118,7 @@ def _message(card: Any, value: int) -> None:
 
 
 def _tool_offset(card: Any, value: int) -> None:
-    card.cfg = card.cfg.model_copy(update={"tool_offset": value})
+    card.cfg = card.cfg.replace(tool_offset=value)
 
 
 def _register(n: int) -> Point:

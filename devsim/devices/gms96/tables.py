@@ -31,7 +31,8 @@ Public names (beyond the agreed API, all documented below): ``N_SIMULATOR_DEFAUL
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+
+from devsim.core.record import field, record
 
 __all__ = [
     "FIRMWARE_VERSION",
@@ -326,7 +327,7 @@ MESSAGE_MIN, MESSAGE_MAX = 1, 255
 ERROR_BITS: dict[int, str] = {}
 
 
-@dataclass(frozen=True)
+@record
 class FaultDef:
     """One fault state of spec §4.5.3 (plus the reference distance limit of §3.8.14).
 

@@ -3,7 +3,7 @@ manual §6)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from devsim.core.record import record
 
 __all__ = ["DEFAULT_VARIANT", "VARIANTS", "Variant", "variant"]
 
@@ -12,7 +12,7 @@ __all__ = ["DEFAULT_VARIANT", "VARIANTS", "Variant", "variant"]
 # ---------------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
+@record
 class Variant:
     """Hardware data of one card type (manual §6 "Leistungsdaten"; currents are DC peak values).
 

@@ -50,7 +50,7 @@ class PoselestaCnc(Model):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
-        self.cfg = PoselestaConfig.model_validate(self.config)
+        self.cfg = PoselestaConfig.parse(self.config)
         self.formats = Formats(dict(self.cfg.decimals))
         declare_signals(self.signals, SIGNALS)
         self.transfers: dict[str, ReadIn | Output | None] = {"v6": None, "v7": None}

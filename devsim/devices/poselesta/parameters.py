@@ -5,12 +5,13 @@ declared range and an effect on the serial ports or the buzzer."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+
+from devsim.core.record import record
 
 __all__ = ["PARAMETERS", "ParamDef", "check_parameter"]
 
 
-@dataclass(frozen=True)
+@record
 class ParamDef:
     number: int
     name: str

@@ -10,9 +10,9 @@ sends.  No clock, no I/O.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from devsim.core.record import field, record
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF, encode, parity_ok
 
 __all__ = [
@@ -37,7 +37,7 @@ ORDER = "NXYZDIJKFSTGML"
 CR, LF, NUL, DEL, SP = 0x0D, 0x0A, 0x00, 0x7F, 0x20
 
 
-@dataclass(frozen=True)
+@record
 class Formats:
     """Digits before and after the point per address (§2.6.3: 7 significant digits, the point
     placed by each axis's resolution; N xxx, G/M/T xx, F/S xxxx, L xx.xxx)."""
@@ -54,7 +54,7 @@ class Formats:
         return {"N": (3, 0), "G": (2, 0), "M": (2, 0), "T": (2, 0), "F": (4, 0), "S": (4, 0), "L": (2, 3)}[letter]
 
 
-@dataclass(frozen=True)
+@record
 class Block:
     """One NC block: its number and its words.  Coordinates and L are integers in units of the
     last decimal (``X 10.500`` with 3 decimals is 10500); G and M keep their order of arrival."""
@@ -81,17 +81,17 @@ class Block:
 
 
 # -- what the reader reports ------------------------------------------------------------------
-@dataclass(frozen=True)
+@record
 class BlockRead:
     block: Block
 
 
-@dataclass(frozen=True)
+@record
 class Ended:
     """The ``M30`` block arrived: the transfer is complete."""
 
 
-@dataclass(frozen=True)
+@record
 class Failed:
     """The transfer stops with the screen message (``WERTBEREICHES-UEBERLAUF``)."""
 
@@ -99,7 +99,7 @@ class Failed:
     message: str = WERTBEREICHES_UEBERLAUF
 
 
-@dataclass(frozen=True)
+@record
 class Notice:
     """Something a host developer may want to know that changes nothing (an empty word, a
     block without number, a duplicate word, comment characters)."""
@@ -111,7 +111,7 @@ class Notice:
 Event = BlockRead | Ended | Failed | Notice
 
 
-@dataclass
+@record(frozen=False)
 class _Word:
     letter: str
     digits: str = ""

@@ -10,10 +10,10 @@ pacing of a character frame is the line's (the port's settings give the characte
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any, Protocol
 
 from devsim.core.clock import Clock, Timer
+from devsim.core.record import record
 from devsim.devices.poselesta.tape import BlockRead, Ended, Failed, Notice, TapeReader
 
 __all__ = ["CASSETTE_LEADER", "PRINTER_CR_PAUSE", "FUNCTIONS", "Function", "Output", "ReadIn"]
@@ -24,7 +24,7 @@ CASSETTE_LEADER = 13.0
 PRINTER_CR_PAUSE = 0.820
 
 
-@dataclass(frozen=True)
+@record
 class Function:
     """A transfer function of the table in spec §3.2.1."""
 

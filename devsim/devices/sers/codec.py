@@ -15,7 +15,8 @@ means for the line being assembled.  The device decides what to echo, execute an
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+
+from devsim.core.record import record
 
 __all__ = ["MAX_LINE", "Address", "address_value", "Framer", "Ignored", "LineEnd", "Noise", "Restart", "TextChar"]
 
@@ -23,7 +24,7 @@ MAX_LINE = 60
 CR, LF, HASH = 0x0D, 0x0A, 0x23
 
 
-@dataclass(frozen=True)
+@record
 class Ignored:
     """Noise outside a line, or the second half of a CR/LF pair (``pair``)."""
 
@@ -33,26 +34,26 @@ class Ignored:
 Noise = Ignored
 
 
-@dataclass(frozen=True)
+@record
 class Restart:
     """``#`` arrived: a new line (``mid_line`` False) or a restart inside the line."""
 
     mid_line: bool
 
 
-@dataclass(frozen=True)
+@record
 class AddressChar:
     """A digit (or ``*``) of the address; its echo is held until the address is complete."""
 
 
-@dataclass(frozen=True)
+@record
 class Address:
     """The address token is complete: a drive number, ``"*"`` or ``None`` (no address given)."""
 
     value: int | str | None
 
 
-@dataclass(frozen=True)
+@record
 class TextChar:
     """A character of the statement text; ``dropped`` when beyond the 60-character limit."""
 
@@ -60,7 +61,7 @@ class TextChar:
     dropped: bool = False
 
 
-@dataclass(frozen=True)
+@record
 class LineEnd:
     """CR or LF ended the line; ``overflow`` if characters were dropped."""
 

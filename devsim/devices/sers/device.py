@@ -12,6 +12,7 @@ from typing import Any, ClassVar
 
 from devsim.core.device import Device
 from devsim.core.kit import ErrorCode, Parameter, Reference
+from devsim.core.settings import Section
 from devsim.devices.sers.config import SersConfig
 from devsim.devices.sers.drive import SersDrive
 from devsim.devices.sers.errors import ERRNO
@@ -28,7 +29,7 @@ class SersDevice(Device):
 
     kind: ClassVar[str] = "sers"
     description: ClassVar[str] = "Stögra SERS stepper driver with positioning control (ASCII, RS-232/RS-485)"
-    config_model: ClassVar[type[SersConfig]] = SersConfig
+    config_model: ClassVar[Section] = SersConfig
     hears_others: ClassVar[bool] = True  # a master's statements reach its slaves (§3.6.2)
     model_class = SersDrive
     face_classes: ClassVar[dict[str, Any]] = {"main": SersFace}

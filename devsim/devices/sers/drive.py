@@ -57,7 +57,7 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         name: str = "",
     ) -> None:
         super().__init__(clock=clock, config=config, nvram=nvram, name=name)
-        self.cfg = SersConfig.model_validate(self.config)
+        self.cfg = SersConfig.parse(self.config)
         self.program = ProgramMemory(self.nvram)
         self.interpreter = Interpreter(self)
         self.master = MasterLink(clock, self.line_out)

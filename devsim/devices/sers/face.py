@@ -11,11 +11,11 @@ from __future__ import annotations
 import functools
 import re
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from devsim.core.device import Face, Port, SerialSettings
 from devsim.core.kit import Command, Table
+from devsim.core.record import field, record
 from devsim.devices.sers import codec
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.drive import SersDrive
@@ -33,7 +33,7 @@ _TEXT_TO_END = re.compile(rb"([^\r\n#]+)[\r\n]")
 _LINE_ENDS = (codec.CR, codec.LF)
 
 
-@dataclass
+@record(frozen=False)
 class _Line:
     """What the device knows about the command line being received."""
 

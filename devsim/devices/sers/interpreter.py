@@ -15,10 +15,10 @@ trace mode and the ``@nP0=0`` message are handled here.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from devsim.core.clock import Clock, Timer
+from devsim.core.record import field, record
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.errors import SersError
 
@@ -75,7 +75,7 @@ MAX_NESTING = 4  # GOSUB depth (§4.6.4)
 L65 = 65  # error / stop handler label (§4.6.2)
 
 
-@dataclass
+@record(frozen=False)
 class Program:
     """A compiled program: statements in order, labels and block jumps."""
 

@@ -5,8 +5,9 @@ See :mod:`devsim.devices.sers.parameters` for the conventions of the table.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any, Literal
+
+from devsim.core.record import record
 
 __all__ = ["POS_MAX", "POS_MIN", "RW_E", "Kind", "Number", "ParamDef", "Rows"]
 
@@ -14,7 +15,7 @@ Kind = Literal["int", "position", "velocity", "acceleration", "fixed"]
 Number = int | float
 
 
-@dataclass(frozen=True)
+@record
 class ParamDef:
     number: int
     name: str  # German designation (manual heading) -- returned by P<n>??

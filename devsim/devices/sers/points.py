@@ -90,7 +90,7 @@ def _alias(name: str) -> str | None:
 
 def _set_dip(field: str) -> Any:
     def put(model: Any, value: Any) -> None:
-        model.cfg = model.cfg.model_copy(update={field: value})
+        model.cfg = model.cfg.replace(**{field: value})
 
     return put
 

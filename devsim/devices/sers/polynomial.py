@@ -16,10 +16,10 @@ last segment too short to brake with B gives errno 118.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any, Protocol
 
 from devsim.core.axis import Watch
+from devsim.core.record import record
 from devsim.devices.sers.errors import SersError
 
 
@@ -44,7 +44,7 @@ RELATIVE = (1112, 1115)
 ABSOLUTE = (1113, 1116)
 
 
-@dataclass(frozen=True)
+@record
 class Segment:
     end: float  # physical position (increments) where the segment ends
     speed: float  # inc/s

@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import functools
 import re
-from dataclasses import dataclass, field
+
+from devsim.core.record import field, record
 
 __all__ = [
     "compare",
@@ -90,7 +91,7 @@ class SyntaxFault(Exception):
 
 
 # -- statement classes --------------------------------------------------------------------
-@dataclass(frozen=True)
+@record
 class Address:
     """An operand naming device state: ``P91``, ``V``, ``I3``, ``J1``, ``O2``, ``IN``."""
 
@@ -99,7 +100,7 @@ class Address:
     text: str  # as written, upper-cased (used as the identifier in query answers)
 
 
-@dataclass(frozen=True)
+@record
 class Number:
     text: str
 
@@ -111,40 +112,40 @@ class Number:
 Operand = Address | Number
 
 
-@dataclass(frozen=True)
+@record
 class Statement:
     text: str = field(default="", compare=False)
 
 
-@dataclass(frozen=True)
+@record
 class Assign(Statement):
     target: Address = Address("P", 0, "P0")
     value: Operand | str = Number("0")  # "*" for Z=* / P1=*
 
 
-@dataclass(frozen=True)
+@record
 class Query(Statement):
     target: Address = Address("P", 0, "P0")
     name: bool = False  # P?? designation query
 
 
-@dataclass(frozen=True)
+@record
 class Arith(Statement):
     op: str = "+"
     operand: Operand = Number("0")
 
 
-@dataclass(frozen=True)
+@record
 class Unary(Statement):
     op: str = "NOT"
 
 
-@dataclass(frozen=True)
+@record
 class Command(Statement):
     name: str = ""
 
 
-@dataclass(frozen=True)
+@record
 class Condition:
     left: Address
     op: str | None = None  # None: true when the value is non-zero
@@ -152,76 +153,76 @@ class Condition:
     negate: bool = False  # legacy "!"
 
 
-@dataclass(frozen=True)
+@record
 class If(Statement):
     cond: Condition | None = None
     then: bool = False
 
 
-@dataclass(frozen=True)
+@record
 class Else(Statement):
     pass
 
 
-@dataclass(frozen=True)
+@record
 class End(Statement):
     pass
 
 
-@dataclass(frozen=True)
+@record
 class Wait(Statement):
     cond: Condition | None = None
 
 
-@dataclass(frozen=True)
+@record
 class Jog(Statement):
     name: str = "RS"
     until: Condition | None = None
 
 
-@dataclass(frozen=True)
+@record
 class Goto(Statement):
     label: int = 0
     sub: bool = False  # GOSUB/GS
 
 
-@dataclass(frozen=True)
+@record
 class Label(Statement):
     number: int = 0
 
 
-@dataclass(frozen=True)
+@record
 class Run(Statement):
     label: int | None = None
 
 
-@dataclass(frozen=True)
+@record
 class ListCmd(Statement):
     params: bool = False  # LISTP
     arg: str = ""
 
 
-@dataclass(frozen=True)
+@record
 class Trace(Statement):
     query: bool = False  # TR?
 
 
-@dataclass(frozen=True)
+@record
 class Change(Statement):
     value: Number = Number("0")
 
 
-@dataclass(frozen=True)
+@record
 class Text(Statement):
     body: str = ""
 
 
-@dataclass(frozen=True)
+@record
 class Comment(Statement):
     pass
 
 
-@dataclass
+@record(frozen=False)
 class ParseResult:
     """Statements found in a line's text.
 

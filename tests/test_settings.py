@@ -1,0 +1,108 @@
+"""Configuration tables (devsim.core.settings): checks, messages and the file lines they get."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from devsim.core.config import ConfigError, load_config, load_yaml, validate
+from devsim.core.settings import (
+    Bool,
+    DictOf,
+    Float,
+    Int,
+    Invalid,
+    ListOf,
+    Maybe,
+    OneOf,
+    PairOf,
+    Section,
+    Setting,
+    Text,
+)
+
+
+def _even(value: int) -> int:
+    if value % 2:
+        raise ValueError("must be even")
+    return value
+
+
+def _no_foo(data: object) -> None:
+    if "foo" in data:  # type: ignore[operator]
+        raise ValueError("this looks like a foo file")
+
+
+RULE = Section("a rule", (
+    Setting("source", Text(), doc="a bit", alias="from"),
+    Setting("invert", Bool(), False),
+))
+GEOMETRY = Section("where things are", (
+    Setting("cam", Maybe(PairOf(Float())), (-2.0, -1.0)),
+    Setting("marks", ListOf(Float()), []),
+))
+CONFIG = Section("a device", (
+    Setting("address", Int(ge=0, le=31), 3, "switches"),
+    Setting("step", Int(), 2, check=_even),
+    Setting("gain", Float(gt=0), 0.5),
+    Setting("mode", OneOf("S", "E"), "S"),
+    Setting("name", Text()),
+    Setting("params", DictOf(int, Float(integers=True), "number"), {}),
+    Setting("axis", GEOMETRY, {}),
+    Setting("rules", ListOf(RULE), []),
+), before=_no_foo)
+
+
+def test_defaults_conversions_and_values() -> None:
+    values = CONFIG.parse({"name": "x", "gain": 2, "params": {"10": 3, 11: 1.5}, "rules": [{"from": "E0.1"}]})
+    assert values.gain == 2.0 and isinstance(values.gain, float)
+    assert values.params == {10: 3, 11: 1.5} and isinstance(values.params[10], int)
+    assert values.axis.cam == (-2.0, -1.0) and values.axis.marks == []
+    assert values.rules[0].source == "E0.1" and values.rules[0].invert is False
+    assert values.dump()["rules"] == [{"source": "E0.1", "invert": False}]
+    assert CONFIG.parse(values.dump()) == values  # a dump validates again to the same values
+    assert values.replace(address=5).address == 5 and values.address == 3
+
+
+@pytest.mark.parametrize(
+    ("data", "problem"),
+    [
+        ({"name": "x", "address": 32}, (("address",), "Input should be less than or equal to 31")),
+        ({"name": "x", "address": "a"}, (("address",), "Input should be a valid integer, unable to parse string as an integer")),
+        ({"name": "x", "address": 1.5}, (("address",), "Input should be a valid integer, got a number with a fractional part")),
+        ({"name": "x", "address": True}, (("address",), "Input should be a valid integer")),
+        ({"name": "x", "step": 3}, (("step",), "must be even")),
+        ({"name": "x", "gain": 0}, (("gain",), "Input should be greater than 0")),
+        ({"name": "x", "gain": float("nan")}, (("gain",), "not a finite number (NaN and infinity are refused)")),
+        ({"name": "x", "mode": "X"}, (("mode",), "Input should be 'S' or 'E'")),
+        ({}, (("name",), "Field required")),
+        ({"name": "x", "colour": 1}, (("colour",), "unknown field")),
+        ({"name": "x", "params": {"N1": 1}}, (("params", "N1"), "invalid literal for int() with base 10: 'N1'")),
+        ({"name": "x", "axis": {"cam": [1]}}, (("axis", "cam"), "Input should be a list of two values")),
+        ({"name": "x", "rules": [{"from": "E0.1"}, {"invert": "maybe"}]}, (("rules", 1, "from"), "Field required")),
+        ({"foo": 1}, ((), "this looks like a foo file")),
+    ],
+)
+def test_each_problem_is_named(data: dict[str, object], problem: tuple[tuple[object, ...], str]) -> None:
+    with pytest.raises(Invalid) as info:
+        CONFIG.parse(data)
+    assert info.value.problems[0] == problem
+
+
+def test_problems_in_a_file_name_their_line(tmp_path: Path) -> None:
+    path = tmp_path / "device.yaml"
+    path.write_text("name: x\naxis:\n  marks: [1, 2]\nrules:\n  - from: E0.1\n  - from: E0.2\n    invert: maybe\n")
+    with pytest.raises(ConfigError) as info:
+        load_config(path, CONFIG)
+    assert str(info.value) == f"{path}:7: rules.1.invert: Input should be a valid boolean"
+    path.write_text("name: x\nparams:\n  10: .inf\n")
+    with pytest.raises(ConfigError, match=r":3: params.10: not a finite number"):
+        load_config(path, CONFIG)
+    assert validate(load_yaml("d.yaml", "name: y\n"), CONFIG, "d.yaml").name == "y"
+
+
+def test_rows_document_every_key() -> None:
+    keys = [row[0] for row in CONFIG.rows()]
+    assert keys == ["address", "step", "gain", "mode", "name", "params", "axis", "axis.cam", "axis.marks", "rules"]
+    assert dict((r[0], r[1]) for r in CONFIG.rows())["axis.cam"] == "[float, float] | None"
