@@ -74,6 +74,8 @@ _IGNORED = Ignored()
 
 _TEXT_END = re.compile(rb"[\r\n#]")
 _ADDRESS = re.compile(rb"\*|[0-9]*")
+# Bytes after a '#' that cannot begin an address (a '#' is left to feed(), see begin_line).
+_NOT_ADDRESS = frozenset(range(256)) - frozenset(b"0123456789*#")
 
 
 class Framer:
@@ -125,7 +127,11 @@ class Framer:
         after it at once, as :meth:`feed` would byte by byte.  Returns whether the address is
         complete (the next byte is text or a line end), its value, and where the bytes taken
         end; an address the chunk cuts off (or a ``#`` right after it) is left to :meth:`feed`."""
-        stop = _ADDRESS.match(data, start + 1).end()  # type: ignore[union-attr]
+        after = data[start + 1] if start + 1 < len(data) else HASH
+        if after in _NOT_ADDRESS:  # the common case in noise: no address at all
+            stop = start + 1
+        else:
+            stop = _ADDRESS.match(data, start + 1).end()  # type: ignore[union-attr]
         self._last_end = None
         if self.in_line:  # a restart inside the line: its length goes on
             self._length += stop - start
@@ -133,7 +139,7 @@ class Framer:
             self.in_line = True
             self._overflow = False
             self._length = stop - start
-        digits = data[start + 1 : stop].decode("ascii")
+        digits = data[start + 1 : stop].decode("ascii") if stop > start + 1 else ""
         if stop < len(data) and data[stop] != HASH:
             self._addr = None
             return True, address_value(digits), stop
