@@ -11,14 +11,18 @@ from __future__ import annotations
 
 from typing import Any
 
+from devsim.core.axis import Axis
 from devsim.core.kit import declare_signals
 from devsim.core.model import Model
 from devsim.core.points import BadValue
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF, baud_for_code
 from devsim.devices.poselesta.config import PoselestaConfig
+from devsim.devices.poselesta.execution import Executor
 from devsim.devices.poselesta.keyboard import Keyboard
+from devsim.devices.poselesta.manual import ManualMotion
+from devsim.devices.poselesta.mst import MstBus, PlcHelper
 from devsim.devices.poselesta.parameters import PARAMETERS, check_parameter
-from devsim.devices.poselesta.signals import SIGNALS
+from devsim.devices.poselesta.signals import AXES, OUTPUTS, SIGNALS
 from devsim.devices.poselesta.tape import Block, Formats, TapeReader, block_words, parse_blocks, render
 from devsim.devices.poselesta.transfers import (
     CASSETTE_LEADER,
@@ -66,6 +70,12 @@ class PoselestaCnc(Model):
         self.last_key: int | None = None
         self._buzzer_timer: Any = None
         self._boot_timer: Any = None
+        self.axes = {a: Axis(self.clock, name=a) for a in AXES}
+        self.executor = Executor(self)
+        self.mst = MstBus(self.clock, self.signals, lambda: max(1.0, self.params[72]) / 1000.0, self.executor.put)
+        plc = self.cfg.plc
+        self.plc = PlcHelper(self.clock, self.signals, plc.mst_ack, plc.rise_ms / 1000.0, plc.fall_ms / 1000.0)
+        self.manual = ManualMotion(self)
         self._load()
         self._power_on()
 
@@ -91,9 +101,11 @@ class PoselestaCnc(Model):
 
     # -- power ----------------------------------------------------------------------------------
     def _power_on(self) -> None:
+        """§2.4.5, spec §4.2: all outputs L, the axes where the encoders count from (0)."""
         self.mode = "MANUAL"
         self.message = ""
-        self.signals.set("nc_ready", False)
+        for output in OUTPUTS:
+            self.signals.set(output.name, output.initial)
         self.booting = self.cfg.boot_time > 0
         if self.booting:
             self._boot_timer = self.clock.call_later(self.cfg.boot_time, self._boot_done)
@@ -104,16 +116,14 @@ class PoselestaCnc(Model):
         """§2.4.5: after about 2 s the control is in MANUAL, NC ready, mode code on the bus."""
         self._boot_timer = None
         self.signals.set("nc_ready", True)
-        self.signals.set("data_bus", MODES[self.mode])
+        self.signals.set("machine_standstill", True)
+        self.signals.set("inside_working_field", True)
+        self.mst.mode(MODES[self.mode])
         self.booted()
 
     def power_cycle(self, *, wipe: bool = False) -> None:
-        for port in ("v6", "v7"):
-            self._stop(port, "cancelled")
-        self.keyboard.reset()
-        if self._boot_timer is not None:
-            self._boot_timer.cancel()
-        super().power_cycle(wipe=wipe)
+        self.close()
+        super().power_cycle(wipe=wipe)  # (the axes stay where they stood)
         self._load()
         self._power_on()
 
@@ -123,17 +133,81 @@ class PoselestaCnc(Model):
         self.keyboard.reset()
         if self._boot_timer is not None:
             self._boot_timer.cancel()
+        self.executor.emergency_stop()
+        self.manual.reset()
+        self.plc.cancel()
 
     # -- the panel ------------------------------------------------------------------------------
     def select_mode(self, mode: str) -> None:
+        """A mode change (spec §4.1): refused while a transfer runs or a block executes; a stopped
+        program is abandoned (back to its first block); the mode code goes out (BA, §2.4.8)."""
         busy = [p for p, t in self.transfers.items() if t is not None]
         if busy and mode != self.mode:
             raise BadValue(f"a transfer runs on {busy[0]}: cancel it first (v{busy[0][1]}.transfer idle)")
+        if self.executor.running and mode != self.mode:
+            raise BadValue(f"block N{self.executor.block_number} executes ({self.executor.state}): "
+                           "stop the program first")
+        if self.booting:
+            raise BadValue("the control is not ready yet")
         if mode != self.mode:
+            self.manual.reset()
+            self.executor.reset()
             self.mode = mode
             self.message = ""
-            self.signals.set("data_bus", MODES[mode])
+            self.mst.mode(MODES[mode])
             self.record_event("mode")
+
+    def emergency_released(self) -> None:
+        """Not-Stop released (§2.3.2): the control switches to MANUAL and outputs its code."""
+        if self.booting:
+            return
+        self.mode = "MANUAL"
+        self.mst.mode(MODES["MANUAL"])
+        self.record_event("mode")
+
+    # -- the axes (spec §5.1–§5.3): positions in increments of each axis's resolution ---------------
+    def to_mm(self, axis: str, increments: float) -> float:
+        return increments / 10 ** self.formats.decimals[axis.upper()]
+
+    def from_mm(self, axis: str, mm: float) -> float:
+        return mm * 10 ** self.formats.decimals[axis.upper()]
+
+    def rapid(self, axis: str) -> float:
+        """P44–P47, in increments per second."""
+        return self.from_mm(axis, self.params[44 + AXES.index(axis)] / 60.0)
+
+    def max_feed(self, axis: str) -> float:
+        """P48–P51, in increments per second."""
+        return self.from_mm(axis, self.params[48 + AXES.index(axis)] / 60.0)
+
+    def accel(self, axis: str) -> float:
+        return self.from_mm(axis, self.cfg.accel)
+
+    def override(self) -> float:
+        """V23/4: 0 … 10 V = 0 … 150 % in whole percent (6.667 V = 100 %), as a factor."""
+        return round(max(0.0, min(10.0, float(self.signals.get("override_pot_v")))) * 15) / 100
+
+    def feed_pot(self) -> float:
+        """V23/1: 0 … 10 V = 0 … 100 % in whole percent, as a factor."""
+        return round(max(0.0, min(10.0, float(self.signals.get("feed_pot_v")))) * 10) / 100
+
+    def kv(self, axis: str) -> float:
+        """The position loop gain [1/s]: P30–P33 steps × ``kv_per_step`` (spec §5.2)."""
+        return self.params[30 + AXES.index(axis)] * self.cfg.kv_per_step
+
+    def following_error(self, axis: str) -> float:
+        """e = v / Kv in steady state (spec §5.2), in increments; 0 with Not-Stop."""
+        if not self.signals.get("emergency_stop"):
+            return 0.0
+        return self.axes[axis].velocity() / self.kv(axis)
+
+    def analog_out(self, axis: str) -> float:
+        """The ±10 V set-point: the speed over the drive's speed at 10 V (spec §5.2)."""
+        if not self.signals.get("emergency_stop"):
+            return 0.0
+        at_10v = self.cfg.drive_speed_factor * self.rapid(axis)
+        volts = 10.0 * self.axes[axis].velocity() / at_10v if at_10v > 0 else 0.0
+        return max(-10.0, min(10.0, volts))
 
     def select_program(self, number: int) -> None:
         self.program = number

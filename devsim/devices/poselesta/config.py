@@ -40,6 +40,15 @@ def _params(value: dict[int, float]) -> dict[int, float]:
     return value
 
 
+#: The PLC side of the MST acknowledge V22/7 (spec §4.4.3, §8 S15/S16): a plant helper.
+PLC = Section("The PLC side of the MST acknowledge V22/7, played by a plant helper (spec §4.4.3).", (
+    Setting("mst_ack", OneOf("bridged", "delayed", "manual"), "bridged",
+            "bridged: acknowledge = the strobes; delayed: H rise_ms after a strobe rises, L fall_ms after "
+            "it falls; manual: input.mst_ack is set by hand"),
+    Setting("rise_ms", Float(ge=0), 35.0, "delayed: acknowledge H this long after a strobe rises"),
+    Setting("fall_ms", Float(ge=0), 15.0, "delayed: acknowledge L this long after a strobe falls"),
+))
+
 #: What a user can set for one POSELESTA (``--config FILE.yaml`` or a plant file).
 PoselestaConfig = Section("What a user can set for one POSELESTA (--config FILE.yaml or a plant file).", (
     Setting("variant", OneOf("II", "III"), "III", "POS II or POS III (§1.1 of the spec)"),
@@ -57,4 +66,9 @@ PoselestaConfig = Section("What a user can set for one POSELESTA (--config FILE.
     Setting("params", DictOf(_parameter_number, Float(), "parameter number"), {},
             "initial machine parameters, e.g. {70: 3, 71: 0} (P1 … P98)", check=_params),
     Setting("boot_time", Float(ge=0), 2.0, "seconds after power-on until NC ready (§2.4.5: about 2 s)"),
+    Setting("accel", Float(gt=0), 500.0, "acceleration = braking ramp of every axis, mm/s² (spec §5.3)"),
+    Setting("kv_per_step", Float(gt=0), 1.667, "Kv [1/s] per step of the gain P30–P33 (spec §5.2)"),
+    Setting("drive_speed_factor", Float(gt=0), 1.2, "drive speed at 10 V set-point = this × rapid (spec §5.2)"),
+    Setting("m06_requires_nc_start", Bool(), False, "after the M06 acknowledge wait for NC-Start (spec G-M06)"),
+    Setting("plc", PLC, {}),
 ))

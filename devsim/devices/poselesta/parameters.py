@@ -1,6 +1,7 @@
 """The machine parameters the host link depends on (manual §2.4.9, §2.6.2, §2.6.3; spec
 poselesta.md §4.8).  Every number P1 … P98 is stored (default 0) and round-trips; these have a
-declared range and an effect on the serial ports or the buzzer."""
+declared range and an effect: on the serial ports, the buzzer, the strobes, the speeds and gains
+of the axes and the NC-Start."""
 
 from __future__ import annotations
 
@@ -30,7 +31,15 @@ PARAMETERS: dict[int, ParamDef] = {
         ParamDef(69, "V6 code (0 = ISO, 1 = ASCII)", 0, 1, 0, "§2.6.2.1–3"),
         ParamDef(70, "V7 baud rate code (0 = 110 … 5 = 4800)", 0, 5, 3, "§2.6.3"),
         ParamDef(71, "V7 code (0 = ISO, 1 = ASCII)", 0, 1, 0, "§2.6.3"),
-        ParamDef(72, "strobe times t1 = t2 in ms", 0, 99, 20, "§2.4.7"),
+        ParamDef(72, "strobe times t1 = t2 in ms (0 is taken as 1 ms)", 0, 99, 20, "§2.4.7"),
+        *(ParamDef(30 + i, f"gain (Verstärkung) {a}: Kv = P{30 + i} × kv_per_step", 1, 99, 10, "§2.5")
+          for i, a in enumerate("XYZD")),
+        *(ParamDef(44 + i, f"maximum speed = rapid {a}, mm/min (G00, V21/6)", 0, 9999, 6000, "§2.3.8")
+          for i, a in enumerate("XYZD")),
+        *(ParamDef(48 + i, f"maximum feed {a}, mm/min (100 % of the feed pot)", 0, 9999, 2000, "§2.3.6")
+          for i, a in enumerate("XYZD")),
+        ParamDef(64, "rapid influenced by the override pot (0 = no, 1 = yes)", 0, 1, 0, "§2.3.22"),
+        ParamDef(75, "NC-Start source (0 = both, 1 = front panel, 2 = external V19/3)", 0, 2, 0, "§2.3.3"),
     )
 }
 

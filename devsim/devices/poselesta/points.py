@@ -9,7 +9,8 @@ import re
 from devsim.core.kit import Fault, FaultTable, signal_points
 from devsim.core.points import Family, Point, PointTable
 from devsim.devices.poselesta.cnc import MODES, PoselestaCnc
-from devsim.devices.poselesta.signals import SIGNALS
+from devsim.devices.poselesta.execution import STATES
+from devsim.devices.poselesta.signals import AXES, SIGNALS
 from devsim.devices.poselesta.transfers import FUNCTIONS
 
 __all__ = ["FAULTS", "POINTS"]
@@ -29,6 +30,20 @@ def _transfer_points(port: str) -> list[Point]:
               get=lambda m: m.discarded[port]),
         Point(f"{port}.blocks", "int", "blocks of the running transfer", "§2.6",
               get=lambda m: getattr(m.transfers[port], "blocks", 0)),
+    ]
+
+
+def _axis_points(a: str) -> list[Point]:
+    axis = a.upper()
+    return [
+        Point(f"axis.{a}.position", "float", f"actual position of {axis}, increments of its resolution", "§2.2",
+              "inc", get=lambda m: m.axes[a].position(), in_state=True),
+        Point(f"axis.{a}.velocity", "float", f"actual velocity of {axis}", "§2.5", "inc/s",
+              get=lambda m: m.axes[a].velocity()),
+        Point(f"axis.{a}.following_error", "float", f"following error of {axis}: v / Kv (P{30 + AXES.index(a)})",
+              "§2.5", "inc", get=lambda m: m.following_error(a)),
+        Point(f"axis.{a}.analog_out", "float", f"±10 V speed set-point of {axis}'s drive", "§2.5", "V",
+              get=lambda m: m.analog_out(a)),
     ]
 
 
@@ -68,12 +83,21 @@ POINTS = PointTable.of(
               put=lambda m, v: m.clear_message() if v else None, example=True),
         Point("programs", "json", "numbers of the stored programs", "§2.6.3",
               get=lambda m: sorted(m.programs), in_state=True),
+        Point("panel.nc_start", "bool", "the NC-Start key of the front panel (P75 = 0 or 1)", "§2.3.3",
+              put=lambda m, v: m.executor.nc_start("panel") if v else None, example=True),
+        Point("panel.mdi", "str", "the block entered for Hand-Einzelsatz (MANUAL_SINGLE_BLOCK), e.g. N1 G00 X10",
+              "§2.4.7", get=lambda m: m.executor.mdi, put=lambda m, v: setattr(m.executor, "mdi", v)),
+        Point("program.state", "str", f"the block cycle: {', '.join(STATES)}", "§2.4.10",
+              get=lambda m: m.executor.state, choices=STATES, in_state=True),
+        Point("program.block", "int", "number N of the block being executed (-1: none)", "§2.3.13",
+              get=lambda m: m.executor.block_number, in_state=True),
         Point("keyboard.last_key", "int", "code of the last key taken from V8 (-1: none)", "§2.6.4",
               get=lambda m: -1 if m.last_key is None else m.last_key),
         Point("keyboard.accepted", "int", "keys taken from V8", "§2.6.4", get=lambda m: m.keyboard.accepted),
         Point("keyboard.lost", "int", "keys lost because they came less than 100 ms apart", "§2.6.4",
               get=lambda m: m.keyboard.lost),
     ],
+    *(_axis_points(a) for a in AXES),
     _transfer_points("v6"),
     _transfer_points("v7"),
     signal_points(SIGNALS),

@@ -1,0 +1,95 @@
+"""Manual motion in MANUAL and PROGRAM_ENTRY: the direction keys V20/5–12, jogging steps
+V21/1–5 and rapid V21/6 (manual §2.3.6–§2.3.8, §2.3.22, §2.4.2, §2.4.6; spec poselesta.md §5.4).
+
+A direction key moves its axis while it is H, on the axis's own ramps, at the feed pot's share
+of the axis's maximum feed (P48–P51); rapid lifts that to P44–P47 along the ramp.  With a jog
+step selected a key press moves that many increments (the smallest selected step wins, a press
+during a step is ignored; rapid does not apply).  Only a moving axis has its travel command; the
+machine standstill output is L while any axis moves; position reached is never output here.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from devsim.devices.poselesta.signals import AXES
+
+if TYPE_CHECKING:
+    from devsim.devices.poselesta.cnc import PoselestaCnc
+
+__all__ = ["JOG_STEPS", "ManualMotion"]
+
+JOG_STEPS = (1, 10, 100, 1000, 10000)
+MANUAL_MODES = ("MANUAL", "PROGRAM_ENTRY")
+
+
+class ManualMotion:
+    """The direction keys of one control."""
+
+    def __init__(self, cnc: PoselestaCnc) -> None:
+        self.cnc = cnc
+        self.moving: set[str] = set()
+        for a in AXES:
+            for direction in ("pos", "neg"):
+                cnc.signals.subscribe(f"jog_{direction}_{a}", self._key)
+        for name in ("rapid", "feed_pot_v"):
+            cnc.signals.subscribe(name, self._speed_changed)
+
+    def _key(self, name: str, old: Any, new: Any) -> None:
+        cnc = self.cnc
+        _, direction, a = name.split("_")
+        sign = 1 if direction == "pos" else -1
+        if cnc.mode not in MANUAL_MODES or cnc.booting or not cnc.signals.get("emergency_stop"):
+            return
+        step = self._step()
+        axis = cnc.axes[a]
+        if new and not old:
+            if step is not None:
+                if a in self.moving:
+                    return  # a press during a running step is ignored (spec §5.4)
+                self._start(a)
+                target = axis.position() + sign * step
+                axis.move_to(target, self._speed(a, rapid=False), cnc.accel(a), on_done=lambda: self._stopped(a))
+            else:
+                self._start(a)
+                axis.jog(sign, self._speed(a, rapid=True), cnc.accel(a))
+        elif old and not new and step is None and a in self.moving:
+            axis.stop(cnc.accel(a), on_done=lambda: self._stopped(a))
+
+    def _step(self) -> int | None:
+        for n in JOG_STEPS:  # the smallest selected step wins
+            if self.cnc.signals.get(f"jog_step_{n}"):
+                return n
+        return None
+
+    def _speed(self, a: str, *, rapid: bool) -> float:
+        cnc = self.cnc
+        if rapid and cnc.signals.get("rapid"):
+            return max(cnc.rapid(a), 1e-9)
+        return max(cnc.max_feed(a) * cnc.feed_pot(), 1e-9)
+
+    def _speed_changed(self, _name: str, _old: Any, _new: Any) -> None:
+        """The feed pot and rapid act along the ramp on keys held down (manual §2.3.6 graph)."""
+        cnc = self.cnc
+        if self._step() is not None:
+            return
+        for a in list(self.moving):
+            held = [d for d in (1, -1) if cnc.signals.get(f"jog_{'pos' if d > 0 else 'neg'}_{a}")]
+            if held:
+                cnc.axes[a].jog(held[0], self._speed(a, rapid=True), cnc.accel(a))
+
+    def _start(self, a: str) -> None:
+        self.moving.add(a)
+        self.cnc.signals.set(f"travel_{a}", True)
+        self.cnc.signals.set("machine_standstill", False)
+
+    def _stopped(self, a: str) -> None:
+        self.moving.discard(a)
+        self.cnc.signals.set(f"travel_{a}", False)
+        if not self.moving:
+            self.cnc.signals.set("machine_standstill", True)
+
+    def reset(self) -> None:
+        for a in list(self.moving):
+            self.cnc.axes[a].stop(self.cnc.accel(a))
+            self._stopped(a)

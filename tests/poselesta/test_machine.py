@@ -1,0 +1,268 @@
+"""The POSELESTA's machine side through the control API of a served device (virtual time): the
+M/S/T handshake on the data bus (spec §4.4, the timelines of §6.3, §6.4), the block cycle
+(§4.3), exact positioning, NC-Stop, Not-Stop, block skip, single block, M06/M10 and the
+direction keys (§5.4)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+OUTPUTS = ("data_bus", "strobe_m", "strobe_s1", "strobe_s2", "strobe_t", "strobe_ba")
+
+
+@pytest.fixture
+def make(devsim_device):  # noqa: ANN001, ANN201
+    def start(config: dict[str, Any] | None = None, program: str = "", mode: str = "AUTO_CONTINUOUS") -> Any:
+        cnc = devsim_device("poselesta", config)
+        cnc.advance(0.1)  # past the BA output after the boot
+        if program:
+            cnc.set("program.P20", program)
+            cnc.set("panel.program", 20)
+        cnc.set("panel.mode", mode)
+        cnc.advance(0.1)
+        return cnc
+
+    return start
+
+
+def bus(cnc: Any) -> tuple[Any, ...]:
+    return tuple(cnc.read(f"output.{name}") for name in OUTPUTS)
+
+
+def sample(cnc: Any, until_ms: int, step_ms: int = 20) -> list[tuple[Any, ...]]:
+    """The bus and strobes in the middle of each ``step_ms`` window from now (t = 0 is now)."""
+    cnc.advance(step_ms / 2000)
+    seen = [bus(cnc)]
+    for _ in range(until_ms // step_ms):
+        cnc.advance(step_ms / 1000)
+        seen.append(bus(cnc))
+    return seen
+
+
+def test_power_up_outputs_the_mode_code_with_the_ba_strobe(devsim_device) -> None:  # noqa: ANN001
+    """§6.4: NC ready after about 2 s, then 0x08, strobe BA after t1, L after 2 t1, bus 00 after 3 t1."""
+    cnc = devsim_device("poselesta", boot=False)
+    assert cnc.read("output.nc_ready") is False and cnc.read("output.data_bus") == 0
+    cnc.advance(1.99)
+    assert cnc.read("output.nc_ready") is False
+    cnc.advance(0.02)  # 2.01 s
+    assert cnc.read("output.nc_ready") is True and bus(cnc) == (0x08, False, False, False, False, False)
+    cnc.advance(0.02)  # 2.03
+    assert bus(cnc) == (0x08, False, False, False, False, True)
+    cnc.advance(0.02)  # 2.05
+    assert bus(cnc) == (0x08, False, False, False, False, False)
+    cnc.advance(0.02)  # 2.07
+    assert bus(cnc) == (0x00, False, False, False, False, False)
+    cnc.set("input.emergency_stop", False)  # Not-Stop does not drop NC ready
+    assert cnc.read("output.nc_ready") is True
+
+
+def test_block_functions_follow_the_handshake_timeline_with_the_acknowledge_bridged(make) -> None:  # noqa: ANN001
+    """§6.3, first table: N10 M03 S1250 T07 X100 with P72 = 20 ms."""
+    cnc = make(program="N10 M03 S1250 T07 X100")
+    cnc.set("panel.nc_start", True)
+    assert cnc.read("output.m03") is True and cnc.read("program.state") == "MST_OUTPUT"
+    seen = sample(cnc, 240)
+    assert seen == [
+        (0x03, False, False, False, False, False),  # 0–20: M03 on the bus
+        (0x03, True, False, False, False, False),  # 20–40: strobe M
+        (0x03, False, False, False, False, False),  # 40–60: t2
+        (0x50, False, False, False, False, False),  # S1: units and tens first
+        (0x50, False, True, False, False, False),
+        (0x50, False, False, False, False, False),
+        (0x12, False, False, False, False, False),  # S2: hundreds and thousands
+        (0x12, False, False, True, False, False),
+        (0x12, False, False, False, False, False),
+        (0x07, False, False, False, False, False),  # T07
+        (0x07, False, False, False, True, False),
+        (0x07, False, False, False, False, False),
+        (0x00, False, False, False, False, False),  # 240: bus 00, the motion
+    ]
+    assert cnc.read("output.travel_x") is True and cnc.read("output.machine_standstill") is False
+    assert cnc.read("program.state") == "MOVING"
+    # G00 at the rapid of P44 (6000 mm/min) with 500 mm/s² ramps: 100 mm take 1.2 s (240 ms → 1440 ms)
+    cnc.advance(1.18)  # 1430 ms
+    assert cnc.read("output.position_reached") is False and cnc.read("axis.x.position") < 100_000
+    cnc.advance(0.02)
+    assert cnc.read("axis.x.position") == pytest.approx(100_000)
+    assert cnc.read("output.travel_x") is False and cnc.read("output.machine_standstill") is True
+    assert cnc.read("program.state") == "END" and cnc.read("output.m03") is True  # self-holding
+    assert cnc.read("output.start_stop_status") is False
+
+
+def test_a_slow_plc_stretches_the_strobe_until_its_acknowledge(make) -> None:  # noqa: ANN001
+    """§6.3, second variant: acknowledge H 35 ms after the strobe rises, L 15 ms after it falls:
+    strobe M H at 20, L at 55, acknowledge L at 70, S1 on the bus at 90."""
+    cnc = make({"plc": {"mst_ack": "delayed", "rise_ms": 35, "fall_ms": 15}}, program="N10 M03 S1250")
+    cnc.set("panel.nc_start", True)
+    seen = []
+    for t in (10, 30, 50, 60, 65, 75, 85, 95):
+        cnc.advance((t - (seen[-1][0] if seen else 0)) / 1000)
+        seen.append((t, cnc.read("output.data_bus"), cnc.read("output.strobe_m"), cnc.read("input.mst_ack")))
+    assert seen == [
+        (10, 0x03, False, False), (30, 0x03, True, False), (50, 0x03, True, False), (60, 0x03, False, True),
+        (65, 0x03, False, True), (75, 0x03, False, False), (85, 0x03, False, False), (95, 0x50, False, False),
+    ]
+
+
+def test_an_acknowledge_stuck_high_holds_the_output(make) -> None:  # noqa: ANN001
+    """§6.3 / S16: strobe M for t1, then the control waits for the acknowledge to go L."""
+    cnc = make({"plc": {"mst_ack": "manual"}}, program="N10 M03 S1250")
+    cnc.set("input.mst_ack", True)
+    cnc.set("panel.nc_start", True)
+    seen = sample(cnc, 200)
+    assert seen[1] == (0x03, True, False, False, False, False)
+    assert all(row == (0x03, False, False, False, False, False) for row in seen[2:])
+    assert cnc.read("program.state") == "MST_OUTPUT"
+    cnc.set("input.mst_ack", False)
+    cnc.advance(0.03)
+    assert cnc.read("output.data_bus") == 0x50  # t2 after the acknowledge fell
+
+
+def test_axis_enable_and_program_continue_gate_the_block(make) -> None:  # noqa: ANN001
+    """S19 (§2.3.15, §2.3.16): travel command, then wait for the axis enable; position reached,
+    then wait for program continue."""
+    cnc = make(program="N1 G00 X10\nN2 X20")
+    cnc.set("input.axis_enable", False)
+    cnc.set("input.program_continue", False)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(1.0)
+    assert cnc.read("program.state") == "WAIT_AXIS_ENABLE" and cnc.read("output.travel_x") is True
+    assert cnc.read("axis.x.position") == 0
+    cnc.set("input.axis_enable", True)
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.position") == pytest.approx(10_000)
+    assert cnc.read("program.state") == "WAIT_PROGRAM_CONTINUE"
+    assert cnc.read("output.position_reached") is True and cnc.read("output.travel_x") is False
+    cnc.set("input.program_continue", True)
+    assert cnc.read("output.position_reached") is False and cnc.read("program.block") == 2
+    cnc.set("input.program_continue", False)
+    cnc.advance(1.0)
+    assert cnc.read("program.state") == "WAIT_PROGRAM_CONTINUE" and cnc.read("axis.x.position") == pytest.approx(20_000)
+
+
+def test_nc_stop_brakes_to_hold_and_nc_start_resumes_to_the_same_end_point(make) -> None:  # noqa: ANN001
+    """S20 (§2.3.1): braking ramp, travel commands stay, HOLD; NC-Start continues."""
+    cnc = make(program="N1 G01 X50 F3000")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.5)
+    moving_at = cnc.read("axis.x.velocity")
+    assert moving_at == pytest.approx(50_000)  # 3000 mm/min = 50 mm/s = 50,000 increments/s
+    cnc.set("input.nc_stop", False)
+    assert cnc.read("program.state") == "HOLD" and cnc.read("output.start_stop_status") is False
+    cnc.advance(0.05)
+    assert 0 < cnc.read("axis.x.velocity") < moving_at  # along the ramp, not at once
+    cnc.advance(0.5)
+    held = cnc.read("axis.x.position")
+    assert cnc.read("axis.x.velocity") == 0 and held < 50_000
+    assert cnc.read("output.travel_x") is True and cnc.read("output.machine_standstill") is True
+    cnc.set("panel.nc_start", True)  # still stopped: ignored
+    assert cnc.read("program.state") == "HOLD"
+    cnc.set("input.nc_stop", True)
+    cnc.set("input.nc_start", True)  # the external button
+    assert cnc.read("program.state") == "MOVING"
+    cnc.advance(2.0)
+    assert cnc.read("axis.x.position") == pytest.approx(50_000) and cnc.read("program.state") == "END"
+
+
+def test_not_stop_stops_at_once_and_its_release_returns_to_manual(make) -> None:  # noqa: ANN001
+    """S22 (§2.3.2): set-points 0 V at once, no ramp, the program aborted; release → MANUAL, 0x08."""
+    cnc = make(program="N1 G01 X50 F3000")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.analog_out") > 0 and cnc.read("axis.x.following_error") > 0
+    cnc.set("input.emergency_stop", False)
+    position = cnc.read("axis.x.position")
+    assert cnc.read("axis.x.velocity") == 0 and cnc.read("axis.x.analog_out") == 0
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.position") == position and cnc.read("program.state") == "IDLE"
+    assert cnc.read("output.nc_ready") is True and cnc.read("panel.mode") == "AUTO_CONTINUOUS"
+    cnc.set("input.emergency_stop", True)
+    assert cnc.read("panel.mode") == "MANUAL" and cnc.read("output.data_bus") == 0x08
+
+
+def test_blocks_marked_slash_are_skipped_while_the_input_is_low(make) -> None:  # noqa: ANN001
+    """S23 (§2.3.13): a block marked ``#`` is sampled at its start."""
+    cnc = make(program="N1 X10\nN2 X20 #\nN3 M02")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(2.0)
+    assert cnc.read("program.state") == "END" and cnc.read("axis.x.position") == pytest.approx(10_000)
+    cnc.set("input.block_skip_cancel", True)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(2.0)
+    assert cnc.read("axis.x.position") == pytest.approx(20_000)
+
+
+def test_single_block_and_programmed_stop_wait_for_nc_start(make) -> None:  # noqa: ANN001
+    """S30 and M00 (§2.4.7): every block stops like a programmed stop; M00's output until NC-Start."""
+    cnc = make(program="N1 X1\nN2 X2 M00\nN3 X3", mode="AUTO_SINGLE_BLOCK")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(1.0)
+    assert cnc.read("program.state") == "STOPPED" and cnc.read("axis.x.position") == pytest.approx(1_000)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(1.0)
+    assert cnc.read("program.state") == "STOPPED" and cnc.read("output.m00") is True
+    with pytest.raises(Exception, match="stop the program first|executes"):
+        cnc.set("panel.nc_start", True)
+        cnc.set("panel.mode", "MANUAL")  # N3 runs now: no mode change
+    cnc.advance(1.0)
+    assert cnc.read("output.m00") is False and cnc.read("axis.x.position") == pytest.approx(3_000)
+
+
+def test_tool_change_and_m10_wait_for_their_acknowledges(make) -> None:  # noqa: ANN001
+    """S17, S18 (§2.3.17, §2.3.18)."""
+    cnc = make(program="N20 M06 T05 X1\nN30 M10 X2\nN40 M11")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.5)
+    assert cnc.read("program.state") == "WAIT_TOOL_CHANGE" and cnc.read("output.m06") is True
+    cnc.set("input.tool_change_ack", True)
+    assert cnc.read("output.m06") is False
+    cnc.set("input.tool_change_ack", False)
+    cnc.set("input.m10_ack", True)  # H at output time: M10 waits for a negative pulse
+    cnc.advance(1.0)
+    assert cnc.read("program.state") == "WAIT_M10_PULSE" and cnc.read("output.m10") is True
+    cnc.set("input.m10_ack", False)
+    assert cnc.read("output.m10") is False
+    cnc.advance(1.0)
+    assert cnc.read("program.state") == "END" and cnc.read("axis.x.position") == pytest.approx(2_000)
+
+
+def test_direction_keys_jog_at_the_feed_pot_share_and_steps(make) -> None:  # noqa: ANN001
+    """S26 (§2.3.6–§2.3.8): 5 V = 50 % of P48; rapid = P44; a 100-increment step per press."""
+    cnc = make(mode="MANUAL")
+    cnc.set("input.feed_pot_v", 5.0)
+    cnc.set("input.jog_pos_x", True)
+    assert cnc.read("output.travel_x") is True and cnc.read("output.machine_standstill") is False
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.velocity") == pytest.approx(1000 / 60 * 1000)  # 50 % of 2000 mm/min
+    cnc.set("input.rapid", True)
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.velocity") == pytest.approx(100_000)  # P44 6000 mm/min
+    cnc.set("input.jog_pos_x", False)
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.velocity") == 0 and cnc.read("output.travel_x") is False
+    assert cnc.read("output.position_reached") is False  # never in MANUAL
+    start = cnc.read("axis.x.position")
+    cnc.set("input.jog_step_100", True)
+    for _ in range(3):
+        cnc.set("input.jog_neg_x", True)
+        cnc.set("input.jog_neg_x", False)
+        cnc.advance(0.5)
+    assert cnc.read("axis.x.position") == pytest.approx(start - 300)
+
+
+def test_override_scales_the_feed_and_zero_stands_without_hold(make) -> None:  # noqa: ANN001
+    """S29 (§2.3.22): 10 V = 150 %, 0 V stops the path (no HOLD), 6.667 V = 100 %."""
+    cnc = make(program="N1 G01 X200 F1000")
+    cnc.set("input.override_pot_v", 10.0)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.velocity") == pytest.approx(1500 / 60 * 1000)
+    cnc.set("input.override_pot_v", 0.0)
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.velocity") == 0 and cnc.read("program.state") == "MOVING"
+    cnc.set("input.override_pot_v", 6.667)
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.velocity") == pytest.approx(1000 / 60 * 1000, rel=1e-3)
