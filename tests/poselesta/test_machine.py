@@ -266,3 +266,38 @@ def test_override_scales_the_feed_and_zero_stands_without_hold(make) -> None:  #
     cnc.set("input.override_pot_v", 6.667)
     cnc.advance(0.5)
     assert cnc.read("axis.x.velocity") == pytest.approx(1000 / 60 * 1000, rel=1e-3)
+
+
+def test_the_input_diagnostics_show_the_levels_of_section_6_11(make) -> None:  # noqa: ANN001
+    """§6.11 (P79 N5) with the default levels; NC-Stop L changes port 4 B to 0x10; P79 N7."""
+    cnc = make(mode="PROGRAM_ENTRY")
+    assert cnc.read("diagnostics.inputs") == {
+        "1A": 0x46, "1B": 0x00, "2A": 0xFF, "2B": 0x00, "3A": 0x00, "3B": 0x00, "4A": 0x60, "4B": 0x18,
+    }
+    assert cnc.read("diagnostics.input_screen").splitlines()[:2] == [
+        "Port 1 EIN 01000110 00000000", "Port 2 EIN 11111111 00000000",
+    ]
+    cnc.set("input.nc_stop", False)
+    assert cnc.read("diagnostics.inputs")["4B"] == 0x10
+    assert cnc.read("diagnostics.pots") == ["FF", "AA"]  # 10 V, 6.667 V
+
+
+def test_a_limit_switch_stops_at_once_and_lets_only_away(make) -> None:  # noqa: ANN001
+    """S25 (spec §5.5): limit +X actuated while moving +: immediate stop, program aborted, alarm;
+    in MANUAL + refused, − allowed."""
+    cnc = make(program="N1 G01 X50 F3000")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.5)
+    cnc.set("input.limit_pos_x", False)
+    stopped_at = cnc.read("axis.x.position")
+    assert cnc.read("axis.x.velocity") == 0 and cnc.read("program.state") == "IDLE"
+    assert cnc.read("panel.message") == "LIMIT_SWITCH" and cnc.read("output.nc_ready") is True
+    cnc.set("panel.mode", "MANUAL")
+    cnc.advance(0.1)
+    cnc.set("input.jog_pos_x", True)
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.position") == stopped_at and cnc.read("output.travel_x") is False
+    cnc.set("input.jog_pos_x", False)
+    cnc.set("input.jog_neg_x", True)
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.position") < stopped_at

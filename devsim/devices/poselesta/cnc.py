@@ -19,6 +19,7 @@ from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF, baud_for_cod
 from devsim.devices.poselesta.config import PoselestaConfig
 from devsim.devices.poselesta.execution import Executor
 from devsim.devices.poselesta.keyboard import Keyboard
+from devsim.devices.poselesta.limits import LimitSwitches
 from devsim.devices.poselesta.manual import ManualMotion
 from devsim.devices.poselesta.mst import MstBus, PlcHelper
 from devsim.devices.poselesta.parameters import PARAMETERS, check_parameter
@@ -76,6 +77,7 @@ class PoselestaCnc(Model):
         plc = self.cfg.plc
         self.plc = PlcHelper(self.clock, self.signals, plc.mst_ack, plc.rise_ms / 1000.0, plc.fall_ms / 1000.0)
         self.manual = ManualMotion(self)
+        self.limits = LimitSwitches(self)
         self._load()
         self._power_on()
 

@@ -29,7 +29,7 @@ class PoselestaDevice(Device):
     """One POSELESTA II/III control with its serial ports V6, V7 and V8."""
 
     kind: ClassVar[str] = "poselesta"
-    description: ClassVar[str] = "ELESTA POSELESTA II/III CNC (tape images on V6/V7 DNC, V8 keyboard)"
+    description: ClassVar[str] = "ELESTA POSELESTA II/III CNC (tape images on V6/V7 DNC, V8 keyboard, M/S/T bus)"
     config_model: ClassVar[Section] = PoselestaConfig
     ports = (
         PortDef("v6", "external data media: printer, cassette, tape reader/punch, TTY", "§2.6.2"),

@@ -11,7 +11,7 @@ block-end M functions (M05, M09, M11, M15, odd free codes, then M00/M01/M02).  N
 
 Not simulated yet: circular interpolation G02/G03 (such a block is refused with the event
 ``unsupported_g``), the continuous path between G01 blocks (every motion block ends with exact
-positioning), subroutines G10–G13, software and hardware limits, block abort, inch programs.
+positioning), subroutines G10–G13, software limits and homing, block abort, inch programs.
 """
 
 from __future__ import annotations
@@ -156,10 +156,15 @@ class Executor:
     def emergency_stop(self) -> None:
         """§2.3.2: axes stop at once without ramp, set-points 0 V, the handshake is given up and
         the program aborted (spec §4.3.5); NC ready stays H."""
-        self._cancel_timer()
         for axis in self.cnc.axes.values():
             axis.quick_stop()
         self.cnc.manual.reset()
+        self.abort()
+
+    def abort(self) -> None:
+        """The program is given up (Not-Stop, a limit switch): handshake abandoned, travel
+        commands L, back to the first block; self-holding M outputs stay (spec §4.3.5)."""
+        self._cancel_timer()
         self.cnc.mst.abandon()
         for a in AXES:
             self.signals.set(f"travel_{a}", False)
@@ -305,6 +310,11 @@ class Executor:
         self._enter("MOVING")
         self.signals.set("machine_standstill", False)
         self._arriving = set(self.targets)
+        for a, target in self.targets.items():
+            if cnc.limits.blocked(a, target - cnc.axes[a].position()):
+                cnc.limits.refuse(a)
+                self.abort()
+                return
         speeds = self._speeds()
         if speeds is None:
             return  # override 0 %: the path stands without HOLD until the override rises (spec §5.3)

@@ -43,6 +43,9 @@ class ManualMotion:
             return
         step = self._step()
         axis = cnc.axes[a]
+        if new and not old and cnc.limits.blocked(a, sign):
+            cnc.limits.refuse(a)  # only away from an actuated limit switch (spec §5.5)
+            return
         if new and not old:
             if step is not None:
                 if a in self.moving:

@@ -9,6 +9,7 @@ import re
 from devsim.core.kit import Fault, FaultTable, signal_points
 from devsim.core.points import Family, Point, PointTable
 from devsim.devices.poselesta.cnc import MODES, PoselestaCnc
+from devsim.devices.poselesta.diagnostics import input_image, input_screen, pots
 from devsim.devices.poselesta.execution import STATES
 from devsim.devices.poselesta.signals import AXES, SIGNALS
 from devsim.devices.poselesta.transfers import FUNCTIONS
@@ -87,6 +88,12 @@ POINTS = PointTable.of(
               put=lambda m, v: m.executor.nc_start("panel") if v else None, example=True),
         Point("panel.mdi", "str", "the block entered for Hand-Einzelsatz (MANUAL_SINGLE_BLOCK), e.g. N1 G00 X10",
               "§2.4.7", get=lambda m: m.executor.mdi, put=lambda m, v: setattr(m.executor, "mdi", v)),
+        Point("diagnostics.inputs", "json", "P79 N5: every input level as ports 1A … 4B (bit = 1: H)", "§2.3.25",
+              get=lambda m: input_image(m.signals)),
+        Point("diagnostics.input_screen", "str", "P79 N5 as the monitor shows it (Port n EIN A7…A0 B7…B0)",
+              "§2.3.25", get=lambda m: input_screen(m.signals)),
+        Point("diagnostics.pots", "json", "P79 N7: feed and override pot as hex 00 … FF", "§2.3.26",
+              get=lambda m: pots(m.signals)),
         Point("program.state", "str", f"the block cycle: {', '.join(STATES)}", "§2.4.10",
               get=lambda m: m.executor.state, choices=STATES, in_state=True),
         Point("program.block", "int", "number N of the block being executed (-1: none)", "§2.3.13",
