@@ -171,3 +171,57 @@ def test_programs_survive_a_power_cycle(cnc: Any) -> None:
     cnc.power_cycle()
     assert cnc.read("programs") == [12]
     assert cnc.read("program.P12") == "N 10 X 1.000 F 100 G 01"  # (an M30 block ends the entry)
+
+
+def test_the_parameter_catalogue_p99_goes_out_and_comes_back_in(cnc: Any) -> None:
+    """Spec §3.9 (S13): P99 through T6/T7 as blocks N<number> P<value>; on POS III the read-in
+    clears the catalogue first and keeps the line of its start; the values act after M30."""
+    cnc.set("param.P71", 1)  # ASCII on V7
+    cnc.set("param.P44", 5000)
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 99)
+    with open_port(cnc, "v7") as host:
+        cnc.set("v7.transfer", "output")
+        tape = host.read_until(b"M30\r\n")
+    lines = tape.decode("ascii").split("\r\n")
+    assert lines[:3] == ["%", "N1P0", "N2P0"] and lines[-2:] == ["M30", ""]
+    assert "N44P5000" in lines and "N70P3" in lines and "N72P20" in lines and not any(x.startswith("N79") for x in lines)
+    assert len(lines) == 1 + 97 + 2
+    cnc.advance(20.0)  # the last characters leave (device time)
+    cnc.set("v7.transfer", "input")
+    assert cnc.read("param.P44") == 0 and cnc.read("param.P71") == 0  # cleared at the start
+    with open_port(cnc, "v7") as host:
+        host.write(b"%\r\nN44P4500\r\nN70P3\r\nN71P1\r\nN72P30\r\nN97P-12.5\r\nM30\r\n")  # still ASCII 1200
+        until(lambda: cnc.read("v7.state") == "done", "the catalogue is read")
+    assert [cnc.read(f"param.P{n}") for n in (44, 70, 71, 72, 97, 48)] == [4500, 3, 1, 30, -12.5, 0]
+
+
+def test_pos_ii_reads_the_catalogue_only_at_110_baud_iso(devsim_device) -> None:  # noqa: ANN001
+    """Spec §3.9 (S12): POS II clears the whole catalogue, P70/P71 included, at the start, so the
+    rest must come at 110 baud ISO: at 1200 baud the control sees garbage, never a ``%``
+    (spec §3.5.4: garbage before ``%`` is ignored), and nothing is read."""
+    cnc = devsim_device("poselesta", {"variant": "II"})
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 99)
+    cnc.set("v7.transfer", "input")
+    assert cnc.read("param.P70") == 0 and cnc.read("param.P72") == 0
+    tape = encode("%\r\nN70P3\r\nN72P20\r\nM30\r\n", True)
+    with serial.serial_for_url(cnc.port_url("v7"), baudrate=1200, stopbits=2, timeout=5) as host:
+        host.write(tape)
+        until(lambda: cnc.runtime.line_status(cnc.name, "v7")["bytes_in"] >= len(tape), "the bytes arrive")
+    assert cnc.read("v7.state") == "wait_start" and cnc.read("param.P70") == 0
+    cnc.set("v7.transfer", "idle")
+    cnc.set("v7.transfer", "input")
+    with serial.serial_for_url(cnc.port_url("v7"), baudrate=110, stopbits=2, timeout=5) as host:
+        host.write(tape)
+        until(lambda: cnc.read("v7.state") == "done", "110 baud ISO is read")
+    assert cnc.read("param.P70") == 3 and cnc.read("param.P72") == 20
+
+
+def test_a_locked_key_switch_refuses_the_catalogue(cnc: Any) -> None:
+    cnc.set("input.key_switch", False)
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 99)
+    with pytest.raises(Exception, match="key switch"):
+        cnc.set("v7.transfer", "input")
+    assert cnc.read("param.P70") == 3

@@ -22,7 +22,7 @@ from devsim.devices.poselesta.keyboard import Keyboard
 from devsim.devices.poselesta.limits import LimitSwitches
 from devsim.devices.poselesta.manual import ManualMotion
 from devsim.devices.poselesta.mst import MstBus, PlcHelper
-from devsim.devices.poselesta.parameters import PARAMETERS, check_parameter
+from devsim.devices.poselesta.parameters import PARAMETERS, catalogue_blocks, check_parameter, store_parameter
 from devsim.devices.poselesta.signals import AXES, OUTPUTS, SIGNALS
 from devsim.devices.poselesta.tape import Block, Formats, TapeReader, block_words, parse_blocks, render
 from devsim.devices.poselesta.transfers import (
@@ -47,7 +47,8 @@ MODES = {
 }
 #: The mode a port's transfers need: Σ for V6, EXT for V7 (§2.6).
 PORT_MODE = {"v6": "EXTERNAL_MEDIUM", "v7": "EXTERNAL_OPERATION"}
-RESERVED_PROGRAMS = (79, 99)  # the diagnostics and the parameter catalogue (spec §4.9)
+DIAGNOSTICS, CATALOGUE = 79, 99
+RESERVED_PROGRAMS = (DIAGNOSTICS, CATALOGUE)  # the diagnostics and the parameter catalogue (spec §4.9)
 
 
 class PoselestaCnc(Model):
@@ -69,6 +70,7 @@ class PoselestaCnc(Model):
             accept=self._key, event=lambda what, code: self.transfer_event("v8", what, code),
         )
         self.last_key: int | None = None
+        self.pending_catalogue: dict[int, float] = {}
         self._buzzer_timer: Any = None
         self._boot_timer: Any = None
         self.axes = {a: Axis(self.clock, name=a) for a in AXES}
@@ -244,26 +246,43 @@ class PoselestaCnc(Model):
         if self.transfers[port] is not None:
             raise BadValue(f"a transfer runs on {port} already (busy)")
         program = self.program
-        if program in RESERVED_PROGRAMS:
-            raise BadValue(f"P{program:02d} is not an NC program (the parameter catalogue P99 is not simulated yet)")
+        if program == DIAGNOSTICS:
+            raise BadValue("P79 is the diagnostic program, not a program to transfer")
+        catalogue = program == CATALOGUE
+        if catalogue and function.direction == "input" and not self.signals.get("key_switch"):
+            self.record_event("key_switch_locked")
+            raise BadValue("the key switch is locked: the parameter catalogue cannot be read in")
         if self.baud(port) is None:
             self.message = WERTBEREICHES_UEBERLAUF
             raise BadValue(f"P{68 if port == 'v6' else 70}: baud rate code not available on POS {self.cfg.variant}")
         self.message = ""
         self.record_event(f"{function.name}_start")
         if function.direction == "input":
-            self.programs.pop(program, None)  # "zuerst das vorgewählte Programm gelöscht" (§2.6)
-            self._save_programs()
+            line = None
+            if catalogue:
+                if self.cfg.variant == "III":  # the line stays as it was at the start (spec §3.9)
+                    line = (self.baud(port), self.iso(port))
+                    if int(self.params[68 if port == "v6" else 70]) > 3:
+                        self.message = WERTBEREICHES_UEBERLAUF
+                        raise BadValue("the catalogue is read at up to 1200 baud (P68/P70 ≤ 3)")
+                self._clear_catalogue()  # the whole catalogue is 0 first, P68–P71 too: POS II
+                self.pending_catalogue = {}  # so reads it at 110 baud ISO (§2.6.2.3)
+            else:
+                self.programs.pop(program, None)  # "zuerst das vorgewählte Programm gelöscht" (§2.6)
+                self._save_programs()
             reader = TapeReader(
-                iso=self.iso(port), formats=self.formats, parity_error=self.cfg.parity_error,
+                iso=self.iso(port) if line is None else line[1], formats=self.formats, parity_error=self.cfg.parity_error,
                 ascii_bit7=self.cfg.ascii_bit7, strict_block_numbers=self.cfg.strict_block_numbers,
+                catalogue=catalogue,
             )
             leader = CASSETTE_LEADER if function.name == "T3" else 0.0
             if port == "v6":
                 self._v6_lines(True, record=function.name != "T3")  # the cassette plays: RTS L
-            self.transfers[port] = ReadIn(self, function, program, reader, leader)
+            read_in = ReadIn(self, function, program, reader, leader)
+            read_in.line = line
+            self.transfers[port] = read_in
         else:
-            blocks = list(self.programs.get(program, {}).values())
+            blocks = catalogue_blocks(self.params) if catalogue else list(self.programs.get(program, {}).values())
             pieces = self._output_pieces(function.name, port, blocks)
             if port == "v6":
                 self._v6_lines(True)
@@ -309,6 +328,9 @@ class PoselestaCnc(Model):
         running = self.transfers[port]
         if running is not None:
             running.cancel()
+            if running.program == CATALOGUE and running.function.direction == "input" and state == "done":
+                self.params.update(self.pending_catalogue)  # the parameters act after M30 (spec §3.9)
+                self._save_params()
         self.transfers[port] = None
         self.last_state[port] = state
         if port == "v6":
@@ -316,14 +338,21 @@ class PoselestaCnc(Model):
         if state == "failed":
             self.message = WERTBEREICHES_UEBERLAUF
 
-    def store_block(self, program: int, block: Block) -> bool:
+    def _clear_catalogue(self) -> None:
+        self.params = dict.fromkeys(self.params, 0.0)
+        self._save_params()
+
+    def store_block(self, program: int, block: Block) -> str | None:
+        """A block read in; returns why it cannot be stored (the read-in fails), or None."""
+        if program == CATALOGUE:
+            return store_parameter(self.pending_catalogue, block)
         blocks = self.programs.setdefault(program, {})
         total = sum(len(b) for b in self.programs.values())
         if block.number not in blocks and total >= self.cfg.max_blocks_total:
-            return False
+            return "memory full"
         blocks[block.number] = block
         self._save_programs()
-        return True
+        return None
 
     def send(self, port: str, data: bytes) -> None:
         self.announce(f"{port}_out", data)
@@ -337,6 +366,9 @@ class PoselestaCnc(Model):
 
     # -- line settings --------------------------------------------------------------------------
     def iso(self, port: str) -> bool:
+        running = self.transfers.get(port)
+        if isinstance(running, ReadIn) and running.line is not None:
+            return running.line[1]
         return self.params[69 if port == "v6" else 71] == 0 or port == "v8"
 
     def baud(self, port: str) -> int | None:
@@ -345,6 +377,8 @@ class PoselestaCnc(Model):
         if port == "v8":
             return 1200
         running = self.transfers.get(port)
+        if isinstance(running, ReadIn) and running.line is not None:
+            return running.line[0]  # the line of this read-in, captured at its start
         name = running.function.name if running is not None else ""
         if name == "T1":
             return 1200

@@ -8,8 +8,12 @@ from __future__ import annotations
 import math
 
 from devsim.core.record import record
+from devsim.devices.poselesta.tape import Block
 
-__all__ = ["PARAMETERS", "ParamDef", "check_parameter"]
+__all__ = ["PARAMETERS", "ParamDef", "catalogue_blocks", "check_parameter", "store_parameter"]
+
+#: The catalogue's value word P carries 3 decimals (spec §3.9, simulator-defined format).
+CATALOGUE_SCALE = 1000
 
 
 @record
@@ -54,3 +58,24 @@ def check_parameter(number: int, value: float) -> None:
     if pdef is not None:
         if not pdef.minimum <= value <= pdef.maximum or not float(value).is_integer():
             raise ValueError(f"P{number}: {value:g} is not a whole number in {pdef.minimum:g} … {pdef.maximum:g}")
+
+
+def catalogue_blocks(params: dict[int, float]) -> list[Block]:
+    """The machine-parameter catalogue P99 as blocks ``N<number> P<value>``, P1 … P98 without
+    P79 (spec §3.9, a simulator-defined format: the original is not documented)."""
+    return [Block(number, (("P", round(params.get(number, 0.0) * CATALOGUE_SCALE)),))
+            for number in range(1, 99) if number != 79]
+
+
+def store_parameter(pending: dict[int, float], block: Block) -> str | None:
+    """A catalogue block read in: N selects the parameter, P is its value (unknown numbers are
+    kept); returns why it cannot be taken (the read-in then fails), or None."""
+    value = block.value("P")
+    if value is None:
+        return None  # a block without a value changes nothing
+    try:
+        check_parameter(block.number, value / CATALOGUE_SCALE)
+    except ValueError as exc:
+        return str(exc)
+    pending[block.number] = value / CATALOGUE_SCALE
+    return None

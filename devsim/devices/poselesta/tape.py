@@ -31,9 +31,12 @@ __all__ = [
 COORDINATES = "XYZD"
 CENTRES = "IJK"  # I ↔ X, J ↔ Y, K ↔ Z (absolute centre coordinates, spec §6.6)
 ADDRESS_LETTERS = frozenset("NXYZDIJKFSGMTL")
-SIGNED = frozenset(COORDINATES + CENTRES)
-#: Output order inside a block (spec §3.6, G-ORDER): N X Y Z D I J K F S T G M L #.
-ORDER = "NXYZDIJKFSTGML"
+SIGNED = frozenset(COORDINATES + CENTRES + "P")
+#: Output order inside a block (spec §3.6, G-ORDER): N X Y Z D I J K F S T G M L #; P is the
+#: value word of the parameter catalogue P99 (spec §3.9, simulator-defined).
+ORDER = "NPXYZDIJKFSTGML"
+#: The catalogue's value word: signed, 5 digits before the point and 3 after (spec §3.9).
+CATALOGUE_VALUE = "P"
 CR, LF, NUL, DEL, SP = 0x0D, 0x0A, 0x00, 0x7F, 0x20
 
 
@@ -51,7 +54,8 @@ class Formats:
         if letter in CENTRES:
             d = self.decimals["XYZ"[CENTRES.index(letter)]]
             return 7 - d, d
-        return {"N": (3, 0), "G": (2, 0), "M": (2, 0), "T": (2, 0), "F": (4, 0), "S": (4, 0), "L": (2, 3)}[letter]
+        return {"N": (3, 0), "G": (2, 0), "M": (2, 0), "T": (2, 0), "F": (4, 0), "S": (4, 0), "L": (2, 3),
+                "P": (5, 3)}[letter]
 
 
 @record
@@ -132,8 +136,10 @@ class TapeReader:
         parity_error: Literal["abort", "skip"] = "abort",
         ascii_bit7: Literal["ignore", "abort"] = "ignore",
         strict_block_numbers: bool = False,
+        catalogue: bool = False,
     ) -> None:
         self.iso = iso
+        self.letters = ADDRESS_LETTERS | {CATALOGUE_VALUE} if catalogue else ADDRESS_LETTERS
         self.formats = formats or Formats()
         self.parity_error = parity_error
         self.ascii_bit7 = ascii_bit7
@@ -180,7 +186,7 @@ class TapeReader:
     def _interpret(self, char: int, events: list[Event]) -> None:
         c = chr(char)
         word = self._word
-        if c in ADDRESS_LETTERS:
+        if c in self.letters:
             self._finish_word(events)
             self._word = _Word(c)
         elif c in "-+":
@@ -270,8 +276,8 @@ def _value_text(letter: str, value: int, formats: Formats) -> tuple[str, str]:
     value = abs(value)
     if letter in "GMT":
         return sign, f"{value:02d}"
-    if after == 0:
-        return sign, str(value)
+    if after == 0 or letter == CATALOGUE_VALUE and value % 10**after == 0:
+        return sign, str(value // 10**after)
     whole, fraction = divmod(value, 10**after)
     return sign, f"{whole}.{fraction:0{after}d}"
 

@@ -54,7 +54,7 @@ class Cnc(Protocol):
     clock: Clock
 
     def transfer_event(self, port: str, what: str, detail: Any = None) -> None: ...
-    def store_block(self, program: int, block: Any) -> bool: ...
+    def store_block(self, program: int, block: Any) -> str | None: ...
     def transfer_ended(self, port: str, state: str, message: str | None = None) -> None: ...
     def char_time(self, port: str) -> float: ...
     def send(self, port: str, data: bytes) -> None: ...
@@ -69,6 +69,7 @@ class ReadIn:
         self.program = program
         self.reader = reader
         self.blocks = 0
+        self.line: tuple[int | None, bool] | None = None  # baud and code fixed for this transfer
         self.state = "leader" if leader > 0 else "wait_start"
         self._timer: Timer | None = cnc.clock.call_later(leader, self._leader_over) if leader > 0 else None
 
@@ -91,9 +92,10 @@ class ReadIn:
     def _on(self, event: object) -> None:
         port = self.function.port
         if isinstance(event, BlockRead):
-            if not self.cnc.store_block(self.program, event.block):
-                self.cnc.transfer_event(port, "memory_full")
-                self.cnc.transfer_ended(port, "failed", "memory full")
+            problem = self.cnc.store_block(self.program, event.block)
+            if problem is not None:
+                self.cnc.transfer_event(port, "failed", problem)
+                self.cnc.transfer_ended(port, "failed", problem)
                 return
             self.blocks += 1
             self.cnc.transfer_event(port, "block", event.block.number)
