@@ -301,3 +301,39 @@ def test_a_limit_switch_stops_at_once_and_lets_only_away(make) -> None:  # noqa:
     cnc.set("input.jog_neg_x", True)
     cnc.advance(0.5)
     assert cnc.read("axis.x.position") < stopped_at
+
+
+def test_subroutine_calls_and_repeats_follow_g12_g11_g13(make) -> None:  # noqa: ANN001
+    """Spec §4.12.1 (INFERRED from the manual's example §6.6): G12 L1.100 calls N100 once, G13
+    L2.101 runs N101 two more times, G11 returns after the call; each pass of N101 moves +1."""
+    cnc = make(program="N1 G91\nN2 G12 L1.100\nN3 X10 M02\nN100 G10\nN101 X1\nN102 G13 L2.101\nN103 G11")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(5.0)
+    assert cnc.read("program.state") == "END"
+    assert cnc.read("axis.x.position") == pytest.approx(13_000)  # 3 × 1 mm in the loop, then 10 mm
+
+
+def test_dwell_and_unknown_g_functions(make) -> None:  # noqa: ANN001
+    """G04 waits L seconds at the end of its block; an unknown G runs as a no-op (spec §4.12.1)."""
+    cnc = make(program="N1 G04 L1.500\nN2 G77 X1")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(1.4)
+    assert cnc.read("program.block") == 1
+    cnc.advance(1.0)
+    assert cnc.read("program.state") == "END" and cnc.read("axis.x.position") == pytest.approx(1_000)
+
+
+def test_block_abort_brakes_and_goes_on_at_p90(make) -> None:  # noqa: ANN001
+    """S31 (§2.3.21, POS III): P90 = 50; V22/10 H→L during N20's motion: the axis brakes, the
+    program goes on at N50 by itself."""
+    cnc = make(program="N10 X1\nN20 X100\nN30 X200\nN50 Y5")
+    cnc.set("param.P90", 50)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.8)
+    assert cnc.read("program.block") == 20 and cnc.read("axis.x.velocity") > 0
+    cnc.set("input.block_abort", False)
+    cnc.advance(0.05)
+    assert cnc.read("program.block") == 20 and cnc.read("axis.x.velocity") > 0  # braking along the ramp
+    cnc.advance(1.0)
+    assert cnc.read("program.state") == "END" and cnc.read("axis.y.position") == pytest.approx(5_000)
+    assert 1_000 < cnc.read("axis.x.position") < 100_000

@@ -225,3 +225,22 @@ def test_a_locked_key_switch_refuses_the_catalogue(cnc: Any) -> None:
     with pytest.raises(Exception, match="key switch"):
         cnc.set("v7.transfer", "input")
     assert cnc.read("param.P70") == 3
+
+
+def test_a_protected_program_is_not_overwritten_by_a_read_in(cnc: Any) -> None:
+    """S32 (§2.3.21, spec §4.5 G-LOCK): protect P20; with the program lock closed (V22/9 L) it
+    cannot be released, a read-in into it is refused before anything is deleted; opened, it can."""
+    cnc.set("program.P20", "N1 X1")
+    cnc.set("panel.protect", 20)
+    cnc.set("input.program_lock_open", False)
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 20)
+    with pytest.raises(Exception, match="protected"):
+        cnc.set("v7.transfer", "input")
+    with pytest.raises(Exception, match="program lock open"):
+        cnc.set("panel.release", 20)
+    assert cnc.read("program.P20") == "N 1 X 1.000" and cnc.read("protected") == [20]
+    cnc.set("input.program_lock_open", True)
+    cnc.set("panel.release", 20)
+    cnc.set("v7.transfer", "input")
+    assert cnc.read("program.P20") == ""  # read-in deletes the pre-selected program first

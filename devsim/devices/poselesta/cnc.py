@@ -89,6 +89,7 @@ class PoselestaCnc(Model):
         self.programs: dict[int, dict[int, Block]] = {
             int(p): {int(b["N"]): Block.from_json(b) for b in blocks} for p, blocks in stored.items()
         }
+        self.protected: set[int] = {int(p) for p in self.nvram.get("protected") or []}
         params = {n: p.default for n, p in PARAMETERS.items()}
         params.update({int(k): float(v) for k, v in (self.nvram.get("params") or {}).items()})
         if self.nvram.get("params") is None:
@@ -219,6 +220,22 @@ class PoselestaCnc(Model):
     def clear_message(self) -> None:
         self.message = ""
 
+    # -- program lock (POS III, §2.3.21; spec §4.5 G-LOCK) ------------------------------------------
+    def protect(self, number: int, on: bool) -> None:
+        """Protect a program (in any position of V22/9) or release it (only while V22/9 is H)."""
+        if self.cfg.variant != "III":
+            raise BadValue("program protection is a POS III function")
+        if not on and not self.signals.get("program_lock_open"):
+            self.record_event("program_locked")
+            raise BadValue(f"P{number:02d} can only be released with the program lock open (V22/9 H)")
+        (self.protected.add if on else self.protected.discard)(number)
+        self.nvram.put("protected", sorted(self.protected))
+
+    def _refuse_protected(self, number: int) -> None:
+        if number in self.protected:
+            self.record_event("program_protected")
+            raise BadValue(f"P{number:02d} is protected: release it first (program lock open)")
+
     def transfer_name(self, port: str) -> str:
         running = self.transfers[port]
         if running is None:
@@ -249,6 +266,8 @@ class PoselestaCnc(Model):
         if program == DIAGNOSTICS:
             raise BadValue("P79 is the diagnostic program, not a program to transfer")
         catalogue = program == CATALOGUE
+        if function.direction == "input":
+            self._refuse_protected(program)  # before anything is deleted
         if catalogue and function.direction == "input" and not self.signals.get("key_switch"):
             self.record_event("key_switch_locked")
             raise BadValue("the key switch is locked: the parameter catalogue cannot be read in")
@@ -427,6 +446,7 @@ class PoselestaCnc(Model):
         program; the same rules as a read-in."""
         if number in RESERVED_PROGRAMS:
             raise BadValue(f"P{number:02d} is not an NC program")
+        self._refuse_protected(number)
         try:
             blocks = parse_blocks(text, self.formats)
         except ValueError as exc:

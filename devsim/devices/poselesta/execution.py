@@ -9,9 +9,11 @@ at F × override); exact positioning with "Position erreicht" and "Programm fort
 block-end M functions (M05, M09, M11, M15, odd free codes, then M00/M01/M02).  NC-Stop brakes to
 ``HOLD``, NC-Start continues; Not-Stop stops at once, gives up the handshake and the program.
 
-Not simulated yet: circular interpolation G02/G03 (such a block is refused with the event
-``unsupported_g``), the continuous path between G01 blocks (every motion block ends with exact
-positioning), subroutines G10–G13, software limits and homing, block abort, inch programs.
+Subroutines and repeats (G10–G13), dwell (G04) and block abort (P90) change the flow.  Not
+simulated yet: circular interpolation G02/G03 (such a block stops the program with the event
+``unsupported_g``; G25 blocks run as no motion), the continuous path between G01 blocks (every
+motion block ends with exact positioning), cutter compensation G41/G42 (accepted, no offset),
+software limits and homing, inch programs.
 """
 
 from __future__ import annotations
@@ -39,6 +41,8 @@ DECODED = {0: "m00", 1: "m01", 2: "m02", 3: "m03", 4: "m04", 6: "m06", 8: "m08",
 #: What a function switches off (§2.4.7; M03/M04 cancel each other, spec §4.4.7).
 CANCELS = {5: ("m03", "m04"), 9: ("m08",), 11: ("m10",), 3: ("m04",), 4: ("m03",)}
 _FIXED = frozenset((*range(12), 13, 14, 15, 30))
+#: G functions with a meaning here (spec §4.12.1); the others are stored and run as no-ops.
+KNOWN_G = frozenset((0, 1, 2, 3, 4, 9, 10, 11, 12, 13, 17, 18, 19, 25, 40, 41, 42, 60, 90, 91))
 POSITION_REACHED_PULSE = 60e-6  # §2.4.2: with "Programm fortsetzen" already H
 
 
@@ -64,6 +68,9 @@ class Executor:
         self.targets: dict[str, float] = {}
         self.stop_pending = False  # NC-Stop during M/S/T output: the motion waits for NC-Start
         self._resume: Callable[[], None] | None = None
+        self.calls: list[list[int]] = []  # [return index, calls left, subroutine index] (G12)
+        self.loops: dict[int, int] = {}  # G13 block index → jumps left
+        self.abort_pending = False
         self._m10_waits = False
         self._arriving: set[str] = set()
         self._timer: Any = None
@@ -71,7 +78,8 @@ class Executor:
         for name, handler in (("nc_start", self._nc_start_input), ("nc_stop", self._nc_stop_input),
                               ("emergency_stop", self._emergency_input), ("axis_enable", self._wait_input),
                               ("program_continue", self._wait_input), ("tool_change_ack", self._wait_input),
-                              ("m10_ack", self._m10_ack_input), ("override_pot_v", self._override_input)):
+                              ("m10_ack", self._m10_ack_input), ("override_pot_v", self._override_input),
+                              ("block_abort", self._block_abort_input)):
             self.signals.subscribe(name, handler)
 
     # -- state ------------------------------------------------------------------------------------
@@ -92,9 +100,11 @@ class Executor:
         """Back to the first block (a mode change abandons a stopped program, spec §4.1)."""
         self._cancel_timer()
         self._resume = None
-        self.stop_pending = False
+        self.stop_pending = self.abort_pending = False
         self.pointer = 0
         self.block = None
+        self.calls.clear()
+        self.loops.clear()
         self._enter("IDLE")
 
     # -- NC-Start, NC-Stop, Not-Stop ----------------------------------------------------------------
@@ -118,6 +128,8 @@ class Executor:
             if not self._load():
                 return
             self.pointer = 0
+            self.calls.clear()
+            self.loops.clear()
             self._next_block()
         elif self.state in ("STOPPED", "HOLD") or self.stop_pending:
             self.stop_pending = False
@@ -195,6 +207,8 @@ class Executor:
                 self.motion = g
             elif g in (90, 91):
                 self.absolute = g == 90
+            elif g not in KNOWN_G:
+                self._unsupported(g)  # stored and run as no-op (spec §4.12.1)
         feed = block.value("F")
         if feed is not None:
             self.feed = feed
@@ -224,6 +238,9 @@ class Executor:
     def _after_start_functions(self) -> None:
         block = self.block
         assert block is not None
+        if self.abort_pending:
+            self._jump_p90()
+            return
         if 6 in block.values("M") and not self.signals.get("tool_change_ack"):
             self._enter("WAIT_TOOL_CHANGE")  # §2.3.17: after M06, S and T are taken over
             return
@@ -272,9 +289,12 @@ class Executor:
         block = self.block
         assert block is not None
         cnc = self.cnc
+        if 25 in block.values("G"):
+            self._unsupported(25)  # no motion (spec §4.12.1)
+            self._end_functions()
+            return
         if self.motion in (2, 3) and any(block.value(c) is not None for c in "XYZDIJK"):
-            cnc.record_event("unsupported_g")
-            cnc.announce("event", "program", "unsupported_g", self.motion)
+            self._unsupported(self.motion)
             self._stop_until_start(self._end_functions)  # not executed: the program stops (spec §5.3)
             return
         targets: dict[str, float] = {}
@@ -384,8 +404,13 @@ class Executor:
         self.signals.set("position_reached", False)
         self._end_functions()
 
-    def _brake(self, state: str | None) -> None:
-        """Brake every axis along its ramp; ``HOLD`` waits for NC-Start (§2.3.1)."""
+    def _unsupported(self, g: int) -> None:
+        self.cnc.record_event("unsupported_g")
+        self.cnc.announce("event", "program", "unsupported_g", g)
+
+    def _brake(self, state: str | None, then: Callable[[], None] | None = None) -> None:
+        """Brake every axis along its ramp; ``HOLD`` waits for NC-Start (§2.3.1); ``then``
+        runs once all stand."""
         cnc = self.cnc
         pending = set(self.targets)
 
@@ -393,6 +418,8 @@ class Executor:
             pending.discard(a)
             if not pending and self.state == "HOLD":
                 self.signals.set("machine_standstill", True)  # spec G-STANDSTILL
+            if not pending and then is not None:
+                then()
 
         for a in self.targets:
             axis = cnc.axes[a]
@@ -407,6 +434,15 @@ class Executor:
     def _end_functions(self) -> None:
         block = self.block
         assert block is not None
+        dwell = block.value("L") if 4 in block.values("G") else None
+        if dwell:
+            self._after(dwell / 1000, self._block_end_output)  # G04: L seconds (spec §5.3)
+            return
+        self._block_end_output()
+
+    def _block_end_output(self) -> None:
+        block = self.block
+        assert block is not None
         ms = sorted(block.values("M"))
         last = [m for m in ms if m in (0, 1, 2)]
         functions = [("M", m) for m in ms if block_end_function(m) and m not in (0, 1, 2)]
@@ -417,9 +453,14 @@ class Executor:
     def _block_done(self) -> None:
         block = self.block
         assert block is not None
+        if self.abort_pending:
+            self._jump_p90()
+            return
         ms = block.values("M")
         mode = self.cnc.mode
         self.pointer += 1
+        if not self._flow(block):
+            return
         if 2 in ms:
             self._program_end()
             return
@@ -435,6 +476,81 @@ class Executor:
         if 0 in ms or optional or mode == "AUTO_SINGLE_BLOCK":
             self._stop_until_start(self._next_block)
             return
+        self._next_block()
+
+    def _flow(self, block: Block) -> bool:
+        """Subroutines and repeats (spec §4.12.1, INFERRED from the manual's example §6.6):
+        ``G12 L a.bbb`` calls the subroutine at N bbb a times, ``G11`` returns to the block after
+        the call, ``G13 L a.bbb`` jumps back to N bbb a more times.  Returns False when the
+        program ended (a jump to a missing block)."""
+        gs = block.values("G")
+        count, target = divmod(block.value("L") or 0, 1000)
+        if 12 in gs:
+            index = self._index(target)
+            if index is None:
+                return False
+            if count > 0:
+                self.calls.append([self.pointer, count - 1, index])
+                self.pointer = index
+        elif 11 in gs and self.calls:
+            call = self.calls[-1]
+            if call[1] > 0:
+                call[1] -= 1
+                self.pointer = call[2]
+            else:
+                self.calls.pop()
+                self.pointer = call[0]
+        elif 13 in gs:
+            here = self.pointer - 1
+            left = self.loops.get(here, count)
+            if left > 0:
+                index = self._index(target)
+                if index is None:
+                    return False
+                self.loops[here] = left - 1
+                self.pointer = index
+            else:
+                self.loops.pop(here, None)
+        return True
+
+    def _index(self, number: int) -> int | None:
+        for index, candidate in enumerate(self.blocks):
+            if candidate.number == number:
+                return index
+        self.cnc.record_event("block_missing")
+        self.cnc.announce("event", "program", "block_missing", number)
+        self._program_end()
+        return None
+
+    # -- block abort (POS III, §2.3.21) --------------------------------------------------------------
+    def _block_abort_input(self, _name: str, old: Any, new: Any) -> None:
+        """V22/10 H→L: the block is given up (the motion brakes, an M/S/T output finishes
+        first) and the program goes on at N = P90 by itself (spec §4.3.6)."""
+        if not old or new or self.cnc.cfg.variant != "III" or self.cnc.mode not in EXECUTION_MODES[:2]:
+            return
+        if self.state == "MST_OUTPUT":
+            self.abort_pending = True
+        elif self.state == "MOVING":
+            self._arriving.clear()
+            self._enter("BLOCK_START")  # (braking: no more arrivals, no override re-plan)
+            self._brake(None, then=self._jump_p90)
+        elif self.state in RUNNING:
+            self._jump_p90()
+
+    def _jump_p90(self) -> None:
+        self.abort_pending = False
+        self._cancel_timer()
+        for a in AXES:
+            self.signals.set(f"travel_{a}", False)
+        self.signals.set("position_reached", False)
+        number = int(self.cnc.params[90])
+        self.cnc.record_event("block_abort")
+        index = next((i for i, b in enumerate(self.blocks) if b.number == number), None)
+        if index is None:
+            self.cnc.record_event("p90_block_missing")
+            self._program_end()
+            return
+        self.pointer = index
         self._next_block()
 
     def _program_end(self) -> None:

@@ -44,6 +44,8 @@ PARAMETERS: dict[int, ParamDef] = {
           for i, a in enumerate("XYZD")),
         ParamDef(64, "rapid influenced by the override pot (0 = no, 1 = yes)", 0, 1, 0, "§2.3.22"),
         ParamDef(75, "NC-Start source (0 = both, 1 = front panel, 2 = external V19/3)", 0, 2, 0, "§2.3.3"),
+        ParamDef(90, "block number N the program goes on at after a block abort V22/10 (POS III)", 0, 999, 0,
+                 "§2.3.21"),
     )
 }
 
