@@ -184,7 +184,7 @@ class Axis:
     def phase(self, t: float | None = None) -> Phase:
         """``idle``, ``accel`` (|v| increasing), ``const`` (cruising) or ``decel``."""
         _, v, a, seg = self._lookup(t)
-        if seg is not None and seg.shape != "linear":
+        if seg is not None and seg.shape == "sine":
             # a raised cosine starts and ends with zero acceleration: its average decides
             return "accel" if sign(seg.a) == seg.direction else "decel"
         if a == 0.0:
@@ -578,6 +578,21 @@ class Axis:
         """Bumped by every change of plan: a watch armed under an older one must re-arm."""
         return self._gen
 
+    def follow(self, pieces: list[tuple[float, Any]], on_done: Callback | None = None) -> float:
+        """Follow a path's component (:mod:`devsim.core.path`) from now: ``pieces`` of
+        ``(duration, curve)``, each monotonic in position, the first starting where the axis
+        stands; it ends at rest where the last piece ends.  Returns the end time."""
+        now = self.clock.now()
+        segs: list[Segment] = []
+        t = now
+        for duration, curve in pieces:
+            x0, v0, a0 = curve.state(0.0)
+            segs.append(Segment(t, t + duration, x0, v0, a0, "curve", duration, curve))
+            t += duration
+        rest = pieces[-1][1].state(pieces[-1][0])[0] if pieces else self.position(now)
+        self._vref = None
+        return self._set_plan(now, segs, rest, on_done, t, t)
+
     def _install(
         self,
         now: float,
@@ -605,12 +620,17 @@ class Axis:
         if cruise is not None and cruise != 0.0:
             segs.append(Segment(t, math.inf, x, cruise, 0.0))
             t = math.inf
+        return self._set_plan(now, segs, x if rest is None or cruise is not None else rest, on_done, t, ramp_end)
+
+    def _set_plan(self, now: float, segs: list[Segment], rest: float, on_done: Callback | None, t: float,
+                  ramp_end: float) -> float:
+        """Make ``segs`` the plan from ``now``, ending at ``rest`` at ``t`` (``inf``: a cruise)."""
         self._archive(now)
         self._cancel_plan()
         self._gen += 1
         gen = self._gen
         self._plan = segs
-        self._rest = x if rest is None or cruise is not None else rest
+        self._rest = rest
         if not segs:
             self._idle_since = now
         self._on_done = on_done

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from typing import Literal
+from typing import Any, Literal
 
 from devsim.core.record import record
 
@@ -35,7 +35,7 @@ __all__ = [
 ]
 
 Phase = Literal["idle", "accel", "const", "decel"]
-Shape = Literal["linear", "sine"]
+Shape = Literal["linear", "sine", "curve"]
 PhaseSpec = tuple[float, float, float, Shape]  # (acceleration, duration, end velocity, shape)
 
 REL_X = 1e-11  # relative position tolerance (positions are up to ~1e9 inc)
@@ -184,6 +184,9 @@ class Segment:
     a: float
     shape: Shape = "linear"
     span: float = 0.0
+    #: ``shape="curve"``: the axis's share of a path (:mod:`devsim.core.path`), an object whose
+    #: ``state(dt)`` gives position, velocity and acceleration; monotonic in position.
+    curve: Any = None
 
     def position(self, t: float) -> float:
         return self._position(t - self.t0)
@@ -191,17 +194,23 @@ class Segment:
     def velocity(self, t: float) -> float:
         if self.shape == "linear":
             return self.v0 + self.a * (t - self.t0)
+        if self.shape == "curve":
+            return float(self.curve.state(t - self.t0)[1])
         return self._velocity(t - self.t0)
 
     def acceleration(self, t: float) -> float:
         """Instantaneous acceleration (for a sine segment: ``a*pi/2*sin(pi*dt/span)``)."""
         if self.shape == "linear":
             return self.a
+        if self.shape == "curve":
+            return float(self.curve.state(t - self.t0)[2])
         return 0.5 * math.pi * self.a * math.sin(math.pi * (t - self.t0) / self.span)
 
     def _position(self, dt: float) -> float:
         if self.shape == "linear":
             return self.x0 + (self.v0 + 0.5 * self.a * dt) * dt
+        if self.shape == "curve":
+            return float(self.curve.state(dt)[0])
         span = self.span
         return (
             self.x0
@@ -216,6 +225,8 @@ class Segment:
     @property
     def direction(self) -> int:
         """+1/-1: the way the position moves (segments never reverse inside)."""
+        if self.shape == "curve":
+            return sign(self._position(self.t1 - self.t0) - self.x0)
         return sign(self.v0) or sign(self.a)
 
     def solve(self, p: float) -> float:
@@ -226,6 +237,8 @@ class Segment:
         segment is monotone in position, so its root is bracketed in ``[t0, t0 + span]`` and found
         by Newton steps safeguarded with bisection, to a few ulp of the segment's time scale.
         """
+        if self.shape == "curve":
+            return self._solve_curve(p)
         if self.shape != "linear":
             return self._solve_sine(p)
         dx = p - self.x0
@@ -236,6 +249,23 @@ class Segment:
             den = self.v0 + self.direction * (math.sqrt(disc) if disc > 0.0 else 0.0)
             tau = 2.0 * dx / den if den != 0.0 else 0.0
         return self.t0 + tau
+
+    def _solve_curve(self, p: float) -> float:
+        """Bisection on a monotonic curve piece, to a few ulp of its time scale."""
+        d = self.direction
+        lo, hi = 0.0, self.t1 - self.t0
+        if d == 0 or (self._position(lo) - p) * d >= 0.0:
+            return self.t0
+        if (self._position(hi) - p) * d <= 0.0:
+            return self.t1
+        eps = 4.0 * math.ulp(max(hi, 1.0))
+        while hi - lo > eps:
+            mid = 0.5 * (lo + hi)
+            if (self._position(mid) - p) * d >= 0.0:
+                hi = mid
+            else:
+                lo = mid
+        return self.t0 + hi
 
     def _solve_sine(self, p: float) -> float:
         d = self.direction

@@ -5,6 +5,7 @@ direction keys (§5.4)."""
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import pytest
@@ -337,3 +338,51 @@ def test_block_abort_brakes_and_goes_on_at_p90(make) -> None:  # noqa: ANN001
     cnc.advance(1.0)
     assert cnc.read("program.state") == "END" and cnc.read("axis.y.position") == pytest.approx(5_000)
     assert 1_000 < cnc.read("axis.x.position") < 100_000
+
+
+def _radius(cnc: Any, cx: float, cy: float) -> float:
+    return math.hypot(cnc.read("axis.x.position") / 1000 - cx, cnc.read("axis.y.position") / 1000 - cy)
+
+
+def test_g02_runs_the_quarter_circle_of_the_manuals_example(make) -> None:  # noqa: ANN001
+    """Spec §5.3, §6.6 (N3 reconstructed): clockwise, radius 20 around the absolute centre
+    I0 J-43.144, from (-20, -43.144) to (0, -23.144), at F3000 = 50 mm/s; NC-Stop brakes along
+    the circle and NC-Start goes on to the end point."""
+    cnc = make(program="N1 G00 X-20 Y-43.144\nN3 G02 X0 Y-23.144 I0 J-43.144 F3000")
+    cnc.set("panel.nc_start", True)
+    cnc.run_until(lambda d: d.model.executor.block_number == 3 and d.model.executor.state == "MOVING", 5.0)
+    assert cnc.read("output.travel_x") is True and cnc.read("output.travel_y") is True
+    cnc.advance(0.3)
+    assert _radius(cnc, 0, -43.144) == pytest.approx(20.0, abs=1e-6)
+    speed = math.hypot(cnc.read("axis.x.velocity"), cnc.read("axis.y.velocity"))
+    assert speed == pytest.approx(50_000)
+    assert cnc.read("axis.y.velocity") > 0 and cnc.read("axis.x.velocity") > 0  # climbing the left side
+    cnc.set("input.nc_stop", False)
+    cnc.advance(0.5)
+    assert cnc.read("program.state") == "HOLD" and cnc.read("axis.x.velocity") == 0
+    assert _radius(cnc, 0, -43.144) == pytest.approx(20.0, abs=1e-6)  # braked on the circle
+    cnc.set("input.nc_stop", True)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(2.0)
+    assert cnc.read("program.state") == "END"
+    assert (cnc.read("axis.x.position"), cnc.read("axis.y.position")) == pytest.approx((0, -23_144), abs=1e-6)
+
+
+def test_an_arc_whose_end_is_off_the_circle_stops_the_program(make) -> None:  # noqa: ANN001
+    """Spec §5.3: start and end radius differ by more than 0.01 mm: the block is not executed."""
+    cnc = make(program="N1 G03 X10 Y10 I0 J0 F1000")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(1.0)
+    assert cnc.read("program.state") == "STOPPED" and cnc.read("axis.x.position") == 0
+
+
+def test_a_full_circle_counter_clockwise_returns_to_its_start(make) -> None:  # noqa: ANN001
+    cnc = make(program="N1 G00 X10\nN2 G03 X10 Y0 I0 J0 F6000")
+    cnc.set("panel.nc_start", True)
+    cnc.run_until(lambda d: d.model.executor.block_number == 2 and d.model.executor.state == "MOVING", 5.0)
+    cnc.advance(0.3)
+    assert cnc.read("axis.y.position") > 0  # counter-clockwise from (10, 0): up first
+    assert _radius(cnc, 0, 0) == pytest.approx(10.0, abs=1e-6)
+    cnc.advance(2.0)
+    assert cnc.read("program.state") == "END"
+    assert (cnc.read("axis.x.position"), cnc.read("axis.y.position")) == pytest.approx((10_000, 0), abs=1e-6)

@@ -9,9 +9,9 @@ at F × override); exact positioning with "Position erreicht" and "Programm fort
 block-end M functions (M05, M09, M11, M15, odd free codes, then M00/M01/M02).  NC-Stop brakes to
 ``HOLD``, NC-Start continues; Not-Stop stops at once, gives up the handshake and the program.
 
-Subroutines and repeats (G10–G13), dwell (G04) and block abort (P90) change the flow.  Not
-simulated yet: circular interpolation G02/G03 (such a block stops the program with the event
-``unsupported_g``; G25 blocks run as no motion), the continuous path between G01 blocks (every
+G02/G03 arcs run in :mod:`~devsim.devices.poselesta.contour`.  Subroutines and repeats
+(G10–G13), dwell (G04) and block abort (P90) change the flow.  Not simulated yet: G25 (its
+blocks run as no motion, event ``unsupported_g``), the continuous path between blocks (every
 motion block ends with exact positioning), cutter compensation G41/G42 (accepted, no offset),
 software limits and homing, inch programs.
 """
@@ -22,6 +22,7 @@ import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from devsim.devices.poselesta.contour import PLANES, ArcMotion
 from devsim.devices.poselesta.signals import AXES
 from devsim.devices.poselesta.tape import Block, parse_blocks
 
@@ -63,6 +64,8 @@ class Executor:
         self.pointer = 0
         self.block: Block | None = None
         self.motion = 0  # modal G00 … G03
+        self.plane = 17  # modal G17 / G18 / G19
+        self.contour: ArcMotion | None = None
         self.absolute = True  # G90 / G91
         self.feed = 0  # modal F, mm/min
         self.targets: dict[str, float] = {}
@@ -205,6 +208,8 @@ class Executor:
         for g in block.values("G"):
             if g in (0, 1, 2, 3):
                 self.motion = g
+            elif g in PLANES:
+                self.plane = g
             elif g in (90, 91):
                 self.absolute = g == 90
             elif g not in KNOWN_G:
@@ -293,9 +298,19 @@ class Executor:
             self._unsupported(25)  # no motion (spec §4.12.1)
             self._end_functions()
             return
-        if self.motion in (2, 3) and any(block.value(c) is not None for c in "XYZDIJK"):
-            self._unsupported(self.motion)
-            self._stop_until_start(self._end_functions)  # not executed: the program stops (spec §5.3)
+        self.contour = None
+        if self.motion in (2, 3):
+            contour = ArcMotion.from_block(cnc, block, self.plane, self.absolute, -1 if self.motion == 2 else 1)
+            if isinstance(contour, str):
+                cnc.record_event("circle_endpoint_error")
+                cnc.announce("event", "program", "circle_endpoint_error", contour)
+                self._stop_until_start(self._end_functions)  # not executed: the program stops (spec §5.3)
+                return
+            if contour is None:
+                self._end_functions()  # I/J only: no motion (spec §5.3)
+                return
+            self.contour = contour
+            self._motion_targets(contour.targets)
             return
         targets: dict[str, float] = {}
         for a in AXES:
@@ -307,6 +322,10 @@ class Executor:
         if not targets:
             self._end_functions()
             return
+        self._motion_targets(targets)
+
+    def _motion_targets(self, targets: dict[str, float]) -> None:
+        cnc = self.cnc
         self.targets = targets
         travel = set(targets)
         if self.motion in (1, 2, 3) and cnc.mode != "MANUAL":
@@ -335,6 +354,11 @@ class Executor:
                 cnc.limits.refuse(a)
                 self.abort()
                 return
+        if self.contour is not None:
+            speed = self._path_speed(tuple(self.targets))
+            if speed is not None:
+                self.contour.run(speed, self._arrived)
+            return
         speeds = self._speeds()
         if speeds is None:
             return  # override 0 %: the path stands without HOLD until the override rises (spec §5.3)
@@ -378,7 +402,20 @@ class Executor:
         return {a: (cnc.from_mm(a, path * abs(cnc.to_mm(a, d)) / length),
                     cnc.from_mm(a, accel * abs(cnc.to_mm(a, d)) / length)) for a, d in deltas.items()}
 
+    def _path_speed(self, axes: tuple[str, ...]) -> float | None:
+        """F × override in mm/s, no faster than the slowest rapid of ``axes``; None at 0."""
+        cnc = self.cnc
+        path = min([self.feed * cnc.override() / 60.0, *(cnc.to_mm(a, cnc.rapid(a)) for a in axes)])
+        return path if path > 0 else None
+
     def _override_input(self, _name: str, _old: Any, _new: Any) -> None:
+        if self.state == "MOVING" and self.cnc.mode in EXECUTION_MODES and self.contour is not None:
+            speed = self._path_speed(tuple(self.targets))
+            if speed is None:
+                self.contour.brake(None)
+            else:
+                self.contour.run(speed, self._arrived)
+            return
         if self.state == "MOVING" and self.cnc.mode in EXECUTION_MODES:
             speeds = self._speeds()
             if speeds is None:
@@ -421,12 +458,15 @@ class Executor:
             if not pending and then is not None:
                 then()
 
-        for a in self.targets:
-            axis = cnc.axes[a]
-            if axis.moving:
-                axis.stop(cnc.accel(a), on_done=lambda a=a: settled(a))
-            else:
-                settled(a)
+        if self.contour is not None:
+            self.contour.brake(settled)
+        else:
+            for a in self.targets:
+                axis = cnc.axes[a]
+                if axis.moving:
+                    axis.stop(cnc.accel(a), on_done=lambda a=a: settled(a))
+                else:
+                    settled(a)
         if state is not None:
             self._stop_until_start(self._move, state=state)
 
