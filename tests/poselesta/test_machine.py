@@ -386,3 +386,49 @@ def test_a_full_circle_counter_clockwise_returns_to_its_start(make) -> None:  # 
     cnc.advance(2.0)
     assert cnc.read("program.state") == "END"
     assert (cnc.read("axis.x.position"), cnc.read("axis.y.position")) == pytest.approx((10_000, 0), abs=1e-6)
+
+
+def test_homing_takes_the_first_mark_seen_with_its_activation_high(make) -> None:  # noqa: ANN001
+    """S37 (§2.2.2, §2.3.23, spec §5.6): marks at −10 and −30 mm; with V24/1 L the first is
+    ignored; set H after 20 mm, the second is taken: there the actual value becomes 0."""
+    cnc = make({"axes": {"x": {"reference_marks": [-10.0, -30.0]}}}, mode="MANUAL")
+    cnc.set("input.rm_enable_x", False)
+    cnc.set("panel.reference", "x")
+    cnc.advance(0.1)
+    assert cnc.read("output.travel_x") is True and cnc.read("axis.x.velocity") < 0
+    cnc.advance(7.0)  # 3.333 mm/s: past the mark at −10 mm, short of −30 mm
+    assert -30_000 < cnc.read("axis.x.position") < -20_000 and cnc.read("referenced") == []
+    cnc.set("input.rm_enable_x", True)
+    cnc.run_until(lambda d: "x" in d.model.field.referenced, 60.0)
+    # 10 % of P48 (2000 mm/min) = 3.333 mm/s; braking from it at 500 mm/s² takes 0.0111 mm
+    assert cnc.read("axis.x.position") == pytest.approx(-(10 / 3) ** 2 / 2 / 500 * 1000, abs=1e-6)
+    assert cnc.read("axis.x.velocity") == 0 and cnc.read("output.travel_x") is False
+
+
+def test_leaving_the_working_field_brakes_and_stops_the_program(make) -> None:  # noqa: ANN001
+    """S24 (§2.4.4, spec §5.5): +limit X at 50 mm (P9) once referenced; G00 X80 brakes at the
+    crossing and overshoots by the braking distance; V18/6 L; NC-Start ignored; in MANUAL + is
+    refused, − brings it back and V18/6 goes H."""
+    cnc = make({"axes": {"x": {"reference_marks": [-1.0]}}}, program="N1 G00 X80", mode="MANUAL")
+    cnc.set("panel.reference", "x")
+    cnc.run_until(lambda d: "x" in d.model.field.referenced, 60.0)
+    cnc.set("param.P9", 50)
+    cnc.set("panel.mode", "AUTO_CONTINUOUS")
+    cnc.advance(0.1)
+    cnc.set("panel.nc_start", True)
+    cnc.run_until(lambda d: not d.model.signals.get("inside_working_field"), 5.0)
+    assert cnc.read("axis.x.position") == pytest.approx(50_000, abs=1)
+    assert cnc.read("program.state") == "LIMIT_STOP" and cnc.read("panel.message") == "OUTSIDE_WORKING_FIELD"
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.position") == pytest.approx(60_000, abs=1)  # 100 mm/s braked at 500 mm/s²: 10 mm
+    cnc.set("panel.nc_start", True)
+    assert cnc.read("program.state") == "LIMIT_STOP"
+    cnc.set("panel.mode", "MANUAL")
+    cnc.advance(0.1)
+    cnc.set("input.jog_pos_x", True)
+    cnc.advance(0.2)
+    assert cnc.read("axis.x.velocity") == 0
+    cnc.set("input.jog_pos_x", False)
+    cnc.set("input.jog_neg_x", True)
+    cnc.run_until(lambda d: d.model.signals.get("inside_working_field"), 60.0)
+    assert cnc.read("axis.x.position") == pytest.approx(50_000, abs=1)

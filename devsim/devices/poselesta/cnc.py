@@ -32,6 +32,7 @@ from devsim.devices.poselesta.transfers import (
     Output,
     ReadIn,
 )
+from devsim.devices.poselesta.working_field import WorkingField
 
 __all__ = ["MODES", "PoselestaCnc"]
 
@@ -80,6 +81,7 @@ class PoselestaCnc(Model):
         self.plc = PlcHelper(self.clock, self.signals, plc.mst_ack, plc.rise_ms / 1000.0, plc.fall_ms / 1000.0)
         self.manual = ManualMotion(self)
         self.limits = LimitSwitches(self)
+        self.field = WorkingField(self)
         self._load()
         self._power_on()
 
@@ -140,6 +142,7 @@ class PoselestaCnc(Model):
             self._boot_timer.cancel()
         self.executor.emergency_stop()
         self.manual.reset()
+        self.field.cancel()
         self.plc.cancel()
 
     # -- the panel ------------------------------------------------------------------------------
@@ -467,3 +470,5 @@ class PoselestaCnc(Model):
             raise BadValue(str(exc)) from None
         self.params[number] = value
         self._save_params()
+        if 9 <= number <= 16:
+            self.field.rearm()

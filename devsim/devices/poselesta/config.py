@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from devsim.core.settings import Bool, DictOf, Float, Int, OneOf, Section, Setting
+from devsim.core.settings import Bool, DictOf, Float, Int, ListOf, OneOf, Section, Setting
 from devsim.devices.poselesta.parameters import check_parameter
 
 __all__ = ["PoselestaConfig"]
@@ -49,6 +49,15 @@ PLC = Section("The PLC side of the MST acknowledge V22/7, played by a plant help
     Setting("fall_ms", Float(ge=0), 15.0, "delayed: acknowledge L this long after a strobe falls"),
 ))
 
+#: One axis: where its reference marks are and how it homes (spec §5.6, G-HOME).
+AXIS = Section("One axis: its reference marks and homing (spec §5.6).", (
+    Setting("reference_marks", ListOf(Float()), [-10.0],
+            "positions of the encoder's reference marks, mm from the power-on position"),
+    Setting("home_direction", OneOf(-1, 1), -1, "the way homing searches"),
+    Setting("reference_value", Float(), 0.0, "the actual value at the accepted mark, mm"),
+))
+AXES = Section("The four axes X, Y, Z, D.", tuple(Setting(a, AXIS, {}) for a in "xyzd"))
+
 #: What a user can set for one POSELESTA (``--config FILE.yaml`` or a plant file).
 PoselestaConfig = Section("What a user can set for one POSELESTA (--config FILE.yaml or a plant file).", (
     Setting("variant", OneOf("II", "III"), "III", "POS II or POS III (§1.1 of the spec)"),
@@ -71,4 +80,5 @@ PoselestaConfig = Section("What a user can set for one POSELESTA (--config FILE.
     Setting("drive_speed_factor", Float(gt=0), 1.2, "drive speed at 10 V set-point = this × rapid (spec §5.2)"),
     Setting("m06_requires_nc_start", Bool(), False, "after the M06 acknowledge wait for NC-Start (spec G-M06)"),
     Setting("plc", PLC, {}),
+    Setting("axes", AXES, {}),
 ))

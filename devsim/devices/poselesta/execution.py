@@ -32,7 +32,7 @@ if TYPE_CHECKING:
 __all__ = ["EXECUTION_MODES", "STATES", "Executor", "block_end_function"]
 
 STATES = ("IDLE", "BLOCK_START", "MST_OUTPUT", "WAIT_TOOL_CHANGE", "WAIT_M10_PULSE", "WAIT_AXIS_ENABLE",
-          "MOVING", "WAIT_PROGRAM_CONTINUE", "HOLD", "STOPPED", "END")
+          "MOVING", "WAIT_PROGRAM_CONTINUE", "HOLD", "STOPPED", "LIMIT_STOP", "END")
 #: States in which a block is being worked on: the "Start" symbol, V16/8 H (spec §4.3.1).
 RUNNING = frozenset(("BLOCK_START", "MST_OUTPUT", "WAIT_TOOL_CHANGE", "WAIT_M10_PULSE", "WAIT_AXIS_ENABLE",
                      "MOVING", "WAIT_PROGRAM_CONTINUE"))
@@ -100,8 +100,14 @@ class Executor:
         return self.block.number if self.block is not None else -1
 
     def reset(self) -> None:
-        """Back to the first block (a mode change abandons a stopped program, spec §4.1)."""
+        """Back to the first block (a mode change abandons a stopped program, spec §4.1): its
+        travel commands end."""
         self._cancel_timer()
+        if self.state != "IDLE":
+            for a in AXES:
+                self.signals.set(f"travel_{a}", False)
+            self.signals.set("position_reached", False)
+        self.contour = None
         self._resume = None
         self.stop_pending = self.abort_pending = False
         self.pointer = 0
@@ -122,8 +128,8 @@ class Executor:
         allowed = {0: ("panel", "external"), 1: ("panel",), 2: ("external",)}.get(int(cnc.params[75]), ())
         if source not in allowed or cnc.booting or not self.signals.get("emergency_stop"):
             return
-        if cnc.mode not in EXECUTION_MODES or not self.signals.get("nc_stop"):
-            cnc.record_event("nc_start_ignored")
+        if cnc.mode not in EXECUTION_MODES or not self.signals.get("nc_stop") or not cnc.field.inside:
+            cnc.record_event("nc_start_ignored")  # (also while outside the working field, spec §5.5)
             return
         for output in ("m00", "m01", "m02", "m06"):
             self.signals.set(output, False)  # reset by NC-Start (§2.4.7)
@@ -134,7 +140,7 @@ class Executor:
             self.calls.clear()
             self.loops.clear()
             self._next_block()
-        elif self.state in ("STOPPED", "HOLD") or self.stop_pending:
+        elif self.state in ("STOPPED", "HOLD", "LIMIT_STOP") or self.stop_pending:
             self.stop_pending = False
             resume, self._resume = self._resume, None
             if resume is not None:
@@ -167,6 +173,11 @@ class Executor:
             self.emergency_stop()
         else:
             self.cnc.emergency_released()
+
+    def left_field(self) -> None:
+        """An axis left the working field: all brake as with NC-Stop, the program stops (§2.4.4)."""
+        if self.state == "MOVING":
+            self._brake("LIMIT_STOP")
 
     def emergency_stop(self) -> None:
         """§2.3.2: axes stop at once without ramp, set-points 0 V, the handshake is given up and
@@ -350,7 +361,8 @@ class Executor:
         self.signals.set("machine_standstill", False)
         self._arriving = set(self.targets)
         for a, target in self.targets.items():
-            if cnc.limits.blocked(a, target - cnc.axes[a].position()):
+            if cnc.limits.blocked(a, target - cnc.axes[a].position()) or cnc.field.outside_towards(
+                    a, target - cnc.axes[a].position()):
                 cnc.limits.refuse(a)
                 self.abort()
                 return

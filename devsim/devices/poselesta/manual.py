@@ -43,8 +43,8 @@ class ManualMotion:
             return
         step = self._step()
         axis = cnc.axes[a]
-        if new and not old and cnc.limits.blocked(a, sign):
-            cnc.limits.refuse(a)  # only away from an actuated limit switch (spec §5.5)
+        if new and not old and (cnc.limits.blocked(a, sign) or cnc.field.outside_towards(a, sign)):
+            cnc.limits.refuse(a)  # only away from an actuated limit switch or back to the field (spec §5.5)
             return
         if new and not old:
             if step is not None:
@@ -91,6 +91,11 @@ class ManualMotion:
         self.cnc.signals.set(f"travel_{a}", False)
         if not self.moving:
             self.cnc.signals.set("machine_standstill", True)
+
+    def left_field(self) -> None:
+        """Outside the working field every moving axis brakes (§2.4.4)."""
+        for a in list(self.moving):
+            self.cnc.axes[a].stop(self.cnc.accel(a), on_done=lambda a=a: self._stopped(a))
 
     def reset(self) -> None:
         for a in list(self.moving):

@@ -24,6 +24,7 @@ class ParamDef:
     maximum: float
     default: float
     section: str
+    whole: bool = True  # only whole numbers (a code, a count, a speed)
 
 
 PARAMETERS: dict[int, ParamDef] = {
@@ -36,6 +37,12 @@ PARAMETERS: dict[int, ParamDef] = {
         ParamDef(70, "V7 baud rate code (0 = 110 … 5 = 4800)", 0, 5, 3, "§2.6.3"),
         ParamDef(71, "V7 code (0 = ISO, 1 = ASCII)", 0, 1, 0, "§2.6.3"),
         ParamDef(72, "strobe times t1 = t2 in ms (0 is taken as 1 ms)", 0, 99, 20, "§2.4.7"),
+        *(ParamDef(9 + i, f"software limit + {a}, mm from the reference mark", -99999, 99999, 99999, "§2.4.4",
+                   False)
+          for i, a in enumerate("XYZD")),
+        *(ParamDef(13 + i, f"software limit − {a}, mm from the reference mark", -99999, 99999, -99999, "§2.4.4",
+                   False)
+          for i, a in enumerate("XYZD")),
         *(ParamDef(30 + i, f"gain (Verstärkung) {a}: Kv = P{30 + i} × kv_per_step", 1, 99, 10, "§2.5")
           for i, a in enumerate("XYZD")),
         *(ParamDef(44 + i, f"maximum speed = rapid {a}, mm/min (G00, V21/6)", 0, 9999, 6000, "§2.3.8")
@@ -58,8 +65,9 @@ def check_parameter(number: int, value: float) -> None:
         raise ValueError(f"P{number}: not a finite number")
     pdef = PARAMETERS.get(number)
     if pdef is not None:
-        if not pdef.minimum <= value <= pdef.maximum or not float(value).is_integer():
-            raise ValueError(f"P{number}: {value:g} is not a whole number in {pdef.minimum:g} … {pdef.maximum:g}")
+        if not pdef.minimum <= value <= pdef.maximum or pdef.whole and not float(value).is_integer():
+            kind = "a whole number" if pdef.whole else "a number"
+            raise ValueError(f"P{number}: {value:g} is not {kind} in {pdef.minimum:g} … {pdef.maximum:g}")
 
 
 def catalogue_blocks(params: dict[int, float]) -> list[Block]:
