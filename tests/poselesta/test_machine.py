@@ -432,3 +432,113 @@ def test_leaving_the_working_field_brakes_and_stops_the_program(make) -> None:  
     cnc.set("input.jog_neg_x", True)
     cnc.run_until(lambda d: d.model.signals.get("inside_working_field"), 60.0)
     assert cnc.read("axis.x.position") == pytest.approx(50_000, abs=1)
+
+
+def test_the_handwheel_moves_p76_increments_per_detent(make) -> None:  # noqa: ANN001
+    """S27 (§2.2.3, §2.4.6): handwheel X active, P76 = 4, 25 detents: X moves 0.100 mm; the
+    machine standstill output is L as soon as the handwheel is activated."""
+    cnc = make(mode="MANUAL")
+    cnc.set("param.P76", 4)
+    with pytest.raises(Exception, match="not one of 1, 2, 4"):
+        cnc.set("param.P76", 3)
+    cnc.set("input.handwheel_x", True)
+    assert cnc.read("output.machine_standstill") is False
+    cnc.set("handwheel.turn", 25)
+    cnc.advance(5.0)
+    assert cnc.read("axis.x.position") == pytest.approx(100)
+    cnc.set("handwheel.factor", 10)
+    cnc.set("handwheel.turn", -1)
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.position") == pytest.approx(60)
+    cnc.set("input.handwheel_x", False)
+    assert cnc.read("output.machine_standstill") is True
+
+
+def test_open_loop_axes_follow_an_outside_force(make) -> None:  # noqa: ANN001
+    """S28 (§2.3.9, spec §5.2): P77 = X, open loop at standstill; pushing X moves the display,
+    following error and set-point stay 0, the travel command shows."""
+    cnc = make(mode="MANUAL")
+    with pytest.raises(Exception, match="not in open loop"):
+        cnc.set("axis.x.push", 5.0)
+    cnc.set("param.P77", 1)
+    cnc.set("input.open_loop", True)
+    cnc.set("axis.x.push", 5.0)
+    cnc.advance(0.2)
+    assert cnc.read("axis.x.velocity") != 0 and cnc.read("output.travel_x") is True
+    assert cnc.read("axis.x.following_error") == 0 and cnc.read("axis.x.analog_out") == 0
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.position") == pytest.approx(5_000)
+
+
+def test_inch_shows_and_runs_inch_programs(make) -> None:  # noqa: ANN001
+    """S33 (§2.3.14, spec §5.1): X at 100.001 mm shows 3.93705 inch with V22/2 H; an inch block
+    moves inch and F is inch/min; D is not converted."""
+    cnc = make(program="N1 G01 X1 D1 F10")
+    cnc.set("input.inch", True)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.5)
+    assert math.hypot(cnc.read("axis.x.velocity"), cnc.read("axis.d.velocity")) == pytest.approx(10 * 25.4 / 60 * 1000,
+                                                                                               rel=0.02)
+    cnc.advance(10.0)
+    assert cnc.read("axis.x.position") == pytest.approx(25_400) and cnc.read("axis.d.position") == pytest.approx(1_000)
+    assert cnc.read("axis.x.display") == f"{25.4 / 25.4:.5f}" and cnc.read("axis.d.display") == "1.000"
+    cnc.set("program.P21", "N1 G00 X100.001")
+    cnc.set("input.inch", False)
+    cnc.set("panel.program", 21)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(3.0)
+    assert cnc.read("axis.x.display") == "100.001"
+    cnc.set("input.inch", True)
+    assert cnc.read("axis.x.display") == "3.93705"
+
+
+def test_the_output_test_counts_through_every_output(make) -> None:  # noqa: ANN001
+    """S40 (§2.4.11, spec §4.7 G-DIAG6): 250 ms per step, 64 s per pass, regardless of Not-Stop;
+    C stops it with every output L, and only a power cycle brings the control back."""
+    cnc = make(mode="PROGRAM_ENTRY")
+    cnc.set("input.emergency_stop", False)
+    cnc.set("panel.mode", "PROGRAM_ENTRY")  # (the Not-Stop release would switch to MANUAL)
+    cnc.set("diagnostics.output_test", True)
+    cnc.advance(0.25 * 5 + 0.1)  # n = 5: contacts 1 and 3
+    assert cnc.read("output.m00") is True and cnc.read("output.m01") is False and cnc.read("output.m02") is True
+    assert cnc.read("output.travel_x") is True and cnc.read("output.data_bus") == 5
+    cnc.advance(64.0)
+    assert cnc.read("diagnostics.output_cycles") == 1 and cnc.read("output.data_bus") == 5
+    cnc.set("diagnostics.output_test", False)
+    assert cnc.read("output.data_bus") == 0 and cnc.read("output.travel_x") is False
+    assert cnc.read("output.nc_ready") is False
+    with pytest.raises(Exception, match="switch the control off and on"):
+        cnc.set("panel.mode", "MANUAL")
+    cnc.set("input.emergency_stop", True)
+    cnc.power_cycle()
+    cnc.advance(0.1)
+    assert cnc.read("output.nc_ready") is True and cnc.read("panel.mode") == "MANUAL"
+
+
+def test_monitoring_alarms_drop_nc_ready_and_stop_the_axes(make) -> None:  # noqa: ANN001
+    """S35, S36 (spec §4.10, §5.2, §5.7): an encoder loss or a following error beyond its limit
+    drops NC ready, sets the set-points to 0 at once and gives the program up; reset_fault
+    restores NC ready."""
+    for fault, alarm in (("encoder_loss_y", "ENCODER_FAULT"), ("following_error", "FOLLOWING_ERROR_LIMIT")):
+        cnc = make(program="N1 G01 Y50 F3000")
+        cnc.set("panel.nc_start", True)
+        cnc.advance(0.5)
+        cnc.fault(fault)
+        assert cnc.read("output.nc_ready") is False and cnc.read("panel.message") == alarm
+        assert cnc.read("axis.y.velocity") == 0 and cnc.read("axis.y.analog_out") == 0
+        assert cnc.read("program.state") == "IDLE"
+        cnc.fault(fault, False)
+        assert cnc.read("output.nc_ready") is True and cnc.read("panel.message") == ""
+
+
+def test_a_lost_relay_supply_shows_every_output_low(make) -> None:  # noqa: ANN001
+    """S39 (§2.7): all outputs read L while the relay supply is lost; the logic goes on."""
+    cnc = make(program="N1 M03 M08 X1")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(1.0)
+    assert cnc.read("output.m03") is True and cnc.read("output.machine_standstill") is True
+    cnc.fault("relay_supply")
+    assert cnc.read("output.m03") is False and cnc.read("output.nc_ready") is False
+    assert cnc.read("output.data_bus") == 0
+    cnc.fault("relay_supply", False)
+    assert cnc.read("output.m03") is True and cnc.read("output.m08") is True and cnc.read("output.nc_ready") is True

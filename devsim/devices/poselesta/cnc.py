@@ -17,6 +17,7 @@ from devsim.core.model import Model
 from devsim.core.points import BadValue
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF, baud_for_code
 from devsim.devices.poselesta.config import PoselestaConfig
+from devsim.devices.poselesta.diagnostics import OutputTest
 from devsim.devices.poselesta.execution import Executor
 from devsim.devices.poselesta.keyboard import Keyboard
 from devsim.devices.poselesta.limits import LimitSwitches
@@ -72,6 +73,7 @@ class PoselestaCnc(Model):
         )
         self.last_key: int | None = None
         self.pending_catalogue: dict[int, float] = {}
+        self.relay_supply_lost = False
         self._buzzer_timer: Any = None
         self._boot_timer: Any = None
         self.axes = {a: Axis(self.clock, name=a) for a in AXES}
@@ -82,6 +84,7 @@ class PoselestaCnc(Model):
         self.manual = ManualMotion(self)
         self.limits = LimitSwitches(self)
         self.field = WorkingField(self)
+        self.output_test = OutputTest(self)
         self._load()
         self._power_on()
 
@@ -130,6 +133,7 @@ class PoselestaCnc(Model):
 
     def power_cycle(self, *, wipe: bool = False) -> None:
         self.close()
+        self.output_test.stopped = False
         super().power_cycle(wipe=wipe)  # (the axes stay where they stood)
         self._load()
         self._power_on()
@@ -143,6 +147,7 @@ class PoselestaCnc(Model):
         self.executor.emergency_stop()
         self.manual.reset()
         self.field.cancel()
+        self.output_test.cancel()
         self.plc.cancel()
 
     # -- the panel ------------------------------------------------------------------------------
@@ -157,6 +162,8 @@ class PoselestaCnc(Model):
                            "stop the program first")
         if self.booting:
             raise BadValue("the control is not ready yet")
+        if self.output_test.running or self.output_test.stopped:
+            raise BadValue("the output test P79 N6 runs or ran: stop it (C) and switch the control off and on")
         if mode != self.mode:
             self.manual.reset()
             self.executor.reset()
@@ -203,15 +210,24 @@ class PoselestaCnc(Model):
         """The position loop gain [1/s]: P30–P33 steps × ``kv_per_step`` (spec §5.2)."""
         return self.params[30 + AXES.index(axis)] * self.cfg.kv_per_step
 
+    def display(self, axis: str) -> str:
+        """The actual value as the screen shows it (spec §5.1): mm with the axis's decimals, or
+        with V22/2 H inch with two more (100.001 mm → 3.93705); D is not converted."""
+        decimals = self.formats.decimals[axis.upper()]
+        value = self.to_mm(axis, self.axes[axis].position())
+        if self.signals.get("inch") and axis != "d":
+            return f"{value / 25.4:.{decimals + 2}f}"
+        return f"{value:.{decimals}f}"
+
     def following_error(self, axis: str) -> float:
-        """e = v / Kv in steady state (spec §5.2), in increments; 0 with Not-Stop."""
-        if not self.signals.get("emergency_stop"):
+        """e = v / Kv in steady state (spec §5.2), in increments; 0 with Not-Stop or open loop."""
+        if not self.signals.get("emergency_stop") or self.manual.in_open_loop(axis):
             return 0.0
         return self.axes[axis].velocity() / self.kv(axis)
 
     def analog_out(self, axis: str) -> float:
         """The ±10 V set-point: the speed over the drive's speed at 10 V (spec §5.2)."""
-        if not self.signals.get("emergency_stop"):
+        if not self.signals.get("emergency_stop") or self.manual.in_open_loop(axis):
             return 0.0
         at_10v = self.cfg.drive_speed_factor * self.rapid(axis)
         volts = 10.0 * self.axes[axis].velocity() / at_10v if at_10v > 0 else 0.0

@@ -36,8 +36,10 @@ class ArcMotion:
         self.targets = {axes[0]: cnc.from_mm(axes[0], end[0]), axes[1]: cnc.from_mm(axes[1], end[1])}
 
     @classmethod
-    def from_block(cls, cnc: PoselestaCnc, block: Block, plane: int, absolute: bool, way: int) -> ArcMotion | str | None:
-        """The arc a block programs, an error text (the radii differ), or None (no end point)."""
+    def from_block(cls, cnc: PoselestaCnc, block: Block, plane: int, absolute: bool, way: int,
+                   unit: Callable[[str], float] = lambda _a: 1.0) -> ArcMotion | str | None:
+        """The arc a block programs, an error text (the radii differ), or None (no end point);
+        ``unit(axis)`` converts program units (inch) to the machine's."""
         (a, centre_a), (b, centre_b) = PLANES[plane]
         if block.value(a.upper()) is None and block.value(b.upper()) is None:
             return None
@@ -45,11 +47,11 @@ class ArcMotion:
         end = []
         for axis, s in zip((a, b), start, strict=True):
             value = block.value(axis.upper())
-            end.append(s if value is None else cnc.to_mm(axis, value) + (0.0 if absolute else s))
+            end.append(s if value is None else cnc.to_mm(axis, value * unit(axis)) + (0.0 if absolute else s))
         centre = []
         for axis, word, s in zip((a, b), (centre_a, centre_b), start, strict=True):
             value = block.value(word)
-            centre.append(s if value is None else cnc.to_mm(axis, value))
+            centre.append(s if value is None else cnc.to_mm(axis, value * unit(axis)))
         r_start = math.hypot(start[0] - centre[0], start[1] - centre[1])
         r_end = math.hypot(end[0] - centre[0], end[1] - centre[1])
         if abs(r_start - r_end) > CIRCLE_TOLERANCE or r_start == 0:

@@ -1,14 +1,18 @@
-"""The diagnostic pages of program P79 (manual §2.3.25, §2.3.26; spec poselesta.md §4.7, vector
-§6.11): N5, the levels of all inputs as four ports of two bytes; N7, the feed and override pot
-voltages as hex 00 … FF."""
+"""The diagnostic pages of program P79 (manual §2.3.25, §2.3.26, §2.4.11; spec poselesta.md
+§4.7, vector §6.11): N5, the levels of all inputs as four ports of two bytes; N6, the output test;
+N7, the feed and override pot voltages as hex 00 … FF."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from devsim.core.points import BadValue
 from devsim.core.signals import SignalBank
 
-__all__ = ["INPUT_IMAGE", "input_image", "input_screen", "pots"]
+if TYPE_CHECKING:
+    from devsim.devices.poselesta.cnc import PoselestaCnc
+
+__all__ = ["INPUT_IMAGE", "OUTPUT_GROUPS", "OutputTest", "input_image", "input_screen", "pots"]
 
 #: P79 N5: port and half → the input of bit 7 … bit 0 (None: unused).
 INPUT_IMAGE: dict[str, tuple[str | None, ...]] = {
@@ -48,3 +52,67 @@ def pots(signals: SignalBank) -> list[Any]:
     """P79 N7: feed and override pot as ``round(V / 10 × 255)`` in hex."""
     return [f"{round(max(0.0, min(10.0, float(signals.get(name)))) / 10 * 255):02X}"
             for name in ("feed_pot_v", "override_pot_v")]
+
+
+#: P79 N6: the outputs of V15, V16 and V18, contact 1 … 8 (None: no contact); V17 is the bus.
+OUTPUT_GROUPS: tuple[tuple[str | None, ...], ...] = (
+    ("m00", "m01", "m02", "m03", "m04", "m06", "m08", "m10"),
+    ("strobe_m", "strobe_s1", "strobe_s2", "strobe_t", "strobe_ba", "buzzer", None, "start_stop_status"),
+    ("travel_x", "travel_y", "travel_z", "travel_d", "position_reached", "inside_working_field", "nc_ready",
+     "machine_standstill"),
+)
+OUTPUT_TEST_STEP = 0.25  # s: 256 steps = 64 s per pass (spec §4.7, G-DIAG6)
+
+
+class OutputTest:
+    """P79 N6 (§2.4.11): every output in ascending binary code, one step each 250 ms, a pass
+    counter; "C" stops it with all outputs L, and the control then needs a power cycle.  It
+    runs whatever NC-Stop and Not-Stop say: the outputs must be disconnected from the machine."""
+
+    def __init__(self, cnc: PoselestaCnc) -> None:
+        self.cnc = cnc
+        self.running = False
+        self.stopped = False  # "C" pressed: normal operation only after a power cycle
+        self.count = 0
+        self.cycles = 0
+        self._timer: Any = None
+
+    def start(self) -> None:
+        cnc = self.cnc
+        if cnc.mode != "PROGRAM_ENTRY" or cnc.executor.running:
+            raise BadValue("the diagnostic programs P79 run in PROGRAM_ENTRY")
+        self.running, self.count, self.cycles = True, 0, 0
+        self._show()
+
+    def _show(self) -> None:
+        for group in OUTPUT_GROUPS:
+            for bit, name in enumerate(group):
+                if name is not None:
+                    self.cnc.signals.set(name, bool(self.count >> bit & 1))
+        self.cnc.signals.set("data_bus", self.count)
+        self._timer = self.cnc.clock.call_later(OUTPUT_TEST_STEP, self._step)
+
+    def _step(self) -> None:
+        self.count = (self.count + 1) % 256
+        if self.count == 0:
+            self.cycles += 1
+        self._show()
+
+    def stop(self) -> None:
+        """Key "C": all outputs L; the control stays so until it is switched off and on."""
+        if not self.running:
+            return
+        self.cancel()
+        self.stopped = True
+        for group in OUTPUT_GROUPS:
+            for name in group:
+                if name is not None:
+                    self.cnc.signals.set(name, False)
+        self.cnc.signals.set("data_bus", 0)
+        self.cnc.record_event("output_test_stopped")
+
+    def cancel(self) -> None:
+        self.running = False
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None

@@ -63,6 +63,7 @@ class Executor:
         self.blocks: list[Block] = []
         self.pointer = 0
         self.block: Block | None = None
+        self.inch = False  # V22/2 sampled at the start of the block (spec §5.1)
         self.motion = 0  # modal G00 … G03
         self.plane = 17  # modal G17 / G18 / G19
         self.contour: ArcMotion | None = None
@@ -213,8 +214,14 @@ class Executor:
             return
         self._program_end()
 
+    def unit(self, a: str) -> float:
+        """Program units per machine unit: an inch program (V22/2 H) on a linear axis is
+        converted when it runs (spec §5.1: the machine measures in mm; D is not converted)."""
+        return 25.4 if self.inch and a != "d" else 1.0
+
     def _run(self, block: Block) -> None:
         self.block = block
+        self.inch = bool(self.signals.get("inch"))
         self._enter("BLOCK_START")
         for g in block.values("G"):
             if g in (0, 1, 2, 3):
@@ -311,7 +318,8 @@ class Executor:
             return
         self.contour = None
         if self.motion in (2, 3):
-            contour = ArcMotion.from_block(cnc, block, self.plane, self.absolute, -1 if self.motion == 2 else 1)
+            contour = ArcMotion.from_block(cnc, block, self.plane, self.absolute, -1 if self.motion == 2 else 1,
+                                           self.unit)
             if isinstance(contour, str):
                 cnc.record_event("circle_endpoint_error")
                 cnc.announce("event", "program", "circle_endpoint_error", contour)
@@ -329,7 +337,7 @@ class Executor:
             if value is None:
                 continue
             base = 0.0 if self.absolute else cnc.axes[a].final_position()
-            targets[a] = base + value
+            targets[a] = base + value * self.unit(a)
         if not targets:
             self._end_functions()
             return
@@ -402,7 +410,7 @@ class Executor:
         length = math.sqrt(sum(cnc.to_mm(a, d) ** 2 for a, d in deltas.items()))
         if length == 0:
             return {a: (1.0, 1.0) for a in self.targets}
-        path = self.feed * override / 60.0  # mm/s
+        path = self.feed * self.unit("x") * override / 60.0  # mm/s
         for a, d in deltas.items():  # no component faster than its rapid
             share = abs(cnc.to_mm(a, d)) / length
             if share > 0:
@@ -417,7 +425,7 @@ class Executor:
     def _path_speed(self, axes: tuple[str, ...]) -> float | None:
         """F × override in mm/s, no faster than the slowest rapid of ``axes``; None at 0."""
         cnc = self.cnc
-        path = min([self.feed * cnc.override() / 60.0, *(cnc.to_mm(a, cnc.rapid(a)) for a in axes)])
+        path = min([self.feed * self.unit("x") * cnc.override() / 60.0, *(cnc.to_mm(a, cnc.rapid(a)) for a in axes)])
         return path if path > 0 else None
 
     def _override_input(self, _name: str, _old: Any, _new: Any) -> None:

@@ -1,17 +1,26 @@
 """Manual motion in MANUAL and PROGRAM_ENTRY: the direction keys V20/5–12, jogging steps
-V21/1–5 and rapid V21/6 (manual §2.3.6–§2.3.8, §2.3.22, §2.4.2, §2.4.6; spec poselesta.md §5.4).
+V21/1–5, rapid V21/6, the handwheel V5 with its axis selection V20/1–4, and open loop V21/7
+(manual §2.2.3, §2.3.5–§2.3.9, §2.3.22, §2.4.2, §2.4.6; spec poselesta.md §5.2, §5.4).
 
 A direction key moves its axis while it is H, on the axis's own ramps, at the feed pot's share
 of the axis's maximum feed (P48–P51); rapid lifts that to P44–P47 along the ramp.  With a jog
 step selected a key press moves that many increments (the smallest selected step wins, a press
 during a step is ignored; rapid does not apply).  Only a moving axis has its travel command; the
 machine standstill output is L while any axis moves; position reached is never output here.
+
+The handwheel (``handwheel.turn``: detents, at ``handwheel.rate_hz``) moves every axis whose
+activation input is H by P76 increments per detent, times the hand panel's factor (×10 in
+selector position 1, ×1 in position 2), driving the position command directly (no ramp of its
+own).  Activating a handwheel makes the machine standstill output L at once.  With open loop
+(V21/7 H, switched only at standstill) the axes of P77 follow whatever moves them
+(``axis.<a>.push``): their following error and set-point are 0, the travel command still shows.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from devsim.core.points import BadValue
 from devsim.devices.poselesta.signals import AXES
 
 if TYPE_CHECKING:
@@ -29,11 +38,68 @@ class ManualMotion:
     def __init__(self, cnc: PoselestaCnc) -> None:
         self.cnc = cnc
         self.moving: set[str] = set()
+        self.handwheel_factor = 1
+        self.handwheel_rate = 10.0  # detents per second
+        self.open_loop = False  # in effect (switched at standstill)
         for a in AXES:
             for direction in ("pos", "neg"):
                 cnc.signals.subscribe(f"jog_{direction}_{a}", self._key)
+            cnc.signals.subscribe(f"handwheel_{a}", self._handwheel_selected)
         for name in ("rapid", "feed_pot_v"):
             cnc.signals.subscribe(name, self._speed_changed)
+        cnc.signals.subscribe("open_loop", self._open_loop_input)
+
+    # -- the handwheel (§2.2.3, spec §5.4) ------------------------------------------------------------
+    def _handwheel_selected(self, _name: str, _old: Any, _new: Any) -> None:
+        cnc = self.cnc
+        if cnc.mode in MANUAL_MODES and not self.moving:
+            selected = any(cnc.signals.get(f"handwheel_{a}") for a in AXES)
+            cnc.signals.set("machine_standstill", not selected)  # at once, even without motion (§2.4.6)
+
+    def turn(self, detents: int) -> None:
+        """Turn the handwheel by ``detents`` (negative: backwards)."""
+        cnc = self.cnc
+        if cnc.mode not in MANUAL_MODES or cnc.booting or not cnc.signals.get("emergency_stop"):
+            cnc.record_event("handwheel_ignored")
+            return
+        step = int(cnc.params[76]) * self.handwheel_factor
+        for a in AXES:
+            if not cnc.signals.get(f"handwheel_{a}") or detents == 0:
+                continue
+            if cnc.limits.blocked(a, detents) or cnc.field.outside_towards(a, detents):
+                cnc.limits.refuse(a)
+                continue
+            axis = cnc.axes[a]
+            speed = abs(self.handwheel_rate) * step
+            self.moving.add(a)
+            cnc.signals.set(f"travel_{a}", True)
+            axis.move_to(axis.final_position() + detents * step, speed, speed * 1000,
+                         on_done=lambda a=a: self._handwheel_done(a))
+
+    def _handwheel_done(self, a: str) -> None:
+        self._stopped(a)
+        self._handwheel_selected("", None, None)
+
+    # -- open loop (§2.3.9, spec §5.2) -----------------------------------------------------------------
+    def _open_loop_input(self, _name: str, _old: Any, new: Any) -> None:
+        if self.cnc.executor.state in ("MOVING",) or self.moving:
+            self.cnc.record_event("open_loop_change_deferred")  # only at standstill (§2.3.9)
+            return
+        self.open_loop = bool(new)
+
+    def in_open_loop(self, a: str) -> bool:
+        return self.open_loop and bool(int(self.cnc.params[77]) >> AXES.index(a) & 1)
+
+    def push(self, a: str, mm: float) -> None:
+        """An outside force moves an open-loop axis by ``mm`` (10 mm/s): the display follows."""
+        cnc = self.cnc
+        if not self.in_open_loop(a):
+            raise BadValue(f"{a.upper()} is not in open loop (V21/7 H and P77)")
+        axis = cnc.axes[a]
+        speed = cnc.from_mm(a, 10.0)
+        self._start(a)
+        axis.move_to(axis.final_position() + cnc.from_mm(a, mm), speed, speed * 100,
+                     on_done=lambda: self._stopped(a))
 
     def _key(self, name: str, old: Any, new: Any) -> None:
         cnc = self.cnc

@@ -25,6 +25,7 @@ class ParamDef:
     default: float
     section: str
     whole: bool = True  # only whole numbers (a code, a count, a speed)
+    choices: tuple[int, ...] | None = None
 
 
 PARAMETERS: dict[int, ParamDef] = {
@@ -51,6 +52,9 @@ PARAMETERS: dict[int, ParamDef] = {
           for i, a in enumerate("XYZD")),
         ParamDef(64, "rapid influenced by the override pot (0 = no, 1 = yes)", 0, 1, 0, "§2.3.22"),
         ParamDef(75, "NC-Start source (0 = both, 1 = front panel, 2 = external V19/3)", 0, 2, 0, "§2.3.3"),
+        ParamDef(76, "handwheel evaluation: increments per handwheel step (1, 2 or 4)", 1, 4, 1, "§2.2.3",
+                 choices=(1, 2, 4)),
+        ParamDef(77, "open-loop axes, bit mask X = 1, Y = 2, Z = 4, D = 8", 0, 15, 0, "§2.3.9"),
         ParamDef(90, "block number N the program goes on at after a block abort V22/10 (POS III)", 0, 999, 0,
                  "§2.3.21"),
     )
@@ -68,6 +72,8 @@ def check_parameter(number: int, value: float) -> None:
         if not pdef.minimum <= value <= pdef.maximum or pdef.whole and not float(value).is_integer():
             kind = "a whole number" if pdef.whole else "a number"
             raise ValueError(f"P{number}: {value:g} is not {kind} in {pdef.minimum:g} … {pdef.maximum:g}")
+        if pdef.choices is not None and value not in pdef.choices:
+            raise ValueError(f"P{number}: {value:g} is not one of {', '.join(map(str, pdef.choices))}")
 
 
 def catalogue_blocks(params: dict[int, float]) -> list[Block]:

@@ -5,6 +5,8 @@ keyboard and the signals of the host side."""
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
+from typing import Any
 
 from devsim.core.kit import Fault, FaultTable, signal_points
 from devsim.core.points import Family, Point, PointTable
@@ -39,12 +41,16 @@ def _axis_points(a: str) -> list[Point]:
     return [
         Point(f"axis.{a}.position", "float", f"actual position of {axis}, increments of its resolution", "§2.2",
               "inc", get=lambda m: m.axes[a].position(), in_state=True),
+        Point(f"axis.{a}.display", "str", f"actual value of {axis} on the screen: mm, or inch with V22/2 H", "§2.3.14",
+              get=lambda m: m.display(a)),
         Point(f"axis.{a}.velocity", "float", f"actual velocity of {axis}", "§2.5", "inc/s",
               get=lambda m: m.axes[a].velocity()),
         Point(f"axis.{a}.following_error", "float", f"following error of {axis}: v / Kv (P{30 + AXES.index(a)})",
               "§2.5", "inc", get=lambda m: m.following_error(a)),
         Point(f"axis.{a}.analog_out", "float", f"±10 V speed set-point of {axis}'s drive", "§2.5", "V",
               get=lambda m: m.analog_out(a)),
+        Point(f"axis.{a}.push", "float", f"an outside force moves {axis} by this many mm (open loop only)",
+              "§2.3.9", "mm", put=lambda m, v: m.manual.push(a, v)),
     ]
 
 
@@ -71,6 +77,43 @@ def _monitoring(model: PoselestaCnc, active: bool) -> None:
     model.message = "Fehlermeldung" if active else ""
 
 
+def _alarm(alarm: str) -> Callable[[PoselestaCnc, bool], None]:
+    """An internal monitoring alarm (spec §4.10): NC ready L, set-points 0 at once, the program
+    given up, the alarm on the screen; clearing the fault is ``reset_fault``."""
+
+    def apply(model: PoselestaCnc, active: bool) -> None:
+        if active:
+            model.executor.emergency_stop()
+            model.message = alarm
+            model.record_event(alarm.lower())
+        elif model.message == alarm:
+            model.message = ""
+        model.signals.set("nc_ready", not active and not model.booting)
+
+    return apply
+
+
+class _RelaySupply:
+    """The outputs as the machine sees them: all L while the relay supply is lost (S39); the
+    control's logic goes on and shows again when the supply returns."""
+
+    def __init__(self, model: PoselestaCnc) -> None:
+        self.model = model
+
+    def get(self, name: str) -> Any:
+        value = self.model.signals.get(name)
+        if self.model.relay_supply_lost:
+            return 0 if isinstance(value, int) and not isinstance(value, bool) else False
+        return value
+
+    def set(self, name: str, value: Any) -> None:
+        self.model.signals.set(name, value)
+
+
+def _relay_supply(model: PoselestaCnc, active: bool) -> None:
+    model.relay_supply_lost = active
+
+
 POINTS = PointTable.of(
     [
         Point("panel.mode", "str", "operating mode (Betriebsart); EXTERNAL_MEDIUM = Σ (V6), "
@@ -90,6 +133,14 @@ POINTS = PointTable.of(
               "§2.3.21", put=lambda m, v: m.protect(v, False), minimum=0, maximum=98, example=0),
         Point("protected", "json", "numbers of the protected programs", "§2.3.21",
               get=lambda m: sorted(m.protected), in_state=True),
+        Point("handwheel.turn", "int", "turn the handwheel V5 by this many detents (negative: backwards)", "§2.2.3",
+              put=lambda m, v: m.manual.turn(v), example=0),
+        Point("handwheel.factor", "int", "hand panel selector: 10 (position 1) or 1 (position 2)", "§3.4",
+              get=lambda m: m.manual.handwheel_factor, put=lambda m, v: setattr(m.manual, "handwheel_factor", v),
+              choices=(1, 10)),
+        Point("handwheel.rate_hz", "float", "detents per second of a turn", "§2.2.3", "1/s",
+              get=lambda m: m.manual.handwheel_rate, put=lambda m, v: setattr(m.manual, "handwheel_rate", v),
+              minimum=0.1, maximum=1000.0),
         Point("panel.reference", "str", "home an axis (x, y, z or d) in MANUAL: to its reference mark", "§2.3.23",
               put=lambda m, v: m.field.reference(v), choices=tuple(AXES), example="x"),
         Point("referenced", "json", "the axes that are referenced (their software limits act)", "§2.3.23",
@@ -102,6 +153,11 @@ POINTS = PointTable.of(
               get=lambda m: input_image(m.signals)),
         Point("diagnostics.input_screen", "str", "P79 N5 as the monitor shows it (Port n EIN A7…A0 B7…B0)",
               "§2.3.25", get=lambda m: input_screen(m.signals)),
+        Point("diagnostics.output_test", "bool", "P79 N6: true starts the output test (PROGRAM_ENTRY), false is "
+              "key C: all outputs L until a power cycle", "§2.4.11", get=lambda m: m.output_test.running,
+              put=lambda m, v: m.output_test.start() if v else m.output_test.stop()),
+        Point("diagnostics.output_cycles", "int", "P79 N6: passes of the output test (64 s each)", "§2.4.11",
+              get=lambda m: m.output_test.cycles),
         Point("diagnostics.pots", "json", "P79 N7: feed and override pot as hex 00 … FF", "§2.3.26",
               get=lambda m: pots(m.signals)),
         Point("program.state", "str", f"the block cycle: {', '.join(STATES)}", "§2.4.10",
@@ -117,7 +173,8 @@ POINTS = PointTable.of(
     *(_axis_points(a) for a in AXES),
     _transfer_points("v6"),
     _transfer_points("v7"),
-    signal_points(SIGNALS),
+    signal_points([d for d in SIGNALS if d.kind != "output"]),
+    signal_points([d for d in SIGNALS if d.kind == "output"], bank=lambda m: _RelaySupply(m)),  # type: ignore[arg-type]
     families=[
         Family("program.P<nn>", "str", "program P00 … P98, one block per line", "§2.6.3", _program),
         Family("param.P<n>", "float", "machine parameter P1 … P98", "§2.6.2.3", _param),
@@ -125,8 +182,16 @@ POINTS = PointTable.of(
 )
 
 FAULTS = FaultTable(
-    [Fault("monitoring", "internal monitoring error: NC ready goes L, an error message shows", "§2.4.5",
-           _monitoring)]
+    [
+        Fault("monitoring", "internal monitoring error: NC ready goes L, an error message shows", "§2.4.5",
+              _monitoring),
+        *(Fault(f"encoder_loss_{a}", f"the encoder of {a.upper()} is lost: alarm ENCODER_FAULT, NC ready L, "
+                "set-points 0, the program given up", "§2.2", _alarm("ENCODER_FAULT")) for a in AXES),
+        Fault("following_error", "a following error beyond the limit (a blocked drive): alarm "
+              "FOLLOWING_ERROR_LIMIT, NC ready L, set-points 0", "§2.5", _alarm("FOLLOWING_ERROR_LIMIT")),
+        Fault("relay_supply", "the 24 V supply of the output relays is lost: every output reads L; the "
+              "control's state shows again when it returns", "§2.7", _relay_supply),
+    ]
 )
 
 
