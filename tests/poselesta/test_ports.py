@@ -244,3 +244,13 @@ def test_a_protected_program_is_not_overwritten_by_a_read_in(cnc: Any) -> None:
     cnc.set("panel.release", 20)
     cnc.set("v7.transfer", "input")
     assert cnc.read("program.P20") == ""  # read-in deletes the pre-selected program first
+
+
+def test_pos_iii_reads_the_catalogue_at_1200_baud_at_most(cnc: Any) -> None:
+    """Spec §3.9: P70 = 5 (4800 baud) refuses the catalogue read-in, nothing is cleared."""
+    cnc.set("param.P70", 5)
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 99)
+    with pytest.raises(Exception, match="1200 baud"):
+        cnc.set("v7.transfer", "input")
+    assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF" and cnc.read("param.P70") == 5
