@@ -1,4 +1,5 @@
-"""Coordinated motion of several axes along one path (a circular arc), in closed form.
+"""Coordinated motion of several axes along one path (a straight line or a circular arc), in
+closed form.
 
 The speed along the path is a trapezoid (or triangle) in the path length ``s``: from the
 current path speed up to ``speed`` with ``accel``, cruising, and down to rest at the end of the
@@ -8,8 +9,8 @@ profile changes its acceleration and where a component turns (an arc's quadrant 
 that every piece is monotonic in every axis and the axis model's crossing events stay exact.
 Units are the caller's: a path in millimetres, ``scale`` turning a component into increments.
 
-Used by the POSELESTA's G02/G03 (spec poselesta.md §5.3); a straight line is the degenerate
-case any kind can build the same way.
+Used by the POSELESTA's G01/G02/G03 and its continuous path (spec poselesta.md §5.3): a
+profile may end at a speed (``v_end``), the next path starting from it.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import math
 
 from devsim.core.record import record
 
-__all__ = ["Arc", "ArcComponent", "SpeedProfile", "arc_pieces"]
+__all__ = ["Arc", "Line", "Path", "PathComponent", "SpeedProfile", "path_pieces"]
 
 
 @record
@@ -29,40 +30,44 @@ class SpeedProfile:
     pieces: tuple[tuple[float, float, float, float], ...]
     end: float
     length: float
+    final: float = 0.0  # the path speed at the end
 
     @classmethod
-    def plan(cls, length: float, v0: float, speed: float, accel: float) -> SpeedProfile:
-        """From path speed ``v0`` to rest after ``length``, at most ``speed``, ramps ``accel``
-        (braking harder only when ``v0`` cannot stop within ``length`` otherwise)."""
+    def plan(cls, length: float, v0: float, speed: float, accel: float, v_end: float = 0.0) -> SpeedProfile:
+        """From path speed ``v0`` to ``v_end`` (rest by default) after ``length``, at most
+        ``speed``, ramps ``accel`` (braking harder only when ``v0`` cannot slow down within
+        ``length`` otherwise)."""
         pieces: list[tuple[float, float, float, float]] = []
         t = s = 0.0
         v = max(0.0, v0)
+        v_end = max(0.0, min(v_end, speed))
         if length <= 0:
             return cls((), 0.0, 0.0)
-        if v * v / (2 * accel) >= length:  # stopping already takes all of it
-            acc = -v * v / (2 * length)
-            return cls(((0.0, 0.0, v, acc),), v / -acc if acc else 0.0, length)
+        if v > v_end and (v * v - v_end * v_end) / (2 * accel) >= length:  # slowing takes all of it
+            acc = -(v * v - v_end * v_end) / (2 * length)
+            return cls(((0.0, 0.0, v, acc),), (v_end - v) / acc, length, v_end)
         if v > speed:  # first down to the speed
             dt = (v - speed) / accel
             pieces.append((t, s, v, -accel))
             s += (v + speed) / 2 * dt
             t += dt
             v = speed
-        peak = min(speed, math.sqrt(accel * (length - s) + v * v / 2))
+        peak = min(speed, math.sqrt(accel * (length - s) + (v * v + v_end * v_end) / 2))
         if peak > v:
             dt = (peak - v) / accel
             pieces.append((t, s, v, accel))
             s += (v + peak) / 2 * dt
             t += dt
             v = peak
-        cruise = length - s - v * v / (2 * accel)
+        cruise = length - s - (v * v - v_end * v_end) / (2 * accel)
         if cruise > 1e-12 * max(1.0, length):
             pieces.append((t, s, v, 0.0))
             t += cruise / v
             s += cruise
-        pieces.append((t, s, v, -accel))
-        t += v / accel
-        return cls(tuple(pieces), t, length)
+        if v > v_end:
+            pieces.append((t, s, v, -accel))
+            t += (v - v_end) / accel
+        return cls(tuple(pieces), t, length, min(v, v_end) if v_end else 0.0)
 
     def _piece(self, t: float) -> tuple[float, float, float, float]:
         found = self.pieces[0]
@@ -74,7 +79,7 @@ class SpeedProfile:
     def state(self, t: float) -> tuple[float, float, float]:
         """``(s, ds/dt, d²s/dt²)`` at ``t`` (clamped to the profile)."""
         if not self.pieces or t >= self.end:
-            return self.length, 0.0, 0.0
+            return self.length, self.final, 0.0
         t0, s0, v0, acc = self._piece(max(0.0, t))
         dt = max(0.0, t) - t0
         return s0 + v0 * dt + 0.5 * acc * dt * dt, v0 + acc * dt, acc
@@ -134,40 +139,71 @@ class Arc:
             found.append(s)
 
 
-class ArcComponent:
-    """One axis's share of an arc for a piece of time: ``state(dt)`` = (position, velocity,
-    acceleration) in the axis's units (``scale`` × the arc's), ``dt`` from the piece's start."""
+    def rest(self, s: float) -> Arc:
+        """The part of the arc after ``s``."""
+        return Arc(self.cx, self.cy, self.radius, self.angle(s), self.way, max(0.0, self.sweep - s / self.radius))
 
-    def __init__(self, arc: Arc, profile: SpeedProfile, t_start: float, component: int, scale: float) -> None:
-        self.arc, self.profile, self.t_start, self.component, self.scale = arc, profile, t_start, component, scale
+    def component(self, i: int, s: float) -> tuple[float, float, float]:
+        """Component ``i`` (0: first axis, 1: second) and its first and second derivative in s."""
+        a = self.angle(s)
+        c, n = math.cos(a), math.sin(a)
+        if i == 0:
+            return self.cx + self.radius * c, -self.way * n, -c / self.radius
+        return self.cy + self.radius * n, self.way * c, -n / self.radius
+
+
+@record
+class Line:
+    """A straight line from ``start`` to ``end`` (any number of axes)."""
+
+    start: tuple[float, ...]
+    end: tuple[float, ...]
+
+    @property
+    def length(self) -> float:
+        return math.dist(self.start, self.end)
+
+    def turning_points(self) -> list[float]:
+        return []
+
+    def point(self, s: float) -> tuple[float, ...]:
+        return tuple(self.component(i, s)[0] for i in range(len(self.start)))
+
+    def rest(self, s: float) -> Line:
+        return Line(self.point(s), self.end)
+
+    def component(self, i: int, s: float) -> tuple[float, float, float]:
+        length = self.length
+        unit = (self.end[i] - self.start[i]) / length if length > 0 else 0.0
+        return self.start[i] + unit * s, unit, 0.0
+
+
+Path = Arc | Line
+
+
+class PathComponent:
+    """One axis's share of a path for a piece of time: ``state(dt)`` = (position, velocity,
+    acceleration) in the axis's units (``scale`` × the path's), ``dt`` from the piece's start."""
+
+    def __init__(self, path: Path, profile: SpeedProfile, t_start: float, component: int, scale: float) -> None:
+        self.path, self.profile, self.t_start, self.component, self.scale = path, profile, t_start, component, scale
 
     def state(self, dt: float) -> tuple[float, float, float]:
         s, sd, sdd = self.profile.state(self.t_start + dt)
-        arc = self.arc
-        a = arc.angle(s)
-        c, n = math.cos(a), math.sin(a)
-        if self.component == 0:
-            x = arc.cx + arc.radius * c
-            v = -arc.way * n * sd
-            acc = -c * sd * sd / arc.radius - arc.way * n * sdd
-        else:
-            x = arc.cy + arc.radius * n
-            v = arc.way * c * sd
-            acc = -n * sd * sd / arc.radius + arc.way * c * sdd
-        return x * self.scale, v * self.scale, acc * self.scale
+        x, dx, ddx = self.path.component(self.component, s)
+        return x * self.scale, dx * sd * self.scale, (ddx * sd * sd + dx * sdd) * self.scale
 
 
-def arc_pieces(arc: Arc, profile: SpeedProfile, scales: tuple[float, float]) -> list[
-    tuple[float, tuple[ArcComponent, ArcComponent]]
+def path_pieces(path: Path, profile: SpeedProfile, scales: tuple[float, ...]) -> list[
+    tuple[float, tuple[PathComponent, ...]]
 ]:
-    """The arc cut into pieces monotonic in both components: ``(duration, (x part, y part))``."""
+    """The path cut into pieces monotonic in every component: ``(duration, (one per axis))``."""
     cuts = {0.0, profile.end}
     cuts.update(t for t, *_ in profile.pieces)
-    cuts.update(profile.time_at(s) for s in arc.turning_points())
+    cuts.update(profile.time_at(s) for s in path.turning_points())
     times = sorted(t for t in cuts if 0.0 <= t <= profile.end)
     pieces = []
     for t0, t1 in zip(times, times[1:], strict=False):
         if t1 - t0 > 1e-12 * max(1.0, profile.end):
-            pieces.append((t1 - t0, (ArcComponent(arc, profile, t0, 0, scales[0]),
-                                     ArcComponent(arc, profile, t0, 1, scales[1]))))
+            pieces.append((t1 - t0, tuple(PathComponent(path, profile, t0, i, scale) for i, scale in enumerate(scales))))
     return pieces

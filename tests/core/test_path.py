@@ -9,7 +9,7 @@ import pytest
 
 from devsim.core.axis import Axis
 from devsim.core.clock import VirtualClock
-from devsim.core.path import Arc, SpeedProfile, arc_pieces
+from devsim.core.path import Arc, Line, SpeedProfile, path_pieces
 
 
 def test_speed_profile_trapezoid_triangle_and_slowing_down() -> None:
@@ -34,7 +34,7 @@ def test_an_arc_is_followed_exactly_on_two_axes() -> None:
     y = Axis(clock, position=-43_144, name="y")
     arc = Arc(0.0, -43.144, 20.0, math.pi, -1, math.pi / 2)
     profile = SpeedProfile.plan(arc.length, 0.0, 50.0, 500.0)
-    pieces = arc_pieces(arc, profile, (1000.0, 1000.0))
+    pieces = path_pieces(arc, profile, (1000.0, 1000.0))
     done = []
     end = x.follow([(d, px) for d, (px, _) in pieces], on_done=lambda: done.append(clock.now()))
     y.follow([(d, py) for d, (_, py) in pieces])
@@ -51,3 +51,26 @@ def test_an_arc_is_followed_exactly_on_two_axes() -> None:
     assert (x.position(), y.position()) == pytest.approx((0.0, -23_144), abs=1e-6)
     assert done == [pytest.approx(profile.end)] and not x.moving
     assert crossed and crossed[0] == pytest.approx(profile.time_at(20.0 * math.pi / 4), abs=1e-9)
+
+
+def test_a_profile_may_end_at_speed_and_the_next_go_on_from_it() -> None:
+    """A continuous path: the first piece ends at its cruise speed, the next starts there."""
+    first = SpeedProfile.plan(10.0, 0.0, 50.0, 500.0, v_end=50.0)
+    assert first.final == 50.0 and first.state(first.end)[1] == 50.0
+    assert first.end == pytest.approx(0.1 + (10.0 - 2.5) / 50)
+    second = SpeedProfile.plan(10.0, first.final, 50.0, 500.0)
+    assert second.state(0.0)[1] == 50.0 and second.end == pytest.approx((10.0 - 2.5) / 50 + 0.1)
+
+
+def test_a_line_is_followed_on_three_axes() -> None:
+    clock = VirtualClock()
+    axes = [Axis(clock, name=n) for n in "xyz"]
+    line = Line((0.0, 0.0, 0.0), (3.0, 4.0, 12.0))  # 13 long
+    profile = SpeedProfile.plan(line.length, 0.0, 13.0, 130.0)
+    pieces = path_pieces(line, profile, (1.0, 1.0, 1.0))
+    for i, axis in enumerate(axes):
+        axis.follow([(d, parts[i]) for d, parts in pieces])
+    clock.advance_to(0.5)
+    assert [a.velocity() for a in axes] == pytest.approx([3.0, 4.0, 12.0])
+    clock.advance(2.0)
+    assert [a.position() for a in axes] == pytest.approx([3.0, 4.0, 12.0])

@@ -542,3 +542,37 @@ def test_a_lost_relay_supply_shows_every_output_low(make) -> None:  # noqa: ANN0
     assert cnc.read("output.data_bus") == 0
     cnc.fault("relay_supply", False)
     assert cnc.read("output.m03") is True and cnc.read("output.m08") is True and cnc.read("output.nc_ready") is True
+
+
+def test_contouring_blocks_run_through_without_stopping(make) -> None:  # noqa: ANN001
+    """Spec §4.3.3, §5.3 (manual §2.3.15, §2.4.2): G01 X10 then X20 pass the block boundary at
+    the path speed, travel commands on, no position reached; the G00 block after the chain makes
+    the end of the chain an exact stop."""
+    cnc = make(program="N1 G01 X10 F3000\nN2 X20\nN3 G00 X0")
+    cnc.set("panel.nc_start", True)
+    cnc.run_until(lambda d: d.model.executor.block_number == 2, 5.0)
+    assert cnc.read("axis.x.position") == pytest.approx(10_000)
+    cnc.advance(0.001)
+    assert cnc.read("axis.x.velocity") == pytest.approx(50_000)  # still 50 mm/s: no stop at N1's end
+    assert cnc.read("output.travel_x") is True and cnc.read("output.position_reached") is False
+    assert cnc.read("program.state") == "MOVING"
+    cnc.run_until(lambda d: bool(d.model.signals.get("position_reached")), 5.0)
+    assert cnc.read("axis.x.position") == pytest.approx(20_000) and cnc.read("program.block") == 2
+    cnc.advance(3.0)
+    assert cnc.read("program.state") == "END" and cnc.read("axis.x.position") == pytest.approx(0)
+
+
+def test_a_chain_of_line_and_arc_keeps_its_speed(make) -> None:  # noqa: ANN001
+    """A G01 into a G02 (spec §5.3: no look-ahead, the path speed is kept)."""
+    cnc = make(program="N1 G01 X-20 F3000\nN2 G02 X0 Y20 I0 J0\nN3 G01 X10")
+    cnc.set("panel.nc_start", True)
+    cnc.run_until(lambda d: d.model.executor.block_number == 2, 5.0)
+    cnc.advance(0.1)
+    assert math.hypot(cnc.read("axis.x.velocity"), cnc.read("axis.y.velocity")) == pytest.approx(50_000)
+    assert _radius(cnc, 0, 0) == pytest.approx(20.0, abs=1e-6)
+    cnc.run_until(lambda d: d.model.executor.block_number == 3, 5.0)
+    cnc.advance(0.01)
+    assert cnc.read("axis.x.velocity") == pytest.approx(50_000) and cnc.read("output.position_reached") is False
+    cnc.advance(2.0)
+    assert cnc.read("program.state") == "END"
+    assert (cnc.read("axis.x.position"), cnc.read("axis.y.position")) == pytest.approx((10_000, 20_000), abs=1e-6)

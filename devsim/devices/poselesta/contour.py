@@ -1,9 +1,15 @@
-"""Circular interpolation G02/G03 (manual §2.3.15, §2.4.2; spec poselesta.md §5.3, §6.6, §7.5
-G-IJK): an arc in the plane of two axes (G17 XY with I/J, G18 XZ with I/K, G19 YZ with J/K),
-its centre given by I/J/K as absolute coordinates, clockwise for G02 and counter-clockwise for
-G03 seen from the positive third axis, at the path speed F × override.  The axes follow the arc
-in closed form (:mod:`devsim.core.path`); a change of the override re-plans along the rest of
-the arc, NC-Stop brakes along it."""
+"""Contouring: linear interpolation G01 and circular interpolation G02/G03, and the continuous
+path between such blocks (manual §2.3.15, §2.4.2, §2.4.3; spec poselesta.md §4.3.3, §5.3, §6.6,
+§7.5 G-IJK).
+
+A G01 block is a straight line of its axes, a G02/G03 block an arc in the plane of two axes
+(G17 XY with I/J, G18 XZ with I/K, G19 YZ with J/K) around the centre I/J/K, taken as absolute
+coordinates, clockwise for G02 and counter-clockwise for G03 seen from the positive third axis.
+The path speed is F × override; the axes follow the path in closed form
+(:mod:`devsim.core.path`).  A change of the override re-plans along the rest of the path,
+NC-Stop brakes along it, and a block the next one continues ends at its path speed instead of
+at rest (no look-ahead beyond the next block).
+"""
 
 from __future__ import annotations
 
@@ -11,13 +17,13 @@ import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from devsim.core.path import Arc, SpeedProfile, arc_pieces
+from devsim.core.path import Arc, Line, Path, SpeedProfile, path_pieces
 from devsim.devices.poselesta.tape import Block
 
 if TYPE_CHECKING:
     from devsim.devices.poselesta.cnc import PoselestaCnc
 
-__all__ = ["CIRCLE_TOLERANCE", "PLANES", "ArcMotion"]
+__all__ = ["CIRCLE_TOLERANCE", "PLANES", "PathMotion"]
 
 #: G17/G18/G19: the axes of the plane and their centre words.
 PLANES = {17: (("x", "I"), ("y", "J")), 18: (("x", "I"), ("z", "K")), 19: (("y", "J"), ("z", "K"))}
@@ -25,19 +31,27 @@ CIRCLE_TOLERANCE = 0.01  # mm: start and end radius may differ this much (spec �
 FULL = 2 * math.pi
 
 
-class ArcMotion:
-    """One G02/G03 block's arc, from planning to arrival (re-planned from where it is)."""
+class PathMotion:
+    """One contouring block's path, from planning to arrival (re-planned from where it is)."""
 
-    def __init__(self, cnc: PoselestaCnc, axes: tuple[str, str], arc: Arc) -> None:
-        self.cnc, self.axes, self.arc = cnc, axes, arc
+    def __init__(self, cnc: PoselestaCnc, axes: tuple[str, ...], path: Path) -> None:
+        self.cnc, self.axes, self.path = cnc, axes, path
         self.profile = SpeedProfile.plan(0.0, 0.0, 1.0, 1.0)
         self.t0 = cnc.clock.now()
-        end = arc.point(arc.length)
-        self.targets = {axes[0]: cnc.from_mm(axes[0], end[0]), axes[1]: cnc.from_mm(axes[1], end[1])}
+        self.continues = False  # the next block goes on along the contour: end at path speed
+        end = path.point(path.length)
+        self.targets = {a: cnc.from_mm(a, end[i]) for i, a in enumerate(axes)}
 
     @classmethod
-    def from_block(cls, cnc: PoselestaCnc, block: Block, plane: int, absolute: bool, way: int,
-                   unit: Callable[[str], float] = lambda _a: 1.0) -> ArcMotion | str | None:
+    def line(cls, cnc: PoselestaCnc, targets: dict[str, float]) -> PathMotion:
+        """G01 to ``targets`` (increments) from where the axes stand."""
+        axes = tuple(targets)
+        start = tuple(cnc.to_mm(a, cnc.axes[a].final_position()) for a in axes)
+        return cls(cnc, axes, Line(start, tuple(cnc.to_mm(a, targets[a]) for a in axes)))
+
+    @classmethod
+    def arc(cls, cnc: PoselestaCnc, block: Block, plane: int, absolute: bool, way: int,
+            unit: Callable[[str], float] = lambda _a: 1.0) -> PathMotion | str | None:
         """The arc a block programs, an error text (the radii differ), or None (no end point);
         ``unit(axis)`` converts program units (inch) to the machine's."""
         (a, centre_a), (b, centre_b) = PLANES[plane]
@@ -67,11 +81,10 @@ class ArcMotion:
         s, sd, _ = self.profile.state(self.cnc.clock.now() - self.t0)
         return s, sd
 
-    def _follow(self, arc: Arc, profile: SpeedProfile, on_done: Callable[[str], None] | None) -> None:
+    def _follow(self, path: Path, profile: SpeedProfile, on_done: Callable[[str], None] | None) -> None:
         cnc = self.cnc
-        self.arc, self.profile, self.t0 = arc, profile, cnc.clock.now()
-        scales = (cnc.from_mm(self.axes[0], 1.0), cnc.from_mm(self.axes[1], 1.0))
-        pieces = arc_pieces(arc, profile, scales)
+        self.path, self.profile, self.t0 = path, profile, cnc.clock.now()
+        pieces = path_pieces(path, profile, tuple(cnc.from_mm(a, 1.0) for a in self.axes))
         for index, axis in enumerate(self.axes):
             done = None if on_done is None else (lambda a=axis: on_done(a))
             if pieces:
@@ -79,21 +92,23 @@ class ArcMotion:
             elif done is not None:
                 done()
 
-    def _rest(self) -> Arc:
-        """The part of the arc still ahead."""
-        s, _ = self._progress()
-        arc = self.arc
-        return Arc(arc.cx, arc.cy, arc.radius, arc.angle(s), arc.way, max(0.0, arc.sweep - s / arc.radius))
+    @property
+    def final_speed(self) -> float:
+        """The path speed the block ends with (0, or the speed handed on)."""
+        return self.profile.final
 
-    def run(self, speed: float, on_done: Callable[[str], None]) -> None:
-        """Go on along the arc at path speed ``speed`` (mm/s) from the current path speed."""
-        _, sd = self._progress()
-        rest = self._rest()
-        self._follow(rest, SpeedProfile.plan(rest.length, sd, speed, self.cnc.cfg.accel), on_done)
+    def run(self, speed: float, on_done: Callable[[str], None], v0: float | None = None) -> None:
+        """Go on along the path at path speed ``speed`` (mm/s), from the current path speed
+        (or ``v0``, the speed the previous block handed on)."""
+        s, sd = self._progress()
+        rest = self.path.rest(s)
+        start = sd if v0 is None else v0
+        self._follow(rest, SpeedProfile.plan(rest.length, start, speed, self.cnc.cfg.accel,
+                                             speed if self.continues else 0.0), on_done)
 
     def brake(self, on_done: Callable[[str], None] | None) -> None:
-        """Brake along the arc with the ramp: the axes stay on the circle."""
-        _, sd = self._progress()
-        rest = self._rest()
+        """Brake along the path with the ramp: the axes stay on it."""
+        s, sd = self._progress()
+        rest = self.path.rest(s)
         distance = min(sd * sd / (2 * self.cnc.cfg.accel), rest.length)
         self._follow(rest, SpeedProfile.plan(distance, sd, max(sd, 1e-9), self.cnc.cfg.accel), on_done)

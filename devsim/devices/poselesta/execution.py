@@ -9,20 +9,18 @@ at F × override); exact positioning with "Position erreicht" and "Programm fort
 block-end M functions (M05, M09, M11, M15, odd free codes, then M00/M01/M02).  NC-Stop brakes to
 ``HOLD``, NC-Start continues; Not-Stop stops at once, gives up the handshake and the program.
 
-G02/G03 arcs run in :mod:`~devsim.devices.poselesta.contour`.  Subroutines and repeats
-(G10–G13), dwell (G04) and block abort (P90) change the flow.  Not simulated yet: G25 (its
-blocks run as no motion, event ``unsupported_g``), the continuous path between blocks (every
-motion block ends with exact positioning), cutter compensation G41/G42 (accepted, no offset),
-software limits and homing, inch programs.
+G01 lines, G02/G03 arcs and the continuous path between them run in
+:mod:`~devsim.devices.poselesta.contour`.  Subroutines and repeats (G10–G13), dwell (G04) and
+block abort (P90) change the flow.  Not simulated: G25 (its blocks run as no motion, event
+``unsupported_g``) and cutter compensation G41/G42 (accepted, no offset).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from devsim.devices.poselesta.contour import PLANES, ArcMotion
+from devsim.devices.poselesta.contour import PLANES, PathMotion
 from devsim.devices.poselesta.signals import AXES
 from devsim.devices.poselesta.tape import Block, parse_blocks
 
@@ -66,7 +64,9 @@ class Executor:
         self.inch = False  # V22/2 sampled at the start of the block (spec §5.1)
         self.motion = 0  # modal G00 … G03
         self.plane = 17  # modal G17 / G18 / G19
-        self.contour: ArcMotion | None = None
+        self.contour: PathMotion | None = None
+        self.carry: float | None = None  # path speed handed on to the next block (mm/s)
+        self._v0: float | None = None
         self.absolute = True  # G90 / G91
         self.feed = 0  # modal F, mm/min
         self.targets: dict[str, float] = {}
@@ -111,6 +111,7 @@ class Executor:
         self.contour = None
         self._resume = None
         self.stop_pending = self.abort_pending = False
+        self.carry = self._v0 = None
         self.pointer = 0
         self.block = None
         self.calls.clear()
@@ -312,14 +313,14 @@ class Executor:
         block = self.block
         assert block is not None
         cnc = self.cnc
+        self._v0, self.carry = self.carry, None  # the path speed the previous block handed on
         if 25 in block.values("G"):
             self._unsupported(25)  # no motion (spec §4.12.1)
             self._end_functions()
             return
         self.contour = None
         if self.motion in (2, 3):
-            contour = ArcMotion.from_block(cnc, block, self.plane, self.absolute, -1 if self.motion == 2 else 1,
-                                           self.unit)
+            contour = PathMotion.arc(cnc, block, self.plane, self.absolute, -1 if self.motion == 2 else 1, self.unit)
             if isinstance(contour, str):
                 cnc.record_event("circle_endpoint_error")
                 cnc.announce("event", "program", "circle_endpoint_error", contour)
@@ -341,6 +342,8 @@ class Executor:
         if not targets:
             self._end_functions()
             return
+        if self.motion == 1:
+            self.contour = PathMotion.line(cnc, targets)
         self._motion_targets(targets)
 
     def _motion_targets(self, targets: dict[str, float]) -> None:
@@ -352,9 +355,33 @@ class Executor:
         for a in travel:
             self.signals.set(f"travel_{a}", True)
         if self.stop_pending:
+            self._v0 = None
             self._stop_until_start(self._check_enable, state="HOLD")
             return
+        if self._v0 is not None:
+            self._move()  # within a contour the axis enable is not checked again (§2.3.15)
+            return
         self._check_enable()
+
+    def _continues(self) -> bool:
+        """Does the next block continue this block's contour (spec §4.3.3)?  Then this one ends
+        at its path speed: no exact positioning, travel commands on, no position reached."""
+        block = self.block
+        if block is None or self.cnc.mode != "AUTO_CONTINUOUS" or self.motion not in (1, 2, 3):
+            return False
+        gs = set(block.values("G"))
+        if gs & {4, 9, 60, 11, 12, 13} or block.values("M") or self.abort_pending:
+            return False
+        index = self.pointer + 1
+        while index < len(self.blocks) and self.blocks[index].skip and not self.signals.get("block_skip_cancel"):
+            index += 1
+        if index >= len(self.blocks):
+            return False
+        following = self.blocks[index]
+        motion = next((g for g in reversed(following.values("G")) if g in (0, 1, 2, 3)), self.motion)
+        return (motion in (1, 2, 3) and not set(following.values("G")) & {4, 9, 10, 11, 12, 13, 25, 60}
+                and not any(following.value(c) is not None for c in "MST")
+                and any(following.value(c) is not None for c in "XYZD"))
 
     def _check_enable(self) -> None:
         if not self.signals.get("axis_enable"):
@@ -376,8 +403,10 @@ class Executor:
                 return
         if self.contour is not None:
             speed = self._path_speed(tuple(self.targets))
+            v0, self._v0 = self._v0, None
             if speed is not None:
-                self.contour.run(speed, self._arrived)
+                self.contour.continues = self._continues()
+                self.contour.run(speed, self._arrived, v0)
             return
         speeds = self._speeds()
         if speeds is None:
@@ -391,41 +420,26 @@ class Executor:
             axis.move_to(target, speed, accel, on_done=lambda a=a: self._arrived(a))
 
     def _speeds(self) -> dict[str, tuple[float, float]] | None:
-        """Speed and acceleration of each axis (inc/s, inc/s²): G00 each at its rapid (P44–P47,
-        × override with P64 = 1); G01 one straight line at F × override, every component within
-        its rapid, the acceleration shared out along the path (spec §5.3)."""
+        """G00: each axis at its rapid (P44–P47, × override with P64 = 1) with its own ramps
+        (spec §5.3); speeds in inc/s, accelerations in inc/s²."""
         cnc = self.cnc
-        override = cnc.override()
         if any(cnc.rapid(a) <= 0 for a in self.targets):
             cnc.record_event("zero_speed_parameter")  # P44–P47 = 0: the axis cannot move (spec §4.8)
             return None
-        if self.motion == 0:
-            factor = override if cnc.params[64] == 1 else 1.0
-            if factor <= 0:
-                return None
-            return {a: (cnc.rapid(a) * factor, cnc.accel(a)) for a in self.targets}
-        if override <= 0:
+        factor = cnc.override() if cnc.params[64] == 1 else 1.0
+        if factor <= 0:
             return None
-        deltas = {a: t - cnc.axes[a].position() for a, t in self.targets.items()}
-        length = math.sqrt(sum(cnc.to_mm(a, d) ** 2 for a, d in deltas.items()))
-        if length == 0:
-            return {a: (1.0, 1.0) for a in self.targets}
-        path = self.feed * self.unit("x") * override / 60.0  # mm/s
-        for a, d in deltas.items():  # no component faster than its rapid
-            share = abs(cnc.to_mm(a, d)) / length
-            if share > 0:
-                path = min(path, cnc.to_mm(a, cnc.rapid(a)) / share)
-        accel = min(cnc.to_mm(a, cnc.accel(a)) for a in self.targets)
-        if path <= 0:
-            cnc.record_event("zero_feed")
-            return None
-        return {a: (cnc.from_mm(a, path * abs(cnc.to_mm(a, d)) / length),
-                    cnc.from_mm(a, accel * abs(cnc.to_mm(a, d)) / length)) for a, d in deltas.items()}
+        return {a: (cnc.rapid(a) * factor, cnc.accel(a)) for a in self.targets}
 
     def _path_speed(self, axes: tuple[str, ...]) -> float | None:
         """F × override in mm/s, no faster than the slowest rapid of ``axes``; None at 0."""
         cnc = self.cnc
+        if any(cnc.rapid(a) <= 0 for a in axes):
+            cnc.record_event("zero_speed_parameter")  # P44–P47 = 0: the axis cannot move (spec §4.8)
+            return None
         path = min([self.feed * self.unit("x") * cnc.override() / 60.0, *(cnc.to_mm(a, cnc.rapid(a)) for a in axes)])
+        if self.feed <= 0:
+            cnc.record_event("zero_feed")
         return path if path > 0 else None
 
     def _override_input(self, _name: str, _old: Any, _new: Any) -> None:
@@ -446,6 +460,10 @@ class Executor:
     def _arrived(self, axis: str) -> None:
         self._arriving.discard(axis)
         if self._arriving or self.state != "MOVING":
+            return
+        if self.contour is not None and self.contour.final_speed > 0:
+            self.carry = self.contour.final_speed  # the contour goes on in the next block (§2.4.2)
+            self._end_functions()
             return
         for a in AXES:  # exact positioning (§2.4.2, §2.4.3)
             self.signals.set(f"travel_{a}", False)
