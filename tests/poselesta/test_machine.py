@@ -576,3 +576,18 @@ def test_a_chain_of_line_and_arc_keeps_its_speed(make) -> None:  # noqa: ANN001
     cnc.advance(2.0)
     assert cnc.read("program.state") == "END"
     assert (cnc.read("axis.x.position"), cnc.read("axis.y.position")) == pytest.approx((10_000, 20_000), abs=1e-6)
+
+
+def test_an_xy_plotter_gets_its_position_as_the_set_point(devsim_device) -> None:  # noqa: ANN001
+    """Spec §5.9 (manual §2.3.20): V22/8 H at power-on; the set-point is the position over the
+    working field, −10 V … +10 V in 14 bits."""
+    cnc = devsim_device("poselesta")
+    assert cnc.read("xy_plotter") is False
+    cnc.set("input.xy_plotter", True)
+    assert cnc.read("xy_plotter") is False  # sampled at power-on only
+    cnc.set("param.P9", 100)
+    cnc.set("param.P13", -100)
+    cnc.power_cycle()
+    assert cnc.read("xy_plotter") is True
+    assert cnc.read("axis.x.analog_out") == pytest.approx(-10 + 20 * 8192 / 16383)  # 0 mm: the middle step
+    assert cnc.read("axis.x.following_error") == 0

@@ -254,3 +254,18 @@ def test_pos_iii_reads_the_catalogue_at_1200_baud_at_most(cnc: Any) -> None:
     with pytest.raises(Exception, match="1200 baud"):
         cnc.set("v7.transfer", "input")
     assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF" and cnc.read("param.P70") == 5
+
+
+def test_the_keyboard_test_shows_each_code_plus_one(cnc: Any) -> None:
+    """Vector K2 (§2.6.4): key P (48) during P79 N3 shows 49; key 2D ends the test."""
+    cnc.set("input.keyboard_external", True)
+    cnc.set("panel.mode", "PROGRAM_ENTRY")
+    cnc.set("diagnostics.keyboard_test", "true")
+    with open_port(cnc, "v8") as keyboard:
+        keyboard.write(encode("H", True))
+        until(lambda: cnc.read("keyboard.accepted") == 1, "the key is taken")
+        assert cnc.read("diagnostics.keyboard_test") == "49"
+        cnc.advance(0.2)
+        keyboard.write(bytes([0x2D]))
+        until(lambda: cnc.read("keyboard.accepted") == 2, "the exit key is taken")
+    assert cnc.read("diagnostics.keyboard_test") == ""

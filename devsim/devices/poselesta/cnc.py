@@ -50,6 +50,7 @@ MODES = {
 #: The mode a port's transfers need: Σ for V6, EXT for V7 (§2.6).
 PORT_MODE = {"v6": "EXTERNAL_MEDIUM", "v7": "EXTERNAL_OPERATION"}
 DIAGNOSTICS, CATALOGUE = 79, 99
+KEYBOARD_TEST_EXIT = 0x2D  # the key that ends the keyboard test P79 N3 (spec §3.10)
 RESERVED_PROGRAMS = (DIAGNOSTICS, CATALOGUE)  # the diagnostics and the parameter catalogue (spec §4.9)
 
 
@@ -74,6 +75,8 @@ class PoselestaCnc(Model):
         self.last_key: int | None = None
         self.pending_catalogue: dict[int, float] = {}
         self.relay_supply_lost = False
+        self.keyboard_test: str | None = None  # P79 N3 running: what the screen shows ("" before a key)
+        self.plotter = False  # X/Y plotter operation (POS III, V22/8 at power-on)
         self._buzzer_timer: Any = None
         self._boot_timer: Any = None
         self.axes = {a: Axis(self.clock, name=a) for a in AXES}
@@ -114,6 +117,8 @@ class PoselestaCnc(Model):
         """§2.4.5, spec §4.2: all outputs L, the axes where the encoders count from (0)."""
         self.mode = "MANUAL"
         self.message = ""
+        self.keyboard_test = None
+        self.plotter = self.cfg.variant == "III" and bool(self.signals.get("xy_plotter"))  # sampled now only
         for output in OUTPUTS:
             self.signals.set(output.name, output.initial)
         self.booting = self.cfg.boot_time > 0
@@ -220,13 +225,22 @@ class PoselestaCnc(Model):
         return f"{value:.{decimals}f}"
 
     def following_error(self, axis: str) -> float:
-        """e = v / Kv in steady state (spec §5.2), in increments; 0 with Not-Stop or open loop."""
-        if not self.signals.get("emergency_stop") or self.manual.in_open_loop(axis):
+        """e = v / Kv in steady state (spec §5.2), in increments; 0 with Not-Stop, open loop or a
+        plotter (actual = command, spec §5.9)."""
+        if not self.signals.get("emergency_stop") or self.manual.in_open_loop(axis) or self.plotter:
             return 0.0
         return self.axes[axis].velocity() / self.kv(axis)
 
     def analog_out(self, axis: str) -> float:
-        """The ±10 V set-point: the speed over the drive's speed at 10 V (spec §5.2)."""
+        """The ±10 V set-point: the speed over the drive's speed at 10 V (spec §5.2); for an
+        X/Y plotter the position over the working field P9–P16, in 14 bits (spec §5.9)."""
+        if self.plotter:
+            low, high = self.field.limits(axis)
+            if high <= low:
+                return 0.0
+            share = (self.axes[axis].position() - low) / (high - low)
+            steps = round(max(0.0, min(1.0, share)) * (2**14 - 1))
+            return -10.0 + 20.0 * steps / (2**14 - 1)
         if not self.signals.get("emergency_stop") or self.manual.in_open_loop(axis):
             return 0.0
         at_10v = self.cfg.drive_speed_factor * self.rapid(axis)
@@ -448,6 +462,8 @@ class PoselestaCnc(Model):
 
     def _key(self, code: int) -> None:
         self.last_key = code
+        if self.keyboard_test is not None:  # P79 N3: the code + 1 on the screen; 2D ends the test
+            self.keyboard_test = None if code == KEYBOARD_TEST_EXIT else f"{code + 1:02X}"
         self.transfer_event("v8", "key", code)
         if self.params[67] == 0:
             self.signals.set("buzzer", True)

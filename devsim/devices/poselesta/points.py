@@ -9,7 +9,7 @@ from collections.abc import Callable
 from typing import Any
 
 from devsim.core.kit import Fault, FaultTable, signal_points
-from devsim.core.points import Family, Point, PointTable
+from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.devices.poselesta.cnc import MODES, PoselestaCnc
 from devsim.devices.poselesta.diagnostics import input_image, input_screen, pots
 from devsim.devices.poselesta.execution import STATES
@@ -110,6 +110,15 @@ class _RelaySupply:
         self.model.signals.set(name, value)
 
 
+def _keyboard_test(model: PoselestaCnc, value: str) -> None:
+    if value.strip().lower() in ("true", "1", "on", "yes"):
+        if model.mode != "PROGRAM_ENTRY":
+            raise BadValue("the diagnostic programs P79 run in PROGRAM_ENTRY")
+        model.keyboard_test = ""
+    else:
+        model.keyboard_test = None
+
+
 def _relay_supply(model: PoselestaCnc, active: bool) -> None:
     model.relay_supply_lost = active
 
@@ -158,6 +167,11 @@ POINTS = PointTable.of(
               put=lambda m, v: m.output_test.start() if v else m.output_test.stop()),
         Point("diagnostics.output_cycles", "int", "P79 N6: passes of the output test (64 s each)", "§2.4.11",
               get=lambda m: m.output_test.cycles),
+        Point("diagnostics.keyboard_test", "str", "P79 N3: set true to start; shows each key's code + 1 in hex "
+              "(key P, 48, shows 49); key 2D ends it (then empty)", "§2.6.4",
+              get=lambda m: m.keyboard_test or "", put=lambda m, v: _keyboard_test(m, v), example="false"),
+        Point("xy_plotter", "bool", "X/Y plotter operation (POS III, V22/8 sampled at power-on): set-points = "
+              "position over the working field in 14 bits", "§2.3.20", get=lambda m: m.plotter, in_state=True),
         Point("diagnostics.pots", "json", "P79 N7: feed and override pot as hex 00 … FF", "§2.3.26",
               get=lambda m: pots(m.signals)),
         Point("program.state", "str", f"the block cycle: {', '.join(STATES)}", "§2.4.10",
