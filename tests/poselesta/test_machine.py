@@ -591,3 +591,26 @@ def test_an_xy_plotter_gets_its_position_as_the_set_point(devsim_device) -> None
     assert cnc.read("xy_plotter") is True
     assert cnc.read("axis.x.analog_out") == pytest.approx(-10 + 20 * 8192 / 16383)  # 0 mm: the middle step
     assert cnc.read("axis.x.following_error") == 0
+
+
+def test_panel_keys_blocks_and_diagnostics_as_operator_actions(make) -> None:  # noqa: ANN001
+    """Spec §3.2.2: panel.key (by name or code, the V8 path: buzzer), panel.edit_block (one block
+    by the read-in rules), panel.diagnostic (P79 N3 / N6 in PROGRAM_ENTRY)."""
+    cnc = make({"v8_keymap": {"48": "P", "0x2D": "exit"}}, mode="PROGRAM_ENTRY")
+    cnc.set("panel.key", "P")
+    assert cnc.read("keyboard.last_key") == 0x48 and cnc.read("output.buzzer") is True
+    with pytest.raises(Exception, match="not a key code"):
+        cnc.set("panel.key", "01")
+    cnc.set("panel.edit_block", "20: N5 X10")
+    cnc.set("panel.edit_block", "20: N2 Y-3")
+    cnc.set("panel.edit_block", "20: N5 X11")
+    assert cnc.read("program.P20") == "N 2 Y- 3.000\nN 5 X 11.000"
+    with pytest.raises(Exception, match="WERTBEREICHES-UEBERLAUF"):
+        cnc.set("panel.edit_block", "20: N6 X12345.678")
+    cnc.set("panel.diagnostic", 3)
+    cnc.advance(0.2)
+    cnc.set("panel.key", "P")
+    assert cnc.read("diagnostics.keyboard_test") == "49"
+    cnc.advance(0.2)
+    cnc.set("panel.key", "exit")
+    assert cnc.read("diagnostics.keyboard_test") == ""

@@ -15,7 +15,7 @@ from devsim.core.axis import Axis
 from devsim.core.kit import declare_signals
 from devsim.core.model import Model
 from devsim.core.points import BadValue
-from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF, baud_for_code
+from devsim.devices.poselesta.codes import KEY_CODES, WERTBEREICHES_UEBERLAUF, baud_for_code
 from devsim.devices.poselesta.config import PoselestaConfig
 from devsim.devices.poselesta.diagnostics import OutputTest
 from devsim.devices.poselesta.execution import Executor
@@ -460,8 +460,46 @@ class PoselestaCnc(Model):
             return
         running.feed(data)
 
+    def press_key(self, key: str) -> None:
+        """A front-panel key (spec §3.2.2 ``panel.key``): by its name in ``v8_keymap`` or its
+        two-digit hex code; the same path as a key from V8, whichever keyboard V21/9 selects."""
+        names = {name.upper(): code for code, name in self.cfg.v8_keymap.items()}
+        code = names.get(key.strip().upper())
+        if code is None:
+            try:
+                code = int(key, 16)
+            except ValueError:
+                raise BadValue(f"no key {key!r}: a name of v8_keymap ({', '.join(sorted(names))}) or a hex code")\
+                    from None
+        if code not in KEY_CODES:
+            raise BadValue(f"{code:02X} is not a key code of the keyboard (spec §3.10)")
+        if self.booting:
+            raise BadValue("the control is not ready yet")
+        self._key(code)
+
+    def edit_block(self, text: str) -> None:
+        """Program entry of one block (spec §3.2.2 ``panel.edit_block``): ``"20: N5 X10"`` stores
+        (or replaces) block N5 of P20, by the rules of a read-in."""
+        number_text, sep, block_text = text.partition(":")
+        if not sep or not number_text.strip().lstrip("Pp").isdigit():
+            raise BadValue("expected 'program: block', e.g. '20: N5 X10'")
+        number = int(number_text.strip().lstrip("Pp"))
+        if number in RESERVED_PROGRAMS or not 0 <= number <= 98:
+            raise BadValue(f"P{number:02d} is not an NC program")
+        self._refuse_protected(number)
+        try:
+            blocks = parse_blocks(block_text, self.formats)
+        except ValueError as exc:
+            raise BadValue(str(exc)) from None
+        if len(blocks) != 1:
+            raise BadValue("exactly one block with its number N is entered at a time")
+        problem = self.store_block(number, blocks[0])
+        if problem is not None:
+            raise BadValue(f"{WERTBEREICHES_UEBERLAUF}: {problem}")
+
     def _key(self, code: int) -> None:
         self.last_key = code
+        self.transfer_event("v8", "key_name", self.cfg.v8_keymap.get(code, f"{code:02X}"))
         if self.keyboard_test is not None:  # P79 N3: the code + 1 on the screen; 2D ends the test
             self.keyboard_test = None if code == KEYBOARD_TEST_EXIT else f"{code + 1:02X}"
         self.transfer_event("v8", "key", code)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from devsim.core.settings import Bool, DictOf, Float, Int, ListOf, OneOf, Section, Setting
+from devsim.core.settings import Bool, DictOf, Float, Int, ListOf, OneOf, Section, Setting, Text
 from devsim.devices.poselesta.parameters import check_parameter
 
 __all__ = ["PoselestaConfig"]
@@ -32,6 +32,16 @@ def _parameter_number(key: Any) -> int:
         return int(str(key).strip())
     except ValueError:
         raise ValueError("Input should be a valid integer, unable to parse string as an integer") from None
+
+
+def _key_code(key: Any) -> int:
+    """A key code as a number (0x48, 72) or hex text ("48"); one of the 45 codes of §3.10."""
+    from devsim.devices.poselesta.codes import KEY_CODES
+
+    code = key if isinstance(key, int) else int(str(key), 16)
+    if code not in KEY_CODES:
+        raise ValueError(f"{code:02X} is not a key code of the keyboard (spec §3.10)")
+    return code
 
 
 def _params(value: dict[int, float]) -> dict[int, float]:
@@ -81,4 +91,6 @@ PoselestaConfig = Section("What a user can set for one POSELESTA (--config FILE.
     Setting("m06_requires_nc_start", Bool(), False, "after the M06 acknowledge wait for NC-Start (spec G-M06)"),
     Setting("plc", PLC, {}),
     Setting("axes", AXES, {}),
+    Setting("v8_keymap", DictOf(_key_code, Text(), "key code"), {0x48: "P"},
+            "names of the keyboard's key codes for panel.key (spec §3.10: the legends are lost; 48 = P)"),
 ))

@@ -110,6 +110,15 @@ class _RelaySupply:
         self.model.signals.set(name, value)
 
 
+def _diagnostic(model: PoselestaCnc, number: int) -> None:
+    if model.mode != "PROGRAM_ENTRY":
+        raise BadValue("the diagnostic programs P79 run in PROGRAM_ENTRY")
+    if number == 3:
+        _keyboard_test(model, "true")
+    elif number == 6:
+        model.output_test.start()
+
+
 def _keyboard_test(model: PoselestaCnc, value: str) -> None:
     if value.strip().lower() in ("true", "1", "on", "yes"):
         if model.mode != "PROGRAM_ENTRY":
@@ -154,6 +163,13 @@ POINTS = PointTable.of(
               put=lambda m, v: m.field.reference(v), choices=tuple(AXES), example="x"),
         Point("referenced", "json", "the axes that are referenced (their software limits act)", "§2.3.23",
               get=lambda m: sorted(m.field.referenced), in_state=True),
+        Point("panel.key", "str", "press a front-panel key: a name of v8_keymap (P) or its hex code (48)", "§2.6.4",
+              put=lambda m, v: m.press_key(v), example="P"),
+        Point("panel.edit_block", "str", "enter one block of a program: '20: N5 X10' (PROGRAM_ENTRY rules of a "
+              "read-in)", "§2.6.3", put=lambda m, v: m.edit_block(v), example="0: N1 X0"),
+        Point("panel.diagnostic", "int", "run P79 Nn in PROGRAM_ENTRY: 3 keyboard test, 6 output test (5 and 7 "
+              "are the pages diagnostics.inputs and diagnostics.pots)", "§2.3.25",
+              put=lambda m, v: _diagnostic(m, v), choices=(3, 5, 6, 7), example=5),
         Point("panel.nc_start", "bool", "the NC-Start key of the front panel (P75 = 0 or 1)", "§2.3.3",
               put=lambda m, v: m.executor.nc_start("panel") if v else None, example=True),
         Point("panel.mdi", "str", "the block entered for Hand-Einzelsatz (MANUAL_SINGLE_BLOCK), e.g. N1 G00 X10",
