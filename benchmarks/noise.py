@@ -72,10 +72,11 @@ def writer(path: str, megabytes: float, raw: bool) -> None:
 
 
 SINK = """
-import asyncio, os, sys
+import asyncio, os, sys, tty
 total = int(sys.argv[1])
 async def main():
     master, slave = os.openpty()
+    tty.setraw(slave)  # as devsim's pty: no output processing adds bytes
     os.set_blocking(master, False)
     loop = asyncio.get_running_loop()
     done = asyncio.Event()
