@@ -46,3 +46,50 @@ def test_garbage_on_every_port_leaves_other_programs_alone(noise: list[tuple[str
         clock.advance(0.05)
     assert nvram.get("programs")["1"] == kept
     assert device.read("program.P01") == "N 1 X 1.000\nN 2 Y 2.000"
+
+
+INPUTS = ["nc_start", "nc_stop", "emergency_stop", "axis_enable", "program_continue", "tool_change_ack",
+          "m10_ack", "mst_ack", "block_skip_cancel", "block_abort", "optional_stop", "jog_pos_x", "jog_neg_y",
+          "jog_step_100", "rapid", "handwheel_x", "open_loop", "inch", "limit_pos_x", "limit_neg_y", "rm_enable_x"]
+ACTIONS = [
+    *(("input." + name, value) for name in INPUTS for value in (True, False)),
+    *(("panel.mode", mode) for mode in ("MANUAL", "AUTO_CONTINUOUS", "AUTO_SINGLE_BLOCK", "MANUAL_SINGLE_BLOCK",
+                                         "PROGRAM_ENTRY", "EXTERNAL_OPERATION")),
+    ("panel.nc_start", True), ("panel.reference", "x"), ("handwheel.turn", 7), ("axis.x.push", 1.0),
+    ("input.override_pot_v", 0.0), ("input.override_pot_v", 10.0), ("input.feed_pot_v", 2.5),
+    ("panel.mdi", "N1 G01 X5 F500"), ("panel.program", 1), ("panel.program", 2), ("param.P9", 20),
+    ("diagnostics.output_test", True), ("diagnostics.output_test", False), ("panel.diagnostic", 3),
+]
+PROGRAM = ("N1 G00 X10 Y5 M03 S1250 T07\nN2 G01 X20 F3000\nN3 G02 X30 Y15 I20 J15\nN4 G03 X20 Y5 I20 J15 M06\n"
+           "N5 M10 X0 #\nN6 G04 L0.5 M00\nN7 G12 L2.100\nN8 M02\nN100 G91 X1\nN101 G13 L1.100\nN102 G11")
+
+
+@settings(max_examples=150, deadline=None)
+@given(steps=hs.lists(hs.tuples(hs.sampled_from(ACTIONS), hs.floats(min_value=0, max_value=1.5)), max_size=40))
+def test_any_operator_and_machine_sequence_keeps_the_control_sane(steps: list[tuple[tuple[str, object], float]]) -> None:
+    """Any order of inputs, panel actions and waits: only refusals (BadValue), never a crash;
+    the stored programs stay; positions stay finite; the state is one of the declared ones."""
+    from devsim.core.points import BadValue
+    from devsim.devices.poselesta.execution import STATES
+
+    clock = VirtualClock()
+    nvram = NonVolatileMemory(None)
+    device = PoselestaDevice(clock=clock, config={"boot_time": 0}, nvram=nvram)
+    device.set("program.P01", PROGRAM)
+    device.set("program.P02", "N1 G01 X-5 Y-5 F100")
+    kept = dict(nvram.get("programs"))
+    device.set("panel.program", 1)
+    device.set("panel.mode", "AUTO_CONTINUOUS")
+    device.set("panel.nc_start", True)  # the program runs while the sequence arrives
+    for (name, value), wait in steps:
+        try:
+            device.set(name, value)
+        except BadValue:
+            pass
+        clock.advance(wait)
+        assert device.read("program.state") in STATES
+        for axis in "xyzd":
+            position = device.read(f"axis.{axis}.position")
+            assert position == position and abs(position) < 1e9  # finite
+    clock.advance(30.0)
+    assert nvram.get("programs") == kept

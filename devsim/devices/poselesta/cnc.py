@@ -9,6 +9,7 @@ points ``panel.mode``, ``panel.program`` and ``v6.transfer`` / ``v7.transfer``.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from devsim.core.axis import Axis
@@ -171,6 +172,7 @@ class PoselestaCnc(Model):
             raise BadValue("the output test P79 N6 runs or ran: stop it (C) and switch the control off and on")
         if mode != self.mode:
             self.manual.reset()
+            self.field.cancel()  # a homing search ends with the mode
             self.executor.reset()
             self.mode = mode
             self.message = ""
@@ -191,6 +193,12 @@ class PoselestaCnc(Model):
 
     def from_mm(self, axis: str, mm: float) -> float:
         return mm * 10 ** self.formats.decimals[axis.upper()]
+
+    def planned_position(self, axis: str) -> float:
+        """Where the axis will stand: the end of its plan, or where it is while a key or the
+        homing search drives it without an end."""
+        end = self.axes[axis].final_position()
+        return end if math.isfinite(end) else self.axes[axis].position()
 
     def rapid(self, axis: str) -> float:
         """P44–P47, in increments per second."""

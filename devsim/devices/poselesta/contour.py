@@ -46,7 +46,7 @@ class PathMotion:
     def line(cls, cnc: PoselestaCnc, targets: dict[str, float]) -> PathMotion:
         """G01 to ``targets`` (increments) from where the axes stand."""
         axes = tuple(targets)
-        start = tuple(cnc.to_mm(a, cnc.axes[a].final_position()) for a in axes)
+        start = tuple(cnc.to_mm(a, cnc.planned_position(a)) for a in axes)
         return cls(cnc, axes, Line(start, tuple(cnc.to_mm(a, targets[a]) for a in axes)))
 
     @classmethod
@@ -57,7 +57,7 @@ class PathMotion:
         (a, centre_a), (b, centre_b) = PLANES[plane]
         if block.value(a.upper()) is None and block.value(b.upper()) is None:
             return None
-        start = [cnc.to_mm(axis, cnc.axes[axis].final_position()) for axis in (a, b)]
+        start = [cnc.to_mm(axis, cnc.planned_position(axis)) for axis in (a, b)]
         end = []
         for axis, s in zip((a, b), start, strict=True):
             value = block.value(axis.upper())

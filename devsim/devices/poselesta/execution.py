@@ -337,7 +337,7 @@ class Executor:
             value = block.value(a.upper())
             if value is None:
                 continue
-            base = 0.0 if self.absolute else cnc.axes[a].final_position()
+            base = 0.0 if self.absolute else cnc.planned_position(a)
             targets[a] = base + value * self.unit(a)
         if not targets:
             self._end_functions()

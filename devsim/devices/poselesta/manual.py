@@ -73,7 +73,7 @@ class ManualMotion:
             speed = abs(self.handwheel_rate) * step
             self.moving.add(a)
             cnc.signals.set(f"travel_{a}", True)
-            axis.move_to(axis.final_position() + detents * step, speed, speed * 1000,
+            axis.move_to(cnc.planned_position(a) + detents * step, speed, speed * 1000,
                          on_done=lambda a=a: self._handwheel_done(a))
 
     def _handwheel_done(self, a: str) -> None:
@@ -98,7 +98,7 @@ class ManualMotion:
         axis = cnc.axes[a]
         speed = cnc.from_mm(a, 10.0)
         self._start(a)
-        axis.move_to(axis.final_position() + cnc.from_mm(a, mm), speed, speed * 100,
+        axis.move_to(cnc.planned_position(a) + cnc.from_mm(a, mm), speed, speed * 100,
                      on_done=lambda: self._stopped(a))
 
     def _key(self, name: str, old: Any, new: Any) -> None:

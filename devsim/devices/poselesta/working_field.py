@@ -86,11 +86,14 @@ class WorkingField:
         self._arm_field(a)
 
     def cancel(self) -> None:
+        """The search ends (mode change, power): the axis brakes, still not referenced."""
         for watch in self._marks:
             watch.cancel()
         self._marks.clear()
         if self.homing is not None:
-            self.cnc.signals.set(f"travel_{self.homing}", False)
+            a = self.homing
+            self.cnc.axes[a].stop(self.cnc.accel(a))
+            self.cnc.signals.set(f"travel_{a}", False)
         self.homing = None
 
     # -- the working field ---------------------------------------------------------------------------
