@@ -614,3 +614,28 @@ def test_panel_keys_blocks_and_diagnostics_as_operator_actions(make) -> None:  #
     cnc.advance(0.2)
     cnc.set("panel.key", "exit")
     assert cnc.read("diagnostics.keyboard_test") == ""
+
+
+def test_homing_turns_back_once_at_a_limit_switch(make) -> None:  # noqa: ANN001
+    """Spec §5.6: the mark lies behind the start; the − limit switch turns the search back, the
+    mark is then taken moving +; a second limit switch stops with the alarm."""
+    cnc = make({"axes": {"x": {"reference_marks": [5.0]}}}, mode="MANUAL")
+    cnc.set("panel.reference", "x")
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.velocity") < 0
+    cnc.set("input.limit_neg_x", False)
+    cnc.advance(0.1)
+    assert cnc.read("axis.x.velocity") > 0 and cnc.read("panel.message") == ""
+    cnc.set("input.limit_neg_x", True)
+    cnc.run_until(lambda d: "x" in d.model.field.referenced, 30.0)
+    assert cnc.read("axis.x.position") == pytest.approx((10 / 3) ** 2 / 2 / 500 * 1000, abs=1e-6)  # braked +
+    far = make({"axes": {"x": {"reference_marks": [500.0]}}}, mode="MANUAL")  # a mark beyond the + switch
+    far.set("panel.reference", "x")
+    far.advance(1.0)
+    far.set("input.limit_neg_x", False)  # turns back
+    far.advance(0.5)
+    far.set("input.limit_neg_x", True)
+    far.advance(0.5)
+    far.set("input.limit_pos_x", False)  # and runs into the other switch: alarm
+    assert far.read("panel.message") == "LIMIT_SWITCH" and far.read("axis.x.velocity") == 0
+    assert far.read("referenced") == [] and far.read("output.travel_x") is False

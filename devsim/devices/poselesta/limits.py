@@ -43,6 +43,8 @@ class LimitSwitches:
         if velocity == 0 or (velocity > 0) != (side == "pos"):
             return  # actuated at rest or while moving away: only further motion towards it is refused
         cnc = self.cnc
+        if cnc.field.homing == a and cnc.field.reverse(a):
+            return  # the homing search turns back once (spec §5.6)
         for axis in cnc.axes.values():
             axis.quick_stop()
         cnc.message = LIMIT_SWITCH

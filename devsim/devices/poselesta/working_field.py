@@ -3,7 +3,8 @@ poselesta.md §5.5, §5.6, G-HOME, G-SOFT).
 
 Homing (``panel.reference``, MANUAL) moves the axis towards ``home_direction`` at 10 % of its
 maximum feed until it passes a reference mark while its activation input V24 is H; the actual
-value there becomes ``reference_value``, the axis brakes to a stop and is referenced.  The marks
+value there becomes ``reference_value``, the axis brakes to a stop and is referenced.  A limit
+switch reached first turns the search back once; reached again, it stops with its alarm.  The marks
 sit where the configuration puts them (``axes.<a>.reference_marks``, mm from the power-on
 position).  Once an axis is referenced the software limits P9–P12 (+) and P13–P16 (−) bound the
 working field: leaving it makes every axis brake as with NC-Stop, V18/6 goes L, a running
@@ -36,6 +37,7 @@ class WorkingField:
         self.homing: str | None = None
         self.offset = dict.fromkeys(AXES, 0.0)  # axis frame − power-on frame, increments
         self._marks: list[Watch] = []
+        self._direction, self._reversed = -1, False
         self._fields: dict[str, RegionSwitch] = {}
 
     # -- homing ------------------------------------------------------------------------------------
@@ -49,6 +51,7 @@ class WorkingField:
         settings = getattr(cnc.cfg.axes, a)
         axis = cnc.axes[a]
         direction = settings.home_direction
+        self._direction, self._reversed = direction, False
         self.homing = a
         self.referenced.discard(a)
         self._arm_field(a)
@@ -59,10 +62,22 @@ class WorkingField:
         cnc.signals.set("machine_standstill", False)
         axis.jog(direction, max(cnc.max_feed(a) * HOME_SPEED, 1e-9), cnc.accel(a))
 
+    def reverse(self, a: str) -> bool:
+        """A limit switch before the mark: search the other way, once (spec §5.6); False the
+        second time (the switch then stops everything with the alarm)."""
+        if self._reversed:
+            self.cancel()
+            return False
+        self._reversed = True
+        self._direction = -self._direction
+        cnc = self.cnc
+        cnc.record_event("homing_reversed")
+        cnc.axes[a].jog(self._direction, max(cnc.max_feed(a) * HOME_SPEED, 1e-9), cnc.accel(a))
+        return True
+
     def _mark(self, a: str, position: float, way: int) -> None:
         cnc = self.cnc
-        settings = getattr(cnc.cfg.axes, a)
-        if self.homing != a or way != settings.home_direction or not cnc.signals.get(f"rm_enable_{a}"):
+        if self.homing != a or way != self._direction or not cnc.signals.get(f"rm_enable_{a}"):
             if self.homing == a:
                 cnc.record_event("reference_mark_ignored")
             return
