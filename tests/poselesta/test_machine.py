@@ -639,3 +639,58 @@ def test_homing_turns_back_once_at_a_limit_switch(make) -> None:  # noqa: ANN001
     far.set("input.limit_pos_x", False)  # and runs into the other switch: alarm
     assert far.read("panel.message") == "LIMIT_SWITCH" and far.read("axis.x.velocity") == 0
     assert far.read("referenced") == [] and far.read("output.travel_x") is False
+
+
+def test_the_conversions_of_section_6_10(make) -> None:  # noqa: ANN001
+    """Spec §6.10: pots in percent and as the diagnostic's hex, handwheel and jog step sizes."""
+    cnc = make(mode="MANUAL")
+    for volts, percent in ((6.6, 99.0), (10.0, 150.0), (0.0, 0.0), (6.667, 100.0)):
+        cnc.set("input.override_pot_v", volts)
+        assert cnc.read("panel.override") == percent
+    for volts, percent in ((10.0, 100.0), (5.0, 50.0)):
+        cnc.set("input.feed_pot_v", volts)
+        assert cnc.read("panel.feed") == percent
+    for feed, override, shown in ((0.0, 10.0, ["00", "FF"]), (10.0, 6.667, ["FF", "AA"])):
+        cnc.set("input.feed_pot_v", feed)
+        cnc.set("input.override_pot_v", override)
+        assert cnc.read("diagnostics.pots") == shown
+    cnc.set("input.feed_pot_v", 10.0)
+    cnc.set("param.P76", 4)
+    cnc.set("handwheel.factor", 10)
+    cnc.set("input.handwheel_x", True)
+    cnc.set("handwheel.turn", 1)
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.position") == pytest.approx(40)  # 0.040 mm
+    cnc.set("input.handwheel_x", False)
+    cnc.set("input.jog_step_1000", True)
+    cnc.set("input.jog_pos_y", True)
+    cnc.advance(1.0)
+    assert cnc.read("axis.y.position") == pytest.approx(1_000)  # 1.000 mm
+
+
+def test_the_data_bus_rows_of_section_6_2(make) -> None:  # noqa: ANN001
+    """Spec §6.2: M 20 → 0x20; S 8 → S1 = 0x08, then S2 = 0x00 (S2 always goes out)."""
+    cnc = make(program="N1 M20 S8")
+    cnc.set("panel.nc_start", True)
+    seen = sample(cnc, 180)
+    assert [row[0] for row in seen[::3]] == [0x20, 0x08, 0x00, 0x00]
+    assert seen[4][2] is True and seen[7][3] is True  # strobe S1, then strobe S2
+
+
+def test_tools_and_compensation_are_recorded(make) -> None:  # noqa: ANN001
+    """Spec §4.9, §5.8 phase 1: the tool catalogue keeps radius and length; G41/G42/G40 are
+    recorded (an event each) without offsetting the path."""
+    cnc = make(program="N1 G42 G01 X10 F3000 T05\nN2 G40 X0")
+    cnc.set("tool.T05", {"radius": 4.0, "length": 120.5})
+    assert cnc.read("tool.T05") == {"radius": 4.0, "length": 120.5}
+    with pytest.raises(Exception, match="finite"):
+        cnc.set("tool.T05", {"radius": float("nan")})
+    cnc.set("panel.nc_start", True)
+    cnc.run_until(lambda d: d.model.executor.state == "MOVING", 5.0)
+    assert cnc.read("program.compensation") == "G42" and cnc.read("program.tool") == 5
+    cnc.run_until(lambda d: d.model.executor.block_number == 2, 5.0)
+    assert cnc.read("axis.x.position") == pytest.approx(10_000)  # the programmed path, no offset
+    cnc.advance(2.0)
+    assert cnc.read("program.compensation") == "G40"
+    cnc.power_cycle()
+    assert cnc.read("tool.T05") == {"radius": 4.0, "length": 120.5}

@@ -99,6 +99,7 @@ class PoselestaCnc(Model):
             int(p): {int(b["N"]): Block.from_json(b) for b in blocks} for p, blocks in stored.items()
         }
         self.protected: set[int] = {int(p) for p in self.nvram.get("protected") or []}
+        self.tools: dict[int, dict[str, float]] = {int(t): dict(v) for t, v in (self.nvram.get("tools") or {}).items()}
         params = {n: p.default for n, p in PARAMETERS.items()}
         params.update({int(k): float(v) for k, v in (self.nvram.get("params") or {}).items()})
         if self.nvram.get("params") is None:
@@ -540,6 +541,21 @@ class PoselestaCnc(Model):
         else:
             self.programs.pop(number, None)
         self._save_programs()
+
+    def set_tool(self, number: int, value: Any) -> None:
+        """The tool catalogue (spec §4.9): radius and length of T01 … T99, in the catalogue's unit
+        (P1); kept in memory, not transferable serially."""
+        if not isinstance(value, dict) or set(value) - {"radius", "length"}:
+            raise BadValue('expected {"radius": r, "length": l}')
+        entry = {}
+        for key in ("radius", "length"):
+            number_value = value.get(key, 0.0)
+            if isinstance(number_value, bool) or not isinstance(number_value, int | float) or \
+                    not math.isfinite(number_value):
+                raise BadValue(f"T{number:02d}.{key}: a finite number")
+            entry[key] = float(number_value)
+        self.tools[number] = entry
+        self.nvram.put("tools", {str(t): v for t, v in sorted(self.tools.items())})
 
     def set_param(self, number: int, value: float) -> None:
         try:

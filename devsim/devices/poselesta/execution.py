@@ -64,6 +64,8 @@ class Executor:
         self.inch = False  # V22/2 sampled at the start of the block (spec §5.1)
         self.motion = 0  # modal G00 … G03
         self.plane = 17  # modal G17 / G18 / G19
+        self.compensation = 40  # modal G40 / G41 / G42 (no offset: spec §5.8 phase 1)
+        self.tool = 0  # the last T programmed
         self.contour: PathMotion | None = None
         self.carry: float | None = None  # path speed handed on to the next block (mm/s)
         self._v0: float | None = None
@@ -229,6 +231,10 @@ class Executor:
                 self.motion = g
             elif g in PLANES:
                 self.plane = g
+            elif g in (40, 41, 42) and g != self.compensation:
+                self.compensation = g  # recorded, no path offset (spec §5.8, phase 1)
+                self.cnc.record_event("compensation")
+                self.cnc.announce("event", "program", "compensation", f"G{g}")
             elif g in (90, 91):
                 self.absolute = g == 90
             elif g not in KNOWN_G:
@@ -244,6 +250,7 @@ class Executor:
         tool = block.value("T")
         if tool is not None:
             functions.append(("T", tool))
+            self.tool = tool
         self._m10_waits = False
         self._enter("MST_OUTPUT")
         self.cnc.mst.output(functions, self._after_start_functions)

@@ -63,6 +63,16 @@ def _program(name: str) -> Point | None:
                  "§2.6.3", get=lambda m: m.program_text(number), put=lambda m, v: m.set_program_text(number, v))
 
 
+def _tool(name: str) -> Point | None:
+    match = re.fullmatch(r"tool\.T(\d\d)", name)
+    if match is None or not 1 <= int(match[1]) <= 99:
+        return None
+    number = int(match[1])
+    return Point(name, "json", f"tool T{number:02d} of the catalogue: radius and length", "§2.3.14",
+                 get=lambda m: m.tools.get(number, {"radius": 0.0, "length": 0.0}),
+                 put=lambda m, v: m.set_tool(number, v))
+
+
 def _param(name: str) -> Point | None:
     match = re.fullmatch(r"param\.P(\d{1,2})", name)
     if match is None or not 1 <= int(match[1]) <= 98 or int(match[1]) == 79:
@@ -170,6 +180,10 @@ POINTS = PointTable.of(
         Point("panel.diagnostic", "int", "run P79 Nn in PROGRAM_ENTRY: 3 keyboard test, 6 output test (5 and 7 "
               "are the pages diagnostics.inputs and diagnostics.pots)", "§2.3.25",
               put=lambda m, v: _diagnostic(m, v), choices=(3, 5, 6, 7), example=5),
+        Point("panel.override", "float", "the override pot's value as the screen shows it (V23/4)", "§2.3.22", "%",
+              get=lambda m: round(m.override() * 100, 1)),
+        Point("panel.feed", "float", "the feed pot's value as the screen shows it (V23/1)", "§2.3.22", "%",
+              get=lambda m: round(m.feed_pot() * 100, 1)),
         Point("panel.nc_start", "bool", "the NC-Start key of the front panel (P75 = 0 or 1)", "§2.3.3",
               put=lambda m, v: m.executor.nc_start("panel") if v else None, example=True),
         Point("panel.mdi", "str", "the block entered for Hand-Einzelsatz (MANUAL_SINGLE_BLOCK), e.g. N1 G00 X10",
@@ -190,6 +204,10 @@ POINTS = PointTable.of(
               "position over the working field in 14 bits", "§2.3.20", get=lambda m: m.plotter, in_state=True),
         Point("diagnostics.pots", "json", "P79 N7: feed and override pot as hex 00 … FF", "§2.3.26",
               get=lambda m: pots(m.signals)),
+        Point("program.compensation", "str", "cutter radius compensation in force: G40, G41 or G42 (recorded; "
+              "the path has no offset)", "§2.3.15", get=lambda m: f"G{m.executor.compensation}"),
+        Point("program.tool", "int", "the tool T last programmed (0: none)", "§2.4.8",
+              get=lambda m: m.executor.tool, in_state=True),
         Point("program.state", "str", f"the block cycle: {', '.join(STATES)}", "§2.4.10",
               get=lambda m: m.executor.state, choices=STATES, in_state=True),
         Point("program.block", "int", "number N of the block being executed (-1: none)", "§2.3.13",
@@ -208,6 +226,7 @@ POINTS = PointTable.of(
     families=[
         Family("program.P<nn>", "str", "program P00 … P98, one block per line", "§2.6.3", _program),
         Family("param.P<n>", "float", "machine parameter P1 … P98", "§2.6.2.3", _param),
+        Family("tool.T<nn>", "json", "tool T01 … T99 of the tool catalogue: {radius, length}", "§2.3.14", _tool),
     ],
 )
 
