@@ -694,3 +694,28 @@ def test_tools_and_compensation_are_recorded(make) -> None:  # noqa: ANN001
     assert cnc.read("program.compensation") == "G40"
     cnc.power_cycle()
     assert cnc.read("tool.T05") == {"radius": 4.0, "length": 120.5}
+
+
+def _events(cnc: Any) -> list[str]:
+    return [name for _, name in cnc.device.model.events]
+
+
+def test_encoder_overspeed_rm_missing_and_the_g25_circle(make) -> None:  # noqa: ANN001
+    """Spec §5.7: a 2-channel adapter (8 kHz) is too slow for the rapid of 100 mm/s at 0.001 mm
+    (25 kHz): the event encoder_overspeed; a lost reference mark signal makes homing search on;
+    with g25_full_circle a G25 block runs once round its centre (spec §4.12.1)."""
+    cnc = make({"encoder_khz": 8.0, "g25_full_circle": True}, program="N1 G00 X10\nN2 G03 G25 I0 J0 F6000")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.3)
+    assert "encoder_overspeed" in _events(cnc)
+    cnc.run_until(lambda d: d.model.executor.block_number == 2 and d.model.executor.state == "MOVING", 5.0)
+    cnc.advance(0.5)
+    assert _radius(cnc, 0, 0) == pytest.approx(10.0, abs=1e-6) and cnc.read("axis.y.position") != 0
+    cnc.advance(3.0)
+    assert cnc.read("program.state") == "END"
+    assert (cnc.read("axis.x.position"), cnc.read("axis.y.position")) == pytest.approx((10_000, 0), abs=1e-6)
+    quiet = make({"axes": {"x": {"reference_marks": [-1.0]}}}, mode="MANUAL")
+    quiet.fault("rm_missing_x")
+    quiet.set("panel.reference", "x")
+    quiet.advance(5.0)
+    assert quiet.read("referenced") == [] and quiet.read("axis.x.velocity") < 0 and "encoder_overspeed" not in _events(quiet)

@@ -76,6 +76,7 @@ class PoselestaCnc(Model):
         self.last_key: int | None = None
         self.pending_catalogue: dict[int, float] = {}
         self.relay_supply_lost = False
+        self.rm_missing: set[str] = set()  # axes whose reference mark signal is lost (fault)
         self.keyboard_test: str | None = None  # P79 N3 running: what the screen shows ("" before a key)
         self.plotter = False  # X/Y plotter operation (POS III, V22/8 at power-on)
         self._buzzer_timer: Any = None
@@ -200,6 +201,13 @@ class PoselestaCnc(Model):
         homing search drives it without an end."""
         end = self.axes[axis].final_position()
         return end if math.isfinite(end) else self.axes[axis].position()
+
+    def check_encoder(self, axis: str, speed: float) -> None:
+        """Spec §5.7: the encoder signal is f = v / (4 · resolution); above the adapter's limit
+        the event ``encoder_overspeed`` (speed in increments per second)."""
+        if abs(speed) / 4 > self.cfg.encoder_khz * 1000:
+            self.record_event("encoder_overspeed")
+            self.announce("event", "axis", "encoder_overspeed", axis)
 
     def rapid(self, axis: str) -> float:
         """P44–P47, in increments per second."""

@@ -51,17 +51,18 @@ class PathMotion:
 
     @classmethod
     def arc(cls, cnc: PoselestaCnc, block: Block, plane: int, absolute: bool, way: int,
-            unit: Callable[[str], float] = lambda _a: 1.0) -> PathMotion | str | None:
+            unit: Callable[[str], float] = lambda _a: 1.0, *, full_circle: bool = False) -> PathMotion | str | None:
         """The arc a block programs, an error text (the radii differ), or None (no end point);
-        ``unit(axis)`` converts program units (inch) to the machine's."""
+        ``unit(axis)`` converts program units (inch) to the machine's; ``full_circle`` (G25 with
+        ``g25_full_circle``): once round the centre, back to the start."""
         (a, centre_a), (b, centre_b) = PLANES[plane]
-        if block.value(a.upper()) is None and block.value(b.upper()) is None:
+        if block.value(a.upper()) is None and block.value(b.upper()) is None and not full_circle:
             return None
         start = [cnc.to_mm(axis, cnc.planned_position(axis)) for axis in (a, b)]
         end = []
         for axis, s in zip((a, b), start, strict=True):
             value = block.value(axis.upper())
-            end.append(s if value is None else cnc.to_mm(axis, value * unit(axis)) + (0.0 if absolute else s))
+            end.append(s if value is None or full_circle else cnc.to_mm(axis, value * unit(axis)) + (0.0 if absolute else s))
         centre = []
         for axis, word, s in zip((a, b), (centre_a, centre_b), start, strict=True):
             value = block.value(word)

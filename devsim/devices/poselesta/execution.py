@@ -321,13 +321,14 @@ class Executor:
         assert block is not None
         cnc = self.cnc
         self._v0, self.carry = self.carry, None  # the path speed the previous block handed on
-        if 25 in block.values("G"):
+        if 25 in block.values("G") and not cnc.cfg.g25_full_circle:
             self._unsupported(25)  # no motion (spec §4.12.1)
             self._end_functions()
             return
         self.contour = None
-        if self.motion in (2, 3):
-            contour = PathMotion.arc(cnc, block, self.plane, self.absolute, -1 if self.motion == 2 else 1, self.unit)
+        if self.motion in (2, 3) or 25 in block.values("G"):
+            contour = PathMotion.arc(cnc, block, self.plane, self.absolute, -1 if self.motion == 2 else 1, self.unit,
+                                     full_circle=25 in block.values("G"))
             if isinstance(contour, str):
                 cnc.record_event("circle_endpoint_error")
                 cnc.announce("event", "program", "circle_endpoint_error", contour)
@@ -412,6 +413,8 @@ class Executor:
             speed = self._path_speed(tuple(self.targets))
             v0, self._v0 = self._v0, None
             if speed is not None:
+                for a in self.targets:
+                    cnc.check_encoder(a, cnc.from_mm(a, speed))
                 self.contour.continues = self._continues()
                 self.contour.run(speed, self._arrived, v0)
             return
@@ -424,6 +427,7 @@ class Executor:
             if abs(target - axis.position()) < 1e-9 and not axis.moving:
                 self._arrived(a)  # (already there: a zero move still reaches its position, §2.4.3)
                 continue
+            cnc.check_encoder(a, speed)
             axis.move_to(target, speed, accel, on_done=lambda a=a: self._arrived(a))
 
     def _speeds(self) -> dict[str, tuple[float, float]] | None:

@@ -236,6 +236,8 @@ FAULTS = FaultTable(
               _monitoring),
         *(Fault(f"encoder_loss_{a}", f"the encoder of {a.upper()} is lost: alarm ENCODER_FAULT, NC ready L, "
                 "set-points 0, the program given up", "§2.2", _alarm("ENCODER_FAULT")) for a in AXES),
+        *(Fault(f"rm_missing_{a}", f"the reference mark signal of {a.upper()} is lost: homing never finds a mark",
+                "§2.2.2", lambda m, on, a=a: (m.rm_missing.add if on else m.rm_missing.discard)(a)) for a in AXES),
         Fault("following_error", "a following error beyond the limit (a blocked drive): alarm "
               "FOLLOWING_ERROR_LIMIT, NC ready L, set-points 0", "§2.5", _alarm("FOLLOWING_ERROR_LIMIT")),
         Fault("relay_supply", "the 24 V supply of the output relays is lost: every output reads L; the "

@@ -77,7 +77,7 @@ class WorkingField:
 
     def _mark(self, a: str, position: float, way: int) -> None:
         cnc = self.cnc
-        if self.homing != a or way != self._direction or not cnc.signals.get(f"rm_enable_{a}"):
+        if self.homing != a or way != self._direction or not cnc.signals.get(f"rm_enable_{a}") or a in cnc.rm_missing:
             if self.homing == a:
                 cnc.record_event("reference_mark_ignored")
             return
