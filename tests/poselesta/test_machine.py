@@ -482,8 +482,8 @@ def test_inch_shows_and_runs_inch_programs(make) -> None:  # noqa: ANN001
     cnc.advance(10.0)
     assert cnc.read("axis.x.position") == pytest.approx(25_400) and cnc.read("axis.d.position") == pytest.approx(1_000)
     assert cnc.read("axis.x.display") == f"{25.4 / 25.4:.5f}" and cnc.read("axis.d.display") == "1.000"
-    cnc.set("program.P21", "N1 G00 X100.001")
     cnc.set("input.inch", False)
+    cnc.set("program.P21", "N1 G00 X100.001")
     cnc.set("panel.program", 21)
     cnc.set("panel.nc_start", True)
     cnc.advance(3.0)
@@ -719,3 +719,19 @@ def test_encoder_overspeed_rm_missing_and_the_g25_circle(make) -> None:  # noqa:
     quiet.set("panel.reference", "x")
     quiet.advance(5.0)
     assert quiet.read("referenced") == [] and quiet.read("axis.x.velocity") < 0 and "encoder_overspeed" not in _events(quiet)
+
+
+def test_a_program_typed_in_inch_is_stored_as_typed(make) -> None:  # noqa: ANN001
+    """Spec §5.1: entered or read in while V22/2 is H, X/Y/Z carry two more decimals
+    (xx.xxxxx); run with V22/2 H they are inch."""
+    cnc = make()
+    cnc.set("input.inch", True)
+    cnc.set("program.P22", "N1 G00 X3.93705 D1")
+    assert cnc.read("program.P22") == "N 1 X 3.93705 D 1.000 G 00"
+    with pytest.raises(Exception, match="beyond the format"):
+        cnc.set("program.P23", "N1 X100.001")  # more than xx.xxxxx inch
+    cnc.set("panel.program", 22)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(3.0)
+    assert cnc.read("axis.x.position") == pytest.approx(3.93705 * 25.4 * 1000)
+    assert cnc.read("axis.d.position") == pytest.approx(1_000) and cnc.read("axis.x.display") == "3.93705"

@@ -62,6 +62,8 @@ class PoselestaCnc(Model):
         super().__init__(**kwargs)
         self.cfg = PoselestaConfig.parse(self.config)
         self.formats = Formats(dict(self.cfg.decimals))
+        # programs typed in inch (V22/2 H) carry two more decimals on X, Y, Z (spec §5.1)
+        self.inch_formats = Formats({a: d + (0 if a == "D" else 2) for a, d in self.cfg.decimals.items()})
         declare_signals(self.signals, SIGNALS)
         self.transfers: dict[str, ReadIn | Output | None] = {"v6": None, "v7": None}
         self.last_state = {"v6": "idle", "v7": "idle"}
@@ -100,6 +102,7 @@ class PoselestaCnc(Model):
             int(p): {int(b["N"]): Block.from_json(b) for b in blocks} for p, blocks in stored.items()
         }
         self.protected: set[int] = {int(p) for p in self.nvram.get("protected") or []}
+        self.inch_programs: set[int] = {int(p) for p in self.nvram.get("inch_programs") or []}
         self.tools: dict[int, dict[str, float]] = {int(t): dict(v) for t, v in (self.nvram.get("tools") or {}).items()}
         params = {n: p.default for n, p in PARAMETERS.items()}
         params.update({int(k): float(v) for k, v in (self.nvram.get("params") or {}).items()})
@@ -281,6 +284,16 @@ class PoselestaCnc(Model):
         (self.protected.add if on else self.protected.discard)(number)
         self.nvram.put("protected", sorted(self.protected))
 
+    def program_formats(self, number: int) -> Formats:
+        """The word formats a program was typed in: mm, or inch with two more decimals."""
+        return self.inch_formats if number in self.inch_programs else self.formats
+
+    def _typed(self, number: int, inch: bool) -> None:
+        """A program is (re)entered: in inch while V22/2 is H (stored as typed, spec §5.1)."""
+        if inch != (number in self.inch_programs):
+            (self.inch_programs.add if inch else self.inch_programs.discard)(number)
+            self.nvram.put("inch_programs", sorted(self.inch_programs))
+
     def _refuse_protected(self, number: int) -> None:
         if number in self.protected:
             self.record_event("program_protected")
@@ -339,8 +352,9 @@ class PoselestaCnc(Model):
             else:
                 self.programs.pop(program, None)  # "zuerst das vorgewählte Programm gelöscht" (§2.6)
                 self._save_programs()
+                self._typed(program, bool(self.signals.get("inch")))
             reader = TapeReader(
-                iso=self.iso(port) if line is None else line[1], formats=self.formats, parity_error=self.cfg.parity_error,
+                iso=self.iso(port) if line is None else line[1], formats=self.program_formats(program), parity_error=self.cfg.parity_error,
                 ascii_bit7=self.cfg.ascii_bit7, strict_block_numbers=self.cfg.strict_block_numbers,
                 catalogue=catalogue,
             )
@@ -352,26 +366,26 @@ class PoselestaCnc(Model):
             self.transfers[port] = read_in
         else:
             blocks = catalogue_blocks(self.params) if catalogue else list(self.programs.get(program, {}).values())
-            pieces = self._output_pieces(function.name, port, blocks)
+            pieces = self._output_pieces(function.name, port, blocks, self.program_formats(program))
             if port == "v6":
                 self._v6_lines(True)
             self.transfers[port] = Output(self, function, program, pieces, len(blocks))
 
-    def _output_pieces(self, name: str, port: str, blocks: list[Block]) -> list[tuple[float, bytes]]:
+    def _output_pieces(self, name: str, port: str, blocks: list[Block], formats: Formats) -> list[tuple[float, bytes]]:
         iso = self.iso(port)
         if name == "T1":
-            return self._printer_pieces(blocks, iso)
+            return self._printer_pieces(blocks, formats)
         eob = "\r\n" if self.cfg.eob == "CRLF" else "\r"
-        data = render(blocks, iso=iso, formatted=port == "v6", formats=self.formats, eob=eob,
+        data = render(blocks, iso=iso, formatted=port == "v6", formats=formats, eob=eob,
                       leader_nul=self.cfg.leader_nul, trailer_nul=self.cfg.trailer_nul)
         return [(CASSETTE_LEADER if name == "T2" else 0.0, data)]
 
-    def _printer_pieces(self, blocks: list[Block], iso: bool) -> list[tuple[float, bytes]]:
+    def _printer_pieces(self, blocks: list[Block], formats: Formats) -> list[tuple[float, bytes]]:
         """§2.6.2.1: one word per line, CR without LF, 820 ms after every CR; 7 bits with bit 7
         = 0 whatever P69 says (the printer's parity is a ninth bit a byte cannot carry)."""
         lines = ["%", "", ""]  # "%" CR CR CR
         for block in sorted(blocks, key=lambda b: b.number):
-            lines += block_words(block, self.formats, formatted=True)
+            lines += block_words(block, formats, formatted=True)
         lines.append("M 30")
         pieces: list[tuple[float, bytes]] = []
         wait = 0.0
@@ -504,8 +518,10 @@ class PoselestaCnc(Model):
         if number in RESERVED_PROGRAMS or not 0 <= number <= 98:
             raise BadValue(f"P{number:02d} is not an NC program")
         self._refuse_protected(number)
+        if number not in self.programs:
+            self._typed(number, bool(self.signals.get("inch")))
         try:
-            blocks = parse_blocks(block_text, self.formats)
+            blocks = parse_blocks(block_text, self.program_formats(number))
         except ValueError as exc:
             raise BadValue(str(exc)) from None
         if len(blocks) != 1:
@@ -529,7 +545,8 @@ class PoselestaCnc(Model):
     # -- programs and parameters as points ----------------------------------------------------------
     def program_text(self, number: int) -> str:
         blocks = sorted(self.programs.get(number, {}).values(), key=lambda b: b.number)
-        return "\n".join(" ".join(block_words(b, self.formats, formatted=True)) for b in blocks)
+        formats = self.program_formats(number)
+        return "\n".join(" ".join(block_words(b, formats, formatted=True)) for b in blocks)
 
     def set_program_text(self, number: int, text: str) -> None:
         """Program entry (spec §3.2.2 ``panel.edit_block``): blocks typed as text replace the
@@ -537,8 +554,9 @@ class PoselestaCnc(Model):
         if number in RESERVED_PROGRAMS:
             raise BadValue(f"P{number:02d} is not an NC program")
         self._refuse_protected(number)
+        inch = bool(self.signals.get("inch"))
         try:
-            blocks = parse_blocks(text, self.formats)
+            blocks = parse_blocks(text, self.inch_formats if inch else self.formats)
         except ValueError as exc:
             raise BadValue(str(exc)) from None
         others = sum(len(b) for p, b in self.programs.items() if p != number)
@@ -549,6 +567,7 @@ class PoselestaCnc(Model):
         else:
             self.programs.pop(number, None)
         self._save_programs()
+        self._typed(number, inch)
 
     def set_tool(self, number: int, value: Any) -> None:
         """The tool catalogue (spec §4.9): radius and length of T01 … T99, in the catalogue's unit

@@ -62,6 +62,7 @@ class Executor:
         self.pointer = 0
         self.block: Block | None = None
         self.inch = False  # V22/2 sampled at the start of the block (spec §5.1)
+        self.typed_inch = False  # the running program was typed in inch (two more decimals)
         self.motion = 0  # modal G00 … G03
         self.plane = 17  # modal G17 / G18 / G19
         self.compensation = 40  # modal G40 / G41 / G42 (no offset: spec §5.8 phase 1)
@@ -153,11 +154,14 @@ class Executor:
     def _load(self) -> bool:
         cnc = self.cnc
         if cnc.mode == "MANUAL_SINGLE_BLOCK":
+            self.typed_inch = bool(self.signals.get("inch"))
             try:
-                self.blocks = parse_blocks(self.mdi, cnc.formats) if self.mdi.strip() else []
+                formats = cnc.inch_formats if self.typed_inch else cnc.formats
+                self.blocks = parse_blocks(self.mdi, formats) if self.mdi.strip() else []
             except ValueError:
                 self.blocks = []
         else:
+            self.typed_inch = cnc.program in cnc.inch_programs
             self.blocks = sorted(cnc.programs.get(cnc.program, {}).values(), key=lambda b: b.number)
         if not self.blocks:
             cnc.record_event("no_program")
@@ -218,9 +222,16 @@ class Executor:
         self._program_end()
 
     def unit(self, a: str) -> float:
-        """Program units per machine unit: an inch program (V22/2 H) on a linear axis is
-        converted when it runs (spec §5.1: the machine measures in mm; D is not converted)."""
-        return 25.4 if self.inch and a != "d" else 1.0
+        """A stored coordinate value in units of the machine's last decimal: a program runs in
+        inch while V22/2 is H (spec §5.1: the machine measures in mm; D is not converted), and a
+        program typed in inch carries two more decimals."""
+        if a == "d":
+            return 1.0
+        return (25.4 if self.inch else 1.0) / (100.0 if self.typed_inch else 1.0)
+
+    def feed_unit(self) -> float:
+        """F in mm/min, or inch/min while V22/2 is H."""
+        return 25.4 if self.inch else 1.0
 
     def _run(self, block: Block) -> None:
         self.block = block
@@ -448,7 +459,7 @@ class Executor:
         if any(cnc.rapid(a) <= 0 for a in axes):
             cnc.record_event("zero_speed_parameter")  # P44–P47 = 0: the axis cannot move (spec §4.8)
             return None
-        path = min([self.feed * self.unit("x") * cnc.override() / 60.0, *(cnc.to_mm(a, cnc.rapid(a)) for a in axes)])
+        path = min([self.feed * self.feed_unit() * cnc.override() / 60.0, *(cnc.to_mm(a, cnc.rapid(a)) for a in axes)])
         if self.feed <= 0:
             cnc.record_event("zero_feed")
         return path if path > 0 else None
