@@ -735,3 +735,18 @@ def test_a_program_typed_in_inch_is_stored_as_typed(make) -> None:  # noqa: ANN0
     cnc.advance(3.0)
     assert cnc.read("axis.x.position") == pytest.approx(3.93705 * 25.4 * 1000)
     assert cnc.read("axis.d.position") == pytest.approx(1_000) and cnc.read("axis.x.display") == "3.93705"
+
+
+def test_the_plc_helper_answers_tool_changes_and_releases_m10(make) -> None:  # noqa: ANN001
+    """Spec Appendix A (plant helpers): M06 acknowledged 200 ms after it is output, a pulse-mode
+    M10 released 300 ms after it is output; the program runs through without a hand."""
+    cnc = make({"plc": {"tool_change_ms": 200, "m10_release_ms": 300}}, program="N1 M06 T02\nN2 M10 X1\nN3 M02")
+    cnc.set("input.m10_ack", True)
+    cnc.set("panel.nc_start", True)
+    cnc.run_until(lambda d: d.model.executor.state == "WAIT_TOOL_CHANGE", 2.0)
+    cnc.run_until(lambda d: d.model.executor.state != "WAIT_TOOL_CHANGE", 1.0)
+    assert cnc.read("output.m06") is False
+    cnc.run_until(lambda d: d.model.executor.state == "WAIT_M10_PULSE", 2.0)
+    cnc.advance(2.0)
+    assert cnc.read("program.state") == "END" and cnc.read("output.m10") is False
+    assert cnc.read("input.m10_ack") is True and cnc.read("input.tool_change_ack") is False  # pulses over

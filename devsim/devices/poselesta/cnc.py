@@ -87,7 +87,9 @@ class PoselestaCnc(Model):
         self.executor = Executor(self)
         self.mst = MstBus(self.clock, self.signals, lambda: max(1.0, self.params[72]) / 1000.0, self.executor.put)
         plc = self.cfg.plc
-        self.plc = PlcHelper(self.clock, self.signals, plc.mst_ack, plc.rise_ms / 1000.0, plc.fall_ms / 1000.0)
+        self.plc = PlcHelper(self.clock, self.signals, plc.mst_ack, plc.rise_ms / 1000.0, plc.fall_ms / 1000.0,
+                             None if plc.tool_change_ms is None else plc.tool_change_ms / 1000.0,
+                             None if plc.m10_release_ms is None else plc.m10_release_ms / 1000.0)
         self.manual = ManualMotion(self)
         self.limits = LimitSwitches(self)
         self.field = WorkingField(self)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from devsim.core.settings import Bool, DictOf, Float, Int, ListOf, OneOf, Section, Setting, Text
+from devsim.core.settings import Bool, DictOf, Float, Int, ListOf, Maybe, OneOf, Section, Setting, Text
 from devsim.devices.poselesta.parameters import check_parameter
 
 __all__ = ["PoselestaConfig"]
@@ -57,6 +57,10 @@ PLC = Section("The PLC side of the MST acknowledge V22/7, played by a plant help
             "it falls; manual: input.mst_ack is set by hand"),
     Setting("rise_ms", Float(ge=0), 35.0, "delayed: acknowledge H this long after a strobe rises"),
     Setting("fall_ms", Float(ge=0), 15.0, "delayed: acknowledge L this long after a strobe falls"),
+    Setting("tool_change_ms", Maybe(Float(ge=0)), None,
+            "M06 is acknowledged (a 50 ms pulse on V22/5) this long after it is output; null: by hand"),
+    Setting("m10_release_ms", Maybe(Float(ge=0)), None,
+            "a non-self-holding M10 gets its 50 ms negative pulse on V22/6 this long after it is output"),
 ))
 
 #: One axis: where its reference marks are and how it homes (spec §5.6, G-HOME).

@@ -8,7 +8,8 @@ a fixed timing that ignores the acknowledge: bus, t1, strobe H, t1, strobe L, t2
 t1 = t2 = P72 (1 … 99 ms; 0 is taken as 1 ms, spec §4.8).
 
 :class:`PlcHelper` is the plant side the manual describes: the acknowledge bridged to the strobes
-(the strobe is then t1 long), a PLC that answers after a delay, or nobody (``manual``).
+(the strobe is then t1 long), a PLC that answers after a delay, or nobody (``manual``); it can
+also acknowledge a tool change (M06) and release a non-self-holding M10 after a delay.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ __all__ = ["MST_STROBES", "MstBus", "PlcHelper", "bcd"]
 
 #: The strobe of each kind of function (V16/1–4); the mode code has ``strobe_ba`` (V16/5).
 MST_STROBES = {"M": "strobe_m", "S1": "strobe_s1", "S2": "strobe_s2", "T": "strobe_t"}
+PULSE = 0.050  # s: the helper's acknowledge pulses
 
 
 def bcd(value: int) -> int:
@@ -158,12 +160,28 @@ class PlcHelper:
     ``bridged`` (acknowledge = any of the M/S/T strobes), ``delayed`` (H ``rise`` s after a strobe
     rises, L ``fall`` s after it falls) or ``manual`` (the test or the user sets ``input.mst_ack``)."""
 
-    def __init__(self, clock: Clock, signals: SignalBank, mode: str, rise: float, fall: float) -> None:
+    def __init__(self, clock: Clock, signals: SignalBank, mode: str, rise: float, fall: float,
+                 tool_change: float | None = None, m10_release: float | None = None) -> None:
         self.clock, self.signals, self.mode, self.rise, self.fall = clock, signals, mode, rise, fall
+        self.tool_change, self.m10_release = tool_change, m10_release
         self._timer: Timer | None = None
+        self._others: list[Timer] = []
         if mode != "manual":
             for strobe in MST_STROBES.values():
                 signals.subscribe(strobe, self._strobe)
+        if tool_change is not None:
+            signals.subscribe("m06", lambda _n, _o, new: new and self._pulse(tool_change, "tool_change_ack", True))
+        if m10_release is not None:
+            signals.subscribe("m10", lambda _n, _o, new: new and signals.get("m10_ack")
+                              and self._pulse(m10_release, "m10_ack", False))
+
+    def _pulse(self, delay: float, name: str, level: bool) -> None:
+        """The PLC answers a tool change (V22/5 H) or releases M10 (V22/6 L) for 50 ms."""
+        def on() -> None:
+            self.signals.set(name, level)
+            self._others.append(self.clock.call_later(PULSE, lambda: self.signals.set(name, not level)))
+
+        self._others.append(self.clock.call_later(delay, on))
 
     def _strobe(self, _name: str, _old: Any, new: Any) -> None:
         if self.mode == "bridged":
@@ -178,3 +196,6 @@ class PlcHelper:
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
+        for timer in self._others:
+            timer.cancel()
+        self._others.clear()
