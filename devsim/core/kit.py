@@ -9,7 +9,7 @@ kind are in :mod:`devsim.core.points`.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator
-from typing import Any, Generic, Literal, TypeVar
+from typing import Any, Generic, Literal, Protocol, TypeVar
 
 from devsim.core.points import Point, PointType, UnknownName, parse_bool
 from devsim.core.record import field, record
@@ -24,6 +24,7 @@ __all__ = [
     "Parameter",
     "PortDef",
     "SignalDef",
+    "SignalView",
     "Table",
     "declare_signals",
     "signal_points",
@@ -176,8 +177,16 @@ def declare_signals(bank: SignalBank, defs: Iterable[SignalDef]) -> None:
         bank.define(d.name, d.kind, d.initial, d.doc)
 
 
+class SignalView(Protocol):
+    """What :func:`signal_points` reads and writes: a :class:`SignalBank`, or a view of it (a
+    kind may show its outputs through one, e.g. all L while their relay supply is lost)."""
+
+    def get(self, name: str) -> Any: ...
+    def set(self, name: str, value: Any) -> Any: ...
+
+
 def signal_points(
-    defs: Iterable[SignalDef], bank: Callable[[Any], SignalBank] = lambda m: m.signals
+    defs: Iterable[SignalDef], bank: Callable[[Any], SignalView] = lambda m: m.signals
 ) -> list[Point]:
     """``input.*`` and ``quantity.*`` settable, ``output.*`` read-only, all in ``state``."""
     points = []

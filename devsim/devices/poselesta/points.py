@@ -222,7 +222,7 @@ POINTS = PointTable.of(
     _transfer_points("v6"),
     _transfer_points("v7"),
     signal_points([d for d in SIGNALS if d.kind != "output"]),
-    signal_points([d for d in SIGNALS if d.kind == "output"], bank=lambda m: _RelaySupply(m)),  # type: ignore[arg-type]
+    signal_points([d for d in SIGNALS if d.kind == "output"], bank=lambda m: _RelaySupply(m)),
     families=[
         Family("program.P<nn>", "str", "program P00 … P98, one block per line", "§2.6.3", _program),
         Family("param.P<n>", "float", "machine parameter P1 … P98", "§2.6.2.3", _param),
