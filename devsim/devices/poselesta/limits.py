@@ -18,6 +18,8 @@ LIMIT_SWITCH = "LIMIT_SWITCH"
 
 
 class LimitSwitches:
+    """The eight limit-switch inputs V19/4–11 of one control (manual §2.3; spec §5.5)."""
+
     def __init__(self, cnc: PoselestaCnc) -> None:
         self.cnc = cnc
         for a in AXES:

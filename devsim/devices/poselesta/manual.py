@@ -33,7 +33,8 @@ MANUAL_MODES = ("MANUAL", "PROGRAM_ENTRY")
 
 
 class ManualMotion:
-    """The direction keys of one control."""
+    """Manual motion of one control: direction keys, jog steps, rapid, handwheel and open loop
+    (manual §2.2.3, §2.3.5–§2.3.9; spec §5.4)."""
 
     def __init__(self, cnc: PoselestaCnc) -> None:
         self.cnc = cnc
