@@ -750,3 +750,41 @@ def test_the_plc_helper_answers_tool_changes_and_releases_m10(make) -> None:  # 
     cnc.advance(2.0)
     assert cnc.read("program.state") == "END" and cnc.read("output.m10") is False
     assert cnc.read("input.m10_ack") is True and cnc.read("input.tool_change_ack") is False  # pulses over
+
+
+def test_count_loss_shifts_the_actual_value_from_the_true_position(make) -> None:  # noqa: ANN001
+    """Spec §5.7: an encoder drops counts: the actual value falls behind by that much (while
+    the axis moves, from its next standstill); homing finds the mark where it physically is."""
+    cnc = make({"count_loss_increments": 25, "axes": {"x": {"reference_marks": [-5.0]}}}, mode="MANUAL")
+    cnc.fault("count_loss_x")
+    assert cnc.read("axis.x.position") == -25 and "count_loss" in _events(cnc)
+    cnc.fault("count_loss_x", False)
+    cnc.set("input.jog_pos_x", True)
+    cnc.advance(0.5)
+    cnc.fault("count_loss_x")
+    assert cnc.device.model.field.offset["x"] == -25  # not yet: X still moves
+    cnc.set("input.jog_pos_x", False)
+    cnc.advance(1.0)
+    assert cnc.device.model.field.offset["x"] == -50
+    cnc.set("panel.reference", "x")
+    cnc.run_until(lambda d: "x" in d.model.field.referenced, 60.0)
+    assert cnc.read("axis.x.position") == pytest.approx(-(10 / 3) ** 2 / 2 / 500 * 1000, abs=1e-6)
+
+
+def test_a_simulated_cassette_records_and_plays_back(make) -> None:  # noqa: ANN001
+    """Spec §3.8, Appendix A (manual §2.6.2.2): with v6_peer: cassette, T2 records P20 after the
+    13 s leader, T3 plays it into P21 after its leader; the tape survives a power cycle."""
+    cnc = make({"v6_peer": "cassette"}, program="N1 X10\nN2 Y-2.5 M02", mode="EXTERNAL_MEDIUM")
+    cnc.set("v6.transfer", "cassette_out")
+    cnc.advance(20.0)
+    assert cnc.read("v6.state") == "done" and cnc.read("cassette.tape").startswith("a5 8d 0a")  # ISO %
+    cnc.power_cycle()
+    cnc.advance(0.1)
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 21)
+    cnc.set("v6.transfer", "cassette_in")
+    cnc.advance(12.9)
+    assert cnc.read("program.P21") == ""
+    cnc.advance(1.0)
+    assert cnc.read("v6.state") == "done"
+    assert cnc.read("program.P21") == "N 1 X 10.000\nN 2 Y- 2.500 M 02"

@@ -25,6 +25,7 @@ from devsim.devices.poselesta.limits import LimitSwitches
 from devsim.devices.poselesta.manual import ManualMotion
 from devsim.devices.poselesta.mst import MstBus, PlcHelper
 from devsim.devices.poselesta.parameters import PARAMETERS, catalogue_blocks, check_parameter, store_parameter
+from devsim.devices.poselesta.peers import Cassette
 from devsim.devices.poselesta.signals import AXES, OUTPUTS, SIGNALS
 from devsim.devices.poselesta.tape import Block, Formats, TapeReader, block_words, parse_blocks, render
 from devsim.devices.poselesta.transfers import (
@@ -94,6 +95,7 @@ class PoselestaCnc(Model):
         self.limits = LimitSwitches(self)
         self.field = WorkingField(self)
         self.output_test = OutputTest(self)
+        self.cassette = Cassette(self) if self.cfg.v6_peer == "cassette" else None
         self._load()
         self._power_on()
 
@@ -372,6 +374,8 @@ class PoselestaCnc(Model):
             if port == "v6":
                 self._v6_lines(True)
             self.transfers[port] = Output(self, function, program, pieces, len(blocks))
+        if self.cassette is not None and port == "v6":
+            self.cassette.started(function.name)  # (after the transfer: its leader ends first)
 
     def _output_pieces(self, name: str, port: str, blocks: list[Block], formats: Formats) -> list[tuple[float, bytes]]:
         iso = self.iso(port)
@@ -413,6 +417,8 @@ class PoselestaCnc(Model):
         running = self.transfers[port]
         if running is not None:
             running.cancel()
+            if self.cassette is not None and port == "v6":
+                self.cassette.ended(running.function.name, state)
             if running.program == CATALOGUE and running.function.direction == "input" and state == "done":
                 self.params.update(self.pending_catalogue)  # the parameters act after M30 (spec §3.9)
                 self._save_params()

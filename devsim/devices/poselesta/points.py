@@ -184,6 +184,10 @@ POINTS = PointTable.of(
               get=lambda m: round(m.override() * 100, 1)),
         Point("panel.feed", "float", "the feed pot's value as the screen shows it (V23/1)", "§2.3.22", "%",
               get=lambda m: round(m.feed_pot() * 100, 1)),
+        Point("cassette.tape", "str", "what the simulated cassette recorder holds (config v6_peer: cassette), "
+              "as hex bytes", "§2.6.2.2", get=lambda m: m.cassette.tape.hex(" ") if m.cassette else ""),
+        Point("cassette.eject", "bool", "erase the simulated cassette", "§2.6.2.2",
+              put=lambda m, v: m.cassette.eject() if v and m.cassette else None, example=False),
         Point("panel.nc_start", "bool", "the NC-Start key of the front panel (P75 = 0 or 1)", "§2.3.3",
               put=lambda m, v: m.executor.nc_start("panel") if v else None, example=True),
         Point("panel.mdi", "str", "the block entered for Hand-Einzelsatz (MANUAL_SINGLE_BLOCK), e.g. N1 G00 X10",
@@ -238,6 +242,9 @@ FAULTS = FaultTable(
                 "set-points 0, the program given up", "§2.2", _alarm("ENCODER_FAULT")) for a in AXES),
         *(Fault(f"rm_missing_{a}", f"the reference mark signal of {a.upper()} is lost: homing never finds a mark",
                 "§2.2.2", lambda m, on, a=a: (m.rm_missing.add if on else m.rm_missing.discard)(a)) for a in AXES),
+        *(Fault(f"count_loss_{a}", f"the encoder of {a.upper()} drops count_loss_increments counts (overspeed, "
+                "noise): the actual value falls behind the true position", "§2.2",
+                lambda m, on, a=a: on and m.field.lose_counts(a, m.cfg.count_loss_increments)) for a in AXES),
         Fault("following_error", "a following error beyond the limit (a blocked drive): alarm "
               "FOLLOWING_ERROR_LIMIT, NC ready L, set-points 0", "§2.5", _alarm("FOLLOWING_ERROR_LIMIT")),
         Fault("relay_supply", "the 24 V supply of the output relays is lost: every output reads L; the "

@@ -111,6 +111,20 @@ class WorkingField:
             self.cnc.signals.set(f"travel_{a}", False)
         self.homing = None
 
+    # -- encoder count loss (spec §5.7) ----------------------------------------------------------------
+    def lose_counts(self, a: str, increments: float) -> None:
+        """The encoder of ``a`` drops ``increments`` counts: the actual value the control counts
+        falls behind the true position by that much (once the axis stands, the shift is made;
+        the reference marks stay where they physically are)."""
+        axis = self.cnc.axes[a]
+        if axis.moving:  # look again when the plan ends (a jog has no end: every 100 ms meanwhile)
+            wait = axis.segments()[-1].t1 - self.cnc.clock.now() if axis.segments() else 0.0
+            self.cnc.clock.call_later(min(max(wait, 0.0), 0.1), lambda: self.lose_counts(a, increments))
+            return
+        axis.set_position(axis.position() - increments)
+        self.offset[a] -= increments
+        self.cnc.record_event("count_loss")
+
     # -- the working field ---------------------------------------------------------------------------
     def limits(self, a: str) -> tuple[float, float]:
         """(−, +) software limits of an axis in increments (P13–P16, P9–P12)."""
