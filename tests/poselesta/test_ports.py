@@ -269,3 +269,25 @@ def test_the_keyboard_test_shows_each_code_plus_one(cnc: Any) -> None:
         keyboard.write(bytes([0x2D]))
         until(lambda: cnc.read("keyboard.accepted") == 2, "the exit key is taken")
     assert cnc.read("diagnostics.keyboard_test") == ""
+
+
+def test_a_tape_sent_with_stty_and_cat_as_the_readme_shows(cnc: Any, tmp_path: Any) -> None:
+    """The README's shell recipe with tools nobody on this project wrote: coreutils `stty` sets
+    the pty to 1200 baud, 8 bits, 2 stop bits, raw; `cat` writes an ASCII tape file into it."""
+    import shutil
+    import subprocess
+
+    assert shutil.which("stty") and shutil.which("cat")
+    cnc.set("param.P71", 1)
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 20)
+    cnc.set("v7.transfer", "input")
+    tape = tmp_path / "p20.txt"
+    tape.write_bytes(b"%\r\nN1 X10.5 Y-3\r\nN2 G00 X0 Y0 M02\r\nM30\r\n")
+    path = cnc.port_url("v7")
+    subprocess.run(["stty", "-F", path, "1200", "cs8", "-parenb", "cstopb", "raw"], check=True)
+    with open(path, "wb") as port:  # hold the pty open while cat writes, as a shell session would
+        subprocess.run(f"cat {tape} > {path}", shell=True, check=True)  # noqa: S602 - our own temp paths
+        until(lambda: cnc.read("v7.state") == "done", "the read-in ends with M30")
+        port.flush()
+    assert cnc.read("program.P20") == "N 1 X 10.500 Y- 3.000\nN 2 X 0.000 Y 0.000 G 00 M 02"
