@@ -105,6 +105,12 @@ class Framer:
         return len(data) if found < 0 else found
 
     @property
+    def length(self) -> int:
+        """Characters of the line so far (``#``, address, text), counted for the 60-character
+        limit (§4.1)."""
+        return self._length
+
+    @property
     def in_text(self) -> bool:
         """Inside a line, past the address: every byte up to CR, LF or ``#`` is text."""
         return self.in_line and self._addr is None

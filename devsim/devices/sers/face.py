@@ -146,12 +146,20 @@ class SersFace(Face):
             return stop
         self._line = line = _Line()
         self._select(line, address)
+        if not line.execute and not line.reply:  # another drive's line: only its end matters
+            finish = framer.skip_text(data, stop)
+            if finish < len(data) and data[finish] in _LINE_ENDS:
+                self._line_end(line, data[finish], framer.end_line(data[finish]))
+                return finish + 1
+            return finish
         whole = _TEXT_TO_END.match(data, stop) if line.execute else None
         end = whole.end() if whole is not None else 0
         text = _quiet(whole[1]) if whole is not None and end - index - 1 <= codec.MAX_LINE else None
         if text is None:
             if line.reply and self.echo:
                 self.send(data[index:stop])
+            if whole is not None:
+                return self._failing_line(line, data, stop, end)
             return stop
         framer.take_text(end - 1 - stop)
         if line.reply and self.echo:
@@ -159,6 +167,27 @@ class SersFace(Face):
         line.text = text
         self._end_line(line, framer.end_line(data[end - 1]))
         return end
+
+    def _failing_line(self, line: _Line, data: bytes, stop: int, end: int) -> int:
+        """The rest of a whole line in the chunk whose first statement is an error before any
+        statement completes (what noise mostly is): its echo up to the character that made
+        the error, the error, the echo of the rest and of the line end, in one step, as
+        :meth:`_take_text`, :meth:`_progress` and the line end would do it piece by piece.
+        Any other line goes on piece by piece (returns ``stop``)."""
+        framer = self.framer
+        window = max(0, codec.MAX_LINE - framer.length)  # characters kept (the rest are dropped)
+        failure = _first_failure(data[stop : min(end - 1, stop + window)])
+        if failure is None:
+            return stop
+        cut, errno = failure
+        if line.reply and self.echo:
+            self.send(data[stop : stop + cut])
+        self._error(line, errno)
+        finish = framer.skip_text(data, stop)  # the line end (its length and overflow counted)
+        if line.reply and self.echo:
+            self.send(data[stop + cut : finish])
+        self._line_end(line, data[finish], framer.end_line(data[finish]))
+        return finish + 1
 
     def _restart(self, line: _Line, data: bytes, index: int) -> int:
         """A ``#`` inside the line's text and the address after it (what :meth:`_on_restart`
@@ -494,6 +523,23 @@ def _quiet(text: bytes) -> str | None:
         if done and (len(done) > 1 or done[0][1] != at + 1 or not _answers(done[0][0])):
             return None
     return chars
+
+
+@functools.lru_cache(maxsize=1024)
+def _first_failure(text: bytes) -> tuple[int, int] | None:
+    """Where a line's text fails before any statement completes, as it arrives character by
+    character: ``(characters up to and including the one that made the error, errno)``, or
+    None (a statement completes first, or no error)."""
+    chars = text.decode("latin-1")
+    for at, char in enumerate(chars):
+        if char in _EXTENDS_ONLY:
+            continue
+        result = st.parse(chars[: at + 1], False)
+        if result.statements:
+            return None
+        if result.errno is not None:
+            return at + 1, result.errno
+    return None
 
 
 def _label_number(text: str) -> int | None:
