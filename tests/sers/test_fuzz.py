@@ -145,3 +145,24 @@ def test_whole_lines_answer_as_bytes_do(stream: bytes) -> None:
         outputs.append(bytes(out))
     assert outputs[0] == outputs[1]
     assert outputs[0]
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    data=hs.lists(hs.one_of(hs.binary(max_size=12), hs.sampled_from([b"#", b"#1", b"#2", b"\r", b"\n", b"P11?",
+                                                                     b"Q", b"\x8f", b"A" * 70])), max_size=40),
+    cut=hs.integers(min_value=2, max_value=300),
+)
+def test_random_noise_in_chunks_answers_as_bytes_do(data: list[bytes], cut: int) -> None:
+    """Random noise (what benchmarks/noise.py --raw pours in): the one-step paths for another
+    drive's line and for a line failing at its first statement answer exactly as byte-by-byte
+    handling does."""
+    stream = b"".join(data)
+    outputs = []
+    for size in (1, cut):
+        device, clock, out, _nvram = _device()
+        for start in range(0, len(stream), size):
+            device.feed(stream[start : start + size])
+        clock.advance(0.01)
+        outputs.append((bytes(out), device.read("P11"), device.read("P12")))
+    assert outputs[0] == outputs[1]
