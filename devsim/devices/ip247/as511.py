@@ -1,0 +1,178 @@
+"""The PG port's link layer: the AS511 procedure, device side (spec ip247.md §3.5; manual §2.2
+names AS511 without defining it, the spec follows the public descriptions).
+
+Pure and incremental, no clock and no I/O: :meth:`As511Link.feed` takes the bytes from the
+programmer (PG) and returns the bytes to send back; the caller keeps the 500 ms inter-character
+timeout on its clock while :attr:`As511Link.busy` and calls :meth:`As511Link.timeout` when it
+expires.  One transaction (§3.5.2)::
+
+    PG  02                        device  10 06          request to send / ready
+    PG  <fn>                      device  02             (10 15: function refused)
+    PG  10 06                     device  16 10 03       "accept"
+    PG  10 06
+    PG  <parameters> 10 04        device  10 06          (10 15: parameters refused)
+                                  device  02             only with a data phase:
+    PG  10 06                     device  <data> 10 03
+    PG  10 06
+                                  device  02             the end, always
+    PG  10 06                     device  12 10 03
+    PG  10 06
+
+Inside parameter and data blocks every 10H byte is doubled (DLE transparency); a single DLE
+followed by EOT, ETX, ACK or NAK is a control sequence.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from devsim.core.record import record
+
+__all__ = ["ACK", "DLE", "EOT", "ETX", "NAK", "STX", "As511Link", "Refused", "dle_double", "dle_undouble"]
+
+STX, ETX, EOT, ACK, DLE, NAK = 0x02, 0x03, 0x04, 0x06, 0x10, 0x15
+DLE_ACK, DLE_NAK, DLE_ETX, DLE_EOT = bytes((DLE, ACK)), bytes((DLE, NAK)), bytes((DLE, ETX)), bytes((DLE, EOT))
+ACCEPT = bytes((0x16, DLE, ETX))  # "accept" after the function code
+END = bytes((0x12, DLE, ETX))  # "end" of every transaction
+TIMEOUT = 0.5  # seconds: no gap this long inside a transaction (§3.5.1)
+
+
+@record
+class Refused:
+    """The device refuses the parameters (DLE NAK in step 9)."""
+
+    reason: str = ""
+
+
+#: What a service answers: response data (a data phase follows), None (no data phase), Refused.
+Reply = bytes | None | Refused
+
+
+def dle_double(data: bytes) -> bytes:
+    """DLE transparency: every 10H twice."""
+    return data.replace(b"\x10", b"\x10\x10")
+
+
+def dle_undouble(data: bytes) -> bytes:
+    """The receiver's side of :func:`dle_double` (a block without its DLE ETX/EOT)."""
+    return data.replace(b"\x10\x10", b"\x10")
+
+
+class As511Link:
+    """One PG port's transaction state (the device is the slave).
+
+    ``known(fn)`` says whether a function code exists (else DLE NAK right after it);
+    ``service(fn, parameters)`` carries it out once the parameters are complete.  ``events``
+    collects what a host developer may want to know (``refused_function``, ``abandoned`` …)."""
+
+    def __init__(self, known: Callable[[int], bool], service: Callable[[int, bytes], Reply]) -> None:
+        self.known, self.service = known, service
+        self.state = "idle"
+        self.events: list[str] = []
+        self._fn = 0
+        self._block = bytearray()
+        self._dle = False  # a DLE was the last byte (inside a block, or the first of DLE ACK)
+        self._data: bytes | None = None
+
+    @property
+    def busy(self) -> bool:
+        """Inside a transaction: the 500 ms timeout runs (restarted by every byte)."""
+        return self.state != "idle"
+
+    def timeout(self) -> None:
+        """500 ms without a byte inside a transaction: it is abandoned (§3.5.1)."""
+        if self.busy:
+            self._abandon("timeout")
+
+    def feed(self, data: bytes) -> list[bytes]:
+        out: list[bytes] = []
+        for byte in data:
+            self._byte(byte, out)
+        return out
+
+    # -- the steps ----------------------------------------------------------------------------------
+    def _byte(self, byte: int, out: list[bytes]) -> None:
+        state = self.state
+        if state == "idle":
+            if byte == STX:
+                out.append(DLE_ACK)
+                self.state = "function"
+            return  # anything else between transactions is noise
+        if state == "function":
+            self._fn = byte
+            if self.known(byte):
+                out.append(bytes((STX,)))
+                self.state = "ack_accept"
+            else:
+                out.append(DLE_NAK)
+                self.events.append("refused_function")
+                self.state = "idle"
+            return
+        if state == "parameters":
+            self._parameter(byte, out)
+            return
+        # every other state waits for the PG's DLE ACK
+        if not self._dle:
+            if byte == DLE:
+                self._dle = True
+            else:
+                self._abandon("expected DLE ACK")
+            return
+        self._dle = False
+        if byte != ACK:
+            self._abandon("DLE NAK" if byte == NAK else "expected DLE ACK")
+            return
+        self._acknowledged(out)
+
+    def _acknowledged(self, out: list[bytes]) -> None:
+        state = self.state
+        if state == "ack_accept":
+            out.append(ACCEPT)
+            self.state = "ack_parameters"
+        elif state == "ack_parameters":
+            self._block.clear()
+            self.state = "parameters"
+        elif state == "ack_data":
+            assert self._data is not None
+            out.append(dle_double(self._data) + DLE_ETX)
+            self.state = "ack_data_done"
+        elif state == "ack_data_done":
+            out.append(bytes((STX,)))
+            self.state = "ack_end"
+        elif state == "ack_end":
+            out.append(END)
+            self.state = "ack_final"
+        elif state == "ack_final":
+            self.state = "idle"
+
+    def _parameter(self, byte: int, out: list[bytes]) -> None:
+        if not self._dle:
+            if byte == DLE:
+                self._dle = True
+            else:
+                self._block.append(byte)
+            return
+        self._dle = False
+        if byte == DLE:
+            self._block.append(DLE)  # a doubled DLE is one data byte
+            return
+        if byte != EOT:
+            self._abandon("a single DLE inside the parameters")
+            return
+        reply = self.service(self._fn, bytes(self._block))
+        if isinstance(reply, Refused):
+            out.append(DLE_NAK)
+            self.events.append("refused_parameters")
+            self.state = "idle"
+            return
+        out.append(DLE_ACK)
+        out.append(bytes((STX,)))
+        self._data = reply
+        self.state = "ack_data" if reply is not None else "ack_end"
+
+    def _abandon(self, why: str) -> None:
+        self.events.append(f"abandoned: {why}")
+        self.state = "idle"
+        self._dle = False
+        self._block.clear()
+        self._data = None
