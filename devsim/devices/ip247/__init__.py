@@ -3,6 +3,7 @@
 So far the pure pieces: the PG port's link layer (:mod:`devsim.devices.ip247.as511`), the
 machine-data record with its checks and ramp (:mod:`devsim.devices.ip247.machine_data`) and the
 traverse-program record with its language check (:mod:`devsim.devices.ip247.program`), the
-error and mode tables (:mod:`devsim.devices.ip247.tables`).  The kind
+error and mode tables (:mod:`devsim.devices.ip247.tables`) and the PG profile's requests and
+responses (:mod:`devsim.devices.ip247.pg_profile`).  The kind
 (model, faces, tables) is not built or registered yet.
 """

@@ -1,0 +1,153 @@
+"""The simulator's application profile on the PG port, "IP247-SIM/PG v1" (spec ip247.md §3.6):
+what the parameters of an AS511 transaction (:mod:`devsim.devices.ip247.as511`) ask for, and
+the response data the module sends.  The IP247's real PG function codes are not public; this
+profile is simulator-defined and carries the services of the mode table with the fields of the
+FB164 parameters and the record layouts of §3.4 (manual §6.3.8).
+
+Pure: :func:`parse_request` turns a function code and its parameter bytes into a request (or
+:class:`Malformed`, answered with ack 82H); :func:`response` lays out the answer.
+"""
+
+from __future__ import annotations
+
+import struct
+
+from devsim.core.record import record
+
+__all__ = [
+    "ACK_ACCEPTED", "ACK_FULL", "ACK_MALFORMED", "ACK_NEGATIVE", "ACK_QUEUED", "COMMANDS", "FUNCTIONS", "Delete",
+    "Header", "Malformed", "Observe", "Observation", "Operate", "ReadRecord", "WriteRecord", "parse_request",
+    "response",
+]
+
+OPERATE, OBSERVE, WRITE_REC, READ_REC, DELETE_REC = 0x61, 0x62, 0x63, 0x64, 0x65
+FUNCTIONS = {OPERATE: "OPERATE", OBSERVE: "OBSERVE", WRITE_REC: "WRITE_REC", READ_REC: "READ_REC",
+             DELETE_REC: "DELETE_REC"}
+#: Commands of OPERATE (spec §3.6.2, simulator encoding).
+COMMANDS = {1: "Start", 2: "Stopp", 3: "Vorwärts", 4: "Rückwärts", 5: "Übernahme"}
+ACK_ACCEPTED, ACK_QUEUED, ACK_NEGATIVE, ACK_FULL, ACK_MALFORMED = 0x00, 0x01, 0x80, 0x81, 0x82
+MAX_PARAMETERS = 1100  # bytes after DLE removal (spec §3.6.5)
+
+
+@record
+class Operate:
+    """An operator command BA1 … BA17: FB164's byte, word and double-word parameters."""
+
+    page: int
+    ba: int
+    cmd: int
+    b: int
+    w: int
+    dd: int
+
+
+@record
+class Observe:
+    page: int
+
+
+@record
+class WriteRecord:
+    """BA20 (machine data), BA22 (program), BA24 (SYS-ID): the record's words."""
+
+    page: int
+    ba: int
+    db: int
+    overwrite: bool
+    words: tuple[int, ...]
+
+
+@record
+class ReadRecord:
+    page: int
+    ba: int
+    db: int
+    bcd: bool
+
+
+@record
+class Delete:
+    page: int
+    ba: int
+    db: int
+
+
+@record
+class Malformed:
+    """Wrong length or a field out of range: ack 82H, nothing executed (spec §3.6.5)."""
+
+    function: int
+    page: int = 0
+    ba: int = 0
+
+
+Request = Operate | Observe | WriteRecord | ReadRecord | Delete | Malformed
+_LENGTHS = {OPERATE: 10, OBSERVE: 1, READ_REC: 4, DELETE_REC: 3}
+
+
+def parse_request(function: int, data: bytes) -> Request:
+    """The request of one transaction's parameter block (spec §3.6.3)."""
+    page, ba = (data[0] if data else 0), (data[1] if len(data) > 1 else 0)
+    if len(data) > MAX_PARAMETERS or not 1 <= page <= 4:
+        return Malformed(function, page, ba)
+    expected = _LENGTHS.get(function)
+    if expected is not None and len(data) != expected:
+        return Malformed(function, page, ba)
+    if function == OPERATE:
+        _, _, cmd, b, w, dd = struct.unpack(">BBBBHi", data)
+        if cmd not in COMMANDS:
+            return Malformed(function, page, ba)
+        return Operate(page, ba, cmd, b, w, dd)
+    if function == OBSERVE:
+        return Observe(page)
+    if function == READ_REC:
+        return ReadRecord(page, ba, data[2], bool(data[3] & 1))
+    if function == DELETE_REC:
+        return Delete(page, ba, data[2])
+    if function == WRITE_REC:
+        if len(data) < 4 or len(data) % 2:
+            return Malformed(function, page, ba)
+        words = struct.unpack(f">{(len(data) - 4) // 2}H", data[4:])
+        return WriteRecord(page, ba, data[2], bool(data[3] & 1), words)
+    return Malformed(function, page, ba)
+
+
+@record
+class Header:
+    """The common 8 bytes of every response (spec §3.6.4)."""
+
+    ack: int
+    page: int
+    ba: int
+    cmd: int
+    err: int
+    btr: int  # the page's current mode (0 on page 4)
+    rmld: int  # axis attributes (0 on page 4)
+    mfkt: int  # current M function, 255 before the first, 2 outside BA8/BA9
+
+    def pack(self) -> bytes:
+        return bytes((self.ack, self.page, self.ba, self.cmd, self.err, self.btr, self.rmld, self.mfkt))
+
+
+@record
+class Observation:
+    """OBSERVE's continuation (spec §3.6.4): 14 more bytes."""
+
+    position: int
+    residual: int
+    errors: tuple[int, int, int, int]  # axes 1 … 3 and the data channel
+    last_command: int
+    flags: int  # 1 external start, 2 interrupted, 4 teach-in, 8 waiting for Übernahme
+
+    def pack(self) -> bytes:
+        return struct.pack(">ii4BBB", self.position, self.residual, *self.errors, self.last_command, self.flags)
+
+
+def response(header: Header, body: bytes | Observation | tuple[int, ...] = b"") -> bytes:
+    """Header and continuation: OBSERVE's 14 bytes, a READ_REC record (words), a WRITE_REC
+    result (words) or nothing."""
+    if isinstance(body, Observation):
+        return header.pack() + body.pack()
+    if isinstance(body, tuple):
+        return header.pack() + struct.pack(f">{len(body)}H", *body)
+    return header.pack() + body
