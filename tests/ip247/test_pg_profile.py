@@ -10,6 +10,7 @@ from devsim.devices.ip247.pg_profile import (
     Header,
     Malformed,
     Observation,
+    Observe,
     Operate,
     ReadRecord,
     WriteRecord,

@@ -1,9 +1,9 @@
 """The Siemens SIMATIC S5 IP247 stepper positioning module (spec ip247.md): work in progress.
 
-So far the pure pieces: the PG port's link layer (:mod:`devsim.devices.ip247.as511`), the
-machine-data record with its checks and ramp (:mod:`devsim.devices.ip247.machine_data`) and the
-traverse-program record with its language check (:mod:`devsim.devices.ip247.program`), the
-error and mode tables (:mod:`devsim.devices.ip247.tables`) and the PG profile's requests and
-responses (:mod:`devsim.devices.ip247.pg_profile`).  The kind
-(model, faces, tables) is not built or registered yet.
+So far the pure pieces: the PG port's link layer (:mod:`devsim.devices.ip247.as511`), the PG
+profile's requests and responses (:mod:`devsim.devices.ip247.pg_profile`), the machine-data
+record with its checks and ramp (:mod:`devsim.devices.ip247.machine_data`), the traverse-program
+record with its language check (:mod:`devsim.devices.ip247.program`), and the error and mode
+tables (:mod:`devsim.devices.ip247.tables`).  The kind (model, faces, points) is not built or
+registered yet.
 """
