@@ -3,7 +3,8 @@
 So far the pure pieces: the PG port's link layer (:mod:`devsim.devices.ip247.as511`), the PG
 profile's requests and responses (:mod:`devsim.devices.ip247.pg_profile`), the machine-data
 record with its checks and ramp (:mod:`devsim.devices.ip247.machine_data`), the traverse-program
-record with its language check (:mod:`devsim.devices.ip247.program`), and the error and mode
-tables (:mod:`devsim.devices.ip247.tables`).  The kind (model, faces, points) is not built or
+record with its language check (:mod:`devsim.devices.ip247.program`), binary/BCD values and the
+small records (:mod:`devsim.devices.ip247.values`), and the error and mode tables
+(:mod:`devsim.devices.ip247.tables`).  The kind (model, faces, points) is not built or
 registered yet.
 """
