@@ -39,6 +39,8 @@ class PgClient:
     def _expect(self, expected: bytes, step: str) -> None:
         got = self._read(len(expected))
         if got != expected:
+            if got == bytes((DLE,)):
+                got += self._read(1)  # STX expected, a DLE came: DLE NAK?
             if got[:2] == bytes((DLE, NAK)):
                 raise As511Error(f"{step}: refused (DLE NAK)")
             raise As511Error(f"{step}: expected {expected.hex(' ')}, got {got.hex(' ')}")
