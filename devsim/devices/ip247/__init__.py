@@ -9,8 +9,9 @@ So far the pure pieces, each tested with the spec's vectors: the PG port's link 
 (:mod:`devsim.devices.ip247.motion`), the traverse-program record with its language check
 (:mod:`devsim.devices.ip247.program`), the program memory (:mod:`devsim.devices.ip247.store`),
 binary/BCD values and the small records (:mod:`devsim.devices.ip247.values`), the error and mode
-tables (:mod:`devsim.devices.ip247.tables`), and the preconditions of an operator job
-(:mod:`devsim.devices.ip247.jobs`).  The kind itself (the per-axis state and the
+tables (:mod:`devsim.devices.ip247.tables`), the preconditions of an operator job
+(:mod:`devsim.devices.ip247.jobs`), and the zero and tool offsets
+(:mod:`devsim.devices.ip247.coordinates`).  The kind itself (the per-axis state and the
 modes' actions of §4.1/§4.2, program execution, the PG and PLC faces, points, config)
 is not built or registered yet.
 """
