@@ -52,6 +52,16 @@ def _device() -> tuple[SersDevice, VirtualClock, bytearray, NonVolatileMemory]:
     return device, clock, out, nvram
 
 
+def _answers(stream: bytes, size: int, *names: str) -> tuple[object, ...]:
+    """What a fresh drive answers (and then reads for ``names``) when ``stream`` arrives in
+    chunks of ``size`` bytes."""
+    device, clock, out, _nvram = _device()
+    for start in range(0, len(stream), size):
+        device.feed(stream[start : start + size])
+    clock.advance(0.01)
+    return (bytes(out), *(device.read(name) for name in names))
+
+
 @settings(max_examples=150, deadline=None)
 @given(st.lists(st.one_of(st.binary(max_size=40), st.sampled_from([c + "\r" for c in COMMANDS]).map(str.encode)),
                 max_size=25),
@@ -111,14 +121,7 @@ def test_chunks_and_single_bytes_give_the_same_answers(data: list[bytes], cut: i
     """The face's fast paths (noise between lines, text nobody executes, runs of text, whole
     lines) answer exactly as byte-by-byte handling does, wherever the host's chunks are cut."""
     stream = b"".join(data)
-    outputs = []
-    for size in (1, cut):
-        device, clock, out, _nvram = _device()
-        for start in range(0, len(stream), size):
-            device.feed(stream[start : start + size])
-        clock.advance(0.01)
-        outputs.append((bytes(out), device.read("program"), device.read("P11")))
-    assert outputs[0] == outputs[1]
+    assert _answers(stream, 1, "program", "P11") == _answers(stream, cut, "program", "P11")
 
 
 @pytest.mark.parametrize(
@@ -136,15 +139,9 @@ def test_chunks_and_single_bytes_give_the_same_answers(data: list[bytes], cut: i
     ],
 )
 def test_whole_lines_answer_as_bytes_do(stream: bytes) -> None:
-    outputs = []
-    for size in (1, len(stream)):
-        device, clock, out, _nvram = _device()
-        for start in range(0, len(stream), size):
-            device.feed(stream[start : start + size])
-        clock.advance(0.01)
-        outputs.append(bytes(out))
-    assert outputs[0] == outputs[1]
-    assert outputs[0]
+    bytewise = _answers(stream, 1)
+    assert bytewise == _answers(stream, len(stream))
+    assert bytewise[0]
 
 
 @settings(max_examples=300, deadline=None)
@@ -158,11 +155,4 @@ def test_random_noise_in_chunks_answers_as_bytes_do(data: list[bytes], cut: int)
     drive's line and for a line failing at its first statement answer exactly as byte-by-byte
     handling does."""
     stream = b"".join(data)
-    outputs = []
-    for size in (1, cut):
-        device, clock, out, _nvram = _device()
-        for start in range(0, len(stream), size):
-            device.feed(stream[start : start + size])
-        clock.advance(0.01)
-        outputs.append((bytes(out), device.read("P11"), device.read("P12")))
-    assert outputs[0] == outputs[1]
+    assert _answers(stream, 1, "P11", "P12") == _answers(stream, cut, "P11", "P12")

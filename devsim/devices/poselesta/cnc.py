@@ -227,13 +227,17 @@ class PoselestaCnc(Model):
     def accel(self, axis: str) -> float:
         return self.from_mm(axis, self.cfg.accel)
 
+    def _pot(self, name: str, full_scale: float) -> float:
+        """A potentiometer input (0 … 10 V) in whole percent of ``full_scale`` %, as a factor."""
+        return round(max(0.0, min(10.0, float(self.signals.get(name)))) * full_scale / 10) / 100
+
     def override(self) -> float:
-        """V23/4: 0 … 10 V = 0 … 150 % in whole percent (6.667 V = 100 %), as a factor."""
-        return round(max(0.0, min(10.0, float(self.signals.get("override_pot_v")))) * 15) / 100
+        """V23/4: 0 … 10 V = 0 … 150 % (6.667 V = 100 %)."""
+        return self._pot("override_pot_v", 150)
 
     def feed_pot(self) -> float:
-        """V23/1: 0 … 10 V = 0 … 100 % in whole percent, as a factor."""
-        return round(max(0.0, min(10.0, float(self.signals.get("feed_pot_v")))) * 10) / 100
+        """V23/1: 0 … 10 V = 0 … 100 %."""
+        return self._pot("feed_pot_v", 100)
 
     def kv(self, axis: str) -> float:
         """The position loop gain [1/s]: P30–P33 steps × ``kv_per_step`` (spec §5.2)."""

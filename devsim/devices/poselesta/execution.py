@@ -17,7 +17,7 @@ block abort (P90) change the flow.  Not simulated: G25 (its blocks run as no mot
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
 from devsim.devices.poselesta.contour import PLANES, PathMotion
@@ -445,19 +445,24 @@ class Executor:
         """G00: each axis at its rapid (P44–P47, × override with P64 = 1) with its own ramps
         (spec §5.3); speeds in inc/s, accelerations in inc/s²."""
         cnc = self.cnc
-        if any(cnc.rapid(a) <= 0 for a in self.targets):
-            cnc.record_event("zero_speed_parameter")  # P44–P47 = 0: the axis cannot move (spec §4.8)
+        if self._zero_rapid(self.targets):
             return None
         factor = cnc.override() if cnc.params[64] == 1 else 1.0
         if factor <= 0:
             return None
         return {a: (cnc.rapid(a) * factor, cnc.accel(a)) for a in self.targets}
 
+    def _zero_rapid(self, axes: Iterable[str]) -> bool:
+        """P44–P47 = 0 (after a POS II catalogue read): the axis cannot move (spec §4.8)."""
+        if any(self.cnc.rapid(a) <= 0 for a in axes):
+            self.cnc.record_event("zero_speed_parameter")
+            return True
+        return False
+
     def _path_speed(self, axes: tuple[str, ...]) -> float | None:
         """F × override in mm/s, no faster than the slowest rapid of ``axes``; None at 0."""
         cnc = self.cnc
-        if any(cnc.rapid(a) <= 0 for a in axes):
-            cnc.record_event("zero_speed_parameter")  # P44–P47 = 0: the axis cannot move (spec §4.8)
+        if self._zero_rapid(axes):
             return None
         path = min([self.feed * self.feed_unit() * cnc.override() / 60.0, *(cnc.to_mm(a, cnc.rapid(a)) for a in axes)])
         if self.feed <= 0:
