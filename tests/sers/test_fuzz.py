@@ -136,12 +136,27 @@ def test_chunks_and_single_bytes_give_the_same_answers(data: list[bytes], cut: i
         b"#W=360E\r#E W=3\r#X=1 #2P11?\r#1P11?\r",  # statements run before the line end
         b"#" + b"P11?" * 16 + b"\r",  # beyond 60 characters
         b"#P11\x00?\r#Q?\r",  # errors
+        # not selected: other drives' lines are skipped in one step up to the next address
+        b"#2\r#" + b"A" * 70 + b"#1\r#1P11?\r",  # ... counting the line's length across a restart
+        b"#2\r#" + b"A" * 59 + b"##1\r#1P11?\r",  # ... where a '#' beyond 60 is no overflow
+        b"#2\rX\r\n#Q\r#\n#\r\n#*E\r#1P11?\r\n",  # ... line ends, pairs, a broadcast
     ],
 )
 def test_whole_lines_answer_as_bytes_do(stream: bytes) -> None:
     bytewise = _answers(stream, 1)
     assert bytewise == _answers(stream, len(stream))
     assert bytewise[0]
+
+
+@pytest.mark.parametrize("size", [1, 7, 200])
+def test_a_line_for_another_drive_counts_its_length_into_a_restart_for_this_one(size: int) -> None:
+    """§4.1: 60 characters per line, counted from the line's first '#' across restarts; the
+    skip over other drives' lines (drive not selected) counts as byte-by-byte framing does:
+    text beyond 60 is an overflow, a '#' beyond it is not."""
+    over = _answers(b"#2\r#" + b"A" * 70 + b"#1\r", size)[0]
+    assert over.endswith(b"#1\r\n*RS232 Puffer\xfcberlauf\n\r")
+    hashes = _answers(b"#2\r#" + b"A" * 59 + b"##1\r", size)[0]
+    assert hashes.endswith(b"#1\r\nok1\n\r")
 
 
 @settings(max_examples=300, deadline=None)

@@ -73,6 +73,8 @@ _IGNORED = Ignored()
 
 
 _TEXT_END = re.compile(rb"[\r\n#]")
+# A '#' with an address after it: the only bytes that can select a drive that is not selected.
+_ADDRESSED = re.compile(rb"#[0-9*]")
 _ADDRESS = re.compile(rb"\*|[0-9]*")
 # Bytes after a '#' that cannot begin an address (a '#' is left to feed(), see begin_line).
 _NOT_ADDRESS = frozenset(range(256)) - frozenset(b"0123456789*#")
@@ -151,6 +153,44 @@ class Framer:
             return True, address_value(digits), stop
         self._addr = digits
         return False, None, stop
+
+    def skip_unaddressed(self, data: bytes, start: int) -> int:
+        """For a drive that is not selected, outside a line or in the text of a line it
+        neither executes nor answers: where the next ``#`` followed by an address is (the
+        only thing that can concern it), with the lines in between framed in one step as
+        :meth:`feed` would byte by byte (line ends, restarts, the 60-character count).  A
+        ``#`` that ends the chunk is left to :meth:`feed` (its address may follow)."""
+        found = _ADDRESSED.search(data, start)
+        stop = len(data) if found is None else found.start()
+        if found is None and stop > start and data[stop - 1] == HASH:
+            stop -= 1
+        if stop <= start:
+            return start
+        last_end = max(data.rfind(b"\r", start, stop), data.rfind(b"\n", start, stop))
+        tail = start
+        if last_end >= 0:
+            previous = max(data.rfind(b"\r", start, last_end), data.rfind(b"\n", start, last_end))
+            if previous >= 0:
+                ended = data.find(b"#", previous + 1, last_end) >= 0
+            else:
+                ended = self.in_line or data.find(b"#", start, last_end) >= 0
+            self.in_line = False
+            tail = last_end + 1
+            self._last_end = data[last_end] if ended and tail == stop else None
+        if tail == stop:
+            return stop
+        self._last_end = None
+        if not self.in_line:
+            opened = data.find(b"#", tail, stop)
+            if opened < 0:
+                return stop  # noise between lines
+            self.in_line, self._addr, self._length, self._overflow = True, None, 0, False
+            tail = opened
+        self._length += stop - tail
+        beyond = min(self._length - MAX_LINE, stop - tail)
+        if beyond > 0 and data[stop - beyond : stop].strip(b"#"):
+            self._overflow = True  # a text character beyond the limit (a '#' sets nothing)
+        return stop
 
     def end_line(self, byte: int) -> bool:
         """When :attr:`in_text`: CR or LF ``byte`` ends the line, as :meth:`feed` would;

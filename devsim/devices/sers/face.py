@@ -93,6 +93,12 @@ class SersFace(Face):
         index, end = 0, len(data)
         while index < end:
             line = self._line
+            if model.addressed is False and self._unconcerned(line):
+                stop = framer.skip_unaddressed(data, index)  # lines for other drives: one step
+                if stop > index:
+                    index = stop
+                    self._line = (line or _Line()) if framer.in_line else None
+                    continue
             byte = data[index]
             if not framer.in_line:
                 if byte == codec.HASH:
@@ -132,6 +138,17 @@ class SersFace(Face):
                 self._on_event(event, byte)
             if not model.logic_alive or model.booting:
                 return
+
+    def _unconcerned(self, line: _Line | None) -> bool:
+        """Whether nothing this drive does depends on the bytes until the next ``#`` with an
+        address while it is not selected (see :meth:`codec.Framer.skip_unaddressed`): outside
+        a line or in one it neither executes nor answers, no echo of a CR/LF pair owed, no
+        message waiting for a line end."""
+        if self._last_replied or self._spontaneous:
+            return False
+        if line is None:
+            return not self.framer.in_line
+        return not (line.execute or line.reply) and self.framer.in_text
 
     def _begin_line(self, data: bytes, index: int) -> int:
         """A ``#`` outside a line and the drive address after it (what :meth:`_on_restart`,
