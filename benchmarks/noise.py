@@ -10,10 +10,12 @@ The same noise is then poured into a bare asyncio pty reader (4 KiB per loop tur
 reads a pty), while the echo is polled as before: its rate is the reference for the swallow rate.
 
 Noise: random bytes without ``#`` (the SERS line start) by default, so no command lines are
-started; ``--raw`` sends plain random bytes.  Targets: the neighbour's p99 < 1 ms while the noise
+started; ``--raw`` sends plain random bytes.  The noise is 64 KiB of pseudo-random bytes from
+``--seed``, repeated, so that runs compare: how much of it a drive answers depends on the
+bytes (a ``#`` and this drive's address select it, another address deselects it).  Targets: the neighbour's p99 < 1 ms while the noise
 flows, and noise swallowed at ≥ 50 MB/s.
 
-    python benchmarks/noise.py [--megabytes 100] [--kind sers] [--raw]
+    python benchmarks/noise.py [--megabytes 100] [--kind sers] [--raw] [--seed 1]
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import random
 import signal
 import statistics
 import subprocess
@@ -57,8 +60,8 @@ def poll(port: serial.Serial, count: int) -> list[float]:
     return times
 
 
-def writer(path: str, megabytes: float, raw: bool) -> None:
-    block = bytearray(os.urandom(1 << 16))
+def writer(path: str, megabytes: float, raw: bool, seed: int) -> None:
+    block = bytearray(random.Random(seed).randbytes(1 << 16))  # the same noise in every run
     if not raw:
         block = block.replace(b"#", b"\x00")
     total = int(megabytes * 1e6)
@@ -97,15 +100,19 @@ asyncio.run(main())
 """
 
 
-def bare_rate(megabytes: float, raw: bool, echo: serial.Serial) -> float:
+def _writer(path: str, megabytes: float, raw: bool, seed: int) -> subprocess.Popen[bytes]:
+    return subprocess.Popen([sys.executable, __file__, "--writer", path, str(megabytes), "--seed", str(seed),
+                             *(["--raw"] if raw else [])], env=_env())
+
+
+def bare_rate(megabytes: float, raw: bool, seed: int, echo: serial.Serial) -> float:
     """MB/s a bare asyncio pty reader swallows the same noise at, the echo polled meanwhile."""
     sink = subprocess.Popen([sys.executable, "-c", SINK, str(int(megabytes * 1e6))], stdout=subprocess.PIPE,
                             text=True)
     assert sink.stdout is not None
     path = sink.stdout.readline().strip()
     started = time.perf_counter()
-    noise = subprocess.Popen([sys.executable, __file__, "--writer", path, str(megabytes), *(["--raw"] if raw else [])],
-                             env=_env())
+    noise = _writer(path, megabytes, raw, seed)
     while noise.poll() is None:
         poll(echo, 50)
     assert sink.stdout.readline().strip() == "done"
@@ -124,10 +131,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--megabytes", type=float, default=100.0)
     parser.add_argument("--kind", default="sers")
     parser.add_argument("--raw", action="store_true", help="noise may contain '#'")
+    parser.add_argument("--seed", type=int, default=1, help="the noise: 64 KiB from this seed, repeated (default 1)")
     parser.add_argument("--writer", nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.writer:
-        writer(args.writer[0], float(args.writer[1]), args.raw)
+        writer(args.writer[0], float(args.writer[1]), args.raw, args.seed)
         return 0
     from devsim.core.control import ControlClient
 
@@ -156,8 +164,7 @@ def main(argv: list[str] | None = None) -> int:
                 quiet_times, echo_quiet = poll(quiet, 2000), poll(echo, 2000)
                 before = control.line("noisy")["bytes_in"]
                 started = time.perf_counter()
-                noise = subprocess.Popen([sys.executable, __file__, "--writer", ports["noisy"], str(args.megabytes),
-                                          *(["--raw"] if args.raw else [])], env=_env())
+                noise = _writer(ports["noisy"], args.megabytes, args.raw, args.seed)
                 noisy_times: list[float] = []
                 echo_noisy: list[float] = []
                 while noise.poll() is None:
@@ -167,7 +174,7 @@ def main(argv: list[str] | None = None) -> int:
                 while control.line("noisy")["bytes_in"] < target:
                     noisy_times += poll(quiet, 10)
                 elapsed = time.perf_counter() - started
-                reference = bare_rate(args.megabytes, args.raw, echo)
+                reference = bare_rate(args.megabytes, args.raw, args.seed, echo)
         finally:
             _stop(echo_proc)
             proc.send_signal(signal.SIGINT)
