@@ -28,6 +28,7 @@ _BUILTIN = {
     "sers": "devsim.devices.sers:SersDevice",
     "gms96": "devsim.devices.gms96:Gms96Device",
     "poselesta": "devsim.devices.poselesta:PoselestaDevice",
+    "ip247": "devsim.devices.ip247:Ip247Device",
 }
 
 

@@ -1,0 +1,255 @@
+"""Automatic execution of a traverse program on one IP247 axis, BA8 and BA9 (manual §2.6,
+§4.3.1–§4.3.3; spec ip247.md §5.11, §4.11).
+
+The blocks come in the order :func:`.flow.steps` gives them; switches, shifts and corrections
+take no time, a traverse (X, G74) moves the axis and a dwell (G04) waits on the device clock,
+each setting "position reached" when done.  A halt (M00 before the next traverse or dwell, each
+step of BA9) and an interruption (Stopp: error 65) leave the axis "fertig" with the context
+kept; Übernahme continues, Start begins again, a Stopp on an interrupted program aborts it.
+A flying change (G10) runs its blocks one after the other with a stop between them and no
+"position reached" at the joint (the ramp between two velocities is not modelled).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import TYPE_CHECKING
+
+from devsim.devices.ip247 import program as lang
+from devsim.devices.ip247.flow import M_NONE, FlowError, steps
+from devsim.devices.ip247.jobs import START, STOP, TAKE_OVER
+from devsim.devices.ip247.program import Block
+
+if TYPE_CHECKING:
+    from devsim.devices.ip247.axis_unit import AxisUnit
+
+__all__ = ["ProgramRun"]
+
+
+
+class ProgramRun:
+    """One program context of an axis (spec §4.1.1 ``program_ctx``)."""
+
+    def __init__(self, unit: AxisUnit, number: int, single: bool, programs: dict[int, lang.Program]) -> None:
+        self.unit, self.number, self.single = unit, number, single
+        self._steps: Iterator[tuple[int, Block, int]] = steps(programs, number)
+        self.absolute, self.direction = True, 25
+        self.metric = unit.md is None or unit.md.unit != 2  # G71 on metric, G70 on inch axes
+        self.feed: int | None = None
+        self.halted = False  # waiting for Übernahme (M00, a BA9 step): OBSERVE flag bit 3
+        self.interrupted = False  # error 65: OBSERVE flag bit 1
+        self._pending: tuple[Block, int] | None = None  # the traverse/dwell the halt holds back
+        self._m00 = False
+        self._timer = None
+        self._last: tuple[Block, int] | None = None  # the traverse or dwell executing
+
+    # -- from the module -------------------------------------------------------------------------
+    def start(self) -> None:
+        self.unit.m_function = M_NONE
+        self.unit.coords.program_shift(0)
+        self._advance()
+
+    def take_over(self) -> int | None:
+        """Übernahme while "fertig": continue after a halt or an interruption."""
+        if not (self.halted or self.interrupted):
+            return 2
+        self.halted = self.interrupted = False
+        if self._last is not None:  # an interrupted traverse is completed first
+            block, m = self._last
+            self._execute(block, m)
+            return None
+        self._advance(skip_halt=True)
+        return None
+
+    def stop_at_rest(self) -> tuple[int | None, bool]:
+        """Stopp while "fertig": at a halt it interrupts (65); on an interrupted program it
+        aborts the context.  Returns (error, context ended)."""
+        if self.interrupted:
+            self.abort()
+            return None, True
+        self.halted, self.interrupted = False, True
+        return 65, False
+
+    def command(self, ba: int, cmd: int) -> int | None:
+        """A job while the program moves (spec §4.2): Stopp interrupts (65); Übernahme is error 2
+        and interrupts; another mode aborts the context with error 2."""
+        unit = self.unit
+        unit.last_cmd = cmd
+        if cmd == STOP or ba == 4 or (ba == unit.mode and cmd == TAKE_OVER):
+            self._interrupt()
+            return 65 if cmd == STOP or ba == 4 else 2
+        if ba == unit.mode and cmd == START:
+            self._interrupt()
+            return 2
+        self.abort()
+        unit.brake()
+        return 2
+
+    def abort(self) -> None:
+        """The context ends without its M02: leftover program shifts fold into BA12/13's."""
+        if self._timer is not None:
+            self._timer.cancel()
+        coords = self.unit.coords
+        coords.zo_mode += coords.zo_prog
+        coords.zo_prog = 0
+        self.unit.automatic = None
+        self.unit.m_function = 2
+
+    # -- the blocks -------------------------------------------------------------------------------
+    def _advance(self, skip_halt: bool = False) -> None:
+        unit = self.unit
+        if self._pending is not None:
+            block, m = self._pending
+            self._pending = None
+            self._execute(block, m)
+            return
+        while True:
+            try:
+                _, block, m = next(self._steps)
+            except StopIteration:
+                self._end()
+                return
+            except FlowError as exc:
+                self._fail(exc.error)
+                return
+            error = self._switches(block)
+            if error is not None:
+                self._fail(error)
+                return
+            moves = block.x is not None or block.g in (74, 4)
+            if block.m == 0 and not moves:
+                self._halt()  # M00 alone: a traverse of length 0 (spec §4.11.8)
+                return
+            if not moves:
+                continue
+            if block.m == 0 and not skip_halt:
+                self._pending = (block, m)
+                unit.m_function = m
+                self._halt()
+                return
+            self._execute(block, m)
+            return
+
+    def _switches(self, block: Block) -> int | None:
+        g, unit, md = block.g, self.unit, self.unit.md
+        assert md is not None
+        if g in (90, 91):
+            self.absolute = g == 90
+        elif g in (70, 71) and md.unit != 3:
+            self.metric = g == 71
+        elif g in (25, 26, 27):
+            self.direction = g
+        elif g == 53:
+            unit.coords.program_shift(0)
+        elif g in (54, 55, 56, 57):
+            unit.coords.program_shift(md.zero_offsets[g - 54])
+        elif g == 40:
+            unit.coords.to_prog = 0
+        elif g in (43, 44):
+            return unit.coords.program_tool(md.tool_length, g == 43)
+        return None
+
+    def _execute(self, block: Block, m: int) -> None:
+        unit, md = self.unit, self.unit.md
+        assert md is not None
+        unit.m_function = m
+        self._last = (block, m)
+        unit.running = True
+        unit.module.changed(unit)
+        if block.g == 4:
+            unit.in_position = False
+            self._timer = unit.clock.call_later((block.f or 0) * 0.1, lambda: self._done(True))
+            return
+        if block.g == 74:
+            target, velocity = float(md.reference), md.step_velocity  # the physical reference point
+        else:
+            assert block.x is not None
+            x = self._convert(block.x)
+            tip = x if self.absolute else unit.actual() + x
+            target = float(unit.coords.holder_for(round(tip)))
+            if block.f:
+                self.feed = round(self._convert(block.f))
+            velocity = md.v_max if block.g == 0 else (self.feed or md.step_velocity)
+            if not md.rotary and unit.reference_set:
+                low, high = unit.coords.range()
+                if not low <= target - unit.coords.zero_offset <= high:
+                    self._fail(23)
+                    return
+        f = md.frequency(velocity)
+        if f > md.f_max * (1 + 1e-9) and block.g != 0:
+            self._fail(43)
+            return
+        if f < 1:
+            self._fail(58)
+            return
+        unit.position_to(target, min(f, float(md.f_max)), self._done)
+
+    def _convert(self, value: float) -> float:
+        """A program value in the axis unit: G70 (0.1 inch) on a metric axis, G71 (mm) on an
+        inch axis (spec §4.11.3: 1 inch = 25.4 mm)."""
+        md = self.unit.md
+        assert md is not None
+        if md.unit == 1 and not self.metric:
+            return round(value * 2.54)
+        if md.unit == 2 and self.metric:
+            return round(value / 2.54)
+        return value
+
+    def _done(self, reached: bool) -> None:
+        unit = self.unit
+        self._timer = None
+        if not reached:
+            return
+        block, _ = self._last or (None, 0)
+        self._last = None
+        unit.in_position = not (block is not None and block.g == 10)
+        unit.set_pe()
+        if self.interrupted:
+            self._rest()
+            return
+        if self.single:
+            self.halted = True
+            self._rest()
+            return
+        self._advance()
+
+    def _interrupt(self) -> None:
+        """Brake; the traverse stays to be completed (the dwell counts as expired)."""
+        unit = self.unit
+        self.interrupted, self.halted = True, False
+        if self._timer is not None:  # a dwell: expired
+            self._timer.cancel()
+            self._timer = None
+            self._last = None
+            unit.in_position = True
+            unit.set_pe()
+            self._rest()
+            return
+        unit.brake(self._braked)
+
+    def _braked(self, reached: bool) -> None:
+        if reached:
+            self._last = None  # (braking onto the target: it was reached)
+        self._rest()
+
+    def _halt(self) -> None:
+        self.halted = True
+        self._rest()
+
+    def _rest(self) -> None:
+        unit = self.unit
+        unit.running = False
+        unit.module.changed(unit)
+
+    def _end(self) -> None:
+        unit = self.unit
+        unit.coords.program_end()
+        unit.automatic = None
+        unit.m_function = 2
+        self._rest()
+
+    def _fail(self, error: int) -> None:
+        unit = self.unit
+        self.abort()
+        self._rest()
+        unit.module.set_error(unit, error)

@@ -1,0 +1,440 @@
+"""One IP247 axis page: its state and the modes that move it or shift its coordinates (manual
+§2.7, §2.8, §4.1, §4.2, §4.3.5–§4.3.9; spec ip247.md §4.1, §4.2, §5.4–§5.10).
+
+The axis is open loop: the shared closed-form :class:`~devsim.core.axis.Axis` carries the motor
+side's machine position M in base units, moved by the exponential ramp pieces of
+:mod:`.motion`.  The holder coordinate is H = M − M0 (M0 fixed by the reference point), the
+reported actual value the tool tip's (:class:`.coordinates.Coordinates`).  The module
+(:mod:`.module`) checks a job's preconditions (:func:`.jobs.refusal`) before it reaches
+:meth:`AxisUnit.operate`; errors are module error numbers (spec §4.3).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from devsim.core.axis import Axis, RegionSwitch
+from devsim.devices.ip247.attributes import rmld
+from devsim.devices.ip247.coordinates import Coordinates
+from devsim.devices.ip247.jobs import BACKWARD, FORWARD, START, STOP, TAKE_OVER, AxisView
+from devsim.devices.ip247.machine_data import MachineData
+from devsim.devices.ip247.motion import ExpPiece, move_pieces
+
+if TYPE_CHECKING:
+    from devsim.devices.ip247.module import Ip247Module
+
+__all__ = ["AxisUnit"]
+
+FOREVER = 1e9  # seconds: a jog's cruise lasts until something stops it
+MAX_RELATIVE = 200_000_000  # base units: BA7 on a rotary axis (spec §5.5)
+
+
+class AxisUnit:
+    """Axis page 1 … 3 (spec §4.1.1)."""
+
+    def __init__(self, module: Ip247Module, number: int, geometry: dict[str, Any]) -> None:
+        self.module, self.number, self.clock = module, number, module.clock
+        self.axis = Axis(module.clock, name=f"axis{number}")
+        self.md: MachineData | None = None
+        self.md_words: list[int] | None = None
+        self.mode, self.last_cmd, self.running = 4, 0, False
+        self.reference_set = False
+        self.error = 8  # "Zustand nach Spannungsausfall" (spec §4.14 [DECISION])
+        self.coords = Coordinates(0, 0, 0)
+        self.m0 = 0.0  # machine position of the holder coordinate 0
+        self.in_position = False
+        self.target: float | None = None  # holder target of the current (or aborted) positioning
+        self.m_function = 2
+        self.teach_in: int | None = None
+        self.locks: set[int] = set()  # directions locked by a limit switch (+1 forward, -1 backward)
+        self.waiting_start: Callable[[], None] | None = None  # a job waiting for external start
+        self.automatic: Any = None  # the program context (BA8/BA9), see .automatic
+        self.reference_run: Any = None  # see .reference
+        self.pattern_base = 0.0  # machine position where the current-pattern counter was 0
+        self._done: Callable[[bool], None] | None = None
+        self._decel_at = math.inf  # when the current positioning move starts its last braking
+        self._direction = 0
+        self._sw_watch: Any = None
+        self._switches = [self._region(geometry, name) for name in ("anf", "end", "cam")]
+
+    # -- what the module and the faces see --------------------------------------------------------
+    @property
+    def md_valid(self) -> bool:
+        return self.md is not None and self.md.error == 0
+
+    @property
+    def holder(self) -> float:
+        return self.axis.position() - self.m0
+
+    def actual(self) -> int:
+        """The reported actual value, the tool tip in base units (0 without valid MD)."""
+        if self.md is None:
+            return 0
+        return self.coords.actual(round(self.holder))
+
+    def residual(self) -> int:
+        if self.target is None or self.md is None:
+            return 0
+        return round(self.target - self.holder)
+
+    def attributes(self) -> int:
+        md = self.md
+        return rmld(unit=md.unit if md else 1, in_position=self.in_position,
+                    reference_sync=bool(md and md.reference_sync == 0), teach_in=self.teach_in is not None,
+                    reference_missing=not self.reference_set, md_missing=md is None, finished=not self.running)
+
+    def view(self) -> AxisView:
+        return AxisView(self.number, self.md_valid, self.reference_set, self.running, self.mode,
+                        self.teach_in is not None, bool(self.md and self.md.rotary))
+
+    # -- machine data -----------------------------------------------------------------------------
+    def load_md(self, md: MachineData | None, words: list[int] | None, *, first: bool) -> None:
+        """New machine data (BA20), or none (BA21 with ``md`` None, which keeps the reference)."""
+        old = self.md
+        self.md, self.md_words = md, words
+        if md is None:
+            return
+        self.coords = Coordinates(md.limit_begin, md.limit_end, md.reference, md.rotary, self.coords.zo_mode, 0,
+                                  self.coords.to_ba15, self.coords.to_prog)
+        relevant = ("reference", "gear", "pulses_per_rev", "unit", "rotary", "limit_begin", "limit_end")
+        if first or old is None or any(getattr(old, k) != getattr(md, k) for k in relevant):
+            self.reference_set = False  # (spec §4.1.2 bit 5)
+        self._update_levels()
+
+    def power_up(self) -> None:
+        """Reference lost; the actual value reads as the reference coordinate (spec §4.14)."""
+        self.axis.quick_stop()
+        self.mode, self.last_cmd, self.running, self.reference_set = 4, 0, False, False
+        self.error, self.in_position, self.target, self.m_function = 8, False, None, 2
+        self.teach_in, self.waiting_start, self.automatic, self._done = None, None, None, None
+        if self.reference_run is not None:
+            self.reference_run.cancel()
+        self.locks.clear()
+        if self.md is not None:
+            self.m0 = self.axis.position() - self.md.reference
+        self.set_pe()
+
+    # -- operator jobs (spec §4.2) ----------------------------------------------------------------
+    def operate(self, ba: int, cmd: int, b: int, w: int, dd: int) -> int | None:
+        """A job the checks let through; returns the module error it leaves (None: none)."""
+        if self.waiting_start is not None:
+            self.waiting_start = None
+            self._set_running(False)
+            if cmd == STOP:
+                return None  # Stopp cancels the wait without error (spec §4.2)
+            return 2
+        if self.running:
+            return self._while_running(ba, cmd, b, w, dd)
+        handler = _MODES.get(ba)
+        self.mode, self.last_cmd = ba, cmd
+        if ba not in (8, 9):
+            self.m_function = 2
+        if cmd == STOP and ba not in (8, 9):
+            return None  # Stopp of a finished axis: nothing to do
+        if cmd == TAKE_OVER and ba in (1, 2, 6, 7):
+            return self.module.teach_store(self)  # store a teach-in block (spec §5.12)
+        return handler(self, cmd, b, w, dd) if handler is not None else 2
+
+    def _while_running(self, ba: int, cmd: int, b: int, w: int, dd: int) -> int | None:
+        if self.automatic is not None and self.mode in (8, 9):
+            return self.automatic.command(ba, cmd)
+        if ba in (1, 2) and self.mode in (1, 2) and ba != self.mode and cmd in (FORWARD, BACKWARD):
+            self.mode, self.last_cmd = ba, cmd  # stop, then jog on in the other mode (spec §5.4)
+            self.brake(lambda ok: self._jog_mode(cmd, w))
+            return None
+        self.last_cmd = STOP
+        if self.reference_run is not None:
+            self.reference_run.cancel()
+            self.reference_set = False  # an aborted reference run leaves none (spec §5.6)
+        self.brake()
+        if cmd == STOP or ba == 4:
+            return None
+        return 2
+
+    # -- motion -----------------------------------------------------------------------------------
+    def _set_running(self, running: bool) -> None:
+        self.running = running
+        self.module.changed(self)
+
+    def _velocity(self, w: int, default: int) -> tuple[float, int | None]:
+        """The job's travel frequency: W or the MD velocity, clamped (error 7, spec §5.2)."""
+        md = self.md
+        assert md is not None
+        velocity = w or default
+        error = None
+        if not 1 <= velocity <= 65000:
+            velocity, error = min(max(velocity, 1), 65000), 7
+        f = md.frequency(velocity)
+        if f > md.f_max or f < 1:
+            f, error = min(max(f, 1.0), float(md.f_max)), 7
+        return f, error
+
+    def _start(self, pieces: list[tuple[float, Any]], done: Callable[[bool], None] | None) -> None:
+        self.in_position = False
+        self.set_pe()
+        self._done = done
+        self._set_running(True)
+        self._follow(pieces)
+        self._decel_at = self.clock.now() + sum(d for d, _ in pieces[:-1]) if pieces else math.inf
+
+    def _follow(self, pieces: list[tuple[float, Any]]) -> None:
+        self.axis.follow(pieces, self._ended)  # (a new plan drops the old plan's on_done)
+
+    def _ended(self) -> None:
+        done, self._done = self._done, None
+        self._set_running(False)
+        if done is not None:
+            done(True)
+
+    def position_to(self, holder_target: float, f: float, done: Callable[[bool], None] | None = None) -> None:
+        """A positioning move of the holder to ``holder_target`` (BA6, BA7, program traverses)."""
+        md = self.md
+        assert md is not None
+        self.target = holder_target
+        distance = holder_target - self.holder
+        self._direction = 1 if distance > 0 else -1 if distance < 0 else 0
+        pieces = move_pieces(self.axis.position(), distance, f, md.ramp, md.resolution)
+
+        def reached(ok: bool) -> None:
+            if ok:
+                self.in_position = True
+                self.target = holder_target
+                self.axis.set_position(holder_target + self.m0)  # the pulses are exact
+                self.set_pe()
+            if done is not None:
+                done(ok)
+
+        if not pieces:
+            self._done = None
+            reached(True)
+            return
+        self._start(pieces, reached)
+
+    def jog(self, direction: int, f: float, done: Callable[[bool], None] | None = None) -> None:
+        md = self.md
+        assert md is not None
+        ramp, r, x = md.ramp, md.resolution, self.axis.position()
+        self._direction = direction
+        pieces: list[tuple[float, Any]] = []
+        if f > md.f_ss:
+            f = min(f, float(md.f_max))
+            t_v = ramp.time_to(f)
+            pieces.append((t_v, ExpPiece(ramp, r, x, direction, "accel", t_v, f)))
+            x += direction * r * ramp.pulses_to(f)
+        pieces.append((FOREVER, ExpPiece(ramp, r, x, direction, "constant", 0.0, f)))
+        self.target = None
+        self._start(pieces, done)
+
+    def brake(self, then: Callable[[bool], None] | None = None) -> None:
+        """Stop with the deceleration ramp; a positioning move already braking onto its target
+        finishes there (spec §5.11.5).  ``then(reached)`` runs when the axis stands."""
+        md, done = self.md, self._done
+        if md is None or not self.axis.moving:
+            self._done = None
+            if self.running:
+                self._set_running(False)
+            if then is not None:
+                then(False)
+            return
+        if self.clock.now() >= self._decel_at and done is not None:
+            self._done = lambda ok: (done(ok), then(ok) if then is not None else None)
+            return
+        self._done = (lambda ok: then(False)) if then is not None else None
+        v = self.axis.velocity()
+        f0, sign = abs(v) / md.resolution, (1 if v > 0 else -1)
+        if f0 <= md.f_ss * (1 + 1e-9):
+            self.axis.quick_stop()  # at or below f_ss the pulse train simply stops
+            self._ended()
+            return
+        t_v = md.ramp.time_to(f0)
+        self._follow([(t_v, ExpPiece(md.ramp, md.resolution, self.axis.position(), sign, "decel", t_v, f0))])
+        self._decel_at = self.clock.now()
+
+    # -- the modes --------------------------------------------------------------------------------
+    def _jog_mode(self, cmd: int, w: int) -> int | None:
+        md = self.md
+        assert md is not None
+        if cmd not in (FORWARD, BACKWARD):
+            return 2
+        direction = 1 if cmd == FORWARD else -1
+        if direction in self.locks:
+            return 25 if direction < 0 else 26
+        f, error = self._velocity(w, md.jog1 if self.mode == 1 else md.jog2)
+        self.jog(direction, f)
+        self._arm_sw_limit(direction)
+        return error
+
+    def _ba1(self, cmd: int, b: int, w: int, dd: int) -> int | None:
+        return self._jog_mode(cmd, w)
+
+    def _ba4(self, cmd: int, b: int, w: int, dd: int) -> int | None:
+        return None  # the axis is off (and stays "fertig")
+
+    def _ba5(self, cmd: int, b: int, w: int, dd: int) -> int | None:
+        md = self.md
+        assert md is not None
+        self.reference_set = False  # the start deletes an existing reference (spec §5.6)
+        if b != 0:
+            self.m0 = self.axis.position() - md.reference  # set: H := x_ref (spec §5.6.1)
+            self.reference_set = True
+            self.target = None
+            return None
+        from devsim.devices.ip247.reference import ReferenceRun
+
+        ReferenceRun(self).start()
+        return None
+
+    def _positioning(self, holder_target: float, w: int) -> int | None:
+        md = self.md
+        assert md is not None
+        if not md.rotary and self.reference_set:
+            low, high = self.coords.range()
+            shifted = holder_target - self.coords.zero_offset
+            if not low <= shifted <= high:
+                return 23
+        direction = 1 if holder_target > self.holder else -1
+        if holder_target != self.holder and direction in self.locks:
+            return 25 if direction < 0 else 26
+        f, error = self._velocity(w, md.step_velocity)
+        self.position_to(holder_target, f)
+        return error
+
+    def _ba6(self, cmd: int, b: int, w: int, dd: int) -> int | None:
+        md = self.md
+        assert md is not None
+        if not md.rotary:
+            return self._positioning(self.coords.holder_for(dd), w)
+        begin, end = self.coords.range()
+        if not begin <= dd <= end:
+            return 23
+        span = end - begin
+        here = self.actual()
+        forward = (dd - here) % span
+        if cmd == START:
+            step = forward if forward <= span - forward else forward - span  # ties: forward
+        elif cmd == FORWARD:
+            step = forward or span
+        else:
+            step = -((here - dd) % span or span)
+        return self._positioning(self.holder + step, w)
+
+    def _ba7(self, cmd: int, b: int, w: int, dd: int) -> int | None:
+        md = self.md
+        assert md is not None
+        if cmd not in (FORWARD, BACKWARD):
+            return 2
+        distance = dd if cmd == FORWARD else -dd
+        if md.rotary and abs(distance) > MAX_RELATIVE:
+            return 62
+        if md.rotary:
+            f, error = self._velocity(w, md.step_velocity)
+            self.position_to(self.holder + distance, f)
+            return error
+        return self._positioning(self.holder + distance, w)
+
+    def _ba12(self, cmd: int, b: int, w: int, dd: int) -> int | None:
+        return self.coords.set_actual(round(self.holder), dd)
+
+    def _ba13(self, cmd: int, b: int, w: int, dd: int) -> int | None:
+        return self.coords.shift(dd, cmd == FORWARD) if cmd in (FORWARD, BACKWARD) else 2
+
+    def _ba14(self, cmd: int, b: int, w: int, dd: int) -> int | None:
+        self.coords.clear_shifts()
+        return None
+
+    def _ba15(self, cmd: int, b: int, w: int, dd: int) -> int | None:
+        return self.coords.set_tool(dd, cmd == FORWARD) if cmd in (FORWARD, BACKWARD) else 2
+
+    def _ba16(self, cmd: int, b: int, w: int, dd: int) -> int | None:
+        self.coords.clear_tools()
+        return None
+
+    def _ba_program(self, cmd: int, b: int, w: int, dd: int) -> int | None:
+        return self.module.program_job(self, cmd, b)
+
+    def _ba_teach(self, cmd: int, b: int, w: int, dd: int) -> int | None:
+        return self.module.teach_job(self, cmd, b)
+
+    # -- limit switches (spec §5.7) ---------------------------------------------------------------
+    def _region(self, geometry: dict[str, Any], name: str) -> RegionSwitch | None:
+        where = geometry.get(name)
+        if where is None:
+            return None
+        if name == "anf":
+            low, high = -math.inf, float(where)
+        elif name == "end":
+            low, high = float(where), math.inf
+        else:
+            low, high = float(where[0]), float(where[1])
+        return RegionSwitch(self.axis, low, high, lambda active, n=name: self._switch(n, active))
+
+    def _switch(self, name: str, actuated: bool) -> None:
+        """A switch the axis geometry drives: its input's level per the MD polarity."""
+        level = actuated if name == "cam" or self.md is None or self.md.limit_polarity == 0 else not actuated
+        self.module.signals.set(f"{'BERO' if name == 'cam' else name.upper()}{self.number}", level)
+
+    def _update_levels(self) -> None:
+        for name, region in zip(("anf", "end", "cam"), self._switches, strict=True):
+            if region is not None:
+                self._switch(name, region.active)
+
+    def actuated(self, name: str) -> bool:
+        """Whether limit input ``anf``/``end`` reads as actuated (MD n+33 polarity)."""
+        level = bool(self.module.signals.get(f"{name.upper()}{self.number}"))
+        return level if self.md is None or self.md.limit_polarity == 0 else not level
+
+    def limit_input(self, name: str) -> None:
+        """An ANF/END input changed: a switch in the direction of travel stops the axis (errors
+        25/26) and locks that direction; leaving it in the other direction releases it."""
+        direction = -1 if name == "anf" else 1
+        if self.reference_run is not None:
+            if self.actuated(name):
+                self.reference_run.limit(name)
+            return
+        if self.actuated(name):
+            if self.running and self._direction == direction:
+                self.locks.add(direction)
+                self.module.fail(self, 25 if direction < 0 else 26)
+                return
+        elif self._direction == -direction:
+            self.locks.discard(direction)
+
+    def cam_input(self, active: bool) -> None:
+        if self.reference_run is not None:
+            self.reference_run.cam(active)
+        elif active:
+            self.locks.clear()  # passing the reference cam releases a locked direction (spec §5.7)
+
+    def _arm_sw_limit(self, direction: int) -> None:
+        """Jog on a linear axis with reference: brake when the holder passes the SW limit."""
+        md = self.md
+        if self._sw_watch is not None:
+            self._sw_watch.cancel()
+            self._sw_watch = None
+        if md is None or md.rotary or not self.reference_set:
+            return
+        low, high = self.coords.range()
+        limit = (high if direction > 0 else low) + self.coords.zero_offset + self.m0
+        if (self.axis.position() - limit) * direction >= 0:
+            self.brake()
+            self.module.set_error(self, 29 if direction > 0 else 28)
+            return
+
+        def passed(_direction: int) -> None:
+            if self.running and self.mode in (1, 2) and self._direction == direction:
+                self.brake()
+                self.module.set_error(self, 29 if direction > 0 else 28)
+
+        self._sw_watch = self.axis.watch(limit, passed)
+
+    def set_pe(self) -> None:
+        self.module.signals.set(f"PE{self.number}", self.in_position and not self.module.basp_forces_pe)
+
+
+_MODES: dict[int, Callable[[AxisUnit, int, int, int, int], int | None]] = {
+    1: AxisUnit._ba1, 2: AxisUnit._ba1, 4: AxisUnit._ba4, 5: AxisUnit._ba5, 6: AxisUnit._ba6, 7: AxisUnit._ba7,
+    8: AxisUnit._ba_program, 9: AxisUnit._ba_program, 10: AxisUnit._ba_teach, 11: AxisUnit._ba_teach,
+    12: AxisUnit._ba12, 13: AxisUnit._ba13, 14: AxisUnit._ba14, 15: AxisUnit._ba15, 16: AxisUnit._ba16,
+}

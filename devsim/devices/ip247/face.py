@@ -1,0 +1,83 @@
+"""The IP247's two host faces (spec ip247.md §3.5–§3.7): the PG port, an AS511 link carrying
+the "IP247-SIM/PG v1" profile, and the PLC-side endpoint "IP247-SIM/AG v1" (length-framed
+messages with the same services, absolute pages, BCD values per machine data).
+
+The AS511 link's 500 ms inter-character timeout runs on the device clock.
+"""
+
+from __future__ import annotations
+
+from devsim.core.clock import Timer
+from devsim.core.device import Face, Port, SerialSettings
+from devsim.devices.ip247.as511 import TIMEOUT, As511Link, Reply
+from devsim.devices.ip247.attributes import AgFramer, ag_frame
+from devsim.devices.ip247.module import Ip247Module
+from devsim.devices.ip247.pg_profile import ACK_NEGATIVE, FUNCTIONS, Header, parse_request
+from devsim.devices.ip247.services import serve
+
+__all__ = ["AgFace", "PgFace"]
+
+
+class PgFace(Face):
+    """The programmer port X8 (9600 8E1, spec §2.2): one PG, point to point."""
+
+    model: Ip247Module
+
+    def __init__(self, model: Ip247Module, port: Port) -> None:
+        super().__init__(model, port)
+        self.link = As511Link(lambda fn: fn in FUNCTIONS, self._service)
+        self._timer: Timer | None = None
+
+    @property
+    def serial_settings(self) -> SerialSettings:
+        return SerialSettings(9600, 8, "E", 1)
+
+    def _service(self, function: int, parameters: bytes) -> Reply:
+        return serve(self.model, parse_request(function, parameters))
+
+    def feed(self, data: bytes) -> None:
+        if self.model.config.get("powered", True) is False:
+            return  # a module without power answers nothing (spec §3.6.5)
+        for chunk in self.link.feed(data):
+            self.send(chunk)
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        if self.link.busy:
+            self._timer = self.model.clock.call_later(TIMEOUT, self._expired)
+
+    def _expired(self) -> None:
+        self._timer = None
+        self.link.timeout()
+
+    def host_disconnected(self) -> None:
+        self.link.timeout()
+
+    def close(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+
+
+class AgFace(Face):
+    """The PLC side on TCP (spec §3.7): what FB164/FB165 would exchange through the pages."""
+
+    model: Ip247Module
+
+    def __init__(self, model: Ip247Module, port: Port) -> None:
+        super().__init__(model, port)
+        self.framer = AgFramer()
+
+    def feed(self, data: bytes) -> None:
+        base = int(self.model.config.get("base_page", 0))
+        for function, payload in self.framer.feed(data):
+            asked = payload[0] if payload else 0
+            page = asked - base + 1
+            if function not in FUNCTIONS or not 1 <= page <= 4:  # the PLC gets a handling-block error
+                ba = payload[1] if len(payload) > 1 else 0
+                self.send(ag_frame(function, Header(ACK_NEGATIVE, asked, ba, 0, 0, 0, 0, 0).pack()))
+                continue
+            answer = serve(self.model, parse_request(function, bytes((page,)) + payload[1:]), plc=True)
+            self.send(ag_frame(function, answer[:1] + bytes((asked,)) + answer[2:]))
+
+    def host_disconnected(self) -> None:
+        self.framer = AgFramer()

@@ -1,0 +1,134 @@
+"""The IP247's control names, signals and faults, declared once (spec ip247.md §2.1, §4.1, §4.13,
+§4.14; manual per row).
+
+``axis.<n>.*`` show what FB164 and COM247 show of an axis; ``program.<n>`` is a traverse program
+as text (setting it stores it as BA22 from the PG would); ``ag.operate`` is the in-process PLC
+side: an FB164 job with the values as the PLC sends them (BCD when the machine data say so).
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+from devsim.core.kit import Fault, FaultTable, SignalDef, signal_points
+from devsim.core.points import BadValue, Family, Point, PointTable
+from devsim.devices.ip247 import program as lang
+from devsim.devices.ip247.pg_profile import COMMANDS, Operate
+from devsim.devices.ip247.services import serve
+
+__all__ = ["FAULTS", "POINTS", "SIGNALS"]
+
+SIGNALS: tuple[SignalDef, ...] = (
+    *(d for n in (1, 2, 3) for d in (
+        SignalDef(f"ANF{n}", "input", False, f"axis {n} limit switch Anfang (24 V = True)", "§2.5"),
+        SignalDef(f"END{n}", "input", False, f"axis {n} limit switch Ende (24 V = True)", "§2.5"),
+        SignalDef(f"BERO{n}", "input", False, f"axis {n} reference cam (active high)", "§2.5"),
+        SignalDef(f"START{n}", "input", False, f"axis {n} external start/stop: 0→1 stops", "§2.8.4"),
+        SignalDef(f"BB{n}", "input", True, f"axis {n} power unit ready", "§2.4"),
+        SignalDef(f"PE{n}", "output", False, f"axis {n} position reached", "§2.7.7"),
+        SignalDef(f"RS{n}", "output", False, f"axis {n} reset pulse to the power unit", "§2.8.1"),
+    )),
+    SignalDef("BASP", "input", False, "command output disable from the PLC: every axis stops", "§2.9"),
+    SignalDef("led_green", "output", True, "module running", "§3.1.3"),
+    SignalDef("led_red", "output", False, "an error ≥ 10 is pending", "§3.1.3"),
+)
+
+
+def _axis_points(n: int) -> list[Point]:
+    def unit(m: Any) -> Any:
+        return m.units[n - 1]
+
+    return [
+        Point(f"axis.{n}.position", "int", f"axis {n} actual value (tool tip), base units", "§2.7", "base",
+              get=lambda m: unit(m).actual(), in_state=True),
+        Point(f"axis.{n}.residual", "int", f"axis {n} residual distance, base units", "§2.7.7", "base",
+              get=lambda m: unit(m).residual()),
+        Point(f"axis.{n}.machine_position", "float", f"axis {n} motor-side position (pulses × resolution)",
+              "§5.1", "base", get=lambda m: unit(m).axis.position()),
+        Point(f"axis.{n}.mode", "int", f"axis {n} operating mode (BTR)", "§4.1", get=lambda m: unit(m).mode,
+              in_state=True),
+        Point(f"axis.{n}.running", "bool", f"axis {n} state: läuft (True) / fertig", "§4.1",
+              get=lambda m: unit(m).running, in_state=True),
+        Point(f"axis.{n}.error", "int", f"axis {n} pending module error", "§7.2", get=lambda m: unit(m).error,
+              in_state=True),
+        Point(f"axis.{n}.attributes", "int", f"axis {n} attributes byte RMLD", "§2.7",
+              get=lambda m: unit(m).attributes()),
+        Point(f"axis.{n}.reference_set", "bool", f"axis {n} reference point set", "§4.2.3",
+              get=lambda m: unit(m).reference_set),
+        Point(f"axis.{n}.m_function", "int", f"axis {n} M function shown (MFKT)", "§2.6.9",
+              get=lambda m: unit(m).m_function),
+        Point(f"axis.{n}.md_error", "int", f"axis {n} machine-data error (0: none; -1: no MD)", "§7.2.1",
+              get=lambda m: unit(m).md.error if unit(m).md else -1),
+        Point(f"axis.{n}.machine_data", "json", f"axis {n} machine-data record (70 words) or null", "§6.3.8.1",
+              get=lambda m: unit(m).md_words),
+    ]
+
+
+def _program(name: str) -> Point | None:
+    match = re.fullmatch(r"program\.(\d{1,3})", name)
+    if match is None or int(match[1]) > 255:
+        return None
+    number = int(match[1])
+
+    def put(m: Any, text: Any) -> None:
+        words = lang.record_words(number, str(text).replace("\r\n", "\n"))
+        m.write_record(4, 22, number, words, overwrite=True)
+        if m.channel_error:
+            raise BadValue(f"program {number} not stored: module error {m.channel_error}")
+
+    return Point(name, "str", f"traverse program {number} as text, one block per line", "§2.6",
+                 get=lambda m: (m.store.get(number).text if m.store.get(number) else None), put=put)
+
+
+def _ag_operate(m: Any, job: Any) -> None:
+    """An FB164 job from the PLC: {page (absolute), ba, cmd (name or 1 … 5), b, w, dd}."""
+    if not isinstance(job, dict):
+        raise BadValue("an FB164 job is a mapping {page, ba, cmd, b, w, dd}")
+    cmd = job.get("cmd", "Start")
+    names = {v.lower(): k for k, v in COMMANDS.items()}
+    code = names.get(str(cmd).lower()) if not isinstance(cmd, int) else cmd
+    if code is None or int(job.get("ba", 0)) not in range(256):
+        raise BadValue(f"unknown command {cmd!r} (Start, Stopp, Vorwärts, Rückwärts, Übernahme)")
+    page = int(job.get("page", m.config.get("base_page", 0))) - int(m.config.get("base_page", 0)) + 1
+    request = Operate(page, int(job.get("ba", 0)), int(code), int(job.get("b", 0)) & 0xFF,
+                      int(job.get("w", 0)) & 0xFFFF, int(job.get("dd", 0)) & 0xFFFF_FFFF)
+    answer = serve(m, request, plc=True) if 1 <= page <= 4 else bytes((0x80,)) + bytes(7)
+    m.ag_last = {"ack": answer[0], "err": answer[4], "btr": answer[5], "rmld": answer[6], "mfkt": answer[7]}
+
+
+POINTS = PointTable.of(
+    *(_axis_points(n) for n in (1, 2, 3)),
+    [
+        Point("channel.error", "int", "data channel (page 4) pending module error", "§7.2",
+              get=lambda m: m.channel_error, in_state=True),
+        Point("sys_id", "json", "module identification: [module, slot, page]", "§4.3.22",
+              get=lambda m: list(m.sys_id)),
+        Point("programs", "json", "program directory: [[number, record words], …]", "§6.3.8.5",
+              get=lambda m: [list(e) for e in m.store.directory()]),
+        Point("ag.operate", "json", "an FB164 job from the PLC side: {page, ba, cmd, b, w, dd}", "§6.2",
+              put=_ag_operate),
+        Point("ag.last", "json", "the answer to the last ag.operate: {ack, err, btr, rmld, mfkt}", "§6.2",
+              get=lambda m: getattr(m, "ag_last", None)),
+    ],
+    signal_points(SIGNALS),
+    families=[Family("program.<n>", "str", "traverse program n (0 … 255) as text", "§2.6", _program)],
+)
+
+
+def _battery(m: Any, active: bool) -> None:
+    m.config["battery_ok"] = not active
+
+
+def _power(m: Any, active: bool) -> None:
+    m.config["powered"] = not active
+    if not active:
+        m.power_cycle()
+
+
+FAULTS = FaultTable([
+    Fault("battery_failed", "the buffer battery failed: machine data, programs, SYS-ID and offsets are lost at "
+          "the next power-up", "§4.14", _battery),
+    Fault("power_off", "the module has no 5 V: the PG port answers nothing; clearing it powers the module up "
+          "(reference lost, error 8)", "§3.1.1", _power),
+])

@@ -1,0 +1,271 @@
+"""The IP247 kind through its services, in virtual time (spec ip247.md §3.2, §4.1, §4.2, §5.4–§5.11,
+§4.14; vectors §3.6.7, §5.9, §6.1, §6.2, §6.6)."""
+
+from __future__ import annotations
+
+import struct
+
+import pytest
+
+from devsim.core.clock import VirtualClock
+from devsim.core.nvram import NonVolatileMemory
+from devsim.devices.ip247 import Ip247Device
+from devsim.devices.ip247 import program as lang
+from devsim.devices.ip247.machine_data import Ramp
+from devsim.devices.ip247.pg_profile import parse_request
+from devsim.devices.ip247.services import serve
+from tests.ip247.test_machine_data import COM247, words
+
+START, STOP, FORWARD, BACKWARD, TAKE_OVER = 1, 2, 3, 4, 5
+
+
+class Module:
+    """A module with COM247's machine data (§6.2: module 11, r = 1.1 µm, sync no) on axis 1."""
+
+    def __init__(self, config: dict | None = None, nvram: NonVolatileMemory | None = None) -> None:
+        self.clock = VirtualClock()
+        self.device = Ip247Device(clock=self.clock, config={"sys_id": {"module": 11, "slot": 1}, **(config or {})},
+                                  nvram=nvram)
+        self.m = self.device.model
+
+    def call(self, function: int, data: bytes) -> bytes:
+        return serve(self.m, parse_request(function, data))
+
+    def operate(self, page: int, ba: int, cmd: int, b: int = 0, w: int = 0, dd: int = 0) -> bytes:
+        return self.call(0x61, struct.pack(">BBBBHi", page, ba, cmd, b, w, dd))
+
+    def write(self, page: int, ba: int, db: int, record: list[int], flags: int = 0) -> bytes:
+        return self.call(0x63, bytes((page, ba, db, flags)) + struct.pack(f">{len(record)}H", *record))
+
+    def load_md(self, axis: int = 1, record: str = COM247) -> bytes:
+        self.m.signals.set(f"ANF{axis}", True)  # NC limit switches, not actuated: 24 V
+        self.m.signals.set(f"END{axis}", True)
+        data = words(record)
+        data[3] = (data[3] & 0xFF00) | axis
+        return self.write(axis, 20, 100 + axis, data)
+
+    def store(self, number: int, text: str) -> bytes:
+        return self.write(4, 22, number, lang.record_words(number, text))
+
+    def ready(self, axis: int = 1) -> None:
+        assert self.load_md(axis)[8] == 0
+        assert self.operate(axis, 5, START, b=1)[4] == 0  # "Referenzpunkt setzen"
+
+
+@pytest.fixture
+def mod() -> Module:
+    return Module()
+
+
+def test_power_up_state(mod: Module) -> None:
+    """§4.14: BA4 on every axis, error 8 pending on all four pages, no MD, no reference."""
+    obs = mod.call(0x62, b"\x01")
+    assert obs[:8] == bytes((0, 1, 0, 0, 8, 4, 0xE2, 2))
+    assert obs[16:20] == bytes((8, 8, 8, 8))
+
+
+def test_vector_b_automatic_start_answers_running_and_m255(mod: Module) -> None:
+    mod.ready()
+    assert mod.store(5, "%  5 TEST\nN1 X10 F1000\nN2 M02\n")[8:] == bytes(4)
+    answer = mod.operate(1, 8, START, b=5)
+    assert answer == bytes.fromhex("00 01 08 01 00 08 02 FF")
+    mod.clock.advance(5)
+    assert mod.operate(1, 66, START)[:1] == b"\x80"  # BA66 is a record mode, not an operator job
+    assert mod.device.read("axis.1.position") == 10_000 and mod.device.read("axis.1.m_function") == 2
+
+
+def test_without_md_only_ba4_and_ba17_run(mod: Module) -> None:
+    """§4.2: error 14 without machine data; BA17 clears every page's error."""
+    assert mod.operate(1, 1, FORWARD)[4] == 14
+    assert mod.operate(1, 4, START)[4] == 0
+    assert mod.operate(4, 17, START)[4] == 0
+    assert mod.call(0x62, b"\x02")[16:20] == bytes(4)
+
+
+def test_page_rules_and_undefined_modes(mod: Module) -> None:
+    """§3.2/§3.6.5: BA18 negatively acknowledged; BA1 on the data channel 80H + error 46; an
+    undefined mode is accepted with error 2; program input on an axis page is 80H + 46."""
+    assert mod.operate(1, 18, START)[0] == 0x80
+    answer = mod.operate(4, 1, FORWARD)
+    assert answer[0] == 0x80 and answer[4] == 46
+    answer = mod.operate(2, 33, START)
+    assert answer[0] == 0 and answer[4] == 2
+    answer = mod.store(7, "%  7\nN1 M02\n")
+    assert answer[0] == 0 and answer[4] == 0
+    answer = mod.write(1, 22, 8, lang.record_words(8, "%  8\nN1 M02\n"))
+    assert answer[0] == 0x80 and answer[4] == 46
+
+
+def test_md_round_trip_directory_and_no_overwrite(mod: Module) -> None:
+    """§6.2 record stored as DB 101, read back (BA67) with the MD error 0; a second write is
+    error 17 unless the PG's overwrite flag is set; BA64 lists it."""
+    assert mod.load_md()[8:10] == b"\x00\x00"
+    record = mod.call(0x64, bytes((1, 67, 101, 0)))[8:]
+    assert struct.unpack(">70H", record)[3] == 0x0B01 and struct.unpack(">70H", record)[2] == 0x4265
+    assert mod.load_md()[4] == 17
+    assert mod.write(1, 20, 101, words(COM247), flags=1)[4] == 0
+    assert mod.call(0x64, bytes((4, 64, 0, 0)))[8:] == struct.pack(">6H", 101, 70, 0, 0, 0, 0)
+
+
+def test_md_error_12_when_the_module_number_differs() -> None:
+    """§6.3: the record names module 11; a module with SYS-ID module 5 gives MD error 12 and
+    module error 15; the attributes say MD present (bit 6 clear) but motion is refused (14)."""
+    mod = Module({"sys_id": {"module": 5}})
+    answer = mod.load_md()
+    assert answer[8] == 12 and answer[4] == 15 and answer[6] & 0x40 == 0
+    assert mod.operate(1, 1, FORWARD)[4] == 14
+
+
+def test_ba7_takes_the_closed_form_time(mod: Module) -> None:
+    """§5.3/§5.5: 10 mm at 1000 mm/min with r = 1.1 µm, f_ss 10 kHz, a 100 Hz/ms: the two
+    exponential ramps and the cruise take exactly what the formulas say; PE at the end."""
+    mod.ready()
+    md = mod.m.units[0].md
+    ramp, r = Ramp(100_000, 10_000, 100.0), 1.1
+    f = 1000 * 1000 / (60 * r)
+    pulses = 10_000 / r
+    expected = 2 * ramp.time_to(f) + (pulses - 2 * ramp.pulses_to(f)) / f
+    assert md is not None and md.resolution == r
+    assert mod.operate(1, 7, FORWARD, w=1000, dd=10_000)[4] == 0
+    mod.clock.advance(expected - 1e-6)
+    assert mod.device.read("axis.1.running") is True and mod.device.read("output.PE1") is False
+    mod.clock.advance(2e-6)
+    assert mod.device.read("axis.1.running") is False and mod.device.read("output.PE1") is True
+    assert mod.device.read("axis.1.position") == 1_000 + 10_000  # (from the reference coordinate, 1 mm)
+
+
+def test_stop_keeps_the_residual_and_ba7_by_it_reaches_the_target(mod: Module) -> None:
+    mod.ready()
+    mod.operate(1, 6, START, w=1000, dd=50_000)
+    mod.clock.advance(1.0)
+    assert mod.operate(1, 6, STOP)[4] == 0
+    mod.clock.advance(5)
+    residual = mod.device.read("axis.1.residual")
+    assert residual > 0 and mod.device.read("output.PE1") is False
+    assert residual + mod.device.read("axis.1.position") == 50_000
+    mod.operate(1, 7, FORWARD, w=1000, dd=residual)
+    mod.clock.advance(60)
+    assert mod.device.read("axis.1.position") == 50_000 and mod.device.read("output.PE1") is True
+
+
+def test_a_job_while_running_is_error_2_and_aborts(mod: Module) -> None:
+    """§3.1: an operator command on a running axis (not Stopp, not BA4) aborts with error 2."""
+    mod.ready()
+    mod.operate(1, 1, FORWARD)
+    mod.clock.advance(0.5)
+    assert mod.operate(1, 6, START, dd=0)[4] == 2
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.running") is False and mod.device.read("axis.1.mode") == 1
+
+
+def test_jog_into_a_limit_switch_stops_with_26_and_locks_forward() -> None:
+    """§5.7: END actuated while jogging forward: error 26, the direction is locked; backward
+    is allowed and releases it once the switch is left."""
+    mod = Module({"axes": {1: {"end": 20_000.0}}})
+    mod.ready()
+    mod.operate(1, 1, FORWARD, w=1000)
+    mod.clock.advance(10)
+    assert mod.device.read("axis.1.error") == 26 and mod.device.read("axis.1.running") is False
+    assert mod.operate(1, 1, FORWARD, w=1000)[4] == 26
+    mod.operate(1, 1, BACKWARD, w=1000)
+    mod.clock.advance(2)
+    mod.operate(1, 1, STOP)
+    mod.clock.advance(2)
+    assert mod.operate(1, 1, FORWARD, w=100)[4] == 0
+
+
+def test_reference_run_ends_at_the_cam_edge() -> None:
+    """§5.6.2 (sync no; R backward in COM247's MD): the run goes forward over the cam, back over
+    it, onto it again at f_ss and leaves it in single steps backward: H := x_ref there."""
+    mod = Module({"axes": {1: {"cam": [20_000.0, 30_000.0]}}})
+    assert mod.load_md()[8] == 0
+    assert mod.operate(1, 5, START, b=0)[4] == 0
+    mod.clock.advance(120)
+    assert mod.device.read("axis.1.reference_set") is True and mod.device.read("axis.1.running") is False
+    md = mod.m.units[0].md
+    assert md is not None and mod.device.read("axis.1.position") == md.reference
+    machine = mod.device.read("axis.1.machine_position")
+    assert 20_000 - 2 * md.resolution < machine < 20_000  # just off the cam's edge
+
+
+def test_zero_offset_relative_vector_e(mod: Module) -> None:
+    """§3.6.7 (e) / §2.6.6.7: BA13 10 mm forward at actual 0 gives −10 mm."""
+    mod.ready(axis=2)
+    mod.operate(2, 12, START, dd=0)
+    assert mod.call(0x61, bytes.fromhex("02 0D 03 00 00 00 00 00 27 10"))[4] == 0
+    assert mod.device.read("axis.2.position") == -10_000
+
+
+def test_single_block_halts_and_stop_interrupts_with_65(mod: Module) -> None:
+    """§5.11.3/§5.11.5: BA9 halts after each traverse; Übernahme goes on; Stopp at a halt
+    interrupts (65, context kept); a second Stopp aborts it."""
+    mod.ready()
+    mod.store(3, "%  3\nN1 X5 F1000 M11\nN2 X8 F1000 M12\nN3 M02\n")
+    mod.operate(1, 9, START, b=3)
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.position") == 5_000 and mod.device.read("axis.1.m_function") == 11
+    assert mod.call(0x62, b"\x01")[21] & 0x08  # waiting for Übernahme
+    mod.operate(1, 9, TAKE_OVER, b=3)
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.position") == 8_000 and mod.device.read("axis.1.m_function") == 12
+    assert mod.operate(1, 9, STOP)[4] == 65
+    assert mod.operate(1, 9, STOP)[4] == 0 and mod.m.units[0].automatic is None
+
+
+def test_interrupted_traverse_completes_on_take_over(mod: Module) -> None:
+    mod.ready()
+    mod.store(4, "%  4\nN1 X30 F1000 M20\nN2 M02\n")
+    mod.operate(1, 8, START, b=4)
+    mod.clock.advance(0.5)
+    assert mod.operate(1, 8, STOP)[4] == 65
+    mod.clock.advance(5)
+    assert 0 < mod.device.read("axis.1.position") < 30_000
+    assert mod.operate(1, 8, TAKE_OVER, b=4)[4] == 0
+    mod.clock.advance(60)
+    assert mod.device.read("axis.1.position") == 30_000 and mod.device.read("axis.1.m_function") == 2
+
+
+def test_battery_ram_survives_power_but_not_a_battery_fault(tmp_path) -> None:  # noqa: ANN001
+    """§4.14: MD, programs and offsets kept across power-up (reference lost, error 8); a failed
+    battery loses them at the next power-up."""
+    nvram = NonVolatileMemory.for_device(tmp_path, "ip")
+    mod = Module(nvram=nvram)
+    mod.ready()
+    mod.store(9, "%  9\nN1 X1 F100\nN2 M02\n")
+    mod.operate(1, 15, FORWARD, dd=2_000)
+    mod.device.fault("power_off", True)
+    mod.device.fault("power_off", False)
+    assert mod.device.read("axis.1.reference_set") is False and mod.device.read("axis.1.error") == 8
+    assert mod.device.read("axis.1.md_error") == 0 and mod.device.read("programs") == [[9, 17]]
+    assert mod.m.units[0].coords.to_ba15 == 2_000
+    mod.device.fault("battery_failed", True)
+    mod.device.fault("power_off", True)
+    mod.device.fault("power_off", False)
+    assert mod.device.read("axis.1.md_error") == -1 and mod.device.read("programs") == []
+
+
+def test_teach_in_stores_the_positions_as_a_program(mod: Module) -> None:
+    """§5.12: BA10 on a new program number, jog/position, Übernahme stores the actual value as a
+    block, BA11 closes the program with M02; other modes meanwhile are error 30."""
+    mod.ready()
+    assert mod.operate(1, 10, START, b=42)[4] == 0
+    assert mod.operate(1, 12, START, dd=0)[4] == 30
+    mod.operate(1, 7, FORWARD, w=1000, dd=5_000)
+    mod.clock.advance(10)
+    assert mod.operate(1, 7, TAKE_OVER)[4] == 0
+    assert mod.operate(1, 11, START)[4] == 0
+    assert mod.device.read("program.42") == "%  42\nN10 X6.000\nN20 M02\n"  # (reference 1 mm + 5 mm)
+
+
+def test_the_plc_job_point_takes_bcd_values(mod: Module) -> None:
+    """ag.operate: an FB164 job as the PLC sends it; with "AG BCD-codiert" 0012 0000H is 120 mm."""
+    record = words(COM247)
+    record[47] = 1
+    mod.m.signals.set("ANF1", True)
+    mod.m.signals.set("END1", True)
+    assert mod.write(1, 20, 5, record)[8] == 0
+    mod.device.set("ag.operate", {"page": 0, "ba": 5, "cmd": "Start", "b": 1})
+    mod.device.set("ag.operate", {"page": 0, "ba": 6, "cmd": "Start", "w": 0x1000, "dd": 0x0012_0000})
+    assert mod.device.read("ag.last")["err"] == 0
+    mod.clock.advance(30)
+    assert mod.device.read("axis.1.position") == 120_000

@@ -1,0 +1,104 @@
+"""The IP247's PG port on a real pty (AS511, vectors §3.6.7 a, b, f) and its PLC side on a real
+TCP socket (spec ip247.md §3.7, BCD values of §3.3.2)."""
+
+from __future__ import annotations
+
+import socket
+import struct
+from typing import Any
+
+import pytest
+import serial
+
+from devsim.devices.ip247 import program as lang
+from devsim.devices.ip247.attributes import AgFramer, ag_frame
+from devsim.devices.ip247.client import PgClient
+from tests.ip247.test_machine_data import COM247, words
+
+VECTOR_A = bytes.fromhex("02 10 06 64 02 10 06 16 10 03 10 06 04 46 00 00 10 04".replace(" ", ""))
+
+
+@pytest.fixture
+def module(devsim_device):  # noqa: ANN001, ANN201
+    return devsim_device("ip247", {"sys_id": {"module": 11, "slot": 1}})
+
+
+def pg(module: Any) -> serial.Serial:
+    return serial.serial_for_url(module.port_url("pg"), baudrate=9600, parity="E", timeout=5)
+
+
+def test_vector_a_read_sys_id_byte_by_byte(module: Any) -> None:
+    """§3.6.7 (a): every byte of the transaction as the spec lists it."""
+    with pg(module) as port:
+        steps = [("02", "10 06"), ("64", "02"), ("10 06", "16 10 03"), ("10 06", ""),
+                 ("04 46 00 00 10 04", "10 06 02"),
+                 ("10 06", "00 04 46 00 00 00 00 00 49 50 32 34 37 20 41 30 32 2E 31 20 00 0B 00 01 00 00 10 03"),
+                 ("10 06", "02"), ("10 06", "12 10 03"), ("10 06", "")]
+        for sent, expected in steps:
+            port.write(bytes.fromhex(sent))
+            want = bytes.fromhex(expected)
+            assert port.read(len(want)) == want, f"after {sent}"
+        assert port.in_waiting == 0
+
+
+def test_vector_f_unknown_function_is_refused(module: Any) -> None:
+    with pg(module) as port:
+        port.write(b"\x02")
+        assert port.read(2) == b"\x10\x06"
+        port.write(b"\x18")
+        assert port.read(2) == b"\x10\x15"
+        client = PgClient(port)  # the link is idle again: the next transaction works
+        assert client.transaction(0x64, bytes((4, 0x46, 0, 0)))[8:14] == b"IP247 "  # type: ignore[index]
+
+
+def test_vector_b_and_a_program_through_the_client(module: Any) -> None:
+    """§3.6.7 (b): machine data, reference set, program 5, then BA8 Start; the program runs on
+    the device clock to its end."""
+    module.set("input.ANF1", True)
+    module.set("input.END1", True)
+    with pg(module) as port:
+        client = PgClient(port)
+        md = words(COM247)
+        answer = client.transaction(0x63, bytes((1, 20, 123, 0)) + struct.pack(">70H", *md))
+        assert answer is not None and answer[8] == 0
+        assert client.transaction(0x61, bytes.fromhex("01 05 01 01 00 00 00 00 00 00"))[4] == 0  # type: ignore[index]
+        record = lang.record_words(5, "%  5 VEKTOR B\nN1 X10 F1000\nN2 M02\n")
+        assert client.transaction(0x63, bytes((4, 22, 5, 0)) + struct.pack(f">{len(record)}H", *record))[8:] \
+            == bytes(4)
+        assert client.transaction(0x61, bytes.fromhex("01 08 01 05 00 00 00 00 00 00")) \
+            == bytes.fromhex("00 01 08 01 00 08 02 FF")
+        module.advance(5)
+        observed = client.transaction(0x62, b"\x01")
+        assert observed is not None and observed[7] == 2 and observed[6] & 0x84 == 0x84
+        assert struct.unpack(">i", observed[8:12])[0] == 10_000  # X10 (G90: absolute)
+
+
+def test_the_plc_side_over_tcp_with_bcd_values(devsim_device) -> None:  # noqa: ANN001
+    """§3.7/§3.3.2: absolute pages from the S2 base page; with "AG BCD-codiert" the target
+    +120 000 µm arrives as 0012 0000H, 1000 mm/min as word 1000H; not BCD: error 66; machine
+    data are never overwritten from the PLC (17)."""
+    module = devsim_device("ip247", {"sys_id": {"module": 11}, "base_page": 8}, transport="tcp")
+    module.set("input.ANF1", True)
+    module.set("input.END1", True)
+    md = words(COM247)
+    md[47] = 0x0001  # AG BCD-codiert
+    framer = AgFramer()
+
+    def ask(conn: socket.socket, function: int, payload: bytes) -> bytes:
+        conn.sendall(ag_frame(function, payload))
+        while True:
+            messages = framer.feed(conn.recv(4096))
+            if messages:
+                assert messages[0][0] == function
+                return messages[0][1]
+
+    host, port = module.port_url("ag").removeprefix("socket://").rsplit(":", 1)
+    with socket.create_connection((host, int(port)), timeout=5) as conn:
+        assert ask(conn, 0x63, bytes((8, 20, 123, 0)) + struct.pack(">70H", *md))[8] == 0
+        assert ask(conn, 0x63, bytes((8, 20, 123, 1)) + struct.pack(">70H", *md))[4] == 17
+        assert ask(conn, 0x61, bytes.fromhex("08 05 01 01 0000 00000000"))[:6] == bytes((0, 8, 5, 1, 0, 5))
+        assert ask(conn, 0x61, bytes.fromhex("08 06 01 00 1000 0012 0000"))[4] == 0
+        module.advance(30)
+        assert module.read("axis.1.position") == 120_000
+        assert ask(conn, 0x61, bytes.fromhex("08 06 01 00 1000 001A 0000"))[4] == 66
+        assert ask(conn, 0x61, bytes.fromhex("07 06 01 00 1000 0012 0000"))[0] == 0x80  # not this module's page
