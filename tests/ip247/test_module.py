@@ -254,7 +254,7 @@ def test_teach_in_stores_the_positions_as_a_program(mod: Module) -> None:
     mod.clock.advance(10)
     assert mod.operate(1, 7, TAKE_OVER)[4] == 0
     assert mod.operate(1, 11, START)[4] == 0
-    assert mod.device.read("program.42") == "%  42\nN10 X6.000\nN20 M02\n"  # (reference 1 mm + 5 mm)
+    assert mod.device.read("program.42") == "% 42\nN10 X6.000\nN20 M02\n"  # (reference 1 mm + 5 mm)
 
 
 def test_the_plc_job_point_takes_bcd_values(mod: Module) -> None:

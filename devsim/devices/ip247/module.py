@@ -231,7 +231,7 @@ class Ip247Module(Model):
             return 2
         number, unit.teach_in = unit.teach_in, None
         blocks = [*unit.taught, f"N{10 * (len(unit.taught) + 1)} M02"]
-        text = "\n".join([f"% {number}", *blocks]) + "\n"
+        text = "\n".join([f"%{number:3d}", *blocks]) + "\n"  # (as COM247 writes it: "%  1", "%155")
         try:
             self.store.add(Stored(number, text), from_plc=False)
         except StoreError as exc:
