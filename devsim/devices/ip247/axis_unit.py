@@ -96,8 +96,9 @@ class AxisUnit:
         self.md, self.md_words = md, words
         if md is None:
             return
-        self.coords = Coordinates(md.limit_begin, md.limit_end, md.reference, md.rotary, self.coords.zo_mode, 0,
-                                  self.coords.to_ba15, self.coords.to_prog)
+        kept = self.coords if not first else Coordinates(0, 0, 0)  # new MD reset the offsets (spec §5.9)
+        self.coords = Coordinates(md.limit_begin, md.limit_end, md.reference, md.rotary, kept.zo_mode, 0,
+                                  kept.to_ba15, kept.to_prog)
         relevant = ("reference", "gear", "pulses_per_rev", "unit", "rotary", "limit_begin", "limit_end")
         if first or old is None or any(getattr(old, k) != getattr(md, k) for k in relevant):
             self.reference_set = False  # (spec §4.1.2 bit 5)

@@ -11,13 +11,13 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import Command, PortDef, Reference
+from devsim.core.kit import Command, Parameter, PortDef, Reference
 from devsim.core.settings import Section
 from devsim.devices.ip247.config import Ip247Config
 from devsim.devices.ip247.face import AgFace, PgFace
 from devsim.devices.ip247.module import Ip247Module
 from devsim.devices.ip247.points import FAULTS, POINTS
-from devsim.devices.ip247.tables import MODES, error_codes
+from devsim.devices.ip247.tables import MD_ITEMS, MODES, error_codes
 
 __all__ = ["Ip247Device"]
 
@@ -42,6 +42,7 @@ class Ip247Device(Device):
         return Reference(
             commands=[Command(f"BA{m.number}", None, "§4.1.1", f"{m.name} ({m.english}); pages {m.pages}"
                               + (f"; {m.parameters}" if m.parameters else "")) for m in MODES.values()],
-            parameters=[],
+            parameters=[Parameter(f"MD {item.words}", f"{item.name} ({item.english})", "§4.8", item.unit,
+                                  item.minimum, item.maximum, None, True, "simulated") for item in MD_ITEMS],
             errors=error_codes(),
         )
