@@ -269,3 +269,61 @@ def test_the_plc_job_point_takes_bcd_values(mod: Module) -> None:
     assert mod.device.read("ag.last")["err"] == 0
     mod.clock.advance(30)
     assert mod.device.read("axis.1.position") == 120_000
+
+
+def test_external_start_vector_6_9(mod: Module) -> None:
+    """§6.9/§5.10: with START-N/STOP = 1, BA9 halts before N1 (M00); Übernahme → error 6; the
+    falling edge runs N1 to 100 mm; a rising edge after PE interrupts (65); Übernahme → 6; the
+    falling edge runs N2 to 200 mm with M20."""
+    mod.ready()
+    mod.store(6, "%  6\nN1 X100 F2500 M00\nN2 X200 F1000 M20\nN3 M02\n")
+    mod.device.set("input.START1", True)
+    assert mod.operate(1, 9, START, b=6)[4] == 0
+    mod.clock.advance(1)
+    assert mod.device.read("axis.1.position") == 1_000  # (the reference coordinate: no motion)
+    answer = mod.operate(1, 9, TAKE_OVER, b=6)
+    assert answer[4] == 6 and mod.call(0x62, b"\x01")[21] & 0x01  # waiting for external start
+    mod.device.set("input.START1", False)
+    mod.clock.advance(10)
+    assert mod.device.read("axis.1.position") == 100_000 and mod.device.read("output.PE1") is True
+    mod.device.set("input.START1", True)
+    assert mod.device.read("axis.1.error") == 65
+    assert mod.operate(1, 9, TAKE_OVER, b=6)[4] == 6
+    mod.device.set("input.START1", False)
+    mod.clock.advance(30)
+    assert mod.device.read("axis.1.position") == 200_000 and mod.device.read("axis.1.m_function") == 20
+
+
+def test_external_stop_while_jogging_is_27_and_stopp_cancels_a_wait(mod: Module) -> None:
+    mod.ready()
+    mod.operate(1, 1, FORWARD)
+    mod.clock.advance(0.5)
+    mod.device.set("input.START1", True)
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.error") == 27 and mod.device.read("axis.1.running") is False
+    assert mod.operate(1, 7, FORWARD, dd=1_000)[4] == 6
+    assert mod.operate(1, 7, STOP)[4] == 0 and mod.device.read("axis.1.running") is False
+    mod.device.set("input.START1", False)
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.residual") == 0 and mod.device.read("axis.1.running") is False
+
+
+def test_backlash_is_taken_up_at_each_reversal(mod: Module) -> None:
+    """§5.8 (COM247 MD: b = 1 mm): no take-up on the first move after "Referenzpunkt setzen";
+    on a reversal the motor travels b more while the actual value stands still."""
+    mod.ready()
+    read = mod.device.read
+    motor = read("axis.1.machine_position")
+    mod.operate(1, 7, FORWARD, w=1000, dd=10_000)
+    mod.clock.advance(5)
+    assert read("axis.1.position") == 11_000 and read("axis.1.machine_position") - motor == pytest.approx(10_000)
+    motor = read("axis.1.machine_position")
+    mod.operate(1, 7, BACKWARD, w=1000, dd=5_000)
+    mod.clock.advance(0.02)
+    assert read("axis.1.machine_position") < motor and read("axis.1.position") == 11_000  # taking up the play
+    mod.clock.advance(5)
+    assert read("axis.1.position") == 6_000 and motor - read("axis.1.machine_position") == pytest.approx(6_000)
+    motor = read("axis.1.machine_position")
+    mod.operate(1, 7, BACKWARD, w=1000, dd=1_000)
+    mod.clock.advance(5)
+    assert read("axis.1.position") == 5_000 and motor - read("axis.1.machine_position") == pytest.approx(1_000)

@@ -158,7 +158,12 @@ class ProgramRun:
         unit.module.changed(unit)
         if block.g == 4:
             unit.in_position = False
-            self._timer = unit.clock.call_later((block.f or 0) * 0.1, lambda: self._done(True))
+
+            def dwell() -> None:
+                self._timer = unit.clock.call_later((block.f or 0) * 0.1, lambda: self._done(True))
+
+            if unit.held(dwell):
+                unit.module.set_error(unit, 6)
             return
         if block.g == 74:
             target, velocity = float(md.reference), md.step_velocity  # the physical reference point
@@ -182,7 +187,8 @@ class ProgramRun:
         if f < 1:
             self._fail(58)
             return
-        unit.position_to(target, min(f, float(md.f_max)), self._done)
+        if unit.held(lambda: unit.position_to(target, min(f, float(md.f_max)), self._done)):
+            unit.module.set_error(unit, 6)
 
     def _convert(self, value: float) -> float:
         """A program value in the axis unit: G70 (0.1 inch) on a metric axis, G71 (mm) on an

@@ -43,7 +43,8 @@ class AxisUnit:
         self.reference_set = False
         self.error = 8  # "Zustand nach Spannungsausfall" (spec §4.14 [DECISION])
         self.coords = Coordinates(0, 0, 0)
-        self.m0 = 0.0  # machine position of the holder coordinate 0
+        self.m0 = 0.0  # motor position of the holder coordinate 0 (pushing forward)
+        self._h0, self._d = 0.0, 0  # the load at the start of the current move, its direction
         self.in_position = False
         self.target: float | None = None  # holder target of the current (or aborted) positioning
         self.m_function = 2
@@ -66,7 +67,36 @@ class AxisUnit:
 
     @property
     def holder(self) -> float:
-        return self.axis.position() - self.m0
+        """The load (holder) coordinate H.  With backlash b the motor leads the load by the
+        play on the side it pushes: during a move in direction d the load stands until the
+        motor has taken the play up, then follows it (spec §5.8)."""
+        p = self.axis.position() - self.m0
+        if self._d == 0:
+            return p
+        free = p - self._side(self._d)
+        return max(self._h0, free) if self._d > 0 else min(self._h0, free)
+
+    def _side(self, direction: int) -> float:
+        """Motor minus load while pushing in ``direction``: 0 forward, −b backward."""
+        return -float(self.md.backlash) if direction < 0 and self.md is not None else 0.0
+
+    def set_holder(self, value: float, direction: int = 0) -> None:
+        """H := ``value`` where the axis stands (reference point, power-up).  With a direction
+        (a reference drive) the play is taken up on that side; without, the next move takes
+        none up (spec §5.8: not on the first move after power-up or "Referenzpunkt setzen")."""
+        self._h0, self._d = value, direction
+        self.m0 = self.axis.position() - value - self._side(direction)
+
+    def _begin(self, direction: int) -> None:
+        """A move in ``direction`` starts from the load's current coordinate."""
+        h = self.holder
+        if self._d == 0:
+            self.m0 = self.axis.position() - h - self._side(direction)  # no play to take up
+        self._h0, self._d = h, direction
+
+    def _machine(self, holder: float, direction: int) -> float:
+        """The motor position that puts the load at ``holder`` after a move in ``direction``."""
+        return holder + self._side(direction) + self.m0
 
     def actual(self) -> int:
         """The reported actual value, the tool tip in base units (0 without valid MD)."""
@@ -114,7 +144,7 @@ class AxisUnit:
             self.reference_run.cancel()
         self.locks.clear()
         if self.md is not None:
-            self.m0 = self.axis.position() - self.md.reference
+            self.set_holder(self.md.reference)
         self.set_pe()
 
     # -- operator jobs (spec §4.2) ----------------------------------------------------------------
@@ -153,6 +183,27 @@ class AxisUnit:
         if cmd == STOP or ba == 4:
             return None
         return 2
+
+    # -- the external start/stop input (spec §5.10) -------------------------------------------------
+    def held(self, start: Callable[[], None]) -> int | None:
+        """Start a motion job, or, while the START-N/STOP input is 1, hold it until the input
+        falls (error 6, "Motor wartet auf externen Start"); returns 6 when held."""
+        if not self.module.signals.get(f"START{self.number}"):
+            start()
+            return None
+        self.waiting_start = start
+        self._set_running(True)
+        return 6
+
+    def release(self) -> None:
+        """The input fell: the waiting job starts (its error 6 is gone)."""
+        start, self.waiting_start = self.waiting_start, None
+        if start is None:
+            return
+        if self.error == 6:
+            self.error = 0
+        self._set_running(False)
+        start()
 
     # -- motion -----------------------------------------------------------------------------------
     def _set_running(self, running: bool) -> None:
@@ -194,15 +245,19 @@ class AxisUnit:
         md = self.md
         assert md is not None
         self.target = holder_target
-        distance = holder_target - self.holder
-        self._direction = 1 if distance > 0 else -1 if distance < 0 else 0
-        pieces = move_pieces(self.axis.position(), distance, f, md.ramp, md.resolution)
+        direction = 1 if holder_target > self.holder else -1 if holder_target < self.holder else 0
+        self._direction = direction
+        if direction:
+            self._begin(direction)
+        end = self._machine(holder_target, direction or self._d)
+        pieces = move_pieces(self.axis.position(), end - self.axis.position() if direction else 0.0, f, md.ramp,
+                             md.resolution)
 
         def reached(ok: bool) -> None:
             if ok:
                 self.in_position = True
                 self.target = holder_target
-                self.axis.set_position(holder_target + self.m0)  # the pulses are exact
+                self.axis.set_position(end)  # the pulses are exact
                 self.set_pe()
             if done is not None:
                 done(ok)
@@ -218,6 +273,7 @@ class AxisUnit:
         assert md is not None
         ramp, r, x = md.ramp, md.resolution, self.axis.position()
         self._direction = direction
+        self._begin(direction)
         pieces: list[tuple[float, Any]] = []
         if f > md.f_ss:
             f = min(f, float(md.f_max))
@@ -263,9 +319,12 @@ class AxisUnit:
         if direction in self.locks:
             return 25 if direction < 0 else 26
         f, error = self._velocity(w, md.jog1 if self.mode == 1 else md.jog2)
-        self.jog(direction, f)
-        self._arm_sw_limit(direction)
-        return error
+
+        def run() -> None:
+            self.jog(direction, f)
+            self._arm_sw_limit(direction)
+
+        return self.held(run) or error
 
     def _ba1(self, cmd: int, b: int, w: int, dd: int) -> int | None:
         return self._jog_mode(cmd, w)
@@ -278,14 +337,13 @@ class AxisUnit:
         assert md is not None
         self.reference_set = False  # the start deletes an existing reference (spec §5.6)
         if b != 0:
-            self.m0 = self.axis.position() - md.reference  # set: H := x_ref (spec §5.6.1)
+            self.set_holder(md.reference)  # set: H := x_ref (spec §5.6.1)
             self.reference_set = True
             self.target = None
             return None
         from devsim.devices.ip247.reference import ReferenceRun
 
-        ReferenceRun(self).start()
-        return None
+        return self.held(ReferenceRun(self).start)
 
     def _positioning(self, holder_target: float, w: int) -> int | None:
         md = self.md
@@ -299,8 +357,7 @@ class AxisUnit:
         if holder_target != self.holder and direction in self.locks:
             return 25 if direction < 0 else 26
         f, error = self._velocity(w, md.step_velocity)
-        self.position_to(holder_target, f)
-        return error
+        return self.held(lambda: self.position_to(holder_target, f)) or error
 
     def _ba6(self, cmd: int, b: int, w: int, dd: int) -> int | None:
         md = self.md
@@ -331,8 +388,8 @@ class AxisUnit:
             return 62
         if md.rotary:
             f, error = self._velocity(w, md.step_velocity)
-            self.position_to(self.holder + distance, f)
-            return error
+            target = self.holder + distance
+            return self.held(lambda: self.position_to(target, f)) or error
         return self._positioning(self.holder + distance, w)
 
     def _ba12(self, cmd: int, b: int, w: int, dd: int) -> int | None:
@@ -417,7 +474,7 @@ class AxisUnit:
         if md is None or md.rotary or not self.reference_set:
             return
         low, high = self.coords.range()
-        limit = (high if direction > 0 else low) + self.coords.zero_offset + self.m0
+        limit = self._machine((high if direction > 0 else low) + self.coords.zero_offset, direction)
         if (self.axis.position() - limit) * direction >= 0:
             self.brake()
             self.module.set_error(self, 29 if direction > 0 else 28)

@@ -148,14 +148,18 @@ class Ip247Module(Model):
         """START-N/STOP input: 0→1 stops (error 27 while moving), 1→0 releases a waiting job
         (spec §5.10)."""
         if level:
-            if unit.running:
+            if unit.waiting_start is not None:
+                return
+            if unit.running and unit.automatic is not None:
+                unit.automatic.command(unit.mode, 2)  # interrupted, continuable with Übernahme
+                self.set_error(unit, 27)
+            elif unit.running:
                 self.fail(unit, 27)
             elif unit.automatic is not None and unit.automatic.halted:
                 unit.automatic.halted, unit.automatic.interrupted = False, True
                 self.set_error(unit, 65)
-        elif unit.waiting_start is not None:
-            job, unit.waiting_start = unit.waiting_start, None
-            job()
+        else:
+            unit.release()
 
     # -- operator jobs (spec §3.1, §4.2) ------------------------------------------------------------
     def operate(self, page: int, ba: int, cmd: int, b: int = 0, w: int = 0, dd: int = 0) -> int:

@@ -119,7 +119,7 @@ class ReferenceRun:
         unit = self.unit
         unit.axis.quick_stop()
         unit.axis.set_position(machine)
-        unit.m0 = machine - self.md.reference
+        unit.set_holder(self.md.reference, self.r)  # the last direction is R (spec §5.8)
         unit.reference_set = True
         unit.target = None
         self._finish(None)
