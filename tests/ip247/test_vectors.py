@@ -1,0 +1,131 @@
+"""The IP247's worked examples end to end through its services (spec ip247.md §6.6 zero-offset
+program, §6.7 rotary axis, §6.8 reference run), in virtual time."""
+
+from __future__ import annotations
+
+import pytest
+
+from devsim.core.record import replace
+from devsim.devices.ip247.machine_data import decode, encode
+from tests.ip247.test_machine_data import COM247, words
+from tests.ip247.test_module import BACKWARD, FORWARD, START, STOP, TAKE_OVER, Module
+
+
+def record(**changes: object) -> str:
+    md = replace(decode(words(COM247)), **changes)
+    return " ".join(f"{w:04X}" for w in encode(md))
+
+
+MAIN = ("%  1 HAUPTPROGRAMM\nN1 L9\nN2 X40.000 F500\nN3 G54\nN4 L9\nN5 X40.000 F500\nN6 G55\nN7 L9\n"
+        "N8 X40.000 F500\nN9 G56\nN10 G74\nN11 M02\n")
+SUB = "L  9 UNTERPROGRAMM\nN1 X0 F100 M10\nN2 G04 F50\nN3 X10 F100\nN4 G04 F50\nN5 X20 F100\nN6 G04 F50\nN7 M02\n"
+
+
+def test_zero_offset_program_of_section_6_6() -> None:
+    """BA9 step by step: the actual value at each halt is the table's (mm ×1000), G74 gives
+    −130 mm, the end −10 mm; M10 from L9's first traverse on (it starts with the Start), M02 at
+    the end."""
+    mod = Module()
+    assert mod.load_md(record=record(reference=0, zero_offsets=(40_000, 80_000, 120_000, 0), backlash=0,
+                                     limit_begin=-1_000_000, limit_end=1_000_000))[8] == 0
+    mod.operate(1, 5, START, b=1)
+    mod.operate(1, 13, FORWARD, dd=10_000)
+    assert mod.device.read("axis.1.position") == -10_000
+    mod.operate(1, 6, START, dd=0)
+    mod.clock.advance(30)
+    assert mod.device.read("axis.1.position") == 0 and mod.device.read("axis.1.machine_position") == 10_000
+    assert mod.store(9, SUB)[8:] == bytes(4) and mod.store(1, MAIN)[8:] == bytes(4)
+    holes = [0, 0, 10, 10, 20, 20]
+    expected = [*holes, 40, *holes, 40, *holes, 40, -130]
+    assert mod.operate(1, 9, START, b=1)[7] == 10  # (L9 N1 X0 M10 starts at once)
+    seen, m = [], []
+    for step in range(len(expected)):
+        if step:
+            assert mod.operate(1, 9, TAKE_OVER, b=1)[4] == 0
+        mod.clock.advance(30)
+        seen.append(mod.device.read("axis.1.position") // 1000)
+        m.append(mod.device.read("axis.1.m_function"))
+    assert seen == expected
+    assert set(m) == {10}
+    mod.operate(1, 9, TAKE_OVER, b=1)
+    assert mod.device.read("axis.1.position") == -10_000 and mod.device.read("axis.1.m_function") == 2
+
+
+def rotary() -> Module:
+    """§6.7: range 0 … 360°, r = 4 m° (gear 1.6°, 400 pulses)."""
+    mod = Module()
+    answer = mod.load_md(record=record(unit=3, rotary=True, limit_begin=0, limit_end=360_000, gear=1_600,
+                                       pulses_per_rev=400, reference=0, backlash=0, f_ss=200, f_max=20_000,
+                                       zero_offsets=(0, 0, 0, 0)))
+    assert answer[8] == 0 and answer[6] & 0x03 == 0x01  # RMLD unit bits: degree
+    mod.operate(1, 5, START, b=1)
+    return mod
+
+
+@pytest.mark.parametrize(("target", "command", "travel"), [
+    (270_000, START, -90_000),  # shortest path: backward
+    (180_000, START, 180_000),  # a tie: forward
+    (0, FORWARD, 360_000),  # Vorwärts to where it stands: one revolution
+    (0, BACKWARD, -360_000),
+])
+def test_rotary_targets_of_section_6_7(target: int, command: int, travel: int) -> None:
+    mod = rotary()
+    motor = mod.device.read("axis.1.machine_position")
+    assert mod.operate(1, 6, command, w=4_000, dd=target)[4] == 0
+    mod.clock.advance(60)
+    assert mod.device.read("axis.1.position") == target
+    assert mod.device.read("axis.1.machine_position") - motor == pytest.approx(travel)
+
+
+def test_rotary_offsets_and_long_relative_moves_of_section_6_7() -> None:
+    mod = rotary()
+    mod.operate(1, 7, FORWARD, w=4_000, dd=60_000)
+    mod.clock.advance(30)
+    assert mod.operate(1, 15, FORWARD, dd=30_000)[4] == 0
+    assert mod.device.read("axis.1.position") == 90_000  # BA15 30° at 60°
+    mod.operate(1, 16, START)
+    assert mod.operate(1, 12, START, dd=400_000)[4] == 0
+    assert mod.device.read("axis.1.position") == 400_000 and mod.m.units[0].coords.range() == (340_000, 700_000)
+    mod.operate(1, 14, START)
+    mod.operate(1, 7, FORWARD, w=4_000, dd=500_000)
+    mod.clock.advance(120)
+    assert mod.device.read("axis.1.position") == (60_000 + 500_000) % 360_000
+    assert mod.operate(1, 7, FORWARD, dd=200_000_001)[4] == 62
+
+
+def test_a_cam_never_left_is_error_59_after_2500_steps() -> None:
+    """§6.8: BERO stuck at 1: 2,500 single steps, then error 59, reference missing (bit 5)."""
+    mod = Module()
+    mod.load_md()
+    mod.device.set("input.BERO1", True)
+    mod.operate(1, 5, START, b=0)
+    mod.clock.advance(2500 / 100 - 0.01)
+    assert mod.device.read("axis.1.running") is True
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.error") == 59 and mod.device.read("axis.1.attributes") & 0x20
+    assert mod.device.read("axis.1.running") is False
+
+
+@pytest.mark.parametrize("cam_edge", [20_000.0, 20_002.2, 20_004.4, 20_006.6])
+def test_synchronous_reference_at_pattern_zero(cam_edge: float) -> None:
+    """§6.8: synchronous with 4 patterns: at most 3 single steps after the cam's falling edge,
+    and the reference point lies where the pattern counter is 0."""
+    mod = Module({"axes": {1: {"cam": [cam_edge, cam_edge + 10_000]}}})
+    mod.load_md(record=record(reference_sync=0, patterns=4))
+    mod.operate(1, 5, START, b=0)
+    mod.clock.advance(120)
+    assert mod.device.read("axis.1.reference_set") is True
+    unit = mod.m.units[0]
+    pulses = round((unit.axis.position() - unit.pattern_base) / 1.1)
+    assert pulses % 4 == 0
+    assert 0 <= (cam_edge - unit.axis.position()) / 1.1 <= 3 + 1  # (the edge lies within a step)
+
+
+def test_reference_set_after_a_zero_offset_of_section_6_8() -> None:
+    """BA13 100 mm Rückwärts, then "Referenzpunkt setzen" with x_ref = 0: actual 100 mm."""
+    mod = Module()
+    mod.load_md(record=record(reference=0))
+    mod.operate(1, 13, BACKWARD, dd=100_000)
+    mod.operate(1, 5, START, b=1)
+    assert mod.device.read("axis.1.position") == 100_000
+    assert mod.operate(1, 5, STOP)[4] == 0
