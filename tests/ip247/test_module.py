@@ -9,14 +9,21 @@ import pytest
 
 from devsim.core.clock import VirtualClock
 from devsim.core.nvram import NonVolatileMemory
+from devsim.core.record import replace
 from devsim.devices.ip247 import Ip247Device
 from devsim.devices.ip247 import program as lang
-from devsim.devices.ip247.machine_data import Ramp
+from devsim.devices.ip247.machine_data import Ramp, decode, encode
 from devsim.devices.ip247.pg_profile import parse_request
 from devsim.devices.ip247.services import serve
 from tests.ip247.test_machine_data import COM247, words
 
 START, STOP, FORWARD, BACKWARD, TAKE_OVER = 1, 2, 3, 4, 5
+
+
+def record(**changes: object) -> str:
+    """COM247's machine data (§6.2) with some items changed, as the record's hex words."""
+    md = replace(decode(words(COM247)), **changes)
+    return " ".join(f"{w:04X}" for w in encode(md))
 
 
 class Module:
@@ -244,17 +251,47 @@ def test_battery_ram_survives_power_but_not_a_battery_fault(tmp_path) -> None:  
     assert mod.device.read("axis.1.md_error") == -1 and mod.device.read("programs") == []
 
 
-def test_teach_in_stores_the_positions_as_a_program(mod: Module) -> None:
-    """§5.12: BA10 on a new program number, jog/position, Übernahme stores the actual value as a
-    block, BA11 closes the program with M02; other modes meanwhile are error 30."""
-    mod.ready()
-    assert mod.operate(1, 10, START, b=42)[4] == 0
-    assert mod.operate(1, 12, START, dd=0)[4] == 30
-    mod.operate(1, 7, FORWARD, w=1000, dd=5_000)
-    mod.clock.advance(10)
-    assert mod.operate(1, 7, TAKE_OVER)[4] == 0
+def test_teach_in_example_of_section_5_12() -> None:
+    """§5.12: BA10 program 7; positions stored with Übernahme (message 3) as N<k> X… F<step
+    velocity>; another axis cannot start teach-in (22); BA8 meanwhile is 30; BA11 closes."""
+    mod = Module()
+    assert mod.load_md(record=record(step_velocity=2500, limit_end=5_000_000))[8] == 0
+    mod.load_md(axis=2)
+    mod.operate(1, 5, START, b=1)
+    mod.operate(2, 5, START, b=1)
+    assert mod.operate(1, 10, START, b=7)[4] == 0 and mod.device.read("axis.1.attributes") & 0x10
+    mod.operate(1, 7, FORWARD, w=6000, dd=1_257_250)
+    mod.clock.advance(60)
+    assert mod.operate(1, 1, TAKE_OVER)[4] == 3
+    mod.operate(1, 6, START, w=6000, dd=3_000_000)
+    mod.clock.advance(60)
+    assert mod.operate(1, 6, TAKE_OVER)[4] == 3
+    assert mod.operate(2, 10, START, b=8)[4] == 22
+    assert mod.operate(1, 8, START, b=7)[4] == 30
     assert mod.operate(1, 11, START)[4] == 0
-    assert mod.device.read("program.42") == "% 42\nN10 X6.000\nN20 M02\n"  # (reference 1 mm + 5 mm)
+    assert mod.device.read("program.7") == "%  7\nN1 X1258.250 F2500\nN2 X3000.000 F2500\nN3 M02\n"
+
+
+def test_basp_and_the_power_unit_ready_input(mod: Module) -> None:
+    """§5.13/§5.14: BASP stops every axis with error 55 and forces PE low; without BB a motion
+    job is refused with 53, and BB falling during motion stops the pulses (53)."""
+    mod.ready()
+    mod.operate(1, 7, FORWARD, w=1000, dd=1_000)
+    mod.clock.advance(5)
+    assert mod.device.read("output.PE1") is True
+    mod.operate(1, 1, FORWARD)
+    mod.device.set("input.BASP", True)
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.error") == 55 and mod.device.read("axis.2.error") == 55
+    assert mod.device.read("axis.1.running") is False and mod.device.read("output.PE1") is False
+    mod.device.set("input.BASP", False)
+    mod.device.set("input.BB1", False)
+    assert mod.operate(1, 1, FORWARD)[4] == 53
+    mod.device.set("input.BB1", True)
+    mod.operate(1, 1, FORWARD)
+    mod.clock.advance(1)
+    mod.device.set("input.BB1", False)
+    assert mod.device.read("axis.1.error") == 53 and mod.device.read("axis.1.running") is False
 
 
 def test_the_plc_job_point_takes_bcd_values(mod: Module) -> None:

@@ -5,16 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from devsim.core.record import replace
-from devsim.devices.ip247.machine_data import decode, encode
-from tests.ip247.test_machine_data import COM247, words
-from tests.ip247.test_module import BACKWARD, FORWARD, START, STOP, TAKE_OVER, Module
-
-
-def record(**changes: object) -> str:
-    md = replace(decode(words(COM247)), **changes)
-    return " ".join(f"{w:04X}" for w in encode(md))
-
+from tests.ip247.test_module import BACKWARD, FORWARD, START, STOP, TAKE_OVER, Module, record
 
 MAIN = ("%  1 HAUPTPROGRAMM\nN1 L9\nN2 X40.000 F500\nN3 G54\nN4 L9\nN5 X40.000 F500\nN6 G55\nN7 L9\n"
         "N8 X40.000 F500\nN9 G56\nN10 G74\nN11 M02\n")

@@ -187,8 +187,14 @@ class AxisUnit:
     # -- the external start/stop input (spec §5.10) -------------------------------------------------
     def held(self, start: Callable[[], None]) -> int | None:
         """Start a motion job, or, while the START-N/STOP input is 1, hold it until the input
-        falls (error 6, "Motor wartet auf externen Start"); returns 6 when held."""
-        if not self.module.signals.get(f"START{self.number}"):
+        falls (error 6, "Motor wartet auf externen Start"); returns 6 when held.  Without the
+        power unit's BB the job is refused (53); under BASP too (55)."""
+        signals = self.module.signals
+        if not signals.get(f"BB{self.number}"):
+            return 53
+        if self.module.basp:
+            return 55
+        if not signals.get(f"START{self.number}"):
             start()
             return None
         self.waiting_start = start

@@ -23,7 +23,7 @@ from devsim.devices.ip247.automatic import ProgramRun
 from devsim.devices.ip247.axis_unit import AxisUnit
 from devsim.devices.ip247.jobs import START, STOP, TAKE_OVER, Job, refusal
 from devsim.devices.ip247.pg_profile import ACK_ACCEPTED, ACK_NEGATIVE, Observation
-from devsim.devices.ip247.store import ProgramStore, Stored, StoreError
+from devsim.devices.ip247.store import CAPACITY, ProgramStore, Stored, StoreError
 from devsim.devices.ip247.tables import MODES, NONEXISTENT, page_error
 
 __all__ = ["Ip247Module", "OPERATOR_MODES", "READ_MODES"]
@@ -31,6 +31,7 @@ __all__ = ["Ip247Module", "OPERATOR_MODES", "READ_MODES"]
 OPERATOR_MODES = frozenset(range(1, 18))
 WRITE_MODES, DELETE_MODES, READ_MODES = frozenset((20, 22, 24)), frozenset((21, 23)), frozenset(range(64, 71))
 AXES = (1, 2, 3)
+RS_PULSE = 0.1  # seconds (spec §5.16)
 
 
 class Ip247Module(Model):
@@ -56,6 +57,7 @@ class Ip247Module(Model):
             self.signals.subscribe(f"END{n}", lambda _n, _o, v, u=unit: u.limit_input("end"))
             self.signals.subscribe(f"BERO{n}", lambda _n, _o, v, u=unit: u.cam_input(bool(v)))
             self.signals.subscribe(f"START{n}", lambda _n, _o, v, u=unit: self._external(u, bool(v)))
+            self.signals.subscribe(f"BB{n}", lambda _n, _o, v, u=unit: self._ready(u, bool(v)))
         self.signals.subscribe("BASP", lambda _n, _o, v: self._basp(bool(v)))
         self._load()
         self.power_up()
@@ -137,12 +139,39 @@ class Ip247Module(Model):
         return self.basp and self.config.get("x21", "2-3") == "2-3"
 
     def _basp(self, active: bool) -> None:
-        """BASP (command output disable): every axis stops (spec §5.13)."""
+        """BASP with X21 2-3: every running axis brakes, error 55 on all axes, PE low (spec
+        §5.13); with X21 1-2 it is ignored."""
+        if self.config.get("x21", "2-3") != "2-3":
+            return
         self.basp = active
         for unit in self.units:
-            if active and unit.running:
-                self.fail(unit, 9)
+            if active:
+                if unit.running or unit.waiting_start is not None:
+                    unit.waiting_start = None
+                    self.fail(unit, 55)
+                else:
+                    self.set_error(unit, 55)
             unit.set_pe()
+
+    def pulse_rs(self, unit: AxisUnit) -> None:
+        """A 100 ms high pulse on RS; the pattern counter restarts at 0 (spec §2.8.1, §5.6.3)."""
+        name = f"RS{unit.number}"
+        self.signals.set(name, True)
+        self.clock.call_later(RS_PULSE, lambda: self.signals.set(name, False))
+        unit.pattern_base = unit.axis.position()
+
+    def _ready(self, unit: AxisUnit, ready: bool) -> None:
+        """BB from the power unit: 0→1 restarts its pattern counter; falling during motion the
+        pulses stop at once, error 53 (spec §5.14, §5.6.3)."""
+        if ready:
+            unit.pattern_base = unit.axis.position()
+            return
+        if unit.running:
+            if unit.automatic is not None:
+                unit.automatic.abort()
+            unit.axis.quick_stop()
+            unit.brake()
+            self.set_error(unit, 53)
 
     def _external(self, unit: AxisUnit, level: bool) -> None:
         """START-N/STOP input: 0→1 stops (error 27 while moving), 1→0 releases a waiting job
@@ -226,30 +255,42 @@ class Ip247Module(Model):
     def teach_job(self, unit: AxisUnit, cmd: int, number: int) -> int | None:
         """BA10 (teach-in on for a new program) and BA11 (close it with M02), spec §5.12."""
         if unit.mode == 10:
-            if self.store.get(number) is not None or any(u.teach_in == number for u in self.units):
+            if any(u.teach_in is not None for u in self.units):
+                return 22  # one axis at a time
+            if self.store.get(number) is not None:
                 return 49
-            unit.teach_in = number
-            unit.taught = []
+            if self.store.used + len(self._teach_text(number, [])) > CAPACITY:
+                return 24
+            unit.teach_in, unit.taught = number, []
             return None
         if unit.teach_in is None:
             return 2
-        number, unit.teach_in = unit.teach_in, None
-        blocks = [*unit.taught, f"N{10 * (len(unit.taught) + 1)} M02"]
-        text = "\n".join([f"%{number:3d}", *blocks]) + "\n"  # (as COM247 writes it: "%  1", "%155")
-        try:
-            self.store.add(Stored(number, text), from_plc=False)
-        except StoreError as exc:
-            return exc.error
-        self.save()
+        self._close_teach_in(unit)
         return None
 
+    @staticmethod
+    def _teach_text(number: int, blocks: list[str]) -> str:
+        """The generated program (spec §5.12 [DECISION]): ``%  7``, ``N1 X1258.250 F2500``, ``N3 M02``."""
+        return "".join(f"{line}\n" for line in (f"%{number:3d}", *blocks, f"N{len(blocks) + 1} M02"))
+
+    def _close_teach_in(self, unit: AxisUnit) -> None:
+        number, unit.teach_in = unit.teach_in, None
+        assert number is not None
+        self.store.add(Stored(number, self._teach_text(number, unit.taught)), from_plc=False)
+        self.save()
+
     def teach_store(self, unit: AxisUnit) -> int | None:
-        """Übernahme in teach-in: the actual position becomes a traverse block (spec §5.12)."""
-        if unit.teach_in is None:
+        """Übernahme in teach-in at standstill: the actual value becomes a block with the MD
+        step velocity, message 3 "Satz abgespeichert" (spec §5.12)."""
+        if unit.teach_in is None or unit.md is None:
             return 2
-        actual = unit.actual()
-        unit.taught.append(f"N{10 * (len(unit.taught) + 1)} X{actual / 1000:.3f}")
-        return None
+        block = f"N{len(unit.taught) + 1} X{unit.actual() / 1000:.3f} F{unit.md.step_velocity}"
+        if self.store.used + len(self._teach_text(unit.teach_in, [*unit.taught, block])) > CAPACITY:
+            unit.taught[-1:] = []  # memory full: the last stored block makes way for the end block
+            self._close_teach_in(unit)
+            return 24
+        unit.taught.append(block)
+        return 3
 
     # -- records (spec §3.4, §4.9, §4.10) -----------------------------------------------------------
     def md_numbers_differ(self) -> bool:
@@ -311,6 +352,7 @@ class Ip247Module(Model):
         stored = machine_data.encode(md)
         stored[48:] = list(words[48:70])
         unit.load_md(md, stored, first=True)
+        self.pulse_rs(unit)  # the power unit's pattern counter restarts with the IP's (spec §5.16)
         if error:
             self.set_error(unit, 15)
         self.save()

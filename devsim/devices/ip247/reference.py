@@ -19,7 +19,6 @@ __all__ = ["ReferenceRun", "SINGLE_STEP_HZ"]
 
 SINGLE_STEP_HZ = 100.0  # single steps off the cam: min(f_ss, 100 Hz) (spec §5.6.2 [DECISION])
 CAM_STEPS = 2500  # single steps before the cam counts as defective (error 59)
-RS_PULSE = 0.1  # seconds of the RS pulse at the start (spec §5.6.2 step 0)
 
 
 class ReferenceRun:
@@ -37,9 +36,7 @@ class ReferenceRun:
     def start(self) -> None:
         unit, module = self.unit, self.unit.module
         unit.reference_run = self
-        module.signals.set(f"RS{unit.number}", True)  # step 0: the RS pulse, pattern counter 0
-        module.clock.call_later(RS_PULSE, lambda: module.signals.set(f"RS{unit.number}", False))
-        unit.pattern_base = unit.axis.position()
+        module.pulse_rs(unit)  # step 0: the RS pulse, pattern counter 0
         if self._cam():
             self._onto_cam()  # special case 3: already on the cam
         elif unit.actuated("anf" if self.r > 0 else "end"):
