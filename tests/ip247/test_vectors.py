@@ -120,3 +120,53 @@ def test_reference_set_after_a_zero_offset_of_section_6_8() -> None:
     mod.operate(1, 5, START, b=1)
     assert mod.device.read("axis.1.position") == 100_000
     assert mod.operate(1, 5, STOP)[4] == 0
+
+
+def test_flying_change_runs_through_without_a_stop() -> None:
+    """§5.11.4 manual example: 0→50 at 1000 mm/min, 50→100 at 500, 100→150 at 1000 without a
+    stop; M30, M31 from the joint at 50, M32 from 100; PE only at the end."""
+    mod = Module()
+    mod.ready()
+    mod.store(17, "%  17\nN30 G10 X50 F1000 M30\nN32 G10 X100 F500 M31\nN34 X150 F1000 M32\nN36 M02\n")
+    mod.operate(1, 8, START, b=17)
+    seen: dict[int, list[tuple[int, float]]] = {}
+    while mod.device.read("axis.1.running"):
+        mod.clock.advance(0.05)
+        position, velocity = mod.device.read("axis.1.position"), mod.m.units[0].axis.velocity()
+        seen.setdefault(mod.device.read("axis.1.m_function"), []).append((position, velocity))
+        if position < 149_000:
+            assert velocity > 0 and mod.device.read("output.PE1") is False
+    assert mod.device.read("axis.1.position") == 150_000 and mod.device.read("output.PE1") is True
+    assert min(p for p, _ in seen[31]) >= 50_000 and max(p for p, _ in seen[30]) <= 50_000 + 1_000
+    assert min(p for p, _ in seen[32]) >= 100_000
+    cruising = [v for p, v in seen[31] if 70_000 < p < 99_000]
+    assert cruising and all(v == pytest.approx(500 * 1000 / 60) for v in cruising)
+
+
+@pytest.mark.parametrize(("text", "error"), [
+    ("N10 G10 X100 F1000\nN20 X50 F1000\nN30 M02", 52),  # a reversal
+    ("N10 G10 X100 F1000\nN20 G04 F10\nN30 M02", 52),  # a dwell
+    ("N10 G10 X100 F3000\nN20 X101 F3000\nN30 M02", 52),  # shorter than the braking distance
+    ("N10 G10 X100 F1000\nN20 G56\nN25 X120 F1000\nN30 M02", 52),  # a shift
+])
+def test_flying_change_not_possible(text: str, error: int) -> None:
+    mod = Module()
+    mod.ready()
+    mod.store(18, f"%  18\n{text}\n")
+    mod.operate(1, 8, START, b=18)
+    mod.clock.advance(30)
+    assert mod.device.read("axis.1.error") == error and mod.m.units[0].automatic is None
+
+
+def test_flying_change_on_a_rotary_axis_needs_a_fixed_direction() -> None:
+    """§5.11.4: X300 (backward by shortest path from 0°) then X10 (forward): error 47; with
+    G26 the chain runs forward."""
+    mod = rotary()
+    mod.store(19, "%  19\nN10 G10 X300 F1000\nN20 X10 F1000\nN30 M02\n")
+    mod.operate(1, 8, START, b=19)
+    assert mod.device.read("axis.1.error") == 47
+    mod.store(20, "%  20\nN5 G26\nN10 G10 X300 F1000\nN20 X10 F1000\nN30 M02\n")
+    mod.operate(1, 8, START, b=20)
+    mod.clock.advance(120)
+    assert mod.device.read("axis.1.error") == 0 and mod.device.read("axis.1.position") == 10_000
+    assert mod.device.read("axis.1.machine_position") == pytest.approx(370_000)

@@ -6,17 +6,17 @@ take no time, a traverse (X, G74) moves the axis and a dwell (G04) waits on the 
 each setting "position reached" when done.  A halt (M00 before the next traverse or dwell, each
 step of BA9) and an interruption (Stopp: error 65) leave the axis "fertig" with the context
 kept; Übernahme continues, Start begins again, a Stopp on an interrupted program aborts it.
-A flying change (G10) runs its blocks one after the other with a stop between them and no
-"position reached" at the joint (the ramp between two velocities is not modelled).
+A flying change (G10) joins its blocks into one motion (:mod:`.flying`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterator
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.flow import M_NONE, FlowError, steps
+from devsim.devices.ip247.flying import NotJoinable, chain_pieces
 from devsim.devices.ip247.jobs import START, STOP, TAKE_OVER
 from devsim.devices.ip247.program import Block
 
@@ -42,6 +42,7 @@ class ProgramRun:
         self._m00 = False
         self._timer = None
         self._last: tuple[Block, int] | None = None  # the traverse or dwell executing
+        self._m_timers: list[Any] = []  # M outputs at the joints of a G10 chain
 
     # -- from the module -------------------------------------------------------------------------
     def start(self) -> None:
@@ -85,8 +86,14 @@ class ProgramRun:
         unit.brake()
         return 2
 
+    def _cancel_m_timers(self) -> None:
+        for timer in self._m_timers:
+            timer.cancel()
+        self._m_timers.clear()
+
     def abort(self) -> None:
         """The context ends without its M02: leftover program shifts fold into BA12/13's."""
+        self._cancel_m_timers()
         if self._timer is not None:
             self._timer.cancel()
         coords = self.unit.coords
@@ -165,30 +172,98 @@ class ProgramRun:
             if unit.held(dwell):
                 unit.module.set_error(unit, 6)
             return
-        if block.g == 74:
-            target, velocity = float(md.reference), md.step_velocity  # the physical reference point
+        result = self._target(block, unit.actual(), unit.holder)
+        if isinstance(result, int):
+            self._fail(result)
+            return
+        if block.g == 10 and block.m != 0:  # (M00 in a G10 block splits the chain)
+            self._flying(block, m, result)
+            return
+        target, f, _ = result
+        if unit.held(lambda: unit.position_to(target, f, self._done)):
+            unit.module.set_error(unit, 6)
+
+    def _target(self, block: Block, tip: float, holder: float) -> tuple[float, float, float] | int:
+        """Where a traverse takes the holder, at which frequency, and the tip coordinate there;
+        or the module error (23 SW limit, 43/58 velocity)."""
+        unit, md = self.unit, self.unit.md
+        assert md is not None
+        if block.g == 74:  # the physical reference point at the step velocity
+            target, velocity = float(md.reference), float(md.step_velocity)
+            end_tip = float(unit.coords.actual(round(target)))
         else:
             assert block.x is not None
             x = self._convert(block.x)
-            tip = x if self.absolute else unit.actual() + x
-            target = float(unit.coords.holder_for(round(tip)))
             if block.f:
                 self.feed = round(self._convert(block.f))
-            velocity = md.v_max if block.g == 0 else (self.feed or md.step_velocity)
+            velocity = md.v_max if block.g == 0 else float(self.feed or md.step_velocity)
+            if md.rotary and self.absolute:
+                begin, end = unit.coords.range()
+                span = end - begin
+                forward = (x - tip) % span
+                if self.direction == 26:
+                    step = forward
+                elif self.direction == 27:
+                    step = forward - span if forward else 0.0
+                else:  # G25: the shortest way, a tie forward
+                    step = forward if forward <= span - forward else forward - span
+                target, end_tip = holder + step, x
+            else:
+                end_tip = x if self.absolute else tip + x
+                target = float(unit.coords.holder_for(round(end_tip)))
             if not md.rotary and unit.reference_set:
                 low, high = unit.coords.range()
                 if not low <= target - unit.coords.zero_offset <= high:
-                    self._fail(23)
-                    return
+                    return 23
         f = md.frequency(velocity)
         if f > md.f_max * (1 + 1e-9) and block.g != 0:
-            self._fail(43)
-            return
+            return 43
         if f < 1:
-            self._fail(58)
+            return 58
+        return target, min(f, float(md.f_max)), end_tip
+
+    def _flying(self, first: Block, m: int, result: tuple[float, float, float]) -> None:
+        """A G10 chain (spec §5.11.4): the following traverses joined into one motion."""
+        unit, md = self.unit, self.unit.md
+        assert md is not None
+        chain = [(first, m, result)]
+        while chain[-1][0].g == 10 and chain[-1][0].m != 0:
+            try:
+                _, block, m_next = next(self._steps)
+            except StopIteration:
+                self._fail(52)
+                return
+            except FlowError as exc:
+                self._fail(exc.error)
+                return
+            if block.x is None or block.g not in (None, 0, 10):
+                self._fail(52)  # a dwell, M02 alone, a switch, a shift or a correction cannot be joined
+                return
+            _, _, tip = chain[-1][2]
+            following = self._target(block, tip, chain[-1][2][0])
+            if isinstance(following, int):
+                self._fail(following)
+                return
+            chain.append((block, m_next, following))
+        holders = [unit.holder, *(r[0] for _, _, r in chain)]
+        steps = [b - a for a, b in zip(holders, holders[1:], strict=False)]
+        direction = 1 if steps[0] > 0 else -1
+        if any(step * direction <= 0 for step in steps):
+            self._fail(47 if md.rotary else 52)
             return
-        if unit.held(lambda: unit.position_to(target, min(f, float(md.f_max)), self._done)):
-            unit.module.set_error(unit, 6)
+        unit.begin(direction)
+        ends = [unit.machine(h, direction) for h in holders[1:]]
+        try:
+            pieces, starts = chain_pieces(md.ramp, md.resolution, unit.axis.position(), direction, ends,
+                                          [r[1] for _, _, r in chain])
+        except NotJoinable:
+            self._fail(52)
+            return
+        self._last = (chain[-1][0], chain[-1][1])
+        for (_, m_block, _), at in zip(chain[1:], starts, strict=True):
+            self._m_timers.append(unit.clock.call_later(at, lambda m_block=m_block: setattr(unit, "m_function",
+                                                                                          m_block)))
+        unit.follow_path(pieces, holders[-1], ends[-1], self._done)
 
     def _convert(self, value: float) -> float:
         """A program value in the axis unit: G70 (0.1 inch) on a metric axis, G71 (mm) on an
@@ -222,6 +297,7 @@ class ProgramRun:
     def _interrupt(self) -> None:
         """Brake; the traverse stays to be completed (the dwell counts as expired)."""
         unit = self.unit
+        self._cancel_m_timers()
         self.interrupted, self.halted = True, False
         if self._timer is not None:  # a dwell: expired
             self._timer.cancel()

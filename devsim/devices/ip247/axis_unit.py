@@ -87,14 +87,15 @@ class AxisUnit:
         self._h0, self._d = value, direction
         self.m0 = self.axis.position() - value - self._side(direction)
 
-    def _begin(self, direction: int) -> None:
+    def begin(self, direction: int) -> None:
         """A move in ``direction`` starts from the load's current coordinate."""
         h = self.holder
         if self._d == 0:
             self.m0 = self.axis.position() - h - self._side(direction)  # no play to take up
         self._h0, self._d = h, direction
+        self._direction = direction
 
-    def _machine(self, holder: float, direction: int) -> float:
+    def machine(self, holder: float, direction: int) -> float:
         """The motor position that puts the load at ``holder`` after a move in ``direction``."""
         return holder + self._side(direction) + self.m0
 
@@ -250,14 +251,19 @@ class AxisUnit:
         """A positioning move of the holder to ``holder_target`` (BA6, BA7, program traverses)."""
         md = self.md
         assert md is not None
-        self.target = holder_target
         direction = 1 if holder_target > self.holder else -1 if holder_target < self.holder else 0
-        self._direction = direction
         if direction:
-            self._begin(direction)
-        end = self._machine(holder_target, direction or self._d)
+            self.begin(direction)
+        end = self.machine(holder_target, direction or self._d)
         pieces = move_pieces(self.axis.position(), end - self.axis.position() if direction else 0.0, f, md.ramp,
                              md.resolution)
+        self.follow_path(pieces, holder_target, end, done)
+
+    def follow_path(self, pieces: list[tuple[float, Any]], holder_target: float, end: float,
+                    done: Callable[[bool], None] | None = None) -> None:
+        """Move along ``pieces`` (from :meth:`begin`) to motor position ``end``, the holder to
+        ``holder_target``: "position reached" there, the residual meanwhile."""
+        self.target = holder_target
 
         def reached(ok: bool) -> None:
             if ok:
@@ -279,7 +285,7 @@ class AxisUnit:
         assert md is not None
         ramp, r, x = md.ramp, md.resolution, self.axis.position()
         self._direction = direction
-        self._begin(direction)
+        self.begin(direction)
         pieces: list[tuple[float, Any]] = []
         if f > md.f_ss:
             f = min(f, float(md.f_max))
@@ -480,7 +486,7 @@ class AxisUnit:
         if md is None or md.rotary or not self.reference_set:
             return
         low, high = self.coords.range()
-        limit = self._machine((high if direction > 0 else low) + self.coords.zero_offset, direction)
+        limit = self.machine((high if direction > 0 else low) + self.coords.zero_offset, direction)
         if (self.axis.position() - limit) * direction >= 0:
             self.brake()
             self.module.set_error(self, 29 if direction > 0 else 28)
