@@ -364,3 +364,18 @@ def test_backlash_is_taken_up_at_each_reversal(mod: Module) -> None:
     mod.operate(1, 7, BACKWARD, w=1000, dd=1_000)
     mod.clock.advance(5)
     assert read("axis.1.position") == 5_000 and motor - read("axis.1.machine_position") == pytest.approx(1_000)
+
+
+def test_jobs_while_braking_wait_in_the_job_list(mod: Module) -> None:
+    """§3.1/§3.6.4: while the axis brakes, OPERATE is queued (ack 01H) and interpreted at
+    standstill in arrival order; the ninth job overflows the PG list: ack 81H, error 1."""
+    mod.ready()
+    mod.operate(1, 1, FORWARD, w=6000)
+    mod.clock.advance(3)
+    mod.operate(1, 1, STOP)
+    assert mod.m.units[0].braking
+    answers = [mod.operate(1, 13, FORWARD, dd=1_000)[0] for _ in range(9)]
+    assert answers == [0x01] * 8 + [0x81] and mod.device.read("axis.1.error") == 1
+    assert mod.m.units[0].coords.zo_mode == 0  # nothing interpreted yet
+    mod.clock.advance(10)
+    assert mod.device.read("axis.1.running") is False and mod.m.units[0].coords.zo_mode == 8_000 and not mod.m.job_lists["pg"]

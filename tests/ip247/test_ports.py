@@ -102,3 +102,36 @@ def test_the_plc_side_over_tcp_with_bcd_values(devsim_device) -> None:  # noqa: 
         assert module.read("axis.1.position") == 120_000
         assert ask(conn, 0x61, bytes.fromhex("08 06 01 00 1000 001A 0000"))[4] == 66
         assert ask(conn, 0x61, bytes.fromhex("07 06 01 00 1000 0012 0000"))[0] == 0x80  # not this module's page
+
+
+def test_generic_s5_services_read_programs_and_machine_data(devsim_device) -> None:  # noqa: ANN001
+    """With ``s5_services``: 18H system parameters, 1AH B_INFO and 04H read memory as an S5 CPU
+    answers them (libnodave's AS511 client reads DBs this way): program 5 is DB 5, the machine
+    data stored as DB 123 are DX 123; an unknown block is refused with DLE NAK."""
+    module = devsim_device("ip247", {"sys_id": {"module": 11}, "s5_services": True})
+    module.set("program.5", "%  5 GENERIC\nN1 X10 F1000\nN2 M02\n")
+    module.set("input.ANF1", True)
+    module.set("input.END1", True)
+    with pg(module) as port:
+        client = PgClient(port)
+        md = words(COM247)
+        client.transaction(0x63, bytes((1, 20, 123, 0)) + struct.pack(">70H", *md))
+        system = client.transaction(0x18, b"")
+        assert system is not None and len(system) == 45 and system[:5] == bytes(5)
+        for kind, number, record in ((0x01, 5, lang.record_words(5, "%  5 GENERIC\nN1 X10 F1000\nN2 M02\n")),
+                                     (0x0C, 123, module.read("axis.1.machine_data"))):
+            info = client.transaction(0x1A, bytes((kind, number)))
+            assert info is not None and info[0] == 0 and info[3:7] == bytes((0x70, 0x70, 0x40 | kind, number))
+            address, length = struct.unpack(">H", info[1:3])[0], struct.unpack(">H", info[11:13])[0]
+            assert length == 5 + len(record)
+            data = client.transaction(0x04, struct.pack(">HH", address, address + 2 * len(record) - 1))
+            assert data is not None and data[:5] == bytes(5)
+            assert list(struct.unpack(f">{len(record)}H", data[5:])) == record
+        port.write(b"\x02")
+        assert port.read(2) == b"\x10\x06"
+        port.write(b"\x1a")
+        assert port.read(1) == b"\x02"
+        port.write(b"\x10\x06")
+        assert port.read(3) == b"\x16\x10\x03"
+        port.write(b"\x10\x06\x01\x09\x10\x04")  # DB 9 does not exist
+        assert port.read(2) == b"\x10\x15"

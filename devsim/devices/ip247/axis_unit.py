@@ -45,6 +45,7 @@ class AxisUnit:
         self.coords = Coordinates(0, 0, 0)
         self.m0 = 0.0  # motor position of the holder coordinate 0 (pushing forward)
         self._h0, self._d = 0.0, 0  # the load at the start of the current move, its direction
+        self.braking = False  # stopping after a Stopp or a fault: jobs wait in the job lists
         self.in_position = False
         self.target: float | None = None  # holder target of the current (or aborted) positioning
         self.m_function = 2
@@ -215,6 +216,8 @@ class AxisUnit:
     # -- motion -----------------------------------------------------------------------------------
     def _set_running(self, running: bool) -> None:
         self.running = running
+        if not running:
+            self.braking = False
         self.module.changed(self)
 
     def _velocity(self, w: int, default: int) -> tuple[float, int | None]:
@@ -242,6 +245,7 @@ class AxisUnit:
         self.axis.follow(pieces, self._ended)  # (a new plan drops the old plan's on_done)
 
     def _ended(self) -> None:
+        self.braking = False
         done, self._done = self._done, None
         self._set_running(False)
         if done is not None:
@@ -318,6 +322,7 @@ class AxisUnit:
             self._ended()
             return
         t_v = md.ramp.time_to(f0)
+        self.braking = True
         self._follow([(t_v, ExpPiece(md.ramp, md.resolution, self.axis.position(), sign, "decel", t_v, f0))])
         self._decel_at = self.clock.now()
 

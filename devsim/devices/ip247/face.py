@@ -13,6 +13,7 @@ from devsim.devices.ip247.as511 import TIMEOUT, As511Link, Reply
 from devsim.devices.ip247.attributes import AgFramer, ag_frame
 from devsim.devices.ip247.module import Ip247Module
 from devsim.devices.ip247.pg_profile import ACK_NEGATIVE, FUNCTIONS, Header, parse_request
+from devsim.devices.ip247.s5_services import S5_FUNCTIONS, S5Memory
 from devsim.devices.ip247.services import serve
 
 __all__ = ["AgFace", "PgFace"]
@@ -25,14 +26,19 @@ class PgFace(Face):
 
     def __init__(self, model: Ip247Module, port: Port) -> None:
         super().__init__(model, port)
-        self.link = As511Link(lambda fn: fn in FUNCTIONS, self._service)
+        self.link = As511Link(self._known, self._service)
         self._timer: Timer | None = None
 
     @property
     def serial_settings(self) -> SerialSettings:
         return SerialSettings(9600, 8, "E", 1)
 
+    def _known(self, function: int) -> bool:
+        return function in FUNCTIONS or (function in S5_FUNCTIONS and bool(self.model.config.get("s5_services")))
+
     def _service(self, function: int, parameters: bytes) -> Reply:
+        if function in S5_FUNCTIONS:
+            return S5Memory(self.model.data_blocks()).service(function, parameters)
         return serve(self.model, parse_request(function, parameters))
 
     def feed(self, data: bytes) -> None:

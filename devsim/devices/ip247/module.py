@@ -22,7 +22,7 @@ from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.automatic import ProgramRun
 from devsim.devices.ip247.axis_unit import AxisUnit
 from devsim.devices.ip247.jobs import START, STOP, TAKE_OVER, Job, refusal
-from devsim.devices.ip247.pg_profile import ACK_ACCEPTED, ACK_NEGATIVE, Observation
+from devsim.devices.ip247.pg_profile import ACK_ACCEPTED, ACK_FULL, ACK_NEGATIVE, ACK_QUEUED, Observation
 from devsim.devices.ip247.store import CAPACITY, ProgramStore, Stored, StoreError
 from devsim.devices.ip247.tables import MODES, NONEXISTENT, page_error
 
@@ -51,6 +51,8 @@ class Ip247Module(Model):
         self.sys_id = (0, 0, 0)
         self.store = ProgramStore()
         self.basp = False
+        self.job_lists: dict[str, list[tuple[int, int, int, int, int, int]]] = {"pg": [], "ag": []}
+        self._draining = False
         for unit in self.units:
             n = unit.number
             self.signals.subscribe(f"ANF{n}", lambda _n, _o, v, u=unit: u.limit_input("anf"))
@@ -130,6 +132,20 @@ class Ip247Module(Model):
 
     def changed(self, unit: AxisUnit) -> None:
         self.announce("changed", unit.number)
+        if not unit.braking and not self._draining and any(q and q[0][0] == unit.number for q in
+                                                             self.job_lists.values()):
+            self._drain(unit.number)
+
+    def _drain(self, page: int) -> None:
+        """The axis stands again: the jobs that came while it braked are interpreted in arrival
+        order (spec §3.1)."""
+        self._draining = True
+        try:
+            for source, queue in self.job_lists.items():
+                while queue and queue[0][0] == page and not self.units[page - 1].braking:
+                    self.operate(*queue.pop(0), source=source)
+        finally:
+            self._draining = False
 
     def _leds(self) -> None:
         self.signals.set("led_red", any(self.error_of(p) >= 10 for p in (1, 2, 3, 4)))
@@ -191,11 +207,21 @@ class Ip247Module(Model):
             unit.release()
 
     # -- operator jobs (spec §3.1, §4.2) ------------------------------------------------------------
-    def operate(self, page: int, ba: int, cmd: int, b: int = 0, w: int = 0, dd: int = 0) -> int:
-        """An operator job; returns the acknowledgement (00H or 80H)."""
+    def operate(self, page: int, ba: int, cmd: int, b: int = 0, w: int = 0, dd: int = 0, *,
+                source: str = "pg") -> int:
+        """An operator job from the PG or the PLC (``source`` "ag"); returns the acknowledgement:
+        00H, 80H, 01H (queued while the axis brakes) or 81H (that interface's job list is full:
+        error 1 from the PG, 5 from the PLC)."""
         if ba in NONEXISTENT - {3} or (ba in MODES and ba not in OPERATOR_MODES):
             return ACK_NEGATIVE  # BA18/19/72 and the record modes: not an operator job here
         unit = self.unit(page)
+        if unit is not None and unit.braking and ba in OPERATOR_MODES:
+            queue = self.job_lists[source]
+            if len(queue) >= int(self.config.get("job_list", 8)):
+                self.set_error(unit, 1 if source == "pg" else 5)
+                return ACK_FULL
+            queue.append((page, ba, cmd, b, w, dd))
+            return ACK_QUEUED
         if ba not in MODES:  # an undefined mode (3, 25 … 63, 75 …): error 2
             self.set_error(unit, 2)
             return ACK_ACCEPTED
@@ -446,6 +472,13 @@ class Ip247Module(Model):
                 return ACK_ACCEPTED, []
             return ACK_ACCEPTED, lang.record_words(db, stored.text, stored.error, stored.faulty)
         return ACK_ACCEPTED, values.sys_id_record(*self.sys_id, firmware=str(self.config.get("firmware", "A02.1")))
+
+    def data_blocks(self) -> list[tuple[int, int, list[int]]]:
+        """The records as S5 blocks for generic tools (:mod:`.s5_services`): programs as DB n,
+        machine data as DX (their DB number)."""
+        blocks = [(0x01, p.number, lang.record_words(p.number, p.text, p.error, p.faulty)) for p in self.store.programs]
+        blocks += [(0x0C, u.md.db, list(u.md_words)) for u in self.units if u.md is not None and u.md_words]
+        return blocks
 
     # -- observe (spec §3.6.4) ----------------------------------------------------------------------
     def header(self, page: int) -> tuple[int, int, int, int]:

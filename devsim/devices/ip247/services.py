@@ -69,4 +69,4 @@ def _operate(module: Ip247Module, request: Operate, page: int, plc: bool) -> int
         except NotBcd as exc:
             module.set_error(unit, exc.error)
             return ACK_ACCEPTED
-    return module.operate(page, request.ba, request.cmd, b, w, dd)
+    return module.operate(page, request.ba, request.cmd, b, w, dd, source="ag" if plc else "pg")
