@@ -134,7 +134,7 @@ class AxisUnit:
         relevant = ("reference", "gear", "pulses_per_rev", "unit", "rotary", "limit_begin", "limit_end")
         if first or old is None or any(getattr(old, k) != getattr(md, k) for k in relevant):
             self.reference_set = False  # (spec §4.1.2 bit 5)
-        self._update_levels()
+        self.wire_switches()
 
     def power_up(self) -> None:
         """Reference lost; the actual value reads as the reference coordinate (spec §4.14)."""
@@ -445,15 +445,20 @@ class AxisUnit:
             low, high = float(where[0]), float(where[1])
         return RegionSwitch(self.axis, low, high, lambda active, n=name: self._switch(n, active))
 
-    def _switch(self, name: str, actuated: bool) -> None:
-        """A switch the axis geometry drives: its input's level per the MD polarity."""
-        level = actuated if name == "cam" or self.md is None or self.md.limit_polarity == 0 else not actuated
+    def _switch(self, name: str, actuated: bool, polarity: int | None = None) -> None:
+        """A switch the axis geometry drives: its input's level as wired for the MD polarity
+        (an NC contact is at 24 V while not actuated)."""
+        if polarity is None:
+            polarity = self.md.limit_polarity if self.md is not None else 0
+        level = actuated if name == "cam" or polarity == 0 else not actuated
         self.module.signals.set(f"{'BERO' if name == 'cam' else name.upper()}{self.number}", level)
 
-    def _update_levels(self) -> None:
+    def wire_switches(self, polarity: int | None = None) -> None:
+        """Set the geometry's switch inputs for a limit-switch polarity (the MD's by default;
+        an incoming record's before it is checked)."""
         for name, region in zip(("anf", "end", "cam"), self._switches, strict=True):
             if region is not None:
-                self._switch(name, region.active)
+                self._switch(name, region.active, polarity)
 
     def actuated(self, name: str) -> bool:
         """Whether limit input ``anf``/``end`` reads as actuated (MD n+33 polarity)."""

@@ -352,7 +352,7 @@ class Ip247Module(Model):
             return ACK_ACCEPTED, []
         module = words[0] & 0xFF
         if module != self.sys_id[0] and any(u.md_valid for u in self.units):
-            self.set_error(None, 16)  # the module number is frozen by correct MD (spec §4.12)
+            self.set_error(None, 12)  # the module number is frozen by correct MD (spec §4.12)
             return ACK_ACCEPTED, []
         self.sys_id = (module, words[1] & 0xFF, words[2] & 0xFF)
         self.save()
@@ -372,6 +372,7 @@ class Ip247Module(Model):
             self.set_error(unit, 15)
             return [0]
         md = replace(md, db=db)
+        unit.wire_switches(md.limit_polarity if md.limit_polarity in (0, 1) else None)
         levels = (bool(self.signals.get(f"ANF{unit.number}")), bool(self.signals.get(f"END{unit.number}")))
         error = machine_data.check(md, sys_module=self.sys_id[0], limit_levels=levels)
         md = replace(md, error=error)
