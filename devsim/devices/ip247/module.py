@@ -408,6 +408,8 @@ class Ip247Module(Model):
         except StoreError as exc:
             self.set_error(None, exc.error)
             return [0, 0]
+        if error:
+            self.set_error(None, 48)  # stored, but marked faulty (spec §4.5)
         self.save()
         return [error, faulty]
 
@@ -424,7 +426,7 @@ class Ip247Module(Model):
             if unit.running:
                 self.set_error(unit, 4)
             elif unit.md is None or unit.md.db != db:
-                self.set_error(unit, 12)
+                self.set_error(unit, 13)  # no such machine-data block (spec §4.3 [DECISION])
             else:
                 unit.load_md(None, None, first=False)
                 self.save()
@@ -460,7 +462,7 @@ class Ip247Module(Model):
         if ba == 67:
             source = unit if unit is not None else next((u for u in self.units if u.md and u.md.db == db), None)
             if source is None or source.md_words is None or (source.md is not None and source.md.db != db):
-                self.set_error(unit, 12)
+                self.set_error(unit, 13)
                 return ACK_ACCEPTED, []
             return ACK_ACCEPTED, list(source.md_words)
         if ba == 68:
