@@ -240,14 +240,14 @@ def test_battery_ram_survives_power_but_not_a_battery_fault(tmp_path) -> None:  
     mod.ready()
     mod.store(9, "%  9\nN1 X1 F100\nN2 M02\n")
     mod.operate(1, 15, FORWARD, dd=2_000)
-    mod.device.fault("power_off", True)
-    mod.device.fault("power_off", False)
+    mod.device.fault("power", True)
+    mod.device.fault("power", False)
     assert mod.device.read("axis.1.reference_set") is False and mod.device.read("axis.1.error") == 8
     assert mod.device.read("axis.1.md_error") == 0 and mod.device.read("programs") == [[9, 17]]
     assert mod.m.units[0].coords.to_ba15 == 2_000
     mod.device.fault("battery_failed", True)
-    mod.device.fault("power_off", True)
-    mod.device.fault("power_off", False)
+    mod.device.fault("power", True)
+    mod.device.fault("power", False)
     assert mod.device.read("axis.1.md_error") == -1 and mod.device.read("programs") == []
 
 

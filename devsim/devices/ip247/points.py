@@ -131,6 +131,6 @@ def _power(m: Any, active: bool) -> None:
 FAULTS = FaultTable([
     Fault("battery_failed", "the buffer battery failed: machine data, programs, SYS-ID and offsets are lost at "
           "the next power-up", "§4.14", _battery),
-    Fault("power_off", "the module has no 5 V: the PG port answers nothing; clearing it powers the module up "
-          "(reference lost, error 8)", "§3.1.1", _power),
+    Fault("power", "the supply is off while active: the PG port answers nothing; on again afterwards (a "
+          "power-up: reference lost, error 8)", "§3.1.1", _power),
 ])
