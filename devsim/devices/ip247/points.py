@@ -62,9 +62,20 @@ def _axis_points(n: int) -> list[Point]:
               get=lambda m: unit(m).m_function),
         Point(f"axis.{n}.md_error", "int", f"axis {n} machine-data error (0: none; -1: no MD)", "§7.2.1",
               get=lambda m: unit(m).md.error if unit(m).md else -1),
-        Point(f"axis.{n}.machine_data", "json", f"axis {n} machine-data record (70 words) or null", "§6.3.8.1",
-              get=lambda m: unit(m).md_words),
+        Point(f"axis.{n}.machine_data", "json", f"axis {n} machine-data record (70 words; setting it stores it as "
+              "BA20 from the PG would, overwriting, in the DB its word n+2 names)", "§6.3.8.1",
+              get=lambda m: unit(m).md_words, put=lambda m, v: _put_md(m, n, v)),
     ]
+
+
+def _put_md(m: Any, axis: int, record: Any) -> None:
+    if isinstance(record, str):
+        record = [int(word, 16) for word in record.split()]
+    if not isinstance(record, list) or len(record) != 70 or not all(isinstance(w, int) for w in record):
+        raise BadValue("machine data are 70 words (a list of numbers, or hex words in one string)")
+    m.write_record(axis, 20, record[2] & 0xFF, [w & 0xFFFF for w in record], overwrite=True)
+    if m.units[axis - 1].md is None:
+        raise BadValue(f"machine data not stored: module error {m.units[axis - 1].error}")
 
 
 def _program(name: str) -> Point | None:
