@@ -237,6 +237,7 @@ class AxisUnit:
         self.in_position = False
         self.set_pe()
         self._done = done
+        self.module.record_event("move_start")
         self._set_running(True)
         self._follow(pieces)
         self._decel_at = self.clock.now() + sum(d for d, _ in pieces[:-1]) if pieces else math.inf
@@ -246,6 +247,7 @@ class AxisUnit:
 
     def _ended(self) -> None:
         self.braking = False
+        self.module.record_event("move_end")
         done, self._done = self._done, None
         self._set_running(False)
         if done is not None:
