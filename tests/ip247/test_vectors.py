@@ -170,3 +170,25 @@ def test_flying_change_on_a_rotary_axis_needs_a_fixed_direction() -> None:
     mod.clock.advance(120)
     assert mod.device.read("axis.1.error") == 0 and mod.device.read("axis.1.position") == 10_000
     assert mod.device.read("axis.1.machine_position") == pytest.approx(370_000)
+
+
+def test_step_loss_when_the_motor_cannot_start_or_stalls() -> None:
+    """§5.15 / §8 scenario 24: f_ss 2000 Hz on a motor that starts only up to 800 Hz howls
+    without moving while the actual value counts 100 mm; a pull-out frequency of 3000 Hz stops
+    the motor where the ramp passes it (the module still counts the whole move)."""
+    howl = Module({"axes": {1: {"max_start_hz": 800}}})
+    howl.load_md(record=record(f_ss=2000))
+    howl.operate(1, 5, START, b=1)
+    howl.operate(1, 7, FORWARD, w=1000, dd=100_000)
+    howl.clock.advance(60)
+    assert howl.device.read("axis.1.position") == 1_000 + 100_000
+    assert howl.device.read("axis.1.mechanical_position") == 0
+    stall = Module({"axes": {1: {"pullout_hz": 12_000}}})
+    stall.ready()
+    stall.operate(1, 7, FORWARD, w=1000, dd=100_000)  # 15 151.5 Hz
+    stall.clock.advance(60)
+    md = stall.m.units[0].md
+    assert md is not None
+    ramp = md.ramp
+    assert stall.device.read("axis.1.machine_position") == pytest.approx(100_000)
+    assert stall.device.read("axis.1.mechanical_position") == pytest.approx(1.1 * ramp.pulses_to(12_000), rel=1e-6)

@@ -21,6 +21,7 @@ from devsim.devices.ip247.coordinates import Coordinates
 from devsim.devices.ip247.jobs import BACKWARD, FORWARD, START, STOP, TAKE_OVER, AxisView
 from devsim.devices.ip247.machine_data import MachineData
 from devsim.devices.ip247.motion import ExpPiece, move_pieces
+from devsim.devices.ip247.motor import SteppingMotor
 
 if TYPE_CHECKING:
     from devsim.devices.ip247.module import Ip247Module
@@ -60,6 +61,8 @@ class AxisUnit:
         self._direction = 0
         self._sw_watch: Any = None
         self._switches = [self._region(geometry, name) for name in ("anf", "end", "cam")]
+        self.motor = SteppingMotor(geometry.get("max_start_hz"), geometry.get("pullout_hz"))
+        self._mech0, self._x0, self._follows = 0.0, 0.0, math.inf
 
     # -- what the module and the faces see --------------------------------------------------------
     @property
@@ -243,7 +246,23 @@ class AxisUnit:
         self._decel_at = self.clock.now() + sum(d for d, _ in pieces[:-1]) if pieces else math.inf
 
     def _follow(self, pieces: list[tuple[float, Any]]) -> None:
+        md = self.md
+        mechanical, from_rest = self.mechanical_position(), not self.axis.moving
+        stalled = not from_rest and self._stalled
         self.axis.follow(pieces, self._ended)  # (a new plan drops the old plan's on_done)
+        self._mech0, self._x0 = mechanical, self.axis.position()
+        self._follows = self.motor.follows(pieces, md.resolution, from_rest) if md is not None else math.inf
+        if stalled:
+            self._follows = 0.0  # a stalled motor stays stalled until the axis stands
+
+    @property
+    def _stalled(self) -> bool:
+        return abs(self.axis.position() - self._x0) > self._follows
+
+    def mechanical_position(self) -> float:
+        """Where the motor really is (spec §5.15): the motor position less the steps it lost."""
+        travelled = self.axis.position() - self._x0
+        return self._mech0 + math.copysign(min(abs(travelled), self._follows), travelled)
 
     def _ended(self) -> None:
         self.braking = False

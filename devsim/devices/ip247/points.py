@@ -46,6 +46,8 @@ def _axis_points(n: int) -> list[Point]:
               get=lambda m: unit(m).residual()),
         Point(f"axis.{n}.machine_position", "float", f"axis {n} motor-side position (pulses × resolution)",
               "§5.1", "base", get=lambda m: unit(m).axis.position()),
+        Point(f"axis.{n}.mechanical_position", "float", f"axis {n} where the motor really is (less lost steps)",
+              "§5.15", "base", get=lambda m: unit(m).mechanical_position()),
         Point(f"axis.{n}.velocity", "float", f"axis {n} motor-side velocity (pulse frequency × resolution)",
               "§5.2", "base/s", get=lambda m: unit(m).axis.velocity()),
         Point(f"axis.{n}.mode", "int", f"axis {n} operating mode (BTR)", "§4.1", get=lambda m: unit(m).mode,

@@ -10,6 +10,7 @@ direction R before the cam was found: error 25/26 (spec §5.6.2 [DECISION]).
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -101,16 +102,16 @@ class ReferenceRun:
         self._timer = unit.clock.call_later(CAM_STEPS / rate, lambda: self._abort(59))
 
     def _left_cam(self) -> None:
+        """The cam is left: at the pulse that crossed its edge; synchronous, more single steps
+        in R up to the next current pattern 0 (at most patterns − 1, spec §5.6.3)."""
         unit, md = self.unit, self.md
         if self._timer is not None:
             self._timer.cancel()
-        if md.reference_sync != 0:
-            self._set(unit.axis.position())
-            return
-        pulses = round((unit.axis.position() - unit.pattern_base) / md.resolution)
-        counter = pulses % md.patterns
-        more = (-counter) % md.patterns if self.r > 0 else counter
-        self._set(unit.axis.position() + self.r * more * md.resolution)
+        offset = (unit.axis.position() - unit.pattern_base) / md.resolution
+        pulse = math.ceil(offset - 1e-9) if self.r > 0 else math.floor(offset + 1e-9)
+        if md.reference_sync == 0:
+            pulse += (-pulse) % md.patterns if self.r > 0 else -(pulse % md.patterns)
+        self._set(unit.pattern_base + pulse * md.resolution)
 
     def _set(self, machine: float) -> None:
         unit = self.unit
