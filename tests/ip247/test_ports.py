@@ -3,7 +3,6 @@ TCP socket (spec ip247.md §3.7, BCD values of §3.3.2)."""
 
 from __future__ import annotations
 
-import socket
 import struct
 from typing import Any
 
@@ -11,8 +10,7 @@ import pytest
 import serial
 
 from devsim.devices.ip247 import program as lang
-from devsim.devices.ip247.attributes import AgFramer, ag_frame
-from devsim.devices.ip247.client import PgClient
+from devsim.devices.ip247.client import AgClient, PgClient
 from tests.ip247.test_machine_data import COM247, words
 
 VECTOR_A = bytes.fromhex("02 10 06 64 02 10 06 16 10 03 10 06 04 46 00 00 10 04".replace(" ", ""))
@@ -82,26 +80,17 @@ def test_the_plc_side_over_tcp_with_bcd_values(devsim_device) -> None:  # noqa: 
     module.set("input.END1", True)
     md = words(COM247)
     md[47] = 0x0001  # AG BCD-codiert
-    framer = AgFramer()
-
-    def ask(conn: socket.socket, function: int, payload: bytes) -> bytes:
-        conn.sendall(ag_frame(function, payload))
-        while True:
-            messages = framer.feed(conn.recv(4096))
-            if messages:
-                assert messages[0][0] == function
-                return messages[0][1]
-
     host, port = module.port_url("ag").removeprefix("socket://").rsplit(":", 1)
-    with socket.create_connection((host, int(port)), timeout=5) as conn:
-        assert ask(conn, 0x63, bytes((8, 20, 123, 0)) + struct.pack(">70H", *md))[8] == 0
-        assert ask(conn, 0x63, bytes((8, 20, 123, 1)) + struct.pack(">70H", *md))[4] == 17
-        assert ask(conn, 0x61, bytes.fromhex("08 05 01 01 0000 00000000"))[:6] == bytes((0, 8, 5, 1, 0, 5))
-        assert ask(conn, 0x61, bytes.fromhex("08 06 01 00 1000 0012 0000"))[4] == 0
+    with AgClient(host, int(port)) as plc:
+        assert plc.write_record(8, 20, 123, md)[8] == 0
+        assert plc.write_record(8, 20, 123, md, overwrite=True)[4] == 17
+        assert plc.operate(8, 5, "Start", b=1)[:6] == bytes((0, 8, 5, 1, 0, 5))
+        assert plc.operate(8, 6, "Start", w=0x1000, dd=0x0012_0000)[4] == 0
         module.advance(30)
         assert module.read("axis.1.position") == 120_000
-        assert ask(conn, 0x61, bytes.fromhex("08 06 01 00 1000 001A 0000"))[4] == 66
-        assert ask(conn, 0x61, bytes.fromhex("07 06 01 00 1000 0012 0000"))[0] == 0x80  # not this module's page
+        assert plc.observe(8)[8:12] == struct.pack(">i", 120_000)  # (OBSERVE values are binary)
+        assert plc.operate(8, 6, "Start", w=0x1000, dd=0x001A_0000)[4] == 66
+        assert plc.operate(7, 6, "Start", w=0x1000, dd=0x0012_0000)[0] == 0x80  # not this module's page
 
 
 def test_generic_s5_services_read_programs_and_machine_data(devsim_device) -> None:  # noqa: ANN001

@@ -1,15 +1,25 @@
-"""A small PG-side client for the IP247's programmer port: one AS511 transaction per call, over
+"""Small host-side clients for the IP247 (spec ip247.md §3.5–§3.7).
+
+:class:`PgClient` is the programmer's side of the PG port: one AS511 transaction per call, over
 anything with ``write(bytes)`` and ``read(n) -> bytes`` (a pyserial port at 9600 8E1 with a
-timeout).  The device side is :mod:`devsim.devices.ip247.as511`; the services and their
-parameter blocks are :mod:`devsim.devices.ip247.pg_profile` (spec ip247.md §3.5, §3.6)."""
+timeout).  :class:`AgClient` is a PLC replacement's side of the "IP247-SIM/AG v1" endpoint: one
+length-framed message per call over a TCP socket.  Both carry the services of
+:mod:`devsim.devices.ip247.pg_profile` with the same helpers (:class:`Services`): ``operate``,
+``observe``, ``read_record``, ``write_record``, ``delete_record``."""
 
 from __future__ import annotations
 
+import socket
+import struct
 from typing import Protocol
 
 from devsim.devices.ip247.as511 import ACK, DLE, EOT, ETX, NAK, STX, dle_double
+from devsim.devices.ip247.attributes import AgFramer, ag_frame
 
-__all__ = ["As511Error", "PgClient"]
+__all__ = ["AgClient", "As511Error", "PgClient", "Services"]
+
+COMMANDS = {"start": 1, "stopp": 2, "stop": 2, "vorwärts": 3, "forward": 3, "rückwärts": 4, "backward": 4,
+            "übernahme": 5, "take_over": 5}
 
 
 class Port(Protocol):
@@ -21,7 +31,68 @@ class As511Error(IOError):
     """The device refused (DLE NAK), answered something else, or stayed silent."""
 
 
-class PgClient:
+class Services:
+    """The profile's services over :meth:`transaction` (spec §3.6.3, §3.6.4); every answer is
+    the response data: the 8-byte header (ack, page, BA, command, error, BTR, RMLD, MFKT) and
+    what follows it."""
+
+    def transaction(self, function: int, parameters: bytes) -> bytes | None:
+        raise NotImplementedError
+
+    def operate(self, page: int, ba: int, cmd: int | str, b: int = 0, w: int = 0, dd: int = 0) -> bytes:
+        """An operator job: ``cmd`` 1 … 5 or Start, Stopp, Vorwärts, Rückwärts, Übernahme."""
+        code = COMMANDS[cmd.lower()] if isinstance(cmd, str) else cmd
+        return self._call(0x61, struct.pack(">BBBBHI", page, ba, code, b & 0xFF, w & 0xFFFF, dd & 0xFFFF_FFFF))
+
+    def observe(self, page: int) -> bytes:
+        """Header, position and residual (int32), the four error bytes, last command, flags."""
+        return self._call(0x62, bytes((page,)))
+
+    def read_record(self, page: int, ba: int, db: int = 0, bcd: bool = False) -> bytes:
+        return self._call(0x64, bytes((page, ba, db, int(bcd))))
+
+    def write_record(self, page: int, ba: int, db: int, words: list[int], overwrite: bool = False) -> bytes:
+        return self._call(0x63, bytes((page, ba, db, int(overwrite))) + struct.pack(f">{len(words)}H", *words))
+
+    def delete_record(self, page: int, ba: int, db: int) -> bytes:
+        return self._call(0x65, bytes((page, ba, db)))
+
+    def _call(self, function: int, parameters: bytes) -> bytes:
+        answer = self.transaction(function, parameters)
+        if answer is None:
+            raise As511Error("no response data")
+        return answer
+
+
+class AgClient(Services):
+    """The PLC side (spec §3.7) on TCP: pages are absolute (S2 base page + 0 … 3), values are BCD
+    where the axis's machine data say so."""
+
+    def __init__(self, host: str, port: int, timeout: float = 5.0) -> None:
+        self.socket = socket.create_connection((host, port), timeout=timeout)
+        self._framer = AgFramer()
+
+    def transaction(self, function: int, parameters: bytes) -> bytes:
+        self.socket.sendall(ag_frame(function, parameters))
+        while True:
+            data = self.socket.recv(4096)
+            if not data:
+                raise As511Error("the endpoint closed the connection")
+            messages = self._framer.feed(data)
+            if messages:
+                return messages[0][1]
+
+    def close(self) -> None:
+        self.socket.close()
+
+    def __enter__(self) -> AgClient:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class PgClient(Services):
     """The programmer's side of AS511 (the PG is the master)."""
 
     def __init__(self, port: Port) -> None:
