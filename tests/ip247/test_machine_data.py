@@ -51,37 +51,38 @@ def test_the_com247_screen_example_is_valid() -> None:
     assert check(md, sys_module=11, limit_levels=(True, True)) == 0
 
 
-@pytest.mark.parametrize(
-    ("changes", "levels", "error"),
-    [
-        ({"pulse_us": 32}, (True, True), 2),
-        ({"pulse_us": 30, "f_max": 20_000}, (True, True), 2),
-        ({"f_max": 39}, (True, True), 3),
-        ({"jog1": 0}, (True, True), 4),
-        ({"step_velocity": 3001}, (True, True), 4),
-        ({"pulses_per_rev": 11}, (True, True), 5),
-        ({"a": 19}, (True, True), 6),
-        ({"a": 1000}, (True, True), 6),
-        ({"limit_begin": 600_000}, (True, True), 7),
-        ({"reference": 600_000}, (True, True), 8),
-        ({"gear": 199}, (True, True), 9),
-        ({"patterns": 3}, (True, True), 10),
-        ({"patterns": 7}, (True, True), 10),
-        ({"unit": 4}, (True, True), 11),
-        ({"module": 12}, (True, True), 12),
-        ({"zero_offsets": (99_700_000, 0, 0, 0)}, (True, True), 13),
-        ({"tool_length": 99_600_000}, (True, True), 14),
-        ({"reference_direction": 0x10}, (True, True), 15),
-        ({"reference_sync": 2}, (True, True), 15),
-        ({"reference_velocity": 100}, (True, True), 17),
-        ({"pulse_polarity": 0x20}, (True, True), 18),
-        ({}, (True, False), 19),  # NC contacts: an input at 0 V is actuated
-        ({"backlash": 65_000}, (True, True), 20),
-        ({"rotary": True, "limit_begin": 600_000}, (True, True), 21),
-        ({"f_ss": 0}, (True, True), 22),
-        ({"f_ss": 5000}, (True, True), 22),
-    ],
-)
+#: Spec §6.3: a change to the §6.1 record, the two limit inputs (True = 24 V), the MD error.
+SECTION_6_3: list[tuple[dict[str, object], tuple[bool, bool], int]] = [
+    ({"pulse_us": 32}, (True, True), 2),
+    ({"pulse_us": 30, "f_max": 20_000}, (True, True), 2),
+    ({"f_max": 39}, (True, True), 3),
+    ({"jog1": 0}, (True, True), 4),
+    ({"step_velocity": 3001}, (True, True), 4),
+    ({"pulses_per_rev": 11}, (True, True), 5),
+    ({"a": 19}, (True, True), 6),
+    ({"a": 1000}, (True, True), 6),
+    ({"limit_begin": 600_000}, (True, True), 7),
+    ({"reference": 600_000}, (True, True), 8),
+    ({"gear": 199}, (True, True), 9),
+    ({"patterns": 3}, (True, True), 10),
+    ({"patterns": 7}, (True, True), 10),
+    ({"unit": 4}, (True, True), 11),
+    ({"module": 12}, (True, True), 12),
+    ({"zero_offsets": (99_700_000, 0, 0, 0)}, (True, True), 13),
+    ({"tool_length": 99_600_000}, (True, True), 14),
+    ({"reference_direction": 0x10}, (True, True), 15),
+    ({"reference_sync": 2}, (True, True), 15),
+    ({"reference_velocity": 100}, (True, True), 17),
+    ({"pulse_polarity": 0x20}, (True, True), 18),
+    ({}, (True, False), 19),  # NC contacts: an input at 0 V is actuated
+    ({"backlash": 65_000}, (True, True), 20),
+    ({"rotary": True, "limit_begin": 600_000}, (True, True), 21),
+    ({"f_ss": 0}, (True, True), 22),
+    ({"f_ss": 5000}, (True, True), 22),
+]
+
+
+@pytest.mark.parametrize(("changes", "levels", "error"), SECTION_6_3)
 def test_each_trigger_of_section_6_3(changes: dict[str, object], levels: tuple[bool, bool], error: int) -> None:
     md = replace(decode(words(MANUAL)), **changes)
     assert check(md, sys_module=0, limit_levels=levels) == error

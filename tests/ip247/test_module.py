@@ -1,5 +1,5 @@
-"""The IP247 kind through its services, in virtual time (spec ip247.md §3.2, §4.1, §4.2, §5.4–§5.11,
-§4.14; vectors §3.6.7, §5.9, §6.1, §6.2, §6.6)."""
+"""The IP247 kind through its PG port on a real pty, in virtual time (spec ip247.md §3.2, §4.1, §4.2,
+§5.4–§5.14, §4.14; vectors §3.6.7 b and e, §5.9, §5.12, §6.2, §6.9)."""
 
 from __future__ import annotations
 
@@ -7,61 +7,10 @@ import struct
 
 import pytest
 
-from devsim.core.clock import VirtualClock
-from devsim.core.nvram import NonVolatileMemory
-from devsim.core.record import replace
-from devsim.devices.ip247 import Ip247Device
 from devsim.devices.ip247 import program as lang
-from devsim.devices.ip247.machine_data import Ramp, decode, encode
-from devsim.devices.ip247.pg_profile import parse_request
-from devsim.devices.ip247.services import serve
+from devsim.devices.ip247.machine_data import Ramp
+from tests.ip247.helpers import BACKWARD, FORWARD, START, STOP, TAKE_OVER, Make, Module, record
 from tests.ip247.test_machine_data import COM247, words
-
-START, STOP, FORWARD, BACKWARD, TAKE_OVER = 1, 2, 3, 4, 5
-
-
-def record(**changes: object) -> str:
-    """COM247's machine data (§6.2) with some items changed, as the record's hex words."""
-    md = replace(decode(words(COM247)), **changes)
-    return " ".join(f"{w:04X}" for w in encode(md))
-
-
-class Module:
-    """A module with COM247's machine data (§6.2: module 11, r = 1.1 µm, sync no) on axis 1."""
-
-    def __init__(self, config: dict | None = None, nvram: NonVolatileMemory | None = None) -> None:
-        self.clock = VirtualClock()
-        self.device = Ip247Device(clock=self.clock, config={"sys_id": {"module": 11, "slot": 1}, **(config or {})},
-                                  nvram=nvram)
-        self.m = self.device.model
-
-    def call(self, function: int, data: bytes) -> bytes:
-        return serve(self.m, parse_request(function, data))
-
-    def operate(self, page: int, ba: int, cmd: int, b: int = 0, w: int = 0, dd: int = 0) -> bytes:
-        return self.call(0x61, struct.pack(">BBBBHi", page, ba, cmd, b, w, dd))
-
-    def write(self, page: int, ba: int, db: int, record: list[int], flags: int = 0) -> bytes:
-        return self.call(0x63, bytes((page, ba, db, flags)) + struct.pack(f">{len(record)}H", *record))
-
-    def load_md(self, axis: int = 1, record: str = COM247) -> bytes:
-        self.m.signals.set(f"ANF{axis}", True)  # NC limit switches, not actuated: 24 V
-        self.m.signals.set(f"END{axis}", True)
-        data = words(record)
-        data[3] = (data[3] & 0xFF00) | axis
-        return self.write(axis, 20, 100 + axis, data)
-
-    def store(self, number: int, text: str) -> bytes:
-        return self.write(4, 22, number, lang.record_words(number, text))
-
-    def ready(self, axis: int = 1) -> None:
-        assert self.load_md(axis)[8] == 0
-        assert self.operate(axis, 5, START, b=1)[4] == 0  # "Referenzpunkt setzen"
-
-
-@pytest.fixture
-def mod() -> Module:
-    return Module()
 
 
 def test_power_up_state(mod: Module) -> None:
@@ -114,10 +63,10 @@ def test_md_round_trip_directory_and_no_overwrite(mod: Module) -> None:
     assert mod.call(0x64, bytes((4, 64, 0, 0)))[8:] == struct.pack(">6H", 101, 70, 0, 0, 0, 0)
 
 
-def test_md_error_12_when_the_module_number_differs() -> None:
+def test_md_error_12_when_the_module_number_differs(make: Make) -> None:
     """§6.3: the record names module 11; a module with SYS-ID module 5 gives MD error 12 and
     module error 15; the attributes say MD present (bit 6 clear) but motion is refused (14)."""
-    mod = Module({"sys_id": {"module": 5}})
+    mod = make({"sys_id": {"module": 5}})
     answer = mod.load_md()
     assert answer[8] == 12 and answer[4] == 15 and answer[6] & 0x40 == 0
     assert mod.operate(1, 1, FORWARD)[4] == 14
@@ -165,10 +114,10 @@ def test_a_job_while_running_is_error_2_and_aborts(mod: Module) -> None:
     assert mod.device.read("axis.1.running") is False and mod.device.read("axis.1.mode") == 1
 
 
-def test_jog_into_a_limit_switch_stops_with_26_and_locks_forward() -> None:
+def test_jog_into_a_limit_switch_stops_with_26_and_locks_forward(make: Make) -> None:
     """§5.7: END actuated while jogging forward: error 26, the direction is locked; backward
     is allowed and releases it once the switch is left."""
-    mod = Module({"axes": {1: {"end": 20_000.0}}})
+    mod = make({"axes": {1: {"end": 20_000.0}}})
     mod.ready()
     mod.operate(1, 1, FORWARD, w=1000)
     mod.clock.advance(10)
@@ -181,10 +130,10 @@ def test_jog_into_a_limit_switch_stops_with_26_and_locks_forward() -> None:
     assert mod.operate(1, 1, FORWARD, w=100)[4] == 0
 
 
-def test_reference_run_ends_at_the_cam_edge() -> None:
+def test_reference_run_ends_at_the_cam_edge(make: Make) -> None:
     """§5.6.2 (sync no; R backward in COM247's MD): the run goes forward over the cam, back over
     it, onto it again at f_ss and leaves it in single steps backward: H := x_ref there."""
-    mod = Module({"axes": {1: {"cam": [20_000.0, 30_000.0]}}})
+    mod = make({"axes": {1: {"cam": [20_000.0, 30_000.0]}}})
     assert mod.load_md()[8] == 0
     assert mod.operate(1, 5, START, b=0)[4] == 0
     mod.clock.advance(120)
@@ -232,11 +181,10 @@ def test_interrupted_traverse_completes_on_take_over(mod: Module) -> None:
     assert mod.device.read("axis.1.position") == 30_000 and mod.device.read("axis.1.m_function") == 2
 
 
-def test_battery_ram_survives_power_but_not_a_battery_fault(tmp_path) -> None:  # noqa: ANN001
+def test_battery_ram_survives_power_but_not_a_battery_fault(make: Make) -> None:
     """§4.14: MD, programs and offsets kept across power-up (reference lost, error 8); a failed
     battery loses them at the next power-up."""
-    nvram = NonVolatileMemory.for_device(tmp_path, "ip")
-    mod = Module(nvram=nvram)
+    mod = make()
     mod.ready()
     mod.store(9, "%  9\nN1 X1 F100\nN2 M02\n")
     mod.operate(1, 15, FORWARD, dd=2_000)
@@ -251,10 +199,10 @@ def test_battery_ram_survives_power_but_not_a_battery_fault(tmp_path) -> None:  
     assert mod.device.read("axis.1.md_error") == -1 and mod.device.read("programs") == []
 
 
-def test_teach_in_example_of_section_5_12() -> None:
+def test_teach_in_example_of_section_5_12(make: Make) -> None:
     """§5.12: BA10 program 7; positions stored with Übernahme (message 3) as N<k> X… F<step
     velocity>; another axis cannot start teach-in (22); BA8 meanwhile is 30; BA11 closes."""
-    mod = Module()
+    mod = make()
     assert mod.load_md(record=record(step_velocity=2500, limit_end=5_000_000))[8] == 0
     mod.load_md(axis=2)
     mod.operate(1, 5, START, b=1)

@@ -9,9 +9,11 @@ from typing import Any
 import pytest
 import serial
 
+from devsim.core.record import replace
 from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.client import AgClient, PgClient
-from tests.ip247.test_machine_data import COM247, words
+from devsim.devices.ip247.machine_data import decode, encode
+from tests.ip247.test_machine_data import COM247, MANUAL, SECTION_6_3, words
 
 VECTOR_A = bytes.fromhex("02 10 06 64 02 10 06 16 10 03 10 06 04 46 00 00 10 04".replace(" ", ""))
 
@@ -124,3 +126,30 @@ def test_generic_s5_services_read_programs_and_machine_data(devsim_device) -> No
         assert port.read(3) == b"\x16\x10\x03"
         port.write(b"\x10\x06\x01\x09\x10\x04")  # DB 9 does not exist
         assert port.read(2) == b"\x10\x15"
+
+
+def test_every_md_error_trigger_of_section_6_3_over_tcp(devsim_device) -> None:  # noqa: ANN001
+    """§6.3 through the PLC endpoint: each changed record (BA20 after BA21) comes back with its
+    MD error in the result and module error 15; the valid §6.1 record with 0."""
+    module = devsim_device("ip247", {}, transport="tcp")
+    host, port = module.port_url("ag").removeprefix("socket://").rsplit(":", 1)
+    with AgClient(host, int(port)) as plc:
+        for changes, levels, error in [({}, (True, True), 0), *SECTION_6_3]:
+            module.set("input.ANF1", levels[0])
+            module.set("input.END1", levels[1])
+            plc.delete_record(0, 21, 1)
+            answer = plc.write_record(0, 20, 1, encode(replace(decode(words(MANUAL)), **changes)))
+            assert (answer[8], answer[4]) == (error, 15 if error else 0), changes
+
+
+def test_vector_6_5_the_manuals_example_program_in_the_directory(module: Any) -> None:
+    """§6.5 / §3.4.2: program "BEISPIEL" as DB 1 (25 words); BA65 lists 0001 0019; BA69 reads the
+    same record back."""
+    text = "%  1 BEISPIEL\nN1 X100 F1000 M10\nN2 M02\n"
+    record = lang.record_words(1, text)
+    assert len(record) == 25
+    with pg(module) as port:
+        client = PgClient(port)
+        assert client.write_record(4, 22, 1, record)[8:] == bytes(4)
+        assert client.read_record(1, 65)[8:] == bytes.fromhex("0001 0019")
+        assert client.read_record(2, 69, 1)[8:] == struct.pack(">25H", *record)

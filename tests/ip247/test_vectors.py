@@ -1,22 +1,23 @@
-"""The IP247's worked examples end to end through its services (spec ip247.md §6.6 zero-offset
-program, §6.7 rotary axis, §6.8 reference run), in virtual time."""
+"""The IP247's worked examples through its PG port on a real pty, in virtual time (spec ip247.md §6.6
+zero-offset program, §6.7 rotary axis, §6.8 reference run, §5.11.4 flying change, §5.15 step
+loss)."""
 
 from __future__ import annotations
 
 import pytest
 
-from tests.ip247.test_module import BACKWARD, FORWARD, START, STOP, TAKE_OVER, Module, record
+from tests.ip247.helpers import BACKWARD, FORWARD, START, STOP, TAKE_OVER, Make, Module, record
 
 MAIN = ("%  1 HAUPTPROGRAMM\nN1 L9\nN2 X40.000 F500\nN3 G54\nN4 L9\nN5 X40.000 F500\nN6 G55\nN7 L9\n"
         "N8 X40.000 F500\nN9 G56\nN10 G74\nN11 M02\n")
 SUB = "L  9 UNTERPROGRAMM\nN1 X0 F100 M10\nN2 G04 F50\nN3 X10 F100\nN4 G04 F50\nN5 X20 F100\nN6 G04 F50\nN7 M02\n"
 
 
-def test_zero_offset_program_of_section_6_6() -> None:
+def test_zero_offset_program_of_section_6_6(make: Make) -> None:
     """BA9 step by step: the actual value at each halt is the table's (mm ×1000), G74 gives
     −130 mm, the end −10 mm; M10 from L9's first traverse on (it starts with the Start), M02 at
     the end."""
-    mod = Module()
+    mod = make()
     assert mod.load_md(record=record(reference=0, zero_offsets=(40_000, 80_000, 120_000, 0), backlash=0,
                                      limit_begin=-1_000_000, limit_end=1_000_000))[8] == 0
     mod.operate(1, 5, START, b=1)
@@ -42,9 +43,9 @@ def test_zero_offset_program_of_section_6_6() -> None:
     assert mod.device.read("axis.1.position") == -10_000 and mod.device.read("axis.1.m_function") == 2
 
 
-def rotary() -> Module:
+def rotary(make: Make) -> Module:
     """§6.7: range 0 … 360°, r = 4 m° (gear 1.6°, 400 pulses)."""
-    mod = Module()
+    mod = make()
     answer = mod.load_md(record=record(unit=3, rotary=True, limit_begin=0, limit_end=360_000, gear=1_600,
                                        pulses_per_rev=400, reference=0, backlash=0, f_ss=200, f_max=20_000,
                                        zero_offsets=(0, 0, 0, 0)))
@@ -59,8 +60,8 @@ def rotary() -> Module:
     (0, FORWARD, 360_000),  # Vorwärts to where it stands: one revolution
     (0, BACKWARD, -360_000),
 ])
-def test_rotary_targets_of_section_6_7(target: int, command: int, travel: int) -> None:
-    mod = rotary()
+def test_rotary_targets_of_section_6_7(make: Make, target: int, command: int, travel: int) -> None:
+    mod = rotary(make)
     motor = mod.device.read("axis.1.machine_position")
     assert mod.operate(1, 6, command, w=4_000, dd=target)[4] == 0
     mod.clock.advance(60)
@@ -68,8 +69,8 @@ def test_rotary_targets_of_section_6_7(target: int, command: int, travel: int) -
     assert mod.device.read("axis.1.machine_position") - motor == pytest.approx(travel)
 
 
-def test_rotary_offsets_and_long_relative_moves_of_section_6_7() -> None:
-    mod = rotary()
+def test_rotary_offsets_and_long_relative_moves_of_section_6_7(make: Make) -> None:
+    mod = rotary(make)
     mod.operate(1, 7, FORWARD, w=4_000, dd=60_000)
     mod.clock.advance(30)
     assert mod.operate(1, 15, FORWARD, dd=30_000)[4] == 0
@@ -84,9 +85,9 @@ def test_rotary_offsets_and_long_relative_moves_of_section_6_7() -> None:
     assert mod.operate(1, 7, FORWARD, dd=200_000_001)[4] == 62
 
 
-def test_a_cam_never_left_is_error_59_after_2500_steps() -> None:
+def test_a_cam_never_left_is_error_59_after_2500_steps(make: Make) -> None:
     """§6.8: BERO stuck at 1: 2,500 single steps, then error 59, reference missing (bit 5)."""
-    mod = Module()
+    mod = make()
     mod.load_md()
     mod.device.set("input.BERO1", True)
     mod.operate(1, 5, START, b=0)
@@ -98,10 +99,10 @@ def test_a_cam_never_left_is_error_59_after_2500_steps() -> None:
 
 
 @pytest.mark.parametrize("cam_edge", [20_000.0, 20_002.2, 20_004.4, 20_006.6])
-def test_synchronous_reference_at_pattern_zero(cam_edge: float) -> None:
+def test_synchronous_reference_at_pattern_zero(make: Make, cam_edge: float) -> None:
     """§6.8: synchronous with 4 patterns: at most 3 single steps after the cam's falling edge,
     and the reference point lies where the pattern counter is 0."""
-    mod = Module({"axes": {1: {"cam": [cam_edge, cam_edge + 10_000]}}})
+    mod = make({"axes": {1: {"cam": [cam_edge, cam_edge + 10_000]}}})
     mod.load_md(record=record(reference_sync=0, patterns=4))
     mod.operate(1, 5, START, b=0)
     mod.clock.advance(120)
@@ -112,9 +113,9 @@ def test_synchronous_reference_at_pattern_zero(cam_edge: float) -> None:
     assert 0 <= (cam_edge - unit.axis.position()) / 1.1 <= 3 + 1  # (the edge lies within a step)
 
 
-def test_reference_set_after_a_zero_offset_of_section_6_8() -> None:
+def test_reference_set_after_a_zero_offset_of_section_6_8(make: Make) -> None:
     """BA13 100 mm Rückwärts, then "Referenzpunkt setzen" with x_ref = 0: actual 100 mm."""
-    mod = Module()
+    mod = make()
     mod.load_md(record=record(reference=0))
     mod.operate(1, 13, BACKWARD, dd=100_000)
     mod.operate(1, 5, START, b=1)
@@ -122,10 +123,10 @@ def test_reference_set_after_a_zero_offset_of_section_6_8() -> None:
     assert mod.operate(1, 5, STOP)[4] == 0
 
 
-def test_flying_change_runs_through_without_a_stop() -> None:
+def test_flying_change_runs_through_without_a_stop(make: Make) -> None:
     """§5.11.4 manual example: 0→50 at 1000 mm/min, 50→100 at 500, 100→150 at 1000 without a
     stop; M30, M31 from the joint at 50, M32 from 100; PE only at the end."""
-    mod = Module()
+    mod = make()
     mod.ready()
     mod.store(17, "%  17\nN30 G10 X50 F1000 M30\nN32 G10 X100 F500 M31\nN34 X150 F1000 M32\nN36 M02\n")
     mod.operate(1, 8, START, b=17)
@@ -149,8 +150,8 @@ def test_flying_change_runs_through_without_a_stop() -> None:
     ("N10 G10 X100 F3000\nN20 X101 F3000\nN30 M02", 52),  # shorter than the braking distance
     ("N10 G10 X100 F1000\nN20 G56\nN25 X120 F1000\nN30 M02", 52),  # a shift
 ])
-def test_flying_change_not_possible(text: str, error: int) -> None:
-    mod = Module()
+def test_flying_change_not_possible(make: Make, text: str, error: int) -> None:
+    mod = make()
     mod.ready()
     mod.store(18, f"%  18\n{text}\n")
     mod.operate(1, 8, START, b=18)
@@ -158,10 +159,10 @@ def test_flying_change_not_possible(text: str, error: int) -> None:
     assert mod.device.read("axis.1.error") == error and mod.m.units[0].automatic is None
 
 
-def test_flying_change_on_a_rotary_axis_needs_a_fixed_direction() -> None:
+def test_flying_change_on_a_rotary_axis_needs_a_fixed_direction(make: Make) -> None:
     """§5.11.4: X300 (backward by shortest path from 0°) then X10 (forward): error 47; with
     G26 the chain runs forward."""
-    mod = rotary()
+    mod = rotary(make)
     mod.store(19, "%  19\nN10 G10 X300 F1000\nN20 X10 F1000\nN30 M02\n")
     mod.operate(1, 8, START, b=19)
     assert mod.device.read("axis.1.error") == 47
@@ -172,18 +173,18 @@ def test_flying_change_on_a_rotary_axis_needs_a_fixed_direction() -> None:
     assert mod.device.read("axis.1.machine_position") == pytest.approx(370_000)
 
 
-def test_step_loss_when_the_motor_cannot_start_or_stalls() -> None:
+def test_step_loss_when_the_motor_cannot_start_or_stalls(make: Make) -> None:
     """§5.15 / §8 scenario 24: f_ss 2000 Hz on a motor that starts only up to 800 Hz howls
     without moving while the actual value counts 100 mm; a pull-out frequency of 3000 Hz stops
     the motor where the ramp passes it (the module still counts the whole move)."""
-    howl = Module({"axes": {1: {"max_start_hz": 800}}})
+    howl = make({"axes": {1: {"max_start_hz": 800}}})
     howl.load_md(record=record(f_ss=2000))
     howl.operate(1, 5, START, b=1)
     howl.operate(1, 7, FORWARD, w=1000, dd=100_000)
     howl.clock.advance(60)
     assert howl.device.read("axis.1.position") == 1_000 + 100_000
     assert howl.device.read("axis.1.mechanical_position") == 0
-    stall = Module({"axes": {1: {"pullout_hz": 12_000}}})
+    stall = make({"axes": {1: {"pullout_hz": 12_000}}})
     stall.ready()
     stall.operate(1, 7, FORWARD, w=1000, dd=100_000)  # 15 151.5 Hz
     stall.clock.advance(60)
