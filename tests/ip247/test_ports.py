@@ -96,8 +96,8 @@ def test_the_plc_side_over_tcp_with_bcd_values(devsim_device) -> None:  # noqa: 
 
 
 def test_generic_s5_services_read_programs_and_machine_data(devsim_device) -> None:  # noqa: ANN001
-    """With ``s5_services``: 18H system parameters, 1AH B_INFO and 04H read memory as an S5 CPU
-    answers them (libnodave's AS511 client reads DBs this way): program 5 is DB 5, the machine
+    """With ``s5_services``: 18H system parameters, 1BH block list, 1AH B_INFO and 04H read memory as
+    an S5 CPU answers them (libnodave's AS511 client reads DBs this way): program 5 is DB 5, the machine
     data stored as DB 123 are DX 123; an unknown block is refused with DLE NAK."""
     module = devsim_device("ip247", {"sys_id": {"module": 11}, "s5_services": True})
     module.set("program.5", "%  5 GENERIC\nN1 X10 F1000\nN2 M02\n")
@@ -109,6 +109,10 @@ def test_generic_s5_services_read_programs_and_machine_data(devsim_device) -> No
         client.transaction(0x63, bytes((1, 20, 123, 0)) + struct.pack(">70H", *md))
         system = client.transaction(0x18, b"")
         assert system is not None and len(system) == 45 and system[:5] == bytes(5)
+        listing = client.transaction(0x1B, b"\x01")
+        assert listing is not None and len(listing) == 1 + 512
+        listed = [n for n in range(256) if listing[1 + 2 * n : 3 + 2 * n] != b"\x00\x00"]
+        assert listed == [5]
         for kind, number, record in ((0x01, 5, lang.record_words(5, "%  5 GENERIC\nN1 X10 F1000\nN2 M02\n")),
                                      (0x0C, 123, module.read("axis.1.machine_data"))):
             info = client.transaction(0x1A, bytes((kind, number)))

@@ -43,7 +43,7 @@ Ip247Config = Section("Configuration of one simulated IP247 (spec ip247.md §2, 
     Setting("sys_id", SYS_ID, {}, "SYS-ID of a module with empty battery RAM"),
     Setting("battery_ok", Bool(), True, "false: battery RAM is lost at power-up (spec §4.14)"),
     Setting("powered", Bool(), True, "false: the PG port answers nothing (COM247: F53H)"),
-    Setting("s5_services", Bool(), False, "answer the standard S5 services 04H, 18H, 1AH on the PG port, "
+    Setting("s5_services", Bool(), False, "answer the standard S5 services 04H, 18H, 1AH, 1BH on the PG port, "
             "programs as DB n and machine data as DX n, for generic AS511 tools (off: spec vector 3.6.7 f)"),
     Setting("job_list", Int(ge=1, le=64), 8, "jobs each interface may queue while an axis brakes (spec §5.16)"),
     Setting("axes", DictOf(_axis, AXIS_GEOMETRY, "axis"), {}, "switch positions per axis 1 … 3"),

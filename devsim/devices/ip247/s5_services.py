@@ -8,6 +8,8 @@ module's records appear as data blocks in one 64 KiB byte-addressed memory.
   images, flags, timers, counters and system data (what a client reads at connect);
 * ``1AH`` B_INFO (block type, number): 00H, the address of DW0, 70H 70H, type | 40H, number, PG
   id, library number, length in words with the 5-word header; an unknown block is refused;
+* ``1BH`` block address list (block type): 00H, then for block numbers 0 … 255 the address of
+  its DW0 as a word, 0 where there is no such block (how a tool lists the DBs);
 * ``04H`` read memory (first address, last address): five 00H bytes, then the bytes.
 
 These services are off unless the configuration says ``s5_services: true``: the spec's vector
@@ -24,8 +26,8 @@ from devsim.devices.ip247.as511 import Refused, Reply
 __all__ = ["S5_FUNCTIONS", "DB", "DX", "S5Memory"]
 
 DB, DX = 0x01, 0x0C  # block type codes
-READ_MEMORY, SYSTEM_PARAMETERS, BLOCK_INFO = 0x04, 0x18, 0x1A
-S5_FUNCTIONS = frozenset((READ_MEMORY, SYSTEM_PARAMETERS, BLOCK_INFO))
+READ_MEMORY, SYSTEM_PARAMETERS, BLOCK_INFO, BLOCK_LIST = 0x04, 0x18, 0x1A, 0x1B
+S5_FUNCTIONS = frozenset((READ_MEMORY, SYSTEM_PARAMETERS, BLOCK_INFO, BLOCK_LIST))
 FIRST_BLOCK = 0x1000  # where the blocks begin; below: the (empty) images the system data name
 IMAGES = (0x0080, 0x0100, 0x0200, 0x0300, 0x0400, 0x0500)  # inputs, outputs, flags, timers, counters, system
 
@@ -61,6 +63,12 @@ class S5Memory:
         address, length = self.info[(parameters[0], parameters[1])]
         return struct.pack(">BHBBBBHHH", 0, address, 0x70, 0x70, 0x40 | parameters[0], parameters[1], 0, 0, length)
 
+    def _block_list(self, parameters: bytes) -> Reply:
+        if len(parameters) != 1:
+            return Refused("the block list takes a block type")
+        addresses = [self.info.get((parameters[0], n), (0, 0))[0] for n in range(256)]
+        return b"\x00" + struct.pack(">256H", *addresses)
+
     def _read_memory(self, parameters: bytes) -> Reply:
         if len(parameters) != 4:
             return Refused("read memory takes a first and a last address")
@@ -73,5 +81,6 @@ class S5Memory:
 _SERVICES = {
     SYSTEM_PARAMETERS: S5Memory._system_parameters,
     BLOCK_INFO: S5Memory._block_info,
+    BLOCK_LIST: S5Memory._block_list,
     READ_MEMORY: S5Memory._read_memory,
 }
