@@ -327,3 +327,15 @@ def test_jobs_while_braking_wait_in_the_job_list(mod: Module) -> None:
     assert mod.m.units[0].coords.zo_mode == 0  # nothing interpreted yet
     mod.clock.advance(10)
     assert mod.device.read("axis.1.running") is False and mod.m.units[0].coords.zo_mode == 8_000 and not mod.m.job_lists["pg"]
+
+
+def test_the_plc_record_point_never_overwrites(mod: Module) -> None:
+    """ag.record: FB165 in process; BA20 for an axis that has MD is 17 from the PLC, BA67 reads."""
+    mod.load_md()
+    mod.device.set("ag.record", {"ba": 20, "page": 0, "db": 123, "words": words(COM247)})
+    assert mod.device.read("ag.last")["err"] == 17
+    mod.device.set("ag.record", {"ba": 67, "page": 0, "db": 101})
+    assert mod.device.read("ag.last")["words"] == mod.device.read("axis.1.machine_data")
+    mod.operate(1, 5, START, b=1)
+    mod.operate(1, 7, BACKWARD, w=1000, dd=1_000)
+    assert mod.device.read("output.RP1") is False

@@ -98,6 +98,7 @@ class AxisUnit:
             self.m0 = self.axis.position() - h - self._side(direction)  # no play to take up
         self._h0, self._d = h, direction
         self._direction = direction
+        self.module.signals.set(f"RP{self.number}", direction > 0)
 
     def machine(self, holder: float, direction: int) -> float:
         """The motor position that puts the load at ``holder`` after a move in ``direction``."""

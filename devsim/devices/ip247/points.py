@@ -28,6 +28,8 @@ SIGNALS: tuple[SignalDef, ...] = (
         SignalDef(f"BB{n}", "input", True, f"axis {n} power unit ready", "§2.4"),
         SignalDef(f"PE{n}", "output", False, f"axis {n} position reached", "§2.7.7"),
         SignalDef(f"RS{n}", "output", False, f"axis {n} reset pulse to the power unit", "§2.8.1"),
+        SignalDef(f"RP{n}", "output", False, f"axis {n} direction to the power unit (True: forward), set before "
+                  "the first pulse of a move", "§2.4"),
     )),
     SignalDef("BASP", "input", False, "command output disable from the PLC: every axis stops", "§2.9"),
     SignalDef("led_green", "output", True, "module running", "§3.1.3"),
@@ -98,6 +100,25 @@ def _program(name: str) -> Point | None:
                  get=lambda m: (m.store.get(number).text if m.store.get(number) else None), put=put)
 
 
+def _ag_record(m: Any, job: Any) -> None:
+    """An FB165 job from the PLC: {ba, page (absolute), db, words, bcd} (spec §3.3.3)."""
+    if not isinstance(job, dict) or "ba" not in job:
+        raise BadValue("an FB165 job is a mapping {ba, page, db, words, bcd}")
+    ba, db = int(job["ba"]), int(job.get("db", 0)) & 0xFF
+    page = int(job.get("page", m.config.get("base_page", 0))) - int(m.config.get("base_page", 0)) + 1
+    if not 1 <= page <= 4:
+        m.ag_last = {"ack": 0x80, "err": 0, "words": []}
+        return
+    words = [int(w) & 0xFFFF for w in job.get("words", [])]
+    if ba in (20, 22, 24):
+        ack, result = m.write_record(page, ba, db, words, from_plc=True)
+    elif ba in (21, 23):
+        ack, result = m.delete_record(page, ba, db), []
+    else:
+        ack, result = m.read_record(page, ba, db, bool(job.get("bcd", False)))
+    m.ag_last = {"ack": ack, "err": m.error_of(page), "words": result}
+
+
 def _ag_operate(m: Any, job: Any) -> None:
     """An FB164 job from the PLC: {page (absolute), ba, cmd (name or 1 … 5), b, w, dd}."""
     if not isinstance(job, dict):
@@ -125,7 +146,10 @@ POINTS = PointTable.of(
               get=lambda m: [list(e) for e in m.store.directory()]),
         Point("ag.operate", "json", "an FB164 job from the PLC side: {page, ba, cmd, b, w, dd}", "§6.2",
               put=_ag_operate),
-        Point("ag.last", "json", "the answer to the last ag.operate: {ack, err, btr, rmld, mfkt}", "§6.2",
+        Point("ag.record", "json", "an FB165 job from the PLC side: {ba, page, db, words, bcd} (no overwrite)",
+              "§6.3", put=_ag_record),
+        Point("ag.last", "json", "the answer to the last ag.operate ({ack, err, btr, rmld, mfkt}) or ag.record "
+              "({ack, err, words})", "§6.2",
               get=lambda m: getattr(m, "ag_last", None)),
     ],
     signal_points(SIGNALS),
