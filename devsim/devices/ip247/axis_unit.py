@@ -22,6 +22,7 @@ from devsim.devices.ip247.jobs import BACKWARD, FORWARD, START, STOP, TAKE_OVER,
 from devsim.devices.ip247.machine_data import MachineData
 from devsim.devices.ip247.motion import ExpPiece, move_pieces
 from devsim.devices.ip247.motor import SteppingMotor
+from devsim.devices.ip247.reference import ReferenceRun
 
 if TYPE_CHECKING:
     from devsim.devices.ip247.module import Ip247Module
@@ -380,8 +381,6 @@ class AxisUnit:
             self.reference_set = True
             self.target = None
             return None
-        from devsim.devices.ip247.reference import ReferenceRun
-
         return self.held(ReferenceRun(self).start)
 
     def _positioning(self, holder_target: float, w: int) -> int | None:

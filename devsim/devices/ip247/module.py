@@ -14,6 +14,7 @@ from __future__ import annotations
 from typing import Any
 
 from devsim.core.clock import Clock
+from devsim.core.kit import declare_signals
 from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
 from devsim.core.record import replace
@@ -23,6 +24,7 @@ from devsim.devices.ip247.automatic import ProgramRun
 from devsim.devices.ip247.axis_unit import AxisUnit
 from devsim.devices.ip247.jobs import START, STOP, TAKE_OVER, Job, refusal
 from devsim.devices.ip247.pg_profile import ACK_ACCEPTED, ACK_FULL, ACK_NEGATIVE, ACK_QUEUED, Observation
+from devsim.devices.ip247.signals import SIGNALS
 from devsim.devices.ip247.store import CAPACITY, ProgramStore, Stored, StoreError
 from devsim.devices.ip247.tables import MODES, NONEXISTENT, page_error
 
@@ -41,9 +43,6 @@ class Ip247Module(Model):
                  nvram: NonVolatileMemory | None = None, name: str = "") -> None:
         super().__init__(clock=clock, config=config, nvram=nvram, name=name)
         cfg = self.config
-        from devsim.core.kit import declare_signals
-        from devsim.devices.ip247.points import SIGNALS
-
         declare_signals(self.signals, SIGNALS)
         geometry = cfg.get("axes") or {}
         self.units = [AxisUnit(self, n, dict(geometry.get(n) or geometry.get(str(n)) or {})) for n in AXES]

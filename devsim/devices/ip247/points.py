@@ -11,31 +11,14 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from devsim.core.kit import Fault, FaultTable, SignalDef, signal_points
+from devsim.core.kit import Fault, FaultTable, signal_points
 from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.pg_profile import COMMANDS, Operate
 from devsim.devices.ip247.services import serve
+from devsim.devices.ip247.signals import SIGNALS
 
 __all__ = ["FAULTS", "POINTS", "SIGNALS"]
-
-SIGNALS: tuple[SignalDef, ...] = (
-    *(d for n in (1, 2, 3) for d in (
-        SignalDef(f"ANF{n}", "input", False, f"axis {n} limit switch Anfang (24 V = True)", "§2.5"),
-        SignalDef(f"END{n}", "input", False, f"axis {n} limit switch Ende (24 V = True)", "§2.5"),
-        SignalDef(f"BERO{n}", "input", False, f"axis {n} reference cam (active high)", "§2.5"),
-        SignalDef(f"START{n}", "input", False, f"axis {n} external start/stop: 0→1 stops", "§2.8.4"),
-        SignalDef(f"BB{n}", "input", True, f"axis {n} power unit ready", "§2.4"),
-        SignalDef(f"PE{n}", "output", False, f"axis {n} position reached", "§2.7.7"),
-        SignalDef(f"RS{n}", "output", False, f"axis {n} reset pulse to the power unit", "§2.8.1"),
-        SignalDef(f"RP{n}", "output", False, f"axis {n} direction to the power unit (True: forward), set before "
-                  "the first pulse of a move", "§2.4"),
-    )),
-    SignalDef("BASP", "input", False, "command output disable from the PLC: every axis stops", "§2.9"),
-    SignalDef("led_green", "output", True, "module running", "§3.1.3"),
-    SignalDef("led_red", "output", False, "an error ≥ 10 is pending", "§3.1.3"),
-)
-
 
 def _axis_points(n: int) -> list[Point]:
     def unit(m: Any) -> Any:
