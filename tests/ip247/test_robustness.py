@@ -29,6 +29,7 @@ FRAGMENTS = [b"\x02", b"\x10", b"\x10\x06", b"\x10\x15", b"\x10\x04", b"\x10\x03
 def _module() -> tuple[Ip247Device, VirtualClock, bytearray]:
     clock = VirtualClock()
     device = Ip247Device(clock=clock, config={"sys_id": {"module": 11}})
+    clock.advance(1.0)  # the module runs after its 1 s start (spec §5.16)
     device.set("input.ANF1", True)
     device.set("input.END1", True)
     device.set("axis.1.machine_data", words(COM247))
@@ -129,3 +130,21 @@ def test_kill_9_during_a_record_write_keeps_the_stored_records(tmp_path: Path) -
     finally:
         code, err = sim.stop()
     assert code == 0 and "Traceback" not in err
+
+
+def test_the_pg_port_is_silent_for_the_first_second_while_the_leds_blink() -> None:
+    """§2.1/§5.16: after power-up both LEDs blink alternately and the module answers nothing;
+    after 1 s the green LED stays on and the PG port answers."""
+    clock = VirtualClock()
+    device = Ip247Device(clock=clock, config={})
+    out = bytearray()
+    device.port("pg").attach(out.extend)
+    device.port("pg").feed(b"\x02")
+    seen = []
+    for _ in range(4):
+        seen.append((device.read("output.led_green"), device.read("output.led_red")))
+        clock.advance(0.25)
+    assert out == b"" and seen == [(True, False), (False, True), (True, False), (False, True)]
+    assert device.read("output.led_green") is True and device.read("output.led_red") is False
+    device.port("pg").feed(b"\x02")
+    assert out == b"\x10\x06"

@@ -41,6 +41,7 @@ Ip247Config = Section("Configuration of one simulated IP247 (spec ip247.md §2, 
     Setting("x21", OneOf("2-3", "1-2"), "2-3", "jumper X21: 2-3 forces PE low under BASP"),
     Setting("firmware", Text(), "A02.1", "firmware version in SYS-ID"),
     Setting("sys_id", SYS_ID, {}, "SYS-ID of a module with empty battery RAM"),
+    Setting("boot_time", Float(ge=0), 1.0, "seconds after power-up until the module runs (LEDs blink, PG silent)"),
     Setting("battery_ok", Bool(), True, "false: battery RAM is lost at power-up (spec §4.14)"),
     Setting("powered", Bool(), True, "false: the PG port answers nothing (COM247: F53H)"),
     Setting("s5_services", Bool(), False, "answer the standard S5 services 04H, 18H, 1AH, 1BH on the PG port, "

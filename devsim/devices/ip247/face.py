@@ -42,8 +42,8 @@ class PgFace(Face):
         return serve(self.model, parse_request(function, parameters))
 
     def feed(self, data: bytes) -> None:
-        if self.model.config.get("powered", True) is False:
-            return  # a module without power answers nothing (spec §3.6.5)
+        if self.model.config.get("powered", True) is False or self.model.booting:
+            return  # a module without power, or still starting, answers nothing (spec §3.6.5, §5.16)
         for chunk in self.link.feed(data):
             self.send(chunk)
         if self._timer is not None:
@@ -74,6 +74,8 @@ class AgFace(Face):
         self.framer = AgFramer()
 
     def feed(self, data: bytes) -> None:
+        if self.model.booting:
+            return  # (the dual-port RAM is not served before the module runs)
         base = int(self.model.config.get("base_page", 0))
         for function, payload in self.framer.feed(data):
             asked = payload[0] if payload else 0

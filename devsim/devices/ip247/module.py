@@ -34,6 +34,7 @@ OPERATOR_MODES = frozenset(range(1, 18))
 WRITE_MODES, DELETE_MODES, READ_MODES = frozenset((20, 22, 24)), frozenset((21, 23)), frozenset(range(64, 71))
 AXES = (1, 2, 3)
 RS_PULSE = 0.1  # seconds (spec §5.16)
+BOOT_TIME, BLINK = 1.0, 0.25  # seconds until the PG port is online; LED blink period (spec §5.16)
 
 
 class Ip247Module(Model):
@@ -50,6 +51,7 @@ class Ip247Module(Model):
         self.sys_id = (0, 0, 0)
         self.store = ProgramStore()
         self.basp = False
+        self._boot_timers: list[Any] = []
         self.job_lists: dict[str, list[tuple[int, int, int, int, int, int]]] = {"pg": [], "ag": []}
         self._draining = False
         for unit in self.units:
@@ -90,11 +92,34 @@ class Ip247Module(Model):
         self.nvram.put("sys_id", list(self.sys_id))
 
     def power_up(self) -> None:
+        """Jobs and programs dropped, reference lost, error 8 everywhere; for ``boot_time`` (1 s)
+        the module answers nothing while its LEDs blink alternately, then green stays on
+        (spec §2.1, §5.16)."""
         for unit in self.units:
             unit.power_up()
         self.channel_error = 8
+        for timer in self._boot_timers:
+            timer.cancel()
+        boot = float(self.config.get("boot_time", BOOT_TIME))
+        self.booting = boot > 0
+        if not self.booting:
+            self._running()
+            return
+        blinks = int(boot / BLINK)
+        for k in range(blinks + 1):
+            self._boot_timers.append(self.clock.call_later(k * BLINK, lambda k=k: self._blink(k % 2 == 0)))
+        self._boot_timers.append(self.clock.call_later(boot, self._running))
+
+    def _blink(self, green: bool) -> None:
+        self.signals.set("led_green", green)
+        self.signals.set("led_red", not green)
+
+    def _running(self) -> None:
+        self._boot_timers.clear()
         self.signals.set("led_green", True)
         self._leds()
+        if self.booting:
+            self.booted()
 
     def power_cycle(self, *, wipe: bool = False) -> None:
         wipe = wipe or self.config.get("battery_ok", True) is False  # battery RAM lost (spec §4.14)
