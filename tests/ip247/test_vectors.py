@@ -193,3 +193,21 @@ def test_step_loss_when_the_motor_cannot_start_or_stalls(make: Make) -> None:
     ramp = md.ramp
     assert stall.device.read("axis.1.machine_position") == pytest.approx(100_000)
     assert stall.device.read("axis.1.mechanical_position") == pytest.approx(1.1 * ramp.pulses_to(12_000), rel=1e-6)
+
+
+def test_wiring_faults_move_the_motor_wrongly_while_the_module_counts(make: Make) -> None:
+    """§5.15: with T/RP swapped the motor goes backward by what the module counts forward; with
+    RS stuck it stands; the module's actual value counts the pulses either way."""
+    mod = make()
+    mod.ready()
+    mod.device.fault("rp_swapped_1", True)
+    mod.operate(1, 7, FORWARD, w=1000, dd=10_000)
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.position") == 11_000
+    assert mod.device.read("axis.1.mechanical_position") == pytest.approx(-10_000)
+    mod.device.fault("rp_swapped_1", False)
+    mod.device.fault("rs_stuck_1", True)
+    mod.operate(1, 7, FORWARD, w=1000, dd=10_000)
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.position") == 21_000
+    assert mod.device.read("axis.1.mechanical_position") == pytest.approx(-10_000)

@@ -63,7 +63,7 @@ class AxisUnit:
         self._sw_watch: Any = None
         self._switches = [self._region(geometry, name) for name in ("anf", "end", "cam")]
         self.motor = SteppingMotor(geometry.get("max_start_hz"), geometry.get("pullout_hz"))
-        self._mech0, self._x0, self._follows = 0.0, 0.0, math.inf
+        self._mech0, self._x0, self._follows, self._sense = 0.0, 0.0, math.inf, 1
 
     # -- what the module and the faces see --------------------------------------------------------
     @property
@@ -256,6 +256,15 @@ class AxisUnit:
         self._follows = self.motor.follows(pieces, md.resolution, from_rest) if md is not None else math.inf
         if stalled:
             self._follows = 0.0  # a stalled motor stays stalled until the axis stands
+        self._sense = self.wiring()
+
+    def wiring(self) -> int:
+        """How the motor answers the pulses (spec §5.15 wiring faults): 1, −1 with T/RP swapped
+        (it turns the other way), 0 with RS stuck active or no special voltage (it stands)."""
+        faults = self.module.wiring_faults
+        if f"rs_stuck_{self.number}" in faults or "no_special_voltage" in faults:
+            return 0
+        return -1 if f"rp_swapped_{self.number}" in faults else 1
 
     @property
     def _stalled(self) -> bool:
@@ -264,7 +273,7 @@ class AxisUnit:
     def mechanical_position(self) -> float:
         """Where the motor really is (spec §5.15): the motor position less the steps it lost."""
         travelled = self.axis.position() - self._x0
-        return self._mech0 + math.copysign(min(abs(travelled), self._follows), travelled)
+        return self._mech0 + self._sense * math.copysign(min(abs(travelled), self._follows), travelled)
 
     def _ended(self) -> None:
         self.braking = False

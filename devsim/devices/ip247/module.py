@@ -52,6 +52,7 @@ class Ip247Module(Model):
         self.store = ProgramStore()
         self.basp = False
         self._boot_timers: list[Any] = []
+        self.wiring_faults: set[str] = set()  # spec §5.15: see points.FAULTS
         self.job_lists: dict[str, list[tuple[int, int, int, int, int, int]]] = {"pg": [], "ag": []}
         self._draining = False
         for unit in self.units:

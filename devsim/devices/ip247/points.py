@@ -150,7 +150,20 @@ def _power(m: Any, active: bool) -> None:
         m.power_cycle()
 
 
+def _wiring(name: str) -> Any:
+    def apply(m: Any, active: bool) -> None:
+        (m.wiring_faults.add if active else m.wiring_faults.discard)(name)
+
+    return apply
+
+
 FAULTS = FaultTable([
+    *(Fault(f"rp_swapped_{n}", f"axis {n}: T and RP swapped: the motor turns the other way while the module counts "
+            "on (mechanical_position); from the next move", "§7.1.5.3", _wiring(f"rp_swapped_{n}")) for n in (1, 2, 3)),
+    *(Fault(f"rs_stuck_{n}", f"axis {n}: RS permanently active: the motor does not move although the actual value "
+            "counts; from the next move", "§7.1.5.3", _wiring(f"rs_stuck_{n}")) for n in (1, 2, 3)),
+    Fault("no_special_voltage", "the special voltage Us is missing: no output signals reach the power units, no "
+          "motor moves; from the next move", "§3.1.4", _wiring("no_special_voltage")),
     Fault("battery_failed", "the buffer battery failed: machine data, programs, SYS-ID and offsets are lost at "
           "the next power-up", "§4.14", _battery),
     Fault("power", "the supply is off while active: the PG port answers nothing; on again afterwards (a "
