@@ -339,3 +339,21 @@ def test_the_plc_record_point_never_overwrites(mod: Module) -> None:
     mod.operate(1, 5, START, b=1)
     mod.operate(1, 7, BACKWARD, w=1000, dd=1_000)
     assert mod.device.read("output.RP1") is False
+
+
+def test_tbit_follows_jobs_from_the_plc_side(mod: Module) -> None:
+    """§3.7/§6.2.6: TBIT set while a job the PLC issued runs, cleared at "fertig"; a program the
+    PG continues with Übernahme is the PG's (no TBIT)."""
+    mod.ready()
+    mod.store(4, "%  4\nN1 X30 F1000 M20\nN2 M02\n")
+    mod.device.set("ag.operate", {"page": 0, "ba": 7, "cmd": "Vorwärts", "w": 0x1000, "dd": 0x0000_1000})
+    assert mod.device.read("axis.1.tbit") is True
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.tbit") is False
+    mod.device.set("ag.operate", {"page": 0, "ba": 8, "cmd": "Start", "b": 4})
+    assert mod.device.read("axis.1.tbit") is True
+    mod.operate(1, 8, STOP)
+    mod.clock.advance(2)
+    assert mod.device.read("axis.1.tbit") is False
+    mod.operate(1, 8, TAKE_OVER, b=4)
+    assert mod.device.read("axis.1.running") is True and mod.device.read("axis.1.tbit") is False

@@ -53,6 +53,7 @@ class Ip247Module(Model):
         self.basp = False
         self._boot_timers: list[Any] = []
         self.wiring_faults: set[str] = set()  # spec §5.15: see points.FAULTS
+        self.tbit = {1: False, 2: False, 3: False}  # FB164's TBIT as the PLC side would see it (spec §3.7)
         self.job_lists: dict[str, list[tuple[int, int, int, int, int, int]]] = {"pg": [], "ag": []}
         self._draining = False
         for unit in self.units:
@@ -157,6 +158,8 @@ class Ip247Module(Model):
 
     def changed(self, unit: AxisUnit) -> None:
         self.announce("changed", unit.number)
+        if not unit.running:
+            self.tbit[unit.number] = False
         if not unit.braking and not self._draining and any(q and q[0][0] == unit.number for q in
                                                              self.job_lists.values()):
             self._drain(unit.number)
@@ -272,6 +275,10 @@ class Ip247Module(Model):
         error = unit.operate(ba, cmd, b, w, dd)
         if error is not None:
             self.set_error(unit, error)
+        if source == "ag" and cmd != STOP:
+            self.tbit[page] = unit.running  # FB164's busy bit: set while the job it issued runs
+        elif cmd == TAKE_OVER and ba in (8, 9):
+            self.tbit[page] = False  # a program the PG continues belongs to the PG (spec §3.3.1)
         self._leds()
         self.save()
         return ACK_ACCEPTED

@@ -45,6 +45,8 @@ def _axis_points(n: int) -> list[Point]:
               get=lambda m: unit(m).attributes()),
         Point(f"axis.{n}.reference_set", "bool", f"axis {n} reference point set", "§4.2.3",
               get=lambda m: unit(m).reference_set),
+        Point(f"axis.{n}.tbit", "bool", f"axis {n}: FB164's TBIT, set while a job the PLC side issued runs; "
+              "a program continued from the PG is the PG's", "§6.2.6", get=lambda m: m.tbit[n]),
         Point(f"axis.{n}.waiting_start", "bool", f"axis {n} holds a job until START-N/STOP falls (error 6)",
               "§2.8.4", get=lambda m: unit(m).waiting_start is not None),
         Point(f"axis.{n}.m_function", "int", f"axis {n} M function shown (MFKT)", "§2.6.9",
