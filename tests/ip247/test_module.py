@@ -357,3 +357,17 @@ def test_tbit_follows_jobs_from_the_plc_side(mod: Module) -> None:
     assert mod.device.read("axis.1.tbit") is False
     mod.operate(1, 8, TAKE_OVER, b=4)
     assert mod.device.read("axis.1.running") is True and mod.device.read("axis.1.tbit") is False
+
+
+def test_an_interrupted_relative_traverse_keeps_its_target(mod: Module) -> None:
+    """§5.11.5: Übernahme completes the interrupted traverse to its target, also under G91 (the
+    distance is not added again from where the axis stopped)."""
+    mod.ready()
+    mod.store(8, "%  8\nN1 G91\nN2 X30 F1000\nN3 M02\n")
+    mod.operate(1, 8, START, b=8)
+    mod.clock.advance(0.5)
+    assert mod.operate(1, 8, STOP)[4] == 65
+    mod.clock.advance(5)
+    assert mod.operate(1, 8, TAKE_OVER, b=8)[4] == 0
+    mod.clock.advance(60)
+    assert mod.device.read("axis.1.position") == 1_000 + 30_000

@@ -26,7 +26,6 @@ if TYPE_CHECKING:
 __all__ = ["ProgramRun"]
 
 
-
 class ProgramRun:
     """One program context of an axis (spec §4.1.1 ``program_ctx``)."""
 
@@ -39,9 +38,9 @@ class ProgramRun:
         self.halted = False  # waiting for Übernahme (M00, a BA9 step): OBSERVE flag bit 3
         self.interrupted = False  # error 65: OBSERVE flag bit 1
         self._pending: tuple[Block, int] | None = None  # the traverse/dwell the halt holds back
-        self._m00 = False
         self._timer = None
         self._last: tuple[Block, int] | None = None  # the traverse or dwell executing
+        self._move: tuple[float, float] | None = None  # its holder target and frequency
         self._m_timers: list[Any] = []  # M outputs at the joints of a G10 chain
 
     # -- from the module -------------------------------------------------------------------------
@@ -55,9 +54,13 @@ class ProgramRun:
         if not (self.halted or self.interrupted):
             return 2
         self.halted = self.interrupted = False
-        if self._last is not None:  # an interrupted traverse is completed first
-            block, m = self._last
-            self._execute(block, m)
+        if self._last is not None and self._move is not None:  # an interrupted traverse is completed first
+            unit = self.unit
+            unit.m_function = self._last[1]
+            target, f = self._move
+            unit.running = True
+            if unit.held(lambda: unit.position_to(target, f, self._done)):
+                unit.module.set_error(unit, 6)
             return None
         self._advance(skip_halt=True)
         return None
@@ -180,6 +183,7 @@ class ProgramRun:
             self._flying(block, m, result)
             return
         target, f, _ = result
+        self._move = (target, f)
         if unit.held(lambda: unit.position_to(target, f, self._done)):
             unit.module.set_error(unit, 6)
 
@@ -260,6 +264,7 @@ class ProgramRun:
             self._fail(52)
             return
         self._last = (chain[-1][0], chain[-1][1])
+        self._move = (holders[-1], chain[-1][2][1])
         for (_, m_block, _), at in zip(chain[1:], starts, strict=True):
             self._m_timers.append(unit.clock.call_later(at, lambda m_block=m_block: setattr(unit, "m_function",
                                                                                           m_block)))
