@@ -211,3 +211,21 @@ def test_wiring_faults_move_the_motor_wrongly_while_the_module_counts(make: Make
     mod.clock.advance(5)
     assert mod.device.read("axis.1.position") == 21_000
     assert mod.device.read("axis.1.mechanical_position") == pytest.approx(-10_000)
+
+
+def test_switches_sit_at_mechanical_positions(make: Make) -> None:
+    """§5.15: a motor that howls (no start at f_ss) never reaches END at 20 mm, so the module
+    counts through it without error 26; a healthy motor stops there."""
+    howl = make({"axes": {1: {"max_start_hz": 800, "end": 20_000}}})
+    howl.load_md(record=record(f_ss=2000))
+    howl.operate(1, 5, START, b=1)
+    howl.operate(1, 7, FORWARD, w=1000, dd=50_000)
+    howl.clock.advance(60)
+    assert howl.device.read("axis.1.position") == 51_000 and howl.device.read("axis.1.error") == 0
+    assert howl.device.read("input.END1") is True  # NC contact, not actuated
+    healthy = make({"axes": {1: {"end": 20_000}}})
+    healthy.load_md(record=record(f_ss=2000))
+    healthy.operate(1, 5, START, b=1)
+    healthy.operate(1, 7, FORWARD, w=1000, dd=50_000)
+    healthy.clock.advance(60)
+    assert healthy.device.read("axis.1.error") == 26 and healthy.device.read("input.END1") is False

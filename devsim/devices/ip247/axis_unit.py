@@ -15,7 +15,7 @@ import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from devsim.core.axis import Axis, RegionSwitch
+from devsim.core.axis import Axis
 from devsim.devices.ip247.attributes import rmld
 from devsim.devices.ip247.coordinates import Coordinates
 from devsim.devices.ip247.jobs import BACKWARD, FORWARD, START, STOP, TAKE_OVER, AxisView
@@ -23,6 +23,7 @@ from devsim.devices.ip247.machine_data import MachineData
 from devsim.devices.ip247.motion import ExpPiece, move_pieces
 from devsim.devices.ip247.motor import SteppingMotor
 from devsim.devices.ip247.reference import ReferenceRun
+from devsim.devices.ip247.switches import MechanicalSwitch
 
 if TYPE_CHECKING:
     from devsim.devices.ip247.module import Ip247Module
@@ -61,9 +62,9 @@ class AxisUnit:
         self._decel_at = math.inf  # when the current positioning move starts its last braking
         self._direction = 0
         self._sw_watch: Any = None
-        self._switches = [self._region(geometry, name) for name in ("anf", "end", "cam")]
         self.motor = SteppingMotor(geometry.get("max_start_hz"), geometry.get("pullout_hz"))
         self._mech0, self._x0, self._follows, self._sense = 0.0, 0.0, math.inf, 1
+        self._switches = [self._region(geometry, name) for name in ("anf", "end", "cam")]
 
     # -- what the module and the faces see --------------------------------------------------------
     @property
@@ -257,6 +258,9 @@ class AxisUnit:
         if stalled:
             self._follows = 0.0  # a stalled motor stays stalled until the axis stands
         self._sense = self.wiring()
+        for switch in self._switches:
+            if switch is not None:
+                switch.arm(self._x0, self._mech0, self._sense, self._follows)
 
     def wiring(self) -> int:
         """How the motor answers the pulses (spec §5.15 wiring faults): 1, −1 with T/RP swapped
@@ -463,7 +467,7 @@ class AxisUnit:
         return self.module.teach_job(self, cmd, b)
 
     # -- limit switches (spec §5.7) ---------------------------------------------------------------
-    def _region(self, geometry: dict[str, Any], name: str) -> RegionSwitch | None:
+    def _region(self, geometry: dict[str, Any], name: str) -> MechanicalSwitch | None:
         where = geometry.get(name)
         if where is None:
             return None
@@ -473,7 +477,8 @@ class AxisUnit:
             low, high = float(where), math.inf
         else:
             low, high = float(where[0]), float(where[1])
-        return RegionSwitch(self.axis, low, high, lambda active, n=name: self._switch(n, active))
+        return MechanicalSwitch(self.axis, low, high, self.mechanical_position(),
+                                lambda active, n=name: self._switch(n, active))
 
     def _switch(self, name: str, actuated: bool, polarity: int | None = None) -> None:
         """A switch the axis geometry drives: its input's level as wired for the MD polarity

@@ -19,7 +19,7 @@ SYS_ID = Section("The module identification of a module whose battery RAM is emp
     Setting("page", _BYTE, 0, "page address (Kacheladresse)"),
 ))
 
-AXIS_GEOMETRY = Section("Where an axis's switches sit (machine position, base units) and what its motor can do "
+AXIS_GEOMETRY = Section("Where an axis's switches sit (mechanical position, base units) and what its motor can do "
                         "(spec §4.13, §5.7, §5.15).", (
     Setting("anf", Maybe(Float()), None, "limit switch ANF: actuated at and below this position"),
     Setting("end", Maybe(Float()), None, "limit switch END: actuated at and above this position"),
