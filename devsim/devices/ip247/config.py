@@ -1,7 +1,7 @@
 """Configuration of one simulated IP247 (manual §3.2, §3.3; spec ip247.md §2.1, §2.3, §4.14).
 
 The S2 base page, the X21 jumper, the SYS-ID a fresh module starts with, the battery, and where
-each axis's switches sit (in base units of the machine position, the motor side): the limit
+each axis's switches sit (in base units of the mechanical position, where the motor really is): the limit
 switches ANF (active at and below) and END (at and above), and the reference cam [low, high].
 """
 
