@@ -34,13 +34,19 @@ __all__ = ["SLICE", "TcpTransport"]
 
 #: Most host bytes handed to a device in one loop turn (the rest waits for the next turns).
 SLICE = 16 * 1024
+#: Bytes one socket read takes at most.  A session reads into a buffer of its own: asyncio's plain
+#: protocols allocate a 256 KiB object for every read, which glibc serves with mmap/munmap when
+#: its dynamic threshold has not risen – a system call pair per poll, seen in 500-device plants.
+READ_SIZE = 64 * 1024
 
 
-class _Session(asyncio.Protocol):
+class _Session(asyncio.BufferedProtocol):
     """One TCP client; the owning transport decides whether it is the host or waits."""
 
     def __init__(self, owner: TcpTransport) -> None:
         self.owner = owner
+        self._buffer = bytearray(READ_SIZE)
+        self._view = memoryview(self._buffer)
         self.transport: asyncio.Transport | None = None
         self.closed = False
         self.state: object = None  # per-client protocol state of subclasses (RFC 2217)
@@ -55,8 +61,11 @@ class _Session(asyncio.Protocol):
                 sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.owner._connected(self)
 
-    def data_received(self, data: bytes) -> None:
-        self.owner._received(self, data)
+    def get_buffer(self, sizehint: int) -> memoryview:
+        return self._view
+
+    def buffer_updated(self, nbytes: int) -> None:
+        self.owner._received(self, bytes(self._view[:nbytes]))
 
     def eof_received(self) -> bool:
         return False  # half-close ends the session

@@ -135,3 +135,25 @@ def test_a_flood_on_one_port_does_not_stall_another(monkeypatch: pytest.MonkeyPa
         b.close()
     finally:
         rt.stop()
+
+
+async def test_a_session_reads_into_its_own_buffer(echo: Recorder) -> None:
+    """Every read lands in the session's one buffer (asyncio's BufferedProtocol): a plain protocol
+    gets a fresh 256 KiB object per read, which glibc may serve with mmap/munmap – a system-call
+    pair per poll that made 500-device plants 1.7× as expensive (benchmarks/scale.py)."""
+    transport = TcpTransport()
+    await transport.start(echo)
+    try:
+        reader, writer = await asyncio.open_connection("127.0.0.1", transport.port)
+        writer.write(b"one")
+        assert await _read_exactly(reader, 3) == b"one"
+        session = transport._active  # the serving client
+        assert isinstance(session, asyncio.BufferedProtocol)
+        first = session.get_buffer(-1)
+        writer.write(b"two")
+        assert await _read_exactly(reader, 3) == b"two"
+        assert session.get_buffer(-1) is first and len(first) <= 128 * 1024  # (below glibc's mmap threshold)
+        writer.close()
+        await writer.wait_closed()
+    finally:
+        await transport.close()
