@@ -1,7 +1,8 @@
 """The SAIA PCD4.H3 servo positioning module (spec pcd4h3.md): work in progress.
 
 So far the S-Bus host link's framing (:mod:`devsim.devices.pcd4h3.sbus`: serial data mode with
-byte stuffing and CRC, Ether-S-Bus frames, the command set of §9.4), tested with the spec's
-byte vectors.  The kind (the LM628 controller, the PCD9.H3E1 library, the PLC around it, the
+byte stuffing and CRC, Ether-S-Bus frames, the command set of §9.4) and the library's numbers
+(:mod:`devsim.devices.pcd4h3.units`: FFP, counts, velocity and acceleration registers), each
+tested with the spec's vectors.  The kind (the LM628 controller, the PCD9.H3E1 library, the PLC around it, the
 faces) is not built or registered yet.
 """
