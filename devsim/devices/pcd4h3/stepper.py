@@ -1,0 +1,75 @@
+"""Runs an LM628 on the device clock (spec pcd4h3.md §5.1; design principle: an idle simulator
+uses no CPU): the chip's samples are computed in batches, up to the present, whenever someone
+looks (:meth:`ChipStepper.catch_up`) and by a periodic tick while anything moves; once the
+trajectory is complete and the motor stands still on its position the ticks stop.
+
+A batch computes every sample (341.333 µs apart) in order, so the loop's behaviour is the same
+however the batches fall; only the moment at which a flag becomes visible is rounded to the next
+look or tick.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from devsim.core.clock import Clock, Timer
+from devsim.devices.pcd4h3.lm628 import Lm628
+from devsim.devices.pcd4h3.units import CHIP_SAMPLE
+
+__all__ = ["ChipStepper"]
+
+TICK = 0.010  # seconds of device time between batches while the chip is active
+QUIET = 64  # samples without any change before the chip counts as settled
+
+
+class ChipStepper:
+    def __init__(self, chip: Lm628, clock: Clock, on_tick: Callable[[], None] | None = None) -> None:
+        self.chip, self.clock, self.on_tick = chip, clock, on_tick
+        self._samples = 0  # samples computed since the epoch
+        self._epoch = clock.now()
+        self._timer: Timer | None = None
+        self._quiet = 0
+
+    @property
+    def active(self) -> bool:
+        return self._timer is not None
+
+    def catch_up(self) -> None:
+        """Compute every sample due by now."""
+        due = int((self.clock.now() - self._epoch) / CHIP_SAMPLE + 1e-9)
+        chip = self.chip
+        while self._samples < due:
+            before = (chip.actual, chip.profile.position, chip.flags)
+            chip.sample()
+            self._samples += 1
+            if (chip.actual, chip.profile.position, chip.flags) == before and chip.profile.complete \
+                    and abs(chip.motor.velocity) < 1e-3:
+                self._quiet += 1
+            else:
+                self._quiet = 0
+
+    def poke(self) -> None:
+        """A command changed the chip (call :meth:`catch_up` before the command, so it acts at
+        the right sample): keep ticking until the chip settles."""
+        self._quiet = 0
+        if self._timer is None:
+            self._timer = self.clock.call_later(TICK, self._tick)
+
+    def _tick(self) -> None:
+        self._timer = None
+        self.catch_up()
+        if self.on_tick is not None:
+            self.on_tick()
+        if self._quiet < QUIET:
+            self._timer = self.clock.call_later(TICK, self._tick)
+        else:
+            self._rest()
+
+    def _rest(self) -> None:
+        """Settled: no ticks; the sample count restarts from now when the chip wakes."""
+        self._epoch, self._samples = self.clock.now(), 0
+
+    def close(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
