@@ -6,7 +6,8 @@ byte stuffing and CRC, Ether-S-Bus frames, the command set of §9.4) and the lib
 LM628's profile generator per sample (:mod:`devsim.devices.pcd4h3.trajectory`) and its PID
 filter with the motor it drives (:mod:`devsim.devices.pcd4h3.pid`), the chip around them with its
 commands, status and signals (:mod:`devsim.devices.pcd4h3.lm628`) and its runner on the device
-clock that rests when the chip settles (:mod:`devsim.devices.pcd4h3.stepper`), each tested with the
-spec's vectors or the loop's closed form.  The kind (the LM628 controller, the PCD9.H3E1 library, the PLC around it, the
+clock that rests when the chip settles (:mod:`devsim.devices.pcd4h3.stepper`), and the library's
+register blocks and flag fields (:mod:`devsim.devices.pcd4h3.layout`), each tested with the spec's
+vectors or the loop's closed form.  The kind (the LM628 controller, the PCD9.H3E1 library, the PLC around it, the
 faces) is not built or registered yet.
 """
