@@ -7,7 +7,8 @@ LM628's profile generator per sample (:mod:`devsim.devices.pcd4h3.trajectory`) a
 filter with the motor it drives (:mod:`devsim.devices.pcd4h3.pid`), the chip around them with its
 commands, status and signals (:mod:`devsim.devices.pcd4h3.lm628`) and its runner on the device
 clock that rests when the chip settles (:mod:`devsim.devices.pcd4h3.stepper`), and the library's
-register blocks and flag fields (:mod:`devsim.devices.pcd4h3.layout`), each tested with the spec's
-vectors or the loop's closed form.  The kind (the LM628 controller, the PCD9.H3E1 library, the PLC around it, the
+register blocks and flag fields (:mod:`devsim.devices.pcd4h3.layout`) with AxInit and AxHndlg over
+them (:mod:`devsim.devices.pcd4h3.library`), each tested with the spec's vectors or the loop's
+closed form.  The kind (the LM628 controller, the PCD9.H3E1 library, the PLC around it, the
 faces) is not built or registered yet.
 """

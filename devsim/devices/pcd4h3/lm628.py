@@ -41,6 +41,7 @@ class Lm628:
         self.accel_loaded = False
         self.home = 0.0  # motor position of count 0
         self._stop = 0  # the stop bits (8 … 10) of the last LTRJ, acting at the next STT
+        self.on_target = False  # signals bit 10: the generator finished a profile since the last STT
 
     # -- initialisation and interrupts (§3.5.3) -------------------------------------------------
     def reset(self) -> None:
@@ -49,7 +50,7 @@ class Lm628:
         self.profile, self.buffer = Profile(), Trajectory()
         self.filter = Filter(dac_bits=8)
         self.flags, self.mask, self.motor_off, self.stop_on_error = 0, INTERRUPTS & ~BREAKPOINT, True, False
-        self.breakpoint, self.accel_loaded = None, False
+        self.breakpoint, self.accel_loaded, self.on_target = None, False, False
         self.define_home()
 
     def port(self, bits: int) -> None:
@@ -133,11 +134,12 @@ class Lm628:
         if stop & 0x0400:
             self.profile.stop_smoothly()
             return
-        self.motor_off, self.accel_loaded = False, False
+        self.motor_off, self.accel_loaded, self.on_target = False, False, False
         self.flags &= ~COMPLETE
         self.profile.start(self.buffer)
         if self.profile.complete:
             self.flags |= COMPLETE
+            self.on_target = True
 
     # -- reports (§4.5, §4.8) ----------------------------------------------------------------------
     @property
@@ -154,8 +156,8 @@ class Lm628:
     def signals(self) -> int:
         """RDSIGS (§4.5)."""
         t = self.buffer
-        return ((self.flags & INTERRUPTS) | int(self.motor_off) << 7 | int(self.filter.dac_bits == 8) << 8
-                | int(self.stop_on_error) << 9 | int(self.profile.complete) << 10 | int(t.velocity_mode) << 11
+        return ((self.status & INTERRUPTS) | int(self.motor_off) << 7 | int(self.filter.dac_bits == 8) << 8
+                | int(self.stop_on_error) << 9 | int(self.on_target) << 10 | int(t.velocity_mode) << 11
                 | int(t.forward) << 12 | int(self.accel_loaded) << 14)
 
     # -- one sample --------------------------------------------------------------------------------
@@ -165,6 +167,7 @@ class Lm628:
         self.profile.sample()
         if self.profile.complete and not was_complete:
             self.flags |= COMPLETE
+            self.on_target = True
         if self.motor_off:
             self.filter.output = 0
         else:
