@@ -12,10 +12,12 @@ import serial
 from devsim.core.record import replace
 from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.client import PgClient
+from devsim.devices.ip247.jobs import BACKWARD, FORWARD, START, STOP, TAKE_OVER
 from devsim.devices.ip247.machine_data import decode, encode
 from tests.ip247.test_machine_data import COM247, words
 
-START, STOP, FORWARD, BACKWARD, TAKE_OVER = 1, 2, 3, 4, 5
+__all__ = ["BACKWARD", "FORWARD", "START", "STOP", "TAKE_OVER", "Make", "Module", "record"]
+
 
 
 def record(**changes: object) -> str:

@@ -53,6 +53,7 @@ class AxisUnit:
         self.target: float | None = None  # holder target of the current (or aborted) positioning
         self.m_function = 2
         self.teach_in: int | None = None
+        self.taught: list[str] = []  # the blocks stored in teach-in so far
         self.locks: set[int] = set()  # directions locked by a limit switch (+1 forward, -1 backward)
         self.waiting_start: Callable[[], None] | None = None  # a job waiting for external start
         self.automatic: Any = None  # the program context (BA8/BA9), see .automatic
@@ -60,7 +61,6 @@ class AxisUnit:
         self.pattern_base = 0.0  # machine position where the current-pattern counter was 0
         self._done: Callable[[bool], None] | None = None
         self._decel_at = math.inf  # when the current positioning move starts its last braking
-        self._direction = 0
         self._sw_watch: Any = None
         self.motor = SteppingMotor(geometry.get("max_start_hz"), geometry.get("pullout_hz"))
         self._mech0, self._x0, self._follows, self._sense = 0.0, 0.0, math.inf, 1
@@ -99,7 +99,6 @@ class AxisUnit:
         if self._d == 0:
             self.m0 = self.axis.position() - h - self._side(direction)  # no play to take up
         self._h0, self._d = h, direction
-        self._direction = direction
         self.module.signals.set(f"RP{self.number}", direction > 0)
 
     def machine(self, holder: float, direction: int) -> float:
@@ -324,7 +323,6 @@ class AxisUnit:
         md = self.md
         assert md is not None
         ramp, r, x = md.ramp, md.resolution, self.axis.position()
-        self._direction = direction
         self.begin(direction)
         pieces: list[tuple[float, Any]] = []
         if f > md.f_ss:
@@ -509,11 +507,11 @@ class AxisUnit:
                 self.reference_run.limit(name)
             return
         if self.actuated(name):
-            if self.running and self._direction == direction:
+            if self.running and self._d == direction:
                 self.locks.add(direction)
                 self.module.fail(self, 25 if direction < 0 else 26)
                 return
-        elif self._direction == -direction:
+        elif self._d == -direction:
             self.locks.discard(direction)
 
     def cam_input(self, active: bool) -> None:
@@ -538,7 +536,7 @@ class AxisUnit:
             return
 
         def passed(_direction: int) -> None:
-            if self.running and self.mode in (1, 2) and self._direction == direction:
+            if self.running and self.mode in (1, 2) and self._d == direction:
                 self.brake()
                 self.module.set_error(self, 29 if direction > 0 else 28)
 

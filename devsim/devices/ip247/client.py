@@ -15,12 +15,9 @@ from typing import Protocol
 
 from devsim.devices.ip247.as511 import ACK, DLE, EOT, ETX, NAK, STX, dle_double
 from devsim.devices.ip247.attributes import AgFramer, ag_frame
+from devsim.devices.ip247.pg_profile import command_code, pack_words
 
 __all__ = ["AgClient", "As511Error", "PgClient", "Services"]
-
-COMMANDS = {"start": 1, "stopp": 2, "stop": 2, "vorwärts": 3, "forward": 3, "rückwärts": 4, "backward": 4,
-            "übernahme": 5, "take_over": 5}
-
 
 class Port(Protocol):
     def write(self, data: bytes) -> object: ...
@@ -41,7 +38,9 @@ class Services:
 
     def operate(self, page: int, ba: int, cmd: int | str, b: int = 0, w: int = 0, dd: int = 0) -> bytes:
         """An operator job: ``cmd`` 1 … 5 or Start, Stopp, Vorwärts, Rückwärts, Übernahme."""
-        code = COMMANDS[cmd.lower()] if isinstance(cmd, str) else cmd
+        code = command_code(cmd)
+        if code is None:
+            raise ValueError(f"unknown command {cmd!r}")
         return self._call(0x61, struct.pack(">BBBBHI", page, ba, code, b & 0xFF, w & 0xFFFF, dd & 0xFFFF_FFFF))
 
     def observe(self, page: int) -> bytes:
@@ -52,7 +51,7 @@ class Services:
         return self._call(0x64, bytes((page, ba, db, int(bcd))))
 
     def write_record(self, page: int, ba: int, db: int, words: list[int], overwrite: bool = False) -> bytes:
-        return self._call(0x63, bytes((page, ba, db, int(overwrite))) + struct.pack(f">{len(words)}H", *words))
+        return self._call(0x63, bytes((page, ba, db, int(overwrite))) + pack_words(words))
 
     def delete_record(self, page: int, ba: int, db: int) -> bytes:
         return self._call(0x65, bytes((page, ba, db)))

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 
 from devsim.core.record import record
+from devsim.core.words import signed32
 
 __all__ = ["LIMIT", "RECORD_WORDS", "MachineData", "Ramp", "check", "decode", "encode"]
 
@@ -20,8 +21,7 @@ LIMIT = 99_999_999  # ±100 m in base units
 
 
 def _signed(high: int, low: int) -> int:
-    value = (high << 16) | low
-    return value - (1 << 32) if value & 0x8000_0000 else value
+    return signed32(high << 16 | low)
 
 
 def _words(value: int) -> tuple[int, int]:

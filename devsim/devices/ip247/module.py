@@ -54,6 +54,7 @@ class Ip247Module(Model):
         self._boot_timers: list[Any] = []
         self.wiring_faults: set[str] = set()  # spec §5.15: see points.FAULTS
         self.tbit = {1: False, 2: False, 3: False}  # FB164's TBIT as the PLC side would see it (spec §3.7)
+        self.ag_last: dict[str, Any] | None = None  # the answer to the last in-process PLC job (points)
         self.job_lists: dict[str, list[tuple[int, int, int, int, int, int]]] = {"pg": [], "ag": []}
         self._draining = False
         for unit in self.units:
@@ -355,13 +356,12 @@ class Ip247Module(Model):
         numbers = [u.md.db for u in self.units if u.md is not None]
         return len(numbers) == len(set(numbers))
 
-    def _record_page(self, ba: int, page: int) -> tuple[int, AxisUnit | None] | None:
-        """The ack and page error of a record mode on a page, or None when it may run."""
-        unit = self.unit(page)
-        error = page_error(ba, page, md_numbers_differ=self.md_numbers_differ())
-        if error == 46:
-            self.set_error(unit, 46)
-            return ACK_NEGATIVE, unit
+    def _record_page(self, ba: int, page: int) -> int | None:
+        """80H (and error 46 on the page) for a record mode the page does not permit, or None
+        when it may run there."""
+        if page_error(ba, page, md_numbers_differ=self.md_numbers_differ()) == 46:
+            self.set_error(self.unit(page), 46)
+            return ACK_NEGATIVE
         return None
 
     def write_record(self, page: int, ba: int, db: int, words: list[int], *, overwrite: bool = False,
@@ -371,7 +371,7 @@ class Ip247Module(Model):
             return ACK_NEGATIVE, []
         refused = self._record_page(ba, page)
         if refused is not None:
-            return refused[0], []
+            return refused, []
         unit = self.unit(page)
         if ba == 20:
             assert unit is not None
@@ -450,7 +450,7 @@ class Ip247Module(Model):
             return ACK_NEGATIVE
         refused = self._record_page(ba, page)
         if refused is not None:
-            return refused[0]
+            return refused
         unit = self.unit(page)
         if ba == 21:
             assert unit is not None
@@ -480,7 +480,7 @@ class Ip247Module(Model):
             return ACK_NEGATIVE, []
         refused = self._record_page(ba, page)
         if refused is not None:
-            return refused[0], []
+            return refused, []
         unit = self.unit(page)
         self.set_error(unit, 0)  # a transfer is an operator job: it acknowledges the page's error
         if ba == 64:

@@ -15,7 +15,8 @@ import struct
 from devsim.core.record import record
 
 __all__ = [
-    "ACK_ACCEPTED", "ACK_FULL", "ACK_MALFORMED", "ACK_NEGATIVE", "ACK_QUEUED", "COMMANDS", "FUNCTIONS", "Delete",
+    "ACK_ACCEPTED", "ACK_FULL", "ACK_MALFORMED", "ACK_NEGATIVE", "ACK_QUEUED", "COMMAND_NAMES", "COMMANDS", "FUNCTIONS",
+    "Delete", "command_code", "pack_words",
     "Header", "Malformed", "Observe", "Observation", "Operate", "ReadRecord", "WriteRecord", "parse_request",
     "response",
 ]
@@ -25,6 +26,9 @@ FUNCTIONS = {OPERATE: "OPERATE", OBSERVE: "OBSERVE", WRITE_REC: "WRITE_REC", REA
              DELETE_REC: "DELETE_REC"}
 #: Commands of OPERATE (spec §3.6.2, simulator encoding).
 COMMANDS = {1: "Start", 2: "Stopp", 3: "Vorwärts", 4: "Rückwärts", 5: "Übernahme"}
+#: The commands by name, German as in the table above or English.
+COMMAND_NAMES = {**{name.lower(): code for code, name in COMMANDS.items()},
+                 "stop": 2, "forward": 3, "backward": 4, "take_over": 5}
 ACK_ACCEPTED, ACK_QUEUED, ACK_NEGATIVE, ACK_FULL, ACK_MALFORMED = 0x00, 0x01, 0x80, 0x81, 0x82
 MAX_PARAMETERS = 1100  # bytes after DLE removal (spec §3.6.5)
 
@@ -143,11 +147,23 @@ class Observation:
         return struct.pack(">ii4BBB", self.position, self.residual, *self.errors, self.last_command, self.flags)
 
 
+def command_code(command: int | str) -> int | None:
+    """A command as its code: 1 … 5 as they are, a name (Start, Stopp … or English) looked up."""
+    if isinstance(command, int):
+        return command
+    return COMMAND_NAMES.get(str(command).lower())
+
+
+def pack_words(words: tuple[int, ...] | list[int]) -> bytes:
+    """Record words as the profile sends them: big-endian 16-bit."""
+    return struct.pack(f">{len(words)}H", *words)
+
+
 def response(header: Header, body: bytes | Observation | tuple[int, ...] = b"") -> bytes:
     """Header and continuation: OBSERVE's 14 bytes, a READ_REC record (words), a WRITE_REC
     result (words) or nothing."""
     if isinstance(body, Observation):
         return header.pack() + body.pack()
     if isinstance(body, tuple):
-        return header.pack() + struct.pack(f">{len(body)}H", *body)
+        return header.pack() + pack_words(body)
     return header.pack() + body

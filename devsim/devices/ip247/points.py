@@ -14,7 +14,7 @@ from typing import Any
 from devsim.core.kit import Fault, FaultTable, signal_points
 from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.devices.ip247 import program as lang
-from devsim.devices.ip247.pg_profile import COMMANDS, Operate
+from devsim.devices.ip247.pg_profile import Operate, command_code
 from devsim.devices.ip247.services import serve
 from devsim.devices.ip247.signals import SIGNALS
 
@@ -109,8 +109,7 @@ def _ag_operate(m: Any, job: Any) -> None:
     if not isinstance(job, dict):
         raise BadValue("an FB164 job is a mapping {page, ba, cmd, b, w, dd}")
     cmd = job.get("cmd", "Start")
-    names = {v.lower(): k for k, v in COMMANDS.items()}
-    code = names.get(str(cmd).lower()) if not isinstance(cmd, int) else cmd
+    code = command_code(cmd)
     if code is None or int(job.get("ba", 0)) not in range(256):
         raise BadValue(f"unknown command {cmd!r} (Start, Stopp, Vorwärts, Rückwärts, Übernahme)")
     page = int(job.get("page", m.config.get("base_page", 0))) - int(m.config.get("base_page", 0)) + 1
@@ -135,7 +134,7 @@ POINTS = PointTable.of(
               "§6.3", put=_ag_record),
         Point("ag.last", "json", "the answer to the last ag.operate ({ack, err, btr, rmld, mfkt}) or ag.record "
               "({ack, err, words})", "§6.2",
-              get=lambda m: getattr(m, "ag_last", None)),
+              get=lambda m: m.ag_last),
     ],
     signal_points(SIGNALS),
     families=[Family("program.<n>", "str", "traverse program n (0 … 255) as text", "§2.6", _program)],

@@ -69,7 +69,7 @@ class ReferenceRun:
         towards_r = (name == "end") == (self.r > 0)
         if self.step == 3 and not towards_r:
             self.unit.brake(lambda ok: self._away())  # the limit in −R: reverse, no error
-        elif self.step in (4, 5, 6) and towards_r or self.step == 3 and towards_r:
+        elif towards_r and self.step in (3, 4, 5, 6):
             self._abort(26 if name == "end" else 25)
 
     # -- the steps ----------------------------------------------------------------------------

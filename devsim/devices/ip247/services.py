@@ -20,6 +20,7 @@ from devsim.devices.ip247.pg_profile import (
     ReadRecord,
     Request,
     WriteRecord,
+    pack_words,
     response,
 )
 from devsim.devices.ip247.values import NotBcd, path_from_plc, velocity_from_plc
@@ -41,17 +42,13 @@ def serve(module: Ip247Module, request: Request, *, plc: bool = False) -> bytes:
         ack, result = module.write_record(page, request.ba, request.db, list(request.words),
                                           overwrite=request.overwrite, from_plc=plc)
         body = tuple(result) if ack == ACK_ACCEPTED else ()
-        return _header(module, ack, page, asked, request.ba, 0) + response_words(body)
+        return _header(module, ack, page, asked, request.ba, 0) + pack_words(body)
     if isinstance(request, ReadRecord):
         ack, words = module.read_record(page, request.ba, request.db, request.bcd)
-        return _header(module, ack, page, asked, request.ba, 0) + response_words(tuple(words))
+        return _header(module, ack, page, asked, request.ba, 0) + pack_words(words)
     assert isinstance(request, Delete)
     ack = module.delete_record(page, request.ba, request.db)
     return _header(module, ack, page, asked, request.ba, 0)
-
-
-def response_words(words: tuple[int, ...]) -> bytes:
-    return response(Header(0, 0, 0, 0, 0, 0, 0, 0), words)[8:]
 
 
 def _header(module: Ip247Module, ack: int, page: int, asked: int, ba: int, cmd: int) -> bytes:

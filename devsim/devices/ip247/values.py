@@ -10,6 +10,8 @@ representable, else binary (flagged).  Pure functions; :class:`NotBcd` carries t
 
 from __future__ import annotations
 
+from devsim.core.words import signed32
+
 __all__ = [
     "NotBcd", "actual_values", "md_directory", "md_overview", "path_from_plc", "path_to_plc", "program_directory",
     "sys_id_record", "velocity_from_plc",
@@ -47,7 +49,7 @@ def path_from_plc(raw: int, bcd: bool) -> int:
     """A double-word parameter (path, target, offset) in base units (spec §3.3.2)."""
     raw &= 0xFFFF_FFFF
     if not bcd:
-        return raw - (1 << 32) if raw & 0x8000_0000 else raw
+        return signed32(raw)
     sign = raw >> 28
     if sign not in (0x0, 0xF):
         raise NotBcd(66)

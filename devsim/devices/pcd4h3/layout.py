@@ -9,6 +9,7 @@ should the original H3DEF.SRC turn up.  Pure tables and address arithmetic.
 from __future__ import annotations
 
 from devsim.core.record import record
+from devsim.core.words import signed32
 
 __all__ = ["FLAGS", "Flag", "Layout", "REGISTERS", "Register", "FLAGS_PER_AXIS", "REGISTERS_PER_AXIS"]
 
@@ -48,7 +49,7 @@ REGISTERS: tuple[Register, ...] = (
     Register(3, "IntL", "integration limit", True, 0, 32767, "", 500),
     Register(4, "SampI", "D-part sample time n: (n+1)·341.33 µs", True, 0, 255, "", 15),
     Register(5, "MCFac", "machine factor k (FFP float), counts per user unit", True, unit="FFP",
-             example=0xC8000047 - (1 << 32)),
+             example=signed32(0xC8000047)),
     Register(6, "PosEr", "position error limit", True, 0, 32767, "counts", 2000),
     Register(7, "DestP", "target position", True, unit="user unit", example=1000),
     Register(8, "BrkP", "break position", True, unit="user unit", example=700),

@@ -8,6 +8,7 @@ decides when.  Commands take the words the host port carries (§3.5.3).
 
 from __future__ import annotations
 
+from devsim.core.words import signed32
 from devsim.devices.pcd4h3.pid import Coefficients, Filter, Motor, sat
 from devsim.devices.pcd4h3.trajectory import Profile, Trajectory
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
@@ -17,11 +18,6 @@ __all__ = ["Lm628", "MOTOR_OFF", "BREAKPOINT", "POSITION_ERROR", "WRAPAROUND", "
 MOTOR_OFF, BREAKPOINT, POSITION_ERROR, WRAPAROUND, INDEX, COMPLETE, COMMAND_ERROR = 0x80, 0x40, 0x20, 0x10, 0x08, 0x04, 0x02
 INTERRUPTS = BREAKPOINT | POSITION_ERROR | WRAPAROUND | INDEX | COMPLETE | COMMAND_ERROR
 POSITION_RANGE = 1 << 30
-
-
-def _signed32(value: int) -> int:
-    value &= 0xFFFF_FFFF
-    return value - (1 << 32) if value & 0x8000_0000 else value
 
 
 class Lm628:
@@ -71,7 +67,7 @@ class Lm628:
     def set_breakpoint(self, position: int, relative: bool = False) -> None:
         """SBPA / SBPR (relative to the current target)."""
         base = self.profile.target >> 16 if relative else 0
-        self.breakpoint = base + _signed32(position)
+        self.breakpoint = base + signed32(position)
 
     def reset_interrupts(self, word: int) -> None:
         """RSTI: a 0 bit resets that flag."""
@@ -104,13 +100,13 @@ class Lm628:
         acceleration, velocity, position = b.acceleration, b.velocity, b.position
         if control & 0x20:
             value = next(items)
-            acceleration = acceleration + _signed32(value) if control & 0x10 else value & 0x3FFF_FFFF
+            acceleration = acceleration + signed32(value) if control & 0x10 else value & 0x3FFF_FFFF
             self.accel_loaded = True
         if control & 0x08:
             value = next(items)
-            velocity = velocity + _signed32(value) if control & 0x04 else value & 0x3FFF_FFFF
+            velocity = velocity + signed32(value) if control & 0x04 else value & 0x3FFF_FFFF
         if control & 0x02:
-            value = _signed32(next(items))
+            value = signed32(next(items))
             position = (self.profile.target >> 16) + value if control & 0x01 else value
         self.buffer = Trajectory(acceleration, velocity, position, bool(control & 0x0800), bool(control & 0x1000))
         self._stop = control & 0x0700
