@@ -371,3 +371,16 @@ def test_an_interrupted_relative_traverse_keeps_its_target(mod: Module) -> None:
     assert mod.operate(1, 8, TAKE_OVER, b=8)[4] == 0
     mod.clock.advance(60)
     assert mod.device.read("axis.1.position") == 1_000 + 30_000
+
+
+def test_position_reached_drops_during_a_dwell(mod: Module) -> None:
+    """§4.1.3 [DECISION]: PE is cleared when a motion or a dwell starts, and set when the dwell
+    has run (output and attribute bit 2 alike)."""
+    mod.ready()
+    mod.store(12, "%  12\nN1 X10 F1000\nN2 G04 F30\nN3 M02\n")
+    mod.operate(1, 8, START, b=12)
+    mod.clock.advance(1.5)  # the traverse is done, the 3 s dwell runs
+    assert mod.device.read("axis.1.running") is True
+    assert mod.device.read("output.PE1") is False and not mod.device.read("axis.1.attributes") & 0x04
+    mod.clock.advance(3)
+    assert mod.device.read("output.PE1") is True and mod.device.read("axis.1.attributes") & 0x04

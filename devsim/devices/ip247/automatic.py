@@ -168,6 +168,7 @@ class ProgramRun:
         unit.module.changed(unit)
         if block.g == 4:
             unit.in_position = False
+            unit.set_pe()
 
             def dwell() -> None:
                 self._timer = unit.clock.call_later((block.f or 0) * 0.1, lambda: self._done(True))
