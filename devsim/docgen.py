@@ -51,6 +51,11 @@ def shared_vocabulary_markdown() -> list[str]:
     )
 
 
+def _port_doc(doc: str, default: str | None) -> str:
+    """A port's description, with the network transport it is served on by default."""
+    return doc if default is None else f"{doc} (default transport: `{default}`)"
+
+
 def reference_markdown(cls: type[Device]) -> str:
     """The whole reference of one kind, as Markdown."""
     ref = cls.reference()
@@ -63,7 +68,10 @@ def reference_markdown(cls: type[Device]) -> str:
         "",
         *_table(
             ("port", "description", "manual", "direction"),
-            ((f"`{p.name}`", p.doc, p.section, "receive only" if p.receive_only else "both") for p in cls.ports),
+            (
+                (f"`{p.name}`", _port_doc(p.doc, p.default), p.section, "receive only" if p.receive_only else "both")
+                for p in cls.ports
+            ),
         ),
         "",
         "## Control names",

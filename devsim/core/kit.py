@@ -27,6 +27,7 @@ __all__ = [
     "SignalView",
     "Table",
     "declare_signals",
+    "parse_port_default",
     "signal_points",
 ]
 
@@ -34,14 +35,44 @@ Effect = Literal["simulated", "stored"]
 H = TypeVar("H")
 
 
+#: The network schemes a port may declare as its default transport (:attr:`PortDef.default`).
+DEFAULT_SCHEMES = ("udp", "tcp")
+
+
 @record
 class PortDef:
-    """A serial port of a kind (``main`` by default; ``v6``, ``v7``, ``v8`` for the CNC)."""
+    """A port of a kind (``main`` by default; ``v6``, ``v7``, ``v8`` for the CNC).
+
+    ``default`` declares where the port is served when nobody says otherwise: ``None`` (a serial
+    port: a pty), or ``"udp:PORT"`` / ``"tcp:PORT"`` for a port the real device has on its
+    Ethernet interface (``"udp:5050"`` for Ether-S-Bus).  ``devsim run`` serves such a port on
+    that transport and number on loopback (``--port NAME=...`` overrides it); a plant file that
+    gives the port no transport serves it on that scheme at an ephemeral port number
+    (:attr:`default_transport`)."""
 
     name: str = "main"
     doc: str = "the device's serial port"
     section: str = ""
     receive_only: bool = False
+    default: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.default is not None:
+            parse_port_default(self.default)
+
+    @property
+    def default_transport(self) -> tuple[str, int] | None:
+        """``(scheme, port)`` of the declared default (``("udp", 5050)``), or ``None``."""
+        return None if self.default is None else parse_port_default(self.default)
+
+
+def parse_port_default(text: str) -> tuple[str, int]:
+    """``"udp:5050"`` → ``("udp", 5050)``; the scheme one of :data:`DEFAULT_SCHEMES`, the port
+    1 … 65535."""
+    scheme, sep, number = text.partition(":")
+    if not sep or scheme not in DEFAULT_SCHEMES or not number.isdigit() or not 0 < int(number) <= 65535:
+        raise ValueError(f"a port default is udp:PORT or tcp:PORT (PORT 1..65535), not {text!r}")
+    return scheme, int(number)
 
 
 MAIN_PORT = (PortDef(),)
