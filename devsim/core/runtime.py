@@ -184,13 +184,17 @@ class Runtime:
         trace: str | Path | None = None,
     ) -> Any:
         """Serve one port of a device, or the same port of several devices on a multidrop bus,
-        on ``transport``; returns the Line."""
+        on ``transport``; returns the Line.  ``trace`` names a trace file: ``*.pcap`` is written
+        as pcap (:mod:`devsim.transports.pcap`), anything else as the text trace."""
         from devsim.transports.line import Line
-        from devsim.transports.trace import Tracer
+        from devsim.transports.tracing import open_trace
 
         group = [devices] if isinstance(devices, Device) else list(devices)
         target: Any = group[0].port(port) if len(group) == 1 else Bus(group, port)
-        tracer = Tracer(trace) if trace is not None else None
+        tracer = None
+        if trace is not None:  # FILE.pcap: a pcap trace with the transport's addresses, else text
+            peers = getattr(transport, "trace_peers", None)
+            tracer = open_trace(trace, peers=peers, name=port_key(group[0].name, port))
         line = Line(target, self.clock, pacing=pacing, tracer=tracer)
         await transport.start(line)
         self.transports.append(transport)

@@ -4,8 +4,11 @@
 * :class:`TcpTransport` – a raw TCP port, like a serial device server (``socket://``);
 * :class:`Rfc2217Transport` – a TCP port speaking RFC 2217, line settings included
   (``rfc2217://``);
+* :class:`UdpTransport` – a UDP port, one telegram per datagram (``udp://``), answers to the
+  latest sender;
 * :class:`Line` – pacing, line-settings mismatch and tracing between a transport and a device
-  or bus; :class:`Tracer` writes the wire trace.
+  or bus; :func:`open_trace` opens the wire trace: :class:`Tracer` writes text,
+  :class:`PcapTracer` a pcap file for Wireshark (``*.pcap``).
 
 Each transport serves one :class:`Endpoint` (in practice a :class:`Line`) and knows no device.
 """
@@ -22,8 +25,11 @@ _HOME = {
     "PtyTransport": "pty",
     "Rfc2217Transport": "rfc2217",
     "TcpTransport": "tcp",
+    "UdpTransport": "udp",
+    "PcapTracer": "pcap",
     "Tracer": "trace",
     "render": "trace",
+    "open_trace": "tracing",
 }
 
 __all__ = sorted(_HOME)

@@ -51,3 +51,8 @@ class Transport(ABC):
     def url(self) -> str:
         """A pyserial URL or device path a host can open."""
         return self.address
+
+    def trace_peers(self) -> tuple[tuple[str, int], tuple[str, int]] | None:
+        """The (host, device) ``(address, port)`` pairs of the conversation now on this port,
+        for pcap traces; ``None`` where the transport has no such addresses (a pty) or no host yet."""
+        return None

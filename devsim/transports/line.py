@@ -15,7 +15,8 @@ plain byte pipe does not have:
 * **Output pacing** (``pacing=True``).  The device's answer reaches the host at the speed of the
   wire: the k-th character is released ``k`` character times after the device started sending
   (see :meth:`SerialSettings.char_time`), through the device clock's ``call_later``.
-* **Tracing.**  Every chunk in either direction goes to a :class:`~devsim.transports.trace.Tracer`.
+* **Tracing.**  Every chunk in either direction goes to a trace (:class:`~devsim.transports.trace.Tracer`,
+  or a pcap file, :mod:`devsim.transports.pcap`).
 * **Injected faults** (:meth:`Line.inject` with a :class:`LineFault`): corrupted, dropped, split,
   delayed or jittered bytes, line noise, a temporary baud-rate mismatch, a pulled cable, a hung
   or a silent device.  See :class:`LineFault` for what each kind does and in which order
@@ -47,7 +48,7 @@ from devsim.transports.faults import FaultDirection as FaultDirection
 from devsim.transports.faults import FaultHandle as FaultHandle
 from devsim.transports.faults import FaultKind as FaultKind
 from devsim.transports.faults import LineFault as LineFault
-from devsim.transports.trace import Tracer, render
+from devsim.transports.trace import TraceSink, render
 from devsim.transports.uart import garble as garble
 from devsim.transports.uart import settings_match as settings_match
 
@@ -171,7 +172,7 @@ class Line:
         clock: Clock,
         *,
         pacing: bool = False,
-        tracer: Tracer | None = None,
+        tracer: TraceSink | None = None,
     ) -> None:
         self.target = target
         self.clock = clock

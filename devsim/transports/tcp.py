@@ -112,6 +112,16 @@ class TcpTransport(Transport):
         """Whether a client is being served."""
         return self._active is not None
 
+    def trace_peers(self) -> tuple[tuple[str, int], tuple[str, int]] | None:
+        """The serving client's address and the listening address (``None`` with no client)."""
+        session = self._active
+        if session is None or session.transport is None:
+            return None
+        peer = session.transport.get_extra_info("peername")
+        if not peer:
+            return None
+        return (str(peer[0]), int(peer[1])), (self.host, self.port)
+
     @property
     def waiting(self) -> int:
         """Clients queued behind the one being served."""

@@ -13,6 +13,10 @@ Format of a data line::
 
 Events that are not data (host settings, disconnects) are written as ``TIME -- text``.  Every line
 is flushed at once, so a trace survives a crash and can be followed with ``tail -f``.
+
+A trace file is never written through a symlink (:func:`create_trace_file`, also used by the
+pcap trace of :mod:`devsim.transports.pcap`); :func:`devsim.transports.tracing.open_trace` picks
+the text or the pcap form by the file's suffix.
 """
 
 from __future__ import annotations
@@ -20,8 +24,9 @@ from __future__ import annotations
 import errno
 import os
 from types import TracebackType
+from typing import Protocol
 
-__all__ = ["Tracer", "render"]
+__all__ = ["TraceSink", "Tracer", "create_trace_file", "render"]
 
 _ESCAPES = {0x0D: "\\r", 0x0A: "\\n", 0x09: "\\t", 0x22: '\\"', 0x5C: "\\\\"}
 
@@ -39,18 +44,38 @@ def render(data: bytes) -> str:
     return '"' + "".join(parts) + '"'
 
 
+class TraceSink(Protocol):
+    """What a line writes its trace to: a :class:`Tracer`, a pcap tracer, or a tap on either."""
+
+    def record(self, direction: str, data: bytes, when: float, note: str | None = None) -> None:
+        """One chunk of data, ``"H>D"`` (host to device) or ``"D>H"``, at simulated time ``when``."""
+
+    def note(self, text: str, when: float) -> None:
+        """An event that is not data."""
+
+    def close(self) -> None:
+        """Flush and close."""
+
+
+def create_trace_file(path: str | os.PathLike[str]) -> int:
+    """Open ``path`` for writing, created or truncated, and return the descriptor; refuses a
+    symlink (``refusing to write a trace through the symlink ...``), so that a trace never
+    truncates a file someone linked to where the trace goes."""
+    name = os.fspath(path)
+    try:
+        return os.open(name, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise OSError(exc.errno, f"refusing to write a trace through the symlink {name}") from None
+        raise
+
+
 class Tracer:
     """Writes a trace file (truncated when opened)."""
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = os.fspath(path)
-        try:  # never truncate through a symlink someone put where the trace goes
-            fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
-        except OSError as exc:
-            if exc.errno == errno.ELOOP:
-                raise OSError(exc.errno, f"refusing to write a trace through the symlink {self.path}") from None
-            raise
-        self._file = open(fd, "w", encoding="ascii", newline="\n")
+        self._file = open(create_trace_file(self.path), "w", encoding="ascii", newline="\n")
 
     @property
     def closed(self) -> bool:
