@@ -8,6 +8,11 @@
       sers: pty /dev/pts/5
       control: unix:/tmp/sers.sock
 
+  A port whose kind declares a default network transport (``PortDef.default``, e.g.
+  ``"udp:5050"``) is served there on loopback; ``--port NAME=SPEC`` (repeatable) puts one port on
+  ``pty``, ``udp:[HOST:]PORT``, ``tcp:[HOST:]PORT`` or ``rfc2217:[HOST:]PORT`` instead, and
+  ``--pty``/``--link``/``--tcp``/``--rfc2217`` choose for the other ports.
+
 * ``devsim ctl --control ADDR devices|read|set|state|power-cycle|advance|now|line`` – talk to a
   running simulator's control API and print the JSON result.
 
@@ -130,7 +135,7 @@ def doc(kind: str) -> None:
 # -- devsim run ------------------------------------------------------------------------------
 @record(frozen=False)
 class _Port:
-    scheme: str  # "pty", "tcp" or "rfc2217"
+    scheme: str  # "pty", "tcp", "rfc2217" or "udp"
     host: str = "127.0.0.1"
     port: int = 0
     link: str | None = None
@@ -140,7 +145,7 @@ class _Port:
 class _Plan:
     kind: str
     devices: list[tuple[str, dict[str, Any]]]
-    port: _Port
+    port: _Port  # for the ports without a default or an override
     state_dir: str | None
     speed: float
     virtual: bool
@@ -149,6 +154,7 @@ class _Plan:
     control: ControlAddress | None
     allow_remote: bool
     printed: list[str] = field(default_factory=list)
+    overrides: dict[str, _Port] = field(default_factory=dict)  # --port NAME=SPEC
 
 
 def _host_port(option: str, text: str) -> tuple[str, int]:
@@ -163,6 +169,29 @@ def _host_port(option: str, text: str) -> tuple[str, int]:
     if not 0 <= port <= 65535:
         raise click.UsageError(f"{option}: port {port} is not in 0..65535")
     return host, port
+
+
+#: What ``--port NAME=SPEC`` accepts after ``NAME=``.
+PORT_SCHEMES = ("pty", "udp", "tcp", "rfc2217")
+
+
+def _parse_port_option(text: str, names: Sequence[str]) -> tuple[str, _Port]:
+    """``--port NAME=pty|udp:[HOST:]PORT|tcp:[HOST:]PORT|rfc2217:[HOST:]PORT`` → (NAME, port)."""
+    name, sep, spec = text.partition("=")
+    if not sep or not name:
+        raise click.UsageError(f"--port: expected NAME=SPEC (e.g. ether=udp:5050), got {text!r}")
+    if name not in names:
+        raise click.UsageError(f"--port: the kind has no port {name!r} (ports: {', '.join(names)})")
+    scheme, _, rest = spec.partition(":")
+    if scheme not in PORT_SCHEMES:
+        raise click.UsageError(
+            f"--port {name}: expected pty, udp:[HOST:]PORT, tcp:[HOST:]PORT or rfc2217:[HOST:]PORT, got {spec!r}"
+        )
+    if scheme == "pty":
+        if rest:
+            raise click.UsageError(f"--port {name}: pty takes no address, got {spec!r}")
+        return name, _Port("pty")
+    return name, _Port(scheme, *_host_port(f"--port {name}", rest))
 
 
 def _parse_drives(text: str) -> list[int]:
@@ -239,7 +268,9 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
 @click.option("--state-dir", metavar="DIR", help="Where non-volatile memory (EEPROM) is kept.")
 @click.option("--speed", type=float, default=1.0, show_default=True, metavar="F", help="Time speed factor.")
 @click.option("--virtual", is_flag=True, help="Virtual time: it moves only through 'devsim ctl advance'.")
-@click.option("--trace", metavar="FILE", help="Write a timestamped trace of the line traffic.")
+@click.option(
+    "--trace", metavar="FILE", help="Write a timestamped trace of the line traffic (FILE.pcap: a pcap file for Wireshark)."
+)
 @click.option("--control", metavar="ADDR", help="Serve the control API on unix:/path.sock or [HOST:]PORT.")
 @click.option("--control-allow-remote", is_flag=True, help="Allow a non-loopback --control host.")
 @click.option(
@@ -250,6 +281,13 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     help="RS-485 multidrop: one device per address on one line (--addresses is the same option).",
 )
 @click.option("--pacing", is_flag=True, help="Pace output at the configured baud rate.")
+@click.option(
+    "--port",
+    "port_options",
+    multiple=True,
+    metavar="NAME=SPEC",
+    help="Serve port NAME on SPEC: pty, udp:[HOST:]PORT, tcp:[HOST:]PORT or rfc2217:[HOST:]PORT (repeatable).",
+)
 def run(
     kind: str,
     use_pty: bool,
@@ -265,10 +303,14 @@ def run(
     control_allow_remote: bool,
     drives: str | None,
     pacing: bool,
+    port_options: tuple[str, ...],
 ) -> None:
     """Serve a simulated KIND device until Ctrl-C.
 
-    Prints one line per device port (NAME: pty|tcp|rfc2217 ADDRESS) and the control address.
+    Prints one line per device port (NAME: pty|tcp|rfc2217|udp ADDRESS) and the control address.
+    A port the kind declares on the network (e.g. Ether-S-Bus on udp:5050) is served there on
+    loopback unless --port NAME=SPEC says otherwise; the other ports follow --pty/--tcp/--rfc2217.
+    A trace named FILE.pcap is written as pcap (Wireshark, tshark).
     """
     try:
         cls = device_class(kind)
@@ -286,6 +328,12 @@ def run(
         port = _Port("rfc2217", *_host_port("--rfc2217", rfc2217))
     else:
         port = _Port("pty", link=link)
+    overrides: dict[str, _Port] = {}
+    for text in port_options:
+        name, spec = _parse_port_option(text, [p.name for p in cls.ports])
+        if name in overrides:
+            raise click.UsageError(f"--port: port {name!r} given twice")
+        overrides[name] = spec
     if speed <= 0:
         raise click.UsageError("--speed: must be positive")
     if virtual and speed != 1.0:
@@ -315,6 +363,7 @@ def run(
         pacing=pacing,
         control=control_addr,
         allow_remote=control_allow_remote,
+        overrides=overrides,
     )
     try:
         asyncio.run(_serve(plan))
@@ -329,6 +378,10 @@ class _StartError(Exception):
 
 
 def _make_transport(port: _Port) -> Any:
+    if port.scheme == "udp":
+        from devsim.transports.udp import UdpTransport
+
+        return UdpTransport(host=port.host, port=port.port)
     if port.scheme == "tcp":
         from devsim.transports.tcp import TcpTransport
 
@@ -365,14 +418,14 @@ async def _serve(plan: _Plan) -> None:
             if plan.state_dir is not None:
                 Path(plan.state_dir).mkdir(parents=True, exist_ok=True)
             devices = [runtime.add_device(plan.kind, name, config) for name, config in plan.devices]
-            served: list[tuple[str, Any, str | None]] = []  # port key, transport, link
-            for index, port_name in enumerate(devices[0].port_names()):
-                spec = _port_for(plan.port, port_name, index, len(devices[0].port_names()))
+            served: list[tuple[str, Any, _Port]] = []  # port name, transport, spec
+            plan_ports = _plan_ports(plan, devices[0].ports)
+            for index, (port_name, spec) in enumerate(plan_ports):
                 stage = f"open the {spec.scheme} port"
                 transport = _make_transport(spec)
                 trace = _trace_for(plan.trace, port_name, index)
                 await runtime.serve(devices, transport, port=port_name, pacing=plan.pacing, trace=trace)
-                served.append((port_name, transport, spec.link))
+                served.append((port_name, transport, spec))
             if plan.control is not None:
                 stage = f"serve the control API on {plan.control}"
                 server = ControlServer(runtime, plan.control, allow_remote=plan.allow_remote)
@@ -385,11 +438,11 @@ async def _serve(plan: _Plan) -> None:
 
         try:
             for device in devices:
-                for port_name, transport, link in served:
+                for port_name, transport, spec in served:
                     key = port_key(device.name, port_name)
-                    _say(f"{key}: {plan.port.scheme} {_port_text(transport, plan.port.scheme)}")
-                    if link:
-                        _say(f"{key}: link {link}")
+                    _say(f"{key}: {spec.scheme} {_port_text(transport, spec.scheme)}")
+                    if spec.link:
+                        _say(f"{key}: link {spec.link}")
             if server is not None:
                 _say(f"control: {address}")
             for device in devices:  # NAME: ready, each time it has booted and listens
@@ -407,6 +460,23 @@ async def _serve(plan: _Plan) -> None:
         loop.remove_signal_handler(signum)
 
 
+def _plan_ports(plan: _Plan, ports: Sequence[Any]) -> list[tuple[str, _Port]]:
+    """The transport of every port of the kind (``ports``: its :class:`PortDef` rows): the
+    ``--port`` override, else the port's declared default on loopback, else the shared choice
+    (``--pty``/``--link``/``--tcp``/``--rfc2217``) spread over those ports by :func:`_port_for`."""
+    shared = [p.name for p in ports if p.name not in plan.overrides and p.default is None]
+    chosen: list[tuple[str, _Port]] = []
+    for spec in ports:
+        if spec.name in plan.overrides:
+            chosen.append((spec.name, plan.overrides[spec.name]))
+        elif spec.default is not None:
+            scheme, number = spec.default_transport
+            chosen.append((spec.name, _Port(scheme, "127.0.0.1", number)))
+        else:
+            chosen.append((spec.name, _port_for(plan.port, spec.name, shared.index(spec.name), len(shared))))
+    return chosen
+
+
 def _port_for(port: _Port, name: str, index: int, count: int) -> _Port:
     """The transport of one port of a kind with ``count`` ports: a pty each (``--link PATH``
     becomes ``PATH-NAME`` beyond the first port), consecutive TCP port numbers from the given one."""
@@ -418,9 +488,13 @@ def _port_for(port: _Port, name: str, index: int, count: int) -> _Port:
 
 
 def _trace_for(trace: str | None, name: str, index: int) -> str | None:
-    """``--trace FILE`` for the first port, ``FILE-NAME`` beside it for the others."""
+    """``--trace FILE`` for the first port, ``FILE-NAME`` beside it for the others
+    (``STEM-NAME.pcap`` for ``STEM.pcap``, so that the others are pcap files too)."""
     if trace is None or index == 0:
         return trace
+    stem, dot, suffix = trace.rpartition(".")
+    if dot and suffix.lower() == "pcap" and "/" not in suffix:
+        return f"{stem}-{name}.{suffix}"
     return f"{trace}-{name}"
 
 

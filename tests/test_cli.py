@@ -128,10 +128,11 @@ def test_ctl_cannot_connect(sockdir: str) -> None:
 class Sim:
     """A `devsim run` subprocess whose stdout lines are collected by a thread."""
 
-    def __init__(self, *args: str) -> None:
+    def __init__(self, *args: str, extra_env: dict[str, str] | None = None) -> None:
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
         env["DEVSIM_EXTRA_KINDS"] = f"{ECHO},{TWOPORT}"
+        env.update(extra_env or {})
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "devsim", "run", *args],
             cwd=ROOT,
