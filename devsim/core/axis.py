@@ -593,6 +593,17 @@ class Axis:
         self._vref = None
         return self._set_plan(now, segs, rest, on_done, t, t)
 
+    def track(self, position: float, velocity: float) -> None:
+        """The axis is moved by a sampled loop (a servo chip computing its samples in batches):
+        it is at ``position`` now and goes on at ``velocity`` until the loop's next report
+        corrects it; ``velocity`` 0 stands it still.  Watches and switches fire on that
+        extrapolation, so within one report of the exact instant."""
+        now = self.clock.now()
+        if velocity == 0.0:
+            self._install(now, position, 0.0, [], position, None)
+        else:
+            self._install(now, position, velocity, [], None, None, cruise=velocity)
+
     def _install(
         self,
         now: float,

@@ -29,6 +29,7 @@ _BUILTIN = {
     "gms96": "devsim.devices.gms96:Gms96Device",
     "poselesta": "devsim.devices.poselesta:PoselestaDevice",
     "ip247": "devsim.devices.ip247:Ip247Device",
+    "pcd4h3": "devsim.devices.pcd4h3:Pcd4h3Device",
 }
 
 

@@ -32,6 +32,8 @@ def test_axinit_issues_the_chip_trace_of_example_1() -> None:
         ("LFIL", (0x0F0F, 150, 50, 50, 500)), ("UDF", ()), ("LTRJ", (0x0100,)), ("STT", ()),
         ("LTRJ", (0x0020, 76)), ("LTRJ", (0x0008, 1_117_389)),
     ]
+    assert axis.chip.signals & 0x2000  # UDF executed: bit 13 for the sample after it
+    axis.chip.sample()  # (AxInit takes milliseconds: the chip samples meanwhile)
     assert axis.chip.status == 0x84 and axis.chip.signals == 0x4084
     assert axis.flags[200] == 1 and axis.flags[207] == 0 and axis.chip.actual == 0
 
@@ -44,7 +46,7 @@ def test_example_1_motion_program_through_the_flags() -> None:
     axis.trace.clear()
     axis.registers[207] = 1000
     axis.flags[207] = axis.flags[228] = 1
-    assert axis.handle() == ["FLdDA", "FStart"]
+    assert axis.handle() == pytest.approx(0.5 + 4.1 + 1.0)  # base time and the two functions (§10.1)
     assert axis.trace == [("LTRJ", (0x0002, 100_000)), ("STT", ())]
     assert axis.flags[207] == axis.flags[228] == 0 and axis.flags[200] == 0
     samples = 0

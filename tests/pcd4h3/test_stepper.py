@@ -40,7 +40,7 @@ def test_batches_give_the_same_loop_as_single_samples() -> None:
     batched, single = _chip(), _chip()
     stepper = ChipStepper(batched, clock)
     for chip in (batched, single):
-        chip.load_trajectory(0x002A, [76, 1_117_389, 20_000])
+        chip.load_trajectory(0x002A, [76, 1_117_389, 100_000])  # (still moving at the end)
         chip.start()
     stepper.poke()
     for _ in range(400):

@@ -112,6 +112,9 @@ class Layout:
         self.bar, self.baf, self.axes = bar, baf, axes
         self.flag_offsets = {f.symbol: f.offset for f in FLAGS} | dict(flag_map or {})
         self.register_offsets = {r.symbol: r.offset for r in REGISTERS}
+        #: The command flags in the order AxHndlg scans them: by offset (§3.3.2).
+        self.command_order = tuple(sorted((f.symbol for f in FLAGS if f.kind == "command"),
+                                          key=lambda symbol: self.flag_offsets[symbol]))
 
     def register(self, axis: int, symbol: str) -> int:
         return self.bar + (axis - 1) * REGISTERS_PER_AXIS + self.register_offsets[symbol]

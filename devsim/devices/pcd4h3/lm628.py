@@ -1,30 +1,57 @@
-"""The LM628/LM629 motion controller chip of one PCD4.H3 axis (spec pcd4h3.md §3.5, §4.5, §4.8,
-§5.2–§5.9; National Semiconductor LM628 datasheet): its commands, its status byte and signals
-register, and one sample of its work (profile generator, filter, motor, the checks).
+"""The LM628/LM629 motion controller chip of one PCD4.H3 axis (spec pcd4h3.md §3.5, §3.7, §4.5,
+§4.8, §5.2–§5.9; National Semiconductor LM628 datasheet): its commands with the command error
+they raise on bad data, its status byte and signals register, and one sample of its work
+(profile generator, filter, motor, encoder with index and wrap-around, the checks).
 
 Pure and stepped: :meth:`Lm628.sample` advances one sample period (2048 / 6 MHz); the caller
-decides when.  Commands take the words the host port carries (§3.5.3).
+decides when.  Commands take the words the host port carries (§3.5.3); :meth:`Lm628.command` and
+:meth:`Lm628.read` are the host port itself, where a disturbed bus (``bus_errors``) or a chip that
+is not fitted (``present``) turns every transfer into a command error (§3.7, G-27).
 """
 
 from __future__ import annotations
+
+import math
+from collections.abc import Callable
 
 from devsim.core.words import signed32
 from devsim.devices.pcd4h3.pid import Coefficients, Filter, Motor, sat
 from devsim.devices.pcd4h3.trajectory import Profile, Trajectory
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
-__all__ = ["Lm628", "MOTOR_OFF", "BREAKPOINT", "POSITION_ERROR", "WRAPAROUND", "INDEX", "COMPLETE", "COMMAND_ERROR"]
+__all__ = ["BREAKPOINT", "COMMAND_ERROR", "COMPLETE", "INDEX", "Lm628", "MOTOR_OFF", "POSITION_ERROR", "WRAPAROUND"]
 
 MOTOR_OFF, BREAKPOINT, POSITION_ERROR, WRAPAROUND, INDEX, COMPLETE, COMMAND_ERROR = 0x80, 0x40, 0x20, 0x10, 0x08, 0x04, 0x02
 INTERRUPTS = BREAKPOINT | POSITION_ERROR | WRAPAROUND | INDEX | COMPLETE | COMMAND_ERROR
-POSITION_RANGE = 1 << 30
+POSITION_RANGE = 1 << 30  # positions run from −2^30 to 2^30 − 1 (C0000000h … 3FFFFFFFh)
+VALUE_MAX = 0x3FFF_FFFF  # velocity and acceleration words
+
+
+def wrap(count: int) -> int:
+    """A count in the chip's position range, as its 31-bit counter wraps (§5.7)."""
+    return (count + POSITION_RANGE) % (2 * POSITION_RANGE) - POSITION_RANGE
+
+
+def _in_range(position: int) -> bool:
+    return -POSITION_RANGE <= position < POSITION_RANGE
+
+
+def _sign(value: int) -> int:
+    return (value > 0) - (value < 0)
 
 
 class Lm628:
-    """One chip: its buffers, working registers, flags and the motor behind its output."""
+    """One chip: its buffers, working registers, flags, and the motor and encoder behind it."""
 
-    def __init__(self, motor: Motor | None = None) -> None:
+    def __init__(self, motor: Motor | None = None, *, lm629: bool = False) -> None:
         self.motor = motor if motor is not None else Motor()
+        self.lm629 = lm629  # the PWM types' chip: no 12-bit port (G-26)
+        self.present = True  # False: a Y chip on a one-axis module, every transfer fails (G-27)
+        self.bus_errors = 0  # transfers still to be disturbed on the PCD4 bus (§3.7 cause 5)
+        self.command_errors = 0  # since start-up (diagnostics)
+        self.encoder_sign = 1  # −1: phases A/B swapped by a wrong inversion jumper (§2.5)
+        self.index_period = 0  # counts between index marks (4 · lines), 0: no index reaches the decoder
+        self.index_offset = 0
         self.profile = Profile()
         self.filter = Filter(dac_bits=8)
         self.buffer = Trajectory()
@@ -35,9 +62,44 @@ class Lm628:
         self.error_threshold = 0x7FFF
         self.breakpoint: int | None = None
         self.accel_loaded = False
-        self.home = 0.0  # motor position of count 0
+        self.started = False  # a real trajectory start since RESET (relative loads need one, G-4)
+        self.index_armed = False
+        self.index_position = 0
+        self.home = 0  # raw encoder count of position 0
         self._stop = 0  # the stop bits (8 … 10) of the last LTRJ, acting at the next STT
         self.on_target = False  # signals bit 10: the generator finished a profile since the last STT
+        self.udf_sample = False  # signals bit 13: for the sample after UDF
+        self._raw = self._encoder()
+
+    # -- the host port (§3.5.2, §3.7) ------------------------------------------------------------
+    def command(self, mnemonic: str, *words: int) -> None:
+        """One command byte and its data words; a failed transfer sets the command error."""
+        handler = COMMANDS.get(mnemonic)
+        if handler is None or not self._transfer():
+            self.error()
+            return
+        handler(self, list(words))
+
+    def read(self, mnemonic: str) -> int | None:
+        """A report command (RDRP, RDSIGS …): its value, or None when the transfer failed."""
+        report = REPORTS.get(mnemonic)
+        if report is None or not self._transfer():
+            self.error()
+            return None
+        return report(self)
+
+    def _transfer(self) -> bool:
+        if not self.present:
+            return False
+        if self.bus_errors > 0:
+            self.bus_errors -= 1
+            return False
+        return True
+
+    def error(self) -> None:
+        """The command error flag (status bit 1): the command is ignored."""
+        self.flags |= COMMAND_ERROR
+        self.command_errors += 1
 
     # -- initialisation and interrupts (§3.5.3) -------------------------------------------------
     def reset(self) -> None:
@@ -46,68 +108,111 @@ class Lm628:
         self.profile, self.buffer = Profile(), Trajectory()
         self.filter = Filter(dac_bits=8)
         self.flags, self.mask, self.motor_off, self.stop_on_error = 0, INTERRUPTS & ~BREAKPOINT, True, False
-        self.breakpoint, self.accel_loaded, self.on_target = None, False, False
+        self.error_threshold = 0x7FFF
+        self.breakpoint, self.accel_loaded, self.on_target, self.started = None, False, False, False
+        self.index_armed, self._stop = False, 0
         self.define_home()
 
     def port(self, bits: int) -> None:
-        """PORT8 / PORT12."""
+        """PORT8 / PORT12 (the LM629 has no 12-bit port: command error)."""
+        if bits == 12 and self.lm629:
+            self.error()
+            return
         self.filter.dac_bits = bits
 
     def define_home(self) -> None:
-        """DFH: the actual position becomes 0."""
-        self.home = self.motor.position
-        self.profile.set_home()
-        self.profile.position = 0
-        self.profile.target = 0
+        """DFH: the actual position becomes 0; the desired position and the running target move
+        with it, so a running move stops where it would have (§5.9)."""
+        actual = self.unwrapped_actual
+        self.home += actual
+        self.profile.shift(-actual)
+
+    def set_actual(self, position: int) -> None:
+        """The actual position reads ``position`` from now (a test's injection, S07); the desired
+        position moves with it."""
+        shift = position - self.unwrapped_actual
+        self.home -= shift
+        self.profile.shift(shift)
+
+    def arm_index(self) -> None:
+        """SIP: the next index mark latches the actual position."""
+        self.index_armed = True
 
     def position_error(self, threshold: int, stop: bool) -> None:
-        """LPEI (flag only) / LPES (flag and motor off)."""
-        self.error_threshold, self.stop_on_error = threshold & 0x7FFF, stop
+        """LPEI (flag only) / LPES (flag and motor off); the threshold is 0 … 7FFFh."""
+        if not 0 <= threshold <= 0x7FFF:
+            self.error()
+            return
+        self.error_threshold, self.stop_on_error = threshold, stop
 
     def set_breakpoint(self, position: int, relative: bool = False) -> None:
-        """SBPA / SBPR (relative to the current target)."""
-        base = self.profile.target >> 16 if relative else 0
-        self.breakpoint = base + signed32(position)
+        """SBPA / SBPR (relative to the current target, only after a first start)."""
+        if relative and not self.started:
+            self.error()
+            return
+        value = (self.profile.target >> 16 if relative else 0) + signed32(position)
+        if not _in_range(value):
+            self.error()
+            return
+        self.breakpoint = value
 
     def reset_interrupts(self, word: int) -> None:
         """RSTI: a 0 bit resets that flag."""
         self.flags &= word | ~INTERRUPTS
 
+    def mask_interrupts(self, word: int) -> None:
+        """MSKI: which flags drive the host interrupt."""
+        self.mask = word & INTERRUPTS
+
     # -- filter and trajectory ---------------------------------------------------------------------
     def load_filter(self, control: int, words: list[int]) -> None:
         """LFIL: the control word (ds in bits 15…8, which values follow) and kp, ki, kd, il."""
+        wanted = bin(control & 0x0F).count("1")
+        if len(words) != wanted or any(not 0 <= w <= 0x7FFF for w in words):
+            self.error()
+            return
         values = iter(words)
         c = self.filter.buffer
         kp, ki, kd, il = c.kp, c.ki, c.kd, c.il
         if control & 8:
-            kp = next(values) & 0x7FFF
+            kp = next(values)
         if control & 4:
-            ki = next(values) & 0x7FFF
+            ki = next(values)
         if control & 2:
-            kd = next(values) & 0x7FFF
+            kd = next(values)
         if control & 1:
-            il = next(values) & 0x7FFF
+            il = next(values)
         self.filter.buffer = Coefficients(kp, ki, kd, il, control >> 8 & 0xFF)
 
     def update_filter(self) -> None:
         """UDF."""
         self.filter.update()
+        self.udf_sample = True
 
     def load_trajectory(self, control: int, values: list[int]) -> None:
-        """LTRJ: the control word (§3.5.4) and acceleration, velocity, position as loaded."""
+        """LTRJ: the control word (§3.5.4) and acceleration, velocity, position as loaded; bad
+        data or a relative value before the first start reject the whole command (§3.7)."""
+        wanted = bin(control & 0x2A).count("1")
+        if len(values) != wanted or control & 0x15 and not self.started or control & ~0x1F3F & 0xFFFF:
+            self.error()
+            return
         items = iter(values)
         b = self.buffer
         acceleration, velocity, position = b.acceleration, b.velocity, b.position
         if control & 0x20:
             value = next(items)
-            acceleration = acceleration + signed32(value) if control & 0x10 else value & 0x3FFF_FFFF
-            self.accel_loaded = True
+            acceleration = acceleration + signed32(value) if control & 0x10 else value & 0xFFFF_FFFF
         if control & 0x08:
             value = next(items)
-            velocity = velocity + signed32(value) if control & 0x04 else value & 0x3FFF_FFFF
+            velocity = velocity + signed32(value) if control & 0x04 else value & 0xFFFF_FFFF
         if control & 0x02:
             value = signed32(next(items))
             position = (self.profile.target >> 16) + value if control & 0x01 else value
+        if not (0 <= acceleration <= VALUE_MAX and 0 <= velocity <= VALUE_MAX and _in_range(position)):
+            self.error()
+            return
+        if control & 0x20:
+            self.accel_loaded = True
         self.buffer = Trajectory(acceleration, velocity, position, bool(control & 0x0800), bool(control & 0x1000))
         self._stop = control & 0x0700
 
@@ -115,9 +220,8 @@ class Lm628:
         """STT: take over the buffers; a stop in the control word acts now."""
         stop = self._stop
         if self.accel_loaded and not self.profile.complete and not self.motor_off and self.profile.velocity:
-            self.flags |= COMMAND_ERROR  # acceleration changed while moving (§3.5.3)
+            self.error()  # acceleration changed while moving (§3.5.3)
             return
-        self._stop = 0
         if stop & 0x0100:
             self.motor_off = True
             self.profile.stop_abruptly()
@@ -125,12 +229,13 @@ class Lm628:
             return
         if stop & 0x0200:
             self.profile.stop_abruptly()
+            self.on_target = True
             self.flags |= COMPLETE
             return
         if stop & 0x0400:
             self.profile.stop_smoothly()
             return
-        self.motor_off, self.accel_loaded, self.on_target = False, False, False
+        self.motor_off, self.accel_loaded, self.on_target, self.started = False, False, False, True
         self.flags &= ~COMPLETE
         self.profile.start(self.buffer)
         if self.profile.complete:
@@ -138,43 +243,135 @@ class Lm628:
             self.on_target = True
 
     # -- reports (§4.5, §4.8) ----------------------------------------------------------------------
+    def _encoder(self) -> int:
+        return math.floor(self.encoder_sign * self.motor.position)
+
+    @property
+    def unwrapped_actual(self) -> int:
+        return self._encoder() - self.home
+
     @property
     def actual(self) -> int:
-        """RDRP: the encoder count relative to home."""
-        return int((self.motor.position - self.home) // 1)
+        """RDRP: the encoder count relative to home, in the chip's range."""
+        return wrap(self._encoder() - self.home)
+
+    @property
+    def desired(self) -> int:
+        """RDDP: the generator's desired position."""
+        return wrap(self.profile.desired)
 
     @property
     def status(self) -> int:
         """RDSTAT (bit 0 busy is never seen: commands complete at once)."""
-        return self.flags | (MOTOR_OFF if self.motor_off else 0) | (COMPLETE if self.motor_off else 0)
+        return self.flags | (MOTOR_OFF | COMPLETE if self.motor_off else 0)
 
     @property
     def signals(self) -> int:
         """RDSIGS (§4.5)."""
         t = self.buffer
-        return ((self.status & INTERRUPTS) | int(self.motor_off) << 7 | int(self.filter.dac_bits == 8) << 8
-                | int(self.stop_on_error) << 9 | int(self.on_target) << 10 | int(t.velocity_mode) << 11
-                | int(t.forward) << 12 | int(self.accel_loaded) << 14)
+        return ((self.status & INTERRUPTS) | int(self.index_armed) | int(self.motor_off) << 7
+                | int(self.filter.dac_bits == 8) << 8 | int(self.stop_on_error) << 9 | int(self.on_target) << 10
+                | int(t.velocity_mode) << 11 | int(t.forward) << 12 | int(self.udf_sample) << 13
+                | int(self.accel_loaded) << 14)
+
+    @property
+    def real_velocity(self) -> int:
+        """RDRV: whole counts per sample, the top 14 bits only (C000h … 3FFFh)."""
+        return max(-0x4000, min(0x3FFF, math.floor(self.encoder_sign * self.motor.velocity * CHIP_SAMPLE)))
 
     # -- one sample --------------------------------------------------------------------------------
     def sample(self) -> None:
-        before = self.actual
+        self.udf_sample = False
+        before = self._raw
         was_complete = self.profile.complete
-        self.profile.sample()
-        if self.profile.complete and not was_complete:
-            self.flags |= COMPLETE
-            self.on_target = True
-        if self.motor_off:
-            self.filter.output = 0
+        if self.motor_off:  # the set position tracks the coasting axis, the integrator rests (G-21)
+            self.profile.hold(self.unwrapped_actual)
+            self.filter.reset()
         else:
-            self.filter.sample(self.profile.desired, self.actual)
-        self.motor.step(self.filter.volts if self.filter.dac_bits == 12 else self.filter.volts * 10.0, CHIP_SAMPLE)
-        after = self.actual
-        if abs(sat(self.profile.desired - after, 32)) > self.error_threshold:
+            self.profile.sample()
+            if self.profile.complete and not was_complete:
+                self.flags |= COMPLETE
+                self.on_target = True
+            self.filter.sample(self.profile.desired, self.unwrapped_actual)
+        volts = self.filter.volts if self.filter.dac_bits == 12 else self.filter.volts * 10.0
+        self.motor.step(volts * self.encoder_sign, CHIP_SAMPLE)
+        after = self._raw = self._encoder()
+        if before != after:
+            self._moved(before, after)
+        if not self.motor_off and abs(sat(self.profile.desired - self.unwrapped_actual, 32)) > self.error_threshold:
             self.flags |= POSITION_ERROR
             if self.stop_on_error:
                 self.motor_off = True
-        if self.breakpoint is not None and (before - self.breakpoint) * (after - self.breakpoint) <= 0 \
-                and before != after:
-            self.flags |= BREAKPOINT
-            self.breakpoint = None
+
+    def _moved(self, before: int, after: int) -> None:
+        """The encoder counted from ``before`` to ``after`` (raw counts) in this sample."""
+        home = self.home
+        if (before - home + POSITION_RANGE) >> 31 != (after - home + POSITION_RANGE) >> 31:
+            self.flags |= WRAPAROUND
+        if self.breakpoint is not None:
+            b = self.breakpoint
+            was, now = _sign(wrap(before - home) - b), _sign(wrap(after - home) - b)
+            if was != now and was != 0 and now * was <= 0:
+                self.flags |= BREAKPOINT
+        if self.index_armed and self.index_period:
+            period, offset = self.index_period, self.index_offset
+            if after > before:  # the last mark at or below ``after``, passed if above ``before``
+                mark = (after - offset) // period * period + offset
+                passed = mark > before
+            else:  # the first mark at or above ``after``, passed if below ``before``
+                mark = -((offset - after) // period) * period + offset
+                passed = mark < before
+            if passed:
+                self.index_position = wrap(mark - home)
+                self.index_armed = False
+                self.flags |= INDEX
+
+
+COMMANDS: dict[str, Callable[[Lm628, list[int]], None]] = {
+    "RESET": lambda c, w: c.reset() if not w else c.error(),
+    "PORT8": lambda c, w: c.port(8) if not w else c.error(),
+    "PORT12": lambda c, w: c.port(12) if not w else c.error(),
+    "DFH": lambda c, w: c.define_home() if not w else c.error(),
+    "SIP": lambda c, w: c.arm_index() if not w else c.error(),
+    "LPEI": lambda c, w: c.position_error(w[0], False) if len(w) == 1 else c.error(),
+    "LPES": lambda c, w: c.position_error(w[0], True) if len(w) == 1 else c.error(),
+    "SBPA": lambda c, w: c.set_breakpoint(w[0], False) if len(w) == 1 else c.error(),
+    "SBPR": lambda c, w: c.set_breakpoint(w[0], True) if len(w) == 1 else c.error(),
+    "MSKI": lambda c, w: c.mask_interrupts(w[0]) if len(w) == 1 else c.error(),
+    "RSTI": lambda c, w: c.reset_interrupts(w[0]) if len(w) == 1 else c.error(),
+    "LFIL": lambda c, w: c.load_filter(w[0], w[1:]) if w else c.error(),
+    "UDF": lambda c, w: c.update_filter() if not w else c.error(),
+    "LTRJ": lambda c, w: c.load_trajectory(w[0], w[1:]) if w else c.error(),
+    "STT": lambda c, w: c.start() if not w else c.error(),
+}
+"""The write commands of §3.5.3 by mnemonic (32-bit values as one word each)."""
+
+REPORTS: dict[str, Callable[[Lm628], int]] = {
+    "RDSTAT": lambda c: c.status,
+    "RDSIGS": lambda c: c.signals,
+    "RDIP": lambda c: c.index_position,
+    "RDDP": lambda c: c.desired,
+    "RDRP": lambda c: c.actual,
+    "RDDV": lambda c: c.profile.velocity,
+    "RDRV": lambda c: c.real_velocity,
+    "RDSUM": lambda c: c.filter.integral,
+}
+"""The report commands of §3.5.3 by mnemonic."""
+
+CODES = {"RESET": 0x00, "STT": 0x01, "DFH": 0x02, "SIP": 0x03, "UDF": 0x04, "PORT8": 0x05, "PORT12": 0x06,
+         "RDDV": 0x07, "RDDP": 0x08, "RDIP": 0x09, "RDRP": 0x0A, "RDRV": 0x0B, "RDSIGS": 0x0C, "RDSUM": 0x0D,
+         "LPES": 0x1A, "LPEI": 0x1B, "MSKI": 0x1C, "RSTI": 0x1D, "LFIL": 0x1E, "LTRJ": 0x1F, "SBPA": 0x20, "SBPR": 0x21}
+"""Command bytes (§3.5.3)."""
+READ_BYTES = {"RDDV": 4, "RDDP": 4, "RDIP": 4, "RDRP": 4, "RDRV": 2, "RDSIGS": 2, "RDSUM": 2}
+
+
+def notation(mnemonic: str, words: tuple[int, ...]) -> str:
+    """One transfer as the spec writes chip traces (§6): ``C:1F D:00 02 D:00 01 D:86 A0``."""
+    parts = [f"C:{CODES.get(mnemonic, 0xFF):02X}"]
+    if mnemonic in READ_BYTES:
+        return f"{parts[0]} R:{READ_BYTES[mnemonic]}"
+    wide = {"LTRJ": range(1, len(words)), "SBPA": range(len(words)), "SBPR": range(len(words))}.get(mnemonic, ())
+    for index, word in enumerate(words):
+        halves = (word >> 16 & 0xFFFF, word & 0xFFFF) if index in wide else (word & 0xFFFF,)
+        parts.extend(f"D:{h >> 8:02X} {h & 0xFF:02X}" for h in halves)
+    return " ".join(parts)

@@ -2,7 +2,8 @@
 §5.3, §5.4 ``pid`` mode, §5.5, §5.11; LM628 datasheet).
 
 Filter arithmetic as the spec fixes it: the error e = desired − actual saturates to 16 bits; the
-error sum is kept to 24 bits and its term I = ki · (Σe / 256) is limited to ±il; the derivative
+error sum is kept to 24 bits and its term I = ki · (Σe / 256) is limited to ±il (the sum stops
+growing where the term reaches il, so it does not wind up beyond the limit: a decision, §5.3); the derivative
 d = e(n') − e(n'−1) is taken every ds + 1 samples and kd · d held in between; the output word
 u = sat16(kp·e + I + kd·d) goes out as the top 12 bits (offset binary around 800h, ±10 V) or the
 top 8 bits (PWM, −128 … +127).  New coefficients act only after UDF.
@@ -63,7 +64,8 @@ class Filter:
         """One sample: the output word for error ``desired − actual``."""
         c = self.working
         e = sat(desired - actual, 16)
-        self.error_sum = sat(self.error_sum + e, 24)
+        limit = (c.il * 256 + c.ki - 1) // c.ki if c.ki else 1 << 23  # the sum stops where the term reaches il
+        self.error_sum = max(-limit, min(limit, sat(self.error_sum + e, 24)))
         self.integral = max(-c.il, min(c.il, c.ki * (int(self.error_sum / 256))))
         if self._countdown == 0:
             self.derivative = e - self._previous
@@ -97,20 +99,28 @@ class Motor:
         self.position = 0.0  # counts
         self.velocity = 0.0  # counts/s
         self.blocked = False
+        self.load = 0.0  # a load torque, as the volts that would hold it (S21)
+        self.low, self.high = -math.inf, math.inf  # mechanical end stops (S12)
+        self._decay: tuple[float, float] = (0.0, 1.0)  # (seconds, exp(−seconds/τ)) of the last step
 
     def step(self, volts: float, seconds: float) -> None:
         """Hold ``volts`` for ``seconds``: the exact solution of the first-order lag."""
         if self.blocked:
             self.velocity = 0.0
             return
-        goal = self.kv * volts
+        goal = self.kv * (volts - self.load)
         if self.tau <= 0:
             self.position += goal * seconds
             self.velocity = goal
-            return
-        decay = math.exp(-seconds / self.tau)
-        self.position += goal * seconds + (self.velocity - goal) * self.tau * (1 - decay)
-        self.velocity = goal + (self.velocity - goal) * decay
+        else:
+            if self._decay[0] != seconds:
+                self._decay = (seconds, math.exp(-seconds / self.tau))
+            decay = self._decay[1]
+            self.position += goal * seconds + (self.velocity - goal) * self.tau * (1 - decay)
+            self.velocity = goal + (self.velocity - goal) * decay
+        if not self.low <= self.position <= self.high:
+            self.position = min(self.high, max(self.low, self.position))
+            self.velocity = 0.0
 
     @property
     def counts(self) -> int:

@@ -23,8 +23,12 @@ QUIET = 64  # samples without any change before the chip counts as settled
 
 
 class ChipStepper:
-    def __init__(self, chip: Lm628, clock: Clock, on_tick: Callable[[], None] | None = None) -> None:
+    def __init__(self, chip: Lm628, clock: Clock, on_tick: Callable[[], None] | None = None, *,
+                 own_timer: bool = True) -> None:
         self.chip, self.clock, self.on_tick = chip, clock, on_tick
+        self.own_timer = own_timer  # False: someone else (the PLC cycle) calls catch_up while active
+        #: Called after each batch that computed samples (the shared axis follows the motor).
+        self.on_batch: Callable[[], None] | None = None
         self._samples = 0  # samples computed since the epoch
         self._epoch = clock.now()
         self._timer: Timer | None = None
@@ -34,10 +38,22 @@ class ChipStepper:
     def active(self) -> bool:
         return self._timer is not None
 
-    def catch_up(self) -> None:
-        """Compute every sample due by now."""
-        due = int((self.clock.now() - self._epoch) / CHIP_SAMPLE + 1e-9)
+    @property
+    def settled(self) -> bool:
+        """Nothing has changed for a while: no sample needs computing until a command."""
+        return self._quiet >= QUIET
+
+    def catch_up(self, until: float | None = None) -> None:
+        """Compute every sample due by now (or by ``until``); a settled chip just rests."""
+        now = self.clock.now() if until is None else until
+        if self.settled:
+            if now > self._epoch + self._samples * CHIP_SAMPLE:
+                self._epoch, self._samples = now, 0
+            return
+        due = int((now - self._epoch) / CHIP_SAMPLE + 1e-9)
         chip = self.chip
+        if self._samples >= due:
+            return
         while self._samples < due:
             before = (chip.actual, chip.profile.position, chip.flags)
             chip.sample()
@@ -47,12 +63,14 @@ class ChipStepper:
                 self._quiet += 1
             else:
                 self._quiet = 0
+        if self.on_batch is not None:
+            self.on_batch()
 
     def poke(self) -> None:
         """A command changed the chip (call :meth:`catch_up` before the command, so it acts at
         the right sample): keep ticking until the chip settles."""
         self._quiet = 0
-        if self._timer is None:
+        if self._timer is None and self.own_timer:
             self._timer = self.clock.call_later(TICK, self._tick)
 
     def _tick(self) -> None:

@@ -62,10 +62,16 @@ class Profile:
     def stop_abruptly(self) -> None:
         self.velocity, self.target, self.stopping, self.complete = 0, self.position, False, True
 
-    def set_home(self) -> None:
-        """DFH: the current position becomes 0 (desired and target move with it)."""
-        self.target -= self.position
-        self.position = 0
+    def shift(self, counts: int) -> None:
+        """The coordinates move by ``counts`` (DFH, a set actual position): desired position and
+        target move with them."""
+        self.target += counts << 16
+        self.position += counts << 16
+
+    def hold(self, position: int) -> None:
+        """While the motor is off the desired position follows the axis (G-21)."""
+        self.position = self.target = position << 16
+        self.velocity, self.stopping, self.complete = 0, False, True
 
     def sample(self) -> None:
         """One sample period of the generator."""

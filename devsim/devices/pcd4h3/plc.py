@@ -1,0 +1,242 @@
+"""The simulated PCD4 CPU around the H3 modules (spec pcd4h3.md §3.3.3, §4.1, §9.5, §9.6): its
+media (registers, flags, inputs, outputs, counters, timers), the cold start that runs AxInit for
+every axis (XOB 16), and the cyclic part that calls AxHndlg for every axis once per PLC cycle,
+with the cyclic read functions and the DP14 display the manual's examples program.
+
+The cycle runs on the device clock only while there is something to do (a command flag set, a
+chip moving, a cyclic read to refresh): an idle PLC costs no CPU, and what a host sees is what an
+always-cycling PLC would show.  Inside a cycle each function acts on its chip at the moment the
+FBs' execution times (§10.1) put it, so two axes started in one cycle start about 1 ms apart.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from devsim.core.clock import Clock, Timer
+from devsim.core.model import Model
+from devsim.core.nvram import NonVolatileMemory
+from devsim.core.words import signed32
+from devsim.devices.pcd4h3 import display
+from devsim.devices.pcd4h3.config import Pcd4h3Config
+from devsim.devices.pcd4h3.drive import H3Drive, axis_signals
+from devsim.devices.pcd4h3.layout import REGISTERS, Layout
+from devsim.devices.pcd4h3.library import H3Axis
+from devsim.devices.pcd4h3.units import ffp_encode
+
+__all__ = ["Halted", "Pcd4"]
+
+RUN, HALT, STOP = "R", "H", "S"
+MEDIA_SIZE = {"register": 4096, "flag": 8192, "input": 1024, "output": 1024, "counter": 1600, "timer": 32}
+BUS_INPUTS = {"X": (9, 10, 11), "Y": (13, 14, 15)}  # LS1, LS2, In/Ref at module address + offset (§2.2)
+
+
+class Halted(Exception):
+    """ComErS halted the CPU (``comers_action: halt``)."""
+
+
+class Pcd4(Model):
+    """One PCD4 with ``modules`` H3 modules and ``mna`` axes."""
+
+    def __init__(self, *, clock: Clock, config: Mapping[str, Any] | None = None,
+                 nvram: NonVolatileMemory | None = None, name: str = "") -> None:
+        super().__init__(clock=clock, config=config, nvram=nvram, name=name)
+        s = self.settings = Pcd4h3Config.parse(self.config).dump()
+        h = s["h3def"]
+        variant = s["variant"]
+        self.per_module, self.pwm, self.rs422 = int(variant[2]), variant[3] in "67", variant[3] in "17"
+        self.imode = h["imode"] or (5 if self.pwm else 6)
+        self.fmah3, self.station = h["fmah3"], s["station"]
+        self.layout = Layout(h["bar"], h["baf"], h["mna"], s["flag_map"])
+        self.cycle_time = s["plc_cycle_ms"] / 1000
+        self.diag_registers, self.diag_flags = s["diagnostics"]
+        self.registers: dict[int, int] = {}
+        self.flags: dict[int, int] = {}
+        self.inputs: dict[int, int] = {}  # inputs that are not an H3 module's (the user's keys)
+        self.outputs: dict[int, int] = {}
+        self.counters: dict[int, int] = {}
+        self.timers: dict[int, int] = {}
+        for axis in range(1, h["mna"] + 1):  # G-16: the registers start with Example 1's values
+            for register in REGISTERS:
+                if register.load:
+                    self.registers[self.layout.register(axis, register.symbol)] = register.example
+        self.drives: list[H3Drive] = []
+        self.axes: list[H3Axis] = []
+        for n in range(1, max(2, h["mna"]) + 1):
+            for signal, kind, initial, doc in axis_signals(n):
+                self.signals.define(signal, kind, initial, doc)  # type: ignore[arg-type]
+        for n in range(1, h["mna"] + 1):
+            module, y = (n - 1) // 2, n % 2 == 0
+            present = module < s["modules"] and (not y or self.per_module == 2)
+            drive = H3Drive(n, clock, self.signals, s["axes"].get(n) or _axis_defaults(), lm629=self.pwm,
+                            rs422=self.rs422, present=present)
+            axis = H3Axis(n, self.layout, drive.chip, self.registers, self.flags)
+            axis.rsigb_bit12_inverted = s["rsigb_bit12_inverted"]
+            axis.on_comers = self._comers
+            self.drives.append(drive)
+            self.axes.append(axis)
+            self.signals.subscribe(f"LS1_{n}", lambda _n, old, new, n=n: self._limit(n, old, new))
+            self.signals.subscribe(f"LS2_{n}", lambda _n, old, new, n=n: self._limit(n, old, new))
+        self.screens = {n: display.BLANK for n in s["display"]}
+        self.status = RUN
+        self.initialised = [False] * len(self.axes)
+        self._timer: Timer | None = None
+        self._last_cycle = -math.inf
+        self._calls_before, self._running_since = [0] * len(self.axes), clock.now()
+        self.cold_start()
+
+    # -- cold start (XOB 16, §9.6.1) -------------------------------------------------------------
+    def cold_start(self) -> None:
+        """Load the configured registers, run AxInit for every axis, start the cycle."""
+        for n, values in self.settings["init"].items():
+            if n > len(self.axes):
+                continue
+            for symbol, value in values.items():
+                address = self.layout.register(n, symbol)
+                self.registers[address] = signed32(ffp_encode(value)) if symbol == "MCFac" else signed32(int(value))
+        self.status = RUN
+        self._fold_calls()
+        for index, (axis, drive) in enumerate(zip(self.axes, self.drives, strict=True)):
+            drive.catch_up()
+            try:
+                axis.init(self.imode)
+            except Halted:
+                break
+            finally:
+                drive.poke()
+            self.initialised[index] = True
+        self.wake()
+
+    def restart(self) -> None:
+        """S-Bus 'restart cold' (38h)."""
+        self.cold_start()
+
+    def run(self) -> None:
+        """S-Bus 'run' (2Fh)."""
+        if self.status != RUN:
+            self.status = RUN
+            self._running_since = self.clock.now()
+            self.wake()
+
+    def stop(self) -> None:
+        """S-Bus 'stop' (43h): AxHndlg no longer runs; the chips finish what they do."""
+        if self.status == RUN:
+            self._fold_calls()
+        self.status = STOP
+
+    def halt(self) -> None:
+        """The CPU halts (as ComErS does with ``comers_action: halt``)."""
+        if self.status == RUN:
+            self._fold_calls()
+        self.status = HALT
+
+    def power_cycle(self, *, wipe: bool = False) -> None:
+        """Off and on: the chips are reset and the motors stand; the PLC's registers stay (R2
+        memory, G-16), AxInit runs again: the actual position is 0 (§4.11)."""
+        super().power_cycle(wipe=wipe)
+        for drive in self.drives:
+            drive.catch_up()
+            drive.motor.velocity = 0.0
+            drive.chip.reset()
+            drive.poke()
+        self.cold_start()
+
+    # -- the cycle (§3.3.2, §9.6.1) ---------------------------------------------------------------
+    def wake(self) -> None:
+        """Something may need the cycle: make sure the next one is scheduled (on the cycle grid)."""
+        if self._timer is not None:
+            return
+        now = self.clock.now()
+        due = max(now, self._last_cycle + self.cycle_time)
+        self._timer = self.clock.call_at(due, self._cycle)
+
+    def _cycle(self) -> None:
+        self._timer = None
+        start = self._last_cycle = self.clock.now()
+        for drive in self.drives:
+            drive.catch_up()
+        elapsed = 0.0
+        if self.status == RUN:
+            try:
+                for axis, drive in zip(self.axes, self.drives, strict=True):
+                    for symbol in self.settings["cyclic_reads"]:
+                        axis.set_flag(symbol, 1)
+                    offset = elapsed
+
+                    def before(ms: float, drive: H3Drive = drive, offset: float = offset) -> None:
+                        drive.catch_up(start + offset + ms / 1000)
+
+                    transfers = axis.transfers
+                    elapsed += axis.handle(before) / 1000
+                    if axis.transfers != transfers:
+                        drive.poke()
+            except Halted:
+                pass
+            self._display()
+        if self._busy():
+            self._timer = self.clock.call_at(start + max(self.cycle_time, elapsed), self._cycle)
+
+    def _busy(self) -> bool:
+        if any(not drive.settled for drive in self.drives):
+            return True
+        if self.status != RUN:
+            return False
+        return any(self.flags.get(self.layout.flag(axis.axis, symbol), 0)
+                   for axis in self.axes for symbol in self.layout.command_order)
+
+    def _display(self) -> None:
+        for n, view in self.settings["display"].items():
+            if n > len(self.axes):
+                continue
+            axis = self.axes[n - 1]
+            if axis.flag("DplM"):
+                self.screens[n] = (display.six_digits(axis.reg(view["reg1"])), display.six_digits(axis.reg(view["reg2"])))
+            else:
+                self.screens[n] = display.ten_digits(axis.reg(view["reg1"]))
+
+    def _comers(self, offset: int) -> None:
+        if self.settings["comers_action"] != "continue":
+            self._fold_calls()
+            self.status = HALT
+            raise Halted
+
+    def _limit(self, n: int, old: Any, new: Any) -> None:
+        """A limit switch opened: a user program would stop the axis (optional, §5.10)."""
+        if old and not new and self.settings["emulate_user_limit_stop"]:
+            self.axes[n - 1].set_flag("FStop", 1)
+            self.wake()
+
+    def _fold_calls(self) -> None:
+        now = self.clock.now()
+        if self.status == RUN:
+            done = self._cycles_since(now)
+            self._calls_before = [c + done for c in self._calls_before]
+        self._running_since = now
+
+    def _cycles_since(self, now: float) -> int:
+        return max(0, math.floor((now - self._running_since) / self.cycle_time + 1e-9))
+
+    def handler_calls(self, index: int) -> int:
+        """AxHndlg calls of an axis since start-up: one per cycle while the PCD runs."""
+        running = self._cycles_since(self.clock.now()) if self.status == RUN else 0
+        return self._calls_before[index] + running
+
+    def catch_up(self) -> None:
+        """Bring every chip to now (before the host looks)."""
+        for drive in self.drives:
+            drive.catch_up()
+
+    def close(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        for drive in self.drives:
+            drive.close()
+
+
+def _axis_defaults() -> dict[str, Any]:
+    from devsim.devices.pcd4h3.config import AXIS
+
+    return AXIS.parse({}).dump()

@@ -1,0 +1,227 @@
+"""The PCD4.H3's control names and faults, declared once (spec pcd4h3.md §4.2–§4.5, §5.4, §8,
+§9.5).
+
+``R.<n>``, ``F.<n>``, ``I.<n>`` and ``O.<n>`` are the PLC's media as S-Bus shows them;
+``axis.<n>.<symbol>`` is a register or flag of axis n's block by its H3DEF symbol
+(``axis.1.DestP``, ``axis.1.FStart``); ``axis.<n>.*`` further show the chip and the motor: what
+the spec's scenarios inject (``axis.<n>.position`` sets the actual position, ``axis.<n>.load`` a
+load torque, ``axis.<n>.bus_errors`` disturbed transfers) and check (``axis.<n>.trace``: the
+chip transfers in the spec's notation).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from typing import Any
+
+from devsim.core.kit import Fault, FaultTable, SignalDef, signal_points
+from devsim.core.points import BadValue, Family, Point, PointTable
+from devsim.core.words import signed32
+from devsim.devices.pcd4h3.drive import axis_signals
+from devsim.devices.pcd4h3.layout import FLAGS, REGISTERS
+from devsim.devices.pcd4h3.lm628 import notation
+from devsim.devices.pcd4h3.plc import MEDIA_SIZE, Pcd4
+from devsim.devices.pcd4h3.services import read
+
+__all__ = ["FAULTS", "POINTS", "SIGNALS"]
+
+STATIC_AXES = (1, 2)  # declared in the table; further axes are reached through the families
+SIGNALS = tuple(SignalDef(name, kind, initial, doc, "§2.6")  # type: ignore[arg-type]
+                for n in STATIC_AXES for name, kind, initial, doc in axis_signals(n))
+
+
+def _on(n: int, get: Callable[[Pcd4, int], Any]) -> Callable[[Pcd4], Any]:
+    """A getter of axis n (None where the installation has no axis n)."""
+    def getter(m: Pcd4) -> Any:
+        if n > len(m.axes):
+            return None
+        m.catch_up()
+        return get(m, n - 1)
+
+    return getter
+
+
+def _put_on(n: int, put: Callable[[Pcd4, int, Any], None]) -> Callable[[Pcd4, Any], None]:
+    def setter(m: Pcd4, value: Any) -> None:
+        if n > len(m.axes):
+            raise BadValue(f"the installation has {len(m.axes)} axes")
+        m.catch_up()
+        put(m, n - 1, value)
+        m.drives[n - 1].poke()
+        m.wake()
+
+    return setter
+
+
+def _set_actual(m: Pcd4, i: int, value: int) -> None:
+    m.drives[i].chip.set_actual(int(value))
+
+
+def _set_load(m: Pcd4, i: int, value: float) -> None:
+    m.drives[i].motor.load = float(value)
+
+
+def _set_bus_errors(m: Pcd4, i: int, value: int) -> None:
+    m.drives[i].chip.bus_errors = int(value)
+
+
+def _clear_trace(m: Pcd4, i: int, value: Any) -> None:
+    if value not in ([], None):
+        raise BadValue("set the trace to [] to clear it")
+    m.axes[i].trace.clear()
+
+
+def _volts(m: Pcd4, i: int) -> float:
+    chip = m.drives[i].chip
+    if chip.motor_off:
+        return 0.0
+    return chip.filter.volts if chip.filter.dac_bits == 12 else chip.filter.volts * 10.0
+
+
+def _axis_points(n: int) -> list[Point]:
+    return [
+        Point(f"axis.{n}.position", "int", f"axis {n} actual position (RDRP), counts; setting it redefines the "
+              "count without motion (a test's injection)", "§5.1", "counts",
+              get=_on(n, lambda m, i: m.drives[i].chip.actual), put=_put_on(n, _set_actual), in_state=True),
+        Point(f"axis.{n}.set_position", "int", f"axis {n} set position of the profile generator (RDDP)", "§5.2",
+              "counts", get=_on(n, lambda m, i: m.drives[i].chip.desired)),
+        Point(f"axis.{n}.velocity", "float", f"axis {n} actual velocity as the encoder counts it", "§5.1",
+              "counts/s", get=_on(n, lambda m, i: m.drives[i].chip.encoder_sign * m.drives[i].motor.velocity)),
+        Point(f"axis.{n}.mechanical_position", "float", f"axis {n} where the motor is (the shared axis, counts "
+              "from power-on)", "§5.4", "counts", get=_on(n, lambda m, i: m.drives[i].axis.position())),
+        Point(f"axis.{n}.following_error", "int", f"axis {n} set position − actual position", "§5.5", "counts",
+              get=_on(n, lambda m, i: m.drives[i].chip.profile.desired - m.drives[i].chip.unwrapped_actual)),
+        Point(f"axis.{n}.output_volts", "float", f"axis {n} set-point output (±10 V, or PWM duty × 10 V)", "§5.11",
+              "V", get=_on(n, _volts)),
+        Point(f"axis.{n}.status", "int", f"axis {n} chip status byte (RDSTAT)", "§4.8",
+              get=_on(n, lambda m, i: m.drives[i].chip.status), in_state=True),
+        Point(f"axis.{n}.signals", "int", f"axis {n} chip signals register (RDSIGS)", "§4.5",
+              get=_on(n, lambda m, i: m.drives[i].chip.signals)),
+        Point(f"axis.{n}.motor_off", "bool", f"axis {n} control switched off", "§4.10",
+              get=_on(n, lambda m, i: m.drives[i].chip.motor_off), in_state=True),
+        Point(f"axis.{n}.display", "json", f"axis {n} PCA2.D14 display [top, bottom] (DP14 as configured)", "§3.4",
+              get=_on(n, lambda m, i: list(m.screens[i + 1]) if i + 1 in m.screens else None)),
+        Point(f"axis.{n}.trace", "json", f"axis {n} chip transfers, oldest first, as the spec writes them "
+              "(C:1F D:00 02 …); set [] to clear", "§6",
+              get=_on(n, lambda m, i: [notation(name, words) for name, words in m.axes[i].trace]),
+              put=_put_on(n, _clear_trace)),
+        Point(f"axis.{n}.comers", "int", f"axis {n} ComErS calls since start-up", "§3.7",
+              get=_on(n, lambda m, i: m.axes[i].comers_calls)),
+        Point(f"axis.{n}.load", "float", f"axis {n} load torque, as the volts that would hold it", "§8 S21", "V",
+              get=_on(n, lambda m, i: m.drives[i].motor.load), put=_put_on(n, _set_load), minimum=-10, maximum=10),
+        Point(f"axis.{n}.bus_errors", "int", f"axis {n} chip transfers still to be disturbed on the bus", "§3.7",
+              get=_on(n, lambda m, i: m.drives[i].chip.bus_errors), put=_put_on(n, _set_bus_errors),
+              minimum=0, maximum=1000),
+    ]
+
+
+def _medium(prefix: str, medium: str, settable: bool) -> Callable[[str], Point | None]:
+    def make(name: str) -> Point | None:
+        match = re.fullmatch(rf"{prefix}\.(\d{{1,4}})", name)
+        if match is None or int(match[1]) >= MEDIA_SIZE[medium]:
+            return None
+        address = int(match[1])
+        kind = "int" if medium == "register" else "bool"
+
+        def get(m: Pcd4) -> Any:
+            m.catch_up()
+            value = read(m, medium, address)
+            return value if kind == "int" else bool(value)
+
+        def put(m: Pcd4, value: Any) -> None:
+            store = {"register": m.registers, "flag": m.flags, "input": m.inputs}[medium]
+            store[address] = signed32(int(value)) if kind == "int" else int(bool(value))
+            m.wake()
+
+        return Point(name, kind, f"{medium} {address} of the PCD", "§9.5", get=get,  # type: ignore[arg-type]
+                     put=put if settable else None)
+
+    return make
+
+
+_SYMBOLS = {r.symbol: ("register", r.offset) for r in REGISTERS} | {f.symbol: ("flag", f.offset) for f in FLAGS}
+
+
+def _axis_family(name: str) -> Point | None:
+    match = re.fullmatch(r"axis\.(\d{1,2})\.(\w+)", name)
+    if match is None or not 1 <= int(match[1]) <= 32:
+        return None
+    n, symbol = int(match[1]), match[2]
+    if n not in STATIC_AXES:
+        found = next((p for p in _axis_points(n) if p.name == name), None)
+        if found is not None:
+            return found
+    if symbol not in _SYMBOLS:
+        return None
+    medium = _SYMBOLS[symbol][0]
+
+    def address(m: Pcd4) -> int:
+        if n > len(m.axes):
+            raise BadValue(f"the installation has {len(m.axes)} axes")
+        return m.layout.register(n, symbol) if medium == "register" else m.layout.flag(n, symbol)
+
+    def get(m: Pcd4) -> Any:
+        store = m.registers if medium == "register" else m.flags
+        value = store.get(address(m), 0)
+        return value if medium == "register" else bool(value)
+
+    def put(m: Pcd4, value: Any) -> None:
+        store = m.registers if medium == "register" else m.flags
+        store[address(m)] = signed32(int(value)) if medium == "register" else int(bool(value))
+        m.wake()
+
+    kind = "int" if medium == "register" else "bool"
+    return Point(name, kind, f"axis {n} {medium} {symbol}", "§4.2" if medium == "register" else "§4.3",  # type: ignore[arg-type]
+                 get=get, put=put)
+
+
+def _plc_status(m: Pcd4, value: str) -> None:
+    {"R": m.run, "S": m.stop, "H": m.halt}[value]()
+
+
+POINTS = PointTable.of(
+    *(_axis_points(n) for n in STATIC_AXES),
+    [
+        Point("plc.status", "str", "PCD status: R run, H halt (ComErS), S stop; set R or S as S-Bus run/stop do",
+              "§9.6.2", get=lambda m: m.status, put=_plc_status, choices=("R", "H", "S"), in_state=True),
+        Point("plc.restart", "bool", "a cold restart: AxInit for every axis with the registers as they are (S-Bus "
+              "38h)", "§9.6.1", put=lambda m, v: m.restart() if v else None, example=True),
+    ],
+    signal_points(SIGNALS),
+    families=[
+        Family("axis.<n>.<symbol>", "int", "a register (KProp … RSigB) or flag (OnDest … FBackw) of axis n's "
+               "block by its H3DEF symbol; also axis.<n>.* beyond axis 2", "§4.2, §4.3", _axis_family),
+        Family("R.<n>", "int", "register n (0 … 4095) as S-Bus reads it", "§9.5", _medium("R", "register", True)),
+        Family("F.<n>", "bool", "flag n (0 … 8191)", "§9.5", _medium("F", "flag", True)),
+        Family("I.<n>", "bool", "input n (0 … 1023); the H3 modules' own inputs follow their switches", "§9.5",
+               _medium("I", "input", True)),
+        Family("O.<n>", "bool", "output n (0 … 1023)", "§9.5", _medium("O", "output", False), access="r"),
+    ],
+)
+
+
+def _fault(n: int, what: str) -> Callable[[Pcd4, bool], None]:
+    def apply(m: Pcd4, active: bool) -> None:
+        if n > len(m.axes):
+            raise BadValue(f"the installation has {len(m.axes)} axes")
+        m.catch_up()
+        drive = m.drives[n - 1]
+        if what == "blocked":
+            drive.motor.blocked = active
+        else:
+            count = drive.chip.actual  # the count stays where it is when the wiring changes
+            drive.chip.encoder_sign = -1 if active else 1
+            drive.chip.set_actual(count)
+        drive.poke()
+        m.wake()
+
+    return apply
+
+
+FAULTS = FaultTable([
+    *(Fault(f"blocked_{n}", f"axis {n}: the rotor is blocked (the motor does not turn)", "§5.2, §6.6 E11",
+            _fault(n, "blocked")) for n in STATIC_AXES),
+    *(Fault(f"encoder_reversed_{n}", f"axis {n}: one phase inversion jumper wrong: the decoder counts backwards "
+            "(runaway, S20)", "§2.5", _fault(n, "reversed")) for n in STATIC_AXES),
+])

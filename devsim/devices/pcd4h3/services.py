@@ -1,0 +1,180 @@
+"""What the PCD answers over S-Bus (spec pcd4h3.md §9.4, §9.5, §9.6.2, §9.6.3): reads and writes
+of its media, its status, station number and firmware, run, stop and cold restart.
+
+The media a host sees: registers R 0 … 4095 (the axis blocks among them, and the simulator's
+read-only diagnostics block), flags F 0 … 8191 (the axis fields, the diagnostics flags), inputs
+I 0 … 1023 (each H3 module's limit and reference inputs at FMAH3 + 16m + 9/10/11 and 13/14/15,
+the user's keys elsewhere), outputs O 0 … 1023 (the FBs' own: read only), counters and timers.
+:func:`serve` turns one decoded request into the reply data, an ACK/NAK code, or nothing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from devsim.core.words import signed32
+from devsim.devices.pcd4h3.plc import BUS_INPUTS, MEDIA_SIZE, Pcd4
+from devsim.devices.pcd4h3.sbus import ACK, NAK, Bad, Read, Request, Simple, Write, decode_command, pack_bits
+from devsim.devices.pcd4h3.units import CHIP_SAMPLE
+
+__all__ = ["DIAG_FLAGS", "DIAG_REGISTERS", "Answer", "serve"]
+
+Answer = bytes | int | None  # reply data, an ACK/NAK code, or no answer (broadcast)
+DIAG_REGISTERS, DIAG_FLAGS = 16, 8  # per axis (§9.6.3)
+
+
+def serve(plc: Pcd4, request: Request) -> Answer:
+    """The answer to one request addressed to this station (or broadcast: executed, no answer)."""
+    command = decode_command(request)
+    answer = _carry_out(plc, command)
+    return None if request.station == 255 else answer
+
+
+def _carry_out(plc: Pcd4, command: Read | Write | Simple | Bad) -> Answer:
+    if isinstance(command, Bad):
+        return NAK
+    if isinstance(command, Simple):
+        return SIMPLE[command.name](plc)
+    if isinstance(command, Read):
+        if command.address + command.count > MEDIA_SIZE[command.medium]:
+            return NAK
+        plc.catch_up()
+        values = [read(plc, command.medium, command.address + i) for i in range(command.count)]
+        if command.medium in ("flag", "input", "output"):
+            return pack_bits(values)
+        return b"".join((v & 0xFFFF_FFFF).to_bytes(4, "big") for v in values)
+    return _write(plc, command)
+
+
+def _write(plc: Pcd4, command: Write) -> Answer:
+    medium, first, values = command.medium, command.address, command.values
+    if first + len(values) > MEDIA_SIZE[medium] or medium == "output":
+        return NAK  # the outputs belong to the FBs (no raw bus)
+    if medium == "register":
+        if any(_diagnostic_register(plc, first + i) is not None for i in range(len(values))):
+            return NAK
+        for i, value in enumerate(values):
+            plc.registers[first + i] = signed32(value)
+        return ACK
+    if any(_diagnostic_flag(plc, first + i) is not None for i in range(len(values))):
+        return NAK
+    for i, value in enumerate(values):
+        plc.flags[first + i] = value
+    plc.wake()
+    return ACK
+
+
+# -- reading one element --------------------------------------------------------------------------
+def read(plc: Pcd4, medium: str, address: int) -> int:
+    """One element of a medium as the host reads it."""
+    if medium == "register":
+        diag = _diagnostic_register(plc, address)
+        return diag if diag is not None else plc.registers.get(address, 0)
+    if medium == "flag":
+        diag = _diagnostic_flag(plc, address)
+        return diag if diag is not None else plc.flags.get(address, 0)
+    if medium == "input":
+        bus = _bus_input(plc, address)
+        return bus if bus is not None else plc.inputs.get(address, 0)
+    if medium == "output":
+        return plc.outputs.get(address, 0)
+    if medium == "counter":
+        return plc.counters.get(address, 0)
+    return plc.timers.get(address, 0)
+
+
+def _bus_input(plc: Pcd4, address: int) -> int | None:
+    """An H3 module's input (§2.2), or None for an address outside the modules."""
+    relative = address - plc.fmah3
+    module, offset = divmod(relative, 16)
+    if relative < 0 or module >= int(plc.settings["modules"]):
+        return None
+    for chip, offsets in BUS_INPUTS.items():
+        if offset in offsets:
+            n = 2 * module + (1 if chip == "X" else 2)
+            name = f'{("LS1", "LS2", "REF")[offsets.index(offset)]}_{n}'
+            return int(bool(plc.signals.get(name))) if name in plc.signals else 0
+    return 0  # the chip data bus and the unused inputs read 0 without raw bus access
+
+
+def _diagnostic_register(plc: Pcd4, address: int) -> int | None:
+    index = address - plc.diag_registers
+    if not 0 <= index < DIAG_REGISTERS * len(plc.axes):
+        return None
+    n, item = divmod(index, DIAG_REGISTERS)
+    return DIAGNOSTICS[item](plc, n) if item < len(DIAGNOSTICS) else 0
+
+
+def _diagnostic_flag(plc: Pcd4, address: int) -> int | None:
+    index = address - plc.diag_flags
+    if not 0 <= index < DIAG_FLAGS * len(plc.axes):
+        return None
+    n, item = divmod(index, DIAG_FLAGS)
+    chip = plc.drives[n].chip
+    values = (plc.initialised[n], False, not chip.profile.complete or not plc.drives[n].settled,
+              plc.axes[n].warnings > 0)
+    return int(values[item]) if item < len(values) else 0
+
+
+def _text(plc: Pcd4, n: int, part: int) -> int:
+    top, bottom = plc.screens.get(n + 1, ("", ""))
+    data = (top.ljust(6) + bottom.ljust(6)).encode("ascii", "replace")
+    return signed32(int.from_bytes(data[4 * part : 4 * part + 4], "big")) if top or bottom else 0
+
+
+DIAGNOSTICS: tuple[Callable[[Pcd4, int], int], ...] = (
+    lambda p, n: p.drives[n].chip.status,
+    lambda p, n: p.drives[n].chip.signals,
+    lambda p, n: p.drives[n].chip.actual,
+    lambda p, n: p.drives[n].chip.desired,
+    lambda p, n: round(p.drives[n].chip.profile.velocity / 65536 / CHIP_SAMPLE * 1000),
+    lambda p, n: round(p.drives[n].chip.encoder_sign * p.drives[n].motor.velocity * 1000),
+    lambda p, n: p.drives[n].chip.filter.dac,
+    lambda p, n: round(_volts(p, n) * 1000),
+    lambda p, n: p.drives[n].chip.command_errors,
+    lambda p, n: p.axes[n].comers_calls,
+    lambda p, n: p.axes[n].last_comers,
+    lambda p, n: p.handler_calls(n),
+    lambda p, n: _text(p, n, 0),
+    lambda p, n: _text(p, n, 1),
+    lambda p, n: _text(p, n, 2),
+)
+"""The diagnostics registers of one axis (§9.6.3), by offset."""
+
+
+def _volts(plc: Pcd4, n: int) -> float:
+    chip = plc.drives[n].chip
+    if chip.motor_off:
+        return 0.0
+    return chip.filter.volts if chip.filter.dac_bits == 12 else chip.filter.volts * 10.0
+
+
+def _status(plc: Pcd4) -> bytes:
+    return plc.status.encode()
+
+
+def _restart(plc: Pcd4) -> int:
+    plc.restart()
+    return ACK
+
+
+def _run(plc: Pcd4) -> int:
+    plc.run()
+    return ACK
+
+
+def _stop(plc: Pcd4) -> int:
+    plc.stop()
+    return ACK
+
+
+SIMPLE: dict[str, Callable[[Pcd4], Any]] = {
+    "read status": _status,
+    "read station": lambda p: bytes((p.station,)),
+    "read firmware": lambda p: str(p.settings["firmware"]).encode("ascii", "replace")[:3].ljust(3),
+    "run": _run,
+    "restart cold": _restart,
+    "stop": _stop,
+}
+"""The commands without parameters (§9.4) by the name :mod:`~devsim.devices.pcd4h3.sbus` gives them."""
