@@ -9,7 +9,7 @@ import serial
 
 from devsim.devices.pcd4h3.sbus import FS, crc16, stuff, unstuff
 
-__all__ = ["EXAMPLE", "Station", "hexbytes"]
+__all__ = ["EXAMPLE", "Station", "flag", "hexbytes", "load", "reg", "run"]
 
 #: The manual's example installation (§4.1, §9.1 a): FMAH3 48, BAR = BAF = 200, one axis;
 #: answers at once (the 2 ms response delay would need the virtual clock advanced).
@@ -76,3 +76,32 @@ class Station:
     def read_flags(self, address: int, count: int = 1, command: int = 0x02) -> list[int]:
         data = self.call(command, bytes((count - 1,)) + address.to_bytes(2, "big"), (count + 7) // 8)
         return [data[i // 8] >> (i % 8) & 1 for i in range(count)]
+
+
+def reg(symbol: str, axis: int = 1, bar: int = 200) -> int:
+    """A register's address in the example installation (§4.2)."""
+    from devsim.devices.pcd4h3.layout import Layout
+
+    return Layout(bar=bar, baf=bar, axes=2).register(axis, symbol)
+
+
+def flag(symbol: str, axis: int = 1, baf: int = 200) -> int:
+    from devsim.devices.pcd4h3.layout import Layout
+
+    return Layout(bar=baf, baf=baf, axes=2).flag(axis, symbol)
+
+
+def load(pcd: Station, axis: int = 1, **registers: int) -> None:
+    """Write registers by symbol over S-Bus."""
+    for symbol, value in registers.items():
+        assert pcd.write_registers(reg(symbol, axis), value) == b"\x00\x00"
+
+
+def run(pcd: Station, *functions: str, axis: int = 1, cycles: int = 1) -> None:
+    """Set command flags over S-Bus, wait (virtual time) until AxHndlg has processed them, then
+    let the PLC cycle ``cycles`` more times."""
+    for symbol in functions:
+        assert pcd.write_flags(flag(symbol, axis), 1) == b"\x00\x00"
+    names = [f"axis.{axis}.{symbol}" for symbol in functions]
+    assert pcd.sim.run_until(lambda d: not any(d.read(name) for name in names), 1.0), functions
+    pcd.sim.advance(0.010 * cycles)

@@ -1,0 +1,154 @@
+"""Command errors and their handling (spec pcd4h3.md §3.7, §6.6 E1–E12) on a running PCD,
+driven over S-Bus on a real pty: three identical transfers, ComErS, the flag cleared, the chip
+unchanged; halting the PCD when ComErS is the manual's commissioning one."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from devsim.devices.pcd4h3.units import ffp_encode
+from tests.pcd4h3.helpers import Station, flag, load, reg, run
+
+
+def transfers(pcd: Station) -> list[str]:
+    return [t for t in pcd.sim.read("axis.1.trace") if not t.startswith("C:1D D:FF FD")]
+
+
+def fresh(pcd: Station) -> None:
+    pcd.sim.set("axis.1.trace", [])
+
+
+def test_e1_negative_velocity_three_transfers_then_comers(pcd: Station) -> None:
+    fresh(pcd)
+    load(pcd, Veloc=-100)
+    run(pcd, "FLdVA")
+    assert transfers(pcd) == ["C:1F D:00 08 D:FF FC D:97 0A"] * 3
+    assert pcd.read_flags(flag("FLdVA")) == [0]
+    assert pcd.sim.read("axis.1.comers") == 1 and pcd.read_registers(4000 + 9) == [1]
+    assert pcd.read_registers(4000 + 10) == [9]  # the offset of the function that called ComErS
+    assert pcd.sim.device.model.drives[0].chip.buffer.velocity == 1_117_389  # unchanged
+    assert pcd.call(0x1B, data_bytes=1) == b"R"
+
+
+def test_e1_with_the_commissioning_comers_halts_the_pcd(make: Callable[..., Station]) -> None:
+    pcd = make({"comers_action": "halt"})
+    load(pcd, Veloc=-100, DestP=500)
+    run(pcd, "FLdVA", "FLdDA")  # FLdDA (offset 7) runs first, FLdVA (9) halts the PCD
+    assert pcd.call(0x1B, data_bytes=1) == b"H"
+    assert pcd.read_flags(flag("FLdVA")) == [0]
+    fresh(pcd)
+    pcd.write_flags(flag("FStart"), 1)
+    pcd.sim.advance(0.1)
+    assert pcd.read_flags(flag("FStart")) == [1] and transfers(pcd) == []  # flags no longer processed
+    assert pcd.call(0x38) == b"\x00\x00"  # restart cold: AxInit loads Veloc again: halted again
+    assert pcd.call(0x1B, data_bytes=1) == b"H"
+    load(pcd, Veloc=500)
+    assert pcd.call(0x38) == b"\x00\x00"
+    assert pcd.call(0x1B, data_bytes=1) == b"R" and pcd.sim.read("axis.1.position") == 0
+    assert pcd.read_flags(flag("FStart")) == [0]  # AxInit clears the command flags
+
+
+def test_e2_a_regulator_factor_beyond_32767(pcd: Station) -> None:
+    fresh(pcd)
+    load(pcd, KProp=40_000)
+    run(pcd, "FLdRP")
+    assert transfers(pcd) == ["C:1E D:0F 0F D:9C 40 D:00 32 D:00 32 D:01 F4"] * 3
+    assert pcd.sim.device.model.drives[0].chip.filter.buffer.kp == 150
+
+
+def test_e3_e4_relative_loads_before_the_first_movement(pcd: Station) -> None:
+    load(pcd, DestP=100)
+    for function in ("FLdDR", "FLdVR", "FLdAR", "FLdBPR"):
+        before = pcd.sim.read("axis.1.comers")
+        run(pcd, function)
+        assert pcd.sim.read("axis.1.comers") == before + 1, function
+    run(pcd, "FLdDA", "FStart")  # after a first start a relative load is accepted
+    before = pcd.sim.read("axis.1.comers")
+    run(pcd, "FLdDR")
+    assert pcd.sim.read("axis.1.comers") == before
+
+
+def test_e5_an_integer_machine_factor(pcd: Station) -> None:
+    """k = 0 (00000064h decodes to 0): the target is 0 counts without an error; FRdAP divides by
+    zero: ComErS, RActP unchanged."""
+    load(pcd, MCFac=0x64, DestP=1000, RActP=4711)
+    fresh(pcd)
+    run(pcd, "FLdDA", "FStart")
+    assert transfers(pcd) == ["C:1F D:00 02 D:00 00 D:00 00", "C:01"]
+    run(pcd, "FRdAP")
+    assert pcd.read_registers(reg("RActP")) == [4711] and pcd.sim.read("axis.1.comers") == 1
+
+
+def test_e6_one_disturbed_transfer_is_repeated(pcd: Station) -> None:
+    pcd.sim.set("axis.1.bus_errors", 1)
+    load(pcd, DestP=1000)
+    fresh(pcd)
+    run(pcd, "FLdDA")
+    assert transfers(pcd) == ["C:1F D:00 02 D:00 01 D:86 A0"] * 2
+    assert pcd.sim.read("axis.1.comers") == 0
+    assert pcd.sim.device.model.drives[0].chip.buffer.position == 100_000
+
+
+def test_e7_acceleration_during_a_move_switches_the_motor_off(pcd: Station) -> None:
+    load(pcd, DestP=1000)
+    run(pcd, "FLdDA", "FStart")
+    pcd.sim.advance(2.0)
+    run(pcd, "FLdAA")
+    run(pcd, "FRdSR")
+    assert pcd.read_flags(flag("OnDest")) == [1]
+    assert pcd.read_registers(reg("RSigB"))[0] & 0x4080 == 0x4080
+    assert pcd.sim.read("axis.1.output_volts") == 0.0
+    run(pcd, "FStart")  # re-enables with the new acceleration towards the target
+    assert pcd.sim.run_until(lambda d: d.read("axis.1.OnDest"), 20.0)
+    assert abs(pcd.sim.read("axis.1.position") - 100_000) <= 3
+
+
+def test_e8_e9_mcw_reaction_and_sample_interval_out_of_range(pcd: Station) -> None:
+    fresh(pcd)
+    load(pcd, MCW=0)
+    run(pcd, "FSetPE")
+    load(pcd, SampI=300)
+    run(pcd, "FLdRP")
+    assert pcd.sim.read("axis.1.comers") == 2 and transfers(pcd) == []  # refused by the FB itself
+
+
+def test_e10_a_single_step_while_moving_is_executed_with_a_warning(pcd: Station) -> None:
+    load(pcd, DestP=1000)
+    run(pcd, "FLdDA", "FStart")
+    assert pcd.read_flags(8000 + 3) == [0]
+    fresh(pcd)
+    run(pcd, "FSStepF")
+    assert transfers(pcd)[:2] == ["C:1F D:00 03 D:00 00 D:00 01", "C:01"]
+    assert pcd.read_flags(8000 + 3) == [1]
+
+
+def test_e11_e12_a_blocked_rotor_trips_the_position_error(make: Callable[..., Station]) -> None:
+    for reaction, off in ((0x41A, True), (0x41B, False)):
+        pcd = make()
+        load(pcd, MCW=reaction, DestP=1000)
+        run(pcd, "FSetPE", "FLdDA", "FStart")
+        pcd.sim.advance(1.0)
+        pcd.sim.fault("blocked_1", True)
+        assert pcd.sim.run_until(lambda d: d.read("axis.1.ExcPEr"), 5.0)
+        pcd.sim.advance(0.05)
+        assert pcd.sim.read("axis.1.motor_off") is off
+        if off:
+            assert pcd.read_flags(flag("OnDest")) == [1] and pcd.sim.read("axis.1.output_volts") == 0.0
+        else:
+            assert abs(pcd.sim.read("axis.1.output_volts")) > 9.9  # saturated, the trajectory goes on
+            assert pcd.sim.read("axis.1.set_position") > pcd.sim.read("axis.1.position") + 2000
+
+
+def test_a_machine_factor_that_overflows_the_range(pcd: Station) -> None:
+    """§3.7: integer 1000 as MCFac gives k = −196 608: DestP 10 000 is beyond −2^30 counts."""
+    load(pcd, MCFac=1000, DestP=10_000)
+    fresh(pcd)
+    run(pcd, "FLdDA")
+    assert pcd.sim.read("axis.1.comers") == 1 and len(transfers(pcd)) == 3
+
+
+def test_the_machine_factor_as_float_gives_the_example_counts(pcd: Station) -> None:
+    load(pcd, MCFac=ffp_encode(4000 / 3000), DestP=60_000)  # U1: k = 1.33333 counts/µm
+    fresh(pcd)
+    run(pcd, "FLdDA")
+    assert transfers(pcd) == ["C:1F D:00 02 D:00 01 D:38 80"]  # 80 000 counts
