@@ -56,12 +56,12 @@ BOOT_TIMEOUT = 60.0
 
 # -- helpers -------------------------------------------------------------------------------
 def _transport_spec(transport: str | Mapping[str, Any]) -> Any:
-    """``"pty"``, ``"tcp"``, ``"rfc2217"`` or a plant-file transport mapping → TransportSpec."""
+    """``"pty"``, ``"tcp"``, ``"rfc2217"``, ``"udp"`` or a plant-file transport mapping → TransportSpec."""
     from devsim.scenario.schema import TransportSpec
 
     if isinstance(transport, str):
-        if transport not in ("pty", "tcp", "rfc2217"):
-            raise ValueError(f"transport must be 'pty', 'tcp', 'rfc2217' or a mapping, not {transport!r}")
+        if transport not in ("pty", "tcp", "rfc2217", "udp"):
+            raise ValueError(f"transport must be 'pty', 'tcp', 'rfc2217', 'udp' or a mapping, not {transport!r}")
         spec = TransportSpec.model_validate({transport: {}})
     else:
         spec = TransportSpec.model_validate(dict(transport))

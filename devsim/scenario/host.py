@@ -1,7 +1,7 @@
 """The scripted host of a scenario: the far end of a port, as host software would hold it.
 
-A :class:`HostPort` opens the real pty (raw, at the device's line settings), the TCP socket or
-the RFC 2217 connection of a plant port, keeps everything it receives, and sends bytes.  It runs
+A :class:`HostPort` opens the real pty (raw, at the device's line settings), the TCP socket, the
+RFC 2217 connection or a UDP socket (one datagram per ``send``) of a plant port, keeps everything it receives, and sends bytes.  It runs
 in the runtime's event loop, next to the devices, so that the scenario runner can wait for bytes
 without threads (RFC 2217 uses pyserial's client and one reader thread).
 """
@@ -154,6 +154,36 @@ class TcpHost(HostPort):
                 await self._writer.wait_closed()
 
 
+class UdpHost(HostPort):
+    """A UDP client: each ``send`` is one datagram; the datagrams that come back are appended to
+    what was received (an expectation sees them back to back)."""
+
+    def __init__(self, name: str, host: str, port: int) -> None:
+        super().__init__(name)
+        self.host, self.port = host.strip("[]"), port
+        self._transport: asyncio.DatagramTransport | None = None
+
+    async def open(self) -> None:
+        host = self
+
+        class Protocol(asyncio.DatagramProtocol):
+            def datagram_received(self, data: bytes, addr: Any) -> None:
+                host._on_data(data)
+
+        loop = asyncio.get_running_loop()
+        self._transport, _ = await loop.create_datagram_endpoint(Protocol, remote_addr=(self.host, self.port))
+
+    async def send(self, data: bytes) -> None:
+        assert self._transport is not None
+        self._transport.sendto(data)
+        self.sent += len(data)
+
+    async def close(self) -> None:
+        if self._transport is not None:
+            self._transport.close()
+            self._transport = None
+
+
 class Rfc2217Host(HostPort):
     """pyserial's RFC 2217 client, read by one thread that hands bytes to the loop."""
 
@@ -203,4 +233,6 @@ def open_host_port(name: str, kind: str, transport: Any, settings: SerialSetting
     host, _, port = str(transport.address).rpartition(":")
     if kind == "tcp":
         return TcpHost(name, host, int(port))
+    if kind == "udp":
+        return UdpHost(name, host, int(port))
     return Rfc2217Host(name, f"rfc2217://{host}:{port}", settings)

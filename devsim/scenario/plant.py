@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from devsim.core.device import Device
 from devsim.core.record import field, record
@@ -18,14 +18,19 @@ from devsim.core.runtime import Runtime, port_key
 from devsim.scenario.schema import PlantSpec, TransportSpec
 from devsim.transports.fdlimit import is_out_of_fds, port_budget
 
-__all__ = ["Plant", "build_plant", "make_transport", "plant_running", "start_plant"]
+__all__ = ["Plant", "TraceFormat", "build_plant", "make_transport", "plant_running", "start_plant"]
+
+#: How ``trace_dir`` traces are written: text (``NAME.trace``) or pcap (``NAME.pcap``).
+TraceFormat = Literal["text", "pcap"]
+_TRACE_SUFFIX = {"text": "trace", "pcap": "pcap"}
 
 
 def make_transport(spec: TransportSpec) -> Any:
-    """A transport object for a pty, tcp or rfc2217 transport spec."""
+    """A transport object for a pty, tcp, rfc2217 or udp transport spec."""
     from devsim.transports.pty import PtyTransport
     from devsim.transports.rfc2217 import Rfc2217Transport
     from devsim.transports.tcp import TcpTransport
+    from devsim.transports.udp import UdpTransport
 
     if spec.pty is not None:
         return PtyTransport(link=spec.pty.link)
@@ -33,6 +38,8 @@ def make_transport(spec: TransportSpec) -> Any:
         return TcpTransport(spec.tcp.host, spec.tcp.port)
     if spec.rfc2217 is not None:
         return Rfc2217Transport(spec.rfc2217.host, spec.rfc2217.port)
+    if spec.udp is not None:
+        return UdpTransport(spec.udp.host, spec.udp.port)
     raise ValueError("a bus member has no transport of its own")
 
 
@@ -45,7 +52,7 @@ class Plant:
     devices: dict[str, Device] = field(default_factory=dict)
     transports: dict[str, Any] = field(default_factory=dict)  # port name -> transport
     lines: dict[str, Any] = field(default_factory=dict)  # port name -> Line
-    kinds: dict[str, str] = field(default_factory=dict)  # port name -> "pty" | "tcp" | "rfc2217"
+    kinds: dict[str, str] = field(default_factory=dict)  # port name -> "pty" | "tcp" | "rfc2217" | "udp"
     refused: dict[str, str] = field(default_factory=dict)  # port name -> why it is not served
 
     def port(self, name: str) -> str:
@@ -77,9 +84,17 @@ class Plant:
 
 
 async def build_plant(
-    runtime: Runtime, spec: PlantSpec, *, trace_dir: str | Path | None = None, keep_going: bool = False
+    runtime: Runtime,
+    spec: PlantSpec,
+    *,
+    trace_dir: str | Path | None = None,
+    keep_going: bool = False,
+    trace_format: TraceFormat = "text",
 ) -> Plant:
     """Create the devices of ``spec`` in ``runtime`` (running in this loop) and serve them.
+
+    With ``trace_dir`` every port's traffic is traced there, as ``NAME.trace`` (text) or, with
+    ``trace_format="pcap"``, as ``NAME.pcap`` (:mod:`devsim.transports.pcap`).
 
     With ``keep_going`` a port that cannot be opened because the process is out of file
     descriptors is left out (listed in ``plant.refused``) and the others are served."""
@@ -103,7 +118,7 @@ async def build_plant(
             continue
         budget -= 1
         transport = make_transport(tspec)
-        trace = Path(trace_dir) / f"{name}.trace" if trace_dir is not None else None
+        trace = Path(trace_dir) / f"{name}.{_TRACE_SUFFIX[trace_format]}" if trace_dir is not None else None
         try:
             line = await runtime.serve(members, transport, port=port, trace=trace)
         except OSError as exc:
@@ -127,12 +142,13 @@ def start_plant(
     speed: float = 1.0,
     state_dir: str | Path | None = None,
     trace_dir: str | Path | None = None,
+    trace_format: TraceFormat = "text",
 ) -> Plant:
     """Start a runtime in a background thread and build ``spec`` in it; stop with
     ``plant.runtime.stop()``."""
     runtime = Runtime(virtual=virtual, speed=speed, state_dir=state_dir).start()
     try:
-        return runtime.run(build_plant(runtime, spec, trace_dir=trace_dir))
+        return runtime.run(build_plant(runtime, spec, trace_dir=trace_dir, trace_format=trace_format))
     except BaseException:
         runtime.stop()
         raise

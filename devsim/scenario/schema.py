@@ -5,13 +5,20 @@ A **plant** file lists devices (and optional multidrop buses) and how each is re
     devices:
       - name: x
         kind: sers
-        transport: {pty: {link: /tmp/ttyX}}     # or {tcp: {port: 4001}}, {rfc2217: {port: 4002}}, {bus: line1}
+        transport: {pty: {link: /tmp/ttyX}}     # or {tcp: {port: 4001}}, {rfc2217: {port: 4002}},
+                                                 # {udp: {port: 5050}}, {bus: line1}
         config: {address: 1, params: {P1017: 1}}
         axis: {limit_right: 128000}              # axis geometry, merged into the device config
         state: {input.I1: true, program: ["ON", "W=360 E"]}
     buses:
       - name: line1
         transport: {pty: {}}
+
+A port given no transport is a pty – unless its kind declares a default network transport
+(:attr:`devsim.core.kit.PortDef.default`, e.g. ``udp:5050`` for Ether-S-Bus): then it is served
+on that scheme at an *ephemeral* port number on loopback (``{udp: {}}``), so that many plants
+can run side by side; the plant reports the number it got (``plant.port(name)``, ``devsim up``).
+Give ``{udp: {port: 5050}}`` to have the real one.
 
 A **scenario** file is a plant plus a timeline (``steps``) and expectations.  Each step has at
 most one trigger (``at``: time since the start, ``after``: time since the previous step,
@@ -78,17 +85,21 @@ class TcpSpec(_Model):
     host: str = "127.0.0.1"
 
 
+_TRANSPORTS = ("pty", "tcp", "rfc2217", "udp", "bus")
+
+
 class TransportSpec(_Model):
-    """Exactly one of ``pty``, ``tcp``, ``rfc2217`` or ``bus`` (the name of a bus)."""
+    """Exactly one of ``pty``, ``tcp``, ``rfc2217``, ``udp`` or ``bus`` (the name of a bus)."""
 
     pty: PtySpec | None = None
     tcp: TcpSpec | None = None
     rfc2217: TcpSpec | None = None
+    udp: TcpSpec | None = None
     bus: str | None = None
 
     @model_validator(mode="after")
     def _one(self) -> TransportSpec:
-        given = [k for k in ("pty", "tcp", "rfc2217", "bus") if getattr(self, k) is not None]
+        given = [k for k in _TRANSPORTS if getattr(self, k) is not None]
         if len(given) > 1:
             raise ValueError(f"give one transport, not {' and '.join(given)}")
         if not given:
@@ -97,7 +108,7 @@ class TransportSpec(_Model):
 
     @property
     def kind(self) -> str:
-        return next(k for k in ("pty", "tcp", "rfc2217", "bus") if getattr(self, k) is not None)
+        return next(k for k in _TRANSPORTS if getattr(self, k) is not None)
 
 
 class DeviceSpec(_Model):
@@ -105,7 +116,9 @@ class DeviceSpec(_Model):
     kind: str
     transport: TransportSpec = Field(default_factory=TransportSpec)
     ports: dict[str, TransportSpec] = Field(
-        default_factory=dict, description="per serial port of the kind: its transport (default: a pty each)"
+        default_factory=dict,
+        description="per port of the kind: its transport (default: a pty, or the port's declared scheme on an"
+        " ephemeral port)",
     )
     config: dict[str, Any] = Field(default_factory=dict, description="device configuration (DIP switches, parameters)")
     axis: dict[str, Any] | None = Field(default=None, description="axis geometry, merged into config['axis']")
@@ -125,13 +138,18 @@ class DeviceSpec(_Model):
         return kind_ports(self.kind)
 
     def transport_of(self, port: str) -> TransportSpec:
-        """The transport serving one port: ``ports[port]``, else ``transport`` for the first
-        port, else a new pty."""
+        """The transport serving one port: ``ports[port]``, else ``transport`` (when given) for
+        the first port, else the port's declared default scheme on an ephemeral port number,
+        else a pty."""
         if port in self.ports:
             return self.ports[port]
-        if port == self.port_names()[0]:
+        first = port == self.port_names()[0]
+        if first and "transport" in self.model_fields_set:
             return self.transport
-        return TransportSpec()
+        default = kind_port_defaults(self.kind).get(port)
+        if default is not None:
+            return TransportSpec.model_validate({default[0]: {}})
+        return self.transport if first else TransportSpec()
 
     def device_config(self) -> dict[str, Any]:
         config = dict(self.config)
@@ -148,7 +166,7 @@ class BusSpec(_Model):
     @classmethod
     def _not_a_bus(cls, value: TransportSpec) -> TransportSpec:
         if value.bus is not None:
-            raise ValueError("a bus is reached by pty, tcp or rfc2217, not by another bus")
+            raise ValueError("a bus is reached by pty, tcp, rfc2217 or udp, not by another bus")
         return value
 
 
@@ -161,6 +179,17 @@ def kind_ports(kind: str) -> list[str]:
         return [p.name for p in device_class(kind).ports]
     except Exception:
         return ["main"]
+
+
+def kind_port_defaults(kind: str) -> dict[str, tuple[str, int]]:
+    """The declared default network transports of a kind's ports: name → (scheme, port)."""
+    from devsim.core.registry import device_class
+
+    try:
+        ports = device_class(kind).ports
+    except Exception:
+        return {}
+    return {p.name: p.default_transport for p in ports if p.default_transport is not None}
 
 
 class PlantSpec(_Model):
