@@ -31,8 +31,8 @@ class Pcd4h3Device(Device):
     config_model: ClassVar[Section] = Pcd4h3Config
     ports = (
         PortDef("sbus", "S-Bus serial data mode (FS B5h, stuffing, CRC-16; 9600 8N1)", "§9.2"),
-        PortDef("ether_udp", "Ether-S-Bus on UDP, one telegram per datagram (port 5050)", "§9.3"),
-        PortDef("ether_tcp", "Ether-S-Bus on TCP, telegrams back to back (port 5050)", "§9.3"),
+        PortDef("ether_udp", "Ether-S-Bus on UDP, one telegram per datagram", "§9.3", default="udp:5050"),
+        PortDef("ether_tcp", "Ether-S-Bus on TCP, telegrams back to back", "§9.3", default="tcp:5050"),
     )
     model_class = Pcd4
     face_classes: ClassVar[dict[str, Any]] = {"sbus": SbusFace, "ether_udp": EtherDatagramFace,

@@ -294,7 +294,7 @@ class Lm628:
                 self.on_target = True
             self.filter.sample(self.profile.desired, self.unwrapped_actual)
         volts = self.filter.volts if self.filter.dac_bits == 12 else self.filter.volts * 10.0
-        self.motor.step(volts * self.encoder_sign, CHIP_SAMPLE)
+        self.motor.step(volts, CHIP_SAMPLE)
         after = self._raw = self._encoder()
         if before != after:
             self._moved(before, after)

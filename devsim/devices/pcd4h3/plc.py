@@ -23,7 +23,7 @@ from devsim.devices.pcd4h3 import display
 from devsim.devices.pcd4h3.config import Pcd4h3Config
 from devsim.devices.pcd4h3.drive import H3Drive, axis_signals
 from devsim.devices.pcd4h3.layout import REGISTERS, Layout
-from devsim.devices.pcd4h3.library import H3Axis
+from devsim.devices.pcd4h3.library import STATUS_FLAGS, H3Axis
 from devsim.devices.pcd4h3.units import ffp_encode
 
 __all__ = ["Halted", "Pcd4"]
@@ -83,6 +83,7 @@ class Pcd4(Model):
         self.status = RUN
         self.initialised = [False] * len(self.axes)
         self._timer: Timer | None = None
+        self._seen: dict[tuple[int, str], int] = {}  # status flags at the last look (events)
         self._last_cycle = -math.inf
         self._calls_before, self._running_since = [0] * len(self.axes), clock.now()
         self.cold_start()
@@ -172,11 +173,21 @@ class Pcd4(Model):
                     elapsed += axis.handle(before) / 1000
                     if axis.transfers != transfers:
                         drive.poke()
+                    self._note(axis)
             except Halted:
                 pass
             self._display()
         if self._busy():
             self._timer = self.clock.call_at(start + max(self.cycle_time, elapsed), self._cycle)
+
+    def _note(self, axis: H3Axis) -> None:
+        """Events for timing expectations: a status flag rising (``axis1.OnDest`` …)."""
+        for symbol in STATUS_FLAGS:
+            value = axis.flag(symbol)
+            key = (axis.axis, symbol)
+            if value and not self._seen.get(key):
+                self.record_event(f"axis{axis.axis}.{symbol}")
+            self._seen[key] = value
 
     def _busy(self) -> bool:
         if any(not drive.settled for drive in self.drives):

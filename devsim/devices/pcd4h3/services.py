@@ -112,8 +112,8 @@ def _diagnostic_flag(plc: Pcd4, address: int) -> int | None:
         return None
     n, item = divmod(index, DIAG_FLAGS)
     chip = plc.drives[n].chip
-    values = (plc.initialised[n], False, not chip.profile.complete or not plc.drives[n].settled,
-              plc.axes[n].warnings > 0)
+    moving = not chip.profile.complete or abs(chip.motor.velocity) > 1.0  # counts/s
+    values = (plc.initialised[n], False, moving, plc.axes[n].warnings > 0)
     return int(values[item]) if item < len(values) else 0
 
 
