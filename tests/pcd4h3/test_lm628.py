@@ -3,6 +3,8 @@ status, signals, and a closed-loop move."""
 
 from __future__ import annotations
 
+import pytest
+
 from devsim.devices.pcd4h3.lm628 import BREAKPOINT, COMPLETE, MOTOR_OFF, POSITION_ERROR, Lm628
 from devsim.devices.pcd4h3.pid import Motor
 
@@ -77,3 +79,38 @@ def test_breakpoint_flag_when_the_actual_position_passes_it() -> None:
     while not chip.status & BREAKPOINT:
         chip.sample()
     assert 69_000 < chip.actual < 71_000
+
+
+def test_pd_step_response_on_a_pure_inertia_matches_the_closed_form() -> None:
+    """The loop from 2000 counts off target back to it, on a motor that is a pure inertia
+    (x'' = b·U: a lag of τ = 10^6 s): kp, kd give x'' + b·g·kd·T·x' + b·g·kp·x = 0 with g the
+    12-bit output's volts per filter unit (10 V / 2^15), so ωn² = b·g·kp, 2ζωn = b·g·kd·T; the
+    first undershoot is x0·exp(−ζπ/√(1−ζ²)) at t = π/ωd (§5.3 on the closed form of a damped
+    oscillator)."""
+    import math
+
+    from devsim.devices.pcd4h3.units import CHIP_SAMPLE
+
+    g, T = 10.0 / 32768, CHIP_SAMPLE
+    omega, zeta = 2 * math.pi * 5, 0.3
+    kp = 8
+    b = omega**2 / (g * kp)  # counts/s² per volt
+    kd = round(2 * zeta * omega / (b * g * T))
+    tau = 1e6
+    chip = Lm628(Motor(kv=b * tau, tau=tau))
+    chip.reset()
+    chip.port(12)
+    chip.load_filter(0x000F, [kp, 0, kd, 0])
+    chip.update_filter()
+    chip.load_trajectory(0x0000, [])
+    chip.start()  # the control on, the target where the axis is: 0
+    chip.motor.position = 2000.0  # then the axis is pushed 2000 counts away
+    low, when = math.inf, 0.0
+    for n in range(1, int(0.3 / T)):
+        chip.sample()
+        if chip.actual < low:
+            low, when = chip.actual, n * T
+    z = zeta * (kd * b * g * T) / (2 * zeta * omega)  # ζ with kd as rounded
+    damped = omega * math.sqrt(1 - z * z)
+    assert when == pytest.approx(math.pi / damped, rel=0.03)
+    assert low == pytest.approx(-2000 * math.exp(-z * math.pi / math.sqrt(1 - z * z)), rel=0.05)

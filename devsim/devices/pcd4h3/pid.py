@@ -91,6 +91,18 @@ class Filter:
         return (self.output >> 8) / 128
 
 
+def _lag_terms(t: float, tau: float) -> tuple[float, float, float]:
+    """e^(−t/τ), 1 − e^(−t/τ) and t − τ·(1 − e^(−t/τ)), without cancellation when t ≪ τ (a
+    motor that is nearly a pure inertia)."""
+    x = t / tau
+    gained = -math.expm1(-x)
+    if x < 1e-3:
+        travelled = tau * x * x * (0.5 - x / 6 + x * x / 24)
+    else:
+        travelled = t - tau * gained
+    return 1.0 - gained, gained, travelled
+
+
 class Motor:
     """Amplifier and motor as a velocity source with a lag: dv/dt = (Kv · U − v) / τm."""
 
@@ -101,7 +113,7 @@ class Motor:
         self.blocked = False
         self.load = 0.0  # a load torque, as the volts that would hold it (S21)
         self.low, self.high = -math.inf, math.inf  # mechanical end stops (S12)
-        self._decay: tuple[float, float] = (0.0, 1.0)  # (seconds, exp(−seconds/τ)) of the last step
+        self._decay: tuple[float, float, float, float] = (0.0, 1.0, 0.0, 0.0)  # the last step's terms
 
     def step(self, volts: float, seconds: float) -> None:
         """Hold ``volts`` for ``seconds``: the exact solution of the first-order lag."""
@@ -114,10 +126,11 @@ class Motor:
             self.velocity = goal
         else:
             if self._decay[0] != seconds:
-                self._decay = (seconds, math.exp(-seconds / self.tau))
-            decay = self._decay[1]
-            self.position += goal * seconds + (self.velocity - goal) * self.tau * (1 - decay)
-            self.velocity = goal + (self.velocity - goal) * decay
+                self._decay = (seconds, *_lag_terms(seconds, self.tau))
+            _, kept, gained, travelled = self._decay
+            # v(t) = v0·e^(−t/τ) + goal·(1 − e^(−t/τ)); x(t) = x0 + v0·τ·(1 − e^(−t/τ)) + goal·(t − τ·(1 − e^(−t/τ)))
+            self.position += self.velocity * self.tau * gained + goal * travelled
+            self.velocity = self.velocity * kept + goal * gained
         if not self.low <= self.position <= self.high:
             self.position = min(self.high, max(self.low, self.position))
             self.velocity = 0.0
