@@ -12,7 +12,7 @@ from devsim.core.registry import device_class
 from devsim.docgen import reference_markdown, shared_vocabulary_markdown
 
 ROOT = Path(__file__).resolve().parents[1]
-SHIPPED = ("sers", "gms96", "poselesta", "ip247")
+SHIPPED = ("sers", "gms96", "poselesta", "ip247", "pcd4h3")
 
 
 @pytest.mark.parametrize("kind", SHIPPED)
