@@ -152,3 +152,25 @@ def test_the_machine_factor_as_float_gives_the_example_counts(pcd: Station) -> N
     fresh(pcd)
     run(pcd, "FLdDA")
     assert transfers(pcd) == ["C:1F D:00 02 D:00 01 D:38 80"]  # 80 000 counts
+
+
+def test_a_phase_jumper_the_wrong_way_reverses_the_count(make: Callable[..., Station]) -> None:
+    """Jumper A/Ā changed alone (§2.5): the decoder counts backwards, the loop runs away; with
+    LPES (MCW 41Ah) the control switches off at the position error."""
+    pcd = make({"jumpers": {"invert_a": False}, "init": {1: {"MCW": 0x41A}}})
+    load(pcd, DestP=10)
+    run(pcd, "FLdDA", "FStart")
+    assert pcd.sim.run_until(lambda d: d.read("axis.1.ExcPEr"), 2.0)
+    pcd.sim.advance(0.05)
+    assert pcd.sim.read("axis.1.motor_off") and pcd.sim.read("axis.1.mechanical_position") > 1000
+
+
+def test_an_inverted_index_jumper_captures_at_the_next_line(make: Callable[..., Station]) -> None:
+    """IN/ĪN wrong: the decoder sees A = B = IN = 0 at every line and captures there, not at the
+    index mark (the manual's malfunction, §6.4)."""
+    for inverted, near in ((False, 1000), (True, 4)):
+        pcd = make({"jumpers": {"index_invert": inverted}, "axes": {1: {"index_offset": 1000}}})
+        load(pcd, Veloc=20)
+        run(pcd, "FSetIP", "FLdVA", "FForw")
+        assert pcd.sim.run_until(lambda d: d.read("axis.1.IPuls"), 5.0)
+        assert pcd.sim.device.model.drives[0].chip.index_position == near

@@ -22,7 +22,7 @@ from devsim.core.settings import (
 )
 from devsim.devices.pcd4h3.layout import FLAGS, REGISTERS
 
-__all__ = ["AXIS", "H3DEF", "Pcd4h3Config", "READ_FUNCTIONS", "VARIANTS"]
+__all__ = ["AXIS", "H3DEF", "JUMPERS", "Pcd4h3Config", "READ_FUNCTIONS", "VARIANTS"]
 
 VARIANTS = ("H310", "H320", "H311", "H321", "H316", "H326", "H317", "H327")
 READ_FUNCTIONS = tuple(f.symbol for f in FLAGS if f.symbol.startswith("FRd"))
@@ -59,6 +59,15 @@ H3DEF = Section("H3DEF.SRC's installation symbols (manual §7.1.3, spec §4.1)."
     Setting("bafb", Int(ge=0, le=999), 900, "BAFB: first function block number (documentation)"),
 ))
 
+JUMPERS = Section("The encoder jumpers common to both axes (manual §6.4, spec §2.5); the factory setting suits "
+                   "the simulated encoder.", (
+    Setting("invert_a", Bool(), True, "A/Ā: phase A inverted (factory Ā); changing A or B alone reverses the count"),
+    Setting("invert_b", Bool(), True, "B/B̄: phase B inverted (factory B̄)"),
+    Setting("index_invert", Bool(), False, "IN/ĪN: index inverted (factory IN); inverted, the decoder sees A = B = "
+            "IN = 0 at every fourth count and captures there (the manual's malfunction)"),
+    Setting("sink_mode", Bool(), False, "Q/S: 24 V encoder inputs in sink mode (signal levels only)"),
+))
+
 AXIS = Section("One axis: motor, encoder, jumpers, switches (spec §2.5, §5.4, §5.9, §5.10); positions in "
                "encoder counts from where the axis stood at power-on.", (
     Setting("encoder_lines", Int(ge=1, le=1_000_000), 500, "encoder lines per revolution (index every 4 × lines counts)"),
@@ -66,7 +75,9 @@ AXIS = Section("One axis: motor, encoder, jumpers, switches (spec §2.5, §5.4, 
     Setting("kv", Float(gt=0, le=1e8), 10_000.0, "motor with amplifier: counts/s per volt"),
     Setting("tau_ms", Float(ge=0, le=10_000), 20.0, "motor time constant τm, ms"),
     Setting("in_rp", OneOf("index", "ref"), "index", "jumper IN/RP: terminal 4/12 feeds the decoder's index (index) "
-            "or is only a reference switch (ref)"),
+            "or is only a reference switch (ref; 24 V types, the 5 V types take the index from the D-Sub)"),
+    Setting("pwm_logic", OneOf("sign_magnitude", "bridge"), "sign_magnitude", "PWM output jumper (PWM types): sign "
+            "and magnitude or H-bridge logic (the output is reported as a signed duty either way)"),
     Setting("ls1", Maybe(Float()), None, "limit switch LS1 opens at and below this count (negative end)"),
     Setting("ls2", Maybe(Float()), None, "limit switch LS2 opens at and above this count (positive end)"),
     Setting("ref_switch", Maybe(PairOf(Float())), None, "reference switch closed on [low, high] counts"),
@@ -80,6 +91,7 @@ Pcd4h3Config = Section("Configuration of one simulated PCD4 with PCD4.H3 modules
     Setting("firmware", Text(), "003", "what S-Bus 'read firmware version' answers (3 characters)"),
     Setting("response_delay_ms", Float(ge=0, le=1000), 2.0, "the S-Bus answer leaves this long after the request"),
     Setting("h3def", H3DEF, {}, "H3DEF.SRC symbols"),
+    Setting("jumpers", JUMPERS, {}, "the jumpers common to both axes (per axis: in_rp under axes)"),
     Setting("flag_map", DictOf(_flag, Int(ge=0, le=34), "flag"), {}, "flag offsets replacing the reconstructed ones "
             "(G-1), e.g. {FStart: 28}"),
     Setting("plc_cycle_ms", Float(ge=1, le=1000), 10.0, "PLC cycle: AxHndlg for every axis once per cycle"),

@@ -43,7 +43,7 @@ class H3Drive:
     """Axis ``number``: chip, motor, encoder, the shared axis, the switches."""
 
     def __init__(self, number: int, clock: Clock, signals: SignalBank, settings: Mapping[str, Any], *,
-                 lm629: bool, rs422: bool, present: bool) -> None:
+                 lm629: bool, rs422: bool, present: bool, jumpers: Mapping[str, Any] | None = None) -> None:
         self.number, self.signals = number, signals
         self.motor = Motor(kv=float(settings["kv"]), tau=float(settings["tau_ms"]) / 1000)
         stops = settings.get("hard_stops")
@@ -55,6 +55,11 @@ class H3Drive:
         # the index reaches the decoder through the D-Sub (5 V types) or terminal 4/12 with IN/RP = IN
         if rs422 or settings["in_rp"] == "index":
             self.chip.index_period = 4 * lines
+        jumpers = jumpers or {}
+        if jumpers.get("invert_a", True) != jumpers.get("invert_b", True):
+            self.chip.encoder_sign = -1  # one phase the wrong way round: the decoder counts backwards
+        if jumpers.get("index_invert", False) and self.chip.index_period:
+            self.chip.index_period = 4  # A = B = ĪN = 0 once per line: a capture at the next line
         self.chip.index_offset = int(settings["index_offset"])
         self.stepper = ChipStepper(self.chip, clock, own_timer=False)
         self.stepper.on_batch = self._follow

@@ -71,7 +71,7 @@ class Pcd4(Model):
             module, y = (n - 1) // 2, n % 2 == 0
             present = module < s["modules"] and (not y or self.per_module == 2)
             drive = H3Drive(n, clock, self.signals, s["axes"].get(n) or _axis_defaults(), lm629=self.pwm,
-                            rs422=self.rs422, present=present)
+                            rs422=self.rs422, present=present, jumpers=s["jumpers"])
             axis = H3Axis(n, self.layout, drive.chip, self.registers, self.flags)
             axis.rsigb_bit12_inverted = s["rsigb_bit12_inverted"]
             axis.on_comers = self._comers
