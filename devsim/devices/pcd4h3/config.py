@@ -97,6 +97,8 @@ Pcd4h3Config = Section("Configuration of one simulated PCD4 with PCD4.H3 modules
     Setting("plc_cycle_ms", Float(ge=1, le=1000), 10.0, "PLC cycle: AxHndlg for every axis once per cycle"),
     Setting("comers_action", OneOf("continue", "halt", "xob13_diag"), "continue", "what ComErS does: go on, or halt "
             "the PCD (status H) as the manual's commissioning ComErS; xob13_diag halts and keeps the diagnostics"),
+    Setting("user_program", Maybe(OneOf("example1", "example2", "example3")), None, "a user program the PLC runs "
+            "on axis 1: the manual's Example 1, 2 or 3 (keys on inputs I 0 … 15: use FMAH3 48)"),
     Setting("cyclic_reads", ListOf(OneOf(*READ_FUNCTIONS)), [], "read functions the user program sets every cycle, "
             "e.g. [FRdAP, FRdSV] (Examples 2 and 3)"),
     Setting("emulate_user_limit_stop", Bool(), False, "stop (FStop) an axis whose limit switch opens, as a user "

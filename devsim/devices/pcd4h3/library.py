@@ -58,6 +58,7 @@ class H3Axis:
         self.warnings = 0  # FStop with a doubtful MCW, a single step while moving (G-10, E10)
         self.rsigb_bit12_inverted = False  # G-5 option
         self.transfers = 0  # chip transfers since start-up
+        self.ran: list[str] = []  # the functions the last AxHndlg call ran
         self._function = ""
         self._attempts = 1  # the most attempts one transfer of the running function took
 
@@ -147,10 +148,12 @@ class H3Axis:
         at the right sample); returns the call's duration in ms (§3.3.2: base 0.5 ms, each
         function its §10.1 time, each repeat the time again)."""
         elapsed = 0.5
+        self.ran = []
         for symbol in self.layout.command_order:
             if self.flags.get(self.layout.flag(self.axis, symbol), 0):
                 if before is not None:
                     before(elapsed)
+                self.ran.append(symbol)
                 try:
                     attempts = self._run(symbol)
                 finally:

@@ -24,12 +24,14 @@ from devsim.devices.pcd4h3.config import Pcd4h3Config
 from devsim.devices.pcd4h3.drive import H3Drive, axis_signals
 from devsim.devices.pcd4h3.layout import REGISTERS, Layout
 from devsim.devices.pcd4h3.library import STATUS_FLAGS, H3Axis
+from devsim.devices.pcd4h3.programs import PROGRAMS, Sequence
 from devsim.devices.pcd4h3.units import ffp_encode
 
 __all__ = ["Halted", "Pcd4"]
 
 RUN, HALT, STOP = "R", "H", "S"
 MEDIA_SIZE = {"register": 4096, "flag": 8192, "input": 1024, "output": 1024, "counter": 1600, "timer": 32}
+MOTION_FUNCTIONS = ("FStart", "FStop", "FMotOff", "FSStepF", "FSStepB", "FForw", "FBackw")
 BUS_INPUTS = {"X": (9, 10, 11), "Y": (13, 14, 15)}  # LS1, LS2, In/Ref at module address + offset (§2.2)
 
 
@@ -79,7 +81,14 @@ class Pcd4(Model):
             self.axes.append(axis)
             self.signals.subscribe(f"LS1_{n}", lambda _n, old, new, n=n: self._limit(n, old, new))
             self.signals.subscribe(f"LS2_{n}", lambda _n, old, new, n=n: self._limit(n, old, new))
-        self.screens = {n: display.BLANK for n in s["display"]}
+        program = PROGRAMS.get(s["user_program"] or "")
+        self.sequence = Sequence(program, self) if program is not None and self.axes else None
+        displayed = dict(s["display"])
+        if program is not None and program.display:
+            displayed.setdefault(1, {"reg1": "RActP", "reg2": "RSetV"})
+        self.displayed = displayed
+        self.screens = {n: display.BLANK for n in displayed}
+        self._timer_ends: dict[int, float] = {}
         self.status = RUN
         self.initialised = [False] * len(self.axes)
         self._timer: Timer | None = None
@@ -99,6 +108,8 @@ class Pcd4(Model):
                 self.registers[address] = signed32(ffp_encode(value)) if symbol == "MCFac" else signed32(int(value))
         self.status = RUN
         self._fold_calls()
+        if self.sequence is not None:
+            self.sequence.restart()
         for index, (axis, drive) in enumerate(zip(self.axes, self.drives, strict=True)):
             drive.catch_up()
             try:
@@ -160,6 +171,8 @@ class Pcd4(Model):
             drive.catch_up()
         elapsed = 0.0
         if self.status == RUN:
+            if self.sequence is not None:
+                self.sequence.before_handling()
             try:
                 for axis, drive in zip(self.axes, self.drives, strict=True):
                     for symbol in self.settings["cyclic_reads"]:
@@ -174,6 +187,8 @@ class Pcd4(Model):
                     if axis.transfers != transfers:
                         drive.poke()
                     self._note(axis)
+                if self.sequence is not None:
+                    self.sequence.cycle()
             except Halted:
                 pass
             self._display()
@@ -181,7 +196,11 @@ class Pcd4(Model):
             self._timer = self.clock.call_at(start + max(self.cycle_time, elapsed), self._cycle)
 
     def _note(self, axis: H3Axis) -> None:
-        """Events for timing expectations: a status flag rising (``axis1.OnDest`` …)."""
+        """Events for timing expectations: a motion function run (``axis1.FStart`` …) and a
+        status flag rising (``axis1.OnDest`` …)."""
+        for symbol in axis.ran:
+            if symbol in MOTION_FUNCTIONS:
+                self.record_event(f"axis{axis.axis}.{symbol}")
         for symbol in STATUS_FLAGS:
             value = axis.flag(symbol)
             key = (axis.axis, symbol)
@@ -194,11 +213,24 @@ class Pcd4(Model):
             return True
         if self.status != RUN:
             return False
+        if self.sequence is not None and (self.sequence.busy or any(self.timer(n) for n in self._timer_ends)):
+            return True
         return any(self.flags.get(self.layout.flag(axis.axis, symbol), 0)
                    for axis in self.axes for symbol in self.layout.command_order)
 
+    # -- timers (LD T n tenths; they count down to 0) ----------------------------------------------
+    def load_timer(self, n: int, tenths: int) -> None:
+        self._timer_ends[n] = self.clock.now() + tenths / 10
+
+    def timer(self, n: int) -> int:
+        """Timer n's value in tenths of a second (0 once it ran out)."""
+        end = self._timer_ends.get(n)
+        if end is None:
+            return self.timers.get(n, 0)
+        return max(0, math.ceil((end - self.clock.now()) * 10 - 1e-9))
+
     def _display(self) -> None:
-        for n, view in self.settings["display"].items():
+        for n, view in self.displayed.items():
             if n > len(self.axes):
                 continue
             axis = self.axes[n - 1]
