@@ -76,6 +76,10 @@ def test_example_3_automatic_and_manual(make: Callable[..., Station]) -> None:
     assert abs(pcd.sim.read("axis.1.position")) <= 1
     pcd.sim.set("I.9", True)
     pcd.sim.advance(1.0)
-    press(pcd, 15)  # the stop key
+    pressed = pcd.sim.now()
+    pcd.sim.set("I.15", True)  # the stop key: FStop at once (the SB restarts; I 9 released meanwhile)
+    pcd.sim.advance(0.05)
+    assert at(pcd, "axis1.FStop", pressed)[0] < 0.05
+    pcd.sim.set("I.9", False)
     pcd.sim.advance(3.0)
     assert pcd.sim.read("axis.1.OnDest") and abs(pcd.sim.read("axis.1.velocity")) < 50
