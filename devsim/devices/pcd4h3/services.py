@@ -18,7 +18,7 @@ from devsim.devices.pcd4h3.plc import BUS_INPUTS, MEDIA_SIZE, Pcd4
 from devsim.devices.pcd4h3.sbus import ACK, NAK, Bad, Read, Request, Simple, Write, decode_command, pack_bits
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
-__all__ = ["DIAG_FLAGS", "DIAG_REGISTERS", "Answer", "serve"]
+__all__ = ["DIAG_FLAGS", "DIAG_REGISTERS", "Answer", "read", "serve", "write"]
 
 Answer = bytes | int | None  # reply data, an ACK/NAK code, or no answer (broadcast)
 DIAG_REGISTERS, DIAG_FLAGS = 16, 8  # per axis (§9.6.3)
@@ -48,26 +48,34 @@ def _carry_out(plc: Pcd4, command: Read | Write | Simple | Bad) -> Answer:
 
 
 def _write(plc: Pcd4, command: Write) -> Answer:
-    medium, first, values = command.medium, command.address, command.values
-    if first + len(values) > MEDIA_SIZE[medium] or medium == "output":
-        return NAK  # the outputs belong to the FBs (no raw bus)
+    return ACK if write(plc, command.medium, command.address, command.values) else NAK
+
+
+def write(plc: Pcd4, medium: str, first: int, values: tuple[int, ...] | list[int]) -> bool:
+    """Write consecutive elements of a medium as a host does (registers as signed 32-bit values,
+    flags 0/1); False, and nothing written, where the host may not: beyond the medium, the
+    outputs (the FBs' own), the diagnostics block.  The seam for other host links (the Modbus
+    mirror of spec §9.8 maps its coils and holding registers onto this and :func:`read`)."""
+    if first < 0 or first + len(values) > MEDIA_SIZE[medium] or medium not in ("register", "flag"):
+        return False
     if medium == "register":
         if any(_diagnostic_register(plc, first + i) is not None for i in range(len(values))):
-            return NAK
+            return False
         for i, value in enumerate(values):
             plc.registers[first + i] = signed32(value)
-        return ACK
+        return True
     if any(_diagnostic_flag(plc, first + i) is not None for i in range(len(values))):
-        return NAK
+        return False
     for i, value in enumerate(values):
-        plc.flags[first + i] = value
+        plc.flags[first + i] = 1 if value else 0
     plc.wake()
-    return ACK
+    return True
 
 
 # -- reading one element --------------------------------------------------------------------------
 def read(plc: Pcd4, medium: str, address: int) -> int:
-    """One element of a medium as the host reads it."""
+    """One element of a medium as the host reads it (bring the chips to now first:
+    ``plc.catch_up()``)."""
     if medium == "register":
         diag = _diagnostic_register(plc, address)
         return diag if diag is not None else plc.registers.get(address, 0)
