@@ -109,3 +109,22 @@ def test_silence_for_crc_errors_other_stations_and_broadcasts(pcd: Station) -> N
     pcd.send_raw(body + crc16(body).to_bytes(2, "big"))
     exchange(pcd, "B5 00 01 1B DD FF", "B5 01 52 5C 89")  # the first answer is this one
     assert pcd.read_registers(207) == [7]
+
+
+def test_diagnostics_block_and_run_stop(pcd: Station) -> None:
+    """§9.6.2, §9.6.3: AxHndlg calls count one per cycle while the PCD runs, not while stopped
+    (43h) or halted; the diagnostics registers are read-only (NAK); while stopped the flags stay
+    pending; run (2Fh) goes on."""
+    pcd.sim.advance(1.0)
+    calls = pcd.read_registers(4011)[0]
+    assert calls == pytest.approx(100, abs=2)
+    assert pcd.call(0x43) == b"\x00\x00" and pcd.call(0x1B, data_bytes=1) == b"S"
+    assert pcd.write_flags(228, 1) == b"\x00\x00"  # FStart: pending while stopped
+    pcd.sim.advance(1.0)
+    assert pcd.read_registers(4011)[0] == calls and pcd.read_flags(228) == [1]
+    assert pcd.call(0x2F) == b"\x00\x00" and pcd.call(0x1B, data_bytes=1) == b"R"
+    pcd.sim.advance(1.0)
+    assert pcd.read_registers(4011)[0] == pytest.approx(calls + 100, abs=2) and pcd.read_flags(228) == [0]
+    assert pcd.write_registers(4000, 1) == b"\x00\x01"  # NAK: read-only
+    assert pcd.write_flags(8000, 1) == b"\x00\x01"
+    assert pcd.read_registers(4002, 2) == [0, 0]  # actual and set position, counts

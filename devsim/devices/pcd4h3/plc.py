@@ -20,7 +20,7 @@ from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
 from devsim.core.words import signed32
 from devsim.devices.pcd4h3 import display
-from devsim.devices.pcd4h3.config import Pcd4h3Config
+from devsim.devices.pcd4h3.config import AXIS, Pcd4h3Config
 from devsim.devices.pcd4h3.drive import H3Drive, axis_signals
 from devsim.devices.pcd4h3.layout import REGISTERS, Layout
 from devsim.devices.pcd4h3.library import STATUS_FLAGS, H3Axis
@@ -106,8 +106,8 @@ class Pcd4(Model):
             for symbol, value in values.items():
                 address = self.layout.register(n, symbol)
                 self.registers[address] = signed32(ffp_encode(value)) if symbol == "MCFac" else signed32(int(value))
-        self.status = RUN
         self._fold_calls()
+        self.status = RUN
         if self.sequence is not None:
             self.sequence.restart()
         for index, (axis, drive) in enumerate(zip(self.axes, self.drives, strict=True)):
@@ -280,6 +280,4 @@ class Pcd4(Model):
 
 
 def _axis_defaults() -> dict[str, Any]:
-    from devsim.devices.pcd4h3.config import AXIS
-
     return AXIS.parse({}).dump()

@@ -22,7 +22,7 @@ from devsim.devices.pcd4h3.drive import axis_signals
 from devsim.devices.pcd4h3.layout import FLAGS, REGISTERS
 from devsim.devices.pcd4h3.lm628 import notation
 from devsim.devices.pcd4h3.plc import MEDIA_SIZE, Pcd4
-from devsim.devices.pcd4h3.services import read
+from devsim.devices.pcd4h3.services import bus_input, read
 
 __all__ = ["FAULTS", "POINTS", "SIGNALS"]
 
@@ -130,6 +130,9 @@ def _medium(prefix: str, medium: str, settable: bool) -> Callable[[str], Point |
             return value if kind == "int" else bool(value)
 
         def put(m: Pcd4, value: Any) -> None:
+            if medium == "input" and bus_input(m, address) is not None:
+                raise BadValue(f"I {address} is an H3 module's own input: set its switch (input.LS1_n, "
+                               "input.LS2_n, input.REF_n)")
             store = {"register": m.registers, "flag": m.flags, "input": m.inputs}[medium]
             store[address] = signed32(int(value)) if kind == "int" else int(bool(value))
             m.wake()

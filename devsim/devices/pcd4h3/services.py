@@ -18,7 +18,7 @@ from devsim.devices.pcd4h3.plc import BUS_INPUTS, MEDIA_SIZE, Pcd4
 from devsim.devices.pcd4h3.sbus import ACK, NAK, Bad, Read, Request, Simple, Write, decode_command, pack_bits
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
-__all__ = ["DIAG_FLAGS", "DIAG_REGISTERS", "Answer", "read", "serve", "write"]
+__all__ = ["DIAG_FLAGS", "DIAG_REGISTERS", "Answer", "bus_input", "read", "serve", "write"]
 
 Answer = bytes | int | None  # reply data, an ACK/NAK code, or no answer (broadcast)
 DIAG_REGISTERS, DIAG_FLAGS = 16, 8  # per axis (§9.6.3)
@@ -83,7 +83,7 @@ def read(plc: Pcd4, medium: str, address: int) -> int:
         diag = _diagnostic_flag(plc, address)
         return diag if diag is not None else plc.flags.get(address, 0)
     if medium == "input":
-        bus = _bus_input(plc, address)
+        bus = bus_input(plc, address)
         return bus if bus is not None else plc.inputs.get(address, 0)
     if medium == "output":
         return plc.outputs.get(address, 0)
@@ -92,7 +92,7 @@ def read(plc: Pcd4, medium: str, address: int) -> int:
     return plc.timer(address)
 
 
-def _bus_input(plc: Pcd4, address: int) -> int | None:
+def bus_input(plc: Pcd4, address: int) -> int | None:
     """An H3 module's input (§2.2), or None for an address outside the modules."""
     relative = address - plc.fmah3
     module, offset = divmod(relative, 16)
