@@ -120,16 +120,18 @@ def list_kinds() -> None:
 # -- devsim doc ------------------------------------------------------------------------------
 @cli.command("doc")
 @click.argument("kind")
-def doc(kind: str) -> None:
+@click.option("--modbus", "modbus_map", is_flag=True, help="Print the Modbus register map instead.")
+def doc(kind: str, modbus_map: bool) -> None:
     """Print KIND's reference in Markdown: ports, control names, faults, commands, parameters,
-    error codes and configuration keys, from the tables that drive the simulator."""
-    from devsim.docgen import reference_markdown
+    error codes and configuration keys, from the tables that drive the simulator (with --modbus:
+    the register map its points give)."""
+    from devsim.docgen import modbus_markdown, reference_markdown
 
     try:
         cls = device_class(kind)
     except UnknownKind as exc:
         raise click.UsageError(str(exc)) from None
-    click.echo(reference_markdown(cls))
+    click.echo(modbus_markdown(cls) if modbus_map else reference_markdown(cls))
 
 
 # -- devsim run ------------------------------------------------------------------------------
@@ -155,6 +157,7 @@ class _Plan:
     allow_remote: bool
     printed: list[str] = field(default_factory=list)
     overrides: dict[str, _Port] = field(default_factory=dict)  # --port NAME=SPEC
+    modbus: str | None = None  # --modbus tcp:[HOST:]PORT | rtu | rtu:LINK
 
 
 def _host_port(option: str, text: str) -> tuple[str, int]:
@@ -288,6 +291,11 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     metavar="NAME=SPEC",
     help="Serve port NAME on SPEC: pty, udp:[HOST:]PORT, tcp:[HOST:]PORT or rfc2217:[HOST:]PORT (repeatable).",
 )
+@click.option(
+    "--modbus",
+    metavar="SPEC",
+    help="Also serve the device over Modbus (extra [modbus]): tcp:[HOST:]PORT, rtu (a pty) or rtu:LINK.",
+)
 def run(
     kind: str,
     use_pty: bool,
@@ -304,6 +312,7 @@ def run(
     drives: str | None,
     pacing: bool,
     port_options: tuple[str, ...],
+    modbus: str | None,
 ) -> None:
     """Serve a simulated KIND device until Ctrl-C.
 
@@ -334,6 +343,8 @@ def run(
         if name in overrides:
             raise click.UsageError(f"--port: port {name!r} given twice")
         overrides[name] = spec
+    if modbus is not None:
+        _check_modbus(modbus)
     if speed <= 0:
         raise click.UsageError("--speed: must be positive")
     if virtual and speed != 1.0:
@@ -364,6 +375,7 @@ def run(
         control=control_addr,
         allow_remote=control_allow_remote,
         overrides=overrides,
+        modbus=modbus,
     )
     try:
         asyncio.run(_serve(plan))
@@ -426,6 +438,14 @@ async def _serve(plan: _Plan) -> None:
                 trace = _trace_for(plan.trace, port_name, index)
                 await runtime.serve(devices, transport, port=port_name, pacing=plan.pacing, trace=trace)
                 served.append((port_name, transport, spec))
+            modbus_served: list[tuple[str, str]] = []
+            if plan.modbus is not None:
+                stage = f"serve Modbus ({plan.modbus})"
+                from devsim.facades.modbus import start_modbus
+
+                for index, device in enumerate(devices):
+                    spec = _modbus_for(plan.modbus, index)
+                    modbus_served.append((device.name, await start_modbus(runtime, device, spec)))
             if plan.control is not None:
                 stage = f"serve the control API on {plan.control}"
                 server = ControlServer(runtime, plan.control, allow_remote=plan.allow_remote)
@@ -443,6 +463,8 @@ async def _serve(plan: _Plan) -> None:
                     _say(f"{key}: {spec.scheme} {_port_text(transport, spec.scheme)}")
                     if spec.link:
                         _say(f"{key}: link {spec.link}")
+            for name, where in modbus_served:
+                _say(f"{name}.modbus: {'tcp' if plan.modbus and plan.modbus.startswith('tcp') else 'rtu'} {where}")
             if server is not None:
                 _say(f"control: {address}")
             for device in devices:  # NAME: ready, each time it has booted and listens
@@ -475,6 +497,29 @@ def _plan_ports(plan: _Plan, ports: Sequence[Any]) -> list[tuple[str, _Port]]:
         else:
             chosen.append((spec.name, _port_for(plan.port, spec.name, shared.index(spec.name), len(shared))))
     return chosen
+
+
+def _check_modbus(spec: str) -> None:
+    scheme, _, rest = spec.partition(":")
+    if scheme == "tcp":
+        _host_port("--modbus", rest)
+    elif scheme != "rtu":
+        raise click.UsageError(f"--modbus: expected tcp:[HOST:]PORT, rtu or rtu:LINK, not {spec!r}")
+    try:
+        import pymodbus  # noqa: F401
+    except ImportError:
+        raise click.UsageError("--modbus needs pymodbus: pip install 'devsim-motion[modbus]'") from None
+
+
+def _modbus_for(spec: str, index: int) -> str:
+    """The Modbus port of the index-th device: TCP port numbers count up, RTU links get -N."""
+    scheme, _, rest = spec.partition(":")
+    if index == 0:
+        return spec
+    if scheme == "tcp":
+        host, port = _host_port("--modbus", rest)
+        return f"tcp:{host}:{port + index if port else 0}"
+    return f"rtu:{rest}-{index}" if rest else "rtu"
 
 
 def _port_for(port: _Port, name: str, index: int, count: int) -> _Port:

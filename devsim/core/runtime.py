@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import asyncio
 import threading
-from collections.abc import Callable, Coroutine, Mapping, Sequence
+from collections.abc import Awaitable, Callable, Coroutine, Mapping, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -60,6 +60,7 @@ class Runtime:
         self.lines: dict[str, Any] = {}  # port_key(device, port) -> Line serving it
         self.ports: dict[str, str] = {}  # port_key(device, port) -> URL/path a host opens
         self.transports: list[Any] = []
+        self.closers: list[Callable[[], Awaitable[Any]]] = []
         self._line_faults: dict[tuple[str, str], list[Any]] = {}
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
@@ -119,6 +120,9 @@ class Runtime:
         self._loop = None
 
     async def aclose(self) -> None:
+        for close in reversed(self.closers):
+            await close()
+        self.closers.clear()
         for transport in reversed(self.transports):
             await transport.close()
         self.transports.clear()
@@ -186,23 +190,34 @@ class Runtime:
         """Serve one port of a device, or the same port of several devices on a multidrop bus,
         on ``transport``; returns the Line.  ``trace`` names a trace file: ``*.pcap`` is written
         as pcap (:mod:`devsim.transports.pcap`), anything else as the text trace."""
-        from devsim.transports.line import Line
-        from devsim.transports.tracing import open_trace
 
         group = [devices] if isinstance(devices, Device) else list(devices)
         target: Any = group[0].port(port) if len(group) == 1 else Bus(group, port)
+        return await self.serve_target([port_key(device.name, port) for device in group], target, transport,
+                                       pacing=pacing, trace=trace)
+
+    async def serve_target(self, keys: Sequence[str], target: Any, transport: Any, *, pacing: bool = False,
+                           trace: str | Path | None = None) -> Any:
+        """Serve any line target (a device's port, a bus, a facade's endpoint) on ``transport``
+        under the port keys ``keys``; returns the Line."""
+        from devsim.transports.line import Line
+        from devsim.transports.tracing import open_trace
+
         tracer = None
         if trace is not None:  # FILE.pcap: a pcap trace with the transport's addresses, else text
             peers = getattr(transport, "trace_peers", None)
-            tracer = open_trace(trace, peers=peers, name=port_key(group[0].name, port))
+            tracer = open_trace(trace, peers=peers, name=keys[0])
         line = Line(target, self.clock, pacing=pacing, tracer=tracer)
         await transport.start(line)
         self.transports.append(transport)
-        for device in group:
-            key = port_key(device.name, port)
+        for key in keys:
             self.lines[key] = line
             self.ports[key] = str(getattr(transport, "url", "") or getattr(transport, "address", ""))
         return line
+
+    def add_closer(self, close: Callable[[], Awaitable[Any]]) -> None:
+        """Something else the runtime serves (a facade's own server): closed first at the end."""
+        self.closers.append(close)
 
     def serve_sync(self, devices: Device | Sequence[Device], transport: Any, **kwargs: Any) -> Any:
         return self.run(self.serve(devices, transport, **kwargs))

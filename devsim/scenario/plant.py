@@ -130,9 +130,37 @@ async def build_plant(
         plant.lines[name] = line
         plant.kinds[name] = tspec.kind
     for dev in spec.devices:
+        if dev.modbus is not None:
+            await _serve_modbus(plant, dev, trace_dir, trace_format)
+    for dev in spec.devices:
         if dev.state:
             plant.devices[dev.name].apply_state(dev.state)
     return plant
+
+
+async def _serve_modbus(plant: Plant, dev: Any, trace_dir: str | Path | None, trace_format: TraceFormat) -> None:
+    """A device's Modbus facade (``NAME.modbus``): TCP through pymodbus's server, RTU on a pty."""
+    from devsim.facades.modbus import start_modbus
+
+    name = f"{dev.name}.modbus"
+    trace = str(Path(trace_dir) / f"{name}.{_TRACE_SUFFIX[trace_format]}") if trace_dir is not None else None
+    where = await start_modbus(plant.runtime, plant.devices[dev.name], dev.modbus.spec(), unit=dev.modbus.unit,
+                               overrides=dev.modbus.map, trace=trace, line=dev.modbus.line)
+    if dev.modbus.tcp is not None:
+        plant.transports[name] = _Address(f"socket://{where}", where)
+        plant.kinds[name] = "tcp"
+    else:
+        plant.transports[name] = plant.runtime.transports[-1]
+        plant.lines[name] = plant.runtime.lines[name]
+        plant.kinds[name] = "pty"
+
+
+@record
+class _Address:
+    """Where a server the plant does not own as a transport listens (the Modbus TCP facade)."""
+
+    url: str
+    address: str
 
 
 def start_plant(

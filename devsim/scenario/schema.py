@@ -44,6 +44,7 @@ __all__ = [
     "ACTIONS",
     "Condition",
     "DeviceSpec",
+    "ModbusSpec",
     "PlantSpec",
     "Scenario",
     "Step",
@@ -111,6 +112,33 @@ class TransportSpec(_Model):
         return next(k for k in _TRANSPORTS if getattr(self, k) is not None)
 
 
+class ModbusSpec(_Model):
+    """The device also on Modbus (issue 13): ``{tcp: {port: 5020}}`` (Modbus TCP) or ``{rtu: {}}``
+    (Modbus RTU on a pty, ``{rtu: {link: /tmp/ttyMB}}`` with a symlink); ``unit`` its unit id,
+    ``line`` the RTU line settings (``19200 8E1``);
+    ``map`` overrides entries of the generated register map (``{name: {address, table, scale}}``
+    or ``{name: null}``)."""
+
+    tcp: TcpSpec | None = None
+    rtu: PtySpec | None = None
+    unit: int = Field(default=1, ge=1, le=247)
+    line: str = Field(default="19200 8E1", description="RTU line settings")
+    map: dict[str, Any] = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _one(self) -> ModbusSpec:
+        if (self.tcp is None) == (self.rtu is None):
+            raise ValueError("give tcp or rtu")
+        return self
+
+    def spec(self) -> str:
+        """The ``--modbus`` form: ``tcp:HOST:PORT``, ``rtu`` or ``rtu:LINK``."""
+        if self.tcp is not None:
+            return f"tcp:{self.tcp.host}:{self.tcp.port}"
+        assert self.rtu is not None
+        return f"rtu:{self.rtu.link}" if self.rtu.link else "rtu"
+
+
 class DeviceSpec(_Model):
     name: str = Field(pattern=r"^[A-Za-z_][A-Za-z0-9_-]*$")
     kind: str
@@ -123,6 +151,7 @@ class DeviceSpec(_Model):
     config: dict[str, Any] = Field(default_factory=dict, description="device configuration (DIP switches, parameters)")
     axis: dict[str, Any] | None = Field(default=None, description="axis geometry, merged into config['axis']")
     state: dict[str, Any] = Field(default_factory=dict, description="initial state: settable names and 'program'")
+    modbus: ModbusSpec | None = Field(default=None, description="also serve the device over Modbus TCP or RTU")
 
     @model_validator(mode="after")
     def _transport_or_ports(self) -> DeviceSpec:

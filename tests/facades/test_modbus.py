@@ -1,0 +1,137 @@
+"""The Modbus facade on real ports (issue 13): Modbus TCP and Modbus RTU on a pty, beside the
+device's own serial port, through pymodbus's client and modbus-tk (a second client nobody here
+wrote); a write acts as the control API's ``set``, refused values and unmapped addresses get the
+standard exception codes."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+import serial
+from modbus_tk import defines as cst
+from modbus_tk.exceptions import ModbusError
+from modbus_tk.modbus_rtu import RtuMaster
+from modbus_tk.modbus_tcp import TcpMaster
+from pymodbus.client import ModbusSerialClient, ModbusTcpClient
+
+from devsim.scenario.plant import plant_running
+from devsim.scenario.schema import PlantSpec
+
+
+def spec(modbus: dict[str, Any], **device: Any) -> PlantSpec:
+    return PlantSpec.model_validate({"devices": [{"name": "drive", "kind": "sers", "modbus": modbus, **device}]})
+
+
+@pytest.fixture
+def tcp() -> Iterator[tuple[Any, ModbusTcpClient]]:
+    with plant_running(spec({"tcp": {"port": 0}}), virtual=True) as plant:
+        host, _, port = plant.port("drive.modbus").removeprefix("socket://").rpartition(":")
+        client = ModbusTcpClient(host, port=int(port), timeout=5)
+        assert client.connect()
+        try:
+            yield plant, client
+        finally:
+            client.close()
+
+
+def address(plant: Any, name: str) -> int:
+    from devsim.facades.modbus_map import ModbusMap
+
+    return ModbusMap.generate(plant.devices["drive"].points).by_name[name].address
+
+
+def test_tcp_reads_and_writes_through_the_points(tcp: tuple[Any, ModbusTcpClient]) -> None:
+    plant, client = tcp
+    supply = address(plant, "quantity.supply_voltage")
+    assert client.read_holding_registers(supply, count=2, device_id=1).registers == [1, 68000 - 65536]  # 68.000 V
+    assert not client.write_registers(supply, [0, 50_000], device_id=1).isError()
+    assert plant.runtime.read("drive", "quantity.supply_voltage") == 50.0
+    refused = client.write_registers(supply, [0xFFFF, 0xFFFF], device_id=1)  # −0.001 V: below the minimum
+    assert refused.isError() and refused.exception_code == 3
+    assert plant.runtime.read("drive", "quantity.supply_voltage") == 50.0
+    assert not client.write_register(supply + 1, 45_000, device_id=1).isError()  # FC 06: the low word alone
+    assert plant.runtime.read("drive", "quantity.supply_voltage") == 45.0
+    i1 = address(plant, "input.I1")
+    assert not client.write_coil(i1, True, device_id=1).isError()
+    assert plant.runtime.read("drive", "input.I1") is True
+    plant.runtime.set("drive", "input.I2", True)
+    assert client.read_coils(i1, count=2, device_id=1).bits[:2] == [True, True]
+    missing = client.read_holding_registers(60_000, count=2, device_id=1)
+    assert missing.isError() and missing.exception_code == 2
+
+
+def test_tcp_sees_the_axis_move_that_the_serial_port_commands(tcp: tuple[Any, ModbusTcpClient]) -> None:
+    plant, client = tcp
+    plant.runtime.advance(3.0)  # the drive's 2 s initialisation
+    port = serial.serial_for_url(plant.port("drive"), baudrate=9600, timeout=2)
+    try:
+        port.write(b"#1 ON V=60 WR=360 E\r")
+        assert port.read_until(b"\r")  # the echo: the line is taken
+    finally:
+        port.close()
+    position = address(plant, "axis.position")
+    plant.runtime.advance(5.0)
+    words = client.read_input_registers(position, count=2, device_id=1).registers
+    value = (words[0] << 16 | words[1]) - (1 << 32 if words[0] & 0x8000 else 0)
+    assert value == round(plant.runtime.read("drive", "axis.position") * 1000) != 0
+
+
+def test_modbus_tk_over_tcp(tcp: tuple[Any, ModbusTcpClient]) -> None:
+    plant, _client = tcp
+    host, _, port = plant.port("drive.modbus").removeprefix("socket://").rpartition(":")
+    master = TcpMaster(host, int(port), timeout_in_sec=5.0)
+    try:
+        supply = address(plant, "quantity.supply_voltage")
+        assert master.execute(1, cst.READ_HOLDING_REGISTERS, supply, 2) == (1, 68000 - 65536)
+        master.execute(1, cst.WRITE_MULTIPLE_REGISTERS, supply, output_value=[0, 55_000])
+        assert plant.runtime.read("drive", "quantity.supply_voltage") == 55.0
+        with pytest.raises(ModbusError) as refused:
+            master.execute(1, cst.WRITE_MULTIPLE_REGISTERS, supply, output_value=[0xFFFF, 0xFFFF])  # −0.001 V
+        assert refused.value.get_exception_code() == 3
+        with pytest.raises(ModbusError) as missing:
+            master.execute(1, cst.READ_INPUT_REGISTERS, 30_000, 2)
+        assert missing.value.get_exception_code() == 2
+    finally:
+        master.close()
+
+
+def test_rtu_on_a_pty() -> None:
+    """pymodbus's serial client at 19200 8E1; before it, frames written raw: a request to another
+    unit and one to ours back to back get exactly one answer (ours)."""
+    from pymodbus.framer import FramerRTU
+
+    crc = FramerRTU.compute_CRC
+    with plant_running(spec({"rtu": {}}), virtual=True) as plant:
+        path = plant.port("drive.modbus")
+        supply = address(plant, "quantity.supply_voltage")
+        with serial.Serial(path, 19200, parity="E", timeout=2) as raw:
+            other = bytes((7, 3)) + supply.to_bytes(2, "big") + (2).to_bytes(2, "big")
+            ours = bytes((1, 3)) + supply.to_bytes(2, "big") + (2).to_bytes(2, "big")
+            raw.write(b"".join(frame + crc(frame).to_bytes(2, "big") for frame in (other, ours)))
+            answer = bytes((1, 3, 4, 0, 1)) + (68000 - 65536).to_bytes(2, "big")
+            assert raw.read(9) == answer + crc(answer).to_bytes(2, "big")
+        client = ModbusSerialClient(port=path, baudrate=19200, parity="E", timeout=2)
+        assert client.connect()
+        try:
+            assert client.read_holding_registers(supply, count=2, device_id=1).registers == [1, 68000 - 65536]
+            assert not client.write_registers(supply, [0, 48_000], device_id=1).isError()
+            assert plant.runtime.read("drive", "quantity.supply_voltage") == 48.0
+        finally:
+            client.close()
+
+
+def test_modbus_tk_over_rtu_on_a_pty() -> None:
+    """8N1 here: modbus-tk sets an inter-byte timeout, which a Linux pty refuses with parity."""
+    with plant_running(spec({"rtu": {}, "line": "9600 8N1"}), virtual=True) as plant:
+        master = RtuMaster(serial.Serial(plant.port("drive.modbus"), 9600, timeout=2))
+        master.set_timeout(2.0)
+        try:
+            supply = address(plant, "quantity.supply_voltage")
+            assert master.execute(1, cst.READ_HOLDING_REGISTERS, supply, 2) == (1, 68000 - 65536)
+            master.execute(1, cst.WRITE_SINGLE_COIL, address(plant, "input.I1"), output_value=1)
+            assert plant.runtime.read("drive", "input.I1") is True
+            assert master.execute(1, cst.READ_COILS, address(plant, "input.I1"), 1) == (1,)
+        finally:
+            master.close()

@@ -1,0 +1,46 @@
+"""`devsim run KIND --modbus SPEC` (issue 13): the device's Modbus facade beside its own port, and
+`devsim doc KIND --modbus`."""
+
+from __future__ import annotations
+
+import pytest
+from click.testing import CliRunner
+from pymodbus.client import ModbusTcpClient
+
+from devsim.cli import cli
+from tests.test_cli import Sim
+
+
+def test_run_serves_modbus_tcp_beside_the_pty() -> None:
+    sim = Sim("sers", "--pty", "--modbus", "tcp:127.0.0.1:0")
+    try:
+        seen = sim.read_until("sers.modbus:")
+        assert seen["sers"].startswith("pty /dev/")
+        scheme, where = seen["sers.modbus"].split()
+        host, _, port = where.rpartition(":")
+        assert scheme == "tcp" and host == "127.0.0.1"
+        client = ModbusTcpClient(host, port=int(port), timeout=5)
+        assert client.connect()
+        try:
+            words = client.read_holding_registers(2, count=2, device_id=1).registers  # quantity.supply_voltage
+            assert words == [1, 68000 - 65536]
+        finally:
+            client.close()
+    finally:
+        sim.stop()
+
+
+@pytest.mark.parametrize(("spec", "message"), [
+    ("udp:1", "--modbus: expected tcp:[HOST:]PORT, rtu or rtu:LINK, not 'udp:1'"),
+    ("tcp:x", "--modbus: expected [HOST:]PORT, got 'x'"),
+])
+def test_a_bad_modbus_spec_is_one_line(spec: str, message: str) -> None:
+    result = CliRunner().invoke(cli, ["run", "sers", "--modbus", spec])
+    assert result.exit_code == 2 and message in result.output
+
+
+def test_doc_prints_the_modbus_map() -> None:
+    result = CliRunner().invoke(cli, ["doc", "sers", "--modbus"])
+    assert result.exit_code == 0
+    assert "| holding | 2–3 | quantity.supply_voltage | float | ×1000 | V |" in result.output
+    assert "| coil | 6 | input.I1 | bool |" in result.output
