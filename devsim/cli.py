@@ -158,6 +158,7 @@ class _Plan:
     printed: list[str] = field(default_factory=list)
     overrides: dict[str, _Port] = field(default_factory=dict)  # --port NAME=SPEC
     modbus: str | None = None  # --modbus tcp:[HOST:]PORT | rtu | rtu:LINK
+    modbus_map: str = "points"  # --modbus-map points | mirror
 
 
 def _host_port(option: str, text: str) -> tuple[str, int]:
@@ -296,6 +297,13 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     metavar="SPEC",
     help="Also serve the device over Modbus (extra [modbus]): tcp:[HOST:]PORT, rtu (a pty) or rtu:LINK.",
 )
+@click.option(
+    "--modbus-map",
+    type=click.Choice(["points", "mirror"]),
+    default="points",
+    show_default=True,
+    help="The Modbus map: generated from the points, or the kind's own mirror (pcd4h3: its media).",
+)
 def run(
     kind: str,
     use_pty: bool,
@@ -313,6 +321,7 @@ def run(
     pacing: bool,
     port_options: tuple[str, ...],
     modbus: str | None,
+    modbus_map: str,
 ) -> None:
     """Serve a simulated KIND device until Ctrl-C.
 
@@ -376,6 +385,7 @@ def run(
         allow_remote=control_allow_remote,
         overrides=overrides,
         modbus=modbus,
+        modbus_map=modbus_map,
     )
     try:
         asyncio.run(_serve(plan))
@@ -445,7 +455,8 @@ async def _serve(plan: _Plan) -> None:
 
                 for index, device in enumerate(devices):
                     spec = _modbus_for(plan.modbus, index)
-                    modbus_served.append((device.name, await start_modbus(runtime, device, spec)))
+                    modbus_served.append((device.name, await start_modbus(runtime, device, spec,
+                                                                          layout=plan.modbus_map)))
             if plan.control is not None:
                 stage = f"serve the control API on {plan.control}"
                 server = ControlServer(runtime, plan.control, allow_remote=plan.allow_remote)

@@ -228,6 +228,10 @@ class Family:
     section: str
     make: Callable[[str], Point | None]
     access: Access = "rw"
+    #: The family as a Modbus mirror (``devsim.facades.modbus_map.ModbusMap.mirror``): the tables
+    #: that show it and how many members from ``<n>`` = 0 (a kind's own Modbus layout, e.g. the
+    #: PCD's media in spec pcd4h3 §9.8).
+    modbus: tuple[tuple[str, ...], int] | None = None
 
 
 @record(frozen=False)

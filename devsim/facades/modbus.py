@@ -26,7 +26,7 @@ from devsim.core.device import Device, SerialSettings
 from devsim.core.points import BadValue, ReadOnlyName
 from devsim.facades.modbus_map import BITS, ModbusMap, from_words, to_words
 
-__all__ = ["ModbusFacade", "ModbusRtuEndpoint", "line_settings", "serve_tcp", "start_modbus"]
+__all__ = ["ModbusFacade", "ModbusRtuEndpoint", "device_map", "line_settings", "serve_tcp", "start_modbus"]
 
 TABLE_OF = {1: "coil", 5: "coil", 15: "coil", 2: "discrete", 3: "holding", 6: "holding", 16: "holding",
             23: "holding", 4: "input"}
@@ -211,14 +211,26 @@ def line_settings(text: str) -> SerialSettings:
         raise ValueError(f"line settings are like '19200 8E1', not {text!r}") from None
 
 
+def device_map(device: Device, layout: str = "points", overrides: dict[str, Any] | None = None) -> ModbusMap:
+    """The map a device is served with: generated from its points (``points``), or the kind's own
+    mirror of its families (``mirror``, e.g. the PCD's registers and flags, spec pcd4h3 §9.8)."""
+    if layout == "mirror":
+        if overrides:
+            raise ValueError("the mirror layout takes no map overrides")
+        return ModbusMap.mirror(device.points)
+    if layout != "points":
+        raise ValueError(f"a Modbus layout is points or mirror, not {layout!r}")
+    return ModbusMap.generate(device.points, overrides)
+
+
 async def start_modbus(runtime: Any, device: Device, spec: str, *, unit: int = 1,
                        overrides: dict[str, Any] | None = None, trace: str | None = None,
-                       line: str = "19200 8E1") -> str:
+                       line: str = "19200 8E1", layout: str = "points") -> str:
     """Serve ``device`` over Modbus in ``runtime`` (in its loop) as ``spec`` says: ``tcp:[HOST:]PORT``
     (Modbus TCP, loopback unless a host is named), ``rtu`` (RTU on a new pty) or ``rtu:LINK`` (a
     pty with a stable symlink) at the ``line`` settings (Modbus's default 19200 8E1).  The port
     key is ``NAME.modbus``; returns what a host opens."""
-    facade = ModbusFacade(device, ModbusMap.generate(device.points, overrides), unit)
+    facade = ModbusFacade(device, device_map(device, layout, overrides), unit)
     key = f"{device.name}.modbus"
     scheme, _, rest = spec.partition(":")
     if scheme == "tcp":

@@ -68,7 +68,9 @@ class ModbusMap:
 
     def __init__(self, entries: Iterable[Entry]) -> None:
         self.entries = sorted(entries, key=lambda e: (TABLES.index(e.table), e.address))
-        self.by_name = {e.name: e for e in self.entries}
+        self.by_name: dict[str, Entry] = {}
+        for e in self.entries:
+            self.by_name.setdefault(e.name, e)
         self._at: dict[tuple[str, int], tuple[Entry, int]] = {}
         for entry in self.entries:
             for offset in range(entry.width):
@@ -99,6 +101,24 @@ class ModbusMap:
                 entry = replace(entry, address=following[entry.table])
             following[entry.table] = max(following[entry.table], entry.end)
             entries.append(entry)
+        return cls(entries)
+
+    @classmethod
+    def mirror(cls, points: PointTable) -> ModbusMap:
+        """A kind's own layout from its families that declare one (``Family.modbus``): member
+        ``<n>`` at address n (bits) or 2n (32-bit registers, raw, high word first)."""
+        entries = []
+        for family in points.families:
+            if family.modbus is None:
+                continue
+            tables, count = family.modbus
+            for table in tables:
+                width = 1 if table in BITS else 2
+                for n in range(count):
+                    name = family.pattern.replace("<n>", str(n))
+                    entries.append(Entry(name, table, n * width, width, 1.0, family.type, "", family.doc))
+        if not entries:
+            raise ValueError("the kind declares no Modbus mirror")
         return cls(entries)
 
     def find(self, table: str, address: int) -> tuple[Entry, int] | None:

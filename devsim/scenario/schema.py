@@ -123,6 +123,8 @@ class ModbusSpec(_Model):
     rtu: PtySpec | None = None
     unit: int = Field(default=1, ge=1, le=247)
     line: str = Field(default="19200 8E1", description="RTU line settings")
+    layout: Literal["points", "mirror"] = Field(default="points", description="the map: generated from the points,"
+                                                " or the kind's own mirror (PCD4.H3: its media, spec §9.8)")
     map: dict[str, Any] = Field(default_factory=dict)
 
     @model_validator(mode="after")

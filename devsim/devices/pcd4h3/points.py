@@ -22,7 +22,7 @@ from devsim.devices.pcd4h3.drive import axis_signals
 from devsim.devices.pcd4h3.layout import FLAGS, REGISTERS
 from devsim.devices.pcd4h3.lm628 import notation
 from devsim.devices.pcd4h3.plc import MEDIA_SIZE, Pcd4
-from devsim.devices.pcd4h3.services import bus_input, read
+from devsim.devices.pcd4h3.services import bus_input, read, write
 
 __all__ = ["FAULTS", "POINTS", "SIGNALS"]
 
@@ -130,12 +130,14 @@ def _medium(prefix: str, medium: str, settable: bool) -> Callable[[str], Point |
             return value if kind == "int" else bool(value)
 
         def put(m: Pcd4, value: Any) -> None:
-            if medium == "input" and bus_input(m, address) is not None:
-                raise BadValue(f"I {address} is an H3 module's own input: set its switch (input.LS1_n, "
-                               "input.LS2_n, input.REF_n)")
-            store = {"register": m.registers, "flag": m.flags, "input": m.inputs}[medium]
-            store[address] = signed32(int(value)) if kind == "int" else int(bool(value))
-            m.wake()
+            if medium == "input":
+                if bus_input(m, address) is not None:
+                    raise BadValue(f"I {address} is an H3 module's own input: set its switch (input.LS1_n, "
+                                   "input.LS2_n, input.REF_n)")
+                m.inputs[address] = int(bool(value))
+                m.wake()
+            elif not write(m, medium, address, [signed32(int(value)) if kind == "int" else int(bool(value))]):
+                raise BadValue(f"{name} is the simulator's read-only diagnostics block")
 
         return Point(name, kind, f"{medium} {address} of the PCD", "§9.5", get=get,  # type: ignore[arg-type]
                      put=put if settable else None)
@@ -195,10 +197,11 @@ POINTS = PointTable.of(
     families=[
         Family("axis.<n>.<symbol>", "int", "a register (KProp … RSigB) or flag (OnDest … FBackw) of axis n's "
                "block by its H3DEF symbol; also axis.<n>.* beyond axis 2", "§4.2, §4.3", _axis_family),
-        Family("R.<n>", "int", "register n (0 … 4095) as S-Bus reads it", "§9.5", _medium("R", "register", True)),
-        Family("F.<n>", "bool", "flag n (0 … 8191)", "§9.5", _medium("F", "flag", True)),
+        Family("R.<n>", "int", "register n (0 … 4095) as S-Bus reads it", "§9.5", _medium("R", "register", True),
+               modbus=(("holding", "input"), 4096)),
+        Family("F.<n>", "bool", "flag n (0 … 8191)", "§9.5", _medium("F", "flag", True), modbus=(("coil",), 8192)),
         Family("I.<n>", "bool", "input n (0 … 1023); the H3 modules' own inputs follow their switches", "§9.5",
-               _medium("I", "input", True)),
+               _medium("I", "input", True), modbus=(("discrete",), 1024)),
         Family("O.<n>", "bool", "output n (0 … 1023)", "§9.5", _medium("O", "output", False), access="r"),
     ],
 )
