@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from devsim.core.clock import VirtualClock
+from devsim.core.device import SerialSettings
 from devsim.core.record import field, record
 from devsim.core.runtime import Runtime
 from devsim.scenario.host import HostPort, open_host_port
@@ -157,6 +158,7 @@ class Runner:
         self.clock = self.runtime.clock
         self.mode = mode
         self.hosts: dict[str, HostPort] = {}
+        self._settled: dict[str, tuple[int, int]] = {}  # line-less port → (sent, received) when it settled
         self.traffic: dict[str, _Traffic] = {}
         self.t0 = 0.0
 
@@ -174,7 +176,10 @@ class Runner:
             await asyncio.sleep(0)
         deadline = time.monotonic() + _IO_GUARD
         for name, host in self.hosts.items():
-            line = self.plant.lines[name]
+            line = self.plant.lines.get(name)
+            if line is None:  # a server of its own (the Modbus TCP facade): answers come on their own
+                await self._settle(host, deadline)
+                continue
             transport = self.plant.transports[name]
             while True:
                 expected = line.bytes_delivered - getattr(transport, "dropped", 0) - getattr(transport, "pending", 0)
@@ -183,6 +188,21 @@ class Runner:
                 if time.monotonic() > deadline:
                     raise _Abort(f"port {name}: {expected - len(host.received)} bytes never arrived at the host")
                 await host.wait_data(0.01)
+
+    async def _settle(self, host: HostPort, deadline: float) -> None:
+        """A port without a line (the Modbus TCP facade, a server in this process): after a send,
+        wait in real time, bounded by the drain's guard, for the answer and until it is complete."""
+        sent, received = self._settled.get(host.name, (0, 0))
+        if host.sent == sent:
+            return
+        while len(host.received) == received and time.monotonic() < deadline:
+            await host.wait_data(0.01)
+        while time.monotonic() < deadline:
+            before = len(host.received)
+            await host.wait_data(0.01)
+            if len(host.received) == before:
+                break
+        self._settled[host.name] = (host.sent, len(host.received))
 
     async def _wait_until(self, predicate: Callable[[], bool], timeout: float) -> bool:
         """Until ``predicate()`` holds or ``timeout`` simulated seconds pass."""
@@ -250,7 +270,8 @@ class Runner:
                 if item is not None:
                     wanted.add(self._port(item.port))
         for name in sorted(wanted):
-            settings = self.plant.lines[name].device_settings
+            line = self.plant.lines.get(name)  # (a Modbus TCP facade is a server of its own: no line)
+            settings = line.device_settings if line is not None else SerialSettings()
             host = open_host_port(name, self.plant.kinds[name], self.plant.transports[name], settings)
             await host.open()
             self.hosts[name] = host
@@ -337,7 +358,10 @@ class Runner:
     async def _do_send(self, action: Any, index: int) -> bool:
         host = self._host(action.port)
         data = action.payload()
-        line = self.plant.lines[self._port(action.port)]
+        line = self.plant.lines.get(self._port(action.port))
+        if line is None:  # a server of its own: what it received is seen by its answer (``_settle``)
+            await host.send(data)
+            return False
         before = line.bytes_in
         await host.send(data)
         if self.virtual:

@@ -259,8 +259,10 @@ class PlantSpec(_Model):
         return rows
 
     def ports(self) -> list[str]:
-        """Names a host can talk to: device ports with their own transport, and buses."""
-        return [name for name, _device, _port in self.device_ports()] + [b.name for b in self.buses]
+        """Names a host can talk to: device ports with their own transport, buses, and the
+        devices' Modbus facades (``NAME.modbus``)."""
+        return ([name for name, _device, _port in self.device_ports()] + [b.name for b in self.buses]
+                + [f"{d.name}.modbus" for d in self.devices if d.modbus is not None])
 
 
 # -- conditions ------------------------------------------------------------------------------

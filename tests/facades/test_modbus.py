@@ -135,3 +135,28 @@ def test_modbus_tk_over_rtu_on_a_pty() -> None:
             assert master.execute(1, cst.READ_COILS, address(plant, "input.I1"), 1) == (1,)
         finally:
             master.close()
+
+
+def test_a_scenario_speaks_modbus_tcp_to_the_facade() -> None:
+    """Plant files' ``modbus:``: the facade is a port of the plant (``drive.modbus``) a scenario can
+    send raw Modbus TCP frames to: read the supply voltage, write it, see the device take it."""
+    from devsim.scenario.report import format_report
+    from devsim.scenario.runner import run_scenario
+    from devsim.scenario.schema import scenario_from_dict
+
+    read = bytes.fromhex("0001 0000 0006 01 03 0002 0002")  # MBAP, FC 3, holding 2, 2 registers
+    answer = bytes.fromhex("0001 0000 0007 01 03 04 0001 09A0")  # 68 000 = 0001 09A0h
+    write = bytes.fromhex("0002 0000 000B 01 10 0002 0002 04 0000 AFC8")  # FC 16: 45 000
+    written = bytes.fromhex("0002 0000 0006 01 10 0002 0002")
+    data = {
+        "devices": [{"name": "drive", "kind": "sers", "modbus": {"tcp": {"port": 0}}}],
+        "steps": [
+            {"send": {"port": "drive.modbus", "data": read.decode("latin-1")}},
+            {"expect": {"port": "drive.modbus", "bytes": answer.decode("latin-1")}},
+            {"send": {"port": "drive.modbus", "data": write.decode("latin-1")}},
+            {"expect": {"port": "drive.modbus", "bytes": written.decode("latin-1")}},
+            {"expect_state": {"device": "drive", "name": "quantity.supply_voltage", "equals": 45.0}},
+        ],
+    }
+    result = run_scenario(scenario_from_dict(data, "modbus"))
+    assert result.passed, format_report(result)
