@@ -121,7 +121,8 @@ def list_kinds() -> None:
 @cli.command("doc")
 @click.argument("kind")
 @click.option("--modbus", "modbus_map", is_flag=True, help="Print the Modbus register map instead.")
-def doc(kind: str, modbus_map: bool) -> None:
+@click.option("--eds", "eds_file", is_flag=True, help="Print the CANopen EDS (object dictionary) instead.")
+def doc(kind: str, modbus_map: bool, eds_file: bool) -> None:
     """Print KIND's reference in Markdown: ports, control names, faults, commands, parameters,
     error codes and configuration keys, from the tables that drive the simulator (with --modbus:
     the register map its points give)."""
@@ -131,6 +132,11 @@ def doc(kind: str, modbus_map: bool) -> None:
         cls = device_class(kind)
     except UnknownKind as exc:
         raise click.UsageError(str(exc)) from None
+    if eds_file:
+        from devsim.facades.canopen_od import eds
+
+        click.echo(eds(cls.kind, cls.description, cls.points))
+        return
     click.echo(modbus_markdown(cls) if modbus_map else reference_markdown(cls))
 
 

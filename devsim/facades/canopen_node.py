@@ -1,0 +1,84 @@
+"""A device as a CANopen node (issue 13; canopen's local node over python-can; extra
+``devsim-motion[can]``): the object dictionary of :mod:`devsim.facades.canopen_od`, NMT with the
+boot-up message and the heartbeat producer (1017h), and SDO access to every point: an upload reads
+the point as the control API does, a download sets it with its validation (a refused value is
+aborted with 0609 0030h, value range exceeded; a read-only object 0601 0002h).
+
+Not yet: the CiA 402 drive profile (controlword 6040h, statusword 6041h, profile position and
+velocity modes, 6064h/606Ch/60F4h), PDO mapping, EMCY on faults, and the socketcand server for
+hosts in another process.  Callbacks come from python-can's notifier thread; ``call`` runs the
+device access where the device lives (``Runtime.call``)."""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Callable
+from typing import Any
+
+import canopen
+from canopen.sdo.exceptions import SdoAbortedError
+
+from devsim.core.device import Device
+from devsim.core.points import BadValue, ReadOnlyName
+from devsim.facades.canopen_od import eds, point_objects
+
+__all__ = ["CanopenFacade", "READ_ONLY", "VALUE_RANGE_EXCEEDED", "WRITE_ONLY", "load_od"]
+
+VALUE_RANGE_EXCEEDED = 0x06090030
+READ_ONLY = 0x06010002
+WRITE_ONLY = 0x06010001
+
+
+def load_od(text: str, node_id: int) -> Any:
+    """An object dictionary from EDS text (canopen wants a file-like object with a name)."""
+    source = io.StringIO(text)
+    source.name = "devsim.eds"  # type: ignore[misc]
+    return canopen.import_od(source, node_id)
+
+
+def _direct(fn: Callable[..., Any], *args: Any) -> Any:
+    return fn(*args)
+
+
+class CanopenFacade:
+    """``device`` as CANopen node ``node_id``."""
+
+    def __init__(self, device: Device, node_id: int = 1, call: Callable[..., Any] = _direct) -> None:
+        if not 1 <= node_id <= 127:
+            raise ValueError("a CANopen node id is 1 … 127")
+        self.device, self.call = device, call
+        self.od = load_od(eds(device.kind, device.description, device.points), node_id)
+        self.node = canopen.LocalNode(node_id, self.od)
+        self.objects = {index: point for index, point in point_objects(device.points)}
+        self.node.add_read_callback(self._read)
+        self.node.add_write_callback(self._write)
+
+    def attach(self, network: canopen.Network) -> None:
+        """Join ``network`` and boot: the boot-up message, then pre-operational (the heartbeat
+        starts if 1017h is set)."""
+        network.add_node(self.node)
+        self.node.nmt.send_command(0x81)  # reset node: INITIALISING, boot-up message
+        self.node.nmt.send_command(0x80)  # enter PRE-OPERATIONAL
+
+    def _read(self, index: int, subindex: int, od: Any) -> Any:
+        point = self.objects.get(index)
+        if point is None:
+            return None
+        if not point.readable:
+            raise SdoAbortedError(WRITE_ONLY)
+        value = self.call(self.device.read, point.name)
+        if value is None:
+            return 0
+        return bool(value) if point.type == "bool" else value
+
+    def _write(self, index: int, subindex: int, od: Any, data: bytes) -> None:
+        point = self.objects.get(index)
+        if point is None:
+            return
+        if not point.settable:
+            raise SdoAbortedError(READ_ONLY)
+        value = od.decode_raw(data)
+        try:
+            self.call(self.device.set, point.name, bool(value) if point.type == "bool" else value)
+        except (BadValue, ReadOnlyName, ValueError):
+            raise SdoAbortedError(VALUE_RANGE_EXCEEDED) from None

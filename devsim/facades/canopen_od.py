@@ -1,0 +1,78 @@
+"""The CANopen object dictionary of a device kind, as an EDS (CiA 306) generated from its declared
+points (issue 13): the communication objects every node has (device type, error register,
+heartbeat producer time, identity) and, from index 2000h on, one manufacturer object per
+``bool``/``int``/``float`` point in table order (BOOLEAN, INTEGER32, REAL64; read-only where the
+point is), named after the point.  ``devsim doc KIND --eds`` prints it, ``docs/eds/KIND.eds``
+holds it.  Pure text.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from devsim.core.points import Point
+
+__all__ = ["DEVICE_TYPE", "FIRST_POINT_INDEX", "VENDOR_ID", "eds", "point_objects"]
+
+FIRST_POINT_INDEX = 0x2000
+VENDOR_ID = 0x00000000  # no CiA vendor id: a simulator
+DEVICE_TYPE = 0x00020192  # CiA 402 drive profile (192h), additional information: servo drive (0002h)
+TYPES = {"bool": (0x0001, "BOOLEAN"), "int": (0x0004, "INTEGER32"), "float": (0x0011, "REAL64")}
+
+
+def point_objects(points: Iterable[Point]) -> list[tuple[int, Point]]:
+    """(index, point) of every point with a CANopen form, from 2000h on."""
+    mapped = [p for p in points if p.type in TYPES]
+    return [(FIRST_POINT_INDEX + i, p) for i, p in enumerate(mapped)]
+
+
+def _product_code(kind: str) -> int:
+    import zlib
+
+    return zlib.crc32(kind.encode()) & 0xFFFF_FFFF
+
+
+def _var(index: int, sub: int | None, name: str, data_type: int, access: str, default: str | int = "",
+         pdo: bool = False) -> list[str]:
+    head = f"[{index:04X}]" if sub is None else f"[{index:04X}sub{sub:X}]"
+    lines = [head, f"ParameterName={name}", "ObjectType=0x7", f"DataType=0x{data_type:04X}", f"AccessType={access}"]
+    if default != "":
+        lines.append(f"DefaultValue={default if isinstance(default, str) else f'0x{default:X}'}")
+    lines += [f"PDOMapping={int(pdo)}", ""]
+    return lines
+
+
+def eds(kind: str, description: str, points: Iterable[Point]) -> str:
+    """The EDS of a kind."""
+    objects = point_objects(points)
+    lines = [
+        "[FileInfo]", f"FileName={kind}.eds", "FileVersion=1", "FileRevision=0", "EDSVersion=4.0",
+        f"Description=devsim {kind}: {description}"[:243], "CreatedBy=devsim (generated: devsim doc KIND --eds)", "",
+        "[DeviceInfo]", "VendorName=devsim", f"VendorNumber=0x{VENDOR_ID:X}", f"ProductName=devsim {kind}",
+        f"ProductNumber=0x{_product_code(kind):X}", "RevisionNumber=0x1", "OrderCode=", "BaudRate_125=1",
+        "BaudRate_250=1", "BaudRate_500=1", "BaudRate_1000=1", "SimpleBootUpMaster=0", "SimpleBootUpSlave=1",
+        "Granularity=8", "DynamicChannelsSupported=0", "GroupMessaging=0", "NrOfRXPDO=0", "NrOfTXPDO=0",
+        "LSS_Supported=0", "",
+        "[DummyUsage]", "Dummy0001=0", "Dummy0002=0", "Dummy0003=0", "Dummy0004=0", "Dummy0005=0", "Dummy0006=0",
+        "Dummy0007=0", "",
+        "[MandatoryObjects]", "SupportedObjects=3", "1=0x1000", "2=0x1001", "3=0x1018", "",
+    ]
+    lines += _var(0x1000, None, "Device type", 0x0007, "ro", DEVICE_TYPE)
+    lines += _var(0x1001, None, "Error register", 0x0005, "ro", 0)
+    lines += ["[1018]", "ParameterName=Identity object", "ObjectType=0x9", "SubNumber=5", ""]
+    lines += _var(0x1018, 0, "Highest sub-index supported", 0x0005, "const", 4)
+    lines += _var(0x1018, 1, "Vendor-ID", 0x0007, "ro", VENDOR_ID)
+    lines += _var(0x1018, 2, "Product code", 0x0007, "ro", _product_code(kind))
+    lines += _var(0x1018, 3, "Revision number", 0x0007, "ro", 1)
+    lines += _var(0x1018, 4, "Serial number", 0x0007, "ro", 1)
+    lines += ["[OptionalObjects]", "SupportedObjects=2", "1=0x1008", "2=0x1017", ""]
+    lines += _var(0x1008, None, "Manufacturer device name", 0x0009, "const", f"devsim {kind}")
+    lines += _var(0x1017, None, "Producer heartbeat time", 0x0006, "rw", 0)
+    lines += ["[ManufacturerObjects]", f"SupportedObjects={len(objects)}"]
+    lines += [f"{n}=0x{index:04X}" for n, (index, _p) in enumerate(objects, start=1)]
+    lines.append("")
+    for index, point in objects:
+        code, _name = TYPES[point.type]
+        access = "rw" if point.readable and point.settable else ("wo" if point.settable else "ro")
+        lines += _var(index, None, point.name, code, access, pdo=point.type != "float")
+    return "\n".join(lines)

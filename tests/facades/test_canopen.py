@@ -1,0 +1,93 @@
+"""A device as a CANopen node (issue 13, first part): the EDS devsim generates per kind (shipped
+in docs/eds/, read by canopen), NMT boot-up and heartbeat, identity and every point over SDO with
+the device's validation; canopen's remote node as the master on python-can's virtual bus."""
+
+from __future__ import annotations
+
+import uuid
+from collections.abc import Iterator
+from pathlib import Path
+
+import canopen
+import pytest
+from click.testing import CliRunner
+
+from devsim.cli import cli
+from devsim.core.clock import VirtualClock
+from devsim.core.registry import device_class
+from devsim.facades.canopen_node import READ_ONLY, VALUE_RANGE_EXCEEDED, CanopenFacade, load_od
+from devsim.facades.canopen_od import DEVICE_TYPE, eds
+
+ROOT = Path(__file__).resolve().parents[2]
+SHIPPED = ("sers", "gms96", "poselesta", "ip247", "pcd4h3")
+
+
+@pytest.mark.parametrize("kind", SHIPPED)
+def test_the_shipped_eds_is_current_and_canopen_reads_it(kind: str) -> None:
+    cls = device_class(kind)
+    text = eds(kind, cls.description, cls.points)
+    assert (ROOT / "docs" / "eds" / f"{kind}.eds").read_text(encoding="utf-8") == text + "\n", (
+        f"run `devsim doc {kind} --eds > docs/eds/{kind}.eds`")
+    od = canopen.import_od(str(ROOT / "docs" / "eds" / f"{kind}.eds"))
+    assert od[0x1000].default == DEVICE_TYPE and od[0x1018][1].default == 0
+    assert CliRunner().invoke(cli, ["doc", kind, "--eds"]).output == text + "\n"
+
+
+class Bus:
+    """A sers device as node 5 and canopen's remote node as the master, on one virtual CAN bus."""
+
+    def __init__(self) -> None:
+        channel = f"devsim-{uuid.uuid4().hex}"
+        self.device = device_class("sers")(clock=VirtualClock(), config={})
+        self.slave, self.master = canopen.Network(), canopen.Network()
+        self.slave.connect(interface="virtual", channel=channel)
+        self.master.connect(interface="virtual", channel=channel)
+        self.facade = CanopenFacade(self.device, 5)
+        self.remote = canopen.RemoteNode(5, load_od(eds("sers", self.device.description, self.device.points), 5))
+        self.master.add_node(self.remote)
+
+    def index(self, name: str) -> int:
+        return next(i for i, p in self.facade.objects.items() if p.name == name)
+
+    def close(self) -> None:
+        self.slave.disconnect()
+        self.master.disconnect()
+        self.device.close()
+
+
+@pytest.fixture
+def bus() -> Iterator[Bus]:
+    b = Bus()
+    try:
+        yield b
+    finally:
+        b.close()
+
+
+def test_boot_up_heartbeat_and_identity(bus: Bus) -> None:
+    bus.facade.attach(bus.slave)
+    bus.remote.nmt.wait_for_bootup(5)
+    assert bus.remote.sdo[0x1000].raw == DEVICE_TYPE
+    assert bus.remote.sdo[0x1008].raw == "devsim sers"
+    assert bus.remote.sdo[0x1018][2].raw == bus.remote.object_dictionary[0x1018][2].default
+    bus.remote.sdo[0x1017].raw = 50  # heartbeat every 50 ms
+    assert bus.remote.nmt.wait_for_heartbeat(5) == "PRE-OPERATIONAL"
+    bus.remote.nmt.state = "OPERATIONAL"
+    assert bus.remote.nmt.wait_for_heartbeat(5) == "OPERATIONAL"
+
+
+def test_points_over_sdo_with_the_device_validation(bus: Bus) -> None:
+    bus.facade.attach(bus.slave)
+    supply = bus.remote.sdo[bus.index("quantity.supply_voltage")]
+    assert supply.raw == 68.0
+    supply.raw = 50.0
+    assert bus.device.read("quantity.supply_voltage") == 50.0
+    with pytest.raises(canopen.SdoAbortedError) as refused:
+        supply.raw = -1.0
+    assert refused.value.code == VALUE_RANGE_EXCEEDED and bus.device.read("quantity.supply_voltage") == 50.0
+    with pytest.raises(canopen.SdoAbortedError) as read_only:
+        bus.remote.sdo[bus.index("axis.position")].raw = 5.0
+    assert read_only.value.code == READ_ONLY
+    bus.remote.sdo[bus.index("input.I1")].raw = True
+    assert bus.device.read("input.I1") is True
+    assert bus.remote.sdo[bus.index("input.I1")].raw is True
