@@ -165,6 +165,7 @@ class _Plan:
     overrides: dict[str, _Port] = field(default_factory=dict)  # --port NAME=SPEC
     modbus: str | None = None  # --modbus tcp:[HOST:]PORT | rtu | rtu:LINK
     modbus_map: str = "points"  # --modbus-map points | mirror
+    canopen: str | None = None  # --canopen NODE[@[HOST:]PORT]
 
 
 def _host_port(option: str, text: str) -> tuple[str, int]:
@@ -304,6 +305,11 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     help="Also serve the device over Modbus (extra [modbus]): tcp:[HOST:]PORT, rtu (a pty) or rtu:LINK.",
 )
 @click.option(
+    "--canopen",
+    metavar="NODE[@[HOST:]PORT]",
+    help="Also serve the device as CANopen node NODE (extra [can]) on a socketcand server (default port 29536).",
+)
+@click.option(
     "--modbus-map",
     type=click.Choice(["points", "mirror"]),
     default="points",
@@ -327,6 +333,7 @@ def run(
     pacing: bool,
     port_options: tuple[str, ...],
     modbus: str | None,
+    canopen: str | None,
     modbus_map: str,
 ) -> None:
     """Serve a simulated KIND device until Ctrl-C.
@@ -360,6 +367,8 @@ def run(
         overrides[name] = spec
     if modbus is not None:
         _check_modbus(modbus)
+    if canopen is not None:
+        _check_canopen(canopen)
     if speed <= 0:
         raise click.UsageError("--speed: must be positive")
     if virtual and speed != 1.0:
@@ -392,6 +401,7 @@ def run(
         overrides=overrides,
         modbus=modbus,
         modbus_map=modbus_map,
+        canopen=canopen,
     )
     try:
         asyncio.run(_serve(plan))
@@ -463,6 +473,12 @@ async def _serve(plan: _Plan) -> None:
                     spec = _modbus_for(plan.modbus, index)
                     modbus_served.append((device.name, await start_modbus(runtime, device, spec,
                                                                           layout=plan.modbus_map)))
+            canopen_lines: list[str] = []
+            if plan.canopen is not None:
+                stage = f"serve CANopen ({plan.canopen})"
+                from devsim.facades.canopen_node import start_canopen
+
+                canopen_lines = await start_canopen(runtime, devices, plan.canopen)
             if plan.control is not None:
                 stage = f"serve the control API on {plan.control}"
                 server = ControlServer(runtime, plan.control, allow_remote=plan.allow_remote)
@@ -480,6 +496,8 @@ async def _serve(plan: _Plan) -> None:
                     _say(f"{key}: {spec.scheme} {_port_text(transport, spec.scheme)}")
                     if spec.link:
                         _say(f"{key}: link {spec.link}")
+            for text in canopen_lines:
+                _say(text)
             for name, where in modbus_served:
                 _say(f"{name}.modbus: {'tcp' if plan.modbus and plan.modbus.startswith('tcp') else 'rtu'} {where}")
             if server is not None:
@@ -526,6 +544,18 @@ def _check_modbus(spec: str) -> None:
         import pymodbus  # noqa: F401
     except ImportError:
         raise click.UsageError("--modbus needs pymodbus: pip install 'devsim-motion[modbus]'") from None
+
+
+def _check_canopen(spec: str) -> None:
+    node, _, where = spec.partition("@")
+    if not node.isdigit() or not 1 <= int(node) <= 127:
+        raise click.UsageError(f"--canopen: expected NODE[@[HOST:]PORT] with NODE 1 … 127, not {spec!r}")
+    if where:
+        _host_port("--canopen", where)
+    try:
+        import canopen  # noqa: F401
+    except ImportError:
+        raise click.UsageError("--canopen needs canopen and python-can: pip install 'devsim-motion[can]'") from None
 
 
 def _modbus_for(spec: str, index: int) -> str:

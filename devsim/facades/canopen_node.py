@@ -4,9 +4,10 @@ boot-up message and the heartbeat producer (1017h), and SDO access to every poin
 the point as the control API does, a download sets it with its validation (a refused value is
 aborted with 0609 0030h, value range exceeded; a read-only object 0601 0002h).
 
-Not yet: the CiA 402 drive profile (controlword 6040h, statusword 6041h, profile position and
-velocity modes, 6064h/606Ch/60F4h), PDO mapping, EMCY on faults, and the socketcand server for
-hosts in another process.  Callbacks come from python-can's notifier thread; ``call`` runs the
+Hosts in other processes reach the nodes through :class:`devsim.transports.socketcand.SocketcandServer`
+(:func:`start_canopen`, ``devsim run --canopen``).  Not yet: the CiA 402 drive profile (controlword
+6040h, statusword 6041h, profile position and velocity modes, 6064h/606Ch/60F4h), PDO mapping, EMCY
+on faults, SocketCAN ``vcan``.  Callbacks come from python-can's notifier thread; ``call`` runs the
 device access where the device lives (``Runtime.call``)."""
 
 from __future__ import annotations
@@ -82,3 +83,34 @@ class CanopenFacade:
             self.call(self.device.set, point.name, bool(value) if point.type == "bool" else value)
         except (BadValue, ReadOnlyName, ValueError):
             raise SdoAbortedError(VALUE_RANGE_EXCEEDED) from None
+
+
+async def start_canopen(runtime: Any, devices: list[Device], spec: str) -> list[str]:
+    """Serve ``devices`` as CANopen nodes ``NODE``, ``NODE+1`` … on one virtual bus that hosts in
+    other processes reach through a socketcand server: ``spec`` is ``NODE`` or
+    ``NODE@[HOST:]PORT`` (default 127.0.0.1:29536, loopback unless a host is named).  Returns one
+    line per device for ``devsim run`` to print."""
+    import os
+
+    from devsim.transports.socketcand import SocketcandServer
+
+    node_text, _, where = spec.partition("@")
+    host, _, port_text = where.rpartition(":")
+    first = int(node_text)
+    if not 1 <= first <= 128 - len(devices):
+        raise ValueError(f"--canopen: node ids {first} … {first + len(devices) - 1} are not all in 1 … 127")
+    channel = f"devsim-{os.getpid()}-{id(runtime)}"
+    network = canopen.Network()
+    network.connect(interface="virtual", channel=channel)
+    for offset, device in enumerate(devices):
+        CanopenFacade(device, first + offset, call=runtime.call).attach(network)
+    server = SocketcandServer(channel, host or "127.0.0.1", int(port_text or 29536))
+    await server.start()
+
+    async def close() -> None:
+        await server.close()
+        network.disconnect()
+
+    runtime.add_closer(close)
+    return [f"{device.name}.canopen: socketcand {server.address} can0 node {first + offset}"
+            for offset, device in enumerate(devices)]
