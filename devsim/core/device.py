@@ -24,7 +24,7 @@ from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
 from devsim.core.clock import Clock
-from devsim.core.kit import MAIN_PORT, FaultTable, PortDef, Reference
+from devsim.core.kit import MAIN_PORT, DriveActions, FaultTable, PortDef, Reference
 from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
 from devsim.core.points import BadValue, PointTable, ReadOnlyName, UnknownName
@@ -162,6 +162,8 @@ class Device:
     points: ClassVar[PointTable] = PointTable()
     faults: ClassVar[FaultTable] = FaultTable()
     model_class: ClassVar[Callable[..., Model]] = Model
+    #: What the model does as a drive, for drive-profile facades (CiA 402); None: not a drive.
+    drive: ClassVar[DriveActions | None] = None
     face_classes: ClassVar[Mapping[str, Callable[[Any, Port], Face]]] = {}
 
     def __init__(

@@ -18,6 +18,7 @@ from devsim.core.signals import SignalBank, SignalKind
 __all__ = [
     "Command",
     "CommandTable",
+    "DriveActions",
     "ErrorCode",
     "Fault",
     "FaultTable",
@@ -257,3 +258,24 @@ class Reference:
     parameters: list[Parameter] = field(default_factory=list)
     errors: list[ErrorCode] = field(default_factory=list)
     config: list[tuple[str, str, str]] = field(default_factory=list)  # key, type/default, doc
+
+
+@record
+class DriveActions:
+    """What a kind's model does as a drive (one axis), for drive-profile facades such as CiA 402
+    (:mod:`devsim.facades.cia402`): the kind declares it as ``Device.drive``; positions in the
+    units of its ``axis.position``, speeds in those units per second."""
+
+    enable: Callable[[Any, bool], None]  # power stage on (operation enabled) / off
+    move_to: Callable[[Any, float, float], None]  # absolute target, speed (axis units, units/s)
+    jog: Callable[[Any, float], None]  # run at a velocity (units/s); 0 stops with the ramp
+    quick_stop: Callable[[Any], None]
+    reset_fault: Callable[[Any], None]
+    position: Callable[[Any], float]
+    velocity: Callable[[Any], float]
+    enabled: Callable[[Any], bool]
+    fault: Callable[[Any], bool]
+    moving: Callable[[Any], bool]
+    following_error: Callable[[Any], float] = lambda m: 0.0
+
+

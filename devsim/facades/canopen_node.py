@@ -4,10 +4,13 @@ boot-up message and the heartbeat producer (1017h), and SDO access to every poin
 the point as the control API does, a download sets it with its validation (a refused value is
 aborted with 0609 0030h, value range exceeded; a read-only object 0601 0002h).
 
-Hosts in other processes reach the nodes through :class:`devsim.transports.socketcand.SocketcandServer`
-(:func:`start_canopen`, ``devsim run --canopen``).  Not yet: the CiA 402 drive profile (controlword
-6040h, statusword 6041h, profile position and velocity modes, 6064h/606Ch/60F4h), PDO mapping, EMCY
-on faults, SocketCAN ``vcan``.  Callbacks come from python-can's notifier thread; ``call`` runs the
+A kind that declares itself a drive (``Device.drive``) also gets the CiA 402 objects and state
+machine (:mod:`devsim.facades.cia402`): controlword 6040h, statusword 6041h, profile position and
+profile velocity modes, 6064h/606Ch/60F4h; a fault the model announces (topic ``fault``) sends an
+EMCY message.  Hosts in other processes reach the nodes through
+:class:`devsim.transports.socketcand.SocketcandServer` (:func:`start_canopen`, ``devsim run
+--canopen``).  Not yet: PDO mapping, SocketCAN ``vcan``, the drive actions of kinds other than the
+PCD4.H3.  Callbacks come from python-can's notifier thread; ``call`` runs the
 device access where the device lives (``Runtime.call``)."""
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 from devsim.core.device import Device
 from devsim.core.points import BadValue, ReadOnlyName
 from devsim.facades.canopen_od import eds, point_objects
+from devsim.facades.cia402 import Cia402
 
 __all__ = ["CanopenFacade", "READ_ONLY", "VALUE_RANGE_EXCEEDED", "WRITE_ONLY", "load_od"]
 
@@ -48,7 +52,10 @@ class CanopenFacade:
         if not 1 <= node_id <= 127:
             raise ValueError("a CANopen node id is 1 … 127")
         self.device, self.call = device, call
-        self.od = load_od(eds(device.kind, device.description, device.points), node_id)
+        self.od = load_od(eds(device.kind, device.description, device.points, drive=device.drive is not None),
+                          node_id)
+        self.drive = Cia402(device.drive, device.model) if device.drive is not None else None
+        self._unlisten = device.model.listen("fault", self._emergency)
         self.node = canopen.LocalNode(node_id, self.od)
         self.objects = {index: point for index, point in point_objects(device.points)}
         self.node.add_read_callback(self._read)
@@ -61,7 +68,17 @@ class CanopenFacade:
         self.node.nmt.send_command(0x81)  # reset node: INITIALISING, boot-up message
         self.node.nmt.send_command(0x80)  # enter PRE-OPERATIONAL
 
+    def _emergency(self, axis: int = 1, code: int = 0x1000) -> None:
+        """A fault the model announces: an EMCY message (error register bit 0, generic error)."""
+        if axis == 1 and self.node.has_network():
+            self.node.emcy.send(code, 0x01)
+
+    def close(self) -> None:
+        self._unlisten()
+
     def _read(self, index: int, subindex: int, od: Any) -> Any:
+        if self.drive is not None and index in DRIVE_READS:
+            return self.call(DRIVE_READS[index], self.drive)
         point = self.objects.get(index)
         if point is None:
             return None
@@ -73,6 +90,12 @@ class CanopenFacade:
         return bool(value) if point.type == "bool" else value
 
     def _write(self, index: int, subindex: int, od: Any, data: bytes) -> None:
+        if self.drive is not None and index in DRIVE_WRITES:
+            try:
+                self.call(DRIVE_WRITES[index], self.drive, od.decode_raw(data))
+            except (BadValue, ReadOnlyName, ValueError):
+                raise SdoAbortedError(VALUE_RANGE_EXCEEDED) from None
+            return
         point = self.objects.get(index)
         if point is None:
             return
@@ -114,3 +137,28 @@ async def start_canopen(runtime: Any, devices: list[Device], spec: str) -> list[
     runtime.add_closer(close)
     return [f"{device.name}.canopen: socketcand {server.address} can0 node {first + offset}"
             for offset, device in enumerate(devices)]
+
+
+DRIVE_READS: dict[int, Callable[[Cia402], int]] = {
+    0x603F: lambda d: 0x1000 if d.actions.fault(d.model) else 0,
+    0x6040: lambda d: d.controlword,
+    0x6041: lambda d: d.statusword,
+    0x6060: lambda d: d.mode,
+    0x6061: lambda d: d.mode,
+    0x6064: lambda d: round(d.actions.position(d.model)),
+    0x606C: lambda d: round(d.actions.velocity(d.model)),
+    0x607A: lambda d: d.target_position,
+    0x6081: lambda d: d.profile_velocity,
+    0x60F4: lambda d: round(d.actions.following_error(d.model)),
+    0x60FF: lambda d: d.target_velocity,
+}
+"""The CiA 402 objects as the drive state shows them."""
+
+DRIVE_WRITES: dict[int, Callable[[Cia402, Any], None]] = {
+    0x6040: Cia402.write_controlword,
+    0x6060: lambda d, v: setattr(d, "mode", int(v)),
+    0x607A: lambda d, v: setattr(d, "target_position", int(v)),
+    0x6081: lambda d, v: setattr(d, "profile_velocity", int(v)),
+    0x60FF: Cia402.write_target_velocity,
+}
+"""Writing the CiA 402 objects."""

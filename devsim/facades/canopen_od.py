@@ -2,8 +2,9 @@
 points (issue 13): the communication objects every node has (device type, error register,
 heartbeat producer time, identity) and, from index 2000h on, one manufacturer object per
 ``bool``/``int``/``float`` point in table order (BOOLEAN, INTEGER32, REAL64; read-only where the
-point is), named after the point.  ``devsim doc KIND --eds`` prints it, ``docs/eds/KIND.eds``
-holds it.  Pure text.
+point is), named after the point; for a kind that is a drive (``Device.drive``) also the CiA 402 objects (controlword,
+statusword, modes, actual and target values).  ``devsim doc KIND --eds`` prints it,
+``docs/eds/KIND.eds`` holds it.  Pure text.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from collections.abc import Iterable
 
 from devsim.core.points import Point
 
-__all__ = ["DEVICE_TYPE", "FIRST_POINT_INDEX", "VENDOR_ID", "eds", "point_objects"]
+__all__ = ["DEVICE_TYPE", "DRIVE_OBJECTS", "FIRST_POINT_INDEX", "VENDOR_ID", "eds", "point_objects"]
 
 FIRST_POINT_INDEX = 0x2000
 VENDOR_ID = 0x00000000  # no CiA vendor id: a simulator
@@ -42,8 +43,24 @@ def _var(index: int, sub: int | None, name: str, data_type: int, access: str, de
     return lines
 
 
-def eds(kind: str, description: str, points: Iterable[Point]) -> str:
-    """The EDS of a kind."""
+#: CiA 402 objects of a drive (index, name, data type, access, PDO-mappable).
+DRIVE_OBJECTS = (
+    (0x603F, "Error code", 0x0006, "ro", True),
+    (0x6040, "Controlword", 0x0006, "rw", True),
+    (0x6041, "Statusword", 0x0006, "ro", True),
+    (0x6060, "Modes of operation", 0x0002, "rw", True),
+    (0x6061, "Modes of operation display", 0x0002, "ro", True),
+    (0x6064, "Position actual value", 0x0004, "ro", True),
+    (0x606C, "Velocity actual value", 0x0004, "ro", True),
+    (0x607A, "Target position", 0x0004, "rw", True),
+    (0x6081, "Profile velocity", 0x0007, "rw", True),
+    (0x60F4, "Following error actual value", 0x0004, "ro", True),
+    (0x60FF, "Target velocity", 0x0004, "rw", True),
+)
+
+
+def eds(kind: str, description: str, points: Iterable[Point], drive: bool = False) -> str:
+    """The EDS of a kind (with the CiA 402 objects when it is a ``drive``)."""
     objects = point_objects(points)
     lines = [
         "[FileInfo]", f"FileName={kind}.eds", "FileVersion=1", "FileRevision=0", "EDSVersion=4.0",
@@ -65,9 +82,14 @@ def eds(kind: str, description: str, points: Iterable[Point]) -> str:
     lines += _var(0x1018, 2, "Product code", 0x0007, "ro", _product_code(kind))
     lines += _var(0x1018, 3, "Revision number", 0x0007, "ro", 1)
     lines += _var(0x1018, 4, "Serial number", 0x0007, "ro", 1)
-    lines += ["[OptionalObjects]", "SupportedObjects=2", "1=0x1008", "2=0x1017", ""]
+    optional = [0x1008, 0x1017] + ([index for index, *_ in DRIVE_OBJECTS] if drive else [])
+    lines += ["[OptionalObjects]", f"SupportedObjects={len(optional)}"]
+    lines += [f"{n}=0x{index:04X}" for n, index in enumerate(optional, start=1)] + [""]
     lines += _var(0x1008, None, "Manufacturer device name", 0x0009, "const", f"devsim {kind}")
     lines += _var(0x1017, None, "Producer heartbeat time", 0x0006, "rw", 0)
+    if drive:  # the device profile area (CiA 402)
+        for index, name, code, access, pdo in DRIVE_OBJECTS:
+            lines += _var(index, None, name, code, access, pdo=pdo)
     lines += ["[ManufacturerObjects]", f"SupportedObjects={len(objects)}"]
     lines += [f"{n}=0x{index:04X}" for n, (index, _p) in enumerate(objects, start=1)]
     lines.append("")

@@ -25,7 +25,7 @@ SHIPPED = ("sers", "gms96", "poselesta", "ip247", "pcd4h3")
 @pytest.mark.parametrize("kind", SHIPPED)
 def test_the_shipped_eds_is_current_and_canopen_reads_it(kind: str) -> None:
     cls = device_class(kind)
-    text = eds(kind, cls.description, cls.points)
+    text = eds(kind, cls.description, cls.points, drive=cls.drive is not None)
     assert (ROOT / "docs" / "eds" / f"{kind}.eds").read_text(encoding="utf-8") == text + "\n", (
         f"run `devsim doc {kind} --eds > docs/eds/{kind}.eds`")
     od = canopen.import_od(str(ROOT / "docs" / "eds" / f"{kind}.eds"))

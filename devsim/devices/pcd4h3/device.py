@@ -17,7 +17,7 @@ from devsim.devices.pcd4h3.config import Pcd4h3Config
 from devsim.devices.pcd4h3.face import EtherDatagramFace, EtherStreamFace, SbusFace
 from devsim.devices.pcd4h3.layout import FLAGS, REGISTERS
 from devsim.devices.pcd4h3.plc import Pcd4
-from devsim.devices.pcd4h3.points import FAULTS, POINTS
+from devsim.devices.pcd4h3.points import DRIVE, FAULTS, POINTS
 from devsim.devices.pcd4h3.sbus import READS, SIMPLE, WRITES
 
 __all__ = ["Pcd4h3Device"]
@@ -39,6 +39,7 @@ class Pcd4h3Device(Device):
                                               "ether_tcp": EtherStreamFace}
     points = POINTS
     faults = FAULTS
+    drive = DRIVE
 
     @classmethod
     def reference(cls) -> Reference:

@@ -206,6 +206,8 @@ class Pcd4(Model):
             key = (axis.axis, symbol)
             if value and not self._seen.get(key):
                 self.record_event(f"axis{axis.axis}.{symbol}")
+                if symbol == "ExcPEr":
+                    self.announce("fault", axis.axis, 0x8611)  # CiA 402's "following error" (EMCY)
             self._seen[key] = value
 
     def _busy(self) -> bool:

@@ -15,7 +15,7 @@ import re
 from collections.abc import Callable
 from typing import Any
 
-from devsim.core.kit import Fault, FaultTable, SignalDef, signal_points
+from devsim.core.kit import DriveActions, Fault, FaultTable, SignalDef, signal_points
 from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.core.words import signed32
 from devsim.devices.pcd4h3.drive import axis_signals
@@ -24,7 +24,7 @@ from devsim.devices.pcd4h3.lm628 import notation
 from devsim.devices.pcd4h3.plc import MEDIA_SIZE, Pcd4
 from devsim.devices.pcd4h3.services import bus_input, read, write
 
-__all__ = ["FAULTS", "POINTS", "SIGNALS"]
+__all__ = ["DRIVE", "FAULTS", "POINTS", "SIGNALS"]
 
 STATIC_AXES = (1, 2)  # declared in the table; further axes are reached through the families
 SIGNALS = tuple(SignalDef(name, kind, initial, doc, "§2.6")  # type: ignore[arg-type]
@@ -231,3 +231,62 @@ FAULTS = FaultTable([
     *(Fault(f"encoder_reversed_{n}", f"axis {n}: one phase inversion jumper wrong: the decoder counts backwards "
             "(runaway, S20)", "§2.5", _fault(n, "reversed")) for n in STATIC_AXES),
 ])
+
+
+# -- axis 1 as a drive (CiA 402 facade): the library's functions, run at once --------------------
+def _run(m: Pcd4, *symbols: str, **registers: int) -> None:
+    m.catch_up()
+    axis = m.axes[0]
+    for symbol, value in registers.items():
+        axis.put(symbol, value)
+    for symbol in symbols:
+        axis.run(symbol)
+    m.drives[0].poke()
+    m.wake()
+
+
+def _user(m: Pcd4, counts: float) -> int:
+    k = m.axes[0].k
+    return round(counts / k) if k else 0
+
+
+def _enable(m: Pcd4, on: bool) -> None:
+    if on:  # hold where the axis stands
+        _run(m, "FLdDA", "FStart", DestP=_user(m, m.drives[0].chip.actual))
+    else:
+        _run(m, "FMotOff")
+
+
+def _move_to(m: Pcd4, target: float, speed: float) -> None:
+    if speed > 0:
+        _run(m, "FLdVA", Veloc=_user(m, speed))
+    _run(m, "FLdDA", "FStart", DestP=_user(m, target))
+
+
+def _jog(m: Pcd4, velocity: float) -> None:
+    if velocity == 0:
+        _run(m, "FStop", MCW=(m.axes[0].reg("MCW") & ~0x0700) | 0x0400)
+    else:
+        _run(m, "FLdVA", "FForw" if velocity > 0 else "FBackw", Veloc=_user(m, abs(velocity)))
+
+
+def _only_axis_1(m: Pcd4) -> Any:
+    return m.drives[0]
+
+
+DRIVE = DriveActions(
+    enable=_enable,
+    move_to=_move_to,
+    jog=_jog,
+    quick_stop=lambda m: _run(m, "FStop", MCW=(m.axes[0].reg("MCW") & ~0x0700) | 0x0200),
+    reset_fault=lambda m: _run(m, "FResSF", StaFRR=0),
+    position=lambda m: _only_axis_1(m).chip.actual,
+    velocity=lambda m: _only_axis_1(m).chip.encoder_sign * _only_axis_1(m).motor.velocity,
+    enabled=lambda m: not _only_axis_1(m).chip.motor_off,
+    fault=lambda m: bool(_only_axis_1(m).chip.status & 0x20),
+    moving=lambda m: not _only_axis_1(m).chip.profile.complete,
+    following_error=lambda m: _only_axis_1(m).chip.profile.desired - _only_axis_1(m).chip.unwrapped_actual,
+)
+"""Axis 1 as a CiA 402 drive: positions in counts, speeds in counts/s; the functions run at once
+as a host-side call of the FBs would; a quick stop is FStop with MCW's abrupt stop; a fault is an
+excessive position error."""

@@ -1,0 +1,127 @@
+"""The CiA 402 drive state machine and its profile modes over a kind's declared drive actions
+(issue 13; CiA 402 part 2 §8, the "power drive system" finite state automaton).
+
+A kind that is a drive declares :class:`DriveActions` (``Device.drive``): how to switch the power
+stage, move to a position, run at a velocity, stop quickly and reset a fault, and how to read
+position, velocity, enable, fault and motion.  :class:`Cia402` keeps the state the controlword
+(6040h) drives and composes the statusword (6041h); in profile position mode (6060h = 1) a rising
+"new set-point" bit (4) starts a move to the target position (607Ah, bit 6: relative) at the
+profile velocity (6081h), in profile velocity mode (3) the target velocity (60FFh) runs the axis.
+Pure: the node calls it and it calls the actions.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from devsim.core.kit import DriveActions
+
+__all__ = ["Cia402", "DriveActions", "STATES"]
+
+
+#: State → statusword bits 0…6 (with bit 4 "voltage enabled" where the power stage may be on)
+STATES = {
+    "switch_on_disabled": 0x0040,
+    "ready_to_switch_on": 0x0021,
+    "switched_on": 0x0033,
+    "operation_enabled": 0x0037,
+    "quick_stop_active": 0x0017,
+    "fault": 0x0008,
+}
+PROFILE_POSITION, PROFILE_VELOCITY = 1, 3
+
+
+class Cia402:
+    """One axis's 402 state, driving ``actions`` on ``model``."""
+
+    def __init__(self, actions: DriveActions, model: Any) -> None:
+        self.actions, self.model = actions, model
+        self.state = "switch_on_disabled"
+        self.controlword = 0
+        self.mode = PROFILE_POSITION
+        self.target_position = 0
+        self.profile_velocity = 1000
+        self.target_velocity = 0
+        self.setpoint_ack = False
+
+    # -- controlword (6040h) ---------------------------------------------------------------------
+    def write_controlword(self, word: int) -> None:
+        before, self.controlword = self.controlword, word & 0xFFFF
+        a = self.actions
+        if self.state == "fault" or a.fault(self.model):
+            if self.state != "fault":
+                self.state = "fault"
+            if word & 0x80 and not before & 0x80:  # fault reset (rising bit 7)
+                a.reset_fault(self.model)
+                if not a.fault(self.model):
+                    self.state = "switch_on_disabled"
+            return
+        command = word & 0x8F
+        if not word & 0x02:  # disable voltage
+            self._go("switch_on_disabled")
+        elif not word & 0x04:  # quick stop
+            if self.state == "operation_enabled":
+                a.quick_stop(self.model)
+                self.state = "quick_stop_active"
+            else:
+                self._go("switch_on_disabled")
+        elif command & 0x0F == 0x06:  # shutdown
+            self._go("ready_to_switch_on")
+        elif command & 0x0F == 0x07:  # switch on / disable operation
+            if self.state in ("ready_to_switch_on", "operation_enabled", "switched_on"):
+                self._go("switched_on")
+        elif command & 0x0F == 0x0F:  # enable operation
+            if self.state in ("switched_on", "operation_enabled", "quick_stop_active"):
+                self._go("operation_enabled")
+        if self.state == "operation_enabled":
+            self._profile(before, word)
+
+    def _go(self, state: str) -> None:
+        if state == self.state:
+            return
+        was_enabled = self.state in ("operation_enabled", "quick_stop_active")
+        self.state = state
+        if state == "operation_enabled":
+            self.actions.enable(self.model, True)
+        elif was_enabled:
+            self.actions.enable(self.model, False)
+
+    def _profile(self, before: int, word: int) -> None:
+        if self.mode == PROFILE_POSITION:
+            if word & 0x10 and not before & 0x10:  # new set-point
+                target = float(self.target_position)
+                if word & 0x40:  # relative
+                    target += self.actions.position(self.model)
+                self.actions.move_to(self.model, target, float(self.profile_velocity))
+                self.setpoint_ack = True
+            elif not word & 0x10:
+                self.setpoint_ack = False
+        elif self.mode == PROFILE_VELOCITY:
+            self.actions.jog(self.model, float(self.target_velocity) if not word & 0x100 else 0.0)
+
+    def write_target_velocity(self, value: int) -> None:
+        self.target_velocity = value
+        if self.state == "operation_enabled" and self.mode == PROFILE_VELOCITY and not self.controlword & 0x100:
+            self.actions.jog(self.model, float(value))
+
+    # -- statusword (6041h) ------------------------------------------------------------------------
+    @property
+    def statusword(self) -> int:
+        a = self.actions
+        if a.fault(self.model):
+            self.state = "fault"
+        elif self.state == "operation_enabled" and not a.enabled(self.model):
+            self.state = "switched_on"  # the drive switched itself off
+        elif self.state == "quick_stop_active" and not a.moving(self.model):
+            self.actions.enable(self.model, False)
+            self.state = "switch_on_disabled"
+        word = STATES[self.state] | 0x0200  # bit 9: remote
+        if self.state in ("switch_on_disabled", "ready_to_switch_on", "switched_on", "operation_enabled"):
+            word |= 0x0020  # bit 5: quick stop not active
+        if self.state == "switch_on_disabled":
+            word &= ~0x0020
+        if not a.moving(self.model):
+            word |= 0x0400  # bit 10: target reached
+        if self.setpoint_ack:
+            word |= 0x1000
+        return word

@@ -1,0 +1,114 @@
+"""CiA 402 over CANopen for a kind that declares itself a drive (issue 13; the PCD4.H3's axis 1):
+canopen's remote node as the master drives the state machine from Switch on disabled to
+Operation enabled, runs a profile-position move that ends at the closed-form time of the
+LM628's triangle (virtual time), runs in profile velocity mode, provokes a following error and
+sees EMCY and the Fault state, and resets it."""
+
+from __future__ import annotations
+
+import time
+import uuid
+from collections.abc import Iterator
+from pathlib import Path
+
+import canopen
+import pytest
+
+from devsim.core.runtime import Runtime
+from devsim.facades.canopen_node import CanopenFacade
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+class Drive:
+    def __init__(self) -> None:
+        channel = f"devsim-{uuid.uuid4().hex}"
+        self.runtime = Runtime(virtual=True).start()
+        self.device = self.runtime.add_device("pcd4h3", "pcd", {})
+        self.slave, self.master = canopen.Network(), canopen.Network()
+        self.slave.connect(interface="virtual", channel=channel)
+        self.master.connect(interface="virtual", channel=channel)
+        self.facade = CanopenFacade(self.device, 3, call=self.runtime.call)
+        self.node = self.master.add_node(3, str(ROOT / "docs" / "eds" / "pcd4h3.eds"))
+        self.facade.attach(self.slave)
+
+    @property
+    def status(self) -> int:
+        return int(self.node.sdo[0x6041].raw)
+
+    def control(self, word: int) -> None:
+        self.node.sdo[0x6040].raw = word
+
+    def close(self) -> None:
+        self.slave.disconnect()
+        self.master.disconnect()
+        self.runtime.stop()
+
+
+@pytest.fixture
+def drive() -> Iterator[Drive]:
+    d = Drive()
+    try:
+        yield d
+    finally:
+        d.close()
+
+
+def enable(drive: Drive) -> None:
+    assert drive.status & 0x4F == 0x40  # Switch on disabled
+    drive.control(0x06)  # shutdown
+    assert drive.status & 0x6F == 0x21  # Ready to switch on
+    drive.control(0x07)  # switch on
+    assert drive.status & 0x6F == 0x23  # Switched on
+    drive.control(0x0F)  # enable operation
+    assert drive.status & 0x6F == 0x27  # Operation enabled
+    assert drive.runtime.read("pcd", "axis.1.motor_off") is False
+
+
+def test_profile_position_move_at_the_closed_form_time(drive: Drive) -> None:
+    enable(drive)
+    drive.node.sdo[0x6060].raw = 1  # profile position
+    drive.node.sdo[0x607A].raw = 100_000  # counts: 100 mm with k = 100
+    drive.node.sdo[0x6081].raw = 50_000  # counts/s: Veloc 500, so the move is the 6.34 s triangle (§5.2)
+    start = drive.runtime.now()
+    drive.control(0x1F)  # new set-point
+    assert drive.status & 0x1400 == 0x1000  # set-point acknowledged, target not reached
+    drive.control(0x0F)
+    assert drive.runtime.run_until(lambda: drive.device.read("axis.1.status") & 0x04, 10.0)  # trajectory complete
+    assert drive.runtime.now() - start == pytest.approx(6.34, abs=0.05)
+    drive.runtime.advance(0.5)
+    assert drive.status & 0x0400 and abs(drive.node.sdo[0x6064].raw - 100_000) <= 3
+    assert drive.node.sdo[0x6061].raw == 1
+
+
+def test_profile_velocity_mode(drive: Drive) -> None:
+    enable(drive)
+    drive.node.sdo[0x6060].raw = 3  # profile velocity
+    drive.node.sdo[0x60FF].raw = -20_000  # counts/s
+    drive.control(0x0F)
+    drive.runtime.advance(4.0)
+    assert drive.node.sdo[0x606C].raw == pytest.approx(-20_000 * 0.999, rel=0.01)  # (341 µs vs 341.33 µs)
+    drive.node.sdo[0x60FF].raw = 0
+    drive.runtime.advance(4.0)
+    assert abs(drive.node.sdo[0x606C].raw) < 50
+
+
+def test_a_following_error_is_an_emcy_and_the_fault_state_then_reset(drive: Drive) -> None:
+    enable(drive)
+    drive.node.sdo[0x607A].raw = 100_000
+    drive.node.sdo[0x6081].raw = 50_000
+    drive.control(0x1F)
+    drive.runtime.advance(1.0)
+    drive.runtime.fault("pcd", "blocked_1", True)
+    assert drive.runtime.run_until(lambda: drive.runtime.read("pcd", "axis.1.ExcPEr"), 3.0)
+    deadline = time.monotonic() + 5  # the EMCY crosses python-can's notifier thread: wait for it
+    while not [e for e in drive.node.emcy.log if e.code == 0x8611] and time.monotonic() < deadline:
+        drive.node.emcy.wait(0x8611, timeout=0.05)
+    received = [e for e in drive.node.emcy.log if e.code == 0x8611]
+    assert received and received[0].register & 0x01
+    assert drive.status & 0x4F == 0x08  # Fault
+    assert drive.node.sdo[0x603F].raw != 0
+    drive.runtime.fault("pcd", "blocked_1", False)
+    drive.control(0x80)  # fault reset
+    assert drive.status & 0x4F == 0x40  # Switch on disabled
+    enable(drive)
