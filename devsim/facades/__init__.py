@@ -1,7 +1,12 @@
 """Facades: the same simulated device behind a modern fieldbus face, as mappings over the kind's
-declared points (:mod:`devsim.core.points`), never code per kind.
+declared points (:mod:`devsim.core.points`) and, for drive profiles, its declared drive actions
+(:class:`devsim.core.kit.DriveActions`), never code per kind.
 
 * :mod:`devsim.facades.modbus_map` – the Modbus register map a kind's points give (pure);
-* :mod:`devsim.facades.modbus` – serving that map with pymodbus (extra ``devsim-motion[modbus]``):
-  Modbus TCP, and Modbus RTU on any devsim serial transport (a pty, raw TCP, RFC 2217).
+* :mod:`devsim.facades.modbus` – serving it with pymodbus (extra ``devsim-motion[modbus]``): Modbus
+  TCP, and Modbus RTU on any devsim serial transport (a pty, raw TCP, RFC 2217);
+* :mod:`devsim.facades.canopen_od` – the CANopen EDS of a kind (pure);
+* :mod:`devsim.facades.cia402` – the CiA 402 state machine and profile modes (pure);
+* :mod:`devsim.facades.canopen_node` – the device as canopen's local node (extra ``[can]``), reached
+  from other processes through :mod:`devsim.transports.socketcand`.
 """

@@ -6,6 +6,7 @@ standard exception codes."""
 from __future__ import annotations
 
 from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import pytest
@@ -24,16 +25,23 @@ def spec(modbus: dict[str, Any], **device: Any) -> PlantSpec:
     return PlantSpec.model_validate({"devices": [{"name": "drive", "kind": "sers", "modbus": modbus, **device}]})
 
 
-@pytest.fixture
-def tcp() -> Iterator[tuple[Any, ModbusTcpClient]]:
-    with plant_running(spec({"tcp": {"port": 0}}), virtual=True) as plant:
-        host, _, port = plant.port("drive.modbus").removeprefix("socket://").rpartition(":")
+@contextmanager
+def modbus_tcp(plant_spec: PlantSpec, device: str) -> Iterator[tuple[Any, ModbusTcpClient]]:
+    """A plant (virtual time) and pymodbus's client on ``device``'s Modbus TCP facade."""
+    with plant_running(plant_spec, virtual=True) as plant:
+        host, _, port = plant.port(f"{device}.modbus").removeprefix("socket://").rpartition(":")
         client = ModbusTcpClient(host, port=int(port), timeout=5)
         assert client.connect()
         try:
             yield plant, client
         finally:
             client.close()
+
+
+@pytest.fixture
+def tcp() -> Iterator[tuple[Any, ModbusTcpClient]]:
+    with modbus_tcp(spec({"tcp": {"port": 0}}), "drive") as both:
+        yield both
 
 
 def address(plant: Any, name: str) -> int:

@@ -11,22 +11,16 @@ from typing import Any
 import pytest
 from pymodbus.client import ModbusTcpClient
 
-from devsim.scenario.plant import plant_running
 from devsim.scenario.schema import PlantSpec
+from tests.facades.test_modbus import modbus_tcp
 
 
 @pytest.fixture
 def pcd() -> Iterator[tuple[Any, ModbusTcpClient]]:
     spec = PlantSpec.model_validate({"devices": [
         {"name": "pcd", "kind": "pcd4h3", "modbus": {"tcp": {"port": 0}, "layout": "mirror"}}]})
-    with plant_running(spec, virtual=True) as plant:
-        host, _, port = plant.port("pcd.modbus").removeprefix("socket://").rpartition(":")
-        client = ModbusTcpClient(host, port=int(port), timeout=5)
-        assert client.connect()
-        try:
-            yield plant, client
-        finally:
-            client.close()
+    with modbus_tcp(spec, "pcd") as both:
+        yield both
 
 
 def test_example_1_over_modbus(pcd: tuple[Any, ModbusTcpClient]) -> None:
