@@ -112,3 +112,43 @@ def test_a_following_error_is_an_emcy_and_the_fault_state_then_reset(drive: Driv
     drive.control(0x80)  # fault reset
     assert drive.status & 0x4F == 0x40  # Switch on disabled
     enable(drive)
+
+
+def test_the_sers_as_a_402_drive() -> None:
+    """The SERS declares its drive actions too: ON by Enable operation, an absolute WA … E by a
+    new set-point (12 800 increments at 6 400 inc/s), a jog in profile velocity mode; an
+    undervoltage error is the Fault state, cleared by a fault reset once the supply is back."""
+    channel = f"devsim-{uuid.uuid4().hex}"
+    runtime = Runtime(virtual=True).start()
+    slave, master = canopen.Network(), canopen.Network()
+    slave.connect(interface="virtual", channel=channel)
+    master.connect(interface="virtual", channel=channel)
+    try:
+        device = runtime.add_device("sers", "sers", {})
+        runtime.advance(3.0)  # the drive's initialisation
+        CanopenFacade(device, 2, call=runtime.call).attach(slave)
+        node = master.add_node(2, str(ROOT / "docs" / "eds" / "sers.eds"))
+        for word, state in ((0x06, 0x21), (0x07, 0x23), (0x0F, 0x27)):
+            node.sdo[0x6040].raw = word
+            assert node.sdo[0x6041].raw & 0x6F == state
+        assert runtime.read("sers", "energized") is True
+        node.sdo[0x607A].raw = 12_800
+        node.sdo[0x6081].raw = 6_400
+        node.sdo[0x6040].raw = 0x1F
+        assert runtime.run_until(lambda: not device.read("motion"), 10.0)
+        assert node.sdo[0x6064].raw == 12_800 and node.sdo[0x6041].raw & 0x0400
+        node.sdo[0x6060].raw = 3
+        node.sdo[0x60FF].raw = -3_200
+        node.sdo[0x6040].raw = 0x0F
+        runtime.advance(2.0)
+        assert node.sdo[0x606C].raw == -3_200
+        runtime.set("sers", "quantity.supply_voltage", 40.0)  # below U_L: a drive error
+        runtime.advance(0.5)
+        assert node.sdo[0x6041].raw & 0x4F == 0x08
+        runtime.set("sers", "quantity.supply_voltage", 68.0)
+        node.sdo[0x6040].raw = 0x80
+        assert node.sdo[0x6041].raw & 0x4F == 0x40
+    finally:
+        slave.disconnect()
+        master.disconnect()
+        runtime.stop()

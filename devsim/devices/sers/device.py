@@ -15,6 +15,7 @@ from devsim.core.kit import ErrorCode, Parameter, Reference
 from devsim.core.settings import Section
 from devsim.devices.sers.config import SersConfig
 from devsim.devices.sers.drive import SersDrive
+from devsim.devices.sers.drive_actions import DRIVE
 from devsim.devices.sers.errors import ERRNO
 from devsim.devices.sers.execution import COMMANDS, STATEMENTS
 from devsim.devices.sers.face import INTERACTIVE, SersFace
@@ -35,6 +36,7 @@ class SersDevice(Device):
     face_classes: ClassVar[dict[str, Any]] = {"main": SersFace}
     points = POINTS
     faults = FAULTS
+    drive = DRIVE
 
     @classmethod
     def reference(cls) -> Reference:
