@@ -1,0 +1,62 @@
+"""Every kind that declares drive actions passes the CiA 402 flow through canopen (issue 13, the
+kit's contract for drives): from Switch on disabled to Operation enabled, a relative profile-
+position move of 1 000 units that ends there with "target reached", and back to Switch on
+disabled.  Kinds without drive actions are CANopen nodes without the 402 objects."""
+
+from __future__ import annotations
+
+import uuid
+from pathlib import Path
+
+import canopen
+import pytest
+
+from devsim.core.registry import device_class, kinds
+from devsim.core.runtime import Runtime
+from devsim.facades.canopen_node import CanopenFacade
+
+ROOT = Path(__file__).resolve().parents[2]
+DRIVES = sorted(k for k in kinds() if device_class(k).drive is not None)
+
+
+def test_the_drives() -> None:
+    assert {"sers", "pcd4h3"} <= set(DRIVES)
+
+
+@pytest.mark.parametrize("kind", DRIVES)
+def test_a_drive_runs_the_402_flow(kind: str) -> None:
+    channel = f"devsim-{uuid.uuid4().hex}"
+    runtime = Runtime(virtual=True).start()
+    slave, master = canopen.Network(), canopen.Network()
+    slave.connect(interface="virtual", channel=channel)
+    master.connect(interface="virtual", channel=channel)
+    try:
+        device = runtime.add_device(kind, kind, {})
+        runtime.advance(3.0)  # past any initialisation after power-on
+        CanopenFacade(device, 9, call=runtime.call).attach(slave)
+        node = master.add_node(9, str(ROOT / "docs" / "eds" / f"{kind}.eds"))
+        for word, state in ((0x06, 0x21), (0x07, 0x23), (0x0F, 0x27)):
+            node.sdo[0x6040].raw = word
+            assert node.sdo[0x6041].raw & 0x6F == state, (kind, hex(word))
+        start = node.sdo[0x6064].raw
+        node.sdo[0x6060].raw = 1
+        node.sdo[0x607A].raw = 1000
+        node.sdo[0x6081].raw = 2000
+        node.sdo[0x6040].raw = 0x5F  # new set-point, relative
+        assert node.sdo[0x6041].raw & 0x1000
+        assert runtime.run_until(lambda: not device.drive.moving(device.model), 30.0)
+        runtime.advance(1.0)
+        assert abs(node.sdo[0x6064].raw - (start + 1000)) <= 3
+        assert node.sdo[0x6041].raw & 0x0400
+        node.sdo[0x6040].raw = 0x00  # disable voltage
+        assert node.sdo[0x6041].raw & 0x4F == 0x40
+    finally:
+        slave.disconnect()
+        master.disconnect()
+        runtime.stop()
+
+
+@pytest.mark.parametrize("kind", sorted(set(kinds()) - set(DRIVES)))
+def test_a_kind_without_drive_actions_has_no_402_objects(kind: str) -> None:
+    od = canopen.import_od(str(ROOT / "docs" / "eds" / f"{kind}.eds"))
+    assert 0x6040 not in od and 0x1000 in od
