@@ -19,6 +19,7 @@ from devsim.devices.gms96.card import Gms96Card
 from devsim.devices.gms96.config import Gms96Config
 from devsim.devices.gms96.face import IMMEDIATE_COMMANDS, QUEUED_COMMANDS, SHORT_COMMANDS, Gms96Face
 from devsim.devices.gms96.nparams import N_STORED_ONLY
+from devsim.devices.gms96.drive_actions import DRIVE
 from devsim.devices.gms96.points import FAULTS, POINTS
 
 __all__ = ["Gms96Device"]
@@ -33,6 +34,7 @@ class Gms96Device(Device):
     model_class = Gms96Card
     face_classes: ClassVar[dict[str, Any]] = {"main": Gms96Face}
     points = POINTS
+    drive = DRIVE
     faults = FAULTS
 
     @classmethod
