@@ -17,9 +17,9 @@ from devsim.core.settings import Section
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.card import Gms96Card
 from devsim.devices.gms96.config import Gms96Config
+from devsim.devices.gms96.drive_actions import DRIVE
 from devsim.devices.gms96.face import IMMEDIATE_COMMANDS, QUEUED_COMMANDS, SHORT_COMMANDS, Gms96Face
 from devsim.devices.gms96.nparams import N_STORED_ONLY
-from devsim.devices.gms96.drive_actions import DRIVE
 from devsim.devices.gms96.points import FAULTS, POINTS
 
 __all__ = ["Gms96Device"]
