@@ -9,8 +9,9 @@ machine (:mod:`devsim.facades.cia402`): controlword 6040h, statusword 6041h, pro
 profile velocity modes, 6064h/606Ch/60F4h; a fault the model announces (topic ``fault``) sends an
 EMCY message.  Hosts in other processes reach the nodes through
 :class:`devsim.transports.socketcand.SocketcandServer` (:func:`start_canopen`, ``devsim run
---canopen``).  Not yet: PDO mapping, SocketCAN ``vcan``, the drive actions of kinds other than the
-PCD4.H3.  Callbacks come from python-can's notifier thread; ``call`` runs the
+--canopen``).  PDOs: what the master maps into 1600h/1A00h and enables; TPDOs go out on SYNC
+(transmission types 1 … 240), RPDOs are written into their objects.  Not yet: event-driven TPDOs
+(types 254/255), SocketCAN ``vcan``.  Callbacks come from python-can's notifier thread; ``call`` runs the
 device access where the device lives (``Runtime.call``)."""
 
 from __future__ import annotations
@@ -56,6 +57,8 @@ class CanopenFacade:
                           node_id)
         self.drive = Cia402(device.drive, device.model) if device.drive is not None else None
         self._unlisten = device.model.listen("fault", self._emergency)
+        self._pdos_on = False
+        self._syncs = 0
         self.node = canopen.LocalNode(node_id, self.od)
         self.objects = {index: point for index, point in point_objects(device.points)}
         self.node.add_read_callback(self._read)
@@ -63,10 +66,45 @@ class CanopenFacade:
 
     def attach(self, network: canopen.Network) -> None:
         """Join ``network`` and boot: the boot-up message, then pre-operational (the heartbeat
-        starts if 1017h is set)."""
+        starts if 1017h is set).  Entering OPERATIONAL the node takes the PDO configuration the
+        master wrote: TPDOs with a transmission type 1 … 240 go out after every that many SYNCs,
+        RPDOs are written into their objects as they arrive."""
         network.add_node(self.node)
+        network.subscribe(0, self._nmt)  # after canopen's own NMT handling
+        network.subscribe(0x80, self._sync)
         self.node.nmt.send_command(0x81)  # reset node: INITIALISING, boot-up message
         self.node.nmt.send_command(0x80)  # enter PRE-OPERATIONAL
+
+    # -- PDOs ---------------------------------------------------------------------------------
+    def _nmt(self, can_id: int, data: bytes, timestamp: float) -> None:
+        if len(data) < 2 or data[1] not in (0, self.node.id):
+            return
+        if self.node.nmt.state == "OPERATIONAL" and not self._pdos_on:
+            self._pdos_on = True
+            self._syncs = 0
+            self.node.tpdo.read(from_od=False)  # what the master configured (SDO into the data store)
+            self.node.rpdo.read(from_od=False)
+            for rpdo in self.node.rpdo.map.values():
+                if rpdo.enabled:
+                    rpdo.add_callback(self._received)
+        elif self.node.nmt.state != "OPERATIONAL":
+            self._pdos_on = False
+
+    def _sync(self, can_id: int, data: bytes, timestamp: float) -> None:
+        if not self._pdos_on:
+            return
+        self._syncs += 1
+        for tpdo in self.node.tpdo.map.values():
+            if tpdo.enabled and 1 <= (tpdo.trans_type or 0) <= 240 and self._syncs % tpdo.trans_type == 0:
+                for variable in tpdo.map:
+                    if variable.length:
+                        variable.set_data(self.node.get_data(variable.index, variable.subindex))
+                tpdo.transmit()
+
+    def _received(self, rpdo: Any) -> None:
+        for variable in rpdo.map:
+            if variable.length:
+                self.node.set_data(variable.index, variable.subindex, variable.get_data(), check_writable=True)
 
     def _emergency(self, axis: int = 1, code: int = 0x1000) -> None:
         """A fault the model announces: an EMCY message (error register bit 0, generic error)."""

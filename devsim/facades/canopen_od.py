@@ -2,7 +2,8 @@
 points (issue 13): the communication objects every node has (device type, error register,
 heartbeat producer time, identity) and, from index 2000h on, one manufacturer object per
 ``bool``/``int``/``float`` point in table order (BOOLEAN, INTEGER32, REAL64; read-only where the
-point is), named after the point; for a kind that is a drive (``Device.drive``) also the CiA 402 objects (controlword,
+point is), named after the point; 4 RPDOs and 4 TPDOs (communication and mapping records, the predefined connection set's
+COB-IDs); for a kind that is a drive (``Device.drive``) also the CiA 402 objects (controlword,
 statusword, modes, actual and target values).  ``devsim doc KIND --eds`` prints it,
 ``docs/eds/KIND.eds`` holds it.  Pure text.
 """
@@ -59,6 +60,42 @@ DRIVE_OBJECTS = (
 )
 
 
+PDOS = 4  # RPDOs and TPDOs, each with a communication and a mapping record
+
+
+def _record(index: int, name: str, subs: list[tuple[str, int, str, str | int]]) -> list[str]:
+    lines = [f"[{index:04X}]", f"ParameterName={name}", "ObjectType=0x9", f"SubNumber={len(subs)}", ""]
+    for sub, (sub_name, code, access, default) in enumerate(subs):
+        lines += _var(index, sub, sub_name, code, access, default)
+    return lines
+
+
+def _pdo_objects() -> list[str]:
+    """The communication (1400h/1800h) and mapping (1600h/1A00h) records of 4 RPDOs and 4 TPDOs,
+    with the predefined connection set's COB-IDs."""
+    lines: list[str] = []
+    for n in range(PDOS):
+        for base, cob, kind in ((0x1400, 0x200, "RPDO"), (0x1800, 0x180, "TPDO")):
+            subs: list[tuple[str, int, str, str | int]] = [
+                ("Highest sub-index supported", 0x0005, "const", 5),
+                (f"COB-ID used by {kind}", 0x0007, "rw", f"$NODEID+0x{cob + 0x100 * n:X}"),
+                ("Transmission type", 0x0005, "rw", 255),
+                ("Inhibit time", 0x0006, "rw", 0),
+                ("Compatibility entry", 0x0005, "rw", 0),
+                ("Event timer", 0x0006, "rw", 0),
+            ]
+            lines += _record(base + n, f"{kind} communication parameter {n + 1}", subs)
+        for base, kind in ((0x1600, "RPDO"), (0x1A00, "TPDO")):
+            mapping: list[tuple[str, int, str, str | int]] = [("Number of mapped objects", 0x0005, "rw", 0)]
+            mapping += [(f"Mapping entry {i}", 0x0007, "rw", 0) for i in range(1, 9)]
+            lines += _record(base + n, f"{kind} mapping parameter {n + 1}", mapping)
+    return lines
+
+
+def _pdo_indices() -> list[int]:
+    return [base + n for base in (0x1400, 0x1600, 0x1800, 0x1A00) for n in range(PDOS)]
+
+
 def eds(kind: str, description: str, points: Iterable[Point], drive: bool = False) -> str:
     """The EDS of a kind (with the CiA 402 objects when it is a ``drive``)."""
     objects = point_objects(points)
@@ -68,7 +105,7 @@ def eds(kind: str, description: str, points: Iterable[Point], drive: bool = Fals
         "[DeviceInfo]", "VendorName=devsim", f"VendorNumber=0x{VENDOR_ID:X}", f"ProductName=devsim {kind}",
         f"ProductNumber=0x{_product_code(kind):X}", "RevisionNumber=0x1", "OrderCode=", "BaudRate_125=1",
         "BaudRate_250=1", "BaudRate_500=1", "BaudRate_1000=1", "SimpleBootUpMaster=0", "SimpleBootUpSlave=1",
-        "Granularity=8", "DynamicChannelsSupported=0", "GroupMessaging=0", "NrOfRXPDO=0", "NrOfTXPDO=0",
+        "Granularity=8", "DynamicChannelsSupported=0", "GroupMessaging=0", f"NrOfRXPDO={PDOS}", f"NrOfTXPDO={PDOS}",
         "LSS_Supported=0", "",
         "[DummyUsage]", "Dummy0001=0", "Dummy0002=0", "Dummy0003=0", "Dummy0004=0", "Dummy0005=0", "Dummy0006=0",
         "Dummy0007=0", "",
@@ -82,11 +119,12 @@ def eds(kind: str, description: str, points: Iterable[Point], drive: bool = Fals
     lines += _var(0x1018, 2, "Product code", 0x0007, "ro", _product_code(kind))
     lines += _var(0x1018, 3, "Revision number", 0x0007, "ro", 1)
     lines += _var(0x1018, 4, "Serial number", 0x0007, "ro", 1)
-    optional = [0x1008, 0x1017] + ([index for index, *_ in DRIVE_OBJECTS] if drive else [])
+    optional = [0x1008, 0x1017, *_pdo_indices()] + ([index for index, *_ in DRIVE_OBJECTS] if drive else [])
     lines += ["[OptionalObjects]", f"SupportedObjects={len(optional)}"]
     lines += [f"{n}=0x{index:04X}" for n, index in enumerate(optional, start=1)] + [""]
     lines += _var(0x1008, None, "Manufacturer device name", 0x0009, "const", f"devsim {kind}")
     lines += _var(0x1017, None, "Producer heartbeat time", 0x0006, "rw", 0)
+    lines += _pdo_objects()
     if drive:  # the device profile area (CiA 402)
         for index, name, code, access, pdo in DRIVE_OBJECTS:
             lines += _var(index, None, name, code, access, pdo=pdo)

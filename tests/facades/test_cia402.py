@@ -152,3 +152,37 @@ def test_the_sers_as_a_402_drive() -> None:
         slave.disconnect()
         master.disconnect()
         runtime.stop()
+
+
+def test_pdos_carry_the_controlword_and_the_statusword(drive: Drive) -> None:
+    """The master maps RPDO1 = controlword and TPDO1 = statusword + position actual value on every
+    SYNC, starts the node, and drives the state machine by PDO alone."""
+    import queue
+
+    node = drive.node
+    node.tpdo.read()
+    node.rpdo.read()
+    tpdo, rpdo = node.tpdo[1], node.rpdo[1]
+    tpdo.clear()
+    tpdo.add_variable(0x6041)
+    tpdo.add_variable(0x6064)
+    tpdo.trans_type, tpdo.enabled = 1, True
+    rpdo.clear()
+    rpdo.add_variable(0x6040)
+    rpdo.trans_type, rpdo.enabled = 255, True
+    node.tpdo.save()
+    node.rpdo.save()
+    arrived: queue.Queue[tuple[int, int]] = queue.Queue()
+    tpdo.add_callback(lambda m: arrived.put((m["Statusword"].raw, m["Position actual value"].raw)))
+    node.nmt.state = "OPERATIONAL"
+
+    def sync() -> tuple[int, int]:
+        drive.master.sync.transmit()  # (frames on the bus are handled in order: the RPDOs before)
+        return arrived.get(timeout=5)
+
+    assert sync()[0] & 0x4F == 0x40
+    for word, state in ((0x06, 0x21), (0x07, 0x23), (0x0F, 0x27)):
+        rpdo["Controlword"].raw = word
+        rpdo.transmit()
+        status, position = sync()
+        assert status & 0x6F == state and position == 0
