@@ -145,6 +145,10 @@ def test_the_sers_as_a_402_drive() -> None:
         runtime.set("sers", "quantity.supply_voltage", 40.0)  # below U_L: a drive error
         runtime.advance(0.5)
         assert node.sdo[0x6041].raw & 0x4F == 0x08
+        deadline = time.monotonic() + 5  # the EMCY crosses python-can's notifier thread
+        while not [e for e in node.emcy.log if e.code == 0x3220] and time.monotonic() < deadline:
+            node.emcy.wait(0x3220, timeout=0.05)
+        assert [e for e in node.emcy.log if e.code == 0x3220]  # DC link undervoltage
         runtime.set("sers", "quantity.supply_voltage", 68.0)
         node.sdo[0x6040].raw = 0x80
         assert node.sdo[0x6041].raw & 0x4F == 0x40

@@ -9,7 +9,7 @@ from typing import Any
 
 from devsim.core.kit import Command, Table
 from devsim.devices.sers import statements as st
-from devsim.devices.sers.constants import STEP_LOSS
+from devsim.devices.sers.constants import EMCY_CODES, STEP_LOSS
 from devsim.devices.sers.errors import SersError
 
 __all__ = ["COMMANDS", "STATEMENTS", "Execution"]
@@ -170,6 +170,8 @@ class Execution:
         if first:
             self.record_event("error")
         self.errors |= bit
+        if first:
+            self.announce("fault", 1, EMCY_CODES.get(bit, 0x1000))  # (a CANopen facade sends EMCY)
         self.poly.cancel()
         if first:
             self.interpreter.on_drive_error()
