@@ -190,3 +190,35 @@ def test_pdos_carry_the_controlword_and_the_statusword(drive: Drive) -> None:
         rpdo.transmit()
         status, position = sync()
         assert status & 0x6F == state and position == 0
+
+
+def test_a_gms96_following_error_is_an_emcy_and_the_fault_state() -> None:
+    """The GMS96's blocked axis: the following error trips N20, IDXOFF: EMCY 8611h; the drive
+    shows Switched on (the controller is off), not Operation enabled."""
+    channel = f"devsim-{uuid.uuid4().hex}"
+    runtime = Runtime(virtual=True).start()
+    slave, master = canopen.Network(), canopen.Network()
+    slave.connect(interface="virtual", channel=channel)
+    master.connect(interface="virtual", channel=channel)
+    try:
+        device = runtime.add_device("gms96", "card", {})
+        runtime.advance(3.0)
+        CanopenFacade(device, 4, call=runtime.call).attach(slave)
+        node = master.add_node(4, str(ROOT / "docs" / "eds" / "gms96.eds"))
+        for word in (0x06, 0x07, 0x0F):
+            node.sdo[0x6040].raw = word
+        assert node.sdo[0x6041].raw & 0x6F == 0x27
+        node.sdo[0x607A].raw = 100_000
+        node.sdo[0x6040].raw = 0x1F
+        runtime.advance(0.2)
+        runtime.fault("card", "blocked_axis", True)
+        assert runtime.run_until(lambda: device.model.idxoff, 10.0)
+        deadline = time.monotonic() + 5  # the EMCY crosses python-can's notifier thread
+        while not [e for e in node.emcy.log if e.code == 0x8611] and time.monotonic() < deadline:
+            node.emcy.wait(0x8611, timeout=0.05)
+        assert [e for e in node.emcy.log if e.code == 0x8611]
+        assert node.sdo[0x6041].raw & 0x6F == 0x23  # the controller switched itself off
+    finally:
+        slave.disconnect()
+        master.disconnect()
+        runtime.stop()

@@ -339,6 +339,7 @@ class Gms96Card(Settings, Model):
         if not self.controller:
             return
         self.record_event("following_error")
+        self.announce("fault", 1, 0x8611)  # CiA 402's following error (a CANopen facade sends EMCY)
         self.idxoff = True
         self.controller = False
         self.spindle_on = False
