@@ -10,8 +10,8 @@ profile velocity modes, 6064h/606Ch/60F4h; a fault the model announces (topic ``
 EMCY message.  Hosts in other processes reach the nodes through
 :class:`devsim.transports.socketcand.SocketcandServer` (:func:`start_canopen`, ``devsim run
 --canopen``).  PDOs: what the master maps into 1600h/1A00h and enables; TPDOs go out on SYNC
-(transmission types 1 … 240), RPDOs are written into their objects.  Not yet: event-driven TPDOs
-(types 254/255), SocketCAN ``vcan``.  Callbacks come from python-can's notifier thread; ``call`` runs the
+(transmission types 1 … 240) and, with types 254/255, every event-timer period of device time;
+RPDOs are written into their objects.  Not yet: SocketCAN ``vcan``.  Callbacks come from python-can's notifier thread; ``call`` runs the
 device access where the device lives (``Runtime.call``)."""
 
 from __future__ import annotations
@@ -59,6 +59,7 @@ class CanopenFacade:
         self._unlisten = device.model.listen("fault", self._emergency)
         self._pdos_on = False
         self._syncs = 0
+        self._timers: dict[int, Any] = {}  # event-driven TPDOs: their device-clock timers
         self.node = canopen.LocalNode(node_id, self.od)
         self.objects = {index: point for index, point in point_objects(device.points)}
         self.node.add_read_callback(self._read)
@@ -68,7 +69,8 @@ class CanopenFacade:
         """Join ``network`` and boot: the boot-up message, then pre-operational (the heartbeat
         starts if 1017h is set).  Entering OPERATIONAL the node takes the PDO configuration the
         master wrote: TPDOs with a transmission type 1 … 240 go out after every that many SYNCs,
-        RPDOs are written into their objects as they arrive."""
+        those with 254/255 every event-timer period (device time), RPDOs are written into their
+        objects as they arrive."""
         network.add_node(self.node)
         network.subscribe(0, self._nmt)  # after canopen's own NMT handling
         network.subscribe(0x80, self._sync)
@@ -87,8 +89,33 @@ class CanopenFacade:
             for rpdo in self.node.rpdo.map.values():
                 if rpdo.enabled:
                     rpdo.add_callback(self._received)
+            for tpdo in self.node.tpdo.map.values():
+                if tpdo.enabled and (tpdo.trans_type or 0) >= 254 and tpdo.event_timer:
+                    self.call(self._schedule, tpdo)
         elif self.node.nmt.state != "OPERATIONAL":
             self._pdos_on = False
+            self.call(self._cancel_timers)
+
+    def _schedule(self, tpdo: Any) -> None:
+        """An event-driven TPDO with an event timer: sent every event-timer ms of device time."""
+        def tick() -> None:
+            self._timers.pop(id(tpdo), None)
+            if self._pdos_on:
+                self._transmit(tpdo)
+                self._schedule(tpdo)
+
+        self._timers[id(tpdo)] = self.device.clock.call_later(tpdo.event_timer / 1000, tick)
+
+    def _cancel_timers(self) -> None:
+        for timer in self._timers.values():
+            timer.cancel()
+        self._timers.clear()
+
+    def _transmit(self, tpdo: Any) -> None:
+        for variable in tpdo.map:
+            if variable.length:
+                variable.set_data(self.node.get_data(variable.index, variable.subindex))
+        tpdo.transmit()
 
     def _sync(self, can_id: int, data: bytes, timestamp: float) -> None:
         if not self._pdos_on:
@@ -96,10 +123,7 @@ class CanopenFacade:
         self._syncs += 1
         for tpdo in self.node.tpdo.map.values():
             if tpdo.enabled and 1 <= (tpdo.trans_type or 0) <= 240 and self._syncs % tpdo.trans_type == 0:
-                for variable in tpdo.map:
-                    if variable.length:
-                        variable.set_data(self.node.get_data(variable.index, variable.subindex))
-                tpdo.transmit()
+                self._transmit(tpdo)
 
     def _received(self, rpdo: Any) -> None:
         for variable in rpdo.map:
@@ -113,6 +137,7 @@ class CanopenFacade:
 
     def close(self) -> None:
         self._unlisten()
+        self.call(self._cancel_timers)
 
     def _read(self, index: int, subindex: int, od: Any) -> Any:
         if self.drive is not None and index in DRIVE_READS:

@@ -222,3 +222,28 @@ def test_a_gms96_following_error_is_an_emcy_and_the_fault_state() -> None:
         slave.disconnect()
         master.disconnect()
         runtime.stop()
+
+
+def test_an_event_driven_tpdo_goes_out_every_event_timer_period(drive: Drive) -> None:
+    """TPDO2 with transmission type 255 and an event timer of 100 ms: one every 100 ms of device
+    time (virtual here), with the position as it moves."""
+    import queue
+
+    node = drive.node
+    node.tpdo.read()
+    tpdo = node.tpdo[2]
+    tpdo.clear()
+    tpdo.add_variable(0x6064)
+    tpdo.trans_type, tpdo.event_timer, tpdo.enabled = 255, 100, True
+    node.tpdo.save()
+    arrived: queue.Queue[int] = queue.Queue()
+    tpdo.add_callback(lambda m: arrived.put(m["Position actual value"].raw))
+    node.nmt.state = "OPERATIONAL"
+    assert drive.node.sdo[0x1017].raw == 0  # (an SDO round trip: the NMT command was handled before it)
+    drive.runtime.advance(0.35)
+    assert [arrived.get(timeout=5) for _ in range(3)] == [0, 0, 0]
+    node.nmt.state = "PRE-OPERATIONAL"
+    assert drive.node.sdo[0x1017].raw == 0
+    drive.runtime.advance(0.5)
+    assert drive.node.sdo[0x1017].raw == 0  # (a round trip after any TPDO the advance could have sent)
+    assert arrived.empty()  # stopped with OPERATIONAL
