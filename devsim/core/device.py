@@ -164,6 +164,9 @@ class Device:
     model_class: ClassVar[Callable[..., Model]] = Model
     #: What the model does as a drive, for drive-profile facades (CiA 402); None: not a drive.
     drive: ClassVar[DriveActions | None] = None
+    #: Settable names and values that make the drive able to move (machine data, a reference
+    #: point …), for tests and plants: ``device.apply_state(cls.drive_setup)``.
+    drive_setup: ClassVar[Mapping[str, Any]] = {}
     face_classes: ClassVar[Mapping[str, Callable[[Any, Port], Face]]] = {}
 
     def __init__(

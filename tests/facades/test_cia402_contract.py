@@ -20,7 +20,7 @@ DRIVES = sorted(k for k in kinds() if device_class(k).drive is not None)
 
 
 def test_the_drives() -> None:
-    assert {"sers", "pcd4h3"} <= set(DRIVES)
+    assert {"sers", "gms96", "ip247", "pcd4h3"} <= set(DRIVES)
 
 
 @pytest.mark.parametrize("kind", DRIVES)
@@ -33,6 +33,7 @@ def test_a_drive_runs_the_402_flow(kind: str) -> None:
     try:
         device = runtime.add_device(kind, kind, {})
         runtime.advance(3.0)  # past any initialisation after power-on
+        runtime.call(device.apply_state, device.drive_setup)  # what the kind needs to move
         CanopenFacade(device, 9, call=runtime.call).attach(slave)
         node = master.add_node(9, str(ROOT / "docs" / "eds" / f"{kind}.eds"))
         for word, state in ((0x06, 0x21), (0x07, 0x23), (0x0F, 0x27)):

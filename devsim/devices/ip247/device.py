@@ -14,6 +14,7 @@ from devsim.core.device import Device
 from devsim.core.kit import Command, Parameter, PortDef, Reference
 from devsim.core.settings import Section
 from devsim.devices.ip247.config import Ip247Config
+from devsim.devices.ip247.drive_actions import DRIVE, SETUP
 from devsim.devices.ip247.face import AgFace, PgFace
 from devsim.devices.ip247.module import Ip247Module
 from devsim.devices.ip247.points import FAULTS, POINTS
@@ -36,6 +37,8 @@ class Ip247Device(Device):
     face_classes: ClassVar[dict[str, Any]] = {"pg": PgFace, "ag": AgFace}
     points = POINTS
     faults = FAULTS
+    drive = DRIVE
+    drive_setup = SETUP
 
     @classmethod
     def reference(cls) -> Reference:

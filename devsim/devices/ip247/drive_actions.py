@@ -1,0 +1,75 @@
+"""The IP247's axis 1 as a drive for drive-profile facades such as CiA 402
+(:class:`devsim.core.kit.DriveActions`): what FB164 would ask of page 1 (spec ip247.md §4.1), done
+on the module: BA6 "Start" to an absolute target, BA1 Vorwärts/Rückwärts to jog, "Stopp" to stop.
+The module has no power stage of its own to switch: enabled means machine data are loaded and the
+power unit is ready (BB); a fault is a pending error of 10 or more.  Positions are base units
+(the ``axis.1.position`` point), speeds base units per second, sent as the velocity word in
+units/min (the base unit × 1000, as the machine data count it).
+
+``SETUP`` is what a test or a plant must set first for the axis to move: the manual's example
+machine data (§6.1; r = 10 µm, 3000 mm/min) for module 0 (the SYS-ID of a fresh module), the NC limit
+switches closed, and the reference point
+set (BA5) at 0.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from devsim.core.kit import DriveActions
+from devsim.core.points import BadValue
+from devsim.devices.ip247.jobs import BACKWARD, FORWARD, START, STOP
+
+__all__ = ["DRIVE", "SETUP"]
+
+PAGE = 1
+MANUALS_MD = (
+    "0046 0044 427B 0001 0100 0001 86A0 0000 2710 0001 86A0 0001 0040 000A 03E8 0000 044C 0000 03E8 0000 "
+    "03E8 0000 03E8 0000 03E8 0001 0020 0000 03E8 FFFF D8F0 0007 A120 0001 0000 0000 0000 03E8 0000 0000 "
+    "0000 0000 0000 0000 0000 0000 0000 0001 0000 0000" + " 0000" * 20
+)
+SETUP: dict[str, Any] = {
+    "input.ANF1": True,
+    "input.END1": True,
+    "axis.1.machine_data": MANUALS_MD,
+    "ag.operate": {"page": 0, "ba": 5, "cmd": "Start", "b": 1},  # BA5: set the reference point here
+}
+
+
+def _unit(m: Any) -> Any:
+    return m.units[PAGE - 1]
+
+
+def _operate(m: Any, ba: int, cmd: int, w: int = 0, dd: int = 0) -> None:
+    m.operate(PAGE, ba, cmd, 0, w, dd, source="ag")
+    error = _unit(m).error
+    if error >= 10:
+        raise BadValue(f"the module refuses: error {error}")
+
+
+def _per_minute(speed: float) -> int:
+    return max(1, min(65000, round(abs(speed) * 60 / 1000)))
+
+
+def _enable(m: Any, on: bool) -> None:
+    if on and not _enabled(m):
+        raise BadValue("no machine data on axis 1, or the power unit is not ready (BB)")
+
+
+def _enabled(m: Any) -> bool:
+    return _unit(m).md is not None and bool(m.signals.get("BB1"))
+
+
+DRIVE = DriveActions(
+    enable=_enable,
+    move_to=lambda m, target, speed: _operate(m, 6, START, _per_minute(speed) if speed > 0 else 0, round(target)),
+    jog=lambda m, v: _operate(m, 1, STOP) if v == 0 else _operate(m, 1, FORWARD if v > 0 else BACKWARD,
+                                                                   _per_minute(v)),
+    quick_stop=lambda m: _operate(m, _unit(m).mode, STOP),
+    reset_fault=lambda m: m.operate(PAGE, 17, START, source="ag"),  # BA17: acknowledge the error
+    position=lambda m: _unit(m).actual(),
+    velocity=lambda m: _unit(m).axis.velocity(),
+    enabled=_enabled,
+    fault=lambda m: _unit(m).error >= 10,
+    moving=lambda m: bool(_unit(m).running),
+)
