@@ -11,8 +11,9 @@ EMCY message.  Hosts in other processes reach the nodes through
 :class:`devsim.transports.socketcand.SocketcandServer` (:func:`start_canopen`, ``devsim run
 --canopen``).  PDOs: what the master maps into 1600h/1A00h and enables; TPDOs go out on SYNC
 (transmission types 1 … 240) and, with types 254/255, every event-timer period of device time;
-RPDOs are written into their objects.  Not yet: SocketCAN ``vcan``.  Callbacks come from python-can's notifier thread; ``call`` runs the
-device access where the device lives (``Runtime.call``)."""
+RPDOs are written into their objects.  Not yet: SocketCAN ``vcan``.  Callbacks come from
+python-can's notifier thread; ``call`` runs the device access where the device lives
+(``Runtime.call``)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""A device as a CANopen node (issue 13, first part): the EDS devsim generates per kind (shipped
+"""A device as a CANopen node (issue 13): the EDS devsim generates per kind (shipped
 in docs/eds/, read by canopen), NMT boot-up and heartbeat, identity and every point over SDO with
 the device's validation; canopen's remote node as the master on python-can's virtual bus."""
 
