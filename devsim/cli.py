@@ -471,8 +471,8 @@ async def _serve(plan: _Plan) -> None:
 
                 for index, device in enumerate(devices):
                     spec = _modbus_for(plan.modbus, index)
-                    modbus_served.append((device.name, await start_modbus(runtime, device, spec,
-                                                                          layout=plan.modbus_map)))
+                    where, _transport = await start_modbus(runtime, device, spec, layout=plan.modbus_map)
+                    modbus_served.append((device.name, where))
             canopen_lines: list[str] = []
             if plan.canopen is not None:
                 stage = f"serve CANopen ({plan.canopen})"

@@ -277,5 +277,3 @@ class DriveActions:
     fault: Callable[[Any], bool]
     moving: Callable[[Any], bool]
     following_error: Callable[[Any], float] = lambda m: 0.0
-
-

@@ -39,7 +39,6 @@ class ModbusFacade:
         self.device = device
         self.map = mapping if mapping is not None else ModbusMap.generate(device.points)
         self.unit = unit
-        self.requests = 0
 
     def sim_device(self) -> SimDevice:
         blocks: dict[str, list[SimData]] = {table: [] for table in ("coil", "discrete", "holding", "input")}
@@ -58,7 +57,6 @@ class ModbusFacade:
     # -- pymodbus calls this before it reads or writes its registers ----------------------------
     async def _action(self, function: int, start: int, address: int, count: int, registers: list[int],
                       values: Sequence[int] | Sequence[bool] | None) -> ExcCodes | None:
-        self.requests += 1
         table = TABLE_OF.get(function)
         if table is None:
             return ExcCodes.ILLEGAL_FUNCTION
@@ -225,11 +223,12 @@ def device_map(device: Device, layout: str = "points", overrides: dict[str, Any]
 
 async def start_modbus(runtime: Any, device: Device, spec: str, *, unit: int = 1,
                        overrides: dict[str, Any] | None = None, trace: str | None = None,
-                       line: str = "19200 8E1", layout: str = "points") -> str:
+                       line: str = "19200 8E1", layout: str = "points") -> tuple[str, Any]:
     """Serve ``device`` over Modbus in ``runtime`` (in its loop) as ``spec`` says: ``tcp:[HOST:]PORT``
-    (Modbus TCP, loopback unless a host is named), ``rtu`` (RTU on a new pty) or ``rtu:LINK`` (a
-    pty with a stable symlink) at the ``line`` settings (Modbus's default 19200 8E1).  The port
-    key is ``NAME.modbus``; returns what a host opens."""
+    (Modbus TCP, loopback unless a host is named; pymodbus's own server, not traced), ``rtu`` (RTU
+    on a new pty) or ``rtu:LINK`` (a pty with a stable symlink) at the ``line`` settings (Modbus's
+    default 19200 8E1).  The port key is ``NAME.modbus``; returns what a host opens and the pty
+    transport (None for TCP)."""
     facade = ModbusFacade(device, device_map(device, layout, overrides), unit)
     key = f"{device.name}.modbus"
     scheme, _, rest = spec.partition(":")
@@ -239,11 +238,11 @@ async def start_modbus(runtime: Any, device: Device, spec: str, *, unit: int = 1
         runtime.add_closer(server.shutdown)
         address = f"{host or '127.0.0.1'}:{bound}"
         runtime.ports[key] = address
-        return address
+        return address, None
     if scheme != "rtu":
         raise ValueError(f"--modbus: expected tcp:[HOST:]PORT, rtu or rtu:LINK, not {spec!r}")
     from devsim.transports.pty import PtyTransport
 
     transport = PtyTransport(link=rest or None)
     await runtime.serve_target([key], ModbusRtuEndpoint(facade, line_settings(line)), transport, trace=trace)
-    return str(getattr(transport, "url", "") or transport.address)
+    return str(getattr(transport, "url", "") or transport.address), transport

@@ -1,9 +1,10 @@
 """The scripted host of a scenario: the far end of a port, as host software would hold it.
 
 A :class:`HostPort` opens the real pty (raw, at the device's line settings), the TCP socket, the
-RFC 2217 connection or a UDP socket (one datagram per ``send``) of a plant port, keeps everything it receives, and sends bytes.  It runs
-in the runtime's event loop, next to the devices, so that the scenario runner can wait for bytes
-without threads (RFC 2217 uses pyserial's client and one reader thread).
+RFC 2217 connection or a UDP socket (one datagram per ``send``) of a plant port, keeps everything
+it receives, and sends bytes.  It runs in the runtime's event loop, next to the devices, so that
+the scenario runner can wait for bytes without threads (RFC 2217 uses pyserial's client and one
+reader thread).
 """
 
 from __future__ import annotations

@@ -144,14 +144,14 @@ async def _serve_modbus(plant: Plant, dev: Any, trace_dir: str | Path | None, tr
 
     name = f"{dev.name}.modbus"
     trace = str(Path(trace_dir) / f"{name}.{_TRACE_SUFFIX[trace_format]}") if trace_dir is not None else None
-    where = await start_modbus(plant.runtime, plant.devices[dev.name], dev.modbus.spec(), unit=dev.modbus.unit,
-                               overrides=dev.modbus.map, trace=trace, line=dev.modbus.line,
-                               layout=dev.modbus.layout)
-    if dev.modbus.tcp is not None:
+    where, transport = await start_modbus(plant.runtime, plant.devices[dev.name], dev.modbus.spec(),
+                                          unit=dev.modbus.unit, overrides=dev.modbus.map, trace=trace,
+                                          line=dev.modbus.line, layout=dev.modbus.layout)
+    if transport is None:
         plant.transports[name] = _Address(f"socket://{where}", where)
         plant.kinds[name] = "tcp"
     else:
-        plant.transports[name] = plant.runtime.transports[-1]
+        plant.transports[name] = transport
         plant.lines[name] = plant.runtime.lines[name]
         plant.kinds[name] = "pty"
 

@@ -10,6 +10,7 @@ import time
 import uuid
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import canopen
 import pytest
@@ -21,16 +22,27 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 class Drive:
-    def __init__(self) -> None:
+    """A device of ``kind`` as CANopen node ``node_id`` in a runtime (virtual time), canopen's
+    remote node as the master, both on one python-can virtual bus.  ``ready`` first runs past the
+    power-on initialisation and applies what the kind needs to move (``Device.drive_setup``)."""
+
+    def __init__(self, kind: str = "pcd4h3", node_id: int = 3, *, name: str = "pcd", ready: bool = False) -> None:
         channel = f"devsim-{uuid.uuid4().hex}"
         self.runtime = Runtime(virtual=True).start()
-        self.device = self.runtime.add_device("pcd4h3", "pcd", {})
         self.slave, self.master = canopen.Network(), canopen.Network()
         self.slave.connect(interface="virtual", channel=channel)
         self.master.connect(interface="virtual", channel=channel)
-        self.facade = CanopenFacade(self.device, 3, call=self.runtime.call)
-        self.node = self.master.add_node(3, str(ROOT / "docs" / "eds" / "pcd4h3.eds"))
-        self.facade.attach(self.slave)
+        try:
+            self.device = self.runtime.add_device(kind, name, {})
+            if ready:
+                self.runtime.advance(3.0)
+                self.runtime.call(self.device.apply_state, self.device.drive_setup)
+            self.facade = CanopenFacade(self.device, node_id, call=self.runtime.call)
+            self.node = self.master.add_node(node_id, str(ROOT / "docs" / "eds" / f"{kind}.eds"))
+            self.facade.attach(self.slave)
+        except BaseException:
+            self.close()
+            raise
 
     @property
     def status(self) -> int:
@@ -38,6 +50,14 @@ class Drive:
 
     def control(self, word: int) -> None:
         self.node.sdo[0x6040].raw = word
+
+    def emcy(self, code: int) -> list[Any]:
+        """The EMCY messages with ``code`` the master got, waiting (bounded) for the first: it
+        crosses python-can's notifier thread."""
+        deadline = time.monotonic() + 5
+        while not [e for e in self.node.emcy.log if e.code == code] and time.monotonic() < deadline:
+            self.node.emcy.wait(code, timeout=0.05)
+        return [e for e in self.node.emcy.log if e.code == code]
 
     def close(self) -> None:
         self.slave.disconnect()
@@ -101,10 +121,7 @@ def test_a_following_error_is_an_emcy_and_the_fault_state_then_reset(drive: Driv
     drive.runtime.advance(1.0)
     drive.runtime.fault("pcd", "blocked_1", True)
     assert drive.runtime.run_until(lambda: drive.runtime.read("pcd", "axis.1.ExcPEr"), 3.0)
-    deadline = time.monotonic() + 5  # the EMCY crosses python-can's notifier thread: wait for it
-    while not [e for e in drive.node.emcy.log if e.code == 0x8611] and time.monotonic() < deadline:
-        drive.node.emcy.wait(0x8611, timeout=0.05)
-    received = [e for e in drive.node.emcy.log if e.code == 0x8611]
+    received = drive.emcy(0x8611)
     assert received and received[0].register & 0x01
     assert drive.status & 0x4F == 0x08  # Fault
     assert drive.node.sdo[0x603F].raw != 0
@@ -118,16 +135,9 @@ def test_the_sers_as_a_402_drive() -> None:
     """The SERS declares its drive actions too: ON by Enable operation, an absolute WA … E by a
     new set-point (12 800 increments at 6 400 inc/s), a jog in profile velocity mode; an
     undervoltage error is the Fault state, cleared by a fault reset once the supply is back."""
-    channel = f"devsim-{uuid.uuid4().hex}"
-    runtime = Runtime(virtual=True).start()
-    slave, master = canopen.Network(), canopen.Network()
-    slave.connect(interface="virtual", channel=channel)
-    master.connect(interface="virtual", channel=channel)
+    drive = Drive("sers", 2, name="sers", ready=True)
+    runtime, device, node = drive.runtime, drive.device, drive.node
     try:
-        device = runtime.add_device("sers", "sers", {})
-        runtime.advance(3.0)  # the drive's initialisation
-        CanopenFacade(device, 2, call=runtime.call).attach(slave)
-        node = master.add_node(2, str(ROOT / "docs" / "eds" / "sers.eds"))
         for word, state in ((0x06, 0x21), (0x07, 0x23), (0x0F, 0x27)):
             node.sdo[0x6040].raw = word
             assert node.sdo[0x6041].raw & 0x6F == state
@@ -145,17 +155,12 @@ def test_the_sers_as_a_402_drive() -> None:
         runtime.set("sers", "quantity.supply_voltage", 40.0)  # below U_L: a drive error
         runtime.advance(0.5)
         assert node.sdo[0x6041].raw & 0x4F == 0x08
-        deadline = time.monotonic() + 5  # the EMCY crosses python-can's notifier thread
-        while not [e for e in node.emcy.log if e.code == 0x3220] and time.monotonic() < deadline:
-            node.emcy.wait(0x3220, timeout=0.05)
-        assert [e for e in node.emcy.log if e.code == 0x3220]  # DC link undervoltage
+        assert drive.emcy(0x3220)  # DC link undervoltage
         runtime.set("sers", "quantity.supply_voltage", 68.0)
         node.sdo[0x6040].raw = 0x80
         assert node.sdo[0x6041].raw & 0x4F == 0x40
     finally:
-        slave.disconnect()
-        master.disconnect()
-        runtime.stop()
+        drive.close()
 
 
 def test_pdos_carry_the_controlword_and_the_statusword(drive: Drive) -> None:
@@ -195,16 +200,9 @@ def test_pdos_carry_the_controlword_and_the_statusword(drive: Drive) -> None:
 def test_a_gms96_following_error_is_an_emcy_and_the_fault_state() -> None:
     """The GMS96's blocked axis: the following error trips N20, IDXOFF: EMCY 8611h; the drive
     shows Switched on (the controller is off), not Operation enabled."""
-    channel = f"devsim-{uuid.uuid4().hex}"
-    runtime = Runtime(virtual=True).start()
-    slave, master = canopen.Network(), canopen.Network()
-    slave.connect(interface="virtual", channel=channel)
-    master.connect(interface="virtual", channel=channel)
+    drive = Drive("gms96", 4, name="card", ready=True)
+    runtime, device, node = drive.runtime, drive.device, drive.node
     try:
-        device = runtime.add_device("gms96", "card", {})
-        runtime.advance(3.0)
-        CanopenFacade(device, 4, call=runtime.call).attach(slave)
-        node = master.add_node(4, str(ROOT / "docs" / "eds" / "gms96.eds"))
         for word in (0x06, 0x07, 0x0F):
             node.sdo[0x6040].raw = word
         assert node.sdo[0x6041].raw & 0x6F == 0x27
@@ -213,15 +211,10 @@ def test_a_gms96_following_error_is_an_emcy_and_the_fault_state() -> None:
         runtime.advance(0.2)
         runtime.fault("card", "blocked_axis", True)
         assert runtime.run_until(lambda: device.model.idxoff, 10.0)
-        deadline = time.monotonic() + 5  # the EMCY crosses python-can's notifier thread
-        while not [e for e in node.emcy.log if e.code == 0x8611] and time.monotonic() < deadline:
-            node.emcy.wait(0x8611, timeout=0.05)
-        assert [e for e in node.emcy.log if e.code == 0x8611]
+        assert drive.emcy(0x8611)
         assert node.sdo[0x6041].raw & 0x6F == 0x23  # the controller switched itself off
     finally:
-        slave.disconnect()
-        master.disconnect()
-        runtime.stop()
+        drive.close()
 
 
 def test_an_event_driven_tpdo_goes_out_every_event_timer_period(drive: Drive) -> None:

@@ -5,15 +5,13 @@ disabled.  Kinds without drive actions are CANopen nodes without the 402 objects
 
 from __future__ import annotations
 
-import uuid
 from pathlib import Path
 
 import canopen
 import pytest
 
 from devsim.core.registry import device_class, kinds
-from devsim.core.runtime import Runtime
-from devsim.facades.canopen_node import CanopenFacade
+from tests.facades.test_cia402 import Drive
 
 ROOT = Path(__file__).resolve().parents[2]
 DRIVES = sorted(k for k in kinds() if device_class(k).drive is not None)
@@ -25,17 +23,9 @@ def test_the_drives() -> None:
 
 @pytest.mark.parametrize("kind", DRIVES)
 def test_a_drive_runs_the_402_flow(kind: str) -> None:
-    channel = f"devsim-{uuid.uuid4().hex}"
-    runtime = Runtime(virtual=True).start()
-    slave, master = canopen.Network(), canopen.Network()
-    slave.connect(interface="virtual", channel=channel)
-    master.connect(interface="virtual", channel=channel)
+    drive = Drive(kind, 9, name=kind, ready=True)
+    runtime, device, node = drive.runtime, drive.device, drive.node
     try:
-        device = runtime.add_device(kind, kind, {})
-        runtime.advance(3.0)  # past any initialisation after power-on
-        runtime.call(device.apply_state, device.drive_setup)  # what the kind needs to move
-        CanopenFacade(device, 9, call=runtime.call).attach(slave)
-        node = master.add_node(9, str(ROOT / "docs" / "eds" / f"{kind}.eds"))
         for word, state in ((0x06, 0x21), (0x07, 0x23), (0x0F, 0x27)):
             node.sdo[0x6040].raw = word
             assert node.sdo[0x6041].raw & 0x6F == state, (kind, hex(word))
@@ -52,9 +42,7 @@ def test_a_drive_runs_the_402_flow(kind: str) -> None:
         node.sdo[0x6040].raw = 0x00  # disable voltage
         assert node.sdo[0x6041].raw & 0x4F == 0x40
     finally:
-        slave.disconnect()
-        master.disconnect()
-        runtime.stop()
+        drive.close()
 
 
 @pytest.mark.parametrize("kind", sorted(set(kinds()) - set(DRIVES)))

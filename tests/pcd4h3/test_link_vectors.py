@@ -89,7 +89,7 @@ def test_example_1_move_and_actual_position_v1_v2_v3_v6(pcd: Station) -> None:
     pcd.write_flags(221, 1)  # FRdAP
     pcd.sim.advance(1.0)
     exchange(pcd, "B5 00 01 06 00 00 D5 9D C3", "B5 01 00 00 03 E8 3B 89")
-    pcd.read_registers(213, 7)  # V7: all read registers in one telegram
+    assert pcd.read_registers(213, 7) == [1000, 0, 0, 0, 0, 0, 0]  # V7: all read registers (only FRdAP ran)
 
 
 def test_default_installation_v20_v21(make: Callable[..., Station]) -> None:

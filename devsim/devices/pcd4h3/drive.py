@@ -112,4 +112,4 @@ class H3Drive:
     def close(self) -> None:
         for switch in self.switches:
             switch.cancel()
-        self.axis.quick_stop()
+        self.axis.quick_stop()  # no plan left: no timers of the shared axis outlive the device

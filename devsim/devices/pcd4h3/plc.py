@@ -59,7 +59,6 @@ class Pcd4(Model):
         self.inputs: dict[int, int] = {}  # inputs that are not an H3 module's (the user's keys)
         self.outputs: dict[int, int] = {}
         self.counters: dict[int, int] = {}
-        self.timers: dict[int, int] = {}
         for axis in range(1, h["mna"] + 1):  # G-16: the registers start with Example 1's values
             for register in REGISTERS:
                 if register.load:
@@ -94,7 +93,7 @@ class Pcd4(Model):
         self._timer: Timer | None = None
         self._seen: dict[tuple[int, str], int] = {}  # status flags at the last look (events)
         self._last_cycle = -math.inf
-        self._calls_before, self._running_since = [0] * len(self.axes), clock.now()
+        self._calls_before, self._running_since = 0, clock.now()  # AxHndlg calls (one per axis per cycle)
         self.cold_start()
 
     # -- cold start (XOB 16, §9.6.1) -------------------------------------------------------------
@@ -228,7 +227,7 @@ class Pcd4(Model):
         """Timer n's value in tenths of a second (0 once it ran out)."""
         end = self._timer_ends.get(n)
         if end is None:
-            return self.timers.get(n, 0)
+            return 0
         return max(0, math.ceil((end - self.clock.now()) * 10 - 1e-9))
 
     def _display(self) -> None:
@@ -256,17 +255,16 @@ class Pcd4(Model):
     def _fold_calls(self) -> None:
         now = self.clock.now()
         if self.status == RUN:
-            done = self._cycles_since(now)
-            self._calls_before = [c + done for c in self._calls_before]
+            self._calls_before += self._cycles_since(now)
         self._running_since = now
 
     def _cycles_since(self, now: float) -> int:
         return max(0, math.floor((now - self._running_since) / self.cycle_time + 1e-9))
 
-    def handler_calls(self, index: int) -> int:
-        """AxHndlg calls of an axis since start-up: one per cycle while the PCD runs."""
+    def handler_calls(self) -> int:
+        """AxHndlg calls of each axis since start-up: one per cycle while the PCD runs."""
         running = self._cycles_since(self.clock.now()) if self.status == RUN else 0
-        return self._calls_before[index] + running
+        return self._calls_before + running
 
     def catch_up(self) -> None:
         """Bring every chip to now (before the host looks)."""

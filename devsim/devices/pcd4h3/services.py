@@ -143,7 +143,7 @@ DIAGNOSTICS: tuple[Callable[[Pcd4, int], int], ...] = (
     lambda p, n: p.drives[n].chip.command_errors,
     lambda p, n: p.axes[n].comers_calls,
     lambda p, n: p.axes[n].last_comers,
-    lambda p, n: p.handler_calls(n),
+    lambda p, n: p.handler_calls(),
     lambda p, n: _text(p, n, 0),
     lambda p, n: _text(p, n, 1),
     lambda p, n: _text(p, n, 2),
