@@ -163,6 +163,53 @@ def test_the_sers_as_a_402_drive() -> None:
         drive.close()
 
 
+def test_the_poselesta_x_axis_as_a_402_drive() -> None:
+    """The CNC's X axis: enabled by the axis enable, a target as a Hand-Einzelsatz block started
+    with NC-Start (G01 X10 F3000: 50 mm/s with 500 mm/s² ramps reach 10 mm after 10/50 + 50/500 =
+    0.3 s), a jog as the X+ key, a following-error alarm as EMCY 8611h and the Fault state until
+    the alarm ends."""
+    drive = Drive("poselesta", 4, name="cnc", ready=True)
+    runtime, device, node = drive.runtime, drive.device, drive.node
+    try:
+        for word, state in ((0x06, 0x21), (0x07, 0x23), (0x0F, 0x27)):
+            node.sdo[0x6040].raw = word
+            assert node.sdo[0x6041].raw & 0x6F == state
+        assert device.read("input.axis_enable") is True
+        node.sdo[0x6060].raw = 1
+        node.sdo[0x607A].raw = 10_000  # increments of 1 µm
+        node.sdo[0x6081].raw = 50_000  # 50 mm/s = F3000
+        start = runtime.now()
+        node.sdo[0x6040].raw = 0x1F
+        assert device.read("panel.mode") == "MANUAL_SINGLE_BLOCK"
+        assert device.read("panel.mdi") == "N1 G90 G01 X10.000 F3000"
+        runtime.advance(0.29)
+        assert node.sdo[0x6064].raw < 10_000 and not node.sdo[0x6041].raw & 0x0400
+        runtime.advance(0.02)
+        assert device.events[-1] == (pytest.approx(start + 0.3), "position_reached")
+        assert node.sdo[0x6064].raw == 10_000 and node.sdo[0x6041].raw & 0x0400
+        runtime.run_until(lambda: device.read("program.state") == "END", 5.0)
+        node.sdo[0x6060].raw = 3
+        node.sdo[0x60FF].raw = 1
+        node.sdo[0x6040].raw = 0x0F
+        assert device.read("panel.mode") == "MANUAL" and device.read("output.travel_x") is True
+        runtime.advance(1.0)
+        assert node.sdo[0x606C].raw > 0 and node.sdo[0x6064].raw > 10_000
+        node.sdo[0x60FF].raw = 0
+        runtime.advance(1.0)
+        assert node.sdo[0x606C].raw == 0
+        runtime.fault("cnc", "following_error", True)
+        assert node.sdo[0x6041].raw & 0x4F == 0x08
+        assert drive.emcy(0x8611)
+        node.sdo[0x6040].raw = 0x80
+        assert node.sdo[0x6041].raw & 0x4F == 0x08  # the alarm is still there
+        runtime.fault("cnc", "following_error", False)
+        node.sdo[0x6040].raw = 0x00
+        node.sdo[0x6040].raw = 0x80  # a fault reset is bit 7's rising edge
+        assert node.sdo[0x6041].raw & 0x4F == 0x40
+    finally:
+        drive.close()
+
+
 def test_pdos_carry_the_controlword_and_the_statusword(drive: Drive) -> None:
     """The master maps RPDO1 = controlword and TPDO1 = statusword + position actual value on every
     SYNC, starts the node, and drives the state machine by PDO alone."""

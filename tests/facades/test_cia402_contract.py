@@ -11,6 +11,8 @@ import canopen
 import pytest
 
 from devsim.core.registry import device_class, kinds
+from devsim.facades.canopen_node import load_od
+from devsim.facades.canopen_od import eds
 from tests.facades.test_cia402 import Drive
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -18,7 +20,7 @@ DRIVES = sorted(k for k in kinds() if device_class(k).drive is not None)
 
 
 def test_the_drives() -> None:
-    assert {"sers", "gms96", "ip247", "pcd4h3"} <= set(DRIVES)
+    assert {"sers", "gms96", "poselesta", "ip247", "pcd4h3"} <= set(DRIVES)
 
 
 @pytest.mark.parametrize("kind", DRIVES)
@@ -45,7 +47,12 @@ def test_a_drive_runs_the_402_flow(kind: str) -> None:
         drive.close()
 
 
-@pytest.mark.parametrize("kind", sorted(set(kinds()) - set(DRIVES)))
-def test_a_kind_without_drive_actions_has_no_402_objects(kind: str) -> None:
-    od = canopen.import_od(str(ROOT / "docs" / "eds" / f"{kind}.eds"))
-    assert 0x6040 not in od and 0x1000 in od
+def test_a_kind_without_drive_actions_has_no_402_objects() -> None:
+    """Every built-in kind is a drive now; the test kit's echo device is not."""
+    from tests.support.echo import EchoDevice
+
+    assert EchoDevice.drive is None
+    od = load_od(eds(EchoDevice.kind, EchoDevice.description, EchoDevice.points, drive=False), 1)
+    assert 0x6040 not in od and 0x6041 not in od and 0x1000 in od
+    for kind in DRIVES:
+        assert 0x6040 in canopen.import_od(str(ROOT / "docs" / "eds" / f"{kind}.eds"))

@@ -17,6 +17,7 @@ from devsim.core.settings import Section
 from devsim.devices.poselesta.cnc import PoselestaCnc
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF
 from devsim.devices.poselesta.config import PoselestaConfig
+from devsim.devices.poselesta.drive_actions import DRIVE
 from devsim.devices.poselesta.face import PoselestaPortFace
 from devsim.devices.poselesta.parameters import PARAMETERS
 from devsim.devices.poselesta.points import FAULTS, POINTS
@@ -41,6 +42,7 @@ class PoselestaDevice(Device):
                                               "v8": PoselestaPortFace}
     points = POINTS
     faults = FAULTS
+    drive = DRIVE
 
     @classmethod
     def reference(cls) -> Reference:

@@ -82,9 +82,15 @@ def _param(name: str) -> Point | None:
                  get=lambda m: m.params.get(number, 0.0), put=lambda m, v: m.set_param(number, v))
 
 
+#: The alarms as the EMCY error codes (CiA 301) a fieldbus facade sends when one starts.
+EMCY_CODES = {"Fehlermeldung": 0x6100, "ENCODER_FAULT": 0x7305, "FOLLOWING_ERROR_LIMIT": 0x8611}
+
+
 def _monitoring(model: PoselestaCnc, active: bool) -> None:
     model.signals.set("nc_ready", not active and not model.booting)
     model.message = "Fehlermeldung" if active else ""
+    if active:
+        model.announce("fault", 1, EMCY_CODES["Fehlermeldung"])
 
 
 def _alarm(alarm: str) -> Callable[[PoselestaCnc, bool], None]:
@@ -96,6 +102,7 @@ def _alarm(alarm: str) -> Callable[[PoselestaCnc, bool], None]:
             model.executor.emergency_stop()
             model.message = alarm
             model.record_event(alarm.lower())
+            model.announce("fault", 1, EMCY_CODES[alarm])
         elif model.message == alarm:
             model.message = ""
         model.signals.set("nc_ready", not active and not model.booting)

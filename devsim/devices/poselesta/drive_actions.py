@@ -1,0 +1,87 @@
+"""The POSELESTA's X axis as a drive for drive-profile facades such as CiA 402
+(:class:`devsim.core.kit.DriveActions`): what the operator or the machine's PLC does at the
+control, done on the model (spec poselesta.md §2.3–§2.5, manual §2.3.1, §2.3.3, §2.3.15, §2.4.7).
+
+A CNC has no "go to" command: a positioning is a block.  A 402 target is entered as a
+Hand-Einzelsatz block (MANUAL_SINGLE_BLOCK, ``N1 G90 G01 X… F…`` in mm and mm/min, or ``G00`` at
+rapid when no profile velocity is given) and started with NC-Start, so it runs with the control's
+own ramps, override and working-field limits.  Enabling is the machine's axis enable (V19,
+Achsfreigabe); a jog is the X+/X− keys in MANUAL at the control's own manual feed (feed pot, or
+rapid): the profile velocity's sign picks the key.  The quick stop is NC-Stop: the axes brake on
+their ramp and the block is given up.  A fault is NC ready L (an internal alarm, §2.4.5/§4.10);
+it ends with its cause.  Positions are increments of X's resolution (the ``axis.x.position`` point).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from devsim.core.kit import DriveActions
+from devsim.core.points import BadValue
+
+__all__ = ["DRIVE"]
+
+
+def _ready(c: Any) -> None:
+    if c.booting:
+        raise BadValue("the control is not ready yet")
+    if not c.signals.get("emergency_stop"):
+        raise BadValue("Not-Stop is pressed")
+    if not c.signals.get("nc_ready"):
+        raise BadValue(f"NC ready is L: {c.message or 'an internal alarm'}")
+
+
+def _enable(c: Any, on: bool) -> None:
+    if on:
+        _ready(c)
+    c.signals.set("axis_enable", on)
+
+
+def _move_to(c: Any, target: float, speed: float) -> None:
+    _ready(c)
+    if c.executor.running:
+        raise BadValue(f"block N{c.executor.block_number} executes ({c.executor.state})")
+    c.select_mode("MANUAL_SINGLE_BLOCK")
+    decimals = c.formats.decimals["X"]
+    position = f"X{c.to_mm('x', target):.{decimals}f}"
+    feed = round(c.to_mm("x", speed) * 60 / c.executor.feed_unit())
+    c.executor.mdi = f"N1 G90 G01 {position} F{feed}" if feed >= 1 else f"N1 G90 G00 {position}"
+    c.executor.nc_start("panel" if int(c.params[75]) in (0, 1) else "external")
+    if not c.executor.running:
+        raise BadValue(f"the control did not start the block ({c.message or 'NC-Start ignored'})")
+
+
+def _jog(c: Any, velocity: float) -> None:
+    for key in ("jog_pos_x", "jog_neg_x"):
+        c.signals.set(key, False)
+    if velocity == 0:
+        return
+    _ready(c)
+    if c.mode != "MANUAL":
+        c.select_mode("MANUAL")
+    c.signals.set("jog_pos_x" if velocity > 0 else "jog_neg_x", True)
+
+
+def _quick_stop(c: Any) -> None:
+    for key in ("jog_pos_x", "jog_neg_x"):
+        c.signals.set(key, False)
+    if c.executor.running:
+        c.signals.set("nc_stop", False)  # NC-Stop (active L): brake to HOLD
+        c.signals.set("nc_stop", True)
+        c.executor.reset()  # the held block is given up
+
+
+DRIVE = DriveActions(
+    enable=_enable,
+    move_to=_move_to,
+    jog=_jog,
+    quick_stop=_quick_stop,
+    reset_fault=lambda c: None,  # an alarm ends with its cause (a declared fault switched off)
+    position=lambda c: c.axes["x"].position(),
+    velocity=lambda c: c.axes["x"].velocity(),
+    enabled=lambda c: bool(not c.booting and c.signals.get("emergency_stop") and c.signals.get("nc_ready")
+                           and c.signals.get("axis_enable")),
+    fault=lambda c: bool(not c.booting and not c.signals.get("nc_ready")),
+    moving=lambda c: bool(c.signals.get("travel_x")),
+    following_error=lambda c: c.following_error("x"),
+)
