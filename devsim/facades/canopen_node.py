@@ -10,8 +10,9 @@ profile velocity modes, 6064h/606Ch/60F4h; a fault the model announces (topic ``
 EMCY message.  Hosts in other processes reach the nodes through
 :class:`devsim.transports.socketcand.SocketcandServer` (:func:`start_canopen`, ``devsim run
 --canopen``).  PDOs: what the master maps into 1600h/1A00h and enables; TPDOs go out on SYNC
-(transmission types 1 … 240) and, with types 254/255, every event-timer period of device time;
-RPDOs are written into their objects.  Not yet: SocketCAN ``vcan``.  Callbacks come from
+(transmission types 1 … 240); with types 254/255 when a mapped value changes (looked at every
+inhibit time, else every 10 ms of device time) and when the event timer runs out; RPDOs are
+written into their objects.  Not yet: SocketCAN ``vcan``.  Callbacks come from
 python-can's notifier thread; ``call`` runs the device access where the device lives
 (``Runtime.call``)."""
 
@@ -29,9 +30,10 @@ from devsim.core.points import BadValue, ReadOnlyName
 from devsim.facades.canopen_od import eds, point_objects
 from devsim.facades.cia402 import Cia402
 
-__all__ = ["CanopenFacade", "READ_ONLY", "VALUE_RANGE_EXCEEDED", "WRITE_ONLY", "load_od"]
+__all__ = ["CHANGE_SAMPLE", "CanopenFacade", "READ_ONLY", "VALUE_RANGE_EXCEEDED", "WRITE_ONLY", "load_od"]
 
 VALUE_RANGE_EXCEEDED = 0x06090030
+CHANGE_SAMPLE = 0.010  # s of device time between looks for a change of an event-driven TPDO
 READ_ONLY = 0x06010002
 WRITE_ONLY = 0x06010001
 
@@ -60,7 +62,8 @@ class CanopenFacade:
         self._unlisten = device.model.listen("fault", self._emergency)
         self._pdos_on = False
         self._syncs = 0
-        self._timers: dict[int, Any] = {}  # event-driven TPDOs: their device-clock timers
+        self._timers: dict[tuple[int, str], Any] = {}  # event-driven TPDOs: device-clock timers
+        self._sent: dict[int, bytes] = {}  # event-driven TPDOs: the data they last carried
         self.node = canopen.LocalNode(node_id, self.od)
         self.objects = {index: point for index, point in point_objects(device.points)}
         self.node.add_read_callback(self._read)
@@ -70,8 +73,8 @@ class CanopenFacade:
         """Join ``network`` and boot: the boot-up message, then pre-operational (the heartbeat
         starts if 1017h is set).  Entering OPERATIONAL the node takes the PDO configuration the
         master wrote: TPDOs with a transmission type 1 … 240 go out after every that many SYNCs,
-        those with 254/255 every event-timer period (device time), RPDOs are written into their
-        objects as they arrive."""
+        those with 254/255 on a change of their values and every event-timer period (device
+        time), RPDOs are written into their objects as they arrive."""
         network.add_node(self.node)
         network.subscribe(0, self._nmt)  # after canopen's own NMT handling
         network.subscribe(0x80, self._sync)
@@ -91,32 +94,62 @@ class CanopenFacade:
                 if rpdo.enabled:
                     rpdo.add_callback(self._received)
             for tpdo in self.node.tpdo.map.values():
-                if tpdo.enabled and (tpdo.trans_type or 0) >= 254 and tpdo.event_timer:
-                    self.call(self._schedule, tpdo)
+                if tpdo.enabled and (tpdo.trans_type or 0) >= 254:
+                    self.call(self._start_event_driven, tpdo)
         elif self.node.nmt.state != "OPERATIONAL":
             self._pdos_on = False
             self.call(self._cancel_timers)
 
-    def _schedule(self, tpdo: Any) -> None:
-        """An event-driven TPDO with an event timer: sent every event-timer ms of device time."""
-        def tick() -> None:
-            self._timers.pop(id(tpdo), None)
-            if self._pdos_on:
-                self._transmit(tpdo)
-                self._schedule(tpdo)
+    def _start_event_driven(self, tpdo: Any) -> None:
+        """An event-driven TPDO (types 254/255, CiA 301 §7.5.2.35): sent when a mapped value
+        changes (looked at every inhibit time, or every ``CHANGE_SAMPLE`` s without one, in
+        device time) and, with an event timer, when that long passed without a transmission."""
+        self._sent[id(tpdo)] = self._data(tpdo)
+        self._arm(tpdo, "event")
+        self._arm(tpdo, "change")
 
-        self._timers[id(tpdo)] = self.device.clock.call_later(tpdo.event_timer / 1000, tick)
+    def _arm(self, tpdo: Any, why: str) -> None:
+        key = (id(tpdo), why)
+        old = self._timers.pop(key, None)
+        if old is not None:
+            old.cancel()
+        if why == "event":
+            if not tpdo.event_timer:
+                return
+            delay = tpdo.event_timer / 1000
+        else:
+            delay = tpdo.inhibit_time / 10_000 if tpdo.inhibit_time else CHANGE_SAMPLE
+
+        def tick() -> None:
+            self._timers.pop(key, None)
+            if not self._pdos_on:
+                return
+            if why == "event" or self._data(tpdo) != self._sent.get(id(tpdo)):
+                self._transmit(tpdo)  # re-arms the event timer
+            if why == "change":
+                self._arm(tpdo, "change")
+
+        self._timers[key] = self.device.clock.call_later(delay, tick)
 
     def _cancel_timers(self) -> None:
         for timer in self._timers.values():
             timer.cancel()
         self._timers.clear()
 
+    def _data(self, tpdo: Any) -> bytes:
+        return b"".join(self.node.get_data(v.index, v.subindex) for v in tpdo.map if v.length)
+
     def _transmit(self, tpdo: Any) -> None:
+        carried = []
         for variable in tpdo.map:
             if variable.length:
-                variable.set_data(self.node.get_data(variable.index, variable.subindex))
+                data = self.node.get_data(variable.index, variable.subindex)
+                variable.set_data(data)
+                carried.append(data)
         tpdo.transmit()
+        if (tpdo.trans_type or 0) >= 254:
+            self._sent[id(tpdo)] = b"".join(carried)
+            self._arm(tpdo, "event")
 
     def _sync(self, can_id: int, data: bytes, timestamp: float) -> None:
         if not self._pdos_on:

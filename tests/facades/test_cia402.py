@@ -287,3 +287,48 @@ def test_an_event_driven_tpdo_goes_out_every_event_timer_period(drive: Drive) ->
     drive.runtime.advance(0.5)
     assert drive.node.sdo[0x1017].raw == 0  # (a round trip after any TPDO the advance could have sent)
     assert arrived.empty()  # stopped with OPERATIONAL
+
+
+def test_an_event_driven_tpdo_goes_out_when_its_values_change(drive: Drive) -> None:
+    """TPDO3 with transmission type 254, no event timer and an inhibit time of 50 ms (500 × 100 µs):
+    nothing while the drive stands, the statusword as soon as it changes, then the position at
+    most every 50 ms of device time while the axis moves, and silence again after it stopped."""
+    import queue
+
+    node = drive.node
+    node.tpdo.read()
+    tpdo = node.tpdo[3]
+    tpdo.clear()
+    tpdo.add_variable(0x6041)
+    tpdo.add_variable(0x6064)
+    tpdo.trans_type, tpdo.inhibit_time, tpdo.event_timer, tpdo.enabled = 254, 500, 0, True
+    node.tpdo.save()
+    arrived: queue.Queue[tuple[int, int]] = queue.Queue()
+    tpdo.add_callback(lambda m: arrived.put((m["Statusword"].raw, m["Position actual value"].raw)))
+    node.nmt.state = "OPERATIONAL"
+    assert node.sdo[0x1017].raw == 0  # (a round trip: the NMT command was handled before it)
+    drive.runtime.advance(1.0)
+    assert node.sdo[0x1017].raw == 0
+    assert arrived.empty()  # no change, no TPDO
+    enable(drive)
+    drive.runtime.advance(0.05)
+    assert arrived.get(timeout=5)[0] & 0x6F == 0x27  # the statusword changed to Operation enabled
+    node.sdo[0x6060].raw = 1
+    node.sdo[0x607A].raw = 20_000
+    node.sdo[0x6081].raw = 10_000
+    start = drive.runtime.now()
+    node.sdo[0x6040].raw = 0x1F
+    assert drive.runtime.run_until(lambda: not drive.device.drive.moving(drive.device.model), 30.0)
+    moved = drive.runtime.now() - start
+    drive.runtime.advance(0.5)
+    assert node.sdo[0x1017].raw == 0
+    seen = []
+    while not arrived.empty():
+        seen.append(arrived.get())
+    positions = [position for _, position in seen]
+    assert positions[-1] == node.sdo[0x6064].raw  # the last change (the settled loop) went out
+    assert any(1_000 < position < 19_000 for position in positions)  # and changes along the way
+    assert moved > 1.0 and 10 <= len(seen) <= (moved + 0.5) / 0.05 + 1  # each 50 ms apart at least
+    drive.runtime.advance(1.0)
+    assert node.sdo[0x1017].raw == 0
+    assert arrived.empty()  # standing again: silent
