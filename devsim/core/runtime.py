@@ -142,21 +142,31 @@ class Runtime:
             return False
 
     def call(self, fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
-        """Run ``fn`` in the loop thread and return its result (directly if already there)."""
+        """Run ``fn`` in the loop thread and return its result (directly if already there).
+
+        From another thread the caller waits on a bare lock the loop thread releases: the
+        cheapest hand-over there is (a facade's request from python-can's notifier thread pays
+        it on every access)."""
         if self._in_loop_thread():
             return fn(*args, **kwargs)
-        import concurrent.futures
-
-        fut: concurrent.futures.Future[T] = concurrent.futures.Future()
+        done = threading.Lock()
+        done.acquire()
+        outcome: list[Any] = []
 
         def invoke() -> None:
             try:
-                fut.set_result(fn(*args, **kwargs))
+                outcome.append((True, fn(*args, **kwargs)))
             except BaseException as exc:  # handed to the caller
-                fut.set_exception(exc)
+                outcome.append((False, exc))
+            finally:
+                done.release()
 
         self.loop.call_soon_threadsafe(invoke)
-        return fut.result()
+        done.acquire()
+        ok, value = outcome[0]
+        if not ok:
+            raise value
+        return value
 
     def run(self, coro: Coroutine[Any, Any, T], timeout: float | None = None) -> T:
         """Run a coroutine in the loop thread from another thread and wait for it."""
