@@ -549,8 +549,12 @@ def _check_modbus(spec: str) -> None:
 def _check_canopen(spec: str) -> None:
     node, _, where = spec.partition("@")
     if not node.isdigit() or not 1 <= int(node) <= 127:
-        raise click.UsageError(f"--canopen: expected NODE[@[HOST:]PORT] with NODE 1 … 127, not {spec!r}")
-    if where:
+        raise click.UsageError(f"--canopen: expected NODE[@[HOST:]PORT] or NODE@socketcan:CHANNEL with NODE 1 … 127, "
+                               f"not {spec!r}")
+    if where.startswith("socketcan:"):
+        if not where.removeprefix("socketcan:"):
+            raise click.UsageError("--canopen NODE@socketcan:CHANNEL needs a channel, e.g. vcan0")
+    elif where:
         _host_port("--canopen", where)
     try:
         import canopen  # noqa: F401

@@ -12,7 +12,8 @@ EMCY message.  Hosts in other processes reach the nodes through
 --canopen``).  PDOs: what the master maps into 1600h/1A00h and enables; TPDOs go out on SYNC
 (transmission types 1 … 240); with types 254/255 when a mapped value changes (looked at every
 inhibit time, else every 10 ms of device time) and when the event timer runs out; RPDOs are
-written into their objects.  Not yet: SocketCAN ``vcan``.  Callbacks come from
+written into their objects.  ``devsim run --canopen NODE@socketcan:vcan0`` puts the nodes on a
+SocketCAN interface instead, where the machine has one.  Callbacks come from
 python-can's notifier thread; ``call`` runs the device access where the device lives
 (``Runtime.call``)."""
 
@@ -206,25 +207,40 @@ class CanopenFacade:
 
 
 async def start_canopen(runtime: Any, devices: list[Device], spec: str) -> list[str]:
-    """Serve ``devices`` as CANopen nodes ``NODE``, ``NODE+1`` … on one virtual bus that hosts in
-    other processes reach through a socketcand server: ``spec`` is ``NODE`` or
-    ``NODE@[HOST:]PORT`` (default 127.0.0.1:29536, loopback unless a host is named).  Returns one
-    line per device for ``devsim run`` to print."""
+    """Serve ``devices`` as CANopen nodes ``NODE``, ``NODE+1`` … on one CAN network that hosts in
+    other processes reach: ``spec`` is ``NODE`` or ``NODE@[HOST:]PORT`` (a python-can virtual bus
+    behind a socketcand server, default 127.0.0.1:29536, loopback unless a host is named), or
+    ``NODE@socketcan:CHANNEL`` (a SocketCAN interface such as ``vcan0``, where the machine has
+    one).  Returns one line per device for ``devsim run`` to print."""
     import os
 
-    from devsim.transports.socketcand import SocketcandServer
-
     node_text, _, where = spec.partition("@")
-    host, _, port_text = where.rpartition(":")
     first = int(node_text)
     if not 1 <= first <= 128 - len(devices):
         raise ValueError(f"--canopen: node ids {first} … {first + len(devices) - 1} are not all in 1 … 127")
-    channel = f"devsim-{os.getpid()}-{id(runtime)}"
     network = canopen.Network()
-    network.connect(interface="virtual", channel=channel)
-    for offset, device in enumerate(devices):
-        CanopenFacade(device, first + offset, call=runtime.call).attach(network)
-    server = SocketcandServer(channel, host or "127.0.0.1", int(port_text or 29536))
+    if where.startswith("socketcan:"):
+        channel = where.removeprefix("socketcan:")
+        try:
+            network.connect(interface="socketcan", channel=channel)
+        except (OSError, ValueError, ImportError) as exc:  # python-can's CanError is an OSError
+            raise ValueError(f"--canopen: SocketCAN {channel!r} cannot be opened here: {exc}") from None
+        _attach_all(runtime, devices, network, first)
+
+        async def close_socketcan() -> None:
+            network.disconnect()
+
+        runtime.add_closer(close_socketcan)
+        return [f"{device.name}.canopen: socketcan {channel} node {first + offset}"
+                for offset, device in enumerate(devices)]
+
+    from devsim.transports.socketcand import SocketcandServer
+
+    host, _, port_text = where.rpartition(":")
+    bus = f"devsim-{os.getpid()}-{id(runtime)}"
+    network.connect(interface="virtual", channel=bus)
+    _attach_all(runtime, devices, network, first)
+    server = SocketcandServer(bus, host or "127.0.0.1", int(port_text or 29536))
     await server.start()
 
     async def close() -> None:
@@ -234,6 +250,11 @@ async def start_canopen(runtime: Any, devices: list[Device], spec: str) -> list[
     runtime.add_closer(close)
     return [f"{device.name}.canopen: socketcand {server.address} can0 node {first + offset}"
             for offset, device in enumerate(devices)]
+
+
+def _attach_all(runtime: Any, devices: list[Device], network: canopen.Network, first: int) -> None:
+    for offset, device in enumerate(devices):
+        CanopenFacade(device, first + offset, call=runtime.call).attach(network)
 
 
 DRIVE_READS: dict[int, Callable[[Cia402], int]] = {
