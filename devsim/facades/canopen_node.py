@@ -72,7 +72,7 @@ class CanopenFacade:
 
     def attach(self, network: canopen.Network) -> None:
         """Join ``network`` and boot: the boot-up message, then pre-operational (the heartbeat
-        starts if 1017h is set).  Entering OPERATIONAL the node takes the PDO configuration the
+        starts if 1017h is set); the NMT resets (node, communication) boot again.  Entering OPERATIONAL the node takes the PDO configuration the
         master wrote: TPDOs with a transmission type 1 … 240 go out after every that many SYNCs,
         those with 254/255 on a change of their values and every event-timer period (device
         time), RPDOs are written into their objects as they arrive."""
@@ -85,6 +85,12 @@ class CanopenFacade:
     # -- PDOs ---------------------------------------------------------------------------------
     def _nmt(self, can_id: int, data: bytes, timestamp: float) -> None:
         if len(data) < 2 or data[1] not in (0, self.node.id):
+            return
+        if data[0] in (0x81, 0x82):  # reset node / communication: boot-up, then PRE-OPERATIONAL
+            self._pdos_on = False
+            self.call(self._cancel_timers)
+            self.node.nmt.send_command(0x81)
+            self.node.nmt.send_command(0x80)
             return
         if self.node.nmt.state == "OPERATIONAL" and not self._pdos_on:
             self._pdos_on = True

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import time
 import uuid
 from pathlib import Path
 
@@ -121,4 +122,67 @@ def test_devsim_run_on_socketcan_serves_vcan0_or_says_why_not() -> None:
         finally:
             network.disconnect()
     finally:
+        sim.stop()
+
+
+def test_the_402_flow_with_the_master_in_another_process_under_virtual_time() -> None:
+    """The issue's end-to-end check: ``devsim run pcd4h3 --virtual`` serves node 3 over socketcand,
+    and this process is the master (canopen over python-can's socketcand client): it resets the
+    node and sees the boot-up, reads the identity, drives 402 from Switch on disabled to Operation
+    enabled, runs a profile-position move that completes at the LM628 triangle's closed-form 6.34 s
+    (spec pcd4h3 §5.2; virtual time advanced through the control API), blocks the axis and sees
+    EMCY 8611h and the Fault state, and resets the fault."""
+    from devsim.core.control import ControlClient
+    from tests.test_cli import Sim
+
+    sim = Sim("pcd4h3", "--virtual", "--control", "127.0.0.1:0", "--canopen", "3@127.0.0.1:0")
+    network = canopen.Network()
+    try:
+        seen = sim.read_until("control:")
+        kind, where, _, _, number = seen["pcd4h3.canopen"].split()
+        assert (kind, number) == ("socketcand", "3")
+        host, _, port = where.rpartition(":")
+        network.connect(interface="socketcand", host=host, port=int(port), channel="can0")
+        node = network.add_node(3, str(ROOT / "docs" / "eds" / "pcd4h3.eds"))
+        with ControlClient(seen["control"]) as control:
+            import queue
+
+            bootups: queue.Queue[bytes] = queue.Queue()
+            network.subscribe(0x703, lambda can_id, data, timestamp: bootups.put(bytes(data)))
+            node.nmt.send_command(0x81)  # reset node
+            assert bootups.get(timeout=5) == b"\x00"  # the boot-up message
+            identity = canopen.import_od(str(ROOT / "docs" / "eds" / "pcd4h3.eds"))[0x1018]
+            assert node.sdo[0x1018][2].raw == identity[2].default != 0  # product code, as the EDS says
+            assert node.sdo[0x1018][3].raw == identity[3].default  # revision
+            assert node.sdo[0x1008].raw == "devsim pcd4h3"
+            assert node.sdo[0x6041].raw & 0x4F == 0x40  # Switch on disabled
+            for word, state in ((0x06, 0x21), (0x07, 0x23), (0x0F, 0x27)):
+                node.sdo[0x6040].raw = word
+                assert node.sdo[0x6041].raw & 0x6F == state
+            node.sdo[0x6060].raw = 1
+            node.sdo[0x607A].raw = 100_000  # counts: 100 mm with k = 100
+            node.sdo[0x6081].raw = 50_000  # counts/s: the 6.34 s triangle
+            node.sdo[0x6040].raw = 0x1F
+            node.sdo[0x6040].raw = 0x0F
+            control.advance(6.30)  # the closed form: 6.34 s
+            assert not control.read("pcd4h3", "axis.1.status") & 0x04  # trajectory not yet complete
+            control.advance(0.08)
+            assert control.read("pcd4h3", "axis.1.status") & 0x04
+            control.advance(0.5)
+            assert node.sdo[0x6041].raw & 0x0400 and abs(node.sdo[0x6064].raw - 100_000) <= 3
+            node.sdo[0x607A].raw = 0
+            node.sdo[0x6040].raw = 0x1F
+            control.advance(1.0)
+            control.fault("pcd4h3", "blocked_1", True)
+            control.advance(3.0)
+            deadline = time.monotonic() + 5
+            while not [e for e in node.emcy.log if e.code == 0x8611] and time.monotonic() < deadline:
+                node.emcy.wait(0x8611, timeout=0.05)
+            assert [e for e in node.emcy.log if e.code == 0x8611]
+            assert node.sdo[0x6041].raw & 0x4F == 0x08  # Fault
+            control.fault("pcd4h3", "blocked_1", False)
+            node.sdo[0x6040].raw = 0x80  # fault reset
+            assert node.sdo[0x6041].raw & 0x4F == 0x40
+    finally:
+        network.disconnect()
         sim.stop()
