@@ -31,7 +31,8 @@ from devsim.core.points import BadValue, ReadOnlyName
 from devsim.facades.canopen_od import eds, point_objects
 from devsim.facades.cia402 import Cia402
 
-__all__ = ["CHANGE_SAMPLE", "CanopenFacade", "READ_ONLY", "VALUE_RANGE_EXCEEDED", "WRITE_ONLY", "load_od"]
+__all__ = ["CHANGE_SAMPLE", "CanopenFacade", "READ_ONLY", "VALUE_RANGE_EXCEEDED", "WRITE_ONLY", "load_od",
+           "serve_nodes", "start_canopen"]
 
 VALUE_RANGE_EXCEEDED = 0x06090030
 CHANGE_SAMPLE = 0.010  # s of device time between looks for a change of an event-driven TPDO
@@ -213,17 +214,26 @@ class CanopenFacade:
 
 
 async def start_canopen(runtime: Any, devices: list[Device], spec: str) -> list[str]:
-    """Serve ``devices`` as CANopen nodes ``NODE``, ``NODE+1`` … on one CAN network that hosts in
-    other processes reach: ``spec`` is ``NODE`` or ``NODE@[HOST:]PORT`` (a python-can virtual bus
-    behind a socketcand server, default 127.0.0.1:29536, loopback unless a host is named), or
-    ``NODE@socketcan:CHANNEL`` (a SocketCAN interface such as ``vcan0``, where the machine has
-    one).  Returns one line per device for ``devsim run`` to print."""
-    import os
-
+    """Serve ``devices`` as CANopen nodes ``NODE``, ``NODE+1`` … (``devsim run --canopen``):
+    ``spec`` is ``NODE``, ``NODE@[HOST:]PORT`` or ``NODE@socketcan:CHANNEL`` (see
+    :func:`serve_nodes`).  Returns one line per device for ``devsim run`` to print."""
     node_text, _, where = spec.partition("@")
     first = int(node_text)
     if not 1 <= first <= 128 - len(devices):
         raise ValueError(f"--canopen: node ids {first} … {first + len(devices) - 1} are not all in 1 … 127")
+    return await serve_nodes(runtime, [(device, first + offset) for offset, device in enumerate(devices)], where)
+
+
+async def serve_nodes(runtime: Any, nodes: list[tuple[Device, int]], where: str = "") -> list[str]:
+    """Put each (device, node id) on one CAN network that hosts in other processes reach:
+    ``where`` is ``[HOST:]PORT`` (a python-can virtual bus behind a socketcand server, default
+    127.0.0.1:29536, loopback unless a host is named) or ``socketcan:CHANNEL`` (a SocketCAN
+    interface such as ``vcan0``, where the machine has one).  Returns one line per node."""
+    import os
+
+    ids = [node_id for _, node_id in nodes]
+    if len(set(ids)) != len(ids):
+        raise ValueError(f"CANopen node ids on one network must differ: {sorted(ids)}")
     network = canopen.Network()
     if where.startswith("socketcan:"):
         channel = where.removeprefix("socketcan:")
@@ -231,36 +241,38 @@ async def start_canopen(runtime: Any, devices: list[Device], spec: str) -> list[
             network.connect(interface="socketcan", channel=channel)
         except (OSError, ValueError, ImportError) as exc:  # python-can's CanError is an OSError
             raise ValueError(f"--canopen: SocketCAN {channel!r} cannot be opened here: {exc}") from None
-        _attach_all(runtime, devices, network, first)
+        _attach_all(runtime, nodes, network)
 
         async def close_socketcan() -> None:
             network.disconnect()
 
         runtime.add_closer(close_socketcan)
-        return [f"{device.name}.canopen: socketcan {channel} node {first + offset}"
-                for offset, device in enumerate(devices)]
+        return [f"{device.name}.canopen: socketcan {channel} node {node_id}" for device, node_id in nodes]
 
     from devsim.transports.socketcand import SocketcandServer
 
     host, _, port_text = where.rpartition(":")
-    bus = f"devsim-{os.getpid()}-{id(runtime)}"
+    bus = f"devsim-{os.getpid()}-{id(runtime)}-{id(network)}"
     network.connect(interface="virtual", channel=bus)
-    _attach_all(runtime, devices, network, first)
+    _attach_all(runtime, nodes, network)
     server = SocketcandServer(bus, host or "127.0.0.1", int(port_text or 29536))
-    await server.start()
+    try:
+        await server.start()
+    except BaseException:
+        network.disconnect()
+        raise
 
     async def close() -> None:
         await server.close()
         network.disconnect()
 
     runtime.add_closer(close)
-    return [f"{device.name}.canopen: socketcand {server.address} can0 node {first + offset}"
-            for offset, device in enumerate(devices)]
+    return [f"{device.name}.canopen: socketcand {server.address} can0 node {node_id}" for device, node_id in nodes]
 
 
-def _attach_all(runtime: Any, devices: list[Device], network: canopen.Network, first: int) -> None:
-    for offset, device in enumerate(devices):
-        CanopenFacade(device, first + offset, call=runtime.call).attach(network)
+def _attach_all(runtime: Any, nodes: list[tuple[Device, int]], network: canopen.Network) -> None:
+    for device, node_id in nodes:
+        CanopenFacade(device, node_id, call=runtime.call).attach(network)
 
 
 DRIVE_READS: dict[int, Callable[[Cia402], int]] = {

@@ -54,6 +54,7 @@ class Plant:
     lines: dict[str, Any] = field(default_factory=dict)  # port name -> Line
     kinds: dict[str, str] = field(default_factory=dict)  # port name -> "pty" | "tcp" | "rfc2217" | "udp"
     refused: dict[str, str] = field(default_factory=dict)  # port name -> why it is not served
+    facades: list[str] = field(default_factory=list)  # "NAME.canopen: ..." lines of the fieldbus facades
 
     def port(self, name: str) -> str:
         """What a host opens for port ``name`` (a device or bus): pty path or URL."""
@@ -80,7 +81,7 @@ class Plant:
             members = [d.name for d in self.spec.devices if d.transport_of("main").bus == name]
             who = f"{name} ({', '.join(members)})" if members else name
             rows.append(f"{who}: {self.kinds[name]} {self.port(name)}")
-        return rows
+        return rows + self.facades
 
 
 async def build_plant(
@@ -132,10 +133,25 @@ async def build_plant(
     for dev in spec.devices:
         if dev.modbus is not None:
             await _serve_modbus(plant, dev, trace_dir, trace_format)
+    await _serve_canopen(plant)
     for dev in spec.devices:
         if dev.state:
             plant.devices[dev.name].apply_state(dev.state)
     return plant
+
+
+async def _serve_canopen(plant: Plant) -> None:
+    """The devices' CANopen nodes, one CAN network per ``canopen.network`` (``NAME.canopen``)."""
+    networks: dict[str, list[tuple[Device, int]]] = {}
+    for dev in plant.spec.devices:
+        if dev.canopen is not None:
+            networks.setdefault(dev.canopen.network, []).append((plant.devices[dev.name], dev.canopen.node))
+    if not networks:
+        return
+    from devsim.facades.canopen_node import serve_nodes
+
+    for where, nodes in networks.items():
+        plant.facades += await serve_nodes(plant.runtime, nodes, where)
 
 
 async def _serve_modbus(plant: Plant, dev: Any, trace_dir: str | Path | None, trace_format: TraceFormat) -> None:

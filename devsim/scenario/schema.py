@@ -141,6 +141,16 @@ class ModbusSpec(_Model):
         return f"rtu:{self.rtu.link}" if self.rtu.link else "rtu"
 
 
+class CanopenSpec(_Model):
+    """A device as a CANopen node (issue 13): its node id and the CAN network it joins, a
+    socketcand server at ``[HOST:]PORT`` (the plant's devices with the same network share one bus)
+    or ``socketcan:CHANNEL``."""
+
+    node: int = Field(ge=1, le=127, description="the node id")
+    network: str = Field(default="127.0.0.1:29536", pattern=r"^(socketcan:\S+|(\S+:)?\d+)$",
+                         description="[HOST:]PORT of a socketcand server, or socketcan:CHANNEL")
+
+
 class DeviceSpec(_Model):
     name: str = Field(pattern=r"^[A-Za-z_][A-Za-z0-9_-]*$")
     kind: str
@@ -154,6 +164,7 @@ class DeviceSpec(_Model):
     axis: dict[str, Any] | None = Field(default=None, description="axis geometry, merged into config['axis']")
     state: dict[str, Any] = Field(default_factory=dict, description="initial state: settable names and 'program'")
     modbus: ModbusSpec | None = Field(default=None, description="also serve the device over Modbus TCP or RTU")
+    canopen: CanopenSpec | None = Field(default=None, description="also serve the device as a CANopen node")
 
     @model_validator(mode="after")
     def _transport_or_ports(self) -> DeviceSpec:
