@@ -61,10 +61,11 @@ class Sub:
 
     def wait(self, topic: str, where: Callable[[Message], bool] = lambda m: True, timeout: float = 10.0) -> Message:
         """The first message (seen before or arriving within ``timeout`` s) on ``topic`` for
-        which ``where`` holds; it and everything before it is consumed from :attr:`seen`."""
+        which ``where`` holds; it and the earlier ones on that topic are consumed (messages on
+        other topics are kept for later waits)."""
         for index, message in enumerate(self.seen):
             if message.topic == topic and where(message):
-                del self.seen[: index + 1]
+                self.seen = [m for m in self.seen[:index] if m.topic != topic] + self.seen[index + 1:]
                 return message
         deadline = time.monotonic() + timeout
         while True:
