@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
@@ -199,3 +200,29 @@ def test_bad_mqtt_options_are_one_line(args: list[str], message: str) -> None:
 
     result = CliRunner().invoke(cli, ["run", "sers", *args])
     assert result.exit_code == 2 and message in result.output
+
+
+def test_a_plant_file_mqtt_section(tmp_path: Path, mosquitto: Broker) -> None:
+    from devsim.scenario.plant import plant_running
+    from devsim.scenario.schema import load_plant
+
+    path = tmp_path / "plant.yaml"
+    path.write_text(f"name: hall\ndevices:\n  - {{name: a, kind: sers}}\n  - {{name: b, kind: gms96}}\n"
+                    f"mqtt: {{url: '{mosquitto.url}', rate: 250ms}}\n")
+    spec = load_plant(path)
+    assert spec.mqtt is not None and spec.mqtt.rate == 0.25
+    with plant_running(spec, virtual=True) as plant, Sub(mosquitto.port, "devsim/hall/+/birth") as sub:
+        assert f"mqtt: broker {mosquitto.url}" in plant.describe()
+        assert "mqtt: topics devsim/hall/" in plant.describe()
+        assert sub.wait("devsim/hall/a/birth").json()["kind"] == "sers"
+        assert sub.wait("devsim/hall/b/birth").json()["rate"] == 0.25
+
+
+def test_a_bad_plant_file_mqtt_section_names_its_line(tmp_path: Path) -> None:
+    from devsim.core.config import ConfigError
+    from devsim.scenario.schema import load_plant
+
+    path = tmp_path / "plant.yaml"
+    path.write_text("devices:\n  - {name: a, kind: sers}\nmqtt:\n  url: http://x\n")
+    with pytest.raises(ConfigError, match=r"plant.yaml:4: mqtt.url: .*expected mqtt://HOST\[:PORT\]"):
+        load_plant(path)
