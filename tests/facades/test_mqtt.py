@@ -226,3 +226,28 @@ def test_a_bad_plant_file_mqtt_section_names_its_line(tmp_path: Path) -> None:
     path.write_text("devices:\n  - {name: a, kind: sers}\nmqtt:\n  url: http://x\n")
     with pytest.raises(ConfigError, match=r"plant.yaml:4: mqtt.url: .*expected mqtt://HOST\[:PORT\]"):
         load_plant(path)
+
+
+def test_the_devices_come_back_when_the_broker_restarts() -> None:
+    first = Broker().start()
+    runtime = Runtime(virtual=True).start()
+    try:
+        device = runtime.add_device("sers", "x")
+        runtime.run(start_mqtt(runtime, [device], first.url, plant="again", rate=RATE), timeout=20)
+        with Sub(first.port, "devsim/again/x/status") as sub:
+            assert sub.wait("devsim/again/x/status").text == "online"
+        first.stop()  # a broker without persistence: everything retained is gone
+        second = Broker()
+        second.port = first.port
+        second.start()
+        try:
+            with Sub(second.port, "devsim/again/x/#") as sub:
+                assert sub.wait("devsim/again/x/birth", timeout=15).json()["device"] == "x"
+                assert sub.wait("devsim/again/x/status").text == "online"
+                pub(second.port, "devsim/again/x/set/input.I4", "true")
+                assert sub.wait("devsim/again/x/state/input.I4", lambda m: m.json() is True)
+        finally:
+            second.stop()
+    finally:
+        runtime.stop()
+        first.stop()
