@@ -193,6 +193,8 @@ class MqttLink:
                                 will=aiomqtt.Will(topic, payload, qos, retain), timeout=10)
         await client.__aenter__()
         self.client = client
+        while not self.queue.empty():  # nothing from a lost session goes out before the new births
+            self.queue.get_nowait()
         for pattern in self.side.filters():
             await client.subscribe(pattern, qos=1)
         self.side.connected()
@@ -214,6 +216,7 @@ class MqttLink:
                     await self._drop()
 
     async def _serve(self) -> None:
+        """Publish what is queued and hand over the commands until either side fails."""
         client = self.client
         assert client is not None
 
@@ -222,20 +225,22 @@ class MqttLink:
                 topic, payload, qos, retain = await self.queue.get()
                 await client.publish(topic, payload, qos=qos, retain=retain)
 
-        publisher = asyncio.get_running_loop().create_task(publish())
-        try:
+        async def receive() -> None:
             async for message in client.messages:
                 raw = message.payload
                 payload = bytes(raw) if isinstance(raw, bytes | bytearray) else b"" if raw is None else str(raw).encode()
                 self.side.handle(str(message.topic), payload)
-                if publisher.done():
-                    publisher.result()
+
+        loop = asyncio.get_running_loop()
+        tasks = {loop.create_task(publish()), loop.create_task(receive())}
+        try:
+            done, _pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
         finally:
-            publisher.cancel()
-            with contextlib.suppress(asyncio.CancelledError, aiomqtt.MqttError):
-                await publisher
-            if publisher.done() and not publisher.cancelled() and publisher.exception() is not None:
-                raise aiomqtt.MqttError(str(publisher.exception()))
+            for task in tasks:
+                task.cancel()
+            await asyncio.gather(*tasks, return_exceptions=True)
+        for task in done:
+            task.result()  # the broker's MqttError, or a bug: raised here
 
     async def _drop(self) -> None:
         client, self.client = self.client, None
