@@ -251,3 +251,19 @@ def test_the_devices_come_back_when_the_broker_restarts() -> None:
     finally:
         runtime.stop()
         first.stop()
+
+
+def test_a_clean_stop_says_offline_too(mosquitto: Broker) -> None:
+    plant = f"c{next(_plants)}"
+    sim = Sim("sers", "--virtual", "--mqtt", mosquitto.url, "--mqtt-plant", plant)
+    try:
+        sim.read_until("mqtt: topics")
+        with Sub(mosquitto.port, f"devsim/{plant}/sers/status") as sub:
+            assert sub.wait(f"devsim/{plant}/sers/status").text == "online"
+            code, _err = sim.stop()  # SIGINT: devsim disconnects cleanly, so the broker sends no will
+            assert code == 0
+            assert sub.wait(f"devsim/{plant}/sers/status", lambda m: m.text == "offline").text == "offline"
+        with Sub(mosquitto.port, f"devsim/{plant}/sers/status") as late:
+            assert late.wait(f"devsim/{plant}/sers/status").text == "offline"  # retained
+    finally:
+        sim.stop()
