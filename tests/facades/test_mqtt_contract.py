@@ -1,10 +1,8 @@
 """Contract of the MQTT facade over every registered kind (issue 14): each kind's birth lists all
-its declared points with type, unit and access, and a set sent with mosquitto_pub round-trips to
-its state topic."""
+its declared points with type, unit and access, a set sent with mosquitto_pub round-trips to
+its state topic, and every readable point has a retained state."""
 
 from __future__ import annotations
-
-import pytest
 
 from devsim.core.device import Device
 from devsim.core.registry import kinds
@@ -43,23 +41,10 @@ def test_every_kind_has_a_birth_and_a_set_round_trips(mosquitto: Broker) -> None
                 pub(mosquitto.port, f"{base}/set/{name}", "true" if not before else "false")
                 assert sub.wait(f"{base}/state/{name}", lambda m, want=not before: m.json() is want)
                 assert runtime.read(device.name, name) is (not before)
+                with Sub(mosquitto.port, f"{base}/state/#") as late:  # every readable point, retained
+                    for point in device.points:
+                        if point.readable:
+                            assert late.wait(f"{base}/state/{point.name}").retain
     finally:
         runtime.stop()
 
-
-@pytest.mark.parametrize("kind", KINDS)
-def test_every_readable_point_has_a_retained_state(kind: str, mosquitto: Broker) -> None:  # noqa: F811
-    runtime = Runtime(virtual=True).start()
-    try:
-        device = runtime.add_device(kind, "d")
-        runtime.run(start_mqtt(runtime, [device], mosquitto.url, plant=f"retained-{kind}", rate=0.5), timeout=30)
-        readable = [p.name for p in device.points if p.readable]
-        state = f"devsim/retained-{kind}/d/state"
-        with Sub(mosquitto.port, f"{state}/#") as sub:  # all published (live or retained) ...
-            for name in readable:
-                sub.wait(f"{state}/{name}")
-        with Sub(mosquitto.port, f"{state}/#") as late:  # ... and kept for a newcomer
-            for name in readable:
-                assert late.wait(f"{state}/{name}").retain
-    finally:
-        runtime.stop()
