@@ -166,6 +166,10 @@ class _Plan:
     modbus: str | None = None  # --modbus tcp:[HOST:]PORT | rtu | rtu:LINK
     modbus_map: str = "points"  # --modbus-map points | mirror
     canopen: str | None = None  # --canopen NODE[@[HOST:]PORT]
+    mqtt: str | None = None  # --mqtt [URL]: "" for the embedded broker
+    mqtt_convention: str = "devsim"  # --mqtt-convention devsim | sparkplug
+    mqtt_rate: float = 1.0  # --mqtt-rate SECONDS
+    mqtt_plant: str | None = None  # --mqtt-plant NAME (default: the kind)
 
 
 def _host_port(option: str, text: str) -> tuple[str, int]:
@@ -316,6 +320,25 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     show_default=True,
     help="The Modbus map: generated from the points, or the kind's own mirror (pcd4h3: its media).",
 )
+@click.option(
+    "--mqtt",
+    metavar="[URL]",
+    is_flag=False,
+    flag_value="",
+    default=None,
+    help="Also publish the devices over MQTT (extra [mqtt]) on the broker mqtt://HOST[:PORT]; with no URL on an"
+    " embedded broker on loopback (port 1883 if free).",
+)
+@click.option(
+    "--mqtt-convention",
+    type=click.Choice(["devsim", "sparkplug"]),
+    default="devsim",
+    show_default=True,
+    help="MQTT topics: devsim/PLANT/DEVICE/... (JSON), or Sparkplug B.",
+)
+@click.option("--mqtt-rate", type=float, default=1.0, show_default=True, metavar="SECONDS",
+              help="How often (device time) the MQTT facade samples the points for changes.")
+@click.option("--mqtt-plant", metavar="NAME", help="The plant's name in MQTT topics (default: the kind).")
 def run(
     kind: str,
     use_pty: bool,
@@ -335,6 +358,10 @@ def run(
     modbus: str | None,
     canopen: str | None,
     modbus_map: str,
+    mqtt: str | None,
+    mqtt_convention: str,
+    mqtt_rate: float,
+    mqtt_plant: str | None,
 ) -> None:
     """Serve a simulated KIND device until Ctrl-C.
 
@@ -369,6 +396,8 @@ def run(
         _check_modbus(modbus)
     if canopen is not None:
         _check_canopen(canopen)
+    if mqtt is not None:
+        _check_mqtt(mqtt, mqtt_convention, mqtt_rate, mqtt_plant)
     if speed <= 0:
         raise click.UsageError("--speed: must be positive")
     if virtual and speed != 1.0:
@@ -402,6 +431,10 @@ def run(
         modbus=modbus,
         modbus_map=modbus_map,
         canopen=canopen,
+        mqtt=mqtt,
+        mqtt_convention=mqtt_convention,
+        mqtt_rate=mqtt_rate,
+        mqtt_plant=mqtt_plant,
     )
     try:
         asyncio.run(_serve(plan))
@@ -479,6 +512,14 @@ async def _serve(plan: _Plan) -> None:
                 from devsim.facades.canopen_node import start_canopen
 
                 canopen_lines = await start_canopen(runtime, devices, plan.canopen)
+            mqtt_lines: list[str] = []
+            if plan.mqtt is not None:
+                stage = f"serve MQTT ({plan.mqtt or 'embedded broker'})"
+                from devsim.facades.mqtt import start_mqtt
+
+                mqtt_lines = await start_mqtt(runtime, devices, plan.mqtt or None, plant=plan.mqtt_plant or plan.kind,
+                                              convention=plan.mqtt_convention,  # type: ignore[arg-type]
+                                              rate=plan.mqtt_rate)
             if plan.control is not None:
                 stage = f"serve the control API on {plan.control}"
                 server = ControlServer(runtime, plan.control, allow_remote=plan.allow_remote)
@@ -497,6 +538,8 @@ async def _serve(plan: _Plan) -> None:
                     if spec.link:
                         _say(f"{key}: link {spec.link}")
             for text in canopen_lines:
+                _say(text)
+            for text in mqtt_lines:
                 _say(text)
             for name, where in modbus_served:
                 _say(f"{name}.modbus: {'tcp' if plan.modbus and plan.modbus.startswith('tcp') else 'rtu'} {where}")
@@ -560,6 +603,29 @@ def _check_canopen(spec: str) -> None:
         import canopen  # noqa: F401
     except ImportError:
         raise click.UsageError("--canopen needs canopen and python-can: pip install 'devsim-motion[can]'") from None
+
+
+def _check_mqtt(url: str, convention: str, rate: float, plant: str | None) -> None:
+    try:
+        import aiomqtt  # noqa: F401
+
+        if not url:
+            import amqtt  # noqa: F401
+        if convention == "sparkplug":
+            import tahutils  # noqa: F401
+    except ImportError:
+        raise click.UsageError("--mqtt needs aiomqtt, amqtt and tahutils: pip install 'devsim-motion[mqtt]'") from None
+    from devsim.facades.mqtt_topics import check_name, parse_url
+
+    try:
+        if url:
+            parse_url(url)
+        if plant is not None:
+            check_name("plant", plant)
+    except ValueError as exc:
+        raise click.UsageError(f"--mqtt: {exc}") from None
+    if not rate > 0:
+        raise click.UsageError("--mqtt-rate: must be a positive number of seconds")
 
 
 def _modbus_for(spec: str, index: int) -> str:

@@ -8,5 +8,9 @@ declared points (:mod:`devsim.core.points`) and, for drive profiles, its declare
 * :mod:`devsim.facades.canopen_od` – the CANopen EDS of a kind (pure);
 * :mod:`devsim.facades.cia402` – the CiA 402 state machine and profile modes (pure);
 * :mod:`devsim.facades.canopen_node` – the device as canopen's local node (extra ``[can]``), reached
-  from other processes through :mod:`devsim.transports.socketcand`.
+  from other processes through :mod:`devsim.transports.socketcand`;
+* :mod:`devsim.facades.mqtt_topics` – the devsim MQTT convention's topics and payloads (pure);
+* :mod:`devsim.facades.mqtt_sparkplug` – Sparkplug B payloads through the Tahu binding (pure);
+* :mod:`devsim.facades.mqtt` – publishing devices over MQTT with aiomqtt (extra ``[mqtt]``), and the
+  embedded amqtt broker.
 """

@@ -54,7 +54,7 @@ class Plant:
     lines: dict[str, Any] = field(default_factory=dict)  # port name -> Line
     kinds: dict[str, str] = field(default_factory=dict)  # port name -> "pty" | "tcp" | "rfc2217" | "udp"
     refused: dict[str, str] = field(default_factory=dict)  # port name -> why it is not served
-    facades: list[str] = field(default_factory=list)  # "NAME.canopen: ..." lines of the fieldbus facades
+    facades: list[str] = field(default_factory=list)  # "NAME.canopen: ...", MQTT: lines devsim up prints
 
     def port(self, name: str) -> str:
         """What a host opens for port ``name`` (a device or bus): pty path or URL."""
@@ -137,6 +137,8 @@ async def build_plant(
     for dev in spec.devices:
         if dev.state:
             plant.devices[dev.name].apply_state(dev.state)
+    if spec.mqtt is not None:
+        await _serve_mqtt(plant)
     return plant
 
 
@@ -152,6 +154,17 @@ async def _serve_canopen(plant: Plant) -> None:
 
     for where, nodes in networks.items():
         plant.facades += await serve_nodes(plant.runtime, nodes, where)
+
+
+async def _serve_mqtt(plant: Plant) -> None:
+    """The plant's devices over MQTT (the plant file's ``mqtt:`` section)."""
+    from devsim.facades.mqtt import start_mqtt
+
+    mqtt = plant.spec.mqtt
+    assert mqtt is not None
+    plant.facades += await start_mqtt(plant.runtime, list(plant.devices.values()), mqtt.url,
+                                      plant=mqtt.plant or plant.spec.name or "plant",
+                                      convention=mqtt.convention, rate=mqtt.rate)
 
 
 async def _serve_modbus(plant: Plant, dev: Any, trace_dir: str | Path | None, trace_format: TraceFormat) -> None:

@@ -45,6 +45,7 @@ __all__ = [
     "Condition",
     "DeviceSpec",
     "ModbusSpec",
+    "MqttSpec",
     "PlantSpec",
     "Scenario",
     "Step",
@@ -151,6 +152,35 @@ class CanopenSpec(_Model):
                          description="[HOST:]PORT of a socketcand server, or socketcan:CHANNEL")
 
 
+class MqttSpec(_Model):
+    """The plant's devices also over MQTT (issue 14, :mod:`devsim.facades.mqtt`): ``url``
+    ``mqtt://HOST[:PORT]`` of the broker (none: an embedded broker on loopback), ``convention``
+    ``devsim`` or ``sparkplug``, ``rate`` how often the points are sampled for changes (device
+    time), ``plant`` the plant's name in the topics (default: the plant's ``name``)."""
+
+    url: str | None = None
+    convention: Literal["devsim", "sparkplug"] = "devsim"
+    rate: float = Field(default=1.0, description="seconds (or a duration like 500ms) between samples")
+    plant: str | None = None
+
+    @field_validator("rate", mode="before")
+    @classmethod
+    def _duration(cls, value: Any) -> float:
+        seconds = parse_duration(value, "rate")
+        if not seconds > 0:
+            raise ValueError("`rate` must be a positive duration like 1s or 500ms")
+        return seconds
+
+    @field_validator("url")
+    @classmethod
+    def _url(cls, value: str | None) -> str | None:
+        if value is not None:
+            from devsim.facades.mqtt_topics import parse_url
+
+            parse_url(value)
+        return value
+
+
 class DeviceSpec(_Model):
     name: str = Field(pattern=r"^[A-Za-z_][A-Za-z0-9_-]*$")
     kind: str
@@ -238,6 +268,7 @@ class PlantSpec(_Model):
     name: str | None = Field(default=None, description="a name for the plant (shown by devsim up)")
     devices: list[DeviceSpec] = Field(min_length=1)
     buses: list[BusSpec] = Field(default_factory=list)
+    mqtt: MqttSpec | None = Field(default=None, description="also publish the devices over MQTT")
 
     @model_validator(mode="after")
     def _names(self) -> PlantSpec:

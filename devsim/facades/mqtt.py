@@ -1,0 +1,347 @@
+"""The devices of a plant over MQTT (issue 14), through aiomqtt (extra ``devsim-motion[mqtt]``).
+
+Two conventions:
+
+* ``devsim`` (default, topics in :mod:`devsim.facades.mqtt_topics`): **one MQTT connection per
+  device**, so that each device has its own last will: ``devsim/<plant>/<device>/status`` is
+  ``online`` while it is connected and ``offline`` when it closes or its process dies (the
+  broker sends the will).  A retained ``birth`` lists its points; each readable point is
+  published (retained JSON) on ``state/<name>`` when it changes; ``set/<name>``,
+  ``fault/<kind>`` and ``power_cycle`` commands are carried out with the device's own
+  validation and refusals are answered on ``error``.
+* ``sparkplug`` (:mod:`devsim.facades.mqtt_sparkplug`): **one connection per plant process**,
+  the plant being a Sparkplug edge node whose NDEATH will covers all its devices.
+
+Changes are found by :class:`devsim.core.watch.PointWatch`, which samples the points every
+``rate`` seconds of device time (virtual time in tests), and right after each command.  With no
+broker URL, :func:`start_broker` runs an embedded amqtt broker in the same loop, on loopback.
+Everything runs as tasks in the runtime's loop and calls device methods directly.  A lost
+broker connection is retried every second; the births are then sent again.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import os
+import socket
+from collections.abc import Callable, Sequence
+from typing import Any, Literal
+
+import aiomqtt
+
+from devsim.core.device import Device
+from devsim.core.watch import PointWatch
+from devsim.facades import mqtt_topics as topics
+
+__all__ = ["Convention", "MqttLink", "start_broker", "start_mqtt"]
+
+Convention = Literal["devsim", "sparkplug"]
+#: (topic, payload, qos, retain)
+Message = tuple[str, bytes, int, bool]
+RETRY = 1.0  # seconds between reconnection attempts (network time, not device time)
+
+
+class _DevsimDevice:
+    """One device in the devsim convention: its will, births, watch and commands."""
+
+    def __init__(self, device: Device, plant: str, rate: float) -> None:
+        self.device = device
+        self.plant = plant
+        self.rate = rate
+        self.base = topics.prefix(plant, device.name)
+        self.send: Callable[[Message], None] = lambda message: None
+        self.watch: PointWatch | None = None
+
+    def identifier(self) -> str:
+        return f"devsim-{self.plant}-{self.device.name}-{os.getpid()}"
+
+    def new_session(self) -> Message:
+        return f"{self.base}/status", b"offline", 1, True
+
+    def filters(self) -> list[str]:
+        return topics.command_filters(self.plant, [self.device.name])
+
+    def connected(self) -> None:
+        self.send((f"{self.base}/birth", json.dumps(topics.birth(self.device, self.rate)).encode(), 1, True))
+        self.stop()
+        self.watch = PointWatch(self.device, self._changed, period=self.rate)
+        self.watch.start()  # every readable value now, then what changes
+        self.send((f"{self.base}/status", b"online", 1, True))
+
+    def _changed(self, changes: dict[str, Any]) -> None:
+        for name, value in changes.items():
+            self.send((topics.state_topic(self.plant, self.device.name, name), topics.encode(value), 0, True))
+
+    def handle(self, topic: str, payload: bytes) -> None:
+        found = topics.parse_command(topic, self.plant)
+        if found is None or found[0] != self.device.name:
+            return
+        _name, handler, arg = found
+        try:
+            handler(self.device, arg, payload)
+        except Exception as exc:  # every refusal is answered, as the control API does
+            self.send((f"{self.base}/error", topics.error_payload(topic, exc), 1, False))
+        if self.watch is not None:
+            self.watch.sample()
+
+    def closing(self) -> list[Message]:
+        return [(f"{self.base}/status", b"offline", 1, True)]
+
+    def stop(self) -> None:
+        if self.watch is not None:
+            self.watch.stop()
+            self.watch = None
+
+
+class _SparkplugPlant:
+    """The plant as one Sparkplug edge node with its devices."""
+
+    def __init__(self, devices: Sequence[Device], plant: str, rate: float) -> None:
+        from devsim.facades.mqtt_sparkplug import SparkplugNode
+
+        self.devices = {device.name: device for device in devices}
+        self.node = SparkplugNode(plant)
+        self.plant = plant
+        self.rate = rate
+        self.send: Callable[[Message], None] = lambda message: None
+        self.watches: dict[str, PointWatch] = {}
+
+    def identifier(self) -> str:
+        return f"devsim-spb-{self.plant}-{os.getpid()}"
+
+    def new_session(self) -> Message:
+        topic, payload = self.node.new_session()
+        return topic, payload, 1, False
+
+    def filters(self) -> list[str]:
+        return self.node.filters()
+
+    def connected(self) -> None:
+        self.stop()
+        self._births()
+
+    def _births(self) -> None:
+        self.send((*self.node.node_birth(), 0, False))
+        for device in self.devices.values():
+            watch = PointWatch(device, lambda changes, d=device: self._changed(d, changes), period=self.rate)
+            values = watch.values()
+            self.send((*self.node.device_birth(device, values), 0, False))
+            watch.last = values
+            watch.start()  # nothing new yet: DDATA from the next change on
+            self.watches[device.name] = watch
+
+    def _changed(self, device: Device, changes: dict[str, Any]) -> None:
+        self.send((*self.node.device_data(device, changes), 0, False))
+
+    def handle(self, topic: str, payload: bytes) -> None:
+        from devsim.facades.mqtt_sparkplug import REBIRTH, command_action
+
+        try:
+            name, metrics = self.node.command(topic, payload)
+        except ValueError as exc:
+            self.send((f"{topics.ROOT}/{self.plant}/error", topics.error_payload(topic, exc), 1, False))
+            return
+        if name is None:  # NCMD
+            if any(metric == REBIRTH and value for metric, value in metrics):
+                self.stop()
+                self._births()
+            return
+        device = self.devices.get(name)
+        if device is None:
+            return
+        for metric, value in metrics:
+            try:
+                command_action(device, metric, value)
+            except Exception as exc:
+                self.send((f"{topics.prefix(self.plant, name)}/error", topics.error_payload(f"{topic}#{metric}", exc),
+                           1, False))
+        self.watches[name].sample()
+
+    def closing(self) -> list[Message]:
+        return [(*self.node.death(), 1, False)]
+
+    def stop(self) -> None:
+        for watch in self.watches.values():
+            watch.stop()
+        self.watches.clear()
+
+
+
+class MqttLink:
+    """One MQTT connection for one convention object (a device, or a Sparkplug plant): connects
+    with its will, subscribes its command topics, publishes what it sends in order, hands it
+    the commands, and reconnects when the broker goes away."""
+
+    def __init__(self, host: str, port: int, side: Any) -> None:
+        self.host, self.port, self.side = host, port, side
+        self.queue: asyncio.Queue[Message] = asyncio.Queue()
+        side.send = self.queue.put_nowait
+        self.client: aiomqtt.Client | None = None
+        self._task: asyncio.Task[None] | None = None
+        self._closing = False
+
+    async def start(self) -> None:
+        """Connect (a refused or unreachable broker raises here) and serve in the background."""
+        await self._connect()
+        self._task = asyncio.get_running_loop().create_task(self._run())
+
+    async def _connect(self) -> None:
+        topic, payload, qos, retain = self.side.new_session()
+        client = aiomqtt.Client(self.host, self.port, identifier=self.side.identifier(), keepalive=10,
+                                will=aiomqtt.Will(topic, payload, qos, retain), timeout=10)
+        await client.__aenter__()
+        self.client = client
+        while not self.queue.empty():  # nothing from a lost session goes out before the new births
+            self.queue.get_nowait()
+        for pattern in self.side.filters():
+            await client.subscribe(pattern, qos=1)
+        self.side.connected()
+
+    async def _run(self) -> None:
+        while not self._closing:
+            try:
+                await self._serve()
+            except aiomqtt.MqttError:
+                pass
+            self.side.stop()
+            await self._drop()
+            while not self._closing:
+                await asyncio.sleep(RETRY)
+                try:
+                    await self._connect()
+                    break
+                except (aiomqtt.MqttError, OSError):
+                    await self._drop()
+
+    async def _serve(self) -> None:
+        """Publish what is queued and hand over the commands until either side fails."""
+        client = self.client
+        assert client is not None
+
+        async def publish() -> None:
+            while True:
+                topic, payload, qos, retain = await self.queue.get()
+                await client.publish(topic, payload, qos=qos, retain=retain)
+
+        async def receive() -> None:
+            async for message in client.messages:
+                raw = message.payload
+                payload = bytes(raw) if isinstance(raw, bytes | bytearray) else b"" if raw is None else str(raw).encode()
+                self.side.handle(str(message.topic), payload)
+
+        loop = asyncio.get_running_loop()
+        tasks = {loop.create_task(publish()), loop.create_task(receive())}
+        try:
+            done, _pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+        finally:
+            for task in tasks:
+                task.cancel()
+            await asyncio.gather(*tasks, return_exceptions=True)
+        for task in done:
+            task.result()  # the broker's MqttError, or a bug: raised here
+
+    async def _drop(self) -> None:
+        client, self.client = self.client, None
+        if client is not None:
+            with contextlib.suppress(Exception):
+                await client.__aexit__(None, None, None)
+
+    async def close(self) -> None:
+        """Flush what is queued, say offline (the will is not sent on a clean disconnect), leave."""
+        self._closing = True
+        self.side.stop()
+        client = self.client
+        if client is not None:
+            with contextlib.suppress(aiomqtt.MqttError, asyncio.TimeoutError):
+                async with asyncio.timeout(5):
+                    while not self.queue.empty():
+                        topic, payload, qos, retain = self.queue.get_nowait()
+                        await client.publish(topic, payload, qos=qos, retain=retain)
+                    for topic, payload, qos, retain in self.side.closing():
+                        await client.publish(topic, payload, qos=qos, retain=retain)
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await self._task
+        await self._drop()
+
+
+# -- the embedded broker --------------------------------------------------------------------
+def _free(host: str, port: int) -> bool:
+    with socket.socket() as sock:
+        try:
+            sock.bind((host, port))
+        except OSError:
+            return False
+    return True
+
+
+async def start_broker(host: str = "127.0.0.1", port: int | None = None) -> tuple[Any, int]:
+    """An amqtt broker in this loop on ``host`` (loopback unless named): on ``port``, or on 1883
+    when that is free, else on a free port.  Returns the broker (``await broker.shutdown()``) and
+    its port."""
+    from amqtt.broker import Broker
+
+    if port is None:
+        port = topics.DEFAULT_PORT
+        if not _free(host, port):
+            with socket.socket() as sock:
+                sock.bind((host, 0))
+                port = int(sock.getsockname()[1])
+    config = {
+        "listeners": {"default": {"type": "tcp", "bind": f"{host}:{port}"}},
+        "plugins": {"amqtt.plugins.authentication.AnonymousAuthPlugin": {"allow_anonymous": True}},
+    }
+    broker = Broker(config)
+    await broker.start()
+    return broker, port
+
+
+async def start_mqtt(runtime: Any, devices: Sequence[Device], url: str | None, *, plant: str,
+                     convention: Convention = "devsim", rate: float = 1.0) -> list[str]:
+    """Serve ``devices`` over MQTT in ``runtime`` (in its loop): on the broker at ``url``
+    (``mqtt://HOST[:PORT]``), or on an embedded broker when ``url`` is None.  Returns the lines
+    ``devsim run``/``up`` print (where the broker is, and the topic root)."""
+    topics.check_name("plant", plant)
+    for device in devices:
+        topics.check_name("device", device.name)
+    if not rate > 0:
+        raise ValueError(f"the MQTT rate is a positive number of seconds, not {rate!r}")
+    lines = []
+    if url is None:
+        broker, port = await start_broker()
+        runtime.add_closer(broker.shutdown)
+        host = "127.0.0.1"
+        lines.append(f"mqtt: broker mqtt://{host}:{port} (embedded)")
+    else:
+        host, port = topics.parse_url(url)
+        lines.append(f"mqtt: broker mqtt://{host}:{port}")
+    if convention == "sparkplug":
+        from devsim.facades.mqtt_sparkplug import GROUP, NAMESPACE
+
+        sides: list[Any] = [_SparkplugPlant(devices, plant, rate)]
+        lines.append(f"mqtt: sparkplug {NAMESPACE}/{GROUP}/+/{plant}")
+    elif convention == "devsim":
+        sides = [_DevsimDevice(device, plant, rate) for device in devices]
+        lines.append(f"mqtt: topics {topics.ROOT}/{plant}/")
+    else:
+        raise ValueError(f"an MQTT convention is devsim or sparkplug, not {convention!r}")
+    links = [MqttLink(host, port, side) for side in sides]
+    started: list[MqttLink] = []
+
+    async def close() -> None:
+        for link in reversed(started):
+            await link.close()
+
+    try:
+        for link in links:
+            await link.start()
+            started.append(link)
+    except BaseException:
+        await close()
+        raise
+    runtime.add_closer(close)
+    return lines
+

@@ -1,0 +1,167 @@
+"""Sparkplug B payloads of the MQTT facade (``--mqtt-convention sparkplug``), through the Eclipse
+Tahu Python binding as packaged on PyPI (``tahutils``: Tahu's ``sparkplug_b`` helper and protobuf
+schema).  Pure: topics and payload bytes in, topics and payload bytes out; the connection is in
+:mod:`devsim.facades.mqtt`.
+
+Sparkplug B 3.0 mapping: the group is ``devsim``, the edge node is the plant (one MQTT session
+per plant process, so its NDEATH last will covers every device), each device a Sparkplug
+device.  NBIRTH carries ``bdSeq`` and ``Node Control/Rebirth``; a DBIRTH per device carries every
+declared point as a metric with its datatype (bool → Boolean, int → Int64, float → Double, str
+and json → String) and, as writable command metrics, ``Device Control/Power Cycle`` and
+``Device Control/Fault/<kind>``; DDATA carries what changed.  Every payload but NDEATH carries
+``seq`` (0 … 255, wrapping); NDEATH's ``bdSeq`` matches the NBIRTH of the same session.  DCMD
+metrics are set through the device's own validation; NCMD ``Node Control/Rebirth`` sends the
+births again.  Tahu's helper keeps sequence numbers in module globals; here they live in
+:class:`SparkplugNode`, one per session, and only its stateless ``addMetric`` is used.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Mapping
+from typing import Any
+
+from tahutils.tahu import sparkplug_b as tahu
+
+from devsim.core.device import Device
+from devsim.core.points import Point
+
+__all__ = ["DATATYPES", "GROUP", "NAMESPACE", "SparkplugNode", "command_action", "metric_value"]
+
+NAMESPACE = "spBv1.0"
+GROUP = "devsim"
+T = tahu.MetricDataType
+#: A point's declared type → its Sparkplug metric datatype.
+DATATYPES: dict[str, int] = {"bool": T.Boolean, "int": T.Int64, "float": T.Double, "str": T.String,
+                             "json": T.String}
+REBIRTH = "Node Control/Rebirth"
+POWER_CYCLE = "Device Control/Power Cycle"
+FAULT = "Device Control/Fault/"
+
+_SIGNED = {T.Int8: 8, T.Int16: 16, T.Int32: 32, T.Int64: 64}
+_FIELD = {T.Int8: "int_value", T.Int16: "int_value", T.Int32: "int_value", T.UInt8: "int_value",
+          T.UInt16: "int_value", T.UInt32: "int_value", T.Int64: "long_value", T.UInt64: "long_value",
+          T.DateTime: "long_value", T.Float: "float_value", T.Double: "double_value",
+          T.Boolean: "boolean_value", T.String: "string_value", T.Text: "string_value", T.UUID: "string_value"}
+
+
+def metric_value(metric: Any) -> Any:
+    """A received metric's value (signed integers from their two's complement), None when null."""
+    if metric.is_null:
+        return None
+    name = _FIELD.get(metric.datatype)
+    if name is None:
+        raise ValueError(f"metric {metric.name!r}: datatype {metric.datatype} is not supported")
+    value = getattr(metric, name)
+    bits = _SIGNED.get(metric.datatype)
+    if bits is not None and value >= 1 << (bits - 1):
+        value -= 1 << bits
+    return value
+
+
+def _now_ms() -> int:
+    return int(time.time() * 1000)  # Sparkplug timestamps are UTC wall time (metadata, no wait)
+
+
+def _add(payload: Any, point: Point, value: Any) -> None:
+    datatype = DATATYPES[point.type]
+    if value is None:
+        tahu.addNullMetric(payload, point.name, None, datatype)
+        return
+    if point.type == "json" or (point.type == "str" and not isinstance(value, str)):
+        value = json.dumps(value)
+    tahu.addMetric(payload, point.name, None, datatype, value, _now_ms())
+
+
+class SparkplugNode:
+    """One Sparkplug edge node session (the plant) and its devices' births, data and commands."""
+
+    def __init__(self, plant: str) -> None:
+        self.plant = plant
+        self.bd_seq = -1
+        self._seq = 0
+
+    def topic(self, kind: str, device: str | None = None) -> str:
+        tail = f"/{device}" if device is not None else ""
+        return f"{NAMESPACE}/{GROUP}/{kind}/{self.plant}{tail}"
+
+    def filters(self) -> list[str]:
+        return [self.topic("NCMD"), self.topic("DCMD", "+")]
+
+    def _payload(self) -> Any:
+        payload = tahu.Payload()
+        payload.timestamp = _now_ms()
+        payload.seq = self._seq
+        self._seq = (self._seq + 1) % 256
+        return payload
+
+    def new_session(self) -> tuple[str, bytes]:
+        """Start a session: the next bdSeq, and the NDEATH that is its last will."""
+        self.bd_seq = (self.bd_seq + 1) % 256
+        self._seq = 0
+        return self.death()
+
+    def death(self) -> tuple[str, bytes]:
+        """The NDEATH of this session (its bdSeq)."""
+        payload = tahu.Payload()
+        payload.timestamp = _now_ms()
+        tahu.addMetric(payload, "bdSeq", None, T.Int64, self.bd_seq)
+        return self.topic("NDEATH"), payload.SerializeToString()
+
+    def node_birth(self) -> tuple[str, bytes]:
+        self._seq = 0
+        payload = self._payload()
+        tahu.addMetric(payload, "bdSeq", None, T.Int64, self.bd_seq)
+        tahu.addMetric(payload, REBIRTH, None, T.Boolean, False)
+        return self.topic("NBIRTH"), payload.SerializeToString()
+
+    def device_birth(self, device: Device, values: Mapping[str, Any]) -> tuple[str, bytes]:
+        """Every declared point (write-only ones as null), and the command metrics."""
+        payload = self._payload()
+        for point in device.points:
+            _add(payload, point, values.get(point.name))
+        tahu.addMetric(payload, POWER_CYCLE, None, T.Boolean, False)
+        for kind in device.faults.names():
+            tahu.addMetric(payload, FAULT + kind, None, T.Boolean, False)
+        return self.topic("DBIRTH", device.name), payload.SerializeToString()
+
+    def device_data(self, device: Device, changes: Mapping[str, Any]) -> tuple[str, bytes]:
+        payload = self._payload()
+        for name, value in changes.items():
+            _add(payload, device.points.lookup(name), value)
+        return self.topic("DDATA", device.name), payload.SerializeToString()
+
+    def device_death(self, device: Device) -> tuple[str, bytes]:
+        return self.topic("DDEATH", device.name), self._payload().SerializeToString()
+
+    def command(self, topic: str, data: bytes) -> tuple[str | None, list[tuple[str, Any]]]:
+        """A DCMD (device name, [(metric, value)]) or NCMD (None, ...); ValueError if it is neither
+        or does not decode."""
+        kind, device = self._parse(topic)
+        payload = tahu.Payload()
+        try:
+            payload.ParseFromString(data)
+        except Exception as exc:  # protobuf's DecodeError
+            raise ValueError(f"not a Sparkplug B payload: {exc}") from None
+        return device if kind == "DCMD" else None, [(m.name, metric_value(m)) for m in payload.metrics]
+
+    def _parse(self, topic: str) -> tuple[str, str | None]:
+        parts = topic.split("/")
+        if parts[:2] == [NAMESPACE, GROUP] and len(parts) == 5 and parts[2] == "DCMD" and parts[3] == self.plant:
+            return "DCMD", parts[4]
+        if parts[:2] == [NAMESPACE, GROUP] and len(parts) == 4 and parts[2] == "NCMD" and parts[3] == self.plant:
+            return "NCMD", None
+        raise ValueError(f"not a command topic of node {self.plant!r}: {topic!r}")
+
+
+def command_action(device: Device, name: str, value: Any) -> None:
+    """Carry out one DCMD metric: a point set, a power cycle, or a fault switched."""
+    if name == POWER_CYCLE:
+        if value:
+            device.power_cycle()
+    elif name.startswith(FAULT):
+        device.fault(name[len(FAULT):], value)
+    else:
+        device.set(name, value)
+

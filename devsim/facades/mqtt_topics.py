@@ -1,0 +1,158 @@
+"""The MQTT facade's topics and payloads in the ``devsim`` convention (pure: no I/O, no broker).
+
+Every device of a plant lives under ``devsim/<plant>/<device>/``::
+
+    birth              retained JSON: device, kind, its points (name, type, unit, access) and faults
+    status             retained "online" / "offline" (the connection's last will)
+    state/<name>       retained JSON value of each readable point, on change
+    set/<name>         command: a JSON value, or plain text (read as the point's type)
+    fault/<kind>       command: true / false (also on/off, 1/0)
+    power_cycle        command: empty, or {"wipe": true}
+    error              what a command was refused for: {"topic", "error", "type"} (not retained)
+
+Values go through the device's own validation (``Device.set``/``fault``/``power_cycle``), as
+over the control API.  See :mod:`devsim.facades.mqtt` for the connection that carries them.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Iterable
+from typing import Any
+from urllib.parse import urlsplit
+
+from devsim.core.device import Device
+from devsim.core.points import parse_bool
+
+__all__ = [
+    "COMMANDS",
+    "Command",
+    "DEFAULT_PORT",
+    "birth",
+    "command_filters",
+    "decode_value",
+    "encode",
+    "error_payload",
+    "parse_command",
+    "parse_url",
+    "prefix",
+    "state_topic",
+]
+
+DEFAULT_PORT = 1883
+ROOT = "devsim"
+
+
+def parse_url(url: str) -> tuple[str, int]:
+    """``mqtt://HOST[:PORT]`` (or ``HOST[:PORT]``) → (host, port); the port defaults to 1883."""
+    text = url if "://" in url else f"mqtt://{url}"
+    parts = urlsplit(text)
+    if parts.scheme not in ("mqtt", "tcp"):
+        raise ValueError(f"expected mqtt://HOST[:PORT], not {url!r}")
+    try:
+        port = parts.port
+    except ValueError:
+        raise ValueError(f"expected mqtt://HOST[:PORT], not {url!r}") from None
+    if not parts.hostname or parts.path not in ("", "/"):
+        raise ValueError(f"expected mqtt://HOST[:PORT], not {url!r}")
+    return parts.hostname, port if port is not None else DEFAULT_PORT
+
+
+def check_name(what: str, name: str) -> str:
+    """A plant or device name is one topic level: no ``/``, ``+``, ``#``, not empty."""
+    if not name or any(c in name for c in "/+#\0"):
+        raise ValueError(f"an MQTT {what} name is one topic level (no '/', '+', '#'), not {name!r}")
+    return name
+
+
+def prefix(plant: str, device: str) -> str:
+    return f"{ROOT}/{plant}/{device}"
+
+
+def state_topic(plant: str, device: str, name: str) -> str:
+    return f"{prefix(plant, device)}/state/{name}"
+
+
+def encode(value: Any) -> bytes:
+    """A value as the JSON a state topic carries."""
+    return json.dumps(value, separators=(",", ":")).encode()
+
+
+def decode_value(payload: bytes, point_type: str | None = None) -> Any:
+    """A command's payload: JSON if it parses, else the plain text; for a text point, a JSON
+    value that is not text is taken as the plain text it was sent as (``42`` → ``"42"``)."""
+    text = payload.decode("utf-8", errors="replace").strip()
+    try:
+        value = json.loads(text)
+    except ValueError:
+        return text
+    if point_type == "str" and not isinstance(value, str):
+        return text
+    return value
+
+
+def birth(device: Device, rate: float) -> dict[str, Any]:
+    """The birth message: what the device is and every declared point (name, type, unit, access,
+    doc), its faults, and the sampling period."""
+    return {
+        "device": device.name,
+        "kind": device.kind,
+        "rate": rate,
+        "points": [{"name": p.name, "type": p.type, "unit": p.unit, "access": p.access, "doc": p.doc}
+                   for p in device.points],
+        "faults": list(device.faults.names()),
+    }
+
+
+def error_payload(topic: str, exc: BaseException) -> bytes:
+    """What ``…/error`` carries for a refused command."""
+    message = exc.args[0] if isinstance(exc, KeyError) and len(exc.args) == 1 else str(exc)
+    return json.dumps({"topic": topic, "error": str(message)[:500], "type": type(exc).__name__}).encode()
+
+
+# -- commands -------------------------------------------------------------------------------
+Command = Callable[[Device, str, bytes], None]
+
+
+def _set(device: Device, name: str, payload: bytes) -> None:
+    point = device.points.find(name)
+    device.set(name, decode_value(payload, point.type if point is not None else None))
+
+
+def _fault(device: Device, kind: str, payload: bytes) -> None:
+    device.fault(kind, parse_bool(decode_value(payload)))
+
+
+def _power_cycle(device: Device, _arg: str, payload: bytes) -> None:
+    value = decode_value(payload) if payload.strip() else {}
+    if not isinstance(value, dict) or set(value) - {"wipe"}:
+        raise ValueError('power_cycle takes an empty payload or {"wipe": true}')
+    device.power_cycle(wipe=parse_bool(value.get("wipe", False)))
+
+
+#: ``…/<verb>[/<argument>]`` → what it does, and whether it takes an argument level.
+COMMANDS: dict[str, tuple[Command, bool]] = {
+    "set": (_set, True),
+    "fault": (_fault, True),
+    "power_cycle": (_power_cycle, False),
+}
+
+
+def command_filters(plant: str, devices: Iterable[str]) -> list[str]:
+    """The subscriptions that bring a plant's commands."""
+    return [f"{prefix(plant, device)}/{verb}{'/+' if arg else ''}"
+            for device in devices for verb, (_fn, arg) in COMMANDS.items()]
+
+
+def parse_command(topic: str, plant: str) -> tuple[str, Command, str] | None:
+    """``devsim/<plant>/<device>/<verb>[/<arg>]`` → (device, handler, arg), or None."""
+    parts = topic.split("/")
+    if len(parts) < 4 or parts[0] != ROOT or parts[1] != plant:
+        return None
+    entry = COMMANDS.get(parts[3])
+    if entry is None:
+        return None
+    handler, takes_arg = entry
+    if len(parts) != (5 if takes_arg else 4):
+        return None
+    return parts[2], handler, parts[4] if takes_arg else ""

@@ -1,0 +1,269 @@
+"""The MQTT facade in the devsim convention (issue 14), on a real mosquitto and on the embedded
+amqtt broker, checked with mosquitto_sub / mosquitto_pub: birth, status, retained state, state
+after a set and after the device changed by itself (sampled at the rate, in virtual time),
+fault and power-cycle commands, refusals on …/error, and the last will when ``devsim run`` is
+killed."""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from devsim.core.runtime import Runtime
+from devsim.facades.mqtt import start_broker, start_mqtt
+from tests.support.broker import Broker, free_port, mosquitto_missing
+from tests.support.mqtt import Sub, pub
+from tests.test_cli import Sim
+
+_plants = itertools.count()
+RATE = 0.5
+
+
+@pytest.fixture(scope="module")
+def mosquitto() -> Iterator[Broker]:
+    assert mosquitto_missing() is None, mosquitto_missing()
+    broker = Broker().start()
+    yield broker
+    broker.stop()
+
+
+class Served:
+    """A sers named ``x`` in a virtual-time runtime, published over MQTT as plant ``plant``."""
+
+    def __init__(self, runtime: Runtime, port: int, plant: str) -> None:
+        self.runtime, self.port, self.plant = runtime, port, plant
+        self.base = f"devsim/{plant}/x"
+        self.device = runtime.devices["x"]
+
+    def sub(self) -> Sub:
+        return Sub(self.port, f"{self.base}/#")
+
+
+def broker_port(lines: list[str]) -> int:
+    """The port of ``mqtt: broker mqtt://127.0.0.1:PORT ...``."""
+    first = lines[0].split()[2]
+    assert first.startswith("mqtt://127.0.0.1:"), lines
+    return int(first.rpartition(":")[2])
+
+
+@pytest.fixture(params=["mosquitto", "embedded"])
+def served(request: pytest.FixtureRequest, mosquitto: Broker) -> Iterator[Served]:
+    runtime = Runtime(virtual=True).start()
+    try:
+        device = runtime.add_device("sers", "x")
+        plant = f"p{next(_plants)}"
+        url = mosquitto.url if request.param == "mosquitto" else None
+        lines = runtime.run(start_mqtt(runtime, [device], url, plant=plant, rate=RATE), timeout=20)
+        assert lines[0].endswith("(embedded)") == (url is None)
+        yield Served(runtime, broker_port(lines), plant)
+    finally:
+        runtime.stop()
+
+
+def test_birth_status_and_retained_state(served: Served) -> None:
+    with served.sub() as sub:
+        birth = sub.wait(f"{served.base}/birth")
+        assert birth.retain
+        body = birth.json()
+        assert body["device"] == "x" and body["kind"] == "sers" and body["rate"] == RATE
+        assert [p["name"] for p in body["points"]] == served.device.points.names()
+        position = next(p for p in body["points"] if p["name"] == "axis.position")
+        assert (position["type"], position["unit"], position["access"]) == ("float", "inc", "r")
+        assert next(p for p in body["points"] if p["name"] == "input.I1")["access"] == "rw"
+        assert "emergency_stop" in body["faults"]
+        assert sub.wait(f"{served.base}/status").text == "online"
+        state = sub.wait(f"{served.base}/state/axis.position")
+        assert state.retain and state.json() == 0.0
+        display = sub.wait(f"{served.base}/state/display").json()
+        assert display == served.runtime.read("x", "display")
+
+
+def test_a_set_and_a_change_by_the_device_are_published(served: Served) -> None:
+    state = f"{served.base}/state"
+    with served.sub() as sub:
+        assert sub.wait(f"{state}/input.I1").json() is False
+        pub(served.port, f"{served.base}/set/input.I1", "true")
+        assert sub.wait(f"{state}/input.I1", lambda m: m.json() is True)
+        assert served.runtime.read("x", "input.I1") is True
+        pub(served.port, f"{served.base}/set/input.I1", "false")  # plain text as well as JSON
+        assert sub.wait(f"{state}/input.I1", lambda m: m.json() is False)
+
+        served.runtime.set("x", "input.I2", True)  # through the control API: seen at the next sample
+        with Sub(served.port, f"{state}/input.I2") as late:
+            assert late.wait(f"{state}/input.I2").json() is False  # not sampled yet
+        served.runtime.advance(RATE)
+        assert sub.wait(f"{state}/input.I2", lambda m: m.json() is True)
+    with Sub(served.port, f"{state}/input.I2") as late:  # and it is what a newcomer gets
+        retained = late.wait(f"{state}/input.I2")
+        assert retained.retain and retained.json() is True
+
+
+def test_fault_and_power_cycle_commands(served: Served) -> None:
+    state = f"{served.base}/state"
+    with served.sub() as sub:
+        assert sub.wait(f"{state}/input.stop").json() is False
+        pub(served.port, f"{served.base}/fault/emergency_stop", "true")
+        assert sub.wait(f"{state}/input.stop", lambda m: m.json() is True)
+
+        assert sub.wait(f"{state}/booting").json() is True  # from power-on
+        served.runtime.advance(2 + RATE)  # the SERS boots in 2 s; the next sample shows it
+        assert sub.wait(f"{state}/booting", lambda m: m.json() is False)
+        pub(served.port, f"{served.base}/power_cycle", "")
+        assert sub.wait(f"{state}/booting", lambda m: m.json() is True)
+        served.runtime.advance(2 + RATE)
+        assert sub.wait(f"{state}/booting", lambda m: m.json() is False)
+
+
+REFUSED = [
+    ("set/axis.position", "5", "ReadOnlyName", "read-only"),
+    ("set/input.I1", "maybe", "BadValue", "boolean"),
+    ("set/nope", "1", "UnknownName", "nope"),
+    ("fault/nope", "true", "UnknownName", "no fault 'nope'"),
+    ("fault/emergency_stop", "perhaps", "BadValue", "boolean"),
+    ("power_cycle", '{"now": 1}', "ValueError", "wipe"),
+]
+
+
+def test_a_refused_command_is_answered_on_error(served: Served) -> None:
+    with served.sub() as sub:
+        sub.wait(f"{served.base}/birth")  # subscribed (a retained message came back)
+        for topic, payload, kind, words in REFUSED:
+            pub(served.port, f"{served.base}/{topic}", payload)
+            error = sub.wait(f"{served.base}/error")
+            assert not error.retain
+            body = error.json()
+            assert (body["topic"], body["type"]) == (f"{served.base}/{topic}", kind)
+            assert words in body["error"]
+    assert served.runtime.read("x", "input.I1") is False
+    assert served.runtime.read("x", "input.stop") is False
+
+
+@pytest.fixture(params=["mosquitto", "amqtt"])
+def broker_url(request: pytest.FixtureRequest, mosquitto: Broker) -> Iterator[tuple[str, int]]:
+    """A broker for a `devsim run` subprocess: the mosquitto, or an amqtt one in this process."""
+    if request.param == "mosquitto":
+        yield mosquitto.url, mosquitto.port
+        return
+    runtime = Runtime().start()
+    try:
+        broker, port = runtime.run(start_broker(port=free_port()), timeout=20)
+        runtime.add_closer(broker.shutdown)
+        yield f"mqtt://127.0.0.1:{port}", port
+    finally:
+        runtime.stop()
+
+
+def test_the_last_will_says_offline_when_devsim_is_killed(broker_url: tuple[str, int]) -> None:
+    url, port = broker_url
+    plant = f"k{next(_plants)}"
+    sim = Sim("sers", "--virtual", "--mqtt", url, "--mqtt-plant", plant)
+    try:
+        seen = sim.read_until("mqtt: topics")
+        assert seen["mqtt"] == f"broker {url}"
+        with Sub(port, f"devsim/{plant}/sers/status") as sub:
+            assert sub.wait(f"devsim/{plant}/sers/status").text == "online"
+            sim.proc.kill()  # SIGKILL: no goodbye, the broker sends the will
+            offline = sub.wait(f"devsim/{plant}/sers/status", lambda m: m.text == "offline", timeout=20)
+            assert offline.topic.endswith("/status")
+    finally:
+        sim.stop()
+
+
+def test_run_with_mqtt_and_no_url_starts_an_embedded_broker() -> None:
+    sim = Sim("sers", "--virtual", "--mqtt", "--mqtt-plant", "cli")
+    try:
+        seen = sim.read_until("mqtt: topics")
+        assert seen["mqtt"].endswith("(embedded)")
+        port = int(seen["mqtt"].split()[1].rpartition(":")[2])
+        with Sub(port, "devsim/cli/sers/#") as sub:
+            assert sub.wait("devsim/cli/sers/birth").json()["kind"] == "sers"
+            pub(port, "devsim/cli/sers/set/input.I3", "1")
+            assert sub.wait("devsim/cli/sers/state/input.I3", lambda m: m.json() is True)
+        code, _err = sim.stop()
+        assert code == 0
+    finally:
+        sim.stop()
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--mqtt", "http://x"], "--mqtt: expected mqtt://HOST[:PORT], not 'http://x'"),
+    (["--mqtt", "--mqtt-rate", "0"], "--mqtt-rate: must be a positive number of seconds"),
+    (["--mqtt", "--mqtt-plant", "a/b"], "one topic level"),
+])
+def test_bad_mqtt_options_are_one_line(args: list[str], message: str) -> None:
+    from click.testing import CliRunner
+
+    from devsim.cli import cli
+
+    result = CliRunner().invoke(cli, ["run", "sers", *args])
+    assert result.exit_code == 2 and message in result.output
+
+
+def test_a_plant_file_mqtt_section(tmp_path: Path, mosquitto: Broker) -> None:
+    from devsim.scenario.plant import plant_running
+    from devsim.scenario.schema import load_plant
+
+    path = tmp_path / "plant.yaml"
+    path.write_text(f"name: hall\ndevices:\n  - {{name: a, kind: sers}}\n  - {{name: b, kind: gms96}}\n"
+                    f"mqtt: {{url: '{mosquitto.url}', rate: 250ms}}\n")
+    spec = load_plant(path)
+    assert spec.mqtt is not None and spec.mqtt.rate == 0.25
+    with plant_running(spec, virtual=True) as plant, Sub(mosquitto.port, "devsim/hall/+/birth") as sub:
+        assert f"mqtt: broker {mosquitto.url}" in plant.describe()
+        assert "mqtt: topics devsim/hall/" in plant.describe()
+        assert sub.wait("devsim/hall/a/birth").json()["kind"] == "sers"
+        assert sub.wait("devsim/hall/b/birth").json()["rate"] == 0.25
+
+
+def test_a_bad_plant_file_mqtt_section_names_its_line(tmp_path: Path) -> None:
+    from devsim.core.config import ConfigError
+    from devsim.scenario.schema import load_plant
+
+    path = tmp_path / "plant.yaml"
+    path.write_text("devices:\n  - {name: a, kind: sers}\nmqtt:\n  url: http://x\n")
+    with pytest.raises(ConfigError, match=r"plant.yaml:4: mqtt.url: .*expected mqtt://HOST\[:PORT\]"):
+        load_plant(path)
+
+
+def test_the_devices_come_back_when_the_broker_restarts() -> None:
+    first = Broker().start()
+    runtime = Runtime(virtual=True).start()
+    try:
+        device = runtime.add_device("sers", "x")
+        runtime.run(start_mqtt(runtime, [device], first.url, plant="again", rate=RATE), timeout=20)
+        with Sub(first.port, "devsim/again/x/status") as sub:
+            assert sub.wait("devsim/again/x/status").text == "online"
+        first.stop()  # a broker without persistence: everything retained is gone
+        second = Broker()
+        second.port = first.port
+        second.start()
+        try:
+            with Sub(second.port, "devsim/again/x/#") as sub:
+                assert sub.wait("devsim/again/x/birth", timeout=15).json()["device"] == "x"
+                assert sub.wait("devsim/again/x/status").text == "online"
+                pub(second.port, "devsim/again/x/set/input.I4", "true")
+                assert sub.wait("devsim/again/x/state/input.I4", lambda m: m.json() is True)
+        finally:
+            second.stop()
+    finally:
+        runtime.stop()
+        first.stop()
+
+
+def test_a_clean_stop_says_offline_too(mosquitto: Broker) -> None:
+    plant = f"c{next(_plants)}"
+    sim = Sim("sers", "--virtual", "--mqtt", mosquitto.url, "--mqtt-plant", plant)
+    try:
+        sim.read_until("mqtt: topics")
+        with Sub(mosquitto.port, f"devsim/{plant}/sers/status") as sub:
+            assert sub.wait(f"devsim/{plant}/sers/status").text == "online"
+            code, _err = sim.stop()  # SIGINT: devsim disconnects cleanly, so the broker sends no will
+            assert code == 0
+            assert sub.wait(f"devsim/{plant}/sers/status", lambda m: m.text == "offline").text == "offline"
+        with Sub(mosquitto.port, f"devsim/{plant}/sers/status") as late:
+            assert late.wait(f"devsim/{plant}/sers/status").text == "offline"  # retained
+    finally:
+        sim.stop()

@@ -1,0 +1,112 @@
+"""The MQTT facade in the Sparkplug B convention (issue 14), on mosquitto and on an amqtt broker,
+seen through mosquitto_sub / mosquitto_pub and decoded with the Tahu binding's own parser
+(``tahutils.parse``): NBIRTH (bdSeq, seq 0), DBIRTH (every point with its datatype), DCMD → DDATA
+with increasing seq, a refused DCMD on …/error, NCMD rebirth, and NDEATH (same bdSeq) as the last
+will when ``devsim run`` is killed."""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+from tahutils.parse import parse_payload_to_metric_dict, payload_from_string
+from tahutils.tahu import sparkplug_b as tahu
+
+from devsim.core.runtime import Runtime
+from devsim.facades.mqtt import start_broker, start_mqtt
+from tests.facades.test_mqtt import mosquitto  # noqa: F401 - the module's broker fixture
+from tests.support.broker import Broker, free_port
+from tests.support.mqtt import Sub, pub
+from tests.test_cli import Sim
+
+_plants = itertools.count()
+T = tahu.MetricDataType
+SPB = "spBv1.0/devsim"
+
+
+def dcmd(*metrics: tuple[str, int, Any]) -> bytes:
+    """A DCMD payload made with Tahu's helper, as a SCADA host would send it."""
+    payload = tahu.Payload()
+    for name, datatype, value in metrics:
+        tahu.addMetric(payload, name, None, datatype, value)
+    return bytes(payload.SerializeToString())
+
+
+@pytest.fixture(params=["mosquitto", "amqtt"])
+def broker_port(request: pytest.FixtureRequest, mosquitto: Broker) -> Iterator[int]:  # noqa: F811
+    if request.param == "mosquitto":
+        yield mosquitto.port
+        return
+    runtime = Runtime().start()
+    try:
+        broker, port = runtime.run(start_broker(port=free_port()), timeout=20)
+        runtime.add_closer(broker.shutdown)
+        yield port
+    finally:
+        runtime.stop()
+
+
+def test_births_commands_data_and_rebirth(broker_port: int) -> None:
+    plant = f"s{next(_plants)}"
+    runtime = Runtime(virtual=True).start()
+    try:
+        device = runtime.add_device("sers", "x")
+        with Sub(broker_port, f"{SPB}/#", f"devsim/{plant}/#").sync() as sub:
+            runtime.run(start_mqtt(runtime, [device], f"mqtt://127.0.0.1:{broker_port}", plant=plant,
+                                   convention="sparkplug", rate=0.5), timeout=20)
+            nbirth = payload_from_string(sub.wait(f"{SPB}/NBIRTH/{plant}").payload)
+            assert nbirth.seq == 0
+            node_metrics = parse_payload_to_metric_dict(nbirth)
+            assert node_metrics["bdSeq"].datatype == T.Int64
+            assert node_metrics["Node Control/Rebirth"].datatype == T.Boolean
+            bd_seq = node_metrics["bdSeq"].value
+
+            dbirth = payload_from_string(sub.wait(f"{SPB}/DBIRTH/{plant}/x").payload)
+            assert dbirth.seq == 1
+            metrics = parse_payload_to_metric_dict(dbirth)
+            assert set(device.points.names()) <= set(metrics)
+            assert (metrics["axis.position"].datatype, metrics["axis.position"].value) == (T.Double, 0.0)
+            assert (metrics["input.I1"].datatype, metrics["input.I1"].value) == (T.Boolean, False)
+            assert metrics["program"].datatype == T.String
+            assert metrics["encoder.pulses"].is_null  # write-only: declared, no value
+            assert metrics["Device Control/Power Cycle"].datatype == T.Boolean
+            assert "Device Control/Fault/emergency_stop" in metrics
+
+            pub(broker_port, f"{SPB}/DCMD/{plant}/x", dcmd(("input.I1", T.Boolean, True)))
+            ddata = payload_from_string(sub.wait(f"{SPB}/DDATA/{plant}/x").payload)
+            assert ddata.seq == 2
+            assert parse_payload_to_metric_dict(ddata)["input.I1"].value is True
+            assert runtime.read("x", "input.I1") is True
+
+            pub(broker_port, f"{SPB}/DCMD/{plant}/x", dcmd(("Device Control/Fault/emergency_stop", T.Boolean, True)))
+            stopped = payload_from_string(sub.wait(f"{SPB}/DDATA/{plant}/x").payload)
+            assert stopped.seq == 3 and parse_payload_to_metric_dict(stopped)["input.stop"].value is True
+
+            pub(broker_port, f"{SPB}/DCMD/{plant}/x", dcmd(("axis.position", T.Double, 5.0)))
+            error = sub.wait(f"devsim/{plant}/x/error").json()
+            assert error["type"] == "ReadOnlyName" and error["topic"].endswith("#axis.position")
+
+            pub(broker_port, f"{SPB}/NCMD/{plant}", dcmd(("Node Control/Rebirth", T.Boolean, True)))
+            again = payload_from_string(sub.wait(f"{SPB}/NBIRTH/{plant}").payload)
+            assert again.seq == 0 and parse_payload_to_metric_dict(again)["bdSeq"].value == bd_seq
+            reborn = parse_payload_to_metric_dict(payload_from_string(sub.wait(f"{SPB}/DBIRTH/{plant}/x").payload))
+            assert reborn["input.I1"].value is True
+    finally:
+        runtime.stop()
+
+
+def test_ndeath_with_the_birth_bdseq_when_devsim_is_killed(broker_port: int) -> None:
+    plant = f"d{next(_plants)}"
+    with Sub(broker_port, f"{SPB}/+/{plant}").sync() as sub:
+        sim = Sim("sers", "--virtual", "--mqtt", f"mqtt://127.0.0.1:{broker_port}", "--mqtt-convention", "sparkplug",
+                  "--mqtt-plant", plant)
+        try:
+            sim.read_until(f"mqtt: sparkplug {SPB}/+/{plant}")
+            birth = parse_payload_to_metric_dict(payload_from_string(sub.wait(f"{SPB}/NBIRTH/{plant}").payload))
+            sim.proc.kill()
+            death = payload_from_string(sub.wait(f"{SPB}/NDEATH/{plant}", timeout=20).payload)
+            assert parse_payload_to_metric_dict(death)["bdSeq"].value == birth["bdSeq"].value
+        finally:
+            sim.stop()
