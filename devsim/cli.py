@@ -166,6 +166,8 @@ class _Plan:
     modbus: str | None = None  # --modbus tcp:[HOST:]PORT | rtu | rtu:LINK
     modbus_map: str = "points"  # --modbus-map points | mirror
     canopen: str | None = None  # --canopen NODE[@[HOST:]PORT]
+    opcua: str | None = None  # --opcua [[HOST:]PORT] ("": the default endpoint)
+    opcua_period: float = 0.1  # --opcua-period SECONDS
 
 
 def _host_port(option: str, text: str) -> tuple[str, int]:
@@ -310,6 +312,16 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     help="Also serve the device as CANopen node NODE (extra [can]) on a socketcand server (default port 29536).",
 )
 @click.option(
+    "--opcua",
+    metavar="[[HOST:]PORT]",
+    is_flag=False,
+    flag_value="",
+    default=None,
+    help="Also serve the devices on an OPC UA server (extra [opcua]), default opc.tcp://127.0.0.1:4840/devsim/.",
+)
+@click.option("--opcua-period", type=float, default=0.1, show_default=True, metavar="SECONDS",
+              help="How often the OPC UA server samples the points for subscriptions (device time).")
+@click.option(
     "--modbus-map",
     type=click.Choice(["points", "mirror"]),
     default="points",
@@ -334,6 +346,8 @@ def run(
     port_options: tuple[str, ...],
     modbus: str | None,
     canopen: str | None,
+    opcua: str | None,
+    opcua_period: float,
     modbus_map: str,
 ) -> None:
     """Serve a simulated KIND device until Ctrl-C.
@@ -369,6 +383,8 @@ def run(
         _check_modbus(modbus)
     if canopen is not None:
         _check_canopen(canopen)
+    if opcua is not None:
+        _check_opcua(opcua, opcua_period)
     if speed <= 0:
         raise click.UsageError("--speed: must be positive")
     if virtual and speed != 1.0:
@@ -402,6 +418,8 @@ def run(
         modbus=modbus,
         modbus_map=modbus_map,
         canopen=canopen,
+        opcua=opcua,
+        opcua_period=opcua_period,
     )
     try:
         asyncio.run(_serve(plan))
@@ -479,6 +497,12 @@ async def _serve(plan: _Plan) -> None:
                 from devsim.facades.canopen_node import start_canopen
 
                 canopen_lines = await start_canopen(runtime, devices, plan.canopen)
+            opcua_url: str | None = None
+            if plan.opcua is not None:
+                stage = "serve OPC UA"
+                from devsim.facades.opcua import start_opcua
+
+                opcua_url = (await start_opcua(runtime, devices, plan.opcua, period=plan.opcua_period)).url
             if plan.control is not None:
                 stage = f"serve the control API on {plan.control}"
                 server = ControlServer(runtime, plan.control, allow_remote=plan.allow_remote)
@@ -500,6 +524,8 @@ async def _serve(plan: _Plan) -> None:
                 _say(text)
             for name, where in modbus_served:
                 _say(f"{name}.modbus: {'tcp' if plan.modbus and plan.modbus.startswith('tcp') else 'rtu'} {where}")
+            if opcua_url is not None:
+                _say(f"opcua: {opcua_url}")
             if server is not None:
                 _say(f"control: {address}")
             for device in devices:  # NAME: ready, each time it has booted and listens
@@ -556,6 +582,21 @@ def _check_canopen(spec: str) -> None:
         import canopen  # noqa: F401
     except ImportError:
         raise click.UsageError("--canopen needs canopen and python-can: pip install 'devsim-motion[can]'") from None
+
+
+def _check_opcua(spec: str, period: float) -> None:
+    from devsim.facades.opcua_space import endpoint_url
+
+    try:
+        endpoint_url(spec)
+    except ValueError as exc:
+        raise click.UsageError(str(exc)) from None
+    if not period > 0:
+        raise click.UsageError("--opcua-period: must be positive")
+    try:
+        import asyncua  # noqa: F401
+    except ImportError:
+        raise click.UsageError("--opcua needs asyncua: pip install 'devsim-motion[opcua]'") from None
 
 
 def _modbus_for(spec: str, index: int) -> str:

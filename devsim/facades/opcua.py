@@ -42,9 +42,11 @@ from devsim.core.device import Device
 from devsim.core.points import BadValue, ReadOnlyName, UnknownName
 from devsim.core.watch import PointWatch
 from devsim.facades.opcua_space import (
+    DEFAULT_ENDPOINT,
     NAMESPACE,
     TypeMismatch,
     Variable,
+    endpoint_url,
     eu_information,
     from_opcua,
     to_opcua,
@@ -53,27 +55,9 @@ from devsim.facades.opcua_space import (
 
 __all__ = ["DEFAULT_ENDPOINT", "OpcuaFacade", "PointAttributes", "endpoint_url", "start_opcua"]
 
-DEFAULT_ENDPOINT = "opc.tcp://127.0.0.1:4840/devsim/"
 _BAD = ua.StatusCodes
 _ADMIN = User(role=UserRole.Admin)  # asyncua's default for a write from inside the server
 _READ, _WRITE = ua.AccessLevel.CurrentRead.mask, ua.AccessLevel.CurrentWrite.mask
-
-
-def endpoint_url(spec: str | None) -> str:
-    """The endpoint for ``--opcua [[HOST:]PORT]`` (or a whole ``opc.tcp://`` URL); empty or None:
-    :data:`DEFAULT_ENDPOINT`.  Loopback unless a host is named."""
-    if not spec:
-        return DEFAULT_ENDPOINT
-    if spec.startswith("opc.tcp://"):
-        return spec
-    host, sep, port_text = spec.rpartition(":")
-    if not sep:
-        host = ""
-    host = host.strip("[]") or "127.0.0.1"
-    if not port_text.isdigit() or not 0 <= int(port_text) <= 65535:
-        raise ValueError(f"--opcua: expected [HOST:]PORT, not {spec!r}")
-    shown = f"[{host}]" if ":" in host else host
-    return f"opc.tcp://{shown}:{int(port_text)}/devsim/"
 
 
 class _Bound:

@@ -32,12 +32,14 @@ from devsim.core.record import record
 
 __all__ = [
     "DATA_TYPES",
+    "DEFAULT_ENDPOINT",
     "NAMESPACE",
     "RESERVED",
     "TypeMismatch",
     "UNECE",
     "Variable",
     "data_type",
+    "endpoint_url",
     "eu_information",
     "from_opcua",
     "to_opcua",
@@ -45,6 +47,7 @@ __all__ = [
 ]
 
 NAMESPACE = "urn:devsim"
+DEFAULT_ENDPOINT = "opc.tcp://127.0.0.1:4840/devsim/"
 #: Browse names on a device object that are not points.
 RESERVED = frozenset({"Kind", "FaultKinds", "Fault", "PowerCycle"})
 
@@ -111,6 +114,23 @@ def variables(device: str, points: Iterable[Point]) -> list[Variable]:
         rows.append(Variable(point.name, f"{device}.{point.name}", data_type(point), point.readable,
                              point.settable, point.type, point.unit, doc))
     return rows
+
+
+def endpoint_url(spec: str | None) -> str:
+    """The endpoint for ``--opcua [[HOST:]PORT]`` (or a whole ``opc.tcp://`` URL); empty or None:
+    :data:`DEFAULT_ENDPOINT`.  Loopback unless a host is named."""
+    if not spec:
+        return DEFAULT_ENDPOINT
+    if spec.startswith("opc.tcp://"):
+        return spec
+    host, sep, port_text = spec.rpartition(":")
+    if not sep:
+        host = ""
+    host = host.strip("[]") or "127.0.0.1"
+    if not port_text.isdigit() or not 0 <= int(port_text) <= 65535:
+        raise ValueError(f"--opcua: expected [HOST:]PORT, not {spec!r}")
+    shown = f"[{host}]" if ":" in host else host
+    return f"opc.tcp://{shown}:{int(port_text)}/devsim/"
 
 
 def eu_information(unit: str) -> tuple[str, int, str, str]:

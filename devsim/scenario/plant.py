@@ -135,6 +135,8 @@ async def build_plant(
     for dev in spec.devices:
         if dev.state:
             plant.devices[dev.name].apply_state(dev.state)
+    if spec.opcua is not None:
+        await _serve_opcua(plant)
     return plant
 
 
@@ -154,6 +156,18 @@ async def _serve_modbus(plant: Plant, dev: Any, trace_dir: str | Path | None, tr
         plant.transports[name] = transport
         plant.lines[name] = plant.runtime.lines[name]
         plant.kinds[name] = "pty"
+
+
+async def _serve_opcua(plant: Plant) -> None:
+    """The plant's OPC UA server (port ``opcua``): every device under Objects."""
+    from devsim.facades.opcua import start_opcua
+
+    opcua = plant.spec.opcua
+    assert opcua is not None
+    facade = await start_opcua(plant.runtime, list(plant.devices.values()), opcua.spec(), period=opcua.period,
+                               name=plant.spec.name or "devsim")
+    plant.transports["opcua"] = _Address(facade.url, facade.url)
+    plant.kinds["opcua"] = "opcua"
 
 
 @record
