@@ -227,7 +227,8 @@ class OpcuaFacade:
         await server.init()
         server.set_endpoint(self.endpoint)
         server.set_server_name(f"devsim {self.name}")
-        server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
+        server.set_security_policy([ua.SecurityPolicyType.NoSecurity])  # a lab's simulator: no certificates
+        server.set_identity_tokens([ua.AnonymousIdentityToken])  # and no user names
         self.namespace = await server.register_namespace(NAMESPACE)
         server.iserver.attribute_service = PointAttributes(server.iserver.aspace, self)
         event_type = await server.create_custom_event_type(
