@@ -8,5 +8,7 @@ declared points (:mod:`devsim.core.points`) and, for drive profiles, its declare
 * :mod:`devsim.facades.canopen_od` – the CANopen EDS of a kind (pure);
 * :mod:`devsim.facades.cia402` – the CiA 402 state machine and profile modes (pure);
 * :mod:`devsim.facades.canopen_node` – the device as canopen's local node (extra ``[can]``), reached
-  from other processes through :mod:`devsim.transports.socketcand`.
+  from other processes through :mod:`devsim.transports.socketcand`;
+* :mod:`devsim.facades.opcua_space` – the OPC UA address space a kind's points give (pure);
+* :mod:`devsim.facades.opcua` – a plant's devices on one asyncua OPC UA server (extra ``[opcua]``).
 """

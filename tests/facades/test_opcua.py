@@ -173,7 +173,8 @@ async def test_fault_and_power_cycle_methods_and_fault_events(served: tuple[Runt
 
         runtime.call(lambda: runtime.device("sers").events.clear())
         await sers.call_method(f"{ns}:PowerCycle", ua.Variant(False, ua.VariantType.Boolean))
-        assert runtime.call(lambda: [name for _, name in runtime.device("sers").events]), "no power-on recorded"
+        assert runtime.call(lambda: [name for _, name in runtime.device("sers").events]) == ["power_on"]
+        assert runtime.read("sers", "booting") is True  # switched on again: it boots
         await subscription.delete()
         await server_subscription.delete()
 
