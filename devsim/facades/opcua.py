@@ -113,7 +113,8 @@ class _DeviceNode:
         self.generators: list[EventGenerator] = []
         self.watch: PointWatch | None = None
         self._pending: dict[str, Any] = {}
-        self._flushing: asyncio.Task[None] | None = None
+        self._events: list[tuple[str, str, bool, int, int]] = []
+        self._tasks: dict[str, asyncio.Task[None]] = {}  # "values" / "events": the one draining each
         self._undo: list[Callable[[], None]] = []
 
     # -- values ---------------------------------------------------------------------------
@@ -150,8 +151,27 @@ class _DeviceNode:
     def changed(self, changes: dict[str, Any]) -> None:
         """The watch's listener: the changed values go into the address space (in a task)."""
         self._pending.update(changes)
-        if self._flushing is None or self._flushing.done():
-            self._flushing = asyncio.get_running_loop().create_task(self._flush())
+        self._drain("values", self._flush)
+
+    def _drain(self, what: str, work: Callable[[], Any]) -> None:
+        """Run ``work()`` (a coroutine emptying a queue) in the server's loop unless it runs
+        already: one task per queue keeps the order of values and events."""
+        loop = self.facade.loop
+        assert loop is not None, "the server has not started"
+
+        def start() -> None:
+            task = self._tasks.get(what)
+            if task is None or task.done():
+                self._tasks[what] = loop.create_task(work())
+
+        try:
+            here = asyncio.get_running_loop() is loop
+        except RuntimeError:
+            here = False
+        if here:
+            start()
+        else:  # a device used from another thread (not the runtime's way, but not to break it)
+            loop.call_soon_threadsafe(start)
 
     async def _flush(self) -> None:
         server = self.facade.server
@@ -187,20 +207,27 @@ class _DeviceNode:
         self._emit(f"{self.device.name}: fault on axis {axis}, code {code:04X}h", "", True, axis, code)
 
     def _emit(self, message: str, kind: str, active: bool, axis: int, code: int) -> None:
-        loop = asyncio.get_running_loop()
-        for generator in self.generators:
-            event = generator.event
-            event.FaultKind, event.Active, event.Axis, event.Code = kind, active, int(axis), int(code)
-            event.Severity = 700 if active else 300
-            loop.create_task(generator.trigger(message=message))
+        self._events.append((message, kind, active, int(axis), int(code)))
+        self._drain("events", self._send_events)
+
+    async def _send_events(self) -> None:
+        """The queued fault events, one after the other (the generators' event objects are
+        reused: filled just before each trigger)."""
+        while self._events:
+            message, kind, active, axis, code = self._events.pop(0)
+            for generator in self.generators:
+                event = generator.event
+                event.FaultKind, event.Active, event.Axis, event.Code = kind, active, axis, code
+                event.Severity = 700 if active else 300
+                await generator.trigger(message=message)
 
     def close(self) -> None:
         if self.watch is not None:
             self.watch.stop()
         for undo in self._undo:
             undo()
-        if self._flushing is not None:
-            self._flushing.cancel()
+        for task in self._tasks.values():
+            task.cancel()
 
 
 class OpcuaFacade:
@@ -219,11 +246,13 @@ class OpcuaFacade:
         self.nodes: dict[str, _DeviceNode] = {}
         self.namespace = 0
         self.url = endpoint
+        self.loop: asyncio.AbstractEventLoop | None = None
 
     async def start(self) -> str:
         """Build the address space and listen; returns the endpoint URL (with the port the
         system chose when the endpoint's port is 0)."""
         server = self.server
+        self.loop = asyncio.get_running_loop()
         await server.init()
         server.set_endpoint(self.endpoint)
         server.set_server_name(f"devsim {self.name}")

@@ -160,6 +160,11 @@ async def test_fault_and_power_cycle_methods_and_fault_events(served: tuple[Runt
         assert (await server_events.event(FaultKind="emergency_stop", Active=True)).SourceNode == sers.nodeid
         runtime.fault("sers", "emergency_stop", False)  # through the control API
         await collect.event(FaultKind="emergency_stop", Active=False)
+        device = runtime.device("sers")
+        runtime.call(lambda: (device.fault("emergency_stop", True), device.fault("emergency_stop", False)))
+        first, second = [await asyncio.wait_for(collect.events.get(), TIMEOUT) for _ in range(2)]
+        assert (first.FaultKind, first.Active, second.FaultKind, second.Active) == (
+            "emergency_stop", True, "emergency_stop", False)  # both, in order, each with its own fields
         with pytest.raises(ua.uaerrors.BadInvalidArgument):
             await sers.call_method(f"{ns}:Fault", ua.Variant("no_such_fault", ua.VariantType.String),
                                    ua.Variant(True, ua.VariantType.Boolean))
