@@ -116,6 +116,7 @@ class _DeviceNode:
         self._events: list[tuple[str, str, bool, int, int]] = []
         self._tasks: dict[str, asyncio.Task[None]] = {}  # "values" / "events": the one draining each
         self._undo: list[Callable[[], None]] = []
+        self._sample_due = False
 
     # -- values ---------------------------------------------------------------------------
     def read(self, bound: _Bound) -> ua.DataValue:
@@ -144,9 +145,19 @@ class _DeviceNode:
         except Exception:  # noqa: BLE001 - the device's failure, not the server's
             logging.getLogger(__name__).exception("%s: writing %s failed", self.device.name, variable.point)
             return ua.StatusCode(_BAD.BadInternalError)
-        if self.watch is not None:
-            self.watch.sample()  # subscribers see the write (and what it moved) at once
+        self.sample_soon()  # subscribers see the write (and what it moved) at once
         return ua.StatusCode()
+
+    def sample_soon(self) -> None:
+        """One extra sample of the points after this loop turn (one for a batch of writes)."""
+        if self.watch is not None and not self._sample_due:
+            self._sample_due = True
+            asyncio.get_running_loop().call_soon(self._sample)
+
+    def _sample(self) -> None:
+        self._sample_due = False
+        if self.watch is not None:
+            self.watch.sample()
 
     def changed(self, changes: dict[str, Any]) -> None:
         """The watch's listener: the changed values go into the address space (in a task)."""
@@ -196,8 +207,7 @@ class _DeviceNode:
         if wipe.VariantType != ua.VariantType.Boolean:
             return ua.StatusCode(_BAD.BadTypeMismatch)
         self.device.power_cycle(wipe=bool(wipe.Value))
-        if self.watch is not None:
-            self.watch.sample()
+        self.sample_soon()
         return []
 
     def fault_switched(self, kind: str, active: bool) -> None:

@@ -24,6 +24,7 @@ from typing import Any
 import pytest
 from asyncua import Client, ua
 
+from devsim.core.points import BadValue
 from devsim.core.registry import kinds
 from devsim.core.runtime import Runtime
 from devsim.facades.opcua import OpcuaFacade, start_opcua
@@ -206,6 +207,26 @@ async def test_every_point_of_every_kind_reads_back_as_the_device_gives_it(
                     assert json.loads(got) == json.loads(want), (kind, row.point)
                 else:
                     assert got == want, (kind, row.point)
+            nodes = [client.get_node(ua.NodeId(row.node_id, ns)) for row in rows]
+            types = await client.read_attributes(nodes, ua.AttributeIds.DataType)
+            access = await client.read_attributes(nodes, ua.AttributeIds.AccessLevel)
+            for row, data_type, level in zip(rows, types, access, strict=True):
+                assert data_type.Value.Value == ua.NodeId(ua.VariantType[row.data_type].value), (kind, row.point)
+                assert level.Value.Value == row.readable * 1 | row.writable * 2, (kind, row.point)
+            # every settable point written with the value it has: taken, or refused exactly where
+            # the control API refuses that value too
+            again = [(row, value) for row, value in zip(readable, expected, strict=True)
+                     if row.writable and value is not None]
+            written = await client.write_values(
+                [client.get_node(ua.NodeId(row.node_id, ns)) for row, _ in again],
+                [ua.DataValue(ua.Variant(value, ua.VariantType[row.data_type])) for row, value in again],
+                raise_on_partial_error=False)
+            for (row, value), status in zip(again, written, strict=True):
+                if not status.is_good():
+                    assert status.value == ua.StatusCodes.BadOutOfRange, (kind, row.point, status)
+                    parsed = json.loads(value) if row.type == "json" else value
+                    with pytest.raises(BadValue):
+                        runtime.set(kind, row.point, parsed)
 
 
 # -- node-opcua ---------------------------------------------------------------------------------
