@@ -276,7 +276,13 @@ class OpcuaFacade:
              ("Axis", ua.VariantType.Int32), ("Code", ua.VariantType.Int32)])
         for device in self.devices:
             await self._add_device(device, event_type)
-        await server.start()
+        quiet = logging.getLogger("asyncua.server.server")  # a port in use: the caller's one line,
+        level = quiet.level  # not asyncua's logged traceback
+        quiet.setLevel(logging.CRITICAL)
+        try:
+            await server.start()
+        finally:
+            quiet.setLevel(level)
         bserver = server.bserver
         parsed = urlparse(self.endpoint)
         if bserver is not None and parsed.port == 0:
