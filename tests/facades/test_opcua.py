@@ -119,6 +119,13 @@ async def test_writes_go_through_the_device_with_its_validation(served: tuple[Ru
         assert runtime.read("sers", "quantity.heatsink_temperature") == 61.5
         with pytest.raises(ua.uaerrors.BadNotWritable):
             await (await _node(client, "sers.axis.position")).write_value(ua.Variant(5.0, ua.VariantType.Double))
+        pulses = await _node(client, "sers.encoder.pulses")  # write-only: counted, never read
+        assert await pulses.get_access_level() == {ua.AccessLevel.CurrentWrite}
+        with pytest.raises(ua.uaerrors.BadNotReadable):
+            await pulses.read_value()
+        await pulses.write_value(ua.Variant(100, ua.VariantType.Int64))  # taken (Good)
+        with pytest.raises(ua.uaerrors.BadTypeMismatch):
+            await pulses.write_value(ua.Variant(1.5, ua.VariantType.Double))
         switch = await _node(client, "sers.input.I1")
         wanted = not runtime.read("sers", "input.I1")
         await switch.write_value(ua.Variant(wanted, ua.VariantType.Boolean))
