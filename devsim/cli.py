@@ -170,6 +170,8 @@ class _Plan:
     mqtt_convention: str = "devsim"  # --mqtt-convention devsim | sparkplug
     mqtt_rate: float = 1.0  # --mqtt-rate SECONDS
     mqtt_plant: str | None = None  # --mqtt-plant NAME (default: the kind)
+    opcua: str | None = None  # --opcua [[HOST:]PORT] ("": the default endpoint)
+    opcua_period: float = 0.1  # --opcua-period SECONDS
 
 
 def _host_port(option: str, text: str) -> tuple[str, int]:
@@ -314,6 +316,16 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     help="Also serve the device as CANopen node NODE (extra [can]) on a socketcand server (default port 29536).",
 )
 @click.option(
+    "--opcua",
+    metavar="[[HOST:]PORT]",
+    is_flag=False,
+    flag_value="",
+    default=None,
+    help="Also serve the devices on an OPC UA server (extra [opcua]), default opc.tcp://127.0.0.1:4840/devsim/.",
+)
+@click.option("--opcua-period", type=float, default=0.1, show_default=True, metavar="SECONDS",
+              help="How often the OPC UA server samples the points for subscriptions (device time).")
+@click.option(
     "--modbus-map",
     type=click.Choice(["points", "mirror"]),
     default="points",
@@ -357,6 +369,8 @@ def run(
     port_options: tuple[str, ...],
     modbus: str | None,
     canopen: str | None,
+    opcua: str | None,
+    opcua_period: float,
     modbus_map: str,
     mqtt: str | None,
     mqtt_convention: str,
@@ -398,6 +412,8 @@ def run(
         _check_canopen(canopen)
     if mqtt is not None:
         _check_mqtt(mqtt, mqtt_convention, mqtt_rate, mqtt_plant)
+    if opcua is not None:
+        _check_opcua(opcua, opcua_period)
     if speed <= 0:
         raise click.UsageError("--speed: must be positive")
     if virtual and speed != 1.0:
@@ -435,6 +451,8 @@ def run(
         mqtt_convention=mqtt_convention,
         mqtt_rate=mqtt_rate,
         mqtt_plant=mqtt_plant,
+        opcua=opcua,
+        opcua_period=opcua_period,
     )
     try:
         asyncio.run(_serve(plan))
@@ -520,6 +538,12 @@ async def _serve(plan: _Plan) -> None:
                 mqtt_lines = await start_mqtt(runtime, devices, plan.mqtt or None, plant=plan.mqtt_plant or plan.kind,
                                               convention=plan.mqtt_convention,  # type: ignore[arg-type]
                                               rate=plan.mqtt_rate)
+            opcua_url: str | None = None
+            if plan.opcua is not None:
+                stage = "serve OPC UA"
+                from devsim.facades.opcua import start_opcua
+
+                opcua_url = (await start_opcua(runtime, devices, plan.opcua, period=plan.opcua_period)).url
             if plan.control is not None:
                 stage = f"serve the control API on {plan.control}"
                 server = ControlServer(runtime, plan.control, allow_remote=plan.allow_remote)
@@ -543,6 +567,8 @@ async def _serve(plan: _Plan) -> None:
                 _say(text)
             for name, where in modbus_served:
                 _say(f"{name}.modbus: {'tcp' if plan.modbus and plan.modbus.startswith('tcp') else 'rtu'} {where}")
+            if opcua_url is not None:
+                _say(f"opcua: {opcua_url}")
             if server is not None:
                 _say(f"control: {address}")
             for device in devices:  # NAME: ready, each time it has booted and listens
@@ -626,6 +652,19 @@ def _check_mqtt(url: str, convention: str, rate: float, plant: str | None) -> No
         raise click.UsageError(f"--mqtt: {exc}") from None
     if not rate > 0:
         raise click.UsageError("--mqtt-rate: must be a positive number of seconds")
+def _check_opcua(spec: str, period: float) -> None:
+    from devsim.facades.opcua_space import endpoint_url
+
+    try:
+        endpoint_url(spec)
+    except ValueError as exc:
+        raise click.UsageError(str(exc)) from None
+    if not period > 0:
+        raise click.UsageError("--opcua-period: must be positive")
+    try:
+        import asyncua  # noqa: F401
+    except ImportError:
+        raise click.UsageError("--opcua needs asyncua: pip install 'devsim-motion[opcua]'") from None
 
 
 def _modbus_for(spec: str, index: int) -> str:

@@ -27,7 +27,7 @@ from devsim.core.clock import Clock
 from devsim.core.kit import MAIN_PORT, DriveActions, FaultTable, PortDef, Reference
 from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
-from devsim.core.points import BadValue, PointTable, ReadOnlyName, UnknownName
+from devsim.core.points import BadValue, PointTable, ReadOnlyName, UnknownName, parse_bool
 from devsim.core.record import record
 from devsim.core.settings import Section
 
@@ -277,8 +277,10 @@ class Device:
             point.put(self.model, value)
 
     def fault(self, kind: str, active: Any) -> None:
-        """Start (or end) a declared device fault such as ``blocked_axis`` or ``emergency_stop``."""
+        """Start (or end) a declared device fault such as ``blocked_axis`` or ``emergency_stop``;
+        then the model announces ``fault_switched(kind, active)`` (a facade's fault events)."""
         self.faults.apply(self.model, kind, active, self.name)
+        self.model.announce("fault_switched", kind, parse_bool(active))
 
     def record_event(self, name: str) -> None:
         self.model.record_event(name)

@@ -13,4 +13,6 @@ declared points (:mod:`devsim.core.points`) and, for drive profiles, its declare
 * :mod:`devsim.facades.mqtt_sparkplug` – Sparkplug B payloads through the Tahu binding (pure);
 * :mod:`devsim.facades.mqtt` – publishing devices over MQTT with aiomqtt (extra ``[mqtt]``), and the
   embedded amqtt broker.
+* :mod:`devsim.facades.opcua_space` – the OPC UA address space a kind's points give (pure);
+* :mod:`devsim.facades.opcua` – a plant's devices on one asyncua OPC UA server (extra ``[opcua]``).
 """

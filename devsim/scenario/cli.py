@@ -148,8 +148,11 @@ def up(
     if workers > 1 and virtual:
         click.echo("devsim: under virtual time a plant stays in one process (--workers ignored)", err=True)
         workers = 1
-    if workers > 1 and getattr(spec, "mqtt", None) is not None:
+    if workers > 1 and spec.mqtt is not None:
         click.echo("devsim: a plant with an mqtt: section stays in one process (--workers ignored)", err=True)
+        workers = 1
+    if workers > 1 and spec.opcua is not None:
+        click.echo("devsim: the plant's OPC UA server needs the plant in one process (--workers ignored)", err=True)
         workers = 1
     if workers > 1:
         from devsim.scenario.workers import run_workers

@@ -139,6 +139,8 @@ async def build_plant(
             plant.devices[dev.name].apply_state(dev.state)
     if spec.mqtt is not None:
         await _serve_mqtt(plant)
+    if spec.opcua is not None:
+        await _serve_opcua(plant)
     return plant
 
 
@@ -183,6 +185,18 @@ async def _serve_modbus(plant: Plant, dev: Any, trace_dir: str | Path | None, tr
         plant.transports[name] = transport
         plant.lines[name] = plant.runtime.lines[name]
         plant.kinds[name] = "pty"
+
+
+async def _serve_opcua(plant: Plant) -> None:
+    """The plant's OPC UA server (port ``opcua``): every device under Objects."""
+    from devsim.facades.opcua import start_opcua
+
+    opcua = plant.spec.opcua
+    assert opcua is not None
+    facade = await start_opcua(plant.runtime, list(plant.devices.values()), opcua.spec(), period=opcua.period,
+                               name=plant.spec.name or "devsim")
+    plant.transports["opcua"] = _Address(facade.url, facade.url)
+    plant.kinds["opcua"] = "opcua"
 
 
 @record

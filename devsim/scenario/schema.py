@@ -46,6 +46,7 @@ __all__ = [
     "DeviceSpec",
     "ModbusSpec",
     "MqttSpec",
+    "OpcuaSpec",
     "PlantSpec",
     "Scenario",
     "Step",
@@ -179,6 +180,23 @@ class MqttSpec(_Model):
 
             parse_url(value)
         return value
+class OpcuaSpec(_Model):
+    """The plant's devices on one OPC UA server (issue 14, :mod:`devsim.facades.opcua`):
+    ``opcua: {}`` serves ``opc.tcp://127.0.0.1:4840/devsim/``; ``port: 0`` takes a free port;
+    ``period`` is how often the points are sampled for subscriptions (device time)."""
+
+    host: str = "127.0.0.1"
+    port: int = Field(default=4840, ge=0, le=65535)
+    period: float = Field(default=0.1, gt=0, description="sampling period for subscriptions, e.g. 100ms")
+
+    @field_validator("period", mode="before")
+    @classmethod
+    def _duration(cls, value: Any, info: ValidationInfo) -> float:
+        return parse_duration(value, str(info.field_name))
+
+    def spec(self) -> str:
+        """The ``--opcua`` form: ``HOST:PORT``."""
+        return f"[{self.host}]:{self.port}" if ":" in self.host else f"{self.host}:{self.port}"
 
 
 class DeviceSpec(_Model):
@@ -269,6 +287,13 @@ class PlantSpec(_Model):
     devices: list[DeviceSpec] = Field(min_length=1)
     buses: list[BusSpec] = Field(default_factory=list)
     mqtt: MqttSpec | None = Field(default=None, description="also publish the devices over MQTT")
+    opcua: OpcuaSpec | None = Field(default=None, description="serve every device on one OPC UA server")
+
+    @model_validator(mode="after")
+    def _opcua_name(self) -> PlantSpec:
+        if self.opcua is not None and "opcua" in [d.name for d in self.devices] + [b.name for b in self.buses]:
+            raise ValueError("with an opcua section no device or bus may be named 'opcua' (the server's port name)")
+        return self
 
     @model_validator(mode="after")
     def _names(self) -> PlantSpec:
@@ -302,9 +327,10 @@ class PlantSpec(_Model):
 
     def ports(self) -> list[str]:
         """Names a host can talk to: device ports with their own transport, buses, and the
-        devices' Modbus facades (``NAME.modbus``)."""
+        devices' Modbus facades (``NAME.modbus``), and the plant's OPC UA server (``opcua``)."""
         return ([name for name, _device, _port in self.device_ports()] + [b.name for b in self.buses]
-                + [f"{d.name}.modbus" for d in self.devices if d.modbus is not None])
+                + [f"{d.name}.modbus" for d in self.devices if d.modbus is not None]
+                + (["opcua"] if self.opcua is not None else []))
 
 
 # -- conditions ------------------------------------------------------------------------------

@@ -1,0 +1,69 @@
+// node-opcua's client, as an OPC UA client nobody on devsim wrote (tests/facades/test_opcua.py).
+// Usage: node client.js ENDPOINT 'PLAN'  -- PLAN is a JSON list of steps, each one of
+//   {"op": "browse", "node": "x"}                       browse names of the node's children
+//   {"op": "read", "node": "x.axis.position"}           value, data type name, status
+//   {"op": "write", "node": "x.param.V", "type": "Double", "value": 12.5}   status
+//   {"op": "call", "object": "x", "method": "x#Fault", "args": [["String", "power"], ["Boolean", true]]}
+// String node ids are in the namespace urn:devsim.  Prints one line "RESULT {json}" (node-opcua
+// writes its own warnings to stdout too).
+"use strict";
+const { OPCUAClient, AttributeIds, DataType } = require("node-opcua-client");
+
+function plain(value, dataType) {
+    if ((dataType === DataType.Int64 || dataType === DataType.UInt64) && Array.isArray(value)) {
+        return value[0] * 4294967296 + (value[1] >>> 0);  // node-opcua's [high, low] words
+    }
+    return value;
+}
+
+async function step(session, ns, s) {
+    const id = (name) => `ns=${ns};s=${name}`;
+    if (s.op === "browse") {
+        const result = await session.browse(id(s.node));
+        return { status: result.statusCode.name, names: result.references.map((r) => r.browseName.name) };
+    }
+    if (s.op === "read") {
+        const dv = await session.read({ nodeId: id(s.node), attributeId: AttributeIds.Value });
+        const type = dv.value.dataType;
+        return { status: dv.statusCode.name, type: DataType[type], value: plain(dv.value.value, type) };
+    }
+    if (s.op === "write") {
+        const status = await session.write({
+            nodeId: id(s.node), attributeId: AttributeIds.Value,
+            value: { value: { dataType: DataType[s.type], value: s.value } },
+        });
+        return { status: status.name };
+    }
+    if (s.op === "call") {
+        const result = await session.call({
+            objectId: id(s.object), methodId: id(s.method),
+            inputArguments: s.args.map(([type, value]) => ({ dataType: DataType[type], value })),
+        });
+        return { status: result.statusCode.name };
+    }
+    throw new Error(`unknown step ${s.op}`);
+}
+
+async function main() {
+    const [endpoint, planText] = process.argv.slice(2);
+    const client = OPCUAClient.create({ endpointMustExist: false, connectionStrategy: { maxRetry: 0 } });
+    await client.connect(endpoint);
+    try {
+        const session = await client.createSession();
+        const namespaces = await session.readNamespaceArray();
+        const ns = namespaces.indexOf("urn:devsim");
+        const results = [];
+        for (const s of JSON.parse(planText)) {
+            results.push(await step(session, ns, s));
+        }
+        await session.close();
+        process.stdout.write(`RESULT ${JSON.stringify({ namespace: ns, results })}\n`);
+    } finally {
+        await client.disconnect();
+    }
+}
+
+main().catch((err) => {
+    process.stderr.write(`${err.stack || err}\n`);
+    process.exit(1);
+});

@@ -1,0 +1,81 @@
+"""The OPC UA address space a kind's points give (devsim.facades.opcua_space, pure): data types,
+access, engineering units, and the conversions a client's writes go through."""
+
+from __future__ import annotations
+
+import pytest
+
+from devsim.core.points import Point
+from devsim.core.registry import device_class, kinds
+from devsim.facades.opcua_space import (
+    RESERVED,
+    TypeMismatch,
+    Variable,
+    data_type,
+    eu_information,
+    from_opcua,
+    to_opcua,
+    variables,
+)
+
+
+def _get(model: object) -> int:
+    return 0
+
+
+def _put(model: object, value: object) -> None:
+    return None
+
+
+@pytest.mark.parametrize(("point", "expected"), [
+    (Point("a", "bool", "", get=_get), "Boolean"),
+    (Point("a", "int", "", get=_get), "Int64"),
+    (Point("a", "int", "", get=_get, minimum=0, maximum=99), "Int32"),
+    (Point("a", "int", "", get=_get, minimum=0, maximum=2**32), "Int64"),
+    (Point("a", "float", "", get=_get), "Double"),
+    (Point("a", "str", "", get=_get), "String"),
+    (Point("a", "json", "", get=_get), "String"),
+])
+def test_the_data_type_comes_from_the_point_type(point: Point, expected: str) -> None:
+    assert data_type(point) == expected
+
+
+def test_a_variable_per_readable_or_settable_point_with_access_and_description() -> None:
+    points = [Point("axis.position", "float", "actual position", "§5.1", "inc", get=_get),
+              Point("param.V", "float", "velocity", "§4", put=_put),
+              Point("input.I1", "bool", "input 1", get=_get, put=_put)]
+    rows = {row.point: row for row in variables("x", points)}
+    assert rows["axis.position"] == Variable("axis.position", "x.axis.position", "Double", True, False, "float", "inc",
+                                             "actual position (§5.1)")
+    assert (rows["param.V"].readable, rows["param.V"].writable) == (False, True)
+    assert (rows["input.I1"].readable, rows["input.I1"].writable) == (True, True)
+
+
+@pytest.mark.parametrize("kind", sorted(kinds()))
+def test_no_kind_has_a_point_named_like_the_device_objects_own_nodes(kind: str) -> None:
+    names = [row.point for row in variables(kind, device_class(kind).points)]
+    assert not RESERVED & set(names) and len(names) == len(set(names))
+
+
+def test_units_get_their_unece_code_or_minus_one() -> None:
+    assert eu_information("V")[1:3] == (ord("V") << 16 | ord("L") << 8 | ord("T"), "V")
+    assert eu_information("1/min")[1] == 4405556  # C94, reciprocal minute
+    assert eu_information("inc")[1:] == (-1, "inc", "inc")
+
+
+def test_values_to_and_from_opcua() -> None:
+    number = Variable("q", "x.q", "Double", True, True, "float", "", "")
+    assert to_opcua(number, 3) == 3.0 and to_opcua(number, None) is None
+    assert from_opcua(number, "Int32", 5) == 5  # another numeric type is taken; the point checks its value
+    with pytest.raises(TypeMismatch):
+        from_opcua(number, "String", "5")
+    with pytest.raises(TypeMismatch):
+        from_opcua(number, "Double", [1.0, 2.0])
+    switch = Variable("b", "x.b", "Boolean", True, True, "bool", "", "")
+    with pytest.raises(TypeMismatch):
+        from_opcua(switch, "Int32", 1)
+    blob = Variable("j", "x.j", "String", True, True, "json", "", "")
+    assert to_opcua(blob, {"a": [1, 2]}) == '{"a":[1,2]}'
+    assert from_opcua(blob, "String", '{"a": [1, 2]}') == {"a": [1, 2]}
+    with pytest.raises(TypeMismatch):
+        from_opcua(blob, "String", "{not json")
