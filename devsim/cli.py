@@ -166,6 +166,7 @@ class _Plan:
     modbus: str | None = None  # --modbus tcp:[HOST:]PORT | rtu | rtu:LINK
     modbus_map: str = "points"  # --modbus-map points | mirror
     canopen: str | None = None  # --canopen NODE[@[HOST:]PORT]
+    fleet: str | None = None  # --fleet mqtt://BROKER[:PORT][/NAME]
 
 
 def _host_port(option: str, text: str) -> tuple[str, int]:
@@ -316,6 +317,11 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     show_default=True,
     help="The Modbus map: generated from the points, or the kind's own mirror (pcd4h3: its media).",
 )
+@click.option(
+    "--fleet",
+    metavar="mqtt://BROKER[:PORT][/NAME]",
+    help="Join a fleet (extra [fleet]): announce the devices on the broker, take control requests from it.",
+)
 def run(
     kind: str,
     use_pty: bool,
@@ -335,6 +341,7 @@ def run(
     modbus: str | None,
     canopen: str | None,
     modbus_map: str,
+    fleet: str | None,
 ) -> None:
     """Serve a simulated KIND device until Ctrl-C.
 
@@ -369,6 +376,8 @@ def run(
         _check_modbus(modbus)
     if canopen is not None:
         _check_canopen(canopen)
+    if fleet is not None:
+        check_fleet(fleet)
     if speed <= 0:
         raise click.UsageError("--speed: must be positive")
     if virtual and speed != 1.0:
@@ -402,6 +411,7 @@ def run(
         modbus=modbus,
         modbus_map=modbus_map,
         canopen=canopen,
+        fleet=fleet,
     )
     try:
         asyncio.run(_serve(plan))
@@ -483,6 +493,13 @@ async def _serve(plan: _Plan) -> None:
                 stage = f"serve the control API on {plan.control}"
                 server = ControlServer(runtime, plan.control, allow_remote=plan.allow_remote)
                 address = await server.start()
+            fleet_line = None
+            if plan.fleet is not None:
+                stage = f"join the fleet {plan.fleet}"
+                from devsim.fleet.member import join_fleet
+
+                member = await join_fleet(runtime, plan.fleet, about={"command": f"devsim run {plan.kind}"})
+                fleet_line = f"fleet: {member.url} as {member.process}"
         except Exception as exc:  # one line, no traceback: a port in use, a bad path, ...
             if server is not None:
                 await server.close()
@@ -502,6 +519,8 @@ async def _serve(plan: _Plan) -> None:
                 _say(f"{name}.modbus: {'tcp' if plan.modbus and plan.modbus.startswith('tcp') else 'rtu'} {where}")
             if server is not None:
                 _say(f"control: {address}")
+            if fleet_line is not None:
+                _say(fleet_line)
             for device in devices:  # NAME: ready, each time it has booted and listens
                 device.on_ready(lambda name=device.name: _say(f"{name}: ready"))
             names = ", ".join(device.name for device in devices)
@@ -558,6 +577,15 @@ def _check_canopen(spec: str) -> None:
         raise click.UsageError("--canopen needs canopen and python-can: pip install 'devsim-motion[can]'") from None
 
 
+def check_fleet(url: str) -> None:
+    """``--fleet URL``: a usable fleet URL, and aiomqtt installed (a usage error otherwise)."""
+    from devsim.fleet.topics import fleet_problem
+
+    problem = fleet_problem(url)
+    if problem is not None:
+        raise click.UsageError(f"--fleet: {problem}")
+
+
 def _modbus_for(spec: str, index: int) -> str:
     """The Modbus port of the index-th device: TCP port numbers count up, RTU links get -N."""
     scheme, _, rest = spec.partition(":")
@@ -610,9 +638,16 @@ def _emit(result: Any) -> None:
 def _call(ctx: click.Context, method: str, *args: Any, **kwargs: Any) -> None:
     from devsim.core.control import ControlAddressError, ControlClient, ControlError
 
-    addr: str = ctx.obj
+    addr, fleet = ctx.obj
+    client: Any
     try:
-        client = ControlClient(addr)
+        if fleet is not None:
+            from devsim.fleet.client import FleetClient
+
+            addr = fleet
+            client = FleetClient(fleet)
+        else:
+            client = ControlClient(addr)
     except ControlAddressError as exc:
         raise click.UsageError(f"--control: {exc}") from None
     except OSError as exc:
@@ -629,13 +664,22 @@ def _call(ctx: click.Context, method: str, *args: Any, **kwargs: Any) -> None:
 
 @cli.group()
 @click.option(
-    "--control", "addr", envvar="DEVSIM_CONTROL", required=True, metavar="ADDR",
+    "--control", "addr", envvar="DEVSIM_CONTROL", metavar="ADDR",
     help="Control address of a running 'devsim run' (unix:/path.sock or [HOST:]PORT; env DEVSIM_CONTROL).",
 )
+@click.option(
+    "--fleet", metavar="mqtt://BROKER[:PORT][/NAME]",
+    help="Instead: every device of every process in this fleet, reached by name (extra [fleet]).",
+)
 @click.pass_context
-def ctl(ctx: click.Context, addr: str) -> None:
-    """Control a running simulator; prints JSON results."""
-    ctx.obj = addr
+def ctl(ctx: click.Context, addr: str | None, fleet: str | None) -> None:
+    """Control a running simulator (or a fleet of them); prints JSON results."""
+    if fleet is not None:
+        check_fleet(fleet)
+        addr = None
+    elif addr is None:
+        raise click.UsageError("Missing option '--control' (or '--fleet')")
+    ctx.obj = (addr, fleet)
 
 
 @ctl.command("devices")
@@ -684,17 +728,28 @@ def ctl_power_cycle(ctx: click.Context, device: str, wipe: bool) -> None:
 
 @ctl.command("advance")
 @click.argument("seconds", type=float)
+@click.option("--device", metavar="NAME", help="With --fleet: only the process serving NAME (default: every one).")
 @click.pass_context
-def ctl_advance(ctx: click.Context, seconds: float) -> None:
-    """Advance virtual time by SECONDS (needs 'devsim run --virtual'); prints the new time."""
-    _call(ctx, "advance", seconds)
+def ctl_advance(ctx: click.Context, seconds: float, device: str | None) -> None:
+    """Advance virtual time by SECONDS (needs 'devsim run --virtual'); prints the new time (with
+    --fleet: of each process, or of the one serving --device)."""
+    _call(ctx, "advance", seconds, **_fleet_device(ctx, device))
 
 
 @ctl.command("now")
+@click.option("--device", metavar="NAME", help="With --fleet: only the process serving NAME (default: every one).")
 @click.pass_context
-def ctl_now(ctx: click.Context) -> None:
-    """The simulator's current time in seconds."""
-    _call(ctx, "now")
+def ctl_now(ctx: click.Context, device: str | None) -> None:
+    """The simulator's current time in seconds (with --fleet: of each process)."""
+    _call(ctx, "now", **_fleet_device(ctx, device))
+
+
+def _fleet_device(ctx: click.Context, device: str | None) -> dict[str, str]:
+    if device is None:
+        return {}
+    if ctx.obj[1] is None:
+        raise click.UsageError("--device is for --fleet (one process has one clock)")
+    return {"device": device}
 
 
 @ctl.command("line")
