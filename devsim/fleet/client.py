@@ -175,19 +175,22 @@ class AsyncFleetClient:
     def online_processes(self) -> list[str]:
         return sorted(p for p, a in self.processes.items() if a.get("online"))
 
-    async def wait_for_devices(self, names: Iterable[str], timeout: float = 10.0) -> list[dict[str, Any]]:
-        """Wait until every device in ``names`` is online (bounded); returns :meth:`devices`."""
+    async def wait_for_devices(self, names: Iterable[str], timeout: float = 10.0, *,
+                               online: bool = True) -> list[dict[str, Any]]:
+        """Wait until every device in ``names`` is listed online (or, with ``online=False``,
+        listed offline); bounded by ``timeout`` seconds.  Returns :meth:`devices`."""
         wanted = set(names)
         loop = asyncio.get_running_loop()
         deadline = loop.time() + timeout
         while True:
-            live = {row["name"] for row in self.devices() if row["online"]}
-            if wanted <= live:
+            have = {row["name"] for row in self.devices() if row["online"] == online}
+            if wanted <= have:
                 return self.devices()
             self._changed.clear()
             left = deadline - loop.time()
             if left <= 0:
-                raise TimeoutError(f"devices not online in the fleet after {timeout:g} s: {sorted(wanted - live)}")
+                state = "online" if online else "offline"
+                raise TimeoutError(f"devices not {state} in the fleet after {timeout:g} s: {sorted(wanted - have)}")
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(self._changed.wait(), left)
 
@@ -281,8 +284,10 @@ class FleetClient:
     async def _listing(self) -> list[dict[str, Any]]:
         return self.fleet.devices()
 
-    def wait_for_devices(self, names: Iterable[str], timeout: float = 10.0) -> list[dict[str, Any]]:
-        return self._run(self.fleet.wait_for_devices(list(names), timeout))  # type: ignore[no-any-return]
+    def wait_for_devices(self, names: Iterable[str], timeout: float = 10.0, *,
+                         online: bool = True) -> list[dict[str, Any]]:
+        """Wait (bounded) until the named devices are online (or offline)."""
+        return self._run(self.fleet.wait_for_devices(list(names), timeout, online=online))  # type: ignore[no-any-return]
 
     def read(self, device: str, name: str) -> Any:
         return self.request("read", device=device, name=name)

@@ -60,6 +60,8 @@ def parse_fleet_url(text: str) -> FleetUrl:
         raise FleetUrlError(f"{text!r}: the port must be a number 1 … 65535") from None
     if not parts.hostname:
         raise FleetUrlError(f"{text!r}: no broker host (expected mqtt://HOST[:PORT][/NAME])")
+    if parts.query or "#" in text:
+        raise FleetUrlError(f"{text!r}: expected mqtt://HOST[:PORT][/NAME], no ?query or #")
     fleet = parts.path.strip("/") or None
     if fleet is not None and (_UNSAFE.search(fleet) or len(fleet) > 64):
         raise FleetUrlError(f"{text!r}: a fleet name is one topic level without + # / or spaces")
