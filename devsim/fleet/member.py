@@ -29,6 +29,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import logging
 import os
 import socket
 import sys
@@ -49,6 +50,9 @@ __all__ = ["FleetClash", "FleetMember", "join_fleet"]
 OFFLINE_EXPIRY = 24 * 3600  # seconds a crashed process's offline mark stays retained (MQTT 5)
 RECONNECT_DELAY = 2.0  # seconds between attempts after the broker went away
 SYNC_TIMEOUT = 10.0  # seconds to wait for the broker to hand over the retained announcements
+# aiomqtt warns on every publish beyond ten in flight; under load that is a line per request
+_LOG = logging.getLogger("devsim.fleet.mqtt")
+_LOG.setLevel(logging.ERROR)
 
 
 class FleetClash(RuntimeError):
@@ -67,6 +71,8 @@ def mqtt_client(url: FleetUrl, identifier: str, will: aiomqtt.Will | None = None
         will=will,
         timeout=SYNC_TIMEOUT,
         keepalive=15,
+        logger=_LOG,
+        socket_options=[(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)],  # requests are small and waited for
     )
 
 
@@ -130,6 +136,7 @@ class FleetMember:
         self.served = 0
         self._client: aiomqtt.Client | None = None
         self._task: asyncio.Task[None] | None = None
+        self._sending: set[asyncio.Task[None]] = set()
         self._closing = False
 
     @property
@@ -226,9 +233,16 @@ class FleetMember:
             if message.topic.value != self.request_topic:
                 continue
             answer = self.answer(message.payload, message.properties)
-            if answer is not None:
+            if answer is not None:  # sent while the next request is handled (answers carry their id)
                 topic, payload, properties = answer
-                await client.publish(topic, payload, qos=0, properties=properties)
+                sending = asyncio.ensure_future(client.publish(topic, payload, qos=0, properties=properties))
+                self._sending.add(sending)
+                sending.add_done_callback(self._sent)
+
+    def _sent(self, task: asyncio.Task[None]) -> None:
+        self._sending.discard(task)
+        if not task.cancelled():
+            task.exception()  # a lost connection shows in the message loop; nothing to add here
 
     def answer(self, payload: Any, properties: Properties | None = None) -> tuple[str, bytes, Properties | None] | None:
         """Execute one request; returns (reply topic, answer, MQTT 5 properties) or None when
