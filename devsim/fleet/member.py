@@ -110,16 +110,6 @@ def parse_announcement(payload: Any) -> dict[str, Any] | None:
     return data if isinstance(data, dict) and isinstance(data.get("devices"), list) else None
 
 
-_members = 0
-
-
-def _next_process_id() -> str:
-    """``HOST-PID``, and ``HOST-PID-N`` for a further member in the same process (tests)."""
-    global _members
-    _members += 1
-    return process_id() + (f"-{_members}" if _members > 1 else "")
-
-
 class FleetMember:
     """One process's membership: see the module docstring.  Runs in the runtime's loop."""
 
@@ -128,7 +118,7 @@ class FleetMember:
         self.runtime = runtime
         self.url = url
         self.topics = Topics(url.root)
-        self.process = process or _next_process_id()
+        self.process = process or process_id()
         self.about = dict(about or {})
         # The control API's own request handling; this server never listens.
         self.executor = ControlServer(runtime, "127.0.0.1:0")

@@ -10,13 +10,16 @@ URL names a fleet, so several fleets can share one broker)::
     ROOT/client/CLIENT/reply        answers to one client's requests
     ROOT/client/CLIENT/sync         the client's own marker: all retained announcements are in
 
-``PROCESS`` is ``HOST-PID`` (a host name's ``/``, ``+``, ``#`` and spaces become ``_``).
+``PROCESS`` is ``HOST-PID-XXXX`` (four random hex digits, so that processes in containers that
+share a host name and a pid stay apart; a host name's ``/``, ``+``, ``#`` and spaces become
+``_``).
 """
 
 from __future__ import annotations
 
 import os
 import re
+import secrets
 import socket
 from urllib.parse import unquote, urlsplit
 
@@ -88,9 +91,9 @@ def fleet_problem(url: str) -> str | None:
 
 
 def process_id(host: str | None = None, pid: int | None = None) -> str:
-    """``HOST-PID`` of this process, safe as one topic level."""
+    """A new ``HOST-PID-XXXX`` for a member of this process, safe as one topic level."""
     host = host or socket.gethostname() or "localhost"
-    return f"{_UNSAFE.sub('_', host)}-{os.getpid() if pid is None else pid}"
+    return f"{_UNSAFE.sub('_', host)}-{os.getpid() if pid is None else pid}-{secrets.token_hex(2)}"
 
 
 @record

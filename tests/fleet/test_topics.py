@@ -70,3 +70,39 @@ def test_a_member_answers_with_the_control_api_and_only_to_client_topics() -> No
         assert runtime.read("s1", "input.I1") is True
     finally:
         runtime.stop()
+
+
+def test_a_clash_is_listed_and_refused_and_offline_rows_give_way() -> None:
+    from devsim.core.control import ControlError
+    from devsim.fleet.client import AsyncFleetClient
+
+    client = AsyncFleetClient("mqtt://127.0.0.1")
+    row = {"name": "x", "kind": "sers"}
+    client.processes = {
+        "h-1-aaaa": {"host": "h", "pid": 1, "online": True, "devices": [row]},
+        "g-2-bbbb": {"host": "g", "pid": 2, "online": True, "devices": [row, {"name": "y", "kind": "sers"}]},
+        "f-3-cccc": {"host": "f", "pid": 3, "online": False, "devices": [row, {"name": "z", "kind": "sers"}]},
+    }
+    rows = client.devices()
+    assert [(r["name"], r["process"], r.get("clash", False), r["online"]) for r in rows] == [
+        ("x", "g-2-bbbb", True, True), ("x", "h-1-aaaa", True, True), ("y", "g-2-bbbb", False, True),
+        ("z", "f-3-cccc", False, False)]  # the offline 'x' gives way to the online ones
+    with pytest.raises(ControlError, match="served by 2 processes") as caught:
+        client.serving("x")
+    assert caught.value.type == "FleetClash"
+    assert client.serving("y") == "g-2-bbbb"
+    with pytest.raises(ControlError, match="offline"):
+        client.serving("z")
+
+
+def test_ctl_without_a_broker_says_so_in_one_line() -> None:
+    import subprocess
+    import sys
+
+    from tests.support.broker import free_port
+
+    done = subprocess.run([sys.executable, "-m", "devsim", "ctl", "--fleet", f"mqtt://127.0.0.1:{free_port()}",
+                           "devices"], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 1
+    assert done.stderr.startswith("Error: cannot connect to mqtt://127.0.0.1:") and "cannot reach the fleet broker" in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1
