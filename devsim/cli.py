@@ -14,7 +14,8 @@
   ``--pty``/``--link``/``--tcp``/``--rfc2217`` choose for the other ports.
 
 * ``devsim ctl --control ADDR devices|read|set|state|power-cycle|advance|now|line`` – talk to a
-  running simulator's control API and print the JSON result.
+  running simulator's control API and print the JSON result; ``devsim ctl --fleet mqtt://BROKER
+  ...`` the same with every device of a fleet (``devsim run/up --fleet``, :mod:`devsim.fleet`).
 
 Usage and configuration errors are one line on stderr (``Error: config.yaml:3: baud: ...``) and
 exit with status 2; failures at run time (a port in use) exit with status 1.

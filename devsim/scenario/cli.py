@@ -3,7 +3,8 @@
 * ``devsim check FILE...`` validates scenario and plant files without running them.
 * ``devsim scenario run FILE... [--virtual | --realtime] [--speed F] [--junit OUT.xml]`` runs
   scenarios, prints a report per scenario and exits non-zero if any failed.
-* ``devsim up PLANT.yaml`` starts every device of a plant, prints each port, serves until Ctrl-C.
+* ``devsim up PLANT.yaml`` starts every device of a plant, prints each port, serves until Ctrl-C;
+  ``--part NAME`` only the devices with that ``part:``, ``--fleet URL`` joins a fleet.
 """
 
 from __future__ import annotations
