@@ -21,7 +21,7 @@ because it survives bridges that speak MQTT 3.1.1.  The ``id`` of the request is
 id: the answer carries it back.  A request without a reply topic is executed and not answered.
 
 A clean stop clears the retained announcement (the process leaves the listing); a lost broker
-connection is retried every few seconds and the announcement renewed.
+connection is retried (after 0.5 s, 1 s, 2 s, then every 5 s) and the announcement renewed.
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url, process_id
 __all__ = ["FleetClash", "FleetMember", "join_fleet"]
 
 OFFLINE_EXPIRY = 24 * 3600  # seconds a crashed process's offline mark stays retained (MQTT 5)
-RECONNECT_DELAY = 2.0  # seconds between attempts after the broker went away
+RECONNECT_DELAYS = (0.5, 1.0, 2.0, 5.0)  # seconds between attempts after the broker went away (then 5 s)
 SYNC_TIMEOUT = 10.0  # seconds to wait for the broker to hand over the retained announcements
 # aiomqtt warns on every publish beyond ten in flight; under load that is a line per request
 _LOG = logging.getLogger("devsim.fleet.mqtt")
@@ -205,8 +205,10 @@ class FleetMember:
             self._client = client
 
     async def _reconnect(self) -> aiomqtt.Client:
+        attempt = 0
         while True:
-            await asyncio.sleep(RECONNECT_DELAY)  # retry pacing, not synchronisation
+            await asyncio.sleep(RECONNECT_DELAYS[min(attempt, len(RECONNECT_DELAYS) - 1)])  # retry pacing
+            attempt += 1
             client = mqtt_client(self.url, f"devsim-{self.process}", self._will())
             try:
                 await client.__aenter__()
