@@ -14,7 +14,8 @@
   ``--pty``/``--link``/``--tcp``/``--rfc2217`` choose for the other ports.
 
 * ``devsim ctl --control ADDR devices|read|set|state|power-cycle|advance|now|line`` – talk to a
-  running simulator's control API and print the JSON result.
+  running simulator's control API and print the JSON result; ``devsim ctl --fleet mqtt://BROKER
+  ...`` the same with every device of a fleet (``devsim run/up --fleet``, :mod:`devsim.fleet`).
 
 Usage and configuration errors are one line on stderr (``Error: config.yaml:3: baud: ...``) and
 exit with status 2; failures at run time (a port in use) exit with status 1.
@@ -24,7 +25,6 @@ from __future__ import annotations
 
 import asyncio
 import gc
-import json
 import signal
 import sys
 from collections.abc import Sequence
@@ -36,6 +36,16 @@ import click
 from devsim import __version__
 from devsim.core.record import field, record
 from devsim.core.registry import UnknownKind, device_class, kinds
+from devsim.ctl import ctl
+from devsim.run_options import (
+    check_canopen,
+    check_fleet,
+    check_modbus,
+    check_mqtt,
+    check_opcua,
+    host_port,
+    modbus_for,
+)
 
 if TYPE_CHECKING:  # imported where used: `devsim run` starts faster without them
     from devsim.core.control import ControlAddress
@@ -172,20 +182,7 @@ class _Plan:
     mqtt_plant: str | None = None  # --mqtt-plant NAME (default: the kind)
     opcua: str | None = None  # --opcua [[HOST:]PORT] ("": the default endpoint)
     opcua_period: float = 0.1  # --opcua-period SECONDS
-
-
-def _host_port(option: str, text: str) -> tuple[str, int]:
-    host, sep, port_text = text.rpartition(":")
-    if not sep:
-        host = "127.0.0.1"
-    host = host.strip("[]") or "127.0.0.1"
-    try:
-        port = int(port_text)
-    except ValueError:
-        raise click.UsageError(f"{option}: expected [HOST:]PORT, got {text!r}") from None
-    if not 0 <= port <= 65535:
-        raise click.UsageError(f"{option}: port {port} is not in 0..65535")
-    return host, port
+    fleet: str | None = None  # --fleet mqtt://BROKER[:PORT][/NAME]
 
 
 #: What ``--port NAME=SPEC`` accepts after ``NAME=``.
@@ -208,7 +205,7 @@ def _parse_port_option(text: str, names: Sequence[str]) -> tuple[str, _Port]:
         if rest:
             raise click.UsageError(f"--port {name}: pty takes no address, got {spec!r}")
         return name, _Port("pty")
-    return name, _Port(scheme, *_host_port(f"--port {name}", rest))
+    return name, _Port(scheme, *host_port(f"--port {name}", rest))
 
 
 def _parse_drives(text: str) -> list[int]:
@@ -351,6 +348,11 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
 @click.option("--mqtt-rate", type=float, default=1.0, show_default=True, metavar="SECONDS",
               help="How often (device time) the MQTT facade samples the points for changes.")
 @click.option("--mqtt-plant", metavar="NAME", help="The plant's name in MQTT topics (default: the kind).")
+@click.option(
+    "--fleet",
+    metavar="mqtt://BROKER[:PORT][/NAME]",
+    help="Join a fleet (extra [fleet]): announce the devices on the broker, take control requests from it.",
+)
 def run(
     kind: str,
     use_pty: bool,
@@ -376,6 +378,7 @@ def run(
     mqtt_convention: str,
     mqtt_rate: float,
     mqtt_plant: str | None,
+    fleet: str | None,
 ) -> None:
     """Serve a simulated KIND device until Ctrl-C.
 
@@ -395,9 +398,9 @@ def run(
     if len(chosen) > 1:
         raise click.UsageError(f"choose one port: {' or '.join(chosen)}")
     if tcp is not None:
-        port = _Port("tcp", *_host_port("--tcp", tcp))
+        port = _Port("tcp", *host_port("--tcp", tcp))
     elif rfc2217 is not None:
-        port = _Port("rfc2217", *_host_port("--rfc2217", rfc2217))
+        port = _Port("rfc2217", *host_port("--rfc2217", rfc2217))
     else:
         port = _Port("pty", link=link)
     overrides: dict[str, _Port] = {}
@@ -407,13 +410,15 @@ def run(
             raise click.UsageError(f"--port: port {name!r} given twice")
         overrides[name] = spec
     if modbus is not None:
-        _check_modbus(modbus)
+        check_modbus(modbus)
     if canopen is not None:
-        _check_canopen(canopen)
+        check_canopen(canopen)
     if mqtt is not None:
-        _check_mqtt(mqtt, mqtt_convention, mqtt_rate, mqtt_plant)
+        check_mqtt(mqtt, mqtt_convention, mqtt_rate, mqtt_plant)
     if opcua is not None:
-        _check_opcua(opcua, opcua_period)
+        check_opcua(opcua, opcua_period)
+    if fleet is not None:
+        check_fleet(fleet)
     if speed <= 0:
         raise click.UsageError("--speed: must be positive")
     if virtual and speed != 1.0:
@@ -453,6 +458,7 @@ def run(
         mqtt_plant=mqtt_plant,
         opcua=opcua,
         opcua_period=opcua_period,
+        fleet=fleet,
     )
     try:
         asyncio.run(_serve(plan))
@@ -521,7 +527,7 @@ async def _serve(plan: _Plan) -> None:
                 from devsim.facades.modbus import start_modbus
 
                 for index, device in enumerate(devices):
-                    spec = _modbus_for(plan.modbus, index)
+                    spec = modbus_for(plan.modbus, index)
                     where, _transport = await start_modbus(runtime, device, spec, layout=plan.modbus_map)
                     modbus_served.append((device.name, where))
             canopen_lines: list[str] = []
@@ -548,6 +554,13 @@ async def _serve(plan: _Plan) -> None:
                 stage = f"serve the control API on {plan.control}"
                 server = ControlServer(runtime, plan.control, allow_remote=plan.allow_remote)
                 address = await server.start()
+            fleet_line = None
+            if plan.fleet is not None:
+                stage = f"join the fleet {plan.fleet}"
+                from devsim.fleet.member import join_fleet
+
+                member = await join_fleet(runtime, plan.fleet, about={"command": f"devsim run {plan.kind}"})
+                fleet_line = f"fleet: {member.url} as {member.process}"
         except Exception as exc:  # one line, no traceback: a port in use, a bad path, ...
             if server is not None:
                 await server.close()
@@ -571,6 +584,8 @@ async def _serve(plan: _Plan) -> None:
                 _say(f"opcua: {opcua_url}")
             if server is not None:
                 _say(f"control: {address}")
+            if fleet_line is not None:
+                _say(fleet_line)
             for device in devices:  # NAME: ready, each time it has booted and listens
                 device.on_ready(lambda name=device.name: _say(f"{name}: ready"))
             names = ", ".join(device.name for device in devices)
@@ -603,81 +618,6 @@ def _plan_ports(plan: _Plan, ports: Sequence[Any]) -> list[tuple[str, _Port]]:
     return chosen
 
 
-def _check_modbus(spec: str) -> None:
-    scheme, _, rest = spec.partition(":")
-    if scheme == "tcp":
-        _host_port("--modbus", rest)
-    elif scheme != "rtu":
-        raise click.UsageError(f"--modbus: expected tcp:[HOST:]PORT, rtu or rtu:LINK, not {spec!r}")
-    try:
-        import pymodbus  # noqa: F401
-    except ImportError:
-        raise click.UsageError("--modbus needs pymodbus: pip install 'devsim-motion[modbus]'") from None
-
-
-def _check_canopen(spec: str) -> None:
-    node, _, where = spec.partition("@")
-    if not node.isdigit() or not 1 <= int(node) <= 127:
-        raise click.UsageError(f"--canopen: expected NODE[@[HOST:]PORT] or NODE@socketcan:CHANNEL with NODE 1 … 127, "
-                               f"not {spec!r}")
-    if where.startswith("socketcan:"):
-        if not where.removeprefix("socketcan:"):
-            raise click.UsageError("--canopen NODE@socketcan:CHANNEL needs a channel, e.g. vcan0")
-    elif where:
-        _host_port("--canopen", where)
-    try:
-        import canopen  # noqa: F401
-    except ImportError:
-        raise click.UsageError("--canopen needs canopen and python-can: pip install 'devsim-motion[can]'") from None
-
-
-def _check_mqtt(url: str, convention: str, rate: float, plant: str | None) -> None:
-    try:
-        import aiomqtt  # noqa: F401
-
-        if not url:
-            import amqtt  # noqa: F401
-        if convention == "sparkplug":
-            import tahutils  # noqa: F401
-    except ImportError:
-        raise click.UsageError("--mqtt needs aiomqtt, amqtt and tahutils: pip install 'devsim-motion[mqtt]'") from None
-    from devsim.facades.mqtt_topics import check_name, parse_url
-
-    try:
-        if url:
-            parse_url(url)
-        if plant is not None:
-            check_name("plant", plant)
-    except ValueError as exc:
-        raise click.UsageError(f"--mqtt: {exc}") from None
-    if not rate > 0:
-        raise click.UsageError("--mqtt-rate: must be a positive number of seconds")
-def _check_opcua(spec: str, period: float) -> None:
-    from devsim.facades.opcua_space import endpoint_url
-
-    try:
-        endpoint_url(spec)
-    except ValueError as exc:
-        raise click.UsageError(str(exc)) from None
-    if not period > 0:
-        raise click.UsageError("--opcua-period: must be positive")
-    try:
-        import asyncua  # noqa: F401
-    except ImportError:
-        raise click.UsageError("--opcua needs asyncua: pip install 'devsim-motion[opcua]'") from None
-
-
-def _modbus_for(spec: str, index: int) -> str:
-    """The Modbus port of the index-th device: TCP port numbers count up, RTU links get -N."""
-    scheme, _, rest = spec.partition(":")
-    if index == 0:
-        return spec
-    if scheme == "tcp":
-        host, port = _host_port("--modbus", rest)
-        return f"tcp:{host}:{port + index if port else 0}"
-    return f"rtu:{rest}-{index}" if rest else "rtu"
-
-
 def _port_for(port: _Port, name: str, index: int, count: int) -> _Port:
     """The transport of one port of a kind with ``count`` ports: a pty each (``--link PATH``
     becomes ``PATH-NAME`` beyond the first port), consecutive TCP port numbers from the given one."""
@@ -708,149 +648,7 @@ def _port_text(transport: Any, scheme: str) -> str:
     return url or address
 
 
-# -- devsim ctl ------------------------------------------------------------------------------
-def _emit(result: Any) -> None:
-    if isinstance(result, dict | list):
-        click.echo(json.dumps(result, indent=2, sort_keys=False))
-    else:
-        click.echo(json.dumps(result))
-
-
-def _call(ctx: click.Context, method: str, *args: Any, **kwargs: Any) -> None:
-    from devsim.core.control import ControlAddressError, ControlClient, ControlError
-
-    addr: str = ctx.obj
-    try:
-        client = ControlClient(addr)
-    except ControlAddressError as exc:
-        raise click.UsageError(f"--control: {exc}") from None
-    except OSError as exc:
-        raise click.ClickException(f"cannot connect to {addr}: {exc.strerror or exc}") from None
-    try:
-        with client:
-            result = getattr(client, method)(*args, **kwargs)
-    except ControlError as exc:
-        raise click.ClickException(str(exc)) from None
-    except (OSError, ValueError) as exc:
-        raise click.ClickException(f"control connection to {addr} failed: {exc}") from None
-    _emit(result)
-
-
-@cli.group()
-@click.option(
-    "--control", "addr", envvar="DEVSIM_CONTROL", required=True, metavar="ADDR",
-    help="Control address of a running 'devsim run' (unix:/path.sock or [HOST:]PORT; env DEVSIM_CONTROL).",
-)
-@click.pass_context
-def ctl(ctx: click.Context, addr: str) -> None:
-    """Control a running simulator; prints JSON results."""
-    ctx.obj = addr
-
-
-@ctl.command("devices")
-@click.pass_context
-def ctl_devices(ctx: click.Context) -> None:
-    """The devices: name, kind and port."""
-    _call(ctx, "devices")
-
-
-@ctl.command("read")
-@click.argument("device")
-@click.argument("name")
-@click.pass_context
-def ctl_read(ctx: click.Context, device: str, name: str) -> None:
-    """Read NAME (e.g. axis.position) of DEVICE."""
-    _call(ctx, "read", device, name)
-
-
-@ctl.command("set")
-@click.argument("device")
-@click.argument("name")
-@click.argument("value")
-@click.pass_context
-def ctl_set(ctx: click.Context, device: str, name: str, value: str) -> None:
-    """Set NAME of DEVICE to VALUE, read as NAME's declared type (true/false/on/off/1/0 for a
-    boolean, a finite number, text, or JSON for structured values)."""
-    _call(ctx, "set", device, name, value)
-
-
-@ctl.command("state")
-@click.argument("device")
-@click.pass_context
-def ctl_state(ctx: click.Context, device: str) -> None:
-    """A snapshot of DEVICE's state."""
-    _call(ctx, "state", device)
-
-
-@ctl.command("power-cycle")
-@click.argument("device")
-@click.option("--wipe", is_flag=True, help="Erase non-volatile memory first.")
-@click.pass_context
-def ctl_power_cycle(ctx: click.Context, device: str, wipe: bool) -> None:
-    """Switch DEVICE off and on."""
-    _call(ctx, "power_cycle", device, wipe=wipe)
-
-
-@ctl.command("advance")
-@click.argument("seconds", type=float)
-@click.pass_context
-def ctl_advance(ctx: click.Context, seconds: float) -> None:
-    """Advance virtual time by SECONDS (needs 'devsim run --virtual'); prints the new time."""
-    _call(ctx, "advance", seconds)
-
-
-@ctl.command("now")
-@click.pass_context
-def ctl_now(ctx: click.Context) -> None:
-    """The simulator's current time in seconds."""
-    _call(ctx, "now")
-
-
-@ctl.command("line")
-@click.argument("device")
-@click.option("--port", default="main", show_default=True, help="Which serial port of DEVICE.")
-@click.pass_context
-def ctl_line(ctx: click.Context, device: str, port: str) -> None:
-    """Status of the line serving a port of DEVICE (settings, mismatch)."""
-    _call(ctx, "line", device, port)
-
-
-@ctl.command("names")
-@click.argument("device")
-@click.pass_context
-def ctl_names(ctx: click.Context, device: str) -> None:
-    """DEVICE's control names with type, unit, access (r, rw, w), description and manual section."""
-    _call(ctx, "names", device)
-
-
-@ctl.command("fault")
-@click.argument("device")
-@click.argument("kind")
-@click.argument("switch", type=click.Choice(["on", "off"]))
-@click.pass_context
-def ctl_fault(ctx: click.Context, device: str, kind: str, switch: str) -> None:
-    """Switch a declared fault KIND of DEVICE on or off (e.g. blocked_axis on)."""
-    _call(ctx, "fault", device, kind, switch == "on")
-
-
-@ctl.command("line-fault")
-@click.argument("device")
-@click.argument("kind")
-@click.argument("switch", type=click.Choice(["on", "off"]))
-@click.option("--port", default="main", show_default=True, help="Which serial port of DEVICE.")
-@click.option("--direction", type=click.Choice(["to_device", "to_host", "both"]), help="Which way.")
-@click.option("--count", type=int, help="Bytes affected (corrupt, drop, split).")
-@click.option("--duration", type=float, help="Seconds until the fault ends by itself.")
-@click.option("--delay", type=float, help="Seconds (delay, jitter, split).")
-@click.option("--rate", type=float, help="Noise bytes per second.")
-@click.option("--baudrate", type=int, help="The host's rate (baud_mismatch).")
-@click.pass_context
-def ctl_line_fault(ctx: click.Context, device: str, kind: str, switch: str, port: str, **params: Any) -> None:
-    """Start or end a line fault KIND on a port of DEVICE: corrupt, drop, split, delay, jitter,
-    noise, baud_mismatch, unplug, hang, silent."""
-    given = {name: value for name, value in params.items() if value is not None}
-    _call(ctx, "line_fault", device, kind, switch == "on", port=port, **given)
-
+cli.add_command(ctl)
 
 _SCENARIO_COMMANDS = ("check", "scenario", "up")
 

@@ -3,7 +3,8 @@
 * ``devsim check FILE...`` validates scenario and plant files without running them.
 * ``devsim scenario run FILE... [--virtual | --realtime] [--speed F] [--junit OUT.xml]`` runs
   scenarios, prints a report per scenario and exits non-zero if any failed.
-* ``devsim up PLANT.yaml`` starts every device of a plant, prints each port, serves until Ctrl-C.
+* ``devsim up PLANT.yaml`` starts every device of a plant, prints each port, serves until Ctrl-C;
+  ``--part NAME`` only the devices with that ``part:``, ``--fleet URL`` joins a fleet.
 """
 
 from __future__ import annotations
@@ -115,6 +116,9 @@ def scenario_run(
 @click.option("--virtual", is_flag=True, help="Virtual time: it moves only through 'devsim ctl advance'.")
 @click.option("--workers", type=click.IntRange(1, 64), default=1, show_default=True, metavar="N",
               help="Spread the plant's devices over N processes (real or sped-up time).")
+@click.option("--fleet", metavar="mqtt://BROKER[:PORT][/NAME]",
+              help="Join a fleet (extra [fleet]): announce the devices on the broker, take control requests from it.")
+@click.option("--part", metavar="NAME", help="Start only the devices with 'part: NAME' (one part of a fleet's plant).")
 def up(
     plant_file: str,
     state_dir: str | None,
@@ -123,9 +127,11 @@ def up(
     trace_dir: str | None,
     virtual: bool,
     workers: int,
+    fleet: str | None,
+    part: str | None,
 ) -> None:
-    """Start every device of PLANT_FILE, print every port and NAME: ready when a device has
-    booted, serve until Ctrl-C."""
+    """Start every device of PLANT_FILE (with --part: those of one part), print every port and
+    NAME: ready when a device has booted, serve until Ctrl-C."""
     from devsim.core.control import ControlAddressError, parse_address
     from devsim.scenario.schema import load_plant
 
@@ -133,6 +139,16 @@ def up(
         spec = load_plant(plant_file)
     except ConfigError as exc:
         raise click.ClickException(str(exc)) from None
+    if part is not None:
+        try:
+            spec = spec.only_part(part)
+        except ValueError as exc:
+            raise click.UsageError(f"--part: {plant_file}: {exc}") from None
+    if fleet is not None:
+        from devsim.fleet.topics import fleet_problem
+
+        if (problem := fleet_problem(fleet)) is not None:
+            raise click.UsageError(f"--fleet: {problem}")
     if speed <= 0:
         raise click.UsageError("--speed: must be positive")
     if virtual and speed != 1.0:
@@ -159,21 +175,29 @@ def up(
 
         try:
             status = asyncio.run(
-                run_workers(spec, workers, control=address, state_dir=state_dir, speed=speed, trace_dir=trace_dir)
+                run_workers(spec, workers, control=address, state_dir=state_dir, speed=speed, trace_dir=trace_dir,
+                            fleet=fleet)
             )
         except KeyboardInterrupt:
             sys.exit(130)
         sys.exit(status)
     try:
-        asyncio.run(_up(spec, state_dir, speed, address, trace_dir, virtual))
+        asyncio.run(_up(spec, state_dir, speed, address, trace_dir, virtual, fleet, part))
     except KeyboardInterrupt:
         sys.exit(130)
     except OSError as exc:
         raise click.ClickException(f"cannot start the plant: {exc}") from None
+    except _FleetError as exc:
+        raise click.ClickException(str(exc)) from None
+
+
+class _FleetError(Exception):
+    """The plant could not join its fleet (a name clash)."""
 
 
 async def _up(
-    spec: object, state_dir: str | None, speed: float, address: object, trace_dir: str | None, virtual: bool
+    spec: object, state_dir: str | None, speed: float, address: object, trace_dir: str | None, virtual: bool,
+    fleet: str | None = None, part: str | None = None,
 ) -> None:
     from devsim.core.control import ControlServer
     from devsim.core.runtime import Runtime
@@ -201,10 +225,23 @@ async def _up(
         if address is not None:
             server = ControlServer(runtime, address)  # type: ignore[arg-type]
             shown = await server.start()
+        member = None
+        if fleet is not None:
+            from devsim.fleet.member import FleetClash, join_fleet
+
+            about = {"plant": getattr(spec, "name", None), "part": part}
+            try:
+                member = await join_fleet(runtime, fleet, about={k: v for k, v in about.items() if v is not None})
+            except (FleetClash, ConnectionError) as exc:
+                if server is not None:
+                    await server.close()
+                raise _FleetError(f"cannot join the fleet {fleet}: {exc}") from None
         for row in plant.describe():
             print(row, flush=True)
         if server is not None:
             print(f"control: {shown}", flush=True)
+        if member is not None:
+            print(f"fleet: {member.url} as {member.process}", flush=True)
         for device in plant.devices.values():
             device.on_ready(lambda name=device.name: print(f"{name}: ready", flush=True))
         title = f"plant {spec.name!r} up" if getattr(spec, "name", None) else "plant up"

@@ -213,6 +213,8 @@ class DeviceSpec(_Model):
     state: dict[str, Any] = Field(default_factory=dict, description="initial state: settable names and 'program'")
     modbus: ModbusSpec | None = Field(default=None, description="also serve the device over Modbus TCP or RTU")
     canopen: CanopenSpec | None = Field(default=None, description="also serve the device as a CANopen node")
+    part: str | None = Field(default=None, pattern=r"^[A-Za-z0-9_.-]+$",
+                             description="which part of the plant serves it (devsim up --part NAME, for a fleet)")
 
     @model_validator(mode="after")
     def _transport_or_ports(self) -> DeviceSpec:
@@ -307,6 +309,11 @@ class PlantSpec(_Model):
                 bus = device.transport_of(port).bus
                 if bus is not None and bus not in buses:
                     raise ValueError(f"device {device.name!r} is on bus {bus!r}, which is not defined")
+            bus = device.transport_of("main").bus
+            others = {d.part for d in self.devices if d.transport_of("main").bus == bus} if bus else set()
+            if len(others) > 1:
+                raise ValueError(f"bus {bus!r} has devices of different parts ({', '.join(map(str, others))});"
+                                 " a bus is served by one process")
             unknown = sorted(set(device.ports) - set(device.port_names()))
             if unknown:
                 raise ValueError(
@@ -314,6 +321,16 @@ class PlantSpec(_Model):
                     f" (ports: {', '.join(device.port_names())})"
                 )
         return self
+
+    def only_part(self, part: str) -> PlantSpec:
+        """The plant with only the devices of ``part`` (and their buses); ValueError if none."""
+        devices = [d for d in self.devices if d.part == part]
+        if not devices:
+            parts = sorted({d.part for d in self.devices if d.part is not None})
+            raise ValueError(f"no device has part {part!r}"
+                             f" ({'parts: ' + ', '.join(parts) if parts else 'the plant names no parts'})")
+        buses = {d.transport_of("main").bus for d in devices}
+        return self.model_copy(update={"devices": devices, "buses": [b for b in self.buses if b.name in buses]})
 
     def device_ports(self) -> list[tuple[str, DeviceSpec, str]]:
         """(plant port name, device, device port) of every device port with a transport of its

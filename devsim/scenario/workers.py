@@ -155,6 +155,7 @@ async def run_workers(
     state_dir: str | None = None,
     speed: float = 1.0,
     trace_dir: str | None = None,
+    fleet: str | None = None,
 ) -> int:
     """Serve ``spec`` from ``workers`` processes until Ctrl-C / SIGTERM; returns an exit status."""
     loop = asyncio.get_running_loop()
@@ -175,6 +176,8 @@ async def run_workers(
                     args += ["--state-dir", state_dir]
                 if trace_dir is not None:
                     args += ["--trace-dir", trace_dir]
+                if fleet is not None:  # each worker is a fleet member of its own
+                    args += ["--fleet", fleet]
                 proc = await asyncio.create_subprocess_exec(
                     *args, stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE, env=dict(os.environ)
                 )

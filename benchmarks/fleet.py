@@ -1,0 +1,192 @@
+"""Fleet: control requests to many devices in several devsim processes through mosquitto.
+
+Starts a mosquitto (``$SYS`` every second), a plant of ``--devices`` SERS devices in
+``--processes`` parts, each part a ``devsim up PLANT --part pN --fleet URL`` process, and one
+asyncio fleet client (:class:`devsim.fleet.client.AsyncFleetClient`) that reads
+``input.I1`` of every device ``--rate`` times a second for ``--seconds`` (after a second of
+warm-up).  What is measured is the fleet's own traffic – request to the process serving the
+device, answer back – as no MQTT state facade is on this branch: every round trip is two
+messages through the broker.
+
+Reports: round trips answered per second and the broker's own count of messages sent per second
+(``$SYS/broker/messages/sent``), round-trip p50/p99/max, late requests (an answer that had not
+arrived when the device's next read was due), and the CPU of mosquitto, of each devsim process
+and of the client (from ``/proc/PID/stat``, % of one core).
+
+    python benchmarks/fleet.py [--devices 100] [--processes 4] [--rate 10] [--seconds 10]
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from devsim.fleet.client import AsyncFleetClient  # noqa: E402
+from tests.support.broker import Broker  # noqa: E402
+
+TICK = os.sysconf("SC_CLK_TCK")
+
+
+def cpu_seconds(pid: int) -> float:
+    """utime + stime of a process, in seconds."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / TICK
+
+
+def start_members(url: str, devices: int, processes: int, tmp: Path) -> list[tuple[subprocess.Popen[str], str]]:
+    plant = tmp / "plant.yaml"
+    plant.write_text("name: bench\ndevices:\n" + "".join(
+        f"  - {{name: d{i:03d}, kind: sers, part: p{i % processes}}}\n" for i in range(devices)))
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    members = []
+    for part in range(processes):
+        proc = subprocess.Popen([sys.executable, "-m", "devsim", "up", str(plant), "--part", f"p{part}", "--fleet", url],
+                                cwd=ROOT, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                stderr=subprocess.DEVNULL, text=True)
+        members.append(proc)
+    joined = []
+    for proc in members:
+        assert proc.stdout is not None
+        for line in proc.stdout:  # bounded by the member's own start-up (it exits on failure)
+            if line.startswith("fleet: "):
+                joined.append((proc, line.rsplit(" as ", 1)[1].strip()))
+                break
+        else:
+            raise SystemExit(f"a devsim process ended before joining: {proc.args}")
+    return joined
+
+
+async def sys_counter(url: str, topic: str) -> asyncio.Queue[tuple[float, int]]:
+    """The broker's $SYS counter ``topic`` as (arrival time, value) in a queue."""
+    import aiomqtt
+
+    from devsim.fleet.topics import parse_fleet_url
+
+    queue: asyncio.Queue[tuple[float, int]] = asyncio.Queue()
+    fleet = parse_fleet_url(url)
+
+    async def watch() -> None:
+        async with aiomqtt.Client(fleet.host, fleet.port) as client:
+            await client.subscribe(topic)
+            async for message in client.messages:
+                queue.put_nowait((asyncio.get_running_loop().time(), int(bytes(message.payload))))  # type: ignore[arg-type]
+
+    _watchers.add(asyncio.ensure_future(watch()))
+    return queue
+
+
+_watchers: set[asyncio.Task[None]] = set()
+
+
+async def measure(url: str, devices: list[str], rate: float, seconds: float, client_pid: int) -> dict[str, float]:
+    counter = await sys_counter(url, "$SYS/broker/messages/sent")
+    async with AsyncFleetClient(url, timeout=5.0) as fleet:
+        await fleet.wait_for_devices(devices, timeout=30)
+        where = {name: fleet.serving(name) for name in devices}
+        period = 1.0 / rate
+        latencies: list[float] = []
+        late = [0]
+        failed = [0]
+        loop = asyncio.get_running_loop()
+        warm_end = loop.time() + 1.0
+        end = warm_end + seconds
+        samples: list[tuple[float, int]] = []
+
+        async def poll(index: int, name: str) -> None:
+            due = loop.time() + period * index / len(devices)
+            while due < end:
+                await asyncio.sleep(max(0.0, due - loop.time()))
+                sent = time.perf_counter()
+                try:
+                    await fleet.ask(where[name], "read", device=name, name="input.I1")
+                except Exception:
+                    failed[0] += 1 if due >= warm_end else 0
+                    due += period
+                    continue
+                took = time.perf_counter() - sent
+                if due >= warm_end:
+                    latencies.append(took)
+                    if loop.time() > due + period:
+                        late[0] += 1
+                due += period
+
+        async def count() -> None:
+            while True:
+                samples.append(await counter.get())
+
+        counting = asyncio.ensure_future(count())
+        polls = asyncio.gather(*(poll(i, name) for i, name in enumerate(devices)))
+        await asyncio.sleep(max(0.0, warm_end - loop.time()))
+        cpu0 = loop.time(), cpu_seconds(client_pid)
+        await polls
+        cpu1 = loop.time(), cpu_seconds(client_pid)
+        counting.cancel()
+    inside = [sample for sample in samples if warm_end <= sample[0] <= end]
+    first, last = inside[0], inside[-1]
+    latencies.sort()
+    return {
+        "answered_per_s": len(latencies) / seconds,
+        "broker_sent_per_s": (last[1] - first[1]) / (last[0] - first[0]),
+        "p50_ms": 1000 * statistics.median(latencies),
+        "p99_ms": 1000 * latencies[int(0.99 * (len(latencies) - 1))],
+        "max_ms": 1000 * latencies[-1],
+        "late": late[0],
+        "failed": failed[0],
+        "requests": len(latencies),
+        "client_cpu": 100 * (cpu1[1] - cpu0[1]) / (cpu1[0] - cpu0[0]),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--devices", type=int, default=100)
+    parser.add_argument("--processes", type=int, default=4)
+    parser.add_argument("--rate", type=float, default=10.0, help="reads per second per device")
+    parser.add_argument("--seconds", type=float, default=10.0)
+    parser.add_argument("--nodelay", action="store_true", help="mosquitto's set_tcp_nodelay true")
+    args = parser.parse_args()
+
+    broker = Broker(extra="sys_interval 1\n" + ("set_tcp_nodelay true" if args.nodelay else "")).start()
+    with tempfile.TemporaryDirectory(prefix="devsim-fleet-bench-") as tmp:
+        members: list[tuple[subprocess.Popen[str], str]] = []
+        try:
+            members = start_members(broker.url, args.devices, args.processes, Path(tmp))
+            assert broker.process is not None
+            pids = {"mosquitto": broker.process.pid, **{name: proc.pid for proc, name in members}}
+            before = {key: cpu_seconds(pid) for key, pid in pids.items()}
+            started = time.perf_counter()
+            names = [f"d{i:03d}" for i in range(args.devices)]
+            result = asyncio.run(measure(broker.url, names, args.rate, args.seconds, os.getpid()))
+            elapsed = time.perf_counter() - started
+            cpu = {key: 100 * (cpu_seconds(pid) - before[key]) / elapsed for key, pid in pids.items()}
+        finally:
+            for proc, _name in members:
+                proc.terminate()
+            for proc, _name in members:
+                try:
+                    proc.wait(10)
+                except subprocess.TimeoutExpired:
+                    proc.kill()
+            broker.stop()
+    print(f"{args.devices} devices in {args.processes} processes, read at {args.rate:g} Hz each for {args.seconds:g} s")
+    print(f"round trips answered: {result['answered_per_s']:.0f}/s ({result['requests']} in the window;"
+          f" {result['late']} late, {result['failed']} unanswered)")
+    print(f"broker messages sent: {result['broker_sent_per_s']:.0f}/s ($SYS/broker/messages/sent)")
+    print(f"round trip p50 {result['p50_ms']:.2f} ms, p99 {result['p99_ms']:.2f} ms, max {result['max_ms']:.1f} ms")
+    print(f"CPU (% of one core, whole run incl. warm-up): mosquitto {cpu['mosquitto']:.1f}; devsim "
+          + ", ".join(f"{cpu[name]:.1f}" for _p, name in members)
+          + f"; the client {result['client_cpu']:.1f} (measured window)")
+
+
+if __name__ == "__main__":
+    main()

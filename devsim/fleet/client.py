@@ -1,0 +1,324 @@
+"""The fleet's client: every device of every devsim process on a broker, reached by name.
+
+:class:`AsyncFleetClient` (asyncio) and :class:`FleetClient` (blocking, its loop in a thread;
+what ``devsim ctl --fleet URL`` uses) keep the retained announcements of all processes (see
+:mod:`devsim.fleet.member`) and send a control-API request to the process that announces the
+named device, on its request topic, with the client's reply topic and a unique ``id`` as the
+correlation id; the answer is the control API's own (``ok``/``result`` or ``error``/``type``,
+raised as :class:`devsim.core.control.ControlError`).  :class:`FleetClient` has the methods of
+:class:`devsim.core.control.ControlClient`.
+
+* ``devices()`` – one row per device: the process's ``devices`` row (name, kind, ports) with
+  ``process``, ``host``, ``pid``, ``online`` (and ``plant``/``part`` when given).  A process that
+  died without a clean stop shows its devices with ``"online": false`` (its last will) until a
+  process serving the same name appears.
+* **Clashes.** Device names are unique across a fleet: a process refuses to join when a name is
+  taken.  Two processes that announce the same name anyway (they joined at the same moment, or a
+  bridge joined two fleets) are both listed, each row with ``"clash": true``, and requests for
+  that name are refused (``FleetClash``) until one of them leaves.
+* **Time.** Virtual time belongs to each process.  ``advance(seconds, device=NAME)`` advances
+  the process serving NAME; ``advance(seconds)`` advances every online process on virtual time
+  and returns ``{process: new time}`` (an error of one is raised after the others advanced).
+  ``now`` likewise, for every online process.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import threading
+import uuid
+from collections.abc import Iterable
+from typing import Any
+
+import aiomqtt
+
+from devsim.core.control import ControlError
+from devsim.fleet.member import mqtt_client, parse_announcement
+from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url
+
+__all__ = ["AsyncFleetClient", "FleetClient"]
+
+TIME_OPS = ("advance", "now")  # ops without a device: every process, or the one serving ``device``
+
+
+class AsyncFleetClient:
+    """An asyncio fleet client; ``async with AsyncFleetClient(url) as fleet: await fleet.request(...)``."""
+
+    def __init__(self, url: str | FleetUrl, *, timeout: float = 10.0) -> None:
+        self.url = parse_fleet_url(url) if isinstance(url, str) else url
+        self.timeout = timeout
+        self.topics = Topics(self.url.root)
+        self.id = f"ctl-{uuid.uuid4().hex[:16]}"
+        self.processes: dict[str, dict[str, Any]] = {}  # process -> its latest announcement
+        self._client: aiomqtt.Client | None = None
+        self._reader: asyncio.Task[None] | None = None
+        self._pending: dict[str, asyncio.Future[dict[str, Any]]] = {}
+        self._changed = asyncio.Event()
+        self._synced = asyncio.Event()
+        self._next = 0
+
+    @property
+    def reply_topic(self) -> str:
+        return self.topics.reply(self.id)
+
+    async def open(self) -> AsyncFleetClient:
+        client = mqtt_client(self.url, f"devsim-{self.id}")
+        try:
+            await client.__aenter__()
+        except aiomqtt.MqttError as exc:
+            raise ConnectionError(f"cannot reach the fleet broker {self.url}: {exc}") from None
+        self._client = client
+        await client.subscribe(self.reply_topic, qos=0)
+        await client.subscribe(self.topics.announcements, qos=1)
+        marker = self.topics.sync(self.id)
+        await client.subscribe(marker, qos=0)
+        self._reader = asyncio.ensure_future(self._read(marker))
+        await client.publish(marker, b"sync", qos=0)
+        try:
+            await asyncio.wait_for(self._synced.wait(), self.timeout)
+        except TimeoutError:
+            await self.close()
+            raise ConnectionError(f"the fleet broker {self.url} did not answer") from None
+        return self
+
+    async def close(self) -> None:
+        if self._reader is not None:
+            self._reader.cancel()
+            with contextlib.suppress(BaseException):
+                await self._reader
+            self._reader = None
+        client, self._client = self._client, None
+        if client is not None:
+            with contextlib.suppress(Exception):
+                await client.__aexit__(None, None, None)
+        for future in self._pending.values():
+            if not future.done():
+                future.set_exception(ConnectionError("fleet client closed"))
+        self._pending.clear()
+
+    async def __aenter__(self) -> AsyncFleetClient:
+        return await self.open()
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self.close()
+
+    async def _read(self, marker: str) -> None:
+        assert self._client is not None
+        try:
+            async for message in self._client.messages:
+                topic = message.topic.value
+                if topic == self.reply_topic:
+                    self._answer(message.payload)
+                elif topic == marker:
+                    self._synced.set()
+                else:
+                    process = self.topics.process_of(topic)
+                    if process is None:
+                        continue
+                    announcement = parse_announcement(message.payload)
+                    if announcement is None:
+                        self.processes.pop(process, None)
+                    else:
+                        self.processes[process] = announcement
+                    self._changed.set()
+        except aiomqtt.MqttError as exc:
+            for future in self._pending.values():
+                if not future.done():
+                    future.set_exception(ConnectionError(f"fleet broker connection lost: {exc}"))
+
+    def _answer(self, payload: Any) -> None:
+        try:
+            data = json.loads(payload)
+        except (ValueError, RecursionError, TypeError):
+            return
+        if isinstance(data, dict):
+            future = self._pending.pop(str(data.get("id")), None)
+            if future is not None and not future.done():
+                future.set_result(data)
+
+    # -- the listing ---------------------------------------------------------------------
+    def devices(self) -> list[dict[str, Any]]:
+        """Every device of every process (see the module docstring), sorted by name."""
+        rows: list[dict[str, Any]] = []
+        for process, announcement in self.processes.items():
+            about = {key: announcement.get(key) for key in ("host", "pid", "plant", "part") if key in announcement}
+            for row in announcement.get("devices", []):
+                if isinstance(row, dict) and "name" in row:
+                    rows.append({**row, "process": process, **about, "online": bool(announcement.get("online"))})
+        online: dict[str, int] = {}
+        for row in rows:
+            if row["online"]:
+                online[row["name"]] = online.get(row["name"], 0) + 1
+        rows = [row for row in rows if row["online"] or row["name"] not in online]
+        for row in rows:
+            if online.get(row["name"], 0) > 1:
+                row["clash"] = True
+        return sorted(rows, key=lambda row: (str(row["name"]), str(row["process"])))
+
+    def serving(self, device: str) -> str:
+        """The process that serves ``device`` (online, and the only one); else ControlError."""
+        rows = [row for row in self.devices() if row["name"] == device]
+        live = [row for row in rows if row["online"]]
+        if len(live) == 1:
+            return str(live[0]["process"])
+        if len(live) > 1:
+            where = ", ".join(f"{row['process']} (host {row.get('host')})" for row in live)
+            raise ControlError(f"device {device!r} is served by {len(live)} processes: {where}", "FleetClash")
+        if rows:
+            raise ControlError(f"device {device!r} is offline (its process {rows[0]['process']} is gone)", "Offline")
+        known = sorted({str(row["name"]) for row in self.devices() if row["online"]})
+        raise ControlError(f"no device named {device[:60]!r} in the fleet {self.url}"
+                           f" (have: {', '.join(known) or 'none'})", "UnknownDevice")
+
+    def online_processes(self) -> list[str]:
+        return sorted(p for p, a in self.processes.items() if a.get("online"))
+
+    async def wait_for_devices(self, names: Iterable[str], timeout: float = 10.0, *,
+                               online: bool = True) -> list[dict[str, Any]]:
+        """Wait until every device in ``names`` is listed online (or, with ``online=False``,
+        listed offline); bounded by ``timeout`` seconds.  Returns :meth:`devices`."""
+        wanted = set(names)
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + timeout
+        while True:
+            have = {row["name"] for row in self.devices() if row["online"] == online}
+            if wanted <= have:
+                return self.devices()
+            self._changed.clear()
+            left = deadline - loop.time()
+            if left <= 0:
+                state = "online" if online else "offline"
+                raise TimeoutError(f"devices not {state} in the fleet after {timeout:g} s: {sorted(wanted - have)}")
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._changed.wait(), left)
+
+    # -- requests ------------------------------------------------------------------------
+    async def ask(self, process: str, op: str, **fields: Any) -> Any:
+        """Send one control request to ``process``; its result, or ControlError."""
+        if self._client is None:
+            raise ConnectionError("fleet client not open")
+        self._next += 1
+        req_id = f"{self.id}-{self._next}"
+        message = {"id": req_id, "op": op, **{k: v for k, v in fields.items() if v is not None},
+                   "reply_to": self.reply_topic}
+        future: asyncio.Future[dict[str, Any]] = asyncio.get_running_loop().create_future()
+        self._pending[req_id] = future
+        try:
+            await self._client.publish(self.topics.request(process), json.dumps(message), qos=0)
+            reply = await asyncio.wait_for(future, self.timeout)
+        except TimeoutError:
+            raise ControlError(f"{process} did not answer {op!r} within {self.timeout:g} s", "Timeout") from None
+        finally:
+            self._pending.pop(req_id, None)
+        if not reply.get("ok"):
+            raise ControlError(str(reply.get("error")), str(reply.get("type", "Error")))
+        return reply.get("result")
+
+    async def request(self, op: str, **fields: Any) -> Any:
+        """A control request routed by its ``device``; ``devices`` from the announcements;
+        ``advance``/``now`` without a device go to every online process (``{process: result}``)."""
+        if op == "devices":
+            return self.devices()
+        device = fields.get("device")
+        if device is not None:
+            return await self.ask(self.serving(str(device)), op, **fields)
+        if op not in TIME_OPS:
+            raise ControlError(f"{op} needs 'device'", "BadRequest")
+        processes = self.online_processes()
+        if op == "advance":  # only clocks that wait for it; real ones would refuse
+            processes = [p for p in processes if self.processes[p].get("clock") == "virtual"]
+            if not processes:
+                raise ControlError("no process in the fleet runs on virtual time", "BadRequest")
+        results = await asyncio.gather(*(self.ask(p, op, **fields) for p in processes), return_exceptions=True)
+        failed = [f"{p}: {r}" for p, r in zip(processes, results, strict=True) if isinstance(r, BaseException)]
+        if failed:
+            raise ControlError("; ".join(failed), "FleetError")
+        return dict(zip(processes, results, strict=True))
+
+
+class FleetClient:
+    """Blocking fleet client with :class:`~devsim.core.control.ControlClient`'s methods (its
+    asyncio loop runs in a daemon thread).  ``with FleetClient("mqtt://broker") as fleet: ...``."""
+
+    def __init__(self, url: str | FleetUrl, timeout: float = 10.0) -> None:
+        self._loop = asyncio.new_event_loop()
+        self._thread = threading.Thread(target=self._loop.run_forever, name="devsim-fleet-client", daemon=True)
+        self._thread.start()
+        self.fleet = AsyncFleetClient(url, timeout=timeout)
+        try:
+            self._run(self.fleet.open())
+        except BaseException:
+            self._end()
+            raise
+
+    def _run(self, coro: Any) -> Any:
+        return asyncio.run_coroutine_threadsafe(coro, self._loop).result()
+
+    def _end(self) -> None:
+        self._loop.call_soon_threadsafe(self._loop.stop)
+        self._thread.join(10)
+        if not self._thread.is_alive():
+            self._loop.close()
+
+    def close(self) -> None:
+        if self._loop.is_closed():
+            return
+        with contextlib.suppress(Exception):
+            self._run(self.fleet.close())
+        self._end()
+
+    def __enter__(self) -> FleetClient:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def request(self, op: str, **fields: Any) -> Any:
+        return self._run(self.fleet.request(op, **fields))
+
+    def devices(self) -> list[dict[str, Any]]:
+        return self._run(self._listing())  # type: ignore[no-any-return]
+
+    async def _listing(self) -> list[dict[str, Any]]:
+        return self.fleet.devices()
+
+    def wait_for_devices(self, names: Iterable[str], timeout: float = 10.0, *,
+                         online: bool = True) -> list[dict[str, Any]]:
+        """Wait (bounded) until the named devices are online (or offline)."""
+        return self._run(self.fleet.wait_for_devices(list(names), timeout, online=online))  # type: ignore[no-any-return]
+
+    def read(self, device: str, name: str) -> Any:
+        return self.request("read", device=device, name=name)
+
+    def set(self, device: str, name: str, value: Any) -> None:
+        self.request("set", device=device, name=name, value=value)
+
+    def state(self, device: str) -> dict[str, Any]:
+        result: dict[str, Any] = self.request("state", device=device)
+        return result
+
+    def power_cycle(self, device: str, *, wipe: bool = False) -> None:
+        self.request("power_cycle", device=device, wipe=wipe)
+
+    def advance(self, seconds: float, device: str | None = None) -> Any:
+        """Advance the process serving ``device`` (its new time), or every process ({process: time})."""
+        return self.request("advance", seconds=seconds, device=device)
+
+    def now(self, device: str | None = None) -> Any:
+        return self.request("now", device=device)
+
+    def line(self, device: str, port: str = "main") -> dict[str, Any]:
+        result: dict[str, Any] = self.request("line", device=device, port=port)
+        return result
+
+    def names(self, device: str) -> list[dict[str, Any]]:
+        result: list[dict[str, Any]] = self.request("names", device=device)
+        return result
+
+    def fault(self, device: str, kind: str, active: bool = True) -> None:
+        self.request("fault", device=device, kind=kind, active=active)
+
+    def line_fault(self, device: str, kind: str, active: bool = True, *, port: str = "main", **params: Any) -> None:
+        self.request("line_fault", device=device, kind=kind, active=active, port=port, params=params)

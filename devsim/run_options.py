@@ -1,0 +1,109 @@
+"""The facade and fleet options of ``devsim run`` checked before anything starts (issues 13, 14):
+each bad value is one usage-error line; a missing extra names the ``pip install`` that brings it.
+The libraries themselves are imported only to check that they are there."""
+
+from __future__ import annotations
+
+import click
+
+__all__ = ["check_canopen", "check_fleet", "check_modbus", "check_mqtt", "check_opcua", "host_port", "modbus_for"]
+
+
+def host_port(option: str, text: str) -> tuple[str, int]:
+    host, sep, port_text = text.rpartition(":")
+    if not sep:
+        host = "127.0.0.1"
+    host = host.strip("[]") or "127.0.0.1"
+    try:
+        port = int(port_text)
+    except ValueError:
+        raise click.UsageError(f"{option}: expected [HOST:]PORT, got {text!r}") from None
+    if not 0 <= port <= 65535:
+        raise click.UsageError(f"{option}: port {port} is not in 0..65535")
+    return host, port
+
+
+def check_modbus(spec: str) -> None:
+    scheme, _, rest = spec.partition(":")
+    if scheme == "tcp":
+        host_port("--modbus", rest)
+    elif scheme != "rtu":
+        raise click.UsageError(f"--modbus: expected tcp:[HOST:]PORT, rtu or rtu:LINK, not {spec!r}")
+    try:
+        import pymodbus  # noqa: F401
+    except ImportError:
+        raise click.UsageError("--modbus needs pymodbus: pip install 'devsim-motion[modbus]'") from None
+
+
+def check_canopen(spec: str) -> None:
+    node, _, where = spec.partition("@")
+    if not node.isdigit() or not 1 <= int(node) <= 127:
+        raise click.UsageError(f"--canopen: expected NODE[@[HOST:]PORT] or NODE@socketcan:CHANNEL with NODE 1 … 127, "
+                               f"not {spec!r}")
+    if where.startswith("socketcan:"):
+        if not where.removeprefix("socketcan:"):
+            raise click.UsageError("--canopen NODE@socketcan:CHANNEL needs a channel, e.g. vcan0")
+    elif where:
+        host_port("--canopen", where)
+    try:
+        import canopen  # noqa: F401
+    except ImportError:
+        raise click.UsageError("--canopen needs canopen and python-can: pip install 'devsim-motion[can]'") from None
+
+
+def check_mqtt(url: str, convention: str, rate: float, plant: str | None) -> None:
+    try:
+        import aiomqtt  # noqa: F401
+
+        if not url:
+            import amqtt  # noqa: F401
+        if convention == "sparkplug":
+            import tahutils  # noqa: F401
+    except ImportError:
+        raise click.UsageError("--mqtt needs aiomqtt, amqtt and tahutils: pip install 'devsim-motion[mqtt]'") from None
+    from devsim.facades.mqtt_topics import check_name, parse_url
+
+    try:
+        if url:
+            parse_url(url)
+        if plant is not None:
+            check_name("plant", plant)
+    except ValueError as exc:
+        raise click.UsageError(f"--mqtt: {exc}") from None
+    if not rate > 0:
+        raise click.UsageError("--mqtt-rate: must be a positive number of seconds")
+
+
+def check_opcua(spec: str, period: float) -> None:
+    from devsim.facades.opcua_space import endpoint_url
+
+    try:
+        endpoint_url(spec)
+    except ValueError as exc:
+        raise click.UsageError(str(exc)) from None
+    if not period > 0:
+        raise click.UsageError("--opcua-period: must be positive")
+    try:
+        import asyncua  # noqa: F401
+    except ImportError:
+        raise click.UsageError("--opcua needs asyncua: pip install 'devsim-motion[opcua]'") from None
+
+
+def check_fleet(url: str) -> None:
+    """``--fleet URL``: a usable fleet URL, and aiomqtt installed (a usage error otherwise)."""
+    from devsim.fleet.topics import fleet_problem
+
+    problem = fleet_problem(url)
+    if problem is not None:
+        raise click.UsageError(f"--fleet: {problem}")
+
+
+def modbus_for(spec: str, index: int) -> str:
+    """The Modbus port of the index-th device: TCP port numbers count up, RTU links get -N."""
+    scheme, _, rest = spec.partition(":")
+    if index == 0:
+        return spec
+    if scheme == "tcp":
+        host, port = host_port("--modbus", rest)
+        return f"tcp:{host}:{port + index if port else 0}"
+    return f"rtu:{rest}-{index}" if rest else "rtu"

@@ -1,0 +1,128 @@
+"""Fixtures of the fleet tests: a real mosquitto (tests/support/broker.py), devsim processes and
+mosquitto's own clients as subprocesses, every wait bounded."""
+
+from __future__ import annotations
+
+import json
+import os
+import queue
+import shutil
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tests.support.broker import Broker, _program, mosquitto_missing
+
+ROOT = Path(__file__).resolve().parents[2]
+
+PLANT = """\
+name: line3
+devices:
+  - {name: feeder, kind: sers, part: cell-a}
+  - {name: press, kind: gms96, part: cell-b}
+  - {name: robot, kind: sers, part: cell-c}
+  - {name: robot2, kind: sers, part: cell-c}
+  - {name: spare, kind: sers}
+"""
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
+    return env
+
+
+class Program:
+    """A subprocess whose stdout lines are collected by a thread; stderr goes to a file."""
+
+    def __init__(self, args: list[str], log: Path) -> None:
+        self.log = log
+        self._err = log.open("w")
+        self.proc = subprocess.Popen(args, cwd=ROOT, env=_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                     stderr=self._err, text=True)
+        self.lines: queue.Queue[str | None] = queue.Queue()
+        self.seen: list[str] = []
+        threading.Thread(target=self._pump, daemon=True).start()
+
+    def _pump(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            self.lines.put(line.rstrip("\n"))
+        self.lines.put(None)
+
+    def wait_for(self, prefix: str, timeout: float = 30.0) -> str:
+        """The first stdout line (from now on) starting with ``prefix``; fails after ``timeout``."""
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                line = self.lines.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                raise AssertionError(f"no line {prefix!r} within {timeout} s; got {self.seen}; "
+                                     f"stderr: {self.log.read_text()[-2000:]}") from None
+            if line is None:
+                self.proc.wait(5)
+                raise AssertionError(f"{self.proc.args} ended ({self.proc.returncode}) before {prefix!r}; "
+                                     f"got {self.seen}; stderr: {self.log.read_text()[-2000:]}")
+            self.seen.append(line)
+            if line.startswith(prefix):
+                return line
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self._err.close()
+
+
+class Member(Program):
+    """``devsim run|up ... --fleet URL``, started and announced (its ``fleet:`` line seen)."""
+
+    def __init__(self, args: list[str], url: str, log: Path) -> None:
+        super().__init__([sys.executable, "-m", "devsim", *args, "--fleet", url], log)
+        self.process = self.wait_for("fleet: ").rsplit(" as ", 1)[1]
+
+
+def ctl(url: str, *args: str, ok: bool = True) -> Any:
+    """``devsim ctl --fleet URL ARGS``: its JSON (ok) or its stderr (not ok)."""
+    done = subprocess.run([sys.executable, "-m", "devsim", "ctl", "--fleet", url, *args], cwd=ROOT, env=_env(),
+                          capture_output=True, text=True, timeout=60)
+    if ok:
+        assert done.returncode == 0, done.stderr
+        return json.loads(done.stdout)
+    assert done.returncode != 0, done.stdout
+    return done.stderr.strip()
+
+
+def mosquitto(name: str, *args: str, log: Path) -> Program:
+    """mosquitto_sub / mosquitto_pub: MQTT clients nobody on this project wrote.  Line-buffered
+    (``stdbuf -oL``): mosquitto_sub flushes its messages but not its ``-d`` lines, and
+    ``Subscribed`` is how a test knows the subscription is in place."""
+    stdbuf = shutil.which("stdbuf")
+    return Program([*([stdbuf, "-oL"] if stdbuf else []), _program(name), *args], log)
+
+
+@pytest.fixture(scope="module")
+def broker() -> Iterator[Broker]:
+    why = mosquitto_missing()
+    if why is not None:
+        pytest.fail(why)  # .ci/run installs mosquitto: its absence is an error, not a skip
+    server = Broker().start()
+    yield server
+    server.stop()
+
+
+@pytest.fixture(scope="module")
+def plant_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("fleet") / "line3.yaml"
+    path.write_text(PLANT)
+    return path
