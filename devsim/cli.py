@@ -63,14 +63,14 @@ class ConfigUsageError(click.ClickException):
 
 class _Cli(click.Group):
     """A group that reports every usage error as a single line (no usage block, no traceback),
-    and imports the scenario commands only when one of them runs."""
+    and imports the modules of the ``LAZY_COMMANDS`` only when one of them runs."""
 
     def list_commands(self, ctx: click.Context) -> list[str]:
-        return sorted([*super().list_commands(ctx), *_SCENARIO_COMMANDS])
+        return sorted([*super().list_commands(ctx), *LAZY_COMMANDS])
 
     def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
-        if cmd_name in _SCENARIO_COMMANDS:
-            return _scenario_command(cmd_name)
+        if cmd_name in LAZY_COMMANDS:
+            return _lazy_command(cmd_name)
         return super().get_command(ctx, cmd_name)
 
     def main(  # type: ignore[override]
@@ -650,12 +650,17 @@ def _port_text(transport: Any, scheme: str) -> str:
 
 cli.add_command(ctl)
 
-_SCENARIO_COMMANDS = ("check", "scenario", "up")
+#: Commands whose module is imported only when one of them runs (``devsim run`` starts faster):
+#: command name → the module that defines it as a click command of the same name.
+LAZY_COMMANDS: dict[str, str] = {
+    "check": "devsim.scenario.cli",
+    "scenario": "devsim.scenario.cli",
+    "up": "devsim.scenario.cli",
+}
 
 
-def _scenario_command(name: str) -> click.Command:
-    """``check``, ``scenario`` and ``up`` live in :mod:`devsim.scenario.cli`, imported when used."""
-    from devsim.scenario import cli as scenario_cli
+def _lazy_command(name: str) -> click.Command:
+    import importlib
 
-    command: click.Command = getattr(scenario_cli, name)
+    command: click.Command = getattr(importlib.import_module(LAZY_COMMANDS[name]), name)
     return command
