@@ -1,12 +1,18 @@
-"""Fleet: control requests to many devices in several devsim processes through mosquitto.
+"""Fleet: many devices in several devsim processes through mosquitto.
 
-Starts a mosquitto (``$SYS`` every second), a plant of ``--devices`` SERS devices in
-``--processes`` parts, each part a ``devsim up PLANT --part pN --fleet URL`` process, and one
-asyncio fleet client (:class:`devsim.fleet.client.AsyncFleetClient`) that reads
-``input.I1`` of every device ``--rate`` times a second for ``--seconds`` (after a second of
-warm-up).  What is measured is the fleet's own traffic – request to the process serving the
-device, answer back – as no MQTT state facade is on this branch: every round trip is two
-messages through the broker.
+Starts a mosquitto (``$SYS`` every second) and a plant of ``--devices`` SERS devices in
+``--processes`` parts, each part a ``devsim up PLANT --part pN`` process.  Two measurements
+(``--measure``, default both):
+
+* ``states``: the parts publish their devices with the MQTT facade (the plant's ``mqtt:``
+  section, points sampled every ``1/--rate`` s); one asyncio client sets ``input.I1`` of every
+  device ``--rate`` times a second (flipping it) through ``…/set/input.I1`` and takes the
+  ``…/state/input.I1`` each device publishes: state messages delivered per second, and the end-to-
+  end time from the command to the published state (command → broker → devsim → broker →
+  subscriber).
+* ``requests``: the parts join a fleet (``--fleet URL``); one fleet client
+  (:class:`devsim.fleet.client.AsyncFleetClient`) reads ``input.I1`` of every device ``--rate``
+  times a second: every round trip is two messages through the broker.
 
 Reports: round trips answered per second and the broker's own count of messages sent per second
 (``$SYS/broker/messages/sent``), round-trip p50/p99/max, late requests (an answer that had not
@@ -14,6 +20,7 @@ arrived when the device's next read was due), and the CPU of mosquitto, of each 
 and of the client (from ``/proc/PID/stat``, % of one core).
 
     python benchmarks/fleet.py [--devices 100] [--processes 4] [--rate 10] [--seconds 10]
+                               [--measure states|requests|both]
 """
 
 from __future__ import annotations
@@ -43,23 +50,31 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / TICK
 
 
-def start_members(url: str, devices: int, processes: int, tmp: Path) -> list[tuple[subprocess.Popen[str], str]]:
+def start_members(url: str, devices: int, processes: int, tmp: Path, *, states: float | None = None,
+                  ) -> list[tuple[subprocess.Popen[str], str]]:
+    """The parts as ``devsim up`` processes: fleet members, or (``states``: the MQTT facade's
+    sampling period) publishing their devices on the broker."""
     plant = tmp / "plant.yaml"
-    plant.write_text("name: bench\ndevices:\n" + "".join(
+    mqtt = f"mqtt: {{url: '{url}', rate: {states}}}\n" if states is not None else ""
+    plant.write_text(f"name: bench\n{mqtt}devices:\n" + "".join(
         f"  - {{name: d{i:03d}, kind: sers, part: p{i % processes}}}\n" for i in range(devices)))
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     members = []
     for part in range(processes):
-        proc = subprocess.Popen([sys.executable, "-m", "devsim", "up", str(plant), "--part", f"p{part}", "--fleet", url],
+        extra = [] if states is not None else ["--fleet", url]
+        proc = subprocess.Popen([sys.executable, "-m", "devsim", "up", str(plant), "--part", f"p{part}", *extra],
                                 cwd=ROOT, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                                 stderr=subprocess.DEVNULL, text=True)
         members.append(proc)
     joined = []
-    for proc in members:
+    for part, proc in enumerate(members):
         assert proc.stdout is not None
         for line in proc.stdout:  # bounded by the member's own start-up (it exits on failure)
-            if line.startswith("fleet: "):
+            if states is None and line.startswith("fleet: "):
                 joined.append((proc, line.rsplit(" as ", 1)[1].strip()))
+                break
+            if states is not None and line.startswith("mqtt: topics"):
+                joined.append((proc, f"p{part}"))
                 break
         else:
             raise SystemExit(f"a devsim process ended before joining: {proc.args}")
@@ -147,26 +162,104 @@ async def measure(url: str, devices: list[str], rate: float, seconds: float, cli
     }
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--devices", type=int, default=100)
-    parser.add_argument("--processes", type=int, default=4)
-    parser.add_argument("--rate", type=float, default=10.0, help="reads per second per device")
-    parser.add_argument("--seconds", type=float, default=10.0)
-    parser.add_argument("--nodelay", action="store_true", help="mosquitto's set_tcp_nodelay true")
-    args = parser.parse_args()
+async def measure_states(url: str, devices: list[str], rate: float, seconds: float, client_pid: int,
+                         ) -> dict[str, float]:
+    """Flip ``input.I1`` of every device ``rate`` times a second over MQTT and time each
+    published state from its command."""
+    import aiomqtt
 
+    from devsim.fleet.topics import parse_fleet_url
+
+    broker = parse_fleet_url(url)
+    counter = await sys_counter(url, "$SYS/broker/messages/sent")
+    loop = asyncio.get_running_loop()
+    pending: dict[tuple[str, bool], float] = {}
+    latencies: list[float] = []
+    delivered = [0]
+    late = [0]
+    window = [float("inf"), float("inf")]  # warm-up end, end: set once the births are in
+    async with aiomqtt.Client(broker.host, broker.port) as client:
+        await client.subscribe("devsim/bench/+/state/#")
+        await client.subscribe("devsim/bench/+/status")
+        online: set[str] = set()
+        all_online = asyncio.Event()
+        samples: list[tuple[float, int]] = []
+
+        async def receive() -> None:
+            async for message in client.messages:
+                device = message.topic.value.split("/")[2]
+                if message.topic.value.endswith("/status"):
+                    (online.add if bytes(message.payload) == b"online" else online.discard)(device)  # type: ignore[arg-type]
+                    if len(online) == len(devices):
+                        all_online.set()
+                    continue
+                counted = window[0] <= loop.time() <= window[1]
+                delivered[0] += counted
+                if message.topic.value.endswith("/input.I1"):
+                    sent = pending.pop((device, bytes(message.payload) == b"true"), None)  # type: ignore[arg-type]
+                    if sent is not None and counted:
+                        latencies.append(time.perf_counter() - sent)
+
+        async def flip(index: int, name: str) -> None:
+            period = 1.0 / rate
+            due = loop.time() + period * index / len(devices)
+            value = True
+            while due < window[1]:
+                await asyncio.sleep(max(0.0, due - loop.time()))
+                if pending.pop((name, not value), None) is not None and due >= window[0]:
+                    late[0] += 1  # the previous flip's state had not come by this flip
+                pending[(name, value)] = time.perf_counter()
+                await client.publish(f"devsim/bench/{name}/set/input.I1", b"true" if value else b"false")
+                value = not value
+                due += period
+
+        async def count() -> None:
+            while True:
+                samples.append(await counter.get())
+
+        receiving = asyncio.ensure_future(receive())
+        counting = asyncio.ensure_future(count())
+        await asyncio.wait_for(all_online.wait(), 60)  # every device born and subscribed to its commands
+        await asyncio.sleep(1.0)  # the births' retained states drain before the window
+        window[:] = [loop.time() + 1.0, loop.time() + 1.0 + seconds]
+        warm_end, end = window
+        flips = asyncio.gather(*(flip(i, name) for i, name in enumerate(devices)))
+        await asyncio.sleep(max(0.0, warm_end - loop.time()))
+        cpu0 = loop.time(), cpu_seconds(client_pid)
+        await flips
+        cpu1 = loop.time(), cpu_seconds(client_pid)
+        await asyncio.sleep(0.5)  # the last states
+        receiving.cancel()
+        counting.cancel()
+    inside = [sample for sample in samples if warm_end <= sample[0] <= end]
+    first, last = inside[0], inside[-1]
+    latencies.sort()
+    return {
+        "delivered_per_s": delivered[0] / seconds,
+        "broker_sent_per_s": (last[1] - first[1]) / (last[0] - first[0]),
+        "p50_ms": 1000 * statistics.median(latencies),
+        "p99_ms": 1000 * latencies[int(0.99 * (len(latencies) - 1))],
+        "max_ms": 1000 * latencies[-1],
+        "late": late[0],
+        "flips": len(latencies),
+        "client_cpu": 100 * (cpu1[1] - cpu0[1]) / (cpu1[0] - cpu0[0]),
+    }
+
+
+def run_one(args: argparse.Namespace, measure_what: str) -> None:
     broker = Broker(extra="sys_interval 1\n" + ("set_tcp_nodelay true" if args.nodelay else "")).start()
+    states = 1.0 / args.rate if measure_what == "states" else None
     with tempfile.TemporaryDirectory(prefix="devsim-fleet-bench-") as tmp:
         members: list[tuple[subprocess.Popen[str], str]] = []
         try:
-            members = start_members(broker.url, args.devices, args.processes, Path(tmp))
+            members = start_members(broker.url, args.devices, args.processes, Path(tmp), states=states)
             assert broker.process is not None
             pids = {"mosquitto": broker.process.pid, **{name: proc.pid for proc, name in members}}
             before = {key: cpu_seconds(pid) for key, pid in pids.items()}
             started = time.perf_counter()
             names = [f"d{i:03d}" for i in range(args.devices)]
-            result = asyncio.run(measure(broker.url, names, args.rate, args.seconds, os.getpid()))
+            how = measure_states if states is not None else measure
+            result = asyncio.run(how(broker.url, names, args.rate, args.seconds, os.getpid()))
             elapsed = time.perf_counter() - started
             cpu = {key: 100 * (cpu_seconds(pid) - before[key]) / elapsed for key, pid in pids.items()}
         finally:
@@ -178,14 +271,36 @@ def main() -> None:
                 except subprocess.TimeoutExpired:
                     proc.kill()
             broker.stop()
-    print(f"{args.devices} devices in {args.processes} processes, read at {args.rate:g} Hz each for {args.seconds:g} s")
-    print(f"round trips answered: {result['answered_per_s']:.0f}/s ({result['requests']} in the window;"
-          f" {result['late']} late, {result['failed']} unanswered)")
+    if states is not None:
+        print(f"states: {args.devices} devices in {args.processes} processes publishing over MQTT, input.I1 flipped"
+              f" at {args.rate:g} Hz each for {args.seconds:g} s")
+        print(f"state messages delivered: {result['delivered_per_s']:.0f}/s ({result['flips']} flips timed,"
+              f" {result['late']} states later than the next flip)")
+        what = "command to published state"
+    else:
+        print(f"requests: {args.devices} devices in {args.processes} processes, read at {args.rate:g} Hz each"
+              f" for {args.seconds:g} s")
+        print(f"round trips answered: {result['answered_per_s']:.0f}/s ({result['requests']} in the window;"
+              f" {result['late']} late, {result['failed']} unanswered)")
+        what = "round trip"
     print(f"broker messages sent: {result['broker_sent_per_s']:.0f}/s ($SYS/broker/messages/sent)")
-    print(f"round trip p50 {result['p50_ms']:.2f} ms, p99 {result['p99_ms']:.2f} ms, max {result['max_ms']:.1f} ms")
+    print(f"{what} p50 {result['p50_ms']:.2f} ms, p99 {result['p99_ms']:.2f} ms, max {result['max_ms']:.1f} ms")
     print(f"CPU (% of one core, whole run incl. warm-up): mosquitto {cpu['mosquitto']:.1f}; devsim "
           + ", ".join(f"{cpu[name]:.1f}" for _p, name in members)
           + f"; the client {result['client_cpu']:.1f} (measured window)")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--devices", type=int, default=100)
+    parser.add_argument("--processes", type=int, default=4)
+    parser.add_argument("--rate", type=float, default=10.0, help="commands or reads per second per device")
+    parser.add_argument("--seconds", type=float, default=10.0)
+    parser.add_argument("--measure", choices=("states", "requests", "both"), default="both")
+    parser.add_argument("--nodelay", action="store_true", help="mosquitto's set_tcp_nodelay true")
+    args = parser.parse_args()
+    for what in ("states", "requests") if args.measure == "both" else (args.measure,):
+        run_one(args, what)
 
 
 if __name__ == "__main__":
