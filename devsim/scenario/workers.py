@@ -33,7 +33,8 @@ __all__ = ["run_workers", "split_plant"]
 
 def split_plant(spec: PlantSpec, workers: int) -> list[dict[str, Any]]:
     """The plant dealt into at most ``workers`` sub-plants (plain data, loadable as YAML): each
-    bus with its devices is one unit, each other device one unit, dealt round-robin."""
+    bus with its devices is one unit, the other devices of one CANopen network one unit (a
+    network is served by one process), each other device one unit, dealt round-robin."""
     units: list[tuple[list[Any], list[Any]]] = []
     by_bus: dict[str, tuple[list[Any], list[Any]]] = {}
     for bus in spec.buses:
@@ -43,6 +44,12 @@ def split_plant(spec: PlantSpec, workers: int) -> list[dict[str, Any]]:
         bus = device.transport_of("main").bus
         if bus is not None and bus in by_bus:
             by_bus[bus][0].append(device)
+        elif device.canopen is not None:
+            key = f"canopen {device.canopen.network}"
+            if key not in by_bus:
+                by_bus[key] = ([], [])
+                units.append(by_bus[key])
+            by_bus[key][0].append(device)
         else:
             units.append(([device], []))
     shares: list[dict[str, Any]] = [{"devices": [], "buses": []} for _ in range(max(1, min(workers, len(units))))]

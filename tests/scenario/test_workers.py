@@ -45,6 +45,21 @@ def test_split_keeps_a_bus_whole(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
     assert len(holder) == 1 and {"b1", "b2"} <= {d["name"] for d in holder[0]["devices"]}
 
 
+def test_split_keeps_a_canopen_network_in_one_worker() -> None:
+    from devsim.scenario.schema import PlantSpec
+
+    spec = PlantSpec.model_validate({"devices": [
+        {"name": "a", "kind": "sers", "canopen": {"node": 1, "network": "29600"}},
+        {"name": "b", "kind": "sers"},
+        {"name": "c", "kind": "sers", "canopen": {"node": 2, "network": "29600"}},
+        {"name": "d", "kind": "sers", "canopen": {"node": 1, "network": "29601"}},
+    ]})
+    shares = split_plant(spec, 3)
+    names = [sorted(d["name"] for d in s["devices"]) for s in shares]
+    assert sorted(sum(names, [])) == ["a", "b", "c", "d"] and len(shares) == 3
+    assert ["a", "c"] in names  # one network, one process
+
+
 def test_workers_serve_ports_and_one_control_address(tmp_path: Path) -> None:
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
