@@ -61,7 +61,12 @@ def output_format(path: str | Path) -> str:
 
 
 def _short(data: bytes, limit: int = 16) -> str:
-    text = "".join(chr(b) if 0x20 <= b < 0x7F else "·" for b in data)
+    """A chunk as a short label: its text, or its hex when it is mostly binary."""
+    printable = sum(0x20 <= b < 0x7F or b in (0x0A, 0x0D) for b in data)
+    if printable * 2 < len(data):
+        text = data.hex(" ")
+    else:
+        text = "".join(chr(b) if 0x20 <= b < 0x7F else "·" for b in data)
     return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
@@ -132,7 +137,8 @@ def _mark_events(axes: Sequence[Any], logs: Sequence[MotionData]) -> None:
             ax.axvline(when, color="0.45", linewidth=0.7, linestyle=":")
     top = axes[0]
     for when, names in list(named.items())[:MAX_EVENT_LABELS]:
-        top.annotate(", ".join(names), (when, 1.0), xycoords=("data", "axes fraction"), xytext=(2, 2),
+        label = ", ".join(names)
+        top.annotate(label if len(label) <= 32 else label[:31] + "…", (when, 1.0), xycoords=("data", "axes fraction"), xytext=(2, 2),
                      textcoords="offset points", fontsize=6, rotation=60, color="0.3", annotation_clip=False)
 
 
