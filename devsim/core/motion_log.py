@@ -123,8 +123,6 @@ class _DeviceLog:
         self.last: dict[str, tuple[str, ...]] = {}  # axis → the cells of its last row
         self.last_time: dict[str, float] = {}  # axis → the time of its last row
         self._undo: list[Callable[[], None]] = []
-        self._pending: list[tuple[float, str]] = []  # events whose rows are still to be written
-        self._timer: Any = None
 
     # -- reading -------------------------------------------------------------------------------
     def _cells(self, axis: str, values: dict[str, Any]) -> tuple[str, ...]:
@@ -172,24 +170,16 @@ class _DeviceLog:
 
     # -- events ----------------------------------------------------------------------------------
     def _event(self, when: float, name: str) -> None:
-        # the rows are read once the model has finished what it is doing, at the same device time
-        self._pending.append((when, name))
-        if self._timer is None:
-            self._timer = self.device.clock.call_later(0.0, self._event_rows)
+        # read at once: in real time a later read would be later than the event's time
+        if self.log.closed:
+            return
+        values = self.watch.values()
+        for axis in self.axes:
+            self._row(when, axis, self._cells(axis, values), name)
+        self.log.flush()
 
     def _fault(self, kind: str, active: bool) -> None:
         self._event(self.device.clock.now(), f"fault:{kind}={'on' if active else 'off'}")
-
-    def _event_rows(self) -> None:
-        self._timer = None
-        pending, self._pending = self._pending, []
-        if not pending or self.log.closed:
-            return
-        values = self.watch.values()
-        for when, name in pending:
-            for axis in self.axes:
-                self._row(when, axis, self._cells(axis, values), name)
-        self.log.flush()
 
     def close(self) -> None:
         self.watch.stop()
@@ -198,9 +188,6 @@ class _DeviceLog:
             self._tick_timer = None
         for undo in self._undo:
             undo()
-        if self._timer is not None:
-            self._timer.cancel()
-        self._event_rows()
         now = self.device.clock.now()
         values = self.watch.values()
         for axis in self.axes:
