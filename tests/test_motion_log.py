@@ -249,3 +249,33 @@ def test_devsim_run_writes_the_log_and_plot_draws_it(sockdir: str, tmp_path: Pat
                           cwd=ROOT, env=env, capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_devsim_up_logs_every_device_of_the_plant(sockdir: str, tmp_path: Path) -> None:
+    plant = tmp_path / "plant.yaml"
+    plant.write_text("devices:\n  - {name: feeder, kind: sers}\n  - {name: table, kind: pcd4h3}\n")
+    log_path = tmp_path / "plant.csv"
+    addr = f"unix:{sockdir}/up.sock"
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "devsim", "up", str(plant), "--virtual", "--control", addr,
+         "--motion-log", str(log_path), "--motion-resolution", "0.5"],
+        cwd=ROOT, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        while not (line := proc.stdout.readline()).startswith("control:"):
+            assert line, proc.stderr.read() if proc.stderr else ""
+        with ControlClient(addr) as client:
+            client.request("advance", seconds=3.0)
+            client.request("set", device="table", name="axis.2.position", value=500)
+            client.request("advance", seconds=1.0)
+    finally:
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=15)
+    assert proc.returncode == 0
+    rows = rows_of(log_path)
+    assert {(r["device"], r["axis"]) for r in rows} == {("feeder", "axis"), ("table", "axis.1"), ("table", "axis.2")}
+    moved = [(float(r["time"]), r["position"]) for r in rows if r["axis"] == "axis.2"]
+    assert moved[0] == (0.0, "0") and moved[-1] == (4.0, "500")
+    assert (3.5, "500") in moved  # the first sample after the change, on the 0.5 s grid
