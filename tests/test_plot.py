@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import shutil
 import struct
+import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -180,3 +181,14 @@ def test_the_readme_picture_is_current(gms96_dir: Path) -> None:
         image.verify()
     shutil.copyfile(made, README_PICTURE)
     assert png_size(README_PICTURE) == (1000, 980)
+
+
+def test_without_matplotlib_the_command_says_what_to_install(
+    monkeypatch: pytest.MonkeyPatch, sers_files: tuple[Path, Path], tmp_path: Path
+) -> None:
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib raises ImportError
+    code, _, stderr = invoke("plot", str(sers_files[0]), "-o", str(tmp_path / "x.png"))
+    assert code == 1 and "pip install 'devsim-motion[plot]'" in stderr
+    code, _, stderr = invoke("scenario", "run", str(SERS), "--plot", str(tmp_path / "plots"))
+    assert code == 1 and "pip install 'devsim-motion[plot]'" in stderr
+    assert not (tmp_path / "plots").exists()
