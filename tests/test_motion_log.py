@@ -195,6 +195,21 @@ def test_no_sampling_without_a_log_and_none_after_it_closes(tmp_path: Path) -> N
         runtime.stop()
 
 
+def test_a_device_without_axes_adds_no_timer(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    monkeypatch.setenv("DEVSIM_EXTRA_KINDS", "echo=tests.support.echo:EchoDevice")
+    runtime = Runtime(virtual=True).start()
+    try:
+        device = runtime.add_device("echo", "e")
+        assert axis_columns(device) == {}
+        log = runtime.call(lambda: MotionLog(tmp_path / "log.csv", 0.01))
+        runtime.call(log.add, device)
+        assert runtime.clock.next_event() is None
+        runtime.call(log.close)
+    finally:
+        runtime.stop()
+    assert (tmp_path / "log.csv").read_text() == ",".join(HEADER) + "\n"
+
+
 @pytest.mark.parametrize("value", [0.0, -1.0, math.inf, math.nan, 1e-6, 1e5])
 def test_bad_resolutions_are_refused(value: float) -> None:
     assert motion_log_problem(value) is not None

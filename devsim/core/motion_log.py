@@ -137,6 +137,8 @@ class _DeviceLog:
 
     # -- the grid --------------------------------------------------------------------------------
     def start(self) -> None:
+        if not self.axes:  # nothing moves: no timer either
+            return
         model = self.device.model
         self._undo.append(model.listen("event", self._event))
         self._undo.append(model.listen("fault_switched", self._fault))
