@@ -2,7 +2,9 @@
 
 * ``devsim check FILE...`` validates scenario and plant files without running them.
 * ``devsim scenario run FILE... [--virtual | --realtime] [--speed F] [--junit OUT.xml]`` runs
-  scenarios, prints a report per scenario and exits non-zero if any failed.
+  scenarios, prints a report per scenario and exits non-zero if any failed; ``--motion-log
+  FILE.csv`` logs the axes, ``--plot DIR`` draws a picture per scenario
+  (:mod:`devsim.scenario.pictures`).
 * ``devsim up PLANT.yaml`` starts every device of a plant, prints each port, serves until Ctrl-C;
   ``--part NAME`` only the devices with that ``part:``, ``--fleet URL`` joins a fleet.
 """
