@@ -183,6 +183,8 @@ class _Plan:
     opcua: str | None = None  # --opcua [[HOST:]PORT] ("": the default endpoint)
     opcua_period: float = 0.1  # --opcua-period SECONDS
     fleet: str | None = None  # --fleet mqtt://BROKER[:PORT][/NAME]
+    motion_log: str | None = None  # --motion-log FILE.csv
+    motion_resolution: float = 0.01  # --motion-resolution SECONDS
 
 
 #: What ``--port NAME=SPEC`` accepts after ``NAME=``.
@@ -353,6 +355,10 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     metavar="mqtt://BROKER[:PORT][/NAME]",
     help="Join a fleet (extra [fleet]): announce the devices on the broker, take control requests from it.",
 )
+@click.option("--motion-log", metavar="FILE.csv", help="Write every axis's motion (set-point, position, velocity,"
+              " following error, events) as CSV, for 'devsim plot'.")
+@click.option("--motion-resolution", type=float, default=0.01, show_default=True, metavar="SECONDS",
+              help="How often (device time) the motion log samples the axes, besides every event.")
 def run(
     kind: str,
     use_pty: bool,
@@ -379,6 +385,8 @@ def run(
     mqtt_rate: float,
     mqtt_plant: str | None,
     fleet: str | None,
+    motion_log: str | None,
+    motion_resolution: float,
 ) -> None:
     """Serve a simulated KIND device until Ctrl-C.
 
@@ -419,6 +427,11 @@ def run(
         check_opcua(opcua, opcua_period)
     if fleet is not None:
         check_fleet(fleet)
+    if motion_log is not None:
+        from devsim.core.motion_log import motion_log_problem
+
+        if (problem := motion_log_problem(motion_resolution)) is not None:
+            raise click.UsageError(problem)
     if speed <= 0:
         raise click.UsageError("--speed: must be positive")
     if virtual and speed != 1.0:
@@ -459,6 +472,8 @@ def run(
         opcua=opcua,
         opcua_period=opcua_period,
         fleet=fleet,
+        motion_log=motion_log,
+        motion_resolution=motion_resolution,
     )
     try:
         asyncio.run(_serve(plan))
@@ -513,6 +528,11 @@ async def _serve(plan: _Plan) -> None:
             if plan.state_dir is not None:
                 Path(plan.state_dir).mkdir(parents=True, exist_ok=True)
             devices = [runtime.add_device(plan.kind, name, config) for name, config in plan.devices]
+            if plan.motion_log is not None:
+                stage = f"write the motion log {plan.motion_log}"
+                from devsim.core.motion_log import start_motion_log
+
+                start_motion_log(runtime, devices, plan.motion_log, plan.motion_resolution)
             served: list[tuple[str, Any, _Port]] = []  # port name, transport, spec
             plan_ports = _plan_ports(plan, devices[0].ports)
             for index, (port_name, spec) in enumerate(plan_ports):
@@ -654,6 +674,7 @@ cli.add_command(ctl)
 #: command name → the module that defines it as a click command of the same name.
 LAZY_COMMANDS: dict[str, str] = {
     "check": "devsim.scenario.cli",
+    "plot": "devsim.plot",
     "scenario": "devsim.scenario.cli",
     "up": "devsim.scenario.cli",
 }

@@ -59,10 +59,13 @@ class Model:
         self.announce("ready")
 
     def record_event(self, name: str) -> None:
-        """Note a moment (``move_start``, ``move_end``, ``error`` ...) for timing expectations."""
-        self.events.append((self.clock.now(), name))
+        """Note a moment (``move_start``, ``move_end``, ``error`` ...) for timing expectations;
+        listeners of topic ``event`` hear ``(time, name)`` (the motion log, a monitor)."""
+        now = self.clock.now()
+        self.events.append((now, name))
         if len(self.events) > 10000:
             del self.events[:5000]
+        self.announce("event", now, name)
 
     # -- power ------------------------------------------------------------------------------
     def power_cycle(self, *, wipe: bool = False) -> None:

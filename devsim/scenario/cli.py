@@ -2,7 +2,9 @@
 
 * ``devsim check FILE...`` validates scenario and plant files without running them.
 * ``devsim scenario run FILE... [--virtual | --realtime] [--speed F] [--junit OUT.xml]`` runs
-  scenarios, prints a report per scenario and exits non-zero if any failed.
+  scenarios, prints a report per scenario and exits non-zero if any failed; ``--motion-log
+  FILE.csv`` logs the axes, ``--plot DIR`` draws a picture per scenario
+  (:mod:`devsim.scenario.pictures`).
 * ``devsim up PLANT.yaml`` starts every device of a plant, prints each port, serves until Ctrl-C;
   ``--part NAME`` only the devices with that ``part:``, ``--fleet URL`` joins a fleet.
 """
@@ -64,6 +66,13 @@ def scenario() -> None:
 @click.option("--junit", metavar="OUT.xml", help="Also write the results as JUnit XML.")
 @click.option("--state-dir", metavar="DIR", help="Where the devices' non-volatile memory is kept.")
 @click.option("--trace-dir", metavar="DIR", help="Write a trace of every port's traffic here.")
+@click.option("--motion-log", metavar="FILE.csv", help="Log every axis's motion as CSV (several scenarios:"
+              " FILE-SCENARIO.csv).")
+@click.option("--motion-resolution", type=float, default=0.01, show_default=True, metavar="SECONDS",
+              help="How often (device time) the motion log samples the axes, besides every event.")
+@click.option("--plot", "plot_dir", metavar="DIR", help="Draw one picture per scenario here (extra [plot]).")
+@click.option("--plot-format", type=click.Choice(["png", "svg", "html"]), default="png", show_default=True,
+              help="The format of the --plot pictures.")
 def scenario_run(
     files: tuple[str, ...],
     mode: str | None,
@@ -71,6 +80,10 @@ def scenario_run(
     junit: str | None,
     state_dir: str | None,
     trace_dir: str | None,
+    motion_log: str | None,
+    motion_resolution: float,
+    plot_dir: str | None,
+    plot_format: str,
 ) -> None:
     """Run scenario FILES; exit status 1 if any expectation failed."""
     from devsim.scenario.report import format_report, write_junit
@@ -79,6 +92,19 @@ def scenario_run(
 
     if speed is not None and speed <= 0:
         raise click.UsageError("--speed: must be positive")
+    pictures = None
+    if motion_log is not None or plot_dir is not None:
+        from devsim.core.motion_log import motion_log_problem
+        from devsim.scenario.pictures import ScenarioPictures
+
+        if (problem := motion_log_problem(motion_resolution)) is not None:
+            raise click.UsageError(problem)
+        if plot_dir is not None:
+            from devsim.plot import require_matplotlib
+
+            require_matplotlib()
+        pictures = ScenarioPictures(motion_log=motion_log, resolution=motion_resolution, plot_dir=plot_dir,
+                                    plot_format=plot_format, trace_dir=trace_dir, count=len(files))
     scenarios = []
     for path in files:
         try:
@@ -88,16 +114,22 @@ def scenario_run(
     results = []
     for item in scenarios:
         chosen = mode or item.mode()
+        item_trace_dir = pictures.begin(item.path) if pictures is not None else trace_dir
 
         def announce(plant: object, chosen: str = chosen) -> None:
+            if pictures is not None:
+                pictures.start(plant)
             if chosen == "realtime":
                 for row in plant.describe():  # type: ignore[attr-defined]
                     click.echo(row)
 
         results.append(
-            run_scenario(item, mode=chosen, speed=speed, state_dir=state_dir, trace_dir=trace_dir, announce=announce)
+            run_scenario(item, mode=chosen, speed=speed, state_dir=state_dir, trace_dir=item_trace_dir,
+                         announce=announce)
         )
         click.echo(format_report(results[-1]))
+        if pictures is not None and (line := pictures.finish(item_trace_dir)) is not None:
+            click.echo(line)
     if junit is not None:
         write_junit(results, junit)
     failed = [r for r in results if not r.passed]
@@ -119,6 +151,9 @@ def scenario_run(
 @click.option("--fleet", metavar="mqtt://BROKER[:PORT][/NAME]",
               help="Join a fleet (extra [fleet]): announce the devices on the broker, take control requests from it.")
 @click.option("--part", metavar="NAME", help="Start only the devices with 'part: NAME' (one part of a fleet's plant).")
+@click.option("--motion-log", metavar="FILE.csv", help="Log every axis's motion as CSV, for 'devsim plot'.")
+@click.option("--motion-resolution", type=float, default=0.01, show_default=True, metavar="SECONDS",
+              help="How often (device time) the motion log samples the axes, besides every event.")
 def up(
     plant_file: str,
     state_dir: str | None,
@@ -129,6 +164,8 @@ def up(
     workers: int,
     fleet: str | None,
     part: str | None,
+    motion_log: str | None,
+    motion_resolution: float,
 ) -> None:
     """Start every device of PLANT_FILE (with --part: those of one part), print every port and
     NAME: ready when a device has booted, serve until Ctrl-C."""
@@ -167,6 +204,14 @@ def up(
     if workers > 1 and spec.mqtt is not None:
         click.echo("devsim: a plant with an mqtt: section stays in one process (--workers ignored)", err=True)
         workers = 1
+    if motion_log is not None:
+        from devsim.core.motion_log import motion_log_problem
+
+        if (problem := motion_log_problem(motion_resolution)) is not None:
+            raise click.UsageError(problem)
+        if workers > 1:
+            click.echo("devsim: the motion log needs the plant in one process (--workers ignored)", err=True)
+            workers = 1
     if workers > 1 and spec.opcua is not None:
         click.echo("devsim: the plant's OPC UA server needs the plant in one process (--workers ignored)", err=True)
         workers = 1
@@ -182,7 +227,8 @@ def up(
             sys.exit(130)
         sys.exit(status)
     try:
-        asyncio.run(_up(spec, state_dir, speed, address, trace_dir, virtual, fleet, part))
+        motion = (motion_log, motion_resolution) if motion_log is not None else None
+        asyncio.run(_up(spec, state_dir, speed, address, trace_dir, virtual, fleet, part, motion))
     except KeyboardInterrupt:
         sys.exit(130)
     except OSError as exc:
@@ -197,7 +243,7 @@ class _FleetError(Exception):
 
 async def _up(
     spec: object, state_dir: str | None, speed: float, address: object, trace_dir: str | None, virtual: bool,
-    fleet: str | None = None, part: str | None = None,
+    fleet: str | None = None, part: str | None = None, motion: tuple[str, float] | None = None,
 ) -> None:
     from devsim.core.control import ControlServer
     from devsim.core.runtime import Runtime
@@ -221,6 +267,10 @@ async def _up(
             print(f"devsim: {len(plant.refused)} ports not opened ({'; '.join(causes)}; ulimit -n {limit}):"
                   f" {', '.join(list(plant.refused)[:5])}{' ...' if len(plant.refused) > 5 else ''}",
                   file=sys.stderr, flush=True)
+        if motion is not None:
+            from devsim.core.motion_log import start_motion_log
+
+            start_motion_log(runtime, list(plant.devices.values()), *motion)
         server = None
         if address is not None:
             server = ControlServer(runtime, address)  # type: ignore[arg-type]

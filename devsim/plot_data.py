@@ -1,0 +1,195 @@
+"""Reading what ``devsim plot`` draws: motion logs and wire traces, pure (no matplotlib).
+
+* a **motion log** (:mod:`devsim.core.motion_log`, ``--motion-log FILE.csv``) becomes one
+  :class:`AxisSeries` per device and axis, and the device's events;
+* a **text trace** (:mod:`devsim.transports.trace`, ``--trace FILE``) and a **pcap trace**
+  (:mod:`devsim.transports.pcap`, ``--trace FILE.pcap``) become a :class:`Traffic`: the chunks
+  that crossed the line, each with its device-clock time and direction (``H>D``, ``D>H``), and
+  the notes (host settings, disconnects) of a text trace.
+
+A pcap trace holds addresses, not directions: the device is the endpoint that takes part in every
+packet (with both in every packet: the lower port, then the lower address — a listening port
+below an ephemeral one, and devsim's invented device address 127.0.0.1 below the host's
+127.0.0.2).  :func:`load` tells the three apart by their content.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+import struct
+from pathlib import Path
+
+from devsim.core.motion_log import HEADER
+from devsim.core.record import field, record
+
+__all__ = ["AxisSeries", "MotionData", "Traffic", "load", "read_motion_log", "read_pcap_trace", "read_text_trace"]
+
+
+@record(frozen=False)
+class AxisSeries:
+    """One axis of a motion log: its rows in time order (NaN where a cell was empty)."""
+
+    device: str
+    axis: str
+    time: list[float] = field(default_factory=list)
+    setpoint: list[float] = field(default_factory=list)
+    position: list[float] = field(default_factory=list)
+    velocity: list[float] = field(default_factory=list)
+    following_error: list[float] = field(default_factory=list)
+
+    @property
+    def label(self) -> str:
+        return f"{self.device} {self.axis}"
+
+    def has(self, column: str) -> bool:
+        return any(not math.isnan(v) for v in getattr(self, column))
+
+
+@record(frozen=False)
+class MotionData:
+    """A motion log: the axes and, per device, its events ``(time, name)`` in time order."""
+
+    path: str
+    axes: list[AxisSeries] = field(default_factory=list)
+    events: dict[str, list[tuple[float, str]]] = field(default_factory=dict)
+
+
+@record(frozen=False)
+class Traffic:
+    """One port's wire trace: chunks ``(time, direction, bytes)`` and notes ``(time, text)``."""
+
+    name: str
+    chunks: list[tuple[float, str, bytes]] = field(default_factory=list)
+    notes: list[tuple[float, str]] = field(default_factory=list)
+
+
+class PlotInputError(ValueError):
+    """A file ``devsim plot`` cannot read (one line, with the file's name)."""
+
+
+def _number(text: str) -> float:
+    try:
+        return float(text) if text else math.nan
+    except ValueError:
+        return math.nan
+
+
+def read_motion_log(path: str | Path) -> MotionData:
+    """Parse a motion log written by :class:`devsim.core.motion_log.MotionLog`."""
+    data = MotionData(str(path))
+    series: dict[tuple[str, str], AxisSeries] = {}
+    seen: set[tuple[str, float, str]] = set()
+    with open(path, encoding="utf-8", newline="") as stream:
+        reader = csv.reader(stream)
+        header = next(reader, None)
+        if header is None or tuple(header[: len(HEADER)]) != HEADER:
+            raise PlotInputError(f"{path}: not a motion log (expected the header {','.join(HEADER)})")
+        for number, row in enumerate(reader, start=2):
+            if len(row) < len(HEADER):
+                raise PlotInputError(f"{path}:{number}: expected {len(HEADER)} columns, got {len(row)}")
+            when = _number(row[0])
+            if math.isnan(when):
+                raise PlotInputError(f"{path}:{number}: bad time {row[0]!r}")
+            device, axis = row[1], row[2]
+            item = series.get((device, axis))
+            if item is None:
+                item = series[(device, axis)] = AxisSeries(device, axis)
+            item.time.append(when)
+            item.setpoint.append(_number(row[3]))
+            item.position.append(_number(row[4]))
+            item.velocity.append(_number(row[5]))
+            item.following_error.append(_number(row[6]))
+            event = row[7]
+            if event and (device, when, event) not in seen:  # an event has a row per axis
+                seen.add((device, when, event))
+                data.events.setdefault(device, []).append((when, event))
+    for item in series.values():  # rows are near time order; a plot needs them exactly so
+        order = sorted(range(len(item.time)), key=item.time.__getitem__)
+        for column in ("time", "setpoint", "position", "velocity", "following_error"):
+            values = getattr(item, column)
+            setattr(item, column, [values[i] for i in order])
+    for events in data.events.values():
+        events.sort()
+    data.axes = list(series.values())
+    return data
+
+
+_DATA_LINE = re.compile(r'^(\d+(?:\.\d+)?) (H>D|D>H) ((?:[0-9a-f]{2} )*[0-9a-f]{2}) "')
+_NOTE_LINE = re.compile(r"^(\d+(?:\.\d+)?) -- (.*)$")
+
+
+def read_text_trace(path: str | Path) -> Traffic:
+    """Parse a text trace (``12.345678 H>D 23 4f 0d "#O\\r"``, ``12.5 -- host settings ...``)."""
+    traffic = Traffic(Path(path).stem)
+    with open(path, encoding="ascii", errors="replace") as stream:
+        for number, line in enumerate(stream, start=1):
+            line = line.rstrip("\n")
+            if not line:
+                continue
+            match = _DATA_LINE.match(line)
+            if match is not None:
+                traffic.chunks.append((float(match.group(1)), match.group(2), bytes.fromhex(match.group(3))))
+                continue
+            note = _NOTE_LINE.match(line)
+            if note is None:
+                raise PlotInputError(f"{path}:{number}: not a trace line: {line[:60]!r}")
+            traffic.notes.append((float(note.group(1)), note.group(2)))
+    return traffic
+
+
+#: pcap magic (as read little-endian) → (byte order, time fraction per second).
+_PCAP_MAGIC = {0xA1B2C3D4: ("<", 1e6), 0xD4C3B2A1: (">", 1e6), 0xA1B23C4D: ("<", 1e9), 0x4D3CB2A1: (">", 1e9)}
+#: link type → bytes before the IPv4 header (raw IPv4, raw IP, Ethernet).
+_LINK_OFFSET = {228: 0, 101: 0, 1: 14}
+
+
+def read_pcap_trace(path: str | Path) -> Traffic:
+    """Parse a classic pcap file of IPv4/UDP packets (what ``--trace FILE.pcap`` writes)."""
+    raw = Path(path).read_bytes()
+    if len(raw) < 24:
+        raise PlotInputError(f"{path}: too short for a pcap file")
+    magic = struct.unpack_from("<I", raw)[0]
+    if magic not in _PCAP_MAGIC:
+        raise PlotInputError(f"{path}: not a classic pcap file (magic {magic:08x})")
+    order, fraction = _PCAP_MAGIC[magic]
+    linktype = struct.unpack_from(f"{order}I", raw, 20)[0]
+    if linktype not in _LINK_OFFSET:
+        raise PlotInputError(f"{path}: link type {linktype} is not IPv4 (raw IPv4 228, raw IP 101, Ethernet 1)")
+    skip = _LINK_OFFSET[linktype]
+    packets: list[tuple[float, tuple[bytes, int], tuple[bytes, int], bytes]] = []
+    offset = 24
+    while offset + 16 <= len(raw):
+        seconds, part, captured, _length = struct.unpack_from(f"{order}IIII", raw, offset)
+        packet = raw[offset + 16 + skip : offset + 16 + captured]
+        offset += 16 + captured
+        if len(packet) < 28 or packet[0] >> 4 != 4 or packet[9] != 17:
+            continue  # not IPv4/UDP
+        header = (packet[0] & 0x0F) * 4
+        src_port, dst_port, udp_length = struct.unpack_from("!HHH", packet, header)
+        payload = packet[header + 8 : header + udp_length]
+        packets.append((seconds + part / fraction, (packet[12:16], src_port), (packet[16:20], dst_port), payload))
+    traffic = Traffic(Path(path).stem)
+    if not packets:
+        return traffic
+    everywhere = set.intersection(*({src, dst} for _, src, dst, _ in packets))
+    candidates = everywhere or {packets[0][2]}
+    device = min(candidates, key=lambda end: (end[1], end[0]))
+    for when, _src, dst, payload in packets:
+        traffic.chunks.append((when, "H>D" if dst == device else "D>H", payload))
+    return traffic
+
+
+def load(path: str | Path) -> MotionData | Traffic:
+    """A motion log, a pcap trace or a text trace, told apart by the file's first bytes."""
+    try:
+        with open(path, "rb") as stream:
+            head = stream.read(64)
+    except OSError as exc:
+        raise PlotInputError(f"{path}: {exc.strerror or exc}") from None
+    if len(head) >= 4 and struct.unpack_from("<I", head)[0] in _PCAP_MAGIC:
+        return read_pcap_trace(path)
+    if head.startswith(",".join(HEADER[:3]).encode()):
+        return read_motion_log(path)
+    return read_text_trace(path)
