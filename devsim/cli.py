@@ -654,6 +654,8 @@ cli.add_command(ctl)
 #: command name → the module that defines it as a click command of the same name.
 LAZY_COMMANDS: dict[str, str] = {
     "check": "devsim.scenario.cli",
+    "record": "devsim.replay.cli",
+    "replay": "devsim.replay.cli",
     "scenario": "devsim.scenario.cli",
     "up": "devsim.scenario.cli",
 }
