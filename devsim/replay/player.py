@@ -13,10 +13,10 @@ A request the recording does not know:
 * ``fallback="error"`` – one line on stderr (``replay: request not in the recording: ...``) and
   silence on the line, as from a dead device; later known requests are answered again.
 * ``fallback="live"`` – the live model of the recorded kind takes over for good: a devsim device
-  in a :class:`~devsim.core.runtime.Runtime` on the replay's own event loop, served through a
-  :class:`~devsim.transports.line.Line`.  Before the pty is offered, it booted and was sent every
-  request of the recording as the host sent them, its answers discarded, so it holds what the
-  host wrote (parameters, modes, positions); the unknown request and all after it go to it.
+  (:mod:`devsim.replay.live`).  Before the pty is offered, it booted and was sent every request
+  of the recording at its recorded time (in virtual time, so at once), its answers discarded, so
+  it holds what the host wrote (parameters, modes, positions); then its clock runs in real time
+  (times ``speed``) and the unknown request and all after it go to it.
 """
 
 from __future__ import annotations
@@ -31,18 +31,10 @@ from typing import Any
 
 from devsim.core.device import SerialSettings
 from devsim.replay.kinds import protocol_of
+from devsim.replay.live import HandoverClock, start_live
 from devsim.replay.session import Exchange, Session
-from devsim.transports.base import Transport
 
 __all__ = ["ReplayPlan", "Replayer", "replay_session"]
-
-#: How long seeding waits for the live model's answer to one recorded request, at most.
-SEED_WAIT = 2.0
-#: Seeding goes on after this much silence from the live model.
-SEED_QUIET = 0.3
-#: How long the live model may take to boot.
-BOOT_WAIT = 30.0
-
 
 @dataclass
 class ReplayPlan:
@@ -91,26 +83,6 @@ class _Outbox:
     async def close(self) -> None:
         self._task.cancel()
         await asyncio.gather(self._task, return_exceptions=True)
-
-
-class _Bridge(Transport):
-    """The live model's transport: what the device sends goes to ``sink`` (or nowhere)."""
-
-    def __init__(self) -> None:
-        self.endpoint: Any = None
-        self.sink: Callable[[bytes], None] | None = None
-
-    async def start(self, endpoint: Any) -> None:
-        self.endpoint = endpoint
-        endpoint.attach(self._from_device)
-
-    async def close(self) -> None:
-        if self.endpoint is not None:
-            self.endpoint.attach(None)
-
-    def _from_device(self, data: bytes) -> None:
-        if self.sink is not None:
-            self.sink(data)
 
 
 class Replayer:
@@ -218,52 +190,6 @@ class Replayer:
         _warn(f"replay: request not in the recording: {_show(message)}; no answer (--fallback error)")
 
 
-async def _start_live(plan: ReplayPlan, runtime: Any, outbox: _Outbox) -> Any:
-    """Create, boot and seed the live model; returns its Line (output to the host's outbox)."""
-    session = plan.session
-    assert session.kind is not None
-    device = runtime.add_device(session.kind, session.kind, plan.config)
-    bridge = _Bridge()
-    line = await runtime.serve(device, bridge, port=session.port)
-    booted = asyncio.Event()
-    device.on_ready(booted.set)
-    try:
-        await asyncio.wait_for(booted.wait(), BOOT_WAIT)
-    except TimeoutError:
-        raise RuntimeError(f"the live {session.kind} model did not boot within {BOOT_WAIT:g} s") from None
-    await _seed(line, bridge, session.exchanges)
-    loop = asyncio.get_running_loop()
-    bridge.sink = lambda data: outbox.put(loop.time(), data)
-    return line
-
-
-async def _seed(line: Any, bridge: _Bridge, exchanges: list[Exchange]) -> None:
-    """Send the recorded requests to the live model as the host did, its answers discarded;
-    after each, wait for as many bytes as the recording answered (bounded)."""
-    got = 0
-    arrived = asyncio.Event()
-
-    def count(data: bytes) -> None:
-        nonlocal got
-        got += len(data)
-        arrived.set()
-
-    bridge.sink = count
-    loop = asyncio.get_running_loop()
-    for exchange in exchanges:
-        got = 0
-        line.feed(exchange.request)
-        expected = len(exchange.answer)
-        deadline = loop.time() + SEED_WAIT
-        while got < expected and loop.time() < deadline:
-            arrived.clear()
-            try:
-                await asyncio.wait_for(arrived.wait(), min(SEED_QUIET, max(0.0, deadline - loop.time())))
-            except TimeoutError:
-                break  # quiet: it answers less than the recorded device did
-    bridge.sink = None
-
-
 async def replay_session(plan: ReplayPlan) -> int:
     """Serve the replay on a new pty until SIGINT/SIGTERM; returns the exit status."""
     from devsim.core.runtime import Runtime
@@ -274,16 +200,23 @@ async def replay_session(plan: ReplayPlan) -> int:
     for signum in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(signum, stop.set)
     outbox = _Outbox()
-    runtime = Runtime()
+    clock = HandoverClock()
+    runtime = Runtime(clock=clock)
+    runtime.add_closer(clock.close)
     try:
         async with runtime:
             live = None
             if plan.fallback == "live":
+                session = plan.session
+                assert session.kind is not None
                 try:
-                    live = await _start_live(plan, runtime, outbox)
+                    live, bridge = await start_live(runtime, clock, session.kind, session.port, plan.config,
+                                                    session.exchanges)
                 except Exception as exc:
-                    _warn(f"Error: cannot start the live {plan.session.kind} model: {type(exc).__name__}: {exc}")
+                    _warn(f"Error: cannot start the live {session.kind} model: {type(exc).__name__}: {exc}")
                     return 1
+                clock.go_live(1.0 if plan.as_fast else plan.speed)
+                bridge.sink = lambda data: outbox.put(loop.time(), data)
             replayer = Replayer(plan, outbox, live)
             transport = PtyTransport(link=plan.link)
             try:
