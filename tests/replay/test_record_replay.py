@@ -285,3 +285,36 @@ def test_gms96_replay_matches_frames_with_another_frame_count_bit(tmp_path: Path
     status, err = replay.stop()
     assert status == 0, err
     assert "requests answered: exact 4, fcb 2" in err
+
+
+# -- the README's example, as printed there ---------------------------------------------------------
+def _readme_host(tmp_path: Path) -> Path:
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = text[text.index("## Record and replay") :]
+    code = section[section.index("```python\n") + len("```python\n") :]
+    host = tmp_path / "host.py"
+    host.write_text(code[: code.index("```")])
+    return host
+
+
+def _run(host: Path, *args: str) -> list[str]:
+    done = subprocess.run([sys.executable, str(host), *args], capture_output=True, text=True, timeout=20)
+    assert done.returncode == 0, done.stderr
+    return done.stdout.splitlines()
+
+
+def test_the_readme_example(tmp_path: Path, procs: list[Proc]) -> None:
+    host = _readme_host(tmp_path)
+    config = tmp_path / "sers.yaml"
+    config.write_text("boot_time: 0\n")
+    device = _start(procs, "run", "sers", "--pty", "--config", str(config))
+    device_pty = device.value("sers: pty")
+    device.line("sers: ready")
+    recorder = _start(procs, "record", "--port", device_pty, "--out", str(tmp_path / "drive.devsim"), "--kind", "sers")
+    recorded = _run(host, recorder.value("record: pty"))
+    assert recorder.stop()[0] == 0
+    assert recorded[2] == r"b'#V?\rV=2000U/min\n\r\nok1\n\r'"
+    replay = _start(procs, "replay", str(tmp_path / "drive.devsim"), "--pty", "--as-fast")
+    assert _run(host, replay.value("replay: pty")) == recorded
+    live = _start(procs, "replay", str(tmp_path / "drive.devsim"), "--pty", "--fallback", "live")
+    assert _run(host, live.value("replay: pty"), "#P91?") == [*recorded, r"b'#P91?\rP91=2000U/min\n\r\nok1\n\r'"]
