@@ -103,7 +103,7 @@ def _split_frames(buffer: bytes) -> tuple[list[bytes], bytes]:
     return out, buffer[len(buffer) - decoder.pending :] if decoder.pending else b""
 
 
-def _describe_frame(item: object) -> dict[str, Any]:
+def _describe_frame(item: object, from_host: bool) -> dict[str, Any]:
     if isinstance(item, ft12.FrameError):
         return {"error": item.reason, "hex": item.discarded.hex(" ")}
     if isinstance(item, ft12.SingleChar):
@@ -112,13 +112,12 @@ def _describe_frame(item: object) -> dict[str, Any]:
         described: dict[str, Any] = {"frame": "short", "C": f"{item.control:02X}", "A": item.address}
         if item.extension:
             described["AE"] = item.extension.hex(" ")
-        if item.control & ft12.PRM:
+        if from_host:  # a Kurzsatz command #0, #1, #8, #9 (spec §3.6)
             described["command"] = f"#{ft12.short_command_number(item.control)}"
-            described["fcb"] = 1 if item.control & ft12.FCB else 0
         return described
     assert isinstance(item, ft12.LongFrame)
     described = {"frame": "long", "C": f"{item.control:02X}", "A": item.address, "data": item.data.hex(" ")}
-    parsed = ft12.parse_letter(item.data) if item.control & ft12.PRM else None
+    parsed = ft12.parse_letter(item.data) if from_host else None
     if parsed is not None:
         command, params, count = parsed
         described.update(letter=command, params=list(params[:count]), fcb=1 if item.control & ft12.FCB else 0)
@@ -128,6 +127,7 @@ def _describe_frame(item: object) -> dict[str, Any]:
 class _FrameDecoder(Decoder):
     def __init__(self, direction: str) -> None:
         super().__init__(direction)
+        self._from_host = direction == "host"
         if direction == "host":  # what the card receives
             self._decoder = _ft12_card_decoder()
         else:  # what the host receives: E5h and the K answer's AE octet
@@ -135,7 +135,7 @@ class _FrameDecoder(Decoder):
 
     def feed(self, data: bytes) -> list[Any] | None:
         # frames by structure only: the recorder's timing must not cut a frame (a time of 0)
-        return [_describe_frame(item) for item in self._decoder.feed(data, 0.0)]
+        return [_describe_frame(item, self._from_host) for item in self._decoder.feed(data, 0.0)]
 
 
 def _frame_parts(message: bytes) -> tuple[int, int] | None:

@@ -318,3 +318,23 @@ def test_the_readme_example(tmp_path: Path, procs: list[Proc]) -> None:
     assert _run(host, replay.value("replay: pty")) == recorded
     live = _start(procs, "replay", str(tmp_path / "drive.devsim"), "--pty", "--fallback", "live")
     assert _run(host, live.value("replay: pty"), "#P91?") == [*recorded, r"b'#P91?\rP91=2000U/min\n\r\nok1\n\r'"]
+
+
+def test_record_over_tcp_on_both_sides_then_replay_on_a_pty(tmp_path: Path, procs: list[Proc]) -> None:
+    config = tmp_path / "sers.yaml"
+    config.write_text("boot_time: 0\n")
+    device = _start(procs, "run", "sers", "--tcp", "0", "--config", str(config))
+    device_url = device.value("sers: tcp")
+    device.line("sers: ready")
+    assert device_url.startswith("socket://127.0.0.1:")
+    session = tmp_path / "tcp.devsim"
+    recorder = _start(procs, "record", "--port", device_url, "--out", str(session), "--kind", "sers", "--tcp", "0")
+    host_url = recorder.value("record: tcp")
+    with serial.serial_for_url(host_url, timeout=2) as port:
+        answers = [ask(port, line) for line in ("#1\r", "#V=1500\r", "#V?\r")]
+    assert answers[2] == "#V?\rV=1500U/min\n\r\nok1\n\r"
+    assert recorder.stop()[0] == 0
+    assert json.loads(session.read_text().splitlines()[0])["device"] == device_url
+    replay = _start(procs, "replay", str(session), "--pty", "--as-fast")
+    with serial.Serial(replay.value("replay: pty"), 9600, timeout=2) as port:
+        assert [ask(port, line) for line in ("#1\r", "#V=1500\r", "#V?\r")] == answers
