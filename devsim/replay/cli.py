@@ -4,7 +4,8 @@
   ``--tcp [HOST:]PORT``) for the host, forwarded to the device's port, both directions written
   to the session file (:mod:`devsim.replay.recorder`, format in :mod:`devsim.replay.session`).
 * ``devsim replay session.devsim --pty [--link PATH] [--speed F | --as-fast] [--fallback
-  error|live]`` – the device side played back on a new pty (:mod:`devsim.replay.player`).
+  error|live]`` – the device side played back on a new pty, or on ``--tcp [HOST:]PORT``
+  (:mod:`devsim.replay.player`).
 
 Both print their ports on stdout, one per line (``record: pty /dev/pts/7``, ``replay: pty
 /dev/pts/8``), for scripts to parse; problems are one line on stderr.
@@ -108,24 +109,28 @@ def record(device_url: str, out: str, kind: str | None, port_name: str | None, l
 
 @click.command("replay")
 @click.argument("session_file", metavar="SESSION")
-@click.option("--pty", "use_pty", is_flag=True, help="Serve on a new pseudo-terminal (the default and only way).")
+@click.option("--pty", "use_pty", is_flag=True, help="Serve on a new pseudo-terminal (the default).")
 @click.option("--link", metavar="PATH", help="A stable symlink to the pty.")
+@click.option("--tcp", metavar="[HOST:]PORT", help="Serve on a raw TCP port instead (host 127.0.0.1).")
 @click.option("--speed", type=float, default=1.0, show_default=True, metavar="F",
               help="Answer F times faster than recorded.")
 @click.option("--as-fast", is_flag=True, help="Answer at once, without the recorded delays.")
 @click.option("--fallback", type=click.Choice(["error", "live"]), default="error", show_default=True,
               help="On a request not in the recording: report it and stay silent, or hand over to the live model.")
 @click.option("--config", "config_file", metavar="FILE.yaml", help="The live model's configuration (with --fallback live).")
-def replay(session_file: str, use_pty: bool, link: str | None, speed: float, as_fast: bool, fallback: str,
+def replay(session_file: str, use_pty: bool, link: str | None, tcp: str | None, speed: float, as_fast: bool, fallback: str,
            config_file: str | None) -> None:
-    """Play the device side of a recorded SESSION to a host on a new pty.
+    """Play the device side of a recorded SESSION to a host on a new pty (or --tcp port).
 
     Prints replay: pty PATH once it serves; a request the recording does not know is reported on
     stderr (--fallback error: no answer) or answered by the live model from then on (--fallback live).
     """
     from devsim.replay.player import ReplayPlan, replay_session
     from devsim.replay.session import SessionError, load_session
+    from devsim.run_options import host_port
 
+    if tcp is not None and (use_pty or link):
+        raise click.UsageError("choose one port: --pty/--link or --tcp")
     if speed <= 0:
         raise click.UsageError("--speed: must be positive")
     if as_fast and speed != 1.0:
@@ -147,5 +152,5 @@ def replay(session_file: str, use_pty: bool, link: str | None, speed: float, as_
         config = _load_config(session.kind, config_file)
     elif config_file is not None:
         raise click.UsageError("--config is for the live model: add --fallback live")
-    plan = ReplayPlan(session=session, link=link, speed=speed, as_fast=as_fast, fallback=fallback, config=config)
+    plan = ReplayPlan(session=session, link=link, tcp=host_port("--tcp", tcp) if tcp is not None else None, speed=speed, as_fast=as_fast, fallback=fallback, config=config)
     sys.exit(asyncio.run(replay_session(plan)))

@@ -11,12 +11,17 @@ and replayed byte-exact, with host messages cut where the device starts answerin
   chunk completes.
 * ``tolerances``: the ways a host's request may differ from the recorded one and still be the
   same request, tried in order after an exact match failed.  Each maps a message to a key;
-  two messages match under a tolerance when their keys are equal.
+  two messages match under a tolerance when their keys are equal.  A tolerance may also
+  ``adapt`` the recorded answer to the host's request (an Ether-S-Bus reply carries the
+  request's sequence number).
 
-| kind | host messages | tolerances |
+The table is keyed by kind, or by ``KIND.PORT`` for one port of a kind with several:
+
+| key | host messages | tolerances |
 |---|---|---|
 | ``sers`` | ASCII lines (CR or LF) | none (exact: the answer echoes the line as typed) |
 | ``gms96`` | FT1.2 frames | ``checksum``: the CS octet ignored; ``fcb``: the frame count bit (FCB, 20h of C) and with it the checksum ignored (spec §3.3: a host toggles FCB per frame) |
+| ``pcd4h3.ether_tcp`` | Ether-S-Bus frames (by their length field, pcd4h3 spec §9.3) | ``sequence``: another sequence number (and so CRC); the answer gets the host's sequence number and a new CRC |
 | others | cut where the device answers | none (exact) |
 """
 
@@ -27,6 +32,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from devsim.devices.gms96 import codec as ft12
+from devsim.devices.pcd4h3 import sbus
 
 __all__ = ["Decoder", "Protocol", "Tolerance", "protocol_of", "PROTOCOLS"]
 
@@ -45,10 +51,12 @@ class Decoder:
 
 @dataclass(frozen=True)
 class Tolerance:
-    """A named way two requests count as the same: ``key(message)`` equal."""
+    """A named way two requests count as the same: ``key(message)`` equal; ``adapt(request,
+    answer)`` makes the recorded answer fit the host's request (``None``: sent as recorded)."""
 
     name: str
     key: Callable[[bytes], bytes]
+    adapt: Callable[[bytes, bytes], bytes] | None = None
 
 
 @dataclass(frozen=True)
@@ -166,6 +174,67 @@ def _without_fcb(message: bytes) -> bytes:
     return bytes(out)
 
 
+# -- PCD4.H3 Ether-S-Bus on TCP: frames with a sequence number ---------------------------------
+_ETHER_HEADER = 9  # length (4), version, type, sequence (2), attribute
+
+
+def _split_ether(buffer: bytes) -> tuple[list[bytes], bytes]:
+    receiver = sbus.EtherReceiver()
+    frames = receiver.feed(buffer)
+    rest = buffer[sum(len(frame) for frame in frames) :]
+    if len(rest) >= 4 and not _length_ok(rest):  # not a frame: one message, so that it is reported
+        return [*frames, rest], b""
+    return frames, rest
+
+
+def _length_ok(rest: bytes) -> bool:
+    length = int.from_bytes(rest[:4], "big")
+    return 13 <= length <= 4096
+
+
+class _EtherDecoder(Decoder):
+    _ATTRIBUTES = {sbus.REQUEST: "request", sbus.RESPONSE: "response", sbus.ACK_NAK: "ack/nak"}
+
+    def __init__(self, direction: str) -> None:
+        super().__init__(direction)
+        self._receiver = sbus.EtherReceiver()
+
+    def feed(self, data: bytes) -> list[Any] | None:
+        out: list[Any] = []
+        for frame in self._receiver.feed(data):
+            sequence, attribute = int.from_bytes(frame[6:8], "big"), frame[8]
+            payload = frame[_ETHER_HEADER:-2]
+            described: dict[str, Any] = {"sequence": sequence, "attribute": self._ATTRIBUTES.get(attribute, attribute),
+                                         "payload": payload.hex(" ")}
+            if attribute == sbus.REQUEST and len(payload) >= 2:
+                described.update(station=payload[0], command=f"{payload[1]:02X}")
+            described["crc_ok"] = sbus.crc16(frame[:-2]) == int.from_bytes(frame[-2:], "big")
+            out.append(described)
+        return out
+
+
+def _is_ether(frame: bytes) -> bool:
+    return len(frame) >= 13 and int.from_bytes(frame[:4], "big") == len(frame)
+
+
+def _without_sequence(frame: bytes) -> bytes:
+    if not _is_ether(frame):
+        return frame
+    return frame[:6] + b"\0\0" + frame[8:-2] + b"\0\0"
+
+
+def _with_sequence(request: bytes, answer: bytes) -> bytes:
+    """The recorded answer's frames with the request's sequence number and their CRC anew."""
+    if not _is_ether(request):
+        return answer
+    frames, rest = _split_ether(answer)
+    out = bytearray()
+    for frame in frames:
+        body = frame[:6] + request[6:8] + frame[8:-2]
+        out += body + sbus.crc16(body).to_bytes(2, "big")
+    return bytes(out + rest)
+
+
 #: kind → what record and replay know of its protocol (see the module docstring's table).
 PROTOCOLS: dict[str, Protocol] = {
     "sers": Protocol(split=_split_lines, decoder=_LineDecoder),
@@ -174,11 +243,16 @@ PROTOCOLS: dict[str, Protocol] = {
         decoder=_FrameDecoder,
         tolerances=(Tolerance("checksum", _without_checksum), Tolerance("fcb", _without_fcb)),
     ),
+    "pcd4h3.ether_tcp": Protocol(
+        split=_split_ether,
+        decoder=_EtherDecoder,
+        tolerances=(Tolerance("sequence", _without_sequence, _with_sequence),),
+    ),
 }
 
 _PLAIN = Protocol()
 
 
-def protocol_of(kind: str) -> Protocol:
-    """The kind's protocol knowledge; byte-exact for a kind not in :data:`PROTOCOLS`."""
-    return PROTOCOLS.get(kind, _PLAIN)
+def protocol_of(kind: str, port: str = "main") -> Protocol:
+    """What is known of the protocol on ``port`` of ``kind``; byte-exact for one not in :data:`PROTOCOLS`."""
+    return PROTOCOLS.get(f"{kind}.{port}") or PROTOCOLS.get(kind, _PLAIN)

@@ -1,4 +1,5 @@
-"""``devsim replay``: play the device side of a recorded session to a host on a new pty.
+"""``devsim replay``: play the device side of a recorded session to a host on a new pty (or a
+raw TCP port, for a session recorded on a network port such as Ether-S-Bus on TCP).
 
 The host's bytes are cut into requests by the kind's framing (:mod:`devsim.replay.kinds`;
 unframed kinds: a request is complete when it equals a recorded one).  Each request is matched
@@ -32,7 +33,7 @@ from typing import Any
 from devsim.core.device import SerialSettings
 from devsim.replay.kinds import protocol_of
 from devsim.replay.live import HandoverClock, start_live
-from devsim.replay.session import Exchange, Session
+from devsim.replay.session import Exchange, Reply, Session
 
 __all__ = ["ReplayPlan", "Replayer", "replay_session"]
 
@@ -40,6 +41,7 @@ __all__ = ["ReplayPlan", "Replayer", "replay_session"]
 class ReplayPlan:
     session: Session
     link: str | None = None
+    tcp: tuple[str, int] | None = None  # a raw TCP port instead of the pty
     speed: float = 1.0
     as_fast: bool = False
     fallback: str = "error"  # "error" | "live"
@@ -91,7 +93,8 @@ class Replayer:
     def __init__(self, plan: ReplayPlan, outbox: _Outbox, live: Any = None) -> None:
         self.session = plan.session
         self.serial_settings: SerialSettings = plan.session.settings  # the pty is preset with them
-        self.protocol = protocol_of(plan.session.kind or "")
+        self.protocol = protocol_of(plan.session.kind or "", plan.session.port)
+        self._adapt = {t.name: t.adapt for t in self.protocol.tolerances}
         self.speed = plan.speed
         self.as_fast = plan.as_fast
         self.fallback = plan.fallback
@@ -158,7 +161,7 @@ class Replayer:
         found = self.match(self._buffer)
         if found is not None:
             message, self._buffer = self._buffer, b""
-            self._answer(*found)
+            self._answer(message, *found)
             return
         if not any(exchange.request.startswith(self._buffer) for exchange in self.session.exchanges):
             message, self._buffer = self._buffer, b""
@@ -169,13 +172,17 @@ class Replayer:
         if found is None:
             self._unknown(message)
         else:
-            self._answer(*found)
+            self._answer(message, *found)
 
-    def _answer(self, exchange: Exchange, how: str) -> None:
+    def _answer(self, message: bytes, exchange: Exchange, how: str) -> None:
         self.counts[how] = self.counts.get(how, 0) + 1
         self._cursor = (exchange.index + 1) % max(1, len(self.session.exchanges))
         now = asyncio.get_running_loop().time()
-        for reply in exchange.replies:
+        replies = exchange.replies
+        adapt = self._adapt.get(how)
+        if adapt is not None and replies:  # the answer made to fit the host's request, as one chunk
+            replies = [Reply(replies[0].delay, adapt(message, exchange.answer))]
+        for reply in replies:
             delay = 0.0 if self.as_fast else reply.delay / self.speed
             self.outbox.put(now + delay, reply.data)
 
@@ -194,6 +201,7 @@ async def replay_session(plan: ReplayPlan) -> int:
     """Serve the replay on a new pty until SIGINT/SIGTERM; returns the exit status."""
     from devsim.core.runtime import Runtime
     from devsim.transports.pty import PtyTransport
+    from devsim.transports.tcp import TcpTransport
 
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
@@ -218,14 +226,17 @@ async def replay_session(plan: ReplayPlan) -> int:
                 clock.go_live(1.0 if plan.as_fast else plan.speed)
                 bridge.sink = lambda data: outbox.put(loop.time(), data)
             replayer = Replayer(plan, outbox, live)
-            transport = PtyTransport(link=plan.link)
+            transport: Any = PtyTransport(link=plan.link) if plan.tcp is None else TcpTransport(*plan.tcp)
             try:
                 await transport.start(replayer)
             except OSError as exc:
-                _warn(f"Error: cannot open the pty: {exc}")
+                _warn(f"Error: cannot open the {'pty' if plan.tcp is None else 'TCP port'}: {exc}")
                 return 1
             try:
-                print(f"replay: pty {transport.address}", flush=True)
+                if plan.tcp is None:
+                    print(f"replay: pty {transport.address}", flush=True)
+                else:
+                    print(f"replay: tcp {transport.url}", flush=True)
                 if plan.link:
                     print(f"replay: link {plan.link}", flush=True)
                 _warn(f"replay: {len(plan.session.exchanges)} recorded requests of kind "

@@ -60,7 +60,7 @@ class SessionWriter:
     def __init__(self, path: str | Path, *, kind: str | None, port: str, device: str, settings: SerialSettings) -> None:
         self.path = Path(path)
         self._file: IO[str] | None = self.path.open("w", encoding="utf-8")
-        protocol = protocol_of(kind or "")
+        protocol = protocol_of(kind or "", port)
         self._decoders = {"host": protocol.decoder("host"), "device": protocol.decoder("device")}
         self.chunks = 0
         self._line({"format": FORMAT, "version": VERSION, "kind": kind, "port": port, "device": device,
@@ -135,8 +135,8 @@ def _settings(raw: Any, where: str) -> SerialSettings:
 class _Cutter:
     """Cuts the recorded stream into exchanges (see the module docstring)."""
 
-    def __init__(self, kind: str | None) -> None:
-        self.split = protocol_of(kind or "").split
+    def __init__(self, kind: str | None, port: str) -> None:
+        self.split = protocol_of(kind or "", port).split
         self.exchanges: list[Exchange] = []
         self.pending = b""
         self.pending_t = 0.0
@@ -194,7 +194,7 @@ def load_session(path: str | Path) -> Session:
     if not isinstance(header, dict) or header.get("format") != FORMAT:
         raise SessionError(f"{path}:1: not a devsim session (no {FORMAT!r} header)")
     kind = header.get("kind")
-    cutter = _Cutter(kind if isinstance(kind, str) else None)
+    cutter = _Cutter(kind if isinstance(kind, str) else None, str(header.get("port") or "main"))
     for number, text in enumerate(lines[1:], start=2):
         if not text.strip():
             continue

@@ -338,3 +338,59 @@ def test_record_over_tcp_on_both_sides_then_replay_on_a_pty(tmp_path: Path, proc
     replay = _start(procs, "replay", str(session), "--pty", "--as-fast")
     with serial.Serial(replay.value("replay: pty"), 9600, timeout=2) as port:
         assert [ask(port, line) for line in ("#1\r", "#V=1500\r", "#V?\r")] == answers
+
+
+# -- PCD4.H3 Ether-S-Bus on TCP: another sequence number ---------------------------------------------
+def _crc(data: bytes) -> int:  # CRC-16/XMODEM, as in the README's Ether-S-Bus example
+    value = 0
+    for byte in data:
+        value ^= byte << 8
+        for _ in range(8):
+            value = (value << 1 ^ 0x1021) & 0xFFFF if value & 0x8000 else value << 1 & 0xFFFF
+    return value
+
+
+def _ether_host(url: str, first_sequence: int) -> list[bytes]:
+    """Write R 100 := 1234, read it back: the whole reply frames."""
+    import socket
+    import struct
+
+    host, _, port = url.removeprefix("socket://").rpartition(":")
+    replies = []
+    with socket.create_connection((host, int(port)), timeout=5) as sock:
+        for sequence, payload in enumerate([bytes([1, 0x0E, 0]) + struct.pack(">Hi", 100, 1234),
+                                            bytes([1, 0x06, 0]) + struct.pack(">H", 100)], start=first_sequence):
+            body = struct.pack(">IBBHB", 11 + len(payload), 1, 0, sequence, 0) + payload
+            sock.sendall(body + struct.pack(">H", _crc(body)))
+            reply = b""
+            while len(reply) < 4 or len(reply) < int.from_bytes(reply[:4], "big"):
+                chunk = sock.recv(512)
+                assert chunk, "connection closed"
+                reply += chunk
+            replies.append(reply)
+    return replies
+
+
+def test_ether_sbus_replay_answers_another_sequence_number_with_it(tmp_path: Path, procs: list[Proc]) -> None:
+    device = _start(procs, "run", "pcd4h3", "--pty", "--port", "ether_tcp=tcp:0", "--port", "ether_udp=udp:0")
+    device_url = device.value("pcd4h3.ether_tcp: tcp")
+    session = tmp_path / "ether.devsim"
+    recorder = _start(procs, "record", "--port", device_url, "--out", str(session), "--kind", "pcd4h3",
+                      "--device-port", "ether_tcp", "--tcp", "0")
+    recorded = _ether_host(recorder.value("record: tcp"), 1)
+    assert recorder.stop()[0] == 0
+    assert recorded[1][6:8] == b"\x00\x02" and recorded[1][9:-2] == (1234).to_bytes(4, "big")  # R 100 = 1234
+    decoded = [d for line in session.read_text().splitlines()[1:] for d in json.loads(line).get("decoded", [])]
+    assert {"sequence": 2, "attribute": "request", "payload": "01 06 00 00 64", "station": 1, "command": "06",
+            "crc_ok": True} in decoded
+
+    replay = _start(procs, "replay", str(session), "--tcp", "0", "--as-fast")
+    url = replay.value("replay: tcp")
+    assert _ether_host(url, 1) == recorded
+    for sequence, reply, original in zip((41, 42), _ether_host(url, 41), recorded, strict=True):
+        assert reply[6:8] == sequence.to_bytes(2, "big")  # the host's sequence number
+        assert reply[:6] == original[:6] and reply[8:-2] == original[8:-2]
+        assert int.from_bytes(reply[-2:], "big") == _crc(reply[:-2])  # and a valid CRC
+    status, err = replay.stop()
+    assert status == 0, err
+    assert "requests answered: exact 2, sequence 2" in err
