@@ -11,6 +11,8 @@ import json
 import os
 import queue
 import signal
+import socket
+import struct
 import subprocess
 import sys
 import threading
@@ -350,25 +352,28 @@ def _crc(data: bytes) -> int:  # CRC-16/XMODEM, as in the README's Ether-S-Bus e
     return value
 
 
+def _ether_ask(sock: socket.socket, sequence: int, payload: bytes) -> bytes:
+    """One Ether-S-Bus request on a TCP stream; the whole reply frame."""
+    body = struct.pack(">IBBHB", 11 + len(payload), 1, 0, sequence, 0) + payload
+    sock.sendall(body + struct.pack(">H", _crc(body)))
+    reply = b""
+    while len(reply) < 4 or len(reply) < int.from_bytes(reply[:4], "big"):
+        chunk = sock.recv(512)
+        assert chunk, "connection closed"
+        reply += chunk
+    return reply
+
+
+def _connect(url: str) -> socket.socket:
+    host, _, port = url.removeprefix("socket://").rpartition(":")
+    return socket.create_connection((host, int(port)), timeout=5)
+
+
 def _ether_host(url: str, first_sequence: int) -> list[bytes]:
     """Write R 100 := 1234, read it back: the whole reply frames."""
-    import socket
-    import struct
-
-    host, _, port = url.removeprefix("socket://").rpartition(":")
-    replies = []
-    with socket.create_connection((host, int(port)), timeout=5) as sock:
-        for sequence, payload in enumerate([bytes([1, 0x0E, 0]) + struct.pack(">Hi", 100, 1234),
-                                            bytes([1, 0x06, 0]) + struct.pack(">H", 100)], start=first_sequence):
-            body = struct.pack(">IBBHB", 11 + len(payload), 1, 0, sequence, 0) + payload
-            sock.sendall(body + struct.pack(">H", _crc(body)))
-            reply = b""
-            while len(reply) < 4 or len(reply) < int.from_bytes(reply[:4], "big"):
-                chunk = sock.recv(512)
-                assert chunk, "connection closed"
-                reply += chunk
-            replies.append(reply)
-    return replies
+    with _connect(url) as sock:
+        return [_ether_ask(sock, first_sequence, bytes([1, 0x0E, 0]) + struct.pack(">Hi", 100, 1234)),
+                _ether_ask(sock, first_sequence + 1, bytes([1, 0x06, 0]) + struct.pack(">H", 100))]
 
 
 def test_ether_sbus_replay_answers_another_sequence_number_with_it(tmp_path: Path, procs: list[Proc]) -> None:
@@ -394,3 +399,17 @@ def test_ether_sbus_replay_answers_another_sequence_number_with_it(tmp_path: Pat
     status, err = replay.stop()
     assert status == 0, err
     assert "requests answered: exact 2, sequence 2" in err
+
+
+def test_ether_sbus_fallback_live_holds_the_recorded_write(tmp_path: Path, procs: list[Proc]) -> None:
+    device = _start(procs, "run", "pcd4h3", "--pty", "--port", "ether_tcp=tcp:0", "--port", "ether_udp=udp:0")
+    session = tmp_path / "ether.devsim"
+    recorder = _start(procs, "record", "--port", device.value("pcd4h3.ether_tcp: tcp"), "--out", str(session),
+                      "--kind", "pcd4h3", "--device-port", "ether_tcp", "--tcp", "0")
+    _ether_host(recorder.value("record: tcp"), 1)
+    assert recorder.stop()[0] == 0
+    replay = _start(procs, "replay", str(session), "--tcp", "0", "--fallback", "live")
+    with _connect(replay.value("replay: tcp")) as sock:  # R 100 and R 101: never asked
+        reply = _ether_ask(sock, 9, bytes([1, 0x06, 1]) + struct.pack(">H", 100))
+    assert reply[6:8] == b"\x00\x09" and reply[9:-2] == struct.pack(">ii", 1234, 0)  # the write, replayed into it
+    replay.err_line("replay: request not in the recording")
