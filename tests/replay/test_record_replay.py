@@ -413,3 +413,26 @@ def test_ether_sbus_fallback_live_holds_the_recorded_write(tmp_path: Path, procs
         reply = _ether_ask(sock, 9, bytes([1, 0x06, 1]) + struct.pack(">H", 100))
     assert reply[6:8] == b"\x00\x09" and reply[9:-2] == struct.pack(">ii", 1234, 0)  # the write, replayed into it
     replay.err_line("replay: request not in the recording")
+
+
+@pytest.mark.parametrize("args, earliest, latest", [([], 0.6, None), (["--speed", "4"], 0.15, 0.6)],
+                         ids=["as-recorded", "speed-4"])
+def test_replay_keeps_the_recorded_delay(tmp_path: Path, procs: list[Proc], args: list[str], earliest: float,
+                                         latest: float | None) -> None:
+    from devsim.core.device import SerialSettings
+    from devsim.replay.session import SessionWriter
+
+    writer = SessionWriter(tmp_path / "slow.devsim", kind="sers", port="main", device="-", settings=SerialSettings())
+    writer.chunk(1.0, "host", b"#1\r")
+    writer.chunk(1.001, "device", b"#1\r")  # the echo: at once
+    writer.chunk(1.6, "device", b"\nok1\n\r")  # the answer 0.6 s after the request
+    writer.close()
+    replay = _start(procs, "replay", str(tmp_path / "slow.devsim"), "--pty", *args)
+    with serial.Serial(replay.value("replay: pty"), 9600, timeout=3) as port:
+        start = time.monotonic()
+        port.write(b"#1\r")
+        assert port.read(3) == b"#1\r"
+        assert port.read_until(b"\n\r") == b"\nok1\n\r"
+        elapsed = time.monotonic() - start
+    assert elapsed >= earliest - 0.01
+    assert latest is None or elapsed < latest
