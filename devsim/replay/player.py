@@ -5,7 +5,7 @@ The host's bytes are cut into requests by the kind's framing (:mod:`devsim.repla
 unframed kinds: a request is complete when it equals a recorded one).  Each request is matched
 against the recording's requests (:mod:`devsim.replay.session`), starting at the exchange after
 the last one matched and wrapping around, first byte-exact, then with each of the kind's
-tolerances in turn (GMS96: checksum, FCB).  A match is answered with the recorded answer, each
+tolerances in turn (GMS96: checksum, FCB; Ether-S-Bus: sequence number).  A match is answered with the recorded answer, each
 chunk after its recorded delay divided by ``speed`` (``as_fast``: no delay); answers leave in
 order through one queue.
 
@@ -36,6 +36,7 @@ from devsim.replay.live import HandoverClock, start_live
 from devsim.replay.session import Exchange, Reply, Session
 
 __all__ = ["ReplayPlan", "Replayer", "replay_session"]
+
 
 @dataclass
 class ReplayPlan:
@@ -103,7 +104,6 @@ class Replayer:
         self.live_now = False
         self._buffer = b""
         self._cursor = 0
-        self._host: SerialSettings | None = None
         #: how requests were answered: "exact", a tolerance's name, or "unknown"
         self.counts: dict[str, int] = {}
 
@@ -129,12 +129,13 @@ class Replayer:
         self._unframed()
 
     def host_settings(self, settings: SerialSettings) -> None:
-        self._host = settings
-        if self.live is not None:
+        if self.live is not None:  # a host at the wrong baud rate garbles the live model's line
             self.live.host_settings(settings)
 
     def host_disconnected(self) -> None:
         self._buffer = b""
+        if self.live_now:
+            self.live.host_disconnected()
 
     # -- matching ---------------------------------------------------------------------------
     def _order(self) -> list[Exchange]:
