@@ -42,6 +42,10 @@ class HandoverClock(VirtualClock):
         self._wake: asyncio.Event | None = None
         self._task: asyncio.Task[None] | None = None
 
+    @property
+    def virtual(self) -> bool:
+        return self._loop is None  # real time once handed over
+
     def now(self) -> float:
         if self._loop is None:
             return super().now()
