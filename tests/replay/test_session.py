@@ -71,3 +71,23 @@ def test_a_bad_session_is_one_line_exit_2(tmp_path: Path, content: str, message:
         load_session(path)
     result = CliRunner().invoke(cli, ["replay", str(path), "--pty"])
     assert result.exit_code == 2 and message in result.output
+
+
+async def test_the_handover_clock_is_virtual_then_real() -> None:
+    import asyncio
+
+    from devsim.replay.live import HandoverClock
+
+    clock = HandoverClock()
+    fired: list[float] = []
+    clock.call_later(100.0, lambda: fired.append(clock.now()))
+    assert clock.virtual and clock.advance(100.0) == 1 and fired == [100.0]  # seeding: no wall time
+    loop = asyncio.get_running_loop()
+    clock.go_live()
+    assert not clock.virtual
+    done = asyncio.Event()
+    start = loop.time()
+    clock.call_later(0.05, done.set)
+    await asyncio.wait_for(done.wait(), 5)
+    assert loop.time() - start >= 0.05 - 1e-3 and clock.now() >= 100.05 - 1e-3  # then real time, from there
+    await clock.close()
