@@ -675,6 +675,8 @@ cli.add_command(ctl)
 LAZY_COMMANDS: dict[str, str] = {
     "check": "devsim.scenario.cli",
     "plot": "devsim.plot",
+    "record": "devsim.replay.cli",
+    "replay": "devsim.replay.cli",
     "scenario": "devsim.scenario.cli",
     "up": "devsim.scenario.cli",
 }

@@ -1,0 +1,93 @@
+"""The session file and its cutting into exchanges, without processes (pure)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from devsim.cli import cli
+from devsim.core.device import SerialSettings
+from devsim.devices.gms96 import codec as ft12
+from devsim.replay.kinds import protocol_of
+from devsim.replay.session import SessionError, SessionWriter, load_session
+
+
+def _write(path: Path, kind: str | None, chunks: list[tuple[float, str, bytes]]) -> Path:
+    writer = SessionWriter(path, kind=kind, port="main", device="/dev/null", settings=SerialSettings())
+    for t, direction, data in chunks:
+        writer.chunk(t, direction, data)
+    writer.close()
+    return path
+
+
+def test_an_echo_goes_with_the_request_it_echoes(tmp_path: Path) -> None:
+    # the host types a line slowly; the SERS echoes each character, answers at the CR
+    session = load_session(_write(tmp_path / "s", "sers", [
+        (0.0, "host", b"#V"), (0.001, "device", b"#V"), (0.01, "host", b"?\r"), (0.011, "device", b"?\r"),
+        (0.02, "device", b"V=2000U/min\n\r\nok1\n\r"),
+        (0.5, "host", b"#1"), (0.501, "device", b"#1"), (0.6, "host", b"\r"), (0.65, "device", b"\r\nok1\n\r"),
+    ]))
+    first, second = session.exchanges
+    assert first.request == b"#V?\r" and first.answer == b"#V?\rV=2000U/min\n\r\nok1\n\r"
+    assert [(round(r.delay, 3), r.data) for r in first.replies] == [
+        (0.0, b"#V"), (0.001, b"?\r"), (0.01, b"V=2000U/min\n\r\nok1\n\r")]
+    assert second.request == b"#1\r" and second.answer == b"#1\r\nok1\n\r"
+    assert [round(r.delay, 3) for r in second.replies] == [0.0, 0.05]  # the echo before the CR: at once
+
+
+def test_an_unframed_kind_ends_a_request_where_the_device_answers(tmp_path: Path) -> None:
+    session = load_session(_write(tmp_path / "s", "ip247", [
+        (0.0, "host", b"\x10"), (0.1, "host", b"\x02"), (0.2, "device", b"\x10\x06"), (0.3, "host", b"AB"),
+    ]))
+    assert [(e.request, e.answer) for e in session.exchanges] == [(b"\x10\x02", b"\x10\x06"), (b"AB", b"")]
+    lines = [json.loads(text) for text in (tmp_path / "s").read_text().splitlines()]
+    assert all("decoded" not in entry for entry in lines[1:])  # no codec: bytes only
+
+
+def test_gms96_tolerances_ignore_the_checksum_and_the_frame_count_bit() -> None:
+    frame = ft12.encode(ft12.LongFrame(ft12.control_host(0), 3, ft12.letter("A", 10000)))
+    flipped = ft12.encode(ft12.LongFrame(ft12.control_host(1), 3, ft12.letter("A", 10000)))
+    other = ft12.encode(ft12.LongFrame(ft12.control_host(0), 3, ft12.letter("A", 10001)))
+    broken = frame[:-2] + bytes([frame[-2] ^ 0xFF]) + frame[-1:]
+    tolerances = {t.name: t.key for t in protocol_of("gms96").tolerances}
+    assert tolerances["checksum"](broken) == tolerances["checksum"](frame) != tolerances["checksum"](flipped)
+    assert tolerances["fcb"](flipped) == tolerances["fcb"](frame) != tolerances["fcb"](other)
+    split = protocol_of("gms96").split
+    assert split is not None and split(frame + flipped[:5]) == ([frame], flipped[:5])
+
+
+@pytest.mark.parametrize("content, message", [
+    ("", "empty file"),
+    ('{"hello": 1}\n', ":1: not a devsim session"),
+    ('{"format": "devsim-session", "kind": "sers"}\n{"t": 1, "dir": "host", "hex": "zz"}\n', ":2: "),
+])
+def test_a_bad_session_is_one_line_exit_2(tmp_path: Path, content: str, message: str) -> None:
+    path = tmp_path / "bad.devsim"
+    path.write_text(content)
+    with pytest.raises(SessionError, match=message):
+        load_session(path)
+    result = CliRunner().invoke(cli, ["replay", str(path), "--pty"])
+    assert result.exit_code == 2 and message in result.output
+
+
+async def test_the_handover_clock_is_virtual_then_real() -> None:
+    import asyncio
+
+    from devsim.replay.live import HandoverClock
+
+    clock = HandoverClock()
+    fired: list[float] = []
+    clock.call_later(100.0, lambda: fired.append(clock.now()))
+    assert clock.virtual and clock.advance(100.0) == 1 and fired == [100.0]  # seeding: no wall time
+    loop = asyncio.get_running_loop()
+    clock.go_live()
+    assert not clock.virtual
+    done = asyncio.Event()
+    start = loop.time()
+    clock.call_later(0.05, done.set)
+    await asyncio.wait_for(done.wait(), 5)
+    assert loop.time() - start >= 0.05 - 1e-3 and clock.now() >= 100.05 - 1e-3  # then real time, from there
+    await clock.close()
