@@ -5,9 +5,10 @@ Starts a mosquitto (``$SYS`` every second) and a plant of ``--devices`` SERS dev
 (``--measure``, default both):
 
 * ``states``: the parts publish their devices with the MQTT facade (the plant's ``mqtt:``
-  section, points sampled every ``1/--rate`` s); one asyncio client sets ``input.I1`` of every
-  device ``--rate`` times a second (flipping it) through ``…/set/input.I1`` and takes the
-  ``…/state/input.I1`` each device publishes: state messages delivered per second, and the end-to-
+  section, points sampled every ``1/--rate`` s); one asyncio client sets ``quantity.adc_volts``
+  of every device ``--rate`` times a second (a new value each time) through
+  ``…/set/quantity.adc_volts`` and takes the ``…/state/quantity.adc_volts`` each device
+  publishes: state messages delivered per second, and the end-to-
   end time from the command to the published state (command → broker → devsim → broker →
   subscriber).
 * ``requests``: the parts join a fleet (``--fleet URL``); one fleet client
@@ -27,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import os
 import statistics
 import subprocess
@@ -42,6 +44,7 @@ from devsim.fleet.client import AsyncFleetClient  # noqa: E402
 from tests.support.broker import Broker  # noqa: E402
 
 TICK = os.sysconf("SC_CLK_TCK")
+SENDERS = 4  # MQTT connections the states measurement sends its commands on
 
 
 def cpu_seconds(pid: int) -> float:
@@ -164,8 +167,8 @@ async def measure(url: str, devices: list[str], rate: float, seconds: float, cli
 
 async def measure_states(url: str, devices: list[str], rate: float, seconds: float, client_pid: int,
                          ) -> dict[str, float]:
-    """Flip ``input.I1`` of every device ``rate`` times a second over MQTT and time each
-    published state from its command."""
+    """Set ``quantity.adc_volts`` of every device to a new value ``rate`` times a second over
+    MQTT and time each published state from its command (every value is matched, however late)."""
     import aiomqtt
 
     from devsim.fleet.topics import parse_fleet_url
@@ -173,12 +176,15 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
     broker = parse_fleet_url(url)
     counter = await sys_counter(url, "$SYS/broker/messages/sent")
     loop = asyncio.get_running_loop()
-    pending: dict[tuple[str, bool], float] = {}
+    pending: dict[tuple[str, float], float] = {}
     latencies: list[float] = []
     delivered = [0]
-    late = [0]
+    sent = [0]
     window = [float("inf"), float("inf")]  # warm-up end, end: set once the births are in
-    async with aiomqtt.Client(broker.host, broker.port) as client:
+    async with contextlib.AsyncExitStack() as stack:
+        client = await stack.enter_async_context(aiomqtt.Client(broker.host, broker.port))
+        senders = [await stack.enter_async_context(aiomqtt.Client(broker.host, broker.port))
+                   for _ in range(SENDERS)]  # one aiomqtt connection does not carry 1,000 publishes/s
         await client.subscribe("devsim/bench/+/state/#")
         await client.subscribe("devsim/bench/+/status")
         online: set[str] = set()
@@ -195,22 +201,24 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
                     continue
                 counted = window[0] <= loop.time() <= window[1]
                 delivered[0] += counted
-                if message.topic.value.endswith("/input.I1"):
-                    sent = pending.pop((device, bytes(message.payload) == b"true"), None)  # type: ignore[arg-type]
-                    if sent is not None and counted:
-                        latencies.append(time.perf_counter() - sent)
+                if message.topic.value.endswith("/quantity.adc_volts"):
+                    sent_at = pending.pop((device, float(bytes(message.payload))), None)  # type: ignore[arg-type]
+                    if sent_at is not None and counted:
+                        latencies.append(time.perf_counter() - sent_at)
 
-        async def flip(index: int, name: str) -> None:
+        async def command(index: int, name: str) -> None:
             period = 1.0 / rate
             due = loop.time() + period * index / len(devices)
-            value = True
+            number = 0
             while due < window[1]:
                 await asyncio.sleep(max(0.0, due - loop.time()))
-                if pending.pop((name, not value), None) is not None and due >= window[0]:
-                    late[0] += 1  # the previous flip's state had not come by this flip
-                pending[(name, value)] = time.perf_counter()
-                await client.publish(f"devsim/bench/{name}/set/input.I1", b"true" if value else b"false")
-                value = not value
+                number += 1
+                volts = (number % 500) / 100  # 0.01 … 4.99 V: a new value each time
+                pending[(name, volts)] = time.perf_counter()
+                sender = senders[index % len(senders)]
+                await sender.publish(f"devsim/bench/{name}/set/quantity.adc_volts", str(volts).encode())
+                if due >= window[0]:
+                    sent[0] += 1
                 due += period
 
         async def count() -> None:
@@ -223,12 +231,12 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
         await asyncio.sleep(1.0)  # the births' retained states drain before the window
         window[:] = [loop.time() + 1.0, loop.time() + 1.0 + seconds]
         warm_end, end = window
-        flips = asyncio.gather(*(flip(i, name) for i, name in enumerate(devices)))
+        commands = asyncio.gather(*(command(i, name) for i, name in enumerate(devices)))
         await asyncio.sleep(max(0.0, warm_end - loop.time()))
         cpu0 = loop.time(), cpu_seconds(client_pid)
-        await flips
+        await commands
         cpu1 = loop.time(), cpu_seconds(client_pid)
-        await asyncio.sleep(0.5)  # the last states
+        await asyncio.sleep(1.0)  # the last states
         receiving.cancel()
         counting.cancel()
     inside = [sample for sample in samples if warm_end <= sample[0] <= end]
@@ -240,8 +248,8 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
         "p50_ms": 1000 * statistics.median(latencies),
         "p99_ms": 1000 * latencies[int(0.99 * (len(latencies) - 1))],
         "max_ms": 1000 * latencies[-1],
-        "late": late[0],
-        "flips": len(latencies),
+        "sent": sent[0],
+        "timed": len(latencies),
         "client_cpu": 100 * (cpu1[1] - cpu0[1]) / (cpu1[0] - cpu0[0]),
     }
 
@@ -272,10 +280,10 @@ def run_one(args: argparse.Namespace, measure_what: str) -> None:
                     proc.kill()
             broker.stop()
     if states is not None:
-        print(f"states: {args.devices} devices in {args.processes} processes publishing over MQTT, input.I1 flipped"
-              f" at {args.rate:g} Hz each for {args.seconds:g} s")
-        print(f"state messages delivered: {result['delivered_per_s']:.0f}/s ({result['flips']} flips timed,"
-              f" {result['late']} states later than the next flip)")
+        print(f"states: {args.devices} devices in {args.processes} processes publishing over MQTT, a new"
+              f" quantity.adc_volts at {args.rate:g} Hz each for {args.seconds:g} s")
+        print(f"state messages delivered: {result['delivered_per_s']:.0f}/s ({result['timed']} of"
+              f" {result['sent']} commands' states timed)")
         what = "command to published state"
     else:
         print(f"requests: {args.devices} devices in {args.processes} processes, read at {args.rate:g} Hz each"

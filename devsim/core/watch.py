@@ -52,22 +52,26 @@ class PointWatch:
         self._timer: Any = None
         self._running = False
 
-    def values(self) -> Changes:
-        """The present values of the watched names."""
+    def values(self, names: Iterable[str] | None = None) -> Changes:
+        """The present values of the watched names (or of ``names``)."""
         values: Changes = {}
-        for name in self.names:
+        for name in self.names if names is None else names:
             try:
                 values[name] = self.device.read(name)
             except (UnknownName, ValueError, LookupError, ArithmeticError):
                 values[name] = None
         return values
 
-    def sample(self) -> Changes:
-        """Read now; call the listener with what changed (if anything) and return it."""
-        values = self.values()
+    def sample(self, names: Iterable[str] | None = None) -> Changes:
+        """Read now (every watched name, or only ``names``: a point just set); call the listener
+        with what changed (if anything) and return it."""
+        values = self.values(names)
         changes = {name: value for name, value in values.items()
                    if name not in self.last or self.last[name] != value}
-        self.last = values
+        if names is None:
+            self.last = values
+        else:
+            self.last.update(values)
         if changes:
             self.on_change(changes)
         return changes

@@ -83,8 +83,9 @@ class _DevsimDevice:
             handler(self.device, arg, payload)
         except Exception as exc:  # every refusal is answered, as the control API does
             self.send((f"{self.base}/error", topics.error_payload(topic, exc), 1, False))
-        if self.watch is not None:
-            self.watch.sample()
+        if self.watch is not None:  # the point just set at once (what follows from it at the next sample)
+            just_set = handler is topics.COMMANDS["set"][0] and arg in self.watch.names
+            self.watch.sample([arg] if just_set else None)
 
     def closing(self) -> list[Message]:
         return [(f"{self.base}/status", b"offline", 1, True)]

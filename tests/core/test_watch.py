@@ -55,3 +55,15 @@ def test_the_period_must_be_positive() -> None:
     _, device = _device()
     with pytest.raises(ValueError):
         PointWatch(device, lambda changes: None, period=0)
+
+
+def test_a_sample_of_some_names_reports_only_their_changes() -> None:
+    clock, device = _device()
+    seen: list[dict] = []
+    watch = PointWatch(device, seen.append, names=["input.limit_right", "input.limit_left"])
+    watch.start()
+    device.set("input.limit_right", True)
+    device.set("input.limit_left", True)
+    assert watch.sample(["input.limit_right"]) == {"input.limit_right": True}
+    assert watch.sample() == {"input.limit_left": True}  # the other change waited for a full sample
+    assert seen[1:] == [{"input.limit_right": True}, {"input.limit_left": True}]
