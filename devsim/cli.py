@@ -37,6 +37,7 @@ from devsim import __version__
 from devsim.core.record import field, record
 from devsim.core.registry import UnknownKind, device_class, kinds
 from devsim.ctl import ctl
+from devsim.live_log import attach_log, level_of, log_options
 from devsim.run_options import (
     check_canopen,
     check_fleet,
@@ -185,6 +186,7 @@ class _Plan:
     fleet: str | None = None  # --fleet mqtt://BROKER[:PORT][/NAME]
     motion_log: str | None = None  # --motion-log FILE.csv
     motion_resolution: float = 0.01  # --motion-resolution SECONDS
+    log_level: int = 2  # -v/-q (devsim.live_log)
 
 
 #: What ``--port NAME=SPEC`` accepts after ``NAME=``.
@@ -359,6 +361,7 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
               " following error, events) as CSV, for 'devsim plot'.")
 @click.option("--motion-resolution", type=float, default=0.01, show_default=True, metavar="SECONDS",
               help="How often (device time) the motion log samples the axes, besides every event.")
+@log_options
 def run(
     kind: str,
     use_pty: bool,
@@ -387,13 +390,16 @@ def run(
     fleet: str | None,
     motion_log: str | None,
     motion_resolution: float,
+    verbose: int,
+    quiet: int,
 ) -> None:
     """Serve a simulated KIND device until Ctrl-C.
 
     Prints one line per device port (NAME: pty|tcp|rfc2217|udp ADDRESS) and the control address.
     A port the kind declares on the network (e.g. Ether-S-Bus on udp:5050) is served there on
     loopback unless --port NAME=SPEC says otherwise; the other ports follow --pty/--tcp/--rfc2217.
-    A trace named FILE.pcap is written as pcap (Wireshark, tshark).
+    A trace named FILE.pcap is written as pcap (Wireshark, tshark).  Host connects, disconnects,
+    line mismatches and device errors are logged to stderr (-v: more, -q: less).
     """
     try:
         cls = device_class(kind)
@@ -474,6 +480,7 @@ def run(
         fleet=fleet,
         motion_log=motion_log,
         motion_resolution=motion_resolution,
+        log_level=level_of(verbose, quiet),
     )
     try:
         asyncio.run(_serve(plan))
@@ -608,6 +615,7 @@ async def _serve(plan: _Plan) -> None:
                 _say(fleet_line)
             for device in devices:  # NAME: ready, each time it has booted and listens
                 device.on_ready(lambda name=device.name: _say(f"{name}: ready"))
+            attach_log(runtime, plan.log_level)
             names = ", ".join(device.name for device in devices)
             print(f"devsim: serving {names}; Ctrl-C to stop", file=sys.stderr, flush=True)
             # What exists now (modules, tables, devices) lives as long as the process: keep it

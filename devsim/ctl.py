@@ -5,6 +5,7 @@ errors are one line."""
 from __future__ import annotations
 
 import json
+import sys
 from typing import Any
 
 import click
@@ -182,3 +183,39 @@ def ctl_line_fault(ctx: click.Context, device: str, kind: str, switch: str, port
     noise, baud_mismatch, unplug, hang, silent."""
     given = {name: value for name, value in params.items() if value is not None}
     _call(ctx, "line_fault", device, kind, switch == "on", port=port, **given)
+
+
+@ctl.command("watch")
+@click.argument("device")
+@click.argument("names", nargs=-1)
+@click.option("--json", "as_json", is_flag=True, help="One JSON object per line instead of text.")
+@click.option("--period", type=float, metavar="SECONDS", help="Sampling period in device time (default 0.1).")
+def ctl_watch(device: str, names: tuple[str, ...], as_json: bool, period: float | None) -> None:
+    """Print changes of DEVICE's NAMEs (default: its state and axes) and its events (move start
+    and end, faults, errors, host connects) as they happen, one line each, until Ctrl-C or the
+    simulator stops: '12.300 sers axis.position 1234.0'."""
+    from devsim.core.control import ControlAddressError, ControlClient, ControlError
+    from devsim.core.watch_stream import describe
+
+    addr, fleet = click.get_current_context().obj
+    if fleet is not None:
+        raise click.UsageError("watch needs --control (a fleet has no stream)")
+    try:
+        client = ControlClient(addr)
+    except ControlAddressError as exc:
+        raise click.UsageError(f"--control: {exc}") from None
+    except OSError as exc:
+        raise click.ClickException(f"cannot connect to {addr}: {exc.strerror or exc}") from None
+    stream = client.watch(device, list(names) or None, period=period)
+    try:
+        for item in stream:
+            click.echo(json.dumps(item) if as_json else describe(item))
+    except KeyboardInterrupt:
+        sys.exit(0)
+    except ControlError as exc:
+        raise click.ClickException(str(exc)) from None
+    except (OSError, ValueError) as exc:
+        raise click.ClickException(f"control connection to {addr} failed: {exc}") from None
+    finally:
+        stream.close()
+        client.close()

@@ -23,7 +23,15 @@ Ops: ``read`` (device, name), ``set`` (device, name, value), ``state`` (device),
 ``line`` (device, port: status of the line serving that port), ``names`` (device: its declared
 points), ``fault`` (device, kind, active: a declared device fault on or off), ``line_fault``
 (device, port, kind, active, params: a fault on the line serving a port, e.g. ``noise`` with
-``{"rate": 100}``).
+``{"rate": 100}``), ``telegrams`` (device, port, count: the last telegrams on that port's line,
+each ``{"t", "dir", "hex", "text"}``; kept from the first such request on), ``watch`` (device,
+names, period: a subscription, see below).
+
+``watch`` answers once (``result``: the watched names and the device time) and then keeps
+sending one line per change or event until the connection closes or the simulator stops:
+``{"watch": ID, "t": 12.3, "device": "sers", "type": "change", "name": "axis.position",
+"value": 1234.0}`` (types in :mod:`devsim.core.watch_stream`).  The connection still answers
+requests meanwhile; :meth:`ControlClient.watch` opens a connection of its own for the stream.
 """
 
 from __future__ import annotations
@@ -37,6 +45,7 @@ import math
 import os
 import socket
 import threading
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, Literal
 
@@ -45,6 +54,7 @@ from pydantic import BaseModel, ConfigDict, ValidationError
 from devsim.core.points import parse_bool
 from devsim.core.record import asdict, is_record, record
 from devsim.core.runtime import Runtime, port_key
+from devsim.core.watch_stream import WatchStream
 
 __all__ = [
     "BadRequest",
@@ -60,10 +70,12 @@ __all__ = [
     "parse_address",
 ]
 
-Op = Literal["read", "set", "state", "power_cycle", "advance", "now", "devices", "line", "names", "fault", "line_fault"]
+Op = Literal["read", "set", "state", "power_cycle", "advance", "now", "devices", "line", "names", "fault", "line_fault",
+             "telegrams", "watch"]
 
 MAX_LINE = 1 << 20  # bytes in one request line
 MAX_DEPTH = 64  # nesting of lists and objects in one request
+MAX_BACKLOG = 4 << 20  # bytes of watch output a slow reader may leave unread before its watch ends
 
 
 # -- messages ------------------------------------------------------------------------------
@@ -83,6 +95,9 @@ class Request(BaseModel):
     kind: str | None = None
     active: Any = True
     params: dict[str, Any] = {}
+    names: list[str] | None = None
+    period: float | None = None
+    count: int = 20
 
 
 class OkResponse(BaseModel):
@@ -291,6 +306,7 @@ class ControlServer:
         task = asyncio.current_task()
         assert task is not None
         self._clients.add(task)
+        streams: list[WatchStream] = []
         try:
             while True:
                 try:
@@ -302,14 +318,47 @@ class ControlServer:
                     break
                 if not raw.strip():
                     continue
-                writer.write(self._encode(self.handle_line(raw)))
+                response = self.handle_line(raw)
+                if isinstance(response, OkResponse) and isinstance(response.result, _WatchStart):
+                    response = self._start_watch(response, writer, streams)
+                if response is not _ALREADY_SENT:
+                    writer.write(self._encode(response))
                 await writer.drain()
         except (ConnectionError, asyncio.CancelledError):
             pass
         finally:
+            for stream in streams:
+                stream.stop()
             self._clients.discard(task)
             with contextlib.suppress(Exception):
                 writer.close()
+
+    def _start_watch(self, response: OkResponse, writer: asyncio.StreamWriter,
+                     streams: list[WatchStream]) -> OkResponse | ErrorResponse:
+        """Answer a ``watch`` request, then start its stream (the answer goes out first)."""
+        start: _WatchStart = response.result
+        watch_id = response.id
+
+        def send(item: dict[str, Any]) -> None:
+            if writer.is_closing():
+                return
+            transport = writer.transport
+            if transport.get_write_buffer_size() > MAX_BACKLOG:  # nobody reads: end this watch
+                stream.stop()
+                return
+            writer.write((json.dumps({"watch": watch_id, **_jsonable(item)}, separators=(",", ":")) + "\n")
+                         .encode("utf-8"))
+
+        try:
+            stream = WatchStream(self.runtime, self.runtime.device(start.device), send, names=start.names,
+                                 period=start.period)
+        except Exception as exc:
+            return ErrorResponse(id=watch_id, error=_clip(_error_text(exc)), type=type(exc).__name__)
+        streams.append(stream)
+        writer.write(self._encode(OkResponse(id=watch_id, result={
+            "device": start.device, "names": stream.names, "period": stream.period, "t": self.runtime.clock.now()})))
+        stream.start()
+        return _ALREADY_SENT
 
     @staticmethod
     def _encode(response: OkResponse | ErrorResponse) -> bytes:
@@ -378,6 +427,18 @@ class ControlServer:
         if op == "fault":
             rt.fault(device, _need(req.kind, "kind", op), req.active)
             return None
+        if op == "telegrams":
+            from devsim.transports.tap import tap
+
+            line = self.runtime.lines.get(port_key(device, req.port))
+            if line is None:
+                rt.line_status(device, req.port)  # the reason: no such device, port or line
+            return tap(line).last(max(0, min(req.count, 200)))
+        if op == "watch":
+            if req.period is not None and not (math.isfinite(req.period) and req.period > 0):
+                raise BadRequest("'period' must be a positive number of seconds")
+            rt.device(device)
+            return _WatchStart(device=device, names=req.names, period=req.period)
         if op == "line_fault":
             rt.line_fault(device, _need(req.kind, "kind", op), parse_bool(req.active), port=req.port, **req.params)
             return None
@@ -388,6 +449,19 @@ class ControlServer:
             rt.set(device, name, req.value)
             return None
         raise BadRequest(f"unknown op {op!r}")  # pragma: no cover - Request validates op
+
+
+@record
+class _WatchStart:
+    """What ``execute`` hands ``_serve`` for a ``watch`` request: the stream needs the connection."""
+
+    device: str
+    names: list[str] | None = None
+    period: float | None = None
+
+
+#: ``_start_watch`` wrote its answer itself.
+_ALREADY_SENT = ErrorResponse(error="", type="")
 
 
 def _unix_socket_alive(path: str) -> bool:
@@ -506,3 +580,34 @@ class ControlClient:
 
     def line_fault(self, device: str, kind: str, active: bool = True, *, port: str = "main", **params: Any) -> None:
         self.request("line_fault", device=device, kind=kind, active=active, port=port, params=params)
+
+    def telegrams(self, device: str, port: str = "main", count: int = 20) -> list[dict[str, Any]]:
+        """The last ``count`` telegrams on the line of a port (kept from the first call on)."""
+        result: list[dict[str, Any]] = self.request("telegrams", device=device, port=port, count=count)
+        return result
+
+    def watch(self, device: str, names: list[str] | None = None, *, period: float | None = None,
+              timeout: float | None = None) -> Iterator[dict[str, Any]]:
+        """Changes and events of ``device`` as they happen (see :mod:`devsim.core.watch_stream`),
+        on a connection of its own; the first items are the present values.  Ends when the
+        simulator stops (or closes the stream); ``timeout``: at most that long without an item
+        (:class:`TimeoutError`), None waits for ever.  Close the generator to stop watching."""
+        watcher = ControlClient(self.address, timeout=self.timeout)
+        try:
+            watcher.request("watch", device=device, names=names or None, period=period)
+            watcher._sock.settimeout(timeout)
+            while True:
+                try:
+                    line = watcher._file.readline()
+                except OSError as exc:
+                    if isinstance(exc, TimeoutError | socket.timeout):
+                        raise TimeoutError(f"no change of {device} within {timeout} s") from None
+                    return
+                if not line:
+                    return
+                item = json.loads(line)
+                if "watch" in item:
+                    item.pop("watch")
+                    yield item
+        finally:
+            watcher.close()

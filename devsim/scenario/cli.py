@@ -19,6 +19,7 @@ from pathlib import Path
 import click
 
 from devsim.core.config import ConfigError, LineDict, load_yaml
+from devsim.live_log import attach_log, level_of, log_options
 from devsim.transports import fdlimit
 
 __all__ = ["register"]
@@ -154,6 +155,7 @@ def scenario_run(
 @click.option("--motion-log", metavar="FILE.csv", help="Log every axis's motion as CSV, for 'devsim plot'.")
 @click.option("--motion-resolution", type=float, default=0.01, show_default=True, metavar="SECONDS",
               help="How often (device time) the motion log samples the axes, besides every event.")
+@log_options
 def up(
     plant_file: str,
     state_dir: str | None,
@@ -166,9 +168,12 @@ def up(
     part: str | None,
     motion_log: str | None,
     motion_resolution: float,
+    verbose: int,
+    quiet: int,
 ) -> None:
     """Start every device of PLANT_FILE (with --part: those of one part), print every port and
-    NAME: ready when a device has booted, serve until Ctrl-C."""
+    NAME: ready when a device has booted, serve until Ctrl-C.  Host connects, disconnects, line
+    mismatches and device errors are logged to stderr (-v: more, -q: less)."""
     from devsim.core.control import ControlAddressError, parse_address
     from devsim.scenario.schema import load_plant
 
@@ -228,7 +233,8 @@ def up(
         sys.exit(status)
     try:
         motion = (motion_log, motion_resolution) if motion_log is not None else None
-        asyncio.run(_up(spec, state_dir, speed, address, trace_dir, virtual, fleet, part, motion))
+        asyncio.run(_up(spec, state_dir, speed, address, trace_dir, virtual, fleet, part, motion,
+                        level_of(verbose, quiet)))
     except KeyboardInterrupt:
         sys.exit(130)
     except OSError as exc:
@@ -244,6 +250,7 @@ class _FleetError(Exception):
 async def _up(
     spec: object, state_dir: str | None, speed: float, address: object, trace_dir: str | None, virtual: bool,
     fleet: str | None = None, part: str | None = None, motion: tuple[str, float] | None = None,
+    log_level: int = 2,
 ) -> None:
     from devsim.core.control import ControlServer
     from devsim.core.runtime import Runtime
@@ -294,6 +301,7 @@ async def _up(
             print(f"fleet: {member.url} as {member.process}", flush=True)
         for device in plant.devices.values():
             device.on_ready(lambda name=device.name: print(f"{name}: ready", flush=True))
+        attach_log(runtime, log_level)
         title = f"plant {spec.name!r} up" if getattr(spec, "name", None) else "plant up"
         print(f"devsim: {title} ({len(plant.devices)} devices); Ctrl-C to stop", file=sys.stderr, flush=True)
         try:

@@ -193,11 +193,21 @@ class Line:
             "to_device": _Stage(clock, self._to_target),
             "to_host": _Stage(clock, self._paced),
         }
+        #: ``fn(event, text)`` called on the line's rare moments (not on data): ``connect``,
+        #: ``disconnect``, ``host_settings`` (text: the settings, `` (mismatch ...)`` when they
+        #: differ), ``fault`` (a line fault started or ended) -- for watchers and logs.
+        self.observers: list[Callable[[str, str], None]] = []
         target.attach(self._from_device)
+
+    def _tell(self, event: str, text: str) -> None:
+        for observer in list(self.observers):
+            observer(event, text)
 
     # -- Endpoint ---------------------------------------------------------------------------
     def attach(self, write: Callable[[bytes], None] | None) -> None:
         """The transport's sink towards the host (``None``: nobody listening)."""
+        if write is not None and self.observers:
+            self._tell("connect", "host connected")
         self._write = write
 
     def feed(self, data: bytes) -> None:
@@ -235,18 +245,19 @@ class Line:
     def host_settings(self, settings: SerialSettings) -> None:
         """The host (re)configured its port."""
         self._host = settings
-        if self.tracer is not None:
-            self.tracer.note(
-                f"host settings {settings.describe()}"
-                + (" (mismatch, device " + self.device_settings.describe() + ")" if self.mismatch else ""),
-                self.clock.now(),
-            )
+        if self.tracer is not None or self.observers:
+            text = (f"host settings {settings.describe()}"
+                    + (" (mismatch, device " + self.device_settings.describe() + ")" if self.mismatch else ""))
+            if self.tracer is not None:
+                self.tracer.note(text, self.clock.now())
+            self._tell("host_settings", text)
 
     def host_disconnected(self) -> None:
         """The host went away: forget its settings (the next host brings its own)."""
         self._host = None
         if self.tracer is not None:
             self.tracer.note("host disconnected", self.clock.now())
+        self._tell("disconnect", "host disconnected")
         self.target.host_disconnected()
 
     # -- faults -----------------------------------------------------------------------------
@@ -290,6 +301,7 @@ class Line:
     def _note(self, text: str) -> None:
         if self.tracer is not None:
             self.tracer.note(text, self.clock.now())
+        self._tell("fault", text)
 
     def _of(self, kind: str, direction: str) -> list[_Active]:
         return [a for a in self._faults if a.fault.kind == kind and a.fault.applies(direction)]

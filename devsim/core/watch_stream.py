@@ -1,0 +1,153 @@
+"""One device watched live: value changes and events as a stream of JSON-able dicts.
+
+The control op ``watch`` (:mod:`devsim.core.control`), ``devsim ctl watch`` and ``devsim
+monitor`` are built on :class:`WatchStream`.  It runs in the runtime's loop thread and hands each
+item to ``send`` as it happens:
+
+* ``{"type": "change", "name": N, "value": V}`` -- a watched point changed, sampled with
+  :class:`~devsim.core.watch.PointWatch` on the device clock every ``period`` seconds (default:
+  the device's ``in_state`` points and every ``axis[.N].position``/``velocity``);
+* ``{"type": "event", "name": N}`` -- what the model records (``move_start``, ``move_end``,
+  ``power_on`` ...; topic ``event``), ``"type": "error"`` when the name says ``error``;
+* ``{"type": "fault", "name": KIND, "active": B}`` -- a declared fault switched
+  (``fault_switched``); ``{"type": "drive_fault", "axis": A, "code": C}`` -- the model's own
+  ``fault`` announcement (what a CANopen facade sends as EMCY);
+* ``{"type": "connect" | "disconnect" | "host_settings" | "line_fault", "port": P, "text": T}``
+  -- moments of the lines serving the device's ports (``host_settings`` adds ``mismatch``).
+
+Every item carries ``t`` (device time) and ``device``.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Callable, Iterable
+from typing import Any
+
+from devsim.core.device import Device
+from devsim.core.points import UnknownName
+from devsim.core.runtime import port_key
+from devsim.core.watch import PointWatch
+
+__all__ = ["DEFAULT_PERIOD", "WatchStream", "axis_names", "default_names", "describe"]
+
+DEFAULT_PERIOD = 0.1
+_AXIS_NAME = re.compile(r"^axis\.(?:[^.]+\.)?(position|velocity)$")
+
+Send = Callable[[dict[str, Any]], None]
+
+
+def axis_names(device: Device) -> list[str]:
+    """``axis.position``, ``axis.1.velocity`` ...: the readable position and velocity names."""
+    return [p.name for p in device.points if p.readable and _AXIS_NAME.match(p.name)]
+
+
+def default_names(device: Device) -> list[str]:
+    """What a watch without names watches: the ``in_state`` points and the axes."""
+    names = [p.name for p in device.points if p.readable and p.in_state]
+    return names + [name for name in axis_names(device) if name not in names]
+
+
+class WatchStream:
+    """Watch ``device`` (of ``runtime``); ``send(item)`` gets each change and event (with
+    ``values=False`` only the events: nothing is sampled)."""
+
+    def __init__(self, runtime: Any, device: Device, send: Send, *, names: Iterable[str] | None = None,
+                 period: float | None = None, values: bool = True) -> None:
+        period = DEFAULT_PERIOD if period is None else period
+        if not period > 0:
+            raise ValueError("a watch period is a positive number of seconds")
+        self.runtime = runtime
+        self.device = device
+        self.send = send
+        self.names = (list(names) if names else default_names(device)) if values else []
+        for name in self.names:  # an unknown name fails here (UnknownName), not as a stream of None
+            try:
+                device.read(name)
+            except UnknownName:
+                raise
+            except (ValueError, LookupError, ArithmeticError):
+                pass  # a value the device cannot give in its present state: watched as None
+        self.period = period
+        self._undo: list[Callable[[], Any]] = []
+        self._watch: PointWatch | None = None
+
+    def _emit(self, kind: str, **fields: Any) -> None:
+        self.send({"t": round(self.device.clock.now(), 6), "device": self.device.name, "type": kind, **fields})
+
+    def start(self) -> None:
+        """Listen and take the first sample (every watched value, as changes)."""
+        model = self.device.model
+        self._undo.append(model.listen("event", self._event))
+        self._undo.append(model.listen("fault_switched",
+                                       lambda kind, active: self._emit("fault", name=kind, active=bool(active))))
+        self._undo.append(model.listen("fault", lambda axis=None, code=None, *_: self._emit(
+            "drive_fault", axis=axis, code=code)))
+        for port in self.device.port_names():
+            line = self.runtime.lines.get(port_key(self.device.name, port))
+            if line is None:
+                continue
+            observer = self._line_observer(port, line)
+            line.observers.append(observer)
+            self._undo.append(lambda line=line, observer=observer: _remove(line.observers, observer))
+        if self.names:
+            self._watch = PointWatch(self.device, self._changes, names=self.names, period=self.period)
+            self._watch.start()
+
+    def _event(self, *args: Any) -> None:
+        # Model.record_event announces (time, name); a kind may announce its own "event" with
+        # other arguments (POSELESTA: port, what, detail), which is not a recorded event.
+        if len(args) != 2 or not isinstance(args[0], int | float) or not isinstance(args[1], str):
+            return
+        name = args[1]
+        self._emit("error" if "error" in name.lower() else "event", name=name)
+
+    def _changes(self, changes: dict[str, Any]) -> None:
+        for name, value in changes.items():
+            self._emit("change", name=name, value=value)
+
+    def _line_observer(self, port: str, line: Any) -> Callable[[str, str], None]:
+        def observe(event: str, text: str) -> None:
+            if event == "host_settings":
+                self._emit("host_settings", port=port, text=text, mismatch=bool(line.mismatch))
+            else:
+                self._emit("line_fault" if event == "fault" else event, port=port, text=text)
+
+        return observe
+
+    def stop(self) -> None:
+        if self._watch is not None:
+            self._watch.stop()
+            self._watch = None
+        for undo in self._undo:
+            undo()
+        self._undo.clear()
+
+
+def _remove(items: list[Any], item: Any) -> None:
+    if item in items:
+        items.remove(item)
+
+
+
+def describe(item: dict[str, Any]) -> str:
+    """One item as a line: ``12.300 sers axis.position 1234.0``, ``12.310 sers event move_end``,
+    ``12.400 sers fault blocked_axis on``, ``13.000 sers connect host connected`` (the port is
+    added to the device, ``cnc.v7``, where it is not ``main``)."""
+    kind = item.get("type")
+    head = f"{float(item.get('t', 0.0)):.3f} {item.get('device')}"
+    if kind == "change":
+        value = item.get("value")
+        return f"{head} {item.get('name')} {value if isinstance(value, str) else json.dumps(value)}"
+    if kind in ("event", "error"):
+        return f"{head} {kind} {item.get('name')}"
+    if kind == "fault":
+        return f"{head} fault {item.get('name')} {'on' if item.get('active') else 'off'}"
+    if kind == "drive_fault":
+        code = item.get("code")
+        shown = f"0x{code:04X}" if isinstance(code, int) else str(code)
+        return f"{head} drive_fault axis {item.get('axis')} code {shown}"
+    port = item.get("port", "main")
+    where = head if port == "main" else f"{head}.{port}"
+    return f"{where} {kind} {item.get('text', '')}".rstrip()

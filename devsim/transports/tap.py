@@ -1,0 +1,83 @@
+"""A tap on a line's trace: the last telegrams that crossed it, for a live monitor.
+
+A :class:`TelegramTap` is a :class:`~devsim.transports.trace.TraceSink` that keeps the last
+``size`` telegrams of a line in memory and hands every call on to the trace the line had before
+(a ``--trace`` file, or none).  :func:`tap` puts one in front of a line the first time somebody
+asks (``devsim monitor``, the control op ``telegrams``), so that a line nobody looks at keeps its
+fault-free fast path.
+
+A telegram is what one side sent in one go: consecutive chunks in the same direction less than
+:data:`GAP` seconds of device time apart are joined (a host's request that arrives split over
+several reads is one telegram), up to :data:`MAX_BYTES`.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+from devsim.transports.trace import TraceSink, render
+
+__all__ = ["GAP", "MAX_BYTES", "TelegramTap", "tap"]
+
+#: Chunks in the same direction closer than this (device seconds) are one telegram.
+GAP = 0.005
+#: A telegram longer than this is cut (noise on a line would otherwise grow one forever).
+MAX_BYTES = 512
+
+
+class TelegramTap:
+    """Keeps the last ``size`` telegrams; forwards everything to ``inner`` (may be None)."""
+
+    def __init__(self, inner: TraceSink | None, size: int = 200) -> None:
+        self.inner = inner
+        self.telegrams: deque[dict[str, Any]] = deque(maxlen=size)
+        #: ``fn(telegram)`` called for each telegram as it starts (later chunks extend it).
+        self.listeners: list[Callable[[dict[str, Any]], None]] = []
+        self._last_at = -1.0
+        self._data = bytearray()
+
+    def record(self, direction: str, data: bytes, when: float, note: str | None = None) -> None:
+        if self.inner is not None:
+            self.inner.record(direction, data, when, note)
+        if not data:
+            return
+        last = self.telegrams[-1] if self.telegrams else None
+        if (last is not None and last["dir"] == direction and when - self._last_at <= GAP
+                and len(self._data) + len(data) <= MAX_BYTES and not note and not last.get("note")):
+            self._data += data
+            last["hex"] = self._data.hex(" ")
+            last["text"] = render(bytes(self._data))
+        else:
+            self._data = bytearray(data)
+            telegram: dict[str, Any] = {"t": when, "dir": direction, "hex": data.hex(" "), "text": render(data)}
+            if note:
+                telegram["note"] = note
+            self.telegrams.append(telegram)
+            for listener in list(self.listeners):
+                listener(telegram)
+        self._last_at = when
+
+    def note(self, text: str, when: float) -> None:
+        if self.inner is not None:
+            self.inner.note(text, when)
+
+    def close(self) -> None:
+        if self.inner is not None:
+            self.inner.close()
+
+    def last(self, count: int) -> list[dict[str, Any]]:
+        """The last ``count`` telegrams, oldest first (copies)."""
+        items = list(self.telegrams)[-count:] if count > 0 else []
+        return [dict(item) for item in items]
+
+
+def tap(line: Any) -> TelegramTap:
+    """The tap in front of ``line``'s trace, put there on the first call (runs in the loop thread)."""
+    existing = line.tracer
+    if isinstance(existing, TelegramTap):
+        return existing
+    telegram_tap = TelegramTap(existing)
+    line.tracer = telegram_tap
+    return telegram_tap
