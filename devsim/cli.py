@@ -682,6 +682,7 @@ cli.add_command(ctl)
 #: command name → the module that defines it as a click command of the same name.
 LAZY_COMMANDS: dict[str, str] = {
     "check": "devsim.scenario.cli",
+    "monitor": "devsim.monitor.cli",
     "plot": "devsim.plot",
     "record": "devsim.replay.cli",
     "replay": "devsim.replay.cli",

@@ -202,7 +202,7 @@ def test_run_pty_control_and_clean_sigint(sockdir: str) -> None:
         with ControlClient(addr) as client:
             assert client.read("echo", "received") == 6
             client.set("echo", "input.mute", True)
-            assert client.devices() == [{"name": "echo", "kind": "echo", "port": path, "ports": {"main": path}}]
+            assert client.devices() == [{"name": "echo", "kind": "echo", "port": path, "ports": {"main": path}, "faults": []}]
             with pytest.raises(ControlError) as info:
                 client.read("echo", "nothing")
             assert info.value.type == "UnknownName"

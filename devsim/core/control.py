@@ -404,6 +404,7 @@ class ControlServer:
                     "kind": dev.kind,
                     "port": rt.ports.get(port_key(name, dev.port_names()[0])),
                     "ports": {p: rt.ports.get(port_key(name, p)) for p in dev.port_names()},
+                    "faults": dev.faults.names(),
                 }
                 for name, dev in rt.devices.items()
             ]

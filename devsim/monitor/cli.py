@@ -1,0 +1,36 @@
+"""``devsim monitor [--control ADDR]``: the live monitor (:mod:`devsim.monitor.app`) on the
+control API of a running ``devsim run``, ``devsim up`` or real-time scenario."""
+
+from __future__ import annotations
+
+import click
+
+__all__ = ["monitor"]
+
+
+@click.command("monitor")
+@click.option(
+    "--control", "addr", envvar="DEVSIM_CONTROL", required=True, metavar="ADDR",
+    help="Control address of the running plant (unix:/path.sock or [HOST:]PORT; env DEVSIM_CONTROL).",
+)
+@click.option("--period", type=float, default=0.1, show_default=True, metavar="SECONDS",
+              help="How often values are sampled, in device time.")
+def monitor(addr: str, period: float) -> None:
+    """A live view of every device: state, display, faults, axes with sparklines, inputs (press
+    to flip) and outputs, the last telegrams per port; f: fault menu, a/A: advance virtual time,
+    q: quit.  Needs the extra [monitor] (textual)."""
+    from devsim.core.control import ControlAddressError
+
+    if not period > 0:
+        raise click.UsageError("--period: must be positive")
+    try:
+        from devsim.monitor.app import MonitorApp
+    except ImportError as exc:
+        raise click.ClickException(f"devsim monitor needs textual: pip install 'devsim-motion[monitor]' ({exc})") from None
+    try:
+        app = MonitorApp(addr, period=period)
+    except ControlAddressError as exc:
+        raise click.UsageError(f"--control: {exc}") from None
+    except OSError as exc:
+        raise click.ClickException(f"cannot connect to {addr}: {exc.strerror or exc}") from None
+    app.run()

@@ -1,0 +1,95 @@
+"""devsim monitor: the textual app against a real control server (headless pilot), and the
+`devsim monitor` command in a real terminal (tmux), with a `devsim run` subprocess behind it."""
+
+from __future__ import annotations
+
+import asyncio
+import socket
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+
+from devsim.core.control import ControlServer
+from devsim.core.runtime import Runtime
+from devsim.monitor.app import DevicePanel, MonitorApp
+from devsim.transports.tcp import TcpTransport
+
+ROOT = Path(__file__).resolve().parents[2]
+SCREENSHOT = ROOT / "docs" / "monitor.png"
+
+
+@pytest.fixture
+def plant() -> Iterator[tuple[Runtime, str, tuple[str, int]]]:
+    """A virtual-time SERS on a TCP port, with a control server."""
+    runtime = Runtime(virtual=True).start()
+    device = runtime.add_device("sers")
+    transport = TcpTransport(port=0)
+    runtime.serve_sync(device, transport)
+    server = ControlServer(runtime, "127.0.0.1:0")
+    address = server.start_sync()
+    runtime.advance(3)  # booted
+    host, _, port = transport.url.removeprefix("socket://").rpartition(":")
+    try:
+        yield runtime, str(address), (host, int(port))
+    finally:
+        server.close_sync()
+        runtime.stop()
+
+
+async def until(pilot: object, predicate: Callable[[], bool], timeout: float = 10.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError("the monitor did not show it in time")
+        await pilot.pause(0.05)  # type: ignore[attr-defined]
+
+
+async def test_monitor_headless(plant: tuple[Runtime, str, tuple[str, int]]) -> None:
+    runtime, address, host_port = plant
+    app = MonitorApp(address, refresh=0.05)
+    async with app.run_test(size=(120, 50)) as pilot:
+        panel = app.query_one("#dev-sers", DevicePanel)
+        await until(pilot, lambda: "axis.position" in panel.values)
+        assert panel.values["axis.position"] == 0.0
+        # a host moves the drive over its line: telegrams both ways, a sparkline, move events
+        with socket.create_connection(host_port, timeout=5) as host:
+            host.sendall(b"#ON W=2000 E\r")
+            answer = b""
+            while b"ok" not in answer:
+                answer += host.recv(100)
+            await pilot.press("a")  # 0.1 s of virtual time from the key
+            await until(pilot, lambda: runtime.now() >= 3.1)
+            await asyncio.to_thread(runtime.advance, 2.0)
+            await until(pilot, lambda: panel.values.get("axis.position", 0) > 1000)
+            await until(pilot, lambda: len(panel.history["axis"]) >= 3)
+            assert list(panel.history["axis"]) == sorted(panel.history["axis"])  # moving forward
+            await until(pilot, lambda: any(t["dir"] == "D>H" and "ok" in t["text"] for t in panel.telegrams.get("main", [])))
+            texts = [t["text"] for t in panel.telegrams["main"]]
+            assert '"#ON W=2000 E\\r"' in texts
+        # an input lamp flipped with a press
+        assert runtime.read("sers", "input.I1") is False
+        await pilot.click("#in-input_I1")
+        assert runtime.read("sers", "input.I1") is True
+        await asyncio.to_thread(runtime.advance, 0.2)
+        await until(pilot, lambda: panel.values.get("input.I1") is True)
+        # a fault from the menu: f, pick "sers: blocked_axis on"
+        await pilot.press("f")
+        await pilot.pause()
+        menu = app.screen.query_one("#faults")
+        labels = [str(menu.get_option_at_index(i).prompt) for i in range(menu.option_count)]  # type: ignore[attr-defined]
+        index = labels.index("sers: blocked_axis on")
+        assert "sers.main: line unplug on" in labels
+        menu.highlighted = index  # type: ignore[attr-defined]
+        await pilot.press("enter")
+        await until(pilot, lambda: "blocked_axis" in panel.faults)
+        state = str(panel.query_one("#state").render())
+        assert "blocked_axis" in state
+        app.save_screenshot(filename="monitor.svg", path=str(SCREENSHOT.parent))
+    svg = SCREENSHOT.with_suffix(".svg")
+    import cairosvg
+
+    cairosvg.svg2png(url=str(svg), write_to=str(SCREENSHOT))
+    svg.unlink()
+    assert SCREENSHOT.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
