@@ -1,0 +1,108 @@
+"""The control API's watch stream, `devsim ctl watch` and the stderr log of `devsim run`, with
+real processes: a `devsim run` simulator, a host on its TCP port, pyserial's RFC 2217 client."""
+
+from __future__ import annotations
+
+import json
+import socket
+from pathlib import Path
+
+import serial
+
+from devsim.core.control import ControlClient
+
+from .run import Proc, ctl
+
+
+def _start(tmp_path: Path, *extra: str) -> tuple[Proc, str, tuple[str, int]]:
+    sim = Proc("run", "sers", "--tcp", "0", "--virtual", "--control", f"unix:{tmp_path}/ctl.sock", *extra)
+    url = sim.expect(lambda line: line.startswith("sers: tcp ")).split()[-1]
+    addr = sim.expect(lambda line: line.startswith("control: ")).split()[-1]
+    host, _, port = url.removeprefix("socket://").rpartition(":")
+    ctl(addr, "advance", "3")  # booted
+    return sim, addr, (host, int(port))
+
+
+def _move(host_port: tuple[str, int]) -> socket.socket:
+    host = socket.create_connection(host_port, timeout=10)
+    host.sendall(b"#ON W=2000 E\r")
+    answer = b""
+    while b"ok" not in answer:
+        answer += host.recv(100)
+    return host
+
+
+def test_ctl_watch_streams_changes_and_events(tmp_path: Path) -> None:
+    sim, addr, host_port = _start(tmp_path)
+    watch = Proc("ctl", "--control", addr, "watch", "sers", "axis.position", "input.I1", "--json")
+    text = Proc("ctl", "--control", addr, "watch", "sers", "axis.position")
+    try:
+        first = json.loads(watch.expect(lambda line: '"axis.position"' in line))
+        assert first == {"t": 3.0, "device": "sers", "type": "change", "name": "axis.position", "value": 0.0}
+        assert text.expect(lambda line: "axis.position" in line) == "3.000 sers axis.position 0.0"
+        host = _move(host_port)
+        assert json.loads(watch.expect(lambda line: '"connect"' in line))["port"] == "main"
+        assert json.loads(watch.expect(lambda line: '"move_start"' in line))["t"] == 3.0
+        ctl(addr, "set", "sers", "input.I1", "on")
+        ctl(addr, "advance", "1")
+        seen = json.loads(watch.expect(lambda line: '"axis.position"' in line))
+        assert seen["t"] == 3.1 and seen["value"] > 0
+        assert json.loads(watch.expect(lambda line: '"input.I1"' in line))["value"] is True
+        ctl(addr, "advance", "30")
+        assert json.loads(watch.expect(lambda line: '"move_end"' in line))["type"] == "event"
+        assert ctl(addr, "fault", "sers", "blocked_axis", "on").returncode == 0
+        fault = json.loads(watch.expect(lambda line: '"fault"' in line))
+        assert (fault["name"], fault["active"]) == ("blocked_axis", True)
+        assert text.expect(lambda line: " fault " in line).endswith("sers fault blocked_axis on")
+        host.close()
+        assert json.loads(watch.expect(lambda line: '"disconnect"' in line))["text"] == "host disconnected"
+        # the simulator stops: the watchers end by themselves, status 0
+        assert sim.stop() == 0
+        assert watch.proc.wait(timeout=15) == 0 and text.proc.wait(timeout=15) == 0
+    finally:
+        for proc in (watch, text, sim):
+            proc.stop()
+
+
+def test_client_watch_and_telegrams(tmp_path: Path) -> None:
+    sim, addr, host_port = _start(tmp_path)
+    try:
+        with ControlClient(addr) as client:
+            assert client.telegrams("sers") == []  # kept from now on
+            stream = client.watch("sers", ["axis.position"], timeout=10)
+            assert next(stream)["value"] == 0.0
+            with _move(host_port):
+                got = client.telegrams("sers")
+            assert [t["dir"] for t in got] == ["H>D", "D>H"]
+            assert got[0]["text"] == '"#ON W=2000 E\\r"' and "ok0" in got[1]["text"]
+            assert next(item for item in stream if item["type"] == "event")["name"] == "move_start"
+            stream.close()
+            assert client.now() == 3.0  # the client still answers
+    finally:
+        sim.stop()
+
+
+def test_run_logs_connects_mismatch_and_levels(tmp_path: Path) -> None:
+    sim = Proc("run", "sers", "--rfc2217", "0", "--virtual", "--control", f"unix:{tmp_path}/ctl.sock")
+    quiet = Proc("run", "sers", "--rfc2217", "0", "--virtual", "-q")
+    try:
+        url = sim.expect(lambda line: line.startswith("sers: rfc2217 ")).split()[-1]
+        sim.expect(lambda line: line.startswith("control: "))
+        # pyserial's RFC 2217 client opens the port at 4800 baud: the drive runs at 9600
+        with serial.serial_for_url(url, baudrate=4800, timeout=5):
+            assert sim.expect(lambda line: "connect" in line, err=True) == "devsim: 0.000 sers connect host connected"
+            line = sim.expect(lambda line: "host_settings" in line, err=True)
+            assert "4800 8N1 (mismatch, device 9600 8N1)" in line
+        assert sim.expect(lambda line: "disconnect" in line, err=True).endswith("sers disconnect host disconnected")
+        quiet_url = quiet.expect(lambda line: line.startswith("sers: rfc2217 ")).split()[-1]
+        with serial.serial_for_url(quiet_url, baudrate=4800, timeout=5):
+            line = quiet.expect(lambda line: line.startswith("devsim: 0.000"), err=True)
+            assert "mismatch" in line  # -q: the mismatch, not the connect before it
+        quiet.stop()
+        rest = []
+        while (item := quiet.err.get(timeout=10)) is not None:
+            rest.append(item)
+        assert not any("connect" in item for item in rest), rest
+    finally:
+        sim.stop()
+        quiet.stop()
