@@ -23,9 +23,10 @@ from typing import Any
 from textual import on
 from textual.app import App, ComposeResult
 from textual.binding import Binding
-from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.containers import Grid, Horizontal, Vertical, VerticalScroll
+from textual.message import Message
 from textual.screen import ModalScreen
-from textual.widgets import Button, Footer, Header, OptionList, Sparkline, Static
+from textual.widgets import Footer, Header, OptionList, Sparkline, Static
 from textual.widgets.option_list import Option
 
 from devsim.core.control import ControlClient, ControlError
@@ -52,6 +53,34 @@ def _show(value: Any) -> str:
     return value if isinstance(value, str) else json.dumps(value)
 
 
+class Lamp(Static, can_focus=False):
+    """An input or output as a lamp; a settable input flips on a click or Enter/space."""
+
+    BINDINGS = [Binding("enter,space", "flip", "flip")]
+
+    class Flip(Message):
+        def __init__(self, lamp: Lamp) -> None:
+            super().__init__()
+            self.lamp = lamp
+
+    def __init__(self, point: str, *, id: str, settable: bool = True) -> None:  # noqa: A002 - textual's name
+        super().__init__(id=id)
+        self.point = point
+        self.label = point.split(".", 1)[1]
+        self.can_focus = settable
+        self.show(False)
+
+    def show(self, on: bool) -> None:
+        self.update(f"[b green]●[/] {self.label}" if on else f"[dim]○[/] {self.label}")
+
+    def on_click(self) -> None:
+        self.action_flip()
+
+    def action_flip(self) -> None:
+        if self.can_focus:
+            self.post_message(self.Flip(self))
+
+
 class DevicePanel(Vertical):
     """What the monitor shows of one device."""
 
@@ -60,10 +89,9 @@ class DevicePanel(Vertical):
     DevicePanel .axis { height: 1; }
     DevicePanel .axis Static { width: 44; }
     DevicePanel Sparkline { width: 1fr; height: 1; }
-    DevicePanel .lamps { layout: grid; grid-size: 8; grid-gutter: 0 1; height: auto; }
-    DevicePanel .lamps Button { width: 1fr; min-width: 6; height: 1; border: none; padding: 0; }
-    DevicePanel .lamps Button:focus, DevicePanel .lamps Button.-active { border: none; height: 1; }
-    DevicePanel .outputs { height: auto; }
+    DevicePanel .lamps { layout: grid; grid-size: 8; grid-rows: 1; grid-gutter: 0 1; height: auto; }
+    DevicePanel Lamp { height: 1; width: 1fr; }
+    DevicePanel Lamp:focus { background: $accent 40%; }
     """
 
     def __init__(self, info: dict[str, Any], names: list[dict[str, Any]]) -> None:
@@ -95,11 +123,13 @@ class DevicePanel(Vertical):
                 yield Static(id=f"{_ident(axis)}-text")
                 yield Sparkline([0.0], id=f"{_ident(axis)}-spark")
         if self.inputs:
-            with Horizontal(classes="lamps"):
+            with Grid(classes="lamps"):
                 for name in self.inputs:
-                    yield Button(name[6:], id=f"in-{_ident(name)}", name=name)
+                    yield Lamp(name, id=f"in-{_ident(name)}")
         if self.outputs:
-            yield Static(id="outputs", classes="outputs")
+            with Grid(classes="lamps"):
+                for name in self.outputs:
+                    yield Lamp(name, id=f"out-{_ident(name)}", settable=False)
         yield Static(id="telegrams")
 
     def on_mount(self) -> None:
@@ -142,14 +172,8 @@ class DevicePanel(Vertical):
             history = self.history[axis]
             if history:
                 self.query_one(f"#{_ident(axis)}-spark", Sparkline).data = list(history)
-        for name in self.inputs:
-            button = self.query_one(f"#in-{_ident(name)}", Button)
-            on_ = bool(self.values.get(name))
-            button.variant = "success" if on_ else "default"
-            button.label = f"{'●' if on_ else '○'} {name[6:]}"
-        if self.outputs:
-            lamps = " ".join(f"{'[green]●[/]' if self.values.get(n) else '○'} {n[7:]}" for n in self.outputs)
-            self.query_one("#outputs", Static).update(lamps)
+        for lamp in self.query(Lamp):
+            lamp.show(bool(self.values.get(lamp.point)))
         rows = []
         for port in self.ports:
             for telegram in self.telegrams.get(port, [])[-_TELEGRAMS:]:
@@ -219,7 +243,7 @@ class MonitorApp(App[None]):
         yield Footer()
 
     def on_mount(self) -> None:
-        self.sub_title = self.address
+        self.sub_title = "attaching"
         for info in self.infos:
             threading.Thread(target=self._watch, args=(info["name"],), daemon=True).start()
         threading.Thread(target=self._poll_telegrams, daemon=True).start()
@@ -268,21 +292,21 @@ class MonitorApp(App[None]):
             elif item["type"] == "ended":
                 self.ended += 1
                 if self.ended == len(self.panels):
-                    self.sub_title = f"{self.address}: the simulator stopped"
+                    self.sub_title = "the simulator stopped"
                 continue
             else:
                 panel.apply(item)
+                if isinstance(item.get("t"), int | float) and self.ended < len(self.panels):
+                    self.sub_title = f"t = {item['t']:.3f} s"
             touched.add(panel.device)
         for device in touched:
             self.panels[device].refresh_view()
 
-    @on(Button.Pressed)
-    def _flip(self, event: Button.Pressed) -> None:
-        name = event.button.name or ""
-        panel = next((p for p in event.button.ancestors if isinstance(p, DevicePanel)), None)
-        if panel is None or not name:
-            return
-        self._request("set", panel.device, name, not bool(panel.values.get(name)))
+    @on(Lamp.Flip)
+    def _flip(self, event: Lamp.Flip) -> None:
+        panel = next((p for p in event.lamp.ancestors if isinstance(p, DevicePanel)), None)
+        if panel is not None:
+            self._request("set", panel.device, event.lamp.point, not bool(panel.values.get(event.lamp.point)))
 
     def _request(self, method: str, *args: Any, **kwargs: Any) -> Any:
         try:
