@@ -112,10 +112,15 @@ def scenario_run(
             scenarios.append(load_scenario(path))
         except ConfigError as exc:
             raise click.ClickException(str(exc)) from None
+    from devsim.scenario.progress import Progress
+
+    progress = Progress(len(scenarios))
     results = []
-    for item in scenarios:
+    for item, path in zip(scenarios, files, strict=True):
         chosen = mode or item.mode()
         item_trace_dir = pictures.begin(item.path) if pictures is not None else trace_dir
+        realtime = chosen == "realtime"
+        progress.begin(path, item, realtime=realtime, speed=speed if speed is not None else item.speed)
 
         def announce(plant: object, chosen: str = chosen) -> None:
             if pictures is not None:
@@ -124,10 +129,13 @@ def scenario_run(
                 for row in plant.describe():  # type: ignore[attr-defined]
                     click.echo(row)
 
-        results.append(
-            run_scenario(item, mode=chosen, speed=speed, state_dir=state_dir, trace_dir=item_trace_dir,
-                         announce=announce)
-        )
+        try:
+            results.append(
+                run_scenario(item, mode=chosen, speed=speed, state_dir=state_dir, trace_dir=item_trace_dir,
+                             announce=announce, on_step=progress.step if realtime else None)
+            )
+        finally:
+            progress.end()
         click.echo(format_report(results[-1]))
         if pictures is not None and (line := pictures.finish(item_trace_dir)) is not None:
             click.echo(line)

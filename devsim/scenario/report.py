@@ -7,9 +7,9 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
 
-from devsim.scenario.runner import ScenarioResult
+from devsim.scenario.runner import ScenarioResult, StepResult
 
-__all__ = ["format_report", "write_junit"]
+__all__ = ["format_report", "format_step", "write_junit"]
 
 _MARK = {"pass": "PASS", "fail": "FAIL", "done": "ok", "skipped": "skipped"}
 
@@ -20,10 +20,7 @@ def format_report(result: ScenarioResult) -> str:
     mode = "real" if result.mode == "realtime" else result.mode
     lines = [f"scenario {result.name}{where}, {mode} time"]
     for step in result.steps:
-        place = f"line {step.line}" if step.line else f"step {step.index}"
-        lines.append(f"  [{step.time:9.3f}s] {place:>8}: {step.label}  {_MARK[step.status]}")
-        if step.message:
-            lines.append(f"  {'':12}   {'':>8}  → {step.message}")
+        lines.extend(format_step(step))
     if result.error:
         lines.append(f"  error: {result.error}")
     checked = [s for s in result.steps if s.checked]
@@ -34,6 +31,15 @@ def format_report(result: ScenarioResult) -> str:
         f"{len(result.steps)} steps, {result.sim_time:.3f} s simulated in {result.wall_time:.2f} s"
     )
     return "\n".join(lines)
+
+
+def format_step(step: StepResult) -> list[str]:
+    """One step of a report: its line, and the explanation of a failure."""
+    place = f"line {step.line}" if step.line else f"step {step.index}"
+    lines = [f"  [{step.time:9.3f}s] {place:>8}: {step.label}  {_MARK[step.status]}"]
+    if step.message:
+        lines.append(f"  {'':12}   {'':>8}  → {step.message}")
+    return lines
 
 
 def write_junit(results: Sequence[ScenarioResult], path: str | os.PathLike[str]) -> None:

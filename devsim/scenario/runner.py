@@ -151,8 +151,12 @@ def _label(step: Step) -> str:
 class Runner:
     """Executes one scenario against a plant that runs in the current loop."""
 
-    def __init__(self, scenario: Scenario, plant: Plant, mode: str) -> None:
+    def __init__(self, scenario: Scenario, plant: Plant, mode: str,
+                 on_step: Callable[[StepResult | None, float], None] | None = None) -> None:
         self.scenario = scenario
+        #: ``on_step(step, now)`` after each step (``None`` at the start of the timeline), in the
+        #: loop thread: what a progress display hears (:mod:`devsim.scenario.progress`).
+        self.on_step = on_step
         self.plant = plant
         self.runtime: Runtime = plant.runtime
         self.clock = self.runtime.clock
@@ -296,12 +300,16 @@ class Runner:
                 if not await self._wait_until(lambda: not any(d.booting for d in devices), 60.0):
                     raise _Abort("the devices did not finish booting")
             self.t0 = self.clock.now()
+            if self.on_step is not None:
+                self.on_step(None, 0.0)
             previous = self.t0
             for index, step in enumerate(scenario.steps, start=1):
                 if self.clock.now() - self.t0 > scenario.timeout:
                     raise _Abort(f"the scenario ran longer than its timeout of {scenario.timeout:g}s")
                 outcome = await self._step(index, step, previous)
                 result.steps.append(outcome)
+                if self.on_step is not None:
+                    self.on_step(outcome, self.now())
                 previous = self.clock.now()
                 if outcome.status == "fail" and step.when is not None and outcome.message.startswith("condition"):
                     for rest_index, rest in enumerate(scenario.steps[index:], start=index + 1):
@@ -484,13 +492,14 @@ async def run_scenario_async(
     *,
     trace_dir: str | Path | None = None,
     announce: Callable[[Plant], None] | None = None,
+    on_step: Callable[[StepResult | None, float], None] | None = None,
 ) -> ScenarioResult:
     """Build the scenario's plant in ``runtime`` (running in this loop) and run the timeline."""
     mode = "virtual" if isinstance(runtime.clock, VirtualClock) else "realtime"
     plant = await build_plant(runtime, scenario, trace_dir=trace_dir)
     if announce is not None:
         announce(plant)
-    return await Runner(scenario, plant, mode).run()
+    return await Runner(scenario, plant, mode, on_step).run()
 
 
 def run_scenario(
@@ -501,6 +510,7 @@ def run_scenario(
     state_dir: str | Path | None = None,
     trace_dir: str | Path | None = None,
     announce: Callable[[Plant], None] | None = None,
+    on_step: Callable[[StepResult | None, float], None] | None = None,
 ) -> ScenarioResult:
     """Run a scenario in a fresh runtime (background thread); ``mode`` virtual or realtime
     (default: the scenario's own choice)."""
@@ -509,6 +519,7 @@ def run_scenario(
         virtual=chosen == "virtual", speed=speed if speed is not None else scenario.speed, state_dir=state_dir
     ).start()
     try:
-        return runtime.run(run_scenario_async(scenario, runtime, trace_dir=trace_dir, announce=announce))
+        return runtime.run(run_scenario_async(scenario, runtime, trace_dir=trace_dir, announce=announce,
+                                              on_step=on_step))
     finally:
         runtime.stop()
