@@ -234,7 +234,7 @@ def up(
         try:
             status = asyncio.run(
                 run_workers(spec, workers, control=address, state_dir=state_dir, speed=speed, trace_dir=trace_dir,
-                            fleet=fleet)
+                            fleet=fleet, verbose=verbose, quiet=quiet)
             )
         except KeyboardInterrupt:
             sys.exit(130)

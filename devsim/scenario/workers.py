@@ -108,6 +108,7 @@ async def _forward(stream: asyncio.StreamReader | None, control_seen: asyncio.Ev
 
 
 async def _proxy(workers: list[_Worker], reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+    streams: list[asyncio.Task[None]] = []
     try:
         while line := await reader.readline():
             if not line.strip():
@@ -119,14 +120,39 @@ async def _proxy(workers: list[_Worker], reader: asyncio.StreamReader, writer: a
             except (ValueError, RecursionError) as exc:
                 answer: dict[str, Any] = {"id": None, "ok": False, "error": f"not JSON: {exc}"[:300], "type": "BadRequest"}
             else:
+                worker = _worker_of(workers, request.get("device"))
+                if request.get("op") == "watch" and worker is not None:
+                    streams.append(asyncio.ensure_future(_watch(worker, line, writer)))
+                    continue
                 answer = await _route(workers, request)
             writer.write((json.dumps(answer) + "\n").encode())
             await writer.drain()
     except (ConnectionError, asyncio.CancelledError):
         pass
     finally:
+        for stream in streams:
+            stream.cancel()
         with contextlib.suppress(Exception):
             writer.close()
+
+
+def _worker_of(workers: list[_Worker], device: Any) -> _Worker | None:
+    return next((worker for worker in workers if device in worker.devices), None)
+
+
+async def _watch(worker: _Worker, request: bytes, writer: asyncio.StreamWriter) -> None:
+    """A ``watch`` on a connection of its own to the worker: its answer and stream, line by line."""
+    reader, upstream = await asyncio.open_unix_connection(worker.control)
+    try:
+        upstream.write(request if request.endswith(b"\n") else request + b"\n")
+        await upstream.drain()
+        while line := await reader.readline():
+            writer.write(line)
+            await writer.drain()
+    except (ConnectionError, asyncio.CancelledError):
+        pass
+    finally:
+        upstream.close()
 
 
 async def _route(workers: list[_Worker], request: dict[str, Any]) -> dict[str, Any]:
@@ -163,6 +189,8 @@ async def run_workers(
     speed: float = 1.0,
     trace_dir: str | None = None,
     fleet: str | None = None,
+    verbose: int = 0,
+    quiet: int = 0,
 ) -> int:
     """Serve ``spec`` from ``workers`` processes until Ctrl-C / SIGTERM; returns an exit status."""
     loop = asyncio.get_running_loop()
@@ -185,6 +213,7 @@ async def run_workers(
                     args += ["--trace-dir", trace_dir]
                 if fleet is not None:  # each worker is a fleet member of its own
                     args += ["--fleet", fleet]
+                args += ["-v"] * verbose + ["-q"] * quiet  # the workers log to our stderr
                 proc = await asyncio.create_subprocess_exec(
                     *args, stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE, env=dict(os.environ)
                 )

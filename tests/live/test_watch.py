@@ -106,3 +106,34 @@ def test_run_logs_connects_mismatch_and_levels(tmp_path: Path) -> None:
     finally:
         sim.stop()
         quiet.stop()
+
+
+def test_watch_through_up_workers(tmp_path: Path) -> None:
+    """`devsim up --workers 2`: the proxy hands a watch to the worker holding the device; the
+    workers log their connects on stderr."""
+    plant = tmp_path / "plant.yaml"
+    plant.write_text("devices:\n"
+                     "  - {name: a, kind: sers, transport: {tcp: {port: 0}}, config: {boot_time: 0.05}}\n"
+                     "  - {name: b, kind: sers, transport: {tcp: {port: 0}}, config: {boot_time: 0.05}}\n")
+    up = Proc("up", str(plant), "--workers", "2", "--control", f"unix:{tmp_path}/up.sock")
+    try:
+        ports = {}
+        for _ in range(2):
+            line = up.expect(lambda line: " tcp " in line)
+            ports[line.split(":")[0]] = line.split()[-1]
+        addr = up.expect(lambda line: line.startswith("control: ")).split()[-1]
+        with ControlClient(addr) as client:
+            streams = {name: client.watch(name, ["input.I1"], timeout=10) for name in ("a", "b")}
+            assert [next(streams[name])["value"] for name in ("a", "b")] == [False, False]
+            client.set("b", "input.I1", True)
+            item = next(item for item in streams["b"] if item["type"] == "change")
+            assert (item["device"], item["name"], item["value"]) == ("b", "input.I1", True)
+            host, _, port = ports["a"].removeprefix("socket://").rpartition(":")
+            with socket.create_connection((host, int(port)), timeout=10):
+                assert next(item for item in streams["a"] if item["type"] == "connect")["port"] == "main"
+                assert up.expect(lambda line: "connect" in line, err=True).endswith("a connect host connected")
+            for stream in streams.values():
+                stream.close()
+            assert client.read("a", "input.I1") is False  # the proxy still answers
+    finally:
+        up.stop()
