@@ -74,6 +74,8 @@ def scenario() -> None:
 @click.option("--plot", "plot_dir", metavar="DIR", help="Draw one picture per scenario here (extra [plot]).")
 @click.option("--plot-format", type=click.Choice(["png", "svg", "html"]), default="png", show_default=True,
               help="The format of the --plot pictures.")
+@click.option("--control", metavar="ADDR",
+              help="Serve the control API while a scenario runs (devsim monitor, devsim ctl watch).")
 def scenario_run(
     files: tuple[str, ...],
     mode: str | None,
@@ -85,6 +87,7 @@ def scenario_run(
     motion_resolution: float,
     plot_dir: str | None,
     plot_format: str,
+    control: str | None,
 ) -> None:
     """Run scenario FILES; exit status 1 if any expectation failed."""
     from devsim.scenario.report import format_report, write_junit
@@ -106,6 +109,14 @@ def scenario_run(
             require_matplotlib()
         pictures = ScenarioPictures(motion_log=motion_log, resolution=motion_resolution, plot_dir=plot_dir,
                                     plot_format=plot_format, trace_dir=trace_dir, count=len(files))
+    if control is not None:
+        from devsim.core.control import ControlAddressError, parse_address
+
+        try:
+            if not parse_address(control).is_loopback():
+                raise click.UsageError(f"--control: refusing non-loopback host {control!r}")
+        except ControlAddressError as exc:
+            raise click.UsageError(f"--control: {exc}") from None
     scenarios = []
     for path in files:
         try:
@@ -132,7 +143,7 @@ def scenario_run(
         try:
             results.append(
                 run_scenario(item, mode=chosen, speed=speed, state_dir=state_dir, trace_dir=item_trace_dir,
-                             announce=announce, on_step=progress.step if realtime else None)
+                             announce=announce, on_step=progress.step if realtime else None, control=control)
             )
         finally:
             progress.end()

@@ -493,13 +493,26 @@ async def run_scenario_async(
     trace_dir: str | Path | None = None,
     announce: Callable[[Plant], None] | None = None,
     on_step: Callable[[StepResult | None, float], None] | None = None,
+    control: str | None = None,
 ) -> ScenarioResult:
-    """Build the scenario's plant in ``runtime`` (running in this loop) and run the timeline."""
+    """Build the scenario's plant in ``runtime`` (running in this loop) and run the timeline;
+    ``control``: also serve the control API there while it runs (``devsim monitor``), its
+    address announced as ``control: ADDR`` among the plant's lines."""
     mode = "virtual" if isinstance(runtime.clock, VirtualClock) else "realtime"
     plant = await build_plant(runtime, scenario, trace_dir=trace_dir)
-    if announce is not None:
-        announce(plant)
-    return await Runner(scenario, plant, mode, on_step).run()
+    server = None
+    if control is not None:
+        from devsim.core.control import ControlServer
+
+        server = ControlServer(runtime, control)
+        plant.facades.append(f"control: {await server.start()}")
+    try:
+        if announce is not None:
+            announce(plant)
+        return await Runner(scenario, plant, mode, on_step).run()
+    finally:
+        if server is not None:
+            await server.close()
 
 
 def run_scenario(
@@ -511,6 +524,7 @@ def run_scenario(
     trace_dir: str | Path | None = None,
     announce: Callable[[Plant], None] | None = None,
     on_step: Callable[[StepResult | None, float], None] | None = None,
+    control: str | None = None,
 ) -> ScenarioResult:
     """Run a scenario in a fresh runtime (background thread); ``mode`` virtual or realtime
     (default: the scenario's own choice)."""
@@ -520,6 +534,6 @@ def run_scenario(
     ).start()
     try:
         return runtime.run(run_scenario_async(scenario, runtime, trace_dir=trace_dir, announce=announce,
-                                              on_step=on_step))
+                                              on_step=on_step, control=control))
     finally:
         runtime.stop()

@@ -70,7 +70,7 @@ async def test_monitor_headless(plant: tuple[Runtime, str, tuple[str, int]]) -> 
             assert '"#ON W=2000 E\\r"' in texts
         # an input lamp flipped with a press
         assert runtime.read("sers", "input.I1") is False
-        await pilot.click("#in-input_I1")
+        assert await pilot.click("#in-input_I1")
         assert runtime.read("sers", "input.I1") is True
         await asyncio.to_thread(runtime.advance, 0.2)
         await until(pilot, lambda: panel.values.get("input.I1") is True)
@@ -93,3 +93,27 @@ async def test_monitor_headless(plant: tuple[Runtime, str, tuple[str, int]]) -> 
     cairosvg.svg2png(url=str(svg), write_to=str(SCREENSHOT))
     svg.unlink()
     assert SCREENSHOT.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+async def test_monitor_on_a_realtime_scenario(tmp_path: Path) -> None:
+    """A real-time scenario with --control waits for input I2; the monitor's lamp sets it."""
+    from .run import Proc
+
+    path = tmp_path / "wait.yaml"
+    path.write_text("devices:\n  - {name: x, kind: sers, config: {address: 1, boot_time: 0.05}}\nsteps:\n"
+                    "  - when: {device: x, name: input.I2, equals: true}\n    timeout: 60s\n")
+    run = Proc("scenario", "run", "--realtime", "--control", f"unix:{tmp_path}/s.sock", str(path))
+    try:
+        addr = run.expect(lambda line: line.startswith("control: ")).split()[-1]
+        app = MonitorApp(addr, refresh=0.05)
+        async with app.run_test(size=(120, 50)) as pilot:
+            panel = app.query_one("#dev-x", DevicePanel)
+            await until(pilot, lambda: panel.values.get("input.I2") is False)
+            await pilot.wait_for_scheduled_animations()
+            await pilot.pause()  # laid out: the lamp has its place on the screen
+            assert await pilot.click("#in-input_I2")
+            await until(pilot, lambda: app.sub_title == "the simulator stopped", timeout=30)
+        assert await asyncio.to_thread(run.proc.wait, 30) == 0
+        assert run.expect(lambda line: line.startswith("PASSED")).startswith("PASSED: 1 of 1 checks passed")
+    finally:
+        run.stop()

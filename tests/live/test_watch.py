@@ -19,7 +19,8 @@ def _start(tmp_path: Path, *extra: str) -> tuple[Proc, str, tuple[str, int]]:
     url = sim.expect(lambda line: line.startswith("sers: tcp ")).split()[-1]
     addr = sim.expect(lambda line: line.startswith("control: ")).split()[-1]
     host, _, port = url.removeprefix("socket://").rpartition(":")
-    ctl(addr, "advance", "3")  # booted
+    with ControlClient(addr) as client:
+        client.advance(3)  # booted
     return sim, addr, (host, int(port))
 
 
@@ -43,19 +44,21 @@ def test_ctl_watch_streams_changes_and_events(tmp_path: Path) -> None:
         host = _move(host_port)
         assert json.loads(watch.expect(lambda line: '"connect"' in line))["port"] == "main"
         assert json.loads(watch.expect(lambda line: '"move_start"' in line))["t"] == 3.0
-        ctl(addr, "set", "sers", "input.I1", "on")
-        ctl(addr, "advance", "1")
+        client = ControlClient(addr)
+        client.set("sers", "input.I1", True)
+        client.advance(1)
         seen = json.loads(watch.expect(lambda line: '"axis.position"' in line))
         assert seen["t"] == 3.1 and seen["value"] > 0
         assert json.loads(watch.expect(lambda line: '"input.I1"' in line))["value"] is True
-        ctl(addr, "advance", "30")
+        client.advance(30)
         assert json.loads(watch.expect(lambda line: '"move_end"' in line))["type"] == "event"
-        assert ctl(addr, "fault", "sers", "blocked_axis", "on").returncode == 0
+        assert ctl(addr, "fault", "sers", "blocked_axis", "on").returncode == 0  # (ctl's own fault command)
         fault = json.loads(watch.expect(lambda line: '"fault"' in line))
         assert (fault["name"], fault["active"]) == ("blocked_axis", True)
         assert text.expect(lambda line: " fault " in line).endswith("sers fault blocked_axis on")
         host.close()
         assert json.loads(watch.expect(lambda line: '"disconnect"' in line))["text"] == "host disconnected"
+        client.close()
         # the simulator stops: the watchers end by themselves, status 0
         assert sim.stop() == 0
         assert watch.proc.wait(timeout=15) == 0 and text.proc.wait(timeout=15) == 0
