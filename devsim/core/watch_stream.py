@@ -6,7 +6,8 @@ item to ``send`` as it happens:
 
 * ``{"type": "change", "name": N, "value": V}`` -- a watched point changed, sampled with
   :class:`~devsim.core.watch.PointWatch` on the device clock every ``period`` seconds (default:
-  the device's ``in_state`` points and every ``axis[.N].position``/``velocity``);
+  the device's ``in_state`` points, every ``axis[.N].position``/``velocity`` and every
+  ``[...].display``);
 * ``{"type": "event", "name": N}`` -- what the model records (``move_start``, ``move_end``,
   ``power_on`` ...; topic ``event``), ``"type": "error"`` when the name says ``error``;
 * ``{"type": "fault", "name": KIND, "active": B}`` -- a declared fault switched
@@ -44,9 +45,11 @@ def axis_names(device: Device) -> list[str]:
 
 
 def default_names(device: Device) -> list[str]:
-    """What a watch without names watches: the ``in_state`` points and the axes."""
+    """What a watch without names watches: the ``in_state`` points, the axes and the displays
+    (``display``, ``axis.x.display`` ...)."""
     names = [p.name for p in device.points if p.readable and p.in_state]
-    return names + [name for name in axis_names(device) if name not in names]
+    displays = [p.name for p in device.points if p.readable and p.name.rsplit(".", 1)[-1] == "display"]
+    return names + [name for name in axis_names(device) + displays if name not in names]
 
 
 class WatchStream:

@@ -20,6 +20,7 @@ import threading
 from collections import deque
 from typing import Any
 
+from rich.markup import escape
 from textual import on
 from textual.app import App, ComposeResult
 from textual.binding import Binding
@@ -66,7 +67,7 @@ class Lamp(Static, can_focus=False):
     def __init__(self, point: str, *, id: str, settable: bool = True) -> None:  # noqa: A002 - textual's name
         super().__init__(id=id)
         self.point = point
-        self.label = point.split(".", 1)[1]
+        self.label = escape(point.split(".", 1)[1])
         self.can_focus = settable
         self.show(False)
 
@@ -90,7 +91,7 @@ class DevicePanel(Vertical):
     DevicePanel .axis Static { width: 44; }
     DevicePanel Sparkline { width: 1fr; height: 1; }
     DevicePanel .lamps { layout: grid; grid-size: 8; grid-rows: 1; grid-gutter: 0 1; height: auto; }
-    DevicePanel Lamp { height: 1; width: 1fr; }
+    DevicePanel Lamp { height: 1; width: 1fr; text-wrap: nowrap; text-overflow: ellipsis; }
     DevicePanel Lamp:focus { background: $accent 40%; }
     """
 
@@ -121,7 +122,7 @@ class DevicePanel(Vertical):
         for axis in self.axes:
             with Horizontal(classes="axis"):
                 yield Static(id=f"{_ident(axis)}-text")
-                yield Sparkline([0.0], id=f"{_ident(axis)}-spark")
+                yield Sparkline([], id=f"{_ident(axis)}-spark")
         if self.inputs:
             with Grid(classes="lamps"):
                 for name in self.inputs:
@@ -156,11 +157,13 @@ class DevicePanel(Vertical):
 
     def refresh_view(self) -> None:
         shown = [f"{name}={_show(value)}" for name, value in self.values.items()
-                 if not name.startswith(("input.", "output.", "axis.")) and not isinstance(value, dict | list)]
+                 if not name.startswith(("input.", "output.", "axis.")) and not isinstance(value, dict | list)
+                 and name.rsplit(".", 1)[-1] != "display"]
         faults = sorted(self.faults) + [f"{port}:{k}" for port, kinds in self.line_faults.items() for k in sorted(kinds)]
-        display = self.values.get("display")
+        displays = [f"{name.removesuffix('display').rstrip('.')} {_show(value)}".strip()
+                    for name, value in self.values.items() if name.rsplit(".", 1)[-1] == "display"]
         lines = ["  ".join(shown[:12]) or "(no state yet)",
-                 f"display: {_show(display)}" if display is not None else "",
+                 f"display: {'  '.join(displays)}" if displays else "",
                  f"faults: {', '.join(faults) if faults else 'none'}",
                  f"last event: {self.last_event or '-'}"]
         self.query_one("#state", Static).update("\n".join(line for line in lines if line))
@@ -170,7 +173,7 @@ class DevicePanel(Vertical):
             self.query_one(f"#{_ident(axis)}-text", Static).update(
                 f"{axis}: pos {_show(position)}  vel {_show(velocity)}")
             history = self.history[axis]
-            if history:
+            if len(history) > 1 and max(history) - min(history) > 1e-9:  # a flat line: nothing to draw
                 self.query_one(f"#{_ident(axis)}-spark", Sparkline).data = list(history)
         for lamp in self.query(Lamp):
             lamp.show(bool(self.values.get(lamp.point)))

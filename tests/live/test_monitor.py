@@ -49,7 +49,7 @@ async def until(pilot: object, predicate: Callable[[], bool], timeout: float = 1
 async def test_monitor_headless(plant: tuple[Runtime, str, tuple[str, int]]) -> None:
     runtime, address, host_port = plant
     app = MonitorApp(address, refresh=0.05)
-    async with app.run_test(size=(120, 50)) as pilot:
+    async with app.run_test(size=(120, 28)) as pilot:
         panel = app.query_one("#dev-sers", DevicePanel)
         await until(pilot, lambda: "axis.position" in panel.values)
         assert panel.values["axis.position"] == 0.0
@@ -117,3 +117,30 @@ async def test_monitor_on_a_realtime_scenario(tmp_path: Path) -> None:
         assert run.expect(lambda line: line.startswith("PASSED")).startswith("PASSED: 1 of 1 checks passed")
     finally:
         run.stop()
+
+
+async def test_monitor_shows_every_kind() -> None:
+    """One plant of every kind: a panel each, with its axes, lamps and faults in the menu."""
+    runtime = Runtime(virtual=True).start()
+    kinds = ["sers", "gms96", "poselesta", "ip247", "pcd4h3"]
+    for kind in kinds:
+        runtime.add_device(kind)
+    server = ControlServer(runtime, "127.0.0.1:0")
+    address = server.start_sync()
+    try:
+        app = MonitorApp(str(address), refresh=0.05)
+        async with app.run_test(size=(160, 120)) as pilot:
+            panels = {kind: app.query_one(f"#dev-{kind}", DevicePanel) for kind in kinds}
+            assert panels["poselesta"].axes == ["axis.x", "axis.y", "axis.z", "axis.d"]
+            assert panels["pcd4h3"].axes == ["axis.1", "axis.2"]
+            for panel in panels.values():
+                await until(pilot, lambda panel=panel: all(f"{axis}.position" in panel.values for axis in panel.axes))
+                assert panel.inputs, panel.device
+            await pilot.press("f")
+            await pilot.pause()
+            menu = app.screen.query_one("#faults")
+            labels = [str(menu.get_option_at_index(i).prompt) for i in range(menu.option_count)]  # type: ignore[attr-defined]
+            assert "pcd4h3: blocked_1 on" in labels and "poselesta: following_error on" in labels
+    finally:
+        server.close_sync()
+        runtime.stop()
