@@ -144,7 +144,8 @@ def describe(item: dict[str, Any]) -> str:
         value = item.get("value")
         return f"{head} {item.get('name')} {value if isinstance(value, str) else json.dumps(value)}"
     if kind in ("event", "error"):
-        return f"{head} {kind} {item.get('name')}"
+        name = str(item.get("name"))
+        return f"{head} {name}" if kind == "error" and name.lower().startswith("error") else f"{head} {kind} {name}"
     if kind == "fault":
         return f"{head} fault {item.get('name')} {'on' if item.get('active') else 'off'}"
     if kind == "drive_fault":

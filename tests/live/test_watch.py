@@ -140,3 +140,27 @@ def test_watch_through_up_workers(tmp_path: Path) -> None:
             assert client.read("a", "input.I1") is False  # the proxy still answers
     finally:
         up.stop()
+
+
+def test_log_levels_on_a_drive_error() -> None:
+    """What each level logs when a SERS sees a short circuit (a drive error: P11, EMCY code)."""
+    from devsim.core.runtime import Runtime
+    from devsim.live_log import attach_log, level_of
+
+    assert [level_of(0, 0), level_of(1, 0), level_of(0, 1), level_of(0, 5), level_of(9, 0)] == [2, 3, 1, 0, 3]
+    runtime = Runtime(virtual=True).start()
+    try:
+        runtime.add_device("sers")
+        runtime.advance(3)
+        logs: dict[int, list[str]] = {level: [] for level in range(4)}
+        for level, lines in logs.items():
+            runtime.call(attach_log, runtime, level, lines.append)
+        runtime.set("sers", "quantity.short_circuit", True)
+        runtime.advance(0.2)
+        runtime.fault("sers", "emergency_stop", True)  # a declared fault switched: -v only
+        errors = ["devsim: 3.000 sers error", "devsim: 3.000 sers drive_fault axis 1 code 0x2320"]
+        assert logs[0] == []
+        assert logs[1] == logs[2] == errors
+        assert logs[3] == [*errors, "devsim: 3.200 sers fault emergency_stop on"]
+    finally:
+        runtime.stop()
