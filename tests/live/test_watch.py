@@ -164,3 +164,42 @@ def test_log_levels_on_a_drive_error() -> None:
         assert logs[3] == [*errors, "devsim: 3.200 sers fault emergency_stop on"]
     finally:
         runtime.stop()
+
+
+def test_watch_protocol_by_hand() -> None:
+    """The documented wire form with a bare socket: the answer, then stream lines tagged with the
+    request's id; errors are ordinary error answers; other requests still get answered."""
+    from devsim.core.control import ControlServer
+    from devsim.core.runtime import Runtime
+
+    runtime = Runtime(virtual=True).start()
+    runtime.add_device("sers")
+    server = ControlServer(runtime, "127.0.0.1:0")
+    address = server.start_sync()
+    try:
+        with socket.create_connection((address.host, address.port), timeout=10) as sock:
+            lines = sock.makefile("rwb")
+
+            def ask(request: dict[str, object]) -> dict[str, object]:
+                lines.write(json.dumps(request).encode() + b"\n")
+                lines.flush()
+                return json.loads(lines.readline())
+
+            assert ask({"id": 1, "op": "watch", "device": "nope"})["type"] == "UnknownDevice"
+            assert ask({"id": 2, "op": "watch", "device": "sers", "names": ["nope"]})["type"] == "UnknownName"
+            assert ask({"id": 3, "op": "watch", "device": "sers", "period": 0})["type"] == "BadRequest"
+            answer = ask({"id": "w", "op": "watch", "device": "sers", "names": ["input.I2"], "period": 0.5})
+            assert answer == {"id": "w", "ok": True,
+                              "result": {"device": "sers", "names": ["input.I2"], "period": 0.5, "t": 0.0}}
+            assert json.loads(lines.readline()) == {"watch": "w", "t": 0.0, "device": "sers", "type": "change",
+                                                    "name": "input.I2", "value": False}
+            assert ask({"id": 5, "op": "set", "device": "sers", "name": "input.I2", "value": True}) == {
+                "id": 5, "ok": True, "result": None}
+            # the change is sampled while time advances: its line comes before the answer
+            assert ask({"id": 6, "op": "advance", "seconds": 1}) == {"watch": "w", "t": 0.5, "device": "sers",
+                                                                      "type": "change", "name": "input.I2",
+                                                                      "value": True}
+            assert json.loads(lines.readline()) == {"id": 6, "ok": True, "result": 1.0}
+    finally:
+        server.close_sync()
+        runtime.stop()
