@@ -24,7 +24,8 @@ Ops: ``read`` (device, name), ``set`` (device, name, value), ``state`` (device),
 points), ``fault`` (device, kind, active: a declared device fault on or off), ``line_fault``
 (device, port, kind, active, params: a fault on the line serving a port, e.g. ``noise`` with
 ``{"rate": 100}``), ``telegrams`` (device, port, count: the last telegrams on that port's line,
-each ``{"t", "dir", "hex", "text"}``; kept from the first such request on), ``watch`` (device,
+each ``{"t", "dir", "hex", "text"}`` and ``decoded`` where the kind's protocol is known; kept
+from the first such request on), ``watch`` (device,
 names, period: a subscription, see below).
 
 ``watch`` answers once (``result``: the watched names and the device time) and then keeps
@@ -429,12 +430,14 @@ class ControlServer:
             rt.fault(device, _need(req.kind, "kind", op), req.active)
             return None
         if op == "telegrams":
+            from devsim.replay.kinds import protocol_of
             from devsim.transports.tap import tap
 
             line = self.runtime.lines.get(port_key(device, req.port))
             if line is None:
                 rt.line_status(device, req.port)  # the reason: no such device, port or line
-            return tap(line).last(max(0, min(req.count, 200)))
+            decoder = protocol_of(rt.device(device).kind, req.port).decoder
+            return tap(line, decoder).last(max(0, min(req.count, 200)))
         if op == "watch":
             if req.period is not None and not (math.isfinite(req.period) and req.period > 0):
                 raise BadRequest("'period' must be a positive number of seconds")

@@ -180,7 +180,10 @@ class DevicePanel(Vertical):
         rows = []
         for port in self.ports:
             for telegram in self.telegrams.get(port, [])[-_TELEGRAMS:]:
-                rows.append(f"{port} {telegram['t']:.3f} {telegram['dir']} {telegram['text'][:70]}")
+                fields = [json.dumps(d, separators=(",", ":")) for d in telegram.get("decoded", [])
+                          if isinstance(d, dict)]  # a frame's fields, where the kind's protocol is known
+                row = f"{port} {telegram['t']:.3f} {telegram['dir']} {escape(telegram['text'][:70])}"
+                rows.append(row + (f"  {escape(' '.join(fields))[:100]}" if fields else ""))
         self.query_one("#telegrams", Static).update("\n".join(rows) or "(no telegrams yet)")
 
 

@@ -8,7 +8,9 @@ fault-free fast path.
 
 A telegram is what one side sent in one go: consecutive chunks in the same direction less than
 :data:`GAP` seconds of device time apart are joined (a host's request that arrives split over
-several reads is one telegram), up to :data:`MAX_BYTES`.
+several reads is one telegram), up to :data:`MAX_BYTES`.  With a decoder per direction (the
+kind's protocol as record and replay know it, :func:`devsim.replay.kinds.protocol_of`) a
+telegram also carries ``decoded``: the messages it completed, e.g. an FT1.2 frame's fields.
 """
 
 from __future__ import annotations
@@ -30,8 +32,11 @@ MAX_BYTES = 512
 class TelegramTap:
     """Keeps the last ``size`` telegrams; forwards everything to ``inner`` (may be None)."""
 
-    def __init__(self, inner: TraceSink | None, size: int = 200) -> None:
+    def __init__(self, inner: TraceSink | None, size: int = 200,
+                 decoder: Callable[[str], Any] | None = None) -> None:
         self.inner = inner
+        #: per direction, a stateful decoder (``feed(data)`` -> descriptions), or none
+        self.decoders = {"H>D": decoder("host"), "D>H": decoder("device")} if decoder is not None else {}
         self.telegrams: deque[dict[str, Any]] = deque(maxlen=size)
         #: ``fn(telegram)`` called for each telegram as it starts (later chunks extend it).
         self.listeners: list[Callable[[dict[str, Any]], None]] = []
@@ -58,6 +63,16 @@ class TelegramTap:
             for listener in list(self.listeners):
                 listener(telegram)
         self._last_at = when
+        decoder = self.decoders.get(direction)
+        if decoder is not None:
+            try:
+                decoded = decoder.feed(data)
+            except Exception:  # a decoder must never break the line it watches
+                self.decoders.pop(direction, None)
+                decoded = None
+            if decoded:
+                target = self.telegrams[-1]
+                target["decoded"] = (target.get("decoded", []) + list(decoded))[-8:]
 
     def note(self, text: str, when: float) -> None:
         if self.inner is not None:
@@ -70,14 +85,15 @@ class TelegramTap:
     def last(self, count: int) -> list[dict[str, Any]]:
         """The last ``count`` telegrams, oldest first (copies)."""
         items = list(self.telegrams)[-count:] if count > 0 else []
-        return [dict(item) for item in items]
+        return [{**item, "decoded": list(item["decoded"])} if "decoded" in item else dict(item) for item in items]
 
 
-def tap(line: Any) -> TelegramTap:
-    """The tap in front of ``line``'s trace, put there on the first call (runs in the loop thread)."""
+def tap(line: Any, decoder: Callable[[str], Any] | None = None) -> TelegramTap:
+    """The tap in front of ``line``'s trace, put there on the first call (runs in the loop
+    thread); ``decoder(direction)`` (``"host"`` or ``"device"``) makes a direction's decoder."""
     existing = line.tracer
     if isinstance(existing, TelegramTap):
         return existing
-    telegram_tap = TelegramTap(existing)
+    telegram_tap = TelegramTap(existing, decoder=decoder)
     line.tracer = telegram_tap
     return telegram_tap

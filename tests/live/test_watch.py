@@ -78,6 +78,8 @@ def test_client_watch_and_telegrams(tmp_path: Path) -> None:
                 got = client.telegrams("sers")
             assert [t["dir"] for t in got] == ["H>D", "D>H"]
             assert got[0]["text"] == '"#ON W=2000 E\\r"' and "ok0" in got[1]["text"]
+            assert got[0]["decoded"] == ["#ON W=2000 E\r"]  # SERS lines, as record and replay cut them
+            assert got[1]["decoded"] == ["#ON W=2000 E\r", "\nok0\n\r"]
             assert next(item for item in stream if item["type"] == "event")["name"] == "move_start"
             stream.close()
             assert client.now() == 3.0  # the client still answers
