@@ -74,6 +74,10 @@ async def test_monitor_headless(plant: tuple[Runtime, str, tuple[str, int]]) -> 
         assert runtime.read("sers", "input.I1") is True
         await asyncio.to_thread(runtime.advance, 0.2)
         await until(pilot, lambda: panel.values.get("input.I1") is True)
+        # and one flipped from the keyboard: focus moves with Tab, Enter flips
+        app.query_one("#in-input_I1").focus()
+        await pilot.press("tab", "enter")
+        assert runtime.read("sers", "input.I2") is True
         # a fault from the menu: f, pick "sers: blocked_axis on"
         await pilot.press("f")
         await pilot.pause()
