@@ -294,3 +294,22 @@ def test_devsim_up_logs_every_device_of_the_plant(sockdir: str, tmp_path: Path) 
     moved = [(float(r["time"]), r["position"]) for r in rows if r["axis"] == "axis.2"]
     assert moved[0] == (0.0, "0") and moved[-1] == (4.0, "500")
     assert (3.5, "500") in moved  # the first sample after the change, on the 0.5 s grid
+
+
+def test_a_kinds_own_event_announcements_do_not_reach_the_motion_log(tmp_path: Path) -> None:
+    """The POSELESTA announces its own topic ``event`` (port, what, detail) when a limit switch
+    trips; the log listens to the recorded moments (topic ``recorded``) only, and keeps going."""
+    from devsim.core.clock import VirtualClock
+    from devsim.devices.poselesta import PoselestaDevice
+
+    clock = VirtualClock()
+    device = PoselestaDevice(clock=clock, name="cnc")
+    path = tmp_path / "cnc.csv"
+    log = MotionLog(path, 0.1)
+    log.add(device)
+    clock.advance(3.0)
+    device.model.announce("event", "limit", "switch", "x")  # what limits.py announces
+    device.record_event("probe")
+    clock.advance(0.2)
+    log.close()
+    assert any(row["event"] == "probe" for row in csv.DictReader(path.open()))

@@ -60,12 +60,13 @@ class Model:
 
     def record_event(self, name: str) -> None:
         """Note a moment (``move_start``, ``move_end``, ``error`` ...) for timing expectations;
-        listeners of topic ``event`` hear ``(time, name)`` (the motion log, a monitor)."""
+        listeners of topic ``recorded`` hear ``(time, name)`` (the motion log, a monitor).  (Topic
+        ``event`` is a kind's own: the POSELESTA announces ``(port, what, detail)`` there.)"""
         now = self.clock.now()
         self.events.append((now, name))
         if len(self.events) > 10000:
             del self.events[:5000]
-        self.announce("event", now, name)
+        self.announce("recorded", now, name)
 
     # -- power ------------------------------------------------------------------------------
     def power_cycle(self, *, wipe: bool = False) -> None:

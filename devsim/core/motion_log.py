@@ -140,7 +140,7 @@ class _DeviceLog:
         if not self.axes:  # nothing moves: no timer either
             return
         model = self.device.model
-        self._undo.append(model.listen("event", self._event))
+        self._undo.append(model.listen("recorded", self._event))
         self._undo.append(model.listen("fault_switched", self._fault))
         self._origin = self.device.clock.now()
         self.watch.start()

@@ -9,7 +9,7 @@ item to ``send`` as it happens:
   the device's ``in_state`` points, every ``axis[.N].position``/``velocity`` and every
   ``[...].display``);
 * ``{"type": "event", "name": N}`` -- what the model records (``move_start``, ``move_end``,
-  ``power_on`` ...; topic ``event``), ``"type": "error"`` when the name says ``error``;
+  ``power_on`` ...; topic ``recorded``), ``"type": "error"`` when the name says ``error``;
 * ``{"type": "fault", "name": KIND, "active": B}`` -- a declared fault switched
   (``fault_switched``); ``{"type": "drive_fault", "axis": A, "code": C}`` -- the model's own
   ``fault`` announcement (what a CANopen facade sends as EMCY);
@@ -82,7 +82,7 @@ class WatchStream:
     def start(self) -> None:
         """Listen and take the first sample (every watched value, as changes)."""
         model = self.device.model
-        self._undo.append(model.listen("event", self._event))
+        self._undo.append(model.listen("recorded", self._event))
         self._undo.append(model.listen("fault_switched",
                                        lambda kind, active: self._emit("fault", name=kind, active=bool(active))))
         self._undo.append(model.listen("fault", lambda axis=None, code=None, *_: self._emit(
@@ -98,12 +98,7 @@ class WatchStream:
             self._watch = PointWatch(self.device, self._changes, names=self.names, period=self.period)
             self._watch.start()
 
-    def _event(self, *args: Any) -> None:
-        # Model.record_event announces (time, name); a kind may announce its own "event" with
-        # other arguments (POSELESTA: port, what, detail), which is not a recorded event.
-        if len(args) != 2 or not isinstance(args[0], int | float) or not isinstance(args[1], str):
-            return
-        name = args[1]
+    def _event(self, _time: float, name: str) -> None:
         self._emit("error" if "error" in name.lower() else "event", name=name)
 
     def _changes(self, changes: dict[str, Any]) -> None:
