@@ -63,6 +63,7 @@ __all__ = [
     "ControlAddressError",
     "ControlClient",
     "ControlError",
+    "ControlOps",
     "ControlServer",
     "ErrorResponse",
     "OkResponse",
@@ -491,7 +492,52 @@ def _need(value: str | None, field: str, op: str) -> str:
 
 
 # -- client --------------------------------------------------------------------------------
-class ControlClient:
+class ControlOps:
+    """The control API's operations as methods over one ``request(op, **fields)``: shared by the
+    socket client (:class:`ControlClient`) and the fleet's (:class:`devsim.fleet.client.FleetClient`)."""
+
+    def request(self, op: str, **fields: Any) -> Any:
+        raise NotImplementedError
+
+    def read(self, device: str, name: str) -> Any:
+        return self.request("read", device=device, name=name)
+
+    def set(self, device: str, name: str, value: Any) -> None:
+        self.request("set", device=device, name=name, value=value)
+
+    def state(self, device: str) -> dict[str, Any]:
+        result: dict[str, Any] = self.request("state", device=device)
+        return result
+
+    def power_cycle(self, device: str, *, wipe: bool = False) -> None:
+        self.request("power_cycle", device=device, wipe=wipe)
+
+    def advance(self, seconds: float) -> float:
+        return float(self.request("advance", seconds=seconds))
+
+    def now(self) -> float:
+        return float(self.request("now"))
+
+    def devices(self) -> list[dict[str, Any]]:
+        result: list[dict[str, Any]] = self.request("devices")
+        return result
+
+    def line(self, device: str, port: str = "main") -> dict[str, Any]:
+        result: dict[str, Any] = self.request("line", device=device, port=port)
+        return result
+
+    def names(self, device: str) -> list[dict[str, Any]]:
+        result: list[dict[str, Any]] = self.request("names", device=device)
+        return result
+
+    def fault(self, device: str, kind: str, active: bool = True) -> None:
+        self.request("fault", device=device, kind=kind, active=active)
+
+    def line_fault(self, device: str, kind: str, active: bool = True, *, port: str = "main", **params: Any) -> None:
+        self.request("line_fault", device=device, kind=kind, active=active, port=port, params=params)
+
+
+class ControlClient(ControlOps):
     """Blocking client of a :class:`ControlServer`; one connection, many requests.
 
     Methods mirror :class:`Runtime`'s control methods and raise :class:`ControlError` (with the
@@ -547,43 +593,6 @@ class ControlClient:
         if not reply.get("ok"):
             raise ControlError(str(reply.get("error")), str(reply.get("type", "Error")))
         return reply.get("result")
-
-    def read(self, device: str, name: str) -> Any:
-        return self.request("read", device=device, name=name)
-
-    def set(self, device: str, name: str, value: Any) -> None:
-        self.request("set", device=device, name=name, value=value)
-
-    def state(self, device: str) -> dict[str, Any]:
-        result: dict[str, Any] = self.request("state", device=device)
-        return result
-
-    def power_cycle(self, device: str, *, wipe: bool = False) -> None:
-        self.request("power_cycle", device=device, wipe=wipe)
-
-    def advance(self, seconds: float) -> float:
-        return float(self.request("advance", seconds=seconds))
-
-    def now(self) -> float:
-        return float(self.request("now"))
-
-    def devices(self) -> list[dict[str, Any]]:
-        result: list[dict[str, Any]] = self.request("devices")
-        return result
-
-    def line(self, device: str, port: str = "main") -> dict[str, Any]:
-        result: dict[str, Any] = self.request("line", device=device, port=port)
-        return result
-
-    def names(self, device: str) -> list[dict[str, Any]]:
-        result: list[dict[str, Any]] = self.request("names", device=device)
-        return result
-
-    def fault(self, device: str, kind: str, active: bool = True) -> None:
-        self.request("fault", device=device, kind=kind, active=active)
-
-    def line_fault(self, device: str, kind: str, active: bool = True, *, port: str = "main", **params: Any) -> None:
-        self.request("line_fault", device=device, kind=kind, active=active, port=port, params=params)
 
     def telegrams(self, device: str, port: str = "main", count: int = 20) -> list[dict[str, Any]]:
         """The last ``count`` telegrams on the line of a port (kept from the first call on)."""

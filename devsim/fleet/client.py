@@ -34,7 +34,7 @@ from typing import Any
 
 import aiomqtt
 
-from devsim.core.control import ControlError
+from devsim.core.control import ControlError, ControlOps
 from devsim.fleet.member import mqtt_client, parse_announcement
 from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url
 
@@ -238,7 +238,7 @@ class AsyncFleetClient:
         return dict(zip(processes, results, strict=True))
 
 
-class FleetClient:
+class FleetClient(ControlOps):
     """Blocking fleet client with :class:`~devsim.core.control.ControlClient`'s methods (its
     asyncio loop runs in a daemon thread).  ``with FleetClient("mqtt://broker") as fleet: ...``."""
 
@@ -289,36 +289,9 @@ class FleetClient:
         """Wait (bounded) until the named devices are online (or offline)."""
         return self._run(self.fleet.wait_for_devices(list(names), timeout, online=online))  # type: ignore[no-any-return]
 
-    def read(self, device: str, name: str) -> Any:
-        return self.request("read", device=device, name=name)
-
-    def set(self, device: str, name: str, value: Any) -> None:
-        self.request("set", device=device, name=name, value=value)
-
-    def state(self, device: str) -> dict[str, Any]:
-        result: dict[str, Any] = self.request("state", device=device)
-        return result
-
-    def power_cycle(self, device: str, *, wipe: bool = False) -> None:
-        self.request("power_cycle", device=device, wipe=wipe)
-
-    def advance(self, seconds: float, device: str | None = None) -> Any:
+    def advance(self, seconds: float, device: str | None = None) -> Any:  # type: ignore[override]
         """Advance the process serving ``device`` (its new time), or every process ({process: time})."""
         return self.request("advance", seconds=seconds, device=device)
 
-    def now(self, device: str | None = None) -> Any:
+    def now(self, device: str | None = None) -> Any:  # type: ignore[override]
         return self.request("now", device=device)
-
-    def line(self, device: str, port: str = "main") -> dict[str, Any]:
-        result: dict[str, Any] = self.request("line", device=device, port=port)
-        return result
-
-    def names(self, device: str) -> list[dict[str, Any]]:
-        result: list[dict[str, Any]] = self.request("names", device=device)
-        return result
-
-    def fault(self, device: str, kind: str, active: bool = True) -> None:
-        self.request("fault", device=device, kind=kind, active=active)
-
-    def line_fault(self, device: str, kind: str, active: bool = True, *, port: str = "main", **params: Any) -> None:
-        self.request("line_fault", device=device, kind=kind, active=active, port=port, params=params)
