@@ -8,14 +8,11 @@ is then replayed to the same host code.  Every wait is bounded.
 from __future__ import annotations
 
 import json
-import os
 import queue
-import signal
 import socket
 import struct
 import subprocess
 import sys
-import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -25,6 +22,7 @@ import serial
 
 from devsim.devices.gms96.client import Gms96Client
 from tests import test_readme_example as readme
+from tests.support.process import DevsimProcess
 from tests.test_readme_example import ask, home_and_move
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -43,41 +41,17 @@ params:
 """
 
 
-class Proc:
+class Proc(DevsimProcess):
     """A ``devsim`` subprocess; its stdout and stderr lines are collected by threads."""
 
     def __init__(self, *args: str) -> None:
-        env = dict(os.environ)
-        env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
-        self.proc = subprocess.Popen([sys.executable, "-m", "devsim", *args], cwd=ROOT, env=env,
-                                     stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                     text=True)
-        self.out: queue.Queue[str | None] = queue.Queue()
-        self.err: queue.Queue[str | None] = queue.Queue()
+        super().__init__(*args)
         self.err_lines: list[str] = []
         self.result: tuple[int, str] | None = None
-        for stream, sink in ((self.proc.stdout, self.out), (self.proc.stderr, self.err)):
-            threading.Thread(target=self._pump, args=(stream, sink), daemon=True).start()
-
-    @staticmethod
-    def _pump(stream, sink) -> None:
-        for line in stream:
-            sink.put(line.rstrip("\n"))
-        sink.put(None)
 
     def _wait(self, lines: queue.Queue[str | None], prefix: str, timeout: float, keep: list[str] | None) -> str:
-        deadline = time.monotonic() + timeout
-        while True:
-            try:
-                line = lines.get(timeout=max(0.01, deadline - time.monotonic()))
-            except queue.Empty:
-                raise AssertionError(f"no line starting {prefix!r} within {timeout} s") from None
-            if line is None:
-                raise AssertionError(f"process ended before {prefix!r}: {self.stop()}")
-            if keep is not None:
-                keep.append(line)
-            if line.startswith(prefix):
-                return line
+        return self.next_match(lines, lambda line: line.startswith(prefix), timeout,
+                               f"line starting {prefix!r}", keep)
 
     def line(self, prefix: str, timeout: float = 20.0) -> str:
         """The next stdout line starting with ``prefix``."""
@@ -94,13 +68,7 @@ class Proc:
         """SIGINT, bounded wait; the exit status and the rest of stderr (idempotent)."""
         if self.result is not None:
             return self.result
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-        try:
-            self.proc.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
+        self.interrupt()
         rest: list[str] = []
         while True:
             try:
