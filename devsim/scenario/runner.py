@@ -24,6 +24,7 @@ from devsim.core.runtime import Runtime
 from devsim.scenario.host import HostPort, open_host_port
 from devsim.scenario.plant import Plant, build_plant
 from devsim.scenario.schema import Condition, Scenario, Step
+from devsim.transports.trace import TapSink
 
 __all__ = ["ScenarioResult", "StepResult", "run_scenario", "run_scenario_async"]
 
@@ -67,26 +68,17 @@ class ScenarioResult:
         return [step for step in self.steps if step.status == "fail"]
 
 
-class _Traffic:
+class _Traffic(TapSink):
     """Taps a line: keeps what the host sent and what the device sent (chained to a tracer)."""
 
     def __init__(self, inner: Any) -> None:
-        self.inner = inner
+        super().__init__(inner)
         self.host = bytearray()
         self.device = bytearray()
 
     def record(self, direction: str, data: bytes, when: float, note: str | None = None) -> None:
         (self.host if direction == "H>D" else self.device).extend(data)
-        if self.inner is not None:
-            self.inner.record(direction, data, when, note)
-
-    def note(self, text: str, when: float) -> None:
-        if self.inner is not None:
-            self.inner.note(text, when)
-
-    def close(self) -> None:
-        if self.inner is not None:
-            self.inner.close()
+        super().record(direction, data, when, note)
 
 
 class _StepFailed(Exception):

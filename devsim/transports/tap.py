@@ -19,7 +19,7 @@ from collections import deque
 from collections.abc import Callable
 from typing import Any
 
-from devsim.transports.trace import TraceSink, render
+from devsim.transports.trace import TapSink, TraceSink, render
 
 __all__ = ["GAP", "MAX_BYTES", "TelegramTap", "tap"]
 
@@ -29,12 +29,12 @@ GAP = 0.005
 MAX_BYTES = 512
 
 
-class TelegramTap:
+class TelegramTap(TapSink):
     """Keeps the last ``size`` telegrams; forwards everything to ``inner`` (may be None)."""
 
     def __init__(self, inner: TraceSink | None, size: int = 200,
                  decoder: Callable[[str], Any] | None = None) -> None:
-        self.inner = inner
+        super().__init__(inner)
         #: per direction, a stateful decoder (``feed(data)`` -> descriptions), or none
         self.decoders = {"H>D": decoder("host"), "D>H": decoder("device")} if decoder is not None else {}
         self.telegrams: deque[dict[str, Any]] = deque(maxlen=size)
@@ -44,8 +44,7 @@ class TelegramTap:
         self._data = bytearray()
 
     def record(self, direction: str, data: bytes, when: float, note: str | None = None) -> None:
-        if self.inner is not None:
-            self.inner.record(direction, data, when, note)
+        super().record(direction, data, when, note)
         if not data:
             return
         last = self.telegrams[-1] if self.telegrams else None
@@ -73,14 +72,6 @@ class TelegramTap:
             if decoded:
                 target = self.telegrams[-1]
                 target["decoded"] = (target.get("decoded", []) + list(decoded))[-8:]
-
-    def note(self, text: str, when: float) -> None:
-        if self.inner is not None:
-            self.inner.note(text, when)
-
-    def close(self) -> None:
-        if self.inner is not None:
-            self.inner.close()
 
     def last(self, count: int) -> list[dict[str, Any]]:
         """The last ``count`` telegrams, oldest first (copies)."""

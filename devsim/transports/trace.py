@@ -26,7 +26,7 @@ import os
 from types import TracebackType
 from typing import Protocol
 
-__all__ = ["TraceSink", "Tracer", "create_trace_file", "render"]
+__all__ = ["TapSink", "TraceSink", "Tracer", "create_trace_file", "render"]
 
 _ESCAPES = {0x0D: "\\r", 0x0A: "\\n", 0x09: "\\t", 0x22: '\\"', 0x5C: "\\\\"}
 
@@ -55,6 +55,26 @@ class TraceSink(Protocol):
 
     def close(self) -> None:
         """Flush and close."""
+
+
+class TapSink:
+    """A tap in front of a line's trace (``inner``, or none): every call passes through; a
+    subclass keeps what it needs of the data in :meth:`record` and calls ``super().record``."""
+
+    def __init__(self, inner: TraceSink | None) -> None:
+        self.inner = inner
+
+    def record(self, direction: str, data: bytes, when: float, note: str | None = None) -> None:
+        if self.inner is not None:
+            self.inner.record(direction, data, when, note)
+
+    def note(self, text: str, when: float) -> None:
+        if self.inner is not None:
+            self.inner.note(text, when)
+
+    def close(self) -> None:
+        if self.inner is not None:
+            self.inner.close()
 
 
 def create_trace_file(path: str | os.PathLike[str]) -> int:
