@@ -135,7 +135,8 @@ def test_the_402_flow_with_the_master_in_another_process_under_virtual_time() ->
     from devsim.core.control import ControlClient
     from tests.test_cli import Sim
 
-    sim = Sim("pcd4h3", "--virtual", "--control", "127.0.0.1:0", "--canopen", "3@127.0.0.1:0")
+    sim = Sim("pcd4h3", "--virtual", "--control", "127.0.0.1:0", "--canopen", "3@127.0.0.1:0",
+              "--port", "ether_udp=udp:0", "--port", "ether_tcp=tcp:0")  # no fixed port 5050
     network = canopen.Network()
     try:
         seen = sim.read_until("control:")
