@@ -67,15 +67,20 @@ class Protocol:
 
 
 # -- SERS: ASCII lines ------------------------------------------------------------------------
-def _split_lines(buffer: bytes) -> tuple[list[bytes], bytes]:
-    """Messages end after CR or LF (a CR/LF pair gives a second, one-byte message)."""
+def _split_at(buffer: bytes, ends: tuple[int, ...]) -> tuple[list[bytes], bytes]:
+    """Messages that end after one of the ``ends`` bytes, and the unfinished rest."""
     out: list[bytes] = []
     start = 0
     for i, byte in enumerate(buffer):
-        if byte in (0x0D, 0x0A):
+        if byte in ends:
             out.append(buffer[start : i + 1])
             start = i + 1
     return out, buffer[start:]
+
+
+def _split_lines(buffer: bytes) -> tuple[list[bytes], bytes]:
+    """Messages end after CR or LF (a CR/LF pair gives a second, one-byte message)."""
+    return _split_at(buffer, (0x0D, 0x0A))
 
 
 class _LineDecoder(Decoder):
@@ -87,15 +92,8 @@ class _LineDecoder(Decoder):
         self._ends = (0x0D, 0x0A) if direction == "host" else (0x0D,)
 
     def feed(self, data: bytes) -> list[Any] | None:
-        buffer = self._rest + data
-        out: list[Any] = []
-        start = 0
-        for i, byte in enumerate(buffer):
-            if byte in self._ends:
-                out.append(buffer[start : i + 1].decode("latin-1"))
-                start = i + 1
-        self._rest = buffer[start:]
-        return out
+        lines, self._rest = _split_at(self._rest + data, self._ends)
+        return [line.decode("latin-1") for line in lines]
 
 
 # -- GMS96: FT1.2 frames ----------------------------------------------------------------------
@@ -182,14 +180,9 @@ def _split_ether(buffer: bytes) -> tuple[list[bytes], bytes]:
     receiver = sbus.EtherReceiver()
     frames = receiver.feed(buffer)
     rest = buffer[sum(len(frame) for frame in frames) :]
-    if len(rest) >= 4 and not _length_ok(rest):  # not a frame: one message, so that it is reported
-        return [*frames, rest], b""
+    if len(rest) >= 4 and not sbus.ether_length_ok(int.from_bytes(rest[:4], "big")):
+        return [*frames, rest], b""  # not a frame: one message, so that it is reported
     return frames, rest
-
-
-def _length_ok(rest: bytes) -> bool:
-    length = int.from_bytes(rest[:4], "big")
-    return 13 <= length <= 4096
 
 
 class _EtherDecoder(Decoder):
@@ -214,7 +207,7 @@ class _EtherDecoder(Decoder):
 
 
 def _is_ether(frame: bytes) -> bool:
-    return len(frame) >= 13 and int.from_bytes(frame[:4], "big") == len(frame)
+    return len(frame) >= sbus.ETHER_MIN and int.from_bytes(frame[:4], "big") == len(frame)
 
 
 def _without_sequence(frame: bytes) -> bytes:

@@ -222,23 +222,23 @@ def up(
             raise click.UsageError(f"--control: {exc}") from None
         if not address.is_loopback():
             raise click.UsageError(f"--control: refusing non-loopback host {address.host!r}")
-    if workers > 1 and virtual:
-        click.echo("devsim: under virtual time a plant stays in one process (--workers ignored)", err=True)
-        workers = 1
-    if workers > 1 and spec.mqtt is not None:
-        click.echo("devsim: a plant with an mqtt: section stays in one process (--workers ignored)", err=True)
-        workers = 1
     if motion_log is not None:
         from devsim.core.motion_log import motion_log_problem
 
         if (problem := motion_log_problem(motion_resolution)) is not None:
             raise click.UsageError(problem)
-        if workers > 1:
-            click.echo("devsim: the motion log needs the plant in one process (--workers ignored)", err=True)
+    if workers > 1:
+        # What needs the whole plant in one process: (it applies, why), the first one said.
+        one_process = (
+            (virtual, "under virtual time a plant stays in one process"),
+            (spec.mqtt is not None, "a plant with an mqtt: section stays in one process"),
+            (motion_log is not None, "the motion log needs the plant in one process"),
+            (spec.opcua is not None, "the plant's OPC UA server needs the plant in one process"),
+        )
+        reason = next((why for applies, why in one_process if applies), None)
+        if reason is not None:
+            click.echo(f"devsim: {reason} (--workers ignored)", err=True)
             workers = 1
-    if workers > 1 and spec.opcua is not None:
-        click.echo("devsim: the plant's OPC UA server needs the plant in one process (--workers ignored)", err=True)
-        workers = 1
     if workers > 1:
         from devsim.scenario.workers import run_workers
 

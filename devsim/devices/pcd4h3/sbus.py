@@ -225,6 +225,16 @@ def pack_bits(values: list[int]) -> bytes:
 
 
 # -- Ether-S-Bus (§9.3) ----------------------------------------------------------------------------
+#: The shortest Ether-S-Bus telegram (9-byte header, station and command, CRC) and the longest
+#: one taken (a length field outside them is not a frame).
+ETHER_MIN, ETHER_MAX = 13, 4096
+
+
+def ether_length_ok(length: int) -> bool:
+    """Whether a telegram's length field can be a frame's."""
+    return ETHER_MIN <= length <= ETHER_MAX
+
+
 def ether_frame(version: int, sequence: int, attribute: int, payload: bytes) -> bytes:
     body = struct.pack(">IBBHB", 4 + 1 + 1 + 2 + 1 + len(payload) + 2, version, 0, sequence, attribute) + payload
     return body + struct.pack(">H", crc16(body))
@@ -233,7 +243,7 @@ def ether_frame(version: int, sequence: int, attribute: int, payload: bytes) -> 
 def parse_ether(frame: bytes) -> tuple[int, int, Request] | None:
     """(version, sequence, request) of one Ether-S-Bus request frame, or None (bad length,
     type, attribute or CRC: dropped)."""
-    if len(frame) < 13:
+    if len(frame) < ETHER_MIN:
         return None
     length, version, kind, sequence, attribute = struct.unpack(">IBBHB", frame[:9])
     if length != len(frame) or version not in (0, 1) or kind != 0 or attribute != REQUEST:
@@ -263,7 +273,7 @@ class EtherReceiver:
         frames = []
         while len(self._buffer) >= 4:
             (length,) = struct.unpack_from(">I", self._buffer)
-            if length < 13 or length > 4096:
+            if not ether_length_ok(length):
                 self._buffer.clear()  # not a frame length: resynchronise on the next write
                 break
             if len(self._buffer) < length:
