@@ -17,6 +17,7 @@ from devsim.core.config import ConfigError
 from devsim.scenario.plant import plant_running
 from devsim.scenario.runner import run_scenario
 from devsim.scenario.schema import load_plant, scenario_from_dict
+from tests.support.process import free_port
 from tests.test_cli import ECHO, TWOPORT, Sim, ctl
 
 pytestmark = pytest.mark.skipif(os.name != "posix", reason="ptys")
@@ -54,14 +55,8 @@ def test_run_gives_each_port_its_own_pty_and_says_ready(tmp_path: Path) -> None:
     assert code == 0 and "Traceback" not in err
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 def test_plant_maps_each_port_to_a_transport(tmp_path: Path) -> None:
-    tcp = _free_port()
+    tcp = free_port()
     plant_file = tmp_path / "plant.yaml"
     plant_file.write_text(
         "name: two ports\n"

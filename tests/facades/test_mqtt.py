@@ -14,8 +14,9 @@ import pytest
 
 from devsim.core.runtime import Runtime
 from devsim.facades.mqtt import start_broker, start_mqtt
-from tests.support.broker import Broker, free_port, mosquitto_missing
+from tests.support.broker import Broker, mosquitto_missing
 from tests.support.mqtt import Sub, pub
+from tests.support.process import free_port
 from tests.test_cli import Sim
 
 _plants = itertools.count()

@@ -17,8 +17,9 @@ from tahutils.tahu import sparkplug_b as tahu
 from devsim.core.runtime import Runtime
 from devsim.facades.mqtt import start_broker, start_mqtt
 from tests.facades.test_mqtt import mosquitto  # noqa: F401 - the module's broker fixture
-from tests.support.broker import Broker, free_port
+from tests.support.broker import Broker
 from tests.support.mqtt import Sub, pub
+from tests.support.process import free_port
 from tests.test_cli import Sim
 
 _plants = itertools.count()

@@ -4,7 +4,6 @@ mosquitto's own clients as subprocesses, every wait bounded."""
 from __future__ import annotations
 
 import json
-import os
 import queue
 import shutil
 import subprocess
@@ -18,6 +17,7 @@ from typing import Any
 import pytest
 
 from tests.support.broker import Broker, _program, mosquitto_missing
+from tests.support.process import devsim_env
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -33,9 +33,7 @@ devices:
 
 
 def _env() -> dict[str, str]:
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
-    return env
+    return devsim_env()
 
 
 class Program:

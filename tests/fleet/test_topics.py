@@ -99,7 +99,7 @@ def test_ctl_without_a_broker_says_so_in_one_line() -> None:
     import subprocess
     import sys
 
-    from tests.support.broker import free_port
+    from tests.support.process import free_port
 
     done = subprocess.run([sys.executable, "-m", "devsim", "ctl", "--fleet", f"mqtt://127.0.0.1:{free_port()}",
                            "devices"], capture_output=True, text=True, timeout=60)

@@ -15,13 +15,9 @@ import tempfile
 import time
 from pathlib import Path
 
-__all__ = ["Broker", "free_port", "mosquitto_missing"]
+from tests.support.process import free_port
 
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
+__all__ = ["Broker", "mosquitto_missing"]
 
 
 def mosquitto_missing() -> str | None:

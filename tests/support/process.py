@@ -1,11 +1,13 @@
 """``python -m devsim ARGS`` as a subprocess for tests: its stdout and stderr lines collected by
-threads into queues, every wait bounded (the live and the record/replay tests)."""
+threads into queues, every wait bounded (the live and the record/replay tests); its environment;
+a free loopback port."""
 
 from __future__ import annotations
 
 import os
 import queue
 import signal
+import socket
 import subprocess
 import sys
 import threading
@@ -14,7 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO
 
-__all__ = ["DevsimProcess", "ROOT", "devsim_env"]
+__all__ = ["DevsimProcess", "ROOT", "devsim_env", "free_port"]
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -24,6 +26,13 @@ def devsim_env() -> dict[str, str]:
     environ = dict(os.environ)
     environ["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), environ.get("PYTHONPATH", "")) if p)
     return environ
+
+
+def free_port() -> int:
+    """A TCP port on 127.0.0.1 that nobody holds now."""
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
 
 
 class DevsimProcess:
