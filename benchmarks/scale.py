@@ -3,14 +3,21 @@
 Starts ``devsim up`` on a plant of ``--devices`` devices (each on its own TCP port, spread over
 ``--workers`` processes), sets every axis moving (SERS: ``#ON V=… WR=… E``), then polls every
 device with ``#P11?`` at ``--rate`` Hz for ``--seconds``, from ``--pollers`` client processes.
+The pollers are ``benchmarks/poller.c``, compiled with ``cc -O2`` into a temporary directory at
+each run (``--poller c``, the default when a C compiler is found), or asyncio processes
+(``--poller python``): at 2,000 devices the asyncio pollers need a core of their own.
 In the same run, in alternating phases, the same pollers poll as many bare asyncio echo
-endpoints (answering every CR with a reply of the same length, in one more process), so the
-harness's own limit on this machine shows beside the simulator's.
+endpoints (answering every CR with a reply of the same length, in as many processes as devsim
+has workers), so the harness's own limit on this machine shows beside the simulator's.
 
 A poll is *missed* when its answer has not arrived by the time the next poll of that device is
 due.  Target: ≥ 2,000 devices on 2 cores with p99 < 5 ms and no missed poll.
 
-    python benchmarks/scale.py [--devices 2000] [--workers 2] [--rate 20] [--seconds 10] [--pollers 2]
+    python benchmarks/scale.py [--devices 2000] [--workers 2] [--rate 20] [--seconds 10] [--pollers N]
+                               [--poller c|python] [--kind sers|stub] [--rounds 2]
+
+It prints the CPU each side used over each phase (share of one core): the pollers, devsim's
+processes, the echo process.
 """
 
 from __future__ import annotations
@@ -19,12 +26,15 @@ import argparse
 import asyncio
 import json
 import os
+import resource
+import shutil
 import signal
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
+from array import array
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 QUERY = b"#P11?\r"
@@ -40,13 +50,22 @@ def _env() -> dict[str, str]:
     return env
 
 
-# -- the echo endpoints (a child process) ------------------------------------------------------
-class _Echo(asyncio.Protocol):
+# -- the echo endpoints (child processes, as many as devsim's workers) -------------------------
+class _Echo(asyncio.BufferedProtocol):
+    """Reads into one shared buffer, as devsim's TCP sessions do: a plain protocol allocates 256 KiB
+    per read, which glibc may serve with an mmap/munmap pair (README, "Performance")."""
+
+    buffer = bytearray(64 * 1024)
+    view = memoryview(buffer)
+
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         self.transport = transport  # type: ignore[assignment]
 
-    def data_received(self, data: bytes) -> None:
-        for _ in range(data.count(b"\r")):
+    def get_buffer(self, sizehint: int) -> memoryview:
+        return self.view
+
+    def buffer_updated(self, nbytes: int) -> None:
+        for _ in range(self.buffer.count(b"\r", 0, nbytes)):
             self.transport.write(REPLY)  # type: ignore[attr-defined]
 
 
@@ -103,6 +122,7 @@ async def poller(ports: list[int], rate: float, seconds: float, move: bool) -> N
     start = time.perf_counter() + 0.2
     ticks = int(seconds * rate)
     step = period / max(1, len(clients))
+    cpu0 = _own_cpu()
     for k in range(ticks):
         for index, client in enumerate(clients):  # each device at its own phase in the period
             due = start + k * period + index * step
@@ -112,13 +132,33 @@ async def poller(ports: list[int], rate: float, seconds: float, move: bool) -> N
             client.poll(time.perf_counter())
     await asyncio.sleep(0.2)
     results.sort()
-    print(json.dumps({"rtts": results, "missed": missed[0], "polls": ticks * len(clients)}), flush=True)
+    print(json.dumps({"rtts": results, "missed": missed[0], "polls": ticks * len(clients), "cpu": _own_cpu() - cpu0,
+                      "wall": time.perf_counter() - start + 0.2}), flush=True)
+
+
+def _own_cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
 
 
 # -- the conductor -----------------------------------------------------------------------------
 def _spawn(args: list[str]) -> subprocess.Popen[str]:
     return subprocess.Popen([sys.executable, *args], cwd=ROOT, env=_env(), stdin=subprocess.DEVNULL,
                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+
+
+def _compile_poller(tmp: str) -> str | None:
+    """``benchmarks/poller.c`` built into ``tmp`` (``None`` when there is no C compiler or it fails)."""
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if cc is None:
+        return None
+    binary = os.path.join(tmp, "poller")
+    built = subprocess.run([cc, "-O2", "-o", binary, os.path.join(ROOT, "benchmarks", "poller.c")],
+                           capture_output=True, text=True)
+    if built.returncode:
+        print(f"cc failed, using the Python poller:\n{built.stderr}", file=sys.stderr)
+        return None
+    return binary
 
 
 def _start_plant(kind: str, devices: int, workers: int, tmp: str) -> tuple[subprocess.Popen[str], list[int]]:
@@ -143,21 +183,61 @@ def _start_plant(kind: str, devices: int, workers: int, tmp: str) -> tuple[subpr
     return proc, ports
 
 
+def _tree_cpu(root: int) -> float:
+    """CPU seconds (user + system) used so far by process ``root`` and its living descendants."""
+    stats: dict[int, tuple[int, float]] = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as fh:
+                    fields = fh.read().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            stats[int(entry)] = (int(fields[1]), (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK"))
+    tree, total = {root}, 0.0
+    for pid in sorted(stats):  # a child's pid is almost always above its parent's; look twice to be sure
+        if stats[pid][0] in tree:
+            tree.add(pid)
+    for pid in sorted(stats):
+        if stats[pid][0] in tree:
+            tree.add(pid)
+    for pid in tree:
+        total += stats.get(pid, (0, 0.0))[1]
+    return total
+
+
 def _percentile(values: list[float], q: float) -> float:
     return values[min(len(values) - 1, int(q * len(values)))] if values else float("nan")
 
 
-def _collect(procs: list[subprocess.Popen[str]]) -> tuple[list[float], int, int]:
-    rtts: list[float] = []
-    missed = polls = 0
-    for proc in procs:
-        out, _ = proc.communicate(timeout=600)
-        data = json.loads(out.strip().splitlines()[-1])
-        rtts += data["rtts"]
-        missed += data["missed"]
-        polls += data["polls"]
-    rtts.sort()
-    return rtts, missed, polls
+class _Side:
+    """What one side (devsim or echo) gathered over its phases."""
+
+    def __init__(self) -> None:
+        self.rtts: list[float] = []
+        self.missed = self.polls = 0
+        self.poller_cpu = self.server_cpu = self.wall = self.poller_wall = 0.0
+
+    def collect(self, procs: list[tuple[subprocess.Popen[str], str]], servers: list[int]) -> None:
+        before, began = sum(map(_tree_cpu, servers)), time.monotonic()
+        walls = []
+        for proc, out in procs:
+            text, _ = proc.communicate(timeout=600)
+            data = json.loads(text.strip().splitlines()[-1])
+            if "rtts" in data:
+                self.rtts += data["rtts"]
+            else:  # the C poller's round trips, float64 in a file
+                samples = array("d")
+                with open(out, "rb") as fh:
+                    samples.fromfile(fh, data["samples"])
+                self.rtts += samples.tolist()
+            self.missed += data["missed"]
+            self.polls += data["polls"]
+            self.poller_cpu += data["cpu"]
+            walls.append(data["wall"])
+        self.server_cpu += sum(map(_tree_cpu, servers)) - before
+        self.wall += time.monotonic() - began
+        self.poller_wall += max(walls)  # the pollers' measurement; wall: the whole phase
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -166,7 +246,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--rate", type=float, default=20.0)
     parser.add_argument("--seconds", type=float, default=10.0)
-    parser.add_argument("--pollers", type=int, default=2)
+    parser.add_argument("--pollers", type=int, help="poller processes (default: 1 in C, 2 in Python)")
+    parser.add_argument("--poller", choices=("c", "python"), help="default: c when a C compiler is found")
     parser.add_argument("--kind", default="sers")
     parser.add_argument("--rounds", type=int, default=2, help="simulator/echo phase pairs (default 2)")
     parser.add_argument("--echo-servers", type=int, help=argparse.SUPPRESS)
@@ -181,48 +262,54 @@ def main(argv: list[str] | None = None) -> int:
         return 0
 
     with tempfile.TemporaryDirectory() as tmp:
+        binary = _compile_poller(tmp) if args.poller != "python" else None
+        if args.poller == "c" and binary is None:
+            raise SystemExit("--poller c: no C compiler (cc) that builds benchmarks/poller.c")
+        count = args.pollers or (1 if binary else 2)
+        print(f"pollers: {count} {'C (benchmarks/poller.c, cc -O2)' if binary else 'asyncio'} "
+              f"process{'es' if count > 1 else ''}", flush=True)
         plant, ports = _start_plant(args.kind, args.devices, args.workers, tmp)
-        echo = _spawn([__file__, "--echo-servers", str(args.devices)])
-        assert echo.stdout is not None
-        echo_ports = json.loads(echo.stdout.readline())
+        echoes = [_spawn([__file__, "--echo-servers", str(len(range(i, args.devices, args.workers)))])
+                  for i in range(args.workers)]
+        echo_ports = [port for echo in echoes for port in json.loads(echo.stdout.readline())]  # type: ignore[union-attr]
         try:
-            def pollers(targets: list[int], move: bool) -> list[subprocess.Popen[str]]:
-                shares = [targets[i :: args.pollers] for i in range(args.pollers)]
-                return [
-                    _spawn([__file__, "--poll", json.dumps({"ports": share, "move": move}), "--rate", str(args.rate),
-                            "--seconds", str(args.seconds)])
-                    for share in shares if share
-                ]
+            def pollers(targets: list[int], move: bool) -> list[tuple[subprocess.Popen[str], str]]:
+                shares = [targets[i :: count] for i in range(count)]
+                started = []
+                for i, share in enumerate(share for share in shares if share):
+                    out = os.path.join(tmp, f"rtts{i}")
+                    if binary:
+                        cmd = [binary, str(args.rate), str(args.seconds), str(int(move)), out, *map(str, share)]
+                        started.append((subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                                         text=True), out))
+                    else:
+                        started.append((_spawn([__file__, "--poll", json.dumps({"ports": share, "move": move}),
+                                                "--rate", str(args.rate), "--seconds", str(args.seconds)]), out))
+                return started
 
             # alternating phases, simulator then reference, so both see the same machine
-            sim, ref = [], []
-            sim_missed = sim_polls = ref_missed = ref_polls = 0
+            sim, ref = _Side(), _Side()
             for phase in range(2 * args.rounds):
                 if phase % 2 == 0:
-                    rtts, missed, polls = _collect(pollers(ports, args.kind == "sers" and phase == 0))
-                    sim += rtts
-                    sim_missed += missed
-                    sim_polls += polls
+                    sim.collect(pollers(ports, args.kind == "sers" and phase == 0), [plant.pid])
                 else:
-                    rtts, missed, polls = _collect(pollers(echo_ports, False))
-                    ref += rtts
-                    ref_missed += missed
-                    ref_polls += polls
-            sim.sort()
-            ref.sort()
+                    ref.collect(pollers(echo_ports, False), [echo.pid for echo in echoes])
         finally:
             plant.send_signal(signal.SIGINT)
-            echo.kill()
+            for echo in echoes:
+                echo.kill()
+                echo.wait()
             plant.wait(timeout=60)
-            echo.wait()
-    for label, rtts, missed, polls in (("devsim", sim, sim_missed, sim_polls), ("echo", ref, ref_missed, ref_polls)):
+    for label, side in (("devsim", sim), ("echo", ref)):
+        side.rtts.sort()
         print(f"{label:>6}: {args.devices} endpoints at {args.rate:g} Hz for {args.seconds:g} s: "
-              f"p50 {_percentile(rtts, 0.5) * 1e3:.2f} ms, p99 {_percentile(rtts, 0.99) * 1e3:.2f} ms, "
-              f"missed {missed} of {polls} polls")
-    ok = _percentile(sim, 0.99) < 0.005 and sim_missed == 0
+              f"p50 {_percentile(side.rtts, 0.5) * 1e3:.2f} ms, p99 {_percentile(side.rtts, 0.99) * 1e3:.2f} ms, "
+              f"missed {side.missed} of {side.polls} polls; CPU (cores): pollers {side.poller_cpu / side.poller_wall:.2f}, "
+              f"{label} {side.server_cpu / side.wall:.2f}")
+    ok = _percentile(sim.rtts, 0.99) < 0.005 and sim.missed == 0
     print(f"target (p99 < 5 ms, no missed poll) with {args.devices} devices on {args.workers} workers: "
           f"{'met' if ok else 'missed'}; median ratio devsim/echo "
-          f"{statistics.median(sim) / statistics.median(ref):.2f}")
+          f"{statistics.median(sim.rtts) / statistics.median(ref.rtts):.2f}")
     return 0
 
 
