@@ -3,16 +3,23 @@
  *   poller RATE SECONDS MOVE OUT PORT...
  *
  * Connects to 127.0.0.1:PORT for every PORT (non-blocking sockets, one epoll), optionally sends
- * the SERS move command to each and drains the answers for 0.5 s (MOVE = 1), then polls every
+ * the SERS move command to each and drops the answers for 0.5 s (MOVE = 1), then polls every
  * device with "#P11?\r" at RATE Hz for SECONDS, each device at its own phase in the period
- * (device i of n is due at start + k / RATE + i / (n * RATE)), exactly as scale.py's Python
- * poller does.  Polls due in the same millisecond go out in one batch; between batches the
- * process sleeps in epoll_wait.
+ * (device i of n is due at start + k / RATE + i / (n * RATE)), as scale.py's Python poller does.
+ *
+ * The process wakes once per millisecond at most (clock_nanosleep to the next due poll, rounded
+ * up to the millisecond): it reads every answer that arrived (epoll_wait with a zero timeout),
+ * then sends the polls now due, in one batch.  It never sleeps in epoll_wait, so an answer does
+ * not wake it: with 40,000 answers a second, a wake-up per answer (an inter-processor interrupt
+ * in a VM) would cost the poller and the answering process more than the rest of a poll.
+ * A round trip is therefore timed by the kernel: from the clock just before the poll's write to
+ * the receive timestamp of the answer's last segment (SO_TIMESTAMPNS, CLOCK_REALTIME on both).
  *
  * An answer is complete when the bytes since the last complete answer hold "\nok" followed later
  * by "\r" (with no later "\nok" still open), as checked at the end of each read: the Python
  * poller's rfind(b"\nok") and find(b"\r") on its buffer, done as a small state machine here.  A
- * poll is missed when the previous poll of the device has no complete answer when it is due.
+ * poll is missed when the previous poll of the device has no complete answer when it is due
+ * (the answers that arrived by then are read first).
  *
  * Writes the round trips (seconds, native float64) to OUT and prints one JSON line:
  *   {"samples": n, "missed": n, "polls": n, "cpu": seconds, "wall": seconds}
@@ -44,10 +51,26 @@ struct conn {
     double sent_at;  /* < 0: no poll outstanding */
 };
 
-static double now(void) {
+static double seconds_of(struct timespec ts) {
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+static double now(void) {  /* for the schedule */
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+    return seconds_of(ts);
+}
+
+static double wall_now(void) {  /* the clock of the kernel's receive timestamps */
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return seconds_of(ts);
+}
+
+static void sleep_until(double when) {
+    struct timespec ts = {.tv_sec = (time_t)when, .tv_nsec = (long)((when - (double)(time_t)when) * 1e9)};
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
+    }
 }
 
 static double cpu_seconds(void) {
@@ -96,11 +119,27 @@ static void reset(struct conn *c) {
 /* Reads what c has; with measuring, a complete answer ends the outstanding poll. */
 static void on_readable(struct conn *c, int measuring) {
     char buf[4096];
+    union {
+        char space[CMSG_SPACE(sizeof(struct timespec))];
+        struct cmsghdr align;
+    } control;
     for (;;) {
-        ssize_t got = read(c->fd, buf, sizeof buf);
+        struct iovec iov = {.iov_base = buf, .iov_len = sizeof buf};
+        struct msghdr msg = {.msg_iov = &iov, .msg_iovlen = 1, .msg_control = control.space,
+                             .msg_controllen = sizeof control.space};
+        ssize_t got = recvmsg(c->fd, &msg, 0);
         if (got > 0) {
             if (measuring && scan(c, buf, got)) {
-                if (c->sent_at >= 0) record(now() - c->sent_at);
+                if (c->sent_at >= 0) {
+                    struct cmsghdr *cm = CMSG_FIRSTHDR(&msg);
+                    struct timespec ts;
+                    if (!cm || cm->cmsg_level != SOL_SOCKET || cm->cmsg_type != SCM_TIMESTAMPNS) {
+                        fprintf(stderr, "poller: no receive timestamp\n");
+                        exit(2);
+                    }
+                    memcpy(&ts, CMSG_DATA(cm), sizeof ts);
+                    record(seconds_of(ts) - c->sent_at);
+                }
                 c->sent_at = -1;
                 reset(c);
             }
@@ -113,7 +152,7 @@ static void on_readable(struct conn *c, int measuring) {
         }
         if (errno == EINTR) continue;
         if (errno == EAGAIN || errno == EWOULDBLOCK) return;
-        die("read");
+        die("recvmsg");
     }
 }
 
@@ -129,17 +168,23 @@ static void send_all(int fd, const char *data, size_t len) {
     }
 }
 
-/* Serves readable sockets for at most timeout_ms. */
-static void serve(int ep, struct conn *conns, int timeout_ms, int measuring) {
+/* Reads every answer that has arrived, without waiting. */
+static void harvest(int ep, struct conn *conns, int measuring) {
     struct epoll_event events[256];
-    int ready = epoll_wait(ep, events, 256, timeout_ms);
-    if (ready < 0 && errno != EINTR) die("epoll_wait");
-    for (int i = 0; i < ready; i++) on_readable(&conns[events[i].data.u32], measuring);
+    int ready;
+    do {
+        ready = epoll_wait(ep, events, 256, 0);
+        if (ready < 0 && errno != EINTR) die("epoll_wait");
+        for (int i = 0; i < ready; i++) on_readable(&conns[events[i].data.u32], measuring);
+    } while (ready == 256);
 }
 
-static void serve_for(int ep, struct conn *conns, double seconds, int measuring) {
-    double until = now() + seconds;
-    for (double left; (left = until - now()) > 0;) serve(ep, conns, (int)(left * 1e3) + 1, measuring);
+/* Reads the answers for `seconds`, once a millisecond. */
+static void harvest_for(int ep, struct conn *conns, double seconds, int measuring) {
+    for (double t = now(), until = t + seconds; t < until; t += 1e-3) {
+        sleep_until(t);
+        harvest(ep, conns, measuring);
+    }
 }
 
 int main(int argc, char **argv) {
@@ -169,6 +214,7 @@ int main(int argc, char **argv) {
         if (connect(fd, (struct sockaddr *)&addr, sizeof addr) < 0) die("connect");  /* loopback: at once */
         int one = 1;
         setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+        if (setsockopt(fd, SOL_SOCKET, SO_TIMESTAMPNS, &one, sizeof one) < 0) die("SO_TIMESTAMPNS");
         fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK);
         conns[i] = (struct conn){.fd = fd, .sent_at = -1};
         struct epoll_event ev = {.events = EPOLLIN, .data.u32 = (uint32_t)i};
@@ -176,28 +222,28 @@ int main(int argc, char **argv) {
     }
     if (move) {
         for (int i = 0; i < n; i++) send_all(conns[i].fd, MOVE, sizeof MOVE - 1);
-        serve_for(ep, conns, 0.5, 0);  /* the move's answers are read and dropped */
+        harvest_for(ep, conns, 0.5, 0);  /* the move's answers are read and dropped */
     }
 
     double step = 1.0 / (rate * n), start = now() + 0.2;
     long total = (long)(seconds * rate) * n, next = 0, missed = 0;
-    serve_for(ep, conns, 0.2, 0);
+    harvest_for(ep, conns, 0.2, 0);
     double cpu0 = cpu_seconds(), wall0 = now();
     while (next < total) {
-        double t = now();
-        for (; next < total && start + (double)next * step <= t; next++) {  /* the batch due by now */
+        double ms = (double)next * step * 1e3;  /* the polls due in this millisecond go in one batch */
+        sleep_until(start + (double)((long)ms + ((double)(long)ms < ms)) * 1e-3);
+        harvest(ep, conns, 1);
+        for (double t = now(); next < total && start + (double)next * step <= t; next++) {
             struct conn *c = &conns[next % n];
             if (c->sent_at >= 0) {
                 missed++;  /* the last answer is not in yet: this poll is missed */
                 continue;
             }
-            c->sent_at = now();
+            c->sent_at = wall_now();
             send_all(c->fd, QUERY, sizeof QUERY - 1);
         }
-        double wait = next < total ? start + (double)next * step - now() : 0;
-        serve(ep, conns, wait > 0 ? (int)(wait * 1e3) + 1 : 0, 1);  /* ceil to ms: at most 1 ms late */
     }
-    serve_for(ep, conns, 0.2, 1);
+    harvest_for(ep, conns, 0.2, 1);
     double cpu = cpu_seconds() - cpu0, wall = now() - wall0;
 
     FILE *fh = fopen(out, "wb");

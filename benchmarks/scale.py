@@ -5,7 +5,8 @@ Starts ``devsim up`` on a plant of ``--devices`` devices (each on its own TCP po
 device with ``#P11?`` at ``--rate`` Hz for ``--seconds``, from ``--pollers`` client processes.
 The pollers are ``benchmarks/poller.c``, compiled with ``cc -O2`` into a temporary directory at
 each run (``--poller c``, the default when a C compiler is found), or asyncio processes
-(``--poller python``): at 2,000 devices the asyncio pollers need a core of their own.
+(``--poller python``): at 2,000 devices the asyncio pollers need a core of their own.  The C
+poller wakes once a millisecond, and times each answer by its kernel receive timestamp.
 In the same run, in alternating phases, the same pollers poll as many bare asyncio echo
 endpoints (answering every CR with a reply of the same length, in as many processes as devsim
 has workers), so the harness's own limit on this machine shows beside the simulator's.
