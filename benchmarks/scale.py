@@ -18,7 +18,7 @@ due.  Target: ≥ 2,000 devices on 2 cores with p99 < 5 ms and no missed poll.
                                [--poller c|python] [--kind sers|stub] [--rounds 2]
 
 It prints the CPU each side used over each phase (share of one core): the pollers, devsim's
-processes, the echo process.
+processes, the echo processes (CPU seconds over the phase's wall seconds).
 """
 
 from __future__ import annotations
