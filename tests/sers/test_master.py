@@ -71,6 +71,16 @@ def test_master_reads_a_slave_value_into_x(plant_factory) -> None:
     assert plant.read("param.R0", "sers0") == 750
 
 
+def test_a_master_asking_for_a_broadcast_target_gets_a_star(sers: Plant) -> None:
+    """P1 may hold ``*`` (Z=*, §4.8.5.5): asked through P3 or P2 the drive answers ``*`` as its
+    query does (found by fuzzing: the answer died on the star)."""
+    host = sers.host
+    assert host.ask("#Z=*\r") == b"#Z=*\r\nok1\n\r"
+    assert host.ask("#P1?\r") == b"#P1?\rP1=*\n\r\nok1\n\r"
+    assert host.ask("#P3=1\r") == b"#P3=1\rP3=*\n\r\nok1\n\r"
+    assert host.ask("#P2=1\r") == b"#P2=1\rP2=*\n\r\nok1\n\r"
+
+
 def test_master_broadcast_does_not_wait(plant_factory) -> None:
     plant: Plant = plant_factory({"address": 0}, {"address": 1}, {"address": 2})
     download(plant, 200, ["Z=*", "ON", "Z=0", "O1=1"])

@@ -969,6 +969,23 @@ def test_tr_starts_at_the_listed_line(sers: Plant) -> None:
     assert (out(sers, 1), out(sers, 2)) == (False, True)
 
 
+def test_list_arguments_beyond_the_grammar_end_the_statement(sers: Plant) -> None:
+    """LIST takes '.', '-', '+', n, -n or n.m and LISTP n or n.m (§4.2): what follows a complete
+    argument is the next statement, here an error, as after ``V=1.2.3``.  (Found by fuzzing:
+    ``LIST 1.2.3``, ``LIST---`` and ``LISTP 1.2.3`` stopped the drive answering.)"""
+    host = sers.host
+    download(host, "O1=1", "O2=1", "O3=1", "PE")
+    assert host.ask("#LIST 1.2.3\r") == (b"#LIST 1.2.3\r1: O1=1\n\r2: O2=1\n\r3: O3=1\n\r4: PE\n\r"
+                                         b"\n*Anweisung erwartet\n\r")  # (LIST 1.2 ran at the '.': position 1)
+    assert host.ask("#LIST +5\r") == b"#LIST +5\r2: O2=1\n\r\n*Anweisung erwartet\n\r"
+    assert host.ask("#LIST-------\r") == b"#LIST--1: O1=1\n\r-\n*Datum oder Parameter erwartet\n\r----\r"
+    answer = host.ask("#LISTP 1.2.3\r")
+    assert answer.startswith(b"#LISTP 1.2.3\rP1=0\n\r") and answer.endswith(b"P123=1\n\r\n*Anweisung erwartet\n\r")
+    assert answer.count(b"\n\rP") == 20 - 1  # 2 x 10 parameters from index 1
+    assert host.ask("#LISTP 3\r").startswith(b"#LISTP 3\rP3=0\n\r\nok")
+    assert host.ask("#P11?\r").startswith(b"#P11?\rP11=0\n\r\nok")
+
+
 # ======================================================================================
 # editing in programming mode (§4.2, §4.5.3, §4.9)
 # ======================================================================================

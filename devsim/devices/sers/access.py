@@ -648,6 +648,8 @@ class ParameterAccess:
         """Parameter ``number`` as a bare number (no unit), as a slave answers a master."""
         if number in (1300, 1301, 1013) or number in PARAMETERS:
             value = self.param_value(number)
+            if value == "*":
+                return "*"  # P1 = Z=* (a broadcast target), as its query answers it
             pdef = PARAMETERS.get(number)
             if pdef is not None and pdef.kind in WEIGHTED:
                 return format_query(float(value), self.scaling.decimals(pdef.kind))

@@ -70,6 +70,9 @@ _LONGEST = len(ALL_WORDS[0])
 _DIGITS = re.compile(r"[0-9]+")
 _NUMBER = re.compile(r"[0-9]*\.?[0-9]*")
 _SIGNED_NUMBER = re.compile(r"-?[0-9]*\.?[0-9]*")
+# The argument of LIST ('.', '-', '+', n, -n, n.m) and of LISTP (n, n.m), spec §4.2 grammar.
+_LIST_ARG = re.compile(r"-[0-9]+|[0-9]*\.[0-9]*|[0-9]+|[-+]")
+_LISTP_ARG = re.compile(r"[0-9]*\.[0-9]*|[0-9]+")
 
 
 def _digits(text: str) -> bool:
@@ -442,12 +445,12 @@ def _statement(cur: _Cursor) -> Statement:  # noqa: C901 - one branch per statem
     if word in ("LIST", "LISTP"):
         save = cur.pos
         cur.skip_spaces()
-        arg_start = cur.pos
-        while cur.peek() and (_digits(cur.peek()) or cur.peek() in ".+-"):
-            cur.pos += 1
-        arg = cur.text[arg_start : cur.pos]
-        if not arg:
-            cur.pos = save
+        found = (_LISTP_ARG if word == "LISTP" else _LIST_ARG).match(cur.text, cur.pos)
+        end = found.end() if found is not None else cur.pos
+        if end == len(cur.text) and not cur.final:
+            raise NeedMore  # the argument may go on
+        arg = cur.text[cur.pos : end]  # (what follows a complete argument is the next statement)
+        cur.pos = end if arg else save
         return ListCmd(text(), params=word == "LISTP", arg=arg)
     if word in ("RS", "RF", "LS", "LF"):
         until = None
