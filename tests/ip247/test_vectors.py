@@ -229,3 +229,15 @@ def test_switches_sit_at_mechanical_positions(make: Make) -> None:
     healthy.operate(1, 7, FORWARD, w=1000, dd=50_000)
     healthy.clock.advance(60)
     assert healthy.device.read("axis.1.error") == 26 and healthy.device.read("input.END1") is False
+
+
+def test_a_refused_rotary_record_with_an_empty_range_reads_as_no_values(make: Make) -> None:
+    """A rotary record whose range end is not above its start is refused (error 21, spec §4.4),
+    and like every axis without valid MD it reports position and residual 0 (§5.8.2).  (Found by
+    fuzzing: the empty range divided by zero at every read of the actual value.)"""
+    mod = make()
+    answer = mod.load_md(record=record(rotary=True, limit_begin=0, limit_end=0, reference=0))
+    assert answer[8] == 21
+    assert mod.device.read("axis.1.position") == 0
+    assert mod.client.observe(1)[8:16] == bytes(8)  # (header, then position and residual)
+    assert mod.client.read_record(1, 66)[8:] == bytes(12)  # BA66 "Istwerte Lesen": 6 words, all 0

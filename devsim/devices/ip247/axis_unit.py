@@ -106,8 +106,9 @@ class AxisUnit:
         return holder + self._side(direction) + self.m0
 
     def actual(self) -> int:
-        """The reported actual value, the tool tip in base units (0 without valid MD)."""
-        if self.md is None:
+        """The reported actual value, the tool tip in base units (0 without valid MD: none, or
+        a record the module refused, whose range may be empty)."""
+        if not self.md_valid:
             return 0
         return self.coords.actual(round(self.holder))
 
