@@ -81,6 +81,22 @@ def test_a_program_in_the_initial_state_is_checked_first(sers: SersDevice) -> No
     assert sers.read("program") == [["ON"], ["W=360", "E"]]  # nothing of the bad download was stored
 
 
+@pytest.mark.parametrize("number", [123, 103])
+def test_a_range_above_zero_refuses_zero(sers: SersDevice, number: int) -> None:
+    """P123 (feed constant) and P103 (modulo) take values > 0 (spec §5 table: ">0"): 0 is "zu
+    klein" on the line and through the control API, and the position stays readable.  (Found by
+    fuzzing: P123=0 was taken, and every read of the position then raised.)"""
+    out = bytearray()
+    sers.attach(out.extend)
+    before = sers.read(f"param.P{number}")
+    sers.feed(f"#P{number}=0\r".encode())
+    assert bytes(out) == f"#P{number}=0\r\n*zu klein\n\r".encode()
+    with pytest.raises(BadValue, match=f"P{number}: errno 2: zu klein"):
+        sers.set(f"param.P{number}", 0)
+    assert sers.read(f"param.P{number}") == before
+    assert sers.read("axis.position") == 0
+
+
 def test_config_parameters_are_checked_against_the_table(tmp_path: Path) -> None:
     path = tmp_path / "sers.yaml"
     path.write_text("address: 1\nparams:\n  P9999: 1\n")
@@ -88,6 +104,9 @@ def test_config_parameters_are_checked_against_the_table(tmp_path: Path) -> None
         load_config(path, SersConfig)
     path.write_text("params:\n  V: 1e12\n")
     with pytest.raises(ConfigError, match=r"V: 1e\+12 is above the maximum"):
+        load_config(path, SersConfig)
+    path.write_text("params:\n  P123: 0\n")
+    with pytest.raises(ConfigError, match=r"P123: 0 must be above 0"):
         load_config(path, SersConfig)
     path.write_text("params:\n  P1017: 2\n  V: 500\n  '1028': 3\n")
     assert load_config(path, SersConfig).params == {"P1017": 2, "V": 500, "1028": 3}

@@ -237,6 +237,8 @@ class ParameterAccess:
     def _check_range(self, pdef: ParamDef, value: float) -> None:
         if pdef.choices is not None and value not in pdef.choices:
             raise SersError(3)
+        if pdef.min_exclusive and pdef.minimum is not None and value <= pdef.minimum:
+            raise SersError(pdef.too_small_errno)  # a range "> minimum" (V, P103, P123)
         if pdef.kind == "velocity":
             rpm = self.scaling.vel_to_incps(float(value)) * 60 / INC_PER_REV
             if rpm <= 0 and pdef.number == 91:

@@ -38,6 +38,8 @@ def _param_ranges(value: dict[str, float | int]) -> dict[str, float | int]:
             raise ValueError(f"{key}: {number:g} is not one of {', '.join(map(str, sorted(pdef.choices)))}")
         if pdef.minimum is not None and number < pdef.minimum:
             raise ValueError(f"{key}: {number:g} is below the minimum {pdef.minimum:g}")
+        if pdef.min_exclusive and pdef.minimum is not None and number <= pdef.minimum:
+            raise ValueError(f"{key}: {number:g} must be above {pdef.minimum:g}")
         if pdef.maximum is not None and number > pdef.maximum:
             raise ValueError(f"{key}: {number:g} is above the maximum {pdef.maximum:g}")
     return value
