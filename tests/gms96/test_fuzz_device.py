@@ -3,6 +3,8 @@ never change what `s85;170` saved (design principle 4)."""
 
 from __future__ import annotations
 
+import signal
+
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -61,3 +63,31 @@ def test_card_survives_any_input_and_keeps_saved_parameters(chunks: list[bytes],
         card.power_cycle()
         clock.advance(1.0)
         assert card.read("param.N10") == 300
+
+
+def test_an_i2t_crossing_closer_than_the_clock_resolves_is_reached_at_once() -> None:
+    """After 39,175 s of device time the clock resolves about 7 ps.  With the I²t integral 1.7e-9
+    below its threshold and rising at 536/s (N15 = 11, full load) the crossing is 3 ps away: its
+    timer fired at the same instant, integrated nothing and was set again, and ``advance`` never
+    returned (found by a fuzz run).  Such a crossing is reached at once."""
+    clock = VirtualClock()
+    device = Gms96Device(clock=clock, config={"boot_time": 0}, nvram=NonVolatileMemory(None))
+    clock.advance(39_175.374685741655)
+    device.set("param.N15", 11)
+    device.set("quantity.load_pct", 100)
+    card = device.model
+    threshold = 3.0 * card.cfg.axis.i2t_t_allow_s
+    card.i2t_q, card.i2t_t = threshold - 1.72e-9, clock.now()
+    previous = signal.signal(signal.SIGALRM, _too_long)
+    signal.alarm(10)
+    try:
+        card._i2t_update()
+        clock.advance(0.1)
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    assert device.read("i2t_active") is True
+
+
+def _too_long(*_: object) -> None:
+    raise AssertionError("advance did not return within 10 s")

@@ -715,11 +715,15 @@ class Gms96Card(Settings, Model):
             self._i2t_timer.cancel()
             self._i2t_timer = None
         threshold = 3.0 * self.cfg.axis.i2t_t_allow_s
-        if not self.i2t_limiting and self.i2t_q >= threshold - 1e-9 and self._i2t_level() > 0:
+        rate = self._i2t_rate()
+        # (a crossing closer than the clock can resolve at this time is reached now: a timer for
+        # it would fire at the same instant, integrate nothing and be set again, for ever)
+        if not self.i2t_limiting and self._i2t_level() > 0 and (
+                self.i2t_q >= threshold - 1e-9 or (rate > 0 and now + (threshold - self.i2t_q) / rate <= now)):
             self.i2t_limiting = True
             self.i2t_latched = True
             self.record_event("i2t_limit")
-        elif self.i2t_limiting and self.i2t_q <= 1e-9 and self._i2t_rate() <= 0:
+        elif self.i2t_limiting and rate <= 0 and (self.i2t_q <= 1e-9 or now + self.i2t_q / -rate <= now):
             self.i2t_limiting = False
         self._rate = self._i2t_rate()
         if not self.i2t_limiting and self._rate > 0:
