@@ -91,3 +91,18 @@ def test_an_i2t_crossing_closer_than_the_clock_resolves_is_reached_at_once() -> 
 
 def _too_long(*_: object) -> None:
     raise AssertionError("advance did not return within 10 s")
+
+
+def test_a_level_change_while_i2t_limits_at_the_level() -> None:
+    """While I²t limits the current to the level, the integral stands still (rate 0); a change of
+    N15 then must not divide by that rate (a fuzz run found a ZeroDivisionError here)."""
+    clock = VirtualClock()
+    device = Gms96Device(clock=clock, config={"boot_time": 0}, nvram=NonVolatileMemory(None))
+    device.set("param.N15", 127)
+    device.set("quantity.load_pct", 100)
+    clock.advance(2.5)
+    assert device.read("i2t_active") is True
+    device.set("param.N15", 127)
+    device.set("param.N15", 100)
+    clock.advance(1.0)
+    assert device.read("i2t_active") is True

@@ -723,7 +723,7 @@ class Gms96Card(Settings, Model):
             self.i2t_limiting = True
             self.i2t_latched = True
             self.record_event("i2t_limit")
-        elif self.i2t_limiting and rate <= 0 and (self.i2t_q <= 1e-9 or now + self.i2t_q / -rate <= now):
+        elif self.i2t_limiting and rate <= 0 and (self.i2t_q <= 1e-9 or (rate < 0 and now + self.i2t_q / -rate <= now)):
             self.i2t_limiting = False
         self._rate = self._i2t_rate()
         if not self.i2t_limiting and self._rate > 0:
