@@ -61,7 +61,10 @@ def _axis_points(n: int) -> list[Point]:
 
 def _put_md(m: Any, axis: int, record: Any) -> None:
     if isinstance(record, str):
-        record = [int(word, 16) for word in record.split()]
+        try:
+            record = [int(word, 16) for word in record.split()]
+        except ValueError:
+            raise BadValue("machine data in one string are hex words") from None
     if not isinstance(record, list) or len(record) != 70 or not all(isinstance(w, int) for w in record):
         raise BadValue("machine data are 70 words (a list of numbers, or hex words in one string)")
     m.write_record(axis, 20, record[2] & 0xFF, [w & 0xFFFF for w in record], overwrite=True)

@@ -23,7 +23,9 @@ __all__ = ["FAULTS", "POINTS", "load_program"]
 def load_program(model: Any, program: Any) -> None:
     """Store a program (lines as typed, without ``#``) in the EEPROM as if downloaded with
     NEW … QUIT; a bad line is refused with its error text and nothing is stored."""
-    lines = [program] if isinstance(program, str) else list(program)
+    lines = [program] if isinstance(program, str) else program
+    if not isinstance(lines, list) or not all(isinstance(text, str) for text in lines):
+        raise BadValue("a program is its lines: text, or a list of texts")
     parsed = []
     for text in lines:
         result = st.parse(str(text), final=True)
@@ -39,6 +41,8 @@ def load_program(model: Any, program: Any) -> None:
 
 def _write_param(number: int) -> Any:
     def put(model: Any, value: Any) -> None:
+        if number == 1 and value != "*" and (isinstance(value, bool) or not isinstance(value, int | float)):
+            raise BadValue("P1: a number, or '*'")  # (the only parameter that is not just a number)
         try:
             model.write_param(number, value)
         except SersError as exc:
