@@ -28,6 +28,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 
 from devsim.core.device import Device
 from devsim.core.points import BadValue, ReadOnlyName
+from devsim.facades import library_log
 from devsim.facades.canopen_od import eds, point_objects
 from devsim.facades.cia402 import Cia402
 
@@ -231,6 +232,8 @@ async def serve_nodes(runtime: Any, nodes: list[tuple[Device, int]], where: str 
     interface such as ``vcan0``, where the machine has one).  Returns one line per node."""
     import os
 
+    library_log.limit("canopen", "canopen")  # (a traceback for every short SDO request)
+    library_log.limit("can", "can")
     ids = [node_id for _, node_id in nodes]
     if len(set(ids)) != len(ids):
         raise ValueError(f"CANopen node ids on one network must differ: {sorted(ids)}")

@@ -12,7 +12,6 @@ event loop, beside the device's own ports.
 from __future__ import annotations
 
 import asyncio
-import logging
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -25,30 +24,13 @@ from pymodbus.simulator.simcore import SimCore
 
 from devsim.core.device import Device, SerialSettings
 from devsim.core.points import BadValue, ReadOnlyName
+from devsim.facades import library_log
 from devsim.facades.modbus_map import BITS, ModbusMap, from_words, to_words
-from devsim.transports.fdlimit import report
 
 __all__ = ["ModbusFacade", "ModbusRtuEndpoint", "device_map", "line_settings", "serve_tcp", "start_modbus"]
 
 TABLE_OF = {1: "coil", 5: "coil", 15: "coil", 2: "discrete", 3: "holding", 6: "holding", 16: "holding",
             23: "holding", 4: "input"}
-
-
-class _RateLimitedLog(logging.Handler):
-    """pymodbus logs a line for every frame it cannot decode (a count out of range, a wrong
-    length): a noisy or hostile host would fill stderr.  One line per kind of message every ten
-    seconds, with the repeats counted (:func:`devsim.transports.fdlimit.report`)."""
-
-    def emit(self, record: logging.LogRecord) -> None:
-        text = record.getMessage()
-        report("modbus " + " ".join(text.split()[:3]), f"modbus: {text}")
-
-
-def _limit_pymodbus_log() -> None:
-    log = logging.getLogger("pymodbus.logging")
-    if not any(isinstance(handler, _RateLimitedLog) for handler in log.handlers):
-        log.addHandler(_RateLimitedLog())
-        log.propagate = False
 
 
 class ModbusFacade:
@@ -147,7 +129,7 @@ class ModbusFacade:
 async def serve_tcp(facade: ModbusFacade, host: str = "127.0.0.1", port: int = 502) -> tuple[ModbusTcpServer, int]:
     """Modbus TCP on ``host:port`` (loopback unless the user names a host); returns the server
     and the port it listens on (``port`` 0: one the system chose)."""
-    _limit_pymodbus_log()
+    library_log.limit("pymodbus", "modbus")
     server = ModbusTcpServer(facade.sim_device(), address=(host, port))
     await server.serve_forever(background=True)
     sockets = getattr(server.transport, "sockets", None) or []
@@ -161,7 +143,7 @@ class ModbusRtuEndpoint:
     broadcast) is carried out without an answer."""
 
     def __init__(self, facade: ModbusFacade, settings: SerialSettings | None = None) -> None:
-        _limit_pymodbus_log()
+        library_log.limit("pymodbus", "modbus")
         self.facade = facade
         self.core = SimCore(facade.sim_device())
         self.framer = FramerRTU(DecodePDU(is_server=True))

@@ -107,6 +107,8 @@ class SocketcandServer:
                     message = parse_send(command)
                     if message is not None and bus is not None:
                         bus.send(message)
+        except ConnectionError:
+            return  # the client reset the connection: it is gone, as after an orderly close
         finally:
             if forward is not None:
                 forward.cancel()

@@ -187,3 +187,44 @@ def test_the_402_flow_with_the_master_in_another_process_under_virtual_time() ->
     finally:
         network.disconnect()
         sim.stop()
+
+
+def test_resets_and_short_sdo_requests_neither_stop_the_node_nor_flood_stderr() -> None:
+    """Clients that send junk and reset the connection, then 300 SDO requests shorter than eight
+    bytes: each reset used to end the socketcand session in an unhandled ConnectionResetError (a
+    14-line traceback), and canopen logged a traceback for each short request.  Now stderr gets
+    one line per kind of message every ten seconds, and the node still answers the next upload."""
+    import socket
+    import struct
+
+    from tests.support.process import DevsimProcess
+
+    sim = DevsimProcess("run", "sers", "--pty", "--canopen", "7@127.0.0.1:0")
+    try:
+        line = sim.next_match(sim.out, lambda text: text.startswith("sers.canopen:"), 30, "the CANopen line")
+        host, _, port = line.split()[2].rpartition(":")
+        for _ in range(20):
+            client = socket.create_connection((host, int(port)), timeout=5)
+            client.sendall(b"junk <<< >")
+            client.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+            client.close()  # (with linger 0: a reset)
+        with socket.create_connection((host, int(port)), timeout=5) as raw:
+            received = b""
+            for command, reply in ((b"", b"< hi >"), (b"< open can0 >", b"< ok >"), (b"< rawmode >", b"< ok >")):
+                raw.sendall(command)
+                while reply not in received:
+                    received += raw.recv(4096)
+                received = b""
+            raw.sendall(b"< send 607 1 40 >" * 150 + b"< send 607 2 40 00 >" * 150)
+            raw.sendall(b"< send 607 8 40 00 10 00 00 00 00 00 >")  # upload 1000h: the device type
+            while b"< frame 587" not in received or b" 43001000" not in received:
+                chunk = raw.recv(65536)
+                assert chunk, "the server closed the connection"
+                received += chunk
+    finally:
+        sim.interrupt()
+    errors: list[str] = []
+    while (text := sim.err.get(timeout=10)) is not None:
+        errors.append(text)
+    assert not any("Traceback" in text for text in errors), errors[:20]
+    assert sum("canopen:" in text for text in errors) <= 4, errors
