@@ -81,6 +81,20 @@ def test_a_master_asking_for_a_broadcast_target_gets_a_star(sers: Plant) -> None
     assert host.ask("#P2=1\r") == b"#P2=1\rP2=*\n\r\nok1\n\r"
 
 
+def test_a_broadcast_target_is_no_number(sers: Plant) -> None:
+    """With Z=* (P1 holds '*') every use of Z as a number is error 19, as V=Z already was: X=Z,
+    a comparison, arithmetic, a master's P2=Z.  (Found by fuzzing: they raised TypeError and the
+    drive went silent.)  Z=0 ends it."""
+    host = sers.host
+    host.ask("#Z=*\r")
+    for statement in ("X=Z", "X=5-Z", "-Z", "P2=Z"):
+        assert host.ask(f"#{statement}\r") == f"#{statement}\n** nur bei P1 oder z erlaubt\n\r\r".encode()
+    assert host.ask("#IF Z=1 O1=1\r") == b"#IF Z=1 O1=1\r\n** nur bei P1 oder z erlaubt\n\r"
+    assert host.ask("#Z?\r").startswith(b"#Z?\rZ=*\n\r")
+    host.ask("#Z=0\r")
+    assert host.ask("#X=Z\r").startswith(b"#X=Z\r\nok")
+
+
 def test_master_broadcast_does_not_wait(plant_factory) -> None:
     plant: Plant = plant_factory({"address": 0}, {"address": 1}, {"address": 2})
     download(plant, 200, ["Z=*", "ON", "Z=0", "O1=1"])

@@ -524,7 +524,10 @@ class ParameterAccess:
             return self.param_value(1300)
         if a.kind == "O" and not 1 <= int(a.ref) <= 16:
             raise SersError(4)
-        return self.param_value(self.address_number(a))
+        value = self.param_value(self.address_number(a))
+        if value == "*":
+            raise SersError(19)  # Z=* names a broadcast, not a number ('*' only with P1 or Z)
+        return value
 
     def j_value(self, n: int) -> int:
         """J1..J5 (§4.6.1): 1 = 24 V at the input (inverse of the P1013 'open' bits)."""
@@ -669,13 +672,12 @@ class ParameterAccess:
                     raise SersError(13)
                 return pdef.name_en if self.english else pdef.name
             raise SersError(13)
-        value = self.operand_value(target)
         if target.kind in ("P", "alias", "O"):
             number = self.address_number(target)
             if number == 1 and self.ram.get(1) == "*":
                 return f"{target.text}=*"
-            return f"{target.text}={self.format_value(number, value)}"
-        return f"{target.text}={int(value)}"
+            return f"{target.text}={self.format_value(number, self.operand_value(target))}"
+        return f"{target.text}={int(self.operand_value(target))}"
 
     def list_parameters(self, arg: str) -> list[str]:
         """LISTP (G-LIST): ``P<n>=<value>`` in ascending order; P1028 bit 4 adds names."""
