@@ -193,6 +193,33 @@ def test_feed_rate_override_scales_jog(sers: Plant) -> None:
     assert sers.read("axis.velocity") == pytest.approx(-150 * 12800 / 60)
 
 
+def test_a_jog_or_homing_that_cannot_move_is_refused(sers: Plant) -> None:
+    """With override P108 = 0 %, a jog or homing speed of 0 or a ramp of 0 the drive cannot
+    move: the command is answered V or A too small and the drive stays at rest, and an input
+    that asks for homing records the error.  (Found by fuzzing: the axis raised, and the drive
+    never answered again.)"""
+    host = sers.host
+    host.ask("#ON P1035=0\r")
+    assert host.ask("#P108=0 RS\r").endswith(b"RS\r\n*V zu klein\n\r")
+    assert host.ask("#P108=100 P1018=0 RS\r").endswith(b"RS\r\n*A zu klein\n\r")
+    assert host.ask("#P1018=100 P41=0 H\r").endswith(b"H\n*V zu klein\n\r\r")
+    assert host.ask("#P41=60 P42=0 H\r").endswith(b"H\n*A zu klein\n\r\r")
+    sers.advance(1.0)
+    assert sers.read("motion.kind") is None and sers.read("axis.velocity") == 0
+    host.ask("#P1021=16\r")  # I5: homing
+    sers.set("input.I5", True)
+    assert sers.read("motion.kind") is None and sers.read("param.P1137") == 119
+
+
+def test_an_overrun_from_an_event_true_at_the_start(sers: Plant) -> None:
+    """RS:I1=0 with I1 already 0 ends the jog at once; the overrun P1039 is then travelled at
+    the jog speed (the axis had no speed yet; found by fuzzing, the move raised)."""
+    sers.host.ask("#ON P1035=0 P1039=10\r")
+    assert sers.host.ask("#RS:I1=0\r") == b"#RS:I1=0\r\nok0\n\r"
+    sers.settle()
+    assert sers.read("axis.position") == pytest.approx(10 * 12800 / 360)
+
+
 def test_homing_negative_with_limit_switch_as_reference(plant_factory) -> None:
     plant = plant_factory({"axis": {"limit_left": -50 * DEG}, "params": {"P147": 3}})
     plant.host.ask("#ON H\r")

@@ -191,6 +191,7 @@ class Motion:
             raise SersError(70)
         speed = float(self.ram[1019 if name[1] == "S" else 1020]) * float(self.ram.get(108, 100)) / 100
         accel = float(self.ram[1018])
+        _can_move(speed, accel)
         if not (self.motion == "jog" and self._jog_dir == direction and self._jog_speed == speed):
             self._servo_check()
             self._begin_motion("jog", accel)
@@ -222,7 +223,8 @@ class Motion:
         if overrun:
             target = self.axis.position() + self._jog_dir * abs(overrun)
             self.motion = "stopping"
-            self.axis.move_to(target, abs(self.axis.velocity()), float(self.ram[1018]), on_done=self._motion_finished)
+            speed = abs(self.axis.velocity()) or self._jog_speed  # (the event came as the jog began)
+            self.axis.move_to(target, speed, float(self.ram[1018]), on_done=self._motion_finished)
         else:
             self.stop_motion()
 
@@ -256,6 +258,8 @@ class Motion:
             signal = "index" if p147 & 64 and not p147 & 128 else "reference"
             self._motion_checks(0)
         accel = float(self.ram[42])
+        _can_move(float(self.ram[41]) * float(self.ram.get(108, 100)) / 100, accel)
+        _can_move(float(self.ram[1003]), accel)
         self._homing = {"signal": signal, "direction": direction, "phase": "seek", "p147": p147}
         self._begin_motion("home", accel)
         if signal == "index":
@@ -577,3 +581,12 @@ class Motion:
         elif n <= 7:
             self.ram[1100 + n - 4] = int(value)
 
+
+def _can_move(speed: float, accel: float) -> None:
+    """A jog or a homing run needs a speed and an acceleration above 0; with P108 = 0 % or a
+    speed or ramp parameter set to 0 it is refused as V or A too small [SIM-CHOICE: the manual
+    does not say what the drive does; it cannot move, and the simulator must not fail]."""
+    if not speed > 0:
+        raise SersError(121)
+    if not accel > 0:
+        raise SersError(119)
