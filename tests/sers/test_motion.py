@@ -211,6 +211,19 @@ def test_a_jog_or_homing_that_cannot_move_is_refused(sers: Plant) -> None:
     assert sers.read("motion.kind") is None and sers.read("param.P1137") == 119
 
 
+def test_a_move_whose_backlash_legs_cannot_creep_is_refused(sers: Plant) -> None:
+    """With backlash P1037 the final approach creeps at P1003; with P1003 = 0 the move is
+    refused as V too small before anything starts (found by fuzzing: the second leg raised)."""
+    host = sers.host
+    host.ask("#ON P1037=5 P1003=0\r")
+    assert host.ask("#W=360 E\r") == b"#W=360 E\r\n*V zu klein\n\r"
+    assert sers.read("motion.kind") is None
+    host.ask("#P1003=10\r")
+    assert host.ask("#W=360 E\r").startswith(b"#W=360 E\r\nok")
+    sers.settle()
+    assert sers.read("axis.position") == pytest.approx(12800)
+
+
 def test_an_overrun_from_an_event_true_at_the_start(sers: Plant) -> None:
     """RS:I1=0 with I1 already 0 ends the jog at once; the overrun P1039 is then travelled at
     the jog speed (the axis had no speed yet; found by fuzzing, the move raised)."""

@@ -72,10 +72,13 @@ class Motion:
         self._speed = float(self.ram[91])
         self._accel = float(self.ram[138])
         self._target_physical = target + self.offset
+        legs = self._backlash_legs(p51 + self.offset, self._target_physical)
+        for _target, speed in legs:
+            _can_move(speed, self._accel)  # (the backlash legs creep at P1003)
         self._servo_check()
         self._begin_motion("position", self._accel)
         self._setpoint = self._target_physical
-        self._legs = self._backlash_legs(p51 + self.offset, self._target_physical)
+        self._legs = legs
         self._next_leg()
         self._arm_position_watches()
 
