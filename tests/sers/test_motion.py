@@ -224,6 +224,25 @@ def test_a_move_whose_backlash_legs_cannot_creep_is_refused(sers: Plant) -> None
     assert sers.read("axis.position") == pytest.approx(12800)
 
 
+def test_ramp_writes_during_a_run_do_not_break_it(plant_factory) -> None:
+    """A homing run creeps and brakes with P1003/P42 as they were at its start, a jog's overrun
+    with the jog's own ramp: setting them to 0 meanwhile used to raise in the axis at the next
+    phase (found by fuzzing).  POS0 with P41 = 0 is refused as V too small."""
+    plant = plant_factory({"axis": {"reference_low": 20000}})
+    host = plant.host
+    host.ask("#ON H\r")
+    host.ask("#P1003=0 P42=0\r")
+    plant.settle()
+    assert plant.read("homed") is True and plant.read("axis.position") == pytest.approx(20000)
+    host.ask("#P1003=10 P42=100 P1035=0 P1039=10 RS:I1=1\r")
+    plant.advance(1.0)
+    host.ask("#P1018=0\r")
+    plant.set("input.I1", True)
+    plant.settle()
+    assert plant.read("motion.kind") is None
+    assert host.ask("#P41=0 POS0\r").endswith(b"POS0\r\n*V zu klein\n\r")
+
+
 def test_an_overrun_from_an_event_true_at_the_start(sers: Plant) -> None:
     """RS:I1=0 with I1 already 0 ends the jog at once; the overrun P1039 is then travelled at
     the jog speed (the axis had no speed yet; found by fuzzing, the move raised)."""

@@ -170,6 +170,7 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self._posr_attempts = 0
         self.max_load_angle = 0.0
         self._jog_dir = 0
+        self._jog_speed = self._jog_accel = 0.0  # (of the jog under way)
         self._jog_until: st.Condition | None = None
         self._short_latched = False
         self._stop_cycled = True

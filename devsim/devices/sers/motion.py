@@ -200,6 +200,7 @@ class Motion:
             self._begin_motion("jog", accel)
             self._jog_dir = direction
             self._jog_speed = speed
+            self._jog_accel = accel
             self.axis.jog(direction, speed, accel)
             self._arm_position_watches()
         self._jog_until = until
@@ -227,7 +228,7 @@ class Motion:
             target = self.axis.position() + self._jog_dir * abs(overrun)
             self.motion = "stopping"
             speed = abs(self.axis.velocity()) or self._jog_speed  # (the event came as the jog began)
-            self.axis.move_to(target, speed, float(self.ram[1018]), on_done=self._motion_finished)
+            self.axis.move_to(target, speed, self._jog_accel, on_done=self._motion_finished)
         else:
             self.stop_motion()
 
@@ -263,7 +264,9 @@ class Motion:
         accel = float(self.ram[42])
         _can_move(float(self.ram[41]) * float(self.ram.get(108, 100)) / 100, accel)
         _can_move(float(self.ram[1003]), accel)
-        self._homing = {"signal": signal, "direction": direction, "phase": "seek", "p147": p147}
+        # (creep speed and ramp as at the start: a write during the run cannot stop it midway)
+        self._homing = {"signal": signal, "direction": direction, "phase": "seek", "p147": p147,
+                        "creep": float(self.ram[1003]), "accel": accel}
         self._begin_motion("home", accel)
         if signal == "index":
             self._watches.append(self.axis.watch_index(self._on_index))
@@ -283,7 +286,7 @@ class Motion:
     def _creep(self) -> None:
         assert self._homing is not None
         self._homing["phase"] = "creep"
-        self.axis.jog(-self._homing["direction"], float(self.ram[1003]), float(self.ram[42]))
+        self.axis.jog(-self._homing["direction"], self._homing["creep"], self._homing["accel"])
 
     def _on_index(self, _direction: int) -> None:
         """Encoder zero pulse (once per motor revolution) during homing with P147 bit 6/7."""
@@ -304,14 +307,14 @@ class Motion:
         phase, p147 = homing["phase"], homing["p147"]
         if phase == "seek" and active:
             homing["phase"] = "braking"
-            self.axis.stop(float(self.ram[42]), on_done=self._creep)
+            self.axis.stop(homing["accel"], on_done=self._creep)
         elif phase == "creep" and not active:
             # G-HOME: at creep speed the drive stops exactly at the falling edge
             if p147 & 32 and homing["signal"] == "reference":
                 homing["phase"] = "measure"
                 self.axis.quick_stop()
                 homing["first_edge"] = self.axis.position()
-                self.axis.jog(homing["direction"], float(self.ram[1003]), float(self.ram[42]))
+                self.axis.jog(homing["direction"], homing["creep"], homing["accel"])
             elif p147 & 128:
                 homing["phase"] = "to_index"  # keep creeping to the next zero pulse
                 self._watches.append(self.axis.watch_index(self._on_index))
@@ -323,7 +326,7 @@ class Motion:
             homing["phase"] = "centre"
             self.axis.quick_stop()
             centre = (homing["first_edge"] + self.axis.position()) / 2
-            self.axis.move_to(centre, float(self.ram[1003]), float(self.ram[42]), on_done=self._homing_done)
+            self.axis.move_to(centre, homing["creep"], homing["accel"], on_done=self._homing_done)
 
     def _electrical_reset(self) -> None:
         """P147 bit 2/7: move on to the next electrical zero (every 256 increments)."""
@@ -338,7 +341,7 @@ class Motion:
         else:
             target = math.floor(here / ELECTRICAL_PERIOD + 1e-9) * ELECTRICAL_PERIOD
         homing["phase"] = "reset"
-        self.axis.move_to(target, float(self.ram[1003]), float(self.ram[42]), on_done=self._homing_done)
+        self.axis.move_to(target, homing["creep"], homing["accel"], on_done=self._homing_done)
 
     def _homing_done(self) -> None:
         self.offset = self.axis.position()
@@ -371,6 +374,7 @@ class Motion:
         target = round(p51 / ELECTRICAL_PERIOD) * ELECTRICAL_PERIOD
         direction = (target > p51) - (target < p51)
         self._motion_checks(direction)
+        _can_move(float(self.ram[41]), float(self.ram[42]))
         self._begin_motion("pos0", float(self.ram[42]))
 
         def done() -> None:
@@ -398,6 +402,7 @@ class Motion:
         target = self._setpoint if self._setpoint is not None else float(self.ram[47]) + self.offset
         direction = (target > self.axis.position()) - (target < self.axis.position())
         self._motion_checks(direction)
+        _can_move(float(self.ram[41]), float(self.ram[42]))
         self._begin_motion("posr", float(self.ram[42]))
         self.axis.move_to(target, float(self.ram[41]), float(self.ram[42]), on_done=self._posr_done)
         self._arm_position_watches()
