@@ -7,9 +7,6 @@ from __future__ import annotations
 import csv
 import math
 import os
-import signal
-import subprocess
-import sys
 import tempfile
 import time
 from collections.abc import Iterator
@@ -25,6 +22,7 @@ from devsim.core.registry import device_class, kinds
 from devsim.core.runtime import Runtime
 from devsim.scenario.runner import run_scenario
 from devsim.scenario.schema import load_scenario
+from tests.support.process import DevsimProcess
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIO = ROOT / "scenarios" / "sers" / "absolute_positioning.yaml"
@@ -227,21 +225,12 @@ def sockdir() -> Iterator[str]:
 def test_devsim_run_writes_the_log_and_plot_draws_it(sockdir: str, tmp_path: Path) -> None:
     log_path, trace_path, picture = tmp_path / "run.csv", tmp_path / "run.trace", tmp_path / "run.png"
     addr = f"unix:{sockdir}/ctl.sock"
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "devsim", "run", "sers", "--virtual", "--control", addr, "--trace", str(trace_path),
-         "--motion-log", str(log_path), "--motion-resolution", "0.02"],
-        cwd=ROOT, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )
+    sim = DevsimProcess("run", "sers", "--virtual", "--control", addr, "--trace", str(trace_path),
+                        "--motion-log", str(log_path), "--motion-resolution", "0.02")
     try:
-        assert proc.stdout is not None
-        lines = {}
-        while "control" not in lines:
-            line = proc.stdout.readline()
-            assert line, proc.stderr.read() if proc.stderr else ""
-            name, _, value = line.strip().partition(": ")
-            lines[name] = value
-        pty = lines["sers"].split(" ", 1)[1]
+        seen: list[str] = []
+        sim.next_match(sim.out, lambda line: line.startswith("control:"), 60, "the control line", keep=seen)
+        pty = dict(line.partition(": ")[::2] for line in seen)["sers"].split(" ", 1)[1]
         with ControlClient(addr) as client, serial.Serial(pty, 9600, timeout=5) as port:
             client.request("advance", seconds=3.0)  # boot
             port.write(b"#1 ON V=60 A=100 WR=90 E\r")
@@ -252,9 +241,8 @@ def test_devsim_run_writes_the_log_and_plot_draws_it(sockdir: str, tmp_path: Pat
             assert b"ok0" in reply
             client.request("advance", seconds=1.0)
     finally:
-        proc.send_signal(signal.SIGINT)
-        proc.wait(timeout=15)
-    assert proc.returncode == 0
+        status = sim.interrupt()
+    assert status == 0
     rows = rows_of(log_path)
     events = [(float(r["time"]), r["event"]) for r in rows if r["event"].startswith("move_")]
     assert [name for _, name in events] == ["move_start", "move_end"]
@@ -271,24 +259,17 @@ def test_devsim_up_logs_every_device_of_the_plant(sockdir: str, tmp_path: Path) 
     plant.write_text("devices:\n  - {name: feeder, kind: sers}\n  - {name: table, kind: pcd4h3}\n")
     log_path = tmp_path / "plant.csv"
     addr = f"unix:{sockdir}/up.sock"
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "devsim", "up", str(plant), "--virtual", "--control", addr,
-         "--motion-log", str(log_path), "--motion-resolution", "0.5"],
-        cwd=ROOT, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )
+    sim = DevsimProcess("up", str(plant), "--virtual", "--control", addr, "--motion-log", str(log_path),
+                        "--motion-resolution", "0.5")
     try:
-        assert proc.stdout is not None
-        while not (line := proc.stdout.readline()).startswith("control:"):
-            assert line, proc.stderr.read() if proc.stderr else ""
+        sim.next_match(sim.out, lambda line: line.startswith("control:"), 60, "the control line")
         with ControlClient(addr) as client:
             client.request("advance", seconds=3.0)
             client.request("set", device="table", name="axis.2.position", value=500)
             client.request("advance", seconds=1.0)
     finally:
-        proc.send_signal(signal.SIGINT)
-        proc.wait(timeout=15)
-    assert proc.returncode == 0
+        status = sim.interrupt()
+    assert status == 0
     rows = rows_of(log_path)
     assert {(r["device"], r["axis"]) for r in rows} == {("feeder", "axis"), ("table", "axis.1"), ("table", "axis.2")}
     moved = [(float(r["time"]), r["position"]) for r in rows if r["axis"] == "axis.2"]

@@ -4,12 +4,9 @@ mosquitto's own clients as subprocesses, every wait bounded."""
 from __future__ import annotations
 
 import json
-import queue
 import shutil
 import subprocess
 import sys
-import threading
-import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -17,7 +14,8 @@ from typing import Any
 import pytest
 
 from tests.support.broker import Broker, _program, mosquitto_missing
-from tests.support.process import devsim_env
+from tests.support.process import OutputEnded, collect_lines, devsim_env, next_match
+from tests.support.process import stop as stop_process
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -32,53 +30,29 @@ devices:
 """
 
 
-def _env() -> dict[str, str]:
-    return devsim_env()
-
-
 class Program:
     """A subprocess whose stdout lines are collected by a thread; stderr goes to a file."""
 
     def __init__(self, args: list[str], log: Path) -> None:
         self.log = log
         self._err = log.open("w")
-        self.proc = subprocess.Popen(args, cwd=ROOT, env=_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+        self.proc = subprocess.Popen(args, cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                                      stderr=self._err, text=True)
-        self.lines: queue.Queue[str | None] = queue.Queue()
+        self.lines = collect_lines(self.proc.stdout)
         self.seen: list[str] = []
-        threading.Thread(target=self._pump, daemon=True).start()
-
-    def _pump(self) -> None:
-        assert self.proc.stdout is not None
-        for line in self.proc.stdout:
-            self.lines.put(line.rstrip("\n"))
-        self.lines.put(None)
 
     def wait_for(self, prefix: str, timeout: float = 30.0) -> str:
         """The first stdout line (from now on) starting with ``prefix``; fails after ``timeout``."""
-        deadline = time.monotonic() + timeout
-        while True:
-            try:
-                line = self.lines.get(timeout=max(0.0, deadline - time.monotonic()))
-            except queue.Empty:
-                raise AssertionError(f"no line {prefix!r} within {timeout} s; got {self.seen}; "
-                                     f"stderr: {self.log.read_text()[-2000:]}") from None
-            if line is None:
-                self.proc.wait(5)
-                raise AssertionError(f"{self.proc.args} ended ({self.proc.returncode}) before {prefix!r}; "
-                                     f"got {self.seen}; stderr: {self.log.read_text()[-2000:]}")
-            self.seen.append(line)
-            if line.startswith(prefix):
-                return line
+        try:
+            return next_match(self.lines, lambda line: line.startswith(prefix), timeout, f"line {prefix!r}",
+                              keep=self.seen)
+        except AssertionError as exc:
+            ended = f" (status {self.proc.wait(5)})" if isinstance(exc, OutputEnded) else ""
+            raise AssertionError(f"{self.proc.args}: {exc}{ended}; got {self.seen}; "
+                                 f"stderr: {self.log.read_text()[-2000:]}") from None
 
     def stop(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(10)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
+        stop_process(self.proc)
         self._err.close()
 
 
@@ -92,7 +66,7 @@ class Member(Program):
 
 def ctl(url: str, *args: str, ok: bool = True) -> Any:
     """``devsim ctl --fleet URL ARGS``: its JSON (ok) or its stderr (not ok)."""
-    done = subprocess.run([sys.executable, "-m", "devsim", "ctl", "--fleet", url, *args], cwd=ROOT, env=_env(),
+    done = subprocess.run([sys.executable, "-m", "devsim", "ctl", "--fleet", url, *args], cwd=ROOT, env=devsim_env(),
                           capture_output=True, text=True, timeout=60)
     if ok:
         assert done.returncode == 0, done.stderr

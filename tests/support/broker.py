@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 from tests.support.process import free_port
+from tests.support.process import stop as stop_process
 
 __all__ = ["Broker", "mosquitto_missing"]
 
@@ -73,13 +74,8 @@ class Broker:
         return path.read_text(errors="replace") if path.exists() else ""
 
     def stop(self) -> None:
-        if self.process is not None and self.process.poll() is None:
-            self.process.terminate()
-            try:
-                self.process.wait(5)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-                self.process.wait()
+        if self.process is not None:
+            stop_process(self.process, timeout=5)
         if self.process is not None and self.process.stderr is not None:
             self.process.stderr.close()
         shutil.rmtree(self.directory, ignore_errors=True)

@@ -17,6 +17,7 @@ from collections.abc import Callable
 from typing import Any
 
 from tests.support.broker import _program
+from tests.support.process import stop as stop_process
 
 __all__ = ["Message", "Sub", "pub"]
 
@@ -87,13 +88,7 @@ class Sub:
         return self
 
     def close(self) -> str:
-        if self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(5)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
+        stop_process(self.proc, timeout=5)
         return self.proc.stderr.read() if self.proc.stderr is not None else ""
 
     def __enter__(self) -> Sub:

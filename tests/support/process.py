@@ -1,6 +1,7 @@
-"""``python -m devsim ARGS`` as a subprocess for tests: its stdout and stderr lines collected by
-threads into queues, every wait bounded (the live and the record/replay tests); its environment;
-a free loopback port."""
+"""Subprocesses for tests: ``python -m devsim ARGS`` with its stdout and stderr lines collected by
+threads into queues (:class:`DevsimProcess`), the same for any program's lines
+(:func:`collect_lines`, :func:`next_match`, every wait bounded), a bounded stop; the environment
+that runs this checkout; a free loopback port."""
 
 from __future__ import annotations
 
@@ -14,9 +15,9 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
-__all__ = ["DevsimProcess", "ROOT", "devsim_env", "free_port"]
+__all__ = ["ROOT", "DevsimProcess", "OutputEnded", "collect_lines", "devsim_env", "free_port", "next_match", "stop"]
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -35,6 +36,54 @@ def free_port() -> int:
         return int(sock.getsockname()[1])
 
 
+def collect_lines(stream: IO[str] | None) -> queue.Queue[str | None]:
+    """A queue a thread fills with ``stream``'s lines (None at its end)."""
+    lines: queue.Queue[str | None] = queue.Queue()
+
+    def pump() -> None:
+        assert stream is not None
+        for line in stream:
+            lines.put(line.rstrip("\n"))
+        lines.put(None)
+
+    threading.Thread(target=pump, daemon=True).start()
+    return lines
+
+
+class OutputEnded(AssertionError):
+    """The lines ended before the one waited for."""
+
+
+def next_match(lines: queue.Queue[str | None], accept: Callable[[str], bool], timeout: float, what: str,
+               keep: list[str] | None = None) -> str:
+    """The first line of ``lines`` that ``accept`` takes (the ones before it dropped, or appended
+    to ``keep``); an AssertionError naming ``what`` after ``timeout``, :class:`OutputEnded` at
+    the end of the lines."""
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            line = lines.get(timeout=max(0.01, deadline - time.monotonic()))
+        except queue.Empty:
+            raise AssertionError(f"no {what} within {timeout} s") from None
+        if line is None:
+            raise OutputEnded(f"the output ended before {what}")
+        if keep is not None:
+            keep.append(line)
+        if accept(line):
+            return line
+
+
+def stop(proc: subprocess.Popen[Any], sig: int = signal.SIGTERM, timeout: float = 10.0) -> int:
+    """``sig`` to ``proc`` (if it runs) and a bounded wait, then SIGKILL; the exit status."""
+    if proc.poll() is None:
+        proc.send_signal(sig)
+    try:
+        return proc.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        return proc.wait()
+
+
 class DevsimProcess:
     """``python -m devsim ARGS`` with its output lines in ``out`` and ``err`` (None ends each)."""
 
@@ -42,41 +91,17 @@ class DevsimProcess:
         self.proc = subprocess.Popen([sys.executable, "-m", "devsim", *args], cwd=ROOT, env=devsim_env(),
                                      stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                      text=True)
-        self.out: queue.Queue[str | None] = queue.Queue()
-        self.err: queue.Queue[str | None] = queue.Queue()
-        for stream, into in ((self.proc.stdout, self.out), (self.proc.stderr, self.err)):
-            threading.Thread(target=self._pump, args=(stream, into), daemon=True).start()
-
-    @staticmethod
-    def _pump(stream: IO[str] | None, into: queue.Queue[str | None]) -> None:
-        assert stream is not None
-        for line in stream:
-            into.put(line.rstrip("\n"))
-        into.put(None)
+        self.out = collect_lines(self.proc.stdout)
+        self.err = collect_lines(self.proc.stderr)
 
     def next_match(self, lines: queue.Queue[str | None], accept: Callable[[str], bool], timeout: float,
                    what: str, keep: list[str] | None = None) -> str:
-        """The first line of ``lines`` that ``accept`` takes (the ones before it dropped, or
-        appended to ``keep``); an AssertionError naming ``what`` after ``timeout`` or at the end."""
-        deadline = time.monotonic() + timeout
-        while True:
-            try:
-                line = lines.get(timeout=max(0.01, deadline - time.monotonic()))
-            except queue.Empty:
-                raise AssertionError(f"no {what} within {timeout} s") from None
-            if line is None:
-                raise AssertionError(f"the process ended (status {self.proc.wait()}) before {what}")
-            if keep is not None:
-                keep.append(line)
-            if accept(line):
-                return line
+        """:func:`next_match`, the end of the lines said as the end of the process."""
+        try:
+            return next_match(lines, accept, timeout, what, keep)
+        except OutputEnded:
+            raise AssertionError(f"the process ended (status {self.proc.wait()}) before {what}") from None
 
     def interrupt(self) -> int:
         """SIGINT and a bounded wait (then SIGKILL); the exit status."""
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-        try:
-            return self.proc.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            return self.proc.wait()
+        return stop(self.proc, signal.SIGINT, 15)
