@@ -77,8 +77,13 @@ class Plant:
     def describe(self) -> list[str]:
         """One line per port, as ``devsim up`` prints them."""
         rows = []
+        on_bus: dict[str, list[str]] = {}
+        for device in self.spec.devices:
+            bus = device.transport_of("main").bus
+            if bus is not None:
+                on_bus.setdefault(bus, []).append(device.name)
         for name in self.transports:
-            members = [d.name for d in self.spec.devices if d.transport_of("main").bus == name]
+            members = on_bus.get(name, [])
             who = f"{name} ({', '.join(members)})" if members else name
             rows.append(f"{who}: {self.kinds[name]} {self.port(name)}")
         return rows + self.facades
