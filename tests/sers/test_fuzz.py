@@ -171,3 +171,41 @@ def test_random_noise_in_chunks_answers_as_bytes_do(data: list[bytes], cut: int)
     handling does."""
     stream = b"".join(data)
     assert _answers(stream, 1, "P11", "P12") == _answers(stream, cut, "P11", "P12")
+
+
+POLLS = [b"#P11?\r", b"#1P11?\r", b"#2P11?\r", b"#*P11?\r", b"#P11?\n", b"#1 P11?\r", b"#P11??\r", b"#P51?\r",
+         b"#V?\r", b"#O1?\r", b"#I3?\r", b"#P9999?\r", b"#P1?\r", b"#Z?\r", b"#TR?\r", b"#1" + b" " * 54 + b"P11?\r"]
+STATES = [b"#P1017=0\r", b"#P1017=1\r", b"#P1017=2\r", b"#2\r", b"#1\r", b"#Q\r", b"#P1019=0\r", b"#PGM\r",
+          b"#QUIT\r", b"#ON W=360 E\r", b"#P1=*\r", b"#P1=1\r", b"#P265=1\r", b"#P265=0\r", b"#RS\r", b"#OFF\r"]
+
+
+def _line_by_line(lines: list[bytes], bytewise: bool, pauses: list[float], shared: bool) -> tuple[object, ...]:
+    device, clock, out, _nvram = _device()
+    device.main.shared_line = shared
+    answers = []
+    for i, line in enumerate(lines):
+        for piece in ([line[k : k + 1] for k in range(len(line))] if bytewise else [line]):
+            device.feed(piece)
+        answers.append(bytes(out))
+        out.clear()
+        clock.advance(pauses[i] if i < len(pauses) else 0.0)
+    return answers, device.read("P11"), device.read("program")
+
+
+@settings(max_examples=300, deadline=None)
+@given(lines=hs.lists(hs.sampled_from(POLLS + STATES), max_size=30),
+       pauses=hs.lists(hs.sampled_from([0.0, 0.001, 0.3, 2.0]), max_size=30), shared=hs.booleans())
+def test_polls_line_by_line_answer_as_bytes_do(lines: list[bytes], pauses: list[float], shared: bool) -> None:
+    """A chunk that is one whole query line (a host's poll) is answered in one step
+    (``face._answer_poll``): in every echo mode, selected or not, on a shared line, in
+    programming mode, with errors and warnings pending and while the axis moves, exactly as the
+    same line taken byte by byte."""
+    assert _line_by_line(lines, False, pauses, shared) == _line_by_line(lines, True, pauses, shared)
+
+
+def test_the_poll_paths_are_taken() -> None:
+    from devsim.devices.sers.face import _poll_line
+
+    assert _poll_line(b"#1P11?\r") is not None and _poll_line(b"#P51??\n") is not None
+    for line in (b"#1P11?", b"#1P11?P12?\r", b"#1V=1\r", b"#1P11?\r#", b"P11?\r", b"#1" + b" " * 58 + b"P11?\r"):
+        assert _poll_line(line) is None, line

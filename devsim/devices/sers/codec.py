@@ -192,6 +192,16 @@ class Framer:
             self._overflow = True  # a text character beyond the limit (a '#' sets nothing)
         return stop
 
+    def whole_line(self, length: int, byte: int) -> None:
+        """Outside a line: a whole line of ``length`` characters (``#``, address, text, at most
+        :data:`MAX_LINE`) and its end ``byte`` were taken at once, as :meth:`begin_line`,
+        :meth:`take_text` and :meth:`end_line` would take them."""
+        self.in_line = False
+        self._addr = None
+        self._length = length
+        self._overflow = False
+        self._last_end = byte
+
     def end_line(self, byte: int) -> bool:
         """When :attr:`in_text`: CR or LF ``byte`` ends the line, as :meth:`feed` would;
         returns whether characters were dropped (the ``overflow`` of :class:`LineEnd`)."""

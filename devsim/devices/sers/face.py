@@ -90,6 +90,10 @@ class SersFace(Face):
         if not model.logic_alive or model.booting:
             return  # G-BOOT: input during the 2 s initialisation is discarded
         framer = self.framer
+        if self._line is None and not framer.in_line:
+            poll = _poll_line(data)
+            if poll is not None and self._answer_poll(poll, data):
+                return
         index, end = 0, len(data)
         while index < end:
             line = self._line
@@ -184,6 +188,36 @@ class SersFace(Face):
         line.text = text
         self._end_line(line, framer.end_line(data[end - 1]))
         return end
+
+    def _answer_poll(self, poll: _Poll, data: bytes) -> bool:
+        """A chunk that is one whole query line (a host's poll, see :func:`_poll_line`), between
+        lines: what :meth:`_begin_line` does with it, without framing and checking the line
+        again.  Only for a line this drive executes and answers, outside programming mode;
+        returns False (having done nothing) for any other."""
+        model = self.model
+        address = poll.address
+        if address is None:
+            if not model.selected:
+                return False
+        elif address != (model.cfg.address or 200):
+            return False
+        if model.program.editing:
+            return False
+        if address is not None:
+            model.addressed = True
+        self.framer.whole_line(poll.length, data[-1])
+        if self.echo:
+            self.send(data)
+        self._line = line = _Line()  # (what the query sets off waits for the line end)
+        line.execute = line.reply = True
+        try:  # what _progress does with the line's one statement, a query (_query)
+            self._out(line, model.query_text(poll.query) + "\n\r")
+        except SersError as exc:
+            self._error(line, exc.errno, exc.detail)
+        finally:
+            model.interpreter.poke()
+        self._reply_end(line)
+        return True
 
     def _failing_line(self, line: _Line, data: bytes, stop: int, end: int) -> int:
         """The rest of a whole line in the chunk whose first statement is an error before any
@@ -304,6 +338,11 @@ class SersFace(Face):
                 except SersError as exc:
                     self._error(line, exc.errno, exc.detail)
                 line.store = []
+        self._reply_end(line)
+
+    def _reply_end(self, line: _Line) -> None:
+        """The end of a line whose statements have run: its deferred answers and the
+        acknowledgement (§4.1), then the messages that waited for the line end."""
         if line.reply:
             if line.deferred:
                 self.send(bytes(line.deferred))
@@ -540,6 +579,34 @@ def _quiet(text: bytes) -> str | None:
         if done and (len(done) > 1 or done[0][1] != at + 1 or not _answers(done[0][0])):
             return None
     return chars
+
+
+@record
+class _Poll:
+    """A whole line that asks one thing (``#1P11?`` and its end), parsed once."""
+
+    address: int | str | None
+    query: st.Query
+    length: int  # characters counted for the line: all but its end
+
+
+@functools.lru_cache(maxsize=1024)
+def _poll_line(data: bytes) -> _Poll | None:
+    """``data`` as a :class:`_Poll` if it is exactly one whole line, within the 60 characters,
+    whose text is a single query (what a host polls with, again and again), else None.  Such a
+    line, taken character by character, runs nothing before its end (:func:`_quiet`)."""
+    if not 2 < len(data) <= codec.MAX_LINE + 1 or data[0] != codec.HASH or data[-1] not in _LINE_ENDS:
+        return None
+    if data.find(b"#", 1) >= 0 or data.find(b"\r", 0, -1) >= 0 or data.find(b"\n", 0, -1) >= 0:
+        return None
+    complete, address, stop = codec.Framer().begin_line(data, 0)
+    text = _quiet(data[stop:-1]) if complete else None
+    if text is None:
+        return None
+    result = st.parse(text, True)
+    if result.errno is not None or len(result.statements) != 1 or not isinstance(result.statements[0][0], st.Query):
+        return None
+    return _Poll(address, result.statements[0][0], len(data) - 1)
 
 
 @functools.lru_cache(maxsize=1024)
