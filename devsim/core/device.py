@@ -183,6 +183,7 @@ class Device:
         self.config: dict[str, Any] = dict(config or {})
         self.model = self.model_class(clock=clock, config=self.config, nvram=self.nvram, name=self.name)
         self._ports = {spec.name: Port(self, spec) for spec in self.ports}
+        self._main = self._ports[self.ports[0].name]
         for port_name, port in self._ports.items():
             face_class = self.face_classes.get(port_name)
             if face_class is not None:
@@ -206,16 +207,16 @@ class Device:
 
     @property
     def main(self) -> Port:
-        return self._ports[self.ports[0].name]
+        return self._main
 
     def attach(self, write: ByteSink | None) -> None:
         self.main.attach(write)
 
     def feed(self, data: bytes) -> None:
-        self.main.feed(data)
+        self._main.feed(data)
 
     def send(self, data: bytes) -> None:
-        self.main.send(data)
+        self._main.send(data)
 
     def host_disconnected(self) -> None:
         self.main.host_disconnected()

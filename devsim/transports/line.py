@@ -514,11 +514,15 @@ class Line:
         if not data:
             return
         self.bytes_out += len(data)
-        if not self._faults and self.tracer is None and self._clean():
-            stage = self._stages["to_host"]
-            if not stage.items:
-                stage.sink(data, len(data))  # the fault-free path
+        if not self._faults and self.tracer is None and self._clean() and not self._stages["to_host"].items:
+            if not self.pacing:  # the fault-free path: straight to the transport
+                write = self._write
+                if write is not None:
+                    self.bytes_delivered += len(data)
+                    write(data)
                 return
+            self._paced(data, len(data))
+            return
         device = self.device_settings
         sent = data
         lost = self._gate("to_host") if self._faults else None

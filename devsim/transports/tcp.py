@@ -77,7 +77,12 @@ class _Session(asyncio.BufferedProtocol):
         return self._view
 
     def buffer_updated(self, nbytes: int) -> None:
-        self.owner._received(self, bytes(self._view[:nbytes]))
+        owner = self.owner
+        endpoint = owner._endpoint
+        if owner._active is self and endpoint is not None and not self.backlog and nbytes <= SLICE:
+            owner._session_data(self, bytes(self._view[:nbytes]), endpoint)  # (what _received does)
+        else:
+            owner._received(self, bytes(self._view[:nbytes]))
 
     def eof_received(self) -> bool:
         return False  # half-close ends the session
@@ -233,6 +238,10 @@ class TcpTransport(Transport):
         if endpoint is None:
             return
         self._session_started(session, endpoint)
+
+        if type(self)._send is TcpTransport._send:
+            endpoint.attach(session.send)  # (detached again when the session ends)
+            return
 
         def write(data: bytes) -> None:
             if self._active is session:
