@@ -34,8 +34,16 @@ class ParameterAccess:
     # ======================================================================================
     @property
     def scaling(self) -> Scaling:
+        """The unit conversion of the weighting parameters as they are now (made again only when
+        one of them changed: a position query needs it twice)."""
         r = self.ram
-        return Scaling(int(r[76]), int(r[44]), int(r[160]), float(r[121]), float(r[122]), float(r[123]))
+        key = (r[76], r[44], r[160], r[121], r[122], r[123])
+        made = self.__dict__.get("_scaling")
+        if made is not None and made[0] == key:
+            return made[1]
+        scaling = Scaling(int(key[0]), int(key[1]), int(key[2]), float(key[3]), float(key[4]), float(key[5]))
+        self.__dict__["_scaling"] = (key, scaling)
+        return scaling
 
     def _factory_image(self) -> dict[int, Any]:
         """Factory defaults plus the configured EEPROM values, in internal units."""
