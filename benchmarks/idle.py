@@ -47,9 +47,10 @@ def main(argv: list[str] | None = None) -> int:
     runtime = Runtime().start()
     try:
         device = runtime.add_device(args.kind)
+        port = device.port_names()[0]  # the kind's first serial port (main, sbus, pg, v6 ...)
         transport = PtyTransport()
-        runtime.serve_sync(device, transport)
-        baud = runtime.call(lambda: device.serial_settings.baudrate)
+        runtime.serve_sync(device, transport, port=port)
+        baud = runtime.call(lambda: device.port(port).serial_settings.baudrate)
         with contextlib.ExitStack() as stack:
             if args.open:
                 stack.enter_context(serial.Serial(transport.address, baud))
@@ -63,7 +64,8 @@ def main(argv: list[str] | None = None) -> int:
     cpu = cpu1 - cpu0
     wall = wall1 - wall0
     percent = 100.0 * cpu / wall
-    print(f"idle: one {args.kind} on a pty ({transport.address}), real clock, host {'open' if args.open else 'absent'}")
+    print(f"idle: one {args.kind}, port {port} on a pty ({transport.address}), real clock,"
+          f" host {'open' if args.open else 'absent'}")
     print(f"  wall     {wall:8.2f} s")
     print(f"  cpu      {cpu * 1e3:8.2f} ms (user + system, whole process)")
     print(f"  load     {percent:8.4f} % of one core (target < 0.1 %): {'PASS' if percent < 0.1 else 'MISS'}")
