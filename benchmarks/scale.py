@@ -18,7 +18,9 @@ due.  Target: ≥ 2,000 devices on 2 cores with p99 < 5 ms and no missed poll.
                                [--poller c|python] [--kind sers|stub] [--rounds 2]
 
 It prints the CPU each side used over each phase (share of one core): the pollers, devsim's
-processes, the echo processes (CPU seconds over the phase's wall seconds).
+processes, the echo processes (CPU seconds over the phase's wall seconds), and how long the
+server processes were runnable but waited for a CPU (``/proc/PID/schedstat``, seconds per
+second of the phase, summed over the processes): answers wait that long too.
 """
 
 from __future__ import annotations
@@ -184,27 +186,35 @@ def _start_plant(kind: str, devices: int, workers: int, tmp: str) -> tuple[subpr
     return proc, ports
 
 
-def _tree_cpu(root: int) -> float:
-    """CPU seconds (user + system) used so far by process ``root`` and its living descendants."""
-    stats: dict[int, tuple[int, float]] = {}
+def _tree_cpu(root: int) -> tuple[float, float]:
+    """CPU seconds (user + system) used so far by process ``root`` and its living descendants,
+    and the seconds they spent runnable but waiting for a CPU (``/proc/PID/schedstat``)."""
+    stats: dict[int, tuple[int, float, float]] = {}
     for entry in os.listdir("/proc"):
         if entry.isdigit():
             try:
                 with open(f"/proc/{entry}/stat") as fh:
                     fields = fh.read().rsplit(")", 1)[1].split()
-            except OSError:
+                with open(f"/proc/{entry}/schedstat") as fh:
+                    waited = int(fh.read().split()[1]) / 1e9
+            except (OSError, IndexError, ValueError):
                 continue
-            stats[int(entry)] = (int(fields[1]), (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK"))
-    tree, total = {root}, 0.0
+            cpu = (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+            stats[int(entry)] = (int(fields[1]), cpu, waited)
+    tree = {root}
     for pid in sorted(stats):  # a child's pid is almost always above its parent's; look twice to be sure
         if stats[pid][0] in tree:
             tree.add(pid)
     for pid in sorted(stats):
         if stats[pid][0] in tree:
             tree.add(pid)
-    for pid in tree:
-        total += stats.get(pid, (0, 0.0))[1]
-    return total
+    found = [stats[pid] for pid in tree if pid in stats]
+    return sum(cpu for _, cpu, _ in found), sum(waited for _, _, waited in found)
+
+
+def _trees(roots: list[int]) -> tuple[float, float]:
+    totals = [_tree_cpu(root) for root in roots]
+    return sum(cpu for cpu, _ in totals), sum(waited for _, waited in totals)
 
 
 def _percentile(values: list[float], q: float) -> float:
@@ -217,10 +227,10 @@ class _Side:
     def __init__(self) -> None:
         self.rtts: list[float] = []
         self.missed = self.polls = 0
-        self.poller_cpu = self.server_cpu = self.wall = self.poller_wall = 0.0
+        self.poller_cpu = self.server_cpu = self.server_wait = self.wall = self.poller_wall = 0.0
 
     def collect(self, procs: list[tuple[subprocess.Popen[str], str]], servers: list[int]) -> None:
-        before, began = sum(map(_tree_cpu, servers)), time.monotonic()
+        before, began = _trees(servers), time.monotonic()
         walls = []
         for proc, out in procs:
             text, _ = proc.communicate(timeout=600)
@@ -236,7 +246,9 @@ class _Side:
             self.polls += data["polls"]
             self.poller_cpu += data["cpu"]
             walls.append(data["wall"])
-        self.server_cpu += sum(map(_tree_cpu, servers)) - before
+        after = _trees(servers)
+        self.server_cpu += after[0] - before[0]
+        self.server_wait += after[1] - before[1]
         self.wall += time.monotonic() - began
         self.poller_wall += max(walls)  # the pollers' measurement; wall: the whole phase
 
@@ -306,7 +318,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{label:>6}: {args.devices} endpoints at {args.rate:g} Hz for {args.seconds:g} s: "
               f"p50 {_percentile(side.rtts, 0.5) * 1e3:.2f} ms, p99 {_percentile(side.rtts, 0.99) * 1e3:.2f} ms, "
               f"missed {side.missed} of {side.polls} polls; CPU (cores): pollers {side.poller_cpu / side.poller_wall:.2f}, "
-              f"{label} {side.server_cpu / side.wall:.2f}")
+              f"{label} {side.server_cpu / side.wall:.2f}; {label}'s processes waited for a CPU "
+              f"{side.server_wait / side.wall:.2f} s per second")
     ok = _percentile(sim.rtts, 0.99) < 0.005 and sim.missed == 0
     print(f"target (p99 < 5 ms, no missed poll) with {args.devices} devices on {args.workers} workers: "
           f"{'met' if ok else 'missed'}; median ratio devsim/echo "
