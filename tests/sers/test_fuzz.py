@@ -176,7 +176,8 @@ def test_random_noise_in_chunks_answers_as_bytes_do(data: list[bytes], cut: int)
 POLLS = [b"#P11?\r", b"#1P11?\r", b"#2P11?\r", b"#*P11?\r", b"#P11?\n", b"#1 P11?\r", b"#P11??\r", b"#P51?\r",
          b"#V?\r", b"#O1?\r", b"#I3?\r", b"#P9999?\r", b"#P1?\r", b"#Z?\r", b"#TR?\r", b"#1" + b" " * 54 + b"P11?\r"]
 STATES = [b"#P1017=0\r", b"#P1017=1\r", b"#P1017=2\r", b"#2\r", b"#1\r", b"#Q\r", b"#P1019=0\r", b"#PGM\r",
-          b"#QUIT\r", b"#ON W=360 E\r", b"#P1=*\r", b"#P1=1\r", b"#P265=1\r", b"#P265=0\r", b"#RS\r", b"#OFF\r"]
+          b"#QUIT\r", b"#ON W=360 E\r", b"#P1=*\r", b"#P1=1\r", b"#P265=1\r", b"#P265=0\r", b"#RS\r", b"#OFF\r",
+          b"\n", b"\r", b"#1P11?\r#"]  # the second half of a line end pair; a line begun in the chunk
 
 
 def _line_by_line(lines: list[bytes], bytewise: bool, pauses: list[float], shared: bool) -> tuple[object, ...]:
