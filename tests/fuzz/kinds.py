@@ -6,9 +6,11 @@ in) and fed to the kind's ports in random chunks, mixed with clock advances, poi
 limits, declared faults, host disconnects, power cycles and reads of every point.  A step that
 raises, or that takes more than ``--watchdog`` seconds (a clock that cannot advance), is a finding:
 it is written to ``.fuzz/finding-KIND-SEED-N.json`` with every step since the device was made, and
-the fuzzer goes on with a fresh device.
+the fuzzer goes on with a fresh device.  A fresh device is also made every ``--fresh`` steps
+(default 200,000), so that the steps kept for a finding (and its replay) stay bounded: a
+5-million-step run kept them all, 1.9 GB.
 
-    python -m tests.fuzz.kinds KIND [--seconds 120] [--seed 1]
+    python -m tests.fuzz.kinds KIND [--seconds 120] [--seed 1] [--fresh 200000]
     python -m tests.fuzz.kinds KIND --replay .fuzz/finding-KIND-1-0.json
 
 A finding file is plain JSON (steps, bytes in hex): replaying one runs nothing but the steps.
@@ -199,7 +201,7 @@ def _timed(rig: Rig, step: Step, watchdog: float) -> None:
         signal.signal(signal.SIGALRM, previous)
 
 
-def fuzz(kind: str, seconds: float, seed: int, watchdog: float) -> int:
+def fuzz(kind: str, seconds: float, seed: int, watchdog: float, fresh: int = 200_000) -> int:
     corpus = load_corpus(kind)
     rng = random.Random(seed)
     rig = Rig(kind)
@@ -208,6 +210,9 @@ def fuzz(kind: str, seconds: float, seed: int, watchdog: float) -> int:
     history: list[Step] = []
     steps, end = 0, time.monotonic() + seconds
     while time.monotonic() < end:
+        if len(history) >= fresh:
+            rig, history = Rig(kind), []
+            fuzzer = Fuzzer(rng, corpus, rig.device)
         step = fuzzer.step()
         history.append(step)
         steps += 1
@@ -251,10 +256,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--watchdog", type=float, default=20.0, help="seconds one step may take")
     parser.add_argument("--replay", help="a finding file to run again")
+    parser.add_argument("--fresh", type=int, default=200_000, help="steps before a fresh device (default 200000)")
     args = parser.parse_args(argv)
     if args.replay:
         return replay(args.kind, args.replay, args.watchdog)
-    return fuzz(args.kind, args.seconds, args.seed, args.watchdog)
+    return fuzz(args.kind, args.seconds, args.seed, args.watchdog, max(1, args.fresh))
 
 
 if __name__ == "__main__":
