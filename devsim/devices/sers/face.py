@@ -100,8 +100,10 @@ class SersFace(Face):
             if model.addressed is False and self._unconcerned(line):
                 stop = framer.skip_unaddressed(data, index)  # lines for other drives: one step
                 if stop > index:
+                    if framer.in_line and (line is None or _ends_line(data, index, stop)):
+                        line = _Line()  # a line that began in the skip (not the one that ended there)
+                    self._line = line if framer.in_line else None
                     index = stop
-                    self._line = (line or _Line()) if framer.in_line else None
                     continue
             byte = data[index]
             if not framer.in_line:
@@ -607,6 +609,11 @@ def _poll_line(data: bytes) -> _Poll | None:
     if result.errno is not None or len(result.statements) != 1 or not isinstance(result.statements[0][0], st.Query):
         return None
     return _Poll(address, result.statements[0][0], len(data) - 1)
+
+
+def _ends_line(data: bytes, start: int, stop: int) -> bool:
+    """Whether a CR or LF is among ``data[start:stop]``."""
+    return data.find(b"\r", start, stop) >= 0 or data.find(b"\n", start, stop) >= 0
 
 
 @functools.lru_cache(maxsize=1024)
