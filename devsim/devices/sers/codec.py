@@ -18,7 +18,8 @@ import re
 
 from devsim.core.record import record
 
-__all__ = ["MAX_LINE", "Address", "address_value", "Framer", "Ignored", "LineEnd", "Noise", "Restart", "TextChar"]
+__all__ = ["MAX_LINE", "NO_ADDRESS", "Address", "address_value", "Framer", "Ignored", "LineEnd", "Noise", "read_address",
+           "Restart", "TextChar"]
 
 MAX_LINE = 60
 CR, LF, HASH = 0x0D, 0x0A, 0x23
@@ -76,8 +77,8 @@ _TEXT_END = re.compile(rb"[\r\n#]")
 # A '#' with an address after it: the only bytes that can select a drive that is not selected.
 _ADDRESSED = re.compile(rb"#[0-9*]")
 _ADDRESS = re.compile(rb"\*|[0-9]*")
-# Bytes after a '#' that cannot begin an address (a '#' is left to feed(), see begin_line).
-_NOT_ADDRESS = frozenset(range(256)) - frozenset(b"0123456789*#")
+#: Bytes after a '#' that cannot begin an address (a '#' is left to feed(), see begin_line).
+NO_ADDRESS = frozenset(range(256)) - frozenset(b"0123456789*#")
 
 
 class Framer:
@@ -135,11 +136,7 @@ class Framer:
         after it at once, as :meth:`feed` would byte by byte.  Returns whether the address is
         complete (the next byte is text or a line end), its value, and where the bytes taken
         end; an address the chunk cuts off (or a ``#`` right after it) is left to :meth:`feed`."""
-        after = data[start + 1] if start + 1 < len(data) else HASH
-        if after in _NOT_ADDRESS:  # the common case in noise: no address at all
-            stop = start + 1
-        else:
-            stop = _ADDRESS.match(data, start + 1).end()  # type: ignore[union-attr]
+        complete, address, stop = read_address(data, start)
         self._last_end = None
         if self.in_line:  # a restart inside the line: its length goes on
             self._length += stop - start
@@ -147,12 +144,24 @@ class Framer:
             self.in_line = True
             self._overflow = False
             self._length = stop - start
-        digits = data[start + 1 : stop].decode("ascii") if stop > start + 1 else ""
-        if stop < len(data) and data[stop] != HASH:
+        if complete:
             self._addr = None
-            return True, address_value(digits), stop
-        self._addr = digits
+            return True, address, stop
+        self._addr = data[start + 1 : stop].decode("ascii")
         return False, None, stop
+
+    def take_line(self, head: int, text: int) -> None:
+        """A ``#`` with its complete address (``head`` characters) and ``text`` characters of
+        text after it were taken at once, as :meth:`begin_line` and then :meth:`skip_text`
+        count them: a new line outside one, a restart inside one."""
+        if self.in_line:
+            self._length += head + text
+        else:
+            self.in_line, self._overflow, self._length = True, False, head + text
+        self._addr = None
+        self._last_end = None
+        if text and self._length > MAX_LINE:
+            self._overflow = True
 
     def skip_unaddressed(self, data: bytes, start: int) -> int:
         """For a drive that is not selected, outside a line or in the text of a line it
@@ -267,6 +276,19 @@ class Framer:
     def _end_address(self) -> Address:
         digits, self._addr = self._addr, None
         return Address(address_value(digits or ""))
+
+
+def read_address(data: bytes, start: int) -> tuple[bool, int | str | None, int]:
+    """``data[start]`` is a ``#``: the address after it, as :meth:`Framer.begin_line` takes it,
+    but changing nothing.  Returns whether it is complete (the next byte is text or a line
+    end), its value (None when incomplete) and where it ends."""
+    after = data[start + 1] if start + 1 < len(data) else HASH
+    if after in NO_ADDRESS:  # the common case in noise: no address at all
+        return True, None, start + 1
+    stop = _ADDRESS.match(data, start + 1).end()  # type: ignore[union-attr]
+    if stop < len(data) and data[stop] != HASH:
+        return True, address_value(data[start + 1 : stop].decode("ascii")), stop
+    return False, None, stop
 
 
 def address_value(digits: str) -> int | str | None:
