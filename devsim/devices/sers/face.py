@@ -99,7 +99,7 @@ class SersFace(Face):
         while index < end:
             line = self._line
             if model.addressed is False and self._unconcerned(line):
-                stop = framer.skip_unaddressed(data, index)  # lines for other drives: one step
+                stop = framer.skip_unaddressed(data, index, model.cfg.address or 200)  # other drives' lines
                 if stop > index:
                     if framer.in_line and (line is None or _ends_line(data, index, stop)):
                         line = _Line()  # a line that began in the skip (not the one that ended there)
@@ -153,8 +153,8 @@ class SersFace(Face):
                 return
 
     def _unconcerned(self, line: _Line | None) -> bool:
-        """Whether nothing this drive does depends on the bytes until the next ``#`` with an
-        address while it is not selected (see :meth:`codec.Framer.skip_unaddressed`): outside
+        """Whether nothing this drive does depends on the bytes until the next ``#`` with its
+        address or ``*`` while it is not selected (see :meth:`codec.Framer.skip_unaddressed`): outside
         a line or in one it neither executes nor answers, no echo of a CR/LF pair owed, no
         message waiting for a line end."""
         if self._last_replied or self._spontaneous:
