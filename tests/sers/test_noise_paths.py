@@ -80,6 +80,8 @@ def test_the_benchmarks_noise_in_pty_reads_leaves_what_bytes_leave(seed: int) ->
         # lines failing at once, one after the other, with restarts, pairs and noise between
         b"#\x00\r\n\x8f#Q\n\r#\x01#\x02#*\x03\r#1\x04\r#P11?\r",
         b"#P1017=2\r#\x00#\x01\r#P1017=1\r#P265=1\r#\x00\r#P265=0\r#P11?\r",
+        # beyond 60 characters a line's text is dropped, only echoed (and an overflow)
+        b"#1" + b" " * 70 + b"P11?\r#" + b" " * 57 + b"X=1\x00\r# " + b"1" * 65 + b"\r#1P11?\r",
         # not selected: other drives' addresses are skipped too; beyond 60 characters their
         # digits, like a '#', are no overflow, text is
         b"#2\r#" + b"A" * 58 + b"#5#1\r#1P11?\r",

@@ -133,15 +133,15 @@ class SersFace(Face):
                     if not model.logic_alive or model.booting:
                         return
                     continue
-                if line.execute and not line.error:
+                if line.execute and not line.error and framer.length < codec.MAX_LINE:
                     taken = self._take_text(line, data, index)  # a run of text in one step
                     if taken:
                         index += taken
                         if not model.logic_alive or model.booting:
                             return
                         continue
-                else:
-                    stop = framer.skip_text(data, index)  # text nobody executes: only echoed
+                else:  # text nobody executes, or beyond 60 characters (dropped): only echoed
+                    stop = framer.skip_text(data, index)
                     if line.reply and self.echo:
                         self.send(data[index:stop])
                     index = stop
