@@ -19,14 +19,16 @@ from devsim.devices.sers import SersDevice
 # show errors and warnings, programming mode, selection, broadcast.
 SETTINGS = [b"#P1017=0\r", b"#P1017=1\r", b"#P1017=2\r", b"#P265=1\r", b"#P265=0\r", b"#P1132=1\r",
             b"#P1131=-2\r", b"#P12=0\r", b"#PGM\r", b"#QUIT\r", b"#2\r", b"#1\r", b"#*\r", b"#Q\r"]
-PIECES = [b"#", b"#1", b"#2", b"#*", b"#01", b"#001", b"#0", b"#12", b"#5", b"#1#", b"\r", b"\n", b"\r\n", b"\n\r",
+PIECES = [b"#", b"#1", b"#2", b"#*", b"#01", b"#001", b"#0", b"#12", b"#012", b"#5", b"#200", b"#1#", b"\r", b"\n", b"\r\n", b"\n\r",
           b"\x8f", b"Q", b" ", b"1", b"5", b"?", b"P11?", b"A" * 70, b"A" * 57, b" " * 58, b"X=1", b"E", b"IF"]
 
 
-def _run(stream: bytes, cuts: list[int]) -> tuple[object, ...]:
-    """What a fresh drive sends and becomes when ``stream`` arrives cut at ``cuts`` (sizes, used
-    in turn)."""
-    device = SersDevice(clock=VirtualClock(), config={"boot_time": 0}, nvram=NonVolatileMemory(None))
+def _run(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False) -> tuple[object, ...]:
+    """What a fresh drive (DIP address ``address``, on a ``shared`` RS-485 line or not) sends
+    and becomes when ``stream`` arrives cut at ``cuts`` (sizes, used in turn)."""
+    device = SersDevice(clock=VirtualClock(), config={"boot_time": 0, "address": address},
+                        nvram=NonVolatileMemory(None))
+    device.main.shared_line = shared
     model = device.model
     out = bytearray()
     device.attach(out.extend)
@@ -54,10 +56,14 @@ def _run(stream: bytes, cuts: list[int]) -> tuple[object, ...]:
 
 @settings(max_examples=400, deadline=None)
 @given(data=hs.lists(hs.one_of(hs.binary(max_size=16), hs.sampled_from(PIECES + SETTINGS)), max_size=50),
-       cuts=hs.lists(hs.integers(min_value=1, max_value=300), min_size=1, max_size=8))
-def test_noise_in_chunks_leaves_what_bytes_leave(data: list[bytes], cuts: list[int]) -> None:
+       cuts=hs.lists(hs.integers(min_value=1, max_value=300), min_size=1, max_size=8),
+       address=hs.sampled_from([1, 1, 1, 0, 12]), shared=hs.booleans())
+def test_noise_in_chunks_leaves_what_bytes_leave(data: list[bytes], cuts: list[int], address: int,
+                                                 shared: bool) -> None:
+    """(Address 0 is the master, answering to #200; on a shared line a drive starts
+    unselected.)"""
     stream = b"".join(data)
-    assert _run(stream, [1]) == _run(stream, cuts)
+    assert _run(stream, [1], address, shared) == _run(stream, cuts, address, shared)
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3, 4])

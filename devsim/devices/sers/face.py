@@ -254,19 +254,22 @@ class SersFace(Face):
         fails before any statement completes (what random noise mostly is), with the restarts
         of the failed line, its end and the noise up to the next ``#``, one line after the
         other, as :meth:`_begin_line`, :meth:`_failing_line`, :meth:`_restart`, the line end
-        and the noise skip would do them.  Stops before a line it does not take whole (one
-        for another drive, one that runs a statement, one the chunk cuts off) or inside one
-        (a restart for another drive or whose address the chunk cuts off), with the line and
-        the framing as those paths leave them; returns where (``index``: nothing taken).  The
+        and the noise skip would do them.  Stops before a line it does not take (one for
+        another drive, one that runs a statement, one whose text in the chunk does not fail)
+        or inside one (a restart for another drive or whose address the chunk cuts off, the
+        chunk's end), with the line and the framing as those paths leave them; returns where
+        (``index``: nothing taken).  The
         echo up to the failing character leaves before the error is recorded, the rest of the
         line's answers with its end, before the line's end is handled."""
         model, framer, send, end = self.model, self.framer, self.send, len(data)
+        hash_, no_address, search, fails = codec.HASH, codec.NO_ADDRESS, _TEXT_END.search, _first_byte_errors()
+        mode = model.handshake_mode  # (only a statement changes it: none runs here)
         while True:
             # data[index] is a '#' outside a line
             if model.addressed is False:
                 return index  # (the general path skips lines for other drives in one step)
             stop = index + 1
-            if stop < end and data[stop] in codec.NO_ADDRESS:  # (most noise: no address)
+            if stop < end and data[stop] in no_address:  # (most noise: no address)
                 address = None
             else:
                 complete, address, stop = codec.read_address(data, index)
@@ -282,14 +285,12 @@ class SersFace(Face):
                 reply = False
             else:
                 return index
-            found = _TEXT_END.search(data, stop)
-            if found is None:
-                return index
-            finish = found.start()
+            found = search(data, stop)
+            finish = end if found is None else found.start()  # (the chunk may end the text)
             keep = min(finish, index + codec.MAX_LINE)  # the text kept (60 characters from the '#')
             if keep <= stop:
                 return index
-            errno = _fails_at_once(data[stop])
+            errno = fails[data[stop]]
             if errno:
                 cut = stop + 1
             else:
@@ -303,7 +304,7 @@ class SersFace(Face):
             self._line = line = _Line()
             line.execute = line.error = True
             line.reply = reply
-            if reply and model.handshake_mode in (0, 1):
+            if reply and mode in (0, 1):
                 send(data[index:cut])
             model.record_error(errno)  # (what _error does, its message from a table)
             mode = model.handshake_mode
@@ -319,7 +320,10 @@ class SersFace(Face):
             framer.take_line(stop - index, finish - stop)
             if reply and echo:
                 text += data[cut:finish]
-            while data[finish] == codec.HASH:  # a restart in the failed line: only echoed
+            if finish == end:  # (the line goes on in the next chunk)
+                send(text)
+                return end
+            while data[finish] == hash_:  # a restart in the failed line: only echoed
                 complete, address, stop = codec.read_address(data, finish)
                 if complete and address is None and model.selected:
                     line.execute = line.reply = True
@@ -332,7 +336,7 @@ class SersFace(Face):
                     send(text)
                     return self._restart(line, data, finish)
                 line.text, line.executed = "", 0
-                found = _TEXT_END.search(data, stop)
+                found = search(data, stop)
                 after = end if found is None else found.start()
                 framer.take_line(stop - finish, after - stop)
                 if line.reply and echo:
@@ -350,13 +354,17 @@ class SersFace(Face):
             index = finish + 1
             if not model.logic_alive or model.booting or model.addressed is False:
                 return index
-            if index < end and data[index] in _LINE_ENDS:  # the other half of a CR/LF pair, or noise
+            if index < end:
                 byte = data[index]
-                index += 1
-                for event in framer.feed(byte):
-                    self._on_event(event, byte)
-            if index < end and data[index] != codec.HASH:
-                index = framer.skip_noise(data, index)
+                if byte in _LINE_ENDS:  # the other half of a CR/LF pair, or noise
+                    index += 1
+                    for event in framer.feed(byte):
+                        self._on_event(event, byte)
+                    if index == end:
+                        return end
+                    byte = data[index]
+                if byte != hash_:
+                    index = framer.skip_noise(data, index)
             if index >= end:
                 return end
 
@@ -741,14 +749,16 @@ def _ends_line(data: bytes, start: int, stop: int) -> bool:
 
 
 @functools.cache
-def _fails_at_once(byte: int) -> int:
-    """The errno of a line's text whose first character ``byte`` (not CR, LF, ``#``) is an
-    error as it arrives (what :func:`_first_failure` finds at the first character), else 0."""
-    char = chr(byte)
-    if char in _EXTENDS_ONLY:
-        return 0
-    result = st.parse(char, False)
-    return result.errno or 0 if not result.statements else 0
+def _first_byte_errors() -> tuple[int, ...]:
+    """For each byte value: the errno of a line's text whose first character it is (not CR,
+    LF, ``#``) when that character is an error as it arrives (what :func:`_first_failure`
+    finds at the first character), else 0.  Made at the first use."""
+    errors = []
+    for byte in range(256):
+        char = chr(byte)
+        result = st.parse(char, False) if char not in _EXTENDS_ONLY else None
+        errors.append(result.errno or 0 if result is not None and not result.statements else 0)
+    return tuple(errors)
 
 
 @functools.lru_cache(maxsize=1024)
