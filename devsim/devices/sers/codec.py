@@ -14,11 +14,13 @@ means for the line being assembled.  The device decides what to echo, execute an
 
 from __future__ import annotations
 
+import functools
 import re
 
 from devsim.core.record import record
 
-__all__ = ["MAX_LINE", "Address", "address_value", "Framer", "Ignored", "LineEnd", "Noise", "Restart", "TextChar"]
+__all__ = ["MAX_LINE", "NO_ADDRESS", "Address", "address_value", "Framer", "Ignored", "LineEnd", "Noise", "read_address",
+           "Restart", "TextChar"]
 
 MAX_LINE = 60
 CR, LF, HASH = 0x0D, 0x0A, 0x23
@@ -73,11 +75,12 @@ _IGNORED = Ignored()
 
 
 _TEXT_END = re.compile(rb"[\r\n#]")
-# A '#' with an address after it: the only bytes that can select a drive that is not selected.
-_ADDRESSED = re.compile(rb"#[0-9*]")
+_NOT_HASH_OR_DIGIT = re.compile(rb"[^#0-9]")
+_DIGITS = re.compile(rb"[0-9]+")
+_DIGIT_BYTES = frozenset(b"0123456789")
 _ADDRESS = re.compile(rb"\*|[0-9]*")
-# Bytes after a '#' that cannot begin an address (a '#' is left to feed(), see begin_line).
-_NOT_ADDRESS = frozenset(range(256)) - frozenset(b"0123456789*#")
+#: Bytes after a '#' that cannot begin an address (a '#' is left to feed(), see begin_line).
+NO_ADDRESS = frozenset(range(256)) - frozenset(b"0123456789*#")
 
 
 class Framer:
@@ -135,11 +138,7 @@ class Framer:
         after it at once, as :meth:`feed` would byte by byte.  Returns whether the address is
         complete (the next byte is text or a line end), its value, and where the bytes taken
         end; an address the chunk cuts off (or a ``#`` right after it) is left to :meth:`feed`."""
-        after = data[start + 1] if start + 1 < len(data) else HASH
-        if after in _NOT_ADDRESS:  # the common case in noise: no address at all
-            stop = start + 1
-        else:
-            stop = _ADDRESS.match(data, start + 1).end()  # type: ignore[union-attr]
+        complete, address, stop = read_address(data, start)
         self._last_end = None
         if self.in_line:  # a restart inside the line: its length goes on
             self._length += stop - start
@@ -147,23 +146,34 @@ class Framer:
             self.in_line = True
             self._overflow = False
             self._length = stop - start
-        digits = data[start + 1 : stop].decode("ascii") if stop > start + 1 else ""
-        if stop < len(data) and data[stop] != HASH:
+        if complete:
             self._addr = None
-            return True, address_value(digits), stop
-        self._addr = digits
+            return True, address, stop
+        self._addr = data[start + 1 : stop].decode("ascii")
         return False, None, stop
 
-    def skip_unaddressed(self, data: bytes, start: int) -> int:
-        """For a drive that is not selected, outside a line or in the text of a line it
-        neither executes nor answers: where the next ``#`` followed by an address is (the
-        only thing that can concern it), with the lines in between framed in one step as
-        :meth:`feed` would byte by byte (line ends, restarts, the 60-character count).  A
-        ``#`` that ends the chunk is left to :meth:`feed` (its address may follow)."""
-        found = _ADDRESSED.search(data, start)
+    def take_line(self, head: int, text: int) -> None:
+        """A ``#`` with its complete address (``head`` characters) and ``text`` characters of
+        text after it were taken at once, as :meth:`begin_line` and then :meth:`skip_text`
+        count them: a new line outside one, a restart inside one."""
+        if self.in_line:
+            self._length += head + text
+        else:
+            self.in_line, self._overflow, self._length = True, False, head + text
+        self._addr = None
+        self._last_end = None
+        if text and self._length > MAX_LINE:
+            self._overflow = True
+
+    def skip_unaddressed(self, data: bytes, start: int, mine: int) -> int:
+        """For drive ``mine`` (its address) while it is not selected, outside a line or in the
+        text of a line it neither executes nor answers: where the next ``#`` that can concern
+        it is (followed by ``*`` or by its address), with the lines in between, other drives'
+        lines among them, framed in one step as :meth:`feed` would byte by byte (line ends,
+        restarts, the 60-character count).  A ``#`` whose address the chunk cuts off (or that
+        ends the chunk) is left to :meth:`feed` (more digits may follow)."""
+        found = _concerning(mine).search(data, start)
         stop = len(data) if found is None else found.start()
-        if found is None and stop > start and data[stop - 1] == HASH:
-            stop -= 1
         if stop <= start:
             return start
         last_end = max(data.rfind(b"\r", start, stop), data.rfind(b"\n", start, stop))
@@ -188,8 +198,8 @@ class Framer:
             tail = opened
         self._length += stop - tail
         beyond = min(self._length - MAX_LINE, stop - tail)
-        if beyond > 0 and data[stop - beyond : stop].strip(b"#"):
-            self._overflow = True  # a text character beyond the limit (a '#' sets nothing)
+        if beyond > 0 and _holds_text(data, stop - beyond, stop, tail):
+            self._overflow = True  # a text character beyond the limit (a '#' or an address sets nothing)
         return stop
 
     def whole_line(self, length: int, byte: int) -> None:
@@ -267,6 +277,41 @@ class Framer:
     def _end_address(self) -> Address:
         digits, self._addr = self._addr, None
         return Address(address_value(digits or ""))
+
+
+@functools.cache
+def _concerning(mine: int) -> re.Pattern[bytes]:
+    """A ``#`` that can concern drive ``mine`` while it is not selected: followed by ``*``, by
+    its address (leading zeros allowed), or by digits up to the chunk's end, or ending it."""
+    return re.compile(rb"#(?:\*|0*" + str(mine).encode() + rb"(?![0-9])|[0-9]*\Z)")
+
+
+def _holds_text(data: bytes, first: int, stop: int, line_start: int) -> bool:
+    """Whether ``data[first:stop]``, the last bytes of a line whose bytes in this chunk begin
+    at ``line_start`` (its ``#``, or text), holds a text character: any byte but ``#`` and the
+    digits of an address (right after a ``#``)."""
+    if _NOT_HASH_OR_DIGIT.search(data, first, stop):
+        return True
+    for run in _DIGITS.finditer(data, first, stop):  # (only '#' and digits left)
+        at = run.start()
+        while at > line_start and data[at - 1] in _DIGIT_BYTES:
+            at -= 1
+        if at == line_start or data[at - 1] != HASH:
+            return True
+    return False
+
+
+def read_address(data: bytes, start: int) -> tuple[bool, int | str | None, int]:
+    """``data[start]`` is a ``#``: the address after it, as :meth:`Framer.begin_line` takes it,
+    but changing nothing.  Returns whether it is complete (the next byte is text or a line
+    end), its value (None when incomplete) and where it ends."""
+    after = data[start + 1] if start + 1 < len(data) else HASH
+    if after in NO_ADDRESS:  # the common case in noise: no address at all
+        return True, None, start + 1
+    stop = _ADDRESS.match(data, start + 1).end()  # type: ignore[union-attr]
+    if stop < len(data) and data[stop] != HASH:
+        return True, address_value(data[start + 1 : stop].decode("ascii")), stop
+    return False, None, stop
 
 
 def address_value(digits: str) -> int | str | None:

@@ -30,6 +30,7 @@ _EXTENDS_ONLY = frozenset("0123456789.?")
 _COMPLETES = re.compile(b"[^" + re.escape("".join(sorted(_EXTENDS_ONLY)).encode()) + b"]")
 # The rest of a line: its text and its end (within 60 characters: checked by the caller).
 _TEXT_TO_END = re.compile(rb"([^\r\n#]+)[\r\n]")
+_TEXT_END = re.compile(rb"[\r\n#]")
 _LINE_ENDS = (codec.CR, codec.LF)
 
 
@@ -98,14 +99,22 @@ class SersFace(Face):
         while index < end:
             line = self._line
             if model.addressed is False and self._unconcerned(line):
-                stop = framer.skip_unaddressed(data, index)  # lines for other drives: one step
+                stop = framer.skip_unaddressed(data, index, model.cfg.address or 200)  # other drives' lines
                 if stop > index:
+                    if framer.in_line and (line is None or _ends_line(data, index, stop)):
+                        line = _Line()  # a line that began in the skip (not the one that ended there)
+                    self._line = line if framer.in_line else None
                     index = stop
-                    self._line = (line or _Line()) if framer.in_line else None
                     continue
             byte = data[index]
             if not framer.in_line:
                 if byte == codec.HASH:
+                    stop = self._failing_lines(data, index)  # lines of noise, one after the other
+                    if stop > index:
+                        index = stop
+                        if not model.logic_alive or model.booting:
+                            return
+                        continue
                     index = self._begin_line(data, index)  # '#' and the address in one step
                     continue
                 if framer.idle or byte not in _LINE_ENDS:
@@ -124,15 +133,15 @@ class SersFace(Face):
                     if not model.logic_alive or model.booting:
                         return
                     continue
-                if line.execute and not line.error:
+                if line.execute and not line.error and framer.length < codec.MAX_LINE:
                     taken = self._take_text(line, data, index)  # a run of text in one step
                     if taken:
                         index += taken
                         if not model.logic_alive or model.booting:
                             return
                         continue
-                else:
-                    stop = framer.skip_text(data, index)  # text nobody executes: only echoed
+                else:  # text nobody executes, or beyond 60 characters (dropped): only echoed
+                    stop = framer.skip_text(data, index)
                     if line.reply and self.echo:
                         self.send(data[index:stop])
                     index = stop
@@ -144,8 +153,8 @@ class SersFace(Face):
                 return
 
     def _unconcerned(self, line: _Line | None) -> bool:
-        """Whether nothing this drive does depends on the bytes until the next ``#`` with an
-        address while it is not selected (see :meth:`codec.Framer.skip_unaddressed`): outside
+        """Whether nothing this drive does depends on the bytes until the next ``#`` with its
+        address or ``*`` while it is not selected (see :meth:`codec.Framer.skip_unaddressed`): outside
         a line or in one it neither executes nor answers, no echo of a CR/LF pair owed, no
         message waiting for a line end."""
         if self._last_replied or self._spontaneous:
@@ -239,6 +248,125 @@ class SersFace(Face):
             self.send(data[stop + cut : finish])
         self._line_end(line, data[finish], framer.end_line(data[finish]))
         return finish + 1
+
+    def _failing_lines(self, data: bytes, index: int) -> int:
+        """From a ``#`` outside a line: whole lines this drive executes whose first statement
+        fails before any statement completes (what random noise mostly is), with the restarts
+        of the failed line, its end and the noise up to the next ``#``, one line after the
+        other, as :meth:`_begin_line`, :meth:`_failing_line`, :meth:`_restart`, the line end
+        and the noise skip would do them.  Stops before a line it does not take (one for
+        another drive, one that runs a statement, one whose text in the chunk does not fail)
+        or inside one (a restart for another drive or whose address the chunk cuts off, the
+        chunk's end), with the line and the framing as those paths leave them; returns where
+        (``index``: nothing taken).  The
+        echo up to the failing character leaves before the error is recorded, the rest of the
+        line's answers with its end, before the line's end is handled."""
+        model, framer, send, end = self.model, self.framer, self.send, len(data)
+        hash_, no_address, search, fails = codec.HASH, codec.NO_ADDRESS, _TEXT_END.search, _first_byte_errors()
+        mode = model.handshake_mode  # (only a statement changes it: none runs here)
+        while True:
+            # data[index] is a '#' outside a line
+            if model.addressed is False:
+                return index  # (the general path skips lines for other drives in one step)
+            stop = index + 1
+            if stop < end and data[stop] in no_address:  # (most noise: no address)
+                address = None
+            else:
+                complete, address, stop = codec.read_address(data, index)
+                if not complete:
+                    return index
+            if address is None:
+                if not model.selected:
+                    return index
+                reply = True
+            elif address == (model.cfg.address or 200):
+                reply = True
+            elif address == "*":
+                reply = False
+            else:
+                return index
+            found = search(data, stop)
+            finish = end if found is None else found.start()  # (the chunk may end the text)
+            keep = min(finish, index + codec.MAX_LINE)  # the text kept (60 characters from the '#')
+            if keep <= stop:
+                return index
+            errno = fails[data[stop]]
+            if errno:
+                cut = stop + 1
+            else:
+                failure = _first_failure(data[stop:keep])
+                if failure is None:
+                    return index
+                cut, errno = stop + failure[0], failure[1]
+            # the line fails at data[cut - 1]: take it
+            if address is not None and reply:
+                model.addressed = True
+            self._line = line = _Line()
+            line.execute = line.error = True
+            line.reply = reply
+            if reply and mode in (0, 1):
+                send(data[index:cut])
+            model.record_error(errno)  # (what _error does, its message from a table)
+            mode = model.handshake_mode
+            echo = mode in (0, 1)
+            text = _error_text(errno, model.english, model.cfg.encoding) if reply else b""
+            if mode == 2:
+                line.deferred += text
+                text = b""
+            if not model.logic_alive or model.booting:
+                framer.take_line(stop - index, cut - stop)
+                send(text)
+                return cut
+            framer.take_line(stop - index, finish - stop)
+            if reply and echo:
+                text += data[cut:finish]
+            if finish == end:  # (the line goes on in the next chunk)
+                send(text)
+                return end
+            while data[finish] == hash_:  # a restart in the failed line: only echoed
+                complete, address, stop = codec.read_address(data, finish)
+                if complete and address is None and model.selected:
+                    line.execute = line.reply = True
+                elif address == (model.cfg.address or 200):
+                    model.addressed = True
+                    line.execute = line.reply = True
+                elif address == "*":
+                    line.execute, line.reply = True, False
+                else:  # (another drive's address, or one the chunk cuts off)
+                    send(text)
+                    return self._restart(line, data, finish)
+                line.text, line.executed = "", 0
+                found = search(data, stop)
+                after = end if found is None else found.start()
+                framer.take_line(stop - finish, after - stop)
+                if line.reply and echo:
+                    text += data[finish:after]  # the address held until complete, and the text
+                finish = after
+                if finish == end:
+                    send(text)
+                    return end
+            byte = data[finish]
+            if line.reply and echo:
+                text += data[finish : finish + 1]
+            overflow = framer.end_line(byte)
+            send(text)
+            self._end_line(line, overflow)
+            index = finish + 1
+            if not model.logic_alive or model.booting or model.addressed is False:
+                return index
+            if index < end:
+                byte = data[index]
+                if byte in _LINE_ENDS:  # the other half of a CR/LF pair, or noise
+                    index += 1
+                    for event in framer.feed(byte):
+                        self._on_event(event, byte)
+                    if index == end:
+                        return end
+                    byte = data[index]
+                if byte != hash_:
+                    index = framer.skip_noise(data, index)
+            if index >= end:
+                return end
 
     def _restart(self, line: _Line, data: bytes, index: int) -> int:
         """A ``#`` inside the line's text and the address after it (what :meth:`_on_restart`
@@ -607,6 +735,30 @@ def _poll_line(data: bytes) -> _Poll | None:
     if result.errno is not None or len(result.statements) != 1 or not isinstance(result.statements[0][0], st.Query):
         return None
     return _Poll(address, result.statements[0][0], len(data) - 1)
+
+
+@functools.lru_cache(maxsize=512)
+def _error_text(errno: int, english: bool, encoding: str) -> bytes:
+    """An error message as :meth:`SersFace._error` sends it (no detail)."""
+    return ("\n*" + message(errno, english) + "\n\r").encode(encoding, errors="replace")
+
+
+def _ends_line(data: bytes, start: int, stop: int) -> bool:
+    """Whether a CR or LF is among ``data[start:stop]``."""
+    return data.find(b"\r", start, stop) >= 0 or data.find(b"\n", start, stop) >= 0
+
+
+@functools.cache
+def _first_byte_errors() -> tuple[int, ...]:
+    """For each byte value: the errno of a line's text whose first character it is (not CR,
+    LF, ``#``) when that character is an error as it arrives (what :func:`_first_failure`
+    finds at the first character), else 0.  Made at the first use."""
+    errors = []
+    for byte in range(256):
+        char = chr(byte)
+        result = st.parse(char, False) if char not in _EXTENDS_ONLY else None
+        errors.append(result.errno or 0 if result is not None and not result.statements else 0)
+    return tuple(errors)
 
 
 @functools.lru_cache(maxsize=1024)
