@@ -91,7 +91,8 @@ class SersFace(Face):
         if not model.logic_alive or model.booting:
             return  # G-BOOT: input during the 2 s initialisation is discarded
         framer = self.framer
-        if self._line is None and not framer.in_line:
+        # (a host's poll is one short chunk: a longer one, noise or a flood, is not hashed and kept)
+        if self._line is None and not framer.in_line and len(data) <= codec.MAX_LINE + 1:
             poll = _poll_line(data)
             if poll is not None and self._answer_poll(poll, data):
                 return
