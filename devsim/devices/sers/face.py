@@ -259,9 +259,9 @@ class SersFace(Face):
         another drive, one that runs a statement, one whose text in the chunk does not fail)
         or inside one (a restart for another drive or whose address the chunk cuts off, the
         chunk's end), with the line and the framing as those paths leave them; returns where
-        (``index``: nothing taken).  The
-        echo up to the failing character leaves before the error is recorded, the rest of the
-        line's answers with its end, before the line's end is handled."""
+        (``index``: nothing taken).  The echo up to the failing character leaves before the
+        error is recorded, the rest of the line's answers with its end, before the line's end
+        is handled."""
         model, framer, send, end = self.model, self.framer, self.send, len(data)
         hash_, no_address, search, fails = codec.HASH, codec.NO_ADDRESS, _TEXT_END.search, _first_byte_errors()
         mode = model.handshake_mode  # (only a statement changes it: none runs here)
