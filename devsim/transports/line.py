@@ -515,13 +515,10 @@ class Line:
             return
         self.bytes_out += len(data)
         if not self._faults and self.tracer is None and self._clean() and not self._stages["to_host"].items:
-            if not self.pacing:  # the fault-free path: straight to the transport
-                write = self._write
-                if write is not None:
-                    self.bytes_delivered += len(data)
-                    write(data)
-                return
-            self._paced(data, len(data))
+            if self.pacing:
+                self._paced(data, len(data))
+            else:
+                self._deliver(data)  # the fault-free path: straight to the transport
             return
         device = self.device_settings
         sent = data

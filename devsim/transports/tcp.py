@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import functools
 import socket
 import threading
 from collections import deque
@@ -77,12 +78,7 @@ class _Session(asyncio.BufferedProtocol):
         return self._view
 
     def buffer_updated(self, nbytes: int) -> None:
-        owner = self.owner
-        endpoint = owner._endpoint
-        if owner._active is self and endpoint is not None and not self.backlog and nbytes <= SLICE:
-            owner._session_data(self, bytes(self._view[:nbytes]), endpoint)  # (what _received does)
-        else:
-            owner._received(self, bytes(self._view[:nbytes]))
+        self.owner._received(self, bytes(self._view[:nbytes]))
 
     def eof_received(self) -> bool:
         return False  # half-close ends the session
@@ -239,15 +235,8 @@ class TcpTransport(Transport):
             return
         self._session_started(session, endpoint)
 
-        if type(self)._send is TcpTransport._send:
-            endpoint.attach(session.send)  # (detached again when the session ends)
-            return
-
-        def write(data: bytes) -> None:
-            if self._active is session:
-                self._send(session, data)
-
-        endpoint.attach(write)
+        # (the endpoint is detached again when the session ends: _deactivate)
+        endpoint.attach(functools.partial(self._send, session))
 
     def _deactivate(self, session: _Session) -> None:
         if self._active is not session:

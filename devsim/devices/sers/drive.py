@@ -267,6 +267,12 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self.announce("line_out", data)
 
     @property
+    def line_address(self) -> int:
+        """The address this drive's lines carry after ``#`` (its DIP address; 0, the master's,
+        is written ``#200``, G-ADDR)."""
+        return self.cfg.address or 200
+
+    @property
     def selected(self) -> bool:
         """Whether statements without an address are for this drive (G-ADDR)."""
         if self.addressed is None:

@@ -100,7 +100,7 @@ class SersFace(Face):
         while index < end:
             line = self._line
             if model.addressed is False and self._unconcerned(line):
-                stop = framer.skip_unaddressed(data, index, model.cfg.address or 200)  # other drives' lines
+                stop = framer.skip_unaddressed(data, index, model.line_address)  # other drives' lines
                 if stop > index:
                     if framer.in_line and (line is None or _ends_line(data, index, stop)):
                         line = _Line()  # a line that began in the skip (not the one that ended there)
@@ -206,12 +206,7 @@ class SersFace(Face):
         returns False (having done nothing) for any other."""
         model = self.model
         address = poll.address
-        if address is None:
-            if not model.selected:
-                return False
-        elif address != (model.cfg.address or 200):
-            return False
-        if model.program.editing:
+        if not self._selection(address)[1] or model.program.editing:
             return False
         if address is not None:
             model.addressed = True
@@ -276,15 +271,8 @@ class SersFace(Face):
                 complete, address, stop = codec.read_address(data, index)
                 if not complete:
                     return index
-            if address is None:
-                if not model.selected:
-                    return index
-                reply = True
-            elif address == (model.cfg.address or 200):
-                reply = True
-            elif address == "*":
-                reply = False
-            else:
+            execute, reply = self._selection(address)
+            if not execute:
                 return index
             found = search(data, stop)
             finish = end if found is None else found.start()  # (the chunk may end the text)
@@ -326,16 +314,13 @@ class SersFace(Face):
                 return end
             while data[finish] == hash_:  # a restart in the failed line: only echoed
                 complete, address, stop = codec.read_address(data, finish)
-                if complete and address is None and model.selected:
-                    line.execute = line.reply = True
-                elif address == (model.cfg.address or 200):
-                    model.addressed = True
-                    line.execute = line.reply = True
-                elif address == "*":
-                    line.execute, line.reply = True, False
-                else:  # (another drive's address, or one the chunk cuts off)
+                executes, answers = self._selection(address) if complete else (False, False)
+                if not executes:  # (another drive's address, or one the chunk cuts off)
                     send(text)
                     return self._restart(line, data, finish)
+                line.execute, line.reply = executes, answers
+                if address is not None and address != "*":
+                    model.addressed = True
                 line.text, line.executed = "", 0
                 found = search(data, stop)
                 after = end if found is None else found.start()
@@ -490,19 +475,22 @@ class SersFace(Face):
         codec.LineEnd: _on_line_end,
     }
 
-    def _select(self, line: _Line, address: int | str | None) -> None:
-        mine = self.model.cfg.address if self.model.cfg.address != 0 else 200
+    def _selection(self, address: int | str | None) -> tuple[bool, bool]:
+        """Whether this drive executes and answers a line with ``address`` after its ``#``
+        (G-ADDR), changing nothing: without one, if it is selected; ``*``, executed by all and
+        answered by none (a broadcast); its own address, both; another, neither."""
         if address is None:
-            line.execute = line.reply = self.model.selected
-        elif address == "*":
-            line.execute = True
-            line.reply = False  # G-ADDR: nobody answers a broadcast
-        elif address == mine:
-            self.model.addressed = True
-            line.execute = line.reply = True
-        else:
-            self.model.addressed = False
-            line.execute = line.reply = False
+            selected = self.model.selected
+            return selected, selected
+        if address == "*":
+            return True, False
+        mine = address == self.model.line_address
+        return mine, mine
+
+    def _select(self, line: _Line, address: int | str | None) -> None:
+        line.execute, line.reply = self._selection(address)
+        if address is not None and address != "*":
+            self.model.addressed = line.execute  # an address selects its drive, deselects the others
         if line.held:
             if line.reply and self.echo:
                 self.send(bytes(line.held))
