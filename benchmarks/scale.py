@@ -171,7 +171,7 @@ def _start_plant(kind: str, devices: int, workers: int, tmp: str) -> tuple[subpr
         for i in range(devices):
             fh.write(f"  - {{name: d{i}, kind: {kind}, transport: {{tcp: {{port: 0}}}}}}\n")
     proc = _spawn(["-m", "devsim", "up", plant, "--workers", str(workers)])
-    ports: list[int] = []
+    ports: dict[str, int] = {}
     ready = 0
     assert proc.stdout is not None
     while ready < devices:
@@ -182,8 +182,10 @@ def _start_plant(kind: str, devices: int, workers: int, tmp: str) -> tuple[subpr
         if value == "ready":
             ready += 1
         elif value.startswith("tcp "):
-            ports.append(int(value.rsplit(":", 1)[1]))
-    return proc, ports
+            ports[name] = int(value.rsplit(":", 1)[1])
+    # in the plant's order, device i at phase i: the workers print their ports one worker after
+    # the other, and polling in that order would load each worker at twice the rate for half a period
+    return proc, [ports[f"d{i}"] for i in range(devices)]
 
 
 def _tree_cpu(root: int) -> tuple[float, float]:
@@ -284,7 +286,9 @@ def main(argv: list[str] | None = None) -> int:
         plant, ports = _start_plant(args.kind, args.devices, args.workers, tmp)
         echoes = [_spawn([__file__, "--echo-servers", str(len(range(i, args.devices, args.workers)))])
                   for i in range(args.workers)]
-        echo_ports = [port for echo in echoes for port in json.loads(echo.stdout.readline())]  # type: ignore[union-attr]
+        # device i served by echo process i % workers, as devsim up deals devices out to its workers
+        shares = [json.loads(echo.stdout.readline()) for echo in echoes]  # type: ignore[union-attr]
+        echo_ports = [shares[i % args.workers][i // args.workers] for i in range(args.devices)]
         try:
             def pollers(targets: list[int], move: bool) -> list[tuple[subprocess.Popen[str], str]]:
                 shares = [targets[i :: count] for i in range(count)]
