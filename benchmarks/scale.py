@@ -10,6 +10,9 @@ poller wakes once a millisecond, and times each answer by its kernel receive tim
 In the same run, in alternating phases, the same pollers poll as many bare asyncio echo
 endpoints (answering every CR with a reply of the same length, in as many processes as devsim
 has workers), so the harness's own limit on this machine shows beside the simulator's.
+Device i of the plant is polled at phase i of the period, and device i is served by process
+i % workers on both sides (devsim up deals devices round-robin), so every process sees an even
+stream of polls.
 
 A poll is *missed* when its answer has not arrived by the time the next poll of that device is
 due.  Target: ≥ 2,000 devices on 2 cores with p99 < 5 ms and no missed poll.
