@@ -515,10 +515,7 @@ class Line:
             return
         self.bytes_out += len(data)
         if not self._faults and self.tracer is None and self._clean() and not self._stages["to_host"].items:
-            if self.pacing:
-                self._paced(data, len(data))
-            else:
-                self._deliver(data)  # the fault-free path: straight to the transport
+            self._paced(data, len(data))  # the fault-free path: nothing to garble, trace or hold back
             return
         device = self.device_settings
         sent = data

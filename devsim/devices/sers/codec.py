@@ -19,7 +19,7 @@ import re
 
 from devsim.core.record import record
 
-__all__ = ["MAX_LINE", "NO_ADDRESS", "Address", "address_value", "Framer", "Ignored", "LineEnd", "Noise", "read_address",
+__all__ = ["MAX_LINE", "NO_ADDRESS", "TEXT_END", "Address", "address_value", "Framer", "Ignored", "LineEnd", "Noise", "read_address",
            "Restart", "TextChar"]
 
 MAX_LINE = 60
@@ -74,7 +74,8 @@ _ADDRESS_CHAR = AddressChar()
 _IGNORED = Ignored()
 
 
-_TEXT_END = re.compile(rb"[\r\n#]")
+#: What ends a run of a line's text: its end or a ``#`` (a restart).
+TEXT_END = re.compile(rb"[\r\n#]")
 _NOT_HASH_OR_DIGIT = re.compile(rb"[^#0-9]")
 _DIGITS = re.compile(rb"[0-9]+")
 _DIGIT_BYTES = frozenset(b"0123456789")
@@ -124,7 +125,7 @@ class Framer:
         """When :attr:`in_text` and the text is not wanted (a line in error, or for another
         drive): where the text ends (the next CR, LF or ``#``), counted into the line's length
         as :meth:`feed` would, in one search."""
-        found = _TEXT_END.search(data, start)
+        found = TEXT_END.search(data, start)
         end = len(data) if found is None else found.start()
         self._length += end - start
         if self._length > MAX_LINE:
@@ -223,7 +224,7 @@ class Framer:
         """When :attr:`in_text`: where the run of kept text characters from ``start`` ends (the
         next CR, LF or ``#``, or the 60-character limit).  Changes nothing; :meth:`take_text`
         then accounts for the characters taken, as :meth:`feed` would one by one."""
-        found = _TEXT_END.search(data, start)
+        found = TEXT_END.search(data, start)
         end = len(data) if found is None else found.start()
         return min(end, start + max(0, MAX_LINE - self._length))
 

@@ -30,7 +30,6 @@ _EXTENDS_ONLY = frozenset("0123456789.?")
 _COMPLETES = re.compile(b"[^" + re.escape("".join(sorted(_EXTENDS_ONLY)).encode()) + b"]")
 # The rest of a line: its text and its end (within 60 characters: checked by the caller).
 _TEXT_TO_END = re.compile(rb"([^\r\n#]+)[\r\n]")
-_TEXT_END = re.compile(rb"[\r\n#]")
 _LINE_ENDS = (codec.CR, codec.LF)
 
 
@@ -258,7 +257,7 @@ class SersFace(Face):
         error is recorded, the rest of the line's answers with its end, before the line's end
         is handled."""
         model, framer, send, end = self.model, self.framer, self.send, len(data)
-        hash_, no_address, search, fails = codec.HASH, codec.NO_ADDRESS, _TEXT_END.search, _first_byte_errors()
+        hash_, no_address, search, fails = codec.HASH, codec.NO_ADDRESS, codec.TEXT_END.search, _first_byte_errors()
         mode = model.handshake_mode  # (only a statement changes it: none runs here)
         while True:
             # data[index] is a '#' outside a line
@@ -629,9 +628,12 @@ class SersFace(Face):
         return self.model.handshake_mode in (0, 1)
 
     def _out(self, line: _Line, text: str) -> None:
+        self._put(line, text.encode(self.model.cfg.encoding, errors="replace"))
+
+    def _put(self, line: _Line, data: bytes) -> None:
+        """An answer of the line: at once, or with RS-485 handshake (P1017 = 2) at its end."""
         if not line.reply:
             return
-        data = text.encode(self.model.cfg.encoding, errors="replace")
         if self.model.handshake_mode == 2:
             line.deferred += data
         else:
@@ -640,7 +642,7 @@ class SersFace(Face):
     def _error(self, line: _Line, errno: int, detail: str = "") -> None:
         line.error = True
         self.model.record_error(errno)
-        self._out(line, "\n*" + message(errno, self.model.english, detail) + "\n\r")
+        self._put(line, _error_text(errno, self.model.english, self.model.cfg.encoding, detail))
 
     def spontaneous(self, text: str) -> None:
         """Messages such as ``@2POS=1`` go out between lines, never inside one (G-SPONT)."""
@@ -727,9 +729,9 @@ def _poll_line(data: bytes) -> _Poll | None:
 
 
 @functools.lru_cache(maxsize=512)
-def _error_text(errno: int, english: bool, encoding: str) -> bytes:
-    """An error message as :meth:`SersFace._error` sends it (no detail)."""
-    return ("\n*" + message(errno, english) + "\n\r").encode(encoding, errors="replace")
+def _error_text(errno: int, english: bool, encoding: str, detail: str = "") -> bytes:
+    """An error message as the drive sends it (§4.8.3.1): ``*`` and its text on a line of its own."""
+    return ("\n*" + message(errno, english, detail) + "\n\r").encode(encoding, errors="replace")
 
 
 def _ends_line(data: bytes, start: int, stop: int) -> bool:

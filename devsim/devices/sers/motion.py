@@ -591,9 +591,10 @@ class Motion:
 
 
 def _can_move(speed: float, accel: float) -> None:
-    """A jog or a homing run needs a speed and an acceleration above 0; with P108 = 0 % or a
-    speed or ramp parameter set to 0 it is refused as V or A too small [SIM-CHOICE: the manual
-    does not say what the drive does; it cannot move, and the simulator must not fail]."""
+    """A jog, a homing run, POS0/POSR or a move's backlash legs need a speed and an acceleration
+    above 0; with P108 = 0 % or a speed or ramp parameter set to 0 the motion is refused as V or
+    A too small [SIM-CHOICE: the manual does not say what the drive does; it cannot move, and
+    the simulator must not fail]."""
     if not speed > 0:
         raise SersError(121)
     if not accel > 0:
