@@ -13,7 +13,8 @@ Noise: random bytes without ``#`` (the SERS line start) by default, so no comman
 started; ``--raw`` sends plain random bytes.  The noise is 64 KiB of pseudo-random bytes from
 ``--seed``, repeated, so that runs compare: how much of it a drive answers depends on the
 bytes (a ``#`` and this drive's address select it, another address deselects it).  Targets: the neighbour's p99 < 1 ms while the noise
-flows, and noise swallowed at ≥ 50 MB/s.
+flows, and noise swallowed at ≥ 50 MB/s.  That rate is absolute, not a ratio, so the last lines
+also say whether the bare reader reaches it in the same run: on a slow day this machine's does not.
 
     python benchmarks/noise.py [--megabytes 100] [--kind sers] [--raw] [--seed 1]
 """
@@ -185,8 +186,11 @@ def main(argv: list[str] | None = None) -> int:
     print(f"noise swallowed: {args.megabytes:g} MB in {elapsed:.2f} s = {rate:.0f} MB/s "
           f"(a bare asyncio pty reader: {reference:.0f} MB/s; ratio {rate / reference:.2f})")
     p99 = sorted(noisy_times)[int(0.99 * (len(noisy_times) - 1))]
+    # the rate target is absolute, so say whether this machine's bare reader reaches it at all
+    print(f"targets (neighbour p99 < 1 ms, noise at >= 50 MB/s): {'met' if p99 < 0.001 and rate >= 50 else 'missed'}; "
+          f"the bare reader {'reaches' if reference >= 50 else 'does not reach'} 50 MB/s in this run")
     print(json.dumps({"p99_ms": round(p99 * 1e3, 3), "mb_per_s": round(rate, 1), "bare_mb_per_s": round(reference, 1),
-                      "targets_met": p99 < 0.001 and rate >= 50}))
+                      "targets_met": p99 < 0.001 and rate >= 50, "bare_reaches_rate": reference >= 50}))
     return 0
 
 

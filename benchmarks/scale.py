@@ -15,7 +15,8 @@ i % workers on both sides (devsim up deals devices round-robin), so every proces
 stream of polls.
 
 A poll is *missed* when its answer has not arrived by the time the next poll of that device is
-due.  Target: ≥ 2,000 devices on 2 cores with p99 < 5 ms and no missed poll.
+due.  Target: ≥ 2,000 devices on 2 cores with p99 < 5 ms and no missed poll.  The target is
+absolute, not a ratio, so the last line also says whether the echo reference meets it in the same run.
 
     python benchmarks/scale.py [--devices 2000] [--workers 2] [--rate 20] [--seconds 10] [--pollers N]
                                [--poller c|python] [--kind sers|stub] [--rounds 2]
@@ -327,9 +328,10 @@ def main(argv: list[str] | None = None) -> int:
               f"missed {side.missed} of {side.polls} polls; CPU (cores): pollers {side.poller_cpu / side.poller_wall:.2f}, "
               f"{label} {side.server_cpu / side.wall:.2f}; {label}'s processes waited for a CPU "
               f"{side.server_wait / side.wall:.2f} s per second")
-    ok = _percentile(sim.rtts, 0.99) < 0.005 and sim.missed == 0
+    ok, bare_ok = (_percentile(side.rtts, 0.99) < 0.005 and side.missed == 0 for side in (sim, ref))
+    # the target is absolute, so say whether the bare echo meets it on this machine in this run
     print(f"target (p99 < 5 ms, no missed poll) with {args.devices} devices on {args.workers} workers: "
-          f"{'met' if ok else 'missed'}; median ratio devsim/echo "
+          f"{'met' if ok else 'missed'} (the echo reference: {'met' if bare_ok else 'missed'}); median ratio devsim/echo "
           f"{statistics.median(sim.rtts) / statistics.median(ref.rtts):.2f}")
     return 0
 
