@@ -207,8 +207,7 @@ class SersFace(Face):
         address = poll.address
         if not self._selection(address)[1] or model.program.editing:
             return False
-        if address is not None:
-            model.addressed = True
+        self._note_address(address, True)
         self.framer.whole_line(poll.length, data[-1])
         if self.echo:
             self.send(data)
@@ -287,8 +286,7 @@ class SersFace(Face):
                     return index
                 cut, errno = stop + failure[0], failure[1]
             # the line fails at data[cut - 1]: take it
-            if address is not None and reply:
-                model.addressed = True
+            self._note_address(address, execute)
             self._line = line = _Line()
             line.execute = line.error = True
             line.reply = reply
@@ -318,8 +316,7 @@ class SersFace(Face):
                     send(text)
                     return self._restart(line, data, finish)
                 line.execute, line.reply = executes, answers
-                if address is not None and address != "*":
-                    model.addressed = True
+                self._note_address(address, executes)
                 line.text, line.executed = "", 0
                 found = search(data, stop)
                 after = end if found is None else found.start()
@@ -486,10 +483,15 @@ class SersFace(Face):
         mine = address == self.model.line_address
         return mine, mine
 
+    def _note_address(self, address: int | str | None, mine: bool) -> None:
+        """A line's address selects its drive and deselects the others (G-ADDR); a line
+        without one, or a broadcast, changes nothing.  ``mine``: the address is this drive's."""
+        if address is not None and address != "*":
+            self.model.addressed = mine
+
     def _select(self, line: _Line, address: int | str | None) -> None:
         line.execute, line.reply = self._selection(address)
-        if address is not None and address != "*":
-            self.model.addressed = line.execute  # an address selects its drive, deselects the others
+        self._note_address(address, line.execute)
         if line.held:
             if line.reply and self.echo:
                 self.send(bytes(line.held))
