@@ -140,6 +140,34 @@ def reference_markdown(cls: type[Device]) -> str:
             ),
             "",
         ]
+    if ref.parameter_table is not None:
+        table = ref.parameter_table
+        out += [
+            "## Parameters",
+            "",
+            "`simulated`: the parameter has the effect the manual gives it; `stored`: it is kept",
+            "and answered, but has no effect in the simulator.",
+            "",
+            *_table(
+                ("parameter", "designation", "description", "unit", "range", "default", "saved", "behaviour",
+                 "manual"),
+                (
+                    (
+                        " ".join(f"`{spelling}`" for spelling in (table.spell(p.key), *p.aliases)),
+                        p.name,
+                        p.doc,
+                        p.unit,
+                        p.range_text(),
+                        "" if p.default is None else p.default,
+                        "yes" if p.saved else "no",
+                        p.effect,
+                        p.section,
+                    )
+                    for p in table
+                ),
+            ),
+            "",
+        ]
     if ref.errors:
         out += [
             "## Error codes",

@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any, Generic, Literal, Protocol, TypeVar
 
+from devsim.core.parameters import ParameterTable
 from devsim.core.points import Point, PointType, UnknownName, parse_bool
 from devsim.core.record import field, record
 from devsim.core.signals import SignalBank, SignalKind
@@ -258,6 +259,9 @@ class Reference:
     parameters: list[Parameter] = field(default_factory=list)
     errors: list[ErrorCode] = field(default_factory=list)
     config: list[tuple[str, str, str]] = field(default_factory=list)  # key, type/default, doc
+    #: The kind's parameters as kit rows (:mod:`devsim.core.parameters`), printed with their key,
+    #: aliases, range, default and effect.
+    parameter_table: ParameterTable | None = None
 
 
 @record

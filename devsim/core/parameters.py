@@ -1,0 +1,356 @@
+"""The kit's parameters: one row type for every kind's parameters, their table and their values.
+
+A parameter is what the manual lists as a numbered or named setting of the device: the SERS's
+``P41`` (V), the GMS96's N parameters, the POSELESTA's machine parameters ``P1 … P98``, the
+IP247's machine data, the PCD4.H3's register block.  Every kind declares its parameters as
+:class:`Param` rows in one :class:`ParameterTable`; the model keeps their values in a
+:class:`Parameters` part and reads them through named accessors (``params.velocity``, made with
+:func:`accessor`), never by a bare number.  The points ``param.*`` (:func:`parameter_points`),
+the generated reference (``devsim doc``), the facade maps and the range checks derive from the
+rows.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from types import MappingProxyType
+from typing import Any, Literal
+
+from devsim.core.points import BadValue, Point, PointType, UnknownName, finite
+from devsim.core.record import record
+
+__all__ = [
+    "EMPTY",
+    "Param",
+    "ParamType",
+    "ParameterTable",
+    "Parameters",
+    "accessor",
+    "parameter_points",
+]
+
+ParamType = Literal["int", "float", "bool", "str"]
+Effect = Literal["simulated", "stored"]
+Access = Literal["rw", "r", "w"]
+Key = int | str
+
+#: An empty, immutable ``extra`` mapping (the default of :attr:`Param.extra`).
+EMPTY: Mapping[str, Any] = MappingProxyType({})
+
+
+@record
+class Param:
+    """One parameter as the manual lists it.
+
+    ``key`` is what the host names it by: a number (``41`` for the SERS's P41, ``15`` for the
+    GMS96's N15, a register offset) or a name.  ``name`` is the manual's designation (in the
+    manual's language where the device shows it), ``doc`` an English description, ``section`` the
+    manual section.  ``type``, ``minimum`` / ``maximum`` (inclusive) and ``choices`` are the range
+    the device takes; ``unit`` is the unit or the weighting (``"inc"``, ``"mm/min"``,
+    ``"position"``); ``decimals`` the places the device shows.  ``default`` is the factory / power-on
+    value, ``saved`` whether the device stores it in non-volatile memory, ``effect`` whether the
+    simulator gives it the effect the manual describes (``"simulated"``) or only keeps and answers
+    it (``"stored"``), ``access`` whether a host may read and write it.  ``attr`` is the model's
+    accessor name for it (``velocity``), ``extra`` the kind's own facts about the row (an error
+    number, a command keyword) that no other kind has.
+    """
+
+    key: Key
+    name: str
+    section: str
+    doc: str = ""
+    aliases: tuple[str, ...] = ()
+    type: ParamType = "int"
+    minimum: float | None = None
+    maximum: float | None = None
+    choices: tuple[Any, ...] | None = None
+    unit: str = ""
+    decimals: int = 0
+    default: Any = 0
+    saved: bool = True
+    effect: Effect = "simulated"
+    access: Access = "rw"
+    attr: str = ""
+    extra: Mapping[str, Any] = EMPTY
+
+    @property
+    def readable(self) -> bool:
+        return self.access != "w"
+
+    @property
+    def writable(self) -> bool:
+        return self.access != "r"
+
+    @property
+    def point_type(self) -> PointType:
+        return self.type
+
+    def check(self, value: Any) -> Any:
+        """The value as this parameter's type, inside its range and choices, or :class:`BadValue`
+        (nothing changes).  A kind with its own range rules checks those after this."""
+        parsed: Any
+        if self.type == "bool":
+            from devsim.core.points import parse_bool
+
+            parsed = parse_bool(value)
+        elif self.type == "str":
+            if not isinstance(value, str):
+                raise BadValue(f"{self.label}: expects text, not {value!r}")
+            parsed = value
+        else:
+            number = finite(value)
+            if self.type == "int":
+                if not number.is_integer():
+                    raise BadValue(f"{self.label}: expects a whole number, not {value!r}")
+                parsed = int(number)
+            else:
+                parsed = number
+            if self.minimum is not None and parsed < self.minimum:
+                raise BadValue(f"{self.label}: {parsed:g} is below the minimum {self.minimum:g}{_unit(self.unit)}")
+            if self.maximum is not None and parsed > self.maximum:
+                raise BadValue(f"{self.label}: {parsed:g} is above the maximum {self.maximum:g}{_unit(self.unit)}")
+        if self.choices is not None and parsed not in self.choices:
+            raise BadValue(f"{self.label}: expects one of {', '.join(map(str, self.choices))}, not {value!r}")
+        return parsed
+
+    @property
+    def label(self) -> str:
+        return str(self.key) if isinstance(self.key, str) else f"#{self.key}"
+
+    def range_text(self) -> str:
+        if self.choices is not None:
+            return " / ".join(str(c) for c in self.choices)
+        if self.minimum is None and self.maximum is None:
+            return ""
+        low = "" if self.minimum is None else f"{self.minimum:g}"
+        high = "" if self.maximum is None else f"{self.maximum:g}"
+        return f"{low} … {high}"
+
+
+def _unit(unit: str) -> str:
+    return f" {unit}" if unit and unit.isascii() and unit[:1].isalpha() else ""
+
+
+class ParameterTable:
+    """A kind's parameters by key, found also by alias and by the kind's spelling of a key.
+
+    ``prefix`` is how the kind writes a numbered key (``"P"`` → ``P41``, ``"N"`` → ``N15``); a
+    token ``P41``, ``p41``, ``41`` or an alias (any case) finds the row."""
+
+    def __init__(self, rows: Iterable[Param], *, prefix: str = "", name: str = "parameter") -> None:
+        self.prefix = prefix
+        self.name = name
+        self.rows: dict[Key, Param] = {}
+        self._aliases: dict[str, Key] = {}
+        self._attrs: dict[str, Key] = {}
+        for row in rows:
+            if row.key in self.rows:
+                raise ValueError(f"{name} {self.spell(row.key)} declared twice")
+            self.rows[row.key] = row
+            for alias in row.aliases:
+                if alias.upper() in self._aliases:
+                    raise ValueError(f"alias {alias!r} declared twice")
+                self._aliases[alias.upper()] = row.key
+            if row.attr:
+                if row.attr in self._attrs:
+                    raise ValueError(f"accessor {row.attr!r} declared twice")
+                self._attrs[row.attr] = row.key
+
+    def __iter__(self) -> Iterator[Param]:
+        return iter(self.rows.values())
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def __contains__(self, key: object) -> bool:
+        return key in self.rows
+
+    def __getitem__(self, key: Key) -> Param:
+        return self.rows[key]
+
+    def get(self, key: Key) -> Param | None:
+        return self.rows.get(key)
+
+    def spell(self, key: Key) -> str:
+        """A key as the kind writes it: ``P41``, ``N15``, or a name as it is."""
+        return f"{self.prefix}{key}" if isinstance(key, int) else key
+
+    def find(self, token: str | int) -> Param | None:
+        """The row for ``P41`` / ``p 41`` / ``41`` / an alias / a name, or None."""
+        if isinstance(token, int):
+            return self.rows.get(token)
+        text = str(token).strip()
+        row = self.rows.get(text)
+        if row is not None:
+            return row
+        upper = text.upper().replace(" ", "")
+        if upper in self._aliases:
+            return self.rows[self._aliases[upper]]
+        digits = upper[len(self.prefix):] if self.prefix and upper.startswith(self.prefix.upper()) else upper
+        if digits.isascii() and digits.isdigit():
+            return self.rows.get(int(digits))
+        return None
+
+    def lookup(self, token: str | int, owner: str = "the device") -> Param:
+        row = self.find(token)
+        if row is None:
+            raise UnknownName(f"{owner} has no {self.name} {token!r}")
+        return row
+
+    def by_attr(self, attr: str) -> Param:
+        return self.rows[self._attrs[attr]]
+
+    def defaults(self) -> dict[Key, Any]:
+        """Every row's factory value (rows with ``default=None`` have none)."""
+        return {row.key: row.default for row in self.rows.values() if row.default is not None}
+
+    def saved(self) -> tuple[Key, ...]:
+        return tuple(row.key for row in self.rows.values() if row.saved)
+
+    def stored_only(self) -> tuple[Key, ...]:
+        return tuple(row.key for row in self.rows.values() if row.effect == "stored")
+
+
+class Parameters:
+    """The part that owns a kind's parameter values: one value per row, the factory values at
+    the start, writes checked against the row.  A kind subclasses it to name the values its model
+    reads (``velocity = accessor(41)``); what a write *does* beyond storing the value belongs to
+    the part that owns that behaviour, which listens with :meth:`on_change`."""
+
+    def __init__(self, table: ParameterTable, values: Mapping[Key, Any] | None = None) -> None:
+        self.table = table
+        self.values: dict[Key, Any] = table.defaults()
+        if values:
+            self.values.update(values)
+        self._listeners: list[Callable[[Param, Any], None]] = []
+
+    def __getitem__(self, key: Key) -> Any:
+        return self.values[key]
+
+    def get(self, key: Key, default: Any = None) -> Any:
+        return self.values.get(key, default)
+
+    def row(self, key: Key) -> Param:
+        return self.table[key]
+
+    def set(self, key: Key, value: Any, *, check: bool = True) -> Any:
+        """Store a value (checked against the row unless ``check`` is False); returns it."""
+        row = self.table[key]
+        if check:
+            value = row.check(value)
+        self.values[key] = value
+        for listener in self._listeners:
+            listener(row, value)
+        return value
+
+    def store(self, key: Key, value: Any) -> None:
+        """Store a value the device computed itself (a read-only actual value): no check, no
+        listener."""
+        self.values[key] = value
+
+    def on_change(self, listener: Callable[[Param, Any], None]) -> None:
+        self._listeners.append(listener)
+
+    def reset(self, keys: Iterable[Key] | None = None) -> None:
+        """Factory values again, for ``keys`` or for every row."""
+        defaults = self.table.defaults()
+        for key in self.table.rows if keys is None else keys:
+            if key in defaults:
+                self.values[key] = defaults[key]
+            else:
+                self.values.pop(key, None)
+
+    def snapshot(self, keys: Iterable[Key] | None = None) -> dict[Key, Any]:
+        """The values of ``keys`` (default: the saved rows), e.g. for non-volatile memory."""
+        chosen = self.table.saved() if keys is None else keys
+        return {key: self.values[key] for key in chosen if key in self.values}
+
+    def restore(self, values: Mapping[Key, Any]) -> None:
+        """Take values back from memory, keys of rows only (a stale image keeps no strangers)."""
+        for key, value in values.items():
+            if key in self.table.rows and (not isinstance(value, float) or math.isfinite(value)):
+                self.values[key] = value
+
+
+def accessor(key: Key, doc: str = "") -> Any:
+    """A named accessor on a :class:`Parameters` subclass: ``velocity = accessor(41)`` reads
+    ``values[41]``; setting it stores the value unchecked (the model's own computed value)."""
+
+    def get(self: Parameters) -> Any:
+        return self.values[key]
+
+    def put(self: Parameters, value: Any) -> None:
+        self.values[key] = value
+
+    return property(get, put, doc=doc or f"parameter {key!r}")
+
+
+def parameter_points(
+    table: ParameterTable,
+    read: Callable[[Any, Param], Any],
+    write: Callable[[Any, Param, Any], None] | None,
+    *,
+    name: Callable[[Param], str] | None = None,
+    in_state: bool = False,
+    example: Callable[[Param], Any] | None = None,
+) -> list[Point]:
+    """``param.<key>`` points for every row: ``read(model, row)`` and ``write(model, row, value)``
+    (the value already checked against the row's type and range).  ``name`` spells a row's point
+    name (default ``param.`` + the kind's spelling of the key)."""
+    spell = name or (lambda row: f"param.{table.spell(row.key)}")
+    points = []
+    for row in table:
+
+        def get(model: Any, row: Param = row) -> Any:
+            return read(model, row)
+
+        def put(model: Any, value: Any, row: Param = row) -> None:
+            assert write is not None
+            write(model, row, value)
+
+        points.append(
+            Point(
+                spell(row),
+                row.point_type,
+                row.doc or row.name,
+                row.section,
+                row.unit,
+                get=get if row.readable else None,
+                put=put if write is not None and row.writable else None,
+                minimum=row.minimum,
+                maximum=row.maximum,
+                choices=row.choices,
+                in_state=in_state,
+                example=example(row) if example is not None else _example(row),
+            )
+        )
+    return points
+
+
+def _example(row: Param) -> Any:
+    """A value a write-only row accepts: its default, its first choice, or a value in range."""
+    if row.choices:
+        return row.choices[0]
+    if row.default is not None:
+        return row.default
+    if row.minimum is not None:
+        return row.minimum
+    return 0 if row.type in ("int", "float") else ""
+
+
+def alias_hook(table: ParameterTable, section: str = "param") -> Callable[[str], str | None]:
+    """A :class:`~devsim.core.points.PointTable` alias hook: ``param.V`` / ``param.p41`` /
+    ``param.41`` → ``param.P41``."""
+
+    def alias(name: str) -> str | None:
+        head, dot, rest = name.partition(".")
+        if head != section or not dot:
+            return None
+        row = table.find(rest)
+        return None if row is None else f"{section}.{table.spell(row.key)}"
+
+    return alias
+
+
+__all__ += ["alias_hook"]

@@ -1,0 +1,95 @@
+"""The kit's parameter rows (devsim.core.parameters): lookup by key, alias and spelling; checks
+before a value is stored; named accessors; the points and the reference derived from the rows."""
+
+from __future__ import annotations
+
+import pytest
+
+from devsim.core.parameters import Param, Parameters, ParameterTable, accessor, alias_hook, parameter_points
+from devsim.core.points import BadValue, PointTable, UnknownName
+
+ROWS = (
+    Param(41, "Geschwindigkeit", "§4.8.4", "velocity", aliases=("V",), type="float", minimum=0.5,
+          maximum=3000, unit="U/min", default=100, attr="velocity"),
+    Param(1014, "Baudrate", "§4.8.6", "baud rate code", choices=(0, 1, 2), default=1, attr="baud"),
+    Param(1133, "Version", "§4.8.6", "firmware version", access="r", saved=False, default=4),
+    Param(60, "Passwort", "§4.8.6", "stored only", effect="stored", default=None, saved=False),
+)
+TABLE = ParameterTable(ROWS, prefix="P")
+
+
+class Values(Parameters):
+    velocity = accessor(41)
+    baud = accessor(1014)
+
+
+def test_a_row_is_found_by_number_spelling_and_alias() -> None:
+    assert TABLE.find("P41") is ROWS[0]
+    assert TABLE.find("p 41") is ROWS[0]
+    assert TABLE.find("41") is ROWS[0]
+    assert TABLE.find(41) is ROWS[0]
+    assert TABLE.find("v") is ROWS[0]
+    assert TABLE.find("P42") is None
+    assert TABLE.find("W") is None
+    with pytest.raises(UnknownName):
+        TABLE.lookup("P42")
+    assert TABLE.by_attr("baud") is ROWS[1]
+
+
+def test_a_table_refuses_a_key_or_alias_declared_twice() -> None:
+    with pytest.raises(ValueError):
+        ParameterTable((ROWS[0], ROWS[0]))
+    with pytest.raises(ValueError):
+        ParameterTable((ROWS[0], Param(42, "x", "§1", aliases=("v",))))
+
+
+def test_values_start_at_the_factory_value_and_are_checked_before_they_are_stored() -> None:
+    values = Values(TABLE)
+    assert values.velocity == 100 and values.baud == 1 and values[1133] == 4
+    assert 60 not in values.values  # no default: no value
+    seen = []
+    values.on_change(lambda row, value: seen.append((row.key, value)))
+    assert values.set(41, "250.5") == 250.5
+    assert values.velocity == 250.5
+    for bad in ("nan", 3000.5, 0.4, "fast"):
+        with pytest.raises(BadValue):
+            values.set(41, bad)
+    with pytest.raises(BadValue):
+        values.set(1014, 3)
+    with pytest.raises(BadValue):
+        values.set(1014, 1.5)
+    assert values.velocity == 250.5 and values.baud == 1
+    assert seen == [(41, 250.5)]
+    values.reset([41])
+    assert values.velocity == 100
+
+
+def test_snapshot_and_restore_keep_only_saved_rows_and_known_keys() -> None:
+    values = Values(TABLE)
+    values.set(41, 200)
+    image = values.snapshot()
+    assert image == {41: 200, 1014: 1}
+    fresh = Values(TABLE)
+    fresh.restore({**image, 9999: 1, 1014: float("nan")})
+    assert fresh.velocity == 200 and fresh.baud == 1 and 9999 not in fresh.values
+
+
+def test_points_derive_from_the_rows() -> None:
+    values = Values(TABLE)
+    written = []
+
+    def write(model: Values, row: Param, value: object) -> None:
+        written.append((row.key, value))
+        model.set(row.key, value)
+
+    points = PointTable.of(
+        parameter_points(TABLE, lambda m, row: m.get(row.key), write), alias=alias_hook(TABLE)
+    )
+    assert points.names() == ["param.P41", "param.P1014", "param.P1133", "param.P60"]
+    assert points.read(values, "param.V") == 100
+    points.set(values, "param.p41", 300)
+    assert written == [(41, 300.0)] and values.velocity == 300
+    with pytest.raises(BadValue):
+        points.set(values, "param.P41", 5000)
+    assert points.lookup("param.P1133").access == "r"
+    assert points.lookup("param.P41").unit == "U/min"
