@@ -89,7 +89,7 @@ def read(plc: Pcd4, medium: str, address: int) -> int:
         return plc.outputs.get(address, 0)
     if medium == "counter":
         return plc.counters.get(address, 0)
-    return plc.timer(address)
+    return plc.timers.value(address)
 
 
 def bus_input(plc: Pcd4, address: int) -> int | None:
