@@ -18,7 +18,7 @@ from devsim.devices.pcd4h3.face import EtherDatagramFace, EtherStreamFace, SbusF
 from devsim.devices.pcd4h3.library import FUNCTIONS
 from devsim.devices.pcd4h3.plc import Pcd4
 from devsim.devices.pcd4h3.points import DRIVE, FAULTS, POINTS
-from devsim.devices.pcd4h3.sbus import READS, SIMPLE, WRITES
+from devsim.devices.pcd4h3.services import SERVICES
 from devsim.devices.pcd4h3.tables import REGISTERS
 
 __all__ = ["Pcd4h3Device"]
@@ -44,13 +44,7 @@ class Pcd4h3Device(Device):
 
     @classmethod
     def reference(cls) -> Reference:
-        commands = [Command(f"{code:02X}h", None, "§9.4", f"read {medium}s (at most {most})")
-                    for code, (medium, most) in READS.items()]
-        commands += [Command(f"{code:02X}h", None, "§9.4", f"write {medium}s"
-                             + (" (NAK: the outputs belong to the FBs)" if medium == "output" else ""))
-                     for code, medium in WRITES.items()]
-        commands += [Command(f"{code:02X}h", None, "§9.4", name) for code, name in SIMPLE.items()]
-        commands += list(FUNCTIONS)
+        commands: list[Command[Any]] = [*SERVICES, *FUNCTIONS]
         errors = [ErrorCode("ACK 0000h", "executed"), ErrorCode("NAK 0001h", "unsupported command, bad count, address "
                             "out of range, a write to the outputs or the diagnostics", "§9.2"),
                   ErrorCode("(silence)", "CRC or framing error, another station, a broadcast", "§9.2")]
