@@ -1,7 +1,7 @@
 """The SAIA PCD4 with PCD4.H3 servo positioning modules as a devsim kind.
 
 Manual "Handbuch Positioniermodule für Servoantriebe PCD4.H3..", SAIA-Burgess 26/729 D2 (seed
-002); spec pcd4h3.md.  The machine is :class:`~devsim.devices.pcd4h3.plc.Pcd4`: the PLC with the
+002); spec pcd4h3.md.  The machine is :class:`~devsim.devices.pcd4h3.model.Pcd4`: the PLC with the
 PCD9.H3E1 library over an LM628 per axis; its ports are S-Bus in serial data mode (``sbus``, a
 pty) and Ether-S-Bus on UDP and TCP (``ether_udp``, ``ether_tcp``), :mod:`~devsim.devices.pcd4h3.face`.
 """
@@ -16,7 +16,7 @@ from devsim.core.settings import Section
 from devsim.devices.pcd4h3.config import Pcd4h3Config
 from devsim.devices.pcd4h3.face import EtherDatagramFace, EtherStreamFace, SbusFace
 from devsim.devices.pcd4h3.library import FUNCTIONS
-from devsim.devices.pcd4h3.plc import Pcd4
+from devsim.devices.pcd4h3.model import Pcd4
 from devsim.devices.pcd4h3.points import DRIVE, FAULTS, POINTS
 from devsim.devices.pcd4h3.services import SERVICES
 from devsim.devices.pcd4h3.tables import REGISTERS

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from devsim.core.clock import Timer
 from devsim.core.device import Face, Port, SerialSettings
-from devsim.devices.pcd4h3.plc import Pcd4
+from devsim.devices.pcd4h3.model import Pcd4
 from devsim.devices.pcd4h3.sbus import (
     EtherReceiver,
     SerialReceiver,

@@ -20,7 +20,7 @@ from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.core.words import signed32
 from devsim.devices.pcd4h3.drive import axis_signals
 from devsim.devices.pcd4h3.lm628 import notation
-from devsim.devices.pcd4h3.plc import MEDIA_SIZE, Pcd4
+from devsim.devices.pcd4h3.model import MEDIA_SIZE, Pcd4
 from devsim.devices.pcd4h3.registers import AxisRegisters
 from devsim.devices.pcd4h3.services import bus_input, read, write
 from devsim.devices.pcd4h3.tables import FLAG_FIELD, REGISTERS

@@ -18,7 +18,7 @@ from typing import Any
 from devsim.core.kit import Command, Table
 from devsim.core.record import record
 from devsim.core.words import signed32
-from devsim.devices.pcd4h3.plc import BUS_INPUTS, MEDIA_SIZE, Pcd4
+from devsim.devices.pcd4h3.model import BUS_INPUTS, MEDIA_SIZE, Pcd4
 from devsim.devices.pcd4h3.sbus import (
     ACK,
     BROADCAST,
@@ -101,20 +101,33 @@ def write(plc: Pcd4, medium: str, first: int, values: tuple[int, ...] | list[int
 def read(plc: Pcd4, medium: str, address: int) -> int:
     """One element of a medium as the host reads it (bring the chips to now first:
     ``plc.catch_up()``)."""
-    if medium == "register":
-        diag = _diagnostic_register(plc, address)
-        return diag if diag is not None else plc.registers.get(address, 0)
-    if medium == "flag":
-        diag = _diagnostic_flag(plc, address)
-        return diag if diag is not None else plc.flags.get(address, 0)
-    if medium == "input":
-        bus = bus_input(plc, address)
-        return bus if bus is not None else plc.inputs.get(address, 0)
-    if medium == "output":
-        return plc.outputs.get(address, 0)
-    if medium == "counter":
-        return plc.counters.get(address, 0)
-    return plc.timers.value(address)
+    return MEDIA[medium](plc, address)
+
+
+def _register(plc: Pcd4, address: int) -> int:
+    diag = _diagnostic_register(plc, address)
+    return diag if diag is not None else plc.registers.get(address, 0)
+
+
+def _flag(plc: Pcd4, address: int) -> int:
+    diag = _diagnostic_flag(plc, address)
+    return diag if diag is not None else plc.flags.get(address, 0)
+
+
+def _input(plc: Pcd4, address: int) -> int:
+    bus = bus_input(plc, address)
+    return bus if bus is not None else plc.inputs.get(address, 0)
+
+
+MEDIA: Table[Callable[[Pcd4, int], int]] = Table([
+    Command("register", _register, "§9.5, §9.6.3", "R n: the axis blocks, the diagnostics block, the user's"),
+    Command("flag", _flag, "§9.5, §9.6.3", "F n: the axis fields, the diagnostics flags, the user's"),
+    Command("input", _input, "§2.2, §9.5", "I n: the H3 modules' limit and reference inputs, the user's keys"),
+    Command("output", lambda plc, address: plc.outputs.get(address, 0), "§9.5", "O n: the FBs' own"),
+    Command("counter", lambda plc, address: plc.counters.get(address, 0), "§9.5", "C n"),
+    Command("timer", lambda plc, address: plc.timers.value(address), "§9.5", "T n, in tenths of a second"),
+])
+"""How the host reads one element of each medium, by the medium's name."""
 
 
 def bus_input(plc: Pcd4, address: int) -> int | None:

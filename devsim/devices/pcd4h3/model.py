@@ -7,6 +7,12 @@ The cycle runs on the device clock only while there is something to do (a comman
 chip moving, a cyclic read to refresh): an idle PLC costs no CPU, and what a host sees is what an
 always-cycling PLC would show.  Inside a cycle each function acts on its chip at the moment the
 FBs' execution times (§10.1) put it, so two axes started in one cycle start about 1 ms apart.
+
+The kind's model: it builds its parts and hands each its collaborators: per axis a drive
+(:class:`~devsim.devices.pcd4h3.drive.H3Drive`: chip, motor, switches) and the library on it
+(:class:`~devsim.devices.pcd4h3.library.H3Axis`, with its register block as
+:class:`~devsim.devices.pcd4h3.registers.AxisRegisters`), the timers, and the user program's
+:class:`~devsim.devices.pcd4h3.programs.Sequence`.
 """
 
 from __future__ import annotations
