@@ -265,10 +265,11 @@ class Sequence:
 
 
 ACTIONS: Table[Callable[[Sequence, Action], None]] = Table([
-    Command("load", Sequence.load_register, "§7.1.5, §9.1", "LD R symbol+RA1 value: load a register of axis 1"),
-    Command("set", Sequence.set_flag, "§7.1.5, §9.1", "SET F symbol+FA1: set a flag of axis 1"),
-    Command("timer", Sequence.load_timer, "§9.1", "LD T n tenths: start timer n"),
-    Command("counter", Sequence.load_counter, "§9.3", "LD C n value: load counter n"),
-    Command("dec", Sequence.decrement_counter, "§9.3", "DEC C n: count counter n down"),
+    Command("load", Sequence.load_register, "§6.3", "LD R symbol+RA1 value: load a register of axis 1"),
+    Command("set", Sequence.set_flag, "§6.3", "SET F symbol+FA1: set a flag of axis 1"),
+    Command("timer", Sequence.load_timer, "§6.3", "LD T n tenths: start timer n"),
+    Command("counter", Sequence.load_counter, "§6.5", "LD C n value: load counter n"),
+    Command("dec", Sequence.decrement_counter, "§6.5", "DEC C n: count counter n down"),
 ])
-"""What a step's actions do, by the statement (the first item of an action)."""
+"""What a step's actions do, by the statement (the first item of an action); sections of the spec
+(manual §9.1, §9.3)."""

@@ -1,4 +1,4 @@
-"""The PCD's timers (spec pcd4h3.md §6.4, §9.5; manual §9.1): ``LD T n tenths`` loads timer n,
+"""The PCD's timers (spec pcd4h3.md §6.3, §9.4, §9.5; manual §9.1): ``LD T n tenths`` loads timer n,
 which counts down to 0 in tenths of a second on the device clock; S-Bus reads them (07h)."""
 
 from __future__ import annotations
