@@ -12,16 +12,14 @@ A flying change (G10) joins its blocks into one motion (:mod:`.flying`).
 from __future__ import annotations
 
 from collections.abc import Iterator
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from devsim.devices.ip247 import program as lang
+from devsim.devices.ip247.axis_unit import AxisUnit
 from devsim.devices.ip247.flow import M_NONE, FlowError, steps
 from devsim.devices.ip247.flying import NotJoinable, chain_pieces
 from devsim.devices.ip247.jobs import START, STOP, TAKE_OVER
 from devsim.devices.ip247.program import Block
-
-if TYPE_CHECKING:
-    from devsim.devices.ip247.axis_unit import AxisUnit
 
 __all__ = ["ProgramRun"]
 
@@ -60,7 +58,7 @@ class ProgramRun:
             target, f = self._move
             unit.running = True
             if unit.held(lambda: unit.position_to(target, f, self._done)):
-                unit.module.set_error(unit, 6)
+                unit.set_error(6)
             return None
         self._advance(skip_halt=True)
         return None
@@ -165,7 +163,7 @@ class ProgramRun:
         unit.m_function = m
         self._last = (block, m)
         unit.running = True
-        unit.module.changed(unit)
+        unit.changed()
         if block.g == 4:
             unit.in_position = False
             unit.set_pe()
@@ -174,7 +172,7 @@ class ProgramRun:
                 self._timer = unit.clock.call_later((block.f or 0) * 0.1, lambda: self._done(True))
 
             if unit.held(dwell):
-                unit.module.set_error(unit, 6)
+                unit.set_error(6)
             return
         result = self._target(block, unit.actual(), unit.holder)
         if isinstance(result, int):
@@ -186,7 +184,7 @@ class ProgramRun:
         target, f, _ = result
         self._move = (target, f)
         if unit.held(lambda: unit.position_to(target, f, self._done)):
-            unit.module.set_error(unit, 6)
+            unit.set_error(6)
 
     def _target(self, block: Block, tip: float, holder: float) -> tuple[float, float, float] | int:
         """Where a traverse takes the holder, at which frequency, and the tip coordinate there;
@@ -327,7 +325,7 @@ class ProgramRun:
     def _rest(self) -> None:
         unit = self.unit
         unit.running = False
-        unit.module.changed(unit)
+        unit.changed()
 
     def _end(self) -> None:
         unit = self.unit
@@ -340,4 +338,4 @@ class ProgramRun:
         unit = self.unit
         self.abort()
         self._rest()
-        unit.module.set_error(unit, error)
+        unit.set_error(error)

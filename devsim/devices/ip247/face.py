@@ -38,7 +38,7 @@ class PgFace(Face):
 
     def _service(self, function: int, parameters: bytes) -> Reply:
         if function in S5_FUNCTIONS:
-            return S5Memory(self.model.data_blocks()).service(function, parameters)
+            return S5Memory(self.model.channel.data_blocks()).service(function, parameters)
         return serve(self.model, parse_request(function, parameters))
 
     def feed(self, data: bytes) -> None:

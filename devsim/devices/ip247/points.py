@@ -67,7 +67,7 @@ def _put_md(m: Any, axis: int, record: Any) -> None:
             raise BadValue("machine data in one string are hex words") from None
     if not isinstance(record, list) or len(record) != 70 or not all(isinstance(w, int) for w in record):
         raise BadValue("machine data are 70 words (a list of numbers, or hex words in one string)")
-    m.write_record(axis, 20, record[2] & 0xFF, [w & 0xFFFF for w in record], overwrite=True)
+    m.channel.write_record(axis, 20, record[2] & 0xFF, [w & 0xFFFF for w in record], overwrite=True)
     if m.units[axis - 1].md is None:
         raise BadValue(f"machine data not stored: module error {m.units[axis - 1].error}")
 
@@ -80,12 +80,12 @@ def _program(name: str) -> Point | None:
 
     def put(m: Any, text: Any) -> None:
         words = lang.record_words(number, str(text).replace("\r\n", "\n"))
-        m.write_record(4, 22, number, words, overwrite=True)
-        if m.channel_error:
-            raise BadValue(f"program {number} not stored: module error {m.channel_error}")
+        m.channel.write_record(4, 22, number, words, overwrite=True)
+        if m.channel.error:
+            raise BadValue(f"program {number} not stored: module error {m.channel.error}")
 
     return Point(name, "str", f"traverse program {number} as text, one block per line", "§2.6",
-                 get=lambda m: (m.store.get(number).text if m.store.get(number) else None), put=put)
+                 get=lambda m: (m.programs.store.get(number).text if m.programs.store.get(number) else None), put=put)
 
 
 def _ag_record(m: Any, job: Any) -> None:
@@ -99,11 +99,11 @@ def _ag_record(m: Any, job: Any) -> None:
         return
     words = [int(w) & 0xFFFF for w in job.get("words", [])]
     if ba in (20, 22, 24):
-        ack, result = m.write_record(page, ba, db, words, from_plc=True)
+        ack, result = m.channel.write_record(page, ba, db, words, from_plc=True)
     elif ba in (21, 23):
-        ack, result = m.delete_record(page, ba, db), []
+        ack, result = m.channel.delete_record(page, ba, db), []
     else:
-        ack, result = m.read_record(page, ba, db, bool(job.get("bcd", False)))
+        ack, result = m.channel.read_record(page, ba, db, bool(job.get("bcd", False)))
     m.ag_last = {"ack": ack, "err": m.error_of(page), "words": result}
 
 
@@ -126,11 +126,11 @@ POINTS = PointTable.of(
     *(_axis_points(n) for n in (1, 2, 3)),
     [
         Point("channel.error", "int", "data channel (page 4) pending module error", "§7.2",
-              get=lambda m: m.channel_error, in_state=True),
+              get=lambda m: m.channel.error, in_state=True),
         Point("sys_id", "json", "module identification: [module, slot, page]", "§4.3.22",
-              get=lambda m: list(m.sys_id)),
+              get=lambda m: list(m.channel.sys_id)),
         Point("programs", "json", "program directory: [[number, record words], …]", "§6.3.8.5",
-              get=lambda m: [list(e) for e in m.store.directory()]),
+              get=lambda m: [list(e) for e in m.programs.store.directory()]),
         Point("ag.operate", "json", "an FB164 job from the PLC side: {page, ba, cmd, b, w, dd}", "§6.2",
               put=_ag_operate),
         Point("ag.record", "json", "an FB165 job from the PLC side: {ba, page, db, words, bcd} (no overwrite)",

@@ -39,15 +39,15 @@ def serve(module: Ip247Module, request: Request, *, plc: bool = False) -> bytes:
     if isinstance(request, Operate):
         return _header(module, _operate(module, request, page, plc), page, asked, request.ba, request.cmd)
     if isinstance(request, WriteRecord):
-        ack, result = module.write_record(page, request.ba, request.db, list(request.words),
+        ack, result = module.channel.write_record(page, request.ba, request.db, list(request.words),
                                           overwrite=request.overwrite, from_plc=plc)
         body = tuple(result) if ack == ACK_ACCEPTED else ()
         return _header(module, ack, page, asked, request.ba, 0) + pack_words(body)
     if isinstance(request, ReadRecord):
-        ack, words = module.read_record(page, request.ba, request.db, request.bcd)
+        ack, words = module.channel.read_record(page, request.ba, request.db, request.bcd)
         return _header(module, ack, page, asked, request.ba, 0) + pack_words(words)
     assert isinstance(request, Delete)
-    ack = module.delete_record(page, request.ba, request.db)
+    ack = module.channel.delete_record(page, request.ba, request.db)
     return _header(module, ack, page, asked, request.ba, 0)
 
 

@@ -8,7 +8,7 @@ from devsim.core.kit import ErrorCode
 from devsim.core.record import record
 
 __all__ = [
-    "DATA_CHANNEL", "MD_ERRORS", "MODES", "MODULE_ERRORS", "NONEXISTENT", "SYNTAX_ERRORS", "Mode", "error_codes",
+    "DATA_CHANNEL", "MD_ERRORS", "MODES", "MODULE_ERRORS", "NONEXISTENT", "SYNTAX_ERRORS", "Mode", "error_codes", "mode_token",
     "page_error", "pg_code",
 ]
 
@@ -122,6 +122,15 @@ class Mode:
     english: str
     pages: str  # "A" axis pages, "D" data channel, "AD" both
     parameters: str = ""
+
+    def describe(self) -> str:
+        """The mode as the reference lists it: names, pages, parameters."""
+        return f"{self.name} ({self.english}); pages {self.pages}" + (f"; {self.parameters}" if self.parameters else "")
+
+
+def mode_token(number: int) -> str:
+    """A mode's token in the tables and the reference: ``BA6``."""
+    return f"BA{number}"
 
 
 MODES: dict[int, Mode] = {m.number: m for m in (
