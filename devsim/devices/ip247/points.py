@@ -9,14 +9,17 @@ side: an FB164 job with the values as the PLC sends them (BCD when the machine d
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from typing import Any
 
-from devsim.core.kit import Fault, FaultTable, signal_points
+from devsim.core.kit import Command, Fault, FaultTable, Table, signal_points
 from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.pg_profile import Operate, command_code
+from devsim.devices.ip247.records import DELETE_RECORDS, READ_RECORDS, WRITE_RECORDS
 from devsim.devices.ip247.services import serve
 from devsim.devices.ip247.signals import SIGNALS
+from devsim.devices.ip247.tables import mode_token
 
 __all__ = ["FAULTS", "POINTS", "SIGNALS"]
 
@@ -98,13 +101,31 @@ def _ag_record(m: Any, job: Any) -> None:
         m.ag_last = {"ack": 0x80, "err": 0, "words": []}
         return
     words = [int(w) & 0xFFFF for w in job.get("words", [])]
-    if ba in (20, 22, 24):
-        ack, result = m.channel.write_record(page, ba, db, words, from_plc=True)
-    elif ba in (21, 23):
-        ack, result = m.channel.delete_record(page, ba, db), []
-    else:
-        ack, result = m.channel.read_record(page, ba, db, bool(job.get("bcd", False)))
+    transfer = FB165_JOBS.get(mode_token(ba)) or _fb165_read  # (a mode no record has: read's 80H)
+    ack, result = transfer(m, page, ba, db, words, bool(job.get("bcd", False)))
     m.ag_last = {"ack": ack, "err": m.error_of(page), "words": result}
+
+
+def _fb165_write(m: Any, page: int, ba: int, db: int, words: list[int], bcd: bool) -> tuple[int, list[int]]:
+    return m.channel.write_record(page, ba, db, words, from_plc=True)
+
+
+def _fb165_delete(m: Any, page: int, ba: int, db: int, words: list[int], bcd: bool) -> tuple[int, list[int]]:
+    return m.channel.delete_record(page, ba, db), []
+
+
+def _fb165_read(m: Any, page: int, ba: int, db: int, words: list[int], bcd: bool) -> tuple[int, list[int]]:
+    return m.channel.read_record(page, ba, db, bcd)
+
+
+Transfer = Callable[[Any, int, int, int, list[int], bool], tuple[int, list[int]]]
+
+#: FB165's jobs (spec §3.3.3): the record modes, written, deleted or read on the data channel.
+FB165_JOBS: Table[Transfer] = Table([
+    *(Command(row.token, _fb165_write, row.section, row.doc) for row in WRITE_RECORDS),
+    *(Command(row.token, _fb165_delete, row.section, row.doc) for row in DELETE_RECORDS),
+    *(Command(row.token, _fb165_read, row.section, row.doc) for row in READ_RECORDS),
+])
 
 
 def _ag_operate(m: Any, job: Any) -> None:
