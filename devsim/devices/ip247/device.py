@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import Parameter, PortDef, Reference
+from devsim.core.kit import PortDef, Reference
 from devsim.core.settings import Section
 from devsim.devices.ip247.config import Ip247Config
 from devsim.devices.ip247.drive_actions import DRIVE, SETUP
@@ -20,7 +20,7 @@ from devsim.devices.ip247.modes import AXIS_MODES
 from devsim.devices.ip247.module import OBSERVED, OPERATOR_JOBS, Ip247Module
 from devsim.devices.ip247.points import FAULTS, POINTS
 from devsim.devices.ip247.records import DELETE_RECORDS, READ_RECORDS, WRITE_RECORDS
-from devsim.devices.ip247.tables import MD_ITEMS, error_codes, mode_token
+from devsim.devices.ip247.tables import MACHINE_DATA, error_codes, mode_token
 
 __all__ = ["Ip247Device"]
 
@@ -47,7 +47,6 @@ class Ip247Device(Device):
         return Reference(
             commands=sorted([*AXIS_MODES, OPERATOR_JOBS.rows[mode_token(17)], *WRITE_RECORDS, *DELETE_RECORDS,
                              *READ_RECORDS, *OBSERVED], key=lambda row: int(row.token.removeprefix("BA"))),
-            parameters=[Parameter(f"MD {item.words}", f"{item.name} ({item.english})", "§4.8", item.unit,
-                                  item.minimum, item.maximum, None, True, "simulated") for item in MD_ITEMS],
+            parameter_table=MACHINE_DATA,
             errors=error_codes(),
         )

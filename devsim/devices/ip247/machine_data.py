@@ -13,14 +13,18 @@ import math
 from collections.abc import Callable
 
 from devsim.core.kit import Command, Table
-from devsim.core.record import record
+from devsim.core.record import fields, record
 from devsim.core.words import signed32
-from devsim.devices.ip247.tables import MD_ERRORS
+from devsim.devices.ip247.tables import MACHINE_DATA, MD_ERRORS
 
-__all__ = ["LIMIT", "RECORD_WORDS", "MachineData", "Ramp", "check", "decode", "encode"]
+__all__ = [
+    "LIMIT", "RECORD_WORDS", "RESERVED", "MachineData", "Ramp", "check", "decode", "encode", "record_db",
+]
 
 RECORD_WORDS = 70
 LIMIT = 99_999_999  # ±100 m in base units
+#: Words n+48 … n+69: reserved, kept as the host wrote them.
+RESERVED = slice(48, RECORD_WORDS)
 
 
 def _signed(high: int, low: int) -> int:
@@ -66,6 +70,26 @@ class MachineData:
     bcd: bool  # n+47 bit 0
 
     @property
+    def zero_offset_1(self) -> int:
+        """MD n+38/39, G54."""
+        return self.zero_offsets[0]
+
+    @property
+    def zero_offset_2(self) -> int:
+        """MD n+40/41, G55."""
+        return self.zero_offsets[1]
+
+    @property
+    def zero_offset_3(self) -> int:
+        """MD n+42/43, G56."""
+        return self.zero_offsets[2]
+
+    @property
+    def zero_offset_4(self) -> int:
+        """MD n+44/45, G57."""
+        return self.zero_offsets[3]
+
+    @property
     def resolution(self) -> float:
         """Base units per pulse: gear / pulses per revolution (spec §4.8)."""
         return self.gear / self.pulses_per_rev
@@ -82,6 +106,11 @@ class MachineData:
     @property
     def ramp(self) -> Ramp:
         return Ramp(self.f_max, self.f_ss, self.a / 1000)
+
+
+def record_db(words: list[int]) -> int:
+    """The DB number a record names in its word n+2 (DR)."""
+    return words[2] & 0xFF
 
 
 def decode(words: list[int]) -> MachineData:
@@ -101,6 +130,11 @@ def decode(words: list[int]) -> MachineData:
         limit_begin=dd(29), limit_end=dd(31), limit_polarity=w[33], tool_length=dd(34), backlash=dd(36),
         zero_offsets=(dd(38), dd(40), dd(42), dd(44)), rotary=bool(w[46] & 0x80), bcd=bool(w[47] & 0x01),
     )
+
+
+_NAMED = {f.name for f in fields(MachineData)} | {n for n, v in vars(MachineData).items() if isinstance(v, property)}
+if not {row.attr for row in MACHINE_DATA} <= _NAMED:  # every row names a value the model can read
+    raise TypeError(f"machine-data rows without a value: {sorted({row.attr for row in MACHINE_DATA} - _NAMED)}")
 
 
 def encode(md: MachineData) -> list[int]:

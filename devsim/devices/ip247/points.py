@@ -15,6 +15,7 @@ from typing import Any
 from devsim.core.kit import Command, Fault, FaultTable, Table, signal_points
 from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.devices.ip247 import program as lang
+from devsim.devices.ip247.machine_data import record_db
 from devsim.devices.ip247.pg_profile import Operate, command_code
 from devsim.devices.ip247.records import DELETE_RECORDS, READ_RECORDS, WRITE_RECORDS
 from devsim.devices.ip247.services import serve
@@ -70,7 +71,7 @@ def _put_md(m: Any, axis: int, record: Any) -> None:
             raise BadValue("machine data in one string are hex words") from None
     if not isinstance(record, list) or len(record) != 70 or not all(isinstance(w, int) for w in record):
         raise BadValue("machine data are 70 words (a list of numbers, or hex words in one string)")
-    m.channel.write_record(axis, 20, record[2] & 0xFF, [w & 0xFFFF for w in record], overwrite=True)
+    m.channel.write_record(axis, 20, record_db(record), [w & 0xFFFF for w in record], overwrite=True)
     if m.units[axis - 1].md is None:
         raise BadValue(f"machine data not stored: module error {m.units[axis - 1].error}")
 

@@ -124,7 +124,7 @@ class DataChannel:
         error = machine_data.check(md, sys_module=self.sys_id[0], limit_levels=unit.limit_levels())
         md = replace(md, error=error)
         stored = machine_data.encode(md)
-        stored[48:] = list(words[48:70])
+        stored[machine_data.RESERVED] = list(words[machine_data.RESERVED])
         unit.load_md(md, stored, first=True)
         unit.pulse_rs()  # the power unit's pattern counter restarts with the IP's (spec §5.16)
         if error:
