@@ -123,9 +123,15 @@ class Param:
             return " / ".join(str(c) for c in self.choices)
         if self.minimum is None and self.maximum is None:
             return ""
-        low = "" if self.minimum is None else f"{self.minimum:g}"
-        high = "" if self.maximum is None else f"{self.maximum:g}"
+        low = "" if self.minimum is None else _number(self.minimum)
+        high = "" if self.maximum is None else _number(self.maximum)
         return f"{low} … {high}"
+
+
+def _number(value: float) -> str:
+    """A range limit as the reference prints it: ``:g``, but a whole number in full (99999999,
+    not 1e+08)."""
+    return str(int(value)) if float(value).is_integer() else f"{value:g}"
 
 
 def _unit(unit: str) -> str:
