@@ -24,7 +24,7 @@ from devsim.devices.poselesta.keyboard import Keyboard
 from devsim.devices.poselesta.limits import LimitSwitches
 from devsim.devices.poselesta.manual import ManualMotion
 from devsim.devices.poselesta.mst import MstBus, PlcHelper
-from devsim.devices.poselesta.parameters import PARAMETERS, catalogue_blocks, check_parameter, store_parameter
+from devsim.devices.poselesta.parameters import MachineParameters
 from devsim.devices.poselesta.peers import Cassette
 from devsim.devices.poselesta.signals import AXES, OUTPUTS, SIGNALS
 from devsim.devices.poselesta.tape import Block, Formats, TapeReader, block_words, parse_blocks, render
@@ -77,16 +77,16 @@ class PoselestaCnc(Model):
             accept=self._key, event=lambda what, code: self.transfer_event("v8", what, code),
         )
         self.last_key: int | None = None
-        self.pending_catalogue: dict[int, float] = {}
         self.relay_supply_lost = False
         self.rm_missing: set[str] = set()  # axes whose reference mark signal is lost (fault)
         self.keyboard_test: str | None = None  # P79 N3 running: what the screen shows ("" before a key)
         self.plotter = False  # X/Y plotter operation (POS III, V22/8 at power-on)
         self._buzzer_timer: Any = None
         self._boot_timer: Any = None
+        self.params = MachineParameters(self.nvram, self.cfg.params)
         self.axes = {a: Axis(self.clock, name=a) for a in AXES}
         self.executor = Executor(self)
-        self.mst = MstBus(self.clock, self.signals, lambda: max(1.0, self.params[72]) / 1000.0, self.executor.put)
+        self.mst = MstBus(self.clock, self.signals, lambda: max(1.0, self.params.strobe_ms) / 1000.0, self.executor.put)
         plc = self.cfg.plc
         self.plc = PlcHelper(self.clock, self.signals, plc.mst_ack, plc.rise_ms / 1000.0, plc.fall_ms / 1000.0,
                              None if plc.tool_change_ms is None else plc.tool_change_ms / 1000.0,
@@ -108,19 +108,12 @@ class PoselestaCnc(Model):
         self.protected: set[int] = {int(p) for p in self.nvram.get("protected") or []}
         self.inch_programs: set[int] = {int(p) for p in self.nvram.get("inch_programs") or []}
         self.tools: dict[int, dict[str, float]] = {int(t): dict(v) for t, v in (self.nvram.get("tools") or {}).items()}
-        params = {n: p.default for n, p in PARAMETERS.items()}
-        params.update({int(k): float(v) for k, v in (self.nvram.get("params") or {}).items()})
-        if self.nvram.get("params") is None:
-            params.update({int(k): float(v) for k, v in self.cfg.params.items()})
-        self.params = params
+        self.params.load()
 
     def _save_programs(self) -> None:
         self.nvram.put(
             "programs", {str(p): [b.to_json() for _, b in sorted(bs.items())] for p, bs in self.programs.items()}
         )
-
-    def _save_params(self) -> None:
-        self.nvram.put("params", {str(n): v for n, v in sorted(self.params.items())})
 
     # -- power ----------------------------------------------------------------------------------
     def _power_on(self) -> None:
@@ -218,11 +211,11 @@ class PoselestaCnc(Model):
 
     def rapid(self, axis: str) -> float:
         """P44–P47, in increments per second."""
-        return self.from_mm(axis, self.params[44 + AXES.index(axis)] / 60.0)
+        return self.from_mm(axis, self.params.rapid(axis) / 60.0)
 
     def max_feed(self, axis: str) -> float:
         """P48–P51, in increments per second."""
-        return self.from_mm(axis, self.params[48 + AXES.index(axis)] / 60.0)
+        return self.from_mm(axis, self.params.max_feed(axis) / 60.0)
 
     def accel(self, axis: str) -> float:
         return self.from_mm(axis, self.cfg.accel)
@@ -241,7 +234,7 @@ class PoselestaCnc(Model):
 
     def kv(self, axis: str) -> float:
         """The position loop gain [1/s]: P30–P33 steps × ``kv_per_step`` (spec §5.2)."""
-        return self.params[30 + AXES.index(axis)] * self.cfg.kv_per_step
+        return self.params.gain(axis) * self.cfg.kv_per_step
 
     def display(self, axis: str) -> str:
         """The actual value as the screen shows it (spec §5.1): mm with the axis's decimals, or
@@ -344,7 +337,7 @@ class PoselestaCnc(Model):
             raise BadValue("the key switch is locked: the parameter catalogue cannot be read in")
         if self.baud(port) is None:
             self.message = WERTBEREICHES_UEBERLAUF
-            raise BadValue(f"P{68 if port == 'v6' else 70}: baud rate code not available on POS {self.cfg.variant}")
+            raise BadValue(f"P{self.params.baud_code_key(port)}: baud rate code not available on POS {self.cfg.variant}")
         self.message = ""
         self.record_event(f"{function.name}_start")
         if function.direction == "input":
@@ -352,11 +345,11 @@ class PoselestaCnc(Model):
             if catalogue:
                 if self.cfg.variant == "III":  # the line stays as it was at the start (spec §3.9)
                     line = (self.baud(port), self.iso(port))
-                    if int(self.params[68 if port == "v6" else 70]) > 3:
+                    if self.params.baud_code(port) > 3:
                         self.message = WERTBEREICHES_UEBERLAUF
                         raise BadValue("the catalogue is read at up to 1200 baud (P68/P70 ≤ 3)")
-                self._clear_catalogue()  # the whole catalogue is 0 first, P68–P71 too: POS II
-                self.pending_catalogue = {}  # so reads it at 110 baud ISO (§2.6.2.3)
+                self.params.begin_catalogue()  # the whole catalogue is 0 first, P68–P71 too: POS II
+                # so reads it at 110 baud ISO (§2.6.2.3)
             else:
                 self.programs.pop(program, None)  # "zuerst das vorgewählte Programm gelöscht" (§2.6)
                 self._save_programs()
@@ -373,7 +366,7 @@ class PoselestaCnc(Model):
             read_in.line = line
             self.transfers[port] = read_in
         else:
-            blocks = catalogue_blocks(self.params) if catalogue else list(self.programs.get(program, {}).values())
+            blocks = self.params.catalogue_blocks() if catalogue else list(self.programs.get(program, {}).values())
             pieces = self._output_pieces(function.name, port, blocks, self.program_formats(program))
             if port == "v6":
                 self._v6_lines(True)
@@ -424,8 +417,7 @@ class PoselestaCnc(Model):
             if self.cassette is not None and port == "v6":
                 self.cassette.ended(running.function.name, state)
             if running.program == CATALOGUE and running.function.direction == "input" and state == "done":
-                self.params.update(self.pending_catalogue)  # the parameters act after M30 (spec §3.9)
-                self._save_params()
+                self.params.commit_catalogue()  # the parameters act after M30 (spec §3.9)
         self.transfers[port] = None
         self.last_state[port] = state
         if port == "v6":
@@ -433,14 +425,10 @@ class PoselestaCnc(Model):
         if state == "failed":
             self.message = WERTBEREICHES_UEBERLAUF
 
-    def _clear_catalogue(self) -> None:
-        self.params = dict.fromkeys(self.params, 0.0)
-        self._save_params()
-
     def store_block(self, program: int, block: Block) -> str | None:
         """A block read in; returns why it cannot be stored (the read-in fails), or None."""
         if program == CATALOGUE:
-            return store_parameter(self.pending_catalogue, block)
+            return self.params.store_catalogue(block)
         blocks = self.programs.setdefault(program, {})
         total = sum(len(b) for b in self.programs.values())
         if block.number not in blocks and total >= self.cfg.max_blocks_total:
@@ -456,7 +444,7 @@ class PoselestaCnc(Model):
         """Seconds per character on the port: the frame of §2.3 at the port's baud rate."""
         running = self.transfers[port]
         if port == "v6" and running is not None and running.function.name == "T1":
-            return (12 if self.params[69] == 0 else 11) / 1200
+            return (12 if self.params.iso("v6") else 11) / 1200
         return (11 if self.iso(port) else 10) / (self.baud(port) or 110)
 
     # -- line settings --------------------------------------------------------------------------
@@ -464,7 +452,7 @@ class PoselestaCnc(Model):
         running = self.transfers.get(port)
         if isinstance(running, ReadIn) and running.line is not None:
             return running.line[1]
-        return self.params[69 if port == "v6" else 71] == 0 or port == "v8"
+        return port == "v8" or self.params.iso(port)
 
     def baud(self, port: str) -> int | None:
         """The port's baud rate: P68 (V6), P70 (V7); the printer 1200, the POS II cassette 300,
@@ -480,8 +468,8 @@ class PoselestaCnc(Model):
         if name in ("T2", "T3") and self.cfg.variant == "II":
             return 300
         if name in ("T2", "T3"):
-            return {1: 300, 3: 1200, 5: 4800}.get(int(self.params[68]), 300)
-        return baud_for_code(int(self.params[68 if port == "v6" else 70]), self.cfg.variant)
+            return {1: 300, 3: 1200, 5: 4800}.get(self.params.baud_code("v6"), 300)
+        return baud_for_code(self.params.baud_code(port), self.cfg.variant)
 
     # -- V6 modem lines ---------------------------------------------------------------------------
     def _v6_lines(self, on: bool, record: bool = True) -> None:
@@ -548,7 +536,7 @@ class PoselestaCnc(Model):
         if self.keyboard_test is not None:  # P79 N3: the code + 1 on the screen; 2D ends the test
             self.keyboard_test = None if code == KEYBOARD_TEST_EXIT else f"{code + 1:02X}"
         self.transfer_event("v8", "key", code)
-        if self.params[67] == 0:
+        if self.params.buzzer_off == 0:
             self.signals.set("buzzer", True)
             if self._buzzer_timer is not None:
                 self._buzzer_timer.cancel()
@@ -598,10 +586,8 @@ class PoselestaCnc(Model):
 
     def set_param(self, number: int, value: float) -> None:
         try:
-            check_parameter(number, value)
+            self.params.write(number, value)
         except ValueError as exc:
             raise BadValue(str(exc)) from None
-        self.params[number] = value
-        self._save_params()
         if 9 <= number <= 16:
             self.field.rearm()

@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import Command, ErrorCode, Parameter, PortDef, Reference
+from devsim.core.kit import Command, ErrorCode, PortDef, Reference
 from devsim.core.settings import Section
 from devsim.devices.poselesta.cnc import PoselestaCnc
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF
@@ -52,10 +52,7 @@ class PoselestaDevice(Device):
                         f"mode digit {f.digit}")
                 for (_, name), f in FUNCTIONS.items()
             ],
-            parameters=[
-                Parameter(f"P{p.number}", p.name, p.section, "", p.minimum, p.maximum, p.default, True, "simulated")
-                for p in PARAMETERS.values()
-            ],
+            parameter_table=PARAMETERS,
             errors=[ErrorCode(WERTBEREICHES_UEBERLAUF, "value range overflow: wrong code, baud, format or "
                               "too many words; the transfer stops", "§2.6")],
         )

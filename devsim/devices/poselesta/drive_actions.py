@@ -46,7 +46,7 @@ def _move_to(c: Any, target: float, speed: float) -> None:
     position = f"X{c.to_mm('x', target):.{decimals}f}"
     feed = round(c.to_mm("x", speed) * 60 / c.executor.feed_unit())
     c.executor.mdi = f"N1 G90 G01 {position} F{feed}" if feed >= 1 else f"N1 G90 G00 {position}"
-    c.executor.nc_start("panel" if int(c.params[75]) in (0, 1) else "external")
+    c.executor.nc_start("panel" if int(c.params.nc_start_source) in (0, 1) else "external")
     if not c.executor.running:
         raise BadValue(f"the control did not start the block ({c.message or 'NC-Start ignored'})")
 

@@ -130,7 +130,7 @@ class Executor:
         """NC-Start (§2.3.3): starts from the first block, continues a stop or a hold; P75 says
         which source counts (0 both, 1 the panel, 2 the external button V19/3)."""
         cnc = self.cnc
-        allowed = {0: ("panel", "external"), 1: ("panel",), 2: ("external",)}.get(int(cnc.params[75]), ())
+        allowed = {0: ("panel", "external"), 1: ("panel",), 2: ("external",)}.get(int(cnc.params.nc_start_source), ())
         if source not in allowed or cnc.booting or not self.signals.get("emergency_stop"):
             return
         if cnc.mode not in EXECUTION_MODES or not self.signals.get("nc_stop") or not cnc.field.inside:
@@ -447,7 +447,7 @@ class Executor:
         cnc = self.cnc
         if self._zero_rapid(self.targets):
             return None
-        factor = cnc.override() if cnc.params[64] == 1 else 1.0
+        factor = cnc.override() if cnc.params.rapid_override == 1 else 1.0
         if factor <= 0:
             return None
         return {a: (cnc.rapid(a) * factor, cnc.accel(a)) for a in self.targets}
@@ -648,7 +648,7 @@ class Executor:
         for a in AXES:
             self.signals.set(f"travel_{a}", False)
         self.signals.set("position_reached", False)
-        number = int(self.cnc.params[90])
+        number = int(self.cnc.params.abort_block)
         self.cnc.record_event("block_abort")
         index = next((i for i, b in enumerate(self.blocks) if b.number == number), None)
         if index is None:

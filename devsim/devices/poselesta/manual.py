@@ -63,7 +63,7 @@ class ManualMotion:
         if cnc.mode not in MANUAL_MODES or cnc.booting or not cnc.signals.get("emergency_stop"):
             cnc.record_event("handwheel_ignored")
             return
-        step = int(cnc.params[76]) * self.handwheel_factor
+        step = int(cnc.params.handwheel_step) * self.handwheel_factor
         for a in AXES:
             if not cnc.signals.get(f"handwheel_{a}") or detents == 0:
                 continue
@@ -89,7 +89,7 @@ class ManualMotion:
         self.open_loop = bool(new)
 
     def in_open_loop(self, a: str) -> bool:
-        return self.open_loop and bool(int(self.cnc.params[77]) >> AXES.index(a) & 1)
+        return self.open_loop and self.cnc.params.is_open_loop(a)
 
     def push(self, a: str, mm: float) -> None:
         """An outside force moves an open-loop axis by ``mm`` (10 mm/s): the display follows."""

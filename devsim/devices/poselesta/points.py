@@ -9,10 +9,13 @@ from collections.abc import Callable
 from typing import Any
 
 from devsim.core.kit import Fault, FaultTable, signal_points
+from devsim.core.parameters import alias_hook, parameter_points
 from devsim.core.points import BadValue, Family, Point, PointTable
+from devsim.core.record import replace
 from devsim.devices.poselesta.cnc import MODES, PoselestaCnc
 from devsim.devices.poselesta.diagnostics import input_image, input_screen, pots
 from devsim.devices.poselesta.execution import STATES
+from devsim.devices.poselesta.parameters import PARAMETERS
 from devsim.devices.poselesta.signals import AXES, SIGNALS
 from devsim.devices.poselesta.transfers import FUNCTIONS
 
@@ -73,13 +76,14 @@ def _tool(name: str) -> Point | None:
                  put=lambda m, v: m.set_tool(number, v))
 
 
-def _param(name: str) -> Point | None:
-    match = re.fullmatch(r"param\.P(\d{1,2})", name)
-    if match is None or not 1 <= int(match[1]) <= 98 or int(match[1]) == 79:
-        return None
-    number = int(match[1])
-    return Point(name, "float", f"machine parameter P{number}", "§2.6.2.3",
-                 get=lambda m: m.params.get(number, 0.0), put=lambda m, v: m.set_param(number, v))
+def _param_points() -> list[Point]:
+    """``param.P1`` … ``param.P98`` from the parameter rows.  The points take any finite number,
+    as the family of names before them did: the control checks a value itself, with its own
+    messages (:func:`~devsim.devices.poselesta.parameters.check_parameter`), so the points carry
+    neither the rows' ranges nor their whole-number type."""
+    points = parameter_points(PARAMETERS, read=lambda m, row: m.params[row.key],
+                              write=lambda m, row, value: m.set_param(row.key, value))
+    return [replace(point, type="float", minimum=None, maximum=None, choices=None) for point in points]
 
 
 #: The alarms as the EMCY error codes (CiA 301) a fieldbus facade sends when one starts.
@@ -234,9 +238,10 @@ POINTS = PointTable.of(
     _transfer_points("v7"),
     signal_points([d for d in SIGNALS if d.kind != "output"]),
     signal_points([d for d in SIGNALS if d.kind == "output"], bank=lambda m: _RelaySupply(m)),
+    _param_points(),
+    alias=alias_hook(PARAMETERS),
     families=[
         Family("program.P<nn>", "str", "program P00 … P98, one block per line", "§2.6.3", _program),
-        Family("param.P<n>", "float", "machine parameter P1 … P98", "§2.6.2.3", _param),
         Family("tool.T<nn>", "json", "tool T01 … T99 of the tool catalogue: {radius, length}", "§2.3.14", _tool),
     ],
 )

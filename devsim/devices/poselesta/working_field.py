@@ -128,8 +128,8 @@ class WorkingField:
     # -- the working field ---------------------------------------------------------------------------
     def limits(self, a: str) -> tuple[float, float]:
         """(−, +) software limits of an axis in increments (P13–P16, P9–P12)."""
-        i = AXES.index(a)
-        return self.cnc.from_mm(a, self.cnc.params[13 + i]), self.cnc.from_mm(a, self.cnc.params[9 + i])
+        minus, plus = self.cnc.params.limits(a)
+        return self.cnc.from_mm(a, minus), self.cnc.from_mm(a, plus)
 
     def rearm(self) -> None:
         """The limits changed (P9–P16): watch the new ones."""
