@@ -22,6 +22,8 @@ __all__ = ["CATALOGUE_SCALE", "PARAMETERS", "MachineParameters", "check_paramete
 
 #: The catalogue's value word P carries 3 decimals (spec §3.9, simulator-defined format).
 CATALOGUE_SCALE = 1000
+#: P75: which NC-Start counts (0 both, 1 the panel, 2 the external button V19/3).
+NC_START_SOURCES = {0: ("panel", "external"), 1: ("panel",), 2: ("external",)}
 #: P79 is the diagnostic program, not a parameter (manual §2.3.25).
 DIAGNOSTIC_PROGRAM = 79
 
@@ -143,6 +145,10 @@ class MachineParameters(Parameters):
     def max_feed(self, axis: str) -> float:
         """P48–P51: the maximum feed of an axis in mm/min."""
         return self.values[48 + AXES.index(axis)]
+
+    def nc_start_counts(self, source: str) -> bool:
+        """P75: does an NC-Start from ``source`` (``panel``, ``external``) count?"""
+        return source in NC_START_SOURCES.get(int(self.nc_start_source), ())
 
     def is_open_loop(self, axis: str) -> bool:
         """P77 marks ``axis`` as an open-loop axis."""
