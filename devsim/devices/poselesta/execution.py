@@ -21,6 +21,7 @@ from collections.abc import Callable
 from typing import Any
 
 from devsim.core.clock import Clock, Timer
+from devsim.core.kit import Command, Table
 from devsim.core.record import record
 from devsim.core.signals import SignalBank
 from devsim.devices.poselesta.block_motion import BlockMotion
@@ -244,17 +245,15 @@ class Executor:
         self._start_motion()
 
     def _wait_input(self, name: str, _old: Any, new: Any) -> None:
-        if not new:
-            return
-        if name == "tool_change_ack" and self.state == "WAIT_TOOL_CHANGE":
-            self._tool_changed()
-        elif name == "axis_enable" and self.state == "WAIT_AXIS_ENABLE":
-            if self.stop_pending:
-                self._stop_until_start(self._move, state="HOLD")
-            else:
-                self._move()
-        elif name == "program_continue" and self.state == "WAIT_PROGRAM_CONTINUE":
-            self._continue_after_position()
+        """An input the block cycle waits for went H (spec §4.3.2): looked up in :data:`WAITS`."""
+        if new and self.state == WAITING_IN[name]:
+            WAITS[name](self)
+
+    def _enabled(self) -> None:
+        if self.stop_pending:
+            self._stop_until_start(self._move, state="HOLD")
+        else:
+            self._move()
 
     def _m10_ack_input(self, _name: str, old: Any, new: Any) -> None:
         if old and not new and self.state == "WAIT_M10_PULSE":
@@ -455,3 +454,14 @@ class Executor:
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
+
+
+#: The inputs of the PLC a block waits for, with the state it waits in (spec §4.3.2).
+WAITING_IN = {"tool_change_ack": "WAIT_TOOL_CHANGE", "axis_enable": "WAIT_AXIS_ENABLE",
+              "program_continue": "WAIT_PROGRAM_CONTINUE"}
+WAITS: Table[Callable[[Executor], None]] = Table([
+    Command("tool_change_ack", Executor._tool_changed, "§2.3.17", "V22/5 H: the tool is changed, the block goes on"),
+    Command("axis_enable", Executor._enabled, "§2.3.15", "V22/3 H: the feed is released, the axes move"),
+    Command("program_continue", Executor._continue_after_position, "§2.3.16",
+            "V22/4 H: after position reached, the block-end functions follow"),
+])

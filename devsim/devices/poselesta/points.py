@@ -8,7 +8,7 @@ import re
 from collections.abc import Callable
 from typing import Any
 
-from devsim.core.kit import Fault, FaultTable, signal_points
+from devsim.core.kit import Command, Fault, FaultTable, Table, signal_points
 from devsim.core.parameters import alias_hook, parameter_points
 from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.core.record import replace
@@ -139,10 +139,18 @@ class _RelaySupply:
 def _diagnostic(model: PoselestaCnc, number: int) -> None:
     if model.mode != "PROGRAM_ENTRY":
         raise BadValue("the diagnostic programs P79 run in PROGRAM_ENTRY")
-    if number == 3:
-        _keyboard_test(model, "true")
-    elif number == 6:
-        model.output_test.start()
+    run = DIAGNOSTIC_PROGRAMS.get(f"N{number}")
+    if run is not None:
+        run(model)  # (N5 and N7 are pages: diagnostics.inputs and diagnostics.pots read them)
+
+
+#: The diagnostic programs of P79 that run (spec §4.7): the keyboard test and the output test.
+DIAGNOSTIC_PROGRAMS: Table[Callable[[PoselestaCnc], None]] = Table([
+    Command("N3", lambda model: _keyboard_test(model, "true"), "§2.6.4",
+            "keyboard test: each key's code + 1 on the screen, key 2D ends it"),
+    Command("N6", lambda model: model.output_test.start(), "§2.4.11",
+            "output test: every output in ascending binary code, 250 ms a step"),
+])
 
 
 def _keyboard_test(model: PoselestaCnc, value: str) -> None:
