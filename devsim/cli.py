@@ -49,8 +49,8 @@ from devsim.run_options import (
 )
 
 if TYPE_CHECKING:  # imported where used: `devsim run` starts faster without them
-    from devsim.core.control import ControlAddress
     from devsim.core.device import Device
+    from devsim.runtime.control import ControlAddress
 
 __all__ = ["cli", "main"]
 
@@ -434,7 +434,7 @@ def run(
     if fleet is not None:
         check_fleet(fleet)
     if motion_log is not None:
-        from devsim.core.motion_log import motion_log_problem
+        from devsim.observe.motion_log import motion_log_problem
 
         if (problem := motion_log_problem(motion_resolution)) is not None:
             raise click.UsageError(problem)
@@ -445,7 +445,7 @@ def run(
 
     control_addr: ControlAddress | None = None
     if control is not None:
-        from devsim.core.control import ControlAddressError, parse_address
+        from devsim.runtime.control import ControlAddressError, parse_address
 
         try:
             control_addr = parse_address(control)
@@ -517,10 +517,10 @@ def _say(line: str) -> None:
 
 
 async def _serve(plan: _Plan) -> None:
-    from devsim.core.runtime import Runtime, port_key
+    from devsim.runtime import Runtime, port_key
 
     if plan.control is not None:
-        from devsim.core.control import ControlServer
+        from devsim.runtime.control import ControlServer
 
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
@@ -537,7 +537,7 @@ async def _serve(plan: _Plan) -> None:
             devices = [runtime.add_device(plan.kind, name, config) for name, config in plan.devices]
             if plan.motion_log is not None:
                 stage = f"write the motion log {plan.motion_log}"
-                from devsim.core.motion_log import start_motion_log
+                from devsim.observe.motion_log import start_motion_log
 
                 start_motion_log(runtime, devices, plan.motion_log, plan.motion_resolution)
             served: list[tuple[str, Any, _Port]] = []  # port name, transport, spec

@@ -23,7 +23,7 @@ def _emit(result: Any) -> None:
 
 
 def _call(ctx: click.Context, method: str, *args: Any, **kwargs: Any) -> None:
-    from devsim.core.control import ControlAddressError, ControlClient, ControlError
+    from devsim.runtime.control import ControlAddressError, ControlClient, ControlError
 
     addr, fleet = ctx.obj
     client: Any
@@ -194,8 +194,8 @@ def ctl_watch(device: str, names: tuple[str, ...], as_json: bool, period: float 
     """Print changes of DEVICE's NAMEs (default: its state and axes) and its events (move start
     and end, faults, errors, host connects) as they happen, one line each, until Ctrl-C or the
     simulator stops: '12.300 sers axis.position 1234.0'."""
-    from devsim.core.control import ControlAddressError, ControlClient, ControlError
-    from devsim.core.watch_stream import describe
+    from devsim.runtime.control import ControlAddressError, ControlClient, ControlError
+    from devsim.runtime.watch_stream import describe
 
     addr, fleet = click.get_current_context().obj
     if fleet is not None:

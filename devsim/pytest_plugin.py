@@ -6,7 +6,7 @@ active wherever ``devsim-motion`` is installed.  It provides:
 ``devsim_device``
     A factory ``make(kind, config=None, *, transport="pty", virtual=True, name=None,
     state_dir=None, boot=True)`` returning a :class:`SimDevice`: one device served on a real pty
-    (or TCP / RFC 2217 port), in its own :class:`~devsim.core.runtime.Runtime` (a background
+    (or TCP / RFC 2217 port), in its own :class:`~devsim.runtime.Runtime` (a background
     thread), with the control API and the clock.  Every device made is stopped at teardown.
 
 ``devsim_plant``
@@ -40,7 +40,7 @@ import pytest
 from devsim.core.clock import VirtualClock
 from devsim.core.device import Device
 from devsim.core.record import fields as record_fields
-from devsim.core.runtime import Runtime
+from devsim.runtime import Runtime
 
 __all__ = [
     "DeviceFactory",

@@ -10,7 +10,8 @@ from collections.abc import Iterator
 
 import pytest
 
-from devsim.core.control import (
+from devsim.runtime import Runtime
+from devsim.runtime.control import (
     ControlAddress,
     ControlAddressError,
     ControlClient,
@@ -18,7 +19,6 @@ from devsim.core.control import (
     ControlServer,
     parse_address,
 )
-from devsim.core.runtime import Runtime
 
 ECHO = "echo=tests.support.echo:EchoDevice"
 

@@ -1,4 +1,4 @@
-"""The motion log (devsim/core/motion_log.py): a SERS move in virtual time against the closed-form
+"""The motion log (devsim/observe/motion_log.py): a SERS move in virtual time against the closed-form
 trapezoid, event rows at the exact event times, the axes every kind declares, no sampling without
 a log, and ``devsim run --motion-log`` as a real process."""
 
@@ -16,10 +16,10 @@ from typing import Any
 import pytest
 import serial
 
-from devsim.core.control import ControlClient
-from devsim.core.motion_log import HEADER, MotionLog, axis_columns, motion_log_problem
 from devsim.core.registry import device_class, kinds
-from devsim.core.runtime import Runtime
+from devsim.observe.motion_log import HEADER, MotionLog, axis_columns, motion_log_problem
+from devsim.runtime import Runtime
+from devsim.runtime.control import ControlClient
 from devsim.scenario.runner import run_scenario
 from devsim.scenario.schema import load_scenario
 from tests.support.process import DevsimProcess

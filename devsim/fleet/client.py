@@ -5,8 +5,8 @@ what ``devsim ctl --fleet URL`` uses) keep the retained announcements of all pro
 :mod:`devsim.fleet.member`) and send a control-API request to the process that announces the
 named device, on its request topic, with the client's reply topic and a unique ``id`` as the
 correlation id; the answer is the control API's own (``ok``/``result`` or ``error``/``type``,
-raised as :class:`devsim.core.control.ControlError`).  :class:`FleetClient` has the methods of
-:class:`devsim.core.control.ControlClient`.
+raised as :class:`devsim.runtime.control.ControlError`).  :class:`FleetClient` has the methods of
+:class:`devsim.runtime.control.ControlClient`.
 
 * ``devices()`` – one row per device: the process's ``devices`` row (name, kind, ports) with
   ``process``, ``host``, ``pid``, ``online`` (and ``plant``/``part`` when given).  A process that
@@ -34,9 +34,9 @@ from typing import Any
 
 import aiomqtt
 
-from devsim.core.control import ControlError, ControlOps
 from devsim.fleet.member import mqtt_client, parse_announcement
 from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url
+from devsim.runtime.control import ControlError, ControlOps
 
 __all__ = ["AsyncFleetClient", "FleetClient"]
 
@@ -239,7 +239,7 @@ class AsyncFleetClient:
 
 
 class FleetClient(ControlOps):
-    """Blocking fleet client with :class:`~devsim.core.control.ControlClient`'s methods (its
+    """Blocking fleet client with :class:`~devsim.runtime.control.ControlClient`'s methods (its
     asyncio loop runs in a daemon thread).  ``with FleetClient("mqtt://broker") as fleet: ...``."""
 
     def __init__(self, url: str | FleetUrl, timeout: float = 10.0) -> None:

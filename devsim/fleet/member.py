@@ -10,7 +10,7 @@ taken from it (``devsim run/up --fleet URL``).
    ``devices`` op lists them (name, kind, ports).  Its last will is the same announcement with
    ``"online": false`` (retained; MQTT 5 message expiry of 24 h, so a crashed process's mark
    does not stay for ever);
-3. answers each request with :meth:`devsim.core.control.ControlServer.handle_line` – the very
+3. answers each request with :meth:`devsim.runtime.control.ControlServer.handle_line` – the very
    code of the control API, so ops, validation and error types are the same.
 
 A request is the control API's JSON request plus ``"reply_to"``: the topic for the answer, which
@@ -41,9 +41,9 @@ from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
 from devsim.core.clock import VirtualClock
-from devsim.core.control import MAX_LINE, ControlServer, ErrorResponse, OkResponse, Request
-from devsim.core.runtime import Runtime
 from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url, process_id
+from devsim.runtime import Runtime
+from devsim.runtime.control import MAX_LINE, ControlServer, ErrorResponse, OkResponse, Request
 
 __all__ = ["FleetClash", "FleetMember", "join_fleet"]
 

@@ -19,7 +19,7 @@ def monitor(addr: str, period: float) -> None:
     """A live view of every device: state, display, faults, axes with sparklines, inputs (press
     to flip) and outputs, the last telegrams per port; f: fault menu, a/A: advance virtual time,
     q: quit.  Needs the extra [monitor] (textual)."""
-    from devsim.core.control import ControlAddressError
+    from devsim.runtime.control import ControlAddressError
 
     if not period > 0:
         raise click.UsageError("--period: must be positive")

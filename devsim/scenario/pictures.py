@@ -3,7 +3,7 @@
 Per scenario:
 
 * ``--motion-log FILE.csv`` logs every axis of the scenario's plant
-  (:mod:`devsim.core.motion_log`); with several scenarios each gets its own file,
+  (:mod:`devsim.observe.motion_log`); with several scenarios each gets its own file,
   ``FILE-STEM.csv`` (``STEM``: the scenario file's name without ``.yaml``);
 * ``--plot DIR`` draws ``DIR/STEM.png`` (or ``.svg``/``.html``, ``--plot-format``) from the
   scenario's motion log and the traces of its ports (:mod:`devsim.plot`).  What it is drawn from
@@ -18,7 +18,7 @@ from typing import Any
 
 import click
 
-from devsim.core.motion_log import start_motion_log
+from devsim.observe.motion_log import start_motion_log
 
 __all__ = ["ScenarioPictures"]
 

@@ -1,6 +1,6 @@
 """The control API out of process: newline-delimited JSON over a Unix socket or loopback TCP.
 
-In process the control API is :class:`devsim.core.runtime.Runtime` itself (``read``, ``set``,
+In process the control API is :class:`devsim.runtime.Runtime` itself (``read``, ``set``,
 ``state``, ``power_cycle``, ``advance``, ``now``).  ``devsim run --control ADDR`` puts a
 :class:`ControlServer` in front of the same methods; :class:`ControlClient` is a small blocking
 client with the same method names, and ``devsim ctl`` is a command line on top of the client.
@@ -31,7 +31,7 @@ names, period: a subscription, see below).
 ``watch`` answers once (``result``: the watched names and the device time) and then keeps
 sending one line per change or event until the connection closes or the simulator stops:
 ``{"watch": ID, "t": 12.3, "device": "sers", "type": "change", "name": "axis.position",
-"value": 1234.0}`` (types in :mod:`devsim.core.watch_stream`).  The connection still answers
+"value": 1234.0}`` (types in :mod:`devsim.runtime.watch_stream`).  The connection still answers
 requests meanwhile; :meth:`ControlClient.watch` opens a connection of its own for the stream.
 """
 
@@ -54,8 +54,8 @@ from pydantic import BaseModel, ConfigDict, ValidationError
 
 from devsim.core.points import parse_bool
 from devsim.core.record import asdict, is_record, record
-from devsim.core.runtime import Runtime, port_key
-from devsim.core.watch_stream import WatchStream
+from devsim.runtime.process import Runtime, port_key
+from devsim.runtime.watch_stream import WatchStream
 
 __all__ = [
     "BadRequest",
@@ -601,7 +601,7 @@ class ControlClient(ControlOps):
 
     def watch(self, device: str, names: list[str] | None = None, *, period: float | None = None,
               timeout: float | None = None) -> Iterator[dict[str, Any]]:
-        """Changes and events of ``device`` as they happen (see :mod:`devsim.core.watch_stream`),
+        """Changes and events of ``device`` as they happen (see :mod:`devsim.runtime.watch_stream`),
         on a connection of its own; the first items are the present values.  Ends when the
         simulator stops (or closes the stream); ``timeout``: at most that long without an item
         (:class:`TimeoutError`), None waits for ever.  Close the generator to stop watching."""

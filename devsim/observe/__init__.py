@@ -1,0 +1,1 @@
+"""Looking at a running plant: the motion log (:mod:`devsim.observe.motion_log`)."""
