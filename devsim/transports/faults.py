@@ -10,13 +10,11 @@ from __future__ import annotations
 
 import math
 import random
-from typing import TYPE_CHECKING, Literal, get_args
+from collections.abc import Callable
+from typing import Literal, get_args
 
 from devsim.core.clock import Timer
 from devsim.core.record import record
-
-if TYPE_CHECKING:
-    from devsim.transports.line import Line
 
 __all__ = ["DEFAULT_SPLIT_GAP", "FaultDirection", "FaultHandle", "FaultKind", "LineFault"]
 
@@ -174,12 +172,13 @@ class _Active:
 
 
 class FaultHandle:
-    """Returned by :meth:`Line.inject`: lets the injector end the fault early."""
+    """Returned by :meth:`Line.inject`: lets the injector end the fault early.  ``end(active,
+    how)`` is the line's own way of ending one of its faults."""
 
-    __slots__ = ("_line", "_active")
+    __slots__ = ("_end", "_active")
 
-    def __init__(self, line: Line, active: _Active) -> None:
-        self._line = line
+    def __init__(self, active: _Active, end: Callable[[_Active, str], None]) -> None:
+        self._end = end
         self._active = active
 
     @property
@@ -193,7 +192,7 @@ class FaultHandle:
 
     def cancel(self) -> None:
         """End the fault now (idempotent)."""
-        self._line._end(self._active, "cancelled")
+        self._end(self._active, "cancelled")
 
     def __repr__(self) -> str:  # pragma: no cover - debugging aid
         return f"<FaultHandle {self.fault.describe()} {'active' if self.active else 'ended'}>"

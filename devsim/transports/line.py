@@ -265,7 +265,7 @@ class Line:
         """Start ``fault`` now; it ends by itself after its ``duration`` or ``count``."""
         active = _Active(fault, self.clock.now())
         self._faults.append(active)
-        handle = FaultHandle(self, active)
+        handle = FaultHandle(active, self._end)
         self._note(f"fault start: {fault.describe()}")
         if fault.kind == "unplug":
             self.target.host_disconnected()
