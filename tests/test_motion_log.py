@@ -19,7 +19,7 @@ import serial
 from devsim.core.registry import device_class, kinds
 from devsim.observe.motion_log import HEADER, MotionLog, axis_columns, motion_log_problem
 from devsim.runtime import Runtime
-from devsim.runtime.control import ControlClient
+from devsim.runtime.client import ControlClient
 from devsim.scenario.runner import run_scenario
 from devsim.scenario.schema import load_scenario
 from tests.support.process import DevsimProcess

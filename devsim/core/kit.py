@@ -129,6 +129,9 @@ class Command(Generic[H]):
     section: str
     doc: str = ""
     effect: Effect = "simulated"
+    #: The typed record the token's arguments arrive in, where a table has one per row (the
+    #: control API's ops, :data:`devsim.runtime.ops.CONTROL`).
+    request: Any = None
 
 
 class Table(Generic[H]):

@@ -2,16 +2,18 @@
 
 In process the control API is :class:`devsim.runtime.Runtime` itself (``read``, ``set``,
 ``state``, ``power_cycle``, ``advance``, ``now``).  ``devsim run --control ADDR`` puts a
-:class:`ControlServer` in front of the same methods; :class:`ControlClient` is a small blocking
-client with the same method names, and ``devsim ctl`` is a command line on top of the client.
+:class:`ControlServer` in front of the same methods; :class:`devsim.runtime.client.ControlClient`
+is a small blocking client with the same method names, and ``devsim ctl`` is a command line on
+top of the client.
 
 Addresses: ``unix:/path/to.sock``, or ``[HOST:]PORT`` for TCP (``tcp:`` prefix optional, IPv6
 hosts in brackets).  TCP servers refuse a non-loopback host unless ``allow_remote`` is given: a
 control port can move machinery.
 
 Protocol: one JSON object per line each way; one connection serves any number of requests, in
-order.  Requests and responses are typed (:class:`Request`, :class:`OkResponse`,
-:class:`ErrorResponse`)::
+order.  The ops, their handlers and their typed requests are one table,
+:data:`devsim.runtime.ops.CONTROL`; answers are :class:`~devsim.runtime.ops.OkResponse` and
+:class:`~devsim.runtime.ops.ErrorResponse`::
 
     → {"id": 1, "op": "read", "device": "sers", "name": "axis.position"}
     ← {"id": 1, "ok": true, "result": 0.0}
@@ -24,107 +26,42 @@ Ops: ``read`` (device, name), ``set`` (device, name, value), ``state`` (device),
 points), ``fault`` (device, kind, active: a declared device fault on or off), ``line_fault``
 (device, port, kind, active, params: a fault on the line serving a port, e.g. ``noise`` with
 ``{"rate": 100}``), ``telegrams`` (device, port, count: the last telegrams on that port's line,
-each ``{"t", "dir", "hex", "text"}`` and ``decoded`` where the kind's protocol is known; kept
-from the first such request on), ``watch`` (device,
-names, period: a subscription, see below).
+each ``{"t", "dir", "hex", "text"}`` and ``decoded`` where the port declares its framing; kept
+from the first such request on), ``watch`` (device, names, period: a subscription, see below).
 
 ``watch`` answers once (``result``: the watched names and the device time) and then keeps
 sending one line per change or event until the connection closes or the simulator stops:
 ``{"watch": ID, "t": 12.3, "device": "sers", "type": "change", "name": "axis.position",
 "value": 1234.0}`` (types in :mod:`devsim.runtime.watch_stream`).  The connection still answers
-requests meanwhile; :meth:`ControlClient.watch` opens a connection of its own for the stream.
+requests meanwhile; :meth:`devsim.runtime.client.ControlClient.watch` opens a connection of its own for the stream.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
-import enum
 import ipaddress
 import json
-import math
 import os
 import socket
-import threading
-from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
-from pydantic import BaseModel, ConfigDict, ValidationError
-
-from devsim.core.points import parse_bool
-from devsim.core.record import asdict, is_record, record
-from devsim.runtime.process import Runtime, port_key
+from devsim.core.record import record
+from devsim.runtime import ops
+from devsim.runtime.ops import ErrorResponse, OkResponse, WatchStart
+from devsim.runtime.process import Runtime
 from devsim.runtime.watch_stream import WatchStream
 
 __all__ = [
-    "BadRequest",
     "ControlAddress",
     "ControlAddressError",
-    "ControlClient",
-    "ControlError",
-    "ControlOps",
     "ControlServer",
-    "ErrorResponse",
-    "OkResponse",
-    "Op",
-    "Request",
     "parse_address",
 ]
 
-Op = Literal["read", "set", "state", "power_cycle", "advance", "now", "devices", "line", "names", "fault", "line_fault",
-             "telegrams", "watch"]
-
 MAX_LINE = 1 << 20  # bytes in one request line
-MAX_DEPTH = 64  # nesting of lists and objects in one request
 MAX_BACKLOG = 4 << 20  # bytes of watch output a slow reader may leave unread before its watch ends
-
-
-# -- messages ------------------------------------------------------------------------------
-class Request(BaseModel):
-    """One control request."""
-
-    model_config = ConfigDict(extra="forbid")
-
-    id: int | str | None = None
-    op: Op
-    device: str | None = None
-    name: str | None = None
-    value: Any = None
-    wipe: bool = False
-    seconds: float | None = None
-    port: str = "main"
-    kind: str | None = None
-    active: Any = True
-    params: dict[str, Any] = {}
-    names: list[str] | None = None
-    period: float | None = None
-    count: int = 20
-
-
-class OkResponse(BaseModel):
-    id: int | str | None = None
-    ok: Literal[True] = True
-    result: Any = None
-
-
-class ErrorResponse(BaseModel):
-    id: int | str | None = None
-    ok: Literal[False] = False
-    error: str
-    type: str
-
-
-class ControlError(Exception):
-    """The server answered with an error; ``type`` is the server-side exception's class name
-    (``UnknownName``, ``UnknownDevice``, ``BadRequest``, ``RuntimeError``, ...)."""
-
-    def __init__(self, message: str, type: str = "Error") -> None:  # noqa: A002 - protocol name
-        super().__init__(message)
-        self.type = type
-
-    def __str__(self) -> str:
-        return f"{self.type}: {self.args[0]}"
 
 
 class ControlAddressError(ValueError):
@@ -201,52 +138,6 @@ def parse_address(addr: str) -> ControlAddress:
 
 
 # -- server --------------------------------------------------------------------------------
-def _jsonable(value: Any) -> Any:
-    """Make results JSON-safe (tuples, sets, bytes, enums, records, non-finite floats)."""
-    if value is None or isinstance(value, bool | int | str):
-        return value
-    if isinstance(value, float):
-        return value if math.isfinite(value) else str(value)
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple | set | frozenset):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, bytes | bytearray):
-        return value.decode("latin-1")
-    if isinstance(value, BaseModel):
-        return _jsonable(value.model_dump(mode="json"))
-    if isinstance(value, enum.Enum):
-        return _jsonable(value.value)
-    if is_record(value):
-        return _jsonable(asdict(value))
-    return str(value)
-
-
-def _clip(text: str, limit: int = 300) -> str:
-    """Error texts never echo a huge request back."""
-    return text if len(text) <= limit else text[: limit - 3] + "..."
-
-
-def _depth(value: Any) -> int:
-    """Nesting depth of parsed JSON, iteratively (no recursion on hostile input)."""
-    deepest = 0
-    stack = [(value, 1)]
-    while stack:
-        node, depth = stack.pop()
-        if isinstance(node, dict | list):
-            deepest = max(deepest, depth)
-            if depth > MAX_DEPTH:
-                return depth
-            stack.extend((child, depth + 1) for child in (node.values() if isinstance(node, dict) else node))
-    return deepest
-
-
-def _error_text(exc: BaseException) -> str:
-    if isinstance(exc, KeyError) and len(exc.args) == 1 and isinstance(exc.args[0], str):
-        return exc.args[0]  # KeyError's str() would add quotes
-    return str(exc) or type(exc).__name__
-
-
 class ControlServer:
     """Serves the control API of a :class:`Runtime` on a Unix socket or a TCP port.
 
@@ -314,17 +205,17 @@ class ControlServer:
                 try:
                     raw = await reader.readline()
                 except (asyncio.LimitOverrunError, ValueError):
-                    writer.write(self._encode(ErrorResponse(error="request line too long", type="BadRequest")))
+                    writer.write(ops.encode(ErrorResponse(error="request line too long", type="BadRequest")))
                     break
                 if not raw:
                     break
                 if not raw.strip():
                     continue
                 response = self.handle_line(raw)
-                if isinstance(response, OkResponse) and isinstance(response.result, _WatchStart):
+                if isinstance(response, OkResponse) and isinstance(response.result, WatchStart):
                     response = self._start_watch(response, writer, streams)
                 if response is not _ALREADY_SENT:
-                    writer.write(self._encode(response))
+                    writer.write(ops.encode(response))
                 await writer.drain()
         except (ConnectionError, asyncio.CancelledError):
             pass
@@ -338,7 +229,7 @@ class ControlServer:
     def _start_watch(self, response: OkResponse, writer: asyncio.StreamWriter,
                      streams: list[WatchStream]) -> OkResponse | ErrorResponse:
         """Answer a ``watch`` request, then start its stream (the answer goes out first)."""
-        start: _WatchStart = response.result
+        start: WatchStart = response.result
         watch_id = response.id
 
         def send(item: dict[str, Any]) -> None:
@@ -348,121 +239,23 @@ class ControlServer:
             if transport.get_write_buffer_size() > MAX_BACKLOG:  # nobody reads: end this watch
                 stream.stop()
                 return
-            writer.write((json.dumps({"watch": watch_id, **_jsonable(item)}, separators=(",", ":")) + "\n")
+            writer.write((json.dumps({"watch": watch_id, **ops.jsonable(item)}, separators=(",", ":")) + "\n")
                          .encode("utf-8"))
 
         try:
             stream = WatchStream(self.runtime, self.runtime.device(start.device), send, names=start.names,
                                  period=start.period)
         except Exception as exc:
-            return ErrorResponse(id=watch_id, error=_clip(_error_text(exc)), type=type(exc).__name__)
+            return ErrorResponse(id=watch_id, error=ops.clip(ops.error_text(exc)), type=type(exc).__name__)
         streams.append(stream)
-        writer.write(self._encode(OkResponse(id=watch_id, result={
+        writer.write(ops.encode(OkResponse(id=watch_id, result={
             "device": start.device, "names": stream.names, "period": stream.period, "t": self.runtime.clock.now()})))
         stream.start()
         return _ALREADY_SENT
 
-    @staticmethod
-    def _encode(response: OkResponse | ErrorResponse) -> bytes:
-        data = response.model_dump()
-        if isinstance(response, OkResponse):
-            data["result"] = _jsonable(response.result)
-        return (json.dumps(data, separators=(",", ":")) + "\n").encode("utf-8")
-
     def handle_line(self, raw: bytes | str) -> OkResponse | ErrorResponse:
         """Answer one request line (runs in the loop thread)."""
-        try:
-            payload = json.loads(raw)
-        except RecursionError:
-            return ErrorResponse(error=f"request nested deeper than {MAX_DEPTH} levels", type="BadRequest")
-        except ValueError as exc:
-            return ErrorResponse(error=f"not JSON: {_clip(str(exc))}", type="BadRequest")
-        if _depth(payload) > MAX_DEPTH:
-            return ErrorResponse(error=f"request nested deeper than {MAX_DEPTH} levels", type="BadRequest")
-        req_id = payload.get("id") if isinstance(payload, dict) else None
-        if not isinstance(req_id, int | str):
-            req_id = None
-        try:
-            request = Request.model_validate(payload)
-        except ValidationError as exc:
-            first = exc.errors()[0]
-            where = ".".join(str(p) for p in first.get("loc", ())) or "request"
-            return ErrorResponse(id=req_id, error=_clip(f"{where}: {first.get('msg')}"), type="BadRequest")
-        try:
-            return OkResponse(id=request.id, result=self.execute(request))
-        except Exception as exc:  # every failure becomes a typed error response
-            return ErrorResponse(id=request.id, error=_clip(_error_text(exc)), type=type(exc).__name__)
-
-    def execute(self, req: Request) -> Any:
-        """Run one validated request against the runtime."""
-        rt = self.runtime
-        op = req.op
-        if op == "now":
-            return rt.now()
-        if op == "devices":
-            return [
-                {
-                    "name": name,
-                    "kind": dev.kind,
-                    "port": rt.ports.get(port_key(name, dev.port_names()[0])),
-                    "ports": {p: rt.ports.get(port_key(name, p)) for p in dev.port_names()},
-                    "faults": dev.faults.names(),
-                }
-                for name, dev in rt.devices.items()
-            ]
-        if op == "advance":
-            if req.seconds is None:
-                raise BadRequest("advance needs 'seconds'")
-            if not math.isfinite(req.seconds) or req.seconds < 0:
-                raise BadRequest("'seconds' must be a finite number, not negative")
-            return rt.advance(req.seconds)
-        device = _need(req.device, "device", op)
-        if op == "state":
-            return rt.state(device)
-        if op == "power_cycle":
-            rt.power_cycle(device, wipe=req.wipe)
-            return None
-        if op == "line":
-            rt.device(device)
-            return rt.line_status(device, req.port)
-        if op == "names":
-            return rt.names(device)
-        if op == "fault":
-            rt.fault(device, _need(req.kind, "kind", op), req.active)
-            return None
-        if op == "telegrams":
-            from devsim.replay.kinds import protocol_of
-            from devsim.transports.tap import tap
-
-            line = self.runtime.lines.get(port_key(device, req.port))
-            if line is None:
-                rt.line_status(device, req.port)  # the reason: no such device, port or line
-            decoder = protocol_of(rt.device(device).kind, req.port).decoder
-            return tap(line, decoder).last(max(0, min(req.count, 200)))
-        if op == "watch":
-            if req.period is not None and not (math.isfinite(req.period) and req.period > 0):
-                raise BadRequest("'period' must be a positive number of seconds")
-            rt.device(device)
-            return _WatchStart(device=device, names=req.names, period=req.period)
-        if op == "line_fault":
-            rt.line_fault(device, _need(req.kind, "kind", op), parse_bool(req.active), port=req.port, **req.params)
-            return None
-        name = _need(req.name, "name", op)
-        if op == "read":
-            return rt.read(device, name)
-        if op == "set":
-            rt.set(device, name, req.value)
-            return None
-        raise BadRequest(f"unknown op {op!r}")  # pragma: no cover - Request validates op
-
-
-@record
-class _WatchStart:
-    """What ``execute`` hands ``_serve`` for a ``watch`` request: the stream needs the connection."""
-
-    device: str
-    names: list[str] | None = None
-    period: float | None = None
+        return ops.answer(self.runtime, raw)[0]
 
 
 #: ``_start_watch`` wrote its answer itself.
@@ -479,148 +272,3 @@ def _unix_socket_alive(path: str) -> bool:
         return False
     finally:
         probe.close()
-
-
-class BadRequest(ValueError):
-    """A request that is well-formed JSON but misses what its op needs."""
-
-
-def _need(value: str | None, field: str, op: str) -> str:
-    if not value:
-        raise BadRequest(f"{op} needs {field!r}")
-    return value
-
-
-# -- client --------------------------------------------------------------------------------
-class ControlOps:
-    """The control API's operations as methods over one ``request(op, **fields)``: shared by the
-    socket client (:class:`ControlClient`) and the fleet's (:class:`devsim.fleet.client.FleetClient`)."""
-
-    def request(self, op: str, **fields: Any) -> Any:
-        raise NotImplementedError
-
-    def read(self, device: str, name: str) -> Any:
-        return self.request("read", device=device, name=name)
-
-    def set(self, device: str, name: str, value: Any) -> None:
-        self.request("set", device=device, name=name, value=value)
-
-    def state(self, device: str) -> dict[str, Any]:
-        result: dict[str, Any] = self.request("state", device=device)
-        return result
-
-    def power_cycle(self, device: str, *, wipe: bool = False) -> None:
-        self.request("power_cycle", device=device, wipe=wipe)
-
-    def advance(self, seconds: float) -> float:
-        return float(self.request("advance", seconds=seconds))
-
-    def now(self) -> float:
-        return float(self.request("now"))
-
-    def devices(self) -> list[dict[str, Any]]:
-        result: list[dict[str, Any]] = self.request("devices")
-        return result
-
-    def line(self, device: str, port: str = "main") -> dict[str, Any]:
-        result: dict[str, Any] = self.request("line", device=device, port=port)
-        return result
-
-    def names(self, device: str) -> list[dict[str, Any]]:
-        result: list[dict[str, Any]] = self.request("names", device=device)
-        return result
-
-    def fault(self, device: str, kind: str, active: bool = True) -> None:
-        self.request("fault", device=device, kind=kind, active=active)
-
-    def line_fault(self, device: str, kind: str, active: bool = True, *, port: str = "main", **params: Any) -> None:
-        self.request("line_fault", device=device, kind=kind, active=active, port=port, params=params)
-
-
-class ControlClient(ControlOps):
-    """Blocking client of a :class:`ControlServer`; one connection, many requests.
-
-    Methods mirror :class:`Runtime`'s control methods and raise :class:`ControlError` (with the
-    server's error ``type``) when the server reports a failure.  Thread-safe; usable as a
-    context manager.
-    """
-
-    def __init__(self, addr: str | ControlAddress, timeout: float | None = 10.0) -> None:
-        self.address = parse_address(addr) if isinstance(addr, str) else addr
-        self.timeout = timeout
-        sock: socket.socket
-        if self.address.path is not None:
-            sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-            sock.settimeout(timeout)
-            try:
-                sock.connect(self.address.path)
-            except OSError:
-                sock.close()
-                raise
-        else:
-            sock = socket.create_connection((self.address.host, self.address.port), timeout=timeout)
-        self._sock = sock
-        self._file = sock.makefile("rwb")
-        self._lock = threading.Lock()
-        self._next_id = 0
-
-    def close(self) -> None:
-        with contextlib.suppress(OSError):
-            self._file.close()
-        with contextlib.suppress(OSError):
-            self._sock.close()
-
-    def __enter__(self) -> ControlClient:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-    def request(self, op: str, **fields: Any) -> Any:
-        """Send one request and return its ``result`` (or raise :class:`ControlError`)."""
-        with self._lock:
-            self._next_id += 1
-            req_id = self._next_id
-            message = {"id": req_id, "op": op, **{k: v for k, v in fields.items() if v is not None}}
-            self._file.write((json.dumps(message) + "\n").encode("utf-8"))
-            self._file.flush()
-            line = self._file.readline()
-        if not line:
-            raise ConnectionError("control connection closed by the simulator")
-        reply = json.loads(line)
-        if reply.get("id") != req_id:
-            raise ControlError(f"answer to request {reply.get('id')!r}, expected {req_id}", "ProtocolError")
-        if not reply.get("ok"):
-            raise ControlError(str(reply.get("error")), str(reply.get("type", "Error")))
-        return reply.get("result")
-
-    def telegrams(self, device: str, port: str = "main", count: int = 20) -> list[dict[str, Any]]:
-        """The last ``count`` telegrams on the line of a port (kept from the first call on)."""
-        result: list[dict[str, Any]] = self.request("telegrams", device=device, port=port, count=count)
-        return result
-
-    def watch(self, device: str, names: list[str] | None = None, *, period: float | None = None,
-              timeout: float | None = None) -> Iterator[dict[str, Any]]:
-        """Changes and events of ``device`` as they happen (see :mod:`devsim.runtime.watch_stream`),
-        on a connection of its own; the first items are the present values.  Ends when the
-        simulator stops (or closes the stream); ``timeout``: at most that long without an item
-        (:class:`TimeoutError`), None waits for ever.  Close the generator to stop watching."""
-        watcher = ControlClient(self.address, timeout=self.timeout)
-        try:
-            watcher.request("watch", device=device, names=names or None, period=period)
-            watcher._sock.settimeout(timeout)
-            while True:
-                try:
-                    line = watcher._file.readline()
-                except OSError as exc:
-                    if isinstance(exc, TimeoutError | socket.timeout):
-                        raise TimeoutError(f"no change of {device} within {timeout} s") from None
-                    return
-                if not line:
-                    return
-                item = json.loads(line)
-                if "watch" in item:
-                    item.pop("watch")
-                    yield item
-        finally:
-            watcher.close()

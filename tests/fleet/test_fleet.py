@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from devsim.fleet.client import FleetClient
-from devsim.runtime.control import ControlError
+from devsim.runtime.client import ControlError
 from tests.fleet.conftest import Member, ctl, mosquitto
 from tests.support.broker import Broker
 

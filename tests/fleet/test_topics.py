@@ -74,7 +74,7 @@ def test_a_member_answers_with_the_control_api_and_only_to_client_topics() -> No
 
 def test_a_clash_is_listed_and_refused_and_offline_rows_give_way() -> None:
     from devsim.fleet.client import AsyncFleetClient
-    from devsim.runtime.control import ControlError
+    from devsim.runtime.client import ControlError
 
     client = AsyncFleetClient("mqtt://127.0.0.1")
     row = {"name": "x", "kind": "sers"}

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import serial
 
-from devsim.runtime.control import ControlClient
+from devsim.runtime.client import ControlClient
 
 from .run import Proc, ctl
 

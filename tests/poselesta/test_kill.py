@@ -11,7 +11,7 @@ from pathlib import Path
 import serial
 
 from devsim.devices.poselesta.codes import encode
-from devsim.runtime.control import ControlClient
+from devsim.runtime.client import ControlClient
 from tests.test_cli import Sim
 
 
