@@ -16,8 +16,9 @@ from __future__ import annotations
 import os
 
 from devsim.core.device import Device
+from devsim.core.framing import PLAIN, Framing
 
-__all__ = ["ENV_EXTRA_KINDS", "GROUP", "UnknownKind", "device_class", "kinds"]
+__all__ = ["ENV_EXTRA_KINDS", "GROUP", "UnknownKind", "device_class", "kinds", "port_framing"]
 
 GROUP = "devsim.devices"
 ENV_EXTRA_KINDS = "DEVSIM_EXTRA_KINDS"
@@ -76,3 +77,18 @@ def device_class(kind: str) -> type[Device]:
     if not (isinstance(cls, type) and issubclass(cls, Device)):
         raise UnknownKind(f"{target} is not a devsim Device")
     return cls
+
+
+def port_framing(kind: str | None, port: str = "main") -> Framing:
+    """The framing ``port`` of ``kind`` declares (:attr:`devsim.core.kit.PortDef.framing`);
+    :data:`~devsim.core.framing.PLAIN` for a port that declares none, or an unknown kind or port."""
+    if not kind:
+        return PLAIN
+    try:
+        cls = device_class(kind)
+    except UnknownKind:
+        return PLAIN
+    for spec in cls.ports:
+        if spec.name == port:
+            return spec.framing or PLAIN
+    return PLAIN

@@ -115,14 +115,13 @@ def _line_fault(rt: Runtime, req: rq.LineFault) -> None:
 
 
 def _telegrams(rt: Runtime, req: rq.Telegrams) -> list[dict[str, Any]]:
-    from devsim.replay.kinds import protocol_of
     from devsim.transports.tap import tap
 
     line = rt.lines.get(port_key(req.device, req.port))
     if line is None:
         rt.line_status(req.device, req.port)  # the reason: no such device, port or line
-    decoder = protocol_of(rt.device(req.device).kind, req.port).decoder
-    return tap(line, decoder).last(max(0, min(req.count, 200)))
+    framing = rt.device(req.device).port(req.port).spec.framing
+    return tap(line, framing.decoder if framing is not None else None).last(max(0, min(req.count, 200)))
 
 
 def _watch(rt: Runtime, req: rq.Watch) -> WatchStart:
