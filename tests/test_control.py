@@ -275,7 +275,7 @@ def test_advance_is_bounded(sockdir: str) -> None:
 def test_every_control_op_is_one_row_offered_by_ctl_the_clients_and_the_facades() -> None:
     """The op table is the one list of ops: ``devsim ctl`` has a command for each, each typed
     request belongs to one row, and the MQTT verbs are ops of the table."""
-    from devsim.ctl import command_name, ctl
+    from devsim.cli.ctl import command_name, ctl
     from devsim.facades.mqtt_topics import COMMANDS
     from devsim.runtime import requests as rq
     from devsim.runtime.ops import CONTROL, op_of

@@ -248,7 +248,7 @@ def test_devsim_run_writes_the_log_and_plot_draws_it(sockdir: str, tmp_path: Pat
     assert [name for _, name in events] == ["move_start", "move_end"]
     assert events[1][0] - events[0][0] == pytest.approx(3200 / V + V / A, abs=1e-9)
     assert float(rows[-1]["position"]) == pytest.approx(3200.0, abs=1e-6)
-    from devsim.plot import render  # (the command itself: tests/test_plot.py)
+    from devsim.observe.plot import render  # (the command itself: tests/test_plot.py)
 
     render([log_path, trace_path], picture)
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -20,7 +20,7 @@ from pathlib import Path
 import click
 
 from devsim.core.config import ConfigError, LineDict, load_yaml
-from devsim.live_log import attach_log, level_of, log_options
+from devsim.observe.live_log import attach_log, level_of, log_options
 from devsim.transports import fdlimit
 
 __all__ = ["register"]
@@ -105,7 +105,7 @@ def scenario_run(
         if (problem := motion_log_problem(motion_resolution)) is not None:
             raise click.UsageError(problem)
         if plot_dir is not None:
-            from devsim.plot import require_matplotlib
+            from devsim.observe.plot import require_matplotlib
 
             require_matplotlib()
         pictures = ScenarioPictures(motion_log=motion_log, resolution=motion_resolution, plot_dir=plot_dir,

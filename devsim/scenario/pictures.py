@@ -6,7 +6,7 @@ Per scenario:
   (:mod:`devsim.observe.motion_log`); with several scenarios each gets its own file,
   ``FILE-STEM.csv`` (``STEM``: the scenario file's name without ``.yaml``);
 * ``--plot DIR`` draws ``DIR/STEM.png`` (or ``.svg``/``.html``, ``--plot-format``) from the
-  scenario's motion log and the traces of its ports (:mod:`devsim.plot`).  What it is drawn from
+  scenario's motion log and the traces of its ports (:mod:`devsim.observe.plot`).  What it is drawn from
   stays beside it: the motion log (``DIR/STEM.csv`` unless ``--motion-log`` names one) and, unless
   ``--trace-dir`` is given, the traces in ``DIR/STEM.traces/``.
 """
@@ -86,8 +86,8 @@ class ScenarioPictures:
         to print (``plot: DIR/STEM.png``), or None without ``--plot``."""
         if self.plot_dir is None:
             return None
-        from devsim.plot import render
-        from devsim.plot_data import PlotInputError
+        from devsim.observe.plot import render
+        from devsim.observe.plot_data import PlotInputError
 
         log = self.log_path
         files: list[Path] = [log] if log is not None and log.exists() else []

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from devsim.monitor.app import DevicePanel, MonitorApp
+from devsim.observe.monitor import DevicePanel, MonitorApp
 from devsim.runtime import Runtime
 from devsim.runtime.control import ControlServer
 from devsim.transports.tcp import TcpTransport

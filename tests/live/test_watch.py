@@ -148,7 +148,7 @@ def test_watch_through_up_workers(tmp_path: Path) -> None:
 
 def test_log_levels_on_a_drive_error() -> None:
     """What each level logs when a SERS sees a short circuit (a drive error: P11, EMCY code)."""
-    from devsim.live_log import attach_log, level_of
+    from devsim.observe.live_log import attach_log, level_of
     from devsim.runtime import Runtime
 
     assert [level_of(0, 0), level_of(1, 0), level_of(0, 1), level_of(0, 5), level_of(9, 0)] == [2, 3, 1, 0, 3]

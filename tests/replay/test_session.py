@@ -12,7 +12,7 @@ from devsim.cli import cli
 from devsim.core.device import SerialSettings
 from devsim.core.registry import port_framing
 from devsim.devices.gms96 import codec as ft12
-from devsim.replay.session import SessionError, SessionWriter, load_session
+from devsim.observe.replay.session import SessionError, SessionWriter, load_session
 
 
 def _write(path: Path, kind: str | None, chunks: list[tuple[float, str, bytes]]) -> Path:
@@ -76,7 +76,7 @@ def test_a_bad_session_is_one_line_exit_2(tmp_path: Path, content: str, message:
 async def test_the_handover_clock_is_virtual_then_real() -> None:
     import asyncio
 
-    from devsim.replay.live import HandoverClock
+    from devsim.observe.replay.live import HandoverClock
 
     clock = HandoverClock()
     fired: list[float] = []

@@ -14,7 +14,7 @@ from typing import Any
 
 import click
 
-from devsim.run_options import check_fleet
+from devsim.cli.options import check_fleet
 from devsim.runtime import requests as rq
 
 __all__ = ["command_name", "ctl"]

@@ -4,7 +4,7 @@ raw TCP port, for a session recorded on a network port such as Ether-S-Bus on TC
 The host's bytes are cut into requests by the framing the kind declares on the port
 (:attr:`devsim.core.kit.PortDef.framing`; unframed ports: a request is complete when it equals a
 recorded one).  Each request is matched
-against the recording's requests (:mod:`devsim.replay.session`), starting at the exchange after
+against the recording's requests (:mod:`devsim.observe.replay.session`), starting at the exchange after
 the last one matched and wrapping around, first byte-exact, then with each of the kind's
 port's tolerances in turn (GMS96: checksum, FCB; Ether-S-Bus: sequence number).  A match is answered with the recorded answer, each
 chunk after its recorded delay divided by ``speed`` (``as_fast``: no delay); answers leave in
@@ -15,7 +15,7 @@ A request the recording does not know:
 * ``fallback="error"`` – one line on stderr (``replay: request not in the recording: ...``) and
   silence on the line, as from a dead device; later known requests are answered again.
 * ``fallback="live"`` – the live model of the recorded kind takes over for good: a devsim device
-  (:mod:`devsim.replay.live`).  Before the pty is offered, it booted and was sent every request
+  (:mod:`devsim.observe.replay.live`).  Before the pty is offered, it booted and was sent every request
   of the recording at its recorded time (in virtual time, so at once), its answers discarded, so
   it holds what the host wrote (parameters, modes, positions); then its clock runs in real time
   (times ``speed``) and the unknown request and all after it go to it.
@@ -33,8 +33,8 @@ from typing import Any
 
 from devsim.core.device import SerialSettings
 from devsim.core.registry import port_framing
-from devsim.replay.live import HandoverClock, start_live
-from devsim.replay.session import Exchange, Reply, Session
+from devsim.observe.replay.live import HandoverClock, start_live
+from devsim.observe.replay.session import Exchange, Reply, Session
 
 __all__ = ["ReplayPlan", "Replayer", "replay_session"]
 

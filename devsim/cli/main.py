@@ -34,11 +34,8 @@ from typing import TYPE_CHECKING, Any, NoReturn
 import click
 
 from devsim import __version__
-from devsim.core.record import field, record
-from devsim.core.registry import UnknownKind, device_class, kinds
-from devsim.ctl import ctl
-from devsim.live_log import attach_log, level_of, log_options
-from devsim.run_options import (
+from devsim.cli.ctl import ctl
+from devsim.cli.options import (
     check_canopen,
     check_fleet,
     check_modbus,
@@ -47,6 +44,9 @@ from devsim.run_options import (
     host_port,
     modbus_for,
 )
+from devsim.core.record import field, record
+from devsim.core.registry import UnknownKind, device_class, kinds
+from devsim.observe.live_log import attach_log, level_of, log_options
 
 if TYPE_CHECKING:  # imported where used: `devsim run` starts faster without them
     from devsim.core.device import Device
@@ -137,7 +137,7 @@ def doc(kind: str, modbus_map: bool, eds_file: bool) -> None:
     """Print KIND's reference in Markdown: ports, control names, faults, commands, parameters,
     error codes and configuration keys, from the tables that drive the simulator (with --modbus:
     the register map its points give)."""
-    from devsim.docgen import modbus_markdown, reference_markdown
+    from devsim.cli.docgen import modbus_markdown, reference_markdown
 
     try:
         cls = device_class(kind)
@@ -186,7 +186,7 @@ class _Plan:
     fleet: str | None = None  # --fleet mqtt://BROKER[:PORT][/NAME]
     motion_log: str | None = None  # --motion-log FILE.csv
     motion_resolution: float = 0.01  # --motion-resolution SECONDS
-    log_level: int = 2  # -v/-q (devsim.live_log)
+    log_level: int = 2  # -v/-q (devsim.observe.live_log)
 
 
 #: What ``--port NAME=SPEC`` accepts after ``NAME=``.
@@ -682,10 +682,10 @@ cli.add_command(ctl)
 #: command name → the module that defines it as a click command of the same name.
 LAZY_COMMANDS: dict[str, str] = {
     "check": "devsim.scenario.cli",
-    "monitor": "devsim.monitor.cli",
-    "plot": "devsim.plot",
-    "record": "devsim.replay.cli",
-    "replay": "devsim.replay.cli",
+    "monitor": "devsim.cli.monitor",
+    "plot": "devsim.observe.plot",
+    "record": "devsim.cli.replay",
+    "replay": "devsim.cli.replay",
     "scenario": "devsim.scenario.cli",
     "up": "devsim.scenario.cli",
 }

@@ -1,4 +1,4 @@
-"""``devsim monitor [--control ADDR]``: the live monitor (:mod:`devsim.monitor.app`) on the
+"""``devsim monitor [--control ADDR]``: the live monitor (:mod:`devsim.observe.monitor`) on the
 control API of a running ``devsim run``, ``devsim up`` or real-time scenario."""
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ def monitor(addr: str, period: float) -> None:
     if not period > 0:
         raise click.UsageError("--period: must be positive")
     try:
-        from devsim.monitor.app import MonitorApp
+        from devsim.observe.monitor import MonitorApp
     except ImportError as exc:
         raise click.ClickException(f"devsim monitor needs textual: pip install 'devsim-motion[monitor]' ({exc})") from None
     try:

@@ -18,7 +18,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from devsim.core.clock import Timer, VirtualClock
-from devsim.replay.session import Exchange
+from devsim.observe.replay.session import Exchange
 from devsim.transports.base import Transport
 
 __all__ = ["Bridge", "HandoverClock", "start_live"]
