@@ -3,7 +3,8 @@
 the handle an injector gets back (:class:`FaultHandle`).
 
 How an active fault acts on the bytes is the line's business (:mod:`devsim.transports.line`,
-which re-exports the public names here).
+which re-exports the public names here); the pure parts of it, given the line's active faults,
+are here too (:func:`gate`, :func:`mangle`, :func:`take`).
 """
 
 from __future__ import annotations
@@ -169,6 +170,48 @@ class _Active:
         self.timers: list[Timer] = []
         self.emitted = {"to_device": 0, "to_host": 0}
         self.active = True
+
+
+# -- how the active faults of a line act on its bytes (pure: the line hands its faults in) -----
+def of_kind(faults: list[_Active], kind: str, direction: str) -> list[_Active]:
+    """The active faults of ``kind`` that act on bytes going ``direction``."""
+    return [a for a in faults if a.fault.kind == kind and a.fault.applies(direction)]
+
+
+def gate(faults: list[_Active], direction: str, noise: bool = False) -> str | None:
+    """The fault that blocks bytes going ``direction`` now, if any."""
+    for active in faults:
+        kind = active.fault.kind
+        if kind == "unplug":
+            return kind
+        if kind == "hang" and (direction == "to_device" or not noise):
+            return kind
+        if kind == "silent" and direction == "to_host" and not noise:
+            return kind
+    return None
+
+
+def take(active: _Active, available: int) -> int:
+    """How many of ``available`` bytes a fault takes (a counted one: at most its rest)."""
+    if active.remaining is None:
+        return available
+    taken = min(active.remaining, available)
+    active.remaining -= taken
+    return taken
+
+
+def mangle(faults: list[_Active], data: bytes, direction: str) -> bytes:
+    """Drop, then corrupt (see :class:`LineFault` for the order)."""
+    for active in of_kind(faults, "drop", direction):
+        data = data[take(active, len(data)) :]
+    corrupt = of_kind(faults, "corrupt", direction)
+    if corrupt and data:
+        buf = bytearray(data)
+        for active in corrupt:  # each one acts on the same next bytes
+            for i in range(take(active, len(buf))):
+                buf[i] ^= 1 << active.rng.randrange(8)
+        data = bytes(buf)
+    return data
 
 
 class FaultHandle:
