@@ -13,7 +13,7 @@
   ``pty``, ``udp:[HOST:]PORT``, ``tcp:[HOST:]PORT`` or ``rfc2217:[HOST:]PORT`` instead, and
   ``--pty``/``--link``/``--tcp``/``--rfc2217`` choose for the other ports.
 
-* ``devsim ctl --control ADDR devices|read|set|state|power-cycle|advance|now|line`` – talk to a
+* ``devsim ctl --control ADDR devices|read|set|state|power-cycle|advance|now|line|...`` – talk to a
   running simulator's control API and print the JSON result; ``devsim ctl --fleet mqtt://BROKER
   ...`` the same with every device of a fleet (``devsim run/up --fleet``, :mod:`devsim.fleet`).
 
@@ -34,7 +34,6 @@ from typing import TYPE_CHECKING, Any, NoReturn
 import click
 
 from devsim import __version__
-from devsim.cli.ctl import ctl
 from devsim.cli.options import (
     check_canopen,
     check_fleet,
@@ -676,12 +675,11 @@ def _port_text(transport: Any, scheme: str) -> str:
     return url or address
 
 
-cli.add_command(ctl)
-
 #: Commands whose module is imported only when one of them runs (``devsim run`` starts faster):
 #: command name → the module that defines it as a click command of the same name.
 LAZY_COMMANDS: dict[str, str] = {
     "check": "devsim.scenario.cli",
+    "ctl": "devsim.cli.ctl",
     "monitor": "devsim.cli.monitor",
     "plot": "devsim.observe.plot",
     "record": "devsim.cli.replay",
