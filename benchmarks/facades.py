@@ -33,8 +33,8 @@ from pymodbus.client import ModbusTcpClient  # noqa: E402
 from pymodbus.server import ModbusTcpServer  # noqa: E402
 from pymodbus.simulator import DataType, SimData, SimDevice  # noqa: E402
 
-from devsim.core.runtime import Runtime  # noqa: E402
 from devsim.facades.modbus import ModbusFacade, serve_tcp  # noqa: E402
+from devsim.runtime import Runtime  # noqa: E402
 
 RATIO_TARGET = 1.3
 BLOCK = 10

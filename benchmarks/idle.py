@@ -1,6 +1,6 @@
 """CPU use of an idle simulator: one device on a pty, real clock, nobody talking.
 
-Starts a :class:`~devsim.core.runtime.Runtime` in a thread with one device of ``--kind``
+Starts a :class:`~devsim.runtime.Runtime` in a thread with one device of ``--kind``
 (default ``sers``) on a :class:`~devsim.transports.pty.PtyTransport`, lets it settle, then
 measures the process's CPU time (user + system, all threads) over ``--seconds`` of wall time and
 prints it as a percentage of one core.  With ``--open`` a pyserial host holds the port open
@@ -41,7 +41,7 @@ def main(argv: list[str] | None = None) -> int:
 
     if args.kind == "stub":
         os.environ["DEVSIM_EXTRA_KINDS"] = "stub=benchmarks.stub:StubDevice"
-    from devsim.core.runtime import Runtime
+    from devsim.runtime import Runtime
     from devsim.transports.pty import PtyTransport
 
     runtime = Runtime().start()

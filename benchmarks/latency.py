@@ -1,6 +1,6 @@
 """Round-trip latency of a simulated device on a pty, against a bare asyncio echo server.
 
-Starts a :class:`~devsim.core.runtime.Runtime` (real clock) in a thread with one device of
+Starts a :class:`~devsim.runtime.Runtime` (real clock) in a thread with one device of
 ``--kind`` (default ``sers``) on a :class:`~devsim.transports.pty.PtyTransport`, opens the pty
 with pyserial at the device's baud rate and times ``--n`` queries ``#P11?\\r`` (default echo
 mode), each until the final acknowledgement line (``\\nok1\\n\\r``, or any ``\\nok...\\r``)

@@ -138,7 +138,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.writer:
         writer(args.writer[0], float(args.writer[1]), args.raw, args.seed)
         return 0
-    from devsim.core.control import ControlClient
+    from devsim.runtime.client import ControlClient
 
     with tempfile.TemporaryDirectory() as tmp:
         plant = os.path.join(tmp, "plant.yaml")

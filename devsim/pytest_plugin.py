@@ -6,7 +6,7 @@ active wherever ``devsim-motion`` is installed.  It provides:
 ``devsim_device``
     A factory ``make(kind, config=None, *, transport="pty", virtual=True, name=None,
     state_dir=None, boot=True)`` returning a :class:`SimDevice`: one device served on a real pty
-    (or TCP / RFC 2217 port), in its own :class:`~devsim.core.runtime.Runtime` (a background
+    (or TCP / RFC 2217 port), in its own :class:`~devsim.runtime.Runtime` (a background
     thread), with the control API and the clock.  Every device made is stopped at teardown.
 
 ``devsim_plant``
@@ -40,7 +40,9 @@ import pytest
 from devsim.core.clock import VirtualClock
 from devsim.core.device import Device
 from devsim.core.record import fields as record_fields
-from devsim.core.runtime import Runtime
+from devsim.runtime import Runtime
+from devsim.runtime import requests as rq
+from devsim.runtime.ops import run
 
 __all__ = [
     "DeviceFactory",
@@ -199,31 +201,32 @@ class SimDevice:
         self._serial.ports.append(port)
         return port
 
-    # -- control API ---------------------------------------------------------------------------
+    # -- control API (the ops of devsim.runtime.ops.CONTROL, on this device) ---------------------
     def read(self, name: str) -> Any:
-        return self.runtime.read(self.name, name)
+        return run(self.runtime, rq.Read(self.name, name))
 
     def set(self, name: str, value: Any) -> None:
-        self.runtime.set(self.name, name, value)
+        run(self.runtime, rq.Set(self.name, name, value))
 
     def state(self) -> dict[str, Any]:
-        return self.runtime.state(self.name)
+        result: dict[str, Any] = run(self.runtime, rq.State(self.name))
+        return result
 
     def names(self) -> list[str]:
         """The device's declared control names."""
-        return [row["name"] for row in self.runtime.names(self.name)]
+        return [row["name"] for row in run(self.runtime, rq.Names(self.name))]
 
     def fault(self, kind: str, active: bool = True) -> None:
         """Switch a fault the device's kind declares (``devsim doc KIND``) on or off."""
-        self.runtime.fault(self.name, kind, active)
+        run(self.runtime, rq.SwitchFault(self.name, kind, active))
 
     def line_fault(self, kind: str, active: bool = True, *, port: str = "main", **params: Any) -> None:
         """Start or end a fault on the device's line (``corrupt``, ``noise`` with ``rate`` ...)."""
-        self.runtime.line_fault(self.name, kind, active, port=port, **params)
+        run(self.runtime, rq.LineFault(self.name, kind, active, port, params))
 
     def power_cycle(self, wipe: bool = False, *, boot: bool = True) -> None:
         """Switch off and on; with ``boot`` (and virtual time) run past the boot again."""
-        self.runtime.power_cycle(self.name, wipe=wipe)
+        run(self.runtime, rq.PowerCycle(self.name, wipe))
         if boot:
             self.wait_booted()
 

@@ -19,7 +19,7 @@ import serial
 from click.testing import CliRunner
 
 from devsim.cli import cli
-from devsim.core.control import ControlClient, ControlError
+from devsim.runtime.client import ControlClient, ControlError
 
 ROOT = Path(__file__).resolve().parents[1]
 ECHO = "echo=tests.support.echo:EchoDevice"

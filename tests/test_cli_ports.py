@@ -11,7 +11,8 @@ import pytest
 import serial
 from click.testing import CliRunner
 
-from devsim.cli import _trace_for, cli
+from devsim.cli import cli
+from devsim.cli.main import _trace_for
 from tests.test_cli import ECHO, TWOPORT, Sim
 from tests.transports.test_pcap import read_pcap
 

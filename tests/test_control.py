@@ -10,15 +10,9 @@ from collections.abc import Iterator
 
 import pytest
 
-from devsim.core.control import (
-    ControlAddress,
-    ControlAddressError,
-    ControlClient,
-    ControlError,
-    ControlServer,
-    parse_address,
-)
-from devsim.core.runtime import Runtime
+from devsim.runtime import Runtime
+from devsim.runtime.client import ControlClient, ControlError
+from devsim.runtime.control import ControlAddress, ControlAddressError, ControlServer, parse_address
 
 ECHO = "echo=tests.support.echo:EchoDevice"
 
@@ -276,3 +270,31 @@ def test_advance_is_bounded(sockdir: str) -> None:
             server.close_sync()
     finally:
         rt.stop()
+
+
+def test_every_control_op_is_one_row_offered_by_ctl_the_clients_and_the_facades() -> None:
+    """The op table is the one list of ops: ``devsim ctl`` has a command for each, each typed
+    request belongs to one row, and the MQTT verbs are ops of the table."""
+    from devsim.cli.ctl import command_name, ctl
+    from devsim.facades.mqtt_topics import COMMANDS
+    from devsim.runtime import requests as rq
+    from devsim.runtime.ops import CONTROL, op_of
+
+    ops = [row.token for row in CONTROL]
+    assert sorted(ctl.commands) == sorted(command_name(op) for op in ops)
+    kinds = [row.request for row in CONTROL]
+    assert len(set(kinds)) == len(kinds) and all(issubclass(k, rq.ControlRequest) for k in kinds)
+    assert all(callable(row.handler) and row.doc for row in CONTROL)
+    assert op_of(rq.Read("d", "n")) == "read" and op_of(rq.SwitchFault("d", "k")) == "fault"
+    assert set(COMMANDS) <= set(ops)
+
+
+def test_typed_requests_run_in_process(runtime: Runtime) -> None:
+    from devsim.runtime import requests as rq
+    from devsim.runtime.ops import BadRequest, run
+
+    run(runtime, rq.Set("echo1", "input.mute", True))
+    assert run(runtime, rq.Read("echo1", "input.mute")) is True
+    assert run(runtime, rq.Advance(1.0)) == 1.0
+    with pytest.raises(BadRequest, match="finite"):
+        run(runtime, rq.Advance(float("nan")))

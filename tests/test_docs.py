@@ -8,8 +8,8 @@ import pytest
 from click.testing import CliRunner
 
 from devsim.cli import cli
+from devsim.cli.docgen import reference_markdown, shared_vocabulary_markdown
 from devsim.core.registry import device_class
-from devsim.docgen import reference_markdown, shared_vocabulary_markdown
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ("sers", "gms96", "poselesta", "ip247", "pcd4h3")

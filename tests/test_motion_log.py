@@ -1,4 +1,4 @@
-"""The motion log (devsim/core/motion_log.py): a SERS move in virtual time against the closed-form
+"""The motion log (devsim/observe/motion_log.py): a SERS move in virtual time against the closed-form
 trapezoid, event rows at the exact event times, the axes every kind declares, no sampling without
 a log, and ``devsim run --motion-log`` as a real process."""
 
@@ -16,10 +16,10 @@ from typing import Any
 import pytest
 import serial
 
-from devsim.core.control import ControlClient
-from devsim.core.motion_log import HEADER, MotionLog, axis_columns, motion_log_problem
 from devsim.core.registry import device_class, kinds
-from devsim.core.runtime import Runtime
+from devsim.observe.motion_log import HEADER, MotionLog, axis_columns, motion_log_problem
+from devsim.runtime import Runtime
+from devsim.runtime.client import ControlClient
 from devsim.scenario.runner import run_scenario
 from devsim.scenario.schema import load_scenario
 from tests.support.process import DevsimProcess
@@ -248,7 +248,7 @@ def test_devsim_run_writes_the_log_and_plot_draws_it(sockdir: str, tmp_path: Pat
     assert [name for _, name in events] == ["move_start", "move_end"]
     assert events[1][0] - events[0][0] == pytest.approx(3200 / V + V / A, abs=1e-9)
     assert float(rows[-1]["position"]) == pytest.approx(3200.0, abs=1e-6)
-    from devsim.plot import render  # (the command itself: tests/test_plot.py)
+    from devsim.observe.plot import render  # (the command itself: tests/test_plot.py)
 
     render([log_path, trace_path], picture)
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

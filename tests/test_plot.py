@@ -1,4 +1,4 @@
-"""``devsim plot`` (devsim/plot.py, devsim/plot_data.py) and ``devsim scenario run --plot DIR``.
+"""``devsim plot`` (devsim/observe/plot.py, devsim/observe/plot_data.py) and ``devsim scenario run --plot DIR``.
 
 The pictures are checked by readers nobody here wrote: Pillow opens and verifies the PNG,
 the standard library's XML parser reads the SVG.  The README's picture (docs/motion-plot.png) is
@@ -17,8 +17,8 @@ from click.testing import CliRunner
 from PIL import Image
 
 from devsim.cli import cli
-from devsim.plot import MARGIN, PANEL_HEIGHT, WIDTH
-from devsim.plot_data import MotionData, Traffic, load, read_motion_log
+from devsim.observe.plot import MARGIN, PANEL_HEIGHT, WIDTH
+from devsim.observe.plot_data import MotionData, Traffic, load, read_motion_log
 from devsim.transports.pcap import PcapTracer
 from devsim.transports.trace import Tracer
 

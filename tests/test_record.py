@@ -87,7 +87,7 @@ def test_a_simulator_starts_without_a_schema_library() -> None:
     control API) is imported only when a file is validated or a control server runs."""
     code = (
         "import sys; from devsim.core.registry import device_class;"
-        "import devsim.cli, devsim.transports.pty, devsim.core.runtime;"
+        "import devsim.cli, devsim.transports.pty, devsim.runtime;"
         "from devsim.core.clock import VirtualClock;"
         "[device_class(k)(clock=VirtualClock(), config=device_class(k).config_model.parse({}).dump())"
         " for k in ('sers', 'gms96', 'poselesta')];"

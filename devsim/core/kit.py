@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any, Generic, Literal, Protocol, TypeVar
 
+from devsim.core.framing import Framing
 from devsim.core.parameters import ParameterTable
 from devsim.core.points import Point, PointType, UnknownName, parse_bool
 from devsim.core.record import field, record
@@ -23,6 +24,7 @@ __all__ = [
     "ErrorCode",
     "Fault",
     "FaultTable",
+    "Framing",
     "Parameter",
     "PortDef",
     "SignalDef",
@@ -50,13 +52,18 @@ class PortDef:
     Ethernet interface (``"udp:5050"`` for Ether-S-Bus).  ``devsim run`` serves such a port on
     that transport and number on loopback (``--port NAME=...`` overrides it); a plant file that
     gives the port no transport serves it on that scheme at an ephemeral port number
-    (:attr:`default_transport`)."""
+    (:attr:`default_transport`).
+
+    ``framing`` declares how the port's byte stream is cut into messages, described and matched
+    (:class:`~devsim.core.framing.Framing`): record and replay, the telegram tap and the monitor
+    use it; ``None``: byte-exact, nothing decoded."""
 
     name: str = "main"
     doc: str = "the device's serial port"
     section: str = ""
     receive_only: bool = False
     default: str | None = None
+    framing: Framing | None = None
 
     def __post_init__(self) -> None:
         if self.default is not None:
@@ -129,6 +136,9 @@ class Command(Generic[H]):
     section: str
     doc: str = ""
     effect: Effect = "simulated"
+    #: The typed record the token's arguments arrive in, where a table has one per row (the
+    #: control API's ops, :data:`devsim.runtime.ops.CONTROL`).
+    request: Any = None
 
 
 class Table(Generic[H]):

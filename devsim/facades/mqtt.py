@@ -7,8 +7,8 @@ Two conventions:
   ``online`` while it is connected and ``offline`` when it closes or its process dies (the
   broker sends the will).  A retained ``birth`` lists its points; each readable point is
   published (retained JSON) on ``state/<name>`` when it changes; ``set/<name>``,
-  ``fault/<kind>`` and ``power_cycle`` commands are carried out with the device's own
-  validation and refusals are answered on ``error``.
+  ``fault/<kind>`` and ``power_cycle`` commands run the control ops of those names
+  (:data:`devsim.runtime.ops.CONTROL`) and refusals are answered on ``error``.
 * ``sparkplug`` (:mod:`devsim.facades.mqtt_sparkplug`): **one connection per plant process**,
   the plant being a Sparkplug edge node whose NDEATH will covers all its devices.
 
@@ -34,6 +34,8 @@ import aiomqtt
 from devsim.core.device import Device
 from devsim.core.watch import PointWatch
 from devsim.facades import mqtt_topics as topics
+from devsim.runtime import Runtime
+from devsim.runtime.ops import run
 
 __all__ = ["Convention", "MqttLink", "start_broker", "start_mqtt"]
 
@@ -46,7 +48,8 @@ RETRY = 1.0  # seconds between reconnection attempts (network time, not device t
 class _DevsimDevice:
     """One device in the devsim convention: its will, births, watch and commands."""
 
-    def __init__(self, device: Device, plant: str, rate: float) -> None:
+    def __init__(self, runtime: Runtime, device: Device, plant: str, rate: float) -> None:
+        self.runtime = runtime
         self.device = device
         self.plant = plant
         self.rate = rate
@@ -78,13 +81,13 @@ class _DevsimDevice:
         found = topics.parse_command(topic, self.plant)
         if found is None or found[0] != self.device.name:
             return
-        _name, handler, arg = found
+        _name, parse, arg = found
         try:
-            handler(self.device, arg, payload)
+            run(self.runtime, parse(self.device, arg, payload))
         except Exception as exc:  # every refusal is answered, as the control API does
             self.send((f"{self.base}/error", topics.error_payload(topic, exc), 1, False))
         if self.watch is not None:  # the point just set at once (what follows from it at the next sample)
-            just_set = handler is topics.COMMANDS["set"][0] and arg in self.watch.names
+            just_set = parse is topics.COMMANDS["set"][0] and arg in self.watch.names
             self.watch.sample([arg] if just_set else None)
 
     def closing(self) -> list[Message]:
@@ -99,9 +102,10 @@ class _DevsimDevice:
 class _SparkplugPlant:
     """The plant as one Sparkplug edge node with its devices."""
 
-    def __init__(self, devices: Sequence[Device], plant: str, rate: float) -> None:
+    def __init__(self, runtime: Runtime, devices: Sequence[Device], plant: str, rate: float) -> None:
         from devsim.facades.mqtt_sparkplug import SparkplugNode
 
+        self.runtime = runtime
         self.devices = {device.name: device for device in devices}
         self.node = SparkplugNode(plant)
         self.plant = plant
@@ -137,7 +141,7 @@ class _SparkplugPlant:
         self.send((*self.node.device_data(device, changes), 0, False))
 
     def handle(self, topic: str, payload: bytes) -> None:
-        from devsim.facades.mqtt_sparkplug import REBIRTH, command_action
+        from devsim.facades.mqtt_sparkplug import REBIRTH, command_request
 
         try:
             name, metrics = self.node.command(topic, payload)
@@ -154,7 +158,9 @@ class _SparkplugPlant:
             return
         for metric, value in metrics:
             try:
-                command_action(device, metric, value)
+                request = command_request(device, metric, value)
+                if request is not None:
+                    run(self.runtime, request)
             except Exception as exc:
                 self.send((f"{topics.prefix(self.plant, name)}/error", topics.error_payload(f"{topic}#{metric}", exc),
                            1, False))
@@ -300,7 +306,7 @@ async def start_broker(host: str = "127.0.0.1", port: int | None = None) -> tupl
     return broker, port
 
 
-async def start_mqtt(runtime: Any, devices: Sequence[Device], url: str | None, *, plant: str,
+async def start_mqtt(runtime: Runtime, devices: Sequence[Device], url: str | None, *, plant: str,
                      convention: Convention = "devsim", rate: float = 1.0) -> list[str]:
     """Serve ``devices`` over MQTT in ``runtime`` (in its loop): on the broker at ``url``
     (``mqtt://HOST[:PORT]``), or on an embedded broker when ``url`` is None.  Returns the lines
@@ -322,10 +328,10 @@ async def start_mqtt(runtime: Any, devices: Sequence[Device], url: str | None, *
     if convention == "sparkplug":
         from devsim.facades.mqtt_sparkplug import GROUP, NAMESPACE
 
-        sides: list[Any] = [_SparkplugPlant(devices, plant, rate)]
+        sides: list[Any] = [_SparkplugPlant(runtime, devices, plant, rate)]
         lines.append(f"mqtt: sparkplug {NAMESPACE}/{GROUP}/+/{plant}")
     elif convention == "devsim":
-        sides = [_DevsimDevice(device, plant, rate) for device in devices]
+        sides = [_DevsimDevice(runtime, device, plant, rate) for device in devices]
         lines.append(f"mqtt: topics {topics.ROOT}/{plant}/")
     else:
         raise ValueError(f"an MQTT convention is devsim or sparkplug, not {convention!r}")

@@ -26,8 +26,9 @@ from tahutils.tahu import sparkplug_b as tahu
 
 from devsim.core.device import Device
 from devsim.core.points import Point
+from devsim.runtime import requests as rq
 
-__all__ = ["DATATYPES", "GROUP", "NAMESPACE", "SparkplugNode", "command_action", "metric_value"]
+__all__ = ["DATATYPES", "GROUP", "NAMESPACE", "SparkplugNode", "command_request", "metric_value"]
 
 NAMESPACE = "spBv1.0"
 GROUP = "devsim"
@@ -155,13 +156,11 @@ class SparkplugNode:
         raise ValueError(f"not a command topic of node {self.plant!r}: {topic!r}")
 
 
-def command_action(device: Device, name: str, value: Any) -> None:
-    """Carry out one DCMD metric: a point set, a power cycle, or a fault switched."""
+def command_request(device: Device, name: str, value: Any) -> rq.ControlRequest | None:
+    """The control request of one DCMD metric: a point set, a power cycle (None when the metric
+    is false), or a fault switched."""
     if name == POWER_CYCLE:
-        if value:
-            device.power_cycle()
-    elif name.startswith(FAULT):
-        device.fault(name[len(FAULT):], value)
-    else:
-        device.set(name, value)
-
+        return rq.PowerCycle(device.name) if value else None
+    if name.startswith(FAULT):
+        return rq.SwitchFault(device.name, name[len(FAULT):], value)
+    return rq.Set(device.name, name, value)

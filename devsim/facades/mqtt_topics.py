@@ -10,8 +10,9 @@ Every device of a plant lives under ``devsim/<plant>/<device>/``::
     power_cycle        command: empty, or {"wipe": true}
     error              what a command was refused for: {"topic", "error", "type"} (not retained)
 
-Values go through the device's own validation (``Device.set``/``fault``/``power_cycle``), as
-over the control API.  See :mod:`devsim.facades.mqtt` for the connection that carries them.
+A command is the control op of its verb (:data:`devsim.runtime.ops.CONTROL`), run with the
+typed request its payload is read into: the same validation and refusals as over the control
+API.  See :mod:`devsim.facades.mqtt` for the connection that carries them.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from urllib.parse import urlsplit
 
 from devsim.core.device import Device
 from devsim.core.points import parse_bool
+from devsim.runtime import requests as rq
 
 __all__ = [
     "COMMANDS",
@@ -111,26 +113,29 @@ def error_payload(topic: str, exc: BaseException) -> bytes:
 
 
 # -- commands -------------------------------------------------------------------------------
-Command = Callable[[Device, str, bytes], None]
+#: How a command's payload becomes the typed request of its control op
+#: (:data:`devsim.runtime.ops.CONTROL`): ``parse(device, argument, payload)``.
+Command = Callable[[Device, str, bytes], rq.ControlRequest]
 
 
-def _set(device: Device, name: str, payload: bytes) -> None:
+def _set(device: Device, name: str, payload: bytes) -> rq.Set:
     point = device.points.find(name)
-    device.set(name, decode_value(payload, point.type if point is not None else None))
+    return rq.Set(device.name, name, decode_value(payload, point.type if point is not None else None))
 
 
-def _fault(device: Device, kind: str, payload: bytes) -> None:
-    device.fault(kind, parse_bool(decode_value(payload)))
+def _fault(device: Device, kind: str, payload: bytes) -> rq.SwitchFault:
+    return rq.SwitchFault(device.name, kind, parse_bool(decode_value(payload)))
 
 
-def _power_cycle(device: Device, _arg: str, payload: bytes) -> None:
+def _power_cycle(device: Device, _arg: str, payload: bytes) -> rq.PowerCycle:
     value = decode_value(payload) if payload.strip() else {}
     if not isinstance(value, dict) or set(value) - {"wipe"}:
         raise ValueError('power_cycle takes an empty payload or {"wipe": true}')
-    device.power_cycle(wipe=parse_bool(value.get("wipe", False)))
+    return rq.PowerCycle(device.name, parse_bool(value.get("wipe", False)))
 
 
-#: ``…/<verb>[/<argument>]`` → what it does, and whether it takes an argument level.
+#: ``…/<op>[/<argument>]`` → how its payload is read, and whether it takes an argument level;
+#: each verb is the control op it runs.
 COMMANDS: dict[str, tuple[Command, bool]] = {
     "set": (_set, True),
     "fault": (_fault, True),

@@ -52,6 +52,9 @@ from devsim.facades.opcua_space import (
     to_opcua,
     variables,
 )
+from devsim.runtime import Runtime
+from devsim.runtime import requests as rq
+from devsim.runtime.ops import run
 
 __all__ = ["DEFAULT_ENDPOINT", "OpcuaFacade", "PointAttributes", "endpoint_url", "start_opcua"]
 
@@ -198,7 +201,7 @@ class _DeviceNode:
         if kind.VariantType != ua.VariantType.String or active.VariantType != ua.VariantType.Boolean:
             return ua.StatusCode(_BAD.BadTypeMismatch)
         try:
-            self.device.fault(kind.Value, active.Value)
+            run(self.facade.runtime, rq.SwitchFault(self.device.name, kind.Value, active.Value))
         except (UnknownName, ValueError):
             return ua.StatusCode(_BAD.BadInvalidArgument)
         return []
@@ -206,7 +209,7 @@ class _DeviceNode:
     async def power_cycle_method(self, parent: ua.NodeId, wipe: ua.Variant) -> Any:
         if wipe.VariantType != ua.VariantType.Boolean:
             return ua.StatusCode(_BAD.BadTypeMismatch)
-        self.device.power_cycle(wipe=bool(wipe.Value))
+        run(self.facade.runtime, rq.PowerCycle(self.device.name, bool(wipe.Value)))
         self.sample_soon()
         return []
 
@@ -246,11 +249,12 @@ class OpcuaFacade:
     ``period`` is how often (seconds of device time) each device's points are sampled for
     subscriptions."""
 
-    def __init__(self, devices: Sequence[Device], endpoint: str = DEFAULT_ENDPOINT, *, period: float = 0.1,
-                 name: str = "devsim") -> None:
+    def __init__(self, devices: Sequence[Device], endpoint: str = DEFAULT_ENDPOINT, *, runtime: Runtime,
+                 period: float = 0.1, name: str = "devsim") -> None:
         if not period > 0:
             raise ValueError("an OPC UA sampling period is a positive number of seconds")
         self.devices, self.endpoint, self.period, self.name = list(devices), endpoint, period, name
+        self.runtime = runtime  # the Fault and PowerCycle methods run its control ops
         self.server = Server()
         self.bound: dict[ua.NodeId, _Bound] = {}
         self.nodes: dict[str, _DeviceNode] = {}
@@ -391,12 +395,12 @@ def _unit_item(parent: ua.NodeId, unit: str) -> ua.AddNodesItem:
     return item
 
 
-async def start_opcua(runtime: Any, devices: Sequence[Device], spec: str | None = None, *, period: float = 0.1,
+async def start_opcua(runtime: Runtime, devices: Sequence[Device], spec: str | None = None, *, period: float = 0.1,
                       name: str = "devsim") -> OpcuaFacade:
     """Serve ``devices`` on one OPC UA server in ``runtime``'s loop (call it there): ``spec`` is
     ``[[HOST:]PORT]`` or an ``opc.tcp://`` URL (default :data:`DEFAULT_ENDPOINT`, loopback unless
     a host is named).  The server stops with the runtime; its URL is ``runtime.ports["opcua"]``."""
-    facade = OpcuaFacade(devices, endpoint_url(spec), period=period, name=name)
+    facade = OpcuaFacade(devices, endpoint_url(spec), runtime=runtime, period=period, name=name)
     await facade.start()
     runtime.add_closer(facade.stop)
     runtime.ports["opcua"] = facade.url

@@ -8,7 +8,7 @@
   answers control-API requests that arrive over the broker (tasks in the runtime's loop).
 * :mod:`devsim.fleet.client` – the client side: :class:`~devsim.fleet.client.FleetClient` lists
   every device of every process and reaches any of them by name, with the methods of
-  :class:`devsim.core.control.ControlClient` (``devsim ctl --fleet URL ...``).
+  :class:`devsim.runtime.client.ControlClient` (``devsim ctl --fleet URL ...``).
 
 Needs aiomqtt (``pip install 'devsim-motion[fleet]'``).
 """

@@ -5,8 +5,8 @@ what ``devsim ctl --fleet URL`` uses) keep the retained announcements of all pro
 :mod:`devsim.fleet.member`) and send a control-API request to the process that announces the
 named device, on its request topic, with the client's reply topic and a unique ``id`` as the
 correlation id; the answer is the control API's own (``ok``/``result`` or ``error``/``type``,
-raised as :class:`devsim.core.control.ControlError`).  :class:`FleetClient` has the methods of
-:class:`devsim.core.control.ControlClient`.
+raised as :class:`devsim.runtime.client.ControlError`).  :class:`FleetClient` has the methods of
+:class:`devsim.runtime.client.ControlClient`.
 
 * ``devices()`` – one row per device: the process's ``devices`` row (name, kind, ports) with
   ``process``, ``host``, ``pid``, ``online`` (and ``plant``/``part`` when given).  A process that
@@ -34,13 +34,16 @@ from typing import Any
 
 import aiomqtt
 
-from devsim.core.control import ControlError, ControlOps
 from devsim.fleet.member import mqtt_client, parse_announcement
 from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url
+from devsim.runtime import requests as rq
+from devsim.runtime.client import ControlError, ControlOps
+from devsim.runtime.ops import CONTROL, routed_by_device
 
 __all__ = ["AsyncFleetClient", "FleetClient"]
 
-TIME_OPS = ("advance", "now")  # ops without a device: every process, or the one serving ``device``
+#: Ops whose ``device`` only routes them: every process, or the one serving ``device``.
+TIME_OPS = tuple(row.token for row in CONTROL if routed_by_device(row.token))
 
 
 class AsyncFleetClient:
@@ -239,7 +242,7 @@ class AsyncFleetClient:
 
 
 class FleetClient(ControlOps):
-    """Blocking fleet client with :class:`~devsim.core.control.ControlClient`'s methods (its
+    """Blocking fleet client with :class:`~devsim.runtime.client.ControlClient`'s methods (its
     asyncio loop runs in a daemon thread).  ``with FleetClient("mqtt://broker") as fleet: ...``."""
 
     def __init__(self, url: str | FleetUrl, timeout: float = 10.0) -> None:
@@ -291,7 +294,7 @@ class FleetClient(ControlOps):
 
     def advance(self, seconds: float, device: str | None = None) -> Any:  # type: ignore[override]
         """Advance the process serving ``device`` (its new time), or every process ({process: time})."""
-        return self.request("advance", seconds=seconds, device=device)
+        return self.call(rq.Advance(seconds, device))
 
     def now(self, device: str | None = None) -> Any:  # type: ignore[override]
-        return self.request("now", device=device)
+        return self.call(rq.Now(device))

@@ -10,8 +10,8 @@ taken from it (``devsim run/up --fleet URL``).
    ``devices`` op lists them (name, kind, ports).  Its last will is the same announcement with
    ``"online": false`` (retained; MQTT 5 message expiry of 24 h, so a crashed process's mark
    does not stay for ever);
-3. answers each request with :meth:`devsim.core.control.ControlServer.handle_line` – the very
-   code of the control API, so ops, validation and error types are the same.
+3. answers each request with :func:`devsim.runtime.ops.answer` – the very code of the control
+   API (its op table), so ops, validation and error types are the same.
 
 A request is the control API's JSON request plus ``"reply_to"``: the topic for the answer, which
 must lie under ``ROOT/client/`` (a member publishes nothing outside its own topics and the
@@ -41,9 +41,11 @@ from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
 from devsim.core.clock import VirtualClock
-from devsim.core.control import MAX_LINE, ControlServer, ErrorResponse, OkResponse, Request
-from devsim.core.runtime import Runtime
 from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url, process_id
+from devsim.runtime import Runtime, ops
+from devsim.runtime.control import MAX_LINE
+from devsim.runtime.ops import ErrorResponse, OkResponse
+from devsim.runtime.requests import Devices
 
 __all__ = ["FleetClash", "FleetMember", "join_fleet"]
 
@@ -120,8 +122,6 @@ class FleetMember:
         self.topics = Topics(url.root)
         self.process = process or process_id()
         self.about = dict(about or {})
-        # The control API's own request handling; this server never listens.
-        self.executor = ControlServer(runtime, "127.0.0.1:0")
         self.since = time.time()
         self.served = 0
         self._client: aiomqtt.Client | None = None
@@ -134,7 +134,7 @@ class FleetMember:
         return self.topics.request(self.process)
 
     def announcement(self, online: bool = True) -> dict[str, Any]:
-        devices = self.executor.execute(Request(op="devices"))
+        devices = ops.run(self.runtime, Devices())
         return {
             "process": self.process,
             "host": socket.gethostname(),
@@ -173,7 +173,7 @@ class FleetMember:
         self._task = asyncio.ensure_future(self._run(client))
 
     def _refuse_clashes(self, others: dict[str, dict[str, Any]]) -> None:
-        mine = {row["name"] for row in self.executor.execute(Request(op="devices"))}
+        mine = {row["name"] for row in ops.run(self.runtime, Devices())}
         for process, announcement in sorted(others.items()):
             if process == self.process or not announcement.get("online"):
                 continue
@@ -253,14 +253,14 @@ class FleetMember:
                 if isinstance(data, dict) and "reply_to" in data:
                     reply_to = data.pop("reply_to")
                     line = json.dumps(data)
-            response = self.executor.handle_line(line)
+            response = ops.answer(self.runtime, line)[0]
         if not self._reply_allowed(reply_to):
             return None
         out: Properties | None = None
         if correlation is not None:
             out = Properties(PacketTypes.PUBLISH)
             out.CorrelationData = correlation
-        return str(reply_to), ControlServer._encode(response), out
+        return str(reply_to), ops.encode(response), out
 
     def _reply_allowed(self, topic: Any) -> bool:
         return (isinstance(topic, str) and topic.startswith(f"{self.topics.root}/client/")

@@ -20,7 +20,7 @@ from pathlib import Path
 import click
 
 from devsim.core.config import ConfigError, LineDict, load_yaml
-from devsim.live_log import attach_log, level_of, log_options
+from devsim.observe.live_log import attach_log, level_of, log_options
 from devsim.transports import fdlimit
 
 __all__ = ["register"]
@@ -99,19 +99,19 @@ def scenario_run(
         raise click.UsageError("--speed: must be positive")
     pictures = None
     if motion_log is not None or plot_dir is not None:
-        from devsim.core.motion_log import motion_log_problem
+        from devsim.observe.motion_log import motion_log_problem
         from devsim.scenario.pictures import ScenarioPictures
 
         if (problem := motion_log_problem(motion_resolution)) is not None:
             raise click.UsageError(problem)
         if plot_dir is not None:
-            from devsim.plot import require_matplotlib
+            from devsim.observe.plot import require_matplotlib
 
             require_matplotlib()
         pictures = ScenarioPictures(motion_log=motion_log, resolution=motion_resolution, plot_dir=plot_dir,
                                     plot_format=plot_format, trace_dir=trace_dir, count=len(files))
     if control is not None:
-        from devsim.core.control import ControlAddressError, parse_address
+        from devsim.runtime.control import ControlAddressError, parse_address
 
         try:
             if not parse_address(control).is_loopback():
@@ -194,7 +194,7 @@ def up(
     """Start every device of PLANT_FILE (with --part: those of one part), print every port and
     NAME: ready when a device has booted, serve until Ctrl-C.  Host connects, disconnects, line
     mismatches and device errors are logged to stderr (-v: more, -q: less)."""
-    from devsim.core.control import ControlAddressError, parse_address
+    from devsim.runtime.control import ControlAddressError, parse_address
     from devsim.scenario.schema import load_plant
 
     try:
@@ -224,7 +224,7 @@ def up(
         if not address.is_loopback():
             raise click.UsageError(f"--control: refusing non-loopback host {address.host!r}")
     if motion_log is not None:
-        from devsim.core.motion_log import motion_log_problem
+        from devsim.observe.motion_log import motion_log_problem
 
         if (problem := motion_log_problem(motion_resolution)) is not None:
             raise click.UsageError(problem)
@@ -272,8 +272,8 @@ async def _up(
     fleet: str | None = None, part: str | None = None, motion: tuple[str, float] | None = None,
     log_level: int = 2,
 ) -> None:
-    from devsim.core.control import ControlServer
-    from devsim.core.runtime import Runtime
+    from devsim.runtime import Runtime
+    from devsim.runtime.control import ControlServer
     from devsim.scenario.plant import build_plant
 
     loop = asyncio.get_running_loop()
@@ -295,7 +295,7 @@ async def _up(
                   f" {', '.join(list(plant.refused)[:5])}{' ...' if len(plant.refused) > 5 else ''}",
                   file=sys.stderr, flush=True)
         if motion is not None:
-            from devsim.core.motion_log import start_motion_log
+            from devsim.observe.motion_log import start_motion_log
 
             start_motion_log(runtime, list(plant.devices.values()), *motion)
         server = None

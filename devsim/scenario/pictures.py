@@ -3,10 +3,10 @@
 Per scenario:
 
 * ``--motion-log FILE.csv`` logs every axis of the scenario's plant
-  (:mod:`devsim.core.motion_log`); with several scenarios each gets its own file,
+  (:mod:`devsim.observe.motion_log`); with several scenarios each gets its own file,
   ``FILE-STEM.csv`` (``STEM``: the scenario file's name without ``.yaml``);
 * ``--plot DIR`` draws ``DIR/STEM.png`` (or ``.svg``/``.html``, ``--plot-format``) from the
-  scenario's motion log and the traces of its ports (:mod:`devsim.plot`).  What it is drawn from
+  scenario's motion log and the traces of its ports (:mod:`devsim.observe.plot`).  What it is drawn from
   stays beside it: the motion log (``DIR/STEM.csv`` unless ``--motion-log`` names one) and, unless
   ``--trace-dir`` is given, the traces in ``DIR/STEM.traces/``.
 """
@@ -18,7 +18,7 @@ from typing import Any
 
 import click
 
-from devsim.core.motion_log import start_motion_log
+from devsim.observe.motion_log import start_motion_log
 
 __all__ = ["ScenarioPictures"]
 
@@ -86,8 +86,8 @@ class ScenarioPictures:
         to print (``plot: DIR/STEM.png``), or None without ``--plot``."""
         if self.plot_dir is None:
             return None
-        from devsim.plot import render
-        from devsim.plot_data import PlotInputError
+        from devsim.observe.plot import render
+        from devsim.observe.plot_data import PlotInputError
 
         log = self.log_path
         files: list[Path] = [log] if log is not None and log.exists() else []

@@ -14,7 +14,7 @@ from typing import Any, Literal
 
 from devsim.core.device import Device
 from devsim.core.record import field, record
-from devsim.core.runtime import Runtime, port_key
+from devsim.runtime import Runtime, port_key
 from devsim.scenario.schema import PlantSpec, TransportSpec
 from devsim.transports.fdlimit import is_out_of_fds, port_budget
 

@@ -20,7 +20,7 @@ from typing import Any
 from devsim.core.clock import VirtualClock
 from devsim.core.device import SerialSettings
 from devsim.core.record import field, record
-from devsim.core.runtime import Runtime
+from devsim.runtime import Runtime
 from devsim.scenario.host import HostPort, open_host_port
 from devsim.scenario.plant import Plant, build_plant
 from devsim.scenario.schema import Condition, Scenario, Step
@@ -494,7 +494,7 @@ async def run_scenario_async(
     plant = await build_plant(runtime, scenario, trace_dir=trace_dir)
     server = None
     if control is not None:
-        from devsim.core.control import ControlServer
+        from devsim.runtime.control import ControlServer
 
         server = ControlServer(runtime, control)
         plant.facades.append(f"control: {await server.start()}")

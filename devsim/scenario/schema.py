@@ -37,7 +37,7 @@ from typing import Any, Literal
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from devsim.core.config import ConfigError, LineDict, LineList, load_yaml, plain, validate
-from devsim.core.runtime import port_key
+from devsim.runtime import port_key
 from devsim.scenario.specs import (
     CanopenSpec,
     ModbusSpec,

@@ -3,20 +3,19 @@
 the handle an injector gets back (:class:`FaultHandle`).
 
 How an active fault acts on the bytes is the line's business (:mod:`devsim.transports.line`,
-which re-exports the public names here).
+which re-exports the public names here); the pure parts of it, given the line's active faults,
+are here too (:func:`gate`, :func:`mangle`, :func:`take`).
 """
 
 from __future__ import annotations
 
 import math
 import random
-from typing import TYPE_CHECKING, Literal, get_args
+from collections.abc import Callable
+from typing import Literal, get_args
 
 from devsim.core.clock import Timer
 from devsim.core.record import record
-
-if TYPE_CHECKING:
-    from devsim.transports.line import Line
 
 __all__ = ["DEFAULT_SPLIT_GAP", "FaultDirection", "FaultHandle", "FaultKind", "LineFault"]
 
@@ -173,13 +172,56 @@ class _Active:
         self.active = True
 
 
+# -- how the active faults of a line act on its bytes (pure: the line hands its faults in) -----
+def of_kind(faults: list[_Active], kind: str, direction: str) -> list[_Active]:
+    """The active faults of ``kind`` that act on bytes going ``direction``."""
+    return [a for a in faults if a.fault.kind == kind and a.fault.applies(direction)]
+
+
+def gate(faults: list[_Active], direction: str, noise: bool = False) -> str | None:
+    """The fault that blocks bytes going ``direction`` now, if any."""
+    for active in faults:
+        kind = active.fault.kind
+        if kind == "unplug":
+            return kind
+        if kind == "hang" and (direction == "to_device" or not noise):
+            return kind
+        if kind == "silent" and direction == "to_host" and not noise:
+            return kind
+    return None
+
+
+def take(active: _Active, available: int) -> int:
+    """How many of ``available`` bytes a fault takes (a counted one: at most its rest)."""
+    if active.remaining is None:
+        return available
+    taken = min(active.remaining, available)
+    active.remaining -= taken
+    return taken
+
+
+def mangle(faults: list[_Active], data: bytes, direction: str) -> bytes:
+    """Drop, then corrupt (see :class:`LineFault` for the order)."""
+    for active in of_kind(faults, "drop", direction):
+        data = data[take(active, len(data)) :]
+    corrupt = of_kind(faults, "corrupt", direction)
+    if corrupt and data:
+        buf = bytearray(data)
+        for active in corrupt:  # each one acts on the same next bytes
+            for i in range(take(active, len(buf))):
+                buf[i] ^= 1 << active.rng.randrange(8)
+        data = bytes(buf)
+    return data
+
+
 class FaultHandle:
-    """Returned by :meth:`Line.inject`: lets the injector end the fault early."""
+    """Returned by :meth:`Line.inject`: lets the injector end the fault early.  ``end(active,
+    how)`` is the line's own way of ending one of its faults."""
 
-    __slots__ = ("_line", "_active")
+    __slots__ = ("_end", "_active")
 
-    def __init__(self, line: Line, active: _Active) -> None:
-        self._line = line
+    def __init__(self, active: _Active, end: Callable[[_Active, str], None]) -> None:
+        self._end = end
         self._active = active
 
     @property
@@ -193,7 +235,7 @@ class FaultHandle:
 
     def cancel(self) -> None:
         """End the fault now (idempotent)."""
-        self._line._end(self._active, "cancelled")
+        self._end(self._active, "cancelled")
 
     def __repr__(self) -> str:  # pragma: no cover - debugging aid
         return f"<FaultHandle {self.fault.describe()} {'active' if self.active else 'ended'}>"

@@ -39,7 +39,7 @@ from typing import Any, Protocol
 from devsim.core.clock import Clock, Timer
 from devsim.core.device import ByteSink, SerialSettings
 from devsim.core.record import replace
-from devsim.transports.faults import _NOISE_TICK, _Active
+from devsim.transports.faults import _NOISE_TICK, _Active, gate, mangle, of_kind, take
 
 # LineFault, FaultHandle, garble and settings_match live in .faults and .uart; they stay
 # importable from here (explicit re-exports), as do the fault kind and direction types.
@@ -222,7 +222,7 @@ class Line:
                 self.target.feed(data)  # the fault-free path: nothing to garble, trace or delay
                 return
         received = data
-        lost = self._gate("to_device") if self._faults else None
+        lost = gate(self._faults, "to_device") if self._faults else None
         if lost is not None:
             received = b""
         else:
@@ -230,7 +230,7 @@ class Line:
             if host is not None and not settings_match(host, self.device_settings):
                 received = garble(data, host, self.device_settings)
             if self._faults:
-                received = self._mangle(received, "to_device")
+                received = mangle(self._faults, received, "to_device")
         if self.tracer is not None:
             if lost is not None:
                 note: str | None = f"lost: {lost}"
@@ -265,7 +265,7 @@ class Line:
         """Start ``fault`` now; it ends by itself after its ``duration`` or ``count``."""
         active = _Active(fault, self.clock.now())
         self._faults.append(active)
-        handle = FaultHandle(self, active)
+        handle = FaultHandle(active, self._end)
         self._note(f"fault start: {fault.describe()}")
         if fault.kind == "unplug":
             self.target.host_disconnected()
@@ -303,21 +303,6 @@ class Line:
             self.tracer.note(text, self.clock.now())
         self._tell("fault", text)
 
-    def _of(self, kind: str, direction: str) -> list[_Active]:
-        return [a for a in self._faults if a.fault.kind == kind and a.fault.applies(direction)]
-
-    def _gate(self, direction: str, noise: bool = False) -> str | None:
-        """The fault that blocks bytes going ``direction`` now, if any."""
-        for active in self._faults:
-            kind = active.fault.kind
-            if kind == "unplug":
-                return kind
-            if kind == "hang" and (direction == "to_device" or not noise):
-                return kind
-            if kind == "silent" and direction == "to_host" and not noise:
-                return kind
-        return None
-
     def _clean(self) -> bool:
         """No mismatch between the host's settings and the device's (remembered for the very
         objects last compared, so that the fault-free path costs no comparison)."""
@@ -340,27 +325,6 @@ class Line:
                 assert active.fault.baudrate is not None
                 return replace(self._host or self.device_settings, baudrate=active.fault.baudrate)
         return self._host
-
-    def _use(self, active: _Active, available: int) -> int:
-        """How many of ``available`` bytes a fault takes (a counted one: at most its rest)."""
-        if active.remaining is None:
-            return available
-        take = min(active.remaining, available)
-        active.remaining -= take
-        return take
-
-    def _mangle(self, data: bytes, direction: str) -> bytes:
-        """Drop, then corrupt (see :class:`LineFault` for the order)."""
-        for active in self._of("drop", direction):
-            data = data[self._use(active, len(data)) :]
-        corrupt = self._of("corrupt", direction)
-        if corrupt and data:
-            buf = bytearray(data)
-            for active in corrupt:  # each one acts on the same next bytes
-                for i in range(self._use(active, len(buf))):
-                    buf[i] ^= 1 << active.rng.randrange(8)
-            data = bytes(buf)
-        return data
 
     def _reap(self) -> None:
         """End the counted faults whose count is used up (after the chunk has been traced)."""
@@ -387,13 +351,13 @@ class Line:
                 latency += fault.delay
             elif fault.kind == "jitter":
                 latency += active.rng.uniform(0.0, fault.delay)
-        splits = self._of("split", direction)
+        splits = of_kind(self._faults, "split", direction)
         if not splits:
             stage.put(now + latency, data, chars)
             return
         split = splits[0]
         gap = DEFAULT_SPLIT_GAP if split.fault.delay is None else split.fault.delay
-        n = self._use(split, len(data))
+        n = take(split, len(data))
         for i in range(n):
             stage.put(now + latency, data[i : i + 1], 1, gap)
         if n < len(data):
@@ -431,7 +395,7 @@ class Line:
             self._inject_noise(noise, direction)
 
     def _inject_noise(self, noise: bytes, direction: str) -> None:
-        lost = self._gate(direction, noise=True)
+        lost = gate(self._faults, direction, noise=True)
         if self.tracer is not None:
             note = "noise" if lost is None else f"noise, lost: {lost}"
             self.tracer.record("H>D" if direction == "to_device" else "D>H", noise, self.clock.now(), note)
@@ -505,7 +469,7 @@ class Line:
 
     # -- host → device ----------------------------------------------------------------------
     def _to_target(self, data: bytes, chars: int = 0) -> None:
-        if self._faults and self._gate("to_device", noise=True) is not None:
+        if self._faults and gate(self._faults, "to_device", noise=True) is not None:
             return  # in flight when the cable was pulled or the device hung
         self.target.feed(data)
 
@@ -519,7 +483,7 @@ class Line:
             return
         device = self.device_settings
         sent = data
-        lost = self._gate("to_host") if self._faults else None
+        lost = gate(self._faults, "to_host") if self._faults else None
         if lost is not None:
             sent = b""
         else:
@@ -527,7 +491,7 @@ class Line:
             if host is not None and not settings_match(host, device):
                 sent = garble(data, device, host)
             if self._faults:
-                sent = self._mangle(sent, "to_host")
+                sent = mangle(self._faults, sent, "to_host")
         if self.tracer is not None:
             if lost is not None:
                 note: str | None = f"lost: {lost}"
@@ -554,7 +518,7 @@ class Line:
             self._schedule()
 
     def _deliver(self, data: bytes) -> None:
-        if self._faults and self._gate("to_host", noise=True) is not None:
+        if self._faults and gate(self._faults, "to_host", noise=True) is not None:
             return  # in flight when the cable was pulled
         if self._write is not None:
             self.bytes_delivered += len(data)

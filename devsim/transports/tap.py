@@ -9,8 +9,8 @@ fault-free fast path.
 A telegram is what one side sent in one go: consecutive chunks in the same direction less than
 :data:`GAP` seconds of device time apart are joined (a host's request that arrives split over
 several reads is one telegram), up to :data:`MAX_BYTES`.  With a decoder per direction (the
-kind's protocol as record and replay know it, :func:`devsim.replay.kinds.protocol_of`) a
-telegram also carries ``decoded``: the messages it completed, e.g. an FT1.2 frame's fields.
+framing the port declares, :attr:`devsim.core.kit.PortDef.framing`, as record and replay use
+it) a telegram also carries ``decoded``: the messages it completed, e.g. an FT1.2 frame's fields.
 """
 
 from __future__ import annotations

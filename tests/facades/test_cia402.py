@@ -15,8 +15,8 @@ from typing import Any
 import canopen
 import pytest
 
-from devsim.core.runtime import Runtime
 from devsim.facades.canopen_node import CanopenFacade
+from devsim.runtime import Runtime
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from devsim.core.runtime import Runtime
 from devsim.facades.mqtt import start_broker, start_mqtt
+from devsim.runtime import Runtime
 from tests.support.broker import Broker, mosquitto_missing
 from tests.support.mqtt import Sub, pub
 from tests.support.process import free_port

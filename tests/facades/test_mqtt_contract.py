@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from devsim.core.device import Device
 from devsim.core.registry import kinds
-from devsim.core.runtime import Runtime
 from devsim.facades.mqtt import start_mqtt
+from devsim.runtime import Runtime
 from tests.facades.test_mqtt import mosquitto  # noqa: F401 - the module's broker fixture
 from tests.support.broker import Broker
 from tests.support.mqtt import Sub, pub

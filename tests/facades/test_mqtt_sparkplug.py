@@ -14,8 +14,8 @@ import pytest
 from tahutils.parse import parse_payload_to_metric_dict, payload_from_string
 from tahutils.tahu import sparkplug_b as tahu
 
-from devsim.core.runtime import Runtime
 from devsim.facades.mqtt import start_broker, start_mqtt
+from devsim.runtime import Runtime
 from tests.facades.test_mqtt import mosquitto  # noqa: F401 - the module's broker fixture
 from tests.support.broker import Broker
 from tests.support.mqtt import Sub, pub

@@ -26,9 +26,9 @@ from asyncua import Client, ua
 
 from devsim.core.points import BadValue
 from devsim.core.registry import kinds
-from devsim.core.runtime import Runtime
 from devsim.facades.opcua import OpcuaFacade, start_opcua
 from devsim.facades.opcua_space import NAMESPACE, to_opcua, variables
+from devsim.runtime import Runtime
 
 NODE_CLIENT = Path(__file__).parent / "opcua_node"
 PERIOD = 0.1  # seconds of device time between samples for subscriptions

@@ -13,8 +13,8 @@ from pathlib import Path
 import can
 import canopen
 
-from devsim.core.runtime import Runtime
 from devsim.facades.canopen_node import CanopenFacade
+from devsim.runtime import Runtime
 from devsim.transports.socketcand import SocketcandServer, frame_text, parse_send
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -132,7 +132,7 @@ def test_the_402_flow_with_the_master_in_another_process_under_virtual_time() ->
     enabled, runs a profile-position move that completes at the LM628 triangle's closed-form 6.34 s
     (spec pcd4h3 §5.2; virtual time advanced through the control API), blocks the axis and sees
     EMCY 8611h and the Fault state, and resets the fault."""
-    from devsim.core.control import ControlClient
+    from devsim.runtime.client import ControlClient
     from tests.test_cli import Sim
 
     sim = Sim("pcd4h3", "--virtual", "--control", "127.0.0.1:0", "--canopen", "3@127.0.0.1:0",

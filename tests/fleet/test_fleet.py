@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from devsim.core.control import ControlError
 from devsim.fleet.client import FleetClient
+from devsim.runtime.client import ControlError
 from tests.fleet.conftest import Member, ctl, mosquitto
 from tests.support.broker import Broker
 

@@ -7,9 +7,9 @@ import json
 import pytest
 
 from devsim.core.config import ConfigError
-from devsim.core.runtime import Runtime
 from devsim.fleet.member import FleetMember
 from devsim.fleet.topics import FleetUrlError, Topics, parse_fleet_url
+from devsim.runtime import Runtime
 from devsim.scenario.schema import PlantSpec, load_plant
 
 
@@ -73,8 +73,8 @@ def test_a_member_answers_with_the_control_api_and_only_to_client_topics() -> No
 
 
 def test_a_clash_is_listed_and_refused_and_offline_rows_give_way() -> None:
-    from devsim.core.control import ControlError
     from devsim.fleet.client import AsyncFleetClient
+    from devsim.runtime.client import ControlError
 
     client = AsyncFleetClient("mqtt://127.0.0.1")
     row = {"name": "x", "kind": "sers"}

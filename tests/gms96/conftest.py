@@ -9,9 +9,9 @@ from typing import Any
 import pytest
 import serial
 
-from devsim.core.runtime import Runtime
 from devsim.devices.gms96 import codec
 from devsim.devices.gms96.client import Gms96Client
+from devsim.runtime import Runtime
 from devsim.transports.pty import PtyTransport
 
 

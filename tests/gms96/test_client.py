@@ -13,7 +13,6 @@ import pytest
 import serial
 
 from devsim.core.device import Device, Face
-from devsim.core.runtime import Runtime
 from devsim.devices.gms96.client import (
     Gms96Client,
     Gms96Error,
@@ -42,6 +41,7 @@ from devsim.devices.gms96.codec import (
     t_reply,
     to_s24,
 )
+from devsim.runtime import Runtime
 from devsim.transports.pty import PtyTransport
 from devsim.transports.tcp import TcpTransport
 

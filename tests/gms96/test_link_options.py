@@ -8,8 +8,8 @@ from typing import Any
 
 import pytest
 
-from devsim.core.runtime import Runtime
 from devsim.devices.gms96 import codec
+from devsim.runtime import Runtime
 from tests.gms96.conftest import Plant
 
 STATUS = "10 01 03 04 16"

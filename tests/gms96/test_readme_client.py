@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from devsim.core.runtime import Runtime
+from devsim.runtime import Runtime
 from devsim.transports.pty import PtyTransport
 
 README = Path(__file__).resolve().parents[2] / "README.md"

@@ -13,10 +13,10 @@ import serial
 from hypothesis import given, settings
 
 from devsim.core.clock import VirtualClock
-from devsim.core.control import ControlClient
 from devsim.devices.ip247 import Ip247Device
 from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.client import PgClient
+from devsim.runtime.client import ControlClient
 from tests.ip247.test_machine_data import COM247, words
 from tests.test_cli import Sim
 

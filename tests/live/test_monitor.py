@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from devsim.core.control import ControlServer
-from devsim.core.runtime import Runtime
-from devsim.monitor.app import DevicePanel, MonitorApp
+from devsim.observe.monitor import DevicePanel, MonitorApp
+from devsim.runtime import Runtime
+from devsim.runtime.control import ControlServer
 from devsim.transports.tcp import TcpTransport
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import serial
 
-from devsim.core.control import ControlClient
+from devsim.runtime.client import ControlClient
 
 from .run import Proc, ctl
 
@@ -148,8 +148,8 @@ def test_watch_through_up_workers(tmp_path: Path) -> None:
 
 def test_log_levels_on_a_drive_error() -> None:
     """What each level logs when a SERS sees a short circuit (a drive error: P11, EMCY code)."""
-    from devsim.core.runtime import Runtime
-    from devsim.live_log import attach_log, level_of
+    from devsim.observe.live_log import attach_log, level_of
+    from devsim.runtime import Runtime
 
     assert [level_of(0, 0), level_of(1, 0), level_of(0, 1), level_of(0, 5), level_of(9, 0)] == [2, 3, 1, 0, 3]
     runtime = Runtime(virtual=True).start()
@@ -173,8 +173,8 @@ def test_log_levels_on_a_drive_error() -> None:
 def test_watch_protocol_by_hand() -> None:
     """The documented wire form with a bare socket: the answer, then stream lines tagged with the
     request's id; errors are ordinary error answers; other requests still get answered."""
-    from devsim.core.control import ControlServer
-    from devsim.core.runtime import Runtime
+    from devsim.runtime import Runtime
+    from devsim.runtime.control import ControlServer
 
     runtime = Runtime(virtual=True).start()
     runtime.add_device("sers")

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import serial
 
-from devsim.core.control import ControlClient
 from devsim.devices.poselesta.codes import encode
+from devsim.runtime.client import ControlClient
 from tests.test_cli import Sim
 
 

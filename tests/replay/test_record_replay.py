@@ -362,7 +362,7 @@ def test_ether_sbus_over_tcp_sequence_tolerance_and_live(tmp_path: Path, procs: 
 def test_replay_keeps_the_recorded_delay(tmp_path: Path, procs: list[Proc], args: list[str], earliest: float,
                                          latest: float | None) -> None:
     from devsim.core.device import SerialSettings
-    from devsim.replay.session import SessionWriter
+    from devsim.observe.replay.session import SessionWriter
 
     writer = SessionWriter(tmp_path / "slow.devsim", kind="sers", port="main", device="-", settings=SerialSettings())
     writer.chunk(1.0, "host", b"#1\r")

@@ -10,9 +10,9 @@ from click.testing import CliRunner
 
 from devsim.cli import cli
 from devsim.core.device import SerialSettings
+from devsim.core.registry import port_framing
 from devsim.devices.gms96 import codec as ft12
-from devsim.replay.kinds import protocol_of
-from devsim.replay.session import SessionError, SessionWriter, load_session
+from devsim.observe.replay.session import SessionError, SessionWriter, load_session
 
 
 def _write(path: Path, kind: str | None, chunks: list[tuple[float, str, bytes]]) -> Path:
@@ -52,10 +52,10 @@ def test_gms96_tolerances_ignore_the_checksum_and_the_frame_count_bit() -> None:
     flipped = ft12.encode(ft12.LongFrame(ft12.control_host(1), 3, ft12.letter("A", 10000)))
     other = ft12.encode(ft12.LongFrame(ft12.control_host(0), 3, ft12.letter("A", 10001)))
     broken = frame[:-2] + bytes([frame[-2] ^ 0xFF]) + frame[-1:]
-    tolerances = {t.name: t.key for t in protocol_of("gms96").tolerances}
+    tolerances = {t.name: t.key for t in port_framing("gms96").tolerances}
     assert tolerances["checksum"](broken) == tolerances["checksum"](frame) != tolerances["checksum"](flipped)
     assert tolerances["fcb"](flipped) == tolerances["fcb"](frame) != tolerances["fcb"](other)
-    split = protocol_of("gms96").split
+    split = port_framing("gms96").split
     assert split is not None and split(frame + flipped[:5]) == ([frame], flipped[:5])
 
 
@@ -76,7 +76,7 @@ def test_a_bad_session_is_one_line_exit_2(tmp_path: Path, content: str, message:
 async def test_the_handover_clock_is_virtual_then_real() -> None:
     import asyncio
 
-    from devsim.replay.live import HandoverClock
+    from devsim.observe.replay.live import HandoverClock
 
     clock = HandoverClock()
     fired: list[float] = []

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from devsim.core.control import ControlClient, ControlError
+from devsim.runtime.client import ControlClient, ControlError
 from devsim.scenario.schema import load_plant
 from devsim.scenario.workers import split_plant
 

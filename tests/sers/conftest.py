@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 import serial
 
-from devsim.core.runtime import Runtime
+from devsim.runtime import Runtime
 from devsim.transports.pty import PtyTransport
 
 ACK = re.compile(rb"\n(ok\d|pgm)\n\r|\n\*[^\n]*\n\r")

@@ -155,7 +155,7 @@ def test_raw_bytes_pass_the_pty_unchanged(sers: Plant) -> None:
 
 
 def test_pyserial_can_open_the_link_path(plant_factory, tmp_path) -> None:
-    from devsim.core.runtime import Runtime
+    from devsim.runtime import Runtime
     from devsim.transports.pty import PtyTransport
 
     runtime = Runtime(virtual=True).start()

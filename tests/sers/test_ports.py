@@ -11,7 +11,7 @@ from pathlib import Path
 
 import serial
 
-from devsim.core.runtime import Runtime
+from devsim.runtime import Runtime
 from devsim.transports.rfc2217 import Rfc2217Transport
 from devsim.transports.tcp import TcpTransport
 from tests.sers.conftest import ACK

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from devsim.core.runtime import Runtime
+from devsim.runtime import Runtime
 from devsim.transports.pcap import (
     LINKTYPE_IPV4,
     MAX_PAYLOAD,

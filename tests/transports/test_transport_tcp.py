@@ -107,7 +107,7 @@ def test_a_flood_on_one_port_does_not_stall_another(monkeypatch: pytest.MonkeyPa
     import socket
     import threading
 
-    from devsim.core.runtime import Runtime
+    from devsim.runtime import Runtime
     from devsim.transports.tcp import SLICE, TcpTransport
 
     monkeypatch.setenv("DEVSIM_EXTRA_KINDS", "echo=tests.support.echo:EchoDevice")

@@ -8,7 +8,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from devsim.core.runtime import Runtime
+from devsim.runtime import Runtime
 from devsim.transports.udp import UdpTransport
 from tests.support.etherbus import read_request
 from tests.transports.transport_helpers import Recorder

@@ -12,13 +12,14 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import ErrorCode, Parameter, Reference
+from devsim.core.kit import ErrorCode, Parameter, PortDef, Reference
 from devsim.core.settings import Section
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.card import Gms96Card
 from devsim.devices.gms96.config import Gms96Config
 from devsim.devices.gms96.drive_actions import DRIVE
 from devsim.devices.gms96.face import IMMEDIATE_COMMANDS, QUEUED_COMMANDS, SHORT_COMMANDS, Gms96Face
+from devsim.devices.gms96.framing import FT12
 from devsim.devices.gms96.nparams import N_STORED_ONLY
 from devsim.devices.gms96.points import FAULTS, POINTS
 
@@ -33,6 +34,7 @@ class Gms96Device(Device):
     config_model: ClassVar[Section] = Gms96Config
     model_class = Gms96Card
     face_classes: ClassVar[dict[str, Any]] = {"main": Gms96Face}
+    ports = (PortDef(framing=FT12),)
     points = POINTS
     drive = DRIVE
     faults = FAULTS

@@ -15,6 +15,7 @@ from devsim.core.kit import Command, ErrorCode, PortDef, Reference
 from devsim.core.settings import Section
 from devsim.devices.pcd4h3.config import Pcd4h3Config
 from devsim.devices.pcd4h3.face import EtherDatagramFace, EtherStreamFace, SbusFace
+from devsim.devices.pcd4h3.framing import ETHER_TCP
 from devsim.devices.pcd4h3.library import FUNCTIONS
 from devsim.devices.pcd4h3.model import Pcd4
 from devsim.devices.pcd4h3.points import DRIVE, FAULTS, POINTS
@@ -33,7 +34,7 @@ class Pcd4h3Device(Device):
     ports = (
         PortDef("sbus", "S-Bus serial data mode (FS B5h, stuffing, CRC-16; 9600 8N1)", "§9.2"),
         PortDef("ether_udp", "Ether-S-Bus on UDP, one telegram per datagram", "§9.3", default="udp:5050"),
-        PortDef("ether_tcp", "Ether-S-Bus on TCP, telegrams back to back", "§9.3", default="tcp:5050"),
+        PortDef("ether_tcp", "Ether-S-Bus on TCP, telegrams back to back", "§9.3", default="tcp:5050", framing=ETHER_TCP),
     )
     model_class = Pcd4
     face_classes: ClassVar[dict[str, Any]] = {"sbus": SbusFace, "ether_udp": EtherDatagramFace,

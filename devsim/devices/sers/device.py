@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import ErrorCode, Parameter, Reference
+from devsim.core.kit import ErrorCode, Parameter, PortDef, Reference
 from devsim.core.settings import Section
 from devsim.devices.sers.config import SersConfig
 from devsim.devices.sers.drive import SersDrive
@@ -19,6 +19,7 @@ from devsim.devices.sers.drive_actions import DRIVE
 from devsim.devices.sers.errors import ERRNO
 from devsim.devices.sers.execution import COMMANDS, STATEMENTS
 from devsim.devices.sers.face import INTERACTIVE, SersFace
+from devsim.devices.sers.framing import LINES
 from devsim.devices.sers.parameters import PARAMETERS, STORED_ONLY
 from devsim.devices.sers.points import FAULTS, POINTS
 
@@ -34,6 +35,7 @@ class SersDevice(Device):
     hears_others: ClassVar[bool] = True  # a master's statements reach its slaves (§3.6.2)
     model_class = SersDrive
     face_classes: ClassVar[dict[str, Any]] = {"main": SersFace}
+    ports = (PortDef(framing=LINES),)
     points = POINTS
     faults = FAULTS
     drive = DRIVE

@@ -30,7 +30,7 @@ from textual.screen import ModalScreen
 from textual.widgets import Footer, Header, OptionList, Sparkline, Static
 from textual.widgets.option_list import Option
 
-from devsim.core.control import ControlClient, ControlError
+from devsim.runtime.client import ControlClient, ControlError
 
 __all__ = ["LINE_FAULTS", "MonitorApp"]
 

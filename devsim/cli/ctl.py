@@ -1,6 +1,10 @@
 """``devsim ctl``: the control API of a running simulator (``--control ADDR``) or of a fleet
 (``--fleet mqtt://BROKER``, :mod:`devsim.fleet`) on the command line; results are printed as JSON,
-errors are one line."""
+errors are one line.
+
+One command per op of :data:`devsim.runtime.ops.CONTROL` (``power_cycle`` is ``power-cycle``),
+each sending the op's typed request (:mod:`devsim.runtime.requests`); :func:`command_names` lists
+them and a test holds them to the table."""
 
 from __future__ import annotations
 
@@ -10,9 +14,15 @@ from typing import Any
 
 import click
 
-from devsim.run_options import check_fleet
+from devsim.cli.options import check_fleet
+from devsim.runtime import requests as rq
 
-__all__ = ["ctl"]
+__all__ = ["command_name", "ctl"]
+
+
+def command_name(op: str) -> str:
+    """The ``devsim ctl`` command of a control op."""
+    return op.replace("_", "-")
 
 
 def _emit(result: Any) -> None:
@@ -22,8 +32,9 @@ def _emit(result: Any) -> None:
         click.echo(json.dumps(result))
 
 
-def _call(ctx: click.Context, method: str, *args: Any, **kwargs: Any) -> None:
-    from devsim.core.control import ControlAddressError, ControlClient, ControlError
+def _call(ctx: click.Context, request: rq.ControlRequest) -> None:
+    from devsim.runtime.client import ControlClient, ControlError
+    from devsim.runtime.control import ControlAddressError
 
     addr, fleet = ctx.obj
     client: Any
@@ -41,7 +52,7 @@ def _call(ctx: click.Context, method: str, *args: Any, **kwargs: Any) -> None:
         raise click.ClickException(f"cannot connect to {addr}: {exc.strerror or exc}") from None
     try:
         with client:
-            result = getattr(client, method)(*args, **kwargs)
+            result = client.call(request)
     except ControlError as exc:
         raise click.ClickException(str(exc)) from None
     except (OSError, ValueError) as exc:
@@ -69,23 +80,23 @@ def ctl(ctx: click.Context, addr: str | None, fleet: str | None) -> None:
     ctx.obj = (addr, fleet)
 
 
-@ctl.command("devices")
+@ctl.command(command_name("devices"))
 @click.pass_context
 def ctl_devices(ctx: click.Context) -> None:
     """The devices: name, kind and port."""
-    _call(ctx, "devices")
+    _call(ctx, rq.Devices())
 
 
-@ctl.command("read")
+@ctl.command(command_name("read"))
 @click.argument("device")
 @click.argument("name")
 @click.pass_context
 def ctl_read(ctx: click.Context, device: str, name: str) -> None:
     """Read NAME (e.g. axis.position) of DEVICE."""
-    _call(ctx, "read", device, name)
+    _call(ctx, rq.Read(device, name))
 
 
-@ctl.command("set")
+@ctl.command(command_name("set"))
 @click.argument("device")
 @click.argument("name")
 @click.argument("value")
@@ -93,80 +104,78 @@ def ctl_read(ctx: click.Context, device: str, name: str) -> None:
 def ctl_set(ctx: click.Context, device: str, name: str, value: str) -> None:
     """Set NAME of DEVICE to VALUE, read as NAME's declared type (true/false/on/off/1/0 for a
     boolean, a finite number, text, or JSON for structured values)."""
-    _call(ctx, "set", device, name, value)
+    _call(ctx, rq.Set(device, name, value))
 
 
-@ctl.command("state")
+@ctl.command(command_name("state"))
 @click.argument("device")
 @click.pass_context
 def ctl_state(ctx: click.Context, device: str) -> None:
     """A snapshot of DEVICE's state."""
-    _call(ctx, "state", device)
+    _call(ctx, rq.State(device))
 
 
-@ctl.command("power-cycle")
+@ctl.command(command_name("power_cycle"))
 @click.argument("device")
 @click.option("--wipe", is_flag=True, help="Erase non-volatile memory first.")
 @click.pass_context
 def ctl_power_cycle(ctx: click.Context, device: str, wipe: bool) -> None:
     """Switch DEVICE off and on."""
-    _call(ctx, "power_cycle", device, wipe=wipe)
+    _call(ctx, rq.PowerCycle(device, wipe))
 
 
-@ctl.command("advance")
+@ctl.command(command_name("advance"))
 @click.argument("seconds", type=float)
 @click.option("--device", metavar="NAME", help="With --fleet: only the process serving NAME (default: every one).")
 @click.pass_context
 def ctl_advance(ctx: click.Context, seconds: float, device: str | None) -> None:
     """Advance virtual time by SECONDS (needs 'devsim run --virtual'); prints the new time (with
     --fleet: of each process, or of the one serving --device)."""
-    _call(ctx, "advance", seconds, **_fleet_device(ctx, device))
+    _call(ctx, rq.Advance(seconds, _fleet_device(ctx, device)))
 
 
-@ctl.command("now")
+@ctl.command(command_name("now"))
 @click.option("--device", metavar="NAME", help="With --fleet: only the process serving NAME (default: every one).")
 @click.pass_context
 def ctl_now(ctx: click.Context, device: str | None) -> None:
     """The simulator's current time in seconds (with --fleet: of each process)."""
-    _call(ctx, "now", **_fleet_device(ctx, device))
+    _call(ctx, rq.Now(_fleet_device(ctx, device)))
 
 
-def _fleet_device(ctx: click.Context, device: str | None) -> dict[str, str]:
-    if device is None:
-        return {}
-    if ctx.obj[1] is None:
+def _fleet_device(ctx: click.Context, device: str | None) -> str | None:
+    if device is not None and ctx.obj[1] is None:
         raise click.UsageError("--device is for --fleet (one process has one clock)")
-    return {"device": device}
+    return device
 
 
-@ctl.command("line")
+@ctl.command(command_name("line"))
 @click.argument("device")
 @click.option("--port", default="main", show_default=True, help="Which serial port of DEVICE.")
 @click.pass_context
 def ctl_line(ctx: click.Context, device: str, port: str) -> None:
     """Status of the line serving a port of DEVICE (settings, mismatch)."""
-    _call(ctx, "line", device, port)
+    _call(ctx, rq.Line(device, port))
 
 
-@ctl.command("names")
+@ctl.command(command_name("names"))
 @click.argument("device")
 @click.pass_context
 def ctl_names(ctx: click.Context, device: str) -> None:
     """DEVICE's control names with type, unit, access (r, rw, w), description and manual section."""
-    _call(ctx, "names", device)
+    _call(ctx, rq.Names(device))
 
 
-@ctl.command("fault")
+@ctl.command(command_name("fault"))
 @click.argument("device")
 @click.argument("kind")
 @click.argument("switch", type=click.Choice(["on", "off"]))
 @click.pass_context
 def ctl_fault(ctx: click.Context, device: str, kind: str, switch: str) -> None:
     """Switch a declared fault KIND of DEVICE on or off (e.g. blocked_axis on)."""
-    _call(ctx, "fault", device, kind, switch == "on")
+    _call(ctx, rq.SwitchFault(device, kind, switch == "on"))
 
 
-@ctl.command("line-fault")
+@ctl.command(command_name("line_fault"))
 @click.argument("device")
 @click.argument("kind")
 @click.argument("switch", type=click.Choice(["on", "off"]))
@@ -182,10 +191,21 @@ def ctl_line_fault(ctx: click.Context, device: str, kind: str, switch: str, port
     """Start or end a line fault KIND on a port of DEVICE: corrupt, drop, split, delay, jitter,
     noise, baud_mismatch, unplug, hang, silent."""
     given = {name: value for name, value in params.items() if value is not None}
-    _call(ctx, "line_fault", device, kind, switch == "on", port=port, **given)
+    _call(ctx, rq.LineFault(device, kind, switch == "on", port, given))
 
 
-@ctl.command("watch")
+@ctl.command(command_name("telegrams"))
+@click.argument("device")
+@click.option("--port", default="main", show_default=True, help="Which serial port of DEVICE.")
+@click.option("--count", type=click.IntRange(0, 200), default=20, show_default=True, help="How many.")
+@click.pass_context
+def ctl_telegrams(ctx: click.Context, device: str, port: str, count: int) -> None:
+    """The last telegrams on the line of a port of DEVICE (time, direction, bytes and, where the
+    port declares its framing, the decoded messages); kept from the first request on."""
+    _call(ctx, rq.Telegrams(device, port, count))
+
+
+@ctl.command(command_name("watch"))
 @click.argument("device")
 @click.argument("names", nargs=-1)
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per line instead of text.")
@@ -194,8 +214,9 @@ def ctl_watch(device: str, names: tuple[str, ...], as_json: bool, period: float 
     """Print changes of DEVICE's NAMEs (default: its state and axes) and its events (move start
     and end, faults, errors, host connects) as they happen, one line each, until Ctrl-C or the
     simulator stops: '12.300 sers axis.position 1234.0'."""
-    from devsim.core.control import ControlAddressError, ControlClient, ControlError
-    from devsim.core.watch_stream import describe
+    from devsim.runtime.client import ControlClient, ControlError
+    from devsim.runtime.control import ControlAddressError
+    from devsim.runtime.watch_stream import describe
 
     addr, fleet = click.get_current_context().obj
     if fleet is not None:

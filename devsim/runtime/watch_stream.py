@@ -1,6 +1,6 @@
 """One device watched live: value changes and events as a stream of JSON-able dicts.
 
-The control op ``watch`` (:mod:`devsim.core.control`), ``devsim ctl watch`` and ``devsim
+The control op ``watch`` (:mod:`devsim.runtime.control`), ``devsim ctl watch`` and ``devsim
 monitor`` are built on :class:`WatchStream`.  It runs in the runtime's loop thread and hands each
 item to ``send`` as it happens:
 
@@ -28,8 +28,8 @@ from typing import Any
 
 from devsim.core.device import Device
 from devsim.core.points import UnknownName
-from devsim.core.runtime import port_key
 from devsim.core.watch import PointWatch
+from devsim.runtime.process import port_key
 
 __all__ = ["DEFAULT_PERIOD", "WatchStream", "axis_names", "default_names", "describe"]
 

@@ -11,7 +11,7 @@ Levels (``2 + verbose - quiet``, clamped):
   line faults started or ended.
 
 A line: ``devsim: 12.300 sers connect host connected`` (device time, then
-:func:`devsim.core.watch_stream.describe`).  Built on :class:`~devsim.core.watch_stream.WatchStream`
+:func:`devsim.runtime.watch_stream.describe`).  Built on :class:`~devsim.runtime.watch_stream.WatchStream`
 without point sampling: a quiet simulator stays idle.  stdout (ports, ``control:``, ``NAME: ready``)
 is not touched: scripts parse it.
 """
@@ -51,7 +51,7 @@ def attach_log(runtime: Any, level: int, write: Callable[[str], None] | None = N
     returns the streams (``stop()`` ends them).  ``write`` defaults to a flushed stderr line."""
     if level <= 0:
         return []
-    from devsim.core.watch_stream import WatchStream, describe
+    from devsim.runtime.watch_stream import WatchStream, describe
 
     def emit(text: str) -> None:
         print(text, file=sys.stderr, flush=True)

@@ -1,11 +1,12 @@
 """``devsim replay``: play the device side of a recorded session to a host on a new pty (or a
 raw TCP port, for a session recorded on a network port such as Ether-S-Bus on TCP).
 
-The host's bytes are cut into requests by the kind's framing (:mod:`devsim.replay.kinds`;
-unframed kinds: a request is complete when it equals a recorded one).  Each request is matched
-against the recording's requests (:mod:`devsim.replay.session`), starting at the exchange after
+The host's bytes are cut into requests by the framing the kind declares on the port
+(:attr:`devsim.core.kit.PortDef.framing`; unframed ports: a request is complete when it equals a
+recorded one).  Each request is matched
+against the recording's requests (:mod:`devsim.observe.replay.session`), starting at the exchange after
 the last one matched and wrapping around, first byte-exact, then with each of the kind's
-tolerances in turn (GMS96: checksum, FCB; Ether-S-Bus: sequence number).  A match is answered with the recorded answer, each
+port's tolerances in turn (GMS96: checksum, FCB; Ether-S-Bus: sequence number).  A match is answered with the recorded answer, each
 chunk after its recorded delay divided by ``speed`` (``as_fast``: no delay); answers leave in
 order through one queue.
 
@@ -14,7 +15,7 @@ A request the recording does not know:
 * ``fallback="error"`` – one line on stderr (``replay: request not in the recording: ...``) and
   silence on the line, as from a dead device; later known requests are answered again.
 * ``fallback="live"`` – the live model of the recorded kind takes over for good: a devsim device
-  (:mod:`devsim.replay.live`).  Before the pty is offered, it booted and was sent every request
+  (:mod:`devsim.observe.replay.live`).  Before the pty is offered, it booted and was sent every request
   of the recording at its recorded time (in virtual time, so at once), its answers discarded, so
   it holds what the host wrote (parameters, modes, positions); then its clock runs in real time
   (times ``speed``) and the unknown request and all after it go to it.
@@ -31,9 +32,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from devsim.core.device import SerialSettings
-from devsim.replay.kinds import protocol_of
-from devsim.replay.live import HandoverClock, start_live
-from devsim.replay.session import Exchange, Reply, Session
+from devsim.core.registry import port_framing
+from devsim.observe.replay.live import HandoverClock, start_live
+from devsim.observe.replay.session import Exchange, Reply, Session
 
 __all__ = ["ReplayPlan", "Replayer", "replay_session"]
 
@@ -94,8 +95,8 @@ class Replayer:
     def __init__(self, plan: ReplayPlan, outbox: _Outbox, live: Any = None) -> None:
         self.session = plan.session
         self.serial_settings: SerialSettings = plan.session.settings  # the pty is preset with them
-        self.protocol = protocol_of(plan.session.kind or "", plan.session.port)
-        self._adapt = {t.name: t.adapt for t in self.protocol.tolerances}
+        self.framing = port_framing(plan.session.kind, plan.session.port)
+        self._adapt = {t.name: t.adapt for t in self.framing.tolerances}
         self.speed = plan.speed
         self.as_fast = plan.as_fast
         self.fallback = plan.fallback
@@ -116,7 +117,7 @@ class Replayer:
             self.live.feed(data)
             return
         self._buffer += data
-        split = self.protocol.split
+        split = self.framing.split
         if split is not None:
             messages, self._buffer = split(self._buffer)
             for index, message in enumerate(messages):
@@ -148,7 +149,7 @@ class Replayer:
         for exchange in order:
             if exchange.request == message:
                 return exchange, "exact"
-        for tolerance in self.protocol.tolerances:
+        for tolerance in self.framing.tolerances:
             key = tolerance.key(message)
             for exchange in order:
                 if tolerance.key(exchange.request) == key:
@@ -200,7 +201,7 @@ class Replayer:
 
 async def replay_session(plan: ReplayPlan) -> int:
     """Serve the replay on a new pty until SIGINT/SIGTERM; returns the exit status."""
-    from devsim.core.runtime import Runtime
+    from devsim.runtime import Runtime
     from devsim.transports.pty import PtyTransport
     from devsim.transports.tcp import TcpTransport
 

@@ -2,10 +2,10 @@
 
 * ``devsim record --port PATH_OR_URL --out session.devsim [--kind KIND]`` – a new pty (or
   ``--tcp [HOST:]PORT``) for the host, forwarded to the device's port, both directions written
-  to the session file (:mod:`devsim.replay.recorder`, format in :mod:`devsim.replay.session`).
+  to the session file (:mod:`devsim.observe.replay.recorder`, format in :mod:`devsim.observe.replay.session`).
 * ``devsim replay session.devsim --pty [--link PATH] [--speed F | --as-fast] [--fallback
   error|live]`` – the device side played back on a new pty, or on ``--tcp [HOST:]PORT``
-  (:mod:`devsim.replay.player`).
+  (:mod:`devsim.observe.replay.player`).
 
 Both print their ports on stdout, one per line (``record: pty /dev/pts/7``, ``replay: pty
 /dev/pts/8``), for scripts to parse; problems are one line on stderr.
@@ -83,9 +83,9 @@ def record(device_url: str, out: str, kind: str | None, port_name: str | None, l
 
     Prints the host's port (record: pty PATH, or record: tcp URL), then records until Ctrl-C.
     """
+    from devsim.cli.options import host_port
     from devsim.core.record import replace
-    from devsim.replay.recorder import RecordPlan, record_session
-    from devsim.run_options import host_port
+    from devsim.observe.replay.recorder import RecordPlan, record_session
 
     if link and tcp:
         raise click.UsageError("choose one host port: --link (a pty) or --tcp")
@@ -125,9 +125,9 @@ def replay(session_file: str, use_pty: bool, link: str | None, tcp: str | None, 
     Prints replay: pty PATH once it serves; a request the recording does not know is reported on
     stderr (--fallback error: no answer) or answered by the live model from then on (--fallback live).
     """
-    from devsim.replay.player import ReplayPlan, replay_session
-    from devsim.replay.session import SessionError, load_session
-    from devsim.run_options import host_port
+    from devsim.cli.options import host_port
+    from devsim.observe.replay.player import ReplayPlan, replay_session
+    from devsim.observe.replay.session import SessionError, load_session
 
     if tcp is not None and (use_pty or link):
         raise click.UsageError("choose one port: --pty/--link or --tcp")

@@ -13,7 +13,7 @@
   ``pty``, ``udp:[HOST:]PORT``, ``tcp:[HOST:]PORT`` or ``rfc2217:[HOST:]PORT`` instead, and
   ``--pty``/``--link``/``--tcp``/``--rfc2217`` choose for the other ports.
 
-* ``devsim ctl --control ADDR devices|read|set|state|power-cycle|advance|now|line`` – talk to a
+* ``devsim ctl --control ADDR devices|read|set|state|power-cycle|advance|now|line|...`` – talk to a
   running simulator's control API and print the JSON result; ``devsim ctl --fleet mqtt://BROKER
   ...`` the same with every device of a fleet (``devsim run/up --fleet``, :mod:`devsim.fleet`).
 
@@ -34,11 +34,7 @@ from typing import TYPE_CHECKING, Any, NoReturn
 import click
 
 from devsim import __version__
-from devsim.core.record import field, record
-from devsim.core.registry import UnknownKind, device_class, kinds
-from devsim.ctl import ctl
-from devsim.live_log import attach_log, level_of, log_options
-from devsim.run_options import (
+from devsim.cli.options import (
     check_canopen,
     check_fleet,
     check_modbus,
@@ -47,10 +43,13 @@ from devsim.run_options import (
     host_port,
     modbus_for,
 )
+from devsim.core.record import field, record
+from devsim.core.registry import UnknownKind, device_class, kinds
+from devsim.observe.live_log import attach_log, level_of, log_options
 
 if TYPE_CHECKING:  # imported where used: `devsim run` starts faster without them
-    from devsim.core.control import ControlAddress
     from devsim.core.device import Device
+    from devsim.runtime.control import ControlAddress
 
 __all__ = ["cli", "main"]
 
@@ -137,7 +136,7 @@ def doc(kind: str, modbus_map: bool, eds_file: bool) -> None:
     """Print KIND's reference in Markdown: ports, control names, faults, commands, parameters,
     error codes and configuration keys, from the tables that drive the simulator (with --modbus:
     the register map its points give)."""
-    from devsim.docgen import modbus_markdown, reference_markdown
+    from devsim.cli.docgen import modbus_markdown, reference_markdown
 
     try:
         cls = device_class(kind)
@@ -186,7 +185,7 @@ class _Plan:
     fleet: str | None = None  # --fleet mqtt://BROKER[:PORT][/NAME]
     motion_log: str | None = None  # --motion-log FILE.csv
     motion_resolution: float = 0.01  # --motion-resolution SECONDS
-    log_level: int = 2  # -v/-q (devsim.live_log)
+    log_level: int = 2  # -v/-q (devsim.observe.live_log)
 
 
 #: What ``--port NAME=SPEC`` accepts after ``NAME=``.
@@ -434,7 +433,7 @@ def run(
     if fleet is not None:
         check_fleet(fleet)
     if motion_log is not None:
-        from devsim.core.motion_log import motion_log_problem
+        from devsim.observe.motion_log import motion_log_problem
 
         if (problem := motion_log_problem(motion_resolution)) is not None:
             raise click.UsageError(problem)
@@ -445,7 +444,7 @@ def run(
 
     control_addr: ControlAddress | None = None
     if control is not None:
-        from devsim.core.control import ControlAddressError, parse_address
+        from devsim.runtime.control import ControlAddressError, parse_address
 
         try:
             control_addr = parse_address(control)
@@ -517,10 +516,10 @@ def _say(line: str) -> None:
 
 
 async def _serve(plan: _Plan) -> None:
-    from devsim.core.runtime import Runtime, port_key
+    from devsim.runtime import Runtime, port_key
 
     if plan.control is not None:
-        from devsim.core.control import ControlServer
+        from devsim.runtime.control import ControlServer
 
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
@@ -537,7 +536,7 @@ async def _serve(plan: _Plan) -> None:
             devices = [runtime.add_device(plan.kind, name, config) for name, config in plan.devices]
             if plan.motion_log is not None:
                 stage = f"write the motion log {plan.motion_log}"
-                from devsim.core.motion_log import start_motion_log
+                from devsim.observe.motion_log import start_motion_log
 
                 start_motion_log(runtime, devices, plan.motion_log, plan.motion_resolution)
             served: list[tuple[str, Any, _Port]] = []  # port name, transport, spec
@@ -676,16 +675,15 @@ def _port_text(transport: Any, scheme: str) -> str:
     return url or address
 
 
-cli.add_command(ctl)
-
 #: Commands whose module is imported only when one of them runs (``devsim run`` starts faster):
 #: command name → the module that defines it as a click command of the same name.
 LAZY_COMMANDS: dict[str, str] = {
     "check": "devsim.scenario.cli",
-    "monitor": "devsim.monitor.cli",
-    "plot": "devsim.plot",
-    "record": "devsim.replay.cli",
-    "replay": "devsim.replay.cli",
+    "ctl": "devsim.cli.ctl",
+    "monitor": "devsim.cli.monitor",
+    "plot": "devsim.observe.plot",
+    "record": "devsim.cli.replay",
+    "replay": "devsim.cli.replay",
     "scenario": "devsim.scenario.cli",
     "up": "devsim.scenario.cli",
 }

@@ -1,4 +1,4 @@
-"""``devsim monitor [--control ADDR]``: the live monitor (:mod:`devsim.monitor.app`) on the
+"""``devsim monitor [--control ADDR]``: the live monitor (:mod:`devsim.observe.monitor`) on the
 control API of a running ``devsim run``, ``devsim up`` or real-time scenario."""
 
 from __future__ import annotations
@@ -19,12 +19,12 @@ def monitor(addr: str, period: float) -> None:
     """A live view of every device: state, display, faults, axes with sparklines, inputs (press
     to flip) and outputs, the last telegrams per port; f: fault menu, a/A: advance virtual time,
     q: quit.  Needs the extra [monitor] (textual)."""
-    from devsim.core.control import ControlAddressError
+    from devsim.runtime.control import ControlAddressError
 
     if not period > 0:
         raise click.UsageError("--period: must be positive")
     try:
-        from devsim.monitor.app import MonitorApp
+        from devsim.observe.monitor import MonitorApp
     except ImportError as exc:
         raise click.ClickException(f"devsim monitor needs textual: pip install 'devsim-motion[monitor]' ({exc})") from None
     try:

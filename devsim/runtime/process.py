@@ -5,7 +5,7 @@ the CLI use, so that blocking host code such as pyserial can run in the caller's
 the caller's own loop (``async with runtime``).  All device code runs in the runtime's loop
 thread; the control methods (:meth:`read`, :meth:`set`, :meth:`advance`, ...) are thread-safe
 and hop into that thread.  This is the in-process form of the control API; the out-of-process
-form (``--control``) is a JSON front end to the same methods (:mod:`devsim.core.control`).
+form (``--control``) is a JSON front end to the same methods (:mod:`devsim.runtime.control`).
 """
 
 from __future__ import annotations

@@ -17,8 +17,8 @@ passed the recorder, in the order it passed::
 
 ``t`` is seconds since the recorder started (monotonic clock), ``dir`` who sent the bytes
 (``host``: host → device, ``device``: device → host), ``hex`` the bytes, ``decoded`` the
-messages this chunk completed as the kind's codec reads them (:mod:`devsim.replay.kinds`;
-absent for kinds without one).  A ``settings`` line says the host changed its line settings
+messages this chunk completed as the port's declared framing reads them
+(:attr:`devsim.core.kit.PortDef.framing`; absent for ports without one).  A ``settings`` line says the host changed its line settings
 (the recorder applied them to the device's port).  Lines of a newer version's unknown kinds
 are skipped; readers rely on ``dir`` and ``hex`` only.
 
@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from devsim.core.device import SerialSettings
-from devsim.replay.kinds import protocol_of
+from devsim.core.registry import port_framing
 
 __all__ = ["Exchange", "FORMAT", "Reply", "Session", "SessionError", "SessionWriter", "load_session"]
 
@@ -60,8 +60,8 @@ class SessionWriter:
     def __init__(self, path: str | Path, *, kind: str | None, port: str, device: str, settings: SerialSettings) -> None:
         self.path = Path(path)
         self._file: IO[str] | None = self.path.open("w", encoding="utf-8")
-        protocol = protocol_of(kind or "", port)
-        self._decoders = {"host": protocol.decoder("host"), "device": protocol.decoder("device")}
+        framing = port_framing(kind, port)
+        self._decoders = {"host": framing.decoder("host"), "device": framing.decoder("device")}
         self.chunks = 0
         self._line({"format": FORMAT, "version": VERSION, "kind": kind, "port": port, "device": device,
                     "settings": settings_dict(settings), "started": datetime.now(UTC).isoformat(timespec="seconds")})
@@ -136,7 +136,7 @@ class _Cutter:
     """Cuts the recorded stream into exchanges (see the module docstring)."""
 
     def __init__(self, kind: str | None, port: str) -> None:
-        self.split = protocol_of(kind or "", port).split
+        self.split = port_framing(kind, port).split
         self.exchanges: list[Exchange] = []
         self.pending = b""
         self.pending_t = 0.0

@@ -1,7 +1,7 @@
 """``devsim plot LOG|TRACE... -o move.png|svg|html``: a picture of a motion and its line traffic.
 
 The files are motion logs (``--motion-log``) and wire traces (``--trace``, text or pcap), in any
-number and order (:func:`devsim.plot_data.load` tells them apart).  The picture has, against one
+number and order (:func:`devsim.observe.plot_data.load` tells them apart).  The picture has, against one
 time axis (seconds of the device clock, which logs and traces share):
 
 * **position** of every axis (its set-point dashed, where the kind has one),
@@ -26,7 +26,7 @@ from typing import Any
 
 import click
 
-from devsim.plot_data import MotionData, PlotInputError, Traffic, load
+from devsim.observe.plot_data import MotionData, PlotInputError, Traffic, load
 
 __all__ = ["FORMATS", "PANEL_HEIGHT", "WIDTH", "plot", "render", "require_matplotlib"]
 

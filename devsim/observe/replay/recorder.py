@@ -5,7 +5,7 @@ optionally with a stable link) or a raw TCP port (:class:`~devsim.transports.tcp
 – and the recorder forwards everything to the device's port, opened with pyserial's
 ``serial_for_url`` (a device path such as a devsim pty or ``/dev/ttyUSB0``, ``socket://HOST:PORT``,
 ``rfc2217://HOST:PORT``), and the device's bytes back.  Each chunk goes to the session file
-(:mod:`devsim.replay.session`) with its time and, where the kind's codec knows the protocol,
+(:mod:`devsim.observe.replay.session`) with its time and, where the kind's codec knows the protocol,
 decoded.  When the host changes its line settings on the pty (baud rate, stop bits), the
 recorder applies them to the device's port and writes a ``settings`` line.
 
@@ -28,7 +28,7 @@ from typing import Any
 import serial
 
 from devsim.core.device import SerialSettings
-from devsim.replay.session import SessionWriter
+from devsim.observe.replay.session import SessionWriter
 
 __all__ = ["RecordPlan", "record_session"]
 

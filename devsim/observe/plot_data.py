@@ -1,6 +1,6 @@
 """Reading what ``devsim plot`` draws: motion logs and wire traces, pure (no matplotlib).
 
-* a **motion log** (:mod:`devsim.core.motion_log`, ``--motion-log FILE.csv``) becomes one
+* a **motion log** (:mod:`devsim.observe.motion_log`, ``--motion-log FILE.csv``) becomes one
   :class:`AxisSeries` per device and axis, and the device's events;
 * a **text trace** (:mod:`devsim.transports.trace`, ``--trace FILE``) and a **pcap trace**
   (:mod:`devsim.transports.pcap`, ``--trace FILE.pcap``) become a :class:`Traffic`: the chunks
@@ -21,8 +21,8 @@ import re
 import struct
 from pathlib import Path
 
-from devsim.core.motion_log import HEADER
 from devsim.core.record import field, record
+from devsim.observe.motion_log import HEADER
 
 __all__ = ["AxisSeries", "MotionData", "Traffic", "load", "read_motion_log", "read_pcap_trace", "read_text_trace"]
 
@@ -77,7 +77,7 @@ def _number(text: str) -> float:
 
 
 def read_motion_log(path: str | Path) -> MotionData:
-    """Parse a motion log written by :class:`devsim.core.motion_log.MotionLog`."""
+    """Parse a motion log written by :class:`devsim.observe.motion_log.MotionLog`."""
     data = MotionData(str(path))
     series: dict[tuple[str, str], AxisSeries] = {}
     seen: set[tuple[str, float, str]] = set()

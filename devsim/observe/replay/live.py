@@ -1,7 +1,7 @@
 """The live model behind ``devsim replay --fallback live``: a devsim device of the recorded kind,
 seeded with the recording, that answers the host once the recording runs out.
 
-The device runs in a :class:`~devsim.core.runtime.Runtime` on the replay's event loop, behind a
+The device runs in a :class:`~devsim.runtime.Runtime` on the replay's event loop, behind a
 :class:`~devsim.transports.line.Line` served on a :class:`Bridge` (a transport with no port:
 the replay feeds it the host's bytes and takes the device's).  Its clock is a
 :class:`HandoverClock`: virtual while the model is seeded, so that it boots and receives every
@@ -18,7 +18,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from devsim.core.clock import Timer, VirtualClock
-from devsim.replay.session import Exchange
+from devsim.observe.replay.session import Exchange
 from devsim.transports.base import Transport
 
 __all__ = ["Bridge", "HandoverClock", "start_live"]

@@ -1,0 +1,17 @@
+"""The ``devsim`` command line (the top layer: it parses options and calls the rest).
+
+* :mod:`devsim.cli.main` – the ``devsim`` group: ``list``, ``run``, ``doc``, and the lazily
+  imported commands of the other modules;
+* :mod:`devsim.cli.ctl` – ``devsim ctl``, one command per control op;
+* :mod:`devsim.cli.options` – checks of the facade and fleet options ``run`` and ``up`` share;
+* :mod:`devsim.cli.docgen` – the Markdown of ``devsim doc``;
+* :mod:`devsim.cli.replay` – ``devsim record`` and ``devsim replay``;
+* :mod:`devsim.cli.monitor` – ``devsim monitor``.
+
+``devsim scenario``, ``check`` and ``up`` live in :mod:`devsim.scenario.cli`, ``devsim plot`` in
+:mod:`devsim.observe.plot`.
+"""
+
+from devsim.cli.main import cli, main
+
+__all__ = ["cli", "main"]

@@ -1,0 +1,274 @@
+"""The control API out of process: newline-delimited JSON over a Unix socket or loopback TCP.
+
+In process the control API is :class:`devsim.runtime.Runtime` itself (``read``, ``set``,
+``state``, ``power_cycle``, ``advance``, ``now``).  ``devsim run --control ADDR`` puts a
+:class:`ControlServer` in front of the same methods; :class:`devsim.runtime.client.ControlClient`
+is a small blocking client with the same method names, and ``devsim ctl`` is a command line on
+top of the client.
+
+Addresses: ``unix:/path/to.sock``, or ``[HOST:]PORT`` for TCP (``tcp:`` prefix optional, IPv6
+hosts in brackets).  TCP servers refuse a non-loopback host unless ``allow_remote`` is given: a
+control port can move machinery.
+
+Protocol: one JSON object per line each way; one connection serves any number of requests, in
+order.  The ops, their handlers and their typed requests are one table,
+:data:`devsim.runtime.ops.CONTROL`; answers are :class:`~devsim.runtime.ops.OkResponse` and
+:class:`~devsim.runtime.ops.ErrorResponse`::
+
+    → {"id": 1, "op": "read", "device": "sers", "name": "axis.position"}
+    ← {"id": 1, "ok": true, "result": 0.0}
+    → {"id": 2, "op": "read", "device": "sers", "name": "nope"}
+    ← {"id": 2, "ok": false, "error": "sers has no 'nope'", "type": "UnknownName"}
+
+Ops: ``read`` (device, name), ``set`` (device, name, value), ``state`` (device),
+``power_cycle`` (device, wipe), ``advance`` (seconds; virtual time only), ``now``, ``devices``,
+``line`` (device, port: status of the line serving that port), ``names`` (device: its declared
+points), ``fault`` (device, kind, active: a declared device fault on or off), ``line_fault``
+(device, port, kind, active, params: a fault on the line serving a port, e.g. ``noise`` with
+``{"rate": 100}``), ``telegrams`` (device, port, count: the last telegrams on that port's line,
+each ``{"t", "dir", "hex", "text"}`` and ``decoded`` where the port declares its framing; kept
+from the first such request on), ``watch`` (device, names, period: a subscription, see below).
+
+``watch`` answers once (``result``: the watched names and the device time) and then keeps
+sending one line per change or event until the connection closes or the simulator stops:
+``{"watch": ID, "t": 12.3, "device": "sers", "type": "change", "name": "axis.position",
+"value": 1234.0}`` (types in :mod:`devsim.runtime.watch_stream`).  The connection still answers
+requests meanwhile; :meth:`devsim.runtime.client.ControlClient.watch` opens a connection of its own for the stream.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import ipaddress
+import json
+import os
+import socket
+from pathlib import Path
+from typing import Any
+
+from devsim.core.record import record
+from devsim.runtime import ops
+from devsim.runtime.ops import ErrorResponse, OkResponse, WatchStart
+from devsim.runtime.process import Runtime
+from devsim.runtime.watch_stream import WatchStream
+
+__all__ = [
+    "ControlAddress",
+    "ControlAddressError",
+    "ControlServer",
+    "parse_address",
+]
+
+MAX_LINE = 1 << 20  # bytes in one request line
+MAX_BACKLOG = 4 << 20  # bytes of watch output a slow reader may leave unread before its watch ends
+
+
+class ControlAddressError(ValueError):
+    """A control address that cannot be parsed or must not be served."""
+
+
+# -- addresses -----------------------------------------------------------------------------
+@record
+class ControlAddress:
+    """A parsed control address: ``path`` for a Unix socket, else ``host`` and ``port``."""
+
+    path: str | None = None
+    host: str = "127.0.0.1"
+    port: int = 0
+
+    @property
+    def is_unix(self) -> bool:
+        return self.path is not None
+
+    def __str__(self) -> str:
+        if self.path is not None:
+            return f"unix:{self.path}"
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        return f"{host}:{self.port}"
+
+    def is_loopback(self) -> bool:
+        """True for Unix sockets and for hosts that resolve only to loopback addresses."""
+        if self.path is not None:
+            return True
+        if self.host == "localhost":
+            return True
+        try:
+            return ipaddress.ip_address(self.host).is_loopback
+        except ValueError:
+            pass
+        try:
+            infos = socket.getaddrinfo(self.host, None)
+        except OSError:
+            return False
+        addrs = {info[4][0] for info in infos}
+        return bool(addrs) and all(ipaddress.ip_address(str(a).split("%")[0]).is_loopback for a in addrs)
+
+
+def parse_address(addr: str) -> ControlAddress:
+    """Parse ``unix:/path``, ``PORT``, ``HOST:PORT``, ``[V6]:PORT`` (optionally ``tcp:``-prefixed)."""
+    text = addr.strip()
+    if text.startswith("unix:"):
+        path = text[5:]
+        if not path:
+            raise ControlAddressError(f"{addr!r}: unix: needs a socket path, e.g. unix:/tmp/devsim.sock")
+        return ControlAddress(path=path)
+    if text.startswith("tcp:"):
+        text = text[4:]
+    host = "127.0.0.1"
+    port_text = text
+    if text.startswith("["):
+        end = text.find("]")
+        if end < 0 or text[end + 1 : end + 2] != ":":
+            raise ControlAddressError(f"{addr!r}: expected [HOST]:PORT")
+        host, port_text = text[1:end], text[end + 2 :]
+    elif ":" in text:
+        host, _, port_text = text.rpartition(":")
+        if not host:
+            host = "127.0.0.1"
+    try:
+        port = int(port_text)
+    except ValueError:
+        raise ControlAddressError(
+            f"{addr!r}: expected unix:/path/to.sock or [HOST:]PORT"
+        ) from None
+    if not 0 <= port <= 65535:
+        raise ControlAddressError(f"{addr!r}: port must be 0..65535")
+    return ControlAddress(host=host, port=port)
+
+
+# -- server --------------------------------------------------------------------------------
+class ControlServer:
+    """Serves the control API of a :class:`Runtime` on a Unix socket or a TCP port.
+
+    Runs in the runtime's event loop: ``await server.start()`` there (or ``server.start_sync()``
+    from another thread when the runtime runs in its own thread).
+    """
+
+    def __init__(self, runtime: Runtime, address: str | ControlAddress, *, allow_remote: bool = False) -> None:
+        self.runtime = runtime
+        self.requested = parse_address(address) if isinstance(address, str) else address
+        if not allow_remote and not self.requested.is_loopback():
+            raise ControlAddressError(
+                f"refusing to serve the control API on non-loopback host {self.requested.host!r} "
+                "(pass --control-allow-remote to allow it)"
+            )
+        self.address: ControlAddress = self.requested
+        self._server: asyncio.AbstractServer | None = None
+        self._clients: set[asyncio.Task[None]] = set()
+
+    async def start(self) -> ControlAddress:
+        """Listen; returns the bound address (with the actual port when port 0 was asked for)."""
+        req = self.requested
+        if req.path is not None:
+            path = Path(req.path)
+            if path.is_socket():
+                if _unix_socket_alive(req.path):
+                    raise ControlAddressError(f"{req}: another process is serving on this socket")
+                with contextlib.suppress(OSError):
+                    path.unlink()  # a stale socket from a killed run
+            self._server = await asyncio.start_unix_server(self._serve, path=req.path, limit=MAX_LINE)
+            with contextlib.suppress(OSError):
+                os.chmod(req.path, 0o600)
+        else:
+            self._server = await asyncio.start_server(self._serve, host=req.host, port=req.port, limit=MAX_LINE)
+            sockname = self._server.sockets[0].getsockname()
+            self.address = ControlAddress(host=req.host, port=int(sockname[1]))
+        return self.address
+
+    def start_sync(self) -> ControlAddress:
+        return self.runtime.run(self.start())
+
+    async def close(self) -> None:
+        if self._server is not None:
+            self._server.close()
+            for task in list(self._clients):
+                task.cancel()
+            await asyncio.gather(*self._clients, return_exceptions=True)
+            with contextlib.suppress(Exception):
+                await asyncio.wait_for(self._server.wait_closed(), 2)
+            self._server = None
+            if self.address.path is not None:
+                with contextlib.suppress(OSError):
+                    os.unlink(self.address.path)
+
+    def close_sync(self) -> None:
+        self.runtime.run(self.close())
+
+    async def _serve(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        task = asyncio.current_task()
+        assert task is not None
+        self._clients.add(task)
+        streams: list[WatchStream] = []
+        try:
+            while True:
+                try:
+                    raw = await reader.readline()
+                except (asyncio.LimitOverrunError, ValueError):
+                    writer.write(ops.encode(ErrorResponse(error="request line too long", type="BadRequest")))
+                    break
+                if not raw:
+                    break
+                if not raw.strip():
+                    continue
+                response = self.handle_line(raw)
+                if isinstance(response, OkResponse) and isinstance(response.result, WatchStart):
+                    response = self._start_watch(response, writer, streams)
+                if response is not _ALREADY_SENT:
+                    writer.write(ops.encode(response))
+                await writer.drain()
+        except (ConnectionError, asyncio.CancelledError):
+            pass
+        finally:
+            for stream in streams:
+                stream.stop()
+            self._clients.discard(task)
+            with contextlib.suppress(Exception):
+                writer.close()
+
+    def _start_watch(self, response: OkResponse, writer: asyncio.StreamWriter,
+                     streams: list[WatchStream]) -> OkResponse | ErrorResponse:
+        """Answer a ``watch`` request, then start its stream (the answer goes out first)."""
+        start: WatchStart = response.result
+        watch_id = response.id
+
+        def send(item: dict[str, Any]) -> None:
+            if writer.is_closing():
+                return
+            transport = writer.transport
+            if transport.get_write_buffer_size() > MAX_BACKLOG:  # nobody reads: end this watch
+                stream.stop()
+                return
+            writer.write((json.dumps({"watch": watch_id, **ops.jsonable(item)}, separators=(",", ":")) + "\n")
+                         .encode("utf-8"))
+
+        try:
+            stream = WatchStream(self.runtime, self.runtime.device(start.device), send, names=start.names,
+                                 period=start.period)
+        except Exception as exc:
+            return ErrorResponse(id=watch_id, error=ops.clip(ops.error_text(exc)), type=type(exc).__name__)
+        streams.append(stream)
+        writer.write(ops.encode(OkResponse(id=watch_id, result={
+            "device": start.device, "names": stream.names, "period": stream.period, "t": self.runtime.clock.now()})))
+        stream.start()
+        return _ALREADY_SENT
+
+    def handle_line(self, raw: bytes | str) -> OkResponse | ErrorResponse:
+        """Answer one request line (runs in the loop thread)."""
+        return ops.answer(self.runtime, raw)[0]
+
+
+#: ``_start_watch`` wrote its answer itself.
+_ALREADY_SENT = ErrorResponse(error="", type="")
+
+
+def _unix_socket_alive(path: str) -> bool:
+    probe = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    try:
+        probe.settimeout(0.5)
+        probe.connect(path)
+        return True
+    except OSError:
+        return False
+    finally:
+        probe.close()
