@@ -25,6 +25,7 @@ from devsim.devices.gms96.counter import CounterInput
 from devsim.devices.gms96.executor import Cmd, Executor
 from devsim.devices.gms96.image import ProcessImage
 from devsim.devices.gms96.motion import ActualSwitch, Indexer
+from devsim.devices.gms96.params import NParameters
 from devsim.devices.gms96.plc import Plc
 from devsim.devices.gms96.points import INPUT_BYTES, SIGNALS
 from devsim.devices.gms96.settings import Settings
@@ -60,6 +61,7 @@ class Gms96Card(Settings, Model):
         self.axis = Axis(clock, counts_per_rev=geo.index_period, index_offset=geo.index_offset, name=self.name)
         self.image = ProcessImage()
         self.indexer = Indexer(self, self.axis)
+        self.params = NParameters(factory=self.cfg.params, stepper=self.stepper, out_of_range=self.cfg.out_of_range)
         self.executor = Executor(self)
         self.plc_image: str | None = None
         self.plc_frames: list[int] = []
@@ -158,7 +160,7 @@ class Gms96Card(Settings, Model):
         offs = self.nvram.get("offsets", {}) or {}
         self.zero_table: dict[int, int] = {int(k): int(v) for k, v in (offs.get("table") or {}).items()}
         self.machine_zero = int(offs.get("machine_zero", 0))
-        self.brake_output = self.n(21) == 1
+        self.brake_output = self.params.brake_output == 1
         self.f = self.M
         self.f_frac = 0
         self.g_relative = False
@@ -204,23 +206,15 @@ class Gms96Card(Settings, Model):
 
     def _load_eeprom(self) -> None:
         self.nv_error = bool(getattr(self.nvram, "corrupt", False))
-        self.params: dict[int, int] = {i: p.default for i, p in tables.N_PARAMETERS.items()}
-        for i, v in self.cfg.params.items():
-            if i in tables.N_PARAMETERS:
-                self.params[i] = tables.clamp_n(i, v)
-        self.n8 = [self.params[8], 0]
+        ee = self.nvram.get("eeprom")
+        self.params.power_on(ee)
         self.M = tables.DEFAULTS["M"]
         self.B = tables.DEFAULTS["B"]
         self.S = tables.DEFAULTS["S"]
         self.override_on = bool(tables.DEFAULTS["override_active"])
-        ee = self.nvram.get("eeprom")
         if ee:
             self.M, self.B, self.S = int(ee["M"]), int(ee["B"]), int(ee["S"])
             self.override_on = bool(ee.get("o", 1))
-            for k, v in (ee.get("N") or {}).items():
-                if int(k) in tables.N_PARAMETERS:
-                    self.params[int(k)] = int(v)
-            self.n8 = list(ee.get("N8", self.n8))
         self.eeprom_M = self.M
 
     def save_eeprom(self) -> None:
@@ -228,7 +222,7 @@ class Gms96Card(Settings, Model):
         self.nvram.put(
             "eeprom",
             {"M": self.M, "B": self.B, "S": self.S, "o": int(self.override_on),
-             "N": {str(k): v for k, v in self.params.items()}, "N8": list(self.n8)},
+             **self.params.eeprom()},
         )
         self.eeprom_M = self.M
         self.record_event("eeprom_saved")
@@ -279,9 +273,6 @@ class Gms96Card(Settings, Model):
     # ======================================================================================
     # small helpers used by the executor, indexer and reference runs
     # ======================================================================================
-    def n(self, index: int) -> int:
-        return self.params.get(index, 0)
-
     def v_factor(self) -> int:
         return tables.v_factor(self.M)
 
@@ -295,7 +286,7 @@ class Gms96Card(Settings, Model):
         return self.image.marker(0, 0)
 
     def enable_blocked(self) -> bool:
-        return self.n(51) == 1 and not self.signals.get("E0.0")
+        return self.params.enable_input == 1 and not self.signals.get("E0.0")
 
     def can_move(self) -> bool:
         if self.counter.active:
@@ -359,7 +350,7 @@ class Gms96Card(Settings, Model):
             self.indexer.spindle_speed = speed
             self.spindle_on = True
             direction = 1 if p2 == 3 else -1
-            if self.n(22) == 1:
+            if self.params.motor_inverted == 1:
                 direction = -direction
             self.indexer.run(direction, "spindle")
         elif p2 == 5:
@@ -387,7 +378,7 @@ class Gms96Card(Settings, Model):
             return False
         if n == 0 and self.brake_output:
             return self.controller and not self.estop and not self.monitoring_cause()
-        if n == 1 and self.n(27) > 0:
+        if n == 1 and self.params.in_position_window > 0:
             return self.in_position()
         return bool(self.image.outputs[n // 8] >> (n % 8) & 1)
 
@@ -406,12 +397,12 @@ class Gms96Card(Settings, Model):
         since = self.axis.stopped_since()
         if since is None:
             return False
-        window = abs(self.n(27))
+        window = abs(self.params.in_position_window)
         if window == 0 or self.stepper:
             return True
         if abs(self.indexer.following_error()) > window:
             return False
-        return self.clock.now() >= since + self.n(28) / 1000.0
+        return self.clock.now() >= since + self.params.in_position_time_ms / 1000.0
 
     def arm_in_position(self) -> None:
         """Re-evaluate the outputs and waits (A0.1, H2) when the set-point stops and N28 later."""
@@ -423,7 +414,7 @@ class Gms96Card(Settings, Model):
         if end is None or end == math.inf:
             return
         now = self.clock.now()
-        for due in (end, end + self.n(28) / 1000.0):
+        for due in (end, end + self.params.in_position_time_ms / 1000.0):
             if due >= now and due > self._inpos_fired:
                 self._inpos_timer = self.clock.call_at(due, lambda due=due: self._in_position_tick(due))
                 return
@@ -469,7 +460,7 @@ class Gms96Card(Settings, Model):
             return v
         if byte == 3:
             v = m[3] & 0xCF
-            v |= 0x10 if self.n(17) == 1 else 0
+            v |= 0x10 if self.params.motion_disabled == 1 else 0
             v |= 0x20 if self.executor.wait_name == "H2" else 0
             return v
         return m[byte] if 0 <= byte < 256 else 0
@@ -556,7 +547,7 @@ class Gms96Card(Settings, Model):
 
     def _on_input(self, name: str, old: Any, new: Any) -> None:
         self.executor.input_edge(name, bool(new))
-        if name == "E0.0" and self.n(51) == 1:
+        if name == "E0.0" and self.params.enable_input == 1:
             self.indexer.replan()
         self.changed()
 
@@ -630,7 +621,7 @@ class Gms96Card(Settings, Model):
         if level is None or not self.controller or not self.axis.moving:
             return None
         now = self.clock.now()
-        cap = self.n(39) / 100.0
+        cap = self.params.peak_current_pct / 100.0
         if self.i2t_limiting:
             cap = min(cap, self._i2t_level())
         if level > cap + 1e-12:
@@ -678,17 +669,17 @@ class Gms96Card(Settings, Model):
 
     # -- I²t (spec §5.7) ------------------------------------------------------------------------
     def _i2t_level(self) -> float:
-        return self.n(15) / 255.0
+        return self.params.i2t_level / 255.0
 
     def _i2t_demand(self) -> float:
-        i_lim = self.n(39) / 100.0
+        i_lim = self.params.peak_current_pct / 100.0
         return min(i_lim, I_BASE + float(self.signals.get("load_pct")) / 100.0)
 
     def current(self) -> float:
         """Motor current as a fraction of Imax (``T1;5`` = round(252·i))."""
         if not self.controller:
             return 0.0
-        i_lim = self.n(39) / 100.0
+        i_lim = self.params.peak_current_pct / 100.0
         if (self.indexer.blocked_at is not None or self.indexer.at_end_stop()) and self.axis.moving:
             i = i_lim  # held by a blockage or pressing against an end stop
         else:

@@ -74,7 +74,7 @@ class CounterCard(Protocol):
     indexer: Any
     machine_to_physical: Any
     monitoring_cause: Any
-    n: Any
+    params: Any
     nv_M: Any
     physical_to_machine: Any
     record_event: Any
@@ -119,7 +119,7 @@ class CounterInput:
         return (self.active or self.sync) and d.controller and not d.estop and not d.monitoring_cause()
 
     def weight(self) -> int:
-        return max(1, min(8, self.dev.n(23)))
+        return max(1, min(8, self.dev.params.counter_weight))
 
     # -- the set-point ------------------------------------------------------------------------
     def _limits(self) -> tuple[float, float]:
@@ -171,7 +171,7 @@ class CounterInput:
         d = self.dev
         if self.active:
             return True  # the counter input already is the set-point source
-        if d.n(50) & 1 or not d.can_move():
+        if d.params.binary_options & 1 or not d.can_move():
             return False
         d.indexer.target = None
         d.indexer.jog_dir = 0

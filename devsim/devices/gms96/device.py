@@ -12,14 +12,14 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import ErrorCode, Parameter, Reference
+from devsim.core.kit import ErrorCode, Reference
 from devsim.core.settings import Section
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.card import Gms96Card
 from devsim.devices.gms96.config import Gms96Config
 from devsim.devices.gms96.drive_actions import DRIVE
 from devsim.devices.gms96.face import IMMEDIATE_COMMANDS, QUEUED_COMMANDS, SHORT_COMMANDS, Gms96Face
-from devsim.devices.gms96.nparams import N_STORED_ONLY
+from devsim.devices.gms96.nparams import N_TABLE
 from devsim.devices.gms96.points import FAULTS, POINTS
 
 __all__ = ["Gms96Device"]
@@ -45,19 +45,6 @@ class Gms96Device(Device):
                 *IMMEDIATE_COMMANDS,
                 *QUEUED_COMMANDS,
             ],
-            parameters=[
-                Parameter(
-                    f"N{p.index}",
-                    p.name_en or p.name,
-                    f"§2.3.1 N{p.index}",
-                    p.unit,
-                    p.minimum,
-                    p.maximum,
-                    p.default,
-                    p.saved,
-                    "stored" if p.index in N_STORED_ONLY else "simulated",
-                )
-                for p in tables.N_PARAMETERS.values()
-            ],
+            parameter_table=N_TABLE,
             errors=[ErrorCode(str(n), text, "§4.4 MB4") for n, text in sorted(tables.MESSAGES.items())],
         )

@@ -48,7 +48,7 @@ class ExecutorCard(Protocol):
     indexer: Any
     input_name: Any
     monitoring_cause: Any
-    n: Any
+    params: Any
     output_bit: Any
     plc: Any
     programs: Any
@@ -284,7 +284,7 @@ class Executor:
         self.last_target = x
         if self.h7_level is not None:
             self.h7_in_move = True  # this move carries the H7 arming (spec §5.5)
-        if d.n(17) == 1:  # N17: the move runs in time only (M3.4)
+        if d.params.motion_disabled == 1:  # N17: the move runs in time only (M3.4)
             shadow = Axis(d.clock, position=ix.axis.position())
             acc, profile = ix.accel()
             end = shadow.move_to(x, max(ix.speed(), 1.0), acc, profile=profile)
@@ -403,7 +403,7 @@ class Executor:
             d.idxoff = False
             d.i2t_latched = False
             return True
-        ref_p2 = (d.n(19) >> 8) & 0xFF if p1 == -1 else p2  # P2 comes from N19 (spec §5.6)
+        ref_p2 = (d.params.reference_type >> 8) & 0xFF if p1 == -1 else p2  # P2 comes from N19 (spec §5.6)
         if not (ref_p2 & 0x40 and not d.idxoff):
             d.idxoff = True
 

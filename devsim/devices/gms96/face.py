@@ -165,7 +165,7 @@ class Gms96Face(Face):
         if p1 == 3 and p2 == 4:
             return self._t(self.model.memory_status(), b"")
         if p1 == 5 and p2 in tables.N_PARAMETERS:
-            value = self.model.n8[1 if p3 == 1 else 0] if p2 == 8 else self.model.n(p2)
+            value = self.model.params.read(p2, p3)
             return self._t(0x4E, codec.to_s24(_wrap24(value)))
         return ACK
 

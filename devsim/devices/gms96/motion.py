@@ -36,7 +36,7 @@ class IndexerCard(Protocol):
     f_frac: Any
     feed_mode: Any
     following_error_fault: Any
-    n: Any
+    params: Any
     nv_M: Any
     o2_value: Any
     override_on: Any
@@ -134,7 +134,7 @@ class Indexer:
         """(axis acceleration, profile): sin² with peak a = 1000·B needs the axis' raised cosine
         with average 2a/π (spec §5.3: T = π/2·Δv/a)."""
         a = 1000.0 * self.dev.B
-        if self.dev.n(24) == 1:
+        if self.dev.params.ramp_type == 1:
             return a * 2.0 / math.pi, _SINE
         return a, None
 
@@ -240,11 +240,11 @@ class Indexer:
         return (d > 0) - (d < 0)
 
     def _needs_backlash(self, direction: int) -> bool:
-        return self.dev.n(41) > 0 and direction != 0 and self.last_dir != 0 and direction != self.last_dir
+        return self.dev.params.backlash > 0 and direction != 0 and self.last_dir != 0 and direction != self.last_dir
 
     def backlash_time(self) -> float:
         """N41 increments at N42 inc/ms: N41/N42 ms."""
-        return self.dev.n(41) / (max(self.dev.n(42), 1) * 1000.0)
+        return self.dev.params.backlash / (max(self.dev.params.backlash_speed, 1) * 1000.0)
 
     def _backlash_dwell(self) -> None:
         """The motor takes up the slack while the set-point (counter, ``T0``, the load) stands:
@@ -302,7 +302,7 @@ class Indexer:
 
     # -- position loop (spec §5.7) --------------------------------------------------------------
     def kv(self) -> float:
-        return max(self.dev.cfg.axis.kv_per_n10 * self.dev.n(10), 1e-6)
+        return max(self.dev.cfg.axis.kv_per_n10 * self.dev.params.position_gain, 1e-6)
 
     def following_error(self) -> float:
         if not self.dev.controller:
@@ -407,7 +407,7 @@ class Indexer:
         d = self.dev
         if not d.controller or d.stepper:
             return
-        limit = float(d.n(20))
+        limit = float(d.params.following_error_limit)
         if self.blocked_at is not None:
             hold = self.blocked_at
             if abs(self.axis.position() - hold) > limit:

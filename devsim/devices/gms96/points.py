@@ -10,12 +10,15 @@ from __future__ import annotations
 
 from typing import Any
 
+from devsim.core import record
 from devsim.core.kit import Fault, FaultTable, SignalDef, signal_points
+from devsim.core.parameters import Param, alias_hook, parameter_points
 from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.core.settings import Invalid
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.config import DilSwitch
 from devsim.devices.gms96.image import parse_bit
+from devsim.devices.gms96.nparams import N_TABLE
 
 __all__ = ["FAULTS", "LEDS", "POINTS", "SIGNALS"]
 
@@ -40,21 +43,25 @@ SIGNALS: tuple[SignalDef, ...] = (
 )
 
 
-def _n_point(p: tables.NParam) -> Point:
-    def put(card: Any, value: Any, index: int = p.index) -> None:
-        card.set_n(index, value)
+def _read_n(card: Any, row: Param) -> int:
+    return int(card.params.read(int(row.key)))
 
-    return Point(
-        f"param.N{p.index}",
-        "int",
-        p.name_en or p.name,
-        f"§2.3.1 N{p.index}",
-        p.unit,
-        get=lambda card, index=p.index: card.n(index),
-        put=put,
-        minimum=tables.INT24_MIN if p.minimum is None else p.minimum,
-        maximum=tables.INT24_MAX if p.maximum is None else p.maximum,
-    )
+
+def _write_n(card: Any, row: Param, value: Any) -> None:
+    card.set_n(int(row.key), value)  # the card's own range rule (clamp or ignore, §3.8.10)
+
+
+def _n_points() -> list[Point]:
+    """``param.N<k>``: a row without a range of its own takes the 24-bit field's (manual §2.3)."""
+    return [
+        record.replace(
+            point,
+            minimum=tables.INT24_MIN if point.minimum is None else point.minimum,
+            maximum=tables.INT24_MAX if point.maximum is None else point.maximum,
+            example=None,
+        )
+        for point in parameter_points(N_TABLE, _read_n, _write_n)
+    ]
 
 
 def _marker_byte(n: int) -> Point:
@@ -73,14 +80,16 @@ def _marker_bit(byte: int, bit: int) -> Point:
                  get=lambda card: bool(card.marker_byte(byte) >> bit & 1), put=put)
 
 
+_param_alias = alias_hook(N_TABLE)
+
+
 def _alias(name: str) -> str | None:
     """``param.n15`` / ``param.15`` → ``param.N15``; ``marker.mb4`` → ``marker.MB4``."""
     section, dot, rest = name.partition(".")
     if not dot:
         return None
     if section == "param":
-        key = rest.upper().lstrip("N")
-        return f"param.N{int(key)}" if key.isascii() and key.isdigit() else None
+        return _param_alias(name)
     if section == "marker":
         upper = rest.upper()
         if upper.startswith("MB") and upper[2:].isdigit():
@@ -263,7 +272,7 @@ POINTS = PointTable.of(
               get=lambda c: c.signals.get("monitoring"), put=_set_monitoring,
               in_state=True, shared=True),
     ],
-    (_n_point(p) for p in tables.N_PARAMETERS.values()),
+    _n_points(),
     [
         _plc_key("loaded", "a PLC program is stored", "bool"),
         _plc_key("cycles", "PLC cycles run"),

@@ -27,7 +27,7 @@ class ReferenceCard(Protocol):
     image: Any
     indexer: Any
     machine_to_physical: Any
-    n: Any
+    params: Any
     record_event: Any
     set_counter_here: Any
     signals: Any
@@ -137,7 +137,7 @@ class ReferenceRun:
     def start(self) -> None:
         p1 = self.p1
         if p1 == -1:
-            n19 = self.dev.n(19)
+            n19 = self.dev.params.reference_type
             self.p1, self.p2 = n19 & 0xFF, (n19 >> 8) & 0xFF
             self.fast_kind = "rapid_nv"
             self.after_success = self._drive_off
@@ -248,7 +248,7 @@ class ReferenceRun:
 
     def _drive_off(self) -> None:
         self.phase = "drive_off"
-        self.dev.indexer.go(self.dev.machine_to_physical(self.dev.n(33)), "rapid_nv", lambda: self._finish(True))
+        self.dev.indexer.go(self.dev.machine_to_physical(self.dev.params.drive_off_position), "rapid_nv", lambda: self._finish(True))
 
     def _distance_limit(self) -> None:
         if self.finished or self.phase == "reposition":

@@ -7,6 +7,7 @@ from typing import Any
 
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.executor import Cmd
+from devsim.devices.gms96.params import NParameters
 
 __all__ = ["Settings"]
 
@@ -15,8 +16,7 @@ class Settings:
     """Part of :class:`~devsim.devices.gms96.card.Gms96Card`: writing N parameters and the
     settings the executor hands back in queue order."""
 
-    params: dict[int, int]
-    n8: list[int]
+    params: NParameters
     cfg: Any
     indexer: Any
     image: Any
@@ -24,20 +24,9 @@ class Settings:
     nvram: Any
 
     def set_n(self, index: int, value: int, p3: int = 0) -> None:
-        if index not in tables.N_PARAMETERS:
+        """``N value;index;P3`` (manual §2.3.1 N) and the ``param.N*`` points."""
+        if not self.params.write(index, value, p3):
             return
-        pdef = tables.N_PARAMETERS[index]
-        lo = pdef.minimum if pdef.minimum is not None else tables.INT24_MIN
-        hi = pdef.maximum if pdef.maximum is not None else tables.INT24_MAX
-        if self.cfg.out_of_range == "ignore" and not lo <= value <= hi:
-            return
-        value = tables.clamp_n(index, value, self.params, stepper=self.stepper)
-        if index == 8:
-            self.n8[1 if p3 == 1 else 0] = value
-            if p3 != 1:
-                self.params[8] = value
-        else:
-            self.params[index] = value
         if index in (10, 20, 27, 28):
             self.indexer.arm_following_error()
         if index in (15, 39):
@@ -79,8 +68,7 @@ class Settings:
         return True
 
     def _defaults(self) -> None:
-        self.params = {i: p.default for i, p in tables.N_PARAMETERS.items()}
-        self.n8 = [self.params[8], 0]
+        self.params.defaults()
         self.M, self.B, self.S = tables.DEFAULTS["M"], tables.DEFAULTS["B"], tables.DEFAULTS["S"]
         self.override_on = bool(tables.DEFAULTS["override_active"])
 
