@@ -20,6 +20,7 @@ from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
 from devsim.core.settings import Values
 from devsim.devices.gms96 import codec, tables
+from devsim.devices.gms96.commands import QueuedCommands
 from devsim.devices.gms96.config import Gms96Config
 from devsim.devices.gms96.counter import CounterInput
 from devsim.devices.gms96.executor import Cmd, Executor
@@ -28,7 +29,9 @@ from devsim.devices.gms96.motion import ActualSwitch, Indexer
 from devsim.devices.gms96.params import NParameters
 from devsim.devices.gms96.plc import Plc
 from devsim.devices.gms96.points import INPUT_BYTES, SIGNALS
+from devsim.devices.gms96.program import ProgramControl
 from devsim.devices.gms96.settings import Settings
+from devsim.devices.gms96.spindle import Spindle
 
 __all__ = ["Gms96Card"]
 
@@ -62,11 +65,14 @@ class Gms96Card(Settings, Model):
         self.image = ProcessImage()
         self.indexer = Indexer(self, self.axis)
         self.params = NParameters(factory=self.cfg.params, stepper=self.stepper, out_of_range=self.cfg.out_of_range)
-        self.executor = Executor(self)
+        self.executor = Executor(self, lambda cmd: self.commands.run(cmd))
+        self.program = ProgramControl(self.executor, self)
+        self.commands = QueuedCommands(self.executor, self.program, self)
         self.plc_image: str | None = None
         self.plc_frames: list[int] = []
         self.plc = Plc(self)
         self.counter = CounterInput(self)
+        self.spindle = Spindle(self.indexer, self.params, lambda: float(self.signals.get("ref_pulse_hz")), self.changed)
         self._define_signals()
         self._switches: list[ActualSwitch] = []
         self._build_switches()
@@ -95,7 +101,7 @@ class Gms96Card(Settings, Model):
         s.subscribe("blocked", lambda *_: self._update_block())
         s.subscribe("monitoring", lambda *_: self._on_monitoring())
         s.subscribe("output_overload", lambda *_: self._on_overload())
-        s.subscribe("ref_pulse_hz", lambda *_: self._spindle_pulse_speed())
+        s.subscribe("ref_pulse_hz", lambda *_: self.spindle.pulse_rate_changed())
 
     def _build_switches(self) -> None:
         """Cam and limit switches act on the ACTUAL position (set-point - v/Kv, spec §5.6,
@@ -167,13 +173,13 @@ class Gms96Card(Settings, Model):
         self.feed_mode = 94
         self.active_zero: int | None = None
         self.tool_active = True
-        self._before_g53: tuple[int | None, bool] = (None, True)
+        self.before_g53: tuple[int | None, bool] = (None, True)
         self.g92 = 0
         self.g96: int | None = None  # G96 cutting speed (executor._x_G)
         self.o2_value: int | None = None
         self.ext_override: int | None = None
         self.spindle_rpm = 0
-        self.spindle_on = False
+        self.spindle.on = False
         self.estop = bool(self.signals.get("emergency_stop"))
         self.idxoff = True
         self.controller = not self.estop and not self.monitoring_cause() and not self.nv_error
@@ -333,44 +339,10 @@ class Gms96Card(Settings, Model):
         self.announce("fault", 1, 0x8611)  # CiA 402's following error (a CANopen facade sends EMCY)
         self.idxoff = True
         self.controller = False
-        self.spindle_on = False
+        self.spindle.on = False
         self.executor.flush()
         self.indexer.power_off(brake=True)
         self.changed()
-
-    def spindle(self, p2: int, p3: int) -> None:
-        """Q8 spindle simulation (spec §5.12): BUSY = 0, motion = 1."""
-        if p3 >= 0x3F0000:
-            self._pulse_distance = p3 & 0xFFFF
-            speed = float(self.signals.get("ref_pulse_hz")) * self._pulse_distance
-        else:
-            self._pulse_distance = None
-            speed = float(min(p3, 0x3EFFFF))
-        if p2 in (3, 4):
-            self.indexer.spindle_speed = speed
-            self.spindle_on = True
-            direction = 1 if p2 == 3 else -1
-            if self.params.motor_inverted == 1:
-                direction = -direction
-            self.indexer.run(direction, "spindle")
-        elif p2 == 5:
-            self.spindle_on = False
-            self.indexer.halt()
-        elif p2 == 8:
-            self.indexer.spindle_speed = speed
-            self.indexer.replan()
-        self.changed()
-
-    def _spindle_pulse_speed(self) -> None:
-        if self.spindle_on and getattr(self, "_pulse_distance", None):
-            self.indexer.spindle_speed = float(self.signals.get("ref_pulse_hz")) * self._pulse_distance
-            self.indexer.replan()
-
-    def input_name(self, operand: int) -> str | None:
-        """p10 operand numbering of inputs: 0..7 = E0.x, 8..15 = E1.x, 16 = E2.0, 17 = E2.1."""
-        if 0 <= operand <= 17:
-            return f"E{operand // 8}.{operand % 8}"
-        return None
 
     # -- outputs ----------------------------------------------------------------------------
     def output_bit(self, n: int) -> bool:
@@ -502,7 +474,7 @@ class Gms96Card(Settings, Model):
         return (
             self.axis.moving
             or self.executor.reference is not None
-            or self.spindle_on
+            or self.spindle.on
             or self.image.marker(1, 5)
         )
 
@@ -546,7 +518,7 @@ class Gms96Card(Settings, Model):
             self._changing = False
 
     def _on_input(self, name: str, old: Any, new: Any) -> None:
-        self.executor.input_edge(name, bool(new))
+        self.program.input_edge(name, bool(new))
         if name == "E0.0" and self.params.enable_input == 1:
             self.indexer.replan()
         self.changed()
@@ -557,7 +529,7 @@ class Gms96Card(Settings, Model):
             self.estop = True
             self.idxoff = True
             self.controller = False
-            self.spindle_on = False
+            self.spindle.on = False
             self.executor.flush()
             self.image.set_marker(0, 2, False)
             self.indexer.power_off(brake=self.brake_output)
@@ -571,7 +543,7 @@ class Gms96Card(Settings, Model):
         if self.monitoring_cause():
             self.idxoff = True
             self.controller = False
-            self.spindle_on = False
+            self.spindle.on = False
             self.executor.flush()
             self.indexer.power_off(brake=self.brake_output)
             self.record_event("monitoring")

@@ -43,6 +43,7 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from devsim.core.clock import Timer
+from devsim.core.kit import Command, Table
 from devsim.devices.gms96.image import parse_bit
 
 
@@ -70,7 +71,7 @@ class PlcCard(Protocol):
     write_marker_bit: Any
     write_marker_byte: Any
 
-__all__ = ["M_FUNCTION_BITS", "Plc"]
+__all__ = ["FB254_FUNCTIONS", "M_FUNCTION_BITS", "Plc"]
 
 #: The handshake bits the CNC sets and the PLC resets (spec §3.8.9): M6.0..M10.7, M15.7, M18.7.
 M_FUNCTION_BITS: tuple[tuple[int, int], ...] = tuple((b, k) for b in range(6, 11) for k in range(8)) + (
@@ -271,10 +272,16 @@ class Plc:
         self.dev.changed()
 
     def fb254(self, accu1: int, accu2: int = 0) -> None:
-        """The FB 254 stand-in for a hook; only function 22 is modelled: copy the H22
-        measurement into the data area from byte ``accu2`` (spec §3.8.7, layout in counter.py)."""
-        if accu1 == 22:
-            self.dev.counter.h22_copy(int(accu2))
+        """The FB 254 stand-in for a hook: the function in Accu1 (:data:`FB254_FUNCTIONS`; any
+        other is not modelled and does nothing) with Accu2."""
+        handler = FB254_FUNCTIONS.get(str(accu1))
+        if handler is not None:
+            handler(self, int(accu2))
+
+    def h22_copy(self, address: int) -> None:
+        """FB 254 / Accu1 = 22: copy the H22 measurement into the data area from byte ``address``
+        (spec §3.8.7, layout in counter.py)."""
+        self.dev.counter.h22_copy(address)
 
     @property
     def now(self) -> float:
@@ -438,3 +445,9 @@ class Plc:
             "image_bytes": len(self.dev.plc_image or "") // 2,
             "frames": len(self.dev.plc_frames),
         }
+
+
+#: The functions of the firmware block FB 254 a PLC program calls, by Accu1 (manual §2.3.1 H).
+FB254_FUNCTIONS: Table[Callable[[Plc, int], None]] = Table(
+    [Command("22", Plc.h22_copy, "§2.3.1 H", "copy the H22 measurement to the data area from byte Accu2")]
+)

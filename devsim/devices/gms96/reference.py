@@ -16,6 +16,7 @@ from typing import Any, Protocol
 
 from devsim.core.axis import Watch
 from devsim.core.clock import Timer
+from devsim.core.kit import Command, Table
 from devsim.devices.gms96.motion import ActualWatch
 
 
@@ -142,19 +143,18 @@ class ReferenceRun:
             self.fast_kind = "rapid_nv"
             self.after_success = self._drive_off
             p1 = self.p1
-        if p1 == 3:  # only through Q-1 (the executor runs a plain Q3 itself)
-            if self.p2 & 0x40 and self.p3 == 0:
-                self.dev.set_counter_here(self._resolver_position())
-            self.dev.idxoff = False
-            self._succeeded()
-        elif p1 == 0 or p1 == 2:
-            self._cam_search()
-        elif p1 == 1:
-            self._index_search()
-        elif p1 == 6:
-            self._input_search()
-        else:
-            self._finish(False)
+        sequence = SEQUENCES.get(str(p1)) or ReferenceRun._unknown
+        sequence(self)
+
+    def _controller_only(self) -> None:
+        """Q3, only through Q-1 (the executor runs a plain Q3 itself)."""
+        if self.p2 & 0x40 and self.p3 == 0:
+            self.dev.set_counter_here(self._resolver_position())
+        self.dev.idxoff = False
+        self._succeeded()
+
+    def _unknown(self) -> None:
+        self._finish(False)
 
     def _cam_search(self) -> None:
         self.cam_phase = True
@@ -179,6 +179,10 @@ class ReferenceRun:
             self._reposition(self.dev.indexer.actual())
         else:
             self._index_search()
+
+    def _index_only(self) -> None:
+        """Q1: the index mark search only."""
+        self._index_search()
 
     def _index_search(self) -> None:
         self.phase = "index_search"
@@ -283,3 +287,15 @@ class ReferenceRun:
             self.dev.idxoff = True
         self.dev.record_event("reference_done" if success else "reference_failed")
         self.done(success)
+
+
+#: The search sequence of each reference type ``Q P1`` (after ``Q-1`` took P1 from N19).
+SEQUENCES: Table[Callable[[ReferenceRun], None]] = Table(
+    [
+        Command("0", ReferenceRun._cam_search, "§2.3.1 Q", "Q0: cam, drive off it, then the index mark"),
+        Command("1", ReferenceRun._index_only, "§2.3.1 Q", "Q1: the index mark"),
+        Command("2", ReferenceRun._cam_search, "§2.3.1 Q", "Q2: the cam"),
+        Command("3", ReferenceRun._controller_only, "§2.3.1 Q", "Q3: the position controller (through Q-1)"),
+        Command("6", ReferenceRun._input_search, "§2.3.1 Q", "Q6: a 24 V input"),
+    ]
+)
