@@ -42,6 +42,7 @@ __all__ = [
     "letter",
     "parse_letter",
     "to_s24",
+    "wrap24",
     "from_s24",
     "control_host",
     "short_command_number",
@@ -389,3 +390,9 @@ def t_reply(address: int, identifier: int, value: bytes, control: int = 0x08) ->
     """The card's answer to ``T``: Langsatz ``A I val`` with F = 08h (user data, spec §3.5);
     E-version may add ACD 20h / DFC 10h (spec §3.9)."""
     return LongFrame(control, address, bytes([_octet("identifier", identifier)]) + bytes(value))
+
+
+def wrap24(value: int) -> int:
+    """Positions travel as 24-bit two's complement (wrap-around, spec §5.1)."""
+    value &= 0xFFFFFF
+    return value - 0x1000000 if value & 0x800000 else value

@@ -11,14 +11,24 @@ while the executor waits or a move runs.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Protocol
 
 from devsim.core.kit import Command, Table
 from devsim.devices.gms96 import tables
-from devsim.devices.gms96.counter import CounterReferenceRun
+from devsim.devices.gms96.coordinates import Coordinates
+from devsim.devices.gms96.counter import CounterInput
 from devsim.devices.gms96.executor import Cmd, Executor
+from devsim.devices.gms96.feed import Feed
+from devsim.devices.gms96.i2t import I2t
+from devsim.devices.gms96.image import ProcessImage
+from devsim.devices.gms96.io import Outputs
+from devsim.devices.gms96.memory import Memory
+from devsim.devices.gms96.motion import Indexer
+from devsim.devices.gms96.params import NParameters
 from devsim.devices.gms96.program import ProgramControl
-from devsim.devices.gms96.reference import ReferenceRun, resolver_position
+from devsim.devices.gms96.reference import References
+from devsim.devices.gms96.spindle import Spindle
+from devsim.devices.gms96.stage import PowerStage
 
 __all__ = [
     "G_FUNCTIONS",
@@ -50,13 +60,54 @@ def zero_point(p1: int) -> int:
     return 54 + ((p1 >> 8) & 0xFF) if g_key(p1) == "54" and p1 != 54 else p1
 
 
+class CommandCard(Protocol):
+    """What the queued commands ask of their card (spec §4.2.4, §5.6)."""
+
+    def can_move(self) -> bool: ...
+    def activate_controller(self) -> None: ...
+    def changed(self) -> None: ...
+    def record_event(self, name: str) -> None: ...
+
+
 class QueuedCommands:
     """The queued commands of one card (manual §2.3.1): what the executor runs for each letter."""
 
-    def __init__(self, executor: Executor, program: ProgramControl, dev: Any) -> None:
+    def __init__(
+        self,
+        *,
+        card: CommandCard,
+        executor: Executor,
+        program: ProgramControl,
+        references: References,
+        indexer: Indexer,
+        feed: Feed,
+        coordinates: Coordinates,
+        params: NParameters,
+        stage: PowerStage,
+        i2t: I2t,
+        counter: CounterInput,
+        spindle: Spindle,
+        outputs: Outputs,
+        image: ProcessImage,
+        memory: Memory,
+        eeprom_write_s: float,
+    ) -> None:
+        self.card = card
         self.executor = executor
         self.program = program
-        self.dev = dev
+        self.references = references
+        self.indexer = indexer
+        self.feed = feed
+        self.coordinates = coordinates
+        self.params = params
+        self.stage = stage
+        self.i2t = i2t
+        self.counter = counter
+        self.spindle = spindle
+        self.outputs = outputs
+        self.image = image
+        self.memory = memory
+        self.eeprom_write_s = eeprom_write_s  # s85;170 keeps BUSY this long
 
     def run(self, cmd: Cmd) -> bool:
         """Carry out ``cmd`` (its row in :data:`QUEUED_COMMANDS`, or the program end marker); a
@@ -66,8 +117,8 @@ class QueuedCommands:
 
     def _settled(self) -> bool:
         """A setting took effect: the running plan follows it, waits re-check."""
-        self.dev.indexer.replan()
-        self.dev.changed()
+        self.indexer.replan()
+        self.card.changed()
         return True
 
     def other(self, cmd: Cmd) -> bool:
@@ -82,48 +133,45 @@ class QueuedCommands:
 
     def feed_move(self, cmd: Cmd) -> bool:
         """``w``: the position counter is zeroed at the start, then a ``v`` move by P1."""
-        if not self.dev.can_move():
+        if not self.card.can_move():
             self.executor.rejected_moves += 1
             return True
-        self.dev.set_counter_here(0)
+        self.coordinates.set_counter_here(0)
         return self.executor.move(Cmd("v", cmd.p1), blend=False)
 
     # -- settings (spec §4.7) ----------------------------------------------------------------------
     def acceleration(self, cmd: Cmd) -> bool:
-        self.dev.B = tables.clamp_setting("B", cmd.p1)
+        self.feed.B = tables.clamp_setting("B", cmd.p1)
         return self._settled()
 
     def max_speed(self, cmd: Cmd) -> bool:
-        self.dev.M = tables.clamp_setting("M", cmd.p1)
+        self.feed.M = tables.clamp_setting("M", cmd.p1)
         return self._settled()
 
     def search_speed(self, cmd: Cmd) -> bool:
-        self.dev.S = tables.clamp_setting("S", cmd.p1)
+        self.feed.S = tables.clamp_setting("S", cmd.p1)
         return self._settled()
 
     def feed(self, cmd: Cmd) -> bool:
-        self.dev.f = max(1, min(cmd.p1, tables.RANGES["f"][1]))
-        self.dev.f_frac = max(0, min(255, cmd.p2))
+        self.feed.set_feed(cmd.p1, cmd.p2)
         return self._settled()
 
     def set_origin(self, cmd: Cmd) -> bool:
         """``O``: the position counter (work coordinates) := P1, no motion (spec §3.8.11)."""
-        d = self.dev
-        value = max(tables.POSITION_MIN, min(tables.POSITION_MAX, cmd.p1))
-        d.origin = d.axis.position() - value - d.offsets()
+        self.coordinates.set_work_position(cmd.p1)
         return self._settled()
 
     def override(self, cmd: Cmd) -> bool:
         if cmd.p1 in (0, 1):
-            self.dev.override_on = bool(cmd.p1)
+            self.feed.override_on = bool(cmd.p1)
         return self._settled()
 
     def data_word(self, cmd: Cmd) -> bool:
         """``d``: a data word from byte P2 (DW0..DW79 are static)."""
         if 0 <= cmd.p2 <= 254:
-            self.dev.image.write_word(cmd.p2, cmd.p1)
+            self.image.write_word(cmd.p2, cmd.p1)
             if cmd.p2 < 160:
-                self.dev.save_static()
+                self.memory.save_static()
         return self._settled()
 
     def reset(self, cmd: Cmd) -> bool:
@@ -134,22 +182,22 @@ class QueuedCommands:
         return self._settled()
 
     def defaults(self, cmd: Cmd) -> bool:
-        self.dev.defaults()
+        self.params.defaults()
+        self.feed.defaults()
         return True
 
     def erase_eeprom(self, cmd: Cmd) -> bool:
-        self.dev.nvram.delete("eeprom")
+        self.memory.erase_eeprom()
         return True
 
     def save(self, cmd: Cmd) -> bool:
         """``s85;170``: save to the EEPROM (BUSY for ``eeprom_write_s``); any other key: nothing."""
-        d = self.dev
         if (cmd.p1, cmd.p2) != tables.SAVE_KEY:
             return True
-        d.save_eeprom()
-        if d.cfg.eeprom_write_s <= 0:
+        self.memory.save_eeprom()
+        if self.eeprom_write_s <= 0:
             return True
-        return self.executor.after(d.cfg.eeprom_write_s, "eeprom")
+        return self.executor.after(self.eeprom_write_s, "eeprom")
 
     # -- G functions (spec §3.8.6, §5.9) -------------------------------------------------------------
     def g(self, cmd: Cmd) -> bool:
@@ -157,49 +205,46 @@ class QueuedCommands:
         return self._settled() if handler is None else handler(self, cmd)
 
     def rapid(self, cmd: Cmd) -> bool:
-        self.dev.f = self.dev.M
+        self.feed.f = self.feed.M
         return self._settled()
 
     def g53(self, cmd: Cmd) -> bool:
         """Deselect the zero offset (P2 = 1: and the tool offset); P3 = 1: enter the machine zero."""
-        d = self.dev
+        c = self.coordinates
         if cmd.p3 == 1:
-            d.machine_zero = cmd.p2
-            d.save_offsets()
+            c.machine_zero = cmd.p2
+            c.save()
         else:
-            d.before_g53 = (d.active_zero, d.tool_active)
-            d.active_zero = None
-            if cmd.p2 == 1:
-                d.tool_active = False
+            c.deselect(without_tool=cmd.p2 == 1)
         return self._settled()
 
     def zero_offset(self, cmd: Cmd) -> bool:
         """G54..G57 (and the extended G54..G69): select; P3 = 1: enter; P2 = 1: re-select."""
-        d = self.dev
+        c = self.coordinates
         zp = zero_point(cmd.p1)
         if cmd.p3 == 1:
-            d.zero_table[zp] = cmd.p2
-            d.save_offsets()
+            c.zero_table[zp] = cmd.p2
+            c.save()
         elif cmd.p2 == 1:
-            d.active_zero, d.tool_active = d.before_g53
+            c.reselect()
         else:
-            d.active_zero = zp
+            c.active_zero = zp
         return self._settled()
 
     def absolute(self, cmd: Cmd) -> bool:
-        self.dev.g_relative = False
+        self.coordinates.g_relative = False
         return self._settled()
 
     def relative(self, cmd: Cmd) -> bool:
-        self.dev.g_relative = True
+        self.coordinates.g_relative = True
         return self._settled()
 
     def speed_limit(self, cmd: Cmd) -> bool:
-        self.dev.g92 = cmd.p2
+        self.coordinates.g92 = cmd.p2
         return self._settled()
 
     def feed_mode(self, cmd: Cmd) -> bool:
-        self.dev.feed_mode = cmd.p1
+        self.feed.feed_mode = cmd.p1
         return self._settled()
 
     def cutting_speed(self, cmd: Cmd) -> bool:
@@ -210,59 +255,56 @@ class QueuedCommands:
         to the active zero point (work coordinates, at least 1 inc), limited by G92 (P2 = rpm
         limit, 0 = none).  Where the real card sends that speed is not documented, so it only shows
         in the control API (``g96_rpm``); motion is not affected."""
-        self.dev.g96 = ((cmd.p3 & 0xFFFFFF) << 24) | (cmd.p2 & 0xFFFFFF)
-        self.dev.changed()
+        self.coordinates.g96 = ((cmd.p3 & 0xFFFFFF) << 24) | (cmd.p2 & 0xFFFFFF)
+        self.card.changed()
         return True
 
     def cutting_speed_off(self, cmd: Cmd) -> bool:
-        self.dev.g96 = None
-        self.dev.changed()
+        self.coordinates.g96 = None
+        self.card.changed()
         return True
 
     # -- reference runs (spec §3.8.14, §5.6, §5.12) ----------------------------------------------------
     def reference(self, cmd: Cmd) -> bool:
         """``Q``: not with an emergency stop or a monitoring fault, nor (but Q3) in counter-input
         mode (spec §5.10); then :data:`Q_TYPES` by P1 (any other type: a run that fails)."""
-        d = self.dev
-        if d.estop or d.monitoring_cause() or (d.counter.active and cmd.p1 != 3):
+        if self.stage.estop or self.stage.monitoring_cause() or (self.counter.active and cmd.p1 != 3):
             self.executor.rejected_moves += 1
             return True
         handler = Q_TYPES.get(str(cmd.p1)) or QueuedCommands.reference_run
         return handler(self, cmd)
 
     def spindle(self, cmd: Cmd) -> bool:
-        self.dev.spindle.run(cmd.p2 & 0xFF, cmd.p3)
+        self.spindle.run(cmd.p2 & 0xFF, cmd.p3)
         return True
 
     def controller_on(self, cmd: Cmd) -> bool:
         """Q3: the position controller on, no motion (``Q3;64``: the resolver's absolute position)."""
-        d = self.dev
-        d.activate_controller()
+        self.card.activate_controller()
         if cmd.p2 & 0x40 and cmd.p3 == 0:
-            d.set_counter_here(resolver_position(d))
-        d.idxoff = False
-        d.i2t_latched = False
+            self.coordinates.set_counter_here(self.references.resolver_position())
+        self.stage.idxoff = False
+        self.i2t.latched = False
         return True
 
     def reference_run(self, cmd: Cmd) -> bool:
-        d = self.dev
         ex = self.executor
-        d.activate_controller()
+        stage = self.stage
+        self.card.activate_controller()
         p1, p2, p3 = cmd.p1, cmd.p2 & 0xFF, cmd.p3
-        ref_p2 = (d.params.reference_type >> 8) & 0xFF if p1 == -1 else p2  # Q-1: P2 from N19 (spec §5.6)
-        if not (ref_p2 & 0x40 and not d.idxoff):
-            d.idxoff = True
+        ref_p2 = (self.params.reference_type >> 8) & 0xFF if p1 == -1 else p2  # Q-1: P2 from N19 (spec §5.6)
+        if not (ref_p2 & 0x40 and not stage.idxoff):
+            stage.idxoff = True
 
         def done(success: bool) -> None:
             ex.reference = None
             if success:
-                d.i2t_latched = False
+                self.i2t.latched = False
             if ex.current is not None and ex.current.letter == "Q":
                 ex.complete()
 
         # P2.5: the index mark from the counter input's reference track (spec §3.8.14)
-        run = CounterReferenceRun if ref_p2 & 0x20 else ReferenceRun
-        ex.reference = run(d, p1, p2, p3, done)
+        ex.reference = self.references.run(p1, p2, p3, done, counter_track=bool(ref_p2 & 0x20))
         ex.reference.start()
         return ex.reference is None or ex.reference.finished
 
@@ -275,11 +317,10 @@ class QueuedCommands:
         """H2 (spec §5.5): in position (|e| <= |N27| for N28 ms after the set-point stopped); with
         N27 = 0 or on a stepper card as soon as the set-point is finished.  The device re-checks
         (changed() -> poke) when the set-point stops and N28 later."""
-        d = self.dev
-        if d.in_position():
+        if self.outputs.in_position():
             return True
-        d.waiting_in_position = True
-        return self.executor.wait("H2", d.in_position)
+        self.executor.waiting_in_position = True
+        return self.executor.wait("H2", self.outputs.in_position)
 
     def torque_abort(self, cmd: Cmd) -> bool:
         self.executor.h7_level = max(0, min(100, cmd.p2))
@@ -287,12 +328,10 @@ class QueuedCommands:
 
     def measurement(self, cmd: Cmd) -> bool:
         """H22;1 / H22;0: the counter input's min/max measurement (spec §3.8.7, counter.py)."""
-        d = self.dev
-        d.h22_active = bool(cmd.p2)
         if cmd.p2:
-            d.counter.h22_start()
+            self.counter.h22_start()
         else:
-            d.counter.h22_stop()
+            self.counter.h22_stop()
         return True
 
     # -- M functions (spec §3.8.9) -----------------------------------------------------------------------
@@ -303,20 +342,20 @@ class QueuedCommands:
     def _m_wait(self, cmd: Cmd, byte: int, bit: int) -> bool:
         """Set the function's marker bit and wait until the PLC resets it (the PLC's
         ``auto_ack_m_functions_ms`` or a scripted rule)."""
-        img = self.dev.image
+        img = self.image
         img.set_marker(byte, bit, True)
-        self.dev.changed()
+        self.card.changed()
         return self.executor.wait(f"m{cmd.p1}", lambda: not img.marker(byte, bit))
 
     def m_function(self, cmd: Cmd) -> bool:
         """M50..M89: M6.0..M10.7, MB11 := P2."""
         byte, bit = tables.m_function_marker(cmd.p1)
-        self.dev.image.markers[11] = cmd.p2 & 0xFF
+        self.image.markers[11] = cmd.p2 & 0xFF
         return self._m_wait(cmd, byte, bit)
 
     def s_function(self, cmd: Cmd) -> bool:
         """m100: MB15 := P2 (M15.7 kept), MW16 := P3, M15.7."""
-        img = self.dev.image
+        img = self.image
         img.markers[15] = (img.markers[15] & 0x80) | (cmd.p2 & 0x7F)
         img.markers[16] = (cmd.p3 >> 8) & 0xFF
         img.markers[17] = cmd.p3 & 0xFF
@@ -324,22 +363,22 @@ class QueuedCommands:
 
     def t_function(self, cmd: Cmd) -> bool:
         """m101: MB18 := P2 (non-volatile), MB19 := P3, M18.7."""
-        img = self.dev.image
+        img = self.image
         img.markers[18] = (img.markers[18] & 0x80) | (cmd.p2 & 0x7F)
         img.markers[19] = cmd.p3 & 0xFF
-        self.dev.save_static()
+        self.memory.save_static()
         return self._m_wait(cmd, 18, 7)
 
     def sync_run(self, cmd: Cmd) -> bool:
         """``m49``: synchronous run to the counter input until #0 / M0.1 / a fault (counter.py)."""
-        d = self.dev
-        if d.counter.active:
+        counter = self.counter
+        if counter.active:
             return True
-        if not d.counter.start_sync():
+        if not counter.start_sync():
             self.executor.rejected_moves += 1
-            d.record_event("move_rejected")
+            self.card.record_event("move_rejected")
             return True
-        return self.executor.wait("m49", lambda: not d.counter.sync)
+        return self.executor.wait("m49", lambda: not counter.sync)
 
     # -- p (spec §3.8.13) ------------------------------------------------------------------------------
     def p(self, cmd: Cmd) -> bool:

@@ -1,7 +1,7 @@
 """The GMS96 servo amplifier family as a devsim kind: the card under its FT1.2 face.
 
 Manual "GMS96 Softwarebeschreibung", software v4.04; spec gms96.md.  The machine is
-:class:`~devsim.devices.gms96.card.Gms96Card`, the link and commands
+:class:`~devsim.devices.gms96.model.Gms96Card`, the link and commands
 :class:`~devsim.devices.gms96.face.Gms96Face`; names and faults are declared in
 :mod:`~devsim.devices.gms96.points`.  Several cards share a multidrop line through
 :class:`devsim.core.bus.Bus`.
@@ -16,7 +16,6 @@ from devsim.core.device import Device
 from devsim.core.kit import Command, ErrorCode, Reference, Table
 from devsim.core.settings import Section
 from devsim.devices.gms96 import tables
-from devsim.devices.gms96.card import Gms96Card
 from devsim.devices.gms96.commands import (
     G_FUNCTIONS,
     H_FUNCTIONS,
@@ -28,6 +27,7 @@ from devsim.devices.gms96.commands import (
 from devsim.devices.gms96.config import Gms96Config
 from devsim.devices.gms96.drive_actions import DRIVE
 from devsim.devices.gms96.face import ON_RECEIPT, P_ON_RECEIPT, SHORT_COMMANDS, T_QUERIES, Gms96Face
+from devsim.devices.gms96.model import Gms96Card
 from devsim.devices.gms96.nparams import N_TABLE
 from devsim.devices.gms96.plc import FB254_FUNCTIONS
 from devsim.devices.gms96.points import FAULTS, POINTS

@@ -16,53 +16,25 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from devsim.core.axis import Axis, Watch
-from devsim.core.clock import Timer
+from devsim.core.clock import Clock, Timer
 from devsim.core.record import record
 from devsim.devices.gms96 import tables
+from devsim.devices.gms96.coordinates import Coordinates
+from devsim.devices.gms96.counter import CounterInput
+from devsim.devices.gms96.feed import Feed
+from devsim.devices.gms96.motion import Indexer
+from devsim.devices.gms96.params import NParameters
 from devsim.devices.gms96.reference import ReferenceRun
 
 
-class ExecutorCard(Protocol):
-    """What this part needs of its card (the GMS96 model): exactly these names."""
+class CardEvents(Protocol):
+    """What the executor asks of its card: whether a move may start, and that it tells others."""
 
-    M: Any
-    activate_controller: Any
-    arm_torque_abort: Any
-    can_move: Any
-    cfg: Any
-    changed: Any
-    clock: Any
-    counter: Any
-    estop: Any
-    f: Any
-    f_frac: Any
-    g92: Any
-    g96: Any
-    g_relative: Any
-    h22_active: Any
-    i2t_latched: Any
-    idxoff: Any
-    image: Any
-    in_position: Any
-    indexer: Any
-    input_name: Any
-    monitoring_cause: Any
-    params: Any
-    output_bit: Any
-    plc: Any
-    programs: Any
-    queued_setting: Any
-    record_event: Any
-    save_eeprom: Any
-    save_static: Any
-    set_counter_here: Any
-    setpoint_work: Any
-    signals: Any
-    spindle: Any
-    waiting_in_position: Any
-    work_to_physical: Any
-    write_marker_byte: Any
-    write_output: Any
+    def can_move(self) -> bool: ...
+    def changed(self) -> None: ...
+    def record_event(self, name: str) -> None: ...
+    def arm_torque_abort(self) -> None: ...
+
 
 __all__ = ["Cmd", "Executor", "TRANSPARENT_P10"]
 
@@ -95,12 +67,33 @@ def transparent(cmd: Cmd) -> bool:
 
 
 class Executor:
-    """FIFO of queued commands and the one command being executed."""
+    """FIFO of queued commands and the one command being executed (spec §4.2.2), the moves and
+    their blending (spec §5.4), the H7 arming (spec §5.5)."""
 
-    def __init__(self, dev: ExecutorCard, run: Callable[[Cmd], bool]) -> None:
-        self.dev = dev
+    def __init__(
+        self,
+        *,
+        clock: Clock,
+        indexer: Indexer,
+        counter: CounterInput,
+        feed: Feed,
+        coordinates: Coordinates,
+        params: NParameters,
+        card: CardEvents,
+        run: Callable[[Cmd], bool],
+        queue_capacity: int,
+    ) -> None:
+        self.clock = clock
+        self.indexer = indexer
+        self.counter = counter
+        self.feed = feed
+        self.coordinates = coordinates
+        self.params = params
+        self.card = card
         #: Carries out one command; True if it is complete at once (:mod:`.commands`).
         self.run = run
+        self.queue_capacity = queue_capacity
+        self.waiting_in_position = False  # H2 waits (M3.5)
         self.queue: deque[Cmd] = deque()
         self.deferred: deque[tuple[Cmd, Callable[[], None]]] = deque()
         self.current: Cmd | None = None
@@ -123,7 +116,7 @@ class Executor:
 
     @property
     def full(self) -> bool:
-        return len(self.queue) >= self.dev.cfg.queue_capacity
+        return len(self.queue) >= self.queue_capacity
 
     # -- input --------------------------------------------------------------------------------
     def submit(self, cmd: Cmd) -> None:
@@ -164,7 +157,7 @@ class Executor:
             self.h7_level = None
         self.current = None
         self.kick()
-        self.dev.changed()
+        self.card.changed()
 
     def poke(self) -> None:
         """Something changed (marker, input, speed): re-check the wait condition."""
@@ -184,11 +177,22 @@ class Executor:
             return None
         return self.h7_level / 100.0
 
+    def disarm_h7(self) -> None:
+        """The torque abort fired: the level is spent."""
+        self.h7_level = None
+
+    def torque_aborted(self) -> None:
+        """H7 stopped the axis: the move it armed is complete (another command goes on)."""
+        if self.current is not None and self.current.letter in "A+vw":
+            self.complete()
+        else:
+            self.h7_in_move = False
+
     def _clear_wait(self) -> None:
         self.waiting = None
         self.wait_name = ""
-        self.dev.waiting_in_position = False
-        ix = self.dev.indexer
+        self.waiting_in_position = False
+        ix = self.indexer
         if ix.on_arrive == self._arrival:
             ix.on_arrive = None
         ix.set_junction(None)
@@ -201,7 +205,7 @@ class Executor:
 
     def after(self, seconds: float, name: str) -> bool:
         self.wait_name = name
-        self._timer = self.dev.clock.call_later(seconds, self.complete)
+        self._timer = self.clock.call_later(seconds, self.complete)
         return False
 
     def _discard(self) -> None:
@@ -222,20 +226,20 @@ class Executor:
         self._discard()
         self._clear_wait()
         cur, self.current = self.current, None
-        if self.dev.counter.stop_sync():  # m49 ends: the set-point brakes with the ramp
+        if self.counter.stop_sync():  # m49 ends: the set-point brakes with the ramp
             self.current = Cmd("_halt")
-            self.dev.indexer.halt(self.complete)
+            self.indexer.halt(self.complete)
         elif cur is not None and (cur.letter in MOVES or cur.letter in "vwQ"):
             self.current = Cmd("_halt")
-            self.dev.indexer.halt(self.complete)
-        elif self.dev.indexer.target is not None:
-            self.dev.indexer.halt()
-        self.dev.changed()
+            self.indexer.halt(self.complete)
+        elif self.indexer.target is not None:
+            self.indexer.halt()
+        self.card.changed()
 
     def flush(self) -> None:
         """A fault: the queue is gone and the executor idle at once (spec §4.5.3)."""
         self._discard()
-        self.dev.counter.sync = False  # a fault ends m49 (the fault stops the axis itself)
+        self.counter.sync = False  # a fault ends m49 (the fault stops the axis itself)
         self._clear_wait()
         self.current = None
 
@@ -246,41 +250,40 @@ class Executor:
 
     # moves ----------------------------------------------------------------------------------
     def _target_of(self, cmd: Cmd, base: float) -> float:
-        d = self.dev
         p1 = max(tables.POSITION_MIN, min(tables.POSITION_MAX, cmd.p1))
-        if cmd.letter == "+" or (cmd.letter == "A" and d.g_relative):
+        if cmd.letter == "+" or (cmd.letter == "A" and self.coordinates.g_relative):
             return base + p1
-        return d.work_to_physical(p1)
+        return self.coordinates.work_to_physical(p1)
 
     def move(self, cmd: Cmd, blend: bool = True) -> bool:
         """``A``, ``+``, ``v``: a move to the command's target (``blend``: one plan with the
         blendable moves queued behind it, spec §5.4); rejected unless the card can move."""
-        d = self.dev
-        if not d.can_move():
+        card = self.card
+        if not card.can_move():
             self.rejected_moves += 1
-            d.record_event("move_rejected")
+            card.record_event("move_rejected")
             return True
-        ix = d.indexer
+        ix = self.indexer
         base = self.last_target if (ix.target is not None and self.last_target is not None) else ix.axis.position()
         x = self._target_of(cmd, base)
         self.last_target = x
         if self.h7_level is not None:
             self.h7_in_move = True  # this move carries the H7 arming (spec §5.5)
-        if d.params.motion_disabled == 1:  # N17: the move runs in time only (M3.4)
-            shadow = Axis(d.clock, position=ix.axis.position())
+        if self.params.motion_disabled == 1:  # N17: the move runs in time only (M3.4)
+            shadow = Axis(self.clock, position=ix.axis.position())
             acc, profile = ix.accel()
             end = shadow.move_to(x, max(ix.speed(), 1.0), acc, profile=profile)
-            return self.after(end - d.clock.now(), "N17")
+            return self.after(end - self.clock.now(), "N17")
         if not ix.axis.moving and ix.axis.position() == x:
             self._consume_h7()
             return True  # already there (a blended move behind it starts from rest)
         final = self._chain_end(x) if blend else x
         if ix.target != final or not ix.axis.moving:
             ix.go(final, "work")
-            d.record_event("move_start")
+            card.record_event("move_start")
         self._complete_at(x)
         self._plan_junction(x)
-        d.arm_torque_abort()
+        card.arm_torque_abort()
         return False
 
     def _consume_h7(self) -> None:
@@ -292,7 +295,7 @@ class Executor:
         """Complete the running move when the set-point reaches ``x``: on arrival if ``x`` ends the
         plan (exactly when the set-point stops, either direction), else when the set-point passes
         the junction ``x`` on the fly (spec §5.4)."""
-        ix = self.dev.indexer
+        ix = self.indexer
         if self._watch is not None:
             self._watch.cancel()
             self._watch = None
@@ -312,32 +315,33 @@ class Executor:
 
     def _arrival(self) -> None:
         if self.current is not None and (self.current.letter in MOVES or self.current.letter in "vw"):
-            self.dev.record_event("move_end")
+            self.card.record_event("move_end")
             self.complete()
 
     def _plan_junction(self, x: float) -> None:
         """Spec §5.4: a slower speed for the next blended move (``f``/``G0`` between the moves) is
         reached *at* the junction ``x``: the indexer brakes before it."""
-        ix = self.dev.indexer
+        ix = self.indexer
         if ix.target is None or ix.target == x:
             ix.set_junction(None)
             return
-        f, frac = self.dev.f, self.dev.f_frac
+        feed = self.feed
+        f, frac = feed.f, feed.f_frac
         for cmd in self.queue:
             if cmd.letter in MOVES:
                 break
             if cmd.letter == "f":
-                f, frac = max(1, min(cmd.p1, tables.RANGES["f"][1])), max(0, min(255, cmd.p2))
+                f, frac = feed.clamp_feed(cmd.p1, cmd.p2)
             elif cmd.letter == "G" and cmd.p1 == 0:
-                f = self.dev.M
-        if (f, frac) == (self.dev.f, self.dev.f_frac):
+                f = feed.M
+        if (f, frac) == (feed.f, feed.f_frac):
             ix.set_junction(None)
         else:
             ix.set_junction(x, (f, frac))
 
     def _chain_end(self, x: float) -> float:
         """Last target of the blendable moves queued behind the current one (spec §5.4)."""
-        ix = self.dev.indexer
+        ix = self.indexer
         start = ix.axis.position()
         direction = 1 if x > start else -1
         end = x
@@ -354,7 +358,7 @@ class Executor:
 
     def _maybe_extend_chain(self) -> None:
         cur = self.current
-        ix = self.dev.indexer
+        ix = self.indexer
         if cur is None or cur.letter not in MOVES or ix.target is None or not ix.axis.moving:
             return
         if ix.final_braking():
@@ -366,16 +370,7 @@ class Executor:
             ix.go(new_end, "work")
             self._complete_at(self.last_target)
             self._plan_junction(self.last_target)
-            self.dev.arm_torque_abort()
-
-    def g96_rpm(self) -> float | None:
-        """The G96 desired spindle speed now (None: G96 not selected)."""
-        d = self.dev
-        if getattr(d, "g96", None) is None:
-            return None
-        r = max(1, abs(d.setpoint_work()))
-        n = d.g96 / r
-        return float(min(n, d.g92)) if d.g92 > 0 else float(n)
+            self.card.arm_torque_abort()
 
     def state(self) -> dict[str, Any]:
         return {

@@ -13,16 +13,15 @@ itself: immediate commands, downloads), :data:`P_ON_RECEIPT` (``p`` downloads, `
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 from devsim.core.device import Face, Port, SerialSettings
 from devsim.core.kit import Command, Table
 from devsim.core.record import record
 from devsim.devices.gms96 import codec, tables
-from devsim.devices.gms96.card import Gms96Card, _wrap24
 from devsim.devices.gms96.commands import QUEUED_COMMANDS
 from devsim.devices.gms96.executor import Cmd
 from devsim.devices.gms96.link import Link
+from devsim.devices.gms96.model import Gms96Card
 
 __all__ = ["ON_RECEIPT", "P_ON_RECEIPT", "SHORT_COMMANDS", "T_QUERIES", "Gms96Face", "Letter"]
 
@@ -50,7 +49,11 @@ class Gms96Face(Face):
 
     def __init__(self, model: Gms96Card, port: Port) -> None:
         super().__init__(model, port)
-        self.link = Link(model, self.short_command, self.letter_command, port.send)
+        self.link = Link(
+            card=model, clock=model.clock, options=model.cfg.link, baud=lambda: int(model.dil.baud),
+            errors=model.link_errors, short_command=self.short_command, letter_command=self.letter_command,
+            write=port.send,
+        )
         model.listen("power_on", self.link.reset)
 
     @property
@@ -83,15 +86,10 @@ class Gms96Face(Face):
         return handler(self, letter)
 
     # -- the routes of a letter (spec §4.2.1) ---------------------------------------------------
-    def _recording(self, kind: str) -> list[list[Any]] | None:
-        """The commands a running ``kind`` download records, or None."""
-        download = self.model.download
-        return download[2] if download is not None and download[0] == kind else None
-
     def queue(self, letter: Letter) -> bytes | None:
         """A queued command: recorded during a CNC download, else into the queue; a full queue
         drops, refuses or defers the acknowledgement (``link.on_queue_full``)."""
-        recorded = self._recording("cnc")
+        recorded = self.model.flash.recording("cnc")
         if recorded is not None:
             recorded.append([letter.letter, letter.p1, letter.p2, letter.p3, letter.count])
             return ACK
@@ -115,11 +113,11 @@ class Gms96Face(Face):
     def download_line(self, letter: Letter) -> bytes | None:
         """``a``: a line of a PLC download (kept opaque); in a CNC download it is recorded like a
         queued command; otherwise ignored."""
-        plc = self._recording("plc")
+        plc = self.model.flash.recording("plc")
         if plc is not None:
             plc.append([letter.raw[1:].hex()])
             return ACK
-        if self._recording("cnc") is not None:
+        if self.model.flash.recording("cnc") is not None:
             return self.queue(letter)
         return ACK
 
@@ -128,8 +126,8 @@ class Gms96Face(Face):
         if letter.p1 != 2:
             return self.queue(letter)
         m = self.model
-        m.o2_value = max(0, min(100, letter.p2))
-        m.ext_override = None
+        m.feed.o2_value = max(0, min(100, letter.p2))
+        m.feed.ext_override = None
         m.indexer.replan()
         return ACK
 
@@ -142,7 +140,7 @@ class Gms96Face(Face):
 
     def marker_byte(self, letter: Letter) -> bytes | None:
         """``p11;offset;value``: MB(offset) := value at once (recorded during a CNC download)."""
-        if self._recording("cnc") is not None:
+        if self.model.flash.recording("cnc") is not None:
             return self.queue(letter)
         self.model.write_marker_byte(letter.p2, letter.p3)
         return ACK
@@ -151,7 +149,7 @@ class Gms96Face(Face):
         """``c value;n``: data register R(n)."""
         if 0 <= letter.p2 <= 19:
             self.model.image.write_register(letter.p2, letter.p1)
-            self.model.save_static()
+            self.model.memory.save_static()
         return ACK
 
     def n_parameter(self, letter: Letter) -> bytes | None:
@@ -168,10 +166,10 @@ class Gms96Face(Face):
     # -- downloads (spec §3.8.13, §3.8.24) -----------------------------------------------------
     def _begin_download(self, kind: str, number: int) -> None:
         m = self.model
-        if m.download is None:
+        if m.flash.download is None:
             if kind == "cnc" and not 0 <= number < m.cfg.max_programs:
                 return
-            m.download = (kind, number, [])
+            m.flash.download = (kind, number, [])
             if kind == "plc":
                 m.plc.begin_download()
             m.silence(m.cfg.flash_erase_s)
@@ -186,25 +184,18 @@ class Gms96Face(Face):
         return ACK
 
     def end_plc_download(self, letter: Letter) -> bytes:
-        recorded = self._recording("plc")
+        recorded = self.model.flash.recording("plc")
         if recorded is not None:
-            self.model.download = None
+            self.model.flash.download = None
             self.model.plc.end_download([bytes.fromhex(row[0]) for row in recorded])
         return ACK
 
     def end_cnc_download(self, letter: Letter) -> bytes:
-        m = self.model
-        if m.download is not None and m.download[0] == "cnc":
-            _kind, pnr, recorded = m.download
-            m.download = None
-            total = sum(len(p) for k, p in m.programs.items() if k != pnr) + len(recorded)
-            if total > m.cfg.max_total_commands:
-                m.cnc_storage_error = True
-                return ACK
-            if pnr == 0:
-                m.programs = {}
-            m.programs[pnr] = recorded
-            m.save_flash()
+        flash = self.model.flash
+        if flash.download is not None and flash.download[0] == "cnc":
+            _kind, pnr, recorded = flash.download
+            flash.download = None
+            flash.store_program(pnr, recorded, self.model.cfg.max_total_commands)
         return ACK
 
     # -- T read-backs (manual §2.3.1 T; spec §3.8.19) --------------------------------------------
@@ -228,16 +219,16 @@ class Gms96Face(Face):
         return codec.encode(codec.t_reply(self.model.address, identifier, value, self._reply_control()))
 
     def t_setpoint(self, p2: int, p3: int) -> bytes:
-        return self._t(0x40, codec.to_s24(_wrap24(self.model.setpoint_work())))
+        return self._t(0x40, codec.to_s24(codec.wrap24(self.model.coordinates.setpoint_work())))
 
     def t_version(self, p2: int, p3: int) -> bytes:
         return self._t(0x56, tables.FIRMWARE_VERSION.to_bytes(2, "little"))
 
     def t_inputs(self, p2: int, p3: int) -> bytes:
-        return self._t(0x49, bytes([self.model.input_byte(p3), self.model.input_byte(p3 + 1)]))
+        return self._t(0x49, bytes([self.model.outputs.input_byte(p3), self.model.outputs.input_byte(p3 + 1)]))
 
     def t_outputs(self, p2: int, p3: int) -> bytes:
-        return self._t(0x49, bytes([self.model.output_byte(p3), self.model.output_byte(p3 + 1)]))
+        return self._t(0x49, bytes([self.model.outputs.output_byte(p3), self.model.outputs.output_byte(p3 + 1)]))
 
     def t_markers(self, p2: int, p3: int) -> bytes:
         m = self.model
@@ -249,7 +240,7 @@ class Gms96Face(Face):
         return self._t(0x49, max(-32768, min(32767, e)).to_bytes(2, "little", signed=True))
 
     def t_current(self, p2: int, p3: int) -> bytes:
-        return self._t(0x49, bytes([min(252, int(round(252 * self.model.current())))]))
+        return self._t(0x49, bytes([min(252, int(round(252 * self.model.torque.current())))]))
 
     def t_data(self, p2: int, p3: int) -> bytes:
         image = self.model.image
@@ -264,14 +255,14 @@ class Gms96Face(Face):
     def t_n_parameter(self, p2: int, p3: int) -> bytes:
         if p2 not in tables.N_PARAMETERS:
             return ACK
-        return self._t(0x4E, codec.to_s24(_wrap24(self.model.params.read(p2, p3))))
+        return self._t(0x4E, codec.to_s24(codec.wrap24(self.model.params.read(p2, p3))))
 
     # -- Kurzsatz (manual §2.3.2) ----------------------------------------------------------------
     def abort(self, ext: bytes) -> bytes:
         """#0: abort; the queue is flushed, a download ends."""
         m = self.model
         m.record_event("abort")
-        m.download = None
+        m.flash.download = None
         m.spindle.on = False
         m.executor.abort()
         return ACK
@@ -284,14 +275,14 @@ class Gms96Face(Face):
 
     def spindle_rpm(self, ext: bytes) -> bytes:
         """#8: the spindle speed for G95."""
-        self.model.spindle_rpm = int.from_bytes(ext[:2], "little") if len(ext) >= 2 else 0
+        self.model.feed.spindle_rpm = int.from_bytes(ext[:2], "little") if len(ext) >= 2 else 0
         self.model.indexer.replan()
         return ACK
 
     def external_override(self, ext: bytes) -> bytes:
         """#9: an override 0..125 % from the host (the potentiometer is ignored from then on)."""
-        self.model.ext_override = min(ext[0] if ext else 0, 125)
-        self.model.o2_value = None
+        self.model.feed.ext_override = min(ext[0] if ext else 0, 125)
+        self.model.feed.o2_value = None
         self.model.indexer.replan()
         return ACK
 

@@ -42,6 +42,13 @@ class ProcessImage:
         self.outputs = bytearray(3)  # AB0, AB1, AB2 (analog out, 0..255)
         self.pending_messages: deque[int] = deque()
 
+    def clear(self) -> None:
+        """Power-on: everything 0, no buffered message (the static data is restored after)."""
+        self.markers[:] = bytes(len(self.markers))
+        self.data[:] = bytes(len(self.data))
+        self.outputs[:] = bytes(len(self.outputs))
+        self.pending_messages.clear()
+
     # -- markers ------------------------------------------------------------------------------
     def marker(self, byte: int, bit: int) -> bool:
         return bool(self.markers[byte] >> bit & 1)

@@ -11,10 +11,14 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable
-from typing import Any
 
 from devsim.core.kit import Command, Table
+from devsim.core.signals import SignalBank
 from devsim.devices.gms96.executor import Cmd, Executor
+from devsim.devices.gms96.flash import Flash
+from devsim.devices.gms96.image import ProcessImage
+from devsim.devices.gms96.io import Outputs
+from devsim.devices.gms96.plc import Plc
 
 __all__ = ["DIRECT_COMMANDS", "P_FUNCTIONS", "ProgramControl", "input_name"]
 
@@ -33,9 +37,24 @@ def input_name(operand: int) -> str | None:
 class ProgramControl:
     """``p`` (manual §2.3.1 p, §2.4.3, §2.5): the queued programming functions and direct commands."""
 
-    def __init__(self, executor: Executor, dev: Any) -> None:
+    def __init__(
+        self,
+        *,
+        executor: Executor,
+        flash: Flash,
+        image: ProcessImage,
+        signals: SignalBank,
+        outputs: Outputs,
+        plc: Plc,
+        write_marker_byte: Callable[[int, int], None],
+    ) -> None:
         self.executor = executor
-        self.dev = dev
+        self.flash = flash
+        self.image = image
+        self.signals = signals
+        self.outputs = outputs
+        self.plc = plc
+        self.write_marker_byte = write_marker_byte  # the card's, with the effects of MB0/MB1
         self.stvo_edge = False  # STVO: a 0→1 edge on E0.1 since the wait began
 
     def run(self, cmd: Cmd) -> bool:
@@ -45,37 +64,37 @@ class ProgramControl:
 
     # -- the PLC (§2.4) ---------------------------------------------------------------------------
     def plc_start(self, cmd: Cmd) -> bool:
-        self.dev.plc.start()
+        self.plc.start()
         return True
 
     def plc_stop(self, cmd: Cmd) -> bool:
-        self.dev.plc.stop()
+        self.plc.stop()
         return True
 
     def marker_byte(self, cmd: Cmd) -> bool:
         """``p11;offset;value`` inside a program: MB(offset) := value."""
-        self.dev.write_marker_byte(cmd.p2, cmd.p3)
+        self.write_marker_byte(cmd.p2, cmd.p3)
         return True
 
     def analog_output(self, cmd: Cmd) -> bool:
         """``p12;value``: the analog output AB2 (0..255 → 0..10 V)."""
-        self.dev.image.outputs[2] = max(0, min(255, cmd.p2))
+        self.image.outputs[2] = max(0, min(255, cmd.p2))
         return True
 
     # -- CNC programs (§2.5) ------------------------------------------------------------------------
     def program_start(self, cmd: Cmd) -> bool:
         """``p3;1;pnr``: the program's commands go to the front of the queue (nested up to 8)."""
         ex = self.executor
-        program = self.dev.programs.get(cmd.p3)
+        program = self.flash.programs.get(cmd.p3)
         if program is None:
             if ex.program_depth == 0:
-                self.dev.image.set_marker(0, 2, False)  # M0.2 start request of a missing program ends
+                self.image.set_marker(0, 2, False)  # M0.2 start request of a missing program ends
             return True
         if ex.program_depth >= MAX_PROGRAM_DEPTH:
             self._stop_all_programs()
             return True
         ex.program_depth += 1
-        img = self.dev.image
+        img = self.image
         img.markers[2] = cmd.p3 & 0xFF
         img.set_marker(0, 2, True)
         img.set_marker(1, 0, False)
@@ -97,16 +116,16 @@ class ProgramControl:
         ex = self.executor
         ex.queue = deque(c for c in ex.queue if c.program is None and c.letter != "_end")
         ex.program_depth = 0
-        self.dev.image.set_marker(0, 2, False)
+        self.image.set_marker(0, 2, False)
 
     def program_end(self, cmd: Cmd) -> bool:
         """The end of a program's commands (M0.2 off; M1.0 on when it ran to its end)."""
         ex = self.executor
         ex.program_depth = max(0, ex.program_depth - 1)
         if ex.program_depth == 0:
-            self.dev.image.set_marker(0, 2, False)
+            self.image.set_marker(0, 2, False)
             if cmd.program is not None and cmd.program >= 0:
-                self.dev.image.set_marker(1, 0, True)
+                self.image.set_marker(1, 0, True)
         return True
 
     # -- PLC direct commands p10 (§2.4.3) -----------------------------------------------------------
@@ -117,7 +136,7 @@ class ProgramControl:
 
     def _wait_input(self, operand: int, want: bool) -> bool:
         name = input_name(operand)
-        signals = self.dev.signals
+        signals = self.signals
         return self.executor.wait(
             "WOSI" if want else "WORI", lambda: bool(signals.get(name)) == want if name else True
         )
@@ -129,7 +148,7 @@ class ProgramControl:
         return self._wait_input(operand, False)
 
     def _wait_output(self, operand: int, want: bool) -> bool:
-        return self.executor.wait("WOSO" if want else "WORO", lambda: self.dev.output_bit(operand) == want)
+        return self.executor.wait("WOSO" if want else "WORO", lambda: self.outputs.output_bit(operand) == want)
 
     def woso(self, operand: int) -> bool:
         return self._wait_output(operand, True)
@@ -138,7 +157,7 @@ class ProgramControl:
         return self._wait_output(operand, False)
 
     def _wait_marker(self, operand: int, want: bool) -> bool:
-        img = self.dev.image
+        img = self.image
         return self.executor.wait("WOSF" if want else "WORF", lambda: img.marker(operand // 8 % 256, operand % 8) == want)
 
     def wosf(self, operand: int) -> bool:
@@ -152,7 +171,7 @@ class ProgramControl:
 
     def _output(self, operand: int, value: Callable[[bool], bool]) -> bool:
         if operand in OUTPUT_OPERANDS:
-            self.dev.write_output(operand, value(self.dev.output_bit(operand)))
+            self.outputs.write_output(operand, value(self.outputs.output_bit(operand)))
         return True
 
     def seto(self, operand: int) -> bool:
@@ -166,15 +185,15 @@ class ProgramControl:
 
     def clao(self, operand: int) -> bool:
         for n in OUTPUT_OPERANDS:
-            self.dev.write_output(n, False)
+            self.outputs.write_output(n, False)
         return True
 
     def sndf(self, operand: int) -> bool:
-        self.dev.image.markers[5] = operand & 0xFF
+        self.image.markers[5] = operand & 0xFF
         return True
 
     def sndm(self, operand: int) -> bool:
-        self.dev.image.post_message(operand)
+        self.image.post_message(operand)
         return True
 
     def stvo(self, operand: int) -> bool:
