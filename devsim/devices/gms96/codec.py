@@ -84,14 +84,14 @@ _LETTER_PARAMS = 3
 
 @record
 class SingleChar:
-    """A single control character: ``E5h`` (ACK, also "no data") or ``A2h``."""
+    """A single control character (spec §3.2 a): ``E5h`` (ACK, also "no data") or ``A2h``."""
 
     value: int
 
 
 @record
 class ShortFrame:
-    """Kurzsatz ``10h C A [AE...] CS 16h``: control field ("F-Feld"), link address and the
+    """Kurzsatz ``10h C A [AE...] CS 16h`` (manual §2.3.2, spec §3.6): control field ("F-Feld"), link address and the
     address-extension (AE) octets that carry short-command data or the MB4 message."""
 
     control: int
@@ -101,7 +101,7 @@ class ShortFrame:
 
 @record
 class LongFrame:
-    """Langsatz ``68h L L 68h C A data CS 16h``; ``data`` is the link user data after A
+    """Langsatz ``68h L L 68h C A data CS 16h`` (manual §2.3, spec §3.5); ``data`` is the link user data after A
     (for GMS96: command character and parameters, or identifier and value)."""
 
     control: int

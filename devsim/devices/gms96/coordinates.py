@@ -18,7 +18,7 @@ __all__ = ["Coordinates"]
 
 
 class Coordinates:
-    """The frames and modal coordinate settings (G53..G57, G90/G91, G92, G96) of one card."""
+    """The frames and modal coordinate settings of one card (manual §2.3.1 G, O; spec §5.9)."""
 
     def __init__(self, axis: Axis, nvram: NonVolatileMemory, tool_offset: Callable[[], int]) -> None:
         self.axis = axis

@@ -1,6 +1,7 @@
 """The GMS96 servo amplifier family as a devsim kind: the card under its FT1.2 face.
 
-Manual "GMS96 Softwarebeschreibung", software v4.04; spec gms96.md.  The machine is
+Manual "GMS96 Softwarebeschreibung", software v4.04 (§2 the interface, §2.3 the commands); spec
+gms96.md.  The machine is
 :class:`~devsim.devices.gms96.model.Gms96Card`, the link and commands
 :class:`~devsim.devices.gms96.face.Gms96Face`; names and faults are declared in
 :mod:`~devsim.devices.gms96.points`.  Several cards share a multidrop line through
@@ -43,7 +44,7 @@ def _spelled(prefix: str, table: Table[Any]) -> list[Command[Any]]:
 
 
 class Gms96Device(Device):
-    """One GMS96 card on a serial line (RS422/485, DIN 19244 FT1.2, 8E1)."""
+    """One GMS96 card on a serial line (RS422/485, DIN 19244 FT1.2, 8E1; manual §2.1, spec §2)."""
 
     kind: ClassVar[str] = "gms96"
     description: ClassVar[str] = "GMS96 servo amplifier with indexer and PLC (DIN 19244 / FT1.2, RS422)"

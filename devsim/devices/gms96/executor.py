@@ -1,7 +1,8 @@
 """The command executor: queued (CNC) commands in order, BUSY, waits and blending.
 
-Manual §2.3.1 (queued letter commands), §2.4.3 (PLC direct commands p10), §2.5 (CNC programs);
-spec §4.2.2 (executor states), §4.2.4 (motion preconditions: a move while IDXOFF = 1 is skipped),
+What each command does is :mod:`.commands` (the executor runs it through the ``run`` it is
+given).  Manual §2.3.1 (queued letter commands), §2.4.3 (PLC direct commands p10), §2.5 (CNC
+programs); spec §4.2.2 (executor states), §4.2.4 (motion preconditions: a move while IDXOFF = 1 is skipped),
 §4.2.5 (queue capacity), §5.4 (blending: consecutive moves in one direction are one plan to the
 chain's last target; a move inside the chain completes when the set-point crosses its end point,
 so SETO/RESO/SNDF/SNDM between them act "on the fly", the chain's last move when the set-point
@@ -28,7 +29,7 @@ from devsim.devices.gms96.reference import ReferenceRun
 
 
 class CardEvents(Protocol):
-    """What the executor asks of its card: whether a move may start, and that it tells others."""
+    """What the executor asks of its card (spec §4.2.4): whether a move may start, and that it tells others."""
 
     def can_move(self) -> bool: ...
     def changed(self) -> None: ...
@@ -44,7 +45,7 @@ MOVES = frozenset("A+")
 
 @record
 class Cmd:
-    """One queued command: letter, P1..P3 and how many parameters were sent."""
+    """One queued command (manual §2.3.1): letter, P1..P3 and how many parameters were sent."""
 
     letter: str
     p1: int = 0

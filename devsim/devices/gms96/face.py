@@ -30,7 +30,7 @@ ACK = bytes([codec.ACK])
 
 @record
 class Letter:
-    """A letter command as received: letter, P1..P3, the number of parameters sent, the raw user
+    """A letter command as received (manual §2.3, spec §3.5): letter, P1..P3, the number of parameters sent, the raw user
     data, and where a deferred acknowledgement goes (``on_queue_full: defer``)."""
 
     letter: str
@@ -43,7 +43,7 @@ class Letter:
 
 
 class Gms96Face(Face):
-    """One card's end of an RS422/485 line (DIN 19244 FT1.2, 8E1)."""
+    """One card's end of an RS422/485 line (DIN 19244 FT1.2, 8E1; manual §2.3, spec §3.7)."""
 
     model: Gms96Card
 

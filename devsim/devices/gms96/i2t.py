@@ -20,7 +20,7 @@ I_BASE = 0.05  # the motor current at rest, fraction of Imax (spec §5.7)
 
 
 class I2t:
-    """The I²t integral, the limitation (I.5) and its latch (I.6, K.0, M1.1) of one card."""
+    """The I²t integral, the limitation (I.5) and its latch (I.6, K.0, M1.1) of one card (spec §5.7)."""
 
     def __init__(
         self,

@@ -30,7 +30,8 @@ def bit_name(area: str, byte: int, bit: int) -> str:
 
 
 class ProcessImage:
-    """Markers MB0..MB255, data bytes 0..255, outputs AB0..AB2 and the MB4 message FIFO.
+    """Markers MB0..MB255, data bytes 0..255, outputs AB0..AB2 and the MB4 message FIFO (manual
+    §2.4.1, §2.4.2).
 
     Inputs live in the device's signal bank (``E0.0`` …) so the control API can flip them; the
     status-derived marker bits of MB0/MB1 are overlaid by the device when it reads them.

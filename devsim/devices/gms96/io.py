@@ -27,7 +27,8 @@ OUTPUT_BITS = 11  # A0.0..A1.2
 
 
 class Outputs:
-    """Inputs and outputs of one card as the host (T1;1, T1;2), the PLC and the waits see them."""
+    """Inputs and outputs of one card as the host (T1;1, T1;2), the PLC and the waits see them
+    (manual §2.4.2; spec §4.11)."""
 
     def __init__(
         self,

@@ -30,7 +30,7 @@ from devsim.devices.gms96 import codec
 
 
 class LinkCard(Protocol):
-    """What the link asks of its card: its address and protocol version (DIL switch, read at
+    """What the link asks of its card (manual §2.2, §2.3): its address and protocol version (DIL switch, read at
     power-on), whether it listens, and an event for the log."""
 
     @property
@@ -49,7 +49,7 @@ IDLE_BITS = 33  #: FT1.2 R4 minimum line idle after an error, in bit times
 
 
 class Link:
-    """Decoder, address filter, duplicate suppression, reply timing."""
+    """Decoder, address filter, duplicate suppression, reply timing (manual §2.3; spec §3.2-§3.10)."""
 
     def __init__(
         self,

@@ -17,7 +17,7 @@ __all__ = ["Memory"]
 
 
 class Memory:
-    """EEPROM (parameters, speeds) and static data of one card in its non-volatile memory."""
+    """EEPROM (parameters, speeds) and static data of one card in its non-volatile memory (spec §4.8)."""
 
     def __init__(
         self,

@@ -26,7 +26,7 @@ from devsim.devices.gms96.stage import PowerStage
 
 
 class IndexerEvents(Protocol):
-    """What the indexer tells its card: the plan changed (H7 and in-position re-arm), the
+    """What the indexer tells its card (spec §5.5, §5.7): the plan changed (H7 and in-position re-arm), the
     following error tripped, an event for the log."""
 
     def plan_changed(self) -> None: ...
@@ -46,7 +46,7 @@ def _dwell(axis: Axis, seconds: float, on_done: Callable[[], None]) -> None:
 
 
 class Indexer:
-    """Set-point generation and the position-loop model of one card."""
+    """Set-point generation and the position-loop model of one card (manual §1.3, §2.7; spec §5.1-§5.8)."""
 
     def __init__(
         self,
@@ -431,7 +431,7 @@ class Indexer:
 
 
 class ActualWatch:
-    """A crossing watch on the actual position (set-point - v/Kv, held by a blockage or an end
+    """A crossing watch on the actual position (spec §5.6, §5.11: set-point - v/Kv, held by a blockage or an end
     stop), solved per planned segment like :meth:`Indexer.end_stop_contact`: closed form while
     cruising, a fine subdivision plus bisection on ramps (linear and sin²).
 
@@ -567,7 +567,7 @@ class ActualWatch:
 
 class ActualSwitch(RegionSwitch):
     """:class:`~devsim.core.axis.RegionSwitch` on the actual position: active while
-    low <= actual <= high; ``on_change(active)`` at the solved instant."""
+    low <= actual <= high (spec §5.11); ``on_change(active)`` at the solved instant."""
 
     def __init__(self, indexer: Indexer, low: float, high: float, on_change: Callable[[bool], None] | None = None) -> None:
         super().__init__(

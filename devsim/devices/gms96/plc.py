@@ -54,7 +54,7 @@ from devsim.devices.gms96.stage import PowerStage
 
 
 class PlcCard(Protocol):
-    """What the PLC asks of its card: the markers as the firmware shows them (MB0/MB1/MB3 carry
+    """What the PLC asks of its card (manual §2.4.1): the markers as the firmware shows them (MB0/MB1/MB3 carry
     its status bits), a marker write with its side effects (M0.1 aborts, M0.2 starts ...), and
     that it tells the rest of the card."""
 
@@ -92,7 +92,7 @@ def load_hook(spec: str) -> Hook:
 
 
 class Plc:
-    """The scripted PLC of one card: run state, download image, cycle and rules."""
+    """The scripted PLC of one card (manual §1.4, §2.4; spec §4.10): run state, download image, cycle and rules."""
 
     def __init__(
         self,

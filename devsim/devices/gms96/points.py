@@ -110,10 +110,6 @@ def _set_dil(field: str) -> Any:
     return put
 
 
-def _set_attr(attr: str) -> Any:
-    return lambda card, value: setattr(card, attr, value)
-
-
 def _plc_running(card: Any, value: bool) -> None:
     if value:
         card.plc.start()

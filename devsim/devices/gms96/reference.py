@@ -1,9 +1,9 @@
 """Reference runs ``Q`` (manual §2.3.1 Q; spec §3.8.14, §5.6, §5.12).
 
 Q0 cam + index mark, Q1 index mark, Q2 cam, Q3 controller (re)activation (``Q3;64``: resolver
-absolute position), Q6 search on a 24 V input (P2.7 edge criterion), Q8 spindle simulation and
-Q-1 per N19 with drive-off to N33.  P2 bits: .0 NC cam, .1 reversed direction, .2 keep the
-counter, .3 cam on E2.0, .6 message 23 instead of failure at the P3 distance limit.  After an
+absolute position), Q6 search on a 24 V input (P2.7 edge criterion) and Q-1 per N19 with
+drive-off to N33 (the Q8 spindle simulation is :mod:`.spindle`).  P2 bits: .0 NC cam, .1 reversed direction, .2 keep the
+counter, .3 cam on E2.0, .5 the index mark from the counter input's reference track, .6 message 23 instead of failure at the P3 distance limit.  After an
 end criterion the axis brakes and repositions onto the detected point (firmware ≥ v3.79).
 Switch and index crossings are solved on the ACTUAL position (``ActualSwitch``,
 ``Indexer.watch_actual_index``), never sampled; the detected point is the actual position then.
@@ -71,7 +71,7 @@ class References:
 
 
 class ReferenceRun:
-    """One running reference sequence; ``done(success)`` is called exactly once.  With
+    """One running reference sequence (manual §2.3.1 Q; spec §5.6); ``done(success)`` is called exactly once.  With
     ``counter_track`` (P2.5) the index mark comes from the counter input's reference track (marks
     at ``axis.counter_marks``) instead of the motor encoder."""
 
