@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from devsim.core.clock import Clock, Timer
+from devsim.core.parameters import Param
 from devsim.core.settings import Values
 from devsim.devices.gms96.params import NParameters
 
@@ -43,6 +44,12 @@ class I2t:
         self.latched = False
         self.rate = 0.0  # dq/dt since the last update
         self._timer: Timer | None = None
+        params.on_change(self._parameter_written)
+
+    def _parameter_written(self, row: Param, value: int) -> None:
+        """N15 (the level) and N39 (the peak current) change the integral's rate."""
+        if row.attr in ("i2t_level", "peak_current_pct"):
+            self.update()
 
     def power_on(self) -> None:
         """The integral and the flags start afresh (a timer set before runs on, harmlessly)."""

@@ -242,15 +242,10 @@ class Gms96Card(Model):
     # what the parts ask of the card
     # ======================================================================================
     def set_n(self, index: int, value: int, p3: int = 0) -> None:
-        """``N value;index;P3`` (manual §2.3.1 N) and the ``param.N*`` points: the value, then
-        its effect on the position loop (N10, N20, N27, N28) and on I²t (N15, N39)."""
-        if not self.params.write(index, value, p3):
-            return
-        if index in (10, 20, 27, 28):
-            self.indexer.arm_following_error()
-        if index in (15, 39):
-            self.i2t.update()
-        self.changed()
+        """``N value;index;P3`` (manual §2.3.1 N) and the ``param.N*`` points: the value (the
+        parts that own its effect listen: the position loop, I²t), then outputs and waits."""
+        if self.params.write(index, value, p3):
+            self.changed()
 
     def can_move(self) -> bool:
         """A move may start (spec §4.2.4); not in counter-input mode (the counter input is the

@@ -17,6 +17,7 @@ from typing import Any, Protocol
 
 from devsim.core.axis import Axis, IndexRule, RampProfile, RangeRule, RegionSwitch, Rule, Segment, Watch
 from devsim.core.clock import Clock, Timer
+from devsim.core.parameters import Param
 from devsim.core.settings import Values
 from devsim.core.signals import SignalBank
 from devsim.devices.gms96.feed import Feed
@@ -37,6 +38,9 @@ class IndexerEvents(Protocol):
 __all__ = ["ActualSwitch", "ActualWatch", "Indexer"]
 
 _SINE = RampProfile(shape="sine")
+
+#: The N parameters whose write re-arms the position loop's events (N10, N20, N27, N28).
+LOOP_PARAMETERS = frozenset({"position_gain", "following_error_limit", "in_position_window", "in_position_time_ms"})
 
 
 def _dwell(axis: Axis, seconds: float, on_done: Callable[[], None]) -> None:
@@ -72,6 +76,7 @@ class Indexer:
         self.geometry = geometry  # the configured axis: kv_per_n10, brake_stop_ms, end_stops
         self.stepper = stepper
         self.card = card
+        params.on_change(self._parameter_written)
         self.target: float | None = None  # physical end of the running plan (chain)
         self.kind = "work"  # which speed applies: work | search | spindle | rapid_nv
         self.jog_dir = 0  # endless run (reference search, spindle) instead of a target
@@ -93,6 +98,11 @@ class Indexer:
         # switches and index marks on the ACTUAL position (spec §5.6, §5.11): re-armed with the
         # following-error watch, i.e. on every re-plan, arrival, halt, power off, blockage, N10
         self._actual_watches: list[ActualWatch] = []
+
+    def _parameter_written(self, row: Param, value: int) -> None:
+        """N10 (Kv), N20 (the limit), N27/N28 (in position): the loop's events are solved anew."""
+        if row.attr in LOOP_PARAMETERS:
+            self.arm_following_error()
 
     # -- speeds ---------------------------------------------------------------------------------
     def override_pct(self) -> float:

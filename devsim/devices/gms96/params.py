@@ -92,10 +92,10 @@ class NParameters(Parameters):
         if self.out_of_range == "ignore" and not lo <= value <= hi:
             return False
         value = clamp_n(index, value, self.values, stepper=self.stepper)
-        if index == 8:
+        if index == 8:  # the window's limits act nowhere in the simulator: no listener
             self.n8[1 if p3 == 1 else 0] = value
             if p3 != 1:
                 self.values[8] = value
         else:
-            self.values[index] = value
+            self.set(index, value, check=False)  # the parts that listen act on it
         return True
