@@ -36,7 +36,7 @@ class Memory:
     def load(self) -> bool:
         """Power-on: the parameters and speeds from the EEPROM, the static data; True if the
         memory could not be read (the NV error of T3;4)."""
-        corrupt = bool(getattr(self.nvram, "corrupt", False))
+        corrupt = bool(self.nvram.corrupt)
         eeprom = self.nvram.get("eeprom")
         self.params.power_on(eeprom)
         self.feed.power_on(eeprom)

@@ -179,20 +179,20 @@ class ReferenceRun:
             self.fast_kind = "rapid_nv"
             self.after_success = self._drive_off
             p1 = self.p1
-        sequence = SEQUENCES.get(str(p1)) or ReferenceRun._unknown
+        sequence = SEQUENCES.get(str(p1)) or ReferenceRun.unknown_type
         sequence(self)
 
-    def _controller_only(self) -> None:
+    def controller_only(self) -> None:
         """Q3, only through Q-1 (the executor runs a plain Q3 itself)."""
         if self.p2 & 0x40 and self.p3 == 0:
             self.refs.coordinates.set_counter_here(self._resolver_position())
         self.refs.stage.idxoff = False
         self._succeeded()
 
-    def _unknown(self) -> None:
+    def unknown_type(self) -> None:
         self._finish(False)
 
-    def _cam_search(self) -> None:
+    def cam_search(self) -> None:
         self.cam_phase = True
         if self.cam_active():
             self._drive_off_cam()
@@ -214,13 +214,10 @@ class ReferenceRun:
         if self.p1 == 2:
             self._reposition(self.refs.indexer.actual())
         else:
-            self._index_search()
+            self.index_search()
 
-    def _index_only(self) -> None:
-        """Q1: the index mark search only."""
-        self._index_search()
-
-    def _index_search(self) -> None:
+    def index_search(self) -> None:
+        """Search the index mark in the "negative" direction (Q1; Q0 after the cam)."""
         if self.counter_track:
             self._track_search()
             return
@@ -260,7 +257,7 @@ class ReferenceRun:
         period, off = axis.counts_per_rev, axis.index_offset
         return round((x - off) / period) * period + off
 
-    def _input_search(self) -> None:
+    def input_search(self) -> None:
         """Q6: until the input reaches its active level (with P2.7 only by a change to it)."""
         self.phase = "input_search"
         need_edge = bool(self.p2 & 0x80) and self.cam_active()
@@ -352,10 +349,10 @@ class ReferenceRun:
 #: The search sequence of each reference type ``Q P1`` (after ``Q-1`` took P1 from N19).
 SEQUENCES: Table[Callable[[ReferenceRun], None]] = Table(
     [
-        Command("0", ReferenceRun._cam_search, "§2.3.1 Q", "Q0: cam, drive off it, then the index mark"),
-        Command("1", ReferenceRun._index_only, "§2.3.1 Q", "Q1: the index mark"),
-        Command("2", ReferenceRun._cam_search, "§2.3.1 Q", "Q2: the cam"),
-        Command("3", ReferenceRun._controller_only, "§2.3.1 Q", "Q3: the position controller (through Q-1)"),
-        Command("6", ReferenceRun._input_search, "§2.3.1 Q", "Q6: a 24 V input"),
+        Command("0", ReferenceRun.cam_search, "§2.3.1 Q", "Q0: cam, drive off it, then the index mark"),
+        Command("1", ReferenceRun.index_search, "§2.3.1 Q", "Q1: the index mark"),
+        Command("2", ReferenceRun.cam_search, "§2.3.1 Q", "Q2: the cam"),
+        Command("3", ReferenceRun.controller_only, "§2.3.1 Q", "Q3: the position controller (through Q-1)"),
+        Command("6", ReferenceRun.input_search, "§2.3.1 Q", "Q6: a 24 V input"),
     ]
 )
