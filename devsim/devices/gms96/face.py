@@ -30,8 +30,9 @@ ACK = bytes([codec.ACK])
 
 @record
 class Letter:
-    """A letter command as received (manual §2.3, spec §3.5): letter, P1..P3, the number of parameters sent, the raw user
-    data, and where a deferred acknowledgement goes (``on_queue_full: defer``)."""
+    """A letter command as received (manual §2.3, spec §3.5): letter, P1..P3, the number of
+    parameters sent, the raw user data, and where a deferred acknowledgement goes
+    (``on_queue_full: defer``)."""
 
     letter: str
     p1: int
