@@ -13,7 +13,7 @@ rows.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping, MutableMapping
 from types import MappingProxyType
 from typing import Any, Literal
 
@@ -123,9 +123,15 @@ class Param:
             return " / ".join(str(c) for c in self.choices)
         if self.minimum is None and self.maximum is None:
             return ""
-        low = "" if self.minimum is None else f"{self.minimum:g}"
-        high = "" if self.maximum is None else f"{self.maximum:g}"
+        low = "" if self.minimum is None else _number(self.minimum)
+        high = "" if self.maximum is None else _number(self.maximum)
         return f"{low} … {high}"
+
+
+def _number(value: float) -> str:
+    """A range limit as the reference prints it: ``:g``, but a whole number in full (99999999,
+    not 1e+08)."""
+    return str(int(value)) if float(value).is_integer() else f"{value:g}"
 
 
 def _unit(unit: str) -> str:
@@ -216,11 +222,17 @@ class Parameters:
     """The part that owns a kind's parameter values: one value per row, the factory values at
     the start, writes checked against the row.  A kind subclasses it to name the values its model
     reads (``velocity = accessor(41)``); what a write *does* beyond storing the value belongs to
-    the part that owns that behaviour, which listens with :meth:`on_change`."""
+    the part that owns that behaviour, which listens with :meth:`on_change`.
 
-    def __init__(self, table: ParameterTable, values: Mapping[Key, Any] | None = None) -> None:
+    ``store`` is where the values live when the device keeps them in a memory of its own (the
+    PCD's registers: a view of the axis's register block); it is taken as it is (no factory
+    values are written into it: :meth:`reset` does that).  Without it the part keeps its own
+    dict, filled with the factory values."""
+
+    def __init__(self, table: ParameterTable, values: Mapping[Key, Any] | None = None, *,
+                 store: MutableMapping[Key, Any] | None = None) -> None:
         self.table = table
-        self.values: dict[Key, Any] = table.defaults()
+        self.values: MutableMapping[Key, Any] = table.defaults() if store is None else store
         if values:
             self.values.update(values)
         self._listeners: list[Callable[[Param, Any], None]] = []

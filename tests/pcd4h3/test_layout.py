@@ -3,16 +3,18 @@ vectors (Example configuration BAR = BAF = 200; default BAR = BAF = 2000)."""
 
 from __future__ import annotations
 
-from devsim.devices.pcd4h3.layout import FLAGS, FLAGS_PER_AXIS, REGISTERS, REGISTERS_PER_AXIS, Layout
+from devsim.devices.pcd4h3.layout import FLAGS_PER_AXIS, REGISTERS_PER_AXIS, Layout
+from devsim.devices.pcd4h3.tables import FLAG_FIELD as FLAGS
+from devsim.devices.pcd4h3.tables import REGISTERS
 from devsim.devices.pcd4h3.units import ffp_decode
 
 
 def test_tables_fill_the_blocks() -> None:
-    assert [r.offset for r in REGISTERS] == list(range(REGISTERS_PER_AXIS))
-    assert [f.offset for f in FLAGS] == list(range(FLAGS_PER_AXIS))
-    commands = [f for f in FLAGS if f.kind == "command"]
-    assert len(commands) == 29 and commands[0].symbol == "FLdDR" and commands[-1].symbol == "FBackw"
-    assert ffp_decode(next(r for r in REGISTERS if r.symbol == "MCFac").example) == 100.0
+    assert [r.key for r in REGISTERS] == list(range(REGISTERS_PER_AXIS))
+    assert [f.key for f in FLAGS] == list(range(FLAGS_PER_AXIS))
+    commands = [f for f in FLAGS if f.extra["kind"] == "command"]
+    assert len(commands) == 29 and commands[0].name == "FLdDR" and commands[-1].name == "FBackw"
+    assert ffp_decode(next(r for r in REGISTERS if r.name == "MCFac").default) == 100.0
 
 
 def test_addresses_of_the_vectors() -> None:
@@ -26,7 +28,7 @@ def test_addresses_of_the_vectors() -> None:
     default = Layout()
     assert default.register(1, "DestP") == 2007 and default.flag(1, "FLdDA") == 2007  # V20, V21
     assert default.register(2, "DestP") == 2027 and default.flag(2, "FStart") == 2063
-    assert default.locate_register(2027)[0] == 2 and default.locate_register(2027)[1].symbol == "DestP"  # type: ignore[index]
+    assert default.locate_register(2027)[0] == 2 and default.locate_register(2027)[1].name == "DestP"  # type: ignore[index]
     assert default.locate_flag(2063) == (2, "FStart") and default.locate_flag(2070) is None
 
 

@@ -9,22 +9,25 @@ from devsim.devices.pcd4h3.layout import Layout
 from devsim.devices.pcd4h3.library import H3Axis
 from devsim.devices.pcd4h3.lm628 import Lm628
 from devsim.devices.pcd4h3.pid import Motor
+from devsim.devices.pcd4h3.registers import AxisRegisters, RegisterBlock
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
 EXAMPLE_1 = {212: 0x41B, 206: 2000, 200: 150, 201: 50, 202: 50, 203: 500, 204: 15, 205: 0xC8000047 - (1 << 32),
              209: 500, 210: 100}
 
 
-def example_axis() -> H3Axis:
+def example_axis() -> tuple[H3Axis, dict[int, int]]:
     registers: dict[int, int] = dict(EXAMPLE_1)
     flags: dict[int, int] = {}
-    return H3Axis(1, Layout(bar=200, baf=200, axes=1), Lm628(Motor()), registers, flags)
+    layout = Layout(bar=200, baf=200, axes=1)
+    block = AxisRegisters(RegisterBlock(registers, layout.block(1)))
+    return H3Axis(1, layout, Lm628(Motor()), block, flags), registers
 
 
 def test_axinit_issues_the_chip_trace_of_example_1() -> None:
     """§6.2: RESET, PORT12, LTRJ 0000h, LPEI 2000, LFIL 0F0Fh 150 50 50 500, UDF, motor off +
     STT, acceleration 76, velocity 1 117 389; then status 84h, RSigB 4084h, OnDest 1."""
-    axis = example_axis()
+    axis, _ = example_axis()
     axis.flags[207] = 1  # a command flag left over: cleared by AxInit
     axis.init(6)
     assert axis.trace == [
@@ -41,10 +44,10 @@ def test_axinit_issues_the_chip_trace_of_example_1() -> None:
 def test_example_1_motion_program_through_the_flags() -> None:
     """§6.3: DestP 1000 (100 mm) + FLdDA + FStart: LTRJ 0002h 000186A0h, STT; flags read back 0,
     OnDest 0; after ≈ 6.34 s OnDest 1 at 100 000 counts, FRdAP gives R 213 = 1000."""
-    axis = example_axis()
+    axis, registers = example_axis()
     axis.init(6)
     axis.trace.clear()
-    axis.registers[207] = 1000
+    registers[207] = 1000
     axis.flags[207] = axis.flags[228] = 1
     assert axis.handle() == pytest.approx(0.5 + 4.1 + 1.0)  # base time and the two functions (§10.1)
     assert axis.trace == [("LTRJ", (0x0002, 100_000)), ("STT", ())]
@@ -58,4 +61,4 @@ def test_example_1_motion_program_through_the_flags() -> None:
     assert samples * CHIP_SAMPLE == pytest.approx(6.34, rel=0.02)
     axis.flags[221] = 1  # FRdAP
     axis.handle()
-    assert axis.registers[213] == pytest.approx(1000, abs=1)
+    assert registers[213] == pytest.approx(1000, abs=1)

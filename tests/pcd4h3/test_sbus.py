@@ -26,6 +26,7 @@ from devsim.devices.pcd4h3.sbus import (
     stuff,
     unstuff,
 )
+from devsim.devices.pcd4h3.services import telegram as telegram_of
 
 
 def h(text: str) -> bytes:
@@ -70,9 +71,9 @@ def test_request_vectors(vector: str, raw: str, wire: str | None, decoded: objec
     assert on_wire == h(wire or raw)
     assert unstuff(on_wire) == telegram
     for size in (1, 3, len(on_wire)):
-        receiver = SerialReceiver(1)
+        receiver = SerialReceiver(1, telegram_of)
         requests = [r for start in range(0, len(on_wire), size) for r in receiver.feed(on_wire[start : start + size])]
-        assert len(requests) == 1 and decode_command(requests[0]) == decoded
+        assert len(requests) == 1 and decode_command(requests[0], telegram_of) == decoded
 
 
 @pytest.mark.parametrize(("data", "wire"), [
@@ -99,32 +100,32 @@ def test_flags_pack_bit_0_first() -> None:
 
 
 def test_other_stations_crc_and_framing_errors_are_dropped() -> None:
-    receiver = SerialReceiver(2)
+    receiver = SerialReceiver(2, telegram_of)
     assert receiver.feed(h("B5 00 01 1B DD FF")) == []  # station 1
-    receiver = SerialReceiver(1)
+    receiver = SerialReceiver(1, telegram_of)
     assert receiver.feed(h("B5 00 01 1B DD FE")) == [] and receiver.errors["crc"] == 1
     assert receiver.feed(h("B5 00 01 0E 05 00 C5 07")) == [] and receiver.errors["framing"] == 1
     assert receiver.feed(h("B5 00 01 06 B5 00 01 1B DD FF")) == [Request(1, 0x1B, b"")]  # B5 resynchronises
     assert receiver.feed(h("B5 00 FF 1B")) == []  # broadcast: in progress
     broadcast = bytes.fromhex("B5 00 FF 38")
     broadcast += crc16(broadcast).to_bytes(2, "big")
-    assert SerialReceiver(1).feed(stuff(broadcast)) == [Request(255, 0x38, b"")]
+    assert SerialReceiver(1, telegram_of).feed(stuff(broadcast)) == [Request(255, 0x38, b"")]
 
 
 def test_unsupported_commands_and_counts_are_bad() -> None:
     telegram = h("B5 00 01 55")
     telegram += crc16(telegram).to_bytes(2, "big")
-    (request,) = SerialReceiver(1).feed(stuff(telegram))
-    assert isinstance(decode_command(request), Bad)
-    assert isinstance(decode_command(Request(1, 0x06, h("20 00 00"))), Bad)  # 33 registers
+    (request,) = SerialReceiver(1, telegram_of).feed(stuff(telegram))
+    assert isinstance(decode_command(request, telegram_of), Bad)
+    assert isinstance(decode_command(Request(1, 0x06, h("20 00 00")), telegram_of), Bad)  # 33 registers
     for command, parameters in ((0x0E, h("00 00")), (0x0B, h("00 00 01")), (0x06, h("00")), (0x0E, h("02 00 00 00 00"))):
-        assert isinstance(decode_command(Request(1, command, parameters)), Bad)
+        assert isinstance(decode_command(Request(1, command, parameters), telegram_of), Bad)
 
 
 @settings(max_examples=500, deadline=None)
 @given(hs.sampled_from([0x00, 0x02, 0x03, 0x05, 0x06, 0x07, 0x0B, 0x0D, 0x0E, 0x1B, 0x55]), hs.binary(max_size=40))
 def test_any_parameters_decode_or_are_bad(command: int, parameters: bytes) -> None:
-    assert isinstance(decode_command(Request(1, command, parameters)), Read | Write | Simple | Bad)
+    assert isinstance(decode_command(Request(1, command, parameters), telegram_of), Read | Write | Simple | Bad)
 
 
 ETHER = [
@@ -142,7 +143,7 @@ def test_ether_vectors(vector: str, frame: str, decoded: object) -> None:
     parsed = parse_ether(h(frame))
     assert parsed is not None
     version, sequence, request = parsed
-    assert (version, sequence, request.station) == (1, 1, 1) and decode_command(request) == decoded
+    assert (version, sequence, request.station) == (1, 1, 1) and decode_command(request, telegram_of) == decoded
     receiver = EtherReceiver()
     assert [f for b in h(frame) for f in receiver.feed(bytes((b,)))] == [h(frame)]
 
@@ -158,12 +159,12 @@ def test_ether_reply_vectors() -> None:
 @settings(max_examples=500, deadline=None)
 @given(hs.binary(max_size=200), hs.integers(min_value=1, max_value=40))
 def test_any_bytes_in_any_chunks_never_raise(data: bytes, size: int) -> None:
-    receiver = SerialReceiver(1)
+    receiver = SerialReceiver(1, telegram_of)
     for start in range(0, len(data), size):
         for request in receiver.feed(data[start : start + size]):
-            decode_command(request)
+            decode_command(request, telegram_of)
     ether = EtherReceiver()
     for frame in ether.feed(data):
         parsed = parse_ether(frame)
         if parsed is not None:
-            decode_command(parsed[2])
+            decode_command(parsed[2], telegram_of)

@@ -26,9 +26,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from devsim.core.kit import Command, Table
 from devsim.core.record import record
 
-__all__ = ["ACK", "DLE", "EOT", "ETX", "NAK", "STX", "As511Link", "Refused", "dle_double", "dle_undouble"]
+__all__ = [
+    "ACK", "DLE", "EOT", "ETX", "NAK", "STX", "As511Link", "Refused", "dle_double", "dle_undouble", "function_token",
+]
 
 STX, ETX, EOT, ACK, DLE, NAK = 0x02, 0x03, 0x04, 0x06, 0x10, 0x15
 DLE_ACK, DLE_NAK, DLE_ETX, DLE_EOT = bytes((DLE, ACK)), bytes((DLE, NAK)), bytes((DLE, ETX)), bytes((DLE, EOT))
@@ -46,6 +49,11 @@ class Refused:
 
 #: What a service answers: response data (a data phase follows), None (no data phase), Refused.
 Reply = bytes | None | Refused
+
+
+def function_token(code: int) -> str:
+    """A PG function code as the tables name it: ``61H``."""
+    return f"{code:02X}H"
 
 
 def dle_double(data: bytes) -> bytes:
@@ -90,28 +98,28 @@ class As511Link:
             self._byte(byte, out)
         return out
 
-    # -- the steps ----------------------------------------------------------------------------------
+    # -- the steps (one reader per state, :data:`STATES`) ----------------------------------------------
     def _byte(self, byte: int, out: list[bytes]) -> None:
-        state = self.state
-        if state == "idle":
-            if byte == STX:
-                out.append(DLE_ACK)
-                self.state = "function"
-            return  # anything else between transactions is noise
-        if state == "function":
-            self._fn = byte
-            if self.known(byte):
-                out.append(bytes((STX,)))
-                self.state = "ack_accept"
-            else:
-                out.append(DLE_NAK)
-                self.events.append("refused_function")
-                self.state = "idle"
-            return
-        if state == "parameters":
-            self._parameter(byte, out)
-            return
-        # every other state waits for the PG's DLE ACK
+        STATES[self.state](self, byte, out)
+
+    def _idle(self, byte: int, out: list[bytes]) -> None:
+        if byte == STX:
+            out.append(DLE_ACK)
+            self.state = "function"
+        # anything else between transactions is noise
+
+    def _function(self, byte: int, out: list[bytes]) -> None:
+        self._fn = byte
+        if self.known(byte):
+            out.append(bytes((STX,)))
+            self.state = "ack_accept"
+        else:
+            out.append(DLE_NAK)
+            self.events.append("refused_function")
+            self.state = "idle"
+
+    def _awaiting_ack(self, byte: int, out: list[bytes]) -> None:
+        """Every other state waits for the PG's DLE ACK, then takes its step."""
         if not self._dle:
             if byte == DLE:
                 self._dle = True
@@ -122,28 +130,31 @@ class As511Link:
         if byte != ACK:
             self._abandon("DLE NAK" if byte == NAK else "expected DLE ACK")
             return
-        self._acknowledged(out)
+        ACKNOWLEDGED[self.state](self, out)
 
-    def _acknowledged(self, out: list[bytes]) -> None:
-        state = self.state
-        if state == "ack_accept":
-            out.append(ACCEPT)
-            self.state = "ack_parameters"
-        elif state == "ack_parameters":
-            self._block.clear()
-            self.state = "parameters"
-        elif state == "ack_data":
-            assert self._data is not None
-            out.append(dle_double(self._data) + DLE_ETX)
-            self.state = "ack_data_done"
-        elif state == "ack_data_done":
-            out.append(bytes((STX,)))
-            self.state = "ack_end"
-        elif state == "ack_end":
-            out.append(END)
-            self.state = "ack_final"
-        elif state == "ack_final":
-            self.state = "idle"
+    def _send_accept(self, out: list[bytes]) -> None:
+        out.append(ACCEPT)
+        self.state = "ack_parameters"
+
+    def _open_parameters(self, out: list[bytes]) -> None:
+        self._block.clear()
+        self.state = "parameters"
+
+    def _send_data(self, out: list[bytes]) -> None:
+        assert self._data is not None
+        out.append(dle_double(self._data) + DLE_ETX)
+        self.state = "ack_data_done"
+
+    def _send_stx(self, out: list[bytes]) -> None:
+        out.append(bytes((STX,)))
+        self.state = "ack_end"
+
+    def _send_end(self, out: list[bytes]) -> None:
+        out.append(END)
+        self.state = "ack_final"
+
+    def _finished(self, out: list[bytes]) -> None:
+        self.state = "idle"
 
     def _parameter(self, byte: int, out: list[bytes]) -> None:
         if not self._dle:
@@ -176,3 +187,25 @@ class As511Link:
         self._dle = False
         self._block.clear()
         self._data = None
+
+
+Reader = Callable[[As511Link, int, list[bytes]], None]
+Step = Callable[[As511Link, list[bytes]], None]
+
+#: The link's states (spec §3.5.2): the reader of the next byte in each.
+STATES: Table[Reader] = Table([
+    Command("idle", As511Link._idle, "spec §3.5.2", "between transactions: STX opens one (DLE ACK)"),
+    Command("function", As511Link._function, "spec §3.5.2", "the function code: STX if known, else DLE NAK"),
+    Command("parameters", As511Link._parameter, "spec §3.5.2", "the parameter block up to DLE EOT"),
+    *(Command(state, As511Link._awaiting_ack, "spec §3.5.2", "waiting for the PG's DLE ACK")
+      for state in ("ack_accept", "ack_parameters", "ack_data", "ack_data_done", "ack_end", "ack_final")),
+])
+#: What the device does when the PG acknowledges (DLE ACK) in each waiting state (spec §3.5.2).
+ACKNOWLEDGED: Table[Step] = Table([
+    Command("ack_accept", As511Link._send_accept, "spec §3.5.2", "send \"accept\" 16 10 03"),
+    Command("ack_parameters", As511Link._open_parameters, "spec §3.5.2", "the parameter block follows"),
+    Command("ack_data", As511Link._send_data, "spec §3.5.2", "send the response data, DLE ETX"),
+    Command("ack_data_done", As511Link._send_stx, "spec §3.5.2", "STX: the end follows"),
+    Command("ack_end", As511Link._send_end, "spec §3.5.2", "send \"end\" 12 10 03"),
+    Command("ack_final", As511Link._finished, "spec §3.5.2", "the transaction is complete"),
+])

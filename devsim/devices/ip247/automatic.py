@@ -11,19 +11,18 @@ A flying change (G10) joins its blocks into one motion (:mod:`.flying`).
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable, Iterator
+from typing import Any
 
+from devsim.core.kit import Command, Table
 from devsim.devices.ip247 import program as lang
+from devsim.devices.ip247.axis_unit import AxisUnit
 from devsim.devices.ip247.flow import M_NONE, FlowError, steps
 from devsim.devices.ip247.flying import NotJoinable, chain_pieces
 from devsim.devices.ip247.jobs import START, STOP, TAKE_OVER
 from devsim.devices.ip247.program import Block
 
-if TYPE_CHECKING:
-    from devsim.devices.ip247.axis_unit import AxisUnit
-
-__all__ = ["ProgramRun"]
+__all__ = ["SWITCHES", "ProgramRun", "g_token"]
 
 
 class ProgramRun:
@@ -60,7 +59,7 @@ class ProgramRun:
             target, f = self._move
             unit.running = True
             if unit.held(lambda: unit.position_to(target, f, self._done)):
-                unit.module.set_error(unit, 6)
+                unit.set_error(6)
             return None
         self._advance(skip_halt=True)
         return None
@@ -141,23 +140,44 @@ class ProgramRun:
             return
 
     def _switches(self, block: Block) -> int | None:
-        g, unit, md = block.g, self.unit, self.unit.md
-        assert md is not None
-        if g in (90, 91):
-            self.absolute = g == 90
-        elif g in (70, 71) and md.unit != 3:
-            self.metric = g == 71
-        elif g in (25, 26, 27):
-            self.direction = g
-        elif g == 53:
-            unit.coords.program_shift(0)
-        elif g in (54, 55, 56, 57):
-            unit.coords.program_shift(md.zero_offsets[g - 54])
-        elif g == 40:
-            unit.coords.to_prog = 0
-        elif g in (43, 44):
-            return unit.coords.program_tool(md.tool_length, g == 43)
+        """The switch, shift or correction a block's G function makes (:data:`SWITCHES`)."""
+        assert self.unit.md is not None
+        switch = SWITCHES.get(g_token(block.g)) if block.g is not None else None
+        return switch(self, block.g) if switch is not None else None
+
+    def _dimensions(self, g: int) -> int | None:
+        self.absolute = g == 90
         return None
+
+    def _units(self, g: int) -> int | None:
+        md = self.unit.md
+        assert md is not None
+        if md.unit != 3:
+            self.metric = g == 71
+        return None
+
+    def _rotary_direction(self, g: int) -> int | None:
+        self.direction = g
+        return None
+
+    def _shifts_off(self, g: int) -> int | None:
+        self.unit.coords.program_shift(0)
+        return None
+
+    def _shift(self, g: int) -> int | None:
+        md = self.unit.md
+        assert md is not None
+        self.unit.coords.program_shift(md.zero_offsets[g - 54])
+        return None
+
+    def _tools_off(self, g: int) -> int | None:
+        self.unit.coords.to_prog = 0
+        return None
+
+    def _tool(self, g: int) -> int | None:
+        md = self.unit.md
+        assert md is not None
+        return self.unit.coords.program_tool(md.tool_length, g == 43)
 
     def _execute(self, block: Block, m: int) -> None:
         unit, md = self.unit, self.unit.md
@@ -165,7 +185,7 @@ class ProgramRun:
         unit.m_function = m
         self._last = (block, m)
         unit.running = True
-        unit.module.changed(unit)
+        unit.changed()
         if block.g == 4:
             unit.in_position = False
             unit.set_pe()
@@ -174,7 +194,7 @@ class ProgramRun:
                 self._timer = unit.clock.call_later((block.f or 0) * 0.1, lambda: self._done(True))
 
             if unit.held(dwell):
-                unit.module.set_error(unit, 6)
+                unit.set_error(6)
             return
         result = self._target(block, unit.actual(), unit.holder)
         if isinstance(result, int):
@@ -186,7 +206,7 @@ class ProgramRun:
         target, f, _ = result
         self._move = (target, f)
         if unit.held(lambda: unit.position_to(target, f, self._done)):
-            unit.module.set_error(unit, 6)
+            unit.set_error(6)
 
     def _target(self, block: Block, tip: float, holder: float) -> tuple[float, float, float] | int:
         """Where a traverse takes the holder, at which frequency, and the tip coordinate there;
@@ -327,7 +347,7 @@ class ProgramRun:
     def _rest(self) -> None:
         unit = self.unit
         unit.running = False
-        unit.module.changed(unit)
+        unit.changed()
 
     def _end(self) -> None:
         unit = self.unit
@@ -340,4 +360,35 @@ class ProgramRun:
         unit = self.unit
         self.abort()
         self._rest()
-        unit.module.set_error(unit, error)
+        unit.set_error(error)
+
+
+def g_token(g: int) -> str:
+    """A G function as the tables name it: ``G54``, ``G04``."""
+    return f"G{g:02d}"
+
+
+Switch = Callable[[ProgramRun, int], "int | None"]
+
+
+def _g(g: int, handler: Switch, section: str, doc: str) -> Command[Switch]:
+    return Command(g_token(g), handler, section, doc)
+
+
+#: The G functions that switch, shift or correct without moving (manual §2.6.6; spec §4.11.3,
+#: §4.11.6, §4.11.7): each returns the module error it gives (63 for G43/G44 out of range).
+SWITCHES: Table[Switch] = Table([
+    _g(90, ProgramRun._dimensions, "§2.6.6", "Maßangaben absolut: X absolute (default)"),
+    _g(91, ProgramRun._dimensions, "§2.6.6", "Maßangaben relativ: X relative"),
+    _g(70, ProgramRun._units, "§2.6.6", "Maßangaben in 0,1 inch (no effect on a degree axis)"),
+    _g(71, ProgramRun._units, "§2.6.6", "Maßangaben in mm (no effect on a degree axis)"),
+    _g(25, ProgramRun._rotary_direction, "§2.6.6", "rotary targets the shortest way (default)"),
+    _g(26, ProgramRun._rotary_direction, "§2.6.6", "rotary targets clockwise (forward)"),
+    _g(27, ProgramRun._rotary_direction, "§2.6.6", "rotary targets counter-clockwise (backward)"),
+    _g(53, ProgramRun._shifts_off, "§2.6.6.7", "Verschiebungen aufheben: program zero offsets off"),
+    *(_g(54 + i, ProgramRun._shift, "§2.6.6.7", f"Verschiebung {i + 1} einschalten: MD zero offset {i + 1}")
+      for i in range(4)),
+    _g(40, ProgramRun._tools_off, "§2.6.6.6", "Werkzeugkorrektur aufheben: program tool offsets off"),
+    _g(43, ProgramRun._tool, "§2.6.6.6", "positive Werkzeugkorrektur: add the MD tool length"),
+    _g(44, ProgramRun._tool, "§2.6.6.6", "negative Werkzeugkorrektur: subtract the MD tool length"),
+])

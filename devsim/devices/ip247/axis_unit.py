@@ -1,45 +1,75 @@
-"""One IP247 axis page: its state and the modes that move it or shift its coordinates (manual
-§2.7, §2.8, §4.1, §4.2, §4.3.5–§4.3.9; spec ip247.md §4.1, §4.2, §5.4–§5.10).
+"""One IP247 axis page: its state, its motion and its switches (manual §2.7, §2.8, §4.1, §4.2;
+spec ip247.md §4.1, §4.13, §5.1–§5.8, §5.15).
 
 The axis is open loop: the shared closed-form :class:`~devsim.core.axis.Axis` carries the motor
 side's machine position M in base units, moved by the exponential ramp pieces of
 :mod:`.motion`.  The holder coordinate is H = M − M0 (M0 fixed by the reference point), the
-reported actual value the tool tip's (:class:`.coordinates.Coordinates`).  The module
-(:mod:`.module`) checks a job's preconditions (:func:`.jobs.refusal`) before it reaches
-:meth:`AxisUnit.operate`; errors are module error numbers (spec §4.3).
+reported actual value the tool tip's (:class:`.coordinates.Coordinates`).  The operating modes
+that move the axis are in :mod:`.modes`; errors are module error numbers (spec §4.3), which the
+page hands to the module it sits on (:class:`AxisEvents`).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable, Set
+from typing import Any, Protocol
 
 from devsim.core.axis import Axis
+from devsim.core.clock import Clock
+from devsim.core.signals import SignalBank
 from devsim.devices.ip247.attributes import rmld
+from devsim.devices.ip247.basp import Basp
 from devsim.devices.ip247.coordinates import Coordinates
-from devsim.devices.ip247.jobs import BACKWARD, FORWARD, START, STOP, TAKE_OVER, AxisView
+from devsim.devices.ip247.jobs import AxisView
 from devsim.devices.ip247.machine_data import MachineData
 from devsim.devices.ip247.motion import ExpPiece, move_pieces
 from devsim.devices.ip247.motor import SteppingMotor
-from devsim.devices.ip247.reference import ReferenceRun
 from devsim.devices.ip247.switches import MechanicalSwitch
 
-if TYPE_CHECKING:
-    from devsim.devices.ip247.module import Ip247Module
-
-__all__ = ["AxisUnit"]
+__all__ = ["AxisEvents", "AxisUnit", "ProgramContext", "ReferenceContext"]
 
 FOREVER = 1e9  # seconds: a jog's cruise lasts until something stops it
-MAX_RELATIVE = 200_000_000  # base units: BA7 on a rotary axis (spec §5.5)
+RS_PULSE = 0.1  # seconds (spec §5.16)
+
+
+class AxisEvents(Protocol):
+    """What an axis page tells the module it sits on (spec §4.1, §4.3)."""
+
+    def set_error(self, unit: AxisUnit, error: int) -> None: ...
+    def changed(self, unit: AxisUnit) -> None: ...
+    def record_event(self, name: str) -> None: ...
+
+
+class ProgramContext(Protocol):
+    """The program context of an axis in BA8/BA9 (:class:`.automatic.ProgramRun`)."""
+
+    number: int
+    halted: bool
+    interrupted: bool
+
+    def abort(self) -> None: ...
+    def command(self, ba: int, cmd: int) -> int | None: ...
+
+
+class ReferenceContext(Protocol):
+    """A reference run in progress (:class:`.reference.ReferenceRun`): the axis forwards its
+    limit and cam inputs to it."""
+
+    def limit(self, name: str) -> None: ...
+    def cam(self, active: bool) -> None: ...
+    def cancel(self) -> None: ...
 
 
 class AxisUnit:
-    """Axis page 1 … 3 (spec §4.1.1)."""
+    """Axis page 1 … 3 (spec §4.1.1): the state FB164 shows, the motion primitives the modes and
+    programs use (manual §2.8, spec §5.3–§5.8) and the limit switches (spec §5.7)."""
 
-    def __init__(self, module: Ip247Module, number: int, geometry: dict[str, Any]) -> None:
-        self.module, self.number, self.clock = module, number, module.clock
-        self.axis = Axis(module.clock, name=f"axis{number}")
+    def __init__(self, number: int, geometry: dict[str, Any], *, clock: Clock, signals: SignalBank,
+                 events: AxisEvents, basp: Basp, wiring_faults: Set[str]) -> None:
+        self.number, self.clock, self.signals, self.events = number, clock, signals, events
+        self.basp, self.wiring_faults = basp, wiring_faults
+        self.axis = Axis(clock, name=f"axis{number}")
         self.md: MachineData | None = None
         self.md_words: list[int] | None = None
         self.mode, self.last_cmd, self.running = 4, 0, False
@@ -56,12 +86,12 @@ class AxisUnit:
         self.taught: list[str] = []  # the blocks stored in teach-in so far
         self.locks: set[int] = set()  # directions locked by a limit switch (+1 forward, -1 backward)
         self.waiting_start: Callable[[], None] | None = None  # a job waiting for external start
-        self.automatic: Any = None  # the program context (BA8/BA9), see .automatic
-        self.reference_run: Any = None  # see .reference
+        self.automatic: ProgramContext | None = None  # the program context (BA8/BA9), see .automatic
+        self.reference_run: ReferenceContext | None = None  # see .reference
         self.pattern_base = 0.0  # machine position where the current-pattern counter was 0
         self._done: Callable[[bool], None] | None = None
         self._decel_at = math.inf  # when the current positioning move starts its last braking
-        self._sw_watch: Any = None
+        self.sw_watch: Any = None  # the SW limit a jog watches
         self.motor = SteppingMotor(geometry.get("max_start_hz"), geometry.get("pullout_hz"))
         self._mech0, self._x0, self._follows, self._sense = 0.0, 0.0, math.inf, 1
         self._switches = [self._region(geometry, name) for name in ("anf", "end", "cam")]
@@ -99,7 +129,7 @@ class AxisUnit:
         if self._d == 0:
             self.m0 = self.axis.position() - h - self._side(direction)  # no play to take up
         self._h0, self._d = h, direction
-        self.module.signals.set(f"RP{self.number}", direction > 0)
+        self.signals.set(f"RP{self.number}", direction > 0)
 
     def machine(self, holder: float, direction: int) -> float:
         """The motor position that puts the load at ``holder`` after a move in ``direction``."""
@@ -126,6 +156,31 @@ class AxisUnit:
     def view(self) -> AxisView:
         return AxisView(self.number, self.md_valid, self.reference_set, self.running, self.mode,
                         self.teach_in is not None, bool(self.md and self.md.rotary))
+
+    # -- what the page tells the module (spec §4.3) ----------------------------------------------
+    def set_error(self, error: int) -> None:
+        self.events.set_error(self, error)
+
+    def changed(self) -> None:
+        self.events.changed(self)
+
+    def fail(self, error: int) -> None:
+        """Stop the axis and its program (a limit switch, an external stop): error ``error``."""
+        if self.automatic is not None:
+            self.automatic.abort()
+        self.brake()
+        self.set_error(error)
+
+    def pulse_rs(self) -> None:
+        """A 100 ms high pulse on RS; the pattern counter restarts at 0 (spec §2.8.1, §5.6.3)."""
+        name = f"RS{self.number}"
+        self.signals.set(name, True)
+        self.clock.call_later(RS_PULSE, lambda: self.signals.set(name, False))
+        self.pattern_base = self.axis.position()
+
+    def limit_levels(self) -> tuple[bool, bool]:
+        """The levels of the limit inputs ANF and END (True = 24 V)."""
+        return bool(self.signals.get(f"ANF{self.number}")), bool(self.signals.get(f"END{self.number}"))
 
     # -- machine data -----------------------------------------------------------------------------
     def load_md(self, md: MachineData | None, words: list[int] | None, *, first: bool) -> None:
@@ -155,58 +210,21 @@ class AxisUnit:
             self.set_holder(self.md.reference)
         self.set_pe()
 
-    # -- operator jobs (spec §4.2) ----------------------------------------------------------------
-    def operate(self, ba: int, cmd: int, b: int, w: int, dd: int) -> int | None:
-        """A job the checks let through; returns the module error it leaves (None: none)."""
-        if self.waiting_start is not None:
-            self.waiting_start = None
-            self._set_running(False)
-            if cmd == STOP:
-                return None  # Stopp cancels the wait without error (spec §4.2)
-            return 2
-        if self.running:
-            return self._while_running(ba, cmd, b, w, dd)
-        handler = _MODES.get(ba)
-        self.mode, self.last_cmd = ba, cmd
-        if ba not in (8, 9):
-            self.m_function = 2
-        if cmd == STOP and ba not in (8, 9):
-            return None  # Stopp of a finished axis: nothing to do
-        if cmd == TAKE_OVER and ba in (1, 2, 6, 7):
-            return self.module.teach_store(self)  # store a teach-in block (spec §5.12)
-        return handler(self, cmd, b, w, dd) if handler is not None else 2
-
-    def _while_running(self, ba: int, cmd: int, b: int, w: int, dd: int) -> int | None:
-        if self.automatic is not None and self.mode in (8, 9):
-            return self.automatic.command(ba, cmd)
-        if ba in (1, 2) and self.mode in (1, 2) and ba != self.mode and cmd in (FORWARD, BACKWARD):
-            self.mode, self.last_cmd = ba, cmd  # stop, then jog on in the other mode (spec §5.4)
-            self.brake(lambda ok: self._jog_mode(cmd, w))
-            return None
-        self.last_cmd = STOP
-        if self.reference_run is not None:
-            self.reference_run.cancel()
-            self.reference_set = False  # an aborted reference run leaves none (spec §5.6)
-        self.brake()
-        if cmd == STOP or ba == 4:
-            return None
-        return 2
-
     # -- the external start/stop input (spec §5.10) -------------------------------------------------
     def held(self, start: Callable[[], None]) -> int | None:
         """Start a motion job, or, while the START-N/STOP input is 1, hold it until the input
         falls (error 6, "Motor wartet auf externen Start"); returns 6 when held.  Without the
         power unit's BB the job is refused (53); under BASP too (55)."""
-        signals = self.module.signals
+        signals = self.signals
         if not signals.get(f"BB{self.number}"):
             return 53
-        if self.module.basp:
+        if self.basp.active:
             return 55
         if not signals.get(f"START{self.number}"):
             start()
             return None
         self.waiting_start = start
-        self._set_running(True)
+        self.set_running(True)
         return 6
 
     def release(self) -> None:
@@ -216,35 +234,22 @@ class AxisUnit:
             return
         if self.error == 6:
             self.error = 0
-        self._set_running(False)
+        self.set_running(False)
         start()
 
     # -- motion -----------------------------------------------------------------------------------
-    def _set_running(self, running: bool) -> None:
+    def set_running(self, running: bool) -> None:
         self.running = running
         if not running:
             self.braking = False
-        self.module.changed(self)
-
-    def _velocity(self, w: int, default: int) -> tuple[float, int | None]:
-        """The job's travel frequency: W or the MD velocity, clamped (error 7, spec §5.2)."""
-        md = self.md
-        assert md is not None
-        velocity = w or default
-        error = None
-        if not 1 <= velocity <= 65000:
-            velocity, error = min(max(velocity, 1), 65000), 7
-        f = md.frequency(velocity)
-        if f > md.f_max or f < 1:
-            f, error = min(max(f, 1.0), float(md.f_max)), 7
-        return f, error
+        self.changed()
 
     def _start(self, pieces: list[tuple[float, Any]], done: Callable[[bool], None] | None) -> None:
         self.in_position = False
         self.set_pe()
         self._done = done
-        self.module.record_event("move_start")
-        self._set_running(True)
+        self.events.record_event("move_start")
+        self.set_running(True)
         self._follow(pieces)
         self._decel_at = self.clock.now() + sum(d for d, _ in pieces[:-1]) if pieces else math.inf
 
@@ -265,7 +270,7 @@ class AxisUnit:
     def wiring(self) -> int:
         """How the motor answers the pulses (spec §5.15 wiring faults): 1, −1 with T/RP swapped
         (it turns the other way), 0 with RS stuck active or no special voltage (it stands)."""
-        faults = self.module.wiring_faults
+        faults = self.wiring_faults
         if f"rs_stuck_{self.number}" in faults or "no_special_voltage" in faults:
             return 0
         return -1 if f"rp_swapped_{self.number}" in faults else 1
@@ -281,9 +286,9 @@ class AxisUnit:
 
     def _ended(self) -> None:
         self.braking = False
-        self.module.record_event("move_end")
+        self.events.record_event("move_end")
         done, self._done = self._done, None
-        self._set_running(False)
+        self.set_running(False)
         if done is not None:
             done(True)
 
@@ -342,7 +347,7 @@ class AxisUnit:
         if md is None or not self.axis.moving:
             self._done = None
             if self.running:
-                self._set_running(False)
+                self.set_running(False)
             if then is not None:
                 then(False)
             return
@@ -360,110 +365,6 @@ class AxisUnit:
         self.braking = True
         self._follow([(t_v, ExpPiece(md.ramp, md.resolution, self.axis.position(), sign, "decel", t_v, f0))])
         self._decel_at = self.clock.now()
-
-    # -- the modes --------------------------------------------------------------------------------
-    def _jog_mode(self, cmd: int, w: int) -> int | None:
-        md = self.md
-        assert md is not None
-        if cmd not in (FORWARD, BACKWARD):
-            return 2
-        direction = 1 if cmd == FORWARD else -1
-        if direction in self.locks:
-            return 25 if direction < 0 else 26
-        f, error = self._velocity(w, md.jog1 if self.mode == 1 else md.jog2)
-
-        def run() -> None:
-            self.jog(direction, f)
-            self._arm_sw_limit(direction)
-
-        return self.held(run) or error
-
-    def _ba1(self, cmd: int, b: int, w: int, dd: int) -> int | None:
-        return self._jog_mode(cmd, w)
-
-    def _ba4(self, cmd: int, b: int, w: int, dd: int) -> int | None:
-        return None  # the axis is off (and stays "fertig")
-
-    def _ba5(self, cmd: int, b: int, w: int, dd: int) -> int | None:
-        md = self.md
-        assert md is not None
-        self.reference_set = False  # the start deletes an existing reference (spec §5.6)
-        if b != 0:
-            self.set_holder(md.reference)  # set: H := x_ref (spec §5.6.1)
-            self.reference_set = True
-            self.target = None
-            return None
-        return self.held(ReferenceRun(self).start)
-
-    def _positioning(self, holder_target: float, w: int) -> int | None:
-        md = self.md
-        assert md is not None
-        if not md.rotary and self.reference_set:
-            low, high = self.coords.range()
-            shifted = holder_target - self.coords.zero_offset
-            if not low <= shifted <= high:
-                return 23
-        direction = 1 if holder_target > self.holder else -1
-        if holder_target != self.holder and direction in self.locks:
-            return 25 if direction < 0 else 26
-        f, error = self._velocity(w, md.step_velocity)
-        return self.held(lambda: self.position_to(holder_target, f)) or error
-
-    def _ba6(self, cmd: int, b: int, w: int, dd: int) -> int | None:
-        md = self.md
-        assert md is not None
-        if not md.rotary:
-            return self._positioning(self.coords.holder_for(dd), w)
-        begin, end = self.coords.range()
-        if not begin <= dd <= end:
-            return 23
-        span = end - begin
-        here = self.actual()
-        forward = (dd - here) % span
-        if cmd == START:
-            step = forward if forward <= span - forward else forward - span  # ties: forward
-        elif cmd == FORWARD:
-            step = forward or span
-        else:
-            step = -((here - dd) % span or span)
-        return self._positioning(self.holder + step, w)
-
-    def _ba7(self, cmd: int, b: int, w: int, dd: int) -> int | None:
-        md = self.md
-        assert md is not None
-        if cmd not in (FORWARD, BACKWARD):
-            return 2
-        distance = dd if cmd == FORWARD else -dd
-        if md.rotary and abs(distance) > MAX_RELATIVE:
-            return 62
-        if md.rotary:
-            f, error = self._velocity(w, md.step_velocity)
-            target = self.holder + distance
-            return self.held(lambda: self.position_to(target, f)) or error
-        return self._positioning(self.holder + distance, w)
-
-    def _ba12(self, cmd: int, b: int, w: int, dd: int) -> int | None:
-        return self.coords.set_actual(round(self.holder), dd)
-
-    def _ba13(self, cmd: int, b: int, w: int, dd: int) -> int | None:
-        return self.coords.shift(dd, cmd == FORWARD) if cmd in (FORWARD, BACKWARD) else 2
-
-    def _ba14(self, cmd: int, b: int, w: int, dd: int) -> int | None:
-        self.coords.clear_shifts()
-        return None
-
-    def _ba15(self, cmd: int, b: int, w: int, dd: int) -> int | None:
-        return self.coords.set_tool(dd, cmd == FORWARD) if cmd in (FORWARD, BACKWARD) else 2
-
-    def _ba16(self, cmd: int, b: int, w: int, dd: int) -> int | None:
-        self.coords.clear_tools()
-        return None
-
-    def _ba_program(self, cmd: int, b: int, w: int, dd: int) -> int | None:
-        return self.module.program_job(self, cmd, b)
-
-    def _ba_teach(self, cmd: int, b: int, w: int, dd: int) -> int | None:
-        return self.module.teach_job(self, cmd, b)
 
     # -- limit switches (spec §5.7) ---------------------------------------------------------------
     def _region(self, geometry: dict[str, Any], name: str) -> MechanicalSwitch | None:
@@ -485,7 +386,7 @@ class AxisUnit:
         if polarity is None:
             polarity = self.md.limit_polarity if self.md is not None else 0
         level = actuated if name == "cam" or polarity == 0 else not actuated
-        self.module.signals.set(f"{'BERO' if name == 'cam' else name.upper()}{self.number}", level)
+        self.signals.set(f"{'BERO' if name == 'cam' else name.upper()}{self.number}", level)
 
     def wire_switches(self, polarity: int | None = None) -> None:
         """Set the geometry's switch inputs for a limit-switch polarity (the MD's by default;
@@ -496,7 +397,7 @@ class AxisUnit:
 
     def actuated(self, name: str) -> bool:
         """Whether limit input ``anf``/``end`` reads as actuated (MD n+33 polarity)."""
-        level = bool(self.module.signals.get(f"{name.upper()}{self.number}"))
+        level = bool(self.signals.get(f"{name.upper()}{self.number}"))
         return level if self.md is None or self.md.limit_polarity == 0 else not level
 
     def limit_input(self, name: str) -> None:
@@ -510,7 +411,7 @@ class AxisUnit:
         if self.actuated(name):
             if self.running and self._d == direction:
                 self.locks.add(direction)
-                self.module.fail(self, 25 if direction < 0 else 26)
+                self.fail(25 if direction < 0 else 26)
                 return
         elif self._d == -direction:
             self.locks.discard(direction)
@@ -521,34 +422,27 @@ class AxisUnit:
         elif active:
             self.locks.clear()  # passing the reference cam releases a locked direction (spec §5.7)
 
-    def _arm_sw_limit(self, direction: int) -> None:
+    def arm_sw_limit(self, direction: int) -> None:
         """Jog on a linear axis with reference: brake when the holder passes the SW limit."""
         md = self.md
-        if self._sw_watch is not None:
-            self._sw_watch.cancel()
-            self._sw_watch = None
+        if self.sw_watch is not None:
+            self.sw_watch.cancel()
+            self.sw_watch = None
         if md is None or md.rotary or not self.reference_set:
             return
         low, high = self.coords.range()
         limit = self.machine((high if direction > 0 else low) + self.coords.zero_offset, direction)
         if (self.axis.position() - limit) * direction >= 0:
             self.brake()
-            self.module.set_error(self, 29 if direction > 0 else 28)
+            self.set_error(29 if direction > 0 else 28)
             return
 
         def passed(_direction: int) -> None:
             if self.running and self.mode in (1, 2) and self._d == direction:
                 self.brake()
-                self.module.set_error(self, 29 if direction > 0 else 28)
+                self.set_error(29 if direction > 0 else 28)
 
-        self._sw_watch = self.axis.watch(limit, passed)
+        self.sw_watch = self.axis.watch(limit, passed)
 
     def set_pe(self) -> None:
-        self.module.signals.set(f"PE{self.number}", self.in_position and not self.module.basp_forces_pe)
-
-
-_MODES: dict[int, Callable[[AxisUnit, int, int, int, int], int | None]] = {
-    1: AxisUnit._ba1, 2: AxisUnit._ba1, 4: AxisUnit._ba4, 5: AxisUnit._ba5, 6: AxisUnit._ba6, 7: AxisUnit._ba7,
-    8: AxisUnit._ba_program, 9: AxisUnit._ba_program, 10: AxisUnit._ba_teach, 11: AxisUnit._ba_teach,
-    12: AxisUnit._ba12, 13: AxisUnit._ba13, 14: AxisUnit._ba14, 15: AxisUnit._ba15, 16: AxisUnit._ba16,
-}
+        self.signals.set(f"PE{self.number}", self.in_position and not self.basp.forces_pe)

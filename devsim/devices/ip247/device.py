@@ -11,14 +11,16 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import Command, Parameter, PortDef, Reference
+from devsim.core.kit import PortDef, Reference
 from devsim.core.settings import Section
 from devsim.devices.ip247.config import Ip247Config
 from devsim.devices.ip247.drive_actions import DRIVE, SETUP
 from devsim.devices.ip247.face import AgFace, PgFace
-from devsim.devices.ip247.module import Ip247Module
+from devsim.devices.ip247.modes import AXIS_MODES
+from devsim.devices.ip247.module import OBSERVED, OPERATOR_JOBS, Ip247Module
 from devsim.devices.ip247.points import FAULTS, POINTS
-from devsim.devices.ip247.tables import MD_ITEMS, MODES, error_codes
+from devsim.devices.ip247.records import DELETE_RECORDS, READ_RECORDS, WRITE_RECORDS
+from devsim.devices.ip247.tables import MACHINE_DATA, error_codes, mode_token
 
 __all__ = ["Ip247Device"]
 
@@ -43,9 +45,8 @@ class Ip247Device(Device):
     @classmethod
     def reference(cls) -> Reference:
         return Reference(
-            commands=[Command(f"BA{m.number}", None, "§4.1.1", f"{m.name} ({m.english}); pages {m.pages}"
-                              + (f"; {m.parameters}" if m.parameters else "")) for m in MODES.values()],
-            parameters=[Parameter(f"MD {item.words}", f"{item.name} ({item.english})", "§4.8", item.unit,
-                                  item.minimum, item.maximum, None, True, "simulated") for item in MD_ITEMS],
+            commands=sorted([*AXIS_MODES, OPERATOR_JOBS.rows[mode_token(17)], *WRITE_RECORDS, *DELETE_RECORDS,
+                             *READ_RECORDS, *OBSERVED], key=lambda row: int(row.token.removeprefix("BA"))),
+            parameter_table=MACHINE_DATA,
             errors=error_codes(),
         )

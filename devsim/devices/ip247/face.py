@@ -7,13 +7,15 @@ The AS511 link's 500 ms inter-character timeout runs on the device clock.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from devsim.core.clock import Timer
 from devsim.core.device import Face, Port, SerialSettings
-from devsim.devices.ip247.as511 import TIMEOUT, As511Link, Reply
+from devsim.devices.ip247.as511 import TIMEOUT, As511Link, Reply, function_token
 from devsim.devices.ip247.attributes import AgFramer, ag_frame
 from devsim.devices.ip247.module import Ip247Module
 from devsim.devices.ip247.pg_profile import ACK_NEGATIVE, FUNCTIONS, Header, parse_request
-from devsim.devices.ip247.s5_services import S5_FUNCTIONS, S5Memory
+from devsim.devices.ip247.s5_services import S5_SERVICES, S5Memory
 from devsim.devices.ip247.services import serve
 
 __all__ = ["AgFace", "PgFace"]
@@ -33,13 +35,30 @@ class PgFace(Face):
     def serial_settings(self) -> SerialSettings:
         return SerialSettings(9600, 8, "E", 1)
 
+    def _function(self, function: int) -> Callable[[int, bytes], Reply] | None:
+        """Who serves a function code: the profile's functions (:data:`.pg_profile.FUNCTIONS`),
+        and the standard S5 services (:data:`.s5_services.S5_SERVICES`) when configured."""
+        token = function_token(function)
+        if token in FUNCTIONS:
+            return self._profile
+        if token in S5_SERVICES and self.model.config.get("s5_services"):
+            return self._s5
+        return None
+
     def _known(self, function: int) -> bool:
-        return function in FUNCTIONS or (function in S5_FUNCTIONS and bool(self.model.config.get("s5_services")))
+        return self._function(function) is not None
 
     def _service(self, function: int, parameters: bytes) -> Reply:
-        if function in S5_FUNCTIONS:
-            return S5Memory(self.model.data_blocks()).service(function, parameters)
+        served = self._function(function)
+        if served is None:  # known when the transaction began, the S5 services switched off since
+            served = self._s5
+        return served(function, parameters)
+
+    def _profile(self, function: int, parameters: bytes) -> Reply:
         return serve(self.model, parse_request(function, parameters))
+
+    def _s5(self, function: int, parameters: bytes) -> Reply:
+        return S5Memory(self.model.channel.data_blocks()).service(function, parameters)
 
     def feed(self, data: bytes) -> None:
         if self.model.config.get("powered", True) is False or self.model.booting:
@@ -80,7 +99,7 @@ class AgFace(Face):
         for function, payload in self.framer.feed(data):
             asked = payload[0] if payload else 0
             page = asked - base + 1
-            if function not in FUNCTIONS or not 1 <= page <= 4:  # the PLC gets a handling-block error
+            if function_token(function) not in FUNCTIONS or not 1 <= page <= 4:  # the PLC gets a handling-block error
                 ba = payload[1] if len(payload) > 1 else 0
                 self.send(ag_frame(function, Header(ACK_NEGATIVE, asked, ba, 0, 0, 0, 0, 0).pack()))
                 continue

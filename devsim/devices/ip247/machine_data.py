@@ -10,14 +10,21 @@ spec fixes.  :class:`Ramp` is the exponential frequency ramp the data define.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
-from devsim.core.record import record
+from devsim.core.kit import Command, Table
+from devsim.core.record import fields, record
 from devsim.core.words import signed32
+from devsim.devices.ip247.tables import MACHINE_DATA, MD_ERRORS
 
-__all__ = ["LIMIT", "RECORD_WORDS", "MachineData", "Ramp", "check", "decode", "encode"]
+__all__ = [
+    "LIMIT", "RECORD_WORDS", "RESERVED", "MachineData", "Ramp", "check", "decode", "encode", "record_db",
+]
 
 RECORD_WORDS = 70
 LIMIT = 99_999_999  # ±100 m in base units
+#: Words n+48 … n+69: reserved, kept as the host wrote them.
+RESERVED = slice(48, RECORD_WORDS)
 
 
 def _signed(high: int, low: int) -> int:
@@ -63,6 +70,26 @@ class MachineData:
     bcd: bool  # n+47 bit 0
 
     @property
+    def zero_offset_1(self) -> int:
+        """MD n+38/39, G54."""
+        return self.zero_offsets[0]
+
+    @property
+    def zero_offset_2(self) -> int:
+        """MD n+40/41, G55."""
+        return self.zero_offsets[1]
+
+    @property
+    def zero_offset_3(self) -> int:
+        """MD n+42/43, G56."""
+        return self.zero_offsets[2]
+
+    @property
+    def zero_offset_4(self) -> int:
+        """MD n+44/45, G57."""
+        return self.zero_offsets[3]
+
+    @property
     def resolution(self) -> float:
         """Base units per pulse: gear / pulses per revolution (spec §4.8)."""
         return self.gear / self.pulses_per_rev
@@ -79,6 +106,11 @@ class MachineData:
     @property
     def ramp(self) -> Ramp:
         return Ramp(self.f_max, self.f_ss, self.a / 1000)
+
+
+def record_db(words: list[int]) -> int:
+    """The DB number a record names in its word n+2 (DR)."""
+    return words[2] & 0xFF
 
 
 def decode(words: list[int]) -> MachineData:
@@ -98,6 +130,11 @@ def decode(words: list[int]) -> MachineData:
         limit_begin=dd(29), limit_end=dd(31), limit_polarity=w[33], tool_length=dd(34), backlash=dd(36),
         zero_offsets=(dd(38), dd(40), dd(42), dd(44)), rotary=bool(w[46] & 0x80), bcd=bool(w[47] & 0x01),
     )
+
+
+_NAMED = {f.name for f in fields(MachineData)} | {n for n, v in vars(MachineData).items() if isinstance(v, property)}
+if not {row.attr for row in MACHINE_DATA} <= _NAMED:  # every row names a value the model can read
+    raise TypeError(f"machine-data rows without a value: {sorted({row.attr for row in MACHINE_DATA} - _NAMED)}")
 
 
 def encode(md: MachineData) -> list[int]:
@@ -154,7 +191,7 @@ def check(md: MachineData, *, sys_module: int, limit_levels: tuple[bool, bool] =
     """The machine-data error number (spec §4.4): 0, or the first failing check.
     ``limit_levels``: the two hardware limit inputs (True = 24 V) when the record arrives."""
     for number in CHECK_ORDER:
-        if _CHECKS[number](md, sys_module, limit_levels, ramp_table_fails):
+        if CHECKS[str(number)](md, sys_module, limit_levels, ramp_table_fails):
             return 21 if number == 7 and md.rotary else number
     return 0
 
@@ -199,26 +236,34 @@ def _zero_offsets_bad(md: MachineData) -> bool:
                for z in md.zero_offsets)
 
 
-_CHECKS = {
-    12: lambda md, sys, lv, rt: md.module != sys,
-    11: lambda md, sys, lv, rt: md.unit not in (1, 2, 3),
-    3: lambda md, sys, lv, rt: not 40 <= md.f_max <= 100_000,
-    22: lambda md, sys, lv, rt: not 1 <= md.f_ss <= 10_000 or md.f_ss >= md.f_max,
-    6: lambda md, sys, lv, rt: _tau_bad(md),
-    2: lambda md, sys, lv, rt: not 1 <= md.pulse_us <= 31 or md.pulse_us > 500_000 / md.f_max,
-    18: lambda md, sys, lv, rt: md.pulse_polarity not in (0x00, 0x40),
-    5: lambda md, sys, lv, rt: not 12 <= md.pulses_per_rev <= 1000,
-    10: lambda md, sys, lv, rt: not 4 <= md.patterns <= 40 or md.pulses_per_rev % md.patterns != 0,
-    9: lambda md, sys, lv, rt: not 12 <= md.gear <= 400_000 or md.resolution < 1,
-    4: lambda md, sys, lv, rt: any(_velocity_bad(md, v) for v in (md.jog1, md.jog2, md.step_velocity)),
-    17: lambda md, sys, lv, rt: (not 1 <= md.reference_velocity <= 65_000
-                                 or not md.f_ss < md.frequency(md.reference_velocity) <= md.f_max),
-    15: lambda md, sys, lv, rt: md.reference_direction not in (0x00, 0x20) or md.reference_sync not in (0, 1),
-    7: lambda md, sys, lv, rt: _limits_bad(md),
-    8: lambda md, sys, lv, rt: _reference_bad(md),
-    19: lambda md, sys, lv, rt: _limit_inputs_bad(md, lv),
-    14: lambda md, sys, lv, rt: _tool_bad(md),
-    20: lambda md, sys, lv, rt: not 0 <= md.backlash <= 64_999,
-    13: lambda md, sys, lv, rt: _zero_offsets_bad(md),
-    16: lambda md, sys, lv, rt: rt,
-}
+Check = Callable[[MachineData, int, tuple[bool, bool], bool], bool]
+
+
+def _check(number: int, failing: Check) -> Command[Check]:
+    return Command(str(number), failing, "§7.2.1", MD_ERRORS[number])
+
+
+#: The checks by the machine-data error they give (manual §7.2.1, spec §4.4): True when failing.
+CHECKS: Table[Check] = Table([
+    _check(12, lambda md, sys, lv, rt: md.module != sys),
+    _check(11, lambda md, sys, lv, rt: md.unit not in (1, 2, 3)),
+    _check(3, lambda md, sys, lv, rt: not 40 <= md.f_max <= 100_000),
+    _check(22, lambda md, sys, lv, rt: not 1 <= md.f_ss <= 10_000 or md.f_ss >= md.f_max),
+    _check(6, lambda md, sys, lv, rt: _tau_bad(md)),
+    _check(2, lambda md, sys, lv, rt: not 1 <= md.pulse_us <= 31 or md.pulse_us > 500_000 / md.f_max),
+    _check(18, lambda md, sys, lv, rt: md.pulse_polarity not in (0x00, 0x40)),
+    _check(5, lambda md, sys, lv, rt: not 12 <= md.pulses_per_rev <= 1000),
+    _check(10, lambda md, sys, lv, rt: not 4 <= md.patterns <= 40 or md.pulses_per_rev % md.patterns != 0),
+    _check(9, lambda md, sys, lv, rt: not 12 <= md.gear <= 400_000 or md.resolution < 1),
+    _check(4, lambda md, sys, lv, rt: any(_velocity_bad(md, v) for v in (md.jog1, md.jog2, md.step_velocity))),
+    _check(17, lambda md, sys, lv, rt: (not 1 <= md.reference_velocity <= 65_000
+                                        or not md.f_ss < md.frequency(md.reference_velocity) <= md.f_max)),
+    _check(15, lambda md, sys, lv, rt: md.reference_direction not in (0x00, 0x20) or md.reference_sync not in (0, 1)),
+    _check(7, lambda md, sys, lv, rt: _limits_bad(md)),
+    _check(8, lambda md, sys, lv, rt: _reference_bad(md)),
+    _check(19, lambda md, sys, lv, rt: _limit_inputs_bad(md, lv)),
+    _check(14, lambda md, sys, lv, rt: _tool_bad(md)),
+    _check(20, lambda md, sys, lv, rt: not 0 <= md.backlash <= 64_999),
+    _check(13, lambda md, sys, lv, rt: _zero_offsets_bad(md)),
+    _check(16, lambda md, sys, lv, rt: rt),
+])

@@ -11,8 +11,12 @@ Pure: :func:`parse_request` turns a function code and its parameter bytes into a
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
+from typing import ClassVar
 
+from devsim.core.kit import Command, Table
 from devsim.core.record import record
+from devsim.devices.ip247.as511 import function_token
 
 __all__ = [
     "ACK_ACCEPTED", "ACK_FULL", "ACK_MALFORMED", "ACK_NEGATIVE", "ACK_QUEUED", "COMMAND_NAMES", "COMMANDS", "FUNCTIONS",
@@ -22,8 +26,6 @@ __all__ = [
 ]
 
 OPERATE, OBSERVE, WRITE_REC, READ_REC, DELETE_REC = 0x61, 0x62, 0x63, 0x64, 0x65
-FUNCTIONS = {OPERATE: "OPERATE", OBSERVE: "OBSERVE", WRITE_REC: "WRITE_REC", READ_REC: "READ_REC",
-             DELETE_REC: "DELETE_REC"}
 #: Commands of OPERATE (spec §3.6.2, simulator encoding).
 COMMANDS = {1: "Start", 2: "Stopp", 3: "Vorwärts", 4: "Rückwärts", 5: "Übernahme"}
 #: The commands by name, German as in the table above or English.
@@ -37,6 +39,8 @@ MAX_PARAMETERS = 1100  # bytes after DLE removal (spec §3.6.5)
 class Operate:
     """An operator command BA1 … BA17: FB164's byte, word and double-word parameters."""
 
+    function: ClassVar[int] = OPERATE
+
     page: int
     ba: int
     cmd: int
@@ -47,12 +51,16 @@ class Operate:
 
 @record
 class Observe:
+    function: ClassVar[int] = OBSERVE
+
     page: int
 
 
 @record
 class WriteRecord:
     """BA20 (machine data), BA22 (program), BA24 (SYS-ID): the record's words."""
+
+    function: ClassVar[int] = WRITE_REC
 
     page: int
     ba: int
@@ -63,6 +71,8 @@ class WriteRecord:
 
 @record
 class ReadRecord:
+    function: ClassVar[int] = READ_REC
+
     page: int
     ba: int
     db: int
@@ -71,6 +81,8 @@ class ReadRecord:
 
 @record
 class Delete:
+    function: ClassVar[int] = DELETE_REC
+
     page: int
     ba: int
     db: int
@@ -86,7 +98,8 @@ class Malformed:
 
 
 Request = Operate | Observe | WriteRecord | ReadRecord | Delete | Malformed
-_LENGTHS = {OPERATE: 10, OBSERVE: 1, READ_REC: 4, DELETE_REC: 3}
+#: A function's parser: (function code, page, BA, the parameter bytes) → the request.
+Parser = Callable[[int, int, int, bytes], Request]
 
 
 def parse_request(function: int, data: bytes) -> Request:
@@ -94,26 +107,49 @@ def parse_request(function: int, data: bytes) -> Request:
     page, ba = (data[0] if data else 0), (data[1] if len(data) > 1 else 0)
     if len(data) > MAX_PARAMETERS or not 1 <= page <= 4:
         return Malformed(function, page, ba)
-    expected = _LENGTHS.get(function)
-    if expected is not None and len(data) != expected:
+    parser = FUNCTIONS.get(function_token(function))
+    if parser is None:
         return Malformed(function, page, ba)
-    if function == OPERATE:
-        _, _, cmd, b, w, dd = struct.unpack(">BBBBHi", data)
-        if cmd not in COMMANDS:
-            return Malformed(function, page, ba)
-        return Operate(page, ba, cmd, b, w, dd)
-    if function == OBSERVE:
-        return Observe(page)
-    if function == READ_REC:
-        return ReadRecord(page, ba, data[2], bool(data[3] & 1))
-    if function == DELETE_REC:
-        return Delete(page, ba, data[2])
-    if function == WRITE_REC:
-        if len(data) < 4 or len(data) % 2:
-            return Malformed(function, page, ba)
-        words = struct.unpack(f">{(len(data) - 4) // 2}H", data[4:])
-        return WriteRecord(page, ba, data[2], bool(data[3] & 1), words)
-    return Malformed(function, page, ba)
+    return parser(function, page, ba, data)
+
+
+def _operate(function: int, page: int, ba: int, data: bytes) -> Request:
+    if len(data) != 10:
+        return Malformed(function, page, ba)
+    _, _, cmd, b, w, dd = struct.unpack(">BBBBHi", data)
+    if cmd not in COMMANDS:
+        return Malformed(function, page, ba)
+    return Operate(page, ba, cmd, b, w, dd)
+
+
+def _observe(function: int, page: int, ba: int, data: bytes) -> Request:
+    return Observe(page) if len(data) == 1 else Malformed(function, page, ba)
+
+
+def _write_record(function: int, page: int, ba: int, data: bytes) -> Request:
+    if len(data) < 4 or len(data) % 2:
+        return Malformed(function, page, ba)
+    words = struct.unpack(f">{(len(data) - 4) // 2}H", data[4:])
+    return WriteRecord(page, ba, data[2], bool(data[3] & 1), words)
+
+
+def _read_record(function: int, page: int, ba: int, data: bytes) -> Request:
+    return ReadRecord(page, ba, data[2], bool(data[3] & 1)) if len(data) == 4 else Malformed(function, page, ba)
+
+
+def _delete(function: int, page: int, ba: int, data: bytes) -> Request:
+    return Delete(page, ba, data[2]) if len(data) == 3 else Malformed(function, page, ba)
+
+
+#: The profile's functions (spec §3.6.1), by token (``61H``): each parses its parameters.
+FUNCTIONS: Table[Parser] = Table([
+    Command(function_token(OPERATE), _operate, "spec §3.6.1", "OPERATE: an operator job (page, BA, command, B, W, DD)"),
+    Command(function_token(OBSERVE), _observe, "spec §3.6.1", "OBSERVE: actual value, residual, errors (page)"),
+    Command(function_token(WRITE_REC), _write_record, "spec §3.6.1",
+            "WRITE_REC: BA20/22/24 (page, BA, DB, overwrite, the record's words)"),
+    Command(function_token(READ_REC), _read_record, "spec §3.6.1", "READ_REC: BA64 … BA70 (page, BA, DB, BCD)"),
+    Command(function_token(DELETE_REC), _delete, "spec §3.6.1", "DELETE_REC: BA21/23 (page, BA, DB)"),
+])
 
 
 @record

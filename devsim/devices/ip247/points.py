@@ -9,14 +9,18 @@ side: an FB164 job with the values as the PLC sends them (BCD when the machine d
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from typing import Any
 
-from devsim.core.kit import Fault, FaultTable, signal_points
+from devsim.core.kit import Command, Fault, FaultTable, Table, signal_points
 from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.devices.ip247 import program as lang
+from devsim.devices.ip247.machine_data import record_db
 from devsim.devices.ip247.pg_profile import Operate, command_code
+from devsim.devices.ip247.records import DELETE_RECORDS, READ_RECORDS, WRITE_RECORDS
 from devsim.devices.ip247.services import serve
 from devsim.devices.ip247.signals import SIGNALS
+from devsim.devices.ip247.tables import mode_token
 
 __all__ = ["FAULTS", "POINTS", "SIGNALS"]
 
@@ -67,7 +71,7 @@ def _put_md(m: Any, axis: int, record: Any) -> None:
             raise BadValue("machine data in one string are hex words") from None
     if not isinstance(record, list) or len(record) != 70 or not all(isinstance(w, int) for w in record):
         raise BadValue("machine data are 70 words (a list of numbers, or hex words in one string)")
-    m.write_record(axis, 20, record[2] & 0xFF, [w & 0xFFFF for w in record], overwrite=True)
+    m.channel.write_record(axis, 20, record_db(record), [w & 0xFFFF for w in record], overwrite=True)
     if m.units[axis - 1].md is None:
         raise BadValue(f"machine data not stored: module error {m.units[axis - 1].error}")
 
@@ -80,12 +84,12 @@ def _program(name: str) -> Point | None:
 
     def put(m: Any, text: Any) -> None:
         words = lang.record_words(number, str(text).replace("\r\n", "\n"))
-        m.write_record(4, 22, number, words, overwrite=True)
-        if m.channel_error:
-            raise BadValue(f"program {number} not stored: module error {m.channel_error}")
+        m.channel.write_record(4, 22, number, words, overwrite=True)
+        if m.channel.error:
+            raise BadValue(f"program {number} not stored: module error {m.channel.error}")
 
     return Point(name, "str", f"traverse program {number} as text, one block per line", "§2.6",
-                 get=lambda m: (m.store.get(number).text if m.store.get(number) else None), put=put)
+                 get=lambda m: (m.programs.store.get(number).text if m.programs.store.get(number) else None), put=put)
 
 
 def _ag_record(m: Any, job: Any) -> None:
@@ -98,13 +102,31 @@ def _ag_record(m: Any, job: Any) -> None:
         m.ag_last = {"ack": 0x80, "err": 0, "words": []}
         return
     words = [int(w) & 0xFFFF for w in job.get("words", [])]
-    if ba in (20, 22, 24):
-        ack, result = m.write_record(page, ba, db, words, from_plc=True)
-    elif ba in (21, 23):
-        ack, result = m.delete_record(page, ba, db), []
-    else:
-        ack, result = m.read_record(page, ba, db, bool(job.get("bcd", False)))
+    transfer = FB165_JOBS.get(mode_token(ba)) or _fb165_read  # (a mode no record has: read's 80H)
+    ack, result = transfer(m, page, ba, db, words, bool(job.get("bcd", False)))
     m.ag_last = {"ack": ack, "err": m.error_of(page), "words": result}
+
+
+def _fb165_write(m: Any, page: int, ba: int, db: int, words: list[int], bcd: bool) -> tuple[int, list[int]]:
+    return m.channel.write_record(page, ba, db, words, from_plc=True)
+
+
+def _fb165_delete(m: Any, page: int, ba: int, db: int, words: list[int], bcd: bool) -> tuple[int, list[int]]:
+    return m.channel.delete_record(page, ba, db), []
+
+
+def _fb165_read(m: Any, page: int, ba: int, db: int, words: list[int], bcd: bool) -> tuple[int, list[int]]:
+    return m.channel.read_record(page, ba, db, bcd)
+
+
+Transfer = Callable[[Any, int, int, int, list[int], bool], tuple[int, list[int]]]
+
+#: FB165's jobs (spec §3.3.3): the record modes, written, deleted or read on the data channel.
+FB165_JOBS: Table[Transfer] = Table([
+    *(Command(row.token, _fb165_write, row.section, row.doc) for row in WRITE_RECORDS),
+    *(Command(row.token, _fb165_delete, row.section, row.doc) for row in DELETE_RECORDS),
+    *(Command(row.token, _fb165_read, row.section, row.doc) for row in READ_RECORDS),
+])
 
 
 def _ag_operate(m: Any, job: Any) -> None:
@@ -126,11 +148,11 @@ POINTS = PointTable.of(
     *(_axis_points(n) for n in (1, 2, 3)),
     [
         Point("channel.error", "int", "data channel (page 4) pending module error", "§7.2",
-              get=lambda m: m.channel_error, in_state=True),
+              get=lambda m: m.channel.error, in_state=True),
         Point("sys_id", "json", "module identification: [module, slot, page]", "§4.3.22",
-              get=lambda m: list(m.sys_id)),
+              get=lambda m: list(m.channel.sys_id)),
         Point("programs", "json", "program directory: [[number, record words], …]", "§6.3.8.5",
-              get=lambda m: [list(e) for e in m.store.directory()]),
+              get=lambda m: [list(e) for e in m.programs.store.directory()]),
         Point("ag.operate", "json", "an FB164 job from the PLC side: {page, ba, cmd, b, w, dd}", "§6.2",
               put=_ag_operate),
         Point("ag.record", "json", "an FB165 job from the PLC side: {ba, page, db, words, bcd} (no overwrite)",

@@ -10,7 +10,9 @@ ordinal (1 = the first block after the header line, 0 = the header line).
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 
+from devsim.core.kit import Command, Table
 from devsim.core.record import record
 
 __all__ = ["MAX_TEXT", "Block", "Program", "SyntaxFault", "parse", "record_text", "record_words"]
@@ -156,41 +158,65 @@ def _block(ordinal: int, line: str) -> Block:
 
 
 def _value(letter: str, text: str, ordinal: int) -> int:
-    if letter == "L":
-        if not text.isdigit():
-            raise SyntaxFault(16, ordinal)
-        if len(text) > 3 or int(text) > 255:
-            raise SyntaxFault(4, ordinal)
-        return int(text)
-    if letter == "G":
-        if len(text) != 2 or not text.isdigit():
-            raise SyntaxFault(16, ordinal)
-        if int(text) not in G_FUNCTIONS:
-            raise SyntaxFault(37, ordinal)
-        return int(text)
-    if letter == "X":
-        sign = -1 if text.startswith("-") else 1
-        body = text.lstrip("+-")
-        whole, point, fraction = body.partition(".")
-        if not (whole or fraction) or not (whole + fraction).isdigit() or "." in fraction:
-            raise SyntaxFault(16, ordinal)
-        if len(whole.lstrip("0")) > 5:
-            raise SyntaxFault(10, ordinal)
-        if len(fraction) > 3:
-            raise SyntaxFault(12, ordinal)
-        return sign * (int(whole or "0") * 1000 + int(fraction.ljust(3, "0") or "0"))
-    if letter == "F":
-        if not text.isdigit():
-            raise SyntaxFault(16, ordinal)
-        if len(text) > 5 or int(text) > 65_000:
-            raise SyntaxFault(11, ordinal)
-        return int(text)
-    # M: two digits
+    return WORDS[letter](text, ordinal)
+
+
+def _program_number(text: str, ordinal: int) -> int:
+    if not text.isdigit():
+        raise SyntaxFault(16, ordinal)
+    if len(text) > 3 or int(text) > 255:
+        raise SyntaxFault(4, ordinal)
+    return int(text)
+
+
+def _g_function(text: str, ordinal: int) -> int:
+    if len(text) != 2 or not text.isdigit():
+        raise SyntaxFault(16, ordinal)
+    if int(text) not in G_FUNCTIONS:
+        raise SyntaxFault(37, ordinal)
+    return int(text)
+
+
+def _path(text: str, ordinal: int) -> int:
+    sign = -1 if text.startswith("-") else 1
+    body = text.lstrip("+-")
+    whole, point, fraction = body.partition(".")
+    if not (whole or fraction) or not (whole + fraction).isdigit() or "." in fraction:
+        raise SyntaxFault(16, ordinal)
+    if len(whole.lstrip("0")) > 5:
+        raise SyntaxFault(10, ordinal)
+    if len(fraction) > 3:
+        raise SyntaxFault(12, ordinal)
+    return sign * (int(whole or "0") * 1000 + int(fraction.ljust(3, "0") or "0"))
+
+
+def _feed(text: str, ordinal: int) -> int:
+    if not text.isdigit():
+        raise SyntaxFault(16, ordinal)
+    if len(text) > 5 or int(text) > 65_000:
+        raise SyntaxFault(11, ordinal)
+    return int(text)
+
+
+def _m_function(text: str, ordinal: int) -> int:
     if not text.isdigit():
         raise SyntaxFault(16, ordinal)
     if len(text) > 2:
         raise SyntaxFault(17, ordinal)
     return int(text)
+
+
+#: A word's reader: (its digits, the block's ordinal) → its value, or :class:`SyntaxFault`.
+WordReader = Callable[[str, int], int]
+
+#: The words of a block after N, in their order (manual §2.6.4–§2.6.9; spec §4.11.2): each reads its value.
+WORDS: Table[WordReader] = Table([
+    Command("L", _program_number, "§2.6.5", "subprogram call: program 0 … 255 (syntax error 4)"),
+    Command("G", _g_function, "§2.6.6", "G function, two digits, one the module knows (syntax error 37)"),
+    Command("X", _path, "§2.6.7", "path in the axis unit, at most 5 + 3 places (syntax errors 10, 12)"),
+    Command("F", _feed, "§2.6.8", "velocity, dwell or repetitions, at most 65000 (syntax error 11)"),
+    Command("M", _m_function, "§2.6.9", "M function, two digits (syntax error 17)"),
+])
 
 
 def _combination(values: dict[str, int], seen: list[str], ordinal: int) -> None:

@@ -11,10 +11,8 @@ direction R before the cam was found: error 25/26 (spec §5.6.2 [DECISION]).
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
-    from devsim.devices.ip247.axis_unit import AxisUnit
+from devsim.devices.ip247.axis_unit import AxisUnit
 
 __all__ = ["ReferenceRun", "SINGLE_STEP_HZ"]
 
@@ -35,9 +33,9 @@ class ReferenceRun:
         self._timer = None
 
     def start(self) -> None:
-        unit, module = self.unit, self.unit.module
+        unit = self.unit
         unit.reference_run = self
-        module.pulse_rs(unit)  # step 0: the RS pulse, pattern counter 0
+        unit.pulse_rs()  # step 0: the RS pulse, pattern counter 0
         if self._cam():
             self._onto_cam()  # special case 3: already on the cam
         elif unit.actuated("anf" if self.r > 0 else "end"):
@@ -74,7 +72,7 @@ class ReferenceRun:
 
     # -- the steps ----------------------------------------------------------------------------
     def _cam(self) -> bool:
-        return bool(self.unit.module.signals.get(f"BERO{self.unit.number}"))
+        return bool(self.unit.signals.get(f"BERO{self.unit.number}"))
 
     def _reference_f(self) -> float:
         return min(self.md.frequency(self.md.reference_velocity), float(self.md.f_max))
@@ -143,6 +141,6 @@ class ReferenceRun:
         unit.reference_run = None
         if unit.running:
             unit.running = False
-        unit.module.changed(unit)
+        unit.changed()
         if error is not None:
-            unit.module.set_error(unit, error)
+            unit.set_error(error)

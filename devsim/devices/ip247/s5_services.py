@@ -20,14 +20,15 @@ caller passes the records.
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
 
-from devsim.devices.ip247.as511 import Refused, Reply
+from devsim.core.kit import Command, Table
+from devsim.devices.ip247.as511 import Refused, Reply, function_token
 
-__all__ = ["S5_FUNCTIONS", "DB", "DX", "S5Memory"]
+__all__ = ["DB", "DX", "S5_SERVICES", "S5Memory"]
 
 DB, DX = 0x01, 0x0C  # block type codes
 READ_MEMORY, SYSTEM_PARAMETERS, BLOCK_INFO, BLOCK_LIST = 0x04, 0x18, 0x1A, 0x1B
-S5_FUNCTIONS = frozenset((READ_MEMORY, SYSTEM_PARAMETERS, BLOCK_INFO, BLOCK_LIST))
 FIRST_BLOCK = 0x1000  # where the blocks begin; below: the (empty) images the system data name
 IMAGES = (0x0080, 0x0100, 0x0200, 0x0300, 0x0400, 0x0500)  # inputs, outputs, flags, timers, counters, system
 
@@ -51,7 +52,7 @@ class S5Memory:
             address += 10 + len(body)
 
     def service(self, function: int, parameters: bytes) -> Reply:
-        handler = _SERVICES.get(function)
+        handler = S5_SERVICES.get(function_token(function))
         return handler(self, parameters) if handler is not None else Refused("not an S5 service")
 
     def _system_parameters(self, parameters: bytes) -> Reply:
@@ -78,9 +79,16 @@ class S5Memory:
         return bytes(5) + bytes(self.memory[first : last + 1])
 
 
-_SERVICES = {
-    SYSTEM_PARAMETERS: S5Memory._system_parameters,
-    BLOCK_INFO: S5Memory._block_info,
-    BLOCK_LIST: S5Memory._block_list,
-    READ_MEMORY: S5Memory._read_memory,
-}
+Service = Callable[[S5Memory, bytes], Reply]
+
+#: The standard S5 services, by token (``1AH``); public descriptions of AS511 (spec §3.5.2).
+S5_SERVICES: Table[Service] = Table([
+    Command(function_token(SYSTEM_PARAMETERS), S5Memory._system_parameters, "spec §3.5.2",
+            "system parameters: the start addresses of the (empty) images"),
+    Command(function_token(BLOCK_INFO), S5Memory._block_info, "spec §3.5.2",
+            "B_INFO (block type, number): the block's address and header"),
+    Command(function_token(BLOCK_LIST), S5Memory._block_list, "spec §3.5.2",
+            "block address list (block type): DW0 addresses of blocks 0 … 255"),
+    Command(function_token(READ_MEMORY), S5Memory._read_memory, "spec §3.5.2",
+            "read memory (first address, last address)"),
+])

@@ -8,10 +8,19 @@ machine data say "AG BCD-codiert" (spec §3.3.2: errors 66/67 for digits that ar
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
+from devsim.core.kit import Command, Table
+from devsim.devices.ip247.as511 import function_token
 from devsim.devices.ip247.module import Ip247Module
 from devsim.devices.ip247.pg_profile import (
     ACK_ACCEPTED,
     ACK_MALFORMED,
+    DELETE_REC,
+    OBSERVE,
+    OPERATE,
+    READ_REC,
+    WRITE_REC,
     Delete,
     Header,
     Malformed,
@@ -25,30 +34,62 @@ from devsim.devices.ip247.pg_profile import (
 )
 from devsim.devices.ip247.values import NotBcd, path_from_plc, velocity_from_plc
 
-__all__ = ["serve"]
+__all__ = ["SERVICES", "serve"]
 
 
 def serve(module: Ip247Module, request: Request, *, plc: bool = False) -> bytes:
     """The response data to one request (pages 1 … 4; the PLC face translates its absolute
     page numbers)."""
-    asked = page = getattr(request, "page", 0)
     if isinstance(request, Malformed):
-        return _header(module, ACK_MALFORMED, page, asked, request.ba, 0)
-    if isinstance(request, Observe):
-        return response(Header(ACK_ACCEPTED, asked, 0, 0, *module.header(page)), module.observe(page))
-    if isinstance(request, Operate):
-        return _header(module, _operate(module, request, page, plc), page, asked, request.ba, request.cmd)
-    if isinstance(request, WriteRecord):
-        ack, result = module.write_record(page, request.ba, request.db, list(request.words),
-                                          overwrite=request.overwrite, from_plc=plc)
-        body = tuple(result) if ack == ACK_ACCEPTED else ()
-        return _header(module, ack, page, asked, request.ba, 0) + pack_words(body)
-    if isinstance(request, ReadRecord):
-        ack, words = module.read_record(page, request.ba, request.db, request.bcd)
-        return _header(module, ack, page, asked, request.ba, 0) + pack_words(words)
+        return _header(module, ACK_MALFORMED, request.page, request.page, request.ba, 0)
+    return SERVICES[function_token(request.function)](module, request, plc)
+
+
+def _observe(module: Ip247Module, request: Request, plc: bool) -> bytes:
+    assert isinstance(request, Observe)
+    page = request.page
+    return response(Header(ACK_ACCEPTED, page, 0, 0, *module.header(page)), module.observe(page))
+
+
+def _operate_job(module: Ip247Module, request: Request, plc: bool) -> bytes:
+    assert isinstance(request, Operate)
+    page = request.page
+    return _header(module, _operate(module, request, page, plc), page, page, request.ba, request.cmd)
+
+
+def _write(module: Ip247Module, request: Request, plc: bool) -> bytes:
+    assert isinstance(request, WriteRecord)
+    page = request.page
+    ack, result = module.channel.write_record(page, request.ba, request.db, list(request.words),
+                                              overwrite=request.overwrite, from_plc=plc)
+    body = tuple(result) if ack == ACK_ACCEPTED else ()
+    return _header(module, ack, page, page, request.ba, 0) + pack_words(body)
+
+
+def _read(module: Ip247Module, request: Request, plc: bool) -> bytes:
+    assert isinstance(request, ReadRecord)
+    page = request.page
+    ack, words = module.channel.read_record(page, request.ba, request.db, request.bcd)
+    return _header(module, ack, page, page, request.ba, 0) + pack_words(words)
+
+
+def _delete(module: Ip247Module, request: Request, plc: bool) -> bytes:
     assert isinstance(request, Delete)
-    ack = module.delete_record(page, request.ba, request.db)
-    return _header(module, ack, page, asked, request.ba, 0)
+    page = request.page
+    ack = module.channel.delete_record(page, request.ba, request.db)
+    return _header(module, ack, page, page, request.ba, 0)
+
+
+Service = Callable[[Ip247Module, Request, bool], bytes]
+
+#: What each function of the profile does on the module (spec §3.6.1, §3.6.4), by token (``61H``).
+SERVICES: Table[Service] = Table([
+    Command(function_token(OPERATE), _operate_job, "spec §3.6.4", "an operator job: the 8-byte header"),
+    Command(function_token(OBSERVE), _observe, "spec §3.6.4", "the header and 14 bytes of observed values"),
+    Command(function_token(WRITE_REC), _write, "spec §3.6.4", "the header and the write's result words"),
+    Command(function_token(READ_REC), _read, "spec §3.6.4", "the header and the record's words"),
+    Command(function_token(DELETE_REC), _delete, "spec §3.6.4", "the header"),
+])
 
 
 def _header(module: Ip247Module, ack: int, page: int, asked: int, ba: int, cmd: int) -> bytes:

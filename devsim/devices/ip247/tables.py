@@ -1,14 +1,15 @@
-"""The IP247's tables: module error numbers, machine-data and syntax error texts, and the
-operating modes with their pages (manual §4.1.1, §5.8.2, §6.2.4, §6.3.4, §7.2, §7.2.1; spec
+"""The IP247's tables: module error numbers, machine-data and syntax error texts, the operating
+modes with their pages, and the machine-data items as parameter rows (manual §4.1.1, §5.8.2, §6.2.4, §6.3.4, §7.2, §7.2.1; spec
 ip247.md §3.2, §4.3–§4.5).  Texts are the manual's, verbatim; English in the second column."""
 
 from __future__ import annotations
 
 from devsim.core.kit import ErrorCode
+from devsim.core.parameters import Access, Param, ParameterTable
 from devsim.core.record import record
 
 __all__ = [
-    "DATA_CHANNEL", "MD_ERRORS", "MODES", "MODULE_ERRORS", "NONEXISTENT", "SYNTAX_ERRORS", "Mode", "error_codes",
+    "DATA_CHANNEL", "MACHINE_DATA", "MD_ERRORS", "MODES", "MODULE_ERRORS", "NONEXISTENT", "SYNTAX_ERRORS", "Mode", "error_codes", "mode_token",
     "page_error", "pg_code",
 ]
 
@@ -123,6 +124,15 @@ class Mode:
     pages: str  # "A" axis pages, "D" data channel, "AD" both
     parameters: str = ""
 
+    def describe(self) -> str:
+        """The mode as the reference lists it: names, pages, parameters."""
+        return f"{self.name} ({self.english}); pages {self.pages}" + (f"; {self.parameters}" if self.parameters else "")
+
+
+def mode_token(number: int) -> str:
+    """A mode's token in the tables and the reference: ``BA6``."""
+    return f"BA{number}"
+
 
 MODES: dict[int, Mode] = {m.number: m for m in (
     Mode(1, "Tippen Geschwindigkeit 1", "jog speed 1", "A", "W velocity (0: MD jog 1)"),
@@ -174,48 +184,51 @@ def page_error(mode: int, page: int, *, md_numbers_differ: bool = False) -> int 
     return None if "A" in pages else 46
 
 
-@record
-class MdItem:
-    """One machine-data item of the table in spec §4.8 (manual §5.6.1.2, §6.3.8.1)."""
-
-    words: str  # position in the record, e.g. "n+5/6"
-    name: str
-    english: str
-    unit: str
-    minimum: float | None = None
-    maximum: float | None = None
+def _md(key: str, name: str, doc: str, unit: str = "", minimum: float | None = None, maximum: float | None = None,
+        *, attr: str, access: Access = "rw") -> Param:
+    return Param(key, name, "§4.8", doc, unit=unit, minimum=minimum, maximum=maximum, default=None, access=access,
+                 attr=attr)
 
 
-MD_ITEMS: tuple[MdItem, ...] = (
-    MdItem("n+3 DR", "Achse", "axis number", "", 1, 3),
-    MdItem("n+3 DL", "Baugruppe", "module number (= SYS-ID module)", "", 0, 99),
-    MdItem("n+4 DL", "Masseinheit", "unit: 1 mm, 2 0.1 inch, 3 degree", "", 1, 3),
-    MdItem("n+46", "Achstyp", "axis type: 00H linear, 80H rotary", ""),
-    MdItem("n+5/6", "Maximale Frequenz", "maximum frequency f_max", "Hz", 40, 100_000),
-    MdItem("n+7/8", "Start/Stop Frequenz", "start/stop frequency f_ss", "Hz", 1, 10_000),
-    MdItem("n+9/10", "Frequenz-Zunahme", "frequency increase a", "mHz/ms", 20, 2_599_999),
-    MdItem("n+11", "Impulsdauer", "pulse duration", "µs", 1, 31),
-    MdItem("n+12", "Polarität", "pulse polarity: 40H positive edge, 00H negative edge", ""),
-    MdItem("n+13", "Bestromungsmusteranzahl", "number of current patterns", "", 4, 40),
-    MdItem("n+14", "Imp/Umdrehung", "pulses per motor revolution", "1/rev", 12, 1000),
-    MdItem("n+15/16", "Übersetzung", "travel per motor revolution (gear)", "base/rev", 12, 400_000),
-    MdItem("n+17/18", "Tippgeschwindigkeit 1", "jog velocity 1", "unit/min", 1, 65000),
-    MdItem("n+19/20", "Tippgeschwindigkeit 2", "jog velocity 2", "unit/min", 1, 65000),
-    MdItem("n+21/22", "Schrittgeschwindigkeit", "incremental (step) velocity", "unit/min", 1, 65000),
-    MdItem("n+23/24", "Referenzgeschwindigkeit", "reference velocity", "unit/min", 1, 65000),
-    MdItem("n+25", "Referenzpunkt synchron", "reference synchronous: 0 yes, 1 no", "", 0, 1),
-    MdItem("n+26", "Referenzrichtung", "reference direction: 00H forward, 20H backward", ""),
-    MdItem("n+27/28", "Referenzpunkt Koordinate", "reference coordinate x_ref", "base", -99_999_999, 99_999_999),
-    MdItem("n+29/30", "Software Endschalter Anfang", "SW limit start (rotary: range start)", "base",
-           -99_999_999, 99_999_999),
-    MdItem("n+31/32", "Software Endschalter Ende", "SW limit end (rotary: range end)", "base",
-           -99_999_999, 99_999_999),
-    MdItem("n+33", "Polarität Endschalter", "limit-switch polarity: 0 NO contact, 1 NC contact", "", 0, 1),
-    MdItem("n+34/35", "Werkzeuglängen Korrektur", "tool length correction (G43/G44)", "base",
-           -99_999_999, 99_999_999),
-    MdItem("n+36/37", "Losekompensation", "backlash", "base", 0, 64_999),
-    *(MdItem(f"n+{38 + 2 * i}/{39 + 2 * i}", f"Nullpunkt Verschiebung {i + 1}", f"zero offset {i + 1} (G{54 + i})",
-             "base", -99_999_999, 99_999_999) for i in range(4)),
-    MdItem("n+47", "AG BCD codiert", "PLC values BCD-coded: 01H yes, 00H no", ""),
-    MdItem("n+4 DR", "MD-Fehler", "machine-data error (written by the module)", "", 0, 22),
-)
+#: The machine data of an axis (spec §4.8; manual §5.6.1.2, §6.3.8.1), one row per item, keyed by
+#: its place in the 70-word record as the host writes it (``n+5/6``: the double word 5 and 6,
+#: ``n+3 DL``: the left byte of word 3).  ``attr`` names the item's value on
+#: :class:`.machine_data.MachineData`, which the model reads; the record's layout and the checks
+#: that give the MD errors are :mod:`.machine_data`'s.
+MACHINE_DATA = ParameterTable([
+    _md("n+3 DR", "Achse", "axis number", "", 1, 3, attr="axis"),
+    _md("n+3 DL", "Baugruppe", "module number (= SYS-ID module)", "", 0, 99, attr="module"),
+    _md("n+4 DL", "Masseinheit", "unit: 1 mm, 2 0.1 inch, 3 degree", "", 1, 3, attr="unit"),
+    _md("n+46", "Achstyp", "axis type: 00H linear, 80H rotary", "", attr="rotary"),
+    _md("n+5/6", "Maximale Frequenz", "maximum frequency f_max", "Hz", 40, 100_000, attr="f_max"),
+    _md("n+7/8", "Start/Stop Frequenz", "start/stop frequency f_ss", "Hz", 1, 10_000, attr="f_ss"),
+    _md("n+9/10", "Frequenz-Zunahme", "frequency increase a", "mHz/ms", 20, 2_599_999, attr="a"),
+    _md("n+11", "Impulsdauer", "pulse duration", "µs", 1, 31, attr="pulse_us"),
+    _md("n+12", "Polarität", "pulse polarity: 40H positive edge, 00H negative edge", "", attr="pulse_polarity"),
+    _md("n+13", "Bestromungsmusteranzahl", "number of current patterns", "", 4, 40, attr="patterns"),
+    _md("n+14", "Imp/Umdrehung", "pulses per motor revolution", "1/rev", 12, 1000, attr="pulses_per_rev"),
+    _md("n+15/16", "Übersetzung", "travel per motor revolution (gear)", "base/rev", 12, 400_000, attr="gear"),
+    _md("n+17/18", "Tippgeschwindigkeit 1", "jog velocity 1", "unit/min", 1, 65000, attr="jog1"),
+    _md("n+19/20", "Tippgeschwindigkeit 2", "jog velocity 2", "unit/min", 1, 65000, attr="jog2"),
+    _md("n+21/22", "Schrittgeschwindigkeit", "incremental (step) velocity", "unit/min", 1, 65000,
+        attr="step_velocity"),
+    _md("n+23/24", "Referenzgeschwindigkeit", "reference velocity", "unit/min", 1, 65000, attr="reference_velocity"),
+    _md("n+25", "Referenzpunkt synchron", "reference synchronous: 0 yes, 1 no", "", 0, 1, attr="reference_sync"),
+    _md("n+26", "Referenzrichtung", "reference direction: 00H forward, 20H backward", "",
+        attr="reference_direction"),
+    _md("n+27/28", "Referenzpunkt Koordinate", "reference coordinate x_ref", "base", -99_999_999, 99_999_999,
+        attr="reference"),
+    _md("n+29/30", "Software Endschalter Anfang", "SW limit start (rotary: range start)", "base",
+        -99_999_999, 99_999_999, attr="limit_begin"),
+    _md("n+31/32", "Software Endschalter Ende", "SW limit end (rotary: range end)", "base",
+        -99_999_999, 99_999_999, attr="limit_end"),
+    _md("n+33", "Polarität Endschalter", "limit-switch polarity: 0 NO contact, 1 NC contact", "", 0, 1,
+        attr="limit_polarity"),
+    _md("n+34/35", "Werkzeuglängen Korrektur", "tool length correction (G43/G44)", "base",
+        -99_999_999, 99_999_999, attr="tool_length"),
+    _md("n+36/37", "Losekompensation", "backlash", "base", 0, 64_999, attr="backlash"),
+    *(_md(f"n+{38 + 2 * i}/{39 + 2 * i}", f"Nullpunkt Verschiebung {i + 1}", f"zero offset {i + 1} (G{54 + i})",
+          "base", -99_999_999, 99_999_999, attr=f"zero_offset_{i + 1}") for i in range(4)),
+    _md("n+47", "AG BCD codiert", "PLC values BCD-coded: 01H yes, 00H no", "", attr="bcd"),
+    _md("n+4 DR", "MD-Fehler", "machine-data error (written by the module)", "", 0, 22, attr="error", access="r"),
+], name="machine-data item")

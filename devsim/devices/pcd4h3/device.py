@@ -1,7 +1,7 @@
 """The SAIA PCD4 with PCD4.H3 servo positioning modules as a devsim kind.
 
 Manual "Handbuch Positioniermodule für Servoantriebe PCD4.H3..", SAIA-Burgess 26/729 D2 (seed
-002); spec pcd4h3.md.  The machine is :class:`~devsim.devices.pcd4h3.plc.Pcd4`: the PLC with the
+002); spec pcd4h3.md.  The machine is :class:`~devsim.devices.pcd4h3.model.Pcd4`: the PLC with the
 PCD9.H3E1 library over an LM628 per axis; its ports are S-Bus in serial data mode (``sbus``, a
 pty) and Ether-S-Bus on UDP and TCP (``ether_udp``, ``ether_tcp``), :mod:`~devsim.devices.pcd4h3.face`.
 """
@@ -11,14 +11,15 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import Command, ErrorCode, Parameter, PortDef, Reference
+from devsim.core.kit import Command, ErrorCode, PortDef, Reference
 from devsim.core.settings import Section
 from devsim.devices.pcd4h3.config import Pcd4h3Config
 from devsim.devices.pcd4h3.face import EtherDatagramFace, EtherStreamFace, SbusFace
-from devsim.devices.pcd4h3.layout import FLAGS, REGISTERS
-from devsim.devices.pcd4h3.plc import Pcd4
+from devsim.devices.pcd4h3.library import FUNCTIONS
+from devsim.devices.pcd4h3.model import Pcd4
 from devsim.devices.pcd4h3.points import DRIVE, FAULTS, POINTS
-from devsim.devices.pcd4h3.sbus import READS, SIMPLE, WRITES
+from devsim.devices.pcd4h3.services import SERVICES
+from devsim.devices.pcd4h3.tables import REGISTERS
 
 __all__ = ["Pcd4h3Device"]
 
@@ -43,18 +44,8 @@ class Pcd4h3Device(Device):
 
     @classmethod
     def reference(cls) -> Reference:
-        commands = [Command(f"{code:02X}h", None, "§9.4", f"read {medium}s (at most {most})")
-                    for code, (medium, most) in READS.items()]
-        commands += [Command(f"{code:02X}h", None, "§9.4", f"write {medium}s"
-                             + (" (NAK: the outputs belong to the FBs)" if medium == "output" else ""))
-                     for code, medium in WRITES.items()]
-        commands += [Command(f"{code:02X}h", None, "§9.4", name) for code, name in SIMPLE.items()]
-        commands += [Command(f.symbol, None, "§3.2", f"flag offset {f.offset}: {f.meaning}; {f.time_ms} ms"
-                             + ("" if f.in_motion else "; not during motion"))
-                     for f in FLAGS if f.kind == "command"]
-        parameters = [Parameter(f"{r.symbol} (offset {r.offset})", r.meaning, "§4.2", r.unit, r.minimum, r.maximum,
-                                r.example, True, "simulated") for r in REGISTERS]
+        commands: list[Command[Any]] = [*SERVICES, *FUNCTIONS]
         errors = [ErrorCode("ACK 0000h", "executed"), ErrorCode("NAK 0001h", "unsupported command, bad count, address "
                             "out of range, a write to the outputs or the diagnostics", "§9.2"),
                   ErrorCode("(silence)", "CRC or framing error, another station, a broadcast", "§9.2")]
-        return Reference(commands=commands, parameters=parameters, errors=errors)
+        return Reference(commands=commands, errors=errors, parameter_table=REGISTERS)

@@ -45,24 +45,20 @@ class H3Drive:
     def __init__(self, number: int, clock: Clock, signals: SignalBank, settings: Mapping[str, Any], *,
                  lm629: bool, rs422: bool, present: bool, jumpers: Mapping[str, Any] | None = None) -> None:
         self.number, self.signals = number, signals
-        self.motor = Motor(kv=float(settings["kv"]), tau=float(settings["tau_ms"]) / 1000)
         stops = settings.get("hard_stops")
-        if stops:
-            self.motor.low, self.motor.high = float(min(stops)), float(max(stops))
-        self.chip = Lm628(self.motor, lm629=lm629)
-        self.chip.present = present
+        low, high = (float(min(stops)), float(max(stops))) if stops else (-math.inf, math.inf)
+        self.motor = Motor(kv=float(settings["kv"]), tau=float(settings["tau_ms"]) / 1000, low=low, high=high)
         lines = int(settings["encoder_lines"])
         # the index reaches the decoder through the D-Sub (5 V types) or terminal 4/12 with IN/RP = IN
-        if rs422 or settings["in_rp"] == "index":
-            self.chip.index_period = 4 * lines
+        index_period = 4 * lines if rs422 or settings["in_rp"] == "index" else 0
         jumpers = jumpers or {}
-        if jumpers.get("invert_a", True) != jumpers.get("invert_b", True):
-            self.chip.encoder_sign = -1  # one phase the wrong way round: the decoder counts backwards
-        if jumpers.get("index_invert", False) and self.chip.index_period:
-            self.chip.index_period = 4  # A = B = ĪN = 0 once per line: a capture at the next line
-        self.chip.index_offset = int(settings["index_offset"])
-        self.stepper = ChipStepper(self.chip, clock, own_timer=False)
-        self.stepper.on_batch = self._follow
+        # one phase the wrong way round: the decoder counts backwards
+        encoder_sign = -1 if jumpers.get("invert_a", True) != jumpers.get("invert_b", True) else 1
+        if jumpers.get("index_invert", False) and index_period:
+            index_period = 4  # A = B = ĪN = 0 once per line: a capture at the next line
+        self.chip = Lm628(self.motor, lm629=lm629, present=present, encoder_sign=encoder_sign,
+                          index_period=index_period, index_offset=int(settings["index_offset"]))
+        self.stepper = ChipStepper(self.chip, clock, own_timer=False, on_batch=self._follow)
         self.axis = Axis(clock, counts_per_rev=4 * lines, index_offset=float(settings["index_offset"]),
                          name=f"axis{number}")
         self.switches: list[RegionSwitch] = []

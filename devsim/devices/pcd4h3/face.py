@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from devsim.core.clock import Timer
 from devsim.core.device import Face, Port, SerialSettings
-from devsim.devices.pcd4h3.plc import Pcd4
+from devsim.devices.pcd4h3.model import Pcd4
 from devsim.devices.pcd4h3.sbus import (
     EtherReceiver,
     SerialReceiver,
@@ -18,7 +18,7 @@ from devsim.devices.pcd4h3.sbus import (
     serial_ack,
     serial_reply,
 )
-from devsim.devices.pcd4h3.services import Answer, serve
+from devsim.devices.pcd4h3.services import Answer, serve, telegram
 
 __all__ = ["EtherDatagramFace", "EtherStreamFace", "SbusFace"]
 
@@ -56,7 +56,7 @@ class SbusFace(_Delayed):
 
     def __init__(self, model: Pcd4, port: Port) -> None:
         super().__init__(model, port)
-        self.receiver = SerialReceiver(model.station)
+        self.receiver = SerialReceiver(model.station, telegram)
 
     @property
     def serial_settings(self) -> SerialSettings:

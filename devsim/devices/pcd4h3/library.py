@@ -8,17 +8,23 @@ Every chip transfer is checked for the command error (§3.7): the FB clears it (
 convert (a conversion out of range, k = 0 on a read, SampI beyond 255, an MCW reaction that is
 neither 1Ah nor 1Bh) fails the same way without reaching the chip.
 
-The PLC media are plain mappings (register and flag address → value) the caller owns; the chip
-is a :class:`~devsim.devices.pcd4h3.lm628.Lm628`.  Every chip command the functions issue is
-appended to :attr:`H3Axis.trace` as the spec writes its chip traces (§6.2).
+The axis's registers are its :class:`~devsim.devices.pcd4h3.registers.AxisRegisters` (a named
+view of its block in the PLC's register medium), its flags the PLC's flag medium (flag address →
+value) the caller owns; the chip is a :class:`~devsim.devices.pcd4h3.lm628.Lm628`.  The
+functions are :data:`FUNCTIONS`, the table of the command flags (§3.2) whose handlers AxHndlg
+runs.  Every chip command the functions issue is appended to :attr:`H3Axis.trace` as the spec
+writes its chip traces (§6.2).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, MutableMapping
 
-from devsim.devices.pcd4h3.layout import FLAGS, Layout
+from devsim.core.kit import Command, Table
+from devsim.devices.pcd4h3.layout import Layout
 from devsim.devices.pcd4h3.lm628 import COMMAND_ERROR, Lm628
+from devsim.devices.pcd4h3.registers import AxisRegisters
+from devsim.devices.pcd4h3.tables import command_flags, flag_row
 from devsim.devices.pcd4h3.units import (
     FB_SAMPLE,
     acceleration_register,
@@ -27,11 +33,10 @@ from devsim.devices.pcd4h3.units import (
     velocity_register,
 )
 
-__all__ = ["FUNCTIONS", "H3Axis", "TIMES"]
+__all__ = ["FUNCTIONS", "H3Axis", "STATUS_FLAGS", "TIMES"]
 
-COMMAND_FLAGS = tuple(f.symbol for f in FLAGS if f.kind == "command")
 STATUS_FLAGS = ("OnDest", "IPuls", "WrapOc", "ExcPEr", "BrkPos")  # status bits 2 … 6
-TIMES = {f.symbol: f.time_ms for f in FLAGS if f.kind == "command"}  # §10.1
+TIMES = {row.name: float(row.extra["time_ms"]) for row in command_flags()}  # §10.1
 FORWARD_END, BACKWARD_END = 0x3FFF_FFFF, 0xC000_0000
 INT32 = 1 << 31
 ATTEMPTS = 3  # the transfer and at most two repeats (§3.7)
@@ -43,32 +48,29 @@ class Refused(Exception):
 
 
 class H3Axis:
-    """Axis ``axis`` of an installation: its registers and flags in the media, its chip."""
+    """Axis ``axis`` of an installation: its registers and flags in the media, its chip.
 
-    def __init__(self, axis: int, layout: Layout, chip: Lm628, registers: MutableMapping[int, int],
-                 flags: MutableMapping[int, int]) -> None:
+    ``on_comers`` is called with the function's flag offset when ComErS runs (the PLC's
+    reaction, §3.7); ``rsigb_bit12_inverted`` is the G-5 option."""
+
+    def __init__(self, axis: int, layout: Layout, chip: Lm628, registers: AxisRegisters,
+                 flags: MutableMapping[int, int], *, on_comers: Callable[[int], None] | None = None,
+                 rsigb_bit12_inverted: bool = False) -> None:
         self.axis, self.layout, self.chip = axis, layout, chip
         self.registers, self.flags = registers, flags
+        self.on_comers = on_comers
+        self.rsigb_bit12_inverted = rsigb_bit12_inverted
         self.mode = 0  # LTRJ bits 11/12 from the last FSelOM
         self.trace: list[tuple[str, tuple[int, ...]]] = []
-        #: Called with the function's flag offset when ComErS runs (the PLC's reaction).
-        self.on_comers: Callable[[int], None] | None = None
         self.comers_calls = 0
         self.last_comers = -1  # flag offset of the function that last called ComErS
         self.warnings = 0  # FStop with a doubtful MCW, a single step while moving (G-10, E10)
-        self.rsigb_bit12_inverted = False  # G-5 option
         self.transfers = 0  # chip transfers since start-up
         self.ran: list[str] = []  # the functions the last AxHndlg call ran
         self._function = ""
         self._attempts = 1  # the most attempts one transfer of the running function took
 
     # -- media ------------------------------------------------------------------------------------
-    def reg(self, symbol: str) -> int:
-        return self.registers.get(self.layout.register(self.axis, symbol), 0)
-
-    def put(self, symbol: str, value: int) -> None:
-        self.registers[self.layout.register(self.axis, symbol)] = value
-
     def flag(self, symbol: str) -> int:
         return self.flags.get(self.layout.flag(self.axis, symbol), 0)
 
@@ -77,7 +79,7 @@ class H3Axis:
 
     @property
     def k(self) -> float:
-        return ffp_decode(self.reg("MCFac"))
+        return ffp_decode(self.registers.machine_factor)
 
     # -- the chip, checked and traced (§3.7) -------------------------------------------------------
     def _log(self, name: str, words: tuple[int, ...]) -> None:
@@ -138,8 +140,8 @@ class H3Axis:
         self.mode = 0
         for symbol in ("FSelOM", "FSetPE", "FLdRP", "FUpDRP", "FLdAA", "FLdVA"):
             self._run(symbol)
-        for symbol in COMMAND_FLAGS:
-            self.set_flag(symbol, 0)
+        for row in command_flags():
+            self.set_flag(row.name, 0)
         self._status()
 
     def handle(self, before: Callable[[float], None] | None = None) -> float:
@@ -202,49 +204,20 @@ class H3Axis:
 
     # -- the functions (§3.4) --------------------------------------------------------------------------
     def _position(self, relative: bool) -> None:
-        self._ltrj(self.mode | (0x0003 if relative else 0x0002), self._word32(self.reg("DestP") * self.k))
+        self._ltrj(self.mode | (0x0003 if relative else 0x0002), self._word32(self.registers.destination * self.k))
 
     def _velocity(self, relative: bool) -> None:
-        word = self._word32(velocity_register(self.reg("Veloc"), self.k))
+        word = self._word32(velocity_register(self.registers.velocity, self.k))
         self._ltrj(self.mode | (0x000C if relative else 0x0008), word)
 
     def _acceleration(self, relative: bool) -> None:
-        word = self._word32(acceleration_register(self.reg("Accel"), self.k))
+        word = self._word32(acceleration_register(self.registers.acceleration, self.k))
         self._ltrj(self.mode | 0x0100)  # the acceleration changes only with the motor off
         self._stt()
         self._ltrj(self.mode | (0x0030 if relative else 0x0020), word)
 
-    def _regulator(self) -> None:
-        sample = self.reg("SampI")
-        if not 0 <= sample <= 255:
-            self._refuse()
-        words = [self.reg(s) & 0xFFFF for s in ("KProp", "KInt", "KDer", "IntL")]
-        self._send("LFIL", sample << 8 | 0x000F, *words)
-
-    def _select_mode(self) -> None:
-        self.mode = self.reg("MCW") & 0x1800
-        self._ltrj(self.mode)
-
-    def _position_error(self) -> None:
-        reaction = self.reg("MCW") & 0xFF
-        if reaction not in (0x1A, 0x1B):
-            self._refuse()  # G-8
-        self._send("LPES" if reaction == 0x1A else "LPEI", self.reg("PosEr") & 0xFFFF)
-
     def _breakpoint(self, relative: bool) -> None:
-        self._send("SBPR" if relative else "SBPA", self._word32(self.reg("BrkP") * self.k))
-
-    def _stop(self) -> None:
-        bits = self.reg("MCW") & 0x0700
-        if bits not in (0x0100, 0x0200, 0x0400):
-            self.warnings += 1  # G-10: several bits by priority 8 > 9 > 10; none: no stop at all
-            bits = bits & -bits
-        self._ltrj(self.mode | bits)
-        self._stt()
-
-    def _motor_off(self) -> None:
-        self._ltrj(self.mode | 0x0100)
-        self._stt()
+        self._send("SBPR" if relative else "SBPA", self._word32(self.registers.break_position * self.k))
 
     def _step(self, direction: int) -> None:
         if not self.chip.profile.complete:
@@ -256,46 +229,186 @@ class H3Axis:
         self._ltrj(0x0002, end)
         self._stt()
 
-    def _read_position(self, register: str, report: str) -> None:
-        self.put(register, self._to_user(self._read(report)))
+    def _read_position(self, report: str) -> int:
+        return self._to_user(self._read(report))
 
-    def _read_velocity(self, register: str, report: str, scale: float) -> None:
-        self.put(register, self._to_user(self._read(report) / (scale * FB_SAMPLE)))
+    def _read_velocity(self, report: str, scale: float) -> int:
+        return self._to_user(self._read(report) / (scale * FB_SAMPLE))
 
-    def _read_signals(self) -> None:
+    def load_destination_relative(self) -> None:
+        """FLdDR: LTRJ mode | 0003h with DestP · k."""
+        self._position(True)
+
+    def load_destination_absolute(self) -> None:
+        """FLdDA: LTRJ mode | 0002h with DestP · k."""
+        self._position(False)
+
+    def load_velocity_relative(self) -> None:
+        """FLdVR: LTRJ mode | 000Ch with the velocity register of Veloc."""
+        self._velocity(True)
+
+    def load_velocity_absolute(self) -> None:
+        """FLdVA: LTRJ mode | 0008h with the velocity register of Veloc."""
+        self._velocity(False)
+
+    def load_acceleration_relative(self) -> None:
+        """FLdAR: motor off (LTRJ 0100h, STT), then LTRJ mode | 0030h with Accel's register."""
+        self._acceleration(True)
+
+    def load_acceleration_absolute(self) -> None:
+        """FLdAA: motor off (LTRJ 0100h, STT), then LTRJ mode | 0020h with Accel's register."""
+        self._acceleration(False)
+
+    def load_regulator(self) -> None:
+        """FLdRP: LFIL (SampI << 8) | 000Fh, KProp, KInt, KDer, IntL."""
+        registers = self.registers
+        sample = registers.sample_interval
+        if not 0 <= sample <= 255:
+            self._refuse()
+        words = [value & 0xFFFF for value in (registers.proportional, registers.integral, registers.derivative,
+                                              registers.integration_limit)]
+        self._send("LFIL", sample << 8 | 0x000F, *words)
+
+    def update_regulator(self) -> None:
+        """FUpDRP: UDF."""
+        self._send("UDF")
+
+    def select_mode(self) -> None:
+        """FSelOM: LTRJ with MCW bits 11, 12 (kept for the later LTRJs)."""
+        self.mode = self.registers.control_word & 0x1800
+        self._ltrj(self.mode)
+
+    def set_position_error(self) -> None:
+        """FSetPE: LPES (MCW low byte 1Ah) or LPEI (1Bh) with PosEr; anything else refused (G-8)."""
+        reaction = self.registers.control_word & 0xFF
+        if reaction not in (0x1A, 0x1B):
+            self._refuse()  # G-8
+        self._send("LPES" if reaction == 0x1A else "LPEI", self.registers.position_error_limit & 0xFFFF)
+
+    def reset_status_flags(self) -> None:
+        """FResSF: RSTI with StaFRR."""
+        self._send("RSTI", self.registers.status_reset & 0xFFFF)
+
+    def load_break_position_relative(self) -> None:
+        """FLdBPR: SBPR with BrkP · k."""
+        self._breakpoint(True)
+
+    def load_break_position_absolute(self) -> None:
+        """FLdBPA: SBPA with BrkP · k."""
+        self._breakpoint(False)
+
+    def set_index_position(self) -> None:
+        """FSetIP: SIP."""
+        self._send("SIP")
+
+    def set_zero_position(self) -> None:
+        """FSetZP: DFH."""
+        self._send("DFH")
+
+    def read_actual_position(self) -> None:
+        """FRdAP: RDRP / k into RActP."""
+        self.registers.actual_position = self._read_position("RDRP")
+
+    def read_set_position(self) -> None:
+        """FRdSP: RDDP / k into RSetP."""
+        self.registers.set_position = self._read_position("RDDP")
+
+    def read_actual_velocity(self) -> None:
+        """FRdAV: RDRV / (T · k) into RActV."""
+        self.registers.actual_velocity = self._read_velocity("RDRV", 1.0)
+
+    def read_set_velocity(self) -> None:
+        """FRdSV: RDDV / (65536 · T · k) into RSetV."""
+        self.registers.set_velocity = self._read_velocity("RDDV", 65536.0)
+
+    def read_integration_sum(self) -> None:
+        """FRdITS: RDSUM into RIntTS."""
+        self.registers.integration_sum = self._read("RDSUM")
+
+    def read_index_position(self) -> None:
+        """FRdIP: RDIP / k into RIndP."""
+        self.registers.index_position = self._read_position("RDIP")
+
+    def read_signal_register(self) -> None:
+        """FRdSR: RDSIGS into RSigB (bit 12 inverted with the G-5 option)."""
         value = self._read("RDSIGS")
-        self.put("RSigB", value ^ 0x1000 if self.rsigb_bit12_inverted else value)
+        self.registers.signal_register = value ^ 0x1000 if self.rsigb_bit12_inverted else value
+
+    def start(self) -> None:
+        """FStart: STT."""
+        self._stt()
+
+    def stop(self) -> None:
+        """FStop: LTRJ mode | MCW bits 8 … 10, STT; several bits by priority, none: no stop (G-10)."""
+        bits = self.registers.control_word & 0x0700
+        if bits not in (0x0100, 0x0200, 0x0400):
+            self.warnings += 1  # G-10: several bits by priority 8 > 9 > 10; none: no stop at all
+            bits = bits & -bits
+        self._ltrj(self.mode | bits)
+        self._stt()
+
+    def motor_off(self) -> None:
+        """FMotOff: LTRJ mode | 0100h, STT."""
+        self._ltrj(self.mode | 0x0100)
+        self._stt()
+
+    def step_forward(self) -> None:
+        """FSStepF: LTRJ 0003h +1, STT."""
+        self._step(1)
+
+    def step_backward(self) -> None:
+        """FSStepB: LTRJ 0003h −1, STT."""
+        self._step(-1)
+
+    def forward(self) -> None:
+        """FForw: LTRJ 0002h to 3FFFFFFFh, STT."""
+        self._run_to(FORWARD_END)
+
+    def backward(self) -> None:
+        """FBackw: LTRJ 0002h to C0000000h, STT."""
+        self._run_to(BACKWARD_END)
 
 
-FUNCTIONS: dict[str, Callable[[H3Axis], None]] = {
-    "FLdDR": lambda a: a._position(True),
-    "FLdDA": lambda a: a._position(False),
-    "FLdVR": lambda a: a._velocity(True),
-    "FLdVA": lambda a: a._velocity(False),
-    "FLdAR": lambda a: a._acceleration(True),
-    "FLdAA": lambda a: a._acceleration(False),
-    "FLdRP": H3Axis._regulator,
-    "FUpDRP": lambda a: a._send("UDF") and None,
-    "FSelOM": H3Axis._select_mode,
-    "FSetPE": H3Axis._position_error,
-    "FResSF": lambda a: a._send("RSTI", a.reg("StaFRR") & 0xFFFF) and None,
-    "FLdBPR": lambda a: a._breakpoint(True),
-    "FLdBPA": lambda a: a._breakpoint(False),
-    "FSetIP": lambda a: a._send("SIP") and None,
-    "FSetZP": lambda a: a._send("DFH") and None,
-    "FRdAP": lambda a: a._read_position("RActP", "RDRP"),
-    "FRdSP": lambda a: a._read_position("RSetP", "RDDP"),
-    "FRdAV": lambda a: a._read_velocity("RActV", "RDRV", 1.0),
-    "FRdSV": lambda a: a._read_velocity("RSetV", "RDDV", 65536.0),
-    "FRdITS": lambda a: a.put("RIntTS", a._read("RDSUM")),
-    "FRdIP": lambda a: a._read_position("RIndP", "RDIP"),
-    "FRdSR": H3Axis._read_signals,
-    "FStart": lambda a: a._stt() and None,
-    "FStop": H3Axis._stop,
-    "FMotOff": H3Axis._motor_off,
-    "FSStepF": lambda a: a._step(1),
-    "FSStepB": lambda a: a._step(-1),
-    "FForw": lambda a: a._run_to(FORWARD_END),
-    "FBackw": lambda a: a._run_to(BACKWARD_END),
-}
-"""Each command flag's function (§3.2): the chip sequence it sends."""
+def _function(symbol: str, handler: Callable[[H3Axis], None]) -> Command[Callable[[H3Axis], None]]:
+    row = flag_row(symbol)
+    doc = (f"flag offset {row.key}: {row.doc}; {row.extra['time_ms']} ms"
+           + ("" if row.extra["in_motion"] else "; not during motion"))
+    return Command(symbol, handler, "§3.2", doc)
+
+
+FUNCTIONS: Table[Callable[[H3Axis], None]] = Table([
+    _function("FLdDR", H3Axis.load_destination_relative),
+    _function("FLdDA", H3Axis.load_destination_absolute),
+    _function("FLdVR", H3Axis.load_velocity_relative),
+    _function("FLdVA", H3Axis.load_velocity_absolute),
+    _function("FLdAR", H3Axis.load_acceleration_relative),
+    _function("FLdAA", H3Axis.load_acceleration_absolute),
+    _function("FLdRP", H3Axis.load_regulator),
+    _function("FUpDRP", H3Axis.update_regulator),
+    _function("FSelOM", H3Axis.select_mode),
+    _function("FSetPE", H3Axis.set_position_error),
+    _function("FResSF", H3Axis.reset_status_flags),
+    _function("FLdBPR", H3Axis.load_break_position_relative),
+    _function("FLdBPA", H3Axis.load_break_position_absolute),
+    _function("FSetIP", H3Axis.set_index_position),
+    _function("FSetZP", H3Axis.set_zero_position),
+    _function("FRdAP", H3Axis.read_actual_position),
+    _function("FRdSP", H3Axis.read_set_position),
+    _function("FRdAV", H3Axis.read_actual_velocity),
+    _function("FRdSV", H3Axis.read_set_velocity),
+    _function("FRdITS", H3Axis.read_integration_sum),
+    _function("FRdIP", H3Axis.read_index_position),
+    _function("FRdSR", H3Axis.read_signal_register),
+    _function("FStart", H3Axis.start),
+    _function("FStop", H3Axis.stop),
+    _function("FMotOff", H3Axis.motor_off),
+    _function("FSStepF", H3Axis.step_forward),
+    _function("FSStepB", H3Axis.step_backward),
+    _function("FForw", H3Axis.forward),
+    _function("FBackw", H3Axis.backward),
+])
+"""The library functions by their command flag (§3.2), in the flag field's order: what AxHndlg
+runs for a set flag, and what the reference lists."""
+
+if [row.token for row in FUNCTIONS] != [row.name for row in command_flags()]:
+    raise ValueError("FUNCTIONS must name every command flag of the flag field, in its order")

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
+from devsim.core.kit import Command, Table
 from devsim.core.words import signed32
 from devsim.devices.pcd4h3.pid import Coefficients, Filter, Motor, sat
 from devsim.devices.pcd4h3.trajectory import Profile, Trajectory
@@ -43,15 +44,16 @@ def _sign(value: int) -> int:
 class Lm628:
     """One chip: its buffers, working registers, flags, and the motor and encoder behind it."""
 
-    def __init__(self, motor: Motor | None = None, *, lm629: bool = False) -> None:
+    def __init__(self, motor: Motor | None = None, *, lm629: bool = False, present: bool = True,
+                 encoder_sign: int = 1, index_period: int = 0, index_offset: int = 0) -> None:
         self.motor = motor if motor is not None else Motor()
         self.lm629 = lm629  # the PWM types' chip: no 12-bit port (G-26)
-        self.present = True  # False: a Y chip on a one-axis module, every transfer fails (G-27)
+        self.present = present  # False: a Y chip on a one-axis module, every transfer fails (G-27)
         self.bus_errors = 0  # transfers still to be disturbed on the PCD4 bus (§3.7 cause 5)
         self.command_errors = 0  # since start-up (diagnostics)
-        self.encoder_sign = 1  # −1: phases A/B swapped by a wrong inversion jumper (§2.5)
-        self.index_period = 0  # counts between index marks (4 · lines), 0: no index reaches the decoder
-        self.index_offset = 0
+        self.encoder_sign = encoder_sign  # −1: phases A/B swapped by a wrong inversion jumper (§2.5)
+        self.index_period = index_period  # counts between index marks (4 · lines), 0: no index reaches the decoder
+        self.index_offset = index_offset
         self.profile = Profile()
         self.filter = Filter(dac_bits=8)
         self.buffer = Trajectory()
@@ -327,35 +329,55 @@ class Lm628:
                 self.flags |= INDEX
 
 
-COMMANDS: dict[str, Callable[[Lm628, list[int]], None]] = {
-    "RESET": lambda c, w: c.reset() if not w else c.error(),
-    "PORT8": lambda c, w: c.port(8) if not w else c.error(),
-    "PORT12": lambda c, w: c.port(12) if not w else c.error(),
-    "DFH": lambda c, w: c.define_home() if not w else c.error(),
-    "SIP": lambda c, w: c.arm_index() if not w else c.error(),
-    "LPEI": lambda c, w: c.position_error(w[0], False) if len(w) == 1 else c.error(),
-    "LPES": lambda c, w: c.position_error(w[0], True) if len(w) == 1 else c.error(),
-    "SBPA": lambda c, w: c.set_breakpoint(w[0], False) if len(w) == 1 else c.error(),
-    "SBPR": lambda c, w: c.set_breakpoint(w[0], True) if len(w) == 1 else c.error(),
-    "MSKI": lambda c, w: c.mask_interrupts(w[0]) if len(w) == 1 else c.error(),
-    "RSTI": lambda c, w: c.reset_interrupts(w[0]) if len(w) == 1 else c.error(),
-    "LFIL": lambda c, w: c.load_filter(w[0], w[1:]) if w else c.error(),
-    "UDF": lambda c, w: c.update_filter() if not w else c.error(),
-    "LTRJ": lambda c, w: c.load_trajectory(w[0], w[1:]) if w else c.error(),
-    "STT": lambda c, w: c.start() if not w else c.error(),
-}
+Write = Callable[[Lm628, list[int]], None]
+Report = Callable[[Lm628], int]
+
+
+def _none(action: Callable[[Lm628], None]) -> Write:
+    """A command without data words (any word is a command error)."""
+    return lambda chip, words: action(chip) if not words else chip.error()
+
+
+def _one(action: Callable[[Lm628, int], None]) -> Write:
+    """A command with one data word."""
+    return lambda chip, words: action(chip, words[0]) if len(words) == 1 else chip.error()
+
+
+def _control(action: Callable[[Lm628, int, list[int]], None]) -> Write:
+    """A command with a control word and the values it announces."""
+    return lambda chip, words: action(chip, words[0], words[1:]) if words else chip.error()
+
+
+COMMANDS: Table[Write] = Table([
+    Command("RESET", _none(Lm628.reset), "§3.5.3", "reset chip"),
+    Command("PORT8", _none(lambda c: c.port(8)), "§3.5.3", "output port 8 bits"),
+    Command("PORT12", _none(lambda c: c.port(12)), "§3.5.3", "output port 12 bits (not on the LM629)"),
+    Command("DFH", _none(Lm628.define_home), "§3.5.3", "define home: actual position := 0"),
+    Command("SIP", _none(Lm628.arm_index), "§3.5.3", "set index position: capture at the next index pulse"),
+    Command("LPEI", _one(lambda c, w: c.position_error(w, False)), "§3.5.3", "position error threshold (flag only)"),
+    Command("LPES", _one(lambda c, w: c.position_error(w, True)), "§3.5.3",
+            "position error threshold for stopping (flag and motor off)"),
+    Command("SBPA", _one(lambda c, w: c.set_breakpoint(w, False)), "§3.5.3", "set breakpoint, absolute"),
+    Command("SBPR", _one(lambda c, w: c.set_breakpoint(w, True)), "§3.5.3", "set breakpoint relative to the target"),
+    Command("MSKI", _one(Lm628.mask_interrupts), "§3.5.3", "mask interrupts to the HI pin"),
+    Command("RSTI", _one(Lm628.reset_interrupts), "§3.5.3", "reset interrupt flags (bit 0 resets)"),
+    Command("LFIL", _control(Lm628.load_filter), "§3.5.3, §3.5.5", "load filter parameters into the buffers"),
+    Command("UDF", _none(Lm628.update_filter), "§3.5.3", "update filter (buffers → working)"),
+    Command("LTRJ", _control(Lm628.load_trajectory), "§3.5.3, §3.5.4", "load trajectory parameters into the buffers"),
+    Command("STT", _none(Lm628.start), "§3.5.3", "start motion (take over the trajectory buffers)"),
+])
 """The write commands of §3.5.3 by mnemonic (32-bit values as one word each)."""
 
-REPORTS: dict[str, Callable[[Lm628], int]] = {
-    "RDSTAT": lambda c: c.status,
-    "RDSIGS": lambda c: c.signals,
-    "RDIP": lambda c: c.index_position,
-    "RDDP": lambda c: c.desired,
-    "RDRP": lambda c: c.actual,
-    "RDDV": lambda c: c.profile.velocity,
-    "RDRV": lambda c: c.real_velocity,
-    "RDSUM": lambda c: c.filter.integral,
-}
+REPORTS: Table[Report] = Table([
+    Command("RDSTAT", lambda c: c.status, "§3.5.3, §4.8", "read status byte"),
+    Command("RDSIGS", lambda c: c.signals, "§3.5.3, §4.5", "read signals register"),
+    Command("RDIP", lambda c: c.index_position, "§3.5.3", "read index position"),
+    Command("RDDP", lambda c: c.desired, "§3.5.3", "read desired (set) position"),
+    Command("RDRP", lambda c: c.actual, "§3.5.3", "read real (actual) position"),
+    Command("RDDV", lambda c: c.profile.velocity, "§3.5.3", "read desired velocity (× 2^16)"),
+    Command("RDRV", lambda c: c.real_velocity, "§3.5.3", "read real velocity (counts per sample)"),
+    Command("RDSUM", lambda c: c.filter.integral, "§3.5.3", "read integration-term sum"),
+])
 """The report commands of §3.5.3 by mnemonic."""
 
 CODES = {"RESET": 0x00, "STT": 0x01, "DFH": 0x02, "SIP": 0x03, "UDF": 0x04, "PORT8": 0x05, "PORT12": 0x06,

@@ -106,13 +106,14 @@ def _lag_terms(t: float, tau: float) -> tuple[float, float, float]:
 class Motor:
     """Amplifier and motor as a velocity source with a lag: dv/dt = (Kv · U − v) / τm."""
 
-    def __init__(self, kv: float = 10_000.0, tau: float = 0.020) -> None:
+    def __init__(self, kv: float = 10_000.0, tau: float = 0.020, *, low: float = -math.inf,
+                 high: float = math.inf) -> None:
         self.kv, self.tau = kv, tau  # counts/s per volt; seconds
         self.position = 0.0  # counts
         self.velocity = 0.0  # counts/s
         self.blocked = False
         self.load = 0.0  # a load torque, as the volts that would hold it (S21)
-        self.low, self.high = -math.inf, math.inf  # mechanical end stops (S12)
+        self.low, self.high = low, high  # mechanical end stops (S12)
         self._decay: tuple[float, float, float, float] = (0.0, 1.0, 0.0, 0.0)  # the last step's terms
 
     def step(self, volts: float, seconds: float) -> None:

@@ -19,10 +19,11 @@ from devsim.core.kit import DriveActions, Fault, FaultTable, SignalDef, signal_p
 from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.core.words import signed32
 from devsim.devices.pcd4h3.drive import axis_signals
-from devsim.devices.pcd4h3.layout import FLAGS, REGISTERS
 from devsim.devices.pcd4h3.lm628 import notation
-from devsim.devices.pcd4h3.plc import MEDIA_SIZE, Pcd4
+from devsim.devices.pcd4h3.model import MEDIA_SIZE, Pcd4
+from devsim.devices.pcd4h3.registers import AxisRegisters
 from devsim.devices.pcd4h3.services import bus_input, read, write
+from devsim.devices.pcd4h3.tables import FLAG_FIELD, REGISTERS
 
 __all__ = ["DRIVE", "FAULTS", "POINTS", "SIGNALS"]
 
@@ -145,7 +146,7 @@ def _medium(prefix: str, medium: str, settable: bool) -> Callable[[str], Point |
     return make
 
 
-_SYMBOLS = {r.symbol: ("register", r.offset) for r in REGISTERS} | {f.symbol: ("flag", f.offset) for f in FLAGS}
+_SYMBOLS = {r.name: ("register", r.key) for r in REGISTERS} | {f.name: ("flag", f.key) for f in FLAG_FIELD}
 
 
 def _axis_family(name: str) -> Point | None:
@@ -234,15 +235,17 @@ FAULTS = FaultTable([
 
 
 # -- axis 1 as a drive (CiA 402 facade): the library's functions, run at once --------------------
-def _run(m: Pcd4, *symbols: str, **registers: int) -> None:
+def _run(m: Pcd4, *symbols: str) -> None:
     m.catch_up()
     axis = m.axes[0]
-    for symbol, value in registers.items():
-        axis.put(symbol, value)
     for symbol in symbols:
         axis.run(symbol)
     m.drives[0].poke()
     m.wake()
+
+
+def _registers(m: Pcd4) -> AxisRegisters:
+    return m.axes[0].registers
 
 
 def _user(m: Pcd4, counts: float) -> int:
@@ -252,22 +255,38 @@ def _user(m: Pcd4, counts: float) -> int:
 
 def _enable(m: Pcd4, on: bool) -> None:
     if on:  # hold where the axis stands
-        _run(m, "FLdDA", "FStart", DestP=_user(m, m.drives[0].chip.actual))
+        _registers(m).destination = _user(m, m.drives[0].chip.actual)
+        _run(m, "FLdDA", "FStart")
     else:
         _run(m, "FMotOff")
 
 
 def _move_to(m: Pcd4, target: float, speed: float) -> None:
     if speed > 0:
-        _run(m, "FLdVA", Veloc=_user(m, speed))
-    _run(m, "FLdDA", "FStart", DestP=_user(m, target))
+        _registers(m).velocity = _user(m, speed)
+        _run(m, "FLdVA")
+    _registers(m).destination = _user(m, target)
+    _run(m, "FLdDA", "FStart")
 
 
 def _jog(m: Pcd4, velocity: float) -> None:
     if velocity == 0:
-        _run(m, "FStop", MCW=(m.axes[0].reg("MCW") & ~0x0700) | 0x0400)
+        _stop(m, 0x0400)
     else:
-        _run(m, "FLdVA", "FForw" if velocity > 0 else "FBackw", Veloc=_user(m, abs(velocity)))
+        _registers(m).velocity = _user(m, abs(velocity))
+        _run(m, "FLdVA", "FForw" if velocity > 0 else "FBackw")
+
+
+def _stop(m: Pcd4, bits: int) -> None:
+    """FStop with MCW's stop bits 8 … 10 set to ``bits`` (0400h smooth, 0200h abrupt)."""
+    registers = _registers(m)
+    registers.control_word = (registers.control_word & ~0x0700) | bits
+    _run(m, "FStop")
+
+
+def _reset_fault(m: Pcd4) -> None:
+    _registers(m).status_reset = 0
+    _run(m, "FResSF")
 
 
 def _only_axis_1(m: Pcd4) -> Any:
@@ -278,8 +297,8 @@ DRIVE = DriveActions(
     enable=_enable,
     move_to=_move_to,
     jog=_jog,
-    quick_stop=lambda m: _run(m, "FStop", MCW=(m.axes[0].reg("MCW") & ~0x0700) | 0x0200),
-    reset_fault=lambda m: _run(m, "FResSF", StaFRR=0),
+    quick_stop=lambda m: _stop(m, 0x0200),
+    reset_fault=_reset_fault,
     position=lambda m: _only_axis_1(m).chip.actual,
     velocity=lambda m: _only_axis_1(m).chip.encoder_sign * _only_axis_1(m).motor.velocity,
     enabled=lambda m: not _only_axis_1(m).chip.motor_off,

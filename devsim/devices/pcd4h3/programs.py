@@ -14,15 +14,18 @@ examples want the manual's installation with FMAH3 48.  Declared as tables; one 
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, MutableMapping
 from typing import Any
 
+from devsim.core.kit import Command, Table
 from devsim.core.record import record
+from devsim.devices.pcd4h3.library import H3Axis
+from devsim.devices.pcd4h3.timers import Timers
 
-__all__ = ["PROGRAMS", "Sequence", "Step", "Transition"]
+__all__ = ["ACTIONS", "PROGRAMS", "Sequence", "Step", "Transition"]
 
 Action = tuple[Any, ...]  # ("load", register, value) / ("set", flag) / ("timer", n, tenths) / ("counter", n, v) / ("dec", n)
-Condition = Callable[[Any], bool]  # of a :class:`Sequence`'s view of the PLC
+Condition = Callable[["Sequence"], bool]  # of a :class:`Sequence`'s view of the PLC
 
 
 @record
@@ -59,7 +62,7 @@ def _input(n: int, level: bool = True) -> Condition:
     return lambda view: view.input(n) == level
 
 
-def _timer_done(view: Any) -> bool:
+def _timer_done(view: Sequence) -> bool:
     return view.timer(0) == 0
 
 
@@ -159,37 +162,58 @@ PROGRAMS: dict[str, Program] = {"example1": EXAMPLE_1, "example2": EXAMPLE_2, "e
 
 
 class Sequence:
-    """A running sequential block on axis 1 of a PLC (``plc`` gives media, the axis, the clock)."""
+    """A running sequential block on axis 1 of a PLC: the axis (its registers and flags), the
+    PLC's inputs and counters, and its timers."""
 
-    def __init__(self, program: Program, plc: Any) -> None:
-        self.program, self.plc = program, plc
+    def __init__(self, program: Program, axis: H3Axis, inputs: Mapping[int, int], counters: MutableMapping[int, int],
+                 timers: Timers) -> None:
+        self.program, self.axis = program, axis
+        self.inputs, self.counters, self.timers = inputs, counters, timers
         self.steps = {step.name: step for step in program.steps}
         self.leaving: dict[str, list[Transition]] = {}
         for transition in program.transitions:
             self.leaving.setdefault(transition.source, []).append(transition)
+        self.active: dict[str, bool] = {}  # name → actions done
         self.restart()
         self._keys = {n: self.input(n) for n in (0, 15)}
 
     def restart(self) -> None:
         """RSB: the initial step becomes the only active one."""
-        self.active: dict[str, bool] = {self.program.initial: False}  # name → actions done
+        self.active = {self.program.initial: False}
 
     # -- the PLC seen by conditions ------------------------------------------------------------
-    @property
-    def axis(self) -> Any:
-        return self.plc.axes[0]
-
     def flag(self, symbol: str) -> int:
         return self.axis.flag(symbol)
 
     def input(self, n: int) -> bool:
-        return bool(self.plc.inputs.get(n, 0))
+        return bool(self.inputs.get(n, 0))
 
     def timer(self, n: int) -> int:
-        return self.plc.timer(n)
+        return self.timers.value(n)
 
     def counter(self, n: int) -> int:
-        return self.plc.counters.get(n, 0)
+        return self.counters.get(n, 0)
+
+    # -- the statements of a step's actions ------------------------------------------------------
+    def load_register(self, action: Action) -> None:
+        """``LD R symbol+RA1 value``."""
+        self.axis.registers.load(action[1], action[2])
+
+    def set_flag(self, action: Action) -> None:
+        """``SET F symbol+FA1``."""
+        self.axis.set_flag(action[1], 1)
+
+    def load_timer(self, action: Action) -> None:
+        """``LD T n tenths``."""
+        self.timers.load(action[1], action[2])
+
+    def load_counter(self, action: Action) -> None:
+        """``LD C n value``."""
+        self.counters[action[1]] = action[2]
+
+    def decrement_counter(self, action: Action) -> None:
+        """``DEC C n`` (not below 0)."""
+        self.counters[action[1]] = max(0, self.counters.get(action[1], 0) - 1)
 
     # -- one call of the cyclic part after AxHndlg ---------------------------------------------
     def before_handling(self) -> None:
@@ -225,7 +249,7 @@ class Sequence:
 
     def _run(self, step: Step) -> None:
         for action in step.actions:
-            ACTIONS[action[0]](self.plc, self.axis, action)
+            ACTIONS[action[0]](self, action)
 
     @property
     def busy(self) -> bool:
@@ -240,11 +264,12 @@ class Sequence:
         return False
 
 
-ACTIONS: dict[str, Callable[[Any, Any, Action], None]] = {
-    "load": lambda plc, axis, a: axis.put(a[1], a[2]),  # LD R symbol+RA1 value
-    "set": lambda plc, axis, a: axis.set_flag(a[1], 1),  # SET F symbol+FA1
-    "timer": lambda plc, axis, a: plc.load_timer(a[1], a[2]),  # LD T n tenths
-    "counter": lambda plc, axis, a: plc.counters.__setitem__(a[1], a[2]),  # LD C n value
-    "dec": lambda plc, axis, a: plc.counters.__setitem__(a[1], max(0, plc.counters.get(a[1], 0) - 1)),  # DEC C n
-}
-"""What a step's actions do, by kind."""
+ACTIONS: Table[Callable[[Sequence, Action], None]] = Table([
+    Command("load", Sequence.load_register, "§6.3", "LD R symbol+RA1 value: load a register of axis 1"),
+    Command("set", Sequence.set_flag, "§6.3", "SET F symbol+FA1: set a flag of axis 1"),
+    Command("timer", Sequence.load_timer, "§6.3", "LD T n tenths: start timer n"),
+    Command("counter", Sequence.load_counter, "§6.5", "LD C n value: load counter n"),
+    Command("dec", Sequence.decrement_counter, "§6.5", "DEC C n: count counter n down"),
+])
+"""What a step's actions do, by the statement (the first item of an action); sections of the spec
+(manual §9.1, §9.3)."""

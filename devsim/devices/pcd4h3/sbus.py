@@ -5,34 +5,32 @@ and UDP.
 Pure, no I/O: :class:`SerialReceiver` takes the host's bytes (split anywhere) and returns the
 complete requests addressed to the station, :func:`serial_reply` and :func:`ether_reply` lay out
 the answers, :func:`parse_ether` and :class:`EtherReceiver` read Ether-S-Bus frames.  A request
-is a :class:`Request` (station, command, parameter bytes) whose parameters
-:func:`decode_command` turns into a read or write of PLC media; CRC errors, framing errors and
-other stations are dropped silently (§9.2).
+is a :class:`Request` (station, command, parameter bytes).  How a command's parameters are laid
+out is its :class:`Telegram` (:class:`Reads`, :class:`Writes`, :class:`NoParameters`), which
+reads them into a read or write of PLC media; the station's table of commands (the kind's
+``services.SERVICES``) says which command code has which, and the receiver asks it (a
+:data:`Telegrams` lookup) where a telegram ends.  CRC errors, framing errors and other stations
+are dropped silently (§9.2).
 """
 
 from __future__ import annotations
 
 import struct
+from collections.abc import Callable
+from typing import Protocol
 
 from devsim.core.record import record
 
 __all__ = [
-    "ACK", "BROADCAST", "Bad", "EtherReceiver", "NAK", "Read", "Request", "SerialReceiver", "Simple", "Write",
-    "crc16", "decode_command", "ether_ack", "ether_frame", "ether_reply", "pack_bits", "parse_ether", "serial_ack",
-    "serial_reply", "stuff", "unstuff",
+    "ACK", "BROADCAST", "Bad", "EtherReceiver", "NAK", "NoParameters", "Read", "Reads", "Request", "SerialReceiver",
+    "Simple", "Telegram", "Telegrams", "Write", "Writes", "crc16", "decode_command", "ether_ack", "ether_frame",
+    "ether_reply", "pack_bits", "parse_ether", "serial_ack", "serial_reply", "stuff", "unstuff",
 ]
 
 FS, DLE = 0xB5, 0xC5
 REQUEST, RESPONSE, ACK_NAK = 0x00, 0x01, 0x02
 ACK, NAK = 0x0000, 0x0001
 BROADCAST = 255
-#: Read commands: medium and the most elements one telegram may ask for (§9.4).
-READS = {0x00: ("counter", 32), 0x02: ("flag", 128), 0x03: ("input", 128), 0x05: ("output", 128),
-         0x06: ("register", 32), 0x07: ("timer", 32)}
-WRITES = {0x0B: "flag", 0x0D: "output", 0x0E: "register"}
-#: Commands without parameters.
-SIMPLE = {0x1B: "read status", 0x1D: "read station", 0x20: "read firmware", 0x2F: "run", 0x38: "restart cold",
-          0x43: "stop"}
 
 
 def crc16(data: bytes, value: int = 0) -> int:
@@ -87,23 +85,12 @@ class Request:
     parameters: bytes
 
 
-def _request_length(command: int, parameters: bytes) -> int | None:
-    """How many parameter bytes a command has (None: not known yet / unknown command: -1)."""
-    if command in READS:
-        return 3
-    if command in WRITES:
-        return None if not parameters else parameters[0] + 2
-    if command in SIMPLE:
-        return 0
-    return -1
-
-
 class SerialReceiver:
     """Requests out of the serial byte stream for one station (§9.2): B5h always starts a new
     telegram; a telegram ends when its command's parameters and the two CRC bytes are in."""
 
-    def __init__(self, station: int) -> None:
-        self.station = station
+    def __init__(self, station: int, telegrams: Telegrams) -> None:
+        self.station, self.telegrams = station, telegrams
         self._raw: bytearray | None = None  # the telegram so far, unstuffed
         self._dle = False
         self.errors = {"crc": 0, "framing": 0}
@@ -145,11 +132,11 @@ class SerialReceiver:
         if raw[1] != REQUEST:
             self._raw = None  # (a response or an ACK on the line: not for a station)
             return None
-        wanted = _request_length(raw[3], bytes(raw[4:]))
+        telegram = self.telegrams(raw[3])
+        # an unknown command: its CRC follows at once (answered with NAK)
+        wanted = 0 if telegram is None else telegram.length(bytes(raw[4:]))
         if wanted is None:
             return None
-        if wanted < 0:
-            wanted = 0  # an unknown command: its CRC follows at once (answered with NAK)
         end = 4 + wanted + 2
         if len(raw) < end:
             return None
@@ -187,32 +174,86 @@ class Bad:
     reason: str
 
 
-def decode_command(request: Request) -> Read | Write | Simple | Bad:
-    command, p = request.command, request.parameters
-    if command in READS and len(p) != 3 or command in WRITES and len(p) < 4:
-        return Bad("wrong parameter count")
-    if command in READS:
-        medium, most = READS[command]
+class Telegram(Protocol):
+    """How a command's parameters are laid out (§9.4)."""
+
+    def length(self, parameters: bytes) -> int | None:
+        """How many parameter bytes the telegram has, seeing the first ones (None: not known yet)."""
+        ...
+
+    def decode(self, parameters: bytes) -> Read | Write | Simple | Bad: ...
+
+
+#: The telegram of a command code, or None for a code the station does not know.
+Telegrams = Callable[[int], Telegram | None]
+
+
+@record
+class Reads:
+    """A read of ``medium``: count − 1, address high, low; at most ``most`` elements (§9.4)."""
+
+    medium: str
+    most: int
+
+    def length(self, parameters: bytes) -> int | None:
+        return 3
+
+    def decode(self, parameters: bytes) -> Read | Bad:
+        p = parameters
+        if len(p) != 3:
+            return Bad("wrong parameter count")
         count = p[0] + 1
-        if count > most:
-            return Bad(f"at most {most} {medium}s per telegram")
-        return Read(medium, p[1] << 8 | p[2], count)
-    if command in WRITES:
-        medium = WRITES[command]
+        if count > self.most:
+            return Bad(f"at most {self.most} {self.medium}s per telegram")
+        return Read(self.medium, p[1] << 8 | p[2], count)
+
+
+@record
+class Writes:
+    """A write of ``medium``: byte count, address high, low, then the data (§9.4): registers in 4
+    bytes each; flags and outputs as count − 1 and the bits, the first in bit 0."""
+
+    medium: str
+
+    def length(self, parameters: bytes) -> int | None:
+        return None if not parameters else parameters[0] + 2
+
+    def decode(self, parameters: bytes) -> Write | Bad:
+        p = parameters
+        if len(p) < 4:
+            return Bad("wrong parameter count")
         address = p[1] << 8 | p[2]
-        if medium == "register":
+        if self.medium == "register":
             data = p[3:]
             if len(data) % 4 or not data:
                 return Bad("register data come in 4 bytes")
-            return Write(medium, address, struct.unpack(f">{len(data) // 4}i", data))
+            return Write(self.medium, address, struct.unpack(f">{len(data) // 4}i", data))
         count = p[3] + 1
         bits = p[4:]
         if len(bits) != (count + 7) // 8:
             return Bad("the byte count does not match the flag count")
-        return Write(medium, address, tuple(bits[i // 8] >> (i % 8) & 1 for i in range(count)))
-    if command in SIMPLE:
-        return Simple(SIMPLE[command])
-    return Bad(f"command {command:02X}h is not supported")
+        return Write(self.medium, address, tuple(bits[i // 8] >> (i % 8) & 1 for i in range(count)))
+
+
+@record
+class NoParameters:
+    """A command without parameters (status, station, firmware, run, stop, restart)."""
+
+    name: str
+
+    def length(self, parameters: bytes) -> int | None:
+        return 0
+
+    def decode(self, parameters: bytes) -> Simple:
+        return Simple(self.name)
+
+
+def decode_command(request: Request, telegrams: Telegrams) -> Read | Write | Simple | Bad:
+    """A request's parameters read as its command's telegram lays them out."""
+    telegram = telegrams(request.command)
+    if telegram is None:
+        return Bad(f"command {request.command:02X}h is not supported")
+    return telegram.decode(request.parameters)
 
 
 def pack_bits(values: list[int]) -> bytes:

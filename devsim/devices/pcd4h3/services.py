@@ -5,7 +5,9 @@ The media a host sees: registers R 0 … 4095 (the axis blocks among them, and t
 read-only diagnostics block), flags F 0 … 8191 (the axis fields, the diagnostics flags), inputs
 I 0 … 1023 (each H3 module's limit and reference inputs at FMAH3 + 16m + 9/10/11 and 13/14/15,
 the user's keys elsewhere), outputs O 0 … 1023 (the FBs' own: read only), counters and timers.
-:func:`serve` turns one decoded request into the reply data, an ACK/NAK code, or nothing.
+:data:`SERVICES` is the station's table of S-Bus commands by code (``06h``): each row's
+:class:`Service` lays out the telegram and carries it out; :func:`serve` turns one request into
+the reply data, an ACK/NAK code, or nothing.
 """
 
 from __future__ import annotations
@@ -13,38 +15,61 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from devsim.core.kit import Command, Table
+from devsim.core.record import record
 from devsim.core.words import signed32
-from devsim.devices.pcd4h3.plc import BUS_INPUTS, MEDIA_SIZE, Pcd4
-from devsim.devices.pcd4h3.sbus import ACK, NAK, Bad, Read, Request, Simple, Write, decode_command, pack_bits
+from devsim.devices.pcd4h3.model import BUS_INPUTS, MEDIA_SIZE, Pcd4
+from devsim.devices.pcd4h3.sbus import (
+    ACK,
+    BROADCAST,
+    NAK,
+    Bad,
+    NoParameters,
+    Read,
+    Reads,
+    Request,
+    Simple,
+    Telegram,
+    Write,
+    Writes,
+    pack_bits,
+)
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
-__all__ = ["DIAG_FLAGS", "DIAG_REGISTERS", "Answer", "bus_input", "read", "serve", "write"]
+__all__ = [
+    "DIAG_FLAGS", "DIAG_REGISTERS", "SERVICES", "Answer", "Service", "bus_input", "read", "serve", "telegram", "write",
+]
 
 Answer = bytes | int | None  # reply data, an ACK/NAK code, or no answer (broadcast)
 DIAG_REGISTERS, DIAG_FLAGS = 16, 8  # per axis (§9.6.3)
 
 
 def serve(plc: Pcd4, request: Request) -> Answer:
-    """The answer to one request addressed to this station (or broadcast: executed, no answer)."""
-    command = decode_command(request)
-    answer = _carry_out(plc, command)
-    return None if request.station == 255 else answer
+    """The answer to one request addressed to this station (or broadcast: executed, no answer);
+    a command the station does not know gets NAK (§9.2)."""
+    service = SERVICES.get(_token(request.command))
+    answer = NAK if service is None else service(plc, request)
+    return None if request.station == BROADCAST else answer
 
 
-def _carry_out(plc: Pcd4, command: Read | Write | Simple | Bad) -> Answer:
-    if isinstance(command, Bad):
+def telegram(code: int) -> Telegram | None:
+    """How command ``code``'s parameters are laid out (the receivers' :data:`~devsim.devices.pcd4h3.sbus.Telegrams`)."""
+    service = SERVICES.get(_token(code))
+    return None if service is None else service.telegram
+
+
+def _token(code: int) -> str:
+    return f"{code:02X}h"
+
+
+def _read(plc: Pcd4, command: Read) -> Answer:
+    if command.address + command.count > MEDIA_SIZE[command.medium]:
         return NAK
-    if isinstance(command, Simple):
-        return SIMPLE[command.name](plc)
-    if isinstance(command, Read):
-        if command.address + command.count > MEDIA_SIZE[command.medium]:
-            return NAK
-        plc.catch_up()
-        values = [read(plc, command.medium, command.address + i) for i in range(command.count)]
-        if command.medium in ("flag", "input", "output"):
-            return pack_bits(values)
-        return b"".join((v & 0xFFFF_FFFF).to_bytes(4, "big") for v in values)
-    return _write(plc, command)
+    plc.catch_up()
+    values = [read(plc, command.medium, command.address + i) for i in range(command.count)]
+    if command.medium in ("flag", "input", "output"):
+        return pack_bits(values)
+    return b"".join((v & 0xFFFF_FFFF).to_bytes(4, "big") for v in values)
 
 
 def _write(plc: Pcd4, command: Write) -> Answer:
@@ -76,20 +101,33 @@ def write(plc: Pcd4, medium: str, first: int, values: tuple[int, ...] | list[int
 def read(plc: Pcd4, medium: str, address: int) -> int:
     """One element of a medium as the host reads it (bring the chips to now first:
     ``plc.catch_up()``)."""
-    if medium == "register":
-        diag = _diagnostic_register(plc, address)
-        return diag if diag is not None else plc.registers.get(address, 0)
-    if medium == "flag":
-        diag = _diagnostic_flag(plc, address)
-        return diag if diag is not None else plc.flags.get(address, 0)
-    if medium == "input":
-        bus = bus_input(plc, address)
-        return bus if bus is not None else plc.inputs.get(address, 0)
-    if medium == "output":
-        return plc.outputs.get(address, 0)
-    if medium == "counter":
-        return plc.counters.get(address, 0)
-    return plc.timer(address)
+    return MEDIA[medium](plc, address)
+
+
+def _register(plc: Pcd4, address: int) -> int:
+    diag = _diagnostic_register(plc, address)
+    return diag if diag is not None else plc.registers.get(address, 0)
+
+
+def _flag(plc: Pcd4, address: int) -> int:
+    diag = _diagnostic_flag(plc, address)
+    return diag if diag is not None else plc.flags.get(address, 0)
+
+
+def _input(plc: Pcd4, address: int) -> int:
+    bus = bus_input(plc, address)
+    return bus if bus is not None else plc.inputs.get(address, 0)
+
+
+MEDIA: Table[Callable[[Pcd4, int], int]] = Table([
+    Command("register", _register, "§9.5, §9.6.3", "R n: the axis blocks, the diagnostics block, the user's"),
+    Command("flag", _flag, "§9.5, §9.6.3", "F n: the axis fields, the diagnostics flags, the user's"),
+    Command("input", _input, "§2.2, §9.5", "I n: the H3 modules' limit and reference inputs, the user's keys"),
+    Command("output", lambda plc, address: plc.outputs.get(address, 0), "§9.5", "O n: the FBs' own"),
+    Command("counter", lambda plc, address: plc.counters.get(address, 0), "§9.5", "C n"),
+    Command("timer", lambda plc, address: plc.timers.value(address), "§9.5", "T n, in tenths of a second"),
+])
+"""How the host reads one element of each medium, by the medium's name."""
 
 
 def bus_input(plc: Pcd4, address: int) -> int | None:
@@ -158,31 +196,73 @@ def _volts(plc: Pcd4, n: int) -> float:
     return chip.filter.volts if chip.filter.dac_bits == 12 else chip.filter.volts * 10.0
 
 
-def _status(plc: Pcd4) -> bytes:
+def _status(plc: Pcd4, command: Simple) -> bytes:
     return plc.status.encode()
 
 
-def _restart(plc: Pcd4) -> int:
+def _station(plc: Pcd4, command: Simple) -> bytes:
+    return bytes((plc.station,))
+
+
+def _firmware(plc: Pcd4, command: Simple) -> bytes:
+    return str(plc.settings["firmware"]).encode("ascii", "replace")[:3].ljust(3)
+
+
+def _restart(plc: Pcd4, command: Simple) -> int:
     plc.restart()
     return ACK
 
 
-def _run(plc: Pcd4) -> int:
+def _run(plc: Pcd4, command: Simple) -> int:
     plc.run()
     return ACK
 
 
-def _stop(plc: Pcd4) -> int:
+def _stop(plc: Pcd4, command: Simple) -> int:
     plc.stop()
     return ACK
 
 
-SIMPLE: dict[str, Callable[[Pcd4], Any]] = {
-    "read status": _status,
-    "read station": lambda p: bytes((p.station,)),
-    "read firmware": lambda p: str(p.settings["firmware"]).encode("ascii", "replace")[:3].ljust(3),
-    "run": _run,
-    "restart cold": _restart,
-    "stop": _stop,
-}
-"""The commands without parameters (§9.4) by the name :mod:`~devsim.devices.pcd4h3.sbus` gives them."""
+@record
+class Service:
+    """One S-Bus command of the station: its telegram (how the parameters are laid out) and what
+    the PCD does with it; called with the PCD and the request, it returns the answer."""
+
+    telegram: Reads | Writes | NoParameters
+    run: Callable[[Pcd4, Any], Answer]
+
+    def __call__(self, plc: Pcd4, request: Request) -> Answer:
+        command = self.telegram.decode(request.parameters)
+        return NAK if isinstance(command, Bad) else self.run(plc, command)
+
+
+def _reads(code: str, medium: str, most: int) -> Command[Service]:
+    return Command(code, Service(Reads(medium, most), _read), "§9.4", f"read {medium}s (at most {most})")
+
+
+def _writes(code: str, medium: str, note: str = "") -> Command[Service]:
+    return Command(code, Service(Writes(medium), _write), "§9.4", f"write {medium}s{note}")
+
+
+def _simple(code: str, name: str, run: Callable[[Pcd4, Simple], Answer]) -> Command[Service]:
+    return Command(code, Service(NoParameters(name), run), "§9.4", name)
+
+
+SERVICES: Table[Service] = Table([
+    _reads("00h", "counter", 32),
+    _reads("02h", "flag", 128),
+    _reads("03h", "input", 128),
+    _reads("05h", "output", 128),
+    _reads("06h", "register", 32),
+    _reads("07h", "timer", 32),
+    _writes("0Bh", "flag"),
+    _writes("0Dh", "output", " (NAK: the outputs belong to the FBs)"),
+    _writes("0Eh", "register"),
+    _simple("1Bh", "read status", _status),
+    _simple("1Dh", "read station", _station),
+    _simple("20h", "read firmware", _firmware),
+    _simple("2Fh", "run", _run),
+    _simple("38h", "restart cold", _restart),
+    _simple("43h", "stop", _stop),
+])
+"""The S-Bus commands the station carries out, by command code (§9.4)."""

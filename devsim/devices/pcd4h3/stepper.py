@@ -24,11 +24,11 @@ QUIET = 64  # samples without any change before the chip counts as settled
 
 class ChipStepper:
     def __init__(self, chip: Lm628, clock: Clock, on_tick: Callable[[], None] | None = None, *,
-                 own_timer: bool = True) -> None:
+                 own_timer: bool = True, on_batch: Callable[[], None] | None = None) -> None:
         self.chip, self.clock, self.on_tick = chip, clock, on_tick
         self.own_timer = own_timer  # False: someone else (the PLC cycle) calls catch_up while active
         #: Called after each batch that computed samples (the shared axis follows the motor).
-        self.on_batch: Callable[[], None] | None = None
+        self.on_batch = on_batch
         self._samples = 0  # samples computed since the epoch
         self._epoch = clock.now()
         self._timer: Timer | None = None

@@ -15,13 +15,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING
 
 from devsim.core.path import Arc, Line, Path, SpeedProfile, path_pieces
+from devsim.devices.poselesta.axes import Axes
 from devsim.devices.poselesta.tape import Block
-
-if TYPE_CHECKING:
-    from devsim.devices.poselesta.cnc import PoselestaCnc
 
 __all__ = ["CIRCLE_TOLERANCE", "PLANES", "PathMotion"]
 
@@ -32,25 +29,26 @@ FULL = 2 * math.pi
 
 
 class PathMotion:
-    """One contouring block's path, from planning to arrival (re-planned from where it is)."""
+    """One contouring block's path, from planning to arrival (re-planned from where it is;
+    manual §2.4.2, §2.4.3; spec §5.3)."""
 
-    def __init__(self, cnc: PoselestaCnc, axes: tuple[str, ...], path: Path) -> None:
-        self.cnc, self.axes, self.path = cnc, axes, path
+    def __init__(self, machine: Axes, axes: tuple[str, ...], path: Path) -> None:
+        self.machine, self.axes, self.path = machine, axes, path
         self.profile = SpeedProfile.plan(0.0, 0.0, 1.0, 1.0)
-        self.t0 = cnc.clock.now()
+        self.t0 = machine.clock.now()
         self.continues = False  # the next block goes on along the contour: end at path speed
         end = path.point(path.length)
-        self.targets = {a: cnc.from_mm(a, end[i]) for i, a in enumerate(axes)}
+        self.targets = {a: machine.from_mm(a, end[i]) for i, a in enumerate(axes)}
 
     @classmethod
-    def line(cls, cnc: PoselestaCnc, targets: dict[str, float]) -> PathMotion:
+    def line(cls, machine: Axes, targets: dict[str, float]) -> PathMotion:
         """G01 to ``targets`` (increments) from where the axes stand."""
         axes = tuple(targets)
-        start = tuple(cnc.to_mm(a, cnc.planned_position(a)) for a in axes)
-        return cls(cnc, axes, Line(start, tuple(cnc.to_mm(a, targets[a]) for a in axes)))
+        start = tuple(machine.to_mm(a, machine.planned_position(a)) for a in axes)
+        return cls(machine, axes, Line(start, tuple(machine.to_mm(a, targets[a]) for a in axes)))
 
     @classmethod
-    def arc(cls, cnc: PoselestaCnc, block: Block, plane: int, absolute: bool, way: int,
+    def arc(cls, machine: Axes, block: Block, plane: int, absolute: bool, way: int,
             unit: Callable[[str], float] = lambda _a: 1.0, *, full_circle: bool = False) -> PathMotion | str | None:
         """The arc a block programs, an error text (the radii differ), or None (no end point);
         ``unit(axis)`` converts program units (inch) to the machine's; ``full_circle`` (G25 with
@@ -58,15 +56,16 @@ class PathMotion:
         (a, centre_a), (b, centre_b) = PLANES[plane]
         if block.value(a.upper()) is None and block.value(b.upper()) is None and not full_circle:
             return None
-        start = [cnc.to_mm(axis, cnc.planned_position(axis)) for axis in (a, b)]
+        start = [machine.to_mm(axis, machine.planned_position(axis)) for axis in (a, b)]
         end = []
         for axis, s in zip((a, b), start, strict=True):
             value = block.value(axis.upper())
-            end.append(s if value is None or full_circle else cnc.to_mm(axis, value * unit(axis)) + (0.0 if absolute else s))
+            end.append(s if value is None or full_circle
+                       else machine.to_mm(axis, value * unit(axis)) + (0.0 if absolute else s))
         centre = []
         for axis, word, s in zip((a, b), (centre_a, centre_b), start, strict=True):
             value = block.value(word)
-            centre.append(s if value is None else cnc.to_mm(axis, value * unit(axis)))
+            centre.append(s if value is None else machine.to_mm(axis, value * unit(axis)))
         r_start = math.hypot(start[0] - centre[0], start[1] - centre[1])
         r_end = math.hypot(end[0] - centre[0], end[1] - centre[1])
         if abs(r_start - r_end) > CIRCLE_TOLERANCE or r_start == 0:
@@ -76,20 +75,20 @@ class PathMotion:
         sweep = ((finish - begin) * way) % FULL
         if sweep < 1e-12:
             sweep = FULL  # the end point is the start: a full circle
-        return cls(cnc, (a, b), Arc(centre[0], centre[1], r_start, begin, way, sweep))
+        return cls(machine, (a, b), Arc(centre[0], centre[1], r_start, begin, way, sweep))
 
     def _progress(self) -> tuple[float, float]:
-        s, sd, _ = self.profile.state(self.cnc.clock.now() - self.t0)
+        s, sd, _ = self.profile.state(self.machine.clock.now() - self.t0)
         return s, sd
 
     def _follow(self, path: Path, profile: SpeedProfile, on_done: Callable[[str], None] | None) -> None:
-        cnc = self.cnc
-        self.path, self.profile, self.t0 = path, profile, cnc.clock.now()
-        pieces = path_pieces(path, profile, tuple(cnc.from_mm(a, 1.0) for a in self.axes))
+        machine = self.machine
+        self.path, self.profile, self.t0 = path, profile, machine.clock.now()
+        pieces = path_pieces(path, profile, tuple(machine.from_mm(a, 1.0) for a in self.axes))
         for index, axis in enumerate(self.axes):
             done = None if on_done is None else (lambda a=axis: on_done(a))
             if pieces:
-                cnc.axes[axis].follow([(d, parts[index]) for d, parts in pieces], on_done=done)
+                machine[axis].follow([(d, parts[index]) for d, parts in pieces], on_done=done)
             elif done is not None:
                 done()
 
@@ -104,12 +103,13 @@ class PathMotion:
         s, sd = self._progress()
         rest = self.path.rest(s)
         start = sd if v0 is None else v0
-        self._follow(rest, SpeedProfile.plan(rest.length, start, speed, self.cnc.cfg.accel,
+        self._follow(rest, SpeedProfile.plan(rest.length, start, speed, self.machine.accel_mm,
                                              speed if self.continues else 0.0), on_done)
 
     def brake(self, on_done: Callable[[str], None] | None) -> None:
         """Brake along the path with the ramp: the axes stay on it."""
         s, sd = self._progress()
         rest = self.path.rest(s)
-        distance = min(sd * sd / (2 * self.cnc.cfg.accel), rest.length)
-        self._follow(rest, SpeedProfile.plan(distance, sd, max(sd, 1e-9), self.cnc.cfg.accel), on_done)
+        accel = self.machine.accel_mm
+        distance = min(sd * sd / (2 * accel), rest.length)
+        self._follow(rest, SpeedProfile.plan(distance, sd, max(sd, 1e-9), accel), on_done)

@@ -1,7 +1,7 @@
 """The ELESTA POSELESTA II/III CNC as a devsim kind: three serial ports over one control.
 
 Manual "Schnittstellenbeschreibung POSELESTA II/III" (seed 004); spec poselesta.md.  The
-control is :class:`~devsim.devices.poselesta.cnc.PoselestaCnc`; the ports V6 (external data
+control is :class:`~devsim.devices.poselesta.model.PoselestaCnc`; the ports V6 (external data
 media), V7 (DNC) and V8 (external keyboard, receive-only) are
 :class:`~devsim.devices.poselesta.face.PoselestaPortFace`; names in
 :mod:`~devsim.devices.poselesta.points`, the tape code in :mod:`~devsim.devices.poselesta.tape`.
@@ -12,16 +12,16 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import Command, ErrorCode, Parameter, PortDef, Reference
+from devsim.core.kit import ErrorCode, PortDef, Reference
 from devsim.core.settings import Section
-from devsim.devices.poselesta.cnc import PoselestaCnc
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF
 from devsim.devices.poselesta.config import PoselestaConfig
 from devsim.devices.poselesta.drive_actions import DRIVE
 from devsim.devices.poselesta.face import PoselestaPortFace
+from devsim.devices.poselesta.links import TRANSFERS
+from devsim.devices.poselesta.model import PoselestaCnc
 from devsim.devices.poselesta.parameters import PARAMETERS
 from devsim.devices.poselesta.points import FAULTS, POINTS
-from devsim.devices.poselesta.transfers import FUNCTIONS
 
 __all__ = ["PoselestaDevice"]
 
@@ -47,15 +47,8 @@ class PoselestaDevice(Device):
     @classmethod
     def reference(cls) -> Reference:
         return Reference(
-            commands=[
-                Command(f.name, None, f.section, f"{f.port.upper()} {name}: {f.direction} ({f.peer}), "
-                        f"mode digit {f.digit}")
-                for (_, name), f in FUNCTIONS.items()
-            ],
-            parameters=[
-                Parameter(f"P{p.number}", p.name, p.section, "", p.minimum, p.maximum, p.default, True, "simulated")
-                for p in PARAMETERS.values()
-            ],
+            commands=list(TRANSFERS),
+            parameter_table=PARAMETERS,
             errors=[ErrorCode(WERTBEREICHES_UEBERLAUF, "value range overflow: wrong code, baud, format or "
                               "too many words; the transfer stops", "§2.6")],
         )

@@ -4,13 +4,12 @@ N7, the feed and override pot voltages as hex 00 … FF."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable
+from typing import Any
 
+from devsim.core.clock import Clock, Timer
 from devsim.core.points import BadValue
 from devsim.core.signals import SignalBank
-
-if TYPE_CHECKING:
-    from devsim.devices.poselesta.cnc import PoselestaCnc
 
 __all__ = ["INPUT_IMAGE", "OUTPUT_GROUPS", "OutputTest", "input_image", "input_screen", "pots"]
 
@@ -67,19 +66,23 @@ OUTPUT_TEST_STEP = 0.25  # s: 256 steps = 64 s per pass (spec §4.7, G-DIAG6)
 class OutputTest:
     """P79 N6 (§2.4.11): every output in ascending binary code, one step each 250 ms, a pass
     counter; "C" stops it with all outputs L, and the control then needs a power cycle.  It
-    runs whatever NC-Stop and Not-Stop say: the outputs must be disconnected from the machine."""
+    runs whatever NC-Stop and Not-Stop say: the outputs must be disconnected from the machine.
+    ``may_start()`` says whether the diagnostic programs can run (PROGRAM_ENTRY, no block)."""
 
-    def __init__(self, cnc: PoselestaCnc) -> None:
-        self.cnc = cnc
+    def __init__(self, clock: Clock, signals: SignalBank, record: Callable[[str], None], *,
+                 may_start: Callable[[], bool]) -> None:
+        self._clock = clock
+        self._signals = signals
+        self._record = record
+        self._may_start = may_start
         self.running = False
         self.stopped = False  # "C" pressed: normal operation only after a power cycle
         self.count = 0
         self.cycles = 0
-        self._timer: Any = None
+        self._timer: Timer | None = None
 
     def start(self) -> None:
-        cnc = self.cnc
-        if cnc.mode != "PROGRAM_ENTRY" or cnc.executor.running:
+        if not self._may_start():
             raise BadValue("the diagnostic programs P79 run in PROGRAM_ENTRY")
         self.running, self.count, self.cycles = True, 0, 0
         self._show()
@@ -88,9 +91,9 @@ class OutputTest:
         for group in OUTPUT_GROUPS:
             for bit, name in enumerate(group):
                 if name is not None:
-                    self.cnc.signals.set(name, bool(self.count >> bit & 1))
-        self.cnc.signals.set("data_bus", self.count)
-        self._timer = self.cnc.clock.call_later(OUTPUT_TEST_STEP, self._step)
+                    self._signals.set(name, bool(self.count >> bit & 1))
+        self._signals.set("data_bus", self.count)
+        self._timer = self._clock.call_later(OUTPUT_TEST_STEP, self._step)
 
     def _step(self) -> None:
         self.count = (self.count + 1) % 256
@@ -107,9 +110,9 @@ class OutputTest:
         for group in OUTPUT_GROUPS:
             for name in group:
                 if name is not None:
-                    self.cnc.signals.set(name, False)
-        self.cnc.signals.set("data_bus", 0)
-        self.cnc.record_event("output_test_stopped")
+                    self._signals.set(name, False)
+        self._signals.set("data_bus", 0)
+        self._record("output_test_stopped")
 
     def cancel(self) -> None:
         self.running = False

@@ -42,11 +42,11 @@ def _move_to(c: Any, target: float, speed: float) -> None:
     if c.executor.running:
         raise BadValue(f"block N{c.executor.block_number} executes ({c.executor.state})")
     c.select_mode("MANUAL_SINGLE_BLOCK")
-    decimals = c.formats.decimals["X"]
-    position = f"X{c.to_mm('x', target):.{decimals}f}"
-    feed = round(c.to_mm("x", speed) * 60 / c.executor.feed_unit())
-    c.executor.mdi = f"N1 G90 G01 {position} F{feed}" if feed >= 1 else f"N1 G90 G00 {position}"
-    c.executor.nc_start("panel" if int(c.params[75]) in (0, 1) else "external")
+    decimals = c.axes.formats.decimals["X"]
+    position = f"X{c.axes.to_mm('x', target):.{decimals}f}"
+    feed = round(c.axes.to_mm("x", speed) * 60 / c.block_motion.feed_unit())
+    c.memory.mdi = f"N1 G90 G01 {position} F{feed}" if feed >= 1 else f"N1 G90 G00 {position}"
+    c.executor.nc_start("panel" if int(c.params.nc_start_source) in (0, 1) else "external")
     if not c.executor.running:
         raise BadValue(f"the control did not start the block ({c.message or 'NC-Start ignored'})")
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 from typing import Any
 
 from devsim.core.device import Face, Port, SerialSettings
-from devsim.devices.poselesta.cnc import PoselestaCnc
+from devsim.devices.poselesta.model import PoselestaCnc
 
 __all__ = ["PoselestaPortFace"]
 

@@ -18,13 +18,16 @@ own).  Activating a handwheel makes the machine standstill output L at once.  Wi
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable
+from typing import Any
 
 from devsim.core.points import BadValue
+from devsim.core.signals import SignalBank
+from devsim.devices.poselesta.axes import Axes
+from devsim.devices.poselesta.limits import LimitSwitches
+from devsim.devices.poselesta.parameters import MachineParameters
+from devsim.devices.poselesta.screen import Screen
 from devsim.devices.poselesta.signals import AXES
-
-if TYPE_CHECKING:
-    from devsim.devices.poselesta.cnc import PoselestaCnc
 
 __all__ = ["JOG_STEPS", "ManualMotion"]
 
@@ -34,47 +37,56 @@ MANUAL_MODES = ("MANUAL", "PROGRAM_ENTRY")
 
 class ManualMotion:
     """Manual motion of one control: direction keys, jog steps, rapid, handwheel and open loop
-    (manual §2.2.3, §2.3.5–§2.3.9; spec §5.4)."""
+    (manual §2.2.3, §2.3.5–§2.3.9; spec §5.4).  ``mode()`` and ``booting()`` say whether manual
+    motion is possible, ``program_moving()`` whether a block moves the axes (open loop switches
+    only at standstill), ``feed_pot()`` the feed pot's factor."""
 
-    def __init__(self, cnc: PoselestaCnc) -> None:
-        self.cnc = cnc
+    def __init__(self, signals: SignalBank, axes: Axes, params: MachineParameters, limits: LimitSwitches,
+                 screen: Screen, *, mode: Callable[[], str], booting: Callable[[], bool],
+                 program_moving: Callable[[], bool], feed_pot: Callable[[], float]) -> None:
+        self._signals = signals
+        self._axes = axes
+        self._params = params
+        self._limits = limits
+        self._screen = screen
+        self._mode = mode
+        self._booting = booting
+        self._program_moving = program_moving
+        self._feed_pot = feed_pot
         self.moving: set[str] = set()
         self.handwheel_factor = 1
         self.handwheel_rate = 10.0  # detents per second
         self.open_loop = False  # in effect (switched at standstill)
         for a in AXES:
             for direction in ("pos", "neg"):
-                cnc.signals.subscribe(f"jog_{direction}_{a}", self._key)
-            cnc.signals.subscribe(f"handwheel_{a}", self._handwheel_selected)
+                signals.subscribe(f"jog_{direction}_{a}", self._key)
+            signals.subscribe(f"handwheel_{a}", self._handwheel_selected)
         for name in ("rapid", "feed_pot_v"):
-            cnc.signals.subscribe(name, self._speed_changed)
-        cnc.signals.subscribe("open_loop", self._open_loop_input)
+            signals.subscribe(name, self._speed_changed)
+        signals.subscribe("open_loop", self._open_loop_input)
 
     # -- the handwheel (§2.2.3, spec §5.4) ------------------------------------------------------------
     def _handwheel_selected(self, _name: str, _old: Any, _new: Any) -> None:
-        cnc = self.cnc
-        if cnc.mode in MANUAL_MODES and not self.moving:
-            selected = any(cnc.signals.get(f"handwheel_{a}") for a in AXES)
-            cnc.signals.set("machine_standstill", not selected)  # at once, even without motion (§2.4.6)
+        if self._mode() in MANUAL_MODES and not self.moving:
+            selected = any(self._signals.get(f"handwheel_{a}") for a in AXES)
+            self._signals.set("machine_standstill", not selected)  # at once, even without motion (§2.4.6)
 
     def turn(self, detents: int) -> None:
         """Turn the handwheel by ``detents`` (negative: backwards)."""
-        cnc = self.cnc
-        if cnc.mode not in MANUAL_MODES or cnc.booting or not cnc.signals.get("emergency_stop"):
-            cnc.record_event("handwheel_ignored")
+        if not self._possible():
+            self._screen.record("handwheel_ignored")
             return
-        step = int(cnc.params[76]) * self.handwheel_factor
+        step = int(self._params.handwheel_step) * self.handwheel_factor
         for a in AXES:
-            if not cnc.signals.get(f"handwheel_{a}") or detents == 0:
+            if not self._signals.get(f"handwheel_{a}") or detents == 0:
                 continue
-            if cnc.limits.blocked(a, detents) or cnc.field.outside_towards(a, detents):
-                cnc.limits.refuse(a)
+            if self._limits.refuses(a, detents):
                 continue
-            axis = cnc.axes[a]
+            axis = self._axes[a]
             speed = abs(self.handwheel_rate) * step
             self.moving.add(a)
-            cnc.signals.set(f"travel_{a}", True)
-            axis.move_to(cnc.planned_position(a) + detents * step, speed, speed * 1000,
+            self._signals.set(f"travel_{a}", True)
+            axis.move_to(self._axes.planned_position(a) + detents * step, speed, speed * 1000,
                          on_done=lambda a=a: self._handwheel_done(a))
 
     def _handwheel_done(self, a: str) -> None:
@@ -83,88 +95,88 @@ class ManualMotion:
 
     # -- open loop (§2.3.9, spec §5.2) -----------------------------------------------------------------
     def _open_loop_input(self, _name: str, _old: Any, new: Any) -> None:
-        if self.cnc.executor.state in ("MOVING",) or self.moving:
-            self.cnc.record_event("open_loop_change_deferred")  # only at standstill (§2.3.9)
+        if self._program_moving() or self.moving:
+            self._screen.record("open_loop_change_deferred")  # only at standstill (§2.3.9)
             return
         self.open_loop = bool(new)
 
     def in_open_loop(self, a: str) -> bool:
-        return self.open_loop and bool(int(self.cnc.params[77]) >> AXES.index(a) & 1)
+        return self.open_loop and self._params.is_open_loop(a)
 
     def push(self, a: str, mm: float) -> None:
         """An outside force moves an open-loop axis by ``mm`` (10 mm/s): the display follows."""
-        cnc = self.cnc
         if not self.in_open_loop(a):
             raise BadValue(f"{a.upper()} is not in open loop (V21/7 H and P77)")
-        axis = cnc.axes[a]
-        speed = cnc.from_mm(a, 10.0)
+        axis = self._axes[a]
+        speed = self._axes.from_mm(a, 10.0)
         self._start(a)
-        axis.move_to(cnc.planned_position(a) + cnc.from_mm(a, mm), speed, speed * 100,
+        axis.move_to(self._axes.planned_position(a) + self._axes.from_mm(a, mm), speed, speed * 100,
                      on_done=lambda: self._stopped(a))
 
     def _key(self, name: str, old: Any, new: Any) -> None:
-        cnc = self.cnc
         _, direction, a = name.split("_")
         sign = 1 if direction == "pos" else -1
-        if cnc.mode not in MANUAL_MODES or cnc.booting or not cnc.signals.get("emergency_stop"):
+        if not self._possible():
             return
         step = self._step()
-        axis = cnc.axes[a]
-        if new and not old and (cnc.limits.blocked(a, sign) or cnc.field.outside_towards(a, sign)):
-            cnc.limits.refuse(a)  # only away from an actuated limit switch or back to the field (spec §5.5)
-            return
+        axis = self._axes[a]
+        accel = self._axes.accel(a)
+        if new and not old and self._limits.refuses(a, sign):
+            return  # only away from an actuated limit switch or back to the field (spec §5.5)
         if new and not old:
             if step is not None:
                 if a in self.moving:
                     return  # a press during a running step is ignored (spec §5.4)
                 self._start(a)
                 target = axis.position() + sign * step
-                axis.move_to(target, self._speed(a, rapid=False), cnc.accel(a), on_done=lambda: self._stopped(a))
+                axis.move_to(target, self._speed(a, rapid=False), accel, on_done=lambda: self._stopped(a))
             else:
                 self._start(a)
-                axis.jog(sign, self._speed(a, rapid=True), cnc.accel(a))
+                axis.jog(sign, self._speed(a, rapid=True), accel)
         elif old and not new and step is None and a in self.moving:
-            axis.stop(cnc.accel(a), on_done=lambda: self._stopped(a))
+            axis.stop(accel, on_done=lambda: self._stopped(a))
+
+    def _possible(self) -> bool:
+        """Manual motion: MANUAL or PROGRAM_ENTRY, the control ready, Not-Stop released."""
+        return self._mode() in MANUAL_MODES and not self._booting() and bool(self._signals.get("emergency_stop"))
 
     def _step(self) -> int | None:
         for n in JOG_STEPS:  # the smallest selected step wins
-            if self.cnc.signals.get(f"jog_step_{n}"):
+            if self._signals.get(f"jog_step_{n}"):
                 return n
         return None
 
     def _speed(self, a: str, *, rapid: bool) -> float:
-        cnc = self.cnc
-        if rapid and cnc.signals.get("rapid"):
-            return max(cnc.rapid(a), 1e-9)
-        return max(cnc.max_feed(a) * cnc.feed_pot(), 1e-9)
+        if rapid and self._signals.get("rapid"):
+            return max(self._axes.rapid(a), 1e-9)
+        return max(self._axes.max_feed(a) * self._feed_pot(), 1e-9)
 
     def _speed_changed(self, _name: str, _old: Any, _new: Any) -> None:
         """The feed pot and rapid act along the ramp on keys held down (manual §2.3.6 graph)."""
-        cnc = self.cnc
         if self._step() is not None:
             return
         for a in list(self.moving):
-            held = [d for d in (1, -1) if cnc.signals.get(f"jog_{'pos' if d > 0 else 'neg'}_{a}")]
+            held = [d for d in (1, -1) if self._signals.get(f"jog_{'pos' if d > 0 else 'neg'}_{a}")]
             if held:
-                cnc.axes[a].jog(held[0], self._speed(a, rapid=True), cnc.accel(a))
+                self._axes[a].jog(held[0], self._speed(a, rapid=True), self._axes.accel(a))
 
     def _start(self, a: str) -> None:
         self.moving.add(a)
-        self.cnc.signals.set(f"travel_{a}", True)
-        self.cnc.signals.set("machine_standstill", False)
+        self._signals.set(f"travel_{a}", True)
+        self._signals.set("machine_standstill", False)
 
     def _stopped(self, a: str) -> None:
         self.moving.discard(a)
-        self.cnc.signals.set(f"travel_{a}", False)
+        self._signals.set(f"travel_{a}", False)
         if not self.moving:
-            self.cnc.signals.set("machine_standstill", True)
+            self._signals.set("machine_standstill", True)
 
     def left_field(self) -> None:
         """Outside the working field every moving axis brakes (§2.4.4)."""
         for a in list(self.moving):
-            self.cnc.axes[a].stop(self.cnc.accel(a), on_done=lambda a=a: self._stopped(a))
+            self._axes[a].stop(self._axes.accel(a), on_done=lambda a=a: self._stopped(a))
 
     def reset(self) -> None:
         for a in list(self.moving):
-            self.cnc.axes[a].stop(self.cnc.accel(a))
+            self._axes[a].stop(self._axes.accel(a))
             self._stopped(a)

@@ -5,31 +5,31 @@ run (a host on the V6 pty may still send: both reach the read-in, as on a shared
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from collections.abc import Callable
 
+from devsim.core.clock import Clock, Timer
+from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.poselesta.transfers import CASSETTE_LEADER
-
-if TYPE_CHECKING:
-    from devsim.devices.poselesta.cnc import PoselestaCnc
 
 __all__ = ["Cassette"]
 
 
 class Cassette:
-    """The cassette recorder on V6: one tape, kept in the plant's memory across power cycles."""
+    """The cassette recorder on V6 (manual §2.6.2.2): one tape, kept in the plant's memory across
+    power cycles.  ``function()`` is the name of the transfer running on V6 (``T2``, ``T3`` or
+    ""), ``play(data)`` what the tape plays into V6; it hears what V6 sends through :meth:`heard`."""
 
-    def __init__(self, cnc: PoselestaCnc) -> None:
-        self.cnc = cnc
-        self.tape = bytes.fromhex(cnc.nvram.get("cassette") or "")
+    def __init__(self, clock: Clock, nvram: NonVolatileMemory, *, function: Callable[[], str],
+                 play: Callable[[bytes], None]) -> None:
+        self._clock = clock
+        self._nvram = nvram
+        self._function = function
+        self._play_in = play
+        self.tape = bytes.fromhex(nvram.get("cassette") or "")
         self._recording = b""
-        self._timer: object | None = None
-        cnc.listen("v6_out", self._heard)
+        self._timer: Timer | None = None
 
-    def _function(self) -> str:
-        running = self.cnc.transfers.get("v6")
-        return running.function.name if running is not None else ""
-
-    def _heard(self, data: bytes) -> None:
+    def heard(self, data: bytes) -> None:
         if self._function() == "T2":
             self._recording += data
 
@@ -38,21 +38,21 @@ class Cassette:
         if name == "T2":
             self._recording = b""
         elif name == "T3":
-            self._timer = self.cnc.clock.call_later(CASSETTE_LEADER, self._play)
+            self._timer = self._clock.call_later(CASSETTE_LEADER, self._play)
 
     def ended(self, name: str, state: str) -> None:
         if name == "T2" and state == "done":
             self.tape = self._recording
-            self.cnc.nvram.put("cassette", self.tape.hex())
+            self._nvram.put("cassette", self.tape.hex())
         if self._timer is not None and name == "T3":
-            self._timer.cancel()  # type: ignore[attr-defined]
+            self._timer.cancel()
             self._timer = None
 
     def _play(self) -> None:
         self._timer = None
         if self._function() == "T3":
-            self.cnc.port_input("v6", self.tape)
+            self._play_in(self.tape)
 
     def eject(self) -> None:
         self.tape = b""
-        self.cnc.nvram.put("cassette", "")
+        self._nvram.put("cassette", "")

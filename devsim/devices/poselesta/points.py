@@ -8,12 +8,15 @@ import re
 from collections.abc import Callable
 from typing import Any
 
-from devsim.core.kit import Fault, FaultTable, signal_points
+from devsim.core.kit import Command, Fault, FaultTable, Table, signal_points
+from devsim.core.parameters import alias_hook, parameter_points
 from devsim.core.points import BadValue, Family, Point, PointTable
-from devsim.devices.poselesta.cnc import MODES, PoselestaCnc
+from devsim.core.record import replace
 from devsim.devices.poselesta.diagnostics import input_image, input_screen, pots
 from devsim.devices.poselesta.execution import STATES
-from devsim.devices.poselesta.signals import AXES, SIGNALS
+from devsim.devices.poselesta.model import MODES, PoselestaCnc
+from devsim.devices.poselesta.parameters import PARAMETERS
+from devsim.devices.poselesta.signals import AXES, SIGNALS, feed_pot, override
 from devsim.devices.poselesta.transfers import FUNCTIONS
 
 __all__ = ["FAULTS", "POINTS"]
@@ -25,15 +28,20 @@ def _transfer_points(port: str) -> list[Point]:
     return [
         Point(f"{port}.transfer", "str", f"the transfer on {port.upper()}: {functions}; idle cancels "
               f"(needs mode {'EXTERNAL_MEDIUM' if port == 'v6' else 'EXTERNAL_OPERATION'})", "§2.6",
-              get=lambda m: m.transfer_name(port), put=lambda m, v: m.set_transfer(port, v), choices=names,
+              get=lambda m: m.links.name(port), put=lambda m, v: m.links.select(port, v), choices=names,
               in_state=True),
         Point(f"{port}.state", "str", "idle, leader, wait_start, receiving, sending, done, failed or cancelled",
-              "§2.6", get=lambda m: m.transfer_state(port), in_state=True),
+              "§2.6", get=lambda m: m.links.state(port), in_state=True),
         Point(f"{port}.discarded", "int", "bytes received while no input transfer ran", "§2.6",
-              get=lambda m: m.discarded[port]),
+              get=lambda m: m.links.discarded[port]),
         Point(f"{port}.blocks", "int", "blocks of the running transfer", "§2.6",
-              get=lambda m: getattr(m.transfers[port], "blocks", 0)),
+              get=lambda m: _blocks(m, port)),
     ]
+
+
+def _blocks(model: PoselestaCnc, port: str) -> int:
+    running = model.links.transfers[port]
+    return 0 if running is None else running.blocks
 
 
 def _axis_points(a: str) -> list[Point]:
@@ -42,7 +50,7 @@ def _axis_points(a: str) -> list[Point]:
         Point(f"axis.{a}.position", "float", f"actual position of {axis}, increments of its resolution", "§2.2",
               "inc", get=lambda m: m.axes[a].position(), in_state=True),
         Point(f"axis.{a}.display", "str", f"actual value of {axis} on the screen: mm, or inch with V22/2 H", "§2.3.14",
-              get=lambda m: m.display(a)),
+              get=lambda m: m.axes.display(a, bool(m.signals.get("inch")))),
         Point(f"axis.{a}.velocity", "float", f"actual velocity of {axis}", "§2.5", "inc/s",
               get=lambda m: m.axes[a].velocity()),
         Point(f"axis.{a}.following_error", "float", f"following error of {axis}: v / Kv (P{30 + AXES.index(a)})",
@@ -60,7 +68,7 @@ def _program(name: str) -> Point | None:
         return None
     number = int(match[1])
     return Point(name, "str", f"program P{number:02d}, one block per line (setting it enters the program)",
-                 "§2.6.3", get=lambda m: m.program_text(number), put=lambda m, v: m.set_program_text(number, v))
+                 "§2.6.3", get=lambda m: m.memory.program_text(number), put=lambda m, v: m.memory.set_program_text(number, v))
 
 
 def _tool(name: str) -> Point | None:
@@ -69,17 +77,18 @@ def _tool(name: str) -> Point | None:
         return None
     number = int(match[1])
     return Point(name, "json", f"tool T{number:02d} of the catalogue: radius and length", "§2.3.14",
-                 get=lambda m: m.tools.get(number, {"radius": 0.0, "length": 0.0}),
-                 put=lambda m, v: m.set_tool(number, v))
+                 get=lambda m: m.memory.tools.get(number, {"radius": 0.0, "length": 0.0}),
+                 put=lambda m, v: m.memory.set_tool(number, v))
 
 
-def _param(name: str) -> Point | None:
-    match = re.fullmatch(r"param\.P(\d{1,2})", name)
-    if match is None or not 1 <= int(match[1]) <= 98 or int(match[1]) == 79:
-        return None
-    number = int(match[1])
-    return Point(name, "float", f"machine parameter P{number}", "§2.6.2.3",
-                 get=lambda m: m.params.get(number, 0.0), put=lambda m, v: m.set_param(number, v))
+def _param_points() -> list[Point]:
+    """``param.P1`` … ``param.P98`` from the parameter rows.  The points take any finite number,
+    as the family of names before them did: the control checks a value itself, with its own
+    messages (:func:`~devsim.devices.poselesta.parameters.check_parameter`), so the points carry
+    neither the rows' ranges nor their whole-number type."""
+    points = parameter_points(PARAMETERS, read=lambda m, row: m.params[row.key],
+                              write=lambda m, row, value: m.set_param(row.key, value))
+    return [replace(point, type="float", minimum=None, maximum=None, choices=None) for point in points]
 
 
 #: The alarms as the EMCY error codes (CiA 301) a fieldbus facade sends when one starts.
@@ -88,7 +97,7 @@ EMCY_CODES = {"Fehlermeldung": 0x6100, "ENCODER_FAULT": 0x7305, "FOLLOWING_ERROR
 
 def _monitoring(model: PoselestaCnc, active: bool) -> None:
     model.signals.set("nc_ready", not active and not model.booting)
-    model.message = "Fehlermeldung" if active else ""
+    model.screen.show("Fehlermeldung" if active else "")
     if active:
         model.announce("fault", 1, EMCY_CODES["Fehlermeldung"])
 
@@ -100,11 +109,11 @@ def _alarm(alarm: str) -> Callable[[PoselestaCnc, bool], None]:
     def apply(model: PoselestaCnc, active: bool) -> None:
         if active:
             model.executor.emergency_stop()
-            model.message = alarm
+            model.screen.show(alarm)
             model.record_event(alarm.lower())
             model.announce("fault", 1, EMCY_CODES[alarm])
-        elif model.message == alarm:
-            model.message = ""
+        elif model.screen.message == alarm:
+            model.screen.clear()
         model.signals.set("nc_ready", not active and not model.booting)
 
     return apply
@@ -130,19 +139,27 @@ class _RelaySupply:
 def _diagnostic(model: PoselestaCnc, number: int) -> None:
     if model.mode != "PROGRAM_ENTRY":
         raise BadValue("the diagnostic programs P79 run in PROGRAM_ENTRY")
-    if number == 3:
-        _keyboard_test(model, "true")
-    elif number == 6:
-        model.output_test.start()
+    run = DIAGNOSTIC_PROGRAMS.get(f"N{number}")
+    if run is not None:
+        run(model)  # (N5 and N7 are pages: diagnostics.inputs and diagnostics.pots read them)
+
+
+#: The diagnostic programs of P79 that run (spec §4.7): the keyboard test and the output test.
+DIAGNOSTIC_PROGRAMS: Table[Callable[[PoselestaCnc], None]] = Table([
+    Command("N3", lambda model: _keyboard_test(model, "true"), "§2.6.4",
+            "keyboard test: each key's code + 1 on the screen, key 2D ends it"),
+    Command("N6", lambda model: model.output_test.start(), "§2.4.11",
+            "output test: every output in ascending binary code, 250 ms a step"),
+])
 
 
 def _keyboard_test(model: PoselestaCnc, value: str) -> None:
     if value.strip().lower() in ("true", "1", "on", "yes"):
         if model.mode != "PROGRAM_ENTRY":
             raise BadValue("the diagnostic programs P79 run in PROGRAM_ENTRY")
-        model.keyboard_test = ""
+        model.panel.keyboard_test_on(True)
     else:
-        model.keyboard_test = None
+        model.panel.keyboard_test_on(False)
 
 
 def _relay_supply(model: PoselestaCnc, active: bool) -> None:
@@ -159,15 +176,15 @@ POINTS = PointTable.of(
         Point("panel.message", "str", "screen message, e.g. WERTBEREICHES-UEBERLAUF", "§2.6",
               get=lambda m: m.message, in_state=True),
         Point("panel.clear_message", "bool", "clear the screen message", "§2.6",
-              put=lambda m, v: m.clear_message() if v else None, example=True),
+              put=lambda m, v: m.screen.clear() if v else None, example=True),
         Point("programs", "json", "numbers of the stored programs", "§2.6.3",
-              get=lambda m: sorted(m.programs), in_state=True),
+              get=lambda m: sorted(m.memory.programs), in_state=True),
         Point("panel.protect", "int", "protect program Pxx against change and read-in (POS III)", "§2.3.21",
-              put=lambda m, v: m.protect(v, True), minimum=0, maximum=98, example=0),
+              put=lambda m, v: m.memory.protect(v, True), minimum=0, maximum=98, example=0),
         Point("panel.release", "int", "release a protected program; only with the program lock open (V22/9 H)",
-              "§2.3.21", put=lambda m, v: m.protect(v, False), minimum=0, maximum=98, example=0),
+              "§2.3.21", put=lambda m, v: m.memory.protect(v, False), minimum=0, maximum=98, example=0),
         Point("protected", "json", "numbers of the protected programs", "§2.3.21",
-              get=lambda m: sorted(m.protected), in_state=True),
+              get=lambda m: sorted(m.memory.protected), in_state=True),
         Point("handwheel.turn", "int", "turn the handwheel V5 by this many detents (negative: backwards)", "§2.2.3",
               put=lambda m, v: m.manual.turn(v), example=0),
         Point("handwheel.factor", "int", "hand panel selector: 10 (position 1) or 1 (position 2)", "§3.4",
@@ -183,14 +200,14 @@ POINTS = PointTable.of(
         Point("panel.key", "str", "press a front-panel key: a name of v8_keymap (P) or its hex code (48)", "§2.6.4",
               put=lambda m, v: m.press_key(v), example="P"),
         Point("panel.edit_block", "str", "enter one block of a program: '20: N5 X10' (PROGRAM_ENTRY rules of a "
-              "read-in)", "§2.6.3", put=lambda m, v: m.edit_block(v), example="0: N1 X0"),
+              "read-in)", "§2.6.3", put=lambda m, v: m.memory.edit_block(v), example="0: N1 X0"),
         Point("panel.diagnostic", "int", "run P79 Nn in PROGRAM_ENTRY: 3 keyboard test, 6 output test (5 and 7 "
               "are the pages diagnostics.inputs and diagnostics.pots)", "§2.3.25",
               put=lambda m, v: _diagnostic(m, v), choices=(3, 5, 6, 7), example=5),
         Point("panel.override", "float", "the override pot's value as the screen shows it (V23/4)", "§2.3.22", "%",
-              get=lambda m: round(m.override() * 100, 1)),
+              get=lambda m: round(override(m.signals) * 100, 1)),
         Point("panel.feed", "float", "the feed pot's value as the screen shows it (V23/1)", "§2.3.22", "%",
-              get=lambda m: round(m.feed_pot() * 100, 1)),
+              get=lambda m: round(feed_pot(m.signals) * 100, 1)),
         Point("cassette.tape", "str", "what the simulated cassette recorder holds (config v6_peer: cassette), "
               "as hex bytes", "§2.6.2.2", get=lambda m: m.cassette.tape.hex(" ") if m.cassette else ""),
         Point("cassette.eject", "bool", "erase the simulated cassette", "§2.6.2.2",
@@ -198,7 +215,7 @@ POINTS = PointTable.of(
         Point("panel.nc_start", "bool", "the NC-Start key of the front panel (P75 = 0 or 1)", "§2.3.3",
               put=lambda m, v: m.executor.nc_start("panel") if v else None, example=True),
         Point("panel.mdi", "str", "the block entered for Hand-Einzelsatz (MANUAL_SINGLE_BLOCK), e.g. N1 G00 X10",
-              "§2.4.7", get=lambda m: m.executor.mdi, put=lambda m, v: setattr(m.executor, "mdi", v)),
+              "§2.4.7", get=lambda m: m.memory.mdi, put=lambda m, v: setattr(m.memory, "mdi", v)),
         Point("diagnostics.inputs", "json", "P79 N5: every input level as ports 1A … 4B (bit = 1: H)", "§2.3.25",
               get=lambda m: input_image(m.signals)),
         Point("diagnostics.input_screen", "str", "P79 N5 as the monitor shows it (Port n EIN A7…A0 B7…B0)",
@@ -210,21 +227,21 @@ POINTS = PointTable.of(
               get=lambda m: m.output_test.cycles),
         Point("diagnostics.keyboard_test", "str", "P79 N3: set true to start; shows each key's code + 1 in hex "
               "(key P, 48, shows 49); key 2D ends it (then empty)", "§2.6.4",
-              get=lambda m: m.keyboard_test or "", put=lambda m, v: _keyboard_test(m, v), example="false"),
+              get=lambda m: m.panel.keyboard_test or "", put=lambda m, v: _keyboard_test(m, v), example="false"),
         Point("xy_plotter", "bool", "X/Y plotter operation (POS III, V22/8 sampled at power-on): set-points = "
               "position over the working field in 14 bits", "§2.3.20", get=lambda m: m.plotter, in_state=True),
         Point("diagnostics.pots", "json", "P79 N7: feed and override pot as hex 00 … FF", "§2.3.26",
               get=lambda m: pots(m.signals)),
         Point("program.compensation", "str", "cutter radius compensation in force: G40, G41 or G42 (recorded; "
-              "the path has no offset)", "§2.3.15", get=lambda m: f"G{m.executor.compensation}"),
+              "the path has no offset)", "§2.3.15", get=lambda m: f"G{m.functions.compensation}"),
         Point("program.tool", "int", "the tool T last programmed (0: none)", "§2.4.8",
-              get=lambda m: m.executor.tool, in_state=True),
+              get=lambda m: m.functions.tool, in_state=True),
         Point("program.state", "str", f"the block cycle: {', '.join(STATES)}", "§2.4.10",
               get=lambda m: m.executor.state, choices=STATES, in_state=True),
         Point("program.block", "int", "number N of the block being executed (-1: none)", "§2.3.13",
               get=lambda m: m.executor.block_number, in_state=True),
         Point("keyboard.last_key", "int", "code of the last key taken from V8 (-1: none)", "§2.6.4",
-              get=lambda m: -1 if m.last_key is None else m.last_key),
+              get=lambda m: -1 if m.panel.last_key is None else m.panel.last_key),
         Point("keyboard.accepted", "int", "keys taken from V8", "§2.6.4", get=lambda m: m.keyboard.accepted),
         Point("keyboard.lost", "int", "keys lost because they came less than 100 ms apart", "§2.6.4",
               get=lambda m: m.keyboard.lost),
@@ -234,9 +251,10 @@ POINTS = PointTable.of(
     _transfer_points("v7"),
     signal_points([d for d in SIGNALS if d.kind != "output"]),
     signal_points([d for d in SIGNALS if d.kind == "output"], bank=lambda m: _RelaySupply(m)),
+    _param_points(),
+    alias=alias_hook(PARAMETERS),
     families=[
         Family("program.P<nn>", "str", "program P00 … P98, one block per line", "§2.6.3", _program),
-        Family("param.P<n>", "float", "machine parameter P1 … P98", "§2.6.2.3", _param),
         Family("tool.T<nn>", "json", "tool T01 … T99 of the tool catalogue: {radius, length}", "§2.3.14", _tool),
     ],
 )
@@ -248,7 +266,7 @@ FAULTS = FaultTable(
         *(Fault(f"encoder_loss_{a}", f"the encoder of {a.upper()} is lost: alarm ENCODER_FAULT, NC ready L, "
                 "set-points 0, the program given up", "§2.2", _alarm("ENCODER_FAULT")) for a in AXES),
         *(Fault(f"rm_missing_{a}", f"the reference mark signal of {a.upper()} is lost: homing never finds a mark",
-                "§2.2.2", lambda m, on, a=a: (m.rm_missing.add if on else m.rm_missing.discard)(a)) for a in AXES),
+                "§2.2.2", lambda m, on, a=a: (m.field.rm_missing.add if on else m.field.rm_missing.discard)(a)) for a in AXES),
         *(Fault(f"count_loss_{a}", f"the encoder of {a.upper()} drops count_loss_increments counts (overspeed, "
                 "noise): the actual value falls behind the true position", "§2.2",
                 lambda m, on, a=a: on and m.field.lose_counts(a, m.cfg.count_loss_increments)) for a in AXES),

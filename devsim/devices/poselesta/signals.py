@@ -6,8 +6,9 @@ the host side (manual §2.3.11, §2.4.5, §2.4.9, §2.6.2, §2.6.3; spec poseles
 from __future__ import annotations
 
 from devsim.core.kit import SignalDef
+from devsim.core.signals import SignalBank
 
-__all__ = ["AXES", "INPUTS", "OUTPUTS", "SIGNALS"]
+__all__ = ["AXES", "INPUTS", "OUTPUTS", "SIGNALS", "feed_pot", "override"]
 
 AXES = "xyzd"
 
@@ -92,3 +93,18 @@ SIGNALS: tuple[SignalDef, ...] = (
     SignalDef("v6_rts", "output", False, "V6 pin 4 RTS: H during a transfer; the cassette: record", "§2.6.2"),
     SignalDef("v6_dtr", "output", False, "V6 pin 20 DTR: H during a transfer; the cassette: run", "§2.6.2"),
 )
+
+
+def _pot(signals: SignalBank, name: str, full_scale: float) -> float:
+    """A potentiometer input (0 … 10 V) in whole percent of ``full_scale`` %, as a factor."""
+    return round(max(0.0, min(10.0, float(signals.get(name)))) * full_scale / 10) / 100
+
+
+def override(signals: SignalBank) -> float:
+    """V23/4 (manual §2.3.22): 0 … 10 V = 0 … 150 % (6.667 V = 100 %)."""
+    return _pot(signals, "override_pot_v", 150)
+
+
+def feed_pot(signals: SignalBank) -> float:
+    """V23/1 (manual §2.3.22): 0 … 10 V = 0 … 100 %."""
+    return _pot(signals, "feed_pot_v", 100)

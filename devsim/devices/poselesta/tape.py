@@ -9,9 +9,10 @@ sends.  No clock, no I/O.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any, Literal
 
+from devsim.core.kit import Command, Table
 from devsim.core.record import field, record
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF, encode, parity_ok
 
@@ -30,7 +31,8 @@ __all__ = [
 
 COORDINATES = "XYZD"
 CENTRES = "IJK"  # I ↔ X, J ↔ Y, K ↔ Z (absolute centre coordinates, spec §6.6)
-ADDRESS_LETTERS = frozenset("NXYZDIJKFSGMTL")
+ADDRESS_LETTERS_ORDER = "NXYZDIJKFSGMTL"
+ADDRESS_LETTERS = frozenset(ADDRESS_LETTERS_ORDER)
 SIGNED = frozenset(COORDINATES + CENTRES + "P")
 #: Output order inside a block (spec §3.6, G-ORDER): N X Y Z D I J K F S T G M L #; P is the
 #: value word of the parameter catalogue P99 (spec §3.9, simulator-defined).
@@ -139,7 +141,7 @@ class TapeReader:
         catalogue: bool = False,
     ) -> None:
         self.iso = iso
-        self.letters = ADDRESS_LETTERS | {CATALOGUE_VALUE} if catalogue else ADDRESS_LETTERS
+        self._characters = CATALOGUE_CHARACTERS if catalogue else CHARACTERS
         self.formats = formats or Formats()
         self.parity_error = parity_error
         self.ascii_bit7 = ascii_bit7
@@ -185,36 +187,48 @@ class TapeReader:
 
     def _interpret(self, char: int, events: list[Event]) -> None:
         c = chr(char)
+        handler = self._characters.get(c)
+        if handler is not None:
+            handler(self, c, events)  # anything else (LF, NUL, DEL, SP, …) is dropped
+
+    # -- the characters of a tape (spec §3.5.2–§3.5.4) ----------------------------------------------
+    def _letter(self, c: str, events: list[Event]) -> None:
+        self._finish_word(events)
+        self._word = _Word(c)
+
+    def _sign(self, c: str, _events: list[Event]) -> None:
         word = self._word
-        if c in self.letters:
-            self._finish_word(events)
-            self._word = _Word(c)
-        elif c in "-+":
-            if word is None or word.digits:
-                return  # a sign in an undefined position: skipped
-            if word.letter in SIGNED:
-                word.negative = c == "-"
-            else:
-                word.sign_invalid = True
-        elif c.isdigit() or c == ".":
-            if word is None:
-                return
-            if c == "." and "." in word.digits:
-                self._fail(events, f"{word.letter}: a second decimal point")
-                return
-            word.digits += c
-        elif c == "C":
-            if word is not None:
-                word.digits, word.negative, word.sign_invalid = "", False, False
-        elif c == "#":
-            self._skip = True
-        elif char == CR:
-            self._finish_word(events)
-            if not self.finished:
-                self._commit(events)
-        elif char in (LF, NUL, DEL, SP):
+        if word is None or word.digits:
+            return  # a sign in an undefined position: skipped
+        if word.letter in SIGNED:
+            word.negative = c == "-"
+        else:
+            word.sign_invalid = True
+
+    def _digit(self, c: str, events: list[Event]) -> None:
+        word = self._word
+        if word is None:
             return
-        elif c in "();:/" and not self._comment_seen:
+        if c == "." and "." in word.digits:
+            self._fail(events, f"{word.letter}: a second decimal point")
+            return
+        word.digits += c
+
+    def _clear(self, _c: str, _events: list[Event]) -> None:
+        word = self._word
+        if word is not None:
+            word.digits, word.negative, word.sign_invalid = "", False, False
+
+    def _skip_mark(self, _c: str, _events: list[Event]) -> None:
+        self._skip = True
+
+    def _end_of_block(self, _c: str, events: list[Event]) -> None:
+        self._finish_word(events)
+        if not self.finished:
+            self._commit(events)
+
+    def _comment(self, c: str, events: list[Event]) -> None:
+        if not self._comment_seen:
             self._comment_seen = True
             events.append(Notice("comment_characters_seen", c))
 
@@ -266,6 +280,28 @@ class TapeReader:
             return
         rest = tuple((k, v) for k, v in words if k != "N")
         events.append(BlockRead(Block(number, rest, skip)))
+
+
+CharacterHandler = Callable[[TapeReader, str, list[Event]], None]
+
+
+def _characters(letters: str) -> Table[CharacterHandler]:
+    """What each character after ``%`` does (spec §3.5.2–§3.5.4, manual §2.6.3)."""
+    return Table([
+        *(Command(letter, TapeReader._letter, "§2.6.3", f"address {letter}: starts a word") for letter in letters),
+        *(Command(sign, TapeReader._sign, "§2.6.3", "sign of the word (X Y Z D I J K P only)") for sign in "-+"),
+        *(Command(digit, TapeReader._digit, "§2.6.3", "a digit or the decimal point of the word")
+          for digit in "0123456789."),
+        Command("C", TapeReader._clear, "§2.6.3", "clears the word being read"),
+        Command("#", TapeReader._skip_mark, "§2.3.13", "marks the block as skippable (/ on the screen)"),
+        Command("\r", TapeReader._end_of_block, "§2.6.3", "CR: end of block"),
+        *(Command(c, TapeReader._comment, "§2.6.3", "a comment character: noticed once, dropped") for c in "();:/"),
+    ])
+
+
+#: The characters of a program tape, and of the parameter catalogue P99 (with its value word P).
+CHARACTERS = _characters(ADDRESS_LETTERS_ORDER)
+CATALOGUE_CHARACTERS = _characters(ADDRESS_LETTERS_ORDER + CATALOGUE_VALUE)
 
 
 # -- output -----------------------------------------------------------------------------------

@@ -1,6 +1,6 @@
 """The running transfers of V6 and V7 (manual §2.6.2, §2.6.3; spec poselesta.md §3.2, §3.5–§3.8).
 
-A transfer is started at the panel (:meth:`PoselestaCnc.start_transfer`) and runs on the device
+A transfer is started at the panel (:meth:`~devsim.devices.poselesta.links.SerialLinks.start`) and runs on the device
 clock: a read-in (:class:`ReadIn`: T3, T5, T7) takes what the host sends, an output
 (:class:`Output`: T1, T2, T4, T6) sends a tape image, with the printer's 820 ms after every CR
 and the cassette's 13 s leader as device-clock waits (free under virtual time).  The byte
@@ -14,6 +14,7 @@ from typing import Any, Protocol
 
 from devsim.core.clock import Clock, Timer
 from devsim.core.record import record
+from devsim.devices.poselesta.codes import baud_for_code
 from devsim.devices.poselesta.tape import BlockRead, Ended, Failed, Notice, TapeReader
 
 __all__ = ["CASSETTE_LEADER", "PRINTER_CR_PAUSE", "FUNCTIONS", "Function", "Output", "ReadIn"]
@@ -24,9 +25,23 @@ CASSETTE_LEADER = 13.0
 PRINTER_CR_PAUSE = 0.820
 
 
+def _printer_baud(_code: int, _variant: str) -> int:
+    """§2.6.2.1: "Baud-Rate: 1200 fest programmiert (Parameter P 68 hat keinen Einfluss)"."""
+    return 1200
+
+
+def _cassette_baud(code: int, variant: str) -> int:
+    """§2.6.2.2: POS II 300 fixed; POS III 300/1200/4800 by P68 (other codes: 300)."""
+    if variant == "II":
+        return 300
+    return {1: 300, 3: 1200, 5: 4800}.get(code, 300)
+
+
 @record
 class Function:
-    """A transfer function of the table in spec §3.2.1."""
+    """A transfer function of the table in spec §3.2.1, with its line: ``baud(code, variant)``
+    from the port's baud rate code, ``frame_bits`` of a character without the ISO parity bit,
+    and the cassette's ``leader`` before the data."""
 
     name: str  # T1 … T7
     port: str
@@ -34,13 +49,19 @@ class Function:
     direction: str  # "output" | "input"
     peer: str
     section: str
+    leader: float = 0.0
+    frame_bits: int = 10
+    baud: Callable[[int, str], int | None] = baud_for_code
 
 
 #: The transfer functions by the name a user selects them with (``v6.transfer`` / ``v7.transfer``).
 FUNCTIONS: dict[tuple[str, str], Function] = {
-    ("v6", "printer"): Function("T1", "v6", 1, "output", "printer Z1 (20 columns)", "§2.6.2.1"),
-    ("v6", "cassette_out"): Function("T2", "v6", 2, "output", "cassette Z2 / ZPS 020", "§2.6.2.2"),
-    ("v6", "cassette_in"): Function("T3", "v6", 3, "input", "cassette Z2 / ZPS 020", "§2.6.2.2"),
+    ("v6", "printer"): Function("T1", "v6", 1, "output", "printer Z1 (20 columns)", "§2.6.2.1", frame_bits=11,
+                                baud=_printer_baud),
+    ("v6", "cassette_out"): Function("T2", "v6", 2, "output", "cassette Z2 / ZPS 020", "§2.6.2.2",
+                                     leader=CASSETTE_LEADER, baud=_cassette_baud),
+    ("v6", "cassette_in"): Function("T3", "v6", 3, "input", "cassette Z2 / ZPS 020", "§2.6.2.2",
+                                    leader=CASSETTE_LEADER, baud=_cassette_baud),
     ("v6", "output"): Function("T4", "v6", 7, "output", "punch / TTY", "§2.6.2.3"),
     ("v6", "input"): Function("T5", "v6", 8, "input", "tape reader / TTY", "§2.6.2.3"),
     ("v7", "output"): Function("T6", "v7", 7, "output", "DNC host", "§2.6.3"),
@@ -48,14 +69,14 @@ FUNCTIONS: dict[tuple[str, str], Function] = {
 }
 
 
-class Cnc(Protocol):
-    """What a transfer uses of the control."""
+class Link(Protocol):
+    """What a transfer uses of the control's links (:class:`~devsim.devices.poselesta.links.SerialLinks`)."""
 
     clock: Clock
 
-    def transfer_event(self, port: str, what: str, detail: Any = None) -> None: ...
+    def event(self, port: str, what: str, detail: Any = None) -> None: ...
     def store_block(self, program: int, block: Any) -> str | None: ...
-    def transfer_ended(self, port: str, state: str, message: str | None = None) -> None: ...
+    def ended(self, port: str, state: str, message: str | None = None) -> None: ...
     def char_time(self, port: str) -> float: ...
     def send(self, port: str, data: bytes) -> None: ...
 
@@ -63,15 +84,15 @@ class Cnc(Protocol):
 class ReadIn:
     """A program read-in (spec §3.5): the leader wait (cassette), ``%``, blocks, ``M30``."""
 
-    def __init__(self, cnc: Cnc, function: Function, program: int, reader: TapeReader, leader: float = 0.0) -> None:
-        self.cnc = cnc
+    def __init__(self, link: Link, function: Function, program: int, reader: TapeReader, leader: float = 0.0) -> None:
+        self.link = link
         self.function = function
         self.program = program
         self.reader = reader
         self.blocks = 0
         self.line: tuple[int | None, bool] | None = None  # baud and code fixed for this transfer
         self.state = "leader" if leader > 0 else "wait_start"
-        self._timer: Timer | None = cnc.clock.call_later(leader, self._leader_over) if leader > 0 else None
+        self._timer: Timer | None = link.clock.call_later(leader, self._leader_over) if leader > 0 else None
 
     def _leader_over(self) -> None:
         self._timer = None
@@ -92,21 +113,21 @@ class ReadIn:
     def _on(self, event: object) -> None:
         port = self.function.port
         if isinstance(event, BlockRead):
-            problem = self.cnc.store_block(self.program, event.block)
+            problem = self.link.store_block(self.program, event.block)
             if problem is not None:
-                self.cnc.transfer_event(port, "failed", problem)
-                self.cnc.transfer_ended(port, "failed", problem)
+                self.link.event(port, "failed", problem)
+                self.link.ended(port, "failed", problem)
                 return
             self.blocks += 1
-            self.cnc.transfer_event(port, "block", event.block.number)
+            self.link.event(port, "block", event.block.number)
         elif isinstance(event, Ended):
-            self.cnc.transfer_event(port, "transfer_done", (self.program, self.blocks))
-            self.cnc.transfer_ended(port, "done")
+            self.link.event(port, "transfer_done", (self.program, self.blocks))
+            self.link.ended(port, "done")
         elif isinstance(event, Failed):
-            self.cnc.transfer_event(port, "failed", event.reason)
-            self.cnc.transfer_ended(port, "failed", event.reason)
+            self.link.event(port, "failed", event.reason)
+            self.link.ended(port, "failed", event.reason)
         elif isinstance(event, Notice):
-            self.cnc.transfer_event(port, event.what, event.detail)
+            self.link.event(port, event.what, event.detail)
 
     def cancel(self) -> None:
         if self._timer is not None:
@@ -119,9 +140,9 @@ class Output:
     (the leader, the printer's CR pause); the transfer ends when the last character has left,
     at the port's character time."""
 
-    def __init__(self, cnc: Cnc, function: Function, program: int, pieces: list[tuple[float, bytes]],
+    def __init__(self, link: Link, function: Function, program: int, pieces: list[tuple[float, bytes]],
                  blocks: int, on_end: Callable[[], None] | None = None) -> None:
-        self.cnc = cnc
+        self.link = link
         self.function = function
         self.program = program
         self.blocks = blocks
@@ -137,17 +158,17 @@ class Output:
             self.state = "done"
             if self._on_end is not None:
                 self._on_end()
-            self.cnc.transfer_event(self.function.port, "transfer_done", (self.program, self.blocks))
-            self.cnc.transfer_ended(self.function.port, "done")
+            self.link.event(self.function.port, "transfer_done", (self.program, self.blocks))
+            self.link.ended(self.function.port, "done")
             return
         wait, data = self._pieces[0]
         if wait > 0:
             self._pieces[0] = (0.0, data)
-            self._timer = self.cnc.clock.call_later(wait, self._next)
+            self._timer = self.link.clock.call_later(wait, self._next)
             return
         self._pieces.pop(0)
-        self.cnc.send(self.function.port, data)
-        self._timer = self.cnc.clock.call_later(len(data) * self.cnc.char_time(self.function.port), self._next)
+        self.link.send(self.function.port, data)
+        self._timer = self.link.clock.call_later(len(data) * self.link.char_time(self.function.port), self._next)
 
     def feed(self, data: bytes) -> None:
         """Input during an output is not read (no handshake, §3.6)."""

@@ -13,14 +13,16 @@ program stops (``LIMIT_STOP``), and in MANUAL only motion back towards the field
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable
+from typing import Any
 
 from devsim.core.axis import RegionSwitch, Watch
 from devsim.core.points import BadValue
+from devsim.core.signals import SignalBank
+from devsim.devices.poselesta.axes import Axes
+from devsim.devices.poselesta.parameters import MachineParameters
+from devsim.devices.poselesta.screen import Screen
 from devsim.devices.poselesta.signals import AXES
-
-if TYPE_CHECKING:
-    from devsim.devices.poselesta.cnc import PoselestaCnc
 
 __all__ = ["OUTSIDE_WORKING_FIELD", "WorkingField"]
 
@@ -29,38 +31,56 @@ HOME_SPEED = 0.10  # of P48–P51 (spec §5.6)
 
 
 class WorkingField:
-    """The referencing state and the software limits of the four axes."""
+    """The referencing state and the software limits of the four axes (manual §2.2.2, §2.3.23,
+    §2.4.4; spec §5.5, §5.6).  ``settings(axis)`` is an axis's configuration (its reference marks,
+    home direction and reference value), ``mode()`` the operating mode, ``booting()`` whether the
+    control starts up; ``left()`` is what brakes when the field is left (the program, manual
+    motion)."""
 
-    def __init__(self, cnc: PoselestaCnc) -> None:
-        self.cnc = cnc
+    def __init__(self, signals: SignalBank, axes: Axes, params: MachineParameters, screen: Screen, *,
+                 settings: Callable[[str], Any], mode: Callable[[], str], booting: Callable[[], bool],
+                 left: Callable[[], None]) -> None:
+        self._signals = signals
+        self._axes = axes
+        self._params = params
+        self._screen = screen
+        self._settings = settings
+        self._mode = mode
+        self._booting = booting
+        self._left = left
+        self.rm_missing: set[str] = set()  # axes whose reference mark signal is lost (fault)
         self.referenced: set[str] = set()
         self.homing: str | None = None
         self.offset = dict.fromkeys(AXES, 0.0)  # axis frame − power-on frame, increments
         self._marks: list[Watch] = []
         self._direction, self._reversed = -1, False
         self._fields: dict[str, RegionSwitch] = {}
+        params.on_change(lambda row, _value: self.rearm() if 9 <= int(row.key) <= 16 else None)
 
     # -- homing ------------------------------------------------------------------------------------
     def reference(self, a: str) -> None:
         """Start homing one axis (MANUAL, at standstill)."""
-        cnc = self.cnc
         if a not in AXES:
             raise BadValue(f"no axis {a!r}: x, y, z or d")
-        if cnc.mode != "MANUAL" or self.homing is not None or cnc.axes[a].moving:
+        if self._mode() != "MANUAL" or self.homing is not None or self._axes[a].moving:
             raise BadValue("homing needs MANUAL and the axes at standstill")
-        settings = getattr(cnc.cfg.axes, a)
-        axis = cnc.axes[a]
+        settings = self._settings(a)
+        axis = self._axes[a]
         direction = settings.home_direction
         self._direction, self._reversed = direction, False
         self.homing = a
         self.referenced.discard(a)
         self._arm_field(a)
         for mark in settings.reference_marks:
-            position = cnc.from_mm(a, mark) + self.offset[a]
+            position = self._axes.from_mm(a, mark) + self.offset[a]
             self._marks.append(axis.watch(position, lambda way, p=position: self._mark(a, p, way)))
-        cnc.signals.set(f"travel_{a}", True)
-        cnc.signals.set("machine_standstill", False)
-        axis.jog(direction, max(cnc.max_feed(a) * HOME_SPEED, 1e-9), cnc.accel(a))
+        self._signals.set(f"travel_{a}", True)
+        self._signals.set("machine_standstill", False)
+        axis.jog(direction, max(self._axes.max_feed(a) * HOME_SPEED, 1e-9), self._axes.accel(a))
+
+    def turn_back(self, a: str) -> bool:
+        """A limit switch of ``a`` was hit: True when the homing search of ``a`` turns back."""
+        return self.homing == a and self.reverse(a)
 
     def reverse(self, a: str) -> bool:
         """A limit switch before the mark: search the other way, once (spec §5.6); False the
@@ -70,34 +90,32 @@ class WorkingField:
             return False
         self._reversed = True
         self._direction = -self._direction
-        cnc = self.cnc
-        cnc.record_event("homing_reversed")
-        cnc.axes[a].jog(self._direction, max(cnc.max_feed(a) * HOME_SPEED, 1e-9), cnc.accel(a))
+        self._screen.record("homing_reversed")
+        self._axes[a].jog(self._direction, max(self._axes.max_feed(a) * HOME_SPEED, 1e-9), self._axes.accel(a))
         return True
 
     def _mark(self, a: str, position: float, way: int) -> None:
-        cnc = self.cnc
-        if self.homing != a or way != self._direction or not cnc.signals.get(f"rm_enable_{a}") or a in cnc.rm_missing:
+        if self.homing != a or way != self._direction or not self._signals.get(f"rm_enable_{a}") \
+                or a in self.rm_missing:
             if self.homing == a:
-                cnc.record_event("reference_mark_ignored")
+                self._screen.record("reference_mark_ignored")
             return
         for watch in self._marks:
             watch.cancel()
         self._marks.clear()
-        cnc.axes[a].stop(cnc.accel(a), on_done=lambda: self._referenced(a, position))
+        self._axes[a].stop(self._axes.accel(a), on_done=lambda: self._referenced(a, position))
 
     def _referenced(self, a: str, mark: float) -> None:
-        cnc = self.cnc
-        axis = cnc.axes[a]
-        shift = cnc.from_mm(a, getattr(cnc.cfg.axes, a).reference_value) - mark
+        axis = self._axes[a]
+        shift = self._axes.from_mm(a, self._settings(a).reference_value) - mark
         axis.set_position(axis.position() + shift)
         self.offset[a] += shift
         self.homing = None
         self.referenced.add(a)
-        cnc.signals.set(f"travel_{a}", False)
-        cnc.signals.set("machine_standstill", True)
-        cnc.record_event("referenced")
-        cnc.announce("event", "axis", "referenced", a)
+        self._signals.set(f"travel_{a}", False)
+        self._signals.set("machine_standstill", True)
+        self._screen.record("referenced")
+        self._screen.report("axis", "referenced", a)
         self._arm_field(a)
 
     def cancel(self) -> None:
@@ -107,8 +125,8 @@ class WorkingField:
         self._marks.clear()
         if self.homing is not None:
             a = self.homing
-            self.cnc.axes[a].stop(self.cnc.accel(a))
-            self.cnc.signals.set(f"travel_{a}", False)
+            self._axes[a].stop(self._axes.accel(a))
+            self._signals.set(f"travel_{a}", False)
         self.homing = None
 
     # -- encoder count loss (spec §5.7) ----------------------------------------------------------------
@@ -116,20 +134,21 @@ class WorkingField:
         """The encoder of ``a`` drops ``increments`` counts: the actual value the control counts
         falls behind the true position by that much (once the axis stands, the shift is made;
         the reference marks stay where they physically are)."""
-        axis = self.cnc.axes[a]
+        axis = self._axes[a]
+        clock = self._axes.clock
         if axis.moving:  # look again when the plan ends (a jog has no end: every 100 ms meanwhile)
-            wait = axis.segments()[-1].t1 - self.cnc.clock.now() if axis.segments() else 0.0
-            self.cnc.clock.call_later(min(max(wait, 0.0), 0.1), lambda: self.lose_counts(a, increments))
+            wait = axis.segments()[-1].t1 - clock.now() if axis.segments() else 0.0
+            clock.call_later(min(max(wait, 0.0), 0.1), lambda: self.lose_counts(a, increments))
             return
         axis.set_position(axis.position() - increments)
         self.offset[a] -= increments
-        self.cnc.record_event("count_loss")
+        self._screen.record("count_loss")
 
     # -- the working field ---------------------------------------------------------------------------
     def limits(self, a: str) -> tuple[float, float]:
         """(−, +) software limits of an axis in increments (P13–P16, P9–P12)."""
-        i = AXES.index(a)
-        return self.cnc.from_mm(a, self.cnc.params[13 + i]), self.cnc.from_mm(a, self.cnc.params[9 + i])
+        minus, plus = self._params.limits(a)
+        return self._axes.from_mm(a, minus), self._axes.from_mm(a, plus)
 
     def rearm(self) -> None:
         """The limits changed (P9–P16): watch the new ones."""
@@ -143,7 +162,7 @@ class WorkingField:
         if a in self.referenced:
             low, high = self.limits(a)
             if low <= high:
-                self._fields[a] = RegionSwitch(self.cnc.axes[a], low, high, lambda inside: self._changed(inside))
+                self._fields[a] = RegionSwitch(self._axes[a], low, high, lambda inside: self._changed(inside))
         self._changed(True)
 
     @property
@@ -156,18 +175,16 @@ class WorkingField:
         if switch is None or switch.active or direction == 0:
             return False
         low, high = self.limits(a)
-        position = self.cnc.axes[a].position()
+        position = self._axes[a].position()
         return (position > high and direction > 0) or (position < low and direction < 0)
 
     def _changed(self, _inside: Any) -> None:
-        cnc = self.cnc
         inside = self.inside
-        was = cnc.signals.get("inside_working_field")
-        if cnc.booting:
+        if self._booting():
             return
-        cnc.signals.set("inside_working_field", inside)
+        was = self._signals.get("inside_working_field")
+        self._signals.set("inside_working_field", inside)
         if was and not inside:
-            cnc.message = OUTSIDE_WORKING_FIELD
-            cnc.record_event("outside_working_field")
-            cnc.executor.left_field()
-            cnc.manual.left_field()
+            self._screen.show(OUTSIDE_WORKING_FIELD)
+            self._screen.record("outside_working_field")
+            self._left()

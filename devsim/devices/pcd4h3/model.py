@@ -7,6 +7,12 @@ The cycle runs on the device clock only while there is something to do (a comman
 chip moving, a cyclic read to refresh): an idle PLC costs no CPU, and what a host sees is what an
 always-cycling PLC would show.  Inside a cycle each function acts on its chip at the moment the
 FBs' execution times (§10.1) put it, so two axes started in one cycle start about 1 ms apart.
+
+The kind's model: it builds its parts and hands each its collaborators: per axis a drive
+(:class:`~devsim.devices.pcd4h3.drive.H3Drive`: chip, motor, switches) and the library on it
+(:class:`~devsim.devices.pcd4h3.library.H3Axis`, with its register block as
+:class:`~devsim.devices.pcd4h3.registers.AxisRegisters`), the timers, and the user program's
+:class:`~devsim.devices.pcd4h3.programs.Sequence`.
 """
 
 from __future__ import annotations
@@ -18,14 +24,14 @@ from typing import Any
 from devsim.core.clock import Clock, Timer
 from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
-from devsim.core.words import signed32
 from devsim.devices.pcd4h3 import display
 from devsim.devices.pcd4h3.config import AXIS, Pcd4h3Config
 from devsim.devices.pcd4h3.drive import H3Drive, axis_signals
-from devsim.devices.pcd4h3.layout import REGISTERS, Layout
+from devsim.devices.pcd4h3.layout import Layout
 from devsim.devices.pcd4h3.library import STATUS_FLAGS, H3Axis
 from devsim.devices.pcd4h3.programs import PROGRAMS, Sequence
-from devsim.devices.pcd4h3.units import ffp_encode
+from devsim.devices.pcd4h3.registers import AxisRegisters, RegisterBlock
+from devsim.devices.pcd4h3.timers import Timers
 
 __all__ = ["Halted", "Pcd4"]
 
@@ -59,10 +65,7 @@ class Pcd4(Model):
         self.inputs: dict[int, int] = {}  # inputs that are not an H3 module's (the user's keys)
         self.outputs: dict[int, int] = {}
         self.counters: dict[int, int] = {}
-        for axis in range(1, h["mna"] + 1):  # G-16: the registers start with Example 1's values
-            for register in REGISTERS:
-                if register.load:
-                    self.registers[self.layout.register(axis, register.symbol)] = register.example
+        self.timers = Timers(clock)
         self.drives: list[H3Drive] = []
         self.axes: list[H3Axis] = []
         for n in range(1, max(2, h["mna"]) + 1):
@@ -73,21 +76,22 @@ class Pcd4(Model):
             present = module < s["modules"] and (not y or self.per_module == 2)
             drive = H3Drive(n, clock, self.signals, s["axes"].get(n) or _axis_defaults(), lm629=self.pwm,
                             rs422=self.rs422, present=present, jumpers=s["jumpers"])
-            axis = H3Axis(n, self.layout, drive.chip, self.registers, self.flags)
-            axis.rsigb_bit12_inverted = s["rsigb_bit12_inverted"]
-            axis.on_comers = self._comers
+            registers = AxisRegisters(RegisterBlock(self.registers, self.layout.block(n)))
+            registers.reset()  # G-16: the registers start with Example 1's values
+            axis = H3Axis(n, self.layout, drive.chip, registers, self.flags, on_comers=self._comers,
+                          rsigb_bit12_inverted=s["rsigb_bit12_inverted"])
             self.drives.append(drive)
             self.axes.append(axis)
             self.signals.subscribe(f"LS1_{n}", lambda _n, old, new, n=n: self._limit(n, old, new))
             self.signals.subscribe(f"LS2_{n}", lambda _n, old, new, n=n: self._limit(n, old, new))
         program = PROGRAMS.get(s["user_program"] or "")
-        self.sequence = Sequence(program, self) if program is not None and self.axes else None
+        self.sequence = (Sequence(program, self.axes[0], self.inputs, self.counters, self.timers)
+                         if program is not None and self.axes else None)
         displayed = dict(s["display"])
         if program is not None and program.display:
             displayed.setdefault(1, {"reg1": "RActP", "reg2": "RSetV"})
         self.displayed = displayed
         self.screens = {n: display.BLANK for n in displayed}
-        self._timer_ends: dict[int, float] = {}
         self.status = RUN
         self.initialised = [False] * len(self.axes)
         self._timer: Timer | None = None
@@ -103,8 +107,7 @@ class Pcd4(Model):
             if n > len(self.axes):
                 continue
             for symbol, value in values.items():
-                address = self.layout.register(n, symbol)
-                self.registers[address] = signed32(ffp_encode(value)) if symbol == "MCFac" else signed32(int(value))
+                self.axes[n - 1].registers.load(symbol, value)
         self._fold_calls()
         self.status = RUN
         if self.sequence is not None:
@@ -214,31 +217,21 @@ class Pcd4(Model):
             return True
         if self.status != RUN:
             return False
-        if self.sequence is not None and (self.sequence.busy or any(self.timer(n) for n in self._timer_ends)):
+        if self.sequence is not None and (self.sequence.busy or self.timers.running()):
             return True
         return any(self.flags.get(self.layout.flag(axis.axis, symbol), 0)
                    for axis in self.axes for symbol in self.layout.command_order)
-
-    # -- timers (LD T n tenths; they count down to 0) ----------------------------------------------
-    def load_timer(self, n: int, tenths: int) -> None:
-        self._timer_ends[n] = self.clock.now() + tenths / 10
-
-    def timer(self, n: int) -> int:
-        """Timer n's value in tenths of a second (0 once it ran out)."""
-        end = self._timer_ends.get(n)
-        if end is None:
-            return 0
-        return max(0, math.ceil((end - self.clock.now()) * 10 - 1e-9))
 
     def _display(self) -> None:
         for n, view in self.displayed.items():
             if n > len(self.axes):
                 continue
             axis = self.axes[n - 1]
+            first, second = axis.registers.named(view["reg1"]), axis.registers.named(view["reg2"])
             if axis.flag("DplM"):
-                self.screens[n] = (display.six_digits(axis.reg(view["reg1"])), display.six_digits(axis.reg(view["reg2"])))
+                self.screens[n] = (display.six_digits(first), display.six_digits(second))
             else:
-                self.screens[n] = display.ten_digits(axis.reg(view["reg1"]))
+                self.screens[n] = display.ten_digits(first)
 
     def _comers(self, offset: int) -> None:
         if self.settings["comers_action"] != "continue":

@@ -1,0 +1,180 @@
+"""The program memory: programs P00 … P98, their protection (POS III), the unit they were typed
+in, and the tool catalogue (manual §2.3.14, §2.3.21, §2.6, §2.6.3; spec poselesta.md §3.2.2,
+§4.5 G-LOCK, §4.9, §5.1).  Everything is kept in the control's non-volatile memory."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+from devsim.core.nvram import NonVolatileMemory
+from devsim.core.points import BadValue
+from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF
+from devsim.devices.poselesta.tape import Block, Formats, block_words, parse_blocks
+
+__all__ = ["CATALOGUE", "DIAGNOSTICS", "RESERVED_PROGRAMS", "ProgramMemory"]
+
+DIAGNOSTICS, CATALOGUE = 79, 99
+RESERVED_PROGRAMS = (DIAGNOSTICS, CATALOGUE)  # the diagnostics and the parameter catalogue (spec §4.9)
+
+
+class ProgramMemory:
+    """The stored programs and tools of one control (manual §2.6.3, §2.3.21; spec §4.5, §4.9).
+
+    ``formats(inch)`` are the word formats of a program typed in mm or in inch; ``inch()`` is
+    the input V22/2 (programs are entered in inch while it is H); ``lock_open()`` the program
+    lock V22/9; ``record`` notes a refusal in the event log.  ``protection`` says whether the
+    variant has the program lock (POS III)."""
+
+    def __init__(self, nvram: NonVolatileMemory, *, formats: Callable[[bool], Formats], inch: Callable[[], bool],
+                 lock_open: Callable[[], bool], record: Callable[[str], None], max_blocks: int,
+                 protection: bool) -> None:
+        self._nvram = nvram
+        self._formats = formats
+        self._inch = inch
+        self._lock_open = lock_open
+        self._record = record
+        self._max_blocks = max_blocks
+        self._protection = protection
+        self.programs: dict[int, dict[int, Block]] = {}
+        self.protected: set[int] = set()
+        self.inch_programs: set[int] = set()
+        self.tools: dict[int, dict[str, float]] = {}
+        self.mdi = ""  # the block entered for Hand-Einzelsatz (§2.4.7)
+        self.load()
+
+    # -- memory -------------------------------------------------------------------------------
+    def load(self) -> None:
+        nvram = self._nvram
+        stored = nvram.get("programs") or {}
+        self.programs = {int(p): {int(b["N"]): Block.from_json(b) for b in blocks} for p, blocks in stored.items()}
+        self.protected = {int(p) for p in nvram.get("protected") or []}
+        self.inch_programs = {int(p) for p in nvram.get("inch_programs") or []}
+        self.tools = {int(t): dict(v) for t, v in (nvram.get("tools") or {}).items()}
+
+    def _save(self) -> None:
+        self._nvram.put(
+            "programs", {str(p): [b.to_json() for _, b in sorted(bs.items())] for p, bs in self.programs.items()}
+        )
+
+    # -- programs -----------------------------------------------------------------------------------
+    def blocks(self, number: int) -> list[Block]:
+        """The blocks of a program in ascending N."""
+        return sorted(self.programs.get(number, {}).values(), key=lambda b: b.number)
+
+    def to_run(self, number: int, hand_block: bool) -> tuple[list[Block], bool]:
+        """The blocks to execute and whether they were typed in inch: program ``number``, or in
+        Hand-Einzelsatz the block entered (typed in inch while V22/2 is H)."""
+        if not hand_block:
+            return self.blocks(number), number in self.inch_programs
+        inch = self._inch()
+        try:
+            return (parse_blocks(self.mdi, self._formats(inch)) if self.mdi.strip() else []), inch
+        except ValueError:
+            return [], inch
+
+    def program_formats(self, number: int) -> Formats:
+        """The word formats a program was typed in: mm, or inch with two more decimals."""
+        return self._formats(number in self.inch_programs)
+
+    def _typed(self, number: int, inch: bool) -> None:
+        """A program is (re)entered: in inch while V22/2 is H (stored as typed, spec §5.1)."""
+        if inch != (number in self.inch_programs):
+            (self.inch_programs.add if inch else self.inch_programs.discard)(number)
+            self._nvram.put("inch_programs", sorted(self.inch_programs))
+
+    def refuse_protected(self, number: int) -> None:
+        if number in self.protected:
+            self._record("program_protected")
+            raise BadValue(f"P{number:02d} is protected: release it first (program lock open)")
+
+    def clear_for_read_in(self, number: int) -> None:
+        """A read-in starts: "zuerst das vorgewählte Programm gelöscht" (§2.6)."""
+        self.programs.pop(number, None)
+        self._save()
+        self._typed(number, self._inch())
+
+    def store_block(self, program: int, block: Block) -> str | None:
+        """A block read in; returns why it cannot be stored (the read-in fails), or None."""
+        blocks = self.programs.setdefault(program, {})
+        total = sum(len(b) for b in self.programs.values())
+        if block.number not in blocks and total >= self._max_blocks:
+            return "memory full"
+        blocks[block.number] = block
+        self._save()
+        return None
+
+    def program_text(self, number: int) -> str:
+        formats = self.program_formats(number)
+        return "\n".join(" ".join(block_words(b, formats, formatted=True)) for b in self.blocks(number))
+
+    def set_program_text(self, number: int, text: str) -> None:
+        """Program entry (spec §3.2.2 ``panel.edit_block``): blocks typed as text replace the
+        program; the same rules as a read-in."""
+        if number in RESERVED_PROGRAMS:
+            raise BadValue(f"P{number:02d} is not an NC program")
+        self.refuse_protected(number)
+        inch = self._inch()
+        try:
+            blocks = parse_blocks(text, self._formats(inch))
+        except ValueError as exc:
+            raise BadValue(str(exc)) from None
+        others = sum(len(b) for p, b in self.programs.items() if p != number)
+        if others + len(blocks) > self._max_blocks:
+            raise BadValue(f"{WERTBEREICHES_UEBERLAUF}: program memory full")
+        if blocks:
+            self.programs[number] = {b.number: b for b in blocks}
+        else:
+            self.programs.pop(number, None)
+        self._save()
+        self._typed(number, inch)
+
+    def edit_block(self, text: str) -> None:
+        """Program entry of one block (spec §3.2.2 ``panel.edit_block``): ``"20: N5 X10"`` stores
+        (or replaces) block N5 of P20, by the rules of a read-in."""
+        number_text, sep, block_text = text.partition(":")
+        if not sep or not number_text.strip().lstrip("Pp").isdigit():
+            raise BadValue("expected 'program: block', e.g. '20: N5 X10'")
+        number = int(number_text.strip().lstrip("Pp"))
+        if number in RESERVED_PROGRAMS or not 0 <= number <= 98:
+            raise BadValue(f"P{number:02d} is not an NC program")
+        self.refuse_protected(number)
+        if number not in self.programs:
+            self._typed(number, self._inch())
+        try:
+            blocks = parse_blocks(block_text, self.program_formats(number))
+        except ValueError as exc:
+            raise BadValue(str(exc)) from None
+        if len(blocks) != 1:
+            raise BadValue("exactly one block with its number N is entered at a time")
+        problem = self.store_block(number, blocks[0])
+        if problem is not None:
+            raise BadValue(f"{WERTBEREICHES_UEBERLAUF}: {problem}")
+
+    # -- program lock (POS III, §2.3.21; spec §4.5 G-LOCK) ------------------------------------------
+    def protect(self, number: int, on: bool) -> None:
+        """Protect a program (in any position of V22/9) or release it (only while V22/9 is H)."""
+        if not self._protection:
+            raise BadValue("program protection is a POS III function")
+        if not on and not self._lock_open():
+            self._record("program_locked")
+            raise BadValue(f"P{number:02d} can only be released with the program lock open (V22/9 H)")
+        (self.protected.add if on else self.protected.discard)(number)
+        self._nvram.put("protected", sorted(self.protected))
+
+    # -- the tool catalogue (spec §4.9) --------------------------------------------------------------
+    def set_tool(self, number: int, value: Any) -> None:
+        """Radius and length of T01 … T99, in the catalogue's unit (P1); kept in memory, not
+        transferable serially."""
+        if not isinstance(value, dict) or set(value) - {"radius", "length"}:
+            raise BadValue('expected {"radius": r, "length": l}')
+        entry = {}
+        for key in ("radius", "length"):
+            number_value = value.get(key, 0.0)
+            if isinstance(number_value, bool) or not isinstance(number_value, int | float) or \
+                    not math.isfinite(number_value):
+                raise BadValue(f"T{number:02d}.{key}: a finite number")
+            entry[key] = float(number_value)
+        self.tools[number] = entry
+        self._nvram.put("tools", {str(t): v for t, v in sorted(self.tools.items())})
