@@ -257,7 +257,7 @@ def test_a_gms96_following_error_is_an_emcy_and_the_fault_state() -> None:
         node.sdo[0x6040].raw = 0x1F
         runtime.advance(0.2)
         runtime.fault("card", "blocked_axis", True)
-        assert runtime.run_until(lambda: device.model.idxoff, 10.0)
+        assert runtime.run_until(lambda: device.model.stage.idxoff, 10.0)
         assert drive.emcy(0x8611)
         assert node.sdo[0x6041].raw & 0x6F == 0x23  # the controller switched itself off
     finally:

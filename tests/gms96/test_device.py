@@ -251,7 +251,7 @@ def test_reference_distance_limit(plant_factory: Any) -> None:
 def test_reference_limit_message_23(referenced: Plant) -> None:
     referenced.device().cfg.axis.__dict__["cam"] = None
     dev = referenced.device()
-    for sw in dev._switches:
+    for sw in dev.switches:
         sw.cancel()
     dev.signals.signal("E2.1").value = False
     host = referenced.host
@@ -265,7 +265,7 @@ def test_blending_and_output_on_the_fly(referenced: Plant) -> None:
     host = referenced.host
     dev = referenced.device()
     seen: list[float] = []
-    dev.signals.subscribe("A0.2", lambda *_: seen.append(dev.axis.position() - dev.origin))
+    dev.signals.subscribe("A0.2", lambda *_: seen.append(dev.axis.position() - dev.coordinates.origin))
     assert host.ask(A10000) == "E5"
     assert host.ask("68 0C 0C 68 53 03 70 0A 00 00 10 00 00 02 00 00 E2 16") == "E5"  # SETO A0.2
     assert host.ask("68 06 06 68 53 03 41 20 4E 00 05 16") == "E5"  # A20000
@@ -293,13 +293,13 @@ def test_following_error_blocked_axis(referenced: Plant) -> None:
     assert host.ask(A30000) == "E5"
     referenced.advance(0.3)
     referenced.set("quantity.blocked", True)
-    referenced.run_until(lambda d: d.idxoff, 5)
+    referenced.run_until(lambda d: d.stage.idxoff, 5)
     assert host.ask(STATUS) == "10 40 03 43 16"
     assert referenced.read("controller") is False
     assert referenced.read("output.A0.0") is False
     referenced.set("quantity.blocked", False)
     assert host.ask("68 06 06 68 53 03 51 03 00 00 AA 16") == "E5"  # Q3
-    referenced.run_until(lambda d: not d.idxoff, 1)
+    referenced.run_until(lambda d: not d.stage.idxoff, 1)
     assert referenced.read("output.A0.0") is True
 
 

@@ -84,7 +84,7 @@ def test_blockage_after_a_torque_abort_stops_the_next_move(referenced: Plant) ->
     held = dev.indexer.actual()
     assert dev.indexer.blocked_at == pytest.approx(held)
     send(c, "A", 0)  # H7 is used up: the blockage gives a following error
-    referenced.run_until(lambda d: d.idxoff, 5)
+    referenced.run_until(lambda d: d.stage.idxoff, 5)
     assert last(dev, "following_error") > last(dev, "torque_abort")
     assert [e for _t, e in dev.events].count("torque_abort") == 1
     assert dev.indexer.actual() == pytest.approx(held)
@@ -131,10 +131,10 @@ def test_abort_ends_the_h2_wait(plant_factory: Any) -> None:
     send(c, "N", 10, 27)
     send(c, "H", 2)
     plant.advance(0.5)
-    assert dev.waiting_in_position is True and plant.read("marker.M3.5") is True
+    assert dev.executor.waiting_in_position is True and plant.read("marker.M3.5") is True
     c.abort()
     plant.advance(0.01)
-    assert dev.waiting_in_position is False and plant.read("marker.M3.5") is False
+    assert dev.executor.waiting_in_position is False and plant.read("marker.M3.5") is False
     assert plant.read("busy") is False
 
 
@@ -211,7 +211,7 @@ def test_zero_length_move_before_a_blendable_one_completes(referenced: Plant) ->
     """A move onto the standing position completes at once, also with a blendable move queued
     behind it (a CNC program puts both into the queue before the first starts)."""
     dev = referenced.device()
-    dev.programs[5] = [["A", 0, 0, 0, 1], ["A", -1000, 0, 0, 1]]
+    dev.flash.programs[5] = [["A", 0, 0, 0, 1], ["A", -1000, 0, 0, 1]]
     referenced.runtime.call(lambda: dev.executor.submit(Cmd("p", 3, 1, 5, 3)))
     referenced.idle(timeout=5)
     assert referenced.read("position") == -1000

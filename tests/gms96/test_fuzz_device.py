@@ -77,11 +77,11 @@ def test_an_i2t_crossing_closer_than_the_clock_resolves_is_reached_at_once() -> 
     device.set("quantity.load_pct", 100)
     card = device.model
     threshold = 3.0 * card.cfg.axis.i2t_t_allow_s
-    card.i2t_q, card.i2t_t = threshold - 1.72e-9, clock.now()
+    card.i2t.q, card.i2t.t = threshold - 1.72e-9, clock.now()
     previous = signal.signal(signal.SIGALRM, _too_long)
     signal.alarm(10)
     try:
-        card._i2t_update()
+        card.i2t.update()
         clock.advance(0.1)
     finally:
         signal.alarm(0)

@@ -474,7 +474,7 @@ def test_end_stop_following_error(plant_factory: Any) -> None:
     send(c, "A", 30000)
     plant.advance(5.0)
     assert plant.read("following_error") == pytest.approx(2000 / KV)  # lag while running free
-    plant.run_until(lambda d: d.idxoff, 10)
+    plant.run_until(lambda d: d.stage.idxoff, 10)
     # the actual position stops at 16384; the set-point runs on until e > N20 = 1000
     t_trip = ramp(2000) + (16384 + 1000 - dist(2000)) / 2000
     assert last(dev, "following_error") - t0 == pytest.approx(t_trip, abs=1e-5)

@@ -303,7 +303,7 @@ def test_message_on_fault(plant_factory: Any) -> None:
     ok(plant, "A", 30000)
     plant.advance(0.3)
     plant.set("quantity.blocked", True)
-    plant.run_until(lambda d: d.idxoff, timeout=5)
+    plant.run_until(lambda d: d.stage.idxoff, timeout=5)
     plant.advance(0.05)
     assert client.status()[1] == 51
     assert client.status()[1] is None

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from devsim.core import record
+from devsim.core.parameters import Param
 from devsim.devices.gms96 import tables as t
 
 # Every N index of spec §4.6 / manual §2.3.1 N, with the manual's "Grundstellung" where it gives one.
@@ -83,13 +84,13 @@ def test_every_n_index_present() -> None:
 @pytest.mark.parametrize("index", sorted(MANUAL_N))
 def test_n_default_within_range_and_saved(index: int) -> None:
     p = t.N_PARAMETERS[index]
-    assert p.index == index
+    assert p.key == index
     lo = t.INT24_MIN if p.minimum is None else p.minimum
     hi = t.INT24_MAX if p.maximum is None else p.maximum
     assert lo <= p.default <= hi
     assert t.clamp_n(index, p.default) == p.default
     assert p.saved  # s saves "all entries of the N command"
-    assert p.name and p.name_en
+    assert p.name and p.doc  # the manual's designation and its English name
 
 
 @pytest.mark.parametrize("index", sorted(MANUAL_N))
@@ -114,23 +115,16 @@ def test_spec_simulator_defaults() -> None:
 
 
 def test_only_n21_needs_restart() -> None:
-    assert {i for i, p in t.N_PARAMETERS.items() if p.needs_restart} == {21}
+    assert {i for i, p in t.N_PARAMETERS.items() if p.extra["needs_restart"]} == {21}
 
 
-def test_nparam_is_frozen_with_agreed_fields() -> None:
-    names = [f.name for f in record.fields(t.NParam)]
-    assert names == [
-        "index",
-        "name",
-        "name_en",
-        "default",
-        "minimum",
-        "maximum",
-        "unit",
-        "saved",
-        "needs_restart",
-        "doc",
-    ]
+def test_n_rows_are_frozen_kit_rows_with_the_agreed_facts() -> None:
+    # the kit's one parameter row type (issue 27): index -> key, name_en -> doc, needs_restart and
+    # the note -> extra
+    for index, p in t.N_PARAMETERS.items():
+        assert isinstance(p, Param) and t.N_TABLE[index] is p
+        assert (p.key, p.section) == (index, f"§2.3.1 N{index}")
+        assert set(p.extra) == {"needs_restart", "note"}
     with pytest.raises(record.FrozenInstanceError):
         t.N_PARAMETERS[10].default = 1  # type: ignore[misc]
 

@@ -50,15 +50,15 @@ _POLL = 0.02
 
 
 class Gms96Error(Exception):
-    """Base class of the client's errors."""
+    """Base class of the client's errors (spec §3.7)."""
 
 
 class Gms96Timeout(Gms96Error):
-    """The card did not answer (no valid frame) within the client's timeout."""
+    """The card did not answer (no valid frame) within the client's timeout (spec §3.4)."""
 
 
 class Gms96ReplyError(Gms96Error):
-    """The card answered with a frame of an unexpected type."""
+    """The card answered with a frame of an unexpected type (spec §3.7)."""
 
 
 class Gms96NoData(Gms96ReplyError):
@@ -76,7 +76,7 @@ def t_param_count(p1: int, p2: int, p3: int) -> int:
 
 
 class Gms96Client:
-    """Host side of one GMS96 card at ``address`` on ``port``."""
+    """Host side of one GMS96 card at ``address`` on ``port`` (the primary station, spec §3.4)."""
 
     def __init__(
         self, port: serial.SerialBase, address: int, *, e_version: bool = False, timeout: float = 0.5

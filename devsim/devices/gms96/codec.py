@@ -42,6 +42,7 @@ __all__ = [
     "letter",
     "parse_letter",
     "to_s24",
+    "wrap24",
     "from_s24",
     "control_host",
     "short_command_number",
@@ -83,14 +84,14 @@ _LETTER_PARAMS = 3
 
 @record
 class SingleChar:
-    """A single control character: ``E5h`` (ACK, also "no data") or ``A2h``."""
+    """A single control character (spec §3.2 a): ``E5h`` (ACK, also "no data") or ``A2h``."""
 
     value: int
 
 
 @record
 class ShortFrame:
-    """Kurzsatz ``10h C A [AE...] CS 16h``: control field ("F-Feld"), link address and the
+    """Kurzsatz ``10h C A [AE...] CS 16h`` (manual §2.3.2, spec §3.6): control field ("F-Feld"), link address and the
     address-extension (AE) octets that carry short-command data or the MB4 message."""
 
     control: int
@@ -100,7 +101,7 @@ class ShortFrame:
 
 @record
 class LongFrame:
-    """Langsatz ``68h L L 68h C A data CS 16h``; ``data`` is the link user data after A
+    """Langsatz ``68h L L 68h C A data CS 16h`` (manual §2.3, spec §3.5); ``data`` is the link user data after A
     (for GMS96: command character and parameters, or identifier and value)."""
 
     control: int
@@ -389,3 +390,9 @@ def t_reply(address: int, identifier: int, value: bytes, control: int = 0x08) ->
     """The card's answer to ``T``: Langsatz ``A I val`` with F = 08h (user data, spec §3.5);
     E-version may add ACD 20h / DFC 10h (spec §3.9)."""
     return LongFrame(control, address, bytes([_octet("identifier", identifier)]) + bytes(value))
+
+
+def wrap24(value: int) -> int:
+    """Positions travel as 24-bit two's complement (wrap-around, spec §5.1)."""
+    value &= 0xFFFFFF
+    return value - 0x1000000 if value & 0x800000 else value

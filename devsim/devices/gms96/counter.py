@@ -52,48 +52,59 @@ monitoring, no following error); the count always counts.
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+from collections.abc import Callable
 
-from devsim.core.axis import Watch
+from devsim.core.axis import Axis
+from devsim.core.clock import Clock
 from devsim.devices.gms96 import tables
-from devsim.devices.gms96.reference import ReferenceRun
+from devsim.devices.gms96.coordinates import Coordinates
+from devsim.devices.gms96.feed import Feed
+from devsim.devices.gms96.memory import Memory
+from devsim.devices.gms96.motion import Indexer
+from devsim.devices.gms96.params import NParameters
+from devsim.devices.gms96.stage import PowerStage
 
-
-class CounterCard(Protocol):
-    """What this part needs of its card (the GMS96 model): exactly these names."""
-
-    M: Any
-    axis: Any
-    can_move: Any
-    cfg: Any
-    changed: Any
-    clock: Any
-    controller: Any
-    estop: Any
-    image: Any
-    indexer: Any
-    machine_to_physical: Any
-    monitoring_cause: Any
-    n: Any
-    nv_M: Any
-    physical_to_machine: Any
-    record_event: Any
-    save_static: Any
-
-__all__ = ["CounterInput", "CounterReferenceRun", "H22_BYTES"]
+__all__ = ["CounterInput", "H22_BYTES"]
 
 FOLLOW_ACCEL = 1e9  # the set-point follows the counter input without a ramp of its own
 H22_BYTES = 16  # min count, position at min, max count, position at max (4 bytes each)
 
 
 class CounterInput:
-    def __init__(self, dev: CounterCard) -> None:
-        self.dev = dev
+    """The counter input of one card (manual §2.6, §2.3.1 H/m; spec §5.10): counter-input mode,
+    ``m49`` and ``H22``."""
+
+    def __init__(
+        self,
+        *,
+        clock: Clock,
+        axis: Axis,
+        indexer: Indexer,
+        params: NParameters,
+        stage: PowerStage,
+        coordinates: Coordinates,
+        feed: Feed,
+        memory: Memory,
+        h22_address: int | None,
+        changed: Callable[[], None],
+        record_event: Callable[[str], None],
+    ) -> None:
+        self.clock = clock
+        self.axis = axis
+        self.indexer = indexer
+        self.params = params
+        self.stage = stage
+        self.coordinates = coordinates
+        self.feed = feed
+        self.memory = memory
+        self.h22_address = h22_address  # H22;0 copies the measurement there (FB 254/22)
+        self.changed = changed
+        self.record_event = record_event
         self.active = False
         self.sync = False
         self._count = 0.0
         self.rate = 0.0
-        self._since = dev.clock.now()
+        self._since = clock.now()
         self._pending = 0.0
         self.h22_running = False
         self.h22: dict[str, int] | None = None
@@ -101,31 +112,31 @@ class CounterInput:
     @property
     def count(self) -> int:
         """Counted increments: the discrete pulses plus the stream's integral."""
-        return int(round(self._count + self.rate * (self.dev.clock.now() - self._since), 6))
+        return int(round(self._count + self.rate * (self.clock.now() - self._since), 6))
 
     def power_on(self) -> None:
         """The mode is read at restart from the M value in EEPROM (manual §2.6)."""
-        self.active = self.dev.nv_M() < 2
+        self.active = self.feed.eeprom_M < 2
         self.sync = False
         self._count = 0.0
         self.rate = 0.0
-        self._since = self.dev.clock.now()
+        self._since = self.clock.now()
         self._pending = 0.0
         self.h22_running = False
         self.h22 = None
 
     def following(self) -> bool:
-        d = self.dev
-        return (self.active or self.sync) and d.controller and not d.estop and not d.monitoring_cause()
+        st = self.stage
+        return (self.active or self.sync) and st.controller and not st.estop and not st.monitoring_cause()
 
     def weight(self) -> int:
-        return max(1, min(8, self.dev.n(23)))
+        return max(1, min(8, self.params.counter_weight))
 
     # -- the set-point ------------------------------------------------------------------------
     def _limits(self) -> tuple[float, float]:
         """Physical set-point range: the 24-bit position range (spec §5.1)."""
-        d = self.dev
-        return d.machine_to_physical(tables.POSITION_MIN), d.machine_to_physical(tables.POSITION_MAX)
+        c = self.coordinates
+        return c.machine_to_physical(tables.POSITION_MIN), c.machine_to_physical(tables.POSITION_MAX)
 
     def pulses(self, count: int) -> None:
         self._count += int(count)
@@ -135,17 +146,17 @@ class CounterInput:
         self._h22_sample()
 
     def _apply(self) -> None:
-        axis = self.dev.axis
+        axis = self.axis
         if self._pending and not axis.moving:
             lo, hi = self._limits()
             axis.set_position(max(lo, min(hi, axis.position() + self._pending)))
             self._pending = 0.0
-            self.dev.indexer.arm_following_error()
-            self.dev.changed()
+            self.indexer.arm_following_error()
+            self.changed()
 
     def set_rate(self, rate_hz: float) -> None:
         self._h22_sample()
-        now = self.dev.clock.now()
+        now = self.clock.now()
         self._count += self.rate * (now - self._since)
         self._since = now
         self.rate = float(rate_hz)
@@ -153,50 +164,48 @@ class CounterInput:
             self._follow_rate()
 
     def _follow_rate(self) -> None:
-        axis = self.dev.axis
+        axis = self.axis
         if self.rate:
             speed = abs(self.rate) * self.weight()
             if self.sync and not self.active:
-                speed = min(speed, float(max(self.dev.M, 1)))  # m49: limited to rapid M
+                speed = min(speed, float(max(self.feed.M, 1)))  # m49: limited to rapid M
             lo, hi = self._limits()
             axis.move_to(hi if self.rate > 0 else lo, speed, FOLLOW_ACCEL, on_done=self._apply)
         elif axis.moving:
             axis.stop(FOLLOW_ACCEL, self._apply)
-        self.dev.indexer.arm_following_error()
-        self.dev.changed()
+        self.indexer.arm_following_error()
+        self.changed()
 
     # -- m49 synchronous run --------------------------------------------------------------------
     def start_sync(self) -> bool:
         """``m49``: couple the set-point to the counter input; False if it cannot (skipped)."""
-        d = self.dev
         if self.active:
             return True  # the counter input already is the set-point source
-        if d.n(50) & 1 or not d.can_move():
+        if self.params.binary_options & 1 or not self.stage.ready():
             return False
-        d.indexer.target = None
-        d.indexer.jog_dir = 0
+        self.indexer.target = None
+        self.indexer.jog_dir = 0
         self.sync = True
         self._pending = 0.0
-        d.record_event("sync_start")
+        self.record_event("sync_start")
         if self.rate:
             self._follow_rate()
-        d.changed()
+        self.changed()
         return True
 
-    def stop_sync(self, on_stopped: Any = None) -> bool:
+    def stop_sync(self, on_stopped: Callable[[], None] | None = None) -> bool:
         """End ``m49`` (abort/fault): the set-point brakes with the card's ramp; True if it ran."""
         if not self.sync:
             return False
         self.sync = False
         self._pending = 0.0
-        self.dev.record_event("sync_end")
-        self.dev.indexer.halt(on_stopped)
+        self.record_event("sync_end")
+        self.indexer.halt(on_stopped)
         return True
 
     # -- H22 measurement --------------------------------------------------------------------------
     def _position(self) -> int:
-        d = self.dev
-        return int(round(d.physical_to_machine(d.indexer.actual())))
+        return int(round(self.coordinates.physical_to_machine(self.indexer.actual())))
 
     def h22_start(self) -> None:
         c, x = self.count, self._position()
@@ -217,13 +226,13 @@ class CounterInput:
             return
         self._h22_sample()
         self.h22_running = False
-        address = self.dev.cfg.h22_data_address
+        address = self.h22_address
         if address is not None:
             self.h22_copy(address)
 
     def h22_copy(self, address: int) -> None:
         """FB 254 / 22: the measurement into the data area from byte ``address`` (layout above)."""
-        data = self.dev.image.data
+        data = self.memory.image.data
         if not 0 <= address <= len(data) - H22_BYTES:
             return
         self._h22_sample()
@@ -233,7 +242,7 @@ class CounterInput:
             raw = (value & 0xFFFFFF).to_bytes(3, "little") + (b"\xff" if value < 0 else b"\x00")
             data[address + 4 * k : address + 4 * k + 4] = raw
         if address < 160:
-            self.dev.save_static()  # DW0..79 are static (spec §3.8.4)
+            self.memory.save_static()  # DW0..79 are static (spec §3.8.4)
 
     def state(self) -> dict[str, object]:
         self._h22_sample()
@@ -246,31 +255,3 @@ class CounterInput:
             "h22": dict(self.h22) if self.h22 is not None else None,
             "h22_running": self.h22_running,
         }
-
-
-class CounterReferenceRun(ReferenceRun):
-    """``Q`` with P2.5: the index mark comes from the counter input's reference track."""
-
-    def _index_search(self) -> None:
-        self.phase = "index_search"
-        axis = self.dev.indexer.axis
-        self._marks: list[Watch] = []
-
-        def mark(at: float, direction: int) -> None:
-            if self.phase == "index_search" and direction == self.neg:
-                self._cancel_marks()
-                self._reposition(at)
-
-        for at in self.dev.cfg.axis.counter_marks:
-            point = at if self.neg > 0 else at + 1e-6
-            self._marks.append(axis.watch(point, lambda side, at=at: mark(at, side)))
-        self._leg(self.neg, "search")
-
-    def _cancel_marks(self) -> None:
-        for w in getattr(self, "_marks", []):
-            w.cancel()
-        self._marks = []
-
-    def _cleanup(self) -> None:
-        self._cancel_marks()
-        super()._cleanup()

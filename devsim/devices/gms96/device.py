@@ -1,7 +1,8 @@
 """The GMS96 servo amplifier family as a devsim kind: the card under its FT1.2 face.
 
-Manual "GMS96 Softwarebeschreibung", software v4.04; spec gms96.md.  The machine is
-:class:`~devsim.devices.gms96.card.Gms96Card`, the link and commands
+Manual "GMS96 Softwarebeschreibung", software v4.04 (§2 the interface, §2.3 the commands); spec
+gms96.md.  The machine is
+:class:`~devsim.devices.gms96.model.Gms96Card`, the link and commands
 :class:`~devsim.devices.gms96.face.Gms96Face`; names and faults are declared in
 :mod:`~devsim.devices.gms96.points`.  Several cards share a multidrop line through
 :class:`devsim.core.bus.Bus`.
@@ -11,23 +12,40 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
+from devsim.core import record
 from devsim.core.device import Device
-from devsim.core.kit import ErrorCode, Parameter, PortDef, Reference
+from devsim.core.kit import Command, ErrorCode, PortDef, Reference, Table
 from devsim.core.settings import Section
 from devsim.devices.gms96 import tables
-from devsim.devices.gms96.card import Gms96Card
+from devsim.devices.gms96.commands import (
+    G_FUNCTIONS,
+    H_FUNCTIONS,
+    M_FUNCTIONS,
+    Q_TYPES,
+    QUEUED_COMMANDS,
+    RESET_FUNCTIONS,
+)
 from devsim.devices.gms96.config import Gms96Config
 from devsim.devices.gms96.drive_actions import DRIVE
-from devsim.devices.gms96.face import IMMEDIATE_COMMANDS, QUEUED_COMMANDS, SHORT_COMMANDS, Gms96Face
+from devsim.devices.gms96.face import ON_RECEIPT, P_ON_RECEIPT, SHORT_COMMANDS, T_QUERIES, Gms96Face
 from devsim.devices.gms96.framing import FT12
-from devsim.devices.gms96.nparams import N_STORED_ONLY
+from devsim.devices.gms96.model import Gms96Card
+from devsim.devices.gms96.nparams import N_TABLE
+from devsim.devices.gms96.plc import FB254_FUNCTIONS
 from devsim.devices.gms96.points import FAULTS, POINTS
+from devsim.devices.gms96.program import DIRECT_COMMANDS, P_FUNCTIONS
+from devsim.devices.gms96.spindle import SPINDLE_FUNCTIONS
 
 __all__ = ["Gms96Device"]
 
 
+def _spelled(prefix: str, table: Table[Any]) -> list[Command[Any]]:
+    """A sub-table's rows as the manual writes them (``T1;4``, ``p10;16``)."""
+    return [record.replace(row, token=prefix + row.token) for row in table]
+
+
 class Gms96Device(Device):
-    """One GMS96 card on a serial line (RS422/485, DIN 19244 FT1.2, 8E1)."""
+    """One GMS96 card on a serial line (RS422/485, DIN 19244 FT1.2, 8E1; manual §2.1, spec §2)."""
 
     kind: ClassVar[str] = "gms96"
     description: ClassVar[str] = "GMS96 servo amplifier with indexer and PLC (DIN 19244 / FT1.2, RS422)"
@@ -43,23 +61,21 @@ class Gms96Device(Device):
     def reference(cls) -> Reference:
         return Reference(
             commands=[
-                *(row.__class__(f"#{row.token}", row.handler, row.section, row.doc) for row in SHORT_COMMANDS),
-                *IMMEDIATE_COMMANDS,
+                *_spelled("#", SHORT_COMMANDS),
+                *ON_RECEIPT,
+                *_spelled("p", P_ON_RECEIPT),
+                *_spelled("T", T_QUERIES),
                 *QUEUED_COMMANDS,
+                *_spelled("G", G_FUNCTIONS),
+                *_spelled("H", H_FUNCTIONS),
+                *_spelled("m", M_FUNCTIONS),
+                *_spelled("p", P_FUNCTIONS),
+                *_spelled("p10;", DIRECT_COMMANDS),
+                *_spelled("Q", Q_TYPES),
+                *_spelled("Q8;", SPINDLE_FUNCTIONS),
+                *_spelled("r", RESET_FUNCTIONS),
+                *_spelled("FB254 Accu1=", FB254_FUNCTIONS),
             ],
-            parameters=[
-                Parameter(
-                    f"N{p.index}",
-                    p.name_en or p.name,
-                    f"§2.3.1 N{p.index}",
-                    p.unit,
-                    p.minimum,
-                    p.maximum,
-                    p.default,
-                    p.saved,
-                    "stored" if p.index in N_STORED_ONLY else "simulated",
-                )
-                for p in tables.N_PARAMETERS.values()
-            ],
+            parameter_table=N_TABLE,
             errors=[ErrorCode(str(n), text, "§4.4 MB4") for n, text in sorted(tables.MESSAGES.items())],
         )

@@ -20,21 +20,21 @@ __all__ = ["DRIVE"]
 
 def _enable(c: Any, on: bool) -> None:
     if on:
-        if c.estop or c.monitoring_cause() or c.nv_error:
+        if c.stage.faulted():
             raise BadValue("the card cannot switch on: emergency stop or a monitoring fault")
         c.executor.submit(Cmd("Q", 3, 0, 0, 1))
         return
     c.executor.abort()
-    c.controller = False
+    c.stage.controller = False
     c.indexer.power_off(brake=True)
     c.changed()
 
 
 def _move_to(c: Any, target: float, speed: float) -> None:
-    work = round(target - c.offsets())
-    if c.g_relative:  # G91: "A" would be relative; move by the difference from the last target
+    work = round(target - c.coordinates.offsets())
+    if c.coordinates.g_relative:  # G91: "A" would be relative; move by the difference from the last target
         base = c.executor.last_target if c.executor.last_target is not None else c.axis.position()
-        c.executor.submit(Cmd("+", round(c.machine_to_physical(target) - base), 0, 0, 1))
+        c.executor.submit(Cmd("+", round(c.coordinates.machine_to_physical(target) - base), 0, 0, 1))
         return
     c.executor.submit(Cmd("A", work, 0, 0, 1))
 
@@ -53,10 +53,10 @@ DRIVE = DriveActions(
     jog=_jog,
     quick_stop=lambda c: c.executor.abort(),
     reset_fault=lambda c: None,  # an emergency stop or a monitoring fault ends with its cause
-    position=lambda c: c.physical_to_machine(c.indexer.actual()),
+    position=lambda c: c.coordinates.physical_to_machine(c.indexer.actual()),
     velocity=lambda c: c.axis.velocity(),
-    enabled=lambda c: bool(c.controller and not c.idxoff),
-    fault=lambda c: bool(c.estop or c.monitoring_cause()),
+    enabled=lambda c: bool(c.stage.controller and not c.stage.idxoff),
+    fault=lambda c: bool(c.stage.estop or c.stage.monitoring_cause()),
     moving=lambda c: bool(c.motion()),
     following_error=lambda c: c.indexer.following_error(),
 )

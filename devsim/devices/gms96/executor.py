@@ -1,7 +1,8 @@
 """The command executor: queued (CNC) commands in order, BUSY, waits and blending.
 
-Manual §2.3.1 (queued letter commands), §2.4.3 (PLC direct commands p10), §2.5 (CNC programs);
-spec §4.2.2 (executor states), §4.2.4 (motion preconditions: a move while IDXOFF = 1 is skipped),
+What each command does is :mod:`.commands` (the executor runs it through the ``run`` it is
+given).  Manual §2.3.1 (queued letter commands), §2.4.3 (PLC direct commands p10), §2.5 (CNC
+programs); spec §4.2.2 (executor states), §4.2.4 (motion preconditions: a move while IDXOFF = 1 is skipped),
 §4.2.5 (queue capacity), §5.4 (blending: consecutive moves in one direction are one plan to the
 chain's last target; a move inside the chain completes when the set-point crosses its end point,
 so SETO/RESO/SNDF/SNDM between them act "on the fly", the chain's last move when the set-point
@@ -16,54 +17,25 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from devsim.core.axis import Axis, Watch
-from devsim.core.clock import Timer
+from devsim.core.clock import Clock, Timer
 from devsim.core.record import record
 from devsim.devices.gms96 import tables
-from devsim.devices.gms96.counter import CounterReferenceRun
-from devsim.devices.gms96.reference import ReferenceRun, resolver_position
+from devsim.devices.gms96.coordinates import Coordinates
+from devsim.devices.gms96.counter import CounterInput
+from devsim.devices.gms96.feed import Feed
+from devsim.devices.gms96.motion import Indexer
+from devsim.devices.gms96.params import NParameters
+from devsim.devices.gms96.reference import ReferenceRun
 
 
-class ExecutorCard(Protocol):
-    """What this part needs of its card (the GMS96 model): exactly these names."""
+class CardEvents(Protocol):
+    """What the executor asks of its card (spec §4.2.4): whether a move may start, and that it tells others."""
 
-    M: Any
-    activate_controller: Any
-    arm_torque_abort: Any
-    can_move: Any
-    cfg: Any
-    changed: Any
-    clock: Any
-    counter: Any
-    estop: Any
-    f: Any
-    f_frac: Any
-    g92: Any
-    g96: Any
-    g_relative: Any
-    h22_active: Any
-    i2t_latched: Any
-    idxoff: Any
-    image: Any
-    in_position: Any
-    indexer: Any
-    input_name: Any
-    monitoring_cause: Any
-    n: Any
-    output_bit: Any
-    plc: Any
-    programs: Any
-    queued_setting: Any
-    record_event: Any
-    save_eeprom: Any
-    save_static: Any
-    set_counter_here: Any
-    setpoint_work: Any
-    signals: Any
-    spindle: Any
-    waiting_in_position: Any
-    work_to_physical: Any
-    write_marker_byte: Any
-    write_output: Any
+    def can_move(self) -> bool: ...
+    def changed(self) -> None: ...
+    def record_event(self, name: str) -> None: ...
+    def arm_torque_abort(self) -> None: ...
+
 
 __all__ = ["Cmd", "Executor", "TRANSPARENT_P10"]
 
@@ -73,7 +45,7 @@ MOVES = frozenset("A+")
 
 @record
 class Cmd:
-    """One queued command: letter, P1..P3 and how many parameters were sent."""
+    """One queued command (manual §2.3.1): letter, P1..P3 and how many parameters were sent."""
 
     letter: str
     p1: int = 0
@@ -96,10 +68,33 @@ def transparent(cmd: Cmd) -> bool:
 
 
 class Executor:
-    """FIFO of queued commands and the one command being executed."""
+    """FIFO of queued commands and the one command being executed (spec §4.2.2), the moves and
+    their blending (spec §5.4), the H7 arming (spec §5.5)."""
 
-    def __init__(self, dev: ExecutorCard) -> None:
-        self.dev = dev
+    def __init__(
+        self,
+        *,
+        clock: Clock,
+        indexer: Indexer,
+        counter: CounterInput,
+        feed: Feed,
+        coordinates: Coordinates,
+        params: NParameters,
+        card: CardEvents,
+        run: Callable[[Cmd], bool],
+        queue_capacity: int,
+    ) -> None:
+        self.clock = clock
+        self.indexer = indexer
+        self.counter = counter
+        self.feed = feed
+        self.coordinates = coordinates
+        self.params = params
+        self.card = card
+        #: Carries out one command; True if it is complete at once (:mod:`.commands`).
+        self.run = run
+        self.queue_capacity = queue_capacity
+        self.waiting_in_position = False  # H2 waits (M3.5)
         self.queue: deque[Cmd] = deque()
         self.deferred: deque[tuple[Cmd, Callable[[], None]]] = deque()
         self.current: Cmd | None = None
@@ -114,7 +109,6 @@ class Executor:
         self._timer: Timer | None = None
         self._watch: Watch | None = None
         self._running = False
-        self._stvo_edge = False
 
     # -- state --------------------------------------------------------------------------------
     @property
@@ -123,7 +117,7 @@ class Executor:
 
     @property
     def full(self) -> bool:
-        return len(self.queue) >= self.dev.cfg.queue_capacity
+        return len(self.queue) >= self.queue_capacity
 
     # -- input --------------------------------------------------------------------------------
     def submit(self, cmd: Cmd) -> None:
@@ -164,7 +158,7 @@ class Executor:
             self.h7_level = None
         self.current = None
         self.kick()
-        self.dev.changed()
+        self.card.changed()
 
     def poke(self) -> None:
         """Something changed (marker, input, speed): re-check the wait condition."""
@@ -184,11 +178,22 @@ class Executor:
             return None
         return self.h7_level / 100.0
 
+    def disarm_h7(self) -> None:
+        """The torque abort fired: the level is spent."""
+        self.h7_level = None
+
+    def torque_aborted(self) -> None:
+        """H7 stopped the axis: the move it armed is complete (another command goes on)."""
+        if self.current is not None and self.current.letter in "A+vw":
+            self.complete()
+        else:
+            self.h7_in_move = False
+
     def _clear_wait(self) -> None:
         self.waiting = None
         self.wait_name = ""
-        self.dev.waiting_in_position = False
-        ix = self.dev.indexer
+        self.waiting_in_position = False
+        ix = self.indexer
         if ix.on_arrive == self._arrival:
             ix.on_arrive = None
         ix.set_junction(None)
@@ -201,7 +206,7 @@ class Executor:
 
     def after(self, seconds: float, name: str) -> bool:
         self.wait_name = name
-        self._timer = self.dev.clock.call_later(seconds, self.complete)
+        self._timer = self.clock.call_later(seconds, self.complete)
         return False
 
     def _discard(self) -> None:
@@ -222,83 +227,64 @@ class Executor:
         self._discard()
         self._clear_wait()
         cur, self.current = self.current, None
-        if self.dev.counter.stop_sync():  # m49 ends: the set-point brakes with the ramp
+        if self.counter.stop_sync():  # m49 ends: the set-point brakes with the ramp
             self.current = Cmd("_halt")
-            self.dev.indexer.halt(self.complete)
+            self.indexer.halt(self.complete)
         elif cur is not None and (cur.letter in MOVES or cur.letter in "vwQ"):
             self.current = Cmd("_halt")
-            self.dev.indexer.halt(self.complete)
-        elif self.dev.indexer.target is not None:
-            self.dev.indexer.halt()
-        self.dev.changed()
+            self.indexer.halt(self.complete)
+        elif self.indexer.target is not None:
+            self.indexer.halt()
+        self.card.changed()
 
     def flush(self) -> None:
         """A fault: the queue is gone and the executor idle at once (spec §4.5.3)."""
         self._discard()
-        self.dev.counter.sync = False  # a fault ends m49 (the fault stops the axis itself)
+        self.counter.sync = False  # a fault ends m49 (the fault stops the axis itself)
         self._clear_wait()
         self.current = None
 
     # -- execution ----------------------------------------------------------------------------
     def _start(self, cmd: Cmd) -> bool:
-        """Execute ``cmd``; True if it is complete at once."""
-        d = self.dev
-        handler = getattr(self, "_x_" + {"+": "plus", "_end": "end"}.get(cmd.letter, cmd.letter), None)
-        if handler is None:
-            return d.queued_setting(cmd)
-        return bool(handler(cmd))
+        """Execute ``cmd`` (:mod:`.commands`); True if it is complete at once."""
+        return self.run(cmd)
 
     # moves ----------------------------------------------------------------------------------
     def _target_of(self, cmd: Cmd, base: float) -> float:
-        d = self.dev
         p1 = max(tables.POSITION_MIN, min(tables.POSITION_MAX, cmd.p1))
-        if cmd.letter == "+" or (cmd.letter == "A" and d.g_relative):
+        if cmd.letter == "+" or (cmd.letter == "A" and self.coordinates.g_relative):
             return base + p1
-        return d.work_to_physical(p1)
+        return self.coordinates.work_to_physical(p1)
 
-    def _x_A(self, cmd: Cmd) -> bool:
-        return self._move(cmd)
-
-    def _x_plus(self, cmd: Cmd) -> bool:
-        return self._move(cmd)
-
-    def _x_v(self, cmd: Cmd) -> bool:
-        return self._move(cmd, blend=False)
-
-    def _x_w(self, cmd: Cmd) -> bool:
-        if not self.dev.can_move():
+    def move(self, cmd: Cmd, blend: bool = True) -> bool:
+        """``A``, ``+``, ``v``: a move to the command's target (``blend``: one plan with the
+        blendable moves queued behind it, spec §5.4); rejected unless the card can move."""
+        card = self.card
+        if not card.can_move():
             self.rejected_moves += 1
+            card.record_event("move_rejected")
             return True
-        self.dev.set_counter_here(0)
-        return self._move(Cmd("v", cmd.p1), blend=False)
-
-    def _move(self, cmd: Cmd, blend: bool = True) -> bool:
-        d = self.dev
-        if not d.can_move():
-            self.rejected_moves += 1
-            d.record_event("move_rejected")
-            return True
-        ix = d.indexer
+        ix = self.indexer
         base = self.last_target if (ix.target is not None and self.last_target is not None) else ix.axis.position()
         x = self._target_of(cmd, base)
         self.last_target = x
         if self.h7_level is not None:
             self.h7_in_move = True  # this move carries the H7 arming (spec §5.5)
-        if d.n(17) == 1:  # N17: the move runs in time only (M3.4)
-            shadow = Axis(d.clock, position=ix.axis.position())
+        if self.params.motion_disabled == 1:  # N17: the move runs in time only (M3.4)
+            shadow = Axis(self.clock, position=ix.axis.position())
             acc, profile = ix.accel()
             end = shadow.move_to(x, max(ix.speed(), 1.0), acc, profile=profile)
-            return self.after(end - d.clock.now(), "N17")
+            return self.after(end - self.clock.now(), "N17")
         if not ix.axis.moving and ix.axis.position() == x:
             self._consume_h7()
             return True  # already there (a blended move behind it starts from rest)
         final = self._chain_end(x) if blend else x
         if ix.target != final or not ix.axis.moving:
             ix.go(final, "work")
-            d.record_event("move_start")
+            card.record_event("move_start")
         self._complete_at(x)
         self._plan_junction(x)
-        d.arm_torque_abort()
+        card.arm_torque_abort()
         return False
 
     def _consume_h7(self) -> None:
@@ -310,7 +296,7 @@ class Executor:
         """Complete the running move when the set-point reaches ``x``: on arrival if ``x`` ends the
         plan (exactly when the set-point stops, either direction), else when the set-point passes
         the junction ``x`` on the fly (spec §5.4)."""
-        ix = self.dev.indexer
+        ix = self.indexer
         if self._watch is not None:
             self._watch.cancel()
             self._watch = None
@@ -330,32 +316,33 @@ class Executor:
 
     def _arrival(self) -> None:
         if self.current is not None and (self.current.letter in MOVES or self.current.letter in "vw"):
-            self.dev.record_event("move_end")
+            self.card.record_event("move_end")
             self.complete()
 
     def _plan_junction(self, x: float) -> None:
         """Spec §5.4: a slower speed for the next blended move (``f``/``G0`` between the moves) is
         reached *at* the junction ``x``: the indexer brakes before it."""
-        ix = self.dev.indexer
+        ix = self.indexer
         if ix.target is None or ix.target == x:
             ix.set_junction(None)
             return
-        f, frac = self.dev.f, self.dev.f_frac
+        feed = self.feed
+        f, frac = feed.f, feed.f_frac
         for cmd in self.queue:
             if cmd.letter in MOVES:
                 break
             if cmd.letter == "f":
-                f, frac = max(1, min(cmd.p1, tables.RANGES["f"][1])), max(0, min(255, cmd.p2))
+                f, frac = feed.clamp_feed(cmd.p1, cmd.p2)
             elif cmd.letter == "G" and cmd.p1 == 0:
-                f = self.dev.M
-        if (f, frac) == (self.dev.f, self.dev.f_frac):
+                f = feed.M
+        if (f, frac) == (feed.f, feed.f_frac):
             ix.set_junction(None)
         else:
             ix.set_junction(x, (f, frac))
 
     def _chain_end(self, x: float) -> float:
         """Last target of the blendable moves queued behind the current one (spec §5.4)."""
-        ix = self.dev.indexer
+        ix = self.indexer
         start = ix.axis.position()
         direction = 1 if x > start else -1
         end = x
@@ -372,7 +359,7 @@ class Executor:
 
     def _maybe_extend_chain(self) -> None:
         cur = self.current
-        ix = self.dev.indexer
+        ix = self.indexer
         if cur is None or cur.letter not in MOVES or ix.target is None or not ix.axis.moving:
             return
         if ix.final_braking():
@@ -384,241 +371,7 @@ class Executor:
             ix.go(new_end, "work")
             self._complete_at(self.last_target)
             self._plan_junction(self.last_target)
-            self.dev.arm_torque_abort()
-
-    # reference runs ---------------------------------------------------------------------------
-    def _x_Q(self, cmd: Cmd) -> bool:
-        d = self.dev
-        if d.estop or d.monitoring_cause() or (d.counter.active and cmd.p1 != 3):
-            self.rejected_moves += 1  # counter-input mode: no indexer runs (spec §5.10)
-            return True
-        p1, p2, p3 = cmd.p1, cmd.p2 & 0xFF, cmd.p3
-        if p1 == 8:
-            d.spindle(p2, p3)
-            return True
-        d.activate_controller()
-        if p1 == 3:
-            if p2 & 0x40 and p3 == 0:
-                d.set_counter_here(resolver_position(d))
-            d.idxoff = False
-            d.i2t_latched = False
-            return True
-        ref_p2 = (d.n(19) >> 8) & 0xFF if p1 == -1 else p2  # Q-1: P2 comes from N19 (spec §5.6)
-        if not (ref_p2 & 0x40 and not d.idxoff):
-            d.idxoff = True
-
-        def done(success: bool) -> None:
-            self.reference = None
-            if success:
-                d.i2t_latched = False
-            if self.current is not None and self.current.letter == "Q":
-                self.complete()
-
-        # P2.5: the index mark from the counter input's reference track (spec §3.8.14)
-        run = CounterReferenceRun if ref_p2 & 0x20 else ReferenceRun
-        self.reference = run(d, p1, p2, p3, done)
-        self.reference.start()
-        return self.reference is None or self.reference.finished
-
-    # G92 / G96 / G97 ----------------------------------------------------------------------------
-    def _x_G(self, cmd: Cmd) -> bool:
-        """G96 constant cutting speed / G97 deselect (spec §3.8.6, §5.2; manual: "V-version",
-        "further information on request").  Modelled [R] as far as the sources go: the card
-        computes the desired spindle speed ``n = C / r`` [rpm] continuously from the cutting-speed
-        value ``C`` (P2, with P3 as its upper 24 bits; unit inc/min/2π, so that v = 2π·r·n) and the
-        distance ``r`` of the set-point to the active zero point (work coordinates, at least 1 inc),
-        limited by G92 (P2 = rpm limit, 0 = none).  Where the real card sends that speed is not
-        documented, so it only shows in the control API (``g96_rpm``); motion is not affected.
-        Everything else goes to the device's G handling (G92 stores its P2 there)."""
-        d = self.dev
-        if cmd.p1 == 96:
-            d.g96 = ((cmd.p3 & 0xFFFFFF) << 24) | (cmd.p2 & 0xFFFFFF)
-            d.changed()
-            return True
-        if cmd.p1 == 97:
-            d.g96 = None
-            d.changed()
-            return True
-        return d.queued_setting(cmd)
-
-    def g96_rpm(self) -> float | None:
-        """The G96 desired spindle speed now (None: G96 not selected)."""
-        d = self.dev
-        if getattr(d, "g96", None) is None:
-            return None
-        r = max(1, abs(d.setpoint_work()))
-        n = d.g96 / r
-        return float(min(n, d.g92)) if d.g92 > 0 else float(n)
-
-    # auxiliary ---------------------------------------------------------------------------------
-    def _x_H(self, cmd: Cmd) -> bool:
-        d = self.dev
-        if cmd.p1 == 2:
-            # spec §5.5: in position (|e| <= |N27| for N28 ms after the set-point stopped); with
-            # N27 = 0 or on a stepper card: as soon as the set-point is finished.  The device
-            # re-checks (changed() -> poke) when the set-point stops and N28 later.
-            if d.in_position():
-                return True
-            d.waiting_in_position = True
-            return self.wait("H2", d.in_position)
-        if cmd.p1 == 7:
-            self.h7_level = max(0, min(100, cmd.p2))
-            return True
-        if cmd.p1 == 22:  # counter-input min/max measurement (spec §3.8.7, counter.py)
-            d.h22_active = bool(cmd.p2)
-            if cmd.p2:
-                d.counter.h22_start()
-            else:
-                d.counter.h22_stop()
-            return True
-        return True
-
-    def _x_m(self, cmd: Cmd) -> bool:
-        d = self.dev
-        img = d.image
-        if 50 <= cmd.p1 <= 89:
-            byte, bit = tables.m_function_marker(cmd.p1)
-            img.markers[11] = cmd.p2 & 0xFF
-        elif cmd.p1 == 100:
-            img.markers[15] = (img.markers[15] & 0x80) | (cmd.p2 & 0x7F)
-            img.markers[16] = (cmd.p3 >> 8) & 0xFF
-            img.markers[17] = cmd.p3 & 0xFF
-            byte, bit = 15, 7
-        elif cmd.p1 == 101:
-            img.markers[18] = (img.markers[18] & 0x80) | (cmd.p2 & 0x7F)
-            img.markers[19] = cmd.p3 & 0xFF
-            d.save_static()
-            byte, bit = 18, 7
-        elif cmd.p1 == 49:
-            return self._sync_run()
-        else:
-            return True  # unknown: accepted, no action
-        img.set_marker(byte, bit, True)
-        d.changed()  # the PLC (plc.auto_ack_m_functions_ms or a scripted rule) resets the bit
-        return self.wait(f"m{cmd.p1}", lambda: not img.marker(byte, bit))
-
-    def _sync_run(self) -> bool:
-        """``m49``: synchronous run to the counter input until #0 / M0.1 / a fault (counter.py)."""
-        d = self.dev
-        if d.counter.active:
-            return True
-        if not d.counter.start_sync():
-            self.rejected_moves += 1
-            d.record_event("move_rejected")
-            return True
-        return self.wait("m49", lambda: not d.counter.sync)
-
-    def _x_s(self, cmd: Cmd) -> bool:
-        d = self.dev
-        if (cmd.p1, cmd.p2) != tables.SAVE_KEY:
-            return True
-        d.save_eeprom()
-        if d.cfg.eeprom_write_s <= 0:
-            return True
-        return self.after(d.cfg.eeprom_write_s, "eeprom")
-
-    def _x_p(self, cmd: Cmd) -> bool:
-        d = self.dev
-        if cmd.p1 == 10:
-            return self._direct(cmd.p2, cmd.p3)
-        if cmd.p1 == 12:
-            d.image.outputs[2] = max(0, min(255, cmd.p2))
-            return True
-        if cmd.p1 == 11:
-            d.write_marker_byte(cmd.p2, cmd.p3)
-            return True
-        if cmd.p1 == 1 and cmd.p2 == 1:
-            d.plc.start()
-            return True
-        if cmd.p1 == 1 and cmd.p2 == 2:
-            d.plc.stop()
-            return True
-        if cmd.p1 == 3 and cmd.p2 == 1:
-            return self._start_program(cmd.p3)
-        if cmd.p1 == 3 and cmd.p2 == 2:
-            self._stop_program()
-            return True
-        return True
-
-    def _start_program(self, pnr: int) -> bool:
-        d = self.dev
-        program = d.programs.get(pnr)
-        if program is None:
-            if self.program_depth == 0:
-                d.image.set_marker(0, 2, False)  # M0.2 start request of a missing program ends
-            return True
-        if self.program_depth >= 8:
-            self._stop_all_programs()
-            return True
-        self.program_depth += 1
-        img = d.image
-        img.markers[2] = pnr & 0xFF
-        img.set_marker(0, 2, True)
-        img.set_marker(1, 0, False)
-        cmds = [Cmd(*row) for row in program] + [Cmd("_end", program=pnr)]
-        self.queue.extendleft(reversed(cmds))
-        return True
-
-    def _stop_program(self) -> None:
-        """p3;2 inside a program: drop the rest of the running program."""
-        while self.queue:
-            cmd = self.queue.popleft()
-            if cmd.letter == "_end":
-                self.queue.appendleft(Cmd("_end", program=-1))
-                return
-
-    def _stop_all_programs(self) -> None:
-        self.queue = deque(c for c in self.queue if c.program is None and c.letter != "_end")
-        self.program_depth = 0
-        self.dev.image.set_marker(0, 2, False)
-
-    def _x_end(self, cmd: Cmd) -> bool:
-        self.program_depth = max(0, self.program_depth - 1)
-        if self.program_depth == 0:
-            self.dev.image.set_marker(0, 2, False)
-            if cmd.program is not None and cmd.program >= 0:
-                self.dev.image.set_marker(1, 0, True)
-        return True
-
-    def _direct(self, op: int, operand: int) -> bool:
-        """PLC direct commands ``p10;OpCode;Operand`` (manual §2.4.3, spec §4.10.4)."""
-        d = self.dev
-        img = d.image
-        if op in (2, 3):
-            name = d.input_name(operand)
-            want = op == 2
-            return self.wait("WOSI" if want else "WORI", lambda: bool(d.signals.get(name)) == want if name else True)
-        if op in (6, 7):
-            want = op == 6
-            return self.wait("WOSO" if want else "WORO", lambda: d.output_bit(operand) == want)
-        if op in (10, 11):
-            want = op == 10
-            return self.wait("WOSF" if want else "WORF", lambda: img.marker(operand // 8 % 256, operand % 8) == want)
-        if op == 14:
-            return self.after(operand / 10.0, "WAIT") if operand > 0 else True
-        if op in (16, 17, 24):
-            if 0 <= operand <= 10:
-                value = True if op == 16 else False if op == 17 else not d.output_bit(operand)
-                d.write_output(operand, value)
-            return True
-        if op == 26:
-            for n in range(11):
-                d.write_output(n, False)
-            return True
-        if op == 28:
-            img.markers[5] = operand & 0xFF
-            return True
-        if op == 29:
-            img.post_message(operand)
-            return True
-        if op == 31:
-            self._stvo_edge = False
-            return self.wait("STVO", lambda: self._stvo_edge)
-        return True
-
-    def input_edge(self, name: str, value: bool) -> None:
-        if name == "E0.1" and value:
-            self._stvo_edge = True
+            self.card.arm_torque_abort()
 
     def state(self) -> dict[str, Any]:
         return {

@@ -3,36 +3,58 @@
 The link layer (:mod:`.link`) finds frames, filters addresses, suppresses repetitions and times
 replies; this face turns each Kurzsatz and Langsatz into operations on the card
 (:class:`~devsim.devices.gms96.card.Gms96Card`) and builds the answers: ``E5h``, the status
-Kurzsatz and the ``T`` read-backs.  Commands are looked up in tables (:data:`SHORT_COMMANDS`,
-:data:`IMMEDIATE_COMMANDS`, :data:`QUEUED_COMMANDS`) that ``devsim doc gms96`` lists.
+Kurzsatz and the ``T`` read-backs.  Every command is looked up in a table that ``devsim doc
+gms96`` lists: :data:`SHORT_COMMANDS` (Kurzsatz), :data:`ON_RECEIPT` (the letters the face handles
+itself: immediate commands, downloads), :data:`P_ON_RECEIPT` (``p`` downloads, ``p11``),
+:data:`T_QUERIES` (``T`` read-backs); every other letter of
+:data:`~devsim.devices.gms96.commands.QUEUED_COMMANDS` goes to the command queue.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 from devsim.core.device import Face, Port, SerialSettings
 from devsim.core.kit import Command, Table
+from devsim.core.record import record
 from devsim.devices.gms96 import codec, tables
-from devsim.devices.gms96.card import Gms96Card, _wrap24
+from devsim.devices.gms96.commands import QUEUED_COMMANDS
 from devsim.devices.gms96.executor import Cmd
 from devsim.devices.gms96.link import Link
+from devsim.devices.gms96.model import Gms96Card
 
-__all__ = ["IMMEDIATE_COMMANDS", "QUEUED_COMMANDS", "SHORT_COMMANDS", "Gms96Face"]
+__all__ = ["ON_RECEIPT", "P_ON_RECEIPT", "SHORT_COMMANDS", "T_QUERIES", "Gms96Face", "Letter"]
 
 ACK = bytes([codec.ACK])
-ON_RECEIPT = frozenset("cNqT")  # always immediate; o only as o2, p only as p11 (spec §4.2.1)
+
+
+@record
+class Letter:
+    """A letter command as received (manual §2.3, spec §3.5): letter, P1..P3, the number of
+    parameters sent, the raw user data, and where a deferred acknowledgement goes
+    (``on_queue_full: defer``)."""
+
+    letter: str
+    p1: int
+    p2: int
+    p3: int
+    count: int
+    raw: bytes
+    deferred: Callable[[bytes], None]
 
 
 class Gms96Face(Face):
-    """One card's end of an RS422/485 line (DIN 19244 FT1.2, 8E1)."""
+    """One card's end of an RS422/485 line (DIN 19244 FT1.2, 8E1; manual §2.3, spec §3.7)."""
 
     model: Gms96Card
 
     def __init__(self, model: Gms96Card, port: Port) -> None:
         super().__init__(model, port)
-        self.link = Link(model, self.short_command, self.letter_command, port.send)
+        self.link = Link(
+            card=model, clock=model.clock, options=model.cfg.link, baud=lambda: int(model.dil.baud),
+            errors=model.link_errors, short_command=self.short_command, letter_command=self.letter_command,
+            write=port.send,
+        )
         model.listen("power_on", self.link.reset)
 
     @property
@@ -53,78 +75,136 @@ class Gms96Face(Face):
         handler = SHORT_COMMANDS.get(str(number))
         if handler is None:
             return ACK if self.model.cfg.link.unknown_short_command_reply == "ack" else None
-        return handler(self.model, ext)
+        return handler(self, ext)
 
     def letter_command(
         self, cmd: str, params: tuple[int, int, int], count: int, raw: bytes, *, deferred: Callable[[bytes], None]
     ) -> bytes | None:
-        p1, p2, p3 = params
+        """A Langsatz letter command: :data:`ON_RECEIPT`, else the queue (:data:`QUEUED_COMMANDS`)."""
         self.model.record_event(f"cmd_{cmd}")
-        if cmd == "p" and p1 in (1, 3) and p2 in (100, 101):
-            return self._download_control(p1, p2, p3)
-        if self.model.download is not None:
-            kind, pnr, recorded = self.model.download
-            if kind == "plc" and cmd == "a":
-                recorded.append([raw[1:].hex()])
-                return ACK
-            if kind == "cnc" and (cmd in QUEUED_COMMANDS or (cmd == "p" and p1 == 11)) and not (cmd == "o" and p1 == 2):
-                recorded.append([cmd, p1, p2, p3, count])
-                return ACK
-        if cmd in ON_RECEIPT or (cmd == "o" and p1 == 2) or (cmd == "p" and p1 == 11):
-            return self._immediate(cmd, p1, p2, p3)
-        if cmd == "a":
-            return ACK  # outside a PLC download: ignored
-        if cmd in QUEUED_COMMANDS:
-            item = Cmd(cmd, p1, p2, p3, count)
-            if self.model.executor.full:
-                mode = self.model.cfg.link.on_queue_full
-                if mode == "drop":
-                    return None
-                if mode == "nack":
-                    return codec.encode(codec.ShortFrame(0x01, self.model.address))
-                self.model.executor.defer(item, lambda: deferred(ACK))
-                return None
-            self.model.executor.submit(item)
+        letter = Letter(cmd, *params, count, raw, deferred)
+        handler = ON_RECEIPT.get(cmd) or (Gms96Face.queue if cmd in QUEUED_COMMANDS else Gms96Face.unknown)
+        return handler(self, letter)
+
+    # -- the routes of a letter (spec §4.2.1) ---------------------------------------------------
+    def queue(self, letter: Letter) -> bytes | None:
+        """A queued command: recorded during a CNC download, else into the queue; a full queue
+        drops, refuses or defers the acknowledgement (``link.on_queue_full``)."""
+        recorded = self.model.flash.recording("cnc")
+        if recorded is not None:
+            recorded.append([letter.letter, letter.p1, letter.p2, letter.p3, letter.count])
             return ACK
+        item = Cmd(letter.letter, letter.p1, letter.p2, letter.p3, letter.count)
+        executor = self.model.executor
+        if executor.full:
+            mode = self.model.cfg.link.on_queue_full
+            if mode == "drop":
+                return None
+            if mode == "nack":
+                return codec.encode(codec.ShortFrame(0x01, self.model.address))
+            executor.defer(item, lambda: letter.deferred(ACK))
+            return None
+        executor.submit(item)
+        return ACK
+
+    def unknown(self, letter: Letter) -> bytes | None:
         self.model.record_event("unknown_command")
         return ACK if self.model.cfg.link.unknown_command_reply == "ack" else None
 
-    def _download_control(self, p1: int, p2: int, p3: int) -> bytes:
-        if p2 == 100:
-            if self.model.download is None:
-                if p1 == 3 and not 0 <= p3 < self.model.cfg.max_programs:
-                    return ACK
-                self.model.download = ("cnc" if p1 == 3 else "plc", p3, [])
-                if p1 == 1:
-                    self.model.plc.begin_download()
-                self.model.silence(self.model.cfg.flash_erase_s)
-                self.model.record_event("flash_erase")
+    def download_line(self, letter: Letter) -> bytes | None:
+        """``a``: a line of a PLC download (kept opaque); in a CNC download it is recorded like a
+        queued command; otherwise ignored."""
+        plc = self.model.flash.recording("plc")
+        if plc is not None:
+            plc.append([letter.raw[1:].hex()])
             return ACK
-        if self.model.download is not None and self.model.download[0] == ("cnc" if p1 == 3 else "plc"):
-            kind, pnr, recorded = self.model.download
-            self.model.download = None
-            if kind == "cnc":
-                total = sum(len(p) for k, p in self.model.programs.items() if k != pnr) + len(recorded)
-                if total > self.model.cfg.max_total_commands:
-                    self.model.cnc_storage_error = True
-                    return ACK
-                if pnr == 0:
-                    self.model.programs = {}
-                self.model.programs[pnr] = recorded
-            else:
-                self.model.plc.end_download([bytes.fromhex(row[0]) for row in recorded])
-                return ACK
-            self.model.save_flash()
+        if self.model.flash.recording("cnc") is not None:
+            return self.queue(letter)
         return ACK
 
-    def _immediate(self, cmd: str, p1: int, p2: int, p3: int) -> bytes | None:
-        """Commands carried out on receipt (manual §2.3.1, spec §4.2.1): :data:`IMMEDIATE_COMMANDS`."""
-        if cmd == "T":
-            return self._read_back(p1, p2, p3)
-        handler = IMMEDIATE_COMMANDS.get(cmd)
-        if handler is not None:
-            handler(self.model, p1, p2, p3)
+    def override(self, letter: Letter) -> bytes | None:
+        """``o2;P2`` on receipt (never recorded); ``o0``/``o1`` queue."""
+        if letter.p1 != 2:
+            return self.queue(letter)
+        m = self.model
+        m.feed.o2_value = max(0, min(100, letter.p2))
+        m.feed.ext_override = None
+        m.indexer.replan()
         return ACK
+
+    def program(self, letter: Letter) -> bytes | None:
+        """``p``: the downloads and ``p11`` on receipt (:data:`P_ON_RECEIPT`), the rest queues."""
+        handler = (
+            P_ON_RECEIPT.get(f"{letter.p1};{letter.p2}") or P_ON_RECEIPT.get(str(letter.p1)) or Gms96Face.queue
+        )
+        return handler(self, letter)
+
+    def marker_byte(self, letter: Letter) -> bytes | None:
+        """``p11;offset;value``: MB(offset) := value at once (recorded during a CNC download)."""
+        if self.model.flash.recording("cnc") is not None:
+            return self.queue(letter)
+        self.model.write_marker_byte(letter.p2, letter.p3)
+        return ACK
+
+    def register(self, letter: Letter) -> bytes | None:
+        """``c value;n``: data register R(n)."""
+        if 0 <= letter.p2 <= 19:
+            self.model.image.write_register(letter.p2, letter.p1)
+            self.model.memory.save_static()
+        return ACK
+
+    def n_parameter(self, letter: Letter) -> bytes | None:
+        """``N value;index;P3``."""
+        self.model.set_n(letter.p2, letter.p1, letter.p3)
+        return ACK
+
+    def message_query(self, letter: Letter) -> bytes | None:
+        """``q``: M3.1, the PLC reports pending messages again."""
+        self.model.image.set_marker(3, 1, True)
+        self.model.changed()
+        return ACK
+
+    # -- downloads (spec §3.8.13, §3.8.24) -----------------------------------------------------
+    def _begin_download(self, kind: str, number: int) -> None:
+        m = self.model
+        if m.flash.download is None:
+            if kind == "cnc" and not 0 <= number < m.cfg.max_programs:
+                return
+            m.flash.download = (kind, number, [])
+            if kind == "plc":
+                m.plc.begin_download()
+            m.silence(m.cfg.flash_erase_s)
+            m.record_event("flash_erase")
+
+    def begin_plc_download(self, letter: Letter) -> bytes:
+        self._begin_download("plc", letter.p3)
+        return ACK
+
+    def begin_cnc_download(self, letter: Letter) -> bytes:
+        self._begin_download("cnc", letter.p3)
+        return ACK
+
+    def end_plc_download(self, letter: Letter) -> bytes:
+        recorded = self.model.flash.recording("plc")
+        if recorded is not None:
+            self.model.flash.download = None
+            self.model.plc.end_download([bytes.fromhex(row[0]) for row in recorded])
+        return ACK
+
+    def end_cnc_download(self, letter: Letter) -> bytes:
+        flash = self.model.flash
+        if flash.download is not None and flash.download[0] == "cnc":
+            _kind, pnr, recorded = flash.download
+            flash.download = None
+            flash.store_program(pnr, recorded, self.model.cfg.max_total_commands)
+        return ACK
+
+    # -- T read-backs (manual §2.3.1 T; spec §3.8.19) --------------------------------------------
+    def read_back(self, letter: Letter) -> bytes:
+        """``T P1;P2;P3``: :data:`T_QUERIES` by ``P1;P2``, then ``P1``; anything else: E5h."""
+        p1, p2, p3 = letter.p1, letter.p2, letter.p3
+        handler = T_QUERIES.get(f"{p1};{p2}") or T_QUERIES.get(str(p1))
+        return ACK if handler is None else handler(self, p2, p3)
 
     def _reply_control(self) -> int:
         control = 0x08
@@ -139,125 +219,125 @@ class Gms96Face(Face):
     def _t(self, identifier: int, value: bytes) -> bytes:
         return codec.encode(codec.t_reply(self.model.address, identifier, value, self._reply_control()))
 
-    def _read_back(self, p1: int, p2: int, p3: int) -> bytes:
-        """``T`` (manual §2.3.1 T; spec §3.8.19)."""
-        if p1 == 0:
-            return self._t(0x40, codec.to_s24(_wrap24(self.model.setpoint_work())))
-        if p1 == 1:
-            if p2 == 0:
-                return self._t(0x56, tables.FIRMWARE_VERSION.to_bytes(2, "little"))
-            if p2 == 1:
-                return self._t(0x49, bytes([self.model.input_byte(p3), self.model.input_byte(p3 + 1)]))
-            if p2 == 2:
-                return self._t(0x49, bytes([self.model.output_byte(p3), self.model.output_byte(p3 + 1)]))
-            if p2 == 3:
-                return self._t(0x49, bytes([self.model.marker_byte(p3) if 0 <= p3 < 256 else 0,
-                                            self.model.marker_byte(p3 + 1) if 0 <= p3 + 1 < 256 else 0]))
-            if p2 == 4:
-                e = int(round(self.model.indexer.following_error()))
-                return self._t(0x49, max(-32768, min(32767, e)).to_bytes(2, "little", signed=True))
-            if p2 == 5:
-                return self._t(0x49, bytes([min(252, int(round(252 * self.model.current())))]))
-            if p2 == 6:
-                return self._t(0x44, self.model.image.read_bytes(self.model.image.data, p3, 3))
-        if p1 == 3 and p2 == 0:
-            return self._t(self.model.status(), b"")
-        if p1 == 3 and p2 == 4:
-            return self._t(self.model.memory_status(), b"")
-        if p1 == 5 and p2 in tables.N_PARAMETERS:
-            value = self.model.n8[1 if p3 == 1 else 0] if p2 == 8 else self.model.n(p2)
-            return self._t(0x4E, codec.to_s24(_wrap24(value)))
+    def t_setpoint(self, p2: int, p3: int) -> bytes:
+        return self._t(0x40, codec.to_s24(codec.wrap24(self.model.coordinates.setpoint_work())))
+
+    def t_version(self, p2: int, p3: int) -> bytes:
+        return self._t(0x56, tables.FIRMWARE_VERSION.to_bytes(2, "little"))
+
+    def t_inputs(self, p2: int, p3: int) -> bytes:
+        return self._t(0x49, bytes([self.model.outputs.input_byte(p3), self.model.outputs.input_byte(p3 + 1)]))
+
+    def t_outputs(self, p2: int, p3: int) -> bytes:
+        return self._t(0x49, bytes([self.model.outputs.output_byte(p3), self.model.outputs.output_byte(p3 + 1)]))
+
+    def t_markers(self, p2: int, p3: int) -> bytes:
+        m = self.model
+        return self._t(0x49, bytes([m.marker_byte(p3) if 0 <= p3 < 256 else 0,
+                                    m.marker_byte(p3 + 1) if 0 <= p3 + 1 < 256 else 0]))
+
+    def t_following_error(self, p2: int, p3: int) -> bytes:
+        e = int(round(self.model.indexer.following_error()))
+        return self._t(0x49, max(-32768, min(32767, e)).to_bytes(2, "little", signed=True))
+
+    def t_current(self, p2: int, p3: int) -> bytes:
+        return self._t(0x49, bytes([min(252, int(round(252 * self.model.torque.current())))]))
+
+    def t_data(self, p2: int, p3: int) -> bytes:
+        image = self.model.image
+        return self._t(0x44, image.read_bytes(image.data, p3, 3))
+
+    def t_status(self, p2: int, p3: int) -> bytes:
+        return self._t(self.model.status(), b"")
+
+    def t_memory_status(self, p2: int, p3: int) -> bytes:
+        return self._t(self.model.memory_status(), b"")
+
+    def t_n_parameter(self, p2: int, p3: int) -> bytes:
+        if p2 not in tables.N_PARAMETERS:
+            return ACK
+        return self._t(0x4E, codec.to_s24(codec.wrap24(self.model.params.read(p2, p3))))
+
+    # -- Kurzsatz (manual §2.3.2) ----------------------------------------------------------------
+    def abort(self, ext: bytes) -> bytes:
+        """#0: abort; the queue is flushed, a download ends."""
+        m = self.model
+        m.record_event("abort")
+        m.flash.download = None
+        m.spindle.on = False
+        m.executor.abort()
+        return ACK
+
+    def status_frame(self, ext: bytes) -> bytes:
+        """#1: the status Kurzsatz (K byte, and the MB4 message in the address extension)."""
+        m = self.model
+        k = tables.k_from_status(m.status(), False)
+        return codec.encode(codec.k_frame(k, m.address, m.image.take_message()))
+
+    def spindle_rpm(self, ext: bytes) -> bytes:
+        """#8: the spindle speed for G95."""
+        self.model.feed.spindle_rpm = int.from_bytes(ext[:2], "little") if len(ext) >= 2 else 0
+        self.model.indexer.replan()
+        return ACK
+
+    def external_override(self, ext: bytes) -> bytes:
+        """#9: an override 0..125 % from the host (the potentiometer is ignored from then on)."""
+        self.model.feed.ext_override = min(ext[0] if ext else 0, 125)
+        self.model.feed.o2_value = None
+        self.model.indexer.replan()
         return ACK
 
 
-# -- the command tables ---------------------------------------------------------------------------
-def _status(card: Any, ext: bytes) -> bytes:
-    k = tables.k_from_status(card.status(), False)
-    return codec.encode(codec.k_frame(k, card.address, card.image.take_message()))
-
-
-def _abort(card: Any, ext: bytes) -> bytes:
-    card.record_event("abort")
-    card.download = None
-    card.spindle_on = False
-    card.executor.abort()
-    return ACK
-
-
-def _spindle_rpm(card: Any, ext: bytes) -> bytes:
-    card.spindle_rpm = int.from_bytes(ext[:2], "little") if len(ext) >= 2 else 0
-    card.indexer.replan()
-    return ACK
-
-
-def _override(card: Any, ext: bytes) -> bytes:
-    card.ext_override = min(ext[0] if ext else 0, 125)
-    card.o2_value = None
-    card.indexer.replan()
-    return ACK
-
-
 #: Kurzsatz numbers (manual §2.3.2, spec §3.7).
-SHORT_COMMANDS: Table[Callable[[Any, bytes], bytes]] = Table(
+SHORT_COMMANDS: Table[Callable[[Gms96Face, bytes], bytes]] = Table(
     [
-        Command("0", _abort, "§2.3.2", "#0: abort; the queue is flushed, a download ends"),
-        Command("1", _status, "§2.3.2", "#1: status Kurzsatz (K byte, MB4 message)"),
-        Command("8", _spindle_rpm, "§2.3.2", "#8: spindle speed (G95)"),
-        Command("9", _override, "§2.3.2", "#9: override 0..125 %"),
+        Command("0", Gms96Face.abort, "§2.3.2", "#0: abort; the queue is flushed, a download ends"),
+        Command("1", Gms96Face.status_frame, "§2.3.2", "#1: status Kurzsatz (K byte, MB4 message)"),
+        Command("8", Gms96Face.spindle_rpm, "§2.3.2", "#8: spindle speed (G95)"),
+        Command("9", Gms96Face.external_override, "§2.3.2", "#9: override 0..125 %"),
     ]
 )
 
+LetterHandler = Callable[[Gms96Face, Letter], "bytes | None"]
 
-def _register(card: Any, p1: int, p2: int, p3: int) -> None:
-    if 0 <= p2 <= 19:
-        card.image.write_register(p2, p1)
-        card.save_static()
-
-
-def _override_o2(card: Any, p1: int, p2: int, p3: int) -> None:
-    card.o2_value = max(0, min(100, p2))
-    card.ext_override = None
-    card.indexer.replan()
-
-
-def _quit_message(card: Any, p1: int, p2: int, p3: int) -> None:
-    card.image.set_marker(3, 1, True)
-    card.changed()
-
-
-#: Letter commands carried out on receipt (``o2``, ``p11`` too), the rest queue (spec §4.2.1).
-IMMEDIATE_COMMANDS: Table[Callable[[Any, int, int, int], None]] = Table(
+#: Letters the face handles on receipt (spec §4.2.1): the immediate commands, ``o2``, ``p11``, the
+#: downloads; every other letter of :data:`QUEUED_COMMANDS` queues.
+ON_RECEIPT: Table[LetterHandler] = Table(
     [
-        Command("T", lambda card, p1, p2, p3: None, "§2.3.1 T", "read back position, I/O, markers, status, N"),
-        Command("c", _register, "§2.3.1 c", "write a data register"),
-        Command("N", lambda card, p1, p2, p3: card.set_n(p2, p1, p3), "§2.3.1 N", "write an N parameter"),
-        Command("o", _override_o2, "§2.3.1 o", "o2: override value (immediate form)"),
-        Command("p", lambda card, p1, p2, p3: card.write_marker_byte(p2, p3), "§2.3.1 p", "write a marker byte"),
-        Command("q", _quit_message, "§2.3.1 q", "acknowledge the message (M3.1)"),
+        Command("T", Gms96Face.read_back, "§2.3.1 T", "read back position, I/O, markers, status, N (the T rows)"),
+        Command("c", Gms96Face.register, "§2.3.1 c", "write a data register"),
+        Command("N", Gms96Face.n_parameter, "§2.3.1 N", "write an N parameter"),
+        Command("o", Gms96Face.override, "§2.3.1 o", "o2: override value (immediate form); o0/o1 queue"),
+        Command("p", Gms96Face.program, "§2.3.1 p", "the downloads and p11 on receipt; the rest queues"),
+        Command("q", Gms96Face.message_query, "§2.3.1 q", "acknowledge the message (M3.1)"),
+        Command("a", Gms96Face.download_line, "§2.3.1 p", "a: a PLC download line (ignored outside a download)"),
     ]
 )
 
-#: Letter commands the executor carries out in order (spec §4.2.1, §3.8).
-QUEUED_COMMANDS: Table[str] = Table(
+#: ``p`` functions carried out on receipt (spec §3.8.13), by ``P1;P2`` or ``P1``.
+P_ON_RECEIPT: Table[LetterHandler] = Table(
     [
-        Command("A", "move", "§2.3.1 A", "absolute move"),
-        Command("B", "setting", "§2.3.1 B", "acceleration"),
-        Command("d", "setting", "§2.3.1 d", "write a data word"),
-        Command("f", "setting", "§2.3.1 f", "feed rate"),
-        Command("G", "setting", "§2.3.1 G", "G functions (G53-G57 offsets, G90/91, G92, G94/95)"),
-        Command("H", "function", "§2.3.1 H", "H functions (in-position, torque abort, measurement ...)"),
-        Command("M", "setting", "§2.3.1 M", "maximum speed"),
-        Command("m", "function", "§2.3.1 m", "M functions (outputs, electronic gear m49 ...)"),
-        Command("O", "setting", "§2.3.1 O", "set the origin (actual position := value)"),
-        Command("o", "setting", "§2.3.1 o", "override on/off"),
-        Command("Q", "reference", "§2.3.1 Q", "reference run Q0/1/2/3/6/8/-1"),
-        Command("r", "setting", "§2.3.1 r", "defaults (r0) / erase the EEPROM (r1)"),
-        Command("S", "setting", "§2.3.1 S", "S function"),
-        Command("s", "function", "§2.3.1 s", "save to the EEPROM (s85;170)"),
-        Command("v", "move", "§2.3.1 v", "velocity mode (jog)"),
-        Command("w", "function", "§2.3.1 w", "wait"),
-        Command("+", "move", "§2.3.1 +", "relative move"),
-        Command("p", "function", "§2.3.1 p", "program and PLC control (p1, p3)"),
-        Command("a", "function", "§2.3.1 a", "a PLC download line"),
+        Command("1;100", Gms96Face.begin_plc_download, "§2.3.1 p", "begin a PLC download (flash erase: silent)"),
+        Command("1;101", Gms96Face.end_plc_download, "§2.3.1 p", "end of the PLC download"),
+        Command("3;100", Gms96Face.begin_cnc_download, "§2.3.1 p", "begin the download of CNC program P3 (silent)"),
+        Command("3;101", Gms96Face.end_cnc_download, "§2.3.1 p", "end of the CNC download (program 0: all anew)"),
+        Command("11", Gms96Face.marker_byte, "§2.3.1 p", "MB(P2) := P3 at once (recorded in a CNC download)"),
+    ]
+)
+
+#: ``T P1;P2;P3`` read-backs (manual §2.3.1 T, spec §3.8.19), by ``P1;P2`` or ``P1``.
+T_QUERIES: Table[Callable[[Gms96Face, int, int], bytes]] = Table(
+    [
+        Command("0", Gms96Face.t_setpoint, "§2.3.1 T", "T0: set-point position (work frame)"),
+        Command("1;0", Gms96Face.t_version, "§2.3.1 T", "T1;0: software version × 100"),
+        Command("1;1", Gms96Face.t_inputs, "§2.3.1 T", "T1;1;P3: inputs EB(P3), EB(P3+1)"),
+        Command("1;2", Gms96Face.t_outputs, "§2.3.1 T", "T1;2;P3: outputs AB(P3), AB(P3+1)"),
+        Command("1;3", Gms96Face.t_markers, "§2.3.1 T", "T1;3;P3: markers MB(P3), MB(P3+1)"),
+        Command("1;4", Gms96Face.t_following_error, "§2.3.1 T", "T1;4: following error"),
+        Command("1;5", Gms96Face.t_current, "§2.3.1 T", "T1;5: motor current (252 = Imax)"),
+        Command("1;6", Gms96Face.t_data, "§2.3.1 T", "T1;6;P3: 3 data bytes from P3"),
+        Command("3;0", Gms96Face.t_status, "§2.3.1 T", "T3;0: standard status"),
+        Command("3;4", Gms96Face.t_memory_status, "§2.3.1 T", "T3;4: memory status"),
+        Command("5", Gms96Face.t_n_parameter, "§2.3.1 T", "T5;n;P3: N parameter n (N8: P3 = 1 the upper limit)"),
     ]
 )

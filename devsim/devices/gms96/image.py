@@ -30,7 +30,8 @@ def bit_name(area: str, byte: int, bit: int) -> str:
 
 
 class ProcessImage:
-    """Markers MB0..MB255, data bytes 0..255, outputs AB0..AB2 and the MB4 message FIFO.
+    """Markers MB0..MB255, data bytes 0..255, outputs AB0..AB2 and the MB4 message FIFO (manual
+    §2.4.1, §2.4.2).
 
     Inputs live in the device's signal bank (``E0.0`` …) so the control API can flip them; the
     status-derived marker bits of MB0/MB1 are overlaid by the device when it reads them.
@@ -41,6 +42,13 @@ class ProcessImage:
         self.data = bytearray(256)
         self.outputs = bytearray(3)  # AB0, AB1, AB2 (analog out, 0..255)
         self.pending_messages: deque[int] = deque()
+
+    def clear(self) -> None:
+        """Power-on: everything 0, no buffered message (the static data is restored after)."""
+        self.markers[:] = bytes(len(self.markers))
+        self.data[:] = bytes(len(self.data))
+        self.outputs[:] = bytes(len(self.outputs))
+        self.pending_messages.clear()
 
     # -- markers ------------------------------------------------------------------------------
     def marker(self, byte: int, bit: int) -> bool:

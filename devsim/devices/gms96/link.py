@@ -22,26 +22,25 @@ timeout.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, Protocol
+from typing import Protocol
 
 from devsim.core.clock import Clock, Timer
+from devsim.core.settings import Values
 from devsim.devices.gms96 import codec
 
 
 class LinkCard(Protocol):
-    """What the link needs of its card (the GMS96 model)."""
-
-    clock: Clock
-    cfg: Any
-    dil: Any
-    address: int
-    e_version: bool
-    link_errors: dict[str, int]
+    """What the link asks of its card (manual §2.2, §2.3): its address and protocol version (DIL switch, read at
+    power-on), whether it listens, and an event for the log."""
 
     @property
+    def address(self) -> int: ...
+    @property
+    def e_version(self) -> bool: ...
+    @property
     def silent(self) -> bool: ...
-
     def record_event(self, name: str) -> None: ...
+
 
 __all__ = ["Link", "NO_REPLY"]
 
@@ -50,25 +49,33 @@ IDLE_BITS = 33  #: FT1.2 R4 minimum line idle after an error, in bit times
 
 
 class Link:
-    """Decoder, address filter, duplicate suppression, reply timing."""
+    """Decoder, address filter, duplicate suppression, reply timing (manual §2.3; spec §3.2-§3.10)."""
 
     def __init__(
         self,
-        dev: LinkCard,
+        *,
+        card: LinkCard,
+        clock: Clock,
+        options: Values,
+        baud: Callable[[], int],
+        errors: dict[str, int],
         short_command: Callable[[int, bytes], bytes | None],
         letter_command: Callable[..., bytes | None],
         write: Callable[[bytes], None],
     ) -> None:
-        self.dev = dev
+        self.card = card
+        self.clock = clock
+        self.options = options  # the configuration's ``link:``
+        self.baud = baud  # the DIL switch's baud rate
         self.short_command = short_command
         self.letter_command = letter_command
         self.write = write
         self.decoder = codec.FrameDecoder(
-            short_extension=codec.short_extension_device, char_timeout=dev.cfg.link.char_timeout
+            short_extension=codec.short_extension_device, char_timeout=options.char_timeout
         )
         self.last_fcb: int | None = None
         self.last_reply = NO_REPLY
-        self.errors = dev.link_errors
+        self.errors = errors
         self.frames = 0
         self._expire: Timer | None = None
         self.error_hold = False  # R4: an error was detected, waiting for line idle
@@ -77,7 +84,7 @@ class Link:
     @property
     def idle_after_error(self) -> float:
         """R4 minimum line idle in seconds: 33 bit times at the DIL baud rate."""
-        return IDLE_BITS / self.dev.dil.baud
+        return IDLE_BITS / self.baud()
 
     def reset(self) -> None:
         self.decoder.reset()
@@ -87,7 +94,7 @@ class Link:
 
     @property
     def silent(self) -> bool:
-        return self.dev.silent
+        return self.card.silent
 
     def close(self) -> None:
         if self._expire is not None:
@@ -96,7 +103,7 @@ class Link:
 
     # -- input ----------------------------------------------------------------------------------
     def feed(self, data: bytes) -> None:
-        now = self.dev.clock.now()
+        now = self.clock.now()
         if self.silent:
             self.decoder.reset()  # the frame is lost
             return
@@ -121,17 +128,17 @@ class Link:
             self._expire = None
         if self.decoder.pending:
             timeout = self.decoder.char_timeout
-            self._expire = self.dev.clock.call_later(timeout * 1.0001, self._on_expire)
+            self._expire = self.clock.call_later(timeout * 1.0001, self._on_expire)
 
     def _on_expire(self) -> None:
         self._expire = None
-        for item in self.decoder.expire(self.dev.clock.now()):
+        for item in self.decoder.expire(self.clock.now()):
             self._handle(item)
 
     def _handle(self, item: codec.Frame | codec.FrameError) -> None:
         if isinstance(item, codec.FrameError):
             self._count(item.reason)
-            if item.reason != "timeout" and self.dev.cfg.link.error_line_idle:
+            if item.reason != "timeout" and self.options.error_line_idle:
                 self.error_hold = True
             return
         if self.silent:
@@ -146,9 +153,9 @@ class Link:
 
     def _mine(self, address: int) -> bool | None:
         """True: addressed to this card; None: broadcast; False: someone else's."""
-        if address == self.dev.address:
+        if address == self.card.address:
             return True
-        bc = self.dev.cfg.link.broadcast_address
+        bc = self.options.broadcast_address
         return None if bc is not None and address == bc else False
 
     def _short(self, frame: codec.ShortFrame) -> None:
@@ -156,7 +163,7 @@ class Link:
             return
         self.frames += 1
         number = codec.short_command_number(frame.control)
-        if number == 0 and self.dev.e_version:
+        if number == 0 and self.card.e_version:
             self.last_fcb = None
         reply = self.short_command(number, frame.extension)
         self.send(reply)
@@ -172,13 +179,13 @@ class Link:
         self.frames += 1
         control = frame.control
         fcv, fcb = bool(control & codec.FCV), 1 if control & codec.FCB else 0
-        check = self.dev.e_version and "fcb" in self.dev.cfg.link.e_version_features and mine
+        check = self.card.e_version and "fcb" in self.options.e_version_features and mine
         if check:
             if not fcv and (control & 0x0F) == 0:
                 self.last_fcb = None
             elif fcv:
                 if self.last_fcb is not None and fcb == self.last_fcb:
-                    self.dev.record_event("duplicate")
+                    self.card.record_event("duplicate")
                     self.send(self.last_reply)
                     return
                 self.last_fcb = fcb
@@ -194,7 +201,7 @@ class Link:
 
     def _deferred_reply(self, reply: bytes) -> None:
         """A queued command's E5h released when a queue slot frees (on_queue_full: defer)."""
-        if self.dev.e_version:
+        if self.card.e_version:
             self.last_reply = reply
         self.send(reply)
 
@@ -202,9 +209,9 @@ class Link:
     def send(self, data: bytes | None) -> None:
         if not data:
             return
-        delay = self.dev.cfg.link.response_delay
+        delay = self.options.response_delay
         if delay > 0:
-            self.dev.clock.call_later(delay, lambda: self.write(data))
+            self.clock.call_later(delay, lambda: self.write(data))
         else:
             self.write(data)
 

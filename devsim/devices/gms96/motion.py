@@ -16,40 +16,31 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from devsim.core.axis import Axis, IndexRule, RampProfile, RangeRule, RegionSwitch, Rule, Segment, Watch
-from devsim.core.clock import Timer
+from devsim.core.clock import Clock, Timer
+from devsim.core.parameters import Param
+from devsim.core.settings import Values
+from devsim.core.signals import SignalBank
+from devsim.devices.gms96.feed import Feed
+from devsim.devices.gms96.image import ProcessImage
+from devsim.devices.gms96.params import NParameters
+from devsim.devices.gms96.stage import PowerStage
 
 
-class IndexerCard(Protocol):
-    """What this part needs of its card (the GMS96 model): exactly these names."""
+class IndexerEvents(Protocol):
+    """What the indexer tells its card (spec §5.5, §5.7): the plan changed (H7 and in-position re-arm), the
+    following error tripped, an event for the log."""
 
-    B: Any
-    M: Any
-    S: Any
-    arm_in_position: Any
-    arm_torque_abort: Any
-    cfg: Any
-    clock: Any
-    controller: Any
-    enable_blocked: Any
-    ext_override: Any
-    f: Any
-    f_frac: Any
-    feed_mode: Any
-    following_error_fault: Any
-    n: Any
-    nv_M: Any
-    o2_value: Any
-    override_on: Any
-    record_event: Any
-    signals: Any
-    spindle_rpm: Any
-    stepper: Any
-    stop_marker: Any
-    v_factor: Any
+    def plan_changed(self) -> None: ...
+    def following_error_fault(self, reason: str) -> None: ...
+    def record_event(self, name: str) -> None: ...
+
 
 __all__ = ["ActualSwitch", "ActualWatch", "Indexer"]
 
 _SINE = RampProfile(shape="sine")
+
+#: The N parameters whose write re-arms the position loop's events (N10, N20, N27, N28).
+LOOP_PARAMETERS = frozenset({"position_gain", "following_error_limit", "in_position_window", "in_position_time_ms"})
 
 
 def _dwell(axis: Axis, seconds: float, on_done: Callable[[], None]) -> None:
@@ -59,11 +50,33 @@ def _dwell(axis: Axis, seconds: float, on_done: Callable[[], None]) -> None:
 
 
 class Indexer:
-    """Set-point generation and the position-loop model of one card."""
+    """Set-point generation and the position-loop model of one card (manual §1.3, §2.7; spec §5.1-§5.8)."""
 
-    def __init__(self, dev: IndexerCard, axis: Axis) -> None:
-        self.dev = dev
+    def __init__(
+        self,
+        *,
+        clock: Clock,
+        axis: Axis,
+        feed: Feed,
+        params: NParameters,
+        stage: PowerStage,
+        image: ProcessImage,
+        signals: SignalBank,
+        geometry: Values,
+        stepper: bool,
+        card: IndexerEvents,
+    ) -> None:
+        self.clock = clock
         self.axis = axis
+        self.feed = feed
+        self.params = params
+        self.stage = stage
+        self.image = image
+        self.signals = signals
+        self.geometry = geometry  # the configured axis: kv_per_n10, brake_stop_ms, end_stops
+        self.stepper = stepper
+        self.card = card
+        params.on_change(self._parameter_written)
         self.target: float | None = None  # physical end of the running plan (chain)
         self.kind = "work"  # which speed applies: work | search | spindle | rapid_nv
         self.jog_dir = 0  # endless run (reference search, spindle) instead of a target
@@ -86,55 +99,43 @@ class Indexer:
         # following-error watch, i.e. on every re-plan, arrival, halt, power off, blockage, N10
         self._actual_watches: list[ActualWatch] = []
 
+    def _parameter_written(self, row: Param, value: int) -> None:
+        """N10 (Kv), N20 (the limit), N27/N28 (in position): the loop's events are solved anew."""
+        if row.attr in LOOP_PARAMETERS:
+            self.arm_following_error()
+
     # -- speeds ---------------------------------------------------------------------------------
-    def v_factor(self) -> int:
-        return self.dev.v_factor()
-
     def override_pct(self) -> float:
-        d = self.dev
-        if not d.override_on:
-            return 100.0
-        if d.o2_value is not None:
-            return float(d.o2_value)
-        if d.ext_override is not None:
-            return float(d.ext_override)
-        return float(d.signals.get("override_pot"))
+        return self.feed.override_pct(float(self.signals.get("override_pot")))
 
-    def work_speed(self, feed: tuple[int, int] | None = None) -> float:
-        """G94: f (≤ M); G95: (f + frac/256) inc/rev × rpm / 60 (spec §5.2).  ``feed``: an
-        ``(f, frac)`` to use instead of the current one."""
-        d = self.dev
-        f, frac = feed if feed is not None else (d.f, d.f_frac)
-        if d.feed_mode == 95:
-            v = (f + frac / 256.0) * d.spindle_rpm / 60.0
-        else:
-            v = float(f)
-        return min(v, float(d.M))
+    def enable_blocked(self) -> bool:
+        """N51 = 1 and E0.0 at 0 V: the indexer is not enabled (spec §4.2.4)."""
+        return self.params.enable_input == 1 and not self.signals.get("E0.0")
 
     def speed(self, feed: tuple[int, int] | None = None) -> float:
         """The commanded speed now for the running plan (0: hold); ``feed`` as for
-        :meth:`work_speed` (default: the next move's feed once braking for its junction)."""
-        d = self.dev
+        :meth:`Feed.work_speed` (default: the next move's feed once braking for its junction)."""
+        fd = self.feed
         if feed is None and self._junction_braking:
             feed = self.junction_feed
-        if d.stop_marker() or (self.kind != "spindle" and d.enable_blocked()):
-            return 0.0
+        if self.image.marker(0, 0) or (self.kind != "spindle" and self.enable_blocked()):
+            return 0.0  # M0.0 STOP, or no enable
         if self.kind == "search":
-            v = float(d.S)
+            v = float(fd.S)
         elif self.kind == "spindle":
-            v = min(self.spindle_speed, float(d.M)) * self.override_pct() / 100.0
+            v = min(self.spindle_speed, float(fd.M)) * self.override_pct() / 100.0
         elif self.kind == "rapid_nv":
-            v = float(d.nv_M()) * self.override_pct() / 100.0
+            v = float(fd.eeprom_M) * self.override_pct() / 100.0
         else:
-            v = min(self.work_speed(feed) * self.override_pct() / 100.0, float(d.M))
-        vf = self.v_factor()
+            v = min(fd.work_speed(feed) * self.override_pct() / 100.0, float(fd.M))
+        vf = fd.v_factor()
         return vf * math.floor(v / vf + 1e-9) if self.kind in ("work", "rapid_nv") else v
 
     def accel(self) -> tuple[float, RampProfile | None]:
         """(axis acceleration, profile): sin² with peak a = 1000·B needs the axis' raised cosine
         with average 2a/π (spec §5.3: T = π/2·Δv/a)."""
-        a = 1000.0 * self.dev.B
-        if self.dev.n(24) == 1:
+        a = 1000.0 * self.feed.B
+        if self.params.ramp_type == 1:
             return a * 2.0 / math.pi, _SINE
         return a, None
 
@@ -182,7 +183,7 @@ class Indexer:
                 self.axis.jog(self.jog_dir, v, acc, profile=profile)
             if direction:
                 self.last_dir = direction
-        self.dev.record_event("replan")
+        self.card.record_event("replan")
         self.arm_following_error()
         self._arm_junction()
 
@@ -240,17 +241,17 @@ class Indexer:
         return (d > 0) - (d < 0)
 
     def _needs_backlash(self, direction: int) -> bool:
-        return self.dev.n(41) > 0 and direction != 0 and self.last_dir != 0 and direction != self.last_dir
+        return self.params.backlash > 0 and direction != 0 and self.last_dir != 0 and direction != self.last_dir
 
     def backlash_time(self) -> float:
         """N41 increments at N42 inc/ms: N41/N42 ms."""
-        return self.dev.n(41) / (max(self.dev.n(42), 1) * 1000.0)
+        return self.params.backlash / (max(self.params.backlash_speed, 1) * 1000.0)
 
     def _backlash_dwell(self) -> None:
         """The motor takes up the slack while the set-point (counter, ``T0``, the load) stands:
         for the axis a standstill that still counts as motion."""
         self.comp_phase = "dwell"
-        self.dev.record_event("backlash")
+        self.card.record_event("backlash")
         _dwell(self.axis, self.backlash_time(), self._backlash_done)
 
     def _backlash_done(self) -> None:
@@ -280,7 +281,7 @@ class Indexer:
         if self.axis.moving:
             self.axis.stop(acc, on_stopped, profile=profile, speed=max(abs(self.axis.velocity()), 1.0))
         elif on_stopped is not None:
-            self.dev.clock.call_later(0.0, on_stopped)
+            self.clock.call_later(0.0, on_stopped)
         self.arm_following_error()
 
     def power_off(self, brake: bool) -> None:
@@ -290,7 +291,7 @@ class Indexer:
         self.on_arrive = None
         self._cancel_backlash()
         v = abs(self.axis.velocity())
-        ms = self.dev.cfg.axis.brake_stop_ms
+        ms = self.geometry.brake_stop_ms
         if self.blocked_at is not None or v == 0.0 or ms <= 0 or not brake or self._past_end_stop():
             actual = self.actual()
             self.axis.quick_stop()
@@ -302,14 +303,14 @@ class Indexer:
 
     # -- position loop (spec §5.7) --------------------------------------------------------------
     def kv(self) -> float:
-        return max(self.dev.cfg.axis.kv_per_n10 * self.dev.n(10), 1e-6)
+        return max(self.geometry.kv_per_n10 * self.params.position_gain, 1e-6)
 
     def following_error(self) -> float:
-        if not self.dev.controller:
+        if not self.stage.controller:
             return 0.0
         if self.blocked_at is not None:
             return self.axis.position() - self.blocked_at
-        if self.dev.stepper:
+        if self.stepper:
             return 0.0
         x = self.axis.position()
         return x - self._end_stop(x - self.axis.velocity() / self.kv())
@@ -317,15 +318,15 @@ class Indexer:
     def actual(self) -> float:
         if self.blocked_at is not None:
             return self.blocked_at
-        if not self.dev.controller:
+        if not self.stage.controller:
             return self._end_stop(self.axis.position())
         return self.axis.position() - self.following_error()
 
     def _end_stop(self, x: float) -> float:
         """The mechanics end where the end stops are (spec §5.11 b); a stepper card does not see
         it (no feedback)."""
-        stops = self.dev.cfg.axis.end_stops
-        if stops is None or self.dev.stepper:
+        stops = self.geometry.end_stops
+        if stops is None or self.stepper:
             return x
         return min(max(x, stops[0]), stops[1])
 
@@ -335,54 +336,18 @@ class Indexer:
 
     def at_end_stop(self) -> bool:
         """The axis presses against an end stop: the set-point is past it (with the lag)."""
-        if self.blocked_at is not None or not self.dev.controller:
+        if self.blocked_at is not None or not self.stage.controller:
             return False
-        x = self.axis.position() - (0.0 if self.dev.stepper else self.axis.velocity() / self.kv())
+        x = self.axis.position() - (0.0 if self.stepper else self.axis.velocity() / self.kv())
         return self._end_stop(x) != x
 
     def end_stop_contact(self) -> float | None:
         """The first instant >= now at which the actual position (set-point - v/Kv) reaches an end
-        stop under the current plan (None: not in this plan).  Solved per segment: sign changes
-        on a fine subdivision, then bisection."""
-        stops = self.dev.cfg.axis.end_stops
-        if stops is None or self.dev.stepper or not self.dev.controller or self.blocked_at is not None:
+        stop under the current plan (None: not in this plan)."""
+        stops = self.geometry.end_stops
+        if stops is None or self.stepper or not self.stage.controller or self.blocked_at is not None:
             return None
-        lo, hi = stops
-        kv = self.kv()
-        now = self.dev.clock.now()
-
-        def outside(seg: Any, t: float) -> bool:
-            x = seg.position(t) - seg.velocity(t) / kv
-            return x > hi or x < lo
-
-        for seg in self.axis.segments():
-            if seg.t1 <= now:
-                continue
-            t0 = max(seg.t0, now)
-            if outside(seg, t0):
-                return t0
-            if seg.t1 == math.inf:  # a cruise: the actual moves linearly
-                v = seg.velocity(t0)
-                edge = hi if v > 0 else lo
-                if v == 0.0:
-                    return None
-                t = t0 + (edge - (seg.position(t0) - v / kv)) / v
-                return t if t >= t0 else None
-            steps = 64
-            prev = t0
-            for k in range(1, steps + 1):
-                t = t0 + (seg.t1 - t0) * k / steps
-                if outside(seg, t):
-                    a, b = prev, t
-                    for _ in range(60):
-                        mid = 0.5 * (a + b)
-                        if outside(seg, mid):
-                            b = mid
-                        else:
-                            a = mid
-                    return b
-                prev = t
-        return None
+        return _end_stop_contact(self.axis.segments(), self.clock.now(), stops, self.kv())
 
     def block(self, active: bool) -> None:
         if active and self.blocked_at is None:
@@ -395,8 +360,7 @@ class Indexer:
         """Schedule the following-error trip as an event: a crossing of the set-point past the
         blockage (or an end stop) ± N20, or the instant the planned speed exceeds N20·Kv.  The
         plan-dependent H7 and in-position events are re-armed with it."""
-        self.dev.arm_torque_abort()
-        self.dev.arm_in_position()
+        self.card.plan_changed()
         self.arm_actual_watches()
         if self._fe_timer is not None:
             self._fe_timer.cancel()
@@ -404,32 +368,29 @@ class Indexer:
         for w in self._fe_watches:
             w.cancel()
         self._fe_watches = []
-        d = self.dev
-        if not d.controller or d.stepper:
+        if not self.stage.controller or self.stepper:
             return
-        limit = float(d.n(20))
+        limit = float(self.params.following_error_limit)
         if self.blocked_at is not None:
             hold = self.blocked_at
             if abs(self.axis.position() - hold) > limit:
-                d.clock.call_later(0.0, lambda: d.following_error_fault("blocked"))
+                self.clock.call_later(0.0, lambda: self.card.following_error_fault("blocked"))
                 return
             self._fe_watches.append(self.axis.watch(hold + limit + 1e-6, lambda s: s > 0 and self._trip()))
             self._fe_watches.append(self.axis.watch(hold - limit, lambda s: s < 0 and self._trip()))
             return
-        stops = d.cfg.axis.end_stops
+        stops = self.geometry.end_stops
         if stops is not None:
             lo, hi = stops
             self._fe_watches.append(self.axis.watch(hi + limit + 1e-6, lambda s: s > 0 and self._trip()))
             self._fe_watches.append(self.axis.watch(lo - limit, lambda s: s < 0 and self._trip()))
-        when = self._speed_exceeds(limit * self.kv())
+        when = _speed_exceeds(self.axis.segments(), self.clock.now(), limit * self.kv())
         if when is not None:
-            self._fe_timer = d.clock.call_at(when, self._trip)
+            self._fe_timer = self.clock.call_at(when, self._trip)
 
     # -- the actual position as a function of time (switches, index marks) -----------------------
     def actual_now(self) -> float:
-        """:meth:`actual`, usable while the device is still being built."""
-        if not hasattr(self.dev, "controller"):
-            return self._end_stop(self.axis.position())
+        """:meth:`actual` (kept for the watches' first state)."""
         return self.actual()
 
     def actual_function(self) -> Callable[[Segment | None, float], float] | None:
@@ -438,9 +399,9 @@ class Indexer:
         if self.blocked_at is not None:
             return None
         rest = self.axis.final_position()
-        if not getattr(self.dev, "controller", False):
+        if not self.stage.controller:
             return lambda seg, t: self._end_stop(seg.position(t) if seg is not None else rest)
-        if self.dev.stepper:
+        if self.stepper:
             return lambda seg, t: seg.position(t) if seg is not None else rest
         kv = self.kv()
         return lambda seg, t: self._end_stop(seg.position(t) - seg.velocity(t) / kv if seg is not None else rest)
@@ -458,28 +419,14 @@ class Indexer:
         for w in list(self._actual_watches):
             w.arm()
 
-    def _trip(self) -> None:
-        self.dev.following_error_fault("speed" if self.blocked_at is None else "blocked")
+    def add_watch(self, watch: ActualWatch) -> None:
+        self._actual_watches.append(watch)
 
-    def _speed_exceeds(self, vmax: float) -> float | None:
-        now = self.dev.clock.now()
-        for seg in self.axis.segments():
-            if seg.t1 <= now:
-                continue
-            t0 = max(seg.t0, now)
-            t1 = seg.t1 if seg.t1 < math.inf else t0 + 1.0
-            if abs(seg.velocity(t0)) > vmax:
-                return t0
-            if abs(seg.velocity(t1)) > vmax:
-                lo, hi = t0, t1
-                for _ in range(60):
-                    mid = 0.5 * (lo + hi)
-                    if abs(seg.velocity(mid)) > vmax:
-                        hi = mid
-                    else:
-                        lo = mid
-                return hi
-        return None
+    def remove_watch(self, watch: ActualWatch) -> None:
+        self._actual_watches.remove(watch)
+
+    def _trip(self) -> None:
+        self.card.following_error_fault("speed" if self.blocked_at is None else "blocked")
 
     def state(self) -> dict[str, Any]:
         return {
@@ -494,7 +441,7 @@ class Indexer:
 
 
 class ActualWatch:
-    """A crossing watch on the actual position (set-point - v/Kv, held by a blockage or an end
+    """A crossing watch on the actual position (spec §5.6, §5.11: set-point - v/Kv, held by a blockage or an end
     stop), solved per planned segment like :meth:`Indexer.end_stop_contact`: closed form while
     cruising, a fine subdivision plus bisection on ramps (linear and sin²).
 
@@ -516,7 +463,7 @@ class ActualWatch:
         self._timer: Timer | None = None
         self._gen = -1
         self.cancelled = False
-        indexer._actual_watches.append(self)
+        indexer.add_watch(self)
         self.arm()
 
     def cancel(self) -> None:
@@ -524,7 +471,7 @@ class ActualWatch:
             return
         self.cancelled = True
         self._unschedule()
-        self.indexer._actual_watches.remove(self)
+        self.indexer.remove_watch(self)
 
     def _unschedule(self) -> None:
         if self._timer is not None:
@@ -546,7 +493,7 @@ class ActualWatch:
             return
         ix = self.indexer
         axis = ix.axis
-        clock = ix.dev.clock
+        clock = ix.clock
         now = clock.now()
         self._gen = axis.plan_generation
         f = ix.actual_function()
@@ -625,15 +572,75 @@ class ActualWatch:
             self.arm()
             self.callback(direction)
 
-        self._timer = self.indexer.dev.clock.call_at(when, fire)
+        self._timer = self.indexer.clock.call_at(when, fire)
 
 
 class ActualSwitch(RegionSwitch):
     """:class:`~devsim.core.axis.RegionSwitch` on the actual position: active while
-    low <= actual <= high; ``on_change(active)`` at the solved instant."""
+    low <= actual <= high (spec §5.11); ``on_change(active)`` at the solved instant."""
 
     def __init__(self, indexer: Indexer, low: float, high: float, on_change: Callable[[bool], None] | None = None) -> None:
         super().__init__(
             indexer.axis, low, high, on_change,
             make_watch=lambda rule, callback: ActualWatch(indexer, rule, callback, jump_fires=True),
         )
+
+
+def _end_stop_contact(segments: list[Segment], now: float, stops: tuple[float, float], kv: float) -> float | None:
+    """The first instant >= ``now`` at which set-point - v/Kv leaves ``stops`` under the plan
+    ``segments``: closed form while cruising, sign changes on a fine subdivision then bisection."""
+    lo, hi = stops
+
+    def outside(seg: Segment, t: float) -> bool:
+        x = seg.position(t) - seg.velocity(t) / kv
+        return x > hi or x < lo
+
+    for seg in segments:
+        if seg.t1 <= now:
+            continue
+        t0 = max(seg.t0, now)
+        if outside(seg, t0):
+            return t0
+        if seg.t1 == math.inf:  # a cruise: the actual moves linearly
+            v = seg.velocity(t0)
+            edge = hi if v > 0 else lo
+            if v == 0.0:
+                return None
+            t = t0 + (edge - (seg.position(t0) - v / kv)) / v
+            return t if t >= t0 else None
+        steps = 64
+        prev = t0
+        for k in range(1, steps + 1):
+            t = t0 + (seg.t1 - t0) * k / steps
+            if outside(seg, t):
+                a, b = prev, t
+                for _ in range(60):
+                    mid = 0.5 * (a + b)
+                    if outside(seg, mid):
+                        b = mid
+                    else:
+                        a = mid
+                return b
+            prev = t
+    return None
+
+
+def _speed_exceeds(segments: list[Segment], now: float, vmax: float) -> float | None:
+    """The first instant >= ``now`` at which the planned speed exceeds ``vmax`` (bisection)."""
+    for seg in segments:
+        if seg.t1 <= now:
+            continue
+        t0 = max(seg.t0, now)
+        t1 = seg.t1 if seg.t1 < math.inf else t0 + 1.0
+        if abs(seg.velocity(t0)) > vmax:
+            return t0
+        if abs(seg.velocity(t1)) > vmax:
+            lo, hi = t0, t1
+            for _ in range(60):
+                mid = 0.5 * (lo + hi)
+                if abs(seg.velocity(mid)) > vmax:
+                    hi = mid
+                else:
+                    lo = mid
+            return hi
+    return None

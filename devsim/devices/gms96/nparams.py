@@ -1,40 +1,59 @@
-"""GMS96 N parameters (machine data), one row each (spec §4.6, manual §2.3.1 N)."""
+"""GMS96 N parameters (machine data) as kit rows, one :class:`~devsim.core.parameters.Param` each
+(spec §4.6, manual §2.3.1 N).
+
+A row's ``name`` is the manual's (German) designation, ``doc`` its English name; ``extra`` holds
+``needs_restart`` (the new value only takes effect at the next card start: saved with ``s85;170``
+and the card restarted -- only N21 per the manual) and ``note`` (what the manual and the spec
+say beyond the name).  ``minimum``/``maximum`` ``None``: the manual gives no range, the 24-bit
+field range applies (:func:`~devsim.devices.gms96.tables.clamp_n`).  Every N parameter is saved
+by ``s85;170`` ("Alle Eingaben des N-Befehls" [M §2.3.1 s]).  ``attr`` names the accessor the
+model reads the value by (:class:`~devsim.devices.gms96.params.NParameters`).
+"""
 
 from __future__ import annotations
 
-from devsim.core.record import record
+from devsim.core.parameters import Param, ParameterTable
 
-__all__ = ["INT24_MAX", "INT24_MIN", "N_DUAL_VALUE", "N_PARAMETERS", "N_SIMULATOR_DEFAULTS", "N_STORED_ONLY", "NParam"]
+__all__ = [
+    "INT24_MAX",
+    "INT24_MIN",
+    "N_DUAL_VALUE",
+    "N_PARAMETERS",
+    "N_SIMULATOR_DEFAULTS",
+    "N_STORED_ONLY",
+    "N_TABLE",
+]
 
 #: Full 24-bit two's complement range of a parameter field P1..P3 [M §2.3].
 INT24_MIN, INT24_MAX = -0x800000, 0x7FFFFF
 
-# ---------------------------------------------------------------------------------------------
-# N parameters (spec §4.6, manual §2.3.1 N)
-# ---------------------------------------------------------------------------------------------
+#: N parameters kept and answered but without an effect in the simulator (the generated
+#: reference marks them "stored"): found by searching the card's code for each index.  The
+#: controller gains and sample time act on a loop the simulator replaces by the v/Kv lag model
+#: (N10); resolver, measurement and reserved entries have no effect a host could see; N32
+#: (position monitoring on/off) and N52/N53 (I/O card counts) have one the simulator lacks.
+N_STORED_ONLY: frozenset[int] = frozenset({11, 12, 13, 16, 25, 26, 32, 34, 35, 43, 44, 45, 52, 53, 54, 55, 56})
 
-
-@record
-class NParam:
-    """One N parameter (machine datum), set with ``N value;index``, read with ``T5;index``.
-
-    ``minimum``/``maximum`` are the static range (``None`` = no range given: the 24-bit field
-    range applies, see :func:`clamp_n`).  ``saved``: stored in EEPROM by ``s85;170`` (true for
-    every N parameter: "Alle Eingaben des N-Befehls" [M §2.3.1 s]).  ``needs_restart``: the new
-    value only takes effect at the next card start, i.e. it must be saved with ``s85;170`` and
-    the card restarted (power cycle or emergency stop) -- only N21 per the manual.
-    """
-
-    index: int
-    name: str
-    name_en: str
-    default: int
-    minimum: int | None
-    maximum: int | None
-    unit: str
-    saved: bool
-    needs_restart: bool
-    doc: str
+#: The accessor names of the N parameters the model reads (``params.position_gain``).
+_ATTRS: dict[int, str] = {
+    10: "position_gain",
+    15: "i2t_level",
+    17: "motion_disabled",
+    19: "reference_type",
+    20: "following_error_limit",
+    21: "brake_output",
+    22: "motor_inverted",
+    23: "counter_weight",
+    24: "ramp_type",
+    27: "in_position_window",
+    28: "in_position_time_ms",
+    33: "drive_off_position",
+    39: "peak_current_pct",
+    41: "backlash",
+    42: "backlash_speed",
+    50: "binary_options",
+    51: "enable_input",
+}
 
 
 def _n(
@@ -48,11 +67,24 @@ def _n(
     doc: str = "",
     *,
     needs_restart: bool = False,
-) -> NParam:
-    return NParam(index, name, name_en, default, minimum, maximum, unit, True, needs_restart, doc)
+) -> Param:
+    return Param(
+        index,
+        name,
+        f"§2.3.1 N{index}",
+        name_en,
+        minimum=minimum,
+        maximum=maximum,
+        unit=unit,
+        default=default,
+        saved=True,
+        effect="stored" if index in N_STORED_ONLY else "simulated",
+        attr=_ATTRS.get(index, ""),
+        extra={"needs_restart": needs_restart, "note": doc},
+    )
 
 
-_N_LIST: tuple[NParam, ...] = (
+_ROWS: tuple[Param, ...] = (
     _n(
         8,
         "Grenzwert des Grundstellungsbereichs",
@@ -343,18 +375,15 @@ _N_LIST: tuple[NParam, ...] = (
     ),
 )
 
-#: Every N index of spec §4.6 / manual §2.3.1 N. Indices not in this dict are undefined (ignored [R]).
-N_PARAMETERS: dict[int, NParam] = {p.index: p for p in _N_LIST}
+
+#: The N parameters (``N15``, ``n15`` and ``15`` name the same row).
+N_TABLE = ParameterTable(_ROWS, prefix="N", name="N parameter")
+
+#: Every N index of spec §4.6 / manual §2.3.1 N. Indices not in it are undefined (ignored [R]).
+N_PARAMETERS: dict[int, Param] = {int(key): row for key, row in N_TABLE.rows.items()}
 
 #: N indices whose default is a simulator choice ([R]); the manual gives no "Grundstellung".
 N_SIMULATOR_DEFAULTS: frozenset[int] = frozenset({8, 19, 22, 28, 32, 33, 39, 42, 43, 44, 45, 51, 54, 55, 56})
 
 #: N parameters holding two values selected by P3 (0 = lower, 1 = upper): only N8.
 N_DUAL_VALUE: frozenset[int] = frozenset({8})
-
-#: N parameters kept and answered but without an effect in the simulator (the generated
-#: reference marks them "stored"): found by searching the card's code for each index.  The
-#: controller gains and sample time act on a loop the simulator replaces by the v/Kv lag model
-#: (N10); resolver, measurement and reserved entries have no effect a host could see; N32
-#: (position monitoring on/off) and N52/N53 (I/O card counts) have one the simulator lacks.
-N_STORED_ONLY: frozenset[int] = frozenset({11, 12, 13, 16, 25, 26, 32, 34, 35, 43, 44, 45, 52, 53, 54, 55, 56})

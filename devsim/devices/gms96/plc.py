@@ -42,35 +42,29 @@ import importlib
 from collections.abc import Callable
 from typing import Any, Protocol
 
-from devsim.core.clock import Timer
-from devsim.devices.gms96.image import parse_bit
+from devsim.core.clock import Clock, Timer
+from devsim.core.kit import Command, Table
+from devsim.core.settings import Values
+from devsim.devices.gms96.counter import CounterInput
+from devsim.devices.gms96.flash import Flash
+from devsim.devices.gms96.image import ProcessImage, parse_bit
+from devsim.devices.gms96.io import Outputs
+from devsim.devices.gms96.motion import Indexer
+from devsim.devices.gms96.stage import PowerStage
 
 
 class PlcCard(Protocol):
-    """What this part needs of its card (the GMS96 model): exactly these names."""
+    """What the PLC asks of its card (manual §2.4.1): the markers as the firmware shows them (MB0/MB1/MB3 carry
+    its status bits), a marker write with its side effects (M0.1 aborts, M0.2 starts ...), and
+    that it tells the rest of the card."""
 
-    axis: Any
-    booting: Any
-    cfg: Any
-    changed: Any
-    clock: Any
-    counter: Any
-    dil: Any
-    hw: Any
-    image: Any
-    indexer: Any
-    input_byte: Any
-    marker_byte: Any
-    output_bit: Any
-    plc_frames: Any
-    plc_image: Any
-    powered: Any
-    record_event: Any
-    save_flash: Any
-    write_marker_bit: Any
-    write_marker_byte: Any
+    def marker_byte(self, byte: int) -> int: ...
+    def write_marker_byte(self, byte: int, value: int) -> None: ...
+    def changed(self) -> None: ...
+    def record_event(self, name: str) -> None: ...
 
-__all__ = ["M_FUNCTION_BITS", "Plc"]
+
+__all__ = ["FB254_FUNCTIONS", "M_FUNCTION_BITS", "Plc"]
 
 #: The handshake bits the CNC sets and the PLC resets (spec §3.8.9): M6.0..M10.7, M15.7, M18.7.
 M_FUNCTION_BITS: tuple[tuple[int, int], ...] = tuple((b, k) for b in range(6, 11) for k in range(8)) + (
@@ -98,11 +92,36 @@ def load_hook(spec: str) -> Hook:
 
 
 class Plc:
-    """The scripted PLC of one card: run state, download image, cycle and rules."""
+    """The scripted PLC of one card (manual §1.4, §2.4; spec §4.10): run state, download image, cycle and rules."""
 
-    def __init__(self, dev: PlcCard) -> None:
-        self.dev = dev
-        self.cfg = dev.cfg.plc
+    def __init__(
+        self,
+        *,
+        card: PlcCard,
+        clock: Clock,
+        options: Values,
+        ms_per_1000: int | None,
+        flash: Flash,
+        image: ProcessImage,
+        outputs: Outputs,
+        counter: CounterInput,
+        indexer: Indexer,
+        stage: PowerStage,
+        interpolation: Callable[[], bool],
+        powered: Callable[[], bool],
+    ) -> None:
+        self.card = card
+        self.clock = clock
+        self.cfg = options  # the configuration's ``plc:``
+        self.ms_per_1000 = ms_per_1000  # the variant's measured cycle time (manual §6)
+        self.flash = flash
+        self.image = image
+        self.outputs = outputs
+        self.counter = counter
+        self.indexer = indexer
+        self.stage = stage
+        self.interpolation = interpolation  # DIL 6: the PLC functionality is lost
+        self.powered = powered
         self.running = False
         self.storage_error = False
         self.cycles = 0
@@ -119,7 +138,7 @@ class Plc:
     def cycle_s(self) -> float:
         if self.cfg.cycle_ms is not None:
             return self.cfg.cycle_ms / 1000.0
-        per_1000 = self.dev.hw.plc_ms_per_1000 or 87
+        per_1000 = self.ms_per_1000 or 87
         return per_1000 * self.cfg.instructions / 1000.0 / 1000.0
 
     def scripted(self) -> bool:
@@ -137,26 +156,27 @@ class Plc:
     @property
     def loaded(self) -> bool:
         """A PLC program is in FLASH (downloaded, or the scenario's scripted program)."""
-        if self.dev.plc_image is not None:
+        if self.flash.plc_image is not None:
             return True
         return self.cfg.loaded if self.cfg.loaded is not None else self.scripted()
 
     @property
     def disabled(self) -> bool:
         """Behind a GMS-I (DIL 6) the PLC functionality is lost (spec §4.11.6)."""
-        return self.dev.dil.interpolation
+        return self.interpolation()
 
     # -- run state ------------------------------------------------------------------------------
-    def power_on(self) -> None:
-        """Power-on / reset: a program in FLASH starts by itself (manual §2.4)."""
+    def power_on(self, boot_time: float = 0.0) -> None:
+        """Power-on / reset: a program in FLASH starts by itself (manual §2.4), after the card's
+        ``boot_time``."""
         self._cancel()
         self.running = False
         self.storage_error = False
         self._reset_rule_state()
         if self.loaded and not self.disabled:
             self.running = True
-            first = (self.dev.cfg.boot_time if self.dev.booting else 0.0) + self.cycle_s
-            self._timer = self.dev.clock.call_later(first, self._cycle)
+            first = boot_time + self.cycle_s
+            self._timer = self.clock.call_later(first, self._cycle)
 
     def power_off(self) -> None:
         self._cancel()
@@ -169,7 +189,7 @@ class Plc:
         self.running = True
         self.fault = None
         self._reset_rule_state()
-        self.dev.record_event("plc_start")
+        self.card.record_event("plc_start")
         self._schedule()
 
     def stop(self) -> None:
@@ -178,7 +198,7 @@ class Plc:
             return
         self._cancel()
         self.running = False
-        self.dev.record_event("plc_stop")
+        self.card.record_event("plc_stop")
 
     def _cancel(self) -> None:
         if self._timer is not None:
@@ -187,18 +207,18 @@ class Plc:
 
     def _schedule(self) -> None:
         self._cancel()
-        self._timer = self.dev.clock.call_later(self.cycle_s, self._cycle)
+        self._timer = self.clock.call_later(self.cycle_s, self._cycle)
 
     def _cycle(self) -> None:
         self._timer = None
-        if not self.running or not self.dev.powered:
+        if not self.running or not self.powered():
             return
         try:
             self.run_cycle()
         except Exception as exc:  # a hook (trusted Python from a config file) failed
             self.running = False
             self.fault = f"{type(exc).__name__}: {exc}"
-            self.dev.record_event("plc_fault")
+            self.card.record_event("plc_fault")
             return
         if self.running:
             self._schedule()
@@ -207,9 +227,7 @@ class Plc:
     def begin_download(self) -> None:
         """``p1;100``: the flash sector is erased: the program is gone, the PLC stops."""
         self.stop()
-        self.dev.plc_image = None
-        self.dev.plc_frames = []
-        self.dev.save_flash()
+        self.flash.erase_plc()
 
     def end_download(self, frames: list[bytes]) -> None:
         """``p1;101``: store the ``a`` frames' raw data in order as the PLC program image.
@@ -220,14 +238,11 @@ class Plc:
         size = sum(len(f) for f in frames)
         if size > self.cfg.flash_bytes:
             self.storage_error = True
-            self.dev.record_event("plc_storage_error")
+            self.card.record_event("plc_storage_error")
             return
         self.storage_error = False
-        if frames:
-            self.dev.plc_image = b"".join(frames).hex()
-            self.dev.plc_frames = [len(f) for f in frames]
-        self.dev.save_flash()
-        self.dev.record_event("plc_download")
+        self.flash.store_plc(frames)
+        self.card.record_event("plc_download")
 
     # -- process image access for rules and hooks ----------------------------------------------
     def bit(self, name: str) -> bool:
@@ -239,8 +254,8 @@ class Plc:
             n = byte * 8 + bit
             if n in self._paa_writes:
                 return self._paa_writes[n]
-            return n < OUTPUTS and self.dev.output_bit(n)
-        return bool(self.dev.marker_byte(byte) >> bit & 1)
+            return n < OUTPUTS and self.outputs.output_bit(n)
+        return bool(self.card.marker_byte(byte) >> bit & 1)
 
     def set_bit(self, name: str, value: bool) -> None:
         """Write an output (PAA, transferred at the end of the cycle) or a marker (at once)."""
@@ -255,36 +270,42 @@ class Plc:
             raise ValueError(f"the PLC cannot write input {name}")
 
     def marker_byte(self, byte: int) -> int:
-        return self.dev.marker_byte(byte)
+        return self.card.marker_byte(byte)
 
     def set_marker_byte(self, byte: int, value: int) -> None:
-        if self.dev.image.markers[byte] != value & 0xFF:
-            self.dev.write_marker_byte(byte, value)
+        if self.image.markers[byte] != value & 0xFF:
+            self.card.write_marker_byte(byte, value)
 
     def set_marker_bit(self, byte: int, bit: int, value: bool) -> None:
-        if self.dev.image.marker(byte, bit) != value:
-            self.dev.write_marker_bit(byte, bit, value)
+        if self.image.marker(byte, bit) != value:
+            cur = self.image.markers[byte]
+            self.card.write_marker_byte(byte, (cur | (1 << bit)) if value else (cur & ~(1 << bit)))
 
     def message(self, code: int) -> None:
         """Like SNDM: the code into MB4, buffered behind a waiting one (spec §4.5.1)."""
-        self.dev.image.post_message(code)
-        self.dev.changed()
+        self.image.post_message(code)
+        self.card.changed()
 
     def fb254(self, accu1: int, accu2: int = 0) -> None:
-        """The FB 254 stand-in for a hook; only function 22 is modelled: copy the H22
-        measurement into the data area from byte ``accu2`` (spec §3.8.7, layout in counter.py)."""
-        if accu1 == 22:
-            self.dev.counter.h22_copy(int(accu2))
+        """The FB 254 stand-in for a hook: the function in Accu1 (:data:`FB254_FUNCTIONS`; any
+        other is not modelled and does nothing) with Accu2."""
+        handler = FB254_FUNCTIONS.get(str(accu1))
+        if handler is not None:
+            handler(self, int(accu2))
+
+    def h22_copy(self, address: int) -> None:
+        """FB 254 / Accu1 = 22: copy the H22 measurement into the data area from byte ``address``
+        (spec §3.8.7, layout in counter.py)."""
+        self.counter.h22_copy(address)
 
     @property
     def now(self) -> float:
-        return self.dev.clock.now()
+        return self.clock.now()
 
     # -- one cycle -------------------------------------------------------------------------------
     def run_cycle(self) -> None:
-        dev = self.dev
         self.cycles += 1
-        self._pae = bytes(dev.input_byte(b) for b in range(4))
+        self._pae = bytes(self.outputs.input_byte(b) for b in range(4))
         self._paa_writes = {}
         self._auto_ack()
         self._limit_switches()
@@ -297,19 +318,19 @@ class Plc:
         self._flush_paa()
 
     def _flush_paa(self) -> None:
-        dev = self.dev
+        outputs = self.image.outputs
         changed = False
         for n, value in self._paa_writes.items():
-            if bool(dev.image.outputs[n // 8] >> (n % 8) & 1) != value:
+            if bool(outputs[n // 8] >> (n % 8) & 1) != value:
                 byte, bit = divmod(n, 8)
                 if value:
-                    dev.image.outputs[byte] |= 1 << bit
+                    outputs[byte] |= 1 << bit
                 else:
-                    dev.image.outputs[byte] &= ~(1 << bit) & 0xFF
+                    outputs[byte] &= ~(1 << bit) & 0xFF
                 changed = True
         self._paa_writes = {}
         if changed:
-            dev.changed()
+            self.card.changed()
 
     def _reset_rule_state(self) -> None:
         self._ack_seen: dict[tuple[int, int], float] = {}
@@ -322,7 +343,7 @@ class Plc:
         }
         self._prev_pae: bytes | None = None
         self._fe_pending = False
-        self._controller_was_on = bool(getattr(self.dev, "controller", False))
+        self._controller_was_on = bool(self.stage.controller)
 
     # -- rules -----------------------------------------------------------------------------------
     def _auto_ack(self) -> None:
@@ -332,7 +353,7 @@ class Plc:
         now = self.now
         for byte, bit in M_FUNCTION_BITS:
             key = (byte, bit)
-            if not self.dev.image.marker(byte, bit):
+            if not self.image.marker(byte, bit):
                 self._ack_seen.pop(key, None)
                 continue
             seen = self._ack_seen.setdefault(key, now)
@@ -341,13 +362,13 @@ class Plc:
                 self.set_marker_bit(byte, bit, False)
 
     def _commanded_direction(self) -> int:
-        ix = self.dev.indexer
+        ix = self.indexer
         if ix.target is not None:
-            d = ix.target - self.dev.axis.position()
+            d = ix.target - ix.axis.position()
             return (d > 0) - (d < 0)
         if ix.jog_dir:
             return ix.jog_dir
-        v = self.dev.axis.velocity()
+        v = ix.axis.velocity()
         return (v > 0) - (v < 0)
 
     def _limit_switches(self) -> None:
@@ -366,7 +387,7 @@ class Plc:
             if rule.action == "stop":
                 want_stop = want_stop or (active and towards)
             elif active and towards and (edge or (rule.direction != "any" and direction != 0)):
-                self.dev.record_event("plc_limit_abort")
+                self.card.record_event("plc_limit_abort")
                 self.set_marker_bit(0, 1, True)  # the firmware aborts and clears M0.1
         if any(r.action == "stop" for r in rules) and want_stop != self._stop_by_rules:
             self._stop_by_rules = want_stop
@@ -376,7 +397,7 @@ class Plc:
         """Fault levels from MB0: a following error is the position controller (M0.5) going
         off while neither emergency stop (M0.4 = 0) nor monitoring (M0.6) is present; it stays
         pending until the controller is on again (Q / Q3)."""
-        mb0 = self.dev.marker_byte(0)
+        mb0 = self.card.marker_byte(0)
         estop = not mb0 & 0x10
         monitoring = bool(mb0 & 0x40)
         controller = bool(mb0 & 0x20)
@@ -390,7 +411,7 @@ class Plc:
     def _fault_messages(self) -> None:
         codes = self.cfg.message_on_fault
         states = self._fault_states()
-        query = self.dev.image.marker(3, 1)
+        query = self.image.marker(3, 1)
         if codes is not None:
             for name, active in states.items():
                 code = getattr(codes, name)
@@ -409,9 +430,9 @@ class Plc:
             old, new = bool(prev[byte] >> bit & 1), bool(self._pae[byte] >> bit & 1)
             if old == new or new != (rule.edge == "rising"):
                 continue
-            if self.dev.image.marker(0, 2):
+            if self.image.marker(0, 2):
                 continue  # a program runs: M0.2 is already 1
-            self.dev.record_event("plc_start_program")
+            self.card.record_event("plc_start_program")
             self.set_marker_byte(2, rule.program)
             self.set_marker_bit(0, 2, True)
 
@@ -421,7 +442,7 @@ class Plc:
             area, byte, bit = parse_bit(rule.to)
             if area == "A":
                 n = byte * 8 + bit
-                if n < OUTPUTS and bool(self.dev.image.outputs[byte] >> bit & 1) != value:
+                if n < OUTPUTS and bool(self.image.outputs[byte] >> bit & 1) != value:
                     self._paa_writes[n] = value
             elif area == "M":
                 self.set_marker_bit(byte, bit, value)
@@ -435,6 +456,12 @@ class Plc:
             "cycle_ms": self.cycle_s * 1000.0,
             "storage_error": self.storage_error,
             "fault": self.fault,
-            "image_bytes": len(self.dev.plc_image or "") // 2,
-            "frames": len(self.dev.plc_frames),
+            "image_bytes": len(self.flash.plc_image or "") // 2,
+            "frames": len(self.flash.plc_frames),
         }
+
+
+#: The functions of the firmware block FB 254 a PLC program calls, by Accu1 (manual §2.3.1 H).
+FB254_FUNCTIONS: Table[Callable[[Plc, int], None]] = Table(
+    [Command("22", Plc.h22_copy, "§2.3.1 H", "copy the H22 measurement to the data area from byte Accu2")]
+)

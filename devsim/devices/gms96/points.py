@@ -10,16 +10,19 @@ from __future__ import annotations
 
 from typing import Any
 
+from devsim.core import record
 from devsim.core.kit import Fault, FaultTable, SignalDef, signal_points
+from devsim.core.parameters import Param, alias_hook, parameter_points
 from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.core.settings import Invalid
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.config import DilSwitch
 from devsim.devices.gms96.image import parse_bit
+from devsim.devices.gms96.io import INPUT_BYTES
+from devsim.devices.gms96.nparams import N_TABLE
 
 __all__ = ["FAULTS", "LEDS", "POINTS", "SIGNALS"]
 
-INPUT_BYTES = 4  # EB0..EB3
 LEDS = {"dc_overvoltage": "red", "dc_undervoltage": "yellow", "overtemperature": "green"}
 
 SIGNALS: tuple[SignalDef, ...] = (
@@ -40,21 +43,25 @@ SIGNALS: tuple[SignalDef, ...] = (
 )
 
 
-def _n_point(p: tables.NParam) -> Point:
-    def put(card: Any, value: Any, index: int = p.index) -> None:
-        card.set_n(index, value)
+def _read_n(card: Any, row: Param) -> int:
+    return int(card.params.read(int(row.key)))
 
-    return Point(
-        f"param.N{p.index}",
-        "int",
-        p.name_en or p.name,
-        f"§2.3.1 N{p.index}",
-        p.unit,
-        get=lambda card, index=p.index: card.n(index),
-        put=put,
-        minimum=tables.INT24_MIN if p.minimum is None else p.minimum,
-        maximum=tables.INT24_MAX if p.maximum is None else p.maximum,
-    )
+
+def _write_n(card: Any, row: Param, value: Any) -> None:
+    card.set_n(int(row.key), value)  # the card's own range rule (clamp or ignore, §3.8.10)
+
+
+def _n_points() -> list[Point]:
+    """``param.N<k>``: a row without a range of its own takes the 24-bit field's (manual §2.3)."""
+    return [
+        record.replace(
+            point,
+            minimum=tables.INT24_MIN if point.minimum is None else point.minimum,
+            maximum=tables.INT24_MAX if point.maximum is None else point.maximum,
+            example=None,
+        )
+        for point in parameter_points(N_TABLE, _read_n, _write_n)
+    ]
 
 
 def _marker_byte(n: int) -> Point:
@@ -73,14 +80,16 @@ def _marker_bit(byte: int, bit: int) -> Point:
                  get=lambda card: bool(card.marker_byte(byte) >> bit & 1), put=put)
 
 
+_param_alias = alias_hook(N_TABLE)
+
+
 def _alias(name: str) -> str | None:
     """``param.n15`` / ``param.15`` → ``param.N15``; ``marker.mb4`` → ``marker.MB4``."""
     section, dot, rest = name.partition(".")
     if not dot:
         return None
     if section == "param":
-        key = rest.upper().lstrip("N")
-        return f"param.N{int(key)}" if key.isascii() and key.isdigit() else None
+        return _param_alias(name)
     if section == "marker":
         upper = rest.upper()
         if upper.startswith("MB") and upper[2:].isdigit():
@@ -99,10 +108,6 @@ def _set_dil(field: str) -> Any:
             raise BadValue(f"dil.{exc}") from None
 
     return put
-
-
-def _set_attr(attr: str) -> Any:
-    return lambda card, value: setattr(card, attr, value)
 
 
 def _plc_running(card: Any, value: bool) -> None:
@@ -129,21 +134,21 @@ def _register(n: int) -> Point:
 _PLAIN: list[Point] = [
     # -- the shared vocabulary -------------------------------------------------------------
     Point("axis.position", "float", "actual position (set-point − v/Kv), increments in the machine frame",
-          "§5.1", "inc", get=lambda c: c.physical_to_machine(c.indexer.actual()), in_state=True, shared=True),
+          "§5.1", "inc", get=lambda c: c.coordinates.physical_to_machine(c.indexer.actual()), in_state=True, shared=True),
     Point("axis.velocity", "float", "set-point velocity", "§5.1", "inc/s", get=lambda c: c.axis.velocity(),
           in_state=True, shared=True),
     Point("motion", "bool", "the axis moves (motion bit of the status byte)", "§4.3", get=lambda c: c.motion(),
           shared=True),
     Point("energized", "bool", "the position controller drives the motor", "§4.5.3",
-          get=lambda c: bool(c.controller and c.powered), shared=True),
+          get=lambda c: bool(c.stage.controller and c.powered), shared=True),
     Point("ready", "bool", "powered, booted, no emergency stop and no monitoring fault", "§4.5.3",
-          get=lambda c: bool(c.powered and not c.booting and not c.estop and not c.monitoring_cause()),
+          get=lambda c: bool(c.powered and not c.booting and not c.stage.estop and not c.stage.monitoring_cause()),
           shared=True),
     Point("fault", "bool", "an emergency stop or a monitoring fault is active", "§4.5.3",
-          get=lambda c: bool(c.estop or c.monitoring_cause()), shared=True),
+          get=lambda c: bool(c.stage.estop or c.stage.monitoring_cause()), shared=True),
     # -- the axis ---------------------------------------------------------------------------
     Point("axis.setpoint", "float", "set-point in the machine frame", "§5.1", "inc",
-          get=lambda c: c.physical_to_machine(c.axis.position())),
+          get=lambda c: c.coordinates.physical_to_machine(c.axis.position())),
     Point("axis.physical", "float", "actual position in the physical frame", "§5.1", "inc",
           get=lambda c: c.indexer.actual()),
     Point("axis.acceleration", "float", "set-point acceleration", "§5.1", "inc/s²",
@@ -158,51 +163,51 @@ _PLAIN: list[Point] = [
           get=lambda c: tables.k_from_status(c.status(), bool(c.image.markers[4])), in_state=True),
     Point("MB4", "int", "message marker byte MB4", "§4.4", get=lambda c: c.image.markers[4], in_state=True),
     Point("memory_status", "int", "memory status byte (T3;4)", "§4.3", get=lambda c: c.memory_status()),
-    Point("position", "int", "set-point in the work frame (T0)", "§5.1", "inc", get=lambda c: c.setpoint_work(),
+    Point("position", "int", "set-point in the work frame (T0)", "§5.1", "inc", get=lambda c: c.coordinates.setpoint_work(),
           in_state=True),
     Point("position_setpoint", "int", "set-point in the work frame", "§5.1", "inc",
-          get=lambda c: c.setpoint_work()),
+          get=lambda c: c.coordinates.setpoint_work()),
     Point("position_counter", "int", "actual position counter", "§5.1", "inc",
-          get=lambda c: round(c.physical_to_machine(c.indexer.actual()))),
+          get=lambda c: round(c.coordinates.physical_to_machine(c.indexer.actual()))),
     Point("following_error", "float", "following error", "§5.11", "inc", get=lambda c: c.indexer.following_error(),
           in_state=True),
     Point("current", "float", "motor current as a fraction of the maximum (T1;5)", "§5.7",
-          get=lambda c: c.current()),
+          get=lambda c: c.torque.current()),
     Point("busy", "bool", "BUSY: a command is being executed", "§4.3", get=lambda c: c.busy(), in_state=True),
-    Point("idxoff", "bool", "IDXOFF: no reference", "§4.3", get=lambda c: c.idxoff, in_state=True),
-    Point("estop", "bool", "the emergency stop is active", "§2.2", get=lambda c: c.estop, in_state=True),
-    Point("monitoring", "str", "the monitoring cause ('' = none)", "§4.5.3", get=lambda c: c.monitoring_cause()),
-    Point("controller", "bool", "the position controller is active", "§4.5.3", get=lambda c: c.controller,
+    Point("idxoff", "bool", "IDXOFF: no reference", "§4.3", get=lambda c: c.stage.idxoff, in_state=True),
+    Point("estop", "bool", "the emergency stop is active", "§2.2", get=lambda c: c.stage.estop, in_state=True),
+    Point("monitoring", "str", "the monitoring cause ('' = none)", "§4.5.3", get=lambda c: c.stage.monitoring_cause()),
+    Point("controller", "bool", "the position controller is active", "§4.5.3", get=lambda c: c.stage.controller,
           in_state=True),
     Point("speed", "float", "set-point speed", "§5.2", "inc/s", get=lambda c: abs(c.axis.velocity())),
     Point("override", "float", "override in effect", "§2.3.1 o", "%", get=lambda c: c.indexer.override_pct()),
     Point("queue_length", "int", "commands waiting in the queue", "§4.2.1", get=lambda c: len(c.executor.queue)),
     Point("rejected_moves", "int", "moves refused since power-on", "§4.2.1", get=lambda c: c.executor.rejected_moves),
-    Point("g96_rpm", "float", "spindle speed computed by G96", "§5.9", "1/min", get=lambda c: c.executor.g96_rpm()),
+    Point("g96_rpm", "float", "spindle speed computed by G96", "§5.9", "1/min", get=lambda c: c.coordinates.g96_rpm()),
     Point("programs", "json", "stored CNC programs: number → commands", "§4.9",
-          get=lambda c: {k: len(v) for k, v in c.programs.items()}, in_state=True),
+          get=lambda c: {k: len(v) for k, v in c.flash.programs.items()}, in_state=True),
     Point("address", "int", "the card address (DIL switch)", "§2.2", get=lambda c: c.address, in_state=True),
     Point("protocol", "str", "S or E version (DIL 7)", "§2.2", get=lambda c: c.dil.protocol, in_state=True),
     Point("booting", "bool", "the card boots and does not listen", "§2.3.1", get=lambda c: c.booting),
     Point("powered", "bool", "the card has power", "§4.1.2", get=lambda c: c.powered, in_state=True),
     Point("silent", "bool", "the card ignores the line (boot, flash erase)", "§2.3.1 p", get=lambda c: c.silent),
-    Point("i2t_active", "bool", "I²t limits the current", "§4.5.3", get=lambda c: c.i2t_limiting),
-    Point("i2t_latched", "bool", "the I²t fault is latched", "§4.5.3", get=lambda c: c.i2t_latched),
+    Point("i2t_active", "bool", "I²t limits the current", "§4.5.3", get=lambda c: c.i2t.limiting),
+    Point("i2t_latched", "bool", "the I²t fault is latched", "§4.5.3", get=lambda c: c.i2t.latched),
     Point("leds", "json", "the red, yellow and green LEDs", "§4.5.3",
-          get=lambda c: {color: LEDS.get(c.monitoring_cause()) == color for color in ("red", "yellow", "green")}),
+          get=lambda c: {color: LEDS.get(c.stage.monitoring_cause()) == color for color in ("red", "yellow", "green")}),
     Point("link_errors", "json", "frames the link dropped, by reason", "§2.3",
           get=lambda c: dict(c.link_errors)),
-    Point("param.M", "int", "maximum speed setting M", "§2.3.1 M", get=lambda c: c.M, in_state=True),
-    Point("param.B", "int", "acceleration setting B", "§2.3.1 B", get=lambda c: c.B, in_state=True),
-    Point("param.S", "int", "S setting", "§2.3.1 S", get=lambda c: c.S, in_state=True),
-    Point("param.f", "int", "feed rate f", "§2.3.1 f", get=lambda c: c.f, in_state=True),
+    Point("param.M", "int", "maximum speed setting M", "§2.3.1 M", get=lambda c: c.feed.M, in_state=True),
+    Point("param.B", "int", "acceleration setting B", "§2.3.1 B", get=lambda c: c.feed.B, in_state=True),
+    Point("param.S", "int", "S setting", "§2.3.1 S", get=lambda c: c.feed.S, in_state=True),
+    Point("param.f", "int", "feed rate f", "§2.3.1 f", get=lambda c: c.feed.f, in_state=True),
     Point("message", "int", "post a message (MB4 FIFO)", "§4.4", put=_message, minimum=0, maximum=255, example=1),
     Point("tool_offset", "int", "the tool offset", "§5.9", "inc", get=lambda c: c.cfg.tool_offset, put=_tool_offset),
     Point("plc", "json", "the PLC's state", "§4.10", get=lambda c: c.plc.state(), in_state=True),
     Point("plc.running", "bool", "the PLC cycles (p1;1 / p1;2)", "§4.10", get=lambda c: c.plc.state()["running"],
           put=_plc_running),
-    Point("plc.image", "str", "the PLC image loaded by a download", "§4.10", get=lambda c: c.plc_image),
-    Point("plc.frames", "json", "the downloaded PLC frames", "§4.10", get=lambda c: list(c.plc_frames)),
+    Point("plc.image", "str", "the PLC image loaded by a download", "§4.10", get=lambda c: c.flash.plc_image),
+    Point("plc.frames", "json", "the downloaded PLC frames", "§4.10", get=lambda c: list(c.flash.plc_frames)),
     Point("counter", "json", "the counter input's state", "§5.10", get=lambda c: c.counter.state(), in_state=True),
     Point("counter.pulses", "int", "count pulses at the counter input (as if they arrived)", "§5.10",
           put=lambda c, v: c.counter.pulses(v), example=0),
@@ -263,7 +268,7 @@ POINTS = PointTable.of(
               get=lambda c: c.signals.get("monitoring"), put=_set_monitoring,
               in_state=True, shared=True),
     ],
-    (_n_point(p) for p in tables.N_PARAMETERS.values()),
+    _n_points(),
     [
         _plc_key("loaded", "a PLC program is stored", "bool"),
         _plc_key("cycles", "PLC cycles run"),

@@ -1,9 +1,9 @@
 """Reference runs ``Q`` (manual §2.3.1 Q; spec §3.8.14, §5.6, §5.12).
 
 Q0 cam + index mark, Q1 index mark, Q2 cam, Q3 controller (re)activation (``Q3;64``: resolver
-absolute position), Q6 search on a 24 V input (P2.7 edge criterion), Q8 spindle simulation and
-Q-1 per N19 with drive-off to N33.  P2 bits: .0 NC cam, .1 reversed direction, .2 keep the
-counter, .3 cam on E2.0, .6 message 23 instead of failure at the P3 distance limit.  After an
+absolute position), Q6 search on a 24 V input (P2.7 edge criterion) and Q-1 per N19 with
+drive-off to N33 (the Q8 spindle simulation is :mod:`.spindle`).  P2 bits: .0 NC cam, .1 reversed direction, .2 keep the
+counter, .3 cam on E2.0, .5 the index mark from the counter input's reference track, .6 message 23 instead of failure at the P3 distance limit.  After an
 end criterion the axis brakes and repositions onto the detected point (firmware ≥ v3.79).
 Switch and index crossings are solved on the ACTUAL position (``ActualSwitch``,
 ``Indexer.watch_actual_index``), never sampled; the detected point is the actual position then.
@@ -12,46 +12,81 @@ Switch and index crossings are solved on the ACTUAL position (``ActualSwitch``,
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, Protocol
 
 from devsim.core.axis import Watch
-from devsim.core.clock import Timer
-from devsim.devices.gms96.motion import ActualWatch
+from devsim.core.clock import Clock, Timer
+from devsim.core.kit import Command, Table
+from devsim.core.settings import Values
+from devsim.core.signals import SignalBank
+from devsim.devices.gms96.coordinates import Coordinates
+from devsim.devices.gms96.image import ProcessImage
+from devsim.devices.gms96.motion import ActualWatch, Indexer
+from devsim.devices.gms96.params import NParameters
+from devsim.devices.gms96.stage import PowerStage
 
-
-class ReferenceCard(Protocol):
-    """What this part needs of its card (the GMS96 model): exactly these names."""
-
-    clock: Any
-    idxoff: Any
-    image: Any
-    indexer: Any
-    machine_to_physical: Any
-    n: Any
-    record_event: Any
-    set_counter_here: Any
-    signals: Any
-
-__all__ = ["ReferenceRun", "MESSAGE_DISTANCE_LIMIT", "resolver_position"]
+__all__ = ["MESSAGE_DISTANCE_LIMIT", "ReferenceRun", "References"]
 
 MESSAGE_DISTANCE_LIMIT = 23
 
 
-def resolver_position(dev: ReferenceCard) -> int:
-    """Absolute position within the pole pass, -period/2..period/2-1 (P2.6 with P3 = 0, and
-    ``Q3;64``); the pole pass starts at an (electronic) index mark (``index_offset`` +
-    k·``index_period``)."""
-    axis = dev.indexer.axis
-    period, off = axis.counts_per_rev, axis.index_offset
-    half = period // 2
-    return int((round(dev.indexer.actual() - off) + half) % period) - half
+class References:
+    """What the reference runs of one card work with (manual §2.3.1 Q; spec §5.6): the indexer,
+    the power stage's IDXOFF, the frames, N19/N33, the cam inputs, the message buffer."""
+
+    def __init__(
+        self,
+        *,
+        clock: Clock,
+        indexer: Indexer,
+        stage: PowerStage,
+        coordinates: Coordinates,
+        params: NParameters,
+        signals: SignalBank,
+        image: ProcessImage,
+        geometry: Values,
+        record_event: Callable[[str], None],
+    ) -> None:
+        self.clock = clock
+        self.indexer = indexer
+        self.stage = stage
+        self.coordinates = coordinates
+        self.params = params
+        self.signals = signals
+        self.image = image
+        self.geometry = geometry  # the configured axis: counter_marks (P2.5)
+        self.record_event = record_event
+
+    def run(self, p1: int, p2: int, p3: int, done: Callable[[bool], None], *, counter_track: bool) -> ReferenceRun:
+        """A new run of ``Q P1;P2;P3`` (``counter_track``: P2.5, the counter input's marks)."""
+        return ReferenceRun(self, p1, p2, p3, done, counter_track=counter_track)
+
+    def resolver_position(self) -> int:
+        """Absolute position within the pole pass, -period/2..period/2-1 (P2.6 with P3 = 0, and
+        ``Q3;64``); the pole pass starts at an (electronic) index mark (``index_offset`` +
+        k·``index_period``)."""
+        axis = self.indexer.axis
+        period, off = axis.counts_per_rev, axis.index_offset
+        half = period // 2
+        return int((round(self.indexer.actual() - off) + half) % period) - half
 
 
 class ReferenceRun:
-    """One running reference sequence; ``done(success)`` is called exactly once."""
+    """One running reference sequence (manual §2.3.1 Q; spec §5.6); ``done(success)`` is called exactly once.  With
+    ``counter_track`` (P2.5) the index mark comes from the counter input's reference track (marks
+    at ``axis.counter_marks``) instead of the motor encoder."""
 
-    def __init__(self, dev: ReferenceCard, p1: int, p2: int, p3: int, done: Callable[[bool], None]) -> None:
-        self.dev = dev
+    def __init__(
+        self,
+        refs: References,
+        p1: int,
+        p2: int,
+        p3: int,
+        done: Callable[[bool], None],
+        *,
+        counter_track: bool = False,
+    ) -> None:
+        self.refs = refs
+        self.counter_track = counter_track
         self.p1, self.p2, self.p3 = p1, p2 & 0xFF, p3
         self.done = done
         self.finished = False
@@ -60,14 +95,15 @@ class ReferenceRun:
         self.travelled = 0.0  # path length of the finished legs (for the P3 limit)
         self.fast_kind = "work"
         self.after_success: Callable[[], None] | None = None  # Q-1: the drive-off to N33
-        self._leg_start = dev.indexer.axis.position()
+        self._leg_start = refs.indexer.axis.position()
         self._leg_dir = 0
         self._leg_over = 0.0  # braking overshoot (against the leg's direction) at its start
         self._limit_watch: list[Watch] = []
         self._limit_timer: Timer | None = None
         self._index_watch: ActualWatch | None = None
         self._unsub: Callable[[], None] | None = None
-        self.was_active = not dev.idxoff
+        self.was_active = not refs.stage.idxoff
+        self._marks: list[Watch] = []  # the counter track's marks (P2.5)
 
     # -- helpers --------------------------------------------------------------------------------
     @property
@@ -79,7 +115,7 @@ class ReferenceRun:
         return "E2.0" if self.p2 & 0x08 else "E2.1"
 
     def cam_active(self) -> bool:
-        level = bool(self.dev.signals.get(self.cam_input()))
+        level = bool(self.refs.signals.get(self.cam_input()))
         return level == (not self.p2 & 0x01)
 
     def _cancel_limit(self) -> None:
@@ -91,6 +127,7 @@ class ReferenceRun:
             self._limit_timer = None
 
     def _cleanup(self) -> None:
+        self._cancel_marks()
         self._cancel_limit()
         if self._index_watch is not None:
             self._index_watch.cancel()
@@ -104,19 +141,19 @@ class ReferenceRun:
 
         The limit counts the path travelled (spec §5.6): a leg that reverses a moving axis first
         brakes past its start point by ``over`` and comes back, which is travel too."""
-        axis = self.dev.indexer.axis
+        axis = self.refs.indexer.axis
         x = axis.position()
         if self._leg_dir:
             gone = 2.0 * self._leg_over + (x - self._leg_start) * self._leg_dir
             self.travelled += max(gone, abs(x - self._leg_start))
         v = axis.velocity()
-        over = v * v / (2.0 * self.dev.indexer.accel()[0]) if v * direction < 0 else 0.0
+        over = v * v / (2.0 * self.refs.indexer.accel()[0]) if v * direction < 0 else 0.0
         self._leg_start, self._leg_dir, self._leg_over = x, direction, over
         self._cancel_limit()
         if self.p3 > 0:
             rest = self.p3 - self.travelled
             if rest <= 0:
-                self._limit_timer = self.dev.clock.call_later(0.0, self._distance_limit)
+                self._limit_timer = self.refs.clock.call_later(0.0, self._distance_limit)
             elif rest <= over:  # reached while still braking in the old direction
                 self._limit_watch.append(
                     axis.watch(x - direction * rest, lambda s, d=-direction: (s == d) and self._distance_limit())
@@ -126,37 +163,36 @@ class ReferenceRun:
                 self._limit_watch.append(
                     axis.watch(edge, lambda s, d=direction: (s == d) and self._distance_limit())
                 )
-        self.dev.indexer.run(direction, kind)
+        self.refs.indexer.run(direction, kind)
 
     def _watch_cam(self, callback: Callable[[bool], None]) -> None:
         if self._unsub is not None:
             self._unsub()
-        self._unsub = self.dev.signals.subscribe(self.cam_input(), lambda *_: callback(self.cam_active()))
+        self._unsub = self.refs.signals.subscribe(self.cam_input(), lambda *_: callback(self.cam_active()))
 
     # -- sequence -------------------------------------------------------------------------------
     def start(self) -> None:
         p1 = self.p1
         if p1 == -1:
-            n19 = self.dev.n(19)
+            n19 = self.refs.params.reference_type
             self.p1, self.p2 = n19 & 0xFF, (n19 >> 8) & 0xFF
             self.fast_kind = "rapid_nv"
             self.after_success = self._drive_off
             p1 = self.p1
-        if p1 == 3:  # only through Q-1 (the executor runs a plain Q3 itself)
-            if self.p2 & 0x40 and self.p3 == 0:
-                self.dev.set_counter_here(self._resolver_position())
-            self.dev.idxoff = False
-            self._succeeded()
-        elif p1 == 0 or p1 == 2:
-            self._cam_search()
-        elif p1 == 1:
-            self._index_search()
-        elif p1 == 6:
-            self._input_search()
-        else:
-            self._finish(False)
+        sequence = SEQUENCES.get(str(p1)) or ReferenceRun.unknown_type
+        sequence(self)
 
-    def _cam_search(self) -> None:
+    def controller_only(self) -> None:
+        """Q3, only through Q-1 (the executor runs a plain Q3 itself)."""
+        if self.p2 & 0x40 and self.p3 == 0:
+            self.refs.coordinates.set_counter_here(self._resolver_position())
+        self.refs.stage.idxoff = False
+        self._succeeded()
+
+    def unknown_type(self) -> None:
+        self._finish(False)
+
+    def cam_search(self) -> None:
         self.cam_phase = True
         if self.cam_active():
             self._drive_off_cam()
@@ -176,13 +212,17 @@ class ReferenceRun:
             self._unsub()
             self._unsub = None
         if self.p1 == 2:
-            self._reposition(self.dev.indexer.actual())
+            self._reposition(self.refs.indexer.actual())
         else:
-            self._index_search()
+            self.index_search()
 
-    def _index_search(self) -> None:
+    def index_search(self) -> None:
+        """Search the index mark in the "negative" direction (Q1; Q0 after the cam)."""
+        if self.counter_track:
+            self._track_search()
+            return
         self.phase = "index_search"
-        ix = self.dev.indexer
+        ix = self.refs.indexer
 
         def mark(direction: int) -> None:
             if self.phase == "index_search" and direction == self.neg:
@@ -191,12 +231,33 @@ class ReferenceRun:
         self._index_watch = ix.watch_actual_index(mark)
         self._leg(self.neg, "search")
 
+    def _track_search(self) -> None:
+        """P2.5: the index search on the counter input's reference track (spec §3.8.14)."""
+        self.phase = "index_search"
+        axis = self.refs.indexer.axis
+        self._marks = []
+
+        def mark(at: float, direction: int) -> None:
+            if self.phase == "index_search" and direction == self.neg:
+                self._cancel_marks()
+                self._reposition(at)
+
+        for at in self.refs.geometry.counter_marks:
+            point = at if self.neg > 0 else at + 1e-6
+            self._marks.append(axis.watch(point, lambda side, at=at: mark(at, side)))
+        self._leg(self.neg, "search")
+
+    def _cancel_marks(self) -> None:
+        for w in self._marks:
+            w.cancel()
+        self._marks = []
+
     def _nearest_mark(self, x: float) -> float:
-        axis = self.dev.indexer.axis
+        axis = self.refs.indexer.axis
         period, off = axis.counts_per_rev, axis.index_offset
         return round((x - off) / period) * period + off
 
-    def _input_search(self) -> None:
+    def input_search(self) -> None:
         """Q6: until the input reaches its active level (with P2.7 only by a change to it)."""
         self.phase = "input_search"
         need_edge = bool(self.p2 & 0x80) and self.cam_active()
@@ -210,10 +271,10 @@ class ReferenceRun:
                     need_edge = False
                 return
             if active:
-                self._reposition(self.dev.indexer.actual())
+                self._reposition(self.refs.indexer.actual())
 
         if self.cam_active() and not need_edge:
-            self._reposition(self.dev.indexer.actual())
+            self._reposition(self.refs.indexer.actual())
             return
         self._watch_cam(changed)
         self._leg(self.neg, self.fast_kind)
@@ -227,17 +288,17 @@ class ReferenceRun:
             self._unsub()
             self._unsub = None
         self._cancel_limit()
-        self.dev.indexer.go(point, "search", self._at_point)
+        self.refs.indexer.go(point, "search", self._at_point)
 
     def _resolver_position(self) -> int:
-        return resolver_position(self.dev)
+        return self.refs.resolver_position()
 
     def _at_point(self) -> None:
         if self.p2 & 0x40 and self.p3 == 0:
-            self.dev.set_counter_here(self._resolver_position())
+            self.refs.coordinates.set_counter_here(self._resolver_position())
         elif not self.p2 & 0x04:
-            self.dev.set_counter_here(0)
-        self.dev.idxoff = False
+            self.refs.coordinates.set_counter_here(0)
+        self.refs.stage.idxoff = False
         self._succeeded()
 
     def _succeeded(self) -> None:
@@ -248,7 +309,7 @@ class ReferenceRun:
 
     def _drive_off(self) -> None:
         self.phase = "drive_off"
-        self.dev.indexer.go(self.dev.machine_to_physical(self.dev.n(33)), "rapid_nv", lambda: self._finish(True))
+        self.refs.indexer.go(self.refs.coordinates.machine_to_physical(self.refs.params.drive_off_position), "rapid_nv", lambda: self._finish(True))
 
     def _distance_limit(self) -> None:
         if self.finished or self.phase == "reposition":
@@ -259,11 +320,11 @@ class ReferenceRun:
 
         def stopped() -> None:
             if keep:
-                self.dev.image.post_message(MESSAGE_DISTANCE_LIMIT)
-                self.dev.idxoff = not self.was_active
+                self.refs.image.post_message(MESSAGE_DISTANCE_LIMIT)
+                self.refs.stage.idxoff = not self.was_active
             self._finish(False, idxoff=not keep)
 
-        self.dev.indexer.halt(stopped)
+        self.refs.indexer.halt(stopped)
 
     def abort(self) -> None:
         if self.finished:
@@ -271,7 +332,7 @@ class ReferenceRun:
         self._cleanup()
         self.finished = True
         self.cam_phase = False
-        self.dev.idxoff = True
+        self.refs.stage.idxoff = True
 
     def _finish(self, success: bool, idxoff: bool | None = None) -> None:
         if self.finished:
@@ -280,6 +341,18 @@ class ReferenceRun:
         self.finished = True
         self.cam_phase = False
         if not success and (idxoff if idxoff is not None else True):
-            self.dev.idxoff = True
-        self.dev.record_event("reference_done" if success else "reference_failed")
+            self.refs.stage.idxoff = True
+        self.refs.record_event("reference_done" if success else "reference_failed")
         self.done(success)
+
+
+#: The search sequence of each reference type ``Q P1`` (after ``Q-1`` took P1 from N19).
+SEQUENCES: Table[Callable[[ReferenceRun], None]] = Table(
+    [
+        Command("0", ReferenceRun.cam_search, "§2.3.1 Q", "Q0: cam, drive off it, then the index mark"),
+        Command("1", ReferenceRun.index_search, "§2.3.1 Q", "Q1: the index mark"),
+        Command("2", ReferenceRun.cam_search, "§2.3.1 Q", "Q2: the cam"),
+        Command("3", ReferenceRun.controller_only, "§2.3.1 Q", "Q3: the position controller (through Q-1)"),
+        Command("6", ReferenceRun.input_search, "§2.3.1 Q", "Q6: a 24 V input"),
+    ]
+)

@@ -40,8 +40,8 @@ __all__ = [
     "POSITION_MAX",
     "INT24_MIN",
     "INT24_MAX",
-    "NParam",
     "N_PARAMETERS",
+    "N_TABLE",
     "N_SIMULATOR_DEFAULTS",
     "N_DUAL_VALUE",
     "N10_STEPPER_RANGE",
@@ -100,7 +100,7 @@ from devsim.devices.gms96.nparams import (  # noqa: E402 - the field range (§2.
     N_DUAL_VALUE,
     N_PARAMETERS,
     N_SIMULATOR_DEFAULTS,
-    NParam,
+    N_TABLE,
 )
 
 #: N10 range with the stepper software (KS4/KS8): corner frequency in kHz [M N10].

@@ -1,0 +1,72 @@
+"""The card's FLASH: CNC programs and the PLC program image, and a running download (manual
+§2.3.1 p, a, §2.5; spec §3.8.13, §3.8.24, §4.8, §4.9).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from devsim.core.nvram import NonVolatileMemory
+
+__all__ = ["Flash"]
+
+Program = list[list[Any]]  # rows [letter, P1, P2, P3, count]
+
+
+class Flash:
+    """Programs and the PLC image of one card, kept in its non-volatile memory (spec §4.8)."""
+
+    def __init__(self, nvram: NonVolatileMemory) -> None:
+        self.nvram = nvram
+        self.programs: dict[int, Program] = {}
+        self.plc_image: str | None = None  # hex of the downloaded ``a`` frames
+        self.plc_frames: list[int] = []  # their lengths
+        #: A running download: ("cnc" | "plc", program number, the recorded rows).
+        self.download: tuple[str, int, list[list[Any]]] | None = None
+        #: T3;4 I.4: a CNC download did not fit (kept until the card's memory is wiped).
+        self.cnc_storage_error = False
+
+    def power_on(self) -> None:
+        flash = self.nvram.get("flash", {}) or {}
+        self.programs = {int(k): v for k, v in (flash.get("programs") or {}).items()}
+        self.plc_image = flash.get("plc")
+        self.plc_frames = list(flash.get("plc_frames") or ([len(self.plc_image) // 2] if self.plc_image else []))
+        self.download = None
+
+    def save(self) -> None:
+        self.nvram.put(
+            "flash",
+            {"programs": {str(k): v for k, v in self.programs.items()}, "plc": self.plc_image,
+             "plc_frames": list(self.plc_frames)},
+        )
+
+    def recording(self, kind: str) -> list[list[Any]] | None:
+        """The rows a running ``kind`` download records, or None."""
+        download = self.download
+        return download[2] if download is not None and download[0] == kind else None
+
+    def store_program(self, number: int, rows: Program, max_total: int) -> bool:
+        """The end of a CNC download: program ``number`` (0: all programs anew); False (and the
+        storage error) if the programs would exceed ``max_total`` commands."""
+        total = sum(len(p) for k, p in self.programs.items() if k != number) + len(rows)
+        if total > max_total:
+            self.cnc_storage_error = True
+            return False
+        if number == 0:
+            self.programs = {}
+        self.programs[number] = rows
+        self.save()
+        return True
+
+    def erase_plc(self) -> None:
+        """``p1;100``: the PLC sector is erased."""
+        self.plc_image = None
+        self.plc_frames = []
+        self.save()
+
+    def store_plc(self, frames: list[bytes]) -> None:
+        """``p1;101``: the ``a`` frames' data in order (an empty download leaves no program)."""
+        if frames:
+            self.plc_image = b"".join(frames).hex()
+            self.plc_frames = [len(f) for f in frames]
+        self.save()

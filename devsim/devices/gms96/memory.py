@@ -1,0 +1,61 @@
+"""The card's EEPROM and its static data (manual §2.3.1 s, r, d, m101; spec §4.8).
+
+``s85;170`` saves M, S, B, all N parameters and the override activity; they take effect at the
+next start.  DW0..DW79 (data bytes 0..159) and the tool number MB18 survive a power failure.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from devsim.core.nvram import NonVolatileMemory
+from devsim.devices.gms96.feed import Feed
+from devsim.devices.gms96.image import ProcessImage
+from devsim.devices.gms96.params import NParameters
+
+__all__ = ["Memory"]
+
+
+class Memory:
+    """EEPROM (parameters, speeds) and static data of one card in its non-volatile memory (spec §4.8)."""
+
+    def __init__(
+        self,
+        nvram: NonVolatileMemory,
+        params: NParameters,
+        feed: Feed,
+        image: ProcessImage,
+        record_event: Callable[[str], None],
+    ) -> None:
+        self.nvram = nvram
+        self.params = params
+        self.feed = feed
+        self.image = image
+        self.record_event = record_event
+
+    def load(self) -> bool:
+        """Power-on: the parameters and speeds from the EEPROM, the static data; True if the
+        memory could not be read (the NV error of T3;4)."""
+        corrupt = bool(self.nvram.corrupt)
+        eeprom = self.nvram.get("eeprom")
+        self.params.power_on(eeprom)
+        self.feed.power_on(eeprom)
+        return corrupt
+
+    def load_static(self) -> None:
+        st = self.nvram.get("static", {}) or {}
+        self.image.restore_static(st.get("data"))
+        self.image.markers[18] = int(st.get("mb18", 0)) & 0xFF
+
+    def save_eeprom(self) -> None:
+        """``s85;170``: M, S, B, all N and the override activity (manual §2.3.1 s)."""
+        self.nvram.put("eeprom", {**self.feed.eeprom(), **self.params.eeprom()})
+        self.feed.saved()
+        self.record_event("eeprom_saved")
+
+    def erase_eeprom(self) -> None:
+        """``r1``: the next start uses the defaults."""
+        self.nvram.delete("eeprom")
+
+    def save_static(self) -> None:
+        self.nvram.put("static", {"data": self.image.static_data(), "mb18": self.image.markers[18] & 0x7F})

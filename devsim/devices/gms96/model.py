@@ -1,0 +1,437 @@
+"""The GMS96 servo amplifier card as a model (manual "GMS96 Softwarebeschreibung", v4.04).
+
+The card knows no protocol.  It is composed of parts that own their state: the N parameters
+(:mod:`.params`), the speeds (:mod:`.feed`), the frames (:mod:`.coordinates`), the power stage
+(:mod:`.stage`), I²t (:mod:`.i2t`), the current and H7 (:mod:`.torque`), the indexer and position
+loop (:mod:`.motion`), the inputs and outputs (:mod:`.io`), the process image (:mod:`.image`),
+the EEPROM (:mod:`.memory`) and FLASH (:mod:`.flash`), the counter input (:mod:`.counter`), the
+command executor (:mod:`.executor`) with its commands (:mod:`.commands`, :mod:`.program`), the
+reference runs (:mod:`.reference`), the spindle (:mod:`.spindle`) and the PLC (:mod:`.plc`).  The
+model builds them, wires the signals, and keeps what is the card's own: power-on / reset (spec
+§4.1.2), the DIL switch (§2.2), the status bytes (§4.3), the special markers (§4.4) and the faults
+(§4.5.3: emergency stop, following error, monitoring, output overload).  The FT1.2 link and the
+command dispatch are the face (:mod:`.face`, :mod:`.link`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from devsim.core.axis import Axis
+from devsim.core.clock import Clock, Timer
+from devsim.core.kit import declare_signals
+from devsim.core.model import Model
+from devsim.core.nvram import NonVolatileMemory
+from devsim.core.settings import Values
+from devsim.devices.gms96 import tables
+from devsim.devices.gms96.commands import QueuedCommands
+from devsim.devices.gms96.config import Gms96Config
+from devsim.devices.gms96.coordinates import Coordinates
+from devsim.devices.gms96.counter import CounterInput
+from devsim.devices.gms96.executor import Cmd, Executor
+from devsim.devices.gms96.feed import Feed
+from devsim.devices.gms96.flash import Flash
+from devsim.devices.gms96.i2t import I2t
+from devsim.devices.gms96.image import ProcessImage
+from devsim.devices.gms96.io import INPUT_BYTES, Outputs, axis_switches
+from devsim.devices.gms96.memory import Memory
+from devsim.devices.gms96.motion import ActualSwitch, Indexer
+from devsim.devices.gms96.params import NParameters
+from devsim.devices.gms96.plc import Plc
+from devsim.devices.gms96.points import SIGNALS
+from devsim.devices.gms96.program import ProgramControl
+from devsim.devices.gms96.reference import References
+from devsim.devices.gms96.spindle import Spindle
+from devsim.devices.gms96.stage import PowerStage
+from devsim.devices.gms96.torque import Torque
+
+__all__ = ["Gms96Card"]
+
+
+class Gms96Card(Model):
+    """One GMS96 card (spec §4): its parts, power-on and reset, status bytes, markers, faults."""
+
+    def __init__(
+        self,
+        *,
+        clock: Clock,
+        config: dict[str, Any] | None = None,
+        nvram: NonVolatileMemory | None = None,
+        name: str = "",
+    ) -> None:
+        super().__init__(clock=clock, config=config, nvram=nvram, name=name)
+        self.cfg = Gms96Config.parse(self.config)
+        self.silent_until = 0.0  # the card ignores the line until then (boot, flash erase)
+        #: Frames the link dropped, by reason (checksum, length, not_idle ...).
+        self.link_errors: dict[str, int] = {}
+        self.hw = tables.variant(self.cfg.variant)
+        self.stepper = self.hw.stepper
+        self.pending_dil: Values = self.cfg.dil
+        self.dil: Values = self.cfg.dil
+        self.address = self.dil.address
+        self.e_version = self.dil.protocol == "E"
+        self.powered = False
+        self._build_parts()
+        self._define_signals()
+        self.switches: list[ActualSwitch] = axis_switches(self.indexer, self.signals, self.cfg.axis)
+        self._changing = False
+        self._timers: list[Timer] = []
+        self._power_on(first=True)
+
+    def _build_parts(self) -> None:
+        clock, geo, signals = self.clock, self.cfg.axis, self.signals
+        self.axis = Axis(clock, counts_per_rev=geo.index_period, index_offset=geo.index_offset, name=self.name)
+        self.image = ProcessImage()
+        self.stage = PowerStage(signals)
+        self.params = NParameters(factory=self.cfg.params, stepper=self.stepper, out_of_range=self.cfg.out_of_range)
+        self.feed = Feed()
+        self.coordinates = Coordinates(self.axis, self.nvram, lambda: int(self.cfg.tool_offset))
+        self.flash = Flash(self.nvram)
+        self.memory = Memory(self.nvram, self.params, self.feed, self.image, self.record_event)
+        self.indexer = Indexer(
+            clock=clock, axis=self.axis, feed=self.feed, params=self.params, stage=self.stage, image=self.image,
+            signals=signals, geometry=geo, stepper=self.stepper, card=self,
+        )
+        self.counter = CounterInput(
+            clock=clock, axis=self.axis, indexer=self.indexer, params=self.params, stage=self.stage,
+            coordinates=self.coordinates, feed=self.feed, memory=self.memory, h22_address=self.cfg.h22_data_address,
+            changed=self.changed, record_event=self.record_event,
+        )
+        self.executor = Executor(
+            clock=clock, indexer=self.indexer, counter=self.counter, feed=self.feed, coordinates=self.coordinates,
+            params=self.params, card=self, run=lambda cmd: self.commands.run(cmd),
+            queue_capacity=self.cfg.queue_capacity,
+        )
+        self.i2t = I2t(
+            clock, self.params, geo, lambda: float(signals.get("load_pct")), self._i2t_settled, self.record_event
+        )
+        self.torque = Torque(
+            clock, self.axis, self.indexer, self.params, self.stage, self.i2t, self.executor,
+            lambda: bool(signals.get("blocked")), self.record_event,
+        )
+        self.outputs = Outputs(
+            clock, self.axis, self.image, signals, self.params, self.stage, self.indexer, self.stepper, self.changed
+        )
+        self.plc = Plc(
+            card=self, clock=clock, options=self.cfg.plc, ms_per_1000=self.hw.plc_ms_per_1000, flash=self.flash,
+            image=self.image, outputs=self.outputs, counter=self.counter, indexer=self.indexer, stage=self.stage,
+            interpolation=lambda: bool(self.dil.interpolation), powered=lambda: self.powered,
+        )
+        self.spindle = Spindle(self.indexer, self.params, lambda: float(signals.get("ref_pulse_hz")), self.changed)
+        self.references = References(
+            clock=clock, indexer=self.indexer, stage=self.stage, coordinates=self.coordinates, params=self.params,
+            signals=signals, image=self.image, geometry=geo, record_event=self.record_event,
+        )
+        self.program = ProgramControl(
+            executor=self.executor, flash=self.flash, image=self.image, signals=signals, outputs=self.outputs,
+            plc=self.plc, write_marker_byte=self.write_marker_byte,
+        )
+        self.commands = QueuedCommands(
+            card=self, executor=self.executor, program=self.program, references=self.references,
+            indexer=self.indexer, feed=self.feed, coordinates=self.coordinates, params=self.params,
+            stage=self.stage, i2t=self.i2t, counter=self.counter, spindle=self.spindle, outputs=self.outputs,
+            image=self.image, memory=self.memory, eeprom_write_s=self.cfg.eeprom_write_s,
+        )
+
+    # ======================================================================================
+    # signals (spec §4.5.3, §4.11)
+    # ======================================================================================
+    def _define_signals(self) -> None:
+        s = self.signals
+        declare_signals(s, SIGNALS)
+        s.signal("override_pot").value = float(self.cfg.override_pot_pct)
+        for byte in range(INPUT_BYTES):
+            for bit in range(8):
+                s.subscribe(f"E{byte}.{bit}", self._on_input)
+        s.subscribe("emergency_stop", lambda *_: self._on_estop())
+        s.subscribe("override_pot", lambda *_: self.indexer.replan())
+        s.subscribe("load_pct", lambda *_: self.i2t.update())
+        s.subscribe("blocked", lambda *_: self.torque.update_block())
+        s.subscribe("monitoring", lambda *_: self._on_monitoring())
+        s.subscribe("output_overload", lambda *_: self._on_overload())
+        s.subscribe("ref_pulse_hz", lambda *_: self.spindle.pulse_rate_changed())
+
+    # ======================================================================================
+    # power, reset, persistence (spec §4.1.2, §4.8)
+    # ======================================================================================
+    def _power_on(self, first: bool = False) -> None:
+        for t in self._timers:
+            t.cancel()
+        self._timers = []
+        self.powered = True
+        self.dil = self.pending_dil
+        self.address = self.dil.address
+        self.e_version = self.dil.protocol == "E"
+        self.announce("power_on")  # the link starts afresh (decoder, FCB)
+        self.silent_until = 0.0
+        if self.cfg.boot_time > 0:
+            self.silence(self.cfg.boot_time)
+        self.booting = self.cfg.boot_time > 0
+        if self.booting:
+            self._timers.append(self.clock.call_later(self.cfg.boot_time, self._boot_done))
+        self.executor.flush()
+        self.executor.rejected_moves = 0
+        self.indexer.target = None
+        self.indexer.jog_dir = 0
+        if self.axis.moving:
+            self.axis.quick_stop()
+        self.coordinates.power_on(reset_origin=first or self.cfg.axis.position_after_reset == "zero")
+        self.image.clear()
+        stage = self.stage
+        stage.nv_error = self.memory.load()
+        self.counter.power_on()
+        self.memory.load_static()
+        self.flash.power_on()
+        stage.brake_output = self.params.brake_output == 1
+        self.spindle.on = False
+        stage.estop = bool(self.signals.get("emergency_stop"))
+        stage.idxoff = True
+        stage.controller = not stage.estop and not stage.monitoring_cause() and not stage.nv_error
+        self.executor.waiting_in_position = False
+        self.i2t.power_on()
+        stage.overload_latched = bool(self.signals.get("output_overload"))
+        self.indexer.blocked_at = None
+        self.torque.update_block()
+        self.record_event("power_on")
+        self.plc.power_on(self.cfg.boot_time if self.booting else 0.0)
+        self.changed()
+
+    def _boot_done(self) -> None:
+        self.record_event("ready")
+        self.booted()
+
+    def silence(self, seconds: float) -> None:
+        """The card does not listen for ``seconds`` (boot, flash erase, manual §2.3.1 p)."""
+        self.silent_until = max(self.silent_until, self.clock.now() + seconds)
+
+    @property
+    def silent(self) -> bool:
+        return self.clock.now() < self.silent_until or not self.powered
+
+    def power_cycle(self, *, wipe: bool = False) -> None:
+        self._power_off()
+        if wipe:
+            self.nvram.wipe()
+        self._power_on()
+
+    def _power_off(self) -> None:
+        self.memory.save_static()
+        self.powered = False
+        self.plc.power_off()
+        self.executor.flush()
+        self.indexer.power_off(brake=True)
+
+    def reset(self) -> None:
+        """A reset (emergency-stop release): like power-on, DIL re-read (manual §2.2)."""
+        self._power_on()
+
+    def power(self, on: bool) -> None:
+        """The supply switched off or on (the ``power`` fault)."""
+        if on:
+            self._power_on()
+        else:
+            self._power_off()
+
+    def close(self) -> None:
+        for t in self._timers:
+            t.cancel()
+        self.plc.power_off()
+        self.executor.flush()
+
+    # ======================================================================================
+    # what the parts ask of the card
+    # ======================================================================================
+    def set_n(self, index: int, value: int, p3: int = 0) -> None:
+        """``N value;index;P3`` (manual §2.3.1 N) and the ``param.N*`` points: the value (the
+        parts that own its effect listen: the position loop, I²t), then outputs and waits."""
+        if self.params.write(index, value, p3):
+            self.changed()
+
+    def can_move(self) -> bool:
+        """A move may start (spec §4.2.4); not in counter-input mode (the counter input is the
+        set-point source, spec §5.10)."""
+        if self.counter.active:
+            return False
+        return self.stage.ready()
+
+    def activate_controller(self) -> None:
+        """Q3 / start of every Q: set-point := actual, position controller on (spec §5.6)."""
+        if self.stage.faulted():
+            return
+        if not self.stage.controller:
+            actual = self.indexer.actual()
+            if not self.axis.moving:
+                self.axis.set_position(actual)
+            self.stage.controller = True
+        self.indexer.arm_following_error()
+        self.changed()
+
+    def plan_changed(self) -> None:
+        """The indexer planned anew: H7 and in-position are solved again."""
+        self.torque.arm()
+        self.outputs.arm_in_position()
+
+    def arm_torque_abort(self) -> None:
+        self.torque.arm()
+
+    def following_error_fault(self, reason: str) -> None:
+        """|e| > N20 (spec §4.5.3): IDXOFF, controller off, motion aborted, queue flushed."""
+        if not self.stage.controller:
+            return
+        self.record_event("following_error")
+        self.announce("fault", 1, 0x8611)  # CiA 402's following error (a CANopen facade sends EMCY)
+        self.stage.switch_off()
+        self.spindle.on = False
+        self.executor.flush()
+        self.indexer.power_off(brake=True)
+        self.changed()
+
+    # ======================================================================================
+    # markers and status (spec §4.3, §4.4)
+    # ======================================================================================
+    def marker_byte(self, byte: int) -> int:
+        """MB0/MB1/MB3 carry status bits the firmware keeps (spec §4.4)."""
+        m = self.image.markers
+        stage = self.stage
+        if byte == 0:
+            v = m[0] & 0x07
+            v |= 0x08 if self.motion() else 0
+            v |= 0x10 if not stage.estop else 0
+            v |= 0x20 if stage.controller else 0
+            v |= 0x40 if stage.monitoring_cause() else 0
+            v |= 0x80 if stage.idxoff else 0
+            return v
+        if byte == 1:
+            v = m[1] & 0xE9
+            v |= 0x02 if self.i2t.latched else 0
+            v |= 0x04 if not self.busy() else 0
+            v |= 0x10 if self.axis.phase() == "const" else 0
+            return v
+        if byte == 3:
+            v = m[3] & 0xCF
+            v |= 0x10 if self.params.motion_disabled == 1 else 0
+            v |= 0x20 if self.executor.wait_name == "H2" else 0
+            return v
+        return m[byte] if 0 <= byte < 256 else 0
+
+    def write_marker_byte(self, byte: int, value: int) -> None:
+        """``p11`` / PLC: MB(byte) := value; the control bits of MB0/MB1 act (spec §4.4)."""
+        if not 0 <= byte < 256:
+            return
+        value &= 0xFF
+        m = self.image.markers
+        if byte == 0:
+            old = m[0]
+            m[0] = value & 0x07
+            if (value & 0x02) and not (old & 0x02):
+                self.executor.abort()
+                m[0] &= ~0x02
+            if (value & 0x04) and not (old & 0x04):
+                self.executor.submit(Cmd("p", 3, 1, m[2], 3))
+            if (value ^ old) & 0x01:
+                self.indexer.replan()
+        elif byte == 1:
+            m[1] = (m[1] & 0x01) | (value & 0xE8)
+        elif byte == 18:
+            m[18] = value
+            self.memory.save_static()
+        else:
+            m[byte] = value
+        self.changed()
+
+    def write_marker_bit(self, byte: int, bit: int, value: bool) -> None:
+        cur = self.image.markers[byte]
+        self.write_marker_byte(byte, (cur | (1 << bit)) if value else (cur & ~(1 << bit)))
+
+    def busy(self) -> bool:
+        return self.executor.busy
+
+    def motion(self) -> bool:
+        return (
+            self.axis.moving
+            or self.executor.reference is not None
+            or self.spindle.on
+            or self.image.marker(1, 5)
+        )
+
+    def status(self) -> int:
+        """The standard status byte of ``T3;0`` (spec §4.3.1)."""
+        s = tables.STATUS_BITS
+        stage = self.stage
+        v = 0
+        v |= s["ESTOP"] if stage.estop else 0
+        v |= s["MOTION"] if self.motion() else 0
+        v |= s["MONITORING"] if stage.monitoring_cause() else 0
+        v |= s["IDXOFF"] if stage.idxoff else 0
+        v |= s["BUSY"] if self.busy() else 0
+        v |= s["I2T_ACTIVE"] if self.i2t.limiting else 0
+        v |= s["I2T_LATCHED"] if self.i2t.latched else 0
+        v |= s["MESSAGE"] if self.image.markers[4] else 0
+        return v
+
+    def memory_status(self) -> int:
+        """The memory status byte of ``T3;4`` (spec §4.3.2)."""
+        s = tables.MEMORY_STATUS_BITS
+        v = 0 if self.plc.running else s["PLC_NOT_RUNNING"]
+        if self.plc.storage_error and not self.dil.interpolation:
+            v |= s["PLC_STORAGE_ERROR"]
+        if self.stage.nv_error:
+            v |= s["NV_ERROR"] | s["EEPROM_DEFECTIVE"]
+        if self.flash.cnc_storage_error:
+            v |= s["CNC_STORAGE_ERROR"]
+        return v
+
+    # ======================================================================================
+    # events from inputs and quantities
+    # ======================================================================================
+    def changed(self) -> None:
+        """Outputs follow the state; waiting commands re-check their condition."""
+        if self._changing:
+            return
+        self._changing = True
+        try:
+            self.outputs.follow()
+            self.executor.poke()
+        finally:
+            self._changing = False
+
+    def _on_input(self, name: str, old: Any, new: Any) -> None:
+        self.program.input_edge(name, bool(new))
+        if name == "E0.0" and self.params.enable_input == 1:
+            self.indexer.replan()
+        self.changed()
+
+    def _on_estop(self) -> None:
+        active = bool(self.signals.get("emergency_stop"))
+        stage = self.stage
+        if active and not stage.estop:
+            stage.estop = True
+            stage.switch_off()
+            self.spindle.on = False
+            self.executor.flush()
+            self.image.set_marker(0, 2, False)
+            self.indexer.power_off(brake=stage.brake_output)
+            self.record_event("emergency_stop")
+            self.changed()
+        elif not active and stage.estop:
+            self.record_event("emergency_stop_released")
+            self.reset()
+
+    def _on_monitoring(self) -> None:
+        if self.stage.monitoring_cause():
+            self.stage.switch_off()
+            self.spindle.on = False
+            self.executor.flush()
+            self.indexer.power_off(brake=self.stage.brake_output)
+            self.record_event("monitoring")
+        self.changed()
+
+    def _on_overload(self) -> None:
+        if self.signals.get("output_overload"):
+            self.stage.overload_latched = True  # recovery: 24 V off >= 10 s (a power cycle here)
+        self.changed()
+
+    def _i2t_settled(self) -> None:
+        self.torque.update_block()
+        self.changed()
+
