@@ -123,8 +123,8 @@ class Param:
             return " / ".join(str(c) for c in self.choices)
         if self.minimum is None and self.maximum is None:
             return ""
-        low = "" if self.minimum is None else f"{self.minimum:g}"
-        high = "" if self.maximum is None else f"{self.maximum:g}"
+        low = "" if self.minimum is None else f"{self.minimum:.12g}"  # (every digit the manual gives)
+        high = "" if self.maximum is None else f"{self.maximum:.12g}"
         return f"{low} … {high}"
 
 

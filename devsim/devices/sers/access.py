@@ -9,6 +9,7 @@ import re
 from collections.abc import Callable
 from typing import Any
 
+from devsim.core.parameters import Param as ParamDef
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.constants import (
     INC_PER_REV,
@@ -20,7 +21,7 @@ from devsim.devices.sers.constants import (
     WEIGHTING_PARAMS,
 )
 from devsim.devices.sers.errors import SersError
-from devsim.devices.sers.parameters import ALIASES, CURRENT_MAX_MA, PARAMETERS, ParamDef, lookup
+from devsim.devices.sers.parameters import ALIASES, CURRENT_MAX_MA, KIND, PARAMETERS, lookup
 from devsim.devices.sers.units import Scaling, format_fixed, format_query, quantize
 
 __all__ = ["ParameterAccess"]
@@ -34,16 +35,7 @@ class ParameterAccess:
     # ======================================================================================
     @property
     def scaling(self) -> Scaling:
-        """The unit conversion of the weighting parameters as they are now (made again only when
-        one of them changed: a position query needs it twice)."""
-        r = self.ram
-        key = (r[76], r[44], r[160], r[121], r[122], r[123])
-        made = self.__dict__.get("_scaling")
-        if made is not None and made[0] == key:
-            return made[1]
-        scaling = Scaling(int(key[0]), int(key[1]), int(key[2]), float(key[3]), float(key[4]), float(key[5]))
-        self.__dict__["_scaling"] = (key, scaling)
-        return scaling
+        return self.params.scaling
 
     def _factory_image(self) -> dict[int, Any]:
         """Factory defaults plus the configured EEPROM values, in internal units."""
@@ -54,8 +46,7 @@ class ParameterAccess:
         image[1010] = CURRENT_MAX_MA[self.cfg.current_class] // 2
         user: dict[int, Any] = {}
         for key, value in self.cfg.params.items():
-            pdef = lookup(str(key))
-            user[pdef.number] = value
+            user[lookup(str(key)).number] = value
         for number in WEIGHTING_PARAMS:
             if number in user:
                 image[number] = user[number]
@@ -64,44 +55,48 @@ class ParameterAccess:
             value = user.get(number, image.get(number))
             if value is None:
                 continue
-            if pdef.kind in WEIGHTED:
-                value = scaling.to_internal(pdef.kind, float(value))
+            if KIND[pdef.key] in WEIGHTED:
+                value = scaling.to_internal(KIND[pdef.key], float(value))
             image[number] = value
         return image
 
     def _load_parameters(self) -> None:
-        self.ram = self._factory_image()
+        ram = self._factory_image()
         stored = self.nvram.get("params")
         if stored and not self.eeprom_checksum_error:
             for key, value in stored.items():
-                self.ram[int(key)] = value
+                ram[int(key)] = value
         # not stored: power-on values (spec §4.1 step 4)
-        self.ram.update({1110: 1, 1035: 1, 1: 0, 1047: 0, 1164: 0, 1165: 0, 1118: 0})
+        ram.update({1110: 1, 1035: 1, 1: 0, 1047: 0, 1164: 0, 1165: 0, 1118: 0})
         for n in (100, 101, 102, 1101, 1102, 1103):
-            self.ram[n] = 0
+            ram[n] = 0
         extra = self.nvram.get("registers") or {}
         for n in (47, 1080, 1081, 1082, 1083, 1084, 1085):
-            self.ram[n] = extra.get(str(n), 0)
+            ram[n] = extra.get(str(n), 0)
+        self.params.load(ram)
 
     def psave(self) -> None:
         """P1004=2: RAM parameters → EEPROM (W and R0..R5 only with P1117=1)."""
-        data = {str(n): self.ram[n] for n, pdef in PARAMETERS.items() if pdef.saved and n in self.ram}
+        ram = self.params.values
+        data = {str(n): ram[n] for n, pdef in PARAMETERS.items() if pdef.saved and n in ram}
         self.nvram.put("params", data)
         self.eeprom_checksum_error = False
-        if self.ram.get(1117):
+        if self.params.save_registers_too:
             self.save_registers()
 
     def save_registers(self) -> None:
         """P1004=5: R0..R5 and W."""
-        self.nvram.put("registers", {str(n): self.ram[n] for n in (47, 1080, 1081, 1082, 1083, 1084, 1085)})
+        ram = self.params.values
+        self.nvram.put("registers", {str(n): ram[n] for n in (47, 1080, 1081, 1082, 1083, 1084, 1085)})
 
     def factory_defaults(self) -> None:
         """P1004=3: EEPROM and RAM parameters back to factory defaults."""
         self.nvram.delete("params")
         self.nvram.delete("registers")
-        keep = {n: self.ram[n] for n in (47, 1080, 1081, 1082, 1083, 1084, 1085)}
-        self.ram.update(self._factory_image())
-        self.ram.update(keep)
+        ram = self.params.values
+        keep = {n: ram[n] for n in (47, 1080, 1081, 1082, 1083, 1084, 1085)}
+        ram.update(self._factory_image())
+        ram.update(keep)
         self.eeprom_checksum_error = False
 
     def possave(self) -> None:
@@ -122,10 +117,10 @@ class ParameterAccess:
             return special
         if not pdef.readable:
             raise SersError(106)
-        value = self.ram.get(number, 0)
-        if pdef.kind in WEIGHTED:
+        value = self.params.values.get(number, 0)
+        if KIND[pdef.key] in WEIGHTED:
             scaling = self.scaling
-            return quantize(scaling.from_internal(pdef.kind, float(value)), scaling.decimals(pdef.kind))
+            return quantize(scaling.from_internal(KIND[pdef.key], float(value)), scaling.decimals(KIND[pdef.key]))
         return value
 
     def _special_read(self, n: int) -> float | None:
@@ -170,8 +165,9 @@ class ParameterAccess:
         return quantize(scaling.inc_to_pos(round(self.p51_inc())), scaling.pos_decimals)
 
     def _pulses_in_window(self, n: int) -> int:
-        window = float(self.ram.get(1055 if n == 1124 else 1145, 1)) * 0.002
-        measuring = int(self.ram.get(1053, 0)) in (9, 10) if n == 1124 else int(self.ram.get(1143, 0)) == 5
+        params = self.params
+        window = float(params.frequency_window if n == 1124 else params.frequency_window2) * 0.002
+        measuring = int(self.params.pulse_input) in (9, 10) if n == 1124 else int(self.params.pulse_input2) == 5
         return round(float(self.signals.get("pulse_frequency")) * window) if measuring else 0
 
     @property
@@ -203,12 +199,12 @@ class ParameterAccess:
     def adc(self) -> float:
         """P1046 (spec G-ADC): fraction of the range above the P1148 offset, 10-bit quantised."""
         volts = max(0.0, min(5.0, float(self.signals.get("adc_volts"))))
-        hysteresis = int(self.ram.get(1135, 7))
+        hysteresis = int(self.params.adc_hysteresis)
         bits = max(1, 10 - int(math.log2(hysteresis + 1)))
         raw = round(volts / 5 * 1023)
         raw = (raw >> (10 - bits)) << (10 - bits)
         volts = raw / 1023 * 5
-        offset = int(self.ram.get(1148, 0)) * 5 / 255
+        offset = int(self.params.adc_offset) * 5 / 255
         if offset >= 5:
             return 0.0
         return round(max(0.0, min(1.0, (volts - offset) / (5 - offset))), 3)
@@ -221,7 +217,7 @@ class ParameterAccess:
         if value == "*":
             if number != 1:
                 raise SersError(19)
-            self.ram[1] = "*"
+            self.params.target_address = "*"
             return
         assert isinstance(value, int | float)
         handler = self._special_writes().get(number)
@@ -233,11 +229,11 @@ class ParameterAccess:
         if 1205 <= number <= 1216 and "IO" not in self.cfg.options:
             raise SersError(4)
         self._check_range(pdef, value)
-        if pdef.kind in WEIGHTED:
-            internal = self.scaling.to_internal(pdef.kind, float(value))
-            self.ram[number] = internal
+        if KIND[pdef.key] in WEIGHTED:
+            internal = self.scaling.to_internal(KIND[pdef.key], float(value))
+            self.params.values[number] = internal
         else:
-            self.ram[number] = _as_number(value, pdef)
+            self.params.values[number] = _as_number(value, pdef)
         if 1201 <= number <= 1216:
             self.signals.set(f"O{number - 1200}", bool(value))
         self._after_write(number)
@@ -245,35 +241,35 @@ class ParameterAccess:
     def _check_range(self, pdef: ParamDef, value: float) -> None:
         if pdef.choices is not None and value not in pdef.choices:
             raise SersError(3)
-        if pdef.min_exclusive and pdef.minimum is not None and value <= pdef.minimum:
-            raise SersError(pdef.too_small_errno)  # a range "> minimum" (V, P103, P123)
-        if pdef.kind == "velocity":
+        if pdef.extra["min_exclusive"] and pdef.minimum is not None and value <= pdef.minimum:
+            raise SersError(pdef.extra["too_small_errno"])  # a range "> minimum" (V, P103, P123)
+        if KIND[pdef.key] == "velocity":
             rpm = self.scaling.vel_to_incps(float(value)) * 60 / INC_PER_REV
-            if rpm <= 0 and pdef.number == 91:
-                raise SersError(pdef.too_small_errno)
+            if rpm <= 0 and pdef.key == 91:
+                raise SersError(pdef.extra["too_small_errno"])
             if rpm > 10000:
-                raise SersError(pdef.too_large_errno)
+                raise SersError(pdef.extra["too_large_errno"])
             if rpm < 0:
-                raise SersError(pdef.too_small_errno)
+                raise SersError(pdef.extra["too_small_errno"])
             return
-        if pdef.kind == "acceleration":
+        if KIND[pdef.key] == "acceleration":
             rads = self.scaling.acc_to_incps2(float(value)) * 2 * math.pi / INC_PER_REV
             if rads > 100000:
-                raise SersError(pdef.too_large_errno)
-            if rads < (2 if pdef.number in (138, 1096) else 0):
-                raise SersError(pdef.too_small_errno)
+                raise SersError(pdef.extra["too_large_errno"])
+            if rads < (2 if pdef.key in (138, 1096) else 0):
+                raise SersError(pdef.extra["too_small_errno"])
             return
-        if pdef.kind == "position":
+        if KIND[pdef.key] == "position":
             lo, hi = self.scaling.pos_range()
             if value > hi:
-                raise SersError(pdef.too_large_errno)
+                raise SersError(pdef.extra["too_large_errno"])
             if value < lo:
-                raise SersError(pdef.too_small_errno)
+                raise SersError(pdef.extra["too_small_errno"])
             return
         if pdef.maximum is not None and value > pdef.maximum:
-            raise SersError(pdef.too_large_errno)
+            raise SersError(pdef.extra["too_large_errno"])
         if pdef.minimum is not None and value < pdef.minimum:
-            raise SersError(pdef.too_small_errno)
+            raise SersError(pdef.extra["too_small_errno"])
 
     def _special_writes(self) -> dict[int, Callable[[float], None]]:
         return {
@@ -336,8 +332,8 @@ class ParameterAccess:
         if direction == 0:
             self.interpreter.on_motion_end()
             return
-        self._speed = float(self.ram[91])
-        self._accel = float(self.ram[138])
+        self._speed = float(self.params.velocity)
+        self._accel = float(self.params.acceleration)
         self._target_physical = self._setpoint
         self._begin_motion("position", self._accel)
         self._legs = [(self._setpoint, self._speed)]
@@ -353,13 +349,13 @@ class ParameterAccess:
         start the next one."""
         if not self.logic_alive or self.interpreter.running:
             return
-        events = int(self.ram.get(1098, 0))
+        events = int(self.params.program_jump_enable)
         for n in sorted(self.interpreter.pending_events):
             self.interpreter.pending_events.discard(n)
             if events & (1 << (n - 1)) and self.signals.get(f"I{n}"):
                 self._start_subroutine(n)
                 return
-        if self._functions_enabled(128) and int(self.ram.get(1023, 0)) == 1 and self.signals.get("I8"):
+        if self._functions_enabled(128) and int(self.params.start_enable) == 1 and self.signals.get("I8"):
             self._clock_start = self.clock.call_later(self.interpreter.cycle, self._start_input)
 
     def report_program_error(self, errno: int, detail: str) -> None:
@@ -375,15 +371,15 @@ class ParameterAccess:
         self._motion_checks((target > here) - (target < here))
 
     def begin_polynomial(self) -> None:
-        self._speed = float(self.ram[91])
-        self._accel = float(self.ram[138])
+        self._speed = float(self.params.velocity)
+        self._accel = float(self.params.acceleration)
         self._begin_motion("poly", self._accel)
         self._arm_position_watches()
 
     def polynomial_finished(self) -> None:
         if self.motion is not None:
             self._motion_finished()
-            if self.ram.get(1121):
+            if self.params.report_in_position:
                 self.spontaneous(f"@{self.cfg.address}POS=1")
 
     def _write_opcode(self, value: float) -> None:
@@ -411,7 +407,7 @@ class ParameterAccess:
         if self.errors & STEP_LOSS:
             self._resync_to_encoder()
         self.errors = 0
-        self.ram[1118] = 0
+        self.params.l65_flag = 0
         self.energized = False
         self.relay = False
         self._update_outputs()
@@ -442,7 +438,7 @@ class ParameterAccess:
             raise SersError(80)
         if self.motion is not None:
             raise SersError(93)
-        self.ram[1014] = int(value)
+        self.params.positioning_mode = int(value)
 
     def _write_p1031(self, value: float) -> None:
         commands = {1: "LS", 2: "RS", 4: "LF", 8: "RF"}
@@ -466,37 +462,37 @@ class ParameterAccess:
     def _write_soft_limit(self, number: int, value: float) -> None:
         self._check_range(PARAMETERS[number], value)
         internal = self.scaling.pos_to_inc(float(value))
-        lower = internal if number == 1040 else self.ram[1040]
-        upper = internal if number == 1041 else self.ram[1041]
+        lower = internal if number == 1040 else self.params.limit_negative
+        upper = internal if number == 1041 else self.params.limit_positive
         if lower > upper:
             raise SersError(95)
-        self.ram[number] = internal
+        self.params.values[number] = internal
 
     def _write_w_mode(self, value: float, mode: int) -> None:
-        if self.motion is not None and self.ram[1014] != mode:
+        if self.motion is not None and self.params.positioning_mode != mode:
             raise SersError(93)
         self._write_w(value)
-        self.ram[1014] = mode
+        self.params.positioning_mode = mode
 
     def _write_w(self, value: float) -> None:
         """W (P47): free while standing; while moving only in the constant phase (§4.6.6)."""
         self._check_range(PARAMETERS[47], value)
         new = self.scaling.pos_to_inc(float(value))
         if self.motion != "position":
-            self.ram[47] = new
+            self.params.position_setpoint = new
             return
         if self.axis.phase() != "const":
             raise SersError(81)
-        mode = self.ram[1014]
+        mode = self.params.positioning_mode
         current_target = self._target_physical
         target = current_target + new if mode in (0, 1, 3) else new + self.offset
         position = self.axis.position()
         direction = 1 if self.axis.velocity() > 0 else -1
         remaining = (target - position) * direction
         if remaining < self.axis.stopping_distance(self._accel, self.ramp_profile()):
-            self.ram[47] = new
+            self.params.position_setpoint = new
             raise SersError(87)
-        self.ram[47] = new
+        self.params.position_setpoint = new
         self._target_physical = target
         self._w_updated = True
         self._legs = []
@@ -557,13 +553,13 @@ class ParameterAccess:
             result = st.compare(value, cond.op, right)
         if counter and counters:  # G-COUNTER: compare the old value, then decrement (saturating at 0)
             number = ALIASES[str(left.ref)]
-            old = int(self.ram.get(number, 0))
-            self.ram[number] = old - 1 if (old > 0 or (number == 100 and self.ram[1014] == 3)) else 0
+            old = int(self.params.values.get(number, 0))
+            self.params.values[number] = old - 1 if (old > 0 or (number == 100 and self.params.positioning_mode == 3)) else 0
         return result != cond.negate
 
     def arithmetic(self, op: str, operand: st.Operand | None) -> None:
         """X := X (op) operand, left to right (§4.6.10, spec G-ARITH): 3 decimals, ±2147483.647."""
-        x = float(self.ram.get(1047, 0))
+        x = float(self.params.accumulator)
         if op in ("NOT", "NEG"):
             result = float(~int(x)) if op == "NOT" else -x
         else:
@@ -594,22 +590,22 @@ class ParameterAccess:
         if value < -2147483.647:
             self.warn(256)
             raise SersError(99)
-        self.ram[1047] = quantize(value, 3)
+        self.params.accumulator = quantize(value, 3)
 
     # ======================================================================================
     # serial helpers used by the device
     # ======================================================================================
     @property
     def handshake_mode(self) -> int:
-        return int(self.ram.get(1017, 1))
+        return int(self.params.handshake_mode)
 
     @property
     def english(self) -> bool:
-        return int(self.ram.get(265, 0)) == 1
+        return int(self.params.language) == 1
 
     @property
     def list_options(self) -> int:
-        return int(self.ram.get(1028, 1))
+        return int(self.params.list_option)
 
     def ack_text(self) -> str:
         """``ok<d>`` (§4.1): 4 error, 0/2 moving, 1/3 standing, +2 with a warning; ``pgm``."""
@@ -624,10 +620,10 @@ class ParameterAccess:
 
     def format_value(self, number: int, value: float) -> str:
         pdef = PARAMETERS[number]
-        if pdef.kind in WEIGHTED:
+        if KIND[pdef.key] in WEIGHTED:
             scaling = self.scaling
-            return format_query(value, scaling.decimals(pdef.kind), scaling.unit(pdef.kind))
-        if pdef.kind == "fixed":
+            return format_query(value, scaling.decimals(KIND[pdef.key]), scaling.unit(KIND[pdef.key]))
+        if KIND[pdef.key] == "fixed":
             return format_query(value, pdef.decimals)
         if isinstance(value, float) and value.is_integer():
             return str(int(value))
@@ -645,10 +641,10 @@ class ParameterAccess:
                 pdef = PARAMETERS.get(self.address_number(stmt.target))
             except (SersError, KeyError):
                 pdef = None
-            if pdef is not None and pdef.kind in WEIGHTED:
+            if pdef is not None and KIND[pdef.key] in WEIGHTED:
                 scaling = self.scaling
-                value = format_fixed(stmt.value.value, scaling.decimals(pdef.kind))
-                unit = scaling.unit(pdef.kind) if self.list_options & 2 else ""
+                value = format_fixed(stmt.value.value, scaling.decimals(KIND[pdef.key]))
+                unit = scaling.unit(KIND[pdef.key]) if self.list_options & 2 else ""
                 return f"{stmt.target.text}={value}{unit}"
         legacy_in = re.search(r"\bIN[0-9]", text.upper()) is not None
         if isinstance(stmt, st.If | st.Wait) and stmt.cond is not None and (stmt.cond.negate or legacy_in):
@@ -664,9 +660,9 @@ class ParameterAccess:
             if value == "*":
                 return "*"  # P1 = Z=* (a broadcast target), as its query answers it
             pdef = PARAMETERS.get(number)
-            if pdef is not None and pdef.kind in WEIGHTED:
-                return format_query(float(value), self.scaling.decimals(pdef.kind))
-            if pdef is not None and pdef.kind == "fixed":
+            if pdef is not None and KIND[pdef.key] in WEIGHTED:
+                return format_query(float(value), self.scaling.decimals(KIND[pdef.key]))
+            if pdef is not None and KIND[pdef.key] == "fixed":
                 return format_query(float(value), pdef.decimals)
             return str(int(value)) if float(value).is_integer() else str(value)
         raise SersError(13)
@@ -678,11 +674,11 @@ class ParameterAccess:
                 pdef = PARAMETERS.get(self.address_number(target))
                 if pdef is None:
                     raise SersError(13)
-                return pdef.name_en if self.english else pdef.name
+                return pdef.doc if self.english else pdef.name
             raise SersError(13)
         if target.kind in ("P", "alias", "O"):
             number = self.address_number(target)
-            if number == 1 and self.ram.get(1) == "*":
+            if number == 1 and self.params.target_address == "*":
                 return f"{target.text}=*"
             return f"{target.text}={self.format_value(number, self.operand_value(target))}"
         return f"{target.text}={int(self.operand_value(target))}"
@@ -710,9 +706,9 @@ class ParameterAccess:
 
 
 def _as_number(value: float, pdef: ParamDef) -> float | int:
-    if pdef.kind == "int" and float(value).is_integer():
+    if KIND[pdef.key] == "int" and float(value).is_integer():
         return int(value)
-    if pdef.kind == "fixed":
+    if KIND[pdef.key] == "fixed":
         return quantize(float(value), pdef.decimals)
     return value
 

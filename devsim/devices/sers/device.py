@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import ErrorCode, Parameter, Reference
+from devsim.core.kit import ErrorCode, Reference
 from devsim.core.settings import Section
 from devsim.devices.sers.config import SersConfig
 from devsim.devices.sers.drive import SersDrive
@@ -19,7 +19,7 @@ from devsim.devices.sers.drive_actions import DRIVE
 from devsim.devices.sers.errors import ERRNO
 from devsim.devices.sers.execution import COMMANDS, STATEMENTS
 from devsim.devices.sers.face import INTERACTIVE, SersFace
-from devsim.devices.sers.parameters import PARAMETERS, STORED_ONLY
+from devsim.devices.sers.parameters import PARAMETER_TABLE
 from devsim.devices.sers.points import FAULTS, POINTS
 
 __all__ = ["SersDevice"]
@@ -42,19 +42,6 @@ class SersDevice(Device):
     def reference(cls) -> Reference:
         return Reference(
             commands=[*INTERACTIVE, *STATEMENTS, *COMMANDS],
-            parameters=[
-                Parameter(
-                    f"P{p.number}",
-                    p.name_en or p.name,
-                    f"§4.7 P{p.number}",
-                    {"position": "P123", "velocity": "P121", "acceleration": "P122"}.get(p.kind, ""),
-                    p.minimum,
-                    p.maximum,
-                    p.default,
-                    p.saved,
-                    "stored" if p.number in STORED_ONLY else "simulated",
-                )
-                for p in PARAMETERS.values()
-            ],
+            parameter_table=PARAMETER_TABLE,
             errors=[ErrorCode(str(n), f"{de} — {en}", "§4.8.3.1") for n, (de, en) in sorted(ERRNO.items())],
         )

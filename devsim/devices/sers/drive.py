@@ -38,6 +38,7 @@ from devsim.devices.sers.interpreter import Interpreter
 from devsim.devices.sers.master import MasterLink
 from devsim.devices.sers.motion import Motion
 from devsim.devices.sers.parameters import SUPPLY_THRESHOLDS
+from devsim.devices.sers.params import SersParameters
 from devsim.devices.sers.polynomial import PolynomialMove
 from devsim.devices.sers.program import ProgramMemory
 from devsim.devices.sers.signals import SIGNALS
@@ -58,6 +59,7 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
     ) -> None:
         super().__init__(clock=clock, config=config, nvram=nvram, name=name)
         self.cfg = SersConfig.parse(self.config)
+        self.params = SersParameters()
         self.program = ProgramMemory(self.nvram)
         self.interpreter = Interpreter(self)
         self.master = MasterLink(clock, self.line_out)
@@ -76,7 +78,6 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self.booting = False
         self.firmware = FIRMWARE
         self.trace_mode = False
-        self.ram: dict[int, Any] = {}
         self.poly = PolynomialMove(self)
         self._power_on()
 
@@ -185,7 +186,7 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self.offset = self.axis.position() - p51
         for n in range(1, 17):
             self.signals.set(f"O{n}", False)
-        if self.ram[1011] & 32 and not self.eeprom_checksum_error:
+        if self.params.current_parameters & 32 and not self.eeprom_checksum_error:
             self.energized = True
             self.relay = True
         self._check_supply()

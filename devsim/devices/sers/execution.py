@@ -47,7 +47,7 @@ class Execution:
         """In a master (address 0) after ``Z=n`` (P1): the slave statements go to."""
         if self.cfg.address != 0:
             return None
-        target = self.ram.get(1, 0)
+        target = self.params.target_address
         if target == "*":
             return "*"
         return int(target) if target else None
@@ -58,7 +58,7 @@ class Execution:
         if isinstance(stmt, st.Command) and stmt.name == "E" and self.poly.definition is not None:
             last = self.poly.definition[2]
             started = self.poly.execute() == "started"
-            master_goes_on = self.cfg.address == 0 and int(self.ram.get(1110, 1)) == 0
+            master_goes_on = self.cfg.address == 0 and int(self.params.wait_until_positioned) == 0
             if last:
                 return None if (master_goes_on or self.motion is None) else "position"
             return None if started else "segment"
@@ -66,7 +66,7 @@ class Execution:
             self.execute(stmt)
             if self.motion is None:
                 return None
-            if stmt.name == "E" and self.cfg.address == 0 and int(self.ram.get(1110, 1)) == 0:
+            if stmt.name == "E" and self.cfg.address == 0 and int(self.params.wait_until_positioned) == 0:
                 return None  # master with P1110=0 goes on while it moves (§4.8.5.5)
             return "position"
         if isinstance(stmt, st.Jog):
@@ -118,7 +118,7 @@ class Execution:
             raise SersError(79)
         self.energized = True
         self.relay = True
-        if self.ram.get(1152) == 1 and not int(self.ram.get(147, 0)) & 256 and not self.servo_calibrated:
+        if self.params.servo_mode == 1 and not int(self.params.homing_parameters) & 256 and not self.servo_calibrated:
             # SERVO: the load-angle zero is taken 100 ms after ON (§4.8.6.7, P147 bit 8 = 0)
             self._timers.append(self.clock.call_later(0.1, self._servo_calibrate))
         self._update_outputs()
@@ -130,7 +130,7 @@ class Execution:
 
     def _servo_check(self) -> None:
         """Positioning or jogging before the load angle is calibrated: warning 2048."""
-        if self.ram.get(1152) == 1 and not self.servo_calibrated:
+        if self.params.servo_mode == 1 and not self.servo_calibrated:
             self.warn(2048)
 
     def _servo_overload(self, overloaded: bool) -> None:
@@ -138,7 +138,7 @@ class Execution:
         and the move resumes when the load goes away, at P1163 if P1162=1 (catch-up), else at
         V (arriving later).  P1160 signals the overload on an output."""
         self.servo_overload = overloaded
-        sel = int(self.ram.get(1160, 0))
+        sel = int(self.params.overload_output)
         if sel:
             port, value = abs(sel) if abs(sel) <= 4 else abs(sel) - 4, sel > 0
             if overloaded or abs(sel) > 4:
@@ -151,8 +151,8 @@ class Execution:
         if getattr(self, "_servo_resume", False) and self.motion == "position":
             self._servo_resume = False
             speed = self._speed
-            if self.ram.get(1162) == 1:
-                speed = max(speed, float(self.ram.get(1163, speed)))
+            if self.params.use_catch_up_velocity == 1:
+                speed = max(speed, float(self.params.catch_up_velocity))
             self.axis.move_to(self._target_physical, speed, self._accel, on_done=self._positioning_done)
 
     def switch_off(self) -> None:
@@ -192,16 +192,16 @@ class Execution:
             self._timers.append(self.clock.call_later(0.05, self._phases_off))
 
         if self.motion is not None and self.axis.moving:
-            self._stop_decel = self.ram[1030]
+            self._stop_decel = self.params.error_deceleration
             self.motion = "error-stop"
             self._cancel_jog_timer()
-            self.axis.stop(self.ram[1030], on_done=lambda: (self._motion_finished(), relay_open()))
+            self.axis.stop(self.params.error_deceleration, on_done=lambda: (self._motion_finished(), relay_open()))
         else:
             relay_open()
         self._update_outputs()
 
     def _phases_off(self) -> None:
-        if self.errors and not (self.errors & STEP_LOSS and self.ram.get(1029) == 3):
+        if self.errors and not (self.errors & STEP_LOSS and self.params.step_monitoring == 3):
             self.energized = False
             self._update_outputs()
 

@@ -576,7 +576,7 @@ class SersFace(Face):
         # a master asks through P2 (IF/WAIT) or P3 (read): answer the value (§4.8.5.5, G-MASTER)
         number = self.model.address_number(stmt.target)
         asked = int(self.model.operand_value(stmt.value)) if not isinstance(stmt.value, str) else 0
-        self.model.ram[number] = asked
+        self.model.params.values[number] = asked
         self._out(line, f"P{number}={self.model.plain_value(asked)}\n\r")
         return True
 

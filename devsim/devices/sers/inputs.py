@@ -47,24 +47,24 @@ class InputsAndFaults:
 
     def _functions_enabled(self, bit: int) -> bool:
         """Manual functions on I1..I7 (§3.1.4, §4.8.1.1 P1021)."""
-        service = self.cfg.service_switch or (self.signals.get("service_ext") and self.ram.get(1092))
+        service = self.cfg.service_switch or (self.signals.get("service_ext") and self.params.external_service_switch)
         if bit == 128:
-            return bool(int(self.ram.get(1021, 0)) & 128)
-        return bool(service) or bool(int(self.ram.get(1021, 0)) & bit)
+            return bool(int(self.params.input_enable) & 128)
+        return bool(service) or bool(int(self.params.input_enable) & bit)
 
     def _i7_stop_active(self) -> bool:
-        return bool(self.ram) and self._functions_enabled(64) and bool(self.signals.get("I7"))
+        return self._functions_enabled(64) and bool(self.signals.get("I7"))
 
     def _on_digital_input(self, name: str, old: Any, new: Any) -> None:
         if not self.logic_alive or self.booting:
             return
         n = int(name[1:])
         bit = 1 << (n - 1)
-        monitored = int(self.ram.get(1045, 1)) == n and self.ram.get(1044)
+        monitored = int(self.params.standstill_input) == n and self.params.standstill_distance
         active_edge = bool(new) != (self.cfg.input_level == "low_active")
         if monitored and active_edge and self.motion is not None:
             self._arm_standstill_monitor()
-        if self.ram.get(1130) == n and self._homing is not None and self._homing["signal"] == "reference":
+        if self.params.reference_input == n and self._homing is not None and self._homing["signal"] == "reference":
             self._homing_edge(bool(new))
         if self._functions_enabled(bit):
             try:
@@ -110,7 +110,7 @@ class InputsAndFaults:
         (P1022 ≠ 0) the subroutine L(address + 1) of the BCD address on the inputs."""
         if self.interpreter.running or not self._functions_enabled(128):
             return
-        mask = int(self.ram.get(1022, 0)) & 0x7F & ~int(self.ram.get(1021, 0))
+        mask = int(self.params.input_label_enable) & 0x7F & ~int(self.params.input_enable)
         try:
             if mask:
                 self._run_label((self.inputs_byte(1) & mask) + 1)
@@ -125,7 +125,7 @@ class InputsAndFaults:
 
     def _check_start(self) -> None:
         """Refusals of a program start, in the order of §4.4.1 (errnos 65–69)."""
-        if self.cfg.service_switch or (self.signals.get("service_ext") and self.ram.get(1092)):
+        if self.cfg.service_switch or (self.signals.get("service_ext") and self.params.external_service_switch):
             raise SersError(65)
         if self.errors:
             raise SersError(66)
@@ -145,7 +145,7 @@ class InputsAndFaults:
     def _event_input(self, n: int, active: bool) -> None:
         """Event-driven mode P1098 (§4.5.2): a rising edge on In calls Ln if no program runs;
         an edge during a program is served when it ends if the input is still active."""
-        if not int(self.ram.get(1098, 0)) & (1 << (n - 1)):
+        if not int(self.params.program_jump_enable) & (1 << (n - 1)):
             return
         if not active:
             self.interpreter.pending_events.discard(n)
@@ -174,7 +174,7 @@ class InputsAndFaults:
         if volts < u_l:
             self.drive_error(UNDERVOLTAGE, immediate=True)
         elif volts < u_b:
-            if not self.errors & UNDERVOLTAGE and self.ram.get(1058):
+            if not self.errors & UNDERVOLTAGE and self.params.save_position_on_undervoltage:
                 self.possave()
             self.drive_error(UNDERVOLTAGE)
         if volts < u_w:
@@ -209,16 +209,17 @@ class InputsAndFaults:
         if not self.logic_alive:
             return
         self.signals.set("READY", bool(self.relay and not self.errors))
-        for param, state in (
-            (1125, self.pos_ok),
-            (1126, self.program_state == 1),
-            (1131, self.errors != 0),
-            (1132, self.warnings != 0),
+        params = self.params
+        for selected, state in (
+            (params.output_in_position, self.pos_ok),
+            (params.output_program_running, self.program_state == 1),
+            (params.output_error, self.errors != 0),
+            (params.output_warning, self.warnings != 0),
         ):
-            sel = int(self.ram.get(param, 0))
+            sel = int(selected)
             if sel and abs(sel) <= 4:
                 self.signals.set(f"O{abs(sel)}", state if sel > 0 else not state)
-        brake = int(self.ram.get(1036, 0))
+        brake = int(self.params.brake_output)
         if brake:
             off = not self.energized
             self.signals.set(f"O{abs(brake)}", off if brake > 0 else not off)
@@ -228,13 +229,13 @@ class InputsAndFaults:
         50 % at standstill from 20 ms after the last motion; +20 % boost per bits 1/2."""
         if not self.energized:
             return 0.0
-        current = float(self.ram.get(1010, 0))
-        bits = int(self.ram.get(1011, 0))
+        current = float(self.params.phase_current)
+        bits = int(self.params.current_parameters)
         standing = self.motion is None and self.clock.now() - self._stopped_at >= 0.02
         if standing and bits & 1:
             current *= 0.5
         accel = abs(self.axis.acceleration())
-        if (bits & 2 and accel > float(self.ram.get(1012, 0))) or (bits & 4 and standing):
+        if (bits & 2 and accel > float(self.params.boost_acceleration)) or (bits & 4 and standing):
             current *= 1.2
         return current
 

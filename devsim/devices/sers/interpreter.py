@@ -21,12 +21,13 @@ from devsim.core.clock import Clock, Timer
 from devsim.core.record import field, record
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.errors import SersError
+from devsim.devices.sers.params import SersParameters
 
 
 class ProgramHost(Protocol):
     """What the interpreter needs of the drive it runs on (the SERS model)."""
 
-    ram: dict[int, Any]
+    params: SersParameters
     clock: Clock
     cfg: Any
     axis: Any
@@ -136,18 +137,15 @@ class Interpreter:
     @property
     def in_l65(self) -> bool:
         """The "L65 Fehlerbehandlung" flag is P1118 itself: ``P1118=0`` (or ``P11=0``) ends it."""
-        ram = getattr(self.drive, "ram", None)
-        return bool(ram.get(1118, 0)) if ram is not None else False
+        return bool(self.drive.params.l65_flag)
 
     @in_l65.setter
     def in_l65(self, value: bool) -> None:
-        ram = getattr(self.drive, "ram", None)
-        if ram is not None:
-            ram[1118] = int(value)
+        self.drive.params.l65_flag = int(value)
 
     @property
     def cycle(self) -> float:
-        return 0.002 if int(self.drive.ram.get(1127, 0)) == 1 else 0.0005
+        return 0.002 if int(self.drive.params.slow_program_cycle) == 1 else 0.0005
 
     def reset(self) -> None:
         """Power-on: nothing runs."""
@@ -183,7 +181,7 @@ class Interpreter:
                 raise SersError(71)
             self.pc = self.program.labels[label]
             self.subroutine = True if subroutine is None else subroutine
-        elif self.resume_pc is not None and int(self.drive.ram.get(1033, 0)) == 1 and self.stops == 1:
+        elif self.resume_pc is not None and int(self.drive.params.continuation_after_stop) == 1 and self.stops == 1:
             self.pc = self.resume_pc  # P1033=1: continue where the stop happened
             self.subroutine = False
         else:
@@ -214,7 +212,7 @@ class Interpreter:
         self.resume_pc = None
         self.in_l65 = False
         self.drive.on_program_state()
-        if was and self.drive.ram.get(1129):
+        if was and self.drive.params.report_program_end:
             self.drive.spontaneous(f"@{self.drive.cfg.address}P0=0")
         self.drive.on_program_end()
 
@@ -222,7 +220,7 @@ class Interpreter:
         """A stop command (S) or the STOP input while the program runs (P1033, §4.8.6.2)."""
         if not self.running:
             return
-        mode = int(self.drive.ram.get(1033, 0))
+        mode = int(self.drive.params.continuation_after_stop)
         if mode in (2, 3) and not (mode == 3 and self.in_l65) and L65 in self.program.labels:
             self._jump_l65()
             return
@@ -245,7 +243,7 @@ class Interpreter:
         """A drive error (P11) stops the program, or jumps to L65 with P1033=2/3 (§4.6.2)."""
         if not self.running:
             return
-        mode = int(self.drive.ram.get(1033, 0))
+        mode = int(self.drive.params.continuation_after_stop)
         if mode == 3 and self.in_l65:
             return  # P1033=3: during the L65 handling further errors neither stop nor jump
         if mode in (2, 3) and L65 in self.program.labels:
@@ -381,7 +379,7 @@ class Interpreter:
             return False
         if isinstance(stmt, st.Assign) and stmt.target.kind == "alias" and stmt.target.ref == "D":
             value = drive.operand_value(stmt.value) if not isinstance(stmt.value, str) else 0.0
-            factor = 1.0 if int(drive.ram.get(1141, 0)) == 1 else 1.2
+            factor = 1.0 if int(drive.params.delay_correction) == 1 else 1.2
             self.waiting = "delay"
             self._delay = drive.clock.call_later(max(0.0, float(value)) * 0.1 * factor, self._delay_done)
             return True
@@ -542,14 +540,14 @@ class Interpreter:
             self._schedule(self.cycle)
 
     def _position_blocks(self) -> bool:
-        return self.waiting == "position" and int(self.drive.ram.get(1110, 1)) == 1
+        return self.waiting == "position" and int(self.drive.params.wait_until_positioned) == 1
 
     # -- D2 (§4.8.5.1) ---------------------------------------------------------------------------------
     def _start_d2(self, stmt: st.Assign) -> None:
         drive = self.drive
         value = drive.operand_value(stmt.value) if not isinstance(stmt.value, str) else 0.0
-        drive.ram[1164] = float(value)
-        drive.ram[1165] = 0
+        drive.params.d2_time = float(value)
+        drive.params.d2_bit = 0
         if self._d2 is not None:
             self._d2.cancel()
         nxt = self.program.statements[self.pc + 1] if self.pc + 1 < len(self.program.statements) else None
@@ -561,7 +559,7 @@ class Interpreter:
 
     def _d2_expired(self) -> None:
         self._d2 = None
-        self.drive.ram[1165] = 1
+        self.drive.params.d2_bit = 1
         if self._d2_jump is not None and self.running:
             if self._position_blocks():
                 self._d2_pending = True  # P1110=1: the jump waits until the drive is in position

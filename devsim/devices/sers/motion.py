@@ -48,8 +48,8 @@ class Motion:
             return  # G-EWHILEMOVE: the running move already took the new W
         if self.motion is not None:
             raise SersError(70)
-        mode = int(self.ram[1014])
-        w = float(self.ram[47])
+        mode = int(self.params.positioning_mode)
+        w = float(self.params.position_setpoint)
         p51 = self.p51_inc()
         if mode == 1:
             start, target = 0.0, float(round(w))
@@ -69,8 +69,8 @@ class Motion:
             self.offset = self.axis.position()
         elif target == p51:
             return  # already there: nothing moves, POS stays 1
-        self._speed = float(self.ram[91])
-        self._accel = float(self.ram[138])
+        self._speed = float(self.params.velocity)
+        self._accel = float(self.params.acceleration)
         self._target_physical = target + self.offset
         legs = self._backlash_legs(p51 + self.offset, self._target_physical)
         for _target, speed in legs:
@@ -85,11 +85,11 @@ class Motion:
     def _backlash_legs(self, start: float, target: float) -> list[tuple[float, float]]:
         """Backlash compensation P1037 (§4.8.4.7, spec §5.8 G-BACKLASH): the final approach
         is always made opposite to the homing direction (P147 bit 0), at speed P1003."""
-        slack = abs(float(self.ram.get(1037, 0)))
+        slack = abs(float(self.params.backlash))
         if not slack or target == start:
             return [(target, self._speed)]
-        approach = 1 if int(self.ram.get(147, 0)) & 1 else -1
-        creep = float(self.ram[1003])
+        approach = 1 if int(self.params.homing_parameters) & 1 else -1
+        creep = float(self.params.homing_velocity_slow)
         direction = 1 if target > start else -1
         if direction == approach:
             if abs(target - start) <= slack:
@@ -104,9 +104,10 @@ class Motion:
 
     def ramp_profile(self) -> RampProfile | None:
         """P1032 ramp shape with the sections P1005–P1008 (§4.8.4.4, spec §5.2)."""
-        r = self.ram
-        shape = "sine" if int(r.get(1032, 0)) == 1 else "linear"
-        fractions = [float(r.get(n, 100)) / 100 for n in (1007, 1005, 1008, 1006)]
+        p = self.params
+        shape = "sine" if int(p.ramp_shape) == 1 else "linear"
+        fractions = [float(v) / 100 for v in (p.ramp_velocity1, p.ramp_acceleration1, p.ramp_velocity2,
+                                              p.ramp_acceleration2)]
         if shape == "linear" and all(f == 1.0 for f in fractions):
             return None
         speed1, accel1, speed2, accel2 = fractions
@@ -114,7 +115,7 @@ class Motion:
 
     def _leave_zero_phase(self, target: float) -> float:
         """P1001 (§4.8.4.2): keep 0.1°/0.2°/0.3° away from multiples of 1.8° (64 increments)."""
-        level = int(self.ram.get(1001, 0))
+        level = int(self.params.leave_zero_phase)
         if not level:
             return target
         step = INC_PER_REV / 200
@@ -125,18 +126,18 @@ class Motion:
         return target
 
     def _positioning_done(self) -> None:
-        mode = int(self.ram[1014])
+        mode = int(self.params.positioning_mode)
         if mode == 3:
-            modulo = float(self.ram.get(103, 0))
+            modulo = float(self.params.modulo)
             if modulo > 0:
                 while self.p51_inc() >= modulo - 1e-6:
                     self.offset += modulo
-                    self.ram[100] = int(self.ram.get(100, 0)) + 1
+                    self.params.counter1 = int(self.params.counter1) + 1
                 while self.p51_inc() <= -modulo + 1e-6:
                     self.offset -= modulo
-                    self.ram[100] = int(self.ram.get(100, 0)) - 1
+                    self.params.counter1 = int(self.params.counter1) - 1
         self._motion_finished()
-        if self.ram.get(1121):
+        if self.params.report_in_position:
             self.spontaneous(f"@{self.cfg.address}POS=1")
 
     def _begin_motion(self, kind: str, decel: float) -> None:
@@ -192,8 +193,10 @@ class Motion:
         self._motion_checks(direction)
         if self.motion not in (None, "jog", "position", "stopping"):
             raise SersError(70)
-        speed = float(self.ram[1019 if name[1] == "S" else 1020]) * float(self.ram.get(108, 100)) / 100
-        accel = float(self.ram[1018])
+        params = self.params
+        jog_speed = params.jog_velocity_slow if name[1] == "S" else params.jog_velocity_fast
+        speed = float(jog_speed) * float(params.feedrate_override) / 100
+        accel = float(self.params.jog_acceleration)
         _can_move(speed, accel)
         if not (self.motion == "jog" and self._jog_dir == direction and self._jog_speed == speed):
             self._servo_check()
@@ -205,7 +208,7 @@ class Motion:
             self._arm_position_watches()
         self._jog_until = until
         self._cancel_jog_timer()
-        if serial and until is None and self.ram.get(1035, 1) == 1:
+        if serial and until is None and self.params.jog_timeout == 1:
             self._jog_timer = self.clock.call_later(0.5, self._jog_timeout)
         if until is not None and self.evaluate(until):
             self._until_reached()
@@ -223,7 +226,7 @@ class Motion:
     def _until_reached(self) -> None:
         """':' event (§4.6.9): brake with P1018, or travel the overrun distance P1039 first."""
         self._jog_until = None
-        overrun = float(self.ram.get(1039, 0))
+        overrun = float(self.params.overrun)
         if overrun:
             target = self.axis.position() + self._jog_dir * abs(overrun)
             self.motion = "stopping"
@@ -250,7 +253,7 @@ class Motion:
         """
         if self.motion is not None:
             raise SersError(70)
-        p147 = int(self.ram.get(147, 0))
+        p147 = int(self.params.homing_parameters)
         direction = -1 if p147 & 1 else 1
         if p147 & 2:
             signal = "limit_left" if direction < 0 else "limit_right"
@@ -261,19 +264,19 @@ class Motion:
         else:
             signal = "index" if p147 & 64 and not p147 & 128 else "reference"
             self._motion_checks(0)
-        accel = float(self.ram[42])
-        _can_move(float(self.ram[41]) * float(self.ram.get(108, 100)) / 100, accel)
-        _can_move(float(self.ram[1003]), accel)
+        accel = float(self.params.homing_acceleration)
+        _can_move(float(self.params.homing_velocity) * float(self.params.feedrate_override) / 100, accel)
+        _can_move(float(self.params.homing_velocity_slow), accel)
         # (creep speed and ramp as at the start: a write during the run cannot stop it midway)
         self._homing = {"signal": signal, "direction": direction, "phase": "seek", "p147": p147,
-                        "creep": float(self.ram[1003]), "accel": accel}
+                        "creep": float(self.params.homing_velocity_slow), "accel": accel}
         self._begin_motion("home", accel)
         if signal == "index":
             self._watches.append(self.axis.watch_index(self._on_index))
         if signal != "index" and self._homing_signal_active():
             self._creep()
         else:
-            speed = float(self.ram[41]) * float(self.ram.get(108, 100)) / 100
+            speed = float(self.params.homing_velocity) * float(self.params.feedrate_override) / 100
             self.axis.jog(direction, speed, accel)
             self._arm_position_watches(keep=True)
 
@@ -347,17 +350,17 @@ class Motion:
         self.offset = self.axis.position()
         self.homed = True
         self._motion_finished()
-        if self.ram.get(1121):
+        if self.params.report_in_position:
             self.spontaneous(f"@{self.cfg.address}POS=1")
 
     def _reference_active(self) -> bool:
-        selector = int(self.ram.get(1130, 0)) if self.ram else 0
+        selector = int(self.params.reference_input)
         if selector:
             return bool(self.signals.get(f"I{selector}"))
         return bool(self.signals.get("reference"))
 
     def _on_reference(self, name: str, old: Any, new: Any) -> None:
-        if self._homing is not None and self._homing["signal"] == "reference" and not self.ram.get(1130):
+        if self._homing is not None and self._homing["signal"] == "reference" and not self.params.reference_input:
             self._homing_edge(bool(new))
         self._check_until()
 
@@ -374,14 +377,14 @@ class Motion:
         target = round(p51 / ELECTRICAL_PERIOD) * ELECTRICAL_PERIOD
         direction = (target > p51) - (target < p51)
         self._motion_checks(direction)
-        _can_move(float(self.ram[41]), float(self.ram[42]))
-        self._begin_motion("pos0", float(self.ram[42]))
+        _can_move(float(self.params.homing_velocity), float(self.params.homing_acceleration))
+        self._begin_motion("pos0", float(self.params.homing_acceleration))
 
         def done() -> None:
             self.offset = self.axis.position()
             self._motion_finished()
 
-        self.axis.move_to(target + self.offset, float(self.ram[41]), float(self.ram[42]), on_done=done)
+        self.axis.move_to(target + self.offset, float(self.params.homing_velocity), float(self.params.homing_acceleration), on_done=done)
 
     def posr(self, force: bool) -> None:
         """POSR (§4.8.4.2, spec §5.9): after a step loss, follow the motor's real position
@@ -399,16 +402,16 @@ class Motion:
             self.errors &= ~STEP_LOSS
         self.warnings &= ~STEP_LOSS
         self._resync_to_encoder()
-        target = self._setpoint if self._setpoint is not None else float(self.ram[47]) + self.offset
+        target = self._setpoint if self._setpoint is not None else float(self.params.position_setpoint) + self.offset
         direction = (target > self.axis.position()) - (target < self.axis.position())
         self._motion_checks(direction)
-        _can_move(float(self.ram[41]), float(self.ram[42]))
-        self._begin_motion("posr", float(self.ram[42]))
-        self.axis.move_to(target, float(self.ram[41]), float(self.ram[42]), on_done=self._posr_done)
+        _can_move(float(self.params.homing_velocity), float(self.params.homing_acceleration))
+        self._begin_motion("posr", float(self.params.homing_acceleration))
+        self.axis.move_to(target, float(self.params.homing_velocity), float(self.params.homing_acceleration), on_done=self._posr_done)
         self._arm_position_watches()
 
     def _posr_done(self) -> None:
-        if int(self.ram.get(1140, 0)) & 2:
+        if int(self.params.posr_mode) & 2:
             self._posr_attempts = 0
         self._motion_finished()
 
@@ -418,16 +421,16 @@ class Motion:
 
         With P1053 = 1/2/3 (I3/I4) or 5/6/7 (ENC), or P1143 = 1/2/3, the motor follows
         by count × P1054 × 64 increments, limited by A and V (hand-wheel, electric shaft)."""
-        mode, alt = int(self.ram.get(1053, 0)), int(self.ram.get(1143, 0))
+        mode, alt = int(self.params.pulse_input), int(self.params.pulse_input2)
         if mode in (1, 2, 3, 5, 6, 7):
-            weight, counter = float(self.ram.get(1054, 1)), 1119
+            weight, counter = float(self.params.pulse_weight), 1119
         elif alt in (1, 2, 3):
-            weight, counter = float(self.ram.get(1144, 1)), 1120
+            weight, counter = float(self.params.pulse_weight2), 1120
         else:
             return
         if mode in (5, 6, 7) and "E50" not in self.cfg.options:
             return
-        self.ram[counter] = int(self.ram.get(counter, 0)) + count
+        self.params.values[counter] = int(self.params.values.get(counter, 0)) + count
         if not self.energized or self.errors or self.motion not in (None, "follow"):
             return
         step = count * weight * INC_PER_REV / 200
@@ -440,8 +443,8 @@ class Motion:
             return  # pulses toward a blocked direction are ignored (P1094=0)
         self._follow_target = target
         if self.motion is None:
-            self._begin_motion("follow", float(self.ram[138]))
-        self.axis.move_to(target, float(self.ram[91]), float(self.ram[138]), on_done=self._motion_finished)
+            self._begin_motion("follow", float(self.params.acceleration))
+        self.axis.move_to(target, float(self.params.velocity), float(self.params.acceleration), on_done=self._motion_finished)
 
     # -- load angle / step-loss monitoring (§4.8.6.6, spec §5.9) ----------------------------
     def encoder_position(self) -> float:
@@ -451,12 +454,12 @@ class Motion:
         return self.axis.position() - self.lost
 
     def _monitoring(self) -> bool:
-        mode = int(self.ram.get(1053, 0))
+        mode = int(self.params.pulse_input)
         encoder = mode == 4 or (mode == 8 and "E50" in self.cfg.options)
-        return encoder and int(self.ram.get(1029, 0)) != 0
+        return encoder and int(self.params.step_monitoring) != 0
 
     def _on_stall(self, name: str, old: Any, new: Any) -> None:
-        if self.ram.get(1152) == 1:
+        if self.params.servo_mode == 1:
             self._servo_overload(bool(new))
             return
         if new:
@@ -475,7 +478,7 @@ class Motion:
         self._load_watches = []
         if self._stall_rotor is None or not self._monitoring():
             return
-        window = float(self.ram.get(1002, 255))
+        window = float(self.params.load_angle_window)
         rotor = self._stall_rotor
         for where in (rotor + window, rotor - window):
             self._load_watches.append(self.axis.watch(where, lambda _d: self._step_loss()))
@@ -483,16 +486,16 @@ class Motion:
     def _step_loss(self) -> None:
         """The load angle exceeded P1002: P1029 1 = drive error, 2 = warning, 3 = error, motor on."""
         self.max_load_angle = max(self.max_load_angle, abs(self.axis.position() - self.encoder_position()))
-        reaction = int(self.ram.get(1029, 0))
+        reaction = int(self.params.step_monitoring)
         if reaction == 2:
             self.warn(STEP_LOSS)
             self.stop_motion()
         elif reaction in (1, 3):
             self.drive_error(STEP_LOSS)
-        retries = int(self.ram.get(1138, 0))
+        retries = int(self.params.posr_attempts)
         if retries and self._posr_attempts < retries:
             self._posr_attempts += 1
-            delay = float(self.ram.get(1139, 1.0)) * 0.1
+            delay = float(self.params.posr_wait) * 0.1
             self.pos_ok = False
             self._timers.append(self.clock.call_later(delay, self._auto_posr))
 
@@ -523,7 +526,7 @@ class Motion:
 
     # -- software limits and compare positions (§4.8.6.12, §4.8.1.2) ------------------------
     def _soft_limits(self) -> tuple[float, float] | None:
-        lower, upper = float(self.ram.get(1040, 0)), float(self.ram.get(1041, 0))
+        lower, upper = float(self.params.limit_negative), float(self.params.limit_positive)
         if lower < upper:
             return lower, upper
         return None
@@ -542,7 +545,7 @@ class Motion:
                 watch.cancel()
             self._watches.clear()
         limits = self._soft_limits()
-        homing = self.motion == "home" and not int(self.ram.get(147, 0)) & 8
+        homing = self.motion == "home" and not int(self.params.homing_parameters) & 8
         if limits is not None and not homing:
             lower, upper = (x + self.offset for x in limits)
             velocity_sign = _sign(self.axis.final_position() - self.axis.position())
@@ -552,10 +555,12 @@ class Motion:
             self._watches.append(self.axis.watch(upper + 1e-9, lambda d: d > 0 and self._soft_limit_hit()))
             self._watches.append(self.axis.watch(lower - 1e-9, lambda d: d < 0 and self._soft_limit_hit()))
         self._arm_standstill_monitor()
-        for pos_param, action_param in ((1024, 1025), (1026, 1027)):
-            action = int(self.ram.get(action_param, 0))
+        params = self.params
+        for position, action in ((params.compare_position1, params.compare_output1),
+                                 (params.compare_position2, params.compare_output2)):
+            action = int(action)
             if action:
-                where = float(self.ram.get(pos_param, 0)) + self.offset
+                where = float(position) + self.offset
                 self._watches.append(self.axis.watch(where, lambda _d, a=action: self._compare_action(a)))
 
     def _arm_standstill_monitor(self) -> None:
@@ -564,7 +569,7 @@ class Motion:
         for watch in self._standstill_watches:
             watch.cancel()
         self._standstill_watches = []
-        distance = abs(float(self.ram.get(1044, 0)))
+        distance = abs(float(self.params.standstill_distance))
         if not distance or self.motion is None:
             return
         here = self.axis.position()
@@ -587,7 +592,7 @@ class Motion:
         if n <= 4:
             self.signals.set(f"O{n}", value)
         elif n <= 7:
-            self.ram[1100 + n - 4] = int(value)
+            self.params.values[1100 + n - 4] = int(value)  # M1..M3
 
 
 def _can_move(speed: float, accel: float) -> None:

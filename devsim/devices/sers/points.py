@@ -11,10 +11,12 @@ from __future__ import annotations
 from typing import Any
 
 from devsim.core.kit import Fault, FaultTable, signal_points
+from devsim.core.parameters import Param, alias_hook, parameter_points
 from devsim.core.points import BadValue, Point, PointTable
+from devsim.core.record import replace
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.errors import SersError, message
-from devsim.devices.sers.parameters import ALIASES, PARAMETERS, ParamDef
+from devsim.devices.sers.parameters import PARAMETER_TABLE
 from devsim.devices.sers.signals import SIGNALS
 
 __all__ = ["FAULTS", "POINTS", "load_program"]
@@ -39,57 +41,36 @@ def load_program(model: Any, program: Any) -> None:
     model.program.quit()
 
 
-def _write_param(number: int) -> Any:
-    def put(model: Any, value: Any) -> None:
-        if number == 1 and value != "*" and (isinstance(value, bool) or not isinstance(value, int | float)):
-            raise BadValue("P1: a number, or '*'")  # (the only parameter that is not just a number)
-        try:
-            model.write_param(number, value)
-        except SersError as exc:
-            raise BadValue(f"P{number}: {exc}") from None
-
-    return put
+def _write_param(model: Any, row: Param, value: Any) -> None:
+    number = row.key
+    if number == 1 and value != "*" and (isinstance(value, bool) or not isinstance(value, int | float)):
+        raise BadValue("P1: a number, or '*'")  # (the only parameter that is not just a number)
+    try:
+        model.write_param(number, value)
+    except SersError as exc:
+        raise BadValue(f"P{number}: {exc}") from None
 
 
-def _read_param(number: int) -> Any:
-    return lambda model: model.param_value(number)
+def _read_param(model: Any, row: Param) -> Any:
+    return model.param_value(row.key)
 
 
-def _param_point(pdef: ParamDef) -> Point:
-    unit = {"position": "P123 unit", "velocity": "P121 unit", "acceleration": "P122 unit"}.get(pdef.kind, "")
-    return Point(
-        f"param.P{pdef.number}",
-        "json" if pdef.number == 1 else "float",  # P1 (Z) also takes '*'
-        pdef.name_en or pdef.name,
-        f"§4.7 P{pdef.number}",
-        unit,
-        get=_read_param(pdef.number) if pdef.readable else None,
-        put=_write_param(pdef.number) if pdef.writable else None,
-        example=_example(pdef) if pdef.writable and not pdef.readable else None,
-    )
-
-
-def _example(pdef: ParamDef) -> Any:
+def _example(row: Param) -> Any:
     """A value a write-only parameter accepts (its default, its first choice, or 0 in range)."""
-    if pdef.default is not None:
-        return pdef.default
-    if pdef.choices:
-        return min(pdef.choices)
+    if row.readable:
+        return None
+    if row.default is not None:
+        return row.default
+    if row.choices:
+        return min(row.choices)
     return 0
 
 
-def _alias(name: str) -> str | None:
-    """``param.V``, ``param.51``, ``param.p51`` → ``param.P51``."""
-    section, dot, rest = name.partition(".")
-    if section != "param" or not dot:
-        return None
-    text = rest.strip().upper()
-    if text.startswith("P") and text[1:].isascii() and text[1:].isdigit():
-        return f"param.P{int(text[1:])}"
-    if text.isascii() and text.isdigit():
-        return f"param.P{int(text)}"
-    number = ALIASES.get(text)
-    return None if number is None else f"param.P{number}"
+def _as_the_drive_takes_it(point: Point) -> Point:
+    """A parameter's point takes any number (P1 also ``*``) and leaves the range to the drive:
+    its errnos, and the weighted ranges that follow P76 / P44 / P160 (§4.8.4.6)."""
+    return replace(point, type="json" if point.name == "param.P1" else "float", minimum=None, maximum=None,
+                   choices=None)
 
 
 def _set_dip(field: str) -> Any:
@@ -160,8 +141,8 @@ _PLAIN: list[Point] = [
 POINTS = PointTable.of(
     _PLAIN,
     signal_points(SIGNALS),
-    (_param_point(pdef) for pdef in PARAMETERS.values()),
-    alias=_alias,
+    map(_as_the_drive_takes_it, parameter_points(PARAMETER_TABLE, _read_param, _write_param, example=_example)),
+    alias=alias_hook(PARAMETER_TABLE),
 )
 
 

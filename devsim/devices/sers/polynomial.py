@@ -21,12 +21,13 @@ from typing import Any, Protocol
 from devsim.core.axis import Watch
 from devsim.core.record import record
 from devsim.devices.sers.errors import SersError
+from devsim.devices.sers.params import SersParameters
 
 
 class PolynomialHost(Protocol):
     """What a polynomial move needs of its drive (the SERS model)."""
 
-    ram: dict[int, Any]
+    params: SersParameters
     axis: Any
     motion: str | None
     offset: float
@@ -78,10 +79,10 @@ class PolynomialMove:
         """``WP=`` … ``WAPT=`` (P1111–P1116): remember the segment until its ``E``."""
         drive = self.drive
         if number in RELATIVE:
-            drive.ram[1014] = 0
+            drive.params.positioning_mode = 0
         elif number in ABSOLUTE:
-            drive.ram[1014] = 2
-        self.definition = (value, int(drive.ram.get(1014, 0)), number in LAST)
+            drive.params.positioning_mode = 2
+        self.definition = (value, int(drive.params.positioning_mode), number in LAST)
 
     def execute(self) -> str:
         """``E`` after a segment definition: ``started`` (the program goes on), ``queued``
@@ -90,7 +91,7 @@ class PolynomialMove:
         assert self.definition is not None
         value, mode, last = self.definition
         self.definition = None
-        if float(drive.ram.get(1037, 0)):
+        if float(drive.params.backlash):
             raise SersError(107)
         if self.pending is not None or self.closed:
             raise SersError(123)
@@ -101,9 +102,9 @@ class PolynomialMove:
         segment = Segment(
             exact=end,
             end=float(round(end)),
-            speed=float(drive.ram[91]),
-            accel=float(drive.ram[138]),
-            brake=float(drive.ram.get(1096, drive.ram[138])),
+            speed=float(drive.params.velocity),
+            accel=float(drive.params.acceleration),
+            brake=float(drive.params.polynomial_deceleration),
             last=last,
         )
         if last:
@@ -165,7 +166,7 @@ class PolynomialMove:
         self.drive.polynomial_finished()
 
     def _abort(self) -> None:
-        self.drive.axis.stop(self.running.brake if self.running else float(self.drive.ram[1030]), on_done=self._finished)
+        self.drive.axis.stop(self.running.brake if self.running else float(self.drive.params.error_deceleration), on_done=self._finished)
         self.running = None
         self.pending = None
 
