@@ -7,7 +7,6 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Callable
-from typing import Any
 
 from devsim.core.parameters import Param as ParamDef
 from devsim.devices.sers import statements as st
@@ -18,10 +17,9 @@ from devsim.devices.sers.constants import (
     STEP_LOSS,
     UNDERVOLTAGE,
     WEIGHTED,
-    WEIGHTING_PARAMS,
 )
 from devsim.devices.sers.errors import SersError
-from devsim.devices.sers.parameters import ALIASES, CURRENT_MAX_MA, KIND, PARAMETERS, lookup
+from devsim.devices.sers.parameters import ALIASES, KIND, PARAMETERS
 from devsim.devices.sers.units import Scaling, format_fixed, format_query, quantize
 
 __all__ = ["ParameterAccess"]
@@ -36,72 +34,6 @@ class ParameterAccess:
     @property
     def scaling(self) -> Scaling:
         return self.params.scaling
-
-    def _factory_image(self) -> dict[int, Any]:
-        """Factory defaults plus the configured EEPROM values, in internal units."""
-        image: dict[int, Any] = {}
-        for number, pdef in PARAMETERS.items():
-            if pdef.default is not None:
-                image[number] = pdef.default
-        image[1010] = CURRENT_MAX_MA[self.cfg.current_class] // 2
-        user: dict[int, Any] = {}
-        for key, value in self.cfg.params.items():
-            user[lookup(str(key)).number] = value
-        for number in WEIGHTING_PARAMS:
-            if number in user:
-                image[number] = user[number]
-        scaling = Scaling(int(image[76]), int(image[44]), int(image[160]), image[121], image[122], image[123])
-        for number, pdef in PARAMETERS.items():
-            value = user.get(number, image.get(number))
-            if value is None:
-                continue
-            if KIND[pdef.key] in WEIGHTED:
-                value = scaling.to_internal(KIND[pdef.key], float(value))
-            image[number] = value
-        return image
-
-    def _load_parameters(self) -> None:
-        ram = self._factory_image()
-        stored = self.nvram.get("params")
-        if stored and not self.eeprom_checksum_error:
-            for key, value in stored.items():
-                ram[int(key)] = value
-        # not stored: power-on values (spec §4.1 step 4)
-        ram.update({1110: 1, 1035: 1, 1: 0, 1047: 0, 1164: 0, 1165: 0, 1118: 0})
-        for n in (100, 101, 102, 1101, 1102, 1103):
-            ram[n] = 0
-        extra = self.nvram.get("registers") or {}
-        for n in (47, 1080, 1081, 1082, 1083, 1084, 1085):
-            ram[n] = extra.get(str(n), 0)
-        self.params.load(ram)
-
-    def psave(self) -> None:
-        """P1004=2: RAM parameters → EEPROM (W and R0..R5 only with P1117=1)."""
-        ram = self.params.values
-        data = {str(n): ram[n] for n, pdef in PARAMETERS.items() if pdef.saved and n in ram}
-        self.nvram.put("params", data)
-        self.eeprom_checksum_error = False
-        if self.params.save_registers_too:
-            self.save_registers()
-
-    def save_registers(self) -> None:
-        """P1004=5: R0..R5 and W."""
-        ram = self.params.values
-        self.nvram.put("registers", {str(n): ram[n] for n in (47, 1080, 1081, 1082, 1083, 1084, 1085)})
-
-    def factory_defaults(self) -> None:
-        """P1004=3: EEPROM and RAM parameters back to factory defaults."""
-        self.nvram.delete("params")
-        self.nvram.delete("registers")
-        ram = self.params.values
-        keep = {n: ram[n] for n in (47, 1080, 1081, 1082, 1083, 1084, 1085)}
-        ram.update(self._factory_image())
-        ram.update(keep)
-        self.eeprom_checksum_error = False
-
-    def possave(self) -> None:
-        """P1004=4: actual position P51 → EEPROM, restored at the next power-on."""
-        self.nvram.put("position", self.p51_inc())
 
     # -- reading ---------------------------------------------------------------------------
     def p51_inc(self) -> float:
@@ -427,7 +359,7 @@ class ParameterAccess:
         self.offset = self.axis.position() - self.scaling.pos_to_inc(float(value))
 
     def _write_p1004(self, value: float) -> None:
-        actions = {2: self.psave, 3: self.factory_defaults, 4: self.possave, 5: self.save_registers}
+        actions = {2: self.memory.psave, 3: self.memory.factory_defaults, 4: self.memory.possave, 5: self.memory.save_registers}
         action = actions.get(int(value)) if value == int(value) else None
         if action is None:
             raise SersError(82)

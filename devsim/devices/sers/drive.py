@@ -36,6 +36,7 @@ from devsim.devices.sers.execution import Execution
 from devsim.devices.sers.inputs import InputsAndFaults
 from devsim.devices.sers.interpreter import Interpreter
 from devsim.devices.sers.master import MasterLink
+from devsim.devices.sers.memory import ParameterMemory
 from devsim.devices.sers.motion import Motion
 from devsim.devices.sers.parameters import SUPPLY_THRESHOLDS
 from devsim.devices.sers.params import SersParameters
@@ -60,6 +61,7 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         super().__init__(clock=clock, config=config, nvram=nvram, name=name)
         self.cfg = SersConfig.parse(self.config)
         self.params = SersParameters()
+        self.memory = ParameterMemory(self.nvram, self.params, lambda: self.cfg, lambda: self.p51_inc())
         self.program = ProgramMemory(self.nvram)
         self.interpreter = Interpreter(self)
         self.master = MasterLink(clock, self.line_out)
@@ -143,7 +145,6 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self.logic_alive = True
         self.booting = self.cfg.boot_time > 0
         self.record_event("power_on")
-        self.eeprom_checksum_error = bool(getattr(self.nvram, "corrupt", False))
         self.errors = 0
         self.warnings = 0
         self.errno = 0
@@ -180,13 +181,12 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self.interpreter.reset()
         self.poly.cancel()
         self.trace_mode = False
-        self._load_parameters()
-        saved_pos = self.nvram.get("position")
-        p51 = float(saved_pos) if saved_pos is not None else 0.0
+        self.memory.power_on()
+        p51 = self.memory.saved_position() or 0.0
         self.offset = self.axis.position() - p51
         for n in range(1, 17):
             self.signals.set(f"O{n}", False)
-        if self.params.current_parameters & 32 and not self.eeprom_checksum_error:
+        if self.params.current_parameters & 32 and not self.memory.eeprom_checksum_error:
             self.energized = True
             self.relay = True
         self._check_supply()

@@ -114,7 +114,7 @@ class Execution:
     # ======================================================================================
     def switch_on(self) -> None:
         """ON = P134=7 (§4.8.2.2): phases energised, ready relay closed."""
-        if self.errors or self.eeprom_checksum_error:
+        if self.errors or self.memory.eeprom_checksum_error:
             raise SersError(79)
         self.energized = True
         self.relay = True
@@ -254,8 +254,8 @@ COMMANDS: Table[Callable[[Any], None]] = Table(
         Command("S", lambda d: d.stop_all(), "§4.8.6.2", "stop: the program and the motion"),
         Command("ON", lambda d: d.switch_on(), "§4.8.2.2", "energise the motor (P134=7)"),
         Command("OFF", lambda d: d.switch_off(), "§4.8.2.2", "de-energise the motor (P134=0)"),
-        Command("PSAVE", lambda d: d.psave(), "§4.8.6.10", "save the RAM parameters in the EEPROM (P1004=2)"),
-        Command("POSSAVE", lambda d: d.possave(), "§4.8.4.2", "save P51 in the EEPROM (P1004=4)"),
+        Command("PSAVE", lambda d: d.memory.psave(), "§4.8.6.10", "save the RAM parameters in the EEPROM (P1004=2)"),
+        Command("POSSAVE", lambda d: d.memory.possave(), "§4.8.4.2", "save P51 in the EEPROM (P1004=4)"),
         Command("POS0", lambda d: d.pos0(), "§4.8.4.2", "move to the next electrical zero, then P51=0"),
         Command("POSR", lambda d: d.posr(force=False), "§4.8.4.2", "after step loss: back to the set-point W"),
         Command("NEW", lambda d: d.new_program(), "§4.5.3", "programming mode, deleting the program (P0=2)"),

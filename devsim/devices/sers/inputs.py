@@ -175,7 +175,7 @@ class InputsAndFaults:
             self.drive_error(UNDERVOLTAGE, immediate=True)
         elif volts < u_b:
             if not self.errors & UNDERVOLTAGE and self.params.save_position_on_undervoltage:
-                self.possave()
+                self.memory.possave()
             self.drive_error(UNDERVOLTAGE)
         if volts < u_w:
             self.warn(4)
@@ -247,7 +247,7 @@ class InputsAndFaults:
             return {"char": "-", "blinking": False}
         if self.errors & SHORT:
             return {"char": "E", "blinking": False}
-        if self.eeprom_checksum_error:
+        if self.memory.eeprom_checksum_error:
             return {"char": "7", "blinking": False}
         for bit, char in ERROR_DISPLAY:
             if self.errors & bit:
