@@ -51,7 +51,7 @@ def _run(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False)
     framer = vars(face.framer)
     if not framer["in_line"]:  # (what counted the last line means nothing once it ended)
         framer = {name: framer[name] for name in ("in_line", "_last_end")}
-    return sent, (bytes(out), changes, device.state(), dict(model.params.values), model.errno, model.warnings, model.addressed,
+    return sent, (bytes(out), changes, device.state(), dict(model.params.values), model.power_stage.errno, model.power_stage.warnings, model.addressed,
                   framer, face._last_replied,
                   None if line is None else (line.execute, line.reply, line.error, bytes(line.held),
                                              bytes(line.deferred)))

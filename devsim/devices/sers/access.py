@@ -12,10 +12,6 @@ from devsim.core.parameters import Param as ParamDef
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.constants import (
     INC_PER_REV,
-    OVERTEMP,
-    SHORT,
-    STEP_LOSS,
-    UNDERVOLTAGE,
     WEIGHTED,
 )
 from devsim.devices.sers.errors import SersError
@@ -69,10 +65,10 @@ class ParameterAccess:
     def _special_reads(self) -> dict[int, Callable[[], float]]:
         return {
             0: lambda: 2 if self.program_editing else self.program_state,
-            11: lambda: self.errors,
-            12: lambda: self.warnings,
+            11: lambda: self.power_stage.errors,
+            12: lambda: self.power_stage.warnings,
             51: self._read_p51,
-            134: lambda: 7 if self.energized else 0,
+            134: lambda: 7 if self.power_stage.energized else 0,
             336: lambda: int(self.pos_ok),
             403: lambda: 0 if self.homed else 3,
             1013: self.status_word,
@@ -83,7 +79,7 @@ class ParameterAccess:
             1050: lambda: self.cfg.address,
             1122: lambda: self.program.free_words(),
             1133: lambda: self.firmware,
-            1137: lambda: self.errno,
+            1137: lambda: self.power_stage.errno,
             1300: lambda: self.inputs_byte(1),
             1301: lambda: self.inputs_byte(9) if "IO" in self.cfg.options else 0,
             1123: lambda: int(self.poly.slot_free),
@@ -206,11 +202,11 @@ class ParameterAccess:
     def _special_writes(self) -> dict[int, Callable[[float], None]]:
         return {
             0: self._write_p0,
-            11: self._write_p11,
-            12: self._write_p12,
+            11: self.power_stage.write_p11,
+            12: lambda v: self.power_stage.write_p12(v, self._recheck_warnings),
             47: self._write_w,
             51: self._write_p51,
-            134: lambda v: self.switch_on() if v == 7 else self.switch_off() if v == 0 else _raise(3),
+            134: self.power_stage.write_p134,
             1004: self._write_p1004,
             1014: self._write_p1014,
             1031: self._write_p1031,
@@ -225,7 +221,7 @@ class ParameterAccess:
 
     def _after_write(self, number: int) -> None:
         if number in (1125, 1126, 1131, 1132, 1036):
-            self._update_outputs()
+            self.outputs.update()
 
     def _write_p0(self, value: float) -> None:
         program = getattr(self, "program", None)
@@ -274,7 +270,7 @@ class ParameterAccess:
 
     def on_program_state(self) -> None:
         """The program started or stopped: outputs (P1126) follow."""
-        self._update_outputs()
+        self.outputs.update()
 
     def on_program_end(self) -> None:
         """After a program: the event dispatcher (P1098) and a level start (P1023=1) may
@@ -327,32 +323,9 @@ class ParameterAccess:
         else:
             raise SersError(75)
 
-    def _write_p11(self, value: float) -> None:
-        if value != 0:
-            raise SersError(3)
-        if self.errors & OVERTEMP and self.signals.get("heatsink_temperature") >= 85:
-            raise SersError(3)
-        if self.errors & UNDERVOLTAGE and self.signals.get("supply_voltage") < self.thresholds[2]:
-            raise SersError(3)
-        if self.errors & SHORT and (self.signals.get("short_circuit") or not self._stop_cycled):
-            raise SersError(3)
-        if self.errors & STEP_LOSS:
-            self._resync_to_encoder()
-        self.errors = 0
-        self.params.l65_flag = 0
-        self.energized = False
-        self.relay = False
-        self._update_outputs()
-
-    def _write_p12(self, value: float) -> None:
-        if value != 0:
-            raise SersError(3)
-        if self.warnings & STEP_LOSS:
-            self._resync_to_encoder()
-        self.warnings = 0
-        self._check_supply()
-        self._check_temperature()
-        self._update_outputs()
+    def _recheck_warnings(self) -> None:
+        self.supply.check_supply()
+        self.supply.check_temperature()
 
     def _write_p51(self, value: float) -> None:
         self._check_range(PARAMETERS[51], value)
@@ -504,7 +477,7 @@ class ParameterAccess:
                 result = x * y
             elif op == "/":
                 if y == 0:
-                    self.warn(256)
+                    self.power_stage.warn(256)
                     raise SersError(102)
                 result = x / y
             elif op == "&":
@@ -517,10 +490,10 @@ class ParameterAccess:
 
     def set_x(self, value: float) -> None:
         if value > 2147483.647:
-            self.warn(256)
+            self.power_stage.warn(256)
             raise SersError(98)
         if value < -2147483.647:
-            self.warn(256)
+            self.power_stage.warn(256)
             raise SersError(99)
         self.params.accumulator = quantize(value, 3)
 
@@ -543,10 +516,10 @@ class ParameterAccess:
         """``ok<d>`` (§4.1): 4 error, 0/2 moving, 1/3 standing, +2 with a warning; ``pgm``."""
         if self.program_editing:
             return "pgm"
-        if self.errors:
+        if self.power_stage.errors:
             return "ok4"
         digit = 1 if self.pos_ok else 0
-        if self.warnings:
+        if self.power_stage.warnings:
             digit += 2
         return f"ok{digit}"
 

@@ -38,11 +38,14 @@ from devsim.devices.sers.interpreter import Interpreter
 from devsim.devices.sers.master import MasterLink
 from devsim.devices.sers.memory import ParameterMemory
 from devsim.devices.sers.motion import Motion
+from devsim.devices.sers.outputs import Outputs
 from devsim.devices.sers.parameters import SUPPLY_THRESHOLDS
 from devsim.devices.sers.params import SersParameters
 from devsim.devices.sers.polynomial import PolynomialMove
+from devsim.devices.sers.power import PowerStage
 from devsim.devices.sers.program import ProgramMemory
 from devsim.devices.sers.signals import SIGNALS
+from devsim.devices.sers.supply import SupplyMonitor
 
 __all__ = ["SersDrive"]
 
@@ -69,7 +72,30 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self.addressed: bool | None = None
         #: Other drives share the line (RS-485); the face tells.
         self.shared_line = False
-        self.thresholds = SUPPLY_THRESHOLDS[self.cfg.supply_class]
+        thresholds = SUPPLY_THRESHOLDS[self.cfg.supply_class]
+        self.thresholds = thresholds
+        self.power_stage = PowerStage(
+            clock, self.params, self.signals, self.memory, self,
+            undervoltage=thresholds[2],
+            changed=lambda: self.outputs.update(),
+            program_error=lambda: self.interpreter.on_drive_error(),
+            resync=lambda: self._resync_to_encoder(),
+            record_event=self.record_event,
+            announce=self.announce,
+        )
+        self.supply = SupplyMonitor(
+            self.signals, self.power_stage, self.memory, thresholds,
+            has_option_u=lambda: "U" in self.cfg.options,
+            alive=lambda: self.logic_alive,
+            logic_power=self.switch_supply,
+        )
+        self.outputs = Outputs(
+            self.signals, self.params, self.power_stage, self.memory,
+            alive=lambda: self.logic_alive,
+            booting=lambda: self.booting,
+            in_position=lambda: self.pos_ok,
+            program_running=lambda: self.program_state == 1,
+        )
         self.axis = Axis(clock, counts_per_rev=INC_PER_REV, index_offset=self.cfg.axis.index_offset, name=self.name)
         self._timers: list[Timer] = []
         self._watches: list[Watch] = []
@@ -98,9 +124,9 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         s.subscribe("reference", self._on_reference)
         for n in range(1, 9):
             s.subscribe(f"I{n}", self._on_digital_input)
-        s.subscribe("supply_voltage", lambda *_: self._check_supply())
-        s.subscribe("heatsink_temperature", lambda *_: self._check_temperature())
-        s.subscribe("short_circuit", lambda *_: self._check_short())
+        s.subscribe("supply_voltage", lambda *_: self.supply.check_supply())
+        s.subscribe("heatsink_temperature", lambda *_: self.supply.check_temperature())
+        s.subscribe("short_circuit", lambda *_: self.supply.check_short())
         s.subscribe("stall", self._on_stall)
         for name in s.names():
             s.subscribe(name, lambda *_: self.interpreter.poke())
@@ -145,11 +171,7 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self.logic_alive = True
         self.booting = self.cfg.boot_time > 0
         self.record_event("power_on")
-        self.errors = 0
-        self.warnings = 0
-        self.errno = 0
-        self.energized = False
-        self.relay = False
+        self.power_stage.power_on()
         self.homed = False
         self.pos_ok = True  # P336
         self.motion: str | None = None
@@ -166,7 +188,6 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self._setpoint: float | None = None
         self._follow_target = 0.0
         self._stopped_at = 0.0
-        self.servo_calibrated = False
         self.servo_overload = False
         self._servo_resume = False
         self._posr_attempts = 0
@@ -174,9 +195,6 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self._jog_dir = 0
         self._jog_speed = self._jog_accel = 0.0  # (of the jog under way)
         self._jog_until: st.Condition | None = None
-        self._short_latched = False
-        self._stop_cycled = True
-        self._stop_opened = False
         self.program.reload()  # programming mode does not survive a power loss (P0 = 0)
         self.interpreter.reset()
         self.poly.cancel()
@@ -186,14 +204,10 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self.offset = self.axis.position() - p51
         for n in range(1, 17):
             self.signals.set(f"O{n}", False)
-        if self.params.current_parameters & 32 and not self.memory.eeprom_checksum_error:
-            self.energized = True
-            self.relay = True
-        self._check_supply()
-        self._check_temperature()
-        self._check_short()
-        self._check_limits_at_power_on()
-        self._update_outputs()
+        self.power_stage.energize_at_power_on()
+        self.supply.check_all()
+        self.supply.check_limits_at_power_on()
+        self.outputs.update()
         if self.booting:
             self._timers.append(self.clock.call_later(self.cfg.boot_time, self._boot_done))
 
@@ -209,7 +223,7 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
             try:
                 self.run_program(None)
             except SersError as exc:
-                self.record_error(exc.errno)
+                self.power_stage.record_error(exc.errno)
 
     @property
     def program_state(self) -> int:
@@ -220,8 +234,7 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self._cancel_timers()
         self.axis.quick_stop()
         self.logic_alive = False
-        self.energized = False
-        self.relay = False
+        self.power_stage.power_off()
         self.motion = None
         self.pos_ok = True
         for n in range(1, 17):
@@ -234,8 +247,8 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
             self.nvram.wipe()
         self._power_on()
 
-    def power(self, on: bool) -> None:
-        """The supply switched off or on (the ``power`` fault)."""
+    def switch_supply(self, on: bool) -> None:
+        """The supply switched off or on (the ``power`` fault, the supply monitor)."""
         if on:
             self._power_on()
         else:
@@ -243,6 +256,7 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
 
     def close(self) -> None:
         self._cancel_timers()
+        self.power_stage.cancel()
         self.axis.quick_stop()
         for switch in self._switches:
             switch.cancel()

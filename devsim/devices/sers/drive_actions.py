@@ -30,9 +30,9 @@ def _refusals(action: Callable[..., None]) -> Callable[..., None]:
 
 def _enable(m: Any, on: bool) -> None:
     if on:
-        m.switch_on()
+        m.power_stage.switch_on()
     else:
-        m.switch_off()
+        m.power_stage.switch_off()
 
 
 def _move_to(m: Any, target: float, speed: float) -> None:
@@ -60,7 +60,7 @@ DRIVE = DriveActions(
     reset_fault=_refusals(lambda m: m.write_param(11, 0)),
     position=lambda m: m.p51_inc(),
     velocity=lambda m: m.axis.velocity(),
-    enabled=lambda m: bool(m.energized),
-    fault=lambda m: bool(m.errors),
+    enabled=lambda m: bool(m.power_stage.energized),
+    fault=lambda m: bool(m.power_stage.errors),
     moving=lambda m: bool(m.moving),
 )

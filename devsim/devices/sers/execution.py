@@ -9,7 +9,6 @@ from typing import Any
 
 from devsim.core.kit import Command, Table
 from devsim.devices.sers import statements as st
-from devsim.devices.sers.constants import EMCY_CODES, STEP_LOSS
 from devsim.devices.sers.errors import SersError
 
 __all__ = ["COMMANDS", "STATEMENTS", "Execution"]
@@ -109,30 +108,6 @@ class Execution:
         if self.program_state != 1:
             raise SersError(54)
 
-    # ======================================================================================
-    # motor power and errors
-    # ======================================================================================
-    def switch_on(self) -> None:
-        """ON = P134=7 (§4.8.2.2): phases energised, ready relay closed."""
-        if self.errors or self.memory.eeprom_checksum_error:
-            raise SersError(79)
-        self.energized = True
-        self.relay = True
-        if self.params.servo_mode == 1 and not int(self.params.homing_parameters) & 256 and not self.servo_calibrated:
-            # SERVO: the load-angle zero is taken 100 ms after ON (§4.8.6.7, P147 bit 8 = 0)
-            self._timers.append(self.clock.call_later(0.1, self._servo_calibrate))
-        self._update_outputs()
-
-    # -- SERVO mode (option E50/C, P1152=1; §4.8.6.7, spec §5.10) ---------------------------
-    def _servo_calibrate(self) -> None:
-        if self.energized:
-            self.servo_calibrated = True
-
-    def _servo_check(self) -> None:
-        """Positioning or jogging before the load angle is calibrated: warning 2048."""
-        if self.params.servo_mode == 1 and not self.servo_calibrated:
-            self.warn(2048)
-
     def _servo_overload(self, overloaded: bool) -> None:
         """Under overload the SERVO drive loses no steps: the stator field holds at the rotor
         and the move resumes when the load goes away, at P1163 if P1162=1 (catch-up), else at
@@ -154,65 +129,6 @@ class Execution:
             if self.params.use_catch_up_velocity == 1:
                 speed = max(speed, float(self.params.catch_up_velocity))
             self.axis.move_to(self._target_physical, speed, self._accel, on_done=self._positioning_done)
-
-    def switch_off(self) -> None:
-        """OFF = P134=0: torque off at once (spec G-OFFMOVE), relay open."""
-        if self.motion is not None:
-            self._end_motion(quick=True)
-        self.energized = False
-        self.relay = False
-        self._update_outputs()
-
-    def drive_error(self, bit: int, immediate: bool = False) -> None:
-        """Set a P11 bit: brake with P1030, open the relay, 50 ms later switch the phases off
-        (§2.1.3, §2.1.4); short circuit and U < U_L switch off at once."""
-        first = not self.errors & bit
-        if first:
-            self.record_event("error")
-        self.errors |= bit
-        if first:
-            self.announce("fault", 1, EMCY_CODES.get(bit, 0x1000))  # (a CANopen facade sends EMCY)
-        self.poly.cancel()
-        if first:
-            self.interpreter.on_drive_error()
-        self._homing = None
-        if immediate:
-            if self.motion is not None:
-                self._end_motion(quick=True)
-            self.energized = False
-            self.relay = False
-            self._update_outputs()
-            return
-        if not first and not self.energized:
-            return
-
-        def relay_open() -> None:
-            self.relay = False
-            self._update_outputs()
-            self._timers.append(self.clock.call_later(0.05, self._phases_off))
-
-        if self.motion is not None and self.axis.moving:
-            self._stop_decel = self.params.error_deceleration
-            self.motion = "error-stop"
-            self._cancel_jog_timer()
-            self.axis.stop(self.params.error_deceleration, on_done=lambda: (self._motion_finished(), relay_open()))
-        else:
-            relay_open()
-        self._update_outputs()
-
-    def _phases_off(self) -> None:
-        if self.errors and not (self.errors & STEP_LOSS and self.params.step_monitoring == 3):
-            self.energized = False
-            self._update_outputs()
-
-    def warn(self, bit: int) -> None:
-        self.warnings |= bit
-        self._update_outputs()
-
-    def record_error(self, errno: int) -> None:
-        """Every error message sets P12 value 16 and P1137 (§4.8.3.1)."""
-        self.errno = errno
-        self.warn(16)
 
 
 
@@ -252,8 +168,8 @@ COMMANDS: Table[Callable[[Any], None]] = Table(
         Command("E", lambda d: d.start_positioning(), "§4.6.6", "start positioning to W at V with A"),
         Command("H", lambda d: d.home(), "§4.8.4.5", "start homing (reference run)"),
         Command("S", lambda d: d.stop_all(), "§4.8.6.2", "stop: the program and the motion"),
-        Command("ON", lambda d: d.switch_on(), "§4.8.2.2", "energise the motor (P134=7)"),
-        Command("OFF", lambda d: d.switch_off(), "§4.8.2.2", "de-energise the motor (P134=0)"),
+        Command("ON", lambda d: d.power_stage.switch_on(), "§4.8.2.2", "energise the motor (P134=7)"),
+        Command("OFF", lambda d: d.power_stage.switch_off(), "§4.8.2.2", "de-energise the motor (P134=0)"),
         Command("PSAVE", lambda d: d.memory.psave(), "§4.8.6.10", "save the RAM parameters in the EEPROM (P1004=2)"),
         Command("POSSAVE", lambda d: d.memory.possave(), "§4.8.4.2", "save P51 in the EEPROM (P1004=4)"),
         Command("POS0", lambda d: d.pos0(), "§4.8.4.2", "move to the next electrical zero, then P51=0"),

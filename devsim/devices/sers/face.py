@@ -292,7 +292,7 @@ class SersFace(Face):
             line.reply = reply
             if reply and mode in (0, 1):
                 send(data[index:cut])
-            model.record_error(errno)  # (what _error does, its message from a table)
+            model.power_stage.record_error(errno)  # (what _error does, its message from a table)
             mode = model.handshake_mode
             echo = mode in (0, 1)
             text = _error_text(errno, model.english, model.cfg.encoding) if reply else b""
@@ -440,7 +440,7 @@ class SersFace(Face):
         if line.execute and not line.error:
             self._progress(line, final=True)
             if overflow and not line.error:
-                self.model.warn(1024)
+                self.model.power_stage.warn(1024)
                 self._error(line, 124)
             if line.store and not line.error:
                 try:
@@ -643,7 +643,7 @@ class SersFace(Face):
 
     def _error(self, line: _Line, errno: int, detail: str = "") -> None:
         line.error = True
-        self.model.record_error(errno)
+        self.model.power_stage.record_error(errno)
         self._put(line, _error_text(errno, self.model.english, self.model.cfg.encoding, detail))
 
     def spontaneous(self, text: str) -> None:

@@ -272,8 +272,8 @@ class Interpreter:
     def _program_error(self, errno: int, detail: str = "") -> None:
         """Unknown jump target, stack overflow, arithmetic error …: the program stops with
         P12 value 128 (display 'H' blinking) and the errno (§4.8.3.1)."""
-        self.drive.record_error(errno)
-        self.drive.warn(128)
+        self.drive.power_stage.record_error(errno)
+        self.drive.power_stage.warn(128)
         self._halt()
         self.drive.report_program_error(errno, detail)
 

@@ -4,6 +4,7 @@ step loss, software limits (manual §4.5, §4.6.6, §4.8.4; spec §3.5, §5)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 from devsim.core.axis import RampProfile
@@ -35,7 +36,7 @@ class Motion:
             raise SersError(68)
         if self._i7_stop_active():
             raise SersError(67)
-        if not self.energized or self.errors:
+        if not self.power_stage.energized or self.power_stage.errors:
             raise SersError(79)
 
     def start_positioning(self) -> None:
@@ -63,7 +64,7 @@ class Motion:
         lo, hi = self.scaling.pos_range()
         target_user = self.scaling.inc_to_pos(target)
         if target_user > hi or target_user < lo:
-            self.warn(64)
+            self.power_stage.warn(64)
             raise SersError(85 if target_user > hi else 86)
         if mode == 1:
             self.offset = self.axis.position()
@@ -75,7 +76,7 @@ class Motion:
         legs = self._backlash_legs(p51 + self.offset, self._target_physical)
         for _target, speed in legs:
             _can_move(speed, self._accel)  # (the backlash legs creep at P1003)
-        self._servo_check()
+        self.power_stage.servo_check()
         self._begin_motion("position", self._accel)
         self._setpoint = self._target_physical
         self._legs = legs
@@ -146,7 +147,7 @@ class Motion:
         self.pos_ok = False
         self._stop_decel = decel
         self._w_updated = False
-        self._update_outputs()
+        self.outputs.update()
 
     def _motion_finished(self) -> None:
         was_moving = self.motion is not None
@@ -164,7 +165,7 @@ class Motion:
             watch.cancel()
         self._watches.clear()
         self._standstill_watches = []
-        self._update_outputs()
+        self.outputs.update()
         if was_moving:
             self.interpreter.on_motion_end()
 
@@ -174,6 +175,26 @@ class Motion:
             self._motion_finished()
         else:
             self.stop_motion()
+
+    def abort_profiles(self) -> None:
+        """A drive error: a polynomial profile and a homing run are over."""
+        self.poly.cancel()
+        self._homing = None
+
+    def quick_end(self) -> None:
+        """Torque off (OFF, a short circuit, U < U_L): the motion ends at once."""
+        if self.motion is not None:
+            self._end_motion(quick=True)
+
+    def error_stop(self, then: Callable[[], None]) -> bool:
+        """A drive error while the axis moves: brake with P1030, then ``then`` (§2.1.3)."""
+        if self.motion is None or not self.axis.moving:
+            return False
+        self._stop_decel = self.params.error_deceleration
+        self.motion = "error-stop"
+        self._cancel_jog_timer()
+        self.axis.stop(self.params.error_deceleration, on_done=lambda: (self._motion_finished(), then()))
+        return True
 
     def stop_motion(self) -> None:
         """S (§4.2): decelerate with the active motion's deceleration (spec §5.4)."""
@@ -199,7 +220,7 @@ class Motion:
         accel = float(self.params.jog_acceleration)
         _can_move(speed, accel)
         if not (self.motion == "jog" and self._jog_dir == direction and self._jog_speed == speed):
-            self._servo_check()
+            self.power_stage.servo_check()
             self._begin_motion("jog", accel)
             self._jog_dir = direction
             self._jog_speed = speed
@@ -259,7 +280,7 @@ class Motion:
             signal = "limit_left" if direction < 0 else "limit_right"
             if self.signals.get("stop"):
                 raise SersError(68)
-            if not self.energized or self.errors & ~LIMIT:
+            if not self.power_stage.energized or self.power_stage.errors & ~LIMIT:
                 raise SersError(79)
         else:
             signal = "index" if p147 & 64 and not p147 & 128 else "reference"
@@ -393,14 +414,14 @@ class Motion:
         if self.motion == "poly":
             self.stop_motion()  # POSR also ends polynomial mode (§4.6.7)
             return
-        stepped = self.errors & STEP_LOSS or self.warnings & STEP_LOSS
+        stepped = self.power_stage.errors & STEP_LOSS or self.power_stage.warnings & STEP_LOSS
         if not force and not stepped:
             raise SersError(3)
         if self.motion is not None:
             raise SersError(70)
-        if self.errors & STEP_LOSS:
-            self.errors &= ~STEP_LOSS
-        self.warnings &= ~STEP_LOSS
+        if self.power_stage.errors & STEP_LOSS:
+            self.power_stage.errors &= ~STEP_LOSS
+        self.power_stage.warnings &= ~STEP_LOSS
         self._resync_to_encoder()
         target = self._setpoint if self._setpoint is not None else float(self.params.position_setpoint) + self.offset
         direction = (target > self.axis.position()) - (target < self.axis.position())
@@ -431,7 +452,7 @@ class Motion:
         if mode in (5, 6, 7) and "E50" not in self.cfg.options:
             return
         self.params.values[counter] = int(self.params.values.get(counter, 0)) + count
-        if not self.energized or self.errors or self.motion not in (None, "follow"):
+        if not self.power_stage.energized or self.power_stage.errors or self.motion not in (None, "follow"):
             return
         step = count * weight * INC_PER_REV / 200
         base = self._follow_target if self.motion == "follow" else self.axis.position()
@@ -488,10 +509,10 @@ class Motion:
         self.max_load_angle = max(self.max_load_angle, abs(self.axis.position() - self.encoder_position()))
         reaction = int(self.params.step_monitoring)
         if reaction == 2:
-            self.warn(STEP_LOSS)
+            self.power_stage.warn(STEP_LOSS)
             self.stop_motion()
         elif reaction in (1, 3):
-            self.drive_error(STEP_LOSS)
+            self.power_stage.drive_error(STEP_LOSS)
         retries = int(self.params.posr_attempts)
         if retries and self._posr_attempts < retries:
             self._posr_attempts += 1
@@ -504,13 +525,12 @@ class Motion:
         if self.motion is not None:
             self._timers.append(self.clock.call_later(0.01, self._auto_posr))
             return
-        self.errors &= ~STEP_LOSS
-        if not self.errors:
-            self.energized = self.relay = True
+        self.power_stage.errors &= ~STEP_LOSS
+        self.power_stage.energize()
         try:
             self.posr(force=True)
         except SersError as exc:
-            self.record_error(exc.errno)
+            self.power_stage.record_error(exc.errno)
 
     def _resync_to_encoder(self) -> None:
         """Clearing a step loss: P51 takes the encoder's position (§4.8.6.6)."""
@@ -578,10 +598,10 @@ class Motion:
 
     def _standstill_error(self) -> None:
         if self.motion is not None and self.motion != "error-stop":
-            self.drive_error(STANDSTILL)
+            self.power_stage.drive_error(STANDSTILL)
 
     def _soft_limit_hit(self) -> None:
-        self.warn(1)
+        self.power_stage.warn(1)
         if self.motion not in (None, "stopping", "error-stop"):
             self.stop_motion()
 

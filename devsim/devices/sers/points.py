@@ -88,11 +88,11 @@ _PLAIN: list[Point] = [
           in_state=True, shared=True),
     Point("motion", "bool", "the drive moves (positioning, jog, homing, POS0/POSR)", "§4.6.6",
           get=lambda m: m.motion is not None, in_state=True, shared=True),
-    Point("energized", "bool", "the motor phases are energised (ON)", "§4.8.2.2", get=lambda m: m.energized,
+    Point("energized", "bool", "the motor phases are energised (ON)", "§4.8.2.2", get=lambda m: m.power_stage.energized,
           in_state=True, shared=True),
     Point("ready", "bool", "the ready relay is closed and no drive error is active", "§2.1.3",
-          get=lambda m: bool(m.relay and not m.errors), in_state=True, shared=True),
-    Point("fault", "bool", "a drive error is active (P11 ≠ 0)", "§4.8.3.1", get=lambda m: bool(m.errors),
+          get=lambda m: bool(m.power_stage.relay and not m.power_stage.errors), in_state=True, shared=True),
+    Point("fault", "bool", "a drive error is active (P11 ≠ 0)", "§4.8.3.1", get=lambda m: bool(m.power_stage.errors),
           in_state=True, shared=True),
     # -- the drive --------------------------------------------------------------------------
     Point("axis.acceleration", "float", "actual acceleration", "§5.1", "inc/s²",
@@ -102,14 +102,14 @@ _PLAIN: list[Point] = [
           get=lambda m: m.axis.phase()),
     Point("motion.kind", "str", "what moves the drive: position, jog, homing, pos0, posr (null at rest)",
           "§4.6.6", get=lambda m: m.motion),
-    Point("display", "json", "the 7-segment display: character and blinking", "§3.5", get=lambda m: m.display(),
+    Point("display", "json", "the 7-segment display: character and blinking", "§3.5", get=lambda m: m.outputs.display(),
           in_state=True),
-    Point("display.char", "str", "the character the display shows", "§3.5", get=lambda m: m.display()["char"]),
+    Point("display.char", "str", "the character the display shows", "§3.5", get=lambda m: m.outputs.display()["char"]),
     Point("display.blinking", "bool", "the display blinks (a warning)", "§3.5",
-          get=lambda m: m.display()["blinking"]),
-    Point("P11", "int", "drive errors (bit field)", "§4.8.3.1", get=lambda m: m.errors, in_state=True),
-    Point("P12", "int", "warnings (bit field)", "§4.8.3.1", get=lambda m: m.warnings, in_state=True),
-    Point("errno", "int", "number of the last error message", "§4.8.3.1", get=lambda m: m.errno, in_state=True),
+          get=lambda m: m.outputs.display()["blinking"]),
+    Point("P11", "int", "drive errors (bit field)", "§4.8.3.1", get=lambda m: m.power_stage.errors, in_state=True),
+    Point("P12", "int", "warnings (bit field)", "§4.8.3.1", get=lambda m: m.power_stage.warnings, in_state=True),
+    Point("errno", "int", "number of the last error message", "§4.8.3.1", get=lambda m: m.power_stage.errno, in_state=True),
     Point("homed", "bool", "a homing run (H) completed since power-on", "§4.8.4.5", get=lambda m: m.homed),
     Point("homing", "str", "the homing phase (null when not homing)", "§4.8.4.5",
           get=lambda m: m._homing["phase"] if m._homing else None),
@@ -155,7 +155,7 @@ def _stop(model: Any, active: bool) -> None:
 
 
 def _power(model: Any, active: bool) -> None:
-    model.power(not active)
+    model.switch_supply(not active)
 
 
 FAULTS = FaultTable(

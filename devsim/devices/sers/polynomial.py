@@ -131,7 +131,7 @@ class PolynomialMove:
         if segment.last:
             v = abs(axis.velocity())
             if direction == 0 or v * v / (2 * segment.brake) > abs(segment.end - here) + 1e-6:
-                drive.record_error(118)
+                drive.power_stage.record_error(118)
                 self._abort()
                 return
             axis.move_to(segment.end, segment.speed, segment.accel, decel=segment.brake, on_done=self._finished)
@@ -156,7 +156,7 @@ class PolynomialMove:
         # nothing to go on with: brake with B and report it (errno 108)
         segment = self.running
         self.running = None
-        self.drive.record_error(108)
+        self.drive.power_stage.record_error(108)
         self.drive.axis.stop(segment.brake, on_done=self._finished)
 
     def _finished(self) -> None:
