@@ -33,7 +33,7 @@ class ParameterAccess:
 
     # -- reading ---------------------------------------------------------------------------
     def p51_inc(self) -> float:
-        return self.axis.position() - self.offset
+        return self.motion.p51_inc()
 
     def param_value(self, number: int) -> float:
         """Value of parameter ``number`` in user units (raises SersError 13/106)."""
@@ -69,12 +69,12 @@ class ParameterAccess:
             12: lambda: self.power_stage.warnings,
             51: self._read_p51,
             134: lambda: 7 if self.power_stage.energized else 0,
-            336: lambda: int(self.pos_ok),
-            403: lambda: 0 if self.homed else 3,
+            336: lambda: int(self.motion.pos_ok),
+            403: lambda: 0 if self.motion.homing.homed else 3,
             1013: self.status_word,
             1015: lambda: int(self.axis.phase() in ("accel", "decel")),
             1016: lambda: int(self.axis.phase() == "const"),
-            1042: lambda: int(self._outside_soft_limits()),
+            1042: lambda: int(self.motion.watches.outside_soft_limits(self.motion.p51_inc())),
             1046: self.adc,
             1050: lambda: self.cfg.address,
             1122: lambda: self.program.free_words(),
@@ -82,10 +82,10 @@ class ParameterAccess:
             1137: lambda: self.power_stage.errno,
             1300: lambda: self.inputs_byte(1),
             1301: lambda: self.inputs_byte(9) if "IO" in self.cfg.options else 0,
-            1123: lambda: int(self.poly.slot_free),
+            1123: lambda: int(self.motion.poly.slot_free),
             1124: lambda: self._pulses_in_window(1124),
             1146: lambda: self._pulses_in_window(1146),
-            1057: lambda: round(max(self.max_load_angle, abs(self.axis.position() - self.encoder_position()))),
+            1057: lambda: round(max(self.motion.encoder.max_load_angle, abs(self.motion.encoder.load_angle()))),
         }
 
     def _read_p51(self) -> float:
@@ -118,7 +118,7 @@ class ParameterAccess:
             word |= 2
         if s.get("stop"):
             word |= 4
-        if not self._reference_active():
+        if not self.motion.homing.reference_active():
             word |= 8
         if not s.get("service_ext"):
             word |= 128
@@ -250,24 +250,6 @@ class ParameterAccess:
             program.quit()
         self.interpreter.start(label)
 
-    def continue_positioning(self) -> None:
-        """P1033=1: a program stopped during ``E`` continues the interrupted move."""
-        if self._setpoint is None:
-            return
-        here = self.axis.position()
-        direction = (self._setpoint > here) - (self._setpoint < here)
-        self._motion_checks(direction)
-        if direction == 0:
-            self.interpreter.on_motion_end()
-            return
-        self._speed = float(self.params.velocity)
-        self._accel = float(self.params.acceleration)
-        self._target_physical = self._setpoint
-        self._begin_motion("position", self._accel)
-        self._legs = [(self._setpoint, self._speed)]
-        self._next_leg()
-        self._arm_position_watches()
-
     def on_program_state(self) -> None:
         """The program started or stopped: outputs (P1126) follow."""
         self.outputs.update()
@@ -292,23 +274,7 @@ class ParameterAccess:
     def _write_poly(self, number: int, value: float) -> None:
         """WP/WRP/WAP/WPT/WRPT/WAPT (P1111–P1116): a polynomial segment, closed by E."""
         self._check_range(PARAMETERS[number], value)
-        self.poly.define(number, self.scaling.pos_to_inc(float(value)))
-
-    def motion_checks_for(self, target: float) -> None:
-        here = self.axis.position()
-        self._motion_checks((target > here) - (target < here))
-
-    def begin_polynomial(self) -> None:
-        self._speed = float(self.params.velocity)
-        self._accel = float(self.params.acceleration)
-        self._begin_motion("poly", self._accel)
-        self._arm_position_watches()
-
-    def polynomial_finished(self) -> None:
-        if self.motion is not None:
-            self._motion_finished()
-            if self.params.report_in_position:
-                self.spontaneous(f"@{self.cfg.address}POS=1")
+        self.motion.poly.define(number, self.scaling.pos_to_inc(float(value)))
 
     def _write_opcode(self, value: float) -> None:
         """P1099 (§4.8.6.16): execute a program opcode, e.g. 62213 (0xF305) = ``RUN 5``,
@@ -317,7 +283,7 @@ class ParameterAccess:
         if code >> 8 == 0xF3:
             self.run_program(code & 0xFF or None)
         elif code == 0xF703:
-            self.start_positioning()
+            self.motion.start_positioning()
         elif code >> 8 == 0xF7:
             raise SersError(77)
         else:
@@ -329,7 +295,7 @@ class ParameterAccess:
 
     def _write_p51(self, value: float) -> None:
         self._check_range(PARAMETERS[51], value)
-        self.offset = self.axis.position() - self.scaling.pos_to_inc(float(value))
+        self.motion.set_p51(self.scaling.pos_to_inc(float(value)))
 
     def _write_p1004(self, value: float) -> None:
         actions = {2: self.memory.psave, 3: self.memory.factory_defaults, 4: self.memory.possave, 5: self.memory.save_registers}
@@ -341,16 +307,16 @@ class ParameterAccess:
     def _write_p1014(self, value: float) -> None:
         if value not in (0, 1, 2, 3):
             raise SersError(80)
-        if self.motion is not None:
+        if self.motion.kind is not None:
             raise SersError(93)
         self.params.positioning_mode = int(value)
 
     def _write_p1031(self, value: float) -> None:
         commands = {1: "LS", 2: "RS", 4: "LF", 8: "RF"}
         if value == 16:
-            self.home()
+            self.motion.home()
         elif value in commands:
-            self.jog(commands[int(value)])
+            self.motion.jog.start(commands[int(value)])
         else:
             raise SersError(3)
 
@@ -358,9 +324,9 @@ class ParameterAccess:
         if value == 0:
             return
         if value == 1:
-            self.pos0()
+            self.motion.pos0()
         elif value in (2, 3):
-            self.posr(force=value == 3)
+            self.motion.posr(force=value == 3)
         else:
             raise SersError(3)
 
@@ -374,7 +340,7 @@ class ParameterAccess:
         self.params.values[number] = internal
 
     def _write_w_mode(self, value: float, mode: int) -> None:
-        if self.motion is not None and self.params.positioning_mode != mode:
+        if self.motion.kind is not None and self.params.positioning_mode != mode:
             raise SersError(93)
         self._write_w(value)
         self.params.positioning_mode = mode
@@ -382,27 +348,7 @@ class ParameterAccess:
     def _write_w(self, value: float) -> None:
         """W (P47): free while standing; while moving only in the constant phase (§4.6.6)."""
         self._check_range(PARAMETERS[47], value)
-        new = self.scaling.pos_to_inc(float(value))
-        if self.motion != "position":
-            self.params.position_setpoint = new
-            return
-        if self.axis.phase() != "const":
-            raise SersError(81)
-        mode = self.params.positioning_mode
-        current_target = self._target_physical
-        target = current_target + new if mode in (0, 1, 3) else new + self.offset
-        position = self.axis.position()
-        direction = 1 if self.axis.velocity() > 0 else -1
-        remaining = (target - position) * direction
-        if remaining < self.axis.stopping_distance(self._accel, self.ramp_profile()):
-            self.params.position_setpoint = new
-            raise SersError(87)
-        self.params.position_setpoint = new
-        self._target_physical = target
-        self._w_updated = True
-        self._legs = []
-        self.axis.move_to(target, self._speed, self._accel, on_done=self._positioning_done, profile=self.ramp_profile())
-        self._arm_position_watches()
+        self.motion.write_w(self.scaling.pos_to_inc(float(value)))
 
     # ======================================================================================
     # operands, conditions, arithmetic
@@ -518,7 +464,7 @@ class ParameterAccess:
             return "pgm"
         if self.power_stage.errors:
             return "ok4"
-        digit = 1 if self.pos_ok else 0
+        digit = 1 if self.motion.pos_ok else 0
         if self.power_stage.warnings:
             digit += 2
         return f"ok{digit}"

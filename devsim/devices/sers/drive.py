@@ -22,12 +22,11 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from devsim.core.axis import Axis, RegionSwitch, Watch
+from devsim.core.axis import Axis, RegionSwitch
 from devsim.core.clock import Clock, Timer
 from devsim.core.kit import declare_signals
 from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
-from devsim.devices.sers import statements as st
 from devsim.devices.sers.access import ParameterAccess
 from devsim.devices.sers.config import SersConfig
 from devsim.devices.sers.constants import FIRMWARE, INC_PER_REV
@@ -41,7 +40,6 @@ from devsim.devices.sers.motion import Motion
 from devsim.devices.sers.outputs import Outputs
 from devsim.devices.sers.parameters import SUPPLY_THRESHOLDS
 from devsim.devices.sers.params import SersParameters
-from devsim.devices.sers.polynomial import PolynomialMove
 from devsim.devices.sers.power import PowerStage
 from devsim.devices.sers.program import ProgramMemory
 from devsim.devices.sers.signals import SIGNALS
@@ -50,7 +48,7 @@ from devsim.devices.sers.supply import SupplyMonitor
 __all__ = ["SersDrive"]
 
 
-class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
+class SersDrive(ParameterAccess, Execution, InputsAndFaults, Model):
     """Parameters, physics and faults of one SERS; the serial side is :class:`SersDevice`."""
 
     def __init__(
@@ -64,7 +62,7 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         super().__init__(clock=clock, config=config, nvram=nvram, name=name)
         self.cfg = SersConfig.parse(self.config)
         self.params = SersParameters()
-        self.memory = ParameterMemory(self.nvram, self.params, lambda: self.cfg, lambda: self.p51_inc())
+        self.memory = ParameterMemory(self.nvram, self.params, lambda: self.cfg, lambda: self.motion.p51_inc())
         self.program = ProgramMemory(self.nvram)
         self.interpreter = Interpreter(self)
         self.master = MasterLink(clock, self.line_out)
@@ -74,14 +72,27 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self.shared_line = False
         thresholds = SUPPLY_THRESHOLDS[self.cfg.supply_class]
         self.thresholds = thresholds
+        self.axis = Axis(clock, counts_per_rev=INC_PER_REV, index_offset=self.cfg.axis.index_offset, name=self.name)
         self.power_stage = PowerStage(
-            clock, self.params, self.signals, self.memory, self,
+            clock, self.params, self.signals, self.memory, lambda: self.motion,
             undervoltage=thresholds[2],
             changed=lambda: self.outputs.update(),
             program_error=lambda: self.interpreter.on_drive_error(),
-            resync=lambda: self._resync_to_encoder(),
+            resync=lambda: self.motion.encoder.resync(),
             record_event=self.record_event,
             announce=self.announce,
+        )
+        self.motion = Motion(
+            clock, self.axis, self.params, self.signals, self.power_stage,
+            evaluate=lambda cond: self.evaluate(cond),
+            i7_stop=lambda: self._i7_stop_active(),
+            ended=lambda: self.interpreter.on_motion_end(),
+            poke=lambda: self.interpreter.poke(),
+            segment_ended=lambda: self.interpreter.resume("segment"),
+            in_position_message=lambda: self.spontaneous(f"@{self.cfg.address}POS=1"),
+            has_option_e50=lambda: "E50" in self.cfg.options,
+            record_event=self.record_event,
+            changed=lambda: self.outputs.update(),
         )
         self.supply = SupplyMonitor(
             self.signals, self.power_stage, self.memory, thresholds,
@@ -93,12 +104,10 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
             self.signals, self.params, self.power_stage, self.memory,
             alive=lambda: self.logic_alive,
             booting=lambda: self.booting,
-            in_position=lambda: self.pos_ok,
+            in_position=lambda: self.motion.pos_ok,
             program_running=lambda: self.program_state == 1,
         )
-        self.axis = Axis(clock, counts_per_rev=INC_PER_REV, index_offset=self.cfg.axis.index_offset, name=self.name)
         self._timers: list[Timer] = []
-        self._watches: list[Watch] = []
         self._define_signals()
         self._switches: list[RegionSwitch] = []
         self._build_switches()
@@ -106,7 +115,6 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self.booting = False
         self.firmware = FIRMWARE
         self.trace_mode = False
-        self.poly = PolynomialMove(self)
         self._power_on()
 
     # ======================================================================================
@@ -127,7 +135,7 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         s.subscribe("supply_voltage", lambda *_: self.supply.check_supply())
         s.subscribe("heatsink_temperature", lambda *_: self.supply.check_temperature())
         s.subscribe("short_circuit", lambda *_: self.supply.check_short())
-        s.subscribe("stall", self._on_stall)
+        s.subscribe("stall", lambda _name, _old, new: self.motion.stall(bool(new)))
         for name in s.names():
             s.subscribe(name, lambda *_: self.interpreter.poke())
 
@@ -172,36 +180,13 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         self.booting = self.cfg.boot_time > 0
         self.record_event("power_on")
         self.power_stage.power_on()
-        self.homed = False
-        self.pos_ok = True  # P336
-        self.motion: str | None = None
-        self._stop_decel = 0.0
-        self._w_updated = False
-        self._homing: dict[str, Any] | None = None
-        self._jog_timer: Timer | None = None
-        self._standstill_watches: list[Watch] = []
+        self.motion.power_on()
         self._dispatch: Timer | None = None
-        self._legs: list[tuple[float, float]] = []
-        self.lost = 0.0  # increments the rotor lags behind the stator field (step loss)
-        self._stall_rotor: float | None = None
-        self._load_watches: list[Watch] = []
-        self._setpoint: float | None = None
-        self._follow_target = 0.0
-        self._stopped_at = 0.0
-        self.servo_overload = False
-        self._servo_resume = False
-        self._posr_attempts = 0
-        self.max_load_angle = 0.0
-        self._jog_dir = 0
-        self._jog_speed = self._jog_accel = 0.0  # (of the jog under way)
-        self._jog_until: st.Condition | None = None
         self.program.reload()  # programming mode does not survive a power loss (P0 = 0)
         self.interpreter.reset()
-        self.poly.cancel()
         self.trace_mode = False
         self.memory.power_on()
-        p51 = self.memory.saved_position() or 0.0
-        self.offset = self.axis.position() - p51
+        self.motion.set_p51(self.memory.saved_position() or 0.0)
         for n in range(1, 17):
             self.signals.set(f"O{n}", False)
         self.power_stage.energize_at_power_on()
@@ -232,11 +217,9 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
 
     def _power_off(self) -> None:
         self._cancel_timers()
-        self.axis.quick_stop()
+        self.motion.power_off()
         self.logic_alive = False
         self.power_stage.power_off()
-        self.motion = None
-        self.pos_ok = True
         for n in range(1, 17):
             self.signals.set(f"O{n}", False)
         self.signals.set("READY", False)
@@ -256,6 +239,7 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
 
     def close(self) -> None:
         self._cancel_timers()
+        self.motion.cancel_all()
         self.power_stage.cancel()
         self.axis.quick_stop()
         for switch in self._switches:
@@ -265,13 +249,11 @@ class SersDrive(ParameterAccess, Execution, Motion, InputsAndFaults, Model):
         for timer in self._timers:
             timer.cancel()
         self._timers.clear()
-        for watch in self._watches + getattr(self, "_standstill_watches", []):
-            watch.cancel()
-        self._watches.clear()
-        self._standstill_watches = []
-        if getattr(self, "_jog_timer", None) is not None:
-            self._jog_timer.cancel()
-            self._jog_timer = None
+
+    def _on_reference(self, name: str, old: Any, new: Any) -> None:
+        if not self.params.reference_input:
+            self.motion.homing.edge("reference", bool(new))
+        self.motion.check_until()
 
     def spontaneous(self, text: str) -> None:
         """An unsolicited message (``@2POS=1``) for the serial face to send between lines."""

@@ -54,26 +54,31 @@ class Execution:
     def program_statement(self, stmt: st.Statement) -> str | None:
         """Execute a statement of a running program; returns what the program must wait for
         (``position``: until the drive stands, §4.6.6) or None to go on at once."""
-        if isinstance(stmt, st.Command) and stmt.name == "E" and self.poly.definition is not None:
-            last = self.poly.definition[2]
-            started = self.poly.execute() == "started"
+        if isinstance(stmt, st.Command) and stmt.name == "E" and self.motion.poly.definition is not None:
+            last = self.motion.poly.definition[2]
+            started = self.motion.poly.execute() == "started"
             master_goes_on = self.cfg.address == 0 and int(self.params.wait_until_positioned) == 0
             if last:
-                return None if (master_goes_on or self.motion is None) else "position"
+                return None if (master_goes_on or self.motion.kind is None) else "position"
             return None if started else "segment"
         if isinstance(stmt, st.Command) and stmt.name in ("E", "H", "POS0", "POSR"):
             self.execute(stmt)
-            if self.motion is None:
+            if self.motion.kind is None:
                 return None
             if stmt.name == "E" and self.cfg.address == 0 and int(self.params.wait_until_positioned) == 0:
                 return None  # master with P1110=0 goes on while it moves (§4.8.5.5)
             return "position"
         if isinstance(stmt, st.Jog):
-            self.jog(stmt.name, stmt.until, serial=False)
+            self.motion.jog.start(stmt.name, stmt.until, serial=False)
             # with ':' the statement lasts until standstill; without, it just starts (G-JOGPROG)
-            return "position" if stmt.until is not None and self.motion is not None else None
+            return "position" if stmt.until is not None and self.motion.kind is not None else None
         self.execute(stmt)
         return None
+
+    def continue_positioning(self) -> None:
+        """P1033=1: a program stopped during ``E`` continues the interrupted move."""
+        if not self.motion.continue_positioning():
+            self.interpreter.on_motion_end()
 
     def _command(self, name: str) -> None:
         handler = COMMANDS.get(name)
@@ -93,7 +98,7 @@ class Execution:
 
     def stop_all(self) -> None:
         self.interpreter.stop()
-        self.stop_motion()
+        self.motion.stop_motion()
 
     def trace_off(self) -> None:
         self.trace_mode = False
@@ -107,28 +112,6 @@ class Execution:
     def program_end(self) -> None:
         if self.program_state != 1:
             raise SersError(54)
-
-    def _servo_overload(self, overloaded: bool) -> None:
-        """Under overload the SERVO drive loses no steps: the stator field holds at the rotor
-        and the move resumes when the load goes away, at P1163 if P1162=1 (catch-up), else at
-        V (arriving later).  P1160 signals the overload on an output."""
-        self.servo_overload = overloaded
-        sel = int(self.params.overload_output)
-        if sel:
-            port, value = abs(sel) if abs(sel) <= 4 else abs(sel) - 4, sel > 0
-            if overloaded or abs(sel) > 4:
-                self.signals.set(f"O{port}", value if overloaded else not value)
-        if overloaded:
-            if self.motion == "position":
-                self.axis.quick_stop()
-                self._servo_resume = True
-            return
-        if getattr(self, "_servo_resume", False) and self.motion == "position":
-            self._servo_resume = False
-            speed = self._speed
-            if self.params.use_catch_up_velocity == 1:
-                speed = max(speed, float(self.params.catch_up_velocity))
-            self.axis.move_to(self._target_physical, speed, self._accel, on_done=self._positioning_done)
 
 
 
@@ -149,7 +132,7 @@ STATEMENTS: Table[Callable[[Any, Any], None]] = Table(
         Command("Assign", lambda d, s: d.assign(s), "§4.2", "write a parameter or alias (X: the accumulator)"),
         Command("Arith", lambda d, s: d.arithmetic(s.op, s.operand), "§4.6.10", "X := X op operand"),
         Command("Unary", lambda d, s: d.arithmetic(s.op, None), "§4.6.10", "NOT, NEG on X"),
-        Command("Jog", lambda d, s: d.jog(s.name, s.until), "§4.5.1", "RS, RF, LS, LF [:condition]"),
+        Command("Jog", lambda d, s: d.motion.jog.start(s.name, s.until), "§4.5.1", "RS, RF, LS, LF [:condition]"),
         Command("Command", lambda d, s: d._command(s.name), "§4.2", "a keyword command (see below)"),
         Command("Text", _refuse(16), "§4.6.11", "text for the SERS-Programmer: stored in programming mode only"),
         Command("Run", lambda d, s: d.run_program(s.label), "§4.8.6.16", "RUN / RUN n: start the program"),
@@ -165,15 +148,15 @@ STATEMENTS: Table[Callable[[Any, Any], None]] = Table(
 #: Keyword commands (spec §3.3) → what the drive does.
 COMMANDS: Table[Callable[[Any], None]] = Table(
     [
-        Command("E", lambda d: d.start_positioning(), "§4.6.6", "start positioning to W at V with A"),
-        Command("H", lambda d: d.home(), "§4.8.4.5", "start homing (reference run)"),
+        Command("E", lambda d: d.motion.start_positioning(), "§4.6.6", "start positioning to W at V with A"),
+        Command("H", lambda d: d.motion.home(), "§4.8.4.5", "start homing (reference run)"),
         Command("S", lambda d: d.stop_all(), "§4.8.6.2", "stop: the program and the motion"),
         Command("ON", lambda d: d.power_stage.switch_on(), "§4.8.2.2", "energise the motor (P134=7)"),
         Command("OFF", lambda d: d.power_stage.switch_off(), "§4.8.2.2", "de-energise the motor (P134=0)"),
         Command("PSAVE", lambda d: d.memory.psave(), "§4.8.6.10", "save the RAM parameters in the EEPROM (P1004=2)"),
         Command("POSSAVE", lambda d: d.memory.possave(), "§4.8.4.2", "save P51 in the EEPROM (P1004=4)"),
-        Command("POS0", lambda d: d.pos0(), "§4.8.4.2", "move to the next electrical zero, then P51=0"),
-        Command("POSR", lambda d: d.posr(force=False), "§4.8.4.2", "after step loss: back to the set-point W"),
+        Command("POS0", lambda d: d.motion.pos0(), "§4.8.4.2", "move to the next electrical zero, then P51=0"),
+        Command("POSR", lambda d: d.motion.posr(force=False), "§4.8.4.2", "after step loss: back to the set-point W"),
         Command("NEW", lambda d: d.new_program(), "§4.5.3", "programming mode, deleting the program (P0=2)"),
         Command("PGM", lambda d: d.edit_program(), "§4.5.3", "programming mode, editing the program"),
         Command("QUIT", lambda d: d.quit_program(), "§4.2", "leave programming mode (P0=0)"),

@@ -22,22 +22,20 @@ class InputsAndFaults:
         if not self.logic_alive:
             return
         if new:
-            homing = self._homing
-            if homing is not None and homing["signal"] == name:
-                self._homing_edge(True)
+            if self.motion.homing.edge(name, True):
                 return
             self.power_stage.drive_error(LIMIT)
-        elif self._homing is not None and self._homing["signal"] == name:
-            self._homing_edge(False)
-        self._check_until()
+        else:
+            self.motion.homing.edge(name, False)
+        self.motion.check_until()
 
     def _on_stop_input(self, name: str, old: Any, new: Any) -> None:
         self.power_stage.stop_input(bool(new))
         if new:
             self.interpreter.stop()
-            if self.motion is not None:
-                self.stop_motion()
-        self._check_until()
+            if self.motion.kind is not None:
+                self.motion.stop_motion()
+        self.motion.check_until()
 
     def _functions_enabled(self, bit: int) -> bool:
         """Manual functions on I1..I7 (§3.1.4, §4.8.1.1 P1021)."""
@@ -56,10 +54,10 @@ class InputsAndFaults:
         bit = 1 << (n - 1)
         monitored = int(self.params.standstill_input) == n and self.params.standstill_distance
         active_edge = bool(new) != (self.cfg.input_level == "low_active")
-        if monitored and active_edge and self.motion is not None:
-            self._arm_standstill_monitor()
-        if self.params.reference_input == n and self._homing is not None and self._homing["signal"] == "reference":
-            self._homing_edge(bool(new))
+        if monitored and active_edge and self.motion.kind is not None:
+            self.motion.watches.arm_standstill()
+        if self.params.reference_input == n:
+            self.motion.homing.edge("reference", bool(new))
         if self._functions_enabled(bit):
             try:
                 self._input_function(n, bool(new))
@@ -68,25 +66,25 @@ class InputsAndFaults:
         elif n == 8 and new and self._functions_enabled(128):
             self._start_input()
         self._event_input(n, bool(new))
-        self._check_until()
+        self.motion.check_until()
 
     def _input_function(self, n: int, active: bool) -> None:
         jogs = {1: "LS", 2: "RS", 3: "LF", 4: "RF"}
         if n in jogs:
             if active:
                 self.power_stage.energize()
-                self.jog(jogs[n], serial=False)
-            elif self.motion == "jog":
-                self.stop_motion()
+                self.motion.jog.start(jogs[n], serial=False)
+            elif self.motion.kind == "jog":
+                self.motion.stop_motion()
         elif n == 5 and active:
             self.power_stage.energize()
-            self.home(serial=False)
+            self.motion.home()
         elif n == 6 and active:  # G-INFUNC: rising edge toggles; ON clears P11 and P12
             self.power_stage.toggle()
         elif n == 7 and active:
             self.interpreter.stop()
-            if self.motion is not None:
-                self.stop_motion()
+            if self.motion.kind is not None:
+                self.motion.stop_motion()
         elif n == 8 and active:
             self._start_input()
         self.outputs.update()
@@ -146,18 +144,3 @@ class InputsAndFaults:
     def _dispatch_events(self) -> None:
         self._dispatch = None
         self.on_program_end()
-
-    def phase_current(self) -> float:
-        """Commanded phase current in mA (§4.8.6.1, spec §5.11): P1010; with P1011 bit 0
-        50 % at standstill from 20 ms after the last motion; +20 % boost per bits 1/2."""
-        if not self.power_stage.energized:
-            return 0.0
-        current = float(self.params.phase_current)
-        bits = int(self.params.current_parameters)
-        standing = self.motion is None and self.clock.now() - self._stopped_at >= 0.02
-        if standing and bits & 1:
-            current *= 0.5
-        accel = abs(self.axis.acceleration())
-        if (bits & 2 and accel > float(self.params.boost_acceleration)) or (bits & 4 and standing):
-            current *= 1.2
-        return current

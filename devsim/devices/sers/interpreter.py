@@ -577,8 +577,8 @@ class Interpreter:
         if self._delay is not None:
             self._delay.cancel()
             self._delay = None
-        if self.waiting == "position" and self.drive.motion == "jog":
-            self.drive.stop_motion()
+        if self.waiting == "position" and self.drive.motion.kind == "jog":
+            self.drive.motion.stop_motion()
         self.waiting = None
         self._wait_cond = None
         try:

@@ -44,7 +44,7 @@ class PowerStage:
         params: SersParameters,
         signals: SignalBank,
         memory: ParameterMemory,
-        brakes: Brakes,
+        brakes: Callable[[], Brakes],
         *,
         undervoltage: float,
         changed: Callable[[], None],
@@ -57,7 +57,7 @@ class PowerStage:
         self.params = params
         self.signals = signals
         self.memory = memory
-        self.brakes = brakes
+        self._brakes = brakes  # (the motion, made after the power stage)
         self._changed = changed  # the outputs and the display follow
         self._program_error = program_error  # a running program stops or jumps to L65
         self._resync = resync  # clearing a step loss: P51 takes the encoder's position
@@ -132,7 +132,7 @@ class PowerStage:
 
     def switch_off(self) -> None:
         """OFF = P134=0: torque off at once (spec G-OFFMOVE), relay open."""
-        self.brakes.quick_end()
+        self._brakes().quick_end()
         self.energized = False
         self.relay = False
         self._changed()
@@ -165,11 +165,11 @@ class PowerStage:
         self.errors |= bit
         if first:
             self._announce("fault", 1, EMCY_CODES.get(bit, 0x1000))  # (a CANopen facade sends EMCY)
-        self.brakes.abort_profiles()
+        self._brakes().abort_profiles()
         if first:
             self._program_error()
         if immediate:
-            self.brakes.quick_end()
+            self._brakes().quick_end()
             self.energized = False
             self.relay = False
             self._changed()
@@ -182,7 +182,7 @@ class PowerStage:
             self._changed()
             self._timers.append(self.clock.call_later(0.05, self._phases_off))
 
-        if not self.brakes.error_stop(relay_open):
+        if not self._brakes().error_stop(relay_open):
             relay_open()
         self._changed()
 
@@ -214,6 +214,15 @@ class PowerStage:
         if self.warnings & bit:
             self.warnings &= ~bit
             self._changed()
+
+    def clear_error(self, bit: int) -> None:
+        """A drive error that goes by itself (an automatic POSR after a step loss)."""
+        self.errors &= ~bit
+
+    def clear_step_loss(self) -> None:
+        """POSR: the step loss, as an error or a warning, is over (§4.8.4.2)."""
+        self.errors &= ~STEP_LOSS
+        self.warnings &= ~STEP_LOSS
 
     def record_error(self, errno: int) -> None:
         """Every error message sets P12 value 16 and P1137 (§4.8.3.1)."""
