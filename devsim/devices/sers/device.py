@@ -1,7 +1,7 @@
 """The Stögra SERS stepper drive as a devsim kind: the model under its ASCII face.
 
 Manual "SERS Version V04, Firmware ab 120901"; spec sers.md.  The machine is
-:class:`~devsim.devices.sers.drive.SersDrive`, the serial line protocol
+:class:`~devsim.devices.sers.model.SersDrive`, the serial line protocol
 :class:`~devsim.devices.sers.face.SersFace`; names and faults are declared in
 :mod:`~devsim.devices.sers.points`, commands in :mod:`~devsim.devices.sers.execution`.
 """
@@ -14,11 +14,11 @@ from devsim.core.device import Device
 from devsim.core.kit import ErrorCode, Reference
 from devsim.core.settings import Section
 from devsim.devices.sers.config import SersConfig
-from devsim.devices.sers.drive import SersDrive
 from devsim.devices.sers.drive_actions import DRIVE
 from devsim.devices.sers.errors import ERRNO
 from devsim.devices.sers.execution import COMMANDS, STATEMENTS
 from devsim.devices.sers.face import INTERACTIVE, SersFace
+from devsim.devices.sers.model import SersDrive
 from devsim.devices.sers.parameters import PARAMETER_TABLE
 from devsim.devices.sers.points import FAULTS, POINTS
 

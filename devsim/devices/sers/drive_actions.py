@@ -38,9 +38,9 @@ def _enable(m: Any, on: bool) -> None:
 def _move_to(m: Any, target: float, speed: float) -> None:
     scaling = m.params.scaling
     if speed > 0:
-        m.write_param(91, scaling.incps_to_vel(speed))
-    m.write_param(1014, 2)
-    m.write_param(47, scaling.inc_to_pos(target))
+        m.access.write_param(91, scaling.incps_to_vel(speed))
+    m.access.write_param(1014, 2)
+    m.access.write_param(47, scaling.inc_to_pos(target))
     m.motion.start_positioning()
 
 
@@ -48,7 +48,7 @@ def _jog(m: Any, velocity: float) -> None:
     if velocity == 0:
         m.motion.stop_motion()
         return
-    m.write_param(1020, m.params.scaling.incps_to_vel(abs(velocity)))
+    m.access.write_param(1020, m.params.scaling.incps_to_vel(abs(velocity)))
     m.motion.jog.start("RF" if velocity > 0 else "LF", serial=False)
 
 
@@ -57,7 +57,7 @@ DRIVE = DriveActions(
     move_to=_refusals(_move_to),
     jog=_refusals(_jog),
     quick_stop=_refusals(lambda m: m.motion.stop_motion()),
-    reset_fault=_refusals(lambda m: m.write_param(11, 0)),
+    reset_fault=_refusals(lambda m: m.access.write_param(11, 0)),
     position=lambda m: m.motion.p51_inc(),
     velocity=lambda m: m.axis.velocity(),
     enabled=lambda m: bool(m.power_stage.energized),

@@ -3,7 +3,7 @@
 This module is the ASCII line protocol of the drive, held over the model (:class:`SersDrive`): framing, drive selection on a multidrop line,
 echo modes (P1017, §4.8.6.9), acknowledgements (§4.1), error messages (§4.8.3.1), parameter
 queries (§4.7) and the execution of interactive statements (§4.2).  The physics behind it –
-positioning, jog, homing, limit switches, faults – lives in :mod:`.drive`.
+positioning, jog, homing, limit switches, faults – lives in the model's parts (:mod:`.model`).
 """
 
 from __future__ import annotations
@@ -18,8 +18,9 @@ from devsim.core.kit import Command, Table
 from devsim.core.record import field, record
 from devsim.devices.sers import codec
 from devsim.devices.sers import statements as st
-from devsim.devices.sers.drive import SersDrive
+from devsim.devices.sers.access import address_number
 from devsim.devices.sers.errors import SersError, message
+from devsim.devices.sers.model import SersDrive
 
 __all__ = ["INTERACTIVE", "SersFace"]
 
@@ -214,7 +215,7 @@ class SersFace(Face):
         self._line = line = _Line()  # (what the query sets off waits for the line end)
         line.execute = line.reply = True
         try:  # what _progress does with the line's one statement, a query (_query)
-            self._out(line, model.query_text(poll.query) + "\n\r")
+            self._out(line, model.answers.query_text(poll.query) + "\n\r")
         except SersError as exc:
             self._error(line, exc.errno, exc.detail)
         finally:
@@ -257,7 +258,7 @@ class SersFace(Face):
         is handled."""
         model, framer, send, end = self.model, self.framer, self.send, len(data)
         hash_, no_address, search, fails = codec.HASH, codec.NO_ADDRESS, codec.TEXT_END.search, _first_byte_errors()
-        mode = model.handshake_mode  # (only a statement changes it: none runs here)
+        mode = model.answers.handshake_mode  # (only a statement changes it: none runs here)
         while True:
             # data[index] is a '#' outside a line
             if model.addressed is False:
@@ -293,9 +294,9 @@ class SersFace(Face):
             if reply and mode in (0, 1):
                 send(data[index:cut])
             model.power_stage.record_error(errno)  # (what _error does, its message from a table)
-            mode = model.handshake_mode
+            mode = model.answers.handshake_mode
             echo = mode in (0, 1)
-            text = _error_text(errno, model.english, model.cfg.encoding) if reply else b""
+            text = _error_text(errno, model.answers.english, model.cfg.encoding) if reply else b""
             if mode == 2:
                 line.deferred += text
                 text = b""
@@ -457,7 +458,7 @@ class SersFace(Face):
             if line.deferred:
                 self.send(bytes(line.deferred))
             if not line.error:
-                self.send(b"\n" + self.model.ack_text().encode("latin-1") + b"\n\r")
+                self.send(b"\n" + self.model.answers.ack_text().encode("latin-1") + b"\n\r")
         self._last_replied = line.reply
         self._line = None
         self._flush_spontaneous()
@@ -541,11 +542,11 @@ class SersFace(Face):
             return
         handler = INTERACTIVE.get(type(stmt).__name__)
         if handler is None or not handler(self, line, stmt):
-            self.model.execute(stmt)  # the drive's own statements (execution.STATEMENTS)
+            self.model.execution.execute(stmt)  # the drive's own statements (execution.STATEMENTS)
 
     # -- statements with an answer or line state (the table INTERACTIVE) ---------------------
     def _if(self, line: _Line, stmt: st.If) -> bool:
-        true = self.model.evaluate(stmt.cond)
+        true = self.model.operands.evaluate(stmt.cond)
         if stmt.then:
             if not true:
                 line.skip_block = 1
@@ -558,15 +559,15 @@ class SersFace(Face):
         return True
 
     def _query(self, line: _Line, stmt: st.Query) -> bool:
-        self._out(line, self.model.query_text(stmt) + "\n\r")
+        self._out(line, self.model.answers.query_text(stmt) + "\n\r")
         return True
 
     def _list(self, line: _Line, stmt: st.ListCmd) -> bool:
         model = self.model
         if stmt.params:
-            rows = model.list_parameters(stmt.arg)
+            rows = model.answers.list_parameters(stmt.arg)
         else:
-            rows = model.program.listing(model.list_options, model.render_statement, stmt.arg)
+            rows = model.program.listing(model.answers.list_options, model.answers.render_statement, stmt.arg)
         self._out(line, "".join(f"{row}\n\r" for row in rows))
         return True
 
@@ -574,24 +575,24 @@ class SersFace(Face):
         if stmt.target.kind not in ("P", "alias") or not self._is_master_query(stmt):
             return False
         # a master asks through P2 (IF/WAIT) or P3 (read): answer the value (§4.8.5.5, G-MASTER)
-        number = self.model.address_number(stmt.target)
-        asked = int(self.model.operand_value(stmt.value)) if not isinstance(stmt.value, str) else 0
+        number = address_number(stmt.target)
+        asked = int(self.model.operands.operand_value(stmt.value)) if not isinstance(stmt.value, str) else 0
         self.model.params.values[number] = asked
-        self._out(line, f"P{number}={self.model.plain_value(asked)}\n\r")
+        self._out(line, f"P{number}={self.model.access.plain_value(asked)}\n\r")
         return True
 
     def _version(self, line: _Line, stmt: st.Command) -> bool:
         if stmt.name != "VER":
             return False
-        self._out(line, f"P1133={self.model.firmware}\n\r")
+        self._out(line, f"P1133={self.model.access.firmware}\n\r")
         return True
 
     def _trace(self, line: _Line, stmt: st.Trace) -> bool:
         if stmt.query:
-            self._out(line, f"TR={int(self.model.trace_mode)}\n\r")
+            self._out(line, f"TR={int(self.model.interpreter.trace_mode)}\n\r")
             return True
         # TR: one program step; the executed statement is shown like a LIST row (G-TRACE)
-        self.model.trace_mode = True
+        self.model.interpreter.trace_mode = True
         shown = self.model.interpreter.trace_step()
         if shown is not None:
             self._out(line, shown + "\n\r")
@@ -599,7 +600,7 @@ class SersFace(Face):
 
     def _is_master_query(self, stmt: st.Assign) -> bool:
         try:
-            return self.model.address_number(stmt.target) in (2, 3)
+            return address_number(stmt.target) in (2, 3)
         except SersError:
             return False
 
@@ -627,7 +628,7 @@ class SersFace(Face):
     # -- output ----------------------------------------------------------------------------
     @property
     def echo(self) -> bool:
-        return self.model.handshake_mode in (0, 1)
+        return self.model.answers.handshake_mode in (0, 1)
 
     def _out(self, line: _Line, text: str) -> None:
         self._put(line, text.encode(self.model.cfg.encoding, errors="replace"))
@@ -636,7 +637,7 @@ class SersFace(Face):
         """An answer of the line: at once, or with RS-485 handshake (P1017 = 2) at its end."""
         if not line.reply:
             return
-        if self.model.handshake_mode == 2:
+        if self.model.answers.handshake_mode == 2:
             line.deferred += data
         else:
             self.send(data)
@@ -644,7 +645,7 @@ class SersFace(Face):
     def _error(self, line: _Line, errno: int, detail: str = "") -> None:
         line.error = True
         self.model.power_stage.record_error(errno)
-        self._put(line, _error_text(errno, self.model.english, self.model.cfg.encoding, detail))
+        self._put(line, _error_text(errno, self.model.answers.english, self.model.cfg.encoding, detail))
 
     def spontaneous(self, text: str) -> None:
         """Messages such as ``@2POS=1`` go out between lines, never inside one (G-SPONT)."""

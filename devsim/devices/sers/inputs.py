@@ -1,131 +1,254 @@
-"""Inputs, faults, outputs and display of the SERS model: limit switches, STOP, digital inputs
-and their functions, supply and temperature faults, outputs, the 7-segment display (manual
-§2.1, §3.3, §3.5, §4.8.1; spec §2.7, §4.7, §4.11, §5.6, §5.14)."""
+"""The SERS's inputs: the limit switches and STOP, the digital inputs I1..I16 with their manual
+functions, the start input, the parallel and event-driven modes, and what the inputs read as
+(P1300, P1301, P1013, J1..J5, the ADC) (manual §2.1.2, §3.3, §3.6, §4.5.2, §4.8.1, §4.8.3.2;
+spec §4.11, §5.6, G-INFUNC, G-ADC).
+"""
 
 from __future__ import annotations
 
-from typing import Any
+import math
+from collections.abc import Callable
+from typing import Any, Protocol
 
+from devsim.core.clock import Clock, Timer
+from devsim.core.signals import SignalBank
 from devsim.devices.sers.constants import LIMIT
 from devsim.devices.sers.errors import SersError
+from devsim.devices.sers.motion import Motion
+from devsim.devices.sers.params import SersParameters
+from devsim.devices.sers.power import PowerStage
+from devsim.devices.sers.program import ProgramMemory
 
-__all__ = ["InputsAndFaults"]
+__all__ = ["Inputs", "ProgramStarts"]
+
+#: The manual functions of I1..I4 (P1021 bits 0–3, §4.8.1.1).
+_JOGS = {1: "LS", 2: "RS", 3: "LF", 4: "RF"}
+#: J1..J5 (§4.6.1): the P1013 bit that is set while the switch is open.
+_J_BITS = {1: 8, 2: 2, 3: 1, 4: 4, 5: 128}
 
 
-class InputsAndFaults:
-    """Part of :class:`~devsim.devices.sers.drive.SersDrive`: inputs, faults, outputs, display."""
+class ProgramStarts(Protocol):
+    """What the inputs start and stop: the program execution (:class:`~.execution.Execution`)."""
 
-    # ======================================================================================
-    # inputs and faults
-    # ======================================================================================
-    def _on_limit(self, name: str, old: Any, new: Any) -> None:
-        if not self.logic_alive:
+    @property
+    def running(self) -> bool: ...
+
+    @property
+    def cycle(self) -> float:
+        """The control cycle (0.5 ms, or 2 ms with P1127=1)."""
+
+    def stop_program(self) -> None: ...
+
+    def run_program(self, label: int | None) -> None: ...
+
+    def run_subroutine(self, label: int) -> None: ...
+
+
+class Inputs:
+    """The inputs of one SERS and what they set off (§3.3, §4.8.1)."""
+
+    def __init__(
+        self,
+        clock: Clock,
+        signals: SignalBank,
+        params: SersParameters,
+        power: PowerStage,
+        motion: Motion,
+        program: ProgramMemory,
+        *,
+        config: Callable[[], Any],
+        alive: Callable[[], bool],
+        booting: Callable[[], bool],
+        programs: Callable[[], ProgramStarts],
+        changed: Callable[[], None],
+    ) -> None:
+        self.clock = clock
+        self.signals = signals
+        self.params = params
+        self.power = power
+        self.motion = motion
+        self.program = program
+        self._config = config
+        self._alive = alive
+        self._booting = booting
+        self._programs = programs  # (the program execution, made after the inputs)
+        self._changed = changed
+        #: Inputs whose rising edge came while a program ran (served when it ends, §4.5.2).
+        self.pending_events: set[int] = set()
+        self._dispatch: Timer | None = None
+        self._level_start: Timer | None = None
+
+    def power_on(self) -> None:
+        if self._dispatch is not None:
+            self._dispatch.cancel()
+        self._dispatch = None
+        self.pending_events.clear()
+
+    def power_off(self) -> None:
+        if self._dispatch is not None:
+            self._dispatch.cancel()
+
+    # -- what the inputs read as ------------------------------------------------------------------
+    def inputs_byte(self, first: int) -> int:
+        """P1300 (I1..I8, ``first`` = 1) or P1301 (I9..I16, ``first`` = 9)."""
+        if self._config().input_level == "invalid" and first == 1:
+            return 0
+        return sum(1 << i for i in range(8) if self.signals.get(f"I{first + i}"))
+
+    def status_word(self) -> int:
+        """P1013 (§4.8.3.2): bits set when a switch is *open*."""
+        s = self.signals
+        word = 0
+        if s.get("limit_right"):
+            word |= 1
+        if s.get("limit_left"):
+            word |= 2
+        if s.get("stop"):
+            word |= 4
+        if not self.motion.homing.reference_active():
+            word |= 8
+        if not s.get("service_ext"):
+            word |= 128
+        return word
+
+    def j_value(self, n: int) -> int:
+        """J1..J5 (§4.6.1): 1 = 24 V at the input (inverse of the P1013 'open' bits)."""
+        if n not in _J_BITS:
+            raise SersError(13)
+        return 0 if self.status_word() & _J_BITS[n] else 1
+
+    def adc(self) -> float:
+        """P1046 (spec G-ADC): fraction of the range above the P1148 offset, 10-bit quantised."""
+        volts = max(0.0, min(5.0, float(self.signals.get("adc_volts"))))
+        hysteresis = int(self.params.adc_hysteresis)
+        bits = max(1, 10 - int(math.log2(hysteresis + 1)))
+        raw = round(volts / 5 * 1023)
+        raw = (raw >> (10 - bits)) << (10 - bits)
+        volts = raw / 1023 * 5
+        offset = int(self.params.adc_offset) * 5 / 255
+        if offset >= 5:
+            return 0.0
+        return round(max(0.0, min(1.0, (volts - offset) / (5 - offset))), 3)
+
+    def pulses_in_window(self, n: int) -> int:
+        """P1124 / P1146 (§4.8.6.14): pulses counted in the window P1055 / P1145 (× 2 ms)."""
+        params = self.params
+        window = float(params.frequency_window if n == 1124 else params.frequency_window2) * 0.002
+        measuring = int(params.pulse_input) in (9, 10) if n == 1124 else int(params.pulse_input2) == 5
+        return round(float(self.signals.get("pulse_frequency")) * window) if measuring else 0
+
+    # -- the switches ---------------------------------------------------------------------------------
+    def on_limit(self, name: str, old: Any, new: Any) -> None:
+        if not self._alive():
             return
+        motion = self.motion
         if new:
-            if self.motion.homing.edge(name, True):
+            if motion.homing.edge(name, True):
                 return
-            self.power_stage.drive_error(LIMIT)
+            self.power.drive_error(LIMIT)
         else:
-            self.motion.homing.edge(name, False)
-        self.motion.check_until()
+            motion.homing.edge(name, False)
+        motion.check_until()
 
-    def _on_stop_input(self, name: str, old: Any, new: Any) -> None:
-        self.power_stage.stop_input(bool(new))
+    def on_stop(self, name: str, old: Any, new: Any) -> None:
+        self.power.stop_input(bool(new))
         if new:
-            self.interpreter.stop()
+            self._programs().stop_program()
             if self.motion.kind is not None:
                 self.motion.stop_motion()
         self.motion.check_until()
 
-    def _functions_enabled(self, bit: int) -> bool:
+    def on_reference(self, name: str, old: Any, new: Any) -> None:
+        if not self.params.reference_input:
+            self.motion.homing.edge("reference", bool(new))
+        self.motion.check_until()
+
+    # -- the digital inputs -----------------------------------------------------------------------
+    def functions_enabled(self, bit: int) -> bool:
         """Manual functions on I1..I7 (§3.1.4, §4.8.1.1 P1021)."""
-        service = self.cfg.service_switch or (self.signals.get("service_ext") and self.params.external_service_switch)
+        params = self.params
+        service = self._config().service_switch or (self.signals.get("service_ext") and params.external_service_switch)
         if bit == 128:
-            return bool(int(self.params.input_enable) & 128)
-        return bool(service) or bool(int(self.params.input_enable) & bit)
+            return bool(int(params.input_enable) & 128)
+        return bool(service) or bool(int(params.input_enable) & bit)
 
-    def _i7_stop_active(self) -> bool:
-        return self._functions_enabled(64) and bool(self.signals.get("I7"))
+    def i7_stop_active(self) -> bool:
+        return self.functions_enabled(64) and bool(self.signals.get("I7"))
 
-    def _on_digital_input(self, name: str, old: Any, new: Any) -> None:
-        if not self.logic_alive or self.booting:
+    def on_digital_input(self, name: str, old: Any, new: Any) -> None:
+        if not self._alive() or self._booting():
             return
         n = int(name[1:])
         bit = 1 << (n - 1)
-        monitored = int(self.params.standstill_input) == n and self.params.standstill_distance
-        active_edge = bool(new) != (self.cfg.input_level == "low_active")
-        if monitored and active_edge and self.motion.kind is not None:
-            self.motion.watches.arm_standstill()
-        if self.params.reference_input == n:
-            self.motion.homing.edge("reference", bool(new))
-        if self._functions_enabled(bit):
+        params, motion = self.params, self.motion
+        monitored = int(params.standstill_input) == n and params.standstill_distance
+        active_edge = bool(new) != (self._config().input_level == "low_active")
+        if monitored and active_edge and motion.kind is not None:
+            motion.watches.arm_standstill()
+        if params.reference_input == n:
+            motion.homing.edge("reference", bool(new))
+        if self.functions_enabled(bit):
             try:
                 self._input_function(n, bool(new))
             except SersError as exc:
-                self.power_stage.record_error(exc.errno)
-        elif n == 8 and new and self._functions_enabled(128):
-            self._start_input()
+                self.power.record_error(exc.errno)
+        elif n == 8 and new and self.functions_enabled(128):
+            self.start_input()
         self._event_input(n, bool(new))
-        self.motion.check_until()
+        motion.check_until()
 
     def _input_function(self, n: int, active: bool) -> None:
-        jogs = {1: "LS", 2: "RS", 3: "LF", 4: "RF"}
-        if n in jogs:
+        """The manual function of input ``n`` (§4.8.1.1): I1–I4 jog while active, I5 homing,
+        I6 motor ON/OFF (ON clears P11 and P12, G-INFUNC), I7 stop, I8 start."""
+        motion = self.motion
+        if n in _JOGS:
             if active:
-                self.power_stage.energize()
-                self.motion.jog.start(jogs[n], serial=False)
-            elif self.motion.kind == "jog":
-                self.motion.stop_motion()
+                self.power.energize()
+                motion.jog.start(_JOGS[n], serial=False)
+            elif motion.kind == "jog":
+                motion.stop_motion()
         elif n == 5 and active:
-            self.power_stage.energize()
-            self.motion.home()
-        elif n == 6 and active:  # G-INFUNC: rising edge toggles; ON clears P11 and P12
-            self.power_stage.toggle()
+            self.power.energize()
+            motion.home()
+        elif n == 6 and active:
+            self.power.toggle()
         elif n == 7 and active:
-            self.interpreter.stop()
-            if self.motion.kind is not None:
-                self.motion.stop_motion()
+            self._programs().stop_program()
+            if motion.kind is not None:
+                motion.stop_motion()
         elif n == 8 and active:
-            self._start_input()
-        self.outputs.update()
+            self.start_input()
+        self._changed()
 
-    # -- operating modes on the inputs (§3.6, §4.5.2) -----------------------------------------------
-    def _start_input(self) -> None:
+    # -- starting programs from the inputs (§3.6, §4.5.2) ---------------------------------------
+    def start_input(self) -> None:
         """Start input I8 (P1021 bit 128): stand-alone start from line 1, or in parallel mode
         (P1022 ≠ 0) the subroutine L(address + 1) of the BCD address on the inputs."""
-        if self.interpreter.running or not self._functions_enabled(128):
+        programs = self._programs()
+        if programs.running or not self.functions_enabled(128):
             return
-        mask = int(self.params.input_label_enable) & 0x7F & ~int(self.params.input_enable)
+        params = self.params
+        mask = int(params.input_label_enable) & 0x7F & ~int(params.input_enable)
         try:
             if mask:
-                self._run_label((self.inputs_byte(1) & mask) + 1)
+                programs.run_subroutine((self.inputs_byte(1) & mask) + 1)
             else:
-                self.run_program(None)
+                programs.run_program(None)
         except SersError as exc:
-            self.power_stage.record_error(exc.errno)
+            self.power.record_error(exc.errno)
 
-    def _run_label(self, label: int) -> None:
-        self._check_start()
-        self.interpreter.start(label, subroutine=True)
-
-    def _check_start(self) -> None:
+    def check_start(self) -> None:
         """Refusals of a program start, in the order of §4.4.1 (errnos 65–69)."""
-        if self.cfg.service_switch or (self.signals.get("service_ext") and self.params.external_service_switch):
+        if self._config().service_switch or (self.signals.get("service_ext") and self.params.external_service_switch):
             raise SersError(65)
-        if self.power_stage.errors:
+        if self.power.errors:
             raise SersError(66)
-        if self._i7_stop_active():
+        if self.i7_stop_active():
             raise SersError(67)
         if self.signals.get("stop"):
             raise SersError(68)
         if not self.program.valid:
             raise SersError(69)
-
-    def _start_subroutine(self, n: int) -> None:
-        try:
-            self._run_label(n)
-        except SersError as exc:
-            self.power_stage.record_error(exc.errno)
 
     def _event_input(self, n: int, active: bool) -> None:
         """Event-driven mode P1098 (§4.5.2): a rising edge on In calls Ln if no program runs;
@@ -133,14 +256,32 @@ class InputsAndFaults:
         if not int(self.params.program_jump_enable) & (1 << (n - 1)):
             return
         if not active:
-            self.interpreter.pending_events.discard(n)
+            self.pending_events.discard(n)
             return
-        self.interpreter.pending_events.add(n)
-        if not self.interpreter.running and self._dispatch is None:
+        self.pending_events.add(n)
+        programs = self._programs()
+        if not programs.running and self._dispatch is None:
             # edges of one instant are served together, I1 first (§4.5.2): dispatch a cycle later
-            self._dispatch = self.clock.call_later(self.interpreter.cycle, self._dispatch_events)
-            self._timers.append(self._dispatch)
+            self._dispatch = self.clock.call_later(programs.cycle, self._dispatch_events)
 
     def _dispatch_events(self) -> None:
         self._dispatch = None
-        self.on_program_end()
+        self.program_ended()
+
+    def program_ended(self) -> None:
+        """After a program: the event dispatcher (P1098) and a level start (P1023=1) may
+        start the next one."""
+        programs = self._programs()
+        if not self._alive() or programs.running:
+            return
+        events = int(self.params.program_jump_enable)
+        for n in sorted(self.pending_events):
+            self.pending_events.discard(n)
+            if events & (1 << (n - 1)) and self.signals.get(f"I{n}"):
+                try:
+                    programs.run_subroutine(n)
+                except SersError as exc:
+                    self.power.record_error(exc.errno)
+                return
+        if self.functions_enabled(128) and int(self.params.start_enable) == 1 and self.signals.get("I8"):
+            self._level_start = self.clock.call_later(programs.cycle, self.start_input)

@@ -46,13 +46,13 @@ def _write_param(model: Any, row: Param, value: Any) -> None:
     if number == 1 and value != "*" and (isinstance(value, bool) or not isinstance(value, int | float)):
         raise BadValue("P1: a number, or '*'")  # (the only parameter that is not just a number)
     try:
-        model.write_param(number, value)
+        model.access.write_param(number, value)
     except SersError as exc:
         raise BadValue(f"P{number}: {exc}") from None
 
 
 def _read_param(model: Any, row: Param) -> Any:
-    return model.param_value(row.key)
+    return model.access.param_value(row.key)
 
 
 def _example(row: Param) -> Any:

@@ -47,6 +47,11 @@ class SupplyMonitor:
         self.check_temperature()
         self.check_short()
 
+    def recheck(self) -> None:
+        """``P12=0``: the supply and temperature warnings whose causes remain come back."""
+        self.check_supply()
+        self.check_temperature()
+
     def check_supply(self) -> None:
         """§2.1.4: U_W pre-warning (auto-clear), U_B error after braking, U_L torque off."""
         volts = float(self.signals.get("supply_voltage"))

@@ -1,19 +1,24 @@
-"""The SERS drive behind the serial line: parameters, motion, I/O and faults.
+"""The SERS drive behind the serial line, composed of its parts (manual "SERS Version V04,
+Firmware ab 120901"; spec sers.md).
 
-Implements (manual section → spec section):
+Implements (manual section → spec section) through its parts:
 
-* parameters with range checks, units and PSAVE/POSSAVE/P1004 (§4.7, §4.8, §4.8.6.10 → §4.8);
-* the motor-power state machine ON/OFF, drive errors P11 and warnings P12 (§2.1.3, §4.8.3.1 →
-  §4.3, §4.6) and the 7-segment display (§3.5 → §4.7);
-* positioning E with modes P1014 0–3 and W changes during the constant phase (§4.6.6,
-  §4.8.4.1 → §3.5.3, §3.5.4, §5.2, §5.12), jog RS/RF/LS/LF with the 500 ms timeout (§4.5.1,
-  §4.8.6.4 → §3.5.8, §5.3), homing H (§4.8.4.5 → §5.5), POS0 and P1001 (§4.8.4.2 → §5.13);
-* hardware limit switches, STOP input, software limits and compare positions (§2.1.2,
-  §4.8.6.12, §4.8.1.2 → §5.6, §5.7), supply voltage and heat-sink temperature faults (§2.1.4,
-  §3.5 → §2.7, §5.14), digital inputs with their jog functions (§3.3, §4.8.1.1 → §4.11).
+* the parameters (:mod:`.params`) with their access by number (:mod:`.access`), range checks,
+  units and PSAVE/POSSAVE/P1004 (:mod:`.memory`) (§4.7, §4.8, §4.8.6.10 → §4.8);
+* the power stage ON/OFF, drive errors P11 and warnings P12 (:mod:`.power`), the supply and
+  heat-sink supervision (:mod:`.supply`), the outputs and the 7-segment display (:mod:`.outputs`)
+  (§2.1.3, §2.1.4, §3.5, §4.8.3.1 → §4.3, §4.6, §4.7);
+* the motion (:mod:`.motion` with :mod:`.jog`, :mod:`.homing`, :mod:`.watches`, :mod:`.encoder`,
+  :mod:`.polynomial`): positioning E, jog, homing, POS0/POSR, limits and step loss (§4.5.1,
+  §4.6.6, §4.8.4, §4.8.6 → §3.5, §5);
+* the inputs and their functions (:mod:`.inputs`, §3.3, §4.8.1 → §4.11);
+* statements, commands and the program (:mod:`.execution`, :mod:`.operands`, :mod:`.interpreter`,
+  :mod:`.remote`, :mod:`.program`, :mod:`.answers`) (§4.2–§4.6 → §3.3, §4.4).
 
-Internally positions are motor increments, speeds inc/s and accelerations inc/s²; the
-weighting parameters (P76, P44, P160, P121–P123) only matter at the serial interface.
+The model builds the parts and hands each the collaborators it needs; where two parts need
+each other, the one made first gets the other as a callable.  Internally positions are motor
+increments, speeds inc/s and accelerations inc/s²; the weighting parameters (P76, P44, P160,
+P121–P123) only matter at the serial interface.
 """
 
 from __future__ import annotations
@@ -28,15 +33,16 @@ from devsim.core.kit import declare_signals
 from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.sers.access import ParameterAccess
+from devsim.devices.sers.answers import Answers
 from devsim.devices.sers.config import SersConfig
-from devsim.devices.sers.constants import FIRMWARE, INC_PER_REV
-from devsim.devices.sers.errors import SersError
+from devsim.devices.sers.constants import INC_PER_REV
 from devsim.devices.sers.execution import Execution
-from devsim.devices.sers.inputs import InputsAndFaults
+from devsim.devices.sers.inputs import Inputs
 from devsim.devices.sers.interpreter import Interpreter
 from devsim.devices.sers.master import MasterLink
 from devsim.devices.sers.memory import ParameterMemory
 from devsim.devices.sers.motion import Motion
+from devsim.devices.sers.operands import Operands
 from devsim.devices.sers.outputs import Outputs
 from devsim.devices.sers.parameters import SUPPLY_THRESHOLDS
 from devsim.devices.sers.params import SersParameters
@@ -48,8 +54,8 @@ from devsim.devices.sers.supply import SupplyMonitor
 __all__ = ["SersDrive"]
 
 
-class SersDrive(ParameterAccess, Execution, InputsAndFaults, Model):
-    """Parameters, physics and faults of one SERS; the serial side is :class:`SersDevice`."""
+class SersDrive(Model):
+    """One SERS: its parts, its power-on and the selection on the serial line (§3.5, §3.6.2)."""
 
     def __init__(
         self,
@@ -61,20 +67,17 @@ class SersDrive(ParameterAccess, Execution, InputsAndFaults, Model):
     ) -> None:
         super().__init__(clock=clock, config=config, nvram=nvram, name=name)
         self.cfg = SersConfig.parse(self.config)
-        self.params = SersParameters()
-        self.memory = ParameterMemory(self.nvram, self.params, lambda: self.cfg, lambda: self.motion.p51_inc())
-        self.program = ProgramMemory(self.nvram)
-        self.interpreter = Interpreter(self)
-        self.master = MasterLink(clock, self.line_out)
-        #: The drive was addressed last (True) or another one was (False); None: not yet.
-        self.addressed: bool | None = None
-        #: Other drives share the line (RS-485); the face tells.
-        self.shared_line = False
+        signals = self.signals
+        cfg = self._cfg
+        alive, booting = (lambda: self.logic_alive), (lambda: self.booting)
+        self.params = params = SersParameters()
+        self.memory = memory = ParameterMemory(self.nvram, params, cfg, lambda: self.motion.p51_inc())
+        self.program = program = ProgramMemory(self.nvram)
+        self.master = master = MasterLink(clock, self.line_out)
         thresholds = SUPPLY_THRESHOLDS[self.cfg.supply_class]
-        self.thresholds = thresholds
         self.axis = Axis(clock, counts_per_rev=INC_PER_REV, index_offset=self.cfg.axis.index_offset, name=self.name)
-        self.power_stage = PowerStage(
-            clock, self.params, self.signals, self.memory, lambda: self.motion,
+        self.power_stage = power = PowerStage(
+            clock, params, signals, memory, lambda: self.motion,
             undervoltage=thresholds[2],
             changed=lambda: self.outputs.update(),
             program_error=lambda: self.interpreter.on_drive_error(),
@@ -82,10 +85,10 @@ class SersDrive(ParameterAccess, Execution, InputsAndFaults, Model):
             record_event=self.record_event,
             announce=self.announce,
         )
-        self.motion = Motion(
-            clock, self.axis, self.params, self.signals, self.power_stage,
-            evaluate=lambda cond: self.evaluate(cond),
-            i7_stop=lambda: self._i7_stop_active(),
+        self.motion = motion = Motion(
+            clock, self.axis, params, signals, power,
+            evaluate=lambda cond: self.operands.evaluate(cond),
+            i7_stop=lambda: self.inputs.i7_stop_active(),
             ended=lambda: self.interpreter.on_motion_end(),
             poke=lambda: self.interpreter.poke(),
             segment_ended=lambda: self.interpreter.resume("segment"),
@@ -94,47 +97,68 @@ class SersDrive(ParameterAccess, Execution, InputsAndFaults, Model):
             record_event=self.record_event,
             changed=lambda: self.outputs.update(),
         )
-        self.supply = SupplyMonitor(
-            self.signals, self.power_stage, self.memory, thresholds,
-            has_option_u=lambda: "U" in self.cfg.options,
-            alive=lambda: self.logic_alive,
-            logic_power=self.switch_supply,
+        self.supply = supply = SupplyMonitor(
+            signals, power, memory, thresholds,
+            has_option_u=lambda: "U" in self.cfg.options, alive=alive, logic_power=self.switch_supply,
         )
-        self.outputs = Outputs(
-            self.signals, self.params, self.power_stage, self.memory,
-            alive=lambda: self.logic_alive,
-            booting=lambda: self.booting,
-            in_position=lambda: self.motion.pos_ok,
-            program_running=lambda: self.program_state == 1,
+        self.outputs = outputs = Outputs(
+            signals, params, power, memory, alive=alive, booting=booting,
+            in_position=lambda: motion.pos_ok, program_running=lambda: self.interpreter.running,
         )
-        self._timers: list[Timer] = []
-        self._define_signals()
-        self._switches: list[RegionSwitch] = []
-        self._build_switches()
+        self.inputs = inputs = Inputs(
+            clock, signals, params, power, motion, program,
+            config=cfg, alive=alive, booting=booting, programs=lambda: self.execution, changed=outputs.update,
+        )
+        self.access = access = ParameterAccess(
+            params, memory, power, motion, inputs, program, signals,
+            config=cfg, programs=lambda: self.execution, changed=outputs.update, recheck_warnings=supply.recheck,
+        )
+        self.operands = operands = Operands(access, inputs, params, power)
+        self.answers = Answers(access, operands, params, power, motion, program)
+        self.interpreter = interpreter = Interpreter(
+            clock, params, program, operands, power, motion, master,
+            host=lambda: self.execution, render=self.answers.render_statement, spontaneous=self.spontaneous,
+            address=lambda: self.cfg.address,
+        )
+        self.execution = Execution(
+            params, memory, power, motion, inputs, program, interpreter, access, operands,
+            config=cfg, changed=outputs.update,
+        )
+        #: The drive was addressed last (True) or another one was (False); None: not yet.
+        self.addressed: bool | None = None
+        #: Other drives share the line (RS-485); the face tells.
+        self.shared_line = False
         self.logic_alive = False
         self.booting = False
-        self.firmware = FIRMWARE
-        self.trace_mode = False
+        self._timers: list[Timer] = []
+        self._define_signals(thresholds)
+        self._switches: list[RegionSwitch] = []
+        self._build_switches()
         self._power_on()
+
+    def _cfg(self) -> Any:
+        """The configuration as it is now (a DIP switch may change it)."""
+        return self.cfg
 
     # ======================================================================================
     # signals and geometry
     # ======================================================================================
-    def _define_signals(self) -> None:
+    def _define_signals(self, thresholds: tuple[int, int, int, int]) -> None:
         s = self.signals
         declare_signals(s, SIGNALS)
-        nominal = self.thresholds[0] * 0.8 if self.cfg.supply_voltage is None else self.cfg.supply_voltage
+        nominal = thresholds[0] * 0.8 if self.cfg.supply_voltage is None else self.cfg.supply_voltage
         s.signal("supply_voltage").value = float(nominal)
         s.signal("heatsink_temperature").value = float(self.cfg.heatsink_temperature)
+        inputs, supply = self.inputs, self.supply
         for name in ("limit_left", "limit_right"):
-            s.subscribe(name, self._on_limit)
-        s.subscribe("stop", self._on_stop_input)
-        s.subscribe("reference", self._on_reference)
+            s.subscribe(name, inputs.on_limit)
+        s.subscribe("stop", inputs.on_stop)
+        s.subscribe("reference", inputs.on_reference)
         for n in range(1, 9):
-            s.subscribe(f"I{n}", self._on_digital_input)
-        s.subscribe("supply_voltage", lambda *_: self.supply.check_supply())
-        s.subscribe("heatsink_temperature", lambda *_: self.supply.check_temperature())
-        s.subscribe("short_circuit", lambda *_: self.supply.check_short())
+            s.subscribe(f"I{n}", inputs.on_digital_input)
+        s.subscribe("supply_voltage", lambda *_: supply.check_supply())
+        s.subscribe("heatsink_temperature", lambda *_: supply.check_temperature())
+        s.subscribe("short_circuit", lambda *_: supply.check_short())
         s.subscribe("stall", lambda _name, _old, new: self.motion.stall(bool(new)))
         for name in s.names():
             s.subscribe(name, lambda *_: self.interpreter.poke())
@@ -181,10 +205,9 @@ class SersDrive(ParameterAccess, Execution, InputsAndFaults, Model):
         self.record_event("power_on")
         self.power_stage.power_on()
         self.motion.power_on()
-        self._dispatch: Timer | None = None
+        self.inputs.power_on()
         self.program.reload()  # programming mode does not survive a power loss (P0 = 0)
         self.interpreter.reset()
-        self.trace_mode = False
         self.memory.power_on()
         self.motion.set_p51(self.memory.saved_position() or 0.0)
         for n in range(1, 17):
@@ -199,24 +222,11 @@ class SersDrive(ParameterAccess, Execution, InputsAndFaults, Model):
     def _boot_done(self) -> None:
         self.record_event("ready")
         self.booted()
-        self._autostart()
-
-    def _autostart(self) -> None:
-        """DIP switch 2 bit 8 (§3.1.2): start a valid program after power-on, unless the
-        service switch is on."""
-        if self.cfg.autostart and not self.cfg.service_switch and self.program.valid:
-            try:
-                self.run_program(None)
-            except SersError as exc:
-                self.power_stage.record_error(exc.errno)
-
-    @property
-    def program_state(self) -> int:
-        """P0: 1 while a program runs."""
-        return 1 if self.interpreter.running else 0
+        self.execution.autostart()
 
     def _power_off(self) -> None:
         self._cancel_timers()
+        self.inputs.power_off()
         self.motion.power_off()
         self.logic_alive = False
         self.power_stage.power_off()
@@ -239,6 +249,7 @@ class SersDrive(ParameterAccess, Execution, InputsAndFaults, Model):
 
     def close(self) -> None:
         self._cancel_timers()
+        self.inputs.power_off()
         self.motion.cancel_all()
         self.power_stage.cancel()
         self.axis.quick_stop()
@@ -250,11 +261,9 @@ class SersDrive(ParameterAccess, Execution, InputsAndFaults, Model):
             timer.cancel()
         self._timers.clear()
 
-    def _on_reference(self, name: str, old: Any, new: Any) -> None:
-        if not self.params.reference_input:
-            self.motion.homing.edge("reference", bool(new))
-        self.motion.check_until()
-
+    # ======================================================================================
+    # the serial line
+    # ======================================================================================
     def spontaneous(self, text: str) -> None:
         """An unsolicited message (``@2POS=1``) for the serial face to send between lines."""
         self.announce("spontaneous", text)
@@ -276,4 +285,3 @@ class SersDrive(ParameterAccess, Execution, InputsAndFaults, Model):
             initially = self.cfg.initially_selected
             self.addressed = (not self.shared_line) if initially is None else initially
         return self.addressed
-
