@@ -239,7 +239,7 @@ class ParameterAccess:
 
     def write_w(self, value: float) -> None:
         """W (P47): free while standing; while moving only in the constant phase (§4.6.6)."""
-        self.motion.write_w(self._position(47, value))
+        self.motion.positioning.write_w(self._position(47, value))
 
     def write_w_mode(self, value: float, mode: int) -> None:
         """WR / WA (P1051 / P1052): W, and the positioning mode relative (0) or absolute (2)."""

@@ -1,18 +1,17 @@
-"""Motion of the SERS: positioning ``E`` with its modes and backlash, W changed on the move,
-stopping, POS0/POSR, the hand-wheel, SERVO overload and the phase current (manual §4.6.6,
-§4.8.4, §4.8.6.1, §4.8.6.6, §4.8.6.7; spec §3.5, §5).
+"""Motion of the SERS: what moves the drive and how it stops, POS0/POSR, the hand-wheel and the
+phase current (manual §4.2, §4.8.4, §4.8.6.1, §4.8.6.6; spec §3.5, §5).
 
 Positions are motor increments, speeds inc/s and accelerations inc/s²; P51 is the axis position
 minus :attr:`Motion.offset`.  The motion owns its jog (:mod:`.jog`), homing run (:mod:`.homing`),
-polynomial profile (:mod:`.polynomial`), position watches (:mod:`.watches`) and step-loss
-monitoring (:mod:`.encoder`).
+polynomial profile (:mod:`.polynomial`), positioning ``E`` (:mod:`.positioning`), position
+watches (:mod:`.watches`) and step-loss monitoring (:mod:`.encoder`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 
-from devsim.core.axis import Axis, RampProfile
+from devsim.core.axis import Axis
 from devsim.core.clock import Clock
 from devsim.core.signals import SignalBank
 from devsim.devices.sers import statements as st
@@ -23,6 +22,7 @@ from devsim.devices.sers.homing import Homing, can_move
 from devsim.devices.sers.jog import Jog
 from devsim.devices.sers.params import SersParameters
 from devsim.devices.sers.polynomial import PolynomialMove
+from devsim.devices.sers.positioning import Positioning
 from devsim.devices.sers.power import PowerStage
 from devsim.devices.sers.watches import PositionWatches
 
@@ -68,21 +68,14 @@ class Motion:
         self.pos_ok = True  # P336
         self.offset = 0.0  # axis position of P51 = 0
         self._stop_decel = 0.0  # the deceleration of S for the motion under way
-        self._w_updated = False  # W was changed on the move: the next E is already done
-        self._legs: list[tuple[float, float]] = []  # (target, speed) still to go, backlash
-        self._setpoint: float | None = None  # target of the last E (POSR, P1033=1)
-        self._target = 0.0  # physical target of the positioning under way
-        self._speed = 0.0
-        self._accel = 0.0
         self._follow_target = 0.0  # hand-wheel
         self._stopped_at = 0.0  # when the last motion ended (phase current reduction)
-        self.servo_overload = False
-        self._servo_resume = False
         self.watches = PositionWatches(clock, axis, params, signals, power, offset=lambda: self.offset,
                                        kind=lambda: self.kind, stop=self.stop_motion)
         self.homing = Homing(axis, params, signals, power, self)
         self.jog = Jog(clock, axis, params, power, self, evaluate=evaluate)
         self.encoder = StepMonitor(clock, axis, params, power, self, has_option_e50=has_option_e50)
+        self.positioning = Positioning(axis, params, signals, power, self)
         self.poly = PolynomialMove(axis, params, self, record_error=power.record_error, segment_ended=segment_ended)
 
     # -- power ----------------------------------------------------------------------------------
@@ -93,13 +86,9 @@ class Motion:
         self.kind = None
         self.pos_ok = True
         self._stop_decel = 0.0
-        self._w_updated = False
-        self._legs = []
-        self._setpoint = None
         self._follow_target = 0.0
         self._stopped_at = 0.0
-        self.servo_overload = False
-        self._servo_resume = False
+        self.positioning.power_on()
         self.homing.homed = False
         self.homing.cancel()
         self.jog.power_on()
@@ -172,7 +161,7 @@ class Motion:
         self.kind = kind
         self.pos_ok = False
         self._stop_decel = decel
-        self._w_updated = False
+        self.positioning.w_updated = False
         self._changed()
 
     def finish(self) -> None:
@@ -201,7 +190,7 @@ class Motion:
         self.homing.cancel()
         self.poly.cancel()
         self.jog.cancel_timer()
-        profile = self.ramp_profile() if self.kind == "position" else None
+        profile = self.positioning.ramp_profile() if self.kind == "position" else None
         self.kind = "stopping"
         self.axis.stop(self._stop_decel, on_done=self.finish, profile=profile)
 
@@ -248,162 +237,26 @@ class Motion:
 
     # -- positioning E (§4.6.6) -----------------------------------------------------------------
     def start_positioning(self) -> None:
-        """E (§4.6.6) with P1014 mode 0 relative, 1 relative-clear, 2 absolute, 3 overflow."""
+        """E (§4.6.6); after a polynomial segment's definition it closes the segment (§4.6.7)."""
         if self.poly.definition is not None:
-            self.poly.execute()  # E closes a polynomial segment (§4.6.7)
+            self.poly.execute()
             return
-        if self.kind == "position" and self._w_updated:
-            self._w_updated = False
-            return  # G-EWHILEMOVE: the running move already took the new W
-        if self.kind is not None:
-            raise SersError(70)
-        params = self.params
-        mode = int(params.positioning_mode)
-        w = float(params.position_setpoint)
-        p51 = self.p51_inc()
-        if mode == 1:
-            start, target = 0.0, float(round(w))
-        elif mode == 2:
-            start, target = p51, float(round(w))
-        else:
-            start, target = p51, p51 + round(w)  # W in whole increments (§5.1)
-        target = self._leave_zero_phase(target)
-        direction = (target > start) - (target < start)
-        self.checks(direction)
-        scaling = params.scaling
-        lo, hi = scaling.pos_range()
-        target_user = scaling.inc_to_pos(target)
-        if target_user > hi or target_user < lo:
-            self.power.warn(64)
-            raise SersError(85 if target_user > hi else 86)
-        if mode == 1:
-            self.offset = self.axis.position()
-        elif target == p51:
-            return  # already there: nothing moves, POS stays 1
-        self._speed = float(params.velocity)
-        self._accel = float(params.acceleration)
-        self._target = target + self.offset
-        legs = self._backlash_legs(p51 + self.offset, self._target)
-        for _target, speed in legs:
-            can_move(speed, self._accel)  # (the backlash legs creep at P1003)
-        self.power.servo_check()
-        self.begin("position", self._accel)
-        self._setpoint = self._target
-        self._legs = legs
-        self._next_leg()
-        self.arm_watches()
+        self.positioning.start()
 
     def continue_positioning(self) -> bool:
-        """P1033=1: a program stopped during ``E`` continues the interrupted move; False if it
-        stands at the setpoint already (or there is none)."""
-        setpoint = self._setpoint
-        if setpoint is None:
-            return True
-        here = self.axis.position()
-        direction = (setpoint > here) - (setpoint < here)
-        self.checks(direction)
-        if direction == 0:
-            return False
-        self._speed = float(self.params.velocity)
-        self._accel = float(self.params.acceleration)
-        self._target = setpoint
-        self.begin("position", self._accel)
-        self._legs = [(setpoint, self._speed)]
-        self._next_leg()
-        self.arm_watches()
-        return True
+        """P1033=1: continue the interrupted move; False if it stands at the setpoint already."""
+        return self.positioning.resume()
 
-    def _backlash_legs(self, start: float, target: float) -> list[tuple[float, float]]:
-        """Backlash compensation P1037 (§4.8.4.7, spec §5.8 G-BACKLASH): the final approach
-        is always made opposite to the homing direction (P147 bit 0), at speed P1003."""
-        params = self.params
-        slack = abs(float(params.backlash))
-        if not slack or target == start:
-            return [(target, self._speed)]
-        approach = 1 if int(params.homing_parameters) & 1 else -1
-        creep = float(params.homing_velocity_slow)
-        direction = 1 if target > start else -1
-        if direction == approach:
-            if abs(target - start) <= slack:
-                return [(target, creep)]
-            return [(target - direction * slack, self._speed), (target, creep)]
-        return [(start + direction * slack, creep), (target + direction * slack, self._speed), (target, creep)]
-
-    def _next_leg(self) -> None:
-        target, speed = self._legs.pop(0)
-        done = self._next_leg if self._legs else self._positioning_done
-        self.axis.move_to(target, speed, self._accel, on_done=done, profile=self.ramp_profile())
-
-    def ramp_profile(self) -> RampProfile | None:
-        """P1032 ramp shape with the sections P1005–P1008 (§4.8.4.4, spec §5.2)."""
-        p = self.params
-        shape = "sine" if int(p.ramp_shape) == 1 else "linear"
-        fractions = [float(v) / 100 for v in (p.ramp_velocity1, p.ramp_acceleration1, p.ramp_velocity2,
-                                              p.ramp_acceleration2)]
-        if shape == "linear" and all(f == 1.0 for f in fractions):
-            return None
-        speed1, accel1, speed2, accel2 = fractions
-        return RampProfile(speed1=speed1, accel1=accel1, speed2=speed2, accel2=accel2, shape=shape)
-
-    def _leave_zero_phase(self, target: float) -> float:
-        """P1001 (§4.8.4.2): keep 0.1°/0.2°/0.3° away from multiples of 1.8° (64 increments)."""
-        level = int(self.params.leave_zero_phase)
-        if not level:
-            return target
-        step = INC_PER_REV / 200
-        keep = level * 0.1 * INC_PER_REV / 360
-        nearest = round(target / step) * step
-        if abs(target - nearest) < keep - 1e-9:
-            return float(round(nearest + (keep if target >= nearest else -keep)))
-        return target
-
-    def _positioning_done(self) -> None:
-        params = self.params
-        if int(params.positioning_mode) == 3:
-            modulo = float(params.modulo)
-            if modulo > 0:
-                while self.p51_inc() >= modulo - 1e-6:
-                    self.offset += modulo
-                    params.counter1 = int(params.counter1) + 1
-                while self.p51_inc() <= -modulo + 1e-6:
-                    self.offset -= modulo
-                    params.counter1 = int(params.counter1) - 1
+    def arrived(self) -> None:
         self.finish()
         self._report_in_position()
-
-    def write_w(self, new: float) -> None:
-        """W (P47, increments): free while standing; while moving only in the constant phase,
-        and then the move under way goes to the new target (§4.6.6)."""
-        params = self.params
-        if self.kind != "position":
-            params.position_setpoint = new
-            return
-        if self.axis.phase() != "const":
-            raise SersError(81)
-        mode = params.positioning_mode
-        target = self._target + new if mode in (0, 1, 3) else new + self.offset
-        position = self.axis.position()
-        direction = 1 if self.axis.velocity() > 0 else -1
-        remaining = (target - position) * direction
-        if remaining < self.axis.stopping_distance(self._accel, self.ramp_profile()):
-            params.position_setpoint = new
-            raise SersError(87)
-        params.position_setpoint = new
-        self._target = target
-        self._w_updated = True
-        self._legs = []
-        self.axis.move_to(target, self._speed, self._accel, on_done=self._positioning_done,
-                          profile=self.ramp_profile())
-        self.arm_watches()
 
     # -- polynomial profiles (the host of :class:`.polynomial.PolynomialMove`) ------------------
     def begin_polynomial(self, end: float) -> None:
         """The first segment of a polynomial profile starts toward ``end``."""
         here = self.axis.position()
         self.checks((end > here) - (end < here))
-        self._speed = float(self.params.velocity)
-        self._accel = float(self.params.acceleration)
-        self.begin("poly", self._accel)
+        self.begin("poly", float(self.params.acceleration))
         self.arm_watches()
 
     def polynomial_finished(self) -> None:
@@ -453,7 +306,8 @@ class Motion:
             raise SersError(70)
         power.clear_step_loss()
         self.encoder.resync()
-        target = self._setpoint if self._setpoint is not None else float(self.params.position_setpoint) + self.offset
+        setpoint = self.positioning.setpoint
+        target = setpoint if setpoint is not None else float(self.params.position_setpoint) + self.offset
         here = self.axis.position()
         direction = (target > here) - (target < here)
         self.checks(direction)
@@ -503,29 +357,6 @@ class Motion:
     def stall(self, stalled: bool) -> None:
         """The load stalls the rotor: a step loss, or in SERVO mode (P1152=1) the field waits."""
         if self.params.servo_mode == 1:
-            self._servo_overload(stalled)
+            self.positioning.servo_overload(stalled)
         else:
             self.encoder.stall(stalled)
-
-    def _servo_overload(self, overloaded: bool) -> None:
-        """Under overload the SERVO drive loses no steps: the stator field holds at the rotor
-        and the move resumes when the load goes away, at P1163 if P1162=1 (catch-up), else at
-        V (arriving later).  P1160 signals the overload on an output."""
-        self.servo_overload = overloaded
-        params = self.params
-        sel = int(params.overload_output)
-        if sel:
-            port, value = abs(sel) if abs(sel) <= 4 else abs(sel) - 4, sel > 0
-            if overloaded or abs(sel) > 4:
-                self.signals.set(f"O{port}", value if overloaded else not value)
-        if overloaded:
-            if self.kind == "position":
-                self.axis.quick_stop()
-                self._servo_resume = True
-            return
-        if self._servo_resume and self.kind == "position":
-            self._servo_resume = False
-            speed = self._speed
-            if params.use_catch_up_velocity == 1:
-                speed = max(speed, float(params.catch_up_velocity))
-            self.axis.move_to(self._target, speed, self._accel, on_done=self._positioning_done)
