@@ -17,7 +17,8 @@ from devsim.devices.sers.config import SersConfig
 from devsim.devices.sers.drive_actions import DRIVE
 from devsim.devices.sers.errors import ERRNO
 from devsim.devices.sers.execution import COMMANDS, STATEMENTS
-from devsim.devices.sers.face import INTERACTIVE, SersFace
+from devsim.devices.sers.face import SersFace
+from devsim.devices.sers.interactive import INTERACTIVE
 from devsim.devices.sers.model import SersDrive
 from devsim.devices.sers.parameters import PARAMETER_TABLE
 from devsim.devices.sers.points import FAULTS, POINTS

@@ -11,6 +11,7 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 from devsim.core.clock import Clock, Timer
+from devsim.core.kit import Command, Table
 from devsim.core.signals import SignalBank
 from devsim.devices.sers.constants import LIMIT
 from devsim.devices.sers.errors import SersError
@@ -19,7 +20,7 @@ from devsim.devices.sers.params import SersParameters
 from devsim.devices.sers.power import PowerStage
 from devsim.devices.sers.program import ProgramMemory
 
-__all__ = ["Inputs", "ProgramStarts"]
+__all__ = ["INPUT_FUNCTIONS", "Inputs", "ProgramStarts"]
 
 #: The manual functions of I1..I4 (P1021 bits 0–3, §4.8.1.1).
 _JOGS = {1: "LS", 2: "RS", 3: "LF", 4: "RF"}
@@ -198,27 +199,39 @@ class Inputs:
         motion.check_until()
 
     def _input_function(self, n: int, active: bool) -> None:
-        """The manual function of input ``n`` (§4.8.1.1): I1–I4 jog while active, I5 homing,
-        I6 motor ON/OFF (ON clears P11 and P12, G-INFUNC), I7 stop, I8 start."""
-        motion = self.motion
-        if n in _JOGS:
-            if active:
-                self.power.energize()
-                motion.jog.start(_JOGS[n], serial=False)
-            elif motion.kind == "jog":
-                motion.stop_motion()
-        elif n == 5 and active:
-            self.power.energize()
-            motion.home()
-        elif n == 6 and active:
-            self.power.toggle()
-        elif n == 7 and active:
-            self._programs().stop_program()
-            if motion.kind is not None:
-                motion.stop_motion()
-        elif n == 8 and active:
-            self.start_input()
+        """The manual function of input ``n`` (:data:`INPUT_FUNCTIONS`), then the outputs."""
+        function = _INPUT_FUNCTION.get(n)
+        if function is not None:
+            function(self, active)
         self._changed()
+
+    def jog_input(self, n: int, active: bool) -> None:
+        """I1–I4: jog while the input is active (LS, RS, LF, RF)."""
+        motion = self.motion
+        if active:
+            self.power.energize()
+            motion.jog.start(_JOGS[n], serial=False)
+        elif motion.kind == "jog":
+            motion.stop_motion()
+
+    def home_input(self, active: bool) -> None:
+        if active:
+            self.power.energize()
+            self.motion.home()
+
+    def power_input(self, active: bool) -> None:
+        if active:  # G-INFUNC: a rising edge toggles; ON clears P11 and P12
+            self.power.toggle()
+
+    def stop_input(self, active: bool) -> None:
+        if active:
+            self._programs().stop_program()
+            if self.motion.kind is not None:
+                self.motion.stop_motion()
+
+    def start_input_edge(self, active: bool) -> None:
+        if active:
+            self.start_input()
 
     # -- starting programs from the inputs (§3.6, §4.5.2) ---------------------------------------
     def start_input(self) -> None:
@@ -285,3 +298,18 @@ class Inputs:
                 return
         if self.functions_enabled(128) and int(self.params.start_enable) == 1 and self.signals.get("I8"):
             self._level_start = self.clock.call_later(programs.cycle, self.start_input)
+
+
+#: The manual functions of the inputs I1..I8 when P1021 (or the service switch) enables them
+#: (§4.8.1.1; the handler gets the input's new level).
+INPUT_FUNCTIONS: Table[Callable[[Inputs, bool], None]] = Table(
+    [
+        *(Command(f"I{n}", lambda i, active, n=n: i.jog_input(n, active), "§4.8.1.1", f"jog {_JOGS[n]} while active")
+          for n in _JOGS),
+        Command("I5", Inputs.home_input, "§4.8.1.1", "homing (H)"),
+        Command("I6", Inputs.power_input, "§4.8.1.1", "motor ON/OFF (ON clears P11 and P12)"),
+        Command("I7", Inputs.stop_input, "§4.8.1.1", "stop the program and the motion"),
+        Command("I8", Inputs.start_input_edge, "§4.8.1.1", "start the program"),
+    ]
+)
+_INPUT_FUNCTION = {int(row.token[1:]): row.handler for row in INPUT_FUNCTIONS}

@@ -23,6 +23,12 @@ __all__ = ["REMOTE", "ParkedProgram", "RemoteStatements"]
 _J_BITS = {1: 3, 2: 1, 3: 0, 4: 2, 5: 7}
 Target = int | str
 
+#: Where a slave's input or switch is read (P1300 bit, P1013 bit); a parameter is read by number.
+_SLAVE_SOURCES: dict[str, Callable[[st.Address], tuple[int, int]]] = {
+    "I": lambda address: (1300, int(address.ref) - 1),
+    "J": lambda address: (1013, _J_BITS[int(address.ref)]),
+}
+
 
 class ParkedProgram(Protocol):
     """What a statement sent to a slave needs of the program that waits for it (the
@@ -113,12 +119,8 @@ class RemoteStatements:
         if cond is None:
             return False
         left = cond.left
-        if left.kind == "I":
-            number, bit = 1300, int(left.ref) - 1
-        elif left.kind == "J":
-            number, bit = 1013, _J_BITS[int(left.ref)]
-        else:
-            number, bit = address_number(left), None
+        source = _SLAVE_SOURCES.get(left.kind)
+        number, bit = source(left) if source is not None else (address_number(left), None)
         program = self.program
         program.park_for_master()
 
