@@ -141,15 +141,6 @@ class Interpreter:
 
     # -- state ----------------------------------------------------------------------------------
     @property
-    def in_l65(self) -> bool:
-        """The "L65 Fehlerbehandlung" flag is P1118 itself: ``P1118=0`` (or ``P11=0``) ends it."""
-        return bool(self.params.l65_flag)
-
-    @in_l65.setter
-    def in_l65(self, value: bool) -> None:
-        self.params.l65_flag = int(value)
-
-    @property
     def cycle(self) -> float:
         return 0.002 if int(self.params.slow_program_cycle) == 1 else 0.0005
 
@@ -161,7 +152,7 @@ class Interpreter:
         self.stack.clear()
         self.stops = 0
         self.resume_pc = None
-        self.in_l65 = False
+        self.params.l65_flag = 0  # (the L65 error-handling flag is P1118)
         self.trace_mode = False
 
     def _cancel(self) -> None:
@@ -179,7 +170,7 @@ class Interpreter:
         self._cancel()
         self.stack.clear()
         self.waiting = None
-        self.in_l65 = False
+        self.params.l65_flag = 0  # (the L65 error-handling flag is P1118)
         if label is not None:
             if not 1 <= label <= 128:
                 raise SersError(72)
@@ -216,7 +207,7 @@ class Interpreter:
         self.waiting = None
         self.stops = 0
         self.resume_pc = None
-        self.in_l65 = False
+        self.params.l65_flag = 0  # (the L65 error-handling flag is P1118)
         self._host().state_changed()
         if was and self.params.report_program_end:
             self._spontaneous(f"@{self._address()}P0=0")
@@ -227,7 +218,7 @@ class Interpreter:
         if not self.running:
             return
         mode = int(self.params.continuation_after_stop)
-        if mode in (2, 3) and not (mode == 3 and self.in_l65) and L65 in self.program.labels:
+        if mode in (2, 3) and not (mode == 3 and self.params.l65_flag) and L65 in self.program.labels:
             self._jump_l65()
             return
         self.stops += 1
@@ -250,7 +241,7 @@ class Interpreter:
         if not self.running:
             return
         mode = int(self.params.continuation_after_stop)
-        if mode == 3 and self.in_l65:
+        if mode == 3 and self.params.l65_flag:
             return  # P1033=3: during the L65 handling further errors neither stop nor jump
         if mode in (2, 3) and L65 in self.program.labels:
             self._jump_l65()
@@ -271,7 +262,7 @@ class Interpreter:
         self.waiting = None
         self.stack.clear()
         self.pc = self.program.labels[L65]
-        self.in_l65 = True  # P1118=1
+        self.params.l65_flag = 1  # the L65 error handling runs (P1118)
         self.subroutine = False
         self._schedule(self.cycle)
 
@@ -363,55 +354,12 @@ class Interpreter:
         elif not true:
             self.pc += 1
 
-    def if_(self, stmt: st.If) -> bool:
-        self.branch(stmt, self.operands.evaluate(stmt.cond))
-        return True
-
-    def else_(self, stmt: st.Else) -> bool:
-        self.pc = self.program.block_end.get(self.pc, self.pc)  # the THEN part ran: skip to END
-        return True
-
-    def goto(self, stmt: st.Goto) -> bool:
-        target = self._label_index(stmt.label)
-        if stmt.sub:
-            if len(self.stack) >= MAX_NESTING:
-                raise SersError(73)
-            self.stack.append(self.pc + 1)
-        self.pc = target
-        return False
-
-    def return_(self, stmt: st.Command) -> bool:
-        if self.stack:
-            self.pc = self.stack.pop()
-            return False
-        if self.subroutine:
-            self.end()
-            return False
-        raise SersError(72)  # G-RETURN: RETURN without GOSUB in a program from line 1
-
-    def program_end(self, stmt: st.Command) -> bool:
-        self.end()
-        return False
-
-    def wait(self, stmt: st.Wait) -> bool:
-        self._park("wait", stmt.cond)
-        return True
-
-    def run(self, stmt: st.Run) -> bool:
-        self.start(stmt.label)
-        return False
-
-    def delay(self, stmt: st.Assign) -> bool:
+    def start_delay(self, stmt: st.Assign) -> None:
         """D (§4.8.5.1): wait D × 0.1 s (× 1.2 unless P1141 = 1)."""
         value = self.operands.operand_value(stmt.value) if not isinstance(stmt.value, str) else 0.0
         factor = 1.0 if int(self.params.delay_correction) == 1 else 1.2
         self.waiting = "delay"
         self._delay = self.clock.call_later(max(0.0, float(value)) * 0.1 * factor, self._delay_done)
-        return True
-
-    def d2(self, stmt: st.Assign) -> bool:
-        self._start_d2(stmt)
-        return True
 
     # -- master mode (§3.6.2, §4.8.5.5; the parked program of :class:`.remote.RemoteStatements`) -----
     def park_for_master(self) -> None:
@@ -432,7 +380,7 @@ class Interpreter:
     def later(self, delay: float, action: Callable[[], None]) -> None:
         self._timer = self.clock.call_later(delay, action)
 
-    def _label_index(self, label: int) -> int:
+    def label_index(self, label: int) -> int:
         if not 1 <= label <= 128:
             raise SersError(72)
         index = self.program.labels.get(label)
@@ -441,7 +389,7 @@ class Interpreter:
         return index
 
     # -- waiting ----------------------------------------------------------------------------------------
-    def _park(self, what: str, cond: st.Condition | None) -> None:
+    def park(self, what: str, cond: st.Condition | None) -> None:
         self.waiting = what
         self._wait_cond = cond
         self.poke()
@@ -491,7 +439,8 @@ class Interpreter:
         return self.waiting == "position" and int(self.params.wait_until_positioned) == 1
 
     # -- D2 (§4.8.5.1) ---------------------------------------------------------------------------------
-    def _start_d2(self, stmt: st.Assign) -> None:
+    def start_d2(self, stmt: st.Assign) -> None:
+        """D2 (§4.8.5.1): the non-blocking timer; a GT/GS right after it is its timed jump."""
         value = self.operands.operand_value(stmt.value) if not isinstance(stmt.value, str) else 0.0
         self.params.d2_time = float(value)
         self.params.d2_bit = 0
@@ -529,7 +478,7 @@ class Interpreter:
         self.waiting = None
         self._wait_cond = None
         try:
-            target = self._label_index(jump.label)
+            target = self.label_index(jump.label)
             if jump.sub:
                 if len(self.stack) >= MAX_NESTING:
                     raise SersError(73)
@@ -540,16 +489,65 @@ class Interpreter:
         self.pc = target
         self._schedule(self.cycle)
 
-    def describe(self) -> dict[str, Any]:
-        return {
-            "running": self.running,
-            "line": self.pc + 1,
-            "waiting": self.waiting,
-            "stack": [i + 1 for i in self.stack],
-        }
 
 
 def _going_on(interpreter: Interpreter, stmt: st.Statement) -> bool:
+    return True
+
+
+def _if(interpreter: Interpreter, stmt: st.If) -> bool:
+    interpreter.branch(stmt, interpreter.operands.evaluate(stmt.cond))
+    return True
+
+
+def _else(interpreter: Interpreter, stmt: st.Else) -> bool:
+    pc = interpreter.pc
+    interpreter.pc = interpreter.program.block_end.get(pc, pc)  # the THEN part ran: skip to END
+    return True
+
+
+def _goto(interpreter: Interpreter, stmt: st.Goto) -> bool:
+    target = interpreter.label_index(stmt.label)
+    if stmt.sub:
+        if len(interpreter.stack) >= MAX_NESTING:
+            raise SersError(73)
+        interpreter.stack.append(interpreter.pc + 1)
+    interpreter.pc = target
+    return False
+
+
+def _return(interpreter: Interpreter, stmt: st.Command) -> bool:
+    if interpreter.stack:
+        interpreter.pc = interpreter.stack.pop()
+        return False
+    if interpreter.subroutine:
+        interpreter.end()
+        return False
+    raise SersError(72)  # G-RETURN: RETURN without GOSUB in a program from line 1
+
+
+def _program_end(interpreter: Interpreter, stmt: st.Command) -> bool:
+    interpreter.end()
+    return False
+
+
+def _wait(interpreter: Interpreter, stmt: st.Wait) -> bool:
+    interpreter.park("wait", stmt.cond)
+    return True
+
+
+def _run(interpreter: Interpreter, stmt: st.Run) -> bool:
+    interpreter.start(stmt.label)
+    return False
+
+
+def _delay(interpreter: Interpreter, stmt: st.Assign) -> bool:
+    interpreter.start_delay(stmt)
+    return True
+
+
+def _d2(interpreter: Interpreter, stmt: st.Assign) -> bool:
+    interpreter.start_d2(stmt)
     return True
 
 
@@ -566,16 +564,16 @@ def _flow_token(stmt: st.Statement) -> str:
 #: What the program itself does with a statement (§4.6); every other one the drive executes.
 FLOW: Table[Callable[[Any, Any], bool]] = Table(
     [
-        Command("If", Interpreter.if_, "§4.6.1", "IF condition [THEN … ELSE … END]"),
-        Command("Else", Interpreter.else_, "§4.6.1", "ELSE: the THEN part ran, skip to END"),
+        Command("If", _if, "§4.6.1", "IF condition [THEN … ELSE … END]"),
+        Command("Else", _else, "§4.6.1", "ELSE: the THEN part ran, skip to END"),
         Command("End", _going_on, "§4.6.1", "END of an IF block"),
-        Command("Goto", Interpreter.goto, "§4.6.3", "GOTO/GT, GOSUB/GS n (4 levels)"),
-        Command("RETURN", Interpreter.return_, "§4.6.5", "back from a subroutine"),
-        Command("PE", Interpreter.program_end, "§4.2", "program end"),
-        Command("Wait", Interpreter.wait, "§4.6.8", "WAIT condition"),
-        Command("Run", Interpreter.run, "§4.8.6.16", "RUN [n]: start again"),
-        Command("D", Interpreter.delay, "§4.8.5.1", "D=n: wait n × 0.1 s"),
-        Command("D2", Interpreter.d2, "§4.8.5.1", "D2=n [GT/GS m]: the non-blocking timer and its jump"),
+        Command("Goto", _goto, "§4.6.3", "GOTO/GT, GOSUB/GS n (4 levels)"),
+        Command("RETURN", _return, "§4.6.5", "back from a subroutine"),
+        Command("PE", _program_end, "§4.2", "program end"),
+        Command("Wait", _wait, "§4.6.8", "WAIT condition"),
+        Command("Run", _run, "§4.8.6.16", "RUN [n]: start again"),
+        Command("D", _delay, "§4.8.5.1", "D=n: wait n × 0.1 s"),
+        Command("D2", _d2, "§4.8.5.1", "D2=n [GT/GS m]: the non-blocking timer and its jump"),
         *(Command(name, _going_on, "§4.2", "means nothing inside a program")
           for name in ("NEW", "PGM", "QUIT", "DEL", "VER", "TRON", "TROFF")),
         *(Command(name, _going_on, "§4.2", "answers only interactively")
