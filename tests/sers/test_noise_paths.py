@@ -47,7 +47,7 @@ def _run(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False)
         start, turn = start + size, turn + 1
         sent[min(start, len(stream))] = len(out)
     face = device.face()
-    line = face._line
+    line = face.line
     framer = vars(face.framer)
     if not framer["in_line"]:  # (what counted the last line means nothing once it ended)
         framer = {name: framer[name] for name in ("in_line", "_last_end")}

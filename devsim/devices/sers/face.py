@@ -23,13 +23,13 @@ from devsim.devices.sers.line import (
     Poll,
     ends_line,
     error_text,
-    first_byte_errors,
     first_failure,
     label_number,
     poll_line,
     quiet,
 )
 from devsim.devices.sers.model import SersDrive
+from devsim.devices.sers.noise import NoiseLines
 
 __all__ = ["SersFace"]
 
@@ -42,11 +42,13 @@ class SersFace(Face):
     def __init__(self, model: SersDrive, port: Port) -> None:
         super().__init__(model, port)
         self.framer = codec.Framer()
-        self._line: CommandLine | None = None
+        #: The command line being received (None between lines).
+        self.line: CommandLine | None = None
         self._last_replied = False
         self._spontaneous: list[bytes] = []
         self._settings: SerialSettings | None = None
         self.statements = LineStatements(model, self._out, self._error)
+        self._noise_lines = NoiseLines(model, self.framer, self.send, self).take  # (bound once: a hot path)
         model.listen("power_on", self._reset_serial)
         model.listen("spontaneous", self.spontaneous)
         model.listen("line_out", self.send)
@@ -62,7 +64,7 @@ class SersFace(Face):
     # -- power ---------------------------------------------------------------------------
     def _reset_serial(self) -> None:
         self.framer.reset()
-        self._line = None
+        self.line = None
         self._last_replied = False
         self._spontaneous.clear()
 
@@ -77,25 +79,25 @@ class SersFace(Face):
             return  # G-BOOT: input during the 2 s initialisation is discarded
         framer = self.framer
         # (a host's poll is one short chunk: a longer one, noise or a flood, is not hashed and kept)
-        if self._line is None and not framer.in_line and len(data) <= codec.MAX_LINE + 1:
+        if self.line is None and not framer.in_line and len(data) <= codec.MAX_LINE + 1:
             poll = poll_line(data)
             if poll is not None and self._answer_poll(poll, data):
                 return
         index, end = 0, len(data)
         while index < end:
-            line = self._line
+            line = self.line
             if model.addressed is False and self._unconcerned(line):
                 stop = framer.skip_unaddressed(data, index, model.line_address)  # other drives' lines
                 if stop > index:
                     if framer.in_line and (line is None or ends_line(data, index, stop)):
                         line = CommandLine()  # a line that began in the skip (not the one that ended there)
-                    self._line = line if framer.in_line else None
+                    self.line = line if framer.in_line else None
                     index = stop
                     continue
             byte = data[index]
             if not framer.in_line:
                 if byte == codec.HASH:
-                    stop = self._failing_lines(data, index)  # lines of noise, one after the other
+                    stop = self._noise_lines(data, index)  # lines of noise, one after the other
                     if stop > index:
                         index = stop
                         if not model.logic_alive or model.booting:
@@ -115,7 +117,7 @@ class SersFace(Face):
                         return
                     continue
                 if byte == codec.HASH:
-                    index = self._restart(line, data, index)  # '#' inside the line
+                    index = self.restart(line, data, index)  # '#' inside the line
                     if not model.logic_alive or model.booting:
                         return
                     continue
@@ -134,7 +136,7 @@ class SersFace(Face):
                     continue
             index += 1
             for event in framer.feed(byte):
-                self._on_event(event, byte)
+                self.on_event(event, byte)
             if not model.logic_alive or model.booting:
                 return
 
@@ -158,9 +160,9 @@ class SersFace(Face):
         framer = self.framer
         complete, address, stop = framer.begin_line(data, index)
         if not complete:
-            self._line = CommandLine(held=bytearray(data[index:stop]))  # echoed once the address ends
+            self.line = CommandLine(held=bytearray(data[index:stop]))  # echoed once the address ends
             return stop
-        self._line = line = CommandLine()
+        self.line = line = CommandLine()
         self._select(line, address)
         if not line.execute and not line.reply:  # another drive's line: only its end matters
             finish = framer.skip_text(data, stop)
@@ -181,7 +183,7 @@ class SersFace(Face):
         if line.reply and self.echo:
             self.send(data[index:end])
         line.text = text
-        self._end_line(line, framer.end_line(data[end - 1]))
+        self.end_line(line, framer.end_line(data[end - 1]))
         return end
 
     def _answer_poll(self, poll: Poll, data: bytes) -> bool:
@@ -191,13 +193,13 @@ class SersFace(Face):
         returns False (having done nothing) for any other."""
         model = self.model
         address = poll.address
-        if not self._selection(address)[1] or model.program.editing:
+        if not self.model.selection(address)[1] or model.program.editing:
             return False
-        self._note_address(address, True)
+        self.model.note_address(address, True)
         self.framer.whole_line(poll.length, data[-1])
         if self.echo:
             self.send(data)
-        self._line = line = CommandLine()  # (what the query sets off waits for the line end)
+        self.line = line = CommandLine()  # (what the query sets off waits for the line end)
         line.execute = line.reply = True
         try:  # what _progress does with the line's one statement, a query (_query)
             self._out(line, model.answers.query_text(poll.query) + "\n\r")
@@ -229,118 +231,11 @@ class SersFace(Face):
         self._line_end(line, data[finish], framer.end_line(data[finish]))
         return finish + 1
 
-    def _failing_lines(self, data: bytes, index: int) -> int:
-        """From a ``#`` outside a line: whole lines this drive executes whose first statement
-        fails before any statement completes (what random noise mostly is), with the restarts
-        of the failed line, its end and the noise up to the next ``#``, one line after the
-        other, as :meth:`_begin_line`, :meth:`_failing_line`, :meth:`_restart`, the line end
-        and the noise skip would do them.  Stops before a line it does not take (one for
-        another drive, one that runs a statement, one whose text in the chunk does not fail)
-        or inside one (a restart for another drive or whose address the chunk cuts off, the
-        chunk's end), with the line and the framing as those paths leave them; returns where
-        (``index``: nothing taken).  The echo up to the failing character leaves before the
-        error is recorded, the rest of the line's answers with its end, before the line's end
-        is handled."""
-        model, framer, send, end = self.model, self.framer, self.send, len(data)
-        hash_, no_address, search, fails = codec.HASH, codec.NO_ADDRESS, codec.TEXT_END.search, first_byte_errors()
-        mode = model.answers.handshake_mode  # (only a statement changes it: none runs here)
-        while True:
-            # data[index] is a '#' outside a line
-            if model.addressed is False:
-                return index  # (the general path skips lines for other drives in one step)
-            stop = index + 1
-            if stop < end and data[stop] in no_address:  # (most noise: no address)
-                address = None
-            else:
-                complete, address, stop = codec.read_address(data, index)
-                if not complete:
-                    return index
-            execute, reply = self._selection(address)
-            if not execute:
-                return index
-            found = search(data, stop)
-            finish = end if found is None else found.start()  # (the chunk may end the text)
-            keep = min(finish, index + codec.MAX_LINE)  # the text kept (60 characters from the '#')
-            if keep <= stop:
-                return index
-            errno = fails[data[stop]]
-            if errno:
-                cut = stop + 1
-            else:
-                failure = first_failure(data[stop:keep])
-                if failure is None:
-                    return index
-                cut, errno = stop + failure[0], failure[1]
-            # the line fails at data[cut - 1]: take it
-            self._note_address(address, execute)
-            self._line = line = CommandLine()
-            line.execute = line.error = True
-            line.reply = reply
-            if reply and mode in (0, 1):
-                send(data[index:cut])
-            model.power_stage.record_error(errno)  # (what _error does, its message from a table)
-            mode = model.answers.handshake_mode
-            echo = mode in (0, 1)
-            text = error_text(errno, model.answers.english, model.cfg.encoding) if reply else b""
-            if mode == 2:
-                line.deferred += text
-                text = b""
-            if not model.logic_alive or model.booting:
-                framer.take_line(stop - index, cut - stop)
-                send(text)
-                return cut
-            framer.take_line(stop - index, finish - stop)
-            if reply and echo:
-                text += data[cut:finish]
-            if finish == end:  # (the line goes on in the next chunk)
-                send(text)
-                return end
-            while data[finish] == hash_:  # a restart in the failed line: only echoed
-                complete, address, stop = codec.read_address(data, finish)
-                executes, answers = self._selection(address) if complete else (False, False)
-                if not executes:  # (another drive's address, or one the chunk cuts off)
-                    send(text)
-                    return self._restart(line, data, finish)
-                line.execute, line.reply = executes, answers
-                self._note_address(address, executes)
-                line.text, line.executed = "", 0
-                found = search(data, stop)
-                after = end if found is None else found.start()
-                framer.take_line(stop - finish, after - stop)
-                if line.reply and echo:
-                    text += data[finish:after]  # the address held until complete, and the text
-                finish = after
-                if finish == end:
-                    send(text)
-                    return end
-            byte = data[finish]
-            if line.reply and echo:
-                text += data[finish : finish + 1]
-            overflow = framer.end_line(byte)
-            send(text)
-            self._end_line(line, overflow)
-            index = finish + 1
-            if not model.logic_alive or model.booting or model.addressed is False:
-                return index
-            if index < end:
-                byte = data[index]
-                if byte in LINE_ENDS:  # the other half of a CR/LF pair, or noise
-                    index += 1
-                    for event in framer.feed(byte):
-                        self._on_event(event, byte)
-                    if index == end:
-                        return end
-                    byte = data[index]
-                if byte != hash_:
-                    index = framer.skip_noise(data, index)
-            if index >= end:
-                return end
-
-    def _restart(self, line: CommandLine, data: bytes, index: int) -> int:
+    def restart(self, line: CommandLine, data: bytes, index: int) -> int:
         """A ``#`` inside the line's text and the address after it (what :meth:`_on_restart`
         does, and then the address handlers, byte by byte)."""
         self.statements.progress(line, final=True)
-        if self._line is not line or not self.model.logic_alive or self.model.booting:
+        if self.line is not line or not self.model.logic_alive or self.model.booting:
             return index + 1  # (the statements reset the drive: the '#' is gone with the line)
         line.text, line.executed = "", 0
         complete, address, stop = self.framer.begin_line(data, index)
@@ -368,18 +263,18 @@ class SersFace(Face):
             index = cut
             if found is not None:
                 self.statements.progress(line, final=False)
-                if line.error or self._line is not line or not model.logic_alive or model.booting:
+                if line.error or self.line is not line or not model.logic_alive or model.booting:
                     break
         return index - start
 
     def host_disconnected(self) -> None:
         """A host that leaves mid-line leaves a partial line; the next '#' restarts anyway."""
 
-    def _on_event(self, event: object, byte: int) -> None:
+    def on_event(self, event: object, byte: int) -> None:
         self._handlers[type(event)](self, event, byte)
 
     def _on_text(self, event: codec.TextChar, byte: int) -> None:
-        line = self._line
+        line = self.line
         if line is None:
             return
         if line.reply and self.echo:
@@ -395,32 +290,32 @@ class SersFace(Face):
             self.send(bytes((byte,)))
 
     def _on_restart(self, event: codec.Restart, byte: int) -> None:
-        line = self._line
+        line = self.line
         if event.mid_line and line is not None:
             self.statements.progress(line, final=True)
             line.text, line.executed = "", 0
             line.held = bytearray(b"#")
         else:
-            self._line = CommandLine(held=bytearray(b"#"))
+            self.line = CommandLine(held=bytearray(b"#"))
 
     def _on_address_char(self, event: codec.AddressChar, byte: int) -> None:
-        if self._line is not None:
-            self._line.held.append(byte)
+        if self.line is not None:
+            self.line.held.append(byte)
 
     def _on_address(self, event: codec.Address, byte: int) -> None:
-        if self._line is not None:
-            self._select(self._line, event.value)
+        if self.line is not None:
+            self._select(self.line, event.value)
 
     def _on_line_end(self, event: codec.LineEnd, byte: int) -> None:
-        if self._line is not None:
-            self._line_end(self._line, byte, event.overflow)
+        if self.line is not None:
+            self._line_end(self.line, byte, event.overflow)
 
     def _line_end(self, line: CommandLine, byte: int, overflow: bool) -> None:
         if line.reply and self.echo:
             self.send(bytes((byte,)))
-        self._end_line(line, overflow)
+        self.end_line(line, overflow)
 
-    def _end_line(self, line: CommandLine, overflow: bool) -> None:
+    def end_line(self, line: CommandLine, overflow: bool) -> None:
         """The line has ended (its terminator echoed): the rest of its statements run, then
         the deferred answers and the acknowledgement (§4.1)."""
         if line.execute and not line.error:
@@ -445,7 +340,7 @@ class SersFace(Face):
             if not line.error:
                 self.send(b"\n" + self.model.answers.ack_text().encode("latin-1") + b"\n\r")
         self._last_replied = line.reply
-        self._line = None
+        self.line = None
         self._flush_spontaneous()
 
     _handlers: ClassVar[dict[type, Any]] = {
@@ -457,27 +352,9 @@ class SersFace(Face):
         codec.LineEnd: _on_line_end,
     }
 
-    def _selection(self, address: int | str | None) -> tuple[bool, bool]:
-        """Whether this drive executes and answers a line with ``address`` after its ``#``
-        (G-ADDR), changing nothing: without one, if it is selected; ``*``, executed by all and
-        answered by none (a broadcast); its own address, both; another, neither."""
-        if address is None:
-            selected = self.model.selected
-            return selected, selected
-        if address == "*":
-            return True, False
-        mine = address == self.model.line_address
-        return mine, mine
-
-    def _note_address(self, address: int | str | None, mine: bool) -> None:
-        """A line's address selects its drive and deselects the others (G-ADDR); a line
-        without one, or a broadcast, changes nothing.  ``mine``: the address is this drive's."""
-        if address is not None and address != "*":
-            self.model.addressed = mine
-
     def _select(self, line: CommandLine, address: int | str | None) -> None:
-        line.execute, line.reply = self._selection(address)
-        self._note_address(address, line.execute)
+        line.execute, line.reply = self.model.selection(address)
+        self.model.note_address(address, line.execute)
         if line.held:
             if line.reply and self.echo:
                 self.send(bytes(line.held))
@@ -508,7 +385,7 @@ class SersFace(Face):
     def spontaneous(self, text: str) -> None:
         """Messages such as ``@2POS=1`` go out between lines, never inside one (G-SPONT)."""
         self._spontaneous.append(text.encode(self.model.cfg.encoding, errors="replace") + b"\n\r")
-        if self._line is None:
+        if self.line is None:
             self._flush_spontaneous()
 
     def _flush_spontaneous(self) -> None:

@@ -285,3 +285,21 @@ class SersDrive(Model):
             initially = self.cfg.initially_selected
             self.addressed = (not self.shared_line) if initially is None else initially
         return self.addressed
+
+    def selection(self, address: int | str | None) -> tuple[bool, bool]:
+        """Whether this drive executes and answers a line with ``address`` after its ``#``
+        (G-ADDR), changing nothing: without one, if it is selected; ``*``, executed by all and
+        answered by none (a broadcast); its own address, both; another, neither."""
+        if address is None:
+            selected = self.selected
+            return selected, selected
+        if address == "*":
+            return True, False
+        mine = address == self.line_address
+        return mine, mine
+
+    def note_address(self, address: int | str | None, mine: bool) -> None:
+        """A line's address selects its drive and deselects the others (G-ADDR); a line
+        without one, or a broadcast, changes nothing.  ``mine``: the address is this drive's."""
+        if address is not None and address != "*":
+            self.addressed = mine
