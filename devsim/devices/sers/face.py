@@ -363,7 +363,7 @@ class SersFace(Face):
     # -- output ----------------------------------------------------------------------------
     @property
     def echo(self) -> bool:
-        return self.model.answers.handshake_mode in (0, 1)
+        return self.model.params.handshake_mode in (0, 1)
 
     def _out(self, line: CommandLine, text: str) -> None:
         self._put(line, text.encode(self.model.cfg.encoding, errors="replace"))
@@ -372,7 +372,7 @@ class SersFace(Face):
         """An answer of the line: at once, or with RS-485 handshake (P1017 = 2) at its end."""
         if not line.reply:
             return
-        if self.model.answers.handshake_mode == 2:
+        if self.model.params.handshake_mode == 2:
             line.deferred += data
         else:
             self.send(data)
@@ -380,7 +380,7 @@ class SersFace(Face):
     def _error(self, line: CommandLine, errno: int, detail: str = "") -> None:
         line.error = True
         self.model.power_stage.record_error(errno)
-        self._put(line, error_text(errno, self.model.answers.english, self.model.cfg.encoding, detail))
+        self._put(line, error_text(errno, self.model.params.language == 1, self.model.cfg.encoding, detail))
 
     def spontaneous(self, text: str) -> None:
         """Messages such as ``@2POS=1`` go out between lines, never inside one (G-SPONT)."""

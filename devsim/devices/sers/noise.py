@@ -59,7 +59,7 @@ class NoiseLines:
         is handled."""
         model, framer, send, face, end = self.model, self.framer, self.send, self.face, len(data)
         hash_, no_address, search, fails = codec.HASH, codec.NO_ADDRESS, codec.TEXT_END.search, first_byte_errors()
-        mode = model.answers.handshake_mode  # (only a statement changes it: none runs here)
+        mode = model.params.handshake_mode  # (only a statement changes it: none runs here)
         while True:
             # data[index] is a '#' outside a line
             if model.addressed is False:
@@ -95,9 +95,9 @@ class NoiseLines:
             if reply and mode in (0, 1):
                 send(data[index:cut])
             model.power_stage.record_error(errno)  # (what _error does, its message from a table)
-            mode = model.answers.handshake_mode
+            mode = model.params.handshake_mode
             echo = mode in (0, 1)
-            text = error_text(errno, model.answers.english, model.cfg.encoding) if reply else b""
+            text = error_text(errno, model.params.language == 1, model.cfg.encoding) if reply else b""
             if mode == 2:
                 line.deferred += text
                 text = b""

@@ -45,18 +45,20 @@ class Outputs:
         output shows the inverse)."""
         if not self._alive():
             return
-        power, params, signals = self.power, self.params, self.signals
+        power, signals = self.power, self.signals
         signals.set("READY", bool(power.relay and not power.errors))
+        in_position, running, error, warning, brake = self.params.output_selectors()
         for selected, state in (
-            (params.output_in_position, self._in_position()),
-            (params.output_program_running, self._program_running()),
-            (params.output_error, power.errors != 0),
-            (params.output_warning, power.warnings != 0),
+            (in_position, self._in_position),
+            (running, self._program_running),
+            (error, power.has_errors),
+            (warning, power.has_warnings),
         ):
             sel = int(selected)
             if sel and abs(sel) <= 4:
-                signals.set(f"O{abs(sel)}", state if sel > 0 else not state)
-        brake = int(params.brake_output)
+                on = state()
+                signals.set(f"O{abs(sel)}", on if sel > 0 else not on)
+        brake = int(brake)
         if brake:
             off = not power.energized
             signals.set(f"O{abs(brake)}", off if brake > 0 else not off)

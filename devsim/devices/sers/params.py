@@ -9,6 +9,8 @@ the part that owns that behaviour.
 
 from __future__ import annotations
 
+from typing import Any
+
 from devsim.core.parameters import Parameters, accessor
 from devsim.devices.sers.parameters import PARAMETER_TABLE
 from devsim.devices.sers.units import Scaling
@@ -125,6 +127,13 @@ class SersParameters(Parameters):
         scaling = Scaling(int(key[0]), int(key[1]), int(key[2]), float(key[3]), float(key[4]), float(key[5]))
         self._scaling = (key, scaling)
         return scaling
+
+    def output_selectors(self) -> tuple[Any, Any, Any, Any, Any]:
+        """The outputs that show the drive's state (§4.8.1.2): in position P1125, program
+        running P1126, error P1131, warning P1132, and the brake P1036 (read together: the
+        outputs follow every error message)."""
+        v = self.values
+        return v[1125], v[1126], v[1131], v[1132], v[1036]
 
     def load(self, image: dict[int, object]) -> None:
         """Every value anew (power-on): ``image`` is the whole RAM image, nothing else is kept."""

@@ -75,6 +75,12 @@ class PowerStage:
         self._stop_opened = False
         self._timers: list[Timer] = []
 
+    def has_errors(self) -> bool:
+        return self.errors != 0
+
+    def has_warnings(self) -> bool:
+        return self.warnings != 0
+
     def power_on(self) -> None:
         """Everything off and cleared (§4.1); with P1011 bit 5 the motor is energised at once."""
         self.cancel()
