@@ -33,7 +33,8 @@ __all__ = ["READS", "WRITES", "ParameterAccess", "ProgramControl", "address_numb
 
 
 class ProgramControl(Protocol):
-    """What P0 and P1099 need of the program execution (:class:`~.execution.Execution`)."""
+    """What P0 and P1099 (§4.8.2.1, §4.8.6.16) need of the program execution
+    (:class:`~.execution.Execution`)."""
 
     @property
     def running(self) -> bool: ...

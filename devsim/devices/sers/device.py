@@ -27,7 +27,7 @@ __all__ = ["SersDevice"]
 
 
 class SersDevice(Device):
-    """One SERS drive on a serial line (RS-232, or RS-485 multidrop with others)."""
+    """One SERS drive on a serial line (RS-232, or RS-485 multidrop with others; §1, §3.6)."""
 
     kind: ClassVar[str] = "sers"
     description: ClassVar[str] = "Stögra SERS stepper driver with positioning control (ASCII, RS-232/RS-485)"

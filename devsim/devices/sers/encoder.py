@@ -23,7 +23,7 @@ __all__ = ["Retry", "StepMonitor"]
 
 
 class Retry(Protocol):
-    """What the step-loss reaction needs of the motion (:class:`~.motion.Motion`)."""
+    """What the step-loss reaction (§4.8.6.6) needs of the motion (:class:`~.motion.Motion`)."""
 
     @property
     def moving(self) -> bool: ...

@@ -35,7 +35,8 @@ __all__ = ["SersFace"]
 
 
 class SersFace(Face):
-    """The ASCII line protocol of one SERS on a serial line (RS-232, or RS-485 multidrop)."""
+    """The ASCII line protocol of one SERS on a serial line (RS-232, or RS-485 multidrop;
+    §3.2, §4.1, §4.8.6.9)."""
 
     model: SersDrive
 

@@ -35,7 +35,7 @@ def can_move(speed: float, accel: float) -> None:
 
 
 class HomingMotion(Protocol):
-    """What a homing run needs of the motion (:class:`~.motion.Motion`)."""
+    """What a homing run (§4.8.4.5) needs of the motion (:class:`~.motion.Motion`)."""
 
     def checks(self, direction: int) -> None:
         """The refusals of a motion toward ``direction`` (limit, STOP, I7, power)."""

@@ -29,7 +29,8 @@ _J_BITS = {1: 8, 2: 2, 3: 1, 4: 4, 5: 128}
 
 
 class ProgramStarts(Protocol):
-    """What the inputs start and stop: the program execution (:class:`~.execution.Execution`)."""
+    """What the inputs start and stop (§3.6, §4.5.2): the program execution
+    (:class:`~.execution.Execution`)."""
 
     @property
     def running(self) -> bool: ...

@@ -26,7 +26,7 @@ Error = Callable[[CommandLine, int, str], None]
 
 
 class LineStatements:
-    """Runs the statements of the lines one SERS executes."""
+    """Runs the statements of the lines one SERS executes (§4.2, §3.2.4a)."""
 
     def __init__(self, model: SersDrive, answer: Answer, error: Error) -> None:
         self.model = model

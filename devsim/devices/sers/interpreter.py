@@ -33,7 +33,8 @@ from devsim.devices.sers.remote import RemoteStatements
 
 
 class ProgramHost(Protocol):
-    """What the interpreter needs of the program execution (:class:`~.execution.Execution`)."""
+    """What the interpreter (§4.5, §4.6) needs of the program execution
+    (:class:`~.execution.Execution`)."""
 
     def statement(self, stmt: st.Statement) -> str | None:
         """Execute a statement of the program; what the program waits for (``position`` …)."""
@@ -59,7 +60,7 @@ L65 = 65  # error / stop handler label (§4.6.2)
 
 @record(frozen=False)
 class Program:
-    """A compiled program: statements in order, labels and block jumps."""
+    """A compiled program: statements in order, labels (§4.6.2) and block jumps (§4.6.1)."""
 
     statements: list[st.Statement] = field(default_factory=list)
     texts: list[str] = field(default_factory=list)
@@ -92,7 +93,7 @@ class Program:
 
 
 class Interpreter:
-    """Runs the stored program of one SERS."""
+    """Runs the stored program of one SERS (§4.5, §4.6)."""
 
     def __init__(
         self,

@@ -23,7 +23,7 @@ __all__ = ["Jog", "JogMotion"]
 
 
 class JogMotion(Protocol):
-    """What a jog needs of the motion (:class:`~.motion.Motion`)."""
+    """What a jog (§4.5.1) needs of the motion (:class:`~.motion.Motion`)."""
 
     @property
     def kind(self) -> str | None: ...

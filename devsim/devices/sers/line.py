@@ -45,7 +45,7 @@ LINE_ENDS = (codec.CR, codec.LF)
 
 @record(frozen=False)
 class CommandLine:
-    """What the device knows about the command line being received."""
+    """What the device knows about the command line being received (§3.2.4, §4.1)."""
 
     execute: bool = False  # this drive carries out the statements
     reply: bool = False  # this drive echoes and answers
@@ -90,7 +90,7 @@ def quiet(text: bytes) -> str | None:
 
 @record
 class Poll:
-    """A whole line that asks one thing (``#1P11?`` and its end), parsed once."""
+    """A whole line that asks one thing (``#1P11?`` and its end, §4.7), parsed once."""
 
     address: int | str | None
     query: st.Query

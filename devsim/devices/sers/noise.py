@@ -22,7 +22,7 @@ __all__ = ["LineHost", "NoiseLines"]
 
 
 class LineHost(Protocol):
-    """What the noise path needs of the serial face (:class:`~.face.SersFace`)."""
+    """What the noise path needs of the serial face (:class:`~.face.SersFace`, §3.2.4)."""
 
     line: CommandLine | None  # the line being received
 
@@ -37,7 +37,7 @@ class LineHost(Protocol):
 
 
 class NoiseLines:
-    """The lines of noise one SERS's face takes in one step."""
+    """The lines of noise one SERS's face takes in one step (§3.2.4, §4.8.3.1)."""
 
     def __init__(self, model: SersDrive, framer: codec.Framer, send: Callable[[bytes], None], face: LineHost) -> None:
         self.model = model

@@ -26,7 +26,7 @@ from devsim.devices.sers.params import SersParameters
 
 
 class PolynomialHost(Protocol):
-    """What a polynomial move needs of the motion (:class:`~.motion.Motion`)."""
+    """What a polynomial move (§4.6.7) needs of the motion (:class:`~.motion.Motion`)."""
 
     @property
     def moving(self) -> bool: ...
@@ -50,6 +50,8 @@ ABSOLUTE = (1113, 1116)
 
 @record
 class Segment:
+    """One path segment of a polynomial profile (§4.6.7)."""
+
     end: float  # physical position (increments) where the segment ends
     speed: float  # inc/s
     accel: float  # inc/s²
@@ -59,7 +61,7 @@ class Segment:
 
 
 class PolynomialMove:
-    """The polynomial mode of one drive."""
+    """The polynomial mode of one drive (§4.6.7)."""
 
     def __init__(
         self,

@@ -20,7 +20,7 @@ __all__ = ["Positioning", "PositioningMotion"]
 
 
 class PositioningMotion(Protocol):
-    """What a positioning needs of the motion (:class:`~.motion.Motion`)."""
+    """What a positioning (§4.6.6) needs of the motion (:class:`~.motion.Motion`)."""
 
     offset: float  # the axis position of P51 = 0
 

@@ -23,7 +23,7 @@ __all__ = ["Brakes", "PowerStage"]
 
 
 class Brakes(Protocol):
-    """What a drive error and OFF need of the motion (:class:`~.motion.Motion`)."""
+    """What a drive error and OFF (§2.1.3, §4.8.2.2) need of the motion (:class:`~.motion.Motion`)."""
 
     def abort_profiles(self) -> None:
         """Forget a polynomial profile and a homing run under way."""

@@ -31,7 +31,7 @@ _SLAVE_SOURCES: dict[str, Callable[[st.Address], tuple[int, int]]] = {
 
 
 class ParkedProgram(Protocol):
-    """What a statement sent to a slave needs of the program that waits for it (the
+    """What a statement sent to a slave (§4.8.5.5) needs of the program that waits for it (the
     :class:`~.interpreter.Interpreter`)."""
 
     def park_for_master(self) -> None: ...
@@ -56,7 +56,7 @@ def _wire(operands: Operands, operand: st.Operand) -> str:
 
 
 class RemoteStatements:
-    """The statements a master's program sends to a slave."""
+    """The statements a master's program sends to a slave (§3.6.2, §4.8.5.5)."""
 
     def __init__(self, master: MasterLink, operands: Operands, program: ParkedProgram) -> None:
         self.master = master

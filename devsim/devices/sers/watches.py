@@ -25,7 +25,8 @@ def _sign(x: float) -> int:
 
 
 class PositionWatches:
-    """Software limits, compare positions and standstill monitoring of one motion."""
+    """Software limits, compare positions and standstill monitoring of one motion (§4.8.6.12,
+    §4.8.1.2, §4.8.6.8)."""
 
     def __init__(
         self,
