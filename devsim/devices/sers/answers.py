@@ -45,11 +45,6 @@ class Answers:
         self.program = program
 
     @property
-    def handshake_mode(self) -> int:
-        """P1017 (§4.8.6.9): 0/1 echo, 2 RS-485 (answers at the line end)."""
-        return int(self.params.handshake_mode)
-
-    @property
     def english(self) -> bool:
         """P265 = 1: the messages and designations in English."""
         return int(self.params.language) == 1
