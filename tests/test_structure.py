@@ -36,13 +36,6 @@ LAYERS: list[tuple[str, ...]] = [
 # else is tolerated.
 PENDING_CYCLES: set[str] = set()
 PENDING_CLASSES = {
-    # sers: the face, the interpreter and the drive's mixins (drive.py: SersDrive(ParameterAccess,
-    # Execution, Motion, InputsAndFaults, Model))
-    "devsim.devices.sers.face.SersFace",
-    "devsim.devices.sers.interpreter.Interpreter",
-    "devsim.devices.sers.motion.Motion",
-    "devsim.devices.sers.access.ParameterAccess",
-    "devsim.devices.sers.drive.SersDrive",
     # Not a kind: the core's closed-form axis (583 lines: state, commands, watches, planning), on
     # which every kind stands; splitting it is a change of its own, not part of moving the kinds.
     "devsim.core.axis.Axis",

@@ -33,12 +33,6 @@ def _table_rows(header: Sequence[str], *groups: Iterable[Sequence[Any]]) -> list
     return _table(header, (row for group in groups for row in group))
 
 
-def _range(low: Any, high: Any) -> str:
-    if low is None and high is None:
-        return ""
-    return f"{'' if low is None else low} … {'' if high is None else high}"
-
-
 def config_rows(model: Section | None) -> list[tuple[str, str, str, str]]:
     """(key, type, default, description) of every configuration key, nested keys dotted."""
     return [] if model is None else list(model.rows())
@@ -112,31 +106,6 @@ def reference_markdown(cls: type[Device]) -> str:
             *_table(
                 ("command", "description", "manual", "behaviour"),
                 ((f"`{c.token}`", c.doc, c.section, c.effect) for c in ref.commands),
-            ),
-            "",
-        ]
-    if ref.parameters:
-        out += [
-            "## Parameters",
-            "",
-            "`simulated`: the parameter has the effect the manual gives it; `stored`: it is kept",
-            "and answered, but has no effect in the simulator.",
-            "",
-            *_table(
-                ("parameter", "description", "unit", "range", "default", "saved", "behaviour", "manual"),
-                (
-                    (
-                        f"`{p.name}`",
-                        p.doc,
-                        p.unit,
-                        _range(p.minimum, p.maximum),
-                        p.default,
-                        "yes" if p.saved else "no",
-                        p.effect,
-                        p.section,
-                    )
-                    for p in ref.parameters
-                ),
             ),
             "",
         ]

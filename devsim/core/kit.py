@@ -25,7 +25,6 @@ __all__ = [
     "Fault",
     "FaultTable",
     "Framing",
-    "Parameter",
     "PortDef",
     "SignalDef",
     "SignalView",
@@ -149,6 +148,8 @@ class Table(Generic[H]):
         for row in rows:
             if row.token in self.rows:
                 raise ValueError(f"command {row.token!r} declared twice")
+            if not callable(row.handler):  # a row that only documents would not run
+                raise TypeError(f"command {row.token!r} has no callable handler ({row.handler!r})")
             self.rows[row.token] = row
 
     def __iter__(self) -> Iterator[Command[H]]:
@@ -166,21 +167,6 @@ class Table(Generic[H]):
 
 
 CommandTable = Table
-
-
-@record
-class Parameter:
-    """A parameter as the reference documents it."""
-
-    name: str
-    doc: str
-    section: str
-    unit: str = ""
-    minimum: float | str | None = None
-    maximum: float | str | None = None
-    default: Any = None
-    saved: bool = True
-    effect: Effect = "simulated"
 
 
 @record
@@ -266,7 +252,6 @@ class Reference:
     """What ``devsim doc KIND`` prints, gathered from a kind's tables."""
 
     commands: list[Command[Any]] = field(default_factory=list)
-    parameters: list[Parameter] = field(default_factory=list)
     errors: list[ErrorCode] = field(default_factory=list)
     config: list[tuple[str, str, str]] = field(default_factory=list)  # key, type/default, doc
     #: The kind's parameters as kit rows (:mod:`devsim.core.parameters`), printed with their key,

@@ -129,9 +129,9 @@ class Param:
 
 
 def _number(value: float) -> str:
-    """A range limit as the reference prints it: ``:g``, but a whole number in full (99999999,
-    not 1e+08)."""
-    return str(int(value)) if float(value).is_integer() else f"{value:g}"
+    """A range limit as the reference prints it: every digit the manual gives (99999999, not
+    1e+08; 214748.3647, not 214748)."""
+    return str(int(value)) if float(value).is_integer() else f"{value:.12g}"
 
 
 def _unit(unit: str) -> str:

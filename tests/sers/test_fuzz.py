@@ -205,7 +205,7 @@ def test_polls_line_by_line_answer_as_bytes_do(lines: list[bytes], pauses: list[
 
 
 def test_the_poll_paths_are_taken() -> None:
-    from devsim.devices.sers.face import _poll_line
+    from devsim.devices.sers.line import poll_line as _poll_line
 
     assert _poll_line(b"#1P11?\r") is not None and _poll_line(b"#P51??\n") is not None
     for line in (b"#1P11?", b"#1P11?P12?\r", b"#1V=1\r", b"#1P11?\r#", b"P11?\r", b"#1" + b" " * 58 + b"P11?\r"):

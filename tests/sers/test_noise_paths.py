@@ -47,11 +47,11 @@ def _run(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False)
         start, turn = start + size, turn + 1
         sent[min(start, len(stream))] = len(out)
     face = device.face()
-    line = face._line
+    line = face.line
     framer = vars(face.framer)
     if not framer["in_line"]:  # (what counted the last line means nothing once it ended)
         framer = {name: framer[name] for name in ("in_line", "_last_end")}
-    return sent, (bytes(out), changes, device.state(), dict(model.ram), model.errno, model.warnings, model.addressed,
+    return sent, (bytes(out), changes, device.state(), dict(model.params.values), model.power_stage.errno, model.power_stage.warnings, model.addressed,
                   framer, face._last_replied,
                   None if line is None else (line.execute, line.reply, line.error, bytes(line.held),
                                              bytes(line.deferred)))

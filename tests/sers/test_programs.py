@@ -333,7 +333,7 @@ def test_t15_stand_alone_example(plant_factory) -> None:
     download(host, *T15)
     plant.set("input.I2", True)  # hold the program at WAIT I2=0 after the first move
     run(host)
-    until(plant, lambda d: d.model.interpreter.waiting == "wait" and d.model.motion is None, 10)
+    until(plant, lambda d: d.model.interpreter.waiting == "wait" and d.model.motion.kind is None, 10)
     assert degrees(plant) == pytest.approx(25.5, abs=INC)
     start = plant.read("axis.position")
     plant.set("input.I4", True)  # IN=8 > 7
@@ -343,13 +343,13 @@ def test_t15_stand_alone_example(plant_factory) -> None:
     for _ in range(10):
         until(plant, lambda d: d.read("output.O2"), 10)
         rise = plant.read("axis.position")
-        until(plant, lambda d: d.model.motion == "position", 0.01)
+        until(plant, lambda d: d.model.motion.kind == "position", 0.01)
         assert out(plant, 2) is True  # O2 is high during the 5000° move ...
         plant.settle()
         assert out(plant, 2) is True  # ... until it has ended
         until(plant, lambda d: not d.read("output.O2"), 0.01)
         assert (plant.read("axis.position") - rise) / DEG == pytest.approx(5000, abs=INC)
-    until(plant, lambda d: d.model.interpreter.waiting == "wait" and d.model.motion is None, 10)
+    until(plant, lambda d: d.model.interpreter.waiting == "wait" and d.model.motion.kind is None, 10)
     assert (plant.read("axis.position") - start) / DEG == pytest.approx(2000 + 10 * 6000, abs=21 * INC)
     assert running(plant)  # an endless loop
 

@@ -240,11 +240,11 @@ def test_every_listed_parameter_present():
 
 def test_paramdef_consistency():
     for n, d in PARAMETERS.items():
-        assert d.number == n
+        assert d.key == n
         assert record.is_record(d)
-        assert d.name and d.name_en
-        assert d.kind in ("int", "position", "velocity", "acceleration", "fixed")
-        if d.kind == "fixed":
+        assert d.name and d.doc
+        assert d.extra["kind"] in ("int", "position", "velocity", "acceleration", "fixed")
+        if d.extra["kind"] == "fixed":
             assert d.decimals > 0
         assert d.readable or d.writable
         if d.minimum is not None and d.maximum is not None:
@@ -252,7 +252,7 @@ def test_paramdef_consistency():
         if d.default is not None and d.writable:
             if d.choices is not None:
                 assert d.default in d.choices, n
-        if d.saved or d.saved_with_p1117:
+        if d.saved or d.extra["saved_with_p1117"]:
             assert d.writable or n == 1034
         d.name.encode("latin-1")
     with pytest.raises(record.FrozenInstanceError):
@@ -298,32 +298,34 @@ def test_ranges_and_choices(number, minimum, maximum, choices):
     d = PARAMETERS[number]
     assert d.minimum == minimum
     assert d.maximum == maximum
-    assert d.choices == (frozenset(choices) if choices is not None else None)
+    assert (frozenset(d.choices) if d.choices is not None else None) == (
+        frozenset(choices) if choices is not None else None
+    )
 
 
 def test_special_errnos():
-    assert (PARAMETERS[91].too_large_errno, PARAMETERS[91].too_small_errno) == (122, 121)
-    assert (PARAMETERS[138].too_large_errno, PARAMETERS[138].too_small_errno) == (120, 119)
-    assert (PARAMETERS[1024].too_large_errno, PARAMETERS[1024].too_small_errno) == (88, 89)
-    assert (PARAMETERS[1026].too_large_errno, PARAMETERS[1026].too_small_errno) == (90, 91)
-    assert PARAMETERS[103].too_large_errno == 92
-    assert PARAMETERS[1014].invalid_errno == 80
-    assert PARAMETERS[0].invalid_errno == 82
-    assert PARAMETERS[1004].invalid_errno == 82
-    assert PARAMETERS[1034].write_errno == 12
-    assert PARAMETERS[1].too_large_errno == 1
-    assert PARAMETERS[91].min_exclusive
+    assert (PARAMETERS[91].extra["too_large_errno"], PARAMETERS[91].extra["too_small_errno"]) == (122, 121)
+    assert (PARAMETERS[138].extra["too_large_errno"], PARAMETERS[138].extra["too_small_errno"]) == (120, 119)
+    assert (PARAMETERS[1024].extra["too_large_errno"], PARAMETERS[1024].extra["too_small_errno"]) == (88, 89)
+    assert (PARAMETERS[1026].extra["too_large_errno"], PARAMETERS[1026].extra["too_small_errno"]) == (90, 91)
+    assert PARAMETERS[103].extra["too_large_errno"] == 92
+    assert PARAMETERS[1014].extra["invalid_errno"] == 80
+    assert PARAMETERS[0].extra["invalid_errno"] == 82
+    assert PARAMETERS[1004].extra["invalid_errno"] == 82
+    assert PARAMETERS[1034].extra["write_errno"] == 12
+    assert PARAMETERS[1].extra["too_large_errno"] == 1
+    assert PARAMETERS[91].extra["min_exclusive"]
 
 
 def test_kinds_and_decimals():
-    assert PARAMETERS[47].kind == "position"
-    assert PARAMETERS[91].kind == "velocity"
-    assert PARAMETERS[138].kind == "acceleration"
-    assert (PARAMETERS[1100].kind, PARAMETERS[1100].decimals) == ("fixed", 1)
-    assert (PARAMETERS[1054].kind, PARAMETERS[1054].decimals) == ("fixed", 5)
-    assert (PARAMETERS[1139].kind, PARAMETERS[1139].decimals) == ("fixed", 1)
-    assert (PARAMETERS[1046].kind, PARAMETERS[1046].decimals) == ("fixed", 3)
-    assert PARAMETERS[1010].kind == "int"
+    assert PARAMETERS[47].extra["kind"] == "position"
+    assert PARAMETERS[91].extra["kind"] == "velocity"
+    assert PARAMETERS[138].extra["kind"] == "acceleration"
+    assert (PARAMETERS[1100].extra["kind"], PARAMETERS[1100].decimals) == ("fixed", 1)
+    assert (PARAMETERS[1054].extra["kind"], PARAMETERS[1054].decimals) == ("fixed", 5)
+    assert (PARAMETERS[1139].extra["kind"], PARAMETERS[1139].decimals) == ("fixed", 1)
+    assert (PARAMETERS[1046].extra["kind"], PARAMETERS[1046].decimals) == ("fixed", 3)
+    assert PARAMETERS[1010].extra["kind"] == "int"
     assert {47, 51, 103, 1024, 1026, 1037, 1039, 1040, 1041, 1044, 1051, 1052} <= WEIGHTED
     assert {91, 41, 1003, 1019, 1020, 138, 42, 1018, 1030, 1096, 1012} <= WEIGHTED
     assert 1010 not in WEIGHTED and 76 not in WEIGHTED
@@ -344,7 +346,7 @@ def test_saved_sets():
     for n in (0, 1, 11, 12, 47, 51, 100, 1047, 1101, 1110, 1035, 1201, 1080):
         assert n not in SAVED, n
     assert SAVED_WITH_P1117 == {47, 1080, 1081, 1082, 1083, 1084, 1085}
-    assert PARAMETERS[1080].saved_with_p1117
+    assert PARAMETERS[1080].extra["saved_with_p1117"]
 
 
 def test_factory_defaults():

@@ -13,7 +13,7 @@ def test_t01_ack_of_simple_command(sers: Plant) -> None:
     sers.host.send("#ON")
     # ON is taken over before the CR arrives (§4.1): read the echo, then look at the drive
     sers.host.expect(b"#ON")
-    assert sers.runtime.run_until(lambda: sers.runtime.device("sers").model.energized, 0.0)
+    assert sers.runtime.run_until(lambda: sers.runtime.device("sers").model.power_stage.energized, 0.0)
     sers.host.send("\r")
     sers.host.expect(b"\r\nok1\n\r")
     assert sers.read("display") == {"char": "5", "blinking": False}

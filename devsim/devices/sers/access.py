@@ -1,661 +1,139 @@
-"""Parameter access of the SERS model: the RAM image, EEPROM, reads, writes with their range
-checks and side effects, operands and conditions, and the texts the serial face answers with
-(manual §4.7, §4.8; spec §4.8, G-LIST)."""
+"""Parameter access of the SERS by the number the host sent: reads, writes with their range
+checks and their effects, and the values as the drive shows them (manual §4.7, §4.8, §4.8.4.6;
+spec §4.8, G-QUERYFMT).
+
+A parameter whose value is the drive's state rather than a stored number is read through
+:data:`READS`; one whose write does something is written through :data:`WRITES`; both are
+tables of :class:`~devsim.core.kit.Command` rows keyed by ``P<n>``, each citing its section.
+Every other parameter is a value of :class:`~.params.SersParameters`, converted by its weighting.
+"""
 
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
+from devsim.core.kit import Command, Table
+from devsim.core.parameters import Param
+from devsim.core.signals import SignalBank
 from devsim.devices.sers import statements as st
-from devsim.devices.sers.constants import (
-    INC_PER_REV,
-    OVERTEMP,
-    SHORT,
-    STEP_LOSS,
-    UNDERVOLTAGE,
-    WEIGHTED,
-    WEIGHTING_PARAMS,
-)
+from devsim.devices.sers.constants import FIRMWARE, INC_PER_REV, WEIGHTED
 from devsim.devices.sers.errors import SersError
-from devsim.devices.sers.parameters import ALIASES, CURRENT_MAX_MA, PARAMETERS, ParamDef, lookup
-from devsim.devices.sers.units import Scaling, format_fixed, format_query, quantize
+from devsim.devices.sers.inputs import Inputs
+from devsim.devices.sers.memory import ParameterMemory
+from devsim.devices.sers.motion import Motion
+from devsim.devices.sers.parameters import ALIASES, KIND, PARAMETERS
+from devsim.devices.sers.params import SersParameters
+from devsim.devices.sers.power import PowerStage
+from devsim.devices.sers.program import ProgramMemory
+from devsim.devices.sers.units import Scaling, format_query, quantize
 
-__all__ = ["ParameterAccess"]
+__all__ = ["READS", "WRITES", "ParameterAccess", "ProgramControl", "address_number"]
+
+
+class ProgramControl(Protocol):
+    """What P0 and P1099 (§4.8.2.1, §4.8.6.16) need of the program execution
+    (:class:`~.execution.Execution`)."""
+
+    @property
+    def running(self) -> bool: ...
+
+    def run_program(self, label: int | None) -> None: ...
+
+    def new_program(self) -> None: ...
+
+
+#: How an address names a parameter (§4.2): by number, by alias, as output O1..O16 (P1201..).
+_NUMBERS: dict[str, Callable[[str | int], int]] = {
+    "P": int,
+    "alias": lambda ref: ALIASES[str(ref)],
+    "O": lambda ref: 1200 + int(ref),
+}
+
+
+def address_number(address: st.Address) -> int:
+    """The P number an address names (``V`` → 91, ``O2`` → 1202); errno 13 for I, J, IN."""
+    number = _NUMBERS.get(address.kind)
+    if number is None:
+        raise SersError(13)
+    return number(address.ref)
 
 
 class ParameterAccess:
-    """Part of :class:`~devsim.devices.sers.drive.SersDrive`: parameters, operands, answer texts."""
+    """Reads and writes of one SERS's parameters by number (§4.7, §4.8)."""
 
-    # ======================================================================================
-    # parameters
-    # ======================================================================================
+    def __init__(
+        self,
+        params: SersParameters,
+        memory: ParameterMemory,
+        power: PowerStage,
+        motion: Motion,
+        inputs: Inputs,
+        program: ProgramMemory,
+        signals: SignalBank,
+        *,
+        config: Callable[[], Any],
+        programs: Callable[[], ProgramControl],
+        changed: Callable[[], None],
+        recheck_warnings: Callable[[], None],
+    ) -> None:
+        self.params = params
+        self.memory = memory
+        self.power = power
+        self.motion = motion
+        self.inputs = inputs
+        self.program = program
+        self.signals = signals
+        self._config = config
+        self._programs = programs  # (the program execution, made after the access)
+        self._changed = changed  # outputs that follow a state (P1125 …) follow a new selector
+        self._recheck_warnings = recheck_warnings  # P12=0: the warnings whose causes remain
+        self.firmware = FIRMWARE
+
     @property
     def scaling(self) -> Scaling:
-        """The unit conversion of the weighting parameters as they are now (made again only when
-        one of them changed: a position query needs it twice)."""
-        r = self.ram
-        key = (r[76], r[44], r[160], r[121], r[122], r[123])
-        made = self.__dict__.get("_scaling")
-        if made is not None and made[0] == key:
-            return made[1]
-        scaling = Scaling(int(key[0]), int(key[1]), int(key[2]), float(key[3]), float(key[4]), float(key[5]))
-        self.__dict__["_scaling"] = (key, scaling)
-        return scaling
+        return self.params.scaling
 
-    def _factory_image(self) -> dict[int, Any]:
-        """Factory defaults plus the configured EEPROM values, in internal units."""
-        image: dict[int, Any] = {}
-        for number, pdef in PARAMETERS.items():
-            if pdef.default is not None:
-                image[number] = pdef.default
-        image[1010] = CURRENT_MAX_MA[self.cfg.current_class] // 2
-        user: dict[int, Any] = {}
-        for key, value in self.cfg.params.items():
-            pdef = lookup(str(key))
-            user[pdef.number] = value
-        for number in WEIGHTING_PARAMS:
-            if number in user:
-                image[number] = user[number]
-        scaling = Scaling(int(image[76]), int(image[44]), int(image[160]), image[121], image[122], image[123])
-        for number, pdef in PARAMETERS.items():
-            value = user.get(number, image.get(number))
-            if value is None:
-                continue
-            if pdef.kind in WEIGHTED:
-                value = scaling.to_internal(pdef.kind, float(value))
-            image[number] = value
-        return image
-
-    def _load_parameters(self) -> None:
-        self.ram = self._factory_image()
-        stored = self.nvram.get("params")
-        if stored and not self.eeprom_checksum_error:
-            for key, value in stored.items():
-                self.ram[int(key)] = value
-        # not stored: power-on values (spec §4.1 step 4)
-        self.ram.update({1110: 1, 1035: 1, 1: 0, 1047: 0, 1164: 0, 1165: 0, 1118: 0})
-        for n in (100, 101, 102, 1101, 1102, 1103):
-            self.ram[n] = 0
-        extra = self.nvram.get("registers") or {}
-        for n in (47, 1080, 1081, 1082, 1083, 1084, 1085):
-            self.ram[n] = extra.get(str(n), 0)
-
-    def psave(self) -> None:
-        """P1004=2: RAM parameters → EEPROM (W and R0..R5 only with P1117=1)."""
-        data = {str(n): self.ram[n] for n, pdef in PARAMETERS.items() if pdef.saved and n in self.ram}
-        self.nvram.put("params", data)
-        self.eeprom_checksum_error = False
-        if self.ram.get(1117):
-            self.save_registers()
-
-    def save_registers(self) -> None:
-        """P1004=5: R0..R5 and W."""
-        self.nvram.put("registers", {str(n): self.ram[n] for n in (47, 1080, 1081, 1082, 1083, 1084, 1085)})
-
-    def factory_defaults(self) -> None:
-        """P1004=3: EEPROM and RAM parameters back to factory defaults."""
-        self.nvram.delete("params")
-        self.nvram.delete("registers")
-        keep = {n: self.ram[n] for n in (47, 1080, 1081, 1082, 1083, 1084, 1085)}
-        self.ram.update(self._factory_image())
-        self.ram.update(keep)
-        self.eeprom_checksum_error = False
-
-    def possave(self) -> None:
-        """P1004=4: actual position P51 → EEPROM, restored at the next power-on."""
-        self.nvram.put("position", self.p51_inc())
-
-    # -- reading ---------------------------------------------------------------------------
-    def p51_inc(self) -> float:
-        return self.axis.position() - self.offset
-
-    def param_value(self, number: int) -> float:
+    # -- reading ----------------------------------------------------------------------------------
+    def param_value(self, number: int) -> Any:
         """Value of parameter ``number`` in user units (raises SersError 13/106)."""
-        pdef = PARAMETERS.get(number)
-        if pdef is None:
+        row = PARAMETERS.get(number)
+        if row is None:
             raise SersError(13)
-        special = self._special_read(number)
-        if special is not None:
-            return special
-        if not pdef.readable:
+        reader = _READ.get(number)
+        if reader is not None:
+            return reader(self)
+        if number in _WRITE_ONLY:
             raise SersError(106)
-        value = self.ram.get(number, 0)
-        if pdef.kind in WEIGHTED:
-            scaling = self.scaling
-            return quantize(scaling.from_internal(pdef.kind, float(value)), scaling.decimals(pdef.kind))
+        value = self.params.values.get(number, 0)
+        kind = KIND[number]
+        if kind in WEIGHTED:
+            scaling = self.params.scaling
+            return quantize(scaling.from_internal(kind, float(value)), scaling.decimals(kind))
         return value
 
-    def _special_read(self, n: int) -> float | None:
-        """Parameters whose value is the drive's state rather than a stored number (§4.8.3),
-        looked up in :meth:`_special_reads`; None for the stored ones."""
-        if 1201 <= n <= 1216:
-            return int(self.signals.get(f"O{n - 1200}"))
-        reads = self.__dict__.get("_reads")
-        if reads is None:
-            reads = self.__dict__["_reads"] = self._special_reads()
-        reader = reads.get(n)
-        return None if reader is None else reader()
+    def p51(self) -> float:
+        """P51 in the user unit."""
+        scaling = self.params.scaling
+        return quantize(scaling.inc_to_pos(round(self.motion.p51_inc())), scaling.pos_decimals)
 
-    def _special_reads(self) -> dict[int, Callable[[], float]]:
-        return {
-            0: lambda: 2 if self.program_editing else self.program_state,
-            11: lambda: self.errors,
-            12: lambda: self.warnings,
-            51: self._read_p51,
-            134: lambda: 7 if self.energized else 0,
-            336: lambda: int(self.pos_ok),
-            403: lambda: 0 if self.homed else 3,
-            1013: self.status_word,
-            1015: lambda: int(self.axis.phase() in ("accel", "decel")),
-            1016: lambda: int(self.axis.phase() == "const"),
-            1042: lambda: int(self._outside_soft_limits()),
-            1046: self.adc,
-            1050: lambda: self.cfg.address,
-            1122: lambda: self.program.free_words(),
-            1133: lambda: self.firmware,
-            1137: lambda: self.errno,
-            1300: lambda: self.inputs_byte(1),
-            1301: lambda: self.inputs_byte(9) if "IO" in self.cfg.options else 0,
-            1123: lambda: int(self.poly.slot_free),
-            1124: lambda: self._pulses_in_window(1124),
-            1146: lambda: self._pulses_in_window(1146),
-            1057: lambda: round(max(self.max_load_angle, abs(self.axis.position() - self.encoder_position()))),
-        }
+    def program_state(self) -> int:
+        """P0: 2 in programming mode, 1 while a program runs, else 0."""
+        return 2 if self.program.editing else 1 if self._programs().running else 0
 
-    def _read_p51(self) -> float:
-        scaling = self.scaling
-        return quantize(scaling.inc_to_pos(round(self.p51_inc())), scaling.pos_decimals)
-
-    def _pulses_in_window(self, n: int) -> int:
-        window = float(self.ram.get(1055 if n == 1124 else 1145, 1)) * 0.002
-        measuring = int(self.ram.get(1053, 0)) in (9, 10) if n == 1124 else int(self.ram.get(1143, 0)) == 5
-        return round(float(self.signals.get("pulse_frequency")) * window) if measuring else 0
-
-    @property
-    def program_editing(self) -> bool:
-        program = getattr(self, "program", None)
-        return bool(program is not None and program.editing)
-
-    def inputs_byte(self, first: int) -> int:
-        if self.cfg.input_level == "invalid" and first == 1:
-            return 0
-        return sum(1 << i for i in range(8) if self.signals.get(f"I{first + i}"))
-
-    def status_word(self) -> int:
-        """P1013 (§4.8.3.2): bits set when a switch is *open*."""
-        s = self.signals
-        word = 0
-        if s.get("limit_right"):
-            word |= 1
-        if s.get("limit_left"):
-            word |= 2
-        if s.get("stop"):
-            word |= 4
-        if not self._reference_active():
-            word |= 8
-        if not s.get("service_ext"):
-            word |= 128
-        return word
-
-    def adc(self) -> float:
-        """P1046 (spec G-ADC): fraction of the range above the P1148 offset, 10-bit quantised."""
-        volts = max(0.0, min(5.0, float(self.signals.get("adc_volts"))))
-        hysteresis = int(self.ram.get(1135, 7))
-        bits = max(1, 10 - int(math.log2(hysteresis + 1)))
-        raw = round(volts / 5 * 1023)
-        raw = (raw >> (10 - bits)) << (10 - bits)
-        volts = raw / 1023 * 5
-        offset = int(self.ram.get(1148, 0)) * 5 / 255
-        if offset >= 5:
-            return 0.0
-        return round(max(0.0, min(1.0, (volts - offset) / (5 - offset))), 3)
-
-    # -- writing ---------------------------------------------------------------------------
-    def write_param(self, number: int, value: float | str) -> None:  # noqa: C901
-        pdef = PARAMETERS.get(number)
-        if pdef is None:
-            raise SersError(13)
-        if value == "*":
-            if number != 1:
-                raise SersError(19)
-            self.ram[1] = "*"
-            return
-        assert isinstance(value, int | float)
-        handler = self._special_writes().get(number)
-        if handler is not None:
-            handler(value)
-            return
-        if not pdef.writable:
-            raise SersError(105)
-        if 1205 <= number <= 1216 and "IO" not in self.cfg.options:
-            raise SersError(4)
-        self._check_range(pdef, value)
-        if pdef.kind in WEIGHTED:
-            internal = self.scaling.to_internal(pdef.kind, float(value))
-            self.ram[number] = internal
-        else:
-            self.ram[number] = _as_number(value, pdef)
-        if 1201 <= number <= 1216:
-            self.signals.set(f"O{number - 1200}", bool(value))
-        self._after_write(number)
-
-    def _check_range(self, pdef: ParamDef, value: float) -> None:
-        if pdef.choices is not None and value not in pdef.choices:
-            raise SersError(3)
-        if pdef.min_exclusive and pdef.minimum is not None and value <= pdef.minimum:
-            raise SersError(pdef.too_small_errno)  # a range "> minimum" (V, P103, P123)
-        if pdef.kind == "velocity":
-            rpm = self.scaling.vel_to_incps(float(value)) * 60 / INC_PER_REV
-            if rpm <= 0 and pdef.number == 91:
-                raise SersError(pdef.too_small_errno)
-            if rpm > 10000:
-                raise SersError(pdef.too_large_errno)
-            if rpm < 0:
-                raise SersError(pdef.too_small_errno)
-            return
-        if pdef.kind == "acceleration":
-            rads = self.scaling.acc_to_incps2(float(value)) * 2 * math.pi / INC_PER_REV
-            if rads > 100000:
-                raise SersError(pdef.too_large_errno)
-            if rads < (2 if pdef.number in (138, 1096) else 0):
-                raise SersError(pdef.too_small_errno)
-            return
-        if pdef.kind == "position":
-            lo, hi = self.scaling.pos_range()
-            if value > hi:
-                raise SersError(pdef.too_large_errno)
-            if value < lo:
-                raise SersError(pdef.too_small_errno)
-            return
-        if pdef.maximum is not None and value > pdef.maximum:
-            raise SersError(pdef.too_large_errno)
-        if pdef.minimum is not None and value < pdef.minimum:
-            raise SersError(pdef.too_small_errno)
-
-    def _special_writes(self) -> dict[int, Callable[[float], None]]:
-        return {
-            0: self._write_p0,
-            11: self._write_p11,
-            12: self._write_p12,
-            47: self._write_w,
-            51: self._write_p51,
-            134: lambda v: self.switch_on() if v == 7 else self.switch_off() if v == 0 else _raise(3),
-            1004: self._write_p1004,
-            1014: self._write_p1014,
-            1031: self._write_p1031,
-            1043: self._write_p1043,
-            1051: lambda v: self._write_w_mode(v, 0),
-            1052: lambda v: self._write_w_mode(v, 2),
-            1040: lambda v: self._write_soft_limit(1040, v),
-            1099: self._write_opcode,
-            **{n: (lambda v, n=n: self._write_poly(n, v)) for n in range(1111, 1117)},
-            1041: lambda v: self._write_soft_limit(1041, v),
-        }
-
-    def _after_write(self, number: int) -> None:
-        if number in (1125, 1126, 1131, 1132, 1036):
-            self._update_outputs()
-
-    def _write_p0(self, value: float) -> None:
-        program = getattr(self, "program", None)
-        if value == 0:
-            if program is not None:
-                program.quit()
-        elif value == 1:
-            self.run_program(None)
-        elif value == 2:
-            self.new_program()
-        else:
-            raise SersError(82)
-
-    def new_program(self) -> None:
-        if self.program_state == 1:
-            raise SersError(44)
-        self.program.new()  # type: ignore[attr-defined]
-
-    def run_program(self, label: int | None) -> None:
-        """Starting a stored program (RUN, P0=1): preconditions of §4.4.1."""
-        if self.program_state == 1:
-            raise SersError(44)
-        self._check_start()
-        program = self.program
-        if program.editing:
-            program.quit()
-        self.interpreter.start(label)
-
-    def continue_positioning(self) -> None:
-        """P1033=1: a program stopped during ``E`` continues the interrupted move."""
-        if self._setpoint is None:
-            return
-        here = self.axis.position()
-        direction = (self._setpoint > here) - (self._setpoint < here)
-        self._motion_checks(direction)
-        if direction == 0:
-            self.interpreter.on_motion_end()
-            return
-        self._speed = float(self.ram[91])
-        self._accel = float(self.ram[138])
-        self._target_physical = self._setpoint
-        self._begin_motion("position", self._accel)
-        self._legs = [(self._setpoint, self._speed)]
-        self._next_leg()
-        self._arm_position_watches()
-
-    def on_program_state(self) -> None:
-        """The program started or stopped: outputs (P1126) follow."""
-        self._update_outputs()
-
-    def on_program_end(self) -> None:
-        """After a program: the event dispatcher (P1098) and a level start (P1023=1) may
-        start the next one."""
-        if not self.logic_alive or self.interpreter.running:
-            return
-        events = int(self.ram.get(1098, 0))
-        for n in sorted(self.interpreter.pending_events):
-            self.interpreter.pending_events.discard(n)
-            if events & (1 << (n - 1)) and self.signals.get(f"I{n}"):
-                self._start_subroutine(n)
-                return
-        if self._functions_enabled(128) and int(self.ram.get(1023, 0)) == 1 and self.signals.get("I8"):
-            self._clock_start = self.clock.call_later(self.interpreter.cycle, self._start_input)
-
-    def report_program_error(self, errno: int, detail: str) -> None:
-        """A program error is recorded in P12/P1137; nothing is sent (G-FAULTMSG)."""
-
-    def _write_poly(self, number: int, value: float) -> None:
-        """WP/WRP/WAP/WPT/WRPT/WAPT (P1111–P1116): a polynomial segment, closed by E."""
-        self._check_range(PARAMETERS[number], value)
-        self.poly.define(number, self.scaling.pos_to_inc(float(value)))
-
-    def motion_checks_for(self, target: float) -> None:
-        here = self.axis.position()
-        self._motion_checks((target > here) - (target < here))
-
-    def begin_polynomial(self) -> None:
-        self._speed = float(self.ram[91])
-        self._accel = float(self.ram[138])
-        self._begin_motion("poly", self._accel)
-        self._arm_position_watches()
-
-    def polynomial_finished(self) -> None:
-        if self.motion is not None:
-            self._motion_finished()
-            if self.ram.get(1121):
-                self.spontaneous(f"@{self.cfg.address}POS=1")
-
-    def _write_opcode(self, value: float) -> None:
-        """P1099 (§4.8.6.16): execute a program opcode, e.g. 62213 (0xF305) = ``RUN 5``,
-        63235 (0xF703) = ``E``.  Only the opcodes the manual documents are known."""
-        code = int(value)
-        if code >> 8 == 0xF3:
-            self.run_program(code & 0xFF or None)
-        elif code == 0xF703:
-            self.start_positioning()
-        elif code >> 8 == 0xF7:
-            raise SersError(77)
-        else:
-            raise SersError(75)
-
-    def _write_p11(self, value: float) -> None:
-        if value != 0:
-            raise SersError(3)
-        if self.errors & OVERTEMP and self.signals.get("heatsink_temperature") >= 85:
-            raise SersError(3)
-        if self.errors & UNDERVOLTAGE and self.signals.get("supply_voltage") < self.thresholds[2]:
-            raise SersError(3)
-        if self.errors & SHORT and (self.signals.get("short_circuit") or not self._stop_cycled):
-            raise SersError(3)
-        if self.errors & STEP_LOSS:
-            self._resync_to_encoder()
-        self.errors = 0
-        self.ram[1118] = 0
-        self.energized = False
-        self.relay = False
-        self._update_outputs()
-
-    def _write_p12(self, value: float) -> None:
-        if value != 0:
-            raise SersError(3)
-        if self.warnings & STEP_LOSS:
-            self._resync_to_encoder()
-        self.warnings = 0
-        self._check_supply()
-        self._check_temperature()
-        self._update_outputs()
-
-    def _write_p51(self, value: float) -> None:
-        self._check_range(PARAMETERS[51], value)
-        self.offset = self.axis.position() - self.scaling.pos_to_inc(float(value))
-
-    def _write_p1004(self, value: float) -> None:
-        actions = {2: self.psave, 3: self.factory_defaults, 4: self.possave, 5: self.save_registers}
-        action = actions.get(int(value)) if value == int(value) else None
-        if action is None:
-            raise SersError(82)
-        action()
-
-    def _write_p1014(self, value: float) -> None:
-        if value not in (0, 1, 2, 3):
-            raise SersError(80)
-        if self.motion is not None:
-            raise SersError(93)
-        self.ram[1014] = int(value)
-
-    def _write_p1031(self, value: float) -> None:
-        commands = {1: "LS", 2: "RS", 4: "LF", 8: "RF"}
-        if value == 16:
-            self.home()
-        elif value in commands:
-            self.jog(commands[int(value)])
-        else:
-            raise SersError(3)
-
-    def _write_p1043(self, value: float) -> None:
-        if value == 0:
-            return
-        if value == 1:
-            self.pos0()
-        elif value in (2, 3):
-            self.posr(force=value == 3)
-        else:
-            raise SersError(3)
-
-    def _write_soft_limit(self, number: int, value: float) -> None:
-        self._check_range(PARAMETERS[number], value)
-        internal = self.scaling.pos_to_inc(float(value))
-        lower = internal if number == 1040 else self.ram[1040]
-        upper = internal if number == 1041 else self.ram[1041]
-        if lower > upper:
-            raise SersError(95)
-        self.ram[number] = internal
-
-    def _write_w_mode(self, value: float, mode: int) -> None:
-        if self.motion is not None and self.ram[1014] != mode:
-            raise SersError(93)
-        self._write_w(value)
-        self.ram[1014] = mode
-
-    def _write_w(self, value: float) -> None:
-        """W (P47): free while standing; while moving only in the constant phase (§4.6.6)."""
-        self._check_range(PARAMETERS[47], value)
-        new = self.scaling.pos_to_inc(float(value))
-        if self.motion != "position":
-            self.ram[47] = new
-            return
-        if self.axis.phase() != "const":
-            raise SersError(81)
-        mode = self.ram[1014]
-        current_target = self._target_physical
-        target = current_target + new if mode in (0, 1, 3) else new + self.offset
-        position = self.axis.position()
-        direction = 1 if self.axis.velocity() > 0 else -1
-        remaining = (target - position) * direction
-        if remaining < self.axis.stopping_distance(self._accel, self.ramp_profile()):
-            self.ram[47] = new
-            raise SersError(87)
-        self.ram[47] = new
-        self._target_physical = target
-        self._w_updated = True
-        self._legs = []
-        self.axis.move_to(target, self._speed, self._accel, on_done=self._positioning_done, profile=self.ramp_profile())
-        self._arm_position_watches()
-
-    # ======================================================================================
-    # operands, conditions, arithmetic
-    # ======================================================================================
-    def address_number(self, address: st.Address) -> int:
-        if address.kind == "P":
-            return int(address.ref)
-        if address.kind == "alias":
-            return ALIASES[str(address.ref)]
-        if address.kind == "O":
-            return 1200 + int(address.ref)
-        raise SersError(13)
-
-    def operand_value(self, operand: st.Operand) -> float:
-        if isinstance(operand, st.Number):
-            return operand.value
-        a = operand
-        if a.kind == "I":
-            n = int(a.ref)
-            if not 1 <= n <= 16:
-                raise SersError(13)
-            if n <= 8:
-                return (self.inputs_byte(1) >> (n - 1)) & 1
-            return (self.param_value(1301) >> (n - 9)) & 1  # type: ignore[operator]
-        if a.kind == "J":
-            return self.j_value(int(a.ref))
-        if a.kind == "IN":
-            return self.param_value(1300)
-        if a.kind == "O" and not 1 <= int(a.ref) <= 16:
-            raise SersError(4)
-        value = self.param_value(self.address_number(a))
-        if value == "*":
-            raise SersError(19)  # Z=* names a broadcast, not a number ('*' only with P1 or Z)
-        return value
-
-    def j_value(self, n: int) -> int:
-        """J1..J5 (§4.6.1): 1 = 24 V at the input (inverse of the P1013 'open' bits)."""
-        bits = {1: 8, 2: 2, 3: 1, 4: 4, 5: 128}
-        if n not in bits:
-            raise SersError(13)
-        return 0 if self.status_word() & bits[n] else 1
-
-    def evaluate(self, cond: st.Condition | None, counters: bool = True) -> bool:
-        if cond is None:
-            return False
-        left = cond.left
-        counter = left.kind == "alias" and left.ref in ("C1", "C2", "C3")
-        value = self.operand_value(left)
-        if cond.op is None:
-            result = value != 0
-        else:
-            right = self.operand_value(cond.right) if cond.right is not None else 0
-            result = st.compare(value, cond.op, right)
-        if counter and counters:  # G-COUNTER: compare the old value, then decrement (saturating at 0)
-            number = ALIASES[str(left.ref)]
-            old = int(self.ram.get(number, 0))
-            self.ram[number] = old - 1 if (old > 0 or (number == 100 and self.ram[1014] == 3)) else 0
-        return result != cond.negate
-
-    def arithmetic(self, op: str, operand: st.Operand | None) -> None:
-        """X := X (op) operand, left to right (§4.6.10, spec G-ARITH): 3 decimals, ±2147483.647."""
-        x = float(self.ram.get(1047, 0))
-        if op in ("NOT", "NEG"):
-            result = float(~int(x)) if op == "NOT" else -x
-        else:
-            y = self.operand_value(operand) if operand is not None else 0.0
-            if op == "+":
-                result = x + y
-            elif op == "-":
-                result = x - y
-            elif op == "*":
-                result = x * y
-            elif op == "/":
-                if y == 0:
-                    self.warn(256)
-                    raise SersError(102)
-                result = x / y
-            elif op == "&":
-                result = float(int(x) & int(y))
-            elif op == "|":
-                result = float(int(x) | int(y))
-            else:
-                result = float(int(x) ^ int(y))
-        self.set_x(result)
-
-    def set_x(self, value: float) -> None:
-        if value > 2147483.647:
-            self.warn(256)
-            raise SersError(98)
-        if value < -2147483.647:
-            self.warn(256)
-            raise SersError(99)
-        self.ram[1047] = quantize(value, 3)
-
-    # ======================================================================================
-    # serial helpers used by the device
-    # ======================================================================================
-    @property
-    def handshake_mode(self) -> int:
-        return int(self.ram.get(1017, 1))
-
-    @property
-    def english(self) -> bool:
-        return int(self.ram.get(265, 0)) == 1
-
-    @property
-    def list_options(self) -> int:
-        return int(self.ram.get(1028, 1))
-
-    def ack_text(self) -> str:
-        """``ok<d>`` (§4.1): 4 error, 0/2 moving, 1/3 standing, +2 with a warning; ``pgm``."""
-        if self.program_editing:
-            return "pgm"
-        if self.errors:
-            return "ok4"
-        digit = 1 if self.pos_ok else 0
-        if self.warnings:
-            digit += 2
-        return f"ok{digit}"
-
-    def format_value(self, number: int, value: float) -> str:
-        pdef = PARAMETERS[number]
-        if pdef.kind in WEIGHTED:
-            scaling = self.scaling
-            return format_query(value, scaling.decimals(pdef.kind), scaling.unit(pdef.kind))
-        if pdef.kind == "fixed":
-            return format_query(value, pdef.decimals)
+    def format_value(self, number: int, value: Any) -> str:
+        """A value as a query answers it: weighted ones with the decimals and the unit of their
+        weighting, ``fixed`` ones with their decimals (G-QUERYFMT)."""
+        kind = KIND[number]
+        if kind in WEIGHTED:
+            scaling = self.params.scaling
+            return format_query(value, scaling.decimals(kind), scaling.unit(kind))
+        if kind == "fixed":
+            return format_query(value, PARAMETERS[number].decimals)
         if isinstance(value, float) and value.is_integer():
             return str(int(value))
         return str(value)
-
-    def render_statement(self, text: str) -> str:
-        """A stored statement as LIST shows it (G-LIST): keywords upper-case, constants of
-        weighted parameters with all decimals of the weighting, the unit with P1028 bit 1."""
-        result = st.parse(text, final=True)
-        if result.errno is not None or len(result.statements) != 1:
-            return text
-        stmt = result.statements[0][0]
-        if isinstance(stmt, st.Assign) and isinstance(stmt.value, st.Number) and stmt.target.kind != "I":
-            try:
-                pdef = PARAMETERS.get(self.address_number(stmt.target))
-            except (SersError, KeyError):
-                pdef = None
-            if pdef is not None and pdef.kind in WEIGHTED:
-                scaling = self.scaling
-                value = format_fixed(stmt.value.value, scaling.decimals(pdef.kind))
-                unit = scaling.unit(pdef.kind) if self.list_options & 2 else ""
-                return f"{stmt.target.text}={value}{unit}"
-        legacy_in = re.search(r"\bIN[0-9]", text.upper()) is not None
-        if isinstance(stmt, st.If | st.Wait) and stmt.cond is not None and (stmt.cond.negate or legacy_in):
-            keyword = "IF" if isinstance(stmt, st.If) else "WAIT"
-            then = " THEN" if isinstance(stmt, st.If) and stmt.then else ""
-            return f"{keyword} {_new_syntax(stmt.cond)}{then}"
-        return text.upper() if not isinstance(stmt, st.Text | st.Comment) else text
 
     def plain_value(self, number: int) -> str:
         """Parameter ``number`` as a bare number (no unit), as a slave answers a master."""
@@ -663,84 +141,234 @@ class ParameterAccess:
             value = self.param_value(number)
             if value == "*":
                 return "*"  # P1 = Z=* (a broadcast target), as its query answers it
-            pdef = PARAMETERS.get(number)
-            if pdef is not None and pdef.kind in WEIGHTED:
-                return format_query(float(value), self.scaling.decimals(pdef.kind))
-            if pdef is not None and pdef.kind == "fixed":
-                return format_query(float(value), pdef.decimals)
+            kind = KIND.get(number)
+            if kind in WEIGHTED:
+                return format_query(float(value), self.params.scaling.decimals(kind))
+            if kind == "fixed":
+                return format_query(float(value), PARAMETERS[number].decimals)
             return str(int(value)) if float(value).is_integer() else str(value)
         raise SersError(13)
 
-    def query_text(self, stmt: st.Query) -> str:
-        target = stmt.target
-        if stmt.name:
-            if target.kind in ("P", "alias", "O"):
-                pdef = PARAMETERS.get(self.address_number(target))
-                if pdef is None:
-                    raise SersError(13)
-                return pdef.name_en if self.english else pdef.name
+    # -- writing ----------------------------------------------------------------------------------
+    def write_param(self, number: int, value: float | str) -> None:
+        row = PARAMETERS.get(number)
+        if row is None:
             raise SersError(13)
-        if target.kind in ("P", "alias", "O"):
-            number = self.address_number(target)
-            if number == 1 and self.ram.get(1) == "*":
-                return f"{target.text}=*"
-            return f"{target.text}={self.format_value(number, self.operand_value(target))}"
-        return f"{target.text}={int(self.operand_value(target))}"
+        if value == "*":
+            if number != 1:
+                raise SersError(19)
+            self.params.target_address = "*"
+            return
+        assert isinstance(value, int | float)
+        writer = _WRITE.get(number)
+        if writer is not None:
+            writer(self, value)
+            return
+        if not row.writable:
+            raise SersError(105)
+        if 1205 <= number <= 1216 and "IO" not in self._config().options:
+            raise SersError(4)
+        self.check_range(row, value)
+        kind = KIND[number]
+        values = self.params.values
+        if kind in WEIGHTED:
+            values[number] = self.params.scaling.to_internal(kind, float(value))
+        elif kind == "int" and float(value).is_integer():
+            values[number] = int(value)
+        elif kind == "fixed":
+            values[number] = quantize(float(value), row.decimals)
+        else:
+            values[number] = value
+        if 1201 <= number <= 1216:
+            self.signals.set(f"O{number - 1200}", bool(value))
+        if number in (1125, 1126, 1131, 1132, 1036):
+            self._changed()
 
-    def list_parameters(self, arg: str) -> list[str]:
-        """LISTP (G-LIST): ``P<n>=<value>`` in ascending order; P1028 bit 4 adds names."""
-        numbers = [n for n in sorted(PARAMETERS) if PARAMETERS[n].readable]
-        if arg:
-            first, _, count = arg.partition(".")
-            start = int(first or 0)
-            size = int(count) * 10 if count else 1
-            numbers = numbers[start : start + size]
-        rows = []
-        for n in numbers:
-            try:
-                text = f"P{n}={self.format_value(n, self.param_value(n))}"
-            except SersError:
-                continue
-            if self.list_options & 16:
-                text += "  " + PARAMETERS[n].name
-            rows.append(text)
-        return rows
+    def check_range(self, row: Param, value: float) -> None:
+        """The drive's range check of a write (§4.7): choices, then the range, weighted ranges
+        after conversion (V ≤ 10000 rpm, A ≤ 100000 rad/s², positions within ±2^31 increments)."""
+        extra = row.extra
+        if row.choices is not None and value not in row.choices:
+            raise SersError(3)
+        if extra["min_exclusive"] and row.minimum is not None and value <= row.minimum:
+            raise SersError(extra["too_small_errno"])  # a range "> minimum" (V, P103, P123)
+        kind = extra["kind"]
+        scaling = self.params.scaling
+        if kind == "velocity":
+            rpm = scaling.vel_to_incps(float(value)) * 60 / INC_PER_REV
+            if rpm <= 0 and row.key == 91:
+                raise SersError(extra["too_small_errno"])
+            if rpm > 10000:
+                raise SersError(extra["too_large_errno"])
+            if rpm < 0:
+                raise SersError(extra["too_small_errno"])
+            return
+        if kind == "acceleration":
+            rads = scaling.acc_to_incps2(float(value)) * 2 * math.pi / INC_PER_REV
+            if rads > 100000:
+                raise SersError(extra["too_large_errno"])
+            if rads < (2 if row.key in (138, 1096) else 0):
+                raise SersError(extra["too_small_errno"])
+            return
+        if kind == "position":
+            lo, hi = scaling.pos_range()
+            if value > hi:
+                raise SersError(extra["too_large_errno"])
+            if value < lo:
+                raise SersError(extra["too_small_errno"])
+            return
+        if row.maximum is not None and value > row.maximum:
+            raise SersError(extra["too_large_errno"])
+        if row.minimum is not None and value < row.minimum:
+            raise SersError(extra["too_small_errno"])
+
+    def _position(self, number: int, value: float) -> float:
+        """A position parameter's value checked and in increments."""
+        self.check_range(PARAMETERS[number], value)
+        return self.params.scaling.pos_to_inc(float(value))
+
+    def write_p0(self, value: float) -> None:
+        """P0 (§4.8.2.1): 0 leaves programming mode, 1 starts the program, 2 starts programming
+        mode deleting the program (NEW)."""
+        programs = self._programs()
+        actions: dict[float, Callable[[], None]] = {
+            0: self.program.quit, 1: lambda: programs.run_program(None), 2: programs.new_program}
+        action = actions.get(value)
+        if action is None:
+            raise SersError(82)
+        action()
+
+    def write_w(self, value: float) -> None:
+        """W (P47): free while standing; while moving only in the constant phase (§4.6.6)."""
+        self.motion.positioning.write_w(self._position(47, value))
+
+    def write_w_mode(self, value: float, mode: int) -> None:
+        """WR / WA (P1051 / P1052): W, and the positioning mode relative (0) or absolute (2)."""
+        if self.motion.kind is not None and self.params.positioning_mode != mode:
+            raise SersError(93)
+        self.write_w(value)
+        self.params.positioning_mode = mode
+
+    def write_p1004(self, value: float) -> None:
+        """P1004 (§4.8.6.10): 2 PSAVE, 3 factory defaults, 4 POSSAVE, 5 R0..R5 and W."""
+        memory = self.memory
+        actions = {2: memory.psave, 3: memory.factory_defaults, 4: memory.possave, 5: memory.save_registers}
+        action = actions.get(int(value)) if value == int(value) else None
+        if action is None:
+            raise SersError(82)
+        action()
+
+    def write_p1014(self, value: float) -> None:
+        """P1014 (§4.8.4.1): the positioning mode, not while the drive moves."""
+        if value not in (0, 1, 2, 3):
+            raise SersError(80)
+        if self.motion.kind is not None:
+            raise SersError(93)
+        self.params.positioning_mode = int(value)
+
+    def write_p1043(self, value: float) -> None:
+        """P1043 (§4.8.4.2): 1 POS0, 2 POSR, 3 POSR also without a step loss."""
+        motion = self.motion
+        actions: dict[float, Callable[[], None]] = {
+            0: lambda: None, 1: motion.pos0, 2: lambda: motion.posr(force=False), 3: lambda: motion.posr(force=True)}
+        action = actions.get(value)
+        if action is None:
+            raise SersError(3)
+        action()
+
+    def write_soft_limit(self, number: int, value: float) -> None:
+        """P1040 / P1041 (§4.8.6.12): the lower limit may not lie above the upper one."""
+        internal = self._position(number, value)
+        params = self.params
+        lower = internal if number == 1040 else params.limit_negative
+        upper = internal if number == 1041 else params.limit_positive
+        if lower > upper:
+            raise SersError(95)
+        params.values[number] = internal
+
+    def write_opcode(self, value: float) -> None:
+        """P1099 (§4.8.6.16): execute a program opcode, e.g. 62213 (0xF305) = ``RUN 5``,
+        63235 (0xF703) = ``E``.  Only the opcodes the manual documents are known."""
+        code = int(value)
+        if code >> 8 == 0xF3:
+            self._programs().run_program(code & 0xFF or None)
+        elif code == 0xF703:
+            self.motion.start_positioning()
+        elif code >> 8 == 0xF7:
+            raise SersError(77)
+        else:
+            raise SersError(75)
 
 
+Read = Callable[[ParameterAccess], Any]
+Write = Callable[[ParameterAccess, float], None]
 
 
-def _as_number(value: float, pdef: ParamDef) -> float | int:
-    if pdef.kind == "int" and float(value).is_integer():
-        return int(value)
-    if pdef.kind == "fixed":
-        return quantize(float(value), pdef.decimals)
-    return value
+def _output(n: int) -> Read:
+    return lambda a: int(a.signals.get(f"O{n}"))
 
 
-_OPPOSITE = {"<": ">=", "<=": ">", "=": "<>", "<>": "=", ">": "<=", ">=": "<"}
+#: Parameters whose value is the drive's state rather than a stored number (§4.8.3).
+READS: Table[Read] = Table(
+    [
+        Command("P0", ParameterAccess.program_state, "§4.8.2.1", "EEPROM mode: programming 2, running 1"),
+        Command("P11", lambda a: a.power.errors, "§4.8.3.1", "drive errors"),
+        Command("P12", lambda a: a.power.warnings, "§4.8.3.1", "warnings"),
+        Command("P51", ParameterAccess.p51, "§4.8.4.2", "actual position"),
+        Command("P134", lambda a: 7 if a.power.energized else 0, "§4.8.2.2", "motor ON (7) or OFF (0)"),
+        Command("P336", lambda a: int(a.motion.pos_ok), "§4.8.3.3", "in position"),
+        Command("P403", lambda a: 0 if a.motion.homing.homed else 3, "§4.8.4.5", "homed (0) or not (3)"),
+        Command("P1013", lambda a: a.inputs.status_word(), "§4.8.3.2", "switches open"),
+        Command("P1015", lambda a: int(a.motion.axis.phase() in ("accel", "decel")), "§4.8.3.3", "ramping"),
+        Command("P1016", lambda a: int(a.motion.axis.phase() == "const"), "§4.8.3.3", "at constant speed"),
+        Command("P1042", lambda a: int(a.motion.watches.outside_soft_limits(a.motion.p51_inc())), "§4.8.6.12",
+                "outside the software limits"),
+        Command("P1046", lambda a: a.inputs.adc(), "§4.8.1.3", "the analog input"),
+        Command("P1050", lambda a: a._config().address, "§3.1.2", "the DIP address"),
+        Command("P1057", lambda a: round(max(a.motion.encoder.max_load_angle, abs(a.motion.encoder.load_angle()))),
+                "§4.8.6.6", "the largest load angle"),
+        Command("P1122", lambda a: a.program.free_words(), "§4.8.6.10", "free program memory (words)"),
+        Command("P1123", lambda a: int(a.motion.poly.slot_free), "§4.6.7", "a polynomial segment may be sent"),
+        Command("P1124", lambda a: a.inputs.pulses_in_window(1124), "§4.8.6.14", "pulses in the window (I3)"),
+        Command("P1133", lambda a: a.firmware, "§4.8.2.5", "firmware version"),
+        Command("P1137", lambda a: a.power.errno, "§4.8.3.1", "the last error message"),
+        Command("P1146", lambda a: a.inputs.pulses_in_window(1146), "§4.8.6.14", "pulses in the window (ENC)"),
+        *(Command(f"P{1200 + n}", _output(n), "§4.8.1.2", f"output O{n}") for n in range(1, 17)),
+        Command("P1300", lambda a: a.inputs.inputs_byte(1), "§4.8.1.1", "inputs I1..I8"),
+        Command("P1301", lambda a: a.inputs.inputs_byte(9) if "IO" in a._config().options else 0, "§4.8.1.1",
+                "inputs I9..I16 (option IO)"),
+    ]
+)
 
 
-def _operand_text(operand: st.Operand | None) -> str:
-    if operand is None:
-        return "0"
-    return operand.text if isinstance(operand, st.Number) else operand.text
+def _poly(number: int) -> Write:
+    """WP/WRP/WAP/WPT/WRPT/WAPT (P1111–P1116): a polynomial segment, closed by E."""
+    return lambda a, v: a.motion.poly.define(number, a._position(number, v))
 
 
-def _new_syntax(cond: st.Condition) -> str:
-    """A legacy condition (``!I5``, ``IN5``) in the syntax LIST shows (§4.6.1)."""
-    left = cond.left.text
-    if cond.op is None:
-        return f"{left}=0" if cond.negate else f"{left}<>0"
-    op = _OPPOSITE[cond.op] if cond.negate else cond.op
-    return f"{left}{op}{_operand_text(cond.right)}"
+#: Parameters whose write does something beyond storing the value.
+WRITES: Table[Write] = Table(
+    [
+        Command("P0", ParameterAccess.write_p0, "§4.8.2.1", "QUIT / RUN / NEW"),
+        Command("P11", lambda a, v: a.power.write_p11(v), "§4.8.3.1", "clear the drive errors (0)"),
+        Command("P12", lambda a, v: a.power.write_p12(v, a._recheck_warnings), "§4.8.3.1", "clear the warnings (0)"),
+        Command("P47", ParameterAccess.write_w, "§4.6.6", "W: also on the move, in the constant phase"),
+        Command("P51", lambda a, v: a.motion.set_p51(a._position(51, v)), "§4.8.4.2", "set the actual position"),
+        Command("P134", lambda a, v: a.power.write_p134(v), "§4.8.2.2", "ON (7) / OFF (0)"),
+        Command("P1004", ParameterAccess.write_p1004, "§4.8.6.10", "PSAVE, factory defaults, POSSAVE"),
+        Command("P1014", ParameterAccess.write_p1014, "§4.8.4.1", "positioning mode"),
+        Command("P1031", lambda a, v: a.motion.jog.write_p1031(v, a.motion.home), "§4.8.6.3", "jog / home"),
+        Command("P1040", lambda a, v: a.write_soft_limit(1040, v), "§4.8.6.12", "lower software limit"),
+        Command("P1041", lambda a, v: a.write_soft_limit(1041, v), "§4.8.6.12", "upper software limit"),
+        Command("P1043", ParameterAccess.write_p1043, "§4.8.4.2", "POS0 / POSR"),
+        Command("P1051", lambda a, v: a.write_w_mode(v, 0), "§4.6.6", "WR: W and relative mode"),
+        Command("P1052", lambda a, v: a.write_w_mode(v, 2), "§4.6.6", "WA: W and absolute mode"),
+        Command("P1099", ParameterAccess.write_opcode, "§4.8.6.16", "execute an opcode"),
+        *(Command(f"P{n}", _poly(n), "§4.6.7", "a polynomial segment") for n in range(1111, 1117)),
+    ]
+)
 
-
-
-
-def _sign(x: float) -> int:
-    return (x > 0) - (x < 0)
-
-
-def _raise(errno: int) -> None:
-    raise SersError(errno)
-
+# (the tables by number, for the parameter access of every query and write)
+_READ: dict[int, Read] = {int(row.token[1:]): row.handler for row in READS}
+_WRITE: dict[int, Write] = {int(row.token[1:]): row.handler for row in WRITES}
+_WRITE_ONLY = frozenset(n for n, row in PARAMETERS.items() if not row.readable)

@@ -85,17 +85,21 @@ NO_ADDRESS = frozenset(range(256)) - frozenset(b"0123456789*#")
 
 
 class Framer:
-    """Assembles SERS command lines from bytes."""
+    """Assembles SERS command lines from bytes (§3.2: ``#``, the address, the text, CR/LF)."""
 
     def __init__(self) -> None:
-        self.reset()
-
-    def reset(self) -> None:
         self.in_line = False
         self._addr: str | None = None  # digits collected, None once the address phase ended
         self._length = 0
         self._overflow = False
         self._last_end: int | None = None
+
+    def reset(self) -> None:
+        self.in_line = False
+        self._addr = None
+        self._length = 0
+        self._overflow = False
+        self._last_end = None
 
     @property
     def idle(self) -> bool:

@@ -1,7 +1,7 @@
 """The Stögra SERS stepper drive as a devsim kind: the model under its ASCII face.
 
 Manual "SERS Version V04, Firmware ab 120901"; spec sers.md.  The machine is
-:class:`~devsim.devices.sers.drive.SersDrive`, the serial line protocol
+:class:`~devsim.devices.sers.model.SersDrive`, the serial line protocol
 :class:`~devsim.devices.sers.face.SersFace`; names and faults are declared in
 :mod:`~devsim.devices.sers.points`, commands in :mod:`~devsim.devices.sers.execution`.
 """
@@ -11,23 +11,24 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import ErrorCode, Parameter, PortDef, Reference
+from devsim.core.kit import ErrorCode, PortDef, Reference
 from devsim.core.settings import Section
 from devsim.devices.sers.config import SersConfig
-from devsim.devices.sers.drive import SersDrive
 from devsim.devices.sers.drive_actions import DRIVE
 from devsim.devices.sers.errors import ERRNO
 from devsim.devices.sers.execution import COMMANDS, STATEMENTS
-from devsim.devices.sers.face import INTERACTIVE, SersFace
+from devsim.devices.sers.face import SersFace
 from devsim.devices.sers.framing import LINES
-from devsim.devices.sers.parameters import PARAMETERS, STORED_ONLY
+from devsim.devices.sers.interactive import INTERACTIVE
+from devsim.devices.sers.model import SersDrive
+from devsim.devices.sers.parameters import PARAMETER_TABLE
 from devsim.devices.sers.points import FAULTS, POINTS
 
 __all__ = ["SersDevice"]
 
 
 class SersDevice(Device):
-    """One SERS drive on a serial line (RS-232, or RS-485 multidrop with others)."""
+    """One SERS drive on a serial line (RS-232, or RS-485 multidrop with others; §1, §3.6)."""
 
     kind: ClassVar[str] = "sers"
     description: ClassVar[str] = "Stögra SERS stepper driver with positioning control (ASCII, RS-232/RS-485)"
@@ -44,19 +45,6 @@ class SersDevice(Device):
     def reference(cls) -> Reference:
         return Reference(
             commands=[*INTERACTIVE, *STATEMENTS, *COMMANDS],
-            parameters=[
-                Parameter(
-                    f"P{p.number}",
-                    p.name_en or p.name,
-                    f"§4.7 P{p.number}",
-                    {"position": "P123", "velocity": "P121", "acceleration": "P122"}.get(p.kind, ""),
-                    p.minimum,
-                    p.maximum,
-                    p.default,
-                    p.saved,
-                    "stored" if p.number in STORED_ONLY else "simulated",
-                )
-                for p in PARAMETERS.values()
-            ],
+            parameter_table=PARAMETER_TABLE,
             errors=[ErrorCode(str(n), f"{de} — {en}", "§4.8.3.1") for n, (de, en) in sorted(ERRNO.items())],
         )

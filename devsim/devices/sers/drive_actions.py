@@ -30,37 +30,37 @@ def _refusals(action: Callable[..., None]) -> Callable[..., None]:
 
 def _enable(m: Any, on: bool) -> None:
     if on:
-        m.switch_on()
+        m.power_stage.switch_on()
     else:
-        m.switch_off()
+        m.power_stage.switch_off()
 
 
 def _move_to(m: Any, target: float, speed: float) -> None:
-    scaling = m.scaling
+    scaling = m.params.scaling
     if speed > 0:
-        m.write_param(91, scaling.incps_to_vel(speed))
-    m.write_param(1014, 2)
-    m.write_param(47, scaling.inc_to_pos(target))
-    m.start_positioning()
+        m.access.write_param(91, scaling.incps_to_vel(speed))
+    m.access.write_param(1014, 2)
+    m.access.write_param(47, scaling.inc_to_pos(target))
+    m.motion.start_positioning()
 
 
 def _jog(m: Any, velocity: float) -> None:
     if velocity == 0:
-        m.stop_motion()
+        m.motion.stop_motion()
         return
-    m.write_param(1020, m.scaling.incps_to_vel(abs(velocity)))
-    m.jog("RF" if velocity > 0 else "LF", serial=False)
+    m.access.write_param(1020, m.params.scaling.incps_to_vel(abs(velocity)))
+    m.motion.jog.start("RF" if velocity > 0 else "LF", serial=False)
 
 
 DRIVE = DriveActions(
     enable=_refusals(_enable),
     move_to=_refusals(_move_to),
     jog=_refusals(_jog),
-    quick_stop=_refusals(lambda m: m.stop_motion()),
-    reset_fault=_refusals(lambda m: m.write_param(11, 0)),
-    position=lambda m: m.p51_inc(),
+    quick_stop=_refusals(lambda m: m.motion.stop_motion()),
+    reset_fault=_refusals(lambda m: m.access.write_param(11, 0)),
+    position=lambda m: m.motion.p51_inc(),
     velocity=lambda m: m.axis.velocity(),
-    enabled=lambda m: bool(m.energized),
-    fault=lambda m: bool(m.errors),
-    moving=lambda m: bool(m.moving),
+    enabled=lambda m: bool(m.power_stage.energized),
+    fault=lambda m: bool(m.power_stage.errors),
+    moving=lambda m: bool(m.motion.moving),
 )

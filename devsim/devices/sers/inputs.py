@@ -1,260 +1,316 @@
-"""Inputs, faults, outputs and display of the SERS model: limit switches, STOP, digital inputs
-and their functions, supply and temperature faults, outputs, the 7-segment display (manual
-§2.1, §3.3, §3.5, §4.8.1; spec §2.7, §4.7, §4.11, §5.6, §5.14)."""
+"""The SERS's inputs: the limit switches and STOP, the digital inputs I1..I16 with their manual
+functions, the start input, the parallel and event-driven modes, and what the inputs read as
+(P1300, P1301, P1013, J1..J5, the ADC) (manual §2.1.2, §3.3, §3.6, §4.5.2, §4.8.1, §4.8.3.2;
+spec §4.11, §5.6, G-INFUNC, G-ADC).
+"""
 
 from __future__ import annotations
 
-from typing import Any
+import math
+from collections.abc import Callable
+from typing import Any, Protocol
 
-from devsim.devices.sers.constants import ERROR_DISPLAY, LIMIT, OVERTEMP, SHORT, UNDERVOLTAGE, WARNING_DISPLAY
+from devsim.core.clock import Clock, Timer
+from devsim.core.kit import Command, Table
+from devsim.core.signals import SignalBank
+from devsim.devices.sers.constants import LIMIT
 from devsim.devices.sers.errors import SersError
+from devsim.devices.sers.motion import Motion
+from devsim.devices.sers.params import SersParameters
+from devsim.devices.sers.power import PowerStage
+from devsim.devices.sers.program import ProgramMemory
 
-__all__ = ["InputsAndFaults"]
+__all__ = ["INPUT_FUNCTIONS", "Inputs", "ProgramStarts"]
+
+#: The manual functions of I1..I4 (P1021 bits 0–3, §4.8.1.1).
+_JOGS = {1: "LS", 2: "RS", 3: "LF", 4: "RF"}
+#: J1..J5 (§4.6.1): the P1013 bit that is set while the switch is open.
+_J_BITS = {1: 8, 2: 2, 3: 1, 4: 4, 5: 128}
 
 
-class InputsAndFaults:
-    """Part of :class:`~devsim.devices.sers.drive.SersDrive`: inputs, faults, outputs, display."""
+class ProgramStarts(Protocol):
+    """What the inputs start and stop (§3.6, §4.5.2): the program execution
+    (:class:`~.execution.Execution`)."""
 
-    # ======================================================================================
-    # inputs and faults
-    # ======================================================================================
-    def _check_limits_at_power_on(self) -> None:
-        if self.signals.get("limit_left") or self.signals.get("limit_right"):
-            self.errors |= LIMIT
+    @property
+    def running(self) -> bool: ...
 
-    def _on_limit(self, name: str, old: Any, new: Any) -> None:
-        if not self.logic_alive:
+    @property
+    def cycle(self) -> float:
+        """The control cycle (0.5 ms, or 2 ms with P1127=1)."""
+
+    def stop_program(self) -> None: ...
+
+    def run_program(self, label: int | None) -> None: ...
+
+    def run_subroutine(self, label: int) -> None: ...
+
+
+class Inputs:
+    """The inputs of one SERS and what they set off (§3.3, §4.8.1)."""
+
+    def __init__(
+        self,
+        clock: Clock,
+        signals: SignalBank,
+        params: SersParameters,
+        power: PowerStage,
+        motion: Motion,
+        program: ProgramMemory,
+        *,
+        config: Callable[[], Any],
+        alive: Callable[[], bool],
+        booting: Callable[[], bool],
+        programs: Callable[[], ProgramStarts],
+        changed: Callable[[], None],
+    ) -> None:
+        self.clock = clock
+        self.signals = signals
+        self.params = params
+        self.power = power
+        self.motion = motion
+        self.program = program
+        self._config = config
+        self._alive = alive
+        self._booting = booting
+        self._programs = programs  # (the program execution, made after the inputs)
+        self._changed = changed
+        #: Inputs whose rising edge came while a program ran (served when it ends, §4.5.2).
+        self.pending_events: set[int] = set()
+        self._dispatch: Timer | None = None
+        self._level_start: Timer | None = None
+
+    def power_on(self) -> None:
+        if self._dispatch is not None:
+            self._dispatch.cancel()
+        self._dispatch = None
+        self.pending_events.clear()
+
+    def power_off(self) -> None:
+        if self._dispatch is not None:
+            self._dispatch.cancel()
+
+    # -- what the inputs read as ------------------------------------------------------------------
+    def inputs_byte(self, first: int) -> int:
+        """P1300 (I1..I8, ``first`` = 1) or P1301 (I9..I16, ``first`` = 9)."""
+        if self._config().input_level == "invalid" and first == 1:
+            return 0
+        return sum(1 << i for i in range(8) if self.signals.get(f"I{first + i}"))
+
+    def status_word(self) -> int:
+        """P1013 (§4.8.3.2): bits set when a switch is *open*."""
+        s = self.signals
+        word = 0
+        if s.get("limit_right"):
+            word |= 1
+        if s.get("limit_left"):
+            word |= 2
+        if s.get("stop"):
+            word |= 4
+        if not self.motion.homing.reference_active():
+            word |= 8
+        if not s.get("service_ext"):
+            word |= 128
+        return word
+
+    def j_value(self, n: int) -> int:
+        """J1..J5 (§4.6.1): 1 = 24 V at the input (inverse of the P1013 'open' bits)."""
+        if n not in _J_BITS:
+            raise SersError(13)
+        return 0 if self.status_word() & _J_BITS[n] else 1
+
+    def adc(self) -> float:
+        """P1046 (spec G-ADC): fraction of the range above the P1148 offset, 10-bit quantised."""
+        volts = max(0.0, min(5.0, float(self.signals.get("adc_volts"))))
+        hysteresis = int(self.params.adc_hysteresis)
+        bits = max(1, 10 - int(math.log2(hysteresis + 1)))
+        raw = round(volts / 5 * 1023)
+        raw = (raw >> (10 - bits)) << (10 - bits)
+        volts = raw / 1023 * 5
+        offset = int(self.params.adc_offset) * 5 / 255
+        if offset >= 5:
+            return 0.0
+        return round(max(0.0, min(1.0, (volts - offset) / (5 - offset))), 3)
+
+    def pulses_in_window(self, n: int) -> int:
+        """P1124 / P1146 (§4.8.6.14): pulses counted in the window P1055 / P1145 (× 2 ms)."""
+        params = self.params
+        window = float(params.frequency_window if n == 1124 else params.frequency_window2) * 0.002
+        measuring = int(params.pulse_input) in (9, 10) if n == 1124 else int(params.pulse_input2) == 5
+        return round(float(self.signals.get("pulse_frequency")) * window) if measuring else 0
+
+    # -- the switches ---------------------------------------------------------------------------------
+    def on_limit(self, name: str, old: Any, new: Any) -> None:
+        if not self._alive():
             return
+        motion = self.motion
         if new:
-            homing = self._homing
-            if homing is not None and homing["signal"] == name:
-                self._homing_edge(True)
+            if motion.homing.edge(name, True):
                 return
-            self.drive_error(LIMIT)
-        elif self._homing is not None and self._homing["signal"] == name:
-            self._homing_edge(False)
-        self._check_until()
+            self.power.drive_error(LIMIT)
+        else:
+            motion.homing.edge(name, False)
+        motion.check_until()
 
-    def _on_stop_input(self, name: str, old: Any, new: Any) -> None:
-        if not new and self._stop_opened:
-            self._stop_cycled = True  # opened and closed again: a short may now be cleared
+    def on_stop(self, name: str, old: Any, new: Any) -> None:
+        self.power.stop_input(bool(new))
         if new:
-            self._stop_opened = True
-            self.interpreter.stop()
-            if self.motion is not None:
-                self.stop_motion()
-        self._check_until()
+            self._programs().stop_program()
+            if self.motion.kind is not None:
+                self.motion.stop_motion()
+        self.motion.check_until()
 
-    def _functions_enabled(self, bit: int) -> bool:
+    def on_reference(self, name: str, old: Any, new: Any) -> None:
+        if not self.params.reference_input:
+            self.motion.homing.edge("reference", bool(new))
+        self.motion.check_until()
+
+    # -- the digital inputs -----------------------------------------------------------------------
+    def functions_enabled(self, bit: int) -> bool:
         """Manual functions on I1..I7 (§3.1.4, §4.8.1.1 P1021)."""
-        service = self.cfg.service_switch or (self.signals.get("service_ext") and self.ram.get(1092))
+        params = self.params
+        service = self._config().service_switch or (self.signals.get("service_ext") and params.external_service_switch)
         if bit == 128:
-            return bool(int(self.ram.get(1021, 0)) & 128)
-        return bool(service) or bool(int(self.ram.get(1021, 0)) & bit)
+            return bool(int(params.input_enable) & 128)
+        return bool(service) or bool(int(params.input_enable) & bit)
 
-    def _i7_stop_active(self) -> bool:
-        return bool(self.ram) and self._functions_enabled(64) and bool(self.signals.get("I7"))
+    def i7_stop_active(self) -> bool:
+        return self.functions_enabled(64) and bool(self.signals.get("I7"))
 
-    def _on_digital_input(self, name: str, old: Any, new: Any) -> None:
-        if not self.logic_alive or self.booting:
+    def on_digital_input(self, name: str, old: Any, new: Any) -> None:
+        if not self._alive() or self._booting():
             return
         n = int(name[1:])
         bit = 1 << (n - 1)
-        monitored = int(self.ram.get(1045, 1)) == n and self.ram.get(1044)
-        active_edge = bool(new) != (self.cfg.input_level == "low_active")
-        if monitored and active_edge and self.motion is not None:
-            self._arm_standstill_monitor()
-        if self.ram.get(1130) == n and self._homing is not None and self._homing["signal"] == "reference":
-            self._homing_edge(bool(new))
-        if self._functions_enabled(bit):
+        params, motion = self.params, self.motion
+        monitored = int(params.standstill_input) == n and params.standstill_distance
+        active_edge = bool(new) != (self._config().input_level == "low_active")
+        if monitored and active_edge and motion.kind is not None:
+            motion.watches.arm_standstill()
+        if params.reference_input == n:
+            motion.homing.edge("reference", bool(new))
+        if self.functions_enabled(bit):
             try:
                 self._input_function(n, bool(new))
             except SersError as exc:
-                self.record_error(exc.errno)
-        elif n == 8 and new and self._functions_enabled(128):
-            self._start_input()
+                self.power.record_error(exc.errno)
+        elif n == 8 and new and self.functions_enabled(128):
+            self.start_input()
         self._event_input(n, bool(new))
-        self._check_until()
+        motion.check_until()
 
     def _input_function(self, n: int, active: bool) -> None:
-        jogs = {1: "LS", 2: "RS", 3: "LF", 4: "RF"}
-        if n in jogs:
-            if active:
-                if not self.errors:
-                    self.energized = self.relay = True
-                self.jog(jogs[n], serial=False)
-            elif self.motion == "jog":
-                self.stop_motion()
-        elif n == 5 and active:
-            if not self.errors:
-                self.energized = self.relay = True
-            self.home(serial=False)
-        elif n == 6 and active:  # G-INFUNC: rising edge toggles; ON clears P11 and P12
-            if self.energized:
-                self.switch_off()
-            else:
-                self.errors = 0
-                self.warnings = 0
-                self.switch_on()
-        elif n == 7 and active:
-            self.interpreter.stop()
-            if self.motion is not None:
-                self.stop_motion()
-        elif n == 8 and active:
-            self._start_input()
-        self._update_outputs()
+        """The manual function of input ``n`` (:data:`INPUT_FUNCTIONS`), then the outputs."""
+        function = _INPUT_FUNCTION.get(n)
+        if function is not None:
+            function(self, active)
+        self._changed()
 
-    # -- operating modes on the inputs (§3.6, §4.5.2) -----------------------------------------------
-    def _start_input(self) -> None:
+    def jog_input(self, n: int, active: bool) -> None:
+        """I1–I4: jog while the input is active (LS, RS, LF, RF)."""
+        motion = self.motion
+        if active:
+            self.power.energize()
+            motion.jog.start(_JOGS[n], serial=False)
+        elif motion.kind == "jog":
+            motion.stop_motion()
+
+    def home_input(self, active: bool) -> None:
+        if active:
+            self.power.energize()
+            self.motion.home()
+
+    def power_input(self, active: bool) -> None:
+        if active:  # G-INFUNC: a rising edge toggles; ON clears P11 and P12
+            self.power.toggle()
+
+    def stop_input(self, active: bool) -> None:
+        if active:
+            self._programs().stop_program()
+            if self.motion.kind is not None:
+                self.motion.stop_motion()
+
+    def start_input_edge(self, active: bool) -> None:
+        if active:
+            self.start_input()
+
+    # -- starting programs from the inputs (§3.6, §4.5.2) ---------------------------------------
+    def start_input(self) -> None:
         """Start input I8 (P1021 bit 128): stand-alone start from line 1, or in parallel mode
         (P1022 ≠ 0) the subroutine L(address + 1) of the BCD address on the inputs."""
-        if self.interpreter.running or not self._functions_enabled(128):
+        programs = self._programs()
+        if programs.running or not self.functions_enabled(128):
             return
-        mask = int(self.ram.get(1022, 0)) & 0x7F & ~int(self.ram.get(1021, 0))
+        params = self.params
+        mask = int(params.input_label_enable) & 0x7F & ~int(params.input_enable)
         try:
             if mask:
-                self._run_label((self.inputs_byte(1) & mask) + 1)
+                programs.run_subroutine((self.inputs_byte(1) & mask) + 1)
             else:
-                self.run_program(None)
+                programs.run_program(None)
         except SersError as exc:
-            self.record_error(exc.errno)
+            self.power.record_error(exc.errno)
 
-    def _run_label(self, label: int) -> None:
-        self._check_start()
-        self.interpreter.start(label, subroutine=True)
-
-    def _check_start(self) -> None:
+    def check_start(self) -> None:
         """Refusals of a program start, in the order of §4.4.1 (errnos 65–69)."""
-        if self.cfg.service_switch or (self.signals.get("service_ext") and self.ram.get(1092)):
+        if self._config().service_switch or (self.signals.get("service_ext") and self.params.external_service_switch):
             raise SersError(65)
-        if self.errors:
+        if self.power.errors:
             raise SersError(66)
-        if self._i7_stop_active():
+        if self.i7_stop_active():
             raise SersError(67)
         if self.signals.get("stop"):
             raise SersError(68)
         if not self.program.valid:
             raise SersError(69)
 
-    def _start_subroutine(self, n: int) -> None:
-        try:
-            self._run_label(n)
-        except SersError as exc:
-            self.record_error(exc.errno)
-
     def _event_input(self, n: int, active: bool) -> None:
         """Event-driven mode P1098 (§4.5.2): a rising edge on In calls Ln if no program runs;
         an edge during a program is served when it ends if the input is still active."""
-        if not int(self.ram.get(1098, 0)) & (1 << (n - 1)):
+        if not int(self.params.program_jump_enable) & (1 << (n - 1)):
             return
         if not active:
-            self.interpreter.pending_events.discard(n)
+            self.pending_events.discard(n)
             return
-        self.interpreter.pending_events.add(n)
-        if not self.interpreter.running and self._dispatch is None:
+        self.pending_events.add(n)
+        programs = self._programs()
+        if not programs.running and self._dispatch is None:
             # edges of one instant are served together, I1 first (§4.5.2): dispatch a cycle later
-            self._dispatch = self.clock.call_later(self.interpreter.cycle, self._dispatch_events)
-            self._timers.append(self._dispatch)
+            self._dispatch = self.clock.call_later(programs.cycle, self._dispatch_events)
 
     def _dispatch_events(self) -> None:
         self._dispatch = None
-        self.on_program_end()
+        self.program_ended()
 
-    def _check_supply(self) -> None:
-        """§2.1.4: U_W pre-warning (auto-clear), U_B error after braking, U_L torque off."""
-        volts = float(self.signals.get("supply_voltage"))
-        _u_max, u_w, u_b, u_l = self.thresholds
-        if "U" not in self.cfg.options and volts < u_l / 2:
-            if self.logic_alive:
-                self._power_off()
+    def program_ended(self) -> None:
+        """After a program: the event dispatcher (P1098) and a level start (P1023=1) may
+        start the next one."""
+        programs = self._programs()
+        if not self._alive() or programs.running:
             return
-        if not self.logic_alive:
-            self._power_on()
-            return
-        if volts < u_l:
-            self.drive_error(UNDERVOLTAGE, immediate=True)
-        elif volts < u_b:
-            if not self.errors & UNDERVOLTAGE and self.ram.get(1058):
-                self.possave()
-            self.drive_error(UNDERVOLTAGE)
-        if volts < u_w:
-            self.warn(4)
-        elif self.warnings & 4:
-            self.warnings &= ~4
-            self._update_outputs()
+        events = int(self.params.program_jump_enable)
+        for n in sorted(self.pending_events):
+            self.pending_events.discard(n)
+            if events & (1 << (n - 1)) and self.signals.get(f"I{n}"):
+                try:
+                    programs.run_subroutine(n)
+                except SersError as exc:
+                    self.power.record_error(exc.errno)
+                return
+        if self.functions_enabled(128) and int(self.params.start_enable) == 1 and self.signals.get("I8"):
+            self._level_start = self.clock.call_later(programs.cycle, self.start_input)
 
-    def _check_temperature(self) -> None:
-        """§3.5: warning at 75 °C (auto-clear), error at 85 °C."""
-        celsius = float(self.signals.get("heatsink_temperature"))
-        if not self.logic_alive:
-            return
-        if celsius >= 85:
-            self.drive_error(OVERTEMP)
-        if celsius >= 75:
-            self.warn(2)
-        elif self.warnings & 2:
-            self.warnings &= ~2
-            self._update_outputs()
 
-    def _check_short(self) -> None:
-        if self.logic_alive and self.signals.get("short_circuit"):
-            self._stop_cycled = False
-            self._stop_opened = False
-            self.drive_error(SHORT, immediate=True)
-
-    # ======================================================================================
-    # outputs and display
-    # ======================================================================================
-    def _update_outputs(self) -> None:
-        if not self.logic_alive:
-            return
-        self.signals.set("READY", bool(self.relay and not self.errors))
-        for param, state in (
-            (1125, self.pos_ok),
-            (1126, self.program_state == 1),
-            (1131, self.errors != 0),
-            (1132, self.warnings != 0),
-        ):
-            sel = int(self.ram.get(param, 0))
-            if sel and abs(sel) <= 4:
-                self.signals.set(f"O{abs(sel)}", state if sel > 0 else not state)
-        brake = int(self.ram.get(1036, 0))
-        if brake:
-            off = not self.energized
-            self.signals.set(f"O{abs(brake)}", off if brake > 0 else not off)
-
-    def phase_current(self) -> float:
-        """Commanded phase current in mA (§4.8.6.1, spec §5.11): P1010; with P1011 bit 0
-        50 % at standstill from 20 ms after the last motion; +20 % boost per bits 1/2."""
-        if not self.energized:
-            return 0.0
-        current = float(self.ram.get(1010, 0))
-        bits = int(self.ram.get(1011, 0))
-        standing = self.motion is None and self.clock.now() - self._stopped_at >= 0.02
-        if standing and bits & 1:
-            current *= 0.5
-        accel = abs(self.axis.acceleration())
-        if (bits & 2 and accel > float(self.ram.get(1012, 0))) or (bits & 4 and standing):
-            current *= 1.2
-        return current
-
-    def display(self) -> dict[str, Any]:
-        """7-segment display (§3.5, spec §4.7 priority)."""
-        if not self.logic_alive:
-            return {"char": " ", "blinking": False}
-        if self.booting:
-            return {"char": "-", "blinking": False}
-        if self.errors & SHORT:
-            return {"char": "E", "blinking": False}
-        if self.eeprom_checksum_error:
-            return {"char": "7", "blinking": False}
-        for bit, char in ERROR_DISPLAY:
-            if self.errors & bit:
-                return {"char": char, "blinking": False}
-        for bit, char in WARNING_DISPLAY:
-            if self.warnings & bit:
-                return {"char": char, "blinking": True}
-        if self.energized:
-            return {"char": "5", "blinking": bool(self.signals.get("stop"))}
-        return {"char": "4", "blinking": False}
-
+#: The manual functions of the inputs I1..I8 when P1021 (or the service switch) enables them
+#: (§4.8.1.1; the handler gets the input's new level).
+INPUT_FUNCTIONS: Table[Callable[[Inputs, bool], None]] = Table(
+    [
+        *(Command(f"I{n}", lambda i, active, n=n: i.jog_input(n, active), "§4.8.1.1", f"jog {_JOGS[n]} while active")
+          for n in _JOGS),
+        Command("I5", Inputs.home_input, "§4.8.1.1", "homing (H)"),
+        Command("I6", Inputs.power_input, "§4.8.1.1", "motor ON/OFF (ON clears P11 and P12)"),
+        Command("I7", Inputs.stop_input, "§4.8.1.1", "stop the program and the motion"),
+        Command("I8", Inputs.start_input_edge, "§4.8.1.1", "start the program"),
+    ]
+)
+_INPUT_FUNCTION = {int(row.token[1:]): row.handler for row in INPUT_FUNCTIONS}

@@ -15,60 +15,43 @@ trace mode and the ``@nP0=0`` message are handled here.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any, Protocol
 
 from devsim.core.clock import Clock, Timer
+from devsim.core.kit import Command, Table
 from devsim.core.record import field, record
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.errors import SersError
+from devsim.devices.sers.master import MasterLink
+from devsim.devices.sers.motion import Motion
+from devsim.devices.sers.operands import Operands
+from devsim.devices.sers.params import SersParameters
+from devsim.devices.sers.power import PowerStage
+from devsim.devices.sers.program import ProgramMemory
+from devsim.devices.sers.remote import RemoteStatements
 
 
 class ProgramHost(Protocol):
-    """What the interpreter needs of the drive it runs on (the SERS model)."""
+    """What the interpreter (§4.5, §4.6) needs of the program execution
+    (:class:`~.execution.Execution`)."""
 
-    ram: dict[int, Any]
-    clock: Clock
-    cfg: Any
-    axis: Any
-    motion: str | None
-    trace_mode: bool
-    program: Any
-    master: Any
+    def statement(self, stmt: st.Statement) -> str | None:
+        """Execute a statement of the program; what the program waits for (``position`` …)."""
 
-    def address_number(self, address: st.Address) -> int: ...
-    def operand_value(self, operand: st.Operand) -> float: ...
-    def evaluate(self, cond: st.Condition | None, counters: bool = True) -> bool: ...
-    def set_x(self, value: float) -> None: ...
-    def master_target(self) -> int | str | None: ...
-    def program_statement(self, stmt: st.Statement) -> str | None: ...
+    def master_target(self) -> int | str | None:
+        """The slave statements go to after ``Z=n`` (a master only), or None."""
+
     def continue_positioning(self) -> None: ...
-    def stop_motion(self) -> None: ...
-    def on_program_state(self) -> None: ...
-    def on_program_end(self) -> None: ...
-    def report_program_error(self, errno: int, detail: str) -> None: ...
-    def record_error(self, errno: int) -> None: ...
-    def render_statement(self, text: str) -> str: ...
-    def spontaneous(self, text: str) -> None: ...
-    def warn(self, bit: int) -> None: ...
 
-__all__ = ["Interpreter", "Program"]
+    def state_changed(self) -> None:
+        """The program started or stopped (P0, the output P1126)."""
+
+    def ended(self) -> None:
+        """The program ended normally (the dispatchers may start the next one)."""
 
 
-def _wire(drive: Any, operand: st.Operand) -> str:
-    """A master-side operand as the decimal number sent to a slave (``V=X`` → ``V=1000``)."""
-    if isinstance(operand, st.Number):
-        return operand.text
-    value = float(drive.operand_value(operand))
-    return str(int(value)) if value.is_integer() else f"{value:.4f}".rstrip("0").rstrip(".")
-
-
-def _statement_text(stmt: st.Statement) -> str:
-    if isinstance(stmt, st.Run):
-        return "RUN" if stmt.label is None else f"RUN {stmt.label}"
-    if isinstance(stmt, st.Command):
-        return stmt.name
-    return stmt.text.upper()
-
+__all__ = ["FLOW", "Interpreter", "Program", "ProgramHost"]
 
 
 MAX_NESTING = 4  # GOSUB depth (§4.6.4)
@@ -77,7 +60,7 @@ L65 = 65  # error / stop handler label (§4.6.2)
 
 @record(frozen=False)
 class Program:
-    """A compiled program: statements in order, labels and block jumps."""
+    """A compiled program: statements in order, labels (§4.6.2) and block jumps (§4.6.1)."""
 
     statements: list[st.Statement] = field(default_factory=list)
     texts: list[str] = field(default_factory=list)
@@ -110,10 +93,36 @@ class Program:
 
 
 class Interpreter:
-    """Runs the stored program of one SERS."""
+    """Runs the stored program of one SERS (§4.5, §4.6)."""
 
-    def __init__(self, drive: ProgramHost) -> None:
-        self.drive = drive
+    def __init__(
+        self,
+        clock: Clock,
+        params: SersParameters,
+        memory: ProgramMemory,
+        operands: Operands,
+        power: PowerStage,
+        motion: Motion,
+        master: MasterLink,
+        *,
+        host: Callable[[], ProgramHost],
+        render: Callable[[str], str],
+        spontaneous: Callable[[str], None],
+        address: Callable[[], int],
+    ) -> None:
+        self.clock = clock
+        self.params = params
+        self.memory = memory  # the stored program
+        self.operands = operands
+        self.power = power
+        self.motion = motion
+        self._host = host  # (the program execution, made after the interpreter)
+        self._render = render  # a statement as LIST shows it (TR)
+        self._spontaneous = spontaneous
+        self._address = address
+        self.remote = RemoteStatements(master, operands, self)
+        #: Trace mode (TRON, TR): one statement per TR (§4.5.4).
+        self.trace_mode = False
         self.program = Program()
         self.running = False
         self.pc = 0
@@ -130,24 +139,11 @@ class Interpreter:
         self.resume_pc: int | None = None
         self._resume_move = False
         self._poll: Timer | None = None
-        self.pending_events: set[int] = set()
 
     # -- state ----------------------------------------------------------------------------------
     @property
-    def in_l65(self) -> bool:
-        """The "L65 Fehlerbehandlung" flag is P1118 itself: ``P1118=0`` (or ``P11=0``) ends it."""
-        ram = getattr(self.drive, "ram", None)
-        return bool(ram.get(1118, 0)) if ram is not None else False
-
-    @in_l65.setter
-    def in_l65(self, value: bool) -> None:
-        ram = getattr(self.drive, "ram", None)
-        if ram is not None:
-            ram[1118] = int(value)
-
-    @property
     def cycle(self) -> float:
-        return 0.002 if int(self.drive.ram.get(1127, 0)) == 1 else 0.0005
+        return 0.002 if int(self.params.slow_program_cycle) == 1 else 0.0005
 
     def reset(self) -> None:
         """Power-on: nothing runs."""
@@ -157,8 +153,8 @@ class Interpreter:
         self.stack.clear()
         self.stops = 0
         self.resume_pc = None
-        self.in_l65 = False
-        self.pending_events.clear()
+        self.params.l65_flag = 0  # (the L65 error-handling flag is P1118)
+        self.trace_mode = False
 
     def _cancel(self) -> None:
         for timer in (self._timer, self._delay, self._d2, self._poll):
@@ -171,11 +167,11 @@ class Interpreter:
     # -- starting and ending ------------------------------------------------------------------------
     def start(self, label: int | None = None, *, subroutine: bool | None = None) -> None:
         """Start at line 1 or at label ``label`` (preconditions are the caller's)."""
-        self.program = Program.compile(self.drive.program.statements())
+        self.program = Program.compile(self.memory.statements())
         self._cancel()
         self.stack.clear()
         self.waiting = None
-        self.in_l65 = False
+        self.params.l65_flag = 0  # (the L65 error-handling flag is P1118)
         if label is not None:
             if not 1 <= label <= 128:
                 raise SersError(72)
@@ -183,7 +179,7 @@ class Interpreter:
                 raise SersError(71)
             self.pc = self.program.labels[label]
             self.subroutine = True if subroutine is None else subroutine
-        elif self.resume_pc is not None and int(self.drive.ram.get(1033, 0)) == 1 and self.stops == 1:
+        elif self.resume_pc is not None and int(self.params.continuation_after_stop) == 1 and self.stops == 1:
             self.pc = self.resume_pc  # P1033=1: continue where the stop happened
             self.subroutine = False
         else:
@@ -192,12 +188,12 @@ class Interpreter:
             self.stops = 0
         self.resume_pc = None
         self.running = True
-        self.drive.on_program_state()
+        self._host().state_changed()
         if self._resume_move:
             self._resume_move = False
             self.waiting = "position"
             try:
-                self.drive.continue_positioning()
+                self._host().continue_positioning()
             except SersError as exc:
                 self._program_error(exc.errno)
                 return
@@ -212,18 +208,18 @@ class Interpreter:
         self.waiting = None
         self.stops = 0
         self.resume_pc = None
-        self.in_l65 = False
-        self.drive.on_program_state()
-        if was and self.drive.ram.get(1129):
-            self.drive.spontaneous(f"@{self.drive.cfg.address}P0=0")
-        self.drive.on_program_end()
+        self.params.l65_flag = 0  # (the L65 error-handling flag is P1118)
+        self._host().state_changed()
+        if was and self.params.report_program_end:
+            self._spontaneous(f"@{self._address()}P0=0")
+        self._host().ended()
 
     def stop(self) -> None:
         """A stop command (S) or the STOP input while the program runs (P1033, §4.8.6.2)."""
         if not self.running:
             return
-        mode = int(self.drive.ram.get(1033, 0))
-        if mode in (2, 3) and not (mode == 3 and self.in_l65) and L65 in self.program.labels:
+        mode = int(self.params.continuation_after_stop)
+        if mode in (2, 3) and not (mode == 3 and self.params.l65_flag) and L65 in self.program.labels:
             self._jump_l65()
             return
         self.stops += 1
@@ -239,14 +235,14 @@ class Interpreter:
         self._cancel()
         self.running = False
         self.waiting = None
-        self.drive.on_program_state()
+        self._host().state_changed()
 
     def on_drive_error(self) -> None:
         """A drive error (P11) stops the program, or jumps to L65 with P1033=2/3 (§4.6.2)."""
         if not self.running:
             return
-        mode = int(self.drive.ram.get(1033, 0))
-        if mode == 3 and self.in_l65:
+        mode = int(self.params.continuation_after_stop)
+        if mode == 3 and self.params.l65_flag:
             return  # P1033=3: during the L65 handling further errors neither stop nor jump
         if mode in (2, 3) and L65 in self.program.labels:
             self._jump_l65()
@@ -260,24 +256,23 @@ class Interpreter:
         self.waiting = None
         self.stops = 0
         self.resume_pc = None
-        self.drive.on_program_state()
+        self._host().state_changed()
 
     def _jump_l65(self) -> None:
         self._cancel()
         self.waiting = None
         self.stack.clear()
         self.pc = self.program.labels[L65]
-        self.in_l65 = True  # P1118=1
+        self.params.l65_flag = 1  # the L65 error handling runs (P1118)
         self.subroutine = False
         self._schedule(self.cycle)
 
     def _program_error(self, errno: int, detail: str = "") -> None:
         """Unknown jump target, stack overflow, arithmetic error …: the program stops with
         P12 value 128 (display 'H' blinking) and the errno (§4.8.3.1)."""
-        self.drive.record_error(errno)
-        self.drive.warn(128)
-        self._halt()
-        self.drive.report_program_error(errno, detail)
+        self.power.record_error(errno)
+        self.power.warn(128)
+        self._halt()  # (nothing is sent, G-FAULTMSG)
 
     # -- the cycle ------------------------------------------------------------------------------------
     def continue_cycle(self) -> None:
@@ -285,11 +280,11 @@ class Interpreter:
         self._schedule(self.cycle)
 
     def _schedule(self, delay: float) -> None:
-        if self.drive.trace_mode:
+        if self.trace_mode:
             return  # single step: TR executes the next statement
         if self._timer is not None:
             self._timer.cancel()
-        self._timer = self.drive.clock.call_later(delay, self._tick)
+        self._timer = self.clock.call_later(delay, self._tick)
 
     def _tick(self) -> None:
         self._timer = None
@@ -304,15 +299,15 @@ class Interpreter:
         """TR: execute one statement (starting the program at the current position if it does
         not run, G-TRACE); returns the listed statement."""
         if not self.running:
-            self.program = Program.compile(self.drive.program.statements())
+            self.program = Program.compile(self.memory.statements())
             # the current program position is a statement number (LIST n, 0 = before the first)
-            self.pc = min(max(0, self.drive.program.position - 1), max(0, len(self.program.statements) - 1))
+            self.pc = min(max(0, self.memory.position - 1), max(0, len(self.program.statements) - 1))
             self.running = True
             self.subroutine = False
-            self.drive.on_program_state()
+            self._host().state_changed()
         if self.waiting is not None or self.pc >= len(self.program.statements):
             return None
-        text = f"{self.pc + 1}: {self.drive.render_statement(self.program.texts[self.pc])}"
+        text = f"{self.pc + 1}: {self._render(self.program.texts[self.pc])}"
         self.step()
         return text
 
@@ -323,7 +318,7 @@ class Interpreter:
             self.end()  # the end of the stored program ends it (G-PROGEND)
             return
         stmt = program.statements[self.pc]
-        self.drive.program.position = self.pc + 1  # LIST . shows the line being executed
+        self.memory.position = self.pc + 1  # LIST . shows the line being executed
         try:
             advance = self._execute(stmt)
         except SersError as exc:
@@ -337,66 +332,22 @@ class Interpreter:
             self._schedule(self.cycle)
 
     # -- statements -------------------------------------------------------------------------------------
-    def _execute(self, stmt: st.Statement) -> bool:  # noqa: C901 - one branch per statement kind
-        """Run one statement; True if the program goes on with the next one."""
-        drive = self.drive
-        program = self.program
+    def _execute(self, stmt: st.Statement) -> bool:
+        """Run one statement; True if the program goes on with the next one.  The flow of the
+        program is :data:`FLOW`; the drive does the rest and says what the program waits for."""
         if isinstance(stmt, st.Label | st.Comment | st.Text):
             return True
-        target = drive.master_target()
-        if target is not None and self._remote(stmt, target):
+        host = self._host()
+        target = host.master_target()
+        if target is not None and self.remote.send(stmt, target):
             return False  # sent to a slave; the answer moves the program on
-        if isinstance(stmt, st.If):
-            self._branch(stmt, drive.evaluate(stmt.cond))
-            return True
-        if isinstance(stmt, st.Else):
-            self.pc = program.block_end.get(self.pc, self.pc)  # the THEN part ran: skip to END
-            return True
-        if isinstance(stmt, st.End):
-            return True
-        if isinstance(stmt, st.Goto):
-            target = self._label_index(stmt.label)
-            if stmt.sub:
-                if len(self.stack) >= MAX_NESTING:
-                    raise SersError(73)
-                self.stack.append(self.pc + 1)
-            self.pc = target
-            return False
-        if isinstance(stmt, st.Command) and stmt.name == "RETURN":
-            if self.stack:
-                self.pc = self.stack.pop()
-                return False
-            if self.subroutine:
-                self.end()
-                return False
-            raise SersError(72)  # G-RETURN: RETURN without GOSUB in a program from line 1
-        if isinstance(stmt, st.Command) and stmt.name == "PE":
-            self.end()
-            return False
-        if isinstance(stmt, st.Wait):
-            self._park("wait", stmt.cond)
-            return True
-        if isinstance(stmt, st.Run):
-            self.start(stmt.label)
-            return False
-        if isinstance(stmt, st.Assign) and stmt.target.kind == "alias" and stmt.target.ref == "D":
-            value = drive.operand_value(stmt.value) if not isinstance(stmt.value, str) else 0.0
-            factor = 1.0 if int(drive.ram.get(1141, 0)) == 1 else 1.2
-            self.waiting = "delay"
-            self._delay = drive.clock.call_later(max(0.0, float(value)) * 0.1 * factor, self._delay_done)
-            return True
-        if isinstance(stmt, st.Assign) and stmt.target.kind == "alias" and stmt.target.ref == "D2":
-            self._start_d2(stmt)
-            return True
-        if isinstance(stmt, st.Command) and stmt.name in ("NEW", "PGM", "QUIT", "DEL", "VER", "TRON", "TROFF"):
-            return True  # programming and trace commands mean nothing inside a program
-        if isinstance(stmt, st.Query | st.ListCmd | st.Trace | st.Change):
-            return True
-        # everything else the drive does; it says what (if anything) the program waits for
-        self.waiting = drive.program_statement(stmt)
+        flow = _FLOW.get(_flow_token(stmt))
+        if flow is not None:
+            return flow(self, stmt)
+        self.waiting = host.statement(stmt)
         return True
 
-    def _branch(self, stmt: st.If, true: bool) -> None:
+    def branch(self, stmt: st.If, true: bool) -> None:
         """IF: without THEN skip the next statement when false; with THEN go to ELSE/END."""
         if stmt.then:
             if not true:
@@ -404,89 +355,33 @@ class Interpreter:
         elif not true:
             self.pc += 1
 
-    # -- master mode (§3.6.2, §4.8.5.5; spec §3.8) ----------------------------------------------------
-    def _remote(self, stmt: st.Statement, target: int | str) -> bool:
-        """After ``Z=n`` a statement goes to slave n; True if it was sent (the program waits)."""
-        drive = self.drive
-        if isinstance(stmt, st.Assign) and stmt.target.kind in ("P", "alias"):
-            number = drive.address_number(stmt.target)
-            if number == 1:
-                return False  # Z=… is the master's own business
-            if number == 1047 and isinstance(stmt.value, st.Address):
-                asked = drive.address_number(stmt.value)  # Z=1 X=V: read V of slave 1 into X
-                self._send(target, f"P3={asked}", "P3", lambda value: drive.set_x(value or 0.0))
-                return True
-            value = stmt.value if isinstance(stmt.value, str) else _wire(drive, stmt.value)
-            self._send(target, f"{stmt.target.text}={value}")
-            return True
-        if isinstance(stmt, st.Assign):  # O1=1 and the like
-            self._send(target, f"{stmt.target.text}={_wire(drive, stmt.value)}")  # type: ignore[arg-type]
-            return True
-        if isinstance(stmt, st.If | st.Wait) and stmt.cond is not None:
-            self._remote_condition(stmt, target)
-            return True
-        if isinstance(stmt, st.Command) and stmt.name in ("RETURN", "PE"):
-            return False
-        if isinstance(stmt, st.Command | st.Run | st.Jog):
-            self._send(target, _statement_text(stmt))
-            return True
-        return False
+    def start_delay(self, stmt: st.Assign) -> None:
+        """D (§4.8.5.1): wait D × 0.1 s (× 1.2 unless P1141 = 1)."""
+        value = self.operands.operand_value(stmt.value) if not isinstance(stmt.value, str) else 0.0
+        factor = 1.0 if int(self.params.delay_correction) == 1 else 1.2
+        self.waiting = "delay"
+        self._delay = self.clock.call_later(max(0.0, float(value)) * 0.1 * factor, self._delay_done)
 
-    def _send(self, target: int | str, text: str, want: str | None = None, got: Any = None) -> None:
-        """Send to the slave and park until it answered; no answer (100 ms) is a program error."""
+    # -- master mode (§3.6.2, §4.8.5.5; the parked program of :class:`.remote.RemoteStatements`) -----
+    def park_for_master(self) -> None:
         self.waiting = "master"
 
-        def done(ok: bool, value: float | None, message: str) -> None:
-            if not self.running or self.waiting != "master":
-                return
-            if not ok:
-                self._program_error(64)
-                return
-            if got is not None:
-                got(value)
-            self.pc += 1
-            self.resume("master")
+    def awaiting_master(self) -> bool:
+        return self.running and self.waiting == "master"
 
-        self.drive.master.request(target, text, done, want)
+    def master_answered(self, branch: st.If | None = None, true: bool = False) -> None:
+        if branch is not None:
+            self.branch(branch, true)
+        self.pc += 1
+        self.resume("master")
 
-    def _remote_condition(self, stmt: st.If | st.Wait, target: int | str) -> None:
-        """IF/WAIT on slave data: ``P2=<n>`` returns the value (inputs via P1300, J via P1013)."""
-        cond = stmt.cond
-        assert cond is not None
-        left = cond.left
-        if left.kind == "I":
-            number, bit = 1300, int(left.ref) - 1
-        elif left.kind == "J":
-            number, bit = 1013, {1: 3, 2: 1, 3: 0, 4: 2, 5: 7}[int(left.ref)]
-        else:
-            number, bit = self.drive.address_number(left), None
-        self.waiting = "master"
+    def master_failed(self) -> None:
+        self._program_error(64)
 
-        def done(ok: bool, value: float | None, message: str) -> None:
-            if not self.running or self.waiting != "master":
-                return
-            if not ok or value is None:
-                self._program_error(64)
-                return
-            if bit is not None:
-                level = (int(value) >> bit) & 1
-                value = float(1 - level if left.kind == "J" else level)
-            right = self.drive.operand_value(cond.right) if cond.right is not None else 0.0
-            true = (value != 0) if cond.op is None else st.compare(value, cond.op, right)
-            true = true != cond.negate
-            if isinstance(stmt, st.If):
-                self._branch(stmt, true)
-                self.pc += 1
-                self.resume("master")
-            elif true:
-                self.pc += 1
-                self.resume("master")
-            else:  # WAIT polls the slave every 10 ms (G-MASTER)
-                self._timer = self.drive.clock.call_later(0.01, lambda: self._remote_condition(stmt, target))
+    def later(self, delay: float, action: Callable[[], None]) -> None:
+        self._timer = self.clock.call_later(delay, action)
 
-        self.drive.master.request(target, f"P2={number}", done, "P2")
-
-    def _label_index(self, label: int) -> int:
+    def label_index(self, label: int) -> int:
         if not 1 <= label <= 128:
             raise SersError(72)
         index = self.program.labels.get(label)
@@ -495,7 +390,7 @@ class Interpreter:
         return index
 
     # -- waiting ----------------------------------------------------------------------------------------
-    def _park(self, what: str, cond: st.Condition | None) -> None:
+    def park(self, what: str, cond: st.Condition | None) -> None:
         self.waiting = what
         self._wait_cond = cond
         self.poke()
@@ -504,16 +399,16 @@ class Interpreter:
         """The drive's state changed: a parked WAIT may go on."""
         if self.waiting != "wait" or not self.running:
             return
-        if self.drive.evaluate(self._wait_cond, counters=False):
+        if self.operands.evaluate(self._wait_cond, counters=False):
             self.waiting = None
             self._wait_cond = None
             if self._poll is not None:
                 self._poll.cancel()
                 self._poll = None
             self._schedule(self.cycle)
-        elif self.drive.axis.moving and self._poll is None:
+        elif self.motion.axis.moving and self._poll is None:
             # positions change continuously: look again every cycle while the axis moves
-            self._poll = self.drive.clock.call_later(self.cycle, self._poll_tick)
+            self._poll = self.clock.call_later(self.cycle, self._poll_tick)
 
     def _poll_tick(self) -> None:
         self._poll = None
@@ -542,14 +437,14 @@ class Interpreter:
             self._schedule(self.cycle)
 
     def _position_blocks(self) -> bool:
-        return self.waiting == "position" and int(self.drive.ram.get(1110, 1)) == 1
+        return self.waiting == "position" and int(self.params.wait_until_positioned) == 1
 
     # -- D2 (§4.8.5.1) ---------------------------------------------------------------------------------
-    def _start_d2(self, stmt: st.Assign) -> None:
-        drive = self.drive
-        value = drive.operand_value(stmt.value) if not isinstance(stmt.value, str) else 0.0
-        drive.ram[1164] = float(value)
-        drive.ram[1165] = 0
+    def start_d2(self, stmt: st.Assign) -> None:
+        """D2 (§4.8.5.1): the non-blocking timer; a GT/GS right after it is its timed jump."""
+        value = self.operands.operand_value(stmt.value) if not isinstance(stmt.value, str) else 0.0
+        self.params.d2_time = float(value)
+        self.params.d2_bit = 0
         if self._d2 is not None:
             self._d2.cancel()
         nxt = self.program.statements[self.pc + 1] if self.pc + 1 < len(self.program.statements) else None
@@ -557,11 +452,11 @@ class Interpreter:
         if isinstance(nxt, st.Goto):
             self._d2_jump = nxt
             self.pc += 1  # the GT/GS belongs to the timer: it is not executed now
-        self._d2 = drive.clock.call_later(max(0.0, float(value)) * 0.1, self._d2_expired)
+        self._d2 = self.clock.call_later(max(0.0, float(value)) * 0.1, self._d2_expired)
 
     def _d2_expired(self) -> None:
         self._d2 = None
-        self.drive.ram[1165] = 1
+        self.params.d2_bit = 1
         if self._d2_jump is not None and self.running:
             if self._position_blocks():
                 self._d2_pending = True  # P1110=1: the jump waits until the drive is in position
@@ -579,12 +474,12 @@ class Interpreter:
         if self._delay is not None:
             self._delay.cancel()
             self._delay = None
-        if self.waiting == "position" and self.drive.motion == "jog":
-            self.drive.stop_motion()
+        if self.waiting == "position" and self.motion.kind == "jog":
+            self.motion.stop_motion()
         self.waiting = None
         self._wait_cond = None
         try:
-            target = self._label_index(jump.label)
+            target = self.label_index(jump.label)
             if jump.sub:
                 if len(self.stack) >= MAX_NESTING:
                     raise SersError(73)
@@ -595,10 +490,95 @@ class Interpreter:
         self.pc = target
         self._schedule(self.cycle)
 
-    def describe(self) -> dict[str, Any]:
-        return {
-            "running": self.running,
-            "line": self.pc + 1,
-            "waiting": self.waiting,
-            "stack": [i + 1 for i in self.stack],
-        }
+
+
+def _going_on(interpreter: Interpreter, stmt: st.Statement) -> bool:
+    return True
+
+
+def _if(interpreter: Interpreter, stmt: st.If) -> bool:
+    interpreter.branch(stmt, interpreter.operands.evaluate(stmt.cond))
+    return True
+
+
+def _else(interpreter: Interpreter, stmt: st.Else) -> bool:
+    pc = interpreter.pc
+    interpreter.pc = interpreter.program.block_end.get(pc, pc)  # the THEN part ran: skip to END
+    return True
+
+
+def _goto(interpreter: Interpreter, stmt: st.Goto) -> bool:
+    target = interpreter.label_index(stmt.label)
+    if stmt.sub:
+        if len(interpreter.stack) >= MAX_NESTING:
+            raise SersError(73)
+        interpreter.stack.append(interpreter.pc + 1)
+    interpreter.pc = target
+    return False
+
+
+def _return(interpreter: Interpreter, stmt: st.Command) -> bool:
+    if interpreter.stack:
+        interpreter.pc = interpreter.stack.pop()
+        return False
+    if interpreter.subroutine:
+        interpreter.end()
+        return False
+    raise SersError(72)  # G-RETURN: RETURN without GOSUB in a program from line 1
+
+
+def _program_end(interpreter: Interpreter, stmt: st.Command) -> bool:
+    interpreter.end()
+    return False
+
+
+def _wait(interpreter: Interpreter, stmt: st.Wait) -> bool:
+    interpreter.park("wait", stmt.cond)
+    return True
+
+
+def _run(interpreter: Interpreter, stmt: st.Run) -> bool:
+    interpreter.start(stmt.label)
+    return False
+
+
+def _delay(interpreter: Interpreter, stmt: st.Assign) -> bool:
+    interpreter.start_delay(stmt)
+    return True
+
+
+def _d2(interpreter: Interpreter, stmt: st.Assign) -> bool:
+    interpreter.start_d2(stmt)
+    return True
+
+
+def _flow_token(stmt: st.Statement) -> str:
+    """A statement's row in :data:`FLOW`: a command by its keyword, ``D`` / ``D2`` by the alias
+    assigned, anything else by its type."""
+    if isinstance(stmt, st.Command):
+        return stmt.name
+    if isinstance(stmt, st.Assign) and stmt.target.kind == "alias" and stmt.target.ref in ("D", "D2"):
+        return str(stmt.target.ref)
+    return type(stmt).__name__
+
+
+#: What the program itself does with a statement (§4.6); every other one the drive executes.
+FLOW: Table[Callable[[Any, Any], bool]] = Table(
+    [
+        Command("If", _if, "§4.6.1", "IF condition [THEN … ELSE … END]"),
+        Command("Else", _else, "§4.6.1", "ELSE: the THEN part ran, skip to END"),
+        Command("End", _going_on, "§4.6.1", "END of an IF block"),
+        Command("Goto", _goto, "§4.6.3", "GOTO/GT, GOSUB/GS n (4 levels)"),
+        Command("RETURN", _return, "§4.6.5", "back from a subroutine"),
+        Command("PE", _program_end, "§4.2", "program end"),
+        Command("Wait", _wait, "§4.6.8", "WAIT condition"),
+        Command("Run", _run, "§4.8.6.16", "RUN [n]: start again"),
+        Command("D", _delay, "§4.8.5.1", "D=n: wait n × 0.1 s"),
+        Command("D2", _d2, "§4.8.5.1", "D2=n [GT/GS m]: the non-blocking timer and its jump"),
+        *(Command(name, _going_on, "§4.2", "means nothing inside a program")
+          for name in ("NEW", "PGM", "QUIT", "DEL", "VER", "TRON", "TROFF")),
+        *(Command(name, _going_on, "§4.2", "answers only interactively")
+          for name in ("Query", "ListCmd", "Trace", "Change")),
+    ]
+)
+_FLOW = {row.token: row.handler for row in FLOW}

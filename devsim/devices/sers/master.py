@@ -24,7 +24,7 @@ Done = Callable[[bool, float | None, str], None]
 
 
 class MasterLink:
-    """Requests to slaves, one at a time, and what comes back."""
+    """Requests to slaves, one at a time, and what comes back (§3.6.2, G-MASTER)."""
 
     def __init__(self, clock: Clock, send: Callable[[bytes], None]) -> None:
         self.clock = clock

@@ -1,601 +1,362 @@
-"""Motion of the SERS model: positioning E with its modes, jog, homing, POS0/POSR, encoder,
-step loss, software limits (manual §4.5, §4.6.6, §4.8.4; spec §3.5, §5)."""
+"""Motion of the SERS: what moves the drive and how it stops, POS0/POSR, the hand-wheel and the
+phase current (manual §4.2, §4.8.4, §4.8.6.1, §4.8.6.6; spec §3.5, §5).
+
+Positions are motor increments, speeds inc/s and accelerations inc/s²; P51 is the axis position
+minus :attr:`Motion.offset`.  The motion owns its jog (:mod:`.jog`), homing run (:mod:`.homing`),
+polynomial profile (:mod:`.polynomial`), positioning ``E`` (:mod:`.positioning`), position
+watches (:mod:`.watches`) and step-loss monitoring (:mod:`.encoder`).
+"""
 
 from __future__ import annotations
 
-import math
-from typing import Any
+from collections.abc import Callable
 
-from devsim.core.axis import RampProfile
+from devsim.core.axis import Axis
+from devsim.core.clock import Clock
+from devsim.core.signals import SignalBank
 from devsim.devices.sers import statements as st
-from devsim.devices.sers.access import _sign
-from devsim.devices.sers.constants import ELECTRICAL_PERIOD, INC_PER_REV, LIMIT, STANDSTILL, STEP_LOSS
+from devsim.devices.sers.constants import ELECTRICAL_PERIOD, INC_PER_REV, STEP_LOSS
+from devsim.devices.sers.encoder import StepMonitor
 from devsim.devices.sers.errors import SersError
+from devsim.devices.sers.homing import Homing, can_move
+from devsim.devices.sers.jog import Jog
+from devsim.devices.sers.params import SersParameters
+from devsim.devices.sers.polynomial import PolynomialMove
+from devsim.devices.sers.positioning import Positioning
+from devsim.devices.sers.power import PowerStage
+from devsim.devices.sers.watches import PositionWatches
 
 __all__ = ["Motion"]
 
 
 class Motion:
-    """Part of :class:`~devsim.devices.sers.drive.SersDrive`: positioning, jog, homing, encoder."""
+    """What moves one SERS's motor, and how it stops (§4.6.6, §4.8.4)."""
 
-    # ======================================================================================
-    # motion
-    # ======================================================================================
+    def __init__(
+        self,
+        clock: Clock,
+        axis: Axis,
+        params: SersParameters,
+        signals: SignalBank,
+        power: PowerStage,
+        *,
+        evaluate: Callable[[st.Condition], bool],
+        i7_stop: Callable[[], bool],
+        ended: Callable[[], None],
+        poke: Callable[[], None],
+        segment_ended: Callable[[], None],
+        in_position_message: Callable[[], None],
+        has_option_e50: Callable[[], bool],
+        record_event: Callable[[str], None],
+        changed: Callable[[], None],
+    ) -> None:
+        self.clock = clock
+        self.axis = axis
+        self.params = params
+        self.signals = signals
+        self.power = power
+        self._i7_stop = i7_stop  # input I7 as a stop (§4.8.1.1)
+        self._ended = ended  # a program waiting for the motion goes on
+        self._poke = poke  # a program's WAIT looks again
+        self._in_position_message = in_position_message  # @nPOS=1 with P1121 (§4.8.6.11)
+        self._has_option_e50 = has_option_e50
+        self._record_event = record_event
+        self._changed = changed  # the outputs (P1125 in position) follow
+        #: What moves the drive: position, jog, home, pos0, posr, poly, follow, stopping,
+        #: error-stop; None at rest.
+        self.kind: str | None = None
+        self.pos_ok = True  # P336
+        self.offset = 0.0  # axis position of P51 = 0
+        self._stop_decel = 0.0  # the deceleration of S for the motion under way
+        self._follow_target = 0.0  # hand-wheel
+        self._stopped_at = 0.0  # when the last motion ended (phase current reduction)
+        self.watches = PositionWatches(clock, axis, params, signals, power, offset=lambda: self.offset,
+                                       kind=lambda: self.kind, stop=self.stop_motion)
+        self.homing = Homing(axis, params, signals, power, self)
+        self.jog = Jog(clock, axis, params, power, self, evaluate=evaluate)
+        self.encoder = StepMonitor(clock, axis, params, power, self, has_option_e50=has_option_e50)
+        self.positioning = Positioning(axis, params, signals, power, self)
+        self.poly = PolynomialMove(axis, params, self, record_error=power.record_error, segment_ended=segment_ended)
+
+    # -- power ----------------------------------------------------------------------------------
+    def power_on(self) -> None:
+        """At rest (P51 follows from the memory: :meth:`set_p51`)."""
+        self.cancel_all()
+        self.axis.quick_stop()
+        self.kind = None
+        self.pos_ok = True
+        self._stop_decel = 0.0
+        self._follow_target = 0.0
+        self._stopped_at = 0.0
+        self.positioning.power_on()
+        self.homing.homed = False
+        self.homing.cancel()
+        self.jog.power_on()
+        self.encoder.power_on()
+        self.poly.cancel()
+
+    def power_off(self) -> None:
+        self.cancel_all()
+        self.axis.quick_stop()
+        self.kind = None
+        self.pos_ok = True
+
+    def cancel_all(self) -> None:
+        """Every timer and watch of the motion (power off, power on, close)."""
+        self.watches.cancel_timers()
+        self.watches.cancel()
+        self.jog.cancel_timer()
+        self.encoder.cancel()
+        self.homing.drop_watches()
+
+    # -- state ------------------------------------------------------------------------------------
     @property
     def moving(self) -> bool:
-        return self.motion is not None
+        return self.kind is not None
 
-    def _motion_checks(self, direction: int) -> None:
+    def p51_inc(self) -> float:
+        """P51, the actual position, in increments."""
+        return self.axis.position() - self.offset
+
+    def set_p51(self, increments: float) -> None:
+        """``P51=``: the actual position is ``increments`` from now on."""
+        self.offset = self.axis.position() - increments
+
+    def out_of_position(self) -> None:
+        self.pos_ok = False
+
+    def phase_current(self) -> float:
+        """Commanded phase current in mA (§4.8.6.1, spec §5.11): P1010; with P1011 bit 0
+        50 % at standstill from 20 ms after the last motion; +20 % boost per bits 1/2."""
+        if not self.power.energized:
+            return 0.0
+        params = self.params
+        current = float(params.phase_current)
+        bits = int(params.current_parameters)
+        standing = self.kind is None and self.clock.now() - self._stopped_at >= 0.02
+        if standing and bits & 1:
+            current *= 0.5
+        accel = abs(self.axis.acceleration())
+        if (bits & 2 and accel > float(params.boost_acceleration)) or (bits & 4 and standing):
+            current *= 1.2
+        return current
+
+    # -- starting and ending --------------------------------------------------------------------
+    def checks(self, direction: int) -> None:
         """Refusals in the spec's order (§3.5.3): limit (78), STOP (68), I7 (67), power (79)."""
-        if direction > 0 and self.signals.get("limit_right"):
+        signals = self.signals
+        if direction > 0 and signals.get("limit_right"):
             raise SersError(78)
-        if direction < 0 and self.signals.get("limit_left"):
+        if direction < 0 and signals.get("limit_left"):
             raise SersError(78)
-        if self.signals.get("stop"):
+        if signals.get("stop"):
             raise SersError(68)
-        if self._i7_stop_active():
+        if self._i7_stop():
             raise SersError(67)
-        if not self.energized or self.errors:
+        if not self.power.energized or self.power.errors:
             raise SersError(79)
 
-    def start_positioning(self) -> None:
-        """E (§4.6.6) with P1014 mode 0 relative, 1 relative-clear, 2 absolute, 3 overflow."""
-        if self.poly.definition is not None:
-            self.poly.execute()  # E closes a polynomial segment (§4.6.7)
-            return
-        if self.motion == "position" and self._w_updated:
-            self._w_updated = False
-            return  # G-EWHILEMOVE: the running move already took the new W
-        if self.motion is not None:
-            raise SersError(70)
-        mode = int(self.ram[1014])
-        w = float(self.ram[47])
-        p51 = self.p51_inc()
-        if mode == 1:
-            start, target = 0.0, float(round(w))
-        elif mode == 2:
-            start, target = p51, float(round(w))
-        else:
-            start, target = p51, p51 + round(w)  # W in whole increments (§5.1)
-        target = self._leave_zero_phase(target)
-        direction = (target > start) - (target < start)
-        self._motion_checks(direction)
-        lo, hi = self.scaling.pos_range()
-        target_user = self.scaling.inc_to_pos(target)
-        if target_user > hi or target_user < lo:
-            self.warn(64)
-            raise SersError(85 if target_user > hi else 86)
-        if mode == 1:
-            self.offset = self.axis.position()
-        elif target == p51:
-            return  # already there: nothing moves, POS stays 1
-        self._speed = float(self.ram[91])
-        self._accel = float(self.ram[138])
-        self._target_physical = target + self.offset
-        legs = self._backlash_legs(p51 + self.offset, self._target_physical)
-        for _target, speed in legs:
-            _can_move(speed, self._accel)  # (the backlash legs creep at P1003)
-        self._servo_check()
-        self._begin_motion("position", self._accel)
-        self._setpoint = self._target_physical
-        self._legs = legs
-        self._next_leg()
-        self._arm_position_watches()
-
-    def _backlash_legs(self, start: float, target: float) -> list[tuple[float, float]]:
-        """Backlash compensation P1037 (§4.8.4.7, spec §5.8 G-BACKLASH): the final approach
-        is always made opposite to the homing direction (P147 bit 0), at speed P1003."""
-        slack = abs(float(self.ram.get(1037, 0)))
-        if not slack or target == start:
-            return [(target, self._speed)]
-        approach = 1 if int(self.ram.get(147, 0)) & 1 else -1
-        creep = float(self.ram[1003])
-        direction = 1 if target > start else -1
-        if direction == approach:
-            if abs(target - start) <= slack:
-                return [(target, creep)]
-            return [(target - direction * slack, self._speed), (target, creep)]
-        return [(start + direction * slack, creep), (target + direction * slack, self._speed), (target, creep)]
-
-    def _next_leg(self) -> None:
-        target, speed = self._legs.pop(0)
-        done = self._next_leg if self._legs else self._positioning_done
-        self.axis.move_to(target, speed, self._accel, on_done=done, profile=self.ramp_profile())
-
-    def ramp_profile(self) -> RampProfile | None:
-        """P1032 ramp shape with the sections P1005–P1008 (§4.8.4.4, spec §5.2)."""
-        r = self.ram
-        shape = "sine" if int(r.get(1032, 0)) == 1 else "linear"
-        fractions = [float(r.get(n, 100)) / 100 for n in (1007, 1005, 1008, 1006)]
-        if shape == "linear" and all(f == 1.0 for f in fractions):
-            return None
-        speed1, accel1, speed2, accel2 = fractions
-        return RampProfile(speed1=speed1, accel1=accel1, speed2=speed2, accel2=accel2, shape=shape)
-
-    def _leave_zero_phase(self, target: float) -> float:
-        """P1001 (§4.8.4.2): keep 0.1°/0.2°/0.3° away from multiples of 1.8° (64 increments)."""
-        level = int(self.ram.get(1001, 0))
-        if not level:
-            return target
-        step = INC_PER_REV / 200
-        keep = level * 0.1 * INC_PER_REV / 360
-        nearest = round(target / step) * step
-        if abs(target - nearest) < keep - 1e-9:
-            return float(round(nearest + (keep if target >= nearest else -keep)))
-        return target
-
-    def _positioning_done(self) -> None:
-        mode = int(self.ram[1014])
-        if mode == 3:
-            modulo = float(self.ram.get(103, 0))
-            if modulo > 0:
-                while self.p51_inc() >= modulo - 1e-6:
-                    self.offset += modulo
-                    self.ram[100] = int(self.ram.get(100, 0)) + 1
-                while self.p51_inc() <= -modulo + 1e-6:
-                    self.offset -= modulo
-                    self.ram[100] = int(self.ram.get(100, 0)) - 1
-        self._motion_finished()
-        if self.ram.get(1121):
-            self.spontaneous(f"@{self.cfg.address}POS=1")
-
-    def _begin_motion(self, kind: str, decel: float) -> None:
-        self.record_event("move_start")
-        self.motion = kind
+    def begin(self, kind: str, decel: float) -> None:
+        self._record_event("move_start")
+        self.kind = kind
         self.pos_ok = False
         self._stop_decel = decel
-        self._w_updated = False
-        self._update_outputs()
+        self.positioning.w_updated = False
+        self._changed()
 
-    def _motion_finished(self) -> None:
-        was_moving = self.motion is not None
+    def finish(self) -> None:
+        """The motion has ended (the axis stands)."""
+        was_moving = self.kind is not None
         self.poly.cancel()
         if was_moving:
-            self.record_event("move_end")
+            self._record_event("move_end")
         self._stopped_at = self.clock.now()
-        self.motion = None
+        self.kind = None
         self.pos_ok = True
-        self._homing = None
-        self._jog_dir = 0
-        self._jog_until = None
-        self._cancel_jog_timer()
-        for watch in self._watches + self._standstill_watches:
-            watch.cancel()
-        self._watches.clear()
-        self._standstill_watches = []
-        self._update_outputs()
+        self.homing.cancel()
+        self.jog.reset()
+        self.watches.cancel()
+        self._changed()
         if was_moving:
-            self.interpreter.on_motion_end()
+            self._ended()
 
-    def _end_motion(self, quick: bool) -> None:
-        if quick:
-            self.axis.quick_stop()
-            self._motion_finished()
-        else:
-            self.stop_motion()
+    def arm_watches(self, keep: bool = False) -> None:
+        self.watches.arm(keep)
 
     def stop_motion(self) -> None:
         """S (§4.2): decelerate with the active motion's deceleration (spec §5.4)."""
-        if self.motion is None or self.motion == "error-stop":
+        if self.kind is None or self.kind == "error-stop":
             return
-        self._homing = None
+        self.homing.cancel()
         self.poly.cancel()
-        self._cancel_jog_timer()
-        profile = self.ramp_profile() if self.motion == "position" else None
-        self.motion = "stopping"
-        self.axis.stop(self._stop_decel, on_done=self._motion_finished, profile=profile)
+        self.jog.cancel_timer()
+        profile = self.positioning.ramp_profile() if self.kind == "position" else None
+        self.kind = "stopping"
+        self.axis.stop(self._stop_decel, on_done=self.finish, profile=profile)
 
-    # -- jog -------------------------------------------------------------------------------
-    def jog(self, name: str, until: st.Condition | None = None, serial: bool = True) -> None:
-        """RS/RF/LS/LF (§4.5.1): right = positive; slow P1019, fast P1020, × P108 %."""
-        direction = 1 if name[0] == "R" else -1
-        self._motion_checks(direction)
-        if self.motion not in (None, "jog", "position", "stopping"):
-            raise SersError(70)
-        speed = float(self.ram[1019 if name[1] == "S" else 1020]) * float(self.ram.get(108, 100)) / 100
-        accel = float(self.ram[1018])
-        _can_move(speed, accel)
-        if not (self.motion == "jog" and self._jog_dir == direction and self._jog_speed == speed):
-            self._servo_check()
-            self._begin_motion("jog", accel)
-            self._jog_dir = direction
-            self._jog_speed = speed
-            self._jog_accel = accel
-            self.axis.jog(direction, speed, accel)
-            self._arm_position_watches()
-        self._jog_until = until
-        self._cancel_jog_timer()
-        if serial and until is None and self.ram.get(1035, 1) == 1:
-            self._jog_timer = self.clock.call_later(0.5, self._jog_timeout)
-        if until is not None and self.evaluate(until):
-            self._until_reached()
+    def abort_profiles(self) -> None:
+        """A drive error: a polynomial profile and a homing run are over."""
+        self.poly.cancel()
+        self.homing.cancel()
 
-    def _jog_timeout(self) -> None:
-        self._jog_timer = None
-        if self.motion == "jog":
-            self.stop_motion()
-
-    def _cancel_jog_timer(self) -> None:
-        if self._jog_timer is not None:
-            self._jog_timer.cancel()
-            self._jog_timer = None
-
-    def _until_reached(self) -> None:
-        """':' event (§4.6.9): brake with P1018, or travel the overrun distance P1039 first."""
-        self._jog_until = None
-        overrun = float(self.ram.get(1039, 0))
-        if overrun:
-            target = self.axis.position() + self._jog_dir * abs(overrun)
-            self.motion = "stopping"
-            speed = abs(self.axis.velocity()) or self._jog_speed  # (the event came as the jog began)
-            self.axis.move_to(target, speed, self._jog_accel, on_done=self._motion_finished)
-        else:
-            self.stop_motion()
-
-    def _check_until(self) -> None:
-        self.interpreter.poke()
-        self._check_jog_until()
-
-    def _check_jog_until(self) -> None:
-        if self._jog_until is not None and self.motion == "jog" and self.evaluate(self._jog_until):
-            self._until_reached()
-
-    # -- homing ----------------------------------------------------------------------------
-    def home(self, serial: bool = True) -> None:
-        """H (§4.8.4.5, spec §5.5): seek the reference edge at P41, creep back at P1003.
-
-        P147 bit 0 direction, bit 1 limit switch as reference, bit 2 then the next electrical
-        zero, bit 5 centre of the switch, bit 6 encoder zero pulse instead of the switch, bit 7
-        switch, then zero pulse, then electrical zero.
-        """
-        if self.motion is not None:
-            raise SersError(70)
-        p147 = int(self.ram.get(147, 0))
-        direction = -1 if p147 & 1 else 1
-        if p147 & 2:
-            signal = "limit_left" if direction < 0 else "limit_right"
-            if self.signals.get("stop"):
-                raise SersError(68)
-            if not self.energized or self.errors & ~LIMIT:
-                raise SersError(79)
-        else:
-            signal = "index" if p147 & 64 and not p147 & 128 else "reference"
-            self._motion_checks(0)
-        accel = float(self.ram[42])
-        _can_move(float(self.ram[41]) * float(self.ram.get(108, 100)) / 100, accel)
-        _can_move(float(self.ram[1003]), accel)
-        # (creep speed and ramp as at the start: a write during the run cannot stop it midway)
-        self._homing = {"signal": signal, "direction": direction, "phase": "seek", "p147": p147,
-                        "creep": float(self.ram[1003]), "accel": accel}
-        self._begin_motion("home", accel)
-        if signal == "index":
-            self._watches.append(self.axis.watch_index(self._on_index))
-        if signal != "index" and self._homing_signal_active():
-            self._creep()
-        else:
-            speed = float(self.ram[41]) * float(self.ram.get(108, 100)) / 100
-            self.axis.jog(direction, speed, accel)
-            self._arm_position_watches(keep=True)
-
-    def _homing_signal_active(self) -> bool:
-        assert self._homing is not None
-        if self._homing["signal"] == "reference":
-            return self._reference_active()
-        return bool(self.signals.get(self._homing["signal"]))
-
-    def _creep(self) -> None:
-        assert self._homing is not None
-        self._homing["phase"] = "creep"
-        self.axis.jog(-self._homing["direction"], self._homing["creep"], self._homing["accel"])
-
-    def _on_index(self, _direction: int) -> None:
-        """Encoder zero pulse (once per motor revolution) during homing with P147 bit 6/7."""
-        homing = self._homing
-        if homing is None:
-            return
-        if homing["signal"] == "index":
-            self._homing_edge(homing["phase"] == "seek")
-        elif homing["phase"] == "to_index":
-            homing["phase"] = "edge"
+    def quick_end(self) -> None:
+        """Torque off (OFF, a short circuit, U < U_L): the motion ends at once."""
+        if self.kind is not None:
             self.axis.quick_stop()
-            self._electrical_reset()
+            self.finish()
 
-    def _homing_edge(self, active: bool) -> None:
-        homing = self._homing
-        if homing is None:
-            return
-        phase, p147 = homing["phase"], homing["p147"]
-        if phase == "seek" and active:
-            homing["phase"] = "braking"
-            self.axis.stop(homing["accel"], on_done=self._creep)
-        elif phase == "creep" and not active:
-            # G-HOME: at creep speed the drive stops exactly at the falling edge
-            if p147 & 32 and homing["signal"] == "reference":
-                homing["phase"] = "measure"
-                self.axis.quick_stop()
-                homing["first_edge"] = self.axis.position()
-                self.axis.jog(homing["direction"], homing["creep"], homing["accel"])
-            elif p147 & 128:
-                homing["phase"] = "to_index"  # keep creeping to the next zero pulse
-                self._watches.append(self.axis.watch_index(self._on_index))
-            else:
-                homing["phase"] = "edge"
-                self.axis.quick_stop()
-                self._electrical_reset()
-        elif phase == "measure" and not active:
-            homing["phase"] = "centre"
-            self.axis.quick_stop()
-            centre = (homing["first_edge"] + self.axis.position()) / 2
-            self.axis.move_to(centre, homing["creep"], homing["accel"], on_done=self._homing_done)
+    def error_stop(self, then: Callable[[], None]) -> bool:
+        """A drive error while the axis moves: brake with P1030, then ``then`` (§2.1.3)."""
+        if self.kind is None or not self.axis.moving:
+            return False
+        decel = self.params.error_deceleration
+        self._stop_decel = decel
+        self.kind = "error-stop"
+        self.jog.cancel_timer()
+        self.axis.stop(decel, on_done=lambda: (self.finish(), then()))
+        return True
 
-    def _electrical_reset(self) -> None:
-        """P147 bit 2/7: move on to the next electrical zero (every 256 increments)."""
-        homing = self._homing
-        assert homing is not None
-        if not homing["p147"] & (4 | 128):
-            self._homing_done()
-            return
-        here = self.axis.position()
-        if -homing["direction"] > 0:
-            target = math.ceil(here / ELECTRICAL_PERIOD - 1e-9) * ELECTRICAL_PERIOD
-        else:
-            target = math.floor(here / ELECTRICAL_PERIOD + 1e-9) * ELECTRICAL_PERIOD
-        homing["phase"] = "reset"
-        self.axis.move_to(target, homing["creep"], homing["accel"], on_done=self._homing_done)
+    def overrun(self, target: float, speed: float, accel: float) -> None:
+        """A jog's ':' condition held: travel the overrun P1039, then stand (§4.6.9)."""
+        self.kind = "stopping"
+        self.axis.move_to(target, speed, accel, on_done=self.finish)
 
-    def _homing_done(self) -> None:
+    def home_reached(self) -> None:
         self.offset = self.axis.position()
-        self.homed = True
-        self._motion_finished()
-        if self.ram.get(1121):
-            self.spontaneous(f"@{self.cfg.address}POS=1")
+        self.finish()
+        self._report_in_position()
 
-    def _reference_active(self) -> bool:
-        selector = int(self.ram.get(1130, 0)) if self.ram else 0
-        if selector:
-            return bool(self.signals.get(f"I{selector}"))
-        return bool(self.signals.get("reference"))
+    def check_until(self) -> None:
+        """The drive's state changed: a program's WAIT and a jog's ':' look again."""
+        self._poke()
+        self.jog.check_until()
 
-    def _on_reference(self, name: str, old: Any, new: Any) -> None:
-        if self._homing is not None and self._homing["signal"] == "reference" and not self.ram.get(1130):
-            self._homing_edge(bool(new))
-        self._check_until()
+    def _report_in_position(self) -> None:
+        if self.params.report_in_position:
+            self._in_position_message()
 
-    # -- POS0 / POSR -------------------------------------------------------------------------
+    # -- positioning E (§4.6.6) -----------------------------------------------------------------
+    def start_positioning(self) -> None:
+        """E (§4.6.6); after a polynomial segment's definition it closes the segment (§4.6.7)."""
+        if self.poly.definition is not None:
+            self.poly.execute()
+            return
+        self.positioning.start()
+
+    def continue_positioning(self) -> bool:
+        """P1033=1: continue the interrupted move; False if it stands at the setpoint already."""
+        return self.positioning.resume()
+
+    def arrived(self) -> None:
+        self.finish()
+        self._report_in_position()
+
+    # -- polynomial profiles (the host of :class:`.polynomial.PolynomialMove`) ------------------
+    def begin_polynomial(self, end: float) -> None:
+        """The first segment of a polynomial profile starts toward ``end``."""
+        here = self.axis.position()
+        self.checks((end > here) - (end < here))
+        self.begin("poly", float(self.params.acceleration))
+        self.arm_watches()
+
+    def polynomial_finished(self) -> None:
+        if self.kind is not None:
+            self.finish()
+            self._report_in_position()
+
+    # -- POS0 / POSR (§4.8.4.2) -------------------------------------------------------------------
+    def home(self) -> None:
+        """H (§4.8.4.5)."""
+        self.homing.home(self.kind is not None)
+
     def pos0(self) -> None:
         """POS0 (§4.8.4.2, spec §5.13): go to the nearest phase zero, then P51 := 0.
         During a polynomial profile it ends polynomial mode instead (§4.6.7)."""
-        if self.motion == "poly":
+        if self.kind == "poly":
             self.stop_motion()
             return
-        if self.motion is not None:
+        if self.kind is not None:
             raise SersError(70)
         p51 = self.p51_inc()
         target = round(p51 / ELECTRICAL_PERIOD) * ELECTRICAL_PERIOD
         direction = (target > p51) - (target < p51)
-        self._motion_checks(direction)
-        _can_move(float(self.ram[41]), float(self.ram[42]))
-        self._begin_motion("pos0", float(self.ram[42]))
+        self.checks(direction)
+        speed, accel = float(self.params.homing_velocity), float(self.params.homing_acceleration)
+        can_move(speed, accel)
+        self.begin("pos0", accel)
 
         def done() -> None:
             self.offset = self.axis.position()
-            self._motion_finished()
+            self.finish()
 
-        self.axis.move_to(target + self.offset, float(self.ram[41]), float(self.ram[42]), on_done=done)
+        self.axis.move_to(target + self.offset, speed, accel, on_done=done)
 
     def posr(self, force: bool) -> None:
         """POSR (§4.8.4.2, spec §5.9): after a step loss, follow the motor's real position
         (encoder) and travel at P41 to the setpoint of the interrupted positioning.  Only with
         P11/P12 value 32, unless P1043=3."""
-        if self.motion == "poly":
+        if self.kind == "poly":
             self.stop_motion()  # POSR also ends polynomial mode (§4.6.7)
             return
-        stepped = self.errors & STEP_LOSS or self.warnings & STEP_LOSS
+        power = self.power
+        stepped = power.errors & STEP_LOSS or power.warnings & STEP_LOSS
         if not force and not stepped:
             raise SersError(3)
-        if self.motion is not None:
+        if self.kind is not None:
             raise SersError(70)
-        if self.errors & STEP_LOSS:
-            self.errors &= ~STEP_LOSS
-        self.warnings &= ~STEP_LOSS
-        self._resync_to_encoder()
-        target = self._setpoint if self._setpoint is not None else float(self.ram[47]) + self.offset
-        direction = (target > self.axis.position()) - (target < self.axis.position())
-        self._motion_checks(direction)
-        _can_move(float(self.ram[41]), float(self.ram[42]))
-        self._begin_motion("posr", float(self.ram[42]))
-        self.axis.move_to(target, float(self.ram[41]), float(self.ram[42]), on_done=self._posr_done)
-        self._arm_position_watches()
+        power.clear_step_loss()
+        self.encoder.resync()
+        setpoint = self.positioning.setpoint
+        target = setpoint if setpoint is not None else float(self.params.position_setpoint) + self.offset
+        here = self.axis.position()
+        direction = (target > here) - (target < here)
+        self.checks(direction)
+        speed, accel = float(self.params.homing_velocity), float(self.params.homing_acceleration)
+        can_move(speed, accel)
+        self.begin("posr", accel)
+        self.axis.move_to(target, speed, accel, on_done=self._posr_done)
+        self.arm_watches()
 
     def _posr_done(self) -> None:
-        if int(self.ram.get(1140, 0)) & 2:
-            self._posr_attempts = 0
-        self._motion_finished()
+        self.encoder.retried()
+        self.finish()
 
-    # -- pulse input, hand-wheel, electronic gear (§3.4, §4.8.6.6, spec §5.9) ---------------
+    # -- pulse input, hand-wheel, electronic gear (§3.4, §4.8.6.6, spec §5.9) ---------------------
     def pulses(self, count: int) -> None:
         """``count`` pulses (signed; 4× evaluated encoder counts) arrive at I3/I4 or ENC.
 
         With P1053 = 1/2/3 (I3/I4) or 5/6/7 (ENC), or P1143 = 1/2/3, the motor follows
         by count × P1054 × 64 increments, limited by A and V (hand-wheel, electric shaft)."""
-        mode, alt = int(self.ram.get(1053, 0)), int(self.ram.get(1143, 0))
+        params = self.params
+        mode, alt = int(params.pulse_input), int(params.pulse_input2)
         if mode in (1, 2, 3, 5, 6, 7):
-            weight, counter = float(self.ram.get(1054, 1)), 1119
+            weight, counter = float(params.pulse_weight), 1119
         elif alt in (1, 2, 3):
-            weight, counter = float(self.ram.get(1144, 1)), 1120
+            weight, counter = float(params.pulse_weight2), 1120
         else:
             return
-        if mode in (5, 6, 7) and "E50" not in self.cfg.options:
+        if mode in (5, 6, 7) and not self._has_option_e50():
             return
-        self.ram[counter] = int(self.ram.get(counter, 0)) + count
-        if not self.energized or self.errors or self.motion not in (None, "follow"):
+        params.values[counter] = int(params.values.get(counter, 0)) + count
+        if not self.power.energized or self.power.errors or self.kind not in (None, "follow"):
             return
         step = count * weight * INC_PER_REV / 200
-        base = self._follow_target if self.motion == "follow" else self.axis.position()
+        base = self._follow_target if self.kind == "follow" else self.axis.position()
         target = base + step
         direction = (step > 0) - (step < 0)
         try:
-            self._motion_checks(direction)
+            self.checks(direction)
         except SersError:
             return  # pulses toward a blocked direction are ignored (P1094=0)
         self._follow_target = target
-        if self.motion is None:
-            self._begin_motion("follow", float(self.ram[138]))
-        self.axis.move_to(target, float(self.ram[91]), float(self.ram[138]), on_done=self._motion_finished)
+        if self.kind is None:
+            self.begin("follow", float(params.acceleration))
+        self.axis.move_to(target, float(params.velocity), float(params.acceleration), on_done=self.finish)
 
-    # -- load angle / step-loss monitoring (§4.8.6.6, spec §5.9) ----------------------------
-    def encoder_position(self) -> float:
-        """Where the rotor really is (increments): the stator field minus the steps lost."""
-        if self._stall_rotor is not None:
-            return self._stall_rotor
-        return self.axis.position() - self.lost
-
-    def _monitoring(self) -> bool:
-        mode = int(self.ram.get(1053, 0))
-        encoder = mode == 4 or (mode == 8 and "E50" in self.cfg.options)
-        return encoder and int(self.ram.get(1029, 0)) != 0
-
-    def _on_stall(self, name: str, old: Any, new: Any) -> None:
-        if self.ram.get(1152) == 1:
-            self._servo_overload(bool(new))
-            return
-        if new:
-            self._stall_rotor = self.axis.position() - self.lost
-            self._arm_load_watch()
-        elif self._stall_rotor is not None:
-            self.lost = self.axis.position() - self._stall_rotor
-            self._stall_rotor = None
-            for watch in self._load_watches:
-                watch.cancel()
-            self._load_watches = []
-
-    def _arm_load_watch(self) -> None:
-        for watch in self._load_watches:
-            watch.cancel()
-        self._load_watches = []
-        if self._stall_rotor is None or not self._monitoring():
-            return
-        window = float(self.ram.get(1002, 255))
-        rotor = self._stall_rotor
-        for where in (rotor + window, rotor - window):
-            self._load_watches.append(self.axis.watch(where, lambda _d: self._step_loss()))
-
-    def _step_loss(self) -> None:
-        """The load angle exceeded P1002: P1029 1 = drive error, 2 = warning, 3 = error, motor on."""
-        self.max_load_angle = max(self.max_load_angle, abs(self.axis.position() - self.encoder_position()))
-        reaction = int(self.ram.get(1029, 0))
-        if reaction == 2:
-            self.warn(STEP_LOSS)
-            self.stop_motion()
-        elif reaction in (1, 3):
-            self.drive_error(STEP_LOSS)
-        retries = int(self.ram.get(1138, 0))
-        if retries and self._posr_attempts < retries:
-            self._posr_attempts += 1
-            delay = float(self.ram.get(1139, 1.0)) * 0.1
-            self.pos_ok = False
-            self._timers.append(self.clock.call_later(delay, self._auto_posr))
-
-    def _auto_posr(self) -> None:
-        """P1138/P1139: automatic POSR after a step loss."""
-        if self.motion is not None:
-            self._timers.append(self.clock.call_later(0.01, self._auto_posr))
-            return
-        self.errors &= ~STEP_LOSS
-        if not self.errors:
-            self.energized = self.relay = True
-        try:
-            self.posr(force=True)
-        except SersError as exc:
-            self.record_error(exc.errno)
-
-    def _resync_to_encoder(self) -> None:
-        """Clearing a step loss: P51 takes the encoder's position (§4.8.6.6)."""
-        if self.axis.moving:
-            return
-        rotor = self.encoder_position()
-        if self._stall_rotor is None:
-            self.lost = 0.0
-        if rotor != self.axis.position():
-            self.axis.set_position(rotor)
-            if self._stall_rotor is not None:
-                self._arm_load_watch()
-
-    # -- software limits and compare positions (§4.8.6.12, §4.8.1.2) ------------------------
-    def _soft_limits(self) -> tuple[float, float] | None:
-        lower, upper = float(self.ram.get(1040, 0)), float(self.ram.get(1041, 0))
-        if lower < upper:
-            return lower, upper
-        return None
-
-    def _outside_soft_limits(self) -> bool:
-        limits = self._soft_limits()
-        if limits is None:
-            return False
-        p51 = self.p51_inc()
-        return p51 < limits[0] or p51 > limits[1]
-
-    def _arm_position_watches(self, keep: bool = False) -> None:
-        """Software limits, compare positions and standstill monitoring for a new motion."""
-        if not keep:
-            for watch in self._watches:
-                watch.cancel()
-            self._watches.clear()
-        limits = self._soft_limits()
-        homing = self.motion == "home" and not int(self.ram.get(147, 0)) & 8
-        if limits is not None and not homing:
-            lower, upper = (x + self.offset for x in limits)
-            velocity_sign = _sign(self.axis.final_position() - self.axis.position())
-            here = self.axis.position()
-            if (here > upper and velocity_sign > 0) or (here < lower and velocity_sign < 0):
-                self._timers.append(self.clock.call_later(0, self._soft_limit_hit))
-            self._watches.append(self.axis.watch(upper + 1e-9, lambda d: d > 0 and self._soft_limit_hit()))
-            self._watches.append(self.axis.watch(lower - 1e-9, lambda d: d < 0 and self._soft_limit_hit()))
-        self._arm_standstill_monitor()
-        for pos_param, action_param in ((1024, 1025), (1026, 1027)):
-            action = int(self.ram.get(action_param, 0))
-            if action:
-                where = float(self.ram.get(pos_param, 0)) + self.offset
-                self._watches.append(self.axis.watch(where, lambda _d, a=action: self._compare_action(a)))
-
-    def _arm_standstill_monitor(self) -> None:
-        """P1044/P1045 (§4.8.6.8, spec §5.7): while moving, an edge on input P1045 must come
-        at least every P1044; the distance counts from the motion start and from each edge."""
-        for watch in self._standstill_watches:
-            watch.cancel()
-        self._standstill_watches = []
-        distance = abs(float(self.ram.get(1044, 0)))
-        if not distance or self.motion is None:
-            return
-        here = self.axis.position()
-        for where in (here + distance, here - distance):
-            self._standstill_watches.append(self.axis.watch(where, lambda _d: self._standstill_error()))
-
-    def _standstill_error(self) -> None:
-        if self.motion is not None and self.motion != "error-stop":
-            self.drive_error(STANDSTILL)
-
-    def _soft_limit_hit(self) -> None:
-        self.warn(1)
-        if self.motion not in (None, "stopping", "error-stop"):
-            self.stop_motion()
-
-    def _compare_action(self, action: int) -> None:
-        """P1025/P1027: ±1..4 set/clear O1..O4, ±5..7 set/clear M1..M3."""
-        value = action > 0
-        n = abs(action)
-        if n <= 4:
-            self.signals.set(f"O{n}", value)
-        elif n <= 7:
-            self.ram[1100 + n - 4] = int(value)
-
-
-def _can_move(speed: float, accel: float) -> None:
-    """A jog, a homing run, POS0/POSR or a move's backlash legs need a speed and an acceleration
-    above 0; with P108 = 0 % or a speed or ramp parameter set to 0 the motion is refused as V or
-    A too small [SIM-CHOICE: the manual does not say what the drive does; it cannot move, and
-    the simulator must not fail]."""
-    if not speed > 0:
-        raise SersError(121)
-    if not accel > 0:
-        raise SersError(119)
+    # -- the load (§4.8.6.6, §4.8.6.7) ------------------------------------------------------------
+    def stall(self, stalled: bool) -> None:
+        """The load stalls the rotor: a step loss, or in SERVO mode (P1152=1) the field waits."""
+        if self.params.servo_mode == 1:
+            self.positioning.servo_overload(stalled)
+        else:
+            self.encoder.stall(stalled)

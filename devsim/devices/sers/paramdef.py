@@ -1,58 +1,103 @@
-"""The shape of one SERS parameter row (manual §4.7, §4.8); the rows are in ``params_*.py``.
+"""How a SERS parameter row is written (manual §4.7, §4.8); the rows are in ``params_*.py``.
 
-See :mod:`devsim.devices.sers.parameters` for the conventions of the table.
+Every row is a kit :class:`~devsim.core.parameters.Param`; :class:`Rows` spells one in the
+manual's terms (``_p(number, German designation, English gloss, **facts)``) and puts the facts
+only the SERS has into the row's ``extra`` (see :data:`EXTRA`).  See
+:mod:`devsim.devices.sers.parameters` for the conventions of the table.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from types import MappingProxyType
 from typing import Any, Literal
 
-from devsim.core.record import record
+from devsim.core.parameters import Param
 
-__all__ = ["POS_MAX", "POS_MIN", "RW_E", "Kind", "Number", "ParamDef", "Rows"]
+__all__ = ["EXTRA", "POS_MAX", "POS_MIN", "RW_E", "Kind", "Number", "Rows", "UNITS"]
 
+#: How a value is kept and shown: a plain integer, a weighted quantity (converted with P76 /
+#: P44 / P160, §4.8.4.6) or a number with a fixed number of decimals.
 Kind = Literal["int", "position", "velocity", "acceleration", "fixed"]
 Number = int | float
 
+#: The unit column of a weighted parameter: its unit follows the weighting parameters.
+UNITS: dict[str, str] = {"position": "P123 unit", "velocity": "P121 unit", "acceleration": "P122 unit"}
 
-@record
-class ParamDef:
-    number: int
-    name: str  # German designation (manual heading) -- returned by P<n>??
-    name_en: str  # English gloss (P265=1)
-    aliases: tuple[str, ...] = ()
-    kind: Kind = "int"
-    decimals: int = 0  # for kind "fixed"
-    minimum: Number | None = None
-    maximum: Number | None = None
-    choices: frozenset[int] | None = None
-    default: Number | None = 0
-    readable: bool = True
-    writable: bool = True
-    saved: bool = False
-    saved_with_p1117: bool = False
-    too_large_errno: int = 1
-    too_small_errno: int = 2
-    doc: str = ""
-    # --- extensions beyond the brief -----------------------------------------------------------
-    min_exclusive: bool = False  # range is "> minimum"
-    invalid_errno: int = 3  # value not in choices
-    write_errno: int = 105  # write to a read-only parameter
-    length_unit: bool = False  # query answer carries the position length unit (P123)
-    commands: tuple[str, ...] = ()  # command keywords / bit addresses acting on this parameter
-
-    @property
-    def weighted(self) -> bool:
-        return self.kind in ("position", "velocity", "acceleration")
+#: The SERS's own facts of a row (``Param.extra``) and their values when a row does not name them:
+#: ``kind`` (:data:`Kind`); the errnos of a value too large, too small, not among the choices, and
+#: of a write to a read-only parameter; ``min_exclusive`` for a range "> minimum" (V, P103, P123);
+#: ``saved_with_p1117`` for W and R0..R5 (stored by PSAVE only with P1117=1); ``length_unit``
+#: when the query answer carries the position length unit (P123); ``commands``, the command
+#: keywords and bit addresses acting on the parameter; ``note``, the manual's remarks.
+EXTRA: dict[str, Any] = {
+    "kind": "int",
+    "too_large_errno": 1,
+    "too_small_errno": 2,
+    "invalid_errno": 3,
+    "write_errno": 105,
+    "min_exclusive": False,
+    "saved_with_p1117": False,
+    "length_unit": False,
+    "commands": (),
+    "note": "",
+}
 
 
+def _access(readable: bool, writable: bool) -> Literal["rw", "r", "w"]:
+    return "rw" if readable and writable else "r" if readable else "w"
 
 
-class Rows(list[ParamDef]):
-    """Collects the rows of one table module: ``_p(number, name, name_en, **fields)``."""
+class Rows(list[Param]):
+    """Collects the rows of one table module: ``_p(number, name, name_en, **facts)``.
 
-    def __call__(self, number: int, name: str, name_en: str, **kw: Any) -> None:
-        self.append(ParamDef(number, name, name_en, **kw))
+    ``name`` is the German designation (the manual's heading, the answer to ``P<n>??``),
+    ``name_en`` the English gloss (the answer with P265=1), the row's ``doc``."""
+
+    def __call__(
+        self,
+        number: int,
+        name: str,
+        name_en: str,
+        *,
+        aliases: tuple[str, ...] = (),
+        decimals: int = 0,
+        minimum: Number | None = None,
+        maximum: Number | None = None,
+        choices: Iterable[int] | None = None,
+        default: Number | None = 0,
+        readable: bool = True,
+        writable: bool = True,
+        saved: bool = False,
+        doc: str = "",
+        attr: str = "",
+        **facts: Any,
+    ) -> None:
+        unknown = set(facts) - set(EXTRA) - {"kind"}
+        if unknown:  # pragma: no cover - table integrity
+            raise TypeError(f"P{number}: unknown facts {sorted(unknown)}")
+        kind = facts.get("kind", "int")
+        extra = {**EXTRA, **facts, "note": doc}
+        self.append(
+            Param(
+                number,
+                name,
+                f"§4.7 P{number}",
+                name_en,
+                aliases=aliases,
+                type="int" if kind == "int" else "float",
+                minimum=minimum,
+                maximum=maximum,
+                choices=None if choices is None else tuple(sorted(choices)),
+                unit=UNITS.get(kind, ""),
+                decimals=decimals,
+                default=default,
+                saved=saved,
+                access=_access(readable, writable),
+                attr=attr,
+                extra=MappingProxyType(extra),
+            )
+        )
 
 
 # Position range of W etc. in the default weighting (rotational, 4 decimals) -- §4.8.4.2.

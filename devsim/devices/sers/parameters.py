@@ -8,6 +8,10 @@ designation returned by ``P<n>??``), §4.2 "Adresse" (aliases), §2.1.4 (supply 
 
 Conventions
 -----------
+* Each row is a kit :class:`~devsim.core.parameters.Param` (key = the P number, ``name`` the German
+  designation, ``doc`` the English gloss); the SERS's own facts below are in its ``extra``
+  (:data:`~devsim.devices.sers.paramdef.EXTRA`): ``kind``, the errnos, ``min_exclusive``,
+  ``saved_with_p1117``, ``length_unit``, ``commands`` and the manual's ``note``.
 * Values are in user units.  Weighted kinds (``position``/``velocity``/``acceleration``) follow
   P76 / P44 / P160 (see :mod:`.units`); their ``minimum``/``maximum`` are given in the default
   weighting (°, U/min, rad/s²) where the manual states a range, else ``None`` -- the device
@@ -19,7 +23,7 @@ Conventions
 * ``invalid_errno`` is used when a value is not in ``choices`` (default 3 "ungültig"; P1014: 80;
   P0 / P1004: 82).  ``write_errno`` is used when a read-only parameter is written (default 105;
   P1034: 12).  Reading a write-only parameter -> errno 106.
-* ``saved`` = "E" in the spec (stored by PSAVE).  W (P47) and R0..R5 are "S": stored only with
+* ``saved`` = "E" in the spec (stored by PSAVE); ``effect`` is ``stored`` for :data:`STORED_ONLY`.  W (P47) and R0..R5 are "S": stored only with
   P1117=1 (``saved_with_p1117``).  P51 is stored by POSSAVE only (:data:`POSSAVE_PARAMS`).
 * ``default`` = factory/power-on value ([M] manual or [SIM] spec choice); for variant-dependent
   values it is the default variant SERS 06.85 (P1010 max 8400 mA, P1034 = 6).
@@ -32,17 +36,21 @@ Conventions
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 
-from devsim.devices.sers.paramdef import Kind, Number, ParamDef
+from devsim.core.parameters import Param, ParameterTable
+from devsim.core.record import record, replace
+from devsim.devices.sers.paramdef import Kind, Number
 from devsim.devices.sers.params_io import ROWS as _IO
 from devsim.devices.sers.params_misc import ROWS as _MISC
 from devsim.devices.sers.params_motion import ROWS as _MOTION
 
 __all__ = [
-    "ParamDef",
     "Kind",
+    "PARAMETER_TABLE",
     "PARAMETERS",
     "ALIASES",
+    "KIND",
     "COMMAND_VALUES",
     "BIT_ADDRESSES",
     "FACTORY_DEFAULTS",
@@ -58,21 +66,40 @@ __all__ = [
     "DEFAULT_VARIANT",
     "PARAMETER_MASKS",
     "PROGRAM_MASKS",
+    "STORED_ONLY",
+    "ParamLimits",
     "lookup",
 ]
 
-_TABLE: tuple[ParamDef, ...] = (*_IO, *_MOTION, *_MISC)
+#: Parameters that are kept and answered but have no effect in the simulator (their rows'
+#: ``effect`` is ``stored``): found by looking for every P number in the model's code and
+#: reading the manual's section for those never used.  SERS-Programmer masks and password,
+#: fieldbus settings, commutation and chopper settings have no effect a host could see; the
+#: others have one the manual describes and the simulator lacks (see the session notes).
+STORED_ONLY: frozenset[int] = frozenset(
+    {
+        1009, 1034, 1038, 1056, 1059, *range(1060, 1069), *range(1070, 1074), 1093, 1094, 1095, 1097,
+        1134, 1136, 1142, 1147, 1149, 1150, 1153, 1154, 1155, 1156, 1157, 1158, 1159, 1161,
+    }
+)
 
-#: P number -> definition.
-PARAMETERS: dict[int, ParamDef] = {}
-for _d in _TABLE:
-    if _d.number in PARAMETERS:  # pragma: no cover - table integrity
-        raise RuntimeError(f"duplicate parameter P{_d.number}")
-    PARAMETERS[_d.number] = _d
-PARAMETERS = dict(sorted(PARAMETERS.items()))
+#: The SERS's parameters as kit rows, by P number (aliases V, A, W …; ``P91``, ``p 91``, ``91``).
+PARAMETER_TABLE = ParameterTable(
+    sorted(
+        (replace(row, effect="stored") if row.key in STORED_ONLY else row for row in (*_IO, *_MOTION, *_MISC)),
+        key=lambda row: row.key,
+    ),
+    prefix="P",
+)
+
+#: P number -> row.
+PARAMETERS: Mapping[int, Param] = PARAMETER_TABLE.rows  # type: ignore[assignment]
+
+#: P number -> how its value is kept and shown (``int``, a weighting, ``fixed``).
+KIND: dict[int, Kind] = {n: d.extra["kind"] for n, d in PARAMETERS.items()}
 
 #: Upper-case alias -> P number (simple aliases only; see module docstring).
-ALIASES: dict[str, int] = {alias: d.number for d in PARAMETERS.values() for alias in d.aliases}
+ALIASES: dict[str, int] = {alias: d.key for d in PARAMETERS.values() for alias in d.aliases}
 
 #: Command keyword -> (P number, value written).  §4.2, §4.8.2.1, §4.8.2.2, §4.8.4.2, §4.8.6.3,
 #: §4.8.6.10.  (PGM = programming mode without deletion and VER = read P1133 are not writes.)
@@ -111,25 +138,40 @@ FACTORY_DEFAULTS: dict[int, Number] = {n: d.default for n, d in PARAMETERS.items
 #: Parameters stored by PSAVE (P1004=2) unconditionally.
 SAVED: frozenset[int] = frozenset(n for n, d in PARAMETERS.items() if d.saved)
 #: Parameters stored by PSAVE only with P1117=1, and by P1004=5 (W, R0..R5).
-SAVED_WITH_P1117: frozenset[int] = frozenset(n for n, d in PARAMETERS.items() if d.saved_with_p1117)
+SAVED_WITH_P1117: frozenset[int] = frozenset(n for n, d in PARAMETERS.items() if d.extra["saved_with_p1117"])
 #: Stored by POSSAVE (P1004=4) and restored at power-on.
 POSSAVE_PARAMS: frozenset[int] = frozenset({51})
 #: Weighted parameters (converted via P76 / P44 / P160).
-WEIGHTED: frozenset[int] = frozenset(n for n, d in PARAMETERS.items() if d.weighted)
+WEIGHTED: frozenset[int] = frozenset(n for n, kind in KIND.items() if kind in ("position", "velocity", "acceleration"))
 
 _TOKEN = re.compile(r"P\s*([0-9]+)")
 
 
-def lookup(token: str) -> ParamDef:
-    """Resolve ``P91`` / ``p 91`` / ``91`` / ``V`` / ``wa`` to its definition; ``KeyError`` if
-    unknown."""
+@record
+class ParamLimits:
+    """What a configured parameter value (``params:`` of the configuration) is checked against:
+    the row's range as the drive checks a write (§4.7), in the default weighting."""
+
+    number: int
+    name: str
+    choices: tuple[int, ...] | None
+    minimum: Number | None
+    maximum: Number | None
+    min_exclusive: bool
+
+
+def lookup(token: str) -> ParamLimits:
+    """Resolve ``P91`` / ``p 91`` / ``91`` / ``V`` / ``wa`` to its parameter's limits; ``KeyError``
+    if unknown."""
     key = str(token).strip().upper()
     m = _TOKEN.fullmatch(key)
     if m:
-        return PARAMETERS[int(m.group(1))]
-    if key.isascii() and key.isdigit():
-        return PARAMETERS[int(key)]
-    return PARAMETERS[ALIASES[key]]
+        row = PARAMETERS[int(m.group(1))]
+    elif key.isascii() and key.isdigit():
+        row = PARAMETERS[int(key)]
+    else:
+        row = PARAMETERS[ALIASES[key]]
+    return ParamLimits(row.key, row.name, row.choices, row.minimum, row.maximum, row.extra["min_exclusive"])
 
 
 # ============================================================================================
@@ -192,17 +234,3 @@ PROGRAM_MASKS: dict[int, tuple[int, ...]] = {
     1070 + i: tuple(range(16 * i + 1, 16 * i + 17)) for i in range(4)
 }
 
-del _d
-
-
-#: Parameters that are kept and answered but have no effect in the simulator (the generated
-#: reference marks them "stored"): found by looking for every P number in the model's code and
-#: reading the manual's section for those never used.  SERS-Programmer masks and password,
-#: fieldbus settings, commutation and chopper settings have no effect a host could see; the
-#: others have one the manual describes and the simulator lacks (see the session notes).
-STORED_ONLY: frozenset[int] = frozenset(
-    {
-        1009, 1034, 1038, 1056, 1059, *range(1060, 1069), *range(1070, 1074), 1093, 1094, 1095, 1097,
-        1134, 1136, 1142, 1147, 1149, 1150, 1153, 1154, 1155, 1156, 1157, 1158, 1159, 1161,
-    }
-)

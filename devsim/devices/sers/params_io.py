@@ -46,6 +46,7 @@ _p(
     doc="Manual functions on the inputs when the service switch is off: 1 I1 left slow; 2 I2 right "
     "slow; 4 I3 left fast; 8 I4 right fast; 16 I5 homing; 32 I6 motor ON/OFF (ON also clears "
     "P11/P12); 64 I7 stop (manual prints 84); 128 I8 start program.",
+    attr="input_enable",
 )
 _p(
     1056,
@@ -62,6 +63,7 @@ _p(
     maximum=255,
     **_RW_E,
     doc="Inputs used as address lines in parallel mode (P1022=15 -> I1..I4); P1021 must contain 128.",
+    attr="input_label_enable",
 )
 _p(
     1098,
@@ -71,6 +73,7 @@ _p(
     maximum=255,
     **_RW_E,
     doc="Event mode: bit n-1 -> rising edge on In jumps to Ln (§4.5.2).",
+    attr="program_jump_enable",
 )
 _p(
     1023,
@@ -80,6 +83,7 @@ _p(
     maximum=1,
     **_RW_E,
     doc="0 = program start on an edge at I8; 1 = start while I8 is set (level).",
+    attr="start_enable",
 )
 _p(
     1046,
@@ -102,6 +106,7 @@ _p(
     default=7,
     **_RW_E,
     doc="x = 2^n-1 -> hysteresis n bits, resolution 10-n bits (7 = default, 7-bit resolution).",
+    attr="adc_hysteresis",
 )
 _p(
     1148,
@@ -111,6 +116,7 @@ _p(
     maximum=255,
     **_RW_E,
     doc="Subtracted from the ADC value, scale 0..255 = 0..5 V.",
+    attr="adc_offset",
 )
 _p(
     1130,
@@ -120,6 +126,7 @@ _p(
     maximum=8,
     **_RW_E,
     doc="0 = standard reference input; 1..8 = input I1..I8 is the reference switch.",
+    attr="reference_input",
 )
 _p(
     1038,
@@ -150,6 +157,7 @@ _p(
     maximum=4,
     **_RW_E,
     doc="On OFF: 1..4 switch O1..O4 on; -1..-4 switch O1..O4 off; 0 = off.",
+    attr="brake_output",
 )
 _p(
     1024,
@@ -162,6 +170,7 @@ _p(
     too_small_errno=89,
     **_RW_E,
     doc="When P51 = P1024 the action P1025 is executed.",
+    attr="compare_position1",
 )
 _p(
     1025,
@@ -172,6 +181,7 @@ _p(
     **_RW_E,
     doc="0 off; 1..4 set O1..O4; -1..-4 clear; 5..7 set M1..M3; -5..-7 clear M1..M3. "
     "(Manual heading misprinted 'Vergleichsausgang 2', spec §7.3.)",
+    attr="compare_output1",
 )
 _p(
     1026,
@@ -184,8 +194,9 @@ _p(
     too_small_errno=91,
     **_RW_E,
     doc="As P1024.",
+    attr="compare_position2",
 )
-_p(1027, "Vergleichsausgang 2", "compare output 2", minimum=-7, maximum=7, **_RW_E, doc="As P1025.")
+_p(1027, "Vergleichsausgang 2", "compare output 2", minimum=-7, maximum=7, **_RW_E, doc="As P1025.", attr="compare_output2")
 _p(
     1125,
     "Ausgang Motor IN-Position",
@@ -194,6 +205,7 @@ _p(
     maximum=4,
     **_RW_E,
     doc="1..4: O1..O4 := P336; -1..-4 inverted.",
+    attr="output_in_position",
 )
 _p(
     1126,
@@ -203,6 +215,7 @@ _p(
     maximum=4,
     **_RW_E,
     doc="1..4: O1..O4 := 1 while a program runs; -1..-4 inverted.",
+    attr="output_program_running",
 )
 _p(
     1131,
@@ -212,6 +225,7 @@ _p(
     maximum=4,
     **_RW_E,
     doc="1..4: O1..O4 := 1 while P11 != 0; -1..-4 inverted.",
+    attr="output_error",
 )
 _p(
     1132,
@@ -221,6 +235,7 @@ _p(
     maximum=4,
     **_RW_E,
     doc="1..4: O1..O4 := 1 while P12 != 0; -1..-4 inverted.",
+    attr="output_warning",
 )
 _p(
     1160,
@@ -231,6 +246,7 @@ _p(
     **_RW_E,
     doc="SERVO only: 1..4 set O1..O4 latched; -1..-4 clear latched; 5..8 set O1..O4 while the "
     "overload lasts; -5..-8 clear temporarily.",
+    attr="overload_output",
 )
 
 # ============================================================================================
@@ -328,6 +344,7 @@ _p(
     maximum=1,
     **_RW_E,
     doc="1 = send '@nPOS=1' at the end of every positioning.",
+    attr="report_in_position",
 )
 _p(
     1129,
@@ -337,6 +354,7 @@ _p(
     maximum=1,
     **_RW_E,
     doc="1 = send '@nP0=0' at the end of a program.",
+    attr="report_program_end",
 )
 _p(
     403,

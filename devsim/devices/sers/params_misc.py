@@ -34,6 +34,7 @@ _p(
     maximum=1,
     **_RW_E,
     doc="0 = V01..V03 delay factor 1.2; 1 = factor 1.0.",
+    attr="delay_correction",
 )
 _p(
     1164,
@@ -45,6 +46,7 @@ _p(
     minimum=0,
     maximum=6553.5,
     doc="Non-blocking timer in 0.1 s; DB := 1 when elapsed.",
+    attr="d2_time",
 )
 _p(
     1165,
@@ -55,6 +57,7 @@ _p(
     maximum=1,
     writable=False,
     doc="Set when D2 has elapsed.",
+    attr="d2_bit",
 )
 _p(
     100,
@@ -64,6 +67,7 @@ _p(
     minimum=0,
     maximum=65535,
     doc="Unsigned 16-bit (manual: 0..65536); signed -32768..32767 overflow counter when P1014=3.",
+    attr="counter1",
 )
 _p(
     101,
@@ -94,6 +98,7 @@ _p(
     default=1,
     **_RW_E,
     doc="Bits: 1 statement numbers; 2 units; 4 indented; 8 keep user line breaks; 16 LISTP texts.",
+    attr="list_option",
 )
 _p(
     1110,
@@ -103,6 +108,7 @@ _p(
     maximum=1,
     default=1,
     doc="Master: 1 = wait for own E to finish. Always 1 after power-on, not stored.",
+    attr="wait_until_positioned",
 )
 _p(
     1,
@@ -112,6 +118,7 @@ _p(
     minimum=0,
     maximum=127,
     doc="Master target address (0 = self); '*' (broadcast) allowed only here (errno 19 elsewhere).",
+    attr="target_address",
 )
 _p(2, "IF Senden/Erhalten", "IF send/receive", doc="Internal: master->slave IF query ('P2=336' = 'IF 336').")
 _p(
@@ -144,6 +151,7 @@ _p(
     default=4200,
     **_RW_E,
     doc="Phase current in mA; maximum per version (CURRENT_MAX_MA); default 50 % of max [SIM].",
+    attr="phase_current",
 )
 _p(
     1011,
@@ -155,6 +163,7 @@ _p(
     **_RW_E,
     doc="Bits: 1 reduction at standstill; 2 boost during acceleration above P1012; 4 boost at "
     "standstill; 8 full step above P1012; 16 SERVO fixed standstill current; 32 auto ON.",
+    attr="current_parameters",
 )
 _p(
     1012,
@@ -165,6 +174,7 @@ _p(
     default=10,
     **_RW_E,
     doc="Threshold for boost/full step; not below 10 rad/s².",
+    attr="boost_acceleration",
 )
 _p(
     1034,
@@ -193,6 +203,7 @@ _p(
     maximum=3,
     **_RW_E,
     doc="0 restart; 1 continue; 2 jump to L65; 3 as 2, further errors ignored until P1118=0.",
+    attr="continuation_after_stop",
 )
 _p(
     1118,
@@ -201,6 +212,7 @@ _p(
     minimum=0,
     maximum=1,
     doc="1 while L65 error handling runs.",
+    attr="l65_flag",
 )
 _p(
     1031,
@@ -238,6 +250,7 @@ _p(
     maximum=1,
     default=1,
     doc="1 = serial jog stops unless repeated within 500 ms. Not stored; 1 after power-on.",
+    attr="jog_timeout",
 )
 _p(
     1050,
@@ -257,6 +270,7 @@ _p(
     maximum=3,
     **_RW_E,
     doc="0 none; 1 drive error P11; 2 warning P12; 3 drive error, motor stays energized.",
+    attr="step_monitoring",
 )
 _P1053_NAME = (
     "Option Takteingang / elektrisches Getriebe / Handrad / Encodereingang / "
@@ -275,6 +289,7 @@ _p(
     **_RW_E,
     doc="0 off; 1 pulses I3; 2 +direction I4; 3 quadrature I3/I4; 4 load-angle I3/I4; 5..7 as 1..3 "
     "on ENC; 8 load-angle on ENC; 9 frequency on I3 (P1124); 10 frequency on ENC.",
+    attr="pulse_input",
 )
 _p(
     1054,
@@ -287,6 +302,7 @@ _p(
     default=1,
     **_RW_E,
     doc="Unit 1/200 rev, 16 bit; outside -0.32768..0.32767 the last two decimals become 0.",
+    attr="pulse_weight",
 )
 _p(
     1055,
@@ -296,6 +312,7 @@ _p(
     default=1,
     **_RW_E,
     doc="Multiples of 2 ms.",
+    attr="frequency_window",
 )
 _p(1057, "Max. Lastwinkel", "max. load angle", writable=False, doc="Internal (max. load angle).")
 _p(
@@ -307,6 +324,7 @@ _p(
     default=255,
     **_RW_E,
     doc="Increments (1/12800 rev, unweighted); 255 = 7.2°.",
+    attr="load_angle_window",
 )
 _p(1124, "Frequenz bei P1053=9", "frequency at P1053=9", writable=False, doc="Pulses per P1055 window.")
 _p(
@@ -317,6 +335,7 @@ _p(
     maximum=5,
     **_RW_E,
     doc="0 off; 1 pulses I3; 2 +direction I4; 3 quadrature; 4 load-angle I3/I4; 5 frequency (P1146).",
+    attr="pulse_input2",
 )
 _p(
     1144,
@@ -329,6 +348,7 @@ _p(
     default=1,
     **_RW_E,
     doc="As P1054 for P1143.",
+    attr="pulse_weight2",
 )
 _p(
     1145,
@@ -338,6 +358,7 @@ _p(
     default=1,
     **_RW_E,
     doc="As P1055 for P1143.",
+    attr="frequency_window2",
 )
 _p(1146, "Frequenz bei P1143=5", "frequency at P1143=5", writable=False, doc="Pulses per P1145 window.")
 _p(1147, "Takteingang Zähler 3", "pulse input counter 3", doc="Internal; do not write.")
@@ -350,8 +371,8 @@ _p(
     **_RW_E,
     doc="P1053=3/7 after a limit stop: 0 ignore blocked pulses; 1 count them.",
 )
-_p(1119, "Takteingang Zähler 1", "pulse input counter 1", doc="Pulse counter for P1053 modes.")
-_p(1120, "Takteingang Zähler 2", "pulse input counter 2", doc="As P1119.")
+_p(1119, "Takteingang Zähler 1", "pulse input counter 1", doc="Pulse counter for P1053 modes.", attr="pulse_counter1")
+_p(1120, "Takteingang Zähler 2", "pulse input counter 2", doc="As P1119.", attr="pulse_counter2")
 _p(
     1149,
     "Softwareendschalter und Vergleichsposition bei P1053=7",
@@ -361,7 +382,7 @@ _p(
     **_RW_E,
     doc="0 ignored; 1 respected.",
 )
-_p(1152, "SERVO Modus", "SERVO mode", minimum=0, maximum=1, **_RW_E, doc="1 = SERVO mode (option E50/C).")
+_p(1152, "SERVO Modus", "SERVO mode", minimum=0, maximum=1, **_RW_E, doc="1 = SERVO mode (option E50/C).", attr="servo_mode")
 _p(
     1153,
     "V Lastwinkel Korrektur für SERVO-Modus",
@@ -407,6 +428,7 @@ _p(
     maximum=1,
     **_RW_E,
     doc="1 = catch up lost distance with P1163.",
+    attr="use_catch_up_velocity",
 )
 _p(
     1163,
@@ -416,6 +438,7 @@ _p(
     default=3500,
     **_RW_E,
     doc="Catch-up speed (default 3500 U/min).",
+    attr="catch_up_velocity",
 )
 _p(
     1044,
@@ -426,6 +449,7 @@ _p(
     maximum=_POS_MAX,
     **_RW_E,
     doc="Distance within which an edge on input P1045 must occur while moving; 0 = off.",
+    attr="standstill_distance",
 )
 _p(
     1045,
@@ -436,6 +460,7 @@ _p(
     default=1,
     **_RW_E,
     doc="1..8 = input I1..I8.",
+    attr="standstill_input",
 )
 _p(
     1017,
@@ -446,6 +471,7 @@ _p(
     default=1,
     **_RW_E,
     doc="0 hardware handshake + echo; 1 no handshake + echo; 2 RS485: no echo, errors after line end.",
+    attr="handshake_mode",
 )
 _p(
     1004,
@@ -466,6 +492,7 @@ _p(
     maximum=1,
     **_RW_E,
     doc="1 = PSAVE also stores R0..R5 and W.",
+    attr="save_registers_too",
 )
 _p(
     1122,
@@ -483,8 +510,9 @@ _p(
     maximum=1,
     **_RW_E,
     doc="1 = 2 ms per instruction/command (V01..V03 compatible); 0 = 500 µs.",
+    attr="slow_program_cycle",
 )
-_p(265, "Sprachauswahl", "language selection", minimum=0, maximum=1, **_RW_E, doc="0 German; 1 English.")
+_p(265, "Sprachauswahl", "language selection", minimum=0, maximum=1, **_RW_E, doc="0 German; 1 English.", attr="language")
 _p(
     1040,
     "Grenzposition negativ",
@@ -494,6 +522,7 @@ _p(
     maximum=_POS_MAX,
     **_RW_E,
     doc="Software limit negative; P1040 > P1041 -> errno 95.",
+    attr="limit_negative",
 )
 _p(
     1041,
@@ -504,6 +533,7 @@ _p(
     maximum=_POS_MAX,
     **_RW_E,
     doc="Software limit positive.",
+    attr="limit_positive",
 )
 _p(
     1047,
@@ -515,6 +545,7 @@ _p(
     minimum=-2147483.648,
     maximum=2147483.647,
     doc="32-bit accumulator; fixed point with 3 decimals [SIM G-ARITH].",
+    attr="accumulator",
 )
 for _i in range(6):
     _p(
@@ -537,6 +568,7 @@ _p(
     maximum=1,
     **_RW_E,
     doc="1 = the opto input 'service switch external' enables the jog inputs.",
+    attr="external_service_switch",
 )
 _p(
     1059,

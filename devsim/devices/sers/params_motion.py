@@ -23,6 +23,7 @@ _p(
     **_RW_E,
     doc="0 RELATIV; 1 RELATIV LÖSCHEN (P51:=0 before start); 2 ABSOLUT; 3 relative with overflow "
     "counter C1 (X = C1*P103 + P51).",
+    attr="positioning_mode",
 )
 _W_DOC = (
     "Range at gear 1:1, P123=1: rotational ±214748.3647°, translational ±167772.1599 mm, "
@@ -38,6 +39,7 @@ _p(
     maximum=_POS_MAX,
     saved_with_p1117=True,
     doc="Path (relative modes) or target (absolute). Start with E. " + _W_DOC,
+    attr="position_setpoint",
 )
 _p(
     1051,
@@ -135,6 +137,7 @@ _p(
     **_RW_E,
     doc="Modulo for endless operation (modes 0/1; overflow base in mode 3). Must be an exact number "
     "of increments and larger than the largest single relative move.",
+    attr="modulo",
 )
 _p(
     1043,
@@ -155,6 +158,7 @@ _p(
     maximum=65536,
     **_RW_E,
     doc="n = up to n automatic POSR attempts after a step-angle error (manual range 0..65536).",
+    attr="posr_attempts",
 )
 _p(
     1139,
@@ -167,6 +171,7 @@ _p(
     default=1.0,
     **_RW_E,
     doc="Wait before automatic correction; 1.0 = 0.1 s.",
+    attr="posr_wait",
 )
 _p(
     1140,
@@ -176,6 +181,7 @@ _p(
     maximum=3,
     **_RW_E,
     doc="Bit 0: correct also at standstill; bit 1: P1138 attempts renewed after each success.",
+    attr="posr_mode",
 )
 _p(
     1001,
@@ -185,6 +191,7 @@ _p(
     maximum=3,
     **_RW_E,
     doc="1/2/3 = keep 0.1°/0.2°/0.3° away from multiples of 1.8°.",
+    attr="leave_zero_phase",
 )
 _p(
     1039,
@@ -195,6 +202,7 @@ _p(
     maximum=_POS_MAX,
     **_RW_E,
     doc="Overrun after the event of a ':' statement (0 = off).",
+    attr="overrun",
 )
 _p(
     1058,
@@ -204,6 +212,7 @@ _p(
     maximum=1,
     **_RW_E,
     doc="1 = POSSAVE when the supply falls below U_B.",
+    attr="save_position_on_undervoltage",
 )
 _p(
     91,
@@ -219,6 +228,7 @@ _p(
     too_small_errno=121,
     **_RW_E,
     doc="Positioning velocity; max 10000 at rotational weighting (U/min).",
+    attr="velocity",
 )
 _p(
     1019,
@@ -228,6 +238,7 @@ _p(
     default=30,
     **_RW_E,
     doc="Jog slow speed (x P108).",
+    attr="jog_velocity_slow",
 )
 _p(
     1020,
@@ -237,6 +248,7 @@ _p(
     default=300,
     **_RW_E,
     doc="Jog fast speed (x P108).",
+    attr="jog_velocity_fast",
 )
 _p(
     41,
@@ -246,6 +258,7 @@ _p(
     default=60,
     **_RW_E,
     doc="Homing speed while the reference input is not set (x P108); also POSR speed.",
+    attr="homing_velocity",
 )
 _p(
     1003,
@@ -255,6 +268,7 @@ _p(
     default=10,
     **_RW_E,
     doc="Homing speed after the reference input is set; backlash speed.",
+    attr="homing_velocity_slow",
 )
 _p(
     108,
@@ -265,6 +279,7 @@ _p(
     default=100,
     **_RW_E,
     doc="Percent; multiplies P41, P1019, P1020.",
+    attr="feedrate_override",
 )
 _p(
     138,
@@ -279,6 +294,7 @@ _p(
     too_small_errno=119,
     **_RW_E,
     doc="Positioning acceleration and deceleration; max 100000 rad/s² (rotational).",
+    attr="acceleration",
 )
 _p(
     1018,
@@ -288,6 +304,7 @@ _p(
     default=100,
     **_RW_E,
     doc="Jog acceleration (also used to stop a ':' statement).",
+    attr="jog_acceleration",
 )
 _p(
     42,
@@ -297,6 +314,7 @@ _p(
     default=100,
     **_RW_E,
     doc="Homing acceleration.",
+    attr="homing_acceleration",
 )
 _p(
     1030,
@@ -306,6 +324,7 @@ _p(
     default=1000,
     **_RW_E,
     doc="Deceleration on a drive error.",
+    attr="error_deceleration",
 )
 _p(
     1032,
@@ -315,6 +334,7 @@ _p(
     maximum=1,
     **_RW_E,
     doc="0 = exponential; 1 = sinusoidal.",
+    attr="ramp_shape",
 )
 _p(
     1005,
@@ -325,6 +345,7 @@ _p(
     default=100,
     **_RW_E,
     doc="% of A.",
+    attr="ramp_acceleration1",
 )
 _p(
     1007,
@@ -335,6 +356,7 @@ _p(
     default=100,
     **_RW_E,
     doc="% of V.",
+    attr="ramp_velocity1",
 )
 _p(
     1006,
@@ -345,6 +367,7 @@ _p(
     default=100,
     **_RW_E,
     doc="% of A.",
+    attr="ramp_acceleration2",
 )
 _p(
     1008,
@@ -355,6 +378,7 @@ _p(
     default=100,
     **_RW_E,
     doc="% of V.",
+    attr="ramp_velocity2",
 )
 _p(
     1096,
@@ -366,6 +390,7 @@ _p(
     default=100,
     **_RW_E,
     doc="Braking ramp of the last polynomial segment; max 100000 rad/s² (rotational).",
+    attr="polynomial_deceleration",
 )
 _p(
     147,
@@ -377,6 +402,7 @@ _p(
     doc="Bits: 1 direction negative; 2 limit switch as reference; 4 move to electrical reset "
     "position; 8 respect software limits; 16 reference input inverted; 32 switch centre; "
     "64 zero pulse; 128 switch + zero pulse + reset position; 256 SERVO load-angle reference.",
+    attr="homing_parameters",
 )
 _WEIGHT_CODES = frozenset({0, 64, 2, 66, 1, 17})
 _p(
@@ -387,6 +413,7 @@ _p(
     default=2,
     **_RW_E,
     doc="0/64 inkr (motor/load), 2/66 ° (motor/load), 1 mm, 17 in.",
+    attr="position_weighting",
 )
 _p(
     44,
@@ -396,6 +423,7 @@ _p(
     default=2,
     **_RW_E,
     doc="0/64/2/66 U/min, 1 mm/min, 17 in/min.",
+    attr="velocity_weighting",
 )
 _p(
     160,
@@ -405,6 +433,7 @@ _p(
     default=2,
     **_RW_E,
     doc="0/64/2/66 rad/s², 1 mm/s², 17 in/s².",
+    attr="acceleration_weighting",
 )
 _p(
     123,
@@ -419,6 +448,7 @@ _p(
     **_RW_E,
     doc="Distance per spindle revolution (lead 5 mm -> 5), in the position length unit (mm/in). "
     "The manual says the unit depends on 'P44 (Wichtungsart Lagedaten)' -- P76 meant.",
+    attr="feed_constant",
 )
 _p(
     121,
@@ -428,6 +458,7 @@ _p(
     default=1,
     **_RW_E,
     doc="Gear input revolutions (motor side); ratio g = P121/P122 (8:1 -> P121=8, P122=1).",
+    attr="gear_input",
 )
 _p(
     122,
@@ -437,6 +468,7 @@ _p(
     default=1,
     **_RW_E,
     doc="Gear output revolutions (load side).",
+    attr="gear_output",
 )
 _p(
     1037,
@@ -447,6 +479,7 @@ _p(
     maximum=_POS_MAX,
     **_RW_E,
     doc="Backlash distance (0 = off); direction from P147 bit 0.",
+    attr="backlash",
 )
 
 

@@ -11,10 +11,12 @@ from __future__ import annotations
 from typing import Any
 
 from devsim.core.kit import Fault, FaultTable, signal_points
+from devsim.core.parameters import Param, alias_hook, parameter_points
 from devsim.core.points import BadValue, Point, PointTable
+from devsim.core.record import replace
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.errors import SersError, message
-from devsim.devices.sers.parameters import ALIASES, PARAMETERS, ParamDef
+from devsim.devices.sers.parameters import PARAMETER_TABLE
 from devsim.devices.sers.signals import SIGNALS
 
 __all__ = ["FAULTS", "POINTS", "load_program"]
@@ -39,57 +41,36 @@ def load_program(model: Any, program: Any) -> None:
     model.program.quit()
 
 
-def _write_param(number: int) -> Any:
-    def put(model: Any, value: Any) -> None:
-        if number == 1 and value != "*" and (isinstance(value, bool) or not isinstance(value, int | float)):
-            raise BadValue("P1: a number, or '*'")  # (the only parameter that is not just a number)
-        try:
-            model.write_param(number, value)
-        except SersError as exc:
-            raise BadValue(f"P{number}: {exc}") from None
-
-    return put
+def _write_param(model: Any, row: Param, value: Any) -> None:
+    number = row.key
+    if number == 1 and value != "*" and (isinstance(value, bool) or not isinstance(value, int | float)):
+        raise BadValue("P1: a number, or '*'")  # (the only parameter that is not just a number)
+    try:
+        model.access.write_param(number, value)
+    except SersError as exc:
+        raise BadValue(f"P{number}: {exc}") from None
 
 
-def _read_param(number: int) -> Any:
-    return lambda model: model.param_value(number)
+def _read_param(model: Any, row: Param) -> Any:
+    return model.access.param_value(row.key)
 
 
-def _param_point(pdef: ParamDef) -> Point:
-    unit = {"position": "P123 unit", "velocity": "P121 unit", "acceleration": "P122 unit"}.get(pdef.kind, "")
-    return Point(
-        f"param.P{pdef.number}",
-        "json" if pdef.number == 1 else "float",  # P1 (Z) also takes '*'
-        pdef.name_en or pdef.name,
-        f"§4.7 P{pdef.number}",
-        unit,
-        get=_read_param(pdef.number) if pdef.readable else None,
-        put=_write_param(pdef.number) if pdef.writable else None,
-        example=_example(pdef) if pdef.writable and not pdef.readable else None,
-    )
-
-
-def _example(pdef: ParamDef) -> Any:
+def _example(row: Param) -> Any:
     """A value a write-only parameter accepts (its default, its first choice, or 0 in range)."""
-    if pdef.default is not None:
-        return pdef.default
-    if pdef.choices:
-        return min(pdef.choices)
+    if row.readable:
+        return None
+    if row.default is not None:
+        return row.default
+    if row.choices:
+        return min(row.choices)
     return 0
 
 
-def _alias(name: str) -> str | None:
-    """``param.V``, ``param.51``, ``param.p51`` → ``param.P51``."""
-    section, dot, rest = name.partition(".")
-    if section != "param" or not dot:
-        return None
-    text = rest.strip().upper()
-    if text.startswith("P") and text[1:].isascii() and text[1:].isdigit():
-        return f"param.P{int(text[1:])}"
-    if text.isascii() and text.isdigit():
-        return f"param.P{int(text)}"
-    number = ALIASES.get(text)
-    return None if number is None else f"param.P{number}"
+def _as_the_drive_takes_it(point: Point) -> Point:
+    """A parameter's point takes any number (P1 also ``*``) and leaves the range to the drive:
+    its errnos, and the weighted ranges that follow P76 / P44 / P160 (§4.8.4.6)."""
+    return replace(point, type="json" if point.name == "param.P1" else "float", minimum=None, maximum=None,
+                   choices=None)
 
 
 def _set_dip(field: str) -> Any:
@@ -106,12 +87,12 @@ _PLAIN: list[Point] = [
     Point("axis.velocity", "float", "actual velocity", "§5.1", "inc/s", get=lambda m: m.axis.velocity(),
           in_state=True, shared=True),
     Point("motion", "bool", "the drive moves (positioning, jog, homing, POS0/POSR)", "§4.6.6",
-          get=lambda m: m.motion is not None, in_state=True, shared=True),
-    Point("energized", "bool", "the motor phases are energised (ON)", "§4.8.2.2", get=lambda m: m.energized,
+          get=lambda m: m.motion.kind is not None, in_state=True, shared=True),
+    Point("energized", "bool", "the motor phases are energised (ON)", "§4.8.2.2", get=lambda m: m.power_stage.energized,
           in_state=True, shared=True),
     Point("ready", "bool", "the ready relay is closed and no drive error is active", "§2.1.3",
-          get=lambda m: bool(m.relay and not m.errors), in_state=True, shared=True),
-    Point("fault", "bool", "a drive error is active (P11 ≠ 0)", "§4.8.3.1", get=lambda m: bool(m.errors),
+          get=lambda m: bool(m.power_stage.relay and not m.power_stage.errors), in_state=True, shared=True),
+    Point("fault", "bool", "a drive error is active (P11 ≠ 0)", "§4.8.3.1", get=lambda m: bool(m.power_stage.errors),
           in_state=True, shared=True),
     # -- the drive --------------------------------------------------------------------------
     Point("axis.acceleration", "float", "actual acceleration", "§5.1", "inc/s²",
@@ -120,30 +101,30 @@ _PLAIN: list[Point] = [
     Point("axis.phase", "str", "the ramp phase of the motion (accelerate, constant, brake, idle)", "§5.2",
           get=lambda m: m.axis.phase()),
     Point("motion.kind", "str", "what moves the drive: position, jog, homing, pos0, posr (null at rest)",
-          "§4.6.6", get=lambda m: m.motion),
-    Point("display", "json", "the 7-segment display: character and blinking", "§3.5", get=lambda m: m.display(),
+          "§4.6.6", get=lambda m: m.motion.kind),
+    Point("display", "json", "the 7-segment display: character and blinking", "§3.5", get=lambda m: m.outputs.display(),
           in_state=True),
-    Point("display.char", "str", "the character the display shows", "§3.5", get=lambda m: m.display()["char"]),
+    Point("display.char", "str", "the character the display shows", "§3.5", get=lambda m: m.outputs.display()["char"]),
     Point("display.blinking", "bool", "the display blinks (a warning)", "§3.5",
-          get=lambda m: m.display()["blinking"]),
-    Point("P11", "int", "drive errors (bit field)", "§4.8.3.1", get=lambda m: m.errors, in_state=True),
-    Point("P12", "int", "warnings (bit field)", "§4.8.3.1", get=lambda m: m.warnings, in_state=True),
-    Point("errno", "int", "number of the last error message", "§4.8.3.1", get=lambda m: m.errno, in_state=True),
-    Point("homed", "bool", "a homing run (H) completed since power-on", "§4.8.4.5", get=lambda m: m.homed),
+          get=lambda m: m.outputs.display()["blinking"]),
+    Point("P11", "int", "drive errors (bit field)", "§4.8.3.1", get=lambda m: m.power_stage.errors, in_state=True),
+    Point("P12", "int", "warnings (bit field)", "§4.8.3.1", get=lambda m: m.power_stage.warnings, in_state=True),
+    Point("errno", "int", "number of the last error message", "§4.8.3.1", get=lambda m: m.power_stage.errno, in_state=True),
+    Point("homed", "bool", "a homing run (H) completed since power-on", "§4.8.4.5", get=lambda m: m.motion.homing.homed),
     Point("homing", "str", "the homing phase (null when not homing)", "§4.8.4.5",
-          get=lambda m: m._homing["phase"] if m._homing else None),
+          get=lambda m: m.motion.homing.phase),
     Point("encoder.position", "float", "encoder position in motor increments", "§4.8.6.6", "inc",
-          get=lambda m: m.encoder_position()),
+          get=lambda m: m.motion.encoder.encoder_position()),
     Point("encoder.pulses", "int", "count pulses at the encoder / pulse input (as if they arrived)", "§4.8.6.14",
-          put=lambda m, v: m.pulses(v), example=0),
-    Point("phase_current", "float", "commanded phase current", "§4.8.6.1", "mA", get=lambda m: m.phase_current()),
+          put=lambda m, v: m.motion.pulses(v), example=0),
+    Point("phase_current", "float", "commanded phase current", "§4.8.6.1", "mA", get=lambda m: m.motion.phase_current()),
     Point("load_angle", "float", "stator field ahead of the rotor", "§4.8.6.6", "inc",
-          get=lambda m: m.axis.position() - m.encoder_position()),
+          get=lambda m: m.motion.encoder.load_angle()),
     Point("booting", "bool", "initialising after power-on (input is discarded for 2 s)", "§3.5",
           get=lambda m: m.booting),
     Point("powered", "bool", "the logic supply is on", "§2.1.4", get=lambda m: m.logic_alive, in_state=True),
     Point("position", "float", "actual position P51 in the user unit (P123)", "§4.7 P51",
-          get=lambda m: m.scaling.inc_to_pos(round(m.p51_inc())), in_state=True),
+          get=lambda m: m.params.scaling.inc_to_pos(round(m.motion.p51_inc())), in_state=True),
     Point("address", "int", "the drive address (DIP switch 2)", "§3.1.2", get=lambda m: m.cfg.address,
           in_state=True),
     Point("selected", "bool", "statements without an address are for this drive", "§3.6.2",
@@ -160,8 +141,8 @@ _PLAIN: list[Point] = [
 POINTS = PointTable.of(
     _PLAIN,
     signal_points(SIGNALS),
-    (_param_point(pdef) for pdef in PARAMETERS.values()),
-    alias=_alias,
+    map(_as_the_drive_takes_it, parameter_points(PARAMETER_TABLE, _read_param, _write_param, example=_example)),
+    alias=alias_hook(PARAMETER_TABLE),
 )
 
 
@@ -174,7 +155,7 @@ def _stop(model: Any, active: bool) -> None:
 
 
 def _power(model: Any, active: bool) -> None:
-    model.power(not active)
+    model.switch_supply(not active)
 
 
 FAULTS = FaultTable(

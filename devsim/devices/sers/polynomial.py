@@ -16,26 +16,30 @@ last segment too short to brake with B gives errno 118.
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+from collections.abc import Callable
+from typing import Protocol
 
-from devsim.core.axis import Watch
+from devsim.core.axis import Axis, Watch
 from devsim.core.record import record
 from devsim.devices.sers.errors import SersError
+from devsim.devices.sers.params import SersParameters
 
 
 class PolynomialHost(Protocol):
-    """What a polynomial move needs of its drive (the SERS model)."""
+    """What a polynomial move (§4.6.7) needs of the motion (:class:`~.motion.Motion`)."""
 
-    ram: dict[int, Any]
-    axis: Any
-    motion: str | None
-    offset: float
-    interpreter: Any
+    @property
+    def moving(self) -> bool: ...
 
-    def begin_polynomial(self) -> None: ...
-    def motion_checks_for(self, target: float) -> None: ...
+    @property
+    def offset(self) -> float:
+        """The axis position of P51 = 0."""
+
+    def begin_polynomial(self, end: float) -> None:
+        """The first segment starts toward ``end`` (the motion's refusals first)."""
+
     def polynomial_finished(self) -> None: ...
-    def record_error(self, errno: int) -> None: ...
+
 
 __all__ = ["PolynomialMove", "Segment"]
 
@@ -46,6 +50,8 @@ ABSOLUTE = (1113, 1116)
 
 @record
 class Segment:
+    """One path segment of a polynomial profile (§4.6.7)."""
+
     end: float  # physical position (increments) where the segment ends
     speed: float  # inc/s
     accel: float  # inc/s²
@@ -55,10 +61,22 @@ class Segment:
 
 
 class PolynomialMove:
-    """The polynomial mode of one drive."""
+    """The polynomial mode of one drive (§4.6.7)."""
 
-    def __init__(self, drive: PolynomialHost) -> None:
-        self.drive = drive
+    def __init__(
+        self,
+        axis: Axis,
+        params: SersParameters,
+        motion: PolynomialHost,
+        *,
+        record_error: Callable[[int], None],
+        segment_ended: Callable[[], None],
+    ) -> None:
+        self.axis = axis
+        self.params = params
+        self.motion = motion
+        self._record_error = record_error
+        self._segment_ended = segment_ended  # a program waiting for the segment goes on
         self.definition: tuple[float, int, bool] | None = None  # value (inc), mode, last
         self.running: Segment | None = None
         self.pending: Segment | None = None
@@ -76,61 +94,59 @@ class PolynomialMove:
 
     def define(self, number: int, value: float) -> None:
         """``WP=`` … ``WAPT=`` (P1111–P1116): remember the segment until its ``E``."""
-        drive = self.drive
+        params = self.params
         if number in RELATIVE:
-            drive.ram[1014] = 0
+            params.positioning_mode = 0
         elif number in ABSOLUTE:
-            drive.ram[1014] = 2
-        self.definition = (value, int(drive.ram.get(1014, 0)), number in LAST)
+            params.positioning_mode = 2
+        self.definition = (value, int(params.positioning_mode), number in LAST)
 
     def execute(self) -> str:
         """``E`` after a segment definition: ``started`` (the program goes on), ``queued``
         (the program waits until the running segment ends)."""
-        drive = self.drive
+        params = self.params
         assert self.definition is not None
         value, mode, last = self.definition
         self.definition = None
-        if float(drive.ram.get(1037, 0)):
+        if float(params.backlash):
             raise SersError(107)
         if self.pending is not None or self.closed:
             raise SersError(123)
         base = self.pending.exact if self.pending is not None else (self.running.exact if self.running else None)
         if base is None:
-            base = drive.axis.position()
-        end = value + drive.offset if mode == 2 else base + value
+            base = self.axis.position()
+        end = value + self.motion.offset if mode == 2 else base + value
         segment = Segment(
             exact=end,
             end=float(round(end)),
-            speed=float(drive.ram[91]),
-            accel=float(drive.ram[138]),
-            brake=float(drive.ram.get(1096, drive.ram[138])),
+            speed=float(params.velocity),
+            accel=float(params.acceleration),
+            brake=float(params.polynomial_deceleration),
             last=last,
         )
         if last:
             self.closed = True
         if self.running is None:
-            if drive.motion is not None:
+            if self.motion.moving:
                 raise SersError(70)
-            drive.motion_checks_for(segment.end)
-            drive.begin_polynomial()
+            self.motion.begin_polynomial(segment.end)
             self._start(segment)
             return "started"
         self.pending = segment
         return "queued"
 
     def _start(self, segment: Segment) -> None:
-        drive = self.drive
         self.running = segment
         if self._watch is not None:
             self._watch.cancel()
             self._watch = None
-        axis = drive.axis
+        axis = self.axis
         here = axis.position()
         direction = (segment.end > here) - (segment.end < here)
         if segment.last:
             v = abs(axis.velocity())
             if direction == 0 or v * v / (2 * segment.brake) > abs(segment.end - here) + 1e-6:
-                drive.record_error(118)
+                self._record_error(118)
                 self._abort()
                 return
             axis.move_to(segment.end, segment.speed, segment.accel, decel=segment.brake, on_done=self._finished)
@@ -150,22 +166,23 @@ class PolynomialMove:
         pending, self.pending = self.pending, None
         if pending is not None:
             self._start(pending)
-            self.drive.interpreter.resume("segment")
+            self._segment_ended()
             return
         # nothing to go on with: brake with B and report it (errno 108)
         segment = self.running
         self.running = None
-        self.drive.record_error(108)
-        self.drive.axis.stop(segment.brake, on_done=self._finished)
+        self._record_error(108)
+        self.axis.stop(segment.brake, on_done=self._finished)
 
     def _finished(self) -> None:
         self.running = None
         self.pending = None
         self.closed = False
-        self.drive.polynomial_finished()
+        self.motion.polynomial_finished()
 
     def _abort(self) -> None:
-        self.drive.axis.stop(self.running.brake if self.running else float(self.drive.ram[1030]), on_done=self._finished)
+        brake = self.running.brake if self.running else float(self.params.error_deceleration)
+        self.axis.stop(brake, on_done=self._finished)
         self.running = None
         self.pending = None
 

@@ -37,7 +37,7 @@ def statement_cost(text: str) -> int:
 
 
 class ProgramMemory:
-    """The one stored program: statement texts, and where the user's lines begin."""
+    """The one stored program: statement texts, and where the user's lines begin (§4.3, §4.5.3)."""
 
     def __init__(self, nvram: NonVolatileMemory, capacity: int = 2048) -> None:
         self.nvram = nvram

@@ -16,7 +16,10 @@ from __future__ import annotations
 
 import functools
 import re
+from collections.abc import Callable
 
+from devsim.core.kit import Command as KitCommand
+from devsim.core.kit import Table
 from devsim.core.record import field, record
 
 __all__ = [
@@ -398,67 +401,127 @@ def _statement(cur: _Cursor) -> Statement:  # noqa: C901 - one branch per statem
     word = cur.word()
     if word is None:
         raise SyntaxFault(21, start)
-    text = lambda: cur.text[start : cur.pos]  # noqa: E731
-    if word in ALIAS_WORDS:
-        cur.pos = start
-        return _assign_or_query(cur, start, _address(cur))
-    if word in ("NOT", "NEG"):
-        return Unary(text(), word)
-    if word == "TR":
-        return Trace(text())
-    if word in COMMAND_WORDS:
-        return Command(text(), "RETURN" if word == "RT" else word)
-    if word == "IF":
-        cond = _condition(cur)
-        save = cur.pos
-        cur.skip_spaces()
-        then = False
-        if cur.peek(4) == "THEN":
-            cur.pos += 4
-            then = True
-        else:
-            cur.pos = save
-        return If(text(), cond, then)
-    if word == "THEN":
-        raise SyntaxFault(23, start)
-    if word == "ELSE":
-        return Else(text())
-    if word == "END":
-        return End(text())
-    if word == "WAIT":
-        cond = _condition(cur)
-        return Wait(text(), cond)
-    if word in ("GOTO", "GT"):
-        label = cur.integer(28 if word == "GOTO" else 25)
-        return Goto(text(), label, sub=False)
-    if word in ("GOSUB", "GS"):
-        label = cur.integer(30)
-        return Goto(text(), label, sub=True)
-    if word == "RUN":
-        save = cur.pos
-        cur.skip_spaces()
-        if _digits(cur.peek()):
-            label = cur.integer(37)
-            return Run(text(), label)
+    keyword = _KEYWORD.get(word)
+    if keyword is None:
+        raise SyntaxFault(21, start)
+    return keyword(cur, start, word)
+
+
+# -- the statements a keyword begins (the table KEYWORDS) ---------------------------------------
+def _alias(cur: _Cursor, start: int, word: str) -> Statement:
+    cur.pos = start
+    return _assign_or_query(cur, start, _address(cur))
+
+
+def _unary(cur: _Cursor, start: int, word: str) -> Statement:
+    return Unary(cur.text[start : cur.pos], word)
+
+
+def _trace(cur: _Cursor, start: int, word: str) -> Statement:
+    return Trace(cur.text[start : cur.pos])
+
+
+def _command(cur: _Cursor, start: int, word: str) -> Statement:
+    return Command(cur.text[start : cur.pos], "RETURN" if word == "RT" else word)
+
+
+def _if(cur: _Cursor, start: int, word: str) -> Statement:
+    cond = _condition(cur)
+    save = cur.pos
+    cur.skip_spaces()
+    then = False
+    if cur.peek(4) == "THEN":
+        cur.pos += 4
+        then = True
+    else:
         cur.pos = save
-        return Run(text(), None)
-    if word in ("LIST", "LISTP"):
-        save = cur.pos
-        cur.skip_spaces()
-        found = (_LISTP_ARG if word == "LISTP" else _LIST_ARG).match(cur.text, cur.pos)
-        end = found.end() if found is not None else cur.pos
-        if end == len(cur.text) and not cur.final:
-            raise NeedMore  # the argument may go on
-        arg = cur.text[cur.pos : end]  # (what follows a complete argument is the next statement)
-        cur.pos = end if arg else save
-        return ListCmd(text(), params=word == "LISTP", arg=arg)
-    if word in ("RS", "RF", "LS", "LF"):
-        until = None
-        if cur.peek() == ":":
-            cur.pos += 1
-            until = _condition(cur)
-        return Jog(text(), word, until)
-    raise SyntaxFault(21, start)
+    return If(cur.text[start : cur.pos], cond, then)
+
+
+def _then(cur: _Cursor, start: int, word: str) -> Statement:
+    raise SyntaxFault(23, start)  # THEN without IF
+
+
+def _else(cur: _Cursor, start: int, word: str) -> Statement:
+    return Else(cur.text[start : cur.pos])
+
+
+def _end(cur: _Cursor, start: int, word: str) -> Statement:
+    return End(cur.text[start : cur.pos])
+
+
+def _wait(cur: _Cursor, start: int, word: str) -> Statement:
+    cond = _condition(cur)
+    return Wait(cur.text[start : cur.pos], cond)
+
+
+def _goto(cur: _Cursor, start: int, word: str) -> Statement:
+    label = cur.integer(28 if word == "GOTO" else 25)
+    return Goto(cur.text[start : cur.pos], label, sub=False)
+
+
+def _gosub(cur: _Cursor, start: int, word: str) -> Statement:
+    label = cur.integer(30)
+    return Goto(cur.text[start : cur.pos], label, sub=True)
+
+
+def _run(cur: _Cursor, start: int, word: str) -> Statement:
+    save = cur.pos
+    cur.skip_spaces()
+    if _digits(cur.peek()):
+        label = cur.integer(37)
+        return Run(cur.text[start : cur.pos], label)
+    cur.pos = save
+    return Run(cur.text[start : cur.pos], None)
+
+
+def _list(cur: _Cursor, start: int, word: str) -> Statement:
+    save = cur.pos
+    cur.skip_spaces()
+    found = (_LISTP_ARG if word == "LISTP" else _LIST_ARG).match(cur.text, cur.pos)
+    end = found.end() if found is not None else cur.pos
+    if end == len(cur.text) and not cur.final:
+        raise NeedMore  # the argument may go on
+    arg = cur.text[cur.pos : end]  # (what follows a complete argument is the next statement)
+    cur.pos = end if arg else save
+    return ListCmd(cur.text[start : cur.pos], params=word == "LISTP", arg=arg)
+
+
+def _jog(cur: _Cursor, start: int, word: str) -> Statement:
+    until = None
+    if cur.peek() == ":":
+        cur.pos += 1
+        until = _condition(cur)
+    return Jog(cur.text[start : cur.pos], word, until)
+
+
+Keyword = Callable[[_Cursor, int, str], Statement]
+
+#: The keywords of the statement language (§4.2) and the statement each one begins.
+KEYWORDS: Table[Keyword] = Table(
+    [
+        *(KitCommand(word, _alias, "§4.2", "an alias: assignment or query") for word in ALIAS_WORDS),
+        KitCommand("NOT", _unary, "§4.6.10", "X := NOT X"),
+        KitCommand("NEG", _unary, "§4.6.10", "X := -X"),
+        KitCommand("TR", _trace, "§4.5.4", "one program step"),
+        *(KitCommand(word, _command, "§4.2", "a command without arguments")
+          for word in COMMAND_WORDS if word not in ("NOT", "NEG")),
+        KitCommand("IF", _if, "§4.6.1", "IF condition [THEN]"),
+        KitCommand("THEN", _then, "§4.6.1", "THEN without IF: errno 23"),
+        KitCommand("ELSE", _else, "§4.6.1", "ELSE"),
+        KitCommand("END", _end, "§4.6.1", "END of an IF block"),
+        KitCommand("WAIT", _wait, "§4.6.8", "WAIT condition"),
+        KitCommand("GOTO", _goto, "§4.6.3", "GOTO n"),
+        KitCommand("GT", _goto, "§4.6.3", "GT n"),
+        KitCommand("GOSUB", _gosub, "§4.6.4", "GOSUB n"),
+        KitCommand("GS", _gosub, "§4.6.4", "GS n"),
+        KitCommand("RUN", _run, "§4.8.6.16", "RUN [n]"),
+        KitCommand("LIST", _list, "§4.2", "LIST [range]"),
+        KitCommand("LISTP", _list, "§4.2", "LISTP [range]"),
+        *(KitCommand(word, _jog, "§4.5.1", "jog [:condition]") for word in ("RS", "RF", "LS", "LF")),
+    ]
+)
+_KEYWORD: dict[str, Keyword] = {row.token: row.handler for row in KEYWORDS}
 
 
 def _assign_or_query(cur: _Cursor, start: int, target: Address) -> Statement:

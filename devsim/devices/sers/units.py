@@ -176,13 +176,13 @@ class Scaling:
         return self.p76 in _TRANSLATIONAL
 
     def unit(self, kind: str) -> str:
-        """Unit string for a ParamDef kind ("position", "velocity", "acceleration"; else "")."""
+        """Unit string for a parameter kind ("position", "velocity", "acceleration"; else "")."""
         return {"position": self.pos_unit, "velocity": self.vel_unit, "acceleration": self.acc_unit}.get(
             kind, ""
         )
 
     def decimals(self, kind: str) -> int:
-        """Decimals for a weighted ParamDef kind; raises KeyError for other kinds."""
+        """Decimals for a weighted parameter kind; raises KeyError for other kinds."""
         return {
             "position": self.pos_decimals,
             "velocity": self.vel_decimals,

@@ -1,0 +1,140 @@
+"""What the SERS answers on the serial line: the acknowledgement, query answers, LISTP and the
+statements as LIST shows them (manual §4.1, §4.2, §4.3, §4.7; spec G-LIST, G-QUERYFMT).
+"""
+
+from __future__ import annotations
+
+import re
+
+from devsim.devices.sers import statements as st
+from devsim.devices.sers.access import ParameterAccess, address_number
+from devsim.devices.sers.constants import WEIGHTED
+from devsim.devices.sers.errors import SersError
+from devsim.devices.sers.motion import Motion
+from devsim.devices.sers.operands import Operands
+from devsim.devices.sers.parameters import KIND, PARAMETERS
+from devsim.devices.sers.params import SersParameters
+from devsim.devices.sers.power import PowerStage
+from devsim.devices.sers.program import ProgramMemory
+from devsim.devices.sers.units import format_fixed
+
+__all__ = ["Answers"]
+
+#: Address kinds that name a parameter (a query answers its value with the parameter's format).
+_PARAMETER_KINDS = ("P", "alias", "O")
+_READABLE = [n for n in sorted(PARAMETERS) if PARAMETERS[n].readable]
+
+
+class Answers:
+    """The texts one SERS answers with (§4.1, §4.7, G-LIST)."""
+
+    def __init__(
+        self,
+        access: ParameterAccess,
+        operands: Operands,
+        params: SersParameters,
+        power: PowerStage,
+        motion: Motion,
+        program: ProgramMemory,
+    ) -> None:
+        self.access = access
+        self.operands = operands
+        self.params = params
+        self.power = power
+        self.motion = motion
+        self.program = program
+
+    @property
+    def english(self) -> bool:
+        """P265 = 1: the messages and designations in English."""
+        return int(self.params.language) == 1
+
+    @property
+    def list_options(self) -> int:
+        """P1028 (§4.3)."""
+        return int(self.params.list_option)
+
+    def ack_text(self) -> str:
+        """``ok<d>`` (§4.1): 4 error, 0/2 moving, 1/3 standing, +2 with a warning; ``pgm``."""
+        if self.program.editing:
+            return "pgm"
+        power = self.power
+        if power.errors:
+            return "ok4"
+        digit = 1 if self.motion.pos_ok else 0
+        if power.warnings:
+            digit += 2
+        return f"ok{digit}"
+
+    def query_text(self, stmt: st.Query) -> str:
+        """``P<n>?`` / ``alias?``: ``<as asked>=<value>``; ``P<n>??``: the designation (§4.7)."""
+        target = stmt.target
+        if stmt.name:
+            if target.kind in _PARAMETER_KINDS:
+                row = PARAMETERS.get(address_number(target))
+                if row is None:
+                    raise SersError(13)
+                return row.doc if self.english else row.name
+            raise SersError(13)
+        if target.kind in _PARAMETER_KINDS:
+            number = address_number(target)
+            if number == 1 and self.params.target_address == "*":
+                return f"{target.text}=*"
+            return f"{target.text}={self.access.format_value(number, self.operands.operand_value(target))}"
+        return f"{target.text}={int(self.operands.operand_value(target))}"
+
+    def list_parameters(self, arg: str) -> list[str]:
+        """LISTP (G-LIST): ``P<n>=<value>`` in ascending order; P1028 bit 4 adds names."""
+        numbers = _READABLE
+        if arg:
+            first, _, count = arg.partition(".")
+            start = int(first or 0)
+            size = int(count) * 10 if count else 1
+            numbers = numbers[start : start + size]
+        access = self.access
+        rows = []
+        for n in numbers:
+            try:
+                text = f"P{n}={access.format_value(n, access.param_value(n))}"
+            except SersError:
+                continue
+            if self.list_options & 16:
+                text += "  " + PARAMETERS[n].name
+            rows.append(text)
+        return rows
+
+    def render_statement(self, text: str) -> str:
+        """A stored statement as LIST shows it (G-LIST): keywords upper-case, constants of
+        weighted parameters with all decimals of the weighting, the unit with P1028 bit 1."""
+        result = st.parse(text, final=True)
+        if result.errno is not None or len(result.statements) != 1:
+            return text
+        stmt = result.statements[0][0]
+        if isinstance(stmt, st.Assign) and isinstance(stmt.value, st.Number) and stmt.target.kind != "I":
+            try:
+                kind = KIND.get(address_number(stmt.target))
+            except (SersError, KeyError):
+                kind = None
+            if kind in WEIGHTED:
+                scaling = self.params.scaling
+                value = format_fixed(stmt.value.value, scaling.decimals(kind))
+                unit = scaling.unit(kind) if self.list_options & 2 else ""
+                return f"{stmt.target.text}={value}{unit}"
+        legacy_in = re.search(r"\bIN[0-9]", text.upper()) is not None
+        if isinstance(stmt, st.If | st.Wait) and stmt.cond is not None and (stmt.cond.negate or legacy_in):
+            keyword = "IF" if isinstance(stmt, st.If) else "WAIT"
+            then = " THEN" if isinstance(stmt, st.If) and stmt.then else ""
+            return f"{keyword} {_new_syntax(stmt.cond)}{then}"
+        return text.upper() if not isinstance(stmt, st.Text | st.Comment) else text
+
+
+_OPPOSITE = {"<": ">=", "<=": ">", "=": "<>", "<>": "=", ">": "<=", ">=": "<"}
+
+
+def _new_syntax(cond: st.Condition) -> str:
+    """A legacy condition (``!I5``, ``IN5``) in the syntax LIST shows (§4.6.1)."""
+    left = cond.left.text
+    if cond.op is None:
+        return f"{left}=0" if cond.negate else f"{left}<>0"
+    op = _OPPOSITE[cond.op] if cond.negate else cond.op
+    return f"{left}{op}{'0' if cond.right is None else cond.right.text}"

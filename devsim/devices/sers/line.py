@@ -1,0 +1,166 @@
+"""A command line of the SERS as it arrives: its state, and what its text does character by
+character (manual §3.2.4, §4.1, §4.2; spec G-ADDR, G-LINE).
+
+The serial face takes a line in one step where nothing in it can happen before its end (a
+host's poll, :func:`poll_line`; a line whose statements only answer at its end, :func:`quiet`)
+or where it fails at once (noise, :func:`first_failure`): these functions say when.
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+
+from devsim.core.record import field, record
+from devsim.devices.sers import codec
+from devsim.devices.sers import statements as st
+from devsim.devices.sers.errors import message
+
+__all__ = [
+    "COMPLETES",
+    "EXTENDS_ONLY",
+    "LINE_ENDS",
+    "TEXT_TO_END",
+    "CommandLine",
+    "Poll",
+    "answers",
+    "ends_line",
+    "error_text",
+    "first_byte_errors",
+    "first_failure",
+    "label_number",
+    "poll_line",
+    "quiet",
+]
+
+# Characters that only ever extend the statement in progress (a number, the '?' of a query):
+# nothing can complete with them, so they need no parse (the next character will do it).
+EXTENDS_ONLY = frozenset("0123456789.?")
+# The first character of a text run that is not one of those.
+COMPLETES = re.compile(b"[^" + re.escape("".join(sorted(EXTENDS_ONLY)).encode()) + b"]")
+# The rest of a line: its text and its end (within 60 characters: checked by the caller).
+TEXT_TO_END = re.compile(rb"([^\r\n#]+)[\r\n]")
+LINE_ENDS = (codec.CR, codec.LF)
+
+
+@record(frozen=False)
+class CommandLine:
+    """What the device knows about the command line being received (§3.2.4, §4.1)."""
+
+    execute: bool = False  # this drive carries out the statements
+    reply: bool = False  # this drive echoes and answers
+    held: bytearray = field(default_factory=bytearray)  # echo of '#' and address digits
+    text: str = ""  # statement text of the current segment
+    executed: int = 0  # statements of the segment already executed
+    error: bool = False
+    skip_next: bool = False  # single-statement IF was false
+    skip_block: int = 0  # inside a false IF..THEN block (depth)
+    deferred: bytearray = field(default_factory=bytearray)  # RS-485 mode: answers until line end
+    store: list[str] = field(default_factory=list)  # programming mode: statements for the EEPROM
+
+
+def answers(stmt: st.Statement) -> bool:
+    """Statements that send text: their output must follow the echo of the next character."""
+    if isinstance(stmt, st.Query | st.ListCmd):
+        return True
+    if isinstance(stmt, st.Trace):
+        return stmt.query
+    return isinstance(stmt, st.Command) and stmt.name == "VER"
+
+
+@functools.lru_cache(maxsize=1024)
+def quiet(text: bytes) -> str | None:
+    """A line's text if nothing in it runs, answers or fails before its line end as the text
+    arrives character by character (so it may be taken in one step, see
+    :meth:`.face.SersFace._begin_line`), else None: at every character that can complete a
+    statement, the text so far holds no error and no statement except one answering at its
+    very end."""
+    chars = text.decode("latin-1")
+    for at, char in enumerate(chars):
+        if char in EXTENDS_ONLY:
+            continue
+        result = st.parse(chars[: at + 1], False)
+        if result.errno is not None:
+            return None
+        done = result.statements
+        if done and (len(done) > 1 or done[0][1] != at + 1 or not answers(done[0][0])):
+            return None
+    return chars
+
+
+@record
+class Poll:
+    """A whole line that asks one thing (``#1P11?`` and its end, §4.7), parsed once."""
+
+    address: int | str | None
+    query: st.Query
+    length: int  # characters counted for the line: all but its end
+
+
+@functools.lru_cache(maxsize=1024)
+def poll_line(data: bytes) -> Poll | None:
+    """``data`` as a :class:`Poll` if it is exactly one whole line, within the 60 characters,
+    whose text is a single query (what a host polls with, again and again), else None.  Such a
+    line, taken character by character, runs nothing before its end (:func:`quiet`)."""
+    if not 2 < len(data) <= codec.MAX_LINE + 1 or data[0] != codec.HASH or data[-1] not in LINE_ENDS:
+        return None
+    if data.find(b"#", 1) >= 0 or data.find(b"\r", 0, -1) >= 0 or data.find(b"\n", 0, -1) >= 0:
+        return None
+    complete, address, stop = codec.Framer().begin_line(data, 0)
+    text = quiet(data[stop:-1]) if complete else None
+    if text is None:
+        return None
+    result = st.parse(text, True)
+    if result.errno is not None or len(result.statements) != 1 or not isinstance(result.statements[0][0], st.Query):
+        return None
+    return Poll(address, result.statements[0][0], len(data) - 1)
+
+
+@functools.lru_cache(maxsize=512)
+def error_text(errno: int, english: bool, encoding: str, detail: str = "") -> bytes:
+    """An error message as the drive sends it (§4.8.3.1): ``*`` and its text on a line of its own."""
+    return ("\n*" + message(errno, english, detail) + "\n\r").encode(encoding, errors="replace")
+
+
+def ends_line(data: bytes, start: int, stop: int) -> bool:
+    """Whether a CR or LF is among ``data[start:stop]``."""
+    return data.find(b"\r", start, stop) >= 0 or data.find(b"\n", start, stop) >= 0
+
+
+@functools.cache
+def first_byte_errors() -> tuple[int, ...]:
+    """For each byte value: the errno of a line's text whose first character it is (not CR,
+    LF, ``#``) when that character is an error as it arrives (what :func:`first_failure`
+    finds at the first character), else 0.  Made at the first use."""
+    errors = []
+    for byte in range(256):
+        char = chr(byte)
+        result = st.parse(char, False) if char not in EXTENDS_ONLY else None
+        errors.append(result.errno or 0 if result is not None and not result.statements else 0)
+    return tuple(errors)
+
+
+@functools.lru_cache(maxsize=1024)
+def first_failure(text: bytes) -> tuple[int, int] | None:
+    """Where a line's text fails before any statement completes, as it arrives character by
+    character: ``(characters up to and including the one that made the error, errno)``, or
+    None (a statement completes first, or no error)."""
+    chars = text.decode("latin-1")
+    for at, char in enumerate(chars):
+        if char in EXTENDS_ONLY:
+            continue
+        result = st.parse(chars[: at + 1], False)
+        if result.statements:
+            return None
+        if result.errno is not None:
+            return at + 1, result.errno
+    return None
+
+
+def label_number(text: str) -> int | None:
+    result = st.parse(text, final=True)
+    if result.errno is None and len(result.statements) == 1:
+        stmt = result.statements[0][0]
+        if isinstance(stmt, st.Label):
+            return stmt.number
+    return None

@@ -1,0 +1,117 @@
+"""The SERS's parameter memory: the EEPROM image of the parameters, of R0..R5 and W, and of the
+position (manual §4.8.6.10 PSAVE / P1004, §4.8.4.2 POSSAVE, §3.5 the checksum error; spec §4.1,
+§4.8).
+
+At power-on the RAM image is the factory values, the configured ones (``params:``), what PSAVE
+stored (unless the EEPROM checksum is bad) and the power-on values of the parameters that are
+never stored; the program lives in the same memory but is :class:`~.program.ProgramMemory`'s.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from devsim.core.nvram import NonVolatileMemory
+from devsim.devices.sers.constants import WEIGHTED, WEIGHTING_PARAMS
+from devsim.devices.sers.parameters import CURRENT_MAX_MA, KIND, PARAMETERS, lookup
+from devsim.devices.sers.params import SersParameters
+from devsim.devices.sers.units import Scaling
+
+__all__ = ["ParameterMemory"]
+
+#: W and the registers R0..R5: stored by P1004=5, and by PSAVE with P1117=1.
+REGISTERS = (47, 1080, 1081, 1082, 1083, 1084, 1085)
+
+
+class ParameterMemory:
+    """PSAVE, POSSAVE, P1004 and the power-on image of the parameters (§4.8.6.10, §4.8.4.2)."""
+
+    def __init__(
+        self,
+        nvram: NonVolatileMemory,
+        params: SersParameters,
+        config: Callable[[], Any],
+        position: Callable[[], float],
+    ) -> None:
+        self.nvram = nvram
+        self.params = params
+        self._config = config
+        self._position = position  # P51 in increments (what POSSAVE stores)
+        #: The EEPROM's checksum was bad at power-on (display '7'; cleared by PSAVE, P1004=3).
+        self.eeprom_checksum_error = False
+
+    def power_on(self) -> None:
+        """§4.1 steps 3–4: the checksum, then the parameters from the EEPROM."""
+        self.eeprom_checksum_error = bool(getattr(self.nvram, "corrupt", False))
+        ram = self._factory_image()
+        stored = self.nvram.get("params")
+        if stored and not self.eeprom_checksum_error:
+            for key, value in stored.items():
+                ram[int(key)] = value
+        # not stored: power-on values (spec §4.1 step 4)
+        ram.update({1110: 1, 1035: 1, 1: 0, 1047: 0, 1164: 0, 1165: 0, 1118: 0})
+        for n in (100, 101, 102, 1101, 1102, 1103):
+            ram[n] = 0
+        extra = self.nvram.get("registers") or {}
+        for n in REGISTERS:
+            ram[n] = extra.get(str(n), 0)
+        self.params.load(ram)
+
+    def saved_position(self) -> float | None:
+        """P51 as POSSAVE stored it (increments), or None."""
+        saved = self.nvram.get("position")
+        return float(saved) if saved is not None else None
+
+    def _factory_image(self) -> dict[int, Any]:
+        """Factory defaults plus the configured EEPROM values, in internal units."""
+        cfg = self._config()
+        image: dict[int, Any] = {}
+        for number, row in PARAMETERS.items():
+            if row.default is not None:
+                image[number] = row.default
+        image[1010] = CURRENT_MAX_MA[cfg.current_class] // 2
+        user: dict[int, Any] = {}
+        for key, value in cfg.params.items():
+            user[lookup(str(key)).number] = value
+        for number in WEIGHTING_PARAMS:
+            if number in user:
+                image[number] = user[number]
+        scaling = Scaling(int(image[76]), int(image[44]), int(image[160]), image[121], image[122], image[123])
+        for number in PARAMETERS:
+            value = user.get(number, image.get(number))
+            if value is None:
+                continue
+            kind = KIND[number]
+            if kind in WEIGHTED:
+                value = scaling.to_internal(kind, float(value))
+            image[number] = value
+        return image
+
+    def psave(self) -> None:
+        """P1004=2: RAM parameters → EEPROM (W and R0..R5 only with P1117=1)."""
+        ram = self.params.values
+        data = {str(n): ram[n] for n, row in PARAMETERS.items() if row.saved and n in ram}
+        self.nvram.put("params", data)
+        self.eeprom_checksum_error = False
+        if self.params.save_registers_too:
+            self.save_registers()
+
+    def save_registers(self) -> None:
+        """P1004=5: R0..R5 and W."""
+        ram = self.params.values
+        self.nvram.put("registers", {str(n): ram[n] for n in REGISTERS})
+
+    def factory_defaults(self) -> None:
+        """P1004=3: EEPROM and RAM parameters back to factory defaults."""
+        self.nvram.delete("params")
+        self.nvram.delete("registers")
+        ram = self.params.values
+        keep = {n: ram[n] for n in REGISTERS}
+        ram.update(self._factory_image())
+        ram.update(keep)
+        self.eeprom_checksum_error = False
+
+    def possave(self) -> None:
+        """P1004=4: actual position P51 → EEPROM, restored at the next power-on."""
+        self.nvram.put("position", self._position())

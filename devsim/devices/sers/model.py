@@ -1,0 +1,305 @@
+"""The SERS drive behind the serial line, composed of its parts (manual "SERS Version V04,
+Firmware ab 120901"; spec sers.md).
+
+Implements (manual section → spec section) through its parts:
+
+* the parameters (:mod:`.params`) with their access by number (:mod:`.access`), range checks,
+  units and PSAVE/POSSAVE/P1004 (:mod:`.memory`) (§4.7, §4.8, §4.8.6.10 → §4.8);
+* the power stage ON/OFF, drive errors P11 and warnings P12 (:mod:`.power`), the supply and
+  heat-sink supervision (:mod:`.supply`), the outputs and the 7-segment display (:mod:`.outputs`)
+  (§2.1.3, §2.1.4, §3.5, §4.8.3.1 → §4.3, §4.6, §4.7);
+* the motion (:mod:`.motion` with :mod:`.jog`, :mod:`.homing`, :mod:`.watches`, :mod:`.encoder`,
+  :mod:`.polynomial`): positioning E, jog, homing, POS0/POSR, limits and step loss (§4.5.1,
+  §4.6.6, §4.8.4, §4.8.6 → §3.5, §5);
+* the inputs and their functions (:mod:`.inputs`, §3.3, §4.8.1 → §4.11);
+* statements, commands and the program (:mod:`.execution`, :mod:`.operands`, :mod:`.interpreter`,
+  :mod:`.remote`, :mod:`.program`, :mod:`.answers`) (§4.2–§4.6 → §3.3, §4.4).
+
+The model builds the parts and hands each the collaborators it needs; where two parts need
+each other, the one made first gets the other as a callable.  Internally positions are motor
+increments, speeds inc/s and accelerations inc/s²; the weighting parameters (P76, P44, P160,
+P121–P123) only matter at the serial interface.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+from devsim.core.axis import Axis, RegionSwitch
+from devsim.core.clock import Clock, Timer
+from devsim.core.kit import declare_signals
+from devsim.core.model import Model
+from devsim.core.nvram import NonVolatileMemory
+from devsim.devices.sers.access import ParameterAccess
+from devsim.devices.sers.answers import Answers
+from devsim.devices.sers.config import SersConfig
+from devsim.devices.sers.constants import INC_PER_REV
+from devsim.devices.sers.execution import Execution
+from devsim.devices.sers.inputs import Inputs
+from devsim.devices.sers.interpreter import Interpreter
+from devsim.devices.sers.master import MasterLink
+from devsim.devices.sers.memory import ParameterMemory
+from devsim.devices.sers.motion import Motion
+from devsim.devices.sers.operands import Operands
+from devsim.devices.sers.outputs import Outputs
+from devsim.devices.sers.parameters import SUPPLY_THRESHOLDS
+from devsim.devices.sers.params import SersParameters
+from devsim.devices.sers.power import PowerStage
+from devsim.devices.sers.program import ProgramMemory
+from devsim.devices.sers.signals import SIGNALS
+from devsim.devices.sers.supply import SupplyMonitor
+
+__all__ = ["SersDrive"]
+
+
+class SersDrive(Model):
+    """One SERS: its parts, its power-on and the selection on the serial line (§3.5, §3.6.2)."""
+
+    def __init__(
+        self,
+        *,
+        clock: Clock,
+        config: dict[str, Any] | None = None,
+        nvram: NonVolatileMemory | None = None,
+        name: str = "",
+    ) -> None:
+        super().__init__(clock=clock, config=config, nvram=nvram, name=name)
+        self.cfg = SersConfig.parse(self.config)
+        signals = self.signals
+        cfg = self._cfg
+        alive, booting = (lambda: self.logic_alive), (lambda: self.booting)
+        self.params = params = SersParameters()
+        self.memory = memory = ParameterMemory(self.nvram, params, cfg, lambda: self.motion.p51_inc())
+        self.program = program = ProgramMemory(self.nvram)
+        self.master = master = MasterLink(clock, self.line_out)
+        thresholds = SUPPLY_THRESHOLDS[self.cfg.supply_class]
+        self.axis = Axis(clock, counts_per_rev=INC_PER_REV, index_offset=self.cfg.axis.index_offset, name=self.name)
+        self.power_stage = power = PowerStage(
+            clock, params, signals, memory, lambda: self.motion,
+            undervoltage=thresholds[2],
+            changed=lambda: self.outputs.update(),
+            program_error=lambda: self.interpreter.on_drive_error(),
+            resync=lambda: self.motion.encoder.resync(),
+            record_event=self.record_event,
+            announce=self.announce,
+        )
+        self.motion = motion = Motion(
+            clock, self.axis, params, signals, power,
+            evaluate=lambda cond: self.operands.evaluate(cond),
+            i7_stop=lambda: self.inputs.i7_stop_active(),
+            ended=lambda: self.interpreter.on_motion_end(),
+            poke=lambda: self.interpreter.poke(),
+            segment_ended=lambda: self.interpreter.resume("segment"),
+            in_position_message=lambda: self.spontaneous(f"@{self.cfg.address}POS=1"),
+            has_option_e50=lambda: "E50" in self.cfg.options,
+            record_event=self.record_event,
+            changed=lambda: self.outputs.update(),
+        )
+        self.supply = supply = SupplyMonitor(
+            signals, power, memory, thresholds,
+            has_option_u=lambda: "U" in self.cfg.options, alive=alive, logic_power=self.switch_supply,
+        )
+        self.outputs = outputs = Outputs(
+            signals, params, power, memory, alive=alive, booting=booting,
+            in_position=lambda: motion.pos_ok, program_running=lambda: self.interpreter.running,
+        )
+        self.inputs = inputs = Inputs(
+            clock, signals, params, power, motion, program,
+            config=cfg, alive=alive, booting=booting, programs=lambda: self.execution, changed=outputs.update,
+        )
+        self.access = access = ParameterAccess(
+            params, memory, power, motion, inputs, program, signals,
+            config=cfg, programs=lambda: self.execution, changed=outputs.update, recheck_warnings=supply.recheck,
+        )
+        self.operands = operands = Operands(access, inputs, params, power)
+        self.answers = Answers(access, operands, params, power, motion, program)
+        self.interpreter = interpreter = Interpreter(
+            clock, params, program, operands, power, motion, master,
+            host=lambda: self.execution, render=self.answers.render_statement, spontaneous=self.spontaneous,
+            address=lambda: self.cfg.address,
+        )
+        self.execution = Execution(
+            params, memory, power, motion, inputs, program, interpreter, access, operands,
+            config=cfg, changed=outputs.update,
+        )
+        #: The drive was addressed last (True) or another one was (False); None: not yet.
+        self.addressed: bool | None = None
+        #: Other drives share the line (RS-485); the face tells.
+        self.shared_line = False
+        self.logic_alive = False
+        self.booting = False
+        self._timers: list[Timer] = []
+        self._define_signals(thresholds)
+        self._switches: list[RegionSwitch] = []
+        self._build_switches()
+        self._power_on()
+
+    def _cfg(self) -> Any:
+        """The configuration as it is now (a DIP switch may change it)."""
+        return self.cfg
+
+    # ======================================================================================
+    # signals and geometry
+    # ======================================================================================
+    def _define_signals(self, thresholds: tuple[int, int, int, int]) -> None:
+        s = self.signals
+        declare_signals(s, SIGNALS)
+        nominal = thresholds[0] * 0.8 if self.cfg.supply_voltage is None else self.cfg.supply_voltage
+        s.signal("supply_voltage").value = float(nominal)
+        s.signal("heatsink_temperature").value = float(self.cfg.heatsink_temperature)
+        inputs, supply = self.inputs, self.supply
+        for name in ("limit_left", "limit_right"):
+            s.subscribe(name, inputs.on_limit)
+        s.subscribe("stop", inputs.on_stop)
+        s.subscribe("reference", inputs.on_reference)
+        for n in range(1, 9):
+            s.subscribe(f"I{n}", inputs.on_digital_input)
+        s.subscribe("supply_voltage", lambda *_: supply.check_supply())
+        s.subscribe("heatsink_temperature", lambda *_: supply.check_temperature())
+        s.subscribe("short_circuit", lambda *_: supply.check_short())
+        s.subscribe("stall", lambda _name, _old, new: self.motion.stall(bool(new)))
+        for name in s.names():
+            s.subscribe(name, lambda *_: self.interpreter.poke())
+
+    def _build_switches(self) -> None:
+        geo = self.cfg.axis
+
+        def follow(signal: str) -> Callable[[bool], None]:
+            return lambda active: self.signals.set(signal, active)
+
+        if geo.limit_left is not None:
+            self._switches.append(RegionSwitch(self.axis, -math.inf, geo.limit_left, follow("limit_left")))
+        if geo.limit_right is not None:
+            self._switches.append(RegionSwitch(self.axis, geo.limit_right, math.inf, follow("limit_right")))
+        if geo.reference_low is not None:
+            high = geo.reference_high if geo.reference_high is not None else math.inf
+            self._switches.append(RegionSwitch(self.axis, geo.reference_low, high, follow("reference")))
+        for switch, name in zip(self._switches, self._switch_signals(), strict=False):
+            self.signals.signal(name).value = switch.active
+
+    def _switch_signals(self) -> list[str]:
+        geo = self.cfg.axis
+        names = []
+        if geo.limit_left is not None:
+            names.append("limit_left")
+        if geo.limit_right is not None:
+            names.append("limit_right")
+        if geo.reference_low is not None:
+            names.append("reference")
+        return names
+
+    # ======================================================================================
+    # power
+    # ======================================================================================
+    def _power_on(self) -> None:
+        """§3.5 / spec §4.1: display '-' for 2 s, then parameters from EEPROM."""
+        self._cancel_timers()
+        self.axis.quick_stop()
+        self.addressed = None
+        self.master.cancel()
+        self.announce("power_on")  # the serial face starts afresh (framer, selection)
+        self.logic_alive = True
+        self.booting = self.cfg.boot_time > 0
+        self.record_event("power_on")
+        self.power_stage.power_on()
+        self.motion.power_on()
+        self.inputs.power_on()
+        self.program.reload()  # programming mode does not survive a power loss (P0 = 0)
+        self.interpreter.reset()
+        self.memory.power_on()
+        self.motion.set_p51(self.memory.saved_position() or 0.0)
+        for n in range(1, 17):
+            self.signals.set(f"O{n}", False)
+        self.power_stage.energize_at_power_on()
+        self.supply.check_all()
+        self.supply.check_limits_at_power_on()
+        self.outputs.update()
+        if self.booting:
+            self._timers.append(self.clock.call_later(self.cfg.boot_time, self._boot_done))
+
+    def _boot_done(self) -> None:
+        self.record_event("ready")
+        self.booted()
+        self.execution.autostart()
+
+    def _power_off(self) -> None:
+        self._cancel_timers()
+        self.inputs.power_off()
+        self.motion.power_off()
+        self.logic_alive = False
+        self.power_stage.power_off()
+        for n in range(1, 17):
+            self.signals.set(f"O{n}", False)
+        self.signals.set("READY", False)
+
+    def power_cycle(self, *, wipe: bool = False) -> None:
+        self._power_off()
+        if wipe:
+            self.nvram.wipe()
+        self._power_on()
+
+    def switch_supply(self, on: bool) -> None:
+        """The supply switched off or on (the ``power`` fault, the supply monitor)."""
+        if on:
+            self._power_on()
+        else:
+            self._power_off()
+
+    def close(self) -> None:
+        self._cancel_timers()
+        self.inputs.power_off()
+        self.motion.cancel_all()
+        self.power_stage.cancel()
+        self.axis.quick_stop()
+        for switch in self._switches:
+            switch.cancel()
+
+    def _cancel_timers(self) -> None:
+        for timer in self._timers:
+            timer.cancel()
+        self._timers.clear()
+
+    # ======================================================================================
+    # the serial line
+    # ======================================================================================
+    def spontaneous(self, text: str) -> None:
+        """An unsolicited message (``@2POS=1``) for the serial face to send between lines."""
+        self.announce("spontaneous", text)
+
+    def line_out(self, data: bytes) -> None:
+        """Bytes a master sends to its slaves on the serial line (G-MASTER)."""
+        self.announce("line_out", data)
+
+    @property
+    def line_address(self) -> int:
+        """The address this drive's lines carry after ``#`` (its DIP address; 0, the master's,
+        is written ``#200``, G-ADDR)."""
+        return self.cfg.address or 200
+
+    @property
+    def selected(self) -> bool:
+        """Whether statements without an address are for this drive (G-ADDR)."""
+        if self.addressed is None:
+            initially = self.cfg.initially_selected
+            self.addressed = (not self.shared_line) if initially is None else initially
+        return self.addressed
+
+    def selection(self, address: int | str | None) -> tuple[bool, bool]:
+        """Whether this drive executes and answers a line with ``address`` after its ``#``
+        (G-ADDR), changing nothing: without one, if it is selected; ``*``, executed by all and
+        answered by none (a broadcast); its own address, both; another, neither."""
+        if address is None:
+            selected = self.selected
+            return selected, selected
+        if address == "*":
+            return True, False
+        mine = address == self.line_address
+        return mine, mine
+
+    def note_address(self, address: int | str | None, mine: bool) -> None:
+        """A line's address selects its drive and deselects the others (G-ADDR); a line
+        without one, or a broadcast, changes nothing.  ``mine``: the address is this drive's."""
+        if address is not None and address != "*":
+            self.addressed = mine

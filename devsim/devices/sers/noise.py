@@ -1,0 +1,153 @@
+"""Lines of noise on the SERS's serial line, taken in one step (manual §3.2.4, §4.8.3.1; spec
+G-ADDR, G-LINE).
+
+Random bytes with ``#`` in them are mostly lines this drive executes whose first statement
+fails at once: each is its echo up to the failing character, the error message, the echo of
+the rest, the line end and the noise up to the next ``#``.  :class:`NoiseLines` takes such
+lines one after the other without parsing them character by character; what it sends and
+leaves behind is exactly what the byte-by-byte path of :class:`~.face.SersFace` would
+(``tests/sers/test_noise_paths.py``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Protocol
+
+from devsim.devices.sers import codec
+from devsim.devices.sers.line import LINE_ENDS, CommandLine, error_text, first_byte_errors, first_failure
+from devsim.devices.sers.model import SersDrive
+
+__all__ = ["LineHost", "NoiseLines"]
+
+
+class LineHost(Protocol):
+    """What the noise path needs of the serial face (:class:`~.face.SersFace`, §3.2.4)."""
+
+    line: CommandLine | None  # the line being received
+
+    def restart(self, line: CommandLine, data: bytes, index: int) -> int:
+        """A ``#`` inside the line and the address after it."""
+
+    def end_line(self, line: CommandLine, overflow: bool) -> None:
+        """The line has ended (its terminator echoed): its statements, answers and ack."""
+
+    def on_event(self, event: object, byte: int) -> None:
+        """One byte's framing event, handled byte by byte."""
+
+
+class NoiseLines:
+    """The lines of noise one SERS's face takes in one step (§3.2.4, §4.8.3.1)."""
+
+    def __init__(self, model: SersDrive, framer: codec.Framer, send: Callable[[bytes], None], face: LineHost) -> None:
+        self.model = model
+        self.framer = framer
+        self.send = send
+        self.face = face
+
+    def take(self, data: bytes, index: int) -> int:
+        """From a ``#`` outside a line: whole lines this drive executes whose first statement
+        fails before any statement completes (what random noise mostly is), with the restarts
+        of the failed line, its end and the noise up to the next ``#``, one line after the
+        other, as the face's ``_begin_line``, ``_failing_line``, ``restart``, the line end
+        and the noise skip would do them.  Stops before a line it does not take (one for
+        another drive, one that runs a statement, one whose text in the chunk does not fail)
+        or inside one (a restart for another drive or whose address the chunk cuts off, the
+        chunk's end), with the line and the framing as those paths leave them; returns where
+        (``index``: nothing taken).  The echo up to the failing character leaves before the
+        error is recorded, the rest of the line's answers with its end, before the line's end
+        is handled."""
+        model, framer, send, face, end = self.model, self.framer, self.send, self.face, len(data)
+        hash_, no_address, search, fails = codec.HASH, codec.NO_ADDRESS, codec.TEXT_END.search, first_byte_errors()
+        mode = model.params.handshake_mode  # (only a statement changes it: none runs here)
+        while True:
+            # data[index] is a '#' outside a line
+            if model.addressed is False:
+                return index  # (the general path skips lines for other drives in one step)
+            stop = index + 1
+            if stop < end and data[stop] in no_address:  # (most noise: no address)
+                address = None
+            else:
+                complete, address, stop = codec.read_address(data, index)
+                if not complete:
+                    return index
+            execute, reply = model.selection(address)
+            if not execute:
+                return index
+            found = search(data, stop)
+            finish = end if found is None else found.start()  # (the chunk may end the text)
+            keep = min(finish, index + codec.MAX_LINE)  # the text kept (60 characters from the '#')
+            if keep <= stop:
+                return index
+            errno = fails[data[stop]]
+            if errno:
+                cut = stop + 1
+            else:
+                failure = first_failure(data[stop:keep])
+                if failure is None:
+                    return index
+                cut, errno = stop + failure[0], failure[1]
+            # the line fails at data[cut - 1]: take it
+            model.note_address(address, execute)
+            face.line = line = CommandLine()
+            line.execute = line.error = True
+            line.reply = reply
+            if reply and mode in (0, 1):
+                send(data[index:cut])
+            model.power_stage.record_error(errno)  # (what _error does, its message from a table)
+            mode = model.params.handshake_mode
+            echo = mode in (0, 1)
+            text = error_text(errno, model.params.language == 1, model.cfg.encoding) if reply else b""
+            if mode == 2:
+                line.deferred += text
+                text = b""
+            if not model.logic_alive or model.booting:
+                framer.take_line(stop - index, cut - stop)
+                send(text)
+                return cut
+            framer.take_line(stop - index, finish - stop)
+            if reply and echo:
+                text += data[cut:finish]
+            if finish == end:  # (the line goes on in the next chunk)
+                send(text)
+                return end
+            while data[finish] == hash_:  # a restart in the failed line: only echoed
+                complete, address, stop = codec.read_address(data, finish)
+                executes, answers = model.selection(address) if complete else (False, False)
+                if not executes:  # (another drive's address, or one the chunk cuts off)
+                    send(text)
+                    return face.restart(line, data, finish)
+                line.execute, line.reply = executes, answers
+                model.note_address(address, executes)
+                line.text, line.executed = "", 0
+                found = search(data, stop)
+                after = end if found is None else found.start()
+                framer.take_line(stop - finish, after - stop)
+                if line.reply and echo:
+                    text += data[finish:after]  # the address held until complete, and the text
+                finish = after
+                if finish == end:
+                    send(text)
+                    return end
+            byte = data[finish]
+            if line.reply and echo:
+                text += data[finish : finish + 1]
+            overflow = framer.end_line(byte)
+            send(text)
+            face.end_line(line, overflow)
+            index = finish + 1
+            if not model.logic_alive or model.booting or model.addressed is False:
+                return index
+            if index < end:
+                byte = data[index]
+                if byte in LINE_ENDS:  # the other half of a CR/LF pair, or noise
+                    index += 1
+                    for event in framer.feed(byte):
+                        face.on_event(event, byte)
+                    if index == end:
+                        return end
+                    byte = data[index]
+                if byte != hash_:
+                    index = framer.skip_noise(data, index)
+            if index >= end:
+                return end
