@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -105,3 +107,17 @@ def test_rows_document_every_key() -> None:
     keys = [row[0] for row in rows(CONFIG)]
     assert keys == ["address", "step", "gain", "mode", "name", "params", "axis", "axis.cam", "axis.marks", "rules"]
     assert dict((r[0], r[1]) for r in rows(CONFIG))["axis.cam"] == "[float, float] | None"
+
+
+def test_a_simulator_starts_without_the_error_collector() -> None:
+    """A valid configuration takes msgspec's compiled path only: the piecewise search for every
+    problem (devsim.core.typed_errors) is imported when a configuration is wrong."""
+    code = (
+        "import sys; from devsim.core.registry import device_class;"
+        "from devsim.core.clock import VirtualClock;"
+        "[device_class(k)(clock=VirtualClock(), config=device_class(k).config_model.parse({}).dump())"
+        " for k in ('sers', 'gms96', 'poselesta', 'ip247', 'pcd4h3')];"
+        "print('devsim.core.typed_errors' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "False"

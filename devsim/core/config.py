@@ -173,39 +173,10 @@ def validate(data: Any, model: type[T], path: str | os.PathLike[str]) -> T:
     if data is None:
         data = LineDict()
         data.key_lines = {}
-    if isinstance(model, type) and issubclass(model, Typed):
-        try:
-            return model.parse(data)
-        except Invalid as exc:
-            _refuse(name, data, exc.problems)
-    return _validate_pydantic(data, model, name)  # the scenario schema, until it is typed data too
-
-
-def _validate_pydantic(data: Any, model: Any, name: str) -> Any:
-    from pydantic import ValidationError
-
-    from devsim.core.typed import non_finite
-
-    where = non_finite(data)
     try:
-        result = model.model_validate(data)
-    except ValidationError as exc:
-        _refuse(name, data, [(tuple(e.get("loc", ())), _message(e)) for e in exc.errors()])
-    where = where or non_finite(result.model_dump(by_alias=True))
-    if where is not None:
-        line, parts = _locate(data, where)
-        raise ConfigError(f"{name}:{line}: {'.'.join(parts) or 'value'}: not a finite number (NaN and infinity are refused)")
-    return result
-
-
-def _message(error: dict[str, Any]) -> str:
-    msg = str(error.get("msg", "invalid"))
-    for prefix in ("Value error, ", "Assertion failed, "):
-        if msg.startswith(prefix):
-            msg = msg[len(prefix):]
-    if error.get("type") == "extra_forbidden":
-        msg = "unknown field"
-    return msg
+        return model.parse(data)
+    except Invalid as exc:
+        _refuse(name, data, exc.problems)
 
 
 def _refuse(name: str, data: Any, problems: list[tuple[tuple[int | str, ...], str]]) -> NoReturn:

@@ -38,7 +38,7 @@ import msgspec
 from msgspec import UNSET, Meta
 
 __all__ = [
-    "NOT_FINITE", "UNSET", "Check", "FieldError", "Invalid", "Keys", "Meta", "Typed", "convert", "doc", "non_finite", "plain",
+    "NOT_FINITE", "UNSET", "Check", "FieldError", "Invalid", "Keys", "Meta", "Typed", "convert", "doc", "fixer", "non_finite", "plain",
     "struct_type",
 ]
 
@@ -143,16 +143,13 @@ class Typed(msgspec.Struct, forbid_unknown_fields=True):
                 cls.screen(data)
             except ValueError as exc:
                 raise Invalid([((), str(exc))]) from None
-        where = non_finite(data)
-        if where is not None:
-            raise Invalid([(where, NOT_FINITE)])
         try:
             value = convert(data, cls)
         except msgspec.ValidationError:
             from devsim.core.typed_errors import problems_of
 
             raise Invalid(problems_of(cls, data)) from None
-        fix = _fixer(cls)
+        fix = fixer(cls)
         if fix is not None:
             problems: list[Problem] = []
             fix(value, (), problems)
@@ -197,7 +194,7 @@ _FIXERS: dict[Any, Fixer | None] = {}
 _BUILDING = object()
 
 
-def _fixer(kind: Any) -> Fixer | None:
+def fixer(kind: Any) -> Fixer | None:
     """What :meth:`Typed.parse` still does to a converted value of ``kind`` (run the checks and
     key conversions inside it), or None if nothing."""
     try:
@@ -217,18 +214,18 @@ def _build(kind: Any) -> Fixer | None:
         keys = next((m for m in meta if isinstance(m, Keys)), None)
         checks = [m for m in meta if isinstance(m, Check)]
         if keys is not None:  # Annotated[dict[Any, V], Keys(...)]
-            return _keyed(keys, _fixer(get_args(struct_type(inner_kind))[1]), checks)
-        return _checked(_fixer(inner_kind), checks)
+            return _keyed(keys, fixer(get_args(struct_type(inner_kind))[1]), checks)
+        return _checked(fixer(inner_kind), checks)
     if isinstance(kind, type) and issubclass(kind, msgspec.Struct):
         return _struct(kind)
     if origin is list:
-        item = _fixer(get_args(kind)[0])
+        item = fixer(get_args(kind)[0])
         return None if item is None else lambda v, loc, p: [item(x, (*loc, i), p) for i, x in enumerate(v)]
     if origin is dict:
-        value = _fixer(get_args(kind)[1])
+        value = fixer(get_args(kind)[1])
         return None if value is None else lambda v, loc, p: {k: value(x, (*loc, k), p) for k, x in v.items()}
     if origin is Union or type(kind).__name__ == "UnionType":
-        arms = [(a, _fixer(a)) for a in get_args(kind) if a is not type(None)]
+        arms = [(a, fixer(a)) for a in get_args(kind) if a is not type(None)]
         found = [(a, f) for a, f in arms if f is not None]
         if not found:
             return None
@@ -282,7 +279,7 @@ def _keyed(keys: Keys, item: Fixer | None, checks: list[Check]) -> Fixer:
 
 
 def _struct(kind: type[msgspec.Struct]) -> Fixer | None:
-    fields = [(f.name, f.encode_name, _fixer(f.type)) for f in msgspec.structs.fields(kind)]
+    fields = [(f.name, f.encode_name, fixer(f.type)) for f in msgspec.structs.fields(kind)]
     plan = [(name, key, fix) for name, key, fix in fields if fix is not None]
     if not plan:
         return None

@@ -12,13 +12,15 @@ to 127".  Messages of checks, custom field types and ``__post_init__`` pass thro
 
 from __future__ import annotations
 
+import ast
+import math
 import re
 from collections.abc import Mapping
-from typing import Any, Literal, get_args, get_origin
+from typing import Annotated, Any, Literal, Union, get_args, get_origin
 
 import msgspec
 
-from devsim.core.typed import NOT_FINITE, Location, Problem, convert, struct_type
+from devsim.core.typed import NOT_FINITE, Keys, Location, Problem, convert, fixer, struct_type
 
 __all__ = ["problems_of", "wording"]
 
@@ -42,11 +44,18 @@ def _fields(kind: type[msgspec.Struct]) -> dict[str, msgspec.structs.FieldInfo]:
 
 
 def _collect(kind: Any, data: Any, loc: Location, problems: list[Problem]) -> None:
-    try:
-        convert(data, kind)
+    if isinstance(data, float) and not math.isfinite(data) and _numeric(kind):
+        problems.append((loc, NOT_FINITE))
         return
+    try:
+        value = convert(data, kind)
     except msgspec.ValidationError as exc:
         error = str(exc)
+    else:  # this part is right as a type: its checks and keys still apply
+        fix = fixer(kind)
+        if fix is not None:
+            fix(value, loc, problems)
+        return
     base = struct_type(kind)
     origin = get_origin(base)
     before = len(problems)
@@ -63,16 +72,40 @@ def _collect(kind: Any, data: Any, loc: Location, problems: list[Problem]) -> No
             _collect(get_args(base)[0], item, (*loc, index), problems)
     elif origin is dict and isinstance(data, Mapping):
         key_kind, value_kind = get_args(base)
+        keys = _keys(kind)
         for key, value in data.items():
             try:
                 convert(key, key_kind)
+                if keys is not None:
+                    keys.function(key)
             except msgspec.ValidationError as exc:
                 problems.append(((*loc, key), wording(str(exc), key_kind, key)[1]))
                 continue
+            except ValueError as exc:
+                problems.append(((*loc, key), str(exc)))
+                continue
             _collect(value_kind, value, (*loc, key), problems)
     if len(problems) == before:  # the parts are right: the problem is the whole (a length, a rule)
-        path, text = wording(error, kind, data)
+        path, text = wording(error, kind, data, loc)
         problems.append(((*loc, *path), text))
+
+
+def _keys(kind: Any) -> Keys | None:
+    """The :class:`Keys` of an annotated mapping type."""
+    while get_origin(kind) is Annotated:
+        kind, *meta = get_args(kind)
+        found = next((m for m in meta if isinstance(m, Keys)), None)
+        if found is not None:
+            return found
+    return None
+
+
+def _numeric(kind: Any) -> bool:
+    """``kind`` takes plain numbers (so NaN given for it is refused as such)."""
+    base = struct_type(kind)
+    arms = get_args(base) if get_origin(base) is Union or type(base).__name__ == "UnionType" else (base,)
+    arms = tuple(struct_type(a) for a in arms if a is not type(None))
+    return bool(arms) and all(a in (int, float) for a in arms)
 
 
 def _given(data: Any, path: list[int | str]) -> str:
@@ -107,8 +140,9 @@ def _kind_at(kind: Any, path: list[int | str]) -> Any:
     return kind
 
 
-def wording(error: str, kind: Any, data: Any) -> tuple[list[int | str], str]:
-    """(location inside ``kind``, message) of a msgspec error, in the users' words."""
+def wording(error: str, kind: Any, data: Any, loc: Location = ()) -> tuple[list[int | str], str]:
+    """(location inside ``kind``, message) of a msgspec error, in the users' words; ``loc`` is
+    where ``kind`` sits (its last key names the field in a custom type's message)."""
     match = _AT.match(error)
     assert match is not None
     message, path = match["msg"], _path(match["path"])
@@ -124,7 +158,7 @@ def wording(error: str, kind: Any, data: Any) -> tuple[list[int | str], str]:
     if "..." in path:  # an entry of a mapping: the piecewise pass names its key
         path = path[:path.index("...")]
     target = struct_type(_kind_at(kind, path))
-    field = next((p for p in reversed(path) if isinstance(p, str)), "value")
+    field = next((p for p in reversed((*loc, *path)) if isinstance(p, str) and p != "..."), "value")
     if located or "{field}" in message and not message.startswith("Expected"):
         return path, message.replace("{field}", field)
     text = _expected(message, target)
@@ -160,7 +194,8 @@ def _expected(message: str, target: Any) -> str:
         count = int(length["num"])
         return f"{what} should have {least} {count} {unit}{'' if count == 1 else 's'}"
     if rest.startswith(" matching regex "):
-        return f"String should match pattern {rest.removeprefix(' matching regex ')}"
+        pattern = ast.literal_eval(rest.removeprefix(" matching regex "))  # msgspec shows it as a repr
+        return f"String should match pattern '{pattern}'"
     if want == "array" and get_origin(target) is tuple:
         return "Input should be a list of two values" if len(get_args(target)) == 2 else "Input should be a valid list"
     if want == "int":
