@@ -20,7 +20,7 @@ from typing import Annotated, Any, Literal, Union, get_args, get_origin
 
 import msgspec
 
-from devsim.core.typed import NOT_FINITE, Keys, Location, Problem, convert, fixer, struct_type
+from devsim.core.typed_convert import NOT_FINITE, Keys, Location, Problem, convert, fixer, struct_type
 
 __all__ = ["problems_of", "wording"]
 
