@@ -64,9 +64,9 @@ def _transport_spec(transport: str | Mapping[str, Any]) -> Any:
     if isinstance(transport, str):
         if transport not in ("pty", "tcp", "rfc2217", "udp"):
             raise ValueError(f"transport must be 'pty', 'tcp', 'rfc2217', 'udp' or a mapping, not {transport!r}")
-        spec = TransportSpec.model_validate({transport: {}})
+        spec = TransportSpec.parse({transport: {}})
     else:
-        spec = TransportSpec.model_validate(dict(transport))
+        spec = TransportSpec.parse(dict(transport))
     if spec.bus is not None:
         raise ValueError("devsim_device serves one device on its own port; use devsim_plant for buses")
     return spec
@@ -412,7 +412,7 @@ def _plant_spec(source: Any, *bases: Path) -> Any:
         data = plain(dict(source))
         if "steps" in data:
             return scenario_from_dict(data)
-        return PlantSpec.model_validate(data)
+        return PlantSpec.parse(data)
     return load_plant(_resolve(source, *bases))
 
 
@@ -536,9 +536,8 @@ _RESULT_KEY = pytest.StashKey[Any]()
 def devsim_scenario_result(request: pytest.FixtureRequest) -> Any:
     """The :class:`~devsim.scenario.runner.ScenarioResult` of the test's ``devsim_scenario``
     marker (the scenario runs when this fixture is set up, before the test body)."""
-    from pydantic import ValidationError
-
     from devsim.core.config import ConfigError
+    from devsim.core.typed import Invalid
 
     marker = request.node.get_closest_marker("devsim_scenario")
     if marker is None:
@@ -550,8 +549,11 @@ def devsim_scenario_result(request: pytest.FixtureRequest) -> Any:
         result = run_scenario_spec(marker.args[0], request.path.parent, request.config.rootpath, Path.cwd(), **options)
     except ConfigError as exc:
         pytest.fail("\n".join(exc.messages), pytrace=False)
-    except ValidationError as exc:
-        pytest.fail(f"devsim_scenario: {exc}", pytrace=False)
+    except Invalid as exc:  # a scenario given as a dict
+        count = len(exc.problems)
+        lines = [f"  {'.'.join(map(str, loc)) or 'scenario'}: {text}" for loc, text in exc.problems]
+        pytest.fail(f"devsim_scenario: {count} validation error{'s' if count > 1 else ''} in the scenario\n"
+                    + "\n".join(lines), pytrace=False)
     request.node.stash[_RESULT_KEY] = result
     return result
 

@@ -5,21 +5,20 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import msgspec
 import pytest
-from pydantic import BaseModel, ConfigDict
 
 from devsim.core.config import ConfigError, load_config, load_yaml, plain, validate
+from devsim.core.typed import Typed
 from devsim.devices.sers.config import SersConfig
 
 
-class Step(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+class Step(Typed):
     at: float
     name: str
 
 
-class Scenario(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+class Scenario(Typed):
     title: str
     steps: list[Step]
 
@@ -30,7 +29,7 @@ def write(tmp_path: Path, text: str, name: str = "config.yaml") -> Path:
     return path
 
 
-def error_of(path: Path, model: type[BaseModel] = SersConfig) -> str:
+def error_of(path: Path, model: type[Typed] = SersConfig) -> str:
     with pytest.raises(ConfigError) as info:
         load_config(path, model)
     message = str(info.value)
@@ -151,15 +150,17 @@ def test_readme_example_config_is_valid(tmp_path: Path) -> None:
     assert config.params == {"P1017": 2}
 
 
+class Axis(Typed):
+    limit: float = 0.0
+    extra: dict[str, Any] = {}
+
+
+class Model(Typed):
+    axis: Axis = msgspec.field(default_factory=Axis)
+
+
 @pytest.mark.parametrize("value", [".nan", ".inf", "-.inf", "1e400", "'-1e999'"])
 def test_non_finite_numbers_are_refused_with_their_line(tmp_path: Path, value: str) -> None:
-    class Axis(BaseModel):
-        limit: float = 0.0
-        extra: dict[str, Any] = {}
-
-    class Model(BaseModel):
-        axis: Axis = Axis()
-
     path = tmp_path / "c.yaml"
     path.write_text(f"axis:\n  limit: {value}\n")
     with pytest.raises(ConfigError, match=r"c.yaml:2: axis.limit: not a finite number"):

@@ -83,8 +83,8 @@ def test_match_by_position() -> None:
 
 
 def test_a_simulator_starts_without_a_schema_library() -> None:
-    """`devsim run` builds a device from its tables alone: pydantic (the scenario schema and the
-    control API) is imported only when a file is validated or a control server runs."""
+    """`devsim run` builds a device from its tables alone: pydantic (the control API) is imported
+    only when a control server runs."""
     code = (
         "import sys; from devsim.core.registry import device_class;"
         "import devsim.cli, devsim.transports.pty, devsim.runtime;"

@@ -2,25 +2,16 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Annotated, Any, Literal
 
 import pytest
 
 from devsim.core.config import ConfigError, load_config, load_yaml, validate
-from devsim.core.settings import (
-    Bool,
-    DictOf,
-    Float,
-    Int,
-    Invalid,
-    ListOf,
-    Maybe,
-    OneOf,
-    PairOf,
-    Section,
-    Setting,
-    Text,
-)
+from devsim.core.settings import Check, Invalid, Keys, Meta, Settings, doc, field, rows
 
 
 def _even(value: int) -> int:
@@ -29,29 +20,39 @@ def _even(value: int) -> int:
     return value
 
 
-def _no_foo(data: object) -> None:
-    if "foo" in data:  # type: ignore[operator]
-        raise ValueError("this looks like a foo file")
+class Rule(Settings, rename={"source": "from"}):
+    """a rule"""
+
+    source: Annotated[str, doc("a bit")]
+    invert: bool = False
 
 
-RULE = Section("a rule", (
-    Setting("source", Text(), doc="a bit", alias="from"),
-    Setting("invert", Bool(), False),
-))
-GEOMETRY = Section("where things are", (
-    Setting("cam", Maybe(PairOf(Float())), (-2.0, -1.0)),
-    Setting("marks", ListOf(Float()), []),
-))
-CONFIG = Section("a device", (
-    Setting("address", Int(ge=0, le=31), 3, "switches"),
-    Setting("step", Int(), 2, check=_even),
-    Setting("gain", Float(gt=0), 0.5),
-    Setting("mode", OneOf("S", "E"), "S"),
-    Setting("name", Text()),
-    Setting("params", DictOf(int, Float(integers=True), "number"), {}),
-    Setting("axis", GEOMETRY, {}),
-    Setting("rules", ListOf(RULE), []),
-), before=_no_foo)
+class Geometry(Settings):
+    """where things are"""
+
+    cam: tuple[float, float] | None = (-2.0, -1.0)
+    marks: list[float] = []
+
+
+class Config(Settings, kw_only=True):
+    """a device"""
+
+    address: Annotated[int, Meta(ge=0, le=31), doc("switches")] = 3
+    step: Annotated[int, Check(_even)] = 2
+    gain: Annotated[float, Meta(gt=0)] = 0.5
+    mode: Literal["S", "E"] = "S"
+    name: str
+    params: Annotated[dict[Any, float | int], Keys(int, "number")] = {}
+    axis: Geometry = field(default_factory=Geometry)
+    rules: list[Rule] = []
+
+    @classmethod
+    def screen(cls, data: Mapping[Any, Any]) -> None:
+        if "foo" in data:
+            raise ValueError("this looks like a foo file")
+
+
+CONFIG = Config
 
 
 def test_defaults_conversions_and_values() -> None:
@@ -60,7 +61,7 @@ def test_defaults_conversions_and_values() -> None:
     assert values.params == {10: 3, 11: 1.5} and isinstance(values.params[10], int)
     assert values.axis.cam == (-2.0, -1.0) and values.axis.marks == []
     assert values.rules[0].source == "E0.1" and values.rules[0].invert is False
-    assert values.dump()["rules"] == [{"source": "E0.1", "invert": False}]
+    assert values.dump()["rules"] == [{"from": "E0.1", "invert": False}]  # keyed as in a file
     assert CONFIG.parse(values.dump()) == values  # a dump validates again to the same values
     assert values.replace(address=5).address == 5 and values.address == 3
 
@@ -103,6 +104,20 @@ def test_problems_in_a_file_name_their_line(tmp_path: Path) -> None:
 
 
 def test_rows_document_every_key() -> None:
-    keys = [row[0] for row in CONFIG.rows()]
+    keys = [row[0] for row in rows(CONFIG)]
     assert keys == ["address", "step", "gain", "mode", "name", "params", "axis", "axis.cam", "axis.marks", "rules"]
-    assert dict((r[0], r[1]) for r in CONFIG.rows())["axis.cam"] == "[float, float] | None"
+    assert dict((r[0], r[1]) for r in rows(CONFIG))["axis.cam"] == "[float, float] | None"
+
+
+def test_a_simulator_starts_without_the_error_collector() -> None:
+    """A valid configuration takes msgspec's compiled path only: the piecewise search for every
+    problem (devsim.core.typed_errors) is imported when a configuration is wrong."""
+    code = (
+        "import sys; from devsim.core.registry import device_class;"
+        "from devsim.core.clock import VirtualClock;"
+        "[device_class(k)(clock=VirtualClock(), config=device_class(k).config_model.parse({}).dump())"
+        " for k in ('sers', 'gms96', 'poselesta', 'ip247', 'pcd4h3')];"
+        "print('devsim.core.typed_errors' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "False"

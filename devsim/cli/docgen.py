@@ -13,7 +13,7 @@ from typing import Any
 
 from devsim.core.device import Device
 from devsim.core.points import SHARED_VOCABULARY
-from devsim.core.settings import Section
+from devsim.core.settings import Section, rows
 
 __all__ = ["config_rows", "modbus_markdown", "reference_markdown", "shared_vocabulary_markdown"]
 
@@ -35,7 +35,7 @@ def _table_rows(header: Sequence[str], *groups: Iterable[Sequence[Any]]) -> list
 
 def config_rows(model: Section | None) -> list[tuple[str, str, str, str]]:
     """(key, type, default, description) of every configuration key, nested keys dotted."""
-    return [] if model is None else list(model.rows())
+    return [] if model is None else list(rows(model))
 
 
 def shared_vocabulary_markdown() -> list[str]:

@@ -260,7 +260,7 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
             return raw
         try:
             return model.parse(raw).dump()
-        except ValueError as exc:  # settings.Invalid: "key: message" of the first problem
+        except ValueError as exc:  # typed.Invalid: "key: message" of the first problem
             raise ConfigUsageError(f"{source}: {exc}") from None
 
     if not drives:
@@ -268,7 +268,8 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     names = [kind] if len(drives) == 1 else [f"{kind}{n}" for n in drives]
     def addressed(n: int) -> dict[str, Any]:
         # the address is a DIL-switch setting on cards that have one (GMS96: dil.address)
-        if model is not None and "address" not in model.names and "dil" in model.names:
+        keys = model.__struct_encode_fields__ if model is not None else ()
+        if "address" not in keys and "dil" in keys:
             return {**base, "dil": {**(base.get("dil") or {}), "address": n}}
         return {**base, "address": n}
 

@@ -2,9 +2,9 @@
 
 A configuration file (``devsim run --config``, later plant and scenario files) is YAML, loaded
 with a :class:`yaml.SafeLoader` subclass that remembers the line of every mapping key and list
-item, then validated against a kind's configuration table (:class:`devsim.core.settings.Section`)
-or, for scenario and plant files, the scenario schema (a pydantic model).  Every problem is reported as one line that an
-editor can jump to::
+item, then validated against its declaration (:class:`devsim.core.typed.Typed`: a kind's
+configuration, :mod:`devsim.core.settings`, or the scenario and plant schema).  Every problem is
+reported as one line that an editor can jump to::
 
     config.yaml:3: baud: baud must be one of 1200, 2400, ...
     config.yaml:7: axis.limit_left: Input should be a valid number
@@ -16,22 +16,18 @@ data needs reshaping in between.
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Hashable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, NoReturn, TypeVar, overload
+from typing import Any, NoReturn, TypeVar
 
 import yaml
 
-from devsim.core.settings import Invalid, Section, Values
-
-if TYPE_CHECKING:
-    from pydantic import BaseModel
+from devsim.core.typed import Invalid, Typed
 
 __all__ = ["ConfigError", "LineDict", "LineList", "LineLoader", "load_config", "load_yaml", "plain", "validate"]
 
-M = TypeVar("M", bound="BaseModel")
+T = TypeVar("T", bound=Typed)
 
 
 class ConfigError(ValueError):
@@ -135,11 +131,10 @@ def load_yaml(path: str | os.PathLike[str], text: str | None = None) -> Any:
 
 
 def _locate(data: Any, loc: tuple[int | str, ...]) -> tuple[int, list[str]]:
-    """The best YAML line for a pydantic error location, and the location's printable parts.
+    """The best YAML line for a problem's location, and the location's printable parts.
 
     Walks ``data`` along ``loc`` as far as the data goes.  A key missing from a mapping (a
-    required field) is still named and reported at the mapping's line; location parts that
-    pydantic adds beyond the data (union member tags such as ``float``) are dropped.
+    required field) is still named and reported at the mapping's line.
     """
     line = getattr(data, "line", 1)
     parts: list[str] = []
@@ -151,7 +146,7 @@ def _locate(data: Any, loc: tuple[int | str, ...]) -> tuple[int, list[str]]:
                 parts.append(str(step))
                 node = node[step]
                 continue
-            # an integer-looking key given as a string by pydantic, or a missing field
+            # a missing field
             parts.append(str(step))
             break
         if isinstance(node, LineList) and isinstance(step, int) and 0 <= step < len(node):
@@ -163,16 +158,6 @@ def _locate(data: Any, loc: tuple[int | str, ...]) -> tuple[int, list[str]]:
     return line, parts
 
 
-def _message(error: dict[str, Any]) -> str:
-    msg = str(error.get("msg", "invalid"))
-    for prefix in ("Value error, ", "Assertion failed, "):
-        if msg.startswith(prefix):
-            msg = msg[len(prefix):]
-    if error.get("type") == "extra_forbidden":
-        msg = "unknown field"
-    return msg
-
-
 def _kind(data: Any) -> str:
     if isinstance(data, list):
         return "a list"
@@ -181,38 +166,17 @@ def _kind(data: Any) -> str:
     return type(data).__name__
 
 
-@overload
-def validate(data: Any, model: Section, path: str | os.PathLike[str]) -> Values: ...
-@overload
-def validate(data: Any, model: type[M], path: str | os.PathLike[str]) -> M: ...
-
-
-def validate(data: Any, model: Section | type[M], path: str | os.PathLike[str]) -> Values | M:
-    """Validate YAML data from :func:`load_yaml` against a configuration table or a schema
-    model; errors name file and line."""
+def validate(data: Any, model: type[T], path: str | os.PathLike[str]) -> T:
+    """Validate YAML data from :func:`load_yaml` against a declaration (a configuration or the
+    scenario schema, :class:`devsim.core.typed.Typed`); errors name file and line."""
     name = _display(path)
     if data is None:
         data = LineDict()
         data.key_lines = {}
-    where = _non_finite(data, ())
-    if isinstance(model, Section):
-        try:
-            result: Values | M = model.parse(data)
-        except Invalid as exc:
-            _refuse(name, data, exc.problems)
-        where = where or _non_finite(result.dump(), ())
-    else:
-        from pydantic import ValidationError
-
-        try:
-            result = model.model_validate(data)
-        except ValidationError as exc:
-            _refuse(name, data, [(tuple(e.get("loc", ())), _message(e)) for e in exc.errors()])
-        where = where or _non_finite(result.model_dump(by_alias=True), ())
-    if where is not None:
-        line, parts = _locate(data, where)
-        raise ConfigError(f"{name}:{line}: {'.'.join(parts) or 'value'}: not a finite number (NaN and infinity are refused)")
-    return result
+    try:
+        return model.parse(data)
+    except Invalid as exc:
+        _refuse(name, data, exc.problems)
 
 
 def _refuse(name: str, data: Any, problems: list[tuple[tuple[int | str, ...], str]]) -> NoReturn:
@@ -232,23 +196,6 @@ def _refuse(name: str, data: Any, problems: list[tuple[tuple[int | str, ...], st
     if len(messages) > 1:
         first += f" (and {len(messages) - 1} more)"
     raise ConfigError(first, messages) from None
-
-
-def _non_finite(data: Any, loc: tuple[int | str, ...]) -> tuple[int | str, ...] | None:
-    """Where the first NaN or infinity sits in ``data`` (a number, or nested mappings and lists)."""
-    if isinstance(data, float):
-        return None if math.isfinite(data) else loc
-    if isinstance(data, dict):
-        for key, value in data.items():
-            found = _non_finite(value, (*loc, key))
-            if found is not None:
-                return found
-    elif isinstance(data, list | tuple):
-        for index, value in enumerate(data):
-            found = _non_finite(value, (*loc, index))
-            if found is not None:
-                return found
-    return None
 
 
 def load_config(path: str | os.PathLike[str], model: Any) -> Any:

@@ -1,4 +1,4 @@
-"""Scenario and plant files: the YAML schema (pydantic v2) with line-numbered errors.
+"""Scenario and plant files: the YAML schema (typed data, msgspec) with line-numbered errors.
 
 A **plant** file lists devices (and optional multidrop buses) and how each is reached::
 
@@ -32,21 +32,23 @@ from __future__ import annotations
 import os
 import re
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import Field, ValidationInfo, field_validator, model_validator
+from msgspec import UNSET, Meta, UnsetType, field
 
 from devsim.core.config import ConfigError, LineDict, LineList, load_yaml, plain, validate
+from devsim.core.typed import FieldError, Typed, doc
 from devsim.runtime import port_key
 from devsim.scenario.specs import (
+    Between,
     CanopenSpec,
+    Duration,
     ModbusSpec,
     MqttSpec,
     OpcuaSpec,
     TransportSpec,
     parse_duration,
 )
-from devsim.scenario.specs import SpecModel as _Model
 
 __all__ = [
     "ACTIONS",
@@ -63,31 +65,29 @@ __all__ = [
     "parse_duration",
 ]
 
-class DeviceSpec(_Model):
-    name: str = Field(pattern=r"^[A-Za-z_][A-Za-z0-9_-]*$")
-    kind: str
-    transport: TransportSpec = Field(default_factory=TransportSpec)
-    ports: dict[str, TransportSpec] = Field(
-        default_factory=dict,
-        description="per port of the kind: its transport (default: a pty, or the port's declared scheme on an"
-        " ephemeral port)",
-    )
-    config: dict[str, Any] = Field(default_factory=dict, description="device configuration (DIP switches, parameters)")
-    axis: dict[str, Any] | None = Field(default=None, description="axis geometry, merged into config['axis']")
-    state: dict[str, Any] = Field(default_factory=dict, description="initial state: settable names and 'program'")
-    modbus: ModbusSpec | None = Field(default=None, description="also serve the device over Modbus TCP or RTU")
-    canopen: CanopenSpec | None = Field(default=None, description="also serve the device as a CANopen node")
-    part: str | None = Field(default=None, pattern=r"^[A-Za-z0-9_.-]+$",
-                             description="which part of the plant serves it (devsim up --part NAME, for a fleet)")
+_NAME = r"^[A-Za-z_][A-Za-z0-9_-]*$"
 
-    @model_validator(mode="after")
-    def _transport_or_ports(self) -> DeviceSpec:
-        if "transport" in self.model_fields_set and self.ports:
+
+class DeviceSpec(Typed):
+    name: Annotated[str, Meta(pattern=_NAME)]
+    kind: str
+    transport: TransportSpec | UnsetType = UNSET
+    ports: Annotated[dict[str, TransportSpec], doc(
+        "per port of the kind: its transport (default: a pty, or the port's declared scheme on an ephemeral port)")] = {}
+    config: Annotated[dict[str, Any], doc("device configuration (DIP switches, parameters)")] = {}
+    axis: Annotated[dict[str, Any] | None, doc("axis geometry, merged into config['axis']")] = None
+    state: Annotated[dict[str, Any], doc("initial state: settable names and 'program'")] = {}
+    modbus: Annotated[ModbusSpec | None, doc("also serve the device over Modbus TCP or RTU")] = None
+    canopen: Annotated[CanopenSpec | None, doc("also serve the device as a CANopen node")] = None
+    part: Annotated[Annotated[str, Meta(pattern=r"^[A-Za-z0-9_.-]+$")] | None, doc(
+        "which part of the plant serves it (devsim up --part NAME, for a fleet)")] = None
+
+    def __post_init__(self) -> None:
+        if self.transport is not UNSET and self.ports:
             raise ValueError("give 'transport' (one port) or 'ports' (per port), not both")
         for port, spec in self.ports.items():
             if spec.bus is not None and port != "main":
                 raise ValueError(f"ports.{port}: only the main port can be on a bus")
-        return self
 
     def port_names(self) -> list[str]:
         """The kind's declared serial ports (``main`` if the kind cannot be loaded)."""
@@ -100,12 +100,12 @@ class DeviceSpec(_Model):
         if port in self.ports:
             return self.ports[port]
         first = port == self.port_names()[0]
-        if first and "transport" in self.model_fields_set:
+        if first and isinstance(self.transport, TransportSpec):
             return self.transport
         default = kind_port_defaults(self.kind).get(port)
         if default is not None:
-            return TransportSpec.model_validate({default[0]: {}})
-        return self.transport if first else TransportSpec()
+            return TransportSpec.parse({default[0]: {}})
+        return TransportSpec()
 
     def device_config(self) -> dict[str, Any]:
         config = dict(self.config)
@@ -114,16 +114,13 @@ class DeviceSpec(_Model):
         return config
 
 
-class BusSpec(_Model):
-    name: str = Field(pattern=r"^[A-Za-z_][A-Za-z0-9_-]*$")
-    transport: TransportSpec = Field(default_factory=TransportSpec)
+class BusSpec(Typed):
+    name: Annotated[str, Meta(pattern=_NAME)]
+    transport: TransportSpec = field(default_factory=TransportSpec)
 
-    @field_validator("transport")
-    @classmethod
-    def _not_a_bus(cls, value: TransportSpec) -> TransportSpec:
-        if value.bus is not None:
-            raise ValueError("a bus is reached by pty, tcp, rfc2217 or udp, not by another bus")
-        return value
+    def __post_init__(self) -> None:
+        if self.transport.bus is not None:
+            raise FieldError("transport", "a bus is reached by pty, tcp, rfc2217 or udp, not by another bus")
 
 
 def kind_ports(kind: str) -> list[str]:
@@ -148,21 +145,22 @@ def kind_port_defaults(kind: str) -> dict[str, tuple[str, int]]:
     return {p.name: p.default_transport for p in ports if p.default_transport is not None}
 
 
-class PlantSpec(_Model):
-    name: str | None = Field(default=None, description="a name for the plant (shown by devsim up)")
-    devices: list[DeviceSpec] = Field(min_length=1)
-    buses: list[BusSpec] = Field(default_factory=list)
-    mqtt: MqttSpec | None = Field(default=None, description="also publish the devices over MQTT")
-    opcua: OpcuaSpec | None = Field(default=None, description="serve every device on one OPC UA server")
+class PlantSpec(Typed, kw_only=True):
+    name: Annotated[str | None, doc("a name for the plant (shown by devsim up)")] = None
+    devices: Annotated[list[DeviceSpec], Meta(min_length=1)]
+    buses: list[BusSpec] = []
+    mqtt: Annotated[MqttSpec | None, doc("also publish the devices over MQTT")] = None
+    opcua: Annotated[OpcuaSpec | None, doc("serve every device on one OPC UA server")] = None
 
-    @model_validator(mode="after")
-    def _opcua_name(self) -> PlantSpec:
+    def __post_init__(self) -> None:
+        self._opcua_name()
+        self._names()
+
+    def _opcua_name(self) -> None:
         if self.opcua is not None and "opcua" in [d.name for d in self.devices] + [b.name for b in self.buses]:
             raise ValueError("with an opcua section no device or bus may be named 'opcua' (the server's port name)")
-        return self
 
-    @model_validator(mode="after")
-    def _names(self) -> PlantSpec:
+    def _names(self) -> None:
         names = [d.name for d in self.devices] + [b.name for b in self.buses]
         for name in names:
             if names.count(name) > 1:
@@ -184,7 +182,6 @@ class PlantSpec(_Model):
                     f"device {device.name!r} ({device.kind}) has no port {unknown[0]!r}"
                     f" (ports: {', '.join(device.port_names())})"
                 )
-        return self
 
     def only_part(self, part: str) -> PlantSpec:
         """The plant with only the devices of ``part`` (and their buses); ValueError if none."""
@@ -194,7 +191,7 @@ class PlantSpec(_Model):
             raise ValueError(f"no device has part {part!r}"
                              f" ({'parts: ' + ', '.join(parts) if parts else 'the plant names no parts'})")
         buses = {d.transport_of("main").bus for d in devices}
-        return self.model_copy(update={"devices": devices, "buses": [b for b in self.buses if b.name in buses]})
+        return self.replace(devices=devices, buses=[b for b in self.buses if b.name in buses])
 
     def device_ports(self) -> list[tuple[str, DeviceSpec, str]]:
         """(plant port name, device, device port) of every device port with a transport of its
@@ -215,7 +212,7 @@ class PlantSpec(_Model):
 
 
 # -- conditions ------------------------------------------------------------------------------
-class Condition(_Model):
+class Condition(Typed):
     """A test on one piece of device state: ``{device: x, name: axis.position, ge: 1000}``.
 
     Operators: ``equals``, ``not_equals``, ``lt``, ``le``, ``gt``, ``ge``, ``approx`` (with
@@ -224,30 +221,25 @@ class Condition(_Model):
 
     device: str
     name: str
-    equals: Any = None
-    not_equals: Any = None
+    equals: Any = UNSET
+    not_equals: Any = UNSET
     lt: float | None = None
     le: float | None = None
     gt: float | None = None
     ge: float | None = None
     approx: float | None = None
-    tolerance: float = Field(default=1e-6, ge=0)
+    tolerance: Annotated[float, Meta(ge=0)] = 1e-6
     regex: str | None = None
 
-    @model_validator(mode="before")
-    @classmethod
-    def _mark_given(cls, data: Any) -> Any:
-        if isinstance(data, dict):
-            data = dict(data)
-            data["__has_equals__"] = "equals" in data
-            data["__has_not_equals__"] = "not_equals" in data
-        return data
+    @property
+    def has_equals(self) -> bool:
+        return self.equals is not UNSET
 
-    has_equals: bool = Field(default=False, alias="__has_equals__")
-    has_not_equals: bool = Field(default=False, alias="__has_not_equals__")
+    @property
+    def has_not_equals(self) -> bool:
+        return self.not_equals is not UNSET
 
-    @model_validator(mode="after")
-    def _one_operator(self) -> Condition:
+    def __post_init__(self) -> None:
         ops = [op for op in ("lt", "le", "gt", "ge", "approx", "regex") if getattr(self, op) is not None]
         if self.has_equals:
             ops.append("equals")
@@ -260,7 +252,6 @@ class Condition(_Model):
                 re.compile(self.regex)
             except re.error as exc:
                 raise ValueError(f"bad regex: {exc}") from None
-        return self
 
     def test(self, value: Any) -> bool:
         if self.has_equals and value != self.equals:
@@ -303,17 +294,15 @@ def _text_or_bytes(value: Any) -> bytes:
     raise ValueError("must be a string")
 
 
-class SendAction(_Model):
+class SendAction(Typed):
     port: str | None = None
     data: str | None = None
-    line: str | None = Field(default=None, description="like data, with CR appended")
+    line: Annotated[str | None, doc("like data, with CR appended")] = None
 
-    @model_validator(mode="after")
-    def _one(self) -> SendAction:
+    def __post_init__(self) -> None:
         if (self.data is None) == (self.line is None):
             raise ValueError("give either data or line")
         _text_or_bytes(self.data if self.data is not None else self.line)
-        return self
 
     def payload(self) -> bytes:
         if self.line is not None:
@@ -321,22 +310,16 @@ class SendAction(_Model):
         return _text_or_bytes(self.data)
 
 
-class ExpectAction(_Model):
+class ExpectAction(Typed):
     """The device's answer on ``port``: exact ``bytes`` (next bytes) or a ``regex`` match in
     what arrives, within ``timeout`` (simulated time)."""
 
     port: str | None = None
     bytes: str | None = None
     regex: str | None = None
-    timeout: float = 1.0
+    timeout: Duration = Duration(1.0)
 
-    @field_validator("timeout", mode="before")
-    @classmethod
-    def _duration(cls, value: Any, info: ValidationInfo) -> float:
-        return parse_duration(value, str(info.field_name))
-
-    @model_validator(mode="after")
-    def _one(self) -> ExpectAction:
+    def __post_init__(self) -> None:
         if (self.bytes is None) == (self.regex is None):
             raise ValueError("give either bytes or regex")
         if self.regex is not None:
@@ -344,98 +327,72 @@ class ExpectAction(_Model):
                 re.compile(self.regex.encode("latin-1"))
             except re.error as exc:
                 raise ValueError(f"bad regex: {exc}") from None
-        return self
 
 
-class SetAction(_Model):
+class SetAction(Typed):
     """Set inputs, quantities or parameters: ``{device: x, values: {input.I1: true}}``."""
 
     device: str
-    values: dict[str, Any] = Field(min_length=1)
+    values: Annotated[dict[str, Any], Meta(min_length=1)]
 
 
-class PulseAction(_Model):
+class PulseAction(Typed):
     device: str
     input: str
-    width: float = 0.05
+    width: Duration = Duration(0.05)
     value: Any = True
-
-    @field_validator("width", mode="before")
-    @classmethod
-    def _duration(cls, value: Any, info: ValidationInfo) -> float:
-        return parse_duration(value, str(info.field_name))
 
 
 #: Faults every device has through its power supply; the others are declared by each kind.
 POWER_FAULTS = ("power_cycle", "power_cycle_wipe", "power_off", "power_on")
 
 
-class FaultAction(_Model):
+class FaultAction(Typed):
     """A device fault; ``duration`` makes a lasting fault end by itself."""
 
     device: str
-    kind: str = Field(description="a fault the device's kind declares, or power_cycle(_wipe)/power_off/power_on")
-    duration: float | None = None
-
-    @field_validator("duration", mode="before")
-    @classmethod
-    def _duration(cls, value: Any, info: ValidationInfo) -> float | None:
-        return None if value is None else parse_duration(value, str(info.field_name))
+    kind: Annotated[str, doc("a fault the device's kind declares, or power_cycle(_wipe)/power_off/power_on")]
+    duration: Duration | None = None
 
 
 LineFaultKind = Literal["corrupt", "drop", "split", "delay", "jitter", "noise", "baud_mismatch", "unplug", "hang", "silent"]
 
 
-class LineFaultAction(_Model):
+class LineFaultAction(Typed, kw_only=True):
     """A fault on the real line of ``port``: see :class:`devsim.transports.line.LineFault`."""
 
     port: str | None = None
     kind: LineFaultKind
-    count: int | None = Field(default=None, ge=1, description="bytes affected (corrupt, drop)")
-    duration: float | None = None
-    delay: float | None = None
-    rate: float | None = Field(default=None, gt=0, description="noise bytes per second")
-    baudrate: int | None = Field(default=None, gt=0)
+    count: Annotated[Annotated[int, Meta(ge=1)] | None, doc("bytes affected (corrupt, drop)")] = None
+    duration: Duration | None = None
+    delay: Duration | None = None
+    rate: Annotated[Annotated[float, Meta(gt=0)] | None, doc("noise bytes per second")] = None
+    baudrate: Annotated[int, Meta(gt=0)] | None = None
     direction: Literal["to_device", "to_host", "both"] = "both"
 
-    @field_validator("duration", "delay", mode="before")
-    @classmethod
-    def _duration(cls, value: Any, info: ValidationInfo) -> float | None:
-        return None if value is None else parse_duration(value, str(info.field_name))
 
-
-class PowerCycleAction(_Model):
+class PowerCycleAction(Typed):
     device: str
     wipe: bool = False
 
 
-class TrafficExpectation(_Model):
+class TrafficExpectation(Typed, kw_only=True):
     """Something on the line since the start matched: ``direction`` host (sent by the host)
     or device (sent by the device)."""
 
     port: str | None = None
     direction: Literal["host", "device"] = "host"
     regex: str
-    count: int | None = Field(default=None, ge=0, description="exact number of matches")
+    count: Annotated[Annotated[int, Meta(ge=0)] | None, doc("exact number of matches")] = None
 
 
-class TimingExpectation(_Model):
+class TimingExpectation(Typed):
     """A device event (e.g. the SERS ``move_end``) happened between two times since the start."""
 
     device: str
     event: str
-    between: tuple[float, float]
+    between: Between
     occurrence: Literal["first", "last", "any"] = "any"
-
-    @field_validator("between", mode="before")
-    @classmethod
-    def _durations(cls, value: Any, info: ValidationInfo) -> tuple[float, float]:
-        if not isinstance(value, list | tuple) or len(value) != 2:
-            raise ValueError("`between` must be two durations like [1s, 1.5s]")
-        low, high = (parse_duration(v, "between") for v in value)
-        if low > high:
-            raise ValueError("`between` must go from the earlier to the later time")
-        return low, high
 
 
 #: Step keys that are actions or expectations (exactly one per step).
@@ -445,45 +402,36 @@ ACTIONS = (
 )
 
 
-class Step(_Model):
-    at: float | None = None
-    after: float | None = None
+class Step(Typed):
+    at: Duration | None = None
+    after: Duration | None = None
     when: Condition | None = None
-    timeout: float | None = None
+    timeout: Duration | None = None
 
-    send: SendAction | None = None
-    expect: ExpectAction | None = None
+    send: SendAction | str | None = None  # a string: the data to send
+    expect: ExpectAction | str | None = None  # a string: the bytes expected
     set: SetAction | None = None
     pulse: PulseAction | None = None
     fault: FaultAction | None = None
     line_fault: LineFaultAction | None = None
     power_cycle: PowerCycleAction | None = None
-    wait: float | None = None
+    wait: Duration | None = None
     expect_state: Condition | None = None
     expect_traffic: TrafficExpectation | None = None
     expect_timing: TimingExpectation | None = None
     log: str | None = None
 
     #: line of the step in its file (filled in by the loader)
-    line: int = Field(default=0, exclude=True)
+    line: int = 0
 
-    @field_validator("at", "after", "timeout", "wait", mode="before")
-    @classmethod
-    def _duration(cls, value: Any, info: ValidationInfo) -> float | None:
-        return None if value is None else parse_duration(value, str(info.field_name))
-
-    @field_validator("send", mode="before")
-    @classmethod
-    def _send_shorthand(cls, value: Any) -> Any:
-        return {"data": value} if isinstance(value, str) else value
-
-    @field_validator("expect", mode="before")
-    @classmethod
-    def _expect_shorthand(cls, value: Any) -> Any:
-        return {"bytes": value} if isinstance(value, str) else value
-
-    @model_validator(mode="after")
-    def _shape(self) -> Step:
+    def __post_init__(self) -> None:
+        if isinstance(self.send, str):
+            try:
+                self.send = SendAction(data=self.send)
+            except ValueError as exc:
+                raise FieldError("send", str(exc)) from None
+        if isinstance(self.expect, str):
+            self.expect = ExpectAction(bytes=self.expect)
         triggers = [k for k in ("at", "after", "when") if getattr(self, k) is not None]
         if len(triggers) > 1:
             raise ValueError(f"a step has one trigger, not {' and '.join(triggers)}")
@@ -491,39 +439,35 @@ class Step(_Model):
             raise ValueError("`timeout` goes with `when`")
         actions = [k for k in ACTIONS if getattr(self, k) is not None]
         if not actions and triggers:
-            return self  # only a trigger: wait for it (``when`` fails at its timeout)
+            return  # only a trigger: wait for it (``when`` fails at its timeout)
         if len(actions) != 1:
             what = " and ".join(actions) if actions else "none"
             raise ValueError(f"a step has exactly one action or expectation ({', '.join(ACTIONS)}); got {what}")
-        return self
 
     @property
     def action(self) -> str | None:
         return next((k for k in ACTIONS if getattr(self, k) is not None), None)
 
 
-class Scenario(PlantSpec):
+class Scenario(PlantSpec, kw_only=True):
     name: str | None = None
     description: str = ""
-    time: Literal["virtual", "realtime"] | None = Field(
-        default=None, description="default: virtual when the scenario scripts the host, else realtime"
-    )
-    speed: float = Field(default=1.0, gt=0)
+    time: Annotated[Literal["virtual", "realtime"] | None, doc(
+        "default: virtual when the scenario scripts the host, else realtime")] = None
+    speed: Annotated[float, Meta(gt=0)] = 1.0
     start: Literal["after_boot", "power_on"] = "after_boot"
-    timeout: float = Field(default=300.0, description="limit on the whole run (simulated seconds)")
-    host: dict[str, Any] = Field(default_factory=dict, description="{port: name} the default port of host actions")
-    steps: list[Step] = Field(default_factory=list)
+    timeout: Annotated[Duration, doc("limit on the whole run (simulated seconds)")] = Duration(300.0)
+    host: Annotated[dict[str, Any], doc("{port: name} the default port of host actions")] = {}
+    steps: list[Step] = []
 
     #: the file it came from (filled in by the loader)
-    path: str = Field(default="", exclude=True)
+    path: str = ""
 
-    @field_validator("timeout", mode="before")
-    @classmethod
-    def _duration(cls, value: Any, info: ValidationInfo) -> float:
-        return parse_duration(value, str(info.field_name))
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        self._references()
 
-    @model_validator(mode="after")
-    def _references(self) -> Scenario:
+    def _references(self) -> None:
         devices = {d.name for d in self.devices}
         kinds = {d.name: d.kind for d in self.devices}
         ports = set(self.ports())
@@ -542,7 +486,6 @@ class Scenario(PlantSpec):
                 port = getattr(item, "port", None) if item is not None else None
                 if port is not None and port not in ports:
                     raise ValueError(f"{where}: no port named {port!r} (ports: {', '.join(sorted(ports))})")
-        return self
 
     @property
     def scripts_host(self) -> bool:
@@ -702,6 +645,6 @@ def load_scenario(path: str | os.PathLike[str]) -> Scenario:
 
 def scenario_from_dict(data: dict[str, Any], name: str = "scenario") -> Scenario:
     """Build a scenario from Python data (tests, the pytest plugin)."""
-    scenario = Scenario.model_validate(plain(data))
+    scenario = Scenario.parse(plain(data))
     scenario.name = scenario.name or name
     return scenario

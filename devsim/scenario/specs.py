@@ -1,22 +1,27 @@
 """The plant file's building blocks for one device (spec pieces shared by plants and scenarios):
 durations, the transport a port is served on, and the fieldbus and IT facades (Modbus, CANopen,
-MQTT, OPC UA) a device or plant adds.  :mod:`devsim.scenario.schema` puts them together."""
+MQTT, OPC UA) a device or plant adds.  :mod:`devsim.scenario.schema` puts them together.
+
+Declared as typed data (:class:`devsim.core.typed.Typed`, msgspec structs)."""
 
 from __future__ import annotations
 
 import math
 import re
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
+from msgspec import Meta
+
+from devsim.core.typed import Typed, doc
 
 __all__ = [
+    "Between",
     "CanopenSpec",
+    "Duration",
     "ModbusSpec",
     "MqttSpec",
     "OpcuaSpec",
     "PtySpec",
-    "SpecModel",
     "TcpSpec",
     "TransportSpec",
     "parse_duration",
@@ -41,26 +46,76 @@ def parse_duration(value: Any, field: str = "duration") -> float:
     raise ValueError(f"`{field}` must be a duration like 2s or 150ms")
 
 
-class SpecModel(BaseModel):
-    """A spec with no unknown keys."""
+class Duration(float):
+    """Seconds, given as a number or as text like ``2s``, ``150ms``, ``1.5 min``."""
 
-    model_config = ConfigDict(extra="forbid")
+    @classmethod
+    def from_data(cls, value: Any) -> Duration:
+        return cls(parse_duration(value, "{field}"))
+
+
+class PositiveDuration(Duration):
+    """A duration above zero."""
+
+    @classmethod
+    def from_data(cls, value: Any) -> PositiveDuration:
+        seconds = parse_duration(value, "{field}")
+        if not seconds > 0:
+            raise ValueError("Input should be greater than 0")
+        return cls(seconds)
+
+
+class Rate(Duration):
+    """How often something is sampled: a positive duration."""
+
+    @classmethod
+    def from_data(cls, value: Any) -> Rate:
+        seconds = parse_duration(value, "{field}")
+        if not seconds > 0:
+            raise ValueError("`{field}` must be a positive duration like 1s or 500ms")
+        return cls(seconds)
+
+
+class Between(tuple[float, float]):
+    """Two durations ``[earliest, latest]`` since the start."""
+
+    @classmethod
+    def from_data(cls, value: Any) -> Between:
+        if not isinstance(value, list | tuple) or len(value) != 2:
+            raise ValueError("`between` must be two durations like [1s, 1.5s]")
+        low, high = (parse_duration(v, "between") for v in value)
+        if low > high:
+            raise ValueError("`between` must go from the earlier to the later time")
+        return cls((low, high))
+
+
+class MqttUrl(str):
+    """``mqtt://HOST[:PORT]`` of a broker."""
+
+    @classmethod
+    def from_data(cls, value: Any) -> MqttUrl:
+        if not isinstance(value, str):
+            raise ValueError("Input should be a valid string")
+        from devsim.facades.mqtt_topics import parse_url
+
+        parse_url(value)
+        return cls(value)
 
 
 # -- ports and facades ----------------------------------------------------------------------
-class PtySpec(SpecModel):
+class PtySpec(Typed):
     link: str | None = None
 
 
-class TcpSpec(SpecModel):
-    port: int = Field(default=0, ge=0, le=65535)
+class TcpSpec(Typed):
+    port: Annotated[int, Meta(ge=0, le=65535)] = 0
     host: str = "127.0.0.1"
 
 
 _TRANSPORTS = ("pty", "tcp", "rfc2217", "udp", "bus")
 
 
-class TransportSpec(SpecModel):
+class TransportSpec(Typed):
     """Exactly one of ``pty``, ``tcp``, ``rfc2217``, ``udp`` or ``bus`` (the name of a bus)."""
 
     pty: PtySpec | None = None
@@ -69,21 +124,19 @@ class TransportSpec(SpecModel):
     udp: TcpSpec | None = None
     bus: str | None = None
 
-    @model_validator(mode="after")
-    def _one(self) -> TransportSpec:
+    def __post_init__(self) -> None:
         given = [k for k in _TRANSPORTS if getattr(self, k) is not None]
         if len(given) > 1:
             raise ValueError(f"give one transport, not {' and '.join(given)}")
         if not given:
             self.pty = PtySpec()
-        return self
 
     @property
     def kind(self) -> str:
         return next(k for k in _TRANSPORTS if getattr(self, k) is not None)
 
 
-class ModbusSpec(SpecModel):
+class ModbusSpec(Typed):
     """The device also on Modbus (issue 13): ``{tcp: {port: 5020}}`` (Modbus TCP) or ``{rtu: {}}``
     (Modbus RTU on a pty, ``{rtu: {link: /tmp/ttyMB}}`` with a symlink); ``unit`` its unit id,
     ``line`` the RTU line settings (``19200 8E1``);
@@ -92,17 +145,15 @@ class ModbusSpec(SpecModel):
 
     tcp: TcpSpec | None = None
     rtu: PtySpec | None = None
-    unit: int = Field(default=1, ge=1, le=247)
-    line: str = Field(default="19200 8E1", description="RTU line settings")
-    layout: Literal["points", "mirror"] = Field(default="points", description="the map: generated from the points,"
-                                                " or the kind's own mirror (PCD4.H3: its media, spec §9.8)")
-    map: dict[str, Any] = Field(default_factory=dict)
+    unit: Annotated[int, Meta(ge=1, le=247)] = 1
+    line: Annotated[str, doc("RTU line settings")] = "19200 8E1"
+    layout: Annotated[Literal["points", "mirror"], doc(
+        "the map: generated from the points, or the kind's own mirror (PCD4.H3: its media, spec §9.8)")] = "points"
+    map: dict[str, Any] = {}
 
-    @model_validator(mode="after")
-    def _one(self) -> ModbusSpec:
+    def __post_init__(self) -> None:
         if (self.tcp is None) == (self.rtu is None):
             raise ValueError("give tcp or rtu")
-        return self
 
     def spec(self) -> str:
         """The ``--modbus`` form: ``tcp:HOST:PORT``, ``rtu`` or ``rtu:LINK``."""
@@ -112,56 +163,36 @@ class ModbusSpec(SpecModel):
         return f"rtu:{self.rtu.link}" if self.rtu.link else "rtu"
 
 
-class CanopenSpec(SpecModel):
+class CanopenSpec(Typed):
     """A device as a CANopen node (issue 13): its node id and the CAN network it joins, a
     socketcand server at ``[HOST:]PORT`` (the plant's devices with the same network share one bus)
     or ``socketcan:CHANNEL``."""
 
-    node: int = Field(ge=1, le=127, description="the node id")
-    network: str = Field(default="127.0.0.1:29536", pattern=r"^(socketcan:\S+|(\S+:)?\d+)$",
-                         description="[HOST:]PORT of a socketcand server, or socketcan:CHANNEL")
+    node: Annotated[int, Meta(ge=1, le=127), doc("the node id")]
+    network: Annotated[str, Meta(pattern=r"^(socketcan:\S+|(\S+:)?\d+)$"), doc(
+        "[HOST:]PORT of a socketcand server, or socketcan:CHANNEL")] = "127.0.0.1:29536"
 
 
-class MqttSpec(SpecModel):
+class MqttSpec(Typed):
     """The plant's devices also over MQTT (issue 14, :mod:`devsim.facades.mqtt`): ``url``
     ``mqtt://HOST[:PORT]`` of the broker (none: an embedded broker on loopback), ``convention``
     ``devsim`` or ``sparkplug``, ``rate`` how often the points are sampled for changes (device
     time), ``plant`` the plant's name in the topics (default: the plant's ``name``)."""
 
-    url: str | None = None
+    url: MqttUrl | None = None
     convention: Literal["devsim", "sparkplug"] = "devsim"
-    rate: float = Field(default=1.0, description="seconds (or a duration like 500ms) between samples")
+    rate: Annotated[Rate, doc("seconds (or a duration like 500ms) between samples")] = Rate(1.0)
     plant: str | None = None
 
-    @field_validator("rate", mode="before")
-    @classmethod
-    def _duration(cls, value: Any) -> float:
-        seconds = parse_duration(value, "rate")
-        if not seconds > 0:
-            raise ValueError("`rate` must be a positive duration like 1s or 500ms")
-        return seconds
 
-    @field_validator("url")
-    @classmethod
-    def _url(cls, value: str | None) -> str | None:
-        if value is not None:
-            from devsim.facades.mqtt_topics import parse_url
-
-            parse_url(value)
-        return value
-class OpcuaSpec(SpecModel):
+class OpcuaSpec(Typed):
     """The plant's devices on one OPC UA server (issue 14, :mod:`devsim.facades.opcua`):
     ``opcua: {}`` serves ``opc.tcp://127.0.0.1:4840/devsim/``; ``port: 0`` takes a free port;
     ``period`` is how often the points are sampled for subscriptions (device time)."""
 
     host: str = "127.0.0.1"
-    port: int = Field(default=4840, ge=0, le=65535)
-    period: float = Field(default=0.1, gt=0, description="sampling period for subscriptions, e.g. 100ms")
-
-    @field_validator("period", mode="before")
-    @classmethod
-    def _duration(cls, value: Any, info: ValidationInfo) -> float:
-        return parse_duration(value, str(info.field_name))
+    port: Annotated[int, Meta(ge=0, le=65535)] = 4840
+    period: Annotated[PositiveDuration, doc("sampling period for subscriptions, e.g. 100ms")] = PositiveDuration(0.1)
 
     def spec(self) -> str:
         """The ``--opcua`` form: ``HOST:PORT``."""

@@ -55,8 +55,8 @@ def split_plant(spec: PlantSpec, workers: int) -> list[dict[str, Any]]:
     shares: list[dict[str, Any]] = [{"devices": [], "buses": []} for _ in range(max(1, min(workers, len(units))))]
     for index, (devices, buses) in enumerate(units):
         share = shares[index % len(shares)]
-        share["devices"] += [d.model_dump(mode="json", exclude_defaults=True) for d in devices]
-        share["buses"] += [b.model_dump(mode="json", exclude_defaults=True) for b in buses]
+        share["devices"] += [d.dump() for d in devices]
+        share["buses"] += [b.dump() for b in buses]
     for number, share in enumerate(shares):
         share["name"] = f"{spec.name or 'plant'} (worker {number})"
     return [s for s in shares if s["devices"]]

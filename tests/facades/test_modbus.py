@@ -22,7 +22,7 @@ from devsim.scenario.schema import PlantSpec
 
 
 def spec(modbus: dict[str, Any], **device: Any) -> PlantSpec:
-    return PlantSpec.model_validate({"devices": [{"name": "drive", "kind": "sers", "modbus": modbus, **device}]})
+    return PlantSpec.parse({"devices": [{"name": "drive", "kind": "sers", "modbus": modbus, **device}]})
 
 
 @contextmanager

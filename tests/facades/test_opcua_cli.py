@@ -6,9 +6,9 @@ from __future__ import annotations
 import pytest
 from asyncua import Client, ua
 from click.testing import CliRunner
-from pydantic import ValidationError
 
 from devsim.cli import cli
+from devsim.core.typed import Invalid
 from devsim.facades.opcua_space import NAMESPACE, endpoint_url
 from devsim.scenario.plant import plant_running
 from devsim.scenario.schema import PlantSpec
@@ -49,7 +49,7 @@ def test_a_bad_opcua_spec_is_one_line() -> None:
 
 
 async def test_a_plant_serves_its_devices_on_one_opcua_server() -> None:
-    spec = PlantSpec.model_validate({
+    spec = PlantSpec.parse({
         "name": "cell",
         "devices": [{"name": "x", "kind": "sers", "state": {"quantity.heatsink_temperature": 47.5}},
                     {"name": "y", "kind": "sers"}],
@@ -65,5 +65,5 @@ async def test_a_plant_serves_its_devices_on_one_opcua_server() -> None:
 
 
 def test_no_device_may_take_the_opcua_servers_port_name() -> None:
-    with pytest.raises(ValidationError, match="named 'opcua'"):
-        PlantSpec.model_validate({"devices": [{"name": "opcua", "kind": "sers"}], "opcua": {}})
+    with pytest.raises(Invalid, match="named 'opcua'"):
+        PlantSpec.parse({"devices": [{"name": "opcua", "kind": "sers"}], "opcua": {}})

@@ -32,7 +32,7 @@ def test_topics() -> None:
 
 
 def test_parts_of_a_plant(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    spec = PlantSpec.model_validate({
+    spec = PlantSpec.parse({
         "devices": [{"name": "a", "kind": "sers", "part": "p1"}, {"name": "b", "kind": "sers", "part": "p2"},
                     {"name": "c", "kind": "sers", "part": "p1", "transport": {"bus": "line"}}],
         "buses": [{"name": "line"}, {"name": "other"}],

@@ -249,7 +249,7 @@ def test_reference_distance_limit(plant_factory: Any) -> None:
 
 
 def test_reference_limit_message_23(referenced: Plant) -> None:
-    referenced.device().cfg.axis.__dict__["cam"] = None
+    referenced.device().cfg.axis.cam = None
     dev = referenced.device()
     for sw in dev.switches:
         sw.cancel()

@@ -243,7 +243,7 @@ def test_p3_limit_with_p2_6_not_referenced_raises_message_23(plant_factory: Any)
 
 def test_p3_limit_with_p2_6_keeps_the_indexer_active(referenced: Plant) -> None:
     dev = referenced.device()
-    dev.cfg.axis.__dict__["index_period"] = 1_000_000
+    dev.cfg.axis.index_period = 1_000_000
     dev.axis.counts_per_rev = 1_000_000
     dev.axis.index_offset = 500_000
     c = referenced.client()

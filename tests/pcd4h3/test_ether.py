@@ -28,7 +28,7 @@ NAK = "00 00 00 0D 01 00 00 01 02 00 01 E6 F0"
 
 
 def spec(**config: Any) -> PlantSpec:
-    return PlantSpec.model_validate({"devices": [{"name": "pcd", "kind": "pcd4h3", "config": {**EXAMPLE, **config}}]})
+    return PlantSpec.parse({"devices": [{"name": "pcd", "kind": "pcd4h3", "config": {**EXAMPLE, **config}}]})
 
 
 @pytest.fixture

@@ -38,7 +38,7 @@ def until(condition: Callable[[], Any], timeout: float = 10.0) -> Any:
 
 @pytest.fixture
 def pcd() -> Iterator[tuple[Any, Any]]:
-    spec = PlantSpec.model_validate({"devices": [{"name": "pcd", "kind": "pcd4h3", "config": {"response_delay_ms": 0}}]})
+    spec = PlantSpec.parse({"devices": [{"name": "pcd", "kind": "pcd4h3", "config": {"response_delay_ms": 0}}]})
     with plant_running(spec, virtual=True) as plant:
         port = int(plant.port("pcd.ether_udp").rpartition(":")[2])
         node = SAIANode(253, port=free_udp_port(), autostart=True, scanner=False, localIfaceIpAddr="127.0.0.1")

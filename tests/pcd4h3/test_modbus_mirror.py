@@ -17,7 +17,7 @@ from tests.facades.test_modbus import modbus_tcp
 
 @pytest.fixture
 def pcd() -> Iterator[tuple[Any, ModbusTcpClient]]:
-    spec = PlantSpec.model_validate({"devices": [
+    spec = PlantSpec.parse({"devices": [
         {"name": "pcd", "kind": "pcd4h3", "modbus": {"tcp": {"port": 0}, "layout": "mirror"}}]})
     with modbus_tcp(spec, "pcd") as both:
         yield both

@@ -26,7 +26,7 @@ def _kinds(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def plant(**device: object) -> PlantSpec:
-    return PlantSpec.model_validate({"devices": [{"name": "pcd", "kind": "etherbus", **device}]})
+    return PlantSpec.parse({"devices": [{"name": "pcd", "kind": "etherbus", **device}]})
 
 
 def ask(url: str, request: bytes = REQUEST) -> bytes:
@@ -40,10 +40,10 @@ def ask(url: str, request: bytes = REQUEST) -> bytes:
 
 
 def test_the_udp_spec() -> None:
-    spec = TransportSpec.model_validate({"udp": {"port": 5050}})
+    spec = TransportSpec.parse({"udp": {"port": 5050}})
     assert spec.kind == "udp" and spec.udp is not None and (spec.udp.host, spec.udp.port) == ("127.0.0.1", 5050)
     with pytest.raises(ValueError, match="give one transport, not tcp and udp"):
-        TransportSpec.model_validate({"tcp": {}, "udp": {}})
+        TransportSpec.parse({"tcp": {}, "udp": {}})
 
 
 def test_a_declared_default_gives_its_scheme_on_an_ephemeral_port() -> None:

@@ -48,7 +48,7 @@ def test_split_keeps_a_bus_whole(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 def test_split_keeps_a_canopen_network_in_one_worker() -> None:
     from devsim.scenario.schema import PlantSpec
 
-    spec = PlantSpec.model_validate({"devices": [
+    spec = PlantSpec.parse({"devices": [
         {"name": "a", "kind": "sers", "canopen": {"node": 1, "network": "29600"}},
         {"name": "b", "kind": "sers"},
         {"name": "c", "kind": "sers", "canopen": {"node": 2, "network": "29600"}},

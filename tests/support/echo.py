@@ -7,14 +7,14 @@ with ``DEVSIM_EXTRA_KINDS="echo=tests.support.echo:EchoDevice"``.
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Annotated, Any, ClassVar
 
 from devsim.core.clock import Timer
 from devsim.core.device import Device, Face, SerialSettings
 from devsim.core.kit import SignalDef, declare_signals, signal_points
 from devsim.core.model import Model
 from devsim.core.points import Point, PointTable
-from devsim.core.settings import Float, Int, Maybe, Section, Setting, Text
+from devsim.core.settings import Check, Meta, Section, Settings, field
 
 BAUDS = (1200, 2400, 4800, 9600, 19200)
 
@@ -25,17 +25,23 @@ def _baud(value: int) -> int:
     return value
 
 
-ECHO_GEOMETRY = Section("where the (imaginary) switches sit", (
-    Setting("limit_left", Maybe(Float()), None),
-    Setting("limit_right", Maybe(Float()), None),
-))
+class EchoGeometry(Settings):
+    """where the (imaginary) switches sit"""
 
-EchoConfig = Section("what a user can set for an echo device", (
-    Setting("address", Int(ge=0, le=127), 1),
-    Setting("baud", Int(), 9600, check=_baud),
-    Setting("greeting", Text(), ""),
-    Setting("axis", ECHO_GEOMETRY, {}),
-))
+    limit_left: float | None = None
+    limit_right: float | None = None
+
+
+class EchoConfig(Settings):
+    """what a user can set for an echo device"""
+
+    address: Annotated[int, Meta(ge=0, le=127)] = 1
+    baud: Annotated[int, Check(_baud)] = 9600
+    greeting: str = ""
+    axis: EchoGeometry = field(default_factory=EchoGeometry)
+
+
+ECHO_GEOMETRY = EchoGeometry
 
 
 class EchoModel(Model):

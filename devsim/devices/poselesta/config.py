@@ -4,14 +4,15 @@ point of the word formats, the read-in and output options and the initial machin
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any, Literal
 
-from devsim.core.settings import Bool, DictOf, Float, Int, ListOf, Maybe, OneOf, Section, Setting, Text
+from devsim.core.settings import Check, Keys, Meta, Settings, doc, field
 from devsim.devices.poselesta.parameters import check_parameter
 
 __all__ = ["PoselestaConfig"]
 
 _AXES = ("X", "Y", "Z", "D")
+_NonNegative = Annotated[float, Meta(ge=0)]
 
 
 def _axis(key: Any) -> str:
@@ -50,57 +51,76 @@ def _params(value: dict[int, float]) -> dict[int, float]:
     return value
 
 
-#: The PLC side of the MST acknowledge V22/7 (spec §4.4.3, §8 S15/S16): a plant helper.
-PLC = Section("The PLC side of the MST acknowledge V22/7, played by a plant helper (spec §4.4.3).", (
-    Setting("mst_ack", OneOf("bridged", "delayed", "manual"), "bridged",
-            "bridged: acknowledge = the strobes; delayed: H rise_ms after a strobe rises, L fall_ms after "
-            "it falls; manual: input.mst_ack is set by hand"),
-    Setting("rise_ms", Float(ge=0), 35.0, "delayed: acknowledge H this long after a strobe rises"),
-    Setting("fall_ms", Float(ge=0), 15.0, "delayed: acknowledge L this long after a strobe falls"),
-    Setting("tool_change_ms", Maybe(Float(ge=0)), None,
-            "M06 is acknowledged (a 50 ms pulse on V22/5) this long after it is output; null: by hand"),
-    Setting("m10_release_ms", Maybe(Float(ge=0)), None,
-            "a non-self-holding M10 gets its 50 ms negative pulse on V22/6 this long after it is output"),
-))
+class Plc(Settings):
+    """The PLC side of the MST acknowledge V22/7, played by a plant helper (spec §4.4.3)."""
 
-#: One axis: where its reference marks are and how it homes (spec §5.6, G-HOME).
-AXIS = Section("One axis: its reference marks and homing (spec §5.6).", (
-    Setting("reference_marks", ListOf(Float()), [-10.0],
-            "positions of the encoder's reference marks, mm from the power-on position"),
-    Setting("home_direction", OneOf(-1, 1), -1, "the way homing searches"),
-    Setting("reference_value", Float(), 0.0, "the actual value at the accepted mark, mm"),
-))
-AXES = Section("The four axes X, Y, Z, D.", tuple(Setting(a, AXIS, {}) for a in "xyzd"))
+    mst_ack: Annotated[Literal["bridged", "delayed", "manual"], doc(
+        "bridged: acknowledge = the strobes; delayed: H rise_ms after a strobe rises, L fall_ms after it falls; "
+        "manual: input.mst_ack is set by hand")] = "bridged"
+    rise_ms: Annotated[float, Meta(ge=0), doc("delayed: acknowledge H this long after a strobe rises")] = 35.0
+    fall_ms: Annotated[float, Meta(ge=0), doc("delayed: acknowledge L this long after a strobe falls")] = 15.0
+    tool_change_ms: Annotated[_NonNegative | None, doc(
+        "M06 is acknowledged (a 50 ms pulse on V22/5) this long after it is output; null: by hand")] = None
+    m10_release_ms: Annotated[_NonNegative | None, doc(
+        "a non-self-holding M10 gets its 50 ms negative pulse on V22/6 this long after it is output")] = None
 
-#: What a user can set for one POSELESTA (``--config FILE.yaml`` or a plant file).
-PoselestaConfig = Section("What a user can set for one POSELESTA (--config FILE.yaml or a plant file).", (
-    Setting("variant", OneOf("II", "III"), "III", "POS II or POS III (§1.1 of the spec)"),
-    Setting("decimals", DictOf(_axis, Int(), "X | Y | Z | D"), dict.fromkeys(_AXES, 3),
-            "decimals of each axis's resolution (3 = 0.001 mm); the word format is 7 digits", check=_decimals),
-    Setting("eob", OneOf("CRLF", "CR"), "CRLF", "end of block on output (spec G-EOB)"),
-    Setting("leader_nul", Int(ge=0, le=1000), 0, "NUL bytes before an output (G-LEADER)"),
-    Setting("trailer_nul", Int(ge=0, le=1000), 0, "NUL bytes after an output"),
-    Setting("parity_error", OneOf("abort", "skip"), "abort",
-            "ISO byte with wrong parity after %: WERTBEREICHES-UEBERLAUF or dropped"),
-    Setting("ascii_bit7", OneOf("ignore", "abort"), "ignore",
-            "ASCII code: a byte with bit 7 set is masked or aborts the read-in"),
-    Setting("strict_block_numbers", Bool(), False, "a block without N aborts the read-in"),
-    Setting("max_blocks_total", Int(ge=1), 2000, "program memory, blocks over all programs"),
-    Setting("params", DictOf(_parameter_number, Float(), "parameter number"), {},
-            "initial machine parameters, e.g. {70: 3, 71: 0} (P1 … P98)", check=_params),
-    Setting("boot_time", Float(ge=0), 2.0, "seconds after power-on until NC ready (§2.4.5: about 2 s)"),
-    Setting("accel", Float(gt=0), 500.0, "acceleration = braking ramp of every axis, mm/s² (spec §5.3)"),
-    Setting("kv_per_step", Float(gt=0), 1.667, "Kv [1/s] per step of the gain P30–P33 (spec §5.2)"),
-    Setting("drive_speed_factor", Float(gt=0), 1.2, "drive speed at 10 V set-point = this × rapid (spec §5.2)"),
-    Setting("m06_requires_nc_start", Bool(), False, "after the M06 acknowledge wait for NC-Start (spec G-M06)"),
-    Setting("encoder_khz", Float(gt=0), 100.0,
-            "highest encoder input frequency (4-channel adapter 100 kHz, 2-channel 8 kHz): faster is an event"),
-    Setting("count_loss_increments", Float(gt=0), 10.0, "increments an encoder drops with the fault count_loss_<axis>"),
-    Setting("g25_full_circle", Bool(), False, "a G25 block runs a full circle around I/J (spec §4.12.1)"),
-    Setting("v6_peer", OneOf("host", "cassette"), "host",
-            "what V6's cassette transfers T2/T3 reach: the host on the pty, or a simulated cassette recorder"),
-    Setting("plc", PLC, {}),
-    Setting("axes", AXES, {}),
-    Setting("v8_keymap", DictOf(_key_code, Text(), "key code"), {0x48: "P"},
-            "names of the keyboard's key codes for panel.key (spec §3.10: the legends are lost; 48 = P)"),
-))
+
+class Axis(Settings):
+    """One axis: its reference marks and homing (spec §5.6)."""
+
+    reference_marks: Annotated[list[float], doc(
+        "positions of the encoder's reference marks, mm from the power-on position")] = field(
+        default_factory=lambda: [-10.0])
+    home_direction: Annotated[Literal[-1, 1], doc("the way homing searches")] = -1
+    reference_value: Annotated[float, doc("the actual value at the accepted mark, mm")] = 0.0
+
+
+class Axes(Settings):
+    """The four axes X, Y, Z, D."""
+
+    x: Axis = field(default_factory=Axis)
+    y: Axis = field(default_factory=Axis)
+    z: Axis = field(default_factory=Axis)
+    d: Axis = field(default_factory=Axis)
+
+
+#: The nested parts ``plc``, ``axes.<a>`` and ``axes``.
+PLC, AXIS, AXES = Plc, Axis, Axes
+
+
+class PoselestaConfig(Settings):
+    """What a user can set for one POSELESTA (--config FILE.yaml or a plant file)."""
+
+    variant: Annotated[Literal["II", "III"], doc("POS II or POS III (§1.1 of the spec)")] = "III"
+    decimals: Annotated[dict[Any, int], Keys(_axis, "X | Y | Z | D"), Check(_decimals), doc(
+        "decimals of each axis's resolution (3 = 0.001 mm); the word format is 7 digits")] = field(
+        default_factory=lambda: dict.fromkeys(_AXES, 3))
+    eob: Annotated[Literal["CRLF", "CR"], doc("end of block on output (spec G-EOB)")] = "CRLF"
+    leader_nul: Annotated[int, Meta(ge=0, le=1000), doc("NUL bytes before an output (G-LEADER)")] = 0
+    trailer_nul: Annotated[int, Meta(ge=0, le=1000), doc("NUL bytes after an output")] = 0
+    parity_error: Annotated[Literal["abort", "skip"], doc(
+        "ISO byte with wrong parity after %: WERTBEREICHES-UEBERLAUF or dropped")] = "abort"
+    ascii_bit7: Annotated[Literal["ignore", "abort"], doc(
+        "ASCII code: a byte with bit 7 set is masked or aborts the read-in")] = "ignore"
+    strict_block_numbers: Annotated[bool, doc("a block without N aborts the read-in")] = False
+    max_blocks_total: Annotated[int, Meta(ge=1), doc("program memory, blocks over all programs")] = 2000
+    params: Annotated[dict[Any, float], Keys(_parameter_number, "parameter number"), Check(_params), doc(
+        "initial machine parameters, e.g. {70: 3, 71: 0} (P1 … P98)")] = {}
+    boot_time: Annotated[float, Meta(ge=0), doc("seconds after power-on until NC ready (§2.4.5: about 2 s)")] = 2.0
+    accel: Annotated[float, Meta(gt=0), doc("acceleration = braking ramp of every axis, mm/s² (spec §5.3)")] = 500.0
+    kv_per_step: Annotated[float, Meta(gt=0), doc("Kv [1/s] per step of the gain P30–P33 (spec §5.2)")] = 1.667
+    drive_speed_factor: Annotated[float, Meta(gt=0), doc(
+        "drive speed at 10 V set-point = this × rapid (spec §5.2)")] = 1.2
+    m06_requires_nc_start: Annotated[bool, doc("after the M06 acknowledge wait for NC-Start (spec G-M06)")] = False
+    encoder_khz: Annotated[float, Meta(gt=0), doc(
+        "highest encoder input frequency (4-channel adapter 100 kHz, 2-channel 8 kHz): faster is an event")] = 100.0
+    count_loss_increments: Annotated[float, Meta(gt=0), doc(
+        "increments an encoder drops with the fault count_loss_<axis>")] = 10.0
+    g25_full_circle: Annotated[bool, doc("a G25 block runs a full circle around I/J (spec §4.12.1)")] = False
+    v6_peer: Annotated[Literal["host", "cassette"], doc(
+        "what V6's cassette transfers T2/T3 reach: the host on the pty, or a simulated cassette recorder")] = "host"
+    plc: Plc = field(default_factory=Plc)
+    axes: Axes = field(default_factory=Axes)
+    v8_keymap: Annotated[dict[Any, str], Keys(_key_code, "key code"), doc(
+        "names of the keyboard's key codes for panel.key (spec §3.10: the legends are lost; 48 = P)")] = field(
+        default_factory=lambda: {0x48: "P"})

@@ -9,12 +9,12 @@ revolution) measured from the power-on position.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Annotated, Any, Literal
 
-from devsim.core.settings import Bool, DictOf, Float, Int, ListOf, Maybe, OneOf, Section, Setting
+from devsim.core.settings import Check, Keys, Meta, Settings, doc, field
 from devsim.devices.sers.parameters import lookup
 
-__all__ = ["AXIS_GEOMETRY", "BAUD_RATES", "SersConfig"]
+__all__ = ["AXIS_GEOMETRY", "AxisGeometry", "BAUD_RATES", "SersConfig"]
 
 BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200)
 
@@ -51,35 +51,42 @@ def _baud(value: int) -> int:
     return value
 
 
-_POSITION = Maybe(Float())
+#: A switch position (increments), or None: no such switch.
+_Position = float | None
 
-#: Where the switches sit, in increments from the power-on position (§2.1.2).
-AXIS_GEOMETRY = Section("Where the switches sit, in increments from the power-on position (§2.1.2).", (
-    Setting("limit_left", _POSITION, None, "left (negative) limit switch opens at and below this position"),
-    Setting("limit_right", _POSITION, None, "right (positive) limit switch opens at and above this position"),
-    Setting("reference_low", _POSITION, None, "reference cam start (switch active from here)"),
-    Setting("reference_high", _POSITION, None, "reference cam end (default: open-ended)"),
-    Setting("index_offset", Float(), 0.0, "encoder index mark offset within a revolution"),
-))
 
-#: What a user can set for one SERS (``--config FILE.yaml`` or a plant file).
-SersConfig = Section("What a user can set for one SERS (--config FILE.yaml or a plant file).", (
-    Setting("address", Int(ge=0, le=127), 1, "DIP switch 2 bits 1-7; 0 = master"),
-    Setting("autostart", Bool(), False, "DIP switch 2 bit 8"),
-    Setting("baud", Int(), 9600, "DIP switch 1 bits 1-3", check=_baud),
-    Setting("input_level", OneOf("plc", "ttl", "low_active", "invalid"), "plc", "DIP switch 1 bits 4/5"),
-    Setting("service_switch", Bool(), False, "DIP switch 1 bit 6"),
-    Setting("current_class", OneOf("01", "02", "03", "04", "06", "08", "12"), "06"),
-    Setting("supply_class", OneOf("24", "60", "85", "120", "240"), "85"),
-    Setting("options", ListOf(OneOf("E50", "IO", "P8", "RS485", "SERVO", "U")), []),
-    Setting("params", DictOf(_known_parameter, Float(integers=True), "parameter"), {},
-            "factory/EEPROM parameter values, e.g. {P1017: 2, V: 500}", check=_param_ranges),
-    Setting("axis", AXIS_GEOMETRY, {}),
-    Setting("supply_voltage", Maybe(Float()), None, "initial supply voltage (default nominal)"),
-    Setting("heatsink_temperature", Float(), 30.0),
-    Setting("initially_selected", Maybe(Bool()), None,
-            "G-ADDR: selected after power-on (default: true unless on a shared line)"),
-    Setting("broadcast_reply", OneOf("none", "lowest_address"), "none"),
-    Setting("boot_time", Float(ge=0), 2.0, "seconds of display '-' after power-on (§3.5)"),
-    Setting("encoding", OneOf("latin-1", "cp437"), "latin-1"),
-))
+class AxisGeometry(Settings):
+    """Where the switches sit, in increments from the power-on position (§2.1.2)."""
+
+    limit_left: Annotated[_Position, doc("left (negative) limit switch opens at and below this position")] = None
+    limit_right: Annotated[_Position, doc("right (positive) limit switch opens at and above this position")] = None
+    reference_low: Annotated[_Position, doc("reference cam start (switch active from here)")] = None
+    reference_high: Annotated[_Position, doc("reference cam end (default: open-ended)")] = None
+    index_offset: Annotated[float, doc("encoder index mark offset within a revolution")] = 0.0
+
+
+#: Where the switches sit (the nested part ``axis``).
+AXIS_GEOMETRY = AxisGeometry
+
+
+class SersConfig(Settings):
+    """What a user can set for one SERS (--config FILE.yaml or a plant file)."""
+
+    address: Annotated[int, Meta(ge=0, le=127), doc("DIP switch 2 bits 1-7; 0 = master")] = 1
+    autostart: Annotated[bool, doc("DIP switch 2 bit 8")] = False
+    baud: Annotated[int, Check(_baud), doc("DIP switch 1 bits 1-3")] = 9600
+    input_level: Annotated[Literal["plc", "ttl", "low_active", "invalid"], doc("DIP switch 1 bits 4/5")] = "plc"
+    service_switch: Annotated[bool, doc("DIP switch 1 bit 6")] = False
+    current_class: Literal["01", "02", "03", "04", "06", "08", "12"] = "06"
+    supply_class: Literal["24", "60", "85", "120", "240"] = "85"
+    options: list[Literal["E50", "IO", "P8", "RS485", "SERVO", "U"]] = []
+    params: Annotated[dict[Any, float | int], Keys(_known_parameter, "parameter"), Check(_param_ranges),
+                      doc("factory/EEPROM parameter values, e.g. {P1017: 2, V: 500}")] = {}
+    axis: AxisGeometry = field(default_factory=AxisGeometry)
+    supply_voltage: Annotated[float | None, doc("initial supply voltage (default nominal)")] = None
+    heatsink_temperature: float = 30.0
+    initially_selected: Annotated[bool | None,
+                                  doc("G-ADDR: selected after power-on (default: true unless on a shared line)")] = None
+    broadcast_reply: Literal["none", "lowest_address"] = "none"
+    boot_time: Annotated[float, Meta(ge=0), doc("seconds of display '-' after power-on (§3.5)")] = 2.0
+    encoding: Literal["latin-1", "cp437"] = "latin-1"
