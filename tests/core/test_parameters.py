@@ -93,3 +93,22 @@ def test_points_derive_from_the_rows() -> None:
         points.set(values, "param.P41", 5000)
     assert points.lookup("param.P1133").access == "r"
     assert points.lookup("param.P41").unit == "U/min"
+
+
+def test_the_echo_kind_reads_its_parameter_by_name() -> None:
+    """tests/support/echo.py, the README's smallest kind: P1 through the control API, the face
+    reading it as ``params.repeat``."""
+    from devsim.core.clock import VirtualClock
+    from tests.support.echo import EchoDevice
+
+    device = EchoDevice(clock=VirtualClock())
+    sent: list[bytes] = []
+    device.attach(sent.append)
+    device.feed(b"ab")
+    device.set("param.p1", 3)
+    device.feed(b"c")
+    assert sent == [b"ab", b"ccc"]
+    assert device.model.params.repeat == 3 and device.read("param.P1") == 3
+    with pytest.raises(BadValue):
+        device.set("param.P1", 5)
+    assert EchoDevice.reference().parameter_table is not None

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from devsim.core.registry import kinds
 from devsim.observe.monitor import DevicePanel, MonitorApp
 from devsim.runtime import Runtime
 from devsim.runtime.control import ControlServer
@@ -126,15 +127,15 @@ async def test_monitor_on_a_realtime_scenario(tmp_path: Path) -> None:
 async def test_monitor_shows_every_kind() -> None:
     """One plant of every kind: a panel each, with its axes, lamps and faults in the menu."""
     runtime = Runtime(virtual=True).start()
-    kinds = ["sers", "gms96", "poselesta", "ip247", "pcd4h3"]
-    for kind in kinds:
+    shipped = sorted(kinds())
+    for kind in shipped:
         runtime.add_device(kind)
     server = ControlServer(runtime, "127.0.0.1:0")
     address = server.start_sync()
     try:
         app = MonitorApp(str(address), refresh=0.05)
         async with app.run_test(size=(160, 120)) as pilot:
-            panels = {kind: app.query_one(f"#dev-{kind}", DevicePanel) for kind in kinds}
+            panels = {kind: app.query_one(f"#dev-{kind}", DevicePanel) for kind in shipped}
             assert panels["poselesta"].axes == ["axis.x", "axis.y", "axis.z", "axis.d"]
             assert panels["pcd4h3"].axes == ["axis.1", "axis.2"]
             for panel in panels.values():

@@ -1,8 +1,15 @@
 """A tiny device kind for tests that must not depend on a real controller.
 
-``EchoDevice`` echoes every byte it receives (unless ``input.mute`` is set), counts them, and
-has a timer driven by the device clock so that tests can watch simulated time move.  Register it
-with ``DEVSIM_EXTRA_KINDS="echo=tests.support.echo:EchoDevice"``.
+``EchoDevice`` echoes every byte it receives (unless ``input.mute`` is set; parameter ``P1``
+times each), counts them, and has a timer driven by the device clock so that tests can watch
+simulated time move.  Register it with ``DEVSIM_EXTRA_KINDS="echo=tests.support.echo:EchoDevice"``.
+
+It is also the smallest kind, in one file, with every table a kind declares (README, "Adding a
+kind"; docs/kind-shape.md): configuration (:class:`EchoConfig`), parameters as kit rows
+(:data:`PARAMETERS`, read by the model through :class:`EchoParameters`' named accessor), signals,
+points (:data:`POINTS`), a face per port (:class:`EchoFace`) and the reference.  A shipped kind
+splits the same into ``devsim/devices/KIND/{config,tables,model,face,points,device}.py`` and is
+registered by its entry point in ``pyproject.toml``.
 """
 
 from __future__ import annotations
@@ -11,8 +18,9 @@ from typing import Annotated, Any, ClassVar
 
 from devsim.core.clock import Timer
 from devsim.core.device import Device, Face, SerialSettings
-from devsim.core.kit import SignalDef, declare_signals, signal_points
+from devsim.core.kit import Reference, SignalDef, declare_signals, signal_points
 from devsim.core.model import Model
+from devsim.core.parameters import Param, Parameters, ParameterTable, accessor, alias_hook, parameter_points
 from devsim.core.points import Point, PointTable
 from devsim.core.settings import Check, Meta, Section, Settings, field
 
@@ -43,6 +51,19 @@ class EchoConfig(Settings):
 
 ECHO_GEOMETRY = EchoGeometry
 
+#: The echo's parameters, one kit row each (a real kind cites its manual's section).
+PARAMETERS = ParameterTable(
+    (Param(1, "Wiederholung", "(test device)", "how many times each byte is echoed", minimum=1, maximum=4,
+           default=1, saved=False, attr="repeat"),),
+    prefix="P",
+)
+
+
+class EchoParameters(Parameters):
+    """The echo's parameter values; the model reads them by name."""
+
+    repeat = accessor(1)
+
 
 class EchoModel(Model):
     """The echo "machine": a mute input, a value, a byte counter and a timer on the device clock."""
@@ -51,6 +72,7 @@ class EchoModel(Model):
         super().__init__(**kwargs)
         self.settings = EchoConfig.parse(self.config)
         declare_signals(self.signals, SIGNALS)
+        self.params = EchoParameters(PARAMETERS)
         self.value: float = 0
         self.received = 0
         self.largest = 0  # the biggest chunk of host bytes handed over at once
@@ -91,13 +113,15 @@ class EchoFace(Face):
         self.model.received += len(data)
         self.model.largest = max(self.model.largest, len(data))
         if not self.model.signals.get("mute"):
-            self.send(data)
+            repeat = self.model.params.repeat
+            self.send(data if repeat == 1 else bytes(b for b in data for _ in range(repeat)))
 
 
 SIGNALS = (SignalDef("mute", "input", False, "echo nothing while set"),)
 
 POINTS = PointTable.of(
     signal_points(SIGNALS),
+    parameter_points(PARAMETERS, lambda m, row: m.params[row.key], lambda m, row, v: m.params.set(row.key, v)),
     [
         Point("value", "float", "a free number", get=lambda m: m.value, put=lambda m, v: setattr(m, "value", v)),
         Point("received", "int", "bytes received since power-on", get=lambda m: m.received, in_state=True),
@@ -115,6 +139,7 @@ POINTS = PointTable.of(
             put=lambda m, v: m.nvram.put("note", v),
         ),
     ],
+    alias=alias_hook(PARAMETERS),
 )
 
 
@@ -127,3 +152,7 @@ class EchoDevice(Device):
     model_class = EchoModel
     face_classes: ClassVar[dict[str, Any]] = {"main": EchoFace}
     points = POINTS
+
+    @classmethod
+    def reference(cls) -> Reference:
+        return Reference(parameter_table=PARAMETERS)
