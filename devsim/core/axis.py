@@ -30,15 +30,13 @@ from collections.abc import Callable
 from typing import Any
 
 from devsim.core.clock import Clock, Timer
+from devsim.core.planner import jog_phases, move_phases, move_phases_profiled, stop_phases
 from devsim.core.profile import (
-    ABS_X,
     HISTORY,
     REL_T,
-    REL_X,
     IndexRule,
     Phase,
     PhaseSpec,
-    Ramp,
     RampProfile,
     RangeRule,
     Rule,
@@ -259,113 +257,10 @@ class Axis:
         acc_ramp = make_ramp(profile, speed, accel)
         dec_ramp = make_ramp(profile, speed, decel)
         if acc_ramp is not None and dec_ramp is not None:
-            return self._move_profiled(now, x_now, v_now, target, speed, acc_ramp, dec_ramp, on_done)
-        x0, v0 = x_now, v_now
-        phases: list[PhaseSpec] = []
-        tol = max(ABS_X, REL_X * max(abs(x0), abs(target)))
-        dist = target - x0
-        sd = v0 * v0 / (2.0 * decel)
-        if v0 != 0.0:
-            toward = sign(dist) == sign(v0)
-            if toward and abs(abs(dist) - sd) <= tol and abs(dist) > 0.0:
-                # brakes onto the target exactly (decel adjusted by a rounding error at most)
-                d_exact = v0 * v0 / (2.0 * abs(dist))
-                phases.append((-sign(v0) * d_exact, abs(v0) / d_exact, 0.0, "linear"))
-                return self._install(now, x0, v0, phases, target, on_done)
-            if not toward or sd > abs(dist):
-                phases.append((-sign(v0) * decel, abs(v0) / decel, 0.0, "linear"))
-                x0 += sign(v0) * sd
-                v0 = 0.0
-                dist = target - x0
-        if abs(dist) > 0.0:
-            s = sign(dist)
-            length = abs(dist)
-            u = abs(v0)  # toward the target, 0 <= u and u²/(2 decel) <= length
-            if u > speed:
-                phases.append((-s * decel, (u - speed) / decel, s * speed, "linear"))
-                peak = speed
-                cruise = length - u * u / (2.0 * decel)
-            else:
-                peak = math.sqrt((2.0 * accel * decel * length + decel * u * u) / (accel + decel))
-                peak = max(peak, u)
-                if peak > speed:
-                    peak = speed
-                    cruise = length - (speed * speed - u * u) / (2.0 * accel) - speed * speed / (2.0 * decel)
-                else:
-                    cruise = 0.0
-                phases.append((s * accel, (peak - u) / accel, s * peak, "linear"))
-            if cruise > 0.0:
-                phases.append((0.0, cruise / peak, s * peak, "linear"))
-            phases.append((-s * decel, peak / decel, 0.0, "linear"))
+            phases = move_phases_profiled(x_now, v_now, target, speed, acc_ramp, dec_ramp)
+        else:
+            phases = move_phases(x_now, v_now, target, speed, accel, decel)
         return self._install(now, x_now, v_now, phases, target, on_done)
-
-    def _move_profiled(
-        self,
-        now: float,
-        x_now: float,
-        v_now: float,
-        target: float,
-        speed: float,
-        acc_ramp: Ramp,
-        dec_ramp: Ramp,
-        on_done: Callback | None,
-    ) -> float:
-        """:meth:`move_to` with sectioned ramps (the same cases as the plain planner)."""
-        x0, v0 = x_now, v_now
-        phases: list[PhaseSpec] = []
-        tol = max(ABS_X, REL_X * max(abs(x0), abs(target)))
-        dist = target - x0
-        sd = dec_ramp.distance(0.0, abs(v0))
-        if v0 != 0.0:
-            toward = sign(dist) == sign(v0)
-            if toward and abs(abs(dist) - sd) <= tol and abs(dist) > 0.0:
-                # brakes onto the target exactly (decelerations scaled by a rounding error at most)
-                dec_ramp.down(abs(v0), 0.0, sign(v0), phases, scale=sd / abs(dist))
-                return self._install(now, x0, v0, phases, target, on_done)
-            if not toward or sd > abs(dist):
-                dec_ramp.down(abs(v0), 0.0, sign(v0), phases)
-                x0 += sign(v0) * sd
-                v0 = 0.0
-                dist = target - x0
-        if abs(dist) > 0.0:
-            s = sign(dist)
-            length = abs(dist)
-            u = abs(v0)  # toward the target, 0 <= u and its braking distance <= length
-            if u > speed:
-                dec_ramp.down(u, speed, s, phases)
-                peak = speed
-                cruise = length - dec_ramp.distance(0.0, u)
-            else:
-                peak, cruise = self._peak(acc_ramp, dec_ramp, u, speed, length)
-                acc_ramp.up(u, peak, s, phases)
-            if cruise > 0.0:
-                phases.append((0.0, cruise / peak, s * peak, "linear"))
-            dec_ramp.down(peak, 0.0, s, phases)
-        return self._install(now, x_now, v_now, phases, target, on_done)
-
-    @staticmethod
-    def _peak(acc_ramp: Ramp, dec_ramp: Ramp, u: float, speed: float, length: float) -> tuple[float, float]:
-        """``(peak speed, cruise distance)`` to cover ``length`` from speed ``u``: accelerate to
-        the peak, then brake to 0.  The distance ``f(p)`` is monotone in the peak ``p`` and, between
-        two section bounds, ``f(lo) + (p² - lo²)·(1/(2a) + 1/(2d))``: solved in closed form within
-        the interval that holds the solution."""
-
-        def f(p: float) -> float:
-            return acc_ramp.distance(u, p) + dec_ramp.distance(0.0, p)
-
-        f_top = f(speed)
-        if f_top <= length:
-            return speed, length - f_top
-        inner = {b for b in acc_ramp.bounds + dec_ramp.bounds if u < b < speed}
-        points = [u, *sorted(inner), speed]
-        for lo, hi in zip(points, points[1:], strict=False):
-            if hi < speed and f(hi) < length:
-                continue
-            mid = 0.5 * (lo + hi)
-            k = 0.5 / acc_ramp.acc_at(mid) + 0.5 / dec_ramp.acc_at(mid)
-            p = math.sqrt(max(lo * lo + (length - f(lo)) / k, 0.0))
-            return min(max(p, lo), hi), 0.0
-        return speed, 0.0  # not reached: u == speed has f(speed) <= length
 
     def jog(
         self,
@@ -391,21 +286,7 @@ class Axis:
         x0, v0, _ = self._state(now)
         self._vref = float(speed)
         vt = sign(direction) * float(speed)
-        phases: list[PhaseSpec] = []
-        ramp = make_ramp(profile, speed, accel)
-        if ramp is not None:
-            if v0 != 0.0 and sign(v0) != sign(vt):
-                ramp.down(abs(v0), 0.0, sign(v0), phases)
-                ramp.up(0.0, speed, sign(vt), phases)
-            elif abs(v0) < speed:
-                ramp.up(abs(v0), speed, sign(vt), phases)
-            elif abs(v0) > speed:
-                ramp.down(abs(v0), speed, sign(vt), phases)
-        elif v0 != 0.0 and sign(v0) != sign(vt):
-            phases.append((-sign(v0) * accel, abs(v0) / accel, 0.0, "linear"))
-            phases.append((sign(vt) * accel, speed / accel, vt, "linear"))
-        elif v0 != vt:
-            phases.append((sign(vt - v0) * accel, abs(vt - v0) / accel, vt, "linear"))
+        phases = jog_phases(v0, vt, speed, accel, make_ramp(profile, speed, accel))
         self._install(now, x0, v0, phases, None, on_done, cruise=vt)
 
     def stop(
@@ -426,12 +307,8 @@ class Axis:
             raise ValueError("decel must be positive")
         now = self.clock.now()
         x0, v0, _ = self._state(now)
-        phases: list[PhaseSpec] = []
         ramp = make_ramp(profile, self._reference_speed(speed, v0), decel) if v0 != 0.0 else None
-        if ramp is not None:
-            ramp.down(abs(v0), 0.0, sign(v0), phases)
-        elif v0 != 0.0:
-            phases.append((-sign(v0) * decel, abs(v0) / decel, 0.0, "linear"))
+        phases = stop_phases(v0, decel, ramp)
         return self._install(now, x0, v0, phases, None, on_done)
 
     def quick_stop(self) -> None:
