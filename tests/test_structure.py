@@ -43,9 +43,6 @@ PENDING_CLASSES = {
     "devsim.devices.sers.motion.Motion",
     "devsim.devices.sers.access.ParameterAccess",
     "devsim.devices.sers.drive.SersDrive",
-    # Not a kind: the core's closed-form axis (583 lines: state, commands, watches, planning), on
-    # which every kind stands; splitting it is a change of its own, not part of moving the kinds.
-    "devsim.core.axis.Axis",
 }
 
 

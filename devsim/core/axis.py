@@ -16,6 +16,10 @@ constant-acceleration ramps.
 Units are the device's raw units: positions in increments, velocities in inc/s, accelerations in
 inc/s²; unit scaling is the device's business.
 
+The :class:`Axis` holds the state (its plan, the recent past, the done timer) and the commands;
+the phases of a move, jog or stop are planned by the pure functions of :mod:`devsim.core.planner`,
+and the crossing watches are solved and scheduled by :class:`~devsim.core.crossing.Watches`.
+
 Plans are built so that every segment is monotonic in position (a reversal is split at v = 0);
 a crossing is therefore detected by comparing the watch's *stored* side with the segment's end
 position, which keeps event firing exact under floating point: a crossing is never reported twice
@@ -30,6 +34,7 @@ from collections.abc import Callable
 from typing import Any
 
 from devsim.core.clock import Clock, Timer
+from devsim.core.crossing import CrossingCallback, Watch, Watches
 from devsim.core.planner import jog_phases, move_phases, move_phases_profiled, stop_phases
 from devsim.core.profile import (
     HISTORY,
@@ -51,43 +56,6 @@ __all__ = ["Axis", "IndexRule", "Phase", "RampProfile", "RangeRule", "RegionSwit
 
 
 Callback = Callable[[], None]
-CrossingCallback = Callable[[int], None]
-
-class Watch:
-    """A registered crossing watch (from :meth:`Axis.watch` / :meth:`Axis.watch_index`)."""
-
-    def __init__(self, axis: Axis, rule: Rule, callback: CrossingCallback, teleport_fires: bool) -> None:
-        self._axis = axis
-        self._rule = rule
-        self._callback = callback
-        self._teleport_fires = teleport_fires
-        self._state = rule.state_of(axis.position())
-        self._timer: Timer | None = None
-        self._token: object | None = None
-        self._cancelled = False
-
-    @property
-    def cancelled(self) -> bool:
-        return self._cancelled
-
-    @property
-    def state(self) -> int:
-        """The zone of the rule the watched position is in (for a region: 1 = inside)."""
-        return self._state
-
-    def cancel(self) -> None:
-        """Stop watching; idempotent."""
-        if self._cancelled:
-            return
-        self._cancelled = True
-        self._unschedule()
-        self._axis._watches.remove(self)
-
-    def _unschedule(self) -> None:
-        if self._timer is not None:
-            self._timer.cancel()
-        self._timer = None
-        self._token = None
 
 
 # --------------------------------------------------------------------------------------------
@@ -121,7 +89,7 @@ class Axis:
         self._rest = float(position)  # where the plan ends (or where the idle axis stands)
         self._idle_since = clock.now()
         self._history: deque[Segment] = deque(maxlen=HISTORY)
-        self._watches: list[Watch] = []
+        self._watches = Watches(clock)
         self._gen = 0  # bumped by every plan change; stale timers and loops check it
         self._done_timer: Timer | None = None
         self._on_done: Callback | None = None
@@ -332,11 +300,7 @@ class Axis:
         self._rest = float(position)
         self._idle_since = now
         self._gen += 1
-        gen = self._gen
-        for w in list(self._watches):
-            if not w._teleport_fires and not w._cancelled:
-                w._state = w._rule.state_of(self._rest)
-        self._sync_watches(gen)
+        self._watches.settle(self._rest, teleport=True)
 
     # -- watches -------------------------------------------------------------------------------
     def watch(self, position: float, callback: CrossingCallback) -> Watch:
@@ -351,81 +315,7 @@ class Axis:
         )
 
     def _add_watch(self, rule: Rule, callback: CrossingCallback, teleport_fires: bool) -> Watch:
-        w = Watch(self, rule, callback, teleport_fires)
-        self._watches.append(w)
-        self._schedule_watch(w)
-        return w
-
-    def _next_crossing(self, w: Watch, now: float) -> tuple[float, int] | None:
-        plan = self._plan
-        state = w._state
-        for i, seg in enumerate(plan):
-            if seg.t1 <= now:
-                continue
-            d = seg.direction
-            if i + 1 < len(plan):
-                xe = plan[i + 1].x0
-            elif seg.t1 == math.inf:
-                xe = d * math.inf
-            else:
-                xe = self._rest
-            if d > 0:
-                border = w._rule.up(state)
-                if border is not None and (xe > border[0] if border[1] else xe >= border[0]):
-                    return self._crossing_time(seg, border[0], xe, now), +1
-            elif d < 0:
-                border = w._rule.down(state)
-                if border is not None and (xe <= border[0] if border[1] else xe < border[0]):
-                    return self._crossing_time(seg, border[0], xe, now), -1
-        return None
-
-    @staticmethod
-    def _crossing_time(seg: Segment, p: float, xe: float, now: float) -> float:
-        if p == xe and seg.t1 < math.inf:
-            # ends exactly on p: the root is (near) a double root at a stop, badly conditioned
-            # (1 ulp of position is ~1e-8 s); the segment's end time is the exact answer
-            return max(seg.t1, now)
-        return min(max(seg.solve(p), seg.t0, now), seg.t1)
-
-    def _schedule_watch(self, w: Watch) -> None:
-        w._unschedule()
-        if w._cancelled or not self._plan:
-            return
-        found = self._next_crossing(w, self.clock.now())
-        if found is None:
-            return
-        when, direction = found
-        token = object()
-
-        def fire() -> None:
-            if w._token is not token or w._cancelled:
-                return
-            w._timer = None
-            w._token = None
-            w._state += direction
-            self._schedule_watch(w)  # the next crossing; a re-plan in the callback redoes it
-            w._callback(direction)
-
-        w._token = token
-        w._timer = self.clock.call_at(when, fire)
-
-    def _sync_watches(self, gen: int) -> None:
-        """Bring every watch's side in line with the exact rest position (axis just stopped or
-        was teleported), firing the crossings that happened at this instant."""
-        for w in list(self._watches):
-            w._unschedule()
-        for w in list(self._watches):
-            while not w._cancelled:
-                if self._gen != gen:
-                    return  # a callback re-planned; that re-plan rescheduled everything
-                target = w._rule.state_of(self._rest)
-                if target == w._state:
-                    break
-                direction = 1 if target > w._state else -1
-                # a range (switch) jumps straight to its new zone: a teleport across a region
-                # must not flicker it; index marks are counted one by one
-                w._state = target if isinstance(w._rule, RangeRule) else w._state + direction
-                w._callback(direction)
+        return self._watches.add(rule, callback, teleport_fires, self.position())
 
     # -- planning machinery --------------------------------------------------------------------
     def _archive(self, now: float) -> None:
@@ -527,10 +417,9 @@ class Axis:
         elif on_done is not None:  # already there, or a jog reaching its cruise speed
             self._done_timer = self.clock.call_at(ramp_end, lambda: self._run_done(gen))
         if segs:
-            for w in list(self._watches):
-                self._schedule_watch(w)
+            self._watches.follow(segs, rest)
         else:
-            self._sync_watches(gen)
+            self._watches.settle(rest)
         return t if t < math.inf else ramp_end
 
     def _run_done(self, gen: int) -> None:
@@ -553,7 +442,7 @@ class Axis:
         self._idle_since = end
         self._gen += 1
         gen = self._gen
-        self._sync_watches(gen)
+        self._watches.settle(self._rest)
         if gen == self._gen and on_done is not None:
             on_done()
 
