@@ -30,16 +30,6 @@ LAYERS: list[tuple[str, ...]] = [
     ("devsim.__main__",),
 ]
 
-# PENDING: what the kinds still being reshaped into docs/kind-shape.md break today (issue 27).
-# Each kind's helper moves it into shape; the integrator deletes its entries as the kind lands
-# (test_pending_lists_only_real_offenders fails on an entry that no longer offends).  Nothing
-# else is tolerated.
-PENDING_CYCLES: set[str] = set()
-PENDING_CLASSES = {
-    # Not a kind: the core's closed-form axis (583 lines: state, commands, watches, planning), on
-    # which every kind stands; splitting it is a change of its own, not part of moving the kinds.
-    "devsim.core.axis.Axis",
-}
 
 
 def _module_name(path: Path) -> str:
@@ -111,17 +101,8 @@ def _packages() -> list[str]:
     return sorted({_module_name(p.parent / "__init__.py") for p in PACKAGE.rglob("*.py")})
 
 
-def _without_pending_cycles(graph: dict[str, set[str]]) -> dict[str, set[str]]:
-    """The graph without the edges inside a package of :data:`PENDING_CYCLES`."""
-
-    def pending(name: str) -> str | None:
-        return next((p for p in PENDING_CYCLES if name == p or name.startswith(p + ".")), None)
-
-    return {a: {b for b in targets if pending(b) is None or pending(b) != pending(a)} for a, targets in graph.items()}
-
-
 def test_no_import_cycle_in_any_package() -> None:
-    graph = _without_pending_cycles(_graph())
+    graph = _graph()
     cycles = {package: _cycle(graph, package) for package in _packages()}
     assert {p: " -> ".join(c) for p, c in cycles.items() if c} == {}
 
@@ -217,19 +198,11 @@ def _mixers() -> list[str]:
 
 
 def test_no_class_over_about_400_lines() -> None:
-    assert {name: size for name, size in _long_classes().items() if name not in PENDING_CLASSES} == {}
+    assert _long_classes() == {}
 
 
 def test_no_class_mixes_classes_of_its_package() -> None:
-    assert [name for name in _mixers() if name not in PENDING_CLASSES] == []
-
-
-def test_pending_lists_only_real_offenders() -> None:
-    """An entry of PENDING that no longer offends goes: the list only shrinks."""
-    offending = set(_long_classes()) | set(_mixers())
-    assert sorted(PENDING_CLASSES - offending) == []
-    graph = _graph()
-    assert sorted(p for p in PENDING_CYCLES if _cycle(graph, p) is None) == []
+    assert _mixers() == []
 
 
 def _kinds() -> list[str]:

@@ -16,6 +16,10 @@ constant-acceleration ramps.
 Units are the device's raw units: positions in increments, velocities in inc/s, accelerations in
 inc/s²; unit scaling is the device's business.
 
+The :class:`Axis` holds the state (its plan, the recent past, the done timer) and the commands;
+the phases of a move, jog or stop are planned by the pure functions of :mod:`devsim.core.planner`,
+and the crossing watches are solved and scheduled by :class:`~devsim.core.crossing.Watches`.
+
 Plans are built so that every segment is monotonic in position (a reversal is split at v = 0);
 a crossing is therefore detected by comparing the watch's *stored* side with the segment's end
 position, which keeps event firing exact under floating point: a crossing is never reported twice
@@ -30,15 +34,14 @@ from collections.abc import Callable
 from typing import Any
 
 from devsim.core.clock import Clock, Timer
+from devsim.core.crossing import CrossingCallback, Watch, Watches
+from devsim.core.planner import jog_phases, move_phases, move_phases_profiled, stop_phases
 from devsim.core.profile import (
-    ABS_X,
     HISTORY,
     REL_T,
-    REL_X,
     IndexRule,
     Phase,
     PhaseSpec,
-    Ramp,
     RampProfile,
     RangeRule,
     Rule,
@@ -53,43 +56,6 @@ __all__ = ["Axis", "IndexRule", "Phase", "RampProfile", "RangeRule", "RegionSwit
 
 
 Callback = Callable[[], None]
-CrossingCallback = Callable[[int], None]
-
-class Watch:
-    """A registered crossing watch (from :meth:`Axis.watch` / :meth:`Axis.watch_index`)."""
-
-    def __init__(self, axis: Axis, rule: Rule, callback: CrossingCallback, teleport_fires: bool) -> None:
-        self._axis = axis
-        self._rule = rule
-        self._callback = callback
-        self._teleport_fires = teleport_fires
-        self._state = rule.state_of(axis.position())
-        self._timer: Timer | None = None
-        self._token: object | None = None
-        self._cancelled = False
-
-    @property
-    def cancelled(self) -> bool:
-        return self._cancelled
-
-    @property
-    def state(self) -> int:
-        """The zone of the rule the watched position is in (for a region: 1 = inside)."""
-        return self._state
-
-    def cancel(self) -> None:
-        """Stop watching; idempotent."""
-        if self._cancelled:
-            return
-        self._cancelled = True
-        self._unschedule()
-        self._axis._watches.remove(self)
-
-    def _unschedule(self) -> None:
-        if self._timer is not None:
-            self._timer.cancel()
-        self._timer = None
-        self._token = None
 
 
 # --------------------------------------------------------------------------------------------
@@ -123,7 +89,7 @@ class Axis:
         self._rest = float(position)  # where the plan ends (or where the idle axis stands)
         self._idle_since = clock.now()
         self._history: deque[Segment] = deque(maxlen=HISTORY)
-        self._watches: list[Watch] = []
+        self._watches = Watches(clock)
         self._gen = 0  # bumped by every plan change; stale timers and loops check it
         self._done_timer: Timer | None = None
         self._on_done: Callback | None = None
@@ -259,113 +225,10 @@ class Axis:
         acc_ramp = make_ramp(profile, speed, accel)
         dec_ramp = make_ramp(profile, speed, decel)
         if acc_ramp is not None and dec_ramp is not None:
-            return self._move_profiled(now, x_now, v_now, target, speed, acc_ramp, dec_ramp, on_done)
-        x0, v0 = x_now, v_now
-        phases: list[PhaseSpec] = []
-        tol = max(ABS_X, REL_X * max(abs(x0), abs(target)))
-        dist = target - x0
-        sd = v0 * v0 / (2.0 * decel)
-        if v0 != 0.0:
-            toward = sign(dist) == sign(v0)
-            if toward and abs(abs(dist) - sd) <= tol and abs(dist) > 0.0:
-                # brakes onto the target exactly (decel adjusted by a rounding error at most)
-                d_exact = v0 * v0 / (2.0 * abs(dist))
-                phases.append((-sign(v0) * d_exact, abs(v0) / d_exact, 0.0, "linear"))
-                return self._install(now, x0, v0, phases, target, on_done)
-            if not toward or sd > abs(dist):
-                phases.append((-sign(v0) * decel, abs(v0) / decel, 0.0, "linear"))
-                x0 += sign(v0) * sd
-                v0 = 0.0
-                dist = target - x0
-        if abs(dist) > 0.0:
-            s = sign(dist)
-            length = abs(dist)
-            u = abs(v0)  # toward the target, 0 <= u and u²/(2 decel) <= length
-            if u > speed:
-                phases.append((-s * decel, (u - speed) / decel, s * speed, "linear"))
-                peak = speed
-                cruise = length - u * u / (2.0 * decel)
-            else:
-                peak = math.sqrt((2.0 * accel * decel * length + decel * u * u) / (accel + decel))
-                peak = max(peak, u)
-                if peak > speed:
-                    peak = speed
-                    cruise = length - (speed * speed - u * u) / (2.0 * accel) - speed * speed / (2.0 * decel)
-                else:
-                    cruise = 0.0
-                phases.append((s * accel, (peak - u) / accel, s * peak, "linear"))
-            if cruise > 0.0:
-                phases.append((0.0, cruise / peak, s * peak, "linear"))
-            phases.append((-s * decel, peak / decel, 0.0, "linear"))
+            phases = move_phases_profiled(x_now, v_now, target, speed, acc_ramp, dec_ramp)
+        else:
+            phases = move_phases(x_now, v_now, target, speed, accel, decel)
         return self._install(now, x_now, v_now, phases, target, on_done)
-
-    def _move_profiled(
-        self,
-        now: float,
-        x_now: float,
-        v_now: float,
-        target: float,
-        speed: float,
-        acc_ramp: Ramp,
-        dec_ramp: Ramp,
-        on_done: Callback | None,
-    ) -> float:
-        """:meth:`move_to` with sectioned ramps (the same cases as the plain planner)."""
-        x0, v0 = x_now, v_now
-        phases: list[PhaseSpec] = []
-        tol = max(ABS_X, REL_X * max(abs(x0), abs(target)))
-        dist = target - x0
-        sd = dec_ramp.distance(0.0, abs(v0))
-        if v0 != 0.0:
-            toward = sign(dist) == sign(v0)
-            if toward and abs(abs(dist) - sd) <= tol and abs(dist) > 0.0:
-                # brakes onto the target exactly (decelerations scaled by a rounding error at most)
-                dec_ramp.down(abs(v0), 0.0, sign(v0), phases, scale=sd / abs(dist))
-                return self._install(now, x0, v0, phases, target, on_done)
-            if not toward or sd > abs(dist):
-                dec_ramp.down(abs(v0), 0.0, sign(v0), phases)
-                x0 += sign(v0) * sd
-                v0 = 0.0
-                dist = target - x0
-        if abs(dist) > 0.0:
-            s = sign(dist)
-            length = abs(dist)
-            u = abs(v0)  # toward the target, 0 <= u and its braking distance <= length
-            if u > speed:
-                dec_ramp.down(u, speed, s, phases)
-                peak = speed
-                cruise = length - dec_ramp.distance(0.0, u)
-            else:
-                peak, cruise = self._peak(acc_ramp, dec_ramp, u, speed, length)
-                acc_ramp.up(u, peak, s, phases)
-            if cruise > 0.0:
-                phases.append((0.0, cruise / peak, s * peak, "linear"))
-            dec_ramp.down(peak, 0.0, s, phases)
-        return self._install(now, x_now, v_now, phases, target, on_done)
-
-    @staticmethod
-    def _peak(acc_ramp: Ramp, dec_ramp: Ramp, u: float, speed: float, length: float) -> tuple[float, float]:
-        """``(peak speed, cruise distance)`` to cover ``length`` from speed ``u``: accelerate to
-        the peak, then brake to 0.  The distance ``f(p)`` is monotone in the peak ``p`` and, between
-        two section bounds, ``f(lo) + (p² - lo²)·(1/(2a) + 1/(2d))``: solved in closed form within
-        the interval that holds the solution."""
-
-        def f(p: float) -> float:
-            return acc_ramp.distance(u, p) + dec_ramp.distance(0.0, p)
-
-        f_top = f(speed)
-        if f_top <= length:
-            return speed, length - f_top
-        inner = {b for b in acc_ramp.bounds + dec_ramp.bounds if u < b < speed}
-        points = [u, *sorted(inner), speed]
-        for lo, hi in zip(points, points[1:], strict=False):
-            if hi < speed and f(hi) < length:
-                continue
-            mid = 0.5 * (lo + hi)
-            k = 0.5 / acc_ramp.acc_at(mid) + 0.5 / dec_ramp.acc_at(mid)
-            p = math.sqrt(max(lo * lo + (length - f(lo)) / k, 0.0))
-            return min(max(p, lo), hi), 0.0
-        return speed, 0.0  # not reached: u == speed has f(speed) <= length
 
     def jog(
         self,
@@ -391,21 +254,7 @@ class Axis:
         x0, v0, _ = self._state(now)
         self._vref = float(speed)
         vt = sign(direction) * float(speed)
-        phases: list[PhaseSpec] = []
-        ramp = make_ramp(profile, speed, accel)
-        if ramp is not None:
-            if v0 != 0.0 and sign(v0) != sign(vt):
-                ramp.down(abs(v0), 0.0, sign(v0), phases)
-                ramp.up(0.0, speed, sign(vt), phases)
-            elif abs(v0) < speed:
-                ramp.up(abs(v0), speed, sign(vt), phases)
-            elif abs(v0) > speed:
-                ramp.down(abs(v0), speed, sign(vt), phases)
-        elif v0 != 0.0 and sign(v0) != sign(vt):
-            phases.append((-sign(v0) * accel, abs(v0) / accel, 0.0, "linear"))
-            phases.append((sign(vt) * accel, speed / accel, vt, "linear"))
-        elif v0 != vt:
-            phases.append((sign(vt - v0) * accel, abs(vt - v0) / accel, vt, "linear"))
+        phases = jog_phases(v0, vt, speed, accel, make_ramp(profile, speed, accel))
         self._install(now, x0, v0, phases, None, on_done, cruise=vt)
 
     def stop(
@@ -426,12 +275,8 @@ class Axis:
             raise ValueError("decel must be positive")
         now = self.clock.now()
         x0, v0, _ = self._state(now)
-        phases: list[PhaseSpec] = []
         ramp = make_ramp(profile, self._reference_speed(speed, v0), decel) if v0 != 0.0 else None
-        if ramp is not None:
-            ramp.down(abs(v0), 0.0, sign(v0), phases)
-        elif v0 != 0.0:
-            phases.append((-sign(v0) * decel, abs(v0) / decel, 0.0, "linear"))
+        phases = stop_phases(v0, decel, ramp)
         return self._install(now, x0, v0, phases, None, on_done)
 
     def quick_stop(self) -> None:
@@ -455,11 +300,7 @@ class Axis:
         self._rest = float(position)
         self._idle_since = now
         self._gen += 1
-        gen = self._gen
-        for w in list(self._watches):
-            if not w._teleport_fires and not w._cancelled:
-                w._state = w._rule.state_of(self._rest)
-        self._sync_watches(gen)
+        self._watches.settle(self._rest, teleport=True)
 
     # -- watches -------------------------------------------------------------------------------
     def watch(self, position: float, callback: CrossingCallback) -> Watch:
@@ -474,81 +315,7 @@ class Axis:
         )
 
     def _add_watch(self, rule: Rule, callback: CrossingCallback, teleport_fires: bool) -> Watch:
-        w = Watch(self, rule, callback, teleport_fires)
-        self._watches.append(w)
-        self._schedule_watch(w)
-        return w
-
-    def _next_crossing(self, w: Watch, now: float) -> tuple[float, int] | None:
-        plan = self._plan
-        state = w._state
-        for i, seg in enumerate(plan):
-            if seg.t1 <= now:
-                continue
-            d = seg.direction
-            if i + 1 < len(plan):
-                xe = plan[i + 1].x0
-            elif seg.t1 == math.inf:
-                xe = d * math.inf
-            else:
-                xe = self._rest
-            if d > 0:
-                border = w._rule.up(state)
-                if border is not None and (xe > border[0] if border[1] else xe >= border[0]):
-                    return self._crossing_time(seg, border[0], xe, now), +1
-            elif d < 0:
-                border = w._rule.down(state)
-                if border is not None and (xe <= border[0] if border[1] else xe < border[0]):
-                    return self._crossing_time(seg, border[0], xe, now), -1
-        return None
-
-    @staticmethod
-    def _crossing_time(seg: Segment, p: float, xe: float, now: float) -> float:
-        if p == xe and seg.t1 < math.inf:
-            # ends exactly on p: the root is (near) a double root at a stop, badly conditioned
-            # (1 ulp of position is ~1e-8 s); the segment's end time is the exact answer
-            return max(seg.t1, now)
-        return min(max(seg.solve(p), seg.t0, now), seg.t1)
-
-    def _schedule_watch(self, w: Watch) -> None:
-        w._unschedule()
-        if w._cancelled or not self._plan:
-            return
-        found = self._next_crossing(w, self.clock.now())
-        if found is None:
-            return
-        when, direction = found
-        token = object()
-
-        def fire() -> None:
-            if w._token is not token or w._cancelled:
-                return
-            w._timer = None
-            w._token = None
-            w._state += direction
-            self._schedule_watch(w)  # the next crossing; a re-plan in the callback redoes it
-            w._callback(direction)
-
-        w._token = token
-        w._timer = self.clock.call_at(when, fire)
-
-    def _sync_watches(self, gen: int) -> None:
-        """Bring every watch's side in line with the exact rest position (axis just stopped or
-        was teleported), firing the crossings that happened at this instant."""
-        for w in list(self._watches):
-            w._unschedule()
-        for w in list(self._watches):
-            while not w._cancelled:
-                if self._gen != gen:
-                    return  # a callback re-planned; that re-plan rescheduled everything
-                target = w._rule.state_of(self._rest)
-                if target == w._state:
-                    break
-                direction = 1 if target > w._state else -1
-                # a range (switch) jumps straight to its new zone: a teleport across a region
-                # must not flicker it; index marks are counted one by one
-                w._state = target if isinstance(w._rule, RangeRule) else w._state + direction
-                w._callback(direction)
+        return self._watches.add(rule, callback, teleport_fires, self.position())
 
     # -- planning machinery --------------------------------------------------------------------
     def _archive(self, now: float) -> None:
@@ -650,10 +417,9 @@ class Axis:
         elif on_done is not None:  # already there, or a jog reaching its cruise speed
             self._done_timer = self.clock.call_at(ramp_end, lambda: self._run_done(gen))
         if segs:
-            for w in list(self._watches):
-                self._schedule_watch(w)
+            self._watches.follow(segs, rest)
         else:
-            self._sync_watches(gen)
+            self._watches.settle(rest)
         return t if t < math.inf else ramp_end
 
     def _run_done(self, gen: int) -> None:
@@ -676,7 +442,7 @@ class Axis:
         self._idle_since = end
         self._gen += 1
         gen = self._gen
-        self._sync_watches(gen)
+        self._watches.settle(self._rest)
         if gen == self._gen and on_done is not None:
             on_done()
 

@@ -13,12 +13,13 @@ from __future__ import annotations
 import asyncio
 import re
 import time
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
 
 from devsim.core.clock import VirtualClock
 from devsim.core.device import SerialSettings
+from devsim.core.kit import Command, Table
 from devsim.core.record import field, record
 from devsim.runtime import Runtime
 from devsim.scenario.host import HostPort, open_host_port
@@ -111,33 +112,37 @@ def _label(step: Step) -> str:
     if action is None:
         return trigger.rstrip(": ") or "wait"
     value = getattr(step, action)
-    if action == "send":
-        return trigger + f"send {_show(value.payload())}"
-    if action == "expect":
-        what = _show(value.bytes.encode("latin-1")) if value.bytes is not None else f"/{_escape(value.regex)}/"
-        return trigger + f"expect {what} within {value.timeout:g}s"
-    if action in ("expect_state",):
-        return trigger + f"expect {value.describe()}"
-    if action == "expect_traffic":
-        return trigger + f"expect {value.direction} sent /{_escape(value.regex)}/"
-    if action == "expect_timing":
-        low, high = value.between
-        return trigger + f"expect {value.device} {value.event} between {low:g}s and {high:g}s"
-    if action == "set":
-        return trigger + f"set {value.device} " + ", ".join(f"{k}={v!r}" for k, v in value.values.items())
-    if action == "pulse":
-        return trigger + f"pulse {value.device}.{value.input} for {value.width:g}s"
-    if action == "fault":
-        extra = f" for {value.duration:g}s" if value.duration is not None else ""
-        return trigger + f"fault {value.device} {value.kind}{extra}"
-    if action == "line_fault":
-        extra = f" for {value.duration:g}s" if value.duration is not None else ""
-        return trigger + f"line fault {value.kind}{extra}"
-    if action == "power_cycle":
-        return trigger + f"power cycle {value.device}" + (" (memory wiped)" if value.wipe else "")
-    if action == "wait":
-        return trigger + f"wait {value:g}s"
-    return trigger + f"{action} {value}"
+    label = LABELS.get(action)
+    return trigger + (label(value) if label is not None else f"{action} {value}")
+
+
+def _for(duration: float | None) -> str:
+    return f" for {duration:g}s" if duration is not None else ""
+
+
+def _expect_label(value: Any) -> str:
+    what = _show(value.bytes.encode("latin-1")) if value.bytes is not None else f"/{_escape(value.regex)}/"
+    return f"expect {what} within {value.timeout:g}s"
+
+
+#: A step's action → its line in the report (``log`` steps print their text as it is).
+LABELS: Table[Callable[[Any], str]] = Table((
+    Command("send", lambda v: f"send {_show(v.payload())}", "README: Scenarios and plants"),
+    Command("expect", _expect_label, "README: Scenarios and plants"),
+    Command("expect_state", lambda v: f"expect {v.describe()}", "README: Scenarios and plants"),
+    Command("expect_traffic", lambda v: f"expect {v.direction} sent /{_escape(v.regex)}/",
+            "README: Scenarios and plants"),
+    Command("expect_timing", lambda v: f"expect {v.device} {v.event} between {v.between[0]:g}s and {v.between[1]:g}s",
+            "README: Scenarios and plants"),
+    Command("set", lambda v: f"set {v.device} " + ", ".join(f"{k}={x!r}" for k, x in v.values.items()),
+            "README: Scenarios and plants"),
+    Command("pulse", lambda v: f"pulse {v.device}.{v.input} for {v.width:g}s", "README: Scenarios and plants"),
+    Command("fault", lambda v: f"fault {v.device} {v.kind}{_for(v.duration)}", "README: Scenarios and plants"),
+    Command("line_fault", lambda v: f"line fault {v.kind}{_for(v.duration)}", "README: Scenarios and plants"),
+    Command("power_cycle", lambda v: f"power cycle {v.device}" + (" (memory wiped)" if v.wipe else ""),
+            "README: Scenarios and plants"),
+    Command("wait", lambda v: f"wait {v:g}s", "README: Scenarios and plants"),
+))
 
 
 class Runner:
@@ -337,7 +342,7 @@ class Runner:
         if action is None:
             return StepResult(index, step.line, label, self.now(), "pass" if step.when is not None else "done")
         try:
-            checked = await getattr(self, f"_do_{action}")(getattr(step, action), index)
+            checked = await ACTIONS[action](self, getattr(step, action), index)
         except _StepFailed as exc:
             return StepResult(index, step.line, label, self.now(), "fail", str(exc))
         except (KeyError, ValueError, TypeError) as exc:
@@ -476,6 +481,23 @@ class Runner:
             shown = ", ".join(f"{t:.4f}s" for t in chosen[:5])
             raise _StepFailed(f"{action.event} at {shown}, not between {low:g}s and {high:g}s")
         return True
+
+
+#: A step's action → what the runner does (one row per action of the scenario schema's steps).
+ACTIONS: Table[Callable[..., Awaitable[bool]]] = Table((
+    Command("send", Runner._do_send, "README: Scenarios and plants", "bytes from a host port to a device"),
+    Command("expect", Runner._do_expect, "README: Scenarios and plants", "an answer the host must receive"),
+    Command("set", Runner._do_set, "README: Scenarios and plants", "a control name set to a value"),
+    Command("pulse", Runner._do_pulse, "README: Scenarios and plants", "an input set, then reset after a time"),
+    Command("fault", Runner._do_fault, "README: Scenarios and plants", "a declared device fault switched on or off"),
+    Command("line_fault", Runner._do_line_fault, "README: Scenarios and plants", "a fault on a port's line"),
+    Command("power_cycle", Runner._do_power_cycle, "README: Scenarios and plants", "a device switched off and on"),
+    Command("wait", Runner._do_wait, "README: Scenarios and plants", "simulated time passes"),
+    Command("log", Runner._do_log, "README: Scenarios and plants", "a line in the report"),
+    Command("expect_state", Runner._do_expect_state, "README: Scenarios and plants", "a control name must read a value"),
+    Command("expect_traffic", Runner._do_expect_traffic, "README: Scenarios and plants", "bytes a port must have carried"),
+    Command("expect_timing", Runner._do_expect_timing, "README: Scenarios and plants", "the time between two recorded events"),
+))
 
 
 async def run_scenario_async(

@@ -378,3 +378,9 @@ def test_line_faults_through_the_runner(fault: dict[str, Any], answered: bool) -
         {"expect": {"regex": "P11=0\n\r\nok1", "timeout": "500ms"}},
     ])
     assert recovered.passed, format_report(recovered)
+
+
+def test_every_step_action_of_the_schema_is_a_row_of_the_runners_table() -> None:
+    from devsim.scenario import runner, schema
+
+    assert sorted(row.token for row in runner.ACTIONS) == sorted(schema.ACTIONS)
