@@ -35,11 +35,11 @@ from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+import msgspec
 import pytest
 
 from devsim.core.clock import VirtualClock
 from devsim.core.device import Device
-from devsim.core.record import fields as record_fields
 from devsim.runtime import Runtime
 from devsim.runtime import requests as rq
 from devsim.runtime.ops import run
@@ -381,7 +381,7 @@ def _make_sim_plant_class() -> type:
 
 def _as_sim_plant(plant: Any) -> Any:
     cls = _sim_plant_class()
-    values = {f.name: getattr(plant, f.name) for f in record_fields(plant)}
+    values = {f.name: getattr(plant, f.name) for f in msgspec.structs.fields(plant)}
     return cls(**values)
 
 

@@ -121,3 +121,18 @@ def test_a_simulator_starts_without_the_error_collector() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
+
+
+def test_a_simulator_starts_without_a_second_typed_data_library_or_yaml() -> None:
+    """One typed-data library (msgspec): building every kind and importing the CLI, the runtime
+    and the pty transport loads no pydantic, no dataclasses and (without a file) no YAML."""
+    code = (
+        "import sys; from devsim.core.registry import device_class;"
+        "import devsim.cli, devsim.transports.pty, devsim.runtime;"
+        "from devsim.core.clock import VirtualClock;"
+        "[device_class(k)(clock=VirtualClock(), config=device_class(k).config_model.parse({}).dump())"
+        " for k in ('sers', 'gms96', 'poselesta', 'ip247', 'pcd4h3')];"
+        "print(sorted(m for m in sys.modules if m.split('.')[0] in {'pydantic', 'yaml', 'dataclasses', 'attrs'}))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"

@@ -243,3 +243,16 @@ def test_device_classes_cite_their_manual() -> None:
         if "§" not in doc and "manual" not in doc.lower() and "spec" not in doc.lower():
             missing.append(path.name)
     assert missing == [], missing
+
+
+def test_one_typed_data_library() -> None:
+    """Configuration, scenario and plant files, table rows and value records are msgspec structs
+    (devsim.core.typed, devsim.core.settings): no second way to declare typed data."""
+    others = {"dataclasses", "pydantic", "attrs", "attr"}
+    found = [
+        f"{path.relative_to(ROOT)}: {module}"
+        for path in PACKAGE.rglob("*.py")
+        for module, _names in _imports(path)
+        if module.split(".")[0] in others
+    ]
+    assert found == []

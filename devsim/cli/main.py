@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
 import click
+import msgspec
 
 from devsim import __version__
 from devsim.cli.options import (
@@ -43,7 +44,6 @@ from devsim.cli.options import (
     host_port,
     modbus_for,
 )
-from devsim.core.record import field, record
 from devsim.core.registry import UnknownKind, device_class, kinds
 from devsim.observe.live_log import attach_log, level_of, log_options
 
@@ -151,16 +151,14 @@ def doc(kind: str, modbus_map: bool, eds_file: bool) -> None:
 
 
 # -- devsim run ------------------------------------------------------------------------------
-@record(frozen=False)
-class _Port:
+class _Port(msgspec.Struct):
     scheme: str  # "pty", "tcp", "rfc2217" or "udp"
     host: str = "127.0.0.1"
     port: int = 0
     link: str | None = None
 
 
-@record(frozen=False)
-class _Plan:
+class _Plan(msgspec.Struct):
     kind: str
     devices: list[tuple[str, dict[str, Any]]]
     port: _Port  # for the ports without a default or an override
@@ -171,8 +169,8 @@ class _Plan:
     pacing: bool
     control: ControlAddress | None
     allow_remote: bool
-    printed: list[str] = field(default_factory=list)
-    overrides: dict[str, _Port] = field(default_factory=dict)  # --port NAME=SPEC
+    printed: list[str] = msgspec.field(default_factory=list)
+    overrides: dict[str, _Port] = msgspec.field(default_factory=dict)  # --port NAME=SPEC
     modbus: str | None = None  # --modbus tcp:[HOST:]PORT | rtu | rtu:LINK
     modbus_map: str = "points"  # --modbus-map points | mirror
     canopen: str | None = None  # --canopen NODE[@[HOST:]PORT]

@@ -83,8 +83,9 @@ def record(device_url: str, out: str, kind: str | None, port_name: str | None, l
 
     Prints the host's port (record: pty PATH, or record: tcp URL), then records until Ctrl-C.
     """
+    from msgspec.structs import replace
+
     from devsim.cli.options import host_port
-    from devsim.core.record import replace
     from devsim.observe.replay.recorder import RecordPlan, record_session
 
     if link and tcp:

@@ -33,6 +33,8 @@ from collections import deque
 from collections.abc import Callable
 from typing import Any
 
+import msgspec
+
 from devsim.core.clock import Clock, Timer
 from devsim.core.crossing import CrossingCallback, Watch, Watches
 from devsim.core.planner import jog_phases, move_phases, move_phases_profiled, stop_phases
@@ -50,7 +52,6 @@ from devsim.core.profile import (
     make_ramp,
     sign,
 )
-from devsim.core.record import replace
 
 __all__ = ["Axis", "IndexRule", "Phase", "RampProfile", "RangeRule", "RegionSwitch", "Rule", "Segment", "Shape", "Watch"]
 
@@ -323,7 +324,7 @@ class Axis:
         for seg in self._plan:
             if seg.t0 >= now:
                 break
-            self._history.append(replace(seg, t1=min(seg.t1, now)))
+            self._history.append(msgspec.structs.replace(seg, t1=min(seg.t1, now)))
         end = self._plan_end()
         if end < now:
             self._history.append(Segment(end, now, self._rest, 0.0, 0.0))

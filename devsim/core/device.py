@@ -23,12 +23,13 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
+import msgspec
+
 from devsim.core.clock import Clock
 from devsim.core.kit import MAIN_PORT, DriveActions, FaultTable, PortDef, Reference
 from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
 from devsim.core.points import BadValue, PointTable, ReadOnlyName, UnknownName, parse_bool
-from devsim.core.record import record
 from devsim.core.settings import Section
 
 __all__ = [
@@ -45,8 +46,7 @@ __all__ = [
 ByteSink = Callable[[bytes], None]
 
 
-@record
-class SerialSettings:
+class SerialSettings(msgspec.Struct, frozen=True):
     """Line settings of a UART: what the device is configured for, or what the host opened."""
 
     baudrate: int = 9600

@@ -23,7 +23,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, Protocol
 
-from devsim.core.record import record
+import msgspec
 
 __all__ = ["Decoder", "Framing", "PLAIN", "PlainDecoder", "Splitter", "Tolerance", "split_at"]
 
@@ -47,8 +47,7 @@ class PlainDecoder:
         return None
 
 
-@record
-class Tolerance:
+class Tolerance(msgspec.Struct, frozen=True):
     """A named way two requests count as the same: ``key(message)`` equal; ``adapt(request,
     answer)`` makes the recorded answer fit the host's request (``None``: sent as recorded)."""
 
@@ -57,8 +56,7 @@ class Tolerance:
     adapt: Callable[[bytes, bytes], bytes] | None = None
 
 
-@record
-class Framing:
+class Framing(msgspec.Struct, frozen=True):
     """How a port's messages are cut, described and matched (see the module docstring)."""
 
     split: Splitter | None = None

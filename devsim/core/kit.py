@@ -11,10 +11,11 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any, Generic, Literal, Protocol, TypeVar
 
+import msgspec
+
 from devsim.core.framing import Framing
 from devsim.core.parameters import ParameterTable
 from devsim.core.points import Point, PointType, UnknownName, parse_bool
-from devsim.core.record import field, record
 from devsim.core.signals import SignalBank, SignalKind
 
 __all__ = [
@@ -42,8 +43,7 @@ H = TypeVar("H")
 DEFAULT_SCHEMES = ("udp", "tcp")
 
 
-@record
-class PortDef:
+class PortDef(msgspec.Struct, frozen=True):
     """A port of a kind (``main`` by default; ``v6``, ``v7``, ``v8`` for the CNC).
 
     ``default`` declares where the port is served when nobody says otherwise: ``None`` (a serial
@@ -86,8 +86,7 @@ def parse_port_default(text: str) -> tuple[str, int]:
 MAIN_PORT = (PortDef(),)
 
 
-@record
-class Fault:
+class Fault(msgspec.Struct, frozen=True):
     """A fault a scenario, the control API (``fault`` op) or a fixture can switch on and off.
 
     ``apply(model, active)`` is its effect on the model."""
@@ -125,8 +124,7 @@ class FaultTable:
         fault.apply(model, parse_bool(active))
 
 
-@record
-class Command(Generic[H]):
+class Command(msgspec.Struct, Generic[H], frozen=True):
     """One row of a command table: the token (or statement type) a host sends, the handler
     that carries it out, the manual section, and whether it is simulated or only stored."""
 
@@ -169,8 +167,7 @@ class Table(Generic[H]):
 CommandTable = Table
 
 
-@record
-class ErrorCode:
+class ErrorCode(msgspec.Struct, frozen=True):
     """An error (or status) code the device answers with, and its text."""
 
     code: str
@@ -178,8 +175,7 @@ class ErrorCode:
     section: str = ""
 
 
-@record
-class SignalDef:
+class SignalDef(msgspec.Struct, frozen=True):
     """A digital input, output or analog quantity: makes the signal and its point."""
 
     name: str
@@ -247,20 +243,18 @@ def signal_points(
     return points
 
 
-@record(frozen=False)
-class Reference:
+class Reference(msgspec.Struct):
     """What ``devsim doc KIND`` prints, gathered from a kind's tables."""
 
-    commands: list[Command[Any]] = field(default_factory=list)
-    errors: list[ErrorCode] = field(default_factory=list)
-    config: list[tuple[str, str, str]] = field(default_factory=list)  # key, type/default, doc
+    commands: list[Command[Any]] = msgspec.field(default_factory=list)
+    errors: list[ErrorCode] = msgspec.field(default_factory=list)
+    config: list[tuple[str, str, str]] = msgspec.field(default_factory=list)  # key, type/default, doc
     #: The kind's parameters as kit rows (:mod:`devsim.core.parameters`), printed with their key,
     #: aliases, range, default and effect.
     parameter_table: ParameterTable | None = None
 
 
-@record
-class DriveActions:
+class DriveActions(msgspec.Struct, frozen=True):
     """What a kind's model does as a drive (one axis), for drive-profile facades such as CiA 402
     (:mod:`devsim.facades.cia402`): the kind declares it as ``Device.drive``; positions in the
     units of its ``axis.position``, speeds in those units per second."""

@@ -17,8 +17,9 @@ from collections.abc import Callable, Iterable, Iterator, Mapping, MutableMappin
 from types import MappingProxyType
 from typing import Any, Literal
 
+import msgspec
+
 from devsim.core.points import BadValue, Point, PointType, UnknownName, finite
-from devsim.core.record import record
 
 __all__ = [
     "EMPTY",
@@ -39,8 +40,7 @@ Key = int | str
 EMPTY: Mapping[str, Any] = MappingProxyType({})
 
 
-@record
-class Param:
+class Param(msgspec.Struct, frozen=True):
     """One parameter as the manual lists it.
 
     ``key`` is what the host names it by: a number (``41`` for the SERS's P41, ``15`` for the

@@ -17,13 +17,12 @@ from __future__ import annotations
 
 import math
 
-from devsim.core.record import record
+import msgspec
 
 __all__ = ["Arc", "Line", "Path", "PathComponent", "SpeedProfile", "path_pieces"]
 
 
-@record
-class SpeedProfile:
+class SpeedProfile(msgspec.Struct, frozen=True):
     """Path length ``s(t)`` from 0 to ``length``: pieces ``(t0, s0, v0, acc)`` of constant path
     acceleration, the last ending at rest at ``end``."""
 
@@ -102,8 +101,7 @@ class SpeedProfile:
         return self.end
 
 
-@record
-class Arc:
+class Arc(msgspec.Struct, frozen=True):
     """A circular arc in a plane: centre, radius, start angle and the way round (+1 counter-
     clockwise, -1 clockwise), ``sweep`` radians long."""
 
@@ -152,8 +150,7 @@ class Arc:
         return self.cy + self.radius * n, self.way * c, -n / self.radius
 
 
-@record
-class Line:
+class Line(msgspec.Struct, frozen=True):
     """A straight line from ``start`` to ``end`` (any number of axes)."""
 
     start: tuple[float, ...]

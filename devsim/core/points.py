@@ -27,7 +27,7 @@ import math
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from typing import Any, Literal
 
-from devsim.core.record import field, record
+import msgspec
 
 __all__ = [
     "BadValue",
@@ -132,8 +132,7 @@ def _check_json(value: Any, depth: int = 0) -> Any:
     return value
 
 
-@record
-class Point:
+class Point(msgspec.Struct, frozen=True):
     """One control name: ``name``, ``type``, ``unit``, ``access``, ``doc`` and manual ``section``.
 
     Write one with the name, type, doc and section positionally, the rest by keyword:
@@ -217,8 +216,7 @@ def _unit(unit: str) -> str:
     return f" {unit}" if unit else ""
 
 
-@record
-class Family:
+class Family(msgspec.Struct, frozen=True):
     """Many names of one shape, made when asked for: ``marker.M<byte>.<bit>`` for 2,048 marker
     bits.  ``make(name)`` returns the point for a name of the family, or None."""
 
@@ -234,12 +232,11 @@ class Family:
     modbus: tuple[tuple[str, ...], int] | None = None
 
 
-@record(frozen=False)
-class PointTable:
+class PointTable(msgspec.Struct):
     """A kind's points by name, with an optional ``alias`` hook that maps a spelling
     (``param.n15``, ``param.V``) to the declared name, and families of names made on demand."""
 
-    points: dict[str, Point] = field(default_factory=dict)
+    points: dict[str, Point] = msgspec.field(default_factory=dict)
     alias: Callable[[str], str | None] | None = None
     families: tuple[Family, ...] = ()
 

@@ -13,7 +13,7 @@ import math
 from collections.abc import Iterator
 from typing import Any, Literal
 
-from devsim.core.record import record
+import msgspec
 
 __all__ = [
     "ABS_X",
@@ -56,8 +56,7 @@ def theta_minus_sin(th: float) -> float:
     return th - math.sin(th)
 
 
-@record
-class RampProfile:
+class RampProfile(msgspec.Struct, frozen=True):
     """SERS P1032/P1005–P1008 (spec §5.2): up to three speed sections per ramp.
 
     Section 1: 0 → v1 = ``speed1``·V with acceleration ``accel1``·A; section 2: v1 → v2 =
@@ -164,8 +163,7 @@ def make_ramp(profile: RampProfile | None, vref: float, base: float) -> Ramp | N
     return None if ramp.trivial else ramp
 
 
-@record
-class Segment:
+class Segment(msgspec.Struct, frozen=True):
     """Constant acceleration ``a`` from ``t0`` to ``t1`` starting at ``x0`` with velocity ``v0``.
 
     ``t1`` is ``math.inf`` for an endless cruise (a jog).

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, Literal
 
-from devsim.core.record import field, record
+import msgspec
 
 __all__ = ["Signal", "SignalBank", "SignalKind"]
 
@@ -19,13 +19,12 @@ SignalKind = Literal["input", "output", "quantity"]
 Listener = Callable[[str, Any, Any], None]
 
 
-@record(frozen=False)
-class Signal:
+class Signal(msgspec.Struct):
     name: str
     kind: SignalKind
     value: Any
     doc: str = ""
-    listeners: list[Listener] = field(default_factory=list)
+    listeners: list[Listener] = msgspec.field(default_factory=list)
 
 
 class SignalBank:

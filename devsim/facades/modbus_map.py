@@ -18,8 +18,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from typing import Any
 
+import msgspec
+
 from devsim.core.points import Point, PointTable
-from devsim.core.record import record, replace
 
 __all__ = ["TABLES", "Entry", "ModbusMap", "from_words", "to_words"]
 
@@ -29,8 +30,7 @@ INT32 = 1 << 31
 FLOAT_SCALE = 1000.0
 
 
-@record
-class Entry:
+class Entry(msgspec.Struct, frozen=True):
     """One point in the map: its table, first address, width in bits or registers, scale."""
 
     name: str
@@ -98,7 +98,7 @@ class ModbusMap:
                     continue
                 entry = _override(point, entry, change)
             if entry.address < 0:
-                entry = replace(entry, address=following[entry.table])
+                entry = msgspec.structs.replace(entry, address=following[entry.table])
             following[entry.table] = max(following[entry.table], entry.end)
             entries.append(entry)
         return cls(entries)
@@ -169,4 +169,4 @@ def _override(point: Point, entry: Entry | None, change: Any) -> Entry:
     scale = change.get("scale", entry.scale)
     if isinstance(scale, bool) or not isinstance(scale, int | float) or not 0 < scale < 1e12:
         raise ValueError(f"modbus map: {point.name}: scale {scale!r} must be a positive number")
-    return replace(entry, table=table, address=address, scale=float(scale))
+    return msgspec.structs.replace(entry, table=table, address=address, scale=float(scale))

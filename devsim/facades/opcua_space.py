@@ -27,8 +27,9 @@ import json
 from collections.abc import Iterable
 from typing import Any
 
+import msgspec
+
 from devsim.core.points import Point
-from devsim.core.record import record
 
 __all__ = [
     "DATA_TYPES",
@@ -80,8 +81,7 @@ class TypeMismatch(ValueError):
     """A value written by a client that does not have the variable's data type."""
 
 
-@record
-class Variable:
+class Variable(msgspec.Struct, frozen=True):
     """One point as an OPC UA variable of a device object."""
 
     point: str  # the point's name = the browse name

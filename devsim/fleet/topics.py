@@ -23,7 +23,7 @@ import secrets
 import socket
 from urllib.parse import unquote, urlsplit
 
-from devsim.core.record import record
+import msgspec
 
 __all__ = ["FleetUrl", "FleetUrlError", "Topics", "fleet_problem", "parse_fleet_url", "process_id"]
 
@@ -35,8 +35,7 @@ class FleetUrlError(ValueError):
     """A fleet URL that cannot be used."""
 
 
-@record
-class FleetUrl:
+class FleetUrl(msgspec.Struct, frozen=True):
     host: str
     port: int = 1883
     fleet: str | None = None  # the NAME of mqtt://HOST/NAME
@@ -96,8 +95,7 @@ def process_id(host: str | None = None, pid: int | None = None) -> str:
     return f"{_UNSAFE.sub('_', host)}-{os.getpid() if pid is None else pid}-{secrets.token_hex(2)}"
 
 
-@record
-class Topics:
+class Topics(msgspec.Struct, frozen=True):
     """The topic names of one fleet (``root``)."""
 
     root: str

@@ -21,23 +21,23 @@ import re
 import struct
 from pathlib import Path
 
-from devsim.core.record import field, record
+import msgspec
+
 from devsim.observe.motion_log import HEADER
 
 __all__ = ["AxisSeries", "MotionData", "Traffic", "load", "read_motion_log", "read_pcap_trace", "read_text_trace"]
 
 
-@record(frozen=False)
-class AxisSeries:
+class AxisSeries(msgspec.Struct):
     """One axis of a motion log: its rows in time order (NaN where a cell was empty)."""
 
     device: str
     axis: str
-    time: list[float] = field(default_factory=list)
-    setpoint: list[float] = field(default_factory=list)
-    position: list[float] = field(default_factory=list)
-    velocity: list[float] = field(default_factory=list)
-    following_error: list[float] = field(default_factory=list)
+    time: list[float] = msgspec.field(default_factory=list)
+    setpoint: list[float] = msgspec.field(default_factory=list)
+    position: list[float] = msgspec.field(default_factory=list)
+    velocity: list[float] = msgspec.field(default_factory=list)
+    following_error: list[float] = msgspec.field(default_factory=list)
 
     @property
     def label(self) -> str:
@@ -47,22 +47,20 @@ class AxisSeries:
         return any(not math.isnan(v) for v in getattr(self, column))
 
 
-@record(frozen=False)
-class MotionData:
+class MotionData(msgspec.Struct):
     """A motion log: the axes and, per device, its events ``(time, name)`` in time order."""
 
     path: str
-    axes: list[AxisSeries] = field(default_factory=list)
-    events: dict[str, list[tuple[float, str]]] = field(default_factory=dict)
+    axes: list[AxisSeries] = msgspec.field(default_factory=list)
+    events: dict[str, list[tuple[float, str]]] = msgspec.field(default_factory=dict)
 
 
-@record(frozen=False)
-class Traffic:
+class Traffic(msgspec.Struct):
     """One port's wire trace: chunks ``(time, direction, bytes)`` and notes ``(time, text)``."""
 
     name: str
-    chunks: list[tuple[float, str, bytes]] = field(default_factory=list)
-    notes: list[tuple[float, str]] = field(default_factory=list)
+    chunks: list[tuple[float, str, bytes]] = msgspec.field(default_factory=list)
+    notes: list[tuple[float, str]] = msgspec.field(default_factory=list)
 
 
 class PlotInputError(ValueError):

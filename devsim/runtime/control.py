@@ -47,7 +47,8 @@ import socket
 from pathlib import Path
 from typing import Any
 
-from devsim.core.record import record
+import msgspec
+
 from devsim.runtime import ops
 from devsim.runtime.ops import ErrorResponse, OkResponse, WatchStart
 from devsim.runtime.process import Runtime
@@ -69,8 +70,7 @@ class ControlAddressError(ValueError):
 
 
 # -- addresses -----------------------------------------------------------------------------
-@record
-class ControlAddress:
+class ControlAddress(msgspec.Struct, frozen=True):
     """A parsed control address: ``path`` for a Unix socket, else ``host`` and ``port``."""
 
     path: str | None = None

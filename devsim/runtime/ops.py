@@ -22,7 +22,6 @@ import msgspec
 
 from devsim.core.kit import Command, Table
 from devsim.core.points import parse_bool
-from devsim.core.record import asdict, is_record, record
 from devsim.runtime import requests as rq
 from devsim.runtime.process import Runtime, port_key
 
@@ -66,8 +65,7 @@ class ErrorResponse(msgspec.Struct, frozen=True):
     ok: bool = False
 
 
-@record
-class WatchStart:
+class WatchStart(msgspec.Struct, frozen=True):
     """What the ``watch`` handler hands the server: the stream needs the connection."""
 
     device: str
@@ -266,14 +264,10 @@ def jsonable(value: Any) -> Any:
         return [jsonable(v) for v in value]
     if isinstance(value, bytes | bytearray):
         return value.decode("latin-1")
-    if isinstance(value, msgspec.Struct):
-        return jsonable(msgspec.to_builtins(value))
-    if callable(getattr(value, "model_dump", None)):  # a typed-data model of the configuration
-        return jsonable(value.model_dump(mode="json"))
+    if isinstance(value, msgspec.Struct):  # a record or a configuration: its fields
+        return {name: jsonable(getattr(value, name)) for name in value.__struct_fields__}
     if isinstance(value, enum.Enum):
         return jsonable(value.value)
-    if is_record(value):
-        return jsonable(asdict(value))
     return str(value)
 
 

@@ -12,8 +12,9 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Literal
 
+import msgspec
+
 from devsim.core.device import Device
-from devsim.core.record import field, record
 from devsim.runtime import Runtime, port_key
 from devsim.scenario.schema import PlantSpec, TransportSpec
 from devsim.transports.fdlimit import is_out_of_fds, port_budget
@@ -43,18 +44,17 @@ def make_transport(spec: TransportSpec) -> Any:
     raise ValueError("a bus member has no transport of its own")
 
 
-@record(frozen=False)
-class Plant:
+class Plant(msgspec.Struct):
     """A running plant: its runtime, devices, and per port the transport and the line."""
 
     runtime: Runtime
     spec: PlantSpec
-    devices: dict[str, Device] = field(default_factory=dict)
-    transports: dict[str, Any] = field(default_factory=dict)  # port name -> transport
-    lines: dict[str, Any] = field(default_factory=dict)  # port name -> Line
-    kinds: dict[str, str] = field(default_factory=dict)  # port name -> "pty" | "tcp" | "rfc2217" | "udp"
-    refused: dict[str, str] = field(default_factory=dict)  # port name -> why it is not served
-    facades: list[str] = field(default_factory=list)  # "NAME.canopen: ...", MQTT: lines devsim up prints
+    devices: dict[str, Device] = msgspec.field(default_factory=dict)
+    transports: dict[str, Any] = msgspec.field(default_factory=dict)  # port name -> transport
+    lines: dict[str, Any] = msgspec.field(default_factory=dict)  # port name -> Line
+    kinds: dict[str, str] = msgspec.field(default_factory=dict)  # port name -> "pty" | "tcp" | "rfc2217" | "udp"
+    refused: dict[str, str] = msgspec.field(default_factory=dict)  # port name -> why it is not served
+    facades: list[str] = msgspec.field(default_factory=list)  # "NAME.canopen: ...", MQTT: lines devsim up prints
 
     def port(self, name: str) -> str:
         """What a host opens for port ``name`` (a device or bus): pty path or URL."""
@@ -204,8 +204,7 @@ async def _serve_opcua(plant: Plant) -> None:
     plant.kinds["opcua"] = "opcua"
 
 
-@record
-class _Address:
+class _Address(msgspec.Struct, frozen=True):
     """Where a server the plant does not own as a transport listens (the Modbus TCP facade)."""
 
     url: str

@@ -17,10 +17,11 @@ from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
 
+import msgspec
+
 from devsim.core.clock import VirtualClock
 from devsim.core.device import SerialSettings
 from devsim.core.kit import Command, Table
-from devsim.core.record import field, record
 from devsim.runtime import Runtime
 from devsim.scenario.host import HostPort, open_host_port
 from devsim.scenario.plant import Plant, build_plant
@@ -35,8 +36,7 @@ _IO_GUARD = 5.0
 _POLL = 0.001
 
 
-@record(frozen=False)
-class StepResult:
+class StepResult(msgspec.Struct):
     index: int  # 1-based
     line: int
     label: str
@@ -49,16 +49,15 @@ class StepResult:
         return self.status in ("pass", "fail")
 
 
-@record(frozen=False)
-class ScenarioResult:
+class ScenarioResult(msgspec.Struct):
     name: str
     path: str
     mode: str
-    steps: list[StepResult] = field(default_factory=list)
+    steps: list[StepResult] = msgspec.field(default_factory=list)
     sim_time: float = 0.0
     wall_time: float = 0.0
     error: str = ""
-    ports: dict[str, str] = field(default_factory=dict)
+    ports: dict[str, str] = msgspec.field(default_factory=dict)
 
     @property
     def passed(self) -> bool:

@@ -14,8 +14,9 @@ import random
 from collections.abc import Callable
 from typing import Literal, get_args
 
+import msgspec
+
 from devsim.core.clock import Timer
-from devsim.core.record import record
 
 __all__ = ["DEFAULT_SPLIT_GAP", "FaultDirection", "FaultHandle", "FaultKind", "LineFault"]
 
@@ -48,8 +49,7 @@ _UNDIRECTED = ("baud_mismatch", "unplug", "hang", "silent")
 _NOISE_TICK = 0.01
 
 
-@record
-class LineFault:
+class LineFault(msgspec.Struct, frozen=True):
     """A fault injected into a :class:`Line` (see :meth:`Line.inject`).
 
     ``direction`` is ``"to_device"`` (the host's bytes), ``"to_host"`` (the device's bytes) or

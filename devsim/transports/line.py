@@ -36,9 +36,10 @@ from collections import deque
 from collections.abc import Callable
 from typing import Any, Protocol
 
+import msgspec
+
 from devsim.core.clock import Clock, Timer
 from devsim.core.device import ByteSink, SerialSettings
-from devsim.core.record import replace
 from devsim.transports.faults import _NOISE_TICK, _Active, gate, mangle, of_kind, take
 
 # LineFault, FaultHandle, garble and settings_match live in .faults and .uart; they stay
@@ -323,7 +324,7 @@ class Line:
         for active in reversed(self._faults):
             if active.fault.kind == "baud_mismatch":
                 assert active.fault.baudrate is not None
-                return replace(self._host or self.device_settings, baudrate=active.fault.baudrate)
+                return msgspec.structs.replace(self._host or self.device_settings, baudrate=active.fault.baudrate)
         return self._host
 
     def _reap(self) -> None:

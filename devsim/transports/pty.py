@@ -59,8 +59,9 @@ import os
 import sys
 import termios
 
+import msgspec
+
 from devsim.core.device import SerialSettings
-from devsim.core.record import replace
 from devsim.transports.base import Endpoint, Transport
 
 __all__ = ["PtyTransport", "make_raw", "settings_from_termios", "apply_settings"]
@@ -280,7 +281,7 @@ class PtyTransport(Transport):
             # The pty forced CS8 / no parity: what the host asked for is unknowable, so it
             # counts as matching the device.
             known = self._preset or SerialSettings()
-            settings = replace(settings, bytesize=known.bytesize, parity=known.parity)
+            settings = msgspec.structs.replace(settings, bytesize=known.bytesize, parity=known.parity)
         return settings
 
     def _check_settings(self) -> None:

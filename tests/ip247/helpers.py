@@ -7,9 +7,9 @@ import struct
 from collections.abc import Callable
 from typing import Any
 
+import msgspec
 import serial
 
-from devsim.core.record import replace
 from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.client import PgClient
 from devsim.devices.ip247.jobs import BACKWARD, FORWARD, START, STOP, TAKE_OVER
@@ -19,10 +19,9 @@ from tests.ip247.test_machine_data import COM247, words
 __all__ = ["BACKWARD", "FORWARD", "START", "STOP", "TAKE_OVER", "Make", "Module", "record"]
 
 
-
 def record(**changes: object) -> str:
     """COM247's machine data (§6.2) with some items changed, as the record's hex words."""
-    md = replace(decode(words(COM247)), **changes)
+    md = msgspec.structs.replace(decode(words(COM247)), **changes)
     return " ".join(f"{w:04X}" for w in encode(md))
 
 

@@ -3,9 +3,9 @@
 
 from __future__ import annotations
 
+import msgspec
 import pytest
 
-from devsim.core.record import replace
 from devsim.devices.ip247.machine_data import Ramp, check, decode, encode
 
 MANUAL = """
@@ -84,7 +84,7 @@ SECTION_6_3: list[tuple[dict[str, object], tuple[bool, bool], int]] = [
 
 @pytest.mark.parametrize(("changes", "levels", "error"), SECTION_6_3)
 def test_each_trigger_of_section_6_3(changes: dict[str, object], levels: tuple[bool, bool], error: int) -> None:
-    md = replace(decode(words(MANUAL)), **changes)
+    md = msgspec.structs.replace(decode(words(MANUAL)), **changes)
     assert check(md, sys_module=0, limit_levels=levels) == error
 
 

@@ -6,10 +6,10 @@ from __future__ import annotations
 import struct
 from typing import Any
 
+import msgspec
 import pytest
 import serial
 
-from devsim.core.record import replace
 from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.client import AgClient, PgClient
 from devsim.devices.ip247.machine_data import decode, encode
@@ -142,7 +142,7 @@ def test_every_md_error_trigger_of_section_6_3_over_tcp(devsim_device) -> None: 
             module.set("input.ANF1", levels[0])
             module.set("input.END1", levels[1])
             plc.delete_record(0, 21, 1)
-            answer = plc.write_record(0, 20, 1, encode(replace(decode(words(MANUAL)), **changes)))
+            answer = plc.write_record(0, 20, 1, encode(msgspec.structs.replace(decode(words(MANUAL)), **changes)))
             assert (answer[8], answer[4]) == (error, 15 if error else 0), changes
 
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
-from devsim.core.record import record
+import msgspec
 
 __all__ = [
     "ACK",
@@ -82,15 +82,13 @@ _MAX_L = 255  # largest Langsatz length field
 _LETTER_PARAMS = 3
 
 
-@record
-class SingleChar:
+class SingleChar(msgspec.Struct, frozen=True):
     """A single control character (spec §3.2 a): ``E5h`` (ACK, also "no data") or ``A2h``."""
 
     value: int
 
 
-@record
-class ShortFrame:
+class ShortFrame(msgspec.Struct, frozen=True):
     """Kurzsatz ``10h C A [AE...] CS 16h`` (manual §2.3.2, spec §3.6): control field ("F-Feld"), link address and the
     address-extension (AE) octets that carry short-command data or the MB4 message."""
 
@@ -99,8 +97,7 @@ class ShortFrame:
     extension: bytes = b""
 
 
-@record
-class LongFrame:
+class LongFrame(msgspec.Struct, frozen=True):
     """Langsatz ``68h L L 68h C A data CS 16h`` (manual §2.3, spec §3.5); ``data`` is the link user data after A
     (for GMS96: command character and parameters, or identifier and value)."""
 
@@ -112,8 +109,7 @@ class LongFrame:
 Frame = SingleChar | ShortFrame | LongFrame
 
 
-@record
-class FrameError:
+class FrameError(msgspec.Struct, frozen=True):
     """Bytes that did not form a frame, discarded without reply (spec §3.2 R6, §3.10).
 
     ``reason`` is one of ``"garbage"`` (bytes outside any frame), ``"timeout"`` (a partial

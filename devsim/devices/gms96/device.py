@@ -12,7 +12,8 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from devsim.core import record
+import msgspec
+
 from devsim.core.device import Device
 from devsim.core.kit import Command, ErrorCode, PortDef, Reference, Table
 from devsim.core.settings import Section
@@ -41,7 +42,7 @@ __all__ = ["Gms96Device"]
 
 def _spelled(prefix: str, table: Table[Any]) -> list[Command[Any]]:
     """A sub-table's rows as the manual writes them (``T1;4``, ``p10;16``)."""
-    return [record.replace(row, token=prefix + row.token) for row in table]
+    return [msgspec.structs.replace(row, token=prefix + row.token) for row in table]
 
 
 class Gms96Device(Device):

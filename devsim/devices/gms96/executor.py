@@ -16,9 +16,10 @@ from collections import deque
 from collections.abc import Callable
 from typing import Any, Protocol
 
+import msgspec
+
 from devsim.core.axis import Axis, Watch
 from devsim.core.clock import Clock, Timer
-from devsim.core.record import record
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.coordinates import Coordinates
 from devsim.devices.gms96.counter import CounterInput
@@ -43,8 +44,7 @@ TRANSPARENT_P10 = frozenset({16, 17, 28, 29})  # SETO RESO SNDF SNDM keep blendi
 MOVES = frozenset("A+")
 
 
-@record
-class Cmd:
+class Cmd(msgspec.Struct, frozen=True):
     """One queued command (manual §2.3.1): letter, P1..P3 and how many parameters were sent."""
 
     letter: str

@@ -14,9 +14,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import msgspec
+
 from devsim.core.device import Face, Port, SerialSettings
 from devsim.core.kit import Command, Table
-from devsim.core.record import record
 from devsim.devices.gms96 import codec, tables
 from devsim.devices.gms96.commands import QUEUED_COMMANDS
 from devsim.devices.gms96.executor import Cmd
@@ -28,8 +29,7 @@ __all__ = ["ON_RECEIPT", "P_ON_RECEIPT", "SHORT_COMMANDS", "T_QUERIES", "Gms96Fa
 ACK = bytes([codec.ACK])
 
 
-@record
-class Letter:
+class Letter(msgspec.Struct, frozen=True):
     """A letter command as received (manual §2.3, spec §3.5): letter, P1..P3, the number of
     parameters sent, the raw user data, and where a deferred acknowledgement goes
     (``on_queue_full: defer``)."""

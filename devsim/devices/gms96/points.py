@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from devsim.core import record
+import msgspec
+
 from devsim.core.kit import Fault, FaultTable, SignalDef, signal_points
 from devsim.core.parameters import Param, alias_hook, parameter_points
 from devsim.core.points import BadValue, Family, Point, PointTable
@@ -54,7 +55,7 @@ def _write_n(card: Any, row: Param, value: Any) -> None:
 def _n_points() -> list[Point]:
     """``param.N<k>``: a row without a range of its own takes the 24-bit field's (manual §2.3)."""
     return [
-        record.replace(
+        msgspec.structs.replace(
             point,
             minimum=tables.INT24_MIN if point.minimum is None else point.minimum,
             maximum=tables.INT24_MAX if point.maximum is None else point.maximum,

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from devsim.core.record import field, record
+import msgspec
 
 __all__ = [
     "FIRMWARE_VERSION",
@@ -327,8 +327,7 @@ MESSAGE_MIN, MESSAGE_MAX = 1, 255
 ERROR_BITS: dict[int, str] = {}
 
 
-@record
-class FaultDef:
+class FaultDef(msgspec.Struct, frozen=True):
     """One fault state of spec §4.5.3 (plus the reference distance limit of §3.8.14).
 
     ``status``/``k``/``memory`` name bits in :data:`STATUS_BITS`/:data:`K_BITS`/
@@ -342,9 +341,9 @@ class FaultDef:
     sets: str
     effect: str
     clears: str
-    status: frozenset[str] = field(default_factory=frozenset)
-    k: frozenset[str] = field(default_factory=frozenset)
-    memory: frozenset[str] = field(default_factory=frozenset)
+    status: frozenset[str] = msgspec.field(default_factory=frozenset)
+    k: frozenset[str] = msgspec.field(default_factory=frozenset)
+    memory: frozenset[str] = msgspec.field(default_factory=frozenset)
     markers: tuple[tuple[str, int], ...] = ()
     inputs: tuple[str, ...] = ()
     message: int | None = None

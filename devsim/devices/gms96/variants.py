@@ -3,7 +3,7 @@ manual §6)."""
 
 from __future__ import annotations
 
-from devsim.core.record import record
+import msgspec
 
 __all__ = ["DEFAULT_VARIANT", "VARIANTS", "Variant", "variant"]
 
@@ -12,8 +12,7 @@ __all__ = ["DEFAULT_VARIANT", "VARIANTS", "Variant", "variant"]
 # ---------------------------------------------------------------------------------------------
 
 
-@record
-class Variant:
+class Variant(msgspec.Struct, frozen=True):
     """Hardware data of one card type (manual §6 "Leistungsdaten"; currents are DC peak values).
 
     ``continuous_current_a`` = "Nennstrom", ``supply_v`` = rated DC-bus voltage ("Nenn-Spannung").

@@ -26,8 +26,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import msgspec
+
 from devsim.core.kit import Command, Table
-from devsim.core.record import record
 
 __all__ = [
     "ACK", "DLE", "EOT", "ETX", "NAK", "STX", "As511Link", "Refused", "dle_double", "dle_undouble", "function_token",
@@ -40,8 +41,7 @@ END = bytes((0x12, DLE, ETX))  # "end" of every transaction
 TIMEOUT = 0.5  # seconds: no gap this long inside a transaction (§3.5.1)
 
 
-@record
-class Refused:
+class Refused(msgspec.Struct, frozen=True):
     """The device refuses the parameters (DLE NAK in step 9)."""
 
     reason: str = ""

@@ -10,14 +10,14 @@ which the zero offsets shift with it.  Pure: operations return a module error nu
 
 from __future__ import annotations
 
-from devsim.core.record import record
+import msgspec
+
 from devsim.devices.ip247.machine_data import LIMIT
 
 __all__ = ["Coordinates"]
 
 
-@record(frozen=False)
-class Coordinates:
+class Coordinates(msgspec.Struct):
     """The offsets of one axis, and the machine data's limits they must respect."""
 
     limit_begin: int  # SW limit / range start, in the reference system

@@ -8,7 +8,8 @@ neighbours) and a job, and gives the module error, or None when the job may run.
 
 from __future__ import annotations
 
-from devsim.core.record import record
+import msgspec
+
 from devsim.devices.ip247.tables import DATA_CHANNEL, page_error
 
 __all__ = ["AxisView", "Job", "refusal"]
@@ -28,8 +29,7 @@ WITHOUT_MD = frozenset((4, 17))  # (and the data transfers)
 IN_TEACH_IN = frozenset((1, 2, 4, 6, 7, 11, 17))  # spec §4.2 (BA4 and BA17 [DECISION])
 
 
-@record
-class AxisView:
+class AxisView(msgspec.Struct, frozen=True):
     """What the checks need to know of one axis (page 1 … 3)."""
 
     page: int
@@ -41,8 +41,7 @@ class AxisView:
     rotary: bool = False
 
 
-@record
-class Job:
+class Job(msgspec.Struct, frozen=True):
     page: int
     ba: int
     cmd: int

@@ -12,8 +12,9 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
+import msgspec
+
 from devsim.core.kit import Command, Table
-from devsim.core.record import fields, record
 from devsim.core.words import signed32
 from devsim.devices.ip247.tables import MACHINE_DATA, MD_ERRORS
 
@@ -36,8 +37,7 @@ def _words(value: int) -> tuple[int, int]:
     return value >> 16, value & 0xFFFF
 
 
-@record
-class MachineData:
+class MachineData(msgspec.Struct, frozen=True):
     """One axis's machine data (spec §3.4.1), values as the record carries them."""
 
     db: int  # DR n+2
@@ -132,7 +132,7 @@ def decode(words: list[int]) -> MachineData:
     )
 
 
-_NAMED = {f.name for f in fields(MachineData)} | {n for n, v in vars(MachineData).items() if isinstance(v, property)}
+_NAMED = {f.name for f in msgspec.structs.fields(MachineData)} | {n for n, v in vars(MachineData).items() if isinstance(v, property)}
 if not {row.attr for row in MACHINE_DATA} <= _NAMED:  # every row names a value the model can read
     raise TypeError(f"machine-data rows without a value: {sorted({row.attr for row in MACHINE_DATA} - _NAMED)}")
 
@@ -154,8 +154,7 @@ def encode(md: MachineData) -> list[int]:
     return words
 
 
-@record
-class Ramp:
+class Ramp(msgspec.Struct, frozen=True):
     """The exponential ramp (spec §5.3): the frequency jumps to f_ss, then rises as
     f(t) = f_ss + F (1 − e^(−t/τ)) with F = (f_max − f_ss) / 0.95 and τ = F / a."""
 

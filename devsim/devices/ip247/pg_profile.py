@@ -14,8 +14,9 @@ import struct
 from collections.abc import Callable
 from typing import ClassVar
 
+import msgspec
+
 from devsim.core.kit import Command, Table
-from devsim.core.record import record
 from devsim.devices.ip247.as511 import function_token
 
 __all__ = [
@@ -35,8 +36,7 @@ ACK_ACCEPTED, ACK_QUEUED, ACK_NEGATIVE, ACK_FULL, ACK_MALFORMED = 0x00, 0x01, 0x
 MAX_PARAMETERS = 1100  # bytes after DLE removal (spec §3.6.5)
 
 
-@record
-class Operate:
+class Operate(msgspec.Struct, frozen=True):
     """An operator command BA1 … BA17: FB164's byte, word and double-word parameters."""
 
     function: ClassVar[int] = OPERATE
@@ -49,15 +49,13 @@ class Operate:
     dd: int
 
 
-@record
-class Observe:
+class Observe(msgspec.Struct, frozen=True):
     function: ClassVar[int] = OBSERVE
 
     page: int
 
 
-@record
-class WriteRecord:
+class WriteRecord(msgspec.Struct, frozen=True):
     """BA20 (machine data), BA22 (program), BA24 (SYS-ID): the record's words."""
 
     function: ClassVar[int] = WRITE_REC
@@ -69,8 +67,7 @@ class WriteRecord:
     words: tuple[int, ...]
 
 
-@record
-class ReadRecord:
+class ReadRecord(msgspec.Struct, frozen=True):
     function: ClassVar[int] = READ_REC
 
     page: int
@@ -79,8 +76,7 @@ class ReadRecord:
     bcd: bool
 
 
-@record
-class Delete:
+class Delete(msgspec.Struct, frozen=True):
     function: ClassVar[int] = DELETE_REC
 
     page: int
@@ -88,8 +84,7 @@ class Delete:
     db: int
 
 
-@record
-class Malformed:
+class Malformed(msgspec.Struct, frozen=True):
     """Wrong length or a field out of range: ack 82H, nothing executed (spec §3.6.5)."""
 
     function: int
@@ -152,8 +147,7 @@ FUNCTIONS: Table[Parser] = Table([
 ])
 
 
-@record
-class Header:
+class Header(msgspec.Struct, frozen=True):
     """The common 8 bytes of every response (spec §3.6.4)."""
 
     ack: int
@@ -169,8 +163,7 @@ class Header:
         return bytes((self.ack, self.page, self.ba, self.cmd, self.err, self.btr, self.rmld, self.mfkt))
 
 
-@record
-class Observation:
+class Observation(msgspec.Struct, frozen=True):
     """OBSERVE's continuation (spec §3.6.4): 14 more bytes."""
 
     position: int

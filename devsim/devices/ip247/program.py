@@ -12,8 +12,9 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
+import msgspec
+
 from devsim.core.kit import Command, Table
-from devsim.core.record import record
 
 __all__ = ["MAX_TEXT", "Block", "Program", "SyntaxFault", "parse", "record_text", "record_words"]
 
@@ -32,8 +33,7 @@ class SyntaxFault(ValueError):
         self.errno, self.block = errno, block
 
 
-@record
-class Block:
+class Block(msgspec.Struct, frozen=True):
     """One block: its ordinal, number, type and functions (absent: None).  X is in thousandths
     of the unit (base units); F and M as written."""
 
@@ -47,8 +47,7 @@ class Block:
     m: int | None = None
 
 
-@record
-class Program:
+class Program(msgspec.Struct, frozen=True):
     number: int  # the header's number (documentary)
     main: bool  # "%" (main program) or "L" (subprogram), documentary
     comment: str

@@ -13,8 +13,9 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Protocol
 
+import msgspec
+
 from devsim.core.kit import Command, Table
-from devsim.core.record import replace
 from devsim.devices.ip247 import machine_data, values
 from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.axis_unit import AxisUnit
@@ -119,10 +120,10 @@ class DataChannel:
         except ValueError:
             self.pages.set_error(unit, 15)
             return ACK_ACCEPTED, [0]
-        md = replace(md, db=db)
+        md = msgspec.structs.replace(md, db=db)
         unit.wire_switches(md.limit_polarity if md.limit_polarity in (0, 1) else None)
         error = machine_data.check(md, sys_module=self.sys_id[0], limit_levels=unit.limit_levels())
-        md = replace(md, error=error)
+        md = msgspec.structs.replace(md, error=error)
         stored = machine_data.encode(md)
         stored[machine_data.RESERVED] = list(words[machine_data.RESERVED])
         unit.load_md(md, stored, first=True)

@@ -9,7 +9,7 @@ error 61).  Pure; the module keeps it in its non-volatile memory as plain data.
 
 from __future__ import annotations
 
-from devsim.core.record import record
+import msgspec
 
 __all__ = ["CAPACITY", "MAX_PROGRAMS", "ProgramStore", "Stored", "StoreError"]
 
@@ -25,8 +25,7 @@ class StoreError(ValueError):
         self.error = error
 
 
-@record
-class Stored:
+class Stored(msgspec.Struct, frozen=True):
     """One program as stored: its text, the syntax error (0 = none) and the faulty block."""
 
     number: int

@@ -4,9 +4,10 @@ ip247.md §3.2, §4.3–§4.5).  Texts are the manual's, verbatim; English in th
 
 from __future__ import annotations
 
+import msgspec
+
 from devsim.core.kit import ErrorCode
 from devsim.core.parameters import Access, Param, ParameterTable
-from devsim.core.record import record
 
 __all__ = [
     "DATA_CHANNEL", "MACHINE_DATA", "MD_ERRORS", "MODES", "MODULE_ERRORS", "NONEXISTENT", "SYNTAX_ERRORS", "Mode", "error_codes", "mode_token",
@@ -114,8 +115,7 @@ def error_codes() -> list[ErrorCode]:
     return [ErrorCode(str(n), f"{de} ({en}); PG {pg_code(n)}", "§7.2") for n, (de, en) in MODULE_ERRORS.items()]
 
 
-@record
-class Mode:
+class Mode(msgspec.Struct, frozen=True):
     """One operating mode (Betriebsart) of the table in spec §3.2."""
 
     number: int

@@ -9,8 +9,9 @@ should the original H3DEF.SRC turn up.  Pure address arithmetic.
 
 from __future__ import annotations
 
+import msgspec
+
 from devsim.core.parameters import Param
-from devsim.core.record import record
 from devsim.devices.pcd4h3.tables import FLAG_FIELD, command_flags
 from devsim.devices.pcd4h3.tables import REGISTERS as REGISTER_BLOCK
 
@@ -56,8 +57,7 @@ class Layout:
         return (index // FLAGS_PER_AXIS + 1, symbol) if symbol is not None else None
 
 
-@record
-class Symbol:
+class Symbol(msgspec.Struct, frozen=True):
     """A register's or flag's H3DEF symbol, as the configuration's checks read it."""
 
     symbol: str

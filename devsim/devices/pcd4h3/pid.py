@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 
-from devsim.core.record import record
+import msgspec
 
 __all__ = ["Coefficients", "Filter", "Motor", "sat"]
 
@@ -28,8 +28,7 @@ def sat(value: int, bits: int) -> int:
     return max(-top - 1, min(top, value))
 
 
-@record
-class Coefficients:
+class Coefficients(msgspec.Struct, frozen=True):
     """LFIL's words (§3.5.5): kp, ki, kd, il 0 … 7FFFh, and the derivative interval ds."""
 
     kp: int = 0

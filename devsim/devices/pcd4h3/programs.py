@@ -17,8 +17,9 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, MutableMapping
 from typing import Any
 
+import msgspec
+
 from devsim.core.kit import Command, Table
-from devsim.core.record import record
 from devsim.devices.pcd4h3.library import H3Axis
 from devsim.devices.pcd4h3.timers import Timers
 
@@ -28,22 +29,19 @@ Action = tuple[Any, ...]  # ("load", register, value) / ("set", flag) / ("timer"
 Condition = Callable[["Sequence"], bool]  # of a :class:`Sequence`'s view of the PLC
 
 
-@record
-class Step:
+class Step(msgspec.Struct, frozen=True):
     name: str
     actions: tuple[Action, ...] = ()
 
 
-@record
-class Transition:
+class Transition(msgspec.Struct, frozen=True):
     name: str
     source: str
     targets: tuple[str, ...]
     condition: Condition | None = None
 
 
-@record
-class Program:
+class Program(msgspec.Struct, frozen=True):
     """A user program: its steps and transitions, the initial step, and the cyclic part."""
 
     steps: tuple[Step, ...]

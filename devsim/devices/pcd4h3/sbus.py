@@ -19,7 +19,7 @@ import struct
 from collections.abc import Callable
 from typing import Protocol
 
-from devsim.core.record import record
+import msgspec
 
 __all__ = [
     "ACK", "BROADCAST", "Bad", "EtherReceiver", "NAK", "NoParameters", "Read", "Reads", "Request", "SerialReceiver",
@@ -78,8 +78,7 @@ def serial_ack(code: int = ACK) -> bytes:
     return stuff(_with_crc(bytes((FS, ACK_NAK)) + struct.pack(">H", code)))
 
 
-@record
-class Request:
+class Request(msgspec.Struct, frozen=True):
     station: int
     command: int
     parameters: bytes
@@ -148,27 +147,23 @@ class SerialReceiver:
 
 
 # -- commands ---------------------------------------------------------------------------------
-@record
-class Read:
+class Read(msgspec.Struct, frozen=True):
     medium: str
     address: int
     count: int
 
 
-@record
-class Write:
+class Write(msgspec.Struct, frozen=True):
     medium: str
     address: int
     values: tuple[int, ...]  # register values (signed 32-bit) or flag/output bits (0/1)
 
 
-@record
-class Simple:
+class Simple(msgspec.Struct, frozen=True):
     name: str
 
 
-@record
-class Bad:
+class Bad(msgspec.Struct, frozen=True):
     """A valid telegram the station cannot carry out: NAK 0001h (§9.2)."""
 
     reason: str
@@ -188,8 +183,7 @@ class Telegram(Protocol):
 Telegrams = Callable[[int], Telegram | None]
 
 
-@record
-class Reads:
+class Reads(msgspec.Struct, frozen=True):
     """A read of ``medium``: count − 1, address high, low; at most ``most`` elements (§9.4)."""
 
     medium: str
@@ -208,8 +202,7 @@ class Reads:
         return Read(self.medium, p[1] << 8 | p[2], count)
 
 
-@record
-class Writes:
+class Writes(msgspec.Struct, frozen=True):
     """A write of ``medium``: byte count, address high, low, then the data (§9.4): registers in 4
     bytes each; flags and outputs as count − 1 and the bits, the first in bit 0."""
 
@@ -235,8 +228,7 @@ class Writes:
         return Write(self.medium, address, tuple(bits[i // 8] >> (i % 8) & 1 for i in range(count)))
 
 
-@record
-class NoParameters:
+class NoParameters(msgspec.Struct, frozen=True):
     """A command without parameters (status, station, firmware, run, stop, restart)."""
 
     name: str

@@ -15,8 +15,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+import msgspec
+
 from devsim.core.kit import Command, Table
-from devsim.core.record import record
 from devsim.core.words import signed32
 from devsim.devices.pcd4h3.model import BUS_INPUTS, MEDIA_SIZE, Pcd4
 from devsim.devices.pcd4h3.sbus import (
@@ -223,8 +224,7 @@ def _stop(plc: Pcd4, command: Simple) -> int:
     return ACK
 
 
-@record
-class Service:
+class Service(msgspec.Struct, frozen=True):
     """One S-Bus command of the station: its telegram (how the parameters are laid out) and what
     the PCD does with it; called with the PCD and the request, it returns the answer."""
 

@@ -11,15 +11,14 @@ current position.  New parameters take effect at :meth:`Profile.start` (STT).  P
 
 from __future__ import annotations
 
-from devsim.core.record import record
+import msgspec
 
 __all__ = ["Profile", "Trajectory"]
 
 ONE = 1 << 16
 
 
-@record
-class Trajectory:
+class Trajectory(msgspec.Struct, frozen=True):
     """The LTRJ buffers (§3.5.4): what the next STT takes over."""
 
     acceleration: int = 0  # 16.16 counts/sample²

@@ -20,9 +20,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+import msgspec
+
 from devsim.core.clock import Clock, Timer
 from devsim.core.kit import Command, Table
-from devsim.core.record import record
 from devsim.core.signals import SignalBank
 from devsim.devices.poselesta.block_motion import BlockMotion
 from devsim.devices.poselesta.flow import ProgramFlow
@@ -46,8 +47,7 @@ POSITION_REACHED_PULSE = 60e-6  # §2.4.2: with "Programm fortsetzen" already H
 Program = Callable[[], tuple[list[Block], bool]]
 
 
-@record
-class ExecutionOptions:
+class ExecutionOptions(msgspec.Struct, frozen=True):
     """What the variant and the configuration change in the block cycle (spec §4.3.6, G-M06,
     §4.12.1): V22/10 block abort (POS III), M06 waiting for NC-Start, G25 as a full circle."""
 

@@ -8,10 +8,11 @@ import re
 from collections.abc import Callable
 from typing import Any
 
+import msgspec
+
 from devsim.core.kit import Command, Fault, FaultTable, Table, signal_points
 from devsim.core.parameters import alias_hook, parameter_points
 from devsim.core.points import BadValue, Family, Point, PointTable
-from devsim.core.record import replace
 from devsim.devices.poselesta.diagnostics import input_image, input_screen, pots
 from devsim.devices.poselesta.execution import STATES
 from devsim.devices.poselesta.model import MODES, PoselestaCnc
@@ -88,7 +89,7 @@ def _param_points() -> list[Point]:
     neither the rows' ranges nor their whole-number type."""
     points = parameter_points(PARAMETERS, read=lambda m, row: m.params[row.key],
                               write=lambda m, row, value: m.set_param(row.key, value))
-    return [replace(point, type="float", minimum=None, maximum=None, choices=None) for point in points]
+    return [msgspec.structs.replace(point, type="float", minimum=None, maximum=None, choices=None) for point in points]
 
 
 #: The alarms as the EMCY error codes (CiA 301) a fieldbus facade sends when one starts.

@@ -12,8 +12,9 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any, Literal
 
+import msgspec
+
 from devsim.core.kit import Command, Table
-from devsim.core.record import field, record
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF, encode, parity_ok
 
 __all__ = [
@@ -42,12 +43,11 @@ CATALOGUE_VALUE = "P"
 CR, LF, NUL, DEL, SP = 0x0D, 0x0A, 0x00, 0x7F, 0x20
 
 
-@record
-class Formats:
+class Formats(msgspec.Struct, frozen=True):
     """Digits before and after the point per address (§2.6.3: 7 significant digits, the point
     placed by each axis's resolution; N xxx, G/M/T xx, F/S xxxx, L xx.xxx)."""
 
-    decimals: Mapping[str, int] = field(default_factory=lambda: dict.fromkeys(COORDINATES, 3))
+    decimals: Mapping[str, int] = msgspec.field(default_factory=lambda: dict.fromkeys(COORDINATES, 3))
 
     def of(self, letter: str) -> tuple[int, int]:
         if letter in COORDINATES:
@@ -60,8 +60,7 @@ class Formats:
                 "P": (5, 3)}[letter]
 
 
-@record
-class Block:
+class Block(msgspec.Struct, frozen=True):
     """One NC block: its number and its words.  Coordinates and L are integers in units of the
     last decimal (``X 10.500`` with 3 decimals is 10500); G and M keep their order of arrival."""
 
@@ -87,26 +86,22 @@ class Block:
 
 
 # -- what the reader reports ------------------------------------------------------------------
-@record
-class BlockRead:
+class BlockRead(msgspec.Struct, frozen=True):
     block: Block
 
 
-@record
-class Ended:
+class Ended(msgspec.Struct, frozen=True):
     """The ``M30`` block arrived: the transfer is complete."""
 
 
-@record
-class Failed:
+class Failed(msgspec.Struct, frozen=True):
     """The transfer stops with the screen message (``WERTBEREICHES-UEBERLAUF``)."""
 
     reason: str
     message: str = WERTBEREICHES_UEBERLAUF
 
 
-@record
-class Notice:
+class Notice(msgspec.Struct, frozen=True):
     """Something a host developer may want to know that changes nothing (an empty word, a
     block without number, a duplicate word, comment characters)."""
 
@@ -117,8 +112,7 @@ class Notice:
 Event = BlockRead | Ended | Failed | Notice
 
 
-@record(frozen=False)
-class _Word:
+class _Word(msgspec.Struct):
     letter: str
     digits: str = ""
     negative: bool = False

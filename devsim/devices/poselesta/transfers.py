@@ -12,8 +12,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, Protocol
 
+import msgspec
+
 from devsim.core.clock import Clock, Timer
-from devsim.core.record import record
 from devsim.devices.poselesta.codes import baud_for_code
 from devsim.devices.poselesta.tape import BlockRead, Ended, Failed, Notice, TapeReader
 
@@ -37,8 +38,7 @@ def _cassette_baud(code: int, variant: str) -> int:
     return {1: 300, 3: 1200, 5: 4800}.get(code, 300)
 
 
-@record
-class Function:
+class Function(msgspec.Struct, frozen=True):
     """A transfer function of the table in spec §3.2.1, with its line: ``baud(code, variant)``
     from the port's baud rate code, ``frame_bits`` of a character without the ISO parity bit,
     and the cassette's ``leader`` before the data."""

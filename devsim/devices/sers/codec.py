@@ -17,7 +17,7 @@ from __future__ import annotations
 import functools
 import re
 
-from devsim.core.record import record
+import msgspec
 
 __all__ = ["MAX_LINE", "NO_ADDRESS", "TEXT_END", "Address", "address_value", "Framer", "Ignored", "LineEnd", "Noise", "read_address",
            "Restart", "TextChar"]
@@ -26,8 +26,7 @@ MAX_LINE = 60
 CR, LF, HASH = 0x0D, 0x0A, 0x23
 
 
-@record
-class Ignored:
+class Ignored(msgspec.Struct, frozen=True):
     """Noise outside a line, or the second half of a CR/LF pair (``pair``)."""
 
     pair: bool = False
@@ -36,35 +35,30 @@ class Ignored:
 Noise = Ignored
 
 
-@record
-class Restart:
+class Restart(msgspec.Struct, frozen=True):
     """``#`` arrived: a new line (``mid_line`` False) or a restart inside the line."""
 
     mid_line: bool
 
 
-@record
-class AddressChar:
+class AddressChar(msgspec.Struct, frozen=True):
     """A digit (or ``*``) of the address; its echo is held until the address is complete."""
 
 
-@record
-class Address:
+class Address(msgspec.Struct, frozen=True):
     """The address token is complete: a drive number, ``"*"`` or ``None`` (no address given)."""
 
     value: int | str | None
 
 
-@record
-class TextChar:
+class TextChar(msgspec.Struct, frozen=True):
     """A character of the statement text; ``dropped`` when beyond the 60-character limit."""
 
     char: str
     dropped: bool = False
 
 
-@record
-class LineEnd:
+class LineEnd(msgspec.Struct, frozen=True):
     """CR or LF ended the line; ``overflow`` if characters were dropped."""
 
     overflow: bool

@@ -18,9 +18,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, Protocol
 
+import msgspec
+
 from devsim.core.clock import Clock, Timer
 from devsim.core.kit import Command, Table
-from devsim.core.record import field, record
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.errors import SersError
 from devsim.devices.sers.master import MasterLink
@@ -58,14 +59,13 @@ MAX_NESTING = 4  # GOSUB depth (§4.6.4)
 L65 = 65  # error / stop handler label (§4.6.2)
 
 
-@record(frozen=False)
-class Program:
+class Program(msgspec.Struct):
     """A compiled program: statements in order, labels (§4.6.2) and block jumps (§4.6.1)."""
 
-    statements: list[st.Statement] = field(default_factory=list)
-    texts: list[str] = field(default_factory=list)
-    labels: dict[int, int] = field(default_factory=dict)  # label number -> statement index
-    block_end: dict[int, int] = field(default_factory=dict)  # IF..THEN index -> ELSE/END index; ELSE -> END
+    statements: list[st.Statement] = msgspec.field(default_factory=list)
+    texts: list[str] = msgspec.field(default_factory=list)
+    labels: dict[int, int] = msgspec.field(default_factory=dict)  # label number -> statement index
+    block_end: dict[int, int] = msgspec.field(default_factory=dict)  # IF..THEN index -> ELSE/END index; ELSE -> END
 
     @classmethod
     def compile(cls, texts: list[str]) -> Program:
@@ -489,7 +489,6 @@ class Interpreter:
             return
         self.pc = target
         self._schedule(self.cycle)
-
 
 
 def _going_on(interpreter: Interpreter, stmt: st.Statement) -> bool:

@@ -11,7 +11,8 @@ from __future__ import annotations
 import functools
 import re
 
-from devsim.core.record import field, record
+import msgspec
+
 from devsim.devices.sers import codec
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.errors import message
@@ -43,20 +44,19 @@ TEXT_TO_END = re.compile(rb"([^\r\n#]+)[\r\n]")
 LINE_ENDS = (codec.CR, codec.LF)
 
 
-@record(frozen=False)
-class CommandLine:
+class CommandLine(msgspec.Struct):
     """What the device knows about the command line being received (§3.2.4, §4.1)."""
 
     execute: bool = False  # this drive carries out the statements
     reply: bool = False  # this drive echoes and answers
-    held: bytearray = field(default_factory=bytearray)  # echo of '#' and address digits
+    held: bytearray = msgspec.field(default_factory=bytearray)  # echo of '#' and address digits
     text: str = ""  # statement text of the current segment
     executed: int = 0  # statements of the segment already executed
     error: bool = False
     skip_next: bool = False  # single-statement IF was false
     skip_block: int = 0  # inside a false IF..THEN block (depth)
-    deferred: bytearray = field(default_factory=bytearray)  # RS-485 mode: answers until line end
-    store: list[str] = field(default_factory=list)  # programming mode: statements for the EEPROM
+    deferred: bytearray = msgspec.field(default_factory=bytearray)  # RS-485 mode: answers until line end
+    store: list[str] = msgspec.field(default_factory=list)  # programming mode: statements for the EEPROM
 
 
 def answers(stmt: st.Statement) -> bool:
@@ -88,8 +88,7 @@ def quiet(text: bytes) -> str | None:
     return chars
 
 
-@record
-class Poll:
+class Poll(msgspec.Struct, frozen=True):
     """A whole line that asks one thing (``#1P11?`` and its end, §4.7), parsed once."""
 
     address: int | str | None

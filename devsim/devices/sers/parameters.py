@@ -38,8 +38,9 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 
+import msgspec
+
 from devsim.core.parameters import Param, ParameterTable
-from devsim.core.record import record, replace
 from devsim.devices.sers.paramdef import Kind, Number
 from devsim.devices.sers.params_io import ROWS as _IO
 from devsim.devices.sers.params_misc import ROWS as _MISC
@@ -86,7 +87,7 @@ STORED_ONLY: frozenset[int] = frozenset(
 #: The SERS's parameters as kit rows, by P number (aliases V, A, W …; ``P91``, ``p 91``, ``91``).
 PARAMETER_TABLE = ParameterTable(
     sorted(
-        (replace(row, effect="stored") if row.key in STORED_ONLY else row for row in (*_IO, *_MOTION, *_MISC)),
+        (msgspec.structs.replace(row, effect="stored") if row.key in STORED_ONLY else row for row in (*_IO, *_MOTION, *_MISC)),
         key=lambda row: row.key,
     ),
     prefix="P",
@@ -147,8 +148,7 @@ WEIGHTED: frozenset[int] = frozenset(n for n, kind in KIND.items() if kind in ("
 _TOKEN = re.compile(r"P\s*([0-9]+)")
 
 
-@record
-class ParamLimits:
+class ParamLimits(msgspec.Struct, frozen=True):
     """What a configured parameter value (``params:`` of the configuration) is checked against:
     the row's range as the drive checks a write (§4.7), in the default weighting."""
 

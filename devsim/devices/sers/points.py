@@ -10,10 +10,11 @@ from __future__ import annotations
 
 from typing import Any
 
+import msgspec
+
 from devsim.core.kit import Fault, FaultTable, signal_points
 from devsim.core.parameters import Param, alias_hook, parameter_points
 from devsim.core.points import BadValue, Point, PointTable
-from devsim.core.record import replace
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.errors import SersError, message
 from devsim.devices.sers.parameters import PARAMETER_TABLE
@@ -69,7 +70,7 @@ def _example(row: Param) -> Any:
 def _as_the_drive_takes_it(point: Point) -> Point:
     """A parameter's point takes any number (P1 also ``*``) and leaves the range to the drive:
     its errnos, and the weighted ranges that follow P76 / P44 / P160 (§4.8.4.6)."""
-    return replace(point, type="json" if point.name == "param.P1" else "float", minimum=None, maximum=None,
+    return msgspec.structs.replace(point, type="json" if point.name == "param.P1" else "float", minimum=None, maximum=None,
                    choices=None)
 
 

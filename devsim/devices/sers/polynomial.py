@@ -19,8 +19,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Protocol
 
+import msgspec
+
 from devsim.core.axis import Axis, Watch
-from devsim.core.record import record
 from devsim.devices.sers.errors import SersError
 from devsim.devices.sers.params import SersParameters
 
@@ -48,8 +49,7 @@ RELATIVE = (1112, 1115)
 ABSOLUTE = (1113, 1116)
 
 
-@record
-class Segment:
+class Segment(msgspec.Struct, frozen=True):
     """One path segment of a polynomial profile (§4.6.7)."""
 
     end: float  # physical position (increments) where the segment ends

@@ -18,9 +18,10 @@ import functools
 import re
 from collections.abc import Callable
 
+import msgspec
+
 from devsim.core.kit import Command as KitCommand
 from devsim.core.kit import Table
-from devsim.core.record import field, record
 
 __all__ = [
     "compare",
@@ -97,8 +98,7 @@ class SyntaxFault(Exception):
 
 
 # -- statement classes --------------------------------------------------------------------
-@record
-class Address:
+class Address(msgspec.Struct, frozen=True):
     """An operand naming device state: ``P91``, ``V``, ``I3``, ``J1``, ``O2``, ``IN``."""
 
     kind: str  # "P" (parameter by number), "alias", "I", "J", "O", "IN"
@@ -106,8 +106,7 @@ class Address:
     text: str  # as written, upper-cased (used as the identifier in query answers)
 
 
-@record
-class Number:
+class Number(msgspec.Struct, frozen=True):
     text: str
 
     @property
@@ -118,118 +117,97 @@ class Number:
 Operand = Address | Number
 
 
-@record
-class Statement:
-    text: str = field(default="", compare=False)
+class Statement(msgspec.Struct, frozen=True):
+    text: str = ""  # the statement as the host wrote it
 
 
-@record
 class Assign(Statement):
     target: Address = Address("P", 0, "P0")
     value: Operand | str = Number("0")  # "*" for Z=* / P1=*
 
 
-@record
 class Query(Statement):
     target: Address = Address("P", 0, "P0")
     name: bool = False  # P?? designation query
 
 
-@record
 class Arith(Statement):
     op: str = "+"
     operand: Operand = Number("0")
 
 
-@record
 class Unary(Statement):
     op: str = "NOT"
 
 
-@record
 class Command(Statement):
     name: str = ""
 
 
-@record
-class Condition:
+class Condition(msgspec.Struct, frozen=True):
     left: Address
     op: str | None = None  # None: true when the value is non-zero
     right: Operand | None = None
     negate: bool = False  # legacy "!"
 
 
-@record
 class If(Statement):
     cond: Condition | None = None
     then: bool = False
 
 
-@record
 class Else(Statement):
     pass
 
 
-@record
 class End(Statement):
     pass
 
 
-@record
 class Wait(Statement):
     cond: Condition | None = None
 
 
-@record
 class Jog(Statement):
     name: str = "RS"
     until: Condition | None = None
 
 
-@record
 class Goto(Statement):
     label: int = 0
     sub: bool = False  # GOSUB/GS
 
 
-@record
 class Label(Statement):
     number: int = 0
 
 
-@record
 class Run(Statement):
     label: int | None = None
 
 
-@record
 class ListCmd(Statement):
     params: bool = False  # LISTP
     arg: str = ""
 
 
-@record
 class Trace(Statement):
     query: bool = False  # TR?
 
 
-@record
 class Change(Statement):
     value: Number = Number("0")
 
 
-@record
 class Text(Statement):
     body: str = ""
 
 
-@record
 class Comment(Statement):
     pass
 
 
-@record(frozen=False)
-class ParseResult:
+class ParseResult(msgspec.Struct):
     """Statements found in a line's text.
 
     ``statements`` are complete (``(statement, end_offset)``).  ``pending`` is True when the

@@ -28,8 +28,9 @@ import signal
 import sys
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any
+
+import msgspec
 
 from devsim.core.device import SerialSettings
 from devsim.core.registry import port_framing
@@ -39,15 +40,14 @@ from devsim.observe.replay.session import Exchange, Reply, Session
 __all__ = ["ReplayPlan", "Replayer", "replay_session"]
 
 
-@dataclass
-class ReplayPlan:
+class ReplayPlan(msgspec.Struct):
     session: Session
     link: str | None = None
     tcp: tuple[str, int] | None = None  # a raw TCP port instead of the pty
     speed: float = 1.0
     as_fast: bool = False
     fallback: str = "error"  # "error" | "live"
-    config: dict[str, Any] = field(default_factory=dict)  # the live model's configuration
+    config: dict[str, Any] = msgspec.field(default_factory=dict)  # the live model's configuration
 
 
 def _warn(text: str) -> None:

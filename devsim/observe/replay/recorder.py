@@ -22,9 +22,9 @@ import sys
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
+import msgspec
 import serial
 
 from devsim.core.device import SerialSettings
@@ -33,8 +33,7 @@ from devsim.observe.replay.session import SessionWriter
 __all__ = ["RecordPlan", "record_session"]
 
 
-@dataclass
-class RecordPlan:
+class RecordPlan(msgspec.Struct):
     device_url: str
     out: str
     kind: str | None

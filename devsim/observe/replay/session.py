@@ -31,10 +31,11 @@ recorded delay from the request's last byte.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import IO, Any
+
+import msgspec
 
 from devsim.core.device import SerialSettings
 from devsim.core.registry import port_framing
@@ -90,36 +91,33 @@ class SessionWriter:
         self._file.flush()
 
 
-@dataclass
-class Reply:
+class Reply(msgspec.Struct):
     """Device bytes answering a request, ``delay`` seconds after its last byte."""
 
     delay: float
     data: bytes
 
 
-@dataclass
-class Exchange:
+class Exchange(msgspec.Struct):
     """One host request and the device's answer as recorded."""
 
     index: int
     request: bytes
     t: float  # when its last byte passed the recorder
-    replies: list[Reply] = field(default_factory=list)
+    replies: list[Reply] = msgspec.field(default_factory=list)
 
     @property
     def answer(self) -> bytes:
         return b"".join(reply.data for reply in self.replies)
 
 
-@dataclass
-class Session:
+class Session(msgspec.Struct):
     kind: str | None
     port: str
     settings: SerialSettings
     exchanges: list[Exchange]
     preamble: bytes = b""  # device bytes before the host sent anything (not replayed)
-    header: dict[str, Any] = field(default_factory=dict)
+    header: dict[str, Any] = msgspec.field(default_factory=dict)
 
 
 def _settings(raw: Any, where: str) -> SerialSettings:
