@@ -107,9 +107,9 @@ class Param(msgspec.Struct, frozen=True):
             else:
                 parsed = number
             if self.minimum is not None and parsed < self.minimum:
-                raise BadValue(f"{self.label}: {parsed:g} is below the minimum {self.minimum:g}{_unit(self.unit)}")
+                raise BadValue(f"{self.label}: {_number(parsed)} is below the minimum {_number(self.minimum)}{_unit(self.unit)}")
             if self.maximum is not None and parsed > self.maximum:
-                raise BadValue(f"{self.label}: {parsed:g} is above the maximum {self.maximum:g}{_unit(self.unit)}")
+                raise BadValue(f"{self.label}: {_number(parsed)} is above the maximum {_number(self.maximum)}{_unit(self.unit)}")
         if self.choices is not None and parsed not in self.choices:
             raise BadValue(f"{self.label}: expects one of {', '.join(map(str, self.choices))}, not {value!r}")
         return parsed

@@ -112,3 +112,12 @@ def test_the_echo_kind_reads_its_parameter_by_name() -> None:
     with pytest.raises(BadValue):
         device.set("param.P1", 5)
     assert EchoDevice.reference().parameter_table is not None
+
+
+def test_a_refusal_names_the_limit_with_every_digit() -> None:
+    row = Param(7, "Weg", "§1", maximum=99999999, minimum=-214748.3647, type="float")
+    with pytest.raises(BadValue, match=r"#7: 100000000 is above the maximum 99999999"):
+        row.check(100000000)
+    with pytest.raises(BadValue, match=r"is below the minimum -214748\.3647"):
+        row.check(-300000)
+    assert row.range_text() == "-214748.3647 … 99999999"
