@@ -144,7 +144,7 @@ def test_validate_with_text_source() -> None:
 
 
 def test_readme_example_config_is_valid(tmp_path: Path) -> None:
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    readme = (Path(__file__).resolve().parents[1] / "docs" / "connect.md").read_text(encoding="utf-8")
     block = readme.split("```yaml\n", 1)[1].split("```", 1)[0]
     config = load_config(write(tmp_path, block, "sers.yaml"), SersConfig)
     assert config.params == {"P1017": 2}

@@ -36,7 +36,7 @@ def test_doc_command_prints_it(kind: str) -> None:
 
 def test_readme_shows_the_shared_vocabulary_and_links_the_reference() -> None:
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
-    assert "\n".join(shared_vocabulary_markdown()) in readme
+    assert "\n".join(shared_vocabulary_markdown()) in (ROOT / "docs" / "control.md").read_text(encoding="utf-8")
     for kind in SHIPPED:
         assert f"(docs/devices/{kind}.md)" in readme
 
@@ -44,3 +44,31 @@ def test_readme_shows_the_shared_vocabulary_and_links_the_reference() -> None:
 def test_unknown_kind_is_one_line() -> None:
     result = CliRunner().invoke(cli, ["doc", "nokind"])
     assert result.exit_code == 2 and "unknown device kind 'nokind'" in result.output
+
+
+def test_the_documentation_site_builds_strictly(tmp_path: Path) -> None:
+    """docs/ is a mkdocs-material site (mkdocs.yml): every page in the nav, every link and anchor
+    found (--strict turns a broken one into a failure)."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NO_MKDOCS_2_WARNING="1")
+    done = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(tmp_path / "site")],
+        cwd=ROOT, capture_output=True, text=True, env=env, timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "site" / "kinds" / "sers" / "index.html").exists()
+    assert (tmp_path / "site" / "devices" / "pcd4h3" / "index.html").exists()
+
+
+def test_the_readme_stays_a_front_page() -> None:
+    """README.md is the front page (the quick start, one example, where to read on); the rest lives
+    in docs/, and every docs page it links exists."""
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert len(readme.splitlines()) <= 320
+    import re
+
+    for target in re.findall(r"\]\((docs/[^)#]+)", readme):
+        assert (ROOT / target).exists(), target

@@ -1,4 +1,4 @@
-"""The GMS96 client example in the README runs against a simulated card."""
+"""The GMS96 client example of its guide (docs/kinds/gms96.md) runs against a simulated card."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from pathlib import Path
 from devsim.runtime import Runtime
 from devsim.transports.pty import PtyTransport
 
-README = Path(__file__).resolve().parents[2] / "README.md"
+README = Path(__file__).resolve().parents[2] / "docs" / "kinds" / "gms96.md"
 
 
 def test_readme_client_example() -> None:

@@ -272,7 +272,7 @@ def test_the_keyboard_test_shows_each_code_plus_one(cnc: Any) -> None:
 
 
 def test_a_tape_sent_with_stty_and_cat_as_the_readme_shows(cnc: Any, tmp_path: Any) -> None:
-    """The README's shell recipe with tools nobody on this project wrote: coreutils `stty` sets
+    """The shell recipe of its guide (docs/kinds/poselesta.md) with tools nobody on this project wrote: coreutils `stty` sets
     the pty to 1200 baud, 8 bits, 2 stop bits, raw; `cat` writes an ASCII tape file into it."""
     import shutil
     import subprocess

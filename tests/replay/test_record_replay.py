@@ -257,10 +257,10 @@ def test_gms96_replay_matches_frames_with_another_frame_count_bit(tmp_path: Path
     assert "requests answered: exact 4, fcb 2" in err
 
 
-# -- the README's example, as printed there ---------------------------------------------------------
+# -- the example of docs/replay.md, as printed there ---------------------------------------------------------
 def _readme_host(tmp_path: Path) -> Path:
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    section = text[text.index("## Record and replay") :]
+    text = (ROOT / "docs" / "replay.md").read_text(encoding="utf-8")
+    section = text[text.index("# Record and replay") :]
     code = section[section.index("```python\n") + len("```python\n") :]
     host = tmp_path / "host.py"
     host.write_text(code[: code.index("```")])
@@ -291,7 +291,7 @@ def test_the_readme_example(tmp_path: Path, procs: list[Proc]) -> None:
 
 
 # -- PCD4.H3 Ether-S-Bus on TCP: another sequence number ---------------------------------------------
-def _crc(data: bytes) -> int:  # CRC-16/XMODEM, as in the README's Ether-S-Bus example
+def _crc(data: bytes) -> int:  # CRC-16/XMODEM, as in the Ether-S-Bus example of docs/kinds/pcd4h3.md
     value = 0
     for byte in data:
         value ^= byte << 8
