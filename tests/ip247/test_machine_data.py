@@ -7,6 +7,7 @@ import msgspec
 import pytest
 
 from devsim.devices.ip247.machine_data import Ramp, check, decode, encode
+from devsim.devices.ip247.tables import MACHINE_DATA
 
 MANUAL = """
 0046 0044 4201 0001 0100 0000 1388 0000 00C8 0000
@@ -39,6 +40,14 @@ def test_the_manuals_example_record_decodes_and_is_valid() -> None:
     assert md.resolution == 10 and md.v_max == 3000 and md.ramp.tau * 1000 == pytest.approx(101.05, abs=0.01)
     assert check(md, sys_module=0, limit_levels=(True, True)) == 0
     assert check(md, sys_module=5, limit_levels=(True, True)) == 12
+
+
+def test_every_machine_data_row_names_a_value_of_the_record() -> None:
+    """Each row of the machine-data table (spec §4.8) names, by its ``attr``, a value the model
+    reads on the decoded record."""
+    md = decode(words(COM247))
+    missing = [row.key for row in MACHINE_DATA if not isinstance(getattr(md, row.attr, None), int)]
+    assert missing == []
 
 
 def test_the_com247_screen_example_is_valid() -> None:

@@ -6,10 +6,11 @@ from __future__ import annotations
 import pytest
 
 from devsim.devices.pcd4h3.layout import Layout
-from devsim.devices.pcd4h3.library import H3Axis
+from devsim.devices.pcd4h3.library import FUNCTIONS, H3Axis
 from devsim.devices.pcd4h3.lm628 import Lm628
 from devsim.devices.pcd4h3.pid import Motor
 from devsim.devices.pcd4h3.registers import AxisRegisters, RegisterBlock
+from devsim.devices.pcd4h3.tables import command_flags
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
 EXAMPLE_1 = {212: 0x41B, 206: 2000, 200: 150, 201: 50, 202: 50, 203: 500, 204: 15, 205: 0xC8000047 - (1 << 32),
@@ -22,6 +23,11 @@ def example_axis() -> tuple[H3Axis, dict[int, int]]:
     layout = Layout(bar=200, baf=200, axes=1)
     block = AxisRegisters(RegisterBlock(registers, layout.block(1)))
     return H3Axis(1, layout, Lm628(Motor()), block, flags), registers
+
+
+def test_the_functions_are_the_command_flags_in_their_order() -> None:
+    """§3.2: one library function per command flag of the flag field, in the field's order."""
+    assert [row.token for row in FUNCTIONS] == [row.name for row in command_flags()]
 
 
 def test_axinit_issues_the_chip_trace_of_example_1() -> None:

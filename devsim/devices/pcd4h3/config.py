@@ -10,13 +10,13 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 from devsim.core.settings import Keys, Meta, Settings, doc, field
-from devsim.devices.pcd4h3.layout import FLAGS, REGISTERS
+from devsim.devices.pcd4h3.tables import FLAG_FIELD, REGISTERS, load_registers
 
 __all__ = ["AXIS", "H3DEF", "JUMPERS", "Pcd4h3Config", "READ_FUNCTIONS", "VARIANTS"]
 
 VARIANTS = ("H310", "H320", "H311", "H321", "H316", "H326", "H317", "H327")
-READ_FUNCTIONS = tuple(f.symbol for f in FLAGS if f.symbol.startswith("FRd"))
-LOAD_REGISTERS = tuple(r.symbol for r in REGISTERS if r.load)
+READ_FUNCTIONS = tuple(f.name for f in FLAG_FIELD if f.name.startswith("FRd"))
+LOAD_REGISTERS = tuple(r.name for r in load_registers())
 
 
 def _axis(key: object) -> int:
@@ -34,7 +34,7 @@ def _register(key: object) -> str:
 
 
 def _flag(key: object) -> str:
-    if key not in {f.symbol for f in FLAGS}:
+    if key not in {f.name for f in FLAG_FIELD}:
         raise ValueError("not a flag of an axis field")
     return str(key)
 
@@ -90,7 +90,7 @@ class Axis(Settings):
     hard_stops: Annotated[_Range, doc("mechanical end stops [low, high] counts: the motor stops there")] = None
 
 
-_RegisterSymbol = Literal[tuple(r.symbol for r in REGISTERS)]  # type: ignore[valid-type]
+_RegisterSymbol = Literal[tuple(r.name for r in REGISTERS)]  # type: ignore[valid-type]
 
 
 class Display(Settings):

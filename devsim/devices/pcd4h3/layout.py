@@ -9,15 +9,12 @@ should the original H3DEF.SRC turn up.  Pure address arithmetic.
 
 from __future__ import annotations
 
-import msgspec
-
 from devsim.core.parameters import Param
-from devsim.devices.pcd4h3.tables import FLAG_FIELD, command_flags
-from devsim.devices.pcd4h3.tables import REGISTERS as REGISTER_BLOCK
+from devsim.devices.pcd4h3.tables import FLAG_FIELD, REGISTERS, command_flags
 
-__all__ = ["FLAGS", "FLAGS_PER_AXIS", "Layout", "REGISTERS", "REGISTERS_PER_AXIS", "Symbol"]
+__all__ = ["FLAGS_PER_AXIS", "Layout", "REGISTERS_PER_AXIS"]
 
-REGISTERS_PER_AXIS, FLAGS_PER_AXIS = len(REGISTER_BLOCK), len(FLAG_FIELD)  # NoRfeA 20, NoFfeA 35 (§4.1)
+REGISTERS_PER_AXIS, FLAGS_PER_AXIS = len(REGISTERS), len(FLAG_FIELD)  # NoRfeA 20, NoFfeA 35 (§4.1)
 
 
 class Layout:
@@ -35,7 +32,7 @@ class Layout:
         return self.bar + (axis - 1) * REGISTERS_PER_AXIS
 
     def register(self, axis: int, symbol: str) -> int:
-        return self.block(axis) + int(REGISTER_BLOCK.lookup(symbol, "the register block").key)
+        return self.block(axis) + int(REGISTERS.lookup(symbol, "the register block").key)
 
     def flag(self, axis: int, symbol: str) -> int:
         return self.baf + (axis - 1) * FLAGS_PER_AXIS + self.flag_offsets[symbol]
@@ -45,7 +42,7 @@ class Layout:
         index = address - self.bar
         if not 0 <= index < self.axes * REGISTERS_PER_AXIS:
             return None
-        return index // REGISTERS_PER_AXIS + 1, REGISTER_BLOCK[index % REGISTERS_PER_AXIS]
+        return index // REGISTERS_PER_AXIS + 1, REGISTERS[index % REGISTERS_PER_AXIS]
 
     def locate_flag(self, address: int) -> tuple[int, str] | None:
         """(axis, flag symbol) of a flag address, or None outside the fields."""
@@ -55,16 +52,3 @@ class Layout:
         offset = index % FLAGS_PER_AXIS
         symbol = next((s for s, o in self.flag_offsets.items() if o == offset), None)
         return (index // FLAGS_PER_AXIS + 1, symbol) if symbol is not None else None
-
-
-class Symbol(msgspec.Struct, frozen=True):
-    """A register's or flag's H3DEF symbol, as the configuration's checks read it."""
-
-    symbol: str
-    load: bool = False
-
-
-#: The symbols the configuration (``config.py``, which the settings work moves) checks against,
-#: derived from the tables: the registers (``load``: a load register) and the flags.
-REGISTERS = tuple(Symbol(row.name, row.extra["direction"] == "load") for row in REGISTER_BLOCK)
-FLAGS = tuple(Symbol(row.name) for row in FLAG_FIELD)

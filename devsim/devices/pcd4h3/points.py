@@ -15,12 +15,12 @@ import re
 from collections.abc import Callable
 from typing import Any
 
-from devsim.core.kit import DriveActions, Fault, FaultTable, SignalDef, signal_points
+from devsim.core.kit import Command, DriveActions, Fault, FaultTable, SignalDef, Table, signal_points
 from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.core.words import signed32
 from devsim.devices.pcd4h3.drive import axis_signals
 from devsim.devices.pcd4h3.lm628 import notation
-from devsim.devices.pcd4h3.model import MEDIA_SIZE, Pcd4
+from devsim.devices.pcd4h3.model import HALT, MEDIA_SIZE, RUN, STOP, Pcd4
 from devsim.devices.pcd4h3.registers import AxisRegisters
 from devsim.devices.pcd4h3.services import bus_input, read, write
 from devsim.devices.pcd4h3.tables import FLAG_FIELD, REGISTERS
@@ -182,15 +182,20 @@ def _axis_family(name: str) -> Point | None:
                  get=get, put=put)
 
 
-def _plc_status(m: Pcd4, value: str) -> None:
-    {"R": m.run, "S": m.stop, "H": m.halt}[value]()
+#: What setting ``plc.status`` does, by the status letter S-Bus reads (§9.6.2).
+PLC_STATUS: Table[Callable[[Pcd4], None]] = Table([
+    Command(RUN, Pcd4.run, "§9.6.2", "run, as S-Bus 'run' (2Fh)"),
+    Command(HALT, Pcd4.halt, "§9.6.2", "halt, as ComErS does with comers_action: halt"),
+    Command(STOP, Pcd4.stop, "§9.6.2", "stop, as S-Bus 'stop' (43h)"),
+])
 
 
 POINTS = PointTable.of(
     *(_axis_points(n) for n in STATIC_AXES),
     [
         Point("plc.status", "str", "PCD status: R run, H halt (ComErS), S stop; set R or S as S-Bus run/stop do",
-              "§9.6.2", get=lambda m: m.status, put=_plc_status, choices=("R", "H", "S"), in_state=True),
+              "§9.6.2", get=lambda m: m.status, put=lambda m, v: PLC_STATUS[v](m), choices=tuple(PLC_STATUS.rows),
+              in_state=True),
         Point("plc.restart", "bool", "a cold restart: AxInit for every axis with the registers as they are (S-Bus "
               "38h)", "§9.6.1", put=lambda m, v: m.restart() if v else None, example=True),
     ],

@@ -83,7 +83,7 @@ class SerialLinks:
         running = self.transfers[port]
         if running is None:
             return "idle"
-        return next(name for (p, name), f in FUNCTIONS.items() if p == port and f is running.function)
+        return running.function.choice
 
     def state(self, port: str) -> str:
         running = self.transfers[port]
@@ -284,8 +284,8 @@ TransferHandler = Callable[[SerialLinks, Function, int], None]
 
 
 def _row(name: str, handler: TransferHandler) -> Command[TransferHandler]:
-    (port, user_name), function = next((key, f) for key, f in FUNCTIONS.items() if f.name == name)
-    return Command(name, handler, function.section, f"{port.upper()} {user_name}: {function.direction} "
+    function = next(f for f in FUNCTIONS.values() if f.name == name)
+    return Command(name, handler, function.section, f"{function.port.upper()} {function.choice}: {function.direction} "
                    f"({function.peer}), mode digit {function.digit}")
 
 

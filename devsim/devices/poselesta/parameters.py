@@ -26,6 +26,8 @@ CATALOGUE_SCALE = 1000
 NC_START_SOURCES = {0: ("panel", "external"), 1: ("panel",), 2: ("external",)}
 #: P79 is the diagnostic program, not a parameter (manual §2.3.25).
 DIAGNOSTIC_PROGRAM = 79
+#: The first number (axis X) of each per-axis family; Y, Z, D follow.
+LIMIT_PLUS, LIMIT_MINUS, GAIN, RAPID, MAX_FEED = 9, 13, 30, 44, 48
 
 
 def _ranged(key: int, name: str, doc: str, section: str, minimum: float, maximum: float, default: float,
@@ -49,13 +51,13 @@ _RANGED: list[Param] = [
     _ranged(70, "Baud-Rate V7", "V7 baud rate code (0 = 110 … 5 = 4800)", "§2.6.3", 0, 5, 3, "v7_baud_code"),
     _ranged(71, "Code V7", "V7 code (0 = ISO, 1 = ASCII)", "§2.6.3", 0, 1, 0, "v7_code"),
     _ranged(72, "t1 = t2", "strobe times t1 = t2 in ms (0 is taken as 1 ms)", "§2.4.7", 0, 99, 20, "strobe_ms"),
-    *_per_axis(9, "Software-Endschalter +", "software limit + {a}, mm from the reference mark", "§2.4.4", -99999,
+    *_per_axis(LIMIT_PLUS, "Software-Endschalter +", "software limit + {a}, mm from the reference mark", "§2.4.4", -99999,
                99999, 99999, "limit_plus", whole=False),
-    *_per_axis(13, "Software-Endschalter −", "software limit − {a}, mm from the reference mark", "§2.4.4", -99999,
+    *_per_axis(LIMIT_MINUS, "Software-Endschalter −", "software limit − {a}, mm from the reference mark", "§2.4.4", -99999,
                99999, -99999, "limit_minus", whole=False),
-    *_per_axis(30, "Verstärkung", "gain (Verstärkung) {a}: Kv = P{n} × kv_per_step", "§2.5", 1, 99, 10, "gain"),
-    *_per_axis(44, "Eilgang", "maximum speed = rapid {a}, mm/min (G00, V21/6)", "§2.3.8", 0, 9999, 6000, "rapid"),
-    *_per_axis(48, "Vorschub", "maximum feed {a}, mm/min (100 % of the feed pot)", "§2.3.6", 0, 9999, 2000,
+    *_per_axis(GAIN, "Verstärkung", "gain (Verstärkung) {a}: Kv = P{n} × kv_per_step", "§2.5", 1, 99, 10, "gain"),
+    *_per_axis(RAPID, "Eilgang", "maximum speed = rapid {a}, mm/min (G00, V21/6)", "§2.3.8", 0, 9999, 6000, "rapid"),
+    *_per_axis(MAX_FEED, "Vorschub", "maximum feed {a}, mm/min (100 % of the feed pot)", "§2.3.6", 0, 9999, 2000,
                "max_feed"),
     _ranged(64, "Eilgang-Override", "rapid influenced by the override pot (0 = no, 1 = yes)", "§2.3.22", 0, 1, 0,
             "rapid_override"),
@@ -89,12 +91,12 @@ PARAMETERS = ParameterTable(
 
 def check_parameter(number: int, value: float) -> None:
     """Refuse a parameter number or value the control would not take (ValueError)."""
-    if not 1 <= number <= 98 or number == DIAGNOSTIC_PROGRAM:
+    row = PARAMETERS.get(number)
+    if row is None:
         raise ValueError(f"P{number}: parameters are P1 … P98 (P79 is the diagnostic program)")
     if not math.isfinite(value):
         raise ValueError(f"P{number}: not a finite number")
-    row = PARAMETERS.get(number)
-    if row is not None and row.minimum is not None and row.maximum is not None:
+    if row.minimum is not None and row.maximum is not None:
         whole = row.type == "int"
         if not row.minimum <= value <= row.maximum or whole and not float(value).is_integer():
             kind = "a whole number" if whole else "a number"
@@ -132,19 +134,19 @@ class MachineParameters(Parameters):
     def limits(self, axis: str) -> tuple[float, float]:
         """P13–P16 (−) and P9–P12 (+): the software limits in mm from the reference mark."""
         i = AXES.index(axis)
-        return self.values[13 + i], self.values[9 + i]
+        return self.values[LIMIT_MINUS + i], self.values[LIMIT_PLUS + i]
 
     def gain(self, axis: str) -> float:
         """P30–P33: the position loop gain in steps."""
-        return self.values[30 + AXES.index(axis)]
+        return self.values[GAIN + AXES.index(axis)]
 
     def rapid(self, axis: str) -> float:
         """P44–P47: the rapid of an axis in mm/min."""
-        return self.values[44 + AXES.index(axis)]
+        return self.values[RAPID + AXES.index(axis)]
 
     def max_feed(self, axis: str) -> float:
         """P48–P51: the maximum feed of an axis in mm/min."""
-        return self.values[48 + AXES.index(axis)]
+        return self.values[MAX_FEED + AXES.index(axis)]
 
     def nc_start_counts(self, source: str) -> bool:
         """P75: does an NC-Start from ``source`` (``panel``, ``external``) count?"""
@@ -190,7 +192,7 @@ class MachineParameters(Parameters):
         """The catalogue as blocks ``N<number> P<value>``, P1 … P98 without P79 (spec §3.9, a
         simulator-defined format: the original is not documented)."""
         return [Block(number, (("P", round(self.values.get(number, 0.0) * CATALOGUE_SCALE)),))
-                for number in range(1, 99) if number != DIAGNOSTIC_PROGRAM]
+                for number in PARAMETERS.rows]
 
     def begin_catalogue(self) -> None:
         """A catalogue read-in starts: the whole catalogue is 0 first (§2.6.2.3, P68–P71 too)."""

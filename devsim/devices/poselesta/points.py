@@ -16,7 +16,7 @@ from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.devices.poselesta.diagnostics import input_image, input_screen, pots
 from devsim.devices.poselesta.execution import STATES
 from devsim.devices.poselesta.model import MODES, PoselestaCnc
-from devsim.devices.poselesta.parameters import PARAMETERS
+from devsim.devices.poselesta.parameters import GAIN, PARAMETERS
 from devsim.devices.poselesta.signals import AXES, SIGNALS, feed_pot, override
 from devsim.devices.poselesta.transfers import FUNCTIONS
 
@@ -54,7 +54,7 @@ def _axis_points(a: str) -> list[Point]:
               get=lambda m: m.axes.display(a, bool(m.signals.get("inch")))),
         Point(f"axis.{a}.velocity", "float", f"actual velocity of {axis}", "§2.5", "inc/s",
               get=lambda m: m.axes[a].velocity()),
-        Point(f"axis.{a}.following_error", "float", f"following error of {axis}: v / Kv (P{30 + AXES.index(a)})",
+        Point(f"axis.{a}.following_error", "float", f"following error of {axis}: v / Kv (P{GAIN + AXES.index(a)})",
               "§2.5", "inc", get=lambda m: m.following_error(a)),
         Point(f"axis.{a}.analog_out", "float", f"±10 V speed set-point of {axis}'s drive", "§2.5", "V",
               get=lambda m: m.analog_out(a)),

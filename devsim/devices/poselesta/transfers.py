@@ -45,6 +45,7 @@ class Function(msgspec.Struct, frozen=True):
 
     name: str  # T1 … T7
     port: str
+    choice: str  # what a user selects it with on its port (``v6.transfer = printer``)
     digit: int
     direction: str  # "output" | "input"
     peer: str
@@ -55,18 +56,18 @@ class Function(msgspec.Struct, frozen=True):
 
 
 #: The transfer functions by the name a user selects them with (``v6.transfer`` / ``v7.transfer``).
-FUNCTIONS: dict[tuple[str, str], Function] = {
-    ("v6", "printer"): Function("T1", "v6", 1, "output", "printer Z1 (20 columns)", "§2.6.2.1", frame_bits=11,
-                                baud=_printer_baud),
-    ("v6", "cassette_out"): Function("T2", "v6", 2, "output", "cassette Z2 / ZPS 020", "§2.6.2.2",
-                                     leader=CASSETTE_LEADER, baud=_cassette_baud),
-    ("v6", "cassette_in"): Function("T3", "v6", 3, "input", "cassette Z2 / ZPS 020", "§2.6.2.2",
-                                    leader=CASSETTE_LEADER, baud=_cassette_baud),
-    ("v6", "output"): Function("T4", "v6", 7, "output", "punch / TTY", "§2.6.2.3"),
-    ("v6", "input"): Function("T5", "v6", 8, "input", "tape reader / TTY", "§2.6.2.3"),
-    ("v7", "output"): Function("T6", "v7", 7, "output", "DNC host", "§2.6.3"),
-    ("v7", "input"): Function("T7", "v7", 8, "input", "DNC host", "§2.6.3"),
-}
+FUNCTIONS: dict[tuple[str, str], Function] = {(f.port, f.choice): f for f in (
+    Function("T1", "v6", "printer", 1, "output", "printer Z1 (20 columns)", "§2.6.2.1", frame_bits=11,
+             baud=_printer_baud),
+    Function("T2", "v6", "cassette_out", 2, "output", "cassette Z2 / ZPS 020", "§2.6.2.2", leader=CASSETTE_LEADER,
+             baud=_cassette_baud),
+    Function("T3", "v6", "cassette_in", 3, "input", "cassette Z2 / ZPS 020", "§2.6.2.2", leader=CASSETTE_LEADER,
+             baud=_cassette_baud),
+    Function("T4", "v6", "output", 7, "output", "punch / TTY", "§2.6.2.3"),
+    Function("T5", "v6", "input", 8, "input", "tape reader / TTY", "§2.6.2.3"),
+    Function("T6", "v7", "output", 7, "output", "DNC host", "§2.6.3"),
+    Function("T7", "v7", "input", 8, "input", "DNC host", "§2.6.3"),
+)}
 
 
 class Link(Protocol):
