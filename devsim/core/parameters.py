@@ -19,7 +19,7 @@ from typing import Any, Literal
 
 import msgspec
 
-from devsim.core.points import BadValue, Point, PointType, UnknownName, finite
+from devsim.core.points import BadValue, Point, UnknownName, finite
 
 __all__ = [
     "EMPTY",
@@ -28,6 +28,7 @@ __all__ = [
     "ParameterTable",
     "Parameters",
     "accessor",
+    "alias_hook",
     "parameter_points",
 ]
 
@@ -81,10 +82,6 @@ class Param(msgspec.Struct, frozen=True):
     @property
     def writable(self) -> bool:
         return self.access != "r"
-
-    @property
-    def point_type(self) -> PointType:
-        return self.type
 
     def check(self, value: Any) -> Any:
         """The value as this parameter's type, inside its range and choices, or :class:`BadValue`
@@ -214,9 +211,6 @@ class ParameterTable:
     def saved(self) -> tuple[Key, ...]:
         return tuple(row.key for row in self.rows.values() if row.saved)
 
-    def stored_only(self) -> tuple[Key, ...]:
-        return tuple(row.key for row in self.rows.values() if row.effect == "stored")
-
 
 class Parameters:
     """The part that owns a kind's parameter values: one value per row, the factory values at
@@ -243,9 +237,6 @@ class Parameters:
     def get(self, key: Key, default: Any = None) -> Any:
         return self.values.get(key, default)
 
-    def row(self, key: Key) -> Param:
-        return self.table[key]
-
     def set(self, key: Key, value: Any, *, check: bool = True) -> Any:
         """Store a value (checked against the row unless ``check`` is False); returns it."""
         row = self.table[key]
@@ -255,11 +246,6 @@ class Parameters:
         for listener in self._listeners:
             listener(row, value)
         return value
-
-    def store(self, key: Key, value: Any) -> None:
-        """Store a value the device computed itself (a read-only actual value): no check, no
-        listener."""
-        self.values[key] = value
 
     def on_change(self, listener: Callable[[Param, Any], None]) -> None:
         self._listeners.append(listener)
@@ -324,7 +310,7 @@ def parameter_points(
         points.append(
             Point(
                 spell(row),
-                row.point_type,
+                row.type,
                 row.doc or row.name,
                 row.section,
                 row.unit,
@@ -364,5 +350,3 @@ def alias_hook(table: ParameterTable, section: str = "param") -> Callable[[str],
 
     return alias
 
-
-__all__ += ["alias_hook"]
