@@ -19,7 +19,7 @@ from typing import Any, Literal
 
 import msgspec
 
-from devsim.core.points import BadValue, Point, UnknownName, finite
+from devsim.core.points import BadValue, Point, UnknownName, parse_as
 
 __all__ = [
     "EMPTY",
@@ -86,23 +86,11 @@ class Param(msgspec.Struct, frozen=True):
     def check(self, value: Any) -> Any:
         """The value as this parameter's type, inside its range and choices, or :class:`BadValue`
         (nothing changes).  A kind with its own range rules checks those after this."""
-        parsed: Any
-        if self.type == "bool":
-            from devsim.core.points import parse_bool
-
-            parsed = parse_bool(value)
-        elif self.type == "str":
-            if not isinstance(value, str):
-                raise BadValue(f"{self.label}: expects text, not {value!r}")
-            parsed = value
-        else:
-            number = finite(value)
-            if self.type == "int":
-                if not number.is_integer():
-                    raise BadValue(f"{self.label}: expects a whole number, not {value!r}")
-                parsed = int(number)
-            else:
-                parsed = number
+        try:
+            parsed = parse_as(self.type, value)
+        except BadValue as exc:
+            raise BadValue(f"{self.label}: {exc}") from None
+        if self.type in ("int", "float"):
             if self.minimum is not None and parsed < self.minimum:
                 raise BadValue(f"{self.label}: {_number(parsed)} is below the minimum {_number(self.minimum)}{_unit(self.unit)}")
             if self.maximum is not None and parsed > self.maximum:
