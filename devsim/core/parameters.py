@@ -315,7 +315,11 @@ def parameter_points(
 
 
 def _example(row: Param) -> Any:
-    """A value a write-only row accepts: its default, its first choice, or a value in range."""
+    """A value a write-only row accepts: its default, its first choice, or a value in range
+    (:attr:`~devsim.core.points.Point.example`); None for a readable row, which is set to the
+    value it reads."""
+    if row.readable:
+        return None
     if row.choices:
         return row.choices[0]
     if row.default is not None:
