@@ -144,7 +144,7 @@ def reference_markdown(cls: type[Device]) -> str:
             *_table(("code", "text", "manual"), ((f"`{e.code}`", e.text, e.section) for e in ref.errors)),
             "",
         ]
-    rows = config_rows(cls.config_model) or [(k, t, "", d) for k, t, d in ref.config]
+    rows = config_rows(cls.config_model)
     if rows:
         out += [
             "## Configuration keys",
