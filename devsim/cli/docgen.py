@@ -13,7 +13,7 @@ from typing import Any
 
 from devsim.core.device import Device
 from devsim.core.points import SHARED_VOCABULARY
-from devsim.core.settings import Section, rows
+from devsim.core.settings import Settings, rows
 
 __all__ = ["config_rows", "modbus_markdown", "reference_markdown", "shared_vocabulary_markdown"]
 
@@ -33,7 +33,7 @@ def _table_rows(header: Sequence[str], *groups: Iterable[Sequence[Any]]) -> list
     return _table(header, (row for group in groups for row in group))
 
 
-def config_rows(model: Section | None) -> list[tuple[str, str, str, str]]:
+def config_rows(model: type[Settings] | None) -> list[tuple[str, str, str, str]]:
     """(key, type, default, description) of every configuration key, nested keys dotted."""
     return [] if model is None else list(rows(model))
 
@@ -144,7 +144,7 @@ def reference_markdown(cls: type[Device]) -> str:
             *_table(("code", "text", "manual"), ((f"`{e.code}`", e.text, e.section) for e in ref.errors)),
             "",
         ]
-    rows = config_rows(cls.config_model) or [(k, t, "", d) for k, t, d in ref.config]
+    rows = config_rows(cls.config_model)
     if rows:
         out += [
             "## Configuration keys",

@@ -30,7 +30,7 @@ from devsim.core.kit import MAIN_PORT, DriveActions, FaultTable, PortDef, Refere
 from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
 from devsim.core.points import BadValue, PointTable, ReadOnlyName, UnknownName, parse_bool
-from devsim.core.settings import Section
+from devsim.core.settings import Settings
 
 __all__ = [
     "BadValue",
@@ -153,9 +153,9 @@ class Device:
 
     kind: ClassVar[str] = ""
     description: ClassVar[str] = ""
-    #: What a user can configure (DIP switches, options): a :class:`devsim.core.settings.Section`
-    #: table, or None.
-    config_model: ClassVar[Section | None] = None
+    #: What a user can configure (DIP switches, options): a :class:`devsim.core.settings.Settings`
+    #: class, or None.
+    config_model: ClassVar[type[Settings] | None] = None
     #: On a multidrop bus, also hear what the other devices send (not only the host).
     hears_others: ClassVar[bool] = False
     ports: ClassVar[tuple[PortDef, ...]] = MAIN_PORT

@@ -1,9 +1,9 @@
-"""The device kit's tables: ports, faults, commands, signals, parameters and error codes.
+"""The device kit's tables: ports, faults, commands, signals and error codes.
 
 Each kind declares these once, each row citing its manual section.  The device runs from them
 (a fault row carries its effect, a command row its handler, a signal row the signal it makes),
 and ``devsim doc`` prints them, so what is documented is what runs.  The *declared points* of a
-kind are in :mod:`devsim.core.points`.
+kind are in :mod:`devsim.core.points`, its parameters in :mod:`devsim.core.parameters`.
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ from devsim.core.signals import SignalBank, SignalKind
 
 __all__ = [
     "Command",
-    "CommandTable",
     "DriveActions",
     "ErrorCode",
     "Fault",
@@ -164,8 +163,6 @@ class Table(Generic[H]):
         return self.rows[token].handler
 
 
-CommandTable = Table
-
 
 class ErrorCode(msgspec.Struct, frozen=True):
     """An error (or status) code the device answers with, and its text."""
@@ -248,7 +245,6 @@ class Reference(msgspec.Struct):
 
     commands: list[Command[Any]] = msgspec.field(default_factory=list)
     errors: list[ErrorCode] = msgspec.field(default_factory=list)
-    config: list[tuple[str, str, str]] = msgspec.field(default_factory=list)  # key, type/default, doc
     #: The kind's parameters as kit rows (:mod:`devsim.core.parameters`), printed with their key,
     #: aliases, range, default and effect.
     parameter_table: ParameterTable | None = None

@@ -19,7 +19,7 @@ from typing import Any, Literal
 
 import msgspec
 
-from devsim.core.points import BadValue, Point, PointType, UnknownName, finite
+from devsim.core.points import BadValue, Point, UnknownName, parse_as
 
 __all__ = [
     "EMPTY",
@@ -28,6 +28,7 @@ __all__ = [
     "ParameterTable",
     "Parameters",
     "accessor",
+    "alias_hook",
     "parameter_points",
 ]
 
@@ -82,30 +83,14 @@ class Param(msgspec.Struct, frozen=True):
     def writable(self) -> bool:
         return self.access != "r"
 
-    @property
-    def point_type(self) -> PointType:
-        return self.type
-
     def check(self, value: Any) -> Any:
         """The value as this parameter's type, inside its range and choices, or :class:`BadValue`
         (nothing changes).  A kind with its own range rules checks those after this."""
-        parsed: Any
-        if self.type == "bool":
-            from devsim.core.points import parse_bool
-
-            parsed = parse_bool(value)
-        elif self.type == "str":
-            if not isinstance(value, str):
-                raise BadValue(f"{self.label}: expects text, not {value!r}")
-            parsed = value
-        else:
-            number = finite(value)
-            if self.type == "int":
-                if not number.is_integer():
-                    raise BadValue(f"{self.label}: expects a whole number, not {value!r}")
-                parsed = int(number)
-            else:
-                parsed = number
+        try:
+            parsed = parse_as(self.type, value)
+        except BadValue as exc:
+            raise BadValue(f"{self.label}: {exc}") from None
+        if self.type in ("int", "float"):
             if self.minimum is not None and parsed < self.minimum:
                 raise BadValue(f"{self.label}: {_number(parsed)} is below the minimum {_number(self.minimum)}{_unit(self.unit)}")
             if self.maximum is not None and parsed > self.maximum:
@@ -214,9 +199,6 @@ class ParameterTable:
     def saved(self) -> tuple[Key, ...]:
         return tuple(row.key for row in self.rows.values() if row.saved)
 
-    def stored_only(self) -> tuple[Key, ...]:
-        return tuple(row.key for row in self.rows.values() if row.effect == "stored")
-
 
 class Parameters:
     """The part that owns a kind's parameter values: one value per row, the factory values at
@@ -243,9 +225,6 @@ class Parameters:
     def get(self, key: Key, default: Any = None) -> Any:
         return self.values.get(key, default)
 
-    def row(self, key: Key) -> Param:
-        return self.table[key]
-
     def set(self, key: Key, value: Any, *, check: bool = True) -> Any:
         """Store a value (checked against the row unless ``check`` is False); returns it."""
         row = self.table[key]
@@ -255,11 +234,6 @@ class Parameters:
         for listener in self._listeners:
             listener(row, value)
         return value
-
-    def store(self, key: Key, value: Any) -> None:
-        """Store a value the device computed itself (a read-only actual value): no check, no
-        listener."""
-        self.values[key] = value
 
     def on_change(self, listener: Callable[[Param, Any], None]) -> None:
         self._listeners.append(listener)
@@ -324,7 +298,7 @@ def parameter_points(
         points.append(
             Point(
                 spell(row),
-                row.point_type,
+                row.type,
                 row.doc or row.name,
                 row.section,
                 row.unit,
@@ -341,7 +315,11 @@ def parameter_points(
 
 
 def _example(row: Param) -> Any:
-    """A value a write-only row accepts: its default, its first choice, or a value in range."""
+    """A value a write-only row accepts: its default, its first choice, or a value in range
+    (:attr:`~devsim.core.points.Point.example`); None for a readable row, which is set to the
+    value it reads."""
+    if row.readable:
+        return None
     if row.choices:
         return row.choices[0]
     if row.default is not None:
@@ -364,5 +342,3 @@ def alias_hook(table: ParameterTable, section: str = "param") -> Callable[[str],
 
     return alias
 
-
-__all__ += ["alias_hook"]

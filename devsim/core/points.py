@@ -39,6 +39,7 @@ __all__ = [
     "SHARED_VOCABULARY",
     "UnknownName",
     "finite",
+    "parse_as",
     "parse_bool",
 ]
 
@@ -113,6 +114,28 @@ def _parse_int(value: Any) -> int:
     return int(number)
 
 
+def parse_as(kind: PointType, value: Any) -> Any:
+    """``value`` as a ``kind`` (``bool``, ``int``, ``float``, ``str``, ``json``), or
+    :class:`BadValue`: the one conversion of a control value, for a point
+    (:meth:`Point.parse`) and a parameter row (:meth:`devsim.core.parameters.Param.check`)."""
+    if kind == "bool":
+        return parse_bool(value)
+    if kind == "int":
+        return _parse_int(value)
+    if kind == "float":
+        return finite(value)
+    if kind == "str":
+        if not isinstance(value, str):
+            raise BadValue(f"expects text, not {_show(value)}")
+        return value
+    if isinstance(value, str):  # text from a command line: JSON if it parses
+        try:
+            value = json.loads(value)
+        except (ValueError, RecursionError):
+            pass
+    return _check_json(value)
+
+
 def _show(value: Any) -> str:
     text = repr(value)
     return text if len(text) <= 40 else text[:37] + "..."
@@ -175,24 +198,7 @@ class Point(msgspec.Struct, frozen=True):
 
     def parse(self, value: Any) -> Any:
         """The value converted to the declared type and checked, or :class:`BadValue`."""
-        kind = self.type
-        if kind == "bool":
-            parsed: Any = parse_bool(value)
-        elif kind == "int":
-            parsed = _parse_int(value)
-        elif kind == "float":
-            parsed = finite(value)
-        elif kind == "str":
-            if not isinstance(value, str):
-                raise BadValue(f"expects text, not {_show(value)}")
-            parsed = value
-        else:
-            if isinstance(value, str):  # text from a command line: JSON if it parses
-                try:
-                    value = json.loads(value)
-                except (ValueError, RecursionError):
-                    pass
-            parsed = _check_json(value)
+        parsed = parse_as(self.type, value)
         if self.choices is not None and parsed not in self.choices:
             options = ", ".join(str(c) for c in self.choices)
             raise BadValue(f"expects one of {options}, not {_show(value)}")

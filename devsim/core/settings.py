@@ -20,7 +20,7 @@ documents every key (:func:`rows`, printed by ``devsim doc``) and lets
 from __future__ import annotations
 
 from collections.abc import Iterator
-from typing import Annotated, Any, Literal, TypeAlias, Union, get_args, get_origin
+from typing import Annotated, Any, Literal, Union, get_args, get_origin
 
 import msgspec
 from msgspec import Meta, field
@@ -28,18 +28,12 @@ from msgspec import Meta, field
 from devsim.core.typed import Check, Invalid, Keys, Typed, doc
 
 __all__ = [
-    "Check", "Invalid", "Keys", "Meta", "Section", "Settings", "Values", "doc", "field", "rows", "type_text",
+    "Check", "Invalid", "Keys", "Meta", "Settings", "doc", "field", "rows", "type_text",
 ]
 
 
 class Settings(Typed):
     """A configuration (or one nested part of it): each key a field."""
-
-
-#: The type of a kind's ``config_model`` (a :class:`Settings` class).
-Section: TypeAlias = type[Settings]
-#: A validated configuration (what ``config_model.parse`` gives).
-Values: TypeAlias = Settings
 
 
 def _plain_doc(kind: type) -> str:

@@ -44,13 +44,9 @@ from devsim.core.typed_convert import (
     convert,
     fixer,
     non_finite,
-    struct_type,
 )
 
-__all__ = [
-    "NOT_FINITE", "UNSET", "Check", "FieldError", "Invalid", "Keys", "Meta", "Typed", "convert", "doc", "fixer", "non_finite", "plain",
-    "struct_type",
-]
+__all__ = ["Check", "FieldError", "Invalid", "Keys", "Meta", "Typed", "doc", "plain"]
 
 T = TypeVar("T", bound="Typed")
 

@@ -22,7 +22,7 @@ from devsim.core.kit import Reference, SignalDef, declare_signals, signal_points
 from devsim.core.model import Model
 from devsim.core.parameters import Param, Parameters, ParameterTable, accessor, alias_hook, parameter_points
 from devsim.core.points import Point, PointTable
-from devsim.core.settings import Check, Meta, Section, Settings, field
+from devsim.core.settings import Check, Meta, Settings, field
 
 BAUDS = (1200, 2400, 4800, 9600, 19200)
 
@@ -148,7 +148,7 @@ class EchoDevice(Device):
 
     kind: ClassVar[str] = "echo"
     description: ClassVar[str] = "Echoes every byte back (test device)"
-    config_model: ClassVar[Section] = EchoConfig
+    config_model = EchoConfig
     model_class = EchoModel
     face_classes: ClassVar[dict[str, Any]] = {"main": EchoFace}
     points = POINTS

@@ -16,7 +16,6 @@ import msgspec
 
 from devsim.core.device import Device
 from devsim.core.kit import Command, ErrorCode, PortDef, Reference, Table
-from devsim.core.settings import Section
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.commands import (
     G_FUNCTIONS,
@@ -50,7 +49,7 @@ class Gms96Device(Device):
 
     kind: ClassVar[str] = "gms96"
     description: ClassVar[str] = "GMS96 servo amplifier with indexer and PLC (DIN 19244 / FT1.2, RS422)"
-    config_model: ClassVar[Section] = Gms96Config
+    config_model = Gms96Config
     model_class = Gms96Card
     face_classes: ClassVar[dict[str, Any]] = {"main": Gms96Face}
     ports = (PortDef(framing=FT12),)

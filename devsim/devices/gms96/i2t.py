@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 from devsim.core.clock import Clock, Timer
 from devsim.core.parameters import Param
-from devsim.core.settings import Values
+from devsim.core.settings import Settings
 from devsim.devices.gms96.params import NParameters
 
 __all__ = ["I_BASE", "I2t"]
@@ -27,7 +27,7 @@ class I2t:
         self,
         clock: Clock,
         params: NParameters,
-        geometry: Values,
+        geometry: Settings,
         load_pct: Callable[[], float],
         settled: Callable[[], None],
         record_event: Callable[[str], None],

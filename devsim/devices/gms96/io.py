@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 from devsim.core.axis import Axis
 from devsim.core.clock import Clock, Timer
-from devsim.core.settings import Values
+from devsim.core.settings import Settings
 from devsim.core.signals import SignalBank
 from devsim.devices.gms96.image import ProcessImage
 from devsim.devices.gms96.motion import ActualSwitch, Indexer
@@ -130,7 +130,7 @@ class Outputs:
         self.changed()
 
 
-def axis_switches(indexer: Indexer, signals: SignalBank, geometry: Values) -> list[ActualSwitch]:
+def axis_switches(indexer: Indexer, signals: SignalBank, geometry: Settings) -> list[ActualSwitch]:
     """The configured reference cam and position ranges wired to inputs (spec §5.6, §5.11).
     They act on the ACTUAL position (set-point - v/Kv): they switch v/Kv later than the
     set-point passes them."""

@@ -25,7 +25,7 @@ from collections.abc import Callable
 from typing import Protocol
 
 from devsim.core.clock import Clock, Timer
-from devsim.core.settings import Values
+from devsim.core.settings import Settings
 from devsim.devices.gms96 import codec
 
 
@@ -56,7 +56,7 @@ class Link:
         *,
         card: LinkCard,
         clock: Clock,
-        options: Values,
+        options: Settings,
         baud: Callable[[], int],
         errors: dict[str, int],
         short_command: Callable[[int, bytes], bytes | None],

@@ -22,10 +22,9 @@ from devsim.core.clock import Clock, Timer
 from devsim.core.kit import declare_signals
 from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
-from devsim.core.settings import Values
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.commands import QueuedCommands
-from devsim.devices.gms96.config import Gms96Config
+from devsim.devices.gms96.config import DilSwitch, Gms96Config
 from devsim.devices.gms96.coordinates import Coordinates
 from devsim.devices.gms96.counter import CounterInput
 from devsim.devices.gms96.executor import Cmd, Executor
@@ -66,8 +65,8 @@ class Gms96Card(Model):
         self.link_errors: dict[str, int] = {}
         self.hw = tables.variant(self.cfg.variant)
         self.stepper = self.hw.stepper
-        self.pending_dil: Values = self.cfg.dil
-        self.dil: Values = self.cfg.dil
+        self.pending_dil: DilSwitch = self.cfg.dil
+        self.dil: DilSwitch = self.cfg.dil
         self.address = self.dil.address
         self.e_version = self.dil.protocol == "E"
         self.powered = False

@@ -18,7 +18,7 @@ from typing import Any, Protocol
 from devsim.core.axis import Axis, IndexRule, RampProfile, RangeRule, RegionSwitch, Rule, Segment, Watch
 from devsim.core.clock import Clock, Timer
 from devsim.core.parameters import Param
-from devsim.core.settings import Values
+from devsim.core.settings import Settings
 from devsim.core.signals import SignalBank
 from devsim.devices.gms96.feed import Feed
 from devsim.devices.gms96.image import ProcessImage
@@ -62,7 +62,7 @@ class Indexer:
         stage: PowerStage,
         image: ProcessImage,
         signals: SignalBank,
-        geometry: Values,
+        geometry: Settings,
         stepper: bool,
         card: IndexerEvents,
     ) -> None:

@@ -44,7 +44,7 @@ from typing import Any, Protocol
 
 from devsim.core.clock import Clock, Timer
 from devsim.core.kit import Command, Table
-from devsim.core.settings import Values
+from devsim.core.settings import Settings
 from devsim.devices.gms96.counter import CounterInput
 from devsim.devices.gms96.flash import Flash
 from devsim.devices.gms96.image import ProcessImage, parse_bit
@@ -99,7 +99,7 @@ class Plc:
         *,
         card: PlcCard,
         clock: Clock,
-        options: Values,
+        options: Settings,
         ms_per_1000: int | None,
         flash: Flash,
         image: ProcessImage,

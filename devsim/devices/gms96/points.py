@@ -59,7 +59,6 @@ def _n_points() -> list[Point]:
             point,
             minimum=tables.INT24_MIN if point.minimum is None else point.minimum,
             maximum=tables.INT24_MAX if point.maximum is None else point.maximum,
-            example=None,
         )
         for point in parameter_points(N_TABLE, _read_n, _write_n)
     ]

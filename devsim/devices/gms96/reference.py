@@ -16,7 +16,7 @@ from collections.abc import Callable
 from devsim.core.axis import Watch
 from devsim.core.clock import Clock, Timer
 from devsim.core.kit import Command, Table
-from devsim.core.settings import Values
+from devsim.core.settings import Settings
 from devsim.core.signals import SignalBank
 from devsim.devices.gms96.coordinates import Coordinates
 from devsim.devices.gms96.image import ProcessImage
@@ -43,7 +43,7 @@ class References:
         params: NParameters,
         signals: SignalBank,
         image: ProcessImage,
-        geometry: Values,
+        geometry: Settings,
         record_event: Callable[[str], None],
     ) -> None:
         self.clock = clock

@@ -12,7 +12,6 @@ from typing import Any, ClassVar
 
 from devsim.core.device import Device
 from devsim.core.kit import PortDef, Reference
-from devsim.core.settings import Section
 from devsim.devices.ip247.config import Ip247Config
 from devsim.devices.ip247.drive_actions import DRIVE, SETUP
 from devsim.devices.ip247.face import AgFace, PgFace
@@ -30,7 +29,7 @@ class Ip247Device(Device):
 
     kind: ClassVar[str] = "ip247"
     description: ClassVar[str] = "Siemens SIMATIC S5 IP247 stepper positioning module (PG port AS511, PLC side)"
-    config_model: ClassVar[Section] = Ip247Config
+    config_model = Ip247Config
     ports = (
         PortDef("pg", "programmer port X8 (AS511, IP247-SIM/PG v1; 9600 8E1)", "§3.3.5"),
         PortDef("ag", "PLC side: FB164/FB165 services (IP247-SIM/AG v1, length-framed; TCP)", "§6"),

@@ -12,7 +12,6 @@ from typing import Any, ClassVar
 
 from devsim.core.device import Device
 from devsim.core.kit import Command, ErrorCode, PortDef, Reference
-from devsim.core.settings import Section
 from devsim.devices.pcd4h3.config import Pcd4h3Config
 from devsim.devices.pcd4h3.face import EtherDatagramFace, EtherStreamFace, SbusFace
 from devsim.devices.pcd4h3.framing import ETHER_TCP
@@ -30,7 +29,7 @@ class Pcd4h3Device(Device):
 
     kind: ClassVar[str] = "pcd4h3"
     description: ClassVar[str] = "SAIA PCD4.H3 servo positioning module (LM628) in a PCD4, S-Bus and Ether-S-Bus"
-    config_model: ClassVar[Section] = Pcd4h3Config
+    config_model = Pcd4h3Config
     ports = (
         PortDef("sbus", "S-Bus serial data mode (FS B5h, stuffing, CRC-16; 9600 8N1)", "§9.2"),
         PortDef("ether_udp", "Ether-S-Bus on UDP, one telegram per datagram", "§9.3", default="udp:5050"),

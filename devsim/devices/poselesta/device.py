@@ -13,7 +13,6 @@ from typing import Any, ClassVar
 
 from devsim.core.device import Device
 from devsim.core.kit import ErrorCode, PortDef, Reference
-from devsim.core.settings import Section
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF
 from devsim.devices.poselesta.config import PoselestaConfig
 from devsim.devices.poselesta.drive_actions import DRIVE
@@ -31,7 +30,7 @@ class PoselestaDevice(Device):
 
     kind: ClassVar[str] = "poselesta"
     description: ClassVar[str] = "ELESTA POSELESTA II/III CNC (tape images on V6/V7 DNC, V8 keyboard, M/S/T bus)"
-    config_model: ClassVar[Section] = PoselestaConfig
+    config_model = PoselestaConfig
     ports = (
         PortDef("v6", "external data media: printer, cassette, tape reader/punch, TTY", "§2.6.2"),
         PortDef("v7", "DNC (20 mA): programs in and out", "§2.6.3"),

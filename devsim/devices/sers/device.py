@@ -12,7 +12,6 @@ from typing import Any, ClassVar
 
 from devsim.core.device import Device
 from devsim.core.kit import ErrorCode, PortDef, Reference
-from devsim.core.settings import Section
 from devsim.devices.sers.config import SersConfig
 from devsim.devices.sers.drive_actions import DRIVE
 from devsim.devices.sers.errors import ERRNO
@@ -32,7 +31,7 @@ class SersDevice(Device):
 
     kind: ClassVar[str] = "sers"
     description: ClassVar[str] = "Stögra SERS stepper driver with positioning control (ASCII, RS-232/RS-485)"
-    config_model: ClassVar[Section] = SersConfig
+    config_model = SersConfig
     hears_others: ClassVar[bool] = True  # a master's statements reach its slaves (§3.6.2)
     model_class = SersDrive
     face_classes: ClassVar[dict[str, Any]] = {"main": SersFace}
