@@ -14,7 +14,7 @@ from typing import Any
 
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.sers.constants import WEIGHTED, WEIGHTING_PARAMS
-from devsim.devices.sers.parameters import CURRENT_MAX_MA, KIND, PARAMETERS, lookup
+from devsim.devices.sers.parameters import CURRENT_MAX_MA, KIND, PARAMETER_TABLE, PARAMETERS
 from devsim.devices.sers.params import SersParameters
 from devsim.devices.sers.units import Scaling
 
@@ -73,7 +73,7 @@ class ParameterMemory:
         image[1010] = CURRENT_MAX_MA[cfg.current_class] // 2
         user: dict[int, Any] = {}
         for key, value in cfg.params.items():
-            user[lookup(str(key)).number] = value
+            user[PARAMETER_TABLE.lookup(key).key] = value
         for number in WEIGHTING_PARAMS:
             if number in user:
                 image[number] = user[number]

@@ -35,7 +35,6 @@ Conventions
 
 from __future__ import annotations
 
-import re
 from collections.abc import Mapping
 
 import msgspec
@@ -68,8 +67,6 @@ __all__ = [
     "PARAMETER_MASKS",
     "PROGRAM_MASKS",
     "STORED_ONLY",
-    "ParamLimits",
-    "lookup",
 ]
 
 #: Parameters that are kept and answered but have no effect in the simulator (their rows'
@@ -144,35 +141,6 @@ SAVED_WITH_P1117: frozenset[int] = frozenset(n for n, d in PARAMETERS.items() if
 POSSAVE_PARAMS: frozenset[int] = frozenset({51})
 #: Weighted parameters (converted via P76 / P44 / P160).
 WEIGHTED: frozenset[int] = frozenset(n for n, kind in KIND.items() if kind in ("position", "velocity", "acceleration"))
-
-_TOKEN = re.compile(r"P\s*([0-9]+)")
-
-
-class ParamLimits(msgspec.Struct, frozen=True):
-    """What a configured parameter value (``params:`` of the configuration) is checked against:
-    the row's range as the drive checks a write (§4.7), in the default weighting."""
-
-    number: int
-    name: str
-    choices: tuple[int, ...] | None
-    minimum: Number | None
-    maximum: Number | None
-    min_exclusive: bool
-
-
-def lookup(token: str) -> ParamLimits:
-    """Resolve ``P91`` / ``p 91`` / ``91`` / ``V`` / ``wa`` to its parameter's limits; ``KeyError``
-    if unknown."""
-    key = str(token).strip().upper()
-    m = _TOKEN.fullmatch(key)
-    if m:
-        row = PARAMETERS[int(m.group(1))]
-    elif key.isascii() and key.isdigit():
-        row = PARAMETERS[int(key)]
-    else:
-        row = PARAMETERS[ALIASES[key]]
-    return ParamLimits(row.key, row.name, row.choices, row.minimum, row.maximum, row.extra["min_exclusive"])
-
 
 # ============================================================================================
 # Variant tables
