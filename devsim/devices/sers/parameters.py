@@ -131,10 +131,10 @@ BIT_ADDRESSES: dict[str, tuple[int, int, bool]] = {
 }
 
 #: Factory / power-on value of every parameter that has one (user units, default weighting).
-FACTORY_DEFAULTS: dict[int, Number] = {n: d.default for n, d in PARAMETERS.items() if d.default is not None}
+FACTORY_DEFAULTS: dict[int, Number] = PARAMETER_TABLE.defaults()  # type: ignore[assignment]
 
 #: Parameters stored by PSAVE (P1004=2) unconditionally.
-SAVED: frozenset[int] = frozenset(n for n, d in PARAMETERS.items() if d.saved)
+SAVED: frozenset[int] = frozenset(PARAMETER_TABLE.saved())  # type: ignore[arg-type]
 #: Parameters stored by PSAVE only with P1117=1, and by P1004=5 (W, R0..R5).
 SAVED_WITH_P1117: frozenset[int] = frozenset(n for n, d in PARAMETERS.items() if d.extra["saved_with_p1117"])
 #: Stored by POSSAVE (P1004=4) and restored at power-on.
