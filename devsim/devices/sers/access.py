@@ -230,13 +230,10 @@ class ParameterAccess:
     def write_p0(self, value: float) -> None:
         """P0 (§4.8.2.1): 0 leaves programming mode, 1 starts the program, 2 starts programming
         mode deleting the program (NEW)."""
-        programs = self._programs()
-        actions: dict[float, Callable[[], None]] = {
-            0: self.program.quit, 1: lambda: programs.run_program(None), 2: programs.new_program}
-        action = actions.get(value)
+        action = _P0.get(value)
         if action is None:
             raise SersError(82)
-        action()
+        action(self)
 
     def write_w(self, value: float) -> None:
         """W (P47): free while standing; while moving only in the constant phase (§4.6.6)."""
@@ -251,12 +248,10 @@ class ParameterAccess:
 
     def write_p1004(self, value: float) -> None:
         """P1004 (§4.8.6.10): 2 PSAVE, 3 factory defaults, 4 POSSAVE, 5 R0..R5 and W."""
-        memory = self.memory
-        actions = {2: memory.psave, 3: memory.factory_defaults, 4: memory.possave, 5: memory.save_registers}
-        action = actions.get(int(value)) if value == int(value) else None
+        action = _P1004.get(int(value)) if value == int(value) else None
         if action is None:
             raise SersError(82)
-        action()
+        action(self.memory)
 
     def write_p1014(self, value: float) -> None:
         """P1014 (§4.8.4.1): the positioning mode, not while the drive moves."""
@@ -268,13 +263,10 @@ class ParameterAccess:
 
     def write_p1043(self, value: float) -> None:
         """P1043 (§4.8.4.2): 1 POS0, 2 POSR, 3 POSR also without a step loss."""
-        motion = self.motion
-        actions: dict[float, Callable[[], None]] = {
-            0: lambda: None, 1: motion.pos0, 2: lambda: motion.posr(force=False), 3: lambda: motion.posr(force=True)}
-        action = actions.get(value)
+        action = _P1043.get(value)
         if action is None:
             raise SersError(3)
-        action()
+        action(self.motion)
 
     def write_soft_limit(self, number: int, value: float) -> None:
         """P1040 / P1041 (§4.8.6.12): the lower limit may not lie above the upper one."""
@@ -298,6 +290,28 @@ class ParameterAccess:
             raise SersError(77)
         else:
             raise SersError(75)
+
+
+#: P0's values (§4.8.2.1): leave programming mode, start the program, NEW.
+_P0: dict[float, Callable[[ParameterAccess], None]] = {
+    0: lambda a: a.program.quit(),
+    1: lambda a: a._programs().run_program(None),
+    2: lambda a: a._programs().new_program(),
+}
+#: P1004's values (§4.8.6.10): PSAVE, factory defaults, POSSAVE, R0..R5 and W.
+_P1004: dict[int, Callable[[ParameterMemory], None]] = {
+    2: ParameterMemory.psave,
+    3: ParameterMemory.factory_defaults,
+    4: ParameterMemory.possave,
+    5: ParameterMemory.save_registers,
+}
+#: P1043's values (§4.8.4.2): nothing, POS0, POSR, POSR also without a step loss.
+_P1043: dict[float, Callable[[Motion], None]] = {
+    0: lambda m: None,
+    1: Motion.pos0,
+    2: lambda m: m.posr(force=False),
+    3: lambda m: m.posr(force=True),
+}
 
 
 Read = Callable[[ParameterAccess], Any]
