@@ -18,7 +18,7 @@ from devsim.core.kit import Command, Table
 from devsim.core.parameters import Param
 from devsim.core.signals import SignalBank
 from devsim.devices.sers import statements as st
-from devsim.devices.sers.constants import FIRMWARE, INC_PER_REV, WEIGHTED
+from devsim.devices.sers.constants import FIRMWARE, INC_PER_REV, WEIGHTED_KINDS
 from devsim.devices.sers.errors import SersError
 from devsim.devices.sers.inputs import Inputs
 from devsim.devices.sers.memory import ParameterMemory
@@ -108,7 +108,7 @@ class ParameterAccess:
             raise SersError(106)
         value = self.params.values.get(number, 0)
         kind = KIND[number]
-        if kind in WEIGHTED:
+        if kind in WEIGHTED_KINDS:
             scaling = self.params.scaling
             return quantize(scaling.from_internal(kind, float(value)), scaling.decimals(kind))
         return value
@@ -126,7 +126,7 @@ class ParameterAccess:
         """A value as a query answers it: weighted ones with the decimals and the unit of their
         weighting, ``fixed`` ones with their decimals (G-QUERYFMT)."""
         kind = KIND[number]
-        if kind in WEIGHTED:
+        if kind in WEIGHTED_KINDS:
             scaling = self.params.scaling
             return format_query(value, scaling.decimals(kind), scaling.unit(kind))
         if kind == "fixed":
@@ -142,7 +142,7 @@ class ParameterAccess:
             if value == "*":
                 return "*"  # P1 = Z=* (a broadcast target), as its query answers it
             kind = KIND.get(number)
-            if kind in WEIGHTED:
+            if kind in WEIGHTED_KINDS:
                 return format_query(float(value), self.params.scaling.decimals(kind))
             if kind == "fixed":
                 return format_query(float(value), PARAMETERS[number].decimals)
@@ -171,7 +171,7 @@ class ParameterAccess:
         self.check_range(row, value)
         kind = KIND[number]
         values = self.params.values
-        if kind in WEIGHTED:
+        if kind in WEIGHTED_KINDS:
             values[number] = self.params.scaling.to_internal(kind, float(value))
         elif kind == "int" and float(value).is_integer():
             values[number] = int(value)

@@ -13,7 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from devsim.core.nvram import NonVolatileMemory
-from devsim.devices.sers.constants import WEIGHTED, WEIGHTING_PARAMS
+from devsim.devices.sers.constants import WEIGHTED_KINDS, WEIGHTING_PARAMS
 from devsim.devices.sers.parameters import (
     CURRENT_MAX_MA,
     FACTORY_DEFAULTS,
@@ -87,7 +87,7 @@ class ParameterMemory:
             if value is None:
                 continue
             kind = KIND[number]
-            if kind in WEIGHTED:
+            if kind in WEIGHTED_KINDS:
                 value = scaling.to_internal(kind, float(value))
             image[number] = value
         return image

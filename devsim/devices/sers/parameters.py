@@ -40,6 +40,7 @@ from collections.abc import Mapping
 import msgspec
 
 from devsim.core.parameters import Param, ParameterTable
+from devsim.devices.sers.constants import WEIGHTED_KINDS
 from devsim.devices.sers.paramdef import Kind, Number
 from devsim.devices.sers.params_io import ROWS as _IO
 from devsim.devices.sers.params_misc import ROWS as _MISC
@@ -140,7 +141,7 @@ SAVED_WITH_P1117: frozenset[int] = frozenset(n for n, d in PARAMETERS.items() if
 #: Stored by POSSAVE (P1004=4) and restored at power-on.
 POSSAVE_PARAMS: frozenset[int] = frozenset({51})
 #: Weighted parameters (converted via P76 / P44 / P160).
-WEIGHTED: frozenset[int] = frozenset(n for n, kind in KIND.items() if kind in ("position", "velocity", "acceleration"))
+WEIGHTED: frozenset[int] = frozenset(n for n, kind in KIND.items() if kind in WEIGHTED_KINDS)
 
 # ============================================================================================
 # Variant tables
