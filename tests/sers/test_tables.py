@@ -16,13 +16,13 @@ from devsim.devices.sers.parameters import (
     CURRENT_MAX_MA,
     FACTORY_DEFAULTS,
     PARAMETER_MASKS,
+    PARAMETER_TABLE,
     PARAMETERS,
     PROGRAM_MASKS,
     SAVED,
     SAVED_WITH_P1117,
     SUPPLY_THRESHOLDS,
     WEIGHTED,
-    lookup,
 )
 from devsim.devices.sers.units import (
     ACCEL_WEIGHTINGS,
@@ -192,8 +192,8 @@ EXPECTED_ALIASES = {
 def test_aliases_exact():
     assert ALIASES == EXPECTED_ALIASES
     for alias, number in ALIASES.items():
-        assert lookup(alias).number == number
-        assert lookup(alias.lower()).number == number
+        assert PARAMETER_TABLE.lookup(alias).key == number
+        assert PARAMETER_TABLE.lookup(alias.lower()).key == number
         assert alias in PARAMETERS[number].aliases
 
 
@@ -216,12 +216,12 @@ def test_non_simple_aliases_not_in_aliases():
 
 
 def test_lookup_p_numbers_and_errors():
-    assert lookup("P91").name == "Geschwindigkeit - Positionieren"
-    assert lookup("p 1010").number == 1010
-    assert lookup(" v ").number == 91
+    assert PARAMETER_TABLE.lookup("P91").name == "Geschwindigkeit - Positionieren"
+    assert PARAMETER_TABLE.lookup("p 1010").key == 1010
+    assert PARAMETER_TABLE.lookup(" v ").key == 91
     for bad in ("P9999", "P1074", "Q", "", "ON", "P"):
         with pytest.raises(KeyError):
-            lookup(bad)
+            PARAMETER_TABLE.lookup(bad)
 
 
 def test_every_listed_parameter_present():

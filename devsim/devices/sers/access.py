@@ -18,7 +18,7 @@ from devsim.core.kit import Command, Table
 from devsim.core.parameters import Param
 from devsim.core.signals import SignalBank
 from devsim.devices.sers import statements as st
-from devsim.devices.sers.constants import FIRMWARE, INC_PER_REV, WEIGHTED
+from devsim.devices.sers.constants import FIRMWARE, INC_PER_REV, WEIGHTED_KINDS
 from devsim.devices.sers.errors import SersError
 from devsim.devices.sers.inputs import Inputs
 from devsim.devices.sers.memory import ParameterMemory
@@ -108,7 +108,7 @@ class ParameterAccess:
             raise SersError(106)
         value = self.params.values.get(number, 0)
         kind = KIND[number]
-        if kind in WEIGHTED:
+        if kind in WEIGHTED_KINDS:
             scaling = self.params.scaling
             return quantize(scaling.from_internal(kind, float(value)), scaling.decimals(kind))
         return value
@@ -126,7 +126,7 @@ class ParameterAccess:
         """A value as a query answers it: weighted ones with the decimals and the unit of their
         weighting, ``fixed`` ones with their decimals (G-QUERYFMT)."""
         kind = KIND[number]
-        if kind in WEIGHTED:
+        if kind in WEIGHTED_KINDS:
             scaling = self.params.scaling
             return format_query(value, scaling.decimals(kind), scaling.unit(kind))
         if kind == "fixed":
@@ -142,7 +142,7 @@ class ParameterAccess:
             if value == "*":
                 return "*"  # P1 = Z=* (a broadcast target), as its query answers it
             kind = KIND.get(number)
-            if kind in WEIGHTED:
+            if kind in WEIGHTED_KINDS:
                 return format_query(float(value), self.params.scaling.decimals(kind))
             if kind == "fixed":
                 return format_query(float(value), PARAMETERS[number].decimals)
@@ -171,7 +171,7 @@ class ParameterAccess:
         self.check_range(row, value)
         kind = KIND[number]
         values = self.params.values
-        if kind in WEIGHTED:
+        if kind in WEIGHTED_KINDS:
             values[number] = self.params.scaling.to_internal(kind, float(value))
         elif kind == "int" and float(value).is_integer():
             values[number] = int(value)
@@ -230,13 +230,10 @@ class ParameterAccess:
     def write_p0(self, value: float) -> None:
         """P0 (§4.8.2.1): 0 leaves programming mode, 1 starts the program, 2 starts programming
         mode deleting the program (NEW)."""
-        programs = self._programs()
-        actions: dict[float, Callable[[], None]] = {
-            0: self.program.quit, 1: lambda: programs.run_program(None), 2: programs.new_program}
-        action = actions.get(value)
+        action = _P0.get(value)
         if action is None:
             raise SersError(82)
-        action()
+        action(self)
 
     def write_w(self, value: float) -> None:
         """W (P47): free while standing; while moving only in the constant phase (§4.6.6)."""
@@ -251,12 +248,10 @@ class ParameterAccess:
 
     def write_p1004(self, value: float) -> None:
         """P1004 (§4.8.6.10): 2 PSAVE, 3 factory defaults, 4 POSSAVE, 5 R0..R5 and W."""
-        memory = self.memory
-        actions = {2: memory.psave, 3: memory.factory_defaults, 4: memory.possave, 5: memory.save_registers}
-        action = actions.get(int(value)) if value == int(value) else None
+        action = _P1004.get(int(value)) if value == int(value) else None
         if action is None:
             raise SersError(82)
-        action()
+        action(self.memory)
 
     def write_p1014(self, value: float) -> None:
         """P1014 (§4.8.4.1): the positioning mode, not while the drive moves."""
@@ -268,13 +263,10 @@ class ParameterAccess:
 
     def write_p1043(self, value: float) -> None:
         """P1043 (§4.8.4.2): 1 POS0, 2 POSR, 3 POSR also without a step loss."""
-        motion = self.motion
-        actions: dict[float, Callable[[], None]] = {
-            0: lambda: None, 1: motion.pos0, 2: lambda: motion.posr(force=False), 3: lambda: motion.posr(force=True)}
-        action = actions.get(value)
+        action = _P1043.get(value)
         if action is None:
             raise SersError(3)
-        action()
+        action(self.motion)
 
     def write_soft_limit(self, number: int, value: float) -> None:
         """P1040 / P1041 (§4.8.6.12): the lower limit may not lie above the upper one."""
@@ -298,6 +290,28 @@ class ParameterAccess:
             raise SersError(77)
         else:
             raise SersError(75)
+
+
+#: P0's values (§4.8.2.1): leave programming mode, start the program, NEW.
+_P0: dict[float, Callable[[ParameterAccess], None]] = {
+    0: lambda a: a.program.quit(),
+    1: lambda a: a._programs().run_program(None),
+    2: lambda a: a._programs().new_program(),
+}
+#: P1004's values (§4.8.6.10): PSAVE, factory defaults, POSSAVE, R0..R5 and W.
+_P1004: dict[int, Callable[[ParameterMemory], None]] = {
+    2: ParameterMemory.psave,
+    3: ParameterMemory.factory_defaults,
+    4: ParameterMemory.possave,
+    5: ParameterMemory.save_registers,
+}
+#: P1043's values (§4.8.4.2): nothing, POS0, POSR, POSR also without a step loss.
+_P1043: dict[float, Callable[[Motion], None]] = {
+    0: lambda m: None,
+    1: Motion.pos0,
+    2: lambda m: m.posr(force=False),
+    3: lambda m: m.posr(force=True),
+}
 
 
 Read = Callable[[ParameterAccess], Any]

@@ -8,7 +8,7 @@ import re
 
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.access import ParameterAccess, address_number
-from devsim.devices.sers.constants import WEIGHTED
+from devsim.devices.sers.constants import WEIGHTED_KINDS
 from devsim.devices.sers.errors import SersError
 from devsim.devices.sers.motion import Motion
 from devsim.devices.sers.operands import Operands
@@ -115,7 +115,7 @@ class Answers:
                 kind = KIND.get(address_number(stmt.target))
             except (SersError, KeyError):
                 kind = None
-            if kind in WEIGHTED:
+            if kind in WEIGHTED_KINDS:
                 scaling = self.params.scaling
                 value = format_fixed(stmt.value.value, scaling.decimals(kind))
                 unit = scaling.unit(kind) if self.list_options & 2 else ""

@@ -12,7 +12,7 @@ import math
 from typing import Annotated, Any, Literal
 
 from devsim.core.settings import Check, Keys, Meta, Settings, doc, field
-from devsim.devices.sers.parameters import lookup
+from devsim.devices.sers.parameters import PARAMETER_TABLE
 
 __all__ = ["AXIS_GEOMETRY", "AxisGeometry", "BAUD_RATES", "SersConfig"]
 
@@ -21,24 +21,22 @@ BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200)
 
 def _known_parameter(key: Any) -> str:
     """A parameter named by number (``P1017``, ``1017``) or alias (``V``)."""
-    try:
-        lookup(str(key))
-    except KeyError:
-        raise ValueError("no such parameter") from None
+    if PARAMETER_TABLE.find(str(key)) is None:
+        raise ValueError("no such parameter")
     return str(key)
 
 
 def _param_ranges(value: dict[str, float | int]) -> dict[str, float | int]:
     """Each value within the parameter's own range (§4.7), as the drive would check it."""
     for key, number in value.items():
-        pdef = lookup(key)
+        pdef = PARAMETER_TABLE.lookup(key)
         if not math.isfinite(number):
             raise ValueError(f"{key}: not a finite number")
         if pdef.choices is not None and int(number) not in pdef.choices:
             raise ValueError(f"{key}: {number:g} is not one of {', '.join(map(str, sorted(pdef.choices)))}")
         if pdef.minimum is not None and number < pdef.minimum:
             raise ValueError(f"{key}: {number:g} is below the minimum {pdef.minimum:g}")
-        if pdef.min_exclusive and pdef.minimum is not None and number <= pdef.minimum:
+        if pdef.extra["min_exclusive"] and pdef.minimum is not None and number <= pdef.minimum:
             raise ValueError(f"{key}: {number:g} must be above {pdef.minimum:g}")
         if pdef.maximum is not None and number > pdef.maximum:
             raise ValueError(f"{key}: {number:g} is above the maximum {pdef.maximum:g}")

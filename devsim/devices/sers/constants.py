@@ -4,6 +4,7 @@ from __future__ import annotations
 
 __all__ = [
     "ELECTRICAL_PERIOD",
+    "EMCY_CODES",
     "ERROR_DISPLAY",
     "FIRMWARE",
     "INC_PER_REV",
@@ -15,14 +16,15 @@ __all__ = [
     "STEP_LOSS",
     "UNDERVOLTAGE",
     "WARNING_DISPLAY",
-    "WEIGHTED",
+    "WEIGHTED_KINDS",
     "WEIGHTING_PARAMS",
 ]
 
 FIRMWARE = 120901
 INC_PER_REV = 12800
 ELECTRICAL_PERIOD = 256  # increments between phase-zero positions (7.2° on a 1.8° motor)
-WEIGHTED = ("position", "velocity", "acceleration")
+#: The kinds of parameter whose value follows the weighting (P76, P44, P160; §4.8.4.6).
+WEIGHTED_KINDS = ("position", "velocity", "acceleration")
 WEIGHTING_PARAMS = (76, 44, 160, 121, 122, 123)
 INPUT_NAMES = ("limit_left", "limit_right", "stop", "reference", "service_ext")
 

@@ -1,8 +1,9 @@
 """The serial face of the Stögra SERS (manual "SERS Version V04, Firmware ab 120901"; spec sers.md).
 
-This module is the ASCII line protocol of the drive, held over the model (:class:`SersDrive`): framing, drive selection on a multidrop line,
-echo modes (P1017, §4.8.6.9), acknowledgements (§4.1), error messages (§4.8.3.1), parameter
-queries (§4.7) and the execution of interactive statements (§4.2).  The physics behind it –
+The ASCII line protocol of the drive over its model (:class:`~.model.SersDrive`): framing,
+drive selection on a multidrop line, echo modes (P1017, §4.8.6.9), acknowledgements (§4.1),
+error messages (§4.8.3.1), parameter queries (§4.7) and the execution of interactive
+statements (§4.2).  The physics behind it –
 positioning, jog, homing, limit switches, faults – lives in the model's parts (:mod:`.model`).
 """
 
@@ -202,7 +203,7 @@ class SersFace(Face):
             self.send(data)
         self.line = line = CommandLine()  # (what the query sets off waits for the line end)
         line.execute = line.reply = True
-        try:  # what _progress does with the line's one statement, a query (_query)
+        try:  # what the statements' progress does with the line's one statement, a query
             self._out(line, model.answers.query_text(poll.query) + "\n\r")
         except SersError as exc:
             self._error(line, exc.errno, exc.detail)
@@ -215,8 +216,8 @@ class SersFace(Face):
         """The rest of a whole line in the chunk whose first statement is an error before any
         statement completes (what noise mostly is): its echo up to the character that made
         the error, the error, the echo of the rest and of the line end, in one step, as
-        :meth:`_take_text`, :meth:`_progress` and the line end would do it piece by piece.
-        Any other line goes on piece by piece (returns ``stop``)."""
+        :meth:`_take_text`, :meth:`.interactive.LineStatements.progress` and the line end would
+        do it piece by piece.  Any other line goes on piece by piece (returns ``stop``)."""
         framer = self.framer
         window = max(0, codec.MAX_LINE - framer.length)  # characters kept (the rest are dropped)
         failure = first_failure(data[stop : min(end - 1, stop + window)])

@@ -13,15 +13,22 @@ from collections.abc import Callable
 from typing import Any
 
 from devsim.core.nvram import NonVolatileMemory
-from devsim.devices.sers.constants import WEIGHTED, WEIGHTING_PARAMS
-from devsim.devices.sers.parameters import CURRENT_MAX_MA, KIND, PARAMETERS, lookup
+from devsim.devices.sers.constants import WEIGHTED_KINDS, WEIGHTING_PARAMS
+from devsim.devices.sers.parameters import (
+    CURRENT_MAX_MA,
+    FACTORY_DEFAULTS,
+    KIND,
+    PARAMETER_TABLE,
+    PARAMETERS,
+    SAVED_WITH_P1117,
+)
 from devsim.devices.sers.params import SersParameters
 from devsim.devices.sers.units import Scaling
 
 __all__ = ["ParameterMemory"]
 
 #: W and the registers R0..R5: stored by P1004=5, and by PSAVE with P1117=1.
-REGISTERS = (47, 1080, 1081, 1082, 1083, 1084, 1085)
+REGISTERS = tuple(sorted(SAVED_WITH_P1117))
 
 
 class ParameterMemory:
@@ -43,7 +50,7 @@ class ParameterMemory:
 
     def power_on(self) -> None:
         """§4.1 steps 3–4: the checksum, then the parameters from the EEPROM."""
-        self.eeprom_checksum_error = bool(getattr(self.nvram, "corrupt", False))
+        self.eeprom_checksum_error = self.nvram.corrupt
         ram = self._factory_image()
         stored = self.nvram.get("params")
         if stored and not self.eeprom_checksum_error:
@@ -66,14 +73,11 @@ class ParameterMemory:
     def _factory_image(self) -> dict[int, Any]:
         """Factory defaults plus the configured EEPROM values, in internal units."""
         cfg = self._config()
-        image: dict[int, Any] = {}
-        for number, row in PARAMETERS.items():
-            if row.default is not None:
-                image[number] = row.default
+        image: dict[int, Any] = dict(FACTORY_DEFAULTS)
         image[1010] = CURRENT_MAX_MA[cfg.current_class] // 2
         user: dict[int, Any] = {}
         for key, value in cfg.params.items():
-            user[lookup(str(key)).number] = value
+            user[PARAMETER_TABLE.lookup(key).key] = value
         for number in WEIGHTING_PARAMS:
             if number in user:
                 image[number] = user[number]
@@ -83,7 +87,7 @@ class ParameterMemory:
             if value is None:
                 continue
             kind = KIND[number]
-            if kind in WEIGHTED:
+            if kind in WEIGHTED_KINDS:
                 value = scaling.to_internal(kind, float(value))
             image[number] = value
         return image

@@ -24,7 +24,6 @@ P121–P123) only matter at the serial interface.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from typing import Any
 
 from devsim.core.axis import Axis, RegionSwitch
@@ -166,29 +165,17 @@ class SersDrive(Model):
     def _build_switches(self) -> None:
         geo = self.cfg.axis
 
-        def follow(signal: str) -> Callable[[bool], None]:
-            return lambda active: self.signals.set(signal, active)
+        def switch(low: float, high: float, signal: str) -> None:
+            region = RegionSwitch(self.axis, low, high, lambda active: self.signals.set(signal, active))
+            self._switches.append(region)
+            self.signals.signal(signal).value = region.active
 
         if geo.limit_left is not None:
-            self._switches.append(RegionSwitch(self.axis, -math.inf, geo.limit_left, follow("limit_left")))
+            switch(-math.inf, geo.limit_left, "limit_left")
         if geo.limit_right is not None:
-            self._switches.append(RegionSwitch(self.axis, geo.limit_right, math.inf, follow("limit_right")))
+            switch(geo.limit_right, math.inf, "limit_right")
         if geo.reference_low is not None:
-            high = geo.reference_high if geo.reference_high is not None else math.inf
-            self._switches.append(RegionSwitch(self.axis, geo.reference_low, high, follow("reference")))
-        for switch, name in zip(self._switches, self._switch_signals(), strict=False):
-            self.signals.signal(name).value = switch.active
-
-    def _switch_signals(self) -> list[str]:
-        geo = self.cfg.axis
-        names = []
-        if geo.limit_left is not None:
-            names.append("limit_left")
-        if geo.limit_right is not None:
-            names.append("limit_right")
-        if geo.reference_low is not None:
-            names.append("reference")
-        return names
+            switch(geo.reference_low, geo.reference_high if geo.reference_high is not None else math.inf, "reference")
 
     # ======================================================================================
     # power

@@ -35,12 +35,12 @@ Conventions
 
 from __future__ import annotations
 
-import re
 from collections.abc import Mapping
 
 import msgspec
 
 from devsim.core.parameters import Param, ParameterTable
+from devsim.devices.sers.constants import WEIGHTED_KINDS
 from devsim.devices.sers.paramdef import Kind, Number
 from devsim.devices.sers.params_io import ROWS as _IO
 from devsim.devices.sers.params_misc import ROWS as _MISC
@@ -68,8 +68,6 @@ __all__ = [
     "PARAMETER_MASKS",
     "PROGRAM_MASKS",
     "STORED_ONLY",
-    "ParamLimits",
-    "lookup",
 ]
 
 #: Parameters that are kept and answered but have no effect in the simulator (their rows'
@@ -134,45 +132,16 @@ BIT_ADDRESSES: dict[str, tuple[int, int, bool]] = {
 }
 
 #: Factory / power-on value of every parameter that has one (user units, default weighting).
-FACTORY_DEFAULTS: dict[int, Number] = {n: d.default for n, d in PARAMETERS.items() if d.default is not None}
+FACTORY_DEFAULTS: dict[int, Number] = PARAMETER_TABLE.defaults()  # type: ignore[assignment]
 
 #: Parameters stored by PSAVE (P1004=2) unconditionally.
-SAVED: frozenset[int] = frozenset(n for n, d in PARAMETERS.items() if d.saved)
+SAVED: frozenset[int] = frozenset(PARAMETER_TABLE.saved())  # type: ignore[arg-type]
 #: Parameters stored by PSAVE only with P1117=1, and by P1004=5 (W, R0..R5).
 SAVED_WITH_P1117: frozenset[int] = frozenset(n for n, d in PARAMETERS.items() if d.extra["saved_with_p1117"])
 #: Stored by POSSAVE (P1004=4) and restored at power-on.
 POSSAVE_PARAMS: frozenset[int] = frozenset({51})
 #: Weighted parameters (converted via P76 / P44 / P160).
-WEIGHTED: frozenset[int] = frozenset(n for n, kind in KIND.items() if kind in ("position", "velocity", "acceleration"))
-
-_TOKEN = re.compile(r"P\s*([0-9]+)")
-
-
-class ParamLimits(msgspec.Struct, frozen=True):
-    """What a configured parameter value (``params:`` of the configuration) is checked against:
-    the row's range as the drive checks a write (§4.7), in the default weighting."""
-
-    number: int
-    name: str
-    choices: tuple[int, ...] | None
-    minimum: Number | None
-    maximum: Number | None
-    min_exclusive: bool
-
-
-def lookup(token: str) -> ParamLimits:
-    """Resolve ``P91`` / ``p 91`` / ``91`` / ``V`` / ``wa`` to its parameter's limits; ``KeyError``
-    if unknown."""
-    key = str(token).strip().upper()
-    m = _TOKEN.fullmatch(key)
-    if m:
-        row = PARAMETERS[int(m.group(1))]
-    elif key.isascii() and key.isdigit():
-        row = PARAMETERS[int(key)]
-    else:
-        row = PARAMETERS[ALIASES[key]]
-    return ParamLimits(row.key, row.name, row.choices, row.minimum, row.maximum, row.extra["min_exclusive"])
-
+WEIGHTED: frozenset[int] = frozenset(n for n, kind in KIND.items() if kind in WEIGHTED_KINDS)
 
 # ============================================================================================
 # Variant tables
