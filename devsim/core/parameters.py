@@ -19,7 +19,7 @@ from typing import Any, Literal
 
 import msgspec
 
-from devsim.core.points import BadValue, Point, UnknownName, parse_as
+from devsim.core.points import BadValue, Point, UnknownName, number_text, parse_as, range_text
 
 __all__ = [
     "EMPTY",
@@ -92,9 +92,9 @@ class Param(msgspec.Struct, frozen=True):
             raise BadValue(f"{self.label}: {exc}") from None
         if self.type in ("int", "float"):
             if self.minimum is not None and parsed < self.minimum:
-                raise BadValue(f"{self.label}: {_number(parsed)} is below the minimum {_number(self.minimum)}{_unit(self.unit)}")
+                raise BadValue(f"{self.label}: {number_text(parsed)} is below the minimum {number_text(self.minimum)}{_unit(self.unit)}")
             if self.maximum is not None and parsed > self.maximum:
-                raise BadValue(f"{self.label}: {_number(parsed)} is above the maximum {_number(self.maximum)}{_unit(self.unit)}")
+                raise BadValue(f"{self.label}: {number_text(parsed)} is above the maximum {number_text(self.maximum)}{_unit(self.unit)}")
         if self.choices is not None and parsed not in self.choices:
             raise BadValue(f"{self.label}: expects one of {', '.join(map(str, self.choices))}, not {value!r}")
         return parsed
@@ -104,19 +104,7 @@ class Param(msgspec.Struct, frozen=True):
         return str(self.key) if isinstance(self.key, str) else f"#{self.key}"
 
     def range_text(self) -> str:
-        if self.choices is not None:
-            return " / ".join(str(c) for c in self.choices)
-        if self.minimum is None and self.maximum is None:
-            return ""
-        low = "" if self.minimum is None else _number(self.minimum)
-        high = "" if self.maximum is None else _number(self.maximum)
-        return f"{low} … {high}"
-
-
-def _number(value: float) -> str:
-    """A range limit as the reference prints it: every digit the manual gives (99999999, not
-    1e+08; 214748.3647, not 214748)."""
-    return str(int(value)) if float(value).is_integer() else f"{value:.12g}"
+        return range_text(self.minimum, self.maximum, self.choices)
 
 
 def _unit(unit: str) -> str:

@@ -40,7 +40,9 @@ __all__ = [
     "UnknownName",
     "finite",
     "parse_as",
+    "number_text",
     "parse_bool",
+    "range_text",
 ]
 
 PointType = Literal["bool", "int", "float", "str", "json"]
@@ -209,13 +211,24 @@ class Point(msgspec.Struct, frozen=True):
         return parsed
 
     def range_text(self) -> str:
-        if self.choices is not None:
-            return " / ".join(str(c) for c in self.choices)
-        if self.minimum is None and self.maximum is None:
-            return ""
-        low = "" if self.minimum is None else f"{self.minimum:g}"
-        high = "" if self.maximum is None else f"{self.maximum:g}"
-        return f"{low} … {high}"
+        return range_text(self.minimum, self.maximum, self.choices)
+
+
+def number_text(value: float) -> str:
+    """A limit as a reference prints it: every digit the manual gives (99999999, not 1e+08;
+    214748.3647, not 214748)."""
+    return str(int(value)) if float(value).is_integer() else f"{value:.12g}"
+
+
+def range_text(minimum: float | None, maximum: float | None, choices: tuple[Any, ...] | None = None) -> str:
+    """``low … high``, or the choices, of a point or a parameter row (empty: no range)."""
+    if choices is not None:
+        return " / ".join(str(c) for c in choices)
+    if minimum is None and maximum is None:
+        return ""
+    low = "" if minimum is None else number_text(minimum)
+    high = "" if maximum is None else number_text(maximum)
+    return f"{low} … {high}"
 
 
 def _unit(unit: str) -> str:
