@@ -255,7 +255,7 @@ class ControlServer:
 
     def handle_line(self, raw: bytes | str) -> OkResponse | ErrorResponse:
         """Answer one request line (runs in the loop thread)."""
-        return ops.answer(self.runtime, raw)[0]
+        return ops.answer(self.runtime, raw)
 
 
 #: ``_start_watch`` wrote its answer itself.
