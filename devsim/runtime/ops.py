@@ -4,7 +4,7 @@ of :class:`~devsim.core.kit.Command` rows (op → handler, doc, typed request re
 Everything that offers the control API runs it from here: the control server and the fleet member
 (:func:`answer`, JSON in and out), the clients (:meth:`devsim.runtime.client.ControlOps.call`),
 ``devsim ctl`` (one command per row), the pytest plugin's :class:`~devsim.pytest_plugin.SimDevice`
-and the MQTT and OPC UA command paths (:func:`run` with a request record).
+and ``SimPlant``, and the MQTT and OPC UA command paths (:func:`run` with a request record).
 
 A handler is ``handler(runtime, request) -> result``; it runs the :class:`~devsim.runtime.Runtime`'s
 thread-safe methods, so it may be called from any thread.
