@@ -333,33 +333,35 @@ def _make_sim_plant_class() -> type:
     from devsim.scenario.plant import Plant
 
     class SimPlant(Plant):  # type: ignore[misc]
-        """A running plant with control helpers (all thread-safe, by device name)."""
+        """A running plant with control helpers (all thread-safe, by device name): the ops of
+        :data:`devsim.runtime.ops.CONTROL`, as :class:`SimDevice` runs them."""
 
         def read(self, device: str, name: str) -> Any:
-            return self.runtime.read(device, name)
+            return run(self.runtime, rq.Read(device, name))
 
         def set(self, device: str, name: str, value: Any) -> None:
-            self.runtime.set(device, name, value)
+            run(self.runtime, rq.Set(device, name, value))
 
         def state(self, device: str) -> dict[str, Any]:
-            return self.runtime.state(device)
+            result: dict[str, Any] = run(self.runtime, rq.State(device))
+            return result
 
         def power_cycle(self, device: str, wipe: bool = False) -> None:
-            self.runtime.power_cycle(device, wipe=wipe)
+            run(self.runtime, rq.PowerCycle(device, wipe))
 
         def fault(self, device: str, kind: str, active: bool = True) -> None:
             """Switch a declared fault of ``device`` on or off."""
-            self.runtime.fault(device, kind, active)
+            run(self.runtime, rq.SwitchFault(device, kind, active))
 
         def line_fault(self, device: str, kind: str, active: bool = True, *, port: str = "main", **params: Any) -> None:
             """Start or end a fault on the line serving a port of ``device``."""
-            self.runtime.line_fault(device, kind, active, port=port, **params)
+            run(self.runtime, rq.LineFault(device, kind, active, port, params))
 
         def now(self) -> float:
-            return self.runtime.now()
+            return float(run(self.runtime, rq.Now()))
 
         def advance(self, seconds: float) -> float:
-            return self.runtime.advance(seconds)
+            return float(run(self.runtime, rq.Advance(seconds)))
 
         def run_until(self, predicate: Callable[[Plant], bool], timeout: float) -> bool:
             """Virtual time: until ``predicate(plant)`` holds (run in the runtime's thread)."""

@@ -6,10 +6,10 @@
 * :mod:`devsim.cli.options` – checks of the facade and fleet options ``run`` and ``up`` share;
 * :mod:`devsim.cli.docgen` – the Markdown of ``devsim doc``;
 * :mod:`devsim.cli.replay` – ``devsim record`` and ``devsim replay``;
-* :mod:`devsim.cli.monitor` – ``devsim monitor``.
+* :mod:`devsim.cli.monitor` – ``devsim monitor``;
+* :mod:`devsim.cli.scenario` – ``devsim check``, ``devsim scenario run`` and ``devsim up``.
 
-``devsim scenario``, ``check`` and ``up`` live in :mod:`devsim.scenario.cli`, ``devsim plot`` in
-:mod:`devsim.observe.plot`.
+``devsim plot`` lives in :mod:`devsim.observe.plot`.
 """
 
 from devsim.cli.main import cli, main

@@ -3,7 +3,7 @@
 errors are one line.
 
 One command per op of :data:`devsim.runtime.ops.CONTROL` (``power_cycle`` is ``power-cycle``),
-each sending the op's typed request (:mod:`devsim.runtime.requests`); :func:`command_names` lists
+each sending the op's typed request (:mod:`devsim.runtime.requests`); :func:`command_name` names
 them and a test holds them to the table."""
 
 from __future__ import annotations
@@ -32,24 +32,29 @@ def _emit(result: Any) -> None:
         click.echo(json.dumps(result))
 
 
-def _call(ctx: click.Context, request: rq.ControlRequest) -> None:
-    from devsim.runtime.client import ControlClient, ControlError
+def _connect(ctx: click.Context) -> tuple[str, Any]:
+    """The address and a client of ``--control`` (or ``--fleet``); a one-line error if it cannot
+    be reached."""
+    from devsim.runtime.client import ControlClient
     from devsim.runtime.control import ControlAddressError
 
     addr, fleet = ctx.obj
-    client: Any
     try:
         if fleet is not None:
             from devsim.fleet.client import FleetClient
 
-            addr = fleet
-            client = FleetClient(fleet)
-        else:
-            client = ControlClient(addr)
+            return fleet, FleetClient(fleet)
+        return addr, ControlClient(addr)
     except ControlAddressError as exc:
         raise click.UsageError(f"--control: {exc}") from None
     except OSError as exc:
-        raise click.ClickException(f"cannot connect to {addr}: {exc.strerror or exc}") from None
+        raise click.ClickException(f"cannot connect to {fleet or addr}: {exc.strerror or exc}") from None
+
+
+def _call(ctx: click.Context, request: rq.ControlRequest) -> None:
+    from devsim.runtime.client import ControlError
+
+    addr, client = _connect(ctx)
     try:
         with client:
             result = client.call(request)
@@ -214,19 +219,13 @@ def ctl_watch(device: str, names: tuple[str, ...], as_json: bool, period: float 
     """Print changes of DEVICE's NAMEs (default: its state and axes) and its events (move start
     and end, faults, errors, host connects) as they happen, one line each, until Ctrl-C or the
     simulator stops: '12.300 sers axis.position 1234.0'."""
-    from devsim.runtime.client import ControlClient, ControlError
-    from devsim.runtime.control import ControlAddressError
+    from devsim.runtime.client import ControlError
     from devsim.runtime.watch_stream import describe
 
-    addr, fleet = click.get_current_context().obj
-    if fleet is not None:
+    ctx = click.get_current_context()
+    if ctx.obj[1] is not None:
         raise click.UsageError("watch needs --control (a fleet has no stream)")
-    try:
-        client = ControlClient(addr)
-    except ControlAddressError as exc:
-        raise click.UsageError(f"--control: {exc}") from None
-    except OSError as exc:
-        raise click.ClickException(f"cannot connect to {addr}: {exc.strerror or exc}") from None
+    addr, client = _connect(ctx)
     stream = client.watch(device, list(names) or None, period=period)
     try:
         for item in stream:

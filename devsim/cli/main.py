@@ -677,14 +677,14 @@ def _port_text(transport: Any, scheme: str) -> str:
 #: Commands whose module is imported only when one of them runs (``devsim run`` starts faster):
 #: command name → the module that defines it as a click command of the same name.
 LAZY_COMMANDS: dict[str, str] = {
-    "check": "devsim.scenario.cli",
+    "check": "devsim.cli.scenario",
     "ctl": "devsim.cli.ctl",
     "monitor": "devsim.cli.monitor",
     "plot": "devsim.observe.plot",
     "record": "devsim.cli.replay",
     "replay": "devsim.cli.replay",
-    "scenario": "devsim.scenario.cli",
-    "up": "devsim.scenario.cli",
+    "scenario": "devsim.cli.scenario",
+    "up": "devsim.cli.scenario",
 }
 
 

@@ -281,12 +281,6 @@ class FleetClient(ControlOps):
     def request(self, op: str, **fields: Any) -> Any:
         return self._run(self.fleet.request(op, **fields))
 
-    def devices(self) -> list[dict[str, Any]]:
-        return self._run(self._listing())  # type: ignore[no-any-return]
-
-    async def _listing(self) -> list[dict[str, Any]]:
-        return self.fleet.devices()
-
     def wait_for_devices(self, names: Iterable[str], timeout: float = 10.0, *,
                          online: bool = True) -> list[dict[str, Any]]:
         """Wait (bounded) until the named devices are online (or offline)."""

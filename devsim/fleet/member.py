@@ -253,7 +253,7 @@ class FleetMember:
                 if isinstance(data, dict) and "reply_to" in data:
                     reply_to = data.pop("reply_to")
                     line = json.dumps(data)
-            response = ops.answer(self.runtime, line)[0]
+            response = ops.answer(self.runtime, line)
         if not self._reply_allowed(reply_to):
             return None
         out: Properties | None = None

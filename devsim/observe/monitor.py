@@ -30,6 +30,7 @@ from textual.screen import ModalScreen
 from textual.widgets import Footer, Header, OptionList, Sparkline, Static
 from textual.widgets.option_list import Option
 
+from devsim.runtime import requests as rq
 from devsim.runtime.client import ControlClient, ControlError
 
 __all__ = ["LINE_FAULTS", "MonitorApp"]
@@ -187,13 +188,13 @@ class DevicePanel(Vertical):
         self.query_one("#telegrams", Static).update("\n".join(rows) or "(no telegrams yet)")
 
 
-class FaultMenu(ModalScreen[tuple[str, ...] | None]):
-    """Pick a device fault or a line fault to switch."""
+class FaultMenu(ModalScreen[rq.ControlRequest | None]):
+    """Pick a device fault or a line fault to switch: each choice is its text and its request."""
 
     DEFAULT_CSS = "FaultMenu { align: center middle; } FaultMenu OptionList { width: 70; height: 20; }"
     BINDINGS = [Binding("escape", "dismiss_menu", "close")]
 
-    def __init__(self, choices: list[tuple[str, tuple[str, ...]]]) -> None:
+    def __init__(self, choices: list[tuple[str, rq.ControlRequest]]) -> None:
         super().__init__()
         self.choices = choices
 
@@ -312,47 +313,41 @@ class MonitorApp(App[None]):
     def _flip(self, event: Lamp.Flip) -> None:
         panel = next((p for p in event.lamp.ancestors if isinstance(p, DevicePanel)), None)
         if panel is not None:
-            self._request("set", panel.device, event.lamp.point, not bool(panel.values.get(event.lamp.point)))
+            self._request(rq.Set(panel.device, event.lamp.point, not bool(panel.values.get(event.lamp.point))))
 
-    def _request(self, method: str, *args: Any, **kwargs: Any) -> Any:
+    def _request(self, request: rq.ControlRequest) -> Any:
         try:
-            return getattr(self.client, method)(*args, **kwargs)
+            return self.client.call(request)
         except (ControlError, OSError) as exc:
             self.notify(str(exc), severity="error")
             return None
 
     def action_advance(self, seconds: float) -> None:
-        now = self._request("advance", seconds)
+        now = self._request(rq.Advance(seconds))
         if now is not None:
             self.notify(f"time {now:.3f} s", timeout=1)
 
     def action_faults(self) -> None:
-        choices: list[tuple[str, tuple[str, ...]]] = []
+        choices: list[tuple[str, rq.ControlRequest]] = []
         for info in self.infos:
             panel = self.panels[info["name"]]
             for kind in info.get("faults", []):
                 active = kind in panel.faults
                 choices.append((f"{info['name']}: {kind} {'off' if active else 'on'}",
-                                ("fault", info["name"], kind, "off" if active else "on")))
+                                rq.SwitchFault(info["name"], kind, not active)))
             for port in info.get("ports") or {}:
                 if not str((info.get("ports") or {}).get(port) or ""):
                     continue
                 for kind in LINE_FAULTS:
                     active = kind in panel.line_faults.get(port, set())
                     choices.append((f"{info['name']}.{port}: line {kind} {'off' if active else 'on'}",
-                                    ("line_fault", info["name"], port, kind, "off" if active else "on")))
+                                    rq.LineFault(info["name"], kind, not active, port,
+                                                 {} if active else dict(LINE_FAULTS[kind]))))
         self.push_screen(FaultMenu(choices), self._switch_fault)
 
-    def _switch_fault(self, choice: tuple[str, ...] | None) -> None:
-        if not choice:
-            return
-        if choice[0] == "fault":
-            _, device, kind, switch = choice
-            self._request("fault", device, kind, switch == "on")
-        else:
-            _, device, port, kind, switch = choice
-            self._request("line_fault", device, kind, switch == "on", port=port,
-                          **(LINE_FAULTS[kind] if switch == "on" else {}))
+    def _switch_fault(self, choice: rq.ControlRequest | None) -> None:
+        if choice is not None:
+            self._request(choice)
 
     def on_unmount(self) -> None:
         self._stop.set()

@@ -11,6 +11,8 @@ import threading
 from collections.abc import Iterator
 from typing import Any
 
+import msgspec
+
 from devsim.runtime import requests as rq
 from devsim.runtime.control import ControlAddress, parse_address
 from devsim.runtime.ops import op_of
@@ -41,7 +43,7 @@ class ControlOps:
 
     def call(self, request: rq.ControlRequest) -> Any:
         """Send one typed request; its result."""
-        return self.request(op_of(request), **rq.fields_of(request))
+        return self.request(op_of(request), **msgspec.structs.asdict(request))
 
     def read(self, device: str, name: str) -> Any:
         return self.call(rq.Read(device, name))

@@ -1,10 +1,10 @@
 """The control API out of process: newline-delimited JSON over a Unix socket or loopback TCP.
 
-In process the control API is :class:`devsim.runtime.Runtime` itself (``read``, ``set``,
-``state``, ``power_cycle``, ``advance``, ``now``).  ``devsim run --control ADDR`` puts a
-:class:`ControlServer` in front of the same methods; :class:`devsim.runtime.client.ControlClient`
-is a small blocking client with the same method names, and ``devsim ctl`` is a command line on
-top of the client.
+In process the control API is :func:`devsim.runtime.ops.run` with a typed request (or the
+:class:`devsim.runtime.Runtime`'s own methods).  ``devsim run --control ADDR`` puts a
+:class:`ControlServer` in front of the same op table; :class:`devsim.runtime.client.ControlClient`
+is a small blocking client with a method per op, and ``devsim ctl`` is a command line on top of
+the client.
 
 Addresses: ``unix:/path/to.sock``, or ``[HOST:]PORT`` for TCP (``tcp:`` prefix optional, IPv6
 hosts in brackets).  TCP servers refuse a non-loopback host unless ``allow_remote`` is given: a
@@ -20,14 +20,10 @@ order.  The ops, their handlers and their typed requests are one table,
     → {"id": 2, "op": "read", "device": "sers", "name": "nope"}
     ← {"id": 2, "ok": false, "error": "sers has no 'nope'", "type": "UnknownName"}
 
-Ops: ``read`` (device, name), ``set`` (device, name, value), ``state`` (device),
-``power_cycle`` (device, wipe), ``advance`` (seconds; virtual time only), ``now``, ``devices``,
-``line`` (device, port: status of the line serving that port), ``names`` (device: its declared
-points), ``fault`` (device, kind, active: a declared device fault on or off), ``line_fault``
-(device, port, kind, active, params: a fault on the line serving a port, e.g. ``noise`` with
-``{"rate": 100}``), ``telegrams`` (device, port, count: the last telegrams on that port's line,
-each ``{"t", "dir", "hex", "text"}`` and ``decoded`` where the port declares its framing; kept
-from the first such request on), ``watch`` (device, names, period: a subscription, see below).
+The ops are the rows of :data:`~devsim.runtime.ops.CONTROL` (what each does: its ``doc``); the
+fields of each are those of its request record in :mod:`devsim.runtime.requests` (``line_fault``'s
+``params``, e.g. ``{"rate": 100}`` for ``noise``; ``telegrams`` answers a list of
+``{"t", "dir", "hex", "text"}`` with ``decoded`` where the port declares its framing).
 
 ``watch`` answers once (``result``: the watched names and the device time) and then keeps
 sending one line per change or event until the connection closes or the simulator stops:
@@ -255,7 +251,7 @@ class ControlServer:
 
     def handle_line(self, raw: bytes | str) -> OkResponse | ErrorResponse:
         """Answer one request line (runs in the loop thread)."""
-        return ops.answer(self.runtime, raw)[0]
+        return ops.answer(self.runtime, raw)
 
 
 #: ``_start_watch`` wrote its answer itself.

@@ -4,7 +4,7 @@ of :class:`~devsim.core.kit.Command` rows (op → handler, doc, typed request re
 Everything that offers the control API runs it from here: the control server and the fleet member
 (:func:`answer`, JSON in and out), the clients (:meth:`devsim.runtime.client.ControlOps.call`),
 ``devsim ctl`` (one command per row), the pytest plugin's :class:`~devsim.pytest_plugin.SimDevice`
-and the MQTT and OPC UA command paths (:func:`run` with a request record).
+and ``SimPlant``, and the MQTT and OPC UA command paths (:func:`run` with a request record).
 
 A handler is ``handler(runtime, request) -> result``; it runs the :class:`~devsim.runtime.Runtime`'s
 thread-safe methods, so it may be called from any thread.
@@ -171,9 +171,7 @@ def op_of(request: rq.ControlRequest) -> str:
 
 def required(op: str) -> list[str]:
     """The fields ``op``'s request cannot do without."""
-    kind = CONTROL.rows[op].request
-    return [name for name, default in zip(kind.__struct_fields__, _defaults(kind), strict=True)
-            if default is _REQUIRED]
+    return [field.name for field in msgspec.structs.fields(CONTROL.rows[op].request) if field.required]
 
 
 def routed_by_device(op: str) -> bool:
@@ -206,50 +204,41 @@ def decode(op: Any, fields: Mapping[str, Any]) -> rq.ControlRequest:
         raise BadRequest(clip(str(exc))) from None
 
 
-_REQUIRED = object()
-
-
-def _defaults(kind: type[msgspec.Struct]) -> list[Any]:
-    """Each field's default, :data:`_REQUIRED` for one without."""
-    defaults = list(kind.__struct_defaults__)
-    return [_REQUIRED] * (len(kind.__struct_fields__) - len(defaults)) + defaults
-
-
 # -- JSON lines (the control server and the fleet member) --------------------------------------
-def answer(runtime: Runtime, raw: bytes | str) -> tuple[OkResponse | ErrorResponse, rq.ControlRequest | None]:
-    """Answer one JSON request line; also the typed request (None when it was refused)."""
+def answer(runtime: Runtime, raw: bytes | str) -> OkResponse | ErrorResponse:
+    """Answer one JSON request line."""
     try:
         payload = json.loads(raw)
     except RecursionError:
-        return ErrorResponse(error=f"request nested deeper than {MAX_DEPTH} levels", type="BadRequest"), None
+        return ErrorResponse(error=f"request nested deeper than {MAX_DEPTH} levels", type="BadRequest")
     except ValueError as exc:
-        return ErrorResponse(error=f"not JSON: {clip(str(exc))}", type="BadRequest"), None
+        return ErrorResponse(error=f"not JSON: {clip(str(exc))}", type="BadRequest")
     if _depth(payload) > MAX_DEPTH:
-        return ErrorResponse(error=f"request nested deeper than {MAX_DEPTH} levels", type="BadRequest"), None
+        return ErrorResponse(error=f"request nested deeper than {MAX_DEPTH} levels", type="BadRequest")
     if not isinstance(payload, dict):
-        return ErrorResponse(error="request: a JSON object with an 'op'", type="BadRequest"), None
+        return ErrorResponse(error="request: a JSON object with an 'op'", type="BadRequest")
     req_id = payload.get("id")
     if not isinstance(req_id, int | str) or isinstance(req_id, bool):
         if req_id is not None:
-            return ErrorResponse(error="id: a number or a string", type="BadRequest"), None
+            return ErrorResponse(error="id: a number or a string", type="BadRequest")
         req_id = None
     try:
         request = decode(payload.get("op"), payload)
     except BadRequest as exc:
-        return ErrorResponse(id=req_id, error=str(exc), type="BadRequest"), None
+        return ErrorResponse(id=req_id, error=str(exc), type="BadRequest")
     try:
-        return OkResponse(id=req_id, result=run(runtime, request)), request
+        return OkResponse(id=req_id, result=run(runtime, request))
     except Exception as exc:  # every failure becomes a typed error response
-        return ErrorResponse(id=req_id, error=clip(error_text(exc)), type=type(exc).__name__), request
+        return ErrorResponse(id=req_id, error=clip(error_text(exc)), type=type(exc).__name__)
 
 
-def encode(response: OkResponse | ErrorResponse, **extra: Any) -> bytes:
+def encode(response: OkResponse | ErrorResponse) -> bytes:
     """One response as a JSON line."""
     if isinstance(response, OkResponse):
         data: dict[str, Any] = {"id": response.id, "ok": True, "result": jsonable(response.result)}
     else:
         data = {"id": response.id, "ok": False, "error": response.error, "type": response.type}
-    return (json.dumps({**data, **extra}, separators=(",", ":")) + "\n").encode("utf-8")
+    return (json.dumps(data, separators=(",", ":")) + "\n").encode("utf-8")
 
 
 def jsonable(value: Any) -> Any:

@@ -104,7 +104,3 @@ class Watch(ControlRequest, frozen=True):
     names: list[str] | None = None
     period: float | None = None
 
-
-def fields_of(request: ControlRequest) -> dict[str, Any]:
-    """A request's fields as keyword arguments (what travels beside ``op``)."""
-    return {name: getattr(request, name) for name in request.__struct_fields__}

@@ -124,23 +124,23 @@ def _expect_label(value: Any) -> str:
     return f"expect {what} within {value.timeout:g}s"
 
 
+#: Where a step's actions are described (the section of each row below).
+_STEPS = "README: Scenarios and plants"
+
 #: A step's action → its line in the report (``log`` steps print their text as it is).
 LABELS: Table[Callable[[Any], str]] = Table((
-    Command("send", lambda v: f"send {_show(v.payload())}", "README: Scenarios and plants"),
-    Command("expect", _expect_label, "README: Scenarios and plants"),
-    Command("expect_state", lambda v: f"expect {v.describe()}", "README: Scenarios and plants"),
-    Command("expect_traffic", lambda v: f"expect {v.direction} sent /{_escape(v.regex)}/",
-            "README: Scenarios and plants"),
+    Command("send", lambda v: f"send {_show(v.payload())}", _STEPS),
+    Command("expect", _expect_label, _STEPS),
+    Command("expect_state", lambda v: f"expect {v.describe()}", _STEPS),
+    Command("expect_traffic", lambda v: f"expect {v.direction} sent /{_escape(v.regex)}/", _STEPS),
     Command("expect_timing", lambda v: f"expect {v.device} {v.event} between {v.between[0]:g}s and {v.between[1]:g}s",
-            "README: Scenarios and plants"),
-    Command("set", lambda v: f"set {v.device} " + ", ".join(f"{k}={x!r}" for k, x in v.values.items()),
-            "README: Scenarios and plants"),
-    Command("pulse", lambda v: f"pulse {v.device}.{v.input} for {v.width:g}s", "README: Scenarios and plants"),
-    Command("fault", lambda v: f"fault {v.device} {v.kind}{_for(v.duration)}", "README: Scenarios and plants"),
-    Command("line_fault", lambda v: f"line fault {v.kind}{_for(v.duration)}", "README: Scenarios and plants"),
-    Command("power_cycle", lambda v: f"power cycle {v.device}" + (" (memory wiped)" if v.wipe else ""),
-            "README: Scenarios and plants"),
-    Command("wait", lambda v: f"wait {v:g}s", "README: Scenarios and plants"),
+            _STEPS),
+    Command("set", lambda v: f"set {v.device} " + ", ".join(f"{k}={x!r}" for k, x in v.values.items()), _STEPS),
+    Command("pulse", lambda v: f"pulse {v.device}.{v.input} for {v.width:g}s", _STEPS),
+    Command("fault", lambda v: f"fault {v.device} {v.kind}{_for(v.duration)}", _STEPS),
+    Command("line_fault", lambda v: f"line fault {v.kind}{_for(v.duration)}", _STEPS),
+    Command("power_cycle", lambda v: f"power cycle {v.device}" + (" (memory wiped)" if v.wipe else ""), _STEPS),
+    Command("wait", lambda v: f"wait {v:g}s", _STEPS),
 ))
 
 
@@ -484,18 +484,18 @@ class Runner:
 
 #: A step's action → what the runner does (one row per action of the scenario schema's steps).
 ACTIONS: Table[Callable[..., Awaitable[bool]]] = Table((
-    Command("send", Runner._do_send, "README: Scenarios and plants", "bytes from a host port to a device"),
-    Command("expect", Runner._do_expect, "README: Scenarios and plants", "an answer the host must receive"),
-    Command("set", Runner._do_set, "README: Scenarios and plants", "a control name set to a value"),
-    Command("pulse", Runner._do_pulse, "README: Scenarios and plants", "an input set, then reset after a time"),
-    Command("fault", Runner._do_fault, "README: Scenarios and plants", "a declared device fault switched on or off"),
-    Command("line_fault", Runner._do_line_fault, "README: Scenarios and plants", "a fault on a port's line"),
-    Command("power_cycle", Runner._do_power_cycle, "README: Scenarios and plants", "a device switched off and on"),
-    Command("wait", Runner._do_wait, "README: Scenarios and plants", "simulated time passes"),
-    Command("log", Runner._do_log, "README: Scenarios and plants", "a line in the report"),
-    Command("expect_state", Runner._do_expect_state, "README: Scenarios and plants", "a control name must read a value"),
-    Command("expect_traffic", Runner._do_expect_traffic, "README: Scenarios and plants", "bytes a port must have carried"),
-    Command("expect_timing", Runner._do_expect_timing, "README: Scenarios and plants", "the time between two recorded events"),
+    Command("send", Runner._do_send, _STEPS, "bytes from a host port to a device"),
+    Command("expect", Runner._do_expect, _STEPS, "an answer the host must receive"),
+    Command("set", Runner._do_set, _STEPS, "a control name set to a value"),
+    Command("pulse", Runner._do_pulse, _STEPS, "an input set, then reset after a time"),
+    Command("fault", Runner._do_fault, _STEPS, "a declared device fault switched on or off"),
+    Command("line_fault", Runner._do_line_fault, _STEPS, "a fault on a port's line"),
+    Command("power_cycle", Runner._do_power_cycle, _STEPS, "a device switched off and on"),
+    Command("wait", Runner._do_wait, _STEPS, "simulated time passes"),
+    Command("log", Runner._do_log, _STEPS, "a line in the report"),
+    Command("expect_state", Runner._do_expect_state, _STEPS, "a control name must read a value"),
+    Command("expect_traffic", Runner._do_expect_traffic, _STEPS, "bytes a port must have carried"),
+    Command("expect_timing", Runner._do_expect_timing, _STEPS, "the time between two recorded events"),
 ))
 
 

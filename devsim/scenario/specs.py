@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, Self
 
 from msgspec import Meta
 
@@ -57,23 +57,21 @@ class Duration(float):
 class PositiveDuration(Duration):
     """A duration above zero."""
 
+    #: What a duration not above zero is refused with.
+    refusal = "Input should be greater than 0"
+
     @classmethod
-    def from_data(cls, value: Any) -> PositiveDuration:
+    def from_data(cls, value: Any) -> Self:
         seconds = parse_duration(value, "{field}")
         if not seconds > 0:
-            raise ValueError("Input should be greater than 0")
+            raise ValueError(cls.refusal)
         return cls(seconds)
 
 
-class Rate(Duration):
+class Rate(PositiveDuration):
     """How often something is sampled: a positive duration."""
 
-    @classmethod
-    def from_data(cls, value: Any) -> Rate:
-        seconds = parse_duration(value, "{field}")
-        if not seconds > 0:
-            raise ValueError("`{field}` must be a positive duration like 1s or 500ms")
-        return cls(seconds)
+    refusal = "`{field}` must be a positive duration like 1s or 500ms"
 
 
 class Between(tuple[float, float]):

@@ -3,8 +3,9 @@
 the handle an injector gets back (:class:`FaultHandle`).
 
 How an active fault acts on the bytes is the line's business (:mod:`devsim.transports.line`,
-which re-exports the public names here); the pure parts of it, given the line's active faults,
-are here too (:func:`gate`, :func:`mangle`, :func:`take`).
+which re-exports the public names here); the parts of it that need no clock and no I/O, given
+the line's active faults, are here too (:func:`gate`, :func:`mangle`, :func:`take`; the last two
+use up a counted fault's rest and draw from its random generator).
 """
 
 from __future__ import annotations
@@ -172,7 +173,7 @@ class _Active:
         self.active = True
 
 
-# -- how the active faults of a line act on its bytes (pure: the line hands its faults in) -----
+# -- how the active faults of a line act on its bytes (the line hands its faults in) ----------
 def of_kind(faults: list[_Active], kind: str, direction: str) -> list[_Active]:
     """The active faults of ``kind`` that act on bytes going ``direction``."""
     return [a for a in faults if a.fault.kind == kind and a.fault.applies(direction)]

@@ -1,4 +1,4 @@
-"""``devsim check``, ``devsim scenario run`` and ``devsim up`` (added to the main command).
+"""``devsim check``, ``devsim scenario run`` and ``devsim up`` (imported lazily by :mod:`devsim.cli.main`).
 
 * ``devsim check FILE...`` validates scenario and plant files without running them.
 * ``devsim scenario run FILE... [--virtual | --realtime] [--speed F] [--junit OUT.xml]`` runs
@@ -19,11 +19,12 @@ from pathlib import Path
 
 import click
 
+from devsim.cli.options import check_fleet
 from devsim.core.config import ConfigError, LineDict, load_yaml
 from devsim.observe.live_log import attach_log, level_of, log_options
 from devsim.transports import fdlimit
 
-__all__ = ["register"]
+__all__ = ["check", "scenario", "up"]
 
 
 def _load(path: str) -> object:
@@ -207,10 +208,7 @@ def up(
         except ValueError as exc:
             raise click.UsageError(f"--part: {plant_file}: {exc}") from None
     if fleet is not None:
-        from devsim.fleet.topics import fleet_problem
-
-        if (problem := fleet_problem(fleet)) is not None:
-            raise click.UsageError(f"--fleet: {problem}")
+        check_fleet(fleet)
     if speed <= 0:
         raise click.UsageError("--speed: must be positive")
     if virtual and speed != 1.0:
@@ -336,8 +334,3 @@ async def _up(
     for signum in (signal.SIGINT, signal.SIGTERM):
         loop.remove_signal_handler(signum)
 
-
-def register(group: click.Group) -> None:
-    group.add_command(check)
-    group.add_command(scenario)
-    group.add_command(up)
