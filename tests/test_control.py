@@ -161,6 +161,8 @@ def test_raw_protocol(served: tuple[Runtime, str]) -> None:
         assert reply["type"] == "BadRequest" and reply["id"] == 5 and "colour" in str(reply["error"])
         reply = ask(b'{"id": 6, "op": "advance", "seconds": -1}')
         assert reply["type"] == "BadRequest"
+        reply = ask(b'{"id": 8, "op": "read", "device": "echo1", "name": "value", "seconds": "abc"}')
+        assert reply["type"] == "BadRequest" and "seconds" in str(reply["error"])  # another op's field, checked too
         assert ask(b'{"id": 7, "op": "read", "device": "echo1", "name": "value"}')["result"] == 2.5
 
 

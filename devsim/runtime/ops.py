@@ -164,6 +164,20 @@ _OPS_BY_TYPE: dict[type, str] = {row.request: row.token for row in CONTROL}
 _FIELDS = frozenset(name for row in CONTROL for name in row.request.__struct_fields__) | {"id", "op"}
 
 
+def _envelope() -> type[msgspec.Struct]:
+    """Every field of every request, each optional with its declared type: what any request's
+    fields are checked against, so that a field of another op is refused when its type is wrong
+    as it is when it belongs to the op (one field, one type, whichever op declares it)."""
+    types: dict[str, Any] = {}
+    for row in CONTROL:
+        for field in msgspec.structs.fields(row.request):
+            types.setdefault(field.name, field.type)
+    return msgspec.defstruct("AnyRequest", [(name, kind | None, None) for name, kind in types.items()])
+
+
+_ENVELOPE = _envelope()
+
+
 def op_of(request: rq.ControlRequest) -> str:
     """The op of a request record."""
     return _OPS_BY_TYPE[type(request)]
@@ -194,6 +208,10 @@ def decode(op: Any, fields: Mapping[str, Any]) -> rq.ControlRequest:
     if unknown:
         raise BadRequest(f"{clip(unknown[0], 80)}: not a field of any control request")
     kind: type[rq.ControlRequest] = CONTROL.rows[op].request
+    try:
+        msgspec.convert({k: v for k, v in fields.items() if k not in ("id", "op")}, _ENVELOPE, strict=False)
+    except msgspec.ValidationError as exc:
+        raise BadRequest(clip(str(exc))) from None
     given = {name: fields[name] for name in kind.__struct_fields__ if name in fields}
     for name in required(op):
         if given.get(name) in (None, ""):
