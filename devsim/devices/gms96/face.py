@@ -254,7 +254,7 @@ class Gms96Face(Face):
         return self._t(self.model.memory_status(), b"")
 
     def t_n_parameter(self, p2: int, p3: int) -> bytes:
-        if p2 not in tables.N_PARAMETERS:
+        if p2 not in tables.N_TABLE:
             return ACK
         return self._t(0x4E, codec.to_s24(codec.wrap24(self.model.params.read(p2, p3))))
 
