@@ -16,8 +16,8 @@ from devsim.core.settings import Check, Keys, Meta, Settings, doc, field
 from devsim.devices.gms96.nparams import N_TABLE, n_range
 
 __all__ = [
-    "AXIS_GEOMETRY", "DilSwitch", "Gms96Config", "LIMIT_SWITCH", "LINK_OPTIONS", "PLC_COPY_RULE",
-    "PLC_FAULT_MESSAGES", "PLC_LIMIT_RULE", "PLC_OPTIONS", "PLC_START_RULE",
+    "AxisGeometry", "DilSwitch", "Gms96Config", "LimitSwitch", "LinkOptions", "PlcCopyRule",
+    "PlcFaultMessages", "PlcLimitRule", "PlcOptions", "PlcStartRule",
 ]
 
 _Byte = Annotated[int, Meta(ge=0, le=255)]
@@ -198,9 +198,3 @@ class Gms96Config(Settings):
     @classmethod
     def screen(cls, data: Mapping[Any, Any]) -> None:
         _not_a_sers_file(data)
-
-
-#: The nested parts, by their table names.
-LIMIT_SWITCH, AXIS_GEOMETRY, LINK_OPTIONS = LimitSwitch, AxisGeometry, LinkOptions
-PLC_LIMIT_RULE, PLC_FAULT_MESSAGES, PLC_START_RULE, PLC_COPY_RULE, PLC_OPTIONS = (
-    PlcLimitRule, PlcFaultMessages, PlcStartRule, PlcCopyRule, PlcOptions)
