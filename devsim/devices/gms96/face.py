@@ -2,7 +2,7 @@
 
 The link layer (:mod:`.link`) finds frames, filters addresses, suppresses repetitions and times
 replies; this face turns each Kurzsatz and Langsatz into operations on the card
-(:class:`~devsim.devices.gms96.card.Gms96Card`) and builds the answers: ``E5h``, the status
+(:class:`~devsim.devices.gms96.model.Gms96Card`) and builds the answers: ``E5h``, the status
 Kurzsatz and the ``T`` read-backs.  Every command is looked up in a table that ``devsim doc
 gms96`` lists: :data:`SHORT_COMMANDS` (Kurzsatz), :data:`ON_RECEIPT` (the letters the face handles
 itself: immediate commands, downloads), :data:`P_ON_RECEIPT` (``p`` downloads, ``p11``),
