@@ -66,19 +66,14 @@ class Gms96Card(Model):
         self.link_errors: dict[str, int] = {}
         self.hw = tables.variant(self.cfg.variant)
         self.stepper = self.hw.stepper
+        #: The DIL switch as set now (``dil.*`` points) and as read at the last power-on / reset.
         self.pending_dil: Values = self.cfg.dil
         self.dil: Values = self.cfg.dil
         self.address = self.dil.address
         self.e_version = self.dil.protocol == "E"
         self.powered = False
-        self._build_parts()
-        self._define_signals()
-        self.switches: list[ActualSwitch] = axis_switches(self.indexer, self.signals, self.cfg.axis)
         self._changing = False
         self._timers: list[Timer] = []
-        self._power_on(first=True)
-
-    def _build_parts(self) -> None:
         clock, geo, signals = self.clock, self.cfg.axis, self.signals
         self.axis = Axis(clock, counts_per_rev=geo.index_period, index_offset=geo.index_offset, name=self.name)
         self.image = ProcessImage()
@@ -132,6 +127,9 @@ class Gms96Card(Model):
             stage=self.stage, i2t=self.i2t, counter=self.counter, spindle=self.spindle, outputs=self.outputs,
             image=self.image, memory=self.memory, eeprom_write_s=self.cfg.eeprom_write_s,
         )
+        self._define_signals()
+        self.switches: list[ActualSwitch] = axis_switches(self.indexer, signals, geo)
+        self._power_on(first=True)
 
     # ======================================================================================
     # signals (spec §4.5.3, §4.11)
