@@ -69,8 +69,6 @@ class Gms96Card(Model):
         #: The DIL switch as set now (``dil.*`` points) and as read at the last power-on / reset.
         self.pending_dil: Values = self.cfg.dil
         self.dil: Values = self.cfg.dil
-        self.address = self.dil.address
-        self.e_version = self.dil.protocol == "E"
         self.powered = False
         self._changing = False
         self._timers: list[Timer] = []
@@ -131,6 +129,16 @@ class Gms96Card(Model):
         self.switches: list[ActualSwitch] = axis_switches(self.indexer, signals, geo)
         self._power_on(first=True)
 
+    @property
+    def address(self) -> int:
+        """The card's address on the line (DIL switches 1..5, read at power-on: manual §2.2)."""
+        return int(self.dil.address)
+
+    @property
+    def e_version(self) -> bool:
+        """DIL switch 7: the E version of the protocol (FCB, ACD, DFC; manual §2.2)."""
+        return bool(self.dil.protocol == "E")
+
     # ======================================================================================
     # signals (spec §4.5.3, §4.11)
     # ======================================================================================
@@ -158,8 +166,6 @@ class Gms96Card(Model):
         self._timers = []
         self.powered = True
         self.dil = self.pending_dil
-        self.address = self.dil.address
-        self.e_version = self.dil.protocol == "E"
         self.announce("power_on")  # the link starts afresh (decoder, FCB)
         self.silent_until = 0.0
         if self.cfg.boot_time > 0:
