@@ -15,6 +15,7 @@ command dispatch are the face (:mod:`.face`, :mod:`.link`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from devsim.core.axis import Axis
@@ -294,29 +295,18 @@ class Gms96Card(Model):
     # markers and status (spec §4.3, §4.4)
     # ======================================================================================
     def marker_byte(self, byte: int) -> int:
-        """MB0/MB1/MB3 carry status bits the firmware keeps (spec §4.4)."""
+        """MB(byte) as the PLC and the host read it: MB0/MB1/MB3 carry status bits the firmware
+        keeps (:data:`STATUS_MARKERS`, spec §4.4) over the stored byte."""
         m = self.image.markers
-        stage = self.stage
-        if byte == 0:
-            v = m[0] & 0x07
-            v |= 0x08 if self.motion() else 0
-            v |= 0x10 if not stage.estop else 0
-            v |= 0x20 if stage.controller else 0
-            v |= 0x40 if stage.monitoring_cause() else 0
-            v |= 0x80 if stage.idxoff else 0
-            return v
-        if byte == 1:
-            v = m[1] & 0xE9
-            v |= 0x02 if self.i2t.latched else 0
-            v |= 0x04 if not self.busy() else 0
-            v |= 0x10 if self.axis.phase() == "const" else 0
-            return v
-        if byte == 3:
-            v = m[3] & 0xCF
-            v |= 0x10 if self.params.motion_disabled == 1 else 0
-            v |= 0x20 if self.executor.wait_name == "H2" else 0
-            return v
-        return m[byte] if 0 <= byte < 256 else 0
+        overlay = _STATUS_BYTES.get(byte)
+        if overlay is None:
+            return m[byte] if 0 <= byte < 256 else 0
+        live, bits = overlay
+        v = m[byte] & ~live
+        for mask, state in bits:
+            if state(self):
+                v |= mask
+        return v
 
     def write_marker_byte(self, byte: int, value: int) -> None:
         """``p11`` / PLC: MB(byte) := value; the control bits of MB0/MB1 act (spec §4.4)."""
@@ -439,3 +429,31 @@ class Gms96Card(Model):
         self.torque.update_block()
         self.changed()
 
+
+#: The marker bits the firmware shows from its own state, by their names in
+#: :data:`~devsim.devices.gms96.tables.MARKERS` (spec §4.4): read from the card, never from the
+#: stored byte.
+STATUS_MARKERS: dict[str, Callable[[Gms96Card], bool]] = {
+    "MOTION_ACTIVE": Gms96Card.motion,
+    "ESTOP_OK": lambda card: not card.stage.estop,
+    "POSITION_CONTROL": lambda card: card.stage.controller,
+    "MONITORING_FAULT": lambda card: bool(card.stage.monitoring_cause()),
+    "IDXOFF": lambda card: card.stage.idxoff,
+    "I2T": lambda card: card.i2t.latched,
+    "RDY": lambda card: not card.busy(),
+    "SPEED_REACHED": lambda card: card.axis.phase() == "const",
+    "MOTION_SUPPRESSED": lambda card: card.params.motion_disabled == 1,
+    "WAIT_IN_POSITION": lambda card: card.executor.wait_name == "H2",
+}
+
+
+def _status_bytes() -> dict[int, tuple[int, tuple[tuple[int, Callable[[Gms96Card], bool]], ...]]]:
+    """:data:`STATUS_MARKERS` by marker byte: (the live bits' mask, (bit mask, state) per bit)."""
+    by_byte: dict[int, list[tuple[int, Callable[[Gms96Card], bool]]]] = {}
+    for name, state in STATUS_MARKERS.items():
+        byte, bit = tables.MARKERS[name]
+        by_byte.setdefault(byte, []).append((1 << bit, state))
+    return {byte: (sum(mask for mask, _ in bits), tuple(bits)) for byte, bits in by_byte.items()}
+
+
+_STATUS_BYTES = _status_bytes()
