@@ -48,7 +48,7 @@ from devsim.core.settings import Values
 from devsim.devices.gms96.counter import CounterInput
 from devsim.devices.gms96.flash import Flash
 from devsim.devices.gms96.image import ProcessImage, parse_bit
-from devsim.devices.gms96.io import Outputs
+from devsim.devices.gms96.io import OUTPUT_BITS, Outputs
 from devsim.devices.gms96.motion import Indexer
 from devsim.devices.gms96.stage import PowerStage
 
@@ -71,7 +71,6 @@ M_FUNCTION_BITS: tuple[tuple[int, int], ...] = tuple((b, k) for b in range(6, 11
     (15, 7),
     (18, 7),
 )
-OUTPUTS = 11  # A0.0..A1.2 (spec §4.11.1, G27)
 _EPS = 1e-9
 
 Hook = Callable[["Plc"], Any]
@@ -254,7 +253,7 @@ class Plc:
             n = byte * 8 + bit
             if n in self._paa_writes:
                 return self._paa_writes[n]
-            return n < OUTPUTS and self.outputs.output_bit(n)
+            return n < OUTPUT_BITS and self.outputs.output_bit(n)
         return bool(self.card.marker_byte(byte) >> bit & 1)
 
     def set_bit(self, name: str, value: bool) -> None:
@@ -262,7 +261,7 @@ class Plc:
         area, byte, bit = parse_bit(name)
         if area == "A":
             n = byte * 8 + bit
-            if n < OUTPUTS:
+            if n < OUTPUT_BITS:
                 self._paa_writes[n] = bool(value)
         elif area == "M":
             self.set_marker_bit(byte, bit, bool(value))
@@ -442,7 +441,7 @@ class Plc:
             area, byte, bit = parse_bit(rule.to)
             if area == "A":
                 n = byte * 8 + bit
-                if n < OUTPUTS and bool(self.image.outputs[byte] >> bit & 1) != value:
+                if n < OUTPUT_BITS and bool(self.image.outputs[byte] >> bit & 1) != value:
                     self._paa_writes[n] = value
             elif area == "M":
                 self.set_marker_bit(byte, bit, value)
