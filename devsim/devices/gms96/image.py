@@ -10,7 +10,7 @@ from __future__ import annotations
 import re
 from collections import deque
 
-__all__ = ["ProcessImage", "bit_name", "parse_bit"]
+__all__ = ["STATIC_BYTES", "ProcessImage", "bit_name", "parse_bit"]
 
 _BIT = re.compile(r"^\s*([EAM])\s*(\d+)\.([0-7])\s*$", re.IGNORECASE)
 STATIC_BYTES = 160  # DW0..DW79 survive power-off (manual §2.3.1 d)
