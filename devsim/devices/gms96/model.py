@@ -79,7 +79,7 @@ class Gms96Card(Model):
         self.stage = PowerStage(signals)
         self.params = NParameters(factory=self.cfg.params, stepper=self.stepper, out_of_range=self.cfg.out_of_range)
         self.feed = Feed()
-        self.coordinates = Coordinates(self.axis, self.nvram, lambda: int(self.cfg.tool_offset))
+        self.coordinates = Coordinates(self.axis, self.nvram, int(self.cfg.tool_offset))
         self.flash = Flash(self.nvram)
         self.memory = Memory(self.nvram, self.params, self.feed, self.image, self.record_event)
         self.indexer = Indexer(
