@@ -60,6 +60,7 @@ class PlcCard(Protocol):
 
     def marker_byte(self, byte: int) -> int: ...
     def write_marker_byte(self, byte: int, value: int) -> None: ...
+    def write_marker_bit(self, byte: int, bit: int, value: bool) -> None: ...
     def changed(self) -> None: ...
     def record_event(self, name: str) -> None: ...
 
@@ -277,8 +278,7 @@ class Plc:
 
     def set_marker_bit(self, byte: int, bit: int, value: bool) -> None:
         if self.image.marker(byte, bit) != value:
-            cur = self.image.markers[byte]
-            self.card.write_marker_byte(byte, (cur | (1 << bit)) if value else (cur & ~(1 << bit)))
+            self.card.write_marker_bit(byte, bit, value)
 
     def message(self, code: int) -> None:
         """Like SNDM: the code into MB4, buffered behind a waiting one (spec §4.5.1)."""
