@@ -66,25 +66,24 @@ class Gms96Card(Model):
         #: Frames the link dropped, by reason (checksum, length, not_idle ...).
         self.link_errors: dict[str, int] = {}
         self.hw = tables.variant(self.cfg.variant)
-        self.stepper = self.hw.stepper
         #: The DIL switch as set now (``dil.*`` points) and as read at the last power-on / reset.
         self.pending_dil: Values = self.cfg.dil
         self.dil: Values = self.cfg.dil
         self.powered = False
         self._changing = False
         self._timers: list[Timer] = []
-        clock, geo, signals = self.clock, self.cfg.axis, self.signals
+        clock, geo, signals, stepper = self.clock, self.cfg.axis, self.signals, self.hw.stepper
         self.axis = Axis(clock, counts_per_rev=geo.index_period, index_offset=geo.index_offset, name=self.name)
         self.image = ProcessImage()
         self.stage = PowerStage(signals)
-        self.params = NParameters(factory=self.cfg.params, stepper=self.stepper, out_of_range=self.cfg.out_of_range)
+        self.params = NParameters(factory=self.cfg.params, stepper=stepper, out_of_range=self.cfg.out_of_range)
         self.feed = Feed()
         self.coordinates = Coordinates(self.axis, self.nvram, int(self.cfg.tool_offset))
         self.flash = Flash(self.nvram)
         self.memory = Memory(self.nvram, self.params, self.feed, self.image, self.record_event)
         self.indexer = Indexer(
             clock=clock, axis=self.axis, feed=self.feed, params=self.params, stage=self.stage, image=self.image,
-            signals=signals, geometry=geo, stepper=self.stepper, card=self,
+            signals=signals, geometry=geo, stepper=stepper, card=self,
         )
         self.counter = CounterInput(
             clock=clock, axis=self.axis, indexer=self.indexer, params=self.params, stage=self.stage,
@@ -104,7 +103,7 @@ class Gms96Card(Model):
             lambda: bool(signals.get("blocked")), self.record_event,
         )
         self.outputs = Outputs(
-            clock, self.axis, self.image, signals, self.params, self.stage, self.indexer, self.stepper, self.changed
+            clock, self.axis, self.image, signals, self.params, self.stage, self.indexer, stepper, self.changed
         )
         self.plc = Plc(
             card=self, clock=clock, options=self.cfg.plc, ms_per_1000=self.hw.plc_ms_per_1000, flash=self.flash,
