@@ -78,12 +78,12 @@ MANUAL_N_RANGES = {
 
 
 def test_every_n_index_present() -> None:
-    assert set(t.N_PARAMETERS) == set(MANUAL_N)
+    assert set(t.N_TABLE.rows) == set(MANUAL_N)
 
 
 @pytest.mark.parametrize("index", sorted(MANUAL_N))
 def test_n_default_within_range_and_saved(index: int) -> None:
-    p = t.N_PARAMETERS[index]
+    p = t.N_TABLE[index]
     assert p.key == index
     lo = t.INT24_MIN if p.minimum is None else p.minimum
     hi = t.INT24_MAX if p.maximum is None else p.maximum
@@ -100,33 +100,33 @@ def test_n_defaults_match_manual_or_are_marked_simulator_choice(index: int) -> N
         assert index in t.N_SIMULATOR_DEFAULTS
     else:
         assert index not in t.N_SIMULATOR_DEFAULTS
-        assert t.N_PARAMETERS[index].default == manual
+        assert t.N_TABLE[index].default == manual
 
 
 @pytest.mark.parametrize("index", sorted(MANUAL_N_RANGES))
 def test_n_ranges_match_manual(index: int) -> None:
-    p = t.N_PARAMETERS[index]
+    p = t.N_TABLE[index]
     assert (p.minimum, p.maximum) == MANUAL_N_RANGES[index]
 
 
 def test_spec_simulator_defaults() -> None:
-    d = {i: t.N_PARAMETERS[i].default for i in (8, 22, 28, 32, 33, 39, 42, 51)}
+    d = {i: t.N_TABLE[i].default for i in (8, 22, 28, 32, 33, 39, 42, 51)}
     assert d == {8: 0, 22: 0, 28: 1, 32: 0, 33: 0, 39: 100, 42: 10, 51: 0}
 
 
 def test_only_n21_needs_restart() -> None:
-    assert {i for i, p in t.N_PARAMETERS.items() if p.extra["needs_restart"]} == {21}
+    assert {i for i, p in t.N_TABLE.rows.items() if p.extra["needs_restart"]} == {21}
 
 
 def test_n_rows_are_frozen_kit_rows_with_the_agreed_facts() -> None:
     # the kit's one parameter row type (issue 27): index -> key, name_en -> doc, needs_restart and
     # the note -> extra
-    for index, p in t.N_PARAMETERS.items():
+    for index, p in t.N_TABLE.rows.items():
         assert isinstance(p, Param) and t.N_TABLE[index] is p
         assert (p.key, p.section) == (index, f"§2.3.1 N{index}")
         assert set(p.extra) == {"needs_restart", "note"}
     with pytest.raises(AttributeError):
-        t.N_PARAMETERS[10].default = 1  # type: ignore[misc]
+        t.N_TABLE[10].default = 1  # type: ignore[misc]
 
 
 def test_clamp_n() -> None:

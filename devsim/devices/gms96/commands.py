@@ -20,7 +20,7 @@ from devsim.devices.gms96.counter import CounterInput
 from devsim.devices.gms96.executor import Cmd, Executor
 from devsim.devices.gms96.feed import Feed
 from devsim.devices.gms96.i2t import I2t
-from devsim.devices.gms96.image import ProcessImage
+from devsim.devices.gms96.image import STATIC_BYTES, ProcessImage
 from devsim.devices.gms96.io import Outputs
 from devsim.devices.gms96.memory import Memory
 from devsim.devices.gms96.motion import Indexer
@@ -170,7 +170,7 @@ class QueuedCommands:
         """``d``: a data word from byte P2 (DW0..DW79 are static)."""
         if 0 <= cmd.p2 <= 254:
             self.image.write_word(cmd.p2, cmd.p1)
-            if cmd.p2 < 160:
+            if cmd.p2 < STATIC_BYTES:
                 self.memory.save_static()
         return self._settled()
 

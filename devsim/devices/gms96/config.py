@@ -13,11 +13,11 @@ from collections.abc import Mapping
 from typing import Annotated, Any, Literal
 
 from devsim.core.settings import Check, Keys, Meta, Settings, doc, field
-from devsim.devices.gms96.tables import INT24_MAX, INT24_MIN, N_PARAMETERS
+from devsim.devices.gms96.nparams import N_TABLE, n_range
 
 __all__ = [
-    "AXIS_GEOMETRY", "DilSwitch", "Gms96Config", "LIMIT_SWITCH", "LINK_OPTIONS", "PLC_COPY_RULE",
-    "PLC_FAULT_MESSAGES", "PLC_LIMIT_RULE", "PLC_OPTIONS", "PLC_START_RULE",
+    "AxisGeometry", "DilSwitch", "Gms96Config", "LimitSwitch", "LinkOptions", "PlcCopyRule",
+    "PlcFaultMessages", "PlcLimitRule", "PlcOptions", "PlcStartRule",
 ]
 
 _Byte = Annotated[int, Meta(ge=0, le=255)]
@@ -159,7 +159,7 @@ def _n_parameter(key: Any) -> int:
     """``N10`` or ``10``: each N parameter must exist (§2.3.1 N)."""
     text = str(key).strip().upper()
     number = text[1:] if text.startswith("N") else text
-    if not (number.isascii() and number.isdigit()) or int(number) not in N_PARAMETERS:
+    if not (number.isascii() and number.isdigit()) or int(number) not in N_TABLE:
         raise ValueError("no such parameter")
     return int(number)
 
@@ -167,9 +167,7 @@ def _n_parameter(key: Any) -> int:
 def _param_ranges(value: dict[int, int]) -> dict[int, int]:
     """Each value within the parameter's own range, as the manual states it."""
     for index, number in value.items():
-        pdef = N_PARAMETERS[index]
-        low = INT24_MIN if pdef.minimum is None else pdef.minimum
-        high = INT24_MAX if pdef.maximum is None else pdef.maximum
+        low, high = n_range(N_TABLE[index])
         if not low <= number <= high:
             raise ValueError(f"N{index}: {number} is outside {low} … {high}")
     return value
@@ -200,9 +198,3 @@ class Gms96Config(Settings):
     @classmethod
     def screen(cls, data: Mapping[Any, Any]) -> None:
         _not_a_sers_file(data)
-
-
-#: The nested parts, by their table names.
-LIMIT_SWITCH, AXIS_GEOMETRY, LINK_OPTIONS = LimitSwitch, AxisGeometry, LinkOptions
-PLC_LIMIT_RULE, PLC_FAULT_MESSAGES, PLC_START_RULE, PLC_COPY_RULE, PLC_OPTIONS = (
-    PlcLimitRule, PlcFaultMessages, PlcStartRule, PlcCopyRule, PlcOptions)

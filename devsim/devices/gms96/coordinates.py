@@ -8,8 +8,6 @@ offset.  The zero-offset table and the machine zero are non-volatile.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 from devsim.core.axis import Axis
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.gms96 import tables
@@ -20,10 +18,11 @@ __all__ = ["Coordinates"]
 class Coordinates:
     """The frames and modal coordinate settings of one card (manual §2.3.1 G, O; spec §5.9)."""
 
-    def __init__(self, axis: Axis, nvram: NonVolatileMemory, tool_offset: Callable[[], int]) -> None:
+    def __init__(self, axis: Axis, nvram: NonVolatileMemory, tool_offset: int) -> None:
         self.axis = axis
         self.nvram = nvram
-        self.tool_offset = tool_offset  # the configured tool offset T (no command sets it, spec §5.9)
+        #: The tool offset T: configured, set through the control API (no command sets it, spec §5.9).
+        self.tool_offset = tool_offset
         self.origin = 0.0  # physical position of machine 0
         self.zero_table: dict[int, int] = {}  # G54..G69 → offset
         self.machine_zero = 0  # G53;P2;1: stored, not used internally
@@ -61,7 +60,7 @@ class Coordinates:
     def offsets(self) -> float:
         """The active zero offset plus the tool offset (when active)."""
         z = self.zero_table.get(self.active_zero, 0) if self.active_zero is not None else 0
-        return z + (self.tool_offset() if self.tool_active else 0)
+        return z + (self.tool_offset if self.tool_active else 0)
 
     def work_to_physical(self, w: float) -> float:
         return w + self.offsets() + self.origin

@@ -59,6 +59,7 @@ from devsim.core.clock import Clock
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.coordinates import Coordinates
 from devsim.devices.gms96.feed import Feed
+from devsim.devices.gms96.image import STATIC_BYTES
 from devsim.devices.gms96.memory import Memory
 from devsim.devices.gms96.motion import Indexer
 from devsim.devices.gms96.params import NParameters
@@ -241,7 +242,7 @@ class CounterInput:
             value = max(-0x800000, min(0x7FFFFF, h[key]))
             raw = (value & 0xFFFFFF).to_bytes(3, "little") + (b"\xff" if value < 0 else b"\x00")
             data[address + 4 * k : address + 4 * k + 4] = raw
-        if address < 160:
+        if address < STATIC_BYTES:
             self.memory.save_static()  # DW0..79 are static (spec §3.8.4)
 
     def state(self) -> dict[str, object]:

@@ -144,7 +144,7 @@ class Executor:
                 cmd = self.queue.popleft()
                 self._release_deferred()
                 self.current = cmd
-                if self._start(cmd):
+                if self.run(cmd):
                     self.current = None
         finally:
             self._running = False
@@ -244,12 +244,7 @@ class Executor:
         self._clear_wait()
         self.current = None
 
-    # -- execution ----------------------------------------------------------------------------
-    def _start(self, cmd: Cmd) -> bool:
-        """Execute ``cmd`` (:mod:`.commands`); True if it is complete at once."""
-        return self.run(cmd)
-
-    # moves ----------------------------------------------------------------------------------
+    # -- moves ----------------------------------------------------------------------------------
     def _target_of(self, cmd: Cmd, base: float) -> float:
         p1 = max(tables.POSITION_MIN, min(tables.POSITION_MAX, cmd.p1))
         if cmd.letter == "+" or (cmd.letter == "A" and self.coordinates.g_relative):

@@ -2,7 +2,7 @@
 
 The link layer (:mod:`.link`) finds frames, filters addresses, suppresses repetitions and times
 replies; this face turns each Kurzsatz and Langsatz into operations on the card
-(:class:`~devsim.devices.gms96.card.Gms96Card`) and builds the answers: ``E5h``, the status
+(:class:`~devsim.devices.gms96.model.Gms96Card`) and builds the answers: ``E5h``, the status
 Kurzsatz and the ``T`` read-backs.  Every command is looked up in a table that ``devsim doc
 gms96`` lists: :data:`SHORT_COMMANDS` (Kurzsatz), :data:`ON_RECEIPT` (the letters the face handles
 itself: immediate commands, downloads), :data:`P_ON_RECEIPT` (``p`` downloads, ``p11``),
@@ -254,7 +254,7 @@ class Gms96Face(Face):
         return self._t(self.model.memory_status(), b"")
 
     def t_n_parameter(self, p2: int, p3: int) -> bytes:
-        if p2 not in tables.N_PARAMETERS:
+        if p2 not in tables.N_TABLE:
             return ACK
         return self._t(0x4E, codec.to_s24(codec.wrap24(self.model.params.read(p2, p3))))
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import re
 from collections import deque
 
-__all__ = ["ProcessImage", "bit_name", "parse_bit"]
+__all__ = ["STATIC_BYTES", "ProcessImage", "bit_name", "parse_bit"]
 
 _BIT = re.compile(r"^\s*([EAM])\s*(\d+)\.([0-7])\s*$", re.IGNORECASE)
 STATIC_BYTES = 160  # DW0..DW79 survive power-off (manual §2.3.1 d)
@@ -34,7 +34,8 @@ class ProcessImage:
     §2.4.1, §2.4.2).
 
     Inputs live in the device's signal bank (``E0.0`` …) so the control API can flip them; the
-    status-derived marker bits of MB0/MB1 are overlaid by the device when it reads them.
+    status bits of MB0/MB1/MB3 are overlaid by the card when it reads them
+    (:data:`~devsim.devices.gms96.model.STATUS_MARKERS`).
     """
 
     def __init__(self) -> None:

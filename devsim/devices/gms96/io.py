@@ -23,7 +23,7 @@ from devsim.devices.gms96.stage import PowerStage
 __all__ = ["INPUT_BYTES", "OUTPUT_BITS", "Outputs", "axis_switches"]
 
 INPUT_BYTES = 4  # EB0..EB3
-OUTPUT_BITS = 11  # A0.0..A1.2
+OUTPUT_BITS = 11  # A0.0..A1.2 (spec §4.11.1, G27)
 
 
 class Outputs:

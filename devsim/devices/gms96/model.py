@@ -15,6 +15,7 @@ command dispatch are the face (:mod:`.face`, :mod:`.link`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from devsim.core.axis import Axis
@@ -64,32 +65,24 @@ class Gms96Card(Model):
         #: Frames the link dropped, by reason (checksum, length, not_idle ...).
         self.link_errors: dict[str, int] = {}
         self.hw = tables.variant(self.cfg.variant)
-        self.stepper = self.hw.stepper
+        #: The DIL switch as set now (``dil.*`` points) and as read at the last power-on / reset.
         self.pending_dil: DilSwitch = self.cfg.dil
         self.dil: DilSwitch = self.cfg.dil
-        self.address = self.dil.address
-        self.e_version = self.dil.protocol == "E"
         self.powered = False
-        self._build_parts()
-        self._define_signals()
-        self.switches: list[ActualSwitch] = axis_switches(self.indexer, self.signals, self.cfg.axis)
         self._changing = False
         self._timers: list[Timer] = []
-        self._power_on(first=True)
-
-    def _build_parts(self) -> None:
-        clock, geo, signals = self.clock, self.cfg.axis, self.signals
+        clock, geo, signals, stepper = self.clock, self.cfg.axis, self.signals, self.hw.stepper
         self.axis = Axis(clock, counts_per_rev=geo.index_period, index_offset=geo.index_offset, name=self.name)
         self.image = ProcessImage()
         self.stage = PowerStage(signals)
-        self.params = NParameters(factory=self.cfg.params, stepper=self.stepper, out_of_range=self.cfg.out_of_range)
+        self.params = NParameters(factory=self.cfg.params, stepper=stepper, out_of_range=self.cfg.out_of_range)
         self.feed = Feed()
-        self.coordinates = Coordinates(self.axis, self.nvram, lambda: int(self.cfg.tool_offset))
+        self.coordinates = Coordinates(self.axis, self.nvram, int(self.cfg.tool_offset))
         self.flash = Flash(self.nvram)
         self.memory = Memory(self.nvram, self.params, self.feed, self.image, self.record_event)
         self.indexer = Indexer(
             clock=clock, axis=self.axis, feed=self.feed, params=self.params, stage=self.stage, image=self.image,
-            signals=signals, geometry=geo, stepper=self.stepper, card=self,
+            signals=signals, geometry=geo, stepper=stepper, card=self,
         )
         self.counter = CounterInput(
             clock=clock, axis=self.axis, indexer=self.indexer, params=self.params, stage=self.stage,
@@ -109,7 +102,7 @@ class Gms96Card(Model):
             lambda: bool(signals.get("blocked")), self.record_event,
         )
         self.outputs = Outputs(
-            clock, self.axis, self.image, signals, self.params, self.stage, self.indexer, self.stepper, self.changed
+            clock, self.axis, self.image, signals, self.params, self.stage, self.indexer, stepper, self.changed
         )
         self.plc = Plc(
             card=self, clock=clock, options=self.cfg.plc, ms_per_1000=self.hw.plc_ms_per_1000, flash=self.flash,
@@ -131,6 +124,19 @@ class Gms96Card(Model):
             stage=self.stage, i2t=self.i2t, counter=self.counter, spindle=self.spindle, outputs=self.outputs,
             image=self.image, memory=self.memory, eeprom_write_s=self.cfg.eeprom_write_s,
         )
+        self._define_signals()
+        self.switches: list[ActualSwitch] = axis_switches(self.indexer, signals, geo)
+        self._power_on(first=True)
+
+    @property
+    def address(self) -> int:
+        """The card's address on the line (DIL switches 1..5, read at power-on: manual §2.2)."""
+        return int(self.dil.address)
+
+    @property
+    def e_version(self) -> bool:
+        """DIL switch 7: the E version of the protocol (FCB, ACD, DFC; manual §2.2)."""
+        return bool(self.dil.protocol == "E")
 
     # ======================================================================================
     # signals (spec §4.5.3, §4.11)
@@ -159,8 +165,6 @@ class Gms96Card(Model):
         self._timers = []
         self.powered = True
         self.dil = self.pending_dil
-        self.address = self.dil.address
-        self.e_version = self.dil.protocol == "E"
         self.announce("power_on")  # the link starts afresh (decoder, FCB)
         self.silent_until = 0.0
         if self.cfg.boot_time > 0:
@@ -289,29 +293,18 @@ class Gms96Card(Model):
     # markers and status (spec §4.3, §4.4)
     # ======================================================================================
     def marker_byte(self, byte: int) -> int:
-        """MB0/MB1/MB3 carry status bits the firmware keeps (spec §4.4)."""
+        """MB(byte) as the PLC and the host read it: MB0/MB1/MB3 carry status bits the firmware
+        keeps (:data:`STATUS_MARKERS`, spec §4.4) over the stored byte."""
         m = self.image.markers
-        stage = self.stage
-        if byte == 0:
-            v = m[0] & 0x07
-            v |= 0x08 if self.motion() else 0
-            v |= 0x10 if not stage.estop else 0
-            v |= 0x20 if stage.controller else 0
-            v |= 0x40 if stage.monitoring_cause() else 0
-            v |= 0x80 if stage.idxoff else 0
-            return v
-        if byte == 1:
-            v = m[1] & 0xE9
-            v |= 0x02 if self.i2t.latched else 0
-            v |= 0x04 if not self.busy() else 0
-            v |= 0x10 if self.axis.phase() == "const" else 0
-            return v
-        if byte == 3:
-            v = m[3] & 0xCF
-            v |= 0x10 if self.params.motion_disabled == 1 else 0
-            v |= 0x20 if self.executor.wait_name == "H2" else 0
-            return v
-        return m[byte] if 0 <= byte < 256 else 0
+        overlay = _STATUS_BYTES.get(byte)
+        if overlay is None:
+            return m[byte] if 0 <= byte < 256 else 0
+        live, bits = overlay
+        v = m[byte] & ~live
+        for mask, state in bits:
+            if state(self):
+                v |= mask
+        return v
 
     def write_marker_byte(self, byte: int, value: int) -> None:
         """``p11`` / PLC: MB(byte) := value; the control bits of MB0/MB1 act (spec §4.4)."""
@@ -434,3 +427,31 @@ class Gms96Card(Model):
         self.torque.update_block()
         self.changed()
 
+
+#: The marker bits the firmware shows from its own state, by their names in
+#: :data:`~devsim.devices.gms96.tables.MARKERS` (spec §4.4): read from the card, never from the
+#: stored byte.
+STATUS_MARKERS: dict[str, Callable[[Gms96Card], bool]] = {
+    "MOTION_ACTIVE": Gms96Card.motion,
+    "ESTOP_OK": lambda card: not card.stage.estop,
+    "POSITION_CONTROL": lambda card: card.stage.controller,
+    "MONITORING_FAULT": lambda card: bool(card.stage.monitoring_cause()),
+    "IDXOFF": lambda card: card.stage.idxoff,
+    "I2T": lambda card: card.i2t.latched,
+    "RDY": lambda card: not card.busy(),
+    "SPEED_REACHED": lambda card: card.axis.phase() == "const",
+    "MOTION_SUPPRESSED": lambda card: card.params.motion_disabled == 1,
+    "WAIT_IN_POSITION": lambda card: card.executor.wait_name == "H2",
+}
+
+
+def _status_bytes() -> dict[int, tuple[int, tuple[tuple[int, Callable[[Gms96Card], bool]], ...]]]:
+    """:data:`STATUS_MARKERS` by marker byte: (the live bits' mask, (bit mask, state) per bit)."""
+    by_byte: dict[int, list[tuple[int, Callable[[Gms96Card], bool]]]] = {}
+    for name, state in STATUS_MARKERS.items():
+        byte, bit = tables.MARKERS[name]
+        by_byte.setdefault(byte, []).append((1 << bit, state))
+    return {byte: (sum(mask for mask, _ in bits), tuple(bits)) for byte, bits in by_byte.items()}
+
+
+_STATUS_BYTES = _status_bytes()

@@ -15,7 +15,7 @@ import math
 from collections.abc import Callable
 from typing import Any, Protocol
 
-from devsim.core.axis import Axis, IndexRule, RampProfile, RangeRule, RegionSwitch, Rule, Segment, Watch
+from devsim.core.axis import Axis, IndexRule, RampProfile, RegionSwitch, Rule, Segment, Watch
 from devsim.core.clock import Clock, Timer
 from devsim.core.parameters import Param
 from devsim.core.settings import Settings
@@ -41,12 +41,6 @@ _SINE = RampProfile(shape="sine")
 
 #: The N parameters whose write re-arms the position loop's events (N10, N20, N27, N28).
 LOOP_PARAMETERS = frozenset({"position_gain", "following_error_limit", "in_position_window", "in_position_time_ms"})
-
-
-def _dwell(axis: Axis, seconds: float, on_done: Callable[[], None]) -> None:
-    """A standstill that is part of the plan: ``axis.moving`` stays true (status "motion", no
-    in-position) while no watch sees any motion; ``on_done`` at its end."""
-    axis.dwell(seconds, on_done)
 
 
 class Indexer:
@@ -252,7 +246,7 @@ class Indexer:
         for the axis a standstill that still counts as motion."""
         self.comp_phase = "dwell"
         self.card.record_event("backlash")
-        _dwell(self.axis, self.backlash_time(), self._backlash_done)
+        self.axis.dwell(self.backlash_time(), self._backlash_done)
 
     def _backlash_done(self) -> None:
         self.last_dir = self.comp_dir
@@ -405,10 +399,6 @@ class Indexer:
             return lambda seg, t: seg.position(t) if seg is not None else rest
         kv = self.kv()
         return lambda seg, t: self._end_stop(seg.position(t) - seg.velocity(t) / kv if seg is not None else rest)
-
-    def watch_actual(self, position: float, callback: Callable[[int], None]) -> ActualWatch:
-        """Like :meth:`Axis.watch` on the actual position."""
-        return ActualWatch(self, RangeRule(float(position), math.inf), callback, jump_fires=True)
 
     def watch_actual_index(self, callback: Callable[[int], None]) -> ActualWatch:
         """Like :meth:`Axis.watch_index` on the actual position (the encoder sees the motor)."""

@@ -5,7 +5,7 @@ A row's ``name`` is the manual's (German) designation, ``doc`` its English name;
 ``needs_restart`` (the new value only takes effect at the next card start: saved with ``s85;170``
 and the card restarted -- only N21 per the manual) and ``note`` (what the manual and the spec
 say beyond the name).  ``minimum``/``maximum`` ``None``: the manual gives no range, the 24-bit
-field range applies (:func:`~devsim.devices.gms96.tables.clamp_n`).  Every N parameter is saved
+field range applies (:func:`n_range`).  Every N parameter is saved
 by ``s85;170`` ("Alle Eingaben des N-Befehls" [M §2.3.1 s]).  ``attr`` names the accessor the
 model reads the value by (:class:`~devsim.devices.gms96.params.NParameters`).
 """
@@ -18,10 +18,10 @@ __all__ = [
     "INT24_MAX",
     "INT24_MIN",
     "N_DUAL_VALUE",
-    "N_PARAMETERS",
     "N_SIMULATOR_DEFAULTS",
     "N_STORED_ONLY",
     "N_TABLE",
+    "n_range",
 ]
 
 #: Full 24-bit two's complement range of a parameter field P1..P3 [M §2.3].
@@ -376,11 +376,17 @@ _ROWS: tuple[Param, ...] = (
 )
 
 
-#: The N parameters (``N15``, ``n15`` and ``15`` name the same row).
+#: The N parameters (``N15``, ``n15`` and ``15`` name the same row): every N index of spec §4.6 /
+#: manual §2.3.1 N; indices not in it are undefined (the card ignores them [R]).
 N_TABLE = ParameterTable(_ROWS, prefix="N", name="N parameter")
 
-#: Every N index of spec §4.6 / manual §2.3.1 N. Indices not in it are undefined (ignored [R]).
-N_PARAMETERS: dict[int, Param] = {int(key): row for key, row in N_TABLE.rows.items()}
+
+def n_range(row: Param) -> tuple[int, int]:
+    """The range of an N parameter as the manual states it; without one, the 24-bit field's [M §2.3]."""
+    low = INT24_MIN if row.minimum is None else int(row.minimum)
+    high = INT24_MAX if row.maximum is None else int(row.maximum)
+    return low, high
+
 
 #: N indices whose default is a simulator choice ([R]); the manual gives no "Grundstellung".
 N_SIMULATOR_DEFAULTS: frozenset[int] = frozenset({8, 19, 22, 28, 32, 33, 39, 42, 43, 44, 45, 51, 54, 55, 56})

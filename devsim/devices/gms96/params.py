@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from devsim.core.parameters import Parameters, accessor
-from devsim.devices.gms96.nparams import INT24_MAX, INT24_MIN, N_TABLE
+from devsim.devices.gms96.nparams import N_TABLE, n_range
 from devsim.devices.gms96.tables import clamp_n
 
 __all__ = ["NParameters"]
@@ -87,8 +87,7 @@ class NParameters(Parameters):
         row = self.table.get(index)
         if row is None:
             return False
-        lo = row.minimum if row.minimum is not None else INT24_MIN
-        hi = row.maximum if row.maximum is not None else INT24_MAX
+        lo, hi = n_range(row)
         if self.out_of_range == "ignore" and not lo <= value <= hi:
             return False
         value = clamp_n(index, value, self.values, stepper=self.stepper)

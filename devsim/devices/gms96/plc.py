@@ -48,7 +48,7 @@ from devsim.core.settings import Settings
 from devsim.devices.gms96.counter import CounterInput
 from devsim.devices.gms96.flash import Flash
 from devsim.devices.gms96.image import ProcessImage, parse_bit
-from devsim.devices.gms96.io import Outputs
+from devsim.devices.gms96.io import OUTPUT_BITS, Outputs
 from devsim.devices.gms96.motion import Indexer
 from devsim.devices.gms96.stage import PowerStage
 
@@ -60,6 +60,7 @@ class PlcCard(Protocol):
 
     def marker_byte(self, byte: int) -> int: ...
     def write_marker_byte(self, byte: int, value: int) -> None: ...
+    def write_marker_bit(self, byte: int, bit: int, value: bool) -> None: ...
     def changed(self) -> None: ...
     def record_event(self, name: str) -> None: ...
 
@@ -71,7 +72,6 @@ M_FUNCTION_BITS: tuple[tuple[int, int], ...] = tuple((b, k) for b in range(6, 11
     (15, 7),
     (18, 7),
 )
-OUTPUTS = 11  # A0.0..A1.2 (spec §4.11.1, G27)
 _EPS = 1e-9
 
 Hook = Callable[["Plc"], Any]
@@ -254,7 +254,7 @@ class Plc:
             n = byte * 8 + bit
             if n in self._paa_writes:
                 return self._paa_writes[n]
-            return n < OUTPUTS and self.outputs.output_bit(n)
+            return n < OUTPUT_BITS and self.outputs.output_bit(n)
         return bool(self.card.marker_byte(byte) >> bit & 1)
 
     def set_bit(self, name: str, value: bool) -> None:
@@ -262,7 +262,7 @@ class Plc:
         area, byte, bit = parse_bit(name)
         if area == "A":
             n = byte * 8 + bit
-            if n < OUTPUTS:
+            if n < OUTPUT_BITS:
                 self._paa_writes[n] = bool(value)
         elif area == "M":
             self.set_marker_bit(byte, bit, bool(value))
@@ -278,8 +278,7 @@ class Plc:
 
     def set_marker_bit(self, byte: int, bit: int, value: bool) -> None:
         if self.image.marker(byte, bit) != value:
-            cur = self.image.markers[byte]
-            self.card.write_marker_byte(byte, (cur | (1 << bit)) if value else (cur & ~(1 << bit)))
+            self.card.write_marker_bit(byte, bit, value)
 
     def message(self, code: int) -> None:
         """Like SNDM: the code into MB4, buffered behind a waiting one (spec §4.5.1)."""
@@ -442,7 +441,7 @@ class Plc:
             area, byte, bit = parse_bit(rule.to)
             if area == "A":
                 n = byte * 8 + bit
-                if n < OUTPUTS and bool(self.image.outputs[byte] >> bit & 1) != value:
+                if n < OUTPUT_BITS and bool(self.image.outputs[byte] >> bit & 1) != value:
                     self._paa_writes[n] = value
             elif area == "M":
                 self.set_marker_bit(byte, bit, value)

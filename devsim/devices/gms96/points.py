@@ -123,7 +123,7 @@ def _message(card: Any, value: int) -> None:
 
 
 def _tool_offset(card: Any, value: int) -> None:
-    card.cfg = card.cfg.replace(tool_offset=value)
+    card.coordinates.tool_offset = value
 
 
 def _register(n: int) -> Point:
@@ -202,7 +202,8 @@ _PLAIN: list[Point] = [
     Point("param.S", "int", "S setting", "§2.3.1 S", get=lambda c: c.feed.S, in_state=True),
     Point("param.f", "int", "feed rate f", "§2.3.1 f", get=lambda c: c.feed.f, in_state=True),
     Point("message", "int", "post a message (MB4 FIFO)", "§4.4", put=_message, minimum=0, maximum=255, example=1),
-    Point("tool_offset", "int", "the tool offset", "§5.9", "inc", get=lambda c: c.cfg.tool_offset, put=_tool_offset),
+    Point("tool_offset", "int", "the tool offset", "§5.9", "inc", get=lambda c: c.coordinates.tool_offset,
+          put=_tool_offset),
     Point("plc", "json", "the PLC's state", "§4.10", get=lambda c: c.plc.state(), in_state=True),
     Point("plc.running", "bool", "the PLC cycles (p1;1 / p1;2)", "§4.10", get=lambda c: c.plc.state()["running"],
           put=_plc_running),

@@ -17,14 +17,14 @@ from devsim.core.signals import SignalBank
 from devsim.devices.gms96.executor import Cmd, Executor
 from devsim.devices.gms96.flash import Flash
 from devsim.devices.gms96.image import ProcessImage
-from devsim.devices.gms96.io import Outputs
+from devsim.devices.gms96.io import OUTPUT_BITS, Outputs
 from devsim.devices.gms96.plc import Plc
 
 __all__ = ["DIRECT_COMMANDS", "P_FUNCTIONS", "ProgramControl", "input_name"]
 
 #: Program nesting: a program started from a program nests; more than this stops them all.
 MAX_PROGRAM_DEPTH = 8
-OUTPUT_OPERANDS = range(11)  # A0.0..A1.2 (spec §4.10.4)
+OUTPUT_OPERANDS = range(OUTPUT_BITS)  # A0.0..A1.2 (spec §4.10.4)
 
 
 def input_name(operand: int) -> str | None:

@@ -18,15 +18,14 @@ from devsim.core.clock import Clock, Timer
 from devsim.core.kit import Command, Table
 from devsim.core.settings import Settings
 from devsim.core.signals import SignalBank
+from devsim.devices.gms96 import tables
 from devsim.devices.gms96.coordinates import Coordinates
 from devsim.devices.gms96.image import ProcessImage
 from devsim.devices.gms96.motion import ActualWatch, Indexer
 from devsim.devices.gms96.params import NParameters
 from devsim.devices.gms96.stage import PowerStage
 
-__all__ = ["MESSAGE_DISTANCE_LIMIT", "ReferenceRun", "References"]
-
-MESSAGE_DISTANCE_LIMIT = 23
+__all__ = ["ReferenceRun", "References"]
 
 
 class References:
@@ -320,7 +319,7 @@ class ReferenceRun:
 
         def stopped() -> None:
             if keep:
-                self.refs.image.post_message(MESSAGE_DISTANCE_LIMIT)
+                self.refs.image.post_message(tables.MESSAGE_REFERENCE_DISTANCE_LIMIT)
                 self.refs.stage.idxoff = not self.was_active
             self._finish(False, idxoff=not keep)
 

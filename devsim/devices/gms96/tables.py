@@ -40,7 +40,6 @@ __all__ = [
     "POSITION_MAX",
     "INT24_MIN",
     "INT24_MAX",
-    "N_PARAMETERS",
     "N_TABLE",
     "N_SIMULATOR_DEFAULTS",
     "N_DUAL_VALUE",
@@ -98,9 +97,9 @@ from devsim.devices.gms96.nparams import (  # noqa: E402 - the field range (§2.
     INT24_MAX,
     INT24_MIN,
     N_DUAL_VALUE,
-    N_PARAMETERS,
     N_SIMULATOR_DEFAULTS,
     N_TABLE,
+    n_range,
 )
 
 #: N10 range with the stepper software (KS4/KS8): corner frequency in kHz [M N10].
@@ -136,14 +135,13 @@ def clamp_n(
     documented range are clamped to the 24-bit field.  ``current`` (the card's current N values)
     enables the N34 >= 1.5*N35 coupling; ``stepper=True`` uses :data:`N10_STEPPER_RANGE` for N10.
     """
-    p = N_PARAMETERS[index]
-    lo = INT24_MIN if p.minimum is None else p.minimum
-    hi = INT24_MAX if p.maximum is None else p.maximum
+    p = N_TABLE[index]
+    lo, hi = n_range(p)
     if stepper and index == 10:
         lo, hi = N10_STEPPER_RANGE
     if current is not None and index in (34, 35):
-        n34 = current.get(34, N_PARAMETERS[34].default)
-        n35 = current.get(35, N_PARAMETERS[35].default)
+        n34 = current.get(34, N_TABLE[34].default)
+        n35 = current.get(35, N_TABLE[35].default)
         dlo, dhi = current_gain_limits(index, n34, n35)
         lo, hi = max(lo, dlo), min(hi, dhi)
         if lo > hi:  # inconsistent stored pair: prefer the static range
