@@ -144,6 +144,22 @@ def reference_markdown(cls: type[Device]) -> str:
             *_table(("code", "text", "manual"), ((f"`{e.code}`", e.text, e.section) for e in ref.errors)),
             "",
         ]
+    out += [
+        "## Deviations",
+        "",
+        "Every statement the manual makes about what a host or the machine side can observe holds in",
+        "the simulator (the tests quote the section they check), except these:",
+        "",
+        *(
+            _table(
+                ("manual", "the manual says", "the simulator does", "why"),
+                ((d.section, d.manual, d.simulator, d.reason) for d in ref.deviations),
+            )
+            if ref.deviations
+            else ["None known."]
+        ),
+        "",
+    ]
     rows = config_rows(cls.config_model)
     if rows:
         out += [

@@ -20,6 +20,7 @@ from devsim.core.signals import SignalBank, SignalKind
 
 __all__ = [
     "Command",
+    "Deviation",
     "DriveActions",
     "ErrorCode",
     "Fault",
@@ -172,6 +173,19 @@ class ErrorCode(msgspec.Struct, frozen=True):
     section: str = ""
 
 
+class Deviation(msgspec.Struct, frozen=True):
+    """One place where the simulator knowingly differs from what its manual says a host or the
+    machine side can observe, and why (a pty cannot carry 7-bit parity, for example).
+
+    Everything else the manual states is meant to hold; ``devsim doc`` prints these rows as the
+    kind's *Deviations* section."""
+
+    section: str  # the manual section, e.g. "§2.6.1.2"
+    manual: str  # what the manual says (in English)
+    simulator: str  # what the simulator does instead
+    reason: str  # why it does
+
+
 class SignalDef(msgspec.Struct, frozen=True):
     """A digital input, output or analog quantity: makes the signal and its point."""
 
@@ -248,6 +262,8 @@ class Reference(msgspec.Struct):
     #: The kind's parameters as kit rows (:mod:`devsim.core.parameters`), printed with their key,
     #: aliases, range, default and effect.
     parameter_table: ParameterTable | None = None
+    #: Where the simulator knowingly differs from its manual, and why.
+    deviations: list[Deviation] = msgspec.field(default_factory=list)
 
 
 class DriveActions(msgspec.Struct, frozen=True):

@@ -26,6 +26,7 @@ from devsim.devices.gms96.commands import (
     RESET_FUNCTIONS,
 )
 from devsim.devices.gms96.config import Gms96Config
+from devsim.devices.gms96.deviations import DEVIATIONS
 from devsim.devices.gms96.drive_actions import DRIVE
 from devsim.devices.gms96.face import ON_RECEIPT, P_ON_RECEIPT, SHORT_COMMANDS, T_QUERIES, Gms96Face
 from devsim.devices.gms96.framing import FT12
@@ -78,4 +79,5 @@ class Gms96Device(Device):
             ],
             parameter_table=N_TABLE,
             errors=[ErrorCode(str(n), text, "§4.4 MB4") for n, text in sorted(tables.MESSAGES.items())],
+            deviations=list(DEVIATIONS),
         )

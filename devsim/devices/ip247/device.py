@@ -13,6 +13,7 @@ from typing import Any, ClassVar
 from devsim.core.device import Device
 from devsim.core.kit import PortDef, Reference
 from devsim.devices.ip247.config import Ip247Config
+from devsim.devices.ip247.deviations import DEVIATIONS
 from devsim.devices.ip247.drive_actions import DRIVE, SETUP
 from devsim.devices.ip247.face import AgFace, PgFace
 from devsim.devices.ip247.modes import AXIS_MODES
@@ -48,4 +49,5 @@ class Ip247Device(Device):
                              *READ_RECORDS, *OBSERVED], key=lambda row: int(row.token.removeprefix("BA"))),
             parameter_table=MACHINE_DATA,
             errors=error_codes(),
+            deviations=list(DEVIATIONS),
         )

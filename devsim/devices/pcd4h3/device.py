@@ -13,6 +13,7 @@ from typing import Any, ClassVar
 from devsim.core.device import Device
 from devsim.core.kit import Command, ErrorCode, PortDef, Reference
 from devsim.devices.pcd4h3.config import Pcd4h3Config
+from devsim.devices.pcd4h3.deviations import DEVIATIONS
 from devsim.devices.pcd4h3.face import EtherDatagramFace, EtherStreamFace, SbusFace
 from devsim.devices.pcd4h3.framing import ETHER_TCP
 from devsim.devices.pcd4h3.library import FUNCTIONS
@@ -48,4 +49,4 @@ class Pcd4h3Device(Device):
         errors = [ErrorCode("ACK 0000h", "executed"), ErrorCode("NAK 0001h", "unsupported command, bad count, address "
                             "out of range, a write to the outputs or the diagnostics", "§9.2"),
                   ErrorCode("(silence)", "CRC or framing error, another station, a broadcast", "§9.2")]
-        return Reference(commands=commands, errors=errors, parameter_table=REGISTERS)
+        return Reference(commands=commands, errors=errors, parameter_table=REGISTERS, deviations=list(DEVIATIONS))

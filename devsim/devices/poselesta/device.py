@@ -15,6 +15,7 @@ from devsim.core.device import Device
 from devsim.core.kit import ErrorCode, PortDef, Reference
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF
 from devsim.devices.poselesta.config import PoselestaConfig
+from devsim.devices.poselesta.deviations import DEVIATIONS
 from devsim.devices.poselesta.drive_actions import DRIVE
 from devsim.devices.poselesta.face import PoselestaPortFace
 from devsim.devices.poselesta.links import TRANSFERS
@@ -50,4 +51,5 @@ class PoselestaDevice(Device):
             parameter_table=PARAMETERS,
             errors=[ErrorCode(WERTBEREICHES_UEBERLAUF, "value range overflow: wrong code, baud, format or "
                               "too many words; the transfer stops", "§2.6")],
+            deviations=list(DEVIATIONS),
         )

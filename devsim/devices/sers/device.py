@@ -13,6 +13,7 @@ from typing import Any, ClassVar
 from devsim.core.device import Device
 from devsim.core.kit import ErrorCode, PortDef, Reference
 from devsim.devices.sers.config import SersConfig
+from devsim.devices.sers.deviations import DEVIATIONS
 from devsim.devices.sers.drive_actions import DRIVE
 from devsim.devices.sers.errors import ERRNO
 from devsim.devices.sers.execution import COMMANDS, STATEMENTS
@@ -46,4 +47,5 @@ class SersDevice(Device):
             commands=[*INTERACTIVE, *STATEMENTS, *COMMANDS],
             parameter_table=PARAMETER_TABLE,
             errors=[ErrorCode(str(n), f"{de} — {en}", "§4.8.3.1") for n, (de, en) in sorted(ERRNO.items())],
+            deviations=list(DEVIATIONS),
         )

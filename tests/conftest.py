@@ -1,0 +1,38 @@
+"""Suite-wide hooks: the ``manual`` marker's arguments are checked, and counted per kind.
+
+A test marked ``@pytest.mark.manual("§2.6.2.1", "the printer port always runs at 1200 baud")``
+checks one statement of its kind's manual (the kind is the test's folder under tests/).  The
+summary at the end of a run says how many statements and sections each kind has under test.
+"""
+
+from __future__ import annotations
+
+import re
+from collections import defaultdict
+
+import pytest
+
+SECTION = re.compile(r"§\d+(\.\d+)*[a-z]?( .+)?$")
+_walk: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    for item in items:
+        for mark in item.iter_markers("manual"):
+            if len(mark.args) != 2 or not SECTION.match(str(mark.args[0])) or not str(mark.args[1]).strip():
+                raise pytest.UsageError(
+                    f"{item.nodeid}: @pytest.mark.manual takes (section, statement), "
+                    f"section like '§2.6.2.1'; got {mark.args!r}"
+                )
+            kind = item.path.parent.name
+            _walk[kind][str(mark.args[0]).split()[0]] += 1
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    if not _walk:
+        return
+    terminalreporter.section("manual statements under test")
+    for kind, sections in sorted(_walk.items()):
+        terminalreporter.write_line(
+            f"{kind}: {sum(sections.values())} statements in {len(sections)} sections"
+        )
