@@ -52,8 +52,8 @@ def test_dnc_read_in_r1_then_output_o1(cnc: Any) -> None:
         assert host.in_waiting == 0  # nothing answered (spec §3.5.5)
         cnc.set("param.P71", 1)  # ASCII
         cnc.set("v7.transfer", "output")
+        cnc.advance(len(O1) * 10 / 1200)  # ASCII: 10 bits a character (§2.6.1.2)
         assert host.read(len(O1)) == O1  # O1: unformatted, CR LF, generated M30
-        cnc.advance(1.0)
         assert cnc.read("v7.transfer") == "idle" and cnc.read("v7.state") == "done"
 
 
@@ -95,6 +95,7 @@ def test_tape_punch_output_is_formatted_and_reads_back(cnc: Any) -> None:
     with open_port(cnc, "v6") as punch:  # (the punch is on before the operator starts)
         cnc.set("v6.transfer", "output")
         assert cnc.read("output.v6_rts") is True and cnc.read("output.v6_dtr") is True
+        cnc.advance(5)
         tape = punch.read_until(encode("M 30\r\n", iso=True))
     assert tape == encode("%\r\nN 1 X 0.000 Y- 43.144 F 1002\r\nN 2 X- 20.000 F 750 G 42\r\nN 5 X 5.000 #\r\n"
                           "M 30\r\n", iso=True)
@@ -124,15 +125,16 @@ def test_cassette_leader_and_printer_pauses_run_on_the_device_clock(cnc: Any) ->
     assert cnc.read("program.P03") == "N 1 X 1.000"
     with open_port(cnc, "v6") as printer:
         cnc.set("v6.transfer", "printer")
+        cnc.advance(0.021)  # "%" CR at 1200 baud, 12 bits (P69 = 0): 20 ms
         assert printer.read(2) == b"%\r"
         assert printer.in_waiting == 0  # 820 ms after every CR (§2.6.2.1)
-        cnc.advance(0.83)  # "%" CR at 1200 baud, 12 bits (P69 = 0): 20 ms, then the 820 ms
+        cnc.advance(0.818)  # the 820 ms, then the next CR's 10 ms
         assert printer.in_waiting == 0
-        cnc.advance(0.02)
+        cnc.advance(0.002 + 0.010)
         assert printer.read(1) == b"\r"
-        cnc.advance(0.83)  # one CR: 10 ms and 820 ms
+        cnc.advance(0.83)  # 820 ms and one CR's 10 ms
         assert printer.read(1) == b"\r"
-        cnc.advance(0.83)
+        cnc.advance(0.86)  # 820 ms and "N 1" CR: 40 ms
         assert printer.read(4) == b"N 1\r"
 
 
@@ -182,12 +184,12 @@ def test_the_parameter_catalogue_p99_goes_out_and_comes_back_in(cnc: Any) -> Non
     cnc.set("panel.program", 99)
     with open_port(cnc, "v7") as host:
         cnc.set("v7.transfer", "output")
+        cnc.advance(20.0)  # the catalogue leaves at 1200 baud (device time)
         tape = host.read_until(b"M30\r\n")
     lines = tape.decode("ascii").split("\r\n")
     assert lines[:3] == ["%", "N1P0", "N2P0"] and lines[-2:] == ["M30", ""]
     assert "N44P5000" in lines and "N70P3" in lines and "N72P20" in lines and not any(x.startswith("N79") for x in lines)
     assert len(lines) == 1 + 97 + 2
-    cnc.advance(20.0)  # the last characters leave (device time)
     cnc.set("v7.transfer", "input")
     assert cnc.read("param.P44") == 0 and cnc.read("param.P71") == 0  # cleared at the start
     with open_port(cnc, "v7") as host:
@@ -196,10 +198,14 @@ def test_the_parameter_catalogue_p99_goes_out_and_comes_back_in(cnc: Any) -> Non
     assert [cnc.read(f"param.P{n}") for n in (44, 70, 71, 72, 97, 48)] == [4500, 3, 1, 30, -12.5, 0]
 
 
+@pytest.mark.manual("§2.6.3", "Das Einlesen des Parameterkatalogs ist bei POS II nur im ISO-Code mit 110 Baud möglich, "
+                    "da vor dem Einlesen der gesamte Parameterkatalog (inkl. P 70 und P 71) GELOESCHT wird")
+@pytest.mark.manual("§2.6", "Wird vor dem Einlesen eines Programmes eine falsche Baud-Rate gewählt: "
+                    "WERTBEREICHES-UEBERLAUF")
 def test_pos_ii_reads_the_catalogue_only_at_110_baud_iso(devsim_device) -> None:  # noqa: ANN001
     """Spec §3.9 (S12): POS II clears the whole catalogue, P70/P71 included, at the start, so the
-    rest must come at 110 baud ISO: at 1200 baud the control sees garbage, never a ``%``
-    (spec §3.5.4: garbage before ``%`` is ignored), and nothing is read."""
+    rest must come at 110 baud ISO: at 1200 baud the control sees garbage, never a ``%``, and
+    the read-in ends with WERTBEREICHES-UEBERLAUF (manual §2.6: a wrong baud rate), nothing read."""
     cnc = devsim_device("poselesta", {"variant": "II"})
     cnc.set("panel.mode", "EXTERNAL_OPERATION")
     cnc.set("panel.program", 99)
@@ -209,8 +215,8 @@ def test_pos_ii_reads_the_catalogue_only_at_110_baud_iso(devsim_device) -> None:
     with serial.serial_for_url(cnc.port_url("v7"), baudrate=1200, stopbits=2, timeout=5) as host:
         host.write(tape)
         until(lambda: cnc.runtime.line_status(cnc.name, "v7")["bytes_in"] >= len(tape), "the bytes arrive")
-    assert cnc.read("v7.state") == "wait_start" and cnc.read("param.P70") == 0
-    cnc.set("v7.transfer", "idle")
+        until(lambda: cnc.read("v7.state") == "failed", "the garbled tape stops the read-in")
+    assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF" and cnc.read("param.P70") == 0
     cnc.set("v7.transfer", "input")
     with serial.serial_for_url(cnc.port_url("v7"), baudrate=110, stopbits=2, timeout=5) as host:
         host.write(tape)

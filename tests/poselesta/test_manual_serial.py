@@ -1,0 +1,178 @@
+"""Manual §2.6 (serial interfaces V6, V7, V8) statement by statement, through the real ptys:
+baud rates, character frames, the transfer's end, cancelling, the read-in's start and its errors."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+import serial
+
+from devsim.devices.poselesta.codes import encode, iso_byte
+from tests.poselesta.test_ports import open_port, until
+
+
+@pytest.fixture
+def cnc(devsim_device):  # noqa: ANN001, ANN201
+    return devsim_device("poselesta")
+
+
+def bytes_out(cnc: Any, port: str) -> int:
+    """The bytes the control has put on ``port`` so far (what the line has taken from it)."""
+    return int(cnc.runtime.line_status(cnc.name, port)["bytes_out"])
+
+
+def bytes_in(cnc: Any, port: str) -> int:
+    return int(cnc.runtime.line_status(cnc.name, port)["bytes_in"])
+
+
+def _output_on_v7(cnc: Any, program: str) -> None:
+    cnc.set("program.P20", program)
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 20)
+    cnc.set("v7.transfer", "output")
+
+
+# -- §2.6.2.1 the printer ---------------------------------------------------------------------
+@pytest.mark.manual("§2.6.2.1", "Drucker: Baud-Rate: 1200 fest programmiert (Parameter P 68 hat keinen Einfluss)")
+@pytest.mark.parametrize("p68", [0, 5])
+def test_the_printer_port_runs_at_1200_baud_whatever_p68_says(cnc: Any, p68: int) -> None:
+    cnc.set("param.P68", p68)  # 110 or 4800 baud for the tape devices
+    cnc.set("program.P03", "N1 X1")
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 3)
+    with serial.serial_for_url(cnc.port_url("v6"), baudrate=1200, stopbits=2, timeout=5) as printer:
+        cnc.set("v6.transfer", "printer")
+        assert cnc.runtime.line_status(cnc.name, "v6")["device"]["baudrate"] == 1200
+        cnc.advance(0.0205)  # "%" CR: 2 characters of 12 bits at 1200 baud = 20 ms
+        assert bytes_out(cnc, "v6") == 2
+        cnc.advance(0.82 + 0.0100)  # the 820 ms carriage return, then one CR at 1200 baud
+        assert bytes_out(cnc, "v6") == 3
+        assert printer.read(3) == b"%\r\r"
+
+
+@pytest.mark.manual("§2.6.2.1", "Drucker: P 69 = 0 sxxxxxxxOPSS (ASCII mit parity): 12 bits a character")
+@pytest.mark.manual("§2.6.1.2", "Drucker: sxxxxxxxOSS (MSB = 0) oder sxxxxxxxOPSS (mit parity)")
+@pytest.mark.parametrize(("p69", "bits"), [(0, 12), (1, 11)])
+def test_the_printer_frame_has_an_msb_of_0_and_parity_by_p69(cnc: Any, p69: int, bits: int) -> None:
+    cnc.set("param.P69", p69)
+    cnc.set("program.P03", "N1 X1")
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 3)
+    with open_port(cnc, "v6") as printer:
+        cnc.set("v6.transfer", "printer")
+        cnc.advance(1.5 * bits / 1200)
+        assert bytes_out(cnc, "v6") == 1  # the first character has left, the second not yet
+        cnc.advance(0.9 * bits / 1200)
+        assert bytes_out(cnc, "v6") == 2
+        assert printer.read(2) == b"%\r"  # the MSB 0 whatever P69: 7-bit ASCII on the pty
+
+
+# -- §2.6.1.2 the frames of the tape ports ----------------------------------------------------
+@pytest.mark.manual("§2.6.1.2", "ISO-Code: sxxxxxxxPSS (mit parity): 11 bits a character")
+@pytest.mark.manual("§2.6.1.2", "ASCII-Code: sxxxxxxxSS: 10 bits a character")
+@pytest.mark.manual("§2.6.1.1", "Bei POSELESTA II/III werden generell 2 Stop-Bits gesendet")
+@pytest.mark.parametrize(("p71", "bits"), [(0, 11), (1, 10)])
+def test_dnc_output_leaves_one_character_per_frame_of_its_code(cnc: Any, p71: int, bits: int) -> None:
+    cnc.set("param.P71", p71)
+    with open_port(cnc, "v7") as host:
+        _output_on_v7(cnc, "N1 X10.5 Y-3\nN2 G00 X0 Y0 M02")
+        cnc.advance(10.5 * bits / 1200)  # 10.5 frames: 10 characters have left (11-bit frames: 9 of ASCII)
+        assert bytes_out(cnc, "v7") == 10
+        assert host.read(10) == encode("%\r\nN1X10.5", p71 == 0)
+
+
+@pytest.mark.manual("§2.6.3", "Baud-Rate: Mit Parameter P 70 wählbar 0 = 110 … 5 = 4800 Baud")
+@pytest.mark.parametrize(("p70", "baud"), [(0, 110), (1, 300), (2, 600), (3, 1200), (4, 2400), (5, 4800)])
+def test_the_dnc_baud_rate_follows_p70(cnc: Any, p70: int, baud: int) -> None:
+    cnc.set("param.P70", p70)
+    with serial.serial_for_url(cnc.port_url("v7"), baudrate=baud, stopbits=2, timeout=5) as host:
+        _output_on_v7(cnc, "N1 X1")
+        assert cnc.runtime.line_status(cnc.name, "v7")["device"]["baudrate"] == baud
+        cnc.advance(3.5 * 11 / baud)
+        assert bytes_out(cnc, "v7") == 3
+        assert host.read(3) == encode("%\r\n", True)
+
+
+# -- cancelling -------------------------------------------------------------------------------
+@pytest.mark.manual("§2.6.3", "Das Uebertragungsende ist mit M 30 und CR gekennzeichnet (a cancelled output "
+                    "sends no M 30)")
+def test_cancelling_an_output_stops_the_tape_at_once(cnc: Any) -> None:
+    with open_port(cnc, "v7") as host:
+        _output_on_v7(cnc, "N1 X10.5 Y-3\nN2 G00 X0 Y0 M02")
+        cnc.advance(5.5 * 11 / 1200)
+        cnc.set("v7.transfer", "idle")
+        assert cnc.read("v7.state") == "cancelled"
+        cnc.advance(2.0)
+        assert bytes_out(cnc, "v7") == 5
+        assert host.read(5) == encode("%\r\nN1", True)
+        assert host.read(1) == b""  # nothing after the cancel: no M30
+
+
+@pytest.mark.manual("§2.6.3", "Das Uebertragungsende ist mit M 30 und CR gekennzeichnet (the output ends "
+                    "when its last character has left)")
+def test_an_output_is_done_when_its_last_character_has_left(cnc: Any) -> None:
+    tape = encode("%\r\nN1X1.000\r\nM30\r\n", True)
+    with open_port(cnc, "v7") as host:
+        _output_on_v7(cnc, "N1 X1")
+        cnc.advance((len(tape) - 0.5) * 11 / 1200)
+        assert cnc.read("v7.state") == "sending"
+        cnc.advance(0.5 * 11 / 1200 + 1e-6)
+        assert cnc.read("v7.state") == "done"
+        assert host.read(len(tape)) == tape
+
+
+# -- the read-in's start ------------------------------------------------------------------------
+@pytest.mark.manual("§2.6.3", "Die Datenübertragung beginnt mit einem %-Zeichen. Alle vorgängig eintreffenden "
+                    "Zeichen werden nicht berücksichtigt.")
+def test_a_leader_of_well_formed_characters_before_percent_is_ignored(cnc: Any) -> None:
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 20)
+    cnc.set("v7.transfer", "input")
+    with open_port(cnc, "v7") as host:
+        host.write(b"\x00" * 20 + encode("TAPE 7 N1 X9\r\n", True) + b"\xff" * 3 + encode("%\rN1 X1\rM30\r", True))
+        until(lambda: cnc.read("v7.state") == "done", "the read-in ends with M30")
+    assert cnc.read("program.P20") == "N 1 X 1.000"
+
+
+@pytest.mark.manual("§2.6", "Wird vor dem Einlesen eines Programmes eine falsche Baud-Rate gewählt, erscheint am "
+                    "Bildschirm: WERTBEREICHES-UEBERLAUF")
+@pytest.mark.parametrize("p71", [0, 1])
+@pytest.mark.parametrize("host_baud", [110, 300, 4800])
+def test_a_read_in_at_the_wrong_baud_rate_ends_with_the_overflow_message(cnc: Any, p71: int, host_baud: int) -> None:
+    cnc.set("param.P71", p71)  # the control listens at 1200 baud (P70 = 3)
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 20)
+    cnc.set("v7.transfer", "input")
+    tape = encode("%\r\nN1X10.5Y-3\r\nN2G00X0Y0M02\r\nM30\r\n", p71 == 0)
+    with serial.serial_for_url(cnc.port_url("v7"), baudrate=host_baud, stopbits=2, timeout=5) as host:
+        host.write(tape)
+        until(lambda: cnc.read("v7.state") == "failed", "the garbled tape stops the read-in")
+    assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF"
+    assert cnc.read("programs") == []
+
+
+@pytest.mark.manual("§2.6", "Wird vor dem Einlesen eines Programmes ein falscher Code gewählt, erscheint am "
+                    "Bildschirm: WERTBEREICHES-UEBERLAUF (characters with a parity error before %)")
+def test_a_parity_error_before_percent_ends_the_read_in(cnc: Any) -> None:
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 20)
+    cnc.set("v7.transfer", "input")
+    with open_port(cnc, "v7") as host:
+        host.write(bytes([iso_byte(ord("T")) ^ 0x80]))
+        until(lambda: cnc.read("v7.state") == "failed", "a character with a parity error")
+    assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF"
+
+
+@pytest.mark.manual("§2.6", "falsche Baud-Rate: WERTBEREICHES-UEBERLAUF (on an ASCII port: control characters "
+                    "a tape does not carry, before %)")
+def test_control_characters_before_percent_on_an_ascii_port_end_the_read_in(cnc: Any) -> None:
+    cnc.set("param.P71", 1)
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 20)
+    cnc.set("v7.transfer", "input")
+    with open_port(cnc, "v7") as host:
+        host.write(b"\x00\x00\r\n\x7fTAPE\x18")
+        until(lambda: bytes_in(cnc, "v7") == 10, "the line has taken the bytes")
+        until(lambda: cnc.read("v7.state") == "failed", "CAN is no tape character")
+    assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF"
