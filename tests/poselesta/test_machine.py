@@ -11,12 +11,15 @@ from typing import Any
 import pytest
 
 OUTPUTS = ("data_bus", "strobe_m", "strobe_s1", "strobe_s2", "strobe_t", "strobe_ba")
+#: These tests check the control's logic on the levels it sees; the input delay of manual §2.3
+#: has its own tests (test_manual_inputs.py), so here an input is seen as it is set.
+NO_INPUT_DELAY = {"input_rise_ms": 0, "input_fall_ms": 0}
 
 
 @pytest.fixture
 def make(devsim_device):  # noqa: ANN001, ANN201
     def start(config: dict[str, Any] | None = None, program: str = "", mode: str = "AUTO_CONTINUOUS") -> Any:
-        cnc = devsim_device("poselesta", config)
+        cnc = devsim_device("poselesta", {**NO_INPUT_DELAY, **(config or {})})
         cnc.advance(0.1)  # past the BA output after the boot
         if program:
             cnc.set("program.P20", program)
@@ -272,6 +275,7 @@ def test_override_scales_the_feed_and_zero_stands_without_hold(make) -> None:  #
 def test_the_input_diagnostics_show_the_levels_of_section_6_11(make) -> None:  # noqa: ANN001
     """§6.11 (P79 N5) with the default levels; NC-Stop L changes port 4 B to 0x10; P79 N7."""
     cnc = make(mode="PROGRAM_ENTRY")
+    cnc.set("panel.diagnostic", 5)
     assert cnc.read("diagnostics.inputs") == {
         "1A": 0x46, "1B": 0x00, "2A": 0xFF, "2B": 0x00, "3A": 0x00, "3B": 0x00, "4A": 0x60, "4B": 0x18,
     }
@@ -280,6 +284,7 @@ def test_the_input_diagnostics_show_the_levels_of_section_6_11(make) -> None:  #
     ]
     cnc.set("input.nc_stop", False)
     assert cnc.read("diagnostics.inputs")["4B"] == 0x10
+    cnc.set("panel.diagnostic", 7)
     assert cnc.read("diagnostics.pots") == ["FF", "AA"]  # 10 V, 6.667 V
 
 
@@ -581,7 +586,7 @@ def test_a_chain_of_line_and_arc_keeps_its_speed(make) -> None:  # noqa: ANN001
 def test_an_xy_plotter_gets_its_position_as_the_set_point(devsim_device) -> None:  # noqa: ANN001
     """Spec §5.9 (manual §2.3.20): V22/8 H at power-on; the set-point is the position over the
     working field, −10 V … +10 V in 14 bits."""
-    cnc = devsim_device("poselesta")
+    cnc = devsim_device("poselesta", NO_INPUT_DELAY)
     assert cnc.read("xy_plotter") is False
     cnc.set("input.xy_plotter", True)
     assert cnc.read("xy_plotter") is False  # sampled at power-on only
@@ -650,10 +655,13 @@ def test_the_conversions_of_section_6_10(make) -> None:  # noqa: ANN001
     for volts, percent in ((10.0, 100.0), (5.0, 50.0)):
         cnc.set("input.feed_pot_v", volts)
         assert cnc.read("panel.feed") == percent
+    cnc.set("panel.mode", "PROGRAM_ENTRY")
+    cnc.set("panel.diagnostic", 7)
     for feed, override, shown in ((0.0, 10.0, ["00", "FF"]), (10.0, 6.667, ["FF", "AA"])):
         cnc.set("input.feed_pot_v", feed)
         cnc.set("input.override_pot_v", override)
         assert cnc.read("diagnostics.pots") == shown
+    cnc.set("panel.mode", "MANUAL")
     cnc.set("input.feed_pot_v", 10.0)
     cnc.set("param.P76", 4)
     cnc.set("handwheel.factor", 10)

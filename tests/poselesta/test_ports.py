@@ -28,7 +28,7 @@ def until(check: Callable[[], Any], what: str) -> None:
 
 @pytest.fixture
 def cnc(devsim_device):  # noqa: ANN001, ANN201
-    return devsim_device("poselesta")
+    return devsim_device("poselesta", {"input_rise_ms": 0, "input_fall_ms": 0})  # (§2.3's delay: test_manual_inputs)
 
 
 def open_port(cnc: Any, port: str) -> serial.Serial:
