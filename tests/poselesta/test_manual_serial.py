@@ -176,3 +176,21 @@ def test_control_characters_before_percent_on_an_ascii_port_end_the_read_in(cnc:
         until(lambda: bytes_in(cnc, "v7") == 10, "the line has taken the bytes")
         until(lambda: cnc.read("v7.state") == "failed", "CAN is no tape character")
     assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF"
+
+
+@pytest.mark.manual("§2.6.1.1", "Die Baud-Rate gibt die Anzahl der pro Sekunde übertragenen Bits an (in real time, "
+                    "without --pacing)")
+def test_in_real_time_an_output_takes_its_frames_at_the_baud_rate(devsim_device) -> None:  # noqa: ANN001
+    import time
+
+    cnc = devsim_device("poselesta", {"boot_time": 0, "params": {70: 1}}, virtual=False)  # 300 baud ISO
+    tape = encode("%\r\nN1X1.000\r\nM30\r\n", True)
+    with serial.serial_for_url(cnc.port_url("v7"), baudrate=300, stopbits=2, timeout=5) as host:
+        _output_on_v7(cnc, "N1 X1")
+        started = time.monotonic()
+        assert host.read(1) == tape[:1]
+        first = time.monotonic() - started
+        assert host.read(len(tape) - 1) == tape[1:]
+        took = time.monotonic() - started
+    assert first < 0.5 * len(tape) * 11 / 300
+    assert took >= 0.9 * len(tape) * 11 / 300  # 19 characters of 11 bits at 300 baud: 0.70 s
