@@ -35,11 +35,15 @@ def open_port(cnc: Any, port: str) -> serial.Serial:
     return serial.serial_for_url(cnc.port_url(port), baudrate=1200, stopbits=2, timeout=5)
 
 
+@pytest.mark.manual("§2.4.5", "nach ca. 2 Sekunden schaltet die Steuerung auf Handbetrieb und NC-Bereitschaft auf H-Level")
 def test_boot_gives_manual_mode_and_nc_ready(cnc: Any) -> None:
     assert cnc.read("panel.mode") == "MANUAL"
     assert cnc.read("output.nc_ready") is True and cnc.read("output.data_bus") == 0x08
 
 
+@pytest.mark.manual("§2.6.3", "Die Programmnummer Pxx (z. B. P 20) wird nicht übertragen")
+@pytest.mark.manual("§2.6.3", "Ein Drucker-Anschluss ist nicht sinnvoll, da die Daten nicht formatiert ausgegeben werden")
+@pytest.mark.manual("§2.6.3", "Bei einem Ausdruck wird M 30 automatisch generiert")
 def test_dnc_read_in_r1_then_output_o1(cnc: Any) -> None:
     cnc.set("panel.mode", "EXTERNAL_OPERATION")
     assert cnc.read("output.data_bus") == 0x0A
@@ -57,6 +61,8 @@ def test_dnc_read_in_r1_then_output_o1(cnc: Any) -> None:
         assert cnc.read("v7.transfer") == "idle" and cnc.read("v7.state") == "done"
 
 
+@pytest.mark.manual("§2.6", "Beim Einlesen eines neuen Programmes wird zuerst das vorgewählte Programm (Pxx) gelöscht")
+@pytest.mark.manual("§2.6", "Wird vor dem Einlesen eines Programmes ein falscher Code gewählt, erscheint am Bildschirm: WERTBEREICHES-UEBERLAUF")
 def test_the_selected_program_is_deleted_first_and_a_wrong_code_stops(cnc: Any) -> None:
     cnc.set("program.P20", "N1 X5\nN2 Y6")
     cnc.set("panel.mode", "EXTERNAL_OPERATION")
@@ -72,6 +78,7 @@ def test_the_selected_program_is_deleted_first_and_a_wrong_code_stops(cnc: Any) 
     assert cnc.read("panel.message") == ""
 
 
+@pytest.mark.manual("§2.6", "V 7 in der Betriebsart EXT, V 6 in der Betriebsart Σ")
 def test_transfers_need_their_mode_and_input_while_idle_is_discarded(cnc: Any) -> None:
     with pytest.raises(ValueError, match="needs mode EXTERNAL_OPERATION"):
         cnc.set("v7.transfer", "input")
@@ -88,6 +95,8 @@ def test_transfers_need_their_mode_and_input_while_idle_is_discarded(cnc: Any) -
     assert cnc.read("v6.state") == "cancelled"
 
 
+@pytest.mark.manual("§2.6.2.3", "Die Daten werden formatiert ausgegeben, d.h. die Abstände zwischen den einzelnen Funktionen werden mit Leerzeichen ausgefüllt")
+@pytest.mark.manual("§2.6.2.3", "Beim Einlesen wird zuerst das in der Steuerung vorgewählte Programm gelöscht")
 def test_tape_punch_output_is_formatted_and_reads_back(cnc: Any) -> None:
     cnc.set("program.P07", "N1 X0 Y-43.144 F1002\nN2 X-20 F750 G42\nN5 X5 #")
     cnc.set("panel.mode", "EXTERNAL_MEDIUM")
@@ -109,6 +118,9 @@ def test_tape_punch_output_is_formatted_and_reads_back(cnc: Any) -> None:
     assert cnc.read("program.P08") == cnc.read("program.P07")
 
 
+@pytest.mark.manual("§2.6.2.2", "Da der Beginn der aktiven Schicht nicht automatisch erkannt wird, ist eine Vorlaufzeit von ca. 13 Sekunden fest programmiert")
+@pytest.mark.manual("§2.6.2.1", "Die Datenausgabe beim Drucker wird nach jedem CR für ca. 820 ms (Wagenrücklauf) angehalten")
+@pytest.mark.manual("§2.6.2.1", "Nach jeder ausgedruckten Funktion erfolgt CR. Es wird kein LF generiert (% CR CR CR)")
 def test_cassette_leader_and_printer_pauses_run_on_the_device_clock(cnc: Any) -> None:
     cnc.set("panel.mode", "EXTERNAL_MEDIUM")
     cnc.set("panel.program", 3)
@@ -142,6 +154,10 @@ def _bytes_in(cnc: Any, port: str) -> int:
     return int(cnc.runtime.line_status(cnc.name, port)["bytes_in"])
 
 
+@pytest.mark.manual("§2.6.4", "Zwischen den einzelnen gesendeten Zeichen muss eine Pause von mindestens 100ms eingehalten werden, um einen Ueberlauf des Eingabepuffers zu vermeiden")
+@pytest.mark.manual("§2.6.4", "Ueber die Eingangsklemme V21/9 kann von der internen auf die externe Tastatur umgeschaltet werden")
+@pytest.mark.manual("§2.6.4", "Die Taste P hat z. B. den Code 48 (ISO-Code H)")
+@pytest.mark.manual("§2.4.9", "Bei Anschluss eines Summers zeigt ein kurzes akustisches Signal, dass die Steuerung die Eingabe angenommen hat")
 def test_keyboard_codes_buffer_and_overflow(cnc: Any) -> None:
     """Spec §6.9 K1, K3–K7 on the V8 pty, with the 100 ms per key on the device clock."""
     with open_port(cnc, "v8") as keys:
@@ -175,6 +191,8 @@ def test_programs_survive_a_power_cycle(cnc: Any) -> None:
     assert cnc.read("program.P12") == "N 10 X 1.000 F 100 G 01"  # (an M30 block ends the entry)
 
 
+@pytest.mark.manual("§2.6", "Stecker V6 und V7: Ein- und Ausgabe der NC-Programme oder auch der Maschinenparameter")
+@pytest.mark.manual("§2.6.3", "Bei POS III sind Baudraten bis 1200 sowie ISO- & ASCII-Code möglich (Parameterkatalog)")
 def test_the_parameter_catalogue_p99_goes_out_and_comes_back_in(cnc: Any) -> None:
     """Spec §3.9 (S13): P99 through T6/T7 as blocks N<number> P<value>; on POS III the read-in
     clears the catalogue first and keeps the line of its start; the values act after M30."""
@@ -233,6 +251,7 @@ def test_a_locked_key_switch_refuses_the_catalogue(cnc: Any) -> None:
     assert cnc.read("param.P70") == 3
 
 
+@pytest.mark.manual("§2.3.21", "Programme lassen sich schützen und freigeben. Das Freigeben ist nur in Stellung offen möglich")
 def test_a_protected_program_is_not_overwritten_by_a_read_in(cnc: Any) -> None:
     """S32 (§2.3.21, spec §4.5 G-LOCK): protect P20; with the program lock closed (V22/9 L) it
     cannot be released, a read-in into it is refused before anything is deleted; opened, it can."""
@@ -252,6 +271,7 @@ def test_a_protected_program_is_not_overwritten_by_a_read_in(cnc: Any) -> None:
     assert cnc.read("program.P20") == ""  # read-in deletes the pre-selected program first
 
 
+@pytest.mark.manual("§2.6.2.3", "Beim POS III ist das Einlesen der Parameter mit Baud-Raten bis 1200 Baud im ISO- oder ASCII-Code möglich")
 def test_pos_iii_reads_the_catalogue_at_1200_baud_at_most(cnc: Any) -> None:
     """Spec §3.9: P70 = 5 (4800 baud) refuses the catalogue read-in, nothing is cleared."""
     cnc.set("param.P70", 5)
@@ -262,6 +282,8 @@ def test_pos_iii_reads_the_catalogue_at_1200_baud_at_most(cnc: Any) -> None:
     assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF" and cnc.read("param.P70") == 5
 
 
+@pytest.mark.manual("§2.6.4", "Der angezeigte Code ist um 1 höher als der tatsächlich übertragene Code: für die Taste P wird die Zahl 49 angezeigt")
+@pytest.mark.manual("§2.6.4", "2D bewirkt den Abbruch vom Testprogramm N 3")
 def test_the_keyboard_test_shows_each_code_plus_one(cnc: Any) -> None:
     """Vector K2 (§2.6.4): key P (48) during P79 N3 shows 49; key 2D ends the test."""
     cnc.set("input.keyboard_external", True)
