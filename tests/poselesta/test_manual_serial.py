@@ -194,3 +194,180 @@ def test_in_real_time_an_output_takes_its_frames_at_the_baud_rate(devsim_device)
         took = time.monotonic() - started
     assert first < 0.5 * len(tape) * 11 / 300
     assert took >= 0.9 * len(tape) * 11 / 300  # 19 characters of 11 bits at 300 baud: 0.70 s
+
+
+# -- §2.6.2.1 the printout ------------------------------------------------------------------------
+@pytest.mark.manual("§2.6.2.1", "Nach jeder ausgedruckten Funktion erfolgt CR. Es wird kein LF generiert. "
+                    "Beispiel: % CR CR CR, N 1 CR, X 100.000 CR, Y 20.123 CR, G 00 CR, # CR, N 2 …")
+def test_the_printout_has_one_function_a_line_as_the_manuals_example(cnc: Any) -> None:
+    cnc.set("program.P03", "N1 X100 Y20.123 G00 #\nN2 Y1000 F500 M20")
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 3)
+    expected = b"%\r\r\rN 1\rX 100.000\rY 20.123\rG 00\r#\rN 2\rY 1000.000\rF 500\rM 20\rM 30\r"
+    with open_port(cnc, "v6") as printer:
+        cnc.set("v6.transfer", "printer")
+        cnc.advance(expected.count(b"\r") * 0.83 + len(expected) * 12 / 1200)
+        assert cnc.read("v6.state") == "done"
+        assert printer.read(len(expected)) == expected
+
+
+@pytest.mark.manual("§2.6.2.1", "Während der Datenübertragung werden RTS und DTR auf hohem Niveau gehalten")
+@pytest.mark.manual("§2.6.2.1", "Die Drucker-Rückmeldung (clear to send) wird von der Steuerung ignoriert")
+def test_the_printer_lines_are_high_while_printing_and_cts_is_ignored(cnc: Any) -> None:
+    cnc.set("program.P03", "N1 X1")
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 3)
+    cnc.set("input.v6_cts", False)  # the printer's buffer is full
+    with open_port(cnc, "v6") as printer:
+        cnc.set("v6.transfer", "printer")
+        assert cnc.read("output.v6_rts") is True and cnc.read("output.v6_dtr") is True
+        cnc.advance(10.0)
+        assert printer.read(4) == b"%\r\r\r"
+    assert cnc.read("v6.state") == "done"
+    assert cnc.read("output.v6_rts") is False and cnc.read("output.v6_dtr") is False
+
+
+# -- §2.6.2.2 the cassette ------------------------------------------------------------------------
+@pytest.mark.manual("§2.6.2.2", "Baud-Rate POS II: 300 fest programmiert (P 68 hat keinen Einfluss)")
+@pytest.mark.manual("§2.6.2.2", "Baud-Rate POS III: 300/1200/4800 mittels P 68 wählbar")
+@pytest.mark.parametrize(("variant", "p68", "baud"), [("II", 3, 300), ("II", 0, 300), ("III", 1, 300),
+                                                      ("III", 3, 1200), ("III", 5, 4800)])
+def test_the_cassette_baud_rate(devsim_device, variant: str, p68: int, baud: int) -> None:  # noqa: ANN001
+    cnc = devsim_device("poselesta", {"variant": variant, "params": {68: p68}})
+    cnc.set("program.P03", "N1 X1")
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 3)
+    with serial.serial_for_url(cnc.port_url("v6"), baudrate=baud, stopbits=2, timeout=5) as recorder:
+        cnc.set("v6.transfer", "cassette_out")
+        assert cnc.runtime.line_status(cnc.name, "v6")["device"]["baudrate"] == baud
+        cnc.advance(13.0 + 1.5 * 11 / baud)  # the leader, then one ISO character
+        assert bytes_out(cnc, "v6") == 1
+        assert recorder.read(1) == encode("%", True)
+
+
+@pytest.mark.manual("§2.6.2.2", "Die Ansteuerung erfolgt mit den Signalen RTS und DTR (Ausgabe auf Band: Mode 2)")
+def test_the_cassette_records_with_rts_and_dtr_high(cnc: Any) -> None:
+    cnc.set("program.P03", "N1 X1")
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 3)
+    cnc.set("v6.transfer", "cassette_out")
+    assert cnc.read("output.v6_dtr") is True and cnc.read("output.v6_rts") is True
+    cnc.advance(12.9)
+    assert bytes_out(cnc, "v6") == 0  # the leader: nothing is sent for ca. 13 s
+    cnc.set("v6.transfer", "idle")
+    assert cnc.read("output.v6_dtr") is False and cnc.read("output.v6_rts") is False
+
+
+# -- §2.6.2.3 tape reader / punch, TTY --------------------------------------------------------------
+@pytest.mark.manual("§2.6.2.3", "Baud-Rate mit Parameter P 68 wählbar: 4 = 2400 Baud, 5 = 4800 Baud nur bei POS III möglich")
+@pytest.mark.parametrize("p68", [4, 5])
+def test_pos_ii_has_no_2400_or_4800_baud_on_v6(devsim_device, p68: int) -> None:  # noqa: ANN001
+    cnc = devsim_device("poselesta", {"variant": "II", "params": {68: p68}})
+    cnc.set("program.P03", "N1 X1")
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 3)
+    with pytest.raises(ValueError, match="not available on POS II"):
+        cnc.set("v6.transfer", "output")
+    assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF"
+
+
+@pytest.mark.manual("§2.6.2.3", "Baud-Rate mit Parameter P 68 wählbar: 0 = 110 … 5 = 4800 Baud")
+@pytest.mark.manual("§2.6.2.3", "Code: P 69 = 0 sxxxxxxxPSS (ISO), P 69 = 1 sxxxxxxxSS (ASCII)")
+@pytest.mark.parametrize(("p68", "p69", "baud"), [(0, 0, 110), (2, 1, 600), (4, 0, 2400)])
+def test_the_punch_runs_at_p68_in_the_code_of_p69(cnc: Any, p68: int, p69: int, baud: int) -> None:
+    cnc.set("param.P68", p68)
+    cnc.set("param.P69", p69)
+    cnc.set("program.P03", "N1 X1")
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 3)
+    bits = 11 if p69 == 0 else 10
+    with serial.serial_for_url(cnc.port_url("v6"), baudrate=baud, stopbits=2, timeout=5) as punch:
+        cnc.set("v6.transfer", "output")
+        cnc.advance(3.5 * bits / baud)
+        assert bytes_out(cnc, "v6") == 3
+        assert punch.read(3) == encode("%\r\n", p69 == 0)
+
+
+# -- §2.6.3 the DNC protocol, through the V7 pty -------------------------------------------------------
+def _read_in(cnc: Any, text: bytes) -> None:
+    cnc.set("param.P71", 1)  # ASCII, so the tapes below read as text
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 20)
+    cnc.set("v7.transfer", "input")
+    with open_port(cnc, "v7") as host:
+        host.write(text)
+        until(lambda: bytes_in(cnc, "v7") == len(text), "the line has taken the tape")
+
+
+@pytest.mark.manual("§2.6.3", "Die Satznummer muss mit Nxxx vorgewählt werden. Die Eingabe N 01 und N 1 ist möglich.")
+@pytest.mark.manual("§2.6.3", "Leerzeichen zwischen einzelnen Funktionen müssen nicht eingegeben werden")
+@pytest.mark.manual("§2.6.3", "Führende oder nach dem Komma folgende Nullen müssen nicht eingegeben werden")
+@pytest.mark.manual("§2.6.3", "Die NC-Sätze müssen mit CR abgeschlossen werden. LF kann, muss jedoch nicht, "
+                    "eingegeben werden.")
+@pytest.mark.manual("§2.6.3", "Die Reihenfolge der zu programmierenden Funktionen ist beliebig")
+def test_dnc_read_in_takes_the_protocols_liberties(cnc: Any) -> None:
+    _read_in(cnc, b"%\r\nN 01 X 0010.500 Y-3\r\nN2Y.25X0\rN 3 F 0500 G 01\r\nM30\r\n")
+    until(lambda: cnc.read("v7.state") == "done", "M30 ends the read-in")
+    assert cnc.read("program.P20") == "N 1 X 10.500 Y- 3.000\nN 2 X 0.000 Y 0.250\nN 3 F 500 G 01"
+
+
+@pytest.mark.manual("§2.6.3", "Löschzeichen (delete) werden überlesen")
+@pytest.mark.manual("§2.6.3", "Falsche oder nicht definierte Zeichen werden überlesen")
+@pytest.mark.manual("§2.6.3", "Mit C kann ein falscher Wert einer noch nicht abgeschlossenen Funktion gelöscht und "
+                    "neu eingegeben werden")
+@pytest.mark.manual("§2.6.3", "Die Satzunterdrückung # muss gegebenenfalls im aktuellen Satz stehen")
+def test_dnc_read_in_skips_delete_and_undefined_characters(cnc: Any) -> None:
+    _read_in(cnc, b"%\r\nN1 X1\x7f2 ?y\r\nN2 X7C8 #\r\nM30\r\n")
+    until(lambda: cnc.read("v7.state") == "done", "M30 ends the read-in")
+    assert cnc.read("program.P20") == "N 1 X 12.000\nN 2 X 8.000 #"
+
+
+@pytest.mark.manual("§2.6.3", "Die Datenein- und Ausgabe wird mit M 02 nicht unterbrochen, sondern erst mit M 30")
+@pytest.mark.manual("§2.6.3", "beim Einlesen in die Steuerung kann M 30 mit oder ohne Satznummer eingegeben werden")
+@pytest.mark.parametrize("end", [b"M30\r", b"N9 M30\r"])
+def test_dnc_read_in_ends_at_m30_not_m02(cnc: Any, end: bytes) -> None:
+    _read_in(cnc, b"%\rN1 X1 M02\r")
+    assert cnc.read("v7.state") == "receiving"
+    with open_port(cnc, "v7") as host:
+        host.write(b"N2 X2\r" + end + b"N3 X3\r")
+        until(lambda: cnc.read("v7.state") == "done", "M30 ends the read-in")
+    assert cnc.read("program.P20") == "N 1 X 1.000 M 02\nN 2 X 2.000"
+
+
+@pytest.mark.manual("§2.6.3", "In einem Satz können maximal folgende Funktionen eingegeben werden: 2 Koordinaten, "
+                    "2 Hilfskoordinaten, 4 G-Funktionen, 2 M-Funktionen")
+@pytest.mark.parametrize("block", [b"N2 X1 Y1 Z1", b"N2 I1 J1 K1", b"N2 G01 G90 G40 G17 G04", b"N2 M03 M08 M10"])
+def test_dnc_read_in_refuses_a_block_beyond_the_block_format(cnc: Any, block: bytes) -> None:
+    _read_in(cnc, b"%\rN1 X1\r" + block + b"\rM30\r")
+    until(lambda: cnc.read("v7.state") == "failed", "the block format is exceeded")
+    assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF"
+    assert cnc.read("program.P20") == "N 1 X 1.000"
+
+
+# -- §2.6.4 the external keyboard V8 -----------------------------------------------------------------
+@pytest.mark.manual("§2.6.4", "Baud-Rate: 1200 fest programmiert")
+@pytest.mark.manual("§2.6", "V 8 (externe Tastatur) kann in jeder Betriebsart angewählt werden")
+@pytest.mark.parametrize("mode", ["MANUAL", "EXTERNAL_OPERATION", "AUTO_CONTINUOUS"])
+def test_the_keyboard_port_runs_at_1200_baud_in_every_mode(cnc: Any, mode: str) -> None:
+    cnc.set("param.P68", 0)
+    cnc.set("param.P70", 5)
+    cnc.set("panel.mode", mode)
+    cnc.set("input.keyboard_external", True)
+    cnc.advance(0.1)
+    assert cnc.runtime.line_status(cnc.name, "v8")["device"]["baudrate"] == 1200
+    with open_port(cnc, "v8") as keyboard:
+        keyboard.write(encode("H", True))  # key P
+        until(lambda: cnc.read("keyboard.accepted") == 1, "the key is taken")
+    assert cnc.read("keyboard.last_key") == 0x48
+
+
+@pytest.mark.manual("§2.4.9", "Ueber den Parameter P 67 kann der Summer abgeschaltet werden")
+@pytest.mark.parametrize(("p67", "buzzes"), [(0, True), (1, False)])
+def test_p67_switches_the_buzzer_off(cnc: Any, p67: int, buzzes: bool) -> None:
+    cnc.set("param.P67", p67)
+    cnc.set("input.keyboard_external", True)
+    cnc.advance(0.1)
+    with open_port(cnc, "v8") as keyboard:
+        keyboard.write(encode("H", True))
+        until(lambda: cnc.read("keyboard.accepted") == 1, "the key is taken")
+    assert cnc.read("output.buzzer") is buzzes
