@@ -319,3 +319,26 @@ def test_a_higher_gain_gives_a_smaller_following_error(make) -> None:  # noqa: A
         errors.append(abs(cnc.read("axis.x.following_error")))
         assert -10.0 <= cnc.read("axis.x.analog_out") < 0
     assert errors[1] == pytest.approx(errors[0] / 2) and errors[1] > 0
+
+
+@pytest.mark.manual("§2.4.2", "Position erreicht erscheint nur während ca. 60 us, falls Programm-Fortschaltung schon "
+                    "anliegt")
+def test_position_reached_is_a_60_us_pulse_when_program_continue_is_high(make) -> None:  # noqa: ANN001
+    cnc = make(program="N1 G00 X1\nN2 G00 X2")
+    cnc.set("panel.nc_start", True)
+    cnc.run_until(lambda d: bool(d.model.signals.get("position_reached")), 5.0)
+    assert cnc.read("output.position_reached") is True and cnc.read("program.block") == 1
+    cnc.advance(70e-6)
+    assert cnc.read("output.position_reached") is False
+
+
+@pytest.mark.manual("§2.4.7", "In der Betriebsart Hand-Einzelsatz wirken alle dekodierten M-Funktionen satzweise")
+def test_decoded_m_functions_act_block_by_block_in_manual_single_block(make) -> None:  # noqa: ANN001
+    cnc = make(mode="MANUAL_SINGLE_BLOCK")
+    cnc.set("panel.mdi", "N1 M03 G01 X10 F3000")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.3)
+    assert cnc.read("output.m03") is True and cnc.read("axis.x.velocity") > 0
+    cnc.advance(2.0)
+    assert cnc.read("axis.x.position") == pytest.approx(10_000)
+    assert cnc.read("output.m03") is False  # the block is over: M03 was for this block only

@@ -33,4 +33,36 @@ DEVIATIONS: tuple[Deviation, ...] = (
         "bytes on a pty or a TCP socket",
         "electrical properties a byte stream does not have",
     ),
+    Deviation(
+        "§2.2",
+        "the encoders V1–V4 deliver sine or TTL signals (A, B, reference mark of 90 … 270° width, +5 V supply of "
+        "at most 200 mA, interpolation inside the control)",
+        "the actual value is computed from the axis model; of the encoders only the reference marks (positions "
+        "in config axes.<a>.reference_marks), the highest input frequency (encoder_khz) and the faults "
+        "encoder_loss_<a>, count_loss_<a>, rm_missing_<a> are simulated",
+        "signal shapes, levels and supply currents are electrical; the host and the PLC see their effect only",
+    ),
+    Deviation(
+        "§2.3, §2.4",
+        "inputs H = 18 … 40 V, L = 0 … 3 V or open, 3 … 8 mA; outputs 24 V, 100 mA, short-circuit proof; the "
+        "set-points ±10 V into at least 5 kΩ; the pots on V23 fed with +10 V",
+        "an input or output is a level (True = H), a set-point or a pot a number of volts",
+        "electrical properties a simulated level does not have",
+    ),
+    Deviation(
+        "§2.3.14",
+        "P1 selects mm or inch for the machine parameter and tool catalogues (the table's rows 3 and 4: "
+        "catalogues in inch); after changing P1 the catalogue must be entered again",
+        "P1 is stored and read back but has no effect: the catalogues are always in mm; V22/2 (inch "
+        "programming and display) acts as the manual's rows 1 and 2 say",
+        "the inch catalogue's scaling of every parameter is not described in the manual (spec §4.8: stored only)",
+    ),
+    Deviation(
+        "§2.7, §2.3.25, §2.3.1",
+        "the control shows its state on a 12-inch screen over composite video (V9): messages, the diagnostic "
+        "pages, the function keys of NC-Stop and NC-Start, the start/stop symbol",
+        "the screen is not drawn: what it shows is read as points (panel.message, diagnostics.input_screen, "
+        "diagnostics.pots, diagnostics.keyboard_test, panel.function_keys, output.start_stop_status)",
+        "a video signal is not something a host program reads; the points carry the same information",
+    ),
 )
