@@ -342,3 +342,28 @@ def test_decoded_m_functions_act_block_by_block_in_manual_single_block(make) -> 
     cnc.advance(2.0)
     assert cnc.read("axis.x.position") == pytest.approx(10_000)
     assert cnc.read("output.m03") is False  # the block is over: M03 was for this block only
+
+
+@pytest.mark.manual("§2.3.17", "Damit eine Werkzeugwechsel-Quittierung akzeptiert werden kann, müssen zuvor alle im "
+                    "gleichen Satz programmierten S- und T-Funktionen übernommen und quittiert sein")
+def test_a_tool_change_acknowledge_before_s_and_t_are_taken_does_not_count(make) -> None:  # noqa: ANN001
+    cnc = make(program="N1 M06 S100 T05 X1")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.01)
+    assert cnc.read("output.m06") is True and cnc.read("output.data_bus") == 0x06
+    cnc.set("input.tool_change_ack", True)  # a pulse while M06 is still on the bus
+    cnc.advance(0.05)
+    cnc.set("input.tool_change_ack", False)
+    cnc.advance(1.0)
+    assert cnc.read("program.state") == "WAIT_TOOL_CHANGE" and cnc.read("output.m06") is True
+    assert cnc.read("axis.x.position") == 0
+
+
+@pytest.mark.manual("§2.3.17", "Die Werkzeugwechsel-Quittierung kann impulsförmig oder statisch erfolgen")
+def test_a_static_tool_change_acknowledge_counts(make) -> None:  # noqa: ANN001
+    cnc = make(program="N1 M06 T05 X1")
+    cnc.set("panel.nc_start", True)
+    cnc.run_until(lambda d: d.model.executor.state == "WAIT_TOOL_CHANGE", 2.0)
+    cnc.set("input.tool_change_ack", True)  # and left H
+    cnc.advance(1.0)
+    assert cnc.read("output.m06") is False and cnc.read("axis.x.position") == pytest.approx(1_000)

@@ -371,3 +371,43 @@ def test_p67_switches_the_buzzer_off(cnc: Any, p67: int, buzzes: bool) -> None:
         keyboard.write(encode("H", True))
         until(lambda: cnc.read("keyboard.accepted") == 1, "the key is taken")
     assert cnc.read("output.buzzer") is buzzes
+
+
+@pytest.mark.manual("§2.6.1.1", "Jedes Zeichen beginnt mit einem Start-Bit und endet mit Stop-Bits; es können auch "
+                    "mehrere Stop-Bits nacheinander eintreffen (pauses between characters)")
+def test_a_read_in_takes_pauses_between_characters(cnc: Any) -> None:
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 20)
+    cnc.set("v7.transfer", "input")
+    tape = encode("%\rN1 X1\rM30\r", True)
+    with open_port(cnc, "v7") as host:
+        for k in range(len(tape)):
+            host.write(tape[k:k + 1])
+            until(lambda k=k: bytes_in(cnc, "v7") == k + 1, "the line has taken the character")
+            cnc.advance(0.5)  # a long idle line (stop level) between characters
+    assert cnc.read("v7.state") == "done" and cnc.read("program.P20") == "N 1 X 1.000"
+
+
+@pytest.mark.manual("§2.6.3", "Das ELESTA-Kassettengerät kann nur am Stecker V 6 angeschlossen werden")
+def test_the_cassette_functions_are_on_v6_only(cnc: Any) -> None:
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    for name in ("cassette_out", "cassette_in", "printer"):
+        with pytest.raises(ValueError):
+            cnc.set("v7.transfer", name)
+    assert cnc.read("v7.transfer") == "idle"
+
+
+@pytest.mark.manual("§2.6.2.2", "Der Parameterkatalog kann beim POS II nur mit dem ISO-Code auf Band aufgenommen "
+                    "werden, weil bei der Wiedergabe vom Band der Parameterkatalog inkl. P 69 GELOESCHT wird")
+def test_pos_ii_plays_the_catalogue_back_in_iso_only(devsim_device) -> None:  # noqa: ANN001
+    cnc = devsim_device("poselesta", {"variant": "II", "params": {69: 1}})  # V6 in ASCII
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 99)
+    for iso, state in ((False, "failed"), (True, "done")):
+        cnc.set("v6.transfer", "cassette_in")
+        assert cnc.read("param.P69") == 0  # cleared: the tape is read in ISO
+        cnc.advance(13.0)
+        with serial.serial_for_url(cnc.port_url("v6"), baudrate=300, stopbits=2, timeout=5) as recorder:
+            recorder.write(encode("%\rN70P3\rM30\r", iso))
+            until(lambda state=state: cnc.read("v6.state") == state, f"the {'ISO' if iso else 'ASCII'} tape")
+    assert cnc.read("param.P70") == 3
