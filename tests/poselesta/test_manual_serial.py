@@ -152,6 +152,22 @@ def test_a_read_in_at_the_wrong_baud_rate_ends_with_the_overflow_message(cnc: An
     assert cnc.read("programs") == []
 
 
+@pytest.mark.manual("§2.6", "Wird vor dem Einlesen eines Programmes eine falsche Baud-Rate gewählt, erscheint am "
+                    "Bildschirm: WERTBEREICHES-UEBERLAUF (on an ASCII port, after %: a byte that is neither ASCII nor "
+                    "an ISO character)")
+def test_after_percent_an_ascii_port_stops_at_a_byte_of_no_code(cnc: Any) -> None:
+    cnc.set("param.P71", 1)
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 20)
+    cnc.set("v7.transfer", "input")
+    with open_port(cnc, "v7") as host:
+        host.write(b"%\r\nN1 X1\r\n" + encode("N2 X2\r\n", True))  # an ISO image is taken (bit 7 masked)
+        until(lambda: cnc.read("program.P20") == "N 1 X 1.000\nN 2 X 2.000", "ASCII and ISO characters")
+        host.write(bytes([0x89]) + b"N3 X3\r\n")  # 89: bit 7 set, odd parity: what a wrong baud rate delivers
+        until(lambda: cnc.read("v7.state") == "failed", "a byte of no code")
+    assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF"
+
+
 @pytest.mark.manual("§2.6", "Wird vor dem Einlesen eines Programmes ein falscher Code gewählt, erscheint am "
                     "Bildschirm: WERTBEREICHES-UEBERLAUF (characters with a parity error before %)")
 def test_a_parity_error_before_percent_ends_the_read_in(cnc: Any) -> None:

@@ -101,7 +101,8 @@ class PoselestaConfig(Settings):
     parity_error: Annotated[Literal["abort", "skip"], doc(
         "ISO byte with wrong parity after %: WERTBEREICHES-UEBERLAUF or dropped")] = "abort"
     ascii_bit7: Annotated[Literal["ignore", "abort"], doc(
-        "ASCII code: a byte with bit 7 set is masked or aborts the read-in")] = "ignore"
+        "ASCII code: a byte with bit 7 set is masked (an ISO character, even parity; odd parity aborts: §2.6) or "
+        "always aborts the read-in")] = "ignore"
     strict_block_numbers: Annotated[bool, doc("a block without N aborts the read-in")] = False
     max_blocks_total: Annotated[int, Meta(ge=1), doc("program memory, blocks over all programs")] = 2000
     params: Annotated[dict[Any, float], Keys(_parameter_number, "parameter number"), Check(_params), doc(

@@ -195,7 +195,9 @@ class TapeReader:
                     return None
                 self._fail(events, f"parity error in byte {byte:02X} (ISO code expected)")
                 return None
-        elif byte & 0x80 and self.ascii_bit7 == "abort":
+        elif byte & 0x80 and (self.ascii_bit7 == "abort" or not parity_ok(byte)):
+            # bit 7 is masked only where the byte is an ISO character (even parity): a byte
+            # that is neither ASCII nor ISO comes from a wrong baud rate (§2.6)
             self._fail(events, f"byte {byte:02X} has bit 7 set (ASCII code expected)")
             return None
         return byte & 0x7F
