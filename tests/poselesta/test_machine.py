@@ -785,6 +785,7 @@ def test_encoder_overspeed_rm_missing_and_the_g25_circle(make) -> None:  # noqa:
     assert quiet.read("referenced") == [] and quiet.read("axis.x.velocity") < 0 and "encoder_overspeed" not in _events(quiet)
 
 
+@pytest.mark.manual("§2.3.14", "Es besteht die Möglichkeit, auch wenn der Parameter P1 auf 0 (metrisch) steht, NC-Programme in Inch einzugeben. Dazu muss der Eingang auf H-Level gesetzt werden")
 def test_a_program_typed_in_inch_is_stored_as_typed(make) -> None:  # noqa: ANN001
     """Spec §5.1: entered or read in while V22/2 is H, X/Y/Z carry two more decimals
     (xx.xxxxx); run with V22/2 H they are inch."""

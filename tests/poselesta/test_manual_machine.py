@@ -367,3 +367,18 @@ def test_a_static_tool_change_acknowledge_counts(make) -> None:  # noqa: ANN001
     cnc.set("input.tool_change_ack", True)  # and left H
     cnc.advance(1.0)
     assert cnc.read("output.m06") is False and cnc.read("axis.x.position") == pytest.approx(1_000)
+
+
+@pytest.mark.manual("§2.4.10", "Start/Stop-Status (nur POS III)")
+@pytest.mark.manual("§2.3.21", "Programmverriegelung (nur POS III); Satzabbruch (nur POS III)")
+def test_a_pos_ii_has_no_start_stop_status_program_lock_or_block_abort(make) -> None:  # noqa: ANN001
+    cnc = make({"variant": "II"}, program="N1 G01 X50 F3000\nN2 Y1")
+    cnc.set("param.P90", 2)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.3)
+    assert cnc.read("program.state") == "MOVING" and cnc.read("output.start_stop_status") is False
+    cnc.set("input.block_abort", False)
+    cnc.advance(0.3)
+    assert cnc.read("program.block") == 1 and cnc.read("axis.x.velocity") > 0  # no block abort
+    with pytest.raises(ValueError, match="POS III"):
+        cnc.set("panel.protect", 20)
