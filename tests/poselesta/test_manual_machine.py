@@ -200,6 +200,8 @@ def test_m01_stops_only_while_v21_10_is_high(make, optional_stop: bool, stops: b
                     "0A, Externer Datenträger 0B, Programm-Eingabe 09, Hand-Einzelsatz 0E, Automatik-Einzelsatz 0D, "
                     "Automatik-Folgesatz 0C (10⁰: 1 2 4 8)")
 @pytest.mark.manual("§2.4.1", "Bit 8, 10⁰ dient als Uebertragungsabsicherung")
+@pytest.mark.manual("§2.4.1", "nur Hand-Einzelsatz, Automatik-Einzelsatz und Automatik-Folgesatz erkannt werden müssen, "
+                    "kann dies mit Bit 4, 10⁰ erfolgen")
 @pytest.mark.parametrize(("mode", "code"), [("MANUAL", 0b1000), ("EXTERNAL_OPERATION", 0b1010),
                                             ("EXTERNAL_MEDIUM", 0b1011), ("PROGRAM_ENTRY", 0b1001),
                                             ("MANUAL_SINGLE_BLOCK", 0b1110), ("AUTO_SINGLE_BLOCK", 0b1101),
@@ -208,6 +210,7 @@ def test_each_mode_goes_out_with_its_code_and_the_ba_strobe(make, mode: str, cod
     cnc = make(mode="AUTO_CONTINUOUS" if mode == "MANUAL" else "MANUAL")
     cnc.set("panel.mode", mode)
     assert cnc.read("output.data_bus") == code
+    assert bool(code & 0x04) is (mode in ("MANUAL_SINGLE_BLOCK", "AUTO_SINGLE_BLOCK", "AUTO_CONTINUOUS"))
     cnc.advance(0.03)
     assert cnc.read("output.strobe_ba") is True and cnc.read("output.data_bus") == code
 
@@ -382,3 +385,10 @@ def test_a_pos_ii_has_no_start_stop_status_program_lock_or_block_abort(make) -> 
     assert cnc.read("program.block") == 1 and cnc.read("axis.x.velocity") > 0  # no block abort
     with pytest.raises(ValueError, match="POS III"):
         cnc.set("panel.protect", 20)
+
+
+@pytest.mark.manual("§2.4.1", "Beispiel: Code 37: Data-Bits 01, 02, 04, 10, 20 sind auf H-Level")
+def test_code_37_sets_the_data_bits_of_the_manuals_example(make) -> None:  # noqa: ANN001
+    cnc = make(program="N1 M37")
+    cnc.set("panel.nc_start", True)
+    assert bus_codes(cnc, 0.3) == [0x01 | 0x02 | 0x04 | 0x10 | 0x20]

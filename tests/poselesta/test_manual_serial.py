@@ -427,3 +427,22 @@ def test_pos_ii_plays_the_catalogue_back_in_iso_only(devsim_device) -> None:  # 
             recorder.write(encode("%\rN70P3\rM30\r", iso))
             until(lambda state=state: cnc.read("v6.state") == state, f"the {'ISO' if iso else 'ASCII'} tape")
     assert cnc.read("param.P70") == 3
+
+
+@pytest.mark.manual("§2.6.2.3", "Beispiel: the manual's listing (N 1 … N 115, M 30) is a tape the reader takes (the "
+                    "lost % restored)")
+@pytest.mark.manual("§2.6.2.3", "Das Einlese-Protokoll kann jedoch ohne die Leerzeichen eingegeben werden "
+                    "(and with them, as the listing shows)")
+def test_the_manuals_example_listing_reads_in_through_v6(cnc: Any) -> None:
+    from tests.poselesta.test_tape import LISTING
+
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 7)
+    cnc.set("v6.transfer", "input")
+    with open_port(cnc, "v6") as reader:
+        reader.write(encode(LISTING.replace("\n", "\r\n"), True))
+        until(lambda: cnc.read("v6.state") == "done", "M 30 ends the tape")
+    lines = cnc.read("program.P07").splitlines()
+    assert len(lines) == 22
+    assert lines[0] == "N 1 X 0.000 Y 43.144 F 1002" and lines[5] == "N 6 X 0.000 Z 1.000 G 40 M 02"
+    assert lines[-1] == "N 115 G 11"
