@@ -392,3 +392,31 @@ def test_code_37_sets_the_data_bits_of_the_manuals_example(make) -> None:  # noq
     cnc = make(program="N1 M37")
     cnc.set("panel.nc_start", True)
     assert bus_codes(cnc, 0.3) == [0x01 | 0x02 | 0x04 | 0x10 | 0x20]
+
+
+@pytest.mark.manual("§3.4", "Handradverfahren: Es können mehrere Handradaktivierungen gleichzeitig wirksam sein")
+@pytest.mark.manual("§3.4", "Handradverfahren direkt, Faktor 1: bei jedem Handradschritt wird 1 Schritt generiert. "
+                    "1 Schritt = Auflösung")
+def test_several_handwheel_activations_move_their_axes_together(make) -> None:  # noqa: ANN001
+    cnc = make(mode="MANUAL")
+    cnc.set("handwheel.factor", 1)
+    cnc.set("input.handwheel_x", True)
+    cnc.set("input.handwheel_z", True)
+    cnc.set("handwheel.turn", 7)
+    cnc.advance(2.0)
+    assert cnc.read("axis.x.position") == pytest.approx(7) and cnc.read("axis.z.position") == pytest.approx(7)
+    assert cnc.read("axis.y.position") == 0
+
+
+@pytest.mark.manual("§2.3", "V 19/4 … 11: Endschalter ±X, ±Y, ±Z, ±D (L = actuated: the axis stops)")
+@pytest.mark.parametrize(("switch", "key", "axis"), [("limit_pos_y", "jog_pos_y", "y"), ("limit_neg_d", "jog_neg_d", "d")])
+def test_a_limit_switch_stops_its_axis_in_its_direction(make, switch: str, key: str, axis: str) -> None:  # noqa: ANN001
+    cnc = make(mode="MANUAL")
+    cnc.set(f"input.{key}", True)
+    cnc.advance(0.5)
+    assert cnc.read(f"axis.{axis}.velocity") != 0
+    cnc.set(f"input.{switch}", False)
+    assert cnc.read(f"axis.{axis}.velocity") == 0
+    held = cnc.read(f"axis.{axis}.position")
+    cnc.advance(0.5)
+    assert cnc.read(f"axis.{axis}.position") == held
