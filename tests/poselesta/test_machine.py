@@ -11,12 +11,15 @@ from typing import Any
 import pytest
 
 OUTPUTS = ("data_bus", "strobe_m", "strobe_s1", "strobe_s2", "strobe_t", "strobe_ba")
+#: These tests check the control's logic on the levels it sees; the input delay of manual §2.3
+#: has its own tests (test_manual_inputs.py), so here an input is seen as it is set.
+NO_INPUT_DELAY = {"input_rise_ms": 0, "input_fall_ms": 0}
 
 
 @pytest.fixture
 def make(devsim_device):  # noqa: ANN001, ANN201
     def start(config: dict[str, Any] | None = None, program: str = "", mode: str = "AUTO_CONTINUOUS") -> Any:
-        cnc = devsim_device("poselesta", config)
+        cnc = devsim_device("poselesta", {**NO_INPUT_DELAY, **(config or {})})
         cnc.advance(0.1)  # past the BA output after the boot
         if program:
             cnc.set("program.P20", program)
@@ -42,6 +45,10 @@ def sample(cnc: Any, until_ms: int, step_ms: int = 20) -> list[tuple[Any, ...]]:
     return seen
 
 
+@pytest.mark.manual("§2.4.5", "Nach Beendigung dieser Tests, nach ca. 2 Sekunden, schaltet die Steuerung auf Handbetrieb und der Ausgang wird auf H-Level gesetzt")
+@pytest.mark.manual("§2.4.1", "Nach dem Netzeinschalten und Setzen des NC-Bereitschaftssignals wird die Betriebsart Handbetrieb über den Data-Bus ausgegeben")
+@pytest.mark.manual("§2.4.8", "Der Uebernahmeimpuls Betriebsart hat einen festen Zeitablauf")
+@pytest.mark.manual("§2.4.5", "Es wird durch anliegenden Not-Stop (V 19/2) nicht auf L-Level gesetzt")
 def test_power_up_outputs_the_mode_code_with_the_ba_strobe(devsim_device) -> None:  # noqa: ANN001
     """§6.4: NC ready after about 2 s, then 0x08, strobe BA after t1, L after 2 t1, bus 00 after 3 t1."""
     cnc = devsim_device("poselesta", boot=False)
@@ -57,9 +64,16 @@ def test_power_up_outputs_the_mode_code_with_the_ba_strobe(devsim_device) -> Non
     cnc.advance(0.02)  # 2.07
     assert bus(cnc) == (0x00, False, False, False, False, False)
     cnc.set("input.emergency_stop", False)  # Not-Stop does not drop NC ready
+    cnc.advance(0.1)  # (seen after the input delay)
     assert cnc.read("output.nc_ready") is True
 
 
+@pytest.mark.manual("§2.4.8", "Ausgabereihenfolge innerhalb eines Satzes: M, (M*), S1, S2, T")
+@pytest.mark.manual("§2.4.1", "Zuerst erfolgt die Ausgabe der Einer- und Zehnerstellen (S 1) und danach die Ausgabe der Hunderter- und Tausenderstellen (S 2)")
+@pytest.mark.manual("§2.4.8", "nach Ablauf der programmierten Zeit T1 wird der entsprechende Uebernahmepuls mitausgegeben; die Länge des Uebernahmeimpulses entspricht dann der Zeit T1")
+@pytest.mark.manual("§2.4.7", "M 03 Spindel EIN wird dekodiert ausgegeben; selbsthaltende M-Funktionen werden durch eine löschende Funktion zurückgestellt")
+@pytest.mark.manual("§2.4.2", "Die Fahrbefehle bleiben bis zum Ziel oder Bahnende aktiv")
+@pytest.mark.manual("§2.4.6", "Sobald alle Achsen das Zielfenster einmal erreicht haben und keine Sollwerte vorgegeben werden, wird dieser Ausgang auf H-Level gesetzt")
 def test_block_functions_follow_the_handshake_timeline_with_the_acknowledge_bridged(make) -> None:  # noqa: ANN001
     """§6.3, first table: N10 M03 S1250 T07 X100 with P72 = 20 ms."""
     cnc = make(program="N10 M03 S1250 T07 X100")
@@ -93,6 +107,8 @@ def test_block_functions_follow_the_handshake_timeline_with_the_acknowledge_brid
     assert cnc.read("output.start_stop_status") is False
 
 
+@pytest.mark.manual("§2.4.8", "bleibt der Uebernahmepuls so lange stehen, bis die M-, S- oder T-Quittierung auf H-Level wechselt und T1 abgelaufen ist")
+@pytest.mark.manual("§2.3.19", "Nach einem Uebergang der MST-Quittierung von H-Level auf L-Level wird die nächste Funktion ausgegeben")
 def test_a_slow_plc_stretches_the_strobe_until_its_acknowledge(make) -> None:  # noqa: ANN001
     """§6.3, second variant: acknowledge H 35 ms after the strobe rises, L 15 ms after it falls:
     strobe M H at 20, L at 55, acknowledge L at 70, S1 on the bus at 90."""
@@ -108,6 +124,7 @@ def test_a_slow_plc_stretches_the_strobe_until_its_acknowledge(make) -> None:  #
     ]
 
 
+@pytest.mark.manual("§2.3.19", "Die Uebernahme erfolgt nach einem Hand-shake-Verfahren: die nächste Funktion erst nach dem Uebergang H → L der Quittierung")
 def test_an_acknowledge_stuck_high_holds_the_output(make) -> None:  # noqa: ANN001
     """§6.3 / S16: strobe M for t1, then the control waits for the acknowledge to go L."""
     cnc = make({"plc": {"mst_ack": "manual"}}, program="N10 M03 S1250")
@@ -122,6 +139,10 @@ def test_an_acknowledge_stuck_high_holds_the_output(make) -> None:  # noqa: ANN0
     assert cnc.read("output.data_bus") == 0x50  # t2 after the acknowledge fell
 
 
+@pytest.mark.manual("§2.3.15", "Bei L-Level wird der Vorschub nicht freigegeben; die Steuerung ist in Wartestellung")
+@pytest.mark.manual("§2.4.2", "Nach Ausgabe der Fahrbefehle wartet die Steuerung die Achsfreigabe ab, bevor in den Achsen verfahren wird")
+@pytest.mark.manual("§2.3.16", "Steht der Eingang Programm fortsetzen auf L-Level, bleibt die Steuerung in Wartestellung, bis das Eingangssignal auf H-Level wechselt")
+@pytest.mark.manual("§2.4.3", "Position erreicht wird ausgegeben, wenn ein genaues Positionieren programmiert ist und die bewegten Achsen das Zielfenster erreicht haben")
 def test_axis_enable_and_program_continue_gate_the_block(make) -> None:  # noqa: ANN001
     """S19 (§2.3.15, §2.3.16): travel command, then wait for the axis enable; position reached,
     then wait for program continue."""
@@ -144,6 +165,9 @@ def test_axis_enable_and_program_continue_gate_the_block(make) -> None:  # noqa:
     assert cnc.read("program.state") == "WAIT_PROGRAM_CONTINUE" and cnc.read("axis.x.position") == pytest.approx(20_000)
 
 
+@pytest.mark.manual("§2.3.1", "Ein NC-Stop bewirkt einen Halt der Achsbewegungen entlang der Bremsrampe. Durch Drücken der NC-Start-Taste wird die Positionierung fortgesetzt")
+@pytest.mark.manual("§2.4.2", "Bei NC-Stop werden die Fahrbefehle nicht zurückgesetzt")
+@pytest.mark.manual("§2.3.3", "Nach NC-Stop wird mittels NC-Start die unterbrochene Achsbewegung fortgesetzt")
 def test_nc_stop_brakes_to_hold_and_nc_start_resumes_to_the_same_end_point(make) -> None:  # noqa: ANN001
     """S20 (§2.3.1): braking ramp, travel commands stay, HOLD; NC-Start continues."""
     cnc = make(program="N1 G01 X50 F3000")
@@ -168,6 +192,9 @@ def test_nc_stop_brakes_to_hold_and_nc_start_resumes_to_the_same_end_point(make)
     assert cnc.read("axis.x.position") == pytest.approx(50_000) and cnc.read("program.state") == "END"
 
 
+@pytest.mark.manual("§2.3.2", "Ein Not-Stop bewirkt einen schlagartigen Halt der Achsbewegungen ohne Ausführung der Bremsrampe. Die Analogausgänge werden gleichzeitig auf Null gesetzt")
+@pytest.mark.manual("§2.3.2", "Die Steuerung wechselt beim Aufheben des Not-Stops automatisch auf Handbetrieb")
+@pytest.mark.manual("§2.4.1", "Dasselbe geschieht nach Not-Stop: Handbetrieb wird über den Data-Bus ausgegeben")
 def test_not_stop_stops_at_once_and_its_release_returns_to_manual(make) -> None:  # noqa: ANN001
     """S22 (§2.3.2): set-points 0 V at once, no ramp, the program aborted; release → MANUAL, 0x08."""
     cnc = make(program="N1 G01 X50 F3000")
@@ -184,6 +211,7 @@ def test_not_stop_stops_at_once_and_its_release_returns_to_manual(make) -> None:
     assert cnc.read("panel.mode") == "MANUAL" and cnc.read("output.data_bus") == 0x08
 
 
+@pytest.mark.manual("§2.3.13", "Bei L-Level ist das Satzausblenden wirksam und der markierte Satz wird übersprungen; bei H-Level werden die markierten Sätze auch ausgeführt")
 def test_blocks_marked_slash_are_skipped_while_the_input_is_low(make) -> None:  # noqa: ANN001
     """S23 (§2.3.13): a block marked ``#`` is sampled at its start."""
     cnc = make(program="N1 X10\nN2 X20 #\nN3 M02")
@@ -196,6 +224,8 @@ def test_blocks_marked_slash_are_skipped_while_the_input_is_low(make) -> None:  
     assert cnc.read("axis.x.position") == pytest.approx(20_000)
 
 
+@pytest.mark.manual("§2.4.7", "die Rückstellung der nicht selbsthaltenden Funktionen (M 00) erfolgt durch NC-Start")
+@pytest.mark.manual("§2.4.2", "In der Betriebsart Automatik-Einzelsatz werden die Fahrbefehle und Position erreicht gleich wie bei einem programmierten Stop ausgegeben")
 def test_single_block_and_programmed_stop_wait_for_nc_start(make) -> None:  # noqa: ANN001
     """S30 and M00 (§2.4.7): every block stops like a programmed stop; M00's output until NC-Start."""
     cnc = make(program="N1 X1\nN2 X2 M00\nN3 X3", mode="AUTO_SINGLE_BLOCK")
@@ -212,6 +242,8 @@ def test_single_block_and_programmed_stop_wait_for_nc_start(make) -> None:  # no
     assert cnc.read("output.m00") is False and cnc.read("axis.x.position") == pytest.approx(3_000)
 
 
+@pytest.mark.manual("§2.3.17", "Wenn ein Werkzeugwechsel mit M 06 programmiert ist, muss dieser quittiert werden")
+@pytest.mark.manual("§2.3.18", "Bei H-Level wird M 10 als eine nicht selbsthaltende Funktion behandelt: die Steuerung wartet, bis ein negativer Impuls die Löschung und die Programmfortsetzung bewirkt")
 def test_tool_change_and_m10_wait_for_their_acknowledges(make) -> None:  # noqa: ANN001
     """S17, S18 (§2.3.17, §2.3.18)."""
     cnc = make(program="N20 M06 T05 X1\nN30 M10 X2\nN40 M11")
@@ -230,6 +262,11 @@ def test_tool_change_and_m10_wait_for_their_acknowledges(make) -> None:  # noqa:
     assert cnc.read("program.state") == "END" and cnc.read("axis.x.position") == pytest.approx(2_000)
 
 
+@pytest.mark.manual("§2.3.6", "Die Richtungstasten bewirken eine Achsbewegung in die gewünschte Richtung, solange eine Taste gedrückt wird")
+@pytest.mark.manual("§2.3.22", "Vorschubpotentiometer: Bereich 0...100 %, entsprechend 0...+10 V; 100 % = maximaler Vorschub P 48 - P 51")
+@pytest.mark.manual("§2.3.8", "Eilgang: In den angewählten Achsen wird mit der maximal zulässigen Geschwindigkeit (Parameter 44-47) verfahren")
+@pytest.mark.manual("§2.3.7", "Die Achsen können um den angewählten Jogging-Schritt verfahren werden")
+@pytest.mark.manual("§2.4.3", "Im Handbetrieb wird das Signal Position erreicht nicht ausgegeben")
 def test_direction_keys_jog_at_the_feed_pot_share_and_steps(make) -> None:  # noqa: ANN001
     """S26 (§2.3.6–§2.3.8): 5 V = 50 % of P48; rapid = P44; a 100-increment step per press."""
     cnc = make(mode="MANUAL")
@@ -254,6 +291,7 @@ def test_direction_keys_jog_at_the_feed_pot_share_and_steps(make) -> None:  # no
     assert cnc.read("axis.x.position") == pytest.approx(start - 300)
 
 
+@pytest.mark.manual("§2.3.22", "Override: 6,6 V = 100 % des programmierten Vorschubs, 10 V = 150 %")
 def test_override_scales_the_feed_and_zero_stands_without_hold(make) -> None:  # noqa: ANN001
     """S29 (§2.3.22): 10 V = 150 %, 0 V stops the path (no HOLD), 6.667 V = 100 %."""
     cnc = make(program="N1 G01 X200 F1000")
@@ -269,9 +307,12 @@ def test_override_scales_the_feed_and_zero_stands_without_hold(make) -> None:  #
     assert cnc.read("axis.x.velocity") == pytest.approx(1000 / 60 * 1000, rel=1e-3)
 
 
+@pytest.mark.manual("§2.3.25", "Ein Eingang auf H-Level wird auf dem Bildschirm mit 1 und ein Eingang auf L-Level mit 0 dargestellt (the port table)")
+@pytest.mark.manual("§2.3.26", "Darstellung im Hexadezimal-Code: 00 entspricht 0 V, FF entspricht + 10 V")
 def test_the_input_diagnostics_show_the_levels_of_section_6_11(make) -> None:  # noqa: ANN001
     """§6.11 (P79 N5) with the default levels; NC-Stop L changes port 4 B to 0x10; P79 N7."""
     cnc = make(mode="PROGRAM_ENTRY")
+    cnc.set("panel.diagnostic", 5)
     assert cnc.read("diagnostics.inputs") == {
         "1A": 0x46, "1B": 0x00, "2A": 0xFF, "2B": 0x00, "3A": 0x00, "3B": 0x00, "4A": 0x60, "4B": 0x18,
     }
@@ -280,6 +321,7 @@ def test_the_input_diagnostics_show_the_levels_of_section_6_11(make) -> None:  #
     ]
     cnc.set("input.nc_stop", False)
     assert cnc.read("diagnostics.inputs")["4B"] == 0x10
+    cnc.set("panel.diagnostic", 7)
     assert cnc.read("diagnostics.pots") == ["FF", "AA"]  # 10 V, 6.667 V
 
 
@@ -324,6 +366,7 @@ def test_dwell_and_unknown_g_functions(make) -> None:  # noqa: ANN001
     assert cnc.read("program.state") == "END" and cnc.read("axis.x.position") == pytest.approx(1_000)
 
 
+@pytest.mark.manual("§2.3.21", "Satzabbruch: L-Level bewirkt, dass eine angefangene Positionierung abgebrochen wird; die Programmabarbeitung wird auf der Satznummer in P90 fortgesetzt")
 def test_block_abort_brakes_and_goes_on_at_p90(make) -> None:  # noqa: ANN001
     """S31 (§2.3.21, POS III): P90 = 50; V22/10 H→L during N20's motion: the axis brakes, the
     program goes on at N50 by itself."""
@@ -388,6 +431,7 @@ def test_a_full_circle_counter_clockwise_returns_to_its_start(make) -> None:  # 
     assert (cnc.read("axis.x.position"), cnc.read("axis.y.position")) == pytest.approx((10_000, 0), abs=1e-6)
 
 
+@pytest.mark.manual("§2.3.23", "Bei offenem Kontakt (H-Level) ist die Referenzmarke für die Steuerung wirksam")
 def test_homing_takes_the_first_mark_seen_with_its_activation_high(make) -> None:  # noqa: ANN001
     """S37 (§2.2.2, §2.3.23, spec §5.6): marks at −10 and −30 mm; with V24/1 L the first is
     ignored; set H after 20 mm, the second is taken: there the actual value becomes 0."""
@@ -405,6 +449,8 @@ def test_homing_takes_the_first_mark_seen_with_its_activation_high(make) -> None
     assert cnc.read("axis.x.velocity") == 0 and cnc.read("output.travel_x") is False
 
 
+@pytest.mark.manual("§2.4.4", "Wird das programmierte Arbeitsfeld verlassen, werden alle Achsen entlang der Bremsrampen, wie bei NC-Stop, abgebremst; Fahren ist im Handbetrieb dann nur in Richtung Arbeitsfeld möglich")
+@pytest.mark.manual("§2.4.4", "Die Werte für den Software-Endschalter beziehen sich immer auf die Referenzmarke der entsprechenden Achse")
 def test_leaving_the_working_field_brakes_and_stops_the_program(make) -> None:  # noqa: ANN001
     """S24 (§2.4.4, spec §5.5): +limit X at 50 mm (P9) once referenced; G00 X80 brakes at the
     crossing and overshoots by the braking distance; V18/6 L; NC-Start ignored; in MANUAL + is
@@ -434,6 +480,9 @@ def test_leaving_the_working_field_brakes_and_stops_the_program(make) -> None:  
     assert cnc.read("axis.x.position") == pytest.approx(50_000, abs=1)
 
 
+@pytest.mark.manual("§2.2.3", "Steht P 76 auf 4, ist ein Rasterschritt 4 x so gross")
+@pytest.mark.manual("§2.4.6", "Maschinenstillstand: der Ausgang wird auf L-Level gesetzt, sobald eine Handradaktivierung erfolgt")
+@pytest.mark.manual("§3.4", "Handradverfahren mit Impulsvervielfachung, Faktor 10: bei jedem Handradschritt werden 10 Schritte generiert")
 def test_the_handwheel_moves_p76_increments_per_detent(make) -> None:  # noqa: ANN001
     """S27 (§2.2.3, §2.4.6): handwheel X active, P76 = 4, 25 detents: X moves 0.100 mm; the
     machine standstill output is L as soon as the handwheel is activated."""
@@ -454,6 +503,7 @@ def test_the_handwheel_moves_p76_increments_per_detent(make) -> None:  # noqa: A
     assert cnc.read("output.machine_standstill") is True
 
 
+@pytest.mark.manual("§2.3.9", "In den mit P 77 bestimmten Achsen bleiben die Schleppfehler ständig auf Null; die Fahrbefehle werden auch bei aktiviertem Open-loop ausgegeben")
 def test_open_loop_axes_follow_an_outside_force(make) -> None:  # noqa: ANN001
     """S28 (§2.3.9, spec §5.2): P77 = X, open loop at standstill; pushing X moves the display,
     following error and set-point stay 0, the travel command shows."""
@@ -470,6 +520,7 @@ def test_open_loop_axes_follow_an_outside_force(make) -> None:  # noqa: ANN001
     assert cnc.read("axis.x.position") == pytest.approx(5_000)
 
 
+@pytest.mark.manual("§2.3.14", "der Istwert 100.001 mm wird auf 3.93705 Inch umgerechnet und angezeigt")
 def test_inch_shows_and_runs_inch_programs(make) -> None:  # noqa: ANN001
     """S33 (§2.3.14, spec §5.1): X at 100.001 mm shows 3.93705 inch with V22/2 H; an inch block
     moves inch and F is inch/min; D is not converted."""
@@ -492,6 +543,9 @@ def test_inch_shows_and_runs_inch_programs(make) -> None:  # noqa: ANN001
     assert cnc.read("axis.x.display") == "3.93705"
 
 
+@pytest.mark.manual("§2.4.11", "Durch das Diagnose-Programm P 79, N 6 werden alle Ausgänge der Reihe nach im aufsteigenden Binär-Code betätigt; Dauer eines Durchlaufes: 1 Minute 4 Sekunden")
+@pytest.mark.manual("§2.4.11", "Der Zyklus läuft unabhängig von der Stellung der Steuerungseingänge Not-Stop und NC-Stop ab")
+@pytest.mark.manual("§2.4.11", "bis er durch die Taste C abgebrochen wird; Abschluss: Aus-/Einschalten des Gerätes")
 def test_the_output_test_counts_through_every_output(make) -> None:  # noqa: ANN001
     """S40 (§2.4.11, spec §4.7 G-DIAG6): 250 ms per step, 64 s per pass, regardless of Not-Stop;
     C stops it with every output L, and only a power cycle brings the control back."""
@@ -515,6 +569,7 @@ def test_the_output_test_counts_through_every_output(make) -> None:  # noqa: ANN
     assert cnc.read("output.nc_ready") is True and cnc.read("panel.mode") == "MANUAL"
 
 
+@pytest.mark.manual("§2.4.5", "sofort, wenn ein Fehler festgestellt wird, wird der Ausgang auf L-Level gesetzt. Am Bildschirm erscheint eine Fehlermeldung")
 def test_monitoring_alarms_drop_nc_ready_and_stop_the_axes(make) -> None:  # noqa: ANN001
     """S35, S36 (spec §4.10, §5.2, §5.7): an encoder loss or a following error beyond its limit
     drops NC ready, sets the set-points to 0 at once and gives the program up; reset_fault
@@ -531,6 +586,7 @@ def test_monitoring_alarms_drop_nc_ready_and_stop_the_axes(make) -> None:  # noq
         assert cnc.read("output.nc_ready") is True and cnc.read("panel.message") == ""
 
 
+@pytest.mark.manual("§1.4", "Um die Relaisausgänge aktivieren zu können, muss an V 25 eine externe Spannungsquelle (24 V) angeschlossen werden")
 def test_a_lost_relay_supply_shows_every_output_low(make) -> None:  # noqa: ANN001
     """S39 (§2.7): all outputs read L while the relay supply is lost; the logic goes on."""
     cnc = make(program="N1 M03 M08 X1")
@@ -544,6 +600,9 @@ def test_a_lost_relay_supply_shows_every_output_low(make) -> None:  # noqa: ANN0
     assert cnc.read("output.m03") is True and cnc.read("output.m08") is True and cnc.read("output.nc_ready") is True
 
 
+@pytest.mark.manual("§2.3.15", "Beim Bahnfahren mit G 01, G 02 und G 03 wird durchgefahren, d. h. zwischen den einzelnen Sätzen nicht angehalten")
+@pytest.mark.manual("§2.4.3", "Wenn in einer Bahn durchgefahren wird, wird das Signal Position erreicht erst am Ende der Bahn ausgegeben")
+@pytest.mark.manual("§2.4.2", "bleiben die Fahrbefehle zwischen den einzelnen Sätzen bestehen")
 def test_contouring_blocks_run_through_without_stopping(make) -> None:  # noqa: ANN001
     """Spec §4.3.3, §5.3 (manual §2.3.15, §2.4.2): G01 X10 then X20 pass the block boundary at
     the path speed, travel commands on, no position reached; the G00 block after the chain makes
@@ -578,10 +637,11 @@ def test_a_chain_of_line_and_arc_keeps_its_speed(make) -> None:  # noqa: ANN001
     assert (cnc.read("axis.x.position"), cnc.read("axis.y.position")) == pytest.approx((10_000, 20_000), abs=1e-6)
 
 
+@pytest.mark.manual("§2.3.20", "Dieser Eingang (X/Y-Schreiber) wird nur beim Netzeinschalten registriert")
 def test_an_xy_plotter_gets_its_position_as_the_set_point(devsim_device) -> None:  # noqa: ANN001
     """Spec §5.9 (manual §2.3.20): V22/8 H at power-on; the set-point is the position over the
     working field, −10 V … +10 V in 14 bits."""
-    cnc = devsim_device("poselesta")
+    cnc = devsim_device("poselesta", NO_INPUT_DELAY)
     assert cnc.read("xy_plotter") is False
     cnc.set("input.xy_plotter", True)
     assert cnc.read("xy_plotter") is False  # sampled at power-on only
@@ -650,10 +710,13 @@ def test_the_conversions_of_section_6_10(make) -> None:  # noqa: ANN001
     for volts, percent in ((10.0, 100.0), (5.0, 50.0)):
         cnc.set("input.feed_pot_v", volts)
         assert cnc.read("panel.feed") == percent
+    cnc.set("panel.mode", "PROGRAM_ENTRY")
+    cnc.set("panel.diagnostic", 7)
     for feed, override, shown in ((0.0, 10.0, ["00", "FF"]), (10.0, 6.667, ["FF", "AA"])):
         cnc.set("input.feed_pot_v", feed)
         cnc.set("input.override_pot_v", override)
         assert cnc.read("diagnostics.pots") == shown
+    cnc.set("panel.mode", "MANUAL")
     cnc.set("input.feed_pot_v", 10.0)
     cnc.set("param.P76", 4)
     cnc.set("handwheel.factor", 10)
@@ -668,6 +731,7 @@ def test_the_conversions_of_section_6_10(make) -> None:  # noqa: ANN001
     assert cnc.read("axis.y.position") == pytest.approx(1_000)  # 1.000 mm
 
 
+@pytest.mark.manual("§2.4.1", "Wertigkeiten des Data-Bus: 2 x BCD-Code; die S-Funktionen in 2 Teilen, S1 dann S2")
 def test_the_data_bus_rows_of_section_6_2(make) -> None:  # noqa: ANN001
     """Spec §6.2: M 20 → 0x20; S 8 → S1 = 0x08, then S2 = 0x00 (S2 always goes out)."""
     cnc = make(program="N1 M20 S8")
@@ -721,6 +785,7 @@ def test_encoder_overspeed_rm_missing_and_the_g25_circle(make) -> None:  # noqa:
     assert quiet.read("referenced") == [] and quiet.read("axis.x.velocity") < 0 and "encoder_overspeed" not in _events(quiet)
 
 
+@pytest.mark.manual("§2.3.14", "Es besteht die Möglichkeit, auch wenn der Parameter P1 auf 0 (metrisch) steht, NC-Programme in Inch einzugeben. Dazu muss der Eingang auf H-Level gesetzt werden")
 def test_a_program_typed_in_inch_is_stored_as_typed(make) -> None:  # noqa: ANN001
     """Spec §5.1: entered or read in while V22/2 is H, X/Y/Z carry two more decimals
     (xx.xxxxx); run with V22/2 H they are inch."""
@@ -771,6 +836,7 @@ def test_count_loss_shifts_the_actual_value_from_the_true_position(make) -> None
     assert cnc.read("axis.x.position") == pytest.approx(-(10 / 3) ** 2 / 2 / 500 * 1000, abs=1e-6)
 
 
+@pytest.mark.manual("§2.6.2.2", "Ausgabe auf Band --> Mode 2; Eingabe vom Band --> Mode 3; Vorlaufzeit von ca. 13 Sekunden")
 def test_a_simulated_cassette_records_and_plays_back(make) -> None:  # noqa: ANN001
     """Spec §3.8, Appendix A (manual §2.6.2.2): with v6_peer: cassette, T2 records P20 after the
     13 s leader, T3 plays it into P21 after its leader; the tape survives a power cycle."""

@@ -28,18 +28,22 @@ def until(check: Callable[[], Any], what: str) -> None:
 
 @pytest.fixture
 def cnc(devsim_device):  # noqa: ANN001, ANN201
-    return devsim_device("poselesta")
+    return devsim_device("poselesta", {"input_rise_ms": 0, "input_fall_ms": 0})  # (§2.3's delay: test_manual_inputs)
 
 
 def open_port(cnc: Any, port: str) -> serial.Serial:
     return serial.serial_for_url(cnc.port_url(port), baudrate=1200, stopbits=2, timeout=5)
 
 
+@pytest.mark.manual("§2.4.5", "nach ca. 2 Sekunden schaltet die Steuerung auf Handbetrieb und NC-Bereitschaft auf H-Level")
 def test_boot_gives_manual_mode_and_nc_ready(cnc: Any) -> None:
     assert cnc.read("panel.mode") == "MANUAL"
     assert cnc.read("output.nc_ready") is True and cnc.read("output.data_bus") == 0x08
 
 
+@pytest.mark.manual("§2.6.3", "Die Programmnummer Pxx (z. B. P 20) wird nicht übertragen")
+@pytest.mark.manual("§2.6.3", "Ein Drucker-Anschluss ist nicht sinnvoll, da die Daten nicht formatiert ausgegeben werden")
+@pytest.mark.manual("§2.6.3", "Bei einem Ausdruck wird M 30 automatisch generiert")
 def test_dnc_read_in_r1_then_output_o1(cnc: Any) -> None:
     cnc.set("panel.mode", "EXTERNAL_OPERATION")
     assert cnc.read("output.data_bus") == 0x0A
@@ -52,11 +56,13 @@ def test_dnc_read_in_r1_then_output_o1(cnc: Any) -> None:
         assert host.in_waiting == 0  # nothing answered (spec §3.5.5)
         cnc.set("param.P71", 1)  # ASCII
         cnc.set("v7.transfer", "output")
+        cnc.advance(len(O1) * 10 / 1200)  # ASCII: 10 bits a character (§2.6.1.2)
         assert host.read(len(O1)) == O1  # O1: unformatted, CR LF, generated M30
-        cnc.advance(1.0)
         assert cnc.read("v7.transfer") == "idle" and cnc.read("v7.state") == "done"
 
 
+@pytest.mark.manual("§2.6", "Beim Einlesen eines neuen Programmes wird zuerst das vorgewählte Programm (Pxx) gelöscht")
+@pytest.mark.manual("§2.6", "Wird vor dem Einlesen eines Programmes ein falscher Code gewählt, erscheint am Bildschirm: WERTBEREICHES-UEBERLAUF")
 def test_the_selected_program_is_deleted_first_and_a_wrong_code_stops(cnc: Any) -> None:
     cnc.set("program.P20", "N1 X5\nN2 Y6")
     cnc.set("panel.mode", "EXTERNAL_OPERATION")
@@ -72,6 +78,7 @@ def test_the_selected_program_is_deleted_first_and_a_wrong_code_stops(cnc: Any) 
     assert cnc.read("panel.message") == ""
 
 
+@pytest.mark.manual("§2.6", "V 7 in der Betriebsart EXT, V 6 in der Betriebsart Σ")
 def test_transfers_need_their_mode_and_input_while_idle_is_discarded(cnc: Any) -> None:
     with pytest.raises(ValueError, match="needs mode EXTERNAL_OPERATION"):
         cnc.set("v7.transfer", "input")
@@ -88,6 +95,8 @@ def test_transfers_need_their_mode_and_input_while_idle_is_discarded(cnc: Any) -
     assert cnc.read("v6.state") == "cancelled"
 
 
+@pytest.mark.manual("§2.6.2.3", "Die Daten werden formatiert ausgegeben, d.h. die Abstände zwischen den einzelnen Funktionen werden mit Leerzeichen ausgefüllt")
+@pytest.mark.manual("§2.6.2.3", "Beim Einlesen wird zuerst das in der Steuerung vorgewählte Programm gelöscht")
 def test_tape_punch_output_is_formatted_and_reads_back(cnc: Any) -> None:
     cnc.set("program.P07", "N1 X0 Y-43.144 F1002\nN2 X-20 F750 G42\nN5 X5 #")
     cnc.set("panel.mode", "EXTERNAL_MEDIUM")
@@ -95,6 +104,7 @@ def test_tape_punch_output_is_formatted_and_reads_back(cnc: Any) -> None:
     with open_port(cnc, "v6") as punch:  # (the punch is on before the operator starts)
         cnc.set("v6.transfer", "output")
         assert cnc.read("output.v6_rts") is True and cnc.read("output.v6_dtr") is True
+        cnc.advance(5)
         tape = punch.read_until(encode("M 30\r\n", iso=True))
     assert tape == encode("%\r\nN 1 X 0.000 Y- 43.144 F 1002\r\nN 2 X- 20.000 F 750 G 42\r\nN 5 X 5.000 #\r\n"
                           "M 30\r\n", iso=True)
@@ -108,6 +118,9 @@ def test_tape_punch_output_is_formatted_and_reads_back(cnc: Any) -> None:
     assert cnc.read("program.P08") == cnc.read("program.P07")
 
 
+@pytest.mark.manual("§2.6.2.2", "Da der Beginn der aktiven Schicht nicht automatisch erkannt wird, ist eine Vorlaufzeit von ca. 13 Sekunden fest programmiert")
+@pytest.mark.manual("§2.6.2.1", "Die Datenausgabe beim Drucker wird nach jedem CR für ca. 820 ms (Wagenrücklauf) angehalten")
+@pytest.mark.manual("§2.6.2.1", "Nach jeder ausgedruckten Funktion erfolgt CR. Es wird kein LF generiert (% CR CR CR)")
 def test_cassette_leader_and_printer_pauses_run_on_the_device_clock(cnc: Any) -> None:
     cnc.set("panel.mode", "EXTERNAL_MEDIUM")
     cnc.set("panel.program", 3)
@@ -124,15 +137,16 @@ def test_cassette_leader_and_printer_pauses_run_on_the_device_clock(cnc: Any) ->
     assert cnc.read("program.P03") == "N 1 X 1.000"
     with open_port(cnc, "v6") as printer:
         cnc.set("v6.transfer", "printer")
+        cnc.advance(0.021)  # "%" CR at 1200 baud, 12 bits (P69 = 0): 20 ms
         assert printer.read(2) == b"%\r"
         assert printer.in_waiting == 0  # 820 ms after every CR (§2.6.2.1)
-        cnc.advance(0.83)  # "%" CR at 1200 baud, 12 bits (P69 = 0): 20 ms, then the 820 ms
+        cnc.advance(0.818)  # the 820 ms, then the next CR's 10 ms
         assert printer.in_waiting == 0
-        cnc.advance(0.02)
+        cnc.advance(0.002 + 0.010)
         assert printer.read(1) == b"\r"
-        cnc.advance(0.83)  # one CR: 10 ms and 820 ms
+        cnc.advance(0.83)  # 820 ms and one CR's 10 ms
         assert printer.read(1) == b"\r"
-        cnc.advance(0.83)
+        cnc.advance(0.86)  # 820 ms and "N 1" CR: 40 ms
         assert printer.read(4) == b"N 1\r"
 
 
@@ -140,6 +154,10 @@ def _bytes_in(cnc: Any, port: str) -> int:
     return int(cnc.runtime.line_status(cnc.name, port)["bytes_in"])
 
 
+@pytest.mark.manual("§2.6.4", "Zwischen den einzelnen gesendeten Zeichen muss eine Pause von mindestens 100ms eingehalten werden, um einen Ueberlauf des Eingabepuffers zu vermeiden")
+@pytest.mark.manual("§2.6.4", "Ueber die Eingangsklemme V21/9 kann von der internen auf die externe Tastatur umgeschaltet werden")
+@pytest.mark.manual("§2.6.4", "Die Taste P hat z. B. den Code 48 (ISO-Code H)")
+@pytest.mark.manual("§2.4.9", "Bei Anschluss eines Summers zeigt ein kurzes akustisches Signal, dass die Steuerung die Eingabe angenommen hat")
 def test_keyboard_codes_buffer_and_overflow(cnc: Any) -> None:
     """Spec §6.9 K1, K3–K7 on the V8 pty, with the 100 ms per key on the device clock."""
     with open_port(cnc, "v8") as keys:
@@ -173,6 +191,8 @@ def test_programs_survive_a_power_cycle(cnc: Any) -> None:
     assert cnc.read("program.P12") == "N 10 X 1.000 F 100 G 01"  # (an M30 block ends the entry)
 
 
+@pytest.mark.manual("§2.6", "Stecker V6 und V7: Ein- und Ausgabe der NC-Programme oder auch der Maschinenparameter")
+@pytest.mark.manual("§2.6.3", "Bei POS III sind Baudraten bis 1200 sowie ISO- & ASCII-Code möglich (Parameterkatalog)")
 def test_the_parameter_catalogue_p99_goes_out_and_comes_back_in(cnc: Any) -> None:
     """Spec §3.9 (S13): P99 through T6/T7 as blocks N<number> P<value>; on POS III the read-in
     clears the catalogue first and keeps the line of its start; the values act after M30."""
@@ -182,12 +202,12 @@ def test_the_parameter_catalogue_p99_goes_out_and_comes_back_in(cnc: Any) -> Non
     cnc.set("panel.program", 99)
     with open_port(cnc, "v7") as host:
         cnc.set("v7.transfer", "output")
+        cnc.advance(20.0)  # the catalogue leaves at 1200 baud (device time)
         tape = host.read_until(b"M30\r\n")
     lines = tape.decode("ascii").split("\r\n")
     assert lines[:3] == ["%", "N1P0", "N2P0"] and lines[-2:] == ["M30", ""]
     assert "N44P5000" in lines and "N70P3" in lines and "N72P20" in lines and not any(x.startswith("N79") for x in lines)
     assert len(lines) == 1 + 97 + 2
-    cnc.advance(20.0)  # the last characters leave (device time)
     cnc.set("v7.transfer", "input")
     assert cnc.read("param.P44") == 0 and cnc.read("param.P71") == 0  # cleared at the start
     with open_port(cnc, "v7") as host:
@@ -196,10 +216,14 @@ def test_the_parameter_catalogue_p99_goes_out_and_comes_back_in(cnc: Any) -> Non
     assert [cnc.read(f"param.P{n}") for n in (44, 70, 71, 72, 97, 48)] == [4500, 3, 1, 30, -12.5, 0]
 
 
+@pytest.mark.manual("§2.6.3", "Das Einlesen des Parameterkatalogs ist bei POS II nur im ISO-Code mit 110 Baud möglich, "
+                    "da vor dem Einlesen der gesamte Parameterkatalog (inkl. P 70 und P 71) GELOESCHT wird")
+@pytest.mark.manual("§2.6", "Wird vor dem Einlesen eines Programmes eine falsche Baud-Rate gewählt: "
+                    "WERTBEREICHES-UEBERLAUF")
 def test_pos_ii_reads_the_catalogue_only_at_110_baud_iso(devsim_device) -> None:  # noqa: ANN001
     """Spec §3.9 (S12): POS II clears the whole catalogue, P70/P71 included, at the start, so the
-    rest must come at 110 baud ISO: at 1200 baud the control sees garbage, never a ``%``
-    (spec §3.5.4: garbage before ``%`` is ignored), and nothing is read."""
+    rest must come at 110 baud ISO: at 1200 baud the control sees garbage, never a ``%``, and
+    the read-in ends with WERTBEREICHES-UEBERLAUF (manual §2.6: a wrong baud rate), nothing read."""
     cnc = devsim_device("poselesta", {"variant": "II"})
     cnc.set("panel.mode", "EXTERNAL_OPERATION")
     cnc.set("panel.program", 99)
@@ -209,8 +233,8 @@ def test_pos_ii_reads_the_catalogue_only_at_110_baud_iso(devsim_device) -> None:
     with serial.serial_for_url(cnc.port_url("v7"), baudrate=1200, stopbits=2, timeout=5) as host:
         host.write(tape)
         until(lambda: cnc.runtime.line_status(cnc.name, "v7")["bytes_in"] >= len(tape), "the bytes arrive")
-    assert cnc.read("v7.state") == "wait_start" and cnc.read("param.P70") == 0
-    cnc.set("v7.transfer", "idle")
+        until(lambda: cnc.read("v7.state") == "failed", "the garbled tape stops the read-in")
+    assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF" and cnc.read("param.P70") == 0
     cnc.set("v7.transfer", "input")
     with serial.serial_for_url(cnc.port_url("v7"), baudrate=110, stopbits=2, timeout=5) as host:
         host.write(tape)
@@ -227,6 +251,7 @@ def test_a_locked_key_switch_refuses_the_catalogue(cnc: Any) -> None:
     assert cnc.read("param.P70") == 3
 
 
+@pytest.mark.manual("§2.3.21", "Programme lassen sich schützen und freigeben. Das Freigeben ist nur in Stellung offen möglich")
 def test_a_protected_program_is_not_overwritten_by_a_read_in(cnc: Any) -> None:
     """S32 (§2.3.21, spec §4.5 G-LOCK): protect P20; with the program lock closed (V22/9 L) it
     cannot be released, a read-in into it is refused before anything is deleted; opened, it can."""
@@ -246,6 +271,7 @@ def test_a_protected_program_is_not_overwritten_by_a_read_in(cnc: Any) -> None:
     assert cnc.read("program.P20") == ""  # read-in deletes the pre-selected program first
 
 
+@pytest.mark.manual("§2.6.2.3", "Beim POS III ist das Einlesen der Parameter mit Baud-Raten bis 1200 Baud im ISO- oder ASCII-Code möglich")
 def test_pos_iii_reads_the_catalogue_at_1200_baud_at_most(cnc: Any) -> None:
     """Spec §3.9: P70 = 5 (4800 baud) refuses the catalogue read-in, nothing is cleared."""
     cnc.set("param.P70", 5)
@@ -256,6 +282,8 @@ def test_pos_iii_reads_the_catalogue_at_1200_baud_at_most(cnc: Any) -> None:
     assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF" and cnc.read("param.P70") == 5
 
 
+@pytest.mark.manual("§2.6.4", "Der angezeigte Code ist um 1 höher als der tatsächlich übertragene Code: für die Taste P wird die Zahl 49 angezeigt")
+@pytest.mark.manual("§2.6.4", "2D bewirkt den Abbruch vom Testprogramm N 3")
 def test_the_keyboard_test_shows_each_code_plus_one(cnc: Any) -> None:
     """Vector K2 (§2.6.4): key P (48) during P79 N3 shows 49; key 2D ends the test."""
     cnc.set("input.keyboard_external", True)

@@ -101,12 +101,19 @@ class PoselestaConfig(Settings):
     parity_error: Annotated[Literal["abort", "skip"], doc(
         "ISO byte with wrong parity after %: WERTBEREICHES-UEBERLAUF or dropped")] = "abort"
     ascii_bit7: Annotated[Literal["ignore", "abort"], doc(
-        "ASCII code: a byte with bit 7 set is masked or aborts the read-in")] = "ignore"
+        "ASCII code: a byte with bit 7 set is masked (an ISO character, even parity; odd parity aborts: §2.6) or "
+        "always aborts the read-in")] = "ignore"
     strict_block_numbers: Annotated[bool, doc("a block without N aborts the read-in")] = False
     max_blocks_total: Annotated[int, Meta(ge=1), doc("program memory, blocks over all programs")] = 2000
     params: Annotated[dict[Any, float], Keys(_parameter_number, "parameter number"), Check(_params), doc(
         "initial machine parameters, e.g. {70: 3, 71: 0} (P1 … P98)")] = {}
     boot_time: Annotated[float, Meta(ge=0), doc("seconds after power-on until NC ready (§2.4.5: about 2 s)")] = 2.0
+    input_rise_ms: Annotated[float, Meta(ge=0, le=1000), doc(
+        "§2.3: an input V19–V22 going L→H reaches the control after 2.5 … 15 ms (voltage-dependent) plus ~25 ms "
+        "filtering; 35 ms is the middle of that range plus the filter")] = 35.0
+    input_fall_ms: Annotated[float, Meta(ge=0, le=1000), doc(
+        "§2.3: an input V19–V22 going H→L reaches the control after 15 … 50 ms computing time; 32.5 ms is the "
+        "middle")] = 32.5
     accel: Annotated[float, Meta(gt=0), doc("acceleration = braking ramp of every axis, mm/s² (spec §5.3)")] = 500.0
     kv_per_step: Annotated[float, Meta(gt=0), doc("Kv [1/s] per step of the gain P30–P33 (spec §5.2)")] = 1.667
     drive_speed_factor: Annotated[float, Meta(gt=0), doc(

@@ -49,11 +49,13 @@ Program = Callable[[], tuple[list[Block], bool]]
 
 class ExecutionOptions(msgspec.Struct, frozen=True):
     """What the variant and the configuration change in the block cycle (spec §4.3.6, G-M06,
-    §4.12.1): V22/10 block abort (POS III), M06 waiting for NC-Start, G25 as a full circle."""
+    §4.12.1): V22/10 block abort (POS III), M06 waiting for NC-Start, G25 as a full circle, the
+    start/stop status output V16/8 (POS III, manual §2.4.10)."""
 
     block_abort: bool = True
     m06_requires_nc_start: bool = False
     g25_full_circle: bool = False
+    start_stop_status: bool = True
 
 
 class Executor:
@@ -101,7 +103,7 @@ class Executor:
     # -- state ------------------------------------------------------------------------------------
     def _enter(self, state: str) -> None:
         self.state = state
-        self.signals.set("start_stop_status", state in RUNNING)
+        self.signals.set("start_stop_status", state in RUNNING and self._options.start_stop_status)
 
     @property
     def running(self) -> bool:

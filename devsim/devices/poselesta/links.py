@@ -17,7 +17,7 @@ from devsim.core.clock import Clock
 from devsim.core.kit import Command, Table
 from devsim.core.points import BadValue
 from devsim.core.signals import SignalBank
-from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF, baud_for_code
+from devsim.devices.poselesta.codes import BAUD_CODES, WERTBEREICHES_UEBERLAUF, baud_for_code
 from devsim.devices.poselesta.parameters import MachineParameters
 from devsim.devices.poselesta.programs import CATALOGUE, DIAGNOSTICS, ProgramMemory
 from devsim.devices.poselesta.screen import Screen
@@ -205,7 +205,9 @@ class SerialLinks:
     def _send_pieces(self, function: Function, program: int, pieces: list[tuple[float, bytes]], blocks: int) -> None:
         if function.port == "v6":
             self._v6_lines(True)
-        self.transfers[function.port] = Output(self, function, program, pieces, blocks)
+        output = Output(self, function, program, pieces, blocks)
+        self.transfers[function.port] = output
+        output.begin()
 
     # -- what the transfers call (transfers.Cnc) ------------------------------------------------------
     def event(self, port: str, what: str, detail: Any = None) -> None:
@@ -238,11 +240,16 @@ class SerialLinks:
         self._send(port, data)
 
     def char_time(self, port: str) -> float:
-        """Seconds per character on the port: the frame of §2.3 at the port's baud rate (the
-        printer's frame has one bit more)."""
+        """Seconds per character on the port: its frame's bits (:meth:`frame_bits`) at its baud rate."""
+        return self.frame_bits(port) / (self.baud(port) or BAUD_CODES[0])
+
+    def frame_bits(self, port: str) -> int:
+        """The bits of one character frame (§2.6.1.2, §2.6.2.1–§2.6.4): a start bit, 7 data bits,
+        the printer's eighth data bit (MSB = 0), the parity bit of ISO code (the printer's with
+        P69 = 0), 2 stop bits: ISO 11, ASCII 10, printer 12 (P69 = 0) or 11 (P69 = 1)."""
         running = self.transfers.get(port)
-        bits = running.function.frame_bits if running is not None else 10
-        return (bits + (1 if self.iso(port) else 0)) / (self.baud(port) or 110)
+        printer = running is not None and running.function.printer
+        return 1 + 7 + (1 if printer else 0) + (1 if self.iso(port) else 0) + 2
 
     # -- line settings --------------------------------------------------------------------------
     def iso(self, port: str) -> bool:

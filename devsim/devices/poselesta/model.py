@@ -37,7 +37,8 @@ from devsim.devices.poselesta.parameters import MachineParameters
 from devsim.devices.poselesta.peers import Cassette
 from devsim.devices.poselesta.programs import ProgramMemory
 from devsim.devices.poselesta.screen import Screen
-from devsim.devices.poselesta.signals import OUTPUTS, SIGNALS, feed_pot, override
+from devsim.devices.poselesta.signals import INPUTS, OUTPUTS, SIGNALS, feed_pot, override
+from devsim.devices.poselesta.terminals import InputTerminals
 from devsim.devices.poselesta.working_field import WorkingField
 
 __all__ = ["MODES", "PoselestaCnc"]
@@ -54,6 +55,13 @@ MODES = {
 }
 
 
+def _input_delays(cfg: PoselestaConfig) -> dict[str, tuple[float, float]]:
+    """The delay of each opto-coupled input V19–V22 (§2.3), by the configuration; the pots V23 and
+    the reference mark activation V24 (§2.3.23: at most 5 ms opening, 0.2 ms closing) have none."""
+    opto = (cfg.input_rise_ms / 1000.0, cfg.input_fall_ms / 1000.0)
+    return {d.name: opto for d in INPUTS if d.point_type == "bool" and not d.name.startswith("rm_enable_")}
+
+
 class PoselestaCnc(Model):
     """One POSELESTA control: what its serial ports and its panel reach (manual §2.4.1, §2.4.5,
     §2.6; spec §4.1, §4.2)."""
@@ -63,6 +71,7 @@ class PoselestaCnc(Model):
         cfg = self.cfg = PoselestaConfig.parse(self.config)
         signals = self.signals
         declare_signals(signals, SIGNALS)
+        self.terminals = InputTerminals(self.clock, signals, _input_delays(cfg))
         self.mode = "MANUAL"
         self.program = 0
         self.relay_supply_lost = False
@@ -103,7 +112,8 @@ class PoselestaCnc(Model):
             booting=booting, inside_field=lambda: self.field.inside,
             program=lambda: self.memory.to_run(self.program, self.mode == "MANUAL_SINGLE_BLOCK"),
             released=self.emergency_released, stop_manual=lambda: self.manual.reset(),
-            options=ExecutionOptions(cfg.variant == "III", cfg.m06_requires_nc_start, cfg.g25_full_circle))
+            options=ExecutionOptions(cfg.variant == "III", cfg.m06_requires_nc_start, cfg.g25_full_circle,
+                                     start_stop_status=cfg.variant == "III"))
         plc = cfg.plc
         self.plc = PlcHelper(self.clock, signals, plc.mst_ack, plc.rise_ms / 1000.0, plc.fall_ms / 1000.0,
                              None if plc.tool_change_ms is None else plc.tool_change_ms / 1000.0,
@@ -132,9 +142,11 @@ class PoselestaCnc(Model):
     # -- power ----------------------------------------------------------------------------------
     def _power_on(self) -> None:
         """§2.4.5, spec §4.2: all outputs L, the axes where the encoders count from (0)."""
+        self.terminals.settle()  # the inputs as they are at power-on
         self.mode = "MANUAL"
         self.screen.clear()
         self.panel.keyboard_test = None
+        self.panel.page = None
         self.plotter = self.cfg.variant == "III" and bool(self.signals.get("xy_plotter"))  # sampled now only
         for output in OUTPUTS:
             self.signals.set(output.name, output.initial)
@@ -162,6 +174,8 @@ class PoselestaCnc(Model):
         self._power_on()
 
     def close(self) -> None:
+        self.terminals.cancel()
+        self.panel.cancel()
         for port in ("v6", "v7"):
             self.links.stop(port, "cancelled")
         self.keyboard.reset()
@@ -192,6 +206,7 @@ class PoselestaCnc(Model):
             raise BadValue("the control is not ready yet")
         if self.output_test.running or self.output_test.stopped:
             raise BadValue("the output test P79 N6 runs or ran: stop it (C) and switch the control off and on")
+        self.panel.mode_key()
         if mode != self.mode:
             self.manual.reset()
             self.field.cancel()  # a homing search ends with the mode

@@ -35,6 +35,7 @@ class FrontPanel:
         self._keymap = dict(keymap)
         self.last_key: int | None = None
         self.keyboard_test: str | None = None  # P79 N3 running: what the screen shows ("" before a key)
+        self.page: int | None = None  # the diagnostic page P79 N5 or N7 on the screen
         self._buzzer_timer: Timer | None = None
 
     def code_of(self, key: str) -> int:
@@ -63,6 +64,20 @@ class FrontPanel:
             if self._buzzer_timer is not None:
                 self._buzzer_timer.cancel()
             self._buzzer_timer = self._clock.call_later(BUZZER_PULSE, lambda: self._signals.set("buzzer", False))
+
+    def cancel(self) -> None:
+        """The control is switched off: the buzzer's pulse ends with it."""
+        if self._buzzer_timer is not None:
+            self._buzzer_timer.cancel()
+            self._buzzer_timer = None
+
+    def show_page(self, number: int) -> None:
+        """P79 N5 (the inputs, §2.3.25) or N7 (the pots, §2.3.26) takes the screen."""
+        self.page = number
+
+    def mode_key(self) -> None:
+        """A mode key ends a diagnostic page (§2.3.25, §2.3.26: "Abschluss: Betriebsart")."""
+        self.page = None
 
     def keyboard_test_on(self, on: bool) -> None:
         self.keyboard_test = "" if on else None

@@ -142,7 +142,25 @@ def _diagnostic(model: PoselestaCnc, number: int) -> None:
         raise BadValue("the diagnostic programs P79 run in PROGRAM_ENTRY")
     run = DIAGNOSTIC_PROGRAMS.get(f"N{number}")
     if run is not None:
-        run(model)  # (N5 and N7 are pages: diagnostics.inputs and diagnostics.pots read them)
+        run(model)
+    else:
+        model.panel.show_page(number)  # N5, N7: pages, read as diagnostics.inputs / diagnostics.pots
+
+
+def _page(model: PoselestaCnc, number: int) -> bool:
+    return model.mode == "PROGRAM_ENTRY" and model.panel.page == number
+
+
+def _function_keys(model: PoselestaCnc) -> list[str]:
+    """The function keys the screen shows for the inputs (§2.3.1: "Solange der NC-Stop wirksam ist, wird
+    die entsprechende Funktionstaste am Bildschirm abgebildet" (not in MANUAL, where it is ineffective);
+    §2.3.3: the same for NC-Start while V19/3 is H and P75 takes the external button)."""
+    keys = []
+    if not model.signals.get("nc_stop") and model.mode != "MANUAL":
+        keys.append("NC-STOP")
+    if model.signals.get("nc_start") and model.params.nc_start_counts("external"):
+        keys.append("NC-START")
+    return keys
 
 
 #: The diagnostic programs of P79 that run (spec §4.7): the keyboard test and the output test.
@@ -217,10 +235,15 @@ POINTS = PointTable.of(
               put=lambda m, v: m.executor.nc_start("panel") if v else None, example=True),
         Point("panel.mdi", "str", "the block entered for Hand-Einzelsatz (MANUAL_SINGLE_BLOCK), e.g. N1 G00 X10",
               "§2.4.7", get=lambda m: m.memory.mdi, put=lambda m, v: setattr(m.memory, "mdi", v)),
-        Point("diagnostics.inputs", "json", "P79 N5: every input level as ports 1A … 4B (bit = 1: H)", "§2.3.25",
-              get=lambda m: input_image(m.signals)),
-        Point("diagnostics.input_screen", "str", "P79 N5 as the monitor shows it (Port n EIN A7…A0 B7…B0)",
-              "§2.3.25", get=lambda m: input_screen(m.signals)),
+        Point("diagnostics.inputs", "json", "P79 N5 (panel.diagnostic 5 in PROGRAM_ENTRY, a mode key ends it): every "
+              "input level the control sees as ports 1A … 4B (bit = 1: H); null while the page is not shown",
+              "§2.3.25", get=lambda m: input_image(m.signals) if _page(m, 5) else None),
+        Point("diagnostics.input_screen", "str", "P79 N5 as the screen shows it (Port n EIN A7…A0 B7…B0); empty "
+              "while the page is not shown", "§2.3.25",
+              get=lambda m: input_screen(m.signals) if _page(m, 5) else "", in_state=True),
+        Point("panel.function_keys", "json", "the function keys the screen shows for the inputs: NC-STOP while "
+              "NC-Stop is effective (V19/1 L, not in MANUAL), NC-START while V19/3 is H (P75 = 0 or 2)", "§2.3.3",
+              get=_function_keys, in_state=True),
         Point("diagnostics.output_test", "bool", "P79 N6: true starts the output test (PROGRAM_ENTRY), false is "
               "key C: all outputs L until a power cycle", "§2.4.11", get=lambda m: m.output_test.running,
               put=lambda m, v: m.output_test.start() if v else m.output_test.stop()),
@@ -231,8 +254,9 @@ POINTS = PointTable.of(
               get=lambda m: m.panel.keyboard_test or "", put=lambda m, v: _keyboard_test(m, v), example="false"),
         Point("xy_plotter", "bool", "X/Y plotter operation (POS III, V22/8 sampled at power-on): set-points = "
               "position over the working field in 14 bits", "§2.3.20", get=lambda m: m.plotter, in_state=True),
-        Point("diagnostics.pots", "json", "P79 N7: feed and override pot as hex 00 … FF", "§2.3.26",
-              get=lambda m: pots(m.signals)),
+        Point("diagnostics.pots", "json", "P79 N7 (panel.diagnostic 7 in PROGRAM_ENTRY, a mode key ends it): feed "
+              "and override pot as hex 00 … FF; null while the page is not shown", "§2.3.26",
+              get=lambda m: pots(m.signals) if _page(m, 7) else None),
         Point("program.compensation", "str", "cutter radius compensation in force: G40, G41 or G42 (recorded; "
               "the path has no offset)", "§2.3.15", get=lambda m: f"G{m.functions.compensation}"),
         Point("program.tool", "int", "the tool T last programmed (0: none)", "§2.4.8",
@@ -250,7 +274,7 @@ POINTS = PointTable.of(
     *(_axis_points(a) for a in AXES),
     _transfer_points("v6"),
     _transfer_points("v7"),
-    signal_points([d for d in SIGNALS if d.kind != "output"]),
+    signal_points([d for d in SIGNALS if d.kind != "output"], bank=lambda m: m.terminals),
     signal_points([d for d in SIGNALS if d.kind == "output"], bank=lambda m: _RelaySupply(m)),
     _param_points(),
     alias=alias_hook(PARAMETERS),

@@ -155,11 +155,36 @@ class TapeReader:
             if not self.started:
                 if byte & 0x7F == 0x25:  # '%' recognised on its 7 bits (§3.5.1)
                     self.started = True
+                    continue
+                problem = self._line_error(byte)
+                if problem is not None:
+                    self._fail(events, f"before %: {problem} (wrong baud rate or code?)")
                 continue
             char = self._character(byte, events)
             if char is not None:
                 self._interpret(char, events)
         return events
+
+    def _line_error(self, byte: int) -> str | None:
+        """Why a byte before ``%`` cannot have come from a sender with the control's baud rate and
+        code (manual §2.6: "Wird vor dem Einlesen eines Programmes eine falsche Baud-Rate oder ein
+        falscher Code gewählt, erscheint am Bildschirm: WERTBEREICHES-UEBERLAUF"), or None for a
+        character of the code, which is ignored (§2.6.3: "Alle vorgängig eintreffenden Zeichen
+        werden nicht berücksichtigt").  ISO: a parity error.  ASCII: a byte with bit 7 set that is
+        no ISO character either (odd parity; ``ascii_bit7="abort"``: any), or a control character
+        a tape does not carry (only NUL, LF, CR and DEL are): the pty cannot carry the framing
+        errors a real UART sees at a wrong baud rate, and these bytes are what such a line
+        delivers in their place (see the deviations)."""
+        if self.iso:
+            if not parity_ok(byte) and self.parity_error == "abort":
+                return f"parity error in byte {byte:02X}"
+            return None
+        if byte & 0x80 and (self.ascii_bit7 == "abort" or not parity_ok(byte)):
+            return f"byte {byte:02X} is no character of ASCII code"
+        char = byte & 0x7F
+        if char < 0x20 and char not in (NUL, LF, CR):
+            return f"control character {char:02X}"
+        return None
 
     def _character(self, byte: int, events: list[Event]) -> int | None:
         """The 7-bit character of a byte after ``%`` (§3.5.4), None if it is dropped."""
@@ -170,7 +195,9 @@ class TapeReader:
                     return None
                 self._fail(events, f"parity error in byte {byte:02X} (ISO code expected)")
                 return None
-        elif byte & 0x80 and self.ascii_bit7 == "abort":
+        elif byte & 0x80 and (self.ascii_bit7 == "abort" or not parity_ok(byte)):
+            # bit 7 is masked only where the byte is an ISO character (even parity): a byte
+            # that is neither ASCII nor ISO comes from a wrong baud rate (§2.6)
             self._fail(events, f"byte {byte:02X} has bit 7 set (ASCII code expected)")
             return None
         return byte & 0x7F

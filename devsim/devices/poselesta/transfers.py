@@ -40,8 +40,8 @@ def _cassette_baud(code: int, variant: str) -> int:
 
 class Function(msgspec.Struct, frozen=True):
     """A transfer function of the table in spec §3.2.1, with its line: ``baud(code, variant)``
-    from the port's baud rate code, ``frame_bits`` of a character without the ISO parity bit,
-    and the cassette's ``leader`` before the data."""
+    from the port's baud rate code, ``printer`` for the printer's frame (§2.6.1.2: an eighth
+    data bit, the MSB, always 0), and the cassette's ``leader`` before the data."""
 
     name: str  # T1 … T7
     port: str
@@ -51,13 +51,13 @@ class Function(msgspec.Struct, frozen=True):
     peer: str
     section: str
     leader: float = 0.0
-    frame_bits: int = 10
+    printer: bool = False
     baud: Callable[[int, str], int | None] = baud_for_code
 
 
 #: The transfer functions by the name a user selects them with (``v6.transfer`` / ``v7.transfer``).
 FUNCTIONS: dict[tuple[str, str], Function] = {(f.port, f.choice): f for f in (
-    Function("T1", "v6", "printer", 1, "output", "printer Z1 (20 columns)", "§2.6.2.1", frame_bits=11,
+    Function("T1", "v6", "printer", 1, "output", "printer Z1 (20 columns)", "§2.6.2.1", printer=True,
              baud=_printer_baud),
     Function("T2", "v6", "cassette_out", 2, "output", "cassette Z2 / ZPS 020", "§2.6.2.2", leader=CASSETTE_LEADER,
              baud=_cassette_baud),
@@ -138,8 +138,10 @@ class ReadIn:
 
 class Output:
     """A program output: ``pieces`` of the tape image, each sent after the wait before it
-    (the leader, the printer's CR pause); the transfer ends when the last character has left,
-    at the port's character time."""
+    (the leader, the printer's CR pause), one character at a time on the device clock: a
+    character reaches the line when its frame (§2.6.1.2: start, data, parity, stop bits at the
+    port's baud rate) has been sent, so cancelling stops the tape at the character being sent and
+    nothing after it leaves.  The transfer ends with its last character."""
 
     def __init__(self, link: Link, function: Function, program: int, pieces: list[tuple[float, bytes]],
                  blocks: int, on_end: Callable[[], None] | None = None) -> None:
@@ -148,28 +150,42 @@ class Output:
         self.program = program
         self.blocks = blocks
         self.state = "sending"
-        self._pieces = list(pieces)
+        self._pieces = [(wait, data) for wait, data in pieces if data]
+        self._at = 0  # the next character of the first piece
         self._on_end = on_end
         self._timer: Timer | None = None
-        self._next()
 
-    def _next(self) -> None:
-        self._timer = None
+    def begin(self) -> None:
+        """Start sending (called once the transfer is the port's running one, so that the line
+        settings of the first character are already this transfer's)."""
+        self._schedule()
+
+    def _schedule(self) -> None:
+        port = self.function.port
         if not self._pieces:
+            self._timer = None
             self.state = "done"
             if self._on_end is not None:
                 self._on_end()
-            self.link.event(self.function.port, "transfer_done", (self.program, self.blocks))
-            self.link.ended(self.function.port, "done")
+            self.link.event(port, "transfer_done", (self.program, self.blocks))
+            self.link.ended(port, "done")
             return
         wait, data = self._pieces[0]
-        if wait > 0:
+        if self._at == 0 and wait > 0:
             self._pieces[0] = (0.0, data)
-            self._timer = self.link.clock.call_later(wait, self._next)
+            self._timer = self.link.clock.call_later(wait, self._schedule)
             return
-        self._pieces.pop(0)
-        self.link.send(self.function.port, data)
-        self._timer = self.link.clock.call_later(len(data) * self.link.char_time(self.function.port), self._next)
+        self._timer = self.link.clock.call_later(self.link.char_time(port), self._character)
+
+    def _character(self) -> None:
+        self._timer = None
+        _wait, data = self._pieces[0]
+        self.link.send(self.function.port, data[self._at:self._at + 1])
+        self._at += 1
+        if self._at >= len(data):
+            self._pieces.pop(0)
+            self._at = 0
+        self._schedule()
 
     def feed(self, data: bytes) -> None:
         """Input during an output is not read (no handshake, §3.6)."""
