@@ -173,7 +173,7 @@ class Interpreter:
         self.waiting = None
         self.params.l65_flag = 0  # (the L65 error-handling flag is P1118)
         if label is not None:
-            if not 1 <= label <= 128:
+            if not st.LABEL_MIN <= label <= st.LABEL_MAX:
                 raise SersError(72)
             if label not in self.program.labels:
                 raise SersError(71)
@@ -382,7 +382,7 @@ class Interpreter:
         self._timer = self.clock.call_later(delay, action)
 
     def label_index(self, label: int) -> int:
-        if not 1 <= label <= 128:
+        if not st.LABEL_MIN <= label <= st.LABEL_MAX:
             raise SersError(72)
         index = self.program.labels.get(label)
         if index is None:

@@ -1,0 +1,42 @@
+"""Manual §4.3–§4.6 (program lines, labels, jumps) checked statement by statement through the pty.
+
+Each test quotes the statement of the SERS manual (seed 003) it checks; the expected values come
+from the manual, not from the simulator's output.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.sers.conftest import Plant
+from tests.sers.test_programs import download, finish, listing, out, query, refused, run
+
+
+@pytest.mark.manual("§4.6.2", "Syntax: L dezimalkonstante - a value from 1 to 128 (L1 and L128 are labels)")
+@pytest.mark.manual("§4.6.3", "GOTO label jumps to the label")
+def test_labels_l1_and_l128_are_jump_targets(sers: Plant) -> None:
+    host = sers.host
+    download(host, "GOTO 128", "O1=1", "L128", "O2=1", "GOTO 1", "O3=1", "L1", "O4=1")
+    run(host)
+    finish(sers)
+    # L128 skipped O1, GOTO 1 skipped O3
+    assert (out(sers, 1), out(sers, 2), out(sers, 3), out(sers, 4)) == (False, True, False, True)
+
+
+@pytest.mark.manual("§4.6.2", "a label number outside 1..128 is refused: errno 72 'Sprungziel ungültig' "
+                    "(labels are jump targets)")
+@pytest.mark.parametrize("label", ["L0", "L129", "L 200", "L999"])
+def test_a_label_outside_1_to_128_is_refused_and_not_stored(sers: Plant, label: str) -> None:
+    host = sers.host
+    assert host.ask("#NEW\r").endswith(b"pgm\n\r")
+    assert host.ask("#O1=1\r").endswith(b"pgm\n\r")
+    refused(host, f"#{label} O2=1\r", 72)
+    host.ask("#QUIT\r")
+    assert query(host, "P1137") == "72"
+    assert listing(host) == ["O1=1"]  # the whole line was refused, the program kept
+
+
+@pytest.mark.manual("§4.6.2", "a label number outside 1..128 is refused also in a direct line (errno 72)")
+def test_a_label_outside_the_range_in_a_direct_line(sers: Plant) -> None:
+    refused(sers.host, "#L129\r", 72)
+    assert query(sers.host, "P1137") == "72"
