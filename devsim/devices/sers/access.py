@@ -160,12 +160,14 @@ class ParameterAccess:
             self.params.target_address = "*"
             return
         assert isinstance(value, int | float)
+        if not row.writable:
+            raise SersError(row.extra["write_errno"])
+        if row.choices is not None and value not in row.choices:
+            raise SersError(row.extra["invalid_errno"])
         writer = _WRITE.get(number)
         if writer is not None:
             writer(self, value)
             return
-        if not row.writable:
-            raise SersError(105)
         if 1205 <= number <= 1216 and "IO" not in self._config().options:
             raise SersError(4)
         self.check_range(row, value)
@@ -189,7 +191,7 @@ class ParameterAccess:
         after conversion (V ≤ 10000 rpm, A ≤ 100000 rad/s², positions within ±2^31 increments)."""
         extra = row.extra
         if row.choices is not None and value not in row.choices:
-            raise SersError(3)
+            raise SersError(extra["invalid_errno"])
         if extra["min_exclusive"] and row.minimum is not None and value <= row.minimum:
             raise SersError(extra["too_small_errno"])  # a range "> minimum" (V, P103, P123)
         kind = extra["kind"]
@@ -230,10 +232,7 @@ class ParameterAccess:
     def write_p0(self, value: float) -> None:
         """P0 (§4.8.2.1): 0 leaves programming mode, 1 starts the program, 2 starts programming
         mode deleting the program (NEW)."""
-        action = _P0.get(value)
-        if action is None:
-            raise SersError(82)
-        action(self)
+        _P0[value](self)  # (the row's choices are checked before: errno 82)
 
     def write_w(self, value: float) -> None:
         """W (P47): free while standing; while moving only in the constant phase (§4.6.6)."""
@@ -248,15 +247,11 @@ class ParameterAccess:
 
     def write_p1004(self, value: float) -> None:
         """P1004 (§4.8.6.10): 2 PSAVE, 3 factory defaults, 4 POSSAVE, 5 R0..R5 and W."""
-        action = _P1004.get(int(value)) if value == int(value) else None
-        if action is None:
-            raise SersError(82)
-        action(self.memory)
+        _P1004[int(value)](self.memory)  # (the row's choices are checked before: errno 82)
 
     def write_p1014(self, value: float) -> None:
-        """P1014 (§4.8.4.1): the positioning mode, not while the drive moves."""
-        if value not in (0, 1, 2, 3):
-            raise SersError(80)
+        """P1014 (§4.8.4.1): the positioning mode (the row's choices are checked before: errno 80
+        "unbekannter Positioniermodus"), not while the drive moves."""
         if self.motion.kind is not None:
             raise SersError(93)
         self.params.positioning_mode = int(value)
