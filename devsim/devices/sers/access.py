@@ -77,6 +77,7 @@ class ParameterAccess:
         programs: Callable[[], ProgramControl],
         changed: Callable[[], None],
         recheck_warnings: Callable[[], None],
+        rotation_changed: Callable[[], None],
     ) -> None:
         self.params = params
         self.memory = memory
@@ -89,6 +90,7 @@ class ParameterAccess:
         self._programs = programs  # (the program execution, made after the access)
         self._changed = changed  # outputs that follow a state (P1125 …) follow a new selector
         self._recheck_warnings = recheck_warnings  # P12=0: the warnings whose causes remain
+        self._rotation_changed = rotation_changed  # P1134: the motor turns the other way from now on
         self.firmware = FIRMWARE
 
     @property
@@ -248,6 +250,7 @@ class ParameterAccess:
     def write_p1004(self, value: float) -> None:
         """P1004 (§4.8.6.10): 2 PSAVE, 3 factory defaults, 4 POSSAVE, 5 R0..R5 and W."""
         _P1004[int(value)](self.memory)  # (the row's choices are checked before: errno 82)
+        self._rotation_changed()  # factory defaults may set P1134 back
 
     def write_p1014(self, value: float) -> None:
         """P1014 (§4.8.4.1): the positioning mode (the row's choices are checked before: errno 80
@@ -262,6 +265,15 @@ class ParameterAccess:
         if action is None:
             raise SersError(3)
         action(self.motion)
+
+    def write_p1134(self, value: float) -> None:
+        """P1134 (§4.8.2.3): the motor's sense of rotation; not while the drive moves [SIM-CHOICE:
+        errno 93 "nicht schreibbar, während der Antrieb positioniert"]."""
+        self.check_range(PARAMETERS[1134], value)
+        if self.motion.kind is not None:
+            raise SersError(93)
+        self.params.direction_inverted = int(value)
+        self._rotation_changed()
 
     def write_soft_limit(self, number: int, value: float) -> None:
         """P1040 / P1041 (§4.8.6.12): the lower limit may not lie above the upper one."""
@@ -367,6 +379,7 @@ WRITES: Table[Write] = Table(
         Command("P1004", ParameterAccess.write_p1004, "§4.8.6.10", "PSAVE, factory defaults, POSSAVE"),
         Command("P1014", ParameterAccess.write_p1014, "§4.8.4.1", "positioning mode"),
         Command("P1031", lambda a, v: a.motion.jog.write_p1031(v, a.motion.home), "§4.8.6.3", "jog / home"),
+        Command("P1134", ParameterAccess.write_p1134, "§4.8.2.3", "the motor's sense of rotation"),
         Command("P1040", lambda a, v: a.write_soft_limit(1040, v), "§4.8.6.12", "lower software limit"),
         Command("P1041", lambda a, v: a.write_soft_limit(1041, v), "§4.8.6.12", "upper software limit"),
         Command("P1043", ParameterAccess.write_p1043, "§4.8.4.2", "POS0 / POSR"),

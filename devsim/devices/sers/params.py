@@ -95,6 +95,7 @@ class SersParameters(Parameters):
     reference_input = accessor(1130, "P1130: reference switch input assignment")
     output_error = accessor(1131, "P1131: output SERS error")
     output_warning = accessor(1132, "P1132: output SERS warning")
+    direction_inverted = accessor(1134, "P1134: motor direction inverted (1)")
     adc_hysteresis = accessor(1135, "P1135: ADC hysteresis")
     posr_attempts = accessor(1138, "P1138: POSR attempts")
     posr_wait = accessor(1139, "P1139: POSR waiting time")

@@ -83,9 +83,11 @@ def _set_dip(field: str) -> Any:
 
 _PLAIN: list[Point] = [
     # -- the shared vocabulary -------------------------------------------------------------
-    Point("axis.position", "float", "actual position of the stator field, motor increments", "§5.1", "inc",
-          get=lambda m: m.axis.position(), in_state=True, shared=True),
-    Point("axis.velocity", "float", "actual velocity", "§5.1", "inc/s", get=lambda m: m.axis.velocity(),
+    Point("axis.position", "float", "actual position of the stator field, motor increments as the motor "
+          "physically turns (P1134=1: against the drive's count)", "§4.8.2.3", "inc",
+          get=lambda m: m.wiring.position(), in_state=True, shared=True),
+    Point("axis.velocity", "float", "actual velocity (physical, as axis.position)", "§4.8.2.3", "inc/s",
+          get=lambda m: m.wiring.velocity(),
           in_state=True, shared=True),
     Point("motion", "bool", "the drive moves (positioning, jog, homing, POS0/POSR)", "§4.6.6",
           get=lambda m: m.motion.kind is not None, in_state=True, shared=True),
@@ -96,8 +98,8 @@ _PLAIN: list[Point] = [
     Point("fault", "bool", "a drive error is active (P11 ≠ 0)", "§4.8.3.1", get=lambda m: bool(m.power_stage.errors),
           in_state=True, shared=True),
     # -- the drive --------------------------------------------------------------------------
-    Point("axis.acceleration", "float", "actual acceleration", "§5.1", "inc/s²",
-          get=lambda m: m.axis.acceleration()),
+    Point("axis.acceleration", "float", "actual acceleration (physical, as axis.position)", "§4.8.2.3", "inc/s²",
+          get=lambda m: m.wiring.acceleration()),
     Point("axis.moving", "bool", "the stator field moves", "§5.1", get=lambda m: m.axis.moving),
     Point("axis.phase", "str", "the ramp phase of the motion (accelerate, constant, brake, idle)", "§5.2",
           get=lambda m: m.axis.phase()),
@@ -114,8 +116,8 @@ _PLAIN: list[Point] = [
     Point("homed", "bool", "a homing run (H) completed since power-on", "§4.8.4.5", get=lambda m: m.motion.homing.homed),
     Point("homing", "str", "the homing phase (null when not homing)", "§4.8.4.5",
           get=lambda m: m.motion.homing.phase),
-    Point("encoder.position", "float", "encoder position in motor increments", "§4.8.6.6", "inc",
-          get=lambda m: m.motion.encoder.encoder_position()),
+    Point("encoder.position", "float", "where the rotor physically is (encoder), motor increments", "§4.8.6.6", "inc",
+          get=lambda m: m.wiring.physical(m.motion.encoder.encoder_position())),
     Point("encoder.pulses", "int", "count pulses at the encoder / pulse input (as if they arrived)", "§4.8.6.14",
           put=lambda m, v: m.motion.pulses(v), example=0),
     Point("phase_current", "float", "commanded phase current", "§4.8.6.1", "mA", get=lambda m: m.motion.phase_current()),
