@@ -91,6 +91,19 @@ class Inputs:
                 timer.cancel()
         self._dispatch = self._level_start = None
 
+    def initialised(self) -> None:
+        """The initialisation after power-on is over (§3.5): with P1095=0 a jog function (I1..I6)
+        whose input is already active starts now, by its static level (§4.8.6.3); with P1095=1
+        only a later rising edge starts it."""
+        if int(self.params.jog_at_power_on) != 0:
+            return
+        for n in range(1, 7):
+            if self.signals.get(f"I{n}") and self.functions_enabled(1 << (n - 1)):
+                try:
+                    self._input_function(n, True)
+                except SersError as exc:
+                    self.power.record_error(exc.errno)
+
     # -- what the inputs read as ------------------------------------------------------------------
     def inputs_byte(self, first: int) -> int:
         """P1300 (I1..I8, ``first`` = 1) or P1301 (I9..I16, ``first`` = 9)."""

@@ -199,6 +199,7 @@ class SersDrive(Model):
     def _boot_done(self) -> None:
         self.record_event("ready")
         self.booted()
+        self.inputs.initialised()
         self.execution.autostart()
 
     def _power_off(self) -> None:
