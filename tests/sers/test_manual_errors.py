@@ -52,3 +52,14 @@ def test_a_value_out_of_range_is_too_large_or_too_small(sers: Plant, line: str, 
     assert query(host, "P1137") == str(errno)
     assert int(query(host, "P12")) & 16
     assert query(host, "P1035") == "1"  # the value stays (§4.8.6.4: 1 after power-on)
+
+
+@pytest.mark.manual("§4.8.2.4", "P1136: on versions up to 6 A P1136 cannot be changed (errno 105); a 12 A "
+                    "version takes P1136=1 (18 kHz)")
+def test_p1136_only_on_a_12_a_version(plant_factory) -> None:
+    small = plant_factory({"current_class": "06"})
+    refused(small.host, "#P1136=1\r", 105)
+    assert query(small.host, "P1136") == "0"
+    large = plant_factory({"current_class": "12", "supply_class": "120"})
+    assert large.host.ask("#P1136=1\r").endswith(b"ok1\n\r")
+    assert query(large.host, "P1136") == "1"

@@ -275,6 +275,15 @@ class ParameterAccess:
         self.params.direction_inverted = int(value)
         self._rotation_changed()
 
+    def write_p1136(self, value: float) -> None:
+        """P1136 (§4.8.2.4): "Bei Versionen bis 6A kann P1136 nicht verändert werden" -- only a
+        12 A version takes it (a smaller one: the row's write errno, 105)."""
+        row = PARAMETERS[1136]
+        self.check_range(row, value)
+        if self._config().current_class != "12":
+            raise SersError(row.extra["write_errno"])
+        self.params.values[1136] = int(value)
+
     def write_soft_limit(self, number: int, value: float) -> None:
         """P1040 / P1041 (§4.8.6.12): the lower limit may not lie above the upper one."""
         internal = self._position(number, value)
@@ -379,6 +388,7 @@ WRITES: Table[Write] = Table(
         Command("P1004", ParameterAccess.write_p1004, "§4.8.6.10", "PSAVE, factory defaults, POSSAVE"),
         Command("P1014", ParameterAccess.write_p1014, "§4.8.4.1", "positioning mode"),
         Command("P1031", lambda a, v: a.motion.jog.write_p1031(v, a.motion.home), "§4.8.6.3", "jog / home"),
+        Command("P1136", ParameterAccess.write_p1136, "§4.8.2.4", "chopper frequency: 12 A versions only"),
         Command("P1134", ParameterAccess.write_p1134, "§4.8.2.3", "the motor's sense of rotation"),
         Command("P1040", lambda a, v: a.write_soft_limit(1040, v), "§4.8.6.12", "lower software limit"),
         Command("P1041", lambda a, v: a.write_soft_limit(1041, v), "§4.8.6.12", "upper software limit"),
