@@ -9,6 +9,7 @@ import pytest
 DEG = 12800 / 360
 
 
+@pytest.mark.manual("§4.8.4.5", "P147 bit 2: after the switch, on to the next electrical reset position (every 7.2°)")
 def test_homing_to_the_next_electrical_zero(plant_factory) -> None:
     ref = 100.0  # increments: not on a 256-increment phase zero
     plant = plant_factory({"axis": {"reference_low": ref}, "params": {"P147": 4}})
@@ -19,6 +20,7 @@ def test_homing_to_the_next_electrical_zero(plant_factory) -> None:
     assert plant.read("param.P51") == 0
 
 
+@pytest.mark.manual("§4.8.4.5", "P147 bit 6: homing on the zero pulse instead of the reference switch")
 def test_homing_on_the_encoder_zero_pulse(plant_factory) -> None:
     plant = plant_factory({"axis": {"index_offset": 5000}, "params": {"P147": 64}})
     plant.host.ask("#ON H\r")
@@ -27,6 +29,7 @@ def test_homing_on_the_encoder_zero_pulse(plant_factory) -> None:
     assert plant.read("homed") is True
 
 
+@pytest.mark.manual("§4.8.4.5", "P147 bit 7: reference switch, then zero pulse, then the next electrical reset position")
 def test_homing_switch_then_zero_pulse_then_electrical_zero(plant_factory) -> None:
     plant = plant_factory({"axis": {"reference_low": 20000, "index_offset": 6000}, "params": {"P147": 128}})
     plant.host.ask("#ON H\r")
@@ -36,6 +39,7 @@ def test_homing_switch_then_zero_pulse_then_electrical_zero(plant_factory) -> No
     assert plant.read("axis.position") == pytest.approx(18688)
 
 
+@pytest.mark.manual("§4.8.4.5", "P147 bit 5: the drive measures both edges of the reference switch and goes to its centre")
 def test_homing_to_the_centre_of_the_switch(plant_factory) -> None:
     plant = plant_factory({"axis": {"reference_low": 3000, "reference_high": 5000}, "params": {"P147": 32}})
     plant.host.ask("#ON H\r")
@@ -80,6 +84,8 @@ def test_backlash_against_the_approach_direction(plant_factory) -> None:
     assert plant.read("param.P51") == pytest.approx(-90)
 
 
+@pytest.mark.manual("§4.8.3.1", "P11 2048 standstill monitoring (P1044)")
+@pytest.mark.manual("§3.5", "display 'A': standstill monitoring error")
 def test_standstill_monitoring(plant_factory) -> None:
     plant = plant_factory({"params": {"P1044": 10, "P1045": 2}})
     host = plant.host
@@ -97,6 +103,8 @@ def test_standstill_monitoring(plant_factory) -> None:
     assert plant.read("param.P51") < 360
 
 
+@pytest.mark.manual("§4.8.3.1", "P11 32 step monitoring error (P1029)")
+@pytest.mark.manual("§3.5", "display 'F': load-angle monitoring error")
 def test_step_loss_drive_error_and_resync(plant_factory) -> None:
     plant = plant_factory({"options": ["E50"], "params": {"P1053": 8, "P1029": 1}})
     host = plant.host
