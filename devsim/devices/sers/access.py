@@ -202,16 +202,16 @@ class ParameterAccess:
             rpm = scaling.vel_to_incps(float(value)) * 60 / INC_PER_REV
             if rpm <= 0 and row.key == 91:
                 raise SersError(extra["too_small_errno"])
-            if rpm > 10000:
+            if _beyond(rpm, 10000):
                 raise SersError(extra["too_large_errno"])
             if rpm < 0:
                 raise SersError(extra["too_small_errno"])
             return
         if kind == "acceleration":
             rads = scaling.acc_to_incps2(float(value)) * 2 * math.pi / INC_PER_REV
-            if rads > 100000:
+            if _beyond(rads, 100000):
                 raise SersError(extra["too_large_errno"])
-            if rads < (2 if row.key in (138, 1096) else 0):
+            if _beyond(-rads, -(2 if row.key in (138, 1096) else 0)):
                 raise SersError(extra["too_small_errno"])
             return
         if kind == "position":
@@ -308,6 +308,12 @@ class ParameterAccess:
             raise SersError(75)
 
 
+def _beyond(value: float, limit: float) -> bool:
+    """``value`` above ``limit`` by more than the rounding of the unit conversion (V=10000 rpm
+    and A=100000 rad/s², the manual's maxima, are allowed exactly)."""
+    return value > limit and not math.isclose(value, limit, rel_tol=1e-9, abs_tol=1e-9)
+
+
 #: P0's values (§4.8.2.1): leave programming mode, start the program, NEW.
 _P0: dict[float, Callable[[ParameterAccess], None]] = {
     0: lambda a: a.program.quit(),
@@ -383,7 +389,8 @@ WRITES: Table[Write] = Table(
         Command("P11", lambda a, v: a.power.write_p11(v), "§4.8.3.1", "clear the drive errors (0)"),
         Command("P12", lambda a, v: a.power.write_p12(v, a._recheck_warnings), "§4.8.3.1", "clear the warnings (0)"),
         Command("P47", ParameterAccess.write_w, "§4.6.6", "W: also on the move, in the constant phase"),
-        Command("P51", lambda a, v: a.motion.set_p51(a._position(51, v)), "§4.8.4.2", "set the actual position"),
+        Command("P51", lambda a, v: a.motion.set_p51(round(a._position(51, v))), "§4.8.4.2",
+                "set the actual position (the drive counts whole increments)"),
         Command("P134", lambda a, v: a.power.write_p134(v), "§4.8.2.2", "ON (7) / OFF (0)"),
         Command("P1004", ParameterAccess.write_p1004, "§4.8.6.10", "PSAVE, factory defaults, POSSAVE"),
         Command("P1014", ParameterAccess.write_p1014, "§4.8.4.1", "positioning mode"),
