@@ -70,11 +70,22 @@ DEVIATIONS: tuple[Deviation, ...] = (
     ),
     Deviation(
         "§4.8.6.6",
-        "P1094, P1147, P1149: keeping the absolute value after a limit error with the electric "
-        "shaft, the third pulse counter and the software limits / compare positions of P1053=7",
-        "stored only",
+        "hand-wheel / electric shaft (P1053=3/7): after a limit switch error the motor is energised "
+        "again automatically by pulses in the other direction (P1094 0: at once, 1: once a counter "
+        "of the blocked pulses is back at 0); P1147 third pulse counter; P1149 software limits and "
+        "compare positions at P1053=7",
+        "P1094, P1147, P1149 are stored only; after a limit error the motor stays off until ON "
+        "(P11=0 first), pulses toward the blocked side are ignored",
         "the electric shaft with P1053=7 is simulated only as far as the pulse counters and the "
         "following motion; these refinements are not",
+    ),
+    Deviation(
+        "§4.8.4.2",
+        "P1140 bit 0: with P1138 != 0 a motor pushed out of place at standstill is corrected by an "
+        "automatic POSR",
+        "no automatic POSR at standstill",
+        "the twin's rotor can be blocked (quantity.stall) but not pushed at standstill, so there "
+        "is nothing to correct",
     ),
     Deviation(
         "§4.8.6.7",
