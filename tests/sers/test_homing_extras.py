@@ -200,6 +200,8 @@ def test_phase_current_reduction_at_standstill(plant_factory) -> None:
     assert plant.read("phase_current") == 3000
 
 
+@pytest.mark.manual("§4.8.6.7", "P1152=1 SERVO mode: no step loss; the motor may run at its torque limit and catches up")
+@pytest.mark.manual("§4.8.1.2", "P1160 5..8: the output is set temporarily while the SERVO overload lasts")
 def test_servo_mode_loses_no_steps_and_catches_up(plant_factory) -> None:
     plant = plant_factory({"options": ["E50", "SERVO"], "params": {"P1152": 1, "P1162": 1, "P1163": 600, "P1160": 5}})
     host = plant.host
@@ -219,6 +221,7 @@ def test_servo_mode_loses_no_steps_and_catches_up(plant_factory) -> None:
     assert plant.read("P11") == 0 and plant.read("P12") == 0
 
 
+@pytest.mark.manual("§4.8.3.1", "P12 2048: SERVO not active - the load angle is not yet calibrated, but a positioning or jog was made")
 def test_servo_positioning_before_calibration_warns(plant_factory) -> None:
     plant = plant_factory({"options": ["E50", "SERVO"], "params": {"P1152": 1}})
     plant.host.ask("#ON W=90 E\r")

@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 
 from tests.sers.conftest import Plant
-from tests.sers.test_programs import download, finish, listing, out, query, refused, run
+from tests.sers.test_programs import download, finish, listing, normalise, out, query, refused, run
 
 
 @pytest.mark.manual("§4.6.2", "Syntax: L dezimalkonstante - a value from 1 to 128 (L1 and L128 are labels)")
@@ -30,7 +30,7 @@ def test_a_label_outside_1_to_128_is_refused_and_not_stored(sers: Plant, label: 
     host = sers.host
     assert host.ask("#NEW\r").endswith(b"pgm\n\r")
     assert host.ask("#O1=1\r").endswith(b"pgm\n\r")
-    refused(host, f"#{label} O2=1\r", 72)
+    refused(host, f"#O2=1 {label}\r", 72)
     host.ask("#QUIT\r")
     assert query(host, "P1137") == "72"
     assert listing(host) == ["O1=1"]  # the whole line was refused, the program kept
@@ -40,3 +40,23 @@ def test_a_label_outside_1_to_128_is_refused_and_not_stored(sers: Plant, label: 
 def test_a_label_outside_the_range_in_a_direct_line(sers: Plant) -> None:
     refused(sers.host, "#L129\r", 72)
     assert query(sers.host, "P1137") == "72"
+
+
+@pytest.mark.manual("§4.3", "each statement gets its own line number: the lines '#1 ON V=1000 W=5000 E' and "
+                    "'#O1=1 D=10 W=2000 E' are listed as '1: ...' and '5: ...' (P1028 with the user's line breaks)")
+def test_line_numbering_with_the_users_line_breaks(sers: Plant) -> None:
+    host = sers.host
+    download(host, "ON V=1000 W=5000 E", "O1=1 D=10 W=2000 E")
+    host.ask("#P1028=9\r")  # bit 0 numbers, bit 3 the user's line breaks (§4.8.5.4)
+    answer = host.ask("#LIST\r").decode("latin-1")
+    rows = answer.removeprefix("#LIST\r").removesuffix("\n\r\nok1\n\r").split("\n\r")
+    # (the drive lists constants with their decimals, spec G-LIST: 'V=1000.0000' is 'V=1000')
+    assert [normalise(row) for row in rows] == ["1: ON V=1000 W=5000 E", "5: O1=1 D=10 W=2000 E"]
+
+
+@pytest.mark.manual("§4.3", "or (depending on P1028) one statement per row: 1: ON, 2: V=1000, ... 8: E")
+def test_line_numbering_one_statement_per_row(sers: Plant) -> None:
+    host = sers.host
+    download(host, "ON V=1000 W=5000 E", "O1=1 D=10 W=2000 E")
+    host.ask("#P1028=1\r")
+    assert listing(host) == ["ON", "V=1000", "W=5000", "E", "O1=1", "D=10", "W=2000", "E"]

@@ -339,6 +339,7 @@ T15 = (
 )
 
 
+@pytest.mark.manual("§4.6.12", "the stand-alone example program (endless loop with WAIT, C1 loop, GOSUB10) in mode RELATIV LÖSCHEN")
 @pytest.mark.manual("§3.6.4", "stand-alone operation: the SERS runs its EEPROM program as an independent sequence control")
 def test_t15_stand_alone_example(plant_factory) -> None:
     plant = plant_factory({"params": {"P1014": 1}})
@@ -370,6 +371,7 @@ def test_t15_stand_alone_example(plant_factory) -> None:
 # ======================================================================================
 # T-16 parallel (BCD) mode (§4.5.2, §4.6.12, G-PARALLEL)
 # ======================================================================================
+@pytest.mark.manual("§4.6.12", "the parallel-mode example: L1 ON RT, L2 V=1000 W=2500 E RT, L3 ..., L4 ... RETURN for the addresses 0..3")
 @pytest.mark.manual("§4.5.2", "parallel mode: an edge on the start input I8 calls the label of the BCD address on the inputs (address 0 -> L1) and runs to the next RT")
 @pytest.mark.manual("§3.6.3", "parallel (BCD) mode: subroutines in the EEPROM are called through the digital inputs")
 def test_t16_parallel_bcd_example(plant_factory) -> None:

@@ -74,6 +74,7 @@ def test_t04_addressing_sequence(plant_factory) -> None:
     assert plant.read("param.P51", "sers3") == pytest.approx(4000, abs=0.01)
 
 
+@pytest.mark.manual("§4.6.12", "the serial example: #1, #ON, #V=1000, #W=2500 E, #POS? answers 0 or 1, #P1300? answers 0..255")
 @pytest.mark.manual("§4.8.3.2", "P336 (POS) = 0 while the drive moves, 1 when it stands")
 def test_t05_serial_mode_session(sers: Plant) -> None:
     host = sers.host
@@ -288,6 +289,7 @@ def test_t30_broadcast_starts_both_without_reply(plant_factory) -> None:
     assert plant.read("motion.kind", "sers2") == "position"
 
 
+@pytest.mark.manual("§4.8.6.16", "P1099 executes an opcode: 63235 (0xF703) is E, 62213 (0xF305) is RUN 5")
 def test_t26_opcode_e_over_p1099(sers: Plant) -> None:
     sers.host.ask("#ON W=90\r")
     assert sers.host.ask("#P1099=63235\r") == b"#P1099=63235\r\nok0\n\r"  # ≙ E
