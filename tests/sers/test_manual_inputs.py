@@ -36,3 +36,24 @@ def test_p1095_1_needs_an_edge_after_power_on(plant_factory) -> None:
     plant.set("input.I2", True)
     plant.advance(0.5)
     assert plant.read("motion.kind") == "jog"
+
+
+@pytest.mark.manual("§4.5.1", "jogging with commands over the serial interface needs the motor energised before "
+                    "(ON)")
+def test_serial_jog_needs_on(sers: Plant) -> None:
+    from tests.sers.test_programs import refused
+
+    refused(sers.host, "#RS\r", 79)
+    assert sers.read("motion.kind") is None
+    sers.host.ask("#ON RS\r")
+    assert sers.read("motion.kind") == "jog"
+
+
+@pytest.mark.manual("§3.1.4", "service switch (DIP 1 bit 6) ON: all jog functions are available at the digital "
+                    "inputs (without P1021)")
+def test_service_switch_enables_the_jog_inputs(plant_factory) -> None:
+    plant = plant_factory({"service_switch": True})
+    plant.set("input.I4", True)  # right fast
+    plant.advance(0.2)
+    assert plant.read("motion.kind") == "jog"
+    assert plant.read("axis.velocity") > 0

@@ -136,6 +136,9 @@ def test_without_possave_p51_is_zero_after_power_cycle(plant_factory, tmp_path) 
     assert query(host, "P51") == "0°"
 
 
+@pytest.mark.manual("§4.8.6.4", "P1035 is not stored in the EEPROM: after every power-on P1035=1")
+@pytest.mark.manual("§4.8.5.5", "P1110 is 1 after switching on and not stored")
+@pytest.mark.manual("§4.8.3.2", "P403 = 3 after a power-on reset")
 def test_non_stored_parameters_take_power_on_values(plant_factory, tmp_path) -> None:
     plant = plant_factory({"axis": {"reference_low": 20 * DEG}}, state_dir=tmp_path)
     host = plant.host

@@ -188,6 +188,7 @@ def test_t24_leave_zero_phase(plant_factory, target: str, final: float) -> None:
     assert plant.read("param.P51") == pytest.approx(final, abs=0.02)
 
 
+@pytest.mark.manual("§4.8.6.15", "parameter masks P1060.. and program masks P1070..P1073 are parameters (e.g. P1060 = 2144)")
 def test_t25_parameter_masks_are_stored(sers: Plant) -> None:
     assert sers.host.ask("#P1060=2144\r") == b"#P1060=2144\r\nok1\n\r"
     assert sers.host.ask("#P1070=42\r") == b"#P1070=42\r\nok1\n\r"
