@@ -81,3 +81,21 @@ def test_a_load_angle_watch_does_not_fire_after_a_power_cycle(plant_factory) -> 
     assert plant.read("P11") == 0
     assert plant.read("P12") & 32 == 0
     assert query(host, "P51").startswith("360")
+
+
+@pytest.mark.manual("§4.5.2", "a sequence program runs only while the SERS is powered: a power loss ends it, and "
+                    "none of its pending delays (D, D2) acts while the supply is off or after it returns")
+def test_a_program_and_its_timers_end_with_the_supply(plant_factory) -> None:
+    plant = plant_factory({})
+    host = plant.host
+    download(host, "D2=5 GT 60", "O1=1", "D=10", "O2=1", "PE", "L60", "O3=1", "PE")
+    dev = plant.runtime.device(plant.name)
+    host.ask("#RUN\r")
+    assert plant.runtime.run_until(lambda: dev.read("output.O1"), 1.0)
+    _supply(plant, False)
+    plant.advance(3.0)  # D (1.2 s) and D2 (0.5 s) would both have run out
+    assert plant.read("param.P0") == 0
+    _supply(plant, True)
+    plant.advance(3.0)
+    assert (out(plant, 1), out(plant, 2), out(plant, 3)) == (False, False, False)
+    assert plant.read("param.P0") == 0
