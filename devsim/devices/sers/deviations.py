@@ -33,6 +33,13 @@ DEVIATIONS: tuple[Deviation, ...] = (
         "logical state, which is simulated",
     ),
     Deviation(
+        "§4.6.1",
+        "at most 64 IF ... THEN ... ELSE ... END structures may be in one program",
+        "more are stored and run",
+        "the manual names no error message for a 65th structure; refusing it with a guessed errno "
+        "would mislead a host more than accepting it",
+    ),
+    Deviation(
         "§3.2.1, §4.8.6.9",
         "P1017=0: V24 hardware handshake on HSI/HSO (pins 7 and 8 must be wired)",
         "P1017=0 echoes every character like P1017=1; there is no handshake line",
