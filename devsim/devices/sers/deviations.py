@@ -72,7 +72,8 @@ DEVIATIONS: tuple[Deviation, ...] = (
         "§4.8.6.3",
         "P1093: a jog through a digital input while a program runs interrupts the program and "
         "resumes it afterwards (0) or aborts it (1)",
-        "P1093 is stored only; the program is neither interrupted nor aborted by a jog input",
+        "P1093 is stored only; the program keeps running (P0=1) and the jog takes over the motion "
+        "from the program's positioning",
         "not simulated yet (named here so a host test does not rely on it)",
     ),
     Deviation(
