@@ -68,6 +68,8 @@ def test_default_supply_is_nominal(sers: Plant) -> None:
     assert sers.read("P11") == 0 and sers.read("P12") == 0
 
 
+@pytest.mark.manual("§2.1.4", "below U_W the undervoltage pre-warning: display '9' blinking")
+@pytest.mark.manual("§4.8.3.1", "P12 values 2 and 4 reset themselves when the cause disappears")
 def test_undervoltage_prewarning_auto_clears(sers: Plant) -> None:
     host = sers.host
     sers.set("quantity.supply_voltage", U_W - 1)  # 45 V: below U_W, above U_B
@@ -107,6 +109,8 @@ def test_faults_send_no_unsolicited_text(sers: Plant) -> None:
     assert line_bytes_out(sers) == before
 
 
+@pytest.mark.manual("§2.1.4", "below U_B the drive is braked to standstill, then the relay opens and 50 ms later the phases go off; P11 512, display '9'")
+@pytest.mark.manual("§2.1.3", "on a drive error the drive is braked under control; after that the ready signal is reset and the relay opened; last the phase currents go off")
 def test_undervoltage_error_while_moving(sers: Plant) -> None:
     host = sers.host
     start_fast_jog(sers)
@@ -115,11 +119,12 @@ def test_undervoltage_error_while_moving(sers: Plant) -> None:
     sers.set("quantity.supply_voltage", 40.0)  # below U_B 43, above U_L 32
     assert sers.read("P11") == 512
     assert sers.read("display") == display("9")
-    assert sers.read("output.READY") is False
-    # decelerated with P1030, not switched off at once
+    # decelerated with P1030, not switched off at once; the relay opens only at standstill
+    assert sers.read("output.READY") is True
     assert sers.read("energized") is True
     assert sers.read("axis.velocity") == pytest.approx(FAST)
     assert sers.settle() == pytest.approx(FAST / P1030, abs=1e-3)
+    assert sers.read("output.READY") is False
     assert sers.read("axis.position") - x0 == pytest.approx(FAST**2 / (2 * P1030), abs=1.0)
     assert sers.runtime.now() - t0 == pytest.approx(FAST / P1030, abs=1e-3)
     # relay open at standstill, phases off 50 ms later (§2.1.4)
@@ -157,6 +162,7 @@ def test_undervoltage_error_while_standing(sers: Plant) -> None:
     assert sers.host.ask("#P11?\r") == b"#P11?\rP11=512\n\r\nok4\n\r"
 
 
+@pytest.mark.manual("§2.1.4", "below U_L the torque goes off at once without braking")
 def test_below_u_l_torque_off_immediately(sers: Plant) -> None:
     start_fast_jog(sers)
     sers.set("quantity.supply_voltage", 20.0)  # below U_L 32 (logic still supplied)
@@ -199,6 +205,7 @@ def test_supply_loss_ends_programming_mode(sers: Plant) -> None:
     assert host.ask("#P0?\r") == b"#P0?\rP0=0\n\r\nok1\n\r"
 
 
+@pytest.mark.manual("§2.1.5", "with option U the logic stays powered when the main supply goes off, and the interfaces keep communicating")
 def test_option_u_keeps_the_logic_alive_at_0_v(plant_factory) -> None:
     plant = plant_factory({"options": ["U"]})
     host = plant.host
@@ -219,6 +226,8 @@ def test_option_u_keeps_the_logic_alive_at_0_v(plant_factory) -> None:
 # ======================================================================================
 # temperature (§2.7, §4.6)
 # ======================================================================================
+@pytest.mark.manual("§4.8.3.1", "P12 2: heat-sink temperature above 75 °C")
+@pytest.mark.manual("§3.5", "display '8' blinking: temperature pre-warning")
 def test_overtemperature_warning_at_75(sers: Plant) -> None:
     sers.set("quantity.heatsink_temperature", 74.0)
     assert sers.read("P12") == 0
@@ -232,6 +241,8 @@ def test_overtemperature_warning_at_75(sers: Plant) -> None:
     assert sers.host.ask("#\r") == b"#\r\nok1\n\r"
 
 
+@pytest.mark.manual("§4.8.3.1", "P11 2: heat-sink temperature above 85 °C")
+@pytest.mark.manual("§3.5", "display '8': temperature error")
 def test_overtemperature_error_at_85(sers: Plant) -> None:
     host = sers.host
     assert host.ask("#ON\r") == b"#ON\r\nok1\n\r"
@@ -253,6 +264,7 @@ def test_overtemperature_error_at_85(sers: Plant) -> None:
     assert sers.read("energized") is False
 
 
+@pytest.mark.manual("§4.8.3.1", "P11 = 514: overtemperature (2) and undervoltage (512)")
 def test_error_combination_514(sers: Plant) -> None:
     sers.set("quantity.heatsink_temperature", 90.0)
     sers.set("quantity.supply_voltage", 40.0)
@@ -269,6 +281,8 @@ def test_error_combination_514(sers: Plant) -> None:
 # ======================================================================================
 # short circuit (§4.3, §4.6.1, G-P11CLEAR)
 # ======================================================================================
+@pytest.mark.manual("§2.1.3", "on a short circuit the phase currents go off at once and the ready relay opens at the same time")
+@pytest.mark.manual("§3.5", "display 'E': short circuit")
 def test_short_circuit(sers: Plant) -> None:
     host = sers.host
     start_fast_jog(sers)
@@ -293,6 +307,7 @@ def test_short_circuit(sers: Plant) -> None:
     assert host.ask("#P12=0 ON\r") == b"#P12=0 ON\r\nok1\n\r"
 
 
+@pytest.mark.manual("§4.8.3.1", "after P11=128 the STOP input must be opened and closed again before P11=0")
 def test_short_circuit_clear_refused_while_stop_still_open(sers: Plant) -> None:
     """The STOP input must be opened *and closed* before P11=0 (§4.6.1, G-P11CLEAR)."""
     host = sers.host
@@ -349,6 +364,7 @@ def test_error_stops_a_positioning(sers: Plant) -> None:
     ("quantity", "value"),
     [("supply_voltage", 40.0), ("heatsink_temperature", 90.0), ("short_circuit", True)],
 )
+@pytest.mark.manual("§4.8.3.1", "after an error the motor can be energised only when P11=0 has cleared it")
 def test_on_refused_while_p11_set(sers: Plant, quantity: str, value: object) -> None:
     sers.set(f"quantity.{quantity}", value)
     assert sers.read("P11") != 0

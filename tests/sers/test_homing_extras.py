@@ -9,6 +9,7 @@ import pytest
 DEG = 12800 / 360
 
 
+@pytest.mark.manual("§4.8.4.5", "P147 bit 2: after the switch, on to the next electrical reset position (every 7.2°)")
 def test_homing_to_the_next_electrical_zero(plant_factory) -> None:
     ref = 100.0  # increments: not on a 256-increment phase zero
     plant = plant_factory({"axis": {"reference_low": ref}, "params": {"P147": 4}})
@@ -19,6 +20,7 @@ def test_homing_to_the_next_electrical_zero(plant_factory) -> None:
     assert plant.read("param.P51") == 0
 
 
+@pytest.mark.manual("§4.8.4.5", "P147 bit 6: homing on the zero pulse instead of the reference switch")
 def test_homing_on_the_encoder_zero_pulse(plant_factory) -> None:
     plant = plant_factory({"axis": {"index_offset": 5000}, "params": {"P147": 64}})
     plant.host.ask("#ON H\r")
@@ -27,6 +29,7 @@ def test_homing_on_the_encoder_zero_pulse(plant_factory) -> None:
     assert plant.read("homed") is True
 
 
+@pytest.mark.manual("§4.8.4.5", "P147 bit 7: reference switch, then zero pulse, then the next electrical reset position")
 def test_homing_switch_then_zero_pulse_then_electrical_zero(plant_factory) -> None:
     plant = plant_factory({"axis": {"reference_low": 20000, "index_offset": 6000}, "params": {"P147": 128}})
     plant.host.ask("#ON H\r")
@@ -36,6 +39,7 @@ def test_homing_switch_then_zero_pulse_then_electrical_zero(plant_factory) -> No
     assert plant.read("axis.position") == pytest.approx(18688)
 
 
+@pytest.mark.manual("§4.8.4.5", "P147 bit 5: the drive measures both edges of the reference switch and goes to its centre")
 def test_homing_to_the_centre_of_the_switch(plant_factory) -> None:
     plant = plant_factory({"axis": {"reference_low": 3000, "reference_high": 5000}, "params": {"P147": 32}})
     plant.host.ask("#ON H\r")
@@ -53,6 +57,7 @@ def _move_time(distance_deg: float, rpm: float, accel: float = 100.0) -> float:
     return 2 * math.sqrt(d / accel)
 
 
+@pytest.mark.manual("§4.8.4.7", "backlash P1037 positioning in the backlash direction: W minus backlash at V, then the backlash at P1003 the same way")
 def test_backlash_in_the_approach_direction(plant_factory) -> None:
     # P147 bit 0 = 1: homing negative, so every target is approached in the positive direction:
     # W - b at V, then b at the backlash speed P1003 (diagram "1A/1B")
@@ -63,6 +68,7 @@ def test_backlash_in_the_approach_direction(plant_factory) -> None:
     assert took == pytest.approx(_move_time(88.2, 600) + _move_time(1.8, 10), abs=1e-6)
 
 
+@pytest.mark.manual("§4.8.4.7", "backlash positioning the other way: past the target by the backlash, then the backlash back at P1003")
 def test_backlash_against_the_approach_direction(plant_factory) -> None:
     plant = plant_factory({"params": {"P147": 1, "P1037": 1.8, "P1003": 10}})
     host = plant.host
@@ -80,6 +86,9 @@ def test_backlash_against_the_approach_direction(plant_factory) -> None:
     assert plant.read("param.P51") == pytest.approx(-90)
 
 
+@pytest.mark.manual("§4.8.6.8", "P1044/P1045: without an edge on the input P1045 at least every P1044 of travel the drive stops with P11 'Stillstandsüberwachung' and display 'A'")
+@pytest.mark.manual("§4.8.3.1", "P11 2048 standstill monitoring (P1044)")
+@pytest.mark.manual("§3.5", "display 'A': standstill monitoring error")
 def test_standstill_monitoring(plant_factory) -> None:
     plant = plant_factory({"params": {"P1044": 10, "P1045": 2}})
     host = plant.host
@@ -97,6 +106,9 @@ def test_standstill_monitoring(plant_factory) -> None:
     assert plant.read("param.P51") < 360
 
 
+@pytest.mark.manual("§4.8.6.6", "P1029=1: a load angle beyond P1002 is a drive error; P11=0 replaces P51 by the motor's real position (encoder)")
+@pytest.mark.manual("§4.8.3.1", "P11 32 step monitoring error (P1029)")
+@pytest.mark.manual("§3.5", "display 'F': load-angle monitoring error")
 def test_step_loss_drive_error_and_resync(plant_factory) -> None:
     plant = plant_factory({"options": ["E50"], "params": {"P1053": 8, "P1029": 1}})
     host = plant.host
@@ -118,6 +130,7 @@ def test_step_loss_drive_error_and_resync(plant_factory) -> None:
     assert plant.read("param.P51") == pytest.approx(round(stalled_at) / DEG, abs=1e-4)
 
 
+@pytest.mark.manual("§4.8.6.6", "P1029=2: a step loss is a warning; POSR travels at P41 to the original setpoint W")
 def test_step_loss_warning_then_posr_reaches_the_setpoint(plant_factory) -> None:
     plant = plant_factory({"options": ["E50"], "params": {"P1053": 8, "P1029": 2}})
     host = plant.host
@@ -134,11 +147,13 @@ def test_step_loss_warning_then_posr_reaches_the_setpoint(plant_factory) -> None
     assert plant.read("param.P51") == pytest.approx(360)
 
 
+@pytest.mark.manual("§4.8.4.2", "POSR only applies while P11=32 or P12=32 is set")
 def test_posr_without_step_loss_is_refused(sers) -> None:
     sers.host.send("#ON POSR\r")
     sers.host.expect("#ON POSR\n*ungültig\n\r\r".encode("latin-1"))
 
 
+@pytest.mark.manual("§4.8.4.2", "P1138 n: after a step-angle error the SERS tries POSR up to n times, after the waiting time P1139")
 def test_automatic_posr_retries(plant_factory) -> None:
     plant = plant_factory({"options": ["E50"], "params": {"P1053": 8, "P1029": 3, "P1138": 2, "P1139": 5}})
     plant.host.ask("#ON V=60 W=720 E\r")
@@ -154,6 +169,7 @@ def test_automatic_posr_retries(plant_factory) -> None:
     assert plant.read("P11") == 0
 
 
+@pytest.mark.manual("§4.8.6.6", "P1053=3/7 hand-wheel / electric shaft: the motor follows the encoder pulses (P1054 = 1 for an E50 encoder, 4-fold evaluation: 200 counts per revolution)")
 def test_handwheel_pulses_move_the_motor(plant_factory) -> None:
     # P1053=3: quadrature encoder on I3/I4, P1054=1 → 64 increments per count (E50)
     plant = plant_factory({"params": {"P1053": 3, "P1054": 1}})
@@ -167,12 +183,14 @@ def test_handwheel_pulses_move_the_motor(plant_factory) -> None:
     assert plant.read("param.P1119") == 150
 
 
+@pytest.mark.manual("§4.8.6.6", "P1053=9: pulses at I3 are measured as a frequency in P1124 per window P1055")
 def test_frequency_measurement(plant_factory) -> None:
     plant = plant_factory({"params": {"P1053": 9, "P1055": 50}})
     plant.set("quantity.pulse_frequency", 1000.0)
     assert plant.host.ask("#P1124?\r") == b"#P1124?\rP1124=100\n\r\nok1\n\r"  # 1 kHz × 100 ms
 
 
+@pytest.mark.manual("§4.8.6.1", "P1011 bit 0: at standstill the phase current falls to 50 % of P1010, 20 ms after the last motion")
 def test_phase_current_reduction_at_standstill(plant_factory) -> None:
     plant = plant_factory({"params": {"P1010": 6000, "P1011": 1}})
     plant.host.ask("#ON W=90 E\r")
@@ -182,6 +200,8 @@ def test_phase_current_reduction_at_standstill(plant_factory) -> None:
     assert plant.read("phase_current") == 3000
 
 
+@pytest.mark.manual("§4.8.6.7", "P1152=1 SERVO mode: no step loss; the motor may run at its torque limit and catches up")
+@pytest.mark.manual("§4.8.1.2", "P1160 5..8: the output is set temporarily while the SERVO overload lasts")
 def test_servo_mode_loses_no_steps_and_catches_up(plant_factory) -> None:
     plant = plant_factory({"options": ["E50", "SERVO"], "params": {"P1152": 1, "P1162": 1, "P1163": 600, "P1160": 5}})
     host = plant.host
@@ -201,6 +221,7 @@ def test_servo_mode_loses_no_steps_and_catches_up(plant_factory) -> None:
     assert plant.read("P11") == 0 and plant.read("P12") == 0
 
 
+@pytest.mark.manual("§4.8.3.1", "P12 2048: SERVO not active - the load angle is not yet calibrated, but a positioning or jog was made")
 def test_servo_positioning_before_calibration_warns(plant_factory) -> None:
     plant = plant_factory({"options": ["E50", "SERVO"], "params": {"P1152": 1}})
     plant.host.ask("#ON W=90 E\r")

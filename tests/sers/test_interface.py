@@ -2,20 +2,24 @@
 
 from __future__ import annotations
 
+import pytest
 import serial
 
 from tests.sers.conftest import Host, Plant
 
 
+@pytest.mark.manual("§4.1", "a CR and/or a LF are acknowledged with one 'ok' and a digit")
 def test_crlf_pair_gives_one_acknowledgement(sers: Plant) -> None:
     sers.host.send("#\r\n#P11?\r")
     sers.host.expect(b"#\r\nok1\n\r\n#P11?\rP11=0\n\r\nok1\n\r")
 
 
+@pytest.mark.manual("§4.1", "every line ends with CR (#13) or LF (#10)")
 def test_lf_alone_ends_a_line(sers: Plant) -> None:
     assert sers.host.ask("#ON\n") == b"#ON\n\nok1\n\r"
 
 
+@pytest.mark.manual("§4.2", "all keywords may be written upper or lower case")
 def test_keywords_are_case_insensitive(sers: Plant) -> None:
     assert sers.host.ask("#on v=1000\r") == b"#on v=1000\r\nok1\n\r"
     assert sers.host.ask("#v?\r") == b"#v?\rV=1000U/min\n\r\nok1\n\r"
@@ -26,6 +30,7 @@ def test_echo_mode_0_echoes_like_mode_1(plant_factory) -> None:
     assert plant.host.ask("#P11?\r") == b"#P11?\rP11=0\n\r\nok1\n\r"
 
 
+@pytest.mark.manual("§4.1", "in mode HANDSHAKE_RS485 error messages are always sent only after the line end")
 def test_rs485_mode_reports_errors_only_at_line_end(plant_factory) -> None:
     plant = plant_factory({"params": {"P1017": 2}})
     plant.host.send("#XY ON\r")
@@ -41,6 +46,7 @@ def test_switching_echo_mode_takes_effect_on_the_next_character(sers: Plant) -> 
     assert sers.host.ask("#\r") == b"#\r\nok1\n\r"
 
 
+@pytest.mark.manual("§4.8.2.5", "P1133 can also be read with the command VER")
 def test_query_forms_and_aliases(sers: Plant) -> None:
     host = sers.host
     assert host.ask("#P91?\r") == b"#P91?\rP91=100U/min\n\r\nok1\n\r"
@@ -59,6 +65,7 @@ def test_unknown_parameter_and_read_only(sers: Plant) -> None:
     assert sers.read("param.P1137") == 105
 
 
+@pytest.mark.manual("§4.1", "a wrong value is reported, depending on the value, already while it is being entered")
 def test_statement_errors_stop_the_rest_of_the_line(sers: Plant) -> None:
     sers.host.send("#V=20000 ON\r")
     # the value error is reported as soon as the value is complete; the rest is only echoed
@@ -66,6 +73,7 @@ def test_statement_errors_stop_the_rest_of_the_line(sers: Plant) -> None:
     assert sers.read("energized") is False
 
 
+@pytest.mark.manual("§4.1", "every line sent to a SERS must begin with '#'")
 def test_bytes_before_hash_are_ignored(sers: Plant) -> None:
     assert sers.host.ask("garbage\x00\x7f\r#P11?\r") == b"#P11?\rP11=0\n\r\nok1\n\r"
 
@@ -85,6 +93,8 @@ def test_nul_bytes_inside_a_line(sers: Plant) -> None:
     assert sers.read("energized") is False
 
 
+@pytest.mark.manual("§4.1", "at most 60 characters in a line")
+@pytest.mark.manual("§4.8.3.1", "P12 1024 RS232 buffer overflow (too many characters received in a short time); errno 124")
 def test_overlong_line_is_cut_at_60_characters(sers: Plant) -> None:
     line = "#" + "W=1 " * 20  # 81 characters
     reply = sers.host.ask(line + "\r")
@@ -129,6 +139,7 @@ def test_host_disconnects_mid_line(sers: Plant) -> None:
     assert sers.host.ask("#V?\r") == b"#V?\rV=12U/min\n\r\nok1\n\r"
 
 
+@pytest.mark.manual("§3.1.3", "the baud rate is set on DIP switch 1 bits 1-3 (1200..115200); a host at another rate is not understood")
 def test_baud_mismatch_garbles_and_is_reported(sers: Plant) -> None:
     port = sers.transport.address
     sers.host.close()

@@ -34,6 +34,9 @@ def sent_by_master(plant: Plant) -> list[bytes]:
     return list(plant.runtime.device("sers0").model.master.sent)
 
 
+@pytest.mark.manual("§4.6.12", "the master example: a master at address 0 commands slaves 1 and 2 (Z=1 ... Z=0, RUN 2 in slave 2)")
+@pytest.mark.manual("§4.5.2", "a master program sends the statements after Z=address to that slave; Z=0 addresses the master itself")
+@pytest.mark.manual("§3.6.2", "address 0 makes a SERS a master that commands other SERS units")
 def test_t17_master_drives_two_slaves(line: Plant) -> None:
     host = line.host
     assert host.ask("#200 RUN\r").endswith(b"ok1\n\r")
@@ -62,6 +65,7 @@ def test_t17_master_drives_two_slaves(line: Plant) -> None:
     assert line.read("param.P51", "sers0") == pytest.approx(1020, abs=0.02)
 
 
+@pytest.mark.manual("§3.6.2", "a master queries inputs and status of other SERS drives")
 def test_master_reads_a_slave_value_into_x(plant_factory) -> None:
     plant: Plant = plant_factory({"address": 0}, {"address": 1, "params": {"V": 750}})
     download(plant, 200, ["Z=1", "X=V", "Z=0", "R0=X"])

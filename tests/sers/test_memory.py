@@ -67,6 +67,7 @@ def cost(statement: str) -> int:
 # ======================================================================================
 # parameters
 # ======================================================================================
+@pytest.mark.manual("§4.8.6.10", "P1004=2 / PSAVE stores the parameters from RAM in the EEPROM")
 @pytest.mark.parametrize("save", ["PSAVE", "P1004=2"])
 def test_psave_keeps_parameters_across_power_cycle(plant_factory, tmp_path, save: str) -> None:
     plant = plant_factory({}, state_dir=tmp_path)
@@ -79,6 +80,7 @@ def test_psave_keeps_parameters_across_power_cycle(plant_factory, tmp_path, save
     assert query(host, "P1028") == "9"
 
 
+@pytest.mark.manual("§4.8.6.10", "changed parameters are only in RAM until PSAVE: switching off without PSAVE loses them")
 def test_change_without_psave_reverts_after_power_cycle(plant_factory, tmp_path) -> None:
     plant = plant_factory({}, state_dir=tmp_path)
     host = plant.host
@@ -91,6 +93,7 @@ def test_change_without_psave_reverts_after_power_cycle(plant_factory, tmp_path)
     assert query(host, "V") == "100U/min"  # never saved: factory default
 
 
+@pytest.mark.manual("§4.8.6.10", "P1004=3 replaces all stored parameters by the factory defaults")
 def test_p1004_3_restores_factory_defaults(plant_factory, tmp_path) -> None:
     plant = plant_factory({}, state_dir=tmp_path)
     host = plant.host
@@ -106,6 +109,7 @@ def test_p1004_3_restores_factory_defaults(plant_factory, tmp_path) -> None:
     assert query(host, "V") == "100U/min"
 
 
+@pytest.mark.manual("§4.8.6.10", "P1004=4 / POSSAVE stores the actual position P51 in the EEPROM")
 def test_possave_restores_p51(plant_factory, tmp_path) -> None:
     plant = plant_factory({}, state_dir=tmp_path)
     host = plant.host
@@ -132,6 +136,9 @@ def test_without_possave_p51_is_zero_after_power_cycle(plant_factory, tmp_path) 
     assert query(host, "P51") == "0°"
 
 
+@pytest.mark.manual("§4.8.6.4", "P1035 is not stored in the EEPROM: after every power-on P1035=1")
+@pytest.mark.manual("§4.8.5.5", "P1110 is 1 after switching on and not stored")
+@pytest.mark.manual("§4.8.3.2", "P403 = 3 after a power-on reset")
 def test_non_stored_parameters_take_power_on_values(plant_factory, tmp_path) -> None:
     plant = plant_factory({"axis": {"reference_low": 20 * DEG}}, state_dir=tmp_path)
     host = plant.host
@@ -151,6 +158,8 @@ def test_non_stored_parameters_take_power_on_values(plant_factory, tmp_path) -> 
     assert query(host, "P403") == "3"  # no valid reference after power-on
 
 
+@pytest.mark.manual("§4.8.6.10", "P1117=1: PSAVE also stores R0..R5 and W")
+@pytest.mark.manual("§4.6.6", "W is 0 after power-on unless P1117=1 and W was stored with PSAVE")
 def test_p1117_makes_psave_keep_w_and_registers(plant_factory, tmp_path) -> None:
     plant = plant_factory({}, state_dir=tmp_path)
     host = plant.host
@@ -256,6 +265,7 @@ def test_t21_listing_one_statement_per_row(sers: Plant) -> None:
     assert listing(host) == [(1, "ON V=1000 W=5000 E"), (5, "O1=1 D=10 W=2000 E")]
 
 
+@pytest.mark.manual("§4.8.2.1", "P0=2 (NEW) starts programming mode and deletes the old EEPROM program")
 def test_new_deletes_the_old_program(plant_factory, tmp_path) -> None:
     plant = plant_factory({}, state_dir=tmp_path)
     host = plant.host

@@ -11,6 +11,7 @@ from tests.sers.conftest import Plant
 DEG = 12800 / 360  # increments per degree at the default weighting
 
 
+@pytest.mark.manual("§4.6.6", "a W written in the constant phase is added to the old W in relative mode; the drive travels the new total")
 def test_w_update_during_constant_phase_adds_to_relative_move(sers: Plant) -> None:
     host = sers.host
     host.ask("#ON V=100 A=1000 WR=3600 E\r")
@@ -21,6 +22,7 @@ def test_w_update_during_constant_phase_adds_to_relative_move(sers: Plant) -> No
     assert sers.read("param.P51") == pytest.approx(3960)
 
 
+@pytest.mark.manual("§4.6.6", "W may be overwritten only while standing (POS=1) or in the constant phase")
 def test_w_update_during_acceleration_is_refused(sers: Plant) -> None:
     host = sers.host
     host.ask("#ON V=1000 A=10 WR=36000 E\r")
@@ -29,6 +31,7 @@ def test_w_update_during_acceleration_is_refused(sers: Plant) -> None:
     assert reply == b"#W=100\r\n*Antrieb muss konstant fahren oder stehen\n\r"
 
 
+@pytest.mark.manual("§4.8.4.1", "P1014=2 absolute: E moves to position W")
 def test_absolute_mode(sers: Plant) -> None:
     host = sers.host
     host.ask("#ON WA=90 E\r")
@@ -40,6 +43,7 @@ def test_absolute_mode(sers: Plant) -> None:
     assert sers.read("param.P51") == 90
 
 
+@pytest.mark.manual("§4.8.4.1", "P1014=1 relative with clearing: P51 is set to 0 before the start")
 def test_relative_clear_mode(plant_factory) -> None:
     plant = plant_factory({"params": {"P1014": 1}})
     host = plant.host
@@ -51,6 +55,7 @@ def test_relative_clear_mode(plant_factory) -> None:
     assert plant.read("axis.position") == pytest.approx(720 * DEG)
 
 
+@pytest.mark.manual("§4.8.4.1", "P1014=3 relative with overflow counter C1 (P100) counting P103 overflows")
 def test_overflow_counter_mode(plant_factory) -> None:
     plant = plant_factory({"params": {"P1014": 3, "P103": 360}})
     plant.host.ask("#ON W=270 E\r")
@@ -88,6 +93,7 @@ def test_off_while_moving_stops_at_once(sers: Plant) -> None:
     assert sers.read("output.READY") is False
 
 
+@pytest.mark.manual("§4.8.3.1", "a drive error brakes the drive with P1030, then switches the motor current off and then opens the ready relay")
 def test_limit_switch_hit_mid_move(plant_factory) -> None:
     plant = plant_factory({"axis": {"limit_right": 1000 * DEG}, "params": {"P1030": 1000}})
     host = plant.host
@@ -111,6 +117,7 @@ def test_limit_switch_hit_mid_move(plant_factory) -> None:
     host.expect(b"#ON\n*Antrieb ist nicht freigegeben\n\r\r")
 
 
+@pytest.mark.manual("§2.1.2", "without the STOP input (24 V) the drive cannot move")
 def test_stop_input(sers: Plant) -> None:
     host = sers.host
     host.ask("#ON W=36000 E\r")
@@ -125,6 +132,7 @@ def test_stop_input(sers: Plant) -> None:
     assert host.ask("#P12=0 E\r") == b"#P12=0 E\r\nok0\n\r"
 
 
+@pytest.mark.manual("§4.8.6.12", "below P1040 / above P1041 the drive stops, P12 'Grenzwert' is set, P1042=1 and the display blinks 'L'")
 def test_software_limits(sers: Plant) -> None:
     host = sers.host
     host.ask("#P1040=-100 P1041=100\r")
@@ -140,6 +148,7 @@ def test_software_limits(sers: Plant) -> None:
     )
 
 
+@pytest.mark.manual("§4.8.1.2", "when P51 reaches compare position P1024 the action P1025 sets an output")
 def test_compare_position_sets_output(sers: Plant) -> None:
     sers.host.ask("#P1024=90 P1025=2\r")
     sers.host.ask("#ON W=180 E\r")
@@ -158,6 +167,7 @@ def test_in_position_output(plant_factory) -> None:
     assert plant.read("output.O1") is True
 
 
+@pytest.mark.manual("§4.5.1", "jogging is started by signals at the inputs I1 to I4")
 def test_jog_via_inputs(plant_factory) -> None:
     plant = plant_factory({"params": {"P1021": 1 | 32}})
     plant.set("input.I1", True)  # I1 = left slow; auto-energises
@@ -171,6 +181,7 @@ def test_jog_via_inputs(plant_factory) -> None:
     assert plant.read("energized") is False
 
 
+@pytest.mark.manual("§4.8.6.3", "writing P1031 runs a jog function: 1 LS, 2 RS, 4 LF, 8 RF, 16 homing")
 def test_p1031_jog_command(sers: Plant) -> None:
     sers.host.ask("#ON P1035=0 P1031=8\r")
     sers.advance(5.0)
@@ -252,6 +263,7 @@ def test_an_overrun_from_an_event_true_at_the_start(sers: Plant) -> None:
     assert sers.read("axis.position") == pytest.approx(10 * 12800 / 360)
 
 
+@pytest.mark.manual("§4.8.4.5", "P147 bit 0 = 1 homing negative; bit 1 = 1 the limit switch is the reference switch")
 def test_homing_negative_with_limit_switch_as_reference(plant_factory) -> None:
     plant = plant_factory({"axis": {"limit_left": -50 * DEG}, "params": {"P147": 3}})
     plant.host.ask("#ON H\r")
@@ -271,6 +283,7 @@ def _trapezoid_time(d: float, v: float, a: float) -> float:
     return d / v + v / a if d >= v * v / a else 2 * math.sqrt(d / a)
 
 
+@pytest.mark.manual("§4.6.6", "the ramp shape: P1032 and sections P1005..P1008")
 def test_ramp_sections_p1005_to_p1008(plant_factory) -> None:
     """P1032=0 with sections: 0→50 % V at 50 % A, then 50 %→100 % V at A (spec §5.2)."""
     plant = plant_factory({"params": {"P1005": 50, "P1007": 50, "P1006": 100, "P1008": 50}})

@@ -26,6 +26,7 @@ def download(plant: Plant, lines: list[str]) -> None:
     assert plant.host.ask("#QUIT\r").endswith(b"ok1\n\r")
 
 
+@pytest.mark.manual("§4.6.7", "the 6-segment example: O1 is set at the end of the first segment, O2 at the end of the fourth")
 def test_t14_six_segments_outputs_at_segment_ends(sers: Plant) -> None:
     download(sers, T14)
     dev = sers.runtime.device("sers")
@@ -46,6 +47,7 @@ def test_t14_six_segments_outputs_at_segment_ends(sers: Plant) -> None:
     assert min(abs(v) for v in velocities) > 0
 
 
+@pytest.mark.manual("§4.6.7", "P1123=1 when the next segment may be sent; without it before the current segment ends an error message follows and the drive stops")
 def test_serial_polynomial_mode_p1123_and_missing_segment(sers: Plant) -> None:
     host = sers.host
     host.ask("#ON\r")
@@ -62,12 +64,14 @@ def test_serial_polynomial_mode_p1123_and_missing_segment(sers: Plant) -> None:
     assert sers.read("param.P51") > 720
 
 
+@pytest.mark.manual("§4.8.3.1", "errno 107 'Polynom mit Getriebespiel nicht erlaubt'")
 def test_polynomial_not_with_backlash(plant_factory) -> None:
     plant = plant_factory({"params": {"P1037": 0.5}})
     reply = plant.host.ask("#ON WP=90 E\r")
     assert reply.endswith("\n*Polynom mit Getriebespiel nicht erlaubt\n\r".encode("latin-1"))
 
 
+@pytest.mark.manual("§4.8.3.1", "errno 118 'Polynom Ende zu kurz zum Anhalten'")
 def test_last_segment_too_short_to_brake(sers: Plant) -> None:
     sers.host.ask("#ON\r")
     sers.host.ask("#WP=3600 V=1000 A=1000 E\r")

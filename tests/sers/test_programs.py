@@ -129,6 +129,8 @@ def power_cycle(plant: Plant) -> None:
 # ======================================================================================
 # T-10 counters (§4.6.1 example 3, §4.8.5.2, G-COUNTER)
 # ======================================================================================
+@pytest.mark.manual("§4.6.1", "IF C1>1: every IF on a counter counts it down by 1 (example 3 runs the block C1 times)")
+@pytest.mark.manual("§4.8.5.2", "counters C1..C3 (P100..P102) for program loops")
 @pytest.mark.parametrize("count", [10, 20])
 def test_t10_counter_loop_runs_c1_times(sers: Plant, count: int) -> None:
     host = sers.host
@@ -141,6 +143,7 @@ def test_t10_counter_loop_runs_c1_times(sers: Plant, count: int) -> None:
     assert query(host, "P0") == "0"
 
 
+@pytest.mark.manual("§4.6.8", "WAIT I1=1: the program waits until input I1 becomes 1")
 def test_t10_counter_loop_waits_for_its_input_each_time(sers: Plant) -> None:
     host = sers.host
     download(host, "ON C1=3", "L1", "WAIT I1=1", "WR=180 E", "WAIT I1=0", "IF C1>1 GT1", "PE")
@@ -159,6 +162,7 @@ def test_t10_counter_loop_waits_for_its_input_each_time(sers: Plant) -> None:
 # ======================================================================================
 # T-11 IF variants (§4.6.1)
 # ======================================================================================
+@pytest.mark.manual("§4.6.1", "IF without THEN: if the expression holds the next command runs, else it is skipped; the commands after it run either way (example 1)")
 @pytest.mark.parametrize("warning", [False, True])
 def test_t11_single_statement_if(sers: Plant, warning: bool) -> None:
     host = sers.host
@@ -173,6 +177,7 @@ def test_t11_single_statement_if(sers: Plant, warning: bool) -> None:
     assert out(sers, 4) is True
 
 
+@pytest.mark.manual("§4.6.1", "whether the statement after the IF is on the same line or the next one makes no difference")
 def test_t11_if_skips_the_next_statement_on_the_next_line(sers: Plant) -> None:
     host = sers.host
     download(host, "IF P12<>0", "O1=1", "O2=1", "PE")
@@ -181,6 +186,7 @@ def test_t11_if_skips_the_next_statement_on_the_next_line(sers: Plant) -> None:
     assert (out(sers, 1), out(sers, 2)) == (False, True)
 
 
+@pytest.mark.manual("§4.6.1", "IF ... THEN ... ELSE ... END: the THEN block if the expression holds, else the ELSE block (example 2)")
 @pytest.mark.parametrize("warning", [False, True])
 def test_t11_if_then_else_end(sers: Plant, warning: bool) -> None:
     host = sers.host
@@ -194,6 +200,7 @@ def test_t11_if_then_else_end(sers: Plant, warning: bool) -> None:
     assert out(sers, 4) is False
 
 
+@pytest.mark.manual("§4.6.1", "the former syntax IF !expression is still accepted: '!' inverts the expression")
 @pytest.mark.parametrize("i5", [False, True])
 def test_t11_legacy_negated_if(sers: Plant, i5: bool) -> None:
     host = sers.host
@@ -205,6 +212,7 @@ def test_t11_legacy_negated_if(sers: Plant, i5: bool) -> None:
     assert out(sers, 2) is True
 
 
+@pytest.mark.manual("§4.6.1", "a program read back from the SERS always shows the new syntax, also when the old one was written")
 def test_t11_legacy_if_is_listed_in_the_new_syntax(sers: Plant) -> None:
     """§4.6.1: "Beim Auslesen … wird grundsätzlich die neue Syntax angezeigt"; T-11.3."""
     host = sers.host
@@ -212,6 +220,7 @@ def test_t11_legacy_if_is_listed_in_the_new_syntax(sers: Plant) -> None:
     assert listing(host) == ["IF I5=0", "O1=1"]
 
 
+@pytest.mark.manual("§4.6.1", "example 4: IF ADC>R0 THEN X=ADC*1000 V=X WR=3600 E END")
 def test_t11_if_then_with_adc(sers: Plant) -> None:
     host = sers.host
     download(host, "ON R0=0.2", "IF ADC>R0 THEN", "X=ADC*1000 V=X WR=3600 E", "END", "PE")
@@ -232,6 +241,7 @@ def test_t11_if_then_with_adc(sers: Plant) -> None:
 # ======================================================================================
 # T-12 arithmetic in a program (§4.6.10)
 # ======================================================================================
+@pytest.mark.manual("§4.6.10", "operations run left to right (no precedence) on the accumulator X; registers R0..R5")
 def test_t12_arithmetic_in_a_program(sers: Plant) -> None:
     host = sers.host
     download(
@@ -249,6 +259,7 @@ def test_t12_arithmetic_in_a_program(sers: Plant) -> None:
     assert query(host, "W") == "-360°"
 
 
+@pytest.mark.manual("§4.8.3.1", "P12 256: an arithmetic error in the program (errno 102 'Division durch 0'); P12 128 program error")
 def test_t12_division_by_zero_is_a_program_error(sers: Plant) -> None:
     host = sers.host
     download(host, "X=5", "/0", "O1=1", "PE")
@@ -262,6 +273,7 @@ def test_t12_division_by_zero_is_a_program_error(sers: Plant) -> None:
 # ======================================================================================
 # T-13 delays (§4.8.5.1, G-D2)
 # ======================================================================================
+@pytest.mark.manual("§4.8.5.1", "D: a waiting time in tenths of a second")
 @pytest.mark.parametrize(("p1141", "seconds"), [(0, 1.2), (1, 1.0)])
 def test_t13_d_delay_with_p1141_factor(sers: Plant, p1141: int, seconds: float) -> None:
     host = sers.host
@@ -327,6 +339,8 @@ T15 = (
 )
 
 
+@pytest.mark.manual("§4.6.12", "the stand-alone example program (endless loop with WAIT, C1 loop, GOSUB10) in mode RELATIV LÖSCHEN")
+@pytest.mark.manual("§3.6.4", "stand-alone operation: the SERS runs its EEPROM program as an independent sequence control")
 def test_t15_stand_alone_example(plant_factory) -> None:
     plant = plant_factory({"params": {"P1014": 1}})
     host = plant.host
@@ -357,6 +371,9 @@ def test_t15_stand_alone_example(plant_factory) -> None:
 # ======================================================================================
 # T-16 parallel (BCD) mode (§4.5.2, §4.6.12, G-PARALLEL)
 # ======================================================================================
+@pytest.mark.manual("§4.6.12", "the parallel-mode example: L1 ON RT, L2 V=1000 W=2500 E RT, L3 ..., L4 ... RETURN for the addresses 0..3")
+@pytest.mark.manual("§4.5.2", "parallel mode: an edge on the start input I8 calls the label of the BCD address on the inputs (address 0 -> L1) and runs to the next RT")
+@pytest.mark.manual("§3.6.3", "parallel (BCD) mode: subroutines in the EEPROM are called through the digital inputs")
 def test_t16_parallel_bcd_example(plant_factory) -> None:
     plant = plant_factory({"params": {"P1022": 3, "P1021": 128}})
     host = plant.host
@@ -407,6 +424,7 @@ def log(plant: Plant) -> str:
     return str(int(plant.read("param.R0")))
 
 
+@pytest.mark.manual("§4.5.2", "event-driven mode: a rising edge on an input enabled in P1098 starts its subroutine Ln when no program runs (P0=0)")
 def test_t18_edges_start_their_subroutines(events: Plant) -> None:
     events.set("input.I1", True)
     events.advance(0.01)
@@ -422,6 +440,7 @@ def test_t18_edges_start_their_subroutines(events: Plant) -> None:
     assert log(events) == "13"
 
 
+@pytest.mark.manual("§4.5.2", "several inputs active at once: I1 has the highest priority, then I2 ...; all active inputs' programs run one after the other")
 def test_t18_simultaneous_edges_run_l1_then_l3(events: Plant) -> None:
     events.set("input.I1", True)
     events.set("input.I3", True)
@@ -437,6 +456,7 @@ def test_t18_simultaneous_edges_priority_does_not_depend_on_set_order(events: Pl
     assert log(events) == "13"
 
 
+@pytest.mark.manual("§4.5.2", "an input that becomes inactive while a program runs starts nothing: edges are not stored")
 def test_t18_edge_that_ends_during_a_program_is_not_stored(events: Plant) -> None:
     events.set("input.I1", True)
     events.advance(0.05)
@@ -452,6 +472,8 @@ def test_t18_edge_that_ends_during_a_program_is_not_stored(events: Plant) -> Non
 # ======================================================================================
 # T-20 programming mode + RUN (§4.5.3)
 # ======================================================================================
+@pytest.mark.manual("§4.5.3", "NEW starts programming mode deleting the program, PGM edits it; each line is acknowledged 'pgm'")
+@pytest.mark.manual("§4.8.2.1", "P0=1 / RUN starts the EEPROM program; P0 reads 1 while it runs")
 def test_t20_programming_mode_and_run(sers: Plant) -> None:
     host = sers.host
     assert host.ask("#NEW\r") == b"#NEW\r\npgm\n\r"
@@ -475,6 +497,7 @@ def test_t20_programming_mode_and_run(sers: Plant) -> None:
 NESTED = ("GS1", "O1=1", "PE", "L1 GS2 RT", "L2 GS3 RT", "L3 GS4 RT", "L4 O2=1 GS5 RT", "L5 O3=1 RT")
 
 
+@pytest.mark.manual("§4.4", "subroutine nesting depth at most 4")
 def test_gosub_nesting_of_four_is_allowed(sers: Plant) -> None:
     host = sers.host
     download(host, *NESTED[:6], "L4 O2=1 RT")
@@ -484,6 +507,7 @@ def test_gosub_nesting_of_four_is_allowed(sers: Plant) -> None:
     assert sers.read("P12") == 0
 
 
+@pytest.mark.manual("§4.4", "subroutine nesting deeper than 4 is refused (errno 73 'Stack Überlauf')")
 def test_gosub_nesting_over_four_is_a_stack_overflow(sers: Plant) -> None:
     host = sers.host
     download(host, *NESTED)
@@ -498,6 +522,7 @@ def test_gosub_nesting_over_four_is_a_stack_overflow(sers: Plant) -> None:
     assert host.ask("#\r") == b"#\r\nok3\n\r"
 
 
+@pytest.mark.manual("§4.8.3.1", "P12 16 'Sprungziel existiert nicht' at GOTO/GOSUB to a label that does not exist in the program (errno 71)")
 def test_goto_to_a_missing_label_is_errno_71(sers: Plant) -> None:
     host = sers.host
     download(host, "O1=1", "GT 99", "O2=1")
@@ -528,6 +553,7 @@ def test_run_n_subroutine_ends_normally_at_return(sers: Plant) -> None:
     assert sers.read("P12") == 0
 
 
+@pytest.mark.manual("§4.2", "PE: end of program")
 def test_pe_ends_the_program(sers: Plant) -> None:
     host = sers.host
     download(host, "O1=1", "PE", "O2=1")
@@ -549,6 +575,7 @@ def test_end_of_program_ends_it(sers: Plant) -> None:
     assert sers.read("P12") == 0
 
 
+@pytest.mark.manual("§4.8.3.2", "P1129=1: at the end of a program '@nP0=0' is sent")
 def test_p1129_reports_the_end_of_the_program(plant_factory) -> None:
     plant = plant_factory({"address": 2, "params": {"P1129": 1}})
     host = plant.host
@@ -594,6 +621,7 @@ def stopped(plant: Plant, after: float = 1.0) -> float:
     return degrees(plant)
 
 
+@pytest.mark.manual("§4.8.6.2", "P1033=0: after a stop the program starts again from the beginning")
 def test_p1033_0_restarts_at_line_1(sers: Plant) -> None:
     host = sers.host
     download(host, *STOP_PROGRAM[:4])
@@ -608,6 +636,7 @@ def test_p1033_0_restarts_at_line_1(sers: Plant) -> None:
     assert out(sers, 1) is True
 
 
+@pytest.mark.manual("§4.8.6.2", "P1033=1: after a stop the program continues where it was stopped")
 def test_p1033_1_continues_the_interrupted_move(sers: Plant) -> None:
     host = sers.host
     host.ask("#P1033=1\r")
@@ -670,6 +699,7 @@ def test_p1033_1_continues_an_interrupted_jog_until_condition(sers: Plant) -> No
     assert out(sers, 1) is True
 
 
+@pytest.mark.manual("§4.6.2", "P1033=2: label L65 is jumped to when a program ends unexpectedly, e.g. by an external stop")
 def test_p1033_2_stop_jumps_to_l65(sers: Plant) -> None:
     host = sers.host
     host.ask("#P1033=2\r")
@@ -683,6 +713,7 @@ def test_p1033_2_stop_jumps_to_l65(sers: Plant) -> None:
     assert query(host, "P1118") == "1"
 
 
+@pytest.mark.manual("§4.6.2", "without label L65 the program ends")
 def test_p1033_2_without_l65_stops(sers: Plant) -> None:
     host = sers.host
     host.ask("#P1033=2\r")
@@ -715,6 +746,7 @@ def test_p1033_3_l65_only_once_until_p1118_is_cleared(sers: Plant) -> None:
     assert log(sers) == "2"
 
 
+@pytest.mark.manual("§4.6.2", "P1033=2: L65 is also jumped to on a drive error")
 def test_drive_error_with_p1033_2_runs_l65(sers: Plant) -> None:
     host = sers.host
     host.ask("#P1033=2\r")
@@ -743,6 +775,7 @@ def test_drive_error_with_p1033_0_stops_the_program(sers: Plant) -> None:
 # ======================================================================================
 # starting: autostart, start input, refusals (§4.1, §4.4.1)
 # ======================================================================================
+@pytest.mark.manual("§3.1.2", "DIP switch 2 bit 8 ON: a valid EEPROM program starts automatically after a power-on reset")
 def test_autostart_after_power_cycle(plant_factory, tmp_path) -> None:
     plant = plant_factory({"autostart": True}, state_dir=tmp_path)
     host = plant.host
@@ -765,6 +798,7 @@ def test_autostart_with_a_program_from_the_config_state(plant_factory, tmp_path)
     assert listing(plant.host) == ["O3=1", "PE"]
 
 
+@pytest.mark.manual("§3.1.4", "service switch ON: no autostart and no program start over the interface")
 def test_no_autostart_with_the_service_switch(plant_factory, tmp_path) -> None:
     plant = plant_factory({"autostart": True, "service_switch": True}, state_dir=tmp_path)
     download(plant.host, "O2=1", "PE")
@@ -776,6 +810,7 @@ def test_no_autostart_with_the_service_switch(plant_factory, tmp_path) -> None:
 COUNT_PROGRAM = ("X=R0+1 R0=X", "D=1", "PE")
 
 
+@pytest.mark.manual("§4.8.1.1", "P1023=0: the program starts on an edge at the start input I8")
 def test_start_input_edge(plant_factory) -> None:
     plant = plant_factory({"params": {"P1021": 128, "P1023": 0}})
     download(plant.host, *COUNT_PROGRAM)
@@ -789,6 +824,7 @@ def test_start_input_edge(plant_factory) -> None:
     assert log(plant) == "2"
 
 
+@pytest.mark.manual("§4.8.1.1", "P1023=1: the program starts while the start input I8 is set (static)")
 def test_start_input_level(plant_factory) -> None:
     plant = plant_factory({"params": {"P1021": 128, "P1023": 1}})
     download(plant.host, *COUNT_PROGRAM)
@@ -801,6 +837,7 @@ def test_start_input_level(plant_factory) -> None:
     assert int(log(plant)) == runs + 1 or int(log(plant)) == runs
 
 
+@pytest.mark.manual("§3.3.1", "'Start Programm' on I8 can only be enabled through P1021 (value 128)")
 def test_start_input_needs_p1021_128(sers: Plant) -> None:
     download(sers.host, *COUNT_PROGRAM)
     sers.set("input.I8", True)
@@ -808,6 +845,7 @@ def test_start_input_needs_p1021_128(sers: Plant) -> None:
     assert log(sers) == "0"
 
 
+@pytest.mark.manual("§4.8.3.1", "errno 65 'Programmstart nicht möglich wenn Serviceschalter an ist'")
 def test_run_refused_with_the_service_switch(plant_factory) -> None:
     plant = plant_factory({"service_switch": True})
     download(plant.host, "O1=1", "PE")
@@ -817,6 +855,7 @@ def test_run_refused_with_the_service_switch(plant_factory) -> None:
     assert out(plant, 1) is False
 
 
+@pytest.mark.manual("§4.8.3.1", "errno 66 'Programmstart nicht möglich, Zustandsklasse-1 Fehler'")
 def test_run_refused_with_a_drive_error(sers: Plant) -> None:
     download(sers.host, "O1=1", "PE")
     sers.set("input.limit_right", True)
@@ -836,6 +875,7 @@ def test_run_n_and_p0_1(sers: Plant) -> None:
     assert (out(sers, 1), out(sers, 2)) == (True, False)
 
 
+@pytest.mark.manual("§4.8.3.1", "errno 69 'kein gültiges Programm vorhanden'")
 def test_run_refused_without_a_program(sers: Plant) -> None:
     refused(sers.host, "#RUN\r", 69)
     sers.host.ask("#NEW\r")
@@ -843,6 +883,7 @@ def test_run_refused_without_a_program(sers: Plant) -> None:
     refused(sers.host, "#RUN\r", 69)
 
 
+@pytest.mark.manual("§4.5.3", "for programming mode the SERS must be stopped (errno 44 'Programm läuft noch')")
 @pytest.mark.parametrize("line", ["#NEW\r", "#PGM\r", "#RUN\r", "#P0=2\r"])
 def test_refused_while_a_program_runs(sers: Plant, line: str) -> None:
     host = sers.host
@@ -874,6 +915,7 @@ def test_endless_program_does_not_starve_the_serial_interface(sers: Plant) -> No
     assert query(host, "P0") == "0"
 
 
+@pytest.mark.manual("§4.8.6.10", "P1127=1: programs run 500 statements per second (2 ms cycle); P1127=0: 500 µs")
 @pytest.mark.parametrize(("p1127", "cycle"), [(0, 0.0005), (1, 0.002)])
 def test_p1127_sets_the_statement_time(sers: Plant, p1127: int, cycle: float) -> None:
     host = sers.host
@@ -890,6 +932,7 @@ def test_p1127_sets_the_statement_time(sers: Plant, p1127: int, cycle: float) ->
 # ======================================================================================
 # jog statements in a program (§4.6.9, G-JOGPROG)
 # ======================================================================================
+@pytest.mark.manual("§4.6.9", "RS:I1=1 jogs right slow (P1019) until I1 is set, then brakes at once with P1018 to standstill")
 def test_jog_until_condition_blocks_until_standstill(sers: Plant) -> None:
     host = sers.host
     download(host, "ON", "RS:I1=1", "O1=1", "PE")
@@ -907,6 +950,7 @@ def test_jog_until_condition_blocks_until_standstill(sers: Plant) -> None:
     assert not sers.read("axis.moving")
 
 
+@pytest.mark.manual("§4.6.9", "with P1039 != 0 the drive travels the overrun distance P1039 (braking included) after the event")
 def test_jog_until_condition_with_overrun_distance(sers: Plant) -> None:
     host = sers.host
     host.ask("#P1039=90\r")
@@ -938,6 +982,7 @@ def test_plain_jog_in_a_program_continues_at_once(sers: Plant) -> None:
 # ======================================================================================
 # trace mode (§4.5.4, G-TRACE)
 # ======================================================================================
+@pytest.mark.manual("§4.5.4", "trace mode: TRON, then each TR executes one program step")
 def test_trace_mode_single_steps(sers: Plant) -> None:
     host = sers.host
     download(host, "O1=1", "O2=1", "O3=1", "PE")
@@ -989,6 +1034,7 @@ def test_list_arguments_beyond_the_grammar_end_the_statement(sers: Plant) -> Non
 # ======================================================================================
 # editing in programming mode (§4.2, §4.5.3, §4.9)
 # ======================================================================================
+@pytest.mark.manual("§4.2", "PGM: programming mode editing the program; lines are inserted at the current program position")
 def test_pgm_inserts_after_the_listed_line(sers: Plant) -> None:
     host = sers.host
     download(host, "O1=1", "O2=1", "O3=1")
@@ -999,6 +1045,7 @@ def test_pgm_inserts_after_the_listed_line(sers: Plant) -> None:
     assert listing(host) == ["O1=1", "O4=1", "O2=1", "O3=1"]
 
 
+@pytest.mark.manual("§4.2", "LIST0 allows inserting a line at the start of the program in programming mode")
 def test_list0_inserts_at_the_start(sers: Plant) -> None:
     host = sers.host
     download(host, "O1=1", "O2=1")
@@ -1018,6 +1065,7 @@ def test_pgm_without_list_appends_after_download(sers: Plant) -> None:
     assert listing(host) == ["O1=1", "O2=1", "O3=1"]
 
 
+@pytest.mark.manual("§4.2", "DEL deletes the current line in programming mode")
 def test_del_deletes_the_current_line(sers: Plant) -> None:
     host = sers.host
     download(host, "O1=1", "O2=1", "O3=1")
@@ -1029,6 +1077,7 @@ def test_del_deletes_the_current_line(sers: Plant) -> None:
     refused(host, "#DEL\r", 22)  # outside programming mode
 
 
+@pytest.mark.manual("§4.2", "C n changes the value of the assignment at the current program position")
 def test_c_changes_a_constant(sers: Plant) -> None:
     host = sers.host
     download(host, "ON", "V=100", "W=360 E")
@@ -1056,6 +1105,7 @@ def test_c_on_a_non_constant_is_errno_49(sers: Plant, line: int) -> None:
     assert listing(host) == ["ON", "X=5", "V=X"]
 
 
+@pytest.mark.manual("§4.6.2", "each label number may be defined only once in the program (errno 83 'label bereits definiert: L')")
 def test_duplicate_label_is_errno_83(sers: Plant) -> None:
     host = sers.host
     host.ask("#NEW\r")
@@ -1080,6 +1130,7 @@ def test_malformed_line_is_refused_and_the_program_unchanged(sers: Plant) -> Non
     assert listing(host) == ["O1=1", "O2=1"]
 
 
+@pytest.mark.manual("§4.4", "program memory 2 KByte in the standard version (errno 5 'EEPROM Speicher voll' when full)")
 def test_eeprom_full_is_errno_5(sers: Plant) -> None:
     host = sers.host
     assert query(host, "P1122") == "1024"  # 2 KB standard
@@ -1098,6 +1149,7 @@ def test_eeprom_full_is_errno_5(sers: Plant) -> None:
     assert rows[-1] == "E"
 
 
+@pytest.mark.manual("§4.5.2", "the sequence program is written into the EEPROM of the SERS (kept without supply)")
 def test_program_survives_a_power_cycle_and_runs_again(plant_factory, tmp_path) -> None:
     plant = plant_factory({}, state_dir=tmp_path)
     host = plant.host

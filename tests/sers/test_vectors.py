@@ -9,6 +9,8 @@ import pytest
 from tests.sers.conftest import Plant
 
 
+@pytest.mark.manual("§4.1", "commands are taken over before the CR: #ON energises the motor before the CR arrives")
+@pytest.mark.manual("§4.1", "a CR is acknowledged LF 'ok' digit LF CR; '1': the drive stands")
 def test_t01_ack_of_simple_command(sers: Plant) -> None:
     sers.host.send("#ON")
     # ON is taken over before the CR arrives (§4.1): read the echo, then look at the drive
@@ -20,11 +22,14 @@ def test_t01_ack_of_simple_command(sers: Plant) -> None:
     assert sers.read("output.READY") is True
 
 
+@pytest.mark.manual("§4.1", "in mode Handshake_RS485 the SERS sends only the 'ok' after the CR, no character echo")
 def test_t01_rs485_mode_has_no_echo(plant_factory) -> None:
     plant = plant_factory({"params": {"P1017": 2}})
     assert plant.host.ask("#ON\r") == b"\nok1\n\r"
 
 
+@pytest.mark.manual("§4.1", "several commands and parameters in one line (#ON V=1000 W=2500 O=1 E) with one CR")
+@pytest.mark.manual("§4.1", "ack digit '0': the drive runs (POS=0)")
 def test_t02_several_statements_in_one_line(sers: Plant) -> None:
     assert sers.host.ask("#ON V=1000 W=2500 O1=1 E\r") == b"#ON V=1000 W=2500 O1=1 E\r\nok0\n\r"
     assert sers.read("output.O1") is True
@@ -38,6 +43,7 @@ def test_t02_manual_O_without_number_is_refused(sers: Plant) -> None:
     assert sers.read("param.P1137") == 4
 
 
+@pytest.mark.manual("§4.1", "a query #2P11? is answered 'P11=0' LF CR: the parameter, '=', the value")
 def test_t03_parameter_query(plant_factory) -> None:
     plant = plant_factory({"address": 2})
     assert plant.host.ask("#2P11?\r") == b"#2P11?\rP11=0\n\r\nok1\n\r"
@@ -48,6 +54,7 @@ def test_t03_query_in_rs485_mode(plant_factory) -> None:
     assert plant.host.ask("#3 P11?\r") == b"P11=0\n\r\nok1\n\r"
 
 
+@pytest.mark.manual("§4.1", "#2 addresses drive 2; all following commands go to it, the others ignore them (the #2 ON / #3 ON example)")
 def test_t04_addressing_sequence(plant_factory) -> None:
     plant = plant_factory({"address": 2}, {"address": 3})
     host = plant.host
@@ -67,6 +74,8 @@ def test_t04_addressing_sequence(plant_factory) -> None:
     assert plant.read("param.P51", "sers3") == pytest.approx(4000, abs=0.01)
 
 
+@pytest.mark.manual("§4.6.12", "the serial example: #1, #ON, #V=1000, #W=2500 E, #POS? answers 0 or 1, #P1300? answers 0..255")
+@pytest.mark.manual("§4.8.3.2", "P336 (POS) = 0 while the drive moves, 1 when it stands")
 def test_t05_serial_mode_session(sers: Plant) -> None:
     host = sers.host
     assert host.ask("#1\r") == b"#1\r\nok1\n\r"
@@ -84,6 +93,7 @@ def test_t05_serial_mode_session(sers: Plant) -> None:
     assert host.ask("#P1300?\r") == b"#P1300?\rP1300=0\n\r\nok1\n\r"
 
 
+@pytest.mark.manual("§4.8.1.1", "P1300 holds I1..I8 binary: P1300 = 11 means I1, I2 and I4 are set")
 def test_t06_input_byte(sers: Plant) -> None:
     for name in ("I1", "I2", "I4"):
         sers.set(f"input.{name}", True)
@@ -91,6 +101,9 @@ def test_t06_input_byte(sers: Plant) -> None:
     assert sers.host.ask("#IN?\r") == b"#IN?\rIN=11\n\r\nok1\n\r"
 
 
+@pytest.mark.manual("§4.1", "an error message starts with '*', e.g. the limit switch message when E is sent with a limit switch reached")
+@pytest.mark.manual("§4.8.3.1", "P11 8192: a limit switch is reached; after P11=0 the motor can be energised again")
+@pytest.mark.manual("§4.1", "ack digit '4': the drive has an error (P11 > 0)")
 def test_t07_motion_refused_at_open_limit_switch(sers: Plant) -> None:
     host = sers.host
     host.ask("#ON\r")
@@ -110,6 +123,8 @@ def test_t07_motion_refused_at_open_limit_switch(sers: Plant) -> None:
     assert host.ask("#W=-100 E\r") == b"#W=-100 E\r\nok0\n\r"
 
 
+@pytest.mark.manual("§4.1", "ack digit '3': the drive stands and a warning (P12 > 0) was generated")
+@pytest.mark.manual("§4.8.3.1", "P12 16: an error message was generated, e.g. a parameter value too large")
 def test_t08_value_error_and_warning_digit(sers: Plant) -> None:
     assert sers.host.ask("#V=20000\r") == "#V=20000\r\n*V zu groß\n\r".encode("latin-1")
     assert sers.read("param.P1137") == 122
@@ -117,12 +132,14 @@ def test_t08_value_error_and_warning_digit(sers: Plant) -> None:
     assert sers.host.ask("#\r") == b"#\r\nok3\n\r"
 
 
+@pytest.mark.manual("§4.8.3.1", "P11 = 514 means overtemperature (2) and undervoltage (512)")
 def test_t09_error_combination(sers: Plant) -> None:
     sers.set("quantity.heatsink_temperature", 90.0)
     sers.set("quantity.supply_voltage", 40.0)  # between U_L 32 and U_B 43 of the .85 class
     assert sers.host.ask("#P11?\r") == b"#P11?\rP11=514\n\r\nok4\n\r"
 
 
+@pytest.mark.manual("§4.8.3.2", "P1121=1: at the end of a positioning '@nPOS=1' is sent (drive 2: '@2POS=1')")
 def test_t19_spontaneous_in_position(plant_factory) -> None:
     plant = plant_factory({"address": 2, "params": {"P1121": 1}})
     host = plant.host
@@ -132,6 +149,7 @@ def test_t19_spontaneous_in_position(plant_factory) -> None:
     host.expect(b"@2POS=1\n\r")
 
 
+@pytest.mark.manual("§4.8.4.6", "P76/P44 select the weighting; with gear P121/P122 and feed constant P123 positions are in mm")
 def test_t22_scaling(plant_factory) -> None:
     plant = plant_factory({"params": {"P76": 1, "P44": 1, "P121": 2, "P122": 1, "P123": 5}})
     host = plant.host
@@ -170,6 +188,7 @@ def test_t24_leave_zero_phase(plant_factory, target: str, final: float) -> None:
     assert plant.read("param.P51") == pytest.approx(final, abs=0.02)
 
 
+@pytest.mark.manual("§4.8.6.15", "parameter masks P1060.. and program masks P1070..P1073 are parameters (e.g. P1060 = 2144)")
 def test_t25_parameter_masks_are_stored(sers: Plant) -> None:
     assert sers.host.ask("#P1060=2144\r") == b"#P1060=2144\r\nok1\n\r"
     assert sers.host.ask("#P1070=42\r") == b"#P1070=42\r\nok1\n\r"
@@ -177,6 +196,7 @@ def test_t25_parameter_masks_are_stored(sers: Plant) -> None:
     assert sers.host.ask("#P1074?\r") == "#P1074?\r\n*Parameter nicht vorhanden\n\r".encode("latin-1")
 
 
+@pytest.mark.manual("§4.8.6.4", "P1035=1 (after power-on): a jog started over RS232 stops unless repeated within 500 ms; P1035=0: no timeout")
 def test_t27_jog_with_timeout(sers: Plant) -> None:
     host = sers.host
     host.ask("#ON\r")
@@ -197,6 +217,7 @@ def test_t27_jog_with_timeout(sers: Plant) -> None:
     assert sers.read("motion.kind") is None
 
 
+@pytest.mark.manual("§4.8.6.4", "repeating the jog command within 500 ms keeps the jog running")
 def test_t27_repeating_the_jog_keeps_it_running(sers: Plant) -> None:
     host = sers.host
     host.ask("#ON\r")
@@ -210,6 +231,8 @@ def test_t27_repeating_the_jog_keeps_it_running(sers: Plant) -> None:
     assert sers.read("motion.kind") is None
 
 
+@pytest.mark.manual("§4.8.4.5", "after H the drive runs at P41 to the reference switch, brakes after the rising edge, creeps back at P1003 to the falling edge")
+@pytest.mark.manual("§4.8.3.2", "P403 = 3 after power-on, 0 after a successful homing run")
 def test_t28_homing(plant_factory) -> None:
     ref = 90 / 360 * 12800
     plant = plant_factory({"axis": {"reference_low": ref}, "params": {"P41": 60, "P42": 100, "P1003": 10}})
@@ -237,6 +260,8 @@ def test_t28_homing_overshoot(plant_factory) -> None:
     assert overshoot == pytest.approx(math.degrees((2 * math.pi) ** 2 / (2 * 100)), abs=0.01)
 
 
+@pytest.mark.manual("§4.1", "the ack digit is 0..4: runs, stands, runs with a warning, stands with a warning, drive error")
+@pytest.mark.manual("§4.8.3.1", "P12 values 2 and 4 reset themselves when the cause goes")
 def test_t29_ack_digits(sers: Plant) -> None:
     host = sers.host
     assert host.ask("#\r") == b"#\r\nok1\n\r"
@@ -252,6 +277,7 @@ def test_t29_ack_digits(sers: Plant) -> None:
     assert host.ask("#\r") == b"#\r\nok4\n\r"
 
 
+@pytest.mark.manual("§4.2", "Achsnummer '*' addresses all axes (broadcast), e.g. for a synchronous start")
 def test_t30_broadcast_starts_both_without_reply(plant_factory) -> None:
     plant = plant_factory({"address": 1}, {"address": 2})
     host = plant.host
@@ -264,6 +290,7 @@ def test_t30_broadcast_starts_both_without_reply(plant_factory) -> None:
     assert plant.read("motion.kind", "sers2") == "position"
 
 
+@pytest.mark.manual("§4.8.6.16", "P1099 executes an opcode: 63235 (0xF703) is E, 62213 (0xF305) is RUN 5")
 def test_t26_opcode_e_over_p1099(sers: Plant) -> None:
     sers.host.ask("#ON W=90\r")
     assert sers.host.ask("#P1099=63235\r") == b"#P1099=63235\r\nok0\n\r"  # ≙ E

@@ -77,6 +77,7 @@ class ParameterAccess:
         programs: Callable[[], ProgramControl],
         changed: Callable[[], None],
         recheck_warnings: Callable[[], None],
+        rotation_changed: Callable[[], None],
     ) -> None:
         self.params = params
         self.memory = memory
@@ -89,6 +90,7 @@ class ParameterAccess:
         self._programs = programs  # (the program execution, made after the access)
         self._changed = changed  # outputs that follow a state (P1125 …) follow a new selector
         self._recheck_warnings = recheck_warnings  # P12=0: the warnings whose causes remain
+        self._rotation_changed = rotation_changed  # P1134: the motor turns the other way from now on
         self.firmware = FIRMWARE
 
     @property
@@ -160,12 +162,14 @@ class ParameterAccess:
             self.params.target_address = "*"
             return
         assert isinstance(value, int | float)
+        if not row.writable:
+            raise SersError(row.extra["write_errno"])
+        if row.choices is not None and value not in row.choices:
+            raise SersError(row.extra["invalid_errno"])
         writer = _WRITE.get(number)
         if writer is not None:
             writer(self, value)
             return
-        if not row.writable:
-            raise SersError(105)
         if 1205 <= number <= 1216 and "IO" not in self._config().options:
             raise SersError(4)
         self.check_range(row, value)
@@ -189,7 +193,7 @@ class ParameterAccess:
         after conversion (V ≤ 10000 rpm, A ≤ 100000 rad/s², positions within ±2^31 increments)."""
         extra = row.extra
         if row.choices is not None and value not in row.choices:
-            raise SersError(3)
+            raise SersError(extra["invalid_errno"])
         if extra["min_exclusive"] and row.minimum is not None and value <= row.minimum:
             raise SersError(extra["too_small_errno"])  # a range "> minimum" (V, P103, P123)
         kind = extra["kind"]
@@ -198,16 +202,16 @@ class ParameterAccess:
             rpm = scaling.vel_to_incps(float(value)) * 60 / INC_PER_REV
             if rpm <= 0 and row.key == 91:
                 raise SersError(extra["too_small_errno"])
-            if rpm > 10000:
+            if _beyond(rpm, 10000):
                 raise SersError(extra["too_large_errno"])
             if rpm < 0:
                 raise SersError(extra["too_small_errno"])
             return
         if kind == "acceleration":
             rads = scaling.acc_to_incps2(float(value)) * 2 * math.pi / INC_PER_REV
-            if rads > 100000:
+            if _beyond(rads, 100000):
                 raise SersError(extra["too_large_errno"])
-            if rads < (2 if row.key in (138, 1096) else 0):
+            if _beyond(-rads, -(2 if row.key in (138, 1096) else 0)):
                 raise SersError(extra["too_small_errno"])
             return
         if kind == "position":
@@ -230,10 +234,7 @@ class ParameterAccess:
     def write_p0(self, value: float) -> None:
         """P0 (§4.8.2.1): 0 leaves programming mode, 1 starts the program, 2 starts programming
         mode deleting the program (NEW)."""
-        action = _P0.get(value)
-        if action is None:
-            raise SersError(82)
-        action(self)
+        _P0[value](self)  # (the row's choices are checked before: errno 82)
 
     def write_w(self, value: float) -> None:
         """W (P47): free while standing; while moving only in the constant phase (§4.6.6)."""
@@ -248,15 +249,12 @@ class ParameterAccess:
 
     def write_p1004(self, value: float) -> None:
         """P1004 (§4.8.6.10): 2 PSAVE, 3 factory defaults, 4 POSSAVE, 5 R0..R5 and W."""
-        action = _P1004.get(int(value)) if value == int(value) else None
-        if action is None:
-            raise SersError(82)
-        action(self.memory)
+        _P1004[int(value)](self.memory)  # (the row's choices are checked before: errno 82)
+        self._rotation_changed()  # factory defaults may set P1134 back
 
     def write_p1014(self, value: float) -> None:
-        """P1014 (§4.8.4.1): the positioning mode, not while the drive moves."""
-        if value not in (0, 1, 2, 3):
-            raise SersError(80)
+        """P1014 (§4.8.4.1): the positioning mode (the row's choices are checked before: errno 80
+        "unbekannter Positioniermodus"), not while the drive moves."""
         if self.motion.kind is not None:
             raise SersError(93)
         self.params.positioning_mode = int(value)
@@ -267,6 +265,24 @@ class ParameterAccess:
         if action is None:
             raise SersError(3)
         action(self.motion)
+
+    def write_p1134(self, value: float) -> None:
+        """P1134 (§4.8.2.3): the motor's sense of rotation; not while the drive moves [SIM-CHOICE:
+        errno 93 "nicht schreibbar, während der Antrieb positioniert"]."""
+        self.check_range(PARAMETERS[1134], value)
+        if self.motion.kind is not None:
+            raise SersError(93)
+        self.params.direction_inverted = int(value)
+        self._rotation_changed()
+
+    def write_p1136(self, value: float) -> None:
+        """P1136 (§4.8.2.4): "Bei Versionen bis 6A kann P1136 nicht verändert werden" -- only a
+        12 A version takes it (a smaller one: the row's write errno, 105)."""
+        row = PARAMETERS[1136]
+        self.check_range(row, value)
+        if self._config().current_class != "12":
+            raise SersError(row.extra["write_errno"])
+        self.params.values[1136] = int(value)
 
     def write_soft_limit(self, number: int, value: float) -> None:
         """P1040 / P1041 (§4.8.6.12): the lower limit may not lie above the upper one."""
@@ -290,6 +306,12 @@ class ParameterAccess:
             raise SersError(77)
         else:
             raise SersError(75)
+
+
+def _beyond(value: float, limit: float) -> bool:
+    """``value`` above ``limit`` by more than the rounding of the unit conversion (V=10000 rpm
+    and A=100000 rad/s², the manual's maxima, are allowed exactly)."""
+    return value > limit and not math.isclose(value, limit, rel_tol=1e-9, abs_tol=1e-9)
 
 
 #: P0's values (§4.8.2.1): leave programming mode, start the program, NEW.
@@ -367,11 +389,14 @@ WRITES: Table[Write] = Table(
         Command("P11", lambda a, v: a.power.write_p11(v), "§4.8.3.1", "clear the drive errors (0)"),
         Command("P12", lambda a, v: a.power.write_p12(v, a._recheck_warnings), "§4.8.3.1", "clear the warnings (0)"),
         Command("P47", ParameterAccess.write_w, "§4.6.6", "W: also on the move, in the constant phase"),
-        Command("P51", lambda a, v: a.motion.set_p51(a._position(51, v)), "§4.8.4.2", "set the actual position"),
+        Command("P51", lambda a, v: a.motion.set_p51(round(a._position(51, v))), "§4.8.4.2",
+                "set the actual position (the drive counts whole increments)"),
         Command("P134", lambda a, v: a.power.write_p134(v), "§4.8.2.2", "ON (7) / OFF (0)"),
         Command("P1004", ParameterAccess.write_p1004, "§4.8.6.10", "PSAVE, factory defaults, POSSAVE"),
         Command("P1014", ParameterAccess.write_p1014, "§4.8.4.1", "positioning mode"),
         Command("P1031", lambda a, v: a.motion.jog.write_p1031(v, a.motion.home), "§4.8.6.3", "jog / home"),
+        Command("P1136", ParameterAccess.write_p1136, "§4.8.2.4", "chopper frequency: 12 A versions only"),
+        Command("P1134", ParameterAccess.write_p1134, "§4.8.2.3", "the motor's sense of rotation"),
         Command("P1040", lambda a, v: a.write_soft_limit(1040, v), "§4.8.6.12", "lower software limit"),
         Command("P1041", lambda a, v: a.write_soft_limit(1041, v), "§4.8.6.12", "upper software limit"),
         Command("P1043", ParameterAccess.write_p1043, "§4.8.4.2", "POS0 / POSR"),

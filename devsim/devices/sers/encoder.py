@@ -66,7 +66,7 @@ class StepMonitor:
         self.cancel()
         self.lost = 0.0
         self._stall_rotor = None
-        self._load_watches = []
+        self._drop_load_watches()
         self._attempts = 0
         self.max_load_angle = 0.0
 
@@ -74,6 +74,12 @@ class StepMonitor:
         for timer in self._timers:
             timer.cancel()
         self._timers.clear()
+
+    def _drop_load_watches(self) -> None:
+        """The load-angle watches go (cancelled on the axis: none fires later)."""
+        for watch in self._load_watches:
+            watch.cancel()
+        self._load_watches = []
 
     def encoder_position(self) -> float:
         """Where the rotor really is (increments): the stator field minus the steps lost."""
@@ -97,14 +103,10 @@ class StepMonitor:
         elif self._stall_rotor is not None:
             self.lost = self.axis.position() - self._stall_rotor
             self._stall_rotor = None
-            for watch in self._load_watches:
-                watch.cancel()
-            self._load_watches = []
+            self._drop_load_watches()
 
     def _arm_load_watch(self) -> None:
-        for watch in self._load_watches:
-            watch.cancel()
-        self._load_watches = []
+        self._drop_load_watches()
         if self._stall_rotor is None or not self._monitoring():
             return
         window = float(self.params.load_angle_window)

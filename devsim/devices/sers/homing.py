@@ -73,12 +73,9 @@ class Homing:
         return self._run["phase"] if self._run else None
 
     def cancel(self) -> None:
-        """The run is over (the motion ended, S, a drive error, power-on)."""
+        """The run is over (the motion ended, S, a drive error, power off or on): its phase and
+        its zero-pulse watches go, so no switch edge or index mark continues it later."""
         self._run = None
-        self.drop_watches()
-
-    def drop_watches(self) -> None:
-        """The zero-pulse watches go (power off: the run itself is left as it was)."""
         for watch in self._index_watches:
             watch.cancel()
         self._index_watches = []

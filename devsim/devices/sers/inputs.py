@@ -81,14 +81,28 @@ class Inputs:
         self._level_start: Timer | None = None
 
     def power_on(self) -> None:
-        if self._dispatch is not None:
-            self._dispatch.cancel()
-        self._dispatch = None
+        self.power_off()
         self.pending_events.clear()
 
     def power_off(self) -> None:
-        if self._dispatch is not None:
-            self._dispatch.cancel()
+        """The event dispatch and a level start (P1023=1) due a cycle later do not happen."""
+        for timer in (self._dispatch, self._level_start):
+            if timer is not None:
+                timer.cancel()
+        self._dispatch = self._level_start = None
+
+    def initialised(self) -> None:
+        """The initialisation after power-on is over (§3.5): with P1095=0 a jog function (I1..I6)
+        whose input is already active starts now, by its static level (§4.8.6.3); with P1095=1
+        only a later rising edge starts it."""
+        if int(self.params.jog_at_power_on) != 0:
+            return
+        for n in range(1, 7):
+            if self.signals.get(f"I{n}") and self.functions_enabled(1 << (n - 1)):
+                try:
+                    self._input_function(n, True)
+                except SersError as exc:
+                    self.power.record_error(exc.errno)
 
     # -- what the inputs read as ------------------------------------------------------------------
     def inputs_byte(self, first: int) -> int:
@@ -298,7 +312,11 @@ class Inputs:
                     self.power.record_error(exc.errno)
                 return
         if self.functions_enabled(128) and int(self.params.start_enable) == 1 and self.signals.get("I8"):
-            self._level_start = self.clock.call_later(programs.cycle, self.start_input)
+            self._level_start = self.clock.call_later(programs.cycle, self._level_start_due)
+
+    def _level_start_due(self) -> None:
+        self._level_start = None
+        self.start_input()
 
 
 #: The manual functions of the inputs I1..I8 when P1021 (or the service switch) enables them

@@ -173,7 +173,7 @@ class Interpreter:
         self.waiting = None
         self.params.l65_flag = 0  # (the L65 error-handling flag is P1118)
         if label is not None:
-            if not 1 <= label <= 128:
+            if not st.LABEL_MIN <= label <= st.LABEL_MAX:
                 raise SersError(72)
             if label not in self.program.labels:
                 raise SersError(71)
@@ -382,7 +382,7 @@ class Interpreter:
         self._timer = self.clock.call_later(delay, action)
 
     def label_index(self, label: int) -> int:
-        if not 1 <= label <= 128:
+        if not st.LABEL_MIN <= label <= st.LABEL_MAX:
             raise SersError(72)
         index = self.program.labels.get(label)
         if index is None:
@@ -445,10 +445,12 @@ class Interpreter:
         value = self.operands.operand_value(stmt.value) if not isinstance(stmt.value, str) else 0.0
         self.params.d2_time = float(value)
         self.params.d2_bit = 0
+        # "D2=Wert" reloads (extends) the time of a jump not yet executed (§4.8.5.1)
+        pending = self._d2_jump if self._d2 is not None else None
         if self._d2 is not None:
             self._d2.cancel()
         nxt = self.program.statements[self.pc + 1] if self.pc + 1 < len(self.program.statements) else None
-        self._d2_jump = None
+        self._d2_jump = pending
         if isinstance(nxt, st.Goto):
             self._d2_jump = nxt
             self.pc += 1  # the GT/GS belongs to the timer: it is not executed now

@@ -23,10 +23,9 @@ P121–P123) only matter at the serial interface.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
-from devsim.core.axis import Axis, RegionSwitch
+from devsim.core.axis import Axis
 from devsim.core.clock import Clock, Timer
 from devsim.core.kit import declare_signals
 from devsim.core.model import Model
@@ -49,6 +48,7 @@ from devsim.devices.sers.power import PowerStage
 from devsim.devices.sers.program import ProgramMemory
 from devsim.devices.sers.signals import SIGNALS
 from devsim.devices.sers.supply import SupplyMonitor
+from devsim.devices.sers.wiring import MotorWiring
 
 __all__ = ["SersDrive"]
 
@@ -111,6 +111,7 @@ class SersDrive(Model):
         self.access = access = ParameterAccess(
             params, memory, power, motion, inputs, program, signals,
             config=cfg, programs=lambda: self.execution, changed=outputs.update, recheck_warnings=supply.recheck,
+            rotation_changed=self.apply_rotation_sense,
         )
         self.operands = operands = Operands(access, inputs, params, power)
         self.answers = Answers(access, operands, params, power, motion, program)
@@ -131,8 +132,7 @@ class SersDrive(Model):
         self.booting = False
         self._timers: list[Timer] = []
         self._define_signals(thresholds)
-        self._switches: list[RegionSwitch] = []
-        self._build_switches()
+        self.wiring = MotorWiring(self.axis, signals, self.cfg.axis)
         self._power_on()
 
     def _cfg(self) -> Any:
@@ -162,21 +162,6 @@ class SersDrive(Model):
         for name in s.names():
             s.subscribe(name, lambda *_: self.interpreter.poke())
 
-    def _build_switches(self) -> None:
-        geo = self.cfg.axis
-
-        def switch(low: float, high: float, signal: str) -> None:
-            region = RegionSwitch(self.axis, low, high, lambda active: self.signals.set(signal, active))
-            self._switches.append(region)
-            self.signals.signal(signal).value = region.active
-
-        if geo.limit_left is not None:
-            switch(-math.inf, geo.limit_left, "limit_left")
-        if geo.limit_right is not None:
-            switch(geo.limit_right, math.inf, "limit_right")
-        if geo.reference_low is not None:
-            switch(geo.reference_low, geo.reference_high if geo.reference_high is not None else math.inf, "reference")
-
     # ======================================================================================
     # power
     # ======================================================================================
@@ -196,6 +181,7 @@ class SersDrive(Model):
         self.program.reload()  # programming mode does not survive a power loss (P0 = 0)
         self.interpreter.reset()
         self.memory.power_on()
+        self.apply_rotation_sense()
         self.motion.set_p51(self.memory.saved_position() or 0.0)
         for n in range(1, 17):
             self.signals.set(f"O{n}", False)
@@ -206,9 +192,14 @@ class SersDrive(Model):
         if self.booting:
             self._timers.append(self.clock.call_later(self.cfg.boot_time, self._boot_done))
 
+    def apply_rotation_sense(self) -> None:
+        """P1134 (§4.8.2.3) as the parameters hold it now (power-on, a write, factory defaults)."""
+        self.wiring.set_inverted(bool(self.params.direction_inverted))
+
     def _boot_done(self) -> None:
         self.record_event("ready")
         self.booted()
+        self.inputs.initialised()
         self.execution.autostart()
 
     def _power_off(self) -> None:
@@ -240,8 +231,7 @@ class SersDrive(Model):
         self.motion.cancel_all()
         self.power_stage.cancel()
         self.axis.quick_stop()
-        for switch in self._switches:
-            switch.cancel()
+        self.wiring.close()
 
     def _cancel_timers(self) -> None:
         for timer in self._timers:

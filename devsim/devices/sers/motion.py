@@ -102,12 +102,13 @@ class Motion:
         self.pos_ok = True
 
     def cancel_all(self) -> None:
-        """Every timer and watch of the motion (power off, power on, close)."""
+        """Every timer and watch of the motion (power off, power on, close); a homing run is
+        over (a real drive starts afresh after power-on, §4.8.3.2 P403)."""
         self.watches.cancel_timers()
         self.watches.cancel()
         self.jog.cancel_timer()
         self.encoder.cancel()
-        self.homing.drop_watches()
+        self.homing.cancel()
 
     # -- state ------------------------------------------------------------------------------------
     @property

@@ -46,7 +46,7 @@ class Outputs:
         if not self._alive():
             return
         power, signals = self.power, self.signals
-        signals.set("READY", bool(power.relay and not power.errors))
+        signals.set("READY", bool(power.relay))  # (a drive error opens it after braking, §2.1.3)
         in_position, running, error, warning, brake = self.params.output_selectors()
         for selected, state in (
             (in_position, self._in_position),

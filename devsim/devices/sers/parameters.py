@@ -20,9 +20,15 @@ Conventions
   P1054/P1144 (5), ADC (3), P123 (4, unit = position length unit), X and R0..R5 (3, spec
   G-ARITH).
 * ``min_exclusive`` marks ranges of the form "> minimum" (V, P103, P123).
-* ``invalid_errno`` is used when a value is not in ``choices`` (default 3 "ungültig"; P1014: 80;
-  P0 / P1004: 82).  ``write_errno`` is used when a read-only parameter is written (default 105;
-  P1034: 12).  Reading a write-only parameter -> errno 106.
+* The errnos of a refused write are the row's (:meth:`.access.ParameterAccess.write_param` reads
+  them, before any parameter's own write runs): ``too_large_errno`` / ``too_small_errno`` for a
+  value out of range (default 1 "zu groß" / 2 "zu klein", the manual's "Parameterwert zu groß",
+  §4.8.3.1 P12 value 16); ``invalid_errno`` for a value not in ``choices`` (default 3
+  "ungültig"; P1014: 80 "unbekannter Positioniermodus"; P0 / P1004: 82 "ungültiger EEPROM Modus
+  Wert"); ``write_errno`` for a write to a read-only parameter: 105 "Wert kann nicht geschrieben
+  werden" (the counterpart of 106 "Wert kann nicht gelesen werden", which a read of a write-only
+  parameter gets), except P1034, which the manual does not call read-only but says "darf nicht
+  geändert werden - wird werkseitig eingestellt" (§4.8.6.1): 12 "Zugriff verweigert".
 * ``saved`` = "E" in the spec (stored by PSAVE); ``effect`` is ``stored`` for :data:`STORED_ONLY`.  W (P47) and R0..R5 are "S": stored only with
   P1117=1 (``saved_with_p1117``).  P51 is stored by POSSAVE only (:data:`POSSAVE_PARAMS`).
 * ``default`` = factory/power-on value ([M] manual or [SIM] spec choice); for variant-dependent
@@ -77,8 +83,8 @@ __all__ = [
 #: others have one the manual describes and the simulator lacks (see the session notes).
 STORED_ONLY: frozenset[int] = frozenset(
     {
-        1009, 1034, 1038, 1056, 1059, *range(1060, 1069), *range(1070, 1074), 1093, 1094, 1095, 1097,
-        1134, 1136, 1142, 1147, 1149, 1150, 1153, 1154, 1155, 1156, 1157, 1158, 1159, 1161,
+        1009, 1034, 1038, 1056, 1059, *range(1060, 1069), *range(1070, 1074), 1093, 1094, 1097,
+        1136, 1142, 1147, 1149, 1150, 1153, 1154, 1155, 1156, 1157, 1158, 1159, 1161,
     }
 )
 

@@ -277,7 +277,8 @@ _p(
     minimum=0,
     maximum=1,
     **_RW_E,
-    doc="1 = motor direction inverted.",
+    doc="1 = motor direction inverted: the same effect as swapping the leads within one motor phase.",
+    attr="direction_inverted",
 )
 _p(
     1136,

@@ -241,6 +241,7 @@ _p(
     maximum=1,
     **_RW_E,
     doc="0 static level activates; 1 only a rising edge.",
+    attr="jog_at_power_on",
 )
 _p(
     1035,

@@ -24,6 +24,8 @@ from devsim.core.kit import Command as KitCommand
 from devsim.core.kit import Table
 
 __all__ = [
+    "LABEL_MAX",
+    "LABEL_MIN",
     "compare",
     "Address",
     "Arith",
@@ -70,6 +72,9 @@ _WORD_SET = frozenset(ALL_WORDS)
 _PROPER_PREFIXES = frozenset(w[:i] for w in ALL_WORDS for i in range(1, len(w)))
 _LONGEST = len(ALL_WORDS[0])
 
+
+#: The label numbers a program may define (§4.6.2: "ein Wert von 1 bis 128").
+LABEL_MIN, LABEL_MAX = 1, 128
 
 _DIGITS = re.compile(r"[0-9]+")
 _NUMBER = re.compile(r"[0-9]*\.?[0-9]*")
@@ -367,6 +372,8 @@ def _statement(cur: _Cursor) -> Statement:  # noqa: C901 - one branch per statem
         else:
             cur.pos += 1
         number = cur.integer(37)
+        if not LABEL_MIN <= number <= LABEL_MAX:
+            raise SyntaxFault(72, start)  # §4.6.2: a label is a jump target L1..L128 ("Sprungziel ungültig")
         return Label(cur.text[start : cur.pos], number)
     if c == "O" and cur.peek(2) == "O=":
         raise SyntaxFault(4, start)  # "O=1" (manual §4.1 example): no such output (spec §7.3)

@@ -1,0 +1,65 @@
+"""Manual §4.8.3.1 (drive errors, warnings, the errno list) and the refusals of parameter writes
+(§4.7, §4.8) checked through the pty.
+
+The errno of each refusal is the manual's (§4.8.3.1 "Liste der Fehlernummern"); the texts are the
+manual's too (``errors.message``).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.sers.conftest import Plant
+from tests.sers.test_programs import query, refused
+
+
+@pytest.mark.manual("§4.8.6.1", "P1034 'Darf nicht geändert werden - wird werkseitig eingestellt': a write is "
+                    "refused with errno 12 'Zugriff verweigert' and the value stays")
+def test_writing_the_factory_set_current_range_is_access_denied(sers: Plant) -> None:
+    host = sers.host
+    before = query(host, "P1034")
+    refused(host, "#P1034=1\r", 12)
+    assert query(host, "P1137") == "12"
+    assert query(host, "P1034") == before
+
+
+@pytest.mark.manual("§4.8.2.5", "P1133 firmware version: 'nur Lese-Parameter' - a write gets errno 105 "
+                    "'Wert kann nicht geschrieben werden'")
+@pytest.mark.manual("§4.8.3.2", "P1013 'kann nur gelesen werden' - a write gets errno 105")
+@pytest.mark.parametrize("line", ["#P1133=1\r", "#P1013=0\r"])
+def test_writing_a_read_only_parameter_is_errno_105(sers: Plant, line: str) -> None:
+    refused(sers.host, line, 105)
+    assert query(sers.host, "P1137") == "105"
+
+
+@pytest.mark.manual("§4.8.4.1", "P1014 takes 0..3; another value is errno 80 'unbekannter Positioniermodus'")
+@pytest.mark.manual("§4.8.2.1", "P0 takes 0, 1, 2; another value is errno 82 'ungültiger EEPROM Modus Wert'")
+@pytest.mark.manual("§4.8.6.10", "P1004 takes 2..5; another value is errno 82 'ungültiger EEPROM Modus Wert'")
+@pytest.mark.manual("§4.8.6.3", "P1031 takes 1, 2, 4, 8, 16; another value is errno 3 'ungültig'")
+@pytest.mark.parametrize(("line", "errno"), [("#P1014=4\r", 80), ("#P0=3\r", 82), ("#P1004=7\r", 82),
+                                             ("#P1004=1\r", 82), ("#P1031=3\r", 3), ("#P134=5\r", 3)])
+def test_a_value_outside_the_choices_gets_the_rows_errno(sers: Plant, line: str, errno: int) -> None:
+    refused(sers.host, line, errno)
+    assert query(sers.host, "P1137") == str(errno)
+
+
+@pytest.mark.manual("§4.8.3.1", "P12 value 16: an error message was generated, e.g. 'Parameterwert zu groß' "
+                    "when a parameter is given an invalid value; P1137 holds its errno (1 'zu groß', 2 'zu klein')")
+@pytest.mark.parametrize(("line", "errno"), [("#P1035=2\r", 1), ("#P1035=-1\r", 2)])
+def test_a_value_out_of_range_is_too_large_or_too_small(sers: Plant, line: str, errno: int) -> None:
+    host = sers.host
+    refused(host, line, errno)
+    assert query(host, "P1137") == str(errno)
+    assert int(query(host, "P12")) & 16
+    assert query(host, "P1035") == "1"  # the value stays (§4.8.6.4: 1 after power-on)
+
+
+@pytest.mark.manual("§4.8.2.4", "P1136: on versions up to 6 A P1136 cannot be changed (errno 105); a 12 A "
+                    "version takes P1136=1 (18 kHz)")
+def test_p1136_only_on_a_12_a_version(plant_factory) -> None:
+    small = plant_factory({"current_class": "06"})
+    refused(small.host, "#P1136=1\r", 105)
+    assert query(small.host, "P1136") == "0"
+    large = plant_factory({"current_class": "12", "supply_class": "120"})
+    assert large.host.ask("#P1136=1\r").endswith(b"ok1\n\r")
+    assert query(large.host, "P1136") == "1"
