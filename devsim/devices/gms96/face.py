@@ -127,8 +127,7 @@ class Gms96Face(Face):
         if letter.p1 != 2:
             return self.queue(letter)
         m = self.model
-        m.feed.o2_value = max(0, min(100, letter.p2))
-        m.feed.ext_override = None
+        m.feed.set_override_inactive_value(letter.p2)
         m.indexer.replan()
         return ACK
 
