@@ -220,6 +220,7 @@ class Gms96Card(Model):
     def _power_off(self) -> None:
         self.memory.save_static()
         self.powered = False
+        self.i2t.power_off()
         self.plc.power_off()
         self.executor.flush()
         self.indexer.power_off(brake=True)
