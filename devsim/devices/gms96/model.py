@@ -15,6 +15,7 @@ command dispatch are the face (:mod:`.face`, :mod:`.link`).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -116,7 +117,8 @@ class Gms96Card(Model):
         )
         self.program = ProgramControl(
             executor=self.executor, flash=self.flash, image=self.image, signals=signals, outputs=self.outputs,
-            plc=self.plc, write_marker_byte=self.write_marker_byte,
+            plc=self.plc, marker_byte=self.marker_byte, motion_changes_at=self.motion_changes_at,
+            write_marker_byte=self.write_marker_byte,
         )
         self.commands = QueuedCommands(
             card=self, executor=self.executor, program=self.program, references=self.references,
@@ -149,7 +151,7 @@ class Gms96Card(Model):
             for bit in range(8):
                 s.subscribe(f"E{byte}.{bit}", self._on_input)
         s.subscribe("emergency_stop", lambda *_: self._on_estop())
-        s.subscribe("override_pot", lambda *_: self.indexer.replan())
+        s.subscribe("override_pot", lambda *_: self.speed_changed())
         s.subscribe("load_pct", lambda *_: self.i2t.update())
         s.subscribe("blocked", lambda *_: self.torque.update_block())
         s.subscribe("monitoring", lambda *_: self._on_monitoring())
@@ -338,6 +340,19 @@ class Gms96Card(Model):
 
     def busy(self) -> bool:
         return self.executor.busy
+
+    def speed_changed(self) -> None:
+        """An override or the G95 spindle speed changed on receipt: the running plan follows, waits
+        re-check (spec §5.2)."""
+        self.indexer.replan()
+        self.changed()
+
+    def motion_changes_at(self) -> float | None:
+        """The next boundary of the axis plan after now: where M0.3 and M1.4 (moving, speed
+        reached) may change by themselves (None when the axis rests or cruises for ever)."""
+        now = self.clock.now()
+        times = [t for seg in self.axis.segments() for t in (seg.t0, seg.t1) if now < t < math.inf]
+        return min(times, default=None)
 
     def motion(self) -> bool:
         return (
