@@ -64,9 +64,11 @@ class Feed:
         """``f P1;P2``."""
         self.f, self.f_frac = self.clamp_feed(f, frac)
 
-    @staticmethod
-    def clamp_feed(f: int, frac: int) -> tuple[int, int]:
-        return max(1, min(f, tables.RANGES["f"][1])), max(0, min(255, frac))
+    def clamp_feed(self, f: int, frac: int) -> tuple[int, int]:
+        """``f P1;P2`` as the card takes it: under G94 an f above the M value sets the M value
+        (manual §2.3.1 f, P1: [1..M-Wert]); under G95 f is inc/rev, not bounded by M."""
+        high = self.M if self.feed_mode == 94 else tables.RANGES["f"][1]
+        return max(1, min(f, high)), max(0, min(255, frac))
 
     def v_factor(self) -> int:
         """The speed resolution the M value gives (manual §2.7)."""
