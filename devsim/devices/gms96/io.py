@@ -25,6 +25,12 @@ __all__ = ["INPUT_BYTES", "OUTPUT_BITS", "Outputs", "axis_switches"]
 INPUT_BYTES = 4  # EB0..EB3
 OUTPUT_BITS = 11  # A0.0..A1.2 (spec §4.11.1, G27)
 
+#: Inputs shown OR-ed with another on KSA cards and under an interpolation card (manual §2.4.2,
+#: §4.4, §5.2): E1.6 with E2.0, E1.7 with E2.1, both ways.
+ORED_INPUTS: dict[tuple[int, int], str] = {(1, 6): "E2.0", (2, 0): "E1.6", (1, 7): "E2.1", (2, 1): "E1.7"}
+#: K1: its inputs E0.4 and E0.5 are also shown at E2.0 and E2.1 (manual §5.2).
+K1_SHOWN_AT: dict[tuple[int, int], str] = {(2, 0): "E0.4", (2, 1): "E0.5"}
+
 
 class Outputs:
     """Inputs and outputs of one card as the host (T1;1, T1;2), the PLC and the waits see them
@@ -41,6 +47,8 @@ class Outputs:
         indexer: Indexer,
         stepper: bool,
         changed: Callable[[], None],
+        *,
+        shown_at: Callable[[], dict[tuple[int, int], str]] = dict,
     ) -> None:
         self.clock = clock
         self.axis = axis
@@ -51,6 +59,8 @@ class Outputs:
         self.indexer = indexer
         self.stepper = stepper
         self.changed = changed
+        #: The inputs the variant (and the DIL switch) also show at another bit: {(byte, bit): input}.
+        self.shown_at = shown_at
         self._inpos_timer: Timer | None = None
         self._inpos_fired = -math.inf
 
@@ -80,10 +90,18 @@ class Outputs:
             return 0
         return sum(1 << b for b in range(8) if byte * 8 + b < 16 and self.output_bit(byte * 8 + b))
 
+    def input_bit(self, byte: int, bit: int) -> bool:
+        """An input as the image shows it: its own signal, OR-ed with the one the variant wires
+        to it (:data:`ORED_INPUTS`, :data:`K1_SHOWN_AT`)."""
+        if bool(self.signals.get(f"E{byte}.{bit}")):
+            return True
+        other = self.shown_at().get((byte, bit))
+        return other is not None and bool(self.signals.get(other))
+
     def input_byte(self, byte: int) -> int:
         if not 0 <= byte < INPUT_BYTES:
             return 0
-        value = sum(1 << b for b in range(8) if self.signals.get(f"E{byte}.{b}"))
+        value = sum(1 << b for b in range(8) if self.input_bit(byte, b))
         if byte == 2 and self.stage.overload_latched:
             value |= 0x04
         return value

@@ -34,7 +34,7 @@ from devsim.devices.gms96.feed import Feed
 from devsim.devices.gms96.flash import Flash
 from devsim.devices.gms96.i2t import I2t
 from devsim.devices.gms96.image import ProcessImage
-from devsim.devices.gms96.io import INPUT_BYTES, Outputs, axis_switches
+from devsim.devices.gms96.io import INPUT_BYTES, K1_SHOWN_AT, ORED_INPUTS, Outputs, axis_switches
 from devsim.devices.gms96.memory import Memory
 from devsim.devices.gms96.motion import ActualSwitch, Indexer
 from devsim.devices.gms96.params import NParameters
@@ -103,7 +103,8 @@ class Gms96Card(Model):
             lambda: bool(signals.get("blocked")), self.record_event,
         )
         self.outputs = Outputs(
-            clock, self.axis, self.image, signals, self.params, self.stage, self.indexer, stepper, self.changed
+            clock, self.axis, self.image, signals, self.params, self.stage, self.indexer, stepper, self.changed,
+            shown_at=self._inputs_shown_at,
         )
         self.plc = Plc(
             card=self, clock=clock, options=self.cfg.plc, ms_per_1000=self.hw.plc_ms_per_1000, flash=self.flash,
@@ -116,7 +117,7 @@ class Gms96Card(Model):
             signals=signals, image=self.image, geometry=geo, record_event=self.record_event,
         )
         self.program = ProgramControl(
-            executor=self.executor, flash=self.flash, image=self.image, signals=signals, outputs=self.outputs,
+            executor=self.executor, flash=self.flash, image=self.image, outputs=self.outputs,
             plc=self.plc, marker_byte=self.marker_byte, motion_changes_at=self.motion_changes_at,
             write_marker_byte=self.write_marker_byte,
         )
@@ -340,6 +341,15 @@ class Gms96Card(Model):
 
     def busy(self) -> bool:
         return self.executor.busy
+
+    def _inputs_shown_at(self) -> dict[tuple[int, int], str]:
+        """Which inputs the image shows OR-ed into another bit: K1's E0.4/E0.5 at E2.0/E2.1; on KSA
+        cards and behind an interpolation card E1.6/E1.7 with E2.0/E2.1 (manual §2.4.2, §4.4, §5.2)."""
+        if self.hw.name == "K1":
+            return K1_SHOWN_AT
+        if self.dil.interpolation or self.hw.name.startswith("KSA"):
+            return ORED_INPUTS
+        return {}
 
     def speed_changed(self) -> None:
         """An override or the G95 spindle speed changed on receipt: the running plan follows, waits

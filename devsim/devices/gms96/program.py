@@ -13,7 +13,6 @@ from collections import deque
 from collections.abc import Callable
 
 from devsim.core.kit import Command, Table
-from devsim.core.signals import SignalBank
 from devsim.devices.gms96.executor import Cmd, Executor
 from devsim.devices.gms96.flash import Flash
 from devsim.devices.gms96.image import ProcessImage
@@ -43,7 +42,6 @@ class ProgramControl:
         executor: Executor,
         flash: Flash,
         image: ProcessImage,
-        signals: SignalBank,
         outputs: Outputs,
         plc: Plc,
         marker_byte: Callable[[int], int],
@@ -53,7 +51,6 @@ class ProgramControl:
         self.executor = executor
         self.flash = flash
         self.image = image
-        self.signals = signals
         self.outputs = outputs
         self.plc = plc
         self.marker_byte = marker_byte  # the card's: MB0/MB1/MB3 with the firmware's live status bits
@@ -139,11 +136,12 @@ class ProgramControl:
         return True if handler is None else handler(self, cmd.p3)
 
     def _wait_input(self, operand: int, want: bool) -> bool:
-        name = input_name(operand)
-        signals = self.signals
-        return self.executor.wait(
-            "WOSI" if want else "WORI", lambda: bool(signals.get(name)) == want if name else True
-        )
+        """WOSI/WORI: input ``operand`` as the image shows it (manual §2.4.2, §2.4.3)."""
+        if input_name(operand) is None:
+            return True
+        byte, bit = divmod(operand, 8)
+        outputs = self.outputs
+        return self.executor.wait("WOSI" if want else "WORI", lambda: outputs.input_bit(byte, bit) == want)
 
     def wosi(self, operand: int) -> bool:
         return self._wait_input(operand, True)
