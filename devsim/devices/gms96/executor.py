@@ -37,6 +37,7 @@ class CardEvents(Protocol):
     def changed(self) -> None: ...
     def record_event(self, name: str) -> None: ...
     def arm_torque_abort(self) -> None: ...
+    def programs_ended(self) -> None: ...
 
 
 __all__ = ["Cmd", "Executor", "TRANSPARENT_P10"]
@@ -244,6 +245,7 @@ class Executor:
             reply()
         self.deferred.clear()
         self.program_depth = 0
+        self.card.programs_ended()
         self.h7_level = None
         self.h7_in_move = False
         if self.reference is not None:

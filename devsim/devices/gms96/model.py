@@ -351,6 +351,11 @@ class Gms96Card(Model):
             return ORED_INPUTS
         return {}
 
+    def programs_ended(self) -> None:
+        """The executor dropped its programs (#0, M0.1, a fault): M0.2 "a CNC program runs" is 0
+        and no program ended successfully (manual §2.4.1)."""
+        self.image.set_marker(0, 2, False)
+
     def speed_changed(self) -> None:
         """An override or the G95 spindle speed changed on receipt: the running plan follows, waits
         re-check (spec §5.2)."""
