@@ -17,6 +17,7 @@ A10000 = "68 06 06 68 53 03 41 10 27 00 CE 16"
 A30000 = "68 06 06 68 53 03 41 30 75 00 3C 16"
 
 
+@pytest.mark.manual("§2.3", "commands go in the Langsatz as <address><command>[P1[P2[P3]]]")
 def test_session_6_1_byte_exact(card: Plant) -> None:
     """Spec §6.1: commissioning and first move, every byte."""
     host = card.host
@@ -252,6 +253,7 @@ def test_reference_distance_limit(plant_factory: Any) -> None:
     assert abs(plant.device().axis.position()) <= 50000 + 2000
 
 
+@pytest.mark.manual("§2.3.1 Q", "message 23 when the distance limit P3 is exceeded with P2.6")
 def test_reference_limit_message_23(referenced: Plant) -> None:
     referenced.device().cfg.axis.cam = None
     dev = referenced.device()
@@ -336,6 +338,8 @@ def test_abort_discards_queue(referenced: Plant) -> None:
     assert 1 <= referenced.read("position_setpoint") <= 29999
 
 
+@pytest.mark.manual("§2.3.1 G", "G95: speed in inc per revolution with the actual speed from Kurzsatz #8; f P2 adds 1/256 inc")
+@pytest.mark.manual("§2.3.2 #9", "#9 override is acted on during a move")
 def test_override_and_g95(referenced: Plant) -> None:
     host = referenced.host
     dev = referenced.device()
