@@ -65,3 +65,13 @@ def test_no_i2t_while_the_power_is_off(card: Plant) -> None:
     card.runtime.fault(card.name, "power", False)
     card.advance(BOOT)
     assert status(c) & I2T_LATCHED == 0
+
+
+@pytest.mark.manual("§3.1", "after the allowed time the motor current is set to the programmed limit (N15)")
+@pytest.mark.manual("§2.3.1 T", "T1;5: the motor current [0..252], 252 = the maximum current")
+def test_the_current_is_held_at_the_n15_level(card: Plant) -> None:
+    c = card.client()
+    card.set("quantity.load_pct", 80)
+    card.advance(5.0)
+    assert status(c) & I2T_NOW
+    assert c.read(1, 5)[1] == pytest.approx(252 * N15_DEFAULT / 255, abs=1)

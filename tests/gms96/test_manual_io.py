@@ -185,3 +185,27 @@ def test_data_words_and_their_static_part(card: Plant) -> None:
     card.advance(0.6)
     assert c.read(1, 6, 158)[1] & 0xFFFF == 0x1111
     assert c.read(1, 6, 160)[1] & 0xFFFF == 0
+
+
+@pytest.mark.manual("§2.4.2", "E2.3 = resolver failure (if a resolver is fitted)")
+@pytest.mark.manual("§3.1", "the power stage is switched off when the resolver signals fail")
+def test_e2_3_shows_a_resolver_failure(card: Plant) -> None:  # KSA15-2R: a resolver card
+    c = card.client()
+    assert eb(c, 2) & 0x08 == 0
+    card.set("quantity.monitoring", "resolver_loss")
+    card.advance(0.01)
+    assert eb(c, 2) & 0x08
+    assert c.read(3, 0)[0] & 0x04  # monitoring
+    assert c.read(1, 3, 0)[2][0] & 0x20 == 0  # position controller off
+
+
+@pytest.mark.manual("§3.1", "KSA LEDs: red overvoltage, yellow undervoltage, green temperature protection")
+@pytest.mark.parametrize(("cause", "led"), [("dc_overvoltage", "red"), ("dc_undervoltage", "yellow"),
+                                            ("overtemperature", "green")])
+def test_ksa_leds(card: Plant, cause: str, led: str) -> None:
+    c = card.client()
+    card.set("quantity.monitoring", cause)
+    card.advance(0.01)
+    assert c.read(3, 0)[0] & 0x04  # the interface says only "monitoring" ...
+    leds = card.read("leds")
+    assert leds[led] and sum(leds.values()) == 1  # ... the LED tells which

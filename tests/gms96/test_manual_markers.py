@@ -188,3 +188,31 @@ def test_p11_writes_a_marker_byte_and_is_recorded(referenced: Plant) -> None:
     send(c, "p", 3, 1, 0)
     referenced.idle()
     assert mb(c, 40) == 0x33
+
+
+@pytest.mark.manual("§2.4.1", "M0.1 does not end a pending STOP situation (M0.0 = 1)")
+def test_m0_1_leaves_the_stop(referenced: Plant) -> None:
+    c = referenced.client()
+    send(c, "p", 11, 0, 0x01)  # STOP
+    send(c, "A", 5000)
+    referenced.advance(0.5)
+    send(c, "p", 11, 0, 0x03)  # abort while STOP stays
+    referenced.advance(0.1)
+    assert mb(c, 0) & 0x01
+    send(c, "A", 6000)
+    referenced.advance(1.0)
+    assert velocity(referenced) == 0.0  # still held
+    send(c, "p", 11, 0, 0x00)
+    referenced.idle()
+    assert c.read(0)[1] == 6000
+
+
+@pytest.mark.manual("§2.4.1", "M0.7 IDXOFF is set when a reference run starts")
+def test_idxoff_set_when_a_reference_run_starts(referenced: Plant) -> None:
+    c = referenced.client()
+    assert mb(c, 0) & 0x80 == 0
+    send(c, "Q", 0)
+    referenced.advance(0.2)
+    assert mb(c, 0) & 0x80 and c.read(3, 0)[0] & 0x08
+    referenced.idle()
+    assert mb(c, 0) & 0x80 == 0

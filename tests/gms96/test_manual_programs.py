@@ -101,3 +101,17 @@ def test_a_hundred_programs_survive_power_on(plant_factory: Any, tmp_path: Any) 
     send(c, "p", 3, 1, 99)
     plant.idle()
     assert output(c, 3) and not output(c, 2)
+
+
+@pytest.mark.manual("§2.3.2 #0", "#0 aborts the CNC program input (a running download)")
+def test_break_aborts_a_download(referenced: Plant) -> None:
+    c = referenced.client()
+    send(c, "p", 3, 100, 0)
+    referenced.advance(FLASH_ERASE)
+    send(c, "p", 10, SETO, 4)
+    c.abort()
+    send(c, "p", 10, SETO, 5)  # executed now, not recorded
+    referenced.advance(0.01)
+    assert output(c, 5)
+    send(c, "p", 3, 101)
+    assert referenced.read("programs") == {}

@@ -28,6 +28,8 @@ OUTPUT_BITS = 11  # A0.0..A1.2 (spec §4.11.1, G27)
 #: Inputs shown OR-ed with another on KSA cards and under an interpolation card (manual §2.4.2,
 #: §4.4, §5.2): E1.6 with E2.0, E1.7 with E2.1, both ways.
 ORED_INPUTS: dict[tuple[int, int], str] = {(1, 6): "E2.0", (2, 0): "E1.6", (1, 7): "E2.1", (2, 1): "E1.7"}
+#: The monitoring cause a resolver card shows at E2.3 (manual §2.4.2: "E2.3 = Ausfall Resolver").
+RESOLVER_LOSS = "resolver_loss"
 #: K1: its inputs E0.4 and E0.5 are also shown at E2.0 and E2.1 (manual §5.2).
 K1_SHOWN_AT: dict[tuple[int, int], str] = {(2, 0): "E0.4", (2, 1): "E0.5"}
 
@@ -49,6 +51,7 @@ class Outputs:
         changed: Callable[[], None],
         *,
         shown_at: Callable[[], dict[tuple[int, int], str]] = dict,
+        resolver: bool = False,
     ) -> None:
         self.clock = clock
         self.axis = axis
@@ -61,6 +64,7 @@ class Outputs:
         self.changed = changed
         #: The inputs the variant (and the DIL switch) also show at another bit: {(byte, bit): input}.
         self.shown_at = shown_at
+        self.resolver = resolver  # the card has a resolver: its signal loss shows at E2.3
         self._inpos_timer: Timer | None = None
         self._inpos_fired = -math.inf
 
@@ -103,7 +107,9 @@ class Outputs:
             return 0
         value = sum(1 << b for b in range(8) if self.input_bit(byte, b))
         if byte == 2 and self.stage.overload_latched:
-            value |= 0x04
+            value |= 0x04  # E2.2: 24 V short circuit
+        if byte == 2 and self.resolver and self.stage.monitoring_cause() == RESOLVER_LOSS:
+            value |= 0x08  # E2.3: resolver failure
         return value
 
     def follow(self) -> None:

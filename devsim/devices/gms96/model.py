@@ -104,7 +104,7 @@ class Gms96Card(Model):
         )
         self.outputs = Outputs(
             clock, self.axis, self.image, signals, self.params, self.stage, self.indexer, stepper, self.changed,
-            shown_at=self._inputs_shown_at,
+            shown_at=self._inputs_shown_at, resolver=self.hw.feedback == "resolver",
         )
         self.plc = Plc(
             card=self, clock=clock, options=self.cfg.plc, ms_per_1000=self.hw.plc_ms_per_1000, flash=self.flash,
