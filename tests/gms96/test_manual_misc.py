@@ -97,3 +97,16 @@ def test_k0_and_m1_1_latch_the_i2t_limitation(card: Plant) -> None:
     card.advance(10.0)  # the limitation ends, the marker stays
     assert c.read(3, 0)[0] & 0x20 == 0
     assert c.status()[0] & 0x01 and c.read(1, 3, 1)[2][0] & 0x02
+
+
+@pytest.mark.manual("§6", "KS4/KS8: the maximum step frequency is 500 kHz")
+def test_stepper_never_steps_faster_than_500_khz(plant_factory: Any) -> None:
+    plant = plant_factory({"variant": "KS4"})
+    c = plant.client()
+    send(c, "Q", 3)
+    send(c, "M", 2000000)
+    send(c, "G", 0)
+    send(c, "B", 30000)
+    send(c, "A", 8000000)
+    plant.advance(1.0)
+    assert plant.read("axis.velocity") == pytest.approx(500000)

@@ -84,6 +84,7 @@ class Gms96Card(Model):
         self.indexer = Indexer(
             clock=clock, axis=self.axis, feed=self.feed, params=self.params, stage=self.stage, image=self.image,
             signals=signals, geometry=geo, stepper=stepper, card=self,
+            max_speed=float(self.hw.max_step_frequency_hz) if self.hw.max_step_frequency_hz else None,
         )
         self.counter = CounterInput(
             clock=clock, axis=self.axis, indexer=self.indexer, params=self.params, stage=self.stage,
