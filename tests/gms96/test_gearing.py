@@ -239,6 +239,7 @@ def test_q_p2_4_is_obsolete_and_changes_nothing(plant_factory: Any) -> None:
 
 
 @pytest.mark.manual("§2.3.1 G", "G96: constant cutting speed, a desired speed from the distance to the zero point")
+@pytest.mark.manual("§2.3.1 G", "G92: speed limit for G96; G97 deselects G96")
 def test_g96_desired_speed_from_distance_to_zero_point(referenced: Plant) -> None:
     card = referenced
     assert card.read("g96_rpm") is None

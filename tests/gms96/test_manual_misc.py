@@ -110,3 +110,41 @@ def test_stepper_never_steps_faster_than_500_khz(plant_factory: Any) -> None:
     send(c, "A", 8000000)
     plant.advance(1.0)
     assert plant.read("axis.velocity") == pytest.approx(500000)
+
+
+@pytest.mark.manual("§2.3.1 Q", "Q8 with P3 >= 0x3F0000: the speed comes from the pulses on the reference track of the "
+                    "counter input, each pulse worth the distance in the low word of P3")
+def test_q8_speed_from_reference_track_pulses(card: Plant) -> None:
+    c = card.client()
+    card.set("quantity.ref_pulse_hz", 10.0)
+    send(c, "Q", 8, 3, 0x3F0000 | 50)  # 10 pulses/s x 50 inc = 500 Hz
+    card.advance(1.0)
+    assert card.read("axis.velocity") == pytest.approx(500)
+    card.set("quantity.ref_pulse_hz", 20.0)
+    card.advance(1.0)
+    assert card.read("axis.velocity") == pytest.approx(1000)
+
+
+@pytest.mark.manual("§2.3.1 N", "stepper software: N10 is the corner frequency in kHz [10..500]")
+def test_stepper_n10_range(plant_factory: Any) -> None:
+    plant = plant_factory({"variant": "KS4"})
+    c = plant.client()
+    send(c, "N", 10, 10)
+    assert c.read(5, 10)[1] == 10
+    send(c, "N", 500, 10)
+    assert c.read(5, 10)[1] == 500
+    send(c, "N", 3000, 10)  # a servo value: not taken as it is
+    assert 10 <= c.read(5, 10)[1] <= 500
+
+
+@pytest.mark.manual("§2.3.1 N", "in-position (N27/N28) cannot be evaluated on a stepper: A0.1 follows the set-point")
+def test_stepper_in_position_is_the_set_point(plant_factory: Any) -> None:
+    plant = plant_factory({"variant": "KS4"})
+    c = plant.client()
+    send(c, "Q", 3)
+    send(c, "N", 10, 27)
+    send(c, "N", 200, 28)
+    send(c, "A", 1000)
+    plant.idle()
+    plant.advance(0.001)
+    assert c.read(1, 2, 0)[2][0] & 0x02  # not N28 = 200 ms later
