@@ -7,7 +7,7 @@ from typing import Any
 
 import pytest
 
-from devsim.devices.gms96.client import Gms96Client
+from devsim.devices.gms96.client import Gms96Client, Gms96Timeout
 from devsim.devices.gms96.i2t import I_BASE
 from tests.gms96.conftest import Plant
 from tests.gms96.test_motion_reference import send
@@ -148,3 +148,26 @@ def test_stepper_in_position_is_the_set_point(plant_factory: Any) -> None:
     plant.idle()
     plant.advance(0.001)
     assert c.read(1, 2, 0)[2][0] & 0x02  # not N28 = 200 ms later
+
+
+@pytest.mark.manual("§2.2", "switch 5 on: address offset 16 (addresses 16..31)")
+@pytest.mark.manual("§2.3.1 T", "the answer carries the card's address")
+def test_address_above_15(plant_factory: Any) -> None:
+    plant = plant_factory({"dil": {"address": 29}})
+    c = plant.client(address=29)
+    assert c.read(1, 0)[0] == ord("V")
+    assert c.last_reply is not None and c.last_reply.address == 29  # type: ignore[union-attr]
+    other = plant.client(address=13)  # switches 1..4 alone: not this card
+    other.timeout = 0.2
+    with pytest.raises(Gms96Timeout):
+        other.read(1, 0)
+
+
+@pytest.mark.manual("§2.3.1 S", "S P1: the search speed in Hz for the index mark of the Q command [20..5000]")
+def test_s_sets_the_index_mark_search_speed(plant_factory: Any) -> None:
+    plant = plant_factory({"axis": {"index_offset": 100}})
+    c = plant.client()
+    send(c, "S", 500)
+    send(c, "Q", 1)
+    plant.advance(1.0)
+    assert plant.read("axis.velocity") == pytest.approx(-500)
