@@ -20,7 +20,7 @@ from devsim.devices.gms96.motion import ActualSwitch, Indexer
 from devsim.devices.gms96.params import NParameters
 from devsim.devices.gms96.stage import PowerStage
 
-__all__ = ["INPUT_BYTES", "OUTPUT_BITS", "Outputs", "axis_switches"]
+__all__ = ["INPUT_BYTES", "OUTPUT_BITS", "Outputs", "axis_switches", "inputs_shown_at"]
 
 INPUT_BYTES = 4  # EB0..EB3
 OUTPUT_BITS = 11  # A0.0..A1.2 (spec §4.11.1, G27)
@@ -32,6 +32,16 @@ ORED_INPUTS: dict[tuple[int, int], str] = {(1, 6): "E2.0", (2, 0): "E1.6", (1, 7
 RESOLVER_LOSS = "resolver_loss"
 #: K1: its inputs E0.4 and E0.5 are also shown at E2.0 and E2.1 (manual §5.2).
 K1_SHOWN_AT: dict[tuple[int, int], str] = {(2, 0): "E0.4", (2, 1): "E0.5"}
+
+
+def inputs_shown_at(variant: str, interpolation: bool) -> dict[tuple[int, int], str]:
+    """Which inputs the image shows OR-ed into another bit: K1's E0.4/E0.5 at E2.0/E2.1; on KSA
+    cards and behind an interpolation card E1.6/E1.7 with E2.0/E2.1 (manual §2.4.2, §4.4, §5.2)."""
+    if variant == "K1":
+        return K1_SHOWN_AT
+    if interpolation or variant.startswith("KSA"):
+        return ORED_INPUTS
+    return {}
 
 
 class Outputs:

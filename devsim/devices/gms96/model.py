@@ -15,7 +15,6 @@ command dispatch are the face (:mod:`.face`, :mod:`.link`).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from typing import Any
 
@@ -34,7 +33,7 @@ from devsim.devices.gms96.feed import Feed
 from devsim.devices.gms96.flash import Flash
 from devsim.devices.gms96.i2t import I2t
 from devsim.devices.gms96.image import ProcessImage
-from devsim.devices.gms96.io import INPUT_BYTES, K1_SHOWN_AT, ORED_INPUTS, Outputs, axis_switches
+from devsim.devices.gms96.io import INPUT_BYTES, Outputs, axis_switches, inputs_shown_at
 from devsim.devices.gms96.memory import Memory
 from devsim.devices.gms96.motion import ActualSwitch, Indexer
 from devsim.devices.gms96.params import NParameters
@@ -105,7 +104,8 @@ class Gms96Card(Model):
         )
         self.outputs = Outputs(
             clock, self.axis, self.image, signals, self.params, self.stage, self.indexer, stepper, self.changed,
-            shown_at=self._inputs_shown_at, resolver=self.hw.feedback == "resolver",
+            shown_at=lambda: inputs_shown_at(self.hw.name, self.dil.interpolation),
+            resolver=self.hw.feedback == "resolver",
         )
         self.plc = Plc(
             card=self, clock=clock, options=self.cfg.plc, ms_per_1000=self.hw.plc_ms_per_1000, flash=self.flash,
@@ -119,7 +119,7 @@ class Gms96Card(Model):
         )
         self.program = ProgramControl(
             executor=self.executor, flash=self.flash, image=self.image, outputs=self.outputs,
-            plc=self.plc, marker_byte=self.marker_byte, motion_changes_at=self.motion_changes_at,
+            plc=self.plc, marker_byte=self.marker_byte, motion_changes_at=self.indexer.plan_changes_at,
             write_marker_byte=self.write_marker_byte,
         )
         self.commands = QueuedCommands(
@@ -343,15 +343,6 @@ class Gms96Card(Model):
     def busy(self) -> bool:
         return self.executor.busy
 
-    def _inputs_shown_at(self) -> dict[tuple[int, int], str]:
-        """Which inputs the image shows OR-ed into another bit: K1's E0.4/E0.5 at E2.0/E2.1; on KSA
-        cards and behind an interpolation card E1.6/E1.7 with E2.0/E2.1 (manual §2.4.2, §4.4, §5.2)."""
-        if self.hw.name == "K1":
-            return K1_SHOWN_AT
-        if self.dil.interpolation or self.hw.name.startswith("KSA"):
-            return ORED_INPUTS
-        return {}
-
     def programs_ended(self) -> None:
         """The executor dropped its programs (#0, M0.1, a fault): M0.2 "a CNC program runs" is 0
         and no program ended successfully (manual §2.4.1)."""
@@ -362,13 +353,6 @@ class Gms96Card(Model):
         re-check (spec §5.2)."""
         self.indexer.replan()
         self.changed()
-
-    def motion_changes_at(self) -> float | None:
-        """The next boundary of the axis plan after now: where M0.3 and M1.4 (moving, speed
-        reached) may change by themselves (None when the axis rests or cruises for ever)."""
-        now = self.clock.now()
-        times = [t for seg in self.axis.segments() for t in (seg.t0, seg.t1) if now < t < math.inf]
-        return min(times, default=None)
 
     def motion(self) -> bool:
         return (

@@ -100,6 +100,13 @@ class Indexer:
         if row.attr in LOOP_PARAMETERS:
             self.arm_following_error()
 
+    def plan_changes_at(self) -> float | None:
+        """The next boundary of the axis plan after now: where the motion's status bits (M0.3
+        moving, M1.4 speed reached) may change by themselves (None: at rest or cruising for ever)."""
+        now = self.clock.now()
+        times = [t for seg in self.axis.segments() for t in (seg.t0, seg.t1) if now < t < math.inf]
+        return min(times, default=None)
+
     # -- speeds ---------------------------------------------------------------------------------
     def override_pct(self) -> float:
         return self.feed.override_pct(float(self.signals.get("override_pot")))
