@@ -191,3 +191,22 @@ def test_o_sets_the_position_counter(referenced: Plant) -> None:
     send(c, "G", 53)
     assert int.from_bytes(c.read(0)[2], "little", signed=True) == 600
     assert referenced.read("axis.physical") == before  # no move
+
+
+@pytest.mark.manual("§2.3.1 N", "N39: peak current [0..100 %], lowers the fixed maximum current of the power stage")
+def test_n39_lowers_the_peak_current(card: Plant) -> None:
+    c = card.client()
+    card.set("quantity.load_pct", 200)  # asks for more than the stage gives
+    card.advance(0.01)
+    assert c.read(1, 5)[1] == 252
+    send(c, "N", 50, 39)
+    card.advance(0.01)
+    assert c.read(1, 5)[1] == pytest.approx(126, abs=1)
+
+
+@pytest.mark.manual("§2.3.1 N", "N28: time for in-position [1..255 ms]; N27: window [+/-1..255 inc]")
+def test_n27_n28_ranges(card: Plant) -> None:
+    c = card.client()
+    for index, value in ((28, 1), (28, 255), (27, 255), (27, -255)):
+        send(c, "N", value, index)
+        assert n(c, index) == value
