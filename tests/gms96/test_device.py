@@ -17,6 +17,7 @@ A10000 = "68 06 06 68 53 03 41 10 27 00 CE 16"
 A30000 = "68 06 06 68 53 03 41 30 75 00 3C 16"
 
 
+@pytest.mark.manual("§2.3", "commands go in the Langsatz as <address><command>[P1[P2[P3]]]")
 def test_session_6_1_byte_exact(card: Plant) -> None:
     """Spec §6.1: commissioning and first move, every byte."""
     host = card.host
@@ -150,6 +151,7 @@ def test_garbage_never_crashes_nor_loses_parameters(plant_factory: Any, tmp_path
     assert host.ask("68 09 09 68 53 03 54 05 00 00 0A 00 00 B9 16") == "68 06 06 68 08 03 4E 2C 01 00 86 16"
 
 
+@pytest.mark.manual("§2.3.1 p", "after the start of a CNC/PLC download the card does not answer for 2 to 5 seconds (a flash sector is erased)")
 def test_boot_silence_and_flash_erase(plant_factory: Any) -> None:
     plant = plant_factory({}, boot=False)
     host = plant.host
@@ -162,6 +164,7 @@ def test_boot_silence_and_flash_erase(plant_factory: Any) -> None:
     assert host.ask(STATUS) == "10 40 03 43 16"
 
 
+@pytest.mark.manual("§4.4", "19244 E-version, selected by DIL switch 7")
 def test_e_version_duplicate_suppressed(plant_factory: Any) -> None:
     """Spec §3.11 duplicate example: the repeated +1000 (FCB=1) is acknowledged, not executed."""
     plant = plant_factory({"dil": {"protocol": "E"}})
@@ -200,6 +203,7 @@ def test_client_against_card(card: Plant) -> None:
     assert (ident, value) == (0x56, 404)
 
 
+@pytest.mark.manual("§1", "up to 32 axes are served from one host on the serial line; only the addressed card answers")
 def test_multidrop_only_addressed_card_answers(plant_factory: Any) -> None:
     plant = plant_factory({"dil": {"address": 1}}, {"dil": {"address": 2}}, {"dil": {"address": 3}})
     host = plant.host
@@ -214,6 +218,7 @@ def test_multidrop_only_addressed_card_answers(plant_factory: Any) -> None:
     assert plant.read("rejected_moves", "gms96_3") == 0
 
 
+@pytest.mark.manual("§2.3.1 T", "IDXOFF = 1 (state after power-on): moves are not executable")
 def test_move_rejected_before_reference(card: Plant) -> None:
     assert card.host.ask(A10000) == "E5"
     card.advance(0.2)
@@ -248,6 +253,7 @@ def test_reference_distance_limit(plant_factory: Any) -> None:
     assert abs(plant.device().axis.position()) <= 50000 + 2000
 
 
+@pytest.mark.manual("§2.3.1 Q", "message 23 when the distance limit P3 is exceeded with P2.6")
 def test_reference_limit_message_23(referenced: Plant) -> None:
     referenced.device().cfg.axis.cam = None
     dev = referenced.device()
@@ -261,6 +267,7 @@ def test_reference_limit_message_23(referenced: Plant) -> None:
     assert host.ask(STATUS) == "10 00 03 03 16"
 
 
+@pytest.mark.manual("§2.4.3", "SETO, RESO, SNDF, SNDM between moves do not disturb the chaining (synchronous commands)")
 def test_blending_and_output_on_the_fly(referenced: Plant) -> None:
     host = referenced.host
     dev = referenced.device()
@@ -277,6 +284,7 @@ def test_blending_and_output_on_the_fly(referenced: Plant) -> None:
     assert speeds[0] > 0  # no stop at the junction
 
 
+@pytest.mark.manual("§2.3.1 M", "M between two moves prevents chaining them")
 def test_m_breaks_blending(referenced: Plant) -> None:
     host = referenced.host
     dev = referenced.device()
@@ -288,6 +296,8 @@ def test_m_breaks_blending(referenced: Plant) -> None:
     assert abs(dev.axis.velocity(ends[0])) == pytest.approx(0.0, abs=1e-6)
 
 
+@pytest.mark.manual("§1.1", "the maximum following error is programmable (N20); exceeding it switches the indexer off (IDXOFF)")
+@pytest.mark.manual("§2.3.1 Q", "Q3: only (re-)activation of the position controller, no move")
 def test_following_error_blocked_axis(referenced: Plant) -> None:
     host = referenced.host
     assert host.ask(A30000) == "E5"
@@ -303,6 +313,7 @@ def test_following_error_blocked_axis(referenced: Plant) -> None:
     assert referenced.read("output.A0.0") is True
 
 
+@pytest.mark.manual("§2.2", "the card reads the DIL switch only at power-on or after a reset (e.g. Notaus)")
 def test_emergency_stop_is_a_reset(referenced: Plant) -> None:
     host = referenced.host
     referenced.set("input.emergency_stop", True)
@@ -315,6 +326,7 @@ def test_emergency_stop_is_a_reset(referenced: Plant) -> None:
     assert host.silent(STATUS)
 
 
+@pytest.mark.manual("§2.3.2 #0", "#0 aborts the running operation and discards the pending commands")
 def test_abort_discards_queue(referenced: Plant) -> None:
     host = referenced.host
     assert host.ask(A30000) == "E5"
@@ -326,6 +338,8 @@ def test_abort_discards_queue(referenced: Plant) -> None:
     assert 1 <= referenced.read("position_setpoint") <= 29999
 
 
+@pytest.mark.manual("§2.3.1 G", "G95: speed in inc per revolution with the actual speed from Kurzsatz #8; f P2 adds 1/256 inc")
+@pytest.mark.manual("§2.3.2 #9", "#9 override is acted on during a move")
 def test_override_and_g95(referenced: Plant) -> None:
     host = referenced.host
     dev = referenced.device()
@@ -355,6 +369,7 @@ def test_override_and_g95(referenced: Plant) -> None:
     assert abs(dev.axis.velocity()) == pytest.approx(12506, abs=50)
 
 
+@pytest.mark.manual("§2.3.1 s", "s85;170 saves M, S, B and all N entries in the EEPROM; they are active at the next start")
 def test_persistence_s85_170_power_cycle(plant_factory: Any, tmp_path: Any) -> None:
     plant = plant_factory({}, state_dir=tmp_path)
     host = plant.host
@@ -371,6 +386,7 @@ def test_persistence_s85_170_power_cycle(plant_factory: Any, tmp_path: Any) -> N
     assert host.ask("68 09 09 68 53 03 54 05 00 00 0A 00 00 B9 16") == "68 06 06 68 08 03 4E 2C 01 00 86 16"
 
 
+@pytest.mark.manual("§2.5", "commands after p3;100;pnr are recorded, not executed; p3;101 ends; p3;1;pnr runs the program")
 def test_cnc_program_download_and_run(referenced: Plant) -> None:
     host = referenced.host
     assert host.ask("68 0C 0C 68 53 03 70 03 00 00 64 00 00 00 00 00 2D 16") == "E5"  # p3;100;0
@@ -387,6 +403,7 @@ def test_cnc_program_download_and_run(referenced: Plant) -> None:
     assert referenced.read("output.A0.2") is True
 
 
+@pytest.mark.manual("§2.3.1 N", "N15: I²t current limit in % · 2.55 of Imax")
 def test_i2t_limitation(referenced: Plant) -> None:
     host = referenced.host
     assert host.ask("68 09 09 68 53 03 4E 7F 00 00 0F 00 00 32 16") == "E5"  # N127;15
@@ -400,6 +417,8 @@ def test_i2t_limitation(referenced: Plant) -> None:
     assert abs(int(reply.split()[7], 16) - 126) <= 1
 
 
+@pytest.mark.manual("§3.1", "on a monitoring fault position and current control are switched off and the BREMSE output goes to 0 V")
+@pytest.mark.manual("§3.1", "KSA: LEDs show the monitoring cause (yellow: undervoltage)")
 def test_monitoring(referenced: Plant) -> None:
     host = referenced.host
     referenced.set("quantity.monitoring", "dc_undervoltage")

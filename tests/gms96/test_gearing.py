@@ -43,6 +43,7 @@ def reference(plant: Plant) -> None:
 # -- m49: synchronous run, electronic gear ------------------------------------------------------
 
 
+@pytest.mark.manual("§2.3.1 m", "m49: synchronous run to the counter input (built-in, not the PLC's)")
 def test_m49_setpoint_follows_pulses_times_n23(referenced: Plant) -> None:
     card = referenced
     ok(card, "N", 3, 23)  # N23 = 3 set-point increments per counted increment
@@ -148,6 +149,7 @@ def test_m49_is_skipped_like_a_move(card: Plant, setup: str) -> None:
 # -- H22: min/max measurement of the counter input -----------------------------------------------
 
 
+@pytest.mark.manual("§2.3.1 H", "H22;1 starts a min/max memory of the counter input with axis positions; H22;0 ends it")
 def test_h22_min_max_with_positions_copied_to_data_area(plant_factory: Any) -> None:
     card = plant_factory({"h22_data_address": 160})
     reference(card)
@@ -199,6 +201,7 @@ def hook_fb254(plc: Any) -> None:
 # -- Q P2.5 (counter-input index mark) and P2.4 (obsolete immediate stop) -------------------------
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q P2.5: the reference mark of the counter input instead of the motor encoder")
 def test_q_p2_5_uses_the_counter_input_reference_mark(plant_factory: Any) -> None:
     card = plant_factory({"axis": {"counter_marks": [-7000.0, 9000.0]}})
     ok(card, "S", 2000)  # search speed
@@ -220,6 +223,7 @@ def test_q_p2_5_without_a_mark_fails_at_the_distance_limit(plant_factory: Any) -
     assert card.read("idxoff") is True
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q P2.4 is not needed since v3.79: the brake ramp repositions onto the criterion")
 def test_q_p2_4_is_obsolete_and_changes_nothing(plant_factory: Any) -> None:
     results = []
     for p2 in (0, 0x10):
@@ -234,6 +238,8 @@ def test_q_p2_4_is_obsolete_and_changes_nothing(plant_factory: Any) -> None:
 # -- G92 / G96 / G97: constant cutting speed (desired spindle speed only) -------------------------
 
 
+@pytest.mark.manual("§2.3.1 G", "G96: constant cutting speed, a desired speed from the distance to the zero point")
+@pytest.mark.manual("§2.3.1 G", "G92: speed limit for G96; G97 deselects G96")
 def test_g96_desired_speed_from_distance_to_zero_point(referenced: Plant) -> None:
     card = referenced
     assert card.read("g96_rpm") is None

@@ -257,6 +257,7 @@ def test_r4_timeout_of_a_partial_frame_needs_no_extra_idle(card: Plant) -> None:
     assert host.ask(STATUS) == K_IDLE
 
 
+@pytest.mark.manual("§2.2", "DIL switch 8: 9600 Bd off, 38400 Bd on")
 def test_r4_at_38400_baud() -> None:
     runtime = Runtime(virtual=True).start()
     try:

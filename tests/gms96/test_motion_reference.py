@@ -90,6 +90,8 @@ def velocity(plant: Plant) -> float:
 # ================================================================================================
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q1: only the search of the index mark (at the S speed)")
+@pytest.mark.manual("§2.3.1 S", "S: the search speed of the index mark, default 100 Hz")
 def test_q1_index_mark_only(plant_factory: Any) -> None:
     plant = plant_factory({"axis": {"index_offset": 100}})
     c = plant.client()
@@ -109,6 +111,7 @@ def test_q1_index_mark_only(plant_factory: Any) -> None:
     assert plant.read("position_counter") == 0
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q2: only the search of the mechanical cam")
 def test_q2_cam_only_at_working_speed(card: Plant) -> None:
     c = card.client()
     send(c, "f", 1000)
@@ -129,6 +132,7 @@ def test_q2_cam_only_at_working_speed(card: Plant) -> None:
     assert card.read("position_counter") == 0 and card.read("idxoff") is False
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q0: fast search negative until the cam (E2.1), free the cam slowly (S) positive, then negative onto the index mark")
 def test_q0_timing_closed_form(card: Plant) -> None:
     c = card.client()
     t0 = card.now()
@@ -142,6 +146,7 @@ def test_q0_timing_closed_form(card: Plant) -> None:
     assert physical(card) == pytest.approx(-16384)
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q P2.1: reversed direction of the reference run")
 def test_q0_reversed_direction_p2_1(plant_factory: Any) -> None:
     plant = plant_factory({"axis": {"cam": [15000, 20000]}})
     c = plant.client()
@@ -158,6 +163,7 @@ def test_q0_reversed_direction_p2_1(plant_factory: Any) -> None:
     assert plant.read("position_counter") == 0 and plant.read("idxoff") is False
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q P2.3: the cam on E2.0 instead of E2.1")
 def test_q0_cam_on_e2_0_p2_3(plant_factory: Any) -> None:
     plant = plant_factory({"axis": {"cam_input": "E2.0"}})
     c = plant.client()
@@ -177,6 +183,7 @@ def test_q0_cam_on_e2_0_p2_3(plant_factory: Any) -> None:
     assert plant.read("idxoff") is True
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q P2.2 = 1: the position counter is not zeroed, it keeps counting")
 def test_q1_counter_keeps_counting_p2_2(referenced: Plant) -> None:
     c = referenced.client()
     send(c, "A", 10000)  # physical -6384
@@ -194,6 +201,7 @@ def test_q1_counter_keeps_counting_p2_2(referenced: Plant) -> None:
     assert referenced.read("position_counter") == 0
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q P2.6 with P3 = 0: the absolute resolver position [-2048..2047] goes into the position counter")
 def test_q2_resolver_position_p2_6_p3_0(card: Plant) -> None:
     c = card.client()
     send(c, "Q", 2, 0x40)
@@ -204,6 +212,7 @@ def test_q2_resolver_position_p2_6_p3_0(card: Plant) -> None:
     assert card.read("idxoff") is False
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q P3: distance limit of the reference run; beyond it the run ends, the indexer stays inactive (P2.6 = 0)")
 def test_p3_limit_single_leg_closed_form(plant_factory: Any) -> None:
     plant = plant_factory({"axis": {"index_period": 1_000_000, "index_offset": 500_000}})
     c = plant.client()
@@ -241,6 +250,7 @@ def test_p3_limit_with_p2_6_not_referenced_raises_message_23(plant_factory: Any)
     assert c.status() == ((IDXOFF << 3) | 0x02, 23)
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q P2.6 with P3 > 0: beyond the limit message 23 and the indexer stays active")
 def test_p3_limit_with_p2_6_keeps_the_indexer_active(referenced: Plant) -> None:
     dev = referenced.device()
     dev.cfg.axis.index_period = 1_000_000
@@ -258,6 +268,7 @@ def test_p3_limit_with_p2_6_keeps_the_indexer_active(referenced: Plant) -> None:
     assert referenced.read("position_counter") == 0
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q6: search run onto the 24 V cam input")
 def test_q6_input_search(card: Plant) -> None:
     c = card.client()
     t0 = card.now()
@@ -282,6 +293,7 @@ def test_q6_active_at_start_ends_at_once(card: Plant) -> None:
     assert physical(card) == 0.0 and card.read("idxoff") is False
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q P2.7: edge criterion; a level present at the start ends the run only at the second change")
 def test_q6_edge_criterion_p2_7(card: Plant) -> None:
     c = card.client()
     card.set("input.E2.0", True)
@@ -297,6 +309,7 @@ def test_q6_edge_criterion_p2_7(card: Plant) -> None:
     assert physical(card) == pytest.approx(-(dist(2000) + 2000 * (2.0 - ramp(2000))) + lag(2000))
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q P2.0 = 1: normally-closed cam switch (active at 0 V)")
 def test_q6_normally_closed_p2_0_drives_the_switch_free(card: Plant) -> None:
     c = card.client()
     card.set("input.E2.0", True)  # at 24 V: with P2.0 the active level is 0 V
@@ -308,6 +321,7 @@ def test_q6_normally_closed_p2_0_drives_the_switch_free(card: Plant) -> None:
     assert physical(card) == pytest.approx(-(dist(2000) + 2000 * (1.0 - ramp(2000))) + lag(2000))
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q8 spindle simulation: P2 = 3/4/5 cw/ccw/stop, P3 speed up to rapid, P2 = 8 new speed only; BUSY = 0 and motion = 1")
 def test_q8_spindle_simulation(card: Plant) -> None:
     c = card.client()
     dev = card.device()
@@ -340,6 +354,7 @@ def test_q8_spindle_simulation(card: Plant) -> None:
 # ------------------------------------------------------------------------------------------------
 
 
+@pytest.mark.manual("§2.3.1 Q", "Q-1: reference run per N19 with drive-off to N33; the cam search uses the M speed from the NV memory")
 def test_q_minus_1_uses_saved_m_and_drives_off(plant_factory: Any) -> None:
     plant = plant_factory({"axis": {"index_offset": 100}})
     c = plant.client()
@@ -363,6 +378,7 @@ def test_q_minus_1_uses_saved_m_and_drives_off(plant_factory: Any) -> None:
     assert status(c) == 0
 
 
+@pytest.mark.manual("§2.3.1 N", "N19: reference type, LSB = P1 of Q, middle byte = P2 of Q")
 def test_q_minus_1_reference_type_from_n19(plant_factory: Any) -> None:
     plant = plant_factory({"axis": {"index_offset": 100}})
     c = plant.client()
@@ -383,6 +399,8 @@ def test_q_minus_1_reference_type_from_n19(plant_factory: Any) -> None:
 # ================================================================================================
 
 
+@pytest.mark.manual("§1.3", "a simple backlash compensation takes up play in the mechanics")
+@pytest.mark.manual("§2.3.1 N", "N41: backlash amount [0..255 inc]; N42: its speed [inc/ms]")
 def test_backlash_compensation_on_reversal(referenced: Plant) -> None:
     c = referenced.client()
     dev = referenced.device()
@@ -580,6 +598,7 @@ def test_h2_waits_n28_after_the_set_point(referenced: Plant) -> None:
     assert referenced.read("marker.M3.5") is False
 
 
+@pytest.mark.manual("§2.3.1 H", "H7;P2: the next move is aborted when the current reaches P2 % of the maximum")
 def test_h7_torque_abort_on_blocked_axis(referenced: Plant) -> None:
     c = referenced.client()
     send(c, "H", 7, 50)
@@ -599,6 +618,7 @@ def test_h7_torque_abort_on_blocked_axis(referenced: Plant) -> None:
     assert c.read(0)[1] == round(x_actual - 100)
 
 
+@pytest.mark.manual("§2.3.1 H", "H7 applies to the following move")
 def test_h7_applies_to_the_next_move_only(referenced: Plant) -> None:
     c = referenced.client()
     send(c, "H", 7, 50)
@@ -640,6 +660,7 @@ def test_h2_without_window_is_set_point_finished(referenced: Plant) -> None:
     assert referenced.read("busy") is False
 
 
+@pytest.mark.manual("§2.3.1 N", "N27 > 0: A0.1 shows in-position; N28: ms the following error stays in the window")
 def test_a0_1_in_position_after_n28(referenced: Plant) -> None:
     c = referenced.client()
     send(c, "N", 10, 27)
@@ -741,6 +762,7 @@ def test_override_zero_holds_the_move(referenced: Plant) -> None:
     assert c.read(0)[1] == 10000
 
 
+@pytest.mark.manual("§2.3.1 G", "G90 absolute, G91 relative coordinates of the following moves")
 def test_g91_relative_and_plus(referenced: Plant) -> None:
     c = referenced.client()
     send(c, "G", 91)
@@ -768,6 +790,7 @@ def test_blending_one_plan_and_junction_on_the_fly(referenced: Plant) -> None:
     assert abs(dev.axis.velocity(t0 + ends[0])) == pytest.approx(2000)
 
 
+@pytest.mark.manual("§2.3.1 v", "v: a move with the profile computed before the start; not for chained moves")
 def test_v_does_not_blend_and_reversal_stops(referenced: Plant) -> None:
     c = referenced.client()
     dev = referenced.device()

@@ -91,6 +91,7 @@ def test_start_stop_status_bits_and_cycles(plant_factory: Any) -> None:
     assert plant.host.ask(STATUS) == "10 40 03 43 16"
 
 
+@pytest.mark.manual("§6", "PLC run time for 1000 instructions per variant (87 ms, KS4/KS8 72 ms)")
 @pytest.mark.parametrize(
     ("config", "cycle_ms"),
     [
@@ -107,6 +108,7 @@ def test_cycle_time_from_variant_or_config(
     assert plant.read("plc.cycle_ms") == pytest.approx(cycle_ms)
 
 
+@pytest.mark.manual("§4.4", "under an interpolation card (DIL 6) the GMS loses its PLC")
 def test_interpolation_mode_has_no_plc(plant_factory: Any) -> None:
     plant = plant_factory({"dil": {"interpolation": True}, "plc": {"auto_ack_m_functions_ms": 0}})
     assert memory_status(plant) == 0x02
@@ -117,6 +119,9 @@ def test_interpolation_mode_has_no_plc(plant_factory: Any) -> None:
 # -- download framing (spec §3.8.24, §4.8) ---------------------------------------------------------
 
 
+@pytest.mark.manual("§2.3.1 p", "p1;100 begins a PLC download (a frames), p1;101 ends it; p1;1 starts, p1;2 stops the PLC")
+@pytest.mark.manual("§2.4", "a PLC program in the FLASH at power-on is started automatically")
+@pytest.mark.manual("§2.3.1 T", "T3;4 I.1: PLC not running")
 def test_download_stores_a_frames_opaquely(plant_factory: Any, tmp_path: Any) -> None:
     plant = plant_factory({}, state_dir=tmp_path)
     host = plant.host
@@ -155,6 +160,7 @@ def test_download_stores_a_frames_opaquely(plant_factory: Any, tmp_path: Any) ->
     assert memory_status(plant) == 0x02
 
 
+@pytest.mark.manual("§2.3.1 T", "T3;4 I.0: PLC program storage error (e.g. too long)")
 def test_download_too_long_is_a_storage_error(plant_factory: Any) -> None:
     plant = plant_factory({"plc": {"flash_bytes": 8}})
     host = plant.host
@@ -170,6 +176,7 @@ def test_download_too_long_is_a_storage_error(plant_factory: Any) -> None:
 # -- M-function handshake (spec §3.8.9, §4.10.3) ----------------------------------------------------
 
 
+@pytest.mark.manual("§2.3.1 m", "m waits until the PLC program resets the M bit")
 def test_m_function_handshake_without_auto_ack(card: Plant) -> None:
     ok(card, "m", 58, 7)
     assert markers(card, 6) == (0x00, 0x01)  # M58 = M7.0
@@ -453,6 +460,8 @@ def test_brake_output_is_not_the_plcs(plant_factory: Any) -> None:
 # -- counter input as set-point source, electronic gear (spec §5.10, manual §2.6) ----------------------
 
 
+@pytest.mark.manual("§2.6", "M < 2 saved with s85;170 and a restart: the counter input is the set-point source")
+@pytest.mark.manual("§2.6", "N23: each counted increment is worth v set-point increments (1..8)")
 def test_counter_input_mode_after_save_and_restart(plant_factory: Any, tmp_path: Any) -> None:
     plant = plant_factory({}, state_dir=tmp_path)
     host = plant.host

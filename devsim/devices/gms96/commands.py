@@ -163,7 +163,7 @@ class QueuedCommands:
 
     def override(self, cmd: Cmd) -> bool:
         if cmd.p1 in (0, 1):
-            self.feed.override_on = bool(cmd.p1)
+            self.feed.set_override_active(bool(cmd.p1))
         return self._settled()
 
     def data_word(self, cmd: Cmd) -> bool:

@@ -12,6 +12,7 @@ in position per N27/N28; H7: armed for the next move only, consumed when it ends
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from collections.abc import Callable
 from typing import Any, Protocol
@@ -36,6 +37,7 @@ class CardEvents(Protocol):
     def changed(self) -> None: ...
     def record_event(self, name: str) -> None: ...
     def arm_torque_abort(self) -> None: ...
+    def programs_ended(self) -> None: ...
 
 
 __all__ = ["Cmd", "Executor", "TRANSPARENT_P10"]
@@ -107,6 +109,8 @@ class Executor:
         self.h7_in_move = False  # the running move is the one H7 armed (spec §5.5)
         self.last_target: float | None = None
         self._timer: Timer | None = None
+        #: When the condition of :meth:`wait` may change by itself (None: only when the card changes).
+        self._changes_at: Callable[[], float | None] | None = None
         self._watch: Watch | None = None
         self._running = False
 
@@ -162,15 +166,39 @@ class Executor:
 
     def poke(self) -> None:
         """Something changed (marker, input, speed): re-check the wait condition."""
-        if self.waiting is not None and self.current is not None and self.waiting():
-            self.complete()
+        if self.waiting is not None and self.current is not None:
+            if self.waiting():
+                self.complete()
+            else:
+                self._arm_recheck()
 
-    def wait(self, name: str, condition: Callable[[], bool]) -> bool:
+    def wait(
+        self, name: str, condition: Callable[[], bool], changes_at: Callable[[], float | None] | None = None
+    ) -> bool:
+        """Wait until ``condition`` holds, re-checked whenever the card changes; ``changes_at``
+        names the next instant the condition may change by itself (a status bit that follows
+        the motion), when it is checked again too."""
         if condition():
             return True
         self.waiting = condition
         self.wait_name = name
+        self._changes_at = changes_at
+        self._arm_recheck()
         return False
+
+    def _arm_recheck(self) -> None:
+        if self._changes_at is None:
+            return
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        when = self._changes_at()
+        if when is not None and math.isfinite(when):
+            self._timer = self.clock.call_later(max(0.0, when - self.clock.now()), self._recheck)
+
+    def _recheck(self) -> None:
+        self._timer = None
+        self.poke()
 
     def h7_active(self) -> float | None:
         """The torque-abort level (fraction of Imax) while the armed move runs, else None."""
@@ -191,6 +219,7 @@ class Executor:
 
     def _clear_wait(self) -> None:
         self.waiting = None
+        self._changes_at = None
         self.wait_name = ""
         self.waiting_in_position = False
         ix = self.indexer
@@ -216,6 +245,7 @@ class Executor:
             reply()
         self.deferred.clear()
         self.program_depth = 0
+        self.card.programs_ended()
         self.h7_level = None
         self.h7_in_move = False
         if self.reference is not None:

@@ -127,9 +127,8 @@ class Gms96Face(Face):
         if letter.p1 != 2:
             return self.queue(letter)
         m = self.model
-        m.feed.o2_value = max(0, min(100, letter.p2))
-        m.feed.ext_override = None
-        m.indexer.replan()
+        m.feed.set_override_inactive_value(letter.p2)
+        m.speed_changed()
         return ACK
 
     def program(self, letter: Letter) -> bytes | None:
@@ -277,14 +276,14 @@ class Gms96Face(Face):
     def spindle_rpm(self, ext: bytes) -> bytes:
         """#8: the spindle speed for G95."""
         self.model.feed.spindle_rpm = int.from_bytes(ext[:2], "little") if len(ext) >= 2 else 0
-        self.model.indexer.replan()
+        self.model.speed_changed()
         return ACK
 
     def external_override(self, ext: bytes) -> bytes:
         """#9: an override 0..125 % from the host (the potentiometer is ignored from then on)."""
         self.model.feed.ext_override = min(ext[0] if ext else 0, 125)
         self.model.feed.o2_value = None
-        self.model.indexer.replan()
+        self.model.speed_changed()
         return ACK
 
 

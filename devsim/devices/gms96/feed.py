@@ -64,20 +64,35 @@ class Feed:
         """``f P1;P2``."""
         self.f, self.f_frac = self.clamp_feed(f, frac)
 
-    @staticmethod
-    def clamp_feed(f: int, frac: int) -> tuple[int, int]:
-        return max(1, min(f, tables.RANGES["f"][1])), max(0, min(255, frac))
+    def clamp_feed(self, f: int, frac: int) -> tuple[int, int]:
+        """``f P1;P2`` as the card takes it: under G94 an f above the M value sets the M value
+        (manual §2.3.1 f, P1: [1..M-Wert]); under G95 f is inc/rev, not bounded by M."""
+        high = self.M if self.feed_mode == 94 else tables.RANGES["f"][1]
+        return max(1, min(f, high)), max(0, min(255, frac))
 
     def v_factor(self) -> int:
         """The speed resolution the M value gives (manual §2.7)."""
         return tables.v_factor(self.M)
 
+    def set_override_active(self, active: bool) -> None:
+        """``o0``/``o1`` (manual §2.3.1 o): the override function off (100 %) or on (potentiometer
+        or #9); either ends an override-inactive value that ``o2`` set before."""
+        self.override_on = active
+        self.o2_value = None
+
+    def set_override_inactive_value(self, percent: int) -> None:
+        """``o2;P2`` (manual §2.3.1, immediate commands): the potentiometer override is switched
+        off and P2 [0..100] is the override value from now on, whatever ``o0``/``o1`` was in force."""
+        self.o2_value = max(0, min(100, percent))
+        self.ext_override = None
+
     def override_pct(self, potentiometer: float) -> float:
-        """The override in effect: 100 % when off, else o2, else #9, else the potentiometer."""
-        if not self.override_on:
-            return 100.0
+        """The override in effect: o2's value since it was received, else 100 % when off (o0),
+        else #9, else the potentiometer."""
         if self.o2_value is not None:
             return float(self.o2_value)
+        if not self.override_on:
+            return 100.0
         if self.ext_override is not None:
             return float(self.ext_override)
         return float(potentiometer)

@@ -23,7 +23,7 @@ class Flash:
         self.plc_frames: list[int] = []  # their lengths
         #: A running download: ("cnc" | "plc", program number, the recorded rows).
         self.download: tuple[str, int, list[list[Any]]] | None = None
-        #: T3;4 I.4: a CNC download did not fit (kept until the card's memory is wiped).
+        #: T3;4 I.4: the last CNC download did not fit (until a download fits or the next power-on).
         self.cnc_storage_error = False
 
     def power_on(self) -> None:
@@ -32,6 +32,7 @@ class Flash:
         self.plc_image = flash.get("plc")
         self.plc_frames = list(flash.get("plc_frames") or ([len(self.plc_image) // 2] if self.plc_image else []))
         self.download = None
+        self.cnc_storage_error = False  # the programs in the FLASH are the ones that fitted
 
     def save(self) -> None:
         self.nvram.put(
@@ -52,6 +53,7 @@ class Flash:
         if total > max_total:
             self.cnc_storage_error = True
             return False
+        self.cnc_storage_error = False
         if number == 0:
             self.programs = {}
         self.programs[number] = rows

@@ -52,12 +52,24 @@ class I2t:
             self.update()
 
     def power_on(self) -> None:
-        """The integral and the flags start afresh (a timer set before runs on, harmlessly)."""
+        """The integral and the flags start afresh: a crossing scheduled before the power went
+        off is forgotten, and the integral runs from now with the current the load asks for."""
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
         self.q = 0.0
         self.t = self.clock.now()
         self.limiting = False
         self.latched = False
-        self._timer = None
+        self.rate = 0.0
+        self._integrate()
+
+    def power_off(self) -> None:
+        """No current flows without power: nothing is integrated and no crossing is due."""
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        self.rate = 0.0
 
     def level(self) -> float:
         """N15 as a fraction of Imax."""
@@ -78,7 +90,11 @@ class I2t:
         return (i * i - level * level) / (level * level)
 
     def update(self) -> None:
-        """Integrate up to now, switch the limitation, schedule the next crossing."""
+        """Integrate up to now, switch the limitation, schedule the next crossing; tell the card."""
+        self._integrate()
+        self.settled()
+
+    def _integrate(self) -> None:
         now = self.clock.now()
         self.q = max(0.0, self.q + self.rate * (now - self.t))
         self.t = now
@@ -101,4 +117,3 @@ class I2t:
             self._timer = self.clock.call_later((threshold - self.q) / self.rate, self.update)
         elif self.limiting and self.rate < 0:
             self._timer = self.clock.call_later(self.q / -self.rate, self.update)
-        self.settled()

@@ -20,10 +20,28 @@ from devsim.devices.gms96.motion import ActualSwitch, Indexer
 from devsim.devices.gms96.params import NParameters
 from devsim.devices.gms96.stage import PowerStage
 
-__all__ = ["INPUT_BYTES", "OUTPUT_BITS", "Outputs", "axis_switches"]
+__all__ = ["INPUT_BYTES", "OUTPUT_BITS", "Outputs", "axis_switches", "inputs_shown_at"]
 
 INPUT_BYTES = 4  # EB0..EB3
 OUTPUT_BITS = 11  # A0.0..A1.2 (spec §4.11.1, G27)
+
+#: Inputs shown OR-ed with another on KSA cards and under an interpolation card (manual §2.4.2,
+#: §4.4, §5.2): E1.6 with E2.0, E1.7 with E2.1, both ways.
+ORED_INPUTS: dict[tuple[int, int], str] = {(1, 6): "E2.0", (2, 0): "E1.6", (1, 7): "E2.1", (2, 1): "E1.7"}
+#: The monitoring cause a resolver card shows at E2.3 (manual §2.4.2: "E2.3 = Ausfall Resolver").
+RESOLVER_LOSS = "resolver_loss"
+#: K1: its inputs E0.4 and E0.5 are also shown at E2.0 and E2.1 (manual §5.2).
+K1_SHOWN_AT: dict[tuple[int, int], str] = {(2, 0): "E0.4", (2, 1): "E0.5"}
+
+
+def inputs_shown_at(variant: str, interpolation: bool) -> dict[tuple[int, int], str]:
+    """Which inputs the image shows OR-ed into another bit: K1's E0.4/E0.5 at E2.0/E2.1; on KSA
+    cards and behind an interpolation card E1.6/E1.7 with E2.0/E2.1 (manual §2.4.2, §4.4, §5.2)."""
+    if variant == "K1":
+        return K1_SHOWN_AT
+    if interpolation or variant.startswith("KSA"):
+        return ORED_INPUTS
+    return {}
 
 
 class Outputs:
@@ -41,6 +59,9 @@ class Outputs:
         indexer: Indexer,
         stepper: bool,
         changed: Callable[[], None],
+        *,
+        shown_at: Callable[[], dict[tuple[int, int], str]] = dict,
+        resolver: bool = False,
     ) -> None:
         self.clock = clock
         self.axis = axis
@@ -51,6 +72,9 @@ class Outputs:
         self.indexer = indexer
         self.stepper = stepper
         self.changed = changed
+        #: The inputs the variant (and the DIL switch) also show at another bit: {(byte, bit): input}.
+        self.shown_at = shown_at
+        self.resolver = resolver  # the card has a resolver: its signal loss shows at E2.3
         self._inpos_timer: Timer | None = None
         self._inpos_fired = -math.inf
 
@@ -80,12 +104,22 @@ class Outputs:
             return 0
         return sum(1 << b for b in range(8) if byte * 8 + b < 16 and self.output_bit(byte * 8 + b))
 
+    def input_bit(self, byte: int, bit: int) -> bool:
+        """An input as the image shows it: its own signal, OR-ed with the one the variant wires
+        to it (:data:`ORED_INPUTS`, :data:`K1_SHOWN_AT`)."""
+        if bool(self.signals.get(f"E{byte}.{bit}")):
+            return True
+        other = self.shown_at().get((byte, bit))
+        return other is not None and bool(self.signals.get(other))
+
     def input_byte(self, byte: int) -> int:
         if not 0 <= byte < INPUT_BYTES:
             return 0
-        value = sum(1 << b for b in range(8) if self.signals.get(f"E{byte}.{b}"))
+        value = sum(1 << b for b in range(8) if self.input_bit(byte, b))
         if byte == 2 and self.stage.overload_latched:
-            value |= 0x04
+            value |= 0x04  # E2.2: 24 V short circuit
+        if byte == 2 and self.resolver and self.stage.monitoring_cause() == RESOLVER_LOSS:
+            value |= 0x08  # E2.3: resolver failure
         return value
 
     def follow(self) -> None:

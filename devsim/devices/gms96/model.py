@@ -33,7 +33,7 @@ from devsim.devices.gms96.feed import Feed
 from devsim.devices.gms96.flash import Flash
 from devsim.devices.gms96.i2t import I2t
 from devsim.devices.gms96.image import ProcessImage
-from devsim.devices.gms96.io import INPUT_BYTES, Outputs, axis_switches
+from devsim.devices.gms96.io import INPUT_BYTES, Outputs, axis_switches, inputs_shown_at
 from devsim.devices.gms96.memory import Memory
 from devsim.devices.gms96.motion import ActualSwitch, Indexer
 from devsim.devices.gms96.params import NParameters
@@ -83,6 +83,7 @@ class Gms96Card(Model):
         self.indexer = Indexer(
             clock=clock, axis=self.axis, feed=self.feed, params=self.params, stage=self.stage, image=self.image,
             signals=signals, geometry=geo, stepper=stepper, card=self,
+            max_speed=float(self.hw.max_step_frequency_hz) if self.hw.max_step_frequency_hz else None,
         )
         self.counter = CounterInput(
             clock=clock, axis=self.axis, indexer=self.indexer, params=self.params, stage=self.stage,
@@ -102,7 +103,9 @@ class Gms96Card(Model):
             lambda: bool(signals.get("blocked")), self.record_event,
         )
         self.outputs = Outputs(
-            clock, self.axis, self.image, signals, self.params, self.stage, self.indexer, stepper, self.changed
+            clock, self.axis, self.image, signals, self.params, self.stage, self.indexer, stepper, self.changed,
+            shown_at=lambda: inputs_shown_at(self.hw.name, self.dil.interpolation),
+            resolver=self.hw.feedback == "resolver",
         )
         self.plc = Plc(
             card=self, clock=clock, options=self.cfg.plc, ms_per_1000=self.hw.plc_ms_per_1000, flash=self.flash,
@@ -115,8 +118,9 @@ class Gms96Card(Model):
             signals=signals, image=self.image, geometry=geo, record_event=self.record_event,
         )
         self.program = ProgramControl(
-            executor=self.executor, flash=self.flash, image=self.image, signals=signals, outputs=self.outputs,
-            plc=self.plc, write_marker_byte=self.write_marker_byte,
+            executor=self.executor, flash=self.flash, image=self.image, outputs=self.outputs,
+            plc=self.plc, marker_byte=self.marker_byte, motion_changes_at=self.indexer.plan_changes_at,
+            write_marker_byte=self.write_marker_byte,
         )
         self.commands = QueuedCommands(
             card=self, executor=self.executor, program=self.program, references=self.references,
@@ -149,7 +153,7 @@ class Gms96Card(Model):
             for bit in range(8):
                 s.subscribe(f"E{byte}.{bit}", self._on_input)
         s.subscribe("emergency_stop", lambda *_: self._on_estop())
-        s.subscribe("override_pot", lambda *_: self.indexer.replan())
+        s.subscribe("override_pot", lambda *_: self.speed_changed())
         s.subscribe("load_pct", lambda *_: self.i2t.update())
         s.subscribe("blocked", lambda *_: self.torque.update_block())
         s.subscribe("monitoring", lambda *_: self._on_monitoring())
@@ -220,6 +224,7 @@ class Gms96Card(Model):
     def _power_off(self) -> None:
         self.memory.save_static()
         self.powered = False
+        self.i2t.power_off()
         self.plc.power_off()
         self.executor.flush()
         self.indexer.power_off(brake=True)
@@ -337,6 +342,17 @@ class Gms96Card(Model):
 
     def busy(self) -> bool:
         return self.executor.busy
+
+    def programs_ended(self) -> None:
+        """The executor dropped its programs (#0, M0.1, a fault): M0.2 "a CNC program runs" is 0
+        and no program ended successfully (manual §2.4.1)."""
+        self.image.set_marker(0, 2, False)
+
+    def speed_changed(self) -> None:
+        """An override or the G95 spindle speed changed on receipt: the running plan follows, waits
+        re-check (spec §5.2)."""
+        self.indexer.replan()
+        self.changed()
 
     def motion(self) -> bool:
         return (

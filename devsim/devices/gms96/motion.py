@@ -59,6 +59,7 @@ class Indexer:
         geometry: Settings,
         stepper: bool,
         card: IndexerEvents,
+        max_speed: float | None = None,
     ) -> None:
         self.clock = clock
         self.axis = axis
@@ -69,6 +70,7 @@ class Indexer:
         self.signals = signals
         self.geometry = geometry  # the configured axis: kv_per_n10, brake_stop_ms, end_stops
         self.stepper = stepper
+        self.max_speed = max_speed  # a stepper card's maximum step frequency [Hz] (manual §6)
         self.card = card
         params.on_change(self._parameter_written)
         self.target: float | None = None  # physical end of the running plan (chain)
@@ -98,6 +100,13 @@ class Indexer:
         if row.attr in LOOP_PARAMETERS:
             self.arm_following_error()
 
+    def plan_changes_at(self) -> float | None:
+        """The next boundary of the axis plan after now: where the motion's status bits (M0.3
+        moving, M1.4 speed reached) may change by themselves (None: at rest or cruising for ever)."""
+        now = self.clock.now()
+        times = [t for seg in self.axis.segments() for t in (seg.t0, seg.t1) if now < t < math.inf]
+        return min(times, default=None)
+
     # -- speeds ---------------------------------------------------------------------------------
     def override_pct(self) -> float:
         return self.feed.override_pct(float(self.signals.get("override_pot")))
@@ -122,6 +131,8 @@ class Indexer:
             v = float(fd.eeprom_M) * self.override_pct() / 100.0
         else:
             v = min(fd.work_speed(feed) * self.override_pct() / 100.0, float(fd.M))
+        if self.max_speed is not None:
+            v = min(v, self.max_speed)
         vf = fd.v_factor()
         return vf * math.floor(v / vf + 1e-9) if self.kind in ("work", "rapid_nv") else v
 

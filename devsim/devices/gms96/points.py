@@ -265,7 +265,8 @@ POINTS = PointTable.of(
     _PLAIN,
     signal_points(s for s in SIGNALS if s.name != "monitoring"),
     [
-        Point("quantity.monitoring", "str", "power-stage monitoring cause, e.g. dc_undervoltage ('' or clear: none)", "§4.5.3",
+        Point("quantity.monitoring", "str", "power-stage monitoring cause ('' or clear: none): dc_undervoltage, dc_overvoltage, "
+              "overtemperature (the LEDs), resolver_loss (E2.3 on resolver cards), any other text", "§4.5.3",
               get=lambda c: c.signals.get("monitoring"), put=_set_monitoring,
               in_state=True, shared=True),
     ],

@@ -13,7 +13,6 @@ from collections import deque
 from collections.abc import Callable
 
 from devsim.core.kit import Command, Table
-from devsim.core.signals import SignalBank
 from devsim.devices.gms96.executor import Cmd, Executor
 from devsim.devices.gms96.flash import Flash
 from devsim.devices.gms96.image import ProcessImage
@@ -43,17 +42,19 @@ class ProgramControl:
         executor: Executor,
         flash: Flash,
         image: ProcessImage,
-        signals: SignalBank,
         outputs: Outputs,
         plc: Plc,
+        marker_byte: Callable[[int], int],
+        motion_changes_at: Callable[[], float | None],
         write_marker_byte: Callable[[int, int], None],
     ) -> None:
         self.executor = executor
         self.flash = flash
         self.image = image
-        self.signals = signals
         self.outputs = outputs
         self.plc = plc
+        self.marker_byte = marker_byte  # the card's: MB0/MB1/MB3 with the firmware's live status bits
+        self.motion_changes_at = motion_changes_at  # the next instant the motion's status bits may change
         self.write_marker_byte = write_marker_byte  # the card's, with the effects of MB0/MB1
         self.stvo_edge = False  # STVO: a 0→1 edge on E0.1 since the wait began
 
@@ -135,11 +136,12 @@ class ProgramControl:
         return True if handler is None else handler(self, cmd.p3)
 
     def _wait_input(self, operand: int, want: bool) -> bool:
-        name = input_name(operand)
-        signals = self.signals
-        return self.executor.wait(
-            "WOSI" if want else "WORI", lambda: bool(signals.get(name)) == want if name else True
-        )
+        """WOSI/WORI: input ``operand`` as the image shows it (manual §2.4.2, §2.4.3)."""
+        if input_name(operand) is None:
+            return True
+        byte, bit = divmod(operand, 8)
+        outputs = self.outputs
+        return self.executor.wait("WOSI" if want else "WORI", lambda: outputs.input_bit(byte, bit) == want)
 
     def wosi(self, operand: int) -> bool:
         return self._wait_input(operand, True)
@@ -157,8 +159,12 @@ class ProgramControl:
         return self._wait_output(operand, False)
 
     def _wait_marker(self, operand: int, want: bool) -> bool:
-        img = self.image
-        return self.executor.wait("WOSF" if want else "WORF", lambda: img.marker(operand // 8 % 256, operand % 8) == want)
+        """WOSF/WORF: marker bit ``operand`` (byte operand // 8, bit operand % 8) as the PLC sees
+        it, the status bits of MB0/MB1/MB3 included (manual §2.4.1, §2.4.3)."""
+        byte, mask = operand // 8 % 256, 1 << (operand % 8)
+        return self.executor.wait(
+            "WOSF" if want else "WORF", lambda: bool(self.marker_byte(byte) & mask) == want, self.motion_changes_at
+        )
 
     def wosf(self, operand: int) -> bool:
         return self._wait_marker(operand, True)

@@ -471,7 +471,7 @@ FAULTS: dict[str, FaultDef] = {
             "CNC-Programm-Speicherungsfehler",
             sets="CNC program storage error, e.g. program memory full [R]",
             effect="program rejected",
-            clears="successful download [R]",
+            clears="successful download or power-on [R]",
             memory=_fs("CNC_STORAGE_ERROR"),
             source="M §2.3.1 T3;4; spec §4.5.3",
         ),

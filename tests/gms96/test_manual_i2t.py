@@ -1,0 +1,77 @@
+"""Manual §3.1 (I²t protection), §2.3.1 N15, T3;0 I.5/I.6, §2.3.2 #1 K.0, §2.4.1 M1.1: driven
+through the card's pty; the load is the machine side (``quantity.load_pct``: the current the motor
+asks for beyond what it needs at rest, :data:`~devsim.devices.gms96.i2t.I_BASE`)."""
+
+from __future__ import annotations
+
+import pytest
+
+from devsim.devices.gms96.client import Gms96Client
+from devsim.devices.gms96.i2t import I_BASE
+from tests.gms96.conftest import Plant
+from tests.gms96.test_motion_reference import send
+
+I2T_NOW, I2T_LATCHED = 0x20, 0x40  # T3;0 I.5, I.6 (manual §2.3.1 T)
+K_I2T = 0x01  # #1 K.0 (manual §2.3.2)
+N15_DEFAULT = 84  # manual §2.3.1 N: P2=15 (84, entspricht 33%)
+ALLOWED_AT_100_PCT = 2.0  # manual §3.1: "bei einer 100%-igen Überschreitung ... 2 Sekunden"
+BOOT = 0.6
+
+
+def load_for(current: float) -> float:
+    """The load (in %) that makes the motor ask for ``current`` (fraction of Imax)."""
+    return (current - I_BASE) * 100.0
+
+
+def status(c: Gms96Client) -> int:
+    return c.read(3, 0)[0]
+
+
+@pytest.mark.manual("§3.1", "at a 100 % excess of the I²t limit the current is allowed for 2 seconds, then limited")
+@pytest.mark.manual("§2.3.1 T", "T3;0 I.5: I²t limitation active; I.6: I²t limitation active (latching)")
+def test_double_the_n15_current_is_allowed_for_two_seconds(card: Plant) -> None:
+    c = card.client()
+    level = N15_DEFAULT / 255.0  # manual §3.1: 255 = 100 % of the maximum current
+    card.set("quantity.load_pct", load_for(2 * level))
+    card.advance(ALLOWED_AT_100_PCT - 0.05)
+    assert status(c) & (I2T_NOW | I2T_LATCHED) == 0
+    card.advance(0.1)
+    assert status(c) & (I2T_NOW | I2T_LATCHED) == I2T_NOW | I2T_LATCHED
+
+
+@pytest.mark.manual("§3.1", "I²t: the 2 s allowed at a 100 % excess count from power-on; "
+                    "nothing of the time before a power cycle is carried over")
+def test_i2t_after_power_on_counts_afresh(card: Plant) -> None:
+    c = card.client()
+    send(c, "N", N15_DEFAULT // 2, 15)  # not saved: power-on brings back 84
+    card.set("quantity.load_pct", load_for(2 * N15_DEFAULT / 255.0))  # 4x the level now, 2x after power-on
+    card.advance(0.2)  # at 4x (a 300 % excess) the limit would trip after 0.4 s
+    assert status(c) & I2T_LATCHED == 0
+    card.runtime.power_cycle(card.name)
+    card.advance(BOOT)
+    assert c.read(5, 15)[1] == N15_DEFAULT
+    card.advance(ALLOWED_AT_100_PCT - BOOT - 0.05)
+    assert status(c) & (I2T_NOW | I2T_LATCHED) == 0
+    card.advance(0.1)
+    assert status(c) & (I2T_NOW | I2T_LATCHED) == I2T_NOW | I2T_LATCHED
+
+
+def test_no_i2t_while_the_power_is_off(card: Plant) -> None:
+    c = card.client()
+    card.set("quantity.load_pct", load_for(2 * N15_DEFAULT / 255.0))
+    card.advance(1.0)
+    card.runtime.fault(card.name, "power", True)
+    card.advance(5.0)
+    card.runtime.fault(card.name, "power", False)
+    card.advance(BOOT)
+    assert status(c) & I2T_LATCHED == 0
+
+
+@pytest.mark.manual("§3.1", "after the allowed time the motor current is set to the programmed limit (N15)")
+@pytest.mark.manual("§2.3.1 T", "T1;5: the motor current [0..252], 252 = the maximum current")
+def test_the_current_is_held_at_the_n15_level(card: Plant) -> None:
+    c = card.client()
+    card.set("quantity.load_pct", 80)
+    card.advance(5.0)
+    assert status(c) & I2T_NOW
+    assert c.read(1, 5)[1] == pytest.approx(252 * N15_DEFAULT / 255, abs=1)

@@ -1,0 +1,54 @@
+"""Manual §2.3.1 T3;4 (memory status), p (downloads), s (EEPROM), r (reset), d/c (static data),
+§2.5 (CNC programs): driven through the card's pty with the :class:`Gms96Client`."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from devsim.devices.gms96.client import Gms96Client
+from tests.gms96.conftest import Plant
+from tests.gms96.test_motion_reference import send
+
+CNC_STORAGE_ERROR = 0x10  # T3;4 I.4 (manual §2.3.1 T)
+FLASH_ERASE = 5.0  # manual §2.3.1 p: "2 bis 5 Sekunden nicht ansprechbar"
+
+
+def memory_status(c: Gms96Client) -> int:
+    """T3;4: the identifier is the memory status byte (manual §2.3.1 T, P1=3 P2=4)."""
+    return c.read(3, 4)[0]
+
+
+def download(plant: Plant, c: Gms96Client, number: int, *commands: tuple[Any, ...]) -> None:
+    """p3;100;number, the commands, p3;101 (manual §2.3.1 p, §2.5)."""
+    send(c, "p", 3, 100, number)
+    plant.advance(FLASH_ERASE)
+    for command in commands:
+        send(c, *command)
+    send(c, "p", 3, 101)
+
+
+@pytest.mark.manual("§2.3.1 T", "T3;4 I.4: CNC program storage error")
+@pytest.mark.parametrize("wipe", [False, True])
+def test_cnc_storage_error_is_gone_after_power_on(plant_factory: Any, wipe: bool) -> None:
+    plant = plant_factory({"max_total_commands": 2})
+    c = plant.client()
+    assert memory_status(c) & CNC_STORAGE_ERROR == 0
+    download(plant, c, 0, ("A", 1000), ("A", 0), ("A", 500))  # 3 commands: does not fit
+    assert memory_status(c) & CNC_STORAGE_ERROR
+    plant.runtime.power_cycle(plant.name, wipe=wipe)
+    plant.advance(0.6)
+    assert memory_status(c) & CNC_STORAGE_ERROR == 0
+
+
+@pytest.mark.manual("§2.3.1 T", "T3;4 I.4: CNC program storage error (a download that fits stores the program)")
+def test_cnc_storage_error_ends_with_a_download_that_fits(plant_factory: Any) -> None:
+    plant = plant_factory({"max_total_commands": 2})
+    c = plant.client()
+    download(plant, c, 0, ("A", 1000), ("A", 0), ("A", 500))
+    assert memory_status(c) & CNC_STORAGE_ERROR
+    assert plant.read("programs") == {}
+    download(plant, c, 0, ("A", 1000), ("A", 0))
+    assert plant.read("programs") == {0: 2}
+    assert memory_status(c) & CNC_STORAGE_ERROR == 0
