@@ -204,6 +204,10 @@ class ProgramRun:
             self._flying(block, m, result)
             return
         target, f, _ = result
+        refused = unit.limit_refusal(1 if target > unit.holder else -1 if target < unit.holder else 0)
+        if refused is not None:
+            self._fail(refused)  # towards an actuated or locked limit switch (manual §2.5.3.10)
+            return
         self._move = (target, f)
         if unit.held(lambda: unit.position_to(target, f, self._done)):
             unit.set_error(6)
@@ -275,6 +279,10 @@ class ProgramRun:
         direction = 1 if steps[0] > 0 else -1
         if any(step * direction <= 0 for step in steps):
             self._fail(47 if md.rotary else 52)
+            return
+        refused = unit.limit_refusal(direction)
+        if refused is not None:
+            self._fail(refused)
             return
         unit.begin(direction)
         ends = [unit.machine(h, direction) for h in holders[1:]]

@@ -400,6 +400,17 @@ class AxisUnit:
         level = bool(self.signals.get(f"{name.upper()}{self.number}"))
         return level if self.md is None or self.md.limit_polarity == 0 else not level
 
+    def limit_refusal(self, direction: int) -> int | None:
+        """A move towards a limit switch: refused with 25 (Anfang) / 26 (Ende) while that
+        direction is locked, or while its switch is actuated now, even at standstill (manual
+        §2.5.3.10: a switch is seen when the axis moves "oder bewegen soll" towards it; §2.8.3:
+        a switch actuated by hand locks its direction).  Refusing locks the direction."""
+        if direction == 0:
+            return None
+        if self.actuated("anf" if direction < 0 else "end"):
+            self.locks.add(direction)
+        return (25 if direction < 0 else 26) if direction in self.locks else None
+
     def limit_input(self, name: str) -> None:
         """An ANF/END input changed: a switch in the direction of travel stops the axis (errors
         25/26) and locks that direction; leaving it in the other direction releases it."""
