@@ -81,6 +81,7 @@ class AxisUnit:
         self.braking = False  # stopping after a Stopp or a fault: jobs wait in the job lists
         self.in_position = False
         self.target: float | None = None  # holder target of the current (or aborted) positioning
+        self.target_tool = 0  # the tool offset the target was computed with (manual §2.7.7)
         self.m_function = 2
         self.teach_in: int | None = None
         self.taught: list[str] = []  # the blocks stored in teach-in so far
@@ -143,9 +144,11 @@ class AxisUnit:
         return self.coords.actual(round(self.holder))
 
     def residual(self) -> int:
+        """The distance to the target the tool tip was sent to: a tool offset made after a stop
+        updates it, so that a relative move by it reaches the original target (manual §2.7.7)."""
         if self.target is None or self.md is None:
             return 0
-        return round(self.target - self.holder)
+        return round(self.target - self.holder - (self.coords.tool_offset - self.target_tool))
 
     def attributes(self) -> int:
         md = self.md
@@ -308,7 +311,7 @@ class AxisUnit:
                     done: Callable[[bool], None] | None = None) -> None:
         """Move along ``pieces`` (from :meth:`begin`) to motor position ``end``, the holder to
         ``holder_target``: "position reached" there, the residual meanwhile."""
-        self.target = holder_target
+        self.target, self.target_tool = holder_target, self.coords.tool_offset
 
         def reached(ok: bool) -> None:
             if ok:
