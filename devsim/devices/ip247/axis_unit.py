@@ -31,6 +31,9 @@ __all__ = ["AxisEvents", "AxisUnit", "ProgramContext", "ReferenceContext"]
 
 FOREVER = 1e9  # seconds: a jog's cruise lasts until something stops it
 RS_PULSE = 0.1  # seconds (spec §5.16)
+#: The machine data whose change clears the reference point (manual §4.3.12): reference
+#: coordinate, pulses per revolution, travel per revolution, reference direction, synchronisation.
+REFERENCE_RELEVANT = ("reference", "pulses_per_rev", "gear", "reference_direction", "reference_sync")
 
 
 class AxisEvents(Protocol):
@@ -72,6 +75,7 @@ class AxisUnit:
         self.axis = Axis(clock, name=f"axis{number}")
         self.md: MachineData | None = None
         self.md_words: list[int] | None = None
+        self._previous_md: MachineData | None = None  # the last record loaded (kept when deleted)
         self.mode, self.last_cmd, self.running = 4, 0, False
         self.reference_set = False
         self.error = 8  # "Zustand nach Spannungsausfall" (spec §4.14 [DECISION])
@@ -187,16 +191,19 @@ class AxisUnit:
 
     # -- machine data -----------------------------------------------------------------------------
     def load_md(self, md: MachineData | None, words: list[int] | None, *, first: bool) -> None:
-        """New machine data (BA20), or none (BA21 with ``md`` None, which keeps the reference)."""
-        old = self.md
+        """New machine data (BA20, ``first``; from battery RAM at power-up otherwise), or none
+        (BA21 with ``md`` None, which keeps the reference).  The reference point survives new
+        data whose reference-relevant items equal the previous record's, a deleted one's too
+        (manual §4.3.12: the PLC side must delete before it writes)."""
+        old = self.md or self._previous_md
         self.md, self.md_words = md, words
         if md is None:
             return
+        self._previous_md = md
         kept = self.coords if not first else Coordinates(0, 0, 0)  # new MD reset the offsets (spec §5.9)
         self.coords = Coordinates(md.limit_begin, md.limit_end, md.reference, md.rotary, kept.zo_mode, 0,
                                   kept.to_ba15, kept.to_prog)
-        relevant = ("reference", "gear", "pulses_per_rev", "unit", "rotary", "limit_begin", "limit_end")
-        if first or old is None or any(getattr(old, k) != getattr(md, k) for k in relevant):
+        if old is None or any(getattr(old, k) != getattr(md, k) for k in REFERENCE_RELEVANT):
             self.reference_set = False  # (spec §4.1.2 bit 5)
         self.wire_switches()
 
