@@ -8,7 +8,7 @@ import struct
 
 import pytest
 
-from tests.ip247.helpers import FORWARD, START, STOP, Module
+from tests.ip247.helpers import FORWARD, START, STOP, Make, Module
 
 
 def observed(mod: Module, page: int = 1) -> tuple[int, int, int]:
@@ -36,3 +36,45 @@ def test_tool_offset_after_a_stop_updates_the_residual(mod: Module) -> None:
     mod.clock.advance(60)
     _, actual, residual = observed(mod)
     assert actual == 50_000 and residual == 0 and mod.device.read("output.PE1") is True
+
+
+@pytest.mark.manual("§2.8.1", "as long as there are no machine data on the module, the output Rücksetzen (RS) "
+                    "carries a high signal")
+@pytest.mark.manual("§2.8.1", "as soon as valid machine data are on the axis, RS goes low")
+def test_rs_is_high_until_valid_machine_data(mod: Module) -> None:
+    mod.clock.advance(2)
+    assert all(mod.device.read(f"output.RS{n}") is True for n in (1, 2, 3))
+    assert mod.load_md()[8] == 0
+    mod.clock.advance(1)
+    assert mod.device.read("output.RS1") is False
+    assert mod.device.read("output.RS2") is True and mod.device.read("output.RS3") is True
+
+
+@pytest.mark.manual("§2.8.1", "RS stays high while the machine data on the axis are faulty")
+def test_rs_stays_high_with_faulty_machine_data(make: Make) -> None:
+    mod = make({"sys_id": {"module": 5}})  # the record names module 11: MD error 12
+    assert mod.load_md()[8] == 12
+    mod.clock.advance(1)
+    assert mod.device.read("output.RS1") is True
+
+
+@pytest.mark.manual("§2.8.1", "deleting the machine data puts RS high again")
+def test_rs_high_again_after_deleting_the_machine_data(mod: Module) -> None:
+    mod.load_md()
+    mod.clock.advance(1)
+    assert mod.device.read("output.RS1") is False
+    assert mod.client.delete_record(1, 21, 101)[4] == 0
+    assert mod.device.read("output.RS1") is True
+
+
+@pytest.mark.manual("§2.8.1", "at the start of the reference run RS is high for 100 ms")
+def test_rs_pulse_of_100_ms_at_the_reference_run(make: Make) -> None:
+    mod = make({"axes": {1: {"cam": [20_000.0, 30_000.0]}}})
+    mod.load_md()
+    mod.clock.advance(1)
+    assert mod.operate(1, 5, START, b=0)[4] == 0
+    assert mod.device.read("output.RS1") is True
+    mod.clock.advance(0.099)
+    assert mod.device.read("output.RS1") is True
+    mod.clock.advance(0.002)
+    assert mod.device.read("output.RS1") is False

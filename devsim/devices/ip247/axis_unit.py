@@ -75,6 +75,7 @@ class AxisUnit:
         self.axis = Axis(clock, name=f"axis{number}")
         self.md: MachineData | None = None
         self.md_words: list[int] | None = None
+        self._rs_pulse: Any = None  # the timer ending a 100 ms RS pulse
         self._previous_md: MachineData | None = None  # the last record loaded (kept when deleted)
         self.mode, self.last_cmd, self.running = 4, 0, False
         self.reference_set = False
@@ -180,10 +181,21 @@ class AxisUnit:
 
     def pulse_rs(self) -> None:
         """A 100 ms high pulse on RS; the pattern counter restarts at 0 (spec §2.8.1, §5.6.3)."""
-        name = f"RS{self.number}"
-        self.signals.set(name, True)
-        self.clock.call_later(RS_PULSE, lambda: self.signals.set(name, False))
+        self.signals.set(f"RS{self.number}", True)
+        if self._rs_pulse is not None:
+            self._rs_pulse.cancel()
+        self._rs_pulse = self.clock.call_later(RS_PULSE, self._rs_pulse_over)
         self.pattern_base = self.axis.position()
+
+    def _rs_pulse_over(self) -> None:
+        self._rs_pulse = None
+        self.set_rs()
+
+    def set_rs(self) -> None:
+        """RS holds the power unit in reset: high while the axis has no valid machine data, low
+        once it has (manual §2.8.1); a pulse in progress ends on its own."""
+        if self._rs_pulse is None:
+            self.signals.set(f"RS{self.number}", not self.md_valid)
 
     def limit_levels(self) -> tuple[bool, bool]:
         """The levels of the limit inputs ANF and END (True = 24 V)."""
@@ -197,6 +209,7 @@ class AxisUnit:
         (manual §4.3.12: the PLC side must delete before it writes)."""
         old = self.md or self._previous_md
         self.md, self.md_words = md, words
+        self.set_rs()
         if md is None:
             return
         self._previous_md = md
@@ -219,6 +232,10 @@ class AxisUnit:
         if self.md is not None:
             self.set_holder(self.md.reference)
         self.set_pe()
+        if self._rs_pulse is not None:
+            self._rs_pulse.cancel()
+            self._rs_pulse = None
+        self.set_rs()
 
     # -- the external start/stop input (spec §5.10) -------------------------------------------------
     def held(self, start: Callable[[], None]) -> int | None:
