@@ -152,12 +152,19 @@ def test_zero_offset_relative_vector_e(mod: Module) -> None:
     assert mod.device.read("axis.2.position") == -10_000
 
 
+@pytest.mark.manual("§4.3.2", "BA9 Start runs the blocks up to the first traverse or dwell, then waits for "
+                    "the Übernahme command")
+@pytest.mark.manual("§4.3.2", "each further traverse must be started separately with Übernahme")
 def test_single_block_halts_and_stop_interrupts_with_65(mod: Module) -> None:
-    """§5.11.3/§5.11.5: BA9 halts after each traverse; Übernahme goes on; Stopp at a halt
-    interrupts (65, context kept); a second Stopp aborts it."""
+    """§5.11.3/§5.11.5: BA9 halts before the first traverse and after each; Übernahme goes on;
+    Stopp at a halt interrupts (65, context kept); a second Stopp aborts it."""
     mod.ready()
     mod.store(3, "%  3\nN1 X5 F1000 M11\nN2 X8 F1000 M12\nN3 M02\n")
     mod.operate(1, 9, START, b=3)
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.position") == 1_000 and mod.device.read("axis.1.running") is False
+    assert mod.call(0x62, b"\x01")[21] & 0x08  # waiting for Übernahme before N1
+    mod.operate(1, 9, TAKE_OVER, b=3)
     mod.clock.advance(5)
     assert mod.device.read("axis.1.position") == 5_000 and mod.device.read("axis.1.m_function") == 11
     assert mod.call(0x62, b"\x01")[21] & 0x08  # waiting for Übernahme

@@ -44,9 +44,11 @@ class ProgramRun:
 
     # -- from the module -------------------------------------------------------------------------
     def start(self) -> None:
+        """Start: the blocks run up to the first traverse or dwell; in BA9 the axis then waits
+        for Übernahme before it (manual §4.3.2)."""
         self.unit.m_function = M_NONE
         self.unit.coords.program_shift(0)
-        self._advance()
+        self._advance(halt_before=self.single)
 
     def take_over(self) -> int | None:
         """Übernahme while "fertig": continue after a halt or an interruption."""
@@ -105,7 +107,7 @@ class ProgramRun:
         self.unit.m_function = 2
 
     # -- the blocks -------------------------------------------------------------------------------
-    def _advance(self, skip_halt: bool = False) -> None:
+    def _advance(self, skip_halt: bool = False, halt_before: bool = False) -> None:
         unit = self.unit
         if self._pending is not None:
             block, m = self._pending
@@ -131,7 +133,7 @@ class ProgramRun:
                 return
             if not moves:
                 continue
-            if block.m == 0 and not skip_halt:
+            if (block.m == 0 or halt_before) and not skip_halt:
                 self._pending = (block, m)
                 unit.m_function = m
                 self._halt()
