@@ -1,0 +1,38 @@
+"""Manual statements about the data channel (page 4) that the named items of issue 28 touch
+(§7.2.2 error 22, §6.2.4 observe on the data channel), driven through the real PG pty and the
+PLC side's TCP endpoint."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.ip247.helpers import START, Module
+
+
+def directory(mod: Module) -> bytes:
+    """BA65: the program directory (number, length in words per program)."""
+    return mod.client.read_record(4, 65)[8:]
+
+
+@pytest.mark.manual("§7.2.2", "error 22: while an axis is in teach-in no program can be changed, deleted or "
+                    "transferred over the data channel")
+def test_deleting_a_program_during_teach_in_is_error_22(mod: Module) -> None:
+    mod.ready()
+    assert mod.store(5, "%  5\nN1 X10 F1000\nN2 M02\n")[8:] == bytes(4)
+    listed = directory(mod)
+    assert mod.operate(1, 10, START, b=9)[4] == 0  # teach-in on for program 9
+    answer = mod.client.delete_record(4, 23, 5)
+    assert answer[4] == 22
+    assert directory(mod) == listed  # program 5 is still there
+    assert mod.operate(1, 11, START, b=9)[4] == 0  # teach-in off
+    assert mod.client.delete_record(4, 23, 5)[4] == 0
+    assert mod.client.read_record(4, 69, 5)[8:] == b""  # gone now
+
+
+@pytest.mark.manual("§7.2.2", "error 22: while an axis is in teach-in no program can be transferred over the "
+                    "data channel")
+def test_storing_a_program_during_teach_in_is_error_22(mod: Module) -> None:
+    mod.ready()
+    assert mod.operate(1, 10, START, b=9)[4] == 0
+    assert mod.store(5, "%  5\nN1 X10 F1000\nN2 M02\n")[4] == 22
+    assert mod.client.read_record(4, 69, 5)[8:] == b""
