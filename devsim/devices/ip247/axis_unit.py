@@ -135,7 +135,13 @@ class AxisUnit:
         if self._d == 0:
             self.m0 = self.axis.position() - h - self._side(direction)  # no play to take up
         self._h0, self._d = h, direction
-        self.signals.set(f"RP{self.number}", direction > 0)
+        self.signals.set(f"RP{self.number}", self.rp_level(direction))
+
+    def rp_level(self, direction: int) -> bool:
+        """The direction output for a move: the MD polarity fixes which level is forward (manual
+        §2.5.1.1; spec §2.2 [DECISION]: 1 forward with the positive edge, 0 with the negative)."""
+        positive = self.md is None or self.md.pulse_polarity == 0x40
+        return (direction > 0) == positive
 
     def machine(self, holder: float, direction: int) -> float:
         """The motor position that puts the load at ``holder`` after a move in ``direction``."""

@@ -19,7 +19,8 @@ SIGNALS: tuple[SignalDef, ...] = (
         SignalDef(f"RS{n}", "output", False, f"axis {n} reset to the power unit: high while the axis has no valid "
                   "machine data, a 100 ms pulse after a machine-data input and at a reference run's start",
                   "§2.8.1"),
-        SignalDef(f"RP{n}", "output", False, f"axis {n} direction to the power unit (True: forward), set before "
+        SignalDef(f"RP{n}", "output", False, f"axis {n} direction to the power unit (forward: True with the positive "
+                  "pulse edge in the machine data, False with the negative), set before "
                   "the first pulse of a move", "§2.4"),
     )),
     SignalDef("BASP", "input", False, "command output disable from the PLC: every axis stops", "§2.9"),
