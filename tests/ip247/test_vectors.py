@@ -29,7 +29,8 @@ def test_zero_offset_program_of_section_6_6(make: Make) -> None:
     assert mod.store(9, SUB)[8:] == bytes(4) and mod.store(1, MAIN)[8:] == bytes(4)
     holes = [0, 0, 10, 10, 20, 20]
     expected = [*holes, 40, *holes, 40, *holes, 40, -130]
-    assert mod.operate(1, 9, START, b=1)[7] == 10  # (L9 N1 X0 M10: halted before its traverse, manual §4.3.2)
+    # (L9 N1 X0 M10: halted before its traverse, manual §4.3.2; M10 comes with the block, §2.6.9)
+    assert mod.operate(1, 9, START, b=1)[7] == 255
     seen, m = [], []
     for _ in range(len(expected)):
         assert mod.operate(1, 9, TAKE_OVER, b=1)[4] == 0

@@ -37,6 +37,7 @@ class ProgramRun:
         self.halted = False  # waiting for Übernahme (M00, a BA9 step): OBSERVE flag bit 3
         self.interrupted = False  # error 65: OBSERVE flag bit 1
         self._pending: tuple[Block, int] | None = None  # the traverse/dwell the halt holds back
+        self._halt_next = False  # the last traverse or dwell had M00: halt before the next
         self._timer = None
         self._last: tuple[Block, int] | None = None  # the traverse or dwell executing
         self._move: tuple[float, float] | None = None  # its holder target and frequency
@@ -108,11 +109,14 @@ class ProgramRun:
 
     # -- the blocks -------------------------------------------------------------------------------
     def _advance(self, skip_halt: bool = False, halt_before: bool = False) -> None:
-        unit = self.unit
+        """The blocks up to the next traverse or dwell, which runs unless a halt holds it: after
+        a block with M00, or at BA9's start (``halt_before``); ``skip_halt`` is the Übernahme
+        that releases it.  An M00 alone (or with a switch) is a traverse of length 0 (manual
+        §2.6.9, §4.3.1, §4.3.2)."""
         if self._pending is not None:
             block, m = self._pending
             self._pending = None
-            self._execute(block, m)
+            self._run(block, m)
             return
         while True:
             try:
@@ -127,19 +131,22 @@ class ProgramRun:
             if error is not None:
                 self._fail(error)
                 return
-            moves = block.x is not None or block.g in (74, 4)
-            if block.m == 0 and not moves:
-                self._halt()  # M00 alone: a traverse of length 0 (spec §4.11.8)
-                return
-            if not moves:
+            if not _traverse(block) and block.m != 0:
                 continue
-            if (block.m == 0 or halt_before) and not skip_halt:
-                self._pending = (block, m)
-                unit.m_function = m
+            if (self._halt_next or halt_before) and not skip_halt:
+                self._pending = (block, m)  # the halt point: directly before the traverse
                 self._halt()
                 return
-            self._execute(block, m)
+            self._run(block, m)
             return
+
+    def _run(self, block: Block, m: int) -> None:
+        """A traverse or dwell runs; after one with M00 the next one waits for Übernahme."""
+        self._halt_next = block.m == 0
+        if _traverse(block):
+            self._execute(block, m)
+        else:
+            self._advance()  # M00 alone: done at once
 
     def _switches(self, block: Block) -> int | None:
         """The switch, shift or correction a block's G function makes (:data:`SWITCHES`)."""
@@ -371,6 +378,11 @@ class ProgramRun:
         self.abort()
         self._rest()
         unit.set_error(error)
+
+
+def _traverse(block: Block) -> bool:
+    """A traverse (X, G74) or a dwell (G04)."""
+    return block.x is not None or block.g in (74, 4)
 
 
 def g_token(g: int) -> str:
