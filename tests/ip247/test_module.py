@@ -186,6 +186,7 @@ def test_single_block_halts_and_stop_interrupts_with_65(mod: Module) -> None:
     assert mod.operate(1, 9, STOP)[4] == 0 and mod.m.units[0].automatic is None
 
 
+@pytest.mark.manual("§4.3.1", "Stopp interrupts a program; Übernahme continues it at the interruption")
 def test_interrupted_traverse_completes_on_take_over(mod: Module) -> None:
     mod.ready()
     mod.store(4, "%  4\nN1 X30 F1000 M20\nN2 M02\n")
@@ -393,6 +394,8 @@ def test_an_interrupted_relative_traverse_keeps_its_target(mod: Module) -> None:
     assert mod.device.read("axis.1.position") == 1_000 + 30_000
 
 
+@pytest.mark.manual("§2.7.7", "in automatic mode position reached is generated after each traverse block and "
+                    "each dwell")
 def test_position_reached_drops_during_a_dwell(mod: Module) -> None:
     """§4.1.3 [DECISION]: PE is cleared when a motion or a dwell starts, and set when the dwell
     has run (output and attribute bit 2 alike)."""
