@@ -109,12 +109,12 @@ def test_switching_jog_modes_while_moving(make: Make) -> None:
     mod.clock.advance(2)
     assert mod.operate(1, 2, FORWARD)[4] == 0
     speeds = []
-    for _ in range(40):
-        mod.clock.advance(0.05)
+    for _ in range(400):
+        mod.clock.advance(0.001)
         speeds.append(mod.device.read("axis.1.velocity"))
     md = mod.m.units[0].md
     assert md is not None  # it braked down to f_ss, where the pulse train stops, before it started again:
-    assert min(speeds) <= md.f_ss * md.resolution * (1 + 1e-6) < 1000 * 1000 / 60
+    assert min(speeds) <= md.f_ss * md.resolution * 1.01 < 1000 * 1000 / 60  # (sampled each ms)
     mod.clock.advance(3)
     assert mod.device.read("axis.1.mode") == 2
     assert mod.device.read("axis.1.velocity") == pytest.approx(2000 * 1000 / 60, rel=1e-6)
