@@ -122,6 +122,9 @@ class ProgramRun:
             try:
                 _, block, m = next(self._steps)
             except StopIteration:
+                if self.interrupted:
+                    self._rest()  # the interruption point lies before the end (manual §4.3.3)
+                    return
                 self._end()
                 return
             except FlowError as exc:
@@ -348,14 +351,23 @@ class ProgramRun:
             self._last = None
             unit.in_position = True
             unit.set_pe()
-            self._rest()
+            self._to_interruption_point()
             return
         unit.brake(self._braked)
 
     def _braked(self, reached: bool) -> None:
         if reached:
             self._last = None  # (braking onto the target: it was reached)
+            self._to_interruption_point()
+            return
         self._rest()
+
+    def _to_interruption_point(self) -> None:
+        """A dwell or a traverse that ended while interrupted: the shifts, corrections and
+        switches up to the next traverse or dwell are still done; that one waits (manual
+        §4.3.3)."""
+        self._advance(halt_before=True)
+        self.halted = False  # (interrupted, not halted: Stopp aborts, Übernahme continues)
 
     def _halt(self) -> None:
         self.halted = True
