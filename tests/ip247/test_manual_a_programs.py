@@ -300,3 +300,15 @@ def test_m00_halts(make: Make) -> None:
     assert takes == [100_000 - 3_250, 100_000 - 3_250 + 2_300, 250_000 - 2_300 + 3_250]
     assert state(mod)[0] == 0 and mod.device.read("axis.1.running") is False
     assert mod.m.units[0].automatic is None  # the M00 of N30 before G40 and M02 did not halt
+
+
+@manual("§2.6.6.9", "after G74 the actual value counts both the zero offset and the tool offset (the example's "
+        "values, with the sign §2.6.6.7 gives a positive zero offset: see the deviation row)")
+def test_g74_example_values(make: Make) -> None:
+    mod = make()
+    assert mod.load_md(record=record(reference=0, zero_offsets=(500_000, 0, 0, 0), tool_length=20_000,
+                                     backlash=0))[8] == 0
+    mod.operate(1, 5, START, b=1)
+    run(mod, "%  1\nN1 G54\nN2 G43\nN3 G74\nN4 G04 F100\nN5 M02\n", seconds=5)
+    assert mod.device.read("axis.1.running") is True  # in the dwell
+    assert state(mod)[1] == -480_000
