@@ -290,3 +290,17 @@ def test_ba66_reads_actual_and_residual(plain: Module) -> None:
     plain.clock.advance(5)
     values = struct.unpack(">3i", plain.client.read_record(1, 66)[8:])
     assert values[0] == actual(plain) and values[2] == 50_000 - actual(plain)  # (§6.3.8.6: 2 words unused)
+
+
+@pytest.mark.manual("§4.3.3", "a program interrupted inside a G10 chain brakes; position reached is not set; 65; "
+                    "Übernahme goes on to the chain's target")
+def test_interruption_inside_a_flying_change(plain: Module) -> None:
+    assert plain.store(4, "%  4\nN1 G10 X50 F1000 M30\nN2 X100 F1000 M31\nN3 M02\n")[4] == 0
+    plain.operate(1, 8, START, b=4)
+    plain.clock.advance(2)
+    assert plain.operate(1, 8, STOP)[4] == 65
+    plain.clock.advance(5)
+    assert plain.device.read("axis.1.running") is False and plain.device.read("output.PE1") is False
+    assert plain.operate(1, 8, TAKE_OVER, b=4)[4] == 0
+    plain.clock.advance(60)
+    assert actual(plain) == 100_000 and plain.device.read("output.PE1") is True

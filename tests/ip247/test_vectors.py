@@ -94,6 +94,8 @@ def test_rotary_offsets_and_long_relative_moves_of_section_6_7(make: Make) -> No
     assert mod.operate(1, 7, FORWARD, dd=200_000_001)[4] == 62
 
 
+@pytest.mark.manual("§4.2.4", "the cam is monitored: not left after 2500 single steps, the run is aborted "
+                    "with 59 Der Referenznocken ist defekt")
 def test_a_cam_never_left_is_error_59_after_2500_steps(make: Make) -> None:
     """§6.8: BERO stuck at 1: 2,500 single steps, then error 59, reference missing (bit 5)."""
     mod = make()
@@ -108,6 +110,8 @@ def test_a_cam_never_left_is_error_59_after_2500_steps(make: Make) -> None:
 
 
 @pytest.mark.parametrize("cam_edge", [20_000.0, 20_002.2, 20_004.4, 20_006.6])
+@pytest.mark.manual("§4.2.4", "with synchronisation the reference point is the first zero of the "
+                    "current-pattern counter after the cam is left")
 def test_synchronous_reference_at_pattern_zero(make: Make, cam_edge: float) -> None:
     """§6.8: synchronous with 4 patterns: at most 3 single steps after the cam's falling edge,
     and the reference point lies where the pattern counter is 0."""
@@ -122,6 +126,8 @@ def test_synchronous_reference_at_pattern_zero(make: Make, cam_edge: float) -> N
     assert 0 <= (cam_edge - unit.axis.position()) / 1.1 <= 3 + 1  # (the edge lies within a step)
 
 
+@pytest.mark.manual("§4.2.3", "example: after a zero offset of 100 mm backward, Referenzpunkt setzen with "
+                    "reference coordinate 0 shows 100 mm")
 def test_reference_set_after_a_zero_offset_of_section_6_8(make: Make) -> None:
     """BA13 100 mm Rückwärts, then "Referenzpunkt setzen" with x_ref = 0: actual 100 mm."""
     mod = make()
