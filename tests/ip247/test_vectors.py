@@ -68,6 +68,8 @@ def rotary(make: Make) -> Module:
 ])
 @pytest.mark.manual("§2.5.3.3", "absolute targets of a rotary axis lie within the range; range start and end "
                     "are the same point")
+@pytest.mark.manual("§4.2.6", "rotary BA6: Vorwärts/Rückwärts approach the target in that direction; standing "
+                    "on it they go once round")
 def test_rotary_targets_of_section_6_7(make: Make, target: int, command: int, travel: int) -> None:
     mod = rotary(make)
     motor = mod.device.read("axis.1.machine_position")
@@ -78,6 +80,8 @@ def test_rotary_targets_of_section_6_7(make: Make, target: int, command: int, tr
 
 
 @pytest.mark.manual("§2.5.3.3", "a relative move on a rotary axis may be longer than the traverse range")
+@pytest.mark.manual("§4.2.7", "on a rotary axis the relative distance is limited to +-200 m (degrees: "
+                    "+-200000); beyond it 62 Unzulässige Wegangabe")
 def test_rotary_offsets_and_long_relative_moves_of_section_6_7(make: Make) -> None:
     mod = rotary(make)
     mod.operate(1, 7, FORWARD, w=4_000, dd=60_000)
