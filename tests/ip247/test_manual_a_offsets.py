@@ -344,3 +344,22 @@ def test_rotary_shortest_way_from_the_tip(make: Make) -> None:
     mod.clock.advance(60)
     assert mod.device.read("axis.1.machine_position") - motor == pytest.approx(180_000)
     assert actual(mod) == 270_000
+
+
+@pytest.mark.manual("§2.6.6.5", "the shortest way ignores the backlash: with equal ways the axis goes clockwise even "
+                    "when the backlash makes that way longer")
+def test_shortest_way_ignores_the_backlash(make: Make) -> None:
+    mod = make()
+    assert mod.load_md(record=record(unit=3, rotary=True, limit_begin=0, limit_end=360_000, gear=1_600,
+                                     pulses_per_rev=400, reference=0, backlash=1_000, f_ss=200, f_max=20_000,
+                                     a=100_000, jog1=1000, jog2=1000, step_velocity=1000,
+                                     reference_velocity=1000, zero_offsets=(0, 0, 0, 0)))[8] == 0
+    mod.operate(1, 5, START, b=1)
+    mod.operate(1, 7, BACKWARD, w=4_000, dd=10_000)  # the last move counter-clockwise
+    mod.clock.advance(30)
+    assert actual(mod) == 350_000
+    motor = mod.device.read("axis.1.machine_position")
+    assert mod.operate(1, 6, START, w=4_000, dd=170_000)[4] == 0  # 180° either way
+    mod.clock.advance(60)
+    assert actual(mod) == 170_000
+    assert mod.device.read("axis.1.machine_position") - motor == pytest.approx(180_000 + 1_000)

@@ -335,6 +335,7 @@ def test_external_stop_while_jogging_is_27_and_stopp_cancels_a_wait(mod: Module)
 
 @pytest.mark.manual("§2.5.3.9", "at each reversal the module adds the backlash to the path; the actual value "
                     "stands while the play is taken up")
+@pytest.mark.manual("§4.2.5", "after Referenzpunkt setzen the first move takes no backlash up")
 def test_backlash_is_taken_up_at_each_reversal(mod: Module) -> None:
     """§5.8 (COM247 MD: b = 1 mm): no take-up on the first move after "Referenzpunkt setzen";
     on a reversal the motor travels b more while the actual value stands still."""
