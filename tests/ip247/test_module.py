@@ -30,6 +30,9 @@ def test_vector_b_automatic_start_answers_running_and_m255(mod: Module) -> None:
     assert mod.device.read("axis.1.position") == 10_000 and mod.device.read("axis.1.m_function") == 2
 
 
+@pytest.mark.manual("§2.5", "without correct machine data an operator command to the axis is refused with "
+                    "Keine oder fehlerhafte Maschinendaten (14)")
+@pytest.mark.manual("§2.2", "an axis works only when a correct machine-data record is on the module")
 def test_without_md_only_ba4_and_ba17_run(mod: Module) -> None:
     """§4.2: error 14 without machine data; BA17 clears every page's error."""
     assert mod.operate(1, 1, FORWARD)[4] == 14
@@ -63,6 +66,8 @@ def test_md_round_trip_directory_and_no_overwrite(mod: Module) -> None:
     assert mod.call(0x64, bytes((4, 64, 0, 0)))[8:] == struct.pack(">6H", 101, 70, 0, 0, 0, 0)
 
 
+@pytest.mark.manual("§2.7.1", "the attribute MD missing is cleared once machine data are transferred, even "
+                    "faulty ones; only error-free machine data let operator commands move the axis")
 def test_md_error_12_when_the_module_number_differs(make: Make) -> None:
     """§6.3: the record names module 11; a module with SYS-ID module 5 gives MD error 12 and
     module error 15; the attributes say MD present (bit 6 clear) but motion is refused (14)."""
@@ -72,6 +77,12 @@ def test_md_error_12_when_the_module_number_differs(make: Make) -> None:
     assert mod.operate(1, 1, FORWARD)[4] == 14
 
 
+@pytest.mark.manual("§2.5.3.7", "the acceleration ramp is f = F(1 - e^(-t/tau)) + f_ss with F = (f_max - "
+                    "f_ss)/0.95, the deceleration ramp its mirror; below f_max the acceleration stops at f_v")
+@pytest.mark.manual("§2.5.3.4", "the travel resolution is the travel per revolution divided by the pulses per "
+                    "revolution")
+@pytest.mark.manual("§2.5.4.2", "velocity [unit/min] = frequency x resolution x 60")
+@pytest.mark.manual("§2.7.7", "position reached is set when the target of a positioning is reached")
 def test_ba7_takes_the_closed_form_time(mod: Module) -> None:
     """§5.3/§5.5: 10 mm at 1000 mm/min with r = 1.1 µm, f_ss 10 kHz, a 100 Hz/ms: the two
     exponential ramps and the cruise take exactly what the formulas say; PE at the end."""
@@ -104,6 +115,8 @@ def test_stop_keeps_the_residual_and_ba7_by_it_reaches_the_target(mod: Module) -
     assert mod.device.read("axis.1.position") == 50_000 and mod.device.read("output.PE1") is True
 
 
+@pytest.mark.manual("§4.1.1", "operator commands given while the axis runs give Nicht erlaubter Auftrag (2) "
+                    "and abort the running action")
 def test_a_job_while_running_is_error_2_and_aborts(mod: Module) -> None:
     """§3.1: an operator command on a running axis (not Stopp, not BA4) aborts with error 2."""
     mod.ready()
@@ -114,6 +127,8 @@ def test_a_job_while_running_is_error_2_and_aborts(mod: Module) -> None:
     assert mod.device.read("axis.1.running") is False and mod.device.read("axis.1.mode") == 1
 
 
+@pytest.mark.manual("§2.8.3", "only the limit switch in the direction of travel is detected: the other "
+                    "direction stays free")
 def test_jog_into_a_limit_switch_stops_with_26_and_locks_forward(make: Make) -> None:
     """§5.7: END actuated while jogging forward: error 26, the direction is locked; backward
     is allowed and releases it once the switch is left."""
@@ -130,6 +145,9 @@ def test_jog_into_a_limit_switch_stops_with_26_and_locks_forward(make: Make) -> 
     assert mod.operate(1, 1, FORWARD, w=100)[4] == 0
 
 
+@pytest.mark.manual("§4.2.4", "special case 1: the cam found before a limit switch reverses the run at the "
+                    "end of the cam; back onto the cam at f_ss, then left in single steps in the reference "
+                    "direction: the reference point")
 def test_reference_run_ends_at_the_cam_edge(make: Make) -> None:
     """§5.6.2 (sync no; R backward in COM247's MD): the run goes forward over the cam, back over
     it, onto it again at f_ss and leaves it in single steps backward: H := x_ref there."""
@@ -152,12 +170,19 @@ def test_zero_offset_relative_vector_e(mod: Module) -> None:
     assert mod.device.read("axis.2.position") == -10_000
 
 
+@pytest.mark.manual("§4.3.2", "BA9 Start runs the blocks up to the first traverse or dwell, then waits for "
+                    "the Übernahme command")
+@pytest.mark.manual("§4.3.2", "each further traverse must be started separately with Übernahme")
 def test_single_block_halts_and_stop_interrupts_with_65(mod: Module) -> None:
-    """§5.11.3/§5.11.5: BA9 halts after each traverse; Übernahme goes on; Stopp at a halt
-    interrupts (65, context kept); a second Stopp aborts it."""
+    """§5.11.3/§5.11.5: BA9 halts before the first traverse and after each; Übernahme goes on;
+    Stopp at a halt interrupts (65, context kept); a second Stopp aborts it."""
     mod.ready()
     mod.store(3, "%  3\nN1 X5 F1000 M11\nN2 X8 F1000 M12\nN3 M02\n")
     mod.operate(1, 9, START, b=3)
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.position") == 1_000 and mod.device.read("axis.1.running") is False
+    assert mod.call(0x62, b"\x01")[21] & 0x08  # waiting for Übernahme before N1
+    mod.operate(1, 9, TAKE_OVER, b=3)
     mod.clock.advance(5)
     assert mod.device.read("axis.1.position") == 5_000 and mod.device.read("axis.1.m_function") == 11
     assert mod.call(0x62, b"\x01")[21] & 0x08  # waiting for Übernahme
@@ -168,6 +193,7 @@ def test_single_block_halts_and_stop_interrupts_with_65(mod: Module) -> None:
     assert mod.operate(1, 9, STOP)[4] == 0 and mod.m.units[0].automatic is None
 
 
+@pytest.mark.manual("§4.3.1", "Stopp interrupts a program; Übernahme continues it at the interruption")
 def test_interrupted_traverse_completes_on_take_over(mod: Module) -> None:
     mod.ready()
     mod.store(4, "%  4\nN1 X30 F1000 M20\nN2 M02\n")
@@ -199,6 +225,8 @@ def test_battery_ram_survives_power_but_not_a_battery_fault(make: Make) -> None:
     assert mod.device.read("axis.1.md_error") == -1 and mod.device.read("programs") == []
 
 
+@pytest.mark.manual("§4.3.4", "the example: positions 1258.250 mm and 3000 mm stored with Übernahme in "
+                    "program 7, BA11 closes it: N1 X1258.250 F2500 / N2 X3000.000 F2500 / N3 M02")
 def test_teach_in_example_of_section_5_12(make: Make) -> None:
     """§5.12: BA10 program 7; positions stored with Übernahme (message 3) as N<k> X… F<step
     velocity>; another axis cannot start teach-in (22); BA8 meanwhile is 30; BA11 closes."""
@@ -220,6 +248,10 @@ def test_teach_in_example_of_section_5_12(make: Make) -> None:
     assert mod.device.read("program.7") == "%  7\nN1 X1258.250 F2500\nN2 X3000.000 F2500\nN3 M02\n"
 
 
+@pytest.mark.manual("§2.9", "with BASP evaluated the PE outputs go low, the jobs on the axes are aborted and "
+                    "AG ist ausgefallen (55) is given")
+@pytest.mark.manual("§2.8.1", "the ready input BB monitors the power unit: without it motion is refused and "
+                    "its loss stops the axis (53)")
 def test_basp_and_the_power_unit_ready_input(mod: Module) -> None:
     """§5.13/§5.14: BASP stops every axis with error 55 and forces PE low; without BB a motion
     job is refused with 53, and BB falling during motion stops the pulses (53)."""
@@ -256,6 +288,10 @@ def test_the_plc_job_point_takes_bcd_values(mod: Module) -> None:
     assert mod.device.read("axis.1.position") == 120_000
 
 
+@pytest.mark.manual("§2.8.4", "BA9 with 1 at the input: the Übernahme gives Motor wartet auf externen Start; "
+                    "the falling edge runs the traverse")
+@pytest.mark.manual("§2.8.4", "a 1 applied after the traverse ended (position reached) interrupts the "
+                    "program: error 65; after Übernahme the next traverse waits for the falling edge")
 def test_external_start_vector_6_9(mod: Module) -> None:
     """§6.9/§5.10: with START-N/STOP = 1, BA9 halts before N1 (M00); Übernahme → error 6; the
     falling edge runs N1 to 100 mm; a rising edge after PE interrupts (65); Übernahme → 6; the
@@ -279,6 +315,10 @@ def test_external_start_vector_6_9(mod: Module) -> None:
     assert mod.device.read("axis.1.position") == 200_000 and mod.device.read("axis.1.m_function") == 20
 
 
+@pytest.mark.manual("§2.8.4", "a 0 to 1 change during a job gives externer Stopp aufgetreten (27) and aborts "
+                    "the job")
+@pytest.mark.manual("§2.8.4", "a job given while the input is 1 waits (error 6); Stopp with any mode cancels "
+                    "the wait without error")
 def test_external_stop_while_jogging_is_27_and_stopp_cancels_a_wait(mod: Module) -> None:
     mod.ready()
     mod.operate(1, 1, FORWARD)
@@ -293,6 +333,9 @@ def test_external_stop_while_jogging_is_27_and_stopp_cancels_a_wait(mod: Module)
     assert mod.device.read("axis.1.residual") == 0 and mod.device.read("axis.1.running") is False
 
 
+@pytest.mark.manual("§2.5.3.9", "at each reversal the module adds the backlash to the path; the actual value "
+                    "stands while the play is taken up")
+@pytest.mark.manual("§4.2.5", "after Referenzpunkt setzen the first move takes no backlash up")
 def test_backlash_is_taken_up_at_each_reversal(mod: Module) -> None:
     """§5.8 (COM247 MD: b = 1 mm): no take-up on the first move after "Referenzpunkt setzen";
     on a reversal the motor travels b more while the actual value stands still."""
@@ -373,6 +416,12 @@ def test_an_interrupted_relative_traverse_keeps_its_target(mod: Module) -> None:
     assert mod.device.read("axis.1.position") == 1_000 + 30_000
 
 
+@pytest.mark.manual("§2.7.7", "in automatic mode position reached is generated after each traverse block and "
+                    "each dwell")
+@pytest.mark.manual("§2.8.2", "position reached goes to the CPU (attribute bit 2) and to a digital output "
+                    "alike")
+@pytest.mark.manual("§2.7.6", "in automatic mode the axis state stays läuft until the program ends or is "
+                    "interrupted")
 def test_position_reached_drops_during_a_dwell(mod: Module) -> None:
     """§4.1.3 [DECISION]: PE is cleared when a motion or a dwell starts, and set when the dwell
     has run (output and attribute bit 2 alike)."""

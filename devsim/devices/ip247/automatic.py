@@ -37,6 +37,7 @@ class ProgramRun:
         self.halted = False  # waiting for Übernahme (M00, a BA9 step): OBSERVE flag bit 3
         self.interrupted = False  # error 65: OBSERVE flag bit 1
         self._pending: tuple[Block, int] | None = None  # the traverse/dwell the halt holds back
+        self._halt_next = False  # the last traverse or dwell had M00: halt before the next
         self._timer = None
         self._last: tuple[Block, int] | None = None  # the traverse or dwell executing
         self._move: tuple[float, float] | None = None  # its holder target and frequency
@@ -44,9 +45,11 @@ class ProgramRun:
 
     # -- from the module -------------------------------------------------------------------------
     def start(self) -> None:
+        """Start: the blocks run up to the first traverse or dwell; in BA9 the axis then waits
+        for Übernahme before it (manual §4.3.2)."""
         self.unit.m_function = M_NONE
         self.unit.coords.program_shift(0)
-        self._advance()
+        self._advance(halt_before=self.single)
 
     def take_over(self) -> int | None:
         """Übernahme while "fertig": continue after a halt or an interruption."""
@@ -105,17 +108,23 @@ class ProgramRun:
         self.unit.m_function = 2
 
     # -- the blocks -------------------------------------------------------------------------------
-    def _advance(self, skip_halt: bool = False) -> None:
-        unit = self.unit
+    def _advance(self, skip_halt: bool = False, halt_before: bool = False) -> None:
+        """The blocks up to the next traverse or dwell, which runs unless a halt holds it: after
+        a block with M00, or at BA9's start (``halt_before``); ``skip_halt`` is the Übernahme
+        that releases it.  An M00 alone (or with a switch) is a traverse of length 0 (manual
+        §2.6.9, §4.3.1, §4.3.2)."""
         if self._pending is not None:
             block, m = self._pending
             self._pending = None
-            self._execute(block, m)
+            self._run(block, m)
             return
         while True:
             try:
                 _, block, m = next(self._steps)
             except StopIteration:
+                if self.interrupted:
+                    self._rest()  # the interruption point lies before the end (manual §4.3.3)
+                    return
                 self._end()
                 return
             except FlowError as exc:
@@ -125,19 +134,22 @@ class ProgramRun:
             if error is not None:
                 self._fail(error)
                 return
-            moves = block.x is not None or block.g in (74, 4)
-            if block.m == 0 and not moves:
-                self._halt()  # M00 alone: a traverse of length 0 (spec §4.11.8)
-                return
-            if not moves:
+            if not _traverse(block) and block.m != 0:
                 continue
-            if block.m == 0 and not skip_halt:
-                self._pending = (block, m)
-                unit.m_function = m
+            if (self._halt_next or halt_before) and not skip_halt:
+                self._pending = (block, m)  # the halt point: directly before the traverse
                 self._halt()
                 return
-            self._execute(block, m)
+            self._run(block, m)
             return
+
+    def _run(self, block: Block, m: int) -> None:
+        """A traverse or dwell runs; after one with M00 the next one waits for Übernahme."""
+        self._halt_next = block.m == 0
+        if _traverse(block):
+            self._execute(block, m)
+        else:
+            self._advance()  # M00 alone: done at once
 
     def _switches(self, block: Block) -> int | None:
         """The switch, shift or correction a block's G function makes (:data:`SWITCHES`)."""
@@ -204,6 +216,10 @@ class ProgramRun:
             self._flying(block, m, result)
             return
         target, f, _ = result
+        refused = unit.limit_refusal(1 if target > unit.holder else -1 if target < unit.holder else 0)
+        if refused is not None:
+            self._fail(refused)  # towards an actuated or locked limit switch (manual §2.5.3.10)
+            return
         self._move = (target, f)
         if unit.held(lambda: unit.position_to(target, f, self._done)):
             unit.set_error(6)
@@ -276,6 +292,10 @@ class ProgramRun:
         if any(step * direction <= 0 for step in steps):
             self._fail(47 if md.rotary else 52)
             return
+        refused = unit.limit_refusal(direction)
+        if refused is not None:
+            self._fail(refused)
+            return
         unit.begin(direction)
         ends = [unit.machine(h, direction) for h in holders[1:]]
         try:
@@ -331,14 +351,23 @@ class ProgramRun:
             self._last = None
             unit.in_position = True
             unit.set_pe()
-            self._rest()
+            self._to_interruption_point()
             return
         unit.brake(self._braked)
 
     def _braked(self, reached: bool) -> None:
         if reached:
             self._last = None  # (braking onto the target: it was reached)
+            self._to_interruption_point()
+            return
         self._rest()
+
+    def _to_interruption_point(self) -> None:
+        """A dwell or a traverse that ended while interrupted: the shifts, corrections and
+        switches up to the next traverse or dwell are still done; that one waits (manual
+        §4.3.3)."""
+        self._advance(halt_before=True)
+        self.halted = False  # (interrupted, not halted: Stopp aborts, Übernahme continues)
 
     def _halt(self) -> None:
         self.halted = True
@@ -361,6 +390,11 @@ class ProgramRun:
         self.abort()
         self._rest()
         unit.set_error(error)
+
+
+def _traverse(block: Block) -> bool:
+    """A traverse (X, G74) or a dwell (G04)."""
+    return block.x is not None or block.g in (74, 4)
 
 
 def g_token(g: int) -> str:
