@@ -22,7 +22,11 @@ from devsim.devices.ip247.flying import NotJoinable, chain_pieces
 from devsim.devices.ip247.jobs import START, STOP, TAKE_OVER
 from devsim.devices.ip247.program import Block
 
-__all__ = ["SWITCHES", "ProgramRun", "g_token"]
+__all__ = ["CYCLE_BLOCKS", "SWITCHES", "ProgramRun", "g_token"]
+
+#: Blocks the module interprets without a traverse or dwell before it gives up with error 33
+#: "Zykluszeit überschritten" (manual §7.2; spec §4.11.5: an endless loop without motion).
+CYCLE_BLOCKS = 10_000
 
 
 class ProgramRun:
@@ -41,6 +45,7 @@ class ProgramRun:
         self._last: tuple[Block, int] | None = None  # the traverse or dwell executing
         self._move: tuple[float, float] | None = None  # its holder target and frequency
         self._m_timers: list[Any] = []  # M outputs at the joints of a G10 chain
+        self._advancing = self._again = False  # interpreting; a traverse ended at once meanwhile
 
     # -- from the module -------------------------------------------------------------------------
     def start(self) -> None:
@@ -106,13 +111,26 @@ class ProgramRun:
 
     # -- the blocks -------------------------------------------------------------------------------
     def _advance(self, skip_halt: bool = False) -> None:
+        if self._advancing:
+            self._again = True  # a traverse that took no time ended inside the loop below: it goes on
+            return
+        self._advancing = True
+        try:
+            self._interpret(skip_halt)
+        finally:
+            self._advancing = False
+
+    def _interpret(self, skip_halt: bool) -> None:
+        """The blocks up to the next one that takes time (a traverse, a dwell), a halt or the
+        end; :data:`CYCLE_BLOCKS` blocks without either: error 33."""
         unit = self.unit
         if self._pending is not None:
             block, m = self._pending
             self._pending = None
-            self._execute(block, m)
-            return
-        while True:
+            if not self._ran_at_once(block, m):
+                return
+            skip_halt = False
+        for _ in range(CYCLE_BLOCKS):
             try:
                 _, block, m = next(self._steps)
             except StopIteration:
@@ -136,8 +154,18 @@ class ProgramRun:
                 unit.m_function = m
                 self._halt()
                 return
-            self._execute(block, m)
-            return
+            if not self._ran_at_once(block, m):
+                return
+            skip_halt = False
+        self._fail(33)  # blocks without end and without time: "Zykluszeit überschritten" (§7.2)
+
+    def _ran_at_once(self, block: Block, m: int) -> bool:
+        """Execute a traverse or dwell; True when it ended at once (a path of length 0) and the
+        program goes on."""
+        self._again = False
+        self._execute(block, m)
+        again, self._again = self._again, False
+        return again
 
     def _switches(self, block: Block) -> int | None:
         """The switch, shift or correction a block's G function makes (:data:`SWITCHES`)."""
