@@ -106,9 +106,14 @@ class DataChannel:
     # -- writing (spec §4.9, §4.10, §4.12) ---------------------------------------------------------
     def write_md(self, unit: AxisUnit | None, db: int, words: Words, overwrite: bool,
                  from_plc: bool) -> tuple[int, Words]:
-        """BA20: the axis's machine data; the result word carries the MD error (spec §4.9)."""
+        """BA20: the axis's machine data; the result word carries the MD error (spec §4.9).  A
+        set names its axis (DR n+3) and is taken only over that axis's page: 80H and error 46
+        elsewhere (manual §4.3.12, §6.3.10)."""
         assert unit is not None
         unit.error = 0
+        if len(words) > 3 and words[3] & 0xFF != unit.number:
+            self.pages.set_error(unit, 46)
+            return ACK_NEGATIVE, []
         if unit.running:
             self.pages.set_error(unit, 4)
             return ACK_ACCEPTED, [0]
