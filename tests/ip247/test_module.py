@@ -30,6 +30,9 @@ def test_vector_b_automatic_start_answers_running_and_m255(mod: Module) -> None:
     assert mod.device.read("axis.1.position") == 10_000 and mod.device.read("axis.1.m_function") == 2
 
 
+@pytest.mark.manual("§2.5", "without correct machine data an operator command to the axis is refused with "
+                    "Keine oder fehlerhafte Maschinendaten (14)")
+@pytest.mark.manual("§2.2", "an axis works only when a correct machine-data record is on the module")
 def test_without_md_only_ba4_and_ba17_run(mod: Module) -> None:
     """§4.2: error 14 without machine data; BA17 clears every page's error."""
     assert mod.operate(1, 1, FORWARD)[4] == 14
@@ -63,6 +66,8 @@ def test_md_round_trip_directory_and_no_overwrite(mod: Module) -> None:
     assert mod.call(0x64, bytes((4, 64, 0, 0)))[8:] == struct.pack(">6H", 101, 70, 0, 0, 0, 0)
 
 
+@pytest.mark.manual("§2.7.1", "the attribute MD missing is cleared once machine data are transferred, even "
+                    "faulty ones; only error-free machine data let operator commands move the axis")
 def test_md_error_12_when_the_module_number_differs(make: Make) -> None:
     """§6.3: the record names module 11; a module with SYS-ID module 5 gives MD error 12 and
     module error 15; the attributes say MD present (bit 6 clear) but motion is refused (14)."""
@@ -72,6 +77,12 @@ def test_md_error_12_when_the_module_number_differs(make: Make) -> None:
     assert mod.operate(1, 1, FORWARD)[4] == 14
 
 
+@pytest.mark.manual("§2.5.3.7", "the acceleration ramp is f = F(1 - e^(-t/tau)) + f_ss with F = (f_max - "
+                    "f_ss)/0.95, the deceleration ramp its mirror; below f_max the acceleration stops at f_v")
+@pytest.mark.manual("§2.5.3.4", "the travel resolution is the travel per revolution divided by the pulses per "
+                    "revolution")
+@pytest.mark.manual("§2.5.4.2", "velocity [unit/min] = frequency x resolution x 60")
+@pytest.mark.manual("§2.7.7", "position reached is set when the target of a positioning is reached")
 def test_ba7_takes_the_closed_form_time(mod: Module) -> None:
     """§5.3/§5.5: 10 mm at 1000 mm/min with r = 1.1 µm, f_ss 10 kHz, a 100 Hz/ms: the two
     exponential ramps and the cruise take exactly what the formulas say; PE at the end."""
@@ -152,12 +163,19 @@ def test_zero_offset_relative_vector_e(mod: Module) -> None:
     assert mod.device.read("axis.2.position") == -10_000
 
 
+@pytest.mark.manual("§4.3.2", "BA9 Start runs the blocks up to the first traverse or dwell, then waits for "
+                    "the Übernahme command")
+@pytest.mark.manual("§4.3.2", "each further traverse must be started separately with Übernahme")
 def test_single_block_halts_and_stop_interrupts_with_65(mod: Module) -> None:
-    """§5.11.3/§5.11.5: BA9 halts after each traverse; Übernahme goes on; Stopp at a halt
-    interrupts (65, context kept); a second Stopp aborts it."""
+    """§5.11.3/§5.11.5: BA9 halts before the first traverse and after each; Übernahme goes on;
+    Stopp at a halt interrupts (65, context kept); a second Stopp aborts it."""
     mod.ready()
     mod.store(3, "%  3\nN1 X5 F1000 M11\nN2 X8 F1000 M12\nN3 M02\n")
     mod.operate(1, 9, START, b=3)
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.position") == 1_000 and mod.device.read("axis.1.running") is False
+    assert mod.call(0x62, b"\x01")[21] & 0x08  # waiting for Übernahme before N1
+    mod.operate(1, 9, TAKE_OVER, b=3)
     mod.clock.advance(5)
     assert mod.device.read("axis.1.position") == 5_000 and mod.device.read("axis.1.m_function") == 11
     assert mod.call(0x62, b"\x01")[21] & 0x08  # waiting for Übernahme
@@ -293,6 +311,8 @@ def test_external_stop_while_jogging_is_27_and_stopp_cancels_a_wait(mod: Module)
     assert mod.device.read("axis.1.residual") == 0 and mod.device.read("axis.1.running") is False
 
 
+@pytest.mark.manual("§2.5.3.9", "at each reversal the module adds the backlash to the path; the actual value "
+                    "stands while the play is taken up")
 def test_backlash_is_taken_up_at_each_reversal(mod: Module) -> None:
     """§5.8 (COM247 MD: b = 1 mm): no take-up on the first move after "Referenzpunkt setzen";
     on a reversal the motor travels b more while the actual value stands still."""

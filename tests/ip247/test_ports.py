@@ -73,6 +73,8 @@ def test_vector_b_and_a_program_through_the_client(module: Any) -> None:
         assert struct.unpack(">i", observed[8:12])[0] == 10_000  # X10 (G90: absolute)
 
 
+@pytest.mark.manual("§2.5.4.6", "with AG BCD-codiert the paths and velocities of the PLC jobs for jog and "
+                    "step moves are BCD")
 def test_the_plc_side_over_tcp_with_bcd_values(devsim_device) -> None:  # noqa: ANN001
     """§3.7/§3.3.2: absolute pages from the S2 base page; with "AG BCD-codiert" the target
     +120 000 µm arrives as 0012 0000H, 1000 mm/min as word 1000H; not BCD: error 66; machine
@@ -132,6 +134,26 @@ def test_generic_s5_services_read_programs_and_machine_data(devsim_device) -> No
         assert port.read(2) == b"\x10\x15"
 
 
+@pytest.mark.manual("§2.5", "machine data from the PLC side are checked by the IP247 only: an axis can hold "
+                    "faulty machine data, reported as error 15 with the MD error in the record")
+@pytest.mark.manual("§2.5.1.2", "the pulse duration lies in 1 to 31 us and at most half the period of the "
+                    "maximum frequency, else MD error 2")
+@pytest.mark.manual("§2.5.2.1", "pulses per revolution lie in 12 to 1000, else MD error 5")
+@pytest.mark.manual("§2.5.3.4", "the finest travel resolution is 0.001 mm per pulse, else MD error 9")
+@pytest.mark.manual("§2.5.3.5", "the maximum frequency lies in 0.040 to 100 kHz, else MD error 3")
+@pytest.mark.manual("§2.5.3.6", "the start-stop frequency lies in 0.001 to 10 kHz (below the maximum "
+                    "frequency), else MD error 22")
+@pytest.mark.manual("§2.5.3.7", "tau lies between 5 ms and 2.6 s (a_min, a_max), else MD error 6")
+@pytest.mark.manual("§2.5.3.9", "the backlash compensation lies in 0 to 64.999 mm, else MD error 20")
+@pytest.mark.manual("§2.5.3.10", "at machine-data input the limit-switch polarity is checked against the "
+                    "inputs (both not actuated), else MD error 19")
+@pytest.mark.manual("§2.5.4.1", "the unit is metric (01), 0.1 inch (10) or degree (11), else MD error 11")
+@pytest.mark.manual("§2.5.4.2", "each velocity lies in 1 to 65000 and at most the maximum velocity, else MD "
+                    "error 4")
+@pytest.mark.manual("§2.5.5.1", "SW limit Ende plus the MD tool offset must stay within +99.999999 m, else MD "
+                    "error 14")
+@pytest.mark.manual("§2.5.5.2", "a zero offset of the machine data that leaves the range of +-99.999999 m is "
+                    "refused at input (MD error 13)")
 def test_every_md_error_trigger_of_section_6_3_over_tcp(devsim_device) -> None:  # noqa: ANN001
     """§6.3 through the PLC endpoint: each changed record (BA20 after BA21) comes back with its
     MD error in the result and module error 15; the valid §6.1 record with 0."""

@@ -29,11 +29,10 @@ def test_zero_offset_program_of_section_6_6(make: Make) -> None:
     assert mod.store(9, SUB)[8:] == bytes(4) and mod.store(1, MAIN)[8:] == bytes(4)
     holes = [0, 0, 10, 10, 20, 20]
     expected = [*holes, 40, *holes, 40, *holes, 40, -130]
-    assert mod.operate(1, 9, START, b=1)[7] == 10  # (L9 N1 X0 M10 starts at once)
+    assert mod.operate(1, 9, START, b=1)[7] == 10  # (L9 N1 X0 M10: halted before its traverse, manual §4.3.2)
     seen, m = [], []
-    for step in range(len(expected)):
-        if step:
-            assert mod.operate(1, 9, TAKE_OVER, b=1)[4] == 0
+    for _ in range(len(expected)):
+        assert mod.operate(1, 9, TAKE_OVER, b=1)[4] == 0
         mod.clock.advance(30)
         seen.append(mod.device.read("axis.1.position") // 1000)
         m.append(mod.device.read("axis.1.m_function"))
@@ -60,6 +59,8 @@ def rotary(make: Make) -> Module:
     (0, FORWARD, 360_000),  # Vorwärts to where it stands: one revolution
     (0, BACKWARD, -360_000),
 ])
+@pytest.mark.manual("§2.5.3.3", "absolute targets of a rotary axis lie within the range; range start and end "
+                    "are the same point")
 def test_rotary_targets_of_section_6_7(make: Make, target: int, command: int, travel: int) -> None:
     mod = rotary(make)
     motor = mod.device.read("axis.1.machine_position")
@@ -69,6 +70,7 @@ def test_rotary_targets_of_section_6_7(make: Make, target: int, command: int, tr
     assert mod.device.read("axis.1.machine_position") - motor == pytest.approx(travel)
 
 
+@pytest.mark.manual("§2.5.3.3", "a relative move on a rotary axis may be longer than the traverse range")
 def test_rotary_offsets_and_long_relative_moves_of_section_6_7(make: Make) -> None:
     mod = rotary(make)
     mod.operate(1, 7, FORWARD, w=4_000, dd=60_000)
@@ -173,6 +175,10 @@ def test_flying_change_on_a_rotary_axis_needs_a_fixed_direction(make: Make) -> N
     assert mod.device.read("axis.1.machine_position") == pytest.approx(370_000)
 
 
+@pytest.mark.manual("§2.3.1", "the drive position is not monitored: the actual value is computed from the "
+                    "pulses output")
+@pytest.mark.manual("§2.4", "a stepper motor dimensioned wrongly loses steps, and the axis is positioned "
+                    "wrongly")
 def test_step_loss_when_the_motor_cannot_start_or_stalls(make: Make) -> None:
     """§5.15 / §8 scenario 24: f_ss 2000 Hz on a motor that starts only up to 800 Hz howls
     without moving while the actual value counts 100 mm; a pull-out frequency of 3000 Hz stops

@@ -49,9 +49,11 @@ class ProgramRun:
 
     # -- from the module -------------------------------------------------------------------------
     def start(self) -> None:
+        """Start: the blocks run up to the first traverse or dwell; in BA9 the axis then waits
+        for Übernahme before it (manual §4.3.2)."""
         self.unit.m_function = M_NONE
         self.unit.coords.program_shift(0)
-        self._advance()
+        self._advance(halt_before=self.single)
 
     def take_over(self) -> int | None:
         """Übernahme while "fertig": continue after a halt or an interruption."""
@@ -110,17 +112,17 @@ class ProgramRun:
         self.unit.m_function = 2
 
     # -- the blocks -------------------------------------------------------------------------------
-    def _advance(self, skip_halt: bool = False) -> None:
+    def _advance(self, skip_halt: bool = False, halt_before: bool = False) -> None:
         if self._advancing:
             self._again = True  # a traverse that took no time ended inside the loop below: it goes on
             return
         self._advancing = True
         try:
-            self._interpret(skip_halt)
+            self._interpret(skip_halt, halt_before)
         finally:
             self._advancing = False
 
-    def _interpret(self, skip_halt: bool) -> None:
+    def _interpret(self, skip_halt: bool, halt_before: bool) -> None:
         """The blocks up to the next one that takes time (a traverse, a dwell), a halt or the
         end; :data:`CYCLE_BLOCKS` blocks without either: error 33."""
         unit = self.unit
@@ -149,7 +151,7 @@ class ProgramRun:
                 return
             if not moves:
                 continue
-            if block.m == 0 and not skip_halt:
+            if (block.m == 0 or halt_before) and not skip_halt:
                 self._pending = (block, m)
                 unit.m_function = m
                 self._halt()
@@ -232,6 +234,10 @@ class ProgramRun:
             self._flying(block, m, result)
             return
         target, f, _ = result
+        refused = unit.limit_refusal(1 if target > unit.holder else -1 if target < unit.holder else 0)
+        if refused is not None:
+            self._fail(refused)  # towards an actuated or locked limit switch (manual §2.5.3.10)
+            return
         self._move = (target, f)
         if unit.held(lambda: unit.position_to(target, f, self._done)):
             unit.set_error(6)
@@ -303,6 +309,10 @@ class ProgramRun:
         direction = 1 if steps[0] > 0 else -1
         if any(step * direction <= 0 for step in steps):
             self._fail(47 if md.rotary else 52)
+            return
+        refused = unit.limit_refusal(direction)
+        if refused is not None:
+            self._fail(refused)
             return
         unit.begin(direction)
         ends = [unit.machine(h, direction) for h in holders[1:]]

@@ -31,6 +31,9 @@ __all__ = ["AxisEvents", "AxisUnit", "ProgramContext", "ReferenceContext"]
 
 FOREVER = 1e9  # seconds: a jog's cruise lasts until something stops it
 RS_PULSE = 0.1  # seconds (spec §5.16)
+#: The machine data whose change clears the reference point (manual §4.3.12): reference
+#: coordinate, pulses per revolution, travel per revolution, reference direction, synchronisation.
+REFERENCE_RELEVANT = ("reference", "pulses_per_rev", "gear", "reference_direction", "reference_sync")
 
 
 class AxisEvents(Protocol):
@@ -72,6 +75,8 @@ class AxisUnit:
         self.axis = Axis(clock, name=f"axis{number}")
         self.md: MachineData | None = None
         self.md_words: list[int] | None = None
+        self._rs_pulse: Any = None  # the timer ending a 100 ms RS pulse
+        self._previous_md: MachineData | None = None  # the last record loaded (kept when deleted)
         self.mode, self.last_cmd, self.running = 4, 0, False
         self.reference_set = False
         self.error = 8  # "Zustand nach Spannungsausfall" (spec §4.14 [DECISION])
@@ -81,6 +86,7 @@ class AxisUnit:
         self.braking = False  # stopping after a Stopp or a fault: jobs wait in the job lists
         self.in_position = False
         self.target: float | None = None  # holder target of the current (or aborted) positioning
+        self.target_tool = 0  # the tool offset the target was computed with (manual §2.7.7)
         self.m_function = 2
         self.teach_in: int | None = None
         self.taught: list[str] = []  # the blocks stored in teach-in so far
@@ -129,7 +135,13 @@ class AxisUnit:
         if self._d == 0:
             self.m0 = self.axis.position() - h - self._side(direction)  # no play to take up
         self._h0, self._d = h, direction
-        self.signals.set(f"RP{self.number}", direction > 0)
+        self.signals.set(f"RP{self.number}", self.rp_level(direction))
+
+    def rp_level(self, direction: int) -> bool:
+        """The direction output for a move: the MD polarity fixes which level is forward (manual
+        §2.5.1.1; spec §2.2 [DECISION]: 1 forward with the positive edge, 0 with the negative)."""
+        positive = self.md is None or self.md.pulse_polarity == 0x40
+        return (direction > 0) == positive
 
     def machine(self, holder: float, direction: int) -> float:
         """The motor position that puts the load at ``holder`` after a move in ``direction``."""
@@ -143,9 +155,11 @@ class AxisUnit:
         return self.coords.actual(round(self.holder))
 
     def residual(self) -> int:
+        """The distance to the target the tool tip was sent to: a tool offset made after a stop
+        updates it, so that a relative move by it reaches the original target (manual §2.7.7)."""
         if self.target is None or self.md is None:
             return 0
-        return round(self.target - self.holder)
+        return round(self.target - self.holder - (self.coords.tool_offset - self.target_tool))
 
     def attributes(self) -> int:
         md = self.md
@@ -173,10 +187,21 @@ class AxisUnit:
 
     def pulse_rs(self) -> None:
         """A 100 ms high pulse on RS; the pattern counter restarts at 0 (spec §2.8.1, §5.6.3)."""
-        name = f"RS{self.number}"
-        self.signals.set(name, True)
-        self.clock.call_later(RS_PULSE, lambda: self.signals.set(name, False))
+        self.signals.set(f"RS{self.number}", True)
+        if self._rs_pulse is not None:
+            self._rs_pulse.cancel()
+        self._rs_pulse = self.clock.call_later(RS_PULSE, self._rs_pulse_over)
         self.pattern_base = self.axis.position()
+
+    def _rs_pulse_over(self) -> None:
+        self._rs_pulse = None
+        self.set_rs()
+
+    def set_rs(self) -> None:
+        """RS holds the power unit in reset: high while the axis has no valid machine data, low
+        once it has (manual §2.8.1); a pulse in progress ends on its own."""
+        if self._rs_pulse is None:
+            self.signals.set(f"RS{self.number}", not self.md_valid)
 
     def limit_levels(self) -> tuple[bool, bool]:
         """The levels of the limit inputs ANF and END (True = 24 V)."""
@@ -184,16 +209,20 @@ class AxisUnit:
 
     # -- machine data -----------------------------------------------------------------------------
     def load_md(self, md: MachineData | None, words: list[int] | None, *, first: bool) -> None:
-        """New machine data (BA20), or none (BA21 with ``md`` None, which keeps the reference)."""
-        old = self.md
+        """New machine data (BA20, ``first``; from battery RAM at power-up otherwise), or none
+        (BA21 with ``md`` None, which keeps the reference).  The reference point survives new
+        data whose reference-relevant items equal the previous record's, a deleted one's too
+        (manual §4.3.12: the PLC side must delete before it writes)."""
+        old = self.md or self._previous_md
         self.md, self.md_words = md, words
+        self.set_rs()
         if md is None:
             return
+        self._previous_md = md
         kept = self.coords if not first else Coordinates(0, 0, 0)  # new MD reset the offsets (spec §5.9)
         self.coords = Coordinates(md.limit_begin, md.limit_end, md.reference, md.rotary, kept.zo_mode, 0,
                                   kept.to_ba15, kept.to_prog)
-        relevant = ("reference", "gear", "pulses_per_rev", "unit", "rotary", "limit_begin", "limit_end")
-        if first or old is None or any(getattr(old, k) != getattr(md, k) for k in relevant):
+        if old is None or any(getattr(old, k) != getattr(md, k) for k in REFERENCE_RELEVANT):
             self.reference_set = False  # (spec §4.1.2 bit 5)
         self.wire_switches()
 
@@ -209,6 +238,10 @@ class AxisUnit:
         if self.md is not None:
             self.set_holder(self.md.reference)
         self.set_pe()
+        if self._rs_pulse is not None:
+            self._rs_pulse.cancel()
+            self._rs_pulse = None
+        self.set_rs()
 
     # -- the external start/stop input (spec §5.10) -------------------------------------------------
     def held(self, start: Callable[[], None]) -> int | None:
@@ -308,7 +341,7 @@ class AxisUnit:
                     done: Callable[[bool], None] | None = None) -> None:
         """Move along ``pieces`` (from :meth:`begin`) to motor position ``end``, the holder to
         ``holder_target``: "position reached" there, the residual meanwhile."""
-        self.target = holder_target
+        self.target, self.target_tool = holder_target, self.coords.tool_offset
 
         def reached(ok: bool) -> None:
             if ok:
@@ -399,6 +432,17 @@ class AxisUnit:
         """Whether limit input ``anf``/``end`` reads as actuated (MD n+33 polarity)."""
         level = bool(self.signals.get(f"{name.upper()}{self.number}"))
         return level if self.md is None or self.md.limit_polarity == 0 else not level
+
+    def limit_refusal(self, direction: int) -> int | None:
+        """A move towards a limit switch: refused with 25 (Anfang) / 26 (Ende) while that
+        direction is locked, or while its switch is actuated now, even at standstill (manual
+        §2.5.3.10: a switch is seen when the axis moves "oder bewegen soll" towards it; §2.8.3:
+        a switch actuated by hand locks its direction).  Refusing locks the direction."""
+        if direction == 0:
+            return None
+        if self.actuated("anf" if direction < 0 else "end"):
+            self.locks.add(direction)
+        return (25 if direction < 0 else 26) if direction in self.locks else None
 
     def limit_input(self, name: str) -> None:
         """An ANF/END input changed: a switch in the direction of travel stops the axis (errors

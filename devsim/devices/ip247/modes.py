@@ -89,8 +89,9 @@ class AxisModes:
         if cmd not in (FORWARD, BACKWARD):
             return 2
         direction = 1 if cmd == FORWARD else -1
-        if direction in unit.locks:
-            return 25 if direction < 0 else 26
+        refused = unit.limit_refusal(direction)
+        if refused is not None:
+            return refused
         f, error = self._velocity(unit, w, md.jog1 if unit.mode == 1 else md.jog2)
 
         def run() -> None:
@@ -107,9 +108,10 @@ class AxisModes:
             shifted = holder_target - unit.coords.zero_offset
             if not low <= shifted <= high:
                 return 23
-        direction = 1 if holder_target > unit.holder else -1
-        if holder_target != unit.holder and direction in unit.locks:
-            return 25 if direction < 0 else 26
+        direction = 1 if holder_target > unit.holder else -1 if holder_target < unit.holder else 0
+        refused = unit.limit_refusal(direction)
+        if refused is not None:
+            return refused
         f, error = self._velocity(unit, w, md.step_velocity)
         return unit.held(lambda: unit.position_to(holder_target, f)) or error
 
@@ -164,6 +166,9 @@ class AxisModes:
         if md.rotary and abs(distance) > MAX_RELATIVE:
             return 62
         if md.rotary:
+            refused = unit.limit_refusal(1 if distance > 0 else -1 if distance < 0 else 0)
+            if refused is not None:
+                return refused  # (the limit switches work on a rotary axis too, §2.8.3)
             f, error = self._velocity(unit, w, md.step_velocity)
             target = unit.holder + distance
             return unit.held(lambda: unit.position_to(target, f)) or error

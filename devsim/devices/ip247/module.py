@@ -238,8 +238,12 @@ class Ip247Module(Model):
             queue.append((page, ba, cmd, b, w, dd))
             return ACK_QUEUED
         job = OPERATOR_JOBS.get(mode_token(ba))
-        if job is None:  # an undefined mode (3, 25 … 63, 75 …): error 2
-            self.set_error(unit, 2)
+        if job is None:  # an undefined mode (3, 25 … 63, 75 …): error 2, and what runs is aborted
+            error: int | None = 2
+            if unit is not None and (unit.running or unit.waiting_start is not None):
+                error = self.modes.operate(unit, ba, cmd, b, w, dd)  # (manual §7.2.2)
+            if error is not None:
+                self.set_error(unit, error)
             return ACK_ACCEPTED
         if page_error(ba, page) == 46:
             self.set_error(unit, 46)

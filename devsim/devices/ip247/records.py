@@ -198,8 +198,12 @@ class DataChannel:
             self.pages.save()
 
     def delete_program(self, unit: AxisUnit | None, db: int) -> None:
-        """BA23: program ``db`` (error 61 when it only leaves the directory, spec §4.10)."""
+        """BA23: program ``db`` (error 61 when it only leaves the directory, spec §4.10); refused
+        with 22 while an axis is in teach-in (manual §7.2.2)."""
         self.error = 0
+        if self.programs.teach_in_active():
+            self.pages.set_error(None, 22)
+            return
         try:
             error = self.programs.store.delete(db, executing=self.programs.executing())
             if error:

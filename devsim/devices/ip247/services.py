@@ -16,6 +16,7 @@ from devsim.devices.ip247.module import Ip247Module
 from devsim.devices.ip247.pg_profile import (
     ACK_ACCEPTED,
     ACK_MALFORMED,
+    ACK_NEGATIVE,
     DELETE_REC,
     OBSERVE,
     OPERATE,
@@ -46,8 +47,12 @@ def serve(module: Ip247Module, request: Request, *, plc: bool = False) -> bytes:
 
 
 def _observe(module: Ip247Module, request: Request, plc: bool) -> bytes:
+    """OBSERVE: the page's header and observed values; FB164's observe modes 71/73 on the data
+    channel are negatively acknowledged on the PLC side (manual §6.2.4)."""
     assert isinstance(request, Observe)
     page = request.page
+    if plc and module.unit(page) is None:
+        return _header(module, ACK_NEGATIVE, page, page, 0, 0)
     return response(Header(ACK_ACCEPTED, page, 0, 0, *module.header(page)), module.observe(page))
 
 

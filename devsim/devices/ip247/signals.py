@@ -16,8 +16,11 @@ SIGNALS: tuple[SignalDef, ...] = (
         SignalDef(f"START{n}", "input", False, f"axis {n} external start/stop: 0→1 stops", "§2.8.4"),
         SignalDef(f"BB{n}", "input", True, f"axis {n} power unit ready", "§2.4"),
         SignalDef(f"PE{n}", "output", False, f"axis {n} position reached", "§2.7.7"),
-        SignalDef(f"RS{n}", "output", False, f"axis {n} reset pulse to the power unit", "§2.8.1"),
-        SignalDef(f"RP{n}", "output", False, f"axis {n} direction to the power unit (True: forward), set before "
+        SignalDef(f"RS{n}", "output", False, f"axis {n} reset to the power unit: high while the axis has no valid "
+                  "machine data, a 100 ms pulse after a machine-data input and at a reference run's start",
+                  "§2.8.1"),
+        SignalDef(f"RP{n}", "output", False, f"axis {n} direction to the power unit (forward: True with the positive "
+                  "pulse edge in the machine data, False with the negative), set before "
                   "the first pulse of a move", "§2.4"),
     )),
     SignalDef("BASP", "input", False, "command output disable from the PLC: every axis stops", "§2.9"),
