@@ -27,6 +27,19 @@ DEVIATIONS: tuple[Deviation, ...] = (
               "the port 'pg' is a pty (or socket) carrying the AS511 bytes; a pty has no current loop, its "
               "baud rate is not enforced, and Linux ptys drop the parity bit; no backplane PG access",
               "a pty cannot carry a current loop nor 8E1 framing"),
+    # -- chapter 5 (COM247) ----------------------------------------------------------------------
+    Deviation("§5.1–§5.11", "COM247 on the PG: its screens, function keys, presets, files (.247) on floppy or "
+              "hard disk, the PG's own memory, printing, installation under S5-DOS/PCP/M, its limits (250 "
+              "programs per file, 16 machine-data sets per axis and file, 48 entries per directory page) and "
+              "the PG keyboard's repeat buffer",
+              "not simulated: the simulator is the module behind the PG port; what COM247 sends (BA24 at "
+              "BEGINN, BA70 at ONLINE, BA20/22 with the overwrite question, BA17 on leaving the test screen, "
+              "operator jobs, OBSERVE) is answered as the module answers it",
+              "a host program emulating COM247 talks to the module; the twin of COM247 is that host"),
+    Deviation("§5.4, §6.3.8.3", "module number 0 … 99, slot 0 … 255, page 0 … 252 (BA24)",
+              "BA24 takes any byte for each; the module number is frozen by correct machine data (12)",
+              "the manual gives the ranges for COM247's screen and FB165's data block, not a module error "
+              "for values outside them"),
     # -- chapter 6 (FB164 / FB165) ---------------------------------------------------------------
     Deviation("§6.1–§6.2.5, §6.2.7–§6.2.8, §6.3.1–§6.3.7, §6.3.9",
               "FB164 and FB165 run in the PLC: call parameters SSNR, DBNR, DWNR, BA, STAR … UEBN edges, BCD, "
@@ -91,7 +104,8 @@ DEVIATIONS: tuple[Deviation, ...] = (
     Deviation("§7.2.1", "error 17: the reference velocity's frequency must be above f_ss and below f_max",
               "f_ss < f_ref ≤ f_max: the reference velocity may reach f_max",
               "the manual's own example record (§6.3.8.1: 3000 mm/min at 10 µm per pulse = 5000 Hz = f_max) "
-              "is valid"),
+              "is valid, and COM247's machine-data page 2 (§5.6.1.2) says 'kleiner oder gleich der "
+              "Maximalfrequenz'"),
     Deviation("§7.2", "error 33 'Zykluszeit überschritten' (no cause given)",
               "raised when 10,000 blocks run without a traverse or dwell taking time (an endless loop "
               "without motion): the program ends, the module keeps answering",
