@@ -196,10 +196,10 @@ def test_the_commands_each_mode_takes(mod: Module) -> None:
                     "continues an interrupted program")
 def test_take_over_after_a_halt_and_an_interruption(mod: Module) -> None:
     mod.ready()
-    mod.store(5, "%  5\nN1 X10 F1000\nN2 X40 F1000 M00\nN3 M02\n")
+    mod.store(5, "%  5\nN1 X10 F1000 M00\nN2 X40 F1000\nN3 M02\n")
     mod.operate(1, 8, START, b=5)
     mod.clock.advance(10)
-    assert observe(mod)[0] == 10_000 and mod.device.read("axis.1.running") is False  # held before N2
+    assert observe(mod)[0] == 10_000 and mod.device.read("axis.1.running") is False  # held after N1 (§2.6.9)
     mod.operate(1, 8, TAKE_OVER)
     mod.clock.advance(0.5)
     assert mod.operate(1, 8, STOP)[4] == 65

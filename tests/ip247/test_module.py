@@ -125,6 +125,8 @@ def test_a_job_while_running_is_error_2_and_aborts(mod: Module) -> None:
     assert mod.device.read("axis.1.running") is False and mod.device.read("axis.1.mode") == 1
 
 
+@pytest.mark.manual("§2.8.3", "only the limit switch in the direction of travel is detected: the other "
+                    "direction stays free")
 def test_jog_into_a_limit_switch_stops_with_26_and_locks_forward(make: Make) -> None:
     """§5.7: END actuated while jogging forward: error 26, the direction is locked; backward
     is allowed and releases it once the switch is left."""
@@ -186,6 +188,7 @@ def test_single_block_halts_and_stop_interrupts_with_65(mod: Module) -> None:
     assert mod.operate(1, 9, STOP)[4] == 0 and mod.m.units[0].automatic is None
 
 
+@pytest.mark.manual("§4.3.1", "Stopp interrupts a program; Übernahme continues it at the interruption")
 def test_interrupted_traverse_completes_on_take_over(mod: Module) -> None:
     mod.ready()
     mod.store(4, "%  4\nN1 X30 F1000 M20\nN2 M02\n")
@@ -238,6 +241,10 @@ def test_teach_in_example_of_section_5_12(make: Make) -> None:
     assert mod.device.read("program.7") == "%  7\nN1 X1258.250 F2500\nN2 X3000.000 F2500\nN3 M02\n"
 
 
+@pytest.mark.manual("§2.9", "with BASP evaluated the PE outputs go low, the jobs on the axes are aborted and "
+                    "AG ist ausgefallen (55) is given")
+@pytest.mark.manual("§2.8.1", "the ready input BB monitors the power unit: without it motion is refused and "
+                    "its loss stops the axis (53)")
 def test_basp_and_the_power_unit_ready_input(mod: Module) -> None:
     """§5.13/§5.14: BASP stops every axis with error 55 and forces PE low; without BB a motion
     job is refused with 53, and BB falling during motion stops the pulses (53)."""
@@ -274,6 +281,10 @@ def test_the_plc_job_point_takes_bcd_values(mod: Module) -> None:
     assert mod.device.read("axis.1.position") == 120_000
 
 
+@pytest.mark.manual("§2.8.4", "BA9 with 1 at the input: the Übernahme gives Motor wartet auf externen Start; "
+                    "the falling edge runs the traverse")
+@pytest.mark.manual("§2.8.4", "a 1 applied after the traverse ended (position reached) interrupts the "
+                    "program: error 65; after Übernahme the next traverse waits for the falling edge")
 def test_external_start_vector_6_9(mod: Module) -> None:
     """§6.9/§5.10: with START-N/STOP = 1, BA9 halts before N1 (M00); Übernahme → error 6; the
     falling edge runs N1 to 100 mm; a rising edge after PE interrupts (65); Übernahme → 6; the
@@ -297,6 +308,10 @@ def test_external_start_vector_6_9(mod: Module) -> None:
     assert mod.device.read("axis.1.position") == 200_000 and mod.device.read("axis.1.m_function") == 20
 
 
+@pytest.mark.manual("§2.8.4", "a 0 to 1 change during a job gives externer Stopp aufgetreten (27) and aborts "
+                    "the job")
+@pytest.mark.manual("§2.8.4", "a job given while the input is 1 waits (error 6); Stopp with any mode cancels "
+                    "the wait without error")
 def test_external_stop_while_jogging_is_27_and_stopp_cancels_a_wait(mod: Module) -> None:
     mod.ready()
     mod.operate(1, 1, FORWARD)
@@ -393,6 +408,12 @@ def test_an_interrupted_relative_traverse_keeps_its_target(mod: Module) -> None:
     assert mod.device.read("axis.1.position") == 1_000 + 30_000
 
 
+@pytest.mark.manual("§2.7.7", "in automatic mode position reached is generated after each traverse block and "
+                    "each dwell")
+@pytest.mark.manual("§2.8.2", "position reached goes to the CPU (attribute bit 2) and to a digital output "
+                    "alike")
+@pytest.mark.manual("§2.7.6", "in automatic mode the axis state stays läuft until the program ends or is "
+                    "interrupted")
 def test_position_reached_drops_during_a_dwell(mod: Module) -> None:
     """§4.1.3 [DECISION]: PE is cleared when a motion or a dwell starts, and set when the dwell
     has run (output and attribute bit 2 alike)."""

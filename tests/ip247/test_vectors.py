@@ -13,9 +13,15 @@ MAIN = ("%  1 HAUPTPROGRAMM\nN1 L9\nN2 X40.000 F500\nN3 G54\nN4 L9\nN5 X40.000 F
 SUB = "L  9 UNTERPROGRAMM\nN1 X0 F100 M10\nN2 G04 F50\nN3 X10 F100\nN4 G04 F50\nN5 X20 F100\nN6 G04 F50\nN7 M02\n"
 
 
+@pytest.mark.manual("§2.6.6.7", "the manual example: BA13 10 mm forward, BA6 to 0, program 1 calling L9 three "
+                    "times with G54, G55, G56 shows -130 mm after G74 and -10 mm after the end")
+@pytest.mark.manual("§2.6.6.7", "a positive zero offset moves the origin in the positive direction: the "
+                    "points of the axis get more negative values")
+@pytest.mark.manual("§2.6.6.7", "zero offsets made in a subprogram stay after the return and are reset at the "
+                    "end of the main program")
 def test_zero_offset_program_of_section_6_6(make: Make) -> None:
     """BA9 step by step: the actual value at each halt is the table's (mm ×1000), G74 gives
-    −130 mm, the end −10 mm; M10 from L9's first traverse on (it starts with the Start), M02 at
+    −130 mm, the end −10 mm; M10 from L9's first traverse on (held before it at the Start), M02 at
     the end."""
     mod = make()
     assert mod.load_md(record=record(reference=0, zero_offsets=(40_000, 80_000, 120_000, 0), backlash=0,
@@ -29,7 +35,8 @@ def test_zero_offset_program_of_section_6_6(make: Make) -> None:
     assert mod.store(9, SUB)[8:] == bytes(4) and mod.store(1, MAIN)[8:] == bytes(4)
     holes = [0, 0, 10, 10, 20, 20]
     expected = [*holes, 40, *holes, 40, *holes, 40, -130]
-    assert mod.operate(1, 9, START, b=1)[7] == 10  # (L9 N1 X0 M10: halted before its traverse, manual §4.3.2)
+    # (L9 N1 X0 M10: halted before its traverse, manual §4.3.2; M10 comes with the block, §2.6.9)
+    assert mod.operate(1, 9, START, b=1)[7] == 255
     seen, m = [], []
     for _ in range(len(expected)):
         assert mod.operate(1, 9, TAKE_OVER, b=1)[4] == 0
@@ -125,6 +132,9 @@ def test_reference_set_after_a_zero_offset_of_section_6_8(make: Make) -> None:
     assert mod.operate(1, 5, STOP)[4] == 0
 
 
+@pytest.mark.manual("§2.6.6.3", "G10 joins the next block without stopping the axis: a velocity change during "
+                    "a motion (example 1)")
+@pytest.mark.manual("§2.6.9", "with G10 the new M function is output from the transition point on")
 def test_flying_change_runs_through_without_a_stop(make: Make) -> None:
     """§5.11.4 manual example: 0→50 at 1000 mm/min, 50→100 at 500, 100→150 at 1000 without a
     stop; M30, M31 from the joint at 50, M32 from 100; PE only at the end."""
@@ -152,6 +162,9 @@ def test_flying_change_runs_through_without_a_stop(make: Make) -> None:
     ("N10 G10 X100 F3000\nN20 X101 F3000\nN30 M02", 52),  # shorter than the braking distance
     ("N10 G10 X100 F1000\nN20 G56\nN25 X120 F1000\nN30 M02", 52),  # a shift
 ])
+@pytest.mark.manual("§2.6.6.3", "a flying change into the opposite direction, into a dwell, onto a path "
+                    "shorter than the braking distance or into a shift is not possible: error 52, the program "
+                    "is aborted")
 def test_flying_change_not_possible(make: Make, text: str, error: int) -> None:
     mod = make()
     mod.ready()
@@ -161,6 +174,9 @@ def test_flying_change_not_possible(make: Make, text: str, error: int) -> None:
     assert mod.device.read("axis.1.error") == error and mod.m.units[0].automatic is None
 
 
+@pytest.mark.manual("§2.6.6.3", "on a rotary axis a chain that is not shortest-path all the way needs "
+                    "G26/G27, else error 47 Keine Richtungsaenderung beim FW")
+@pytest.mark.manual("§2.6.6.5", "G26 approaches absolute targets of a rotary axis clockwise (forward)")
 def test_flying_change_on_a_rotary_axis_needs_a_fixed_direction(make: Make) -> None:
     """§5.11.4: X300 (backward by shortest path from 0°) then X10 (forward): error 47; with
     G26 the chain runs forward."""

@@ -41,6 +41,7 @@ class ProgramRun:
         self.halted = False  # waiting for Übernahme (M00, a BA9 step): OBSERVE flag bit 3
         self.interrupted = False  # error 65: OBSERVE flag bit 1
         self._pending: tuple[Block, int] | None = None  # the traverse/dwell the halt holds back
+        self._halt_next = False  # the last traverse or dwell had M00: halt before the next
         self._timer = None
         self._last: tuple[Block, int] | None = None  # the traverse or dwell executing
         self._move: tuple[float, float] | None = None  # its holder target and frequency
@@ -113,6 +114,10 @@ class ProgramRun:
 
     # -- the blocks -------------------------------------------------------------------------------
     def _advance(self, skip_halt: bool = False, halt_before: bool = False) -> None:
+        """The blocks up to the next traverse or dwell, which runs unless a halt holds it: after
+        a block with M00, or at BA9's start (``halt_before``); ``skip_halt`` is the Übernahme
+        that releases it.  An M00 alone (or with a switch) is a traverse of length 0 (manual
+        §2.6.9, §4.3.1, §4.3.2)."""
         if self._advancing:
             self._again = True  # a traverse that took no time ended inside the loop below: it goes on
             return
@@ -123,19 +128,21 @@ class ProgramRun:
             self._advancing = False
 
     def _interpret(self, skip_halt: bool, halt_before: bool) -> None:
-        """The blocks up to the next one that takes time (a traverse, a dwell), a halt or the
-        end; :data:`CYCLE_BLOCKS` blocks without either: error 33."""
-        unit = self.unit
+        """:meth:`_advance`'s loop; :data:`CYCLE_BLOCKS` blocks without a traverse or dwell that
+        takes time, a halt or the end: error 33 (manual §7.2)."""
         if self._pending is not None:
             block, m = self._pending
             self._pending = None
             if not self._ran_at_once(block, m):
                 return
-            skip_halt = False
+            skip_halt = halt_before = False
         for _ in range(CYCLE_BLOCKS):
             try:
                 _, block, m = next(self._steps)
             except StopIteration:
+                if self.interrupted:
+                    self._rest()  # the interruption point lies before the end (manual §4.3.3)
+                    return
                 self._end()
                 return
             except FlowError as exc:
@@ -145,29 +152,32 @@ class ProgramRun:
             if error is not None:
                 self._fail(error)
                 return
-            moves = block.x is not None or block.g in (74, 4)
-            if block.m == 0 and not moves:
-                self._halt()  # M00 alone: a traverse of length 0 (spec §4.11.8)
-                return
-            if not moves:
+            if not _traverse(block) and block.m != 0:
                 continue
-            if (block.m == 0 or halt_before) and not skip_halt:
-                self._pending = (block, m)
-                unit.m_function = m
+            if (self._halt_next or halt_before) and not skip_halt:
+                self._pending = (block, m)  # the halt point: directly before the traverse
                 self._halt()
                 return
             if not self._ran_at_once(block, m):
                 return
-            skip_halt = False
+            skip_halt = halt_before = False
         self._fail(33)  # blocks without end and without time: "Zykluszeit überschritten" (§7.2)
 
     def _ran_at_once(self, block: Block, m: int) -> bool:
-        """Execute a traverse or dwell; True when it ended at once (a path of length 0) and the
-        program goes on."""
+        """Run a traverse or dwell (:meth:`_run`); True when it ended at once (a path of length
+        0, an M00 alone) and the program goes on."""
         self._again = False
-        self._execute(block, m)
+        self._run(block, m)
         again, self._again = self._again, False
         return again
+
+    def _run(self, block: Block, m: int) -> None:
+        """A traverse or dwell runs; after one with M00 the next one waits for Übernahme."""
+        self._halt_next = block.m == 0
+        if _traverse(block):
+            self._execute(block, m)
+        else:
+            self._advance()  # M00 alone: done at once
 
     def _switches(self, block: Block) -> int | None:
         """The switch, shift or correction a block's G function makes (:data:`SWITCHES`)."""
@@ -369,14 +379,23 @@ class ProgramRun:
             self._last = None
             unit.in_position = True
             unit.set_pe()
-            self._rest()
+            self._to_interruption_point()
             return
         unit.brake(self._braked)
 
     def _braked(self, reached: bool) -> None:
         if reached:
             self._last = None  # (braking onto the target: it was reached)
+            self._to_interruption_point()
+            return
         self._rest()
+
+    def _to_interruption_point(self) -> None:
+        """A dwell or a traverse that ended while interrupted: the shifts, corrections and
+        switches up to the next traverse or dwell are still done; that one waits (manual
+        §4.3.3)."""
+        self._advance(halt_before=True)
+        self.halted = False  # (interrupted, not halted: Stopp aborts, Übernahme continues)
 
     def _halt(self) -> None:
         self.halted = True
@@ -399,6 +418,11 @@ class ProgramRun:
         self.abort()
         self._rest()
         unit.set_error(error)
+
+
+def _traverse(block: Block) -> bool:
+    """A traverse (X, G74) or a dwell (G04)."""
+    return block.x is not None or block.g in (74, 4)
 
 
 def g_token(g: int) -> str:

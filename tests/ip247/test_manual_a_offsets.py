@@ -1,0 +1,292 @@
+"""Walk of manual §4.3.1–§4.3.9 and §4.4 (programs from the operator's side, teach-in, zero
+offsets BA12–BA14, tool offsets BA15/BA16, the observe modes), driven through the PG port on a
+real pty."""
+
+from __future__ import annotations
+
+import struct
+
+import pytest
+
+from tests.ip247.helpers import BACKWARD, FORWARD, START, STOP, TAKE_OVER, Make, Module, record
+
+
+def actual(mod: Module) -> int:
+    return int(mod.device.read("axis.1.position"))
+
+
+@pytest.fixture
+def plain(make: Make) -> Module:
+    """COM247's machine data without backlash (x_A −10 mm, x_E 500 mm, x_ref 1 mm), reference set."""
+    mod = make()
+    assert mod.load_md(record=record(backlash=0))[8] == 0
+    assert mod.operate(1, 5, START, b=1)[4] == 0
+    return mod
+
+
+# -- §4.3.1 ------------------------------------------------------------------------------------------
+@pytest.mark.manual("§4.3.1", "a program that is being executed cannot be changed or deleted (51)")
+def test_a_running_program_cannot_be_deleted(plain: Module) -> None:
+    assert plain.store(4, "%  4\nN1 X100 F1000\nN2 M02\n")[4] == 0
+    plain.operate(1, 8, START, b=4)
+    plain.clock.advance(0.5)
+    assert plain.client.delete_record(4, 23, 4)[4] == 51
+
+
+@pytest.mark.manual("§4.3.1", "after an interruption Start begins the program again at its first block")
+@pytest.mark.manual("§4.3.1", "a further Stopp aborts an interrupted program")
+def test_restart_and_abort_after_an_interruption(plain: Module) -> None:
+    assert plain.store(4, "%  4\nN1 G91\nN2 X10 F1000\nN3 X10 F1000\nN4 M02\n")[4] == 0
+    plain.operate(1, 8, START, b=4)
+    plain.clock.advance(0.2)
+    assert plain.operate(1, 8, STOP)[4] == 65
+    plain.clock.advance(5)
+    stopped = actual(plain)
+    assert plain.operate(1, 8, START, b=4)[4] == 0  # from N1 again: two more relative 10 mm
+    plain.clock.advance(30)
+    assert actual(plain) == stopped + 20_000
+    plain.operate(1, 8, START, b=4)
+    plain.clock.advance(0.2)
+    plain.operate(1, 8, STOP)
+    plain.clock.advance(5)
+    assert plain.operate(1, 8, STOP)[4] == 0 and plain.m.units[0].automatic is None
+    assert plain.operate(1, 8, TAKE_OVER, b=4)[4] == 2  # nothing left to continue
+
+
+@pytest.mark.manual("§4.3.3", "a program interrupted during a dwell counts the dwell as expired: after Übernahme "
+                    "the next traverse runs; switches before it are done at the interruption, then 65 and "
+                    "position reached")
+def test_interruption_during_a_dwell(make: Make) -> None:
+    mod = make()
+    assert mod.load_md(record=record(backlash=0, zero_offsets=(0, 0, 5_000, 0)))[8] == 0
+    mod.operate(1, 5, START, b=1)
+    assert mod.store(4, "%  4\nN10 G04 F1000 M10\nN20 G56 X20 F1000 M20\nN30 M02\n")[4] == 0
+    mod.operate(1, 8, START, b=4)
+    mod.clock.advance(1)
+    assert mod.operate(1, 8, STOP)[4] == 65
+    assert actual(mod) == 1_000 - 5_000  # G56 of N20 already done
+    assert mod.device.read("output.PE1") is True and mod.device.read("axis.1.running") is False
+    mod.operate(1, 8, TAKE_OVER, b=4)
+    mod.clock.advance(1)
+    assert mod.device.read("axis.1.running") is True  # N20 runs now, not the rest of the 100 s dwell
+    mod.clock.advance(60)
+    assert actual(mod) == 20_000 + 5_000  # reached in the shifted system; the end removed G56
+
+
+@pytest.mark.manual("§4.3.3", "an interruption while accelerating or cruising: no position reached, fertig, 65; "
+                    "the residual is shown and Übernahme completes the traverse")
+def test_interruption_while_cruising(plain: Module) -> None:
+    assert plain.store(4, "%  4\nN1 X100 F1000\nN2 M02\n")[4] == 0
+    plain.operate(1, 8, START, b=4)
+    plain.clock.advance(3)
+    assert plain.operate(1, 8, STOP)[4] == 65
+    plain.clock.advance(5)
+    residual = plain.device.read("axis.1.residual")
+    assert residual > 0 and residual + actual(plain) == 100_000 and plain.device.read("output.PE1") is False
+    plain.operate(1, 8, TAKE_OVER, b=4)
+    plain.clock.advance(60)
+    assert actual(plain) == 100_000 and plain.device.read("output.PE1") is True
+
+
+# -- §4.3.4 teach-in ----------------------------------------------------------------------------------
+@pytest.mark.manual("§4.3.4", "teach-in off without stored positions leaves an empty program")
+def test_teach_in_without_positions(plain: Module) -> None:
+    assert plain.operate(1, 10, START, b=7)[4] == 0
+    assert plain.operate(1, 11, START, b=7)[4] == 0
+    assert plain.device.read("program.7") == "%  7\nN1 M02\n"
+
+
+@pytest.mark.manual("§4.3.4", "each Übernahme at standstill stores the actual value with the MD step velocity and "
+                    "no M function, numbered on from N1; storing the same position twice gives two blocks")
+def test_teach_in_blocks(plain: Module) -> None:
+    assert plain.operate(1, 10, START, b=7)[4] == 0
+    plain.operate(1, 7, FORWARD, dd=1_500)
+    plain.clock.advance(10)
+    assert plain.operate(1, 7, TAKE_OVER)[4] == 3  # "Satz abgespeichert"
+    assert plain.operate(1, 7, TAKE_OVER)[4] == 3
+    assert plain.operate(1, 11, START, b=7)[4] == 0
+    assert plain.device.read("program.7") == "%  7\nN1 X2.500 F1000\nN2 X2.500 F1000\nN3 M02\n"
+
+
+@pytest.mark.manual("§4.3.4", "teach-in on needs a program number not yet used on the IP247 (49)")
+@pytest.mark.manual("§4.3.4", "teach-in on needs that no other axis is in teach-in (22)")
+def test_teach_in_preconditions(plain: Module) -> None:
+    plain.ready(2)
+    assert plain.store(5, "%  5\nN1 M02\n")[4] == 0
+    assert plain.operate(1, 10, START, b=5)[4] == 49
+    assert plain.operate(1, 10, START, b=6)[4] == 0
+    assert plain.operate(2, 10, START, b=8)[4] == 22
+
+
+@pytest.mark.manual("§4.3.4", "in teach-in only jog and BA6/BA7 are allowed; other modes are not carried out (30)")
+def test_teach_in_allows_only_jog_and_step_moves(plain: Module) -> None:
+    assert plain.operate(1, 10, START, b=6)[4] == 0
+    assert plain.operate(1, 13, FORWARD, dd=1_000)[4] == 30
+    assert plain.operate(1, 7, FORWARD, dd=1_000)[4] == 0
+
+
+@pytest.mark.manual("§4.3.4", "switching the module off during teach-in loses the program; teach-in is off "
+                    "afterwards")
+def test_power_off_during_teach_in(plain: Module) -> None:
+    assert plain.operate(1, 10, START, b=6)[4] == 0
+    assert plain.operate(1, 7, TAKE_OVER)[4] == 3
+    plain.device.fault("power", True)
+    plain.device.fault("power", False)
+    plain.clock.advance(2)
+    assert plain.device.read("program.6") is None
+    assert not plain.call(0x62, b"\x01")[6] & 0x10
+
+
+# -- §4.3.5 – §4.3.9 ----------------------------------------------------------------------------------
+@pytest.mark.manual("§4.3.5", "BA12 gives the current position a new coordinate without motion; the SW limits and "
+                    "the reference coordinate move with it (150 mm → 400 mm: all 250 mm more positive)")
+def test_ba12_example(plain: Module) -> None:
+    plain.operate(1, 6, START, w=6000, dd=150_000)
+    plain.clock.advance(30)
+    assert plain.operate(1, 12, START, dd=400_000)[4] == 0
+    assert actual(plain) == 400_000
+    assert plain.operate(1, 6, START, dd=500_000 + 250_000)[4] == 0  # x_E now at 750 mm
+    plain.operate(1, 6, STOP)
+    plain.clock.advance(60)
+    assert plain.operate(1, 6, START, dd=750_001)[4] == 23
+
+
+@pytest.mark.manual("§4.3.5", "a BA12 coordinate beyond ±100 m is refused with 62 'Unzulässige Wegangabe'; a "
+                    "shift that takes other coordinates beyond it with 23")
+def test_ba12_limits(plain: Module) -> None:
+    assert plain.operate(1, 12, START, dd=100_000_001)[4] == 62
+    assert plain.operate(1, 12, START, dd=99_990_000)[4] == 23  # x_E would be beyond +100 m
+    assert actual(plain) == 1_000
+
+
+@pytest.mark.manual("§4.3.5", "zero offsets need valid machine data but no reference point")
+@pytest.mark.manual("§4.3.8", "BA15 needs valid machine data but no reference point")
+def test_offsets_without_reference_point(mod: Module) -> None:
+    assert mod.operate(1, 12, START, dd=0)[4] == 14
+    assert mod.load_md()[8] == 0
+    assert mod.operate(1, 12, START, dd=0)[4] == 0
+    assert mod.operate(1, 15, FORWARD, dd=0)[4] == 0
+
+
+@pytest.mark.manual("§4.3.5", "after the module is switched on again the reference point is lost, a zero offset "
+                    "is not")
+@pytest.mark.manual("§4.3.8", "BA15 and program tool offsets stay after the module is switched on again")
+def test_offsets_survive_power_up(plain: Module) -> None:
+    plain.operate(1, 13, FORWARD, dd=4_000)
+    plain.operate(1, 15, FORWARD, dd=3_000)
+    plain.device.fault("power", True)
+    plain.device.fault("power", False)
+    plain.clock.advance(2)
+    assert actual(plain) == 1_000 - 4_000 + 3_000  # shown at the reference coordinate
+
+
+@pytest.mark.manual("§4.3.6", "BA13 Vorwärts makes all coordinates more negative by the value; the sign counts: "
+                    "−50 mm Rückwärts is 50 mm Vorwärts")
+@pytest.mark.manual("§4.3.6", "relative shifts add to absolute ones")
+@pytest.mark.manual("§4.3.7", "BA14 removes the sum of all BA12/BA13 shifts")
+def test_ba13_and_ba14(plain: Module) -> None:
+    assert plain.operate(1, 13, BACKWARD, dd=-50_000)[4] == 0
+    assert actual(plain) == 1_000 - 50_000
+    assert plain.operate(1, 12, START, dd=0)[4] == 0
+    assert plain.operate(1, 13, FORWARD, dd=7_000)[4] == 0
+    assert actual(plain) == -7_000
+    assert plain.operate(1, 14, START)[4] == 0
+    assert actual(plain) == 1_000
+
+
+@pytest.mark.manual("§4.3.8", "the tool tip goes to the target: the drilling example (BA6 50, BA15 100 Vorwärts, "
+                    "BA6 200, BA16, BA6 50) puts the holder at 100 and back at 50")
+@pytest.mark.manual("§4.3.8", "the actual value after a tool offset is the tool tip's position")
+def test_drilling_example(plain: Module) -> None:
+    motor0 = plain.device.read("axis.1.machine_position") - 1_000  # the holder at 0
+    plain.operate(1, 6, START, w=6000, dd=50_000)
+    plain.clock.advance(30)
+    assert plain.operate(1, 15, FORWARD, dd=100_000)[4] == 0
+    assert actual(plain) == 150_000
+    plain.operate(1, 6, START, w=6000, dd=200_000)
+    plain.clock.advance(30)
+    assert plain.device.read("axis.1.machine_position") - motor0 == pytest.approx(100_000)
+    plain.operate(1, 16, START)
+    plain.operate(1, 6, START, w=6000, dd=50_000)
+    plain.clock.advance(30)
+    assert plain.device.read("axis.1.machine_position") - motor0 == pytest.approx(50_000)
+
+
+@pytest.mark.manual("§4.3.8", "the sign of the value counts: −80 mm Rückwärts is a tool offset forward")
+@pytest.mark.manual("§4.3.8", "a new BA15 replaces the tool offset, the program's too")
+@pytest.mark.manual("§4.3.8", "values beyond ±100 m are refused with 62 'Unzulässige Wegangabe'")
+def test_ba15_sign_replacement_and_range(make: Make) -> None:
+    mod = make()
+    assert mod.load_md(record=record(backlash=0, tool_length=10_000))[8] == 0
+    mod.operate(1, 5, START, b=1)
+    assert mod.operate(1, 15, BACKWARD, dd=-80_000)[4] == 0
+    assert actual(mod) == 1_000 + 80_000
+    assert mod.store(1, "%  1\nN1 G43\nN2 M02\n")[4] == 0
+    mod.operate(1, 8, START, b=1)
+    mod.clock.advance(1)
+    assert actual(mod) == 1_000 + 90_000
+    assert mod.operate(1, 15, FORWARD, dd=5_000)[4] == 0
+    assert actual(mod) == 1_000 + 5_000
+    assert mod.operate(1, 15, FORWARD, dd=100_000_001)[4] == 62
+
+
+@pytest.mark.manual("§4.3.8", "the tool tip must stay within ±100 m at the SW limits, else the offset is refused "
+                    "with 23")
+def test_ba15_checks_the_tip_at_the_limits(make: Make) -> None:
+    mod = make()
+    assert mod.load_md(record=record(limit_end=99_000_000, backlash=0))[8] == 0
+    assert mod.operate(1, 15, FORWARD, dd=1_000_000)[4] == 23  # x_E + 1 m = 100 m: beyond +99.999999 m
+    assert mod.operate(1, 15, FORWARD, dd=999_999)[4] == 0
+
+
+@pytest.mark.manual("§4.3.8", "on a rotary axis at 60° a tool offset of 30° forward shows 90°: the coordinate "
+                    "system turns; the range stays 0 … 360°")
+@pytest.mark.manual("§4.3.8", "a rotary tool offset not smaller than the range is refused with 63")
+def test_rotary_tool_offset(make: Make) -> None:
+    mod = make()
+    assert mod.load_md(record=record(unit=3, rotary=True, limit_begin=0, limit_end=360_000, gear=1_600,
+                                     pulses_per_rev=400, reference=0, backlash=0, f_ss=200, f_max=20_000,
+                                     a=100_000, jog1=1000, jog2=1000, step_velocity=1000,
+                                     reference_velocity=1000, zero_offsets=(0, 0, 0, 0)))[8] == 0
+    mod.operate(1, 5, START, b=1)
+    mod.operate(1, 7, FORWARD, w=4_000, dd=60_000)
+    mod.clock.advance(30)
+    assert mod.operate(1, 15, FORWARD, dd=360_000)[4] == 63
+    assert mod.operate(1, 15, FORWARD, dd=30_000)[4] == 0
+    assert actual(mod) == 90_000
+    mod.operate(1, 7, FORWARD, w=4_000, dd=290_000)  # the tip passes 360° and wraps
+    mod.clock.advance(60)
+    assert actual(mod) == 20_000
+
+
+@pytest.mark.manual("§4.3.9", "BA16 removes every tool offset, BA15's and the programs' alike")
+def test_ba16_clears_all_tool_offsets(make: Make) -> None:
+    mod = make()
+    assert mod.load_md(record=record(backlash=0, tool_length=10_000))[8] == 0
+    mod.operate(1, 5, START, b=1)
+    mod.operate(1, 15, FORWARD, dd=5_000)
+    assert mod.store(1, "%  1\nN1 G43\nN2 M02\n")[4] == 0
+    mod.operate(1, 8, START, b=1)
+    mod.clock.advance(1)
+    assert actual(mod) == 1_000 + 15_000
+    assert mod.operate(1, 16, START)[4] == 0
+    assert actual(mod) == 1_000
+
+
+@pytest.mark.manual("§4.3.10", "BA17 Start resets the pending errors of all axes and the data channel")
+def test_ba17_clears_every_page(mod: Module) -> None:
+    assert mod.operate(1, 1, FORWARD)[4] == 14
+    assert mod.operate(2, 1, FORWARD)[4] == 14
+    assert mod.operate(3, 17, START)[4] == 0
+    errors = mod.call(0x62, b"\x01")[16:20]
+    assert errors == bytes(4)  # axes 1 … 3 and the data channel (8 after power-up) cleared
+
+
+@pytest.mark.manual("§4.4", "BA66 Istwerte Lesen gives both values at once")
+def test_ba66_reads_actual_and_residual(plain: Module) -> None:
+    plain.operate(1, 6, START, w=1000, dd=50_000)
+    plain.clock.advance(1)
+    plain.operate(1, 6, STOP)
+    plain.clock.advance(5)
+    values = struct.unpack(">3i", plain.client.read_record(1, 66)[8:])
+    assert values[0] == actual(plain) and values[2] == 50_000 - actual(plain)  # (§6.3.8.6: 2 words unused)
