@@ -378,3 +378,65 @@ def test_error_33_an_endless_loop_of_empty_traverses(mod: Module) -> None:
     assert mod.operate(1, 8, START, b=2)[4] == 0
     mod.clock.advance(5)
     assert observe(mod)[:2] == (2_000, 0)  # three empty traverses, then 1 mm from x_ref = 1 mm
+
+
+@pytest.mark.manual("§7.2.2", "Fehler 52: a flying change (G10) whose conditions are not met cannot be executed")
+@pytest.mark.manual("§7.2", "47 \"Keine Richtungsänderung bei fliegendem Wechsel\" (rotary axis)")
+def test_errors_52_and_47_of_the_flying_change(mod: Module) -> None:
+    mod.ready()
+    mod.store(1, "%  1\nN1 G10 X20 F1000\nN2 X10 F1000\nN3 M02\n")  # the chain would reverse
+    assert mod.operate(1, 8, START, b=1)[4] == 52 and mod.device.read("axis.1.running") is False
+    mod.store(2, "%  2\nN1 G10 X20 F1000\nN2 G04 F10\nN3 M02\n")  # a dwell cannot be joined
+    assert mod.operate(1, 8, START, b=2)[4] == 52
+    rotary = record(rotary=True, unit=3, limit_begin=0, limit_end=360_000, reference=0)
+    assert mod.load_md(axis=2, record=rotary)[8] == 0
+    mod.operate(2, 5, START, b=1)
+    mod.store(3, "%  3\nN1 G10 X90 F1000\nN2 X45 F1000\nN3 M02\n")  # G25: forward, then back the short way
+    assert mod.operate(2, 8, START, b=3)[4] == 47
+
+
+@pytest.mark.manual("§7.2", "62 \"Unzulässige Wegangabe\": a coordinate beyond ±100 m; 63 \"Unzulässige "
+                    "Werkzeugkorrektur\": a rotary tool offset not shorter than the range")
+def test_errors_62_and_63(mod: Module) -> None:
+    mod.ready()
+    assert mod.operate(1, 12, START, dd=100_000_000)[4] == 62
+    assert mod.operate(1, 13, FORWARD, dd=-100_000_000)[4] == 62
+    assert mod.operate(1, 15, FORWARD, dd=100_000_000)[4] == 62
+    rotary = record(rotary=True, unit=3, limit_begin=0, limit_end=360_000, reference=0)
+    assert mod.load_md(axis=2, record=rotary)[8] == 0
+    mod.operate(2, 5, START, b=1)
+    assert mod.operate(2, 15, FORWARD, dd=360_000)[4] == 63
+    assert mod.operate(2, 15, FORWARD, dd=359_999)[4] == 0
+
+
+@pytest.mark.manual("§7.2", "66 \"Wegangabe nicht BCD-codiert\"; 67 \"Geschwindigkeit nicht BCD-codiert\" (AG "
+                    "values with 'AG BCD-codiert')")
+def test_errors_66_and_67_from_the_plc(devsim_device: Any) -> None:
+    module = devsim_device("ip247", {}, transport="tcp")
+    module.set("input.ANF1", True)
+    module.set("input.END1", True)
+    md = words(COM247)
+    md[3], md[47] = 0x0001, 1
+    host, port = module.port_url("ag").removeprefix("socket://").rsplit(":", 1)
+    with AgClient(host, int(port)) as plc:
+        plc.write_record(0, 20, 1, md)
+        plc.operate(0, 5, "Start", b=1)
+        assert plc.operate(0, 6, "Start", w=0x1000, dd=0x0000_A000)[4] == 66
+        assert plc.operate(0, 6, "Start", w=0x10A0, dd=0x0001_0000)[4] == 67
+        assert plc.operate(0, 7, "Vorwärts", w=0x1000, dd=0x0000_0F00)[4] == 66
+        module.advance(5)
+        assert module.read("axis.1.position") == 1_000  # nothing moved
+        assert plc.operate(0, 7, "Vorwärts", w=0x1000, dd=0x0000_1000)[4] == 0
+
+
+@pytest.mark.manual("§7.2", "3 \"Satz abgespeichert\": in teach-in Übernahme stores the position as a block")
+@pytest.mark.manual("§7.2", "8 \"Zustand nach Spannungsausfall auf der Baugruppe\" on every page after power-up")
+def test_messages_3_and_8(mod: Module) -> None:
+    assert observe(mod)[2] == bytes((8, 8, 8, 8))
+    mod.ready()
+    mod.operate(1, 10, START, b=7)
+    mod.operate(1, 7, FORWARD, w=1000, dd=4_000)
+    mod.clock.advance(10)
+    assert mod.operate(1, 7, TAKE_OVER)[4] == 3
+    mod.operate(1, 11, START)
+    assert mod.device.read("program.7").splitlines()[1] == "N1 X5.000 F1000"
