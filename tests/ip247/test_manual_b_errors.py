@@ -440,3 +440,61 @@ def test_messages_3_and_8(mod: Module) -> None:
     assert mod.operate(1, 7, TAKE_OVER)[4] == 3
     mod.operate(1, 11, START)
     assert mod.device.read("program.7").splitlines()[1] == "N1 X5.000 F1000"
+
+
+#: §7.2.1, each machine-data error at the edges the manual names (from COM247's record: f_max 100 kHz,
+#: f_ss 10 kHz, 1000 pulses and 1.1 mm per revolution, software limits −10 mm … +500 mm).
+MD_EDGES: list[tuple[dict[str, object], int]] = [
+    ({"pulse_us": 0}, 2), ({"pulse_us": 32}, 2), ({"pulse_us": 6}, 2), ({"pulse_us": 4}, 0),
+    ({"f_max": 100_001}, 3), ({"f_max": 100_000}, 0),
+    ({"jog1": 6601}, 4), ({"step_velocity": 6601}, 4), ({"jog2": 6600}, 0),
+    ({"pulses_per_rev": 11, "patterns": 11}, 5), ({"pulses_per_rev": 1001, "patterns": 7}, 5),
+    ({"a": 19}, 6), ({"a": 36_000}, 6), ({"a": 37_000}, 0),
+    ({"limit_begin": 500_000}, 7),
+    ({"reference": 500_000}, 8), ({"reference": -10_000}, 8), ({"reference": 499_999}, 0),
+    ({"gear": 11}, 9), ({"gear": 999}, 9), ({"gear": 1000}, 0),
+    ({"patterns": 3}, 10), ({"patterns": 41}, 10), ({"patterns": 7}, 10), ({"patterns": 40}, 0),
+    ({"unit": 0}, 11), ({"unit": 4}, 11),
+    ({"module": 12}, 12),
+    ({"zero_offsets": (100_000_000, 0, 0, 0)}, 13), ({"zero_offsets": (0, 0, 0, -99_500_000)}, 13),
+    ({"zero_offsets": (0, 0, 0, -99_400_000)}, 0),
+    ({"tool_length": 99_600_000}, 14),
+    ({"reference_direction": 0x10}, 15), ({"reference_sync": 2}, 15),
+    ({"reference_velocity": 660}, 17), ({"reference_velocity": 661}, 0),
+    ({"pulse_polarity": 0x20}, 18),
+    ({"backlash": 65_000}, 20), ({"backlash": 64_999}, 0),
+    ({"rotary": True, "unit": 3, "limit_begin": 360_000, "limit_end": 0, "reference": 0}, 21),
+    ({"f_ss": 0}, 22), ({"f_ss": 10_001}, 22),
+]
+
+
+@pytest.mark.manual("§7.2.1", "machine data are checked on the module; a faulty set gives 'Fehlerhafte "
+                    "Maschinendaten' (15) and carries its MD error number in the set (read back with BA67/68)")
+@pytest.mark.manual("§7.2.1", "2: pulse duration 1 … 31 µs and below half the period of the maximum frequency; "
+                    "3: maximum frequency up to 100 kHz; 4: jog/step velocity at 1 Hz … f_max")
+@pytest.mark.manual("§7.2.1", "5: pulses per revolution 12 … 1000; 6: frequency increase 0.020 … 2599.999 Hz/ms "
+                    "with τ within 5 … 2600 ms; 7: SW limit start below SW limit end; 8: reference point "
+                    "between the SW limits")
+@pytest.mark.manual("§7.2.1", "9: gear 0.012 … 400 mm with a resolution of at least 1 µm; 10: 4 … 40 current "
+                    "patterns dividing the pulses per revolution; 11: unit 1, 2 or 3; 12: module number of the "
+                    "SYS-ID")
+@pytest.mark.manual("§7.2.1", "13: zero offsets within ±100 m and not shifting the SW limits out of it; 14: tool "
+                    "length within ±100 m; 15: reference direction 00H/20H, synchronisation 0/1")
+@pytest.mark.manual("§7.2.1", "17: reference frequency above f_ss; 18: edge 0 or 40H; 20: backlash 0 … 64999 µm; "
+                    "21: rotary range start below its end; 22: start/stop frequency 1 Hz … 10 kHz")
+@pytest.mark.parametrize(("changes", "error"), MD_EDGES)
+def test_each_machine_data_error_at_its_edges(mod: Module, changes: dict[str, object], error: int) -> None:
+    answer = mod.load_md(record=record(**changes))
+    assert (answer[8], answer[4]) == (error, 15 if error else 0)
+    overview = struct.unpack(">15H", mod.call(0x64, bytes((4, 68, 0, 0)))[8:])
+    assert overview[:5] == (101, int(changes.get("module", 11)), 1, 70, error)  # type: ignore[call-overload]
+    assert struct.unpack(">70H", mod.call(0x64, bytes((1, 67, 101, 0)))[8:])[4] & 0xFF == error
+
+
+@pytest.mark.manual("§7.2.1", "19: the limit switches selected by the polarity must be present (not actuated) "
+                    "when the machine data are entered")
+def test_md_error_19_with_an_actuated_limit_switch(mod: Module) -> None:
+    mod.device.set("input.ANF1", True)
+    mod.device.set("input.END1", False)  # NC contact at 0 V: actuated (or not wired)
+    answer = mod.write(1, 20, 101, words(COM247))
+    assert (answer[8], answer[4]) == (19, 15)

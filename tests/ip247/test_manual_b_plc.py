@@ -342,3 +342,17 @@ def test_programs_over_the_plc_interface(plc: Plc) -> None:
     assert [plc.module.read(f"axis.{n}.position") for n in (1, 2, 3)] == [10_000] * 3
     assert plc.ag.delete_record(DATA_CHANNEL, 23, 5)[4] == 0
     assert plc.ag.write_record(DATA_CHANNEL, 22, 5, lang.record_words(5, new))[4] == 0
+
+
+@pytest.mark.manual("§6.2.7.2", "BA1/BA2 in BCD: the word parameter is the velocity in BCD, the byte parameter 1 "
+                    "multiplies it by 10 (0: as it is)")
+def test_a_bcd_jog_velocity(plc: Plc) -> None:
+    plc.ready(bcd=True)  # COM247's MD: 1.1 µm per pulse, at most 6600 mm/min
+    plc.ag.operate(0, 1, "Vorwärts", b=1, w=0x0500)
+    plc.module.advance(3)
+    assert plc.module.read("axis.1.velocity") == pytest.approx(5000 * 1000 / 60)
+    plc.ag.operate(0, 1, "Stopp")
+    plc.module.advance(3)
+    plc.ag.operate(0, 1, "Rückwärts", b=0, w=0x0500)
+    plc.module.advance(3)
+    assert plc.module.read("axis.1.velocity") == pytest.approx(-500 * 1000 / 60)

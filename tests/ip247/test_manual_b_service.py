@@ -79,6 +79,7 @@ def test_each_axis_has_its_own_inputs_and_output(make: Make) -> None:
 
 
 @pytest.mark.manual("§3.3.5", "the PG interface X8 runs at 9600 bit/s (the PG's cable sets the rate)")
+@pytest.mark.manual("§7.1.5.3", "online, the PG shows the SYS-ID with the firmware state ('IP247', 'A02.1')")
 def test_the_pg_port_at_9600(mod: Module) -> None:
     assert mod.port.baudrate == 9600 and mod.port.parity == serial.PARITY_EVEN
     assert mod.call(0x64, bytes((4, 70, 0, 0)))[8:20] == b"IP247 A02.1 "

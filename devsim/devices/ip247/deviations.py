@@ -121,6 +121,13 @@ DEVIATIONS: tuple[Deviation, ...] = (
               "which one",
               "BA66 with the BCD flag converts what it can and leaves the rest binary; there is no MB249",
               "MB249 is FB165's flag byte"),
+    Deviation("§6.3.8.2", "a program DB is at most 512 words long",
+              "a program of 1023 characters (§2.6.1, §5.6.2.1) is a record of 517 words (5 header words and "
+              "the text); BA22 takes and BA69 gives it",
+              "the manual allows 1023 characters per program elsewhere; 512 words hold only 1014"),
+    Deviation("§6.3.8.1", "machine data can be transferred, read and deleted only over the axis's own page",
+              "BA67 also reads them over the data channel while all DB numbers differ",
+              "§6.3.4 and §4.3.15 allow that; only transfer and delete are tied to the axis's page"),
     Deviation("§6.1.3, §7.3.2", "several CPUs must not operate the same axis (it leads to program errors)",
               "any number of hosts may use the endpoint and the PG port; jobs are taken in arrival order",
               "what goes wrong in a multi-processor PLC is the PLC's, not the module's"),
