@@ -356,3 +356,41 @@ def test_a_bcd_jog_velocity(plc: Plc) -> None:
     plc.ag.operate(0, 1, "Rückwärts", b=0, w=0x0500)
     plc.module.advance(3)
     assert plc.module.read("axis.1.velocity") == pytest.approx(-500 * 1000 / 60)
+
+
+@pytest.mark.manual("§5.6.1.2", "'AG BCD-codiert' yes: every coordinate the AG sends (targets, increments, zero "
+                    "offsets, tool offsets) is read as BCD, within ±9999999")
+def test_bcd_offsets_and_increments_from_the_plc(plc: Plc) -> None:
+    plc.ready(bcd=True)
+    assert plc.ag.operate(0, 12, "Start", dd=0x0002_5000)[4] == 0  # BA12: actual value 25 mm
+    assert plc.module.read("axis.1.position") == 25_000
+    assert plc.ag.operate(0, 13, "Vorwärts", dd=0x0000_5000)[4] == 0  # BA13: 5 mm forward
+    assert plc.module.read("axis.1.position") == 20_000
+    assert plc.ag.operate(0, 15, "Vorwärts", dd=0x0000_3000)[4] == 0  # BA15: tool 3 mm
+    assert plc.module.read("axis.1.position") == 23_000
+    assert plc.ag.operate(0, 7, "Rückwärts", w=0x1000, dd=0x0001_0000)[4] == 0  # BA7: 10 mm back
+    plc.module.advance(10)
+    assert plc.module.read("axis.1.position") == 13_000
+    assert plc.ag.operate(0, 12, "Start", dd=0x0002_500A)[4] == 66
+    assert plc.ag.operate(0, 15, "Vorwärts", dd=0x0000_30F0)[4] == 66
+
+
+@pytest.mark.manual("§6.3.8.5", "programs are listed in the order they are stored: a program transferred again "
+                    "after a delete comes last")
+def test_the_directory_order_after_a_delete(plc: Plc) -> None:
+    for number in (3, 1, 2):
+        plc.ag.write_record(DATA_CHANNEL, 22, number, lang.record_words(number, f"%{number:3d}\nN1 M02\n"))
+    plc.ag.delete_record(DATA_CHANNEL, 23, 3)
+    plc.ag.write_record(DATA_CHANNEL, 22, 3, lang.record_words(3, "%  3\nN1 X1 F100\nN2 M02\n"))
+    assert plc.words(plc.ag.read_record(DATA_CHANNEL, 65))[::2] == (1, 2, 3)
+
+
+@pytest.mark.manual("§6.3.8.2", "program DB header: DW n length in words, DW n+1 00H 'D', DW n+2 'B' and the "
+                    "number, DW n+3 the program error, DW n+4 the faulty block, the text from DW n+5")
+def test_the_header_of_a_faulty_program(plc: Plc) -> None:
+    text = "%  9 FEHLER\nN1 X10 F1000\nN2 X10 Q5\nN3 M02\n"
+    answer = plc.ag.write_record(DATA_CHANNEL, 22, 9, lang.record_words(9, text))
+    assert answer[4] == 48
+    read = plc.words(plc.ag.read_record(1, 69, 9))
+    assert read[:5] == (5 + (len(text) + 1) // 2, 0x0044, 0x4209, 16, 2)  # 16: function unknown, block 2
+    assert b"".join(struct.pack(">H", w) for w in read[5:])[: len(text)] == text.encode()
