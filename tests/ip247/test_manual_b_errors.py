@@ -498,3 +498,15 @@ def test_md_error_19_with_an_actuated_limit_switch(mod: Module) -> None:
     mod.device.set("input.END1", False)  # NC contact at 0 V: actuated (or not wired)
     answer = mod.write(1, 20, 101, words(COM247))
     assert (answer[8], answer[4]) == (19, 15)
+
+
+@pytest.mark.manual("§7.2.2", "Fehler 7: a velocity whose frequency is below 1 Hz runs at 1 Hz, with this "
+                    "message")
+def test_error_7_a_too_slow_jog_runs_at_1_hz(mod: Module) -> None:
+    slow = record(gear=400_000, pulses_per_rev=12, patterns=4, f_max=100, f_ss=1, a=100, jog1=6000, jog2=6000,
+                  step_velocity=6000, reference_velocity=6000)  # 33.333 mm per pulse
+    assert mod.load_md(record=slow)[8] == 0
+    mod.operate(1, 5, START, b=1)
+    assert mod.operate(1, 1, FORWARD, w=1)[4] == 7  # 1 mm/min: 0.0005 Hz
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.velocity") == pytest.approx(400_000 / 12)  # one pulse per second
