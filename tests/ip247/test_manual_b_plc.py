@@ -394,3 +394,18 @@ def test_the_header_of_a_faulty_program(plc: Plc) -> None:
     read = plc.words(plc.ag.read_record(1, 69, 9))
     assert read[:5] == (5 + (len(text) + 1) // 2, 0x0044, 0x4209, 16, 2)  # 16: function unknown, block 2
     assert b"".join(struct.pack(">H", w) for w in read[5:])[: len(text)] == text.encode()
+
+
+@pytest.mark.manual("§6.4.6.1", "the machine-data DB104 in the AG is transferred (BA20, Z-DB 10) as DB10 in the "
+                    "IP247's memory, read back (BA67, Q-DB 10) and deleted (BA21) under that number")
+def test_the_target_db_number_names_the_stored_set(plc: Plc) -> None:
+    plc.module.set("input.ANF1", True)
+    plc.module.set("input.END1", True)
+    md = plc.md()
+    md[2] = 0x4200 | 104  # the AG's DB104
+    assert plc.ag.write_record(0, 20, 10, md)[8] == 0
+    assert plc.words(plc.ag.read_record(0, 64))[:2] == (10, 70)
+    read = plc.words(plc.ag.read_record(0, 67, 10))
+    assert read[2] == 0x4200 | 10 and read[5:] == tuple(md[5:])
+    assert plc.ag.read_record(0, 67, 104)[4] == 13  # no set of that number
+    assert plc.ag.delete_record(0, 21, 10)[4] == 0 and plc.words(plc.ag.read_record(0, 64)) == (0,) * 6
