@@ -13,7 +13,7 @@ import serial
 
 from devsim.core.config import ConfigError
 from devsim.devices.ip247.client import AgClient, As511Error, PgClient
-from tests.ip247.helpers import BACKWARD, FORWARD, START, STOP, Make, Module
+from tests.ip247.helpers import BACKWARD, FORWARD, START, STOP, Make, Module, record
 from tests.ip247.test_machine_data import COM247, words
 
 
@@ -154,6 +154,7 @@ def test_restart_without_the_battery(mod: Module) -> None:
 @pytest.mark.manual("§7.1.5.3", "after power-on the LEDs blink alternately for a moment, then the green LED is lit")
 @pytest.mark.manual("§7.1.5.3", "after a machine-data set is transferred its power unit automatically gets an "
                     "initialising pulse (RS)")
+@pytest.mark.manual("§3.3.3", "the module gives each axis's power unit a high-active reset pulse (RS)")
 def test_commissioning_leds_and_the_reset_pulse(mod: Module) -> None:
     mod.device.fault("power", True)
     mod.device.fault("power", False)
@@ -200,3 +201,21 @@ def test_velocity_and_pulse_frequency(mod: Module) -> None:
     mod.clock.advance(3)
     frequency = mod.device.read("axis.1.velocity") / 1.1  # pulses per second
     assert frequency == pytest.approx(3300 * 1000 / (1.1 * 60))
+
+
+@pytest.mark.manual("§3.3.3", "the polarity of clock and direction level is programmable (machine data)")
+def test_the_direction_level_follows_the_polarity(mod: Module) -> None:
+    mod.ready(1)  # COM247's MD: positive edge (40H)
+    assert mod.load_md(axis=2, record=record(pulse_polarity=0x00))[8] == 0
+    mod.operate(2, 5, START, b=1)
+    for axis in (1, 2):
+        mod.operate(axis, 1, FORWARD, w=1000)
+    mod.clock.advance(1)
+    assert (mod.device.read("output.RP1"), mod.device.read("output.RP2")) == (True, False)
+    for axis in (1, 2):
+        mod.operate(axis, 1, STOP)
+    mod.clock.advance(2)
+    for axis in (1, 2):
+        mod.operate(axis, 1, BACKWARD, w=1000)
+    mod.clock.advance(1)
+    assert (mod.device.read("output.RP1"), mod.device.read("output.RP2")) == (False, True)
