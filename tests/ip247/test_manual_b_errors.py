@@ -510,3 +510,36 @@ def test_error_7_a_too_slow_jog_runs_at_1_hz(mod: Module) -> None:
     assert mod.operate(1, 1, FORWARD, w=1)[4] == 7  # 1 mm/min: 0.0005 Hz
     mod.clock.advance(5)
     assert mod.device.read("axis.1.velocity") == pytest.approx(400_000 / 12)  # one pulse per second
+
+
+@pytest.mark.manual("§7.2.2", "two kinds of module errors: axis errors that abort the motion, and warnings or "
+                    "notes for information only (errors 1 to 9)")
+def test_warnings_do_not_abort_the_motion(mod: Module) -> None:
+    mod.ready()
+    assert mod.operate(1, 1, FORWARD, w=30_000)[4] == 7  # warning: the jog runs at f_max
+    mod.clock.advance(1)
+    assert mod.write(1, 20, 101, words(COM247), flags=1)[4] == 4  # warning: no input while running
+    mod.clock.advance(1)
+    assert mod.device.read("axis.1.running") is True and mod.device.read("axis.1.velocity") > 0
+    mod.operate(1, 1, STOP)
+    mod.clock.advance(5)
+    assert mod.operate(1, 6, START, w=1000, dd=450_000)[4] == 0
+    mod.clock.advance(1)
+    assert mod.operate(1, 6, START, w=1000, dd=450_000)[4] == 2  # an axis error: the move is aborted
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.running") is False
+
+
+@pytest.mark.manual("§3.1.3", "two LEDs show operation and errors: green while the module runs, red while an "
+                    "axis error is pending (warnings 1 … 9 do not light it)")
+def test_the_red_led_shows_axis_errors(mod: Module) -> None:
+    mod.operate(4, 17, START)
+    assert (mod.device.read("output.led_green"), mod.device.read("output.led_red")) == (True, False)
+    mod.load_md()
+    assert mod.operate(1, 6, START, w=1000, dd=5_000)[4] == 10
+    assert mod.device.read("output.led_red") is True
+    mod.operate(4, 17, START)
+    assert mod.device.read("output.led_red") is False
+    mod.operate(1, 5, START, b=1)
+    assert mod.operate(1, 1, FORWARD, w=30_000)[4] == 7
+    assert mod.device.read("output.led_red") is False
