@@ -128,6 +128,11 @@ DEVIATIONS: tuple[Deviation, ...] = (
     Deviation("§6.3.8.1", "machine data can be transferred, read and deleted only over the axis's own page",
               "BA67 also reads them over the data channel while all DB numbers differ",
               "§6.3.4 and §4.3.15 allow that; only transfer and delete are tied to the axis's page"),
+    Deviation("§6.3.10", "after switching on, module, slot and page number are preset to 0",
+              "they are 0 (or the config's sys_id) only when the battery RAM is empty; with the battery "
+              "they are kept like the machine data",
+              "machine data stay valid across a restart with the battery (§7.3.3), which they could not if "
+              "the module number fell back to 0 (their module number must equal the SYS-ID's)"),
     Deviation("§6.1.3, §7.3.2", "several CPUs must not operate the same axis (it leads to program errors)",
               "any number of hosts may use the endpoint and the PG port; jobs are taken in arrival order",
               "what goes wrong in a multi-processor PLC is the PLC's, not the module's"),
