@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import pytest
 
-from tests.ip247.helpers import BACKWARD, FORWARD, START, Module
+from tests.ip247.helpers import BACKWARD, FORWARD, START, Make, Module, record
+from tests.ip247.test_machine_data import words
 
 ANFANG, ENDE = 25, 26  # §7.2 error list: "Endschalter Anfang / Ende überfahren"
 
@@ -59,3 +60,18 @@ def test_program_traverse_towards_an_actuated_switch_aborts(mod: Module) -> None
     mod.clock.advance(2)
     assert mod.device.read("axis.1.error") == ANFANG
     assert mod.device.read("axis.1.running") is False and mod.device.read("axis.1.position") == 1_000
+
+
+@pytest.mark.manual("§2.5.3.10", "without limit switches wired, polarity Schließer (NO) must be set: the open "
+                    "inputs then read as not actuated and the axis moves both ways")
+def test_no_switches_wired_with_no_contacts(make: Make) -> None:
+    mod = make()
+    mod.device.set("input.ANF1", False)  # nothing wired: 0 V on both inputs
+    mod.device.set("input.END1", False)
+    assert mod.write(1, 20, 101, words(record(limit_polarity=0)))[8] == 0
+    mod.operate(1, 5, START, b=1)
+    assert mod.operate(1, 7, FORWARD, w=1000, dd=2_000)[4] == 0
+    mod.clock.advance(5)
+    assert mod.operate(1, 7, BACKWARD, w=1000, dd=2_000)[4] == 0
+    mod.clock.advance(5)
+    assert mod.device.read("axis.1.position") == 1_000 and mod.device.read("axis.1.error") == 0

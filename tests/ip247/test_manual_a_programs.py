@@ -112,6 +112,19 @@ SYNTAX = [
                  marks=manual("§2.6.10", "an X without G00 must be followed by the F function")),
     pytest.param("%  1\nN1 G24 F3 M10\nN2 G20\nN3 M02\n", 9, 1,
                  marks=manual("§2.6.6.4", "a G24 block holds no other function, not even an M function")),
+    pytest.param("%  1\nN1 G24 F2\nN2 X1 F1\nN3 G20 M10\nN4 M02\n", 5, 3,
+                 marks=manual("§2.6.6.4", "a G20 block holds no other function (5 'Funktion nach G-Funktion "
+                              "nicht erlaubt')")),
+    pytest.param("%  1\nN1 G74 X10\nN2 M02\n", 5, 1,
+                 marks=manual("§2.6.10", "the X function is forbidden with G74")),
+    pytest.param("%  1\nN1 G24 F65001\nN2 X1 F1\nN3 G20\nN4 M02\n", 11, 1,
+                 marks=manual("§2.6.8", "as a loop count F lies in 0 … 65000")),
+    pytest.param("%  1\nN1 L5 X10\nN2 M02\n", 9, 1,
+                 marks=manual("§2.6.5", "no function may follow the L function; the block ends there")),
+    pytest.param("%  1\nN1 G90 G91\nN2 M02\n", 9, 1,
+                 marks=manual("§2.6.6", "a block holds one G function only")),
+    pytest.param("%  1\nN1 X1 F1 M10 M11\nN2 M02\n", 9, 1,
+                 marks=manual("§2.6.3", "each function appears at most once in a block")),
 ]
 
 
@@ -300,3 +313,26 @@ def test_m00_halts(make: Make) -> None:
     assert takes == [100_000 - 3_250, 100_000 - 3_250 + 2_300, 250_000 - 2_300 + 3_250]
     assert state(mod)[0] == 0 and mod.device.read("axis.1.running") is False
     assert mod.m.units[0].automatic is None  # the M00 of N30 before G40 and M02 did not halt
+
+
+@manual("§2.6.6.9", "after G74 the actual value counts both the zero offset and the tool offset (the example's "
+        "values, with the sign §2.6.6.7 gives a positive zero offset: see the deviation row)")
+def test_g74_example_values(make: Make) -> None:
+    mod = make()
+    assert mod.load_md(record=record(reference=0, zero_offsets=(500_000, 0, 0, 0), tool_length=20_000,
+                                     backlash=0))[8] == 0
+    mod.operate(1, 5, START, b=1)
+    run(mod, "%  1\nN1 G54\nN2 G43\nN3 G74\nN4 G04 F100\nN5 M02\n", seconds=5)
+    assert mod.device.read("axis.1.running") is True  # in the dwell
+    assert state(mod)[1] == -480_000
+
+
+@manual("§2.5.5.1", "each G43/G44 checks the resulting tool offset against the limits; beyond them the program is "
+        "aborted with an error (63)")
+def test_g43_beyond_the_limits_aborts(make: Make) -> None:
+    mod = make()
+    assert mod.load_md(record=record(tool_length=40_000_000, limit_end=10_000_000, backlash=0))[8] == 0
+    mod.operate(1, 5, START, b=1)
+    run(mod, "%  1\nN1 G43\nN2 G43\nN3 G43\nN4 X2 F1000\nN5 M02\n", seconds=10)
+    assert state(mod)[0] == 63 and mod.m.units[0].automatic is None
+    assert mod.device.read("axis.1.position") == 1_000 + 80_000_000  # the two G43 that fitted stay

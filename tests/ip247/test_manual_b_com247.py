@@ -71,17 +71,6 @@ def test_new_machine_data_reset_the_offsets(mod: Module) -> None:
     assert observe(mod)[0] == 3_000
 
 
-@pytest.mark.manual("§5.6.1.2", "the tool length must be smaller than the range the software limit switches allow")
-def test_a_tool_length_beyond_the_software_range(mod: Module) -> None:
-    mod.device.set("input.ANF1", True)
-    mod.device.set("input.END1", True)
-    span = 500_000 - -10_000  # COM247's software limits
-    answer = mod.write(1, 20, 101, words(record(tool_length=span)))
-    assert (answer[8], answer[4]) == (14, 15)
-    mod.call(0x65, bytes((1, 21, 101)))
-    assert mod.write(1, 20, 101, words(record(tool_length=span - 1)))[8] == 0
-
-
 @pytest.mark.manual("§5.6.1.2", "rotary axis: the range end is physically the range start; the actual value jumps "
                     "from the end value to the start value")
 def test_a_rotary_axis_wraps_its_actual_value(mod: Module) -> None:

@@ -25,15 +25,34 @@ from devsim.devices.ip247.jobs import AxisView
 from devsim.devices.ip247.machine_data import MachineData
 from devsim.devices.ip247.motion import ExpPiece, move_pieces
 from devsim.devices.ip247.motor import SteppingMotor
+from devsim.devices.ip247.reset_output import ResetOutput
 from devsim.devices.ip247.switches import MechanicalSwitch
 
-__all__ = ["AxisEvents", "AxisUnit", "ProgramContext", "ReferenceContext"]
+__all__ = ["AxisEvents", "AxisUnit", "ProgramContext", "ReferenceContext", "rp_level", "switch_bounds"]
 
 FOREVER = 1e9  # seconds: a jog's cruise lasts until something stops it
-RS_PULSE = 0.1  # seconds (spec §5.16)
 #: The machine data whose change clears the reference point (manual §4.3.12): reference
 #: coordinate, pulses per revolution, travel per revolution, reference direction, synchronisation.
 REFERENCE_RELEVANT = ("reference", "pulses_per_rev", "gear", "reference_direction", "reference_sync")
+
+
+def rp_level(md: MachineData | None, direction: int) -> bool:
+    """The direction output RP for a move: the MD polarity fixes which level is forward (manual
+    §2.5.1.1; spec §2.2 [DECISION]: 1 forward with the positive edge, 0 with the negative)."""
+    positive = md is None or md.pulse_polarity == 0x40
+    return (direction > 0) == positive
+
+
+def switch_bounds(geometry: dict[str, Any], name: str) -> tuple[float, float] | None:
+    """Where switch ``name`` (anf, end, cam) is actuated, from the axis geometry (config)."""
+    where = geometry.get(name)
+    if where is None:
+        return None
+    if name == "anf":
+        return -math.inf, float(where)
+    if name == "end":
+        return float(where), math.inf
+    return float(where[0]), float(where[1])
 
 
 class AxisEvents(Protocol):
@@ -75,7 +94,7 @@ class AxisUnit:
         self.axis = Axis(clock, name=f"axis{number}")
         self.md: MachineData | None = None
         self.md_words: list[int] | None = None
-        self._rs_pulse: Any = None  # the timer ending a 100 ms RS pulse
+        self.rs = ResetOutput(f"RS{number}", signals, clock, lambda: self.md_valid)
         self._previous_md: MachineData | None = None  # the last record loaded (kept when deleted)
         self.mode, self.last_cmd, self.running = 4, 0, False
         self.reference_set = False
@@ -135,13 +154,7 @@ class AxisUnit:
         if self._d == 0:
             self.m0 = self.axis.position() - h - self._side(direction)  # no play to take up
         self._h0, self._d = h, direction
-        self.signals.set(f"RP{self.number}", self.rp_level(direction))
-
-    def rp_level(self, direction: int) -> bool:
-        """The direction output for a move: the MD polarity fixes which level is forward (manual
-        §2.5.1.1; spec §2.2 [DECISION]: 1 forward with the positive edge, 0 with the negative)."""
-        positive = self.md is None or self.md.pulse_polarity == 0x40
-        return (direction > 0) == positive
+        self.signals.set(f"RP{self.number}", rp_level(self.md, direction))
 
     def machine(self, holder: float, direction: int) -> float:
         """The motor position that puts the load at ``holder`` after a move in ``direction``."""
@@ -187,21 +200,8 @@ class AxisUnit:
 
     def pulse_rs(self) -> None:
         """A 100 ms high pulse on RS; the pattern counter restarts at 0 (spec §2.8.1, §5.6.3)."""
-        self.signals.set(f"RS{self.number}", True)
-        if self._rs_pulse is not None:
-            self._rs_pulse.cancel()
-        self._rs_pulse = self.clock.call_later(RS_PULSE, self._rs_pulse_over)
+        self.rs.pulse()
         self.pattern_base = self.axis.position()
-
-    def _rs_pulse_over(self) -> None:
-        self._rs_pulse = None
-        self.set_rs()
-
-    def set_rs(self) -> None:
-        """RS holds the power unit in reset: high while the axis has no valid machine data, low
-        once it has (manual §2.8.1); a pulse in progress ends on its own."""
-        if self._rs_pulse is None:
-            self.signals.set(f"RS{self.number}", not self.md_valid)
 
     def limit_levels(self) -> tuple[bool, bool]:
         """The levels of the limit inputs ANF and END (True = 24 V)."""
@@ -215,7 +215,7 @@ class AxisUnit:
         (manual §4.3.12: the PLC side must delete before it writes)."""
         old = self.md or self._previous_md
         self.md, self.md_words = md, words
-        self.set_rs()
+        self.rs.update()
         if md is None:
             return
         self._previous_md = md
@@ -238,10 +238,8 @@ class AxisUnit:
         if self.md is not None:
             self.set_holder(self.md.reference)
         self.set_pe()
-        if self._rs_pulse is not None:
-            self._rs_pulse.cancel()
-            self._rs_pulse = None
-        self.set_rs()
+        self.rs.cancel()
+        self.rs.update()
 
     # -- the external start/stop input (spec §5.10) -------------------------------------------------
     def held(self, start: Callable[[], None]) -> int | None:
@@ -401,16 +399,10 @@ class AxisUnit:
 
     # -- limit switches (spec §5.7) ---------------------------------------------------------------
     def _region(self, geometry: dict[str, Any], name: str) -> MechanicalSwitch | None:
-        where = geometry.get(name)
-        if where is None:
+        bounds = switch_bounds(geometry, name)
+        if bounds is None:
             return None
-        if name == "anf":
-            low, high = -math.inf, float(where)
-        elif name == "end":
-            low, high = float(where), math.inf
-        else:
-            low, high = float(where[0]), float(where[1])
-        return MechanicalSwitch(self.axis, low, high, self.mechanical_position(),
+        return MechanicalSwitch(self.axis, *bounds, self.mechanical_position(),
                                 lambda active, n=name: self._switch(n, active))
 
     def _switch(self, name: str, actuated: bool, polarity: int | None = None) -> None:

@@ -87,6 +87,11 @@ DEVIATIONS: tuple[Deviation, ...] = (
               "BEGINN, BA70 at ONLINE, BA20/22 with the overwrite question, BA17 on leaving the test screen, "
               "operator jobs, OBSERVE) is answered as the module answers it",
               "a host program emulating COM247 talks to the module; the twin of COM247 is that host"),
+    Deviation("§5.6.1.2", "COM247's machine-data page 4: the tool length must be smaller than the range the "
+              "software limit switches allow",
+              "a linear axis's tool length is checked against ±100 m only (MD error 14 as §7.2.1 and §2.5.5.1 "
+              "define it); a rotary axis's against its range",
+              "the sentence describes COM247's input field; the module's own check is the one §7.2.1 gives"),
     Deviation("§5.4, §6.3.8.3", "module number 0 … 99, slot 0 … 255, page 0 … 252 (BA24)",
               "BA24 takes any byte for each; the module number is frozen by correct machine data (12)",
               "the manual gives the ranges for COM247's screen and FB165's data block, not a module error "

@@ -219,12 +219,10 @@ def _limit_inputs_bad(md: MachineData, levels: tuple[bool, bool]) -> bool:
 
 
 def _tool_bad(md: MachineData) -> bool:
-    """MD error 14: the tool length is shorter than the range the software limits (or the rotary
-    range) allow (manual §5.6.1.2), and the tool tip stays within ±100 m (§7.2.1)."""
-    if abs(md.tool_length) >= md.limit_end - md.limit_begin:
-        return True
-    return not md.rotary and (abs(md.tool_length) > LIMIT or md.limit_end + md.tool_length > LIMIT
-                              or md.limit_begin + md.tool_length < -LIMIT)
+    if md.rotary:
+        return abs(md.tool_length) >= md.limit_end - md.limit_begin
+    return (abs(md.tool_length) > LIMIT or md.limit_end + md.tool_length > LIMIT
+            or md.limit_begin + md.tool_length < -LIMIT)
 
 
 def _zero_offsets_bad(md: MachineData) -> bool:

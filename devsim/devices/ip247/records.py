@@ -111,9 +111,6 @@ class DataChannel:
         elsewhere (manual §4.3.12, §6.3.10)."""
         assert unit is not None
         unit.error = 0
-        if len(words) > 3 and words[3] & 0xFF != unit.number:
-            self.pages.set_error(unit, 46)
-            return ACK_NEGATIVE, []
         if unit.running:
             self.pages.set_error(unit, 4)
             return ACK_ACCEPTED, [0]
@@ -125,6 +122,9 @@ class DataChannel:
         except ValueError:
             self.pages.set_error(unit, 15)
             return ACK_ACCEPTED, [0]
+        if md.axis != unit.number:
+            self.pages.set_error(unit, 46)  # only over the page of its axis (manual §4.3.12)
+            return ACK_NEGATIVE, []
         md = msgspec.structs.replace(md, db=db)
         unit.wire_switches(md.limit_polarity if md.limit_polarity in (0, 1) else None)
         error = machine_data.check(md, sys_module=self.sys_id[0], limit_levels=unit.limit_levels())
@@ -225,7 +225,10 @@ class DataChannel:
         return ACK_ACCEPTED, record
 
     def read_md(self, unit: AxisUnit | None, db: int, bcd: bool) -> tuple[int, Words]:
-        source = unit if unit is not None else next((u for u in self.units if u.md and u.md.db == db), None)
+        """BA67: over its axis's page; over any page when the DB numbers differ (manual §4.3.15)."""
+        source = unit
+        if unit is None or ((unit.md is None or unit.md.db != db) and self.md_numbers_differ()):
+            source = next((u for u in self.units if u.md and u.md.db == db), None)
         if source is None or source.md_words is None or (source.md is not None and source.md.db != db):
             self.pages.set_error(unit, 13)
             return ACK_ACCEPTED, []
