@@ -409,3 +409,21 @@ def test_the_target_db_number_names_the_stored_set(plc: Plc) -> None:
     assert read[2] == 0x4200 | 10 and read[5:] == tuple(md[5:])
     assert plc.ag.read_record(0, 67, 104)[4] == 13  # no set of that number
     assert plc.ag.delete_record(0, 21, 10)[4] == 0 and plc.words(plc.ag.read_record(0, 64)) == (0,) * 6
+
+
+@pytest.mark.manual("§6.2.6.2", "BA9: each Übernahme starts the next block of the program (traverse or dwell); "
+                    "TBIT is set with it and reset when the block is done")
+def test_tbit_in_single_block(plc: Plc) -> None:
+    plc.ready()
+    plc.ag.write_record(DATA_CHANNEL, 22, 5, lang.record_words(5, "%  5\nN1 X10 F1000\nN2 G04 F10\nN3 X20 F1000\n"
+                                                                   "N4 M02\n"))
+    plc.ag.operate(0, 9, "Start", b=5)
+    plc.module.advance(5)
+    positions = []
+    for _ in range(3):
+        plc.ag.operate(0, 9, "Übernahme")
+        assert plc.module.read("axis.1.tbit") is True
+        plc.module.advance(10)
+        assert plc.module.read("axis.1.tbit") is False
+        positions.append(plc.module.read("axis.1.position"))
+    assert positions == [10_000, 10_000, 20_000]
