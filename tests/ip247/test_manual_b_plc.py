@@ -11,9 +11,10 @@ from typing import Any
 
 import msgspec
 import pytest
+import serial
 
 from devsim.devices.ip247 import program as lang
-from devsim.devices.ip247.client import AgClient
+from devsim.devices.ip247.client import AgClient, PgClient
 from devsim.devices.ip247.machine_data import decode, encode
 from tests.ip247.test_machine_data import COM247, MANUAL, words
 
@@ -153,7 +154,7 @@ def test_stopp_with_any_mode_stops_the_axis(plc: Plc) -> None:
                     "Übernahme from the AG and reset at the next interruption or the end")
 @pytest.mark.manual("§6.2.6.2", "a program continued from the PG is treated as started from the PG: TBIT is not "
                     "set")
-def test_tbit_over_a_job_and_an_interrupted_program(plc: Plc, devsim_device: Any) -> None:
+def test_tbit_over_a_job_and_an_interrupted_program(plc: Plc) -> None:
     plc.ready()
     plc.ag.operate(0, 7, "Vorwärts", w=1000, dd=5_000)
     assert plc.module.read("axis.1.tbit") is True
@@ -172,7 +173,8 @@ def test_tbit_over_a_job_and_an_interrupted_program(plc: Plc, devsim_device: Any
     plc.ag.operate(0, 8, "Stopp")
     plc.module.advance(2)
     assert plc.module.read("axis.1.tbit") is False
-    plc.module.device.model.operate(1, 8, 5, source="pg")  # Übernahme from the PG
+    with serial.serial_for_url(plc.module.port_url("pg"), timeout=5) as port:  # the PG port (TCP here)
+        assert PgClient(port).operate(1, 8, "Übernahme")[4] == 0
     assert plc.module.read("axis.1.running") is True and plc.module.read("axis.1.tbit") is False
 
 
