@@ -212,12 +212,14 @@ def test_machine_data_over_the_data_channel_only_with_distinct_numbers(plc: Plc)
 
 @pytest.mark.manual("§6.3.8.1", "the machine-data DB of the manual's example (70 words) is written with BA20 and "
                     "read back with BA67 word for word, DR n+4 the machine-data error")
+@pytest.mark.manual("§6.3.4", "the dual/BCD conversion flag (BA = KY x,y with x > 0) is evaluated only with BA66")
 def test_the_manuals_machine_data_record_round_trip(plc: Plc) -> None:
     plc.module.set("input.ANF1", True)
     plc.module.set("input.END1", True)
     record = words(MANUAL)
     assert plc.ag.write_record(0, 20, 1, record)[8] == 0
     assert list(plc.words(plc.ag.read_record(0, 67, 1))) == record
+    assert list(plc.words(plc.ag.read_record(0, 67, 1, bcd=True))) == record  # the BCD flag is BA66's only
 
 
 @pytest.mark.manual("§6.3.8.2", "programs are axis-independent: transferred and deleted only over the data "
