@@ -290,3 +290,76 @@ def test_ba66_reads_actual_and_residual(plain: Module) -> None:
     plain.clock.advance(5)
     values = struct.unpack(">3i", plain.client.read_record(1, 66)[8:])
     assert values[0] == actual(plain) and values[2] == 50_000 - actual(plain)  # (§6.3.8.6: 2 words unused)
+
+
+@pytest.mark.manual("§4.3.3", "a program interrupted inside a G10 chain brakes; position reached is not set; 65; "
+                    "Übernahme goes on to the chain's target")
+def test_interruption_inside_a_flying_change(plain: Module) -> None:
+    assert plain.store(4, "%  4\nN1 G10 X50 F1000 M30\nN2 X100 F1000 M31\nN3 M02\n")[4] == 0
+    plain.operate(1, 8, START, b=4)
+    plain.clock.advance(2)
+    assert plain.operate(1, 8, STOP)[4] == 65
+    plain.clock.advance(5)
+    assert plain.device.read("axis.1.running") is False and plain.device.read("output.PE1") is False
+    assert plain.operate(1, 8, TAKE_OVER, b=4)[4] == 0
+    plain.clock.advance(60)
+    assert actual(plain) == 100_000 and plain.device.read("output.PE1") is True
+
+
+def _rotary(make: Make) -> Module:
+    """0 … 360° in m°, r = 4 m° (gear 1.6°, 400 pulses), reference 0° set."""
+    mod = make()
+    assert mod.load_md(record=record(unit=3, rotary=True, limit_begin=0, limit_end=360_000, gear=1_600,
+                                     pulses_per_rev=400, reference=0, backlash=0, f_ss=200, f_max=20_000,
+                                     a=100_000, jog1=1000, jog2=1000, step_velocity=1000,
+                                     reference_velocity=1000, zero_offsets=(0, 0, 0, 0)))[8] == 0
+    mod.operate(1, 5, START, b=1)
+    return mod
+
+
+@pytest.mark.manual("§4.3.5", "rotary example: 60° becomes 400°; the range is then 340° … 700° and absolute targets "
+                    "must lie in it (0° no longer exists)")
+def test_rotary_ba12_example(make: Make) -> None:
+    mod = _rotary(make)
+    mod.operate(1, 7, FORWARD, w=4_000, dd=60_000)
+    mod.clock.advance(30)
+    assert mod.operate(1, 12, START, dd=400_000)[4] == 0
+    assert actual(mod) == 400_000
+    assert mod.operate(1, 6, START, w=4_000, dd=0)[4] == 23
+    assert mod.operate(1, 6, START, w=4_000, dd=690_000)[4] == 0
+    mod.clock.advance(60)
+    assert actual(mod) == 690_000
+
+
+@pytest.mark.manual("§4.3.8", "on a rotary axis with a tool offset the shortest way of a step move is reckoned from "
+                    "the tool tip")
+@pytest.mark.manual("§4.2.6", "rotary Start takes the shortest way; with equal ways forward (clockwise)")
+def test_rotary_shortest_way_from_the_tip(make: Make) -> None:
+    mod = _rotary(make)
+    mod.operate(1, 7, FORWARD, w=4_000, dd=60_000)
+    mod.clock.advance(30)
+    assert mod.operate(1, 15, FORWARD, dd=30_000)[4] == 0  # the tip at 90°
+    motor = mod.device.read("axis.1.machine_position")
+    assert mod.operate(1, 6, START, w=4_000, dd=270_000)[4] == 0  # 180° either way from the tip: forward
+    mod.clock.advance(60)
+    assert mod.device.read("axis.1.machine_position") - motor == pytest.approx(180_000)
+    assert actual(mod) == 270_000
+
+
+@pytest.mark.manual("§2.6.6.5", "the shortest way ignores the backlash: with equal ways the axis goes clockwise even "
+                    "when the backlash makes that way longer")
+def test_shortest_way_ignores_the_backlash(make: Make) -> None:
+    mod = make()
+    assert mod.load_md(record=record(unit=3, rotary=True, limit_begin=0, limit_end=360_000, gear=1_600,
+                                     pulses_per_rev=400, reference=0, backlash=1_000, f_ss=200, f_max=20_000,
+                                     a=100_000, jog1=1000, jog2=1000, step_velocity=1000,
+                                     reference_velocity=1000, zero_offsets=(0, 0, 0, 0)))[8] == 0
+    mod.operate(1, 5, START, b=1)
+    mod.operate(1, 7, BACKWARD, w=4_000, dd=10_000)  # the last move counter-clockwise
+    mod.clock.advance(30)
+    assert actual(mod) == 350_000
+    motor = mod.device.read("axis.1.machine_position")
+    assert mod.operate(1, 6, START, w=4_000, dd=170_000)[4] == 0  # 180° either way
+    mod.clock.advance(60)
+    assert actual(mod) == 170_000
+    assert mod.device.read("axis.1.machine_position") - motor == pytest.approx(180_000 + 1_000)

@@ -241,3 +241,36 @@ def test_rotary_start_to_where_it_stands(make: Make) -> None:
     assert mod.operate(1, 6, START, dd=0)[4] == 0
     mod.clock.advance(10)
     assert mod.device.read("axis.1.machine_position") == motor
+
+
+@pytest.mark.manual("§4.2.4", "the run starts against the reference direction at the reference velocity, reverses "
+                    "at the limit switch and goes on past the cam; it comes back onto the cam at f_ss and leaves "
+                    "it in single steps in the reference direction")
+def test_reference_run_reverses_at_the_limit_switch(make: Make) -> None:
+    mod = make({"axes": {1: {"cam": [-8_000.0, -6_000.0], "end": 20_000.0}}})
+    assert mod.load_md()[8] == 0  # COM247: reference direction backward
+    assert mod.operate(1, 5, START, b=0)[4] == 0
+    mod.clock.advance(0.5)
+    assert mod.device.read("axis.1.velocity") > 0  # first forward, against the reference direction
+    mod.clock.advance(120)
+    md = mod.m.units[0].md
+    assert md is not None and mod.device.read("axis.1.reference_set") is True
+    assert mod.device.read("axis.1.error") == 0  # the limit switch reversed the run: no error
+    machine = mod.device.read("axis.1.machine_position")
+    assert -8_000 - 2 * md.resolution < machine < -8_000
+    assert mod.device.read("axis.1.position") == md.reference
+
+
+@pytest.mark.manual("§4.2.4", "special case 2: with the reversing limit switch actuated at the start the run goes "
+                    "in the reference direction at once")
+def test_reference_run_started_on_the_limit_switch(make: Make) -> None:
+    mod = make({"axes": {1: {"cam": [-8_000.0, -6_000.0], "end": 5_000.0}}})
+    assert mod.load_md()[8] == 0
+    mod.operate(1, 7, FORWARD, w=1000, dd=10_000)  # onto the END switch: 26
+    mod.clock.advance(10)
+    assert mod.device.read("axis.1.error") == 26 and mod.device.read("input.END1") is False
+    assert mod.operate(1, 5, START, b=0)[4] == 0
+    mod.clock.advance(0.5)
+    assert mod.device.read("axis.1.velocity") < 0  # at once backward, in the reference direction
+    mod.clock.advance(120)
+    assert mod.device.read("axis.1.reference_set") is True and mod.device.read("axis.1.error") == 0

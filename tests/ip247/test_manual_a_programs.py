@@ -336,3 +336,24 @@ def test_g43_beyond_the_limits_aborts(make: Make) -> None:
     run(mod, "%  1\nN1 G43\nN2 G43\nN3 G43\nN4 X2 F1000\nN5 M02\n", seconds=10)
     assert state(mod)[0] == 63 and mod.m.units[0].automatic is None
     assert mod.device.read("axis.1.position") == 1_000 + 80_000_000  # the two G43 that fitted stay
+
+
+@manual("§2.6.9", "in BA9 an M00 with a traverse adds no halt of its own: one Übernahme starts the next traverse "
+        "or dwell")
+@manual("§2.6.9", "in BA9 an M00 alone still is a traverse of length 0 that needs its own Übernahme")
+def test_m00_in_single_block(ready: Module) -> None:
+    assert stored(ready, 1, "%  1\nN10 X10 F1000 M00\nN20 G04 F10\nN30 M00\nN40 X20 F1000\nN50 M02\n")[0] == 0
+    ready.operate(1, 9, START, b=1)
+    ready.operate(1, 9, TAKE_OVER, b=1)
+    ready.clock.advance(10)
+    assert state(ready)[1] == 10_000
+    ready.operate(1, 9, TAKE_OVER, b=1)  # one Übernahme: the dwell runs
+    ready.clock.advance(0.5)
+    assert ready.device.read("axis.1.running") is True
+    ready.clock.advance(5)
+    ready.operate(1, 9, TAKE_OVER, b=1)  # N30 (length 0)
+    ready.clock.advance(5)
+    assert state(ready)[1] == 10_000 and ready.device.read("axis.1.running") is False
+    ready.operate(1, 9, TAKE_OVER, b=1)  # N40
+    ready.clock.advance(10)
+    assert state(ready)[1] == 20_000

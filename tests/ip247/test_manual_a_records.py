@@ -162,3 +162,32 @@ def test_module_number_frozen_by_correct_md(mod: Module) -> None:
     mod.ready()
     assert mod.write(4, 24, 0, [12, 1, 0])[4] == 12
     assert mod.write(4, 24, 0, [11, 5, 9])[4] == 0  # the same number: slot and page change
+
+
+@pytest.mark.manual("§4.3.18", "at most 255 programs can be stored (18 'Max. Programmzahl erreicht')")
+def test_at_most_255_programs(mod: Module) -> None:
+    for number in range(255):
+        assert mod.store(number, f"%{number:3d}\nN1 M02\n")[4] == 0, number
+    answer = mod.client.delete_record(4, 23, 7)
+    assert answer[4] == 0
+    assert mod.store(7, "%  7\nN1 M02\n")[4] == 0
+    assert mod.store(255, "%255\nN1 M02\n")[4] == 18
+
+
+@pytest.mark.manual("§4.3.19", "deleting a program while no program runs frees its memory (the memory is "
+                    "compacted); a gap left while a program ran stays until then")
+def test_deleting_frees_memory_unless_a_program_runs(mod: Module) -> None:
+    mod.ready()
+    block = "N1 G04 F1" + " " * 39 + "\n"
+    big = "%{:3d}\n" + block * 19 + "N2 M02\n"
+    count = 6000 // len(big.format(1))
+    for number in range(1, count + 1):
+        assert mod.store(number, big.format(number))[4] == 0
+    assert mod.store(200, big.format(200))[4] == 24
+    mod.operate(1, 8, START, b=1)  # program 1 dwells 19 × 0.1 s
+    assert mod.client.delete_record(4, 23, 2)[4] == 61
+    assert mod.store(200, big.format(200))[4] == 24  # the gap is not free yet
+    mod.clock.advance(10)
+    assert mod.client.delete_record(4, 23, 3)[4] == 0  # compacts, closing the gap too
+    assert mod.store(200, big.format(200))[4] == 0
+    assert mod.store(201, big.format(201))[4] == 0

@@ -115,6 +115,8 @@ def test_stop_keeps_the_residual_and_ba7_by_it_reaches_the_target(mod: Module) -
     assert mod.device.read("axis.1.position") == 50_000 and mod.device.read("output.PE1") is True
 
 
+@pytest.mark.manual("§4.1.1", "operator commands given while the axis runs give Nicht erlaubter Auftrag (2) "
+                    "and abort the running action")
 def test_a_job_while_running_is_error_2_and_aborts(mod: Module) -> None:
     """§3.1: an operator command on a running axis (not Stopp, not BA4) aborts with error 2."""
     mod.ready()
@@ -143,6 +145,9 @@ def test_jog_into_a_limit_switch_stops_with_26_and_locks_forward(make: Make) -> 
     assert mod.operate(1, 1, FORWARD, w=100)[4] == 0
 
 
+@pytest.mark.manual("§4.2.4", "special case 1: the cam found before a limit switch reverses the run at the "
+                    "end of the cam; back onto the cam at f_ss, then left in single steps in the reference "
+                    "direction: the reference point")
 def test_reference_run_ends_at_the_cam_edge(make: Make) -> None:
     """§5.6.2 (sync no; R backward in COM247's MD): the run goes forward over the cam, back over
     it, onto it again at f_ss and leaves it in single steps backward: H := x_ref there."""
@@ -220,6 +225,8 @@ def test_battery_ram_survives_power_but_not_a_battery_fault(make: Make) -> None:
     assert mod.device.read("axis.1.md_error") == -1 and mod.device.read("programs") == []
 
 
+@pytest.mark.manual("§4.3.4", "the example: positions 1258.250 mm and 3000 mm stored with Übernahme in "
+                    "program 7, BA11 closes it: N1 X1258.250 F2500 / N2 X3000.000 F2500 / N3 M02")
 def test_teach_in_example_of_section_5_12(make: Make) -> None:
     """§5.12: BA10 program 7; positions stored with Übernahme (message 3) as N<k> X… F<step
     velocity>; another axis cannot start teach-in (22); BA8 meanwhile is 30; BA11 closes."""
@@ -328,6 +335,7 @@ def test_external_stop_while_jogging_is_27_and_stopp_cancels_a_wait(mod: Module)
 
 @pytest.mark.manual("§2.5.3.9", "at each reversal the module adds the backlash to the path; the actual value "
                     "stands while the play is taken up")
+@pytest.mark.manual("§4.2.5", "after Referenzpunkt setzen the first move takes no backlash up")
 def test_backlash_is_taken_up_at_each_reversal(mod: Module) -> None:
     """§5.8 (COM247 MD: b = 1 mm): no take-up on the first move after "Referenzpunkt setzen";
     on a reversal the motor travels b more while the actual value stands still."""

@@ -154,6 +154,8 @@ def test_generic_s5_services_read_programs_and_machine_data(devsim_device) -> No
                     "error 14")
 @pytest.mark.manual("§2.5.5.2", "a zero offset of the machine data that leaves the range of +-99.999999 m is "
                     "refused at input (MD error 13)")
+@pytest.mark.manual("§2.5.2.2", "the number of current patterns is 2 x phases (twice that in half step): an "
+                    "odd number is MD error 10")
 def test_every_md_error_trigger_of_section_6_3_over_tcp(devsim_device) -> None:  # noqa: ANN001
     """§6.3 through the PLC endpoint: each changed record (BA20 after BA21) comes back with its
     MD error in the result and module error 15; the valid §6.1 record with 0."""

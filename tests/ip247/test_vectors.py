@@ -68,6 +68,8 @@ def rotary(make: Make) -> Module:
 ])
 @pytest.mark.manual("§2.5.3.3", "absolute targets of a rotary axis lie within the range; range start and end "
                     "are the same point")
+@pytest.mark.manual("§4.2.6", "rotary BA6: Vorwärts/Rückwärts approach the target in that direction; standing "
+                    "on it they go once round")
 def test_rotary_targets_of_section_6_7(make: Make, target: int, command: int, travel: int) -> None:
     mod = rotary(make)
     motor = mod.device.read("axis.1.machine_position")
@@ -78,6 +80,8 @@ def test_rotary_targets_of_section_6_7(make: Make, target: int, command: int, tr
 
 
 @pytest.mark.manual("§2.5.3.3", "a relative move on a rotary axis may be longer than the traverse range")
+@pytest.mark.manual("§4.2.7", "on a rotary axis the relative distance is limited to +-200 m (degrees: "
+                    "+-200000); beyond it 62 Unzulässige Wegangabe")
 def test_rotary_offsets_and_long_relative_moves_of_section_6_7(make: Make) -> None:
     mod = rotary(make)
     mod.operate(1, 7, FORWARD, w=4_000, dd=60_000)
@@ -94,6 +98,8 @@ def test_rotary_offsets_and_long_relative_moves_of_section_6_7(make: Make) -> No
     assert mod.operate(1, 7, FORWARD, dd=200_000_001)[4] == 62
 
 
+@pytest.mark.manual("§4.2.4", "the cam is monitored: not left after 2500 single steps, the run is aborted "
+                    "with 59 Der Referenznocken ist defekt")
 @pytest.mark.manual("§7.2.2", "Fehler 59: the reference cam is to be left in single steps but gives no falling "
                     "edge within 2500 steps")
 def test_a_cam_never_left_is_error_59_after_2500_steps(make: Make) -> None:
@@ -110,6 +116,8 @@ def test_a_cam_never_left_is_error_59_after_2500_steps(make: Make) -> None:
 
 
 @pytest.mark.parametrize("cam_edge", [20_000.0, 20_002.2, 20_004.4, 20_006.6])
+@pytest.mark.manual("§4.2.4", "with synchronisation the reference point is the first zero of the "
+                    "current-pattern counter after the cam is left")
 def test_synchronous_reference_at_pattern_zero(make: Make, cam_edge: float) -> None:
     """§6.8: synchronous with 4 patterns: at most 3 single steps after the cam's falling edge,
     and the reference point lies where the pattern counter is 0."""
@@ -124,6 +132,8 @@ def test_synchronous_reference_at_pattern_zero(make: Make, cam_edge: float) -> N
     assert 0 <= (cam_edge - unit.axis.position()) / 1.1 <= 3 + 1  # (the edge lies within a step)
 
 
+@pytest.mark.manual("§4.2.3", "example: after a zero offset of 100 mm backward, Referenzpunkt setzen with "
+                    "reference coordinate 0 shows 100 mm")
 def test_reference_set_after_a_zero_offset_of_section_6_8(make: Make) -> None:
     """BA13 100 mm Rückwärts, then "Referenzpunkt setzen" with x_ref = 0: actual 100 mm."""
     mod = make()
