@@ -100,6 +100,8 @@ def test_rotary_offsets_and_long_relative_moves_of_section_6_7(make: Make) -> No
 
 @pytest.mark.manual("§4.2.4", "the cam is monitored: not left after 2500 single steps, the run is aborted "
                     "with 59 Der Referenznocken ist defekt")
+@pytest.mark.manual("§7.2.2", "Fehler 59: the reference cam is to be left in single steps but gives no falling "
+                    "edge within 2500 steps")
 def test_a_cam_never_left_is_error_59_after_2500_steps(make: Make) -> None:
     """§6.8: BERO stuck at 1: 2,500 single steps, then error 59, reference missing (bit 5)."""
     mod = make()

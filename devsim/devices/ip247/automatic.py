@@ -22,7 +22,11 @@ from devsim.devices.ip247.flying import NotJoinable, chain_pieces
 from devsim.devices.ip247.jobs import START, STOP, TAKE_OVER
 from devsim.devices.ip247.program import Block
 
-__all__ = ["SWITCHES", "ProgramRun", "g_token"]
+__all__ = ["CYCLE_BLOCKS", "SWITCHES", "ProgramRun", "g_token"]
+
+#: Blocks the module interprets without a traverse or dwell before it gives up with error 33
+#: "Zykluszeit überschritten" (manual §7.2; spec §4.11.5: an endless loop without motion).
+CYCLE_BLOCKS = 10_000
 
 
 class ProgramRun:
@@ -42,6 +46,7 @@ class ProgramRun:
         self._last: tuple[Block, int] | None = None  # the traverse or dwell executing
         self._move: tuple[float, float] | None = None  # its holder target and frequency
         self._m_timers: list[Any] = []  # M outputs at the joints of a G10 chain
+        self._advancing = self._again = False  # interpreting; a traverse ended at once meanwhile
 
     # -- from the module -------------------------------------------------------------------------
     def start(self) -> None:
@@ -113,12 +118,25 @@ class ProgramRun:
         a block with M00, or at BA9's start (``halt_before``); ``skip_halt`` is the Übernahme
         that releases it.  An M00 alone (or with a switch) is a traverse of length 0 (manual
         §2.6.9, §4.3.1, §4.3.2)."""
+        if self._advancing:
+            self._again = True  # a traverse that took no time ended inside the loop below: it goes on
+            return
+        self._advancing = True
+        try:
+            self._interpret(skip_halt, halt_before)
+        finally:
+            self._advancing = False
+
+    def _interpret(self, skip_halt: bool, halt_before: bool) -> None:
+        """:meth:`_advance`'s loop; :data:`CYCLE_BLOCKS` blocks without a traverse or dwell that
+        takes time, a halt or the end: error 33 (manual §7.2)."""
         if self._pending is not None:
             block, m = self._pending
             self._pending = None
-            self._run(block, m)
-            return
-        while True:
+            if not self._ran_at_once(block, m):
+                return
+            skip_halt = halt_before = False
+        for _ in range(CYCLE_BLOCKS):
             try:
                 _, block, m = next(self._steps)
             except StopIteration:
@@ -140,8 +158,18 @@ class ProgramRun:
                 self._pending = (block, m)  # the halt point: directly before the traverse
                 self._halt()
                 return
-            self._run(block, m)
-            return
+            if not self._ran_at_once(block, m):
+                return
+            skip_halt = halt_before = False
+        self._fail(33)  # blocks without end and without time: "Zykluszeit überschritten" (§7.2)
+
+    def _ran_at_once(self, block: Block, m: int) -> bool:
+        """Run a traverse or dwell (:meth:`_run`); True when it ended at once (a path of length
+        0, an M00 alone) and the program goes on."""
+        self._again = False
+        self._run(block, m)
+        again, self._again = self._again, False
+        return again
 
     def _run(self, block: Block, m: int) -> None:
         """A traverse or dwell runs; after one with M00 the next one waits for Übernahme."""

@@ -50,7 +50,8 @@ def _axis(key: object) -> int:
 class Ip247Config(Settings):
     """Configuration of one simulated IP247 (spec ip247.md §2, §4.14)."""
 
-    base_page: Annotated[int, Meta(ge=0, le=252), doc("switch S2: the first of the four pages (0 … 252, steps of 4)")] = 0
+    base_page: Annotated[int, Meta(ge=0, le=252, multiple_of=4),
+                         doc("switch S2: the first of the four pages (0 … 252, steps of 4; manual §3.3.2)")] = 0
     x21: Annotated[Literal["2-3", "1-2"], doc("jumper X21: 2-3 forces PE low under BASP")] = "2-3"
     firmware: Annotated[str, doc("firmware version in SYS-ID")] = "A02.1"
     sys_id: Annotated[SysId, doc("SYS-ID of a module with empty battery RAM")] = field(default_factory=SysId)

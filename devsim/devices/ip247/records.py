@@ -106,7 +106,9 @@ class DataChannel:
     # -- writing (spec §4.9, §4.10, §4.12) ---------------------------------------------------------
     def write_md(self, unit: AxisUnit | None, db: int, words: Words, overwrite: bool,
                  from_plc: bool) -> tuple[int, Words]:
-        """BA20: the axis's machine data; the result word carries the MD error (spec §4.9)."""
+        """BA20: the axis's machine data; the result word carries the MD error (spec §4.9).  A
+        set names its axis (DR n+3) and is taken only over that axis's page: 80H and error 46
+        elsewhere (manual §4.3.12, §6.3.10)."""
         assert unit is not None
         unit.error = 0
         if unit.running:
