@@ -269,11 +269,13 @@ class Lm628:
 
     @property
     def signals(self) -> int:
-        """RDSIGS (§4.5)."""
-        t = self.buffer
+        """RDSIGS (§4.5): bits 11 and 12 (velocity mode, forward) are the working trajectory's,
+        taken over at STT, not the buffer's (manual §7.4 FSelOM, FRdSR: they change only with
+        the next start)."""
+        p = self.profile
         return ((self.status & INTERRUPTS) | int(self.index_armed) | int(self.motor_off) << 7
                 | int(self.filter.dac_bits == 8) << 8 | int(self.stop_on_error) << 9 | int(self.on_target) << 10
-                | int(t.velocity_mode) << 11 | int(t.forward) << 12 | int(self.udf_sample) << 13
+                | int(p.velocity_mode) << 11 | int(p.forward) << 12 | int(self.udf_sample) << 13
                 | int(self.accel_loaded) << 14)
 
     @property
