@@ -20,7 +20,8 @@ from devsim.devices.pcd4h3.pid import Coefficients, Filter, Motor, sat
 from devsim.devices.pcd4h3.trajectory import Profile, Trajectory
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
-__all__ = ["BREAKPOINT", "COMMAND_ERROR", "COMPLETE", "INDEX", "Lm628", "MOTOR_OFF", "POSITION_ERROR", "WRAPAROUND"]
+__all__ = ["BREAKPOINT", "COMMAND_ERROR", "COMPLETE", "INDEX", "Lm628", "MOTOR_OFF", "POSITION_ERROR", "POSITION_RANGE",
+           "WRAPAROUND"]
 
 MOTOR_OFF, BREAKPOINT, POSITION_ERROR, WRAPAROUND, INDEX, COMPLETE, COMMAND_ERROR = 0x80, 0x40, 0x20, 0x10, 0x08, 0x04, 0x02
 INTERRUPTS = BREAKPOINT | POSITION_ERROR | WRAPAROUND | INDEX | COMPLETE | COMMAND_ERROR
