@@ -149,21 +149,25 @@ def _medium(prefix: str, medium: str, settable: bool) -> Callable[[str], Point |
     return make
 
 
-_SYMBOLS = {r.name: ("register", r.key) for r in REGISTERS} | {f.name: ("flag", f.key) for f in FLAG_FIELD}
+#: The H3DEF symbols by their lower-case spelling: the PCD assembler does not tell upper from lower
+#: case, so a user program may write them either way (manual §7.1.5); so may a point name.
+_SYMBOLS = ({r.name.lower(): (r.name, "register") for r in REGISTERS}
+            | {f.name.lower(): (f.name, "flag") for f in FLAG_FIELD})
 
 
 def _axis_family(name: str) -> Point | None:
     match = re.fullmatch(r"axis\.(\d{1,2})\.(\w+)", name)
     if match is None or not 1 <= int(match[1]) <= 32:
         return None
-    n, symbol = int(match[1]), match[2]
+    n = int(match[1])
     if n not in STATIC_AXES:
         found = next((p for p in _axis_points(n) if p.name == name), None)
         if found is not None:
             return found
-    if symbol not in _SYMBOLS:
+    if match[2].lower() not in _SYMBOLS:
         return None
-    medium = _SYMBOLS[symbol][0]
+    symbol, medium = _SYMBOLS[match[2].lower()]
+    name = f"axis.{n}.{symbol}"  # the manual's spelling, whatever the caller's
 
     def address(m: Pcd4) -> int:
         if n > len(m.axes):
@@ -205,7 +209,7 @@ POINTS = PointTable.of(
     signal_points(SIGNALS),
     families=[
         Family("axis.<n>.<symbol>", "int", "a register (KProp … RSigB) or flag (OnDest … FBackw) of axis n's "
-               "block by its H3DEF symbol; also axis.<n>.* beyond axis 2", "§4.2, §4.3", _axis_family),
+               "block by its H3DEF symbol, in any case (axis.1.destp is axis.1.DestP); also axis.<n>.* beyond axis 2", "§4.2, §4.3", _axis_family),
         Family("R.<n>", "int", "register n (0 … 4095) as S-Bus reads it", "§9.5", _medium("R", "register", True),
                modbus=(("holding", "input"), 4096)),
         Family("F.<n>", "bool", "flag n (0 … 8191)", "§9.5", _medium("F", "flag", True), modbus=(("coil",), 8192)),
