@@ -1,0 +1,48 @@
+"""Manual §8 (what the host sees of a command error), §9.1 (Example 1's initialisation values) and
+§10.1 (the functions' execution times), over S-Bus on a real pty."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from devsim.devices.pcd4h3.units import ffp_encode
+from tests.pcd4h3.helpers import Station, flag, load, reg, run
+
+TWO_AXES = {"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 2}}
+
+
+@pytest.mark.manual("§8", "der Anwender hat keinen direkten Zugriff auf das Errorflag: die FB überwachen es selbständig")
+def test_the_command_error_flag_is_not_left_for_the_user(pcd: Station) -> None:
+    load(pcd, Veloc=-5)
+    run(pcd, "FLdVA")
+    assert pcd.sim.read("axis.1.comers") == 1
+    run(pcd, "FRdSR")
+    assert pcd.read_registers(reg("RSigB"))[0] & 0x02 == 0  # bit 1: the chip's command error, cleared by the FB
+
+
+@pytest.mark.manual("§9.1", "Initialisierungsregister von Beispiel 1: MCW 41BH, PosEr 2000, KProp 150, KInt 50, KDer 50, "
+                    "IntL 500, SampI 15, MCFac 100.0 (Fliesspunkt), Veloc 500, Accel 100")
+def test_example_1_initialisation_registers(make: Callable[..., Station]) -> None:
+    pcd = make({"user_program": "example1"})
+    values = pcd.read_registers(reg("KProp"), 13)
+    assert values[:7] == [150, 50, 50, 500, 15, ffp_encode(100.0) - (1 << 32), 2000]
+    assert values[9:11] == [500, 100] and values[12] == 0x41B
+
+
+@pytest.mark.manual("§10.1", "Abarbeitungszeiten der Funktionen in AxHndlg: FLdDA 4,1 ms, FStart 1 ms (was ein Aufruf "
+                    "abarbeitet, verzögert den Aufruf der nächsten Achse)")
+def test_the_execution_times_delay_the_next_axis(make: Callable[..., Station]) -> None:
+    pcd = make(TWO_AXES)
+    for axis in (1, 2):
+        load(pcd, axis, DestP=1000)
+    pcd.write_flags(flag("FLdDA", 1), 1)  # both axes' flags before one PLC cycle (axis 2's field follows axis 1's)
+    pcd.write_flags(flag("FStart", 1), 1)
+    pcd.write_flags(flag("FLdDA", 2), 1)
+    pcd.write_flags(flag("FStart", 2), 1)
+    assert pcd.sim.run_until(lambda d: not d.read("axis.2.FStart"), 1.0)
+    pcd.sim.advance(1.0)
+    lead = pcd.sim.read("axis.1.set_position") - pcd.sim.read("axis.2.set_position")
+    # both ramp at 10 000 counts/s²: after 1 s, a start later by Δt is Δt · 10 000 counts behind
+    assert lead / 10_000 == pytest.approx((4.1 + 1.0 + 0.5) / 1000, abs=0.0007)  # axis 1's call: its two functions
