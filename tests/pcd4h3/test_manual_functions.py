@@ -342,8 +342,8 @@ def test_signal_register_bit_9_shows_the_reaction(pcd: Station) -> None:
     assert read(pcd, "FRdSR", "RSigB") & 0x200 == 0x200
 
 
-@pytest.mark.manual("§7.4 FSetPE", "die Differenz wird in Encoderimpulsen (vierfach) eingegeben; erreicht ihr Betrag den "
-                    "Wert, wird ExcPEr gesetzt (Beispiel: 500 Encoderimpulse → PosEr = 2000)")
+@pytest.mark.manual("§7.4 FSetPE", "die Differenz zwischen Soll- und Istposition wird direkt in Impulsen (nach der "
+                    "Vervierfachung) eingegeben: PosEr ist ein Grenzwert in Zählschritten")
 @pytest.mark.manual("§7.4 FResSF", "ExcPEr wird '1' gesetzt, wenn der Betrag des Positionsfehlers den mit FSetPE "
                     "definierten Wert überschreitet")
 def test_the_position_error_limit_in_counts(pcd: Station) -> None:
