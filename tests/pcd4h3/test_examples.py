@@ -91,6 +91,8 @@ def test_example_3_automatic_cycle(make: Callable[..., Station]) -> None:
 
 
 @pytest.mark.manual("§9.3", "Manuellbetrieb: solange die Taste gedrückt ist ±0,02 m/s; losgelassen: Stop mit der definierten Stopart; per Taste die Istposition als Nullposition")
+@pytest.mark.manual("§7.4 FForw", "realisiert, indem die grösstmögliche positive Zielposition geladen und ein Startbefehl "
+                    "erteilt wird")
 def test_example_3_manual_jog_and_zero(make: Callable[..., Station]) -> None:
     """ST 7/8: jog forward at 20 mm/s, smooth stop on release (≈ 20 mm overrun in ≈ 2 s); ST 4:
     FSetZP makes the position 0 without motion."""

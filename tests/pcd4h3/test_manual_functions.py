@@ -414,3 +414,72 @@ def test_fsetzp_standing_and_moving(pcd: Station) -> None:
     run(pcd, "FSetZP")
     settled(pcd)
     assert pcd.sim.read("axis.1.mechanical_position") == pytest.approx(mechanical_start + 100_000, abs=3)
+
+
+@pytest.mark.manual("§7.4 FResSF", "OnDest: infolge falsch eingestellter Parameter oder mechanischer Probleme kann der "
+                    "Motor noch nicht in der Zielposition sein und das Flag trotzdem gesetzt werden, da der Generator "
+                    "das Sollprofil bereits beendet hat")
+def test_ondest_follows_the_generator_not_the_motor(pcd: Station) -> None:
+    pcd.sim.fault("blocked_1", True)
+    load(pcd, DestP=50)
+    run(pcd, "FLdDA", "FStart")
+    assert pcd.sim.run_until(lambda d: d.read("axis.1.OnDest"), 10.0)
+    assert read(pcd, "FRdSP", "RSetP") == 50 and read(pcd, "FRdAP", "RActP") == 0
+
+
+@pytest.mark.manual("§7.4 FSStepF", "die Funktion darf nicht ausgeführt werden, wenn die absolute Zielposition die positive "
+                    "Grenze des Wertebereichs erreicht hat")
+def test_a_step_beyond_the_range_is_a_command_error(pcd: Station) -> None:
+    load(pcd, MCFac=0x80000041, DestP=(1 << 30) - 1)  # k = 1: the last count of the range
+    run(pcd, "FLdDA", "FStart")
+    assert pcd.sim.read("axis.1.comers") == 0
+    run(pcd, "FSStepF")
+    assert pcd.sim.read("axis.1.comers") == 1  # the chip refuses the target 2^30: ComErS
+
+
+@pytest.mark.manual("§7.2 AxHndlg", "Laderegister: soll ein Parameter geladen werden, muss die Funktion aktiviert werden, "
+                    "welche den Wert vom Laderegister ins H3-Modul kopiert")
+def test_a_load_register_alone_changes_nothing(pcd: Station) -> None:
+    load(pcd, DestP=100)
+    run(pcd, "FLdDA", "FStart")
+    settled(pcd)
+    load(pcd, DestP=900)  # written, never loaded
+    run(pcd, "FStart")
+    settled(pcd)
+    assert pcd.sim.read("axis.1.position") == pytest.approx(10_000, abs=3)
+
+
+@pytest.mark.manual("§6.2", "Funktionsprinzip der Drehzahlregelung: die Sollposition wird kontinuierlich (entsprechend "
+                    "der verlangten Geschwindigkeit) vergrössert")
+def test_in_velocity_mode_the_set_position_keeps_growing(pcd: Station) -> None:
+    load(pcd, MCW=0x041B | 0x1800, Veloc=200)
+    run(pcd, "FSelOM", "FLdVA", "FStart")
+    pcd.sim.advance(3.0)
+    first, then = read(pcd, "FRdSP", "RSetP"), pcd.sim.now()
+    pcd.sim.advance(1.0)
+    second, now = read(pcd, "FRdSP", "RSetP"), pcd.sim.now()
+    assert second - first == pytest.approx(200 * (now - then), abs=2)  # 200 per second
+
+
+@pytest.mark.manual("§1", "auf dem Modul befindet sich für jede Achse ein Prozessor, welcher eine Bewegung entsprechend "
+                    "den geladenen Parametern selbständig ausführt")
+def test_the_chip_finishes_a_move_while_the_plc_stands(pcd: Station) -> None:
+    load(pcd, DestP=400)
+    run(pcd, "FLdDA", "FStart")
+    assert pcd.call(0x43) == b"\x00\x00"  # S-Bus stop: AxHndlg no longer runs
+    pcd.sim.advance(10.0)
+    assert pcd.sim.read("axis.1.position") == pytest.approx(40_000, abs=3)
+    assert pcd.read_flags(200) == [0]  # nobody copies the status while the PLC stands
+    assert pcd.call(0x2F) == b"\x00\x00"  # run
+    pcd.sim.advance(0.05)
+    assert pcd.read_flags(200) == [1]
+
+
+@pytest.mark.manual("§7.4 FRdSR", "Bit 7: die Regelung wird ausgeschaltet beim Einschalten der Speisung")
+def test_power_on_switches_the_control_off(pcd: Station) -> None:
+    load(pcd, DestP=100)
+    run(pcd, "FLdDA", "FStart")
+    settled(pcd)
+    assert pcd.sim.read("axis.1.motor_off") is False
+    pcd.sim.power_cycle()
+    assert read(pcd, "FRdSR", "RSigB") & 0x80 and pcd.sim.read("axis.1.output_volts") == 0.0

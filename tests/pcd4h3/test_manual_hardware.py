@@ -171,3 +171,14 @@ def test_both_phases_inverted_together_keep_the_direction(make: Callable[..., St
     moved_to(pcd, 100)
     assert pcd.sim.read("axis.1.position") == pytest.approx(10_000, abs=3)
     assert pcd.sim.read("axis.1.mechanical_position") == pytest.approx(10_000, abs=3)
+
+
+@pytest.mark.manual("§6.4", "die Invertierung der Encodersignale erfolgt mit je 1 Jumper für A, B und IN gemeinsam für "
+                    "beide Achsen; der Jumper IN/RP ist für jede Achse getrennt wählbar")
+def test_the_inversion_jumpers_are_common_to_both_axes(make: Callable[..., Station]) -> None:
+    pcd = make({"h3def": {"fmah3": FMAH3, "bar": 200, "baf": 200, "mna": 2}, "jumpers": {"invert_b": False},
+                "init": {1: {"MCW": 0x41A}, 2: {"MCW": 0x41A}}})
+    for axis in (1, 2):
+        load(pcd, axis, DestP=10)
+        run(pcd, "FLdDA", "FStart", axis=axis)
+    assert pcd.sim.run_until(lambda d: d.read("axis.1.ExcPEr") and d.read("axis.2.ExcPEr"), 2.0)  # both run away

@@ -33,6 +33,7 @@ def test_example_1_initialisation_registers(make: Callable[..., Station]) -> Non
 
 @pytest.mark.manual("§10.1", "Abarbeitungszeiten der Funktionen in AxHndlg: FLdDA 4,1 ms, FStart 1 ms (was ein Aufruf "
                     "abarbeitet, verzögert den Aufruf der nächsten Achse)")
+@pytest.mark.manual("§1", "eine Verkettung mehrerer Achsen (Punkt-Punkt) im quasi Synchronbetrieb ist programmierbar")
 def test_the_execution_times_delay_the_next_axis(make: Callable[..., Station]) -> None:
     pcd = make(TWO_AXES)
     for axis in (1, 2):
