@@ -72,7 +72,8 @@ def test_fldda_loads_and_fstart_takes_it_over(pcd: Station) -> None:
     assert read(pcd, "FRdAP", "RActP") == pytest.approx(60_000, abs=3)
 
 
-@pytest.mark.manual("§7.4 FLdDA", "Beispiel in 1/10 mm: k = 4 · 1000 / 30 = 133,333 Imp. pro 1/10 mm; DestP = 600")
+@pytest.mark.manual("§7.4 FLdDA", "Beispiel in 1/10 mm: k = 4 · 1000 / 30 = 133,333 Imp. pro 1/10 mm; DestP "
+                    "= 600")
 def test_fldda_in_tenths_of_a_millimetre(pcd: Station) -> None:
     load(pcd, MCFac=ffp_encode(4 * 1000 / 30), DestP=600)
     run(pcd, "FLdVA", "FLdAA", "FLdDA", "FStart")
@@ -129,7 +130,8 @@ def test_fldva_example_in_millimetres_per_second(make: Callable[..., Station]) -
     assert pcd.sim.read("axis.1.velocity") == pytest.approx(133_333 * 0.999, rel=0.002)  # 0.1 m/s
 
 
-@pytest.mark.manual("§7.4 FLdVR", "relativ laden heisst, der Wert ist bezogen auf die momentane Sollgeschwindigkeit")
+@pytest.mark.manual("§7.4 FLdVR", "relativ laden heisst, der Wert ist bezogen auf die momentane "
+                    "Sollgeschwindigkeit")
 @pytest.mark.manual("§7.4 FLdVR", "Beispiel: eine Geschwindigkeit relativ von −0,1 m/s (Veloc = −100 mm/s)")
 def test_fldvr_is_relative_to_the_set_velocity(pcd: Station) -> None:
     load(pcd, MCW=0x141B | 0x0800)  # velocity mode, forward
@@ -156,7 +158,8 @@ def test_fldaa_sets_the_ramp_of_the_next_start(pcd: Station) -> None:
     assert read(pcd, "FRdSV", "RSetV") == pytest.approx(250, abs=3)  # 200 per s²
 
 
-@pytest.mark.manual("§7.4 FLdAR", "relativ laden heisst, der Wert ist bezogen auf die momentane Sollbeschleunigung")
+@pytest.mark.manual("§7.4 FLdAR", "relativ laden heisst, der Wert ist bezogen auf die momentane "
+                    "Sollbeschleunigung")
 def test_fldar_is_relative_to_the_acceleration(pcd: Station) -> None:
     load(pcd, DestP=10)
     run(pcd, "FLdDA", "FStart")  # the first start: relative loads allowed from now on
@@ -197,9 +200,12 @@ def test_fstop_abrupt_holds_the_set_position(pcd: Station) -> None:
     assert pcd.sim.read("axis.1.motor_off") is False
 
 
-@pytest.mark.manual("§7.4 FStop", "Bit 8: bei einem Stopbefehl wird die Regelung ausgeschaltet, die Stellgrösse auf Null")
-@pytest.mark.manual("§7.4 FMotOff", "FMotOff schaltet die Regelung aus (Stellgrösse Null), wie FStop mit Bit 8 im MCW")
-@pytest.mark.manual("§7.4 FResSF", "OnDest wird '1' gesetzt, wenn die Regelung ausgeschaltet ist (z.B. nach FMotOff)")
+@pytest.mark.manual("§7.4 FStop", "Bit 8: bei einem Stopbefehl wird die Regelung ausgeschaltet, die "
+                    "Stellgrösse auf Null")
+@pytest.mark.manual("§7.4 FMotOff", "FMotOff schaltet die Regelung aus (Stellgrösse Null), wie FStop mit Bit "
+                    "8 im MCW")
+@pytest.mark.manual("§7.4 FResSF", "OnDest wird '1' gesetzt, wenn die Regelung ausgeschaltet ist (z.B. nach "
+                    "FMotOff)")
 def test_fstop_bit_8_and_fmotoff_switch_the_control_off(make: Callable[..., Station]) -> None:
     for function, mcw in (("FStop", 0x011B), ("FMotOff", 0x041B)):
         pcd = make()
@@ -247,7 +253,8 @@ def test_single_steps(pcd: Station) -> None:
 
 @pytest.mark.manual("§7.4 FForw", "mit der zuletzt geladenen Geschwindigkeit in positive Richtung fahren, bis ein "
                     "manueller Stopbefehl ausgeführt wird")
-@pytest.mark.manual("§7.4 FBackw", "mit der zuletzt geladenen Geschwindigkeit in negative Richtung fahren, bis ein Stop")
+@pytest.mark.manual("§7.4 FBackw", "mit der zuletzt geladenen Geschwindigkeit in negative Richtung fahren, "
+                    "bis ein Stop")
 def test_forward_and_backward_run_until_a_stop(pcd: Station) -> None:
     load(pcd, Veloc=200)
     run(pcd, "FLdVA", "FBackw")
@@ -264,7 +271,8 @@ def test_forward_and_backward_run_until_a_stop(pcd: Station) -> None:
 
 @pytest.mark.manual("§7.4 FRdAP", "die Funktion liest die Istposition und kopiert sie in das Register RActP (mit k "
                     "umgerechnet)")
-@pytest.mark.manual("§7.4 FRdSP", "die Funktion liest die momentane Sollposition am Ausgang des Profilgenerators in RSetP")
+@pytest.mark.manual("§7.4 FRdSP", "die Funktion liest die momentane Sollposition am Ausgang des "
+                    "Profilgenerators in RSetP")
 def test_read_actual_and_set_position(pcd: Station) -> None:
     load(pcd, DestP=1000)
     run(pcd, "FLdDA", "FStart")
@@ -282,7 +290,8 @@ def test_read_actual_and_set_position(pcd: Station) -> None:
 
 @pytest.mark.manual("§7.4 FRdAV", "nur die 14 höherwertigen Bit der Istgeschwindigkeit können gelesen werden; für kleine "
                     "Geschwindigkeiten kann kein vernünftiger Wert gelesen werden, die Sollgeschwindigkeit empfiehlt sich")
-@pytest.mark.manual("§7.4 FRdSV", "die Funktion liest die momentane Sollgeschwindigkeit vom Profilgenerator in RSetV")
+@pytest.mark.manual("§7.4 FRdSV", "die Funktion liest die momentane Sollgeschwindigkeit vom Profilgenerator "
+                    "in RSetV")
 def test_read_actual_velocity_is_coarse(pcd: Station) -> None:
     load(pcd, Veloc=500)
     run(pcd, "FLdVA", "FForw")
@@ -299,7 +308,8 @@ def test_read_actual_velocity_is_coarse(pcd: Station) -> None:
 @pytest.mark.manual("§7.4 FRdIP", "die Funktion liest die Indexposition in das Register RIndP")
 @pytest.mark.manual("§7.4 FSetIP", "nach FSetIP wird beim nächsten Mal, wenn A, B und der Indexeingang Null sind, die "
                     "Istposition ins Indexpositionsregister geschrieben und das Statusflag IPuls gesetzt")
-@pytest.mark.manual("§7.4 FRdSR", "Bit 0: '1' nach FSetIP; zurückgesetzt, nachdem die nächste Indexposition erfasst wurde")
+@pytest.mark.manual("§7.4 FRdSR", "Bit 0: '1' nach FSetIP; zurückgesetzt, nachdem die nächste Indexposition "
+                    "erfasst wurde")
 @pytest.mark.manual("§7.4 FResSF", "IPuls wird '1' gesetzt, wenn ein Indeximpuls erfasst wurde")
 def test_index_capture(make: Callable[..., Station]) -> None:
     pcd = make({"axes": {1: {"index_offset": 700}}})
@@ -356,7 +366,8 @@ def test_the_position_error_limit_in_counts(pcd: Station) -> None:
     assert 500 <= pcd.sim.read("axis.1.following_error") <= 520
 
 
-@pytest.mark.manual("§7.4 FResSF", "das Flag wird zurückgesetzt, wenn das entsprechende Bit im Register StaFRR Null ist")
+@pytest.mark.manual("§7.4 FResSF", "das Flag wird zurückgesetzt, wenn das entsprechende Bit im Register "
+                    "StaFRR Null ist")
 @pytest.mark.manual("§7.4 FLdBPA", "die Breakposition wird sofort in das Arbeitsregister übernommen; wird sie erreicht, "
                     "wird BrkPos gesetzt; das Flag kann mit ResSF zurückgesetzt werden")
 @pytest.mark.manual("§7.4 FResSF", "BrkPos wird '1' gesetzt, sobald die Istposition die Breakposition über- oder "
@@ -379,7 +390,8 @@ def test_break_position_and_reset_of_single_status_flags(pcd: Station) -> None:
     assert read(pcd, "FRdAP", "RActP") == pytest.approx(300, abs=5)
 
 
-@pytest.mark.manual("§7.4 FLdBPR", "relativ laden heisst, der Wert ist bezogen auf die momentane Zielposition")
+@pytest.mark.manual("§7.4 FLdBPR", "relativ laden heisst, der Wert ist bezogen auf die momentane "
+                    "Zielposition")
 def test_fldbpr_is_relative_to_the_target(pcd: Station) -> None:
     load(pcd, DestP=1000, BrkP=-300, StaFRR=0)
     run(pcd, "FLdDA", "FStart")

@@ -63,7 +63,8 @@ def test_velocity_mode_runs_until_a_stop(pcd: Station) -> None:
 @pytest.mark.manual("§6.2", "die Geschwindigkeit und die Zielposition können an einer beliebigen Position während der "
                     "Bewegung verändert werden; der Controller beschleunigt oder bremst mit der definierten "
                     "Beschleunigung")
-@pytest.mark.manual("§1", "Geschwindigkeit, Zielposition und PID-Parameter können während der Bewegung verändert werden")
+@pytest.mark.manual("§1", "Geschwindigkeit, Zielposition und PID-Parameter können während der Bewegung "
+                    "verändert werden")
 def test_target_velocity_and_regulator_change_during_the_move(pcd: Station) -> None:
     load(pcd, DestP=2000)
     run(pcd, "FLdDA", "FStart")
@@ -119,7 +120,8 @@ def test_regulator_parameters_act_after_fupdrp(pcd: Station) -> None:
     assert pcd.read_registers(reg("RIntTS")) == [0]
 
 
-@pytest.mark.manual("§6.3", "die Abtastzeit vom Differentialteil kann in Schritten von 341 µs eingestellt werden")
+@pytest.mark.manual("§6.3", "die Abtastzeit vom Differentialteil kann in Schritten von 341 µs eingestellt "
+                    "werden")
 @pytest.mark.manual("§7.4 FLdRP", "Abtastzeit des D-Anteils = (n + 1) · 341,33 µs, n im Register SampI")
 def test_the_derivative_sample_time_is_n_plus_1_samples(make: Callable[..., Station]) -> None:
     """Only the D term (KProp = KInt = 0), the rotor blocked, the set position running away at a

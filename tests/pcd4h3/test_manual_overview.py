@@ -13,7 +13,8 @@ from tests.pcd4h3.helpers import Station, flag, load, reg, run
 TWO_AXES = {"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 2}}
 
 
-@pytest.mark.manual("§8", "der Anwender hat keinen direkten Zugriff auf das Errorflag: die FB überwachen es selbständig")
+@pytest.mark.manual("§8", "der Anwender hat keinen direkten Zugriff auf das Errorflag: die FB überwachen es "
+                    "selbständig")
 def test_the_command_error_flag_is_not_left_for_the_user(pcd: Station) -> None:
     load(pcd, Veloc=-5)
     run(pcd, "FLdVA")
@@ -33,7 +34,8 @@ def test_example_1_initialisation_registers(make: Callable[..., Station]) -> Non
 
 @pytest.mark.manual("§10.1", "Abarbeitungszeiten der Funktionen in AxHndlg: FLdDA 4,1 ms, FStart 1 ms (was ein Aufruf "
                     "abarbeitet, verzögert den Aufruf der nächsten Achse)")
-@pytest.mark.manual("§1", "eine Verkettung mehrerer Achsen (Punkt-Punkt) im quasi Synchronbetrieb ist programmierbar")
+@pytest.mark.manual("§1", "eine Verkettung mehrerer Achsen (Punkt-Punkt) im quasi Synchronbetrieb ist "
+                    "programmierbar")
 def test_the_execution_times_delay_the_next_axis(make: Callable[..., Station]) -> None:
     pcd = make(TWO_AXES)
     for axis in (1, 2):

@@ -22,7 +22,8 @@ def test_symbols_in_any_case(make: Callable[..., Station]) -> None:
     assert pcd.sim.read("axis.1.dplm") is True and pcd.sim.read("axis.1.DPLM") is True
 
 
-@pytest.mark.manual("§7.1.3", "H3DEF.SRC voreingestellt: FMAH3 EQU 0, IMode EQU 6, MNA EQU 2, BAF EQU 2000, BAR EQU 2000")
+@pytest.mark.manual("§7.1.3", "H3DEF.SRC voreingestellt: FMAH3 EQU 0, IMode EQU 6, MNA EQU 2, BAF EQU 2000, "
+                    "BAR EQU 2000")
 @pytest.mark.manual("§7.2 AxInit", "RAi = (i − 1) · 20 (NoRfeA), FAi = (i − 1) · 35 (NoFfeA)")
 def test_the_h3def_defaults(make: Callable[..., Station]) -> None:
     pcd = make({"h3def": {}})  # H3DEF.SRC as shipped
