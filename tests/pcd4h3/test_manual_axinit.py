@@ -95,3 +95,15 @@ def test_the_status_flags_are_copied_from_the_module_every_call(pcd: Station) ->
     assert pcd.read_flags(flag("OnDest")) == [0]
     finished(pcd)
     assert pcd.read_flags(flag("OnDest")) == [1]
+
+
+@pytest.mark.manual("§7.2 AxInit", "beim Reset werden die Bewegungsparameter (Beschleunigung, Geschwindigkeit, Zielposition "
+                    "und Breakposition) auf Null gesetzt")
+def test_axinit_forgets_the_break_position(pcd: Station) -> None:
+    load(pcd, BrkP=300, StaFRR=0)
+    run(pcd, "FLdBPA", "FResSF")
+    assert pcd.call(RESTART_COLD) == ACK
+    load(pcd, DestP=600)
+    run(pcd, "FLdDA", "FStart")
+    finished(pcd)
+    assert pcd.read_flags(flag("BrkPos")) == [0]  # passed 300 without a break position

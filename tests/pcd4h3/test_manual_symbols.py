@@ -7,6 +7,7 @@ from collections.abc import Callable
 
 import pytest
 
+from devsim.core.points import BadValue
 from tests.pcd4h3.helpers import Station, flag, reg, run
 
 
@@ -74,3 +75,17 @@ def test_axis_3_by_its_register_block_and_flag_field(make: Callable[..., Station
     pcd.write_flags(flag("FRdAP", 3), 1)  # FRdAP (offset 21: the reconstruction, G-1)
     pcd.sim.advance(0.05)
     assert pcd.read_registers(ra3 + 13)[0] < 250  # RActP
+
+
+@pytest.mark.manual("§7.1.3", "MNA definiert die Anzahl der eingesetzten Achsen; entsprechend werden die Speichermedien "
+                    "(Register, Flag) reserviert")
+def test_only_mna_axes_have_a_block(make: Callable[..., Station]) -> None:
+    pcd = make()  # the example installation: MNA 1 on a two-axis module
+    after = 200 + 35  # where axis 2's flag field would be
+    pcd.write_flags(after + 28, 1)
+    pcd.sim.advance(0.1)
+    assert pcd.read_flags(after + 28) == [1]  # an ordinary flag: no AxHndlg processes it
+    assert pcd.write_registers(220 + 7, 999) == b"\x00\x00"
+    assert pcd.read_registers(220 + 7) == [999]
+    with pytest.raises(BadValue, match="1 axes"):
+        pcd.sim.read("axis.2.DestP")
