@@ -49,3 +49,37 @@ def test_the_execution_times_delay_the_next_axis(make: Callable[..., Station]) -
     lead = pcd.sim.read("axis.1.set_position") - pcd.sim.read("axis.2.set_position")
     # both ramp at 10 000 counts/s²: after 1 s, a start later by Δt is Δt · 10 000 counts behind
     assert lead / 10_000 == pytest.approx((4.1 + 1.0 + 0.5) / 1000, abs=0.0007)  # axis 1's call: its two functions
+
+
+#: §10.1, column "Abarbeitungszeit", as the manual prints it (ms).
+EXECUTION_MS = {
+    "FSelOM": 1.9, "FSetPE": 1.9, "FStart": 1.0, "FStop": 2.7, "FMotOff": 1.8, "FSStepF": 4.5, "FSStepB": 4.5,
+    "FForw": 4.5, "FBackw": 4.5, "FLdDR": 4.1, "FLdDA": 4.1, "FLdVR": 4.5, "FLdVA": 4.5, "FLdAR": 7.2, "FLdAA": 7.2,
+    "FLdRP": 5.2, "FUpDRP": 0.9, "FRdAP": 4.3, "FRdSP": 4.3, "FRdAV": 2.8, "FRdSV": 3.7, "FRdITS": 1.9, "FRdIP": 4.3,
+    "FRdSR": 1.8, "FResSF": 1.8, "FLdBPR": 3.3, "FLdBPA": 3.3, "FSetIP": 0.9, "FSetZP": 0.9,
+}
+
+
+def axis_2_start_lag(make: Callable[..., Station], function: str | None) -> float:
+    """Axis 1 runs ``function`` (or nothing) in the PLC cycle in which axis 2 starts a move; how
+    far axis 2's set position is behind after 1 s, as time at its speed then (about 1 s · 100 · k)."""
+    pcd = make(TWO_AXES)
+    load(pcd, 1, DestP=10)
+    run(pcd, "FLdDA", "FStart", axis=1)  # a first start: relative loads are allowed, nothing is refused
+    pcd.sim.advance(2.0)
+    load(pcd, 2, DestP=1000)
+    if function is not None:
+        pcd.write_flags(flag(function, 1), 1)
+    pcd.write_flags(flag("FLdDA", 2), 1)
+    pcd.write_flags(flag("FStart", 2), 1)
+    pcd.sim.advance(1.0)
+    return -pcd.sim.read("axis.2.set_position") / 10_000  # s behind, against the same run without lag
+
+
+@pytest.mark.manual("§10.1", "Abarbeitungszeit jeder Funktion (FSelOM 1,9 ms … FSetZP 0,9 ms): so lange dauert ihr "
+                    "Aufruf in AxHndlg")
+def test_each_function_takes_its_execution_time(make: Callable[..., Station]) -> None:
+    baseline = axis_2_start_lag(make, None)
+    for function, ms in EXECUTION_MS.items():
+        lag = axis_2_start_lag(make, function) - baseline
+        assert lag * 1000 == pytest.approx(ms, abs=0.4), function  # the chip acts on its 341 µs sample grid
