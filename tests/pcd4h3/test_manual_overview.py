@@ -83,3 +83,17 @@ def test_each_function_takes_its_execution_time(make: Callable[..., Station]) ->
     for function, ms in EXECUTION_MS.items():
         lag = axis_2_start_lag(make, function) - baseline
         assert lag * 1000 == pytest.approx(ms, abs=0.4), function  # the chip acts on its 341 µs sample grid
+
+
+@pytest.mark.manual("§10.1", "ausführbar während Bewegung: ja für die Lade-, Lese- und Hilfsfunktionen (FLdAA/FLdAR nur "
+                    "bedingt, FSStepF/FSStepB nein)")
+def test_the_functions_allowed_during_a_move(pcd: Station) -> None:
+    load(pcd, DestP=5000, BrkP=4000, StaFRR=0xFFFF, Veloc=400)
+    run(pcd, "FLdDA", "FStart")
+    pcd.sim.advance(3.0)
+    allowed = ("FSelOM", "FSetPE", "FLdDR", "FLdDA", "FLdVR", "FLdVA", "FLdRP", "FUpDRP", "FRdAP", "FRdSP", "FRdAV",
+               "FRdSV", "FRdITS", "FRdIP", "FRdSR", "FResSF", "FLdBPR", "FLdBPA", "FSetIP")
+    for function in allowed:
+        run(pcd, function)
+        assert pcd.sim.read("axis.1.comers") == 0, function
+        assert pcd.sim.read("axis.1.motor_off") is False and pcd.read_flags(flag("OnDest")) == [0], function
