@@ -8,7 +8,7 @@ from collections.abc import Callable
 import pytest
 
 from devsim.devices.pcd4h3.units import ffp_encode
-from tests.pcd4h3.helpers import Station, load, reg, run
+from tests.pcd4h3.helpers import Station, flag, load, reg, run
 
 VELOCITY_MODE, FORWARD = 1 << 11, 1 << 12  # MCW and RSigB bits 11, 12 (§7.4 FSelOM, FRdSR)
 
@@ -191,7 +191,11 @@ def test_fstop_abrupt_holds_the_set_position(pcd: Station) -> None:
     load(pcd, Veloc=500, MCW=0x021B)
     run(pcd, "FLdVA", "FForw")
     pcd.sim.advance(6.0)
-    run(pcd, "FStop")
+    assert pcd.sim.read("axis.1.following_error") > 50  # at 50 000 counts/s the set position runs ahead
+    pcd.write_flags(flag("FStop"), 1)
+    assert pcd.sim.run_until(lambda d: not d.read("axis.1.FStop"), 1.0)  # the cycle that ran FStop, no later
+    assert pcd.sim.read("axis.1.set_position") == pytest.approx(pcd.sim.read("axis.1.position"), abs=1)
+    pcd.sim.advance(0.01)
     assert pcd.read_flags(200) == [1]
     held = pcd.sim.read("axis.1.set_position")
     pcd.sim.advance(1.0)

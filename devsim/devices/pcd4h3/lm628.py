@@ -230,8 +230,8 @@ class Lm628:
             self.profile.stop_abruptly()
             self.flags |= COMPLETE
             return
-        if stop & 0x0200:
-            self.profile.stop_abruptly()
+        if stop & 0x0200:  # maximum deceleration: the set position becomes the actual one (§7.4 FStop bit 9)
+            self.profile.stop_abruptly(self.unwrapped_actual)
             self.on_target = True
             self.flags |= COMPLETE
             return

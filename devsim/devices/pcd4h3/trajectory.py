@@ -58,7 +58,11 @@ class Profile:
     def stop_smoothly(self) -> None:
         self.stopping, self.complete = True, self.velocity == 0
 
-    def stop_abruptly(self) -> None:
+    def stop_abruptly(self, at: int | None = None) -> None:
+        """Stop at once: the desired position becomes ``at`` (counts; the actual position, manual
+        §7.4 FStop bit 9: "die Sollposition gleich der Istposition") or stays where it is."""
+        if at is not None:
+            self.position = at << 16
         self.velocity, self.target, self.stopping, self.complete = 0, self.position, False, True
 
     def shift(self, counts: int) -> None:
