@@ -182,3 +182,19 @@ def test_the_inversion_jumpers_are_common_to_both_axes(make: Callable[..., Stati
         load(pcd, axis, DestP=10)
         run(pcd, "FLdDA", "FStart", axis=axis)
     assert pcd.sim.run_until(lambda d: d.read("axis.1.ExcPEr") and d.read("axis.2.ExcPEr"), 2.0)  # both run away
+
+
+@pytest.mark.manual("§6.4", "wird bei 24 V-Encodern mit Referenzschaltern gearbeitet (Jumper IN/RP in RP), so muss der "
+                    "Jumper IN/ĪN in Pos. IN stecken: das Indexsignal darf am Decoder nicht dauernd Null sein "
+                    "(Fehlfunktion)")
+def test_rp_with_the_index_inverted_is_a_malfunction(make: Callable[..., Station]) -> None:
+    for inverted, captured in ((False, False), (True, True)):
+        pcd = make({"jumpers": {"index_invert": inverted}, "axes": {1: {"in_rp": "ref", "index_offset": 1000}}})
+        load(pcd, Veloc=20)
+        run(pcd, "FSetIP", "FLdVA", "FForw")
+        pcd.sim.advance(2.0)
+        assert bool(pcd.read_flags(flag("IPuls"))[0]) is captured, inverted
+        if captured:
+            load(pcd, MCFac=0x80000041)
+            run(pcd, "FRdIP")
+            assert pcd.read_registers(reg("RIndP")) == [4]  # the next line, not a mark of the encoder

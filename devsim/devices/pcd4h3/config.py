@@ -65,7 +65,7 @@ class Jumpers(Settings):
     invert_b: Annotated[bool, doc("B/B̄: phase B inverted (factory B̄)")] = True
     index_invert: Annotated[bool, doc(
         "IN/ĪN: index inverted (factory IN); inverted, the decoder sees A = B = IN = 0 at every fourth count and "
-        "captures there (the manual's malfunction)")] = False
+        "captures there (the manual's malfunction), also with in_rp: ref on the 24 V types")] = False
     sink_mode: Annotated[bool, doc("Q/S: 24 V encoder inputs in sink mode (signal levels only)")] = False
 
 
