@@ -198,3 +198,19 @@ def test_rp_with_the_index_inverted_is_a_malfunction(make: Callable[..., Station
             load(pcd, MCFac=0x80000041)
             run(pcd, "FRdIP")
             assert pcd.read_registers(reg("RIndP")) == [4]  # the next line, not a mark of the encoder
+
+
+@pytest.mark.manual("§2", "Geschwindigkeit und Beschleunigung: Bereich bis 2^30 − 1 im Register des Controllers (durch "
+                    "k und die Abtastzeit geteilt in der Einheit des Anwenders)")
+def test_the_velocity_and_acceleration_ranges(pcd: Station) -> None:
+    # k = 100: Veloc · 100 · 65536 · 341 µs ≤ 3FFFFFFFh up to Veloc 480 468; Accel · 100 · 65536 · (341 µs)² up to
+    # 1.409 · 10^9
+    for register, function, inside, beyond in (("Veloc", "FLdVA", 480_000, 481_000),
+                                                ("Accel", "FLdAA", 1_400_000_000, 1_420_000_000)):
+        before = pcd.sim.read("axis.1.comers")
+        load(pcd, **{register: inside})
+        run(pcd, function)
+        assert pcd.sim.read("axis.1.comers") == before, register
+        load(pcd, **{register: beyond})
+        run(pcd, function)
+        assert pcd.sim.read("axis.1.comers") == before + 1, register
