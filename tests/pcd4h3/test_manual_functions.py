@@ -499,3 +499,17 @@ def test_power_on_switches_the_control_off(pcd: Station) -> None:
     assert pcd.sim.read("axis.1.motor_off") is False
     pcd.sim.power_cycle()
     assert read(pcd, "FRdSR", "RSigB") & 0x80 and pcd.sim.read("axis.1.output_volts") == 0.0
+
+
+@pytest.mark.manual("§7.4 FSetZP", "die Zielposition wird nicht beeinflusst, wenn kein FStart ausgeführt wird: mit "
+                    "FStart gilt die geladene Zielposition ab der neuen Nullposition")
+def test_fsetzp_then_fstart_takes_the_target_from_the_new_zero(pcd: Station) -> None:
+    load(pcd, DestP=1000)
+    run(pcd, "FLdDA", "FStart")
+    pcd.sim.advance(3.0)
+    run(pcd, "FSetZP", "FStart")
+    zero = pcd.sim.read("axis.1.mechanical_position") - pcd.sim.read("axis.1.position")
+    settled(pcd)
+    assert read(pcd, "FRdAP", "RActP") == pytest.approx(1000, abs=1)
+    assert pcd.sim.read("axis.1.mechanical_position") == pytest.approx(zero + 100_000, abs=3)
+    assert zero > 30_000  # the new zero lies where the axis was, well past the old one
