@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import pytest
+
 from devsim.devices.pcd4h3.units import ffp_encode
 from tests.pcd4h3.helpers import Station, flag, load, reg, run
 
@@ -18,6 +20,13 @@ def fresh(pcd: Station) -> None:
     pcd.sim.set("axis.1.trace", [])
 
 
+@pytest.mark.manual("§8", "Fehler-Beispiel: mit FLdVA wird eine negative Geschwindigkeit geladen")
+@pytest.mark.manual("§8", "bei einem Fehler ignoriert der H3-Controller den gesendeten Befehl und setzt das "
+                    "Befehls-Errorflag")
+@pytest.mark.manual("§8", "der zuletzt gesendete Befehl wird maximal zweimal wiederholt; nach dem dritten "
+                    "Fehler wird ComErS aufgerufen und danach mit dem nächsten Schritt weitergefahren")
+@pytest.mark.manual("§8", "im Debugger mit Hilfe der Diagnoseregister feststellen, bei welchem Befehl der "
+                    "Fehler ausgelöst wird")
 def test_e1_negative_velocity_three_transfers_then_comers(pcd: Station) -> None:
     fresh(pcd)
     load(pcd, Veloc=-100)
@@ -30,6 +39,8 @@ def test_e1_negative_velocity_three_transfers_then_comers(pcd: Station) -> None:
     assert pcd.call(0x1B, data_bytes=1) == b"R"
 
 
+@pytest.mark.manual("§8", "für die Inbetriebnahme: ComErS provoziert mit einer Division durch Null XOB 13, "
+                    "dort HALT")
 def test_e1_with_the_commissioning_comers_halts_the_pcd(make: Callable[..., Station]) -> None:
     pcd = make({"comers_action": "halt"})
     load(pcd, Veloc=-100, DestP=500)
@@ -48,6 +59,9 @@ def test_e1_with_the_commissioning_comers_halts_the_pcd(make: Callable[..., Stat
     assert pcd.read_flags(flag("FStart")) == [0]  # AxInit clears the command flags
 
 
+@pytest.mark.manual("§8", "Fehler-Beispiel: ein Regelfaktor > 32767 soll ins H3-Modul geladen werden")
+@pytest.mark.manual("§7.4 FLdRP", "wird ein Wert ausserhalb des erlaubten Wertebereichs in die Register "
+                    "geladen, wird ein Befehls-Error erzeugt")
 def test_e2_a_regulator_factor_beyond_32767(pcd: Station) -> None:
     fresh(pcd)
     load(pcd, KProp=40_000)
@@ -56,6 +70,14 @@ def test_e2_a_regulator_factor_beyond_32767(pcd: Station) -> None:
     assert pcd.sim.device.model.drives[0].chip.filter.buffer.kp == 150
 
 
+@pytest.mark.manual("§8", "Fehler-Beispiel: für die erste Bewegung (vor dem ersten Startbefehl) einen "
+                    "Bewegungsparameter relativ laden (FLdDR, FLdVR, FLdAR, FLdBPR)")
+@pytest.mark.manual("§7.4 FLdDR", "nach der Initialisierung darf für die erste Bewegung nur eine absolute "
+                    "Zielposition geladen werden; relativ erzeugt einen Command Error")
+@pytest.mark.manual("§7.4 FLdVR", "für die erste Bewegung nur eine absolute Geschwindigkeit; relativ: "
+                    "Command Error")
+@pytest.mark.manual("§7.4 FLdAR", "für die erste Bewegung nur eine absolute Beschleunigung; relativ: Command "
+                    "Error")
 def test_e3_e4_relative_loads_before_the_first_movement(pcd: Station) -> None:
     load(pcd, DestP=100)
     for function in ("FLdDR", "FLdVR", "FLdAR", "FLdBPR"):
@@ -68,6 +90,8 @@ def test_e3_e4_relative_loads_before_the_first_movement(pcd: Station) -> None:
     assert pcd.sim.read("axis.1.comers") == before
 
 
+@pytest.mark.manual("§8", "Fehler-Beispiel: der Maschinenfaktor k wurde nicht im Fliesspunkt-Format in MCFac "
+                    "geladen")
 def test_e5_an_integer_machine_factor(pcd: Station) -> None:
     """k = 0 (00000064h decodes to 0): the target is 0 counts without an error; FRdAP divides by
     zero: ComErS, RActP unchanged."""
@@ -79,6 +103,7 @@ def test_e5_an_integer_machine_factor(pcd: Station) -> None:
     assert pcd.read_registers(reg("RActP")) == [4711] and pcd.sim.read("axis.1.comers") == 1
 
 
+@pytest.mark.manual("§8", "Fehler-Beispiel: eine Störung auf dem PCD4-Bus; der Befehl wird wiederholt")
 def test_e6_one_disturbed_transfer_is_repeated(pcd: Station) -> None:
     pcd.sim.set("axis.1.bus_errors", 1)
     load(pcd, DestP=1000)
@@ -89,6 +114,9 @@ def test_e6_one_disturbed_transfer_is_repeated(pcd: Station) -> None:
     assert pcd.sim.device.model.drives[0].chip.buffer.position == 100_000
 
 
+@pytest.mark.manual("§7.4 FLdAA", "FLdAA darf während einer Bewegung ausgeführt werden; beim Aufruf wird "
+                    "FMotOff ausgeführt: die Regelung ist danach aus und wird mit FStart wieder "
+                    "eingeschaltet")
 def test_e7_acceleration_during_a_move_switches_the_motor_off(pcd: Station) -> None:
     load(pcd, DestP=1000)
     run(pcd, "FLdDA", "FStart")
@@ -103,6 +131,7 @@ def test_e7_acceleration_during_a_move_switches_the_motor_off(pcd: Station) -> N
     assert abs(pcd.sim.read("axis.1.position") - 100_000) <= 3
 
 
+@pytest.mark.manual("§7.4 FLdRP", "SampI 0 … 255: ein Wert ausserhalb erzeugt einen Befehls-Error")
 def test_e8_e9_mcw_reaction_and_sample_interval_out_of_range(pcd: Station) -> None:
     fresh(pcd)
     load(pcd, MCW=0)
@@ -112,6 +141,8 @@ def test_e8_e9_mcw_reaction_and_sample_interval_out_of_range(pcd: Station) -> No
     assert pcd.sim.read("axis.1.comers") == 2 and transfers(pcd) == []  # refused by the FB itself
 
 
+@pytest.mark.manual("§10.1", "FSStepF und FSStepB sind während einer Bewegung nicht ausführbar (die FB "
+                    "führen sie trotzdem aus)")
 def test_e10_a_single_step_while_moving_is_executed_with_a_warning(pcd: Station) -> None:
     load(pcd, DestP=1000)
     run(pcd, "FLdDA", "FStart")
@@ -122,6 +153,11 @@ def test_e10_a_single_step_while_moving_is_executed_with_a_warning(pcd: Station)
     assert pcd.read_flags(8000 + 3) == [1]
 
 
+@pytest.mark.manual("§6.2", "erreicht der Motor die Sollgeschwindigkeit nicht (blockierter Rotor), wird die "
+                    "Differenz Soll − Ist sehr gross: eine Positionsfehlermeldung, die einen automatischen "
+                    "Stop des Motors auslösen kann")
+@pytest.mark.manual("§7.4 FSetPE", "im Fehlerfall wird nur das Statusflag gesetzt (1Bh) oder zusätzlich die "
+                    "Regelung ausgeschaltet (1Ah)")
 def test_e11_e12_a_blocked_rotor_trips_the_position_error(make: Callable[..., Station]) -> None:
     for reaction, off in ((0x41A, True), (0x41B, False)):
         pcd = make()
@@ -139,6 +175,8 @@ def test_e11_e12_a_blocked_rotor_trips_the_position_error(make: Callable[..., St
             assert pcd.sim.read("axis.1.set_position") > pcd.sim.read("axis.1.position") + 2000
 
 
+@pytest.mark.manual("§8", "MCFac nicht im Fliesspunkt-Format kann bei der Umrechnung einen Überlauf des "
+                    "Wertebereiches bewirken")
 def test_a_machine_factor_that_overflows_the_range(pcd: Station) -> None:
     """§3.7: integer 1000 as MCFac gives k = −196 608: DestP 10 000 is beyond −2^30 counts."""
     load(pcd, MCFac=1000, DestP=10_000)
@@ -147,6 +185,7 @@ def test_a_machine_factor_that_overflows_the_range(pcd: Station) -> None:
     assert pcd.sim.read("axis.1.comers") == 1 and len(transfers(pcd)) == 3
 
 
+@pytest.mark.manual("§7.4 FLdDA", "k = 4 · In / s; Beispiel: 1,33333 Imp./µm, DestP = 60000 µm")
 def test_the_machine_factor_as_float_gives_the_example_counts(pcd: Station) -> None:
     load(pcd, MCFac=ffp_encode(4000 / 3000), DestP=60_000)  # U1: k = 1.33333 counts/µm
     fresh(pcd)
@@ -154,6 +193,8 @@ def test_the_machine_factor_as_float_gives_the_example_counts(pcd: Station) -> N
     assert transfers(pcd) == ["C:1F D:00 02 D:00 01 D:38 80"]  # 80 000 counts
 
 
+@pytest.mark.manual("§6.4", "für den Positionsdecoder müssen die Signale genau die Folge aufweisen; eine "
+                    "Phase falsch invertiert zählt rückwärts")
 def test_a_phase_jumper_the_wrong_way_reverses_the_count(make: Callable[..., Station]) -> None:
     """Jumper A/Ā changed alone (§2.5): the decoder counts backwards, the loop runs away; with
     LPES (MCW 41Ah) the control switches off at the position error."""
@@ -165,6 +206,8 @@ def test_a_phase_jumper_the_wrong_way_reverses_the_count(make: Callable[..., Sta
     assert pcd.sim.read("axis.1.motor_off") and pcd.sim.read("axis.1.mechanical_position") > 1000
 
 
+@pytest.mark.manual("§6.4", "das Indexsignal darf am Eingang des Positionsdecoders nicht dauernd Null sein, "
+                    "da dies zu einer Fehlfunktion des Controllers führen kann")
 def test_an_inverted_index_jumper_captures_at_the_next_line(make: Callable[..., Station]) -> None:
     """IN/ĪN wrong: the decoder sees A = B = IN = 0 at every line and captures there, not at the
     index mark (the manual's malfunction, §6.4)."""

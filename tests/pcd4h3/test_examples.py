@@ -29,6 +29,10 @@ def wait_flag(pcd: Station, symbol: str, timeout: float, start: float | None = N
     return pcd.sim.now() - start
 
 
+@pytest.mark.manual("§9.2", "Beispiel 2: Breakposition 70 mm, dort Geschwindigkeit 0,02 m/s bis 100 mm; "
+                    "zurück langsam bis 70 mm, schnell bis 0")
+@pytest.mark.manual("§9.2", "nach dem Laden der Breakposition muss das Statusflag BrkPos mit FResSF zuerst "
+                    "zurückgesetzt werden")
 def test_example_2_break_position_both_ways(make: Callable[..., Station]) -> None:
     pcd = make(EXAMPLES_23)
     pcd.write_flags(flag("DplM"), 1)
@@ -57,6 +61,8 @@ def test_example_2_break_position_both_ways(make: Callable[..., Station]) -> Non
     assert pcd.sim.read("axis.1.display") == ["     0", "     0"]
 
 
+@pytest.mark.manual("§9.3", "Automatikbetrieb: 0 → 150 mm mit Breakpositionen 30 und 110 mm, dann fünfmal "
+                    "relativ −30 mm")
 def test_example_3_automatic_cycle(make: Callable[..., Station]) -> None:
     pcd = make(EXAMPLES_23)
     pcd.sim.set("axis.1.trace", [])
@@ -87,6 +93,10 @@ def test_example_3_automatic_cycle(make: Callable[..., Station]) -> None:
     assert pcd.sim.read("axis.1.comers") == 0
 
 
+@pytest.mark.manual("§9.3", "Manuellbetrieb: solange die Taste gedrückt ist ±0,02 m/s; losgelassen: Stop mit "
+                    "der definierten Stopart; per Taste die Istposition als Nullposition")
+@pytest.mark.manual("§7.4 FForw", "realisiert, indem die grösstmögliche positive Zielposition geladen und ein Startbefehl "
+                    "erteilt wird")
 def test_example_3_manual_jog_and_zero(make: Callable[..., Station]) -> None:
     """ST 7/8: jog forward at 20 mm/s, smooth stop on release (≈ 20 mm overrun in ≈ 2 s); ST 4:
     FSetZP makes the position 0 without motion."""

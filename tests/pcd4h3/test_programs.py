@@ -20,6 +20,8 @@ def at(pcd: Station, event: str, after: float) -> list[float]:
     return [t - after for t, name in pcd.sim.device.events if name == event and t > after]
 
 
+@pytest.mark.manual("§9.1", "Beispiel 1: mit der Taste an Eingang 8 gestartet: 100 mm, 3 s warten, zurück "
+                    "auf 0")
 def test_example_1_runs_on_the_start_key(make: Callable[..., Station]) -> None:
     pcd = make({"user_program": "example1"})
     pcd.sim.advance(1.0)
@@ -36,6 +38,7 @@ def test_example_1_runs_on_the_start_key(make: Callable[..., Station]) -> None:
     assert abs(pcd.sim.read("axis.1.position")) <= 3  # and it waits for the next key
 
 
+@pytest.mark.manual("§9.2", "auf der Anzeige PCA2.D14 oben die Istposition, unten die Sollgeschwindigkeit")
 def test_example_2_break_position_and_display(make: Callable[..., Station]) -> None:
     pcd = make({"user_program": "example2"})
     start = pcd.sim.now()
@@ -48,6 +51,10 @@ def test_example_2_break_position_and_display(make: Callable[..., Station]) -> N
     assert pcd.sim.read("axis.1.display") == ["     0", "     0"]
 
 
+@pytest.mark.manual("§9.3", "zu jedem Zeitpunkt mit einem Schalter zwischen Automatik und Manuell "
+                    "umschalten; die momentane Bewegung wird zu Ende geführt")
+@pytest.mark.manual("§9.3", "das Automatikprogramm läuft endlos bis in den Manuellbetrieb umgeschaltet oder "
+                    "mit der Stoptaste abgebrochen wird; die Stoptaste stoppt die Achse zu jedem Zeitpunkt")
 def test_example_3_automatic_and_manual(make: Callable[..., Station]) -> None:
     pcd = make({"user_program": "example3"})
     start = pcd.sim.now()

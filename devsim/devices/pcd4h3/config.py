@@ -28,15 +28,19 @@ def _axis(key: object) -> int:
 
 
 def _register(key: object) -> str:
-    if key not in LOAD_REGISTERS:
+    """A load register's symbol in any case (the PCD assembler ignores case, manual §7.1.5)."""
+    symbol = {name.lower(): name for name in LOAD_REGISTERS}.get(str(key).lower())
+    if symbol is None:
         raise ValueError(f"not a load register of an axis block ({', '.join(LOAD_REGISTERS)})")
-    return str(key)
+    return symbol
 
 
 def _flag(key: object) -> str:
-    if key not in {f.name for f in FLAG_FIELD}:
+    """A flag's symbol in any case (manual §7.1.5)."""
+    symbol = {f.name.lower(): f.name for f in FLAG_FIELD}.get(str(key).lower())
+    if symbol is None:
         raise ValueError("not a flag of an axis field")
-    return str(key)
+    return symbol
 
 
 class H3Def(Settings):
@@ -61,7 +65,7 @@ class Jumpers(Settings):
     invert_b: Annotated[bool, doc("B/B̄: phase B inverted (factory B̄)")] = True
     index_invert: Annotated[bool, doc(
         "IN/ĪN: index inverted (factory IN); inverted, the decoder sees A = B = IN = 0 at every fourth count and "
-        "captures there (the manual's malfunction)")] = False
+        "captures there (the manual's malfunction), also with in_rp: ref on the 24 V types")] = False
     sink_mode: Annotated[bool, doc("Q/S: 24 V encoder inputs in sink mode (signal levels only)")] = False
 
 

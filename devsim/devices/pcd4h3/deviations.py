@@ -1,8 +1,98 @@
 """Where the pcd4h3 simulator knowingly differs from its manual, and why (``devsim doc pcd4h3``
-prints these rows as the *Deviations* section of docs/devices/pcd4h3.md)."""
+prints these rows as the *Deviations* section of docs/devices/pcd4h3.md).
+
+The manual is "Handbuch Positioniermodule für Servoantriebe PCD4.H3..", SAIA-Burgess 26/729 D2
+(seed 002); its sections are cited as printed there.
+"""
 
 from __future__ import annotations
 
 from devsim.core.kit import Deviation
 
-DEVIATIONS: tuple[Deviation, ...] = ()
+DEVIATIONS: tuple[Deviation, ...] = (
+    Deviation(
+        "§2",
+        "Electrical data: 24 V input levels (low 0 … 4 V, high 19 … 32 V), 10 mA input current, source or sink "
+        "mode (jumper Q/S, §6.4), RS-422 inputs, no isolation, display outputs 1 … 100 mA, supply currents, "
+        "temperatures, interference immunity.",
+        "The switch, encoder and display lines are booleans and counts; the Q/S jumper (`jumpers.sink_mode`) "
+        "is accepted and changes nothing.",
+        "There is no electrical layer behind a pty or a socket.",
+    ),
+    Deviation(
+        "§2",
+        "Counting frequency at most 100 kHz.",
+        "The decoder counts at any speed the motor reaches; no counts are lost above 100 kHz.",
+        "Count loss is an electrical fault of a real encoder line; the spec leaves it to a scenario (G-17) "
+        "and none is offered.",
+    ),
+    Deviation(
+        "§2, §7.4 FLdVA",
+        "Velocity and acceleration ranges printed as [−2^30 … 2^30 − 1] / k · 22348 · 10^−6 and "
+        "… · 76206 · 10^−9.",
+        "Veloc and Accel are converted as v · k · 65536 · 341 µs and a · k · 65536 · (341 µs)² and checked in "
+        "the chip's units (0 … 3FFFFFFFh); beyond that the chip reports a command error (§8).",
+        "The printed formulas are garbled (spec G-6); the chip's own ranges decide what it accepts.",
+    ),
+    Deviation(
+        "§5.2",
+        "Module addresses 0 … 7 (data bus), outputs 8 … 11 (WR, RD, PS, CS) carry the function blocks' "
+        "traffic with the chips; outputs 12 … 15 (clock, data, enable X/Y) drive the PCA2.D14 displays.",
+        "These inputs and outputs read 0 over S-Bus; the chips are reached through the library's functions, "
+        "and what DP14 shows is the text `axis.N.display` (and the diagnostics registers).",
+        "The bus strobes and the display's serial protocol are not documented in the manual (spec G-14, "
+        "G-18); the host never needs them.",
+    ),
+    Deviation(
+        "§6.6",
+        "Jumper S/B per axis: the PWM output as SIGN and MAGNITUDE or through the logic for a bridge amplifier.",
+        "The output is reported as a signed duty (`axis.N.output_volts` = duty · 10 V) either way; "
+        "`axes.N.pwm_logic` is accepted and changes nothing.",
+        "The bridge logic is a circuit in front of the amplifier; its timing is not documented (spec G-35).",
+    ),
+    Deviation(
+        "§7.1.1, §7.1.2",
+        "The library PCD9.H3E1 comes on floppy disks (H3DEF.SRC, H3FB.SRC), is assembled and linked with the "
+        "user program (PUBLSYM/EXTNSYM, $INCLUDE).",
+        "The library is part of the simulator; H3DEF.SRC's symbols are the `h3def` settings (BAFB and BAC are "
+        "accepted and documented only).",
+        "There is no PCD assembler or linker to feed.",
+    ),
+    Deviation(
+        "§7.1.3, §7.1.5",
+        "The function blocks use common registers and flags after the axis blocks and one counter (BAC) as "
+        "scratch memory (sizes in H3DEF.LST: TRe, TFl, TCo).",
+        "Nothing is kept there: those registers, flags and the counter read 0 unless a host writes them.",
+        "Their contents are the FBs' private intermediate values, undocumented (spec G-13).",
+    ),
+    Deviation(
+        "§7.2",
+        "The user program: XOB 16 loads the registers and calls AxInit, a COB calls AxHndlg every cycle, a "
+        "GRAFTEC block (SB) sequences the moves; ComErS (§8) may be programmed freely.",
+        "The PLC runs AxInit at every cold start (registers from `init`), AxHndlg every `plc_cycle_ms`, "
+        "the configured cyclic reads and DP14, and optionally one of the manual's three example programs "
+        "(`user_program`); anything else a user program would do, a host does over S-Bus. ComErS is one of "
+        "`comers_action` continue, halt or xob13_diag.",
+        "A PCD instruction interpreter is beyond the module this kind simulates.",
+    ),
+    Deviation(
+        "§7.4 DPB14",
+        "DPB14 fills all digits of a PCA2.D14 with blanks.",
+        "No user program calls DPB14: the display of an axis in `display` shows DP14's output every cycle, an "
+        "axis not listed stays blank.",
+        "Only the examples' user programs run inside the simulator, and they do not call DPB14.",
+    ),
+    Deviation(
+        "§7.4 FRdSR",
+        "RSigB bit 12: 0 = forward, 1 = backward.",
+        "1 = forward, as MCW bit 12 (§7.4 FSelOM: 1 = vorwärts) and the LM628 have it; "
+        "`rsigb_bit12_inverted: true` gives the FRdSR text's reading.",
+        "The manual contradicts itself (FSelOM and FRdSR); the spec decides for the chip (G-5).",
+    ),
+    Deviation(
+        "§7.4 FSetPE",
+        "ExcPEr is set when the position error reaches PosEr (FSetPE; FResSF says: exceeds).",
+        "ExcPEr is set when the error exceeds PosEr (strictly greater).",
+        "The manual says both; the LM628 sets the flag on exceeding (spec G-9).",
+    ),
+)

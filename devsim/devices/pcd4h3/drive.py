@@ -54,8 +54,10 @@ class H3Drive:
         jumpers = jumpers or {}
         # one phase the wrong way round: the decoder counts backwards
         encoder_sign = -1 if jumpers.get("invert_a", True) != jumpers.get("invert_b", True) else 1
-        if jumpers.get("index_invert", False) and index_period:
-            index_period = 4  # A = B = ĪN = 0 once per line: a capture at the next line
+        if jumpers.get("index_invert", False) and (index_period or not rs422):
+            # A = B = ĪN = 0 once per line: a capture at the next line; with IN/RP = RP the 24 V decoder's
+            # index input rests at 0 through the inverter: the same malfunction (manual §6.4, "Wichtig")
+            index_period = 4
         self.chip = Lm628(self.motor, lm629=lm629, present=present, encoder_sign=encoder_sign,
                           index_period=index_period, index_offset=int(settings["index_offset"]))
         self.stepper = ChipStepper(self.chip, clock, own_timer=False, on_batch=self._follow)

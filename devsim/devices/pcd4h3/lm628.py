@@ -20,7 +20,8 @@ from devsim.devices.pcd4h3.pid import Coefficients, Filter, Motor, sat
 from devsim.devices.pcd4h3.trajectory import Profile, Trajectory
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
-__all__ = ["BREAKPOINT", "COMMAND_ERROR", "COMPLETE", "INDEX", "Lm628", "MOTOR_OFF", "POSITION_ERROR", "WRAPAROUND"]
+__all__ = ["BREAKPOINT", "COMMAND_ERROR", "COMPLETE", "INDEX", "Lm628", "MOTOR_OFF", "POSITION_ERROR", "POSITION_RANGE",
+           "WRAPAROUND"]
 
 MOTOR_OFF, BREAKPOINT, POSITION_ERROR, WRAPAROUND, INDEX, COMPLETE, COMMAND_ERROR = 0x80, 0x40, 0x20, 0x10, 0x08, 0x04, 0x02
 INTERRUPTS = BREAKPOINT | POSITION_ERROR | WRAPAROUND | INDEX | COMPLETE | COMMAND_ERROR
@@ -229,8 +230,8 @@ class Lm628:
             self.profile.stop_abruptly()
             self.flags |= COMPLETE
             return
-        if stop & 0x0200:
-            self.profile.stop_abruptly()
+        if stop & 0x0200:  # maximum deceleration: the set position becomes the actual one (§7.4 FStop bit 9)
+            self.profile.stop_abruptly(self.unwrapped_actual)
             self.on_target = True
             self.flags |= COMPLETE
             return
@@ -269,11 +270,13 @@ class Lm628:
 
     @property
     def signals(self) -> int:
-        """RDSIGS (§4.5)."""
-        t = self.buffer
+        """RDSIGS (§4.5): bits 11 and 12 (velocity mode, forward) are the working trajectory's,
+        taken over at STT, not the buffer's (manual §7.4 FSelOM, FRdSR: they change only with
+        the next start)."""
+        p = self.profile
         return ((self.status & INTERRUPTS) | int(self.index_armed) | int(self.motor_off) << 7
                 | int(self.filter.dac_bits == 8) << 8 | int(self.stop_on_error) << 9 | int(self.on_target) << 10
-                | int(t.velocity_mode) << 11 | int(t.forward) << 12 | int(self.udf_sample) << 13
+                | int(p.velocity_mode) << 11 | int(p.forward) << 12 | int(self.udf_sample) << 13
                 | int(self.accel_loaded) << 14)
 
     @property

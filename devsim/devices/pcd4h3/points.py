@@ -11,6 +11,7 @@ chip transfers in the spec's notation).
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Callable
 from typing import Any
@@ -19,13 +20,15 @@ from devsim.core.kit import Command, DriveActions, Fault, FaultTable, SignalDef,
 from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.core.words import signed32
 from devsim.devices.pcd4h3.drive import axis_signals
-from devsim.devices.pcd4h3.lm628 import notation
+from devsim.devices.pcd4h3.lm628 import POSITION_RANGE, notation
 from devsim.devices.pcd4h3.model import HALT, MEDIA_SIZE, RUN, STOP, Pcd4
 from devsim.devices.pcd4h3.registers import AxisRegisters
 from devsim.devices.pcd4h3.services import bus_input, read, write
 from devsim.devices.pcd4h3.tables import FLAG_FIELD, REGISTERS
 
 __all__ = ["DRIVE", "FAULTS", "POINTS", "SIGNALS"]
+
+INT32 = 1 << 31
 
 STATIC_AXES = (1, 2)  # declared in the table; further axes are reached through the families
 SIGNALS = tuple(SignalDef(name, kind, initial, doc, "§2.6")  # type: ignore[arg-type]
@@ -146,21 +149,25 @@ def _medium(prefix: str, medium: str, settable: bool) -> Callable[[str], Point |
     return make
 
 
-_SYMBOLS = {r.name: ("register", r.key) for r in REGISTERS} | {f.name: ("flag", f.key) for f in FLAG_FIELD}
+#: The H3DEF symbols by their lower-case spelling: the PCD assembler does not tell upper from lower
+#: case, so a user program may write them either way (manual §7.1.5); so may a point name.
+_SYMBOLS = ({r.name.lower(): (r.name, "register") for r in REGISTERS}
+            | {f.name.lower(): (f.name, "flag") for f in FLAG_FIELD})
 
 
 def _axis_family(name: str) -> Point | None:
     match = re.fullmatch(r"axis\.(\d{1,2})\.(\w+)", name)
     if match is None or not 1 <= int(match[1]) <= 32:
         return None
-    n, symbol = int(match[1]), match[2]
+    n = int(match[1])
     if n not in STATIC_AXES:
         found = next((p for p in _axis_points(n) if p.name == name), None)
         if found is not None:
             return found
-    if symbol not in _SYMBOLS:
+    if match[2].lower() not in _SYMBOLS:
         return None
-    medium = _SYMBOLS[symbol][0]
+    symbol, medium = _SYMBOLS[match[2].lower()]
+    name = f"axis.{n}.{symbol}"  # the manual's spelling, whatever the caller's
 
     def address(m: Pcd4) -> int:
         if n > len(m.axes):
@@ -202,7 +209,7 @@ POINTS = PointTable.of(
     signal_points(SIGNALS),
     families=[
         Family("axis.<n>.<symbol>", "int", "a register (KProp … RSigB) or flag (OnDest … FBackw) of axis n's "
-               "block by its H3DEF symbol; also axis.<n>.* beyond axis 2", "§4.2, §4.3", _axis_family),
+               "block by its H3DEF symbol, in any case (axis.1.destp is axis.1.DestP); also axis.<n>.* beyond axis 2", "§4.2, §4.3", _axis_family),
         Family("R.<n>", "int", "register n (0 … 4095) as S-Bus reads it", "§9.5", _medium("R", "register", True),
                modbus=(("holding", "input"), 4096)),
         Family("F.<n>", "bool", "flag n (0 … 8191)", "§9.5", _medium("F", "flag", True), modbus=(("coil",), 8192)),
@@ -253,24 +260,39 @@ def _registers(m: Pcd4) -> AxisRegisters:
     return m.axes[0].registers
 
 
-def _user(m: Pcd4, counts: float) -> int:
+def _user(m: Pcd4, counts: float, what: str) -> int:
+    """``counts`` in the user unit of MCFac, as a PCD register holds it (signed 32 bits); a value
+    the register cannot hold is refused before anything is written (a PCD register would wrap it
+    and the axis would go elsewhere)."""
     k = m.axes[0].k
-    return round(counts / k) if k else 0
+    value = round(counts / k) if k and math.isfinite(counts) else 0
+    if not -INT32 <= value < INT32:
+        raise BadValue(f"{what} {counts:g} counts is {value} in MCFac's unit: more than a 32-bit PCD register holds")
+    return value
+
+
+def _target(m: Pcd4, counts: float) -> int:
+    """A target position in DestP's unit; beyond the LM628's position range (−2^30 … 2^30 − 1
+    counts, manual §7.4 FLdDA) the chip would refuse it with a command error: refused here."""
+    if not -POSITION_RANGE <= counts < POSITION_RANGE:
+        raise BadValue(f"target {counts:g} counts is beyond the LM628's position range −2^30 … 2^30 − 1")
+    return _user(m, counts, "target")
 
 
 def _enable(m: Pcd4, on: bool) -> None:
     if on:  # hold where the axis stands
-        _registers(m).destination = _user(m, m.drives[0].chip.actual)
+        _registers(m).destination = _target(m, m.drives[0].chip.actual)
         _run(m, "FLdDA", "FStart")
     else:
         _run(m, "FMotOff")
 
 
 def _move_to(m: Pcd4, target: float, speed: float) -> None:
+    destination = _target(m, target)
     if speed > 0:
-        _registers(m).velocity = _user(m, speed)
+        _registers(m).velocity = _user(m, speed, "speed")
         _run(m, "FLdVA")
-    _registers(m).destination = _user(m, target)
+    _registers(m).destination = destination
     _run(m, "FLdDA", "FStart")
 
 
@@ -278,7 +300,7 @@ def _jog(m: Pcd4, velocity: float) -> None:
     if velocity == 0:
         _stop(m, 0x0400)
     else:
-        _registers(m).velocity = _user(m, abs(velocity))
+        _registers(m).velocity = _user(m, abs(velocity), "speed")
         _run(m, "FLdVA", "FForw" if velocity > 0 else "FBackw")
 
 

@@ -89,6 +89,7 @@ def write(plc: Pcd4, medium: str, first: int, values: tuple[int, ...] | list[int
             return False
         for i, value in enumerate(values):
             plc.registers[first + i] = signed32(value)
+        plc.wake()  # the next cycle's DP14 shows the new value even when nothing moves (manual §9.2)
         return True
     if any(_diagnostic_flag(plc, first + i) is not None for i in range(len(values))):
         return False

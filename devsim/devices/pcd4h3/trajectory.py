@@ -25,7 +25,7 @@ class Trajectory(msgspec.Struct, frozen=True):
     velocity: int = 0  # 16.16 counts/sample
     position: int = 0  # counts
     velocity_mode: bool = False
-    forward: bool = True
+    forward: bool = False  # RESET clears the trajectory control word
 
 
 class Profile:
@@ -38,7 +38,7 @@ class Profile:
         self.top = 0  # the velocity to reach (unsigned 16.16)
         self.target = 0  # counts << 16
         self.velocity_mode = False
-        self.forward = True
+        self.forward = False  # as after RESET (signals bit 12 reads 0)
         self.stopping = False
         self.complete = True  # "trajectory complete" (status bit 2)
 
@@ -58,7 +58,11 @@ class Profile:
     def stop_smoothly(self) -> None:
         self.stopping, self.complete = True, self.velocity == 0
 
-    def stop_abruptly(self) -> None:
+    def stop_abruptly(self, at: int | None = None) -> None:
+        """Stop at once: the desired position becomes ``at`` (counts; the actual position, manual
+        §7.4 FStop bit 9: "die Sollposition gleich der Istposition") or stays where it is."""
+        if at is not None:
+            self.position = at << 16
         self.velocity, self.target, self.stopping, self.complete = 0, self.position, False, True
 
     def shift(self, counts: int) -> None:
