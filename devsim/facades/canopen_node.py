@@ -169,9 +169,14 @@ class CanopenFacade:
                 self._transmit(tpdo)
 
     def _received(self, rpdo: Any) -> None:
+        """An RPDO's values into their objects; one the object refuses (an unsupported mode of
+        operation, a value out of range) is dropped: a PDO has no answer to carry a refusal."""
         for variable in rpdo.map:
             if variable.length:
-                self.node.set_data(variable.index, variable.subindex, variable.get_data(), check_writable=True)
+                try:
+                    self.node.set_data(variable.index, variable.subindex, variable.get_data(), check_writable=True)
+                except SdoAbortedError:
+                    continue
 
     def _emergency(self, axis: int = 1, code: int = 0x1000) -> None:
         """A fault the model announces: an EMCY message (error register bit 0, generic error)."""
@@ -290,12 +295,13 @@ DRIVE_READS: dict[int, Callable[[Cia402], int]] = {
     0x6081: lambda d: d.profile_velocity,
     0x60F4: lambda d: round(d.actions.following_error(d.model)),
     0x60FF: lambda d: d.target_velocity,
+    0x6502: lambda d: d.supported_modes,
 }
 """The CiA 402 objects as the drive state shows them."""
 
 DRIVE_WRITES: dict[int, Callable[[Cia402, Any], None]] = {
     0x6040: Cia402.write_controlword,
-    0x6060: lambda d, v: setattr(d, "mode", int(v)),
+    0x6060: lambda d, v: d.write_mode(int(v)),
     0x607A: lambda d, v: setattr(d, "target_position", int(v)),
     0x6081: lambda d, v: setattr(d, "profile_velocity", int(v)),
     0x60FF: Cia402.write_target_velocity,
