@@ -5,6 +5,7 @@ objects too, one boot-up each), and SDO aborts that name the request they answer
 
 from __future__ import annotations
 
+import queue
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -61,3 +62,93 @@ def test_6060h_takes_only_the_modes_6502h_lists_and_6061h_shows_no_other(drive: 
     rpdo.transmit()
     assert node.sdo[0x6061].raw == 3
     assert node.sdo[0x6060].raw == 3
+
+
+class Bootups:
+    """The boot-up messages (CiA 301: COB-ID 700h + node id, one data byte 00h) the master sees from
+    node ``node_id``; heartbeats (the NMT state, never 00h) are counted apart."""
+
+    def __init__(self, drive: Drive, node_id: int = 3) -> None:
+        self.frames: queue.Queue[bytes] = queue.Queue()
+        drive.master.subscribe(0x700 + node_id, lambda can_id, data, timestamp: self.frames.put(bytes(data)))
+        assert drive.node.sdo[0x1000].raw  # (a round trip: the boot-up of the attach went by before it)
+        self.count()
+
+    def count(self) -> int:
+        """Boot-ups since the last count (after an SDO round trip, everything the node sent before
+        it has been handled)."""
+        seen = []
+        while not self.frames.empty():
+            seen.append(self.frames.get())
+        return seen.count(b"\x00")
+
+
+def configure(drive: Drive) -> None:
+    """What a master writes during start-up: a heartbeat, TPDO1 = statusword on every SYNC, and
+    the 402 objects away from their power-on values, the drive enabled."""
+    node = drive.node
+    node.sdo[0x1017].raw = 20
+    node.tpdo.read()
+    tpdo = node.tpdo[1]
+    tpdo.clear()
+    tpdo.add_variable(0x6041)
+    tpdo.trans_type, tpdo.enabled = 1, True
+    node.tpdo.save()
+    node.sdo[0x6060].raw = 3
+    node.sdo[0x607A].raw = 1234
+    node.sdo[0x6081].raw = 777
+    node.sdo[0x60FF].raw = 5
+    for word in (0x06, 0x07, 0x0F):
+        node.sdo[0x6040].raw = word
+    assert node.sdo[0x6041].raw & 0x6F == 0x27  # Operation enabled
+    assert node.sdo[0x1A00][0].raw == 1 and node.sdo[0x1800][2].raw == 1
+
+
+def test_reset_communication_restores_the_communication_objects_and_boots_once(drive: Drive) -> None:
+    """CiA 301: reset communication sets 1000h … 1FFFh to their power-on values (the EDS's
+    defaults: no heartbeat, the predefined PDO set unmapped) and boots (one boot-up message,
+    then PRE-OPERATIONAL); the application (the 402 objects, the enabled drive) is untouched."""
+    node = drive.node
+    od = canopen.import_od(str(ROOT / "docs" / "eds" / "pcd4h3.eds"), 3)
+    bootups = Bootups(drive)
+    configure(drive)
+    assert node.nmt.wait_for_heartbeat(5) == "PRE-OPERATIONAL"
+    node.nmt.state = "OPERATIONAL"
+    node.nmt.send_command(0x82)  # reset communication
+    assert node.sdo[0x1017].raw == od[0x1017].default == 0
+    assert bootups.count() == 1
+    for index, sub in ((0x1800, 1), (0x1800, 2), (0x1800, 5), (0x1A00, 0), (0x1A00, 1)):
+        assert node.sdo[index][sub].raw == od[index][sub].default, (hex(index), sub)
+    assert node.sdo[0x6061].raw == 3 and node.sdo[0x607A].raw == 1234  # the application objects stay
+    assert node.sdo[0x6041].raw & 0x6F == 0x27
+    node.sdo[0x1017].raw = 20
+    assert node.nmt.wait_for_heartbeat(5) == "PRE-OPERATIONAL"
+    drive.master.send_message(0, [0x82, 0])  # reset communication of all nodes
+    assert node.sdo[0x1017].raw == 0 and bootups.count() == 1
+
+
+def test_reset_node_also_restores_the_402_objects_and_disables_the_drive(drive: Drive) -> None:
+    """CiA 301: reset node resets the application (2000h … 9FFFh: here the 402 objects to the
+    EDS's power-on values, the drive disabled, the state machine in Switch on disabled) and then
+    the communication, with one boot-up message."""
+    node = drive.node
+    od = canopen.import_od(str(ROOT / "docs" / "eds" / "pcd4h3.eds"), 3)
+    bootups = Bootups(drive)
+    configure(drive)
+    assert drive.runtime.read("pcd", "axis.1.motor_off") is False
+    node.nmt.state = "OPERATIONAL"
+    node.nmt.send_command(0x81)  # reset node
+    assert node.sdo[0x6041].raw & 0x4F == 0x40  # Switch on disabled
+    assert bootups.count() == 1
+    assert drive.runtime.read("pcd", "axis.1.motor_off") is True
+    for index in (0x6040, 0x6060, 0x607A, 0x6081, 0x60FF):
+        assert node.sdo[index].raw == od[index].default, hex(index)
+    assert node.sdo[0x6061].raw == od[0x6060].default
+    assert node.sdo[0x1017].raw == 0 and node.sdo[0x1A00][0].raw == od[0x1A00][0].default
+    node.sdo[0x1017].raw = 20
+    assert node.nmt.wait_for_heartbeat(5) == "PRE-OPERATIONAL"
+    for word, state in ((0x06, 0x21), (0x07, 0x23), (0x0F, 0x27)):  # and it runs the 402 flow again
+        node.sdo[0x6040].raw = word
+        assert node.sdo[0x6041].raw & 0x6F == state
+    node.nmt.send_command(0x81)
+    assert node.sdo[0x6041].raw & 0x4F == 0x40 and bootups.count() == 1
