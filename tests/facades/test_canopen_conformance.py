@@ -84,10 +84,16 @@ class Bootups:
 
 
 def configure(drive: Drive) -> None:
-    """What a master writes during start-up: a heartbeat, TPDO1 = statusword on every SYNC, and
-    the 402 objects away from their power-on values, the drive enabled."""
+    """What a master writes during start-up: a heartbeat, TPDO1 = statusword on every SYNC, RPDO1 =
+    controlword, and the 402 objects away from their power-on values, the drive enabled."""
     node = drive.node
     node.sdo[0x1017].raw = 20
+    node.rpdo.read()
+    rpdo = node.rpdo[1]
+    rpdo.clear()
+    rpdo.add_variable(0x6040)
+    rpdo.trans_type, rpdo.enabled = 255, True
+    node.rpdo.save()
     node.tpdo.read()
     tpdo = node.tpdo[1]
     tpdo.clear()
@@ -114,6 +120,10 @@ def test_reset_communication_restores_the_communication_objects_and_boots_once(d
     configure(drive)
     assert node.nmt.wait_for_heartbeat(5) == "PRE-OPERATIONAL"
     node.nmt.state = "OPERATIONAL"
+    for word, state in ((0x07, 0x23), (0x0F, 0x27)):  # RPDO1 is taken in OPERATIONAL
+        node.rpdo[1]["Controlword"].raw = word
+        node.rpdo[1].transmit()
+        assert node.sdo[0x6041].raw & 0x6F == state
     node.nmt.send_command(0x82)  # reset communication
     assert node.sdo[0x1017].raw == od[0x1017].default == 0
     assert bootups.count() == 1
@@ -121,6 +131,9 @@ def test_reset_communication_restores_the_communication_objects_and_boots_once(d
         assert node.sdo[index][sub].raw == od[index][sub].default, (hex(index), sub)
     assert node.sdo[0x6061].raw == 3 and node.sdo[0x607A].raw == 1234  # the application objects stay
     assert node.sdo[0x6041].raw & 0x6F == 0x27
+    node.rpdo[1]["Controlword"].raw = 0x00  # disable voltage, by a PDO the reset unmapped
+    node.rpdo[1].transmit()
+    assert node.sdo[0x6041].raw & 0x6F == 0x27  # not taken
     node.sdo[0x1017].raw = 20
     assert node.nmt.wait_for_heartbeat(5) == "PRE-OPERATIONAL"
     drive.master.send_message(0, [0x82, 0])  # reset communication of all nodes
