@@ -3,7 +3,8 @@
 boot-up message, the heartbeat producer (1017h) and CiA 301's resets (issue 29: reset communication
 restores 1000h … 1FFFh, reset node also the 402 objects), and SDO access to every point: an upload reads
 the point as the control API does, a download sets it with its validation (a refused value is
-aborted with 0609 0030h, value range exceeded; a read-only object 0601 0002h).
+aborted with 0609 0030h, value range exceeded; a read-only object 0601 0002h; every abort names the
+request's multiplexer: :mod:`devsim.facades.canopen_sdo`).
 
 A kind that declares itself a drive (``Device.drive``) also gets the CiA 402 objects and state
 machine (:mod:`devsim.facades.cia402`): controlword 6040h, statusword 6041h, profile position and
@@ -31,6 +32,7 @@ from devsim.core.device import Device
 from devsim.core.points import BadValue, ReadOnlyName
 from devsim.facades import library_log
 from devsim.facades.canopen_od import eds, point_objects
+from devsim.facades.canopen_sdo import DevsimSdoServer
 from devsim.facades.cia402 import Cia402
 
 __all__ = ["CHANGE_SAMPLE", "CanopenFacade", "READ_ONLY", "VALUE_RANGE_EXCEEDED", "WRITE_ONLY", "load_od",
@@ -69,6 +71,7 @@ class CanopenFacade:
         self._timers: dict[tuple[int, str], Any] = {}  # event-driven TPDOs: device-clock timers
         self._sent: dict[int, bytes] = {}  # event-driven TPDOs: the data they last carried
         self.node = canopen.LocalNode(node_id, self.od)
+        self.node.sdo = self.sdo = DevsimSdoServer(0x600 + node_id, 0x580 + node_id, self.node)
         self.objects = {index: point for index, point in point_objects(device.points)}
         self.node.add_read_callback(self._read)
         self.node.add_write_callback(self._write)
@@ -110,6 +113,7 @@ class CanopenFacade:
         """NMT reset communication: the communication objects (1000h … 1FFFh: 1017h, the PDO
         parameters) back to their power-on values, PDOs and heartbeat stopped, then the boot."""
         self._stop_pdos()
+        self.sdo.reset()
         self.node.nmt.stop_heartbeat()
         self._forget(0x1000, 0x1FFF)
         self._boot()

@@ -6,7 +6,8 @@ objects too, one boot-up each), and SDO aborts that name the request they answer
 from __future__ import annotations
 
 import queue
-from collections.abc import Iterator
+import struct
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import canopen
@@ -165,3 +166,52 @@ def test_reset_node_also_restores_the_402_objects_and_disables_the_drive(drive: 
         assert node.sdo[0x6041].raw & 0x6F == state
     node.nmt.send_command(0x81)
     assert node.sdo[0x6041].raw & 0x4F == 0x40 and bootups.count() == 1
+
+
+def test_every_sdo_abort_names_the_request_it_answers(drive: Drive) -> None:
+    """CiA 301: an abort transfer request carries the multiplexer (index, sub-index) of the
+    transfer it ends.  Each case follows a successful upload of 1000h, so an abort that named the
+    last object used instead would show 1000h/00h."""
+    node = drive.node
+    answers: queue.Queue[bytes] = queue.Queue()
+    drive.master.subscribe(0x583, lambda can_id, data, timestamp: answers.put(bytes(data)))
+    write_only = next(i for i, p in drive.facade.objects.items() if p.settable and not p.readable)
+
+    def aborted(request: Callable[[], object]) -> tuple[int, int, int]:
+        assert node.sdo.upload(0x1000, 0) and answers.get(timeout=5)[0] == 0x43
+        with pytest.raises(canopen.SdoAbortedError) as refused:
+            request()
+        while (frame := answers.get(timeout=5))[0] != 0x80:  # (the segments before the abort)
+            pass
+        _, index, subindex, code = struct.unpack("<BHBL", frame)
+        assert code == refused.value.code
+        return index, subindex, code
+
+    raw = node.sdo.request_response
+    cases: list[tuple[Callable[[], object], tuple[int, int, int]]] = [
+        (lambda: node.sdo.upload(0x5FFF, 0), (0x5FFF, 0, 0x06020000)),  # object does not exist
+        (lambda: node.sdo.download(0x5FFF, 0, b"\0\0\0\0"), (0x5FFF, 0, 0x06020000)),
+        (lambda: node.sdo.upload(0x1018, 7), (0x1018, 7, 0x06090011)),  # sub-index does not exist
+        (lambda: node.sdo.download(0x1800, 9, b"\0"), (0x1800, 9, 0x06090011)),
+        (lambda: node.sdo.upload(write_only, 0), (write_only, 0, 0x06010001)),  # write-only
+        (lambda: node.sdo.download(0x1000, 0, b"\1\2\3\4"), (0x1000, 0, 0x06010002)),  # read-only
+        (lambda: node.sdo.download(0x1008, 0, b"a longer name", force_segment=True), (0x1008, 0, 0x06010002)),
+        (lambda: node.sdo.download(0x6081, 0, b"\1\2"), (0x6081, 0, 0x06070010)),  # length
+        (lambda: node.sdo.download(0x607A, 0, b"\1\2\3\4\5\6", force_segment=True), (0x607A, 0, 0x06070010)),
+        (lambda: node.sdo.download(0x6060, 0, b"\x06"), (0x6060, 0, VALUE_RANGE_EXCEEDED)),  # value
+        (lambda: node.sdo.download(0x6060, 0, b"\x06", force_segment=True), (0x6060, 0, VALUE_RANGE_EXCEEDED)),
+        (lambda: raw(bytes((0xE0, 0x34, 0x12, 0x05, 0, 0, 0, 0))), (0x1234, 5, 0x05040001)),  # no such command
+        (lambda: raw(bytes((0xA4, 0x41, 0x60, 0x00, 0x7F, 0, 0, 0))), (0x6041, 0, 0x05040001)),  # block upload
+        (lambda: raw(bytes((0xC6, 0x7A, 0x60, 0x00, 4, 0, 0, 0))), (0x607A, 0, 0x05040001)),  # block download
+        (lambda: raw(bytes((0x60, 0x34, 0x12, 0x05, 0, 0, 0, 0))), (0, 0, 0x05040001)),  # a segment, no transfer
+    ]
+    for request, expected in cases:
+        assert aborted(request) == expected
+    # a toggle error ends the segmented upload of 1008h it interrupts
+    assert raw(bytes((0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0)))[0] == 0x41 and answers.get(timeout=5)
+    assert raw(bytes((0x60, 0, 0, 0, 0, 0, 0, 0)))[0] == 0x00 and answers.get(timeout=5)  # toggle 0
+    with pytest.raises(canopen.SdoAbortedError) as refused:
+        raw(bytes((0x60, 0, 0, 0, 0, 0, 0, 0)))  # toggle 0 again
+    assert refused.value.code == 0x05030000
+    assert struct.unpack("<BHBL", answers.get(timeout=5)) == (0x80, 0x1008, 0, 0x05030000)
+    assert node.sdo[0x1008].raw == "devsim pcd4h3"  # and the server goes on
