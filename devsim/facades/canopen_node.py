@@ -1,8 +1,10 @@
 """A device as a CANopen node (issue 13; canopen's local node over python-can; extra
 ``devsim-motion[can]``): the object dictionary of :mod:`devsim.facades.canopen_od`, NMT with the
-boot-up message and the heartbeat producer (1017h), and SDO access to every point: an upload reads
+boot-up message, the heartbeat producer (1017h) and CiA 301's resets (issue 29: reset communication
+restores 1000h … 1FFFh, reset node also the 402 objects), and SDO access to every point: an upload reads
 the point as the control API does, a download sets it with its validation (a refused value is
-aborted with 0609 0030h, value range exceeded; a read-only object 0601 0002h).
+aborted with 0609 0030h, value range exceeded; a read-only object 0601 0002h; every abort names the
+request's multiplexer: :mod:`devsim.facades.canopen_sdo`).
 
 A kind that declares itself a drive (``Device.drive``) also gets the CiA 402 objects and state
 machine (:mod:`devsim.facades.cia402`): controlword 6040h, statusword 6041h, profile position and
@@ -30,6 +32,7 @@ from devsim.core.device import Device
 from devsim.core.points import BadValue, ReadOnlyName
 from devsim.facades import library_log
 from devsim.facades.canopen_od import eds, point_objects
+from devsim.facades.canopen_sdo import DevsimSdoServer
 from devsim.facades.cia402 import Cia402
 
 __all__ = ["CHANGE_SAMPLE", "CanopenFacade", "READ_ONLY", "VALUE_RANGE_EXCEEDED", "WRITE_ONLY", "load_od",
@@ -68,46 +71,90 @@ class CanopenFacade:
         self._timers: dict[tuple[int, str], Any] = {}  # event-driven TPDOs: device-clock timers
         self._sent: dict[int, bytes] = {}  # event-driven TPDOs: the data they last carried
         self.node = canopen.LocalNode(node_id, self.od)
+        self.node.sdo = self.sdo = DevsimSdoServer(0x600 + node_id, 0x580 + node_id, self.node)
         self.objects = {index: point for index, point in point_objects(device.points)}
         self.node.add_read_callback(self._read)
         self.node.add_write_callback(self._write)
 
     def attach(self, network: canopen.Network) -> None:
         """Join ``network`` and boot: the boot-up message, then pre-operational (the heartbeat
-        starts if 1017h is set); the NMT resets (node, communication) boot again.  Entering OPERATIONAL the node takes the PDO configuration the
+        starts if 1017h is set); the NMT resets boot again (:meth:`_reset_communication`,
+        :meth:`_reset_node`).  Entering OPERATIONAL the node takes the PDO configuration the
         master wrote: TPDOs with a transmission type 1 … 240 go out after every that many SYNCs,
         those with 254/255 on a change of their values and every event-timer period (device
         time), RPDOs are written into their objects as they arrive."""
         network.add_node(self.node)
-        network.subscribe(0, self._nmt)  # after canopen's own NMT handling
+        network.unsubscribe(0, self.node.nmt.on_command)  # the NMT commands come to _nmt alone
+        network.subscribe(0, self._nmt)
         network.subscribe(0x80, self._sync)
-        self.node.nmt.send_command(0x81)  # reset node: INITIALISING, boot-up message
-        self.node.nmt.send_command(0x80)  # enter PRE-OPERATIONAL
+        self._boot()
 
-    # -- PDOs ---------------------------------------------------------------------------------
+    # -- NMT (CiA 301: the NMT state machine) ---------------------------------------------------------
     def _nmt(self, can_id: int, data: bytes, timestamp: float) -> None:
         if len(data) < 2 or data[1] not in (0, self.node.id):
             return
-        if data[0] in (0x81, 0x82):  # reset node / communication: boot-up, then PRE-OPERATIONAL
-            self._pdos_on = False
-            self.call(self._cancel_timers)
-            self.node.nmt.send_command(0x81)
-            self.node.nmt.send_command(0x80)
+        reset = RESETS.get(data[0])
+        if reset is not None:
+            reset(self)
             return
+        self.node.nmt.on_command(can_id, data, timestamp)
         if self.node.nmt.state == "OPERATIONAL" and not self._pdos_on:
-            self._pdos_on = True
-            self._syncs = 0
-            self.node.tpdo.read(from_od=False)  # what the master configured (SDO into the data store)
-            self.node.rpdo.read(from_od=False)
-            for rpdo in self.node.rpdo.map.values():
-                if rpdo.enabled:
-                    rpdo.add_callback(self._received)
-            for tpdo in self.node.tpdo.map.values():
-                if tpdo.enabled and (tpdo.trans_type or 0) >= 254:
-                    self.call(self._start_event_driven, tpdo)
+            self._start_pdos()
         elif self.node.nmt.state != "OPERATIONAL":
-            self._pdos_on = False
-            self.call(self._cancel_timers)
+            self._stop_pdos()
+
+    def _boot(self) -> None:
+        """Initialisation ends: one boot-up message, then PRE-OPERATIONAL (with the heartbeat
+        1017h asks for)."""
+        self.node.nmt.send_command(0x81)  # INITIALISING: canopen sends the boot-up message
+        self.node.nmt.send_command(0x80)  # PRE-OPERATIONAL, the heartbeat from 1017h
+
+    def _reset_communication(self) -> None:
+        """NMT reset communication: the communication objects (1000h … 1FFFh: 1017h, the PDO
+        parameters) back to their power-on values, PDOs and heartbeat stopped, then the boot."""
+        self._stop_pdos()
+        self.sdo.reset()
+        self.node.nmt.stop_heartbeat()
+        self._forget(0x1000, 0x1FFF)
+        self._boot()
+
+    def _reset_node(self) -> None:
+        """NMT reset node (reset application, then reset communication): also the application
+        objects (2000h … 9FFFh) back to their power-on values: the 402 objects, the drive
+        disabled and in Switch on disabled.  The objects from 2000h on that are the device's
+        points show the simulated device, which the node's reset does not switch off."""
+        self._stop_pdos()
+        if self.drive is not None:
+            self.call(self.drive.reset)
+        self._forget(0x2000, 0x9FFF)
+        self._reset_communication()
+
+    def _forget(self, first: int, last: int) -> None:
+        """Drop what masters wrote into objects ``first`` … ``last``: they read their EDS default."""
+        for index in [index for index in self.node.data_store if first <= index <= last]:
+            del self.node.data_store[index]
+
+    # -- PDOs ---------------------------------------------------------------------------------
+    def _start_pdos(self) -> None:
+        self._pdos_on = True
+        self._syncs = 0
+        self.node.tpdo.read(from_od=False)  # what the master configured (SDO into the data store)
+        self.node.rpdo.read(from_od=False)  # (subscribes the enabled RPDOs)
+        for rpdo in self.node.rpdo.map.values():
+            if rpdo.enabled:
+                rpdo.add_callback(self._received)
+        for tpdo in self.node.tpdo.map.values():
+            if tpdo.enabled and (tpdo.trans_type or 0) >= 254:
+                self.call(self._start_event_driven, tpdo)
+
+    def _stop_pdos(self) -> None:
+        """Leaving OPERATIONAL: no TPDO goes out, no RPDO is taken."""
+        self._pdos_on = False
+        self.call(self._cancel_timers)
+        for rpdo in self.node.rpdo.map.values():
+            rpdo.callbacks.clear()
+            if rpdo.cob_id is not None and rpdo.on_message in self.node.network.subscribers.get(rpdo.cob_id, []):
+                self.node.network.unsubscribe(rpdo.cob_id, rpdo.on_message)
 
     def _start_event_driven(self, tpdo: Any) -> None:
         """An event-driven TPDO (types 254/255, CiA 301 §7.5.2.35): sent when a mapped value
@@ -169,9 +216,14 @@ class CanopenFacade:
                 self._transmit(tpdo)
 
     def _received(self, rpdo: Any) -> None:
+        """An RPDO's values into their objects; one the object refuses (an unsupported mode of
+        operation, a value out of range) is dropped: a PDO has no answer to carry a refusal."""
         for variable in rpdo.map:
             if variable.length:
-                self.node.set_data(variable.index, variable.subindex, variable.get_data(), check_writable=True)
+                try:
+                    self.node.set_data(variable.index, variable.subindex, variable.get_data(), check_writable=True)
+                except SdoAbortedError:
+                    continue
 
     def _emergency(self, axis: int = 1, code: int = 0x1000) -> None:
         """A fault the model announces: an EMCY message (error register bit 0, generic error)."""
@@ -278,6 +330,12 @@ def _attach_all(runtime: Any, nodes: list[tuple[Device, int]], network: canopen.
         CanopenFacade(device, node_id, call=runtime.call).attach(network)
 
 
+RESETS: dict[int, Callable[[CanopenFacade], None]] = {
+    0x81: CanopenFacade._reset_node,
+    0x82: CanopenFacade._reset_communication,
+}
+"""The NMT reset commands (CiA 301): reset node, reset communication."""
+
 DRIVE_READS: dict[int, Callable[[Cia402], int]] = {
     0x603F: lambda d: 0x1000 if d.actions.fault(d.model) else 0,
     0x6040: lambda d: d.controlword,
@@ -290,12 +348,13 @@ DRIVE_READS: dict[int, Callable[[Cia402], int]] = {
     0x6081: lambda d: d.profile_velocity,
     0x60F4: lambda d: round(d.actions.following_error(d.model)),
     0x60FF: lambda d: d.target_velocity,
+    0x6502: lambda d: d.supported_modes,
 }
 """The CiA 402 objects as the drive state shows them."""
 
 DRIVE_WRITES: dict[int, Callable[[Cia402, Any], None]] = {
     0x6040: Cia402.write_controlword,
-    0x6060: lambda d, v: setattr(d, "mode", int(v)),
+    0x6060: lambda d, v: d.write_mode(int(v)),
     0x607A: lambda d, v: setattr(d, "target_position", int(v)),
     0x6081: lambda d, v: setattr(d, "profile_velocity", int(v)),
     0x60FF: Cia402.write_target_velocity,

@@ -4,7 +4,8 @@ heartbeat producer time, identity) and, from index 2000h on, one manufacturer ob
 ``bool``/``int``/``float`` point in table order (BOOLEAN, INTEGER32, REAL64; read-only where the
 point is), named after the point; 4 RPDOs and 4 TPDOs (communication and mapping records, the predefined connection set's
 COB-IDs); for a kind that is a drive (``Device.drive``) also the CiA 402 objects (controlword,
-statusword, modes, actual and target values).  ``devsim doc KIND --eds`` prints it,
+statusword, modes and the supported ones, actual and target values, with the power-on values of
+those a master writes).  ``devsim doc KIND --eds`` prints it,
 ``docs/eds/KIND.eds`` holds it.  Pure text.
 """
 
@@ -13,6 +14,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from devsim.core.points import Point
+from devsim.facades.cia402 import DEFAULTS
 
 __all__ = ["DEVICE_TYPE", "DRIVE_OBJECTS", "FIRST_POINT_INDEX", "VENDOR_ID", "eds", "point_objects"]
 
@@ -44,19 +46,21 @@ def _var(index: int, sub: int | None, name: str, data_type: int, access: str, de
     return lines
 
 
-#: CiA 402 objects of a drive (index, name, data type, access, PDO-mappable).
-DRIVE_OBJECTS = (
-    (0x603F, "Error code", 0x0006, "ro", True),
-    (0x6040, "Controlword", 0x0006, "rw", True),
-    (0x6041, "Statusword", 0x0006, "ro", True),
-    (0x6060, "Modes of operation", 0x0002, "rw", True),
-    (0x6061, "Modes of operation display", 0x0002, "ro", True),
-    (0x6064, "Position actual value", 0x0004, "ro", True),
-    (0x606C, "Velocity actual value", 0x0004, "ro", True),
-    (0x607A, "Target position", 0x0004, "rw", True),
-    (0x6081, "Profile velocity", 0x0007, "rw", True),
-    (0x60F4, "Following error actual value", 0x0004, "ro", True),
-    (0x60FF, "Target velocity", 0x0004, "rw", True),
+#: CiA 402 objects of a drive (index, name, data type, access, PDO-mappable, power-on value of
+#: the objects a master writes: :data:`devsim.facades.cia402.DEFAULTS`).
+DRIVE_OBJECTS: tuple[tuple[int, str, int, str, bool, int | str], ...] = (
+    (0x603F, "Error code", 0x0006, "ro", True, ""),
+    (0x6040, "Controlword", 0x0006, "rw", True, DEFAULTS["controlword"]),
+    (0x6041, "Statusword", 0x0006, "ro", True, ""),
+    (0x6060, "Modes of operation", 0x0002, "rw", True, DEFAULTS["mode"]),
+    (0x6061, "Modes of operation display", 0x0002, "ro", True, ""),
+    (0x6064, "Position actual value", 0x0004, "ro", True, ""),
+    (0x606C, "Velocity actual value", 0x0004, "ro", True, ""),
+    (0x607A, "Target position", 0x0004, "rw", True, DEFAULTS["target_position"]),
+    (0x6081, "Profile velocity", 0x0007, "rw", True, DEFAULTS["profile_velocity"]),
+    (0x60F4, "Following error actual value", 0x0004, "ro", True, ""),
+    (0x60FF, "Target velocity", 0x0004, "rw", True, DEFAULTS["target_velocity"]),
+    (0x6502, "Supported drive modes", 0x0007, "ro", False, ""),
 )
 
 
@@ -126,8 +130,8 @@ def eds(kind: str, description: str, points: Iterable[Point], drive: bool = Fals
     lines += _var(0x1017, None, "Producer heartbeat time", 0x0006, "rw", 0)
     lines += _pdo_objects()
     if drive:  # the device profile area (CiA 402)
-        for index, name, code, access, pdo in DRIVE_OBJECTS:
-            lines += _var(index, None, name, code, access, pdo=pdo)
+        for index, name, code, access, pdo, default in DRIVE_OBJECTS:
+            lines += _var(index, None, name, code, access, default, pdo=pdo)
     lines += ["[ManufacturerObjects]", f"SupportedObjects={len(objects)}"]
     lines += [f"{n}=0x{index:04X}" for n, (index, _p) in enumerate(objects, start=1)]
     lines.append("")

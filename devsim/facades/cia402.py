@@ -7,6 +7,10 @@ position, velocity, enable, fault and motion.  :class:`Cia402` keeps the state t
 (6040h) drives and composes the statusword (6041h); in profile position mode (6060h = 1) a rising
 "new set-point" bit (4) starts a move to the target position (607Ah, bit 6: relative) at the
 profile velocity (6081h), in profile velocity mode (3) the target velocity (60FFh) runs the axis.
+The modes a drive supports (6502h, CiA 402-2) are those whose drive action the kind declares
+(:data:`MODES`); writing another mode into 6060h is refused (``ValueError``), so 6061h only ever
+shows a supported one.  :meth:`Cia402.reset` is the application part of an NMT reset node (CiA 301,
+the NMT state machine's "reset application" sub-state): the power-on values of :data:`DEFAULTS`, the drive disabled, Switch on disabled.
 Pure: the node calls it and it calls the actions.
 """
 
@@ -16,7 +20,7 @@ from typing import Any
 
 from devsim.core.kit import DriveActions
 
-__all__ = ["Cia402", "DriveActions", "STATES"]
+__all__ = ["Cia402", "DEFAULTS", "DriveActions", "MODES", "STATES"]
 
 
 #: State → statusword bits 0…6 (with bit 4 "voltage enabled" where the power stage may be on)
@@ -30,19 +34,49 @@ STATES = {
 }
 PROFILE_POSITION, PROFILE_VELOCITY = 1, 3
 
+#: Modes of operation (6060h value) → (the drive action the mode needs, its bit in 6502h "supported
+#: drive modes", CiA 402-2: bit 0 profile position, bit 2 profile velocity).
+MODES = {PROFILE_POSITION: ("move_to", 0), PROFILE_VELOCITY: ("jog", 2)}
+
+#: The power-on values of the 402 objects a master writes (the EDS's DefaultValue; CiA 301: an NMT
+#: reset node restores the application objects' power-on values).
+DEFAULTS = {"controlword": 0, "mode": PROFILE_POSITION, "target_position": 0, "profile_velocity": 1000,
+            "target_velocity": 0}
+
 
 class Cia402:
     """One axis's 402 state, driving ``actions`` on ``model``."""
 
     def __init__(self, actions: DriveActions, model: Any) -> None:
         self.actions, self.model = actions, model
+        self._power_on()
+
+    def _power_on(self) -> None:
         self.state = "switch_on_disabled"
-        self.controlword = 0
-        self.mode = PROFILE_POSITION
-        self.target_position = 0
-        self.profile_velocity = 1000
-        self.target_velocity = 0
+        self.controlword, self.mode = DEFAULTS["controlword"], DEFAULTS["mode"]
+        self.target_position, self.profile_velocity = DEFAULTS["target_position"], DEFAULTS["profile_velocity"]
+        self.target_velocity = DEFAULTS["target_velocity"]
         self.setpoint_ack = False
+
+    # -- modes of operation (6060h, 6061h, 6502h) -------------------------------------------------------
+    @property
+    def supported_modes(self) -> int:
+        """6502h: a bit per mode whose drive action the kind declares."""
+        return sum(1 << bit for action, bit in MODES.values() if getattr(self.actions, action, None) is not None)
+
+    def write_mode(self, mode: int) -> None:
+        """6060h: a mode the drive supports, else ``ValueError`` (the node aborts 0609 0030h)."""
+        action_bit = MODES.get(mode)
+        if action_bit is None or not self.supported_modes >> action_bit[1] & 1:
+            raise ValueError(f"mode of operation {mode} is not supported")
+        self.mode = mode
+
+    # -- NMT reset node (CiA 301, reset application) ----------------------------------------------------------
+    def reset(self) -> None:
+        """The 402 objects back to their power-on values, the drive disabled, Switch on disabled."""
+        if self.actions.enabled(self.model):
+            self.actions.enable(self.model, False)
+        self._power_on()
 
     # -- controlword (6040h) ---------------------------------------------------------------------
     def write_controlword(self, word: int) -> None:

@@ -1,7 +1,7 @@
 """Every kind that declares drive actions passes the CiA 402 flow through canopen (issue 13, the
 kit's contract for drives): from Switch on disabled to Operation enabled, a relative profile-
 position move of 1 000 units that ends there with "target reached", and back to Switch on
-disabled.  Kinds without drive actions are CANopen nodes without the 402 objects."""
+disabled; enabled again, an NMT reset node disables the drive as disable voltage does (issue 29).  Kinds without drive actions are CANopen nodes without the 402 objects."""
 
 from __future__ import annotations
 
@@ -43,6 +43,13 @@ def test_a_drive_runs_the_402_flow(kind: str) -> None:
         assert node.sdo[0x6041].raw & 0x0400
         node.sdo[0x6040].raw = 0x00  # disable voltage
         assert node.sdo[0x6041].raw & 0x4F == 0x40
+        disabled = runtime.call(device.drive.enabled, device.model)  # (the IP247 has no power stage to switch)
+        for word in (0x06, 0x07, 0x0F):
+            node.sdo[0x6040].raw = word
+        assert runtime.call(device.drive.enabled, device.model)
+        node.nmt.send_command(0x81)  # NMT reset node (CiA 301): the drive disabled, Switch on disabled
+        assert node.sdo[0x6041].raw & 0x4F == 0x40
+        assert runtime.call(device.drive.enabled, device.model) == disabled
     finally:
         drive.close()
 

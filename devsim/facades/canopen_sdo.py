@@ -1,0 +1,138 @@
+"""The SDO server of a devsim CANopen node (issue 29; CiA 301 §7.2.4, SDO protocols and abort
+codes): canopen's :class:`~canopen.sdo.SdoServer` with the request dispatch that CiA 301 asks of
+an abort.  Every abort names the multiplexer (index, sub-index) of the request it answers: an
+initiate request's own, a segment's the transfer in progress; a request with an unknown command
+specifier (and a block transfer, which this server does not offer) is aborted 0504 0001h with the
+multiplexer in its own bytes 1 … 3; a segment with no transfer in progress likewise, naming
+0000h/00h (it carries no multiplexer).  A segmented download is checked at its initiation (the
+object, write access, the announced size), so it is refused before any segment.  A request
+shorter than the 8 bytes of an SDO frame is ignored."""
+
+from __future__ import annotations
+
+import logging
+import struct
+from collections.abc import Callable
+from typing import Any
+
+from canopen.objectdictionary import ODVariable
+from canopen.objectdictionary.datatypes import NUMBER_TYPES
+from canopen.sdo import SdoServer
+from canopen.sdo.constants import EXPEDITED, NO_MORE_DATA, SIZE_SPECIFIED
+from canopen.sdo.exceptions import SdoAbortedError
+
+__all__ = ["INVALID_COMMAND", "DevsimSdoServer"]
+
+logger = logging.getLogger(__name__)
+
+INVALID_COMMAND = 0x05040001  # client/server command specifier not valid or unknown
+NOT_IN_OD = 0x06020000  # object does not exist in the object dictionary
+NO_SUBINDEX = 0x06090011  # sub-index does not exist
+READ_ONLY = 0x06010002  # attempt to write a read only object
+LENGTH_MISMATCH = 0x06070010  # data type does not match, length of service parameter does not match
+GENERAL_ERROR = 0x08000000
+
+
+class DevsimSdoServer(SdoServer):
+    """One node's SDO server: :data:`STEPS` by client command specifier (bits 5 … 7 of byte 0)."""
+
+    def __init__(self, rx_cobid: int, tx_cobid: int, node: Any) -> None:
+        super().__init__(rx_cobid, tx_cobid, node)
+        self._index, self._subindex = 0, 0
+        self.transfer: str | None = None  # "upload" / "download": a segmented transfer in progress
+
+    def reset(self) -> None:
+        """NMT reset communication: a transfer in progress ends."""
+        self.transfer, self._buffer = None, None
+
+    def on_request(self, can_id: int, data: bytes, timestamp: float) -> None:
+        if len(data) < 8:
+            return
+        request = bytes(data)
+        try:
+            STEPS[request[0] >> 5](self, request)
+        except SdoAbortedError as exc:
+            self.abort(exc.code)
+        except Exception:  # a fault of this server: the general error, never a dead notifier
+            logger.exception("SDO request %s", request.hex())
+            self.abort(GENERAL_ERROR)
+
+    def abort(self, abort_code: int = GENERAL_ERROR) -> None:
+        """The abort transfer request (CiA 301): the multiplexer of the request it answers."""
+        self.transfer = None
+        self.send_response(struct.pack("<BHBL", 0x80, self._index, self._subindex, abort_code))
+
+    def _multiplexer(self, request: bytes) -> None:
+        self._index, self._subindex = struct.unpack_from("<HB", request, 1)
+
+    # -- the steps ----------------------------------------------------------------------------------
+    def _initiate_upload(self, request: bytes) -> None:
+        self._multiplexer(request)
+        self.transfer, self._buffer = None, None
+        self.init_upload(request)
+        if self._buffer is not None:
+            self.transfer = "upload"
+
+    def _upload_segment(self, request: bytes) -> None:
+        if self.transfer != "upload":
+            self._index, self._subindex = 0, 0
+            raise SdoAbortedError(INVALID_COMMAND)
+        self.segmented_upload(request[0])
+        if not self._buffer:
+            self.transfer = None
+
+    def _initiate_download(self, request: bytes) -> None:
+        self._multiplexer(request)
+        self.transfer, self._buffer = None, None
+        command = request[0]
+        if not command & EXPEDITED:
+            variable = self._variable()
+            if not variable.writable:
+                raise SdoAbortedError(READ_ONLY)
+            size, = struct.unpack_from("<L", request, 4)
+            if command & SIZE_SPECIFIED and variable.data_type in NUMBER_TYPES and 8 * size != len(variable):
+                raise SdoAbortedError(LENGTH_MISMATCH)
+        self.init_download(request)
+        if not command & EXPEDITED:
+            self.transfer = "download"
+
+    def _download_segment(self, request: bytes) -> None:
+        if self.transfer != "download":
+            self._index, self._subindex = 0, 0
+            raise SdoAbortedError(INVALID_COMMAND)
+        self.segmented_download(request[0], request)
+        if request[0] & NO_MORE_DATA:
+            self.transfer = None
+
+    def _client_abort(self, request: bytes) -> None:
+        self.transfer = None
+        self.request_aborted(request)
+
+    def _unsupported(self, request: bytes) -> None:
+        """A block transfer or an unknown command specifier: aborted, naming its own multiplexer."""
+        self._multiplexer(request)
+        raise SdoAbortedError(INVALID_COMMAND)
+
+    def _variable(self) -> ODVariable:
+        od = self._node.object_dictionary
+        if self._index not in od:
+            raise SdoAbortedError(NOT_IN_OD)
+        entry = od[self._index]
+        if isinstance(entry, ODVariable):
+            return entry
+        if self._subindex not in entry:
+            raise SdoAbortedError(NO_SUBINDEX)
+        return entry[self._subindex]
+
+
+STEPS: dict[int, Callable[[DevsimSdoServer, bytes], None]] = {
+    0: DevsimSdoServer._download_segment,
+    1: DevsimSdoServer._initiate_download,
+    2: DevsimSdoServer._initiate_upload,
+    3: DevsimSdoServer._upload_segment,
+    4: DevsimSdoServer._client_abort,
+    5: DevsimSdoServer._unsupported,  # block upload
+    6: DevsimSdoServer._unsupported,  # block download
+    7: DevsimSdoServer._unsupported,
+}
+"""The client command specifiers of CiA 301's SDO protocols."""

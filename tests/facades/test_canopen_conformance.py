@@ -1,0 +1,217 @@
+"""A CANopen node that conforms (issue 29), checked with canopen as the master on python-can's
+virtual bus: CiA 402's modes of operation (6060h takes only a mode 6502h lists, 6061h never shows
+another), CiA 301's NMT resets (reset communication restores 1000h … 1FFFh, reset node the 402
+objects too, one boot-up each), and SDO aborts that name the request they answer."""
+
+from __future__ import annotations
+
+import queue
+import struct
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import canopen
+import pytest
+
+from tests.facades.test_cia402 import Drive
+
+ROOT = Path(__file__).resolve().parents[2]
+VALUE_RANGE_EXCEEDED = 0x06090030  # CiA 301 SDO abort: value range of parameter exceeded
+
+#: CiA 402-2, 6502h "supported drive modes": the bit of each mode of operation (6060h value).
+MODE_BITS = {1: 0, 2: 1, 3: 2, 4: 3, 6: 5, 7: 6, 8: 7, 9: 8, 10: 9}
+
+
+@pytest.fixture
+def drive() -> Iterator[Drive]:
+    d = Drive()
+    try:
+        yield d
+    finally:
+        d.close()
+
+
+def test_6060h_takes_only_the_modes_6502h_lists_and_6061h_shows_no_other(drive: Drive) -> None:
+    node = drive.node
+    supported = node.sdo[0x6502].raw
+    assert supported & (1 << MODE_BITS[1]) and supported & (1 << MODE_BITS[3])  # pp and pv: every drive here
+    assert not supported & (1 << MODE_BITS[6])  # no homing mode
+    shown = node.sdo[0x6061].raw
+    for mode in (-1, 0, *range(1, 11), 127):
+        bit = MODE_BITS.get(mode)
+        if bit is not None and supported >> bit & 1:
+            node.sdo[0x6060].raw = mode
+            shown = mode
+        else:
+            with pytest.raises(canopen.SdoAbortedError) as refused:
+                node.sdo[0x6060].raw = mode
+            assert refused.value.code == VALUE_RANGE_EXCEEDED, mode
+        assert node.sdo[0x6061].raw == shown, mode
+    node.sdo[0x6060].raw = 1
+    # an RPDO carrying an unsupported mode changes nothing either
+    node.rpdo.read()
+    rpdo = node.rpdo[1]
+    rpdo.clear()
+    rpdo.add_variable(0x6060)
+    rpdo.trans_type, rpdo.enabled = 255, True
+    node.rpdo.save()
+    node.nmt.state = "OPERATIONAL"
+    rpdo["Modes of operation"].raw = 3
+    rpdo.transmit()
+    assert node.sdo[0x6061].raw == 3  # (frames on the bus are handled in order: the RPDO before the SDO)
+    rpdo["Modes of operation"].raw = 6
+    rpdo.transmit()
+    assert node.sdo[0x6061].raw == 3
+    assert node.sdo[0x6060].raw == 3
+
+
+class Bootups:
+    """The boot-up messages (CiA 301: COB-ID 700h + node id, one data byte 00h) the master sees from
+    node ``node_id``; heartbeats (the NMT state, never 00h) are counted apart."""
+
+    def __init__(self, drive: Drive, node_id: int = 3) -> None:
+        self.frames: queue.Queue[bytes] = queue.Queue()
+        drive.master.subscribe(0x700 + node_id, lambda can_id, data, timestamp: self.frames.put(bytes(data)))
+        assert drive.node.sdo[0x1000].raw  # (a round trip: the boot-up of the attach went by before it)
+        self.count()
+
+    def count(self) -> int:
+        """Boot-ups since the last count (after an SDO round trip, everything the node sent before
+        it has been handled)."""
+        seen = []
+        while not self.frames.empty():
+            seen.append(self.frames.get())
+        return seen.count(b"\x00")
+
+
+def configure(drive: Drive) -> None:
+    """What a master writes during start-up: a heartbeat, TPDO1 = statusword on every SYNC, RPDO1 =
+    controlword, and the 402 objects away from their power-on values, the drive enabled."""
+    node = drive.node
+    node.sdo[0x1017].raw = 20
+    node.rpdo.read()
+    rpdo = node.rpdo[1]
+    rpdo.clear()
+    rpdo.add_variable(0x6040)
+    rpdo.trans_type, rpdo.enabled = 255, True
+    node.rpdo.save()
+    node.tpdo.read()
+    tpdo = node.tpdo[1]
+    tpdo.clear()
+    tpdo.add_variable(0x6041)
+    tpdo.trans_type, tpdo.enabled = 1, True
+    node.tpdo.save()
+    node.sdo[0x6060].raw = 3
+    node.sdo[0x607A].raw = 1234
+    node.sdo[0x6081].raw = 777
+    node.sdo[0x60FF].raw = 5
+    for word in (0x06, 0x07, 0x0F):
+        node.sdo[0x6040].raw = word
+    assert node.sdo[0x6041].raw & 0x6F == 0x27  # Operation enabled
+    assert node.sdo[0x1A00][0].raw == 1 and node.sdo[0x1800][2].raw == 1
+
+
+def test_reset_communication_restores_the_communication_objects_and_boots_once(drive: Drive) -> None:
+    """CiA 301: reset communication sets 1000h … 1FFFh to their power-on values (the EDS's
+    defaults: no heartbeat, the predefined PDO set unmapped) and boots (one boot-up message,
+    then PRE-OPERATIONAL); the application (the 402 objects, the enabled drive) is untouched."""
+    node = drive.node
+    od = canopen.import_od(str(ROOT / "docs" / "eds" / "pcd4h3.eds"), 3)
+    bootups = Bootups(drive)
+    configure(drive)
+    assert node.nmt.wait_for_heartbeat(5) == "PRE-OPERATIONAL"
+    node.nmt.state = "OPERATIONAL"
+    for word, state in ((0x07, 0x23), (0x0F, 0x27)):  # RPDO1 is taken in OPERATIONAL
+        node.rpdo[1]["Controlword"].raw = word
+        node.rpdo[1].transmit()
+        assert node.sdo[0x6041].raw & 0x6F == state
+    node.nmt.send_command(0x82)  # reset communication
+    assert node.sdo[0x1017].raw == od[0x1017].default == 0
+    assert bootups.count() == 1
+    for index, sub in ((0x1800, 1), (0x1800, 2), (0x1800, 5), (0x1A00, 0), (0x1A00, 1)):
+        assert node.sdo[index][sub].raw == od[index][sub].default, (hex(index), sub)
+    assert node.sdo[0x6061].raw == 3 and node.sdo[0x607A].raw == 1234  # the application objects stay
+    assert node.sdo[0x6041].raw & 0x6F == 0x27
+    node.rpdo[1]["Controlword"].raw = 0x00  # disable voltage, by a PDO the reset unmapped
+    node.rpdo[1].transmit()
+    assert node.sdo[0x6041].raw & 0x6F == 0x27  # not taken
+    node.sdo[0x1017].raw = 20
+    assert node.nmt.wait_for_heartbeat(5) == "PRE-OPERATIONAL"
+    drive.master.send_message(0, [0x82, 0])  # reset communication of all nodes
+    assert node.sdo[0x1017].raw == 0 and bootups.count() == 1
+
+
+def test_reset_node_also_restores_the_402_objects_and_disables_the_drive(drive: Drive) -> None:
+    """CiA 301: reset node resets the application (2000h … 9FFFh: here the 402 objects to the
+    EDS's power-on values, the drive disabled, the state machine in Switch on disabled) and then
+    the communication, with one boot-up message."""
+    node = drive.node
+    od = canopen.import_od(str(ROOT / "docs" / "eds" / "pcd4h3.eds"), 3)
+    bootups = Bootups(drive)
+    configure(drive)
+    assert drive.runtime.read("pcd", "axis.1.motor_off") is False
+    node.nmt.state = "OPERATIONAL"
+    node.nmt.send_command(0x81)  # reset node
+    assert node.sdo[0x6041].raw & 0x4F == 0x40  # Switch on disabled
+    assert bootups.count() == 1
+    assert drive.runtime.read("pcd", "axis.1.motor_off") is True
+    for index in (0x6040, 0x6060, 0x607A, 0x6081, 0x60FF):
+        assert node.sdo[index].raw == od[index].default, hex(index)
+    assert node.sdo[0x6061].raw == od[0x6060].default
+    assert node.sdo[0x1017].raw == 0 and node.sdo[0x1A00][0].raw == od[0x1A00][0].default
+    node.sdo[0x1017].raw = 20
+    assert node.nmt.wait_for_heartbeat(5) == "PRE-OPERATIONAL"
+    for word, state in ((0x06, 0x21), (0x07, 0x23), (0x0F, 0x27)):  # and it runs the 402 flow again
+        node.sdo[0x6040].raw = word
+        assert node.sdo[0x6041].raw & 0x6F == state
+    node.nmt.send_command(0x81)
+    assert node.sdo[0x6041].raw & 0x4F == 0x40 and bootups.count() == 1
+
+
+def test_every_sdo_abort_names_the_request_it_answers(drive: Drive) -> None:
+    """CiA 301: an abort transfer request carries the multiplexer (index, sub-index) of the
+    transfer it ends.  Each case follows a successful upload of 1000h, so an abort that named the
+    last object used instead would show 1000h/00h."""
+    node = drive.node
+    answers: queue.Queue[bytes] = queue.Queue()
+    drive.master.subscribe(0x583, lambda can_id, data, timestamp: answers.put(bytes(data)))
+    write_only = next(i for i, p in drive.facade.objects.items() if p.settable and not p.readable)
+
+    def aborted(request: Callable[[], object]) -> tuple[int, int, int]:
+        assert node.sdo.upload(0x1000, 0) and answers.get(timeout=5)[0] == 0x43
+        with pytest.raises(canopen.SdoAbortedError) as refused:
+            request()
+        while (frame := answers.get(timeout=5))[0] != 0x80:  # (the segments before the abort)
+            pass
+        _, index, subindex, code = struct.unpack("<BHBL", frame)
+        assert code == refused.value.code
+        return index, subindex, code
+
+    raw = node.sdo.request_response
+    cases: list[tuple[Callable[[], object], tuple[int, int, int]]] = [
+        (lambda: node.sdo.upload(0x5FFF, 0), (0x5FFF, 0, 0x06020000)),  # object does not exist
+        (lambda: node.sdo.download(0x5FFF, 0, b"\0\0\0\0"), (0x5FFF, 0, 0x06020000)),
+        (lambda: node.sdo.upload(0x1018, 7), (0x1018, 7, 0x06090011)),  # sub-index does not exist
+        (lambda: node.sdo.download(0x1800, 9, b"\0"), (0x1800, 9, 0x06090011)),
+        (lambda: node.sdo.upload(write_only, 0), (write_only, 0, 0x06010001)),  # write-only
+        (lambda: node.sdo.download(0x1000, 0, b"\1\2\3\4"), (0x1000, 0, 0x06010002)),  # read-only
+        (lambda: node.sdo.download(0x1008, 0, b"a longer name", force_segment=True), (0x1008, 0, 0x06010002)),
+        (lambda: node.sdo.download(0x6081, 0, b"\1\2"), (0x6081, 0, 0x06070010)),  # length
+        (lambda: node.sdo.download(0x607A, 0, b"\1\2\3\4\5\6", force_segment=True), (0x607A, 0, 0x06070010)),
+        (lambda: node.sdo.download(0x6060, 0, b"\x06"), (0x6060, 0, VALUE_RANGE_EXCEEDED)),  # value
+        (lambda: node.sdo.download(0x6060, 0, b"\x06", force_segment=True), (0x6060, 0, VALUE_RANGE_EXCEEDED)),
+        (lambda: raw(bytes((0xE0, 0x34, 0x12, 0x05, 0, 0, 0, 0))), (0x1234, 5, 0x05040001)),  # no such command
+        (lambda: raw(bytes((0xA4, 0x41, 0x60, 0x00, 0x7F, 0, 0, 0))), (0x6041, 0, 0x05040001)),  # block upload
+        (lambda: raw(bytes((0xC6, 0x7A, 0x60, 0x00, 4, 0, 0, 0))), (0x607A, 0, 0x05040001)),  # block download
+        (lambda: raw(bytes((0x60, 0x34, 0x12, 0x05, 0, 0, 0, 0))), (0, 0, 0x05040001)),  # a segment, no transfer
+    ]
+    for request, expected in cases:
+        assert aborted(request) == expected
+    # a toggle error ends the segmented upload of 1008h it interrupts
+    assert raw(bytes((0x40, 0x08, 0x10, 0x00, 0, 0, 0, 0)))[0] == 0x41 and answers.get(timeout=5)
+    assert raw(bytes((0x60, 0, 0, 0, 0, 0, 0, 0)))[0] == 0x00 and answers.get(timeout=5)  # toggle 0
+    with pytest.raises(canopen.SdoAbortedError) as refused:
+        raw(bytes((0x60, 0, 0, 0, 0, 0, 0, 0)))  # toggle 0 again
+    assert refused.value.code == 0x05030000
+    assert struct.unpack("<BHBL", answers.get(timeout=5)) == (0x80, 0x1008, 0, 0x05030000)
+    assert node.sdo[0x1008].raw == "devsim pcd4h3"  # and the server goes on
