@@ -16,8 +16,9 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import Protocol
+
+import msgspec
 
 __all__ = ["DEVICE_FAILURE", "FUNCTIONS", "ILLEGAL_ADDRESS", "ILLEGAL_FUNCTION", "ILLEGAL_VALUE", "Function",
            "Refused", "Tables", "answer", "exception"]
@@ -51,8 +52,7 @@ class Tables(Protocol):
     def write_words(self, address: int, values: Sequence[int]) -> None: ...
 
 
-@dataclass(frozen=True)
-class Function:
+class Function(msgspec.Struct, frozen=True):
     """One public function code (§6): its name, section, answer and RTU request length."""
 
     name: str
