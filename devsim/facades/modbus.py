@@ -115,14 +115,16 @@ class _TcpSession(asyncio.Protocol):
     """One Modbus TCP connection (Messaging on TCP/IP §4.4.2): every request of a segment is
     answered, in order; a header that is not Modbus's closes the connection."""
 
-    def __init__(self, facade: ModbusFacade) -> None:
+    def __init__(self, facade: ModbusFacade, sessions: set[_TcpSession]) -> None:
         self.facade = facade
+        self.sessions = sessions
         self.buffer = b""
         self.transport: asyncio.Transport | None = None
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         assert isinstance(transport, asyncio.Transport)
         self.transport = transport
+        self.sessions.add(self)
 
     def data_received(self, data: bytes) -> None:
         self.buffer += data
@@ -149,13 +151,20 @@ class _TcpSession(asyncio.Protocol):
 
     def connection_lost(self, exc: Exception | None) -> None:
         self.transport = None
+        self.sessions.discard(self)
+
+    def close(self) -> None:
+        if self.transport is not None:
+            self.transport.close()
 
 
 class ModbusTcpServer:
-    """The facade's Modbus TCP server: listens on a socket; :meth:`shutdown` closes it."""
+    """The facade's Modbus TCP server: listens on a socket; :meth:`shutdown` closes it and the
+    connections it serves."""
 
-    def __init__(self, server: asyncio.Server) -> None:
+    def __init__(self, server: asyncio.Server, sessions: set[_TcpSession]) -> None:
         self.server = server
+        self.sessions = sessions
 
     @property
     def port(self) -> int:
@@ -163,8 +172,8 @@ class ModbusTcpServer:
 
     async def shutdown(self) -> None:
         self.server.close()
-        if hasattr(self.server, "close_clients"):  # (Python 3.13: connected clients too)
-            self.server.close_clients()
+        for session in list(self.sessions):  # (Python 3.12's wait_closed waits for every client)
+            session.close()
         await self.server.wait_closed()
 
 
@@ -172,7 +181,8 @@ async def serve_tcp(facade: ModbusFacade, host: str = "127.0.0.1", port: int = 5
     """Modbus TCP on ``host:port`` (loopback unless the user names a host); returns the server
     and the port it listens on (``port`` 0: one the system chose)."""
     loop = asyncio.get_running_loop()
-    server = ModbusTcpServer(await loop.create_server(lambda: _TcpSession(facade), host, port))
+    sessions: set[_TcpSession] = set()
+    server = ModbusTcpServer(await loop.create_server(lambda: _TcpSession(facade, sessions), host, port), sessions)
     return server, server.port
 
 

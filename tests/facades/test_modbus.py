@@ -199,3 +199,28 @@ def test_a_scenario_speaks_modbus_tcp_to_the_facade() -> None:
     }
     result = run_scenario(scenario_from_dict(data, "modbus"))
     assert result.passed, format_report(result)
+
+
+def test_shutdown_closes_the_connections_it_serves() -> None:
+    """A client still connected when the plant stops is disconnected (and the stop does not wait
+    for it: Python 3.12's ``Server.wait_closed`` waits for every connection)."""
+    import asyncio
+    import socket
+
+    from devsim.core.clock import VirtualClock
+    from devsim.devices.sers import SersDevice
+    from devsim.facades.modbus import ModbusFacade, serve_tcp
+
+    async def check() -> bytes:
+        server, port = await serve_tcp(ModbusFacade(SersDevice(clock=VirtualClock(), config={})), port=0)
+        client = socket.create_connection(("127.0.0.1", port), timeout=5)
+        client.setblocking(False)
+        try:
+            while not server.sessions:
+                await asyncio.sleep(0)  # (the loop accepts the connection)
+            await asyncio.wait_for(server.shutdown(), 5)
+            return await asyncio.wait_for(asyncio.get_running_loop().sock_recv(client, 10), 5)
+        finally:
+            client.close()
+
+    assert asyncio.run(asyncio.wait_for(check(), 10)) == b""
