@@ -212,24 +212,26 @@ class ModbusRtuEndpoint:
         self._buffer += data
         while len(self._buffer) >= 4:
             size = self._frame_size(self._buffer)
-            if size is None:
-                self._buffer = self._buffer[1:]  # not the start of a frame: resynchronise
+            if size is None or (0 < size <= len(self._buffer) and not _crc_ok(self._buffer[:size])):
+                self._buffer = self._buffer[1:]  # not a frame start (garbage, or misread): resynchronise
                 continue
             if size == 0 or len(self._buffer) < size:
-                break  # wait for the rest
-            frame = self._buffer[:size]
-            if not _crc_ok(frame):  # garbage, or a frame start we misread
-                self._buffer = self._buffer[1:]
+                later = self._next_frame(self._buffer)
+                if later is None:
+                    break  # wait for the rest
+                self._buffer = self._buffer[later:]  # a frame cut short: a whole one follows it
                 continue
-            self._buffer = self._buffer[size:]
-            unit, pdu = frame[0], frame[1:-2]
-            if unit not in (self.facade.unit, 0):
-                continue
-            response = self.facade.answer(pdu)
-            if unit != 0 and self._write is not None:
-                self._write(_with_crc(bytes((unit,)) + response))
+            frame, self._buffer = self._buffer[:size], self._buffer[size:]
+            self._serve(frame[0], frame[1:-2])
         if len(self._buffer) > 512:
             self._buffer = self._buffer[-256:]
+
+    def _serve(self, unit: int, pdu: bytes) -> None:
+        if unit not in (self.facade.unit, 0):
+            return
+        response = self.facade.answer(pdu)
+        if unit != 0 and self._write is not None:
+            self._write(_with_crc(bytes((unit,)) + response))
 
     @staticmethod
     def _frame_size(data: bytes) -> int | None:
@@ -239,10 +241,24 @@ class ModbusRtuEndpoint:
         function = modbus_pdu.FUNCTIONS.get(data[1])
         if function is not None:
             return function.rtu_length(data)
-        for size in range(4, min(len(data), MAX_PDU + 3) + 1):
-            if _crc_ok(data[:size]):
-                return size
-        return 0 if len(data) < MAX_PDU + 3 else None
+        size = _crc_end(data[:MAX_PDU + 3])
+        if size is None:
+            return 0 if len(data) < MAX_PDU + 3 else None
+        return size
+
+    @staticmethod
+    def _next_frame(data: bytes) -> int | None:
+        """Where, after the first byte, a whole request of a known function with a good CRC starts:
+        the frame at the start was cut short (noise, a host that gave up), and waiting for its
+        rest would keep the next requests waiting too."""
+        for start in range(1, len(data) - 3):
+            function = modbus_pdu.FUNCTIONS.get(data[start + 1])
+            if function is None:
+                continue
+            size = function.rtu_length(data[start:])
+            if size and start + size <= len(data) and _crc_ok(data[start:start + size]):
+                return start
+        return None
 
 
 def _crc_ok(frame: bytes) -> bool:
@@ -251,6 +267,17 @@ def _crc_ok(frame: bytes) -> bool:
 
 def _with_crc(frame: bytes) -> bytes:
     return frame + FramerRTU.compute_CRC(frame).to_bytes(2, "big")
+
+
+def _crc_end(data: bytes) -> int | None:
+    """The shortest frame (4 bytes or more) at the start of ``data`` whose CRC holds, in one pass
+    (Modbus over Serial Line V1.02 §6.2.2: CRC-16, low byte first; pymodbus's table)."""
+    crc = 0xFFFF
+    for end in range(len(data) - 2):
+        crc = (crc >> 8) ^ FramerRTU.crc16_table[(crc ^ data[end]) & 0xFF]
+        if end >= 1 and data[end + 1] == crc & 0xFF and data[end + 2] == crc >> 8:
+            return end + 3
+    return None
 
 
 def line_settings(text: str) -> SerialSettings:

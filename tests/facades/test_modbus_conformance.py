@@ -215,3 +215,16 @@ def test_tcp_another_unit_id_is_exception_0b(where: tuple[str, int]) -> None:
         assert absent.value.get_exception_code() == 0x0B
     finally:
         master.close()
+
+
+def test_rtu_a_frame_cut_short_does_not_hold_up_the_next() -> None:
+    """A request cut short (a host that gave up, noise) and an unknown function's frame without a
+    valid CRC, each followed by a whole request: the whole one is answered at once, not after
+    the line has brought enough bytes to fill the partial frame."""
+    with plant_running(spec({"rtu": {}, "line": "115200 8N1"}), virtual=True) as running, \
+            serial.Serial(running.port("drive.modbus"), 115200, timeout=2) as port:
+        read = bytes.fromhex("01 03 0002 0002")
+        answer = bytes.fromhex("01 03 04 0001 09A0")  # 68 000 V/1000 (Application Protocol §6.3)
+        for junk in (bytes.fromhex("01 10 0002 007B F6 0000"), bytes.fromhex("01 55 12 34 56")):
+            port.write(junk + read + crc(read))
+            assert port.read(9) == answer + crc(answer), junk.hex()
