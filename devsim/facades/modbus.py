@@ -66,7 +66,8 @@ class ModbusFacade:
 
     def read_words(self, table: str, address: int, count: int) -> list[int]:
         found = [self._entry(table, address + i) for i in range(count)]
-        return [to_words(self._value(entry.name), entry.scale)[offset] for entry, offset in found]
+        words = {entry.name: to_words(self._value(entry.name), entry.scale) for entry, _ in found}  # (one read a pair)
+        return [words[entry.name][offset] for entry, offset in found]
 
     def write_words(self, address: int, values: Sequence[int]) -> None:
         touched = {}
