@@ -203,8 +203,10 @@ UNKNOWN = [code for code in range(256) if code not in FUNCTIONS]
 # -- the bare pymodbus server ----------------------------------------------------------------------
 def same_map(device: Any, mapping: ModbusMap) -> SimDevice:
     """A pymodbus ``SimDevice`` (id 1) holding the device's present values at the map's addresses.
-    pymodbus keeps bits in 16-bit words, so each bit table must fill whole words to be the same map
-    (the mirror's 8192 flags and 1024 inputs do)."""
+    pymodbus keeps bits in 16-bit words and reads the padding of a table's last word as zeros,
+    where §6.1 and §6.2 want exception 02 for an address that does not exist (the facade's
+    answer, tests/facades/test_modbus_conformance.py); so each bit table must fill whole words to
+    be the same map (the mirror's 8192 flags and 1024 inputs do)."""
     tables: dict[str, list[Any]] = {}
     for table in ("coil", "discrete", "holding", "input"):
         size = mapping.size(table)
