@@ -3,8 +3,9 @@ declared points (:mod:`devsim.core.points`) and, for drive profiles, its declare
 (:class:`devsim.core.kit.DriveActions`), never code per kind.
 
 * :mod:`devsim.facades.modbus_map` – the Modbus register map a kind's points give (pure);
-* :mod:`devsim.facades.modbus` – serving it with pymodbus (extra ``devsim-motion[modbus]``): Modbus
-  TCP, and Modbus RTU on any devsim serial transport (a pty, raw TCP, RFC 2217);
+* :mod:`devsim.facades.modbus_pdu` – the Modbus application layer: one table of function codes (pure);
+* :mod:`devsim.facades.modbus` – serving it (extra ``devsim-motion[modbus]``): Modbus TCP, and Modbus
+  RTU on any devsim serial transport (a pty, raw TCP, RFC 2217);
 * :mod:`devsim.facades.canopen_od` – the CANopen EDS of a kind (pure);
 * :mod:`devsim.facades.cia402` – the CiA 402 state machine and profile modes (pure);
 * :mod:`devsim.facades.canopen_node` – the device as canopen's local node (extra ``[can]``), reached

@@ -1,8 +1,7 @@
 """The log lines of the protocol stacks behind the facades, rate-limited.
 
-pymodbus logs a line for every frame it cannot decode, canopen a traceback for every SDO request
-shorter than eight bytes, python-can one for every error in a listener: a noisy or hostile host
-would fill the simulator's stderr.  :func:`limit` routes a library's logger through
+canopen logs a traceback for every SDO request shorter than eight bytes, python-can a line for every
+error in a listener: a noisy or hostile host would fill the simulator's stderr.  :func:`limit` routes a library's logger through
 :func:`devsim.transports.fdlimit.report`: one line per kind of message every ten seconds, with the
 repeats counted, and nothing beyond its logger (``propagate`` off).
 """

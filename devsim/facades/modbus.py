@@ -1,10 +1,15 @@
-"""A device's declared points served over Modbus with pymodbus 3.x (issue 13): Modbus TCP through
-pymodbus's own server, Modbus RTU through pymodbus's RTU framer on any devsim serial transport (a
-pty, raw TCP, RFC 2217).  Both use pymodbus's current device model (``SimDevice`` with an
-``action``): every read takes the device's present values, every write goes through the device's
-``set`` with its validation; a value the device refuses is exception 03 (illegal data value), an
-address outside the map 02 (illegal data address).  Extra ``devsim-motion[modbus]``.
+"""A device's declared points served over Modbus (issue 13; issue 29: conforming to the Modbus
+Application Protocol Specification V1.1b3 and the Modbus Messaging on TCP/IP Implementation Guide
+V1.0b): Modbus TCP on a socket of its own, Modbus RTU on any devsim serial transport (a pty, raw
+TCP, RFC 2217).  Every read takes the device's present values, every write goes through the
+device's ``set`` with its validation; a value the device refuses is exception 03 (illegal data
+value), an address outside the map 02 (illegal data address).  Extra ``devsim-motion[modbus]``.
 
+The requests are answered by :mod:`devsim.facades.modbus_pdu` (one table of function codes); this
+module frames them.  pymodbus 3.16's server stood here before issue 29: it answered an unknown
+function with ``80 01``, a read of 0 or too many registers with ``80 01`` on TCP and silence on
+RTU, only the first of several requests in one TCP segment, and went silent for good after one
+request with a protocol identifier other than 0; its CRC (``FramerRTU.compute_CRC``) is still used.
 The map is :class:`devsim.facades.modbus_map.ModbusMap`; everything here runs in the runtime's
 event loop, beside the device's own ports.
 """
@@ -12,111 +17,92 @@ event loop, beside the device's own ports.
 from __future__ import annotations
 
 import asyncio
+import struct
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from pymodbus.constants import ExcCodes
 from pymodbus.framer import FramerRTU
-from pymodbus.pdu import DecodePDU, ExceptionResponse
-from pymodbus.server import ModbusTcpServer
-from pymodbus.simulator import DataType, SimData, SimDevice
-from pymodbus.simulator.simcore import SimCore
 
 from devsim.core.device import Device, SerialSettings
 from devsim.core.points import BadValue, ReadOnlyName
-from devsim.facades import library_log
-from devsim.facades.modbus_map import BITS, ModbusMap, from_words, to_words
+from devsim.facades import modbus_pdu
+from devsim.facades.modbus_map import ModbusMap, from_words, to_words
+from devsim.facades.modbus_pdu import ILLEGAL_ADDRESS, ILLEGAL_VALUE, Refused
 
-__all__ = ["ModbusFacade", "ModbusRtuEndpoint", "device_map", "line_settings", "serve_tcp", "start_modbus"]
+__all__ = ["ModbusFacade", "ModbusRtuEndpoint", "ModbusTcpServer", "device_map", "line_settings", "serve_tcp",
+           "start_modbus"]
 
-TABLE_OF = {1: "coil", 5: "coil", 15: "coil", 2: "discrete", 3: "holding", 6: "holding", 16: "holding",
-            23: "holding", 4: "input"}
+#: Messaging on TCP/IP §4.4.1.2: 0xFF is the unit identifier of a server addressed by its IP
+#: address, and "the value 0 is also accepted to communicate directly to a MODBUS/TCP device".
+DIRECT_UNITS = (0x00, 0xFF)
+#: Messaging on TCP/IP §4.4.2.5 (exception 0B): "the targeted device failed to respond".
+GATEWAY_NO_RESPONSE = 0x0B
+#: Messaging on TCP/IP §3.1.3: the MBAP header; its length counts the unit identifier and the PDU
+#: (at most 253 bytes, Application Protocol §4.1).
+MBAP = struct.Struct(">HHHB")
+MAX_PDU = 253
 
 
 class ModbusFacade:
-    """One device behind its Modbus map, as a pymodbus ``SimDevice`` with unit id ``unit``."""
+    """One device behind its Modbus map with unit id ``unit``: the :class:`~devsim.facades.modbus_pdu.Tables`
+    the application layer reads and writes."""
 
     def __init__(self, device: Device, mapping: ModbusMap | None = None, unit: int = 1) -> None:
         self.device = device
         self.map = mapping if mapping is not None else ModbusMap.generate(device.points)
         self.unit = unit
 
-    def sim_device(self) -> SimDevice:
-        blocks: dict[str, list[SimData]] = {table: [] for table in ("coil", "discrete", "holding", "input")}
-        for table in BITS:
-            size = max(self.map.size(table), 1)
-            blocks[table].append(SimData(0, count=size, values=False, datatype=DataType.BITS))
-        for entry in self.map.entries:
-            if entry.table not in BITS:
-                blocks[entry.table].append(SimData(entry.address, count=2, values=0, datatype=DataType.REGISTERS))
-        for table in ("holding", "input"):
-            if not blocks[table]:
-                blocks[table].append(SimData(0, count=1, datatype=DataType.INVALID))
-        return SimDevice(self.unit, simdata=(blocks["coil"], blocks["discrete"], blocks["holding"], blocks["input"]),
-                         use_bit_addressing=True, action=self._action)
+    def answer(self, pdu: bytes) -> bytes:
+        """The response PDU to a request PDU (Application Protocol §6, §7)."""
+        return modbus_pdu.answer(self, pdu)
 
-    # -- pymodbus calls this before it reads or writes its registers ----------------------------
-    async def _action(self, function: int, start: int, address: int, count: int, registers: list[int],
-                      values: Sequence[int] | Sequence[bool] | None) -> ExcCodes | None:
-        table = TABLE_OF.get(function)
-        if table is None:
-            return ExcCodes.ILLEGAL_FUNCTION
-        try:
-            if table in BITS:
-                return self._bits(table, address, count, registers, values)
-            return self._words(table, start, address, count, registers, values)
-        except (BadValue, ReadOnlyName, ValueError):
-            return ExcCodes.ILLEGAL_VALUE
-        except Exception:  # noqa: BLE001 - a device error is the device's failure, not the server's
-            return ExcCodes.DEVICE_FAILURE
+    def read_bits(self, table: str, address: int, count: int) -> list[bool]:
+        entries = [self._entry(table, address + i) for i in range(count)]
+        return [bool(self._value(entry.name)) for entry, _ in entries]
 
-    def _bits(self, table: str, address: int, count: int, registers: list[int],
-              values: Sequence[int] | Sequence[bool] | None) -> ExcCodes | None:
-        if values is not None:
-            targets = [self.map.find(table, address + i) for i in range(len(values))]
-            if any(t is None for t in targets):
-                return ExcCodes.ILLEGAL_ADDRESS
-            checked = [(t[0].name, self.device.check(t[0].name, bool(v))) for t, v in zip(targets, values, strict=True)
-                       if t is not None]
-            for name, value in checked:
-                self.device.set(name, value)
-            return None
-        first = address // 16
-        for register in range(first, min(first + count, len(registers))):
-            word = 0
-            for bit in range(16):
-                found = self.map.find(table, register * 16 + bit)
-                if found is not None and self._value(found[0].name):
-                    word |= 1 << bit
-            registers[register] = word
-        return None
+    def write_bits(self, address: int, values: Sequence[bool]) -> None:
+        targets = [self._entry("coil", address + i)[0].name for i in range(len(values))]
+        self._set([(name, self._check(name, bool(value))) for name, value in zip(targets, values, strict=True)])
 
-    def _words(self, table: str, start: int, address: int, count: int, registers: list[int],
-               values: Sequence[int] | Sequence[bool] | None) -> ExcCodes | None:
+    def read_words(self, table: str, address: int, count: int) -> list[int]:
+        found = [self._entry(table, address + i) for i in range(count)]
+        words = {entry.name: to_words(self._value(entry.name), entry.scale) for entry, _ in found}  # (one read a pair)
+        return [words[entry.name][offset] for entry, offset in found]
+
+    def write_words(self, address: int, values: Sequence[int]) -> None:
         touched = {}
-        for offset in range(len(values) if values is not None else count):
-            found = self.map.find(table, address + offset)
-            if found is None:
-                return ExcCodes.ILLEGAL_ADDRESS
-            touched[found[0].name] = found[0]
-        if values is None:
-            for entry in touched.values():
-                high, low = to_words(self._value(entry.name), entry.scale)
-                index = entry.address - start
-                registers[index : index + 2] = [high, low]
-            return None
+        for i in range(len(values)):
+            entry, _ = self._entry("holding", address + i)
+            touched[entry.name] = entry
         changes = []
-        for entry in touched.values():
+        for entry in touched.values():  # a pair written in part keeps its other word
             words = list(to_words(self._value(entry.name), entry.scale))
             for i in range(2):
                 written = entry.address + i - address
                 if 0 <= written < len(values):
                     words[i] = int(values[written])
-            value = from_words(words[0], words[1], entry.scale, entry.type)
-            changes.append((entry.name, self.device.check(entry.name, value)))
-        for name, value in changes:
-            self.device.set(name, value)
-        return None
+            changes.append((entry.name, self._check(entry.name, from_words(*words, entry.scale, entry.type))))
+        self._set(changes)
+
+    def _entry(self, table: str, address: int) -> Any:
+        found = self.map.find(table, address)
+        if found is None:
+            raise Refused(ILLEGAL_ADDRESS)
+        return found
+
+    def _check(self, name: str, value: Any) -> Any:
+        try:
+            return self.device.check(name, value)
+        except (BadValue, ReadOnlyName, ValueError):
+            raise Refused(ILLEGAL_VALUE) from None
+
+    def _set(self, changes: list[tuple[str, Any]]) -> None:
+        """Every value checked first, then all set: a refused one leaves the others unwritten."""
+        try:
+            for name, value in changes:
+                self.device.set(name, value)
+        except (BadValue, ReadOnlyName, ValueError):
+            raise Refused(ILLEGAL_VALUE) from None
 
     def _value(self, name: str) -> Any:
         point = self.device.points.find(name)
@@ -126,27 +112,89 @@ class ModbusFacade:
         return 0 if value is None else value
 
 
+class _TcpSession(asyncio.Protocol):
+    """One Modbus TCP connection (Messaging on TCP/IP §4.4.2): every request of a segment is
+    answered, in order; a header that is not Modbus's closes the connection."""
+
+    def __init__(self, facade: ModbusFacade, sessions: set[_TcpSession]) -> None:
+        self.facade = facade
+        self.sessions = sessions
+        self.buffer = b""
+        self.transport: asyncio.Transport | None = None
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        assert isinstance(transport, asyncio.Transport)
+        self.transport = transport
+        self.sessions.add(self)
+
+    def data_received(self, data: bytes) -> None:
+        self.buffer += data
+        while len(self.buffer) >= MBAP.size and self.transport is not None:
+            transaction, protocol, length, unit = MBAP.unpack_from(self.buffer)
+            if protocol != 0 or not 2 <= length <= MAX_PDU + 1:
+                # §4.4.2.2: a protocol identifier other than 0 is not a Modbus indication; past it
+                # the stream cannot be framed any more: the connection is closed.
+                self.transport.close()
+                self.transport = None
+                return
+            if len(self.buffer) < 6 + length:
+                return
+            pdu, self.buffer = self.buffer[MBAP.size:6 + length], self.buffer[6 + length:]
+            response = self.answer(unit, pdu)
+            self.transport.write(MBAP.pack(transaction, 0, len(response) + 1, unit) + response)
+
+    def answer(self, unit: int, pdu: bytes) -> bytes:
+        """The device answers its own unit id, 0xFF and 0 (§4.4.1.2); to any other unit id, as a
+        gateway with nothing behind it, exception 0B."""
+        if unit in DIRECT_UNITS or unit == self.facade.unit:
+            return self.facade.answer(pdu)
+        return modbus_pdu.exception(pdu[0], GATEWAY_NO_RESPONSE)
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        self.transport = None
+        self.sessions.discard(self)
+
+    def close(self) -> None:
+        if self.transport is not None:
+            self.transport.close()
+
+
+class ModbusTcpServer:
+    """The facade's Modbus TCP server: listens on a socket; :meth:`shutdown` closes it and the
+    connections it serves."""
+
+    def __init__(self, server: asyncio.Server, sessions: set[_TcpSession]) -> None:
+        self.server = server
+        self.sessions = sessions
+
+    @property
+    def port(self) -> int:
+        return int(self.server.sockets[0].getsockname()[1])
+
+    async def shutdown(self) -> None:
+        self.server.close()
+        for session in list(self.sessions):  # (Python 3.12's wait_closed waits for every client)
+            session.close()
+        await self.server.wait_closed()
+
+
 async def serve_tcp(facade: ModbusFacade, host: str = "127.0.0.1", port: int = 502) -> tuple[ModbusTcpServer, int]:
     """Modbus TCP on ``host:port`` (loopback unless the user names a host); returns the server
     and the port it listens on (``port`` 0: one the system chose)."""
-    library_log.limit("pymodbus", "modbus")
-    server = ModbusTcpServer(facade.sim_device(), address=(host, port))
-    await server.serve_forever(background=True)
-    sockets = getattr(server.transport, "sockets", None) or []
-    bound = sockets[0].getsockname()[1] if sockets else port
-    return server, int(bound)
+    loop = asyncio.get_running_loop()
+    sessions: set[_TcpSession] = set()
+    server = ModbusTcpServer(await loop.create_server(lambda: _TcpSession(facade, sessions), host, port), sessions)
+    return server, server.port
 
 
 class ModbusRtuEndpoint:
-    """Modbus RTU as the target of a devsim line (a pty, raw TCP, RFC 2217): pymodbus's RTU framer
-    finds the frames, the device's ``SimDevice`` answers; other unit ids get silence, unit 0 (a
-    broadcast) is carried out without an answer."""
+    """Modbus RTU as the target of a devsim line (a pty, raw TCP, RFC 2217): frames are cut by
+    structure (the function table's lengths, checked by the CRC), the device answers its unit id;
+    other unit ids get silence, unit 0 (a broadcast) is carried out without an answer (Modbus over
+    Serial Line V1.02 §2.2)."""
 
     def __init__(self, facade: ModbusFacade, settings: SerialSettings | None = None) -> None:
-        library_log.limit("pymodbus", "modbus")
         self.facade = facade
-        self.core = SimCore(facade.sim_device())
-        self.framer = FramerRTU(DecodePDU(is_server=True))
         self._buffer = b""
         self._write: Callable[[bytes], None] | None = None
         self._settings = settings or SerialSettings(19200, 8, "E", 1)
@@ -165,42 +213,72 @@ class ModbusRtuEndpoint:
         self._buffer += data
         while len(self._buffer) >= 4:
             size = self._frame_size(self._buffer)
-            if size is None:
-                self._buffer = self._buffer[1:]  # not the start of a frame: resynchronise
+            if size is None or (0 < size <= len(self._buffer) and not _crc_ok(self._buffer[:size])):
+                self._buffer = self._buffer[1:]  # not a frame start (garbage, or misread): resynchronise
                 continue
             if size == 0 or len(self._buffer) < size:
-                break  # wait for the rest
-            try:
-                _, pdu = self.framer.handleFrame(self._buffer[:size], 0, 0)
-            except Exception:  # noqa: BLE001 - a frame pymodbus cannot decode
-                pdu = None
-            if pdu is None:  # a bad CRC: garbage, or a frame start we misread
-                self._buffer = self._buffer[1:]
+                later = self._next_frame(self._buffer)
+                if later is None:
+                    break  # wait for the rest
+                self._buffer = self._buffer[later:]  # a frame cut short: a whole one follows it
                 continue
-            self._buffer = self._buffer[size:]
-            if pdu.dev_id in (self.facade.unit, 0):
-                asyncio.get_running_loop().create_task(self._answer(pdu))
+            frame, self._buffer = self._buffer[:size], self._buffer[size:]
+            self._serve(frame[0], frame[1:-2])
         if len(self._buffer) > 512:
             self._buffer = self._buffer[-256:]
 
-    def _frame_size(self, data: bytes) -> int | None:
-        """How long the frame starting at ``data`` is (0: not known yet), or None if no request
-        starts here.  pymodbus's own RTU decoder takes everything after a frame, as a line's
-        silence would; frames back to back on a pty must be cut here."""
-        pdu_class = self.framer.decoder.lookupPduClass(data)
-        if pdu_class is None:
-            return None
-        return int(pdu_class.calculateRtuFrameSize(data) or 0)
-
-    async def _answer(self, pdu: Any) -> None:
-        try:
-            response = await pdu.datastore_update(self.core, self.facade.unit)
-        except Exception:  # noqa: BLE001
-            response = ExceptionResponse(pdu.function_code, ExcCodes.DEVICE_FAILURE)
-        if pdu.dev_id == 0 or response is None or self._write is None:
+    def _serve(self, unit: int, pdu: bytes) -> None:
+        if unit not in (self.facade.unit, 0):
             return
-        response.dev_id, response.transaction_id = pdu.dev_id, pdu.transaction_id
-        self._write(self.framer.buildFrame(response))
+        response = self.facade.answer(pdu)
+        if unit != 0 and self._write is not None:
+            self._write(_with_crc(bytes((unit,)) + response))
+
+    @staticmethod
+    def _frame_size(data: bytes) -> int | None:
+        """How long the frame starting at ``data`` is (0: not known yet), or None if no request
+        starts here.  A function the table knows gives its length; for any other code the frame
+        ends where its CRC first holds (it is answered with exception 01)."""
+        function = modbus_pdu.FUNCTIONS.get(data[1])
+        if function is not None:
+            return function.rtu_length(data)
+        size = _crc_end(data[:MAX_PDU + 3])
+        if size is None:
+            return 0 if len(data) < MAX_PDU + 3 else None
+        return size
+
+    @staticmethod
+    def _next_frame(data: bytes) -> int | None:
+        """Where, after the first byte, a whole request of a known function with a good CRC starts:
+        the frame at the start was cut short (noise, a host that gave up), and waiting for its
+        rest would keep the next requests waiting too."""
+        for start in range(1, len(data) - 3):
+            function = modbus_pdu.FUNCTIONS.get(data[start + 1])
+            if function is None:
+                continue
+            size = function.rtu_length(data[start:])
+            if size and start + size <= len(data) and _crc_ok(data[start:start + size]):
+                return start
+        return None
+
+
+def _crc_ok(frame: bytes) -> bool:
+    return FramerRTU.compute_CRC(frame[:-2]) == int.from_bytes(frame[-2:], "big")
+
+
+def _with_crc(frame: bytes) -> bytes:
+    return frame + FramerRTU.compute_CRC(frame).to_bytes(2, "big")
+
+
+def _crc_end(data: bytes) -> int | None:
+    """The shortest frame (4 bytes or more) at the start of ``data`` whose CRC holds, in one pass
+    (Modbus over Serial Line V1.02 §6.2.2: CRC-16, low byte first; pymodbus's table)."""
+    crc = 0xFFFF
+    for end in range(len(data) - 2):
+        crc = (crc >> 8) ^ FramerRTU.crc16_table[(crc ^ data[end]) & 0xFF]
+        if end >= 1 and data[end + 1] == crc & 0xFF and data[end + 2] == crc >> 8:
+            return end + 3
+    return None
 
 
 def line_settings(text: str) -> SerialSettings:
