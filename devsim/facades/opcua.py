@@ -8,7 +8,8 @@ variable per declared point, the properties ``Kind`` and ``FaultKinds``, and the
 ``Fault(kind: String, active: Boolean)`` and ``PowerCycle(wipe: Boolean)``.
 
 * **Reads** of a point variable read the device at that moment (``Device.read``).
-* **Writes** go through ``Device.set`` with its validation: a value of the wrong type is
+* **Writes** go through ``Device.set`` with its validation: a value of another type than the
+  variable's DataType (a Double variable takes only Double, an Int32 only Int32 ...) is
   ``Bad_TypeMismatch``, one the point refuses ``Bad_OutOfRange``, a read-only point
   ``Bad_NotWritable``; nothing changes then.  asyncua's own attribute service is replaced by
   :class:`PointAttributes`, which handles the point variables and hands every other node back.

@@ -9,7 +9,8 @@ holding one variable per declared point that can be read or set:
   ``motion.x``), and a flat list keeps one name for one thing.  NodeId ``s=DEVICE.POINT``, so a
   host can address a point without browsing (``ns=2;s=x.axis.position``);
 * **data type** from the point type (:data:`DATA_TYPES`): Boolean, Int32 (an int point whose
-  declared range fits) or Int64, Double, String; a ``json`` point is String holding JSON text;
+  declared range fits) or Int64, Double, String; a ``json`` point is String holding JSON text.
+  A client writes a variable with its own data type only (:func:`from_opcua`);
 * **AccessLevel** CurrentRead and/or CurrentWrite as declared (``r``, ``rw``, ``w``);
 * **Description** the point's doc (and manual section); an **EngineeringUnits** property
   (EUInformation, UNECE code where :data:`UNECE` knows the unit, else UnitId -1) where the point
@@ -159,22 +160,17 @@ def to_opcua(variable: Variable, value: Any) -> Any:
     return str(value)
 
 
-#: Which OPC UA variant types a client may write to a variable of each data type (numbers of
-#: another numeric type are taken; their value is checked by the point).
-_ACCEPTS = {
-    "Boolean": frozenset({"Boolean"}),
-    "Int32": frozenset({"SByte", "Byte", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64"}),
-    "Int64": frozenset({"SByte", "Byte", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64"}),
-    "Double": frozenset({"SByte", "Byte", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64", "Float",
-                         "Double"}),
-    "String": frozenset({"String"}),
-}
-
-
 def from_opcua(variable: Variable, variant_type: str, value: Any) -> Any:
     """A value a client wrote (its variant type's name and value) as the point's value, for
-    :meth:`devsim.core.device.Device.check`; :class:`TypeMismatch` if its type does not fit."""
-    if variant_type not in _ACCEPTS[variable.data_type] or isinstance(value, list | tuple):
+    :meth:`devsim.core.device.Device.check`; :class:`TypeMismatch` unless it is a scalar of the
+    variable's own data type.
+
+    One type policy for every point (OPC UA Part 4, 5.10.4.1: Bad_TypeMismatch when the written
+    value's data type is not the variable's DataType or a subtype; the built-in types Boolean,
+    Int32, Int64, Double and String have none a client can send): a Double variable takes only
+    Double, Int32 only Int32, Int64 only Int64, Boolean only Boolean, String only String.  No
+    number is converted to another type, so a value is never rounded or widened on its way in."""
+    if variant_type != variable.data_type or isinstance(value, list | tuple):
         raise TypeMismatch(f"{variable.point} takes {variable.data_type}, not {variant_type}")
     if variable.type == "json":
         try:

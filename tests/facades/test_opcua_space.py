@@ -66,7 +66,13 @@ def test_units_get_their_unece_code_or_minus_one() -> None:
 def test_values_to_and_from_opcua() -> None:
     number = Variable("q", "x.q", "Double", True, True, "float", "", "")
     assert to_opcua(number, 3) == 3.0 and to_opcua(number, None) is None
-    assert from_opcua(number, "Int32", 5) == 5  # another numeric type is taken; the point checks its value
+    assert from_opcua(number, "Double", 5.5) == 5.5
+    for other in ("Int32", "Int64", "Float", "Boolean", "Byte"):  # no other numeric type: Part 4, 5.10.4.1
+        with pytest.raises(TypeMismatch):
+            from_opcua(number, other, 5)
+    count = Variable("n", "x.n", "Int32", True, True, "int", "", "")
+    with pytest.raises(TypeMismatch):
+        from_opcua(count, "Int64", 5)
     with pytest.raises(TypeMismatch):
         from_opcua(number, "String", "5")
     with pytest.raises(TypeMismatch):

@@ -3,11 +3,13 @@
 //   {"op": "browse", "node": "x"}                       browse names of the node's children
 //   {"op": "read", "node": "x.axis.position"}           value, data type name, status
 //   {"op": "write", "node": "x.param.V", "type": "Double", "value": 12.5}   status
+//   {"op": "writes", "items": [["x.param.V", "Int32", 3], ...]}   one Write request, a status per item
 //   {"op": "call", "object": "x", "method": "x#Fault", "args": [["String", "power"], ["Boolean", true]]}
+// A step may name a node id in full ("nodeId": "ns=0;i=2253") instead of a devsim "node".
 // String node ids are in the namespace urn:devsim.  Prints one line "RESULT {json}" (node-opcua
 // writes its own warnings to stdout too).
 "use strict";
-const { OPCUAClient, AttributeIds, DataType } = require("node-opcua-client");
+const { OPCUAClient, AttributeIds, DataType, VariantArrayType } = require("node-opcua-client");
 
 function plain(value, dataType) {
     if ((dataType === DataType.Int64 || dataType === DataType.UInt64) && Array.isArray(value)) {
@@ -16,8 +18,21 @@ function plain(value, dataType) {
     return value;
 }
 
+function wire(dataType, value) {
+    if ((dataType === DataType.Int64 || dataType === DataType.UInt64) && typeof value === "number") {
+        return [Math.floor(value / 4294967296), value >>> 0];  // node-opcua's [high, low] words
+    }
+    return value;
+}
+
+function variant(type, value) {
+    const dataType = DataType[type];
+    return { dataType, arrayType: VariantArrayType.Scalar, value: wire(dataType, value) };
+}
+
 async function step(session, ns, s) {
-    const id = (name) => `ns=${ns};s=${name}`;
+    const devsim = (name) => `ns=${ns};s=${name}`;
+    const id = (name) => (name === undefined ? s.nodeId : devsim(name));
     if (s.op === "browse") {
         const result = await session.browse(id(s.node));
         return { status: result.statusCode.name, names: result.references.map((r) => r.browseName.name) };
@@ -30,16 +45,23 @@ async function step(session, ns, s) {
     if (s.op === "write") {
         const status = await session.write({
             nodeId: id(s.node), attributeId: AttributeIds.Value,
-            value: { value: { dataType: DataType[s.type], value: s.value } },
+            value: { value: variant(s.type, s.value) },
         });
         return { status: status.name };
     }
+    if (s.op === "writes") {
+        const statuses = await session.write(s.items.map(([node, type, value]) => ({
+            nodeId: devsim(node), attributeId: AttributeIds.Value, value: { value: variant(type, value) },
+        })));
+        return { statuses: statuses.map((status) => status.name) };
+    }
     if (s.op === "call") {
         const result = await session.call({
-            objectId: id(s.object), methodId: id(s.method),
-            inputArguments: s.args.map(([type, value]) => ({ dataType: DataType[type], value })),
+            objectId: devsim(s.object), methodId: devsim(s.method),
+            inputArguments: s.args.map(([type, value]) => variant(type, value)),
         });
-        return { status: result.statusCode.name };
+        return { status: result.statusCode.name,
+                 inputs: (result.inputArgumentResults || []).map((status) => status.name) };
     }
     throw new Error(`unknown step ${s.op}`);
 }
