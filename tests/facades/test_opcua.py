@@ -214,9 +214,11 @@ async def test_every_point_of_every_kind_reads_back_as_the_device_gives_it(
             nodes = [client.get_node(ua.NodeId(row.node_id, ns)) for row in rows]
             types = await client.read_attributes(nodes, ua.AttributeIds.DataType)
             access = await client.read_attributes(nodes, ua.AttributeIds.AccessLevel)
-            for row, data_type, level in zip(rows, types, access, strict=True):
+            user_access = await client.read_attributes(nodes, ua.AttributeIds.UserAccessLevel)
+            for row, data_type, level, user_level in zip(rows, types, access, user_access, strict=True):
                 assert data_type.Value.Value == ua.NodeId(ua.VariantType[row.data_type].value), (kind, row.point)
-                assert level.Value.Value == row.readable * 1 | row.writable * 2, (kind, row.point)
+                assert level.Value.Value == user_level.Value.Value == row.readable * 1 | row.writable * 2, (
+                    kind, row.point)
             # every settable point written with the value it has: taken, or refused exactly where
             # the control API refuses that value too
             again = [(row, value) for row, value in zip(readable, expected, strict=True)

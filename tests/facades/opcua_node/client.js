@@ -3,13 +3,15 @@
 //   {"op": "browse", "node": "x"}                       browse names of the node's children
 //   {"op": "read", "node": "x.axis.position"}           value, data type name, status
 //   {"op": "write", "node": "x.param.V", "type": "Double", "value": 12.5}   status
+//     both may name an "attribute" (AccessLevel, DisplayName ...; default Value); a write may
+//     add an "indexRange" ("0") and a "statusCode" (a StatusCodes name) to the value written
 //   {"op": "writes", "items": [["x.param.V", "Int32", 3], ...]}   one Write request, a status per item
 //   {"op": "call", "object": "x", "method": "x#Fault", "args": [["String", "power"], ["Boolean", true]]}
 // A step may name a node id in full ("nodeId": "ns=0;i=2253") instead of a devsim "node".
 // String node ids are in the namespace urn:devsim.  Prints one line "RESULT {json}" (node-opcua
 // writes its own warnings to stdout too).
 "use strict";
-const { OPCUAClient, AttributeIds, DataType, VariantArrayType } = require("node-opcua-client");
+const { OPCUAClient, AttributeIds, DataType, StatusCodes, VariantArrayType } = require("node-opcua-client");
 
 function plain(value, dataType) {
     if ((dataType === DataType.Int64 || dataType === DataType.UInt64) && Array.isArray(value)) {
@@ -38,14 +40,17 @@ async function step(session, ns, s) {
         return { status: result.statusCode.name, names: result.references.map((r) => r.browseName.name) };
     }
     if (s.op === "read") {
-        const dv = await session.read({ nodeId: id(s.node), attributeId: AttributeIds.Value });
+        const dv = await session.read({ nodeId: id(s.node), attributeId: AttributeIds[s.attribute || "Value"] });
         const type = dv.value.dataType;
         return { status: dv.statusCode.name, type: DataType[type], value: plain(dv.value.value, type) };
     }
     if (s.op === "write") {
+        const value = { value: variant(s.type, s.value) };
+        if (s.statusCode) {
+            value.statusCode = StatusCodes[s.statusCode];
+        }
         const status = await session.write({
-            nodeId: id(s.node), attributeId: AttributeIds.Value,
-            value: { value: variant(s.type, s.value) },
+            nodeId: id(s.node), attributeId: AttributeIds[s.attribute || "Value"], indexRange: s.indexRange, value,
         });
         return { status: status.name };
     }
