@@ -10,10 +10,16 @@ kind, written with every other built-in type, answers Bad_TypeMismatch and the d
 value; written with its own type (a value next to the one it has), it answers Good and the device
 has the new value, or Bad_OutOfRange exactly where the control API refuses that value too.  The
 device is read through the control API's socket (what ``devsim ctl read`` uses), not through OPC UA.
+
+Values of the right type outside what a point declares (below its minimum, above its maximum, not
+one of its choices; NaN and infinity for every Double) are Bad_OutOfRange (Part 4, Table 61:
+"the value was out of range"), and the device keeps its value.
 """
 
 from __future__ import annotations
 
+import json
+import math
 from collections.abc import Iterator
 from typing import Any, NamedTuple
 
@@ -103,6 +109,36 @@ def own_type_writes(served: Served) -> list[Write]:
     return writes
 
 
+_LIMITS = {"Int32": 2**31 - 1, "Int64": 2**63 - 1, "Double": math.inf}
+
+
+def out_of_range(runtime: Runtime) -> list[Write]:
+    """Every writable variable with a declared range or choices, written just outside them;
+    every writable Double with NaN and infinity."""
+    writes = []
+    for kind in sorted(kinds()):
+        rows, points = _points(runtime, kind)
+        for row in rows:
+            point = points[row.point]
+            if not row.writable or row.type in ("bool", "json"):
+                continue
+            outside: list[Any] = []
+            if point.choices and row.data_type == "String":
+                outside.append("|".join(map(str, point.choices)))  # none of them
+            elif point.choices:
+                outside.append(max(point.choices) + 1)
+            step = 1.0 if row.data_type == "Double" else 1
+            if point.minimum is not None:
+                outside.append(type(step)(point.minimum) - step)
+            if point.maximum is not None:
+                outside.append(type(step)(point.maximum) + step)
+            if row.data_type == "Double":
+                outside += [math.nan, math.inf, -math.inf]
+            writes += [Write(kind, row, row.data_type, value) for value in outside
+                       if isinstance(value, str) or abs(value) <= _LIMITS[row.data_type]]
+    return writes
+
+
 def device_values(control: ControlClient, writes: list[Write]) -> dict[str, Any]:
     """What the devices give for the readable variables written (or the error they answer)."""
     values: dict[str, Any] = {}
@@ -176,6 +212,32 @@ def test_node_opcua_every_other_type_is_a_type_mismatch_and_changes_nothing(serv
         {"op": "writes", "items": [[w.row.node_id, w.vtype, w.value] for w in writes]}])
     wrong = [(w.kind, w.row.point, w.vtype, status) for w, status in zip(writes, result["statuses"], strict=True)
              if status != "BadTypeMismatch"]
+    assert wrong == []
+    assert device_values(served.control, writes) == before
+
+
+async def test_asyncua_a_value_outside_the_declared_range_is_out_of_range(served: Served) -> None:
+    writes = out_of_range(served.runtime)
+    assert {write.row.data_type for write in writes} == {"Int32", "Int64", "Double", "String"}
+    before = device_values(served.control, writes)
+    async with Client(served.facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        nodes = [client.get_node(node_id) for node_id in _node_ids(ns, writes)]
+        statuses = await client.write_values(nodes, _data_values(writes), raise_on_partial_error=False)
+    wrong = [(w.kind, w.row.point, w.value, s.name) for w, s in zip(writes, statuses, strict=True)
+             if s.value != ua.StatusCodes.BadOutOfRange]
+    assert wrong == []
+    assert device_values(served.control, writes) == before
+
+
+def test_node_opcua_a_value_outside_the_declared_range_is_out_of_range(served: Served) -> None:
+    writes = out_of_range(served.runtime)
+    before = device_values(served.control, writes)
+    items = [[w.row.node_id, w.vtype, w.value if isinstance(w.value, str) or math.isfinite(w.value)
+              else json.dumps(w.value)] for w in writes]  # "NaN", "Infinity": JSON has no such number
+    [result] = node_client(served.facade.url, [{"op": "writes", "items": items}])
+    wrong = [(w.kind, w.row.point, w.value, status) for w, status in zip(writes, result["statuses"], strict=True)
+             if status != "BadOutOfRange"]
     assert wrong == []
     assert device_values(served.control, writes) == before
 

@@ -21,6 +21,9 @@ function plain(value, dataType) {
 }
 
 function wire(dataType, value) {
+    if ((dataType === DataType.Double || dataType === DataType.Float) && typeof value === "string") {
+        return Number(value);  // "NaN", "Infinity", "-Infinity": numbers JSON cannot carry
+    }
     if ((dataType === DataType.Int64 || dataType === DataType.UInt64) && typeof value === "number") {
         return [Math.floor(value / 4294967296), value >>> 0];  // node-opcua's [high, low] words
     }
