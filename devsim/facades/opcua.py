@@ -42,7 +42,7 @@ from asyncua.server.event_generator import EventGenerator
 from devsim.core.device import Device
 from devsim.core.points import BadValue, ReadOnlyName, UnknownName
 from devsim.core.watch import PointWatch
-from devsim.facades.opcua_services import DeviceMethods, PointAttributes, call_result
+from devsim.facades.opcua_services import DeviceMethods, NodeView, PointAttributes, call_result
 from devsim.facades.opcua_space import (
     DEFAULT_ENDPOINT,
     NAMESPACE,
@@ -253,6 +253,7 @@ class OpcuaFacade:
         iserver.attribute_service = PointAttributes(iserver.aspace, self.bound)
         iserver.method_service.stop()
         iserver.method_service = DeviceMethods(iserver.aspace)
+        iserver.view_service = NodeView(iserver.aspace)
         event_type = await server.create_custom_event_type(
             self.namespace, "DeviceFaultEventType", ua.ObjectIds.BaseEventType,
             [("FaultKind", ua.VariantType.String), ("Active", ua.VariantType.Boolean),
@@ -285,8 +286,11 @@ class OpcuaFacade:
         self.nodes[device.name] = node
         await obj.add_property(ua.NodeId(f"{device.name}#Kind", ns), ua.QualifiedName("Kind", ns),
                                device.kind, ua.VariantType.String)
-        await obj.add_property(ua.NodeId(f"{device.name}#FaultKinds", ns), ua.QualifiedName("FaultKinds", ns),
-                               device.faults.names(), ua.VariantType.String)
+        fault_kinds = await obj.add_property(ua.NodeId(f"{device.name}#FaultKinds", ns),
+                                             ua.QualifiedName("FaultKinds", ns), device.faults.names(),
+                                             ua.VariantType.String)
+        await fault_kinds.write_value_rank(ua.ValueRank.OneDimension)  # an array of names (Part 3, 5.6.2)
+        await fault_kinds.write_array_dimensions([0])  # of any length
         await obj.add_method(ua.NodeId(f"{device.name}#Fault", ns), ua.QualifiedName("Fault", ns), node.fault_method,
                              [_argument("kind", ua.VariantType.String, "a declared fault (FaultKinds)"),
                               _argument("active", ua.VariantType.Boolean, "on (true) or off")], [])

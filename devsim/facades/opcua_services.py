@@ -3,7 +3,12 @@ asyncua's services, with the point variables read from and written to their devi
 status codes Part 4 gives where asyncua answers otherwise.
 
 * :class:`PointAttributes` (Part 4, 5.10.2 Read, 5.10.4 Write).  A point variable's Value is
-  read from and written to its device (:class:`PointNode`).  A write of any node by a client
+  read from and written to its device (:class:`PointNode`).  A read of any Value honours the
+  request's ``timestampsToReturn`` (Source, Server, Both, Neither) and ``indexRange`` (7.27: a
+  substring of a String, a slice of an array; ``Bad_IndexRangeInvalid`` for a range of invalid
+  syntax, ``Bad_IndexRangeNoData`` for one that selects nothing, as on a scalar number), and a
+  request with a negative ``maxAge`` or an invalid ``timestampsToReturn`` is a service fault
+  (``Bad_MaxAgeInvalid``, ``Bad_TimestampsToReturnInvalid``).  asyncua ignores all three.  A write of any node by a client
   answers, in this order: ``Bad_NodeIdUnknown`` for a node the server does not have,
   ``Bad_AttributeIdInvalid`` for an attribute the node does not have, ``Bad_NotWritable`` when
   the node's AccessLevel (Value) or WriteMask (any other attribute) does not allow writing,
@@ -11,6 +16,8 @@ status codes Part 4 gives where asyncua answers otherwise.
   point's Value ``Bad_WriteNotSupported`` when an IndexRange or a status code is written with it
   (Table 61: the server does not support that combination).  asyncua answers
   ``Bad_UserAccessDenied`` for all of these.
+* :class:`NodeView` (Part 4, 5.8.2 Browse): ``Bad_NodeIdUnknown`` for a node the server does not
+  have (asyncua: ``Bad_NodeIdInvalid``, which Part 4 keeps for a NodeId of invalid syntax).
 * :class:`DeviceMethods` (Part 4, 5.11.2 Call, Tables 67 and 68): ``Bad_NodeIdUnknown`` for an
   object the server does not have, ``Bad_NodeIdInvalid`` for a node that is not an object,
   ``Bad_MethodInvalid`` for a method that is not a component of that object,
@@ -22,14 +29,17 @@ status codes Part 4 gives where asyncua answers otherwise.
 
 from __future__ import annotations
 
+import dataclasses
+import re
 from collections.abc import Mapping
+from datetime import UTC, datetime
 from typing import Any, Protocol
 
 from asyncua import ua
 from asyncua.crypto.permission_rules import User, UserRole
-from asyncua.server.address_space import AddressSpace, AttributeService, MethodService
+from asyncua.server.address_space import AddressSpace, AttributeService, MethodService, ViewService
 
-__all__ = ["DeviceMethods", "PointAttributes", "PointNode", "call_result"]
+__all__ = ["DeviceMethods", "NodeView", "PointAttributes", "PointNode", "call_result", "index_range", "shaped"]
 
 _BAD = ua.StatusCodes
 _ADMIN = User(role=UserRole.Admin)  # asyncua's default for a write from inside the server
@@ -59,11 +69,16 @@ class PointAttributes(AttributeService):
         self.points = points
 
     def read(self, params: ua.ReadParameters) -> list[ua.DataValue]:
+        if params.MaxAge < 0:
+            raise ua.UaStatusCodeError(_BAD.BadMaxAgeInvalid)
+        if params.TimestampsToReturn not in _TIMESTAMPS:
+            raise ua.UaStatusCodeError(_BAD.BadTimestampsToReturnInvalid)
         results = super().read(params)
         for index, item in enumerate(params.NodesToRead):
-            point = self.points.get(item.NodeId)
-            if point is not None and item.AttributeId == ua.AttributeIds.Value:
-                results[index] = point.read()
+            if item.AttributeId == ua.AttributeIds.Value:
+                point = self.points.get(item.NodeId)
+                value = point.read() if point is not None else results[index]
+                results[index] = shaped(value, params.TimestampsToReturn, item.IndexRange)
         return results
 
     async def write(self, params: ua.WriteParameters, user: User = _ADMIN) -> list[ua.StatusCode]:
@@ -109,6 +124,68 @@ class PointAttributes(AttributeService):
             if item.IndexRange or (value.StatusCode is not None and not value.StatusCode.is_good()):
                 return _BAD.BadWriteNotSupported
         return None
+
+
+_TIMESTAMPS = (ua.TimestampsToReturn.Source, ua.TimestampsToReturn.Server, ua.TimestampsToReturn.Both,
+               ua.TimestampsToReturn.Neither)
+_RANGE = re.compile(r"(\d+)(?::(\d+))?")
+
+
+def index_range(text: str) -> list[tuple[int, int]] | None:
+    """A NumericRange (Part 4, 7.27) as (first, last) per dimension; None: invalid syntax."""
+    dimensions = []
+    for part in text.split(","):
+        match = _RANGE.fullmatch(part)
+        if match is None:
+            return None
+        first = int(match[1])
+        last = first if match[2] is None else int(match[2])
+        if match[2] is not None and last <= first:  # "5:5" and "7:5" are invalid
+            return None
+        dimensions.append((first, last))
+    return dimensions
+
+
+def _range_of(variant: ua.Variant | None, text: str) -> ua.Variant | int:
+    """The part of a value an index range selects, or the status code why none."""
+    dimensions = index_range(text)
+    if dimensions is None:
+        return _BAD.BadIndexRangeInvalid
+    value = variant.Value if variant is not None else None
+    if variant is None or not isinstance(value, list | tuple | str | bytes) or len(dimensions) != 1 \
+            or dimensions[0][0] >= len(value):
+        return _BAD.BadIndexRangeNoData  # a scalar, another number of dimensions, past the end
+    first, last = dimensions[0]
+    return ua.Variant(value[first:last + 1], variant.VariantType, is_array=isinstance(value, list | tuple))
+
+
+def shaped(value: ua.DataValue, timestamps: ua.TimestampsToReturn, text: str | None) -> ua.DataValue:
+    """A Value read as the request asks: its ``indexRange`` part and the timestamps it wants
+    (a copy: asyncua's stored values are shared)."""
+    if value.StatusCode is not None and value.StatusCode.is_bad():
+        return value
+    if text:
+        part = _range_of(value.Value, text)
+        if isinstance(part, int):
+            return ua.DataValue(StatusCode=_status(part))
+        value = dataclasses.replace(value, Value=part)
+    source = value.SourceTimestamp if timestamps in (ua.TimestampsToReturn.Source, ua.TimestampsToReturn.Both) else None
+    server = None
+    if timestamps in (ua.TimestampsToReturn.Server, ua.TimestampsToReturn.Both):
+        server = value.ServerTimestamp or datetime.now(UTC)
+    return dataclasses.replace(value, SourceTimestamp=source, SourcePicoseconds=None if source is None else
+                               value.SourcePicoseconds, ServerTimestamp=server, ServerPicoseconds=None)
+
+
+class NodeView(ViewService):
+    """asyncua's view service, with Bad_NodeIdUnknown for a node it does not have."""
+
+    def _browse(self, desc: ua.BrowseDescription) -> ua.BrowseResult:
+        if desc.NodeId not in self._aspace:
+            result = ua.BrowseResult()
+            result.StatusCode = _status(_BAD.BadNodeIdUnknown)
+            return result
+        return super()._browse(desc)
 
 
 def call_result(status: int, arguments: list[int] | None = None) -> ua.CallMethodResult:

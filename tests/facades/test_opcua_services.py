@@ -154,6 +154,76 @@ async def test_access_levels_are_the_points_access(served: Served) -> None:
             assert next(results)["value"] == readable * 1 | writable * 2
 
 
+# -- Read: index ranges, timestamps, maxAge; Browse -----------------------------------------------
+LEVEL = "sers.dip.input_level"  # a String point (its choice's name)
+#: (node, index range) -> the status code, and the part of the value (Part 4, 7.27: first..last)
+RANGES = [
+    (LEVEL, "0:1", "Good", lambda text, kinds: text[0:2]),
+    (LEVEL, "1", "Good", lambda text, kinds: text[1:2]),
+    ("sers#FaultKinds", "1:2", "Good", lambda text, kinds: kinds[1:3]),
+    (TEMPERATURE, "0", "BadIndexRangeNoData", None),  # a scalar number has no elements
+    (LEVEL, "1000:1001", "BadIndexRangeNoData", None),  # past the end
+    ("sers#FaultKinds", "0,0", "BadIndexRangeNoData", None),  # one dimension, not two
+    (LEVEL, "7:5", "BadIndexRangeInvalid", None),  # first not below last: invalid syntax
+    (LEVEL, "0:x", "BadIndexRangeInvalid", None),
+]
+TIMESTAMPS = {"Source": (True, False), "Server": (False, True), "Both": (True, True), "Neither": (False, False)}
+
+
+def _expected_ranges(served: Served) -> list[tuple[str, Any]]:
+    text = served.runtime.read("sers", "dip.input_level")
+    kinds = served.runtime.call(lambda: served.runtime.device("sers").faults.names())
+    return [(status, part(text, kinds) if part else None) for *_, status, part in RANGES]
+
+
+async def test_asyncua_reads_honour_index_range_timestamps_and_max_age(served: Served) -> None:
+    async with Client(served.facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+
+        async def read(node: str, index_range: str | None = None, timestamps: str = "Both",
+                       max_age: float = 0) -> ua.DataValue:
+            [result] = await client.uaclient.read(ua.ReadParameters(
+                NodesToRead=[ua.ReadValueId(NodeId=ua.NodeId(node, ns), AttributeId=ua.AttributeIds.Value,
+                                            IndexRange=index_range)],
+                TimestampsToReturn=ua.TimestampsToReturn[timestamps], MaxAge=max_age))
+            return result
+
+        got = []
+        for node, index_range, *_ in RANGES:
+            result = await read(node, index_range)
+            got.append((result.StatusCode.name, result.Value.Value if result.StatusCode.is_good() else None))
+        assert got == _expected_ranges(served)
+        for node in (TEMPERATURE, "sers#Kind"):  # a point, a property
+            for timestamps, wanted in TIMESTAMPS.items():
+                result = await read(node, timestamps=timestamps)
+                assert (result.SourceTimestamp is not None, result.ServerTimestamp is not None) == wanted, (
+                    node, timestamps)
+        with pytest.raises(ua.uaerrors.BadMaxAgeInvalid):
+            await read(TEMPERATURE, max_age=-1)
+        with pytest.raises(ua.uaerrors.BadTimestampsToReturnInvalid):
+            await read(TEMPERATURE, timestamps="Invalid")
+        assert await client.get_node(ua.NodeId("sers#FaultKinds", ns)).read_value_rank() == ua.ValueRank.OneDimension
+        [browsed] = await client.uaclient.browse(ua.BrowseParameters(NodesToBrowse=[ua.BrowseDescription(
+            NodeId=ua.NodeId("sers.nope", ns), BrowseDirection=ua.BrowseDirection.Forward)]))
+        assert browsed.StatusCode.name == "BadNodeIdUnknown"
+
+
+def test_node_opcua_reads_honour_index_range_timestamps_and_max_age(served: Served) -> None:
+    plan: list[dict[str, Any]] = [{"op": "read", "node": node, "indexRange": index_range}
+                                  for node, index_range, *_ in RANGES]
+    plan += [{"op": "read", "node": TEMPERATURE}, {"op": "read", "node": "sers#Kind"},  # both timestamps
+             {"op": "read", "node": TEMPERATURE, "maxAge": -1},
+             {"op": "read", "node": "sers#FaultKinds", "attribute": "ValueRank"},
+             {"op": "browse", "node": "sers.nope"}]
+    results = node_client(served.facade.url, plan)
+    ranges, (point, prop, aged, rank, browsed) = results[:len(RANGES)], results[len(RANGES):]
+    assert [(r["status"], r["value"] if r["status"] == "Good" else None) for r in ranges] == _expected_ranges(served)
+    assert point["timestamps"] == prop["timestamps"] == [True, True]
+    assert aged == {"fault": "BadMaxAgeInvalid"}
+    assert rank["value"] == 1  # OneDimension
+    assert browsed["status"] == "BadNodeIdUnknown"
+
+
 # -- Call ------------------------------------------------------------------------------------------
 S, B, I32 = "String", "Boolean", "Int32"
 #: (object, method, arguments) -> (the call's status, the input arguments' statuses)

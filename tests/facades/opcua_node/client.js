@@ -3,8 +3,10 @@
 //   {"op": "browse", "node": "x"}                       browse names of the node's children
 //   {"op": "read", "node": "x.axis.position"}           value, data type name, status
 //   {"op": "write", "node": "x.param.V", "type": "Double", "value": 12.5}   status
-//     both may name an "attribute" (AccessLevel, DisplayName ...; default Value); a write may
-//     add an "indexRange" ("0") and a "statusCode" (a StatusCodes name) to the value written
+//     both may name an "attribute" (AccessLevel, DisplayName ...; default Value) and an
+//     "indexRange" ("0:2"); a read a "maxAge" (a refused request: {"fault": name}; node-opcua
+//     asks for both timestamps, "timestamps" says which came), a write a "statusCode" (a
+//     StatusCodes name) to write with the value
 //   {"op": "writes", "items": [["x.param.V", "Int32", 3], ...]}   one Write request, a status per item
 //   {"op": "call", "object": "x", "method": "x#Fault", "args": [["String", "power"], ["Boolean", true]]}
 // A step may name a node id in full ("nodeId": "ns=0;i=2253") instead of a devsim "node".
@@ -43,9 +45,23 @@ async function step(session, ns, s) {
         return { status: result.statusCode.name, names: result.references.map((r) => r.browseName.name) };
     }
     if (s.op === "read") {
-        const dv = await session.read({ nodeId: id(s.node), attributeId: AttributeIds[s.attribute || "Value"] });
+        let dv;
+        try {
+            dv = await session.read({
+                nodeId: id(s.node), attributeId: AttributeIds[s.attribute || "Value"], indexRange: s.indexRange,
+            }, s.maxAge);
+        } catch (err) {  // a service fault: the whole request refused
+            const header = err.response && err.response.responseHeader;
+            if (!header) {
+                throw err;
+            }
+            return { fault: header.serviceResult.name };
+        }
         const type = dv.value.dataType;
-        return { status: dv.statusCode.name, type: DataType[type], value: plain(dv.value.value, type) };
+        return {
+            status: dv.statusCode.name, type: DataType[type], value: plain(dv.value.value, type),
+            timestamps: [dv.sourceTimestamp !== null, dv.serverTimestamp !== null],
+        };
     }
     if (s.op === "write") {
         const value = { value: variant(s.type, s.value) };
