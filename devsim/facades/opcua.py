@@ -62,6 +62,7 @@ __all__ = ["DEFAULT_ENDPOINT", "OpcuaFacade", "endpoint_url", "start_opcua"]
 
 _BAD = ua.StatusCodes
 _READ, _WRITE = ua.AccessLevel.CurrentRead.mask, ua.AccessLevel.CurrentWrite.mask
+_NOT_READABLE = ua.DataValue(StatusCode=ua.StatusCode(_BAD.BadNotReadable))
 
 
 class _Bound:
@@ -81,7 +82,7 @@ class _Bound:
 
     def data_value(self, value: Any) -> ua.DataValue:
         converted = to_opcua(self.variable, value)
-        if converted is None:
+        if converted is None and self.vtype != ua.VariantType.String:  # a number with no value now
             return ua.DataValue(StatusCode=ua.StatusCode(_BAD.BadNoData))
         return ua.DataValue(ua.Variant(converted, self.vtype), SourceTimestamp=datetime.now(UTC))
 
@@ -307,6 +308,8 @@ class OpcuaFacade:
             node.bound[row.point] = self.bound[result.AddedNodeId] = bound
             if row.unit:
                 units.append(_unit_item(result.AddedNodeId, row.unit))
+            if not row.readable:  # a write-only point: monitored, it tells so (Part 4, 5.12.2)
+                await self.server.write_attribute_value(result.AddedNodeId, _NOT_READABLE)
         for result in await self.server.iserver.isession.add_nodes(units):
             result.StatusCode.check()
         # fault events, from the device object and from the Server object

@@ -146,11 +146,13 @@ def eu_information(unit: str) -> tuple[str, int, str, str]:
 
 
 def to_opcua(variable: Variable, value: Any) -> Any:
-    """A point's value as the variable's OPC UA value (None stays None: no value)."""
-    if value is None:
-        return None
+    """A point's value as the variable's OPC UA value.  A point with no value now (None: a
+    ``motion.kind`` at rest) is JSON ``null`` for a JSON point, a null String for a text point
+    (Part 6, 5.2.2.4) and None, no value, for the others."""
     if variable.type == "json":
         return json.dumps(value, separators=(",", ":"))
+    if value is None:
+        return None
     if variable.type == "bool":
         return bool(value)
     if variable.type == "int":

@@ -14,6 +14,7 @@ is not an object Bad_NodeIdInvalid.  Nothing refused changes the device.
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Iterator
 from typing import Any, NamedTuple
 
@@ -222,6 +223,57 @@ def test_node_opcua_reads_honour_index_range_timestamps_and_max_age(served: Serv
     assert aged == {"fault": "BadMaxAgeInvalid"}
     assert rank["value"] == 1  # OneDimension
     assert browsed["status"] == "BadNodeIdUnknown"
+
+
+# -- Subscriptions ---------------------------------------------------------------------------------
+def _monitored(served: Served) -> tuple[list[str], list[str]]:
+    """Every point variable of the SERS and the status its first data change has: Good for a
+    readable one (null text where the point has no value now), Bad_NotReadable for a write-only
+    one (Part 4, 5.12.2: the monitored item is created, and the Publish response says the value
+    cannot be read)."""
+    rows = variables("sers", served.runtime.device("sers").points)
+    wanted = []
+    for row in rows:
+        if not row.readable:
+            wanted.append("BadNotReadable")
+        elif served.runtime.read("sers", row.point) is None and row.data_type != "String":
+            wanted.append("BadNoData")  # a number with no value now
+        else:
+            wanted.append("Good")
+    return [row.node_id for row in rows], wanted
+
+
+class _FirstChanges:
+    """asyncua subscription handler: the status of each node's first data change."""
+
+    def __init__(self, count: int) -> None:
+        self.statuses: dict[str, str] = {}
+        self.count = count
+        self.done = asyncio.Event()
+
+    def datachange_notification(self, node: Any, value: Any, data: Any) -> None:
+        self.statuses.setdefault(node.nodeid.Identifier, data.monitored_item.Value.StatusCode.name)
+        if len(self.statuses) == self.count:
+            self.done.set()
+
+
+async def test_asyncua_a_write_only_point_is_monitored_as_not_readable(served: Served) -> None:
+    names, wanted = _monitored(served)
+    assert "BadNotReadable" in wanted and "Good" in wanted
+    changes = _FirstChanges(len(names))
+    async with Client(served.facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        subscription = await client.create_subscription(20, changes)
+        await subscription.subscribe_data_change([client.get_node(ua.NodeId(name, ns)) for name in names])
+        await asyncio.wait_for(changes.done.wait(), 10)
+        await subscription.delete()
+    assert [changes.statuses[name] for name in names] == wanted
+
+
+def test_node_opcua_a_write_only_point_is_monitored_as_not_readable(served: Served) -> None:
+    names, wanted = _monitored(served)
+    [result] = node_client(served.facade.url, [{"op": "monitor", "nodes": names}])
+    assert result["statuses"] == wanted
 
 
 # -- Call ------------------------------------------------------------------------------------------

@@ -82,6 +82,9 @@ def test_values_to_and_from_opcua() -> None:
         from_opcua(switch, "Int32", 1)
     blob = Variable("j", "x.j", "String", True, True, "json", "", "")
     assert to_opcua(blob, {"a": [1, 2]}) == '{"a":[1,2]}'
+    assert to_opcua(blob, None) == "null"  # the JSON point's value: null
+    text = Variable("t", "x.t", "String", True, False, "str", "", "")
+    assert to_opcua(text, None) is None and to_opcua(text, "idle") == "idle"  # a null String
     assert from_opcua(blob, "String", '{"a": [1, 2]}') == {"a": [1, 2]}
     with pytest.raises(TypeMismatch):
         from_opcua(blob, "String", "{not json")

@@ -8,12 +8,16 @@
 //     asks for both timestamps, "timestamps" says which came), a write a "statusCode" (a
 //     StatusCodes name) to write with the value
 //   {"op": "writes", "items": [["x.param.V", "Int32", 3], ...]}   one Write request, a status per item
+//   {"op": "monitor", "nodes": ["x.axis.position", ...]}   the status of each one's first notification
 //   {"op": "call", "object": "x", "method": "x#Fault", "args": [["String", "power"], ["Boolean", true]]}
 // A step may name a node id in full ("nodeId": "ns=0;i=2253") instead of a devsim "node".
 // String node ids are in the namespace urn:devsim.  Prints one line "RESULT {json}" (node-opcua
 // writes its own warnings to stdout too).
 "use strict";
-const { OPCUAClient, AttributeIds, DataType, StatusCodes, VariantArrayType } = require("node-opcua-client");
+const {
+    OPCUAClient, AttributeIds, ClientMonitoredItem, ClientSubscription, DataType, StatusCodes, TimestampsToReturn,
+    VariantArrayType,
+} = require("node-opcua-client");
 
 function plain(value, dataType) {
     if ((dataType === DataType.Int64 || dataType === DataType.UInt64) && Array.isArray(value)) {
@@ -78,6 +82,25 @@ async function step(session, ns, s) {
             nodeId: devsim(node), attributeId: AttributeIds.Value, value: { value: variant(type, value) },
         })));
         return { statuses: statuses.map((status) => status.name) };
+    }
+    if (s.op === "monitor") {
+        const subscription = ClientSubscription.create(session, {
+            requestedPublishingInterval: 20, requestedLifetimeCount: 100, requestedMaxKeepAliveCount: 10,
+            publishingEnabled: true,
+        });
+        const firsts = s.nodes.map((name) => new Promise((resolve, reject) => {
+            const item = ClientMonitoredItem.create(subscription, {
+                nodeId: devsim(name), attributeId: AttributeIds.Value,
+            }, { samplingInterval: 0, queueSize: 1, discardOldest: true }, TimestampsToReturn.Both);
+            const timer = setTimeout(() => reject(new Error(`no notification for ${name}`)), 10000);
+            item.once("changed", (dv) => {
+                clearTimeout(timer);
+                resolve(dv.statusCode.name);
+            });
+        }));
+        const statuses = await Promise.all(firsts);
+        await subscription.terminate();
+        return { statuses };
     }
     if (s.op === "call") {
         const result = await session.call({
