@@ -30,7 +30,7 @@ from typing import Any
 
 import msgspec
 
-from devsim.core.points import Point
+from devsim.core.points import BadValue, Point
 
 __all__ = [
     "DATA_TYPES",
@@ -171,12 +171,14 @@ def from_opcua(variable: Variable, variant_type: str, value: Any) -> Any:
     value's data type is not the variable's DataType or a subtype; the built-in types Boolean,
     Int32, Int64, Double and String have none a client can send): a Double variable takes only
     Double, Int32 only Int32, Int64 only Int64, Boolean only Boolean, String only String.  No
-    number is converted to another type, so a value is never rounded or widened on its way in."""
+    number is converted to another type, so a value is never rounded or widened on its way in.
+    A String that is not JSON text, for a JSON point, has the right type and a value the point
+    refuses: :class:`devsim.core.points.BadValue` (Bad_OutOfRange), as for any other point."""
     if variant_type != variable.data_type or isinstance(value, list | tuple):
         raise TypeMismatch(f"{variable.point} takes {variable.data_type}, not {variant_type}")
     if variable.type == "json":
         try:
             return json.loads(value)
         except (ValueError, RecursionError):
-            raise TypeMismatch(f"{variable.point} takes JSON text") from None
+            raise BadValue(f"{variable.point} takes JSON text") from None  # a String, not one it takes
     return value

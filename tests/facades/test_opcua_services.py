@@ -65,6 +65,7 @@ WRITES = [
     (TEMPERATURE, "EventNotifier", "Byte", 1, None, None, "BadAttributeIdInvalid"),  # not a Variable's
     ("sers", "Value", "Double", 1.0, None, None, "BadAttributeIdInvalid"),  # an Object has no Value
     (TEMPERATURE, "Value", "Double", 500.0, None, None, "BadOutOfRange"),  # above 200 °C
+    ("sers.program", "Value", "String", "{not json", None, None, "BadOutOfRange"),  # a String, not JSON text
     (TEMPERATURE, "Value", "Double", 40.0, "0", None, "BadWriteNotSupported"),  # a scalar: no IndexRange
     (TEMPERATURE, "Value", "Double", 40.0, None, "BadInternalError", "BadWriteNotSupported"),  # no status
 ]
@@ -87,18 +88,20 @@ def _write_value(ns: int, node: str, attribute: str, vtype: str, value: Any, ind
                          IndexRange=index_range)
 
 
-def _unchanged(served: Served, temperature: float) -> None:
+def _unchanged(served: Served, temperature: float, program: Any) -> None:
     assert served.runtime.read("sers", "quantity.heatsink_temperature") == temperature
+    assert served.runtime.read("sers", "program") == program
 
 
 async def test_asyncua_write_and_read_answer_with_part4_status_codes(served: Served) -> None:
     temperature = served.runtime.read("sers", "quantity.heatsink_temperature")
+    program = served.runtime.read("sers", "program")
     async with Client(served.facade.url) as client:
         ns = await client.get_namespace_index(NAMESPACE)
         statuses = await client.uaclient.write(ua.WriteParameters(NodesToWrite=[
             _write_value(ns, *row[:-1]) for row in WRITES]))
         assert [status.name for status in statuses] == [row[-1] for row in WRITES]
-        _unchanged(served, temperature)
+        _unchanged(served, temperature, program)
         node = client.get_node(ua.NodeId(TEMPERATURE, ns))
         assert (await node.read_display_name()).Text == "quantity.heatsink_temperature"
         assert await client.get_node(ua.NodeId("sers#Kind", ns)).read_value() == "sers"
@@ -113,6 +116,7 @@ async def test_asyncua_write_and_read_answer_with_part4_status_codes(served: Ser
 
 def test_node_opcua_write_and_read_answer_with_part4_status_codes(served: Served) -> None:
     temperature = served.runtime.read("sers", "quantity.heatsink_temperature")
+    program = served.runtime.read("sers", "program")
     plan: list[dict[str, Any]] = []
     for node, attribute, vtype, value, index_range, status, _ in WRITES:
         step = {"op": "write", "node": node, "attribute": attribute, "type": vtype, "value": value}
@@ -126,7 +130,7 @@ def test_node_opcua_write_and_read_answer_with_part4_status_codes(served: Served
     plan += [{"op": "read", "node": node, "attribute": attribute} for node, attribute, _ in READS]
     results = node_client(served.facade.url, plan)
     assert [result["status"] for result in results] == [row[-1] for row in WRITES] + [row[-1] for row in READS]
-    _unchanged(served, temperature)
+    _unchanged(served, temperature, program)
 
 
 async def test_access_levels_are_the_points_access(served: Served) -> None:

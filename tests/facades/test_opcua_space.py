@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from devsim.core.points import Point
+from devsim.core.points import BadValue, Point
 from devsim.core.registry import device_class, kinds
 from devsim.facades.opcua_space import (
     RESERVED,
@@ -86,5 +86,5 @@ def test_values_to_and_from_opcua() -> None:
     text = Variable("t", "x.t", "String", True, False, "str", "", "")
     assert to_opcua(text, None) is None and to_opcua(text, "idle") == "idle"  # a null String
     assert from_opcua(blob, "String", '{"a": [1, 2]}') == {"a": [1, 2]}
-    with pytest.raises(TypeMismatch):
+    with pytest.raises(BadValue):  # a String: the right type, a value the point refuses
         from_opcua(blob, "String", "{not json")
