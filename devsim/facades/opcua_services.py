@@ -29,7 +29,6 @@ status codes Part 4 gives where asyncua answers otherwise.
 
 from __future__ import annotations
 
-import dataclasses
 import re
 from collections.abc import Mapping
 from datetime import UTC, datetime
@@ -164,17 +163,19 @@ def shaped(value: ua.DataValue, timestamps: ua.TimestampsToReturn, text: str | N
     (a copy: asyncua's stored values are shared)."""
     if value.StatusCode is not None and value.StatusCode.is_bad():
         return value
+    variant = value.Value
     if text:
-        part = _range_of(value.Value, text)
+        part = _range_of(variant, text)
         if isinstance(part, int):
             return ua.DataValue(StatusCode=_status(part))
-        value = dataclasses.replace(value, Value=part)
+        variant = part
     source = value.SourceTimestamp if timestamps in (ua.TimestampsToReturn.Source, ua.TimestampsToReturn.Both) else None
     server = None
     if timestamps in (ua.TimestampsToReturn.Server, ua.TimestampsToReturn.Both):
         server = value.ServerTimestamp or datetime.now(UTC)
-    return dataclasses.replace(value, SourceTimestamp=source, SourcePicoseconds=None if source is None else
-                               value.SourcePicoseconds, ServerTimestamp=server, ServerPicoseconds=None)
+    return ua.DataValue(variant, StatusCode=value.StatusCode, SourceTimestamp=source,
+                        SourcePicoseconds=value.SourcePicoseconds if source is not None else None,
+                        ServerTimestamp=server)
 
 
 class NodeView(ViewService):
