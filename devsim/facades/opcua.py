@@ -82,7 +82,7 @@ class _Bound:
 
     def data_value(self, value: Any) -> ua.DataValue:
         converted = to_opcua(self.variable, value)
-        if converted is None and self.vtype != ua.VariantType.String:  # a number with no value now
+        if converted is None and self.vtype != ua.VariantType.String:  # a number or Boolean with no value
             return ua.DataValue(StatusCode=ua.StatusCode(_BAD.BadNoData))
         return ua.DataValue(ua.Variant(converted, self.vtype), SourceTimestamp=datetime.now(UTC))
 
