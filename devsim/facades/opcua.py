@@ -8,10 +8,13 @@ variable per declared point, the properties ``Kind`` and ``FaultKinds``, and the
 ``Fault(kind: String, active: Boolean)`` and ``PowerCycle(wipe: Boolean)``.
 
 * **Reads** of a point variable read the device at that moment (``Device.read``).
-* **Writes** go through ``Device.set`` with its validation: a value of the wrong type is
+* **Writes** go through ``Device.set`` with its validation: a value of another type than the
+  variable's DataType (a Double variable takes only Double, an Int32 only Int32 ...) is
   ``Bad_TypeMismatch``, one the point refuses ``Bad_OutOfRange``, a read-only point
-  ``Bad_NotWritable``; nothing changes then.  asyncua's own attribute service is replaced by
-  :class:`PointAttributes`, which handles the point variables and hands every other node back.
+  ``Bad_NotWritable``; nothing changes then.  asyncua's attribute and method services are
+  replaced by :class:`devsim.facades.opcua_services.PointAttributes` (the point variables, and
+  Part 4's status codes for what may not be written) and ``DeviceMethods`` (Part 4's checks of a
+  call's object and arguments).
 * **Subscriptions**: a :class:`devsim.core.watch.PointWatch` per device samples the points every
   ``period`` seconds of device time (virtual time in tests) and writes what changed into the
   address space, so data-change monitored items see it; a write from a client is sampled at once.
@@ -34,13 +37,12 @@ from typing import Any
 from urllib.parse import urlparse
 
 from asyncua import Server, ua
-from asyncua.crypto.permission_rules import User, UserRole
-from asyncua.server.address_space import AttributeService
 from asyncua.server.event_generator import EventGenerator
 
 from devsim.core.device import Device
 from devsim.core.points import BadValue, ReadOnlyName, UnknownName
 from devsim.core.watch import PointWatch
+from devsim.facades.opcua_services import DeviceMethods, NodeView, PointAttributes, call_result
 from devsim.facades.opcua_space import (
     DEFAULT_ENDPOINT,
     NAMESPACE,
@@ -56,11 +58,11 @@ from devsim.runtime import Runtime
 from devsim.runtime import requests as rq
 from devsim.runtime.ops import run
 
-__all__ = ["DEFAULT_ENDPOINT", "OpcuaFacade", "PointAttributes", "endpoint_url", "start_opcua"]
+__all__ = ["DEFAULT_ENDPOINT", "OpcuaFacade", "endpoint_url", "start_opcua"]
 
 _BAD = ua.StatusCodes
-_ADMIN = User(role=UserRole.Admin)  # asyncua's default for a write from inside the server
 _READ, _WRITE = ua.AccessLevel.CurrentRead.mask, ua.AccessLevel.CurrentWrite.mask
+_NOT_READABLE = ua.DataValue(StatusCode=ua.StatusCode(_BAD.BadNotReadable))
 
 
 class _Bound:
@@ -72,39 +74,17 @@ class _Bound:
         self.device, self.variable, self.node_id = device, variable, node_id
         self.vtype = ua.VariantType[variable.data_type]
 
+    def read(self) -> ua.DataValue:
+        return self.device.read(self)
+
+    def write(self, value: ua.DataValue) -> ua.StatusCode:
+        return self.device.write(self, value)
+
     def data_value(self, value: Any) -> ua.DataValue:
         converted = to_opcua(self.variable, value)
-        if converted is None:
+        if converted is None and self.vtype != ua.VariantType.String:  # a number or Boolean with no value
             return ua.DataValue(StatusCode=ua.StatusCode(_BAD.BadNoData))
         return ua.DataValue(ua.Variant(converted, self.vtype), SourceTimestamp=datetime.now(UTC))
-
-
-class PointAttributes(AttributeService):
-    """asyncua's attribute service, with the point variables' values read from and written to
-    their devices; every other node and attribute as asyncua handles it."""
-
-    def __init__(self, aspace: Any, facade: OpcuaFacade) -> None:
-        super().__init__(aspace)
-        self.facade = facade
-
-    def read(self, params: ua.ReadParameters) -> list[ua.DataValue]:
-        results = super().read(params)
-        for index, item in enumerate(params.NodesToRead):
-            bound = self.facade.bound.get(item.NodeId)
-            if bound is not None and item.AttributeId == ua.AttributeIds.Value:
-                results[index] = bound.device.read(bound)
-        return results
-
-    async def write(self, params: ua.WriteParameters, user: User = _ADMIN) -> list[ua.StatusCode]:
-        results: list[ua.StatusCode] = []
-        for item in params.NodesToWrite:
-            bound = self.facade.bound.get(item.NodeId)
-            if bound is not None and item.AttributeId == ua.AttributeIds.Value:
-                results.append(bound.device.write(bound, item.Value))
-            else:
-                single = ua.WriteParameters(NodesToWrite=[item])
-                results.extend(await super().write(single, user))
-        return results
 
 
 class _DeviceNode:
@@ -197,18 +177,15 @@ class _DeviceNode:
                     await server.write_attribute_value(bound.node_id, bound.data_value(value))
 
     # -- faults and power ---------------------------------------------------------------------
+    # (DeviceMethods has checked the object, the number and the types of the arguments)
     async def fault_method(self, parent: ua.NodeId, kind: ua.Variant, active: ua.Variant) -> Any:
-        if kind.VariantType != ua.VariantType.String or active.VariantType != ua.VariantType.Boolean:
-            return ua.StatusCode(_BAD.BadTypeMismatch)
         try:
             run(self.facade.runtime, rq.SwitchFault(self.device.name, kind.Value, active.Value))
-        except (UnknownName, ValueError):
-            return ua.StatusCode(_BAD.BadInvalidArgument)
+        except (UnknownName, ValueError):  # not one of FaultKinds: out of range (Part 4, Table 68)
+            return call_result(_BAD.BadInvalidArgument, [_BAD.BadOutOfRange, _BAD.Good])
         return []
 
     async def power_cycle_method(self, parent: ua.NodeId, wipe: ua.Variant) -> Any:
-        if wipe.VariantType != ua.VariantType.Boolean:
-            return ua.StatusCode(_BAD.BadTypeMismatch)
         run(self.facade.runtime, rq.PowerCycle(self.device.name, bool(wipe.Value)))
         self.sample_soon()
         return []
@@ -273,7 +250,11 @@ class OpcuaFacade:
         server.set_security_policy([ua.SecurityPolicyType.NoSecurity])  # a lab's simulator: no certificates
         server.set_identity_tokens([ua.AnonymousIdentityToken])  # and no user names
         self.namespace = await server.register_namespace(NAMESPACE)
-        server.iserver.attribute_service = PointAttributes(server.iserver.aspace, self)
+        iserver = server.iserver
+        iserver.attribute_service = PointAttributes(iserver.aspace, self.bound)
+        iserver.method_service.stop()
+        iserver.method_service = DeviceMethods(iserver.aspace)
+        iserver.view_service = NodeView(iserver.aspace)
         event_type = await server.create_custom_event_type(
             self.namespace, "DeviceFaultEventType", ua.ObjectIds.BaseEventType,
             [("FaultKind", ua.VariantType.String), ("Active", ua.VariantType.Boolean),
@@ -306,8 +287,11 @@ class OpcuaFacade:
         self.nodes[device.name] = node
         await obj.add_property(ua.NodeId(f"{device.name}#Kind", ns), ua.QualifiedName("Kind", ns),
                                device.kind, ua.VariantType.String)
-        await obj.add_property(ua.NodeId(f"{device.name}#FaultKinds", ns), ua.QualifiedName("FaultKinds", ns),
-                               device.faults.names(), ua.VariantType.String)
+        fault_kinds = await obj.add_property(ua.NodeId(f"{device.name}#FaultKinds", ns),
+                                             ua.QualifiedName("FaultKinds", ns), device.faults.names(),
+                                             ua.VariantType.String)
+        await fault_kinds.write_value_rank(ua.ValueRank.OneDimension)  # an array of names (Part 3, 5.6.2)
+        await fault_kinds.write_array_dimensions([0])  # of any length
         await obj.add_method(ua.NodeId(f"{device.name}#Fault", ns), ua.QualifiedName("Fault", ns), node.fault_method,
                              [_argument("kind", ua.VariantType.String, "a declared fault (FaultKinds)"),
                               _argument("active", ua.VariantType.Boolean, "on (true) or off")], [])
@@ -324,6 +308,8 @@ class OpcuaFacade:
             node.bound[row.point] = self.bound[result.AddedNodeId] = bound
             if row.unit:
                 units.append(_unit_item(result.AddedNodeId, row.unit))
+            if not row.readable:  # a write-only point: monitored, it tells so (Part 4, 5.12.2)
+                await self.server.write_attribute_value(result.AddedNodeId, _NOT_READABLE)
         for result in await self.server.iserver.isession.add_nodes(units):
             result.StatusCode.check()
         # fault events, from the device object and from the Server object

@@ -9,7 +9,8 @@ holding one variable per declared point that can be read or set:
   ``motion.x``), and a flat list keeps one name for one thing.  NodeId ``s=DEVICE.POINT``, so a
   host can address a point without browsing (``ns=2;s=x.axis.position``);
 * **data type** from the point type (:data:`DATA_TYPES`): Boolean, Int32 (an int point whose
-  declared range fits) or Int64, Double, String; a ``json`` point is String holding JSON text;
+  declared range fits) or Int64, Double, String; a ``json`` point is String holding JSON text.
+  A client writes a variable with its own data type only (:func:`from_opcua`);
 * **AccessLevel** CurrentRead and/or CurrentWrite as declared (``r``, ``rw``, ``w``);
 * **Description** the point's doc (and manual section); an **EngineeringUnits** property
   (EUInformation, UNECE code where :data:`UNECE` knows the unit, else UnitId -1) where the point
@@ -29,7 +30,7 @@ from typing import Any
 
 import msgspec
 
-from devsim.core.points import Point
+from devsim.core.points import BadValue, Point
 
 __all__ = [
     "DATA_TYPES",
@@ -145,11 +146,13 @@ def eu_information(unit: str) -> tuple[str, int, str, str]:
 
 
 def to_opcua(variable: Variable, value: Any) -> Any:
-    """A point's value as the variable's OPC UA value (None stays None: no value)."""
-    if value is None:
-        return None
+    """A point's value as the variable's OPC UA value.  A point with no value now (None: a
+    ``motion.kind`` at rest) is JSON ``null`` for a JSON point, a null String for a text point
+    (Part 6, 5.2.2.4) and None, no value, for the others."""
     if variable.type == "json":
         return json.dumps(value, separators=(",", ":"))
+    if value is None:
+        return None
     if variable.type == "bool":
         return bool(value)
     if variable.type == "int":
@@ -159,26 +162,23 @@ def to_opcua(variable: Variable, value: Any) -> Any:
     return str(value)
 
 
-#: Which OPC UA variant types a client may write to a variable of each data type (numbers of
-#: another numeric type are taken; their value is checked by the point).
-_ACCEPTS = {
-    "Boolean": frozenset({"Boolean"}),
-    "Int32": frozenset({"SByte", "Byte", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64"}),
-    "Int64": frozenset({"SByte", "Byte", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64"}),
-    "Double": frozenset({"SByte", "Byte", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64", "Float",
-                         "Double"}),
-    "String": frozenset({"String"}),
-}
-
-
 def from_opcua(variable: Variable, variant_type: str, value: Any) -> Any:
     """A value a client wrote (its variant type's name and value) as the point's value, for
-    :meth:`devsim.core.device.Device.check`; :class:`TypeMismatch` if its type does not fit."""
-    if variant_type not in _ACCEPTS[variable.data_type] or isinstance(value, list | tuple):
+    :meth:`devsim.core.device.Device.check`; :class:`TypeMismatch` unless it is a scalar of the
+    variable's own data type.
+
+    One type policy for every point (OPC UA Part 4, 5.10.4.1: Bad_TypeMismatch when the written
+    value's data type is not the variable's DataType or a subtype; the built-in types Boolean,
+    Int32, Int64, Double and String have none a client can send): a Double variable takes only
+    Double, Int32 only Int32, Int64 only Int64, Boolean only Boolean, String only String.  No
+    number is converted to another type, so a value is never rounded or widened on its way in.
+    A String that is not JSON text, for a JSON point, has the right type and a value the point
+    refuses: :class:`devsim.core.points.BadValue` (Bad_OutOfRange), as for any other point."""
+    if variant_type != variable.data_type or isinstance(value, list | tuple):
         raise TypeMismatch(f"{variable.point} takes {variable.data_type}, not {variant_type}")
     if variable.type == "json":
         try:
             return json.loads(value)
         except (ValueError, RecursionError):
-            raise TypeMismatch(f"{variable.point} takes JSON text") from None
+            raise BadValue(f"{variable.point} takes JSON text") from None  # a String, not one it takes
     return value

@@ -14,11 +14,8 @@ from __future__ import annotations
 
 import asyncio
 import json
-import shutil
-import subprocess
 import time
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import pytest
@@ -29,8 +26,8 @@ from devsim.core.registry import kinds
 from devsim.facades.opcua import OpcuaFacade, start_opcua
 from devsim.facades.opcua_space import NAMESPACE, to_opcua, variables
 from devsim.runtime import Runtime
+from tests.facades.opcua_clients import node_client
 
-NODE_CLIENT = Path(__file__).parent / "opcua_node"
 PERIOD = 0.1  # seconds of device time between samples for subscriptions
 TIMEOUT = 10.0  # bound on every wait for a notification
 
@@ -217,9 +214,11 @@ async def test_every_point_of_every_kind_reads_back_as_the_device_gives_it(
             nodes = [client.get_node(ua.NodeId(row.node_id, ns)) for row in rows]
             types = await client.read_attributes(nodes, ua.AttributeIds.DataType)
             access = await client.read_attributes(nodes, ua.AttributeIds.AccessLevel)
-            for row, data_type, level in zip(rows, types, access, strict=True):
+            user_access = await client.read_attributes(nodes, ua.AttributeIds.UserAccessLevel)
+            for row, data_type, level, user_level in zip(rows, types, access, user_access, strict=True):
                 assert data_type.Value.Value == ua.NodeId(ua.VariantType[row.data_type].value), (kind, row.point)
-                assert level.Value.Value == row.readable * 1 | row.writable * 2, (kind, row.point)
+                assert level.Value.Value == user_level.Value.Value == row.readable * 1 | row.writable * 2, (
+                    kind, row.point)
             # every settable point written with the value it has: taken, or refused exactly where
             # the control API refuses that value too
             again = [(row, value) for row, value in zip(readable, expected, strict=True)
@@ -237,21 +236,6 @@ async def test_every_point_of_every_kind_reads_back_as_the_device_gives_it(
 
 
 # -- node-opcua ---------------------------------------------------------------------------------
-def _node_client(url: str, plan: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    node = shutil.which("node")
-    assert node is not None, "Node.js is missing (.ci/run installs it)"
-    if not (NODE_CLIENT / "node_modules" / "node-opcua-client").is_dir():  # a fresh checkout: install it
-        npm = shutil.which("npm")
-        assert npm is not None, "npm is missing (.ci/run installs Node.js and npm)"
-        subprocess.run([npm, "ci", "--no-audit", "--no-fund", "--loglevel=error"], cwd=NODE_CLIENT, check=True,
-                       stdin=subprocess.DEVNULL, capture_output=True, timeout=600)
-    done = subprocess.run([node, str(NODE_CLIENT / "client.js"), url, json.dumps(plan)], capture_output=True,
-                          text=True, timeout=60)
-    assert done.returncode == 0, done.stderr[-2000:]
-    line = next(line for line in done.stdout.splitlines() if line.startswith("RESULT "))
-    return list(json.loads(line[len("RESULT "):])["results"])
-
-
 def test_node_opcua_browses_reads_writes_and_calls(served: tuple[Runtime, OpcuaFacade]) -> None:
     runtime, facade = served
     before = runtime.read("sers", "quantity.heatsink_temperature")
@@ -269,7 +253,9 @@ def test_node_opcua_browses_reads_writes_and_calls(served: tuple[Runtime, OpcuaF
         {"op": "call", "object": "sers", "method": "sers#Fault", "args": [["String", "blocked_axis"], ["Boolean", False]]},
         {"op": "call", "object": "sers", "method": "sers#Fault", "args": [["String", "nope"], ["Boolean", True]]},
     ]
-    browse, position, write, reread, too_hot, text, read_only, errors, on, off, unknown = _node_client(facade.url, plan)
+    results = [{key: value for key, value in result.items() if key != "timestamps"}
+               for result in node_client(facade.url, plan)]
+    browse, position, write, reread, too_hot, text, read_only, errors, on, off, unknown = results
     assert browse["status"] == "Good"
     assert {"Kind", "Fault", "PowerCycle", "axis.position", "quantity.heatsink_temperature"} <= set(browse["names"])
     assert position == {"status": "Good", "type": "Double", "value": runtime.read("sers", "axis.position")}
@@ -278,5 +264,6 @@ def test_node_opcua_browses_reads_writes_and_calls(served: tuple[Runtime, OpcuaF
     assert too_hot == {"status": "BadOutOfRange"} and text == {"status": "BadTypeMismatch"}
     assert read_only == {"status": "BadNotWritable"}
     assert errors == {"status": "Good", "type": "Int64", "value": runtime.read("sers", "P11")}
-    assert on == off == {"status": "Good"} and unknown == {"status": "BadInvalidArgument"}
+    assert on == off == {"status": "Good", "inputs": ["Good", "Good"]}
+    assert unknown["status"] == "BadInvalidArgument"
     assert runtime.read("sers", "quantity.heatsink_temperature") == good

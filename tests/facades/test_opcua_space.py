@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from devsim.core.points import Point
+from devsim.core.points import BadValue, Point
 from devsim.core.registry import device_class, kinds
 from devsim.facades.opcua_space import (
     RESERVED,
@@ -66,7 +66,13 @@ def test_units_get_their_unece_code_or_minus_one() -> None:
 def test_values_to_and_from_opcua() -> None:
     number = Variable("q", "x.q", "Double", True, True, "float", "", "")
     assert to_opcua(number, 3) == 3.0 and to_opcua(number, None) is None
-    assert from_opcua(number, "Int32", 5) == 5  # another numeric type is taken; the point checks its value
+    assert from_opcua(number, "Double", 5.5) == 5.5
+    for other in ("Int32", "Int64", "Float", "Boolean", "Byte"):  # no other numeric type: Part 4, 5.10.4.1
+        with pytest.raises(TypeMismatch):
+            from_opcua(number, other, 5)
+    count = Variable("n", "x.n", "Int32", True, True, "int", "", "")
+    with pytest.raises(TypeMismatch):
+        from_opcua(count, "Int64", 5)
     with pytest.raises(TypeMismatch):
         from_opcua(number, "String", "5")
     with pytest.raises(TypeMismatch):
@@ -76,6 +82,9 @@ def test_values_to_and_from_opcua() -> None:
         from_opcua(switch, "Int32", 1)
     blob = Variable("j", "x.j", "String", True, True, "json", "", "")
     assert to_opcua(blob, {"a": [1, 2]}) == '{"a":[1,2]}'
+    assert to_opcua(blob, None) == "null"  # the JSON point's value: null
+    text = Variable("t", "x.t", "String", True, False, "str", "", "")
+    assert to_opcua(text, None) is None and to_opcua(text, "idle") == "idle"  # a null String
     assert from_opcua(blob, "String", '{"a": [1, 2]}') == {"a": [1, 2]}
-    with pytest.raises(TypeMismatch):
+    with pytest.raises(BadValue):  # a String: the right type, a value the point refuses
         from_opcua(blob, "String", "{not json")

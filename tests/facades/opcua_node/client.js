@@ -3,11 +3,21 @@
 //   {"op": "browse", "node": "x"}                       browse names of the node's children
 //   {"op": "read", "node": "x.axis.position"}           value, data type name, status
 //   {"op": "write", "node": "x.param.V", "type": "Double", "value": 12.5}   status
+//     both may name an "attribute" (AccessLevel, DisplayName ...; default Value) and an
+//     "indexRange" ("0:2"); a read a "maxAge" (a refused request: {"fault": name}; node-opcua
+//     asks for both timestamps, "timestamps" says which came), a write a "statusCode" (a
+//     StatusCodes name) to write with the value
+//   {"op": "writes", "items": [["x.param.V", "Int32", 3], ...]}   one Write request, a status per item
+//   {"op": "monitor", "nodes": ["x.axis.position", ...]}   the status of each one's first notification
 //   {"op": "call", "object": "x", "method": "x#Fault", "args": [["String", "power"], ["Boolean", true]]}
+// A step may name a node id in full ("nodeId": "ns=0;i=2253") instead of a devsim "node".
 // String node ids are in the namespace urn:devsim.  Prints one line "RESULT {json}" (node-opcua
 // writes its own warnings to stdout too).
 "use strict";
-const { OPCUAClient, AttributeIds, DataType } = require("node-opcua-client");
+const {
+    OPCUAClient, AttributeIds, ClientMonitoredItem, ClientSubscription, DataType, StatusCodes, TimestampsToReturn,
+    VariantArrayType,
+} = require("node-opcua-client");
 
 function plain(value, dataType) {
     if ((dataType === DataType.Int64 || dataType === DataType.UInt64) && Array.isArray(value)) {
@@ -16,30 +26,89 @@ function plain(value, dataType) {
     return value;
 }
 
+function wire(dataType, value) {
+    if ((dataType === DataType.Double || dataType === DataType.Float) && typeof value === "string") {
+        return Number(value);  // "NaN", "Infinity", "-Infinity": numbers JSON cannot carry
+    }
+    if ((dataType === DataType.Int64 || dataType === DataType.UInt64) && typeof value === "number") {
+        return [Math.floor(value / 4294967296), value >>> 0];  // node-opcua's [high, low] words
+    }
+    return value;
+}
+
+function variant(type, value) {
+    const dataType = DataType[type];
+    return { dataType, arrayType: VariantArrayType.Scalar, value: wire(dataType, value) };
+}
+
 async function step(session, ns, s) {
-    const id = (name) => `ns=${ns};s=${name}`;
+    const devsim = (name) => `ns=${ns};s=${name}`;
+    const id = (name) => (name === undefined ? s.nodeId : devsim(name));
     if (s.op === "browse") {
         const result = await session.browse(id(s.node));
         return { status: result.statusCode.name, names: result.references.map((r) => r.browseName.name) };
     }
     if (s.op === "read") {
-        const dv = await session.read({ nodeId: id(s.node), attributeId: AttributeIds.Value });
+        let dv;
+        try {
+            dv = await session.read({
+                nodeId: id(s.node), attributeId: AttributeIds[s.attribute || "Value"], indexRange: s.indexRange,
+            }, s.maxAge);
+        } catch (err) {  // a service fault: the whole request refused
+            const header = err.response && err.response.responseHeader;
+            if (!header) {
+                throw err;
+            }
+            return { fault: header.serviceResult.name };
+        }
         const type = dv.value.dataType;
-        return { status: dv.statusCode.name, type: DataType[type], value: plain(dv.value.value, type) };
+        return {
+            status: dv.statusCode.name, type: DataType[type], value: plain(dv.value.value, type),
+            timestamps: [dv.sourceTimestamp !== null, dv.serverTimestamp !== null],
+        };
     }
     if (s.op === "write") {
+        const value = { value: variant(s.type, s.value) };
+        if (s.statusCode) {
+            value.statusCode = StatusCodes[s.statusCode];
+        }
         const status = await session.write({
-            nodeId: id(s.node), attributeId: AttributeIds.Value,
-            value: { value: { dataType: DataType[s.type], value: s.value } },
+            nodeId: id(s.node), attributeId: AttributeIds[s.attribute || "Value"], indexRange: s.indexRange, value,
         });
         return { status: status.name };
     }
+    if (s.op === "writes") {
+        const statuses = await session.write(s.items.map(([node, type, value]) => ({
+            nodeId: devsim(node), attributeId: AttributeIds.Value, value: { value: variant(type, value) },
+        })));
+        return { statuses: statuses.map((status) => status.name) };
+    }
+    if (s.op === "monitor") {
+        const subscription = ClientSubscription.create(session, {
+            requestedPublishingInterval: 20, requestedLifetimeCount: 100, requestedMaxKeepAliveCount: 10,
+            publishingEnabled: true,
+        });
+        const firsts = s.nodes.map((name) => new Promise((resolve, reject) => {
+            const item = ClientMonitoredItem.create(subscription, {
+                nodeId: devsim(name), attributeId: AttributeIds.Value,
+            }, { samplingInterval: 0, queueSize: 1, discardOldest: true }, TimestampsToReturn.Both);
+            const timer = setTimeout(() => reject(new Error(`no notification for ${name}`)), 10000);
+            item.once("changed", (dv) => {
+                clearTimeout(timer);
+                resolve(dv.statusCode.name);
+            });
+        }));
+        const statuses = await Promise.all(firsts);
+        await subscription.terminate();
+        return { statuses };
+    }
     if (s.op === "call") {
         const result = await session.call({
-            objectId: id(s.object), methodId: id(s.method),
-            inputArguments: s.args.map(([type, value]) => ({ dataType: DataType[type], value })),
+            objectId: devsim(s.object), methodId: devsim(s.method),
+            inputArguments: s.args.map(([type, value]) => variant(type, value)),
         });
-        return { status: result.statusCode.name };
+        return { status: result.statusCode.name,
+                 inputs: (result.inputArgumentResults || []).map((status) => status.name) };
     }
     throw new Error(`unknown step ${s.op}`);
 }

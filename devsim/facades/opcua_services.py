@@ -1,0 +1,258 @@
+"""The Attribute and Method service sets of the OPC UA facade (OPC UA Part 4, 5.10 and 5.11):
+asyncua's services, with the point variables read from and written to their devices and the
+status codes Part 4 gives where asyncua answers otherwise.
+
+* :class:`PointAttributes` (Part 4, 5.10.2 Read, 5.10.4 Write).  A point variable's Value is
+  read from and written to its device (:class:`PointNode`).  A read of any Value honours the
+  request's ``timestampsToReturn`` (Source, Server, Both, Neither) and ``indexRange`` (7.27: a
+  substring of a String, a slice of an array; ``Bad_IndexRangeInvalid`` for a range of invalid
+  syntax, ``Bad_IndexRangeNoData`` for one that selects nothing, as on a scalar number), and a
+  request with a negative ``maxAge`` or an invalid ``timestampsToReturn`` is a service fault
+  (``Bad_MaxAgeInvalid``, ``Bad_TimestampsToReturnInvalid``).  asyncua ignores all three.  A write of any node by a client
+  answers, in this order: ``Bad_NodeIdUnknown`` for a node the server does not have,
+  ``Bad_AttributeIdInvalid`` for an attribute the node does not have, ``Bad_NotWritable`` when
+  the node's AccessLevel (Value) or WriteMask (any other attribute) does not allow writing,
+  ``Bad_UserAccessDenied`` when only its UserAccessLevel / UserWriteMask does not, and for a
+  point's Value ``Bad_WriteNotSupported`` when an IndexRange or a status code is written with it
+  (Table 61: the server does not support that combination).  asyncua answers
+  ``Bad_UserAccessDenied`` for all of these.
+* :class:`NodeView` (Part 4, 5.8.2 Browse): ``Bad_NodeIdUnknown`` for a node the server does not
+  have (asyncua: ``Bad_NodeIdInvalid``, which Part 4 keeps for a NodeId of invalid syntax).
+* :class:`DeviceMethods` (Part 4, 5.11.2 Call, Tables 67 and 68): ``Bad_NodeIdUnknown`` for an
+  object the server does not have, ``Bad_NodeIdInvalid`` for a node that is not an object,
+  ``Bad_MethodInvalid`` for a method that is not a component of that object,
+  ``Bad_ArgumentsMissing`` / ``Bad_TooManyArguments`` against the method's InputArguments, and
+  ``Bad_InvalidArgument`` with a ``Bad_TypeMismatch`` in ``inputArgumentResults`` for each
+  argument whose type is not the declared built-in one.  asyncua runs the method of any object
+  on any other and answers a wrong argument count with ``Bad_UnexpectedError``.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from datetime import UTC, datetime
+from typing import Any, Protocol
+
+from asyncua import ua
+from asyncua.crypto.permission_rules import User, UserRole
+from asyncua.server.address_space import AddressSpace, AttributeService, MethodService, ViewService
+
+__all__ = ["DeviceMethods", "NodeView", "PointAttributes", "PointNode", "call_result", "index_range", "shaped"]
+
+_BAD = ua.StatusCodes
+_ADMIN = User(role=UserRole.Admin)  # asyncua's default for a write from inside the server
+_WRITE = ua.AccessLevel.CurrentWrite.mask
+_OBJECTS = (ua.NodeClass.Object, ua.NodeClass.ObjectType)
+_BUILT_IN = range(1, 26)  # ns=0 DataType ids of the built-in types (Part 6, 5.1.2): a Variant's type
+
+
+class PointNode(Protocol):
+    """A point variable as the attribute service sees it (``_Bound`` in :mod:`devsim.facades.opcua`)."""
+
+    def read(self) -> ua.DataValue: ...
+
+    def write(self, value: ua.DataValue) -> ua.StatusCode: ...
+
+
+def _status(code: int) -> ua.StatusCode:
+    return ua.StatusCode(code)
+
+
+class PointAttributes(AttributeService):
+    """asyncua's attribute service, with the point variables' Values read from and written to
+    their devices, and Part 4's status codes for what a client may not write."""
+
+    def __init__(self, aspace: AddressSpace, points: Mapping[ua.NodeId, PointNode]) -> None:
+        super().__init__(aspace)
+        self.points = points
+
+    def read(self, params: ua.ReadParameters) -> list[ua.DataValue]:
+        if params.MaxAge < 0:
+            raise ua.UaStatusCodeError(_BAD.BadMaxAgeInvalid)
+        if params.TimestampsToReturn not in _TIMESTAMPS:
+            raise ua.UaStatusCodeError(_BAD.BadTimestampsToReturnInvalid)
+        results = super().read(params)
+        for index, item in enumerate(params.NodesToRead):
+            if item.AttributeId == ua.AttributeIds.Value:
+                point = self.points.get(item.NodeId)
+                value = point.read() if point is not None else results[index]
+                results[index] = shaped(value, params.TimestampsToReturn, item.IndexRange)
+        return results
+
+    async def write(self, params: ua.WriteParameters, user: User = _ADMIN) -> list[ua.StatusCode]:
+        results: list[ua.StatusCode] = []
+        for item in params.NodesToWrite:
+            refused = self._refusal(item, user)
+            if refused is not None:
+                results.append(_status(refused))
+            elif (point := self.points.get(item.NodeId)) is not None and item.AttributeId == ua.AttributeIds.Value:
+                results.append(point.write(item.Value))
+            else:
+                results.extend(await super().write(ua.WriteParameters(NodesToWrite=[item]), user))
+        return results
+
+    def _attribute(self, node_id: ua.NodeId, attribute: ua.AttributeIds) -> Any:
+        data_value = self._aspace.read_attribute_value(node_id, attribute)
+        return data_value.Value.Value if data_value.StatusCode.is_good() and data_value.Value is not None else None
+
+    def _refusal(self, item: ua.WriteValue, user: User) -> int | None:
+        """The status code a write is refused with before it reaches the node (None: none)."""
+        node_id, attribute = item.NodeId, item.AttributeId
+        if node_id not in self._aspace:
+            return _BAD.BadNodeIdUnknown
+        if attribute not in self._aspace[node_id].attributes:
+            return _BAD.BadAttributeIdInvalid
+        if user.role == UserRole.Admin:  # the server itself
+            return None
+        if attribute == ua.AttributeIds.Value:
+            allowed = self._attribute(node_id, ua.AttributeIds.AccessLevel) or 0
+            user_allowed = self._attribute(node_id, ua.AttributeIds.UserAccessLevel) or 0
+            bit = _WRITE
+        else:  # Part 3, 5.2.7: WriteMask, a bit per attribute (AttributeWriteMask)
+            allowed = self._attribute(node_id, ua.AttributeIds.WriteMask) or 0
+            user_allowed = self._attribute(node_id, ua.AttributeIds.UserWriteMask) or 0
+            mask = ua.AttributeWriteMask.__members__.get(ua.AttributeIds(attribute).name)
+            bit = int(mask) if mask is not None else 0
+        if not allowed & bit:
+            return _BAD.BadNotWritable
+        if not user_allowed & bit:
+            return _BAD.BadUserAccessDenied
+        if node_id in self.points and attribute == ua.AttributeIds.Value:
+            value = item.Value
+            if item.IndexRange or (value.StatusCode is not None and not value.StatusCode.is_good()):
+                return _BAD.BadWriteNotSupported
+        return None
+
+
+_TIMESTAMPS = (ua.TimestampsToReturn.Source, ua.TimestampsToReturn.Server, ua.TimestampsToReturn.Both,
+               ua.TimestampsToReturn.Neither)
+_RANGE = re.compile(r"(\d+)(?::(\d+))?")
+
+
+def index_range(text: str) -> list[tuple[int, int]] | None:
+    """A NumericRange (Part 4, 7.27) as (first, last) per dimension; None: invalid syntax."""
+    dimensions = []
+    for part in text.split(","):
+        match = _RANGE.fullmatch(part)
+        if match is None:
+            return None
+        first = int(match[1])
+        last = first if match[2] is None else int(match[2])
+        if match[2] is not None and last <= first:  # "5:5" and "7:5" are invalid
+            return None
+        dimensions.append((first, last))
+    return dimensions
+
+
+def _range_of(variant: ua.Variant | None, text: str) -> ua.Variant | int:
+    """The part of a value an index range selects, or the status code why none."""
+    dimensions = index_range(text)
+    if dimensions is None:
+        return _BAD.BadIndexRangeInvalid
+    value = variant.Value if variant is not None else None
+    if variant is None or not isinstance(value, list | tuple | str | bytes) or len(dimensions) != 1 \
+            or dimensions[0][0] >= len(value):
+        return _BAD.BadIndexRangeNoData  # a scalar, another number of dimensions, past the end
+    first, last = dimensions[0]
+    return ua.Variant(value[first:last + 1], variant.VariantType, is_array=isinstance(value, list | tuple))
+
+
+def shaped(value: ua.DataValue, timestamps: ua.TimestampsToReturn, text: str | None) -> ua.DataValue:
+    """A Value read as the request asks: its ``indexRange`` part and the timestamps it wants
+    (a copy: asyncua's stored values are shared)."""
+    if value.StatusCode is not None and value.StatusCode.is_bad():
+        return value
+    variant = value.Value
+    if text:
+        part = _range_of(variant, text)
+        if isinstance(part, int):
+            return ua.DataValue(StatusCode=_status(part))
+        variant = part
+    source = value.SourceTimestamp if timestamps in (ua.TimestampsToReturn.Source, ua.TimestampsToReturn.Both) else None
+    server = None
+    if timestamps in (ua.TimestampsToReturn.Server, ua.TimestampsToReturn.Both):
+        server = value.ServerTimestamp or datetime.now(UTC)
+    return ua.DataValue(variant, StatusCode=value.StatusCode, SourceTimestamp=source,
+                        SourcePicoseconds=value.SourcePicoseconds if source is not None else None,
+                        ServerTimestamp=server)
+
+
+class NodeView(ViewService):
+    """asyncua's view service, with Bad_NodeIdUnknown for a node it does not have."""
+
+    def _browse(self, desc: ua.BrowseDescription) -> ua.BrowseResult:
+        if desc.NodeId not in self._aspace:
+            result = ua.BrowseResult()
+            result.StatusCode = _status(_BAD.BadNodeIdUnknown)
+            return result
+        return super()._browse(desc)
+
+
+def call_result(status: int, arguments: list[int] | None = None) -> ua.CallMethodResult:
+    """A Call result: ``status`` and, for Bad_InvalidArgument, a status per input argument."""
+    result = ua.CallMethodResult()
+    result.StatusCode = _status(status)
+    result.InputArgumentResults = [_status(code) for code in arguments or []]
+    return result
+
+
+class DeviceMethods(MethodService):
+    """asyncua's method service with Part 4's checks of the object, the method and the input
+    arguments (their number and built-in types, from the method's InputArguments property)
+    before the method runs."""
+
+    async def _call(self, method: ua.CallMethodRequest) -> ua.CallMethodResult:
+        refused = self._refusal(method)
+        if refused is not None:
+            return refused
+        return await super()._call(method)
+
+    def _refusal(self, method: ua.CallMethodRequest) -> ua.CallMethodResult | None:
+        aspace = self._aspace
+        if method.ObjectId not in aspace:
+            return call_result(_BAD.BadNodeIdUnknown)
+        if aspace[method.ObjectId].attributes[ua.AttributeIds.NodeClass].value.Value.Value not in _OBJECTS:
+            return call_result(_BAD.BadNodeIdInvalid)
+        if not self._component(method.ObjectId, method.MethodId):
+            return call_result(_BAD.BadMethodInvalid)
+        declared = self._input_arguments(method.MethodId)
+        given = method.InputArguments or []
+        if len(given) < len(declared):
+            return call_result(_BAD.BadArgumentsMissing)
+        if len(given) > len(declared):
+            return call_result(_BAD.BadTooManyArguments)
+        results = [_BAD.Good if _fits(argument, variant) else _BAD.BadTypeMismatch
+                   for argument, variant in zip(declared, given, strict=True)]
+        if any(code != _BAD.Good for code in results):
+            return call_result(_BAD.BadInvalidArgument, results)
+        return None
+
+    def _component(self, object_id: ua.NodeId, method_id: ua.NodeId) -> bool:
+        """Is ``method_id`` a method the object has (HasComponent, from it or its type)?"""
+        if method_id not in self._aspace:
+            return False
+        method = self._aspace[method_id]
+        if method.attributes[ua.AttributeIds.NodeClass].value.Value.Value != ua.NodeClass.Method:
+            return False
+        holders = [object_id]
+        for ref in self._aspace[object_id].references:
+            if ref.IsForward and ref.ReferenceTypeId == ua.NodeId(ua.ObjectIds.HasTypeDefinition):
+                holders.append(ref.NodeId)
+        return any(ref.IsForward and ref.NodeId == method_id and ref.ReferenceTypeId == ua.NodeId(ua.ObjectIds.HasComponent)
+                   for holder in holders if holder in self._aspace for ref in self._aspace[holder].references)
+
+    def _input_arguments(self, method_id: ua.NodeId) -> list[ua.Argument]:
+        for ref in self._aspace[method_id].references:
+            if ref.IsForward and ref.BrowseName.Name == "InputArguments" and ref.NodeId in self._aspace:
+                value = self._aspace.read_attribute_value(ref.NodeId, ua.AttributeIds.Value).Value
+                return list(value.Value or []) if value is not None else []
+        return []
+
+
+def _fits(argument: ua.Argument, variant: ua.Variant) -> bool:
+    """A scalar of the argument's built-in type (other data types: not checked here)."""
+    data_type = argument.DataType
+    if data_type.NamespaceIndex != 0 or data_type.Identifier not in _BUILT_IN:
+        return True
+    return variant.VariantType.value == data_type.Identifier and not variant.is_array
