@@ -141,20 +141,27 @@ class _SparkplugPlant:
         self.send((*self.node.device_data(device, changes), 0, False))
 
     def handle(self, topic: str, payload: bytes) -> None:
-        from devsim.facades.mqtt_sparkplug import REBIRTH, command_request
+        """A DCMD or NCMD: a refusal (a payload that is not Sparkplug B, a metric the device
+        refuses) goes to the device's ``…/error`` topic; the node's (NCMD, a device it does not
+        have) to the plant's ``devsim/<plant>/error``."""
+        from devsim.facades.mqtt_sparkplug import REBIRTH, command_request, decode_command
 
         try:
-            name, metrics = self.node.command(topic, payload)
-        except ValueError as exc:
-            self.send((f"{topics.ROOT}/{self.plant}/error", topics.error_payload(topic, exc), 1, False))
+            name = self.node.command_target(topic)
+        except ValueError:  # not a command topic of ours (amqtt hands out retained messages of others)
             return
-        if name is None:  # NCMD
+        device = self.devices.get(name) if name is not None else None
+        try:
+            if name is not None and device is None:
+                raise KeyError(f"node {self.plant!r} has no device {name!r}")
+            metrics = decode_command(payload)
+        except (KeyError, ValueError) as exc:
+            self._refused(device, topic, exc)
+            return
+        if device is None:  # NCMD
             if any(metric == REBIRTH and value for metric, value in metrics):
                 self.stop()
                 self._births()
-            return
-        device = self.devices.get(name)
-        if device is None:
             return
         for metric, value in metrics:
             try:
@@ -162,9 +169,12 @@ class _SparkplugPlant:
                 if request is not None:
                     run(self.runtime, request)
             except Exception as exc:
-                self.send((f"{topics.prefix(self.plant, name)}/error", topics.error_payload(f"{topic}#{metric}", exc),
-                           1, False))
-        self.watches[name].sample()
+                self._refused(device, f"{topic}#{metric}", exc)
+        self.watches[device.name].sample()
+
+    def _refused(self, device: Device | None, topic: str, exc: BaseException) -> None:
+        where = topics.prefix(self.plant, device.name) if device is not None else f"{topics.ROOT}/{self.plant}"
+        self.send((f"{where}/error", topics.error_payload(topic, exc), 1, False))
 
     def closing(self) -> list[Message]:
         return [(*self.node.death(), 1, False)]
