@@ -13,7 +13,9 @@ Two conventions:
   the plant being a Sparkplug edge node whose NDEATH will covers all its devices.
 
 Changes are found by :class:`devsim.core.watch.PointWatch`, which samples the points every
-``rate`` seconds of device time (virtual time in tests), and right after each command.  With no
+``rate`` seconds of device time (virtual time in tests), right after each command, and right
+after each moment the model announces (a move's start and end, a fault, an input or output
+switched: :mod:`devsim.facades.mqtt_events`), so that a move shorter than the rate is seen.  With no
 broker URL, :func:`start_broker` runs an embedded amqtt broker in the same loop, on loopback.
 Everything runs as tasks in the runtime's loop and calls device methods directly.  A lost
 broker connection is retried every second; the births are then sent again.
@@ -34,6 +36,7 @@ import aiomqtt
 from devsim.core.device import Device
 from devsim.core.watch import PointWatch
 from devsim.facades import mqtt_topics as topics
+from devsim.facades.mqtt_events import SampleOnEvent
 from devsim.runtime import Runtime
 from devsim.runtime.ops import run
 
@@ -56,6 +59,7 @@ class _DevsimDevice:
         self.base = topics.prefix(plant, device.name)
         self.send: Callable[[Message], None] = lambda message: None
         self.watch: PointWatch | None = None
+        self.events: SampleOnEvent | None = None
 
     def identifier(self) -> str:
         return f"devsim-{self.plant}-{self.device.name}-{os.getpid()}"
@@ -71,6 +75,8 @@ class _DevsimDevice:
         self.stop()
         self.watch = PointWatch(self.device, self._changed, period=self.rate)
         self.watch.start()  # every readable value now, then what changes
+        self.events = SampleOnEvent(self.device, self.watch.sample)
+        self.events.start()
         self.send((f"{self.base}/status", b"online", 1, True))
 
     def _changed(self, changes: dict[str, Any]) -> None:
@@ -94,6 +100,9 @@ class _DevsimDevice:
         return [(f"{self.base}/status", b"offline", 1, True)]
 
     def stop(self) -> None:
+        if self.events is not None:
+            self.events.stop()
+            self.events = None
         if self.watch is not None:
             self.watch.stop()
             self.watch = None
@@ -112,6 +121,7 @@ class _SparkplugPlant:
         self.rate = rate
         self.send: Callable[[Message], None] = lambda message: None
         self.watches: dict[str, PointWatch] = {}
+        self.events: list[SampleOnEvent] = []
 
     def identifier(self) -> str:
         return f"devsim-spb-{self.plant}-{os.getpid()}"
@@ -136,6 +146,9 @@ class _SparkplugPlant:
             watch.last = values
             watch.start()  # nothing new yet: DDATA from the next change on
             self.watches[device.name] = watch
+            events = SampleOnEvent(device, watch.sample)
+            events.start()
+            self.events.append(events)
 
     def _changed(self, device: Device, changes: dict[str, Any]) -> None:
         self.send((*self.node.device_data(device, changes), 0, False))
@@ -180,6 +193,9 @@ class _SparkplugPlant:
         return [(*self.node.death(), 1, False)]
 
     def stop(self) -> None:
+        for events in self.events:
+            events.stop()
+        self.events.clear()
         for watch in self.watches.values():
             watch.stop()
         self.watches.clear()
