@@ -62,11 +62,15 @@ def test_a_fleet_watch_streams_every_device_of_two_processes(members: dict[str, 
             fleet.fault("feeder", "emergency_stop", True)
             fleet.fault("press", "emergency_stop", True)
             fleet.fault("feeder", "emergency_stop", False)
-        # one line per event, the device named, exactly as `devsim ctl watch` prints it on one process
-        for device, state in (("feeder", "on"), ("press", "on"), ("feeder", "off")):
-            line = line_where(watcher, lambda text, d=device, s=state: text.split()[1:] == [d, "fault", "emergency_stop", s],
-                              f"{device} fault emergency_stop {state}")
-            float(line.split()[0])  # the device time leads, as on one process
+        # one line per event, the device named, exactly as `devsim ctl watch` prints it on one
+        # process; in order per device (two processes' lines interleave as they come)
+        def faults_of(device: str) -> list[str]:
+            return [line.split()[-1] for line in watcher.seen if line.split()[1:4] == [device, "fault", "emergency_stop"]]
+
+        line_where(watcher, lambda _line: faults_of("feeder") == ["on", "off"] and faults_of("press") == ["on"],
+                   "the three fault lines")
+        for line in watcher.seen:
+            float(line.split()[0])  # the device time leads every line, as on one process
         # the independent view: the member published each item on the stream topic, as JSON
         faults = []
         while len(faults) < 3:
@@ -122,3 +126,41 @@ def test_json_lines_name_the_process_and_a_killed_watcher_ends_its_stream(
     finally:
         watcher.stop()
         presence.stop()
+
+
+def test_after_the_broker_restarts_a_member_ends_the_streams_of_watchers_that_are_gone(tmp_path: Path) -> None:
+    """The broker dies (no will goes out) and so does the watcher; a new broker (no persistence)
+    comes up at the address: the member reconnects, finds no presence of that watcher (its marker
+    comes back after the retained presences) and publishes no more on its stream."""
+    first = Broker().start()
+    member = Member(["run", "sers", "--virtual"], first.url, tmp_path / "run.log")
+    watcher = watch(first.url, tmp_path / "watch.log", "sers")
+    second = Broker()
+    sub: Program | None = None
+    try:
+        line_where(watcher, lambda line: line.split()[1:2] == ["sers"], "a first line")
+        assert first.process is not None
+        stop_process(first.process, signal.SIGKILL)  # gone at once: no will reaches anyone
+        stop_process(watcher.proc, signal.SIGKILL)  # and the watcher with it, while the member is away
+        second.port = first.port
+        second.start()
+        sub = mosquitto("mosquitto_sub", "-p", str(second.port), "-t", STREAMS, "-F", "%t %p", "-d",
+                        log=tmp_path / "sub.log")
+        sub.wait_for("Subscribed")
+        with FleetClient(second.url) as fleet:
+            fleet.wait_for_devices(["sers"], timeout=30)
+            fleet.fault("sers", "emergency_stop", True)  # a fault item, were the stream still served
+            assert fleet.read("sers", "input.stop") is True
+        probe = "devsim-fleet/client/probe/watch/0"
+        sent = mosquitto("mosquitto_pub", "-p", str(second.port), "-t", probe, "-m", "end", log=tmp_path / "pub.log")
+        assert sent.proc.wait(15) == 0
+        sent.stop()
+        line_where(sub, lambda line: line == f"{probe} end", "the probe")
+        assert [line for line in sub.seen if line.startswith("devsim-fleet/") and not line.startswith(probe)] == []
+    finally:
+        watcher.stop()
+        if sub is not None:
+            sub.stop()
+        member.stop()
+        second.stop()
+        first.stop()
