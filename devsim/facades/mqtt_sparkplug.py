@@ -23,7 +23,6 @@ import time
 from collections.abc import Mapping
 from typing import Any
 
-from google.protobuf.unknown_fields import UnknownFieldSet
 from tahutils.tahu import sparkplug_b as tahu
 
 from devsim.core.device import Device
@@ -157,7 +156,9 @@ def decode_command(data: bytes) -> list[tuple[str, Any]]:
         payload.ParseFromString(data)
     except Exception as exc:  # protobuf's DecodeError
         raise ValueError(f"not a Sparkplug B payload: {exc}") from None
-    if len(UnknownFieldSet(payload)):
+    size = payload.ByteSize()
+    payload.DiscardUnknownFields()
+    if payload.ByteSize() != size:
         raise ValueError("not a Sparkplug B payload: fields its schema does not have")
     if not payload.metrics:
         raise ValueError("a Sparkplug B command without metrics")
