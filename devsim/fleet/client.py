@@ -360,6 +360,8 @@ class FleetClient(ControlOps):
         that long without an item (TimeoutError).  Close the generator to stop watching."""
         devices = [device] if device is not None else [
             str(row["name"]) for row in self.devices() if row["online"] and not row.get("clash")]
+        if not devices:
+            raise ControlError(f"no device online in the fleet {self.fleet.url}", "UnknownDevice")
         watcher = FleetClient(self.fleet.url, timeout=self.fleet.timeout)
         try:
             for name in devices:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import signal
+import subprocess
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -164,3 +165,13 @@ def test_after_the_broker_restarts_a_member_ends_the_streams_of_watchers_that_ar
         member.stop()
         second.stop()
         first.stop()
+
+
+def test_a_watch_of_an_empty_fleet_or_of_no_device_is_one_line(broker: Broker) -> None:
+    from tests.fleet.conftest import ctl
+
+    assert ctl(broker.url, "watch", ok=False) == f"Error: UnknownDevice: no device online in the fleet {broker.url}"
+    assert "no device named 'nobody'" in ctl(broker.url, "watch", "nobody", ok=False)
+    done = subprocess.run([sys.executable, "-m", "devsim", "ctl", "--control", "127.0.0.1:1", "watch"],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "watch needs DEVICE" in done.stderr
