@@ -211,20 +211,21 @@ def ctl_telegrams(ctx: click.Context, device: str, port: str, count: int) -> Non
 
 
 @ctl.command(command_name("watch"))
-@click.argument("device")
+@click.argument("device", required=False)
 @click.argument("names", nargs=-1)
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per line instead of text.")
 @click.option("--period", type=float, metavar="SECONDS", help="Sampling period in device time (default 0.1).")
-def ctl_watch(device: str, names: tuple[str, ...], as_json: bool, period: float | None) -> None:
+def ctl_watch(device: str | None, names: tuple[str, ...], as_json: bool, period: float | None) -> None:
     """Print changes of DEVICE's NAMEs (default: its state and axes) and its events (move start
     and end, faults, errors, host connects) as they happen, one line each, until Ctrl-C or the
-    simulator stops: '12.300 sers axis.position 1234.0'."""
+    simulator stops: '12.300 sers axis.position 1234.0'.  With --fleet, over the broker (JSON
+    lines add the serving 'process'); without DEVICE, every device of the fleet."""
     from devsim.runtime.client import ControlError
     from devsim.runtime.watch_stream import describe
 
     ctx = click.get_current_context()
-    if ctx.obj[1] is not None:
-        raise click.UsageError("watch needs --control (a fleet has no stream)")
+    if device is None and ctx.obj[1] is None:
+        raise click.UsageError("watch needs DEVICE (every device at once: with --fleet)")
     addr, client = _connect(ctx)
     stream = client.watch(device, list(names) or None, period=period)
     try:

@@ -13,7 +13,9 @@ Two conventions:
   the plant being a Sparkplug edge node whose NDEATH will covers all its devices.
 
 Changes are found by :class:`devsim.core.watch.PointWatch`, which samples the points every
-``rate`` seconds of device time (virtual time in tests), and right after each command.  With no
+``rate`` seconds of device time (virtual time in tests), right after each command, and right
+after each moment the model announces (a move's start and end, a fault, an input or output
+switched: :mod:`devsim.facades.mqtt_events`), so that a move shorter than the rate is seen.  With no
 broker URL, :func:`start_broker` runs an embedded amqtt broker in the same loop, on loopback.
 Everything runs as tasks in the runtime's loop and calls device methods directly.  A lost
 broker connection is retried every second; the births are then sent again.
@@ -34,6 +36,7 @@ import aiomqtt
 from devsim.core.device import Device
 from devsim.core.watch import PointWatch
 from devsim.facades import mqtt_topics as topics
+from devsim.facades.mqtt_events import SampleOnEvent
 from devsim.runtime import Runtime
 from devsim.runtime.ops import run
 
@@ -56,6 +59,7 @@ class _DevsimDevice:
         self.base = topics.prefix(plant, device.name)
         self.send: Callable[[Message], None] = lambda message: None
         self.watch: PointWatch | None = None
+        self.events: SampleOnEvent | None = None
 
     def identifier(self) -> str:
         return f"devsim-{self.plant}-{self.device.name}-{os.getpid()}"
@@ -71,6 +75,8 @@ class _DevsimDevice:
         self.stop()
         self.watch = PointWatch(self.device, self._changed, period=self.rate)
         self.watch.start()  # every readable value now, then what changes
+        self.events = SampleOnEvent(self.device, self.watch.sample)
+        self.events.start()
         self.send((f"{self.base}/status", b"online", 1, True))
 
     def _changed(self, changes: dict[str, Any]) -> None:
@@ -94,6 +100,9 @@ class _DevsimDevice:
         return [(f"{self.base}/status", b"offline", 1, True)]
 
     def stop(self) -> None:
+        if self.events is not None:
+            self.events.stop()
+            self.events = None
         if self.watch is not None:
             self.watch.stop()
             self.watch = None
@@ -112,6 +121,7 @@ class _SparkplugPlant:
         self.rate = rate
         self.send: Callable[[Message], None] = lambda message: None
         self.watches: dict[str, PointWatch] = {}
+        self.events: list[SampleOnEvent] = []
 
     def identifier(self) -> str:
         return f"devsim-spb-{self.plant}-{os.getpid()}"
@@ -136,25 +146,35 @@ class _SparkplugPlant:
             watch.last = values
             watch.start()  # nothing new yet: DDATA from the next change on
             self.watches[device.name] = watch
+            events = SampleOnEvent(device, watch.sample)
+            events.start()
+            self.events.append(events)
 
     def _changed(self, device: Device, changes: dict[str, Any]) -> None:
         self.send((*self.node.device_data(device, changes), 0, False))
 
     def handle(self, topic: str, payload: bytes) -> None:
-        from devsim.facades.mqtt_sparkplug import REBIRTH, command_request
+        """A DCMD or NCMD: a refusal (a payload that is not Sparkplug B, a metric the device
+        refuses) goes to the device's ``…/error`` topic; the node's (NCMD, a device it does not
+        have) to the plant's ``devsim/<plant>/error``."""
+        from devsim.facades.mqtt_sparkplug import REBIRTH, command_request, decode_command
 
         try:
-            name, metrics = self.node.command(topic, payload)
-        except ValueError as exc:
-            self.send((f"{topics.ROOT}/{self.plant}/error", topics.error_payload(topic, exc), 1, False))
+            name = self.node.command_target(topic)
+        except ValueError:  # not a command topic of ours (amqtt hands out retained messages of others)
             return
-        if name is None:  # NCMD
+        device = self.devices.get(name) if name is not None else None
+        try:
+            if name is not None and device is None:
+                raise KeyError(f"node {self.plant!r} has no device {name!r}")
+            metrics = decode_command(payload)
+        except (KeyError, ValueError) as exc:
+            self._refused(device, topic, exc)
+            return
+        if device is None:  # NCMD
             if any(metric == REBIRTH and value for metric, value in metrics):
                 self.stop()
                 self._births()
-            return
-        device = self.devices.get(name)
-        if device is None:
             return
         for metric, value in metrics:
             try:
@@ -162,14 +182,20 @@ class _SparkplugPlant:
                 if request is not None:
                     run(self.runtime, request)
             except Exception as exc:
-                self.send((f"{topics.prefix(self.plant, name)}/error", topics.error_payload(f"{topic}#{metric}", exc),
-                           1, False))
-        self.watches[name].sample()
+                self._refused(device, f"{topic}#{metric}", exc)
+        self.watches[device.name].sample()
+
+    def _refused(self, device: Device | None, topic: str, exc: BaseException) -> None:
+        where = topics.prefix(self.plant, device.name) if device is not None else f"{topics.ROOT}/{self.plant}"
+        self.send((f"{where}/error", topics.error_payload(topic, exc), 1, False))
 
     def closing(self) -> list[Message]:
         return [(*self.node.death(), 1, False)]
 
     def stop(self) -> None:
+        for events in self.events:
+            events.stop()
+        self.events.clear()
         for watch in self.watches.values():
             watch.stop()
         self.watches.clear()

@@ -10,7 +10,8 @@ declared point as a metric with its datatype (bool → Boolean, int → Int64, f
 and json → String) and, as writable command metrics, ``Device Control/Power Cycle`` and
 ``Device Control/Fault/<kind>``; DDATA carries what changed.  Every payload but NDEATH carries
 ``seq`` (0 … 255, wrapping); NDEATH's ``bdSeq`` matches the NBIRTH of the same session.  DCMD
-metrics are set through the device's own validation; NCMD ``Node Control/Rebirth`` sends the
+metrics are set through the device's own validation (a command that is not a Sparkplug B
+payload is refused like a metric the device refuses); NCMD ``Node Control/Rebirth`` sends the
 births again.  Tahu's helper keeps sequence numbers in module globals; here they live in
 :class:`SparkplugNode`, one per session, and only its stateless ``addMetric`` is used.
 """
@@ -28,7 +29,7 @@ from devsim.core.device import Device
 from devsim.core.points import Point
 from devsim.runtime import requests as rq
 
-__all__ = ["DATATYPES", "GROUP", "NAMESPACE", "SparkplugNode", "command_request", "metric_value"]
+__all__ = ["DATATYPES", "GROUP", "NAMESPACE", "SparkplugNode", "command_request", "decode_command", "metric_value"]
 
 NAMESPACE = "spBv1.0"
 GROUP = "devsim"
@@ -136,24 +137,32 @@ class SparkplugNode:
     def device_death(self, device: Device) -> tuple[str, bytes]:
         return self.topic("DDEATH", device.name), self._payload().SerializeToString()
 
-    def command(self, topic: str, data: bytes) -> tuple[str | None, list[tuple[str, Any]]]:
-        """A DCMD (device name, [(metric, value)]) or NCMD (None, ...); ValueError if it is neither
-        or does not decode."""
-        kind, device = self._parse(topic)
-        payload = tahu.Payload()
-        try:
-            payload.ParseFromString(data)
-        except Exception as exc:  # protobuf's DecodeError
-            raise ValueError(f"not a Sparkplug B payload: {exc}") from None
-        return device if kind == "DCMD" else None, [(m.name, metric_value(m)) for m in payload.metrics]
-
-    def _parse(self, topic: str) -> tuple[str, str | None]:
+    def command_target(self, topic: str) -> str | None:
+        """The device a DCMD topic names, None for the node's NCMD; ValueError for another topic."""
         parts = topic.split("/")
         if parts[:2] == [NAMESPACE, GROUP] and len(parts) == 5 and parts[2] == "DCMD" and parts[3] == self.plant:
-            return "DCMD", parts[4]
+            return parts[4]
         if parts[:2] == [NAMESPACE, GROUP] and len(parts) == 4 and parts[2] == "NCMD" and parts[3] == self.plant:
-            return "NCMD", None
+            return None
         raise ValueError(f"not a command topic of node {self.plant!r}: {topic!r}")
+
+
+def decode_command(data: bytes) -> list[tuple[str, Any]]:
+    """The (metric, value) pairs of a DCMD/NCMD payload (Sparkplug B 3.0 ch. 6, Payloads: a
+    protobuf ``Payload``); ValueError when the bytes are not one (not protobuf, fields the Sparkplug B
+    schema does not have) or carry no metric."""
+    payload = tahu.Payload()
+    try:
+        payload.ParseFromString(data)
+    except Exception as exc:  # protobuf's DecodeError
+        raise ValueError(f"not a Sparkplug B payload: {exc}") from None
+    size = payload.ByteSize()
+    payload.DiscardUnknownFields()
+    if payload.ByteSize() != size:
+        raise ValueError("not a Sparkplug B payload: fields its schema does not have")
+    if not payload.metrics:
+        raise ValueError("a Sparkplug B command without metrics")
+    return [(m.name, metric_value(m)) for m in payload.metrics]
 
 
 def command_request(device: Device, name: str, value: Any) -> rq.ControlRequest | None:

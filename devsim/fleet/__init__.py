@@ -9,6 +9,8 @@
 * :mod:`devsim.fleet.client` – the client side: :class:`~devsim.fleet.client.FleetClient` lists
   every device of every process and reaches any of them by name, with the methods of
   :class:`devsim.runtime.client.ControlClient` (``devsim ctl --fleet URL ...``).
+* :mod:`devsim.fleet.streams` – ``watch`` over the broker: a member's streams, addressed and kept
+  alive by topics.
 
 Needs aiomqtt (``pip install 'devsim-motion[fleet]'``).
 """

@@ -20,6 +20,10 @@ raised as :class:`devsim.runtime.client.ControlError`).  :class:`FleetClient` ha
   the process serving NAME; ``advance(seconds)`` advances every online process on virtual time
   and returns ``{process: new time}`` (an error of one is raised after the others advanced).
   ``now`` likewise, for every online process.
+* **Watching.** ``watch(device)`` (``devsim ctl --fleet URL watch``) streams the device's changes
+  and events as ``ControlClient.watch`` does, over the broker (:mod:`devsim.fleet.streams`), each
+  item tagged with the ``process`` that serves it; without a device, every device online in the
+  fleet.  It ends when the watched processes leave.
 """
 
 from __future__ import annotations
@@ -29,7 +33,7 @@ import contextlib
 import json
 import threading
 import uuid
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from typing import Any
 
 import aiomqtt
@@ -61,13 +65,17 @@ class AsyncFleetClient:
         self._changed = asyncio.Event()
         self._synced = asyncio.Event()
         self._next = 0
+        self.watches: dict[str, str] = {}  # stream topic -> the process that serves it
+        self._present = False  # our `watching` is set
+        self._items: asyncio.Queue[dict[str, Any] | BaseException | None] = asyncio.Queue()
 
     @property
     def reply_topic(self) -> str:
         return self.topics.reply(self.id)
 
     async def open(self) -> AsyncFleetClient:
-        client = mqtt_client(self.url, f"devsim-{self.id}")
+        gone = aiomqtt.Will(self.topics.watching(self.id), b"", qos=1, retain=True)  # clears a presence
+        client = mqtt_client(self.url, f"devsim-{self.id}", gone)
         try:
             await client.__aenter__()
         except aiomqtt.MqttError as exc:
@@ -94,6 +102,9 @@ class AsyncFleetClient:
             self._reader = None
         client, self._client = self._client, None
         if client is not None:
+            if self._present:  # the members stop our streams (a clean disconnect sends no will)
+                with contextlib.suppress(Exception):
+                    await client.publish(self.topics.watching(self.id), b"", qos=1, retain=True)
             with contextlib.suppress(Exception):
                 await client.__aexit__(None, None, None)
         for future in self._pending.values():
@@ -114,6 +125,8 @@ class AsyncFleetClient:
                 topic = message.topic.value
                 if topic == self.reply_topic:
                     self._answer(message.payload)
+                elif topic in self.watches:
+                    self._item(self.watches[topic], message.payload)
                 elif topic == marker:
                     self._synced.set()
                 else:
@@ -125,8 +138,11 @@ class AsyncFleetClient:
                         self.processes.pop(process, None)
                     else:
                         self.processes[process] = announcement
+                    if announcement is None or not announcement.get("online"):
+                        self._streams_end(process)
                     self._changed.set()
         except aiomqtt.MqttError as exc:
+            self._items.put_nowait(ConnectionError(f"fleet broker connection lost: {exc}"))
             for future in self._pending.values():
                 if not future.done():
                     future.set_exception(ConnectionError(f"fleet broker connection lost: {exc}"))
@@ -140,6 +156,56 @@ class AsyncFleetClient:
             future = self._pending.pop(str(data.get("id")), None)
             if future is not None and not future.done():
                 future.set_result(data)
+
+    # -- watching ------------------------------------------------------------------------
+    async def watch(self, device: str, names: list[str] | None = None, period: float | None = None) -> Any:
+        """Start watching ``device`` (see :mod:`devsim.fleet.streams`); the answer of its process
+        (device, names, period, t, stream).  The items come from :meth:`next_item`."""
+        if self._client is None:
+            raise ConnectionError("fleet client not open")
+        process = self.serving(device)
+        if not self._present:
+            await self._client.subscribe(self.topics.stream(self.id, "+"), qos=0)
+            await self._client.publish(self.topics.watching(self.id), b"1", qos=1, retain=True)
+            self._present = True
+        self._next += 1
+        stream = self.topics.stream(self.id, self._next)
+        self.watches[stream] = process
+        try:
+            return await self.ask(process, "watch", device=device, names=names, period=period, stream_to=stream)
+        except BaseException:
+            self.watches.pop(stream, None)
+            raise
+
+    def _item(self, process: str, payload: Any) -> None:
+        try:
+            item = json.loads(payload)
+        except (ValueError, RecursionError, TypeError):
+            return
+        if isinstance(item, dict):
+            item.pop("watch", None)
+            self._items.put_nowait({**item, "process": process})
+
+    def _streams_end(self, process: str) -> None:
+        for stream in [s for s, p in self.watches.items() if p == process]:
+            del self.watches[stream]
+            self._items.put_nowait(None)
+
+    async def next_item(self, timeout: float | None = None) -> dict[str, Any] | None:
+        """The next item of any stream of this client; None once every watched process has
+        left; TimeoutError after ``timeout`` seconds without one; ConnectionError when the broker
+        is lost."""
+        while True:
+            if not self.watches and self._items.empty():
+                return None
+            try:
+                item = await asyncio.wait_for(self._items.get(), timeout)
+            except TimeoutError:
+                raise TimeoutError(f"nothing watched changed within {timeout:g} s") from None
+            if isinstance(item, BaseException):
+                raise item
+            if item is not None:
+                return item
 
     # -- the listing ---------------------------------------------------------------------
     def devices(self) -> list[dict[str, Any]]:
@@ -285,6 +351,28 @@ class FleetClient(ControlOps):
                          online: bool = True) -> list[dict[str, Any]]:
         """Wait (bounded) until the named devices are online (or offline)."""
         return self._run(self.fleet.wait_for_devices(list(names), timeout, online=online))  # type: ignore[no-any-return]
+
+    def watch(self, device: str | None, names: list[str] | None = None, *, period: float | None = None,
+              timeout: float | None = None) -> Iterator[dict[str, Any]]:
+        """Changes and events of ``device`` (None: of every device online in the fleet) as they
+        happen, as :meth:`devsim.runtime.client.ControlClient.watch` gives them plus ``process``,
+        on a connection of its own; ends when the watched processes leave.  ``timeout``: at most
+        that long without an item (TimeoutError).  Close the generator to stop watching."""
+        devices = [device] if device is not None else [
+            str(row["name"]) for row in self.devices() if row["online"] and not row.get("clash")]
+        if not devices:
+            raise ControlError(f"no device online in the fleet {self.fleet.url}", "UnknownDevice")
+        watcher = FleetClient(self.fleet.url, timeout=self.fleet.timeout)
+        try:
+            for name in devices:
+                watcher._run(watcher.fleet.watch(name, names, period))
+            while True:
+                item = watcher._run(watcher.fleet.next_item(timeout))
+                if item is None:
+                    return
+                yield item
+        finally:
+            watcher.close()
 
     def advance(self, seconds: float, device: str | None = None) -> Any:  # type: ignore[override]
         """Advance the process serving ``device`` (its new time), or every process ({process: time})."""

@@ -11,7 +11,8 @@ taken from it (``devsim run/up --fleet URL``).
    ``"online": false`` (retained; MQTT 5 message expiry of 24 h, so a crashed process's mark
    does not stay for ever);
 3. answers each request with :func:`devsim.runtime.ops.answer` – the very code of the control
-   API (its op table), so ops, validation and error types are the same.
+   API (its op table), so ops, validation and error types are the same; a ``watch`` request
+   starts a stream published on the broker (:mod:`devsim.fleet.streams`).
 
 A request is the control API's JSON request plus ``"reply_to"``: the topic for the answer, which
 must lie under ``ROOT/client/`` (a member publishes nothing outside its own topics and the
@@ -41,10 +42,11 @@ from paho.mqtt.packettypes import PacketTypes
 from paho.mqtt.properties import Properties
 
 from devsim.core.clock import VirtualClock
+from devsim.fleet.streams import StreamServer
 from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url, process_id
 from devsim.runtime import Runtime, ops
 from devsim.runtime.control import MAX_LINE
-from devsim.runtime.ops import ErrorResponse, OkResponse
+from devsim.runtime.ops import ErrorResponse, OkResponse, WatchStart
 from devsim.runtime.requests import Devices
 
 __all__ = ["FleetClash", "FleetMember", "join_fleet"]
@@ -128,6 +130,7 @@ class FleetMember:
         self._task: asyncio.Task[None] | None = None
         self._sending: set[asyncio.Task[None]] = set()
         self._closing = False
+        self.streams = StreamServer(runtime, self.topics, self.process)
 
     @property
     def request_topic(self) -> str:
@@ -187,6 +190,7 @@ class FleetMember:
 
     async def _announce(self, client: aiomqtt.Client) -> None:
         await client.subscribe(self.request_topic, qos=0)
+        await self.streams.subscribe(client)
         await client.publish(self.topics.announcement(self.process), json.dumps(self.announcement(True)),
                              qos=1, retain=True)
 
@@ -221,15 +225,20 @@ class FleetMember:
             return client
 
     async def _serve(self, client: aiomqtt.Client) -> None:
-        async for message in client.messages:
-            if message.topic.value != self.request_topic:
-                continue
-            answer = self.answer(message.payload, message.properties)
-            if answer is not None:  # sent while the next request is handled (answers carry their id)
-                topic, payload, properties = answer
-                sending = asyncio.ensure_future(client.publish(topic, payload, qos=0, properties=properties))
-                self._sending.add(sending)
-                sending.add_done_callback(self._sent)
+        pump = asyncio.ensure_future(self.streams.pump(client))
+        try:
+            async for message in client.messages:
+                if message.topic.value != self.request_topic:
+                    self.streams.handle(message.topic.value, message.payload)
+                    continue
+                answer = self.answer(message.payload, message.properties)
+                if answer is not None:  # sent while the next request is handled (answers carry their id)
+                    topic, payload, properties = answer
+                    sending = asyncio.ensure_future(client.publish(topic, payload, qos=0, properties=properties))
+                    self._sending.add(sending)
+                    sending.add_done_callback(self._sent)
+        finally:
+            pump.cancel()
 
     def _sent(self, task: asyncio.Task[None]) -> None:
         self._sending.discard(task)
@@ -244,16 +253,20 @@ class FleetMember:
         reply_to = getattr(properties, "ResponseTopic", None) if properties is not None else None
         correlation = getattr(properties, "CorrelationData", None) if properties is not None else None
         response: OkResponse | ErrorResponse
+        stream_to = None
         if len(raw) > MAX_LINE:
             response = ErrorResponse(error="request too long", type="BadRequest")
         else:
             line: bytes | str = raw
             with contextlib.suppress(ValueError, RecursionError):
                 data = json.loads(raw)
-                if isinstance(data, dict) and "reply_to" in data:
-                    reply_to = data.pop("reply_to")
+                if isinstance(data, dict) and ("reply_to" in data or "stream_to" in data):
+                    reply_to = data.pop("reply_to", reply_to)
+                    stream_to = data.pop("stream_to", None)
                     line = json.dumps(data)
             response = ops.answer(self.runtime, line)
+            if isinstance(response, OkResponse) and isinstance(response.result, WatchStart):
+                response = self.streams.start(response.result, response.id, stream_to)
         if not self._reply_allowed(reply_to):
             return None
         out: Properties | None = None
@@ -269,6 +282,7 @@ class FleetMember:
     async def close(self) -> None:
         """Leave: clear the retained announcement, disconnect (no last will on a clean stop)."""
         self._closing = True
+        self.streams.close()
         if self._task is not None:
             self._task.cancel()
             with contextlib.suppress(BaseException):

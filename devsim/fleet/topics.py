@@ -9,6 +9,8 @@ URL names a fleet, so several fleets can share one broker)::
     ROOT/process/PROCESS/request    control-API requests for that process's devices (JSON)
     ROOT/client/CLIENT/reply        answers to one client's requests
     ROOT/client/CLIENT/sync         the client's own marker: all retained announcements are in
+    ROOT/client/CLIENT/watching     retained "1" while the client watches; cleared by its last will
+    ROOT/client/CLIENT/watch/N      the items of one watch stream (``devsim ctl --fleet URL watch``)
 
 ``PROCESS`` is ``HOST-PID-XXXX`` (four random hex digits, so that processes in containers that
 share a host name and a pid stay apart; a host name's ``/``, ``+``, ``#`` and spaces become
@@ -116,6 +118,28 @@ class Topics(msgspec.Struct, frozen=True):
 
     def sync(self, client: str) -> str:
         return f"{self.root}/client/{client}/sync"
+
+    def watching(self, client: str) -> str:
+        """Retained ``1`` while ``client`` watches (its last will clears it): the members serve
+        its streams as long as it is there."""
+        return f"{self.root}/client/{client}/watching"
+
+    def stream(self, client: str, number: int | str) -> str:
+        """The topic of a client's watch stream ``number`` (``+``: the filter of all of them)."""
+        return f"{self.root}/client/{client}/watch/{number}"
+
+    @property
+    def presences(self) -> str:
+        """The filter that matches every client's ``watching``."""
+        return f"{self.root}/client/+/watching"
+
+    def client_of(self, topic: str) -> str | None:
+        """The CLIENT of a ``ROOT/client/CLIENT/...`` topic, or None."""
+        head = f"{self.root}/client/"
+        if not topic.startswith(head):
+            return None
+        client, slash, _rest = topic[len(head):].partition("/")
+        return client if client and slash else None
 
     def process_of(self, topic: str) -> str | None:
         """The PROCESS of an announcement topic, or None."""

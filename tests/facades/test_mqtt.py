@@ -1,8 +1,8 @@
 """The MQTT facade in the devsim convention (issue 14), on a real mosquitto and on the embedded
 amqtt broker, checked with mosquitto_sub / mosquitto_pub: birth, status, retained state, state
-after a set and after the device changed by itself (sampled at the rate, in virtual time),
-fault and power-cycle commands, refusals on …/error, and the last will when ``devsim run`` is
-killed."""
+after a set and after the device changed by itself (sampled at the rate, in virtual time; at once
+after a moment of the model: test_mqtt_events.py), fault and power-cycle commands, refusals on
+…/error, and the last will when ``devsim run`` is killed."""
 
 from __future__ import annotations
 
@@ -92,14 +92,18 @@ def test_a_set_and_a_change_by_the_device_are_published(served: Served) -> None:
         pub(served.port, f"{served.base}/set/input.I1", "false")  # plain text as well as JSON
         assert sub.wait(f"{state}/input.I1", lambda m: m.json() is False)
 
-        served.runtime.set("x", "input.I2", True)  # through the control API: seen at the next sample
-        with Sub(served.port, f"{state}/input.I2") as late:
-            assert late.wait(f"{state}/input.I2").json() is False  # not sampled yet
+        # an analog quantity set through the control API is no moment of the model (an input
+        # would be: tests/facades/test_mqtt_events.py): it is seen at the next sample
+        temperature = f"{state}/quantity.heatsink_temperature"
+        before = sub.wait(temperature).json()
+        served.runtime.set("x", "quantity.heatsink_temperature", before + 11.5)
+        with Sub(served.port, temperature) as late:
+            assert late.wait(temperature).json() == before  # not sampled yet
         served.runtime.advance(RATE)
-        assert sub.wait(f"{state}/input.I2", lambda m: m.json() is True)
-    with Sub(served.port, f"{state}/input.I2") as late:  # and it is what a newcomer gets
-        retained = late.wait(f"{state}/input.I2")
-        assert retained.retain and retained.json() is True
+        assert sub.wait(temperature, lambda m: m.json() == before + 11.5)
+    with Sub(served.port, temperature) as late:  # and it is what a newcomer gets
+        retained = late.wait(temperature)
+        assert retained.retain and retained.json() == before + 11.5
 
 
 def test_fault_and_power_cycle_commands(served: Served) -> None:

@@ -111,3 +111,40 @@ def test_ndeath_with_the_birth_bdseq_when_devsim_is_killed(broker_port: int) -> 
             assert parse_payload_to_metric_dict(death)["bdSeq"].value == birth["bdSeq"].value
         finally:
             sim.stop()
+
+
+NOT_SPARKPLUG = [
+    pytest.param(b"not protobuf", "not a Sparkplug B payload", id="text"),
+    pytest.param(b'{"input.I1": true}', "not a Sparkplug B payload", id="json"),
+    pytest.param(b"\x78\x01", "not a Sparkplug B payload", id="protobuf-field-15"),  # the schema stops at 5
+    pytest.param(b"", "without metrics", id="empty"),
+]
+
+
+@pytest.mark.parametrize(("payload", "words"), NOT_SPARKPLUG)
+def test_a_command_that_is_not_sparkplug_is_refused_on_the_devices_error_topic(
+        broker_port: int, payload: bytes, words: str) -> None:
+    """A DCMD whose payload is not a Sparkplug B protobuf ``Payload`` is answered on
+    ``devsim/<plant>/<device>/error`` (docs/facades/mqtt.md), an NCMD's on the plant's; the node
+    goes on serving (the next DCMD is taken)."""
+    plant = f"n{next(_plants)}"
+    runtime = Runtime(virtual=True).start()
+    try:
+        device = runtime.add_device("sers", "x")
+        with Sub(broker_port, f"{SPB}/+/{plant}/#", f"devsim/{plant}/#").sync() as sub:
+            runtime.run(start_mqtt(runtime, [device], f"mqtt://127.0.0.1:{broker_port}", plant=plant,
+                                   convention="sparkplug", rate=0.5), timeout=20)
+            sub.wait(f"{SPB}/DBIRTH/{plant}/x")
+            pub(broker_port, f"{SPB}/DCMD/{plant}/x", payload)
+            error = sub.wait(f"devsim/{plant}/x/error")
+            assert not error.retain
+            body = error.json()
+            assert body["topic"] == f"{SPB}/DCMD/{plant}/x" and words in body["error"]
+            pub(broker_port, f"{SPB}/NCMD/{plant}", payload)
+            node_error = sub.wait(f"devsim/{plant}/error").json()
+            assert node_error["topic"] == f"{SPB}/NCMD/{plant}" and words in node_error["error"]
+            pub(broker_port, f"{SPB}/DCMD/{plant}/x", dcmd(("input.I1", T.Boolean, True)))
+            ddata = payload_from_string(sub.wait(f"{SPB}/DDATA/{plant}/x").payload)
+            assert parse_payload_to_metric_dict(ddata)["input.I1"].value is True
+    finally:
+        runtime.stop()

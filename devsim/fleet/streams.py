@@ -1,0 +1,119 @@
+"""Watch streams over the fleet's broker: ``devsim ctl --fleet URL watch`` (the member's side).
+
+Over ``--control`` a watch stream lives on its TCP connection (:mod:`devsim.runtime.control`);
+over a broker there is no connection between a client and a member, so a stream is addressed and
+kept alive by topics (:class:`devsim.fleet.topics.Topics`):
+
+* the client publishes a retained ``1`` on ``ROOT/client/CLIENT/watching`` before it asks, with a
+  last will that clears it (and clears it itself when it closes);
+* it sends the control API's ``watch`` request with ``"stream_to": "ROOT/client/CLIENT/watch/N"``;
+  the member answers as the control server does (device, names, period, t; plus ``stream``) and
+  publishes every item of a :class:`~devsim.runtime.watch_stream.WatchStream` there as the
+  control server's JSON line (``{"watch": ID, "t": …, "device": …, "type": …}``), QoS 0, in
+  order;
+* the member follows every client's ``watching`` and stops a client's streams when it is cleared
+  (the client closed, or died: its will).  After a reconnection it takes the retained presences
+  again and, at its own marker (``ROOT/client/PROCESS-streams/sync``, which the broker hands back
+  after them), stops the streams of clients that are gone.
+
+Runs in the runtime's loop, as the member does.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+from typing import Any
+
+import aiomqtt
+
+from devsim.fleet.topics import Topics
+from devsim.runtime import Runtime, ops
+from devsim.runtime.ops import ErrorResponse, OkResponse, WatchStart
+from devsim.runtime.watch_stream import WatchStream
+
+__all__ = ["MAX_BACKLOG", "StreamServer"]
+
+MAX_BACKLOG = 20000  # items waiting for the broker before the stream that adds one more ends
+
+
+class StreamServer:
+    """The watch streams one member serves, keyed by the client that watches."""
+
+    def __init__(self, runtime: Runtime, topics: Topics, process: str) -> None:
+        self.runtime = runtime
+        self.topics = topics
+        self.marker = topics.sync(f"{process}-streams")
+        self.present: set[str] = set()  # clients whose `watching` is set
+        self.streams: dict[str, list[WatchStream]] = {}  # client -> its streams
+        self.outbox: asyncio.Queue[tuple[str, bytes]] = asyncio.Queue()
+
+    # -- the connection ---------------------------------------------------------------------
+    async def subscribe(self, client: aiomqtt.Client) -> None:
+        """On each (re)connection: take every client's presence, then our marker."""
+        self.present.clear()
+        await client.subscribe(self.topics.presences, qos=1)
+        await client.subscribe(self.marker, qos=0)
+        await client.publish(self.marker, b"sync", qos=0)
+
+    async def pump(self, client: aiomqtt.Client) -> None:
+        """Publish the streams' items in order until the connection fails (the member's message
+        loop sees that and reconnects)."""
+        with contextlib.suppress(aiomqtt.MqttError):
+            while True:
+                topic, payload = await self.outbox.get()
+                await client.publish(topic, payload, qos=0)
+
+    def handle(self, topic: str, payload: Any) -> None:
+        """A presence (``watching``) or our marker."""
+        if topic == self.marker:
+            for client in [c for c in self.streams if c not in self.present]:
+                self.drop(client)
+            return
+        client = self.topics.client_of(topic)
+        if client is None or topic != self.topics.watching(client):
+            return
+        if payload:
+            self.present.add(client)
+        else:
+            self.present.discard(client)
+            self.drop(client)
+
+    # -- streams ----------------------------------------------------------------------------
+    def start(self, start: WatchStart, watch_id: Any, stream_to: Any) -> OkResponse | ErrorResponse:
+        """Start the stream a ``watch`` request asked for (its answer)."""
+        client = self.topics.client_of(stream_to) if isinstance(stream_to, str) else None
+        if client is None or any(c in stream_to for c in "+#\x00") or len(stream_to) > 1024:
+            return ErrorResponse(id=watch_id, type="BadRequest", error=(
+                f"watch over the fleet needs 'stream_to', a topic under {self.topics.root}/client/CLIENT/"
+                f" (and a retained '1' on {self.topics.watching('CLIENT')} while CLIENT watches)"))
+        if client not in self.present:
+            return ErrorResponse(id=watch_id, type="BadRequest",
+                                 error=f"{self.topics.watching(client)} is not set: nobody is watching")
+
+        def send(item: dict[str, Any]) -> None:
+            if self.outbox.qsize() >= MAX_BACKLOG:  # the broker does not take them: end this watch
+                stream.stop()
+                return
+            line = json.dumps({"watch": watch_id, **ops.jsonable(item)}, separators=(",", ":"))
+            self.outbox.put_nowait((stream_to, line.encode("utf-8")))
+
+        try:
+            stream = WatchStream(self.runtime, self.runtime.device(start.device), send, names=start.names,
+                                 period=start.period)
+        except Exception as exc:
+            return ErrorResponse(id=watch_id, error=ops.clip(ops.error_text(exc)), type=type(exc).__name__)
+        self.streams.setdefault(client, []).append(stream)
+        answer = OkResponse(id=watch_id, result={"device": start.device, "names": stream.names, "period": stream.period,
+                                                 "t": self.runtime.clock.now(), "stream": stream_to})
+        stream.start()  # its first items (every value) go to the outbox; the answer to the reply topic
+        return answer
+
+    def drop(self, client: str) -> None:
+        for stream in self.streams.pop(client, []):
+            stream.stop()
+
+    def close(self) -> None:
+        for client in list(self.streams):
+            self.drop(client)
