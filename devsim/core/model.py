@@ -72,8 +72,8 @@ class Model:
         """An error the device reports, by its code in the kind's error table
         (:attr:`devsim.core.kit.Reference.errors`), where the logs find its text; ``refused``: the
         device answered a host's command with it.  Listeners of topic ``device_error`` hear
-        ``(code, refused)``; announce it before a ``record_event("error")`` of the same moment,
-        which the logs then leave out."""
+        ``(code, refused)``; call it right before a ``record_event("error")`` (or ``"error N"``)
+        of the same moment, which the logs then leave out."""
         self.announce("device_error", str(code), refused)
 
     # -- power ------------------------------------------------------------------------------

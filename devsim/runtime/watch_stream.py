@@ -106,7 +106,7 @@ class WatchStream:
             self._watch.start()
 
     def _event(self, _time: float, name: str) -> None:
-        if name == "error" and self._coded:
+        if self._coded and name.split(" ", 1)[0] == "error":  # "error", "error 5"
             self._coded = False
             return  # said with its code and text by _device_error
         self._emit("error" if "error" in name.lower() else "event", name=name)

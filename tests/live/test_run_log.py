@@ -162,3 +162,21 @@ def test_qq_prints_nothing_on_stderr_and_the_ports_on_stdout(tmp_path: Path) -> 
         assert _rest(sim) == []
     finally:
         sim.stop()
+
+
+def test_an_ip247_module_error_has_its_text_and_no_second_bare_line() -> None:
+    """A kind that records ``error N``: the log line is the number with the text of its error
+    table, once."""
+    from devsim.observe.live_log import attach_log
+    from devsim.runtime import Runtime
+
+    runtime = Runtime(virtual=True).start()
+    try:
+        module = runtime.add_device("ip247").model
+        runtime.advance(2)
+        lines: list[str] = []
+        runtime.call(attach_log, runtime, 1, lines.append)
+        runtime.call(module.set_error, None, 5)
+        assert lines == ["devsim: 2.000 ip247 error 5: Auftragsliste AG ist voll (AG job list full); PG F85"]
+    finally:
+        runtime.stop()
