@@ -180,3 +180,15 @@ def test_an_ip247_module_error_has_its_text_and_no_second_bare_line() -> None:
         assert lines == ["devsim: 2.000 ip247 error 5: Auftragsliste AG ist voll (AG job list full); PG F85"]
     finally:
         runtime.stop()
+
+
+def test_up_qq_prints_nothing_on_stderr_and_its_ports_on_stdout(tmp_path: Path) -> None:
+    plant = tmp_path / "plant.yaml"
+    plant.write_text("devices:\n  - {name: a, kind: sers, transport: {tcp: {port: 0}}, config: {boot_time: 0.05}}\n")
+    up = Proc("up", str(plant), "-qq")
+    try:
+        up.expect(lambda line: line.startswith("a: tcp "))
+        up.expect(lambda line: line == "a: ready")
+        assert _rest(up) == []  # no file descriptor line, no "plant up" line
+    finally:
+        up.stop()
