@@ -45,7 +45,7 @@ from devsim.cli.options import (
     modbus_for,
 )
 from devsim.core.registry import UnknownKind, device_class, kinds
-from devsim.observe.live_log import attach_log, level_of, log_options
+from devsim.observe.live_log import DEFAULT_LEVEL, attach_log, banner, level_of, log_options
 
 if TYPE_CHECKING:  # imported where used: `devsim run` starts faster without them
     from devsim.core.device import Device
@@ -614,8 +614,8 @@ async def _serve(plan: _Plan) -> None:
             for device in devices:  # NAME: ready, each time it has booted and listens
                 device.on_ready(lambda name=device.name: _say(f"{name}: ready"))
             attach_log(runtime, plan.log_level)
-            names = ", ".join(device.name for device in devices)
-            print(f"devsim: serving {names}; Ctrl-C to stop", file=sys.stderr, flush=True)
+            if plan.log_level >= DEFAULT_LEVEL:  # (-q: warnings and errors only)
+                print(banner(runtime, devices), file=sys.stderr, flush=True)
             # What exists now (modules, tables, devices) lives as long as the process: keep it
             # out of the garbage collector's scans, so that a request's few objects are cheap.
             gc.freeze()

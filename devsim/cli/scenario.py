@@ -21,7 +21,7 @@ import click
 
 from devsim.cli.options import check_fleet
 from devsim.core.config import ConfigError, LineDict, load_yaml
-from devsim.observe.live_log import attach_log, level_of, log_options
+from devsim.observe.live_log import DEFAULT_LEVEL, attach_log, level_of, log_options
 from devsim.transports import fdlimit
 
 __all__ = ["check", "scenario", "up"]
@@ -236,7 +236,8 @@ def up(
         )
         reason = next((why for applies, why in one_process if applies), None)
         if reason is not None:
-            click.echo(f"devsim: {reason} (--workers ignored)", err=True)
+            if level_of(verbose, quiet) >= 1:  # a warning
+                click.echo(f"devsim: {reason} (--workers ignored)", err=True)
             workers = 1
     if workers > 1:
         from devsim.scenario.workers import run_workers
@@ -283,11 +284,12 @@ async def _up(
     if trace_dir is not None:
         Path(trace_dir).mkdir(parents=True, exist_ok=True)
     limit = fdlimit.fd_limit()
-    print(f"devsim: the file descriptor limit {limit} allows about {fdlimit.capacity(limit)} ports",
-          file=sys.stderr, flush=True)
+    if log_level >= DEFAULT_LEVEL:  # (-q: warnings and errors only)
+        print(f"devsim: the file descriptor limit {limit} allows about {fdlimit.capacity(limit)} ports",
+              file=sys.stderr, flush=True)
     async with Runtime(virtual=virtual, speed=speed, state_dir=state_dir) as runtime:
         plant = await build_plant(runtime, spec, trace_dir=trace_dir, keep_going=True)  # type: ignore[arg-type]
-        if plant.refused:
+        if plant.refused and log_level >= 1:  # a warning (-qq: nothing but fatal errors)
             causes = sorted(set(plant.refused.values()))
             print(f"devsim: {len(plant.refused)} ports not opened ({'; '.join(causes)}; ulimit -n {limit}):"
                   f" {', '.join(list(plant.refused)[:5])}{' ...' if len(plant.refused) > 5 else ''}",
@@ -321,7 +323,8 @@ async def _up(
             device.on_ready(lambda name=device.name: print(f"{name}: ready", flush=True))
         attach_log(runtime, log_level)
         title = f"plant {spec.name!r} up" if getattr(spec, "name", None) else "plant up"
-        print(f"devsim: {title} ({len(plant.devices)} devices); Ctrl-C to stop", file=sys.stderr, flush=True)
+        if log_level >= DEFAULT_LEVEL:
+            print(f"devsim: {title} ({len(plant.devices)} devices); Ctrl-C to stop", file=sys.stderr, flush=True)
         # As `devsim run` does: what exists now lives as long as the process, so keep it out of
         # the garbage collector's scans.  Unfrozen, a full collection of a 1,000-device worker
         # takes about 70 ms, and every device of the worker misses a poll meanwhile.

@@ -53,9 +53,16 @@ class SerialSettings(msgspec.Struct, frozen=True):
     bytesize: int = 8
     parity: str = "N"  # "N", "E", "O", "M", "S"
     stopbits: float = 1
+    #: False when the data bits and parity were not visible (a Linux pty forces 8N1 whatever the
+    #: host sets): ``bytesize`` and ``parity`` are then the device's own, assumed, not seen.
+    frame_seen: bool = True
 
     def describe(self) -> str:
+        """``9600 8E1``; what was not seen is not claimed: ``9600 baud, 1 stop bit (data bits and
+        parity not visible)``."""
         stop = int(self.stopbits) if float(self.stopbits).is_integer() else self.stopbits
+        if not self.frame_seen:
+            return f"{self.baudrate} baud, {stop} stop bit{'' if stop == 1 else 's'} (data bits and parity not visible)"
         return f"{self.baudrate} {self.bytesize}{self.parity}{stop}"
 
     def char_time(self) -> float:

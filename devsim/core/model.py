@@ -68,6 +68,14 @@ class Model:
             del self.events[:5000]
         self.announce("recorded", now, name)
 
+    def report_error(self, code: str, *, refused: bool = False) -> None:
+        """An error the device reports, by its code in the kind's error table
+        (:attr:`devsim.core.kit.Reference.errors`), where the logs find its text; ``refused``: the
+        device answered a host's command with it.  Listeners of topic ``device_error`` hear
+        ``(code, refused)``; call it right before a ``record_event("error")`` (or ``"error N"``)
+        of the same moment, which the logs then leave out."""
+        self.announce("device_error", str(code), refused)
+
     # -- power ------------------------------------------------------------------------------
     def power_cycle(self, *, wipe: bool = False) -> None:
         """Switch the device off and on again; ``wipe`` erases non-volatile memory first."""

@@ -1,19 +1,26 @@
-"""``devsim run``/``devsim up`` on stderr: host connects and disconnects, line mismatches and
-device errors as they happen, one line each (``-v``/``-q`` raise or lower how much).
+"""``devsim run``/``devsim up`` on stderr: host connects and disconnects, line mismatches, device
+errors and (``-v``) the traffic as they happen, one line each (``-v``/``-q`` raise or lower how much).
 
-Levels (``2 + verbose - quiet``, clamped):
+Two streams: **stdout** carries the output a user or a script needs to connect (``NAME: pty
+/dev/pts/5``, ``control: ...``, ``NAME: ready``): it is never silenced.  **stderr** carries the log,
+at a level of ``2 + verbose - quiet`` (clamped):
 
-* 0 (``-qq``): nothing;
-* 1 (``-q``): device errors (events named ``...error...``, the model's own faults) and line
-  settings that do not match the device's (``host settings 4800 8N1 (mismatch, device 9600 8N1)``);
-* 2 (default): also host connects and disconnects, and the host's line settings;
-* 3 (``-v``): also every event (``move_start``, ``move_end`` ...), declared faults switched and
-  line faults started or ended.
+* 0 (``-qq``): nothing but fatal errors (``Error: ...`` and a non-zero exit status);
+* 1 (``-q``): warnings and errors: device errors by their number and text from the kind's error
+  table (``sers error P11 8192: drive error: limit switch``; :func:`~devsim.runtime.watch_stream.error_text`),
+  the model's own faults, line settings that do not match the device's (``host settings 4800
+  baud, 1 stop bit (data bits and parity not visible) (mismatch, device 9600 8N1)``), ports a
+  plant could not open;
+* 2 (default): also the banner (what each device expects: ``devsim: serving gms96 (main 9600 8E1,
+  address 3); Ctrl-C to stop``), host connects and disconnects and the host's line settings;
+* 3 (``-v``): also every event (``move_start``, ``move_end`` ...), declared faults switched, line
+  faults started or ended, host commands the device refused (``sers refused 34: = oder ?
+  erwartet — = or ? expected``) and every telegram both ways, decoded by the port's framing
+  (:mod:`devsim.observe.traffic_log`).
 
 A line: ``devsim: 12.300 sers connect host connected`` (device time, then
 :func:`devsim.runtime.watch_stream.describe`).  Built on :class:`~devsim.runtime.watch_stream.WatchStream`
-without point sampling: a quiet simulator stays idle.  stdout (ports, ``control:``, ``NAME: ready``)
-is not touched: scripts parse it.
+without point sampling: a quiet simulator stays idle.
 """
 
 from __future__ import annotations
@@ -24,7 +31,7 @@ from typing import Any
 
 import click
 
-__all__ = ["DEFAULT_LEVEL", "attach_log", "level_of", "log_options"]
+__all__ = ["DEFAULT_LEVEL", "attach_log", "banner", "expects", "level_of", "log_options"]
 
 DEFAULT_LEVEL = 2
 
@@ -67,13 +74,42 @@ def attach_log(runtime: Any, level: int, write: Callable[[str], None] | None = N
         stream = WatchStream(runtime, device, send, values=False)
         stream.start()
         streams.append(stream)
+    if level >= 3:
+        from devsim.observe.traffic_log import watch_traffic
+
+        watch_traffic(runtime, out)
     return streams
+
+
+def expects(runtime: Any, device: Any) -> str:
+    """What the host must set to talk to ``device``: each serial port's line settings (a port
+    with a network default has none) and the device's ``address`` where it has one, e.g.
+    ``main 9600 8E1, address 3``."""
+    from devsim.runtime.process import port_key
+
+    parts = []
+    for spec in device.ports:
+        line = runtime.lines.get(port_key(device.name, spec.name))
+        if line is not None and spec.default is None:
+            parts.append(f"{spec.name} {line.device_settings.describe()}")
+    if any(point.name == "address" and point.readable for point in device.points):
+        parts.append(f"address {device.read('address')}")
+    return ", ".join(parts)
+
+
+def banner(runtime: Any, devices: list[Any]) -> str:
+    """``devsim: serving gms96 (main 9600 8E1, address 3); Ctrl-C to stop``."""
+    names = ", ".join(f"{device.name} ({shown})" if (shown := expects(runtime, device)) else device.name
+                      for device in devices)
+    return f"devsim: serving {names}; Ctrl-C to stop"
 
 
 def log_options(command: Callable[..., Any]) -> Callable[..., Any]:
     """``-v``/``--verbose`` and ``-q``/``--quiet`` (both countable) for a command."""
     command = click.option("-q", "--quiet", count=True,
-                           help="Log less to stderr (-q: errors and mismatches only; -qq: nothing).")(command)
+                           help="Log less to stderr (-q: warnings and errors only; -qq: nothing but fatal errors)."
+                           )(command)
     return click.option("-v", "--verbose", count=True,
-                        help="Log more to stderr (default: connects, disconnects, mismatches, errors; "
-                             "-v: every event and fault).")(command)
+                        help="Log more to stderr (default: what each device expects, connects, disconnects, "
+                             "mismatches, errors; -v: also every event, refused command and telegram, decoded)."
+                        )(command)

@@ -10,6 +10,11 @@ item to ``send`` as it happens:
   ``[...].display``);
 * ``{"type": "event", "name": N}`` -- what the model records (``move_start``, ``move_end``,
   ``power_on`` ...; topic ``recorded``), ``"type": "error"`` when the name says ``error``;
+* ``{"type": "error" | "refused", "code": C, "text": T}`` -- an error the model reports by its
+  code (:meth:`devsim.core.model.Model.report_error`), its text from the kind's error table
+  (:attr:`devsim.core.kit.Reference.errors`; ``""`` when the table has no such row):
+  ``"refused"`` when it is the device's answer to a host's command (a bare ``error`` event of
+  the same moment is left out);
 * ``{"type": "fault", "name": KIND, "active": B}`` -- a declared fault switched
   (``fault_switched``); ``{"type": "drive_fault", "axis": A, "code": C}`` -- the model's own
   ``fault`` announcement (what a CANopen facade sends as EMCY);
@@ -31,7 +36,7 @@ from devsim.core.points import UnknownName
 from devsim.core.watch import PointWatch
 from devsim.runtime.process import port_key
 
-__all__ = ["DEFAULT_PERIOD", "WatchStream", "axis_names", "default_names", "describe"]
+__all__ = ["DEFAULT_PERIOD", "WatchStream", "axis_names", "default_names", "describe", "error_text"]
 
 DEFAULT_PERIOD = 0.1
 _AXIS_NAME = re.compile(r"^axis\.(?:[^.]+\.)?(position|velocity)$")
@@ -75,6 +80,7 @@ class WatchStream:
         self.period = period
         self._undo: list[Callable[[], Any]] = []
         self._watch: PointWatch | None = None
+        self._coded = False  # an error reported by its code, not yet followed by a bare ``error``
 
     def _emit(self, kind: str, **fields: Any) -> None:
         self.send({"t": round(self.device.clock.now(), 6), "device": self.device.name, "type": kind, **fields})
@@ -83,6 +89,7 @@ class WatchStream:
         """Listen and take the first sample (every watched value, as changes)."""
         model = self.device.model
         self._undo.append(model.listen("recorded", self._event))
+        self._undo.append(model.listen("device_error", self._device_error))
         self._undo.append(model.listen("fault_switched",
                                        lambda kind, active: self._emit("fault", name=kind, active=bool(active))))
         self._undo.append(model.listen("fault", lambda axis=None, code=None, *_: self._emit(
@@ -99,7 +106,14 @@ class WatchStream:
             self._watch.start()
 
     def _event(self, _time: float, name: str) -> None:
+        if self._coded and name.split(" ", 1)[0] == "error":  # "error", "error 5"
+            self._coded = False
+            return  # said with its code and text by _device_error
         self._emit("error" if "error" in name.lower() else "event", name=name)
+
+    def _device_error(self, code: str, refused: bool = False) -> None:
+        self._coded = True
+        self._emit("refused" if refused else "error", code=code, text=error_text(type(self.device), code))
 
     def _changes(self, changes: dict[str, Any]) -> None:
         for name, value in changes.items():
@@ -123,6 +137,18 @@ class WatchStream:
         self._undo.clear()
 
 
+_ERROR_TEXTS: dict[type, dict[str, str]] = {}
+
+
+def error_text(kind: type[Device], code: str) -> str:
+    """The text of error ``code`` in the error table of ``kind`` (a :class:`Device` class), ``""``
+    when it has no such row."""
+    texts = _ERROR_TEXTS.get(kind)
+    if texts is None:
+        texts = _ERROR_TEXTS[kind] = {row.code: row.text for row in kind.reference().errors}
+    return texts.get(code, "")
+
+
 def _remove(items: list[Any], item: Any) -> None:
     if item in items:
         items.remove(item)
@@ -138,6 +164,9 @@ def describe(item: dict[str, Any]) -> str:
     if kind == "change":
         value = item.get("value")
         return f"{head} {item.get('name')} {value if isinstance(value, str) else json.dumps(value)}"
+    if kind in ("error", "refused") and "code" in item:  # an error by its code: "sers error P11 8192: drive error: limit switch"
+        text = item.get("text")
+        return f"{head} {kind} {item['code']}" + (f": {text}" if text else "")
     if kind in ("event", "error"):
         name = str(item.get("name"))
         return f"{head} {name}" if kind == "error" and name.lower().startswith("error") else f"{head} {kind} {name}"

@@ -26,6 +26,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from devsim.observe.live_log import DEFAULT_LEVEL, level_of
 from devsim.scenario.schema import PlantSpec
 
 __all__ = ["run_workers", "split_plant"]
@@ -239,8 +240,9 @@ async def run_workers(
                     server = await asyncio.start_server(lambda r, w: _proxy(running, r, w), control.host, control.port)
                     shown = f"{control.host}:{server.sockets[0].getsockname()[1]}"
                 print(f"control: {shown}", flush=True)
-            print(f"devsim: plant up in {len(running)} worker processes ({len(spec.devices)} devices); Ctrl-C to stop",
-                  file=sys.stderr, flush=True)
+            if level_of(verbose, quiet) >= DEFAULT_LEVEL:  # (-q: warnings and errors only)
+                print(f"devsim: plant up in {len(running)} worker processes ({len(spec.devices)} devices);"
+                      " Ctrl-C to stop", file=sys.stderr, flush=True)
             stopping = asyncio.ensure_future(stop.wait())
             done, _ = await asyncio.wait([stopping, *ended], return_when=asyncio.FIRST_COMPLETED)
             status = 0 if stopping in done else 1

@@ -25,8 +25,10 @@ Three things make a pty behave like a serial port rather than a terminal (see th
   the host counts as matching and nothing is reported.
 
   Linux's pty driver forces CS8 without parity whatever a host sets (``pty_set_termios``), so
-  there only the baud rate and the stop bits are visible; data bits and parity are reported as
-  the device's own (the host is assumed to match in what cannot be seen).  The transport probes
+  there only the baud rate and the stop bits are visible; data bits and parity are taken as the
+  device's own (the host is assumed to match in what cannot be seen), and the settings say so
+  (``SerialSettings.frame_seen`` false: a log shows ``9600 baud, 1 stop bit (data bits and parity
+  not visible)``, never a parity the host did not set).  The transport probes
   this at start rather than assuming it.
 * **Reopening at 8E1 (Linux).**  glibc's ``tcsetattr`` reads the termios back after setting
   them and fails with EINVAL when nothing changed (``c_cc`` aside) while the PARENB/CSIZE read
@@ -281,7 +283,8 @@ class PtyTransport(Transport):
             # The pty forced CS8 / no parity: what the host asked for is unknowable, so it
             # counts as matching the device.
             known = self._preset or SerialSettings()
-            settings = msgspec.structs.replace(settings, bytesize=known.bytesize, parity=known.parity)
+            settings = msgspec.structs.replace(settings, bytesize=known.bytesize, parity=known.parity,
+                                               frame_seen=False)
         return settings
 
     def _check_settings(self) -> None:

@@ -162,7 +162,8 @@ def test_log_levels_on_a_drive_error() -> None:
         runtime.set("sers", "quantity.short_circuit", True)
         runtime.advance(0.2)
         runtime.fault("sers", "emergency_stop", True)  # a declared fault switched: -v only
-        errors = ["devsim: 3.000 sers error", "devsim: 3.000 sers drive_fault axis 1 code 0x2320"]
+        errors = ["devsim: 3.000 sers error P11 128: drive error: short circuit",
+                  "devsim: 3.000 sers drive_fault axis 1 code 0x2320"]
         assert logs[0] == []
         assert logs[1] == logs[2] == errors
         assert logs[3] == [*errors, "devsim: 3.200 sers fault emergency_stop on"]

@@ -151,8 +151,10 @@ async def test_host_settings_reported_from_slave_termios(recorder: Recorder) -> 
         # endpoint's own (a Recorder has none: 8N); baud and stop bits are the host's.
         reported = recorder.settings[-1]
         assert (reported.baudrate, reported.stopbits) == (4800, 2)
+        assert reported.frame_seen == transport.frame_visible  # (a log does not claim what it did not see)
         if not transport.frame_visible:
             assert (reported.bytesize, reported.parity) == (8, "N")
+            assert reported.describe() == "4800 baud, 2 stop bits (data bits and parity not visible)"
         else:
             assert (reported.bytesize, reported.parity) == (7, "E")
     finally:
@@ -173,7 +175,7 @@ async def test_baud_mismatch_garbles_and_matching_is_clean() -> None:
         seen = garble(sent, SerialSettings(9600), device)
         back = garble(seen, device, SerialSettings(9600))
         got = await asyncio.to_thread(_serial_exchange, transport.address, sent, len(back), 9600)
-        assert line.host == SerialSettings(9600)
+        assert line.host == SerialSettings(9600, frame_seen=transport.frame_visible)
         assert line.mismatch
         assert bytes(target.received) == seen != sent
         assert got == back
@@ -322,7 +324,7 @@ async def test_arming_keeps_the_hosts_speed_and_stop_bits() -> None:
                 assert port.read(1) == b"y"
 
         await asyncio.to_thread(host)
-        assert line.host == SerialSettings(4800, 8, "E", 2) and not line.mismatch
+        assert line.host == SerialSettings(4800, 8, "E", 2, frame_seen=transport.frame_visible) and not line.mismatch
     finally:
         await transport.close()
         line.close()

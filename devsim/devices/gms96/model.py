@@ -116,6 +116,7 @@ class Gms96Card(Model):
         self.references = References(
             clock=clock, indexer=self.indexer, stage=self.stage, coordinates=self.coordinates, params=self.params,
             signals=signals, image=self.image, geometry=geo, record_event=self.record_event,
+            report_error=self.report_error,
         )
         self.program = ProgramControl(
             executor=self.executor, flash=self.flash, image=self.image, outputs=self.outputs,

@@ -44,6 +44,7 @@ class References:
         image: ProcessImage,
         geometry: Settings,
         record_event: Callable[[str], None],
+        report_error: Callable[[str], None] = lambda code: None,
     ) -> None:
         self.clock = clock
         self.indexer = indexer
@@ -54,6 +55,7 @@ class References:
         self.image = image
         self.geometry = geometry  # the configured axis: counter_marks (P2.5)
         self.record_event = record_event
+        self.report_error = report_error  # a message of the error table (tables.MESSAGES), for the logs
 
     def run(self, p1: int, p2: int, p3: int, done: Callable[[bool], None], *, counter_track: bool) -> ReferenceRun:
         """A new run of ``Q P1;P2;P3`` (``counter_track``: P2.5, the counter input's marks)."""
@@ -320,6 +322,7 @@ class ReferenceRun:
         def stopped() -> None:
             if keep:
                 self.refs.image.post_message(tables.MESSAGE_REFERENCE_DISTANCE_LIMIT)
+                self.refs.report_error(str(tables.MESSAGE_REFERENCE_DISTANCE_LIMIT))
                 self.refs.stage.idxoff = not self.was_active
             self._finish(False, idxoff=not keep)
 

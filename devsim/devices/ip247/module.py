@@ -151,6 +151,8 @@ class Ip247Module(Model):
             self.channel.error = error
         else:
             unit.error = error
+        if error:  # by its number: the logs take its text from the error table (0: no error)
+            self.report_error(str(error))
         self.record_event(f"error {error}")
         self._leds()
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 __all__ = [
+    "DRIVE_ERRORS",
     "ELECTRICAL_PERIOD",
     "EMCY_CODES",
     "ERROR_DISPLAY",
@@ -34,6 +35,10 @@ WARNING_DISPLAY = ((2, "8"), (4, "9"), (32, "F"), (128, "H"), (1, "L"), (8, "A")
 
 # P11 bits that P11=0 may clear only once their cause is gone (spec G-P11CLEAR).
 OVERTEMP, STEP_LOSS, SHORT, UNDERVOLTAGE, STANDSTILL, LIMIT = 2, 32, 128, 512, 2048, 8192
+#: The drive errors, P11's bits (§4.8.3, P11), as the reference and the logs name them (``P11 8192``).
+DRIVE_ERRORS = {OVERTEMP: "overtemperature", STEP_LOSS: "step monitoring", SHORT: "short circuit",
+                UNDERVOLTAGE: "undervoltage", STANDSTILL: "standstill monitoring", 4096: "communication",
+                LIMIT: "limit switch"}
 #: The CiA 301/402 emergency error code of each P11 drive error (an EMCY from a CANopen facade).
 EMCY_CODES = {OVERTEMP: 0x4310, STEP_LOSS: 0x8611, SHORT: 0x2320, UNDERVOLTAGE: 0x3220, STANDSTILL: 0x8611,
               LIMIT: 0x7320}

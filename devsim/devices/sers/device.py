@@ -13,6 +13,7 @@ from typing import Any, ClassVar
 from devsim.core.device import Device
 from devsim.core.kit import ErrorCode, PortDef, Reference
 from devsim.devices.sers.config import SersConfig
+from devsim.devices.sers.constants import DRIVE_ERRORS
 from devsim.devices.sers.deviations import DEVIATIONS
 from devsim.devices.sers.drive_actions import DRIVE
 from devsim.devices.sers.errors import ERRNO
@@ -46,6 +47,8 @@ class SersDevice(Device):
         return Reference(
             commands=[*INTERACTIVE, *STATEMENTS, *COMMANDS],
             parameter_table=PARAMETER_TABLE,
-            errors=[ErrorCode(str(n), f"{de} — {en}", "§4.8.3.1") for n, (de, en) in sorted(ERRNO.items())],
+            errors=[*(ErrorCode(str(n), f"{de} — {en}", "§4.8.3.1") for n, (de, en) in sorted(ERRNO.items())),
+                    *(ErrorCode(f"P11 {bit}", f"drive error: {text}", "§4.8.3 P11")
+                      for bit, text in sorted(DRIVE_ERRORS.items()))],
             deviations=list(DEVIATIONS),
         )

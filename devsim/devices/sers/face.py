@@ -381,7 +381,7 @@ class SersFace(Face):
 
     def _error(self, line: CommandLine, errno: int, detail: str = "") -> None:
         line.error = True
-        self.model.power_stage.record_error(errno)
+        self.model.power_stage.record_error(errno, refused=True)
         self._put(line, error_text(errno, self.model.params.language == 1, self.model.cfg.encoding, detail))
 
     def spontaneous(self, text: str) -> None:

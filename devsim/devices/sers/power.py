@@ -166,7 +166,8 @@ class PowerStage:
         """Set a P11 bit: brake with P1030, open the relay, 50 ms later switch the phases off
         (§2.1.3, §2.1.4); short circuit and U < U_L switch off at once."""
         first = not self.errors & bit
-        if first:
+        if first:  # the code of the kind's error table (devsim.core.model.Model.report_error)
+            self._announce("device_error", f"P11 {bit}", False)
             self._record_event("error")
         self.errors |= bit
         if first:
@@ -230,8 +231,10 @@ class PowerStage:
         self.errors &= ~STEP_LOSS
         self.warnings &= ~STEP_LOSS
 
-    def record_error(self, errno: int) -> None:
-        """Every error message sets P12 value 16 and P1137 (§4.8.3.1)."""
+    def record_error(self, errno: int, refused: bool = False) -> None:
+        """Every error message sets P12 value 16 and P1137 (§4.8.3.1); ``refused``: the answer
+        to a host's command (for the logs, topic ``device_error``)."""
+        self._announce("device_error", str(errno), refused)
         self.errno = errno
         self.warn(16)
 
