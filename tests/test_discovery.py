@@ -9,12 +9,15 @@ from __future__ import annotations
 import json
 import os
 import re
+import shlex
 import shutil
 import socket
 import stat
 import subprocess
 import sys
 import tempfile
+import time
+import uuid
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -214,3 +217,29 @@ def test_up_with_workers_is_one_simulator(runtime: Path, tmp_path: Path) -> None
         assert read.returncode == 0, read.stderr
     finally:
         assert sim.interrupt() == 0
+
+
+def test_monitor_without_an_address_attaches_to_the_one_running(runtime: Path) -> None:
+    """In a real terminal (tmux): ``devsim monitor`` alone shows the one simulator running."""
+    assert shutil.which("tmux"), "tmux is needed (.ci/run installs it)"
+    sim, _address, _ = start("run", "sers", "--tcp", "0", "--virtual")
+    session = f"devsim-{uuid.uuid4().hex[:8]}"
+    environ = devsim_env()
+    command = " ".join(shlex.quote(part) for part in (
+        "env", f"PYTHONPATH={environ['PYTHONPATH']}", f"XDG_RUNTIME_DIR={environ['XDG_RUNTIME_DIR']}",
+        "TERM=xterm-256color", sys.executable, "-m", "devsim", "monitor")) + "; sleep 30"  # an error stays visible
+    try:
+        subprocess.run(["tmux", "new-session", "-d", "-s", session, "-x", "160", "-y", "50", "-c", str(ROOT),
+                        "sh", "-c", command], check=True, timeout=10)
+        deadline = time.monotonic() + 30
+        while "sers (sers)" not in (screen := _capture(session)):
+            assert "Error" not in screen and time.monotonic() < deadline, screen
+            time.sleep(0.1)  # polling the screen (bounded by the deadline), not a synchronisation sleep
+    finally:
+        subprocess.run(["tmux", "kill-session", "-t", session], capture_output=True)
+        assert sim.interrupt() == 0
+
+
+def _capture(session: str) -> str:
+    return subprocess.run(["tmux", "capture-pane", "-p", "-t", session], capture_output=True, text=True,
+                          timeout=10, check=True).stdout
