@@ -1,4 +1,6 @@
-"""Suite-wide hooks: the ``manual`` marker's arguments are checked, and counted per kind.
+"""Suite-wide hooks: the ``manual`` marker's arguments are checked, and counted per kind; the
+simulators the tests start keep their control sockets in a runtime directory of the test run's
+own (``XDG_RUNTIME_DIR``), apart from the user's.
 
 A test marked ``@pytest.mark.manual("§2.6.2.1", "the printer port always runs at 1200 baud")``
 checks one statement of its kind's manual (the kind is the test's folder under tests/).  The
@@ -7,13 +9,25 @@ summary at the end of a run says how many statements and sections each kind has 
 
 from __future__ import annotations
 
+import os
 import re
+import shutil
+import tempfile
 from collections import defaultdict
 
 import pytest
 
 SECTION = re.compile(r"§\d+(\.\d+)*[a-z]?( .+)?$")
 _walk: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
+
+
+_runtime_dir = tempfile.mkdtemp(prefix="devsim-rt-")  # short: a Unix socket path holds 107 bytes
+os.environ["XDG_RUNTIME_DIR"] = _runtime_dir
+os.environ.pop("DEVSIM_CONTROL", None)
+
+
+def pytest_unconfigure() -> None:
+    shutil.rmtree(_runtime_dir, ignore_errors=True)
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:

@@ -7,6 +7,7 @@
 * :mod:`devsim.cli.docgen` – the Markdown of ``devsim doc``;
 * :mod:`devsim.cli.replay` – ``devsim record`` and ``devsim replay``;
 * :mod:`devsim.cli.monitor` – ``devsim monitor``;
+* :mod:`devsim.cli.running` – ``devsim ps``, and which running simulator ``ctl`` and ``monitor`` mean;
 * :mod:`devsim.cli.scenario` – ``devsim check``, ``devsim scenario run`` and ``devsim up``.
 
 ``devsim plot`` lives in :mod:`devsim.observe.plot`.

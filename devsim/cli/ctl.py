@@ -1,4 +1,5 @@
-"""``devsim ctl``: the control API of a running simulator (``--control ADDR``) or of a fleet
+"""``devsim ctl``: the control API of a running simulator (``--control ADDR`` or NAME, or the only
+one running: :func:`devsim.cli.running.control_target`) or of a fleet
 (``--fleet mqtt://BROKER``, :mod:`devsim.fleet`) on the command line; results are printed as JSON,
 errors are one line.
 
@@ -39,6 +40,10 @@ def _connect(ctx: click.Context) -> tuple[str, Any]:
     from devsim.runtime.control import ControlAddressError
 
     addr, fleet = ctx.obj
+    if fleet is None:
+        from devsim.cli.running import control_target
+
+        addr = control_target(addr)
     try:
         if fleet is not None:
             from devsim.fleet.client import FleetClient
@@ -68,7 +73,8 @@ def _call(ctx: click.Context, request: rq.ControlRequest) -> None:
 @click.group()
 @click.option(
     "--control", "addr", envvar="DEVSIM_CONTROL", metavar="ADDR",
-    help="Control address of a running 'devsim run' (unix:/path.sock or [HOST:]PORT; env DEVSIM_CONTROL).",
+    help="Control address (unix:/path.sock or [HOST:]PORT) or name of a running simulator; default: the only one"
+    " running ('devsim ps'); env DEVSIM_CONTROL.",
 )
 @click.option(
     "--fleet", metavar="mqtt://BROKER[:PORT][/NAME]",
@@ -80,9 +86,15 @@ def ctl(ctx: click.Context, addr: str | None, fleet: str | None) -> None:
     if fleet is not None:
         check_fleet(fleet)
         addr = None
-    elif addr is None:
-        raise click.UsageError("Missing option '--control' (or '--fleet')")
     ctx.obj = (addr, fleet)
+
+
+@ctl.command(command_name("info"))
+@click.option("--device", metavar="NAME", help="With --fleet: only the process serving NAME (default: every one).")
+@click.pass_context
+def ctl_info(ctx: click.Context, device: str | None) -> None:
+    """The process: name, pid, uptime, clock, kinds, devices and ports (what 'devsim ps' lists)."""
+    _call(ctx, rq.Info(_fleet_device(ctx, device)))
 
 
 @ctl.command(command_name("devices"))

@@ -6,14 +6,19 @@
   port and the control address are printed on stdout, one per line, for scripts to parse::
 
       sers: pty /dev/pts/5
-      control: unix:/tmp/sers.sock
+      control: unix:/run/user/1000/devsim/sers-4242.sock
+
+  The control API is served on ``NAME-PID.sock`` in the user's runtime directory
+  (:mod:`devsim.runtime.discovery`) unless ``--control ADDR`` names another address or
+  ``--no-control`` none.
 
   A port whose kind declares a default network transport (``PortDef.default``, e.g.
   ``"udp:5050"``) is served there on loopback; ``--port NAME=SPEC`` (repeatable) puts one port on
   ``pty``, ``udp:[HOST:]PORT``, ``tcp:[HOST:]PORT`` or ``rfc2217:[HOST:]PORT`` instead, and
   ``--pty``/``--link``/``--tcp``/``--rfc2217`` choose for the other ports.
 
-* ``devsim ctl --control ADDR devices|read|set|state|power-cycle|advance|now|line|...`` – talk to a
+* ``devsim ps`` – the running simulators (:mod:`devsim.cli.running`).
+* ``devsim ctl [--control ADDR|NAME] devices|read|set|state|power-cycle|advance|now|line|...`` – talk to a
   running simulator's control API and print the JSON result; ``devsim ctl --fleet mqtt://BROKER
   ...`` the same with every device of a fleet (``devsim run/up --fleet``, :mod:`devsim.fleet`).
 
@@ -287,7 +292,9 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
 @click.option(
     "--trace", metavar="FILE", help="Write a timestamped trace of the line traffic (FILE.pcap: a pcap file for Wireshark)."
 )
-@click.option("--control", metavar="ADDR", help="Serve the control API on unix:/path.sock or [HOST:]PORT.")
+@click.option("--control", metavar="ADDR", help="Serve the control API on unix:/path.sock or [HOST:]PORT (default:"
+              " NAME-PID.sock in the runtime directory, see 'devsim ps').")
+@click.option("--no-control", is_flag=True, help="Serve no control API.")
 @click.option("--control-allow-remote", is_flag=True, help="Allow a non-loopback --control host.")
 @click.option(
     "--drives",
@@ -372,6 +379,7 @@ def run(
     virtual: bool,
     trace: str | None,
     control: str | None,
+    no_control: bool,
     control_allow_remote: bool,
     drives: str | None,
     pacing: bool,
@@ -441,22 +449,13 @@ def run(
     if virtual and speed != 1.0:
         raise click.UsageError("--speed and --virtual exclude each other")
 
-    control_addr: ControlAddress | None = None
-    if control is not None:
-        from devsim.runtime.control import ControlAddressError, parse_address
+    from devsim.cli.running import control_option
 
-        try:
-            control_addr = parse_address(control)
-        except ControlAddressError as exc:
-            raise click.UsageError(f"--control: {exc}") from None
-        if not control_allow_remote and not control_addr.is_loopback():
-            raise click.UsageError(
-                f"--control: refusing non-loopback host {control_addr.host!r} (add --control-allow-remote)"
-            )
-
+    configs = _device_configs(cls, kind, config_file, _parse_drives(drives) if drives is not None else None)
+    control_addr = control_option(control, no_control, kind, allow_remote=control_allow_remote)
     plan = _Plan(
         kind=kind,
-        devices=_device_configs(cls, kind, config_file, _parse_drives(drives) if drives is not None else None),
+        devices=configs,
         port=port,
         state_dir=state_dir,
         speed=speed,
@@ -525,7 +524,7 @@ async def _serve(plan: _Plan) -> None:
     for signum in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(signum, stop.set)
 
-    runtime = Runtime(virtual=plan.virtual, speed=plan.speed, state_dir=plan.state_dir)
+    runtime = Runtime(virtual=plan.virtual, speed=plan.speed, state_dir=plan.state_dir, name=plan.kind)
     async with runtime:
         stage = "create the devices"
         server: Any = None
@@ -681,6 +680,7 @@ LAZY_COMMANDS: dict[str, str] = {
     "ctl": "devsim.cli.ctl",
     "monitor": "devsim.cli.monitor",
     "plot": "devsim.observe.plot",
+    "ps": "devsim.cli.running",
     "record": "devsim.cli.replay",
     "replay": "devsim.cli.replay",
     "scenario": "devsim.cli.scenario",

@@ -1,4 +1,4 @@
-"""``devsim monitor [--control ADDR]``: the live monitor (:mod:`devsim.observe.monitor`) on the
+"""``devsim monitor [--control ADDR|NAME]``: the live monitor (:mod:`devsim.observe.monitor`) on the
 control API of a running ``devsim run``, ``devsim up`` or real-time scenario."""
 
 from __future__ import annotations
@@ -10,12 +10,13 @@ __all__ = ["monitor"]
 
 @click.command("monitor")
 @click.option(
-    "--control", "addr", envvar="DEVSIM_CONTROL", required=True, metavar="ADDR",
-    help="Control address of the running plant (unix:/path.sock or [HOST:]PORT; env DEVSIM_CONTROL).",
+    "--control", "addr", envvar="DEVSIM_CONTROL", metavar="ADDR",
+    help="Control address (unix:/path.sock or [HOST:]PORT) or name of the running plant; default: the only one"
+    " running ('devsim ps'); env DEVSIM_CONTROL.",
 )
 @click.option("--period", type=float, default=0.1, show_default=True, metavar="SECONDS",
               help="How often values are sampled, in device time.")
-def monitor(addr: str, period: float) -> None:
+def monitor(addr: str | None, period: float) -> None:
     """A live view of every device: state, display, faults, axes with sparklines, inputs (press
     to flip) and outputs, the last telegrams per port; f: fault menu, a/A: advance virtual time,
     q: quit.  Needs the extra [monitor] (textual)."""
@@ -27,6 +28,9 @@ def monitor(addr: str, period: float) -> None:
         from devsim.observe.monitor import MonitorApp
     except ImportError as exc:
         raise click.ClickException(f"devsim monitor needs textual: pip install 'devsim-motion[monitor]' ({exc})") from None
+    from devsim.cli.running import control_target
+
+    addr = control_target(addr)
     try:
         app = MonitorApp(addr, period=period)
     except ControlAddressError as exc:

@@ -165,7 +165,9 @@ def scenario_run(
 @click.argument("plant_file", type=click.Path(dir_okay=False))
 @click.option("--state-dir", metavar="DIR", help="Where the devices' non-volatile memory is kept.")
 @click.option("--speed", type=float, default=1.0, show_default=True, metavar="F", help="Time speed factor.")
-@click.option("--control", metavar="ADDR", help="Serve the control API on unix:/path.sock or [HOST:]PORT.")
+@click.option("--control", metavar="ADDR", help="Serve the control API on unix:/path.sock or [HOST:]PORT (default:"
+              " NAME-PID.sock in the runtime directory, see 'devsim ps').")
+@click.option("--no-control", is_flag=True, help="Serve no control API.")
 @click.option("--trace-dir", metavar="DIR", help="Write a trace of every port's traffic here.")
 @click.option("--virtual", is_flag=True, help="Virtual time: it moves only through 'devsim ctl advance'.")
 @click.option("--workers", type=click.IntRange(1, 64), default=1, show_default=True, metavar="N",
@@ -182,6 +184,7 @@ def up(
     state_dir: str | None,
     speed: float,
     control: str | None,
+    no_control: bool,
     trace_dir: str | None,
     virtual: bool,
     workers: int,
@@ -195,7 +198,7 @@ def up(
     """Start every device of PLANT_FILE (with --part: those of one part), print every port and
     NAME: ready when a device has booted, serve until Ctrl-C.  Host connects, disconnects, line
     mismatches and device errors are logged to stderr (-v: more, -q: less)."""
-    from devsim.runtime.control import ControlAddressError, parse_address
+    from devsim.cli.running import control_option
     from devsim.scenario.schema import load_plant
 
     try:
@@ -213,14 +216,10 @@ def up(
         raise click.UsageError("--speed: must be positive")
     if virtual and speed != 1.0:
         raise click.UsageError("--speed and --virtual exclude each other")
-    address = None
-    if control is not None:
-        try:
-            address = parse_address(control)
-        except ControlAddressError as exc:
-            raise click.UsageError(f"--control: {exc}") from None
-        if not address.is_loopback():
-            raise click.UsageError(f"--control: refusing non-loopback host {address.host!r}")
+    name = getattr(spec, "name", None) or Path(plant_file).stem
+    if part is not None:
+        name = f"{name}.{part}"
+    address = control_option(control, no_control, name)
     if motion_log is not None:
         from devsim.observe.motion_log import motion_log_problem
 
@@ -244,7 +243,7 @@ def up(
 
         try:
             status = asyncio.run(
-                run_workers(spec, workers, control=address, state_dir=state_dir, speed=speed, trace_dir=trace_dir,
+                run_workers(spec, workers, control=address, name=name, state_dir=state_dir, speed=speed, trace_dir=trace_dir,
                             fleet=fleet, verbose=verbose, quiet=quiet)
             )
         except KeyboardInterrupt:
@@ -253,7 +252,7 @@ def up(
     try:
         motion = (motion_log, motion_resolution) if motion_log is not None else None
         asyncio.run(_up(spec, state_dir, speed, address, trace_dir, virtual, fleet, part, motion,
-                        level_of(verbose, quiet)))
+                        level_of(verbose, quiet), name))
     except KeyboardInterrupt:
         sys.exit(130)
     except OSError as exc:
@@ -269,7 +268,7 @@ class _FleetError(Exception):
 async def _up(
     spec: object, state_dir: str | None, speed: float, address: object, trace_dir: str | None, virtual: bool,
     fleet: str | None = None, part: str | None = None, motion: tuple[str, float] | None = None,
-    log_level: int = 2,
+    log_level: int = 2, name: str = "devsim",
 ) -> None:
     from devsim.runtime import Runtime
     from devsim.runtime.control import ControlServer
@@ -287,7 +286,7 @@ async def _up(
     if log_level >= DEFAULT_LEVEL:  # (-q: warnings and errors only)
         print(f"devsim: the file descriptor limit {limit} allows about {fdlimit.capacity(limit)} ports",
               file=sys.stderr, flush=True)
-    async with Runtime(virtual=virtual, speed=speed, state_dir=state_dir) as runtime:
+    async with Runtime(virtual=virtual, speed=speed, state_dir=state_dir, name=name) as runtime:
         plant = await build_plant(runtime, spec, trace_dir=trace_dir, keep_going=True)  # type: ignore[arg-type]
         if plant.refused and log_level >= 1:  # a warning (-qq: nothing but fatal errors)
             causes = sorted(set(plant.refused.values()))

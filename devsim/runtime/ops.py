@@ -15,6 +15,8 @@ from __future__ import annotations
 import enum
 import json
 import math
+import os
+import time
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -87,6 +89,20 @@ def _devices(rt: Runtime, _req: rq.Devices) -> list[dict[str, Any]]:
     ]
 
 
+def _info(rt: Runtime, _req: rq.Info) -> dict[str, Any]:
+    """What ``devsim ps`` lists of a process: its name, pid, uptime, kinds and ports."""
+    return {
+        "name": rt.name,
+        "pid": os.getpid(),
+        "started": rt.started,
+        "uptime": time.monotonic() - rt.started_monotonic,
+        "clock": "virtual" if rt.clock.virtual else "real",
+        "kinds": sorted({dev.kind for dev in rt.devices.values()}),
+        "devices": list(rt.devices),
+        "ports": dict(rt.ports),
+    }
+
+
 def _advance(rt: Runtime, req: rq.Advance) -> float:
     if req.seconds is None:
         raise BadRequest("advance needs 'seconds'")
@@ -144,6 +160,8 @@ CONTROL: Table[Handler] = Table([
             request=rq.PowerCycle),
     Command("advance", _advance, "", "advance virtual time by seconds; the new time", request=rq.Advance),
     Command("now", lambda rt, req: rt.now(), "", "the device time in seconds", request=rq.Now),
+    Command("info", _info, "", "the process: name, pid, uptime, clock, kinds, devices and ports (devsim ps)",
+            request=rq.Info),
     Command("devices", _devices, "", "the devices: name, kind, ports and faults", request=rq.Devices),
     Command("line", _line, "", "the status of the line serving a port (settings, mismatch, counters)",
             request=rq.Line),

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import asyncio
 import threading
+import time
 from collections.abc import Awaitable, Callable, Coroutine, Mapping, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
@@ -53,7 +54,13 @@ class Runtime:
         speed: float = 1.0,
         state_dir: str | Path | None = None,
         clock: Clock | None = None,
+        name: str = "devsim",
     ) -> None:
+        #: The simulator's name (``devsim ps``, the ``info`` op): the kind of ``devsim run``, the plant's name.
+        self.name = name
+        #: When the runtime was made (seconds since the epoch), and the same on the monotonic clock.
+        self.started = time.time()
+        self.started_monotonic = time.monotonic()
         self.clock: Clock = clock or (VirtualClock() if virtual else RealClock(speed))
         self.state_dir = Path(state_dir) if state_dir is not None else None
         self.devices: dict[str, Device] = {}

@@ -5,7 +5,7 @@ carries it out; a request that arrives as JSON (the control server, the fleet) i
 its record, one that is made in process (``devsim ctl``, the pytest plugin, the MQTT and OPC UA
 command paths) is built directly.  Pure data: no I/O, no runtime.
 
-A ``device`` that is optional (``now``, ``advance``) only routes the request in a fleet: one
+A ``device`` that is optional (``now``, ``advance``, ``info``) only routes the request in a fleet: one
 process has one clock.
 """
 
@@ -19,6 +19,7 @@ __all__ = [
     "Advance",
     "ControlRequest",
     "Devices",
+    "Info",
     "Line",
     "LineFault",
     "Names",
@@ -68,6 +69,10 @@ class Now(ControlRequest, frozen=True):
 
 class Devices(ControlRequest, frozen=True):
     pass
+
+
+class Info(ControlRequest, frozen=True):
+    device: str | None = None
 
 
 class Line(ControlRequest, frozen=True):

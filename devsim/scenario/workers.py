@@ -5,8 +5,9 @@ dealt out to N worker processes (each a plain ``devsim up`` of its share of the 
 staying whole with its devices), and this process
 
 * prints what the workers print (every port, ``NAME: ready``), unchanged;
-* serves the control API on the address given with ``--control`` and hands each request to the
-  worker that holds the device (``devices`` gathers them from all, with a ``worker`` number);
+* serves the control API on the address given with ``--control`` (or its default socket) and
+  hands each request to the worker that holds the device (``devices`` gathers them from all,
+  with a ``worker`` number; ``info`` says this process's name, pid and uptime, and all ports);
 * stops the workers on Ctrl-C / SIGTERM, and stops the others if one dies.
 
 Traces (``--trace-dir``), state (``--state-dir``) and faults work as in one process: the names
@@ -23,6 +24,7 @@ import os
 import signal
 import sys
 import tempfile
+import time
 from pathlib import Path
 from typing import Any
 
@@ -108,7 +110,8 @@ async def _forward(stream: asyncio.StreamReader | None, control_seen: asyncio.Ev
         out.flush()
 
 
-async def _proxy(workers: list[_Worker], reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+async def _proxy(workers: list[_Worker], about: dict[str, Any], reader: asyncio.StreamReader,
+                 writer: asyncio.StreamWriter) -> None:
     streams: list[asyncio.Task[None]] = []
     try:
         while line := await reader.readline():
@@ -125,7 +128,7 @@ async def _proxy(workers: list[_Worker], reader: asyncio.StreamReader, writer: a
                 if request.get("op") == "watch" and worker is not None:
                     streams.append(asyncio.ensure_future(_watch(worker, line, writer)))
                     continue
-                answer = await _route(workers, request)
+                answer = await _route(workers, request, about)
             writer.write((json.dumps(answer) + "\n").encode())
             await writer.drain()
     except (ConnectionError, asyncio.CancelledError):
@@ -156,8 +159,26 @@ async def _watch(worker: _Worker, request: bytes, writer: asyncio.StreamWriter) 
         upstream.close()
 
 
-async def _route(workers: list[_Worker], request: dict[str, Any]) -> dict[str, Any]:
+async def _info(workers: list[_Worker], request: dict[str, Any], about: dict[str, Any]) -> dict[str, Any]:
+    """``info`` of the plant: this process's name, pid and uptime, every worker's kinds, devices and ports."""
+    result: dict[str, Any] = {"name": about["name"], "pid": os.getpid(), "started": about["started"],
+                              "uptime": time.monotonic() - about["monotonic"], "clock": "real",
+                              "kinds": [], "devices": [], "ports": {}}
+    for worker in workers:
+        answer = await worker.ask(request)
+        if not answer.get("ok"):
+            return answer
+        part = answer["result"]
+        result["kinds"] = sorted({*result["kinds"], *part["kinds"]})
+        result["devices"] += part["devices"]
+        result["ports"].update(part["ports"])
+    return {"id": request.get("id"), "ok": True, "result": result}
+
+
+async def _route(workers: list[_Worker], request: dict[str, Any], about: dict[str, Any]) -> dict[str, Any]:
     op = request.get("op")
+    if op == "info":
+        return await _info(workers, request, about)
     if op == "devices":
         rows: list[Any] = []
         for worker in workers:
@@ -186,6 +207,7 @@ async def run_workers(
     workers: int,
     *,
     control: Any = None,
+    name: str = "devsim",
     state_dir: str | None = None,
     speed: float = 1.0,
     trace_dir: str | None = None,
@@ -199,6 +221,7 @@ async def run_workers(
     for signum in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(signum, stop.set)
     shares = split_plant(spec, workers)
+    about = {"name": name, "started": time.time(), "monotonic": time.monotonic()}
     with tempfile.TemporaryDirectory(prefix="devsim-workers-") as tmp:
         running: list[_Worker] = []
         try:
@@ -233,11 +256,11 @@ async def run_workers(
             server = None
             if control is not None:
                 if control.path is not None:
-                    server = await asyncio.start_unix_server(lambda r, w: _proxy(running, r, w), path=control.path)
+                    server = await asyncio.start_unix_server(lambda r, w: _proxy(running, about, r, w), path=control.path)
                     os.chmod(control.path, 0o600)
                     shown = f"unix:{control.path}"
                 else:
-                    server = await asyncio.start_server(lambda r, w: _proxy(running, r, w), control.host, control.port)
+                    server = await asyncio.start_server(lambda r, w: _proxy(running, about, r, w), control.host, control.port)
                     shown = f"{control.host}:{server.sockets[0].getsockname()[1]}"
                 print(f"control: {shown}", flush=True)
             if level_of(verbose, quiet) >= DEFAULT_LEVEL:  # (-q: warnings and errors only)

@@ -93,6 +93,18 @@ def test_advance_is_per_process(fleet: dict[str, Member], broker: Broker) -> Non
     assert ctl(broker.url, "now", "--device", "press") == pytest.approx(before[press] + 3.5)
 
 
+def test_info_is_per_process(fleet: dict[str, Member], broker: Broker) -> None:
+    """``info`` (what ``devsim ps`` lists) names each process: its plant and part, pid and devices."""
+    infos = ctl(broker.url, "info")
+    assert set(infos) == {member.process for member in fleet.values()}
+    for part, member in fleet.items():
+        info = infos[member.process]
+        assert info["name"] == f"line3.{part}" and info["pid"] == member.proc.pid
+        assert info["devices"] == PARTS[part]
+    press = ctl(broker.url, "info", "--device", "press")
+    assert press["pid"] == fleet["cell-b"].proc.pid and press["clock"] == "virtual"
+
+
 def test_mosquitto_sub_sees_the_retained_announcements(fleet: dict[str, Member], broker: Broker,
                                                        tmp_path: Path) -> None:
     sub = mosquitto("mosquitto_sub", "-p", str(broker.port), "-t", "devsim-fleet/process/+", "-F", "%t %r %p",
