@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import shutil
 import struct
+import subprocess
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -21,6 +22,7 @@ from devsim.observe.plot import MARGIN, PANEL_HEIGHT, WIDTH
 from devsim.observe.plot_data import MotionData, Traffic, load, read_motion_log
 from devsim.transports.pcap import PcapTracer
 from devsim.transports.trace import Tracer
+from tests.support.process import devsim_env
 
 ROOT = Path(__file__).resolve().parents[1]
 SERS = ROOT / "scenarios" / "sers" / "absolute_positioning.yaml"
@@ -74,10 +76,12 @@ def test_svg_parses_and_names_its_axes(sers_files: tuple[Path, Path], tmp_path: 
     code, _, stderr = invoke("plot", *map(str, sers_files), "-o", str(out), "--title", "SERS 90°")
     assert code == 0, stderr
     texts = _texts(ET.parse(out).getroot())
-    for label in ("position", "velocity (/s)", "line traffic", "time (s)", "SERS 90°", "x host→dev", "x dev→host"):
+    for label in ("position (inc)", "velocity (inc/s)", "line traffic", "time (s)", "SERS 90°", "x axis",
+                  "x main host→dev", "x main dev→host"):
         assert label in texts, label
     assert any("move_end" in text for text in texts)
     assert "following error" not in texts
+    assert "#P51?" in texts and "P51=90°" in texts and "ok1" in texts  # the drive's lines, as the host reads them
 
 
 def test_html_is_a_page_around_the_svg(sers_files: tuple[Path, Path], tmp_path: Path) -> None:
@@ -89,7 +93,7 @@ def test_html_is_a_page_around_the_svg(sers_files: tuple[Path, Path], tmp_path: 
     assert "<script" not in page
     svg = page[page.index("<svg"): page.index("</svg>") + len("</svg>")]
     texts = _texts(ET.fromstring(svg))
-    assert "position" in texts and "velocity (/s)" in texts and "line traffic" not in texts
+    assert "position (inc)" in texts and "velocity (inc/s)" in texts and "line traffic" not in texts
 
 
 @pytest.fixture(scope="module")
@@ -110,7 +114,7 @@ def test_a_servo_gets_its_set_point_and_following_error(gms96_dir: Path, tmp_pat
     code, _, stderr = invoke("plot", str(gms96_dir / "following_error_blocked_axis.csv"), "-o", str(tmp_path / "g.svg"))
     assert code == 0, stderr
     texts = _texts(ET.parse(tmp_path / "g.svg").getroot())
-    assert "following error" in texts and "axis set-point" in texts
+    assert "following error (inc)" in texts and "card axis set-point" in texts
 
 
 def test_text_and_pcap_traces_read_back(tmp_path: Path) -> None:
@@ -192,3 +196,48 @@ def test_without_matplotlib_the_command_says_what_to_install(
     code, _, stderr = invoke("scenario", "run", str(SERS), "--plot", str(tmp_path / "plots"))
     assert code == 1 and "pip install 'devsim-motion[plot]'" in stderr
     assert not (tmp_path / "plots").exists()
+
+
+def _devsim(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "devsim", *args], cwd=ROOT, env=devsim_env(), capture_output=True,
+                          text=True, timeout=120, stdin=subprocess.DEVNULL)
+
+
+def test_a_real_run_s_plot_has_units_device_names_and_decoded_traffic(tmp_path: Path) -> None:
+    """`devsim scenario run` of the GMS96 scenario writes a motion log and a trace of its FT1.2
+    line; `devsim plot` of them names each panel's unit and the device, and labels the traffic
+    with the decoded frames (the letters and E5), not their hex."""
+    ran = _devsim("scenario", "run", str(GMS96), "--plot", str(tmp_path / "run"))
+    assert ran.returncode == 0, ran.stdout + ran.stderr
+    log, trace = tmp_path / "run" / "following_error_blocked_axis.csv", tmp_path / "run" / "following_error_blocked_axis.traces" / "card.trace"
+    assert log.read_text().splitlines()[1].endswith(",gms96")  # the kind beside each row
+    assert trace.read_text().splitlines()[0] == "0.000000 -- source card port main kind gms96"
+    out = tmp_path / "plot.svg"
+    drawn = _devsim("plot", str(log), str(trace), "-o", str(out))
+    assert drawn.returncode == 0, drawn.stderr
+    texts = _texts(ET.parse(out).getroot())
+    for label in ("position (inc)", "velocity (inc/s)", "following error (inc)", "card axis", "card axis set-point",
+                  "card main host→dev", "card main dev→host", "M 20000", "A 30000", "#1", "E5"):
+        assert label in texts, label
+    assert not [text for text in texts if text.startswith(("68 06", "e5", "h·"))], texts  # no raw chunk labels
+
+
+def test_axes_of_kinds_with_different_units_say_theirs(tmp_path: Path) -> None:
+    """A SERS (inc) and a PCD4.H3 (counts) in one log: the panels name the quantity, each axis its
+    device and unit; a log from before the kind column draws with the quantities alone."""
+    log = tmp_path / "two.csv"
+    log.write_text("time,device,axis,setpoint,position,velocity,following_error,event,kind\n"
+                   "0.0,x,axis,,0.0,0.0,,,sers\n1.0,x,axis,,10.0,5.0,,,sers\n"
+                   "0.0,pcd,axis.1,0,0,0.0,0,,pcd4h3\n1.0,pcd,axis.1,20,20,7.0,1,,pcd4h3\n", encoding="utf-8")
+    out = tmp_path / "two.svg"
+    drawn = _devsim("plot", str(log), "-o", str(out))
+    assert drawn.returncode == 0, drawn.stderr
+    texts = _texts(ET.parse(out).getroot())
+    for label in ("position", "velocity", "x axis (inc/s)", "pcd axis.1 (counts/s)", "pcd axis.1 (counts)"):
+        assert label in texts, label
+    old = tmp_path / "old.csv"
+    old.write_text("\n".join(line.rsplit(",", 1)[0] for line in log.read_text().splitlines()) + "\n")
+    drawn = _devsim("plot", str(old), "-o", str(out))
+    assert drawn.returncode == 0, drawn.stderr
+    texts = _texts(ET.parse(out).getroot())
+    assert "velocity" in texts and "x axis" in texts and not any("(inc" in text for text in texts)

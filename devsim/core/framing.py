@@ -11,6 +11,9 @@ device starts answering, and its telegrams carry no decoding.
 * ``decoder(direction)`` makes a stateful decoder of one direction (``"host"``: what the device
   receives, ``"device"``: what the host receives): fed each chunk, it returns the JSON-able
   descriptions of the messages the chunk completes.
+* ``label(message)``: one decoded message (what the decoder returned for it) in a few characters,
+  for the chunk labels of a plot (``M 20000`` for a GMS96 letter); ``None``: the plot shows a text
+  message as its text and a described one by its fields.
 * ``tolerances``: the ways a host's request may differ from a recorded one and still be the same
   request, tried in order after an exact match failed.  Each maps a message to a key; two
   messages match under a tolerance when their keys are equal.  A tolerance may also ``adapt``
@@ -62,6 +65,7 @@ class Framing(msgspec.Struct, frozen=True):
     split: Splitter | None = None
     decoder: Callable[[str], Decoder] = PlainDecoder
     tolerances: tuple[Tolerance, ...] = ()
+    label: Callable[[Any], str] | None = None
 
 
 #: A port that declares no framing.

@@ -8,7 +8,10 @@ on or off), ``a``/``A`` advance virtual time by 0.1 s / 1 s, ``q`` quit.
 
 Values come from one ``watch`` stream per device (:meth:`ControlClient.watch`, read by a thread
 each); telegrams are polled (control op ``telegrams``).  The UI applies what the threads queued
-on a timer, so a fast-moving plant never floods the event loop.
+on a timer, so a fast-moving plant never floods the event loop.  The header's clock (device time and
+wall time, :func:`~devsim.observe.monitor_text.clock_line`) ticks once a second on the monitor's
+own timer, also while nothing changes: the poller asks the simulator for its time, the simulator
+keeps no timer for it.
 """
 
 from __future__ import annotations
@@ -17,7 +20,9 @@ import json
 import queue
 import re
 import threading
+import time
 from collections import deque
+from collections.abc import Callable
 from typing import Any
 
 from rich.markup import escape
@@ -30,6 +35,7 @@ from textual.screen import ModalScreen
 from textual.widgets import Footer, Header, OptionList, Sparkline, Static
 from textual.widgets.option_list import Option
 
+from devsim.observe.monitor_text import clock_line, display_line, is_display, message_line
 from devsim.runtime import requests as rq
 from devsim.runtime.client import ControlClient, ControlError
 
@@ -43,6 +49,7 @@ LINE_FAULTS: dict[str, dict[str, Any]] = {
 }
 _SPARK = 60  # positions kept per axis
 _TELEGRAMS = 6  # telegrams shown per port
+_TICK = 1.0  # seconds between two ticks of the header's clock
 
 
 def _ident(text: str) -> str:
@@ -159,12 +166,12 @@ class DevicePanel(Vertical):
     def refresh_view(self) -> None:
         shown = [f"{name}={_show(value)}" for name, value in self.values.items()
                  if not name.startswith(("input.", "output.", "axis.")) and not isinstance(value, dict | list)
-                 and name.rsplit(".", 1)[-1] != "display"]
+                 and not is_display(name)]
         faults = sorted(self.faults) + [f"{port}:{k}" for port, kinds in self.line_faults.items() for k in sorted(kinds)]
-        displays = [f"{name.removesuffix('display').rstrip('.')} {_show(value)}".strip()
-                    for name, value in self.values.items() if name.rsplit(".", 1)[-1] == "display"]
+        displays, message = display_line(self.values), message_line(self.values)
         lines = ["  ".join(shown[:12]) or "(no state yet)",
-                 f"display: {'  '.join(displays)}" if displays else "",
+                 f"display: {escape(displays)}" if displays else "",
+                 f"message: {escape(message)}" if message else "",
                  f"faults: {', '.join(faults) if faults else 'none'}",
                  f"last event: {self.last_event or '-'}"]
         self.query_one("#state", Static).update("\n".join(line for line in lines if line))
@@ -220,8 +227,10 @@ class MonitorApp(App[None]):
         Binding("q", "quit", "quit"),
     ]
 
-    def __init__(self, address: str, *, period: float = 0.1, refresh: float = 0.1) -> None:
+    def __init__(self, address: str, *, period: float = 0.1, refresh: float = 0.1,
+                 wall_clock: Callable[[], float] = time.time) -> None:
         super().__init__()
+        self.wall_clock = wall_clock  # the header's wall time (a test's picture fixes it)
         self.address = address
         self.period = period
         self.refresh_every = refresh
@@ -239,6 +248,8 @@ class MonitorApp(App[None]):
         self._stop = threading.Event()
         self._streams: list[Any] = []
         self.ended = 0
+        #: The device time last heard of (a change, an event, or the clock asked once a second).
+        self.device_time: float | None = None
 
     def compose(self) -> ComposeResult:
         yield Header()
@@ -250,11 +261,12 @@ class MonitorApp(App[None]):
         yield Footer()
 
     def on_mount(self) -> None:
-        self.sub_title = "attaching"
+        self.sub_title = clock_line(None, wall=self.wall_clock())
         for info in self.infos:
             threading.Thread(target=self._watch, args=(info["name"],), daemon=True).start()
         threading.Thread(target=self._poll_telegrams, daemon=True).start()
         self.set_interval(self.refresh_every, self._drain)
+        self.set_interval(_TICK, self._show_clock)  # the clock runs while nothing changes
 
     # -- threads ----------------------------------------------------------------------------
     def _watch(self, device: str) -> None:
@@ -270,9 +282,15 @@ class MonitorApp(App[None]):
         self.items.put({"type": "ended", "device": device})
 
     def _poll_telegrams(self) -> None:
+        """The telegrams of every port every 0.3 s, and the device time every second (the
+        simulator only answers: it keeps no timer for the monitor)."""
+        asked = 0.0
         try:
             with ControlClient(self.address) as client:
                 while not self._stop.wait(0.3):
+                    if time.monotonic() - asked >= _TICK:
+                        asked = time.monotonic()
+                        self.items.put({"type": "clock", "t": client.now()})
                     for info in self.infos:
                         for port in info.get("ports") or {"main": None}:
                             try:
@@ -291,6 +309,8 @@ class MonitorApp(App[None]):
                 item = self.items.get_nowait()
             except queue.Empty:
                 break
+            if isinstance(item.get("t"), int | float):
+                self.device_time = max(float(item["t"]), self.device_time or 0.0)
             panel = self.panels.get(str(item.get("device")))
             if panel is None:
                 continue
@@ -298,16 +318,17 @@ class MonitorApp(App[None]):
                 panel.telegrams[item["port"]] = item["list"]
             elif item["type"] == "ended":
                 self.ended += 1
-                if self.ended == len(self.panels):
-                    self.sub_title = "the simulator stopped"
                 continue
             else:
                 panel.apply(item)
-                if isinstance(item.get("t"), int | float) and self.ended < len(self.panels):
-                    self.sub_title = f"t = {item['t']:.3f} s"
             touched.add(panel.device)
         for device in touched:
             self.panels[device].refresh_view()
+        self._show_clock()
+
+    def _show_clock(self) -> None:
+        self.sub_title = clock_line(self.device_time, stopped=self.ended == len(self.panels) > 0,
+                                    wall=self.wall_clock())
 
     @on(Lamp.Flip)
     def _flip(self, event: Lamp.Flip) -> None:

@@ -3,7 +3,7 @@
 ``devsim run/up/scenario run --motion-log FILE.csv [--motion-resolution SECONDS]`` writes one
 row per axis
 
-    time,device,axis,setpoint,position,velocity,following_error,event
+    time,device,axis,setpoint,position,velocity,following_error,event,kind
 
 * at the **exact time of each event** the model records (``move_start``, ``move_end``, errors …,
   :meth:`devsim.core.model.Model.record_event`) and of each declared fault switched on or off
@@ -13,6 +13,9 @@ row per axis
   sample.  An axis at rest writes nothing; when it starts to change again, the last resting values
   are written once more at the previous sample time, so that a plot draws the rest as a flat line.
   A last row per axis is written when the log closes.
+
+``kind`` is the device's kind (``sers``, ``gms96`` …): what ``devsim plot`` takes the units of the
+columns from (the kind's declared points, ``axis.velocity`` in ``inc/s``).
 
 Times and values are written exactly (``repr`` of the float): a time in the log is a time of the
 device clock, the same clock the wire traces (``--trace``) use.
@@ -52,7 +55,7 @@ __all__ = [
 ]
 
 #: The CSV header of a motion log.
-HEADER = ("time", "device", "axis", "setpoint", "position", "velocity", "following_error", "event")
+HEADER = ("time", "device", "axis", "setpoint", "position", "velocity", "following_error", "event", "kind")
 
 #: A point that makes an axis: ``axis.position`` (prefix ``axis``), ``axis.x.position``, ``axis.1.position``.
 AXIS_PATTERN = re.compile(r"^(axis(?:\.[A-Za-z0-9_]+)?)\.position$")
@@ -131,7 +134,7 @@ class _DeviceLog:
         return tuple(cells.get(column, "") for column in HEADER[3:7])
 
     def _row(self, when: float, axis: str, cells: tuple[str, ...], event: str = "") -> None:
-        self.log.write((repr(float(when)), self.device.name, axis, *cells, event))
+        self.log.write((repr(float(when)), self.device.name, axis, *cells, event, self.device.kind))
         self.last[axis] = cells
         self.last_time[axis] = when
 

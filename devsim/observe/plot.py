@@ -8,7 +8,13 @@ time axis (seconds of the device clock, which logs and traces share):
 * **velocity**,
 * **following error** (only when an axis has one),
 * **line traffic**: one lane per port and direction (host → device above device → host), a tick
-  per chunk, its text beside it when there are few,
+  per chunk; when there are few, each message beside it, decoded by the port's declared framing
+  where the trace names its source (``M 20000``, ``E5`` for a GMS96, ``#P51?`` for a SERS), else
+  each chunk's text,
+
+each axis named by its device (``card axis``, ``cnc axis.x``), each panel's quantity with its
+unit from the kind's declared points (``velocity (inc/s)``; a unit per axis in the legend where
+the axes differ),
 
 with the events of the log (``move_start``, ``move_end``, faults …) as dotted vertical lines,
 named on the top panel.  The output format follows the suffix: ``.png`` (``--dpi``), ``.svg``
@@ -26,7 +32,7 @@ from typing import Any
 
 import click
 
-from devsim.observe.plot_data import MotionData, PlotInputError, Traffic, load
+from devsim.observe.plot_data import MotionData, PlotInputError, Traffic, load, messages
 
 __all__ = ["FORMATS", "PANEL_HEIGHT", "WIDTH", "plot", "render", "require_matplotlib"]
 
@@ -82,18 +88,29 @@ def _panels(logs: Sequence[MotionData], traces: Sequence[Traffic]) -> list[str]:
     return panels
 
 
-_YLABELS = {"position": "position", "velocity": "velocity (/s)", "following_error": "following error",
+_YLABELS = {"position": "position", "velocity": "velocity", "following_error": "following error",
             "traffic": "line traffic"}
 
 
+def _units(panel: str, logs: Sequence[MotionData]) -> set[str]:
+    """The units the axes drawn on ``panel`` have (the empty one where the kind is unknown)."""
+    return {series.unit(panel) for log in logs for series in log.axes if series.has(panel)}
+
+
+def _ylabel(panel: str, logs: Sequence[MotionData]) -> str:
+    """``velocity (inc/s)`` when every axis on the panel has that unit, else the quantity alone."""
+    units = _units(panel, logs) if panel != "traffic" else set()
+    return f"{_YLABELS[panel]} ({units.pop()})" if len(units) == 1 and "" not in units else _YLABELS[panel]
+
+
 def _draw_axes(ax: Any, panel: str, logs: Sequence[MotionData]) -> None:
-    many_devices = len({a.device for log in logs for a in log.axes}) > 1
+    each_unit = len(_units(panel, logs) - {""}) > 1  # differing units: each axis says its own
     index = 0
     for log in logs:
         for series in log.axes:
             colour = f"C{index % 10}"
             index += 1
-            label = series.label if many_devices else series.axis
+            label = series.label + (f" ({series.unit(panel)})" if each_unit and series.unit(panel) else "")
             if series.has(panel):
                 ax.plot(series.time, getattr(series, panel), color=colour, linewidth=1.2, label=label)
             if panel == "position" and series.has("setpoint"):
@@ -103,20 +120,27 @@ def _draw_axes(ax: Any, panel: str, logs: Sequence[MotionData]) -> None:
         ax.legend(loc="best", fontsize=7, frameon=False)
 
 
+def _cut(text: str, limit: int = 16) -> str:
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
 def _draw_traffic(ax: Any, traces: Sequence[Traffic]) -> None:
     ticks, names = [], []
     for index, traffic in enumerate(traces):
+        decoded = messages(traffic)  # by the port's framing; [] where the trace does not say
         for offset, direction in ((1, "H>D"), (0, "D>H")):
             lane = 2 * (len(traces) - 1 - index) + offset
             ticks.append(lane)
-            names.append(f"{traffic.name} {'host→dev' if direction == 'H>D' else 'dev→host'}")
+            names.append(f"{traffic.label} {'host→dev' if direction == 'H>D' else 'dev→host'}")
             chunks = [(when, data) for when, way, data in traffic.chunks if way == direction]
             colour = "C0" if direction == "H>D" else "C3"
             if chunks:
                 ax.vlines([w for w, _ in chunks], lane - 0.35, lane + 0.35, color=colour, linewidth=1.0)
-            if len(chunks) <= MAX_CHUNK_LABELS:
-                for when, data in chunks:
-                    ax.annotate(_short(data), (when, lane + 0.38), fontsize=6, rotation=30, color=colour,
+            labels = ([(when, _cut(text)) for when, way, text in decoded if way == direction] if decoded
+                      else [(when, _short(data)) for when, data in chunks])
+            if len(labels) <= MAX_CHUNK_LABELS:
+                for when, text in labels:
+                    ax.annotate(text, (when, lane + 0.38), fontsize=6, rotation=30, color=colour,
                                 annotation_clip=False)
         for when, _text in traffic.notes:
             ax.plot([when], [2 * (len(traces) - 1 - index) + 0.5], marker="d", color="0.5", markersize=4)
@@ -164,7 +188,7 @@ def render(files: Sequence[str | Path], out: str | Path, *, title: str | None = 
                 _draw_traffic(ax, traces)
             else:
                 _draw_axes(ax, panel, logs)
-            ax.set_ylabel(_YLABELS[panel], fontsize=8)
+            ax.set_ylabel(_ylabel(panel, logs), fontsize=8)
             ax.tick_params(labelsize=7)
             ax.grid(True, linewidth=0.3, alpha=0.5)
         if logs:

@@ -1,11 +1,15 @@
 """Reading what ``devsim plot`` draws: motion logs and wire traces, pure (no matplotlib).
 
 * a **motion log** (:mod:`devsim.observe.motion_log`, ``--motion-log FILE.csv``) becomes one
-  :class:`AxisSeries` per device and axis, and the device's events;
+  :class:`AxisSeries` per device and axis, with the units of its columns from the device kind's
+  declared points (:func:`axis_units`), and the device's events;
 * a **text trace** (:mod:`devsim.transports.trace`, ``--trace FILE``) and a **pcap trace**
   (:mod:`devsim.transports.pcap`, ``--trace FILE.pcap``) become a :class:`Traffic`: the chunks
   that crossed the line, each with its device-clock time and direction (``H>D``, ``D>H``), and
-  the notes (host settings, disconnects) of a text trace.
+  the notes (host settings, disconnects) of a text trace.  A text trace that names its source
+  (:func:`devsim.transports.trace.source_note`: devices, port, kind) has its messages decoded by
+  the port's declared framing (:func:`messages`: ``M 20000`` for a GMS96 letter, ``#P51?`` for
+  a SERS line); any other shows its chunks as they came.
 
 A pcap trace holds addresses, not directions: the device is the endpoint that takes part in every
 packet (with both in every packet: the lower port, then the lower address — a listening port
@@ -16,23 +20,33 @@ below an ephemeral one, and devsim's invented device address 127.0.0.1 below the
 from __future__ import annotations
 
 import csv
+import functools
 import math
 import re
 import struct
 from pathlib import Path
+from typing import Any
 
 import msgspec
 
-from devsim.observe.motion_log import HEADER
+from devsim.observe.motion_log import COLUMNS, HEADER
+from devsim.transports.trace import Source, parse_source_note, render
 
-__all__ = ["AxisSeries", "MotionData", "Traffic", "load", "read_motion_log", "read_pcap_trace", "read_text_trace"]
+#: The columns every motion log has (``kind`` came later: an older log ends after ``event``).
+_FIRST = HEADER[: HEADER.index("event") + 1]
+
+__all__ = ["AxisSeries", "MotionData", "Traffic", "axis_units", "load", "messages", "read_motion_log",
+           "read_pcap_trace", "read_text_trace"]
 
 
 class AxisSeries(msgspec.Struct):
-    """One axis of a motion log: its rows in time order (NaN where a cell was empty)."""
+    """One axis of a motion log: its rows in time order (NaN where a cell was empty), and the
+    units of its columns (``{"position": "inc", "velocity": "inc/s"}``; none for a log without kinds)."""
 
     device: str
     axis: str
+    kind: str = ""
+    units: dict[str, str] = msgspec.field(default_factory=dict)
     time: list[float] = msgspec.field(default_factory=list)
     setpoint: list[float] = msgspec.field(default_factory=list)
     position: list[float] = msgspec.field(default_factory=list)
@@ -42,6 +56,10 @@ class AxisSeries(msgspec.Struct):
     @property
     def label(self) -> str:
         return f"{self.device} {self.axis}"
+
+    def unit(self, column: str) -> str:
+        """The unit of ``column`` (``position``, ``velocity`` …); "" when unknown."""
+        return self.units.get(column, "")
 
     def has(self, column: str) -> bool:
         return any(not math.isnan(v) for v in getattr(self, column))
@@ -56,11 +74,53 @@ class MotionData(msgspec.Struct):
 
 
 class Traffic(msgspec.Struct):
-    """One port's wire trace: chunks ``(time, direction, bytes)`` and notes ``(time, text)``."""
+    """One port's wire trace: chunks ``(time, direction, bytes)``, notes ``(time, text)`` and the
+    devices, port and kind it traces when it says so."""
 
     name: str
     chunks: list[tuple[float, str, bytes]] = msgspec.field(default_factory=list)
     notes: list[tuple[float, str]] = msgspec.field(default_factory=list)
+    source: Source | None = None
+
+    @property
+    def label(self) -> str:
+        """``card main`` (the devices and the port it traces), else the file's name."""
+        return self.name if self.source is None else f"{','.join(self.source.devices)} {self.source.port}"
+
+
+def _printable(text: str) -> str:
+    """A text message as it reads (``P51=90°``): the line ends stripped, other control characters escaped."""
+    return "".join(c if c.isprintable() else render(c.encode("latin-1", errors="replace"))[1:-1]
+                   for c in text.strip("\r\n"))
+
+
+def _fields(described: Any) -> str:
+    if isinstance(described, dict):
+        return " ".join(f"{key}={value}" for key, value in described.items() if key != "frame")
+    return str(described)
+
+
+def messages(traffic: Traffic) -> list[tuple[float, str, str]]:
+    """``(time, direction, label)`` of every message the trace's port's framing decodes, at the
+    time of the chunk that completes it; [] for a trace without a source or a port without a
+    framing (then its chunks are all there is)."""
+    if traffic.source is None:
+        return []
+    from devsim.core.registry import port_framing
+
+    framing = port_framing(traffic.source.kind, traffic.source.port)
+    decoders = {"H>D": framing.decoder("host"), "D>H": framing.decoder("device")}
+    label = framing.label or (lambda message: _printable(message) if isinstance(message, str) else _fields(message))
+    found: list[tuple[float, str, str]] = []
+    for when, direction, data in traffic.chunks:
+        try:
+            decoded = decoders[direction].feed(data)
+        except Exception:  # noqa: BLE001 - a decoder that chokes on a trace: that port's chunks as they came
+            return []
+        if decoded is None:
+            return []
+        found.extend((when, direction, label(message)) for message in decoded)
+    return found
 
 
 class PlotInputError(ValueError):
@@ -74,18 +134,46 @@ def _number(text: str) -> float:
         return math.nan
 
 
+_AXIS_PREFIX = re.compile(r"^axis(?:\.[A-Za-z0-9_]+)?$")
+
+
+@functools.cache
+def axis_units(kind: str, axis: str) -> dict[str, str]:
+    """The units of ``axis``'s columns as ``kind`` declares its points (``axis.1.velocity`` in
+    ``counts/s``); an axis the kind's table does not name (``axis.3`` of a configured PCD4.H3) has
+    the units of its first axis; {} for a kind not installed."""
+    from devsim.core.registry import UnknownKind, device_class
+
+    try:
+        points = {p.name: p for p in device_class(kind).points}
+    except (UnknownKind, ImportError):
+        return {}
+    known = [axis] + [name.removesuffix(".position") for name in points
+                      if name.endswith(".position") and _AXIS_PREFIX.match(name.removesuffix(".position"))]
+    for prefix in known:
+        units = {}
+        for column, patterns in COLUMNS.items():  # the point the motion log takes the column from
+            name = next((n for n in (p.format(axis=prefix) for p in patterns) if n in points), None)
+            if name is not None and points[name].unit:
+                units[column] = points[name].unit
+        if units:
+            return units
+    return {}
+
+
 def read_motion_log(path: str | Path) -> MotionData:
-    """Parse a motion log written by :class:`devsim.observe.motion_log.MotionLog`."""
+    """Parse a motion log written by :class:`devsim.observe.motion_log.MotionLog` (one without the
+    ``kind`` column, from before it had one, too)."""
     data = MotionData(str(path))
     series: dict[tuple[str, str], AxisSeries] = {}
     seen: set[tuple[str, float, str]] = set()
     with open(path, encoding="utf-8", newline="") as stream:
         reader = csv.reader(stream)
         header = next(reader, None)
-        if header is None or tuple(header[: len(HEADER)]) != HEADER:
+        if header is None or tuple(header[: len(_FIRST)]) != _FIRST:
             raise PlotInputError(f"{path}: not a motion log (expected the header {','.join(HEADER)})")
         for number, row in enumerate(reader, start=2):
-            if len(row) < len(HEADER):
+            if len(row) < len(_FIRST):
                 raise PlotInputError(f"{path}:{number}: expected {len(HEADER)} columns, got {len(row)}")
             when = _number(row[0])
             if math.isnan(when):
@@ -93,7 +181,8 @@ def read_motion_log(path: str | Path) -> MotionData:
             device, axis = row[1], row[2]
             item = series.get((device, axis))
             if item is None:
-                item = series[(device, axis)] = AxisSeries(device, axis)
+                kind = row[len(_FIRST)] if len(row) > len(_FIRST) else ""
+                item = series[(device, axis)] = AxisSeries(device, axis, kind, axis_units(kind, axis) if kind else {})
             item.time.append(when)
             item.setpoint.append(_number(row[3]))
             item.position.append(_number(row[4]))
@@ -133,7 +222,11 @@ def read_text_trace(path: str | Path) -> Traffic:
             note = _NOTE_LINE.match(line)
             if note is None:
                 raise PlotInputError(f"{path}:{number}: not a trace line: {line[:60]!r}")
-            traffic.notes.append((float(note.group(1)), note.group(2)))
+            source = parse_source_note(note.group(2))
+            if source is not None:
+                traffic.source = source
+            else:
+                traffic.notes.append((float(note.group(1)), note.group(2)))
     return traffic
 
 

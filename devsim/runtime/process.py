@@ -210,8 +210,13 @@ class Runtime:
 
         group = [devices] if isinstance(devices, Device) else list(devices)
         target: Any = group[0].port(port) if len(group) == 1 else Bus(group, port)
-        return await self.serve_target([port_key(device.name, port) for device in group], target, transport,
+        line = await self.serve_target([port_key(device.name, port) for device in group], target, transport,
                                        pacing=pacing, trace=trace)
+        if line.tracer is not None:  # the trace says what it traces: a reader decodes it by the port's framing
+            from devsim.transports.trace import source_note
+
+            line.tracer.note(source_note([d.name for d in group], port, group[0].kind), self.clock.now())
+        return line
 
     async def serve_target(self, keys: Sequence[str], target: Any, transport: Any, *, pacing: bool = False,
                            trace: str | Path | None = None) -> Any:

@@ -11,7 +11,11 @@ Format of a data line::
 * the same bytes as an escaped ASCII rendering in double quotes,
 * optionally a note in parentheses (e.g. what the other side actually read on a mismatched line).
 
-Events that are not data (host settings, disconnects) are written as ``TIME -- text``.  Every line
+Events that are not data (host settings, disconnects) are written as ``TIME -- text``.  A device's
+port traced by ``devsim run``/``up``/``scenario run`` starts with the note of what it traces
+(:func:`source_note`): ``0.000000 -- source card port main kind gms96`` (devices comma-separated
+on a multidrop line), so that a reader (``devsim plot``) decodes the traffic with the port's
+declared framing.  Every line
 is flushed at once, so a trace survives a crash and can be followed with ``tail -f``.
 
 A trace file is never written through a symlink (:func:`create_trace_file`, also used by the
@@ -23,10 +27,13 @@ from __future__ import annotations
 
 import errno
 import os
+import re
+from collections.abc import Sequence
 from types import TracebackType
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
-__all__ = ["TapSink", "TraceSink", "Tracer", "create_trace_file", "render"]
+__all__ = ["Source", "TapSink", "TraceSink", "Tracer", "create_trace_file", "parse_source_note", "render",
+           "source_note"]
 
 _ESCAPES = {0x0D: "\\r", 0x0A: "\\n", 0x09: "\\t", 0x22: '\\"', 0x5C: "\\\\"}
 
@@ -42,6 +49,28 @@ def render(data: bytes) -> str:
         else:
             parts.append(f"\\x{byte:02x}")
     return '"' + "".join(parts) + '"'
+
+
+class Source(NamedTuple):
+    """What a trace traces: the devices on the line, their port, their kind."""
+
+    devices: tuple[str, ...]
+    port: str
+    kind: str
+
+
+_SOURCE = re.compile(r"^source (\S+) port (\S+) kind (\S+)$")
+
+
+def source_note(devices: Sequence[str], port: str, kind: str) -> str:
+    """The note a trace starts with: ``source card port main kind gms96``."""
+    return f"source {','.join(devices)} port {port} kind {kind}"
+
+
+def parse_source_note(text: str) -> Source | None:
+    """The :class:`Source` a note names, or None for any other note."""
+    match = _SOURCE.match(text)
+    return None if match is None else Source(tuple(match[1].split(",")), match[2], match[3])
 
 
 class TraceSink(Protocol):

@@ -94,9 +94,24 @@ def _without_fcb(message: bytes) -> bytes:
     return bytes(out)
 
 
+def _label(described: dict[str, Any]) -> str:
+    """A described frame in a few characters: a letter with its parameters (``M 20000``), a
+    Kurzsatz command (``#1``), the acknowledgement ``E5``, else the frame's C field and data."""
+    if "error" in described:
+        return f"bad frame: {described['error']}"
+    if "letter" in described:
+        return " ".join([str(described["letter"]), *map(str, described.get("params", []))])
+    if "command" in described:
+        return str(described["command"])
+    if described.get("frame") == "single":
+        return str(described["value"])
+    return " ".join([f"C={described.get('C', '?')}", *([str(described["data"])] if "data" in described else [])])
+
+
 #: The GMS96 port's framing: FT1.2 frames, with the checksum and FCB tolerances.
 FT12 = Framing(
     split=_split_frames,
     decoder=FrameDescriber,
     tolerances=(Tolerance("checksum", _without_checksum), Tolerance("fcb", _without_fcb)),
+    label=_label,
 )
