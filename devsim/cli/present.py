@@ -245,7 +245,7 @@ def names_text(rows: Sequence[dict[str, Any]], width: int) -> str:
         cells = [(row["name"], row.get("type") or "", row.get("unit") or "", row.get("access") or "",
                   row.get("doc") or "") for row in members]
         lines += table(cells, width=max(width, 40), indent="  ")
-    lines.append(f"{len(rows)} names in {len(ordered)} groups; --json for every field (manual sections too)")
+    lines.append(_cut(f"{len(rows)} names in {len(ordered)} groups (--json: every field)", max(width, 40)))
     return "\n".join(lines)
 
 
