@@ -14,8 +14,9 @@
   ``--pty``/``--link``/``--tcp``/``--rfc2217`` choose for the other ports.
 
 * ``devsim ctl --control ADDR devices|read|set|state|power-cycle|advance|now|line|...`` – talk to a
-  running simulator's control API and print the JSON result; ``devsim ctl --fleet mqtt://BROKER
-  ...`` the same with every device of a fleet (``devsim run/up --fleet``, :mod:`devsim.fleet`).
+  running simulator's control API and print the result (``--json``: as JSON); ``devsim ctl
+  --fleet mqtt://BROKER ...`` the same with every device of a fleet (``devsim run/up --fleet``,
+  :mod:`devsim.fleet`).
 
 Every error is one line on stderr (``Error: config.yaml:3: baud: ...``); the exit status says
 which kind of mistake it was, the same in every command (:mod:`devsim.cli.exits`: 2 a usage
