@@ -132,6 +132,8 @@ CASES: list[tuple[int, str, Case]] = [
     # -- this machine
     (exits.SYSTEM, "run: port in use", lambda f, a, b: ["run", "sers", "--tcp", str(b)]),
     (exits.SYSTEM, "replay: port in use", lambda f, a, b: ["replay", str(f / "session.devsim"), "--tcp", str(b)]),
+    (exits.SYSTEM, "scenario: cannot write", lambda f, a, b: ["scenario", "run", str(f / "fails.yaml"), "--trace-dir",
+                                                             str(f / "trace.txt" / "dir")]),
     (exits.SYSTEM, "plot: cannot write", lambda f, a, b: ["plot", str(f / "trace.txt"), "-o", str(f / "no/x.png")]),
     # -- a scenario that does not pass
     (exits.FAILED, "scenario: expectation", lambda f, a, b: ["scenario", "run", str(f / "fails.yaml")]),

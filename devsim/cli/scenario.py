@@ -148,6 +148,8 @@ def scenario_run(
                 run_scenario(item, mode=chosen, speed=speed, state_dir=state_dir, trace_dir=item_trace_dir,
                              announce=announce, on_step=progress.step if realtime else None, control=control)
             )
+        except OSError as exc:  # a port in use, a directory that cannot be made
+            raise exits.SystemFailure(f"{path}: cannot run the scenario: {exc}") from None
         finally:
             progress.end()
         click.echo(format_report(results[-1]))
