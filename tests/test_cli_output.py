@@ -134,3 +134,11 @@ def test_an_error_is_one_line_on_stderr(addr: str) -> None:
             done = devsim("ctl", "--control", addr, *mode, *args)
             assert (done.returncode, done.stdout) == (status, "")
             assert done.stderr.startswith(text) and done.stderr.count("\n") == 1
+
+
+def test_watch_lines_print_characters() -> None:
+    """`devsim ctl watch` prints a structured value's text as characters too (its formatter)."""
+    from devsim.runtime.watch_stream import describe
+
+    line = describe({"type": "change", "t": 1.5, "device": "sers", "name": "display", "value": {"char": "°"}})
+    assert line == '1.500 sers display {"char": "°"}'

@@ -137,7 +137,7 @@ def describe(item: dict[str, Any]) -> str:
     head = f"{float(item.get('t', 0.0)):.3f} {item.get('device')}"
     if kind == "change":
         value = item.get("value")
-        return f"{head} {item.get('name')} {value if isinstance(value, str) else json.dumps(value)}"
+        return f"{head} {item.get('name')} {value if isinstance(value, str) else json.dumps(value, ensure_ascii=False)}"
     if kind in ("event", "error"):
         name = str(item.get("name"))
         return f"{head} {name}" if kind == "error" and name.lower().startswith("error") else f"{head} {kind} {name}"
