@@ -5,27 +5,37 @@ JSON, characters unescaped), `names` grouped by family in the terminal's width."
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 import tempfile
+import time
 from collections.abc import Iterator
 
 import pytest
+import serial
 
 from devsim.cli import exits
 from tests.support.process import ROOT, DevsimProcess, devsim_env
 
 
 @pytest.fixture(scope="module")
-def addr() -> Iterator[str]:
+def sim() -> Iterator[tuple[str, str]]:
+    """A running `devsim run sers`: its control address and its port's URL."""
     with tempfile.TemporaryDirectory(prefix="dso") as path:
         address = f"unix:{path}/c.sock"
-        sim = DevsimProcess("run", "sers", "--tcp", "0", "--virtual", "--control", address)
+        proc = DevsimProcess("run", "sers", "--tcp", "0", "--virtual", "--control", address)
         try:
-            sim.next_match(sim.out, lambda line: line.startswith("control: "), 30, "the control line")
-            yield address
+            url = proc.next_match(proc.out, lambda line: line.startswith("sers: tcp "), 30, "the port").split()[2]
+            proc.next_match(proc.out, lambda line: line.startswith("control: "), 30, "the control line")
+            yield address, url
         finally:
-            assert sim.interrupt() == 0
+            assert proc.interrupt() == 0
+
+
+@pytest.fixture(scope="module")
+def addr(sim: tuple[str, str]) -> str:
+    return sim[0]
 
 
 def devsim(*args: str, columns: int = 100) -> subprocess.CompletedProcess[str]:
@@ -142,3 +152,27 @@ def test_watch_lines_print_characters() -> None:
 
     line = describe({"type": "change", "t": 1.5, "device": "sers", "name": "display", "value": {"char": "°"}})
     assert line == '1.500 sers display {"char": "°"}'
+
+
+def test_telegrams_are_a_table(sim: tuple[str, str]) -> None:
+    addr, url = sim
+    assert ok("ctl", "--control", addr, "telegrams", "sers").startswith("(no telegrams yet")  # the tap starts
+    with serial.serial_for_url(url, timeout=1) as port:
+        port.write(b"#1P11?\r")
+        deadline = time.monotonic() + 15
+        while (lines := ok("ctl", "--control", addr, "telegrams", "sers").splitlines())[0].startswith("(no"):
+            assert time.monotonic() < deadline, "the telegram did not arrive"
+    assert lines[0].split() == ["time", "dir", "bytes", "decoded"]
+    when, *rest = lines[1].split()
+    assert re.fullmatch(r"\d+\.\d{3}", when) and rest == ["H>D", '"#1P11?\\r"', "#1P11?"]  # bytes, decoded
+
+
+def test_decoded_messages_are_key_value_words() -> None:
+    """A kind's framing decodes a telegram into fields (GMS96's FT1.2): shown as words."""
+    from devsim.cli.present import render
+    from devsim.runtime import requests as rq
+
+    telegram = {"t": 0.5, "dir": "H>D", "hex": "10 40 01 41 16", "text": '"\\x10@\\x01A\\x16"',
+                "decoded": [{"frame": "short", "C": "40", "A": 1}]}
+    lines = render([(rq.Telegrams("gms96", "main", 1), [telegram])], json_output=False, width=100).splitlines()
+    assert lines[1].endswith("frame=short C=40 A=1")

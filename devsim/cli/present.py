@@ -219,9 +219,16 @@ def _telegrams(result: Any, view: View) -> str:
         return "(no telegrams yet: the tap starts with the first request)"
     rows = []
     for item in result:
-        decoded = "; ".join(value_text(d) for d in item.get("decoded", ()))
+        decoded = "; ".join(_fields(d) for d in item.get("decoded", ()))
         rows.append((f"{float(item.get('t', 0.0)):.3f}", item.get("dir", ""), item.get("text", ""), decoded))
     return "\n".join(table(rows, ("time", "dir", "bytes", "decoded"), width=view.width))
+
+
+def _fields(message: Any) -> str:
+    """A decoded message as ``key=value`` words (``frame=short C=40 A=1``)."""
+    if isinstance(message, dict):
+        return " ".join(f"{key}={value_text(value)}" for key, value in message.items())
+    return value_text(message)
 
 
 def family(name: str) -> str:
