@@ -176,3 +176,19 @@ def test_decoded_messages_are_key_value_words() -> None:
                 "decoded": [{"frame": "short", "C": "40", "A": 1}]}
     lines = render([(rq.Telegrams("gms96", "main", 1), [telegram])], json_output=False, width=100).splitlines()
     assert lines[1].endswith("frame=short C=40 A=1")
+
+
+def test_a_fleet_answers_per_process() -> None:
+    """With --fleet, now/advance answer for each process and devices name it: tables too."""
+    from devsim.cli.present import render
+    from devsim.runtime import requests as rq
+
+    clocks = {"cell-a-12-ab12": 2.5, "cell-b-13-cd34": 3.0}
+    assert render([(rq.Now(), clocks)], json_output=False, width=80).splitlines() == [
+        "process         time", "cell-a-12-ab12  2.5 s", "cell-b-13-cd34  3 s"]
+    assert render([(rq.Advance(1.0), clocks)], json_output=False, width=80).splitlines()[0] == "ok"
+    rows = [{"name": "press", "kind": "sers", "port": "/dev/pts/3", "ports": {"main": "/dev/pts/3"},
+             "faults": [], "process": "cell-a-12-ab12", "host": "cell-a", "pid": 12, "online": True}]
+    lines = render([(rq.Devices(), rows)], json_output=False, width=120).splitlines()
+    assert lines[0].split() == ["name", "kind", "port", "faults", "process", "host", "pid", "online"]
+    assert lines[1].split() == ["press", "sers", "/dev/pts/3", "-", "cell-a-12-ab12", "cell-a", "12", "true"]
