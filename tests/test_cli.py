@@ -18,7 +18,7 @@ import pytest
 import serial
 from click.testing import CliRunner
 
-from devsim.cli import cli
+from devsim.cli import cli, exits
 from devsim.runtime.client import ControlClient, ControlError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -83,7 +83,7 @@ def test_config_error_names_file_line_and_field(tmp_path: Path) -> None:
     path = tmp_path / "config.yaml"
     path.write_text("address: 2\nbaud: 9600\naxis:\n  limit_left: -10\n  limit_right: far\n")
     code, out, err = invoke("run", "echo", "--config", str(path))
-    assert code == 2
+    assert code == exits.BAD_FILE
     assert err == f"Error: {path}:5: axis.limit_right: Input should be a valid number, unable to parse string as a number\n"
 
 
@@ -91,7 +91,7 @@ def test_config_validator_message(tmp_path: Path) -> None:
     path = tmp_path / "config.yaml"
     path.write_text("# echo\naddress: 2\nbaud: 9601\n")
     code, _, err = invoke("run", "echo", "--config", str(path))
-    assert code == 2
+    assert code == exits.BAD_FILE
     assert err == f"Error: {path}:3: baud: baud must be one of 1200, 2400, 4800, 9600, 19200\n"
 
 
@@ -99,13 +99,13 @@ def test_config_yaml_syntax_error(tmp_path: Path) -> None:
     path = tmp_path / "bad.yaml"
     path.write_text("address: 2\naxis:\n  limit_left: 1\n limit_right: 2\n")
     code, _, err = invoke("run", "echo", "--config", str(path))
-    assert code == 2
+    assert code == exits.BAD_FILE
     assert err.startswith(f"Error: {path}:4: ") and err.count("\n") == 1
 
 
 def test_missing_config_file(tmp_path: Path) -> None:
     code, _, err = invoke("run", "echo", "--config", str(tmp_path / "nope.yaml"))
-    assert code == 2
+    assert code == exits.BAD_FILE
     assert err == f"Error: {tmp_path / 'nope.yaml'}: no such file\n"
 
 
@@ -113,13 +113,13 @@ def test_sers_config_error(tmp_path: Path) -> None:
     path = tmp_path / "config.yaml"
     path.write_text("address: 3\nparams:\n  P1017: 2\nbaud: 9601\n")
     code, _, err = invoke("run", "sers", "--config", str(path))
-    assert code == 2
+    assert code == exits.BAD_FILE
     assert err.startswith(f"Error: {path}:4: baud: baud must be one of 1200, 2400,")
 
 
 def test_ctl_cannot_connect(sockdir: str) -> None:
     code, out, err = invoke("ctl", "--control", f"unix:{sockdir}/none.sock", "now")
-    assert code == 1
+    assert code == exits.UNREACHABLE
     assert err.startswith(f"Error: cannot connect to unix:{sockdir}/none.sock") and err.count("\n") == 1
 
 
@@ -206,21 +206,21 @@ def test_run_pty_control_and_clean_sigint(sockdir: str) -> None:
                 client.read("echo", "nothing")
             assert info.value.type == "UnknownName"
         done = ctl(addr, "read", "echo", "input.mute")
-        assert (done.returncode, done.stdout) == (0, "true\n")
+        assert (done.returncode, done.stdout) == (0, "input.mute = true\n")
         done = ctl(addr, "set", "echo", "input.mute", "false")
-        assert done.returncode == 0, done.stderr
+        assert (done.returncode, done.stdout) == (0, "ok\n"), done.stderr
         assert ctl(addr, "set", "echo", "value", "2.5").returncode == 0
         done = ctl(addr, "set", "echo", "value", "hello")  # checked before it takes effect
-        assert done.returncode == 1 and "expects a number" in done.stderr
-        assert json.loads(ctl(addr, "read", "echo", "value").stdout) == 2.5
-        state = json.loads(ctl(addr, "state", "echo").stdout)
+        assert done.returncode == exits.REFUSED and "expects a number" in done.stderr
+        assert json.loads(ctl(addr, "--json", "read", "echo", "value").stdout) == 2.5
+        state = json.loads(ctl(addr, "state", "echo", "--json").stdout)
         assert state["input"]["mute"] is False
         done = ctl(addr, "read", "echo", "nothing")
-        assert done.returncode == 1
+        assert done.returncode == exits.REFUSED
         assert done.stderr.startswith("Error: UnknownName: ") and done.stderr.count("\n") == 1
         done = ctl(addr, "advance", "1")
-        assert done.returncode == 1 and "RuntimeError" in done.stderr
-        assert float(ctl(addr, "now").stdout) > 0
+        assert done.returncode == exits.REFUSED and "RuntimeError" in done.stderr
+        assert float(ctl(addr, "--json", "now").stdout) > 0
         assert ctl(addr, "power-cycle", "echo", "--wipe").returncode == 0
     finally:
         code, err = sim.stop(signal.SIGINT)
@@ -246,7 +246,7 @@ def test_run_tcp_multidrop_virtual_sigterm(sockdir: str) -> None:
             client.set("echo3", "timer", 2)
             assert client.advance(2) == 2.0
             assert client.read("echo3", "fired") is True
-        assert json.loads(ctl(addr, "advance", "0.5").stdout) == 2.5
+        assert json.loads(ctl(addr, "--json", "advance", "0.5").stdout) == 2.5
     finally:
         code, err = sim.stop(signal.SIGTERM)
     assert code == 0, err
@@ -276,7 +276,7 @@ def test_run_link_config_state_dir(tmp_path: Path, sockdir: str) -> None:
     assert not link.exists()
 
 
-def test_run_port_in_use_is_one_line_exit_1(sockdir: str) -> None:
+def test_run_port_in_use_is_one_line_exit_system(sockdir: str) -> None:
     import socket
 
     with socket.socket() as busy:
@@ -286,7 +286,7 @@ def test_run_port_in_use_is_one_line_exit_1(sockdir: str) -> None:
         sim = Sim("echo", "--tcp", str(port))
         code = sim.proc.wait(timeout=30)
         _, err = sim.stop()
-    assert code == 1
+    assert code == exits.SYSTEM
     assert err.startswith("Error: cannot open the tcp port: ") and err.count("\n") == 1
 
 
@@ -314,7 +314,7 @@ def test_run_sers_smoke(tmp_path: Path, sockdir: str) -> None:
             while b"\nok" not in answer and time.monotonic() < deadline:
                 answer += port.read(64)
         assert b"\nok" in answer
-        done = ctl(addr, "read", "sers", "axis.position")
+        done = ctl(addr, "--json", "read", "sers", "axis.position")
         assert done.returncode == 0, done.stderr
         assert isinstance(json.loads(done.stdout), int | float)
     finally:
@@ -331,7 +331,7 @@ def test_run_says_ready_when_the_sers_has_booted(sockdir: str) -> None:
         seen = sim.read_until("control:")
         assert "sers ready" not in seen and seen["sers"].startswith("pty ")
         assert ctl(addr, "advance", "1.9").returncode == 0
-        assert ctl(addr, "read", "sers", "booting").stdout == "true\n"
+        assert ctl(addr, "--json", "read", "sers", "booting").stdout == "true\n"
         assert ctl(addr, "advance", "0.2").returncode == 0
         line = sim.lines.get(timeout=15)
         assert line == "sers: ready"

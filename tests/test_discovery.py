@@ -57,16 +57,16 @@ def test_run_serves_control_in_the_runtime_dir_and_ctl_finds_it(runtime: Path) -
         assert re.fullmatch(r"sers: pty /dev/pts/\d+", before[0]), before
         assert stat.S_IMODE(os.lstat(runtime).st_mode) == 0o700
         assert stat.S_ISSOCK(os.lstat(path).st_mode) and stat.S_IMODE(os.lstat(path).st_mode) == 0o600
-        read = devsim("ctl", "read", "sers", "axis.position")  # no address: the one running
+        read = devsim("ctl", "--json", "read", "sers", "axis.position")  # no address: the one running
         assert read.returncode == 0, read.stderr
         assert float(read.stdout.split()[0]) == 0.0
-        by_name = devsim("ctl", "--control", "sers", "read", "sers", "axis.position")
+        by_name = devsim("ctl", "--json", "--control", "sers", "read", "sers", "axis.position")
         assert by_name.returncode == 0 and float(by_name.stdout.split()[0]) == 0.0, by_name.stderr
     finally:
         assert sim.interrupt() == 0
     assert not path.exists()  # removed on the way out
     gone = devsim("ctl", "read", "sers", "axis.position")
-    assert gone.returncode == 1
+    assert gone.returncode == 5  # exits.UNREACHABLE
     assert gone.stderr.strip() == (f"Error: no running simulator found in {runtime} (start one with 'devsim run KIND',"
                                    " or give --control ADDR)")
 
@@ -107,12 +107,12 @@ def test_several_simulators_are_listed_and_chosen_by_name(runtime: Path) -> None
         monitor = devsim("monitor")
         if "needs textual" not in monitor.stderr:
             assert monitor.returncode == 2 and monitor.stderr == refused.stderr
-        chosen = devsim("ctl", "--control", "gms96", "read", "gms96", "axis.position")
+        chosen = devsim("ctl", "--json", "--control", "gms96", "read", "gms96", "axis.position")
         assert chosen.returncode == 0 and float(chosen.stdout.split()[0]) == 0.0, chosen.stderr
         by_address = devsim("ctl", "--control", sers_address, "read", "sers", "axis.position")
         assert by_address.returncode == 0, by_address.stderr
         unknown = devsim("ctl", "--control", "poselesta", "read", "cnc", "axis.position")
-        assert unknown.returncode == 1
+        assert unknown.returncode == 5  # exits.UNREACHABLE
         assert unknown.stderr == ("Error: no running simulator named 'poselesta' (running: gms96, sers;"
                                   " see 'devsim ps')\n")
         assert [row["name"] for row in json.loads(devsim("ps", "--json").stdout)] == ["gms96", "sers"]
@@ -129,7 +129,7 @@ def test_no_control_opens_none(runtime: Path) -> None:
         assert not [line for line in keep if line.startswith("control:")], keep
         assert not list(runtime.glob("*.sock")) if runtime.exists() else True
         assert devsim("ps").stderr == "no running simulators\n"
-        assert devsim("ctl", "read", "sers", "axis.position").returncode == 1
+        assert devsim("ctl", "read", "sers", "axis.position").returncode == 5  # exits.UNREACHABLE
     finally:
         assert sim.interrupt() == 0
     both = devsim("run", "sers", "--pty", "--no-control", "--control", "unix:/tmp/x.sock")
@@ -162,14 +162,14 @@ def test_an_unsafe_runtime_dir_is_refused(runtime: Path, tmp_path: Path) -> None
     runtime.symlink_to(elsewhere)
     for args in (("run", "sers", "--pty"), ("ps",), ("ctl", "read", "sers", "axis.position")):
         done = devsim(*args)
-        assert done.returncode == 1, (args, done.stderr)
+        assert done.returncode == 6, (args, done.stderr)  # exits.SYSTEM
         assert f"the runtime directory {runtime} is a symlink; remove it" in done.stderr
     assert not list(elsewhere.iterdir())
     runtime.unlink()
     runtime.mkdir(mode=0o755)
     os.chmod(runtime, 0o755)
     done = devsim("run", "sers", "--pty")
-    assert done.returncode == 1 and f"{runtime} is open to others (mode 755); chmod 700 it" in done.stderr
+    assert done.returncode == 6 and f"{runtime} is open to others (mode 755); chmod 700 it" in done.stderr
 
 
 def test_without_xdg_the_runtime_dir_is_named_with_the_uid(monkeypatch: pytest.MonkeyPatch) -> None:

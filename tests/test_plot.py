@@ -17,7 +17,7 @@ import pytest
 from click.testing import CliRunner
 from PIL import Image
 
-from devsim.cli import cli
+from devsim.cli import cli, exits
 from devsim.observe.plot import MARGIN, PANEL_HEIGHT, WIDTH
 from devsim.observe.plot_data import MotionData, Traffic, load, read_motion_log
 from devsim.transports.pcap import PcapTracer
@@ -144,18 +144,18 @@ def test_a_trace_alone_is_a_traffic_timeline(tmp_path: Path, sers_files: tuple[P
 
 
 @pytest.mark.parametrize(
-    ("content", "output", "message"),
+    ("content", "output", "message", "status"),
     [
-        ("time,device,axis\n", "x.png", "not a motion log"),
-        ("hello\n", "x.png", "not a trace line"),
-        ("", "x.gif", "-o: the output must end in .png, .svg or .html"),
+        ("time,device,axis\n", "x.png", "not a motion log", exits.BAD_FILE),
+        ("hello\n", "x.png", "not a trace line", exits.BAD_FILE),
+        ("", "x.gif", "-o: the output must end in .png, .svg or .html", exits.USAGE),
     ],
 )
-def test_bad_input_is_one_line(tmp_path: Path, content: str, output: str, message: str) -> None:
+def test_bad_input_is_one_line(tmp_path: Path, content: str, output: str, message: str, status: int) -> None:
     source = tmp_path / "in.csv"
     source.write_text(content)
     code, _, stderr = invoke("plot", str(source), "-o", str(tmp_path / output))
-    assert code in (1, 2) and message in stderr and stderr.count("\n") == 1, stderr
+    assert code == status and message in stderr and stderr.count("\n") == 1, stderr
     assert not (tmp_path / output).exists()
 
 
@@ -192,9 +192,9 @@ def test_without_matplotlib_the_command_says_what_to_install(
 ) -> None:
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib raises ImportError
     code, _, stderr = invoke("plot", str(sers_files[0]), "-o", str(tmp_path / "x.png"))
-    assert code == 1 and "pip install 'devsim-motion[plot]'" in stderr
+    assert code == exits.SYSTEM and "pip install 'devsim-motion[plot]'" in stderr
     code, _, stderr = invoke("scenario", "run", str(SERS), "--plot", str(tmp_path / "plots"))
-    assert code == 1 and "pip install 'devsim-motion[plot]'" in stderr
+    assert code == exits.SYSTEM and "pip install 'devsim-motion[plot]'" in stderr
     assert not (tmp_path / "plots").exists()
 
 

@@ -12,7 +12,7 @@ import pytest
 import serial
 from click.testing import CliRunner
 
-from devsim.cli import cli
+from devsim.cli import cli, exits
 from devsim.core.config import ConfigError
 from devsim.scenario.plant import plant_running
 from devsim.scenario.runner import run_scenario
@@ -42,14 +42,14 @@ def test_run_gives_each_port_its_own_pty_and_says_ready(tmp_path: Path) -> None:
             assert a.read(5) == b"hello"  # port a echoes
             b.write(b"?\r")
             assert b.read(2) == b"5\r"  # port b reports what port a counted: one model
-        devices = json.loads(ctl(addr, "devices").stdout)
+        devices = json.loads(ctl(addr, "--json", "devices").stdout)
         assert devices[0]["ports"] == {"a": path_a, "b": path_b}
-        line_b = json.loads(ctl(addr, "line", "twoport", "--port", "b").stdout)
+        line_b = json.loads(ctl(addr, "--json", "line", "twoport", "--port", "b").stdout)
         assert line_b["bytes_in"] == 2 and line_b["bytes_out"] == 2
         assert ctl(addr, "fault", "twoport", "jam", "on").returncode == 0
-        assert json.loads(ctl(addr, "read", "twoport", "jammed").stdout) is True
+        assert json.loads(ctl(addr, "--json", "read", "twoport", "jammed").stdout) is True
         done = ctl(addr, "fault", "twoport", "nope", "on")
-        assert done.returncode == 1 and "declared: jam" in done.stderr
+        assert done.returncode == exits.REFUSED and "declared: jam" in done.stderr
     finally:
         code, err = sim.stop()
     assert code == 0 and "Traceback" not in err
@@ -180,7 +180,7 @@ def test_ctl_line_fault(tmp_path: Path) -> None:
             a.write(b"pq")
             assert a.read(1) == b"q"
         done = ctl(addr, "line-fault", "twoport", "noise", "on")
-        assert done.returncode == 1 and "no port 'main'" in done.stderr
+        assert done.returncode == exits.REFUSED and "no port 'main'" in done.stderr
     finally:
         code, err = sim.stop()
     assert code == 0 and "Traceback" not in err

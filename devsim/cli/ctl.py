@@ -1,7 +1,8 @@
 """``devsim ctl``: the control API of a running simulator (``--control ADDR`` or NAME, or the only
 one running: :func:`devsim.cli.running.control_target`) or of a fleet
-(``--fleet mqtt://BROKER``, :mod:`devsim.fleet`) on the command line; results are printed as JSON,
-errors are one line.
+(``--fleet mqtt://BROKER``, :mod:`devsim.fleet`) on the command line; results are printed as text
+(:mod:`devsim.cli.present`; ``--json`` for scripts), errors are one line with the status of
+:mod:`devsim.cli.exits`.
 
 One command per op of :data:`devsim.runtime.ops.CONTROL` (``power_cycle`` is ``power-cycle``),
 each sending the op's typed request (:mod:`devsim.runtime.requests`); :func:`command_name` names
@@ -15,6 +16,7 @@ from typing import Any
 
 import click
 
+from devsim.cli import exits, present
 from devsim.cli.options import check_fleet
 from devsim.runtime import requests as rq
 
@@ -24,13 +26,6 @@ __all__ = ["command_name", "ctl"]
 def command_name(op: str) -> str:
     """The ``devsim ctl`` command of a control op."""
     return op.replace("_", "-")
-
-
-def _emit(result: Any) -> None:
-    if isinstance(result, dict | list):
-        click.echo(json.dumps(result, indent=2, sort_keys=False))
-    else:
-        click.echo(json.dumps(result))
 
 
 def _connect(ctx: click.Context) -> tuple[str, Any]:
@@ -53,24 +48,26 @@ def _connect(ctx: click.Context) -> tuple[str, Any]:
     except ControlAddressError as exc:
         raise click.UsageError(f"--control: {exc}") from None
     except OSError as exc:
-        raise click.ClickException(f"cannot connect to {fleet or addr}: {exc.strerror or exc}") from None
+        raise exits.Unreachable(f"cannot connect to {fleet or addr}: {exc.strerror or exc}") from None
 
 
-def _call(ctx: click.Context, request: rq.ControlRequest) -> None:
+def _call(ctx: click.Context, *requests: rq.ControlRequest) -> None:
+    """Send the requests on one connection; print their results (:mod:`devsim.cli.present`)."""
     from devsim.runtime.client import ControlError
 
     addr, client = _connect(ctx)
     try:
         with client:
-            result = client.call(request)
+            answers = [(request, client.call(request)) for request in requests]
+            text = present.render(answers, json_output=present.wants_json(ctx), names=client.names)
     except ControlError as exc:
-        raise click.ClickException(str(exc)) from None
+        raise exits.control_error(exc) from None
     except (OSError, ValueError) as exc:
-        raise click.ClickException(f"control connection to {addr} failed: {exc}") from None
-    _emit(result)
+        raise exits.Unreachable(f"control connection to {addr} failed: {exc}") from None
+    click.echo(text)
 
 
-@click.group()
+@click.group(cls=present.JsonGroup)
 @click.option(
     "--control", "addr", envvar="DEVSIM_CONTROL", metavar="ADDR",
     help="Control address (unix:/path.sock or [HOST:]PORT) or name of a running simulator; default: the only one"
@@ -82,7 +79,8 @@ def _call(ctx: click.Context, request: rq.ControlRequest) -> None:
 )
 @click.pass_context
 def ctl(ctx: click.Context, addr: str | None, fleet: str | None) -> None:
-    """Control a running simulator (or a fleet of them); prints JSON results."""
+    """Control a running simulator (or a fleet of them): prints tables and plain words (ok, a
+    value with its unit), or JSON with --json."""
     if fleet is not None:
         check_fleet(fleet)
         addr = None
@@ -106,11 +104,12 @@ def ctl_devices(ctx: click.Context) -> None:
 
 @ctl.command(command_name("read"))
 @click.argument("device")
-@click.argument("name")
+@click.argument("names", nargs=-1, required=True)
 @click.pass_context
-def ctl_read(ctx: click.Context, device: str, name: str) -> None:
-    """Read NAME (e.g. axis.position) of DEVICE."""
-    _call(ctx, rq.Read(device, name))
+def ctl_read(ctx: click.Context, device: str, names: tuple[str, ...]) -> None:
+    """Read NAMES (e.g. axis.position) of DEVICE: 'axis.position = 1200 inc', a table for
+    several (with --json: the value, or an object of name and value)."""
+    _call(ctx, *(rq.Read(device, name) for name in names))
 
 
 @ctl.command(command_name("set"))
@@ -175,11 +174,24 @@ def ctl_line(ctx: click.Context, device: str, port: str) -> None:
 
 
 @ctl.command(command_name("names"))
-@click.argument("device")
+@click.argument("device", metavar="DEVICE|KIND")
 @click.pass_context
 def ctl_names(ctx: click.Context, device: str) -> None:
-    """DEVICE's control names with type, unit, access (r, rw, w), description and manual section."""
-    _call(ctx, rq.Names(device))
+    """DEVICE's control names grouped by family (axis, input, param ...), with type, unit, access
+    (r, rw, w) and description (--json: with manual sections).  With no simulator to ask, KIND's
+    names (e.g. 'devsim ctl names sers')."""
+    try:
+        _call(ctx, rq.Names(device))
+    except (click.UsageError, exits.Unreachable) as exc:  # no simulator to ask: a kind's names
+        from devsim.core.registry import UnknownKind, device_class
+
+        if ctx.obj != (None, None):  # an address was given: its answer counts
+            raise
+        try:
+            rows = [point.describe() for point in device_class(device).points]
+        except UnknownKind:
+            raise exc from None
+        click.echo(present.render([(rq.Names(device), rows)], json_output=present.wants_json(ctx)))
 
 
 @ctl.command(command_name("fault"))
@@ -242,13 +254,13 @@ def ctl_watch(device: str | None, names: tuple[str, ...], as_json: bool, period:
     stream = client.watch(device, list(names) or None, period=period)
     try:
         for item in stream:
-            click.echo(json.dumps(item) if as_json else describe(item))
+            click.echo(json.dumps(item, ensure_ascii=False) if as_json or present.wants_json(ctx) else describe(item))
     except KeyboardInterrupt:
         sys.exit(0)
     except ControlError as exc:
-        raise click.ClickException(str(exc)) from None
+        raise exits.control_error(exc) from None
     except (OSError, ValueError) as exc:
-        raise click.ClickException(f"control connection to {addr} failed: {exc}") from None
+        raise exits.Unreachable(f"control connection to {addr} failed: {exc}") from None
     finally:
         stream.close()
         client.close()

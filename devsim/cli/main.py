@@ -19,11 +19,13 @@
 
 * ``devsim ps`` – the running simulators (:mod:`devsim.cli.running`).
 * ``devsim ctl [--control ADDR|NAME] devices|read|set|state|power-cycle|advance|now|line|...`` – talk to a
-  running simulator's control API and print the JSON result; ``devsim ctl --fleet mqtt://BROKER
-  ...`` the same with every device of a fleet (``devsim run/up --fleet``, :mod:`devsim.fleet`).
+  running simulator's control API and print the result (``--json``: as JSON); ``devsim ctl
+  --fleet mqtt://BROKER ...`` the same with every device of a fleet (``devsim run/up --fleet``,
+  :mod:`devsim.fleet`).
 
-Usage and configuration errors are one line on stderr (``Error: config.yaml:3: baud: ...``) and
-exit with status 2; failures at run time (a port in use) exit with status 1.
+Every error is one line on stderr (``Error: config.yaml:3: baud: ...``); the exit status says
+which kind of mistake it was, the same in every command (:mod:`devsim.cli.exits`: 2 a usage
+error, 3 a bad file, 6 a port in use ...).
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ import click
 import msgspec
 
 from devsim import __version__
+from devsim.cli import exits
 from devsim.cli.options import (
     check_canopen,
     check_fleet,
@@ -60,12 +63,6 @@ __all__ = ["cli", "main"]
 
 
 # -- one-line errors -------------------------------------------------------------------------
-class ConfigUsageError(click.ClickException):
-    """A bad option value or configuration file (exit status 2)."""
-
-    exit_code = 2
-
-
 class _Cli(click.Group):
     """A group that reports every usage error as a single line (no usage block, no traceback),
     and imports the modules of the ``LAZY_COMMANDS`` only when one of them runs."""
@@ -98,9 +95,9 @@ class _Cli(click.Group):
         except click.ClickException as exc:
             _fail(exc.format_message(), exc.exit_code)
         except click.Abort:
-            _fail("aborted", 1)
+            _fail("aborted", exits.INTERRUPTED)
         except BrokenPipeError:
-            sys.exit(1)
+            sys.exit(exits.SYSTEM)
         sys.exit(rv if isinstance(rv, int) else 0)
 
 
@@ -255,7 +252,7 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
             elif data is not None and not isinstance(data, dict):
                 raise ConfigError(f"{config_file}:1: expected a mapping at the top level")
         except ConfigError as exc:
-            raise ConfigUsageError(str(exc)) from None
+            raise exits.BadFile(str(exc)) from None
         base = plain(data) if isinstance(data, dict) else {}
 
     def finish(raw: dict[str, Any], source: str) -> dict[str, Any]:
@@ -264,7 +261,9 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
         try:
             return model.parse(raw).dump()
         except ValueError as exc:  # typed.Invalid: "key: message" of the first problem
-            raise ConfigUsageError(f"{source}: {exc}") from None
+            if source == "--drives":
+                raise click.UsageError(f"{source}: {exc}") from None
+            raise exits.BadFile(f"{source}: {exc}") from None
 
     if not drives:
         return [(kind, finish(base, config_file or "config"))]
@@ -412,7 +411,7 @@ def run(
     except UnknownKind as exc:
         raise click.UsageError(str(exc)) from None
     except Exception as exc:
-        raise click.ClickException(f"cannot load device kind {kind!r}: {type(exc).__name__}: {exc}") from None
+        raise exits.SystemFailure(f"cannot load device kind {kind!r}: {type(exc).__name__}: {exc}") from None
 
     chosen = [name for name, given in (("--pty/--link", use_pty or link), ("--tcp", tcp), ("--rfc2217", rfc2217)) if given]
     if len(chosen) > 1:
@@ -482,13 +481,15 @@ def run(
     try:
         asyncio.run(_serve(plan))
     except KeyboardInterrupt:  # Ctrl-C before the handlers were in place
-        sys.exit(130)
+        sys.exit(exits.INTERRUPTED)
     except _StartError as exc:
-        raise click.ClickException(str(exc)) from None
+        raise exits.failure(exc.status, str(exc)) from None
 
 
 class _StartError(Exception):
-    pass
+    def __init__(self, message: str, status: int) -> None:
+        super().__init__(message)
+        self.status = status
 
 
 def _make_transport(port: _Port) -> Any:
@@ -589,7 +590,7 @@ async def _serve(plan: _Plan) -> None:
             if server is not None:
                 await server.close()
             detail = str(exc) if isinstance(exc, OSError | ValueError) else f"{type(exc).__name__}: {exc}"
-            raise _StartError(f"cannot {stage}: {detail}") from None
+            raise _StartError(f"cannot {stage}: {detail}", exits.start_status(exc)) from None
 
         try:
             for device in devices:
@@ -679,7 +680,7 @@ LAZY_COMMANDS: dict[str, str] = {
     "check": "devsim.cli.scenario",
     "ctl": "devsim.cli.ctl",
     "monitor": "devsim.cli.monitor",
-    "plot": "devsim.observe.plot",
+    "plot": "devsim.cli.plot",
     "ps": "devsim.cli.running",
     "record": "devsim.cli.replay",
     "replay": "devsim.cli.replay",

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import click
 
+from devsim.cli import exits
+
 __all__ = ["monitor"]
 
 
@@ -27,7 +29,7 @@ def monitor(addr: str | None, period: float) -> None:
     try:
         from devsim.observe.monitor import MonitorApp
     except ImportError as exc:
-        raise click.ClickException(f"devsim monitor needs textual: pip install 'devsim-motion[monitor]' ({exc})") from None
+        raise exits.MissingExtra(f"devsim monitor needs textual: pip install 'devsim-motion[monitor]' ({exc})") from None
     from devsim.cli.running import control_target
 
     addr = control_target(addr)
@@ -36,5 +38,5 @@ def monitor(addr: str | None, period: float) -> None:
     except ControlAddressError as exc:
         raise click.UsageError(f"--control: {exc}") from None
     except OSError as exc:
-        raise click.ClickException(f"cannot connect to {addr}: {exc.strerror or exc}") from None
+        raise exits.Unreachable(f"cannot connect to {addr}: {exc.strerror or exc}") from None
     app.run()

@@ -1,10 +1,13 @@
 """The facade and fleet options of ``devsim run`` checked before anything starts (issues 13, 14):
-each bad value is one usage-error line; a missing extra names the ``pip install`` that brings it.
+each bad value is one usage-error line; a missing extra names the ``pip install`` that brings it
+(:class:`devsim.cli.exits.MissingExtra`).
 The libraries themselves are imported only to check that they are there."""
 
 from __future__ import annotations
 
 import click
+
+from devsim.cli import exits
 
 __all__ = ["check_canopen", "check_fleet", "check_modbus", "check_mqtt", "check_opcua", "host_port", "modbus_for"]
 
@@ -32,7 +35,7 @@ def check_modbus(spec: str) -> None:
     try:
         import pymodbus  # noqa: F401
     except ImportError:
-        raise click.UsageError("--modbus needs pymodbus: pip install 'devsim-motion[modbus]'") from None
+        raise exits.MissingExtra("--modbus needs pymodbus: pip install 'devsim-motion[modbus]'") from None
 
 
 def check_canopen(spec: str) -> None:
@@ -48,7 +51,7 @@ def check_canopen(spec: str) -> None:
     try:
         import canopen  # noqa: F401
     except ImportError:
-        raise click.UsageError("--canopen needs canopen and python-can: pip install 'devsim-motion[can]'") from None
+        raise exits.MissingExtra("--canopen needs canopen and python-can: pip install 'devsim-motion[can]'") from None
 
 
 def check_mqtt(url: str, convention: str, rate: float, plant: str | None) -> None:
@@ -60,7 +63,7 @@ def check_mqtt(url: str, convention: str, rate: float, plant: str | None) -> Non
         if convention == "sparkplug":
             import tahutils  # noqa: F401
     except ImportError:
-        raise click.UsageError("--mqtt needs aiomqtt, amqtt and tahutils: pip install 'devsim-motion[mqtt]'") from None
+        raise exits.MissingExtra("--mqtt needs aiomqtt, amqtt and tahutils: pip install 'devsim-motion[mqtt]'") from None
     from devsim.facades.mqtt_topics import check_name, parse_url
 
     try:
@@ -86,16 +89,20 @@ def check_opcua(spec: str, period: float) -> None:
     try:
         import asyncua  # noqa: F401
     except ImportError:
-        raise click.UsageError("--opcua needs asyncua: pip install 'devsim-motion[opcua]'") from None
+        raise exits.MissingExtra("--opcua needs asyncua: pip install 'devsim-motion[opcua]'") from None
 
 
 def check_fleet(url: str) -> None:
-    """``--fleet URL``: a usable fleet URL, and aiomqtt installed (a usage error otherwise)."""
-    from devsim.fleet.topics import fleet_problem
+    """``--fleet URL``: a usable fleet URL (a usage error otherwise), and aiomqtt installed."""
+    from devsim.fleet.topics import FleetUrlError, fleet_problem, parse_fleet_url
 
-    problem = fleet_problem(url)
+    try:
+        parse_fleet_url(url)
+    except FleetUrlError as exc:
+        raise click.UsageError(f"--fleet: {exc}") from None
+    problem = fleet_problem(url)  # the URL is good: what is left is the missing extra
     if problem is not None:
-        raise click.UsageError(f"--fleet: {problem}")
+        raise exits.MissingExtra(f"--fleet: {problem}")
 
 
 def modbus_for(spec: str, index: int) -> str:

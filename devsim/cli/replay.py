@@ -19,6 +19,7 @@ from typing import Any
 
 import click
 
+from devsim.cli import exits
 from devsim.core.device import SerialSettings
 
 __all__ = ["record", "replay"]
@@ -46,7 +47,7 @@ def _kind_defaults(kind: str, port_name: str | None, config: dict[str, Any]) -> 
 
 
 def _load_config(kind: str, path: str | None) -> dict[str, Any]:
-    """The kind's configuration file, validated like ``devsim run --config`` (exit status 2)."""
+    """The kind's configuration file, validated like ``devsim run --config`` (a bad file)."""
     if path is None:
         return {}
     from devsim.core.config import ConfigError, load_yaml, plain, validate
@@ -59,12 +60,8 @@ def _load_config(kind: str, path: str | None) -> dict[str, Any]:
             validate(data, model, path)
             return dict(model.parse(plain(data) if isinstance(data, dict) else {}).dump())
     except (ConfigError, ValueError) as exc:
-        raise _ConfigError(str(exc)) from None
+        raise exits.BadFile(str(exc)) from None
     return plain(data) if isinstance(data, dict) else {}
-
-
-class _ConfigError(click.ClickException):
-    exit_code = 2
 
 
 @click.command("record")
@@ -86,7 +83,7 @@ def record(device_url: str, out: str, kind: str | None, port_name: str | None, l
     from msgspec.structs import replace
 
     from devsim.cli.options import host_port
-    from devsim.observe.replay.recorder import RecordPlan, record_session
+    from devsim.observe.replay.recorder import HostPortError, RecordPlan, record_session
 
     if link and tcp:
         raise click.UsageError("choose one host port: --link (a pty) or --tcp")
@@ -103,9 +100,12 @@ def record(device_url: str, out: str, kind: str | None, port_name: str | None, l
     plan = RecordPlan(device_url=device_url, out=out, kind=kind, port_name=port_name, settings=settings,
                       tcp=host_port("--tcp", tcp) if tcp is not None else None, link=link)
     try:
-        sys.exit(asyncio.run(record_session(plan)))
+        status = asyncio.run(record_session(plan))
+    except HostPortError as exc:
+        raise exits.SystemFailure(str(exc)) from None
     except OSError as exc:
-        raise click.ClickException(f"cannot write {out}: {exc}") from None
+        raise exits.SystemFailure(f"cannot write {out}: {exc}") from None
+    sys.exit(exits.UNREACHABLE if status else exits.OK)  # the device's port: not there, or it failed
 
 
 @click.command("replay")
@@ -139,7 +139,7 @@ def replay(session_file: str, use_pty: bool, link: str | None, tcp: str | None, 
     try:
         session = load_session(session_file)
     except SessionError as exc:
-        raise _ConfigError(str(exc)) from None
+        raise exits.BadFile(str(exc)) from None
     config: dict[str, Any] = {}
     if fallback == "live":
         if session.kind is None:
@@ -154,4 +154,5 @@ def replay(session_file: str, use_pty: bool, link: str | None, tcp: str | None, 
     elif config_file is not None:
         raise click.UsageError("--config is for the live model: add --fallback live")
     plan = ReplayPlan(session=session, link=link, tcp=host_port("--tcp", tcp) if tcp is not None else None, speed=speed, as_fast=as_fast, fallback=fallback, config=config)
-    sys.exit(asyncio.run(replay_session(plan)))
+    status = asyncio.run(replay_session(plan))
+    sys.exit(exits.SYSTEM if status else exits.OK)  # the live model or the port could not start

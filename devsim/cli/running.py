@@ -10,6 +10,7 @@ import json
 import click
 import msgspec
 
+from devsim.cli import exits
 from devsim.runtime.control import ControlAddress, ControlAddressError, parse_address
 from devsim.runtime.discovery import DiscoveryError, RuntimeDirError, Simulator, choose, control_path, running
 
@@ -29,12 +30,14 @@ def control_target(given: str | None) -> str:
     several do."""
     try:
         return choose(given)
+    except ControlAddressError as exc:
+        raise click.UsageError(f"--control: {exc}") from None
     except DiscoveryError as exc:
         if exc.several:
             raise ControlChoiceError(str(exc)) from None
-        raise click.ClickException(str(exc)) from None
+        raise exits.Unreachable(str(exc)) from None
     except RuntimeDirError as exc:
-        raise click.ClickException(str(exc)) from None
+        raise exits.SystemFailure(str(exc)) from None
 
 
 def uptime_text(seconds: float | None) -> str:
@@ -71,7 +74,7 @@ def ps(as_json: bool) -> None:
     try:
         found = running()
     except RuntimeDirError as exc:
-        raise click.ClickException(str(exc)) from None
+        raise exits.SystemFailure(str(exc)) from None
     if as_json:
         click.echo(json.dumps([msgspec.to_builtins(sim) for sim in found], indent=2))
         return
@@ -92,7 +95,7 @@ def default_control(name: str) -> ControlAddress:
     try:
         return ControlAddress(path=str(control_path(name)))
     except RuntimeDirError as exc:
-        raise click.ClickException(f"{exc} (--control ADDR serves the control API elsewhere, --no-control"
+        raise exits.SystemFailure(f"{exc} (--control ADDR serves the control API elsewhere, --no-control"
                                    " not at all)") from None
 
 

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import click
 
+from devsim.cli import exits
 from devsim.cli.options import check_fleet
 from devsim.core.config import ConfigError, LineDict, load_yaml
 from devsim.observe.live_log import DEFAULT_LEVEL, attach_log, level_of, log_options
@@ -39,7 +40,7 @@ def _load(path: str) -> object:
 @click.command("check")
 @click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
 def check(files: tuple[str, ...]) -> None:
-    """Validate scenario and plant FILES without running them."""
+    """Validate scenario and plant FILES without running them (exit status 3 if one is wrong)."""
     bad = 0
     for path in files:
         try:
@@ -53,7 +54,7 @@ def check(files: tuple[str, ...]) -> None:
         what = f"scenario, {len(steps)} steps" if steps is not None else "plant"
         click.echo(f"{path}: ok ({what}, {len(spec.devices)} devices)")  # type: ignore[attr-defined]
     if bad:
-        sys.exit(1)
+        sys.exit(exits.BAD_FILE)
 
 
 @click.group("scenario")
@@ -91,7 +92,7 @@ def scenario_run(
     plot_format: str,
     control: str | None,
 ) -> None:
-    """Run scenario FILES; exit status 1 if any expectation failed."""
+    """Run scenario FILES; exit status 1 if any expectation failed (3: a file is wrong)."""
     from devsim.scenario.report import format_report, write_junit
     from devsim.scenario.runner import run_scenario
     from devsim.scenario.schema import load_scenario
@@ -106,7 +107,7 @@ def scenario_run(
         if (problem := motion_log_problem(motion_resolution)) is not None:
             raise click.UsageError(problem)
         if plot_dir is not None:
-            from devsim.observe.plot import require_matplotlib
+            from devsim.cli.plot import require_matplotlib
 
             require_matplotlib()
         pictures = ScenarioPictures(motion_log=motion_log, resolution=motion_resolution, plot_dir=plot_dir,
@@ -124,7 +125,7 @@ def scenario_run(
         try:
             scenarios.append(load_scenario(path))
         except ConfigError as exc:
-            raise click.ClickException(str(exc)) from None
+            raise exits.BadFile(str(exc)) from None
     from devsim.scenario.progress import Progress
 
     progress = Progress(len(scenarios))
@@ -147,6 +148,8 @@ def scenario_run(
                 run_scenario(item, mode=chosen, speed=speed, state_dir=state_dir, trace_dir=item_trace_dir,
                              announce=announce, on_step=progress.step if realtime else None, control=control)
             )
+        except OSError as exc:  # a port in use, a directory that cannot be made
+            raise exits.SystemFailure(f"{path}: cannot run the scenario: {exc}") from None
         finally:
             progress.end()
         click.echo(format_report(results[-1]))
@@ -158,7 +161,7 @@ def scenario_run(
     if len(results) > 1:
         click.echo(f"{len(results) - len(failed)} of {len(results)} scenarios passed")
     if failed:
-        sys.exit(1)
+        sys.exit(exits.FAILED)
 
 
 @click.command("up")
@@ -204,7 +207,7 @@ def up(
     try:
         spec = load_plant(plant_file)
     except ConfigError as exc:
-        raise click.ClickException(str(exc)) from None
+        raise exits.BadFile(str(exc)) from None
     if part is not None:
         try:
             spec = spec.only_part(part)
@@ -247,22 +250,26 @@ def up(
                             fleet=fleet, verbose=verbose, quiet=quiet)
             )
         except KeyboardInterrupt:
-            sys.exit(130)
-        sys.exit(status)
+            sys.exit(exits.INTERRUPTED)
+        sys.exit(exits.SYSTEM if status else exits.OK)  # a worker could not start or ended
     try:
         motion = (motion_log, motion_resolution) if motion_log is not None else None
         asyncio.run(_up(spec, state_dir, speed, address, trace_dir, virtual, fleet, part, motion,
                         level_of(verbose, quiet), name))
     except KeyboardInterrupt:
-        sys.exit(130)
+        sys.exit(exits.INTERRUPTED)
     except OSError as exc:
-        raise click.ClickException(f"cannot start the plant: {exc}") from None
+        raise exits.failure(exits.start_status(exc), f"cannot start the plant: {exc}") from None
     except _FleetError as exc:
-        raise click.ClickException(str(exc)) from None
+        raise exits.failure(exc.status, str(exc)) from None
 
 
 class _FleetError(Exception):
-    """The plant could not join its fleet (a name clash)."""
+    """The plant could not join its fleet (a name clash, no broker); ``status``: the exit status."""
+
+    def __init__(self, message: str, status: int) -> None:
+        super().__init__(message)
+        self.status = status
 
 
 async def _up(
@@ -311,7 +318,7 @@ async def _up(
             except (FleetClash, ConnectionError) as exc:
                 if server is not None:
                     await server.close()
-                raise _FleetError(f"cannot join the fleet {fleet}: {exc}") from None
+                raise _FleetError(f"cannot join the fleet {fleet}: {exc}", exits.start_status(exc)) from None
         for row in plant.describe():
             print(row, flush=True)
         if server is not None:

@@ -194,6 +194,11 @@ class Point(msgspec.Struct, frozen=True):
     def readable(self) -> bool:
         return self.get is not None
 
+    def describe(self) -> dict[str, Any]:
+        """The point as the control op ``names`` lists it: name, type, unit, access, doc, section."""
+        return {"name": self.name, "type": self.type, "unit": self.unit, "access": self.access, "doc": self.doc,
+                "section": self.section}
+
     @property
     def settable(self) -> bool:
         return self.put is not None

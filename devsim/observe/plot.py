@@ -1,4 +1,5 @@
-"""``devsim plot LOG|TRACE... -o move.png|svg|html``: a picture of a motion and its line traffic.
+"""A picture of a motion and its line traffic (``devsim plot LOG|TRACE... -o move.png|svg|html``,
+the command in :mod:`devsim.cli.plot`).
 
 The files are motion logs (``--motion-log``) and wire traces (``--trace``, text or pcap), in any
 number and order (:func:`devsim.observe.plot_data.load` tells them apart).  The picture has, against one
@@ -30,11 +31,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import click
-
 from devsim.observe.plot_data import MotionData, PlotInputError, Traffic, load, messages
 
-__all__ = ["FORMATS", "PANEL_HEIGHT", "WIDTH", "plot", "render", "require_matplotlib"]
+__all__ = ["FORMATS", "PANEL_HEIGHT", "WIDTH", "MissingMatplotlib", "output_format", "render", "require_matplotlib"]
 
 #: Output formats by suffix.
 FORMATS = ("png", "svg", "html")
@@ -50,12 +49,16 @@ MAX_CHUNK_LABELS = 24
 _INSTALL = "devsim plot needs matplotlib: pip install 'devsim-motion[plot]'"
 
 
+class MissingMatplotlib(ImportError):
+    """matplotlib is not installed; the message names the ``pip install``."""
+
+
 def require_matplotlib() -> None:
-    """Raise a one-line :class:`click.ClickException` if matplotlib is missing."""
+    """Raise :class:`MissingMatplotlib` if matplotlib is missing."""
     try:
         import matplotlib  # noqa: F401
     except ImportError:
-        raise click.ClickException(_INSTALL) from None
+        raise MissingMatplotlib(_INSTALL) from None
 
 
 def output_format(path: str | Path) -> str:
@@ -222,27 +225,3 @@ def _html_page(svg: str, title: str, files: Sequence[str | Path]) -> str:
         f"</head>\n<body>\n<h1>{html.escape(title)}</h1>\n{body}\n<p>From:</p>\n<ul>{sources}</ul>\n"
         "</body>\n</html>\n"
     )
-
-
-@click.command("plot")
-@click.argument("files", nargs=-1, required=True, type=click.Path(exists=True, dir_okay=False))
-@click.option("-o", "--output", "output", required=True, metavar="OUT.png|svg|html",
-              help="The picture to write; its suffix chooses the format.")
-@click.option("--title", metavar="TEXT", help="The picture's title (default: the files' names).")
-@click.option("--dpi", type=click.IntRange(30, 600), default=100, show_default=True, help="PNG resolution.")
-def plot(files: tuple[str, ...], output: str, title: str | None, dpi: int) -> None:
-    """Draw motion logs (--motion-log) and wire traces (--trace, text or pcap) in FILES:
-    position, velocity and following error against time with the events marked, and the line
-    traffic on the same time axis."""
-    try:
-        output_format(output)
-    except ValueError as exc:
-        raise click.UsageError(f"-o: {exc}") from None
-    require_matplotlib()
-    try:
-        written = render(files, output, title=title, dpi=dpi)
-    except PlotInputError as exc:
-        raise click.ClickException(str(exc)) from None
-    except OSError as exc:
-        raise click.ClickException(f"cannot write {output}: {exc.strerror or exc}") from None
-    click.echo(str(written))

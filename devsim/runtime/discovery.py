@@ -206,7 +206,7 @@ def listing(simulators: list[Simulator]) -> str:
 
 def is_address(text: str) -> bool:
     """Whether ``text`` is a control address rather than a simulator's name."""
-    if text.startswith(("unix:", "tcp:", "/", "[")):
+    if text.startswith(("unix:", "tcp:", "/", "[")) or text.isdigit():  # a bare number is a port
         return True
     try:
         parse_address(text)

@@ -263,13 +263,7 @@ class Runtime:
     def names(self, device: str) -> list[dict[str, Any]]:
         """The declared points of a device: name, type, unit, access, doc, section."""
 
-        def describe() -> list[dict[str, Any]]:
-            return [
-                {"name": p.name, "type": p.type, "unit": p.unit, "access": p.access, "doc": p.doc, "section": p.section}
-                for p in self.device(device).points
-            ]
-
-        return self.call(describe)
+        return self.call(lambda: [point.describe() for point in self.device(device).points])
 
     def fault(self, device: str, kind: str, active: bool) -> None:
         """Switch a declared device fault on or off."""

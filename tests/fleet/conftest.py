@@ -65,9 +65,9 @@ class Member(Program):
 
 
 def ctl(url: str, *args: str, ok: bool = True) -> Any:
-    """``devsim ctl --fleet URL ARGS``: its JSON (ok) or its stderr (not ok)."""
-    done = subprocess.run([sys.executable, "-m", "devsim", "ctl", "--fleet", url, *args], cwd=ROOT, env=devsim_env(),
-                          capture_output=True, text=True, timeout=60)
+    """``devsim ctl --fleet URL --json ARGS``: its JSON (ok) or its stderr (not ok)."""
+    done = subprocess.run([sys.executable, "-m", "devsim", "ctl", "--fleet", url, "--json", *args], cwd=ROOT,
+                          env=devsim_env(), capture_output=True, text=True, timeout=60)
     if ok:
         assert done.returncode == 0, done.stderr
         return json.loads(done.stdout)

@@ -103,6 +103,6 @@ def test_ctl_without_a_broker_says_so_in_one_line() -> None:
 
     done = subprocess.run([sys.executable, "-m", "devsim", "ctl", "--fleet", f"mqtt://127.0.0.1:{free_port()}",
                            "devices"], capture_output=True, text=True, timeout=60)
-    assert done.returncode == 1
+    assert done.returncode == 5  # devsim.cli.exits.UNREACHABLE
     assert done.stderr.startswith("Error: cannot connect to mqtt://127.0.0.1:") and "cannot reach the fleet broker" in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1

@@ -27,5 +27,6 @@ class Proc(DevsimProcess):
 
 
 def ctl(addr: str, *args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "devsim", "ctl", "--control", addr, *args], cwd=ROOT, env=env(),
+    """``devsim ctl --control ADDR --json ARGS`` (the JSON for scripts)."""
+    return subprocess.run([sys.executable, "-m", "devsim", "ctl", "--control", addr, "--json", *args], cwd=ROOT, env=env(),
                           capture_output=True, text=True, timeout=30, stdin=subprocess.DEVNULL)

@@ -155,10 +155,10 @@ async def test_monitor_shows_every_kind() -> None:
 def test_monitor_without_a_simulator(tmp_path: Path) -> None:
     from click.testing import CliRunner
 
-    from devsim.cli import cli
+    from devsim.cli import cli, exits
 
     result = CliRunner().invoke(cli, ["monitor", "--control", f"unix:{tmp_path}/none.sock"])
-    assert result.exit_code == 1
+    assert result.exit_code == exits.UNREACHABLE
     assert f"cannot connect to unix:{tmp_path}/none.sock" in result.output
     result = CliRunner().invoke(cli, ["monitor", "--control", "unix:/x.sock", "--period", "0"])
     assert result.exit_code == 2 and "--period: must be positive" in result.output

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from devsim.cli import cli
+from devsim.cli import cli, exits
 from devsim.core.device import SerialSettings
 from devsim.core.registry import port_framing
 from devsim.devices.gms96 import codec as ft12
@@ -64,13 +64,13 @@ def test_gms96_tolerances_ignore_the_checksum_and_the_frame_count_bit() -> None:
     ('{"hello": 1}\n', ":1: not a devsim session"),
     ('{"format": "devsim-session", "kind": "sers"}\n{"t": 1, "dir": "host", "hex": "zz"}\n', ":2: "),
 ])
-def test_a_bad_session_is_one_line_exit_2(tmp_path: Path, content: str, message: str) -> None:
+def test_a_bad_session_is_one_line_exit_bad_file(tmp_path: Path, content: str, message: str) -> None:
     path = tmp_path / "bad.devsim"
     path.write_text(content)
     with pytest.raises(SessionError, match=message):
         load_session(path)
     result = CliRunner().invoke(cli, ["replay", str(path), "--pty"])
-    assert result.exit_code == 2 and message in result.output
+    assert result.exit_code == exits.BAD_FILE and message in result.output
 
 
 async def test_the_handover_clock_is_virtual_then_real() -> None:

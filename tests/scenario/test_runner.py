@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 from click.testing import CliRunner
 
-from devsim.cli import cli
+from devsim.cli import cli, exits
 from devsim.scenario.report import format_report, write_junit
 from devsim.scenario.runner import ScenarioResult, run_scenario
 from devsim.scenario.schema import scenario_from_dict
@@ -264,7 +264,7 @@ def test_cli_scenario_run_reports_and_exit_status(tmp_path: Path) -> None:
     path.write_text(text)
     junit = tmp_path / "out.xml"
     result = CliRunner().invoke(cli, ["scenario", "run", str(path), "--junit", str(junit)])
-    assert result.exit_code == 1
+    assert result.exit_code == exits.FAILED
     assert "line 6: expect x.energized == False  FAIL" in result.output
     assert "→ x.energized == False: is True" in result.output
     assert junit.exists()

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from devsim.cli import cli
+from devsim.cli import cli, exits
 from devsim.core.config import ConfigError
 from devsim.scenario.schema import load_plant, load_scenario, parse_duration
 
@@ -110,7 +110,7 @@ def test_devsim_check(tmp_path: Path) -> None:
     assert result.exit_code == 0
     assert "good.yaml: ok (scenario, 4 steps, 1 devices)" in result.output
     result = CliRunner().invoke(cli, ["check", str(good), str(bad)])
-    assert result.exit_code == 1
+    assert result.exit_code == exits.BAD_FILE
     assert "bad.yaml:11: steps.2.timeout: `timeout` must be a duration like 2s or 150ms" in result.output
 
 
@@ -124,7 +124,7 @@ def test_check_finds_misspelled_names_and_wrong_types(tmp_path: Path) -> None:
         "      input.limit_rigth: true\n"
     )
     result = CliRunner().invoke(cli, ["check", str(plant)])
-    assert result.exit_code == 1
+    assert result.exit_code == exits.BAD_FILE
     assert "plant.yaml:5: devices.0.state.input.limit_rigth: x has no 'input.limit_rigth' (did you mean " \
         "input.limit_right" in result.output
     scenario = tmp_path / "s.yaml"
@@ -136,5 +136,5 @@ def test_check_finds_misspelled_names_and_wrong_types(tmp_path: Path) -> None:
         "  - expect_state: {device: x, name: axis.positon, equals: 0}\n"
     )
     result = CliRunner().invoke(cli, ["check", str(scenario)])
-    assert result.exit_code == 1
+    assert result.exit_code == exits.BAD_FILE
     assert "s.yaml:4: steps.1.set.quantity.supply_voltage: quantity.supply_voltage: expects a number" in result.output

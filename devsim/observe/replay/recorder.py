@@ -118,8 +118,14 @@ def _open_device(plan: RecordPlan) -> serial.SerialBase:
                                  parity=settings.parity, stopbits=settings.stopbits, timeout=0.05)
 
 
+class HostPortError(Exception):
+    """The host's pty or TCP port could not be opened."""
+
+
 async def record_session(plan: RecordPlan) -> int:
-    """Record until SIGINT/SIGTERM (or the device's port fails); returns the exit status."""
+    """Record until SIGINT/SIGTERM (or the device's port fails); returns 0, or 1 if the device's
+    port could not be opened or failed (said on stderr).  Raises :class:`HostPortError` if the
+    host's port cannot be opened, :class:`OSError` if the session file cannot be written."""
     try:
         device = _open_device(plan)
     except (serial.SerialException, OSError, ValueError) as exc:
@@ -147,8 +153,7 @@ async def record_session(plan: RecordPlan) -> int:
         try:
             await transport.start(recorder)
         except OSError as exc:
-            _warn(f"Error: cannot open the host's port: {exc}")
-            return 1
+            raise HostPortError(f"cannot open the host's port: {exc}") from None
         pump = threading.Thread(target=_pump, args=(device, loop, recorder, stop, done), name="devsim-record",
                                 daemon=True)
         pump.start()

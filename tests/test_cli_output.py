@@ -1,0 +1,194 @@
+"""What `devsim ctl` prints, through the real CLI (`python -m devsim` subprocesses against a
+running `devsim run sers`): plain words and tables for people, `--json` for scripts (today's
+JSON, characters unescaped), `names` grouped by family in the terminal's width."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Iterator
+
+import pytest
+import serial
+
+from devsim.cli import exits
+from tests.support.process import ROOT, DevsimProcess, devsim_env
+
+
+@pytest.fixture(scope="module")
+def sim() -> Iterator[tuple[str, str]]:
+    """A running `devsim run sers`: its control address and its port's URL."""
+    with tempfile.TemporaryDirectory(prefix="dso") as path:
+        address = f"unix:{path}/c.sock"
+        proc = DevsimProcess("run", "sers", "--tcp", "0", "--virtual", "--control", address)
+        try:
+            url = proc.next_match(proc.out, lambda line: line.startswith("sers: tcp "), 30, "the port").split()[2]
+            proc.next_match(proc.out, lambda line: line.startswith("control: "), 30, "the control line")
+            yield address, url
+        finally:
+            assert proc.interrupt() == 0
+
+
+@pytest.fixture(scope="module")
+def addr(sim: tuple[str, str]) -> str:
+    return sim[0]
+
+
+def devsim(*args: str, columns: int = 100) -> subprocess.CompletedProcess[str]:
+    env = dict(devsim_env(), COLUMNS=str(columns))
+    return subprocess.run([sys.executable, "-m", "devsim", *args], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=60, stdin=subprocess.DEVNULL)
+
+
+def ok(*args: str, columns: int = 100) -> str:
+    done = devsim(*args, columns=columns)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == ""
+    return done.stdout
+
+
+def test_plain_words_for_people(addr: str) -> None:
+    assert ok("ctl", "--control", addr, "set", "sers", "quantity.supply_voltage", "48") == "ok\n"  # was "null"
+    assert ok("ctl", "--control", addr, "read", "sers", "quantity.supply_voltage") == \
+        "quantity.supply_voltage = 48 V\n"
+    assert ok("ctl", "--control", addr, "read", "sers", "axis.velocity") == "axis.velocity = 0 inc/s\n"
+    assert ok("ctl", "--control", addr, "read", "sers", "input.limit_right") == "input.limit_right = false\n"
+    assert ok("ctl", "--control", addr, "fault", "sers", "blocked_axis", "off") == "ok\n"
+    assert ok("ctl", "--control", addr, "line-fault", "sers", "noise", "off") == "ok\n"
+    now = float(ok("ctl", "--control", addr, "--json", "now"))
+    assert ok("ctl", "--control", addr, "advance", "0.25") == f"ok, time {now + 0.25:g} s\n"
+    assert ok("ctl", "--control", addr, "now") == f"{now + 0.25:g} s\n"
+
+
+def test_several_names_are_a_small_table(addr: str) -> None:
+    lines = ok("ctl", "--control", addr, "read", "sers", "axis.position", "axis.velocity", "motion").splitlines()
+    assert [line.split() for line in lines] == [
+        ["name", "value", "unit"], ["axis.position", "0", "inc"], ["axis.velocity", "0", "inc/s"], ["motion", "false"],
+    ]
+    assert len({line.index(line.split()[1]) for line in lines}) == 1  # the values in one column
+
+
+def test_state_and_devices_are_tables(addr: str) -> None:
+    rows = {line.split()[0]: line.split()[1:] for line in ok("ctl", "--control", addr, "state", "sers").splitlines()}
+    assert rows["axis.position"] == ["0", "inc"]  # nested state as dotted names, with units
+    assert rows["quantity.supply_voltage"][1] == "V"
+    assert rows["line.device.text"] == ["9600", "8N1"]
+    lines = ok("ctl", "--control", addr, "devices").splitlines()
+    assert lines[0].split() == ["name", "kind", "port", "faults"]
+    assert lines[1].split()[:3] == ["sers", "sers", lines[1].split()[2]] and "blocked_axis," in lines[1]
+
+
+def test_json_for_scripts_keeps_its_format(addr: str) -> None:
+    """--json (on ctl or on the command) prints what ctl printed before: the bare result."""
+    assert ok("ctl", "--control", addr, "--json", "set", "sers", "input.I3", "on") == "null\n"
+    assert ok("ctl", "--control", addr, "read", "sers", "input.I3", "--json") == "true\n"
+    state = ok("ctl", "--control", addr, "--json", "state", "sers")
+    assert state.startswith('{\n  "kind": "sers",\n  "axis": {\n    "position": 0.0,')
+    assert json.loads(state)["input"]["I3"] is True
+    assert json.loads(ok("ctl", "--control", addr, "--json", "read", "sers", "input.I3", "axis.position")) == \
+        {"input.I3": True, "axis.position": 0.0}
+    assert json.loads(ok("ctl", "--control", addr, "--json", "devices"))[0]["name"] == "sers"
+
+
+def test_unicode_is_printed_as_characters_in_both_modes(addr: str) -> None:
+    raw = ok("ctl", "--control", addr, "--json", "names", "sers")
+    assert "§4.8.2.3" in raw and "\\u00a7" not in raw and "≠" in raw
+    assert json.loads(raw)[0] == {"name": "axis.position", "type": "float", "unit": "inc", "access": "r",
+                                  "doc": json.loads(raw)[0]["doc"], "section": "§4.8.2.3"}
+    text = ok("ctl", "--control", addr, "names", "sers", columns=200)
+    assert "a drive error is active (P11 ≠ 0)" in text and "\\u" not in text
+
+
+def test_names_are_grouped_by_family_in_the_terminal_width(addr: str) -> None:
+    data = json.loads(ok("ctl", "--control", addr, "--json", "names", "sers"))
+    for columns in (60, 120):
+        lines = ok("ctl", "--control", addr, "names", "sers", columns=columns).splitlines()
+        assert max(len(line) for line in lines) <= columns
+        assert any(line.endswith("…") for line in lines)  # long descriptions are cut
+        assert lines[-1].startswith(f"{len(data)} names in ")
+        heads = [line for line in lines[:-1] if not line.startswith("  ")]
+        assert "axis (5)" in heads and "input (21)" in heads and "param (188)" in heads
+        members = [line.split()[0] for line in lines[:-1] if line.startswith("  ")]
+        assert sorted(members) == sorted(row["name"] for row in data)  # each name once
+        group = ""
+        for line in lines[:-1]:
+            if not line.startswith("  "):
+                group = line.split()[0]
+            elif group != "(single":  # a family's names start with it
+                assert line.split()[0].split(".")[0] == group, line
+    axis = ok("ctl", "--control", addr, "names", "sers", columns=200).split("axis (5)\n")[1].splitlines()[0]
+    assert axis.split()[:4] == ["axis.position", "float", "inc", "r"]
+
+
+def test_names_of_a_kind_without_a_simulator() -> None:
+    """`devsim ctl names KIND` with no simulator to ask: the kind's declared names."""
+    text = ok("ctl", "names", "gms96")
+    assert "input (" in text and "output (" in text and text.splitlines()[-1].startswith("160 names in ")
+    assert json.loads(ok("ctl", "names", "sers", "--json"))[0]["name"] == "axis.position"
+    done = devsim("ctl", "names", "nokind")
+    assert done.returncode == exits.UNREACHABLE and "no running simulator found" in done.stderr
+
+
+def test_an_error_is_one_line_on_stderr(addr: str) -> None:
+    for args, status, text in [
+        (("set", "sers", "quantity.supply_voltage", "hello"), exits.REFUSED,
+         "Error: BadValue: quantity.supply_voltage: expects a number, not 'hello'\n"),
+        (("read", "sers", "axis.positon"), exits.REFUSED,
+         "Error: UnknownName: sers has no 'axis.positon' (did you mean axis.position"),
+    ]:
+        for mode in ((), ("--json",)):
+            done = devsim("ctl", "--control", addr, *mode, *args)
+            assert (done.returncode, done.stdout) == (status, "")
+            assert done.stderr.startswith(text) and done.stderr.count("\n") == 1
+
+
+def test_watch_lines_print_characters() -> None:
+    """`devsim ctl watch` prints a structured value's text as characters too (its formatter)."""
+    from devsim.runtime.watch_stream import describe
+
+    line = describe({"type": "change", "t": 1.5, "device": "sers", "name": "display", "value": {"char": "°"}})
+    assert line == '1.500 sers display {"char": "°"}'
+
+
+def test_telegrams_are_a_table(sim: tuple[str, str]) -> None:
+    addr, url = sim
+    assert ok("ctl", "--control", addr, "telegrams", "sers").startswith("(no telegrams yet")  # the tap starts
+    with serial.serial_for_url(url, timeout=1) as port:
+        port.write(b"#1P11?\r")
+        deadline = time.monotonic() + 15
+        while (lines := ok("ctl", "--control", addr, "telegrams", "sers").splitlines())[0].startswith("(no"):
+            assert time.monotonic() < deadline, "the telegram did not arrive"
+    assert lines[0].split() == ["time", "dir", "bytes", "decoded"]
+    when, *rest = lines[1].split()
+    assert re.fullmatch(r"\d+\.\d{3}", when) and rest == ["H>D", '"#1P11?\\r"', "#1P11?"]  # bytes, decoded
+
+
+def test_decoded_messages_are_key_value_words() -> None:
+    """A kind's framing decodes a telegram into fields (GMS96's FT1.2): shown as words."""
+    from devsim.cli.present import render
+    from devsim.runtime import requests as rq
+
+    telegram = {"t": 0.5, "dir": "H>D", "hex": "10 40 01 41 16", "text": '"\\x10@\\x01A\\x16"',
+                "decoded": [{"frame": "short", "C": "40", "A": 1}]}
+    lines = render([(rq.Telegrams("gms96", "main", 1), [telegram])], json_output=False, width=100).splitlines()
+    assert lines[1].endswith("frame=short C=40 A=1")
+
+
+def test_a_fleet_answers_per_process() -> None:
+    """With --fleet, now/advance answer for each process and devices name it: tables too."""
+    from devsim.cli.present import render
+    from devsim.runtime import requests as rq
+
+    clocks = {"cell-a-12-ab12": 2.5, "cell-b-13-cd34": 3.0}
+    assert render([(rq.Now(), clocks)], json_output=False, width=80).splitlines() == [
+        "process         time", "cell-a-12-ab12  2.5 s", "cell-b-13-cd34  3 s"]
+    assert render([(rq.Advance(1.0), clocks)], json_output=False, width=80).splitlines()[0] == "ok"
+    rows = [{"name": "press", "kind": "sers", "port": "/dev/pts/3", "ports": {"main": "/dev/pts/3"},
+             "faults": [], "process": "cell-a-12-ab12", "host": "cell-a", "pid": 12, "online": True}]
+    lines = render([(rq.Devices(), rows)], json_output=False, width=120).splitlines()
+    assert lines[0].split() == ["name", "kind", "port", "faults", "process", "host", "pid", "online"]
+    assert lines[1].split() == ["press", "sers", "/dev/pts/3", "-", "cell-a-12-ab12", "cell-a", "12", "true"]
