@@ -26,7 +26,9 @@ def monitor(addr: str, period: float) -> None:
     try:
         from devsim.observe.monitor import MonitorApp
     except ImportError as exc:
-        raise click.ClickException(f"devsim monitor needs textual: pip install 'devsim-motion[monitor]' ({exc})") from None
+        from devsim.extras import install_command
+
+        raise click.ClickException(f"devsim monitor needs textual: {install_command('monitor')} ({exc})") from None
     try:
         app = MonitorApp(addr, period=period)
     except ControlAddressError as exc:

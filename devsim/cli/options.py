@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import click
 
+from devsim.extras import install_command
+
 __all__ = ["check_canopen", "check_fleet", "check_modbus", "check_mqtt", "check_opcua", "host_port", "modbus_for"]
 
 
@@ -32,7 +34,7 @@ def check_modbus(spec: str) -> None:
     try:
         import pymodbus  # noqa: F401
     except ImportError:
-        raise click.UsageError("--modbus needs pymodbus: pip install 'devsim-motion[modbus]'") from None
+        raise click.UsageError(f"--modbus needs pymodbus: {install_command('modbus')}") from None
 
 
 def check_canopen(spec: str) -> None:
@@ -48,7 +50,7 @@ def check_canopen(spec: str) -> None:
     try:
         import canopen  # noqa: F401
     except ImportError:
-        raise click.UsageError("--canopen needs canopen and python-can: pip install 'devsim-motion[can]'") from None
+        raise click.UsageError(f"--canopen needs canopen and python-can: {install_command('can')}") from None
 
 
 def check_mqtt(url: str, convention: str, rate: float, plant: str | None) -> None:
@@ -60,7 +62,7 @@ def check_mqtt(url: str, convention: str, rate: float, plant: str | None) -> Non
         if convention == "sparkplug":
             import tahutils  # noqa: F401
     except ImportError:
-        raise click.UsageError("--mqtt needs aiomqtt, amqtt and tahutils: pip install 'devsim-motion[mqtt]'") from None
+        raise click.UsageError(f"--mqtt needs aiomqtt, amqtt and tahutils: {install_command('mqtt')}") from None
     from devsim.facades.mqtt_topics import check_name, parse_url
 
     try:
@@ -86,7 +88,7 @@ def check_opcua(spec: str, period: float) -> None:
     try:
         import asyncua  # noqa: F401
     except ImportError:
-        raise click.UsageError("--opcua needs asyncua: pip install 'devsim-motion[opcua]'") from None
+        raise click.UsageError(f"--opcua needs asyncua: {install_command('opcua')}") from None
 
 
 def check_fleet(url: str) -> None:

@@ -85,7 +85,9 @@ def fleet_problem(url: str) -> str | None:
     try:
         import aiomqtt  # noqa: F401
     except ImportError:
-        return "needs aiomqtt: pip install 'devsim-motion[fleet]'"
+        from devsim.extras import install_command
+
+        return f"needs aiomqtt: {install_command('fleet')}"
     return None
 
 

@@ -41,7 +41,6 @@ MARGIN = 100
 MAX_EVENT_LABELS = 30
 MAX_CHUNK_LABELS = 24
 
-_INSTALL = "devsim plot needs matplotlib: pip install 'devsim-motion[plot]'"
 
 
 def require_matplotlib() -> None:
@@ -49,7 +48,9 @@ def require_matplotlib() -> None:
     try:
         import matplotlib  # noqa: F401
     except ImportError:
-        raise click.ClickException(_INSTALL) from None
+        from devsim.extras import install_command
+
+        raise click.ClickException(f"devsim plot needs matplotlib: {install_command('plot')}") from None
 
 
 def output_format(path: str | Path) -> str:
