@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import asyncio
 import json
-import shutil
 import subprocess
 import time
 from collections.abc import Iterator
@@ -29,6 +28,7 @@ from devsim.core.registry import kinds
 from devsim.facades.opcua import OpcuaFacade, start_opcua
 from devsim.facades.opcua_space import NAMESPACE, to_opcua, variables
 from devsim.runtime import Runtime
+from tests.support.programs import needs_program
 
 NODE_CLIENT = Path(__file__).parent / "opcua_node"
 PERIOD = 0.1  # seconds of device time between samples for subscriptions
@@ -238,11 +238,10 @@ async def test_every_point_of_every_kind_reads_back_as_the_device_gives_it(
 
 # -- node-opcua ---------------------------------------------------------------------------------
 def _node_client(url: str, plan: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    node = shutil.which("node")
-    assert node is not None, "Node.js is missing (.ci/run installs it)"
-    if not (NODE_CLIENT / "node_modules" / "node-opcua-client").is_dir():  # a fresh checkout: install it
-        npm = shutil.which("npm")
-        assert npm is not None, "npm is missing (.ci/run installs Node.js and npm)"
+    installed = (NODE_CLIENT / "node_modules" / "node-opcua-client").is_dir()
+    node = needs_program("node", *(() if installed else ("npm",)))
+    if not installed:  # a fresh checkout: install it
+        npm = needs_program("npm")
         subprocess.run([npm, "ci", "--no-audit", "--no-fund", "--loglevel=error"], cwd=NODE_CLIENT, check=True,
                        stdin=subprocess.DEVNULL, capture_output=True, timeout=600)
     done = subprocess.run([node, str(NODE_CLIENT / "client.js"), url, json.dumps(plan)], capture_output=True,

@@ -4,12 +4,13 @@ in with send-keys, the screen comes back with capture-pane."""
 from __future__ import annotations
 
 import shlex
-import shutil
 import subprocess
 import sys
 import time
 import uuid
 from pathlib import Path
+
+from tests.support.programs import needs_program
 
 from .run import ROOT, Proc, ctl, env
 
@@ -30,7 +31,7 @@ def _screen_until(session: str, needle: str, timeout: float = 20.0) -> str:
 
 
 def test_monitor_in_tmux(tmp_path: Path) -> None:
-    assert shutil.which("tmux"), "tmux is needed (.ci/run installs it)"
+    needs_program("tmux")
     sim = Proc("run", "sers", "--tcp", "0", "--virtual", "--control", f"unix:{tmp_path}/ctl.sock")
     session = f"devsim-{uuid.uuid4().hex[:8]}"
     try:
