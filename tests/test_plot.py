@@ -17,7 +17,7 @@ from click.testing import CliRunner
 from PIL import Image
 
 from devsim.cli import cli
-from devsim.extras import install_command
+from devsim.core.extras import install_command
 from devsim.observe.plot import MARGIN, PANEL_HEIGHT, WIDTH
 from devsim.observe.plot_data import MotionData, Traffic, load, read_motion_log
 from devsim.transports.pcap import PcapTracer

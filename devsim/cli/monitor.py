@@ -26,7 +26,7 @@ def monitor(addr: str, period: float) -> None:
     try:
         from devsim.observe.monitor import MonitorApp
     except ImportError as exc:
-        from devsim.extras import install_command
+        from devsim.core.extras import install_command
 
         raise click.ClickException(f"devsim monitor needs textual: {install_command('monitor')} ({exc})") from None
     try:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import click
 
-from devsim.extras import install_command
+from devsim.core.extras import install_command
 
 __all__ = ["check_canopen", "check_fleet", "check_modbus", "check_mqtt", "check_opcua", "host_port", "modbus_for"]
 

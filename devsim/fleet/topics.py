@@ -85,7 +85,7 @@ def fleet_problem(url: str) -> str | None:
     try:
         import aiomqtt  # noqa: F401
     except ImportError:
-        from devsim.extras import install_command
+        from devsim.core.extras import install_command
 
         return f"needs aiomqtt: {install_command('fleet')}"
     return None

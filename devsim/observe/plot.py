@@ -48,7 +48,7 @@ def require_matplotlib() -> None:
     try:
         import matplotlib  # noqa: F401
     except ImportError:
-        from devsim.extras import install_command
+        from devsim.core.extras import install_command
 
         raise click.ClickException(f"devsim plot needs matplotlib: {install_command('plot')}") from None
 

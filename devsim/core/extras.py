@@ -19,7 +19,7 @@ __all__ = ["DISTRIBUTION", "install_command", "source_tree"]
 
 #: The distribution's name (``devsim`` on PyPI is an unrelated project).
 DISTRIBUTION = "devsim-motion"
-_PACKAGE = Path(__file__).resolve().parent
+_PACKAGE = Path(__file__).resolve().parents[1]  # devsim/
 
 
 def _is_tree(path: Path) -> bool:
