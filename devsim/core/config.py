@@ -29,7 +29,8 @@ import yaml
 from devsim.core.typed import Invalid, Typed
 
 __all__ = [
-    "ConfigError", "LineDict", "LineList", "LineLoader", "load_config", "load_yaml", "located", "plain", "validate",
+    "ConfigError", "LineDict", "LineList", "LineLoader", "load_config", "load_yaml", "located", "plain", "report",
+    "validate",
 ]
 
 T = TypeVar("T", bound=Typed)
@@ -201,17 +202,22 @@ def located(name: str, data: Any, loc: tuple[int | str, ...], text: str) -> tupl
     return line, f"{name}:{line}: {field}: {text}" if field else f"{name}:{line}: {text}"
 
 
-def _refuse(name: str, data: Any, problems: list[tuple[tuple[int | str, ...], str]]) -> NoReturn:
-    """One ``file:line: key: message`` per problem (the first is the error's message)."""
-    messages: list[str] = []
+def report(name: str, data: Any, problems: list[tuple[tuple[int | str, ...], str]]) -> list[str]:
+    """One ``file:line: key: message`` per problem, in the file's order (by line)."""
+    rows: list[tuple[int, str]] = []
     seen: set[tuple[int, str]] = set()
     for loc, text in problems:
         line, parts = _locate(data, loc)
         if (line, ".".join(parts)) in seen:  # e.g. one error per member of a union: keep the first
             continue
         seen.add((line, ".".join(parts)))
-        messages.append(located(name, data, loc, text)[1])
-    raise ConfigError.of(messages) from None
+        rows.append(located(name, data, loc, text))
+    return [message for _line, message in sorted(rows, key=lambda row: row[0])]
+
+
+def _refuse(name: str, data: Any, problems: list[tuple[tuple[int | str, ...], str]]) -> NoReturn:
+    """Every problem as a ``file:line: key: message`` line (the first is the error's message)."""
+    raise ConfigError.of(report(name, data, problems)) from None
 
 
 def load_config(path: str | os.PathLike[str], model: Any) -> Any:

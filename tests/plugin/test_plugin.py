@@ -235,7 +235,7 @@ def test_plant_errors_name_the_file(devsim_plant, tmp_path) -> None:
 
     bad = tmp_path / "bad.yaml"
     bad.write_text("devices:\n  - name: d\n    kind: sers\n    config: {baud: 1234}\n")
-    with pytest.raises(ConfigError, match=r"bad.yaml:4: devices.0.config.baud"):
+    with pytest.raises(ConfigError, match=r"bad.yaml:4: devices.1.config.baud"):
         devsim_plant(bad)
 
 
@@ -366,7 +366,7 @@ def test_collected_scenario_files(pytester: pytest.Pytester) -> None:
     # the failure is the scenario report, not a traceback
     assert "scenario scenario_bad" in text and "FAILED: 0 of 2 checks passed" in text
     assert "expected b'#ON\\r\\nok9\\n\\r'" in text
-    assert "scenario_invalid.yaml:4: steps.0" in text
+    assert "scenario_invalid.yaml:4: steps.1" in text
     assert "Traceback" not in text and "devsim/pytest_plugin.py" not in text
 
 
@@ -436,7 +436,7 @@ def test_marker_runs_and_fails_with_the_report(pytester: pytest.Pytester) -> Non
     assert "never reached" not in text
     assert "scenario bad (" in text and "FAILED: 0 of 2 checks passed" in text
     assert "needs @pytest.mark.devsim_scenario" in text
-    assert "invalid.yaml:2: devices.0.bogus" in text
+    assert "invalid.yaml:2: devices.1.bogus" in text
     assert "devsim_scenario: 1 validation error" in text
     assert "PytestUnknownMarkWarning" not in text
 
