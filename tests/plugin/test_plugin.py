@@ -457,3 +457,19 @@ def test_readme_example_is_the_test_file() -> None:
     blocks = re.findall(r"```python\n(.*?)```", section, re.S)
     example = (root / "tests" / "test_readme_example.py").read_text(encoding="utf-8")
     assert example in blocks
+
+
+def test_a_dict_scenarios_steps_are_counted_from_1(pytester: pytest.Pytester) -> None:
+    pytester.makepyfile(
+        """
+        import pytest
+
+        @pytest.mark.devsim_scenario({"devices": [{"name": "d", "kind": "sers"}],
+                                      "steps": [{"wait": "1s"}, {"wait": "soon"}]})
+        def test_bad_step(devsim_scenario_result):
+            pass
+        """
+    )
+    result = run_inner(pytester)
+    result.assert_outcomes(errors=1)
+    assert "  steps.2.wait: `wait` must be a duration like 2s or 150ms" in result.stdout.str()
