@@ -469,6 +469,8 @@ class _Parts(NamedTuple):
     steps: list[Step | None]
     host: dict[str, Any]
     opcua: bool
+    #: the names of the devices that did not parse (None if one has no name to read)
+    unparsed: tuple[str, ...] | None = ()
 
     @classmethod
     def salvage(cls, data: Any) -> _Parts:
@@ -480,8 +482,12 @@ class _Parts(NamedTuple):
             return [_parsed(kind, item) for item in items] if isinstance(items, list) else []
 
         host = raw.get("host")
-        return cls(each(DeviceSpec, "devices"), each(BusSpec, "buses"), each(Step, "steps"),
-                   dict(host) if isinstance(host, dict) else {}, raw.get("opcua") is not None)
+        devices = each(DeviceSpec, "devices")
+        names = [item.get("name") if isinstance(item, dict) else None
+                 for item, device in zip(raw.get("devices") or [], devices, strict=False) if device is None]
+        unparsed = tuple(names) if all(isinstance(name, str) for name in names) else None
+        return cls(devices, each(BusSpec, "buses"), each(Step, "steps"), dict(host) if isinstance(host, dict) else {},
+                   raw.get("opcua") is not None, unparsed)  # type: ignore[arg-type]
 
 
 def _parsed(kind: type[Typed], item: Any) -> Any:
@@ -538,11 +544,12 @@ def _step_references(parts: _Parts) -> list[Problem]:
     parsed: a device that did not is reported by the schema)."""
     if not parts.steps and "port" not in parts.host:
         return []
-    known = None not in parts.devices
+    known = parts.unparsed is not None
     devices = [d for d in parts.devices if d is not None]
     kinds = {d.name: d.kind for d in devices}
+    names = {*kinds, *(parts.unparsed or ())}
     ports = set(_ports(devices, [b for b in parts.buses if b is not None], parts.opcua))
-    ports_known = known and None not in parts.buses
+    ports_known = None not in parts.devices and None not in parts.buses
     problems: list[Problem] = []
     default_port = parts.host.get("port")
     if default_port is not None and ports_known and default_port not in ports:
@@ -552,7 +559,7 @@ def _step_references(parts: _Parts) -> list[Problem]:
             continue
         for key in ("when", "expect_state", "set", "pulse", "fault", "power_cycle", "expect_timing"):
             item = getattr(step, key)
-            if item is not None and known and item.device not in kinds:
+            if item is not None and known and item.device not in names:
                 problems.append((("steps", i, key, "device"), f"no device named {item.device!r}"))
         if step.fault is not None and step.fault.device in kinds:
             text = fault_problem(step.fault.kind, kinds[step.fault.device])

@@ -97,3 +97,18 @@ def test_up_and_scenario_run_refuse_a_bad_file_with_every_mistake(tmp_path: Path
         lines = done.stderr.replace(str(tmp_path) + "/", "").splitlines()
         assert [line.split(": ")[0:2] for line in lines] == [
             ["Error", "plant.yaml:4"], ["plant.yaml:5", "devices.2.name"], ["plant.yaml:7", "devices.2.state.axis.positon"]]
+
+
+def test_a_device_that_fails_the_schema_still_counts_for_the_steps(tmp_path: Path) -> None:
+    """Steps are checked against every device named in the file: a device that failed the schema
+    is no reason to call it missing, nor to leave a misspelled one unreported."""
+    path = tmp_path / "partial.yaml"
+    path.write_text("devices:\n  - {name: x, kind: sers, axis: {limit_right: hello}}\n  - {name: 1bad, kind: sers}\n"
+                    "steps:\n  - set: {device: x, values: {input.I1: 2}}\n"
+                    "  - set: {device: 1bad, values: {input.I1: true}}\n"
+                    "  - set: {device: nobody, values: {input.I1: true}}\n")
+    done = check(path)
+    assert done.returncode == 1
+    assert [line.split(": ")[0:2] for line in done.stderr.replace(str(tmp_path) + "/", "").splitlines()] == [
+        ["partial.yaml:2", "devices.1.axis.limit_right"], ["partial.yaml:3", "devices.2.name"],
+        ["partial.yaml:5", "steps.1.set.values.input.I1"], ["partial.yaml:7", "steps.3.set.device"]]
