@@ -24,7 +24,12 @@ A **scenario** file is a plant plus a timeline (``steps``) and expectations.  Ea
 most one trigger (``at``: time since the start, ``after``: time since the previous step,
 ``when``: a condition on device state, with ``timeout``) and exactly one action or
 expectation; see :data:`ACTIONS`.  Errors read ``scenarios/x.yaml:14: steps.3.after: `after`
-must be a duration like 2s or 150ms``.
+must be a duration like 2s or 150ms`` (list items counted from 1: the third step).
+
+:func:`inspect_file` finds every mistake of a file in one pass (``devsim check``): the schema's,
+references across its parts (:func:`plant_problems`), and the names each device's kind declares
+(:mod:`devsim.scenario.checks`); a part that fails the schema is still parsed on its own, so
+that its neighbours are checked against it.
 """
 
 from __future__ import annotations
@@ -61,9 +66,12 @@ __all__ = [
     "PlantSpec",
     "Scenario",
     "Step",
+    "dotted",
+    "inspect_file",
     "load_plant",
     "load_scenario",
     "parse_duration",
+    "plant_problems",
 ]
 
 _NAME = r"^[A-Za-z_][A-Za-z0-9_-]*$"
