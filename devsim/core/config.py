@@ -26,7 +26,7 @@ from typing import Any, NoReturn, TypeVar
 
 import yaml
 
-from devsim.core.typed import Invalid, Typed
+from devsim.core.typed import Invalid, Typed, place
 
 __all__ = [
     "ConfigError", "LineDict", "LineList", "LineLoader", "load_config", "load_yaml", "located", "place", "plain",
@@ -169,21 +169,6 @@ def _locate(data: Any, loc: tuple[int | str, ...]) -> tuple[int, list[str]]:
             continue
         break
     return line, parts
-
-
-def place(data: Any, loc: tuple[int | str, ...]) -> str:
-    """A location in plain data (a scenario given as a dict) as a user reads it: keys by name,
-    list items counted from 1, as :func:`located` prints them in a file."""
-    parts: list[str] = []
-    node = data
-    for step in loc:
-        if isinstance(node, list) and isinstance(step, int) and 0 <= step < len(node):
-            parts.append(str(step + 1))
-            node = node[step]
-        else:
-            parts.append(str(step))
-            node = node.get(step) if isinstance(node, dict) else None
-    return ".".join(parts)
 
 
 def _kind(data: Any) -> str:

@@ -112,3 +112,17 @@ def test_a_device_that_fails_the_schema_still_counts_for_the_steps(tmp_path: Pat
     assert [line.split(": ")[0:2] for line in done.stderr.replace(str(tmp_path) + "/", "").splitlines()] == [
         ["partial.yaml:2", "devices.1.axis.limit_right"], ["partial.yaml:3", "devices.2.name"],
         ["partial.yaml:5", "steps.1.set.values.input.I1"], ["partial.yaml:7", "steps.3.set.device"]]
+
+
+def test_a_plant_given_as_data_counts_from_1_too() -> None:
+    """The Python API (a plant or scenario as a dict) numbers list items as a file does."""
+    import pytest
+
+    from devsim.core.typed import Invalid
+    from devsim.scenario.schema import PlantSpec, scenario_from_dict
+
+    with pytest.raises(Invalid, match=r"^devices\.2\.colour: unknown field$"):
+        PlantSpec.parse({"devices": [{"name": "a", "kind": "sers"}, {"name": "b", "kind": "sers", "colour": 1}]})
+    with pytest.raises(Invalid, match=r"^steps\.2\.fault\.device: no device named 'b'$"):
+        scenario_from_dict({"devices": [{"name": "a", "kind": "sers"}],
+                            "steps": [{"wait": "1s"}, {"fault": {"device": "b", "kind": "power_off"}}]})
