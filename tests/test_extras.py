@@ -47,3 +47,19 @@ def test_an_installed_copy_names_the_distribution(no_matplotlib: Path, tmp_path:
     shutil.copytree(ROOT / "devsim", site / "devsim", ignore=shutil.ignore_patterns("__pycache__"))
     assert plot_hint([no_matplotlib, site], tmp_path, tmp_path) == (
         "Error: devsim plot needs matplotlib: pip install 'devsim-motion[plot]'")
+
+
+def test_a_copy_installed_from_a_checkout_names_the_checkout(no_matplotlib: Path, tmp_path: Path) -> None:
+    """``pip install .`` copies the package out of the checkout and records where it came from
+    (direct_url.json): the checkout's own extra is still the one to install."""
+    site = tmp_path / "site"
+    shutil.copytree(ROOT / "devsim", site / "devsim", ignore=shutil.ignore_patterns("__pycache__"))
+    info = site / "devsim_motion-0.1.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: devsim-motion\nVersion: 0.1.0\n")
+    (info / "direct_url.json").write_text(f'{{"url": "{ROOT.as_uri()}", "dir_info": {{}}}}')
+    assert plot_hint([no_matplotlib, site], tmp_path, tmp_path) == (
+        f"Error: devsim plot needs matplotlib: pip install '{ROOT}[plot]'")
+    (info / "direct_url.json").unlink()  # installed from an index: no record of a source
+    assert plot_hint([no_matplotlib, site], tmp_path, tmp_path) == (
+        "Error: devsim plot needs matplotlib: pip install 'devsim-motion[plot]'")
