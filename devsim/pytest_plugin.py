@@ -538,7 +538,7 @@ _RESULT_KEY = pytest.StashKey[Any]()
 def devsim_scenario_result(request: pytest.FixtureRequest) -> Any:
     """The :class:`~devsim.scenario.runner.ScenarioResult` of the test's ``devsim_scenario``
     marker (the scenario runs when this fixture is set up, before the test body)."""
-    from devsim.core.config import ConfigError
+    from devsim.core.config import ConfigError, place
     from devsim.core.typed import Invalid
 
     marker = request.node.get_closest_marker("devsim_scenario")
@@ -553,7 +553,7 @@ def devsim_scenario_result(request: pytest.FixtureRequest) -> Any:
         pytest.fail("\n".join(exc.messages), pytrace=False)
     except Invalid as exc:  # a scenario given as a dict
         count = len(exc.problems)
-        lines = [f"  {'.'.join(map(str, loc)) or 'scenario'}: {text}" for loc, text in exc.problems]
+        lines = [f"  {place(marker.args[0], loc) or 'scenario'}: {text}" for loc, text in exc.problems]
         pytest.fail(f"devsim_scenario: {count} validation error{'s' if count > 1 else ''} in the scenario\n"
                     + "\n".join(lines), pytrace=False)
     request.node.stash[_RESULT_KEY] = result

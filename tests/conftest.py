@@ -5,6 +5,10 @@ own (``XDG_RUNTIME_DIR``), apart from the user's.
 A test marked ``@pytest.mark.manual("§2.6.2.1", "the printer port always runs at 1200 baud")``
 checks one statement of its kind's manual (the kind is the test's folder under tests/).  The
 summary at the end of a run says how many statements and sections each kind has under test.
+
+Tests that need a program outside Python ask for it with
+:func:`tests.support.programs.needs_program`; where it is missing they are skipped, and the run
+ends with one line naming the missing programs and the command that installs them.
 """
 
 from __future__ import annotations
@@ -16,6 +20,8 @@ import tempfile
 from collections import defaultdict
 
 import pytest
+
+from tests.support.programs import install_line, missing_names
 
 SECTION = re.compile(r"§\d+(\.\d+)*[a-z]?( .+)?$")
 _walk: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
@@ -43,6 +49,29 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
 
 
 def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    _manual_summary(terminalreporter)
+    _missing_programs_summary(terminalreporter)
+
+
+def _missing_programs_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    """One line: how many tests were skipped for want of which programs, and how to install them."""
+    names: list[str] = []
+    count = 0
+    for report in terminalreporter.stats.get("skipped", []):
+        longrepr = getattr(report, "longrepr", None)
+        reason = longrepr[2] if isinstance(longrepr, tuple) and len(longrepr) == 3 else ""
+        found = missing_names(str(reason))
+        count += bool(found)
+        names += [name for name in found if name not in names]
+    if names:
+        terminalreporter.write_line(
+            f"{count} tests skipped: {', '.join(names)} not installed here"
+            f" (install: {install_line(names)}; CI=true makes these skips failures)",
+            yellow=True,
+        )
+
+
+def _manual_summary(terminalreporter: pytest.TerminalReporter) -> None:
     if not _walk:
         return
     terminalreporter.section("manual statements under test")

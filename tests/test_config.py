@@ -83,10 +83,10 @@ def test_list_item_and_missing_field_lines(tmp_path: Path) -> None:
     with pytest.raises(ConfigError) as info:
         load_config(path, Scenario)
     assert info.value.messages == [
-        f"{path}:5: steps.1.name: Field required",
-        f"{path}:6: steps.2.at: Input should be a valid number, unable to parse string as a number",
+        f"{path}:5: steps.2.name: Field required",
+        f"{path}:6: steps.3.at: Input should be a valid number, unable to parse string as a number",
     ]
-    assert str(info.value) == f"{path}:5: steps.1.name: Field required (and 1 more)"
+    assert str(info.value) == f"{path}:5: steps.2.name: Field required (and 1 more)"
 
 
 def test_missing_top_level_field_reported_at_line_1(tmp_path: Path) -> None:

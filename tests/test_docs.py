@@ -72,3 +72,20 @@ def test_the_readme_stays_a_front_page() -> None:
 
     for target in re.findall(r"\]\((docs/[^)#]+)", readme):
         assert (ROOT / target).exists(), target
+
+
+def test_the_quick_start_is_two_commands_in_a_virtualenv() -> None:
+    """The README's quick start: two one-line commands, each making and entering the virtualenv
+    (Debian's pip refuses `pip install .` outside one); the second is what .ci/run runs."""
+    import re
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = readme.split("## Quick start", 1)[1].split("\n## ", 1)[0]
+    commands = [block.strip() for block in re.findall(r"```sh\n(.*?)```", section, re.S)]
+    assert len(commands) == 2 and all("\n" not in command for command in commands), commands
+    venv = "python3 -m venv .venv && . .venv/bin/activate && "
+    assert all(command.startswith(venv) for command in commands), commands
+    assert commands[0].endswith("pip install . && devsim run sers --pty")
+    assert commands[1] == venv + "pip install '.[test]' && python -m pytest"
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    assert "python3 -m venv .venv" in ci and "pip install '.[test]'" in ci and "python -m pytest" in ci

@@ -96,7 +96,7 @@ def test_problems_in_a_file_name_their_line(tmp_path: Path) -> None:
     path.write_text("name: x\naxis:\n  marks: [1, 2]\nrules:\n  - from: E0.1\n  - from: E0.2\n    invert: maybe\n")
     with pytest.raises(ConfigError) as info:
         load_config(path, CONFIG)
-    assert str(info.value) == f"{path}:7: rules.1.invert: Input should be a valid boolean"
+    assert str(info.value) == f"{path}:7: rules.2.invert: Input should be a valid boolean"
     path.write_text("name: x\nparams:\n  10: .inf\n")
     with pytest.raises(ConfigError, match=r":3: params.10: not a finite number"):
         load_config(path, CONFIG)

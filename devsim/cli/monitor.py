@@ -29,7 +29,9 @@ def monitor(addr: str | None, period: float) -> None:
     try:
         from devsim.observe.monitor import MonitorApp
     except ImportError as exc:
-        raise exits.MissingExtra(f"devsim monitor needs textual: pip install 'devsim-motion[monitor]' ({exc})") from None
+        from devsim.core.extras import install_command
+
+        raise exits.MissingExtra(f"devsim monitor needs textual: {install_command('monitor')} ({exc})") from None
     from devsim.cli.running import control_target
 
     addr = control_target(addr)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import click
 
 from devsim.cli import exits
+from devsim.core.extras import install_command
 
 __all__ = ["check_canopen", "check_fleet", "check_modbus", "check_mqtt", "check_opcua", "host_port", "modbus_for"]
 
@@ -35,7 +36,7 @@ def check_modbus(spec: str) -> None:
     try:
         import pymodbus  # noqa: F401
     except ImportError:
-        raise exits.MissingExtra("--modbus needs pymodbus: pip install 'devsim-motion[modbus]'") from None
+        raise exits.MissingExtra(f"--modbus needs pymodbus: {install_command('modbus')}") from None
 
 
 def check_canopen(spec: str) -> None:
@@ -51,7 +52,7 @@ def check_canopen(spec: str) -> None:
     try:
         import canopen  # noqa: F401
     except ImportError:
-        raise exits.MissingExtra("--canopen needs canopen and python-can: pip install 'devsim-motion[can]'") from None
+        raise exits.MissingExtra(f"--canopen needs canopen and python-can: {install_command('can')}") from None
 
 
 def check_mqtt(url: str, convention: str, rate: float, plant: str | None) -> None:
@@ -63,7 +64,7 @@ def check_mqtt(url: str, convention: str, rate: float, plant: str | None) -> Non
         if convention == "sparkplug":
             import tahutils  # noqa: F401
     except ImportError:
-        raise exits.MissingExtra("--mqtt needs aiomqtt, amqtt and tahutils: pip install 'devsim-motion[mqtt]'") from None
+        raise exits.MissingExtra(f"--mqtt needs aiomqtt, amqtt and tahutils: {install_command('mqtt')}") from None
     from devsim.facades.mqtt_topics import check_name, parse_url
 
     try:
@@ -89,7 +90,7 @@ def check_opcua(spec: str, period: float) -> None:
     try:
         import asyncua  # noqa: F401
     except ImportError:
-        raise exits.MissingExtra("--opcua needs asyncua: pip install 'devsim-motion[opcua]'") from None
+        raise exits.MissingExtra(f"--opcua needs asyncua: {install_command('opcua')}") from None
 
 
 def check_fleet(url: str) -> None:

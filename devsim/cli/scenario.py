@@ -21,33 +21,26 @@ import click
 
 from devsim.cli import exits
 from devsim.cli.options import check_fleet
-from devsim.core.config import ConfigError, LineDict, load_yaml
+from devsim.core.config import ConfigError
 from devsim.observe.live_log import DEFAULT_LEVEL, attach_log, level_of, log_options
 from devsim.transports import fdlimit
 
 __all__ = ["check", "scenario", "up"]
 
 
-def _load(path: str) -> object:
-    from devsim.scenario.schema import load_plant, load_scenario
-
-    data = load_yaml(path)
-    if isinstance(data, LineDict) and "steps" in data:
-        return load_scenario(path)
-    return load_plant(path)
-
-
 @click.command("check")
 @click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
 def check(files: tuple[str, ...]) -> None:
-    """Validate scenario and plant FILES without running them (exit status 3 if one is wrong)."""
+    """Validate scenario and plant FILES without running them: every mistake of every file, one
+    line each (file:line: field: message); exit status 3 if there is any."""
+    from devsim.scenario.schema import inspect_file
+
     bad = 0
     for path in files:
-        try:
-            spec = _load(path)
-        except ConfigError as exc:
+        spec, messages = inspect_file(path)
+        if spec is None:
             bad += 1
-            for message in exc.messages:
+            for message in messages:
                 click.echo(message, err=True)
             continue
         steps = getattr(spec, "steps", None)
@@ -125,7 +118,7 @@ def scenario_run(
         try:
             scenarios.append(load_scenario(path))
         except ConfigError as exc:
-            raise exits.BadFile(str(exc)) from None
+            raise exits.BadFile("\n".join(exc.messages)) from None  # every mistake, one line each
     from devsim.scenario.progress import Progress
 
     progress = Progress(len(scenarios))
@@ -207,7 +200,7 @@ def up(
     try:
         spec = load_plant(plant_file)
     except ConfigError as exc:
-        raise exits.BadFile(str(exc)) from None
+        raise exits.BadFile("\n".join(exc.messages)) from None  # every mistake, one line each
     if part is not None:
         try:
             spec = spec.only_part(part)

@@ -9,6 +9,9 @@ reported as one line that an editor can jump to::
     config.yaml:3: baud: baud must be one of 1200, 2400, ...
     config.yaml:7: axis.limit_left: Input should be a valid number
     config.yaml:4: mapping values are not allowed here
+    plant.yaml:12: devices.3.config.address: Input should be less than or equal to 127
+
+List items are numbered as the file reads them, from 1 (``devices.3`` is the third device).
 
 Use :func:`load_config` for the common case, or :func:`load_yaml` + :func:`validate` when the
 data needs reshaping in between.
@@ -23,9 +26,12 @@ from typing import Any, NoReturn, TypeVar
 
 import yaml
 
-from devsim.core.typed import Invalid, Typed
+from devsim.core.typed import Invalid, Typed, place
 
-__all__ = ["ConfigError", "LineDict", "LineList", "LineLoader", "load_config", "load_yaml", "plain", "validate"]
+__all__ = [
+    "ConfigError", "LineDict", "LineList", "LineLoader", "load_config", "load_yaml", "located", "place", "plain",
+    "report", "validate",
+]
 
 T = TypeVar("T", bound=Typed)
 
@@ -40,6 +46,12 @@ class ConfigError(ValueError):
     def __init__(self, message: str, messages: list[str] | None = None) -> None:
         super().__init__(message)
         self.messages = messages or [message]
+
+    @classmethod
+    def of(cls, messages: list[str]) -> ConfigError:
+        """The error for one or more ``file:line: …`` lines (the first, "(and N more)")."""
+        first = messages[0] + (f" (and {len(messages) - 1} more)" if len(messages) > 1 else "")
+        return cls(first, messages)
 
 
 class LineDict(dict[Any, Any]):
@@ -133,8 +145,9 @@ def load_yaml(path: str | os.PathLike[str], text: str | None = None) -> Any:
 def _locate(data: Any, loc: tuple[int | str, ...]) -> tuple[int, list[str]]:
     """The best YAML line for a problem's location, and the location's printable parts.
 
-    Walks ``data`` along ``loc`` as far as the data goes.  A key missing from a mapping (a
-    required field) is still named and reported at the mapping's line.
+    Walks ``data`` along ``loc`` as far as the data goes; list items are numbered from 1, as
+    the file reads.  A key missing from a mapping (a required field) is still named and reported
+    at the mapping's line.
     """
     line = getattr(data, "line", 1)
     parts: list[str] = []
@@ -151,7 +164,7 @@ def _locate(data: Any, loc: tuple[int | str, ...]) -> tuple[int, list[str]]:
             break
         if isinstance(node, LineList) and isinstance(step, int) and 0 <= step < len(node):
             line = node.item_lines[step]
-            parts.append(str(step))
+            parts.append(str(step + 1))
             node = node[step]
             continue
         break
@@ -179,23 +192,32 @@ def validate(data: Any, model: type[T], path: str | os.PathLike[str]) -> T:
         _refuse(name, data, exc.problems)
 
 
-def _refuse(name: str, data: Any, problems: list[tuple[tuple[int | str, ...], str]]) -> NoReturn:
-    """One ``file:line: key: message`` per problem (the first is the error's message)."""
-    messages: list[str] = []
+def located(name: str, data: Any, loc: tuple[int | str, ...], text: str) -> tuple[int, str]:
+    """A problem at ``loc`` in ``data`` (from :func:`load_yaml` of file ``name``) as its line and
+    its ``file:line: dotted.field: message``."""
+    line, parts = _locate(data, loc)
+    field = ".".join(parts)
+    if not parts and not isinstance(data, dict):
+        text = f"expected a mapping at the top level, got {_kind(data)}"
+    return line, f"{name}:{line}: {field}: {text}" if field else f"{name}:{line}: {text}"
+
+
+def report(name: str, data: Any, problems: list[tuple[tuple[int | str, ...], str]]) -> list[str]:
+    """One ``file:line: key: message`` per problem, in the file's order (by line)."""
+    rows: list[tuple[int, str]] = []
     seen: set[tuple[int, str]] = set()
     for loc, text in problems:
         line, parts = _locate(data, loc)
-        field = ".".join(parts)
-        if (line, field) in seen:  # e.g. one error per member of a union: keep the first
+        if (line, ".".join(parts)) in seen:  # e.g. one error per member of a union: keep the first
             continue
-        seen.add((line, field))
-        if not parts and not isinstance(data, dict):
-            text = f"expected a mapping at the top level, got {_kind(data)}"
-        messages.append(f"{name}:{line}: {field}: {text}" if field else f"{name}:{line}: {text}")
-    first = messages[0]
-    if len(messages) > 1:
-        first += f" (and {len(messages) - 1} more)"
-    raise ConfigError(first, messages) from None
+        seen.add((line, ".".join(parts)))
+        rows.append(located(name, data, loc, text))
+    return [message for _line, message in sorted(rows, key=lambda row: row[0])]
+
+
+def _refuse(name: str, data: Any, problems: list[tuple[tuple[int | str, ...], str]]) -> NoReturn:
+    """Every problem as a ``file:line: key: message`` line (the first is the error's message)."""
+    raise ConfigError.of(report(name, data, problems)) from None
 
 
 def load_config(path: str | os.PathLike[str], model: Any) -> Any:

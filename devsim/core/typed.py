@@ -46,18 +46,34 @@ from devsim.core.typed_convert import (
     non_finite,
 )
 
-__all__ = ["Check", "FieldError", "Invalid", "Keys", "Meta", "Typed", "doc", "plain"]
+__all__ = ["Check", "FieldError", "Invalid", "Keys", "Meta", "Typed", "doc", "place", "plain"]
 
 T = TypeVar("T", bound="Typed")
 
 
 class Invalid(ValueError):
-    """Data that does not fit its declaration: one ``(location, message)`` per problem."""
+    """Data that does not fit its declaration: one ``(location, message)`` per problem (the
+    message names the first's place in ``data`` with :func:`place`)."""
 
-    def __init__(self, problems: list[Problem]) -> None:
+    def __init__(self, problems: list[Problem], data: Any = None) -> None:
         self.problems = problems
         loc, msg = problems[0]
-        super().__init__(f"{'.'.join(map(str, loc))}: {msg}" if loc else msg)
+        super().__init__(f"{place(data, loc)}: {msg}" if loc else msg)
+
+
+def place(data: Any, loc: tuple[int | str, ...]) -> str:
+    """A location in plain data as a user reads it: keys by name, list items counted from 1 (as
+    a file's errors count them, :func:`devsim.core.config.located`)."""
+    parts: list[str] = []
+    node = data
+    for step in loc:
+        if isinstance(node, list | tuple) and isinstance(step, int) and 0 <= step < len(node):
+            parts.append(str(step + 1))
+            node = node[step]
+        else:
+            parts.append(str(step))
+            node = node.get(step) if isinstance(node, Mapping) else None
+    return ".".join(parts)
 
 
 class FieldError(ValueError):
@@ -91,22 +107,22 @@ class Typed(msgspec.Struct, forbid_unknown_fields=True):
             try:
                 cls.screen(data)
             except ValueError as exc:
-                raise Invalid([((), str(exc))]) from None
+                raise Invalid([((), str(exc))], data) from None
         try:
             value = convert(data, cls)
         except msgspec.ValidationError:
             from devsim.core.typed_errors import problems_of
 
-            raise Invalid(problems_of(cls, data)) from None
+            raise Invalid(problems_of(cls, data), data) from None
         fix = fixer(cls)
         if fix is not None:
             problems: list[Problem] = []
             fix(value, (), problems)
             if problems:
-                raise Invalid(problems)
+                raise Invalid(problems, data)
         where = non_finite(value)
         if where is not None:
-            raise Invalid([(where, NOT_FINITE)])
+            raise Invalid([(where, NOT_FINITE)], data)
         return value
 
     def dump(self) -> dict[str, Any]:

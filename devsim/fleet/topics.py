@@ -87,7 +87,9 @@ def fleet_problem(url: str) -> str | None:
     try:
         import aiomqtt  # noqa: F401
     except ImportError:
-        return "needs aiomqtt: pip install 'devsim-motion[fleet]'"
+        from devsim.core.extras import install_command
+
+        return f"needs aiomqtt: {install_command('fleet')}"
     return None
 
 

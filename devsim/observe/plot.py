@@ -46,7 +46,6 @@ MARGIN = 100
 MAX_EVENT_LABELS = 30
 MAX_CHUNK_LABELS = 24
 
-_INSTALL = "devsim plot needs matplotlib: pip install 'devsim-motion[plot]'"
 
 
 class MissingMatplotlib(ImportError):
@@ -58,7 +57,9 @@ def require_matplotlib() -> None:
     try:
         import matplotlib  # noqa: F401
     except ImportError:
-        raise MissingMatplotlib(_INSTALL) from None
+        from devsim.core.extras import install_command
+
+        raise MissingMatplotlib(f"devsim plot needs matplotlib: {install_command('plot')}") from None
 
 
 def output_format(path: str | Path) -> str:

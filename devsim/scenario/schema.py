@@ -24,7 +24,12 @@ A **scenario** file is a plant plus a timeline (``steps``) and expectations.  Ea
 most one trigger (``at``: time since the start, ``after``: time since the previous step,
 ``when``: a condition on device state, with ``timeout``) and exactly one action or
 expectation; see :data:`ACTIONS`.  Errors read ``scenarios/x.yaml:14: steps.3.after: `after`
-must be a duration like 2s or 150ms``.
+must be a duration like 2s or 150ms`` (list items counted from 1: the third step).
+
+:func:`inspect_file` finds every mistake of a file in one pass (``devsim check``): the schema's,
+references across its parts (:func:`plant_problems`), and the names each device's kind declares
+(:mod:`devsim.scenario.checks`); a part that fails the schema is still parsed on its own, so
+that its neighbours are checked against it.
 """
 
 from __future__ import annotations
@@ -32,13 +37,14 @@ from __future__ import annotations
 import os
 import re
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, NamedTuple
 
 from msgspec import UNSET, Meta, UnsetType, field
 
-from devsim.core.config import ConfigError, LineDict, LineList, load_yaml, plain, validate
-from devsim.core.typed import FieldError, Typed, doc
+from devsim.core.config import ConfigError, LineDict, LineList, load_yaml, plain, report
+from devsim.core.typed import FieldError, Invalid, Typed, doc
 from devsim.runtime import port_key
+from devsim.scenario.checks import Problem, device_problems, fault_problem, step_problems
 from devsim.scenario.specs import (
     Between,
     CanopenSpec,
@@ -60,9 +66,12 @@ __all__ = [
     "PlantSpec",
     "Scenario",
     "Step",
+    "dotted",
+    "inspect_file",
     "load_plant",
     "load_scenario",
     "parse_duration",
+    "plant_problems",
 ]
 
 _NAME = r"^[A-Za-z_][A-Za-z0-9_-]*$"
@@ -153,35 +162,15 @@ class PlantSpec(Typed, kw_only=True):
     opcua: Annotated[OpcuaSpec | None, doc("serve every device on one OPC UA server")] = None
 
     def __post_init__(self) -> None:
-        self._opcua_name()
-        self._names()
+        problem = next(iter(self.problems()), None)
+        if problem is not None:
+            raise ValueError(dotted(*problem))
 
-    def _opcua_name(self) -> None:
-        if self.opcua is not None and "opcua" in [d.name for d in self.devices] + [b.name for b in self.buses]:
-            raise ValueError("with an opcua section no device or bus may be named 'opcua' (the server's port name)")
-
-    def _names(self) -> None:
-        names = [d.name for d in self.devices] + [b.name for b in self.buses]
-        for name in names:
-            if names.count(name) > 1:
-                raise ValueError(f"the name {name!r} is used twice")
-        buses = {b.name for b in self.buses}
-        for device in self.devices:
-            for port in device.port_names():
-                bus = device.transport_of(port).bus
-                if bus is not None and bus not in buses:
-                    raise ValueError(f"device {device.name!r} is on bus {bus!r}, which is not defined")
-            bus = device.transport_of("main").bus
-            others = {d.part for d in self.devices if d.transport_of("main").bus == bus} if bus else set()
-            if len(others) > 1:
-                raise ValueError(f"bus {bus!r} has devices of different parts ({', '.join(map(str, others))});"
-                                 " a bus is served by one process")
-            unknown = sorted(set(device.ports) - set(device.port_names()))
-            if unknown:
-                raise ValueError(
-                    f"device {device.name!r} ({device.kind}) has no port {unknown[0]!r}"
-                    f" (ports: {', '.join(device.port_names())})"
-                )
+    def problems(self) -> list[Problem]:
+        """Every reference across the plant's parts that does not hold (names used twice, a
+        bus not defined …), located; a file reports them all (:func:`inspect_file`), a plant
+        given as data raises the first."""
+        return plant_problems(_Parts(self.devices, self.buses, [], {}, self.opcua is not None))
 
     def only_part(self, part: str) -> PlantSpec:
         """The plant with only the devices of ``part`` (and their buses); ValueError if none."""
@@ -206,9 +195,13 @@ class PlantSpec(Typed, kw_only=True):
     def ports(self) -> list[str]:
         """Names a host can talk to: device ports with their own transport, buses, and the
         devices' Modbus facades (``NAME.modbus``), and the plant's OPC UA server (``opcua``)."""
-        return ([name for name, _device, _port in self.device_ports()] + [b.name for b in self.buses]
-                + [f"{d.name}.modbus" for d in self.devices if d.modbus is not None]
-                + (["opcua"] if self.opcua is not None else []))
+        return _ports(self.devices, self.buses, self.opcua is not None)
+
+
+def _ports(devices: list[DeviceSpec], buses: list[BusSpec], opcua: bool) -> list[str]:
+    own = [port_key(d.name, port) for d in devices for port in d.port_names() if d.transport_of(port).bus is None]
+    return (own + [b.name for b in buses] + [f"{d.name}.modbus" for d in devices if d.modbus is not None]
+            + (["opcua"] if opcua else []))
 
 
 # -- conditions ------------------------------------------------------------------------------
@@ -343,10 +336,6 @@ class PulseAction(Typed):
     value: Any = True
 
 
-#: Faults every device has through its power supply; the others are declared by each kind.
-POWER_FAULTS = ("power_cycle", "power_cycle_wipe", "power_off", "power_on")
-
-
 class FaultAction(Typed):
     """A device fault; ``duration`` makes a lasting fault end by itself."""
 
@@ -463,29 +452,11 @@ class Scenario(PlantSpec, kw_only=True):
     #: the file it came from (filled in by the loader)
     path: str = ""
 
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        self._references()
-
-    def _references(self) -> None:
-        devices = {d.name for d in self.devices}
-        kinds = {d.name: d.kind for d in self.devices}
-        ports = set(self.ports())
-        default_port = self.host.get("port")
-        if default_port is not None and default_port not in ports:
-            raise ValueError(f"host.port {default_port!r} is not a device or bus with its own port")
-        for number, step in enumerate(self.steps):
-            where = f"step {number + 1}"
-            for item in (step.when, step.expect_state, step.set, step.pulse, step.fault, step.power_cycle,
-                         step.expect_timing):
-                if item is not None and getattr(item, "device", None) not in devices:
-                    raise ValueError(f"{where}: no device named {item.device!r}")  # type: ignore[union-attr]
-            if step.fault is not None:
-                _check_fault(where, step.fault, kinds[step.fault.device])
-            for item in (step.send, step.expect, step.line_fault, step.expect_traffic):
-                port = getattr(item, "port", None) if item is not None else None
-                if port is not None and port not in ports:
-                    raise ValueError(f"{where}: no port named {port!r} (ports: {', '.join(sorted(ports))})")
+    def problems(self) -> list[Problem]:
+        """The plant's problems, and every step's reference to a device, port or fault that
+        does not exist."""
+        parts = _Parts(self.devices, self.buses, list(self.steps), self.host, self.opcua is not None)
+        return plant_problems(parts)
 
     @property
     def scripts_host(self) -> bool:
@@ -498,18 +469,176 @@ class Scenario(PlantSpec, kw_only=True):
         return str(self.host.get("port") or self.ports()[0])
 
 
-def _check_fault(where: str, action: FaultAction, kind: str) -> None:
-    from devsim.core.registry import device_class
+class _Parts(NamedTuple):
+    """The parts of a plant or scenario that parsed (None for a device, bus or step that did not)."""
 
-    if action.kind in POWER_FAULTS:
-        return
+    devices: list[DeviceSpec | None]
+    buses: list[BusSpec | None]
+    steps: list[Step | None]
+    host: dict[str, Any]
+    opcua: bool
+    #: the names of the devices that did not parse (None if one has no name to read)
+    unparsed: tuple[str, ...] | None = ()
+
+    @classmethod
+    def salvage(cls, data: Any) -> _Parts:
+        """Each part of a file that failed the schema, parsed on its own."""
+        raw = data if isinstance(data, dict) else {}
+
+        def each(kind: type[Typed], key: str) -> list[Any]:
+            items = raw.get(key)
+            return [_parsed(kind, item) for item in items] if isinstance(items, list) else []
+
+        host = raw.get("host")
+        devices = each(DeviceSpec, "devices")
+        names = [item.get("name") if isinstance(item, dict) else None
+                 for item, device in zip(raw.get("devices") or [], devices, strict=False) if device is None]
+        unparsed = tuple(names) if all(isinstance(name, str) for name in names) else None
+        return cls(devices, each(BusSpec, "buses"), each(Step, "steps"), dict(host) if isinstance(host, dict) else {},
+                   raw.get("opcua") is not None, unparsed)  # type: ignore[arg-type]
+
+
+def _parsed(kind: type[Typed], item: Any) -> Any:
     try:
-        declared = device_class(kind).faults.names()
-    except Exception:
-        return  # the unknown kind is reported with its own line
-    if action.kind not in declared:
-        known = ", ".join([*declared, *POWER_FAULTS])
-        raise ValueError(f"{where}: {kind} has no fault {action.kind!r} (declared: {known})")
+        return kind.parse(item)
+    except Invalid:
+        return None
+
+
+def dotted(loc: tuple[int | str, ...], text: str) -> str:
+    """A problem without its file: ``steps.3.fault.kind: …``, list items counted from 1."""
+    where = ".".join(str(p + 1) if isinstance(p, int) else str(p) for p in loc)
+    return f"{where}: {text}" if where else text
+
+
+def plant_problems(parts: _Parts) -> list[Problem]:
+    """References across a plant's (or scenario's) parts that do not hold, located."""
+    devices = [(i, d) for i, d in enumerate(parts.devices) if d is not None]
+    named = [(("devices", i, "name"), d.name) for i, d in devices]
+    named += [(("buses", i, "name"), b.name) for i, b in enumerate(parts.buses) if b is not None]
+    problems: list[Problem] = []
+    if parts.opcua and "opcua" in [name for _loc, name in named]:
+        problems.append((("opcua",), "with an opcua section no device or bus may be named 'opcua'"
+                         " (the server's port name)"))
+    seen: set[str] = set()
+    for loc, name in named:
+        if name in seen:
+            problems.append((loc, f"the name {name!r} is used twice"))
+        seen.add(name)
+    complete = None not in parts.buses
+    buses = {b.name for b in parts.buses if b is not None}
+    mixed: set[str] = set()
+    for i, device in devices:
+        for port in device.port_names():
+            bus = device.transport_of(port).bus
+            if bus is not None and complete and bus not in buses:
+                where = ("ports", port) if port in device.ports else ("transport",)
+                problems.append((("devices", i, *where, "bus"),
+                                 f"device {device.name!r} is on bus {bus!r}, which is not defined"))
+        bus = device.transport_of("main").bus
+        others = {d.part for _j, d in devices if d.transport_of("main").bus == bus} if bus else set()
+        if bus is not None and len(others) > 1 and bus not in mixed:
+            mixed.add(bus)
+            problems.append((("devices", i, "part"), f"bus {bus!r} has devices of different parts"
+                             f" ({', '.join(sorted(map(str, others)))}); a bus is served by one process"))
+        for port in sorted(set(device.ports) - set(device.port_names())):
+            problems.append((("devices", i, "ports", port), f"device {device.name!r} ({device.kind}) has no port"
+                             f" {port!r} (ports: {', '.join(device.port_names())})"))
+    return problems + _step_references(parts)
+
+
+def _step_references(parts: _Parts) -> list[Problem]:
+    """Steps naming a device, port or fault that does not exist (checked only against parts that
+    parsed: a device that did not is reported by the schema)."""
+    if not parts.steps and "port" not in parts.host:
+        return []
+    known = parts.unparsed is not None
+    devices = [d for d in parts.devices if d is not None]
+    kinds = {d.name: d.kind for d in devices}
+    names = {*kinds, *(parts.unparsed or ())}
+    ports = set(_ports(devices, [b for b in parts.buses if b is not None], parts.opcua))
+    ports_known = None not in parts.devices and None not in parts.buses
+    problems: list[Problem] = []
+    default_port = parts.host.get("port")
+    if default_port is not None and ports_known and default_port not in ports:
+        problems.append((("host", "port"), f"{default_port!r} is not a device or bus with its own port"))
+    for i, step in enumerate(parts.steps):
+        if step is None:
+            continue
+        for key in ("when", "expect_state", "set", "pulse", "fault", "power_cycle", "expect_timing"):
+            item = getattr(step, key)
+            if item is not None and known and item.device not in names:
+                problems.append((("steps", i, key, "device"), f"no device named {item.device!r}"))
+        if step.fault is not None and step.fault.device in kinds:
+            text = fault_problem(step.fault.kind, kinds[step.fault.device])
+            if text is not None:
+                problems.append((("steps", i, "fault", "kind"), text))
+        for key in ("send", "expect", "line_fault", "expect_traffic"):
+            port = getattr(getattr(step, key), "port", None)
+            if port is not None and ports_known and port not in ports:
+                problems.append((("steps", i, key, "port"),
+                                 f"no port named {port!r} (ports: {', '.join(sorted(ports))})"))
+    return problems
+
+
+class _PlantFile(PlantSpec, kw_only=True):
+    """A plant file's schema alone: its references are checked with their lines (:func:`inspect_file`)."""
+
+    def __post_init__(self) -> None:
+        pass
+
+
+class _ScenarioFile(Scenario, kw_only=True):
+    """A scenario file's schema alone (see :class:`_PlantFile`)."""
+
+    def __post_init__(self) -> None:
+        pass
+
+
+def inspect_file(
+    path: str | os.PathLike[str], scenario: bool | None = None
+) -> tuple[PlantSpec | None, list[str]]:
+    """A plant or scenario file (``scenario``: read as one; by default a file with ``steps``
+    is) and every mistake in it, in one pass:
+    the schema's, the references across its parts, and the names each device's kind declares,
+    one ``file:line: field: message`` each, in the file's order (the spec is None if any)."""
+    name = os.fspath(path)
+    try:
+        data = load_yaml(path)
+    except ConfigError as exc:
+        return None, exc.messages
+    if data is None:
+        data = LineDict()
+        data.key_lines = {}
+    is_scenario = scenario if scenario is not None else isinstance(data, LineDict) and "steps" in data
+    model: type[PlantSpec] = _ScenarioFile if is_scenario else _PlantFile
+    problems: list[Problem] = []
+    try:
+        shape: PlantSpec | None = model.parse(data)
+    except Invalid as exc:
+        shape = None
+        problems += exc.problems
+    parts = _Parts.salvage(data) if shape is None else _Parts(
+        list(shape.devices), list(shape.buses), list(getattr(shape, "steps", [])),
+        getattr(shape, "host", {}), shape.opcua is not None)
+    problems += plant_problems(parts)
+    raw_devices = data.get("devices") if isinstance(data, dict) else None
+    for i, device in enumerate(parts.devices):
+        if device is not None:
+            problems += device_problems(i, device, raw_devices[i])  # type: ignore[index]
+    kinds = {d.name: d.kind for d in parts.devices if d is not None}
+    for i, step in enumerate(parts.steps):
+        if step is not None:
+            problems += step_problems(i, step, kinds)
+    if problems:
+        return None, report(name, data, problems)
+    assert shape is not None
+    spec = (Scenario if is_scenario else PlantSpec)(**{f: getattr(shape, f) for f in shape.__struct_fields__})
+    if isinstance(spec, Scenario):
+        _step_lines(data, spec)
+        spec.path = name
+        spec.name = spec.name or Path(path).stem
+    return spec, []
 
 
 def _step_lines(data: Any, scenario: Scenario) -> None:
@@ -519,128 +648,21 @@ def _step_lines(data: Any, scenario: Scenario) -> None:
             step.line = line
 
 
-def _check_device_configs(data: Any, spec: PlantSpec, path: str) -> None:
-    """Validate each device's config against its kind's model, with the YAML lines."""
-    from devsim.core.registry import UnknownKind, device_class
-
-    raw_devices = data.get("devices") if isinstance(data, LineDict) else None
-    for index, device in enumerate(spec.devices):
-        raw = raw_devices[index] if isinstance(raw_devices, LineList) and index < len(raw_devices) else None
-        line = raw_devices.item_lines[index] if isinstance(raw_devices, LineList) and index < len(raw_devices) else 1
-        try:
-            cls = device_class(device.kind)
-        except UnknownKind as exc:
-            key_line = raw.key_lines.get("kind", line) if isinstance(raw, LineDict) else line
-            raise ConfigError(f"{path}:{key_line}: devices.{index}.kind: {exc}") from None
-        model = getattr(cls, "config_model", None)
-        if model is None:
-            continue
-        config = raw.get("config") if isinstance(raw, LineDict) else None
-        merged = LineDict(config if isinstance(config, LineDict) else {})
-        merged.line = getattr(config, "line", line)
-        merged.key_lines = dict(getattr(config, "key_lines", {}))
-        axis = raw.get("axis") if isinstance(raw, LineDict) else None
-        if isinstance(axis, LineDict):
-            inner = merged.get("axis")
-            combined = LineDict({**(inner if isinstance(inner, dict) else {}), **axis})
-            combined.line = axis.line
-            combined.key_lines = {**getattr(inner, "key_lines", {}), **axis.key_lines}
-            merged["axis"] = combined
-            merged.key_lines["axis"] = raw.key_lines.get("axis", line)
-        try:
-            validate(merged, model, path)
-        except ConfigError as exc:
-            prefix = f"devices.{index}.config."
-            raise ConfigError(_prefix(str(exc), prefix), [_prefix(m, prefix) for m in exc.messages]) from None
-
-
-def _check_state(data: Any, spec: PlantSpec, path: str) -> None:
-    """Initial ``state`` names and values, checked against each kind's declared points."""
-    from devsim.core.registry import device_class
-
-    raw_devices = data.get("devices") if isinstance(data, LineDict) else None
-    for index, device in enumerate(spec.devices):
-        raw = raw_devices[index] if isinstance(raw_devices, LineList) and index < len(raw_devices) else None
-        state = raw.get("state") if isinstance(raw, LineDict) else None
-        lines = getattr(state, "key_lines", {})
-        try:
-            points = device_class(device.kind).points
-        except Exception:
-            continue
-        for name, value in device.state.items():
-            _check_point(points, device.name, name, value, f"{path}:{lines.get(name, 1)}: devices.{index}.state.{name}")
-
-
-def _check_point(points: Any, owner: str, name: str, value: Any, where: str) -> None:
-    from devsim.core.points import BadValue, ReadOnlyName, UnknownName
-
-    try:
-        points.parse(name, value, owner)
-    except (UnknownName, ReadOnlyName, BadValue) as exc:
-        raise ConfigError(f"{where}: {exc}") from None
-
-
-def _check_steps(scenario: Scenario, path: str) -> None:
-    """Names in ``set``, ``pulse``, ``when`` and ``expect_state`` steps, checked against the
-    declared points of each device's kind."""
-    from devsim.core.points import UnknownName
-    from devsim.core.registry import device_class
-
-    kinds = {d.name: d.kind for d in scenario.devices}
-    for number, step in enumerate(scenario.steps, 1):
-        where = f"{path}:{step.line or 1}: steps.{number}"
-        target = step.set or step.pulse or step.when or step.expect_state
-        if target is None:
-            continue
-        try:
-            points = device_class(kinds[target.device]).points
-        except Exception:
-            continue
-        if step.set is not None:
-            for name, value in step.set.values.items():
-                _check_point(points, step.set.device, name, value, f"{where}.set.{name}")
-        if step.pulse is not None:
-            name = step.pulse.input if "." in step.pulse.input else f"input.{step.pulse.input}"
-            _check_point(points, step.pulse.device, name, step.pulse.value, f"{where}.pulse")
-        for cond in (step.when, step.expect_state):
-            if cond is not None and not cond.name.startswith("line."):
-                try:
-                    points.lookup(cond.name, cond.device)
-                except UnknownName as exc:
-                    raise ConfigError(f"{where}: {exc}") from None
-
-
-def _prefix(message: str, prefix: str) -> str:
-    """Insert ``prefix`` before the field of a ``file:line: field: message`` line."""
-    parts = message.split(": ", 2)
-    if len(parts) == 3:
-        return f"{parts[0]}: {prefix}{parts[1]}: {parts[2]}"
-    return message
-
-
 def load_plant(path: str | os.PathLike[str]) -> PlantSpec:
-    """Load and validate a plant file (a scenario file also works: its steps are ignored)."""
-    data = load_yaml(path)
-    if isinstance(data, LineDict) and "steps" in data:
-        return load_scenario(path)
-    spec = validate(data, PlantSpec, path)
-    _check_device_configs(data, spec, os.fspath(path))
-    _check_state(data, spec, os.fspath(path))
+    """Load and validate a plant file (a scenario file also works: its steps are ignored);
+    raises ConfigError naming every mistake (:func:`inspect_file`)."""
+    spec, messages = inspect_file(path)
+    if spec is None:
+        raise ConfigError.of(messages)
     return spec
 
 
 def load_scenario(path: str | os.PathLike[str]) -> Scenario:
-    """Load and validate a scenario file; raises ConfigError with ``file:line: …``."""
-    data = load_yaml(path)
-    scenario = validate(data, Scenario, path)
-    _step_lines(data, scenario)
-    _check_device_configs(data, scenario, os.fspath(path))
-    _check_state(data, scenario, os.fspath(path))
-    _check_steps(scenario, os.fspath(path))
-    scenario.path = os.fspath(path)
-    if scenario.name is None:
-        scenario.name = Path(path).stem
-    return scenario
+    """Load and validate a scenario file; raises ConfigError with ``file:line: …`` per mistake."""
+    spec, messages = inspect_file(path, scenario=True)
+    if not isinstance(spec, Scenario):
+        raise ConfigError.of(messages)
+    return spec
 
 
 def scenario_from_dict(data: dict[str, Any], name: str = "scenario") -> Scenario:

@@ -12,14 +12,11 @@ import pytest
 
 from devsim.fleet.client import FleetClient
 from tests.fleet.conftest import Member, mosquitto
-from tests.support.broker import Broker, mosquitto_missing
+from tests.support.broker import Broker
 
 
 @pytest.fixture
 def brokers() -> Iterator[tuple[Broker, Broker]]:
-    why = mosquitto_missing()
-    if why is not None:
-        pytest.fail(why)
     near = Broker().start()
     far = Broker(extra=f"connection to-near\naddress 127.0.0.1:{near.port}\ntopic devsim-fleet/# both 0\n")
     try:

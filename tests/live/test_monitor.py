@@ -16,6 +16,7 @@ from devsim.observe.monitor import DevicePanel, MonitorApp
 from devsim.runtime import Runtime
 from devsim.runtime.control import ControlServer
 from devsim.transports.tcp import TcpTransport
+from tests.support.programs import needs_library
 
 ROOT = Path(__file__).resolve().parents[2]
 SCREENSHOT = ROOT / "docs" / "monitor.png"
@@ -94,6 +95,7 @@ async def test_monitor_headless(plant: tuple[Runtime, str, tuple[str, int]]) -> 
         assert "blocked_axis" in state
         app.save_screenshot(filename="monitor.svg", path=str(SCREENSHOT.parent))
     svg = SCREENSHOT.with_suffix(".svg")
+    needs_library("cairo")  # cairosvg's C library
     import cairosvg
 
     cairosvg.svg2png(url=str(svg), write_to=str(SCREENSHOT))

@@ -10,6 +10,8 @@ import uuid
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 
+from tests.support.programs import needs_program
+
 from .run import ROOT, env
 
 
@@ -32,7 +34,9 @@ def screen_until(session: str, needle: str, timeout: float = 20.0) -> str:
 @contextmanager
 def terminal(command: Sequence[str], *, width: int = 160, height: int = 50) -> Iterator[str]:
     """``command`` in a new tmux session (this checkout on its import path, a UTF-8 xterm); yields
-    the session's name and kills the session at the end."""
+    the session's name and kills the session at the end.  Skipped where tmux is missing (a
+    failure under CI: :func:`tests.support.programs.needs_program`)."""
+    needs_program("tmux")
     environ = env()
     line = " ".join(shlex.quote(part) for part in (
         "env", f"PYTHONPATH={environ['PYTHONPATH']}", "TERM=xterm-256color", "LANG=C.UTF-8", *command))

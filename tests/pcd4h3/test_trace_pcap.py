@@ -11,7 +11,7 @@ from pathlib import Path
 
 from tests.pcd4h3.helpers import hexbytes
 from tests.support.process import ROOT, DevsimProcess, free_port
-from tests.transports.test_pcap import tshark
+from tests.support.programs import needs_program
 
 GUIDE = ROOT / "docs" / "kinds" / "pcd4h3.md"
 STATUS = "00 00 00 0D 01 00 00 01 00 01 1B 08 DA"  # read PCD status, station 1 (spec EV14)
@@ -27,6 +27,7 @@ def documented() -> tuple[list[str], list[str]]:
 
 
 def test_the_guides_trace_command_gives_a_file_tshark_decodes(tmp_path: Path) -> None:
+    tshark = needs_program("tshark")
     run, decode = documented()
     port = free_port()  # the guide's 5050, moved out of the way of other simulators
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
@@ -44,7 +45,7 @@ def test_the_guides_trace_command_gives_a_file_tshark_decodes(tmp_path: Path) ->
         assert sim.interrupt() == 0
     arguments = [a.replace("5050", str(port)) for a in decode]
     arguments[arguments.index("-r") + 1] = str(tmp_path / arguments[arguments.index("-r") + 1])
-    result = subprocess.run([tshark(), *arguments, "-T", "fields", "-e", "sbus.cmd", "-e", "sbus.att"],
+    result = subprocess.run([tshark, *arguments, "-T", "fields", "-e", "sbus.cmd", "-e", "sbus.att"],
                             capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL, check=False)
     assert result.returncode == 0, result.stderr
     assert result.stdout.split("\n")[:2] == ["0x1b\t0x00", "\t0x01"], result.stdout  # the request, the response

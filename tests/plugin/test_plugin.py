@@ -235,7 +235,7 @@ def test_plant_errors_name_the_file(devsim_plant, tmp_path) -> None:
 
     bad = tmp_path / "bad.yaml"
     bad.write_text("devices:\n  - name: d\n    kind: sers\n    config: {baud: 1234}\n")
-    with pytest.raises(ConfigError, match=r"bad.yaml:4: devices.0.config.baud"):
+    with pytest.raises(ConfigError, match=r"bad.yaml:4: devices.1.config.baud"):
         devsim_plant(bad)
 
 
@@ -366,7 +366,7 @@ def test_collected_scenario_files(pytester: pytest.Pytester) -> None:
     # the failure is the scenario report, not a traceback
     assert "scenario scenario_bad" in text and "FAILED: 0 of 2 checks passed" in text
     assert "expected b'#ON\\r\\nok9\\n\\r'" in text
-    assert "scenario_invalid.yaml:4: steps.0" in text
+    assert "scenario_invalid.yaml:4: steps.1" in text
     assert "Traceback" not in text and "devsim/pytest_plugin.py" not in text
 
 
@@ -436,7 +436,7 @@ def test_marker_runs_and_fails_with_the_report(pytester: pytest.Pytester) -> Non
     assert "never reached" not in text
     assert "scenario bad (" in text and "FAILED: 0 of 2 checks passed" in text
     assert "needs @pytest.mark.devsim_scenario" in text
-    assert "invalid.yaml:2: devices.0.bogus" in text
+    assert "invalid.yaml:2: devices.1.bogus" in text
     assert "devsim_scenario: 1 validation error" in text
     assert "PytestUnknownMarkWarning" not in text
 
@@ -457,3 +457,19 @@ def test_readme_example_is_the_test_file() -> None:
     blocks = re.findall(r"```python\n(.*?)```", section, re.S)
     example = (root / "tests" / "test_readme_example.py").read_text(encoding="utf-8")
     assert example in blocks
+
+
+def test_a_dict_scenarios_steps_are_counted_from_1(pytester: pytest.Pytester) -> None:
+    pytester.makepyfile(
+        """
+        import pytest
+
+        @pytest.mark.devsim_scenario({"devices": [{"name": "d", "kind": "sers"}],
+                                      "steps": [{"wait": "1s"}, {"wait": "soon"}]})
+        def test_bad_step(devsim_scenario_result):
+            pass
+        """
+    )
+    result = run_inner(pytester)
+    result.assert_outcomes(errors=1)
+    assert "  steps.2.wait: `wait` must be a duration like 2s or 150ms" in result.stdout.str()

@@ -59,35 +59,35 @@ def test_a_good_scenario_loads_with_step_lines(tmp_path: Path) -> None:
 def test_bad_duration_names_file_line_and_field(tmp_path: Path) -> None:
     text = GOOD.replace("    timeout: 5s", "    timeout: 5 parsecs")
     error = error_of(write(tmp_path, text))
-    assert str(error) == f"{tmp_path / 'x.yaml'}:11: steps.2.timeout: `timeout` must be a duration like 2s or 150ms"
+    assert str(error) == f"{tmp_path / 'x.yaml'}:11: steps.3.timeout: `timeout` must be a duration like 2s or 150ms"
 
 
 def test_after_must_be_a_duration(tmp_path: Path) -> None:
     text = GOOD + "  - after: soon\n    log: x\n"
-    assert str(error_of(write(tmp_path, text))).endswith(":13: steps.4.after: `after` must be a duration like 2s or 150ms")
+    assert str(error_of(write(tmp_path, text))).endswith(":13: steps.5.after: `after` must be a duration like 2s or 150ms")
 
 
 def test_two_triggers_and_two_actions_are_refused(tmp_path: Path) -> None:
     text = GOOD + "  - at: 1s\n    after: 2s\n    log: x\n  - send: a\n    wait: 1s\n"
     error = error_of(write(tmp_path, text))
-    assert any(":13: steps.4: a step has one trigger, not at and after" in m for m in error.messages)
-    assert any(":16: steps.5: a step has exactly one action" in m for m in error.messages)
+    assert any(":13: steps.5: a step has one trigger, not at and after" in m for m in error.messages)
+    assert any(":16: steps.6: a step has exactly one action" in m for m in error.messages)
 
 
 def test_unknown_field_and_unknown_device(tmp_path: Path) -> None:
     text = GOOD.replace("    config: {address: 1}", "    config: {address: 1}\n    colour: red")
-    assert str(error_of(write(tmp_path, text))).endswith(":6: devices.0.colour: unknown field")
+    assert str(error_of(write(tmp_path, text))).endswith(":6: devices.1.colour: unknown field")
     text = GOOD.replace("{device: x, name: P11", "{device: y, name: P11")
-    assert "step 3: no device named 'y'" in str(error_of(write(tmp_path, text)))
+    assert ":10: steps.3.when.device: no device named 'y'" in str(error_of(write(tmp_path, text)))
 
 
 def test_device_config_is_validated_by_its_kind(tmp_path: Path) -> None:
     text = GOOD.replace("config: {address: 1}", "config:\n      address: 1\n      baud: 9601")
     assert str(error_of(write(tmp_path, text))).endswith(
-        ":7: devices.0.config.baud: baud must be one of 1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200"
+        ":7: devices.1.config.baud: baud must be one of 1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200"
     )
     text = GOOD.replace("kind: sers", "kind: toaster")
-    assert ":4: devices.0.kind: unknown device kind 'toaster'" in str(error_of(write(tmp_path, text)))
+    assert ":4: devices.1.kind: unknown device kind 'toaster'" in str(error_of(write(tmp_path, text)))
 
 
 def test_yaml_syntax_error_has_a_line(tmp_path: Path) -> None:
@@ -111,7 +111,7 @@ def test_devsim_check(tmp_path: Path) -> None:
     assert "good.yaml: ok (scenario, 4 steps, 1 devices)" in result.output
     result = CliRunner().invoke(cli, ["check", str(good), str(bad)])
     assert result.exit_code == exits.BAD_FILE
-    assert "bad.yaml:11: steps.2.timeout: `timeout` must be a duration like 2s or 150ms" in result.output
+    assert "bad.yaml:11: steps.3.timeout: `timeout` must be a duration like 2s or 150ms" in result.output
 
 
 def test_check_finds_misspelled_names_and_wrong_types(tmp_path: Path) -> None:
@@ -125,7 +125,7 @@ def test_check_finds_misspelled_names_and_wrong_types(tmp_path: Path) -> None:
     )
     result = CliRunner().invoke(cli, ["check", str(plant)])
     assert result.exit_code == exits.BAD_FILE
-    assert "plant.yaml:5: devices.0.state.input.limit_rigth: x has no 'input.limit_rigth' (did you mean " \
+    assert "plant.yaml:5: devices.1.state.input.limit_rigth: x has no 'input.limit_rigth' (did you mean " \
         "input.limit_right" in result.output
     scenario = tmp_path / "s.yaml"
     scenario.write_text(
@@ -137,4 +137,4 @@ def test_check_finds_misspelled_names_and_wrong_types(tmp_path: Path) -> None:
     )
     result = CliRunner().invoke(cli, ["check", str(scenario)])
     assert result.exit_code == exits.BAD_FILE
-    assert "s.yaml:4: steps.1.set.quantity.supply_voltage: quantity.supply_voltage: expects a number" in result.output
+    assert "s.yaml:4: steps.1.set.values.quantity.supply_voltage: quantity.supply_voltage: expects a number" in result.output

@@ -59,4 +59,4 @@ def test_devsim_up_reports_a_bad_plant_file(tmp_path: Path) -> None:
     plant.write_text(PLANT.replace("address: 5", "address: 500"))
     done = subprocess.run([sys.executable, "-m", "devsim", "up", str(plant)], capture_output=True, text=True)
     assert done.returncode != 0
-    assert done.stderr.strip() == f"Error: {plant}:12: devices.2.config.address: Input should be less than or equal to 127"
+    assert done.stderr.strip() == f"Error: {plant}:12: devices.3.config.address: Input should be less than or equal to 127"

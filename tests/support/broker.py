@@ -2,7 +2,9 @@
 loopback port (``.ci/run`` installs mosquitto and its clients with apt-get).
 
 ``Broker.start()`` writes a config into a temporary directory, starts ``mosquitto -c``, and
-returns once the port accepts a connection (the broker is then ready).  ``url`` is
+returns once the port accepts a connection (the broker is then ready).  Where mosquitto or its
+clients are missing, making a ``Broker`` skips the test (fails it under CI=true:
+:mod:`tests.support.programs`).  ``url`` is
 ``mqtt://127.0.0.1:PORT``; ``extra`` config lines (a bridge to a second broker, say) are appended.
 """
 
@@ -17,26 +19,20 @@ from pathlib import Path
 
 from tests.support.process import free_port
 from tests.support.process import stop as stop_process
+from tests.support.programs import needs_program
 
-__all__ = ["Broker", "mosquitto_missing"]
-
-
-def mosquitto_missing() -> str | None:
-    """Why the broker cannot run here, or None."""
-    for program in ("mosquitto", "mosquitto_sub", "mosquitto_pub"):
-        if shutil.which(program) is None and not Path("/usr/sbin", program).exists():
-            return f"{program} is not installed (apt-get install mosquitto mosquitto-clients)"
-    return None
+__all__ = ["Broker"]
 
 
 def _program(name: str) -> str:
-    return shutil.which(name) or str(Path("/usr/sbin", name))
+    return needs_program(name)
 
 
 class Broker:
     """One mosquitto process on 127.0.0.1."""
 
     def __init__(self, extra: str = "") -> None:
+        needs_program("mosquitto", "mosquitto_sub", "mosquitto_pub")
         self.port = free_port()
         self.extra = extra
         self.directory = Path(tempfile.mkdtemp(prefix="devsim-mosquitto-"))

@@ -3,7 +3,6 @@ choice by suffix, and what tshark (Wireshark's decoder) makes of a real Ether-S-
 
 from __future__ import annotations
 
-import shutil
 import socket
 import struct
 import subprocess
@@ -25,6 +24,7 @@ from devsim.transports.pcap import (
 from devsim.transports.trace import Tracer
 from devsim.transports.tracing import open_trace
 from devsim.transports.udp import UdpTransport
+from tests.support.programs import needs_program
 
 REQUEST = bytes.fromhex("00000010 01 00 0001 00 01 06 00 00D5 9409")
 REPLY = bytes.fromhex("0000000F 01 00 0001 01 000003E8 7B16")
@@ -195,15 +195,9 @@ def test_the_runtime_writes_a_pcap_trace_with_the_real_udp_peers(tmp_path: Path,
 
 
 def tshark() -> str:
-    """tshark's path; a clear failure (not a skip) where it is missing: CI installs it (.ci/run)."""
-    path = shutil.which("tshark")
-    if path is None:
-        pytest.fail(
-            "tshark is not installed: the pcap traces are checked with Wireshark's own decoder"
-            " (Debian/Ubuntu: apt-get install tshark; .ci/run installs it)",
-            pytrace=False,
-        )
-    return path
+    """tshark's path: the pcap traces are checked with Wireshark's own decoder (skipped where it
+    is missing, a failure under CI=true: tests/support/programs.py)."""
+    return needs_program("tshark")
 
 
 def test_tshark_decodes_the_trace_as_ether_s_bus(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -34,5 +34,5 @@ def test_bus_names_cannot_leave_the_trace_dir(tmp_path: Path, name: str) -> None
         "devices:\n  - {name: a, kind: sers, transport: {bus: b1}}\n"
         f"buses:\n  - name: '{name}'\n    transport: {{pty: {{}}}}\n"
     )
-    with pytest.raises(ConfigError, match=r"plant.yaml:4: buses.0.name: String should match pattern"):
+    with pytest.raises(ConfigError, match=r"plant.yaml:4: buses.1.name: String should match pattern"):
         load_plant(plant)

@@ -1,0 +1,122 @@
+"""The names in a plant or scenario file, checked against what each device's kind declares.
+
+Each check returns every problem it finds as ``(location, message)``, the location in the file's
+data (``("devices", 0, "state", "input.limit_rigth")``: list items counted from 0 here, printed
+from 1 with the line by :func:`devsim.core.config.located`), so that ``devsim check`` reports
+them all at once, with the schema's own problems:
+
+* :func:`device_problems` – the kind exists; the device's ``config`` (with ``axis`` merged in)
+  fits the kind's configuration; the initial ``state`` names points the kind has, with values
+  of their type;
+* :func:`step_problems` – the names in ``set``, ``pulse``, ``when`` and ``expect_state`` are
+  points of the device's kind; a ``fault`` is one the kind declares.
+
+They work on the parts of a file that parsed (a device or step that did not is left to the
+schema's message), and take the device and step objects by their attributes, so that this module
+needs nothing of :mod:`devsim.scenario.schema`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from devsim.core.points import BadValue, ReadOnlyName, UnknownName
+from devsim.core.registry import UnknownKind, device_class
+from devsim.core.typed import Invalid
+
+__all__ = ["POWER_FAULTS", "Problem", "device_problems", "fault_problem", "step_problems"]
+
+Problem = tuple[tuple[int | str, ...], str]
+
+#: Faults every device has through its power supply; the others are declared by each kind.
+POWER_FAULTS = ("power_cycle", "power_cycle_wipe", "power_off", "power_on")
+
+
+def device_problems(index: int, device: Any, raw: Any) -> list[Problem]:
+    """Problems of device ``index`` (a parsed ``DeviceSpec``; ``raw`` its mapping in the file)."""
+    at = ("devices", index)
+    try:
+        cls = device_class(device.kind)
+    except UnknownKind as exc:
+        return [((*at, "kind"), str(exc))]
+    return _config_problems(at, cls, device, raw) + _state_problems(at, cls, device)
+
+
+def _config_problems(at: tuple[int | str, ...], cls: Any, device: Any, raw: Any) -> list[Problem]:
+    model = getattr(cls, "config_model", None)
+    if model is None:
+        return []
+    try:
+        model.parse(device.device_config())
+    except Invalid as exc:
+        axis = raw.get("axis") if isinstance(raw, Mapping) else None
+        problems: list[Problem] = []
+        for loc, text in exc.problems:
+            from_axis = len(loc) > 1 and loc[0] == "axis" and isinstance(axis, Mapping) and loc[1] in axis
+            problems.append(((*at, "axis", *loc[1:]) if from_axis else (*at, "config", *loc), text))
+        return problems
+    return []
+
+
+def _state_problems(at: tuple[int | str, ...], cls: Any, device: Any) -> list[Problem]:
+    problems: list[Problem] = []
+    for name, value in device.state.items():
+        text = _point_problem(cls.points, device.name, name, value)
+        if text is not None:
+            problems.append(((*at, "state", name), text))
+    return problems
+
+
+def _point_problem(points: Any, owner: str, name: str, value: Any) -> str | None:
+    try:
+        points.parse(name, value, owner)
+    except (UnknownName, ReadOnlyName, BadValue) as exc:
+        return str(exc)
+    return None
+
+
+def step_problems(index: int, step: Any, kinds: Mapping[str, str]) -> list[Problem]:
+    """Problems of the names in step ``index`` (a parsed ``Step``); ``kinds``: device → kind of
+    the devices that parsed (a step on another device is left to the reference check)."""
+    at = ("steps", index)
+    target = step.set or step.pulse or step.when or step.expect_state
+    if target is None or target.device not in kinds:
+        return []
+    try:
+        points = device_class(kinds[target.device]).points
+    except UnknownKind:
+        return []  # reported at the device
+    problems: list[Problem] = []
+    if step.set is not None:
+        for name, value in step.set.values.items():
+            text = _point_problem(points, step.set.device, name, value)
+            if text is not None:
+                problems.append(((*at, "set", "values", name), text))
+    if step.pulse is not None:
+        name = step.pulse.input if "." in step.pulse.input else f"input.{step.pulse.input}"
+        text = _point_problem(points, step.pulse.device, name, step.pulse.value)
+        if text is not None:
+            problems.append(((*at, "pulse", "input"), text))
+    for key in ("when", "expect_state"):
+        cond = getattr(step, key)
+        if cond is not None and not cond.name.startswith("line."):
+            try:
+                points.lookup(cond.name, cond.device)
+            except UnknownName as exc:
+                problems.append(((*at, key, "name"), str(exc)))
+    return problems
+
+
+def fault_problem(fault: str, kind: str) -> str | None:
+    """Why ``kind`` has no fault ``fault`` (None if it has, or if the kind is unknown: that is
+    reported at the device)."""
+    if fault in POWER_FAULTS:
+        return None
+    try:
+        declared = device_class(kind).faults.names()
+    except UnknownKind:
+        return None
+    if fault in declared:
+        return None
+    return f"{kind} has no fault {fault!r} (declared: {', '.join([*declared, *POWER_FAULTS])})"

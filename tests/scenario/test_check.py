@@ -1,0 +1,128 @@
+"""`devsim check FILES` names every mistake of every file in one pass (schema errors and
+misspelled names together, one `file:line: field: message` line each, steps and devices counted
+as the file reads them, from 1), through the real command."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+from tests.support.process import ROOT, devsim_env
+
+SCENARIO = """\
+devices:
+  - name: x
+    kind: sers
+    config: {address: 1, baud: 9601}
+    state:
+      input.limit_rigth: true
+  - name: y
+    kind: toaster
+steps:
+  - at: 1s
+    send: "#ON"
+  - after: soon
+    log: x
+  - set: {device: x, values: {quantity.supply_voltage: hello}}
+  - fault: {device: x, kind: smoke}
+  - expect_state: {device: z, name: axis.position, equals: 0}
+  - when: {device: x, name: axis.positon, ge: 0}
+  - sned: a
+  - pulse: {device: x, input: I99}
+"""
+
+PLANT = """\
+devices:
+  - name: a
+    kind: sers
+    transport: {bus: line}
+  - name: a
+    kind: gms96
+    state: {axis.positon: 3}
+"""
+
+GOOD = "devices:\n  - {name: x, kind: sers}\nsteps:\n  - wait: 1s\n"
+
+
+def check(*paths: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "devsim", "check", *map(str, paths)], cwd=ROOT, env=devsim_env(),
+                          capture_output=True, text=True, timeout=60)
+
+
+def test_every_mistake_of_every_file_in_one_pass(tmp_path: Path) -> None:
+    scenario, plant, good = tmp_path / "s.yaml", tmp_path / "plant.yaml", tmp_path / "good.yaml"
+    scenario.write_text(SCENARIO)
+    plant.write_text(PLANT)
+    good.write_text(GOOD)
+    done = check(scenario, good, plant)
+    assert done.returncode == 1
+    assert done.stdout == f"{good}: ok (scenario, 1 steps, 1 devices)\n"
+    lines = [line.replace(str(tmp_path) + "/", "") for line in done.stderr.splitlines()]
+    assert lines == [
+        "s.yaml:4: devices.1.config.baud: baud must be one of 1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200",
+        "s.yaml:6: devices.1.state.input.limit_rigth: x has no 'input.limit_rigth'"
+        " (did you mean input.limit_right, input.limit_left?)",
+        "s.yaml:8: devices.2.kind: unknown device kind 'toaster' (known: gms96, ip247, pcd4h3, poselesta, sers)",
+        "s.yaml:12: steps.2.after: `after` must be a duration like 2s or 150ms",
+        "s.yaml:14: steps.3.set.values.quantity.supply_voltage: quantity.supply_voltage: expects a number, not 'hello'",
+        "s.yaml:15: steps.4.fault.kind: sers has no fault 'smoke' (declared: blocked_axis, emergency_stop, power,"
+        " power_cycle, power_cycle_wipe, power_off, power_on)",
+        "s.yaml:16: steps.5.expect_state.device: no device named 'z'",
+        "s.yaml:17: steps.6.when.name: x has no 'axis.positon' (did you mean axis.position, position, axis.moving?)",
+        "s.yaml:18: steps.7.sned: unknown field",
+        lines[9],  # the pulse's input, worded by the kind
+        "plant.yaml:4: devices.1.transport.bus: device 'a' is on bus 'line', which is not defined",
+        "plant.yaml:5: devices.2.name: the name 'a' is used twice",
+        lines[12],
+    ]
+    assert lines[9].startswith("s.yaml:19: steps.8.pulse.input: x has no 'input.I99'")
+    assert lines[12].startswith("plant.yaml:7: devices.2.state.axis.positon: a has no 'axis.positon'")
+
+
+def test_the_shipped_scenarios_pass() -> None:
+    files = sorted((ROOT / "scenarios").rglob("*.yaml"))
+    done = check(*files)
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    assert [line.split(": ok (")[0] for line in done.stdout.splitlines()] == list(map(str, files))
+
+
+def test_up_and_scenario_run_refuse_a_bad_file_with_every_mistake(tmp_path: Path) -> None:
+    plant = tmp_path / "plant.yaml"
+    plant.write_text(PLANT)
+    for command in (["up", str(plant)], ["scenario", "run", str(plant)]):
+        done = subprocess.run([sys.executable, "-m", "devsim", *command], cwd=ROOT, env=devsim_env(),
+                              capture_output=True, text=True, timeout=60)
+        assert done.returncode == 1
+        lines = done.stderr.replace(str(tmp_path) + "/", "").splitlines()
+        assert [line.split(": ")[0:2] for line in lines] == [
+            ["Error", "plant.yaml:4"], ["plant.yaml:5", "devices.2.name"], ["plant.yaml:7", "devices.2.state.axis.positon"]]
+
+
+def test_a_device_that_fails_the_schema_still_counts_for_the_steps(tmp_path: Path) -> None:
+    """Steps are checked against every device named in the file: a device that failed the schema
+    is no reason to call it missing, nor to leave a misspelled one unreported."""
+    path = tmp_path / "partial.yaml"
+    path.write_text("devices:\n  - {name: x, kind: sers, axis: {limit_right: hello}}\n  - {name: 1bad, kind: sers}\n"
+                    "steps:\n  - set: {device: x, values: {input.I1: 2}}\n"
+                    "  - set: {device: 1bad, values: {input.I1: true}}\n"
+                    "  - set: {device: nobody, values: {input.I1: true}}\n")
+    done = check(path)
+    assert done.returncode == 1
+    assert [line.split(": ")[0:2] for line in done.stderr.replace(str(tmp_path) + "/", "").splitlines()] == [
+        ["partial.yaml:2", "devices.1.axis.limit_right"], ["partial.yaml:3", "devices.2.name"],
+        ["partial.yaml:5", "steps.1.set.values.input.I1"], ["partial.yaml:7", "steps.3.set.device"]]
+
+
+def test_a_plant_given_as_data_counts_from_1_too() -> None:
+    """The Python API (a plant or scenario as a dict) numbers list items as a file does."""
+    import pytest
+
+    from devsim.core.typed import Invalid
+    from devsim.scenario.schema import PlantSpec, scenario_from_dict
+
+    with pytest.raises(Invalid, match=r"^devices\.2\.colour: unknown field$"):
+        PlantSpec.parse({"devices": [{"name": "a", "kind": "sers"}, {"name": "b", "kind": "sers", "colour": 1}]})
+    with pytest.raises(Invalid, match=r"^steps\.2\.fault\.device: no device named 'b'$"):
+        scenario_from_dict({"devices": [{"name": "a", "kind": "sers"}],
+                            "steps": [{"wait": "1s"}, {"fault": {"device": "b", "kind": "power_off"}}]})
