@@ -24,6 +24,7 @@ from pathlib import Path
 import pytest
 
 from tests.support.process import ROOT, DevsimProcess, devsim_env
+from tests.support.programs import needs_program
 
 
 @pytest.fixture
@@ -221,7 +222,7 @@ def test_up_with_workers_is_one_simulator(runtime: Path, tmp_path: Path) -> None
 
 def test_monitor_without_an_address_attaches_to_the_one_running(runtime: Path) -> None:
     """In a real terminal (tmux): ``devsim monitor`` alone shows the one simulator running."""
-    assert shutil.which("tmux"), "tmux is needed (.ci/run installs it)"
+    needs_program("tmux")
     sim, _address, _ = start("run", "sers", "--tcp", "0", "--virtual")
     session = f"devsim-{uuid.uuid4().hex[:8]}"
     environ = devsim_env()

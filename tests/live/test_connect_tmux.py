@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import re
 import shlex
-import shutil
 import sys
 from pathlib import Path
+
+from tests.support.programs import needs_program
 
 from .run import ROOT, Proc
 from .tmux import screen_until, terminal, tmux
@@ -24,7 +25,7 @@ def _miniterm_args(page: Path) -> list[str]:
 
 
 def test_the_readme_s_miniterm_command_shows_latin1_answers(tmp_path: Path) -> None:
-    assert shutil.which("tmux"), "tmux is needed (.ci/run installs it)"
+    needs_program("tmux")
     options = _miniterm_args(ROOT / "README.md")
     assert options == _miniterm_args(ROOT / "docs" / "connect.md") == _miniterm_args(ROOT / "docs" / "kinds" / "sers.md")
     link = tmp_path / "ttySERS"

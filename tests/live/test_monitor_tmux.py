@@ -4,13 +4,14 @@ in with send-keys, the screen comes back with capture-pane."""
 from __future__ import annotations
 
 import re
-import shutil
 import subprocess
 import sys
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+
+from tests.support.programs import needs_program
 
 from .run import Proc, ctl
 from .tmux import screen_until, terminal, tmux
@@ -19,7 +20,7 @@ from .tmux import screen_until, terminal, tmux
 @contextmanager
 def monitor(addr: str) -> Iterator[str]:
     """``devsim monitor --control ADDR`` in a tmux session (its name)."""
-    assert shutil.which("tmux"), "tmux is needed (.ci/run installs it)"
+    needs_program("tmux")
     with terminal([sys.executable, "-m", "devsim", "monitor", "--control", addr]) as session:
         yield session
 
