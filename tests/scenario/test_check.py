@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+from devsim.cli import exits
 from tests.support.process import ROOT, devsim_env
 
 SCENARIO = """\
@@ -56,7 +57,7 @@ def test_every_mistake_of_every_file_in_one_pass(tmp_path: Path) -> None:
     plant.write_text(PLANT)
     good.write_text(GOOD)
     done = check(scenario, good, plant)
-    assert done.returncode == 1
+    assert done.returncode == exits.BAD_FILE
     assert done.stdout == f"{good}: ok (scenario, 1 steps, 1 devices)\n"
     lines = [line.replace(str(tmp_path) + "/", "") for line in done.stderr.splitlines()]
     assert lines == [
@@ -93,7 +94,7 @@ def test_up_and_scenario_run_refuse_a_bad_file_with_every_mistake(tmp_path: Path
     for command in (["up", str(plant)], ["scenario", "run", str(plant)]):
         done = subprocess.run([sys.executable, "-m", "devsim", *command], cwd=ROOT, env=devsim_env(),
                               capture_output=True, text=True, timeout=60)
-        assert done.returncode == 1
+        assert done.returncode == exits.BAD_FILE
         lines = done.stderr.replace(str(tmp_path) + "/", "").splitlines()
         assert [line.split(": ")[0:2] for line in lines] == [
             ["Error", "plant.yaml:4"], ["plant.yaml:5", "devices.2.name"], ["plant.yaml:7", "devices.2.state.axis.positon"]]
@@ -108,7 +109,7 @@ def test_a_device_that_fails_the_schema_still_counts_for_the_steps(tmp_path: Pat
                     "  - set: {device: 1bad, values: {input.I1: true}}\n"
                     "  - set: {device: nobody, values: {input.I1: true}}\n")
     done = check(path)
-    assert done.returncode == 1
+    assert done.returncode == exits.BAD_FILE
     assert [line.split(": ")[0:2] for line in done.stderr.replace(str(tmp_path) + "/", "").splitlines()] == [
         ["partial.yaml:2", "devices.1.axis.limit_right"], ["partial.yaml:3", "devices.2.name"],
         ["partial.yaml:5", "steps.1.set.values.input.I1"], ["partial.yaml:7", "steps.3.set.device"]]
