@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from devsim.cli import exits
+from devsim.core.extras import install_command
 from tests.support.process import ROOT, DevsimProcess, devsim_env, free_port
 
 PLANT = "devices:\n  - name: x\n    kind: sers\n    config: {address: 1}\n    transport: {tcp: {port: 0}}\n"
@@ -165,7 +166,7 @@ def test_each_kind_of_mistake_has_its_status(files: Path, sim: str, busy: int, s
 def test_a_missing_extra_is_this_machine(files: Path, args: list[str], extra: str) -> None:
     done = devsim(*(arg.format(f=files) for arg in args), hide=files / "hide")
     assert done.returncode == exits.SYSTEM, done.stderr
-    assert done.stderr.startswith("Error: ") and f"pip install 'devsim-motion[{extra}]'" in done.stderr
+    assert done.stderr.startswith("Error: ") and install_command(extra) in done.stderr  # the checkout's or the distribution's
     assert done.stderr.count("\n") == 1
 
 
