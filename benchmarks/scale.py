@@ -9,7 +9,9 @@ first sets each of their axes moving (SERS: ``#ON V=… WR=… E``). The rest of
 
 By default the script searches, for devsim and for the echo reference in the same run, the
 largest size that holds: doubling from ``--start`` until a size fails (or ``--most`` holds), then
-bisecting on a grid of ``--resolution`` devices, at most ``--steps`` phases per side. Phases
+bisecting on a grid of ``--resolution`` devices, at most ``--steps`` phases per side; a size that
+misses is measured once more (``--confirm``) before it counts, as a burst of other load may cause
+the miss. Phases
 alternate between the two sides (devsim's next size, then the echo's), so both see the same
 machine. It prints both limits, then the CPU per poll of each at the largest size that held on
 both sides, their ratio (target ≤ 1.3), and the capacity ratio devsim / echo last (target ≥ 0.9).
@@ -26,7 +28,7 @@ stream of polls.
 A poll is *missed* when its answer has not arrived by the time the next poll of that device is
 due.
 
-    python benchmarks/scale.py [--start 500] [--most 4000] [--resolution 250] [--steps 7] [--seconds 3]
+    python benchmarks/scale.py [--start 500] [--most 4000] [--resolution 250] [--steps 10] [--confirm 1] [--seconds 3]
     python benchmarks/scale.py --devices 2000 [--seconds 10] [--rounds 2]
     common: [--workers 2] [--rate 20] [--pollers N] [--poller c|python] [--kind sers|stub]
 
@@ -300,19 +302,25 @@ class _Search:
     fails (or ``most`` holds), then bisecting until the bracket is ``resolution`` wide, in at most
     ``steps`` phases."""
 
-    def __init__(self, start: int, most: int, resolution: int, steps: int) -> None:
-        self.most, self.resolution, self.steps_left = most, resolution, steps
+    def __init__(self, start: int, most: int, resolution: int, steps: int, confirm: int = 1) -> None:
+        self.most, self.resolution, self.steps_left, self.confirm = most, resolution, steps, confirm
         self.held = 0  # the largest size that held
         self.failed: int | None = None  # the smallest size that failed
         self.next: int | None = min(start, most)
         self.phases: dict[int, _Side] = {}
+        self._tries: dict[int, int] = {}
 
     def record(self, side: _Side) -> None:
         size = side.devices
-        self.phases[size] = side
         self.steps_left -= 1
+        tries = self._tries[size] = self._tries.get(size, 0) + 1
+        if size not in self.phases or side.held:
+            self.phases[size] = side  # (a size that held once is shown by the phase that held)
         if side.held:
             self.held = max(self.held, size)
+        elif tries <= self.confirm and self.steps_left > 0:
+            self.next = size  # a miss is measured again before it counts (a burst of other load)
+            return
         else:
             self.failed = size if self.failed is None else min(self.failed, size)
         self.next = self._choose()
@@ -372,7 +380,8 @@ def _fixed(args: argparse.Namespace, run: Callable[[str, int, bool], _Side]) -> 
 
 def _search(args: argparse.Namespace, run: Callable[[str, int, bool], _Side]) -> None:
     """Both limits in one run: a step runs devsim's next size, then the echo's, until both are found."""
-    searches = {label: _Search(args.start, args.most, args.resolution, args.steps) for label in ("devsim", "echo")}
+    searches = {label: _Search(args.start, args.most, args.resolution, args.steps, args.confirm)
+                for label in ("devsim", "echo")}
     while any(search.next is not None for search in searches.values()):
         for label, search in searches.items():
             if search.next is not None:
@@ -408,7 +417,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--start", type=int, default=500, help="search: the first size (default 500)")
     parser.add_argument("--most", type=int, default=4000, help="search: the plant's size, the largest tried")
     parser.add_argument("--resolution", type=int, default=250, help="search: sizes are multiples of it")
-    parser.add_argument("--steps", type=int, default=7, help="search: phases per side at most (default 7)")
+    parser.add_argument("--steps", type=int, default=10, help="search: phases per side at most (default 10)")
+    parser.add_argument("--confirm", type=int, default=1,
+                        help="search: a size that missed is measured again this many times before it counts")
     parser.add_argument("--echo-servers", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--poll", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
