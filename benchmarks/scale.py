@@ -206,19 +206,22 @@ def _start_plant(kind: str, devices: int, workers: int, tmp: str) -> tuple[subpr
 
 
 def _tree_cpu(root: int) -> tuple[float, float]:
-    """CPU seconds (user + system) used so far by process ``root`` and its living descendants,
-    and the seconds they spent runnable but waiting for a CPU (``/proc/PID/schedstat``)."""
+    """CPU seconds used so far by process ``root`` and its living descendants, and the seconds
+    they spent runnable but waiting for a CPU, summed over their threads (``schedstat``: in
+    nanoseconds, where ``stat``'s user and system times count in ticks of 10 ms)."""
     stats: dict[int, tuple[int, float, float]] = {}
     for entry in os.listdir("/proc"):
         if entry.isdigit():
             try:
                 with open(f"/proc/{entry}/stat") as fh:
                     fields = fh.read().rsplit(")", 1)[1].split()
-                with open(f"/proc/{entry}/schedstat") as fh:
-                    waited = int(fh.read().split()[1]) / 1e9
+                cpu = waited = 0.0
+                for task in os.listdir(f"/proc/{entry}/task"):
+                    with open(f"/proc/{entry}/task/{task}/schedstat") as fh:
+                        ran, wait = fh.read().split()[:2]
+                    cpu, waited = cpu + int(ran) / 1e9, waited + int(wait) / 1e9
             except (OSError, IndexError, ValueError):
                 continue
-            cpu = (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
             stats[int(entry)] = (int(fields[1]), cpu, waited)
     tree = {root}
     for pid in sorted(stats):  # a child's pid is almost always above its parent's; look twice to be sure
