@@ -21,7 +21,8 @@
  * poll is missed when the previous poll of the device has no complete answer when it is due
  * (the answers that arrived by then are read first).
  *
- * Writes the round trips (seconds, native float64) to OUT and prints one JSON line:
+ * Prints "polling" when the polls begin (after the move and its answers), writes the round trips
+ * (seconds, native float64) to OUT, and prints one JSON line:
  *   {"samples": n, "missed": n, "polls": n, "cpu": seconds, "wall": seconds}
  * where cpu is this process's user + system time over the measurement and wall its length.
  */
@@ -228,6 +229,8 @@ int main(int argc, char **argv) {
     double step = 1.0 / (rate * n), start = now() + 0.2;
     long total = (long)(seconds * rate) * n, next = 0, missed = 0;
     harvest_for(ep, conns, 0.2, 0);
+    puts("polling");  /* the conductor starts its CPU accounts here */
+    fflush(stdout);
     double cpu0 = cpu_seconds(), wall0 = now();
     while (next < total) {
         double ms = (double)next * step * 1e3;  /* the polls due in this millisecond go in one batch */

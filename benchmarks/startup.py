@@ -8,7 +8,7 @@ least any asyncio simulator must do before its port is usable.
 Modules are compiled once before the timed runs (bytecode cached in a temporary directory), as
 they are when the package is installed.
 
-Target: < 120 ms for ``sers``.
+Targets: < 120 ms for ``sers``; devsim / the bare server ≤ 1.4 (issue 31), printed last.
 
     python benchmarks/startup.py [--kind sers] [--runs 20]
 """
@@ -104,8 +104,9 @@ def main(argv: list[str] | None = None) -> int:
     print(f"devsim run {args.kind} --pty to a usable port: median {med * 1e3:.0f} ms "
           f"(min {min(devsim) * 1e3:.0f}, max {max(devsim) * 1e3:.0f}) over {args.runs} runs")
     print(f"interpreter floor (python -c pass): median {flo * 1e3:.0f} ms")
-    print(f"bare asyncio pty server: median {ref * 1e3:.0f} ms; devsim / bare = {med / ref:.2f}")
+    print(f"bare asyncio pty server: median {ref * 1e3:.0f} ms")
     print(f"above the floor: {(med - flo) * 1e3:.0f} ms; target < 120 ms in all: {'met' if med < 0.120 else 'missed'}")
+    print(f"start-up to a usable port, devsim / bare asyncio pty server: {med / ref:.2f} (target <= 1.4)")
     return 0
 
 

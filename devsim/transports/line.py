@@ -480,7 +480,12 @@ class Line:
             return
         self.bytes_out += len(data)
         if not self._faults and self.tracer is None and self._clean() and not self._stages["to_host"].items:
-            self._paced(data, len(data))  # the fault-free path: nothing to garble, trace or hold back
+            # the fault-free path: nothing to garble, trace or hold back (what _paced and _deliver do)
+            if self.pacing:
+                self._paced(data, len(data))
+            elif self._write is not None:
+                self.bytes_delivered += len(data)
+                self._write(data)
             return
         device = self.device_settings
         sent = data

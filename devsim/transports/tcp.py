@@ -114,6 +114,8 @@ class TcpTransport(Transport):
         self._endpoint: Endpoint | None = None
         self._active: _Session | None = None
         self._waiting: deque[_Session] = deque()
+        #: No protocol variant: the client's bytes go to the endpoint as they are, and back.
+        self._plain = type(self)._session_data is TcpTransport._session_data
 
     @property
     def url(self) -> str:
@@ -235,8 +237,10 @@ class TcpTransport(Transport):
             return
         self._session_started(session, endpoint)
 
-        # (the endpoint is detached again when the session ends: _deactivate)
-        endpoint.attach(functools.partial(self._send, session))
+        # (the endpoint is detached again when the session ends: _deactivate; a plain TCP port
+        # hands the device's output to the session itself: one call less per answer)
+        plain = type(self)._send is TcpTransport._send
+        endpoint.attach(session.send if plain else functools.partial(self._send, session))
 
     def _deactivate(self, session: _Session) -> None:
         if self._active is not session:
@@ -252,6 +256,8 @@ class TcpTransport(Transport):
             return
         if session.backlog or len(data) > SLICE:
             self._queue_input(session, data)
+        elif self._plain:
+            self._endpoint.feed(data)  # (what _session_data does for a plain TCP port)
         else:
             self._session_data(session, data, self._endpoint)
 

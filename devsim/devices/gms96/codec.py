@@ -133,14 +133,20 @@ def _octet(name: str, value: int) -> int:
     return value
 
 
+_SHORT_START = bytes([START_SHORT])
+
+
 def encode(frame: Frame) -> bytes:
     """The wire bytes of ``frame``; ``ValueError`` for fields that do not fit."""
     if isinstance(frame, SingleChar):
         return bytes([_octet("single character", frame.value)])
     if isinstance(frame, ShortFrame):
-        body = bytes([_octet("control", frame.control), _octet("address", frame.address)])
-        body += bytes(frame.extension)
-        return bytes([START_SHORT]) + body + bytes([checksum(body), END])
+        control, address = frame.control, frame.address
+        if type(control) is not int or type(address) is not int or not 0 <= control <= 0xFF or not 0 <= address <= 0xFF:
+            _octet("control", control)  # (raises, naming the field)
+            _octet("address", address)
+        body = bytes((control, address)) + bytes(frame.extension)
+        return b"".join((_SHORT_START, body, bytes((sum(body) & 0xFF, END))))
     if isinstance(frame, LongFrame):
         body = bytes([_octet("control", frame.control), _octet("address", frame.address)])
         body += bytes(frame.data)
@@ -204,11 +210,17 @@ class FrameDecoder:
     def feed(self, data: bytes, now: float) -> list[Frame | FrameError]:
         """Bytes received at time ``now`` (seconds, any monotonic origin); returns the frames
         and errors they complete, in order.  Never raises on any input."""
-        out: list[Frame | FrameError] = list(self.expire(now))
-        if not data:
-            return out
-        work = bytes(self._buf) + bytes(data)
-        self._buf.clear()
+        if self._buf:
+            out: list[Frame | FrameError] = list(self.expire(now))
+            if not data:
+                return out
+            work = bytes(self._buf) + bytes(data)
+            self._buf.clear()
+        else:  # nothing pending (a host's whole frame): no copies
+            out = []
+            if not data:
+                return out
+            work = data if type(data) is bytes else bytes(data)
         self._last = now
         starts = self._starts
         i = 0

@@ -56,10 +56,16 @@ class Gms96Face(Face):
             write=port.send,
         )
         model.listen("power_on", self.link.reset)
+        self._settings: SerialSettings | None = None
 
     @property
     def serial_settings(self) -> SerialSettings:
-        return SerialSettings(self.model.dil.baud, 8, "E", 1)
+        """8E1 at the DIL switches' rate; the same object while the rate stands, so that the line
+        compares the host's settings with it once, not at every chunk."""
+        settings, baud = self._settings, self.model.dil.baud
+        if settings is None or settings.baudrate != baud:
+            settings = self._settings = SerialSettings(baud, 8, "E", 1)
+        return settings
 
     def close(self) -> None:
         self.link.close()

@@ -104,7 +104,7 @@ class Link:
     # -- input ----------------------------------------------------------------------------------
     def feed(self, data: bytes) -> None:
         now = self.clock.now()
-        if self.silent:
+        if self.card.silent:
             self.decoder.reset()  # the frame is lost
             return
         if self.error_hold and data:
@@ -141,7 +141,7 @@ class Link:
             if item.reason != "timeout" and self.options.error_line_idle:
                 self.error_hold = True
             return
-        if self.silent:
+        if self.card.silent:
             return
         if isinstance(item, codec.ShortFrame):
             self._short(item)

@@ -83,6 +83,17 @@ class Answers:
             return f"{target.text}={self.access.format_value(number, self.operands.operand_value(target))}"
         return f"{target.text}={int(self.operands.operand_value(target))}"
 
+    def parameter_text(self, target: st.Address, number: int) -> str:
+        """What :meth:`query_text` answers for a parameter asked by number or alias (``P``,
+        ``alias``), its number already known (a host's poll, parsed once)."""
+        if number == 1 and self.params.target_address == "*":
+            return f"{target.text}=*"
+        access = self.access
+        value = access.param_value(number)
+        if value == "*":
+            raise SersError(19)  # as Operands.parameter: Z=* names a broadcast, not a number
+        return f"{target.text}={access.format_value(number, value)}"
+
     def list_parameters(self, arg: str) -> list[str]:
         """LISTP (G-LIST): ``P<n>=<value>`` in ascending order; P1028 bit 4 adds names."""
         numbers = _READABLE

@@ -34,6 +34,14 @@ from devsim.devices.sers.noise import NoiseLines
 
 __all__ = ["SersFace"]
 
+#: An acknowledgement (§4.1) as it leaves, by its text (``ok0`` … ``ok4``, ``pgm``).
+_ACKS: dict[str, bytes] = {}
+
+
+def _ack_bytes(ack: str) -> bytes:
+    data = _ACKS[ack] = b"\n" + ack.encode("latin-1") + b"\n\r"
+    return data
+
 
 class SersFace(Face):
     """The ASCII line protocol of one SERS on a serial line (RS-232, or RS-485 multidrop;
@@ -195,20 +203,34 @@ class SersFace(Face):
         returns False (having done nothing) for any other."""
         model = self.model
         address = poll.address
-        if not self.model.selection(address)[1] or model.program.editing:
+        if not model.selection(address)[1] or model.program.editing:
             return False
-        self.model.note_address(address, True)
+        model.note_address(address, True)
         self.framer.whole_line(poll.length, data[-1])
-        if self.echo:
-            self.send(data)
-        self.line = line = CommandLine()  # (what the query sets off waits for the line end)
-        line.execute = line.reply = True
+        self.line = line = CommandLine(True, True)  # (what the query sets off waits for the line end)
+        mode = model.params.handshake_mode
         try:  # what the statements' progress does with the line's one statement, a query
-            self._out(line, model.answers.query_text(poll.query) + "\n\r")
+            answers = model.answers
+            text = (answers.query_text(poll.query) if poll.number is None
+                    else answers.parameter_text(poll.query.target, poll.number))
+            answer = (text + "\n\r").encode(model.cfg.encoding, errors="replace")
         except SersError as exc:
+            if mode in (0, 1):
+                self.send(data)  # the echo, then the error
             self._error(line, exc.errno, exc.detail)
-        finally:
             model.interpreter.poke()
+            self._reply_end(line)
+            return True
+        model.interpreter.poke()
+        if mode in (0, 1) and not self._spontaneous:  # echo, answer and acknowledgement in one piece
+            ack = model.answers.ack_text()
+            self.send(b"".join((data, answer, _ACKS.get(ack) or _ack_bytes(ack))))
+            self._last_replied = True
+            self.line = None
+            return True
+        if mode in (0, 1):
+            self.send(data)
+        self._put(line, answer)
         self._reply_end(line)
         return True
 
@@ -340,7 +362,8 @@ class SersFace(Face):
             if line.deferred:
                 self.send(bytes(line.deferred))
             if not line.error:
-                self.send(b"\n" + self.model.answers.ack_text().encode("latin-1") + b"\n\r")
+                ack = self.model.answers.ack_text()
+                self.send(_ACKS.get(ack) or _ack_bytes(ack))
         self._last_replied = line.reply
         self.line = None
         self._flush_spontaneous()

@@ -94,6 +94,7 @@ class Poll(msgspec.Struct, frozen=True):
     address: int | str | None
     query: st.Query
     length: int  # characters counted for the line: all but its end
+    number: int | None = None  # the parameter asked, by number or alias (``P11?``, ``V?``); else None
 
 
 @functools.lru_cache(maxsize=1024)
@@ -112,7 +113,17 @@ def poll_line(data: bytes) -> Poll | None:
     result = st.parse(text, True)
     if result.errno is not None or len(result.statements) != 1 or not isinstance(result.statements[0][0], st.Query):
         return None
-    return Poll(address, result.statements[0][0], len(data) - 1)
+    query = result.statements[0][0]
+    number = None
+    if not query.name and query.target.kind in ("P", "alias"):
+        from devsim.devices.sers.access import address_number  # (once per distinct poll: cached)
+        from devsim.devices.sers.errors import SersError
+
+        try:
+            number = address_number(query.target)
+        except (SersError, KeyError):
+            number = None
+    return Poll(address, query, len(data) - 1, number)
 
 
 @functools.lru_cache(maxsize=512)
