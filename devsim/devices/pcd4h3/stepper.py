@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from devsim.core.clock import Clock, Timer
+from devsim.devices.pcd4h3 import batch
 from devsim.devices.pcd4h3.lm628 import Lm628
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
@@ -51,18 +52,10 @@ class ChipStepper:
                 self._epoch, self._samples = now, 0
             return
         due = int((now - self._epoch) / CHIP_SAMPLE + 1e-9)
-        chip = self.chip
         if self._samples >= due:
             return
-        while self._samples < due:
-            before = (chip.actual, chip.profile.position, chip.flags)
-            chip.sample()
-            self._samples += 1
-            if (chip.actual, chip.profile.position, chip.flags) == before and chip.profile.complete \
-                    and abs(chip.motor.velocity) < 1e-3:
-                self._quiet += 1
-            else:
-                self._quiet = 0
+        self._quiet = batch.run(self.chip, due - self._samples, self._quiet)
+        self._samples = due
         if self.on_batch is not None:
             self.on_batch()
 
