@@ -144,9 +144,9 @@ def test_velocity_mode_both_ways_and_a_stop() -> None:
 
 def test_parameters_changed_mid_move() -> None:
     script: Script = {0: move(80_000), 1_000: [ltrj(0x000A, 3_000_000, 80_000), cmd("STT")],
-                      2_500: [cmd("LFIL", 0x000A, 60, 600), cmd("UDF")], 3_000: [cmd("DFH")],
+                      2_500: [cmd("LFIL", 0x000E, 60, 0, 600), cmd("UDF")], 3_000: [cmd("DFH")],
                       4_000: [cmd("PORT8")], 4_200: [ltrj(0x0003, -10_000), cmd("STT")]}
-    check({}, script, 12_000, LENGTHS)
+    check({"pid": (40, 3, 400, 900, 2)}, script, 12_000, LENGTHS)
 
 
 def test_end_stops_a_load_and_a_blocked_motor() -> None:

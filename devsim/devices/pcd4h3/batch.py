@@ -25,7 +25,6 @@ STILL = 1e-3  # counts/s: a motor slower than this stands (for the settled count
 ONE = 1 << 16
 I16_LOW, I16_HIGH = -(1 << 15), (1 << 15) - 1
 I24_LOW, I24_HIGH = -(1 << 23), (1 << 23) - 1
-I32_LOW, I32_HIGH = -(1 << 31), (1 << 31) - 1
 
 
 def _quiet_after(chip: Lm628, before: tuple[int, int, int], quiet: int) -> int:
@@ -43,6 +42,21 @@ def run_reference(chip: Lm628, count: int, quiet: int) -> int:
         chip.sample()
         quiet = _quiet_after(chip, before, quiet)
     return quiet
+
+
+def _segment(raw: int, home: int) -> tuple[int, int]:
+    """The raw counts in which the position (raw − home) does not wrap around (§5.7)."""
+    low = ((raw - home + POSITION_RANGE) >> 31 << 31) + home - POSITION_RANGE
+    return low, low + (1 << 31)
+
+
+def _cruise(target: int, position: int, velocity: int, direction: int, acceleration: int) -> int:
+    """Samples from ``position`` in which a position-mode profile at its top velocity only adds
+    it: the remaining distance stays above both the braking distance and one step."""
+    speed = abs(velocity)
+    braking = speed * speed // (2 * acceleration) + speed // 2 if acceleration else 0
+    margin = (target - position) * direction - max(braking, speed)
+    return (margin - 1) // speed + 1 if margin > 0 else 0
 
 
 def _fast(chip: Lm628) -> bool:
@@ -75,7 +89,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
     kp, ki, kd, il, ds = c.kp, c.ki, c.kd, c.il, c.ds
     limit = (il * 256 + ki - 1) // ki if ki else 1 << 23
     error_sum, derivative, previous, countdown = filt.error_sum, filt.derivative, filt._previous, filt._countdown
-    output, integral = filt.output, filt.integral
+    output, integral = filt.output, filt.integral if ki else 0  # the term is 0 from the first sample
     twelve = filt.dac_bits == 12
     # the motor
     if motor._decay[0] != CHIP_SAMPLE:
@@ -89,20 +103,26 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
     flags, on_target = chip.flags, chip.on_target
     raw = chip._raw
     seen = floor(sign * x)  # the encoder before the first sample (the stepper's look)
+    segment = _segment(raw, home)
+    bounded = low > -math.inf or high < math.inf
     chip.udf_sample = False
     done = 0
+    cruise = 0  # samples ahead in which the generator only adds its velocity
     stopped = False
     while done < count:
         done += 1
         before_actual, before_p, before_flags = seen, p, flags
         before = raw
         # -- profile generator (Profile.sample) --
-        if not complete:
+        if cruise:
+            cruise -= 1
+            p += v
+        elif not complete:
             if stopping:
                 if v < 0:
-                    v = min(0, v + a)
+                    v = v + a if v + a < 0 else 0
                 elif v > 0:
-                    v = max(0, v - a)
+                    v = v - a if v - a > 0 else 0
                 if v == 0:
                     stopping, complete = False, True
                     target = p
@@ -110,10 +130,12 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
             elif vmode:
                 goal = top if forward else -top
                 if v < goal:
-                    v = min(goal, v + a)
+                    v = v + a if v + a < goal else goal
                 elif v > goal:
-                    v = max(goal, v - a)
+                    v = v - a if v - a > goal else goal
                 p += v
+                if v == goal:
+                    cruise = count  # held until a command (none comes inside this pass)
             else:
                 remaining = target - p
                 if remaining == 0 and v == 0:
@@ -123,32 +145,34 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
                     v0 = v
                     if v * direction < 0:
                         if v < 0:
-                            v = min(0, v + a)
+                            v = v + a if v + a < 0 else 0
                         elif v > 0:
-                            v = max(0, v - a)
+                            v = v - a if v - a > 0 else 0
                     else:
                         speed = abs(v)
                         braking = speed * speed // (2 * a) + speed // 2 if a else 0
                         if abs(remaining) <= braking:
                             least = min(a, abs(remaining)) * direction if a else 0
                             if v < 0:
-                                v = min(0, v + a)
+                                v = v + a if v + a < 0 else 0
                             elif v > 0:
-                                v = max(0, v - a)
+                                v = v - a if v - a > 0 else 0
                             if least and abs(v) < abs(least):
                                 v = least
                         else:
                             goal = top * direction
                             if v < goal:
-                                v = min(goal, v + a)
+                                v = v + a if v + a < goal else goal
                             elif v > goal:
-                                v = max(goal, v - a)
+                                v = v - a if v - a > goal else goal
                     if v and (target - (p + v)) * direction <= 0 and v0 * direction >= 0:
                         p, v, complete = target, 0, True
                     elif v == 0 and abs(remaining) < ONE:
                         p, complete = target, True
                     else:
                         p += v
+                        if v and v == top * direction:
+                            cruise = _cruise(target, p, v, direction, a)
             if complete:
                 flags |= COMPLETE
                 on_target = True
@@ -159,8 +183,9 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
         s = error_sum + e
         s = I24_LOW if s < I24_LOW else I24_HIGH if s > I24_HIGH else s
         error_sum = -limit if s < -limit else limit if s > limit else s
-        term = ki * (int(error_sum / 256))
-        integral = -il if term < -il else il if term > il else term
+        if ki:
+            term = ki * (int(error_sum / 256))
+            integral = -il if term < -il else il if term > il else term
         if countdown == 0:
             derivative = e - previous
             previous = e
@@ -174,25 +199,22 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
         goal_speed = kv * (volts - load)
         x += speed_now * tau * gained + goal_speed * travelled
         speed_now = speed_now * kept + goal_speed * gained
-        if not low <= x <= high:
+        if bounded and not low <= x <= high:
             x = min(high, max(low, x))
             speed_now = 0.0
-        # -- encoder and checks --
+        # -- encoder and checks (Lm628._moved) --
         raw = floor(sign * x)
-        if before != raw:
-            if watch_moves:
-                chip.flags = flags
-                chip._moved(before, raw)
-                flags = chip.flags
-                watch_moves = chip.breakpoint is not None or (chip.index_armed and chip.index_period)
-            elif (before - home + POSITION_RANGE) >> 31 != (raw - home + POSITION_RANGE) >> 31:
+        if not segment[0] <= raw < segment[1]:
+            if not watch_moves:
                 flags |= WRAPAROUND
-        err = desired - (raw - home)
-        if err < I32_LOW:
-            err = I32_LOW
-        elif err > I32_HIGH:
-            err = I32_HIGH
-        if abs(err) > threshold:
+            segment = _segment(raw, home)
+        if watch_moves and before != raw:
+            chip.flags = flags
+            chip._moved(before, raw)
+            flags = chip.flags
+            watch_moves = chip.breakpoint is not None or (chip.index_armed and chip.index_period)
+        err = desired - (raw - home)  # |err| > threshold ≤ 7FFFh, saturated to 32 bits or not
+        if err > threshold or err < -threshold:
             flags |= POSITION_ERROR
             if stop_on_error:
                 stopped = True
