@@ -84,6 +84,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
     # the profile generator
     p, v, a, top, target = profile.position, profile.velocity, profile.acceleration, profile.top, profile.target
     vmode, forward, stopping, complete = profile.velocity_mode, profile.forward, profile.stopping, profile.complete
+    twice_a = 2 * a
     # the filter
     c = filt.working
     kp, ki, kd, il, ds = c.kp, c.ki, c.kd, c.il, c.ds
@@ -149,10 +150,10 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
                         elif v > 0:
                             v = v - a if v - a > 0 else 0
                     else:
-                        speed = abs(v)
-                        braking = speed * speed // (2 * a) + speed // 2 if a else 0
-                        if abs(remaining) <= braking:
-                            least = min(a, abs(remaining)) * direction if a else 0
+                        speed, distance = v * direction, remaining * direction  # |v|, |remaining|
+                        braking = speed * speed // twice_a + speed // 2 if a else 0
+                        if distance <= braking:
+                            least = (a if a < distance else distance) * direction if a else 0
                             if v < 0:
                                 v = v + a if v + a < 0 else 0
                             elif v > 0:
