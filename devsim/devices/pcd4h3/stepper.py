@@ -3,9 +3,10 @@ uses no CPU): the chip's samples are computed in batches, up to the present, whe
 looks (:meth:`ChipStepper.catch_up`) and by a periodic tick while anything moves; once the
 trajectory is complete and the motor stands still on its position the ticks stop.
 
-A batch computes every sample (341.333 µs apart) in order, so the loop's behaviour is the same
-however the batches fall; only the moment at which a flag becomes visible is rounded to the next
-look or tick.
+A batch computes every sample (341.333 µs apart) in order, in one pass
+(:func:`~devsim.devices.pcd4h3.batch.run`, bit-exact with :meth:`Lm628.sample` one at a time), so
+the loop's behaviour is the same however the batches fall; only the moment at which a flag
+becomes visible is rounded to the next look or tick.
 """
 
 from __future__ import annotations
