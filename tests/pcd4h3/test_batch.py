@@ -165,7 +165,7 @@ def test_a_motor_without_lag() -> None:
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(target=st.integers(-60_000, 60_000), velocity=st.integers(1, 4_000_000), acceleration=st.integers(1, 3_000),
+@given(target=st.integers(-60_000, 60_000), velocity=st.integers(1, 4_000_000), acceleration=st.one_of(st.integers(1, 3_000), st.integers(3_000, 1 << 21)),
        kp=st.integers(1, 200), ki=st.integers(0, 20), kd=st.integers(0, 2_000), il=st.integers(0, 0x7FFF),
        ds=st.integers(0, 7), port=st.sampled_from([8, 12]), tau=st.sampled_from([0.0, 0.002, 0.020, 0.3]),
        kv=st.sampled_from([500.0, 10_000.0, 80_000.0]), threshold=st.integers(0, 0x7FFF),
@@ -179,3 +179,11 @@ def test_random_moves(target: int, velocity: int, acceleration: int, kp: int, ki
     script: Script = {0: [error, cmd("SBPA", breakpoint), cmd("SIP"), *move(target, velocity, acceleration)],
                       1_200: [ltrj(0x0008, max(1, velocity // 2)), cmd("STT")]}
     check(spec, script, 2_500, lengths)
+
+
+def test_the_last_steps_of_a_steep_braking() -> None:
+    """An acceleration above one count per sample²: the generator keeps at least the remaining
+    distance's step while braking (so the last sub-count steps arrive)."""
+    for acceleration in (70_000, 200_000, 1 << 20):
+        check({"pid": (60, 0, 500, 0, 0)}, {0: move(3_000, 6_000_000, acceleration),
+                                           600: move(-1_234, 900_000, acceleration)}, 1_500, LENGTHS)
