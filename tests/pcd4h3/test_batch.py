@@ -187,3 +187,25 @@ def test_the_last_steps_of_a_steep_braking() -> None:
     for acceleration in (70_000, 200_000, 1 << 20):
         check({"pid": (60, 0, 500, 0, 0)}, {0: move(3_000, 6_000_000, acceleration),
                                            600: move(-1_234, 900_000, acceleration)}, 1_500, LENGTHS)
+
+
+def test_a_pcd_whose_axis_stands_has_no_timer() -> None:
+    """An idle axis uses no CPU: once the move has ended and the motor stands, neither the PLC
+    cycle nor the chip has a timer; while it moves the PLC cycles."""
+    from devsim.core.clock import VirtualClock
+    from devsim.devices.pcd4h3.model import Pcd4
+
+    clock = VirtualClock()
+    pcd = Pcd4(clock=clock, config={"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 1}})
+    clock.advance(1.0)
+    assert clock.next_event() is None
+    axis = pcd.axes[0]
+    axis.registers.load("DestP", 3)
+    axis.set_flag("FLdDA", 1)
+    axis.set_flag("FStart", 1)
+    pcd.wake()
+    clock.advance(0.5)
+    assert clock.next_event() is not None and not pcd.drives[0].settled
+    assert clock.run_until(lambda: clock.next_event() is None, 60.0)
+    assert pcd.drives[0].settled and pcd.drives[0].chip.actual == 300  # 100 counts per unit (MCFac)
+    pcd.close()
