@@ -6,8 +6,8 @@ Each phase is a fresh child process that measures its own CPU time (user + syste
 
 * ``axis``: a PCD4 (the model: PLC cycle, AxHndlg, the LM628 with its motor) whose axis 1 runs
   FForw (a move towards 3FFFFFFFh that outlasts the phase) at ``--velocity`` user units/s, after
-  a ramp at ``--accel`` user units/s² that ends within the settling time (the manual's example
-  values: 1,000 counts per unit, so 500 units/s are 5.9 counts per sample);
+  a ramp at ``--accel`` user units/s² that ends within the settling time (the example's machine
+  factor, 100 counts per unit: 500 units/s are 50,000 counts/s, 17 counts per sample);
 * ``timer``: a bare asyncio loop whose one timer fires every PLC cycle (10 ms), doing nothing:
   the cost of being woken as often as the moving PLC is;
 * ``idle``: the same PCD4 with the axis standing (settled: no timer at all).
