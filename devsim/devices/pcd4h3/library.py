@@ -58,6 +58,9 @@ class H3Axis:
                  rsigb_bit12_inverted: bool = False) -> None:
         self.axis, self.layout, self.chip = axis, layout, chip
         self.registers, self.flags = registers, flags
+        #: (symbol, flag address) of the command flags in AxHndlg's order, and the status flags' addresses
+        self.command_flags = tuple((symbol, layout.flag(axis, symbol)) for symbol in layout.command_order)
+        self.status_flags = tuple(layout.flag(axis, symbol) for symbol in STATUS_FLAGS)
         self.on_comers = on_comers
         self.rsigb_bit12_inverted = rsigb_bit12_inverted
         self.mode = 0  # LTRJ bits 11/12 from the last FSelOM
@@ -151,15 +154,16 @@ class H3Axis:
         function its §10.1 time, each repeat the time again)."""
         elapsed = 0.5
         self.ran = []
-        for symbol in self.layout.command_order:
-            if self.flags.get(self.layout.flag(self.axis, symbol), 0):
+        flags = self.flags
+        for symbol, address in self.command_flags:
+            if flags.get(address, 0):
                 if before is not None:
                     before(elapsed)
                 self.ran.append(symbol)
                 try:
                     attempts = self._run(symbol)
                 finally:
-                    self.set_flag(symbol, 0)  # in any case (§3.7), even when ComErS halts the PCD
+                    flags[address] = 0  # in any case (§3.7), even when ComErS halts the PCD
                 elapsed += TIMES[symbol] * attempts
         self._status()
         return elapsed
@@ -177,9 +181,9 @@ class H3Axis:
         return self._attempts
 
     def _status(self) -> None:
-        status = self.chip.status
-        for bit, symbol in enumerate(STATUS_FLAGS, start=2):
-            self.set_flag(symbol, status >> bit & 1)
+        status, flags = self.chip.status, self.flags
+        for bit, address in enumerate(self.status_flags, start=2):
+            flags[address] = status >> bit & 1
 
     # -- conversions (§3.4, §5.1) ------------------------------------------------------------------
     def _refuse(self) -> None:

@@ -203,8 +203,9 @@ class Pcd4(Model):
         for symbol in axis.ran:
             if symbol in MOTION_FUNCTIONS:
                 self.record_event(f"axis{axis.axis}.{symbol}")
-        for symbol in STATUS_FLAGS:
-            value = axis.flag(symbol)
+        flags = self.flags
+        for symbol, address in zip(STATUS_FLAGS, axis.status_flags, strict=True):
+            value = flags.get(address, 0)
             key = (axis.axis, symbol)
             if value and not self._seen.get(key):
                 self.record_event(f"axis{axis.axis}.{symbol}")
@@ -219,8 +220,8 @@ class Pcd4(Model):
             return False
         if self.sequence is not None and (self.sequence.busy or self.timers.running()):
             return True
-        return any(self.flags.get(self.layout.flag(axis.axis, symbol), 0)
-                   for axis in self.axes for symbol in self.layout.command_order)
+        flags = self.flags
+        return any(flags.get(address, 0) for axis in self.axes for _, address in axis.command_flags)
 
     def _display(self) -> None:
         for n, view in self.displayed.items():

@@ -3,9 +3,10 @@ uses no CPU): the chip's samples are computed in batches, up to the present, whe
 looks (:meth:`ChipStepper.catch_up`) and by a periodic tick while anything moves; once the
 trajectory is complete and the motor stands still on its position the ticks stop.
 
-A batch computes every sample (341.333 µs apart) in order, so the loop's behaviour is the same
-however the batches fall; only the moment at which a flag becomes visible is rounded to the next
-look or tick.
+A batch computes every sample (341.333 µs apart) in order, in one pass
+(:func:`~devsim.devices.pcd4h3.batch.run`, bit-exact with :meth:`Lm628.sample` one at a time), so
+the loop's behaviour is the same however the batches fall; only the moment at which a flag
+becomes visible is rounded to the next look or tick.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from devsim.core.clock import Clock, Timer
+from devsim.devices.pcd4h3 import batch
 from devsim.devices.pcd4h3.lm628 import Lm628
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
@@ -51,18 +53,10 @@ class ChipStepper:
                 self._epoch, self._samples = now, 0
             return
         due = int((now - self._epoch) / CHIP_SAMPLE + 1e-9)
-        chip = self.chip
         if self._samples >= due:
             return
-        while self._samples < due:
-            before = (chip.actual, chip.profile.position, chip.flags)
-            chip.sample()
-            self._samples += 1
-            if (chip.actual, chip.profile.position, chip.flags) == before and chip.profile.complete \
-                    and abs(chip.motor.velocity) < 1e-3:
-                self._quiet += 1
-            else:
-                self._quiet = 0
+        self._quiet = batch.run(self.chip, due - self._samples, self._quiet)
+        self._samples = due
         if self.on_batch is not None:
             self.on_batch()
 

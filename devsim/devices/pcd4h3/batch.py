@@ -1,0 +1,238 @@
+"""A run of LM628 samples in one pass (spec pcd4h3.md §5.1–§5.9; issue 31, "sampled loops only
+while they matter"): what :meth:`~devsim.devices.pcd4h3.lm628.Lm628.sample` does ``count`` times,
+with the chip's working state held in local variables between the events that need the objects.
+
+Bit-exact with the sample-by-sample reference: the same integer arithmetic of the profile
+generator and the filter, the same floating-point operations of the motor in the same order
+(``tests/pcd4h3/test_batch.py`` compares both at every sample).  The pass covers a motor that is
+on, free and has a time constant; anything else (motor off, a blocked motor, τm = 0) and the
+sample after a position-error stop take the reference :meth:`Lm628.sample`.  It also counts the
+samples in which nothing changed, as :class:`~devsim.devices.pcd4h3.stepper.ChipStepper` decides
+that the chip has settled.
+"""
+
+from __future__ import annotations
+
+import math
+
+from devsim.devices.pcd4h3.lm628 import COMPLETE, POSITION_ERROR, POSITION_RANGE, WRAPAROUND, Lm628, wrap
+from devsim.devices.pcd4h3.pid import _lag_terms
+from devsim.devices.pcd4h3.units import CHIP_SAMPLE
+
+__all__ = ["STILL", "run", "run_reference"]
+
+STILL = 1e-3  # counts/s: a motor slower than this stands (for the settled count)
+ONE = 1 << 16
+I16_LOW, I16_HIGH = -(1 << 15), (1 << 15) - 1
+I24_LOW, I24_HIGH = -(1 << 23), (1 << 23) - 1
+
+
+def _quiet_after(chip: Lm628, before: tuple[int, int, int], quiet: int) -> int:
+    if (chip.actual, chip.profile.position, chip.flags) == before and chip.profile.complete \
+            and abs(chip.motor.velocity) < STILL:
+        return quiet + 1
+    return 0
+
+
+def run_reference(chip: Lm628, count: int, quiet: int) -> int:
+    """``count`` samples by :meth:`Lm628.sample`, one at a time; returns the samples in a row
+    without any change (``quiet`` before)."""
+    for _ in range(count):
+        before = (chip.actual, chip.profile.position, chip.flags)
+        chip.sample()
+        quiet = _quiet_after(chip, before, quiet)
+    return quiet
+
+
+def _segment(raw: int, home: int) -> tuple[int, int]:
+    """The raw counts in which the position (raw − home) does not wrap around (§5.7)."""
+    low = ((raw - home + POSITION_RANGE) >> 31 << 31) + home - POSITION_RANGE
+    return low, low + (1 << 31)
+
+
+def _cruise(target: int, position: int, velocity: int, direction: int, acceleration: int) -> int:
+    """Samples from ``position`` in which a position-mode profile at its top velocity only adds
+    it: the remaining distance stays above both the braking distance and one step."""
+    speed = abs(velocity)
+    braking = speed * speed // (2 * acceleration) + speed // 2 if acceleration else 0
+    margin = (target - position) * direction - max(braking, speed)
+    return (margin - 1) // speed + 1 if margin > 0 else 0
+
+
+def _fast(chip: Lm628) -> bool:
+    motor = chip.motor
+    return not chip.motor_off and not motor.blocked and motor.tau > 0
+
+
+def run(chip: Lm628, count: int, quiet: int) -> int:
+    """``count`` samples of ``chip``, exactly as :func:`run_reference` computes them."""
+    while count > 0:
+        if not _fast(chip):
+            quiet = run_reference(chip, 1, quiet)
+            count -= 1
+            continue
+        done, quiet = _run_fast(chip, count, quiet)
+        count -= done
+    return quiet
+
+
+def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: C901, PLR0912, PLR0915
+    """Samples while the motor is on; returns (samples done, quiet).  Stops early after a
+    sample that switched the motor off (a position error with LPES)."""
+    profile, filt, motor = chip.profile, chip.filter, chip.motor
+    floor = math.floor
+    # the profile generator
+    p, v, a, top, target = profile.position, profile.velocity, profile.acceleration, profile.top, profile.target
+    vmode, forward, stopping, complete = profile.velocity_mode, profile.forward, profile.stopping, profile.complete
+    twice_a = 2 * a
+    # the filter
+    c = filt.working
+    kp, ki, kd, il, ds = c.kp, c.ki, c.kd, c.il, c.ds
+    limit = (il * 256 + ki - 1) // ki if ki else 1 << 23
+    error_sum, derivative, previous, countdown = filt.error_sum, filt.derivative, filt._previous, filt._countdown
+    output, integral = filt.output, filt.integral if ki else 0  # the term is 0 from the first sample
+    twelve = filt.dac_bits == 12
+    # the motor
+    if motor._decay[0] != CHIP_SAMPLE:
+        motor._decay = (CHIP_SAMPLE, *_lag_terms(CHIP_SAMPLE, motor.tau))
+    _, kept, gained, travelled = motor._decay
+    kv, tau, load, low, high = motor.kv, motor.tau, motor.load, motor.low, motor.high
+    x, speed_now = motor.position, motor.velocity
+    # encoder and checks
+    sign, home, threshold, stop_on_error = chip.encoder_sign, chip.home, chip.error_threshold, chip.stop_on_error
+    watch_moves = chip.breakpoint is not None or (chip.index_armed and chip.index_period)
+    flags, on_target = chip.flags, chip.on_target
+    raw = chip._raw
+    seen = floor(sign * x)  # the encoder before the first sample (the stepper's look)
+    segment = _segment(raw, home)
+    bounded = low > -math.inf or high < math.inf
+    chip.udf_sample = False
+    done = 0
+    cruise = 0  # samples ahead in which the generator only adds its velocity
+    stopped = False
+    while done < count:
+        done += 1
+        before_actual, before_p, before_flags = seen, p, flags
+        before = raw
+        # -- profile generator (Profile.sample) --
+        if cruise:
+            cruise -= 1
+            p += v
+        elif not complete:
+            if stopping:
+                if v < 0:
+                    v = v + a if v + a < 0 else 0
+                elif v > 0:
+                    v = v - a if v - a > 0 else 0
+                if v == 0:
+                    stopping, complete = False, True
+                    target = p
+                p += v
+            elif vmode:
+                goal = top if forward else -top
+                if v < goal:
+                    v = v + a if v + a < goal else goal
+                elif v > goal:
+                    v = v - a if v - a > goal else goal
+                p += v
+                if v == goal:
+                    cruise = count  # held until a command (none comes inside this pass)
+            else:
+                remaining = target - p
+                if remaining == 0 and v == 0:
+                    complete = True
+                else:
+                    direction = 1 if remaining > 0 else -1
+                    v0 = v
+                    if v * direction < 0:
+                        if v < 0:
+                            v = v + a if v + a < 0 else 0
+                        elif v > 0:
+                            v = v - a if v - a > 0 else 0
+                    else:
+                        speed, distance = v * direction, remaining * direction  # |v|, |remaining|
+                        braking = speed * speed // twice_a + speed // 2 if a else 0
+                        if distance <= braking:
+                            least = (a if a < distance else distance) * direction if a else 0
+                            if v < 0:
+                                v = v + a if v + a < 0 else 0
+                            elif v > 0:
+                                v = v - a if v - a > 0 else 0
+                            if least and abs(v) < abs(least):
+                                v = least
+                        else:
+                            goal = top * direction
+                            if v < goal:
+                                v = v + a if v + a < goal else goal
+                            elif v > goal:
+                                v = v - a if v - a > goal else goal
+                    if v and (target - (p + v)) * direction <= 0 and v0 * direction >= 0:
+                        p, v, complete = target, 0, True
+                    elif v == 0 and abs(remaining) < ONE:
+                        p, complete = target, True
+                    else:
+                        p += v
+                        if v and v == top * direction:
+                            cruise = _cruise(target, p, v, direction, a)
+            if complete:
+                flags |= COMPLETE
+                on_target = True
+        desired = p >> 16
+        # -- filter (Filter.sample) --
+        e = desired - (seen - home)
+        e = I16_LOW if e < I16_LOW else I16_HIGH if e > I16_HIGH else e
+        s = error_sum + e
+        s = I24_LOW if s < I24_LOW else I24_HIGH if s > I24_HIGH else s
+        error_sum = -limit if s < -limit else limit if s > limit else s
+        if ki:
+            term = ki * (int(error_sum / 256))
+            integral = -il if term < -il else il if term > il else term
+        if countdown == 0:
+            derivative = e - previous
+            previous = e
+            countdown = ds
+        else:
+            countdown -= 1
+        u = kp * e + integral + kd * derivative
+        output = I16_LOW if u < I16_LOW else I16_HIGH if u > I16_HIGH else u
+        volts = (output >> 4) / 2048 * 10.0 if twelve else (output >> 8) / 128 * 10.0
+        # -- motor (Motor.step) --
+        goal_speed = kv * (volts - load)
+        x += speed_now * tau * gained + goal_speed * travelled
+        speed_now = speed_now * kept + goal_speed * gained
+        if bounded and not low <= x <= high:
+            x = min(high, max(low, x))
+            speed_now = 0.0
+        # -- encoder and checks (Lm628._moved) --
+        raw = floor(sign * x)
+        if not segment[0] <= raw < segment[1]:
+            if not watch_moves:
+                flags |= WRAPAROUND
+            segment = _segment(raw, home)
+        if watch_moves and before != raw:
+            chip.flags = flags
+            chip._moved(before, raw)
+            flags = chip.flags
+            watch_moves = chip.breakpoint is not None or (chip.index_armed and chip.index_period)
+        err = desired - (raw - home)  # |err| > threshold ≤ 7FFFh, saturated to 32 bits or not
+        if err > threshold or err < -threshold:
+            flags |= POSITION_ERROR
+            if stop_on_error:
+                stopped = True
+        seen = raw
+        if complete and p == before_p and flags == before_flags and abs(speed_now) < STILL \
+                and wrap(raw - home) == wrap(before_actual - home):
+            quiet += 1
+        else:
+            quiet = 0
+        if stopped:
+            break
+    profile.position, profile.velocity, profile.target = p, v, target
+    profile.stopping, profile.complete = stopping, complete
+    filt.error_sum, filt.derivative, filt._previous, filt._countdown = error_sum, derivative, previous, countdown
+    filt.output, filt.integral = output, integral
+    motor.position, motor.velocity = x, speed_now
+    chip.flags, chip.on_target, chip._raw = flags, on_target, raw
+    if stopped:
+        chip.motor_off = True
+    return done, quiet
