@@ -113,7 +113,7 @@ class TcpTransport(Transport):
         self._paused: asyncio.TimerHandle | None = None
         self._endpoint: Endpoint | None = None
         self._active: _Session | None = None
-        self._waiting: deque[_Session] = deque()
+        self._waiting: deque[_Session] | tuple[()] = ()  # a deque when a second client waits
 
     @property
     def url(self) -> str:
@@ -207,7 +207,7 @@ class TcpTransport(Transport):
             self._loop.remove_reader(server.fileno())
         server.close()
         sessions = ([self._active] if self._active else []) + list(self._waiting)
-        self._waiting.clear()
+        self._waiting = ()
         for session in sessions:
             if session.transport is not None:
                 session.transport.abort()
@@ -226,6 +226,8 @@ class TcpTransport(Transport):
         else:
             assert session.transport is not None
             session.transport.pause_reading()
+            if not self._waiting:
+                self._waiting = deque()
             self._waiting.append(session)
 
     def _activate(self, session: _Session) -> None:
@@ -286,15 +288,14 @@ class TcpTransport(Transport):
         if self._active is session:
             self._deactivate(session)
             while self._waiting and self._active is None:
-                nxt = self._waiting.popleft()
+                nxt = self._waiting.popleft()  # type: ignore[union-attr]
                 if nxt.closed:
                     continue
                 self._activate(nxt)
                 if nxt.transport is not None:
                     nxt.transport.resume_reading()
-        else:
-            with contextlib.suppress(ValueError):
-                self._waiting.remove(session)
+        elif session in self._waiting:
+            self._waiting.remove(session)  # type: ignore[union-attr]
 
     # -- hooks for protocol variants (RFC 2217) ---------------------------------------------
     def _session_started(self, session: _Session, endpoint: Endpoint) -> None:

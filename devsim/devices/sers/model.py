@@ -135,6 +135,10 @@ class SersDrive(Model):
         self.wiring = MotorWiring(self.axis, signals, self.cfg.axis)
         self._power_on()
 
+    def _poke(self, *_changed: Any) -> None:
+        """A signal changed: a parked WAIT may go on."""
+        self.interpreter.poke()
+
     def _cfg(self) -> Any:
         """The configuration as it is now (a DIP switch may change it)."""
         return self.cfg
@@ -159,8 +163,9 @@ class SersDrive(Model):
         s.subscribe("heatsink_temperature", lambda *_: supply.check_temperature())
         s.subscribe("short_circuit", lambda *_: supply.check_short())
         s.subscribe("stall", lambda _name, _old, new: self.motion.stall(bool(new)))
+        poke = self._poke  # one callable for every signal, not one closure per signal
         for name in s.names():
-            s.subscribe(name, lambda *_: self.interpreter.poke())
+            s.subscribe(name, poke)
 
     # ======================================================================================
     # power
