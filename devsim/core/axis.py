@@ -324,7 +324,8 @@ class Axis:
         for seg in self._plan:
             if seg.t0 >= now:
                 break
-            history.append(msgspec.structs.replace(seg, t1=min(seg.t1, now)))
+            # a segment already over is kept as it is (frozen); the running one ends now
+            history.append(seg if seg.t1 <= now else msgspec.structs.replace(seg, t1=now))
         end = self._plan_end()
         if end < now:
             history.append(Segment(end, now, self._rest, 0.0, 0.0))
