@@ -153,12 +153,13 @@ class SersDrive(Model):
         s.signal("supply_voltage").value = float(nominal)
         s.signal("heatsink_temperature").value = float(self.cfg.heatsink_temperature)
         inputs, supply = self.inputs, self.supply
+        on_limit, on_digital_input = inputs.on_limit, inputs.on_digital_input  # one bound method each
         for name in ("limit_left", "limit_right"):
-            s.subscribe(name, inputs.on_limit)
+            s.subscribe(name, on_limit)
         s.subscribe("stop", inputs.on_stop)
         s.subscribe("reference", inputs.on_reference)
         for n in range(1, 9):
-            s.subscribe(f"I{n}", inputs.on_digital_input)
+            s.subscribe(f"I{n}", on_digital_input)
         s.subscribe("supply_voltage", lambda *_: supply.check_supply())
         s.subscribe("heatsink_temperature", lambda *_: supply.check_temperature())
         s.subscribe("short_circuit", lambda *_: supply.check_short())
