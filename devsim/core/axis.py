@@ -29,7 +29,6 @@ and never lost because a re-plan happened at the crossing instant.
 from __future__ import annotations
 
 import math
-from collections import deque
 from collections.abc import Callable
 from typing import Any
 
@@ -89,7 +88,7 @@ class Axis:
         self._plan: list[Segment] = []
         self._rest = float(position)  # where the plan ends (or where the idle axis stands)
         self._idle_since = clock.now()
-        self._history: deque[Segment] = deque(maxlen=HISTORY)
+        self._history: list[Segment] = []  # the last HISTORY segments (a list: no block until used)
         self._watches = Watches(clock)
         self._gen = 0  # bumped by every plan change; stale timers and loops check it
         self._done_timer: Timer | None = None
@@ -321,13 +320,17 @@ class Axis:
     # -- planning machinery --------------------------------------------------------------------
     def _archive(self, now: float) -> None:
         """Keep the part of the old plan that lies in the past, for queries of past instants."""
+        history = self._history
         for seg in self._plan:
             if seg.t0 >= now:
                 break
-            self._history.append(msgspec.structs.replace(seg, t1=min(seg.t1, now)))
+            # a segment already over is kept as it is (frozen); the running one ends now
+            history.append(seg if seg.t1 <= now else msgspec.structs.replace(seg, t1=now))
         end = self._plan_end()
         if end < now:
-            self._history.append(Segment(end, now, self._rest, 0.0, 0.0))
+            history.append(Segment(end, now, self._rest, 0.0, 0.0))
+        if len(history) > HISTORY:
+            del history[: len(history) - HISTORY]
 
     def _cancel_plan(self) -> None:
         if self._done_timer is not None:

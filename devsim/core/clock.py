@@ -137,7 +137,8 @@ class VirtualClock(Clock):
 
     def __init__(self, start: float = 0.0) -> None:
         self._now = start
-        self._heap: list[Timer] = []
+        # (when, sequence, timer): the heap compares tuples in C, not Timer.__lt__ in Python
+        self._heap: list[tuple[float, int, Timer]] = []
         self._seq = itertools.count()
         self._auto_task: asyncio.Task[None] | None = None
         self._listeners: list[Callable[[], None]] = []
@@ -150,29 +151,37 @@ class VirtualClock(Clock):
         return self._now
 
     def call_at(self, when: float, callback: Callable[[], Any]) -> Timer:
-        timer = Timer(max(when, self._now), callback, next(self._seq))
-        heapq.heappush(self._heap, timer)
+        seq = next(self._seq)
+        timer = Timer(max(when, self._now), callback, seq)
+        heapq.heappush(self._heap, (timer.when, seq, timer))
         for listener in self._listeners:
             listener()
         return timer
 
     def next_event(self) -> float | None:
         """Time of the earliest pending timer, or ``None``."""
-        while self._heap and self._heap[0].cancelled:
-            heapq.heappop(self._heap)
-        return self._heap[0].when if self._heap else None
+        heap = self._heap
+        while heap and heap[0][2].cancelled:
+            heapq.heappop(heap)
+        return heap[0][0] if heap else None
 
     def _run_due(self, limit: float) -> int:
+        heap = self._heap
         ran = 0
-        while True:
-            when = self.next_event()
-            if when is None or when > limit:
-                return ran
-            timer = heapq.heappop(self._heap)
-            self._now = max(self._now, timer.when)
+        while heap:
+            when, _seq, timer = heap[0]
+            if timer.cancelled:
+                heapq.heappop(heap)
+                continue
+            if when > limit:
+                break
+            heapq.heappop(heap)
+            if when > self._now:
+                self._now = when
             timer.cancelled = True
             timer.callback()
             ran += 1
+        return ran
 
     def advance(self, seconds: float) -> int:
         """Move time forward by ``seconds``, running due timers; returns how many ran."""

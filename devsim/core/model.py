@@ -50,8 +50,10 @@ class Model:
         return lambda: listeners.remove(listener) if listener in listeners else None
 
     def announce(self, topic: str, *args: Any) -> None:
-        for listener in list(self._listeners.get(topic, ())):
-            listener(*args)
+        listeners = self._listeners.get(topic)
+        if listeners:  # (most topics of most devices have nobody listening)
+            for listener in list(listeners):
+                listener(*args)
 
     def booted(self) -> None:
         """The power-on initialisation has finished: the device listens (topic ``ready``)."""

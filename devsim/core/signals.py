@@ -24,7 +24,9 @@ class Signal(msgspec.Struct):
     kind: SignalKind
     value: Any
     doc: str = ""
-    listeners: list[Listener] = msgspec.field(default_factory=list)
+    #: A tuple, made anew by each (un)subscription: most signals of a plant's thousand devices
+    #: share the empty one, and ``set`` iterates the listeners as they were when it began.
+    listeners: tuple[Listener, ...] = ()
 
 
 class SignalBank:
@@ -62,14 +64,20 @@ class SignalBank:
         if old == value:
             return False
         sig.value = value
-        for listener in list(sig.listeners):
+        for listener in sig.listeners:
             listener(name, old, value)
         return True
 
     def subscribe(self, name: str, listener: Listener) -> Callable[[], None]:
         sig = self.signal(name)
-        sig.listeners.append(listener)
-        return lambda: sig.listeners.remove(listener)
+        sig.listeners = (*sig.listeners, listener)
+
+        def unsubscribe() -> None:
+            listeners = list(sig.listeners)
+            listeners.remove(listener)
+            sig.listeners = tuple(listeners)
+
+        return unsubscribe
 
     def snapshot(self, kind: SignalKind | None = None) -> dict[str, Any]:
         return {n: s.value for n, s in self._signals.items() if kind is None or s.kind == kind}

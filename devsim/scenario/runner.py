@@ -34,6 +34,9 @@ __all__ = ["ScenarioResult", "StepResult", "run_scenario", "run_scenario_async"]
 _IO_GUARD = 5.0
 # While an axis moves, `when` conditions are looked at this often (simulated seconds).
 _POLL = 0.001
+# Virtual time runs from event to event without a turn of the loop while nothing waits for one,
+# but gives the loop a turn at least this often (wall seconds): a monitor on --control is served.
+_QUIET_SPAN = 0.002
 
 
 class StepResult(msgspec.Struct):
@@ -161,6 +164,7 @@ class Runner:
         self._settled: dict[str, tuple[int, int]] = {}  # line-less port → (sent, received) when it settled
         self.traffic: dict[str, _Traffic] = {}
         self.t0 = 0.0
+        self._turned = -_QUIET_SPAN  # wall time of the last drain
 
     # -- time ----------------------------------------------------------------------------------
     @property
@@ -188,6 +192,22 @@ class Runner:
                 if time.monotonic() > deadline:
                     raise _Abort(f"port {name}: {expected - len(host.received)} bytes never arrived at the host")
                 await host.wait_data(0.01)
+        self._turned = time.monotonic()
+
+    def _quiet(self) -> bool:
+        """Virtual time: a drain would change nothing: no callback is ready in the loop, no byte
+        is on its way to a host, and the loop had a turn within ``_QUIET_SPAN``."""
+        if time.monotonic() - self._turned > _QUIET_SPAN or getattr(asyncio.get_running_loop(), "_ready", True):
+            return False
+        for name, host in self.hosts.items():
+            line = self.plant.lines.get(name)
+            if line is None:
+                return False
+            transport = self.plant.transports[name]
+            expected = line.bytes_delivered - getattr(transport, "dropped", 0) - getattr(transport, "pending", 0)
+            if len(host.received) < expected:
+                return False
+        return True
 
     async def _settle(self, host: HostPort, deadline: float) -> None:
         """A port without a line (the Modbus TCP facade, a server in this process): after a send,
@@ -211,7 +231,8 @@ class Runner:
             clock = self.clock
             assert isinstance(clock, VirtualClock)
             while True:
-                await self._drain()
+                if not self._quiet():
+                    await self._drain()
                 if predicate():
                     return True
                 upcoming = clock.next_event()
@@ -237,7 +258,8 @@ class Runner:
             clock = self.clock
             assert isinstance(clock, VirtualClock)
             while True:
-                await self._drain()
+                if not self._quiet():
+                    await self._drain()
                 upcoming = clock.next_event()
                 if upcoming is None or upcoming > when:
                     clock.advance_to(max(when, clock.now()))

@@ -86,7 +86,8 @@ class _Stage:
     def __init__(self, clock: Clock, sink: Callable[[bytes, int], None]) -> None:
         self.clock = clock
         self.sink = sink
-        self.items: deque[tuple[float, bytes, int]] = deque()
+        #: Chunks waiting (a deque made when the first waits: most lines never delay one).
+        self.items: deque[tuple[float, bytes, int]] | tuple[()] = ()
         self.last_due = -math.inf
         self.timer: Timer | None = None
 
@@ -102,7 +103,10 @@ class _Stage:
         if not self.items and due <= self.clock.now() + _EPSILON:
             self.sink(data, chars)
             return
-        self.items.append((due, data, chars))
+        items = self.items
+        if not items:
+            items = self.items = deque()
+        items.append((due, data, chars))
         if self.timer is None:
             self._schedule()
 
@@ -115,7 +119,7 @@ class _Stage:
         out = bytearray()
         chars = 0
         while self.items and self.items[0][0] <= now:
-            _, data, n = self.items.popleft()
+            _, data, n = self.items.popleft()  # type: ignore[union-attr]
             out += data
             chars += n
         if out:
@@ -127,7 +131,7 @@ class _Stage:
         if self.timer is not None:
             self.timer.cancel()
             self.timer = None
-        self.items.clear()
+        self.items = ()
 
 
 # -- the line ---------------------------------------------------------------------------------
@@ -186,7 +190,7 @@ class Line:
         self.bytes_out = 0
         #: bytes handed to the transport for the host (after garbling, faults and pacing)
         self.bytes_delivered = 0
-        self._queue: deque[_Burst] = deque()
+        self._queue: deque[_Burst] | tuple[()] = ()  # a deque while pacing holds bursts
         self._tx_free_at = 0.0
         self._timer: Timer | None = None
         self._faults: list[_Active] = []
@@ -464,7 +468,7 @@ class Line:
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
-        self._queue.clear()
+        self._queue = ()
         self.target.attach(None)
         self._write = None
 
@@ -519,7 +523,10 @@ class Line:
         start = max(now, self._tx_free_at)
         duration = chars * self.device_settings.char_time()
         self._tx_free_at = start + duration
-        self._queue.append(_Burst(sent, start, duration))
+        queue = self._queue
+        if not queue:
+            queue = self._queue = deque()
+        queue.append(_Burst(sent, start, duration))
         if self._timer is None:
             self._schedule()
 
@@ -549,7 +556,7 @@ class Line:
             burst.sent = k
             if k < n:
                 break
-            self._queue.popleft()
+            self._queue.popleft()  # type: ignore[union-attr]
         if out:
             self._deliver(bytes(out))
         if self._queue:

@@ -113,7 +113,7 @@ class TcpTransport(Transport):
         self._paused: asyncio.TimerHandle | None = None
         self._endpoint: Endpoint | None = None
         self._active: _Session | None = None
-        self._waiting: deque[_Session] = deque()
+        self._waiting: deque[_Session] | tuple[()] = ()  # a deque when a second client waits
         #: No protocol variant: the client's bytes go to the endpoint as they are, and back.
         self._plain = type(self)._session_data is TcpTransport._session_data
 
@@ -209,7 +209,7 @@ class TcpTransport(Transport):
             self._loop.remove_reader(server.fileno())
         server.close()
         sessions = ([self._active] if self._active else []) + list(self._waiting)
-        self._waiting.clear()
+        self._waiting = ()
         for session in sessions:
             if session.transport is not None:
                 session.transport.abort()
@@ -228,6 +228,8 @@ class TcpTransport(Transport):
         else:
             assert session.transport is not None
             session.transport.pause_reading()
+            if not self._waiting:
+                self._waiting = deque()
             self._waiting.append(session)
 
     def _activate(self, session: _Session) -> None:
@@ -292,15 +294,14 @@ class TcpTransport(Transport):
         if self._active is session:
             self._deactivate(session)
             while self._waiting and self._active is None:
-                nxt = self._waiting.popleft()
+                nxt = self._waiting.popleft()  # type: ignore[union-attr]
                 if nxt.closed:
                     continue
                 self._activate(nxt)
                 if nxt.transport is not None:
                     nxt.transport.resume_reading()
-        else:
-            with contextlib.suppress(ValueError):
-                self._waiting.remove(session)
+        elif session in self._waiting:
+            self._waiting.remove(session)  # type: ignore[union-attr]
 
     # -- hooks for protocol variants (RFC 2217) ---------------------------------------------
     def _session_started(self, session: _Session, endpoint: Endpoint) -> None:

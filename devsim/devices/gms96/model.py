@@ -150,9 +150,10 @@ class Gms96Card(Model):
         s = self.signals
         declare_signals(s, SIGNALS)
         s.signal("override_pot").value = float(self.cfg.override_pot_pct)
+        on_input = self._on_input  # one bound method for the 32 inputs, not one each
         for byte in range(INPUT_BYTES):
             for bit in range(8):
-                s.subscribe(f"E{byte}.{bit}", self._on_input)
+                s.subscribe(f"E{byte}.{bit}", on_input)
         s.subscribe("emergency_stop", lambda *_: self._on_estop())
         s.subscribe("override_pot", lambda *_: self.speed_changed())
         s.subscribe("load_pct", lambda *_: self.i2t.update())

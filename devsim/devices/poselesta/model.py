@@ -12,7 +12,9 @@ field, the output test and the cassette.  The serial faces only hand bytes over
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import functools
+import types
+from collections.abc import Callable, Mapping
 from functools import partial
 from typing import Any
 
@@ -55,11 +57,17 @@ MODES = {
 }
 
 
-def _input_delays(cfg: PoselestaConfig) -> dict[str, tuple[float, float]]:
+def _input_delays(cfg: PoselestaConfig) -> Mapping[str, tuple[float, float]]:
     """The delay of each opto-coupled input V19–V22 (§2.3), by the configuration; the pots V23 and
     the reference mark activation V24 (§2.3.23: at most 5 ms opening, 0.2 ms closing) have none."""
-    opto = (cfg.input_rise_ms / 1000.0, cfg.input_fall_ms / 1000.0)
-    return {d.name: opto for d in INPUTS if d.point_type == "bool" and not d.name.startswith("rm_enable_")}
+    return _delays_of((cfg.input_rise_ms / 1000.0, cfg.input_fall_ms / 1000.0))
+
+
+@functools.lru_cache(maxsize=16)
+def _delays_of(opto: tuple[float, float]) -> Mapping[str, tuple[float, float]]:
+    """One read-only table per pair of delays, shared by the controls configured alike."""
+    return types.MappingProxyType(
+        {d.name: opto for d in INPUTS if d.point_type == "bool" and not d.name.startswith("rm_enable_")})
 
 
 class PoselestaCnc(Model):

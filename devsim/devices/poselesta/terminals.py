@@ -27,7 +27,7 @@ class InputTerminals:
     def __init__(self, clock: Clock, signals: SignalBank, delays: Mapping[str, tuple[float, float]]) -> None:
         self._clock = clock
         self._signals = signals
-        self._delays = dict(delays)
+        self._delays = delays  # read only (shared by the controls configured alike)
         self._pending: dict[str, tuple[Any, Timer]] = {}  # a level on its way: (level, its timer)
 
     def get(self, name: str) -> Any:

@@ -135,6 +135,10 @@ class SersDrive(Model):
         self.wiring = MotorWiring(self.axis, signals, self.cfg.axis)
         self._power_on()
 
+    def _poke(self, *_changed: Any) -> None:
+        """A signal changed: a parked WAIT may go on."""
+        self.interpreter.poke()
+
     def _cfg(self) -> Any:
         """The configuration as it is now (a DIP switch may change it)."""
         return self.cfg
@@ -149,18 +153,20 @@ class SersDrive(Model):
         s.signal("supply_voltage").value = float(nominal)
         s.signal("heatsink_temperature").value = float(self.cfg.heatsink_temperature)
         inputs, supply = self.inputs, self.supply
+        on_limit, on_digital_input = inputs.on_limit, inputs.on_digital_input  # one bound method each
         for name in ("limit_left", "limit_right"):
-            s.subscribe(name, inputs.on_limit)
+            s.subscribe(name, on_limit)
         s.subscribe("stop", inputs.on_stop)
         s.subscribe("reference", inputs.on_reference)
         for n in range(1, 9):
-            s.subscribe(f"I{n}", inputs.on_digital_input)
+            s.subscribe(f"I{n}", on_digital_input)
         s.subscribe("supply_voltage", lambda *_: supply.check_supply())
         s.subscribe("heatsink_temperature", lambda *_: supply.check_temperature())
         s.subscribe("short_circuit", lambda *_: supply.check_short())
         s.subscribe("stall", lambda _name, _old, new: self.motion.stall(bool(new)))
+        poke = self._poke  # one callable for every signal, not one closure per signal
         for name in s.names():
-            s.subscribe(name, lambda *_: self.interpreter.poke())
+            s.subscribe(name, poke)
 
     # ======================================================================================
     # power
