@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import select
 import signal
 from pathlib import Path
 
@@ -38,11 +39,15 @@ def ask(link: Path, text: str) -> bytes:
         return bytes(port.read_until(b"\n\r\nok1\n\r" if "?" in text else b"ok1\n\r"))
 
 
-def serving(*args: str, ready: str) -> DevsimProcess:
-    """``devsim ARGS`` once it printed the line starting with ``ready``."""
+def serving(*args: str, ready: str | tuple[str, ...]) -> DevsimProcess:
+    """``devsim ARGS`` once it printed a line starting with ``ready`` (each of them, any order)."""
     sim = DevsimProcess(*args)
+    waiting = {ready} if isinstance(ready, str) else set(ready)
     try:
-        sim.next_match(sim.out, lambda line: line.startswith(ready), 30, repr(ready))
+        while waiting:
+            prefixes = tuple(waiting)
+            line = sim.next_match(sim.out, lambda line, p=prefixes: line.startswith(p), 30, repr(waiting))
+            waiting = {prefix for prefix in waiting if not line.startswith(prefix)}
     except BaseException:
         sim.interrupt()
         raise
@@ -110,3 +115,45 @@ def test_a_link_held_by_a_live_simulator_is_refused_naming_it(tmp_path: Path) ->
         assert ask(link, "#P1050?\r") == b"#P1050?\rP1050=1\n\r\nok1\n\r"
     finally:
         assert holder.interrupt() == exits.OK
+
+
+def wait_gone(pid: int, timeout: float) -> bool:
+    """Whether process ``pid`` (not our child) ends within ``timeout`` s (a pidfd says when)."""
+    try:
+        fd = os.pidfd_open(pid)
+    except ProcessLookupError:
+        return True
+    try:
+        return bool(select.select([fd], [], [], timeout)[0])
+    finally:
+        os.close(fd)
+
+
+@pytest.mark.skipif(not hasattr(os, "pidfd_open"), reason="needs pidfd_open (Linux 5.3)")
+def test_up_with_workers_restarts_after_kill_9_of_its_process(tmp_path: Path) -> None:
+    """kill -9 of ``devsim up --workers 2``: its workers end with it (tidily: links removed), and
+    the same command starts again with what they stored."""
+    links = [tmp_path / "ttyW0", tmp_path / "ttyW1"]
+    plant = tmp_path / "plant.yaml"
+    plant.write_text("devices:\n" + "".join(
+        PLANT.format(link=link).split("\n", 1)[1].replace("name: axis", f"name: axis{n}") for n, link in enumerate(links)))
+    command = ("up", str(plant), "--workers", "2", "--state-dir", str(tmp_path / "state"))
+    first = serving(*command, ready=("axis0: ready", "axis1: ready"))
+    try:
+        for n, link in enumerate(links):
+            assert ask(link, f"#P1019={60 + n} PSAVE\r").endswith(b"ok1\n\r")
+        workers = [json.loads(owner_record_path(str(link)).read_text())["pid"] for link in links]
+        assert first.proc.pid not in workers
+    finally:
+        kill_9(first)
+    outlived = [pid for pid in workers if not wait_gone(pid, 15)]
+    for pid in outlived:  # (leave no process behind)
+        os.kill(pid, signal.SIGTERM)
+    assert not outlived, "a worker outlived its devsim up"
+    assert not any(os.path.lexists(link) for link in links)  # they stopped as on Ctrl-C
+    again = serving(*command, ready=("axis0: ready", "axis1: ready"))
+    try:
+        for n, link in enumerate(links):
+            assert ask(link, "#P1019?\r") == f"#P1019?\rP1019={60 + n}U/min\n\r\nok1\n\r".encode()
+    finally:
+        assert again.interrupt() == exits.OK
