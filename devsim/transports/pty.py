@@ -1,7 +1,9 @@
 """A pseudo-terminal that looks like a serial port (POSIX only).
 
 The host opens the pty's *slave* side (``/dev/pts/N``, or the stable symlink given as ``link``)
-exactly as it would open ``/dev/ttyS0``; the simulator serves the *master* side.
+exactly as it would open ``/dev/ttyS0``; the simulator serves the *master* side.  When an
+existing link is replaced (one a killed simulator left) and when it is refused (a live holder's)
+is :mod:`devsim.transports.ptylink`'s business.
 
 Three things make a pty behave like a serial port rather than a terminal (see the pitfalls in
 ``design.md``):
