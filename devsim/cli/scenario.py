@@ -278,6 +278,9 @@ async def _up(
     stop = asyncio.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(signum, stop.set)
+    from devsim.scenario.workers import end_with_parent
+
+    end_with_parent(loop, stop.set)  # a worker of `devsim up --workers` ends with it
     if state_dir is not None:
         Path(state_dir).mkdir(parents=True, exist_ok=True)
     if trace_dir is not None:

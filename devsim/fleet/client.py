@@ -11,7 +11,9 @@ raised as :class:`devsim.runtime.client.ControlError`).  :class:`FleetClient` ha
 * ``devices()`` – one row per device: the process's ``devices`` row (name, kind, ports) with
   ``process``, ``host``, ``pid``, ``online`` (and ``plant``/``part`` when given).  A process that
   died without a clean stop shows its devices with ``"online": false`` (its last will) until a
-  process serving the same name appears.
+  process serving the same name appears.  A request to an offline device fails at once
+  (``Offline``); so does one in flight when its process goes offline (its last will or its
+  leaving arrives): no answer can come, so it does not wait for the client's ``timeout``.
 * **Clashes.** Device names are unique across a fleet: a process refuses to join when a name is
   taken.  Two processes that announce the same name anyway (they joined at the same moment, or a
   bridge joined two fleets) are both listed, each row with ``"clash": true``, and requests for
@@ -62,6 +64,7 @@ class AsyncFleetClient:
         self._client: aiomqtt.Client | None = None
         self._reader: asyncio.Task[None] | None = None
         self._pending: dict[str, asyncio.Future[dict[str, Any]]] = {}
+        self._asked: dict[str, tuple[str, str]] = {}  # request id -> (the process asked, the op)
         self._changed = asyncio.Event()
         self._synced = asyncio.Event()
         self._next = 0
@@ -140,6 +143,7 @@ class AsyncFleetClient:
                         self.processes[process] = announcement
                     if announcement is None or not announcement.get("online"):
                         self._streams_end(process)
+                        self._requests_fail(process)
                     self._changed.set()
         except aiomqtt.MqttError as exc:
             self._items.put_nowait(ConnectionError(f"fleet broker connection lost: {exc}"))
@@ -156,6 +160,19 @@ class AsyncFleetClient:
             future = self._pending.pop(str(data.get("id")), None)
             if future is not None and not future.done():
                 future.set_result(data)
+
+    def _requests_fail(self, process: str) -> None:
+        """Fail at once every request in flight to ``process``: it went offline (its last will,
+        or it left), so no answer will come."""
+        for req_id, (asked, op) in list(self._asked.items()):
+            future = self._pending.get(req_id)
+            if asked == process and future is not None and not future.done():
+                future.set_exception(ControlError(f"{process} went offline before answering {op!r}", "Offline"))
+
+    def in_flight(self, process: str | None = None) -> int:
+        """How many requests (to ``process``, or to any) wait for their answer."""
+        return sum(1 for req_id, (asked, _op) in self._asked.items()
+                   if req_id in self._pending and process in (None, asked))
 
     # -- watching ------------------------------------------------------------------------
     async def watch(self, device: str, names: list[str] | None = None, period: float | None = None) -> Any:
@@ -274,13 +291,17 @@ class AsyncFleetClient:
                    "reply_to": self.reply_topic}
         future: asyncio.Future[dict[str, Any]] = asyncio.get_running_loop().create_future()
         self._pending[req_id] = future
+        self._asked[req_id] = (process, op)
         try:
             await self._client.publish(self.topics.request(process), json.dumps(message), qos=0)
+            if not self.processes.get(process, {}).get("online"):  # it left while we published
+                self._requests_fail(process)
             reply = await asyncio.wait_for(future, self.timeout)
         except TimeoutError:
             raise ControlError(f"{process} did not answer {op!r} within {self.timeout:g} s", "Timeout") from None
         finally:
             self._pending.pop(req_id, None)
+            self._asked.pop(req_id, None)
         if not reply.get("ok"):
             raise ControlError(str(reply.get("error")), str(reply.get("type", "Error")))
         return reply.get("result")

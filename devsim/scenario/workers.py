@@ -8,7 +8,10 @@ staying whole with its devices), and this process
 * serves the control API on the address given with ``--control`` (or its default socket) and
   hands each request to the worker that holds the device (``devices`` gathers them from all,
   with a ``worker`` number; ``info`` says this process's name, pid and uptime, and all ports);
-* stops the workers on Ctrl-C / SIGTERM, and stops the others if one dies.
+* stops the workers on Ctrl-C / SIGTERM, and stops the others if one dies;
+* holds each worker's stdin, a pipe: when this process dies, even by ``kill -9``, the worker
+  reads its end and stops as on Ctrl-C (:func:`end_with_parent`), so no orphan keeps the
+  plant's links, ports and state-dir locks, and the same ``devsim up`` can start again.
 
 Traces (``--trace-dir``), state (``--state-dir``) and faults work as in one process: the names
 are distinct, each device's memory is locked by its own worker.  Under virtual time a plant
@@ -25,13 +28,39 @@ import signal
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from devsim.observe.live_log import DEFAULT_LEVEL, level_of
 from devsim.scenario.schema import PlantSpec
 
-__all__ = ["run_workers", "split_plant"]
+__all__ = ["WORKER_ENV", "end_with_parent", "run_workers", "split_plant"]
+
+#: Set in a worker's environment (to the pid of its ``devsim up --workers``): its stdin is the
+#: pipe whose end says that process is gone.
+WORKER_ENV = "DEVSIM_WORKER_OF"
+
+
+def end_with_parent(loop: asyncio.AbstractEventLoop, stop: Callable[[], None]) -> None:
+    """In a worker (``WORKER_ENV`` set): call ``stop`` when the stdin pipe from the ``devsim up
+    --workers`` process ends, i.e. when that process has ended, however it died."""
+    if not os.environ.get(WORKER_ENV):
+        return
+
+    def readable() -> None:
+        try:
+            data = os.read(0, 4096)
+        except BlockingIOError:
+            return
+        except OSError:
+            data = b""
+        if not data:
+            loop.remove_reader(0)
+            stop()
+
+    os.set_blocking(0, False)
+    loop.add_reader(0, readable)
 
 
 def split_plant(spec: PlantSpec, workers: int) -> list[dict[str, Any]]:
@@ -239,7 +268,8 @@ async def run_workers(
                     args += ["--fleet", fleet]
                 args += ["-v"] * verbose + ["-q"] * quiet  # the workers log to our stderr
                 proc = await asyncio.create_subprocess_exec(
-                    *args, stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE, env=dict(os.environ)
+                    *args, stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.PIPE,
+                    env={**os.environ, WORKER_ENV: str(os.getpid())},
                 )
                 worker = _Worker(number, proc, sock)
                 worker.devices = {d["name"] for d in share["devices"]}

@@ -1,7 +1,9 @@
 """A pseudo-terminal that looks like a serial port (POSIX only).
 
 The host opens the pty's *slave* side (``/dev/pts/N``, or the stable symlink given as ``link``)
-exactly as it would open ``/dev/ttyS0``; the simulator serves the *master* side.
+exactly as it would open ``/dev/ttyS0``; the simulator serves the *master* side.  When an
+existing link is replaced (one a killed simulator left) and when it is refused (a live holder's)
+is :mod:`devsim.transports.ptylink`'s business.
 
 Three things make a pty behave like a serial port rather than a terminal (see the pitfalls in
 ``design.md``):
@@ -65,6 +67,7 @@ import msgspec
 
 from devsim.core.device import SerialSettings
 from devsim.transports.base import Endpoint, Transport
+from devsim.transports.ptylink import claim_link, release_link
 
 __all__ = ["PtyTransport", "make_raw", "settings_from_termios", "apply_settings"]
 
@@ -231,7 +234,7 @@ class PtyTransport(Transport):
             os.set_blocking(master, False)
             self.address = os.ttyname(slave)
             if self.link is not None:
-                _replace_symlink(self.address, self.link)
+                claim_link(self.address, self.link)
         except BaseException:
             os.close(master)
             os.close(slave)
@@ -261,9 +264,7 @@ class PtyTransport(Transport):
         self._master = self._slave = None
         self._out.clear()
         if self.link is not None:
-            with contextlib.suppress(OSError):
-                if os.path.islink(self.link) and os.readlink(self.link) == self.address:
-                    os.unlink(self.link)
+            release_link(self.address, self.link)
 
     # -- host settings ----------------------------------------------------------------------
     def host_settings(self) -> SerialSettings | None:
@@ -448,28 +449,3 @@ def _pty_keeps_frame_format(fd: int, attrs: list) -> bool:
     except termios.error:
         return False
     return (cflag & termios.CSIZE) == termios.CS7 and bool(cflag & termios.PARENB)
-
-
-def _replace_symlink(target: str, link: str) -> None:
-    """Point ``link`` at ``target``.  An existing link is replaced only when it is one devsim
-    made and left behind: a symlink to a pseudo-terminal that no longer exists (a simulator that
-    was killed).  Anything else – a file, a symlink elsewhere, a link to a live pty of another
-    simulator – is refused."""
-    if os.path.lexists(link):
-        if not os.path.islink(link):
-            raise FileExistsError(f"{link} exists and is not a symlink; not replacing it")
-        old = os.readlink(link)
-        if not old.startswith("/dev/pts/"):
-            raise FileExistsError(f"{link} points at {old}, not at a pseudo-terminal; not replacing it")
-        if os.path.exists(old):
-            raise FileExistsError(f"{link} points at {old}, a pseudo-terminal in use (another simulator?)")
-    tmp = f"{link}.{os.getpid()}.tmp"
-    with contextlib.suppress(FileNotFoundError):
-        os.unlink(tmp)
-    os.symlink(target, tmp)
-    try:
-        os.replace(tmp, link)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise

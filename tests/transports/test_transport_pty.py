@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import asyncio
+import json
 import os
 import select
+import subprocess
 import sys
 
 import pytest
@@ -14,6 +16,7 @@ from devsim.core.clock import RealClock
 from devsim.core.device import SerialSettings
 from devsim.transports.line import Line, garble
 from devsim.transports.pty import PtyTransport
+from devsim.transports.ptylink import owner_record_path
 from tests.transports.transport_helpers import EchoTarget, Recorder
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="ptys are POSIX only")
@@ -345,5 +348,29 @@ async def test_refuses_to_repoint_a_link_devsim_did_not_leave(tmp_path, echo: Re
             await transport.start(echo)
         await transport.close()
         assert os.readlink(link) == aim
+    finally:
+        await other.close()
+
+
+async def test_a_link_whose_recorded_holder_is_dead_is_replaced_even_onto_a_live_pty(tmp_path, echo: Recorder) -> None:
+    """The pty number of a killed simulator is soon someone else's: the owner record, not the
+    pty's existence, decides (a pid that has exited, here a finished child)."""
+    link = tmp_path / "tty"
+    other = PtyTransport()
+    await other.start(Recorder())
+    child = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                           text=True, check=True)
+    try:
+        os.symlink(other.address, link)
+        owner_record_path(str(link)).write_text(json.dumps({"pid": int(child.stdout), "pty": other.address}))
+        transport = PtyTransport(link=str(link))
+        await transport.start(echo)
+        try:
+            assert os.readlink(link) == transport.address
+            assert json.loads(owner_record_path(str(link)).read_text())["pid"] == os.getpid()
+            assert await asyncio.to_thread(_serial_exchange, str(link), b"hi", 2) == b"hi"
+        finally:
+            await transport.close()
+        assert not os.path.lexists(link) and not owner_record_path(str(link)).exists()
     finally:
         await other.close()
