@@ -291,6 +291,8 @@ class TcpTransport(Transport):
         self._served.append(session)
         if self.hosts == 1:
             self._activate(session)
+        elif len(self._served) == 1 and self._endpoint is not None:
+            self._endpoint.attach(self._turn_output)  # (once: the line sees one connect, not one per turn)
 
     def _activate(self, session: _Session) -> None:
         self._active = session
@@ -298,9 +300,6 @@ class TcpTransport(Transport):
         if endpoint is None:
             return
         self._session_started(session, endpoint)
-        if self.hosts > 1:
-            endpoint.attach(functools.partial(self._turn_send, session))
-            return
         # (the endpoint is detached again when the session ends: _detach; a plain TCP port
         # hands the device's output to the session itself: one call less per answer)
         plain = type(self)._send is TcpTransport._send
@@ -406,8 +405,7 @@ class TcpTransport(Transport):
         if self._turn is not session:
             self._turn, self._owed = session, 0
         self._owed += 1
-        if self._active is not session:
-            self._activate(session)
+        self._active = session  # the device's output goes to it (_turn_output)
         message = session.messages.popleft()  # type: ignore[union-attr]
         if session.messages and session not in self._ready and holder is None:
             self._ready.append(session)  # type: ignore[union-attr]
@@ -415,7 +413,11 @@ class TcpTransport(Transport):
         self._turn_timer = self._loop.call_later(TURN_GRACE, self._end_turn)
         endpoint.feed(message)
 
-    def _turn_send(self, session: _Session, data: bytes) -> None:
+    def _turn_output(self, data: bytes) -> None:
+        """The device's output on a several-host port: to the host whose message it answers."""
+        session = self._active
+        if session is None:
+            return
         self._send(session, data)
         if self._turn is session:
             self._owed -= 1

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import subprocess
+from collections.abc import Callable
 
 import pytest
 
@@ -100,6 +101,11 @@ class _Later(Recorder):
     def __init__(self) -> None:
         super().__init__()
         self.pending: list[bytes] = []
+        self.attached = 0
+
+    def attach(self, write: Callable[[bytes], None] | None) -> None:
+        self.attached += write is not None
+        super().attach(write)
 
     def feed(self, data: bytes) -> None:
         super().feed(data)
@@ -133,6 +139,7 @@ async def test_a_late_answer_goes_to_the_host_that_asked() -> None:
         await later.wait_for(lambda: len(later.chunks) == 3)
         later.answer()
         assert await _read(r2, 7) == b"SECOND\n"
+        assert later.attached == 1  # one connect for the line (a log line), not one per turn
         w1.close()
         w2.close()
     finally:
