@@ -45,9 +45,11 @@ def shared_vocabulary_markdown() -> list[str]:
     )
 
 
-def _port_doc(doc: str, default: str | None) -> str:
-    """A port's description, with the network transport it is served on by default."""
-    return doc if default is None else f"{doc} (default transport: `{default}`)"
+def _port_doc(doc: str, default: str | None, hosts: int = 1) -> str:
+    """A port's description, with the network transport it is served on by default and, where
+    it serves more than one, how many hosts at once (over TCP; a serial port serves one)."""
+    text = doc if default is None else f"{doc} (default transport: `{default}`)"
+    return text if hosts == 1 else f"{text}; up to {hosts} hosts at once over TCP"
 
 
 def reference_markdown(cls: type[Device]) -> str:
@@ -63,7 +65,7 @@ def reference_markdown(cls: type[Device]) -> str:
         *_table(
             ("port", "description", "manual", "direction"),
             (
-                (f"`{p.name}`", _port_doc(p.doc, p.default), p.section, "receive only" if p.receive_only else "both")
+                (f"`{p.name}`", _port_doc(p.doc, p.default, p.hosts), p.section, "receive only" if p.receive_only else "both")
                 for p in cls.ports
             ),
         ),

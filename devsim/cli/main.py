@@ -175,6 +175,7 @@ class _Plan(msgspec.Struct):
     overrides: dict[str, _Port] = msgspec.field(default_factory=dict)  # --port NAME=SPEC
     modbus: str | None = None  # --modbus tcp:[HOST:]PORT | rtu | rtu:LINK
     modbus_map: str = "points"  # --modbus-map points | mirror
+    idle_drop: float | None = None  # --idle-drop SECONDS
     canopen: str | None = None  # --canopen NODE[@[HOST:]PORT]
     mqtt: str | None = None  # --mqtt [URL]: "" for the embedded broker
     mqtt_convention: str = "devsim"  # --mqtt-convention devsim | sparkplug
@@ -303,6 +304,8 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     help="RS-485 multidrop: one device per address on one line (--addresses is the same option).",
 )
 @click.option("--pacing", is_flag=True, help="Pace output at the configured baud rate.")
+@click.option("--idle-drop", type=click.FloatRange(min=0), default=None, metavar="SECONDS",
+              help="Drop a TCP host idle this long when another client finds its port full (default 30).")
 @click.option(
     "--port",
     "port_options",
@@ -382,6 +385,7 @@ def run(
     control_allow_remote: bool,
     drives: str | None,
     pacing: bool,
+    idle_drop: float | None,
     port_options: tuple[str, ...],
     modbus: str | None,
     canopen: str | None,
@@ -466,6 +470,7 @@ def run(
         overrides=overrides,
         modbus=modbus,
         modbus_map=modbus_map,
+        idle_drop=idle_drop,
         canopen=canopen,
         mqtt=mqtt,
         mqtt_convention=mqtt_convention,
@@ -526,6 +531,7 @@ async def _serve(plan: _Plan) -> None:
         loop.add_signal_handler(signum, stop.set)
 
     runtime = Runtime(virtual=plan.virtual, speed=plan.speed, state_dir=plan.state_dir, name=plan.kind)
+    runtime.idle_drop = plan.idle_drop
     async with runtime:
         stage = "create the devices"
         server: Any = None

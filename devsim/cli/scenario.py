@@ -174,6 +174,8 @@ def scenario_run(
 @click.option("--motion-log", metavar="FILE.csv", help="Log every axis's motion as CSV, for 'devsim plot'.")
 @click.option("--motion-resolution", type=float, default=0.01, show_default=True, metavar="SECONDS",
               help="How often (device time) the motion log samples the axes, besides every event.")
+@click.option("--idle-drop", type=click.FloatRange(min=0), default=None, metavar="SECONDS",
+              help="Drop a TCP host idle this long when another client finds its port full (default 30).")
 @log_options
 def up(
     plant_file: str,
@@ -188,6 +190,7 @@ def up(
     part: str | None,
     motion_log: str | None,
     motion_resolution: float,
+    idle_drop: float | None,
     verbose: int,
     quiet: int,
 ) -> None:
@@ -240,7 +243,7 @@ def up(
         try:
             status = asyncio.run(
                 run_workers(spec, workers, control=address, name=name, state_dir=state_dir, speed=speed, trace_dir=trace_dir,
-                            fleet=fleet, verbose=verbose, quiet=quiet)
+                            fleet=fleet, verbose=verbose, quiet=quiet, idle_drop=idle_drop)
             )
         except KeyboardInterrupt:
             sys.exit(exits.INTERRUPTED)
@@ -248,7 +251,7 @@ def up(
     try:
         motion = (motion_log, motion_resolution) if motion_log is not None else None
         asyncio.run(_up(spec, state_dir, speed, address, trace_dir, virtual, fleet, part, motion,
-                        level_of(verbose, quiet), name))
+                        level_of(verbose, quiet), name, idle_drop))
     except KeyboardInterrupt:
         sys.exit(exits.INTERRUPTED)
     except OSError as exc:
@@ -268,7 +271,7 @@ class _FleetError(Exception):
 async def _up(
     spec: object, state_dir: str | None, speed: float, address: object, trace_dir: str | None, virtual: bool,
     fleet: str | None = None, part: str | None = None, motion: tuple[str, float] | None = None,
-    log_level: int = 2, name: str = "devsim",
+    log_level: int = 2, name: str = "devsim", idle_drop: float | None = None,
 ) -> None:
     from devsim.runtime import Runtime
     from devsim.runtime.control import ControlServer
@@ -290,6 +293,7 @@ async def _up(
         print(f"devsim: the file descriptor limit {limit} allows about {fdlimit.capacity(limit)} ports",
               file=sys.stderr, flush=True)
     async with Runtime(virtual=virtual, speed=speed, state_dir=state_dir, name=name) as runtime:
+        runtime.idle_drop = idle_drop
         plant = await build_plant(runtime, spec, trace_dir=trace_dir, keep_going=True)  # type: ignore[arg-type]
         if plant.refused and log_level >= 1:  # a warning (-qq: nothing but fatal errors)
             causes = sorted(set(plant.refused.values()))

@@ -55,7 +55,12 @@ class PortDef(msgspec.Struct, frozen=True):
 
     ``framing`` declares how the port's byte stream is cut into messages, described and matched
     (:class:`~devsim.core.framing.Framing`): record and replay, the telegram tap and the monitor
-    use it; ``None``: byte-exact, nothing decoded."""
+    use it; ``None``: byte-exact, nothing decoded.
+
+    ``hosts`` declares how many hosts the port serves at once over TCP: a serial port has one
+    host (also when reached through a device server or RFC 2217); a port the real device has on
+    its Ethernet interface may serve several (the PCD's Ether-S-Bus TCP port).  One more client is
+    refused, or takes the place of an idle host (:mod:`devsim.transports.hosts`)."""
 
     name: str = "main"
     doc: str = "the device's serial port"
@@ -63,8 +68,11 @@ class PortDef(msgspec.Struct, frozen=True):
     receive_only: bool = False
     default: str | None = None
     framing: Framing | None = None
+    hosts: int = 1
 
     def __post_init__(self) -> None:
+        if self.hosts < 1:
+            raise ValueError(f"a port serves at least one host, not {self.hosts}")
         if self.default is not None:
             parse_port_default(self.default)
 

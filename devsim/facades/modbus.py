@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import asyncio
 import struct
+import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -28,6 +29,7 @@ from devsim.core.points import BadValue, ReadOnlyName
 from devsim.facades import modbus_pdu
 from devsim.facades.modbus_map import ModbusMap, from_words, to_words
 from devsim.facades.modbus_pdu import ILLEGAL_ADDRESS, ILLEGAL_VALUE, Refused
+from devsim.transports.hosts import DEFAULT_IDLE_DROP, admit, dropped, listen_backlog, refuse
 
 __all__ = ["ModbusFacade", "ModbusRtuEndpoint", "ModbusTcpServer", "device_map", "line_settings", "serve_tcp",
            "start_modbus"]
@@ -41,6 +43,11 @@ GATEWAY_NO_RESPONSE = 0x0B
 #: (at most 253 bytes, Application Protocol §4.1).
 MBAP = struct.Struct(">HHHB")
 MAX_PDU = 253
+#: How many Modbus TCP clients the server serves at once.  Messaging on TCP/IP §4.2.1 leaves the
+#: number of connections to the implementation (a device keeps a small pool and closes an unused
+#: connection for a new one): 8 ([DECISION]); one more client is refused unless one has been idle
+#: longer than the idle-drop time (:mod:`devsim.transports.hosts`).
+MODBUS_TCP_HOSTS = 8
 
 
 class ModbusFacade:
@@ -116,18 +123,23 @@ class _TcpSession(asyncio.Protocol):
     """One Modbus TCP connection (Messaging on TCP/IP §4.4.2): every request of a segment is
     answered, in order; a header that is not Modbus's closes the connection."""
 
-    def __init__(self, facade: ModbusFacade, sessions: set[_TcpSession]) -> None:
+    def __init__(self, facade: ModbusFacade, sessions: _Sessions) -> None:
         self.facade = facade
         self.sessions = sessions
         self.buffer = b""
         self.transport: asyncio.Transport | None = None
+        self.peer: object = None
+        self.since = self.heard = 0.0
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         assert isinstance(transport, asyncio.Transport)
         self.transport = transport
-        self.sessions.add(self)
+        self.peer = transport.get_extra_info("peername")
+        self.since, self.heard = time.time(), time.monotonic()
+        self.sessions.admit(self)
 
     def data_received(self, data: bytes) -> None:
+        self.heard = time.monotonic()
         self.buffer += data
         while len(self.buffer) >= MBAP.size and self.transport is not None:
             transaction, protocol, length, unit = MBAP.unpack_from(self.buffer)
@@ -159,11 +171,46 @@ class _TcpSession(asyncio.Protocol):
             self.transport.close()
 
 
+class _Sessions:
+    """The connections a Modbus TCP server serves: at most ``hosts``; one more is refused, or
+    takes the place of one idle longer than ``idle_drop`` seconds (:mod:`devsim.transports.hosts`)."""
+
+    def __init__(self, hosts: int, idle_drop: float) -> None:
+        self.hosts, self.idle_drop = hosts, idle_drop
+        self.served: list[_TcpSession] = []
+        self.address = ""
+
+    def __iter__(self) -> Any:
+        return iter(list(self.served))
+
+    def __len__(self) -> int:
+        return len(self.served)
+
+    def admit(self, session: _TcpSession) -> None:
+        admission = admit(self.served, self.hosts, self.idle_drop, lambda s: s.heard)
+        if admission.action == "refuse":
+            refuse(self.address, session.peer, self.hosts, [(s.peer, s.since) for s in self.served])
+            session.close()
+            session.transport = None
+            return
+        if admission.action == "drop":
+            victim = admission.victim
+            assert isinstance(victim, _TcpSession)
+            dropped(self.address, victim.peer, time.monotonic() - victim.heard, session.peer)
+            self.discard(victim)
+            victim.close()
+        self.served.append(session)
+
+    def discard(self, session: _TcpSession) -> None:
+        if session in self.served:
+            self.served.remove(session)
+
+
 class ModbusTcpServer:
     """The facade's Modbus TCP server: listens on a socket; :meth:`shutdown` closes it and the
     connections it serves."""
 
-    def __init__(self, server: asyncio.Server, sessions: set[_TcpSession]) -> None:
+    def __init__(self, server: asyncio.Server, sessions: _Sessions) -> None:
         self.server = server
         self.sessions = sessions
 
@@ -178,12 +225,16 @@ class ModbusTcpServer:
         await self.server.wait_closed()
 
 
-async def serve_tcp(facade: ModbusFacade, host: str = "127.0.0.1", port: int = 502) -> tuple[ModbusTcpServer, int]:
-    """Modbus TCP on ``host:port`` (loopback unless the user names a host); returns the server
-    and the port it listens on (``port`` 0: one the system chose)."""
+async def serve_tcp(facade: ModbusFacade, host: str = "127.0.0.1", port: int = 502, *,
+                    hosts: int = MODBUS_TCP_HOSTS, idle_drop: float | None = None) -> tuple[ModbusTcpServer, int]:
+    """Modbus TCP on ``host:port`` (loopback unless the user names a host) for at most ``hosts``
+    clients at once (``idle_drop``: seconds, default :data:`~devsim.transports.hosts.DEFAULT_IDLE_DROP`);
+    returns the server and the port it listens on (``port`` 0: one the system chose)."""
     loop = asyncio.get_running_loop()
-    sessions: set[_TcpSession] = set()
-    server = ModbusTcpServer(await loop.create_server(lambda: _TcpSession(facade, sessions), host, port), sessions)
+    sessions = _Sessions(hosts, DEFAULT_IDLE_DROP if idle_drop is None else idle_drop)
+    listening = await loop.create_server(lambda: _TcpSession(facade, sessions), host, port, backlog=listen_backlog())
+    server = ModbusTcpServer(listening, sessions)
+    sessions.address = f"[{host}]:{server.port}" if ":" in host else f"{host}:{server.port}"
     return server, server.port
 
 
@@ -315,7 +366,8 @@ async def start_modbus(runtime: Any, device: Device, spec: str, *, unit: int = 1
     scheme, _, rest = spec.partition(":")
     if scheme == "tcp":
         host, _, number = rest.rpartition(":")
-        server, bound = await serve_tcp(facade, host or "127.0.0.1", int(number or 502))
+        server, bound = await serve_tcp(facade, host or "127.0.0.1", int(number or 502),
+                                        idle_drop=getattr(runtime, "idle_drop", None))
         runtime.add_closer(server.shutdown)
         address = f"{host or '127.0.0.1'}:{bound}"
         runtime.ports[key] = address

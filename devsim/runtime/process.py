@@ -68,6 +68,9 @@ class Runtime:
         self.ports: dict[str, str] = {}  # port_key(device, port) -> URL/path a host opens
         self.transports: list[Any] = []
         self.closers: list[Callable[[], Awaitable[Any]]] = []
+        #: Seconds a TCP host may stay idle before a waiting client takes its place (``--idle-drop``;
+        #: None: :data:`devsim.transports.hosts.DEFAULT_IDLE_DROP`).
+        self.idle_drop: float | None = None
         self._line_faults: dict[tuple[str, str], list[Any]] = {}
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
@@ -210,6 +213,11 @@ class Runtime:
 
         group = [devices] if isinstance(devices, Device) else list(devices)
         target: Any = group[0].port(port) if len(group) == 1 else Bus(group, port)
+        limit = getattr(transport, "limit_hosts", None)
+        if limit is not None:  # how many hosts the port serves: the kind's declaration (PortDef.hosts)
+            spec = group[0].port(port).spec
+            framing = spec.framing
+            limit(spec.hosts, self.idle_drop, framing.split if framing is not None else None)
         line = await self.serve_target([port_key(device.name, port) for device in group], target, transport,
                                        pacing=pacing, trace=trace)
         if line.tracer is not None:  # the trace says what it traces: a reader decodes it by the port's framing

@@ -219,10 +219,13 @@ def start_plant(
     state_dir: str | Path | None = None,
     trace_dir: str | Path | None = None,
     trace_format: TraceFormat = "text",
+    idle_drop: float | None = None,
 ) -> Plant:
     """Start a runtime in a background thread and build ``spec`` in it; stop with
-    ``plant.runtime.stop()``."""
-    runtime = Runtime(virtual=virtual, speed=speed, state_dir=state_dir).start()
+    ``plant.runtime.stop()``.  ``idle_drop``: as ``devsim up --idle-drop``."""
+    runtime = Runtime(virtual=virtual, speed=speed, state_dir=state_dir)
+    runtime.idle_drop = idle_drop
+    runtime.start()
     try:
         return runtime.run(build_plant(runtime, spec, trace_dir=trace_dir, trace_format=trace_format))
     except BaseException:

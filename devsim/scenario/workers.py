@@ -243,6 +243,7 @@ async def run_workers(
     fleet: str | None = None,
     verbose: int = 0,
     quiet: int = 0,
+    idle_drop: float | None = None,
 ) -> int:
     """Serve ``spec`` from ``workers`` processes until Ctrl-C / SIGTERM; returns an exit status."""
     loop = asyncio.get_running_loop()
@@ -266,6 +267,8 @@ async def run_workers(
                     args += ["--trace-dir", trace_dir]
                 if fleet is not None:  # each worker is a fleet member of its own
                     args += ["--fleet", fleet]
+                if idle_drop is not None:
+                    args += ["--idle-drop", repr(idle_drop)]
                 args += ["-v"] * verbose + ["-q"] * quiet  # the workers log to our stderr
                 proc = await asyncio.create_subprocess_exec(
                     *args, stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.PIPE,

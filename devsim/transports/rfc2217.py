@@ -9,7 +9,8 @@ RTS, break) and presents the modem lines of a powered device (CTS, DSR and CD on
 negotiated settings go to ``endpoint.host_settings()``, so a client that opens the port at the
 wrong baud rate talks to the device through a garbling :class:`~devsim.transports.line.Line`.
 
-Clients are served one after another exactly as with :class:`~devsim.transports.tcp.TcpTransport`.
+One client at a time exactly as with :class:`~devsim.transports.tcp.TcpTransport`: another one is
+refused at once, or takes the place of a host idle for longer than the idle-drop time.
 Open the port with pyserial as ``rfc2217://HOST:PORT`` (:attr:`Rfc2217Transport.url`).
 """
 
@@ -155,6 +156,10 @@ class Rfc2217Transport(TcpTransport):
     """An RFC 2217 server port serving one endpoint, one client at a time."""
 
     scheme = "rfc2217"
+
+    def limit_hosts(self, hosts: int, idle_drop: float | None = None, split: Any = None) -> None:
+        """An RFC 2217 port is a serial port: one host, whatever the port serves elsewhere."""
+        super().limit_hosts(1, idle_drop)
 
     def _session_started(self, session: _Session, endpoint: Endpoint) -> None:
         preset = getattr(endpoint, "serial_settings", None)

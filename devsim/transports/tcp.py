@@ -1,18 +1,29 @@
-"""Raw TCP, like a serial device server (Moxa NPort, Lantronix in "TCP server" mode).
+"""Raw TCP, like a serial device server (Moxa NPort, Lantronix in "TCP server" mode), or a
+device's own TCP port (Ether-S-Bus).
 
 Bytes on the socket are bytes on the serial line, nothing else: a raw client cannot tell the
 device its line settings, so the line treats it as matching.  Open it with pyserial as
 ``socket://HOST:PORT`` (:attr:`TcpTransport.url`).
 
-**One host at a time.**  A serial port has one host, so the transport serves clients one after
-another: a client that connects while another one is being served is accepted by the kernel but
-*waits* – nothing is read from it and nothing is sent to it – until every earlier client has
-disconnected; then it becomes the host, and whatever it sent in the meantime reaches the device
-in order.  A waiting client that gives up is noticed only when its turn comes.
+**How many hosts.**  ``hosts`` says how many clients the port serves at once (the port's
+:attr:`~devsim.core.kit.PortDef.hosts`, set by the runtime through :meth:`TcpTransport.limit_hosts`).
+A serial port has one host: the default, 1.  A client that connects while the port serves as many
+as it may is refused at once (closed, with a line in the log naming the holder of a one-host
+port), unless a host has been idle (sent nothing) longer than ``idle_drop`` seconds: that one is
+dropped and the newcomer served (:mod:`devsim.transports.hosts`).
 
-When the serving client disconnects, the endpoint gets ``host_disconnected()``.  Output that a
-client does not read piles up in the socket; beyond ``max_buffer`` bytes further output is
-dropped, as on a line nobody listens to.  The server binds to loopback unless told otherwise.
+A port serving several hosts hands the device one whole message at a time (cut by the port's
+declared framing, ``split``; without one, each chunk read is a message) and sends the device's
+answer to the host whose message it answers: a host's messages hold the port's *turn* until the
+device has answered each (one write an answer), or for :data:`TURN_GRACE` seconds after the last
+when one gets no answer; the other hosts' messages wait in turn, as the telegrams of several connections wait for a real PLC's one
+communication task.
+
+When the serving client disconnects (on a several-host port: the last one), the endpoint gets
+``host_disconnected()``.  Output that a client does not read piles up in the socket; beyond
+``max_buffer`` bytes further output is dropped, as on a line nobody listens to.  The server
+binds to loopback unless told otherwise; its listen backlog is the system's ``somaxconn``
+(:func:`~devsim.transports.hosts.listen_backlog`).
 
 **Out of descriptors.**  When the process cannot accept another connection (``ulimit -n``), the
 waiting connection is accepted with a reserve descriptor and closed at once, and the cause is
@@ -27,12 +38,18 @@ import contextlib
 import functools
 import socket
 import threading
+import time
 from collections import deque
+from collections.abc import Callable
 
 from devsim.transports import fdlimit
 from devsim.transports.base import Endpoint, Transport
+from devsim.transports.hosts import DEFAULT_IDLE_DROP, admit, dropped, listen_backlog, refuse
 
-__all__ = ["SLICE", "TcpTransport"]
+__all__ = ["SLICE", "TURN_GRACE", "TcpTransport"]
+
+#: Seconds a host's message on a several-host port holds the turn when the device does not answer it.
+TURN_GRACE = 0.2
 
 #: Most host bytes handed to a device in one loop turn (the rest waits for the next turns).
 SLICE = 16 * 1024
@@ -55,7 +72,7 @@ def _read_buffer() -> memoryview:
 
 
 class _Session(asyncio.BufferedProtocol):
-    """One TCP client; the owning transport decides whether it is the host or waits."""
+    """One TCP client; the owning transport decides whether it is served or refused."""
 
     def __init__(self, owner: TcpTransport) -> None:
         self.owner = owner
@@ -64,10 +81,17 @@ class _Session(asyncio.BufferedProtocol):
         self.closed = False
         self.state: object = None  # per-client protocol state of subclasses (RFC 2217)
         self.backlog: deque[memoryview] = deque()  # host input not yet handed to the device
+        self.peer: object = None
+        self.since = 0.0  # connected at (wall clock, for the log)
+        self.heard = 0.0  # last received from (time.monotonic(), for the idle drop)
+        self.rest = b""  # an unfinished message (several-host ports)
+        self.messages: deque[bytes] | tuple[()] = ()  # whole messages waiting for the turn
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         assert isinstance(transport, asyncio.Transport)
         self.transport = transport
+        self.peer = transport.get_extra_info("peername")
+        self.since, self.heard = time.time(), time.monotonic()
         sock = transport.get_extra_info("socket")
         if sock is not None:
             with contextlib.suppress(OSError):
@@ -78,6 +102,7 @@ class _Session(asyncio.BufferedProtocol):
         return self._view
 
     def buffer_updated(self, nbytes: int) -> None:
+        self.heard = time.monotonic()
         self.owner._received(self, bytes(self._view[:nbytes]))
 
     def eof_received(self) -> bool:
@@ -97,25 +122,49 @@ class _Session(asyncio.BufferedProtocol):
 
 
 class TcpTransport(Transport):
-    """A raw TCP server port serving one endpoint, one client at a time."""
+    """A raw TCP server port serving one endpoint to ``hosts`` clients at once (default one)."""
 
     scheme = "socket"
 
-    def __init__(self, host: str = "127.0.0.1", port: int = 0, *, max_buffer: int = 64 * 1024) -> None:
+    def __init__(self, host: str = "127.0.0.1", port: int = 0, *, max_buffer: int = 64 * 1024,
+                 hosts: int = 1, idle_drop: float = DEFAULT_IDLE_DROP) -> None:
         self.host = host
         self.port = port
         self.max_buffer = max_buffer
         self.address = ""
         #: Bytes dropped because the client did not read them.
         self.dropped = 0
+        #: Clients refused (the port full) and idle hosts dropped for a newcomer.
+        self.refused = 0
+        self.idle_dropped = 0
+        self.hosts = hosts
+        self.idle_drop = idle_drop
+        #: How a several-host port cuts a host's bytes into messages (None: each chunk read is one).
+        self.split: Callable[[bytes], tuple[list[bytes], bytes]] | None = None
         self._server: socket.socket | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._paused: asyncio.TimerHandle | None = None
         self._endpoint: Endpoint | None = None
-        self._active: _Session | None = None
-        self._waiting: deque[_Session] | tuple[()] = ()  # a deque when a second client waits
+        self._active: _Session | None = None  # the host; on a several-host port, the one answered
+        self._served: list[_Session] = []
+        self._ready: deque[_Session] | tuple[()] = ()  # several-host: hosts with messages waiting
+        self._turn: _Session | None = None
+        self._owed = 0  # messages of the turn's host not answered yet
+        self._turn_timer: asyncio.TimerHandle | None = None
         #: No protocol variant: the client's bytes go to the endpoint as they are, and back.
         self._plain = type(self)._session_data is TcpTransport._session_data
+
+    def limit_hosts(self, hosts: int, idle_drop: float | None = None,
+                    split: Callable[[bytes], tuple[list[bytes], bytes]] | None = None) -> None:
+        """Serve ``hosts`` clients at once (a one-host port: 1); drop a host idle for longer than
+        ``idle_drop`` seconds when another client waits; ``split`` cuts a host's bytes into
+        messages on a several-host port (the port's declared framing).  Before :meth:`start`."""
+        if hosts < 1:
+            raise ValueError(f"a port serves at least one host, not {hosts}")
+        self.hosts = hosts
+        if idle_drop is not None:
+            self.idle_drop = idle_drop
+        self.split = split
 
     @property
     def url(self) -> str:
@@ -125,7 +174,12 @@ class TcpTransport(Transport):
     @property
     def connected(self) -> bool:
         """Whether a client is being served."""
-        return self._active is not None
+        return bool(self._served)
+
+    @property
+    def clients(self) -> int:
+        """How many clients are being served."""
+        return len(self._served)
 
     def trace_peers(self) -> tuple[tuple[str, int], tuple[str, int]] | None:
         """The serving client's address and the listening address (``None`` with no client)."""
@@ -137,17 +191,13 @@ class TcpTransport(Transport):
             return None
         return (str(peer[0]), int(peer[1])), (self.host, self.port)
 
-    @property
-    def waiting(self) -> int:
-        """Clients queued behind the one being served."""
-        return len(self._waiting)
-
     async def start(self, endpoint: Endpoint) -> None:
         if self._server is not None:
             raise RuntimeError("transport already started")
         loop = asyncio.get_running_loop()
         family = socket.AF_INET6 if ":" in self.host else socket.AF_INET
-        listener = socket.create_server((self.host, self.port), family=family, backlog=16, reuse_port=False)
+        listener = socket.create_server((self.host, self.port), family=family, backlog=listen_backlog(),
+                                        reuse_port=False)
         listener.setblocking(False)
         self._loop = loop
         self._endpoint = endpoint
@@ -157,7 +207,6 @@ class TcpTransport(Transport):
         self.address = f"{host}:{self.port}"
         fdlimit.keep_reserve()
         loop.add_reader(listener.fileno(), self._accept)
-
     def _accept(self) -> None:
         listener, loop = self._server, self._loop
         if listener is None or loop is None:
@@ -205,32 +254,45 @@ class TcpTransport(Transport):
             return
         if self._paused is not None:
             self._paused.cancel()
+        if self._turn_timer is not None:
+            self._turn_timer.cancel()
         if self._loop is not None:
             self._loop.remove_reader(server.fileno())
         server.close()
-        sessions = ([self._active] if self._active else []) + list(self._waiting)
-        self._waiting = ()
+        sessions, self._served, self._ready, self._turn = list(self._served), [], (), None
         for session in sessions:
             if session.transport is not None:
                 session.transport.abort()
-        if self._active is not None:  # abort() reports connection_lost on the next loop turn
-            self._deactivate(self._active)
+        if sessions:  # abort() reports connection_lost on the next loop turn
+            self._detach()
+        self._active = None
         self._endpoint = None
 
     # -- sessions ---------------------------------------------------------------------------
     def _connected(self, session: _Session) -> None:
+        assert session.transport is not None
         if self._server is None:
-            assert session.transport is not None
             session.transport.abort()
             return
-        if self._active is None:
+        admission = admit(self._served, self.hosts, self.idle_drop, _heard)
+        if admission.action == "refuse":
+            self.refused += 1
+            refuse(self.address, session.peer, self.hosts, [(s.peer, s.since) for s in self._served])
+            session.transport.close()
+            return
+        if admission.action == "drop":
+            victim = admission.victim
+            assert isinstance(victim, _Session)
+            self.idle_dropped += 1
+            dropped(self.address, victim.peer, time.monotonic() - victim.heard, session.peer)
+            if victim.transport is not None:
+                victim.transport.abort()
+            self._lost(victim)  # (its connection_lost comes later and finds it gone)
+        self._served.append(session)
+        if self.hosts == 1:
             self._activate(session)
-        else:
-            assert session.transport is not None
-            session.transport.pause_reading()
-            if not self._waiting:
-                self._waiting = deque()
-            self._waiting.append(session)
+        elif len(self._served) == 1 and self._endpoint is not None:
+            self._endpoint.attach(self._turn_output)  # (once: the line sees one connect, not one per turn)
 
     def _activate(self, session: _Session) -> None:
         self._active = session
@@ -238,15 +300,12 @@ class TcpTransport(Transport):
         if endpoint is None:
             return
         self._session_started(session, endpoint)
-
-        # (the endpoint is detached again when the session ends: _deactivate; a plain TCP port
+        # (the endpoint is detached again when the session ends: _detach; a plain TCP port
         # hands the device's output to the session itself: one call less per answer)
         plain = type(self)._send is TcpTransport._send
         endpoint.attach(session.send if plain else functools.partial(self._send, session))
 
-    def _deactivate(self, session: _Session) -> None:
-        if self._active is not session:
-            return
+    def _detach(self) -> None:
         self._active = None
         endpoint = self._endpoint
         if endpoint is not None:
@@ -254,6 +313,9 @@ class TcpTransport(Transport):
             endpoint.host_disconnected()
 
     def _received(self, session: _Session, data: bytes) -> None:
+        if self.hosts > 1:
+            self._message_data(session, data)
+            return
         if self._active is not session or self._endpoint is None:
             return
         if session.backlog or len(data) > SLICE:
@@ -291,17 +353,88 @@ class TcpTransport(Transport):
             session.transport.resume_reading()
 
     def _lost(self, session: _Session) -> None:
-        if self._active is session:
-            self._deactivate(session)
-            while self._waiting and self._active is None:
-                nxt = self._waiting.popleft()  # type: ignore[union-attr]
-                if nxt.closed:
-                    continue
-                self._activate(nxt)
-                if nxt.transport is not None:
-                    nxt.transport.resume_reading()
-        elif session in self._waiting:
-            self._waiting.remove(session)  # type: ignore[union-attr]
+        if session not in self._served:
+            return
+        self._served.remove(session)
+        session.messages = ()
+        if session in self._ready:
+            self._ready.remove(session)  # type: ignore[union-attr]
+        if self._turn is session:
+            self._end_turn()
+        if not self._served:
+            self._detach()
+        elif self._active is session:
+            self._active = None
+
+    # -- several hosts: one message at a time, the answer to its sender ----------------------
+    def _message_data(self, session: _Session, data: bytes) -> None:
+        if session not in self._served or self._endpoint is None:
+            return
+        if self.split is None:
+            messages, session.rest = [data], b""
+        else:
+            messages, session.rest = self.split(session.rest + data)
+            if len(session.rest) > SLICE:  # no message ends in sight: hand it on as it is
+                messages, session.rest = [*messages, session.rest], b""
+        if not messages:
+            return
+        if not session.messages:
+            session.messages = deque()
+        was_waiting = bool(session.messages)
+        session.messages.extend(messages)  # type: ignore[union-attr]
+        if not was_waiting and session is not self._turn:
+            if not self._ready:
+                self._ready = deque()
+            self._ready.append(session)  # type: ignore[union-attr]
+        if self._turn is None or self._turn is session:
+            self._next_turn(session if self._turn is session else None)
+
+    def _next_turn(self, holder: _Session | None = None) -> None:
+        """Hand the device the next message: ``holder``'s (it has the turn), else the first
+        waiting host's."""
+        endpoint = self._endpoint
+        if endpoint is None:
+            return
+        session = holder
+        if session is None or not session.messages:
+            if not self._ready:
+                return
+            session = self._ready.popleft()  # type: ignore[union-attr]
+        if self._turn_timer is not None:
+            self._turn_timer.cancel()
+        if self._turn is not session:
+            self._turn, self._owed = session, 0
+        self._owed += 1
+        self._active = session  # the device's output goes to it (_turn_output)
+        message = session.messages.popleft()  # type: ignore[union-attr]
+        if session.messages and session not in self._ready and holder is None:
+            self._ready.append(session)  # type: ignore[union-attr]
+        assert self._loop is not None
+        self._turn_timer = self._loop.call_later(TURN_GRACE, self._end_turn)
+        endpoint.feed(message)
+
+    def _turn_output(self, data: bytes) -> None:
+        """The device's output on a several-host port: to the host whose message it answers."""
+        session = self._active
+        if session is None:
+            return
+        self._send(session, data)
+        if self._turn is session:
+            self._owed -= 1
+            if self._owed <= 0:
+                self._end_turn()
+
+    def _end_turn(self) -> None:
+        if self._turn_timer is not None:
+            self._turn_timer.cancel()
+            self._turn_timer = None
+        holder, self._turn, self._owed = self._turn, None, 0
+        if holder is not None and holder.messages and holder not in self._ready:
+            if not self._ready:
+                self._ready = deque()
+            self._ready.append(holder)  # type: ignore[union-attr]
+        if self._loop is not None and self._ready:
+            self._loop.call_soon(self._next_turn)
 
     # -- hooks for protocol variants (RFC 2217) ---------------------------------------------
     def _session_started(self, session: _Session, endpoint: Endpoint) -> None:
@@ -314,3 +447,7 @@ class TcpTransport(Transport):
     def _send(self, session: _Session, data: bytes) -> None:
         """Device output to the serving client."""
         session.send(data)
+
+
+def _heard(session: _Session) -> float:
+    return session.heard

@@ -360,6 +360,17 @@ def test_dnc_read_in_refuses_a_block_beyond_the_block_format(cnc: Any, block: by
     assert cnc.read("program.P20") == "N 1 X 1.000"
 
 
+@pytest.mark.manual("§2.6.3", "In einem Satz können maximal folgende Funktionen eingegeben werden: 2 Koordinaten, "
+                    "2 Hilfskoordinaten, 4 G-Funktionen, 2 M-Funktionen")
+def test_dnc_read_in_takes_a_block_at_the_block_format(cnc: Any) -> None:
+    """The most one block may hold (§2.6.3; spec §3.4): taken whole, through the V7 pty."""
+    _read_in(cnc, b"%\rN1 X1 Y2 I3 J4 G01 G90 G40 G17 M03 M08 F100 S200 T01 L1.5\rM30\r")
+    until(lambda: cnc.read("v7.state") == "done", "M30 ends the read-in")
+    program = cnc.read("program.P20")
+    assert program.startswith("N 1 ") and all(word in program for word in ("G 01", "G 17", "M 03", "M 08"))
+    assert cnc.read("panel.message") != "WERTBEREICHES-UEBERLAUF"
+
+
 # -- §2.6.4 the external keyboard V8 -----------------------------------------------------------------
 @pytest.mark.manual("§2.6.4", "Baud-Rate: 1200 fest programmiert")
 @pytest.mark.manual("§2.6", "V 8 (externe Tastatur) kann in jeder Betriebsart angewählt werden")

@@ -29,6 +29,7 @@ PACKAGES = {
     "node": "nodejs",
     "npm": "npm",
     "tmux": "tmux",
+    "ss": "iproute2",
     "libcairo": "libcairo2",
 }
 #: Where Debian puts daemons such as mosquitto (often not on a user's PATH).

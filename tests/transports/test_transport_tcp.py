@@ -44,7 +44,9 @@ async def test_round_trip_and_disconnect_notification(echo: Recorder) -> None:
         await transport.close()
 
 
-async def test_second_client_waits_for_the_first(echo: Recorder) -> None:
+async def test_a_second_client_is_refused_while_the_first_holds_the_port(echo: Recorder) -> None:
+    """One host at a time (issue 32: refused at once, no longer left waiting); the next client
+    after the holder left is the host.  More in test_tcp_hosts.py."""
     transport = TcpTransport()
     await transport.start(echo)
     try:
@@ -53,23 +55,17 @@ async def test_second_client_waits_for_the_first(echo: Recorder) -> None:
         assert await _read_exactly(r1, 1) == b"A"
         r2, w2 = await asyncio.open_connection("127.0.0.1", transport.port)
         w2.write(b"B")
-        await w2.drain()
-        # A round trip on the first client: had B been delivered, it would be in by now.
-        w1.write(b"C")
-        assert await _read_exactly(r1, 1) == b"C"
-        assert echo.data == b"AC"
-        assert transport.waiting == 1
-
+        assert await asyncio.wait_for(r2.read(), 3) == b""
         w1.close()
         await w1.wait_closed()
-        # Now the second client is the host; what it sent while waiting arrives in order.
-        await echo.wait_for(lambda: echo.data == b"ACB")
-        assert echo.disconnects == 1
-        assert await _read_exactly(r2, 1) == b"B"
-        w2.write(b"D")
-        assert await _read_exactly(r2, 1) == b"D"
+        await echo.wait_for(lambda: echo.disconnects == 1)
+        r3, w3 = await asyncio.open_connection("127.0.0.1", transport.port)
+        w3.write(b"D")
+        assert await _read_exactly(r3, 1) == b"D"
+        assert echo.data == b"AD"
         w2.close()
-        await w2.wait_closed()
+        w3.close()
+        await w3.wait_closed()
         await echo.wait_for(lambda: echo.disconnects == 2)
     finally:
         await transport.close()

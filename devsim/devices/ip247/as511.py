@@ -70,11 +70,14 @@ class As511Link:
     """One PG port's transaction state (the device is the slave).
 
     ``known(fn)`` says whether a function code exists (else DLE NAK right after it);
-    ``service(fn, parameters)`` carries it out once the parameters are complete.  ``events``
+    ``service(fn, parameters)`` carries it out once the parameters are complete; a parameter block
+    longer than ``most`` bytes (after DLE removal) gets DLE NAK instead, at its DLE EOT, and
+    nothing is executed (spec §3.6.5); the bytes beyond are not kept.  ``events``
     collects what a host developer may want to know (``refused_function``, ``abandoned`` …)."""
 
-    def __init__(self, known: Callable[[int], bool], service: Callable[[int, bytes], Reply]) -> None:
-        self.known, self.service = known, service
+    def __init__(self, known: Callable[[int], bool], service: Callable[[int, bytes], Reply],
+                 most: int = 1 << 16) -> None:
+        self.known, self.service, self.most = known, service, most
         self.state = "idle"
         self.events: list[str] = []
         self._fn = 0
@@ -160,17 +163,18 @@ class As511Link:
         if not self._dle:
             if byte == DLE:
                 self._dle = True
-            else:
+            elif len(self._block) <= self.most:  # (one byte over says "too long")
                 self._block.append(byte)
             return
         self._dle = False
         if byte == DLE:
-            self._block.append(DLE)  # a doubled DLE is one data byte
+            if len(self._block) <= self.most:
+                self._block.append(DLE)  # a doubled DLE is one data byte
             return
         if byte != EOT:
             self._abandon("a single DLE inside the parameters")
             return
-        reply = self.service(self._fn, bytes(self._block))
+        reply = Refused("too long") if len(self._block) > self.most else self.service(self._fn, bytes(self._block))
         if isinstance(reply, Refused):
             out.append(DLE_NAK)
             self.events.append("refused_parameters")

@@ -14,7 +14,7 @@ from devsim.core.device import Face, Port, SerialSettings
 from devsim.devices.ip247.as511 import TIMEOUT, As511Link, Reply, function_token
 from devsim.devices.ip247.attributes import AgFramer, ag_frame
 from devsim.devices.ip247.module import Ip247Module
-from devsim.devices.ip247.pg_profile import ACK_NEGATIVE, FUNCTIONS, Header, parse_request
+from devsim.devices.ip247.pg_profile import ACK_NEGATIVE, FUNCTIONS, MAX_PARAMETERS, Header, parse_request
 from devsim.devices.ip247.s5_services import S5_SERVICES, S5Memory
 from devsim.devices.ip247.services import serve
 
@@ -28,7 +28,7 @@ class PgFace(Face):
 
     def __init__(self, model: Ip247Module, port: Port) -> None:
         super().__init__(model, port)
-        self.link = As511Link(self._known, self._service)
+        self.link = As511Link(self._known, self._service, MAX_PARAMETERS)
         self._timer: Timer | None = None
 
     @property

@@ -33,7 +33,7 @@ COMMANDS = {1: "Start", 2: "Stopp", 3: "Vorwärts", 4: "Rückwärts", 5: "Übern
 COMMAND_NAMES = {**{name.lower(): code for code, name in COMMANDS.items()},
                  "stop": 2, "forward": 3, "backward": 4, "take_over": 5}
 ACK_ACCEPTED, ACK_QUEUED, ACK_NEGATIVE, ACK_FULL, ACK_MALFORMED = 0x00, 0x01, 0x80, 0x81, 0x82
-MAX_PARAMETERS = 1100  # bytes after DLE removal (spec §3.6.5)
+MAX_PARAMETERS = 1100  # the longest parameter block, bytes after DLE removal: longer gets DLE NAK (spec §3.6.5)
 
 
 class Operate(msgspec.Struct, frozen=True):

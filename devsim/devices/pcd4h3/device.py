@@ -22,7 +22,11 @@ from devsim.devices.pcd4h3.points import DRIVE, FAULTS, POINTS
 from devsim.devices.pcd4h3.services import SERVICES
 from devsim.devices.pcd4h3.tables import REGISTERS
 
-__all__ = ["Pcd4h3Device"]
+__all__ = ["ETHER_TCP_HOSTS", "Pcd4h3Device"]
+
+#: How many hosts the Ether-S-Bus TCP port serves at once.  The manual (a serial-era H3 manual)
+#: is silent; a PCD's Ethernet interface serves several connections: 8 ([DECISION], spec §9.3).
+ETHER_TCP_HOSTS = 8
 
 
 class Pcd4h3Device(Device):
@@ -34,7 +38,8 @@ class Pcd4h3Device(Device):
     ports = (
         PortDef("sbus", "S-Bus serial data mode (FS B5h, stuffing, CRC-16; 9600 8N1)", "§9.2"),
         PortDef("ether_udp", "Ether-S-Bus on UDP, one telegram per datagram", "§9.3", default="udp:5050"),
-        PortDef("ether_tcp", "Ether-S-Bus on TCP, telegrams back to back", "§9.3", default="tcp:5050", framing=ETHER_TCP),
+        PortDef("ether_tcp", "Ether-S-Bus on TCP, telegrams back to back", "§9.3", default="tcp:5050", framing=ETHER_TCP,
+                hosts=ETHER_TCP_HOSTS),
     )
     model_class = Pcd4
     face_classes: ClassVar[dict[str, Any]] = {"sbus": SbusFace, "ether_udp": EtherDatagramFace,

@@ -204,9 +204,11 @@ class Reads(msgspec.Struct, frozen=True):
 
 class Writes(msgspec.Struct, frozen=True):
     """A write of ``medium``: byte count, address high, low, then the data (§9.4): registers in 4
-    bytes each; flags and outputs as count − 1 and the bits, the first in bit 0."""
+    bytes each; flags and outputs as count − 1 and the bits, the first in bit 0; at most ``most``
+    elements, as a read (a longer write is refused with NAK, nothing written)."""
 
     medium: str
+    most: int
 
     def length(self, parameters: bytes) -> int | None:
         return None if not parameters else parameters[0] + 2
@@ -220,8 +222,12 @@ class Writes(msgspec.Struct, frozen=True):
             data = p[3:]
             if len(data) % 4 or not data:
                 return Bad("register data come in 4 bytes")
+            if len(data) // 4 > self.most:
+                return Bad(f"at most {self.most} {self.medium}s per telegram")
             return Write(self.medium, address, struct.unpack(f">{len(data) // 4}i", data))
         count = p[3] + 1
+        if count > self.most:
+            return Bad(f"at most {self.most} {self.medium}s per telegram")
         bits = p[4:]
         if len(bits) != (count + 7) // 8:
             return Bad("the byte count does not match the flag count")

@@ -7,7 +7,9 @@ I 0 … 1023 (each H3 module's limit and reference inputs at FMAH3 + 16m + 9/10/
 the user's keys elsewhere), outputs O 0 … 1023 (the FBs' own: read only), counters and timers.
 :data:`SERVICES` is the station's table of S-Bus commands by code (``06h``): each row's
 :class:`Service` lays out the telegram and carries it out; :func:`serve` turns one request into
-the reply data, an ACK/NAK code, or nothing.
+the reply data, an ACK/NAK code, or nothing.  How many elements one telegram reads or writes
+at most is the row's (§9.4: 32 registers, counters or timers, 128 flags, inputs or outputs), in
+both directions; beyond it the station answers NAK and writes nothing.
 """
 
 from __future__ import annotations
@@ -241,8 +243,8 @@ def _reads(code: str, medium: str, most: int) -> Command[Service]:
     return Command(code, Service(Reads(medium, most), _read), "§9.4", f"read {medium}s (at most {most})")
 
 
-def _writes(code: str, medium: str, note: str = "") -> Command[Service]:
-    return Command(code, Service(Writes(medium), _write), "§9.4", f"write {medium}s{note}")
+def _writes(code: str, medium: str, most: int, note: str = "") -> Command[Service]:
+    return Command(code, Service(Writes(medium, most), _write), "§9.4", f"write {medium}s (at most {most}){note}")
 
 
 def _simple(code: str, name: str, run: Callable[[Pcd4, Simple], Answer]) -> Command[Service]:
@@ -256,9 +258,9 @@ SERVICES: Table[Service] = Table([
     _reads("05h", "output", 128),
     _reads("06h", "register", 32),
     _reads("07h", "timer", 32),
-    _writes("0Bh", "flag"),
-    _writes("0Dh", "output", " (NAK: the outputs belong to the FBs)"),
-    _writes("0Eh", "register"),
+    _writes("0Bh", "flag", 128),
+    _writes("0Dh", "output", 128, " (NAK: the outputs belong to the FBs)"),
+    _writes("0Eh", "register", 32),
     _simple("1Bh", "read status", _status),
     _simple("1Dh", "read station", _station),
     _simple("20h", "read firmware", _firmware),

@@ -18,6 +18,7 @@ from devsim.core.kit import Command, Table
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF, encode, parity_ok
 
 __all__ = [
+    "BLOCK_FORMAT",
     "Block",
     "BlockRead",
     "Ended",
@@ -32,6 +33,10 @@ __all__ = [
 
 COORDINATES = "XYZD"
 CENTRES = "IJK"  # I ↔ X, J ↔ Y, K ↔ Z (absolute centre coordinates, spec §6.6)
+#: The most words of a kind one block holds (manual §2.6.3, spec §3.4: "maximal ... 2 Koordinaten,
+#: 2 Hilfskoordinaten, 4 G-Funktionen, 2 M-Funktionen"); beyond: WERTBEREICHES-UEBERLAUF.  The
+#: one-per-block words (N, F, S, T, L) are replaced by a repeat (a ``duplicate_word`` notice).
+BLOCK_FORMAT: tuple[tuple[str, int], ...] = ((COORDINATES, 2), (CENTRES, 2), ("G", 4), ("M", 2))
 ADDRESS_LETTERS_ORDER = "NXYZDIJKFSGMTL"
 ADDRESS_LETTERS = frozenset(ADDRESS_LETTERS_ORDER)
 SIGNED = frozenset(COORDINATES + CENTRES + "P")
@@ -288,7 +293,7 @@ class TapeReader:
             self.finished = True
             events.append(Ended())
             return
-        for kinds, most in ((COORDINATES, 2), (CENTRES, 2), ("G", 4), ("M", 2)):
+        for kinds, most in BLOCK_FORMAT:
             if sum(letter in kinds for letter in letters) > most:
                 self._fail(events, f"more than {most} words of {kinds} in a block")
                 return
