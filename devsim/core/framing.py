@@ -28,7 +28,11 @@ from typing import Any, Protocol
 
 import msgspec
 
-__all__ = ["Decoder", "Framing", "PLAIN", "PlainDecoder", "Splitter", "Tolerance", "split_at"]
+__all__ = ["MAX_PARTIAL", "Decoder", "Framing", "PLAIN", "PlainDecoder", "Splitter", "Tolerance", "split_at"]
+
+#: A decoder keeps at most this many bytes of an unfinished message; beyond, it reports them as
+#: they are (a host sending garbage without a message end must not grow it forever).
+MAX_PARTIAL = 512
 
 #: bytes a host sent → (complete messages, the unfinished rest)
 Splitter = Callable[[bytes], tuple[list[bytes], bytes]]

@@ -19,19 +19,23 @@ at a level of ``2 + verbose - quiet`` (clamped):
   (:mod:`devsim.observe.traffic_log`).
 
 A line: ``devsim: 12.300 sers connect host connected`` (device time, then
-:func:`devsim.runtime.watch_stream.describe`).  Built on :class:`~devsim.runtime.watch_stream.WatchStream`
+:func:`devsim.runtime.watch_stream.describe`).  A line repeated (same device, port and message
+kind: a bad byte after another on the POSELESTA's V8) is written once, then counted: ``...
+repeated 12345 times in the last 5 s`` every few seconds while it goes on
+(:class:`~devsim.observe.repeats.RepeatLimiter`, on every port of every kind).  Built on :class:`~devsim.runtime.watch_stream.WatchStream`
 without point sampling: a quiet simulator stays idle.
 """
 
 from __future__ import annotations
 
+import asyncio
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from typing import Any
 
 import click
 
-__all__ = ["DEFAULT_LEVEL", "attach_log", "banner", "expects", "level_of", "log_options"]
+__all__ = ["DEFAULT_LEVEL", "attach_log", "banner", "expects", "level_of", "log_options", "repeat_key"]
 
 DEFAULT_LEVEL = 2
 
@@ -53,9 +57,44 @@ def _level(item: dict[str, Any]) -> int:
     return 3
 
 
-def attach_log(runtime: Any, level: int, write: Callable[[str], None] | None = None) -> list[Any]:
+def repeat_key(item: dict[str, Any]) -> Hashable:
+    """What makes two log items repeats of each other: device, port and message kind (the event's
+    name, the error's code, a line's moment and text: other host settings are news), not the time."""
+    return (item.get("device"), item.get("port", "main"), item.get("type"), item.get("name"), item.get("code"),
+            item.get("text"))
+
+
+class _Repeats:
+    """Counts written every :data:`~devsim.observe.repeats.WINDOW` seconds on the loop's timer."""
+
+    def __init__(self, limiter: Any, out: Callable[[str], None]) -> None:
+        self.limiter, self.out = limiter, out
+        self._handle: asyncio.TimerHandle | None = None
+        try:
+            self._loop: asyncio.AbstractEventLoop | None = asyncio.get_running_loop()
+        except RuntimeError:
+            self._loop = None  # (no loop: a count is written with the next line of its kind)
+        self._tick()
+
+    def _tick(self) -> None:
+        for text in self.limiter.due():
+            self.out(text)
+        if self._loop is not None:
+            self._handle = self._loop.call_later(self.limiter.window / 5, self._tick)
+
+    def stop(self) -> None:
+        if self._handle is not None:
+            self._handle.cancel()
+            self._handle = None
+        for text in self.limiter.flush():
+            self.out(text)
+
+
+def attach_log(runtime: Any, level: int, write: Callable[[str], None] | None = None,
+               clock: Callable[[], float] | None = None) -> list[Any]:
     """Log what happens to every device of ``runtime`` at ``level`` (run in the loop thread);
-    returns the streams (``stop()`` ends them).  ``write`` defaults to a flushed stderr line."""
+    returns the streams (``stop()`` ends them).  ``write`` defaults to a flushed stderr line;
+    ``clock`` (seconds, default the monotonic wall clock) times the windows of repeated lines."""
     if level <= 0:
         return []
     from devsim.runtime.watch_stream import WatchStream, describe
@@ -63,13 +102,17 @@ def attach_log(runtime: Any, level: int, write: Callable[[str], None] | None = N
     def emit(text: str) -> None:
         print(text, file=sys.stderr, flush=True)
 
+    from devsim.observe.repeats import RepeatLimiter
+
     out = write or emit
+    limiter = RepeatLimiter() if clock is None else RepeatLimiter(clock=clock)
 
     def send(item: dict[str, Any]) -> None:
         if _level(item) <= level:
-            out(f"devsim: {describe(item)}")
+            for text in limiter.offer(repeat_key(item), f"devsim: {describe(item)}"):
+                out(text)
 
-    streams = []
+    streams: list[Any] = [_Repeats(limiter, out)]
     for device in runtime.devices.values():
         stream = WatchStream(runtime, device, send, values=False)
         stream.start()

@@ -39,6 +39,8 @@ DLE_ACK, DLE_NAK, DLE_ETX, DLE_EOT = bytes((DLE, ACK)), bytes((DLE, NAK)), bytes
 ACCEPT = bytes((0x16, DLE, ETX))  # "accept" after the function code
 END = bytes((0x12, DLE, ETX))  # "end" of every transaction
 TIMEOUT = 0.5  # seconds: no gap this long inside a transaction (§3.5.1)
+#: The link keeps its last this many events (a host sending garbage must not grow it forever).
+EVENTS_KEPT = 100
 
 
 class Refused(msgspec.Struct, frozen=True):
@@ -73,7 +75,8 @@ class As511Link:
     ``service(fn, parameters)`` carries it out once the parameters are complete; a parameter block
     longer than ``most`` bytes (after DLE removal) gets DLE NAK instead, at its DLE EOT, and
     nothing is executed (spec §3.6.5); the bytes beyond are not kept.  ``events``
-    collects what a host developer may want to know (``refused_function``, ``abandoned`` …)."""
+    collects what a host developer may want to know (``refused_function``, ``abandoned`` …): the
+    last :data:`EVENTS_KEPT`."""
 
     def __init__(self, known: Callable[[int], bool], service: Callable[[int, bytes], Reply],
                  most: int = 1 << 16) -> None:
@@ -118,7 +121,7 @@ class As511Link:
             self.state = "ack_accept"
         else:
             out.append(DLE_NAK)
-            self.events.append("refused_function")
+            self._note("refused_function")
             self.state = "idle"
 
     def _awaiting_ack(self, byte: int, out: list[bytes]) -> None:
@@ -177,7 +180,7 @@ class As511Link:
         reply = Refused("too long") if len(self._block) > self.most else self.service(self._fn, bytes(self._block))
         if isinstance(reply, Refused):
             out.append(DLE_NAK)
-            self.events.append("refused_parameters")
+            self._note("refused_parameters")
             self.state = "idle"
             return
         out.append(DLE_ACK)
@@ -185,8 +188,13 @@ class As511Link:
         self._data = reply
         self.state = "ack_data" if reply is not None else "ack_end"
 
+    def _note(self, event: str) -> None:
+        self.events.append(event)
+        if len(self.events) > 2 * EVENTS_KEPT:
+            del self.events[:-EVENTS_KEPT]
+
     def _abandon(self, why: str) -> None:
-        self.events.append(f"abandoned: {why}")
+        self._note(f"abandoned: {why}")
         self.state = "idle"
         self._dle = False
         self._block.clear()

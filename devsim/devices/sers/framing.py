@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from devsim.core.framing import Framing, split_at
+from devsim.core.framing import MAX_PARTIAL, Framing, split_at
 
 __all__ = ["LINES"]
 
@@ -29,6 +29,9 @@ class LineDecoder:
 
     def feed(self, data: bytes) -> list[Any] | None:
         lines, self._rest = split_at(self._rest + data, self._ends)
+        if len(self._rest) > MAX_PARTIAL:  # garbage without a line end: shown as it is, not kept
+            lines.append(self._rest)
+            self._rest = b""
         return [line.decode("latin-1") for line in lines]
 
 

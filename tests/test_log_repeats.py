@@ -1,0 +1,66 @@
+"""Repeated log lines are rate-limited (issue 32, item 3): the limiter on an injected clock, and
+``devsim run poselesta`` with a host writing 100,000 bad bytes on V8 (a line each, before) through
+the real CLI and a real pty."""
+
+from __future__ import annotations
+
+import os
+import re
+import termios
+import tty
+
+from devsim.observe.repeats import RepeatLimiter
+from tests.support.process import DevsimProcess
+
+BAD_BYTES = 100_000
+
+
+def test_a_repeated_line_is_written_once_then_counted_every_window() -> None:
+    now = [0.0]
+    limiter = RepeatLimiter(window=5.0, clock=lambda: now[0])
+    assert limiter.offer("k", "bad byte") == ["bad byte"]
+    assert limiter.offer("other", "other") == ["other"]
+    for _ in range(12345):
+        now[0] += 0.0001
+        assert limiter.offer("k", "bad byte") == []
+    assert limiter.due() == []
+    now[0] = 5.0
+    assert limiter.due() == ["bad byte ... repeated 12345 times in the last 5 s"]
+    now[0] = 10.0
+    assert limiter.due() == []  # nothing counted: the key is forgotten, the next one is written
+    assert limiter.offer("k", "bad byte") == ["bad byte"]
+    limiter.offer("k", "bad byte")
+    now[0] = 11.0
+    assert limiter.offer("k", "bad byte") == []
+    assert limiter.flush() == ["bad byte ... repeated 2 times in the last 1 s"]
+
+
+def test_bad_bytes_on_poselesta_v8_write_a_line_then_a_count() -> None:
+    sim = DevsimProcess("run", "poselesta", "--pty", "--speed", "100")  # V8 takes 1200 baud
+    try:
+        line = sim.next_match(sim.out, lambda text: ".v8: pty " in text, 30, "the V8 pty")
+        path = line.split(" pty ", 1)[1].strip()
+        sim.next_match(sim.out, lambda text: text.endswith(": ready"), 30, "ready")
+        fd = os.open(path, os.O_RDWR | os.O_NOCTTY)
+        try:
+            tty.setraw(fd)
+            attrs = termios.tcgetattr(fd)
+            attrs[4] = attrs[5] = termios.B1200
+            termios.tcsetattr(fd, termios.TCSANOW, attrs)
+            data = b"\x01" * BAD_BYTES  # odd parity: an ISO parity error, each byte (manual §2.6.4)
+            written = 0
+            while written < len(data):
+                written += os.write(fd, data[written : written + 4096])
+            err: list[str] = []
+            count = sim.next_match(sim.err, lambda text: "repeated" in text, 60, "the count line", keep=err)
+            total = int(re.search(r"repeated (\d+) times", count).group(1))  # type: ignore[union-attr]
+            while total < BAD_BYTES - 1 and len(err) < 60:  # the count of the next windows, until every byte is told
+                count = sim.next_match(sim.err, lambda text: "repeated" in text, 60, "the next count", keep=err)
+                total += int(re.search(r"repeated (\d+) times", count).group(1))  # type: ignore[union-attr]
+        finally:
+            os.close(fd)
+    finally:
+        sim.interrupt()
+    parity = [text for text in err if "v8_parity_error" in text]
+    assert len(parity) <= 1 + BAD_BYTES // 1000, parity[:5]  # (before: one line per byte)
+    assert len(err) < 60 and total == BAD_BYTES - 1, err
