@@ -106,6 +106,10 @@ def soak(kind: str, seconds: float, rss_mb: float, directory: str) -> list[str]:
         for port in ports:
             port.close()
         state = client.state(kind)  # answered after the garbage
+        settle = time.monotonic() + 5  # connections the soak just closed may still be closing
+        while _fds(sim.proc.pid) > fds + 2 and time.monotonic() < settle:
+            client.state(kind)
+            time.sleep(0.05)  # bounded wait for the server to see the closes, not a synchronisation
         after_rss, after_fds = _rss_kb(sim.proc.pid), _fds(sim.proc.pid)
         client.close()
         print(f"{kind}: {fed} bytes on {len(ports)} ports in {seconds:g} s; resident {rss} -> {after_rss} kB, "
