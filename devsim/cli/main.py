@@ -598,6 +598,7 @@ async def _serve(plan: _Plan) -> None:
             detail = str(exc) if isinstance(exc, OSError | ValueError) else f"{type(exc).__name__}: {exc}"
             raise _StartError(f"cannot {stage}: {detail}", exits.start_status(exc)) from None
 
+        logs: list[Any] = []
         try:
             for device in devices:
                 for port_name, transport, spec in served:
@@ -619,7 +620,7 @@ async def _serve(plan: _Plan) -> None:
                 _say(fleet_line)
             for device in devices:  # NAME: ready, each time it has booted and listens
                 device.on_ready(lambda name=device.name: _say(f"{name}: ready"))
-            attach_log(runtime, plan.log_level)
+            logs = attach_log(runtime, plan.log_level)
             if plan.log_level >= DEFAULT_LEVEL:  # (-q: warnings and errors only)
                 print(banner(runtime, devices), file=sys.stderr, flush=True)
             # What exists now (modules, tables, devices) lives as long as the process: keep it
@@ -627,6 +628,8 @@ async def _serve(plan: _Plan) -> None:
             gc.freeze()
             await stop.wait()
         finally:
+            for log in logs:  # the repeat counts not yet written are written now
+                log.stop()
             if server is not None:
                 await server.close()
     for signum in (signal.SIGINT, signal.SIGTERM):

@@ -327,7 +327,7 @@ async def _up(
             print(f"fleet: {member.url} as {member.process}", flush=True)
         for device in plant.devices.values():
             device.on_ready(lambda name=device.name: print(f"{name}: ready", flush=True))
-        attach_log(runtime, log_level)
+        logs = attach_log(runtime, log_level)
         title = f"plant {spec.name!r} up" if getattr(spec, "name", None) else "plant up"
         if log_level >= DEFAULT_LEVEL:
             print(f"devsim: {title} ({len(plant.devices)} devices); Ctrl-C to stop", file=sys.stderr, flush=True)
@@ -338,6 +338,8 @@ async def _up(
         try:
             await stop.wait()
         finally:
+            for log in logs:  # the repeat counts not yet written are written now
+                log.stop()
             if server is not None:
                 await server.close()
     for signum in (signal.SIGINT, signal.SIGTERM):
