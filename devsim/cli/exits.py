@@ -42,6 +42,7 @@ __all__ = [
     "Refused",
     "SystemFailure",
     "Unreachable",
+    "StartFailure",
     "control_error",
     "failure",
     "start_status",
@@ -95,6 +96,15 @@ class SystemFailure(click.ClickException):
 
 class MissingExtra(SystemFailure):
     """A feature's libraries are not installed; the message names the ``pip install``."""
+
+
+class StartFailure(Exception):
+    """A server (``run``, ``up``) could not start: raised inside its event loop with the one line
+    and the status, turned into :func:`failure` once ``asyncio.run`` has returned."""
+
+    def __init__(self, message: str, status: int) -> None:
+        super().__init__(message)
+        self.status = status
 
 
 def failure(status: int, message: str) -> click.ClickException:

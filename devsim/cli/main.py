@@ -487,14 +487,8 @@ def run(
         asyncio.run(_serve(plan))
     except KeyboardInterrupt:  # Ctrl-C before the handlers were in place
         sys.exit(exits.INTERRUPTED)
-    except _StartError as exc:
+    except exits.StartFailure as exc:
         raise exits.failure(exc.status, str(exc)) from None
-
-
-class _StartError(Exception):
-    def __init__(self, message: str, status: int) -> None:
-        super().__init__(message)
-        self.status = status
 
 
 def _make_transport(port: _Port) -> Any:
@@ -596,7 +590,7 @@ async def _serve(plan: _Plan) -> None:
             if server is not None:
                 await server.close()
             detail = str(exc) if isinstance(exc, OSError | ValueError) else f"{type(exc).__name__}: {exc}"
-            raise _StartError(f"cannot {stage}: {detail}", exits.start_status(exc)) from None
+            raise exits.StartFailure(f"cannot {stage}: {detail}", exits.start_status(exc)) from None
 
         logs: list[Any] = []
         try:

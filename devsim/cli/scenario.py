@@ -256,16 +256,9 @@ def up(
         sys.exit(exits.INTERRUPTED)
     except OSError as exc:
         raise exits.failure(exits.start_status(exc), f"cannot start the plant: {exc}") from None
-    except _FleetError as exc:
+    except exits.StartFailure as exc:
         raise exits.failure(exc.status, str(exc)) from None
 
-
-class _FleetError(Exception):
-    """The plant could not join its fleet (a name clash, no broker); ``status``: the exit status."""
-
-    def __init__(self, message: str, status: int) -> None:
-        super().__init__(message)
-        self.status = status
 
 
 async def _up(
@@ -318,7 +311,7 @@ async def _up(
             except (FleetClash, ConnectionError) as exc:
                 if server is not None:
                     await server.close()
-                raise _FleetError(f"cannot join the fleet {fleet}: {exc}", exits.start_status(exc)) from None
+                raise exits.StartFailure(f"cannot join the fleet {fleet}: {exc}", exits.start_status(exc)) from None
         for row in plant.describe():
             print(row, flush=True)
         if server is not None:
