@@ -39,11 +39,11 @@ MAX_QUEUE = 4096
 
 def capture_info(runtime: Runtime, key: str) -> dict[str, Any]:
     """How the port ``key`` (``port_key``) is captured: ``link`` (147 USER0 for a serial line,
-    228 raw IPv4), ``protocol`` and ``port`` (the devsim header's bytes; 0 for IPv4)."""
+    228 raw IPv4), ``protocol`` and ``port_byte`` (the devsim header's bytes; 0 for IPv4)."""
     tag = runtime.capture_tags.get(key)
     if tag is None:
-        return {"link": LINKTYPE_IPV4, "protocol": 0, "port": 0}
-    return {"link": LINKTYPE_USER0, "protocol": tag.protocol, "port": tag.port}
+        return {"link": LINKTYPE_IPV4, "protocol": 0, "port_byte": 0}
+    return {"link": LINKTYPE_USER0, "protocol": tag.protocol, "port_byte": tag.port}
 
 
 def captures(runtime: Runtime) -> dict[str, dict[str, Any]]:

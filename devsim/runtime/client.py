@@ -175,7 +175,7 @@ class ControlClient(ControlOps):
 class CaptureSubscription:
     """A port's chunks as they cross (the ``capture`` op, :mod:`devsim.runtime.capture_stream`)
     on a connection of its own: :attr:`info` says how the port is captured (``link``,
-    ``protocol``, ``port``, ``t``); iterating yields the ``chunk`` and ``dropped`` items until
+    ``protocol``, ``port_byte``, ``t``); iterating yields the ``chunk`` and ``dropped`` items until
     the simulator stops or :meth:`close`.  ``timeout``: at most that long without an item
     (:class:`TimeoutError`), None waits for ever."""
 
