@@ -19,6 +19,7 @@ from devsim.core.points import Point, PointType, UnknownName, parse_bool
 from devsim.core.signals import SignalBank, SignalKind
 
 __all__ = [
+    "CaptureTag",
     "Command",
     "Deviation",
     "DriveActions",
@@ -43,6 +44,20 @@ H = TypeVar("H")
 DEFAULT_SCHEMES = ("udp", "tcp")
 
 
+class CaptureTag(msgspec.Struct, frozen=True):
+    """How a pcap capture tags a serial port's records (``--trace FILE.pcap``, the live capture):
+    the devsim header's protocol and port bytes (:mod:`devsim.transports.pcap`, docs/wireshark.md:
+    protocol 1 SERS, 2 GMS96, 3 POSELESTA, 4 IP247 PG, 5 PCD4.H3 serial S-Bus, 16 Modbus RTU, 0
+    unknown; port 6, 7, 8 for POSELESTA's V6, V7, V8, else 0)."""
+
+    protocol: int = 0
+    port: int = 0
+
+    def __post_init__(self) -> None:
+        if not (0 <= self.protocol <= 255 and 0 <= self.port <= 255):
+            raise ValueError(f"a capture tag's protocol and port are bytes, not {self.protocol}, {self.port}")
+
+
 class PortDef(msgspec.Struct, frozen=True):
     """A port of a kind (``main`` by default; ``v6``, ``v7``, ``v8`` for the CNC).
 
@@ -60,7 +75,11 @@ class PortDef(msgspec.Struct, frozen=True):
     ``hosts`` declares how many hosts the port serves at once over TCP: a serial port has one
     host (also when reached through a device server or RFC 2217); a port the real device has on
     its Ethernet interface may serve several (the PCD's Ether-S-Bus TCP port).  One more client is
-    refused, or takes the place of an idle host (:mod:`devsim.transports.hosts`)."""
+    refused, or takes the place of an idle host (:mod:`devsim.transports.hosts`).
+
+    ``capture`` declares the port a serial line for pcap captures (:class:`CaptureTag`): its
+    records carry the devsim serial header (link type USER0) with these protocol and port bytes;
+    ``None``: a port of the device's network interface, captured as IPv4/UDP."""
 
     name: str = "main"
     doc: str = "the device's serial port"
@@ -69,6 +88,7 @@ class PortDef(msgspec.Struct, frozen=True):
     default: str | None = None
     framing: Framing | None = None
     hosts: int = 1
+    capture: CaptureTag | None = None
 
     def __post_init__(self) -> None:
         if self.hosts < 1:

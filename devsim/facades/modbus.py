@@ -25,6 +25,7 @@ from typing import Any
 from pymodbus.framer import FramerRTU
 
 from devsim.core.device import Device, SerialSettings
+from devsim.core.kit import CaptureTag
 from devsim.core.points import BadValue, ReadOnlyName
 from devsim.facades import modbus_pdu
 from devsim.facades.modbus_map import ModbusMap, from_words, to_words
@@ -33,6 +34,9 @@ from devsim.transports.hosts import DEFAULT_IDLE_DROP, admit, dropped, listen_ba
 
 __all__ = ["ModbusFacade", "ModbusRtuEndpoint", "ModbusTcpServer", "device_map", "line_settings", "serve_tcp",
            "start_modbus"]
+
+#: A Modbus RTU line's pcap records: protocol 16 (docs/wireshark.md; Wireshark's ``mbrtu`` decodes them).
+MODBUS_RTU_CAPTURE = CaptureTag(16)
 
 #: Messaging on TCP/IP §4.4.1.2: 0xFF is the unit identifier of a server addressed by its IP
 #: address, and "the value 0 is also accepted to communicate directly to a MODBUS/TCP device".
@@ -377,5 +381,6 @@ async def start_modbus(runtime: Any, device: Device, spec: str, *, unit: int = 1
     from devsim.transports.pty import PtyTransport
 
     transport = PtyTransport(link=rest or None)
-    await runtime.serve_target([key], ModbusRtuEndpoint(facade, line_settings(line)), transport, trace=trace)
+    await runtime.serve_target([key], ModbusRtuEndpoint(facade, line_settings(line)), transport, trace=trace,
+                               capture=MODBUS_RTU_CAPTURE)
     return str(getattr(transport, "url", "") or transport.address), transport

@@ -11,8 +11,9 @@
   the port's declared framing (:func:`messages`: ``M 20000`` for a GMS96 letter, ``#P51?`` for
   a SERS line); any other shows its chunks as they came.
 
-A pcap trace holds addresses, not directions: the device is the endpoint that takes part in every
-packet (with both in every packet: the lower port, then the lower address — a listening port
+A serial line's pcap trace (link type USER0, devsim's serial header: :mod:`devsim.transports.pcap`)
+says each chunk's direction in its header.  An IPv4/UDP pcap trace holds addresses, not
+directions: the device is the endpoint that takes part in every packet (with both in every packet: the lower port, then the lower address — a listening port
 below an ephemeral one, and devsim's invented device address 127.0.0.1 below the host's
 127.0.0.2).  :func:`load` tells the three apart by their content.
 """
@@ -30,6 +31,7 @@ from typing import Any
 import msgspec
 
 from devsim.observe.motion_log import COLUMNS, HEADER
+from devsim.transports.pcap import HEADER_SIZE, LINKTYPE_USER0, parse_serial_header
 from devsim.transports.trace import Source, parse_source_note, render
 
 #: The columns every motion log has (``kind`` came later: an older log ends after ``event``).
@@ -236,8 +238,24 @@ _PCAP_MAGIC = {0xA1B2C3D4: ("<", 1e6), 0xD4C3B2A1: (">", 1e6), 0xA1B23C4D: ("<",
 _LINK_OFFSET = {228: 0, 101: 0, 1: 14}
 
 
+def _read_serial_records(raw: bytes, order: str, fraction: float, traffic: Traffic) -> Traffic:
+    """The chunks of a serial line's pcap trace: each record a devsim header and the bytes."""
+    offset = 24
+    while offset + 16 <= len(raw):
+        seconds, part, captured, _length = struct.unpack_from(f"{order}IIII", raw, offset)
+        record = raw[offset + 16 : offset + 16 + captured]
+        offset += 16 + captured
+        try:
+            header = parse_serial_header(record)
+        except ValueError:
+            continue  # not one of devsim's records
+        traffic.chunks.append((seconds + part / fraction, str(header["direction"]), record[HEADER_SIZE:]))
+    return traffic
+
+
 def read_pcap_trace(path: str | Path) -> Traffic:
-    """Parse a classic pcap file of IPv4/UDP packets (what ``--trace FILE.pcap`` writes)."""
+    """Parse a classic pcap file (what ``--trace FILE.pcap`` writes): a serial line's records
+    (link type USER0) or IPv4/UDP packets."""
     raw = Path(path).read_bytes()
     if len(raw) < 24:
         raise PlotInputError(f"{path}: too short for a pcap file")
@@ -246,8 +264,11 @@ def read_pcap_trace(path: str | Path) -> Traffic:
         raise PlotInputError(f"{path}: not a classic pcap file (magic {magic:08x})")
     order, fraction = _PCAP_MAGIC[magic]
     linktype = struct.unpack_from(f"{order}I", raw, 20)[0]
+    if linktype == LINKTYPE_USER0:
+        return _read_serial_records(raw, order, fraction, Traffic(Path(path).stem))
     if linktype not in _LINK_OFFSET:
-        raise PlotInputError(f"{path}: link type {linktype} is not IPv4 (raw IPv4 228, raw IP 101, Ethernet 1)")
+        raise PlotInputError(f"{path}: link type {linktype} is neither devsim's serial records (USER0 147) "
+                             "nor IPv4 (raw IPv4 228, raw IP 101, Ethernet 1)")
     skip = _LINK_OFFSET[linktype]
     packets: list[tuple[float, tuple[bytes, int], tuple[bytes, int], bytes]] = []
     offset = 24

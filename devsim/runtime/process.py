@@ -20,6 +20,7 @@ from typing import Any, TypeVar
 from devsim.core.bus import Bus
 from devsim.core.clock import Clock, RealClock, VirtualClock
 from devsim.core.device import Device, UnknownName
+from devsim.core.kit import CaptureTag
 from devsim.core.nvram import NonVolatileMemory
 from devsim.core.registry import device_class
 from devsim.transports.fdlimit import loop_exception_handler
@@ -219,7 +220,7 @@ class Runtime:
             framing = spec.framing
             limit(spec.hosts, self.idle_drop, framing.split if framing is not None else None)
         line = await self.serve_target([port_key(device.name, port) for device in group], target, transport,
-                                       pacing=pacing, trace=trace)
+                                       pacing=pacing, trace=trace, capture=group[0].port(port).spec.capture)
         if line.tracer is not None:  # the trace says what it traces: a reader decodes it by the port's framing
             from devsim.transports.trace import source_note
 
@@ -227,17 +228,18 @@ class Runtime:
         return line
 
     async def serve_target(self, keys: Sequence[str], target: Any, transport: Any, *, pacing: bool = False,
-                           trace: str | Path | None = None) -> Any:
+                           trace: str | Path | None = None, capture: CaptureTag | None = None) -> Any:
         """Serve any line target (a device's port, a bus, a facade's endpoint) on ``transport``
-        under the port keys ``keys``; returns the Line."""
-        from devsim.transports.line import Line
+        under the port keys ``keys``; returns the Line.  ``capture`` tags a serial line's pcap
+        records (:class:`~devsim.core.kit.CaptureTag`; ``None``: captured as IPv4/UDP)."""
+        from devsim.transports.line import Line, wire_settings
         from devsim.transports.tracing import open_trace
 
-        tracer = None
-        if trace is not None:  # FILE.pcap: a pcap trace with the transport's addresses, else text
+        line = Line(target, self.clock, pacing=pacing)
+        if trace is not None:  # FILE.pcap: a serial line's records, or packets with the transport's addresses
             peers = getattr(transport, "trace_peers", None)
-            tracer = open_trace(trace, peers=peers, name=keys[0])
-        line = Line(target, self.clock, pacing=pacing, tracer=tracer)
+            line.tracer = open_trace(trace, peers=peers, name=keys[0], capture=capture,
+                                     settings=lambda: wire_settings(line))
         await transport.start(line)
         self.transports.append(transport)
         for key in keys:

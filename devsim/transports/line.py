@@ -53,7 +53,7 @@ from devsim.transports.trace import TraceSink, render
 from devsim.transports.uart import garble as garble
 from devsim.transports.uart import settings_match as settings_match
 
-__all__ = ["FaultHandle", "Line", "LineFault", "LineTarget", "garble", "settings_match"]
+__all__ = ["FaultHandle", "Line", "LineFault", "LineTarget", "garble", "settings_match", "wire_settings"]
 
 
 # A real receiver accepts a byte that arrives a hair early or late; a timer may fire a few
@@ -561,3 +561,16 @@ class Line:
             self._deliver(bytes(out))
         if self._queue:
             self._schedule()
+
+
+def wire_settings(line: Line) -> dict[str, Any]:
+    """The line settings of the moment as a capture records them (:mod:`devsim.transports.pcap`):
+    the host's ``baud``, ``bits``, ``parity`` and ``stop`` (a ``baud_mismatch`` fault's rate
+    included; 0 / ``""`` where not known: no host report yet, or data bits and parity a pty does
+    not show) and ``mismatch``."""
+    host = line._effective_host()
+    if host is None:
+        return {"baud": 0, "bits": 0, "parity": "", "stop": 0, "mismatch": False}
+    seen = host.frame_seen
+    return {"baud": host.baudrate, "bits": host.bytesize if seen else 0, "parity": host.parity if seen else "",
+            "stop": float(host.stopbits), "mismatch": not settings_match(host, line.device_settings)}

@@ -1,8 +1,10 @@
 """Opening a wire trace: the one factory that picks its form by the file name.
 
-``FILE.pcap`` gets a libpcap trace (:class:`~devsim.transports.pcap.PcapTracer`, readable by
-Wireshark and tshark); any other name the text trace (:class:`~devsim.transports.trace.Tracer`).
-Both refuse to write through a symlink.
+``FILE.pcap`` gets a libpcap trace readable by Wireshark and tshark: a serial line's (a port
+with a capture tag, :class:`~devsim.core.kit.CaptureTag`) in devsim's serial encapsulation
+(:class:`~devsim.transports.pcap.SerialPcapTracer`, link type USER0), any other port's as
+IPv4/UDP (:class:`~devsim.transports.pcap.PcapTracer`); any other name gets the text trace
+(:class:`~devsim.transports.trace.Tracer`).  All refuse to write through a symlink.
 """
 
 from __future__ import annotations
@@ -11,7 +13,8 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-from devsim.transports.pcap import PcapTracer, Peers
+from devsim.core.kit import CaptureTag
+from devsim.transports.pcap import LineState, PcapTracer, Peers, SerialPcapTracer
 from devsim.transports.trace import Tracer, TraceSink
 
 __all__ = ["PCAP_SUFFIX", "is_pcap", "open_trace"]
@@ -29,9 +32,15 @@ def open_trace(
     *,
     peers: Callable[[], Peers | None] | None = None,
     name: str = "",
+    capture: CaptureTag | None = None,
+    settings: Callable[[], LineState] | None = None,
 ) -> TraceSink:
-    """A trace writer for ``path``: pcap for ``*.pcap`` (``peers`` gives the transport's real
-    addresses, ``name`` the stable invented port, see :mod:`devsim.transports.pcap`), else text."""
+    """A trace writer for ``path``: pcap for ``*.pcap``, else text.  A pcap trace of a serial
+    line (``capture``: its tag) carries the line ``settings`` of the moment in each record;
+    any other is IPv4/UDP (``peers`` gives the transport's real addresses, ``name`` the stable
+    invented port, see :mod:`devsim.transports.pcap`)."""
+    if is_pcap(path) and capture is not None:
+        return SerialPcapTracer(path, protocol=capture.protocol, port=capture.port, settings=settings)
     if is_pcap(path):
         return PcapTracer(path, peers=peers, name=name)
     return Tracer(path)

@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 import msgspec
 
 from devsim.core.device import Device
-from devsim.core.kit import Command, ErrorCode, PortDef, Reference, Table
+from devsim.core.kit import CaptureTag, Command, ErrorCode, PortDef, Reference, Table
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.commands import (
     G_FUNCTIONS,
@@ -53,7 +53,7 @@ class Gms96Device(Device):
     config_model = Gms96Config
     model_class = Gms96Card
     face_classes: ClassVar[dict[str, Any]] = {"main": Gms96Face}
-    ports = (PortDef(framing=FT12),)
+    ports = (PortDef(framing=FT12, capture=CaptureTag(2)),)
     points = POINTS
     drive = DRIVE
     faults = FAULTS

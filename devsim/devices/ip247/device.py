@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import PortDef, Reference
+from devsim.core.kit import CaptureTag, PortDef, Reference
 from devsim.devices.ip247.config import Ip247Config
 from devsim.devices.ip247.deviations import DEVIATIONS
 from devsim.devices.ip247.drive_actions import DRIVE, SETUP
@@ -32,7 +32,7 @@ class Ip247Device(Device):
     description: ClassVar[str] = "Siemens SIMATIC S5 IP247 stepper positioning module (PG port AS511, PLC side)"
     config_model = Ip247Config
     ports = (
-        PortDef("pg", "programmer port X8 (AS511, IP247-SIM/PG v1; 9600 8E1)", "§3.3.5"),
+        PortDef("pg", "programmer port X8 (AS511, IP247-SIM/PG v1; 9600 8E1)", "§3.3.5", capture=CaptureTag(4)),
         PortDef("ag", "PLC side: FB164/FB165 services (IP247-SIM/AG v1, length-framed; TCP)", "§6"),
     )
     model_class = Ip247Module

@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import Command, ErrorCode, PortDef, Reference
+from devsim.core.kit import CaptureTag, Command, ErrorCode, PortDef, Reference
 from devsim.devices.pcd4h3.config import Pcd4h3Config
 from devsim.devices.pcd4h3.deviations import DEVIATIONS
 from devsim.devices.pcd4h3.face import EtherDatagramFace, EtherStreamFace, SbusFace
@@ -36,7 +36,8 @@ class Pcd4h3Device(Device):
     description: ClassVar[str] = "SAIA PCD4.H3 servo positioning module (LM628) in a PCD4, S-Bus and Ether-S-Bus"
     config_model = Pcd4h3Config
     ports = (
-        PortDef("sbus", "S-Bus serial data mode (FS B5h, stuffing, CRC-16; 9600 8N1)", "§9.2"),
+        PortDef("sbus", "S-Bus serial data mode (FS B5h, stuffing, CRC-16; 9600 8N1)", "§9.2",
+                capture=CaptureTag(5)),
         PortDef("ether_udp", "Ether-S-Bus on UDP, one telegram per datagram", "§9.3", default="udp:5050"),
         PortDef("ether_tcp", "Ether-S-Bus on TCP, telegrams back to back", "§9.3", default="tcp:5050", framing=ETHER_TCP,
                 hosts=ETHER_TCP_HOSTS),

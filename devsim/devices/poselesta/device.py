@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import ErrorCode, PortDef, Reference
+from devsim.core.kit import CaptureTag, ErrorCode, PortDef, Reference
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF
 from devsim.devices.poselesta.config import PoselestaConfig
 from devsim.devices.poselesta.deviations import DEVIATIONS
@@ -33,9 +33,10 @@ class PoselestaDevice(Device):
     description: ClassVar[str] = "ELESTA POSELESTA II/III CNC (tape images on V6/V7 DNC, V8 keyboard, M/S/T bus)"
     config_model = PoselestaConfig
     ports = (
-        PortDef("v6", "external data media: printer, cassette, tape reader/punch, TTY", "§2.6.2"),
-        PortDef("v7", "DNC (20 mA): programs in and out", "§2.6.3"),
-        PortDef("v8", "external keyboard (receive only)", "§2.6.4", receive_only=True),
+        PortDef("v6", "external data media: printer, cassette, tape reader/punch, TTY", "§2.6.2",
+                capture=CaptureTag(3, 6)),
+        PortDef("v7", "DNC (20 mA): programs in and out", "§2.6.3", capture=CaptureTag(3, 7)),
+        PortDef("v8", "external keyboard (receive only)", "§2.6.4", receive_only=True, capture=CaptureTag(3, 8)),
     )
     model_class = PoselestaCnc
     face_classes: ClassVar[dict[str, Any]] = {"v6": PoselestaPortFace, "v7": PoselestaPortFace,

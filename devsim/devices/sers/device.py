@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from devsim.core.device import Device
-from devsim.core.kit import ErrorCode, PortDef, Reference
+from devsim.core.kit import CaptureTag, ErrorCode, PortDef, Reference
 from devsim.devices.sers.config import SersConfig
 from devsim.devices.sers.constants import DRIVE_ERRORS
 from devsim.devices.sers.deviations import DEVIATIONS
@@ -37,7 +37,7 @@ class SersDevice(Device):
     hears_others: ClassVar[bool] = True  # a master's statements reach its slaves (§3.6.2)
     model_class = SersDrive
     face_classes: ClassVar[dict[str, Any]] = {"main": SersFace}
-    ports = (PortDef(framing=LINES),)
+    ports = (PortDef(framing=LINES, capture=CaptureTag(1)),)
     points = POINTS
     faults = FAULTS
     drive = DRIVE
