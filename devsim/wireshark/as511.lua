@@ -46,6 +46,8 @@ local f = {
     last = ProtoField.uint16("as511.last", "Last address", base.HEX),
     ack = ProtoField.uint8("as511.ack", "Acknowledgement", base.HEX, T.acks),
     err = ProtoField.uint8("as511.error", "Error (Fehlernummer)", base.DEC, error_names),
+    err_text = ProtoField.string("as511.error.text", "Error text (manual §7.2)"),
+    err_en = ProtoField.string("as511.error.en", "Error (English)"),
     btr = ProtoField.uint8("as511.btr", "Current Betriebsart (BTR)", base.DEC, mode_names),
     rmld = ProtoField.uint8("as511.rmld", "Axis attributes (RMLD)", base.HEX),
     mfkt = ProtoField.uint8("as511.mfkt", "M function (MFKT)"),
@@ -153,6 +155,11 @@ local function response(tree, fn, data)
     tree:add(f.cmd, data:range(3, 1))
     local err = tree:add(f.err, data:range(4, 1))
     local code = data:range(4, 1):uint()
+    local row = T.module_errors[code]
+    if row then
+        tree:add(f.err_text, row.de):set_generated()
+        tree:add(f.err_en, row.en):set_generated()
+    end
     if code ~= 0 then err:add_proto_expert_info(e_error, "Error " .. code .. ": " .. (error_names[code] or "?")) end
     tree:add(f.btr, data:range(5, 1))
     tree:add(f.rmld, data:range(6, 1))
