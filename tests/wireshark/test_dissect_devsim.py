@@ -5,10 +5,11 @@ Wireshark's personal plugins folder, where Wireshark loads each file on its own.
 
 from __future__ import annotations
 
-import shutil
 import subprocess
 from pathlib import Path
 
+from devsim.devices.gms96 import codec
+from devsim.wireshark import install, personal_plugins_dir
 from tests.support.programs import needs_program
 from tests.wireshark.captures import DISSECTOR, tshark_fields, write_pcap
 from tests.wireshark.test_dissect_gms96 import ADDRESS
@@ -57,11 +58,10 @@ def test_the_plugins_folder_layout_loads_each_file_on_its_own(tmp_path: Path) ->
     plugins); the kinds' files and the tables then do nothing on their own, devsim.lua loads them;
     a second copy given with -X lua_script is ignored."""
     tshark = needs_program("tshark")
-    plugins = tmp_path / ".local" / "lib" / "wireshark" / "plugins"
-    plugins.mkdir(parents=True)
-    for path in DISSECTOR.parent.glob("*.lua"):
-        shutil.copy(path, plugins)
-    from devsim.devices.gms96 import codec
+    written = install(personal_plugins_dir(tmp_path))
+    assert {path.name for path in written} >= {"devsim.lua", "gms96.lua", "sers.lua", "as511.lua", "poselesta.lua",
+                                                "gms96_tables.lua", "sers_tables.lua", "ip247_tables.lua",
+                                                "poselesta_tables.lua"}
 
     capture = write_pcap(tmp_path / "g.pcap", "gms96", [
         ("H>D", codec.encode(codec.LongFrame(codec.control_host(1), ADDRESS, codec.letter("T", 5, 15))))])
