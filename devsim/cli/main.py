@@ -686,6 +686,7 @@ def _port_text(transport: Any, scheme: str) -> str:
 LAZY_COMMANDS: dict[str, str] = {
     "check": "devsim.cli.scenario",
     "ctl": "devsim.cli.ctl",
+    "extcap": "devsim.cli.wireshark",
     "monitor": "devsim.cli.monitor",
     "plot": "devsim.cli.plot",
     "ps": "devsim.cli.running",
@@ -693,6 +694,7 @@ LAZY_COMMANDS: dict[str, str] = {
     "replay": "devsim.cli.replay",
     "scenario": "devsim.cli.scenario",
     "up": "devsim.cli.scenario",
+    "wireshark": "devsim.cli.wireshark",
 }
 
 

@@ -127,8 +127,12 @@ def _power_cycle(rt: Runtime, req: rq.PowerCycle) -> None:
 
 
 def _line(rt: Runtime, req: rq.Line) -> dict[str, Any]:
+    from devsim.transports.tap import capturing
+
     rt.device(req.device)
-    return rt.line_status(req.device, req.port)
+    status = rt.line_status(req.device, req.port)
+    line = rt.lines[port_key(req.device, req.port)]
+    return {**status, "capturing": rt.call(lambda: capturing(line))}
 
 
 def _fault(rt: Runtime, req: rq.SwitchFault) -> None:
@@ -180,7 +184,7 @@ CONTROL: Table[Handler] = Table([
     Command("info", _info, "", "the process: name, pid, uptime, clock, kinds, devices and ports (devsim ps)",
             request=rq.Info),
     Command("devices", _devices, "", "the devices: name, kind, ports and faults", request=rq.Devices),
-    Command("line", _line, "", "the status of the line serving a port (settings, mismatch, counters)",
+    Command("line", _line, "", "the status of the line serving a port (settings, mismatch, counters, live captures)",
             request=rq.Line),
     Command("names", lambda rt, req: rt.names(req.device), "",
             "the declared points: name, type, unit, access, doc, section", request=rq.Names),

@@ -27,7 +27,7 @@ from typing import Any
 
 from devsim.transports.trace import TapSink, TraceSink, render
 
-__all__ = ["GAP", "MAX_BYTES", "ChunkTap", "TelegramTap", "chunk_tap", "tap", "untap_chunks"]
+__all__ = ["GAP", "MAX_BYTES", "ChunkTap", "TelegramTap", "capturing", "chunk_tap", "tap", "untap_chunks"]
 
 #: Chunks in the same direction closer than this (device seconds) are one telegram.
 GAP = 0.005
@@ -145,3 +145,9 @@ def untap_chunks(line: Any, listener: ChunkListener) -> None:
         chunks.listeners.remove(listener)
     if not chunks.listeners and line.tracer is chunks:
         line.tracer = chunks.inner
+
+
+def capturing(line: Any) -> int:
+    """How many live captures listen on ``line`` now."""
+    chunks = _find(line, ChunkTap)
+    return 0 if chunks is None else len(chunks.listeners)
