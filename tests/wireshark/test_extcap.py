@@ -194,3 +194,28 @@ def test_tshark_captures_a_running_simulators_pty_live(tmp_path: Path) -> None:
     assert [(h["direction"], h["protocol"], h["baud"]) for h in headers] == [("H>D", 1, 9600), ("D>H", 1, 9600)]
     assert [data[16:] for _, data in records] == [b"#RF\r", answer]
     assert records[1][0] >= records[0][0] > 0  # the device clock's time (real, since the start)
+
+
+def test_devsim_ctl_capture_prints_the_chunks_as_trace_lines(tmp_path: Path) -> None:
+    from tests.support.process import collect_lines, next_match, stop
+
+    sim = Sim("sers", "--virtual")
+    try:
+        seen = sim.read_until("control:")
+        printer = subprocess.Popen([sys.executable, "-m", "devsim", "ctl", "--control", seen["control"], "capture",
+                                    "sers"], env=devsim_env(), cwd=ROOT, stdin=subprocess.DEVNULL,
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            lines = collect_lines(printer.stdout)
+            with ControlClient(seen["control"]) as control:
+                _wait(lambda: control.line("sers")["capturing"] or printer.poll() is not None, "capture running")
+            with serial.Serial(seen["sers"].split()[-1], 9600, timeout=1) as host:
+                host.write(b"#RF\r")
+            assert next_match(lines, lambda line: "H>D" in line, 30, "the chunk") == '0.000000 H>D 23 52 46 0d "#RF\\r"'
+        finally:
+            stop(printer)
+            assert printer.stderr is not None
+            printer.stderr.close()
+    finally:
+        code, err = sim.stop()
+    assert code == 0, err
