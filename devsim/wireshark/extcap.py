@@ -124,7 +124,6 @@ def capture(interface: Interface, fifo: str) -> int:
     """Write ``interface``'s chunks to ``fifo`` as pcap until the reader or the simulator goes."""
     from devsim.runtime.client import CaptureSubscription
 
-    signal.signal(signal.SIGTERM, _stop)
     device, port = interface.device_port()
     with CaptureSubscription(interface.simulator.address, device, port) as stream:
         info = stream.info
@@ -182,6 +181,7 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None) -> int:
     if args.capture:
         if not args.fifo:
             parser.error("--capture needs --fifo")
+        signal.signal(signal.SIGTERM, _stop)  # Wireshark ends a capture so: the fifo is closed on the way out
         return capture(interface, args.fifo)
     parser.error("give --extcap-dlts, --extcap-config or --capture with --extcap-interface")
     return 2

@@ -219,3 +219,42 @@ def test_devsim_ctl_capture_prints_the_chunks_as_trace_lines(tmp_path: Path) -> 
     finally:
         code, err = sim.stop()
     assert code == 0, err
+
+
+def test_the_extcap_writes_a_network_port_as_ipv4(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The PCD's Ether-S-Bus kind of port: raw IPv4 packets (invented addresses, 127.0.0.2 →
+    127.0.0.1), what a --trace FILE.pcap of a pty-served network port holds too."""
+    import socket
+    import threading
+
+    from devsim.transports.udp import UdpTransport
+    from devsim.wireshark.extcap import Interface, capture
+    from tests.transports.test_pcap import ETHERBUS, REPLY, REQUEST, read_pcap
+
+    monkeypatch.setenv("DEVSIM_EXTRA_KINDS", ETHERBUS)
+    runtime = Runtime(virtual=True).start()
+    server = ControlServer(runtime, "127.0.0.1:0")
+    address = str(server.start_sync())
+    try:
+        runtime.serve_sync(runtime.add_device("etherbus", "pcd"), transport := UdpTransport(), port="ether")
+        simulator = _simulator(address=address, devices=["pcd"])
+        interface = Interface(simulator, "pcd.ether", {"link": 228})
+        out = tmp_path / "live.pcap"
+        done: list[int] = []
+        writer = threading.Thread(target=lambda: done.append(capture(interface, str(out))), daemon=True)
+        writer.start()
+        with ControlClient(address) as control:
+            _wait(lambda: control.line("pcd", "ether")["capturing"], "capture running")
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+            sock.settimeout(5)
+            sock.sendto(REQUEST, ("127.0.0.1", transport.port))
+            assert sock.recv(100) == REPLY
+        _wait(lambda: out.exists() and len(read_pcap(out)) == 2, "both packets in the file")
+    finally:
+        server.close_sync()  # the stream ends: the extcap closes its file
+        runtime.stop()
+    writer.join(10)
+    assert done == [0]
+    packets = read_pcap(out)
+    assert [(p[1][0], p[2][0], p[3]) for p in packets] == [("127.0.0.2", "127.0.0.1", REQUEST),
+                                                           ("127.0.0.1", "127.0.0.2", REPLY)]
