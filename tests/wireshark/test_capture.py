@@ -227,3 +227,31 @@ def test_the_ether_s_bus_ports_stay_ipv4(served: Any, tmp_path: Path) -> None:
     finally:
         runtime.stop()
     assert struct.unpack("<I", (tmp_path / "ether.pcap").read_bytes()[20:24]) == (228,)
+
+
+def test_over_rfc_2217_the_header_carries_all_four_settings(tmp_path: Path) -> None:
+    """An RFC 2217 client sends data bits and parity too (a pty hides them): the IP247 PG port's
+    9600 8E1 in every record, a host at 8N1 flagged as a mismatch."""
+    from devsim.transports.rfc2217 import Rfc2217Transport
+
+    runtime = Runtime(virtual=True).start()
+    try:
+        device = runtime.add_device("ip247", "ip")
+        transport = Rfc2217Transport()
+        line = runtime.serve_sync(device, transport, port="pg", trace=tmp_path / "pg.pcap")
+        for parity in ("E", "N"):
+            host = serial.serial_for_url(transport.url, baudrate=9600, parity=parity, timeout=2)
+            try:
+                _wait_for(lambda p=parity: getattr(runtime.call(lambda: line.host), "parity", None) == p,
+                          "the host's settings at the device")
+                before = runtime.call(lambda: line.bytes_in)
+                host.write(b"\x02")
+                _wait_for(lambda b=before: runtime.call(lambda: line.bytes_in) > b, "the STX at the device")
+            finally:
+                host.close()
+    finally:
+        runtime.stop()
+    sent = [parse_serial_header(data) for _, data in tshark_records(tmp_path / "pg.pcap", tmp_path)
+            if data[3] == 0]
+    assert [(h["baud"], h["bits"], h["parity"], h["stop"], h["mismatch"]) for h in sent] == [
+        (9600, 8, "E", 1.0, False), (9600, 8, "N", 1.0, True)]
