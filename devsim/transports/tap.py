@@ -100,8 +100,8 @@ def tap(line: Any, decoder: Callable[[str], Any] | None = None) -> TelegramTap:
     thread); ``decoder(direction)`` (``"host"`` or ``"device"``) makes a direction's decoder."""
     existing = _find(line, TelegramTap)
     if existing is not None:
-        return existing  # type: ignore[no-any-return]
-    telegram_tap = TelegramTap(existing, decoder=decoder)
+        return existing
+    telegram_tap = TelegramTap(line.tracer, decoder=decoder)
     line.tracer = telegram_tap
     return telegram_tap
 
@@ -129,7 +129,7 @@ def chunk_tap(line: Any) -> ChunkTap:
     """The chunk tap on ``line``'s trace, put in front of it on the first call (loop thread)."""
     existing = _find(line, ChunkTap)
     if existing is not None:
-        return existing  # type: ignore[no-any-return]
+        return existing
     chunks = ChunkTap(line.tracer)
     line.tracer = chunks
     return chunks

@@ -16,6 +16,7 @@ from typing import Any
 import pytest
 import serial
 
+from devsim.observe.plot_data import read_pcap_trace
 from devsim.runtime import Runtime
 from devsim.runtime.capture_stream import CaptureStream
 from devsim.runtime.client import CaptureSubscription, ControlClient, ControlError
@@ -258,3 +259,32 @@ def test_the_extcap_writes_a_network_port_as_ipv4(tmp_path: Path, monkeypatch: p
     packets = read_pcap(out)
     assert [(p[1][0], p[2][0], p[3]) for p in packets] == [("127.0.0.2", "127.0.0.1", REQUEST),
                                                            ("127.0.0.1", "127.0.0.2", REPLY)]
+
+
+def test_taps_chain_in_front_of_the_trace_and_leave_it_intact(tmp_path: Path) -> None:
+    """The monitor's telegram tap and a live capture on a traced line: every chunk reaches the
+    trace file and both taps, in whichever order they came; the capture leaves, the rest stays."""
+    from devsim.transports.tap import capturing, chunk_tap, tap, untap_chunks
+
+    runtime = Runtime(virtual=True).start()
+    try:
+        device = runtime.add_device("sers", "sers")
+        line = runtime.serve_sync(device, PtyTransport(), trace=tmp_path / "t.pcap")
+        trace = line.tracer
+        seen: list[tuple[str, bytes, float]] = []
+
+        def build() -> Any:
+            telegrams = tap(line)
+            chunk_tap(line).listeners.append(lambda *chunk: seen.append(chunk))
+            assert tap(line) is telegrams and chunk_tap(line) is line.tracer  # found behind, not made twice
+            line.feed(b"#RF\r")
+            return telegrams
+
+        telegrams = runtime.call(build)
+        assert [t["hex"] for t in telegrams.last(5)][:1] == ["23 52 46 0d"] and seen[0] == ("H>D", b"#RF\r", 0.0)
+        runtime.call(lambda: untap_chunks(line, line.tracer.listeners[0]))
+        assert runtime.call(lambda: (line.tracer, capturing(line))) == (telegrams, 0)
+        assert telegrams.inner is trace  # the pcap trace is still at the end of the chain
+    finally:
+        runtime.stop()
+    assert read_pcap_trace(tmp_path / "t.pcap").chunks[0] == (0.0, "H>D", b"#RF\r")
