@@ -53,7 +53,6 @@ from typing import Any
 import msgspec
 
 from devsim.runtime import ops
-from devsim.runtime.capture_stream import CaptureStream
 from devsim.runtime.ops import CaptureStart, ErrorResponse, OkResponse, WatchStart
 from devsim.runtime.process import Runtime
 from devsim.runtime.watch_stream import WatchStream
@@ -203,7 +202,7 @@ class ControlServer:
         task = asyncio.current_task()
         assert task is not None
         self._clients.add(task)
-        streams: list[WatchStream | CaptureStream] = []
+        streams: list[Any] = []  # the watch and capture streams of this connection
         pumps: list[asyncio.Task[None]] = []
         try:
             while True:
@@ -236,10 +235,12 @@ class ControlServer:
                 writer.close()
 
     def _start_capture(self, response: OkResponse, writer: asyncio.StreamWriter,
-                       streams: list[WatchStream | CaptureStream],
+                       streams: list[Any],
                        pumps: list[asyncio.Task[None]]) -> OkResponse | ErrorResponse:
         """Answer a ``capture`` request, then stream the port's chunks from a bounded queue,
         as fast as the reader takes them (the answer goes out first)."""
+        from devsim.runtime.capture_stream import CaptureStream
+
         start: CaptureStart = response.result
         capture_id = response.id
         try:
@@ -265,7 +266,7 @@ class ControlServer:
         return _ALREADY_SENT
 
     def _start_watch(self, response: OkResponse, writer: asyncio.StreamWriter,
-                     streams: list[WatchStream | CaptureStream]) -> OkResponse | ErrorResponse:
+                     streams: list[Any]) -> OkResponse | ErrorResponse:
         """Answer a ``watch`` request, then start its stream (the answer goes out first)."""
         start: WatchStart = response.result
         watch_id = response.id

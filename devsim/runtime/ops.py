@@ -25,7 +25,6 @@ import msgspec
 from devsim.core.kit import Command, Table
 from devsim.core.points import parse_bool
 from devsim.runtime import requests as rq
-from devsim.runtime.capture_stream import captures
 from devsim.runtime.process import Runtime, port_key
 
 __all__ = [
@@ -101,6 +100,8 @@ def _devices(rt: Runtime, _req: rq.Devices) -> list[dict[str, Any]]:
 def _info(rt: Runtime, _req: rq.Info) -> dict[str, Any]:
     """What ``devsim ps`` lists of a process: its name, pid, uptime, kinds and ports (and, for
     ``devsim extcap``, how each port on a line is captured)."""
+    from devsim.runtime.capture_stream import captures
+
     return {
         "name": rt.name,
         "pid": os.getpid(),
