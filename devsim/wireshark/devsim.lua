@@ -49,6 +49,7 @@ local f = {
     reserved = ProtoField.uint16("devsim.reserved", "Reserved", base.HEX),
     data = ProtoField.bytes("devsim.data", "Data"),
     pending = ProtoField.bytes("devsim.pending", "Incomplete (continued in a later chunk)"),
+    unframed = ProtoField.bytes("devsim.unframed", "Bytes without a telegram end (not carried on)"),
 }
 proto.fields = f
 
@@ -63,6 +64,9 @@ proto.experts = { e_mismatch, e_magic }
 -- same direction (and remembered per frame, for the later passes of the GUI).
 local pending = {}
 local carried = {}
+--- The most bytes carried to the next chunk: a line that never ends (garbage, a wrong baud rate)
+--- must not make every later chunk longer.
+local MAX_PENDING = 4096
 local conversation = {}
 
 function proto.init()
@@ -111,12 +115,17 @@ function DEVSIM.units(kind, tvb, pinfo, tree, dir)
         if summary then summaries[#summaries + 1] = summary end
         offset = offset + n
     end
+    local rest = length - offset
+    local carry = rest > 0 and rest <= MAX_PENDING
     if not pinfo.visited then
-        pending[key] = { bytes = offset < length and data:raw(offset) or "", st = st }
+        pending[key] = { bytes = carry and data:raw(offset) or "", st = st }
     end
-    if offset < length then
+    if carry then
         tree:add(f.pending, data:range(offset))
-        summaries[#summaries + 1] = "[" .. (length - offset) .. " bytes continue]"
+        summaries[#summaries + 1] = "[" .. rest .. " bytes continue]"
+    elseif rest > 0 then
+        tree:add(f.unframed, data:range(offset))
+        summaries[#summaries + 1] = "[" .. rest .. " bytes without an end, dropped]"
     end
     pinfo.cols.protocol:set(kind.name)
     pinfo.cols.info:set((dir == 0 and "H>D " or "D>H ") .. table.concat(summaries, "; "))
