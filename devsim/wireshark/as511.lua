@@ -182,7 +182,7 @@ function kind.show(range, pinfo, tree, dir, st)
     local tvb = range:tvb()
     local n = tvb:len()
     local b = byte(tvb, 0)
-    local conv = DEVSIM.state("as511")
+    local conv = DEVSIM.state()
     local item = tree:add(proto, range)
     if st.state == "function" then
         st.state = "acks"

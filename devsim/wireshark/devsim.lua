@@ -70,13 +70,17 @@ local MAX_PENDING = 4096
 local conversation = {}
 
 function proto.init()
-    pending, carried, conversation = {}, {}, {}
+    pending, carried, conversation, saved_conversation = {}, {}, {}, {}
 end
 
---- Conversation state of a kind (per capture), e.g. the last request a reply answers.
-function DEVSIM.state(name)
-    conversation[name] = conversation[name] or {}
-    return conversation[name]
+local saved_conversation = {}
+local active = {}
+
+--- The conversation state of the kind being dissected (both directions), e.g. the request the
+--- next answer answers.  Kinds replace its values (never change a table inside it): it is saved per
+--- packet on the first pass by a shallow copy.
+function DEVSIM.state()
+    return active
 end
 
 local function copy(t)
@@ -97,9 +101,13 @@ function DEVSIM.units(kind, tvb, pinfo, tree, dir)
         local p = pending[key] or { bytes = "", st = {} }
         prefix, st = p.bytes, p.st
         carried[pinfo.number] = { bytes = prefix, st = copy(st) }
+        conversation[kind.name] = conversation[kind.name] or {}
+        active = conversation[kind.name]
+        saved_conversation[pinfo.number] = copy(active)
     else
         local c = carried[pinfo.number] or { bytes = "", st = {} }
         prefix, st = c.bytes, copy(c.st)
+        active = copy(saved_conversation[pinfo.number] or {})
     end
     local data = tvb
     if #prefix > 0 then
