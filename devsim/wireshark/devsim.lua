@@ -5,8 +5,8 @@
 -- docs/wireshark-dissectors.md) and the bytes.  This file decodes the header and hands the bytes
 -- to the kind's dissector by the protocol byte:
 --   1 SERS, 2 GMS96 (DIN 19244 / FT1.2), 3 POSELESTA, 4 IP247 PG port (AS511),
---   5 PCD4.H3 serial S-Bus (shown as data), 16 Modbus RTU (Wireshark's own mbrtu).
--- The kinds' dissectors (gms96.lua, sers.lua, as511.lua, poselesta.lua) are loaded from this
+--   5 PCD4.H3 serial S-Bus (data mode), 16 Modbus RTU (Wireshark's own mbrtu).
+-- The kinds' dissectors (gms96.lua, sers.lua, as511.lua, poselesta.lua, sbus_serial.lua) are loaded from this
 -- file's directory and get the DEVSIM table below as their argument; loaded on their own (a plugins
 -- folder loads every .lua file) they do nothing.
 --
@@ -197,14 +197,14 @@ function proto.dissector(tvb, pinfo, tree)
     else
         tree:add(f.data, payload:range())
         data_dissector:call(payload, pinfo, tree)
-        pinfo.cols.protocol:set(protocol == 5 and "S-Bus serial" or "devsim")
+        pinfo.cols.protocol:set("devsim")
     end
     return tvb:len()
 end
 
 DissectorTable.get("wtap_encap"):add(wtap.USER0, proto)
 
-for _, name in ipairs({ "gms96", "sers", "as511", "poselesta" }) do
+for _, name in ipairs({ "gms96", "sers", "as511", "poselesta", "sbus_serial" }) do
     local path = DEVSIM.dir .. name .. ".lua"
     local chunk = loadfile(path)
     if chunk then chunk(DEVSIM) end

@@ -131,6 +131,17 @@ def _poselesta() -> dict[str, Any]:
     }
 
 
+def _pcd4h3() -> dict[str, Any]:
+    from devsim.devices.pcd4h3 import sbus, services
+
+    layouts = {sbus.Reads: "reads", sbus.Writes: "writes", sbus.NoParameters: "none"}
+    return {
+        "commands": {int(row.token[:-1], 16): {"doc": row.doc, "layout": layouts[type(row.handler.telegram)]}
+                     for row in services.SERVICES},
+        "acks": {sbus.ACK: "ACK", sbus.NAK: "NAK"},
+    }
+
+
 #: The Lua table files the dissectors load (``DEVSIM.tables(...)``) and what each holds.  Keyed by
 #: file, not by kind: the kinds are registered once, by their entry points (tests/test_structure.py).
 GENERATORS: dict[str, Callable[[], dict[str, Any]]] = {
@@ -138,6 +149,7 @@ GENERATORS: dict[str, Callable[[], dict[str, Any]]] = {
     "sers_tables.lua": _sers,
     "ip247_tables.lua": _ip247,
     "poselesta_tables.lua": _poselesta,
+    "pcd4h3_tables.lua": _pcd4h3,
 }
 
 

@@ -1,5 +1,5 @@
 """The ``devsim`` dissector itself (docs/wireshark-dissectors.md): the 16-byte header's fields,
-dispatch on the protocol byte (Modbus RTU to Wireshark's own mbrtu, PCD4.H3 serial S-Bus shown as
+dispatch on the protocol byte (Modbus RTU to Wireshark's own mbrtu, an unknown protocol shown as
 data), and the layout ``devsim wireshark --install`` makes: every .lua file of devsim/wireshark in
 Wireshark's personal plugins folder, where Wireshark loads each file on its own."""
 
@@ -47,10 +47,14 @@ def test_modbus_rtu_goes_to_wiresharks_mbrtu(tmp_path: Path) -> None:
     assert rows == [["1", "3", ""], ["1", "3", "42|7"]]
 
 
-def test_pcd4h3_serial_s_bus_is_shown_as_data(tmp_path: Path) -> None:
+def test_an_unknown_protocol_is_shown_as_data(tmp_path: Path) -> None:
     needs_program("tshark")
-    capture = write_pcap(tmp_path / "p.pcap", "pcd4h3", [("H>D", bytes.fromhex("b5 01 06 00"))])
-    assert tshark_fields(capture, ["devsim.protocol", "data.data"]) == [["5", "b5010600"]]
+    capture = tmp_path / "u.pcap"
+    write_pcap(capture, "sers", [("H>D", b"\x01\x02")])
+    data = bytearray(capture.read_bytes())
+    data[24 + 16 + 4] = 0  # the protocol byte: 0, not known
+    capture.write_bytes(bytes(data))
+    assert tshark_fields(capture, ["devsim.protocol", "data.data"]) == [["0", "0102"]]
 
 
 def test_the_plugins_folder_layout_loads_each_file_on_its_own(tmp_path: Path) -> None:
@@ -61,7 +65,7 @@ def test_the_plugins_folder_layout_loads_each_file_on_its_own(tmp_path: Path) ->
     written = install(personal_plugins_dir(tmp_path))
     assert {path.name for path in written} >= {"devsim.lua", "gms96.lua", "sers.lua", "as511.lua", "poselesta.lua",
                                                 "gms96_tables.lua", "sers_tables.lua", "ip247_tables.lua",
-                                                "poselesta_tables.lua"}
+                                                "poselesta_tables.lua", "sbus_serial.lua", "pcd4h3_tables.lua"}
 
     capture = write_pcap(tmp_path / "g.pcap", "gms96", [
         ("H>D", codec.encode(codec.LongFrame(codec.control_host(1), ADDRESS, codec.letter("T", 5, 15))))])
