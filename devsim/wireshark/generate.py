@@ -97,6 +97,7 @@ def _sers() -> dict[str, Any]:
     return {
         "errno": {n: {"de": de, "en": en} for n, (de, en) in errors.ERRNO.items()},
         "parameters": {int(n): {"name": row.name, "doc": row.doc} for n, row in parameters.PARAMETERS.items()},
+        "aliases": {alias: int(n) for n, row in parameters.PARAMETERS.items() for alias in row.aliases},
         "keywords": _docs(statements.KEYWORDS),
     }
 
