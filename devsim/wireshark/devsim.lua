@@ -186,6 +186,8 @@ function proto.dissector(tvb, pinfo, tree)
     root:append_text(string.format(", %s, %s%s", DIRECTIONS[dir] or "?", PROTOCOLS[protocol] or "?",
         baud > 0 and (", " .. baud .. " baud") or ""))
     pinfo.p2p_dir = dir == 0 and P2P_DIR_SENT or P2P_DIR_RECV
+    pinfo.cols.src:set(dir == 0 and "host" or "device")
+    pinfo.cols.dst:set(dir == 0 and "device" or "host")
     if tvb:len() == HEADER_SIZE then return HEADER_SIZE end
     local payload = tvb:range(HEADER_SIZE):tvb()
     local kind = DEVSIM.kinds[protocol]

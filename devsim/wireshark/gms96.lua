@@ -119,6 +119,7 @@ local function checksum(tree, body, cs)
     if not ok then
         item:add_proto_expert_info(e_checksum, string.format("Wrong checksum: %02Xh, expected %02Xh", cs:uint(), sum))
     end
+    return ok
 end
 
 local function control(tree, range)
@@ -282,7 +283,7 @@ function kind.show(range, pinfo, tree, dir)
             summary = "Langsatz without user data"
         end
     end
-    checksum(item, body, tvb:range(n - 2, 1))
+    if not checksum(item, body, tvb:range(n - 2, 1)) then summary = summary .. " [wrong checksum]" end
     local stop = item:add(f.stop, last)
     if last:uint() ~= 0x16 then stop:add_proto_expert_info(e_frame, "End byte is not 16h") end
     item:append_text(", A=" .. a:uint() .. ": " .. summary)
