@@ -11,7 +11,8 @@
 * :mod:`devsim.cli.monitor` – ``devsim monitor``;
 * :mod:`devsim.cli.running` – ``devsim ps``, and which running simulator ``ctl`` and ``monitor`` mean;
 * :mod:`devsim.cli.scenario` – ``devsim check``, ``devsim scenario run`` and ``devsim up``;
-* :mod:`devsim.cli.plot` – ``devsim plot`` (the drawing is :mod:`devsim.observe.plot`).
+* :mod:`devsim.cli.plot` – ``devsim plot`` (the drawing is :mod:`devsim.observe.plot`);
+* :mod:`devsim.cli.wireshark` – ``devsim wireshark --install`` and ``devsim extcap``.
 """
 
 from devsim.cli.main import cli, main

@@ -264,3 +264,44 @@ def ctl_watch(device: str | None, names: tuple[str, ...], as_json: bool, period:
     finally:
         stream.close()
         client.close()
+
+
+@ctl.command(command_name("capture"))
+@click.argument("device")
+@click.option("--port", default="main", show_default=True, help="Which port of DEVICE (or 'modbus': its RTU line).")
+@click.option("--json", "as_json", is_flag=True, help="One JSON object per line instead of text.")
+def ctl_capture(device: str, port: str, as_json: bool) -> None:
+    """Print the chunks crossing the line of a port of DEVICE as they cross, one line each, until
+    Ctrl-C or the simulator stops: '12.345678 H>D 23 52 46 0d "#RF\\r"' as in a text trace (a
+    reader too slow for the line is told how many chunks it missed).  Wireshark captures the
+    same live through 'devsim extcap' (docs: Wireshark)."""
+    from devsim.cli.running import control_target
+    from devsim.runtime.client import CaptureSubscription, ControlError
+    from devsim.transports.trace import render
+
+    ctx = click.get_current_context()
+    addr, fleet = ctx.obj
+    if fleet is not None:
+        raise click.UsageError("capture talks to one simulator: give --control, not --fleet")
+    addr = control_target(addr)
+    try:
+        stream = CaptureSubscription(addr, device, port)
+    except ControlError as exc:
+        raise exits.control_error(exc) from None
+    except OSError as exc:
+        raise exits.Unreachable(f"cannot connect to {addr}: {exc.strerror or exc}") from None
+    try:
+        for item in stream:
+            if as_json or present.wants_json(ctx):
+                click.echo(json.dumps(item))
+            elif item["type"] == "dropped":
+                click.echo(f"{item['t']:.6f} -- {item['count']} chunks dropped (this reader was too slow)")
+            else:
+                data = bytes.fromhex(item["data"])
+                click.echo(f"{item['t']:.6f} {item['dir']} {data.hex(' ')} {render(data)}")
+    except KeyboardInterrupt:
+        sys.exit(0)
+    except (OSError, ValueError) as exc:
+        raise exits.Unreachable(f"control connection to {addr} failed: {exc}") from None
+    finally:
+        stream.close()

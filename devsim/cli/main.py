@@ -290,7 +290,8 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
 @click.option("--speed", type=float, default=1.0, show_default=True, metavar="F", help="Time speed factor.")
 @click.option("--virtual", is_flag=True, help="Virtual time: it moves only through 'devsim ctl advance'.")
 @click.option(
-    "--trace", metavar="FILE", help="Write a timestamped trace of the line traffic (FILE.pcap: a pcap file for Wireshark)."
+    "--trace", metavar="FILE", help="Write a timestamped trace of the line traffic (FILE.pcap: a pcap file for Wireshark; "
+    "other ports and a Modbus RTU line beside it as FILE-PORT, FILE-modbus)."
 )
 @click.option("--control", metavar="ADDR", help="Serve the control API on unix:/path.sock or [HOST:]PORT (default:"
               " NAME-PID.sock in the runtime directory, see 'devsim ps').")
@@ -553,7 +554,10 @@ async def _serve(plan: _Plan) -> None:
 
                 for index, device in enumerate(devices):
                     spec = modbus_for(plan.modbus, index)
-                    where, _transport = await start_modbus(runtime, device, spec, layout=plan.modbus_map)
+                    modbus_name = "modbus" if len(devices) == 1 else f"{device.name}.modbus"  # its trace: FILE-modbus
+                    where, _transport = await start_modbus(runtime, device, spec, layout=plan.modbus_map,
+                                                           trace=_trace_for(plan.trace, modbus_name,
+                                                                            len(plan_ports) + index))
                     modbus_served.append((device.name, where))
             canopen_lines: list[str] = []
             if plan.canopen is not None:
@@ -682,6 +686,7 @@ def _port_text(transport: Any, scheme: str) -> str:
 LAZY_COMMANDS: dict[str, str] = {
     "check": "devsim.cli.scenario",
     "ctl": "devsim.cli.ctl",
+    "extcap": "devsim.cli.wireshark",
     "monitor": "devsim.cli.monitor",
     "plot": "devsim.cli.plot",
     "ps": "devsim.cli.running",
@@ -689,6 +694,7 @@ LAZY_COMMANDS: dict[str, str] = {
     "replay": "devsim.cli.replay",
     "scenario": "devsim.cli.scenario",
     "up": "devsim.cli.scenario",
+    "wireshark": "devsim.cli.wireshark",
 }
 
 

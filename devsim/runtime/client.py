@@ -17,7 +17,7 @@ from devsim.runtime import requests as rq
 from devsim.runtime.control import ControlAddress, parse_address
 from devsim.runtime.ops import op_of
 
-__all__ = ["ControlClient", "ControlError", "ControlOps"]
+__all__ = ["CaptureSubscription", "ControlClient", "ControlError", "ControlOps"]
 
 
 class ControlError(Exception):
@@ -170,3 +170,45 @@ class ControlClient(ControlOps):
                     yield item
         finally:
             watcher.close()
+
+
+class CaptureSubscription:
+    """A port's chunks as they cross (the ``capture`` op, :mod:`devsim.runtime.capture_stream`)
+    on a connection of its own: :attr:`info` says how the port is captured (``link``,
+    ``protocol``, ``port_byte``, ``t``); iterating yields the ``chunk`` and ``dropped`` items until
+    the simulator stops or :meth:`close`.  ``timeout``: at most that long without an item
+    (:class:`TimeoutError`), None waits for ever."""
+
+    def __init__(self, address: str | ControlAddress, device: str, port: str = "main", *,
+                 timeout: float | None = None, connect_timeout: float | None = 10.0) -> None:
+        self._client = ControlClient(address, timeout=connect_timeout)
+        try:
+            self.info: dict[str, Any] = self._client.call(rq.Capture(device, port))
+        except BaseException:
+            self._client.close()
+            raise
+        self._client._sock.settimeout(timeout)
+        self.timeout = timeout
+
+    def __iter__(self) -> Iterator[dict[str, Any]]:
+        while True:
+            try:
+                line = self._client._file.readline()
+            except OSError as exc:
+                if isinstance(exc, TimeoutError | socket.timeout):
+                    raise TimeoutError(f"no chunk within {self.timeout} s") from None
+                return
+            if not line:
+                return
+            item = json.loads(line)
+            if item.pop("capture", None) is not None:
+                yield item
+
+    def close(self) -> None:
+        self._client.close()
+
+    def __enter__(self) -> CaptureSubscription:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -30,6 +30,13 @@ sending one line per change or event until the connection closes or the simulato
 ``{"watch": ID, "t": 12.3, "device": "sers", "type": "change", "name": "axis.position",
 "value": 1234.0}`` (types in :mod:`devsim.runtime.watch_stream`).  The connection still answers
 requests meanwhile; :meth:`devsim.runtime.client.ControlClient.watch` opens a connection of its own for the stream.
+
+``capture`` answers once (``result``: the device, port, link type, protocol and port bytes,
+:func:`devsim.runtime.capture_stream.capture_info`, and the device time) and then sends one line
+per chunk that crosses the port's line, ``{"capture": ID, "type": "chunk", "t": …, "dir": "H>D",
+"data": HEX, "settings": {…}}``, from a bounded queue: a reader too slow for the traffic gets a
+``{"capture": ID, "type": "dropped", "count": N}`` line instead of the chunks that did not fit
+(:mod:`devsim.runtime.capture_stream`), and the device never waits for it.
 """
 
 from __future__ import annotations
@@ -46,7 +53,8 @@ from typing import Any
 import msgspec
 
 from devsim.runtime import ops
-from devsim.runtime.ops import ErrorResponse, OkResponse, WatchStart
+from devsim.runtime.capture_stream import CaptureStream
+from devsim.runtime.ops import CaptureStart, ErrorResponse, OkResponse, WatchStart
 from devsim.runtime.process import Runtime
 from devsim.runtime.watch_stream import WatchStream
 
@@ -195,7 +203,8 @@ class ControlServer:
         task = asyncio.current_task()
         assert task is not None
         self._clients.add(task)
-        streams: list[WatchStream] = []
+        streams: list[WatchStream | CaptureStream] = []
+        pumps: list[asyncio.Task[None]] = []
         try:
             while True:
                 try:
@@ -210,6 +219,8 @@ class ControlServer:
                 response = self.handle_line(raw)
                 if isinstance(response, OkResponse) and isinstance(response.result, WatchStart):
                     response = self._start_watch(response, writer, streams)
+                elif isinstance(response, OkResponse) and isinstance(response.result, CaptureStart):
+                    response = self._start_capture(response, writer, streams, pumps)
                 if response is not _ALREADY_SENT:
                     writer.write(ops.encode(response))
                 await writer.drain()
@@ -218,12 +229,43 @@ class ControlServer:
         finally:
             for stream in streams:
                 stream.stop()
+            for pump in pumps:
+                pump.cancel()
             self._clients.discard(task)
             with contextlib.suppress(Exception):
                 writer.close()
 
+    def _start_capture(self, response: OkResponse, writer: asyncio.StreamWriter,
+                       streams: list[WatchStream | CaptureStream],
+                       pumps: list[asyncio.Task[None]]) -> OkResponse | ErrorResponse:
+        """Answer a ``capture`` request, then stream the port's chunks from a bounded queue,
+        as fast as the reader takes them (the answer goes out first)."""
+        start: CaptureStart = response.result
+        capture_id = response.id
+        try:
+            stream = CaptureStream(self.runtime, start.device, start.port)
+        except Exception as exc:
+            return ErrorResponse(id=capture_id, error=ops.clip(ops.error_text(exc)), type=type(exc).__name__)
+        streams.append(stream)
+        writer.write(ops.encode(OkResponse(id=capture_id, result={**stream.info, "t": self.runtime.clock.now()})))
+        stream.start()
+
+        async def pump() -> None:
+            try:
+                async for batch in stream.batches():
+                    writer.write(b"".join((json.dumps({"capture": capture_id, **item}, separators=(",", ":"))
+                                           + "\n").encode("utf-8") for item in batch))
+                    await writer.drain()  # a slow reader waits here; its queue fills, then drops
+            except (ConnectionError, RuntimeError):
+                pass
+            finally:
+                stream.stop()
+
+        pumps.append(asyncio.get_running_loop().create_task(pump()))
+        return _ALREADY_SENT
+
     def _start_watch(self, response: OkResponse, writer: asyncio.StreamWriter,
-                     streams: list[WatchStream]) -> OkResponse | ErrorResponse:
+                     streams: list[WatchStream | CaptureStream]) -> OkResponse | ErrorResponse:
         """Answer a ``watch`` request, then start its stream (the answer goes out first)."""
         start: WatchStart = response.result
         watch_id = response.id

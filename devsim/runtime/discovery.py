@@ -75,6 +75,8 @@ class Simulator(msgspec.Struct, frozen=True):
     uptime: float | None = None
     clock: str | None = None
     answering: bool = True
+    #: port key -> how it is captured (``link``, ``protocol``, ``port_byte``: ``devsim extcap``)
+    captures: dict[str, dict[str, Any]] = {}
 
 
 # -- the directory ------------------------------------------------------------------------------

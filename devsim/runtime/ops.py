@@ -25,12 +25,14 @@ import msgspec
 from devsim.core.kit import Command, Table
 from devsim.core.points import parse_bool
 from devsim.runtime import requests as rq
+from devsim.runtime.capture_stream import captures
 from devsim.runtime.process import Runtime, port_key
 
 __all__ = [
     "CONTROL",
     "MAX_DEPTH",
     "BadRequest",
+    "CaptureStart",
     "ErrorResponse",
     "OkResponse",
     "WatchStart",
@@ -75,6 +77,13 @@ class WatchStart(msgspec.Struct, frozen=True):
     period: float | None = None
 
 
+class CaptureStart(msgspec.Struct, frozen=True):
+    """What the ``capture`` handler hands the server: the stream needs the connection."""
+
+    device: str
+    port: str = "main"
+
+
 # -- handlers ---------------------------------------------------------------------------------
 def _devices(rt: Runtime, _req: rq.Devices) -> list[dict[str, Any]]:
     return [
@@ -90,7 +99,8 @@ def _devices(rt: Runtime, _req: rq.Devices) -> list[dict[str, Any]]:
 
 
 def _info(rt: Runtime, _req: rq.Info) -> dict[str, Any]:
-    """What ``devsim ps`` lists of a process: its name, pid, uptime, kinds and ports."""
+    """What ``devsim ps`` lists of a process: its name, pid, uptime, kinds and ports (and, for
+    ``devsim extcap``, how each port on a line is captured)."""
     return {
         "name": rt.name,
         "pid": os.getpid(),
@@ -100,6 +110,7 @@ def _info(rt: Runtime, _req: rq.Info) -> dict[str, Any]:
         "kinds": sorted({dev.kind for dev in rt.devices.values()}),
         "devices": list(rt.devices),
         "ports": dict(rt.ports),
+        "captures": captures(rt),
     }
 
 
@@ -116,8 +127,12 @@ def _power_cycle(rt: Runtime, req: rq.PowerCycle) -> None:
 
 
 def _line(rt: Runtime, req: rq.Line) -> dict[str, Any]:
+    from devsim.transports.tap import capturing
+
     rt.device(req.device)
-    return rt.line_status(req.device, req.port)
+    status = rt.line_status(req.device, req.port)
+    line = rt.lines[port_key(req.device, req.port)]
+    return {**status, "capturing": rt.call(lambda: capturing(line))}
 
 
 def _fault(rt: Runtime, req: rq.SwitchFault) -> None:
@@ -145,6 +160,12 @@ def _watch(rt: Runtime, req: rq.Watch) -> WatchStart:
     return WatchStart(device=req.device, names=req.names, period=req.period)
 
 
+def _capture(rt: Runtime, req: rq.Capture) -> CaptureStart:
+    if rt.lines.get(port_key(req.device, req.port)) is None:
+        rt.line_status(req.device, req.port)  # the reason: no such device, port or line
+    return CaptureStart(device=req.device, port=req.port)
+
+
 def _set(rt: Runtime, req: rq.Set) -> None:
     rt.set(req.device, req.name, req.value)
 
@@ -163,7 +184,7 @@ CONTROL: Table[Handler] = Table([
     Command("info", _info, "", "the process: name, pid, uptime, clock, kinds, devices and ports (devsim ps)",
             request=rq.Info),
     Command("devices", _devices, "", "the devices: name, kind, ports and faults", request=rq.Devices),
-    Command("line", _line, "", "the status of the line serving a port (settings, mismatch, counters)",
+    Command("line", _line, "", "the status of the line serving a port (settings, mismatch, counters, live captures)",
             request=rq.Line),
     Command("names", lambda rt, req: rt.names(req.device), "",
             "the declared points: name, type, unit, access, doc, section", request=rq.Names),
@@ -175,6 +196,9 @@ CONTROL: Table[Handler] = Table([
             request=rq.Telegrams),
     Command("watch", _watch, "", "a stream of the device's changes and events (see devsim.runtime.watch_stream)",
             request=rq.Watch),
+    Command("capture", _capture, "",
+            "a stream of the chunks crossing a port's line with its settings (see devsim.runtime.capture_stream)",
+            request=rq.Capture),
 ])
 
 _OPS_BY_TYPE: dict[type, str] = {row.request: row.token for row in CONTROL}

@@ -67,6 +67,8 @@ class Runtime:
         self.devices: dict[str, Device] = {}
         self.lines: dict[str, Any] = {}  # port_key(device, port) -> Line serving it
         self.ports: dict[str, str] = {}  # port_key(device, port) -> URL/path a host opens
+        #: port_key -> how a serial line's pcap records are tagged (None: captured as IPv4)
+        self.capture_tags: dict[str, CaptureTag | None] = {}
         self.transports: list[Any] = []
         self.closers: list[Callable[[], Awaitable[Any]]] = []
         #: Seconds a TCP host may stay idle before a waiting client takes its place (``--idle-drop``;
@@ -141,6 +143,7 @@ class Runtime:
             line.close()
         self.lines.clear()
         self.ports.clear()
+        self.capture_tags.clear()
         for device in self.devices.values():
             device.close()
         if isinstance(self.clock, VirtualClock):
@@ -244,6 +247,7 @@ class Runtime:
         self.transports.append(transport)
         for key in keys:
             self.lines[key] = line
+            self.capture_tags[key] = capture
             self.ports[key] = str(getattr(transport, "url", "") or getattr(transport, "address", ""))
         return line
 

@@ -17,6 +17,7 @@ import msgspec
 
 __all__ = [
     "Advance",
+    "Capture",
     "ControlRequest",
     "Devices",
     "Info",
@@ -109,3 +110,8 @@ class Watch(ControlRequest, frozen=True):
     names: list[str] | None = None
     period: float | None = None
 
+
+
+class Capture(ControlRequest, frozen=True):
+    device: str
+    port: str = "main"

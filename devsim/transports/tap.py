@@ -1,4 +1,5 @@
-"""A tap on a line's trace: the last telegrams that crossed it, for a live monitor.
+"""Taps on a line's trace: the last telegrams that crossed it, for a live monitor; every chunk as
+it crosses, for a live capture.
 
 A :class:`TelegramTap` is a :class:`~devsim.transports.trace.TraceSink` that keeps the last
 ``size`` telegrams of a line in memory and hands every call on to the trace the line had before
@@ -11,6 +12,11 @@ A telegram is what one side sent in one go: consecutive chunks in the same direc
 several reads is one telegram), up to :data:`MAX_BYTES`.  With a decoder per direction (the
 framing the port declares, :attr:`devsim.core.kit.PortDef.framing`, as record and replay use
 it) a telegram also carries ``decoded``: the messages it completed, e.g. an FT1.2 frame's fields.
+
+A :class:`ChunkTap` (:func:`chunk_tap`) hands every chunk, as it crosses, to its listeners
+(``listener(direction, data, when)``): the control op ``capture`` streams them to Wireshark's
+extcap (:mod:`devsim.runtime.capture_stream`).  It is taken out of the line's trace again when
+its last listener leaves (:func:`untap_chunks`), so that the line gets back its fast path.
 """
 
 from __future__ import annotations
@@ -21,7 +27,7 @@ from typing import Any
 
 from devsim.transports.trace import TapSink, TraceSink, render
 
-__all__ = ["GAP", "MAX_BYTES", "TelegramTap", "tap"]
+__all__ = ["GAP", "MAX_BYTES", "ChunkTap", "TelegramTap", "capturing", "chunk_tap", "tap", "untap_chunks"]
 
 #: Chunks in the same direction closer than this (device seconds) are one telegram.
 GAP = 0.005
@@ -79,12 +85,69 @@ class TelegramTap(TapSink):
         return [{**item, "decoded": list(item["decoded"])} if "decoded" in item else dict(item) for item in items]
 
 
+def _find(line: Any, cls: type[TapSink]) -> Any:
+    """The tap of class ``cls`` somewhere in ``line``'s chain of trace sinks, or None."""
+    sink = line.tracer
+    while sink is not None:
+        if isinstance(sink, cls):
+            return sink
+        sink = getattr(sink, "inner", None)
+    return None
+
+
 def tap(line: Any, decoder: Callable[[str], Any] | None = None) -> TelegramTap:
     """The tap in front of ``line``'s trace, put there on the first call (runs in the loop
     thread); ``decoder(direction)`` (``"host"`` or ``"device"``) makes a direction's decoder."""
-    existing = line.tracer
-    if isinstance(existing, TelegramTap):
-        return existing
+    existing = _find(line, TelegramTap)
+    if existing is not None:
+        return existing  # type: ignore[no-any-return]
     telegram_tap = TelegramTap(existing, decoder=decoder)
     line.tracer = telegram_tap
     return telegram_tap
+
+
+#: What a chunk tap's listener gets: direction (``"H>D"``/``"D>H"``), the bytes, the device time.
+ChunkListener = Callable[[str, bytes, float], None]
+
+
+class ChunkTap(TapSink):
+    """Hands every chunk to its listeners (in the loop thread, as it crosses); forwards
+    everything to ``inner`` (may be None).  A listener must not block: it queues."""
+
+    def __init__(self, inner: TraceSink | None) -> None:
+        super().__init__(inner)
+        self.listeners: list[ChunkListener] = []
+
+    def record(self, direction: str, data: bytes, when: float, note: str | None = None) -> None:
+        super().record(direction, data, when, note)
+        if data:
+            for listener in list(self.listeners):
+                listener(direction, bytes(data), when)
+
+
+def chunk_tap(line: Any) -> ChunkTap:
+    """The chunk tap on ``line``'s trace, put in front of it on the first call (loop thread)."""
+    existing = _find(line, ChunkTap)
+    if existing is not None:
+        return existing  # type: ignore[no-any-return]
+    chunks = ChunkTap(line.tracer)
+    line.tracer = chunks
+    return chunks
+
+
+def untap_chunks(line: Any, listener: ChunkListener) -> None:
+    """Take ``listener`` off ``line``'s chunk tap; the tap leaves the line with its last listener
+    when nothing has been put in front of it since."""
+    chunks = _find(line, ChunkTap)
+    if chunks is None:
+        return
+    if listener in chunks.listeners:
+        chunks.listeners.remove(listener)
+    if not chunks.listeners and line.tracer is chunks:
+        line.tracer = chunks.inner
+
+
+def capturing(line: Any) -> int:
+    """How many live captures listen on ``line`` now."""
+    chunks = _find(line, ChunkTap)
+    return 0 if chunks is None else len(chunks.listeners)
