@@ -24,7 +24,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("devsim.runtime", "devsim.devices"),
     ("devsim.facades",),
     ("devsim.fleet",),
-    ("devsim.observe",),
+    ("devsim.observe", "devsim.wireshark"),
     ("devsim.scenario",),
     ("devsim.wireshark",),
     ("devsim.cli", "devsim.pytest_plugin"),

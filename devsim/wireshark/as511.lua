@@ -12,11 +12,8 @@ local T = DEVSIM.tables("ip247")
 local STX, ETX, EOT, ACK, DLE, NAK = 0x02, 0x03, 0x04, 0x06, 0x10, 0x15
 local OPERATE, OBSERVE, WRITE_REC, READ_REC, DELETE_REC, READ_MEMORY = 0x61, 0x62, 0x63, 0x64, 0x65, 0x04
 
-local function function_names()
-    local names = {}
-    for code, doc in pairs(T.functions) do names[code] = doc:match("^([^:]+)") or doc end
-    return names
-end
+local FUNCTION_NAMES = {}
+for code, doc in pairs(T.functions) do FUNCTION_NAMES[code] = doc:match("^([^:]+)") or doc end
 local mode_names = {}
 for n, m in pairs(T.modes) do mode_names[n] = "BA" .. n .. " " .. m.name end
 local error_names = {}
@@ -27,7 +24,7 @@ local f = {
     element = ProtoField.string("as511.element", "Element"),
     stx = ProtoField.uint8("as511.stx", "STX", base.HEX),
     control = ProtoField.string("as511.control", "Control sequence"),
-    fn = ProtoField.uint8("as511.function", "Function", base.HEX, function_names()),
+    fn = ProtoField.uint8("as511.function", "Function", base.HEX, FUNCTION_NAMES),
     block = ProtoField.bytes("as511.block", "Block (DLE doubled)"),
     data = ProtoField.bytes("as511.data", "Block data (DLE removed)"),
     block_end = ProtoField.string("as511.block_end", "Block end"),
@@ -182,14 +179,14 @@ function kind.show(range, pinfo, tree, dir, st)
     local tvb = range:tvb()
     local n = tvb:len()
     local b = byte(tvb, 0)
-    local conv = DEVSIM.state("as511")
+    local conv = DEVSIM.state()
     local item = tree:add(proto, range)
     if st.state == "function" then
         st.state = "acks"
         st.acks = 0
         conv.fn = b
         item:add(f.fn, tvb:range(0, 1))
-        local name = function_names()[b] or string.format("%02Xh", b)
+        local name = FUNCTION_NAMES[b] or string.format("%02Xh", b)
         item:set_text("AS511 function " .. name)
         return "function " .. name
     end

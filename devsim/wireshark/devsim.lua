@@ -5,8 +5,8 @@
 -- docs/wireshark-dissectors.md) and the bytes.  This file decodes the header and hands the bytes
 -- to the kind's dissector by the protocol byte:
 --   1 SERS, 2 GMS96 (DIN 19244 / FT1.2), 3 POSELESTA, 4 IP247 PG port (AS511),
---   5 PCD4.H3 serial S-Bus (shown as data), 16 Modbus RTU (Wireshark's own mbrtu).
--- The kinds' dissectors (gms96.lua, sers.lua, as511.lua, poselesta.lua) are loaded from this
+--   5 PCD4.H3 serial S-Bus (data mode), 16 Modbus RTU (Wireshark's own mbrtu).
+-- The kinds' dissectors (gms96.lua, sers.lua, as511.lua, poselesta.lua, sbus_serial.lua) are loaded from this
 -- file's directory and get the DEVSIM table below as their argument; loaded on their own (a plugins
 -- folder loads every .lua file) they do nothing.
 --
@@ -49,6 +49,7 @@ local f = {
     reserved = ProtoField.uint16("devsim.reserved", "Reserved", base.HEX),
     data = ProtoField.bytes("devsim.data", "Data"),
     pending = ProtoField.bytes("devsim.pending", "Incomplete (continued in a later chunk)"),
+    unframed = ProtoField.bytes("devsim.unframed", "Bytes without a telegram end (not carried on)"),
 }
 proto.fields = f
 
@@ -63,16 +64,23 @@ proto.experts = { e_mismatch, e_magic }
 -- same direction (and remembered per frame, for the later passes of the GUI).
 local pending = {}
 local carried = {}
+--- The most bytes carried to the next chunk: a line that never ends (garbage, a wrong baud rate)
+--- must not make every later chunk longer.
+local MAX_PENDING = 4096
 local conversation = {}
 
 function proto.init()
-    pending, carried, conversation = {}, {}, {}
+    pending, carried, conversation, saved_conversation = {}, {}, {}, {}
 end
 
---- Conversation state of a kind (per capture), e.g. the last request a reply answers.
-function DEVSIM.state(name)
-    conversation[name] = conversation[name] or {}
-    return conversation[name]
+local saved_conversation = {}
+local active = {}
+
+--- The conversation state of the kind being dissected (both directions), e.g. the request the
+--- next answer answers.  Kinds replace its values (never change a table inside it): it is saved per
+--- packet on the first pass by a shallow copy.
+function DEVSIM.state()
+    return active
 end
 
 local function copy(t)
@@ -93,9 +101,13 @@ function DEVSIM.units(kind, tvb, pinfo, tree, dir)
         local p = pending[key] or { bytes = "", st = {} }
         prefix, st = p.bytes, p.st
         carried[pinfo.number] = { bytes = prefix, st = copy(st) }
+        conversation[kind.name] = conversation[kind.name] or {}
+        active = conversation[kind.name]
+        saved_conversation[pinfo.number] = copy(active)
     else
         local c = carried[pinfo.number] or { bytes = "", st = {} }
         prefix, st = c.bytes, copy(c.st)
+        active = copy(saved_conversation[pinfo.number] or {})
     end
     local data = tvb
     if #prefix > 0 then
@@ -111,12 +123,17 @@ function DEVSIM.units(kind, tvb, pinfo, tree, dir)
         if summary then summaries[#summaries + 1] = summary end
         offset = offset + n
     end
+    local rest = length - offset
+    local carry = rest > 0 and rest <= MAX_PENDING
     if not pinfo.visited then
-        pending[key] = { bytes = offset < length and data:raw(offset) or "", st = st }
+        pending[key] = { bytes = carry and data:raw(offset) or "", st = st }
     end
-    if offset < length then
+    if carry then
         tree:add(f.pending, data:range(offset))
-        summaries[#summaries + 1] = "[" .. (length - offset) .. " bytes continue]"
+        summaries[#summaries + 1] = "[" .. rest .. " bytes continue]"
+    elseif rest > 0 then
+        tree:add(f.unframed, data:range(offset))
+        summaries[#summaries + 1] = "[" .. rest .. " bytes without an end, dropped]"
     end
     pinfo.cols.protocol:set(kind.name)
     pinfo.cols.info:set((dir == 0 and "H>D " or "D>H ") .. table.concat(summaries, "; "))
@@ -169,6 +186,8 @@ function proto.dissector(tvb, pinfo, tree)
     root:append_text(string.format(", %s, %s%s", DIRECTIONS[dir] or "?", PROTOCOLS[protocol] or "?",
         baud > 0 and (", " .. baud .. " baud") or ""))
     pinfo.p2p_dir = dir == 0 and P2P_DIR_SENT or P2P_DIR_RECV
+    pinfo.cols.src:set(dir == 0 and "host" or "device")
+    pinfo.cols.dst:set(dir == 0 and "device" or "host")
     if tvb:len() == HEADER_SIZE then return HEADER_SIZE end
     local payload = tvb:range(HEADER_SIZE):tvb()
     local kind = DEVSIM.kinds[protocol]
@@ -180,14 +199,14 @@ function proto.dissector(tvb, pinfo, tree)
     else
         tree:add(f.data, payload:range())
         data_dissector:call(payload, pinfo, tree)
-        pinfo.cols.protocol:set(protocol == 5 and "S-Bus serial" or "devsim")
+        pinfo.cols.protocol:set("devsim")
     end
     return tvb:len()
 end
 
 DissectorTable.get("wtap_encap"):add(wtap.USER0, proto)
 
-for _, name in ipairs({ "gms96", "sers", "as511", "poselesta" }) do
+for _, name in ipairs({ "gms96", "sers", "as511", "poselesta", "sbus_serial" }) do
     local path = DEVSIM.dir .. name .. ".lua"
     local chunk = loadfile(path)
     if chunk then chunk(DEVSIM) end

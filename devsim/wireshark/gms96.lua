@@ -34,6 +34,7 @@ local f = {
     stop = ProtoField.uint8("gms96.end", "End", base.HEX),
     short = ProtoField.uint8("gms96.short", "Kurzsatz command", base.DEC, short_names),
     k = ProtoField.uint8("gms96.k", "Status byte K", base.HEX),
+    nack = ProtoField.bool("gms96.nack", "NACK: command not accepted (queue full)"),
     mb4 = ProtoField.uint8("gms96.mb4", "Message MB4"),
     override = ProtoField.uint8("gms96.override", "Override (%)"),
     spindle = ProtoField.uint16("gms96.spindle_rpm", "Spindle speed"),
@@ -118,6 +119,7 @@ local function checksum(tree, body, cs)
     if not ok then
         item:add_proto_expert_info(e_checksum, string.format("Wrong checksum: %02Xh, expected %02Xh", cs:uint(), sum))
     end
+    return ok
 end
 
 local function control(tree, range)
@@ -150,7 +152,7 @@ local function letter(tree, data, pinfo)
     if command == "T" then
         key = (T.t_queries[p[1] .. ";" .. p[2]] and (p[1] .. ";" .. p[2])) or (T.t_queries[tostring(p[1])] and tostring(p[1]))
         if key then doc = T.t_queries[key] end
-        DEVSIM.state("gms96").t = { key = key, n = p[2], frame = pinfo.number }
+        DEVSIM.state().t = { key = key, n = p[2], frame = pinfo.number }
         if key == "5" then
             local row = T.n[p[2]]
             tree:add(f.n, p[2]):set_generated()
@@ -177,7 +179,7 @@ end
 
 -- The answer to T: identifier I and value; T3;0 / T3;4 answer with the status byte as I.
 local function t_answer(tree, data)
-    local asked = DEVSIM.state("gms96").t
+    local asked = DEVSIM.state().t
     local identifier = data:range(0, 1)
     local key = asked and asked.key
     if key then tree:add(f.answer_to, "T" .. key .. " (" .. (T.t_queries[key] or "") .. ")"):set_generated() end
@@ -219,6 +221,7 @@ function kind.show(range, pinfo, tree, dir)
         return "garbage (" .. range:len() .. " bytes)"
     end
     local n = tvb:len()
+    if dir == 0 then DEVSIM.state().last_host = b end
     local item = tree:add(proto, range)
     item:add(f.start, tvb:range(0, 1))
     local last = tvb:range(n - 1, 1)
@@ -252,6 +255,10 @@ function kind.show(range, pinfo, tree, dir)
                 item:add_le(f.spindle, ext:range(0, 2))
             end
             if short_names[number] then item:add(f.command_doc, short_names[number]):set_generated() end
+        elseif DEVSIM.state().last_host == 0x68 then
+            -- a Kurzsatz answering a letter command: 01h NACK, the command queue is full (link option nack)
+            item:add(f.nack, c, true)
+            summary = string.format("NACK %02Xh (command queue full)", c:uint())
         else
             local k = item:add(f.k, c)
             local names = bits(k, c:uint(), T.k_bits)
@@ -276,7 +283,7 @@ function kind.show(range, pinfo, tree, dir)
             summary = "Langsatz without user data"
         end
     end
-    checksum(item, body, tvb:range(n - 2, 1))
+    if not checksum(item, body, tvb:range(n - 2, 1)) then summary = summary .. " [wrong checksum]" end
     local stop = item:add(f.stop, last)
     if last:uint() ~= 0x16 then stop:add_proto_expert_info(e_frame, "End byte is not 16h") end
     item:append_text(", A=" .. a:uint() .. ": " .. summary)

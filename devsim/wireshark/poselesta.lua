@@ -36,12 +36,16 @@ local f = {
     key_valid = ProtoField.bool("poselesta.key.valid", "Valid key code"),
     key_display = ProtoField.uint8("poselesta.key.display", "Shown by the keyboard diagnostic (P79 N3)", base.HEX),
     parity_ok = ProtoField.bool("poselesta.parity_ok", "Even parity"),
+    handshake = ProtoField.string("poselesta.handshake", "Handshake character (not defined by the manual: skipped)"),
 }
 proto.fields = f
 
 local e_parity = ProtoExpert.new("poselesta.parity", "Parity error", expert.group.MALFORMED, expert.severity.WARN)
 local e_key = ProtoExpert.new("poselesta.key.invalid", "Not a key code", expert.group.MALFORMED, expert.severity.WARN)
 proto.experts = { e_parity, e_key }
+
+-- DC1..DC4 (XON, XOFF ...): the manual does not name them; the control skips them (spec §3.3).
+local HANDSHAKE = { [0x11] = "DC1 (XON)", [0x12] = "DC2", [0x13] = "DC3 (XOFF)", [0x14] = "DC4" }
 
 local function even(byte)
     local ones = 0
@@ -66,7 +70,7 @@ end
 
 function tape.show(range, pinfo, tree)
     local tvb = range:tvb()
-    local chars, parity_errors, nul = {}, 0, 0
+    local chars, parity_errors, nul, handshakes = {}, 0, 0, {}
     local iso = false
     for i = 0, tvb:len() - 1 do
         local b = tvb:range(i, 1):uint()
@@ -74,6 +78,7 @@ function tape.show(range, pinfo, tree)
         if not even(b) then parity_errors = parity_errors + 1 end
         local c = bit32.band(b, 0x7F)
         if c == 0 then nul = nul + 1
+        elseif HANDSHAKE[c] then handshakes[#handshakes + 1] = { i, HANDSHAKE[c] }
         elseif c ~= 0x0D and c ~= 0x0A and c ~= 0x7F then chars[#chars + 1] = string.char(c) end
     end
     local text = table.concat(chars)
@@ -83,6 +88,7 @@ function tape.show(range, pinfo, tree)
         item:add(f.parity_error, parity_errors):add_proto_expert_info(e_parity)
     end
     if nul > 0 then item:add(f.leader, nul) end
+    for _, h in ipairs(handshakes) do item:add(f.handshake, tvb:range(h[1], 1), h[2]) end
     if text:find("%%") then item:add(f.start, true) end
     if text:find("#") then item:add(f.skip, true) end
     item:add(f.code, iso and "ISO (even parity in bit 7)" or "ASCII"):set_generated()

@@ -74,12 +74,21 @@ local function text_of(range)
     return utf8, raw
 end
 
+local function parameter(tree, n)
+    tree:add(f.param, n):set_generated()
+    local row = T.parameters[n]
+    if row then tree:add(f.param_name, row.name .. " (" .. row.doc .. ")"):set_generated() end
+end
+
+-- P<n>, and the aliases (V = P91, POS = P336 ...) where they are assigned or asked (manual §4.2).
 local function parameters(tree, text)
-    for number in text:gmatch("[Pp](%d+)") do
-        local n = tonumber(number)
-        tree:add(f.param, n):set_generated()
-        local row = T.parameters[n]
-        if row then tree:add(f.param_name, row.name .. " (" .. row.doc .. ")"):set_generated() end
+    for word, number in text:gmatch("(%a[%w]*)%s*([=%?]?)") do
+        local n = word:match("^[Pp](%d+)$")
+        if n then
+            parameter(tree, tonumber(n))
+        elseif number ~= "" and T.aliases[word:upper()] then
+            parameter(tree, T.aliases[word:upper()])
+        end
     end
 end
 
@@ -141,7 +150,7 @@ local function device_line(item, text)
         item:add(f.kind, "answer"):set_generated()
         item:add(f.answer, name)
         item:add(f.value, value)
-        parameters(item, name)
+        parameters(item, name .. "=")
         return text
     end
     item:add(f.kind, "text"):set_generated()

@@ -1,7 +1,8 @@
-"""Helpers of the dissector tests: run tshark with devsim's Lua dissectors on a capture and read
-the fields back; a small pure writer of devsim's serial encapsulation (docs/wireshark-dissectors.md:
-classic pcap, LINKTYPE_USER0 = 147, the 16-byte devsim header) for hand-made captures
-(split frames, bad checksums) that no real session produces on demand."""
+"""Helpers of the dissector tests: a ``devsim run KIND --trace`` session in its own process
+(:class:`Session`), tshark with devsim's Lua dissectors on a capture and its fields read back
+(:func:`tshark_fields`), hand-made captures in devsim's serial encapsulation (:func:`write_pcap`,
+for what no real session produces on demand: split frames, wrong checksums), and the chunks of a
+capture as a TCP stream for a built-in dissector that only Decode As reaches (:func:`as_tcp`)."""
 
 from __future__ import annotations
 
@@ -13,35 +14,29 @@ from pathlib import Path
 
 from tests.support.process import ROOT, DevsimProcess, devsim_env
 
-__all__ = ["DISSECTOR", "Session", "as_tcp", "header", "read_records", "tshark_fields", "write_pcap"]
+__all__ = ["DISSECTOR", "PROTOCOLS", "Session", "as_tcp", "read_records", "tshark_fields", "write_pcap"]
 
 DISSECTOR = ROOT / "devsim" / "wireshark" / "devsim.lua"
-LINKTYPE_USER0 = 147
 PROTOCOLS = {"sers": 1, "gms96": 2, "poselesta": 3, "ip247": 4, "pcd4h3": 5, "modbus_rtu": 16}
 
 
-def header(direction: str, protocol: int, port: int = 0, baud: int = 9600, bits: int = 8, parity: str = "N",
-           stop: float = 1, mismatch: bool = False) -> bytes:
-    """The 16-byte devsim header (direction ``"H>D"`` or ``"D>H"``)."""
-    return (b"ds" + bytes((1, 0 if direction == "H>D" else 1, protocol, port)) + struct.pack(">I", baud)
-            + bytes((bits, ord(parity), round(stop * 10), 1 if mismatch else 0, 0, 0)))
-
-
 def write_pcap(path: Path, protocol: str, chunks: list[tuple[str, bytes]], port: int = 0) -> Path:
-    """A capture of ``chunks`` (direction, bytes), one record each, 10 ms apart."""
-    out = [struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, LINKTYPE_USER0)]
+    """A capture of ``chunks`` (direction ``"H>D"`` / ``"D>H"``, bytes), one record each, 10 ms
+    apart, at 9600 8N1, written with devsim's own pcap functions."""
+    from devsim.transports.pcap import LINKTYPE_USER0, global_header, serial_header, serial_record
+
+    records = [global_header(LINKTYPE_USER0)]
     for i, (direction, data) in enumerate(chunks):
-        record = header(direction, PROTOCOLS[protocol], port) + data
-        usec = 10_000 * (i + 1)
-        out.append(struct.pack("<IIII", usec // 1_000_000, usec % 1_000_000, len(record), len(record)) + record)
-    path.write_bytes(b"".join(out))
+        head = serial_header(direction, PROTOCOLS[protocol], port, 9600, 8, "N", 1, False)
+        records.append(serial_record(0.01 * (i + 1), head, data))
+    path.write_bytes(b"".join(records))
     return path
 
 
 def tshark_fields(capture: Path, fields: list[str], *, lua: bool = True, options: tuple[str, ...] = (),
                   display_filter: str = "") -> list[list[str]]:
     """tshark's ``-T fields`` output: one row per packet, one column per field (occurrences joined
-    by ``,``); with ``lua`` devsim's dissectors are loaded."""
+    by ``|``); with ``lua`` devsim's dissectors are loaded."""
     command = ["tshark", "-n", "-r", str(capture), "-T", "fields", "-E", "occurrence=a", "-E", "aggregator=|"]
     if lua:
         command += ["-X", f"lua_script:{DISSECTOR}"]

@@ -1,5 +1,5 @@
 """The ``devsim`` dissector itself (docs/wireshark-dissectors.md): the 16-byte header's fields,
-dispatch on the protocol byte (Modbus RTU to Wireshark's own mbrtu, PCD4.H3 serial S-Bus shown as
+dispatch on the protocol byte (Modbus RTU to Wireshark's own mbrtu, an unknown protocol shown as
 data), and the layout ``devsim wireshark --install`` makes: every .lua file of devsim/wireshark in
 Wireshark's personal plugins folder, where Wireshark loads each file on its own."""
 
@@ -47,10 +47,14 @@ def test_modbus_rtu_goes_to_wiresharks_mbrtu(tmp_path: Path) -> None:
     assert rows == [["1", "3", ""], ["1", "3", "42|7"]]
 
 
-def test_pcd4h3_serial_s_bus_is_shown_as_data(tmp_path: Path) -> None:
+def test_an_unknown_protocol_is_shown_as_data(tmp_path: Path) -> None:
     needs_program("tshark")
-    capture = write_pcap(tmp_path / "p.pcap", "pcd4h3", [("H>D", bytes.fromhex("b5 01 06 00"))])
-    assert tshark_fields(capture, ["devsim.protocol", "data.data"]) == [["5", "b5010600"]]
+    capture = tmp_path / "u.pcap"
+    write_pcap(capture, "sers", [("H>D", b"\x01\x02")])
+    data = bytearray(capture.read_bytes())
+    data[24 + 16 + 4] = 0  # the protocol byte: 0, not known
+    capture.write_bytes(bytes(data))
+    assert tshark_fields(capture, ["devsim.protocol", "data.data"]) == [["0", "0102"]]
 
 
 def test_the_plugins_folder_layout_loads_each_file_on_its_own(tmp_path: Path) -> None:
@@ -61,7 +65,7 @@ def test_the_plugins_folder_layout_loads_each_file_on_its_own(tmp_path: Path) ->
     written = install(personal_plugins_dir(tmp_path))
     assert {path.name for path in written} >= {"devsim.lua", "gms96.lua", "sers.lua", "as511.lua", "poselesta.lua",
                                                 "gms96_tables.lua", "sers_tables.lua", "ip247_tables.lua",
-                                                "poselesta_tables.lua"}
+                                                "poselesta_tables.lua", "sbus_serial.lua", "pcd4h3_tables.lua"}
 
     capture = write_pcap(tmp_path / "g.pcap", "gms96", [
         ("H>D", codec.encode(codec.LongFrame(codec.control_host(1), ADDRESS, codec.letter("T", 5, 15))))])
@@ -71,3 +75,27 @@ def test_the_plugins_folder_layout_loads_each_file_on_its_own(tmp_path: Path) ->
                                 env={"HOME": str(tmp_path), "PATH": "/usr/bin:/bin"})
         assert result.returncode == 0 and "Lua" not in result.stderr, result.stderr
         assert result.stdout.split() == ["T", "15"]
+
+
+def test_a_line_without_an_end_is_not_carried_on_for_ever(tmp_path: Path) -> None:
+    needs_program("tshark")
+    garbage = b"x" * 3000  # a SERS line with no CR or LF: held back while it may still end
+    capture = write_pcap(tmp_path / "g.pcap", "sers", [("D>H", garbage), ("D>H", garbage), ("D>H", b"ok1\n\r")])
+    rows = tshark_fields(capture, ["devsim.pending", "devsim.unframed", "sers.ack"])
+    assert [len(row[0]) // 2 for row in rows] == [3000, 0, 0]
+    assert [len(row[1]) // 2 for row in rows] == [0, 6000, 0]  # 6000 > 4096: dropped, not carried on
+    assert rows[2][2] == "ok1"
+
+
+def test_two_passes_show_what_one_pass_shows(tmp_path: Path) -> None:
+    """Wireshark dissects a packet again when it is clicked: the state a chunk started with (the
+    bytes carried in, the AS511 transaction's step) is kept per packet."""
+    needs_program("tshark")
+    chunks = [("H>D", b"\x02"), ("D>H", b"\x10\x06"), ("H>D", b"\x61"), ("D>H", b"\x02"), ("H>D", b"\x10\x06"),
+              ("D>H", b"\x16\x10\x03"), ("H>D", b"\x10\x06"), ("H>D", bytes.fromhex("01 06 01 00 00 64")),
+              ("H>D", bytes.fromhex("00 00 10 10 10 10 10 04"))]
+    capture = write_pcap(tmp_path / "a.pcap", "ip247", chunks)
+    fields = ["as511.function", "as511.page", "as511.ba", "as511.dd", "devsim.pending"]
+    once = tshark_fields(capture, fields)
+    assert once[-1][:4] == ["", "1", "6", "4112"]
+    assert tshark_fields(capture, fields, options=("-2",)) == once

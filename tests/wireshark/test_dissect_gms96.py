@@ -84,3 +84,25 @@ def test_a_frame_split_over_two_reads_is_reassembled(tmp_path: Path) -> None:
     rows = tshark_fields(capture, ["gms96.command", "gms96.p1", "gms96.n", "devsim.pending", "gms96.checksum.ok"])
     assert rows[0] == ["", "", "", frame[:5].hex(), ""]
     assert rows[1] == ["N", "250", "15", "", "1"]
+
+
+def test_an_answer_names_the_query_it_answers(tmp_path: Path) -> None:
+    """The answer to T5;15 is N15's value (a later T5;99 does not change it, also in tshark's
+    second pass); a Kurzsatz answering a letter command is the NACK of a full queue (link option
+    ``on_queue_full: nack``), one answering #1 is the status byte K."""
+    needs_program("tshark")
+
+    def long(*data: int) -> bytes:
+        return codec.encode(codec.LongFrame(codec.control_host(1), ADDRESS, codec.letter("T", *data)))
+
+    chunks = [("H>D", long(5, 15)), ("D>H", codec.encode(codec.t_reply(ADDRESS, 0x4E, codec.to_s24(84)))),
+              ("H>D", long(5, 99)), ("D>H", bytes([codec.ACK])),
+              ("H>D", codec.encode(codec.LongFrame(codec.control_host(0), ADDRESS, codec.letter("A", 100)))),
+              ("D>H", codec.encode(codec.ShortFrame(0x01, ADDRESS))),
+              ("H>D", codec.encode(codec.short_command(1, ADDRESS))), ("D>H", codec.encode(codec.k_frame(0x80, ADDRESS, 23)))]
+    capture = write_pcap(tmp_path / "t.pcap", "gms96", chunks)
+    fields = ["gms96.n", "gms96.value", "gms96.nack", "gms96.k", "gms96.mb4"]
+    once = tshark_fields(capture, fields)
+    assert once[1][:2] == ["15", "84"]
+    assert once[5][2:4] == ["1", ""] and once[7][2:] == ["", "0x82", "23"]
+    assert tshark_fields(capture, fields, options=("-2",)) == once

@@ -12,7 +12,7 @@ from pathlib import Path
 import serial
 
 from tests.support.programs import needs_program
-from tests.wireshark.captures import Session, tshark_fields
+from tests.wireshark.captures import Session, tshark_fields, write_pcap
 
 #: Spec vector R1 (§6.7): NUL leader, % and two blocks in ISO (parity in bit 7), M30.
 R1 = bytes.fromhex("00000000 A58D0A 4EB1D8B1302E35592D338D0A 4EB2A0473030A0D830A05930A04D30B28D0A 4D33308D0A")
@@ -62,3 +62,14 @@ def test_dnc_transfers_and_keyboard_codes_decode(tmp_path: Path) -> None:
     assert values(v8, 1) == ["1", "0", "1"]
     assert values(v8, 2) == ["1", "1", "0"]
     assert values(v8, 3) == ["0x49", "0x03"]  # what the keyboard diagnostic shows: the code + 1
+
+
+def test_handshake_characters_and_parity_errors_in_a_block(tmp_path: Path) -> None:
+    from devsim.devices.poselesta.codes import encode
+
+    needs_program("tshark")
+    block = encode("N10 G01 X-20.000\r\n", True)
+    damaged = block[:4] + bytes((block[4] ^ 0x80,)) + block[5:]  # "G" with its parity bit flipped
+    capture = write_pcap(tmp_path / "h.pcap", "poselesta", [("H>D", b"\x11" + damaged)], port=6)
+    rows = tshark_fields(capture, ["poselesta.handshake", "poselesta.parity_errors", "poselesta.block", "poselesta.g"])
+    assert rows == [["DC1 (XON)", "1", "N10 G01 X-20.000", "1"]]

@@ -39,7 +39,7 @@ def test_a_sers_session_decodes_with_addresses_parameters_and_errnos(tmp_path: P
                                            "sers.error", "sers.answer", "sers.value", "sers.ack"])
     host = [row for row in rows if row[0] == "0"]
     assert [row[2] for row in host] == ["1", "1", "", "1", "1", "1"]  # "#V?" names no address
-    assert [row[3] for row in host] == ["11", "", "", "", "9999", ""]
+    assert [row[3] for row in host] == ["11", "91", "91", "91", "9999", ""]  # V is P91 (an alias)
     device = "|".join(row[1] for row in rows if row[0] == "1").split("|")
     assert device.count("acknowledgement") == 3 and device.count("error message") == 3
     assert device.count("answer") == 2  # P11=0, V=1000U/min

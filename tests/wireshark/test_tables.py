@@ -8,10 +8,10 @@ import pytest
 from devsim.wireshark import generate
 
 
-@pytest.mark.parametrize("kind", sorted(generate.GENERATORS))
-def test_committed_tables_are_current(kind: str) -> None:
-    path = generate.HERE / f"{kind}_tables.lua"
-    assert path.read_text(encoding="utf-8") == generate.render(kind), (
+@pytest.mark.parametrize("name", sorted(generate.GENERATORS))
+def test_committed_tables_are_current(name: str) -> None:
+    path = generate.HERE / name
+    assert path.read_text(encoding="utf-8") == generate.render(name), (
         f"{path.name} is stale: run `python -m devsim.wireshark.generate` and look at the diff"
     )
 
