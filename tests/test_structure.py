@@ -26,7 +26,6 @@ LAYERS: list[tuple[str, ...]] = [
     ("devsim.fleet",),
     ("devsim.observe", "devsim.wireshark"),
     ("devsim.scenario",),
-    ("devsim.wireshark",),
     ("devsim.cli", "devsim.pytest_plugin"),
     ("devsim.__main__",),
 ]
