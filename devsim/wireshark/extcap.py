@@ -164,7 +164,12 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None) -> int:
     parser.add_argument("--extcap-capture-filter")
     args, _unknown = parser.parse_known_args(argv)
     if args.extcap_interfaces:
-        out.write("\n".join(interface_lines(interfaces(running()))) + "\n")
+        try:
+            found = interfaces(running())
+        except OSError as exc:  # an unsafe runtime directory: no interfaces, and why
+            print(f"devsim extcap: {exc}", file=sys.stderr)
+            found = []
+        out.write("\n".join(interface_lines(found)) + "\n")
         return 0
     if not args.extcap_interface:
         parser.error("give --extcap-interfaces, or --extcap-interface with --extcap-dlts, --extcap-config or --capture")

@@ -71,6 +71,17 @@ def test_the_installer_reads_wiresharks_folders_and_writes_a_launcher() -> None:
     assert "PYTHONPATH" not in launcher_text("/usr/bin/python3", None)
 
 
+def test_an_unsafe_runtime_directory_lists_no_interfaces(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                         capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "devsim").mkdir(mode=0o777)
+    (tmp_path / "devsim").chmod(0o777)  # open to others: no control socket there is trusted
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
+    out = io.StringIO()
+    assert main(["--extcap-interfaces"], out) == 0
+    assert out.getvalue().splitlines() == interface_lines([])
+    assert "is open to others" in capsys.readouterr().err
+
+
 def test_extcap_config_and_a_foreign_interface() -> None:
     out = io.StringIO()
     assert main(["--extcap-interface", "devsim-1-x", "--extcap-config"], out) == 0 and out.getvalue() == ""
