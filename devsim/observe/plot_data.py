@@ -13,9 +13,9 @@
 
 A serial line's pcap trace (link type USER0, devsim's serial header: :mod:`devsim.transports.pcap`)
 says each chunk's direction in its header.  An IPv4/UDP pcap trace holds addresses, not
-directions: the device is the endpoint that takes part in every packet (with both in every packet: the lower port, then the lower address — a listening port
-below an ephemeral one, and devsim's invented device address 127.0.0.1 below the host's
-127.0.0.2).  :func:`load` tells the three apart by their content.
+directions: the device is the endpoint that takes part in every packet (with both in every
+packet: the lower port, then the lower address — a listening port below an ephemeral one, and
+devsim's invented device address 127.0.0.1 below the host's 127.0.0.2).  :func:`load` tells the three apart by their content.
 """
 
 from __future__ import annotations
