@@ -12,7 +12,8 @@
   a SERS line); any other shows its chunks as they came.
 
 A serial line's pcap trace (link type USER0, devsim's serial header: :mod:`devsim.transports.pcap`)
-says each chunk's direction in its header.  An IPv4/UDP pcap trace holds addresses, not
+says each chunk's direction in its header, and its kind and port by their capture tag
+(:func:`capture_source`): its messages are decoded as a text trace's are.  An IPv4/UDP pcap trace holds addresses, not
 directions: the device is the endpoint that takes part in every packet (with both in every
 packet: the lower port, then the lower address — a listening port below an ephemeral one, and
 devsim's invented device address 127.0.0.1 below the host's 127.0.0.2).  :func:`load` tells the three apart by their content.
@@ -37,7 +38,7 @@ from devsim.transports.trace import Source, parse_source_note, render
 #: The columns every motion log has (``kind`` came later: an older log ends after ``event``).
 _FIRST = HEADER[: HEADER.index("event") + 1]
 
-__all__ = ["AxisSeries", "MotionData", "Traffic", "axis_units", "load", "messages", "read_motion_log",
+__all__ = ["AxisSeries", "MotionData", "Traffic", "axis_units", "capture_source", "load", "messages", "read_motion_log",
            "read_pcap_trace", "read_text_trace"]
 
 
@@ -238,8 +239,27 @@ _PCAP_MAGIC = {0xA1B2C3D4: ("<", 1e6), 0xD4C3B2A1: (">", 1e6), 0xA1B23C4D: ("<",
 _LINK_OFFSET = {228: 0, 101: 0, 1: 14}
 
 
+def capture_source(protocol: int, port: int, name: str) -> Source | None:
+    """What a serial capture's records (devsim header: ``protocol``, ``port`` bytes) trace: the
+    kind and port that declare that capture tag (:attr:`devsim.core.kit.PortDef.capture`), the
+    device named ``name`` (the file's); None when no kind does (Modbus RTU, an unknown tag)."""
+    from devsim.core.registry import device_class, kinds
+
+    for kind in kinds():
+        try:
+            ports = device_class(kind).ports
+        except Exception:  # noqa: BLE001 - a kind that does not load declares nothing here
+            continue
+        for declared in ports:
+            tag = declared.capture
+            if tag is not None and (tag.protocol, tag.port) == (protocol, port):
+                return Source((name,), declared.name, kind)
+    return None
+
+
 def _read_serial_records(raw: bytes, order: str, fraction: float, traffic: Traffic) -> Traffic:
-    """The chunks of a serial line's pcap trace: each record a devsim header and the bytes."""
+    """The chunks of a serial line's pcap trace: each record a devsim header and the bytes; the
+    source (kind and port, for :func:`messages`) from the first record's capture tag."""
     offset = 24
     while offset + 16 <= len(raw):
         seconds, part, captured, _length = struct.unpack_from(f"{order}IIII", raw, offset)
@@ -249,6 +269,8 @@ def _read_serial_records(raw: bytes, order: str, fraction: float, traffic: Traff
             header = parse_serial_header(record)
         except ValueError:
             continue  # not one of devsim's records
+        if not traffic.chunks:
+            traffic.source = capture_source(int(header["protocol"]), int(header["port"]), traffic.name)
         traffic.chunks.append((seconds + part / fraction, str(header["direction"]), record[HEADER_SIZE:]))
     return traffic
 

@@ -177,7 +177,7 @@ def serial_header(direction: str, protocol: int, port: int, baud: int, bits: int
                         ord(parity) if parity else 0, stop_tenths, 1 if mismatch else 0, 0)
 
 
-def parse_serial_header(header: bytes) -> dict[str, object]:
+def parse_serial_header(header: bytes) -> dict[str, Any]:
     """The fields of a devsim header (the inverse of :func:`serial_header`); ``ValueError`` when
     ``header`` is not one."""
     if len(header) < HEADER_SIZE:

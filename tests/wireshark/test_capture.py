@@ -255,3 +255,19 @@ def test_over_rfc_2217_the_header_carries_all_four_settings(tmp_path: Path) -> N
             if data[3] == 0]
     assert [(h["baud"], h["bits"], h["parity"], h["stop"], h["mismatch"]) for h in sent] == [
         (9600, 8, "E", 1.0, False), (9600, 8, "N", 1.0, True)]
+
+
+def test_devsim_plot_decodes_a_serial_capture_by_its_capture_tag(tmp_path: Path) -> None:
+    from devsim.observe.plot_data import load, messages
+    from devsim.transports.trace import Source
+
+    with SerialPcapTracer(tmp_path / "card.pcap", protocol=2) as tracer:
+        tracer.record("H>D", bytes.fromhex("10 01 03 04 16"), 1.0)
+        tracer.record("D>H", bytes.fromhex("10 40 03 43 16"), 1.01)
+    traffic = load(tmp_path / "card.pcap")
+    assert traffic.source == Source(("card",), "main", "gms96") and traffic.label == "card main"
+    assert [(t, d) for t, d, _ in messages(traffic)] == [(1.0, "H>D"), (1.01, "D>H")]
+    with SerialPcapTracer(tmp_path / "rtu.pcap", protocol=16) as tracer:
+        tracer.record("H>D", bytes.fromhex("01 03 00 00 00 01 84 0a"), 1.0)
+    rtu = load(tmp_path / "rtu.pcap")
+    assert rtu.source is None and messages(rtu) == [] and len(rtu.chunks) == 1  # no kind declares 16
