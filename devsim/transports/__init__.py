@@ -8,7 +8,8 @@
   latest sender;
 * :class:`Line` – pacing, line-settings mismatch and tracing between a transport and a device
   or bus; :func:`open_trace` opens the wire trace: :class:`Tracer` writes text,
-  :class:`PcapTracer` a pcap file for Wireshark (``*.pcap``).
+  :class:`SerialPcapTracer` a serial line's pcap file for Wireshark (``*.pcap``, devsim's serial
+  encapsulation), :class:`PcapTracer` a network port's (IPv4/UDP).
 
 Each transport serves one :class:`Endpoint` (in practice a :class:`Line`) and knows no device.
 """
@@ -27,6 +28,7 @@ _HOME = {
     "TcpTransport": "tcp",
     "UdpTransport": "udp",
     "PcapTracer": "pcap",
+    "SerialPcapTracer": "pcap",
     "Tracer": "trace",
     "render": "trace",
     "open_trace": "tracing",
