@@ -69,13 +69,12 @@ local carried = {}
 --- must not make every later chunk longer.
 local MAX_PENDING = 4096
 local conversation = {}
-
-function proto.init()
-    pending, carried, conversation, saved_conversation = {}, {}, {}, {}
-end
-
 local saved_conversation = {}
 local active = {}
+
+function proto.init()
+    pending, carried, conversation, saved_conversation, active = {}, {}, {}, {}, {}
+end
 
 --- The conversation state of the kind being dissected (both directions), e.g. the request the
 --- next answer answers.  Kinds replace its values (never change a table inside it): it is saved per
