@@ -148,9 +148,8 @@ local function letter(tree, data, pinfo)
     end
     tree:add(f.count, count):set_generated()
     local doc = T.letters[command]
-    local key = nil
     if command == "T" then
-        key = (T.t_queries[p[1] .. ";" .. p[2]] and (p[1] .. ";" .. p[2])) or (T.t_queries[tostring(p[1])] and tostring(p[1]))
+        local key = (T.t_queries[p[1] .. ";" .. p[2]] and (p[1] .. ";" .. p[2])) or (T.t_queries[tostring(p[1])] and tostring(p[1]))
         if key then doc = T.t_queries[key] end
         DEVSIM.state().t = { key = key, n = p[2], frame = pinfo.number }
         if key == "5" then
