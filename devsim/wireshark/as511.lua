@@ -45,6 +45,7 @@ local f = {
     err = ProtoField.uint8("as511.error", "Error (Fehlernummer)", base.DEC, error_names),
     err_text = ProtoField.string("as511.error.text", "Error text (manual §7.2)"),
     err_en = ProtoField.string("as511.error.en", "Error (English)"),
+    err_pg = ProtoField.uint8("as511.error.pg", "Error as COM247 shows it (AG number + 80h, manual §7.2)", base.HEX),
     btr = ProtoField.uint8("as511.btr", "Current Betriebsart (BTR)", base.DEC, mode_names),
     rmld = ProtoField.uint8("as511.rmld", "Axis attributes (RMLD)", base.HEX),
     mfkt = ProtoField.uint8("as511.mfkt", "M function (MFKT)"),
@@ -157,6 +158,7 @@ local function response(tree, fn, data)
         tree:add(f.err_text, row.de):set_generated()
         tree:add(f.err_en, row.en):set_generated()
     end
+    if code < 0x80 then tree:add(f.err_pg, code + 0x80):set_generated() end
     if code ~= 0 then err:add_proto_expert_info(e_error, "Error " .. code .. ": " .. (error_names[code] or "?")) end
     tree:add(f.btr, data:range(5, 1))
     tree:add(f.rmld, data:range(6, 1))

@@ -57,7 +57,8 @@ local e_mismatch = ProtoExpert.new("devsim.mismatch.expert", "Line settings mism
     expert.group.COMMENTS_GROUP, expert.severity.WARN)
 local e_magic = ProtoExpert.new("devsim.magic.expert", "Not a devsim header", expert.group.MALFORMED,
     expert.severity.ERROR)
-proto.experts = { e_mismatch, e_magic }
+local e_malformed = ProtoExpert.new("devsim.malformed", "Malformed", expert.group.MALFORMED, expert.severity.ERROR)
+proto.experts = { e_mismatch, e_magic, e_malformed }
 
 -- Reassembly across chunks: a kind's telegram may be split over two reads.  On the first pass the
 -- bytes left over after the last complete telegram of a chunk are carried to the next chunk of the
@@ -68,13 +69,12 @@ local carried = {}
 --- must not make every later chunk longer.
 local MAX_PENDING = 4096
 local conversation = {}
-
-function proto.init()
-    pending, carried, conversation, saved_conversation = {}, {}, {}, {}
-end
-
 local saved_conversation = {}
 local active = {}
+
+function proto.init()
+    pending, carried, conversation, saved_conversation, active = {}, {}, {}, {}, {}
+end
 
 --- The conversation state of the kind being dissected (both directions), e.g. the request the
 --- next answer answers.  Kinds replace its values (never change a table inside it): it is saved per
@@ -149,15 +149,36 @@ function DEVSIM.tables(name)
     return dofile(DEVSIM.dir .. name .. "_tables.lua")
 end
 
---- Latin-1 bytes as UTF-8 (the SERS sends its texts in Latin-1 by default).
-function DEVSIM.latin1(text)
-    return (text:gsub("[\128-\255]", function(c)
-        local b = c:byte()
-        return string.char(0xC0 + math.floor(b / 64), 0x80 + b % 64)
-    end))
+local function valid_utf8(s)
+    local i, n = 1, #s
+    while i <= n do
+        local c = s:byte(i)
+        local size = (c < 0x80 and 1) or (c >= 0xC2 and c <= 0xDF and 2) or (c >= 0xE0 and c <= 0xEF and 3)
+            or (c >= 0xF0 and c <= 0xF4 and 4) or nil
+        if size == nil or i + size - 1 > n then return false end
+        for k = i + 1, i + size - 1 do
+            local b = s:byte(k)
+            if b < 0x80 or b > 0xBF then return false end
+        end
+        i = i + size
+    end
+    return true
+end
+
+--- Bytes from the line as text to show: UTF-8 as it is, anything else read as Latin-1 (the SERS
+--- sends its texts in Latin-1 by default), control characters as <XX>.
+function DEVSIM.text(raw)
+    if not valid_utf8(raw) then
+        raw = raw:gsub("[\128-\255]", function(c)
+            local b = c:byte()
+            return string.char(0xC0 + math.floor(b / 64), 0x80 + b % 64)
+        end)
+    end
+    return (raw:gsub("[%z\1-\31\127]", function(c) return string.format("<%02X>", c:byte()) end))
 end
 
 local data_dissector = Dissector.get("data")
+local mbrtu = Dissector.get("mbrtu")
 
 function proto.dissector(tvb, pinfo, tree)
     if tvb:len() < HEADER_SIZE then return 0 end
@@ -194,8 +215,12 @@ function proto.dissector(tvb, pinfo, tree)
     if kind ~= nil then
         local port = tvb:range(5, 1):uint()
         DEVSIM.units(kind.select and kind.select(port) or kind, payload, pinfo, tree, dir)
-    elseif protocol == 16 and Dissector.get("mbrtu") then
-        Dissector.get("mbrtu"):call(payload, pinfo, tree)
+    elseif protocol == 16 and mbrtu ~= nil then
+        -- (mbrtu throws on a frame too short for it: shown as malformed, not as a Lua error)
+        if not pcall(Dissector.call, mbrtu, payload, pinfo, tree) then
+            root:add_proto_expert_info(e_malformed, "Not a complete Modbus RTU frame")
+            tree:add(f.data, payload:range())
+        end
     else
         tree:add(f.data, payload:range())
         data_dissector:call(payload, pinfo, tree)

@@ -135,7 +135,7 @@ local SUB_FUNCTIONS = { G = "g", H = "h", m = "m", Q = "q", r = "r" }
 
 -- A letter command (host -> device Langsatz user data): "A" + P1 [+ P2 [+ P3]], 24 bit each.
 local function letter(tree, data, pinfo)
-    local command = data:range(0, 1):string()
+    local command = DEVSIM.text(data:range(0, 1):raw())
     local rest = data:len() - 1
     local count = math.min(math.floor(rest / 3), 3)
     tree:add(f.command, data:range(0, 1))
@@ -148,9 +148,8 @@ local function letter(tree, data, pinfo)
     end
     tree:add(f.count, count):set_generated()
     local doc = T.letters[command]
-    local key = nil
     if command == "T" then
-        key = (T.t_queries[p[1] .. ";" .. p[2]] and (p[1] .. ";" .. p[2])) or (T.t_queries[tostring(p[1])] and tostring(p[1]))
+        local key = (T.t_queries[p[1] .. ";" .. p[2]] and (p[1] .. ";" .. p[2])) or (T.t_queries[tostring(p[1])] and tostring(p[1]))
         if key then doc = T.t_queries[key] end
         DEVSIM.state().t = { key = key, n = p[2], frame = pinfo.number }
         if key == "5" then
@@ -198,12 +197,12 @@ local function t_answer(tree, data)
             if row then tree:add(f.n_name, row.name .. " (" .. row.doc .. ")"):set_generated() end
             return string.format("N%d = %d", asked.n, s24(value))
         end
-        return string.format("%s = %d", identifier:string(), s24(value))
+        return string.format("%s = %d", DEVSIM.text(identifier:raw()), s24(value))
     elseif value then
         tree:add(f.value_bytes, value)
         if value:len() == 2 then tree:add_le(f.value, value, value:le_uint()):set_generated() end
     end
-    return "answer " .. identifier:string()
+    return "answer " .. DEVSIM.text(identifier:raw())
 end
 
 function kind.show(range, pinfo, tree, dir)
@@ -214,7 +213,7 @@ function kind.show(range, pinfo, tree, dir)
         item:add(f.start, tvb:range(0, 1))
         return b == 0xE5 and "E5 (ack)" or "A2"
     end
-    if b ~= 0x10 and b ~= 0x68 then
+    if (b ~= 0x10 and b ~= 0x68) or (b == 0x68 and range:len() < 6) then
         local item = tree:add(proto, range, "GMS96 bytes outside a frame")
         item:add(f.garbage, range)
         item:add_proto_expert_info(e_frame, "Bytes outside a frame, or a broken frame header")

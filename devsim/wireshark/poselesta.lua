@@ -25,9 +25,9 @@ local f = {
     word = ProtoField.string("poselesta.word", "Word"),
     address = ProtoField.string("poselesta.address", "Address letter"),
     value = ProtoField.string("poselesta.value", "Value"),
-    n = ProtoField.uint16("poselesta.n", "Block number N"),
-    g = ProtoField.uint8("poselesta.g", "G function"),
-    m = ProtoField.uint8("poselesta.m", "M function"),
+    n = ProtoField.uint32("poselesta.n", "Block number N"),
+    g = ProtoField.uint32("poselesta.g", "G function"),
+    m = ProtoField.uint32("poselesta.m", "M function"),
     code = ProtoField.string("poselesta.code", "Code"),
     parity_error = ProtoField.uint16("poselesta.parity_errors", "Characters with a parity error"),
     leader = ProtoField.uint16("poselesta.leader", "NUL leader / trailer bytes"),
@@ -39,6 +39,9 @@ local f = {
     handshake = ProtoField.string("poselesta.handshake", "Handshake character (not defined by the manual: skipped)"),
 }
 proto.fields = f
+
+-- The words whose value is a number of its own field (N10, G01, M30).
+local NUMBERED = { N = f.n, G = f.g, M = f.m }
 
 local e_parity = ProtoExpert.new("poselesta.parity", "Parity error", expert.group.MALFORMED, expert.severity.WARN)
 local e_key = ProtoExpert.new("poselesta.key.invalid", "Not a key code", expert.group.MALFORMED, expert.severity.WARN)
@@ -81,7 +84,7 @@ function tape.show(range, pinfo, tree)
         elseif HANDSHAKE[c] then handshakes[#handshakes + 1] = { i, HANDSHAKE[c] }
         elseif c ~= 0x0D and c ~= 0x0A and c ~= 0x7F then chars[#chars + 1] = string.char(c) end
     end
-    local text = table.concat(chars)
+    local text = DEVSIM.text(table.concat(chars))
     local item = tree:add(proto, range, "POSELESTA block: " .. text)
     item:add(f.block, range, text)
     if parity_errors > 0 and iso then
@@ -97,9 +100,10 @@ function tape.show(range, pinfo, tree)
         local w = item:add(f.word, letter .. value)
         w:add(f.address, letter .. " (" .. (LETTER_NAMES[letter] or "?") .. ")")
         w:add(f.value, value)
-        if letter == "N" then item:add(f.n, tonumber(value)):set_generated() end
-        if letter == "G" then item:add(f.g, tonumber(value)):set_generated() end
-        if letter == "M" then item:add(f.m, tonumber(value)):set_generated() end
+        local number = NUMBERED[letter] and tonumber(value)
+        if number and number >= 0 and number < 2 ^ 32 and number % 1 == 0 then
+            item:add(NUMBERED[letter], number):set_generated()
+        end
     end
     item:add(f.eob, true)
     return text

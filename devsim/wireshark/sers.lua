@@ -66,14 +66,6 @@ function kind.unit(tvb, offset, dir)
     return i - offset
 end
 
-local function text_of(range)
-    local raw = range:raw()
-    local utf8 = DEVSIM.latin1(raw)
-    -- already UTF-8 (the device's G-ENC option): keep it as it is
-    if raw:find("[\192-\223][\128-\191]") then return raw, raw end
-    return utf8, raw
-end
-
 local function parameter(tree, n)
     tree:add(f.param, n):set_generated()
     local row = T.parameters[n]
@@ -164,7 +156,7 @@ function kind.show(range, pinfo, tree, dir)
     local stop = first
     while stop < last and not eol(tvb:range(stop, 1):uint()) do stop = stop + 1 end
     local body = tvb:range(first, stop - first)
-    local text = text_of(body)
+    local text = DEVSIM.text(body:raw())
     local item = tree:add(proto, range, "SERS " .. (dir == 0 and "host" or "device") .. ": " .. text)
     item:add(f.line, body, text)
     local summary = dir == 0 and host_line(item, body, text) or device_line(item, text)

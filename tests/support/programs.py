@@ -23,6 +23,7 @@ __all__ = ["PACKAGES", "REASON", "install_line", "missing_names", "missing_reaso
 #: the same packages).
 PACKAGES = {
     "tshark": "tshark",
+    "luacheck": "lua-check",
     "mosquitto": "mosquitto",
     "mosquitto_sub": "mosquitto-clients",
     "mosquitto_pub": "mosquitto-clients",

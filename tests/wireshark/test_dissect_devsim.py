@@ -5,8 +5,11 @@ Wireshark's personal plugins folder, where Wireshark loads each file on its own.
 
 from __future__ import annotations
 
+import random
 import subprocess
 from pathlib import Path
+
+import pytest
 
 from devsim.devices.gms96 import codec
 from devsim.wireshark import install, personal_plugins_dir
@@ -99,3 +102,28 @@ def test_two_passes_show_what_one_pass_shows(tmp_path: Path) -> None:
     once = tshark_fields(capture, fields)
     assert once[-1][:4] == ["", "1", "6", "4112"]
     assert tshark_fields(capture, fields, options=("-2",)) == once
+
+
+@pytest.mark.parametrize(("protocol", "port"), [("sers", 0), ("gms96", 0), ("poselesta", 6), ("poselesta", 7),
+                                                ("poselesta", 8), ("ip247", 0), ("pcd4h3", 0), ("modbus_rtu", 0)])
+def test_garbage_never_breaks_a_dissector(tmp_path: Path, protocol: str, port: int) -> None:
+    """400 chunks of random bytes, rich in each protocol's control bytes, both ways: every packet is
+    dissected without a Lua error, and everything shown is valid UTF-8 (a line's Latin-1 bytes are
+    converted, control characters escaped)."""
+    tshark = needs_program("tshark")
+    rng = random.Random(f"{protocol}{port}")
+    special = bytes((0x02, 0x03, 0x04, 0x06, 0x10, 0x12, 0x15, 0x16, 0x68, 0xE5, 0xB5, 0xC5, 0x0D, 0x0A, 0x23, 0x2A))
+    alphabet = special + bytes(range(0x20, 0x7F))
+    chunks = []
+    for _ in range(400):
+        size = rng.choice((1, 1, 2, 3, 5, 8, 20, 60))
+        data = bytes(rng.choice(alphabet) if rng.random() < 0.7 else rng.randrange(256) for _ in range(size))
+        chunks.append((rng.choice(("H>D", "D>H")), data))
+    capture = write_pcap(tmp_path / "garbage.pcap", protocol, chunks, port=port)
+    result = subprocess.run([tshark, "-n", "-r", str(capture), "-X", f"lua_script:{DISSECTOR}", "-V"],
+                            capture_output=True, timeout=120, check=False)
+    assert result.returncode == 0, result.stderr
+    shown = result.stdout.decode("utf-8") + result.stderr.decode("utf-8")  # raises on invalid UTF-8
+    assert "Lua Error" not in shown and "Lua: Error" not in shown, [
+        line for line in shown.splitlines() if "Lua" in line][:5]
+    assert shown.count("\nFrame ") + shown.startswith("Frame ") == len(chunks)

@@ -47,5 +47,6 @@ def test_an_ip247_pg_session_decodes_with_jobs_and_error_numbers(tmp_path: Path)
     assert (values(host, 5), values(host, 6), values(host, 7)) == (["100"], ["4112"], ["2"])
     assert values(device, 8) == ["0", str(NO_MACHINE_DATA), str(NO_MACHINE_DATA)]
     assert values(device, 9)[-1] == "DLE NAK"
-    texts = values(tshark_fields(sim.capture, ["as511.error.text"], display_filter="as511.error == 14"), 0)
-    assert texts == [MODULE_ERRORS[NO_MACHINE_DATA][0]] * 2
+    shown = tshark_fields(sim.capture, ["as511.error.text", "as511.error.pg"], display_filter="as511.error == 14")
+    assert values(shown, 0) == [MODULE_ERRORS[NO_MACHINE_DATA][0]] * 2
+    assert values(shown, 1) == ["0x8e"] * 2  # "8E: Keine oder falsche Maschinendaten" on COM247's screen
