@@ -82,6 +82,23 @@ def test_state_and_devices_are_tables(addr: str) -> None:
     assert lines[1].split()[:3] == ["sers", "sers", lines[1].split()[2]] and "blocked_axis," in lines[1]
 
 
+def test_info_is_a_table_of_the_process(addr: str) -> None:
+    """`ctl info` printed a KeyError's traceback: the op had no formatter."""
+    info = json.loads(ok("ctl", "--control", addr, "--json", "info"))
+    rows = {line.split()[0]: line.split()[1:] for line in ok("ctl", "--control", addr, "info").splitlines()}
+    assert rows["pid"] == [str(info["pid"])]
+    assert rows["clock"] == ["virtual"]
+    assert rows["devices"] == ["sers"]
+
+
+def test_every_answering_op_has_a_formatter() -> None:
+    from devsim.cli.present import FORMATTERS
+    from devsim.runtime.ops import CONTROL
+
+    streams = {"watch", "capture"}  # ctl prints these line by line as they arrive
+    assert {row.token for row in CONTROL if row.token not in FORMATTERS} == streams
+
+
 def test_json_for_scripts_keeps_its_format(addr: str) -> None:
     """--json (on ctl or on the command) prints what ctl printed before: the bare result."""
     assert ok("ctl", "--control", addr, "--json", "set", "sers", "input.I3", "on") == "null\n"

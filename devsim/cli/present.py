@@ -268,6 +268,7 @@ FORMATTERS: dict[str, Callable[[Any, View], str]] = {
     "power_cycle": _ok,
     "advance": _advance,
     "now": _now,
+    "info": _line,
     "devices": _records,
     "line": _line,
     "names": _names,
