@@ -12,6 +12,7 @@ thread-safe methods, so it may be called from any thread.
 
 from __future__ import annotations
 
+import copy
 import enum
 import json
 import math
@@ -145,6 +146,10 @@ def _watch(rt: Runtime, req: rq.Watch) -> WatchStart:
     return WatchStart(device=req.device, names=req.names, period=req.period)
 
 
+def _scenario(rt: Runtime, _req: rq.Scenario) -> dict[str, Any] | None:
+    return rt.call(lambda: copy.deepcopy(rt.scenario))
+
+
 def _set(rt: Runtime, req: rq.Set) -> None:
     rt.set(req.device, req.name, req.value)
 
@@ -173,6 +178,8 @@ CONTROL: Table[Handler] = Table([
     Command("telegrams", _telegrams, "",
             "the last telegrams on a port's line, decoded by the port's framing (kept from the first request on)",
             request=rq.Telegrams),
+    Command("scenario", _scenario, "", "the running scenario's steps, their outcomes so far and its progress"
+            " (null without one)", request=rq.Scenario),
     Command("watch", _watch, "", "a stream of the device's changes and events (see devsim.runtime.watch_stream)",
             request=rq.Watch),
 ])

@@ -26,6 +26,7 @@ __all__ = [
     "Now",
     "PowerCycle",
     "Read",
+    "Scenario",
     "Set",
     "State",
     "SwitchFault",
@@ -109,3 +110,6 @@ class Watch(ControlRequest, frozen=True):
     names: list[str] | None = None
     period: float | None = None
 
+
+class Scenario(ControlRequest, frozen=True):
+    device: str | None = None

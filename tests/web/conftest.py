@@ -1,0 +1,47 @@
+"""A SERS served by ``devsim run --web`` in a subprocess: its page's address, its pty and its
+control socket."""
+
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import pytest
+
+from tests.support.process import DevsimProcess, free_port
+
+pytest.importorskip("aiohttp")
+
+
+@dataclass
+class WebSim:
+    process: DevsimProcess
+    url: str  # http://127.0.0.1:PORT/
+    pty: str
+    control: str
+    lines: list[str]
+
+
+def start_sers(*extra: str, web: str | None = None) -> tuple[DevsimProcess, dict[str, str], list[str]]:
+    """``devsim run sers --web WEB …``; its first lines by their keys (``web``, ``sers``, ``control``)."""
+    process = DevsimProcess("run", "sers", "--web", web or f"127.0.0.1:{free_port()}", *extra)
+    lines: list[str] = []
+    process.next_match(process.out, lambda line: line == "sers: ready", 30, "sers: ready", keep=lines)
+    seen: dict[str, str] = {}
+    for line in lines:
+        key, _, value = line.partition(": ")
+        seen.setdefault(key, value)
+    return process, seen, lines
+
+
+@pytest.fixture
+def sim() -> Iterator[WebSim]:
+    with tempfile.TemporaryDirectory(prefix="dsw") as directory:
+        control = f"unix:{directory}/c.sock"
+        process, seen, lines = start_sers("--control", control)
+        try:
+            assert seen["sers"].startswith("pty /dev/"), lines
+            yield WebSim(process, seen["web"], seen["sers"].split(" ", 1)[1], control, lines)
+        finally:
+            assert process.interrupt() == 0
