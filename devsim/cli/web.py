@@ -7,15 +7,17 @@ only here, when a page is served."""
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import signal
 import sys
+from collections.abc import Iterator
 from typing import Any
 
 import click
 
 from devsim.cli import exits
 
-__all__ = ["DEFAULT_PORT", "start_web", "web", "web_option"]
+__all__ = ["DEFAULT_PORT", "page_beside", "start_web", "web", "web_option"]
 
 DEFAULT_PORT = 8580
 
@@ -105,3 +107,24 @@ async def _serve(control: str, listen: Any) -> None:
     finally:
         await runner.cleanup()
         await view.close()
+
+
+@contextlib.contextmanager
+def page_beside(control: Any, listen: Any) -> Iterator[None]:
+    """The page for the control API at ``control`` served from a thread while the block runs
+    (``devsim up --web``, ``devsim scenario run --web``; it attaches once the control API answers
+    there, and again after each restart); its lines printed first; a one-line error (status
+    SYSTEM) when it cannot listen."""
+    if listen is None:
+        yield
+        return
+    try:
+        server, lines = start_web(str(control), listen)
+    except OSError as exc:
+        raise exits.SystemFailure(f"cannot serve the web page on {listen}: {exc.strerror or exc}") from None
+    try:
+        for line in lines:
+            print(line, flush=True)
+        yield
+    finally:
+        server.stop()

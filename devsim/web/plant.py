@@ -114,7 +114,10 @@ class PlantView:
                     line: dict[str, Any] | None = await self.link.request("line", device=name, port=port)
                 except ControlError:
                     line = None  # a port not on a line
-                ports[port] = {"address": where, "line": line, "connected": feed.hosts.get(port)}
+                connected = feed.hosts.get(port)  # its connect or disconnect, else its settings seen
+                if connected is None and line is not None:
+                    connected = line.get("host") is not None
+                ports[port] = {"address": where, "line": line, "connected": connected}
             values = feed.values
             devices.append({
                 "name": name, "kind": info.get("kind"), "ports": ports,

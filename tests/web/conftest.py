@@ -3,9 +3,11 @@ control socket."""
 
 from __future__ import annotations
 
+import re
 import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import pytest
 
@@ -45,3 +47,16 @@ def sim() -> Iterator[WebSim]:
             yield WebSim(process, seen["web"], seen["sers"].split(" ", 1)[1], control, lines)
         finally:
             assert process.interrupt() == 0
+
+
+def answer(port: Any, command: bytes) -> bytes:
+    """Send a SERS line and read its whole answer: up to ``ok<d>`` or an error line ``*…``
+    (the port's timeout bounds each read)."""
+    port.write(command)
+    got = b""
+    while not re.search(rb"(\nok\d|\n\*[^\n]*)\n\r$", got):
+        chunk = port.read_until(b"\n\r")
+        if not chunk:
+            raise AssertionError(f"no whole answer to {command!r}: {got!r}")
+        got += chunk
+    return got
