@@ -3,6 +3,7 @@ control socket."""
 
 from __future__ import annotations
 
+import contextlib
 import re
 import tempfile
 from collections.abc import Iterator
@@ -60,3 +61,23 @@ def answer(port: Any, command: bytes) -> bytes:
             raise AssertionError(f"no whole answer to {command!r}: {got!r}")
         got += chunk
     return got
+
+
+#: Chromium's switches for the browser tests and the docs picture: headless, no sandbox (CI
+#: containers run as root), nothing fetched from the network on its own.
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+@contextlib.contextmanager
+def chromium(executable: str, width: int = 1280, height: int = 900) -> Iterator[Any]:
+    """A Playwright browser context of Debian's chromium at ``executable`` in a fresh user-data dir."""
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as playwright, tempfile.TemporaryDirectory(prefix="dsc") as profile:
+        context = playwright.chromium.launch_persistent_context(
+            profile, executable_path=executable, args=CHROMIUM_ARGS, viewport={"width": width, "height": height})
+        try:
+            yield context
+        finally:
+            context.close()
