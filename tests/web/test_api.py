@@ -270,3 +270,16 @@ def test_scenario_run_publishes_its_steps_as_they_pass(tmp_path: Path) -> None:
     finally:
         run.proc.terminate()
         run.proc.wait(timeout=15)
+
+
+def test_without_aiohttp_the_web_page_names_its_extra(tmp_path: Path) -> None:
+    shadow = tmp_path / "shadow" / "aiohttp"
+    shadow.mkdir(parents=True)
+    (shadow / "__init__.py").write_text("raise ImportError('aiohttp hidden by the test')\n")
+    environ = devsim_env()
+    environ["PYTHONPATH"] = f"{shadow.parent}:{ROOT}"
+    for args in (["run", "sers", "--web", "0"], ["web", "--control", "unix:/nonexistent/x.sock"]):
+        done = subprocess.run([sys.executable, "-m", "devsim", *args], cwd=ROOT, env=environ, capture_output=True,
+                              text=True, timeout=60, stdin=subprocess.DEVNULL)
+        assert done.returncode == exits.SYSTEM, done.stderr
+        assert "needs aiohttp: pip install '.[web]'" in done.stderr

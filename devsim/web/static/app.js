@@ -20,6 +20,17 @@ function el(tag, attrs = {}, ...children) {
   return node;
 }
 
+// A display as the device's front shows it (devsim/observe/monitor_text.py): a 7-segment digit
+// and that it blinks, an LCD's lines, a text.
+function shownDisplay(value) {
+  if (value && typeof value === "object" && !Array.isArray(value)) {
+    const char = String(value.char ?? "");
+    return (char.trim() ? char : JSON.stringify(char)) + (value.blinking ? " blinking" : "");
+  }
+  if (Array.isArray(value)) return "[" + value.join(" / ") + "]";
+  return value === null || value === undefined ? "–" : String(value);
+}
+
 function show(value) {
   if (value === null || value === undefined) return "–";
   if (typeof value === "number") return Number.isInteger(value) ? String(value) : value.toFixed(3);
@@ -75,6 +86,7 @@ function status(text, bad = false) {
 // -- the chart ------------------------------------------------------------------------------------
 // One series against device time, the last WINDOW seconds, motion events as marks.
 const WINDOW = 20;
+const MIN_SPAN = 2;
 const KEEP = 4000;
 
 class Chart {
@@ -116,13 +128,16 @@ class Chart {
     g.scale(ratio, ratio);
     g.clearRect(0, 0, width, height);
     const end = Math.max(this.clock.now, this.points.length ? this.points[this.points.length - 1][0] : 0);
-    const start = end - WINDOW;
+    // the last WINDOW seconds, or less while there is less to show (at least MIN_SPAN)
+    const first = Math.min(this.points.length ? this.points[0][0] : end, ...this.marks.map((m) => m[0]));
+    const start = Math.min(end - MIN_SPAN, Math.max(end - WINDOW, first));
+    const span = end - start;
     const shown = this.points.filter(([t]) => t >= start);
     if (shown.length) shown.push([end, shown[shown.length - 1][1]]);  // the value holds until now
     let low = Math.min(...shown.map((p) => p[1]), 0), high = Math.max(...shown.map((p) => p[1]), 0);
     if (high - low < 1e-9) { high += 1; low -= 1; }
     const left = 56, right = width - 8, top = 18, bottom = height - 16;
-    const x = (t) => left + (t - start) / WINDOW * (right - left);
+    const x = (t) => left + (t - start) / span * (right - left);
     const y = (v) => bottom - (v - low) / (high - low) * (bottom - top);
     g.font = "11px system-ui, sans-serif";
     g.fillStyle = "#6b7785";
@@ -252,6 +267,11 @@ async function devicePage(name) {
   const values = {};
   const cells = {};
   const dropped = el("span", {class: "muted", id: "dropped"}, "");
+  const displays = device.points.filter((p) => /(^|\.)(display|message)$/.test(p.name)).map((p) => p.name);
+  const front = el("span", {id: "front"});
+  const paintFront = () => front.replaceChildren(...displays.filter((n) => values[n] !== undefined && values[n] !== "")
+    .map((n) => el("span", {}, ` ${n} `, el("span", {class: "display"}, shownDisplay(values[n])))));
+  $("#plant-name").textContent = name;
   const events = el("ol", {class: "mono", id: "events", reversed: ""});
 
   // faults, line faults, power cycle
@@ -334,7 +354,7 @@ async function devicePage(name) {
   main.replaceChildren(
     el("section", {}, el("h2", {}, `${name} `, el("span", {class: "muted"}, device.info.kind), " ",
                          el("a", {href: "#/"}, "plant")),
-       el("div", {class: "controls"}, cycle, dropped), faultButtons, lineControls),
+       el("div", {class: "controls"}, cycle, front, dropped), faultButtons, lineControls),
     el("section", {}, el("h2", {}, "axes"), el("div", {class: "charts"}, Object.values(charts).map((c) => c.canvas))),
     el("section", {}, el("h2", {}, "points ", filter), el("div", {class: "points"}, table)),
     el("section", {}, el("h2", {}, "traffic, newest first ", pause), traffic),
@@ -351,6 +371,7 @@ async function devicePage(name) {
   const change = (item) => {
     values[item.name] = item.value;
     if (cells[item.name]) cells[item.name].textContent = show(item.value);
+    if (displays.includes(item.name)) paintFront();
   };
   paintFaults();
   connect(name, (message) => {
