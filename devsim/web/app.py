@@ -193,19 +193,11 @@ async def _ws(request: web.Request) -> web.StreamResponse:
                 break
 
     listener = asyncio.get_running_loop().create_task(listen())
+    looking = view.looking_at(device) if device is not None else contextlib.nullcontext()
     try:
-        await ws.send_json({"snapshot": {feed.device: feed.snapshot() for feed in feeds}})
-        while not listener.done():
-            waiter = asyncio.ensure_future(subscriber.ready.wait())
-            await asyncio.wait({waiter, listener}, return_when=asyncio.FIRST_COMPLETED)
-            waiter.cancel()
-            if listener.done():
-                break
-            if subscriber.overflow:  # events it has not taken pile up: it reloads rather than miss one
-                await ws.close(code=4000, message=b"too slow: reload")
-                break
-            await ws.send_json(subscriber.take())
-            await asyncio.sleep(BATCH)  # batches: what comes meanwhile goes in the next one
+        async with looking:
+            await ws.send_json({"snapshot": {feed.device: feed.snapshot() for feed in feeds}})
+            await _send(ws, subscriber, listener)
     except (ConnectionError, RuntimeError):
         pass  # the browser has gone
     finally:
@@ -216,6 +208,21 @@ async def _ws(request: web.Request) -> web.StreamResponse:
         with contextlib.suppress(asyncio.CancelledError):
             await listener
     return ws
+
+
+async def _send(ws: web.WebSocketResponse, subscriber: Subscriber, listener: asyncio.Task[None]) -> None:
+    """What the subscriber gathers, in batches, until the browser leaves (``listener`` ends)."""
+    while not listener.done():
+        waiter = asyncio.ensure_future(subscriber.ready.wait())
+        await asyncio.wait({waiter, listener}, return_when=asyncio.FIRST_COMPLETED)
+        waiter.cancel()
+        if listener.done():
+            return
+        if subscriber.overflow:  # events it has not taken pile up: it reloads rather than miss one
+            await ws.close(code=4000, message=b"too slow: reload")
+            return
+        await ws.send_json(subscriber.take())
+        await asyncio.sleep(BATCH)  # batches: what comes meanwhile goes in the next one
 
 
 async def _close_sockets(app: web.Application) -> None:

@@ -47,12 +47,12 @@ class Subscriber:
     def wants(self, device: str) -> bool:
         return self.devices is None or device in self.devices
 
-    def put(self, item: dict[str, Any]) -> None:
-        """Take one item of the stream (never waits)."""
+    def put(self, item: dict[str, Any], chart: bool = False) -> None:
+        """Take one item of the stream (never waits); ``chart``: a sample of a chart's stream."""
         if item.get("type") == "change":
             name = str(item.get("name"))
             self.values[(str(item.get("device")), name)] = item
-            if is_chart(name) and isinstance(item.get("value"), int | float):
+            if chart and is_chart(name) and isinstance(item.get("value"), int | float):
                 if len(self.points) == self.points.maxlen:
                     self.dropped += 1
                 self.points.append(item)
@@ -87,8 +87,9 @@ class Feed:
         self.ended = False
         self.t = 0.0  # the device time last heard of
 
-    def apply(self, item: dict[str, Any]) -> None:
-        """One item of the stream: remember it, hand it to every subscriber."""
+    def apply(self, item: dict[str, Any], chart: bool = False) -> None:
+        """One item of the streams: remember it, hand it to every subscriber (``chart``: a
+        sample of the chart stream, a point for the charts)."""
         kind = item.get("type")
         if isinstance(item.get("t"), int | float):
             self.t = float(item["t"])
@@ -102,7 +103,7 @@ class Feed:
                 self.hosts[str(item.get("port", "main"))] = kind == "connect"
         for subscriber in list(self.subscribers):
             if subscriber.wants(self.device):
-                subscriber.put(item)
+                subscriber.put(item, chart)
 
     def snapshot(self) -> dict[str, Any]:
         """What the stream has said so far: values, active faults, hosts, the recent events."""

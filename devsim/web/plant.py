@@ -3,15 +3,19 @@
 :class:`PlantView` attaches to the control address (and attaches again when the simulator behind
 it stops and another starts there, as between the files of ``devsim scenario run``), reads the
 devices and their declared points once, keeps each port's telegrams from then on (op ``telegrams``)
-and runs two watch streams per device: the axes for the charts, sampled every
-:data:`CHART_PERIOD`, and every readable point for the table, every :data:`TABLE_PERIOD` (device
-time), whose events go to the device's :class:`~devsim.web.feed.Feed`.
+and watches each device as the monitor does (the ``watch`` op's default points, every
+:data:`SUMMARY_PERIOD` of device time, and every event), into the device's
+:class:`~devsim.web.feed.Feed`.  While a browser looks at a device (:meth:`PlantView.looking_at`)
+two more streams sample its axes for the charts every :data:`CHART_PERIOD` and every readable point
+for the table every :data:`TABLE_PERIOD`: a plant of many devices is sampled in detail only where
+someone looks.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+from collections.abc import AsyncIterator
 from typing import Any
 
 from devsim.observe.monitor_text import display_line, is_display, message_line
@@ -23,6 +27,7 @@ __all__ = ["CHART_PERIOD", "TABLE_PERIOD", "PlantView"]
 
 CHART_PERIOD = 0.05  # device seconds between two chart samples
 TABLE_PERIOD = 0.25  # device seconds between two samples of every point
+SUMMARY_PERIOD = 0.25  # device seconds between two samples of what the plant page shows
 RETRY = 0.5  # wall seconds between two attempts to attach
 
 
@@ -39,6 +44,8 @@ class PlantView:
         self.feeds: dict[str, Feed] = {}
         self.attaches = 0
         self._task: asyncio.Task[None] | None = None
+        self._looking: dict[str, int] = {}  # device → browsers looking at it
+        self._details: dict[str, asyncio.Task[None]] = {}
 
     def start(self) -> None:
         self._task = asyncio.get_running_loop().create_task(self._run())
@@ -59,9 +66,14 @@ class PlantView:
                 await asyncio.sleep(RETRY)
                 continue
             self.attached.set()
-            streams = [self._pump(name) for name in self.feeds]
-            await asyncio.gather(*streams)  # until the simulator stops
+            for device, count in self._looking.items():
+                if count and device in self.feeds:
+                    self._start_detail(device)
+            await asyncio.gather(*(self._summary(name) for name in self.feeds))  # until the simulator stops
             self.attached.clear()
+            for task in self._details.values():
+                task.cancel()
+            self._details.clear()
             await self.link.close()
             await asyncio.sleep(RETRY)
 
@@ -81,24 +93,50 @@ class PlantView:
                 feed.subscribers = old[name].subscribers
         self.attaches += 1
 
-    async def _pump(self, device: str) -> None:
+    async def _summary(self, device: str) -> None:
+        """What the plant page shows of ``device``, and all its events, until the simulator stops."""
+        feed = self.feeds[device]
+        with contextlib.suppress(ControlError):
+            async for item in self.link.watch(device, None, SUMMARY_PERIOD):
+                feed.apply(item)
+        feed.ended = True
+        feed.apply({"type": "ended", "device": device, "t": feed.t})
+
+    @contextlib.asynccontextmanager
+    async def looking_at(self, device: str) -> AsyncIterator[None]:
+        """While a browser shows ``device``: its charts and every point are sampled."""
+        self._looking[device] = self._looking.get(device, 0) + 1
+        if self._looking[device] == 1 and self.attached.is_set() and device in self.feeds:
+            self._start_detail(device)
+        try:
+            yield
+        finally:
+            self._looking[device] -= 1
+            if not self._looking[device]:
+                task = self._details.pop(device, None)
+                if task is not None:
+                    task.cancel()
+
+    def _start_detail(self, device: str) -> None:
+        self._details[device] = asyncio.get_running_loop().create_task(self._detail(device))
+
+    async def _detail(self, device: str) -> None:
+        """The chart and table streams of ``device`` (their changes: the events come with the summary)."""
         feed = self.feeds[device]
         readable = [p["name"] for p in self.names[device] if "r" in p.get("access", "")]
         charted = [name for name in readable if is_chart(name)]
 
         async def table() -> None:
             async for item in self.link.watch(device, readable, TABLE_PERIOD):
-                if not (item.get("type") == "change" and is_chart(str(item.get("name")))):
+                if item.get("type") == "change" and not is_chart(str(item.get("name"))):
                     feed.apply(item)
 
         async def chart() -> None:
             async for item in self.link.watch(device, charted, CHART_PERIOD):
-                if item.get("type") == "change":  # its events are the table stream's too
-                    feed.apply(item)
+                if item.get("type") == "change":
+                    feed.apply(item, chart=True)
 
         await asyncio.gather(table(), *([chart()] if charted else []), return_exceptions=True)
-        feed.ended = True
-        feed.apply({"type": "ended", "device": device, "t": feed.t})
 
     # -- what the pages show ----------------------------------------------------------------------
     async def plant(self) -> dict[str, Any]:

@@ -106,14 +106,17 @@ async def test_the_stream_carries_the_move_and_its_events(sim: WebSim) -> None:
         stream = await http.ws_connect("/api/ws?device=sers")
         first = await stream.receive_json(timeout=5)
         assert first["snapshot"]["sers"]["values"]["axis.position"] == 0
+        assert "param.P91" not in first["snapshot"]["sers"]["values"]  # every point: only while a page looks
         with serial.Serial(sim.pty, 9600, timeout=5) as port:
             assert answer(port, b"#1ON W=36000 E\r").endswith(b"\nok0\n\r")
             positions: list[float] = []
             events: list[str] = []
-            while "move_start" not in events or not any(p > 0 for p in positions):
+            values: set[str] = set()
+            while "move_start" not in events or not any(p > 0 for p in positions) or "param.P91" not in values:
                 batch = await stream.receive_json(timeout=5)
                 positions += [p["value"] for p in batch["points"] if p["name"] == "axis.position"]
                 events += [e.get("name") for e in batch["events"]]
+                values |= {v["name"] for v in batch["values"]}
                 assert batch["dropped"] == 0  # a browser that keeps up loses nothing
         await stream.close()
         telegrams = await (await http.get("/api/devices/sers/telegrams?port=main&count=10")).json()

@@ -15,15 +15,17 @@ async def test_a_slow_browser_drops_chart_points_never_events() -> None:
     feed = Feed("sers")
     feed.subscribers.add(subscriber)
     for i in range(1000):
-        feed.apply(change("axis.position", float(i), i / 100))
+        feed.apply(change("axis.position", float(i), i / 100), chart=True)
         if i % 10 == 0:
             feed.apply({"t": i / 100, "device": "sers", "type": "event", "name": f"e{i}"})
     feed.apply(change("P11", 5, 10.0))
+    feed.apply(change("axis.velocity", 1.0, 10.0))  # a summary's sample: a value, no chart point
     batch = subscriber.take()
     assert [p["value"] for p in batch["points"]] == [float(i) for i in range(900, 1000)]  # the newest kept
     assert batch["dropped"] == 900
     assert [e["name"] for e in batch["events"]] == [f"e{i}" for i in range(0, 1000, 10)]  # every one
-    assert {v["name"]: v["value"] for v in batch["values"]} == {"axis.position": 999.0, "P11": 5}
+    assert {v["name"]: v["value"] for v in batch["values"]} == {"axis.position": 999.0, "P11": 5,
+                                                                   "axis.velocity": 1.0}
     assert subscriber.take()["points"] == [] and not subscriber.ready.is_set()
     assert feed.values["axis.position"] == 999.0 and len(feed.recent) == 100
 

@@ -191,15 +191,15 @@ function every(seconds, fn) {
 function portRows(ports) {
   return Object.entries(ports).map(([port, p]) => {
     const line = p.line;
-    const host = line && line.host ? line.host.text : (p.connected ? "connected" : "–");
+    const host = p.connected === true ? `host connected${line && line.host ? " at " + line.host.text : ""}`
+      : p.connected === false ? "no host" : "–";
     const mismatch = line && line.mismatch ? el("span", {class: "error"}, " mismatch") : null;
     const faults = line && line.faults.length ? el("span", {class: "error"}, " line faults: " + line.faults.join(", "))
                                               : null;
     return el("tr", {"data-port": port},
       el("td", {}, port), el("td", {class: "mono"}, p.address || "–"),
       el("td", {}, line ? line.device.text : "(not a line)"),
-      el("td", {}, p.connected === true ? "host connected " : p.connected === false ? "no host " : "", host, mismatch,
-         faults));
+      el("td", {"data-host": port}, host, mismatch, faults));
   });
 }
 
