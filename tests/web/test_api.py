@@ -286,3 +286,21 @@ def test_without_aiohttp_the_web_page_names_its_extra(tmp_path: Path) -> None:
                               text=True, timeout=60, stdin=subprocess.DEVNULL)
         assert done.returncode == exits.SYSTEM, done.stderr
         assert "needs aiohttp: pip install '.[web]'" in done.stderr
+
+
+@pytest.mark.parametrize("command", [["run", "sers"], ["up", "PLANT"]])
+def test_a_web_port_in_use_is_a_system_failure(command: list[str], tmp_path: Path) -> None:
+    import socket
+
+    plant = tmp_path / "plant.yaml"
+    plant.write_text("devices:\n  - {name: x, kind: sers}\n", encoding="utf-8")
+    with socket.socket() as holder:
+        holder.bind(("127.0.0.1", 0))
+        holder.listen()
+        port = holder.getsockname()[1]
+        args = [str(plant) if arg == "PLANT" else arg for arg in command]
+        done = subprocess.run([sys.executable, "-m", "devsim", *args, "--control", f"unix:{tmp_path}/c.sock",
+                               "--web", f"127.0.0.1:{port}"], cwd=ROOT, env=devsim_env(), capture_output=True,
+                              text=True, timeout=60, stdin=subprocess.DEVNULL)
+    assert done.returncode == exits.SYSTEM, done.stderr
+    assert "web page" in done.stderr and "in use" in done.stderr

@@ -6,15 +6,16 @@ from __future__ import annotations
 import tempfile
 import time
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
 import serial
 
-from tests.support.process import free_port
+from tests.support.process import DevsimProcess, free_port
 from tests.support.programs import needs_program
 from tests.web.conftest import WebSim, answer, chromium, start_sers
-from tests.web.test_api import non_loopback_address
+from tests.web.test_api import SCENARIO, non_loopback_address
 
 pytest.importorskip("playwright.sync_api")
 from playwright.sync_api import expect  # noqa: E402
@@ -87,11 +88,24 @@ def test_a_move_appears_on_the_chart_and_the_page_steers_the_device(sim: WebSim,
     assert errors == []
 
 
-def test_the_scenario_view_and_the_plant_page(sim: WebSim, browser: Any) -> None:
-    page = browser.new_page()
-    page.goto(sim.url)
-    expect(page.locator("[data-device=sers] .badge").first).to_have_text("up", timeout=10_000)
-    expect(page.locator("#scenario")).to_have_count(0)  # no scenario runs in devsim run
+def test_the_scenario_view_shows_the_steps_as_they_pass(browser: Any, tmp_path: Path) -> None:
+    path = tmp_path / "progress.yaml"
+    path.write_text(SCENARIO, encoding="utf-8")
+    run = DevsimProcess("scenario", "run", "--realtime", str(path), "--control", f"unix:{tmp_path}/c.sock",
+                        "--web", f"127.0.0.1:{free_port()}")
+    try:
+        url = run.next_match(run.out, lambda line: line.startswith("web: "), 30, "the page's address")[5:]
+        page = browser.new_page()
+        page.goto(url)
+        view = page.locator("#scenario")
+        expect(view).to_have_attribute("data-state", "running", timeout=20_000)
+        expect(view.locator("li[data-status=pass]")).to_have_count(3, timeout=20_000)
+        expect(view.locator("li[data-status=pending]")).to_have_count(2)  # the wait, the log
+        expect(view).to_contain_text("web progress")
+        expect(page.locator("[data-device=x]")).to_contain_text("sers")  # the scenario's plant
+    finally:
+        run.proc.terminate()
+        run.proc.wait(timeout=15)
 
 
 def test_a_non_loopback_page_asks_for_the_token(browser: Any) -> None:
