@@ -44,6 +44,7 @@ STATIC = Path(__file__).parent / "static"
 COOKIE = "devsim_token"
 HEADER = "X-Devsim-Token"
 BATCH = 0.05  # seconds between two messages to one browser
+SEND_TIMEOUT = 10.0  # seconds a browser may take to take one batch before it is disconnected
 VIEW: web.AppKey[PlantView] = web.AppKey("view", PlantView)
 TOKEN: web.AppKey[str | None] = web.AppKey("token", str)
 SOCKETS: web.AppKey[set[web.WebSocketResponse]] = web.AppKey("sockets", set)
@@ -138,12 +139,15 @@ async def _action(request: web.Request) -> web.Response:
         body = None
     if not isinstance(body, dict):
         return web.json_response({"error": "the body: a JSON object", "type": "BadRequest"}, status=400)
+    view = request.app[VIEW]
     try:
-        result = await action(request.app[VIEW], request.match_info["device"], body)
+        result = await action(view, request.match_info["device"], body)
     except ControlError as exc:
         return _refused(exc)
     except (OSError, ConnectionError) as exc:
         return _unreachable(exc)
+    finally:
+        view.changed()
     return web.json_response({"ok": True, "result": result})
 
 
@@ -221,7 +225,12 @@ async def _send(ws: web.WebSocketResponse, subscriber: Subscriber, listener: asy
         if subscriber.overflow:  # events it has not taken pile up: it reloads rather than miss one
             await ws.close(code=4000, message=b"too slow: reload")
             return
-        await ws.send_json(subscriber.take())
+        try:
+            await asyncio.wait_for(ws.send_json(subscriber.take()), SEND_TIMEOUT)
+        except TimeoutError:
+            subscriber.overflow = True
+            await ws.close(code=4000, message=b"too slow: reload")
+            return
         await asyncio.sleep(BATCH)  # batches: what comes meanwhile goes in the next one
 
 

@@ -6,7 +6,8 @@ the hosts on the lines) and hands every item to each browser's :class:`Subscribe
 for any browser.  A subscriber keeps, until its browser takes them:
 
 * the device's events (motion, faults, errors, refusals, connects, line faults) -- never dropped;
-  a browser that lets :data:`MAX_EVENTS` pile up is disconnected (``overflow``) and reloads;
+  a browser that lets :data:`MAX_EVENTS` pile up, or does not take a batch within
+  :data:`devsim.web.app.SEND_TIMEOUT`, is disconnected (``overflow``) and loads the page anew;
 * the latest value of every watched point -- coalesced, the newest always kept;
 * chart points (``axis[.N].position``, ``velocity``, ``following_error``) -- at most
   :data:`MAX_POINTS`; the oldest is dropped when a slow browser lets them pile up, and counted.
@@ -49,6 +50,8 @@ class Subscriber:
 
     def put(self, item: dict[str, Any], chart: bool = False) -> None:
         """Take one item of the stream (never waits); ``chart``: a sample of a chart's stream."""
+        if self.overflow:
+            return  # it is being disconnected: the page reloads what is now
         if item.get("type") == "change":
             name = str(item.get("name"))
             self.values[(str(item.get("device")), name)] = item

@@ -29,6 +29,7 @@ CHART_PERIOD = 0.05  # device seconds between two chart samples
 TABLE_PERIOD = 0.25  # device seconds between two samples of every point
 SUMMARY_PERIOD = 0.25  # device seconds between two samples of what the plant page shows
 RETRY = 0.5  # wall seconds between two attempts to attach
+FRESH = 0.4  # wall seconds the plant page's answer serves every browser that asks
 
 
 class PlantView:
@@ -46,6 +47,7 @@ class PlantView:
         self._task: asyncio.Task[None] | None = None
         self._looking: dict[str, int] = {}  # device → browsers looking at it
         self._details: dict[str, asyncio.Task[None]] = {}
+        self._plant: tuple[float, dict[str, Any]] | None = None  # (when, the plant page's answer)
 
     def start(self) -> None:
         self._task = asyncio.get_running_loop().create_task(self._run())
@@ -141,7 +143,20 @@ class PlantView:
     # -- what the pages show ----------------------------------------------------------------------
     async def plant(self) -> dict[str, Any]:
         """Every device: kind, ports (where a host connects, the line's settings and its host),
-        ready, display, state words, faults."""
+        ready, display, state words, faults; asked at most every :data:`FRESH` seconds, however
+        many browsers show the plant page."""
+        now = asyncio.get_running_loop().time()
+        if self._plant is not None and now - self._plant[0] < FRESH:
+            return self._plant[1]
+        answer = await self._ask_plant()
+        self._plant = (asyncio.get_running_loop().time(), answer)
+        return answer
+
+    def changed(self) -> None:
+        """A request has changed the plant: the next plant page is asked anew."""
+        self._plant = None
+
+    async def _ask_plant(self) -> dict[str, Any]:
         devices = []
         for info in self.infos:
             name = info["name"]

@@ -45,3 +45,11 @@ async def test_the_feed_remembers_faults_and_hosts() -> None:
     assert feed.snapshot()["faults"] == ["power"] and feed.hosts == {"main": True} and feed.t == 1.1
     feed.apply({"t": 1.2, "device": "sers", "type": "fault", "name": "power", "active": False})
     assert feed.snapshot()["faults"] == []
+
+
+async def test_a_browser_being_disconnected_gathers_nothing_more() -> None:
+    subscriber = Subscriber()
+    subscriber.overflow = True
+    subscriber.put({"t": 1.0, "device": "sers", "type": "event", "name": "move_start"})
+    subscriber.put(change("axis.position", 1.0, 1.0), chart=True)
+    assert subscriber.take() == {"events": [], "values": [], "points": [], "dropped": 0}
