@@ -22,6 +22,9 @@
   running simulator's control API and print the result (``--json``: as JSON); ``devsim ctl
   --fleet mqtt://BROKER ...`` the same with every device of a fleet (``devsim run/up --fleet``,
   :mod:`devsim.fleet`).
+* ``devsim web [--control ADDR|NAME] [--listen [HOST:]PORT]`` – the plant in a browser
+  (:mod:`devsim.cli.web`, :mod:`devsim.web`); ``devsim run ... --web [HOST:]PORT`` serves the page
+  from the simulator's own process and prints ``web: http://HOST:PORT/``.
 
 Every error is one line on stderr (``Error: config.yaml:3: baud: ...``); the exit status says
 which kind of mistake it was, the same in every command (:mod:`devsim.cli.exits`: 2 a usage
