@@ -188,25 +188,39 @@ async def test_a_non_loopback_bind_needs_the_token_it_printed(remote_sim: Any) -
         await stream.close()
 
 
-def test_devsim_web_attaches_to_a_running_simulator(tmp_path: Path) -> None:
+def test_devsim_web_attaches_to_a_running_simulator_and_to_the_next_one(tmp_path: Path) -> None:
     control = f"unix:{tmp_path}/c.sock"
-    sim = DevsimProcess("run", "sers", "--control", control)
+    sims = [DevsimProcess("run", "sers", "--control", control)]
     page = None
     try:
-        sim.next_match(sim.out, lambda line: line == "sers: ready", 30, "sers: ready")
+        sims[0].next_match(sims[0].out, lambda line: line == "sers: ready", 30, "sers: ready")
         page = DevsimProcess("web", "--control", control, "--listen", f"127.0.0.1:{free_port()}")
         url = page.next_match(page.out, lambda line: line.startswith("web: "), 30, "the page's address")[5:]
 
-        async def check() -> None:
+        async def kinds() -> list[str]:
             async with aiohttp.ClientSession(url) as http:
-                plant = await wait_for(lambda: _json(http.get("/api/plant")), lambda p: p["devices"], 10, "the devices")
-                assert plant["devices"][0]["name"] == "sers"
+                plant = await wait_for(lambda: _json(http.get("/api/plant")),
+                                       lambda p: p.get("attached") and not p["devices"][0]["ended"], 20, "a plant")
+                return [device["kind"] for device in plant["devices"]]
 
-        asyncio.run(check())
+        assert asyncio.run(kinds()) == ["sers"]
+        assert sims[0].interrupt() == 0
+        sims.append(DevsimProcess("run", "gms96", "--control", control))  # the same address, another simulator
+        sims[1].next_match(sims[1].out, lambda line: line == "gms96: ready", 30, "gms96: ready")
+
+        async def next_kinds() -> list[str]:
+            async with aiohttp.ClientSession(url) as http:
+                plant = await wait_for(lambda: _json(http.get("/api/plant")),
+                                       lambda p: p.get("devices") and p["devices"][0]["kind"] == "gms96", 20,
+                                       "the next simulator")
+                return [device["kind"] for device in plant["devices"]]
+
+        assert asyncio.run(next_kinds()) == ["gms96"]
     finally:
         if page is not None:
             assert page.interrupt() == 0
-        assert sim.interrupt() == 0
+        for sim in sims:
+            sim.interrupt()
 
 
 @pytest.mark.parametrize(("args", "status", "words"), [

@@ -136,3 +136,26 @@ def test_a_non_loopback_page_asks_for_the_token(browser: Any) -> None:
                 other.close()
         finally:
             assert process.interrupt() == 0
+
+
+def test_the_device_page_follows_the_simulator_to_its_next_run(browser: Any, tmp_path: Path) -> None:
+    control = f"unix:{tmp_path}/c.sock"
+    first = DevsimProcess("run", "sers", "--control", control)
+    page_server = second = None
+    try:
+        first.next_match(first.out, lambda line: line == "sers: ready", 30, "sers: ready")
+        page_server = DevsimProcess("web", "--control", control, "--listen", f"127.0.0.1:{free_port()}")
+        url = page_server.next_match(page_server.out, lambda line: line.startswith("web: "), 30, "the address")[5:]
+        page = browser.new_page()
+        page.goto(url + "#/device/sers")
+        expect(page.locator("#status")).to_have_text("live", timeout=10_000)
+        assert first.interrupt() == 0
+        expect(page.locator("#status")).to_contain_text("waiting for it", timeout=10_000)
+        second = DevsimProcess("run", "sers", "--control", control)
+        second.next_match(second.out, lambda line: line == "sers: ready", 30, "sers: ready")
+        expect(page.locator("#status")).to_have_text("live", timeout=10_000)
+        expect(page.locator("tr[data-point='axis.position'] td.value")).to_have_text("0")
+    finally:
+        for process in (page_server, second, first):
+            if process is not None:
+                process.interrupt()

@@ -253,6 +253,19 @@ function plantPage() {
   });
 }
 
+// When the simulator stops, the device page waits for the next one at the same address (as
+// between the files of `devsim scenario run`) and starts afresh with it.
+function reattach(name) {
+  stop();
+  status("the simulator stopped: waiting for it to start again", true);
+  every(1, async () => {
+    try {
+      const plant = await api("/api/plant");
+      if (plant.attached && plant.devices.some((d) => d.name === name && !d.ended)) route();
+    } catch (error) { /* not yet */ }
+  });
+}
+
 // -- the device page -----------------------------------------------------------------------------
 const LINE_FAULTS = ["unplug", "hang", "silent", "noise", "baud_mismatch", "corrupt", "drop", "delay"];
 
@@ -361,6 +374,7 @@ async function devicePage(name) {
     el("section", {}, el("h2", {}, "events, newest first"), events));
 
   const mark = (item) => {
+    if (item.type === "ended") { reattach(name); return; }
     const text = item.name || item.code || item.text || "";
     const label = item.type === "event" ? text : `${item.type} ${text}`;
     events.prepend(el("li", {}, `${show(item.t)} ${label}${item.type === "fault" ? (item.active ? " on" : " off") : ""}`));
