@@ -19,6 +19,7 @@ from devsim.runtime.control import ControlAddress, parse_address
 __all__ = ["ControlLink"]
 
 LIMIT = 1 << 22  # bytes in one answer line (200 telegrams with their decoded fields)
+TIMEOUT = 10.0  # seconds a request may wait for its answer before the simulator counts as gone
 
 Streams = tuple[asyncio.StreamReader, asyncio.StreamWriter]
 
@@ -39,7 +40,8 @@ class ControlLink:
 
     async def request(self, op: str, **fields: Any) -> Any:
         """One request's ``result``; :class:`ControlError` with the simulator's error type,
-        :class:`ConnectionError` when the simulator has gone."""
+        :class:`ConnectionError` when the simulator has gone (or has not answered within
+        :data:`TIMEOUT`)."""
         async with self._lock:
             if self._streams is None:
                 self._streams = await self._open()
@@ -48,9 +50,8 @@ class ControlLink:
             message = {"id": self._next_id, "op": op, **{k: v for k, v in fields.items() if v is not None}}
             try:
                 writer.write((json.dumps(message) + "\n").encode("utf-8"))
-                await writer.drain()
-                line = await reader.readline()
-            except (OSError, asyncio.IncompleteReadError, ValueError) as exc:
+                line = await asyncio.wait_for(self._answer(writer, reader), TIMEOUT)
+            except (OSError, asyncio.IncompleteReadError, ValueError, TimeoutError) as exc:
                 await self._drop()
                 raise ConnectionError(f"control connection broke: {exc}") from None
             if not line:
@@ -60,6 +61,11 @@ class ControlLink:
         if not reply.get("ok"):
             raise ControlError(str(reply.get("error")), str(reply.get("type", "Error")))
         return reply.get("result")
+
+    @staticmethod
+    async def _answer(writer: asyncio.StreamWriter, reader: asyncio.StreamReader) -> bytes:
+        await writer.drain()
+        return await reader.readline()
 
     async def _drop(self) -> None:
         if self._streams is not None:

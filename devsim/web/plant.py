@@ -43,7 +43,6 @@ class PlantView:
         self.infos: list[dict[str, Any]] = []
         self.names: dict[str, list[dict[str, Any]]] = {}
         self.feeds: dict[str, Feed] = {}
-        self.attaches = 0
         self._task: asyncio.Task[None] | None = None
         self._looking: dict[str, int] = {}  # device → browsers looking at it
         self._details: dict[str, asyncio.Task[None]] = {}
@@ -93,7 +92,6 @@ class PlantView:
         for name, feed in self.feeds.items():  # the browsers watching stay with the new process
             if name in old:
                 feed.subscribers = old[name].subscribers
-        self.attaches += 1
 
     async def _summary(self, device: str) -> None:
         """What the plant page shows of ``device``, and all its events, until the simulator stops."""
