@@ -26,6 +26,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("devsim.fleet",),
     ("devsim.observe", "devsim.wireshark"),
     ("devsim.scenario",),
+    ("devsim.web",),
     ("devsim.cli", "devsim.pytest_plugin"),
     ("devsim.__main__",),
 ]

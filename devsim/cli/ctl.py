@@ -234,6 +234,14 @@ def ctl_telegrams(ctx: click.Context, device: str, port: str, count: int) -> Non
     _call(ctx, rq.Telegrams(device, port, count))
 
 
+@ctl.command(command_name("scenario"))
+@click.pass_context
+def ctl_scenario(ctx: click.Context) -> None:
+    """The running scenario (devsim scenario run --control/--web): its steps so far, pass or fail,
+    and its progress."""
+    _call(ctx, rq.Scenario())
+
+
 @ctl.command(command_name("watch"))
 @click.argument("device", required=False)
 @click.argument("names", nargs=-1)

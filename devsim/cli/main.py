@@ -22,6 +22,9 @@
   running simulator's control API and print the result (``--json``: as JSON); ``devsim ctl
   --fleet mqtt://BROKER ...`` the same with every device of a fleet (``devsim run/up --fleet``,
   :mod:`devsim.fleet`).
+* ``devsim web [--control ADDR|NAME] [--listen [HOST:]PORT]`` – the plant in a browser
+  (:mod:`devsim.cli.web`, :mod:`devsim.web`); ``devsim run ... --web [HOST:]PORT`` serves the page
+  from the simulator's own process and prints ``web: http://HOST:PORT/``.
 
 Every error is one line on stderr (``Error: config.yaml:3: baud: ...``); the exit status says
 which kind of mistake it was, the same in every command (:mod:`devsim.cli.exits`: 2 a usage
@@ -187,6 +190,7 @@ class _Plan(msgspec.Struct):
     motion_log: str | None = None  # --motion-log FILE.csv
     motion_resolution: float = 0.01  # --motion-resolution SECONDS
     log_level: int = 2  # -v/-q (devsim.observe.live_log)
+    web: Any = None  # --web: where to serve the page (devsim.web.server.ListenAddress)
 
 
 #: What ``--port NAME=SPEC`` accepts after ``NAME=``.
@@ -365,6 +369,8 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
     metavar="mqtt://BROKER[:PORT][/NAME]",
     help="Join a fleet (extra [fleet]): announce the devices on the broker, take control requests from it.",
 )
+@click.option("--web", metavar="[HOST:]PORT", help="Also serve the plant's web page there (extra [web]; host"
+              " 127.0.0.1 unless named, another host gets a token).")
 @click.option("--motion-log", metavar="FILE.csv", help="Write every axis's motion (set-point, position, velocity,"
               " following error, events) as CSV, for 'devsim plot'.")
 @click.option("--motion-resolution", type=float, default=0.01, show_default=True, metavar="SECONDS",
@@ -398,6 +404,7 @@ def run(
     mqtt_rate: float,
     mqtt_plant: str | None,
     fleet: str | None,
+    web: str | None,
     motion_log: str | None,
     motion_resolution: float,
     verbose: int,
@@ -455,6 +462,13 @@ def run(
 
     from devsim.cli.running import control_option
 
+    web_listen = None
+    if web is not None:
+        from devsim.cli.web import web_option
+
+        if no_control:
+            raise click.UsageError("--web shows the plant through its control API: not with --no-control")
+        web_listen = web_option(web)
     configs = _device_configs(cls, kind, config_file, _parse_drives(drives) if drives is not None else None)
     control_addr = control_option(control, no_control, kind, allow_remote=control_allow_remote)
     plan = _Plan(
@@ -483,6 +497,7 @@ def run(
         motion_log=motion_log,
         motion_resolution=motion_resolution,
         log_level=level_of(verbose, quiet),
+        web=web_listen,
     )
     try:
         asyncio.run(_serve(plan))
@@ -530,6 +545,8 @@ async def _serve(plan: _Plan) -> None:
     async with runtime:
         stage = "create the devices"
         server: Any = None
+        page: Any = None
+        web_lines: list[str] = []
         try:
             if plan.state_dir is not None:
                 Path(plan.state_dir).mkdir(parents=True, exist_ok=True)
@@ -590,6 +607,11 @@ async def _serve(plan: _Plan) -> None:
 
                 member = await join_fleet(runtime, plan.fleet, about={"command": f"devsim run {plan.kind}"})
                 fleet_line = f"fleet: {member.url} as {member.process}"
+            if plan.web is not None:
+                stage = f"serve the web page on {plan.web}"
+                from devsim.cli.web import start_web
+
+                page, web_lines = await asyncio.to_thread(start_web, str(address), plan.web)
         except Exception as exc:  # one line, no traceback: a port in use, a bad path, ...
             if server is not None:
                 await server.close()
@@ -616,6 +638,8 @@ async def _serve(plan: _Plan) -> None:
                 _say(f"control: {address}")
             if fleet_line is not None:
                 _say(fleet_line)
+            for text in web_lines:
+                _say(text)
             for device in devices:  # NAME: ready, each time it has booted and listens
                 device.on_ready(lambda name=device.name: _say(f"{name}: ready"))
             logs = attach_log(runtime, plan.log_level)
@@ -628,6 +652,8 @@ async def _serve(plan: _Plan) -> None:
         finally:
             for log in logs:  # the repeat counts not yet written are written now
                 log.stop()
+            if page is not None:
+                await asyncio.to_thread(page.stop)
             if server is not None:
                 await server.close()
     for signum in (signal.SIGINT, signal.SIGTERM):
@@ -695,6 +721,7 @@ LAZY_COMMANDS: dict[str, str] = {
     "scenario": "devsim.cli.scenario",
     "up": "devsim.cli.scenario",
     "wireshark": "devsim.cli.wireshark",
+    "web": "devsim.cli.web",
 }
 
 

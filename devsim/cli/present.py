@@ -260,6 +260,18 @@ def _names(result: Any, view: View) -> str:
     return names_text(result, view.width)
 
 
+def _scenario(result: Any, view: View) -> str:
+    """``scenario NAME: step 3 of 7, 2.300 of 5.000 s, running`` and a row per step so far."""
+    if not isinstance(result, dict):
+        return "(no scenario runs)"
+    state = "running" if result.get("running") else ("passed" if result.get("passed") else "failed")
+    head = (f"scenario {result.get('name')}: step {result.get('done')} of {result.get('total')}, "
+            f"{value_text(result.get('now'))} of {value_text(result.get('end'))} s, {state}")
+    rows = [(str(step.get("index")), step.get("status", ""), step.get("label", ""), step.get("message", ""))
+            for step in result.get("steps", []) if step.get("status") != "pending"]
+    return "\n".join([head, *table(rows, width=view.width)] if rows else [head])
+
+
 #: op → formatter (result, view) → text; ``watch`` prints its own lines (``describe``).
 FORMATTERS: dict[str, Callable[[Any, View], str]] = {
     "read": _read,
@@ -275,6 +287,7 @@ FORMATTERS: dict[str, Callable[[Any, View], str]] = {
     "fault": _ok,
     "line_fault": _ok,
     "telegrams": _telegrams,
+    "scenario": _scenario,
 }
 
 

@@ -12,10 +12,12 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import gc
 import signal
 import sys
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -72,6 +74,8 @@ def scenario() -> None:
               help="The format of the --plot pictures.")
 @click.option("--control", metavar="ADDR",
               help="Serve the control API while a scenario runs (devsim monitor, devsim ctl watch).")
+@click.option("--web", metavar="[HOST:]PORT", help="Also serve the web page there: the plant and the scenario's steps (extra [web]; host"
+              " 127.0.0.1 unless named, another host gets a token).")
 def scenario_run(
     files: tuple[str, ...],
     mode: str | None,
@@ -84,10 +88,10 @@ def scenario_run(
     plot_dir: str | None,
     plot_format: str,
     control: str | None,
+    web: str | None,
 ) -> None:
     """Run scenario FILES; exit status 1 if any expectation failed (3: a file is wrong)."""
-    from devsim.scenario.report import format_report, write_junit
-    from devsim.scenario.runner import run_scenario
+    from devsim.scenario.report import write_junit
     from devsim.scenario.schema import load_scenario
 
     if speed is not None and speed <= 0:
@@ -113,6 +117,15 @@ def scenario_run(
                 raise click.UsageError(f"--control: refusing non-loopback host {control!r}")
         except ControlAddressError as exc:
             raise click.UsageError(f"--control: {exc}") from None
+    listen = None
+    if web is not None:
+        from devsim.cli.web import web_option
+
+        listen = web_option(web)
+        if control is None:
+            from devsim.cli.running import default_control
+
+            control = str(default_control("scenario"))
     scenarios = []
     for path in files:
         try:
@@ -122,6 +135,33 @@ def scenario_run(
     from devsim.scenario.progress import Progress
 
     progress = Progress(len(scenarios))
+    with _page(control, listen):
+        results = _run_files(scenarios, files, mode, speed, state_dir, trace_dir, pictures, progress, control)
+    if junit is not None:
+        write_junit(results, junit)
+    failed = [r for r in results if not r.passed]
+    if len(results) > 1:
+        click.echo(f"{len(results) - len(failed)} of {len(results)} scenarios passed")
+    if failed:
+        sys.exit(exits.FAILED)
+
+
+def _page(control: str | None, listen: object) -> contextlib.AbstractContextManager[None]:
+    """The web page beside the run (``--web``), or nothing."""
+    if listen is None:
+        return contextlib.nullcontext()
+    from devsim.cli.web import page_beside
+
+    return page_beside(control, listen)
+
+
+def _run_files(scenarios: list[Any], files: tuple[str, ...], mode: str | None, speed: float | None,
+               state_dir: str | None, trace_dir: str | None, pictures: Any, progress: Any,
+               control: str | None) -> list[Any]:
+    """Run each scenario file in turn, its report on stdout: the results."""
+    from devsim.scenario.report import format_report
+    from devsim.scenario.runner import run_scenario
+
     results = []
     for item, path in zip(scenarios, files, strict=True):
         chosen = mode or item.mode()
@@ -148,13 +188,7 @@ def scenario_run(
         click.echo(format_report(results[-1]))
         if pictures is not None and (line := pictures.finish(item_trace_dir)) is not None:
             click.echo(line)
-    if junit is not None:
-        write_junit(results, junit)
-    failed = [r for r in results if not r.passed]
-    if len(results) > 1:
-        click.echo(f"{len(results) - len(failed)} of {len(results)} scenarios passed")
-    if failed:
-        sys.exit(exits.FAILED)
+    return results
 
 
 @click.command("up")
@@ -176,6 +210,8 @@ def scenario_run(
               help="How often (device time) the motion log samples the axes, besides every event.")
 @click.option("--idle-drop", type=click.FloatRange(min=0), default=None, metavar="SECONDS",
               help="Drop a TCP host idle this long when another client finds its port full (default 30).")
+@click.option("--web", metavar="[HOST:]PORT", help="Also serve the plant's web page there (extra [web]; host"
+              " 127.0.0.1 unless named, another host gets a token).")
 @log_options
 def up(
     plant_file: str,
@@ -191,6 +227,7 @@ def up(
     motion_log: str | None,
     motion_resolution: float,
     idle_drop: float | None,
+    web: str | None,
     verbose: int,
     quiet: int,
 ) -> None:
@@ -219,6 +256,13 @@ def up(
     if part is not None:
         name = f"{name}.{part}"
     address = control_option(control, no_control, name)
+    listen = None
+    if web is not None:
+        from devsim.cli.web import web_option
+
+        if address is None:
+            raise click.UsageError("--web shows the plant through its control API: not with --no-control")
+        listen = web_option(web)
     if motion_log is not None:
         from devsim.observe.motion_log import motion_log_problem
 
@@ -241,17 +285,17 @@ def up(
         from devsim.scenario.workers import run_workers
 
         try:
-            status = asyncio.run(
-                run_workers(spec, workers, control=address, name=name, state_dir=state_dir, speed=speed, trace_dir=trace_dir,
-                            fleet=fleet, verbose=verbose, quiet=quiet, idle_drop=idle_drop)
-            )
+            with _page(str(address), listen):
+                status = asyncio.run(run_workers(spec, workers, control=address, name=name, state_dir=state_dir, speed=speed, trace_dir=trace_dir,
+                            fleet=fleet, verbose=verbose, quiet=quiet, idle_drop=idle_drop))
         except KeyboardInterrupt:
             sys.exit(exits.INTERRUPTED)
         sys.exit(exits.SYSTEM if status else exits.OK)  # a worker could not start or ended
     try:
         motion = (motion_log, motion_resolution) if motion_log is not None else None
-        asyncio.run(_up(spec, state_dir, speed, address, trace_dir, virtual, fleet, part, motion,
-                        level_of(verbose, quiet), name, idle_drop))
+        with _page(str(address), listen):
+            asyncio.run(_up(spec, state_dir, speed, address, trace_dir, virtual, fleet, part, motion,
+                            level_of(verbose, quiet), name, idle_drop))
     except KeyboardInterrupt:
         sys.exit(exits.INTERRUPTED)
     except OSError as exc:

@@ -35,18 +35,13 @@ from textual.screen import ModalScreen
 from textual.widgets import Footer, Header, OptionList, Sparkline, Static
 from textual.widgets.option_list import Option
 
-from devsim.observe.monitor_text import clock_line, display_line, is_display, message_line
+from devsim.observe.monitor_text import LINE_FAULTS, clock_line, display_line, is_display, message_line
 from devsim.runtime import requests as rq
 from devsim.runtime.client import ControlClient, ControlError
 
 __all__ = ["LINE_FAULTS", "MonitorApp"]
 
 _AXIS = re.compile(r"^(axis(?:\.[^.]+)?)\.(position|velocity)$")
-#: Line faults the menu offers, with the parameters they need.
-LINE_FAULTS: dict[str, dict[str, Any]] = {
-    "unplug": {}, "hang": {}, "silent": {}, "noise": {"rate": 50}, "baud_mismatch": {"baudrate": 4800},
-    "corrupt": {}, "drop": {}, "delay": {"delay": 0.2},
-}
 _SPARK = 60  # positions kept per axis
 _TELEGRAMS = 6  # telegrams shown per port
 _TICK = 1.0  # seconds between two ticks of the header's clock

@@ -13,11 +13,16 @@ import time
 from collections.abc import Callable, Mapping
 from typing import Any
 
-__all__ = ["clock_line", "display_line", "is_display", "message_line", "shown_display"]
+__all__ = ["LINE_FAULTS", "clock_line", "display_line", "is_display", "message_line", "shown_display"]
 
 #: The last part of a point name that makes it a display (``display``, ``axis.1.display``,
 #: ``panel.message``).
 DISPLAY_NAMES = ("display", "message")
+#: Line faults the monitor's menu and the web page offer, with the parameters they need.
+LINE_FAULTS: dict[str, dict[str, Any]] = {
+    "unplug": {}, "hang": {}, "silent": {}, "noise": {"rate": 50}, "baud_mismatch": {"baudrate": 4800},
+    "corrupt": {}, "drop": {}, "delay": {"delay": 0.2},
+}
 
 
 def is_display(name: str) -> bool:

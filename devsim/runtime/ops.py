@@ -12,6 +12,7 @@ thread-safe methods, so it may be called from any thread.
 
 from __future__ import annotations
 
+import copy
 import enum
 import json
 import math
@@ -167,6 +168,10 @@ def _capture(rt: Runtime, req: rq.Capture) -> CaptureStart:
     return CaptureStart(device=req.device, port=req.port)
 
 
+def _scenario(rt: Runtime, _req: rq.Scenario) -> dict[str, Any] | None:
+    return rt.call(lambda: copy.deepcopy(rt.scenario))
+
+
 def _set(rt: Runtime, req: rq.Set) -> None:
     rt.set(req.device, req.name, req.value)
 
@@ -195,6 +200,8 @@ CONTROL: Table[Handler] = Table([
     Command("telegrams", _telegrams, "",
             "the last telegrams on a port's line, decoded by the port's framing (kept from the first request on)",
             request=rq.Telegrams),
+    Command("scenario", _scenario, "", "the running scenario's steps, their outcomes so far and its progress"
+            " (null without one)", request=rq.Scenario),
     Command("watch", _watch, "", "a stream of the device's changes and events (see devsim.runtime.watch_stream)",
             request=rq.Watch),
     Command("capture", _capture, "",

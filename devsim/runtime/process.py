@@ -74,6 +74,9 @@ class Runtime:
         #: Seconds a TCP host may stay idle before a waiting client takes its place (``--idle-drop``;
         #: None: :data:`devsim.transports.hosts.DEFAULT_IDLE_DROP`).
         self.idle_drop: float | None = None
+        #: A running scenario's steps and progress as the scenario runner publishes them (op
+        #: ``scenario``; :class:`devsim.scenario.published.PublishedProgress`), None without one.
+        self.scenario: dict[str, Any] | None = None
         self._line_faults: dict[tuple[str, str], list[Any]] = {}
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None

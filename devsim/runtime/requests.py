@@ -27,6 +27,7 @@ __all__ = [
     "Now",
     "PowerCycle",
     "Read",
+    "Scenario",
     "Set",
     "State",
     "SwitchFault",
@@ -111,7 +112,10 @@ class Watch(ControlRequest, frozen=True):
     period: float | None = None
 
 
-
 class Capture(ControlRequest, frozen=True):
     device: str
     port: str = "main"
+
+
+class Scenario(ControlRequest, frozen=True):
+    device: str | None = None

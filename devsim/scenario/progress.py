@@ -14,6 +14,7 @@ import threading
 import time
 from typing import Any, TextIO
 
+from devsim.scenario.published import timeline_length
 from devsim.scenario.report import format_step
 from devsim.scenario.runner import StepResult
 from devsim.scenario.schema import Scenario
@@ -22,20 +23,6 @@ __all__ = ["Progress", "timeline_length"]
 
 _WIDTH = 30  # characters of the bar
 _REDRAW = 0.2  # seconds between redraws on a terminal
-
-
-def timeline_length(scenario: Scenario) -> float:
-    """Seconds the timeline takes by its ``at``, ``after`` and ``wait`` steps (``when`` steps
-    and expectations count as instant)."""
-    end = 0.0
-    for step in scenario.steps:
-        if step.at is not None:
-            end = max(end, step.at)
-        elif step.after is not None:
-            end += step.after
-        if step.wait is not None:
-            end += step.wait
-    return end
 
 
 class Progress:

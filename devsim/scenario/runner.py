@@ -25,6 +25,7 @@ from devsim.core.kit import Command, Table
 from devsim.runtime import Runtime
 from devsim.scenario.host import HostPort, open_host_port
 from devsim.scenario.plant import Plant, build_plant
+from devsim.scenario.published import PublishedProgress
 from devsim.scenario.schema import Condition, Scenario, Step
 from devsim.transports.trace import TapSink
 
@@ -544,7 +545,18 @@ async def run_scenario_async(
     try:
         if announce is not None:
             announce(plant)
-        return await Runner(scenario, plant, mode, on_step).run()
+        if server is None:
+            return await Runner(scenario, plant, mode, on_step).run()
+        published = PublishedProgress(runtime, scenario, mode, [_label(step) for step in scenario.steps])
+
+        def hook(step: StepResult | None, now: float) -> None:
+            published.step(step, now)
+            if on_step is not None:
+                on_step(step, now)
+
+        result = await Runner(scenario, plant, mode, hook).run()
+        published.finish(result)
+        return result
     finally:
         if server is not None:
             await server.close()

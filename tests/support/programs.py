@@ -1,5 +1,5 @@
 """Programs outside Python that some tests start or talk to (tshark, mosquitto and its clients,
-Node.js with npm, tmux) and the cairo library (the monitor's screenshot): found, or the test is
+Node.js with npm, tmux, chromium for the web page's browser test) and the cairo library (the monitor's screenshot): found, or the test is
 skipped, and the run ends with one line naming what was missing and the command that installs it
 (``tests/conftest.py``).  Under ``CI=true`` (``.ci/run`` sets it and installs them all) a missing
 program is a failure, so CI runs every test.
@@ -30,6 +30,7 @@ PACKAGES = {
     "node": "nodejs",
     "npm": "npm",
     "tmux": "tmux",
+    "chromium": "chromium",
     "ss": "iproute2",
     "libcairo": "libcairo2",
 }
