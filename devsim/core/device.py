@@ -288,7 +288,14 @@ class Device:
         """Start (or end) a declared device fault such as ``blocked_axis`` or ``emergency_stop``;
         then the model announces ``fault_switched(kind, active)`` (a facade's fault events)."""
         self.faults.apply(self.model, kind, active, self.name)
-        self.model.announce("fault_switched", kind, parse_bool(active))
+        on = parse_bool(active)
+        self.active_faults = tuple(name for name in self.faults.names()
+                                   if (name == kind and on) or (name != kind and name in self.active_faults))
+        self.model.announce("fault_switched", kind, on)
+
+    #: The declared faults switched on (through :meth:`fault`) and not switched off since, in
+    #: declaration order; a watch starts with them (a monitor that attaches later sees them).
+    active_faults: tuple[str, ...] = ()
 
     def record_event(self, name: str) -> None:
         self.model.record_event(name)

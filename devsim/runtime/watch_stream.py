@@ -16,7 +16,8 @@ item to ``send`` as it happens:
   ``"refused"`` when it is the device's answer to a host's command (a bare ``error`` event of
   the same moment is left out);
 * ``{"type": "fault", "name": KIND, "active": B}`` -- a declared fault switched
-  (``fault_switched``); ``{"type": "drive_fault", "axis": A, "code": C}`` -- the model's own
+  (``fault_switched``; a stream starts with one per fault already on, and a ``line_fault`` per
+  line fault already active, so a watcher attaching late knows them); ``{"type": "drive_fault", "axis": A, "code": C}`` -- the model's own
   ``fault`` announcement (what a CANopen facade sends as EMCY);
 * ``{"type": "connect" | "disconnect" | "host_settings" | "line_fault", "port": P, "text": T}``
   -- moments of the lines serving the device's ports (``host_settings`` adds ``mismatch``).
@@ -101,6 +102,12 @@ class WatchStream:
             observer = self._line_observer(port, line)
             line.observers.append(observer)
             self._undo.append(lambda line=line, observer=observer: _remove(line.observers, observer))
+        for kind in self.device.active_faults:  # switched before this watch began
+            self._emit("fault", name=kind, active=True)
+        for port in self.device.port_names():
+            line = self.runtime.lines.get(port_key(self.device.name, port))
+            for fault in line.faults if line is not None else ():
+                self._emit("line_fault", port=port, text=f"fault start: {fault.describe()}")
         if self.names:
             self._watch = PointWatch(self.device, self._changes, names=self.names, period=self.period)
             self._watch.start()

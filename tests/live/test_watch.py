@@ -89,6 +89,28 @@ def test_client_watch_and_telegrams(tmp_path: Path) -> None:
         sim.stop()
 
 
+def test_a_late_watch_starts_with_the_faults_already_on(tmp_path: Path) -> None:
+    """A monitor or web page that attaches after a fault was switched on still shows it: the
+    stream begins with every device fault and line fault active at that moment."""
+    sim, addr, _ = _start(tmp_path)
+    try:
+        with ControlClient(addr) as client:
+            client.fault("sers", "blocked_axis", True)
+            client.fault("sers", "emergency_stop", True)
+            client.fault("sers", "emergency_stop", False)
+            client.line_fault("sers", "noise", rate=5)
+            stream = client.watch("sers", ["axis.position"], timeout=10)
+            first = [next(stream) for _ in range(3)]
+            stream.close()
+        assert [(item["type"], item.get("name")) for item in first[:2]] == \
+            [("fault", "blocked_axis"), ("line_fault", None)]
+        assert first[0]["active"] is True
+        assert first[1]["port"] == "main" and first[1]["text"].startswith("fault start: noise")
+        assert first[2]["name"] == "axis.position"
+    finally:
+        sim.stop()
+
+
 def test_run_logs_connects_mismatch_and_levels(tmp_path: Path) -> None:
     sim = Proc("run", "sers", "--rfc2217", "0", "--virtual", "--control", f"unix:{tmp_path}/ctl.sock")
     quiet = Proc("run", "sers", "--rfc2217", "0", "--virtual", "-q")
