@@ -231,10 +231,11 @@ class Runtime:
         """Serve any line target (a device's port, a bus, a facade's endpoint) on ``transport``
         under the port keys ``keys``; returns the Line."""
         from devsim.transports.line import Line
-        from devsim.transports.tracing import open_trace
 
         tracer = None
         if trace is not None:  # FILE.pcap: a pcap trace with the transport's addresses, else text
+            from devsim.transports.tracing import open_trace
+
             peers = getattr(transport, "trace_peers", None)
             tracer = open_trace(trace, peers=peers, name=keys[0])
         line = Line(target, self.clock, pacing=pacing, tracer=tracer)
