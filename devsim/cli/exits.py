@@ -20,7 +20,9 @@ command meets it (docs/cli.md has the same table for users; a test runs each row
 
 Each status but ``OK``, ``FAILED`` and ``INTERRUPTED`` has a :class:`click.ClickException` here; the
 ``devsim`` group (:class:`devsim.cli.main._Cli`) prints its message as one ``Error:`` line on stderr
-and exits with its status.
+and exits with its status.  The numbers themselves, :class:`StartFailure` and :func:`start_status`
+live in :mod:`devsim.cli.statuses` (without click, for ``devsim run``'s quick command line) and
+are the same names here.
 """
 
 from __future__ import annotations
