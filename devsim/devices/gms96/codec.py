@@ -161,7 +161,7 @@ def encode(frame: Frame) -> bytes:
 # -- decoder ---------------------------------------------------------------------------------
 
 _INCOMPLETE = object()
-_WHOLE_FRAMES = 64  # distinct whole-frame chunks a decoder remembers (a host polls a few)
+_WHOLE_FRAMES = 16  # distinct whole-frame chunks a decoder remembers (a host polls with a few; ~2 KB at most)
 _WHOLE_SIZE = 16  # the longest chunk remembered (Kurzsätze and short Langsätze)
 
 
