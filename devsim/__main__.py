@@ -1,6 +1,6 @@
 """``python -m devsim`` – the same as the ``devsim`` command."""
 
-from devsim.cli import cli
+from devsim.cli import main
 
 if __name__ == "__main__":
-    cli.main(prog_name="devsim")
+    main(prog_name="devsim")

@@ -12,7 +12,7 @@ import serial
 from click.testing import CliRunner
 
 from devsim.cli import cli
-from devsim.cli.main import _trace_for
+from devsim.cli.serve import _trace_for
 from tests.test_cli import ECHO, TWOPORT, Sim
 from tests.transports.test_pcap import read_pcap
 

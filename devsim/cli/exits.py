@@ -20,12 +20,28 @@ command meets it (docs/cli.md has the same table for users; a test runs each row
 
 Each status but ``OK``, ``FAILED`` and ``INTERRUPTED`` has a :class:`click.ClickException` here; the
 ``devsim`` group (:class:`devsim.cli.main._Cli`) prints its message as one ``Error:`` line on stderr
-and exits with its status.
+and exits with its status.  The numbers themselves, :class:`StartFailure` and :func:`start_status`
+live in :mod:`devsim.cli.statuses` (without click, for ``devsim run``'s quick command line) and
+are the same names here.
 """
 
 from __future__ import annotations
 
 import click
+
+from devsim.cli.statuses import (
+    BAD_FILE,
+    EXIT_CODES,
+    FAILED,
+    INTERRUPTED,
+    OK,
+    REFUSED,
+    SYSTEM,
+    UNREACHABLE,
+    USAGE,
+    StartFailure,
+    start_status,
+)
 
 __all__ = [
     "BAD_FILE",
@@ -47,28 +63,6 @@ __all__ = [
     "failure",
     "start_status",
 ]
-
-OK = 0
-FAILED = 1
-USAGE = 2  # click's own status for a usage error
-BAD_FILE = 3
-REFUSED = 4
-UNREACHABLE = 5
-SYSTEM = 6
-INTERRUPTED = 130  # 128 + SIGINT, as a shell reports it
-
-#: Every status by name (docs and tests read it; the order is the table's).
-EXIT_CODES: dict[str, int] = {
-    "OK": OK,
-    "FAILED": FAILED,
-    "USAGE": USAGE,
-    "BAD_FILE": BAD_FILE,
-    "REFUSED": REFUSED,
-    "UNREACHABLE": UNREACHABLE,
-    "SYSTEM": SYSTEM,
-    "INTERRUPTED": INTERRUPTED,
-}
-
 
 class BadFile(click.ClickException):
     """A file named on the command line is missing, unreadable or wrong."""
@@ -98,30 +92,11 @@ class MissingExtra(SystemFailure):
     """A feature's libraries are not installed; the message names the ``pip install``."""
 
 
-class StartFailure(Exception):
-    """A server (``run``, ``up``) could not start: raised inside its event loop with the one line
-    and the status, turned into :func:`failure` once ``asyncio.run`` has returned."""
-
-    def __init__(self, message: str, status: int) -> None:
-        super().__init__(message)
-        self.status = status
-
-
 def failure(status: int, message: str) -> click.ClickException:
     """The one-line error that exits with ``status``."""
     error = click.ClickException(message)
     error.exit_code = status
     return error
-
-
-def start_status(exc: BaseException) -> int:
-    """The status of a server that could not start: ``UNREACHABLE`` if what it connects to (a
-    broker) does not answer, ``REFUSED`` if a fleet refused its names, else ``SYSTEM``."""
-    if isinstance(exc, ConnectionError):
-        return UNREACHABLE
-    if type(exc).__name__ == "FleetClash":
-        return REFUSED
-    return SYSTEM
 
 
 #: Errors of the control API (``ControlError.type``) that say the device was not reached.

@@ -8,23 +8,10 @@ from __future__ import annotations
 import click
 
 from devsim.cli import exits
+from devsim.cli.usage import host_port
 from devsim.core.extras import install_command
 
 __all__ = ["check_canopen", "check_fleet", "check_modbus", "check_mqtt", "check_opcua", "host_port", "modbus_for"]
-
-
-def host_port(option: str, text: str) -> tuple[str, int]:
-    host, sep, port_text = text.rpartition(":")
-    if not sep:
-        host = "127.0.0.1"
-    host = host.strip("[]") or "127.0.0.1"
-    try:
-        port = int(port_text)
-    except ValueError:
-        raise click.UsageError(f"{option}: expected [HOST:]PORT, got {text!r}") from None
-    if not 0 <= port <= 65535:
-        raise click.UsageError(f"{option}: port {port} is not in 0..65535")
-    return host, port
 
 
 def check_modbus(spec: str) -> None:

@@ -11,8 +11,9 @@ import click
 import msgspec
 
 from devsim.cli import exits
-from devsim.runtime.control import ControlAddress, ControlAddressError, parse_address
-from devsim.runtime.discovery import DiscoveryError, RuntimeDirError, Simulator, choose, control_path, running
+from devsim.cli.serve import control_option, default_control
+from devsim.runtime.control import ControlAddressError
+from devsim.runtime.discovery import DiscoveryError, RuntimeDirError, Simulator, choose, running
 
 __all__ = ["ControlChoiceError", "control_option", "control_target", "default_control", "ps", "uptime_text"]
 
@@ -87,31 +88,3 @@ def ps(as_json: bool) -> None:
     widths = [max(len(row[col]) for row in rows) for col in range(len(header) - 1)]
     for row in rows:
         click.echo("  ".join([*(cell.ljust(width) for cell, width in zip(row, widths, strict=False)), row[-1]]))
-
-
-def default_control(name: str) -> ControlAddress:
-    """The control socket ``devsim run`` and ``devsim up`` open when not told otherwise:
-    ``NAME-PID.sock`` in the runtime directory (a one-line error if that is not safe)."""
-    try:
-        return ControlAddress(path=str(control_path(name)))
-    except RuntimeDirError as exc:
-        raise exits.SystemFailure(f"{exc} (--control ADDR serves the control API elsewhere, --no-control"
-                                   " not at all)") from None
-
-
-def control_option(control: str | None, no_control: bool, name: str, *, allow_remote: bool = False) -> ControlAddress | None:
-    """``--control ADDR`` / ``--no-control`` of ``devsim run`` and ``devsim up``: the address to
-    serve the control API on (by default :func:`default_control`), or None."""
-    if no_control:
-        if control is not None:
-            raise click.UsageError("--control and --no-control exclude each other")
-        return None
-    if control is None:
-        return default_control(name)
-    try:
-        address = parse_address(control)
-    except ControlAddressError as exc:
-        raise click.UsageError(f"--control: {exc}") from None
-    if not allow_remote and not address.is_loopback():
-        raise click.UsageError(f"--control: refusing non-loopback host {address.host!r} (add --control-allow-remote)")
-    return address

@@ -33,8 +33,6 @@ import sys
 from collections.abc import Callable, Hashable
 from typing import Any
 
-import click
-
 __all__ = ["DEFAULT_LEVEL", "attach_log", "banner", "expects", "level_of", "log_options", "repeat_key"]
 
 DEFAULT_LEVEL = 2
@@ -149,6 +147,8 @@ def banner(runtime: Any, devices: list[Any]) -> str:
 
 def log_options(command: Callable[..., Any]) -> Callable[..., Any]:
     """``-v``/``--verbose`` and ``-q``/``--quiet`` (both countable) for a command."""
+    import click  # (here: `devsim run` reads the level without click, devsim.cli.quick)
+
     command = click.option("-q", "--quiet", count=True,
                            help="Log less to stderr (-q: warnings and errors only; -qq: nothing but fatal errors)."
                            )(command)

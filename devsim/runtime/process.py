@@ -239,10 +239,11 @@ class Runtime:
         under the port keys ``keys``; returns the Line.  ``capture`` tags a serial line's pcap
         records (:class:`~devsim.core.kit.CaptureTag`; ``None``: captured as IPv4/UDP)."""
         from devsim.transports.line import Line, wire_settings
-        from devsim.transports.tracing import open_trace
 
         line = Line(target, self.clock, pacing=pacing)
         if trace is not None:  # FILE.pcap: a serial line's records, or packets with the transport's addresses
+            from devsim.transports.tracing import open_trace
+
             peers = getattr(transport, "trace_peers", None)
             line.tracer = open_trace(trace, peers=peers, name=keys[0], capture=capture,
                                      settings=lambda: wire_settings(line))

@@ -11,7 +11,6 @@ use up a counted fault's rest and draw from its random generator).
 from __future__ import annotations
 
 import math
-import random
 from collections.abc import Callable
 from typing import Literal, get_args
 
@@ -164,6 +163,8 @@ class _Active:
     __slots__ = ("fault", "rng", "remaining", "started", "timers", "emitted", "active")
 
     def __init__(self, fault: LineFault, started: float) -> None:
+        import random  # (here: a port that never gets a fault starts without it)
+
         self.fault = fault
         self.rng = random.Random(fault.seed)
         self.remaining = fault.count

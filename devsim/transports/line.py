@@ -198,6 +198,7 @@ class Line:
             "to_device": _Stage(clock, self._to_target),
             "to_host": _Stage(clock, self._paced),
         }
+        self._to_device, self._to_host = self._stages["to_device"], self._stages["to_host"]  # (the fast paths' look)
         #: ``fn(event, text)`` called on the line's rare moments (not on data): ``connect``,
         #: ``disconnect``, ``host_settings`` (text: the settings, `` (mismatch ...)`` when they
         #: differ), ``fault`` (a line fault started or ended) -- for watchers and logs.
@@ -221,11 +222,9 @@ class Line:
         if not data:
             return
         self.bytes_in += len(data)
-        if not self._faults and self.tracer is None and self._clean():
-            stage = self._stages["to_device"]
-            if not stage.items:
-                self.target.feed(data)  # the fault-free path: nothing to garble, trace or delay
-                return
+        if not self._faults and self.tracer is None and not self._to_device.items and self._clean():
+            self.target.feed(data)  # the fault-free path: nothing to garble, trace or delay
+            return
         received = data
         lost = gate(self._faults, "to_device") if self._faults else None
         if lost is not None:
@@ -314,8 +313,9 @@ class Line:
         host = self._host
         if host is None:
             return True
-        device = self.device_settings
-        if host is self._matched[0] and device is self._matched[1]:
+        device = self.target.serial_settings  # (what device_settings says, one call less)
+        matched = self._matched
+        if host is matched[0] and device is matched[1]:
             return True
         if settings_match(host, device):
             self._matched = (host, device)
@@ -483,9 +483,9 @@ class Line:
         if not data:
             return
         self.bytes_out += len(data)
-        if not self._faults and self.tracer is None and self._clean() and not self._stages["to_host"].items:
+        if not self._faults and self.tracer is None and not self._to_host.items and self._clean():
             # the fault-free path: nothing to garble, trace or hold back (what _paced and _deliver do)
-            if self.pacing:
+            if self._pacing_requested and not self.clock.virtual:  # (self.pacing)
                 self._paced(data, len(data))
             elif self._write is not None:
                 self.bytes_delivered += len(data)

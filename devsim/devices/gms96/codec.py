@@ -49,6 +49,7 @@ __all__ = [
     "short_command",
     "short_extension_device",
     "short_extension_host",
+    "k_bytes",
     "k_frame",
     "t_reply",
     "FCB",
@@ -160,6 +161,8 @@ def encode(frame: Frame) -> bytes:
 # -- decoder ---------------------------------------------------------------------------------
 
 _INCOMPLETE = object()
+_WHOLE_FRAMES = 16  # distinct whole-frame chunks a decoder remembers (a host polls with a few; ~2 KB at most)
+_WHOLE_SIZE = 16  # the longest chunk remembered (Kurzsätze and short Langsätze)
 
 
 class FrameDecoder:
@@ -187,6 +190,9 @@ class FrameDecoder:
         self._start_re: re.Pattern[bytes] | None = None
         self._buf = bytearray()
         self._last = 0.0
+        #: chunks that were one whole frame and nothing else, with that frame (frames are frozen:
+        #: a host's repeated poll is decoded once); at most :data:`_WHOLE_FRAMES` of them
+        self._whole: dict[bytes, Frame] = {}
 
     @property
     def pending(self) -> int:
@@ -217,10 +223,18 @@ class FrameDecoder:
             work = bytes(self._buf) + bytes(data)
             self._buf.clear()
         else:  # nothing pending (a host's whole frame): no copies
-            out = []
             if not data:
-                return out
+                return []
             work = data if type(data) is bytes else bytes(data)
+            frame = self._whole.get(work)
+            if frame is not None:  # the same whole frame as before: the same frame
+                self._last = now
+                return [frame]
+            out = []
+            if len(work) <= _WHOLE_SIZE and len(self._whole) < _WHOLE_FRAMES:
+                found = self._parse(work, 0) if work[0] in self._starts else None
+                if type(found) is tuple and found[1] == len(work):
+                    self._whole[work] = found[0]
         self._last = now
         starts = self._starts
         i = 0
@@ -392,6 +406,14 @@ def k_frame(k: int, address: int, mb4: int | None) -> ShortFrame:
     if mb4 is None:
         return ShortFrame(k & ~AE_FLAG & 0xFF, address)
     return ShortFrame((k | AE_FLAG) & 0xFF, address, bytes([_octet("MB4", mb4)]))
+
+
+def k_bytes(k: int, address: int, mb4: int | None) -> bytes:
+    """``encode(k_frame(k, address, mb4))`` in one step (the answer to every status poll)."""
+    if mb4 is not None or type(address) is not int or not 0 <= address <= 0xFF:
+        return encode(k_frame(k, address, mb4))
+    control = k & ~AE_FLAG & 0xFF
+    return bytes((START_SHORT, control, address, (control + address) & 0xFF, END))
 
 
 def t_reply(address: int, identifier: int, value: bytes, control: int = 0x08) -> LongFrame:

@@ -78,7 +78,7 @@ class Gms96Face(Face):
 
     def short_command(self, number: int, ext: bytes) -> bytes | None:
         """Kurzsatz #0, #1, #8, #9 (manual §2.3.2), looked up in :data:`SHORT_COMMANDS`."""
-        handler = SHORT_COMMANDS.get(str(number))
+        handler = _SHORT_BY_NUMBER.get(number)
         if handler is None:
             return ACK if self.model.cfg.link.unknown_short_command_reply == "ack" else None
         return handler(self, ext)
@@ -277,7 +277,7 @@ class Gms96Face(Face):
         """#1: the status Kurzsatz (K byte, and the MB4 message in the address extension)."""
         m = self.model
         k = tables.k_from_status(m.status(), False)
-        return codec.encode(codec.k_frame(k, m.address, m.image.take_message()))
+        return codec.k_bytes(k, m.address, m.image.take_message())
 
     def spindle_rpm(self, ext: bytes) -> bytes:
         """#8: the spindle speed for G95."""
@@ -302,6 +302,10 @@ SHORT_COMMANDS: Table[Callable[[Gms96Face, bytes], bytes]] = Table(
         Command("9", Gms96Face.external_override, "§2.3.2", "#9: override 0..125 %"),
     ]
 )
+
+#: :data:`SHORT_COMMANDS` by the number itself (a poll looks its handler up without a string).
+_SHORT_BY_NUMBER: dict[int, Callable[[Gms96Face, bytes], bytes]] = {int(row.token): row.handler
+                                                                    for row in SHORT_COMMANDS}
 
 LetterHandler = Callable[[Gms96Face, Letter], "bytes | None"]
 

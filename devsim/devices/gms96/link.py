@@ -116,11 +116,15 @@ class Link:
             self.error_hold = False
         if data:
             self._last_byte = now
-        for item in self.decoder.feed(data, now):
-            if self.error_hold and not isinstance(item, codec.FrameError):
-                self._count("not_idle")  # back-to-back behind an error in the same chunk (R4)
-                continue
-            self._handle(item)
+        items = self.decoder.feed(data, now)
+        if len(items) == 1 and type(items[0]) is codec.ShortFrame:
+            self._short(items[0])  # a whole Kurzsatz (a poll): the card listens, as just asked
+        else:
+            for item in items:
+                if self.error_hold and not isinstance(item, codec.FrameError):
+                    self._count("not_idle")  # back-to-back behind an error in the same chunk (R4)
+                    continue
+                self._handle(item)
         if self.error_hold:
             self.decoder.reset()  # a partial frame that began behind the error
         if self._expire is not None:
@@ -159,8 +163,8 @@ class Link:
         return None if bc is not None and address == bc else False
 
     def _short(self, frame: codec.ShortFrame) -> None:
-        if self._mine(frame.address) is not True:
-            return
+        if frame.address != self.card.address:
+            return  # (a Kurzsatz to the broadcast address is not answered either)
         self.frames += 1
         number = codec.short_command_number(frame.control)
         if number == 0 and self.card.e_version:

@@ -47,6 +47,12 @@ from devsim.devices.gms96.torque import Torque
 
 __all__ = ["Gms96Card"]
 
+#: The bits of :meth:`Gms96Card.status` (:data:`~devsim.devices.gms96.tables.STATUS_BITS`).
+_ESTOP, _MOTION, _MONITORING, _IDXOFF, _BUSY, _I2T_ACTIVE, _I2T_LATCHED, _MESSAGE = (
+    tables.STATUS_BITS[name]
+    for name in ("ESTOP", "MOTION", "MONITORING", "IDXOFF", "BUSY", "I2T_ACTIVE", "I2T_LATCHED", "MESSAGE")
+)
+
 
 class Gms96Card(Model):
     """One GMS96 card (spec §4): its parts, power-on and reset, status bytes, markers, faults."""
@@ -365,19 +371,12 @@ class Gms96Card(Model):
         )
 
     def status(self) -> int:
-        """The standard status byte of ``T3;0`` (spec §4.3.1)."""
-        s = tables.STATUS_BITS
-        stage = self.stage
-        v = 0
-        v |= s["ESTOP"] if stage.estop else 0
-        v |= s["MOTION"] if self.motion() else 0
-        v |= s["MONITORING"] if stage.monitoring_cause() else 0
-        v |= s["IDXOFF"] if stage.idxoff else 0
-        v |= s["BUSY"] if self.busy() else 0
-        v |= s["I2T_ACTIVE"] if self.i2t.limiting else 0
-        v |= s["I2T_LATCHED"] if self.i2t.latched else 0
-        v |= s["MESSAGE"] if self.image.markers[4] else 0
-        return v
+        """The standard status byte of ``T3;0`` (spec §4.3.1; every status poll asks for it)."""
+        stage, i2t = self.stage, self.i2t
+        return ((_ESTOP if stage.estop else 0) | (_MOTION if self.motion() else 0)
+                | (_MONITORING if stage.monitoring_cause() else 0) | (_IDXOFF if stage.idxoff else 0)
+                | (_BUSY if self.busy() else 0) | (_I2T_ACTIVE if i2t.limiting else 0)
+                | (_I2T_LATCHED if i2t.latched else 0) | (_MESSAGE if self.image.markers[4] else 0))
 
     def memory_status(self) -> int:
         """The memory status byte of ``T3;4`` (spec §4.3.2)."""

@@ -1,0 +1,59 @@
+"""The exit statuses of every ``devsim`` command as numbers, and the failure of a server that
+could not start, without click (:mod:`devsim.cli.exits` has the table and click's exceptions;
+``devsim run``'s quick command line, :mod:`devsim.cli.quick`, imports no click)."""
+
+from __future__ import annotations
+
+__all__ = [
+    "BAD_FILE",
+    "EXIT_CODES",
+    "FAILED",
+    "INTERRUPTED",
+    "OK",
+    "REFUSED",
+    "SYSTEM",
+    "StartFailure",
+    "UNREACHABLE",
+    "USAGE",
+    "start_status",
+]
+
+OK = 0
+FAILED = 1
+USAGE = 2  # click's own status for a usage error
+BAD_FILE = 3
+REFUSED = 4
+UNREACHABLE = 5
+SYSTEM = 6
+INTERRUPTED = 130  # 128 + SIGINT, as a shell reports it
+
+#: Every status by name (docs and tests read it; the order is the table's).
+EXIT_CODES: dict[str, int] = {
+    "OK": OK,
+    "FAILED": FAILED,
+    "USAGE": USAGE,
+    "BAD_FILE": BAD_FILE,
+    "REFUSED": REFUSED,
+    "UNREACHABLE": UNREACHABLE,
+    "SYSTEM": SYSTEM,
+    "INTERRUPTED": INTERRUPTED,
+}
+
+
+class StartFailure(Exception):
+    """A server (``run``, ``up``) could not start: raised inside its event loop with the one line
+    and the status, turned into :func:`devsim.cli.exits.failure` once ``asyncio.run`` has returned."""
+
+    def __init__(self, message: str, status: int) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+def start_status(exc: BaseException) -> int:
+    """The status of a server that could not start: ``UNREACHABLE`` if what it connects to (a
+    broker) does not answer, ``REFUSED`` if a fleet refused its names, else ``SYSTEM``."""
+    if isinstance(exc, ConnectionError):
+        return UNREACHABLE
+    if type(exc).__name__ == "FleetClash":
+        return REFUSED
+    return SYSTEM

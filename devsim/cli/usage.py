@@ -1,0 +1,28 @@
+"""Usage errors without click on the way to them (``devsim run``'s quick command line,
+:mod:`devsim.cli.quick`, imports no click unless it has a mistake to say), and ``[HOST:]PORT``."""
+
+from __future__ import annotations
+
+__all__ = ["host_port", "usage_error"]
+
+
+def usage_error(message: str) -> Exception:
+    """click's usage error (exit status 2, one line), click imported on the way to it."""
+    import click
+
+    return click.UsageError(message)
+
+
+def host_port(option: str, text: str) -> tuple[str, int]:
+    """``[HOST:]PORT`` of ``option`` (host 127.0.0.1 when not given)."""
+    host, sep, port_text = text.rpartition(":")
+    if not sep:
+        host = "127.0.0.1"
+    host = host.strip("[]") or "127.0.0.1"
+    try:
+        port = int(port_text)
+    except ValueError:
+        raise usage_error(f"{option}: expected [HOST:]PORT, got {text!r}") from None
+    if not 0 <= port <= 65535:
+        raise usage_error(f"{option}: port {port} is not in 0..65535")
+    return host, port
