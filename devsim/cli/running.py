@@ -11,7 +11,7 @@ import click
 import msgspec
 
 from devsim.cli import exits
-from devsim.cli.serve import control_option, default_control
+from devsim.cli.control_address import control_option, default_control
 from devsim.runtime.control import ControlAddressError
 from devsim.runtime.discovery import DiscoveryError, RuntimeDirError, Simulator, choose, running
 

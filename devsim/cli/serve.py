@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import msgspec
 
+from devsim.cli.control_address import control_option, default_control, system_failure
 from devsim.cli.statuses import INTERRUPTED, StartFailure, start_status
 from devsim.cli.usage import host_port, usage_error
 from devsim.core.registry import UnknownKind, device_class
@@ -29,49 +30,10 @@ if TYPE_CHECKING:  # imported where used: `devsim run` starts faster without the
 __all__ = ["PORT_SCHEMES", "Plan", "Port", "control_option", "default_control", "plan_run", "serve"]
 
 
-def _system(message: str) -> Exception:
-    from devsim.cli import exits
-
-    return exits.SystemFailure(message)
-
-
 def _bad_file(message: str) -> Exception:
     from devsim.cli import exits
 
     return exits.BadFile(message)
-
-
-def default_control(name: str) -> ControlAddress:
-    """The control socket ``devsim run`` and ``devsim up`` open when not told otherwise:
-    ``NAME-PID.sock`` in the runtime directory (a one-line error if that is not safe)."""
-    from devsim.runtime.control import ControlAddress
-    from devsim.runtime.discovery import RuntimeDirError, control_path
-
-    try:
-        return ControlAddress(path=str(control_path(name)))
-    except RuntimeDirError as exc:
-        raise _system(f"{exc} (--control ADDR serves the control API elsewhere, --no-control"
-                      " not at all)") from None
-
-
-def control_option(control: str | None, no_control: bool, name: str, *, allow_remote: bool = False) -> ControlAddress | None:
-    """``--control ADDR`` / ``--no-control`` of ``devsim run`` and ``devsim up``: the address to
-    serve the control API on (by default :func:`default_control`), or None."""
-    if no_control:
-        if control is not None:
-            raise usage_error("--control and --no-control exclude each other")
-        return None
-    if control is None:
-        return default_control(name)
-    from devsim.runtime.control import ControlAddressError, parse_address
-
-    try:
-        address = parse_address(control)
-    except ControlAddressError as exc:
-        raise usage_error(f"--control: {exc}") from None
-    if not allow_remote and not address.is_loopback():
-        raise usage_error(f"--control: refusing non-loopback host {address.host!r} (add --control-allow-remote)")
-    return address
 
 
 class Port(msgspec.Struct):
@@ -244,7 +206,7 @@ def plan_run(
     except UnknownKind as exc:
         raise usage_error(str(exc)) from None
     except Exception as exc:
-        raise _system(f"cannot load device kind {kind!r}: {type(exc).__name__}: {exc}") from None
+        raise system_failure(f"cannot load device kind {kind!r}: {type(exc).__name__}: {exc}") from None
 
     chosen = [name for name, given in (("--pty/--link", use_pty or link), ("--tcp", tcp), ("--rfc2217", rfc2217)) if given]
     if len(chosen) > 1:
