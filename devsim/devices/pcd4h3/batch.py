@@ -19,12 +19,33 @@ from devsim.devices.pcd4h3.lm628 import COMPLETE, POSITION_ERROR, POSITION_RANGE
 from devsim.devices.pcd4h3.pid import _lag_terms
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
-__all__ = ["STILL", "run", "run_reference"]
+__all__ = ["STILL", "restore", "run", "run_reference", "snapshot"]
 
 STILL = 1e-3  # counts/s: a motor slower than this stands (for the settled count)
 ONE = 1 << 16
 I16_LOW, I16_HIGH = -(1 << 15), (1 << 15) - 1
 I24_LOW, I24_HIGH = -(1 << 23), (1 << 23) - 1
+
+
+State = tuple[int | bool | float, ...]
+
+
+def snapshot(chip: Lm628) -> State:
+    """Everything a run of samples changes in ``chip`` (not what only commands change)."""
+    p, f, m = chip.profile, chip.filter, chip.motor
+    return (p.position, p.velocity, p.target, p.stopping, p.complete,
+            f.error_sum, f.derivative, f._previous, f._countdown, f.output, f.integral,
+            m.position, m.velocity, chip.flags, chip.on_target, chip._raw, chip.udf_sample, chip.motor_off,
+            chip.index_armed, chip.index_position)
+
+
+def restore(chip: Lm628, state: State) -> None:
+    """Put ``chip`` back where :func:`snapshot` found it (the same command state assumed)."""
+    p, f, m = chip.profile, chip.filter, chip.motor
+    (p.position, p.velocity, p.target, p.stopping, p.complete,
+     f.error_sum, f.derivative, f._previous, f._countdown, f.output, f.integral,
+     m.position, m.velocity, chip.flags, chip.on_target, chip._raw, chip.udf_sample, chip.motor_off,
+     chip.index_armed, chip.index_position) = state  # type: ignore[assignment]
 
 
 def _quiet_after(chip: Lm628, before: tuple[int, int, int], quiet: int) -> int:

@@ -18,6 +18,7 @@ The kind's model: it builds its parts and hands each its collaborators: per axis
 from __future__ import annotations
 
 import math
+from bisect import bisect_left
 from collections.abc import Mapping
 from typing import Any
 
@@ -29,6 +30,7 @@ from devsim.devices.pcd4h3.config import AXIS, Pcd4h3Config
 from devsim.devices.pcd4h3.drive import H3Drive, axis_signals
 from devsim.devices.pcd4h3.layout import Layout
 from devsim.devices.pcd4h3.library import STATUS_FLAGS, H3Axis
+from devsim.devices.pcd4h3.lookahead import quiet_cycles, switch_near
 from devsim.devices.pcd4h3.programs import PROGRAMS, Sequence
 from devsim.devices.pcd4h3.registers import AxisRegisters, RegisterBlock
 from devsim.devices.pcd4h3.timers import Timers
@@ -95,6 +97,7 @@ class Pcd4(Model):
         self.status = RUN
         self.initialised = [False] * len(self.axes)
         self._timer: Timer | None = None
+        self._skipped: list[float] = []  # the cycles the timer skips (nothing for them to do, issue 31)
         self._seen: dict[tuple[int, str], int] = {}  # status flags at the last look (events)
         self._last_cycle = -math.inf
         self._calls_before, self._running_since = 0, clock.now()  # AxHndlg calls (one per axis per cycle)
@@ -161,16 +164,28 @@ class Pcd4(Model):
     def wake(self) -> None:
         """Something may need the cycle: make sure the next one is scheduled (on the cycle grid)."""
         if self._timer is not None:
+            if self._skipped:
+                self._resume()
             return
         now = self.clock.now()
         due = max(now, self._last_cycle + self.cycle_time)
         self._timer = self.clock.call_at(due, self._cycle)
 
+    def _resume(self) -> None:
+        """Skip no further cycle: the next one on the grid from now runs."""
+        skipped, self._skipped = self._skipped, []
+        index = bisect_left(skipped, self.clock.now())
+        if index < len(skipped) and self._timer is not None:
+            self._timer.cancel()
+            self._timer = self.clock.call_at(skipped[index], self._cycle)
+
     def _cycle(self) -> None:
         self._timer = None
+        self._skipped = []
         start = self._last_cycle = self.clock.now()
         for drive in self.drives:
             drive.catch_up()
+            drive.stepper.present()
         elapsed = 0.0
         if self.status == RUN:
             if self.sequence is not None:
@@ -195,7 +210,27 @@ class Pcd4(Model):
                 pass
             self._display()
         if self._busy():
-            self._timer = self.clock.call_at(start + max(self.cycle_time, elapsed), self._cycle)
+            due = start + max(self.cycle_time, elapsed)
+            if self._only_moving():
+                # a cycle with nothing to run lasts AxHndlg's base time per axis (§3.3.2)
+                step = max(self.cycle_time, 0.0005 * len(self.axes) if self.status == RUN else 0.0)
+                self._skipped = quiet_cycles(self.drives, due, step)
+                if self._skipped:
+                    due = self._skipped[-1] + step
+            self._timer = self.clock.call_at(due, self._cycle)
+
+    def _only_moving(self) -> bool:
+        """The next cycles have nothing to do but copy the chips' status (while it stays): no
+        command flag, no cyclic read, no user program waiting on a condition or a timer."""
+        if self.status != RUN:
+            return True
+        if self.settings["cyclic_reads"]:
+            return False
+        sequence = self.sequence
+        if sequence is not None and (sequence.busy or self.timers.running() or sequence.program.cyclic_reads):
+            return False
+        flags = self.flags
+        return not any(flags.get(address, 0) for axis in self.axes for _, address in axis.command_flags)
 
     def _note(self, axis: H3Axis) -> None:
         """Events for timing expectations: a motion function run (``axis1.FStart`` …) and a
@@ -261,9 +296,16 @@ class Pcd4(Model):
         return self._calls_before + running
 
     def catch_up(self) -> None:
-        """Bring every chip to now (before the host looks)."""
+        """Bring every chip to now (before the host looks).  While cycles are skipped, the
+        shared axis now follows the motor from here; where that could reach a switch before the
+        next cycle, the skipping ends."""
         for drive in self.drives:
             drive.catch_up()
+        if self._skipped:
+            now, following = self.clock.now(), self._skipped[-1] + self.cycle_time
+            if any(switch_near(drive, drive.axis.position(now), drive.axis.position(following))
+                   for drive in self.drives if drive.switches):
+                self._resume()
 
     def close(self) -> None:
         if self._timer is not None:

@@ -7,10 +7,17 @@ A batch computes every sample (341.333 µs apart) in order, in one pass
 (:func:`~devsim.devices.pcd4h3.batch.run`, bit-exact with :meth:`Lm628.sample` one at a time), so
 the loop's behaviour is the same however the batches fall; only the moment at which a flag
 becomes visible is rounded to the next look or tick.
+
+A caller that wants to know what comes (the PLC, issue 31: "schedule timers only for events")
+computes the chip ahead of the present (:meth:`ChipStepper.ahead`), which keeps a checkpoint of
+the chip's state at each point it was asked for; a look before the end goes back to the last
+checkpoint before it and computes the few samples from there, so that a look sees exactly the
+chip of the present.  A command (:meth:`ChipStepper.poke`) drops what was computed ahead.
 """
 
 from __future__ import annotations
 
+from bisect import bisect_right
 from collections.abc import Callable
 
 from devsim.core.clock import Clock, Timer
@@ -35,6 +42,10 @@ class ChipStepper:
         self._epoch = clock.now()
         self._timer: Timer | None = None
         self._quiet = 0
+        #: (sample index, quiet, chip state) computed ahead of the last look, in order; the first
+        #: is where the chip was when :meth:`ahead` began
+        self._ahead: list[tuple[int, int, batch.State]] = []
+        self._unseen = False  # the chip's state was computed ahead: on_batch has not followed it
 
     @property
     def active(self) -> bool:
@@ -48,21 +59,58 @@ class ChipStepper:
     def catch_up(self, until: float | None = None) -> None:
         """Compute every sample due by now (or by ``until``); a settled chip just rests."""
         now = self.clock.now() if until is None else until
+        moved, self._unseen = self._unseen, False
+        if self._ahead:
+            rewound = self._rewind(int((now - self._epoch) / CHIP_SAMPLE + 1e-9))
+            moved = moved if rewound is None else rewound
         if self.settled:
             if now > self._epoch + self._samples * CHIP_SAMPLE:
                 self._epoch, self._samples = now, 0
-            return
-        due = int((now - self._epoch) / CHIP_SAMPLE + 1e-9)
-        if self._samples >= due:
+        else:
+            due = int((now - self._epoch) / CHIP_SAMPLE + 1e-9)
+            if self._samples < due:
+                self._quiet = batch.run(self.chip, due - self._samples, self._quiet)
+                self._samples = due
+                moved = True
+        if moved and self.on_batch is not None:
+            self.on_batch()
+
+    def _rewind(self, due: int) -> bool | None:
+        """Take the chip from what was computed ahead to the last checkpoint at or before
+        sample ``due`` (when the chip is beyond ``due``, or the checkpoint beyond the chip);
+        None when it stays, else whether it is at a sample the shared axis has not followed."""
+        ahead = self._ahead
+        # before the first checkpoint: a look at the moment of a command that acted a little
+        # later in the same PLC cycle (its FB's time); the chip stays where the command left it
+        index = max(0, bisect_right(ahead, due, key=lambda checkpoint: checkpoint[0]) - 1)
+        samples, quiet, state = ahead[index]
+        del ahead[:index]
+        if samples == self._samples or not (self._samples > due or samples > self._samples):
+            return None
+        batch.restore(self.chip, state)
+        self._samples, self._quiet = samples, quiet
+        return samples <= due  # at the first checkpoint before it: as the command left it (no new sample)
+
+    def ahead(self, until: float) -> None:
+        """Compute the chip's samples up to ``until`` (after the present) and keep a checkpoint
+        there; the present stays where it was for every look (:meth:`catch_up`)."""
+        due = int((until - self._epoch) / CHIP_SAMPLE + 1e-9)
+        if not self._ahead:
+            self._ahead.append((self._samples, self._quiet, batch.snapshot(self.chip)))
+        if due <= self._samples:
             return
         self._quiet = batch.run(self.chip, due - self._samples, self._quiet)
-        self._samples = due
-        if self.on_batch is not None:
-            self.on_batch()
+        self._samples, self._unseen = due, True
+        self._ahead.append((due, self._quiet, batch.snapshot(self.chip)))
+
+    def present(self) -> None:
+        """The chip is at the present (just caught up): forget what was computed ahead."""
+        self._ahead.clear()
 
     def poke(self) -> None:
         """A command changed the chip (call :meth:`catch_up` before the command, so it acts at
         the right sample): keep ticking until the chip settles."""
+        self._ahead.clear()
         self._quiet = 0
         if self._timer is None and self.own_timer:
             self._timer = self.clock.call_later(TICK, self._tick)
