@@ -131,7 +131,53 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
     done = 0
     cruise = 0  # samples ahead in which the generator only adds its velocity
     stopped = False
+    shift, scale = (4, 2048) if twelve else (8, 128)
     while done < count:
+        if cruise and not watch_moves and not bounded:
+            # the generator only adds its velocity and nothing is watched: the same operations
+            # as below without the branches that cannot be taken (about a third faster)
+            n = 0
+            lo16, hi16, lo24, hi24 = I16_LOW, I16_HIGH, I24_LOW, I24_HIGH
+            first_count, end_count = segment
+            for n in range(1, (cruise if cruise < count - done else count - done) + 1):  # noqa: B007
+                p += v
+                desired = p >> 16
+                e = desired - seen + home
+                e = lo16 if e < lo16 else hi16 if e > hi16 else e
+                s = error_sum + e
+                s = lo24 if s < lo24 else hi24 if s > hi24 else s
+                error_sum = -limit if s < -limit else limit if s > limit else s
+                if ki:
+                    term = ki * (int(error_sum / 256))
+                    integral = -il if term < -il else il if term > il else term
+                if countdown == 0:
+                    derivative = e - previous
+                    previous = e
+                    countdown = ds
+                else:
+                    countdown -= 1
+                u = kp * e + integral + kd * derivative
+                output = lo16 if u < lo16 else hi16 if u > hi16 else u
+                goal_speed = kv * ((output >> shift) / scale * 10.0 - load)
+                x += speed_now * tau * gained + goal_speed * travelled
+                speed_now = speed_now * kept + goal_speed * gained
+                seen = floor(sign * x)
+                if not first_count <= seen < end_count:
+                    flags |= WRAPAROUND
+                    first_count, end_count = segment = _segment(seen, home)
+                err = desired - seen + home
+                if err > threshold or err < -threshold:
+                    flags |= POSITION_ERROR
+                    if stop_on_error:
+                        stopped = True
+                        break
+            done += n
+            cruise -= n
+            raw = seen
+            quiet = 0
+            if stopped:
+                break
+            continue
         done += 1
         before_actual, before_p, before_flags = seen, p, flags
         before = raw
