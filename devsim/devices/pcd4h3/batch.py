@@ -147,8 +147,8 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
                 s = error_sum + e
                 s = lo24 if s < lo24 else hi24 if s > hi24 else s
                 error_sum = -limit if s < -limit else limit if s > limit else s
-                if ki:
-                    term = ki * (int(error_sum / 256))
+                if ki:  # Σe / 256 truncated: |Σe| < 2^24, so the quotient of the reference is exact
+                    term = ki * (error_sum >> 8 if error_sum >= 0 else -(-error_sum >> 8))
                     integral = -il if term < -il else il if term > il else term
                 if countdown == 0:
                     derivative = e - previous
@@ -252,7 +252,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
         s = I24_LOW if s < I24_LOW else I24_HIGH if s > I24_HIGH else s
         error_sum = -limit if s < -limit else limit if s > limit else s
         if ki:
-            term = ki * (int(error_sum / 256))
+            term = ki * (error_sum >> 8 if error_sum >= 0 else -(-error_sum >> 8))
             integral = -il if term < -il else il if term > il else term
         if countdown == 0:
             derivative = e - previous
