@@ -15,7 +15,15 @@ from __future__ import annotations
 
 import math
 
-from devsim.devices.pcd4h3.lm628 import COMPLETE, POSITION_ERROR, POSITION_RANGE, WRAPAROUND, Lm628, wrap
+from devsim.devices.pcd4h3.lm628 import (
+    BREAKPOINT,
+    COMPLETE,
+    POSITION_ERROR,
+    POSITION_RANGE,
+    WRAPAROUND,
+    Lm628,
+    wrap,
+)
 from devsim.devices.pcd4h3.pid import _lag_terms
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
@@ -25,6 +33,7 @@ STILL = 1e-3  # counts/s: a motor slower than this stands (for the settled count
 ONE = 1 << 16
 I16_LOW, I16_HIGH = -(1 << 15), (1 << 15) - 1
 I24_LOW, I24_HIGH = -(1 << 23), (1 << 23) - 1
+TWICE_RANGE = 2 * POSITION_RANGE
 
 
 State = tuple[int | bool | float, ...]
@@ -121,7 +130,9 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
     x, speed_now = motor.position, motor.velocity
     # encoder and checks
     sign, home, threshold, stop_on_error = chip.encoder_sign, chip.home, chip.error_threshold, chip.stop_on_error
-    watch_moves = chip.breakpoint is not None or (chip.index_armed and chip.index_period)
+    break_at = chip.breakpoint if chip.breakpoint is not None else 0
+    index_watch = chip.index_armed and chip.index_period
+    watch_moves = chip.breakpoint is not None or index_watch
     flags, on_target = chip.flags, chip.on_target
     raw = chip._raw
     seen = floor(sign * x)  # the encoder before the first sample (the stepper's look)
@@ -277,10 +288,21 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
                 flags |= WRAPAROUND
             segment = _segment(raw, home)
         if watch_moves and before != raw:
-            chip.flags = flags
-            chip._moved(before, raw)
-            flags = chip.flags
-            watch_moves = chip.breakpoint is not None or (chip.index_armed and chip.index_period)
+            if index_watch:
+                chip.flags = flags
+                chip._moved(before, raw)
+                flags = chip.flags
+                index_watch = chip.index_armed and chip.index_period
+                watch_moves = chip.breakpoint is not None or index_watch
+            else:  # the breakpoint alone: Lm628._moved's wrap-around and breakpoint checks, inline
+                if (before - home + POSITION_RANGE) >> 31 != (raw - home + POSITION_RANGE) >> 31:
+                    flags |= WRAPAROUND
+                w = (before - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE - break_at
+                was = (w > 0) - (w < 0)
+                w = (raw - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE - break_at
+                now = (w > 0) - (w < 0)
+                if was != now and was != 0 and now * was <= 0:
+                    flags |= BREAKPOINT
         err = desired - (raw - home)  # |err| > threshold ≤ 7FFFh, saturated to 32 bits or not
         if err > threshold or err < -threshold:
             flags |= POSITION_ERROR
