@@ -18,6 +18,7 @@ from devsim.devices.pcd4h3.model import Pcd4
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
 Step = Callable[[Pcd4], None]
+CYCLE = 0.025  # two PLC cycles (10 ms) and their reads, s
 EXAMPLE = {"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 2}, "modules": 1, "variant": "H320",
            "response_delay_ms": 0}
 
@@ -48,13 +49,24 @@ def look(pcd: Pcd4) -> tuple[Any, ...]:
     pcd.catch_up()
     chips = tuple((batch.snapshot(d.chip), d.chip.status) for d in pcd.drives)
     signals = tuple(pcd.signals.get(f"{name}_{n}") for n in (1, 2) for name in ("LS1", "LS2", "REF"))
-    return pcd.clock.now(), chips, sorted(pcd.flags.items()), sorted(pcd.registers.items()), signals
+    library = tuple((a.transfers, a.comers_calls, tuple(a.trace[-40:])) for a in pcd.axes)
+    return (pcd.clock.now(), chips, sorted(pcd.flags.items()), sorted(pcd.registers.items()), signals, library,
+            sorted(pcd.screens.items()), pcd.status, pcd.handler_calls())
+
+
+def keys(*inputs: int, value: int = 1) -> Step:
+    def act(pcd: Pcd4) -> None:
+        pcd.catch_up()
+        for n in inputs:
+            pcd.inputs[n] = value
+        pcd.wake()
+    return act
 
 
 def shared_axes(pcd: Pcd4) -> tuple[tuple[float, float], ...]:
-    """Where the shared axes are now and how fast the motors move (the tolerance: one sample's
-    travel)."""
-    return tuple((d.axis.position(), abs(d.motor.velocity) * CHIP_SAMPLE + 1e-6) for d in pcd.drives)
+    """Where the shared axes are now and how fast the motors move (the tolerance: two PLC
+    cycles' travel)."""
+    return tuple((d.axis.position(), abs(d.motor.velocity) * CYCLE + 1e-6) for d in pcd.drives)
 
 
 def play(config: dict[str, Any], script: dict[float, list[Step]], seconds: float, seed: int) -> tuple[list[Any], list[Any], list[Any], int]:
@@ -94,6 +106,14 @@ SCENARIOS: dict[str, tuple[dict[str, Any], dict[float, list[Step]], float]] = {
     "a smooth stop mid-move and FBackw": (
         {}, {0.2: [command(1, "FLdVA", "FForw", Veloc=300)], 0.75: [command(1, "FStop", MCW=0x0441B)],
              1.3: [command(1, "FBackw")], 1.6: [command(1, "FStop")]}, 3.0),
+    "cyclic reads and the display while the axis moves, a host writing a register": (
+        {"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 1}, "cyclic_reads": ["FRdAP", "FRdSV", "FRdSR"],
+         "display": {1: {"reg1": "RActP", "reg2": "RSetV"}}},
+        {0.2: [command(1, "FLdAA", "FLdVA", "FLdDA", "FStart", Accel=300, Veloc=120, DestP=180)],
+         0.61: [command(1, RActP=7)], 1.1: [command(1, "FLdDA", "FStart", DestP=20)]}, 3.0),
+    "the manual's example 3 with I 8 held, then I 15": (
+        {"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 1}, "user_program": "example3"},
+        {0.1: [keys(8)], 4.0: [keys(15)]}, 6.0),
 }
 
 
@@ -108,8 +128,8 @@ def test_the_skipped_cycles_change_nothing_a_host_sees(name: str, seed: int, mon
     assert len(looks) == len(every_looks)
     for seen, reference in zip(looks, every_looks, strict=True):
         assert seen == reference
-    # the shared axis extrapolates the motor from the last batch that computed a sample: at a look
-    # in the same sample as a cycle the PLC did not run, from the look instead of the cycle
+    # the shared axis extrapolates the motor from the last batch (the PLC cycle's, which reads
+    # the chip a little after its start): after cycles the PLC ran late, from the next look
     for seen_axes, reference_axes in zip(axes, every_axes, strict=True):
         for (position, _), (reference, tolerance) in zip(seen_axes, reference_axes, strict=True):
             assert position == pytest.approx(reference, abs=tolerance)

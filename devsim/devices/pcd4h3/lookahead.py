@@ -1,14 +1,17 @@
-"""The PLC cycles a moving axis does not need (issue 31, "schedule timers only for events"; spec
-pcd4h3.md §3.3.2, §9.6.1): while the axes only move, with no command flag, user program or
-cyclic read to run, a cycle of AxHndlg copies the chips' status into the status flags, which is
-the same status as before until the chip reports something (the trajectory complete, a
-breakpoint, the index, a wrap-around, a position error, the motor off); and the shared axis
-follows the motor, which only matters where a switch is near.
+"""The PLC cycles a moving axis does not need at their time (issue 31, "schedule timers only
+for events"; spec pcd4h3.md §3.3.2, §9.6.1): while the axes only move, with no command flag and
+no user program waiting on a condition or a timer, a cycle of AxHndlg copies the chips' status
+into the status flags, which stays the same until the chip reports something (the trajectory
+complete, a breakpoint, the index, a wrap-around, a position error, the motor off), and runs the
+cyclic reads (registers, the display), which only a host sees; and the shared axis follows the
+motor, which only matters where a switch is near.
 
 :func:`quiet_cycles` computes the moving chips ahead, cycle by cycle, up to the first cycle
-that would see a change (or a horizon), and returns the cycles in between: the PLC skips them.
-A look in between sees the chip of the present (the stepper keeps a checkpoint at each cycle,
-:meth:`~devsim.devices.pcd4h3.stepper.ChipStepper.ahead`); a command ends the look-ahead.
+that would see a change (or a horizon), and returns the cycles in between: the PLC does not wake
+for them.  A look in between sees the chip of the present (the stepper keeps a checkpoint at each
+cycle, :meth:`~devsim.devices.pcd4h3.stepper.ChipStepper.ahead`) and, where the skipped cycles
+read the chips, the PLC runs their reads first, each at its moment (``Pcd4._materialize``); a
+command or a host's write ends the skipping.
 """
 
 from __future__ import annotations
@@ -28,16 +31,17 @@ def _may_look_ahead(drive: H3Drive) -> bool:
     return drive.settled or (not chip.profile.complete and not chip.motor_off)
 
 
-def switch_near(drive: H3Drive, first: float, second: float) -> bool:
+def switch_near(drive: H3Drive, first: float, second: float, margin: float = MARGIN) -> bool:
     """Whether a switch edge of ``drive`` lies between motor positions ``first`` and ``second``
-    (or within the margin of them)."""
-    low, high = min(first, second) - MARGIN, max(first, second) + MARGIN
+    (or within ``margin`` of them)."""
+    low, high = min(first, second) - margin, max(first, second) + margin
     return any(low <= edge <= high for switch in drive.switches for edge in (switch.low, switch.high))
 
 
-def quiet_cycles(drives: Sequence[H3Drive], first: float, step: float) -> list[float]:
+def quiet_cycles(drives: Sequence[H3Drive], first: float, step: float, reach: float = 0.0) -> list[float]:
     """The cycles from ``first`` on (every ``step``) that would find the status of every chip
-    unchanged and no switch near: their chips computed ahead, the list of their times."""
+    unchanged and no switch near: their chips computed ahead, the list of their times.  A
+    cycle looks at its chips up to ``reach`` after its start (its reads act then, §10.1)."""
     moving = [drive for drive in drives if not drive.settled]
     if not moving or not all(_may_look_ahead(drive) for drive in moving):
         return []
@@ -48,14 +52,15 @@ def quiet_cycles(drives: Sequence[H3Drive], first: float, step: float) -> list[f
     while t <= end:
         following = t + step
         for index, drive in enumerate(moving):
-            drive.stepper.ahead(t)
+            drive.stepper.ahead(t + reach)
             if drive.chip.status != statuses[index]:
                 return quiet
             if drive.switches:
                 x, v = drive.motor.position, drive.motor.velocity
                 v = v if abs(v) > STILL else 0.0
-                if (switch_near(drive, last[index], x) or switch_near(drive, x, x + v * step)
-                        or switch_near(drive, drive.axis.position(t), drive.axis.position(following))):
+                margin = MARGIN + abs(v) * reach
+                if (switch_near(drive, last[index], x, margin) or switch_near(drive, x, x + v * step, margin)
+                        or switch_near(drive, drive.axis.position(t), drive.axis.position(following), margin)):
                     return quiet
                 last[index] = x
         quiet.append(t)

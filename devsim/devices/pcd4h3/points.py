@@ -134,6 +134,7 @@ def _medium(prefix: str, medium: str, settable: bool) -> Callable[[str], Point |
             return value if kind == "int" else bool(value)
 
         def put(m: Pcd4, value: Any) -> None:
+            m.catch_up()  # the cycles before the change (skipped while the axes only move) see the old value
             if medium == "input":
                 if bus_input(m, address) is not None:
                     raise BadValue(f"I {address} is an H3 module's own input: set its switch (input.LS1_n, "

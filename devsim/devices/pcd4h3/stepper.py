@@ -46,6 +46,7 @@ class ChipStepper:
         #: is where the chip was when :meth:`ahead` began
         self._ahead: list[tuple[int, int, batch.State]] = []
         self._unseen = False  # the chip's state was computed ahead: on_batch has not followed it
+        self._present = 0  # the sample the present has reached (while the chip is computed ahead)
 
     @property
     def active(self) -> bool:
@@ -56,46 +57,55 @@ class ChipStepper:
         """Nothing has changed for a while: no sample needs computing until a command."""
         return self._quiet >= QUIET
 
-    def catch_up(self, until: float | None = None) -> None:
-        """Compute every sample due by now (or by ``until``); a settled chip just rests."""
+    def catch_up(self, until: float | None = None, *, follow: bool = True) -> None:
+        """Compute every sample due by now (or by ``until``); a settled chip just rests.
+        ``follow=False``: a moment of the past (a skipped PLC cycle): ``on_batch`` waits for the
+        next look."""
         now = self.clock.now() if until is None else until
+        due = int((now - self._epoch) / CHIP_SAMPLE + 1e-9)
         moved, self._unseen = self._unseen, False
         if self._ahead:
-            rewound = self._rewind(int((now - self._epoch) / CHIP_SAMPLE + 1e-9))
-            moved = moved if rewound is None else rewound
-        if self.settled:
+            # the chip as the present has it: never before what a catch-up already reached (a
+            # function of the PLC cycle acts a little after the cycle's start)
+            target = max(due, self._present)
+            moved = moved or target > self._present
+            self._rewind(target)
+            if self._samples < target:
+                self._quiet = batch.run(self.chip, target - self._samples, self._quiet)
+                self._samples = target
+            self._present = target
+        elif self.settled:
             if now > self._epoch + self._samples * CHIP_SAMPLE:
                 self._epoch, self._samples = now, 0
+            self._present = self._samples
         else:
-            due = int((now - self._epoch) / CHIP_SAMPLE + 1e-9)
             if self._samples < due:
                 self._quiet = batch.run(self.chip, due - self._samples, self._quiet)
                 self._samples = due
                 moved = True
-        if moved and self.on_batch is not None:
+            self._present = self._samples
+        if moved and not follow:
+            self._unseen = True
+        elif moved and self.on_batch is not None:
             self.on_batch()
 
-    def _rewind(self, due: int) -> bool | None:
+    def _rewind(self, target: int) -> None:
         """Take the chip from what was computed ahead to the last checkpoint at or before
-        sample ``due`` (when the chip is beyond ``due``, or the checkpoint beyond the chip);
-        None when it stays, else whether it is at a sample the shared axis has not followed."""
+        sample ``target`` (when the chip is beyond it, or the checkpoint beyond the chip)."""
         ahead = self._ahead
-        # before the first checkpoint: a look at the moment of a command that acted a little
-        # later in the same PLC cycle (its FB's time); the chip stays where the command left it
-        index = max(0, bisect_right(ahead, due, key=lambda checkpoint: checkpoint[0]) - 1)
-        samples, quiet, state = ahead[index]
+        index = bisect_right(ahead, target, key=lambda checkpoint: checkpoint[0]) - 1
+        samples, quiet, state = ahead[index]  # (the first is where the present was: at or before target)
         del ahead[:index]
-        if samples == self._samples or not (self._samples > due or samples > self._samples):
-            return None
-        batch.restore(self.chip, state)
-        self._samples, self._quiet = samples, quiet
-        return samples <= due  # at the first checkpoint before it: as the command left it (no new sample)
+        if self._samples > target or samples > self._samples:
+            batch.restore(self.chip, state)
+            self._samples, self._quiet = samples, quiet
 
     def ahead(self, until: float) -> None:
         """Compute the chip's samples up to ``until`` (after the present) and keep a checkpoint
         there; the present stays where it was for every look (:meth:`catch_up`)."""
         due = int((until - self._epoch) / CHIP_SAMPLE + 1e-9)
         if not self._ahead:
+            self._present = self._samples
             self._ahead.append((self._samples, self._quiet, batch.snapshot(self.chip)))
         if due <= self._samples:
             return
