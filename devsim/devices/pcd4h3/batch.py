@@ -144,9 +144,9 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
     stopped = False
     shift, scale = (4, 2048) if twelve else (8, 128)
     while done < count:
-        if cruise and not watch_moves and not bounded:
-            # the generator only adds its velocity and nothing is watched: the same operations
-            # as below without the branches that cannot be taken (about a third faster)
+        if cruise and not index_watch and not bounded:
+            # the generator only adds its velocity and no index is watched: the same operations
+            # as below without the branches that cannot be taken (about a sixth faster)
             n = 0
             lo16, hi16, lo24, hi24 = I16_LOW, I16_HIGH, I24_LOW, I24_HIGH
             first_count, end_count = segment
@@ -172,10 +172,21 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
                 goal_speed = kv * ((output >> shift) / scale * 10.0 - load)
                 x += speed_now * tau * gained + goal_speed * travelled
                 speed_now = speed_now * kept + goal_speed * gained
+                before = seen
                 seen = floor(sign * x)
                 if not first_count <= seen < end_count:
-                    flags |= WRAPAROUND
+                    if not watch_moves:
+                        flags |= WRAPAROUND
                     first_count, end_count = segment = _segment(seen, home)
+                if watch_moves and before != seen:  # the breakpoint: as in the loop below
+                    if (before - home + POSITION_RANGE) >> 31 != (seen - home + POSITION_RANGE) >> 31:
+                        flags |= WRAPAROUND
+                    w = (before - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE - break_at
+                    was = (w > 0) - (w < 0)
+                    w = (seen - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE - break_at
+                    now = (w > 0) - (w < 0)
+                    if was != now and was != 0 and now * was <= 0:
+                        flags |= BREAKPOINT
                 err = desired - seen + home
                 if err > threshold or err < -threshold:
                     flags |= POSITION_ERROR

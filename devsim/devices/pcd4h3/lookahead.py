@@ -38,10 +38,18 @@ def switch_near(drive: H3Drive, first: float, second: float, margin: float = MAR
     return any(low <= edge <= high for switch in drive.switches for edge in (switch.low, switch.high))
 
 
-def quiet_cycles(drives: Sequence[H3Drive], first: float, step: float, reach: float = 0.0) -> list[float]:
+Moments = tuple[tuple[float, float], ...]
+
+
+def quiet_cycles(drives: Sequence[H3Drive], first: float, step: float,
+                 moments: Sequence[Moments] | None = None) -> list[float]:
     """The cycles from ``first`` on (every ``step``) that would find the status of every chip
-    unchanged and no switch near: their chips computed ahead, the list of their times.  A
-    cycle looks at its chips up to ``reach`` after its start (its reads act then, §10.1)."""
+    unchanged and no switch near: their chips computed ahead, the list of their times.  A cycle
+    looks at drive i's chip at ``moments[i]``, each ``(offset, ms)`` after its start as the PLC
+    cycle computes it (``offset + ms / 1000``: the reads act then, §10.1; the status is copied
+    at the last); without ``moments`` at the start only.  The chips keep a checkpoint at each."""
+    at_start: Moments = ((0.0, 0.0),)
+    looks = {id(drive): (moments[index] if moments else at_start) for index, drive in enumerate(drives)}
     moving = [drive for drive in drives if not drive.settled]
     if not moving or not all(_may_look_ahead(drive) for drive in moving):
         return []
@@ -52,7 +60,10 @@ def quiet_cycles(drives: Sequence[H3Drive], first: float, step: float, reach: fl
     while t <= end:
         following = t + step
         for index, drive in enumerate(moving):
-            drive.stepper.ahead(t + reach)
+            seen = looks[id(drive)]
+            for offset, ms in seen:
+                drive.stepper.ahead(t + offset + ms / 1000)
+            reach = seen[-1][0] + seen[-1][1] / 1000
             if drive.chip.status != statuses[index]:
                 return quiet
             if drive.switches:

@@ -29,7 +29,7 @@ from devsim.devices.pcd4h3.config import AXIS, Pcd4h3Config
 from devsim.devices.pcd4h3.drive import H3Drive, axis_signals
 from devsim.devices.pcd4h3.layout import Layout
 from devsim.devices.pcd4h3.library import STATUS_FLAGS, TIMES, H3Axis
-from devsim.devices.pcd4h3.lookahead import quiet_cycles, switch_near
+from devsim.devices.pcd4h3.lookahead import Moments, quiet_cycles, switch_near
 from devsim.devices.pcd4h3.programs import PROGRAMS, Sequence
 from devsim.devices.pcd4h3.registers import AxisRegisters, RegisterBlock
 from devsim.devices.pcd4h3.timers import Timers
@@ -210,9 +210,9 @@ class Pcd4(Model):
         if self._busy():
             due = start + max(self.cycle_time, elapsed)
             if self._only_moving():
-                work = self._quiet_work()
+                moments, work = self._quiet_work()
                 step = max(self.cycle_time, work)
-                skipped = quiet_cycles(self.drives, due, step, work if self._reading() else 0.0)
+                skipped = quiet_cycles(self.drives, due, step, moments)
                 if skipped:
                     self._skipped, due = skipped, skipped[-1] + step
                     self._coast_end = due
@@ -255,19 +255,23 @@ class Pcd4(Model):
     def _reading(self) -> bool:
         return any(self._reads(index) for index in range(len(self.axes)))
 
-    def _quiet_work(self) -> float:
-        """How long a cycle with nothing but its cyclic reads lasts: AxHndlg's base time per axis
-        and the reads' times (§3.3.2, §10.1)."""
-        if self.status != RUN:
-            return 0.0
+    def _quiet_work(self) -> tuple[list[Moments], float]:
+        """When a cycle with nothing but its cyclic reads looks at each chip (its start, each
+        read, as ``(offset, ms)`` the way :meth:`_run_axes` adds them) and how long it lasts:
+        AxHndlg's base time per axis and the reads' times (§3.3.2, §10.1)."""
+        moments: list[Moments] = []
         elapsed = 0.0
+        running = self.status == RUN
         for index, axis in enumerate(self.axes):
-            reads, ms = self._reads(index), 0.5
+            reads, ms, seen = self._reads(index) if running else set(), 0.5, [(0.0, 0.0)]
             for symbol, _ in axis.command_flags:
                 if symbol in reads:
+                    seen.append((elapsed, ms))
                     ms += TIMES[symbol]
-            elapsed += ms / 1000
-        return elapsed
+            moments.append(tuple(seen))
+            if running:
+                elapsed += ms / 1000
+        return moments, elapsed
 
     def _only_moving(self) -> bool:
         """The next cycles have nothing to do but copy the chips' status (while it stays) and
