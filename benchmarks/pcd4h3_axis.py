@@ -13,7 +13,9 @@ Each phase is a fresh child process that measures its own CPU time (user + syste
 * ``idle``: the same PCD4 with the axis standing (settled: no timer at all).
 
 The phases alternate (axis, timer, idle, axis, …) ``--rounds`` times; the medians are printed,
-then the axis's own share (axis − timer) as % of a core, and last the ratio axis / timer.
+then the axis's own share (axis − timer) as % of a core, the moving axis's whole cost (axis −
+idle: since the PLC no longer wakes every cycle while the axis only moves, the share can be
+negative, and this is the figure to hold against the target), and last the ratio axis / timer.
 
     python benchmarks/pcd4h3_axis.py [--rounds 5] [--seconds 4] [--velocity 500] [--accel 2000]
 """
@@ -130,7 +132,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  round {n + 1}: " + "; ".join(line))
     axis, timer, idle = (statistics.median(share[p]) for p in ("axis", "timer", "idle"))
     print(f"median: axis {axis:.3f} %, timer {timer:.3f} %, idle {idle:.3f} % of a core")
-    print(f"the moving axis's own share (axis - timer): {axis - timer:.3f} % of a core (target <= 0.3 %)")
+    print(f"the moving axis's own share (axis - timer): {axis - timer:.3f} % of a core")
+    print(f"the moving axis's whole cost (axis - idle): {axis - idle:.3f} % of a core (target <= 0.3 %)")
     print(f"ratio axis / timer: {axis / timer:.2f}" if timer > 0 else "ratio axis / timer: n/a (timer used no CPU)")
     return 0
 

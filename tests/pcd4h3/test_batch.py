@@ -114,6 +114,32 @@ def test_a_position_error_flag_and_a_position_error_stop() -> None:
     check({}, {0: [cmd("LPES", 40), *move(30_000)]}, 6_000, LENGTHS)  # motor off, the axis coasts
 
 
+def test_a_load_at_top_velocity_runs_into_the_position_error() -> None:
+    """The pass's loop for a generator only adding its velocity (nothing watched): a load
+    torque mid-cruise, the error flag, and the stop that switches the motor off."""
+    def load(chip: Lm628) -> None:
+        chip.motor.load = 3.0
+
+    for threshold in ("LPEI", "LPES"):
+        check({"pid": (30, 4, 300, 2000, 1)}, {0: [cmd(threshold, 300), *move(400_000, 1_117_389, 2_000)],
+                                              2_000: [load]}, 5_000, LENGTHS)
+
+
+def test_breakpoints_passed_at_top_velocity_and_across_the_wrap() -> None:
+    """The loop for a generator only adding its velocity, with a breakpoint watched: passed
+    absolute and relative while cruising, and a wrap-around with a breakpoint set."""
+    script: Script = {0: [cmd("SBPA", 20_000), *move(200_000, 1_117_389, 2_000)],
+                      3_000: [cmd("RSTI", 0), cmd("SBPR", -150_000)]}
+    check({}, script, 5_000, LENGTHS)
+
+    def near_the_end(chip: Lm628) -> None:
+        chip.set_actual(POSITION_RANGE - 30_000)
+
+    script = {0: [near_the_end, cmd("SBPA", -(1 << 30) + 20_000), ltrj(0x002A, 2_000, 1_117_389, 0), cmd("STT")],
+              10: [ltrj(0x0008 | VELOCITY_MODE | FORWARD, 1_500_000), cmd("STT")]}
+    check({}, script, 5_000, LENGTHS)
+
+
 def test_wrap_around() -> None:
     def near_the_end(chip: Lm628) -> None:
         chip.set_actual(POSITION_RANGE - 3_000)

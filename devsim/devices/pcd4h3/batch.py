@@ -15,16 +15,46 @@ from __future__ import annotations
 
 import math
 
-from devsim.devices.pcd4h3.lm628 import COMPLETE, POSITION_ERROR, POSITION_RANGE, WRAPAROUND, Lm628, wrap
+from devsim.devices.pcd4h3.lm628 import (
+    BREAKPOINT,
+    COMPLETE,
+    POSITION_ERROR,
+    POSITION_RANGE,
+    WRAPAROUND,
+    Lm628,
+    wrap,
+)
 from devsim.devices.pcd4h3.pid import _lag_terms
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
-__all__ = ["STILL", "run", "run_reference"]
+__all__ = ["STILL", "restore", "run", "run_reference", "snapshot"]
 
 STILL = 1e-3  # counts/s: a motor slower than this stands (for the settled count)
 ONE = 1 << 16
 I16_LOW, I16_HIGH = -(1 << 15), (1 << 15) - 1
 I24_LOW, I24_HIGH = -(1 << 23), (1 << 23) - 1
+TWICE_RANGE = 2 * POSITION_RANGE
+
+
+State = tuple[int | bool | float, ...]
+
+
+def snapshot(chip: Lm628) -> State:
+    """Everything a run of samples changes in ``chip`` (not what only commands change)."""
+    p, f, m = chip.profile, chip.filter, chip.motor
+    return (p.position, p.velocity, p.target, p.stopping, p.complete,
+            f.error_sum, f.derivative, f._previous, f._countdown, f.output, f.integral,
+            m.position, m.velocity, chip.flags, chip.on_target, chip._raw, chip.udf_sample, chip.motor_off,
+            chip.index_armed, chip.index_position)
+
+
+def restore(chip: Lm628, state: State) -> None:
+    """Put ``chip`` back where :func:`snapshot` found it (the same command state assumed)."""
+    p, f, m = chip.profile, chip.filter, chip.motor
+    (p.position, p.velocity, p.target, p.stopping, p.complete,
+     f.error_sum, f.derivative, f._previous, f._countdown, f.output, f.integral,
+     m.position, m.velocity, chip.flags, chip.on_target, chip._raw, chip.udf_sample, chip.motor_off,
+     chip.index_armed, chip.index_position) = state  # type: ignore[assignment]
 
 
 def _quiet_after(chip: Lm628, before: tuple[int, int, int], quiet: int) -> int:
@@ -100,7 +130,9 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
     x, speed_now = motor.position, motor.velocity
     # encoder and checks
     sign, home, threshold, stop_on_error = chip.encoder_sign, chip.home, chip.error_threshold, chip.stop_on_error
-    watch_moves = chip.breakpoint is not None or (chip.index_armed and chip.index_period)
+    break_at = chip.breakpoint if chip.breakpoint is not None else 0
+    index_watch = chip.index_armed and chip.index_period
+    watch_moves = chip.breakpoint is not None or index_watch
     flags, on_target = chip.flags, chip.on_target
     raw = chip._raw
     seen = floor(sign * x)  # the encoder before the first sample (the stepper's look)
@@ -110,7 +142,64 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
     done = 0
     cruise = 0  # samples ahead in which the generator only adds its velocity
     stopped = False
+    shift, scale = (4, 2048) if twelve else (8, 128)
     while done < count:
+        if cruise and not index_watch and not bounded:
+            # the generator only adds its velocity and no index is watched: the same operations
+            # as below without the branches that cannot be taken (about a sixth faster)
+            n = 0
+            lo16, hi16, lo24, hi24 = I16_LOW, I16_HIGH, I24_LOW, I24_HIGH
+            first_count, end_count = segment
+            for n in range(1, (cruise if cruise < count - done else count - done) + 1):  # noqa: B007
+                p += v
+                desired = p >> 16
+                e = desired - seen + home
+                e = lo16 if e < lo16 else hi16 if e > hi16 else e
+                s = error_sum + e
+                s = lo24 if s < lo24 else hi24 if s > hi24 else s
+                error_sum = -limit if s < -limit else limit if s > limit else s
+                if ki:  # Σe / 256 truncated: |Σe| < 2^24, so the quotient of the reference is exact
+                    term = ki * (error_sum >> 8 if error_sum >= 0 else -(-error_sum >> 8))
+                    integral = -il if term < -il else il if term > il else term
+                if countdown == 0:
+                    derivative = e - previous
+                    previous = e
+                    countdown = ds
+                else:
+                    countdown -= 1
+                u = kp * e + integral + kd * derivative
+                output = lo16 if u < lo16 else hi16 if u > hi16 else u
+                goal_speed = kv * ((output >> shift) / scale * 10.0 - load)
+                x += speed_now * tau * gained + goal_speed * travelled
+                speed_now = speed_now * kept + goal_speed * gained
+                before = seen
+                seen = floor(sign * x)
+                if not first_count <= seen < end_count:
+                    if not watch_moves:
+                        flags |= WRAPAROUND
+                    first_count, end_count = segment = _segment(seen, home)
+                if watch_moves and before != seen:  # the breakpoint: as in the loop below
+                    if (before - home + POSITION_RANGE) >> 31 != (seen - home + POSITION_RANGE) >> 31:
+                        flags |= WRAPAROUND
+                    w = (before - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE - break_at
+                    was = (w > 0) - (w < 0)
+                    w = (seen - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE - break_at
+                    now = (w > 0) - (w < 0)
+                    if was != now and was != 0 and now * was <= 0:
+                        flags |= BREAKPOINT
+                err = desired - seen + home
+                if err > threshold or err < -threshold:
+                    flags |= POSITION_ERROR
+                    if stop_on_error:
+                        stopped = True
+                        break
+            done += n
+            cruise -= n
+            raw = seen
+            quiet = 0
+            if stopped:
+                break
+            continue
         done += 1
         before_actual, before_p, before_flags = seen, p, flags
         before = raw
@@ -185,7 +274,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
         s = I24_LOW if s < I24_LOW else I24_HIGH if s > I24_HIGH else s
         error_sum = -limit if s < -limit else limit if s > limit else s
         if ki:
-            term = ki * (int(error_sum / 256))
+            term = ki * (error_sum >> 8 if error_sum >= 0 else -(-error_sum >> 8))
             integral = -il if term < -il else il if term > il else term
         if countdown == 0:
             derivative = e - previous
@@ -210,10 +299,21 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
                 flags |= WRAPAROUND
             segment = _segment(raw, home)
         if watch_moves and before != raw:
-            chip.flags = flags
-            chip._moved(before, raw)
-            flags = chip.flags
-            watch_moves = chip.breakpoint is not None or (chip.index_armed and chip.index_period)
+            if index_watch:
+                chip.flags = flags
+                chip._moved(before, raw)
+                flags = chip.flags
+                index_watch = chip.index_armed and chip.index_period
+                watch_moves = chip.breakpoint is not None or index_watch
+            else:  # the breakpoint alone: Lm628._moved's wrap-around and breakpoint checks, inline
+                if (before - home + POSITION_RANGE) >> 31 != (raw - home + POSITION_RANGE) >> 31:
+                    flags |= WRAPAROUND
+                w = (before - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE - break_at
+                was = (w > 0) - (w < 0)
+                w = (raw - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE - break_at
+                now = (w > 0) - (w < 0)
+                if was != now and was != 0 and now * was <= 0:
+                    flags |= BREAKPOINT
         err = desired - (raw - home)  # |err| > threshold ≤ 7FFFh, saturated to 32 bits or not
         if err > threshold or err < -threshold:
             flags |= POSITION_ERROR

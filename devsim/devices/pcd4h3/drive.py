@@ -96,8 +96,8 @@ class H3Drive:
         velocity = self.motor.velocity
         self.axis.track(self.motor.position, velocity if abs(velocity) > STILL else 0.0)
 
-    def catch_up(self, until: float | None = None) -> None:
-        self.stepper.catch_up(until)
+    def catch_up(self, until: float | None = None, *, follow: bool = True) -> None:
+        self.stepper.catch_up(until, follow=follow)
 
     def poke(self) -> None:
         """Something changed the chip or the motor: sample until it settles again."""

@@ -28,7 +28,8 @@ from devsim.devices.pcd4h3 import display
 from devsim.devices.pcd4h3.config import AXIS, Pcd4h3Config
 from devsim.devices.pcd4h3.drive import H3Drive, axis_signals
 from devsim.devices.pcd4h3.layout import Layout
-from devsim.devices.pcd4h3.library import STATUS_FLAGS, H3Axis
+from devsim.devices.pcd4h3.library import STATUS_FLAGS, TIMES, H3Axis
+from devsim.devices.pcd4h3.lookahead import Moments, quiet_cycles, switch_near
 from devsim.devices.pcd4h3.programs import PROGRAMS, Sequence
 from devsim.devices.pcd4h3.registers import AxisRegisters, RegisterBlock
 from devsim.devices.pcd4h3.timers import Timers
@@ -95,6 +96,9 @@ class Pcd4(Model):
         self.status = RUN
         self.initialised = [False] * len(self.axes)
         self._timer: Timer | None = None
+        self._skipped: list[float] = []  # the cycles the timer skips (issue 31), run late if they read
+        self._coast_end: float | None = None  # the cycle after the skipped ones
+        self._coast_reads = False  # the skipped cycles read the chips (run late, at the next look)
         self._seen: dict[tuple[int, str], int] = {}  # status flags at the last look (events)
         self._last_cycle = -math.inf
         self._calls_before, self._running_since = 0, clock.now()  # AxHndlg calls (one per axis per cycle)
@@ -103,6 +107,7 @@ class Pcd4(Model):
     # -- cold start (XOB 16, §9.6.1) -------------------------------------------------------------
     def cold_start(self) -> None:
         """Load the configured registers, run AxInit for every axis, start the cycle."""
+        self._materialize(self.clock.now())
         for n, values in self.settings["init"].items():
             if n > len(self.axes):
                 continue
@@ -129,6 +134,7 @@ class Pcd4(Model):
 
     def run(self) -> None:
         """S-Bus 'run' (2Fh)."""
+        self._materialize(self.clock.now())
         if self.status != RUN:
             self.status = RUN
             self._running_since = self.clock.now()
@@ -136,12 +142,14 @@ class Pcd4(Model):
 
     def stop(self) -> None:
         """S-Bus 'stop' (43h): AxHndlg no longer runs; the chips finish what they do."""
+        self._materialize(self.clock.now())
         if self.status == RUN:
             self._fold_calls()
         self.status = STOP
 
     def halt(self) -> None:
         """The CPU halts (as ComErS does with ``comers_action: halt``)."""
+        self._materialize(self.clock.now())
         if self.status == RUN:
             self._fold_calls()
         self.status = HALT
@@ -161,41 +169,126 @@ class Pcd4(Model):
     def wake(self) -> None:
         """Something may need the cycle: make sure the next one is scheduled (on the cycle grid)."""
         if self._timer is not None:
+            if self._coast_end is not None:
+                self._resume()
             return
         now = self.clock.now()
         due = max(now, self._last_cycle + self.cycle_time)
         self._timer = self.clock.call_at(due, self._cycle)
 
+    def _resume(self) -> None:
+        """Skip no further cycle: the next one on the grid from now runs."""
+        now = self.clock.now()
+        self._materialize(now)
+        skipped, self._skipped, self._coast_end = self._skipped, [], None
+        if skipped and self._timer is not None:  # (all after now)
+            self._timer.cancel()
+            self._timer = self.clock.call_at(skipped[0], self._cycle)
+
+    def _materialize(self, until: float) -> None:
+        """Run the skipped cycles up to ``until`` that read the chips (cyclic reads, the
+        display), as they would have run: each chip back at that cycle's moments; the shared
+        axes follow at the next look, not in the past."""
+        skipped = self._skipped
+        while skipped and skipped[0] <= until:
+            start = skipped.pop(0)
+            if self._coast_reads and self.status == RUN:  # (without reads it would change nothing)
+                for drive in self.drives:
+                    drive.catch_up(start, follow=False)
+                self._run_axes(start, follow=False)
+
     def _cycle(self) -> None:
         self._timer = None
-        start = self._last_cycle = self.clock.now()
+        start = self.clock.now()
+        self._materialize(start)
+        self._skipped, self._coast_end = [], None
+        self._last_cycle = start
         for drive in self.drives:
             drive.catch_up()
-        elapsed = 0.0
-        if self.status == RUN:
-            if self.sequence is not None:
-                self.sequence.before_handling()
-            try:
-                for axis, drive in zip(self.axes, self.drives, strict=True):
-                    for symbol in self.settings["cyclic_reads"]:
-                        axis.set_flag(symbol, 1)
-                    offset = elapsed
-
-                    def before(ms: float, drive: H3Drive = drive, offset: float = offset) -> None:
-                        drive.catch_up(start + offset + ms / 1000)
-
-                    transfers = axis.transfers
-                    elapsed += axis.handle(before) / 1000
-                    if axis.transfers != transfers:
-                        drive.poke()
-                    self._note(axis)
-                if self.sequence is not None:
-                    self.sequence.cycle()
-            except Halted:
-                pass
-            self._display()
+            drive.stepper.present()
+        elapsed = self._run_axes(start) if self.status == RUN else 0.0
         if self._busy():
-            self._timer = self.clock.call_at(start + max(self.cycle_time, elapsed), self._cycle)
+            due = start + max(self.cycle_time, elapsed)
+            if self._only_moving():
+                moments, work = self._quiet_work()
+                step = max(self.cycle_time, work)
+                skipped = quiet_cycles(self.drives, due, step, moments)
+                if skipped:
+                    self._skipped, due = skipped, skipped[-1] + step
+                    self._coast_end = due
+                    self._coast_reads = self._reading()
+            self._timer = self.clock.call_at(due, self._cycle)
+
+    def _run_axes(self, start: float, *, follow: bool = True) -> float:
+        """AxHndlg for every axis, the user program and the display: a cycle's work (§3.3.2,
+        §9.6.1); returns its duration in seconds."""
+        elapsed = 0.0
+        if self.sequence is not None:
+            self.sequence.before_handling()
+        try:
+            for axis, drive in zip(self.axes, self.drives, strict=True):
+                for symbol in self.settings["cyclic_reads"]:
+                    axis.set_flag(symbol, 1)
+                offset = elapsed
+
+                def before(ms: float, drive: H3Drive = drive, offset: float = offset) -> None:
+                    drive.catch_up(start + offset + ms / 1000, follow=follow)
+
+                transfers = axis.transfers
+                elapsed += axis.handle(before) / 1000
+                if axis.transfers != transfers and follow:  # (a skipped cycle only reads a moving chip)
+                    drive.poke()
+                self._note(axis)
+            if self.sequence is not None:
+                self.sequence.cycle()
+        except Halted:
+            pass
+        self._display()
+        return elapsed
+
+    def _reads(self, index: int) -> set[str]:
+        reads = set(self.settings["cyclic_reads"])
+        if index == 0 and self.sequence is not None:
+            reads.update(self.sequence.program.cyclic_reads)
+        return reads
+
+    def _reading(self) -> bool:
+        return any(self._reads(index) for index in range(len(self.axes)))
+
+    def _quiet_work(self) -> tuple[list[Moments], float]:
+        """When a cycle with nothing but its cyclic reads looks at each chip (its start, each
+        read, as ``(offset, ms)`` the way :meth:`_run_axes` adds them) and how long it lasts:
+        AxHndlg's base time per axis and the reads' times (§3.3.2, §10.1)."""
+        moments: list[Moments] = []
+        elapsed = 0.0
+        running = self.status == RUN
+        for index, axis in enumerate(self.axes):
+            reads, ms, seen = self._reads(index) if running else set(), 0.5, [(0.0, 0.0)]
+            for symbol, _ in axis.command_flags:
+                if symbol in reads:
+                    seen.append((elapsed, ms))
+                    ms += TIMES[symbol]
+            moments.append(tuple(seen))
+            if running:
+                elapsed += ms / 1000
+        return moments, elapsed
+
+    def _only_moving(self) -> bool:
+        """The next cycles have nothing to do but copy the chips' status (while it stays) and
+        read the chips as configured: no command flag, no user program waiting on a condition
+        or a timer, and reads that cannot fail (every chip fitted, no disturbed transfer, a
+        ComErS that only counts)."""
+        if self.status != RUN:
+            return True
+        sequence = self.sequence
+        if sequence is not None and (sequence.busy or self.timers.running()):
+            return False
+        if self._reading() and (
+                self.settings["comers_action"] != "continue"
+                or any(not drive.chip.present or drive.chip.bus_errors for drive in self.drives)):
+            return False
+        flags = self.flags
+        return not any(flags.get(address, 0) for axis in self.axes for _, address in axis.command_flags)
 
     def _note(self, axis: H3Axis) -> None:
         """Events for timing expectations: a motion function run (``axis1.FStart`` …) and a
@@ -243,6 +336,7 @@ class Pcd4(Model):
     def _limit(self, n: int, old: Any, new: Any) -> None:
         """A limit switch opened: a user program would stop the axis (optional, §5.10)."""
         if old and not new and self.settings["emulate_user_limit_stop"]:
+            self._materialize(self.clock.now())
             self.axes[n - 1].set_flag("FStop", 1)
             self.wake()
 
@@ -261,9 +355,18 @@ class Pcd4(Model):
         return self._calls_before + running
 
     def catch_up(self) -> None:
-        """Bring every chip to now (before the host looks)."""
+        """Bring every chip to now (before the host looks).  While cycles are skipped, the
+        shared axis now follows the motor from here; where that could reach a switch before the
+        next cycle, the skipping ends."""
+        now = self.clock.now()
+        self._materialize(now)
         for drive in self.drives:
             drive.catch_up()
+        if self._coast_end is not None:
+            following = self._coast_end
+            if any(switch_near(drive, drive.axis.position(now), drive.axis.position(following))
+                   for drive in self.drives if drive.switches):
+                self._resume()
 
     def close(self) -> None:
         if self._timer is not None:

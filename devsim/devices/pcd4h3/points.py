@@ -134,6 +134,7 @@ def _medium(prefix: str, medium: str, settable: bool) -> Callable[[str], Point |
             return value if kind == "int" else bool(value)
 
         def put(m: Pcd4, value: Any) -> None:
+            m.catch_up()  # the cycles before the change (skipped while the axes only move) see the old value
             if medium == "input":
                 if bus_input(m, address) is not None:
                     raise BadValue(f"I {address} is an H3 module's own input: set its switch (input.LS1_n, "
@@ -281,6 +282,7 @@ def _target(m: Pcd4, counts: float) -> int:
 
 def _enable(m: Pcd4, on: bool) -> None:
     if on:  # hold where the axis stands
+        m.catch_up()
         _registers(m).destination = _target(m, m.drives[0].chip.actual)
         _run(m, "FLdDA", "FStart")
     else:
@@ -317,6 +319,8 @@ def _reset_fault(m: Pcd4) -> None:
 
 
 def _only_axis_1(m: Pcd4) -> Any:
+    """Axis 1's drive as of now (the chips may have been computed ahead of the present)."""
+    m.catch_up()
     return m.drives[0]
 
 
@@ -327,11 +331,11 @@ DRIVE = DriveActions(
     quick_stop=lambda m: _stop(m, 0x0200),
     reset_fault=_reset_fault,
     position=lambda m: _only_axis_1(m).chip.actual,
-    velocity=lambda m: _only_axis_1(m).chip.encoder_sign * _only_axis_1(m).motor.velocity,
+    velocity=lambda m: (lambda drive: drive.chip.encoder_sign * drive.motor.velocity)(_only_axis_1(m)),
     enabled=lambda m: not _only_axis_1(m).chip.motor_off,
     fault=lambda m: bool(_only_axis_1(m).chip.status & 0x20),
     moving=lambda m: not _only_axis_1(m).chip.profile.complete,
-    following_error=lambda m: _only_axis_1(m).chip.profile.desired - _only_axis_1(m).chip.unwrapped_actual,
+    following_error=lambda m: (lambda chip: chip.profile.desired - chip.unwrapped_actual)(_only_axis_1(m).chip),
 )
 """Axis 1 as a CiA 402 drive: positions in counts, speeds in counts/s; the functions run at once
 as a host-side call of the FBs would; a quick stop is FStop with MCW's abrupt stop; a fault is an

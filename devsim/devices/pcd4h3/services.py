@@ -86,6 +86,7 @@ def write(plc: Pcd4, medium: str, first: int, values: tuple[int, ...] | list[int
     mirror of spec §9.8 maps its coils and holding registers onto this and :func:`read`)."""
     if first < 0 or first + len(values) > MEDIA_SIZE[medium] or medium not in ("register", "flag"):
         return False
+    plc.catch_up()  # the cycles before the write (skipped while the axes only move) see the old values
     if medium == "register":
         if any(_diagnostic_register(plc, first + i) is not None for i in range(len(values))):
             return False

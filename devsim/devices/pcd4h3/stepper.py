@@ -7,10 +7,17 @@ A batch computes every sample (341.333 µs apart) in order, in one pass
 (:func:`~devsim.devices.pcd4h3.batch.run`, bit-exact with :meth:`Lm628.sample` one at a time), so
 the loop's behaviour is the same however the batches fall; only the moment at which a flag
 becomes visible is rounded to the next look or tick.
+
+A caller that wants to know what comes (the PLC, issue 31: "schedule timers only for events")
+computes the chip ahead of the present (:meth:`ChipStepper.ahead`), which keeps a checkpoint of
+the chip's state at each point it was asked for; a look before the end goes back to the last
+checkpoint before it and computes the few samples from there, so that a look sees exactly the
+chip of the present.  A command (:meth:`ChipStepper.poke`) drops what was computed ahead.
 """
 
 from __future__ import annotations
 
+from bisect import bisect_right
 from collections.abc import Callable
 
 from devsim.core.clock import Clock, Timer
@@ -35,6 +42,11 @@ class ChipStepper:
         self._epoch = clock.now()
         self._timer: Timer | None = None
         self._quiet = 0
+        #: (sample index, quiet, chip state) computed ahead of the last look, in order; the first
+        #: is where the chip was when :meth:`ahead` began
+        self._ahead: list[tuple[int, int, batch.State]] = []
+        self._unseen = False  # the chip's state was computed ahead: on_batch has not followed it
+        self._present = 0  # the sample the present has reached (while the chip is computed ahead)
 
     @property
     def active(self) -> bool:
@@ -45,24 +57,70 @@ class ChipStepper:
         """Nothing has changed for a while: no sample needs computing until a command."""
         return self._quiet >= QUIET
 
-    def catch_up(self, until: float | None = None) -> None:
-        """Compute every sample due by now (or by ``until``); a settled chip just rests."""
+    def catch_up(self, until: float | None = None, *, follow: bool = True) -> None:
+        """Compute every sample due by now (or by ``until``); a settled chip just rests.
+        ``follow=False``: a moment of the past (a skipped PLC cycle): ``on_batch`` waits for the
+        next look."""
         now = self.clock.now() if until is None else until
-        if self.settled:
+        due = int((now - self._epoch) / CHIP_SAMPLE + 1e-9)
+        moved, self._unseen = self._unseen, False
+        if self._ahead:
+            # the chip as the present has it: never before what a catch-up already reached (a
+            # function of the PLC cycle acts a little after the cycle's start)
+            target = max(due, self._present)
+            moved = moved or target > self._present
+            self._rewind(target)
+            if self._samples < target:
+                self._quiet = batch.run(self.chip, target - self._samples, self._quiet)
+                self._samples = target
+            self._present = target
+        elif self.settled:
             if now > self._epoch + self._samples * CHIP_SAMPLE:
                 self._epoch, self._samples = now, 0
-            return
-        due = int((now - self._epoch) / CHIP_SAMPLE + 1e-9)
-        if self._samples >= due:
+            self._present = self._samples
+        else:
+            if self._samples < due:
+                self._quiet = batch.run(self.chip, due - self._samples, self._quiet)
+                self._samples = due
+                moved = True
+            self._present = self._samples
+        if moved and not follow:
+            self._unseen = True
+        elif moved and self.on_batch is not None:
+            self.on_batch()
+
+    def _rewind(self, target: int) -> None:
+        """Take the chip from what was computed ahead to the last checkpoint at or before
+        sample ``target`` (when the chip is beyond it, or the checkpoint beyond the chip)."""
+        ahead = self._ahead
+        index = bisect_right(ahead, target, key=lambda checkpoint: checkpoint[0]) - 1
+        samples, quiet, state = ahead[index]  # (the first is where the present was: at or before target)
+        del ahead[:index]
+        if self._samples > target or samples > self._samples:
+            batch.restore(self.chip, state)
+            self._samples, self._quiet = samples, quiet
+
+    def ahead(self, until: float) -> None:
+        """Compute the chip's samples up to ``until`` (after the present) and keep a checkpoint
+        there; the present stays where it was for every look (:meth:`catch_up`)."""
+        due = int((until - self._epoch) / CHIP_SAMPLE + 1e-9)
+        if not self._ahead:
+            self._present = self._samples
+            self._ahead.append((self._samples, self._quiet, batch.snapshot(self.chip)))
+        if due <= self._samples:
             return
         self._quiet = batch.run(self.chip, due - self._samples, self._quiet)
-        self._samples = due
-        if self.on_batch is not None:
-            self.on_batch()
+        self._samples, self._unseen = due, True
+        self._ahead.append((due, self._quiet, batch.snapshot(self.chip)))
+
+    def present(self) -> None:
+        """The chip is at the present (just caught up): forget what was computed ahead."""
+        self._ahead.clear()
 
     def poke(self) -> None:
         """A command changed the chip (call :meth:`catch_up` before the command, so it acts at
         the right sample): keep ticking until the chip settles."""
+        self._ahead.clear()
         self._quiet = 0
         if self._timer is None and self.own_timer:
             self._timer = self.clock.call_later(TICK, self._tick)

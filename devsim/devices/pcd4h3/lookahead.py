@@ -1,0 +1,79 @@
+"""The PLC cycles a moving axis does not need at their time (issue 31, "schedule timers only
+for events"; spec pcd4h3.md §3.3.2, §9.6.1): while the axes only move, with no command flag and
+no user program waiting on a condition or a timer, a cycle of AxHndlg copies the chips' status
+into the status flags, which stays the same until the chip reports something (the trajectory
+complete, a breakpoint, the index, a wrap-around, a position error, the motor off), and runs the
+cyclic reads (registers, the display), which only a host sees; and the shared axis follows the
+motor, which only matters where a switch is near.
+
+:func:`quiet_cycles` computes the moving chips ahead, cycle by cycle, up to the first cycle
+that would see a change (or a horizon), and returns the cycles in between: the PLC does not wake
+for them.  A look in between sees the chip of the present (the stepper keeps a checkpoint at each
+cycle, :meth:`~devsim.devices.pcd4h3.stepper.ChipStepper.ahead`) and, where the skipped cycles
+read the chips, the PLC runs their reads first, each at its moment (``Pcd4._materialize``); a
+command or a host's write ends the skipping.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from devsim.devices.pcd4h3.drive import STILL, H3Drive
+
+__all__ = ["HORIZON", "quiet_cycles", "switch_near"]
+
+HORIZON = 0.2  # seconds of device time computed ahead at most (one pass: about 600 samples)
+MARGIN = 1.0  # counts either side of a switch edge that count as near
+
+
+def _may_look_ahead(drive: H3Drive) -> bool:
+    chip = drive.chip
+    return drive.settled or (not chip.profile.complete and not chip.motor_off)
+
+
+def switch_near(drive: H3Drive, first: float, second: float, margin: float = MARGIN) -> bool:
+    """Whether a switch edge of ``drive`` lies between motor positions ``first`` and ``second``
+    (or within ``margin`` of them)."""
+    low, high = min(first, second) - margin, max(first, second) + margin
+    return any(low <= edge <= high for switch in drive.switches for edge in (switch.low, switch.high))
+
+
+Moments = tuple[tuple[float, float], ...]
+
+
+def quiet_cycles(drives: Sequence[H3Drive], first: float, step: float,
+                 moments: Sequence[Moments] | None = None) -> list[float]:
+    """The cycles from ``first`` on (every ``step``) that would find the status of every chip
+    unchanged and no switch near: their chips computed ahead, the list of their times.  A cycle
+    looks at drive i's chip at ``moments[i]``, each ``(offset, ms)`` after its start as the PLC
+    cycle computes it (``offset + ms / 1000``: the reads act then, §10.1; the status is copied
+    at the last); without ``moments`` at the start only.  The chips keep a checkpoint at each."""
+    at_start: Moments = ((0.0, 0.0),)
+    looks = {id(drive): (moments[index] if moments else at_start) for index, drive in enumerate(drives)}
+    moving = [drive for drive in drives if not drive.settled]
+    if not moving or not all(_may_look_ahead(drive) for drive in moving):
+        return []
+    statuses = [drive.chip.status for drive in moving]
+    last = [drive.motor.position for drive in moving]
+    quiet: list[float] = []
+    t, end = first, first + HORIZON
+    while t <= end:
+        following = t + step
+        for index, drive in enumerate(moving):
+            seen = looks[id(drive)]
+            for offset, ms in seen:
+                drive.stepper.ahead(t + offset + ms / 1000)
+            reach = seen[-1][0] + seen[-1][1] / 1000
+            if drive.chip.status != statuses[index]:
+                return quiet
+            if drive.switches:
+                x, v = drive.motor.position, drive.motor.velocity
+                v = v if abs(v) > STILL else 0.0
+                margin = MARGIN + abs(v) * reach
+                if (switch_near(drive, last[index], x, margin) or switch_near(drive, x, x + v * step, margin)
+                        or switch_near(drive, drive.axis.position(t), drive.axis.position(following), margin)):
+                    return quiet
+                last[index] = x
+        quiet.append(t)
+        t = following
+    return quiet

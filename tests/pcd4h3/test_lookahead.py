@@ -1,0 +1,152 @@
+"""The PLC skips the cycles a moving axis does not need (devsim/devices/pcd4h3/lookahead.py;
+issue 31, "schedule timers only for events"): with the chips computed ahead, a PCD gives the same
+chips, status flags, switch signals and recorded events as the PLC that runs every cycle, at every
+look of a host (random moments), through moves, breakpoints, a position error, a blocked motor,
+limit and reference switches and a second axis; and it runs far fewer timer events."""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Callable
+from typing import Any
+
+import pytest
+
+from devsim.core.clock import VirtualClock
+from devsim.devices.pcd4h3 import batch, model
+from devsim.devices.pcd4h3.model import Pcd4
+from devsim.devices.pcd4h3.units import CHIP_SAMPLE
+
+Step = Callable[[Pcd4], None]
+CYCLE = 0.025  # two PLC cycles (10 ms) and their reads, s
+EXAMPLE = {"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 2}, "modules": 1, "variant": "H320",
+           "response_delay_ms": 0}
+
+
+def command(n: int, *flags: str, **registers: float) -> Step:
+    def act(pcd: Pcd4) -> None:
+        pcd.catch_up()
+        axis = pcd.axes[n - 1]
+        for symbol, value in registers.items():
+            axis.registers.load(symbol, value)
+        for symbol in flags:
+            axis.set_flag(symbol, 1)
+        pcd.wake()
+    return act
+
+
+def blocked(n: int, active: bool) -> Step:
+    def act(pcd: Pcd4) -> None:
+        pcd.catch_up()
+        pcd.drives[n - 1].motor.blocked = active
+        pcd.drives[n - 1].poke()
+        pcd.wake()
+    return act
+
+
+def look(pcd: Pcd4) -> tuple[Any, ...]:
+    """What a host sees now: the chips, every flag and register, the switches."""
+    pcd.catch_up()
+    chips = tuple((batch.snapshot(d.chip), d.chip.status) for d in pcd.drives)
+    signals = tuple(pcd.signals.get(f"{name}_{n}") for n in (1, 2) for name in ("LS1", "LS2", "REF"))
+    library = tuple((a.transfers, a.comers_calls, tuple(a.trace[-40:])) for a in pcd.axes)
+    return (pcd.clock.now(), chips, sorted(pcd.flags.items()), sorted(pcd.registers.items()), signals, library,
+            sorted(pcd.screens.items()), pcd.status, pcd.handler_calls())
+
+
+def keys(*inputs: int, value: int = 1) -> Step:
+    def act(pcd: Pcd4) -> None:
+        pcd.catch_up()
+        for n in inputs:
+            pcd.inputs[n] = value
+        pcd.wake()
+    return act
+
+
+def shared_axes(pcd: Pcd4) -> tuple[tuple[float, float], ...]:
+    """Where the shared axes are now and how fast the motors move (the tolerance: two PLC
+    cycles' travel)."""
+    return tuple((d.axis.position(), abs(d.motor.velocity) * CYCLE + 1e-6) for d in pcd.drives)
+
+
+def play(config: dict[str, Any], script: dict[float, list[Step]], seconds: float, seed: int) -> tuple[list[Any], list[Any], list[Any], int]:
+    """The script's steps at their times and looks at random moments between them; returns the
+    looks, the shared axes at the looks, the recorded events and signal changes, and the timer
+    events run."""
+    clock = VirtualClock()
+    pcd = Pcd4(clock=clock, config={**EXAMPLE, **config})
+    changes: list[Any] = []
+    for n in (1, 2):
+        for name in ("LS1", "LS2", "REF"):
+            pcd.signals.subscribe(f"{name}_{n}", lambda signal, old, new: changes.append((clock.now(), signal, new)))
+    rng = random.Random(seed)
+    moments = sorted({*script, *(round(rng.uniform(0, seconds), 6) for _ in range(40))})
+    looks, axes, events = [], [], 0
+    for moment in [*moments, seconds]:
+        events += clock.advance_to(moment)
+        for step in script.get(moment, ()):
+            step(pcd)
+        looks.append(look(pcd))
+        axes.append(shared_axes(pcd))
+    pcd.close()
+    return looks, axes, [*pcd.events, *changes], events
+
+
+SCENARIOS: dict[str, tuple[dict[str, Any], dict[float, list[Step]], float]] = {
+    "a move with a breakpoint, a second axis started later": (
+        {}, {0.3: [command(1, "FLdAA", "FLdVA", "FLdDA", "FLdBPA", "FStart", Accel=400, Veloc=150, DestP=250,
+                           BrkP=120)],
+             0.9: [command(2, "FLdDA", "FStart", DestP=-80)]}, 4.0),
+    "limit and reference switches, stopped by the limit": (
+        {"emulate_user_limit_stop": True, "axes": {1: {"ls2": 20_000, "ref_switch": [8_000, 9_000]}}},
+        {0.2: [command(1, "FLdAA", "FLdVA", "FForw", Accel=500, Veloc=200)]}, 3.0),
+    "a blocked motor runs into the position error, reset and moved back": (
+        {}, {0.2: [command(1, "FSetPE", "FLdDA", "FStart", PosEr=500, DestP=1_000), blocked(1, True)],
+             1.0: [blocked(1, False), command(1, "FResSF", "FLdDA", "FStart", StaFRR=0, DestP=0)]}, 3.0),
+    "a smooth stop mid-move and FBackw": (
+        {}, {0.2: [command(1, "FLdVA", "FForw", Veloc=300)], 0.75: [command(1, "FStop", MCW=0x0441B)],
+             1.3: [command(1, "FBackw")], 1.6: [command(1, "FStop")]}, 3.0),
+    "cyclic reads and the display while the axis moves, a host writing a register": (
+        {"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 1}, "cyclic_reads": ["FRdAP", "FRdSV", "FRdSR"],
+         "display": {1: {"reg1": "RActP", "reg2": "RSetV"}}},
+        {0.2: [command(1, "FLdAA", "FLdVA", "FLdDA", "FStart", Accel=300, Veloc=120, DestP=180)],
+         0.61: [command(1, RActP=7)], 1.1: [command(1, "FLdDA", "FStart", DestP=20)]}, 3.0),
+    "the manual's example 3 with I 8 held, then I 15": (
+        {"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 1}, "user_program": "example3"},
+        {0.1: [keys(8)], 4.0: [keys(15)]}, 6.0),
+}
+
+
+@pytest.mark.parametrize("name", SCENARIOS)
+@pytest.mark.parametrize("seed", [1, 2, 7, 16])
+def test_the_skipped_cycles_change_nothing_a_host_sees(name: str, seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    config, script, seconds = SCENARIOS[name]
+    looks, axes, recorded, events = play(config, script, seconds, seed)
+    with monkeypatch.context() as patch:
+        patch.setattr(model, "quiet_cycles", lambda *_: [])
+        every_looks, every_axes, every_recorded, every_events = play(config, script, seconds, seed)
+    assert len(looks) == len(every_looks)
+    for seen, reference in zip(looks, every_looks, strict=True):
+        assert seen == reference
+    # the shared axis extrapolates the motor from the last batch (the PLC cycle's, which reads
+    # the chip a little after its start): after cycles the PLC ran late, from the next look
+    for seen_axes, reference_axes in zip(axes, every_axes, strict=True):
+        for (position, _), (reference, tolerance) in zip(seen_axes, reference_axes, strict=True):
+            assert position == pytest.approx(reference, abs=tolerance)
+    assert [name for _, name, *_ in recorded] == [name for _, name, *_ in every_recorded]
+    for (when, *what), (reference, *expected) in zip(recorded, every_recorded, strict=True):
+        assert what == expected and when == pytest.approx(reference, abs=CHIP_SAMPLE)
+    assert events < every_events
+
+
+def test_a_moving_axis_wakes_the_plc_only_for_its_events() -> None:
+    """FForw at constant velocity for 10 s: a few timer events a second instead of a hundred."""
+    clock = VirtualClock()
+    pcd = Pcd4(clock=clock, config={**EXAMPLE, "h3def": {**EXAMPLE["h3def"], "mna": 1}})
+    command(1, "FLdAA", "FLdVA", "FForw", Accel=2_000, Veloc=500)(pcd)
+    clock.advance(1.0)
+    events = clock.advance(10.0)
+    pcd.catch_up()
+    assert not pcd.drives[0].settled and pcd.drives[0].chip.actual > 500_000
+    assert events < 100
+    pcd.close()
