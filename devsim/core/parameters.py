@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Iterator, Mapping, MutableMapping
+from operator import itemgetter
 from types import MappingProxyType
 from typing import Any, Literal
 
@@ -208,6 +209,16 @@ class ParameterTable:
     def saved(self) -> tuple[Key, ...]:
         return tuple(row.key for row in self.rows.values() if row.saved)
 
+    def picker(self, *keys: Key) -> Callable[[list[Any]], Any]:
+        """The values of ``keys`` (rows with a factory value) at once, for the paths that read
+        several per message: ``picker(values.cells)`` of a device's :class:`ParameterValues` is
+        the tuple of their values, in one call of compiled code (an ``operator.itemgetter`` of
+        the rows' positions; one key: the value itself)."""
+        for key in keys:
+            if self.rows[key].default is None:
+                raise ValueError(f"{self.spell(key)} has no factory value: a picker could find none")
+        return itemgetter(*(self.positions[key] for key in keys))
+
 
 class ParameterValues(MutableMapping[Key, Any]):
     """One device's parameter values, compact: a list with one cell per row of the table, at the
@@ -220,12 +231,16 @@ class ParameterValues(MutableMapping[Key, Any]):
     one beside its rows) lives in a small dict made when first needed.  It behaves as the dict it
     replaces: keys in the table's order, a row without a value is absent."""
 
-    __slots__ = ("_positions", "_template", "_cells", "_extra")
+    __slots__ = ("_positions", "_template", "cells", "_extra")
+
+    #: The values by row position (:data:`MISSING` where a row has none): read it (a
+    #: :meth:`ParameterTable.picker` does), never write into it.
+    cells: list[Any]
 
     def __init__(self, table: ParameterTable, values: Mapping[Key, Any] | None = None) -> None:
         self._positions = table.positions
         self._template = table.template
-        self._cells = self._template
+        self.cells = self._template
         self._extra: dict[Key, Any] | None = None
         if values:
             self.update(values)
@@ -236,7 +251,7 @@ class ParameterValues(MutableMapping[Key, Any]):
             if self._extra is None:
                 raise KeyError(key)
             return self._extra[key]
-        value = self._cells[position]
+        value = self.cells[position]
         if value is MISSING:
             raise KeyError(key)
         return value
@@ -245,14 +260,14 @@ class ParameterValues(MutableMapping[Key, Any]):
         position = self._positions.get(key)
         if position is None:
             return default if self._extra is None else self._extra.get(key, default)
-        value = self._cells[position]
+        value = self.cells[position]
         return default if value is MISSING else value
 
     def __contains__(self, key: object) -> bool:
         position = self._positions.get(key)  # type: ignore[call-overload]
         if position is None:
             return self._extra is not None and key in self._extra
-        return self._cells[position] is not MISSING
+        return self.cells[position] is not MISSING
 
     def __setitem__(self, key: Key, value: Any) -> None:
         position = self._positions.get(key)
@@ -261,7 +276,7 @@ class ParameterValues(MutableMapping[Key, Any]):
                 self._extra = {}
             self._extra[key] = value
             return
-        cells = self._cells
+        cells = self.cells
         if cells[position] is value:
             return
         factory = self._template[position]
@@ -270,7 +285,7 @@ class ParameterValues(MutableMapping[Key, Any]):
         if cells is self._template:
             if value is factory:
                 return
-            cells = self._cells = list(cells)
+            cells = self.cells = list(cells)
         cells[position] = value
 
     def __delitem__(self, key: Key) -> None:
@@ -280,14 +295,14 @@ class ParameterValues(MutableMapping[Key, Any]):
                 raise KeyError(key)
             del self._extra[key]
             return
-        if self._cells[position] is MISSING:
+        if self.cells[position] is MISSING:
             raise KeyError(key)
-        if self._cells is self._template:
-            self._cells = list(self._cells)
-        self._cells[position] = MISSING
+        if self.cells is self._template:
+            self.cells = list(self.cells)
+        self.cells[position] = MISSING
 
     def __iter__(self) -> Iterator[Key]:
-        cells = self._cells
+        cells = self.cells
         for key, position in self._positions.items():
             if cells[position] is not MISSING:
                 yield key
@@ -295,15 +310,15 @@ class ParameterValues(MutableMapping[Key, Any]):
             yield from list(self._extra)
 
     def __len__(self) -> int:
-        return len(self._cells) - self._cells.count(MISSING) + (len(self._extra) if self._extra else 0)
+        return len(self.cells) - self.cells.count(MISSING) + (len(self._extra) if self._extra else 0)
 
     def clear(self) -> None:
-        self._cells = [MISSING] * len(self._template)
+        self.cells = [MISSING] * len(self._template)
         self._extra = None
 
     def factory(self) -> None:
         """Every row back to its factory value (shared again); keys that are no row stay."""
-        self._cells = self._template
+        self.cells = self._template
 
     def __repr__(self) -> str:
         return f"ParameterValues({dict(self.items())!r})"
@@ -386,13 +401,13 @@ def accessor(key: Key, doc: str = "") -> Any:
 
     def get(self: Parameters) -> Any:
         values = self.values
-        if type(values) is ParameterValues:  # the common case, without a call of __getitem__
-            position = values._positions.get(key)
-            if position is not None:
-                value = values._cells[position]
-                if value is not MISSING:
-                    return value
-        return values[key]
+        try:  # the common case, a row of ParameterValues, without a call of __getitem__
+            value = values.cells[values._positions[key]]  # type: ignore[attr-defined]
+        except (AttributeError, KeyError):  # another store, a key that is no row
+            return values[key]
+        if value is MISSING:
+            raise KeyError(key)
+        return value
 
     def put(self: Parameters, value: Any) -> None:
         self.values[key] = value

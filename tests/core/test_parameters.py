@@ -176,12 +176,12 @@ def test_the_compact_values_behave_as_the_dict_they_replace(operations: list) ->
 
 def test_devices_share_the_factory_values_until_they_write_another() -> None:
     first, second = Values(TABLE), Values(TABLE)
-    assert first.values._cells is second.values._cells is TABLE.template  # nothing copied yet
+    assert first.values.cells is second.values.cells is TABLE.template  # nothing copied yet
     first.values[41] = 100  # the factory value again: still shared
-    assert first.values._cells is TABLE.template
+    assert first.values.cells is TABLE.template
     first.set(41, 250)
-    assert first.values._cells is not TABLE.template and second.velocity == 100 and first.velocity == 250
+    assert first.values.cells is not TABLE.template and second.velocity == 100 and first.velocity == 250
     first.values[1014] = 1 + 0  # equal to the factory value: kept as its object
-    assert first.values._cells[TABLE.positions[1014]] is TABLE.template[TABLE.positions[1014]]
+    assert first.values.cells[TABLE.positions[1014]] is TABLE.template[TABLE.positions[1014]]
     first.reset()
-    assert first.values._cells is TABLE.template and first.velocity == 100
+    assert first.values.cells is TABLE.template and first.velocity == 100
