@@ -35,6 +35,18 @@ def test_a_repeated_line_is_written_once_then_counted_every_window() -> None:
     assert limiter.flush() == ["bad byte ... repeated 2 times in the last 1 s"]
 
 
+def test_a_repeat_is_counted_before_its_text_is_made() -> None:
+    now = [0.0]
+    limiter = RepeatLimiter(window=5.0, clock=lambda: now[0])
+    assert not limiter.counted("k")  # nothing written yet: the caller makes the text and offers it
+    assert limiter.offer("k", "bad byte") == ["bad byte"]
+    now[0] = 1.0
+    assert limiter.counted("k") and limiter.counted("k") and not limiter.counted("other")
+    now[0] = 6.0
+    assert not limiter.counted("k")  # the window is over: offered, written after its count
+    assert limiter.offer("k", "bad byte") == ["bad byte ... repeated 2 times in the last 6 s", "bad byte"]
+
+
 def test_bad_bytes_on_poselesta_v8_write_a_line_then_a_count() -> None:
     sim = DevsimProcess("run", "poselesta", "--pty", "--speed", "100")  # V8 takes 1200 baud
     try:

@@ -236,9 +236,9 @@ class SignalDef(msgspec.Struct, frozen=True):
 
 
 def declare_signals(bank: SignalBank, defs: Iterable[SignalDef]) -> None:
-    """Define every declared signal in a device's bank."""
-    for d in defs:
-        bank.define(d.name, d.kind, d.initial, d.doc)
+    """Define every declared signal in a device's bank (in one step: banks that declare the same
+    signals share their names and positions)."""
+    bank.declare((d.name, d.kind, d.initial, d.doc) for d in defs)
 
 
 class SignalView(Protocol):

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Iterator, Mapping, MutableMapping
+from operator import itemgetter
 from types import MappingProxyType
 from typing import Any, Literal
 
@@ -26,6 +27,7 @@ __all__ = [
     "Param",
     "ParamType",
     "ParameterTable",
+    "ParameterValues",
     "Parameters",
     "accessor",
     "alias_hook",
@@ -39,6 +41,20 @@ Key = int | str
 
 #: An empty, immutable ``extra`` mapping (the default of :attr:`Param.extra`).
 EMPTY: Mapping[str, Any] = MappingProxyType({})
+
+
+class _Missing:
+    """The mark of a row that has no value (a row without a factory value, or one deleted)."""
+
+    __slots__ = ()
+
+    def __repr__(self) -> str:
+        return "MISSING"
+
+
+MISSING: Any = _Missing()
+#: Immutable value types that a device may share with the table's factory value when equal.
+_SHAREABLE = (int, float, str, bool)
 
 
 class Param(msgspec.Struct, frozen=True):
@@ -123,10 +139,13 @@ class ParameterTable:
         self.rows: dict[Key, Param] = {}
         self._aliases: dict[str, Key] = {}
         self._attrs: dict[str, Key] = {}
+        #: Each row's position: where a device's :class:`ParameterValues` keeps its value.
+        self.positions: dict[Key, int] = {}
         for row in rows:
             if row.key in self.rows:
                 raise ValueError(f"{name} {self.spell(row.key)} declared twice")
             self.rows[row.key] = row
+            self.positions[row.key] = len(self.positions)
             for alias in row.aliases:
                 if alias.upper() in self._aliases:
                     raise ValueError(f"alias {alias!r} declared twice")
@@ -135,6 +154,9 @@ class ParameterTable:
                 if row.attr in self._attrs:
                     raise ValueError(f"accessor {row.attr!r} declared twice")
                 self._attrs[row.attr] = row.key
+        #: The factory values by position (:data:`MISSING` for a row without one), shared by
+        #: every device's :class:`ParameterValues` until it writes another value: never written.
+        self.template: list[Any] = [MISSING if row.default is None else row.default for row in self.rows.values()]
 
     def __iter__(self) -> Iterator[Param]:
         return iter(self.rows.values())
@@ -187,6 +209,129 @@ class ParameterTable:
     def saved(self) -> tuple[Key, ...]:
         return tuple(row.key for row in self.rows.values() if row.saved)
 
+    def picker(self, *keys: Key) -> Callable[[list[Any]], Any]:
+        """The values of ``keys`` (rows with a factory value) at once, for the paths that read
+        several per message: ``picker(values.cells)`` of a device's :class:`ParameterValues` is
+        the tuple of their values, in one call of compiled code (an ``operator.itemgetter`` of
+        the rows' positions; one key: the value itself)."""
+        for key in keys:
+            if self.rows[key].default is None:
+                raise ValueError(f"{self.spell(key)} has no factory value: a picker could find none")
+        return itemgetter(*(self.positions[key] for key in keys))
+
+
+class ParameterValues(MutableMapping[Key, Any]):
+    """One device's parameter values, compact: a list with one cell per row of the table, at the
+    row's position (:attr:`ParameterTable.positions`), instead of a dict per device.
+
+    Until the device writes a value other than the factory one it shares the table's
+    :attr:`~ParameterTable.template` (copy-on-write), and a value equal to the factory value
+    (same type, same sign of zero) is kept as the factory value's own object, so a thousand
+    devices do not hold a thousand copies of one number.  A key that is no row (a kind may keep
+    one beside its rows) lives in a small dict made when first needed.  It behaves as the dict it
+    replaces: keys in the table's order, a row without a value is absent."""
+
+    __slots__ = ("_positions", "_template", "cells", "_extra")
+
+    #: The values by row position (:data:`MISSING` where a row has none): read it (a
+    #: :meth:`ParameterTable.picker` does), never write into it.
+    cells: list[Any]
+
+    def __init__(self, table: ParameterTable, values: Mapping[Key, Any] | None = None) -> None:
+        self._positions = table.positions
+        self._template = table.template
+        self.cells = self._template
+        self._extra: dict[Key, Any] | None = None
+        if values:
+            self.update(values)
+
+    def __getitem__(self, key: Key) -> Any:
+        position = self._positions.get(key)
+        if position is None:
+            if self._extra is None:
+                raise KeyError(key)
+            return self._extra[key]
+        value = self.cells[position]
+        if value is MISSING:
+            raise KeyError(key)
+        return value
+
+    def get(self, key: Key, default: Any = None) -> Any:
+        position = self._positions.get(key)
+        if position is None:
+            return default if self._extra is None else self._extra.get(key, default)
+        value = self.cells[position]
+        return default if value is MISSING else value
+
+    def __contains__(self, key: object) -> bool:
+        position = self._positions.get(key)  # type: ignore[call-overload]
+        if position is None:
+            return self._extra is not None and key in self._extra
+        return self.cells[position] is not MISSING
+
+    def __setitem__(self, key: Key, value: Any) -> None:
+        position = self._positions.get(key)
+        if position is None:
+            if self._extra is None:
+                self._extra = {}
+            self._extra[key] = value
+            return
+        cells = self.cells
+        if cells[position] is value:
+            return
+        factory = self._template[position]
+        if _shares(value, factory):
+            value = factory
+        if cells is self._template:
+            if value is factory:
+                return
+            cells = self.cells = list(cells)
+        cells[position] = value
+
+    def __delitem__(self, key: Key) -> None:
+        position = self._positions.get(key)
+        if position is None:
+            if self._extra is None:
+                raise KeyError(key)
+            del self._extra[key]
+            return
+        if self.cells[position] is MISSING:
+            raise KeyError(key)
+        if self.cells is self._template:
+            self.cells = list(self.cells)
+        self.cells[position] = MISSING
+
+    def __iter__(self) -> Iterator[Key]:
+        cells = self.cells
+        for key, position in self._positions.items():
+            if cells[position] is not MISSING:
+                yield key
+        if self._extra:
+            yield from list(self._extra)
+
+    def __len__(self) -> int:
+        return len(self.cells) - self.cells.count(MISSING) + (len(self._extra) if self._extra else 0)
+
+    def clear(self) -> None:
+        self.cells = [MISSING] * len(self._template)
+        self._extra = None
+
+    def factory(self) -> None:
+        """Every row back to its factory value (shared again); keys that are no row stay."""
+        self.cells = self._template
+
+    def __repr__(self) -> str:
+        return f"ParameterValues({dict(self.items())!r})"
+
+
+def _shares(value: Any, factory: Any) -> bool:
+    """``value`` may be kept as the object ``factory``: an immutable value of the same type,
+    equal, with the same sign of zero."""
+    kind = type(value)
+    if kind is not type(factory) or kind not in _SHAREABLE or value != factory:
+        return False
+    return kind is not float or value != 0 or math.copysign(1.0, value) == math.copysign(1.0, factory)
+
 
 class Parameters:
     """The part that owns a kind's parameter values: one value per row, the factory values at
@@ -197,15 +342,15 @@ class Parameters:
     ``store`` is where the values live when the device keeps them in a memory of its own (the
     PCD's registers: a view of the axis's register block); it is taken as it is (no factory
     values are written into it: :meth:`reset` does that).  Without it the part keeps its own
-    dict, filled with the factory values."""
+    :class:`ParameterValues`, filled with the factory values."""
 
     def __init__(self, table: ParameterTable, values: Mapping[Key, Any] | None = None, *,
                  store: MutableMapping[Key, Any] | None = None) -> None:
         self.table = table
-        self.values: MutableMapping[Key, Any] = table.defaults() if store is None else store
+        self.values: MutableMapping[Key, Any] = ParameterValues(table) if store is None else store
         if values:
             self.values.update(values)
-        self._listeners: list[Callable[[Param, Any], None]] = []
+        self._listeners: tuple[Callable[[Param, Any], None], ...] = ()
 
     def __getitem__(self, key: Key) -> Any:
         return self.values[key]
@@ -224,10 +369,13 @@ class Parameters:
         return value
 
     def on_change(self, listener: Callable[[Param, Any], None]) -> None:
-        self._listeners.append(listener)
+        self._listeners = (*self._listeners, listener)
 
     def reset(self, keys: Iterable[Key] | None = None) -> None:
         """Factory values again, for ``keys`` or for every row."""
+        if keys is None and type(self.values) is ParameterValues:
+            self.values.factory()
+            return
         defaults = self.table.defaults()
         for key in self.table.rows if keys is None else keys:
             if key in defaults:
@@ -252,7 +400,14 @@ def accessor(key: Key, doc: str = "") -> Any:
     ``values[41]``; setting it stores the value unchecked (the model's own computed value)."""
 
     def get(self: Parameters) -> Any:
-        return self.values[key]
+        values = self.values
+        try:  # the common case, a row of ParameterValues, without a call of __getitem__
+            value = values.cells[values._positions[key]]  # type: ignore[attr-defined]
+        except (AttributeError, KeyError):  # another store, a key that is no row
+            return values[key]
+        if value is MISSING:
+            raise KeyError(key)
+        return value
 
     def put(self: Parameters, value: Any) -> None:
         self.values[key] = value

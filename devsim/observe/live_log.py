@@ -107,7 +107,10 @@ def attach_log(runtime: Any, level: int, write: Callable[[str], None] | None = N
 
     def send(item: dict[str, Any]) -> None:
         if _level(item) <= level:
-            for text in limiter.offer(repeat_key(item), f"devsim: {describe(item)}"):
+            key = repeat_key(item)
+            if limiter.counted(key):
+                return  # a repeat in its window (noise: most errors): no text made
+            for text in limiter.offer(key, f"devsim: {describe(item)}"):
                 out(text)
 
     streams: list[Any] = [_Repeats(limiter, out)]

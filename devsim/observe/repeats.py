@@ -34,6 +34,15 @@ class RepeatLimiter:
         self.window, self.clock = window, clock
         self._runs: dict[Hashable, _Run] = {}
 
+    def counted(self, key: Hashable) -> bool:
+        """A line of ``key`` now is a repeat inside its window: counted here, nothing to write
+        (a caller asks this first and makes the line's text only for :meth:`offer` when not)."""
+        run = self._runs.get(key)
+        if run is not None and self.clock() - run.start < self.window:
+            run.count += 1
+            return True
+        return False
+
     def offer(self, key: Hashable, text: str) -> list[str]:
         """The lines to write for ``text`` of ``key`` now: ``[text]``, a count then ``[text]``
         (the window had ended), or none (a repeat, counted)."""

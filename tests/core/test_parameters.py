@@ -4,8 +4,18 @@ before a value is stored; named accessors; the points and the reference derived 
 from __future__ import annotations
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from devsim.core.parameters import Param, Parameters, ParameterTable, accessor, alias_hook, parameter_points
+from devsim.core.parameters import (
+    Param,
+    Parameters,
+    ParameterTable,
+    ParameterValues,
+    accessor,
+    alias_hook,
+    parameter_points,
+)
 from devsim.core.points import BadValue, PointTable, UnknownName
 
 ROWS = (
@@ -121,3 +131,57 @@ def test_a_refusal_names_the_limit_with_every_digit() -> None:
     with pytest.raises(BadValue, match=r"is below the minimum -214748\.3647"):
         row.check(-300000)
     assert row.range_text() == "-214748.3647 … 99999999"
+
+
+# -- the compact values (issue 31: a device's share of a plant) ------------------------------------
+
+KEYS = st.sampled_from([41, 1014, 1133, 60, 9999, "name"])
+VALUES = st.one_of(st.integers(-3, 300), st.sampled_from([100, 100.0, -0.0, 0.0, 4, True, 1, "x"]),
+                   st.floats(allow_nan=True))
+OPERATIONS = st.lists(st.one_of(
+    st.tuples(st.just("set"), KEYS, VALUES), st.tuples(st.just("del"), KEYS, st.none()),
+    st.tuples(st.just("clear"), st.none(), st.none()), st.tuples(st.just("factory"), st.none(), st.none()),
+), max_size=30)
+
+
+@settings(max_examples=300, deadline=None)
+@given(OPERATIONS)
+def test_the_compact_values_behave_as_the_dict_they_replace(operations: list) -> None:
+    values, model = ParameterValues(TABLE), TABLE.defaults()
+    for op, key, value in operations:
+        if op == "set":
+            values[key] = value
+            model[key] = value
+        elif op == "del":
+            if key in model:
+                del values[key]
+                del model[key]
+            else:
+                with pytest.raises(KeyError):
+                    del values[key]
+        elif op == "clear":
+            values.clear()
+            model.clear()
+        else:  # factory: every row's factory value, keys that are no row stay
+            values.factory()
+            model = {**{k: v for k, v in model.items() if k not in TABLE}, **TABLE.defaults()}
+        assert list(values) == [k for k in TABLE.rows if k in model] + [k for k in model if k not in TABLE]
+        assert len(values) == len(model)
+        for k in (41, 1014, 1133, 60, 9999, "name"):
+            assert (k in values) == (k in model)
+            stored = values.get(k, "absent")
+            expected = model.get(k, "absent")
+            assert type(stored) is type(expected) and repr(stored) == repr(expected)  # -0.0 stays -0.0
+
+
+def test_devices_share_the_factory_values_until_they_write_another() -> None:
+    first, second = Values(TABLE), Values(TABLE)
+    assert first.values.cells is second.values.cells is TABLE.template  # nothing copied yet
+    first.values[41] = 100  # the factory value again: still shared
+    assert first.values.cells is TABLE.template
+    first.set(41, 250)
+    assert first.values.cells is not TABLE.template and second.velocity == 100 and first.velocity == 250
+    first.values[1014] = 1 + 0  # equal to the factory value: kept as its object
+    assert first.values.cells[TABLE.positions[1014]] is TABLE.template[TABLE.positions[1014]]
+    first.reset()
+    assert first.values.cells is TABLE.template and first.velocity == 100

@@ -61,14 +61,11 @@ class Ip247Module(Model):
         self.ag_last: dict[str, Any] | None = None  # the answer to the last in-process PLC job (points)
         self.job_lists: dict[str, list[tuple[int, int, int, int, int, int]]] = {"pg": [], "ag": []}
         self._draining = False
+        unit_input = self._unit_input  # one bound method for every input of the units (not a closure each)
         for unit in self.units:
-            n = unit.number
-            self.signals.subscribe(f"ANF{n}", lambda _n, _o, v, u=unit: u.limit_input("anf"))
-            self.signals.subscribe(f"END{n}", lambda _n, _o, v, u=unit: u.limit_input("end"))
-            self.signals.subscribe(f"BERO{n}", lambda _n, _o, v, u=unit: u.cam_input(bool(v)))
-            self.signals.subscribe(f"START{n}", lambda _n, _o, v, u=unit: self._external(u, bool(v)))
-            self.signals.subscribe(f"BB{n}", lambda _n, _o, v, u=unit: self._ready(u, bool(v)))
-        self.signals.subscribe("BASP", lambda _n, _o, v: self._basp(bool(v)))
+            for prefix in UNIT_INPUTS:
+                self.signals.subscribe(f"{prefix}{unit.number}", unit_input)
+        self.signals.subscribe("BASP", self._basp_input)
         self._load()
         self.power_up()
 
@@ -177,6 +174,16 @@ class Ip247Module(Model):
 
     def _leds(self) -> None:
         self.signals.set("led_red", any(self.error_of(p) >= 10 for p in (1, 2, 3, 4)))
+
+    def _unit_input(self, name: str, _old: Any, value: Any) -> None:
+        """An input of an axis unit changed (``ANF1``, ``BB3`` …): what :data:`UNIT_INPUTS` says
+        for its name without the unit's number, with the unit the number names."""
+        number = int(name[-1])
+        unit = next(u for u in self.units if u.number == number)
+        UNIT_INPUTS[name[:-1]](self, unit, value)
+
+    def _basp_input(self, _name: str, _old: Any, value: Any) -> None:
+        self._basp(bool(value))
 
     def _basp(self, active: bool) -> None:
         """BASP with X21 2-3: every running axis brakes, error 55 on all axes, PE low (spec
@@ -324,3 +331,15 @@ OBSERVED: Table[Callable[[AxisUnit], int]] = Table([
     Command(mode_token(73), AxisUnit.residual, "§4.1.1", MODES[73].describe()
             + "; shown by OBSERVE (62H), not an operator job (80H)"),
 ])
+
+
+#: What an input of an axis unit does when it changes, by its name without the unit's number:
+#: the limit switches ANF/END (spec §5.7), the reference cam BERO (§5.6.2), START-N/STOP (§5.10) and
+#: BB from the power unit (§5.14).
+UNIT_INPUTS: dict[str, Callable[[Ip247Module, AxisUnit, Any], None]] = {
+    "ANF": lambda _module, unit, _value: unit.limit_input("anf"),
+    "END": lambda _module, unit, _value: unit.limit_input("end"),
+    "BERO": lambda _module, unit, value: unit.cam_input(bool(value)),
+    "START": lambda module, unit, value: module._external(unit, bool(value)),
+    "BB": lambda module, unit, value: module._ready(unit, bool(value)),
+}

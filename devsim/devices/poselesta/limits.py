@@ -35,9 +35,10 @@ class LimitSwitches:
         self._outside_towards = outside_towards
         self._homing_turn = homing_turn
         self._stopped = stopped
+        changed = self._changed  # one bound method for every switch
         for a in AXES:
             for side in ("pos", "neg"):
-                signals.subscribe(f"limit_{side}_{a}", self._changed)
+                signals.subscribe(f"limit_{side}_{a}", changed)
 
     def blocked(self, axis: str, direction: float) -> bool:
         """Would a motion of ``axis`` in ``direction`` run into an actuated switch?"""

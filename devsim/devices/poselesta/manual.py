@@ -57,12 +57,13 @@ class ManualMotion:
         self.handwheel_factor = 1
         self.handwheel_rate = 10.0  # detents per second
         self.open_loop = False  # in effect (switched at standstill)
+        key, handwheel, speed = self._key, self._handwheel_selected, self._speed_changed  # one bound method each
         for a in AXES:
             for direction in ("pos", "neg"):
-                signals.subscribe(f"jog_{direction}_{a}", self._key)
-            signals.subscribe(f"handwheel_{a}", self._handwheel_selected)
+                signals.subscribe(f"jog_{direction}_{a}", key)
+            signals.subscribe(f"handwheel_{a}", handwheel)
         for name in ("rapid", "feed_pot_v"):
-            signals.subscribe(name, self._speed_changed)
+            signals.subscribe(name, speed)
         signals.subscribe("open_loop", self._open_loop_input)
 
     # -- the handwheel (§2.2.3, spec §5.4) ------------------------------------------------------------

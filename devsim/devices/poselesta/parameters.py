@@ -196,7 +196,8 @@ class MachineParameters(Parameters):
 
     def begin_catalogue(self) -> None:
         """A catalogue read-in starts: the whole catalogue is 0 first (§2.6.2.3, P68–P71 too)."""
-        self.values = dict.fromkeys(self.values, 0.0)
+        for number in list(self.values):
+            self.values[number] = 0.0
         self.save()
         self._pending = {}
 

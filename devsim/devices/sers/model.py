@@ -68,57 +68,58 @@ class SersDrive(Model):
         self.cfg = SersConfig.parse(self.config)
         signals = self.signals
         cfg = self._cfg
-        alive, booting = (lambda: self.logic_alive), (lambda: self.booting)
+        # the collaborators as bound methods of the model (64 bytes each; a lambda costs 200)
+        alive, booting, execution, outputs_changed = self._alive, self._booting, self._execution, self._outputs_changed
         self.params = params = SersParameters()
-        self.memory = memory = ParameterMemory(self.nvram, params, cfg, lambda: self.motion.p51_inc())
+        self.memory = memory = ParameterMemory(self.nvram, params, cfg, self._p51_inc)
         self.program = program = ProgramMemory(self.nvram)
         self.master = master = MasterLink(clock, self.line_out)
         thresholds = SUPPLY_THRESHOLDS[self.cfg.supply_class]
         self.axis = Axis(clock, counts_per_rev=INC_PER_REV, index_offset=self.cfg.axis.index_offset, name=self.name)
         self.power_stage = power = PowerStage(
-            clock, params, signals, memory, lambda: self.motion,
+            clock, params, signals, memory, self._motion,
             undervoltage=thresholds[2],
-            changed=lambda: self.outputs.update(),
-            program_error=lambda: self.interpreter.on_drive_error(),
-            resync=lambda: self.motion.encoder.resync(),
+            changed=outputs_changed,
+            program_error=self._drive_error,
+            resync=self._resync,
             record_event=self.record_event,
             announce=self.announce,
         )
         self.motion = motion = Motion(
             clock, self.axis, params, signals, power,
-            evaluate=lambda cond: self.operands.evaluate(cond),
-            i7_stop=lambda: self.inputs.i7_stop_active(),
-            ended=lambda: self.interpreter.on_motion_end(),
-            poke=lambda: self.interpreter.poke(),
-            segment_ended=lambda: self.interpreter.resume("segment"),
-            in_position_message=lambda: self.spontaneous(f"@{self.cfg.address}POS=1"),
-            has_option_e50=lambda: "E50" in self.cfg.options,
+            evaluate=self._evaluate,
+            i7_stop=self._i7_stop,
+            ended=self._motion_ended,
+            poke=self._poke,
+            segment_ended=self._segment_ended,
+            in_position_message=self._in_position_message,
+            has_option_e50=self._has_option_e50,
             record_event=self.record_event,
-            changed=lambda: self.outputs.update(),
+            changed=outputs_changed,
         )
         self.supply = supply = SupplyMonitor(
             signals, power, memory, thresholds,
-            has_option_u=lambda: "U" in self.cfg.options, alive=alive, logic_power=self.switch_supply,
+            has_option_u=self._has_option_u, alive=alive, logic_power=self.switch_supply,
         )
         self.outputs = outputs = Outputs(
             signals, params, power, memory, alive=alive, booting=booting,
-            in_position=lambda: motion.pos_ok, program_running=lambda: self.interpreter.running,
+            in_position=self._in_position, program_running=self._program_running,
         )
         self.inputs = inputs = Inputs(
             clock, signals, params, power, motion, program,
-            config=cfg, alive=alive, booting=booting, programs=lambda: self.execution, changed=outputs.update,
+            config=cfg, alive=alive, booting=booting, programs=execution, changed=outputs.update,
         )
         self.access = access = ParameterAccess(
             params, memory, power, motion, inputs, program, signals,
-            config=cfg, programs=lambda: self.execution, changed=outputs.update, recheck_warnings=supply.recheck,
+            config=cfg, programs=execution, changed=outputs.update, recheck_warnings=supply.recheck,
             rotation_changed=self.apply_rotation_sense,
         )
         self.operands = operands = Operands(access, inputs, params, power)
         self.answers = Answers(access, operands, params, power, motion, program)
         self.interpreter = interpreter = Interpreter(
             clock, params, program, operands, power, motion, master,
-            host=lambda: self.execution, render=self.answers.render_statement, spontaneous=self.spontaneous,
-            address=lambda: self.cfg.address,
+            host=execution, render=self.answers.render_statement, spontaneous=self.spontaneous,
+            address=self._address,
         )
         self.execution = Execution(
             params, memory, power, motion, inputs, program, interpreter, access, operands,
@@ -143,6 +144,74 @@ class SersDrive(Model):
         """The configuration as it is now (a DIP switch may change it)."""
         return self.cfg
 
+    # the collaborators handed to the parts, as methods: a part made before another gets it
+    # through one of these (a bound method each, not a closure each)
+    def _alive(self) -> bool:
+        return self.logic_alive
+
+    def _booting(self) -> bool:
+        return self.booting
+
+    def _execution(self) -> Execution:
+        return self.execution
+
+    def _motion(self) -> Motion:
+        return self.motion
+
+    def _outputs_changed(self) -> None:
+        self.outputs.update()
+
+    def _p51_inc(self) -> float:
+        return self.motion.p51_inc()
+
+    def _drive_error(self) -> None:
+        self.interpreter.on_drive_error()
+
+    def _resync(self) -> None:
+        self.motion.encoder.resync()
+
+    def _evaluate(self, cond: Any) -> bool:
+        return self.operands.evaluate(cond)
+
+    def _i7_stop(self) -> bool:
+        return self.inputs.i7_stop_active()
+
+    def _motion_ended(self) -> None:
+        self.interpreter.on_motion_end()
+
+    def _segment_ended(self) -> None:
+        self.interpreter.resume("segment")
+
+    def _in_position_message(self) -> None:
+        self.spontaneous(f"@{self.cfg.address}POS=1")
+
+    def _has_option_e50(self) -> bool:
+        return "E50" in self.cfg.options
+
+    def _has_option_u(self) -> bool:
+        return "U" in self.cfg.options
+
+    def _in_position(self) -> bool:
+        return self.motion.pos_ok
+
+    def _program_running(self) -> bool:
+        return self.interpreter.running
+
+    def _address(self) -> int:
+        return self.cfg.address
+
+    def _supply_changed(self, *_changed: Any) -> None:
+        self.supply.check_supply()
+
+    def _temperature_changed(self, *_changed: Any) -> None:
+        self.supply.check_temperature()
+
+    def _short_changed(self, *_changed: Any) -> None:
+        self.supply.check_short()
+
+    def _stall_changed(self, _name: str, _old: Any, new: Any) -> None:
+        self.motion.stall(bool(new))
+
     # ======================================================================================
     # signals and geometry
     # ======================================================================================
@@ -152,7 +221,7 @@ class SersDrive(Model):
         nominal = thresholds[0] * 0.8 if self.cfg.supply_voltage is None else self.cfg.supply_voltage
         s.signal("supply_voltage").value = float(nominal)
         s.signal("heatsink_temperature").value = float(self.cfg.heatsink_temperature)
-        inputs, supply = self.inputs, self.supply
+        inputs = self.inputs
         on_limit, on_digital_input = inputs.on_limit, inputs.on_digital_input  # one bound method each
         for name in ("limit_left", "limit_right"):
             s.subscribe(name, on_limit)
@@ -160,13 +229,11 @@ class SersDrive(Model):
         s.subscribe("reference", inputs.on_reference)
         for n in range(1, 9):
             s.subscribe(f"I{n}", on_digital_input)
-        s.subscribe("supply_voltage", lambda *_: supply.check_supply())
-        s.subscribe("heatsink_temperature", lambda *_: supply.check_temperature())
-        s.subscribe("short_circuit", lambda *_: supply.check_short())
-        s.subscribe("stall", lambda _name, _old, new: self.motion.stall(bool(new)))
-        poke = self._poke  # one callable for every signal, not one closure per signal
-        for name in s.names():
-            s.subscribe(name, poke)
+        s.subscribe("supply_voltage", self._supply_changed)
+        s.subscribe("heatsink_temperature", self._temperature_changed)
+        s.subscribe("short_circuit", self._short_changed)
+        s.subscribe("stall", self._stall_changed)
+        s.subscribe_all(self._poke)  # after each signal's own listeners: one entry, not one per signal
 
     # ======================================================================================
     # power

@@ -48,16 +48,17 @@ class Outputs:
         power, signals = self.power, self.signals
         signals.set("READY", bool(power.relay))  # (a drive error opens it after braking, §2.1.3)
         in_position, running, error, warning, brake = self.params.output_selectors()
-        for selected, state in (
-            (in_position, self._in_position),
-            (running, self._program_running),
-            (error, power.has_errors),
-            (warning, power.has_warnings),
-        ):
-            sel = int(selected)
-            if sel and abs(sel) <= 4:
-                on = state()
-                signals.set(f"O{abs(sel)}", on if sel > 0 else not on)
+        if in_position or running or error or warning:  # (none assigned, the factory setting: nothing to do)
+            for selected, state in (
+                (in_position, self._in_position),
+                (running, self._program_running),
+                (error, power.has_errors),
+                (warning, power.has_warnings),
+            ):
+                sel = int(selected)
+                if sel and abs(sel) <= 4:
+                    on = state()
+                    signals.set(f"O{abs(sel)}", on if sel > 0 else not on)
         brake = int(brake)
         if brake:
             off = not power.energized

@@ -17,6 +17,11 @@ from devsim.devices.sers.units import Scaling
 
 __all__ = ["SersParameters"]
 
+#: P76, P44, P160, P121, P122, P123: what the unit conversion is made of (§4.8.4.6).
+_WEIGHTING = PARAMETER_TABLE.picker(76, 44, 160, 121, 122, 123)
+#: P1125, P1126, P1131, P1132, P1036: the outputs that show the drive's state (§4.8.1.2).
+_OUTPUT_SELECTORS = PARAMETER_TABLE.picker(1125, 1126, 1131, 1132, 1036)
+
 
 class SersParameters(Parameters):
     """The parameter values of one SERS (§4.7), with the unit conversion their weighting gives
@@ -121,8 +126,7 @@ class SersParameters(Parameters):
     def scaling(self) -> Scaling:
         """The unit conversion of the weighting parameters as they are now (made again only when
         one of them changed: a position query needs it twice)."""
-        v = self.values
-        key = (v[76], v[44], v[160], v[121], v[122], v[123])
+        key = _WEIGHTING(self.values.cells)  # type: ignore[attr-defined]
         made = self._scaling
         if made is not None and made[0] == key:
             return made[1]
@@ -134,8 +138,7 @@ class SersParameters(Parameters):
         """The outputs that show the drive's state (§4.8.1.2): in position P1125, program
         running P1126, error P1131, warning P1132, and the brake P1036 (read together: the
         outputs follow every error message)."""
-        v = self.values
-        return v[1125], v[1126], v[1131], v[1132], v[1036]
+        return _OUTPUT_SELECTORS(self.values.cells)  # type: ignore[attr-defined,no-any-return]
 
     def load(self, image: dict[int, object]) -> None:
         """Every value anew (power-on): ``image`` is the whole RAM image, nothing else is kept."""
