@@ -69,9 +69,8 @@ class Pcd4(Model):
         self.timers = Timers(clock)
         self.drives: list[H3Drive] = []
         self.axes: list[H3Axis] = []
-        for n in range(1, max(2, h["mna"]) + 1):
-            for signal, kind, initial, doc in axis_signals(n):
-                self.signals.define(signal, kind, initial, doc)  # type: ignore[arg-type]
+        self.signals.declare(row for n in range(1, max(2, h["mna"]) + 1)  # one shared layout per kind
+                             for row in axis_signals(n))  # type: ignore[arg-type]
         for n in range(1, h["mna"] + 1):
             module, y = (n - 1) // 2, n % 2 == 0
             present = module < s["modules"] and (not y or self.per_module == 2)
