@@ -36,6 +36,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -106,7 +107,10 @@ async def sys_counter(url: str, topic: str) -> asyncio.Queue[tuple[float, int]]:
 _watchers: set[asyncio.Task[None]] = set()
 
 
-async def measure(url: str, devices: list[str], rate: float, seconds: float, client_pid: int) -> dict[str, float]:
+async def measure(url: str, devices: list[str], rate: float, seconds: float, client_pid: int,
+                  servers: dict[str, int] | None = None) -> dict[str, Any]:
+    """Read ``input.I1`` of every device ``rate`` times a second through the fleet; ``servers``
+    (process -> pid): whose CPU to take over the measured window, with the requests each answered."""
     counter = await sys_counter(url, "$SYS/broker/messages/sent")
     async with AsyncFleetClient(url, timeout=5.0) as fleet:
         await fleet.wait_for_devices(devices, timeout=30)
@@ -119,6 +123,7 @@ async def measure(url: str, devices: list[str], rate: float, seconds: float, cli
         warm_end = loop.time() + 1.0
         end = warm_end + seconds
         samples: list[tuple[float, int]] = []
+        answered = dict.fromkeys(where.values(), 0)
 
         async def poll(index: int, name: str) -> None:
             due = loop.time() + period * index / len(devices)
@@ -133,6 +138,7 @@ async def measure(url: str, devices: list[str], rate: float, seconds: float, cli
                     continue
                 took = time.perf_counter() - sent
                 if due >= warm_end:
+                    answered[where[name]] += 1
                     latencies.append(took)
                     if loop.time() > due + period:
                         late[0] += 1
@@ -145,9 +151,13 @@ async def measure(url: str, devices: list[str], rate: float, seconds: float, cli
         counting = asyncio.ensure_future(count())
         polls = asyncio.gather(*(poll(i, name) for i, name in enumerate(devices)))
         await asyncio.sleep(max(0.0, warm_end - loop.time()))
+        pids = servers or {}
         cpu0 = loop.time(), cpu_seconds(client_pid)
-        await polls
+        served0 = {process: cpu_seconds(pid) for process, pid in pids.items()}
+        await asyncio.sleep(max(0.0, end - loop.time()))
+        served1 = {process: cpu_seconds(pid) for process, pid in pids.items()}
         cpu1 = loop.time(), cpu_seconds(client_pid)
+        await polls
         counting.cancel()
     inside = [sample for sample in samples if warm_end <= sample[0] <= end]
     first, last = inside[0], inside[-1]
@@ -162,6 +172,8 @@ async def measure(url: str, devices: list[str], rate: float, seconds: float, cli
         "failed": failed[0],
         "requests": len(latencies),
         "client_cpu": 100 * (cpu1[1] - cpu0[1]) / (cpu1[0] - cpu0[0]),
+        "server_cpu": {process: served1[process] - served0[process] for process in pids},
+        "answered": answered,
     }
 
 
@@ -254,48 +266,113 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
     }
 
 
-def run_one(args: argparse.Namespace, measure_what: str) -> None:
-    broker = Broker(extra="sys_interval 1\n" + ("set_tcp_nodelay true" if args.nodelay else "")).start()
-    states = 1.0 / args.rate if measure_what == "states" else None
-    with tempfile.TemporaryDirectory(prefix="devsim-fleet-bench-") as tmp:
-        members: list[tuple[subprocess.Popen[str], str]] = []
+def start_bare(url: str, devices: int, processes: int) -> list[tuple[subprocess.Popen[str], str]]:
+    """The bare reference: ``processes`` aiomqtt responders (``benchmarks/fleet_bare.py``), the
+    devices dealt to them as the plant deals them to its parts."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    started = []
+    for part in range(processes):
+        names = [f"d{i:03d}" for i in range(devices) if i % processes == part]
+        proc = subprocess.Popen([sys.executable, str(ROOT / "benchmarks" / "fleet_bare.py"), url, f"bare-p{part}",
+                                 *names], cwd=ROOT, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                stderr=subprocess.DEVNULL, text=True)
+        started.append(proc)
+    joined = []
+    for proc in started:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()  # bounded by its start-up (it exits on failure)
+        if not line.startswith("fleet: "):
+            raise SystemExit(f"a bare responder ended before joining: {proc.args}")
+        joined.append((proc, line.rsplit(" as ", 1)[1].strip()))
+    return joined
+
+
+def stop_all(members: list[tuple[subprocess.Popen[str], str]]) -> None:
+    for proc, _name in members:
+        proc.terminate()
+    for proc, _name in members:
         try:
-            members = start_members(broker.url, args.devices, args.processes, Path(tmp), states=states)
-            assert broker.process is not None
-            pids = {"mosquitto": broker.process.pid, **{name: proc.pid for proc, name in members}}
-            before = {key: cpu_seconds(pid) for key, pid in pids.items()}
-            started = time.perf_counter()
-            names = [f"d{i:03d}" for i in range(args.devices)]
-            how = measure_states if states is not None else measure
-            result = asyncio.run(how(broker.url, names, args.rate, args.seconds, os.getpid()))
-            elapsed = time.perf_counter() - started
-            cpu = {key: 100 * (cpu_seconds(pid) - before[key]) / elapsed for key, pid in pids.items()}
-        finally:
-            for proc, _name in members:
-                proc.terminate()
-            for proc, _name in members:
-                try:
-                    proc.wait(10)
-                except subprocess.TimeoutExpired:
-                    proc.kill()
-            broker.stop()
-    if states is not None:
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+def run_side(args: argparse.Namespace, broker: Broker, side: str, tmp: Path) -> dict[str, Any]:
+    """One measurement of ``side`` (``devsim``, ``bare`` or ``states``) on ``broker``; the CPU of
+    every process over the whole run and the measurement's own figures."""
+    states = 1.0 / args.rate if side == "states" else None
+    url = broker.url if side == "states" else f"{broker.url}/{side}"  # each side its own fleet
+    members: list[tuple[subprocess.Popen[str], str]] = []
+    try:
+        if side == "bare":
+            members = start_bare(url, args.devices, args.processes)
+        else:
+            members = start_members(url, args.devices, args.processes, tmp, states=states)
+        assert broker.process is not None
+        pids = {"mosquitto": broker.process.pid, **{name: proc.pid for proc, name in members}}
+        before = {key: cpu_seconds(pid) for key, pid in pids.items()}
+        started = time.perf_counter()
+        names = [f"d{i:03d}" for i in range(args.devices)]
+        if states is not None:
+            result = asyncio.run(measure_states(url, names, args.rate, args.seconds, os.getpid()))
+        else:
+            servers = {name: proc.pid for proc, name in members}
+            result = asyncio.run(measure(url, names, args.rate, args.seconds, os.getpid(), servers))
+        elapsed = time.perf_counter() - started
+        result["cpu"] = {key: 100 * (cpu_seconds(pid) - before[key]) / elapsed for key, pid in pids.items()}
+        result["members"] = [name for _proc, name in members]
+    finally:
+        stop_all(members)
+    return result
+
+
+def per_request_ms(result: dict[str, Any]) -> float:
+    """The servers' CPU over the measured window per request they answered in it, in ms."""
+    return 1000 * sum(result["server_cpu"].values()) / max(1, sum(result["answered"].values()))
+
+
+def report(args: argparse.Namespace, side: str, result: dict[str, Any]) -> None:
+    if side == "states":
         print(f"states: {args.devices} devices in {args.processes} processes publishing over MQTT, a new"
               f" quantity.adc_volts at {args.rate:g} Hz each for {args.seconds:g} s")
         print(f"state messages delivered: {result['delivered_per_s']:.0f}/s ({result['timed']} of"
               f" {result['sent']} commands' states timed)")
         what = "command to published state"
     else:
-        print(f"requests: {args.devices} devices in {args.processes} processes, read at {args.rate:g} Hz each"
-              f" for {args.seconds:g} s")
+        who = "devsim up --fleet" if side == "devsim" else "bare aiomqtt responders (benchmarks/fleet_bare.py)"
+        print(f"requests, {who}: {args.devices} devices in {args.processes} processes, read at {args.rate:g} Hz"
+              f" each for {args.seconds:g} s")
         print(f"round trips answered: {result['answered_per_s']:.0f}/s ({result['requests']} in the window;"
               f" {result['late']} late, {result['failed']} unanswered)")
         what = "round trip"
     print(f"broker messages sent: {result['broker_sent_per_s']:.0f}/s ($SYS/broker/messages/sent)")
     print(f"{what} p50 {result['p50_ms']:.2f} ms, p99 {result['p99_ms']:.2f} ms, max {result['max_ms']:.1f} ms")
-    print(f"CPU (% of one core, whole run incl. warm-up): mosquitto {cpu['mosquitto']:.1f}; devsim "
-          + ", ".join(f"{cpu[name]:.1f}" for _p, name in members)
+    cpu = result["cpu"]
+    print(f"CPU (% of one core, whole run incl. warm-up): mosquitto {cpu['mosquitto']:.1f}; {side} "
+          + ", ".join(f"{cpu[name]:.1f}" for name in result["members"])
           + f"; the client {result['client_cpu']:.1f} (measured window)")
+    if side != "states":
+        print(f"CPU per request in the {side} processes: {per_request_ms(result):.3f} ms (measured window)")
+
+
+def run_one(args: argparse.Namespace, measure_what: str) -> None:
+    broker = Broker(extra="sys_interval 1\n" + ("set_tcp_nodelay true" if args.nodelay else "")).start()
+    sides = ["states"] if measure_what == "states" else ["devsim", "bare"] * args.rounds
+    per_request: dict[str, list[float]] = {"devsim": [], "bare": []}
+    try:
+        with tempfile.TemporaryDirectory(prefix="devsim-fleet-bench-") as tmp:
+            for side in sides:
+                result = run_side(args, broker, side, Path(tmp))
+                report(args, side, result)
+                if side != "states":
+                    per_request[side].append(per_request_ms(result))
+    finally:
+        broker.stop()
+    if measure_what == "requests":
+        devsim, bare = statistics.median(per_request["devsim"]), statistics.median(per_request["bare"])
+        print(f"CPU per request (median of {args.rounds}): devsim {devsim:.3f} ms, bare aiomqtt responder"
+              f" {bare:.3f} ms; ratio devsim / bare {devsim / bare:.2f}")
 
 
 def main() -> None:
@@ -305,6 +382,8 @@ def main() -> None:
     parser.add_argument("--rate", type=float, default=10.0, help="commands or reads per second per device")
     parser.add_argument("--seconds", type=float, default=10.0)
     parser.add_argument("--measure", choices=("states", "requests", "both"), default="both")
+    parser.add_argument("--rounds", type=int, default=1,
+                        help="requests: devsim and the bare responders measured alternately this many times each")
     parser.add_argument("--nodelay", action="store_true", help="mosquitto's set_tcp_nodelay true")
     args = parser.parse_args()
     for what in ("states", "requests") if args.measure == "both" else (args.measure,):

@@ -33,6 +33,8 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import logging
+import socket
 import threading
 import uuid
 from collections.abc import Iterable, Iterator
@@ -40,7 +42,7 @@ from typing import Any
 
 import aiomqtt
 
-from devsim.fleet.member import mqtt_client, parse_announcement
+from devsim.fleet.member import KEEPALIVE, SYNC_TIMEOUT, parse_announcement
 from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url
 from devsim.runtime import requests as rq
 from devsim.runtime.client import ControlError, ControlOps
@@ -48,8 +50,29 @@ from devsim.runtime.ops import CONTROL, routed_by_device
 
 __all__ = ["AsyncFleetClient", "FleetClient"]
 
+# aiomqtt warns on every publish beyond ten in flight; under load that is a line per request
+_LOG = logging.getLogger("devsim.fleet.mqtt")
+_LOG.setLevel(logging.ERROR)
+
 #: Ops whose ``device`` only routes them: every process, or the one serving ``device``.
 TIME_OPS = tuple(row.token for row in CONTROL if routed_by_device(row.token))
+
+
+def mqtt_client(url: FleetUrl, identifier: str, will: aiomqtt.Will | None = None) -> aiomqtt.Client:
+    """An aiomqtt client (MQTT 5) for the fleet's broker."""
+    return aiomqtt.Client(
+        url.host,
+        url.port,
+        identifier=identifier,
+        username=url.username,
+        password=url.password,
+        protocol=aiomqtt.ProtocolVersion.V5,
+        will=will,
+        timeout=SYNC_TIMEOUT,
+        keepalive=KEEPALIVE,
+        logger=_LOG,
+        socket_options=[(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)],  # requests are small and waited for
+    )
 
 
 class AsyncFleetClient:
