@@ -2,7 +2,7 @@
 taken from it (``devsim run/up --fleet URL``).
 
 :func:`join_fleet` (awaited in the runtime's loop) connects to the broker (one MQTT 5 connection
-per process, :mod:`devsim.fleet.link`) and
+per process, :mod:`devsim.facades.mqtt_link`) and
 
 1. reads every retained announcement and refuses to join when a device name is already served
    by another *online* process (:class:`FleetClash`; offline marks do not count);
@@ -44,10 +44,10 @@ from typing import Any
 import msgspec
 
 from devsim.core.clock import VirtualClock
-from devsim.fleet.link import LinkLost, MqttLink, open_link
+from devsim.facades.mqtt_link import LinkLost, MqttLink, open_link
+from devsim.facades.mqtt_wire import Publish, Will
 from devsim.fleet.streams import StreamServer
 from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url, process_id
-from devsim.fleet.wire import Publish, Will
 from devsim.runtime import Runtime, ops
 from devsim.runtime.control import MAX_LINE
 from devsim.runtime.ops import ErrorResponse, OkResponse, WatchStart

@@ -26,7 +26,7 @@ import contextlib
 import json
 from typing import Any
 
-from devsim.fleet.link import LinkLost, MqttLink
+from devsim.facades.mqtt_link import LinkLost, MqttLink
 from devsim.fleet.topics import Topics
 from devsim.runtime import Runtime, ops
 from devsim.runtime.ops import ErrorResponse, OkResponse, WatchStart

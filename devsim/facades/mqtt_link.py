@@ -1,5 +1,5 @@
-"""A fleet member's one connection to the broker: MQTT 5 over asyncio (packets in
-:mod:`devsim.fleet.wire`, OASIS MQTT 5.0 sections 3 and 4).
+"""devsim's own MQTT 5 client connection over asyncio (packets in :mod:`devsim.facades.mqtt_wire`,
+OASIS MQTT 5.0 sections 3 and 4): what a fleet member and a fleet client speak.
 
 Built for a member's load (many small requests, each answered at once): every message that
 arrives is handed to the ``on_message`` callback in the same step that read it, and what is
@@ -19,8 +19,8 @@ import contextlib
 import socket
 from collections.abc import Callable
 
-from devsim.fleet import wire
-from devsim.fleet.wire import Publish, Will
+from devsim.facades import mqtt_wire as wire
+from devsim.facades.mqtt_wire import Publish, Will
 
 __all__ = ["LinkLost", "MqttLink", "open_link"]
 

@@ -1,11 +1,11 @@
-"""The member's MQTT 5 packets (devsim.fleet.wire) against the bytes of OASIS MQTT 5.0 and a
+"""The member's MQTT 5 packets (devsim.facades.mqtt_wire) against the bytes of OASIS MQTT 5.0 and a
 stream cut at every byte; the exchange with a real broker is what tests/fleet's other tests do."""
 
 from __future__ import annotations
 
 import pytest
 
-from devsim.fleet import wire
+from devsim.facades import mqtt_wire as wire
 
 
 def test_connect_with_a_will_and_credentials() -> None:
