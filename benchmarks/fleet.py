@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import contextlib
 import os
 import statistics
 import subprocess
@@ -45,7 +44,6 @@ from devsim.fleet.client import AsyncFleetClient  # noqa: E402
 from tests.support.broker import Broker  # noqa: E402
 
 TICK = os.sysconf("SC_CLK_TCK")
-SENDERS = 4  # MQTT connections the states measurement sends its commands on
 
 
 def cpu_seconds(pid: int) -> float:
@@ -180,9 +178,11 @@ async def measure(url: str, devices: list[str], rate: float, seconds: float, cli
 async def measure_states(url: str, devices: list[str], rate: float, seconds: float, client_pid: int,
                          ) -> dict[str, float]:
     """Set ``quantity.adc_volts`` of every device to a new value ``rate`` times a second over
-    MQTT and time each published state from its command (every value is matched, however late)."""
-    import aiomqtt
-
+    MQTT and time each published state from its command (every value is matched, however late).
+    The commands go out and the states come in on devsim's own MQTT link
+    (:mod:`devsim.facades.mqtt_link`): an aiomqtt client here was the slowest part of the chain."""
+    from devsim.facades.mqtt_link import open_link
+    from devsim.facades.mqtt_wire import Publish
     from devsim.fleet.topics import parse_fleet_url
 
     broker = parse_fleet_url(url)
@@ -193,30 +193,30 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
     delivered = [0]
     sent = [0]
     window = [float("inf"), float("inf")]  # warm-up end, end: set once the births are in
-    async with contextlib.AsyncExitStack() as stack:
-        client = await stack.enter_async_context(aiomqtt.Client(broker.host, broker.port))
-        senders = [await stack.enter_async_context(aiomqtt.Client(broker.host, broker.port))
-                   for _ in range(SENDERS)]  # one aiomqtt connection does not carry 1,000 publishes/s
-        await client.subscribe("devsim/bench/+/state/#")
-        await client.subscribe("devsim/bench/+/status")
-        online: set[str] = set()
-        all_online = asyncio.Event()
-        samples: list[tuple[float, int]] = []
+    online: set[str] = set()
+    all_online = asyncio.Event()
+    samples: list[tuple[float, int]] = []
 
-        async def receive() -> None:
-            async for message in client.messages:
-                device = message.topic.value.split("/")[2]
-                if message.topic.value.endswith("/status"):
-                    (online.add if bytes(message.payload) == b"online" else online.discard)(device)  # type: ignore[arg-type]
-                    if len(online) == len(devices):
-                        all_online.set()
-                    continue
-                counted = window[0] <= loop.time() <= window[1]
-                delivered[0] += counted
-                if message.topic.value.endswith("/quantity.adc_volts"):
-                    sent_at = pending.pop((device, float(bytes(message.payload))), None)  # type: ignore[arg-type]
-                    if sent_at is not None and counted:
-                        latencies.append(time.perf_counter() - sent_at)
+    def receive(message: Publish) -> None:
+        topic = message.topic
+        device = topic.split("/")[2]
+        if topic.endswith("/status"):
+            (online.add if message.payload == b"online" else online.discard)(device)
+            if len(online) == len(devices):
+                all_online.set()
+            return
+        counted = window[0] <= loop.time() <= window[1]
+        delivered[0] += counted
+        if topic.endswith("/quantity.adc_volts"):
+            sent_at = pending.pop((device, float(message.payload)), None)
+            if sent_at is not None and counted:
+                latencies.append(time.perf_counter() - sent_at)
+
+    link = await open_link(broker.host, broker.port, f"bench-{os.getpid()}")
+    link.on_message = receive
+    try:
+        await link.subscribe("devsim/bench/+/state/#")
+        await link.subscribe("devsim/bench/+/status")
 
         async def command(index: int, name: str) -> None:
             period = 1.0 / rate
@@ -227,8 +227,7 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
                 number += 1
                 volts = (number % 500) / 100  # 0.01 … 4.99 V: a new value each time
                 pending[(name, volts)] = time.perf_counter()
-                sender = senders[index % len(senders)]
-                await sender.publish(f"devsim/bench/{name}/set/quantity.adc_volts", str(volts).encode())
+                link.publish(f"devsim/bench/{name}/set/quantity.adc_volts", str(volts).encode())
                 if due >= window[0]:
                     sent[0] += 1
                 due += period
@@ -237,7 +236,6 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
             while True:
                 samples.append(await counter.get())
 
-        receiving = asyncio.ensure_future(receive())
         counting = asyncio.ensure_future(count())
         await asyncio.wait_for(all_online.wait(), 60)  # every device born and subscribed to its commands
         await asyncio.sleep(1.0)  # the births' retained states drain before the window
@@ -249,8 +247,9 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
         await commands
         cpu1 = loop.time(), cpu_seconds(client_pid)
         await asyncio.sleep(1.0)  # the last states
-        receiving.cancel()
         counting.cancel()
+    finally:
+        await link.disconnect()
     inside = [sample for sample in samples if warm_end <= sample[0] <= end]
     first, last = inside[0], inside[-1]
     latencies.sort()

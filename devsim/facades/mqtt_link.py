@@ -34,8 +34,9 @@ class LinkLost(ConnectionError):
 class MqttLink(asyncio.Protocol):
     """One MQTT 5 session, clean start (see the module docstring)."""
 
-    def __init__(self, keepalive: int) -> None:
+    def __init__(self, keepalive: int, v5: bool = True) -> None:
         self.keepalive = keepalive
+        self.v5 = v5
         self.on_message: Callable[[Publish], None] = lambda message: None
         self._loop = asyncio.get_running_loop()
         self.closed: asyncio.Future[None] = self._loop.create_future()
@@ -65,7 +66,7 @@ class MqttLink(asyncio.Protocol):
             packets = self._reader.feed(data)
             for kind, flags, body in packets:
                 if kind == wire.PUBLISH:
-                    message = wire.parse_publish(flags, body)
+                    message = wire.parse_publish(flags, body, self.v5)
                     if message.qos == 1:
                         self._out.append(wire.puback(message.packet_id))
                     self.on_message(message)
@@ -96,8 +97,12 @@ class MqttLink(asyncio.Protocol):
     def publish(self, topic: str, payload: bytes, qos: int = 0, retain: bool = False,
                 correlation: bytes | None = None, expiry: int | None = None) -> asyncio.Future[bytes] | None:
         """Queue a PUBLISH for this loop turn's write; at QoS 1 the future of its PUBACK."""
-        props = (wire.properties(expiry=expiry, correlation=correlation)
-                 if correlation is not None or expiry is not None else b"\x00")
+        if correlation is None and expiry is None:
+            props = b"\x00" if self.v5 else b""
+        elif self.v5:
+            props = wire.properties(expiry=expiry, correlation=correlation)
+        else:
+            raise ValueError("MQTT 3.1.1 has no properties (correlation data, message expiry)")
         if not qos:
             self._send(wire.publish(topic, payload, 0, retain, props=props))
             return None
@@ -116,16 +121,15 @@ class MqttLink(asyncio.Protocol):
     async def subscribe(self, topic: str, qos: int = 0, timeout: float = 10.0) -> None:
         packet_id = self._packet_id()
         acked = self._expect(wire.SUBACK, packet_id)
-        self._send(wire.subscribe(packet_id, topic, qos))
-        body = await self._wait(acked, timeout)
-        _props, at = wire.parse_properties(body, 2)
-        if body[at:at + 1] and body[at] >= 0x80:
-            raise LinkLost(f"the broker refused the subscription to {topic!r} (reason 0x{body[at]:02x})")
+        self._send(wire.subscribe(packet_id, topic, qos, self.v5))
+        refused = wire.suback_refused(await self._wait(acked, timeout), self.v5)
+        if refused is not None:
+            raise LinkLost(f"the broker refused the subscription to {topic!r} (reason 0x{refused:02x})")
 
     async def unsubscribe(self, topic: str, timeout: float = 10.0) -> None:
         packet_id = self._packet_id()
         acked = self._expect(wire.UNSUBACK, packet_id)
-        self._send(wire.unsubscribe(packet_id, topic))
+        self._send(wire.unsubscribe(packet_id, topic, self.v5))
         await self._wait(acked, timeout)
 
     async def drain(self) -> None:
@@ -143,6 +147,12 @@ class MqttLink(asyncio.Protocol):
         if self._out and self._transport is not None and not self.closed.done():
             self._transport.write(b"".join(self._out))
         self._out.clear()
+
+    def abort(self) -> None:
+        """Close without a DISCONNECT: the broker sends the will."""
+        if self._transport is not None:
+            self._transport.abort()
+        self._lose(LinkLost("aborted"))
 
     async def disconnect(self) -> None:
         """A clean DISCONNECT (the broker drops the will) and close."""
@@ -221,21 +231,22 @@ class MqttLink(asyncio.Protocol):
 
 
 async def open_link(host: str, port: int, identifier: str, *, keepalive: int = 15, will: Will | None = None,
-                    username: str | None = None, password: str | None = None, timeout: float = 10.0) -> MqttLink:
+                    username: str | None = None, password: str | None = None, timeout: float = 10.0,
+                    v5: bool = True) -> MqttLink:
     """Connect and wait for the broker's CONNACK; :class:`LinkLost` when it cannot be reached
-    or refuses."""
+    or refuses.  ``v5=False``: MQTT 3.1.1 (for brokers such as amqtt that speak only that)."""
     loop = asyncio.get_running_loop()
     try:
         _transport, link = await asyncio.wait_for(
-            loop.create_connection(lambda: MqttLink(keepalive), host, port), timeout)
+            loop.create_connection(lambda: MqttLink(keepalive, v5), host, port), timeout)
     except (OSError, TimeoutError) as exc:
         raise LinkLost(f"cannot connect to {host}:{port}: {exc or 'timed out'}") from None
     link._transport.set_write_buffer_limits(high=PAUSED_LIMIT)  # type: ignore[union-attr]
     connack = link._expect(wire.CONNACK, 0)
-    link._send(wire.connect(identifier, keepalive, will=will, username=username, password=password))
+    link._send(wire.connect(identifier, keepalive, will=will, username=username, password=password, v5=v5))
     try:
         body = await link._wait(connack, timeout)
-        reason, props = wire.parse_connack(body)
+        reason, props = wire.parse_connack(body, v5)
     except (LinkLost, asyncio.CancelledError, wire.MalformedPacket) as exc:
         await link.disconnect()
         if isinstance(exc, asyncio.CancelledError):

@@ -1,5 +1,6 @@
-"""The MQTT 5 packets a fleet member sends and takes (OASIS MQTT Version 5.0, section 3), pure:
-bytes in, records out, no I/O.
+"""The MQTT packets devsim's own client sends and takes (OASIS MQTT Version 5.0, section 3; with
+``v5=False`` the same packets of MQTT 3.1.1, which has no properties), pure: bytes in, records
+out, no I/O.
 
 Only what a member needs: CONNECT with a will (3.1), CONNACK (3.2), PUBLISH at QoS 0 and 1 (3.3)
 and its PUBACK (3.4), SUBSCRIBE/SUBACK (3.8, 3.9), UNSUBSCRIBE/UNSUBACK (3.10, 3.11), PINGREQ and
@@ -19,7 +20,8 @@ from collections.abc import Callable
 import msgspec
 
 __all__ = ["DISCONNECT", "PINGREQ", "MalformedPacket", "PacketReader", "Publish", "Will", "connect", "parse_connack",
-           "parse_properties", "parse_publish", "properties", "puback", "publish", "subscribe", "unsubscribe"]
+           "parse_properties", "parse_publish", "properties", "puback", "publish", "suback_refused", "subscribe",
+           "unsubscribe"]
 
 # packet types (2.1.2)
 CONNACK, PUBLISH, PUBACK, SUBACK, UNSUBACK, PINGRESP, SERVER_DISCONNECT = 2, 3, 4, 9, 11, 13, 14
@@ -94,20 +96,20 @@ def properties(expiry: int | None = None, response_topic: str | None = None, cor
 
 
 def connect(identifier: str, keepalive: int, *, will: Will | None = None, username: str | None = None,
-            password: str | None = None) -> bytes:
-    """CONNECT with clean start (3.1)."""
+            password: str | None = None, v5: bool = True) -> bytes:
+    """CONNECT with clean start (3.1; MQTT 3.1.1's clean session)."""
     flags = 0x02
     payload = _string(identifier)
     if will is not None:
         flags |= 0x04 | (will.qos << 3) | (0x20 if will.retain else 0)
-        payload += properties(expiry=will.expiry) + _string(will.topic) + _binary(will.payload)
+        payload += (properties(expiry=will.expiry) if v5 else b"") + _string(will.topic) + _binary(will.payload)
     if username is not None:
         flags |= 0x80
         payload += _string(username)
     if password is not None:
         flags |= 0x40
         payload += _binary(password.encode("utf-8"))
-    header = _string("MQTT") + bytes((5, flags)) + struct.pack("!H", keepalive) + b"\x00"
+    header = _string("MQTT") + bytes((5 if v5 else 4, flags)) + struct.pack("!H", keepalive) + (b"\x00" if v5 else b"")
     return _packet(0x10, header + payload)
 
 
@@ -116,7 +118,7 @@ _NO_PROPERTIES = b"\x00"
 
 def publish(topic: str, payload: bytes, qos: int = 0, retain: bool = False, packet_id: int = 0,
             props: bytes = _NO_PROPERTIES) -> bytes:
-    """PUBLISH (3.3); ``props`` from :func:`properties`."""
+    """PUBLISH (3.3); ``props`` from :func:`properties` (``b""`` for MQTT 3.1.1)."""
     head = _string(topic) + (struct.pack("!H", packet_id) if qos else b"") + props
     return _packet(0x30 | (qos << 1) | (1 if retain else 0), head + payload)
 
@@ -126,14 +128,14 @@ def puback(packet_id: int) -> bytes:
     return b"\x40\x02" + struct.pack("!H", packet_id)
 
 
-def subscribe(packet_id: int, topic: str, qos: int) -> bytes:
+def subscribe(packet_id: int, topic: str, qos: int, v5: bool = True) -> bytes:
     """SUBSCRIBE to one filter (3.8)."""
-    return _packet(0x82, struct.pack("!H", packet_id) + b"\x00" + _string(topic) + bytes((qos,)))
+    return _packet(0x82, struct.pack("!H", packet_id) + (b"\x00" if v5 else b"") + _string(topic) + bytes((qos,)))
 
 
-def unsubscribe(packet_id: int, topic: str) -> bytes:
+def unsubscribe(packet_id: int, topic: str, v5: bool = True) -> bytes:
     """UNSUBSCRIBE from one filter (3.10)."""
-    return _packet(0xA2, struct.pack("!H", packet_id) + b"\x00" + _string(topic))
+    return _packet(0xA2, struct.pack("!H", packet_id) + (b"\x00" if v5 else b"") + _string(topic))
 
 
 # -- decoding ---------------------------------------------------------------------------------
@@ -218,13 +220,15 @@ def parse_properties(data: bytes, at: int) -> tuple[dict[int, object], int]:
     return found, end
 
 
-def parse_publish(flags: int, body: bytes) -> Publish:
+def parse_publish(flags: int, body: bytes, v5: bool = True) -> Publish:
     """A PUBLISH's variable header and payload (3.3.2, 3.3.3)."""
     qos = (flags >> 1) & 3
     topic, at = _read_string(body, 0)
     packet_id = 0
     if qos:
         packet_id, at = _read_u16(body, at)
+    if not v5:
+        return Publish(topic, body[at:], qos, bool(flags & 1), packet_id)
     if body[at:at + 1] == b"\x00":  # no properties: the common case
         return Publish(topic, body[at + 1:], qos, bool(flags & 1), packet_id)
     props, at = parse_properties(body, at)
@@ -235,12 +239,21 @@ def parse_publish(flags: int, body: bytes) -> Publish:
                    correlation if isinstance(correlation, bytes) else None)
 
 
-def parse_connack(body: bytes) -> tuple[int, dict[int, object]]:
-    """A CONNACK's reason code (0 = success, 3.2.2.2) and properties."""
+def parse_connack(body: bytes, v5: bool = True) -> tuple[int, dict[int, object]]:
+    """A CONNACK's reason code (0 = success, 3.2.2.2; MQTT 3.1.1: return codes 1-5 refuse) and
+    properties."""
     if len(body) < 2:
         raise MalformedPacket("CONNACK cut short")
-    props, _end = parse_properties(body, 2) if len(body) > 2 else ({}, 2)
-    return body[1], props
+    props, _end = parse_properties(body, 2) if v5 and len(body) > 2 else ({}, 2)
+    return body[1] if v5 or body[1] == 0 else 0x80 | body[1], props
+
+
+def suback_refused(body: bytes, v5: bool = True) -> int | None:
+    """The failure code of a SUBACK for one filter (3.9.3), or None when granted."""
+    at = parse_properties(body, 2)[1] if v5 else 2
+    if at >= len(body):
+        raise MalformedPacket("SUBACK without a reason code")
+    return body[at] if body[at] >= 0x80 else None
 
 
 class PacketReader:
