@@ -25,14 +25,15 @@ from devsim.facades.mqtt_wire import Publish, Will
 __all__ = ["LinkLost", "MqttLink", "open_link"]
 
 PAUSED_LIMIT = 1 << 20  # bytes the socket may hold before drain() waits
+READ_SIZE = 64 * 1024  # bytes a read takes at most (asyncio's plain protocol allocates 256 KiB per read)
 
 
 class LinkLost(ConnectionError):
     """The broker connection is gone (or never came up)."""
 
 
-class MqttLink(asyncio.Protocol):
-    """One MQTT 5 session, clean start (see the module docstring)."""
+class MqttLink(asyncio.BufferedProtocol):
+    """One MQTT session, clean start (see the module docstring).  Reads into a buffer of its own."""
 
     def __init__(self, keepalive: int, v5: bool = True) -> None:
         self.keepalive = keepalive
@@ -50,6 +51,8 @@ class MqttLink(asyncio.Protocol):
         self._pinger: asyncio.TimerHandle | None = None
         self._paused: asyncio.Future[None] | None = None
         self._reading = False  # inside data_received: its end flushes
+        self._buffer = bytearray(READ_SIZE)
+        self._view = memoryview(self._buffer)
 
     # -- asyncio.Protocol ------------------------------------------------------------------
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
@@ -58,6 +61,12 @@ class MqttLink(asyncio.Protocol):
         sock = transport.get_extra_info("socket")
         if sock is not None and sock.family in (socket.AF_INET, socket.AF_INET6):
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # requests are small and waited for
+
+    def get_buffer(self, sizehint: int) -> memoryview:
+        return self._view
+
+    def buffer_updated(self, nbytes: int) -> None:
+        self.data_received(bytes(self._view[:nbytes]))
 
     def data_received(self, data: bytes) -> None:
         self._heard = self._loop.time()
