@@ -188,7 +188,7 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
     broker = parse_fleet_url(url)
     counter = await sys_counter(url, "$SYS/broker/messages/sent")
     loop = asyncio.get_running_loop()
-    pending: dict[tuple[str, float], float] = {}
+    pending: dict[tuple[str, float], tuple[float, bool]] = {}  # (device, volts) -> (sent at, in the window)
     latencies: list[float] = []
     delivered = [0]
     sent = [0]
@@ -208,8 +208,8 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
         counted = window[0] <= loop.time() <= window[1]
         delivered[0] += counted
         if topic.endswith("/quantity.adc_volts"):
-            sent_at = pending.pop((device, float(message.payload)), None)
-            if sent_at is not None and counted:
+            sent_at, timed = pending.pop((device, float(message.payload)), (0.0, False))
+            if timed:
                 latencies.append(time.perf_counter() - sent_at)
 
     link = await open_link(broker.host, broker.port, f"bench-{os.getpid()}")
@@ -226,7 +226,7 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
                 await asyncio.sleep(max(0.0, due - loop.time()))
                 number += 1
                 volts = (number % 500) / 100  # 0.01 … 4.99 V: a new value each time
-                pending[(name, volts)] = time.perf_counter()
+                pending[(name, volts)] = time.perf_counter(), due >= window[0]
                 link.publish(f"devsim/bench/{name}/set/quantity.adc_volts", str(volts).encode())
                 if due >= window[0]:
                     sent[0] += 1
