@@ -5,23 +5,28 @@ Starts a mosquitto (``$SYS`` every second) and a plant of ``--devices`` SERS dev
 (``--measure``, default both):
 
 * ``states``: the parts publish their devices with the MQTT facade (the plant's ``mqtt:``
-  section, points sampled every ``1/--rate`` s); one asyncio client sets ``quantity.adc_volts``
-  of every device ``--rate`` times a second (a new value each time) through
+  section, points sampled every ``1/--rate`` s); one client sets ``quantity.adc_volts`` of
+  every device ``--rate`` times a second (a new value each time) through
   ``…/set/quantity.adc_volts`` and takes the ``…/state/quantity.adc_volts`` each device
-  publishes: state messages delivered per second, and the end-to-
-  end time from the command to the published state (command → broker → devsim → broker →
-  subscriber).
+  publishes: state messages delivered per second, and the end-to-end time from the command to
+  the published state (command → broker → devsim → broker → subscriber).  The client speaks
+  through devsim's own MQTT link, which is not the bottleneck (an aiomqtt client was).
 * ``requests``: the parts join a fleet (``--fleet URL``); one fleet client
   (:class:`devsim.fleet.client.AsyncFleetClient`) reads ``input.I1`` of every device ``--rate``
-  times a second: every round trip is two messages through the broker.
+  times a second: every round trip is two messages through the broker.  Then, in the same run
+  and on the same broker, the bare reference: as many aiomqtt responders
+  (``benchmarks/fleet_bare.py``) serving the same device names, read the same way.  Phases
+  alternate ``--rounds`` times.  CPU per request is the servers' CPU over the measured window
+  (``/proc/PID/stat``) over the requests they answered in it; printed last: devsim's, the bare
+  responders', and their ratio (medians over the rounds).
 
 Reports: round trips answered per second and the broker's own count of messages sent per second
 (``$SYS/broker/messages/sent``), round-trip p50/p99/max, late requests (an answer that had not
-arrived when the device's next read was due), and the CPU of mosquitto, of each devsim process
-and of the client (from ``/proc/PID/stat``, % of one core).
+arrived when the device's next read was due), and the CPU of mosquitto, of each server process
+and of the client (% of one core).
 
     python benchmarks/fleet.py [--devices 100] [--processes 4] [--rate 10] [--seconds 10]
-                               [--measure states|requests|both]
+                               [--measure states|requests|both] [--rounds 1]
 """
 
 from __future__ import annotations

@@ -32,6 +32,7 @@ import asyncio
 import contextlib
 import json
 import os
+import secrets
 import socket
 from collections.abc import Callable, Sequence
 from typing import Any, Literal
@@ -375,7 +376,8 @@ async def start_mqtt(runtime: Runtime, devices: Sequence[Device], url: str | Non
         lines.append(f"mqtt: topics {topics.ROOT}/{plant}/")
     else:
         raise ValueError(f"an MQTT convention is devsim or sparkplug, not {convention!r}")
-    link = PlantLink(host, port, sides, f"devsim-{plant}-{os.getpid()}", own_wills=convention == "devsim")
+    shared = f"devsim-{plant}-{os.getpid()}-{secrets.token_hex(2)}"  # unique even for two plants of one name here
+    link = PlantLink(host, port, sides, shared, own_wills=convention == "devsim")
     try:
         await link.start()
     except LinkLost as exc:
