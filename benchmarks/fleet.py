@@ -10,13 +10,15 @@ Starts a mosquitto (``$SYS`` every second) and a plant of ``--devices`` SERS dev
   ``…/set/quantity.adc_volts`` and takes the ``…/state/quantity.adc_volts`` each device
   publishes: state messages delivered per second, and the end-to-end time from the command to
   the published state (command → broker → devsim → broker → subscriber).  The client speaks
-  through devsim's own MQTT link, which is not the bottleneck (an aiomqtt client was).
+  through devsim's own MQTT link, which is not the bottleneck (an aiomqtt client was).  The bare
+  reference, in the same run: aiomqtt processes that answer each command with its state at once
+  (``benchmarks/fleet_bare.py states``), no device, no sampling.
 * ``requests``: the parts join a fleet (``--fleet URL``); one fleet client
   (:class:`devsim.fleet.client.AsyncFleetClient`) reads ``input.I1`` of every device ``--rate``
   times a second: every round trip is two messages through the broker.  Then, in the same run
   and on the same broker, the bare reference: as many aiomqtt responders
   (``benchmarks/fleet_bare.py``) serving the same device names, read the same way.  Phases
-  alternate ``--rounds`` times.  CPU per request is the servers' CPU over the measured window
+  alternate ``--rounds`` times (for both measurements).  CPU per request (per command) is the servers' CPU over the measured window
   (``/proc/PID/stat``) over the requests they answered in it; printed last: devsim's, the bare
   responders', and their ratio (medians over the rounds).
 
@@ -181,7 +183,7 @@ async def measure(url: str, devices: list[str], rate: float, seconds: float, cli
 
 
 async def measure_states(url: str, devices: list[str], rate: float, seconds: float, client_pid: int,
-                         ) -> dict[str, float]:
+                         servers: dict[str, int] | None = None) -> dict[str, Any]:
     """Set ``quantity.adc_volts`` of every device to a new value ``rate`` times a second over
     MQTT and time each published state from its command (every value is matched, however late).
     The commands go out and the states come in on devsim's own MQTT link
@@ -248,8 +250,11 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
         warm_end, end = window
         commands = asyncio.gather(*(command(i, name) for i, name in enumerate(devices)))
         await asyncio.sleep(max(0.0, warm_end - loop.time()))
+        pids = servers or {}
         cpu0 = loop.time(), cpu_seconds(client_pid)
+        served0 = {process: cpu_seconds(pid) for process, pid in pids.items()}
         await commands
+        served1 = {process: cpu_seconds(pid) for process, pid in pids.items()}
         cpu1 = loop.time(), cpu_seconds(client_pid)
         await asyncio.sleep(1.0)  # the last states
         counting.cancel()
@@ -267,27 +272,31 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
         "sent": sent[0],
         "timed": len(latencies),
         "client_cpu": 100 * (cpu1[1] - cpu0[1]) / (cpu1[0] - cpu0[0]),
+        "server_cpu": {process: served1[process] - served0[process] for process in pids},
+        "answered": {"commands": sent[0]},
     }
 
 
-def start_bare(url: str, devices: int, processes: int) -> list[tuple[subprocess.Popen[str], str]]:
-    """The bare reference: ``processes`` aiomqtt responders (``benchmarks/fleet_bare.py``), the
+def start_bare(broker: Broker, url: str, devices: int, processes: int, *, states: bool = False,
+               ) -> list[tuple[subprocess.Popen[str], str]]:
+    """The bare reference: ``processes`` aiomqtt processes (``benchmarks/fleet_bare.py``), the
     devices dealt to them as the plant deals them to its parts."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     started = []
     for part in range(processes):
         names = [f"d{i:03d}" for i in range(devices) if i % processes == part]
-        proc = subprocess.Popen([sys.executable, str(ROOT / "benchmarks" / "fleet_bare.py"), url, f"bare-p{part}",
-                                 *names], cwd=ROOT, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+        where = ["states", "127.0.0.1", str(broker.port)] if states else ["requests", url, f"bare-p{part}"]
+        proc = subprocess.Popen([sys.executable, str(ROOT / "benchmarks" / "fleet_bare.py"), *where, *names],
+                                cwd=ROOT, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                                 stderr=subprocess.DEVNULL, text=True)
         started.append(proc)
     joined = []
-    for proc in started:
+    for part, proc in enumerate(started):
         assert proc.stdout is not None
         line = proc.stdout.readline()  # bounded by its start-up (it exits on failure)
-        if not line.startswith("fleet: "):
+        if not line.startswith(("fleet: ", "mqtt: ")):
             raise SystemExit(f"a bare responder ended before joining: {proc.args}")
-        joined.append((proc, line.rsplit(" as ", 1)[1].strip()))
+        joined.append((proc, f"bare-p{part}"))
     return joined
 
 
@@ -303,14 +312,14 @@ def stop_all(members: list[tuple[subprocess.Popen[str], str]]) -> None:
 
 
 def run_side(args: argparse.Namespace, broker: Broker, side: str, tmp: Path) -> dict[str, Any]:
-    """One measurement of ``side`` (``devsim``, ``bare`` or ``states``) on ``broker``; the CPU of
-    every process over the whole run and the measurement's own figures."""
-    states = 1.0 / args.rate if side == "states" else None
-    url = broker.url if side == "states" else f"{broker.url}/{side}"  # each side its own fleet
+    """One measurement of ``side`` (``devsim``, ``bare``, ``states`` or ``states-bare``) on
+    ``broker``; the CPU of every process over the whole run and the measurement's own figures."""
+    states = 1.0 / args.rate if side.startswith("states") else None
+    url = broker.url if states else f"{broker.url}/{side}"  # each side its own fleet
     members: list[tuple[subprocess.Popen[str], str]] = []
     try:
-        if side == "bare":
-            members = start_bare(url, args.devices, args.processes)
+        if side.endswith("bare"):
+            members = start_bare(broker, url, args.devices, args.processes, states=states is not None)
         else:
             members = start_members(url, args.devices, args.processes, tmp, states=states)
         assert broker.process is not None
@@ -318,11 +327,9 @@ def run_side(args: argparse.Namespace, broker: Broker, side: str, tmp: Path) -> 
         before = {key: cpu_seconds(pid) for key, pid in pids.items()}
         started = time.perf_counter()
         names = [f"d{i:03d}" for i in range(args.devices)]
-        if states is not None:
-            result = asyncio.run(measure_states(url, names, args.rate, args.seconds, os.getpid()))
-        else:
-            servers = {name: proc.pid for proc, name in members}
-            result = asyncio.run(measure(url, names, args.rate, args.seconds, os.getpid(), servers))
+        servers = {name: proc.pid for proc, name in members}
+        how = measure_states if states is not None else measure
+        result = asyncio.run(how(url, names, args.rate, args.seconds, os.getpid(), servers))
         elapsed = time.perf_counter() - started
         result["cpu"] = {key: 100 * (cpu_seconds(pid) - before[key]) / elapsed for key, pid in pids.items()}
         result["members"] = [name for _proc, name in members]
@@ -337,8 +344,9 @@ def per_request_ms(result: dict[str, Any]) -> float:
 
 
 def report(args: argparse.Namespace, side: str, result: dict[str, Any]) -> None:
-    if side == "states":
-        print(f"states: {args.devices} devices in {args.processes} processes publishing over MQTT, a new"
+    if side.startswith("states"):
+        who = "the MQTT facade" if side == "states" else "bare aiomqtt processes (benchmarks/fleet_bare.py)"
+        print(f"states, {who}: {args.devices} devices in {args.processes} processes publishing over MQTT, a new"
               f" quantity.adc_volts at {args.rate:g} Hz each for {args.seconds:g} s")
         print(f"state messages delivered: {result['delivered_per_s']:.0f}/s ({result['timed']} of"
               f" {result['sent']} commands' states timed)")
@@ -356,27 +364,30 @@ def report(args: argparse.Namespace, side: str, result: dict[str, Any]) -> None:
     print(f"CPU (% of one core, whole run incl. warm-up): mosquitto {cpu['mosquitto']:.1f}; {side} "
           + ", ".join(f"{cpu[name]:.1f}" for name in result["members"])
           + f"; the client {result['client_cpu']:.1f} (measured window)")
-    if side != "states":
-        print(f"CPU per request in the {side} processes: {per_request_ms(result):.3f} ms (measured window)")
+    what = "command" if side.startswith("states") else "request"
+    print(f"CPU per {what} in the {side} processes: {per_request_ms(result):.3f} ms (measured window)")
 
 
 def run_one(args: argparse.Namespace, measure_what: str) -> None:
     broker = Broker(extra="sys_interval 1\n" + ("set_tcp_nodelay true" if args.nodelay else "")).start()
-    sides = ["states"] if measure_what == "states" else ["devsim", "bare"] * args.rounds
-    per_request: dict[str, list[float]] = {"devsim": [], "bare": []}
+    devsim, bare = ("states", "states-bare") if measure_what == "states" else ("devsim", "bare")
+    cost: dict[str, list[float]] = {devsim: [], bare: []}
+    p99: dict[str, list[float]] = {devsim: [], bare: []}
     try:
         with tempfile.TemporaryDirectory(prefix="devsim-fleet-bench-") as tmp:
-            for side in sides:
+            for side in [devsim, bare] * args.rounds:
                 result = run_side(args, broker, side, Path(tmp))
                 report(args, side, result)
-                if side != "states":
-                    per_request[side].append(per_request_ms(result))
+                cost[side].append(per_request_ms(result))
+                p99[side].append(result["p99_ms"])
     finally:
         broker.stop()
-    if measure_what == "requests":
-        devsim, bare = statistics.median(per_request["devsim"]), statistics.median(per_request["bare"])
-        print(f"CPU per request (median of {args.rounds}): devsim {devsim:.3f} ms, bare aiomqtt responder"
-              f" {bare:.3f} ms; ratio devsim / bare {devsim / bare:.2f}")
+    what = "command" if measure_what == "states" else "request"
+    ours, theirs = statistics.median(cost[devsim]), statistics.median(cost[bare])
+    print(f"{measure_what}: p99 devsim {', '.join(f'{v:.1f}' for v in p99[devsim])} ms,"
+          f" bare {', '.join(f'{v:.1f}' for v in p99[bare])} ms")
+    print(f"CPU per {what} (median of {args.rounds}): devsim {ours:.3f} ms, bare aiomqtt {theirs:.3f} ms;"
+          f" ratio devsim / bare {ours / theirs:.2f}")
 
 
 def main() -> None:

@@ -1,6 +1,7 @@
-"""The bare reference of ``benchmarks/fleet.py --measure requests``: one aiomqtt responder
-process that answers the fleet's ``read`` requests for its devices through the same broker,
-with no device behind them.
+"""The bare references of ``benchmarks/fleet.py``: one aiomqtt process per part, with no device
+behind it, doing through the same broker what the devsim processes do.
+
+``requests``: it answers the fleet's ``read`` requests for its devices.
 
 It joins as a fleet member does, as far as a client can tell: a retained announcement on
 ``ROOT/process/PROCESS`` listing its devices (its last will the same with ``"online": false``),
@@ -8,7 +9,13 @@ its request topic subscribed; each request is parsed with :mod:`json` and answer
 ``reply_to`` with ``{"id": ID, "ok": true, "result": false}`` by ``await client.publish``, as
 one would write it with aiomqtt.  Prints ``fleet: … as PROCESS`` once it serves.
 
-    python benchmarks/fleet_bare.py URL PROCESS DEVICE [DEVICE ...]
+``states``: it stands for the MQTT facade's devices of plant ``bench``: a retained ``online`` on
+each ``devsim/bench/DEVICE/status`` (one connection, its last will ``offline`` on the first), and
+each ``…/set/quantity.adc_volts`` answered at once by the same value, retained, on
+``…/state/quantity.adc_volts``.  Prints ``mqtt: topics …`` once it serves.
+
+    python benchmarks/fleet_bare.py requests URL PROCESS DEVICE [DEVICE ...]
+    python benchmarks/fleet_bare.py states HOST PORT DEVICE [DEVICE ...]
 """
 
 from __future__ import annotations
@@ -42,9 +49,27 @@ async def serve(url: str, process: str, devices: list[str]) -> None:
             await client.publish(data["reply_to"], json.dumps({"id": data["id"], "ok": True, "result": False}))
 
 
+async def states(host: str, port: int, devices: list[str]) -> None:
+    will = aiomqtt.Will(f"devsim/bench/{devices[0]}/status", b"offline", qos=1, retain=True)
+    async with aiomqtt.Client(host, port, identifier=f"bare-states-{devices[0]}", will=will) as client:
+        for name in devices:
+            await client.subscribe(f"devsim/bench/{name}/set/quantity.adc_volts", qos=1)
+        for name in devices:
+            await client.publish(f"devsim/bench/{name}/status", b"online", qos=1, retain=True)
+        print("mqtt: topics devsim/bench/", flush=True)
+        async for message in client.messages:
+            device = message.topic.value.split("/")[2]
+            value = json.dumps(float(message.payload))  # type: ignore[arg-type]
+            await client.publish(f"devsim/bench/{device}/state/quantity.adc_volts", value, retain=True)
+
+
 if __name__ == "__main__":
     sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parents[1]))
+    what, *args = sys.argv[1:]
     try:
-        asyncio.run(serve(sys.argv[1], sys.argv[2], sys.argv[3:]))
+        if what == "states":
+            asyncio.run(states(args[0], int(args[1]), args[2:]))
+        else:
+            asyncio.run(serve(args[0], args[1], args[2:]))
     except KeyboardInterrupt:
         pass
