@@ -242,8 +242,12 @@ class PlantLink:
     async def _connect(self) -> None:
         try:
             if self.own_wills:  # the wills first: a device is announced online only once its will holds
-                for side in self.sides:
-                    self.holders.append(await self._open(side.identifier(), side.new_session()))
+                opened = await asyncio.gather(*(self._open(side.identifier(), side.new_session()) for side in self.sides),
+                                              return_exceptions=True)
+                self.holders = [link for link in opened if isinstance(link, MqttLink)]
+                for failed in opened:
+                    if isinstance(failed, BaseException):
+                        raise failed
                 self.shared = await self._open(self.identifier, None)
             else:
                 [side] = self.sides
