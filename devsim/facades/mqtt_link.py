@@ -146,8 +146,7 @@ class MqttLink(asyncio.BufferedProtocol):
         self.flush()
         while self._paused is not None and not self.closed.done():
             await asyncio.wait({self._paused, self.closed}, return_when=asyncio.FIRST_COMPLETED)
-        if self.closed.done():
-            self.closed.result()
+        self._raise_if_lost()
 
     def flush(self) -> None:
         if self._flush_soon is not None:
@@ -173,8 +172,7 @@ class MqttLink(asyncio.BufferedProtocol):
 
     # -- inside ----------------------------------------------------------------------------
     def _send(self, packet: bytes) -> None:
-        if self.closed.done():
-            self.closed.result()  # raises LinkLost
+        self._raise_if_lost()
         self._out.append(packet)
         if self._flush_soon is None and not self._reading:
             self._flush_soon = self._loop.call_soon(self.flush)
@@ -201,13 +199,19 @@ class MqttLink(asyncio.BufferedProtocol):
 
     async def _wait(self, future: asyncio.Future[bytes], timeout: float) -> bytes:
         done, _ = await asyncio.wait({future, self.closed}, timeout=timeout, return_when=asyncio.FIRST_COMPLETED)
-        if future in done:
+        if future in done and not future.cancelled():  # cancelled: the link was lost meanwhile
             return future.result()
-        if self.closed.done():
-            self.closed.result()
+        self._raise_if_lost()
         self._lose(LinkLost(f"the broker did not answer within {timeout:g} s"))
-        self.closed.result()
+        self._raise_if_lost()
         raise AssertionError("unreachable")
+
+    def _raise_if_lost(self) -> None:
+        """LinkLost (with why) once :attr:`closed` is done, however it ended (a task that awaited
+        it and was cancelled cancels it too)."""
+        if self.closed.done():
+            why = None if self.closed.cancelled() else self.closed.exception()
+            raise LinkLost(str(why) if why is not None else "the connection is closed")
 
     def _ping(self) -> None:
         loop = self._loop

@@ -213,13 +213,13 @@ class FleetMember:
         while not self._closing:
             pump = asyncio.ensure_future(self.streams.pump(link))
             try:
-                await link.closed
-            except LinkLost as exc:
-                if self._closing:
-                    return
-                print(f"devsim: fleet broker {self.url} lost ({exc}); reconnecting", file=sys.stderr, flush=True)
+                await asyncio.wait([link.closed])  # not `await link.closed`: cancelling us would cancel it
             finally:
                 pump.cancel()
+            if self._closing:
+                return
+            why = link.closed.exception() if not link.closed.cancelled() else None
+            print(f"devsim: fleet broker {self.url} lost ({why}); reconnecting", file=sys.stderr, flush=True)
             self._link = None
             link = await self._reconnect()
             self._link = link
