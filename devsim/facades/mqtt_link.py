@@ -25,6 +25,7 @@ from devsim.facades.mqtt_wire import Publish, Will
 __all__ = ["LinkLost", "MqttLink", "open_link"]
 
 PAUSED_LIMIT = 1 << 20  # bytes the socket may hold before drain() waits
+PING_SHARE = 0.75  # a PINGREQ every this share of the keep alive (a device's idle will connection pings, too)
 READ_SIZE = 64 * 1024  # bytes a read takes at most (asyncio's plain protocol allocates 256 KiB per read)
 
 
@@ -220,10 +221,10 @@ class MqttLink(asyncio.BufferedProtocol):
             return
         with contextlib.suppress(LinkLost):
             self._send(wire.PINGREQ)
-        self._pinger = loop.call_later(self.keepalive / 2, self._ping)
+        self._pinger = loop.call_later(self.keepalive * PING_SHARE, self._ping)
 
     def _start_pinging(self) -> None:
-        self._pinger = self._loop.call_later(self.keepalive / 2, self._ping)
+        self._pinger = self._loop.call_later(self.keepalive * PING_SHARE, self._ping)
 
     def _lose(self, exc: LinkLost) -> None:
         if self._pinger is not None:

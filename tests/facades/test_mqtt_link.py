@@ -63,3 +63,15 @@ def test_a_dropped_link_leaves_its_will_and_a_stopped_broker_ends_the_link(broke
             await asyncio.wait_for(watcher.closed, 10)
 
     asyncio.run(run())
+
+
+def test_an_idle_link_keeps_alive(broker: Broker) -> None:
+    async def run() -> None:
+        link = await open_link("127.0.0.1", broker.port, "t-idle", keepalive=1, v5=False)
+        # mosquitto drops a client silent for 1.5 keep-alive intervals; the link's pings prevent it
+        with pytest.raises(TimeoutError):
+            await asyncio.wait_for(asyncio.shield(link.closed), 4)  # idle for four intervals
+        await link.publish_acked("t/still", b"here", qos=1)
+        await link.disconnect()
+
+    asyncio.run(run())
