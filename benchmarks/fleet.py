@@ -165,7 +165,7 @@ async def measure(url: str, devices: list[str], rate: float, seconds: float, cli
         await polls
         counting.cancel()
     inside = [sample for sample in samples if warm_end <= sample[0] <= end]
-    first, last = inside[0], inside[-1]
+    first, last = (inside[0], inside[-1]) if len(inside) > 1 else ((0.0, 0), (1.0, 0))  # $SYS: once a second
     latencies.sort()
     return {
         "answered_per_s": len(latencies) / seconds,
@@ -261,7 +261,7 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
     finally:
         await link.disconnect()
     inside = [sample for sample in samples if warm_end <= sample[0] <= end]
-    first, last = inside[0], inside[-1]
+    first, last = (inside[0], inside[-1]) if len(inside) > 1 else ((0.0, 0), (1.0, 0))  # $SYS: once a second
     latencies.sort()
     return {
         "delivered_per_s": delivered[0] / seconds,
