@@ -225,9 +225,32 @@ def run(runtime: Runtime, request: rq.ControlRequest) -> Any:
     return CONTROL[op_of(request)](runtime, request)
 
 
+#: (op, (field, type, value), ...) -> the typed request made from them: a poller asks the same
+#: thing again and again, and checking it costs more than the read it asks for
+_DECODED: dict[tuple[Any, ...], rq.ControlRequest] = {}
+_DECODED_MAX = 1024
+
+
 def decode(op: Any, fields: Mapping[str, Any]) -> rq.ControlRequest:
     """The typed request for ``op`` from the fields of a JSON request; :class:`BadRequest` when
-    the op is unknown, a field unknown, of the wrong type, or a needed one missing."""
+    the op is unknown, a field unknown, of the wrong type, or a needed one missing.  Requests are
+    records (frozen): one made from the same fields before is given again."""
+    try:
+        key: tuple[Any, ...] | None = (op, *((k, type(v), v) for k, v in fields.items() if k != "id"))
+        found = _DECODED.get(key)  # type: ignore[arg-type]
+    except TypeError:  # a list or an object among the values: made each time
+        key, found = None, None
+    if found is not None:
+        return found
+    request = _decode(op, fields)
+    if key is not None:
+        if len(_DECODED) >= _DECODED_MAX:
+            _DECODED.clear()
+        _DECODED[key] = request
+    return request
+
+
+def _decode(op: Any, fields: Mapping[str, Any]) -> rq.ControlRequest:
     if not isinstance(op, str) or op not in CONTROL:
         raise BadRequest(f"op: unknown op {clip(repr(op), 80)} (ops: {', '.join(row.token for row in CONTROL)})")
     unknown = sorted(set(fields) - _FIELDS)
@@ -322,8 +345,12 @@ def clip(text: str, limit: int = 300) -> str:
 
 def _depth(value: Any) -> int:
     """Nesting depth of parsed JSON, iteratively (no recursion on hostile input)."""
-    if isinstance(value, dict) and not any(isinstance(child, dict | list) for child in value.values()):
-        return 1  # a plain request: the common case
+    if isinstance(value, dict):  # a plain request (no object or list inside) is the common case
+        for child in value.values():
+            if isinstance(child, dict | list):
+                break
+        else:
+            return 1
     deepest = 0
     stack = [(value, 1)]
     while stack:
