@@ -5,30 +5,36 @@ Starts a mosquitto (``$SYS`` every second) and a plant of ``--devices`` SERS dev
 (``--measure``, default both):
 
 * ``states``: the parts publish their devices with the MQTT facade (the plant's ``mqtt:``
-  section, points sampled every ``1/--rate`` s); one asyncio client sets ``quantity.adc_volts``
-  of every device ``--rate`` times a second (a new value each time) through
+  section, points sampled every ``1/--rate`` s); one client sets ``quantity.adc_volts`` of
+  every device ``--rate`` times a second (a new value each time) through
   ``…/set/quantity.adc_volts`` and takes the ``…/state/quantity.adc_volts`` each device
-  publishes: state messages delivered per second, and the end-to-
-  end time from the command to the published state (command → broker → devsim → broker →
-  subscriber).
+  publishes: state messages delivered per second, and the end-to-end time from the command to
+  the published state (command → broker → devsim → broker → subscriber).  The client speaks
+  through devsim's own MQTT link, which is not the bottleneck (an aiomqtt client was).  The bare
+  reference, in the same run: aiomqtt processes that answer each command with its state at once
+  (``benchmarks/fleet_bare.py states``), no device, no sampling.
 * ``requests``: the parts join a fleet (``--fleet URL``); one fleet client
   (:class:`devsim.fleet.client.AsyncFleetClient`) reads ``input.I1`` of every device ``--rate``
-  times a second: every round trip is two messages through the broker.
+  times a second: every round trip is two messages through the broker.  Then, in the same run
+  and on the same broker, the bare reference: as many aiomqtt responders
+  (``benchmarks/fleet_bare.py``) serving the same device names, read the same way.  Phases
+  alternate ``--rounds`` times (for both measurements).  CPU per request (per command) is the servers' CPU over the measured window
+  (``/proc/PID/stat``) over the requests they answered in it; printed last: devsim's, the bare
+  responders', and their ratio (medians over the rounds).
 
 Reports: round trips answered per second and the broker's own count of messages sent per second
 (``$SYS/broker/messages/sent``), round-trip p50/p99/max, late requests (an answer that had not
-arrived when the device's next read was due), and the CPU of mosquitto, of each devsim process
-and of the client (from ``/proc/PID/stat``, % of one core).
+arrived when the device's next read was due), and the CPU of mosquitto, of each server process
+and of the client (% of one core).
 
     python benchmarks/fleet.py [--devices 100] [--processes 4] [--rate 10] [--seconds 10]
-                               [--measure states|requests|both]
+                               [--measure states|requests|both] [--rounds 1]
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
-import contextlib
 import os
 import statistics
 import subprocess
@@ -36,6 +42,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -44,7 +51,6 @@ from devsim.fleet.client import AsyncFleetClient  # noqa: E402
 from tests.support.broker import Broker  # noqa: E402
 
 TICK = os.sysconf("SC_CLK_TCK")
-SENDERS = 4  # MQTT connections the states measurement sends its commands on
 
 
 def cpu_seconds(pid: int) -> float:
@@ -106,7 +112,10 @@ async def sys_counter(url: str, topic: str) -> asyncio.Queue[tuple[float, int]]:
 _watchers: set[asyncio.Task[None]] = set()
 
 
-async def measure(url: str, devices: list[str], rate: float, seconds: float, client_pid: int) -> dict[str, float]:
+async def measure(url: str, devices: list[str], rate: float, seconds: float, client_pid: int,
+                  servers: dict[str, int] | None = None) -> dict[str, Any]:
+    """Read ``input.I1`` of every device ``rate`` times a second through the fleet; ``servers``
+    (process -> pid): whose CPU to take over the measured window, with the requests each answered."""
     counter = await sys_counter(url, "$SYS/broker/messages/sent")
     async with AsyncFleetClient(url, timeout=5.0) as fleet:
         await fleet.wait_for_devices(devices, timeout=30)
@@ -119,6 +128,7 @@ async def measure(url: str, devices: list[str], rate: float, seconds: float, cli
         warm_end = loop.time() + 1.0
         end = warm_end + seconds
         samples: list[tuple[float, int]] = []
+        answered = dict.fromkeys(where.values(), 0)
 
         async def poll(index: int, name: str) -> None:
             due = loop.time() + period * index / len(devices)
@@ -133,6 +143,7 @@ async def measure(url: str, devices: list[str], rate: float, seconds: float, cli
                     continue
                 took = time.perf_counter() - sent
                 if due >= warm_end:
+                    answered[where[name]] += 1
                     latencies.append(took)
                     if loop.time() > due + period:
                         late[0] += 1
@@ -145,12 +156,16 @@ async def measure(url: str, devices: list[str], rate: float, seconds: float, cli
         counting = asyncio.ensure_future(count())
         polls = asyncio.gather(*(poll(i, name) for i, name in enumerate(devices)))
         await asyncio.sleep(max(0.0, warm_end - loop.time()))
+        pids = servers or {}
         cpu0 = loop.time(), cpu_seconds(client_pid)
-        await polls
+        served0 = {process: cpu_seconds(pid) for process, pid in pids.items()}
+        await asyncio.sleep(max(0.0, end - loop.time()))
+        served1 = {process: cpu_seconds(pid) for process, pid in pids.items()}
         cpu1 = loop.time(), cpu_seconds(client_pid)
+        await polls
         counting.cancel()
     inside = [sample for sample in samples if warm_end <= sample[0] <= end]
-    first, last = inside[0], inside[-1]
+    first, last = (inside[0], inside[-1]) if len(inside) > 1 else ((0.0, 0), (1.0, 0))  # $SYS: once a second
     latencies.sort()
     return {
         "answered_per_s": len(latencies) / seconds,
@@ -162,49 +177,53 @@ async def measure(url: str, devices: list[str], rate: float, seconds: float, cli
         "failed": failed[0],
         "requests": len(latencies),
         "client_cpu": 100 * (cpu1[1] - cpu0[1]) / (cpu1[0] - cpu0[0]),
+        "server_cpu": {process: served1[process] - served0[process] for process in pids},
+        "answered": answered,
     }
 
 
 async def measure_states(url: str, devices: list[str], rate: float, seconds: float, client_pid: int,
-                         ) -> dict[str, float]:
+                         servers: dict[str, int] | None = None) -> dict[str, Any]:
     """Set ``quantity.adc_volts`` of every device to a new value ``rate`` times a second over
-    MQTT and time each published state from its command (every value is matched, however late)."""
-    import aiomqtt
-
+    MQTT and time each published state from its command (every value is matched, however late).
+    The commands go out and the states come in on devsim's own MQTT link
+    (:mod:`devsim.facades.mqtt_link`): an aiomqtt client here was the slowest part of the chain."""
+    from devsim.facades.mqtt_link import open_link
+    from devsim.facades.mqtt_wire import Publish
     from devsim.fleet.topics import parse_fleet_url
 
     broker = parse_fleet_url(url)
     counter = await sys_counter(url, "$SYS/broker/messages/sent")
     loop = asyncio.get_running_loop()
-    pending: dict[tuple[str, float], float] = {}
+    pending: dict[tuple[str, float], tuple[float, bool]] = {}  # (device, volts) -> (sent at, in the window)
     latencies: list[float] = []
     delivered = [0]
     sent = [0]
     window = [float("inf"), float("inf")]  # warm-up end, end: set once the births are in
-    async with contextlib.AsyncExitStack() as stack:
-        client = await stack.enter_async_context(aiomqtt.Client(broker.host, broker.port))
-        senders = [await stack.enter_async_context(aiomqtt.Client(broker.host, broker.port))
-                   for _ in range(SENDERS)]  # one aiomqtt connection does not carry 1,000 publishes/s
-        await client.subscribe("devsim/bench/+/state/#")
-        await client.subscribe("devsim/bench/+/status")
-        online: set[str] = set()
-        all_online = asyncio.Event()
-        samples: list[tuple[float, int]] = []
+    online: set[str] = set()
+    all_online = asyncio.Event()
+    samples: list[tuple[float, int]] = []
 
-        async def receive() -> None:
-            async for message in client.messages:
-                device = message.topic.value.split("/")[2]
-                if message.topic.value.endswith("/status"):
-                    (online.add if bytes(message.payload) == b"online" else online.discard)(device)  # type: ignore[arg-type]
-                    if len(online) == len(devices):
-                        all_online.set()
-                    continue
-                counted = window[0] <= loop.time() <= window[1]
-                delivered[0] += counted
-                if message.topic.value.endswith("/quantity.adc_volts"):
-                    sent_at = pending.pop((device, float(bytes(message.payload))), None)  # type: ignore[arg-type]
-                    if sent_at is not None and counted:
-                        latencies.append(time.perf_counter() - sent_at)
+    def receive(message: Publish) -> None:
+        topic = message.topic
+        device = topic.split("/")[2]
+        if topic.endswith("/status"):
+            (online.add if message.payload == b"online" else online.discard)(device)
+            if len(online) == len(devices):
+                all_online.set()
+            return
+        counted = window[0] <= loop.time() <= window[1]
+        delivered[0] += counted
+        if topic.endswith("/quantity.adc_volts"):
+            sent_at, timed = pending.pop((device, float(message.payload)), (0.0, False))
+            if timed:
+                latencies.append(time.perf_counter() - sent_at)
+
+    link = await open_link(broker.host, broker.port, f"bench-{os.getpid()}")
+    link.on_message = receive
+    try:
+        await link.subscribe("devsim/bench/+/state/#")
+        await link.subscribe("devsim/bench/+/status")
 
         async def command(index: int, name: str) -> None:
             period = 1.0 / rate
@@ -214,9 +233,8 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
                 await asyncio.sleep(max(0.0, due - loop.time()))
                 number += 1
                 volts = (number % 500) / 100  # 0.01 … 4.99 V: a new value each time
-                pending[(name, volts)] = time.perf_counter()
-                sender = senders[index % len(senders)]
-                await sender.publish(f"devsim/bench/{name}/set/quantity.adc_volts", str(volts).encode())
+                pending[(name, volts)] = time.perf_counter(), due >= window[0]
+                link.publish(f"devsim/bench/{name}/set/quantity.adc_volts", str(volts).encode())
                 if due >= window[0]:
                     sent[0] += 1
                 due += period
@@ -225,7 +243,6 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
             while True:
                 samples.append(await counter.get())
 
-        receiving = asyncio.ensure_future(receive())
         counting = asyncio.ensure_future(count())
         await asyncio.wait_for(all_online.wait(), 60)  # every device born and subscribed to its commands
         await asyncio.sleep(1.0)  # the births' retained states drain before the window
@@ -233,14 +250,18 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
         warm_end, end = window
         commands = asyncio.gather(*(command(i, name) for i, name in enumerate(devices)))
         await asyncio.sleep(max(0.0, warm_end - loop.time()))
+        pids = servers or {}
         cpu0 = loop.time(), cpu_seconds(client_pid)
+        served0 = {process: cpu_seconds(pid) for process, pid in pids.items()}
         await commands
+        served1 = {process: cpu_seconds(pid) for process, pid in pids.items()}
         cpu1 = loop.time(), cpu_seconds(client_pid)
         await asyncio.sleep(1.0)  # the last states
-        receiving.cancel()
         counting.cancel()
+    finally:
+        await link.disconnect()
     inside = [sample for sample in samples if warm_end <= sample[0] <= end]
-    first, last = inside[0], inside[-1]
+    first, last = (inside[0], inside[-1]) if len(inside) > 1 else ((0.0, 0), (1.0, 0))  # $SYS: once a second
     latencies.sort()
     return {
         "delivered_per_s": delivered[0] / seconds,
@@ -251,51 +272,122 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
         "sent": sent[0],
         "timed": len(latencies),
         "client_cpu": 100 * (cpu1[1] - cpu0[1]) / (cpu1[0] - cpu0[0]),
+        "server_cpu": {process: served1[process] - served0[process] for process in pids},
+        "answered": {"commands": sent[0]},
     }
 
 
-def run_one(args: argparse.Namespace, measure_what: str) -> None:
-    broker = Broker(extra="sys_interval 1\n" + ("set_tcp_nodelay true" if args.nodelay else "")).start()
-    states = 1.0 / args.rate if measure_what == "states" else None
-    with tempfile.TemporaryDirectory(prefix="devsim-fleet-bench-") as tmp:
-        members: list[tuple[subprocess.Popen[str], str]] = []
+def start_bare(broker: Broker, url: str, devices: int, processes: int, *, states: bool = False,
+               ) -> list[tuple[subprocess.Popen[str], str]]:
+    """The bare reference: ``processes`` aiomqtt processes (``benchmarks/fleet_bare.py``), the
+    devices dealt to them as the plant deals them to its parts."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    started = []
+    for part in range(processes):
+        names = [f"d{i:03d}" for i in range(devices) if i % processes == part]
+        where = ["states", "127.0.0.1", str(broker.port)] if states else ["requests", url, f"bare-p{part}"]
+        proc = subprocess.Popen([sys.executable, str(ROOT / "benchmarks" / "fleet_bare.py"), *where, *names],
+                                cwd=ROOT, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                stderr=subprocess.DEVNULL, text=True)
+        started.append(proc)
+    joined = []
+    for part, proc in enumerate(started):
+        assert proc.stdout is not None
+        line = proc.stdout.readline()  # bounded by its start-up (it exits on failure)
+        if not line.startswith(("fleet: ", "mqtt: ")):
+            raise SystemExit(f"a bare responder ended before joining: {proc.args}")
+        joined.append((proc, f"bare-p{part}"))
+    return joined
+
+
+def stop_all(members: list[tuple[subprocess.Popen[str], str]]) -> None:
+    for proc, _name in members:
+        proc.terminate()
+    for proc, _name in members:
         try:
-            members = start_members(broker.url, args.devices, args.processes, Path(tmp), states=states)
-            assert broker.process is not None
-            pids = {"mosquitto": broker.process.pid, **{name: proc.pid for proc, name in members}}
-            before = {key: cpu_seconds(pid) for key, pid in pids.items()}
-            started = time.perf_counter()
-            names = [f"d{i:03d}" for i in range(args.devices)]
-            how = measure_states if states is not None else measure
-            result = asyncio.run(how(broker.url, names, args.rate, args.seconds, os.getpid()))
-            elapsed = time.perf_counter() - started
-            cpu = {key: 100 * (cpu_seconds(pid) - before[key]) / elapsed for key, pid in pids.items()}
-        finally:
-            for proc, _name in members:
-                proc.terminate()
-            for proc, _name in members:
-                try:
-                    proc.wait(10)
-                except subprocess.TimeoutExpired:
-                    proc.kill()
-            broker.stop()
-    if states is not None:
-        print(f"states: {args.devices} devices in {args.processes} processes publishing over MQTT, a new"
+            proc.wait(10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+def run_side(args: argparse.Namespace, broker: Broker, side: str, tmp: Path) -> dict[str, Any]:
+    """One measurement of ``side`` (``devsim``, ``bare``, ``states`` or ``states-bare``) on
+    ``broker``; the CPU of every process over the whole run and the measurement's own figures."""
+    states = 1.0 / args.rate if side.startswith("states") else None
+    url = broker.url if states else f"{broker.url}/{side}"  # each side its own fleet
+    members: list[tuple[subprocess.Popen[str], str]] = []
+    try:
+        if side.endswith("bare"):
+            members = start_bare(broker, url, args.devices, args.processes, states=states is not None)
+        else:
+            members = start_members(url, args.devices, args.processes, tmp, states=states)
+        assert broker.process is not None
+        pids = {"mosquitto": broker.process.pid, **{name: proc.pid for proc, name in members}}
+        before = {key: cpu_seconds(pid) for key, pid in pids.items()}
+        started = time.perf_counter()
+        names = [f"d{i:03d}" for i in range(args.devices)]
+        servers = {name: proc.pid for proc, name in members}
+        how = measure_states if states is not None else measure
+        result = asyncio.run(how(url, names, args.rate, args.seconds, os.getpid(), servers))
+        elapsed = time.perf_counter() - started
+        result["cpu"] = {key: 100 * (cpu_seconds(pid) - before[key]) / elapsed for key, pid in pids.items()}
+        result["members"] = [name for _proc, name in members]
+    finally:
+        stop_all(members)
+    return result
+
+
+def per_request_ms(result: dict[str, Any]) -> float:
+    """The servers' CPU over the measured window per request they answered in it, in ms."""
+    return 1000 * sum(result["server_cpu"].values()) / max(1, sum(result["answered"].values()))
+
+
+def report(args: argparse.Namespace, side: str, result: dict[str, Any]) -> None:
+    if side.startswith("states"):
+        who = "the MQTT facade" if side == "states" else "bare aiomqtt processes (benchmarks/fleet_bare.py)"
+        print(f"states, {who}: {args.devices} devices in {args.processes} processes publishing over MQTT, a new"
               f" quantity.adc_volts at {args.rate:g} Hz each for {args.seconds:g} s")
         print(f"state messages delivered: {result['delivered_per_s']:.0f}/s ({result['timed']} of"
               f" {result['sent']} commands' states timed)")
         what = "command to published state"
     else:
-        print(f"requests: {args.devices} devices in {args.processes} processes, read at {args.rate:g} Hz each"
-              f" for {args.seconds:g} s")
+        who = "devsim up --fleet" if side == "devsim" else "bare aiomqtt responders (benchmarks/fleet_bare.py)"
+        print(f"requests, {who}: {args.devices} devices in {args.processes} processes, read at {args.rate:g} Hz"
+              f" each for {args.seconds:g} s")
         print(f"round trips answered: {result['answered_per_s']:.0f}/s ({result['requests']} in the window;"
               f" {result['late']} late, {result['failed']} unanswered)")
         what = "round trip"
     print(f"broker messages sent: {result['broker_sent_per_s']:.0f}/s ($SYS/broker/messages/sent)")
     print(f"{what} p50 {result['p50_ms']:.2f} ms, p99 {result['p99_ms']:.2f} ms, max {result['max_ms']:.1f} ms")
-    print(f"CPU (% of one core, whole run incl. warm-up): mosquitto {cpu['mosquitto']:.1f}; devsim "
-          + ", ".join(f"{cpu[name]:.1f}" for _p, name in members)
+    cpu = result["cpu"]
+    print(f"CPU (% of one core, whole run incl. warm-up): mosquitto {cpu['mosquitto']:.1f}; {side} "
+          + ", ".join(f"{cpu[name]:.1f}" for name in result["members"])
           + f"; the client {result['client_cpu']:.1f} (measured window)")
+    what = "command" if side.startswith("states") else "request"
+    print(f"CPU per {what} in the {side} processes: {per_request_ms(result):.3f} ms (measured window)")
+
+
+def run_one(args: argparse.Namespace, measure_what: str) -> None:
+    broker = Broker(extra="sys_interval 1\n" + ("set_tcp_nodelay true" if args.nodelay else "")).start()
+    devsim, bare = ("states", "states-bare") if measure_what == "states" else ("devsim", "bare")
+    cost: dict[str, list[float]] = {devsim: [], bare: []}
+    p99: dict[str, list[float]] = {devsim: [], bare: []}
+    try:
+        with tempfile.TemporaryDirectory(prefix="devsim-fleet-bench-") as tmp:
+            for side in [devsim, bare] * args.rounds:
+                result = run_side(args, broker, side, Path(tmp))
+                report(args, side, result)
+                cost[side].append(per_request_ms(result))
+                p99[side].append(result["p99_ms"])
+    finally:
+        broker.stop()
+    what = "command" if measure_what == "states" else "request"
+    ours, theirs = statistics.median(cost[devsim]), statistics.median(cost[bare])
+    print(f"{measure_what}: p99 devsim {', '.join(f'{v:.1f}' for v in p99[devsim])} ms,"
+          f" bare {', '.join(f'{v:.1f}' for v in p99[bare])} ms")
+    print(f"CPU per {what} (median of {args.rounds}): devsim {ours:.3f} ms, bare aiomqtt {theirs:.3f} ms;"
+          f" ratio devsim / bare {ours / theirs:.2f}")
 
 
 def main() -> None:
@@ -305,6 +397,8 @@ def main() -> None:
     parser.add_argument("--rate", type=float, default=10.0, help="commands or reads per second per device")
     parser.add_argument("--seconds", type=float, default=10.0)
     parser.add_argument("--measure", choices=("states", "requests", "both"), default="both")
+    parser.add_argument("--rounds", type=int, default=1,
+                        help="requests: devsim and the bare responders measured alternately this many times each")
     parser.add_argument("--nodelay", action="store_true", help="mosquitto's set_tcp_nodelay true")
     args = parser.parse_args()
     for what in ("states", "requests") if args.measure == "both" else (args.measure,):

@@ -43,15 +43,14 @@ def check_canopen(spec: str) -> None:
 
 
 def check_mqtt(url: str, convention: str, rate: float, plant: str | None) -> None:
-    try:
-        import aiomqtt  # noqa: F401
-
+    try:  # (devsim speaks MQTT itself: devsim.facades.mqtt_link)
         if not url:
             import amqtt  # noqa: F401
         if convention == "sparkplug":
             import tahutils  # noqa: F401
     except ImportError:
-        raise exits.MissingExtra(f"--mqtt needs aiomqtt, amqtt and tahutils: {install_command('mqtt')}") from None
+        raise exits.MissingExtra(f"--mqtt needs amqtt (the embedded broker) and tahutils (Sparkplug B):"
+                                 f" {install_command('mqtt')}") from None
     from devsim.facades.mqtt_topics import check_name, parse_url
 
     try:
@@ -81,7 +80,7 @@ def check_opcua(spec: str, period: float) -> None:
 
 
 def check_fleet(url: str) -> None:
-    """``--fleet URL``: a usable fleet URL (a usage error otherwise), and aiomqtt installed."""
+    """``--fleet URL``: a usable fleet URL (a usage error otherwise)."""
     from devsim.fleet.topics import FleetUrlError, fleet_problem, parse_fleet_url
 
     try:

@@ -51,13 +51,21 @@ class PointWatch:
         self.last: Changes = {}
         self._timer: Any = None
         self._running = False
+        # declared points' getters, looked up once (a sample reads every name: a SERS has 247);
+        # other names (a family member, an alias) go through Device.read each time
+        declared = device.points.points
+        self._getters = {name: point.get for name in self.names
+                         if (point := declared.get(name)) is not None and point.get is not None}
 
     def values(self, names: Iterable[str] | None = None) -> Changes:
         """The present values of the watched names (or of ``names``)."""
         values: Changes = {}
+        model = self.device.model
+        getters = self._getters
         for name in self.names if names is None else names:
+            get = getters.get(name)
             try:
-                values[name] = self.device.read(name)
+                values[name] = get(model) if get is not None else self.device.read(name)
             except (UnknownName, ValueError, LookupError, ArithmeticError):
                 values[name] = None
         return values

@@ -12,8 +12,11 @@ declared points (:mod:`devsim.core.points`) and, for drive profiles, its declare
   from other processes through :mod:`devsim.transports.socketcand`;
 * :mod:`devsim.facades.mqtt_topics` – the devsim MQTT convention's topics and payloads (pure);
 * :mod:`devsim.facades.mqtt_sparkplug` – Sparkplug B payloads through the Tahu binding (pure);
-* :mod:`devsim.facades.mqtt` – publishing devices over MQTT with aiomqtt (extra ``[mqtt]``), and the
-  embedded amqtt broker.
+* :mod:`devsim.facades.mqtt` – publishing devices over MQTT (extra ``[mqtt]`` for the embedded
+  amqtt broker and Sparkplug), and the embedded broker;
+* :mod:`devsim.facades.mqtt_wire` – MQTT 5 and 3.1.1 packets (pure);
+* :mod:`devsim.facades.mqtt_link` – devsim's own MQTT client connection over asyncio, one write per
+  loop turn (the MQTT facade, the fleet's members and clients).
 * :mod:`devsim.facades.opcua_space` – the OPC UA address space a kind's points give (pure);
 * :mod:`devsim.facades.opcua` – a plant's devices on one asyncua OPC UA server (extra ``[opcua]``).
 """

@@ -1,11 +1,14 @@
-"""The devices of a plant over MQTT (issue 14), through aiomqtt (extra ``devsim-motion[mqtt]``).
+"""The devices of a plant over MQTT (issue 14), MQTT 3.1.1 through devsim's own client
+(:mod:`devsim.facades.mqtt_link`; the embedded broker needs the extra ``devsim-motion[mqtt]``).
 
 Two conventions:
 
-* ``devsim`` (default, topics in :mod:`devsim.facades.mqtt_topics`): **one MQTT connection per
-  device**, so that each device has its own last will: ``devsim/<plant>/<device>/status`` is
-  ``online`` while it is connected and ``offline`` when it closes or its process dies (the
-  broker sends the will).  A retained ``birth`` lists its points; each readable point is
+* ``devsim`` (default, topics in :mod:`devsim.facades.mqtt_topics`): each device has its own
+  last will: ``devsim/<plant>/<device>/status`` is ``online`` while it is served and
+  ``offline`` when it closes or its process dies (the broker sends the will).  A will belongs to
+  a connection, so each device holds one idle connection for its will alone; everything else –
+  births, states, commands, errors, the ``online`` – goes over the process's one shared
+  connection, written once per loop turn (issue 31).  A retained ``birth`` lists its points; each readable point is
   published (retained JSON) on ``state/<name>`` when it changes; ``set/<name>``,
   ``fault/<kind>`` and ``power_cycle`` commands run the control ops of those names
   (:data:`devsim.runtime.ops.CONTROL`) and refusals are answered on ``error``.
@@ -18,7 +21,9 @@ after each moment the model announces (a move's start and end, a fault, an input
 switched: :mod:`devsim.facades.mqtt_events`), so that a move shorter than the rate is seen.  With no
 broker URL, :func:`start_broker` runs an embedded amqtt broker in the same loop, on loopback.
 Everything runs as tasks in the runtime's loop and calls device methods directly.  A lost
-broker connection is retried every second; the births are then sent again.
+broker connection (the shared one or a will's) is retried every second with all of them: the
+others are dropped without a goodbye, so that the broker sends their wills, and the births are
+then sent again.
 """
 
 from __future__ import annotations
@@ -27,25 +32,27 @@ import asyncio
 import contextlib
 import json
 import os
+import secrets
 import socket
 from collections.abc import Callable, Sequence
 from typing import Any, Literal
-
-import aiomqtt
 
 from devsim.core.device import Device
 from devsim.core.watch import PointWatch
 from devsim.facades import mqtt_topics as topics
 from devsim.facades.mqtt_events import SampleOnEvent
+from devsim.facades.mqtt_link import LinkLost, MqttLink, open_link
+from devsim.facades.mqtt_wire import Publish, Will
 from devsim.runtime import Runtime
 from devsim.runtime.ops import run
 
-__all__ = ["Convention", "MqttLink", "start_broker", "start_mqtt"]
+__all__ = ["Convention", "PlantLink", "start_broker", "start_mqtt"]
 
 Convention = Literal["devsim", "sparkplug"]
 #: (topic, payload, qos, retain)
 Message = tuple[str, bytes, int, bool]
 RETRY = 1.0  # seconds between reconnection attempts (network time, not device time)
+KEEPALIVE = 10  # seconds (MQTT keep alive)
 
 
 class _DevsimDevice:
@@ -54,6 +61,7 @@ class _DevsimDevice:
     def __init__(self, runtime: Runtime, device: Device, plant: str, rate: float) -> None:
         self.runtime = runtime
         self.device = device
+        self.route: str | None = device.name  # the commands it takes: devsim/<plant>/<route>/...
         self.plant = plant
         self.rate = rate
         self.base = topics.prefix(plant, device.name)
@@ -119,6 +127,7 @@ class _SparkplugPlant:
         self.node = SparkplugNode(plant)
         self.plant = plant
         self.rate = rate
+        self.route: str | None = None  # takes every message of its filters
         self.send: Callable[[Message], None] = lambda message: None
         self.watches: dict[str, PointWatch] = {}
         self.events: list[SampleOnEvent] = []
@@ -202,16 +211,22 @@ class _SparkplugPlant:
 
 
 
-class MqttLink:
-    """One MQTT connection for one convention object (a device, or a Sparkplug plant): connects
-    with its will, subscribes its command topics, publishes what it sends in order, hands it
-    the commands, and reconnects when the broker goes away."""
+class PlantLink:
+    """A process's MQTT connections for its convention objects (devices, or one Sparkplug
+    plant): one shared connection carries every side's commands and messages in order, written
+    once per loop turn; each side's will rides on a connection of its own (``own_wills``, the
+    devsim convention: a will per device) or on the shared one (a single side, Sparkplug's
+    NDEATH).  Reconnects all of them when any is lost."""
 
-    def __init__(self, host: str, port: int, side: Any) -> None:
-        self.host, self.port, self.side = host, port, side
-        self.queue: asyncio.Queue[Message] = asyncio.Queue()
-        side.send = self.queue.put_nowait
-        self.client: aiomqtt.Client | None = None
+    def __init__(self, host: str, port: int, sides: Sequence[Any], identifier: str, *, own_wills: bool) -> None:
+        self.host, self.port, self.sides, self.identifier = host, port, list(sides), identifier
+        self.own_wills = own_wills
+        self.shared: MqttLink | None = None
+        self.holders: list[MqttLink] = []  # the wills' connections
+        self._routes = {side.route: side for side in self.sides if side.route is not None}
+        self._everything = [side for side in self.sides if side.route is None]
+        for side in self.sides:
+            side.send = self._send
         self._task: asyncio.Task[None] | None = None
         self._closing = False
 
@@ -220,85 +235,89 @@ class MqttLink:
         await self._connect()
         self._task = asyncio.get_running_loop().create_task(self._run())
 
+    async def _open(self, identifier: str, will: Message | None) -> MqttLink:
+        return await open_link(self.host, self.port, identifier, keepalive=KEEPALIVE, v5=False,
+                               will=Will(will[0], will[1], will[2], will[3]) if will is not None else None)
+
     async def _connect(self) -> None:
-        topic, payload, qos, retain = self.side.new_session()
-        client = aiomqtt.Client(self.host, self.port, identifier=self.side.identifier(), keepalive=10,
-                                will=aiomqtt.Will(topic, payload, qos, retain), timeout=10)
-        await client.__aenter__()
-        self.client = client
-        while not self.queue.empty():  # nothing from a lost session goes out before the new births
-            self.queue.get_nowait()
-        for pattern in self.side.filters():
-            await client.subscribe(pattern, qos=1)
-        self.side.connected()
+        try:
+            if self.own_wills:  # the wills first: a device is announced online only once its will holds
+                opened = await asyncio.gather(*(self._open(side.identifier(), side.new_session()) for side in self.sides),
+                                              return_exceptions=True)
+                self.holders = [link for link in opened if isinstance(link, MqttLink)]
+                for failed in opened:
+                    if isinstance(failed, BaseException):
+                        raise failed
+                self.shared = await self._open(self.identifier, None)
+            else:
+                [side] = self.sides
+                self.shared = await self._open(side.identifier(), side.new_session())
+            self.shared.on_message = self._route
+            patterns = list(dict.fromkeys(p for side in self.sides for p in side.filters()))
+            await asyncio.gather(*(self.shared.subscribe(pattern, qos=1) for pattern in patterns))
+        except BaseException:
+            self._drop()
+            raise
+        for side in self.sides:
+            side.connected()
+
+    def _send(self, message: Message) -> None:
+        if self.shared is not None:
+            with contextlib.suppress(LinkLost):  # the serving loop reconnects; the births follow
+                self.shared.publish(*message)
+
+    def _route(self, message: Publish) -> None:
+        parts = message.topic.split("/", 3)
+        side = self._routes.get(parts[2]) if len(parts) > 2 else None
+        for target in [side] if side is not None else self._everything:
+            target.handle(message.topic, message.payload)
 
     async def _run(self) -> None:
         while not self._closing:
-            try:
-                await self._serve()
-            except aiomqtt.MqttError:
-                pass
-            self.side.stop()
-            await self._drop()
+            links = [link for link in (self.shared, *self.holders) if link is not None]
+            await asyncio.wait([link.closed for link in links], return_when=asyncio.FIRST_COMPLETED)
+            if self._closing:
+                return
+            for side in self.sides:
+                side.stop()
+            self._drop()
             while not self._closing:
                 await asyncio.sleep(RETRY)
                 try:
                     await self._connect()
                     break
-                except (aiomqtt.MqttError, OSError):
-                    await self._drop()
+                except (LinkLost, OSError):
+                    pass
 
-    async def _serve(self) -> None:
-        """Publish what is queued and hand over the commands until either side fails."""
-        client = self.client
-        assert client is not None
-
-        async def publish() -> None:
-            while True:
-                topic, payload, qos, retain = await self.queue.get()
-                await client.publish(topic, payload, qos=qos, retain=retain)
-
-        async def receive() -> None:
-            async for message in client.messages:
-                raw = message.payload
-                payload = bytes(raw) if isinstance(raw, bytes | bytearray) else b"" if raw is None else str(raw).encode()
-                self.side.handle(str(message.topic), payload)
-
-        loop = asyncio.get_running_loop()
-        tasks = {loop.create_task(publish()), loop.create_task(receive())}
-        try:
-            done, _pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
-        finally:
-            for task in tasks:
-                task.cancel()
-            await asyncio.gather(*tasks, return_exceptions=True)
-        for task in done:
-            task.result()  # the broker's MqttError, or a bug: raised here
-
-    async def _drop(self) -> None:
-        client, self.client = self.client, None
-        if client is not None:
-            with contextlib.suppress(Exception):
-                await client.__aexit__(None, None, None)
+    def _drop(self) -> None:
+        """Close every connection without a DISCONNECT: the broker sends the wills."""
+        for link in (self.shared, *self.holders):
+            if link is not None:
+                link.abort()
+        self.shared, self.holders = None, []
 
     async def close(self) -> None:
-        """Flush what is queued, say offline (the will is not sent on a clean disconnect), leave."""
+        """Say offline on the shared connection (the wills are not sent on a clean disconnect),
+        wait for the broker to have it, leave."""
         self._closing = True
-        self.side.stop()
-        client = self.client
-        if client is not None:
-            with contextlib.suppress(aiomqtt.MqttError, asyncio.TimeoutError):
-                async with asyncio.timeout(5):
-                    while not self.queue.empty():
-                        topic, payload, qos, retain = self.queue.get_nowait()
-                        await client.publish(topic, payload, qos=qos, retain=retain)
-                    for topic, payload, qos, retain in self.side.closing():
-                        await client.publish(topic, payload, qos=qos, retain=retain)
+        for side in self.sides:
+            side.stop()
         if self._task is not None:
             self._task.cancel()
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await self._task
-        await self._drop()
+        shared, holders = self.shared, self.holders
+        self.shared, self.holders = None, []
+        if shared is not None:
+            with contextlib.suppress(LinkLost, asyncio.CancelledError, TimeoutError):
+                last = None
+                for side in self.sides:
+                    for topic, payload, qos, retain in side.closing():
+                        last = shared.publish(topic, payload, qos, retain)
+                if last is not None:
+                    await asyncio.wait_for(last, 5)
+        for link in (*holders, *([shared] if shared is not None else [])):
+            await link.disconnect()
 
 
 # -- the embedded broker --------------------------------------------------------------------
@@ -361,20 +380,12 @@ async def start_mqtt(runtime: Runtime, devices: Sequence[Device], url: str | Non
         lines.append(f"mqtt: topics {topics.ROOT}/{plant}/")
     else:
         raise ValueError(f"an MQTT convention is devsim or sparkplug, not {convention!r}")
-    links = [MqttLink(host, port, side) for side in sides]
-    started: list[MqttLink] = []
-
-    async def close() -> None:
-        for link in reversed(started):
-            await link.close()
-
+    shared = f"devsim-{plant}-{os.getpid()}-{secrets.token_hex(2)}"  # unique even for two plants of one name here
+    link = PlantLink(host, port, sides, shared, own_wills=convention == "devsim")
     try:
-        for link in links:
-            await link.start()
-            started.append(link)
-    except BaseException:
-        await close()
-        raise
-    runtime.add_closer(close)
+        await link.start()
+    except LinkLost as exc:
+        raise ConnectionError(f"cannot reach the MQTT broker mqtt://{host}:{port}: {exc}") from None
+    runtime.add_closer(link.close)
     return lines
 

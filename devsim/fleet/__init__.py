@@ -12,5 +12,6 @@
 * :mod:`devsim.fleet.streams` – ``watch`` over the broker: a member's streams, addressed and kept
   alive by topics.
 
-Needs aiomqtt (``pip install 'devsim-motion[fleet]'``).
+Needs nothing beyond the core: members and clients speak MQTT 5 themselves
+(:mod:`devsim.facades.mqtt_link`).
 """

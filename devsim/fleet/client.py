@@ -38,9 +38,9 @@ import uuid
 from collections.abc import Iterable, Iterator
 from typing import Any
 
-import aiomqtt
-
-from devsim.fleet.member import mqtt_client, parse_announcement
+from devsim.facades.mqtt_link import LinkLost, MqttLink
+from devsim.facades.mqtt_wire import Publish, Will
+from devsim.fleet.member import connect, parse_announcement
 from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url
 from devsim.runtime import requests as rq
 from devsim.runtime.client import ControlError, ControlOps
@@ -61,8 +61,8 @@ class AsyncFleetClient:
         self.topics = Topics(self.url.root)
         self.id = f"ctl-{uuid.uuid4().hex[:16]}"
         self.processes: dict[str, dict[str, Any]] = {}  # process -> its latest announcement
-        self._client: aiomqtt.Client | None = None
-        self._reader: asyncio.Task[None] | None = None
+        self._client: MqttLink | None = None
+        self._marker = self.topics.sync(self.id)
         self._pending: dict[str, asyncio.Future[dict[str, Any]]] = {}
         self._asked: dict[str, tuple[str, str]] = {}  # request id -> (the process asked, the op)
         self._changed = asyncio.Event()
@@ -77,39 +77,34 @@ class AsyncFleetClient:
         return self.topics.reply(self.id)
 
     async def open(self) -> AsyncFleetClient:
-        gone = aiomqtt.Will(self.topics.watching(self.id), b"", qos=1, retain=True)  # clears a presence
-        client = mqtt_client(self.url, f"devsim-{self.id}", gone)
+        gone = Will(self.topics.watching(self.id), b"", qos=1, retain=True)  # clears a presence
         try:
-            await client.__aenter__()
-        except aiomqtt.MqttError as exc:
+            client = await connect(self.url, f"devsim-{self.id}", gone)
+        except LinkLost as exc:
             raise ConnectionError(f"cannot reach the fleet broker {self.url}: {exc}") from None
         self._client = client
-        await client.subscribe(self.reply_topic, qos=0)
-        await client.subscribe(self.topics.announcements, qos=1)
-        marker = self.topics.sync(self.id)
-        await client.subscribe(marker, qos=0)
-        self._reader = asyncio.ensure_future(self._read(marker))
-        await client.publish(marker, b"sync", qos=0)
+        client.on_message = self._received
+        client.closed.add_done_callback(self._lost)
         try:
+            await client.subscribe(self.reply_topic, qos=0)
+            await client.subscribe(self.topics.announcements, qos=1)
+            await client.subscribe(self._marker, qos=0)
+            client.publish(self._marker, b"sync", qos=0)
             await asyncio.wait_for(self._synced.wait(), self.timeout)
-        except TimeoutError:
+        except (TimeoutError, LinkLost):
             await self.close()
             raise ConnectionError(f"the fleet broker {self.url} did not answer") from None
         return self
 
     async def close(self) -> None:
-        if self._reader is not None:
-            self._reader.cancel()
-            with contextlib.suppress(BaseException):
-                await self._reader
-            self._reader = None
         client, self._client = self._client, None
         if client is not None:
+            client.closed.remove_done_callback(self._lost)
             if self._present:  # the members stop our streams (a clean disconnect sends no will)
                 with contextlib.suppress(Exception):
-                    await client.publish(self.topics.watching(self.id), b"", qos=1, retain=True)
+                    await client.publish_acked(self.topics.watching(self.id), b"", qos=1, retain=True, timeout=5)
             with contextlib.suppress(Exception):
-                await client.__aexit__(None, None, None)
+                await client.disconnect()
         for future in self._pending.values():
             if not future.done():
                 future.set_exception(ConnectionError("fleet client closed"))
@@ -121,35 +116,34 @@ class AsyncFleetClient:
     async def __aexit__(self, *exc: object) -> None:
         await self.close()
 
-    async def _read(self, marker: str) -> None:
-        assert self._client is not None
-        try:
-            async for message in self._client.messages:
-                topic = message.topic.value
-                if topic == self.reply_topic:
-                    self._answer(message.payload)
-                elif topic in self.watches:
-                    self._item(self.watches[topic], message.payload)
-                elif topic == marker:
-                    self._synced.set()
-                else:
-                    process = self.topics.process_of(topic)
-                    if process is None:
-                        continue
-                    announcement = parse_announcement(message.payload)
-                    if announcement is None:
-                        self.processes.pop(process, None)
-                    else:
-                        self.processes[process] = announcement
-                    if announcement is None or not announcement.get("online"):
-                        self._streams_end(process)
-                        self._requests_fail(process)
-                    self._changed.set()
-        except aiomqtt.MqttError as exc:
-            self._items.put_nowait(ConnectionError(f"fleet broker connection lost: {exc}"))
-            for future in self._pending.values():
-                if not future.done():
-                    future.set_exception(ConnectionError(f"fleet broker connection lost: {exc}"))
+    def _received(self, message: Publish) -> None:
+        topic = message.topic
+        if topic == self.reply_topic:
+            self._answer(message.payload)
+        elif topic in self.watches:
+            self._item(self.watches[topic], message.payload)
+        elif topic == self._marker:
+            self._synced.set()
+        else:
+            process = self.topics.process_of(topic)
+            if process is None:
+                return
+            announcement = parse_announcement(message.payload)
+            if announcement is None:
+                self.processes.pop(process, None)
+            else:
+                self.processes[process] = announcement
+            if announcement is None or not announcement.get("online"):
+                self._streams_end(process)
+                self._requests_fail(process)
+            self._changed.set()
+
+    def _lost(self, closed: asyncio.Future[None]) -> None:
+        exc = closed.exception()
+        self._items.put_nowait(ConnectionError(f"fleet broker connection lost: {exc}"))
+        for future in self._pending.values():
+            if not future.done():
+                future.set_exception(ConnectionError(f"fleet broker connection lost: {exc}"))
 
     def _answer(self, payload: Any) -> None:
         try:
@@ -183,7 +177,7 @@ class AsyncFleetClient:
         process = self.serving(device)
         if not self._present:
             await self._client.subscribe(self.topics.stream(self.id, "+"), qos=0)
-            await self._client.publish(self.topics.watching(self.id), b"1", qos=1, retain=True)
+            await self._client.publish_acked(self.topics.watching(self.id), b"1", qos=1, retain=True)
             self._present = True
         self._next += 1
         stream = self.topics.stream(self.id, self._next)
@@ -293,7 +287,7 @@ class AsyncFleetClient:
         self._pending[req_id] = future
         self._asked[req_id] = (process, op)
         try:
-            await self._client.publish(self.topics.request(process), json.dumps(message), qos=0)
+            self._client.publish(self.topics.request(process), json.dumps(message).encode(), qos=0)
             if not self.processes.get(process, {}).get("online"):  # it left while we published
                 self._requests_fail(process)
             reply = await asyncio.wait_for(future, self.timeout)

@@ -1,7 +1,8 @@
 """A devsim process as a fleet member: its devices announced on the broker, control-API requests
 taken from it (``devsim run/up --fleet URL``).
 
-:func:`join_fleet` (awaited in the runtime's loop) connects to the broker with aiomqtt and
+:func:`join_fleet` (awaited in the runtime's loop) connects to the broker (one MQTT 5 connection
+per process, :mod:`devsim.facades.mqtt_link`) and
 
 1. reads every retained announcement and refuses to join when a device name is already served
    by another *online* process (:class:`FleetClash`; offline marks do not count);
@@ -23,6 +24,10 @@ id: the answer carries it back.  A request without a reply topic is executed and
 
 A clean stop clears the retained announcement (the process leaves the listing); a lost broker
 connection is retried (after 0.5 s, 1 s, 2 s, then every 5 s) and the announcement renewed.
+
+A request costs the member its own work and little else: it is handed over in the step that read
+it (no queue, no task), parsed once with msgspec, and its answer joins the others of the same read
+in one write to the broker.
 """
 
 from __future__ import annotations
@@ -30,18 +35,17 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
-import logging
 import os
 import socket
 import sys
 import time
 from typing import Any
 
-import aiomqtt
-from paho.mqtt.packettypes import PacketTypes
-from paho.mqtt.properties import Properties
+import msgspec
 
 from devsim.core.clock import VirtualClock
+from devsim.facades.mqtt_link import LinkLost, MqttLink, open_link
+from devsim.facades.mqtt_wire import Publish, Will
 from devsim.fleet.streams import StreamServer
 from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url, process_id
 from devsim.runtime import Runtime, ops
@@ -54,53 +58,66 @@ __all__ = ["FleetClash", "FleetMember", "join_fleet"]
 OFFLINE_EXPIRY = 24 * 3600  # seconds a crashed process's offline mark stays retained (MQTT 5)
 RECONNECT_DELAYS = (0.5, 1.0, 2.0, 5.0)  # seconds between attempts after the broker went away (then 5 s)
 SYNC_TIMEOUT = 10.0  # seconds to wait for the broker to hand over the retained announcements
-# aiomqtt warns on every publish beyond ten in flight; under load that is a line per request
-_LOG = logging.getLogger("devsim.fleet.mqtt")
-_LOG.setLevel(logging.ERROR)
+KEEPALIVE = 15  # seconds (MQTT keep alive)
+_json_decode = msgspec.json.Decoder().decode
+_json_encode = msgspec.json.Encoder().encode
 
 
 class FleetClash(RuntimeError):
     """A device name this process would serve is served by another online process."""
 
 
-def mqtt_client(url: FleetUrl, identifier: str, will: aiomqtt.Will | None = None) -> aiomqtt.Client:
-    """An aiomqtt client (MQTT 5) for the fleet's broker."""
-    return aiomqtt.Client(
-        url.host,
-        url.port,
-        identifier=identifier,
-        username=url.username,
-        password=url.password,
-        protocol=aiomqtt.ProtocolVersion.V5,
-        will=will,
-        timeout=SYNC_TIMEOUT,
-        keepalive=15,
-        logger=_LOG,
-        socket_options=[(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)],  # requests are small and waited for
-    )
+async def connect(url: FleetUrl, identifier: str, will: Will | None = None) -> MqttLink:
+    """A connection to the fleet's broker (MQTT 5); ConnectionError when it cannot be reached."""
+    return await open_link(url.host, url.port, identifier, keepalive=KEEPALIVE, will=will, username=url.username,
+                           password=url.password, timeout=SYNC_TIMEOUT)
 
 
-async def retained_announcements(client: aiomqtt.Client, topics: Topics, marker: str) -> dict[str, dict[str, Any]]:
+async def retained_announcements(link: MqttLink, topics: Topics, marker: str) -> dict[str, dict[str, Any]]:
     """Subscribe to every announcement and collect the retained ones: after them the broker
     delivers ``marker``, published by us once subscribed (messages on one connection keep their
     order).  Returns process → announcement."""
-    await client.subscribe(topics.announcements, qos=1)
-    await client.subscribe(marker, qos=0)
-    await client.publish(marker, b"sync", qos=0)
     found: dict[str, dict[str, Any]] = {}
+    synced: asyncio.Future[None] = asyncio.get_running_loop().create_future()
 
-    async def collect() -> None:
-        async for message in client.messages:
-            topic = message.topic.value
-            if topic == marker:
-                return
-            process = topics.process_of(topic)
-            announcement = parse_announcement(message.payload)
-            if process is not None and announcement is not None:
-                found[process] = announcement
+    def collect(message: Publish) -> None:
+        if message.topic == marker:
+            if not synced.done():
+                synced.set_result(None)
+            return
+        process = topics.process_of(message.topic)
+        announcement = parse_announcement(message.payload)
+        if process is not None and announcement is not None:
+            found[process] = announcement
 
-    await asyncio.wait_for(collect(), SYNC_TIMEOUT)
+    link.on_message = collect
+    await link.subscribe(topics.announcements, qos=1)
+    await link.subscribe(marker, qos=0)
+    link.publish(marker, b"sync")
+    try:
+        await asyncio.wait_for(asyncio.shield(synced), SYNC_TIMEOUT)
+    finally:
+        link.on_message = lambda message: None
     return found
+
+
+def encode_answer(response: OkResponse | ErrorResponse) -> bytes:
+    """The control API's JSON line for ``response`` (:func:`devsim.runtime.ops.encode`), encoded
+    by msgspec (UTF-8 as it is, where :mod:`json` escapes it)."""
+    if isinstance(response, OkResponse):
+        data: dict[str, Any] = {"id": response.id, "ok": True, "result": ops.jsonable(response.result)}
+    else:
+        data = {"id": response.id, "ok": False, "error": response.error, "type": response.type}
+    return _json_encode(data) + b"\n"
+
+
+def _lenient(raw: bytes) -> Any:
+    """What :mod:`json` makes of what msgspec refused (``NaN``, deep nesting), else ``raw``: the
+    control API then says what is wrong with it."""
+    try:
+        return json.loads(raw)
+    except (ValueError, RecursionError):
+        return raw
 
 
 def parse_announcement(payload: Any) -> dict[str, Any] | None:
@@ -108,8 +125,8 @@ def parse_announcement(payload: Any) -> dict[str, Any] | None:
     if not isinstance(payload, bytes | bytearray) or not payload:
         return None
     try:
-        data = json.loads(payload)
-    except (ValueError, RecursionError):
+        data = _json_decode(payload)
+    except (msgspec.DecodeError, RecursionError):
         return None
     return data if isinstance(data, dict) and isinstance(data.get("devices"), list) else None
 
@@ -126,10 +143,10 @@ class FleetMember:
         self.about = dict(about or {})
         self.since = time.time()
         self.served = 0
-        self._client: aiomqtt.Client | None = None
+        self._link: MqttLink | None = None
         self._task: asyncio.Task[None] | None = None
-        self._sending: set[asyncio.Task[None]] = set()
         self._closing = False
+        self._replies: set[str] = set()  # reply topics found allowed
         self.streams = StreamServer(runtime, self.topics, self.process)
 
     @property
@@ -150,30 +167,27 @@ class FleetMember:
             "devices": devices,
         }
 
-    def _will(self) -> aiomqtt.Will:
-        properties = Properties(PacketTypes.WILLMESSAGE)
-        properties.MessageExpiryInterval = OFFLINE_EXPIRY
-        return aiomqtt.Will(self.topics.announcement(self.process), json.dumps(self.announcement(False)),
-                            qos=1, retain=True, properties=properties)
+    def _will(self) -> Will:
+        return Will(self.topics.announcement(self.process), _json_encode(self.announcement(False)),
+                    qos=1, retain=True, expiry=OFFLINE_EXPIRY)
 
     async def start(self) -> None:
         """Connect, check the names, subscribe, announce; then serve in a task."""
-        client = mqtt_client(self.url, f"devsim-{self.process}", self._will())
         try:
-            await client.__aenter__()
-        except aiomqtt.MqttError as exc:
+            link = await connect(self.url, f"devsim-{self.process}", self._will())
+        except LinkLost as exc:
             raise ConnectionError(f"cannot reach the fleet broker {self.url}: {exc}") from None
         try:
-            others = await retained_announcements(client, self.topics, self.topics.sync(f"member-{self.process}"))
+            others = await retained_announcements(link, self.topics, self.topics.sync(f"member-{self.process}"))
             self._refuse_clashes(others)
-            await client.unsubscribe(self.topics.announcements)
-            await self._announce(client)
+            await link.unsubscribe(self.topics.announcements)
+            await self._announce(link)
         except BaseException:
             with contextlib.suppress(Exception):
-                await client.__aexit__(None, None, None)
+                await link.disconnect()
             raise
-        self._client = client
-        self._task = asyncio.ensure_future(self._run(client))
+        self._link = link
+        self._task = asyncio.ensure_future(self._run(link))
 
     def _refuse_clashes(self, others: dict[str, dict[str, Any]]) -> None:
         mine = {row["name"] for row in ops.run(self.runtime, Devices())}
@@ -188,96 +202,93 @@ class FleetMember:
                     " are unique across a fleet"
                 )
 
-    async def _announce(self, client: aiomqtt.Client) -> None:
-        await client.subscribe(self.request_topic, qos=0)
-        await self.streams.subscribe(client)
-        await client.publish(self.topics.announcement(self.process), json.dumps(self.announcement(True)),
-                             qos=1, retain=True)
+    async def _announce(self, link: MqttLink) -> None:
+        link.on_message = lambda message: self._received(link, message)
+        await link.subscribe(self.request_topic, qos=0)
+        await self.streams.subscribe(link)
+        await link.publish_acked(self.topics.announcement(self.process), _json_encode(self.announcement(True)),
+                                 qos=1, retain=True)
 
-    async def _run(self, client: aiomqtt.Client) -> None:
+    async def _run(self, link: MqttLink) -> None:
         while not self._closing:
+            pump = asyncio.ensure_future(self.streams.pump(link))
             try:
-                await self._serve(client)
-            except aiomqtt.MqttError as exc:
-                if self._closing:
-                    return
-                print(f"devsim: fleet broker {self.url} lost ({exc}); reconnecting", file=sys.stderr, flush=True)
-            self._client = None
-            with contextlib.suppress(Exception):
-                await client.__aexit__(None, None, None)
-            client = await self._reconnect()
-            self._client = client
+                await asyncio.wait([link.closed])  # not `await link.closed`: cancelling us would cancel it
+            finally:
+                pump.cancel()
+            if self._closing:
+                return
+            why = link.closed.exception() if not link.closed.cancelled() else None
+            print(f"devsim: fleet broker {self.url} lost ({why}); reconnecting", file=sys.stderr, flush=True)
+            self._link = None
+            link = await self._reconnect()
+            self._link = link
 
-    async def _reconnect(self) -> aiomqtt.Client:
+    async def _reconnect(self) -> MqttLink:
         attempt = 0
         while True:
             await asyncio.sleep(RECONNECT_DELAYS[min(attempt, len(RECONNECT_DELAYS) - 1)])  # retry pacing
             attempt += 1
-            client = mqtt_client(self.url, f"devsim-{self.process}", self._will())
             try:
-                await client.__aenter__()
-                await self._announce(client)
-            except aiomqtt.MqttError:
-                with contextlib.suppress(Exception):
-                    await client.__aexit__(None, None, None)
+                link = await connect(self.url, f"devsim-{self.process}", self._will())
+            except LinkLost:
+                continue
+            try:
+                await self._announce(link)
+            except LinkLost:
+                await link.disconnect()
                 continue
             print(f"devsim: fleet broker {self.url} back; announced again", file=sys.stderr, flush=True)
-            return client
+            return link
 
-    async def _serve(self, client: aiomqtt.Client) -> None:
-        pump = asyncio.ensure_future(self.streams.pump(client))
-        try:
-            async for message in client.messages:
-                if message.topic.value != self.request_topic:
-                    self.streams.handle(message.topic.value, message.payload)
-                    continue
-                answer = self.answer(message.payload, message.properties)
-                if answer is not None:  # sent while the next request is handled (answers carry their id)
-                    topic, payload, properties = answer
-                    sending = asyncio.ensure_future(client.publish(topic, payload, qos=0, properties=properties))
-                    self._sending.add(sending)
-                    sending.add_done_callback(self._sent)
-        finally:
-            pump.cancel()
+    def _received(self, link: MqttLink, message: Publish) -> None:
+        """A message from the broker, in the step that read it: a request is answered into the
+        link's write of this loop turn."""
+        if message.topic != self.request_topic:
+            self.streams.handle(message.topic, message.payload)
+            return
+        answer = self.answer(message.payload, message.response_topic, message.correlation)
+        if answer is not None:
+            topic, payload, correlation = answer
+            with contextlib.suppress(LinkLost):  # a lost connection shows in the serving loop
+                link.publish(topic, payload, correlation=correlation)
 
-    def _sent(self, task: asyncio.Task[None]) -> None:
-        self._sending.discard(task)
-        if not task.cancelled():
-            task.exception()  # a lost connection shows in the message loop; nothing to add here
-
-    def answer(self, payload: Any, properties: Properties | None = None) -> tuple[str, bytes, Properties | None] | None:
-        """Execute one request; returns (reply topic, answer, MQTT 5 properties) or None when
-        the request names no usable reply topic."""
+    def answer(self, payload: Any, reply_to: str | None = None,
+               correlation: bytes | None = None) -> tuple[str, bytes, bytes | None] | None:
+        """Execute one request; returns (reply topic, answer, MQTT 5 correlation data) or None
+        when the request names no usable reply topic (``reply_to``, ``correlation``: the MQTT 5
+        response topic and correlation data it came with; a ``"reply_to"`` in the JSON wins)."""
         self.served += 1
         raw = bytes(payload) if isinstance(payload, bytes | bytearray) else str(payload or "").encode()
-        reply_to = getattr(properties, "ResponseTopic", None) if properties is not None else None
-        correlation = getattr(properties, "CorrelationData", None) if properties is not None else None
         response: OkResponse | ErrorResponse
         stream_to = None
         if len(raw) > MAX_LINE:
             response = ErrorResponse(error="request too long", type="BadRequest")
         else:
-            line: bytes | str = raw
-            with contextlib.suppress(ValueError, RecursionError):
-                data = json.loads(raw)
-                if isinstance(data, dict) and ("reply_to" in data or "stream_to" in data):
-                    reply_to = data.pop("reply_to", reply_to)
-                    stream_to = data.pop("stream_to", None)
-                    line = json.dumps(data)
-            response = ops.answer(self.runtime, line)
+            try:
+                data: Any = _json_decode(raw)
+            except (msgspec.DecodeError, RecursionError):
+                data = _lenient(raw)
+            if isinstance(data, dict):
+                reply_to = data.pop("reply_to", reply_to)
+                stream_to = data.pop("stream_to", None)
+            response = ops.answer_parsed(self.runtime, data) if isinstance(data, dict) else ops.answer(self.runtime, raw)
             if isinstance(response, OkResponse) and isinstance(response.result, WatchStart):
                 response = self.streams.start(response.result, response.id, stream_to)
         if not self._reply_allowed(reply_to):
             return None
-        out: Properties | None = None
-        if correlation is not None:
-            out = Properties(PacketTypes.PUBLISH)
-            out.CorrelationData = correlation
-        return str(reply_to), ops.encode(response), out
+        return str(reply_to), encode_answer(response), correlation
 
     def _reply_allowed(self, topic: Any) -> bool:
-        return (isinstance(topic, str) and topic.startswith(f"{self.topics.root}/client/")
-                and not any(c in topic for c in "+#\x00") and len(topic) < 1024)
+        if topic in self._replies:  # one reply topic per client, asked again and again
+            return True
+        allowed = (isinstance(topic, str) and topic.startswith(f"{self.topics.root}/client/")
+                   and not any(c in topic for c in "+#\x00") and len(topic) < 1024)
+        if allowed:
+            if len(self._replies) >= 1024:
+                self._replies.clear()
+            self._replies.add(topic)
+        return allowed
 
     async def close(self) -> None:
         """Leave: clear the retained announcement, disconnect (no last will on a clean stop)."""
@@ -287,12 +298,12 @@ class FleetMember:
             self._task.cancel()
             with contextlib.suppress(BaseException):
                 await self._task
-        client, self._client = self._client, None
-        if client is not None:
+        link, self._link = self._link, None
+        if link is not None:
             with contextlib.suppress(Exception):
-                await client.publish(self.topics.announcement(self.process), b"", qos=1, retain=True)
+                await link.publish_acked(self.topics.announcement(self.process), b"", qos=1, retain=True, timeout=5)
             with contextlib.suppress(Exception):
-                await client.__aexit__(None, None, None)
+                await link.disconnect()
 
 
 async def join_fleet(runtime: Runtime, url: str | FleetUrl, *, about: dict[str, Any] | None = None) -> FleetMember:

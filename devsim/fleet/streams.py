@@ -26,8 +26,7 @@ import contextlib
 import json
 from typing import Any
 
-import aiomqtt
-
+from devsim.facades.mqtt_link import LinkLost, MqttLink
 from devsim.fleet.topics import Topics
 from devsim.runtime import Runtime, ops
 from devsim.runtime.ops import ErrorResponse, OkResponse, WatchStart
@@ -50,20 +49,24 @@ class StreamServer:
         self.outbox: asyncio.Queue[tuple[str, bytes]] = asyncio.Queue()
 
     # -- the connection ---------------------------------------------------------------------
-    async def subscribe(self, client: aiomqtt.Client) -> None:
+    async def subscribe(self, link: MqttLink) -> None:
         """On each (re)connection: take every client's presence, then our marker."""
         self.present.clear()
-        await client.subscribe(self.topics.presences, qos=1)
-        await client.subscribe(self.marker, qos=0)
-        await client.publish(self.marker, b"sync", qos=0)
+        await link.subscribe(self.topics.presences, qos=1)
+        await link.subscribe(self.marker, qos=0)
+        link.publish(self.marker, b"sync", qos=0)
 
-    async def pump(self, client: aiomqtt.Client) -> None:
-        """Publish the streams' items in order until the connection fails (the member's message
-        loop sees that and reconnects)."""
-        with contextlib.suppress(aiomqtt.MqttError):
+    async def pump(self, link: MqttLink) -> None:
+        """Publish the streams' items in order until the connection fails (the member sees that
+        and reconnects); what waits for the socket waits here, in the outbox."""
+        with contextlib.suppress(LinkLost):
             while True:
                 topic, payload = await self.outbox.get()
-                await client.publish(topic, payload, qos=0)
+                link.publish(topic, payload, qos=0)
+                while not self.outbox.empty():  # everything queued now, in one write
+                    topic, payload = self.outbox.get_nowait()
+                    link.publish(topic, payload, qos=0)
+                await link.drain()
 
     def handle(self, topic: str, payload: Any) -> None:
         """A presence (``watching``) or our marker."""

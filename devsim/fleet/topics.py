@@ -79,17 +79,12 @@ def parse_fleet_url(text: str) -> FleetUrl:
 
 
 def fleet_problem(url: str) -> str | None:
-    """Why ``--fleet URL`` cannot be used here (a bad URL, aiomqtt missing), or None."""
+    """Why ``--fleet URL`` cannot be used here (a bad URL), or None.  (The fleet needs no
+    extra package: :mod:`devsim.facades.mqtt_link` is devsim's own MQTT 5 client.)"""
     try:
         parse_fleet_url(url)
     except FleetUrlError as exc:
         return str(exc)
-    try:
-        import aiomqtt  # noqa: F401
-    except ImportError:
-        from devsim.core.extras import install_command
-
-        return f"needs aiomqtt: {install_command('fleet')}"
     return None
 
 

@@ -29,6 +29,7 @@ from devsim.runtime import requests as rq
 from devsim.runtime.process import Runtime, port_key
 
 __all__ = [
+    "answer_parsed",
     "CONTROL",
     "MAX_DEPTH",
     "BadRequest",
@@ -235,7 +236,14 @@ def op_of(request: rq.ControlRequest) -> str:
 
 def required(op: str) -> list[str]:
     """The fields ``op``'s request cannot do without."""
-    return [field.name for field in msgspec.structs.fields(CONTROL.rows[op].request) if field.required]
+    return list(_REQUIRED[op])
+
+
+#: op -> its required fields, read once (``msgspec.structs.fields`` evaluates the annotations at
+#: every call: most of a request's cost when it ran per request)
+_REQUIRED: dict[str, tuple[str, ...]] = {
+    row.token: tuple(field.name for field in msgspec.structs.fields(row.request) if field.required)
+    for row in CONTROL}
 
 
 def routed_by_device(op: str) -> bool:
@@ -249,9 +257,32 @@ def run(runtime: Runtime, request: rq.ControlRequest) -> Any:
     return CONTROL[op_of(request)](runtime, request)
 
 
+#: (op, (field, type, value), ...) -> the typed request made from them: a poller asks the same
+#: thing again and again, and checking it costs more than the read it asks for
+_DECODED: dict[tuple[Any, ...], rq.ControlRequest] = {}
+_DECODED_MAX = 1024
+
+
 def decode(op: Any, fields: Mapping[str, Any]) -> rq.ControlRequest:
     """The typed request for ``op`` from the fields of a JSON request; :class:`BadRequest` when
-    the op is unknown, a field unknown, of the wrong type, or a needed one missing."""
+    the op is unknown, a field unknown, of the wrong type, or a needed one missing.  Requests are
+    records (frozen): one made from the same fields before is given again."""
+    try:
+        key: tuple[Any, ...] | None = (op, *((k, type(v), v) for k, v in fields.items() if k != "id"))
+        found = _DECODED.get(key)  # type: ignore[arg-type]
+    except TypeError:  # a list or an object among the values: made each time
+        key, found = None, None
+    if found is not None:
+        return found
+    request = _decode(op, fields)
+    if key is not None:
+        if len(_DECODED) >= _DECODED_MAX:
+            _DECODED.clear()
+        _DECODED[key] = request
+    return request
+
+
+def _decode(op: Any, fields: Mapping[str, Any]) -> rq.ControlRequest:
     if not isinstance(op, str) or op not in CONTROL:
         raise BadRequest(f"op: unknown op {clip(repr(op), 80)} (ops: {', '.join(row.token for row in CONTROL)})")
     unknown = sorted(set(fields) - _FIELDS)
@@ -263,7 +294,7 @@ def decode(op: Any, fields: Mapping[str, Any]) -> rq.ControlRequest:
     except msgspec.ValidationError as exc:
         raise BadRequest(clip(str(exc))) from None
     given = {name: fields[name] for name in kind.__struct_fields__ if name in fields}
-    for name in required(op):
+    for name in _REQUIRED[op]:
         if given.get(name) in (None, ""):
             raise BadRequest(f"{op} needs {name!r}")
     try:
@@ -281,6 +312,11 @@ def answer(runtime: Runtime, raw: bytes | str) -> OkResponse | ErrorResponse:
         return ErrorResponse(error=f"request nested deeper than {MAX_DEPTH} levels", type="BadRequest")
     except ValueError as exc:
         return ErrorResponse(error=f"not JSON: {clip(str(exc))}", type="BadRequest")
+    return answer_parsed(runtime, payload)
+
+
+def answer_parsed(runtime: Runtime, payload: Any) -> OkResponse | ErrorResponse:
+    """Answer one request already parsed from its JSON (the fleet member parses it once)."""
     if _depth(payload) > MAX_DEPTH:
         return ErrorResponse(error=f"request nested deeper than {MAX_DEPTH} levels", type="BadRequest")
     if not isinstance(payload, dict):
@@ -341,6 +377,12 @@ def clip(text: str, limit: int = 300) -> str:
 
 def _depth(value: Any) -> int:
     """Nesting depth of parsed JSON, iteratively (no recursion on hostile input)."""
+    if isinstance(value, dict):  # a plain request (no object or list inside) is the common case
+        for child in value.values():
+            if isinstance(child, dict | list):
+                break
+        else:
+            return 1
     deepest = 0
     stack = [(value, 1)]
     while stack:

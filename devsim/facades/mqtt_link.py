@@ -1,0 +1,276 @@
+"""devsim's own MQTT 5 client connection over asyncio (packets in :mod:`devsim.facades.mqtt_wire`,
+OASIS MQTT 5.0 sections 3 and 4): what a fleet member and a fleet client speak.
+
+Built for a member's load (many small requests, each answered at once): every message that
+arrives is handed to the ``on_message`` callback in the same step that read it, and what is
+published is written to the socket once per loop turn – the answers to all the requests of one
+read leave in one write, with no task or future per message.  Only the rare exchanges wait for
+the broker: the CONNACK, a SUBACK, an UNSUBACK, the PUBACK of a QoS 1 publish that asks for it.
+
+A connection that is lost, a broker that sends a DISCONNECT, or one silent for 1.5 keep-alive
+intervals (3.1.2.10) ends :attr:`MqttLink.closed` with a :class:`LinkLost`; the caller reconnects
+with a new link.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import socket
+from collections.abc import Callable
+
+from devsim.facades import mqtt_wire as wire
+from devsim.facades.mqtt_wire import Publish, Will
+
+__all__ = ["LinkLost", "MqttLink", "open_link"]
+
+PAUSED_LIMIT = 1 << 20  # bytes the socket may hold before drain() waits
+PING_SHARE = 0.75  # a PINGREQ every this share of the keep alive (a device's idle will connection pings, too)
+READ_SIZE = 64 * 1024  # bytes a read takes at most (asyncio's plain protocol allocates 256 KiB per read)
+
+
+class LinkLost(ConnectionError):
+    """The broker connection is gone (or never came up)."""
+
+
+class MqttLink(asyncio.BufferedProtocol):
+    """One MQTT session, clean start (see the module docstring).  Reads into a buffer of its own."""
+
+    def __init__(self, keepalive: int, v5: bool = True) -> None:
+        self.keepalive = keepalive
+        self.v5 = v5
+        self.on_message: Callable[[Publish], None] = lambda message: None
+        self._loop = asyncio.get_running_loop()
+        self.closed: asyncio.Future[None] = self._loop.create_future()
+        self._transport: asyncio.Transport | None = None
+        self._reader = wire.PacketReader()
+        self._out: list[bytes] = []
+        self._flush_soon: asyncio.Handle | None = None
+        self._waiting: dict[tuple[int, int], asyncio.Future[bytes]] = {}  # (ack type, packet id) -> ack body
+        self._next_id = 0
+        self._heard = 0.0
+        self._pinger: asyncio.TimerHandle | None = None
+        self._paused: asyncio.Future[None] | None = None
+        self._reading = False  # inside data_received: its end flushes
+        self._buffer = bytearray(READ_SIZE)
+        self._view = memoryview(self._buffer)
+
+    # -- asyncio.Protocol ------------------------------------------------------------------
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        self._transport = transport  # type: ignore[assignment]
+        self._heard = self._loop.time()
+        sock = transport.get_extra_info("socket")
+        if sock is not None and sock.family in (socket.AF_INET, socket.AF_INET6):
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # requests are small and waited for
+
+    def get_buffer(self, sizehint: int) -> memoryview:
+        return self._view
+
+    def buffer_updated(self, nbytes: int) -> None:
+        self.data_received(bytes(self._view[:nbytes]))
+
+    def data_received(self, data: bytes) -> None:
+        self._heard = self._loop.time()
+        self._reading = True
+        try:
+            packets = self._reader.feed(data)
+            for kind, flags, body in packets:
+                if kind == wire.PUBLISH:
+                    message = wire.parse_publish(flags, body, self.v5)
+                    if message.qos == 1:
+                        self._out.append(wire.puback(message.packet_id))
+                    self.on_message(message)
+                elif kind == wire.SERVER_DISCONNECT:
+                    raise LinkLost(f"the broker disconnected (reason {body[0] if body else 0})")
+                else:
+                    self._acked(kind, body)
+        except (wire.MalformedPacket, LinkLost) as exc:
+            self._lose(exc if isinstance(exc, LinkLost) else LinkLost(f"malformed packet from the broker: {exc}"))
+            return
+        finally:
+            self._reading = False
+        self.flush()  # the answers to everything read now, in one write
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        self._lose(LinkLost(f"connection to the broker lost{f': {exc}' if exc else ''}"))
+
+    def pause_writing(self) -> None:
+        if self._paused is None:
+            self._paused = self._loop.create_future()
+
+    def resume_writing(self) -> None:
+        paused, self._paused = self._paused, None
+        if paused is not None and not paused.done():
+            paused.set_result(None)
+
+    # -- sending ---------------------------------------------------------------------------
+    def publish(self, topic: str, payload: bytes, qos: int = 0, retain: bool = False,
+                correlation: bytes | None = None, expiry: int | None = None) -> asyncio.Future[bytes] | None:
+        """Queue a PUBLISH for this loop turn's write; at QoS 1 the future of its PUBACK."""
+        if correlation is None and expiry is None:
+            props = b"\x00" if self.v5 else b""
+        elif self.v5:
+            props = wire.properties(expiry=expiry, correlation=correlation)
+        else:
+            raise ValueError("MQTT 3.1.1 has no properties (correlation data, message expiry)")
+        if not qos:
+            self._send(wire.publish(topic, payload, 0, retain, props=props))
+            return None
+        packet_id = self._packet_id()
+        acked = self._expect(wire.PUBACK, packet_id)
+        self._send(wire.publish(topic, payload, qos, retain, packet_id, props))
+        return acked
+
+    async def publish_acked(self, topic: str, payload: bytes, qos: int = 1, retain: bool = False,
+                            timeout: float = 10.0) -> None:
+        """Publish and wait for the broker's PUBACK (QoS 1)."""
+        acked = self.publish(topic, payload, qos, retain)
+        if acked is not None:
+            await self._wait(acked, timeout)
+
+    async def subscribe(self, topic: str, qos: int = 0, timeout: float = 10.0) -> None:
+        packet_id = self._packet_id()
+        acked = self._expect(wire.SUBACK, packet_id)
+        self._send(wire.subscribe(packet_id, topic, qos, self.v5))
+        refused = wire.suback_refused(await self._wait(acked, timeout), self.v5)
+        if refused is not None:
+            raise LinkLost(f"the broker refused the subscription to {topic!r} (reason 0x{refused:02x})")
+
+    async def unsubscribe(self, topic: str, timeout: float = 10.0) -> None:
+        packet_id = self._packet_id()
+        acked = self._expect(wire.UNSUBACK, packet_id)
+        self._send(wire.unsubscribe(packet_id, topic, self.v5))
+        await self._wait(acked, timeout)
+
+    async def drain(self) -> None:
+        """Wait while the socket holds more than the transport's high-water mark."""
+        self.flush()
+        while self._paused is not None and not self.closed.done():
+            await asyncio.wait({self._paused, self.closed}, return_when=asyncio.FIRST_COMPLETED)
+        self._raise_if_lost()
+
+    def flush(self) -> None:
+        if self._flush_soon is not None:
+            self._flush_soon.cancel()
+            self._flush_soon = None
+        if self._out and self._transport is not None and not self.closed.done():
+            self._transport.write(b"".join(self._out))
+        self._out.clear()
+
+    def abort(self) -> None:
+        """Close without a DISCONNECT: the broker sends the will."""
+        if self._transport is not None:
+            self._transport.abort()
+        self._lose(LinkLost("aborted"))
+
+    async def disconnect(self) -> None:
+        """A clean DISCONNECT (the broker drops the will) and close."""
+        if self._transport is not None and not self.closed.done():
+            self._send(wire.DISCONNECT)
+            self.flush()
+            self._transport.close()
+        self._lose(LinkLost("disconnected"))
+
+    # -- inside ----------------------------------------------------------------------------
+    def _send(self, packet: bytes) -> None:
+        self._raise_if_lost()
+        self._out.append(packet)
+        if self._flush_soon is None and not self._reading:
+            self._flush_soon = self._loop.call_soon(self.flush)
+
+    def _packet_id(self) -> int:
+        self._next_id = self._next_id % 65535 + 1
+        return self._next_id
+
+    def _expect(self, kind: int, packet_id: int) -> asyncio.Future[bytes]:
+        future: asyncio.Future[bytes] = self._loop.create_future()
+        self._waiting[(kind, packet_id)] = future
+        return future
+
+    def _acked(self, kind: int, body: bytes) -> None:
+        if kind == wire.CONNACK:
+            key = (kind, 0)
+        elif kind in (wire.PUBACK, wire.SUBACK, wire.UNSUBACK) and len(body) >= 2:
+            key = (kind, (body[0] << 8) | body[1])
+        else:
+            return  # PINGRESP: hearing it is enough
+        future = self._waiting.pop(key, None)
+        if future is not None and not future.done():
+            future.set_result(body)
+
+    async def _wait(self, future: asyncio.Future[bytes], timeout: float) -> bytes:
+        done, _ = await asyncio.wait({future, self.closed}, timeout=timeout, return_when=asyncio.FIRST_COMPLETED)
+        if future in done and not future.cancelled():  # cancelled: the link was lost meanwhile
+            return future.result()
+        self._raise_if_lost()
+        self._lose(LinkLost(f"the broker did not answer within {timeout:g} s"))
+        self._raise_if_lost()
+        raise AssertionError("unreachable")
+
+    def _raise_if_lost(self) -> None:
+        """LinkLost (with why) once :attr:`closed` is done, however it ended (a task that awaited
+        it and was cancelled cancels it too)."""
+        if self.closed.done():
+            why = None if self.closed.cancelled() else self.closed.exception()
+            raise LinkLost(str(why) if why is not None else "the connection is closed")
+
+    def _ping(self) -> None:
+        loop = self._loop
+        if loop.time() - self._heard > 1.5 * self.keepalive:
+            self._lose(LinkLost(f"the broker was silent for {1.5 * self.keepalive:g} s"))
+            return
+        with contextlib.suppress(LinkLost):
+            self._send(wire.PINGREQ)
+        self._pinger = loop.call_later(self.keepalive * PING_SHARE, self._ping)
+
+    def _start_pinging(self) -> None:
+        self._pinger = self._loop.call_later(self.keepalive * PING_SHARE, self._ping)
+
+    def _lose(self, exc: LinkLost) -> None:
+        if self._pinger is not None:
+            self._pinger.cancel()
+        if self._flush_soon is not None:
+            self._flush_soon.cancel()
+            self._flush_soon = None
+        if not self.closed.done():
+            self.closed.set_exception(exc)
+            self.closed.exception()  # retrieved: nobody need await it
+        if self._transport is not None:
+            self._transport.close()
+        for future in self._waiting.values():
+            if not future.done():
+                future.cancel()
+        self._waiting.clear()
+        self.resume_writing()
+
+
+async def open_link(host: str, port: int, identifier: str, *, keepalive: int = 15, will: Will | None = None,
+                    username: str | None = None, password: str | None = None, timeout: float = 10.0,
+                    v5: bool = True) -> MqttLink:
+    """Connect and wait for the broker's CONNACK; :class:`LinkLost` when it cannot be reached
+    or refuses.  ``v5=False``: MQTT 3.1.1 (for brokers such as amqtt that speak only that)."""
+    loop = asyncio.get_running_loop()
+    try:
+        _transport, link = await asyncio.wait_for(
+            loop.create_connection(lambda: MqttLink(keepalive, v5), host, port), timeout)
+    except (OSError, TimeoutError) as exc:
+        raise LinkLost(f"cannot connect to {host}:{port}: {exc or 'timed out'}") from None
+    link._transport.set_write_buffer_limits(high=PAUSED_LIMIT)  # type: ignore[union-attr]
+    connack = link._expect(wire.CONNACK, 0)
+    link._send(wire.connect(identifier, keepalive, will=will, username=username, password=password, v5=v5))
+    try:
+        body = await link._wait(connack, timeout)
+        reason, props = wire.parse_connack(body, v5)
+    except (LinkLost, asyncio.CancelledError, wire.MalformedPacket) as exc:
+        await link.disconnect()
+        if isinstance(exc, asyncio.CancelledError):
+            raise
+        raise LinkLost(f"no CONNACK from {host}:{port}: {exc}") from None
+    if reason >= 0x80:
+        await link.disconnect()
+        raise LinkLost(f"the broker at {host}:{port} refused the connection (reason 0x{reason:02x})")
+    server_keepalive = props.get(wire.SERVER_KEEP_ALIVE)
+    if isinstance(server_keepalive, int) and server_keepalive > 0:
+        link.keepalive = server_keepalive
+    link._start_pinging()
+    return link
