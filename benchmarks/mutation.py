@@ -55,6 +55,7 @@ MODULES: dict[str, tuple[str, ...]] = {
     "devsim/devices/pcd4h3/sbus.py": (
         "tests/pcd4h3/test_sbus.py",
         "tests/pcd4h3/test_link_vectors.py",
+        "tests/pcd4h3/test_sbus_boundaries.py",
     ),
     "devsim/devices/ip247/as511.py": (
         "tests/ip247/test_as511.py",
