@@ -59,6 +59,7 @@ MODULES: dict[str, tuple[str, ...]] = {
     ),
     "devsim/devices/ip247/as511.py": (
         "tests/ip247/test_as511.py",
+        "tests/ip247/test_as511_boundaries.py",
     ),
     "devsim/devices/poselesta/tape.py": (
         "tests/poselesta/test_tape.py",
