@@ -34,6 +34,7 @@ def _line(draw: hs.DrawFn) -> bytes:
 
 
 STREAM = hs.lists(hs.one_of(hs.sampled_from(TOKENS), hs.binary(max_size=12), _line()), max_size=8).map(b"".join)
+NOT_DIGITS = bytes(range(256)).translate(None, b"0123456789")
 TEXT = hs.binary(max_size=70).map(lambda b: bytes(0x41 + x % 26 for x in b))  # no '#', CR, LF, digit
 
 
@@ -114,14 +115,15 @@ def test_skip_text_counts_to_the_line_end(address: bytes, text: bytes, chunk: by
 @example(b"", b"12", b"#", b"")  # a '#' right after the digits
 @example(b"#1 AB", b"*", b"A", b"\r")
 @example(b"", b"", b"\r", b"")
+@example(b"", b"", b"*", b"")  # '#*' at the chunk's end
+@example(b"", b"1", b"*2", b"")  # '*' after digits is text
 def test_begin_line_takes_the_hash_and_address(before: bytes, address: bytes, tail: bytes, after: bytes) -> None:
     framer = _fed(before)
     assume(not framer.in_line or framer.in_text)
     chunk = b"#" + address + tail
     complete, value, stop = framer.begin_line(chunk, 0)
-    run = 1 + len(address) if address != b"*" else 2
-    if address and address != b"*" and tail[:1].isdigit():
-        run = _first(chunk, bytes(range(256)).translate(None, b"0123456789"), 1)
+    # the address: one '*' right after the '#', or the run of digits there
+    run = 2 if chunk[1:2] == b"*" else _first(chunk, NOT_DIGITS, 1)
     assert stop == run
     assert complete == (stop < len(chunk) and chunk[stop] != ord("#"))
     if complete:
@@ -192,7 +194,7 @@ def _concerning(data: bytes, mine: int) -> int:
     for at in range(len(data)):
         if data[at] != ord("#"):
             continue
-        digits_end = _first(data, bytes(range(256)).translate(None, b"0123456789"), at + 1)
+        digits_end = _first(data, NOT_DIGITS, at + 1)
         digits = data[at + 1 : digits_end]
         if data[at + 1 : at + 2] == b"*" or digits_end == len(data):
             return at
