@@ -34,6 +34,9 @@ def _line(draw: hs.DrawFn) -> bytes:
 
 
 STREAM = hs.lists(hs.one_of(hs.sampled_from(TOKENS), hs.binary(max_size=12), _line()), max_size=8).map(b"".join)
+#: Bytes before the place a fast path starts at (a chunk is taken from the middle): every one
+#: that matters to the framer, none of which may be looked at again.
+LEAD = b"#1 A\r\n#2\r#*"
 NOT_DIGITS = bytes(range(256)).translate(None, b"0123456789")
 TEXT = hs.binary(max_size=70).map(lambda b: bytes(0x41 + x % 26 for x in b))  # no '#', CR, LF, digit
 
@@ -88,7 +91,7 @@ def test_reset_forgets_the_line(before: bytes, after: bytes) -> None:
 def test_skip_noise_stops_at_the_next_hash(before: bytes, chunk: bytes, after: bytes) -> None:
     framer = _fed(before)
     assume(not framer.in_line and (framer.idle or (chunk and chunk[0] not in b"\r\n")))
-    stop = framer.skip_noise(chunk, 0)
+    stop = framer.skip_noise(LEAD + chunk, len(LEAD)) - len(LEAD)
     assert stop == _first(chunk, b"#")
     assert all(events == [codec.Ignored()] for events in framer_events(before + chunk)[len(before):][:stop])
     _continues(framer, before + chunk[:stop], chunk[stop:] + after)
@@ -104,7 +107,7 @@ def test_skip_text_counts_to_the_line_end(address: bytes, text: bytes, chunk: by
     before = b"#" + address + b" " + text
     framer = _fed(before)
     assert framer.in_text
-    stop = framer.skip_text(chunk, 0)
+    stop = framer.skip_text(LEAD + chunk, len(LEAD)) - len(LEAD)
     assert stop == _first(chunk, b"\r\n#")
     _continues(framer, before + chunk[:stop], chunk[stop:] + after)
 
@@ -121,7 +124,8 @@ def test_begin_line_takes_the_hash_and_address(before: bytes, address: bytes, ta
     framer = _fed(before)
     assume(not framer.in_line or framer.in_text)
     chunk = b"#" + address + tail
-    complete, value, stop = framer.begin_line(chunk, 0)
+    complete, value, stop = framer.begin_line(LEAD + chunk, len(LEAD))
+    stop -= len(LEAD)
     # the address: one '*' right after the '#', or the run of digits there
     run = 2 if chunk[1:2] == b"*" else _first(chunk, NOT_DIGITS, 1)
     assert stop == run
@@ -137,6 +141,7 @@ def test_begin_line_takes_the_hash_and_address(before: bytes, address: bytes, ta
 @settings(max_examples=300, deadline=None)
 @given(STREAM, hs.sampled_from([b"#", b"#1", b"#12", b"#*", b"#007"]), TEXT, STREAM)
 @example(b"", b"#1", b"A" * 58, b"B\r")  # the line's 61st character is text: overflow
+@example(b"", b"#1", b"A" * 57, b"\r")  # exactly 60 characters: no overflow
 @example(b"", b"#1", b"A" * 57, b"B\r")
 @example(b"#2 " + b"A" * 50, b"#1", b"A" * 20, b"\r")  # a restart goes on counting
 def test_take_line_counts_a_hash_its_address_and_text(before: bytes, head: bytes, text: bytes, after: bytes) -> None:
@@ -181,7 +186,7 @@ def test_end_line_reports_the_overflow(address: bytes, text: bytes, more: bytes,
 def test_text_run_ends_at_the_60th_character(address: bytes, text: bytes, chunk: bytes, after: bytes) -> None:
     before = b"#" + address + b" " + text
     framer = _fed(before)
-    run = framer.text_run(chunk, 0)
+    run = framer.text_run(LEAD + chunk, len(LEAD)) - len(LEAD)
     assert run == min(_first(chunk, b"\r\n#"), max(0, LIMIT - len(before)))
     assert framer.length == len(before)  # (text_run changes nothing)
     framer.take_text(run)
@@ -213,7 +218,7 @@ def _concerning(data: bytes, mine: int) -> int:
 def test_skip_unaddressed_frames_other_drives_lines(before: bytes, chunk: bytes, after: bytes, mine: int) -> None:
     framer = _fed(before)
     assume(not framer.in_line or framer.in_text)
-    stop = framer.skip_unaddressed(chunk, 0, mine)
+    stop = framer.skip_unaddressed(LEAD + chunk, len(LEAD), mine) - len(LEAD)
     assert stop == _concerning(chunk, mine)
     _continues(framer, before + chunk[:stop], chunk[stop:] + after)
 
