@@ -100,9 +100,9 @@ def test_skip_noise_stops_at_the_next_hash(before: bytes, chunk: bytes, after: b
 @pytest.mark.manual("§4.1", "at most 60 characters in a line")
 @settings(max_examples=300, deadline=None)
 @given(hs.sampled_from(ADDRESSES), TEXT, STREAM, STREAM)
-@example(b"1", b"A" * 57, b"BB\r", b"")  # the 60th character kept, the 61st dropped
-@example(b"", b"A" * 59, b"\r", b"")  # exactly 60: no overflow
-@example(b"", b"A" * 59, b"B\r", b"")  # 61: overflow
+@example(b"1", b"A" * 56, b"BB\r", b"")  # '#1 ' and 56: the 60th character kept, the 61st dropped
+@example(b"", b"A" * 57, b"B\r", b"")  # '# ', 57 and one skipped: exactly 60, no overflow
+@example(b"", b"A" * 57, b"BB\r", b"")  # 61: overflow
 def test_skip_text_counts_to_the_line_end(address: bytes, text: bytes, chunk: bytes, after: bytes) -> None:
     before = b"#" + address + b" " + text
     framer = _fed(before)
@@ -166,8 +166,8 @@ def test_whole_line_is_a_line_taken_at_once(before: bytes, head: bytes, text: by
 
 @settings(max_examples=300, deadline=None)
 @given(hs.sampled_from(ADDRESSES), TEXT, TEXT, hs.sampled_from([b"\r", b"\n"]), STREAM)
-@example(b"", b"A" * 59, b"", b"\r", b"\n")
-@example(b"", b"A" * 59, b"B", b"\n", b"\r")
+@example(b"", b"A" * 58, b"", b"\r", b"\n")  # exactly 60 characters
+@example(b"", b"A" * 58, b"B", b"\n", b"\r")  # 61
 def test_end_line_reports_the_overflow(address: bytes, text: bytes, more: bytes, end: bytes, after: bytes) -> None:
     before = b"#" + address + b" " + text + more
     framer = _fed(before)
@@ -180,8 +180,8 @@ def test_end_line_reports_the_overflow(address: bytes, text: bytes, more: bytes,
 @pytest.mark.manual("§4.1", "at most 60 characters in a line")
 @settings(max_examples=300, deadline=None)
 @given(hs.sampled_from(ADDRESSES), TEXT, STREAM, STREAM)
-@example(b"", b"A" * 58, b"BCD\r", b"")  # one character left before the limit
-@example(b"", b"A" * 59, b"BCD\r", b"")  # none left
+@example(b"", b"A" * 57, b"BCD\r", b"")  # '# ' and 57: one character left before the limit
+@example(b"", b"A" * 58, b"BCD\r", b"")  # none left
 @example(b"", b"A" * 70, b"BCD\r", b"")  # beyond it
 def test_text_run_ends_at_the_60th_character(address: bytes, text: bytes, chunk: bytes, after: bytes) -> None:
     before = b"#" + address + b" " + text
