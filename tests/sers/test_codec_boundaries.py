@@ -209,16 +209,32 @@ def _concerning(data: bytes, mine: int) -> int:
 
 
 @settings(max_examples=500, deadline=None)
-@given(STREAM, STREAM, STREAM, hs.sampled_from([1, 2, 12]))
-@example(b"", b"#2 " + b"A" * 60 + b"\r\n#1\r", b"", 1)
-@example(b"#2 AB", b"C" * 60 + b"#01 X\r", b"", 1)
-@example(b"", b"#2 AB\r", b"\n", 1)  # the pair's second half in the next chunk
-@example(b"", b"#2 AB\r#", b"1\r", 1)  # a '#' at the chunk's end: more digits may follow
-@example(b"", b"#2 " + b"A" * 57 + b"#3", b"\r", 1)  # digits after '#' beyond the limit set nothing
-def test_skip_unaddressed_frames_other_drives_lines(before: bytes, chunk: bytes, after: bytes, mine: int) -> None:
+@given(STREAM, STREAM, STREAM, hs.sampled_from([1, 2, 12]), hs.sampled_from([b"", LEAD]))
+@example(b"", b"#2 " + b"A" * 60 + b"\r\n#1\r", b"", 1, LEAD)
+@example(b"#2 AB", b"C" * 60 + b"#01 X\r", b"", 1, LEAD)
+@example(b"", b"#2 AB\r", b"\n", 1, LEAD)  # the pair's second half in the next chunk
+@example(b"", b"#2 AB\r#", b"1\r", 1, LEAD)  # a '#' at the chunk's end: more digits may follow
+@example(b"", b"#2 " + b"A" * 57 + b"#3", b"\r", 1, LEAD)  # digits after '#' beyond the limit set nothing
+# The last line end before the stop: the end of a line (a CR/LF after it is a pair's second
+# half) or noise between lines (it is not), decided by the line ends before it:
+@example(b"", b"#2 X\rnoise\r", b"\n", 1, LEAD)  # noise after a line: no pair
+@example(b"", b"#2 X\r#2 Y\rnoise\r", b"\n", 1, LEAD)  # the line end right before it decides
+@example(b"", b"#2 X\n#2 Y\nnoise\n", b"\r", 1, LEAD)
+@example(b"", b"#2 X\r\n#2 Y\r", b"\n", 1, LEAD)  # a line's end: a pair
+@example(b"", b"#2 X\n#2 Y\n\rZ\r", b"\n", 1, LEAD)
+@example(b"", b"#2\rA\n#2 B\r", b"\n", 1, LEAD)
+@example(b"#2 AB", b"\r", b"\n", 1, LEAD)  # the line was open before the chunk
+@example(b"#2 AB", b"\r", b"\n", 1, b"")
+@example(b"", b"noise\r", b"\n", 1, LEAD)  # noise only
+@example(b"", b"noise\n", b"\r", 1, LEAD)
+@example(b"#2 AB", b"\r X\r", b"\n", 1, b"")  # a line end at the very start of the data
+@example(b"#2 AB", b"\n X\n", b"\r", 1, b"")
+@example(b"", b"#2 A\r\r", b"\n", 1, LEAD)
+def test_skip_unaddressed_frames_other_drives_lines(before: bytes, chunk: bytes, after: bytes, mine: int,
+                                                    lead: bytes) -> None:
     framer = _fed(before)
     assume(not framer.in_line or framer.in_text)
-    stop = framer.skip_unaddressed(LEAD + chunk, len(LEAD), mine) - len(LEAD)
+    stop = framer.skip_unaddressed(lead + chunk, len(lead), mine) - len(lead)
     assert stop == _concerning(chunk, mine)
     _continues(framer, before + chunk[:stop], chunk[stop:] + after)
 
