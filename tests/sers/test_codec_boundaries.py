@@ -18,9 +18,9 @@ from hypothesis import assume, example, given, settings
 from devsim.devices.sers import codec
 from tests.sers.framer_oracle import LIMIT, framer_events, line_state
 
-TOKENS = [b"#", b"*", b"\r", b"\n", b"\r\n", b"0", b"1", b"2", b"12", b"A", b"?", b" ", b"\xb2", b"#1", b"#2",
-          b"#*", b"#01", b"#12"]
-ADDRESSES = [b"", b"1", b"2", b"12", b"*", b"01", b"007", b"3"]
+TOKENS = [b"#", b"*", b"\r", b"\n", b"\r\n", b"0", b"1", b"2", b"9", b"12", b"A", b"?", b" ", b"\xb2", b"#1", b"#2",
+          b"#*", b"#01", b"#12", b"#9", b"#90"]
+ADDRESSES = [b"", b"1", b"2", b"12", b"*", b"01", b"007", b"3", b"9", b"09"]  # the digits 0 to 9
 
 
 @hs.composite
@@ -230,6 +230,11 @@ def _concerning(data: bytes, mine: int) -> int:
 @example(b"#2 AB", b"\r X\r", b"\n", 1, b"")  # a line end at the very start of the data
 @example(b"#2 AB", b"\n X\n", b"\r", 1, b"")
 @example(b"", b"#2 A\r\r", b"\n", 1, LEAD)
+@example(b"", b"#2 X#\rnoise\r", b"\n", 1, LEAD)  # a '#' right before the line end that decides
+# Beyond the 60th character: digits of text set the overflow, digits of an address do not
+@example(b"", b"#2 " + b"A" * 55 + b"12345", b"\r", 1, LEAD)
+@example(b"", b"#2 " + b"A" * 56 + b"#34#", b"\r", 1, LEAD)
+@example(b"#2 " + b"A" * 50, b"B" * 5 + b"12345", b"\r", 1, b"")
 def test_skip_unaddressed_frames_other_drives_lines(before: bytes, chunk: bytes, after: bytes, mine: int,
                                                     lead: bytes) -> None:
     framer = _fed(before)
