@@ -225,6 +225,8 @@ def _concerning(data: bytes, mine: int) -> int:
 @example(b"", b"#2\rA\n#2 B\r", b"\n", 1, LEAD)
 @example(b"#2 AB", b"\r", b"\n", 1, LEAD)  # the line was open before the chunk
 @example(b"#2 AB", b"\r", b"\n", 1, b"")
+@example(b"", b"#2 X\n", b"\r", 1, LEAD)  # the only line end, an LF: a pair follows
+@example(b"", b"#2 X\r", b"\n", 1, LEAD)
 @example(b"", b"noise\r", b"\n", 1, LEAD)  # noise only
 @example(b"", b"noise\n", b"\r", 1, LEAD)
 @example(b"#2 AB", b"\r X\r", b"\n", 1, b"")  # a line end at the very start of the data
