@@ -19,9 +19,14 @@ from devsim.devices.gms96.codec import (
     ShortFrame,
     encode,
     from_s24,
+    k_frame,
+    letter,
     parse_letter,
+    short_command,
     short_extension_device,
+    t_reply,
     to_s24,
+    wrap24,
 )
 
 STARTS = {0x10, 0x68, 0xE5, 0xA2}
@@ -173,3 +178,36 @@ def test_a_letter_carries_0_to_3_whole_parameters(command: str, rest: bytes) -> 
     count = min(len(rest) // 3, 3)
     values = [from_s24(rest[3 * k : 3 * k + 3]) for k in range(count)] + [0] * (3 - count)
     assert parsed == (command, tuple(values), count)
+
+
+# -- what a caller is told about a field that does not fit -----------------------------------------
+@pytest.mark.parametrize(("make", "field"), [
+    (lambda: encode(ShortFrame(0x100, 3)), "control"),
+    (lambda: encode(ShortFrame(0x53, 1.5)), "address"),  # type: ignore[arg-type]
+    (lambda: encode(LongFrame(0x53, 256, b"")), "address"),
+    (lambda: short_command(256, 3), "command number"),
+    (lambda: k_frame(0x10, 3, 256), "MB4"),
+    (lambda: t_reply(3, 256, b""), "identifier"),
+    (lambda: to_s24(1 << 24), "does not fit in 24 bits"),
+    (lambda: from_s24(b"\x00\x00"), "has 3 octets, not 2"),
+    (lambda: letter("\u0100"), "one latin-1 character"),
+    (lambda: letter("AB"), "one latin-1 character"),
+    (lambda: letter("A", 1, 2, 3, 4), "at most 3 parameters, got 4"),
+])
+def test_a_field_that_does_not_fit_is_named(make: object, field: str) -> None:
+    with pytest.raises(ValueError, match=field):
+        make()  # type: ignore[operator]
+
+
+@pytest.mark.parametrize("char", ["\x00", "A", "\xfe", "\xff"])
+def test_every_latin_1_character_is_a_command(char: str) -> None:
+    assert letter(char, 1) == char.encode("latin-1") + b"\x01\x00\x00"
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.one_of(st.integers(-(1 << 25), 1 << 25), st.sampled_from([(1 << 23) - 1, 1 << 23, -(1 << 23),
+                                                                    -(1 << 23) - 1, (1 << 24) - 1, 1 << 24])))
+def test_positions_wrap_as_24_bit_twos_complement(value: int) -> None:
+    """Spec §5.1: positions travel as 24-bit two's complement and wrap around."""
+    low = value % (1 << 24)
+    assert wrap24(value) == (low - (1 << 24) if low >= 1 << 23 else low)
