@@ -183,6 +183,10 @@ def test_a_letter_carries_0_to_3_whole_parameters(command: str, rest: bytes) -> 
 # -- what a caller is told about a field that does not fit -----------------------------------------
 @pytest.mark.parametrize(("make", "field"), [
     (lambda: encode(ShortFrame(0x100, 3)), "control"),
+    (lambda: encode(ShortFrame(1.5, 3)), "control"),  # type: ignore[arg-type]
+    (lambda: encode(ShortFrame(-1, 3)), "control"),
+    (lambda: encode(ShortFrame(0x53, 0x100)), "address"),
+    (lambda: encode(LongFrame(0x100, 3, b"")), "control"),
     (lambda: encode(ShortFrame(0x53, 1.5)), "address"),  # type: ignore[arg-type]
     (lambda: encode(LongFrame(0x53, 256, b"")), "address"),
     (lambda: short_command(256, 3), "command number"),
