@@ -215,3 +215,8 @@ def test_positions_wrap_as_24_bit_twos_complement(value: int) -> None:
     """Spec §5.1: positions travel as 24-bit two's complement and wrap around."""
     low = value % (1 << 24)
     assert wrap24(value) == (low - (1 << 24) if low >= 1 << 23 else low)
+
+
+def test_encode_names_what_is_no_frame() -> None:
+    with pytest.raises(TypeError, match="not a GMS96 frame: 'E5'"):
+        encode("E5")  # type: ignore[arg-type]
