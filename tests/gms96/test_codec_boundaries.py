@@ -8,6 +8,8 @@ with the rule written here as a small oracle.
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
@@ -17,6 +19,7 @@ from devsim.devices.gms96.codec import (
     FrameError,
     LongFrame,
     ShortFrame,
+    SingleChar,
     encode,
     from_s24,
     k_frame,
@@ -182,24 +185,25 @@ def test_a_letter_carries_0_to_3_whole_parameters(command: str, rest: bytes) -> 
 
 # -- what a caller is told about a field that does not fit -----------------------------------------
 @pytest.mark.parametrize(("make", "field"), [
-    (lambda: encode(ShortFrame(0x100, 3)), "control"),
-    (lambda: encode(ShortFrame(1.5, 3)), "control"),  # type: ignore[arg-type]
-    (lambda: encode(ShortFrame(-1, 3)), "control"),
-    (lambda: encode(ShortFrame(0x53, 0x100)), "address"),
-    (lambda: encode(LongFrame(0x100, 3, b"")), "control"),
-    (lambda: encode(ShortFrame(0x53, 1.5)), "address"),  # type: ignore[arg-type]
-    (lambda: encode(LongFrame(0x53, 256, b"")), "address"),
-    (lambda: short_command(256, 3), "command number"),
-    (lambda: k_frame(0x10, 3, 256), "MB4"),
-    (lambda: t_reply(3, 256, b""), "identifier"),
-    (lambda: to_s24(1 << 24), "does not fit in 24 bits"),
-    (lambda: from_s24(b"\x00\x00"), "has 3 octets, not 2"),
-    (lambda: letter("\u0100"), "one latin-1 character"),
-    (lambda: letter("AB"), "one latin-1 character"),
+    (lambda: encode(SingleChar(256)), "single character must be an octet 0..255, not 256"),
+    (lambda: encode(ShortFrame(0x100, 3)), "control must be an octet 0..255, not 256"),
+    (lambda: encode(ShortFrame(1.5, 3)), "control must be an octet 0..255, not 1.5"),  # type: ignore[arg-type]
+    (lambda: encode(ShortFrame(-1, 3)), "control must be an octet 0..255, not -1"),
+    (lambda: encode(ShortFrame(0x53, 0x100)), "address must be an octet 0..255, not 256"),
+    (lambda: encode(ShortFrame(0x53, 1.5)), "address must be an octet 0..255, not 1.5"),  # type: ignore[arg-type]
+    (lambda: encode(LongFrame(0x100, 3, b"")), "control must be an octet 0..255, not 256"),
+    (lambda: encode(LongFrame(0x53, 256, b"")), "address must be an octet 0..255, not 256"),
+    (lambda: short_command(256, 3), "command number must be an octet 0..255, not 256"),
+    (lambda: k_frame(0x10, 3, 256), "MB4 must be an octet 0..255, not 256"),
+    (lambda: t_reply(3, 256, b""), "identifier must be an octet 0..255, not 256"),
+    (lambda: to_s24(1 << 24), "parameter 16777216 does not fit in 24 bits"),
+    (lambda: from_s24(b"\x00\x00"), "a 24-bit parameter has 3 octets, not 2"),
+    (lambda: letter("\u0100"), "a command character is one latin-1 character, not 'Ā'"),
+    (lambda: letter("AB"), "a command character is one latin-1 character, not 'AB'"),
     (lambda: letter("A", 1, 2, 3, 4), "at most 3 parameters, got 4"),
 ])
 def test_a_field_that_does_not_fit_is_named(make: object, field: str) -> None:
-    with pytest.raises(ValueError, match=field):
+    with pytest.raises(ValueError, match=f"^{re.escape(field)}$"):
         make()  # type: ignore[operator]
 
 
@@ -220,3 +224,26 @@ def test_positions_wrap_as_24_bit_twos_complement(value: int) -> None:
 def test_encode_names_what_is_no_frame() -> None:
     with pytest.raises(TypeError, match="not a GMS96 frame: 'E5'"):
         encode("E5")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(("header", "reason"), [(b"\x68\x01", "length"), (b"\x68\x05\x06", "length_mismatch"),
+                                              (b"\x68\x05\x05\x69", "start_byte")])
+def test_a_broken_langsatz_header_is_reported_at_the_octet_that_breaks_it(header: bytes, reason: str) -> None:
+    """The header 68h L L 68h is checked octet by octet as it arrives (spec §3.2): the error
+    comes with the octet that makes it, not with the next one."""
+    decoder = _decoder()
+    assert decoder.feed(header[:-1], 0.0) == [] and decoder.pending == len(header) - 1
+    assert decoder.feed(header[-1:], 0.0) == [FrameError(reason, header)]
+    assert decoder.pending == 0
+
+
+def test_single_characters_are_frames_only_on_the_host_side() -> None:
+    assert FrameDecoder().accept_single is False
+    assert FrameDecoder(accept_single=True).accept_single is True
+
+
+@pytest.mark.parametrize("kind", [bytearray, memoryview])
+def test_what_is_discarded_is_bytes_whatever_was_fed(kind: type) -> None:
+    out = _decoder().feed(kind(b"\x01\x02" + encode(GOOD)), 0.0)
+    assert out == [FrameError("garbage", b"\x01\x02"), GOOD]
+    assert type(out[0].discarded) is bytes
