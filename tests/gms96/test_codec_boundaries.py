@@ -247,3 +247,11 @@ def test_what_is_discarded_is_bytes_whatever_was_fed(kind: type) -> None:
     out = _decoder().feed(kind(b"\x01\x02" + encode(GOOD)), 0.0)
     assert out == [FrameError("garbage", b"\x01\x02"), GOOD]
     assert type(out[0].discarded) is bytes
+
+
+def test_a_start_byte_right_after_the_start_of_a_broken_frame() -> None:
+    """§3.2 R6: a frame found broken is discarded up to the next start byte after its own, which
+    may be the very next octet (here a Kurzsatz whose control field is 10h, with no 16h at its
+    end, and the frame that begins one octet later)."""
+    good = encode(ShortFrame(0x01, 3))
+    assert _decoder().feed(b"\x10" + good, 0.0) == [FrameError("end_byte", b"\x10"), ShortFrame(0x01, 3)]
