@@ -258,8 +258,11 @@ def _natural(name: str) -> tuple[str, int]:
 
 
 def _matches(entry: dict[str, str], mutant: Mutant) -> bool:
+    """By function and changed line; where a function has the same line twice, the entry also
+    names mutmut's number of the mutant (``number``, stable while the function is unchanged)."""
+    number = mutant.name.rpartition("__mutmut_")[2]
     return (entry["function"] == mutant.function and entry["original"] == mutant.original
-            and entry["mutated"] == mutant.mutated)
+            and entry["mutated"] == mutant.mutated and str(entry.get("number", number)) == number)
 
 
 def report(results: list[Result], list_survivors: bool) -> None:
