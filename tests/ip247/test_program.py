@@ -42,9 +42,25 @@ def test_the_manuals_example_record_of_section_3_4_2() -> None:
 
 
 def test_the_manuals_loop_and_halt_examples_are_valid() -> None:
-    parse("%  2 LOOPS\nN10 G24 F0\nN20 G74\nN30 G24 F5\nN40 L30\nN50 G04 F10\nN60 L30\nN70 G20\nN80 G20\nN90 M02\n")
-    parse("%  3\nN10 G10 X100 F500 M00\nN20 M00\nN30 G56 M00\nN40 X500 F1000\nN50 M02\n")
-    parse("L12   das ist ein Unterprogramm im DB12\n/N1 G91\n:N2 X+12345.678 F1\nN25 G43 X200 F100 M02\n")
+    """Spec §4.11: functions in the order N, L, G, X, F, M; G24 F0 an endless loop, F5 five
+    repetitions; X in mm to 3 decimals (µm); /N and :N blocks taken as N; blocks in text order;
+    the end block may carry a traverse (``N25 G43 X200 F100 M02``)."""
+    loops = parse("%  2 LOOPS\nN10 G24 F0\nN20 G74\nN30 G24 F5\nN40 L30\nN50 G04 F10\nN60 L30\nN70 G20\nN80 G20\n"
+                  "N90 M02\n")
+    assert (loops.number, loops.main, loops.comment) == (2, True, "LOOPS")
+    assert [(b.number, b.call, b.g, b.f, b.m) for b in loops.blocks] == [
+        (10, None, 24, 0, None), (20, None, 74, None, None), (30, None, 24, 5, None), (40, 30, None, None, None),
+        (50, None, 4, 10, None), (60, 30, None, None, None), (70, None, 20, None, None), (80, None, 20, None, None),
+        (90, None, None, None, 2)]
+    halts = parse("%  3\nN10 G10 X100 F500 M00\nN20 M00\nN30 G56 M00\nN40 X500 F1000\nN50 M02\n")
+    assert [(b.g, b.x, b.f, b.m) for b in halts.blocks] == [
+        (10, 100_000, 500, 0), (None, None, None, 0), (56, None, None, 0), (None, 500_000, 1000, None),
+        (None, None, None, 2)]
+    sub = parse("L12   das ist ein Unterprogramm im DB12\n/N1 G91\n:N2 X+12345.678 F1\nN25 G43 X200 F100 M02\n")
+    assert (sub.number, sub.main, sub.comment) == (12, False, "das ist ein Unterprogramm im DB12")
+    assert [(b.ordinal, b.number, b.kind) for b in sub.blocks] == [(1, 1, "/N"), (2, 2, ":N"), (3, 25, "N")]
+    assert [(b.g, b.x, b.f, b.m) for b in sub.blocks] == [
+        (91, None, None, None), (None, 12_345_678, 1, None), (43, 200_000, 100, 2)]
 
 
 @pytest.mark.parametrize(

@@ -156,15 +156,37 @@ def test_ether_reply_vectors() -> None:
     assert ether_reply(1, 1, b"R") == h("00 00 00 0C 01 00 00 01 01 52 69 7D")
 
 
+#: The vectors' telegrams on the wire, to be mixed into garbage.
+WIRES = [h(wire or raw) for _v, raw, wire, _d in REQUESTS]
+
+
 @settings(max_examples=500, deadline=None)
-@given(hs.binary(max_size=200), hs.integers(min_value=1, max_value=40))
-def test_any_bytes_in_any_chunks_never_raise(data: bytes, size: int) -> None:
+@given(hs.lists(hs.one_of(hs.binary(max_size=30), hs.sampled_from(WIRES)), max_size=8),
+       hs.integers(min_value=1, max_value=40), hs.lists(hs.sampled_from([h(f) for _v, f, _d in ETHER]), max_size=4))
+def test_any_bytes_in_any_chunks_never_raise(pieces: list[bytes], size: int, ether_frames: list[bytes]) -> None:
+    """Garbage and telegrams, split anywhere: the same requests as in one piece (§9.2: framing
+    by FS, length and CRC, not by chunk), each for this station (or the broadcast one) and
+    decoded; a telegram followed by no FS before its end is received (FS starts one afresh);
+    Ether-S-Bus frames back to back come out one by one, however the writes cut them (§9.3)."""
+    data = b"".join(pieces)
+    whole = SerialReceiver(1, telegram_of).feed(data)
     receiver = SerialReceiver(1, telegram_of)
+    requests = []
     for start in range(0, len(data), size):
-        for request in receiver.feed(data[start : start + size]):
-            decode_command(request, telegram_of)
+        requests += receiver.feed(data[start : start + size])
+    assert requests == whole
+    for request in requests:
+        assert request.station in (1, 255)
+        assert isinstance(decode_command(request, telegram_of), Read | Write | Simple | Bad)
+    if pieces and pieces[-1] in WIRES:  # the last telegram: nothing after it can cut it
+        assert requests and requests[-1] == SerialReceiver(1, telegram_of).feed(pieces[-1])[0]
     ether = EtherReceiver()
-    for frame in ether.feed(data):
+    stream = b"".join(ether_frames)
+    frames = [frame for start in range(0, len(stream), size) for frame in ether.feed(stream[start : start + size])]
+    assert frames == ether_frames
+    noise = EtherReceiver()
+    for frame in [f for start in range(0, len(data), size) for f in noise.feed(data[start : start + size])]:
+        assert len(frame) == int.from_bytes(frame[:4], "big") and 13 <= len(frame) <= 4096
         parsed = parse_ether(frame)
         if parsed is not None:
-            decode_command(parsed[2], telegram_of)
+            assert isinstance(decode_command(parsed[2], telegram_of), Read | Write | Simple | Bad)

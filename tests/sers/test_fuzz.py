@@ -11,6 +11,7 @@ from devsim.core.clock import VirtualClock
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.sers import SersDevice, codec
 from devsim.devices.sers.statements import parse
+from tests.sers.framer_oracle import framer_events
 
 ALPHABET = "#*?=<>!:.,;-+/&|^\" \t\r\n0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
 COMMANDS = ["#ON", "#OFF", "#E", "#S", "#H", "#W=360", "#V=1000", "#P11?", "#P12=0", "#RS", "#LS",
@@ -31,15 +32,24 @@ def test_parser_never_raises_and_is_prefix_stable(text: str, final: bool) -> Non
         ]
 
 
-@given(st.binary(max_size=200))
+#: Lines of 55 to 65 characters (``#``, an address, text), around the limit of §4.1.
+LINES_AT_THE_LIMIT = hs.builds(
+    lambda length, address, text, end: b"#" + address + text[: length - 1 - len(address)] + end,
+    hs.integers(min_value=55, max_value=65),
+    hs.sampled_from([b"", b"1", b"12", b"*", b"007"]),
+    hs.binary(min_size=70, max_size=70).map(lambda b: bytes(0x41 + x % 26 for x in b)),
+    hs.sampled_from([b"\r", b"\n", b"\r\n", b"\n\r", b"#\r", b""]))
+#: Bytes that matter to the framer, and some that do not.
+FRAMER_BYTES = hs.lists(hs.one_of(hs.sampled_from([b"#", b"*", b"\r", b"\n", b"1", b"0", b"A", b"?", b"\xb2"]),
+                                  hs.binary(max_size=70), LINES_AT_THE_LIMIT), max_size=30).map(b"".join)
+
+
+@pytest.mark.manual("§4.1", "at most 60 characters in a line")
+@given(hs.one_of(hs.binary(max_size=200), FRAMER_BYTES))
 def test_framer_accepts_any_bytes(data: bytes) -> None:
+    """Any bytes: the events the manual's rules give (tests/sers/framer_oracle.py), byte by byte."""
     framer = codec.Framer()
-    for byte in data:
-        for event in framer.feed(byte):
-            assert isinstance(
-                event,
-                codec.Ignored | codec.Restart | codec.AddressChar | codec.Address | codec.TextChar | codec.LineEnd,
-            )
+    assert [framer.feed(byte) for byte in data] == framer_events(data)
 
 
 def _device() -> tuple[SersDevice, VirtualClock, bytearray, NonVolatileMemory]:
