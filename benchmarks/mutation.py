@@ -58,6 +58,23 @@ MODULES: dict[str, tuple[str, ...]] = {
     "devsim/devices/poselesta/tape.py": (
         "tests/poselesta/test_tape.py",
     ),
+    # the facade maps and the kit (helper mut-core)
+    "devsim/facades/modbus_map.py": (
+        "tests/facades/test_modbus_map.py",
+    ),
+    "devsim/core/points.py": (
+        "tests/core/test_points.py",
+    ),
+    "devsim/core/axis.py": (
+        "tests/core/test_axis.py",
+        "tests/core/test_path.py",
+    ),
+    "devsim/core/clock.py": (
+        "tests/core/test_clock.py",
+    ),
+    "devsim/core/settings.py": (
+        "tests/test_settings.py",
+    ),
 }
 
 #: mutmut's exit-code meanings, folded into the columns printed.
