@@ -649,3 +649,110 @@ def test_segment_sine_closed_form() -> None:
     assert s.acceleration(2.0) == pytest.approx(math.pi / 2 * 4.0)
     for t in (1.0 + 1e-7, 1.3, 2.0, 2.9999):
         assert s.solve(s.position(t)) == pytest.approx(t, abs=1e-12)
+
+
+# -- boundaries (issue 35): mid-ramp profiled commands, the recent past --------------------------
+# Profile sections as SERS P1005–P1008 define them (spec sers §5.2, RampProfile): with speed1 0.5
+# and accel1 0.5, section 1 is 0 … V/2 with A/2, above it A; braking mirrors it with D.
+MID = RampProfile(speed1=0.5, accel1=0.5)
+
+
+def _mid_ramp(clock: VirtualClock) -> Axis:
+    """A jog to 100 inc/s with A = 100 under MID, caught at 1.25 s: 75 inc/s, in section 2."""
+    axis = Axis(clock)
+    axis.jog(+1, 100.0, 100.0, profile=MID)  # 0 -> 50 in 1 s (a = 50), 50 -> 100 in 0.5 s (a = 100)
+    clock.advance(1.25)
+    assert axis.velocity() == pytest.approx(75.0) and axis.phase() == "accel"
+    return axis
+
+
+def test_profiled_stop_in_the_middle_of_a_ramp_keeps_the_jogs_speed_as_reference(clock: VirtualClock) -> None:
+    """The sections of a stop are fractions of the last jog's speed (100), not of the speed the
+    axis happens to have (75): 75 -> 50 with D, 50 -> 0 with D/2."""
+    axis = _mid_ramp(clock)
+    x = axis.position()
+    assert axis.stopping_distance(100.0, MID) == pytest.approx((75**2 - 50**2) / 200 + 50**2 / 100)
+    assert axis.stopping_distance(100.0, MID, speed=75.0) == pytest.approx(
+        (75**2 - 37.5**2) / 200 + 37.5**2 / 100)  # a reference speed given: its sections
+    done: list[float] = []
+    end = axis.stop(100.0, on_done=lambda: done.append(clock.now()), profile=MID)
+    assert end == pytest.approx(1.25 + 0.25 + 1.0)
+    assert [s.a for s in axis.segments()] == [-100.0, -50.0]
+    run_idle(clock, axis)
+    assert done == [end]
+    assert axis.position() == pytest.approx(x + 40.625)
+
+
+def test_profiled_jog_stop_in_the_middle_of_a_ramp(clock: VirtualClock) -> None:
+    """``jog(0, speed, accel)`` is that stop, with the sections of ``speed``."""
+    axis = _mid_ramp(clock)
+    done: list[float] = []
+    axis.jog(0, 100.0, 100.0, on_done=lambda: done.append(clock.now()), profile=MID)
+    assert [s.a for s in axis.segments()] == [-100.0, -50.0]
+    run_idle(clock, axis)
+    assert done == [pytest.approx(2.5)]
+
+
+def test_profiled_jog_faster_in_the_middle_of_a_ramp(clock: VirtualClock) -> None:
+    """A new jog speed of 200 moves section 1 up to 100: 75 -> 100 with A/2, 100 -> 200 with A."""
+    axis = _mid_ramp(clock)
+    reached: list[float] = []
+    axis.jog(+1, 200.0, 100.0, on_done=lambda: reached.append(clock.now()), profile=MID)
+    assert [s.a for s in axis.segments()] == [50.0, 100.0, 0.0]
+    clock.advance(5.0)
+    assert reached == [pytest.approx(1.25 + 0.5 + 1.0)]
+    assert axis.velocity() == 200.0
+
+
+def test_reference_speed_must_be_positive(clock: VirtualClock) -> None:
+    axis = _mid_ramp(clock)
+    for speed in (0.0, -1.0, math.nan):
+        with pytest.raises(ValueError, match="speed must be positive"):
+            axis.stop(100.0, profile=MID, speed=speed)
+    with pytest.raises(ValueError, match="decel must be positive"):
+        axis.stopping_distance(0.0)
+
+
+def test_past_positions_after_a_quick_stop(clock: VirtualClock) -> None:
+    """The recent past stays what it was: the ramp, the cruise, then standing at the stop."""
+    axis = Axis(clock, position=10.0)
+    clock.advance(1.0)  # idle at 10 for one second
+    axis.move_to(1010.0, 100.0, 100.0)  # 1 s ramp (50 inc), then cruise
+    clock.advance(2.0)
+    axis.quick_stop()
+    assert axis.stopped_since() == 3.0
+    clock.advance(4.0)
+    assert axis.position(0.5) == 10.0 and axis.velocity(0.5) == 0.0  # idle before the move
+    assert axis.position(-1.0) == 10.0  # before anything: where the axis first stood
+    assert axis.position(1.5) == pytest.approx(10.0 + 12.5)
+    assert (axis.velocity(1.5), axis.acceleration(1.5), axis.phase(1.5)) == (pytest.approx(50.0), 100.0, "accel")
+    assert axis.position(2.5) == pytest.approx(10.0 + 50.0 + 50.0)
+    assert (axis.velocity(2.5), axis.acceleration(2.5), axis.phase(2.5)) == (pytest.approx(100.0), 0.0, "const")
+    for t in (3.0, 5.0, 7.0):
+        assert (axis.position(t), axis.velocity(t), axis.phase(t)) == (pytest.approx(160.0), 0.0, "idle")
+
+
+def test_the_past_of_a_plan_ended_on_its_own(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    axis.move_to(100.0, 100.0, 100.0)  # triangle: 1 s up, 1 s down
+    clock.advance(5.0)
+    axis.move_to(0.0, 100.0, 100.0)
+    clock.advance(0.5)
+    assert axis.position(0.5) == pytest.approx(12.5)
+    assert axis.position(1.5) == pytest.approx(100.0 - 12.5)
+    assert axis.position(3.0) == 100.0 and axis.velocity(3.0) == 0.0  # standing at the target
+    assert axis.position(5.25) == pytest.approx(100.0 - 3.125)
+
+
+def test_history_keeps_the_last_64_segments(clock: VirtualClock) -> None:
+    """64 past segments are kept: a query further back answers with the oldest one kept."""
+    axis = Axis(clock)
+    for k in range(40):  # each step: a 1 s move of 1 inc (a triangle: two segments), back to back
+        axis.move_to(float(k + 1), 2.0, 4.0)
+        clock.advance(1.0)
+    axis.move_to(0.0, 2.0, 4.0)  # archives 40 x 2 segments; the last 64 are kept
+    kept = axis._history
+    assert len(kept) == 64
+    oldest = kept[0]
+    assert axis.position(0.1) == oldest.x0  # further back than the history reaches
+    assert axis.position(oldest.t0) == pytest.approx(oldest.x0)

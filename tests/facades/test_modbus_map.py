@@ -178,6 +178,8 @@ def test_entries_carry_type_unit_and_doc() -> None:
         ("input", "0–1", "axis.position", "float", "×1000", "inc", "a position"),
     ]
     assert [m.size(t) for t in ("coil", "discrete", "holding", "input")] == [0, 1, 2, 2]
+    rescaled = ModbusMap.generate(points, {"param.v": {"scale": 2}, "axis.position": {"scale": 0.5}})
+    assert [row[4] for row in rescaled.rows()] == ["", "×2", "×0.5"]
 
 
 @BOUNDARY
