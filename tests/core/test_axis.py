@@ -730,6 +730,10 @@ def test_past_positions_after_a_quick_stop(clock: VirtualClock) -> None:
     assert (axis.velocity(2.5), axis.acceleration(2.5), axis.phase(2.5)) == (pytest.approx(100.0), 0.0, "const")
     for t in (3.0, 5.0, 7.0):
         assert (axis.position(t), axis.velocity(t), axis.phase(t)) == (pytest.approx(160.0), 0.0, "idle")
+    axis.move_to(0.0, 100.0, 100.0)  # standing since the stop becomes part of the past
+    for t in (3.0, 5.0, 6.99):
+        assert (axis.position(t), axis.velocity(t), axis.acceleration(t)) == (pytest.approx(160.0), 0.0, 0.0)
+    assert (axis.position(0.5), axis.velocity(0.5), axis.acceleration(0.5)) == (10.0, 0.0, 0.0)
 
 
 def test_the_past_of_a_plan_ended_on_its_own(clock: VirtualClock) -> None:
@@ -756,3 +760,200 @@ def test_history_keeps_the_last_64_segments(clock: VirtualClock) -> None:
     oldest = kept[0]
     assert axis.position(0.1) == oldest.x0  # further back than the history reaches
     assert axis.position(oldest.t0) == pytest.approx(oldest.x0)
+    assert oldest.t0 == 8.0  # 80 segments back to back (no standstill between): moves 0 … 7 dropped
+    clock.advance(0.25)
+    axis.move_to(5.0, 2.0, 4.0)  # in the middle of a plan: the running segment is cut, 64 kept
+    assert len(axis._history) == 64 and axis._history[0].t0 == 8.5
+
+
+def test_dwell_is_a_planned_standstill(clock: VirtualClock) -> None:
+    axis = Axis(clock, position=5.0)
+    done: list[float] = []
+    clock.advance(1.0)
+    axis.dwell(2.0, on_done=lambda: done.append(clock.now()))
+    assert axis.moving and axis.stopped_since() is None
+    assert axis.segments()[0].t0 == 1.0 and axis.segments()[0].t1 == 3.0
+    clock.advance(1.0)
+    assert (axis.position(), axis.velocity(), axis.phase(), axis.moving) == (5.0, 0.0, "idle", True)
+    clock.advance(1.5)
+    assert done == [3.0]
+    assert not axis.moving and axis.stopped_since() == 3.0 and axis.position() == 5.0
+
+
+def test_track_follows_a_sampled_loop(clock: VirtualClock) -> None:
+    """A servo loop reports position and velocity; the axis goes on at that velocity until the
+    next report, and watches fire on that extrapolation."""
+    axis = Axis(clock)
+    crossings: list[tuple[float, int]] = []
+    axis.watch(25.0, lambda d: crossings.append((clock.now(), d)))
+    axis.track(10.0, 10.0)
+    assert axis.moving and axis.final_position() == math.inf and axis.stopped_since() is None
+    assert clock.next_event() == 1.5  # the crossing of 25, nothing else
+    clock.advance(2.0)
+    assert axis.position() == pytest.approx(30.0) and axis.velocity() == 10.0
+    assert crossings == [(1.5, +1)]
+    axis.track(31.0, -20.0)
+    assert axis.final_position() == -math.inf
+    clock.advance(0.5)
+    assert axis.position() == pytest.approx(21.0) and crossings[-1] == (pytest.approx(2.3), -1)
+    axis.track(20.0, 0.0)  # the loop stands still: at rest where it says, no timers
+    assert not axis.moving and axis.position() == 20.0 and axis.velocity() == 0.0
+    assert axis.stopped_since() == 2.5 and clock.next_event() is None
+    assert axis.position(2.25) == pytest.approx(26.0)  # the past as it was extrapolated
+
+
+def test_construction(clock: VirtualClock) -> None:
+    for cpr in (0, -1):
+        with pytest.raises(ValueError, match="counts_per_rev must be positive"):
+            Axis(clock, counts_per_rev=cpr)
+    clock.advance(2.0)
+    axis = Axis(clock, position=7, counts_per_rev=1, name="X")
+    assert axis.position() == 7.0 and type(axis.position()) is float
+    assert (axis.name, axis.counts_per_rev, axis.moving, axis.stopped_since()) == ("X", 1, False, 2.0)
+    assert repr(axis) == "<Axis X x=7.000 v=0.000 idle>"
+    assert axis.segments() == [] and axis.final_position() == 7.0
+    assert axis.position(0.0) == 7.0  # before it was made: where it stands
+    assert clock.next_event() is None
+
+
+def test_teleport_fires_point_watches_but_not_index_marks(clock: VirtualClock) -> None:
+    axis = Axis(clock, counts_per_rev=100)
+    points: list[int] = []
+    marks: list[int] = []
+    axis.watch(50.0, points.append)
+    axis.watch_index(marks.append)
+    generation = axis.plan_generation
+    axis.set_position(250.0)  # across the point and two index marks
+    assert points == [+1] and marks == []
+    assert axis.plan_generation != generation  # a watch armed under the old plan must re-arm
+    axis.set_position(10.0)
+    assert points == [+1, -1] and marks == []
+    axis.move_to(120.0, 1000.0, 1e6)  # a real move passes the mark at 100 and the point at 50
+    run_idle(clock, axis)
+    assert points == [+1, -1, +1] and marks == [+1]
+    axis.jog(1, 1.0, 1.0)
+    with pytest.raises(RuntimeError, match="^axis: set_position while moving$"):
+        axis.set_position(0.0)
+
+
+def test_region_switch_bounds_and_its_own_watch(clock: VirtualClock) -> None:
+    axis = Axis(clock, position=5.0)
+    with pytest.raises(ValueError, match="^low must not exceed high$"):
+        RegionSwitch(axis, 1.0, 0.0)
+    inside = RegionSwitch(axis, 0.0, 10.0)
+    assert inside.active and (inside.axis, inside.low, inside.high) == (axis, 0.0, 10.0)
+    point = RegionSwitch(axis, 5.0, 5.0)  # a region of one point is allowed
+    assert point.active
+    # a device that watches something else than the position (GMS96: set-point − v/Kv) gives
+    # its own watch; here one that watches the position shifted by 100
+    shifted: list[bool] = []
+    made: list[object] = []
+
+    def make_watch(rule: object, callback: object) -> object:
+        made.append(rule)
+        return axis._watches.add(rule, callback, True, axis.position() + 100.0)  # type: ignore[arg-type]
+
+    sw = RegionSwitch(axis, 100.0, 110.0, shifted.append, make_watch=make_watch)
+    assert sw.active and len(made) == 1
+    assert (made[0].low, made[0].high) == (100.0, 110.0)  # type: ignore[attr-defined]
+
+
+class _Line:
+    """A path component at constant velocity (devsim.core.path gives real ones)."""
+
+    def __init__(self, x0: float, v: float) -> None:
+        self.x0, self.v = x0, v
+
+    def state(self, dt: float) -> tuple[float, float, float]:
+        return self.x0 + self.v * dt, self.v, 0.0
+
+
+def test_follow_pieces_then_a_profiled_stop(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    axis.jog(1, 50.0, 100.0)  # sets a reference speed of 50 ...
+    axis.quick_stop()
+    done: list[float] = []
+    end = axis.follow([(1.0, _Line(0.0, 10.0)), (2.0, _Line(10.0, 5.0)), (0.5, _Line(20.0, 4.0))],
+                      on_done=lambda: done.append(clock.now()))
+    assert end == 3.5 and axis.final_position() == 22.0
+    first = axis.segments()[0]
+    assert (first.t0, first.t1, first.x0, first.v0, first.a, first.shape, first.span) == (
+        0.0, 1.0, 0.0, 10.0, 0.0, "curve", 1.0)
+    clock.advance(2.0)
+    assert (axis.position(), axis.velocity(), axis.phase()) == (15.0, 5.0, "const")
+    # ... which a path forgets: the stop's profile sections are fractions of the current 5 inc/s
+    axis.stop(10.0, profile=MID)  # 5 -> 2.5 with 10, 2.5 -> 0 with 5: 0.25 s + 0.5 s
+    assert [s.a for s in axis.segments()] == [-10.0, -5.0]
+    run_idle(clock, axis)
+    assert done == [] and clock.now() == pytest.approx(2.75)
+
+
+def test_follow_nothing_stands_still_and_reports_done(clock: VirtualClock) -> None:
+    axis = Axis(clock, position=3.0)
+    clock.advance(1.0)
+    done: list[float] = []
+    assert axis.follow([], on_done=lambda: done.append(clock.now())) == 1.0
+    assert not axis.moving and axis.position() == 3.0
+    clock.advance(0.0)
+    assert done == [1.0]
+
+
+def test_state_at_segment_boundaries_and_beyond_the_plan(clock: VirtualClock) -> None:
+    """At the instant a segment ends, the next one holds (its acceleration); after the plan's end
+    the axis stands; before its start, the past."""
+    clock.advance(5.0)
+    axis = Axis(clock, position=10.0)
+    axis.move_to(1010.0, 100.0, 100.0)  # ramp 5 … 6, cruise 6 … 15, brake 15 … 16
+    assert axis.position(1.0) == 10.0  # before the plan, no history: where it started
+    assert (axis.velocity(1.0), axis.acceleration(1.0)) == (0.0, 0.0)
+    assert (axis.acceleration(6.0), axis.phase(6.0)) == (0.0, "const")
+    assert (axis.acceleration(15.0), axis.phase(15.0)) == (-100.0, "decel")
+    assert (axis.position(20.0), axis.velocity(20.0), axis.acceleration(20.0)) == (1010.0, 0.0, 0.0)
+    clock.advance(3.0)
+    axis.move_to(0.0, 100.0, 100.0)  # the old plan goes to the history, from its first segment
+    assert axis.position(1.0) == 10.0 and axis.acceleration(1.0) == 0.0
+    assert (axis.acceleration(5.0), axis.phase(5.0)) == (100.0, "accel")  # a past segment's start
+    assert (axis.acceleration(6.0), axis.phase(6.0)) == (0.0, "const")
+
+
+def test_plan_generation_changes_with_every_plan(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    seen = [axis.plan_generation]
+    axis.move_to(10.0, 10.0, 10.0)
+    seen.append(axis.plan_generation)
+    run_idle(clock, axis)  # the end of a plan is a change too
+    seen.append(axis.plan_generation)
+    axis.move_to(0.0, 10.0, 10.0)
+    seen.append(axis.plan_generation)
+    clock.advance(0.5)
+    axis.stop(10.0)
+    seen.append(axis.plan_generation)
+    run_idle(clock, axis)
+    seen.append(axis.plan_generation)
+    axis.set_position(0.0)
+    seen.append(axis.plan_generation)
+    assert len(set(seen)) == len(seen)
+
+
+def test_track_at_one_increment_per_second(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    axis.track(0.0, 1.0)
+    clock.advance(2.0)
+    assert axis.moving and axis.position() == 2.0
+
+
+def test_sine_ramps_of_unit_acceleration(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    axis.move_to(100.0, 2.0, 1.0, profile=RampProfile(shape="sine"))
+    shapes = [(s.shape, s.a) for s in axis.segments()]
+    assert shapes == [("sine", 1.0), ("linear", 0.0), ("sine", -1.0)]
+    assert axis.phase(10.0) == "const"
+
+
+def test_default_encoder_index_every_12800_increments(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    marks: list[float] = []
+    axis.watch_index(lambda d: marks.append(axis.position()))
+    axis.move_to(30000.0, 12800.0, 1e6)
+    run_idle(clock, axis)
+    assert marks == [pytest.approx(12800.0, abs=1e-6), pytest.approx(25600.0, abs=1e-6)]
