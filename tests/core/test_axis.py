@@ -5,9 +5,14 @@ from __future__ import annotations
 import math
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from devsim.core.axis import Axis, RampProfile, RegionSwitch, Segment
 from devsim.core.clock import VirtualClock
+
+#: No deadline, no speed health check: a loaded machine (or a mutation run) must not fail these.
+BOUNDARY = settings(deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 
 @pytest.fixture
@@ -707,7 +712,7 @@ def test_profiled_jog_faster_in_the_middle_of_a_ramp(clock: VirtualClock) -> Non
 def test_reference_speed_must_be_positive(clock: VirtualClock) -> None:
     axis = _mid_ramp(clock)
     for speed in (0.0, -1.0, math.nan):
-        with pytest.raises(ValueError, match="speed must be positive"):
+        with pytest.raises(ValueError, match="^speed must be positive$"):
             axis.stop(100.0, profile=MID, speed=speed)
     with pytest.raises(ValueError, match="decel must be positive"):
         axis.stopping_distance(0.0)
@@ -881,6 +886,7 @@ def test_follow_pieces_then_a_profiled_stop(clock: VirtualClock) -> None:
         0.0, 1.0, 0.0, 10.0, 0.0, "curve", 1.0)
     clock.advance(2.0)
     assert (axis.position(), axis.velocity(), axis.phase()) == (15.0, 5.0, "const")
+    assert axis.stopping_distance(10.0, MID) == pytest.approx((25 - 6.25) / 20 + 6.25 / 10)
     # ... which a path forgets: the stop's profile sections are fractions of the current 5 inc/s
     axis.stop(10.0, profile=MID)  # 5 -> 2.5 with 10, 2.5 -> 0 with 5: 0.25 s + 0.5 s
     assert [s.a for s in axis.segments()] == [-10.0, -5.0]
@@ -957,3 +963,77 @@ def test_default_encoder_index_every_12800_increments(clock: VirtualClock) -> No
     axis.move_to(30000.0, 12800.0, 1e6)
     run_idle(clock, axis)
     assert marks == [pytest.approx(12800.0, abs=1e-6), pytest.approx(25600.0, abs=1e-6)]
+
+
+_SMALL = st.floats(0.01, 0.99)
+
+
+@BOUNDARY
+@given(st.sampled_from(["speed", "accel", "decel"]), st.one_of(st.sampled_from([0.0, -0.0, -1.0, math.nan]), _SMALL))
+def test_rates_must_be_positive_and_may_be_below_one(which: str, value: float) -> None:
+    """Oracle: any speed, acceleration or deceleration > 0 is taken (also below 1); 0, negative
+    and NaN are refused with the message naming them, and nothing changes."""
+    clock = VirtualClock()
+    rates = {"speed": 2.0, "accel": 2.0, "decel": 2.0, which: value}
+    taken = value > 0
+    axis = Axis(clock)
+    if taken:
+        assert axis.move_to(1.0, rates["speed"], rates["accel"], rates["decel"]) > 0.0
+        axis.quick_stop()
+        assert axis.stop(rates["decel"]) == 0.0 and axis.stopping_distance(rates["decel"]) == 0.0
+        if which != "decel":
+            axis.jog(1, rates["speed"], rates["accel"])
+            assert axis.moving
+    else:
+        with pytest.raises(ValueError, match="^speed, accel and decel must be positive$"):
+            axis.move_to(1.0, rates["speed"], rates["accel"], rates["decel"])
+        if which == "decel":
+            with pytest.raises(ValueError, match="^decel must be positive$"):
+                axis.stop(value)
+            with pytest.raises(ValueError, match="^decel must be positive$"):
+                axis.stopping_distance(value)
+        else:
+            with pytest.raises(ValueError, match="^speed and accel must be positive$"):
+                axis.jog(1, rates["speed"], rates["accel"])
+        assert not axis.moving and axis.position() == 0.0
+
+
+def test_a_reference_speed_below_one_is_taken(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    axis.jog(1, 1.0, 10.0)
+    clock.advance(1.0)
+    # reference 0.5: section 1 is 0 … 0.25 with 5; from 1 down to 0.25 with 10
+    assert axis.stopping_distance(10.0, MID, speed=0.5) == pytest.approx((1 - 0.0625) / 20 + 0.0625 / 10)
+    # at exactly 1 inc/s a profile still applies: 1 -> 0.5 with 10, 0.5 -> 0 with 5
+    assert axis.stopping_distance(10.0, MID) == pytest.approx(0.75 / 20 + 0.25 / 10)
+
+
+def test_target_must_be_finite(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    for target in (math.inf, -math.inf, math.nan):
+        with pytest.raises(ValueError, match="^target must be finite$"):
+            axis.move_to(target, 1.0, 1.0)
+
+
+def test_a_standing_axis_needs_no_braking_distance_with_a_profile(clock: VirtualClock) -> None:
+    assert Axis(clock).stopping_distance(1.0, MID) == 0.0
+
+
+def test_profiled_stop_after_a_move_in_the_middle_of_a_ramp(clock: VirtualClock) -> None:
+    """The reference speed of a stop is the last move's speed too (not only a jog's)."""
+    axis = Axis(clock)
+    axis.move_to(10_000.0, 100.0, 100.0, profile=MID)
+    clock.advance(1.25)
+    assert axis.velocity() == pytest.approx(75.0)
+    assert axis.stop(100.0, profile=MID) == pytest.approx(2.5)
+
+
+def test_profiled_jog_stop_with_its_own_reference_speed(clock: VirtualClock) -> None:
+    """``jog(0, 200, …)`` brakes with the sections of 200: 75 inc/s lies in section 1 (below 100),
+    so 75 -> 0 with D/2 = 50 takes 1.5 s."""
+    axis = _mid_ramp(clock)
+    done: list[float] = []
+    axis.jog(0, 200.0, 100.0, on_done=lambda: done.append(clock.now()), profile=MID)
+    assert [s.a for s in axis.segments()] == [-50.0]
+    run_idle(clock, axis)
+    assert done == [pytest.approx(1.25 + 1.5)]
