@@ -15,6 +15,7 @@ per-mutant timeout is mutmut's CPU-time limit (a multiple of the tests' own time
     python benchmarks/mutation.py --module sers/codec   # one (a unique part of its path)
     python benchmarks/mutation.py --module sers/codec --survivors   # re-run only last survivors
     python benchmarks/mutation.py --report --list-survivors         # no run: last results, diffs
+    python benchmarks/mutation.py --module sers/codec --tests-from main   # the tests of a revision
 
 Not part of the default CI run (minutes per module).
 """
@@ -39,6 +40,8 @@ EQUIVALENTS = Path(__file__).resolve().with_name("mutation_equivalent.toml")
 #: Module -> the tests that exercise it (the smallest subset that does).
 MODULES: dict[str, tuple[str, ...]] = {
     "devsim/devices/sers/codec.py": (
+        "tests/sers/test_codec_boundaries.py",
+        "tests/sers/test_fuzz.py::test_framer_accepts_any_bytes",
         "tests/sers/test_line_limit.py",
         "tests/sers/test_noise_paths.py",
         "tests/sers/test_interface.py",
@@ -47,16 +50,20 @@ MODULES: dict[str, tuple[str, ...]] = {
     "devsim/devices/gms96/codec.py": (
         "tests/gms96/test_codec.py",
         "tests/gms96/test_frame_limit.py",
+        "tests/gms96/test_codec_boundaries.py",
     ),
     "devsim/devices/pcd4h3/sbus.py": (
         "tests/pcd4h3/test_sbus.py",
         "tests/pcd4h3/test_link_vectors.py",
+        "tests/pcd4h3/test_sbus_boundaries.py",
     ),
     "devsim/devices/ip247/as511.py": (
         "tests/ip247/test_as511.py",
+        "tests/ip247/test_as511_boundaries.py",
     ),
     "devsim/devices/poselesta/tape.py": (
         "tests/poselesta/test_tape.py",
+        "tests/poselesta/test_tape_boundaries.py",
     ),
     # the facade maps and the kit (helper mut-core)
     "devsim/facades/modbus_map.py": (
@@ -143,16 +150,27 @@ use_git_change_detection = false
 """
 
 
-def prepare(module: str, fresh: bool) -> Path:
-    """The module's work directory: its pyproject, links to the sources and tests."""
+def prepare(module: str, fresh: bool, tests_from: str | None = None) -> Path:
+    """The module's work directory: its pyproject, a link to the sources, and the tests: a link
+    to the checkout's, or (``tests_from``) those of a git revision, for figures before a change."""
     work = WORK / slug(module)
     if fresh and (work / "mutants").exists():
         shutil.rmtree(work / "mutants")
     work.mkdir(parents=True, exist_ok=True)
-    for name in ("devsim", "tests"):
-        link = work / name
-        if not link.is_symlink():
-            link.symlink_to(ROOT / name, target_is_directory=True)
+    source = work / "devsim"
+    if not source.is_symlink():
+        source.symlink_to(ROOT / "devsim", target_is_directory=True)
+    tests = work / "tests"
+    if tests.is_symlink():
+        tests.unlink()
+    elif tests.exists():
+        shutil.rmtree(tests)
+    if tests_from is None:
+        tests.symlink_to(ROOT / "tests", target_is_directory=True)
+    else:
+        archive = subprocess.run(["git", "archive", tests_from, "tests"], cwd=ROOT, check=True,
+                                 capture_output=True).stdout
+        subprocess.run(["tar", "-x", "-C", str(work)], input=archive, check=True)
     (work / "pyproject.toml").write_text(_pyproject(module))
     return work
 
@@ -164,31 +182,30 @@ def _mutmut(work: Path, *args: str) -> int:
     return subprocess.call(command, cwd=work, env=env)
 
 
-def run(module: str, survivors_only: bool) -> None:
-    if survivors_only:
-        work = prepare(module, fresh=False)
-        names = [m.name for m in collect(module).survivors]
-        if not names:
-            print(f"{module}: no survivors to re-run")
-            return
-        # the tests may have changed: their copy is refreshed by mutmut; results of these reset
-        _forget(work, module, set(names))
-        _mutmut(work, "run", "--max-children", "1", *names)
-    else:
-        work = prepare(module, fresh=True)
-        _mutmut(work, "run", "--max-children", "1")
+def run(module: str, survivors_only: bool, tests_from: str | None = None) -> None:
+    if not survivors_only:
+        _mutmut(prepare(module, fresh=True, tests_from=tests_from), "run", "--max-children", "1")
+        return
+    names = [m.name for m in collect(module).survivors]
+    if not names:
+        print(f"{module}: no survivors to re-run")
+        return
+    # Only the survivors run again (against the tests as they are now: mutmut copies them
+    # afresh).  mutmut forgets every verdict when the test selection changed; a mutant killed
+    # before stays killed by more tests, so the earlier verdicts of the others are kept.
+    earlier = json.loads(_meta(module).read_text())["exit_code_by_key"]
+    work = prepare(module, fresh=False, tests_from=tests_from)
+    _mutmut(work, "run", "--max-children", "1", *names)
+    meta = _meta(module)
+    data = json.loads(meta.read_text())
+    for name, code in earlier.items():
+        if name not in names and data["exit_code_by_key"].get(name) is None:
+            data["exit_code_by_key"][name] = code
+    meta.write_text(json.dumps(data, indent=4))
 
 
 def _meta(module: str) -> Path:
     return WORK / slug(module) / "mutants" / (module + ".meta")
-
-
-def _forget(work: Path, module: str, names: set[str]) -> None:
-    meta = _meta(module)
-    data = json.loads(meta.read_text())
-    for name in names:
-        data["exit_code_by_key"][name] = None
-    meta.write_text(json.dumps(data, indent=4))
 
 
 def _function(name: str) -> str:
@@ -277,11 +294,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--report", action="store_true", help="no run: print the last results")
     parser.add_argument("--survivors", action="store_true", help="re-run only the last run's survivors")
     parser.add_argument("--list-survivors", action="store_true", help="print each surviving mutant's diff")
+    parser.add_argument("--tests-from", metavar="REV",
+                        help="run against the tests of a git revision (figures before a change)")
     args = parser.parse_args(argv)
     modules = pick(args.module)
     if not args.report:
         for module in modules:
-            run(module, args.survivors)
+            run(module, args.survivors, args.tests_from)
     report([collect(m) for m in modules], args.list_survivors)
     return 0
 

@@ -11,6 +11,7 @@ from devsim.core.clock import VirtualClock
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.sers import SersDevice, codec
 from devsim.devices.sers.statements import parse
+from tests.sers.framer_oracle import framer_events
 
 ALPHABET = "#*?=<>!:.,;-+/&|^\" \t\r\n0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
 COMMANDS = ["#ON", "#OFF", "#E", "#S", "#H", "#W=360", "#V=1000", "#P11?", "#P12=0", "#RS", "#LS",
@@ -31,47 +32,6 @@ def test_parser_never_raises_and_is_prefix_stable(text: str, final: bool) -> Non
         ]
 
 
-def _framer_oracle(data: bytes) -> list[object]:
-    """The events of §4.1/§4.2 written from the manual, byte by byte: noise before ``#`` is
-    ignored; ``#`` starts a line (or restarts inside one) and its digits (or ``*``) are the
-    address; CR or LF ends the line, its other half right after is ignored as a pair; the
-    61st character of a line and every one after it is dropped and the end reports it."""
-    events: list[object] = []
-    in_line, count, dropped, address, last_end = False, 0, False, None, None
-    for byte in data:
-        end_before, last_end = last_end, None
-        if byte in b"\r\n":
-            if not in_line:
-                events.append(codec.Ignored(pair=end_before is not None and end_before != byte))
-                continue
-            if address is not None:
-                events.append(codec.Address(None if address == "" else address if address == "*" else int(address)))
-            events += [codec.LineEnd(dropped)]
-            in_line, address, last_end = False, None, byte
-            continue
-        if byte == ord("#"):
-            events.append(codec.Restart(mid_line=in_line))
-            if not in_line:
-                count, dropped = 0, False
-            in_line, address, count = True, "", count + 1
-            continue
-        if not in_line:
-            events.append(codec.Ignored())
-            continue
-        count += 1
-        char = chr(byte)
-        if address is not None:
-            if (char.isascii() and char.isdigit() and address != "*") or (char == "*" and address == ""):
-                address += char
-                events.append(codec.AddressChar())
-                continue
-            events.append(codec.Address(None if address == "" else address if address == "*" else int(address)))
-            address = None
-        dropped = dropped or count > codec.MAX_LINE
-        events.append(codec.TextChar(char, dropped=count > codec.MAX_LINE))
-    return events
-
-
 #: Lines of 55 to 65 characters (``#``, an address, text), around the limit of §4.1.
 LINES_AT_THE_LIMIT = hs.builds(
     lambda length, address, text, end: b"#" + address + text[: length - 1 - len(address)] + end,
@@ -87,9 +47,9 @@ FRAMER_BYTES = hs.lists(hs.one_of(hs.sampled_from([b"#", b"*", b"\r", b"\n", b"1
 @pytest.mark.manual("§4.1", "at most 60 characters in a line")
 @given(hs.one_of(hs.binary(max_size=200), FRAMER_BYTES))
 def test_framer_accepts_any_bytes(data: bytes) -> None:
-    """Any bytes: the events the manual's rules give (the oracle above), one byte at a time."""
+    """Any bytes: the events the manual's rules give (tests/sers/framer_oracle.py), byte by byte."""
     framer = codec.Framer()
-    assert [event for byte in data for event in framer.feed(byte)] == _framer_oracle(data)
+    assert [framer.feed(byte) for byte in data] == framer_events(data)
 
 
 def _device() -> tuple[SersDevice, VirtualClock, bytearray, NonVolatileMemory]:
