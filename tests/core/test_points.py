@@ -337,3 +337,73 @@ def test_state_of_a_name_under_a_value_keeps_the_value() -> None:
     model = Model()
     model.values["motion.x"] = 5
     assert t.state(model) == {"motion": False}
+
+
+# -- boundaries found by the mutation run (issue 35) ---------------------------------------------
+
+
+def test_a_value_shown_whole_up_to_exactly_40_characters() -> None:
+    forty, forty_one = "x" * 38, "x" * 39  # their reprs: 40 and 41 characters
+    with pytest.raises(BadValue) as err:
+        parse_bool(forty)
+    assert str(err.value).endswith(f", not '{forty}'")
+    with pytest.raises(BadValue) as err:
+        parse_bool(forty_one)
+    assert str(err.value).endswith(", not '" + "x" * 36 + "...")
+
+
+def test_large_whole_limits_keep_every_digit() -> None:
+    assert number_text(1e12) == "1000000000000"
+    assert number_text(2147483647.0) == "2147483647"
+    assert number_text(0.1) == "0.1"
+
+
+@pytest.mark.parametrize("value", ["nan", "abc", True, [1.0], None])
+def test_float_points_take_numbers_only(value: Any) -> None:
+    with pytest.raises(BadValue, match="^expects a (finite )?number, not "):
+        parse_as("float", value)
+
+
+def test_a_declared_name_is_never_respelt_by_the_alias() -> None:
+    t = PointTable.of([_point("a"), _point("b")], alias=lambda name: "b")
+    assert t.find("a").name == "a"  # type: ignore[union-attr]
+    assert t.find("anything").name == "b"  # type: ignore[union-attr]
+
+
+def test_every_family_is_asked_in_turn() -> None:
+    def output(name: str) -> Point | None:
+        return _point(name, "bool") if name.startswith("output.") else None
+
+    t = PointTable.of([], families=[Family("marker.M<n>", "bool", "a marker", "§1", marker),
+                                    Family("output.<n>", "bool", "an output", "§2", output)])
+    assert t.find("output.3").name == "output.3"  # type: ignore[union-attr]
+    assert t.find("marker.M3").name == "marker.M3"  # type: ignore[union-attr]
+    assert t.find("input.3") is None
+
+
+def test_default_and_given_owner_in_messages() -> None:
+    t, model = table(), Model()
+    with pytest.raises(UnknownName, match="^reset of the device can only be set$"):
+        t.read(model, "reset")
+    with pytest.raises(ReadOnlyName, match="^motion of the device is read-only$"):
+        t.set(model, "motion", True)
+    with pytest.raises(ReadOnlyName, match="^motion of the device is read-only$"):
+        t.parse("motion", True)
+    for call in (lambda: t.read(model, "zzz", "card 2"), lambda: t.parse("zzz", 1, "card 2"),
+                 lambda: t.set(model, "zzz", 1, "card 2")):
+        with pytest.raises(UnknownName) as err:
+            call()
+        assert str(err.value) == "card 2 has no 'zzz'"
+
+
+def test_state_skips_points_outside_it_wherever_they_stand() -> None:
+    t = PointTable.of([_point("n"), _point("axis.position", "float", in_state=True)])
+    assert t.state(Model()) == {"axis": {"position": 1.5}}
+
+
+def test_suggestions_compare_the_first_60_characters() -> None:
+    """difflib's ratio 2·M/(len a + len b) with the cutoff 0.6: 26 matching characters of a
+    60-character cut give 52/86 > 0.6 (suggested); a 61-character cut would give 52/87 < 0.6."""
+    t = PointTable.of([_point("a" * 26)])
+    name = "a" * 30 + "z" * 31
+    assert t.unknown_text(name, "d").endswith(f"(did you mean {'a' * 26}?)")
