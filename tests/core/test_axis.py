@@ -968,7 +968,7 @@ def test_default_encoder_index_every_12800_increments(clock: VirtualClock) -> No
 _SMALL = st.floats(0.01, 0.99)
 
 
-@BOUNDARY
+@settings(BOUNDARY, max_examples=40)
 @given(st.sampled_from(["speed", "accel", "decel"]), st.one_of(st.sampled_from([0.0, -0.0, -1.0, math.nan]), _SMALL))
 def test_rates_must_be_positive_and_may_be_below_one(which: str, value: float) -> None:
     """Oracle: any speed, acceleration or deceleration > 0 is taken (also below 1); 0, negative
@@ -1037,3 +1037,22 @@ def test_profiled_jog_stop_with_its_own_reference_speed(clock: VirtualClock) -> 
     assert [s.a for s in axis.segments()] == [-50.0]
     run_idle(clock, axis)
     assert done == [pytest.approx(1.25 + 1.5)]
+
+
+def test_profiled_stop_of_a_tracked_axis_uses_its_speed(clock: VirtualClock) -> None:
+    """No move or jog gave a speed: the stop's sections are fractions of the current |v| (10)."""
+    axis = Axis(clock)
+    axis.track(0.0, 10.0)
+    assert axis.stop(10.0, profile=MID) == pytest.approx(0.5 + 1.0)  # 10 -> 5 with 10, 5 -> 0 with 5
+
+
+def test_many_commands_at_one_instant_keep_the_past(clock: VirtualClock) -> None:
+    """Re-planning again and again at the same instant adds nothing to the history (a plan that
+    starts now has no past), so the past stays answerable."""
+    axis = Axis(clock)
+    axis.move_to(1000.0, 100.0, 100.0)
+    clock.advance(1.0)
+    for k in range(70):
+        axis.move_to(1000.0 + k, 100.0, 100.0)
+    assert axis.position(0.5) == pytest.approx(12.5)
+    assert axis.velocity(0.5) == pytest.approx(50.0)

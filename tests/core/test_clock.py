@@ -198,3 +198,10 @@ async def test_real_clock_scaled_by_speed() -> None:
     assert fired_at == [fired_at[0]]
     assert timer.cancelled  # a fired timer is spent
     timer.cancel()
+
+
+def test_timer_repr_for_debugging() -> None:
+    timer = Timer(1.5, print)
+    assert repr(timer) == "<Timer at 1.500000 pending <built-in function print>>"
+    timer.cancel()
+    assert repr(timer) == "<Timer at 1.500000 cancelled <built-in function print>>"
