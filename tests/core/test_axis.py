@@ -809,7 +809,7 @@ def test_track_follows_a_sampled_loop(clock: VirtualClock) -> None:
 
 def test_construction(clock: VirtualClock) -> None:
     for cpr in (0, -1):
-        with pytest.raises(ValueError, match="counts_per_rev must be positive"):
+        with pytest.raises(ValueError, match="^counts_per_rev must be positive$"):
             Axis(clock, counts_per_rev=cpr)
     clock.advance(2.0)
     axis = Axis(clock, position=7, counts_per_rev=1, name="X")
@@ -817,7 +817,7 @@ def test_construction(clock: VirtualClock) -> None:
     assert (axis.name, axis.counts_per_rev, axis.moving, axis.stopped_since()) == ("X", 1, False, 2.0)
     assert repr(axis) == "<Axis X x=7.000 v=0.000 idle>"
     assert axis.segments() == [] and axis.final_position() == 7.0
-    assert axis.position(0.0) == 7.0  # before it was made: where it stands
+    assert (axis.position(0.0), axis.velocity(0.0), axis.acceleration(0.0)) == (7.0, 0.0, 0.0)  # before it was made
     assert clock.next_event() is None
 
 
@@ -860,6 +860,8 @@ def test_region_switch_bounds_and_its_own_watch(clock: VirtualClock) -> None:
 
     sw = RegionSwitch(axis, 100.0, 110.0, shifted.append, make_watch=make_watch)
     assert sw.active and len(made) == 1
+    axis.set_position(20.0)  # its watch is told, and the switch calls back
+    assert shifted == [False] and not sw.active
     assert (made[0].low, made[0].high) == (100.0, 110.0)  # type: ignore[attr-defined]
 
 
@@ -1056,3 +1058,10 @@ def test_many_commands_at_one_instant_keep_the_past(clock: VirtualClock) -> None
         axis.move_to(1000.0 + k, 100.0, 100.0)
     assert axis.position(0.5) == pytest.approx(12.5)
     assert axis.velocity(0.5) == pytest.approx(50.0)
+
+
+def test_profiled_stop_from_exactly_one_increment_per_second(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    axis.jog(1, 1.0, 10.0)
+    clock.advance(1.0)
+    assert axis.stop(10.0, profile=MID) == pytest.approx(1.0 + 0.05 + 0.1)  # 1 -> 0.5 with 10, 0.5 -> 0 with 5
