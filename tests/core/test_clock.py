@@ -140,15 +140,27 @@ async def test_sleep_on_a_virtual_clock_in_auto_mode() -> None:
         assert order == [("short", 2.5), ("long", 100.0)]
         assert clock.now() == 100.0
         # idle with nothing pending, then a new timer wakes auto mode
-        fired = asyncio.Event()
-        await asyncio.sleep(0)
-        clock.call_later(7.0, fired.set)
-        await asyncio.wait_for(fired.wait(), 5)
-        assert clock.now() == 107.0
+        for expected in (107.0, 114.0):  # each new timer wakes it, again and again
+            # the loop idles (a wall-time wait, no virtual timer): auto mode waits for a timer;
+            # the check below holds however long this takes, it only reaches that path
+            await asyncio.sleep(0.02)
+            fired = asyncio.Event()
+            clock.call_later(7.0, fired.set)
+            await asyncio.wait_for(fired.wait(), 5)
+            assert clock.now() == expected
+        # virtual time costs no wall time: ten events in a row, each a jump (the bound is a
+        # thousand times what they take; a jump that waited a wall second would miss it)
+        await asyncio.wait_for(_ten_sleeps(clock), 5)
+        assert clock.now() == 124.0
     finally:
         clock.stop_auto()
         clock.stop_auto()
     assert clock._auto_task is None
+
+
+async def _ten_sleeps(clock: VirtualClock) -> None:
+    for _ in range(10):
+        await clock.sleep(1.0)
 
 
 async def test_auto_mode_waits_for_a_busy_loop() -> None:
@@ -205,3 +217,56 @@ def test_timer_repr_for_debugging() -> None:
     assert repr(timer) == "<Timer at 1.500000 pending <built-in function print>>"
     timer.cancel()
     assert repr(timer) == "<Timer at 1.500000 cancelled <built-in function print>>"
+
+
+def test_a_cancelled_timer_first_in_line_does_not_stop_the_others() -> None:
+    clock = VirtualClock()
+    seen: list[float] = []
+    first = clock.call_at(1.0, lambda: seen.append(1.0))
+    clock.call_at(2.0, lambda: seen.append(2.0))
+    first.cancel()
+    assert clock.advance(3.0) == 1 and seen == [2.0]
+
+
+def test_a_fired_timer_is_spent() -> None:
+    clock = VirtualClock()
+    timer = clock.call_at(1.0, lambda: None)
+    assert timer.cancelled is False and timer.when == 1.0
+    clock.advance(1.0)
+    assert timer.cancelled is True
+
+
+def test_timers_of_one_instant_order_by_creation() -> None:
+    clock = VirtualClock()
+    a, b = clock.call_at(1.0, print), clock.call_at(1.0, print)
+    assert a < b and not b < a
+    assert not Timer(1.0, print) < Timer(1.0, print, 0) and not Timer(1.0, print, 0) < Timer(1.0, print)
+
+
+def test_run_until_runs_an_event_exactly_at_the_deadline() -> None:
+    clock = VirtualClock()
+    hits: list[float] = []
+    clock.call_at(4.0, lambda: hits.append(clock.now()))
+    assert clock.run_until(lambda: bool(hits), timeout=4.0) is True
+    assert hits == [4.0]
+
+
+def test_clock_messages() -> None:
+    with pytest.raises(ValueError, match="^time does not run backwards$"):
+        VirtualClock().advance(-1.0)
+    with pytest.raises(ValueError, match="^speed must be positive$"):
+        RealClock(0.0)
+    assert RealClock().speed == 1.0
+
+
+async def test_real_clock_timer_fields_and_double_cancel() -> None:
+    clock = RealClock(speed=1000.0)
+
+    def callback() -> None:
+        return None
+
+    timer = clock.call_at(1e6, callback)
+    assert (timer.when, timer.callback, timer.cancelled) == (1e6, callback, False)
+    timer.cancel()
+    timer.cancel()
+    assert timer.cancelled
