@@ -80,10 +80,20 @@ MODULES: dict[str, tuple[str, ...]] = {
         "tests/core/test_clock.py",
     ),
     "devsim/core/settings.py": (  # not test_settings.py's two import checks: mutmut imports dataclasses
+        "tests/core/test_settings_reference.py",
         "tests/test_settings.py::test_defaults_conversions_and_values",
         "tests/test_settings.py::test_each_problem_is_named",
         "tests/test_settings.py::test_problems_in_a_file_name_their_line",
         "tests/test_settings.py::test_rows_document_every_key",
+    ),
+    "devsim/facades/mqtt_topics.py": (
+        "tests/facades/test_mqtt_topics.py",
+    ),
+    "devsim/facades/opcua_space.py": (
+        "tests/facades/test_opcua_space.py",
+    ),
+    "devsim/facades/canopen_od.py": (
+        "tests/facades/test_canopen.py",
     ),
 }
 
