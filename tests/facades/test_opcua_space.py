@@ -103,6 +103,7 @@ def test_values_to_and_from_opcua() -> None:
     ("0", "opc.tcp://127.0.0.1:0/devsim/"),
     ("65535", "opc.tcp://127.0.0.1:65535/devsim/"),
     ("0.0.0.0:4840", "opc.tcp://0.0.0.0:4840/devsim/"),
+    ("XBOX:4840", "opc.tcp://XBOX:4840/devsim/"),  # only the brackets of an IPv6 address come off
     ("[::1]:4840", "opc.tcp://[::1]:4840/devsim/"),
     ("::1:4840", "opc.tcp://[::1]:4840/devsim/"),
     ("opc.tcp://h:1/x/", "opc.tcp://h:1/x/"),
