@@ -160,6 +160,7 @@ pytest_add_cli_args_test_selection = [{tests}]
 timeout_multiplier = 5.0
 timeout_constant = 5.0
 use_git_change_detection = false
+also_copy = ["docs"]
 """
 
 
@@ -170,9 +171,10 @@ def prepare(module: str, fresh: bool, tests_from: str | None = None) -> Path:
     if fresh and (work / "mutants").exists():
         shutil.rmtree(work / "mutants")
     work.mkdir(parents=True, exist_ok=True)
-    source = work / "devsim"
-    if not source.is_symlink():
-        source.symlink_to(ROOT / "devsim", target_is_directory=True)
+    for name in ("devsim", "docs"):  # docs: tests compare generated files with it (docs/eds/)
+        source = work / name
+        if not source.is_symlink():
+            source.symlink_to(ROOT / name, target_is_directory=True)
     tests = work / "tests"
     if tests.is_symlink():
         tests.unlink()
