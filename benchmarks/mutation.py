@@ -65,6 +65,36 @@ MODULES: dict[str, tuple[str, ...]] = {
         "tests/poselesta/test_tape.py",
         "tests/poselesta/test_tape_boundaries.py",
     ),
+    # the facade maps and the kit (helper mut-core)
+    "devsim/facades/modbus_map.py": (
+        "tests/facades/test_modbus_map.py",
+    ),
+    "devsim/core/points.py": (
+        "tests/core/test_points.py",
+    ),
+    "devsim/core/axis.py": (
+        "tests/core/test_axis.py",
+        "tests/core/test_path.py",
+    ),
+    "devsim/core/clock.py": (
+        "tests/core/test_clock.py",
+    ),
+    "devsim/core/settings.py": (  # not test_settings.py's two import checks: mutmut imports dataclasses
+        "tests/core/test_settings_reference.py",
+        "tests/test_settings.py::test_defaults_conversions_and_values",
+        "tests/test_settings.py::test_each_problem_is_named",
+        "tests/test_settings.py::test_problems_in_a_file_name_their_line",
+        "tests/test_settings.py::test_rows_document_every_key",
+    ),
+    "devsim/facades/mqtt_topics.py": (
+        "tests/facades/test_mqtt_topics.py",
+    ),
+    "devsim/facades/opcua_space.py": (
+        "tests/facades/test_opcua_space.py",
+    ),
+    "devsim/facades/canopen_od.py": (
+        "tests/facades/test_canopen.py",
+    ),
 }
 
 #: mutmut's exit-code meanings, folded into the columns printed.
@@ -134,6 +164,7 @@ pytest_add_cli_args_test_selection = [{tests}]
 timeout_multiplier = 5.0
 timeout_constant = 5.0
 use_git_change_detection = false
+also_copy = ["docs"]
 """
 
 
@@ -144,9 +175,10 @@ def prepare(module: str, fresh: bool, tests_from: str | None = None) -> Path:
     if fresh and (work / "mutants").exists():
         shutil.rmtree(work / "mutants")
     work.mkdir(parents=True, exist_ok=True)
-    source = work / "devsim"
-    if not source.is_symlink():
-        source.symlink_to(ROOT / "devsim", target_is_directory=True)
+    for name in ("devsim", "docs"):  # docs: tests compare generated files with it (docs/eds/)
+        source = work / name
+        if not source.is_symlink():
+            source.symlink_to(ROOT / name, target_is_directory=True)
     tests = work / "tests"
     if tests.is_symlink():
         tests.unlink()

@@ -164,7 +164,7 @@ class Axis:
     ) -> float:
         """Distance needed to brake from the current velocity with ``decel``: v²/(2·decel), or
         with ``profile`` the sum over its sections (reference speed as for :meth:`stop`)."""
-        if decel <= 0:
+        if not decel > 0:  # also refuses NaN
             raise ValueError("decel must be positive")
         v = self.velocity()
         ramp = make_ramp(profile, self._reference_speed(speed, v), decel) if v != 0.0 else None
@@ -271,7 +271,7 @@ class Axis:
         ``speed``, by default the speed of the last :meth:`move_to`/:meth:`jog` (the current
         |velocity| if there was none).
         """
-        if decel <= 0:
+        if not decel > 0:  # also refuses NaN
             raise ValueError("decel must be positive")
         now = self.clock.now()
         x0, v0, _ = self._state(now)

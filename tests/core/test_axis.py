@@ -5,9 +5,14 @@ from __future__ import annotations
 import math
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from devsim.core.axis import Axis, RampProfile, RegionSwitch, Segment
 from devsim.core.clock import VirtualClock
+
+#: No deadline, no speed health check: a loaded machine (or a mutation run) must not fail these.
+BOUNDARY = settings(deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 
 @pytest.fixture
@@ -649,3 +654,414 @@ def test_segment_sine_closed_form() -> None:
     assert s.acceleration(2.0) == pytest.approx(math.pi / 2 * 4.0)
     for t in (1.0 + 1e-7, 1.3, 2.0, 2.9999):
         assert s.solve(s.position(t)) == pytest.approx(t, abs=1e-12)
+
+
+# -- boundaries (issue 35): mid-ramp profiled commands, the recent past --------------------------
+# Profile sections as SERS P1005–P1008 define them (spec sers §5.2, RampProfile): with speed1 0.5
+# and accel1 0.5, section 1 is 0 … V/2 with A/2, above it A; braking mirrors it with D.
+MID = RampProfile(speed1=0.5, accel1=0.5)
+
+
+def _mid_ramp(clock: VirtualClock) -> Axis:
+    """A jog to 100 inc/s with A = 100 under MID, caught at 1.25 s: 75 inc/s, in section 2."""
+    axis = Axis(clock)
+    axis.jog(+1, 100.0, 100.0, profile=MID)  # 0 -> 50 in 1 s (a = 50), 50 -> 100 in 0.5 s (a = 100)
+    clock.advance(1.25)
+    assert axis.velocity() == pytest.approx(75.0) and axis.phase() == "accel"
+    return axis
+
+
+def test_profiled_stop_in_the_middle_of_a_ramp_keeps_the_jogs_speed_as_reference(clock: VirtualClock) -> None:
+    """The sections of a stop are fractions of the last jog's speed (100), not of the speed the
+    axis happens to have (75): 75 -> 50 with D, 50 -> 0 with D/2."""
+    axis = _mid_ramp(clock)
+    x = axis.position()
+    assert axis.stopping_distance(100.0, MID) == pytest.approx((75**2 - 50**2) / 200 + 50**2 / 100)
+    assert axis.stopping_distance(100.0, MID, speed=75.0) == pytest.approx(
+        (75**2 - 37.5**2) / 200 + 37.5**2 / 100)  # a reference speed given: its sections
+    done: list[float] = []
+    end = axis.stop(100.0, on_done=lambda: done.append(clock.now()), profile=MID)
+    assert end == pytest.approx(1.25 + 0.25 + 1.0)
+    assert [s.a for s in axis.segments()] == [-100.0, -50.0]
+    run_idle(clock, axis)
+    assert done == [end]
+    assert axis.position() == pytest.approx(x + 40.625)
+
+
+def test_profiled_jog_stop_in_the_middle_of_a_ramp(clock: VirtualClock) -> None:
+    """``jog(0, speed, accel)`` is that stop, with the sections of ``speed``."""
+    axis = _mid_ramp(clock)
+    done: list[float] = []
+    axis.jog(0, 100.0, 100.0, on_done=lambda: done.append(clock.now()), profile=MID)
+    assert [s.a for s in axis.segments()] == [-100.0, -50.0]
+    run_idle(clock, axis)
+    assert done == [pytest.approx(2.5)]
+
+
+def test_profiled_jog_faster_in_the_middle_of_a_ramp(clock: VirtualClock) -> None:
+    """A new jog speed of 200 moves section 1 up to 100: 75 -> 100 with A/2, 100 -> 200 with A."""
+    axis = _mid_ramp(clock)
+    reached: list[float] = []
+    axis.jog(+1, 200.0, 100.0, on_done=lambda: reached.append(clock.now()), profile=MID)
+    assert [s.a for s in axis.segments()] == [50.0, 100.0, 0.0]
+    clock.advance(5.0)
+    assert reached == [pytest.approx(1.25 + 0.5 + 1.0)]
+    assert axis.velocity() == 200.0
+
+
+def test_reference_speed_must_be_positive(clock: VirtualClock) -> None:
+    axis = _mid_ramp(clock)
+    for speed in (0.0, -1.0, math.nan):
+        with pytest.raises(ValueError, match="^speed must be positive$"):
+            axis.stop(100.0, profile=MID, speed=speed)
+    with pytest.raises(ValueError, match="decel must be positive"):
+        axis.stopping_distance(0.0)
+
+
+def test_past_positions_after_a_quick_stop(clock: VirtualClock) -> None:
+    """The recent past stays what it was: the ramp, the cruise, then standing at the stop."""
+    axis = Axis(clock, position=10.0)
+    clock.advance(1.0)  # idle at 10 for one second
+    axis.move_to(1010.0, 100.0, 100.0)  # 1 s ramp (50 inc), then cruise
+    clock.advance(2.0)
+    axis.quick_stop()
+    assert axis.stopped_since() == 3.0
+    clock.advance(4.0)
+    assert axis.position(0.5) == 10.0 and axis.velocity(0.5) == 0.0  # idle before the move
+    assert axis.position(-1.0) == 10.0  # before anything: where the axis first stood
+    assert axis.position(1.5) == pytest.approx(10.0 + 12.5)
+    assert (axis.velocity(1.5), axis.acceleration(1.5), axis.phase(1.5)) == (pytest.approx(50.0), 100.0, "accel")
+    assert axis.position(2.5) == pytest.approx(10.0 + 50.0 + 50.0)
+    assert (axis.velocity(2.5), axis.acceleration(2.5), axis.phase(2.5)) == (pytest.approx(100.0), 0.0, "const")
+    for t in (3.0, 5.0, 7.0):
+        assert (axis.position(t), axis.velocity(t), axis.phase(t)) == (pytest.approx(160.0), 0.0, "idle")
+    axis.move_to(0.0, 100.0, 100.0)  # standing since the stop becomes part of the past
+    for t in (3.0, 5.0, 6.99):
+        assert (axis.position(t), axis.velocity(t), axis.acceleration(t)) == (pytest.approx(160.0), 0.0, 0.0)
+    assert (axis.position(0.5), axis.velocity(0.5), axis.acceleration(0.5)) == (10.0, 0.0, 0.0)
+
+
+def test_the_past_of_a_plan_ended_on_its_own(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    axis.move_to(100.0, 100.0, 100.0)  # triangle: 1 s up, 1 s down
+    clock.advance(5.0)
+    axis.move_to(0.0, 100.0, 100.0)
+    clock.advance(0.5)
+    assert axis.position(0.5) == pytest.approx(12.5)
+    assert axis.position(1.5) == pytest.approx(100.0 - 12.5)
+    assert axis.position(3.0) == 100.0 and axis.velocity(3.0) == 0.0  # standing at the target
+    assert axis.position(5.25) == pytest.approx(100.0 - 3.125)
+
+
+def test_history_keeps_the_last_64_segments(clock: VirtualClock) -> None:
+    """64 past segments are kept: a query further back answers with the oldest one kept."""
+    axis = Axis(clock)
+    for k in range(40):  # each step: a 1 s move of 1 inc (a triangle: two segments), back to back
+        axis.move_to(float(k + 1), 2.0, 4.0)
+        clock.advance(1.0)
+    axis.move_to(0.0, 2.0, 4.0)  # archives 40 x 2 segments; the last 64 are kept
+    kept = axis._history
+    assert len(kept) == 64
+    oldest = kept[0]
+    assert axis.position(0.1) == oldest.x0  # further back than the history reaches
+    assert axis.position(oldest.t0) == pytest.approx(oldest.x0)
+    assert oldest.t0 == 8.0  # 80 segments back to back (no standstill between): moves 0 … 7 dropped
+    clock.advance(0.25)
+    axis.move_to(5.0, 2.0, 4.0)  # in the middle of a plan: the running segment is cut, 64 kept
+    assert len(axis._history) == 64 and axis._history[0].t0 == 8.5
+
+
+def test_dwell_is_a_planned_standstill(clock: VirtualClock) -> None:
+    axis = Axis(clock, position=5.0)
+    done: list[float] = []
+    clock.advance(1.0)
+    axis.dwell(2.0, on_done=lambda: done.append(clock.now()))
+    assert axis.moving and axis.stopped_since() is None
+    assert axis.segments()[0].t0 == 1.0 and axis.segments()[0].t1 == 3.0
+    clock.advance(1.0)
+    assert (axis.position(), axis.velocity(), axis.phase(), axis.moving) == (5.0, 0.0, "idle", True)
+    clock.advance(1.5)
+    assert done == [3.0]
+    assert not axis.moving and axis.stopped_since() == 3.0 and axis.position() == 5.0
+
+
+def test_track_follows_a_sampled_loop(clock: VirtualClock) -> None:
+    """A servo loop reports position and velocity; the axis goes on at that velocity until the
+    next report, and watches fire on that extrapolation."""
+    axis = Axis(clock)
+    crossings: list[tuple[float, int]] = []
+    axis.watch(25.0, lambda d: crossings.append((clock.now(), d)))
+    axis.track(10.0, 10.0)
+    assert axis.moving and axis.final_position() == math.inf and axis.stopped_since() is None
+    assert clock.next_event() == 1.5  # the crossing of 25, nothing else
+    clock.advance(2.0)
+    assert axis.position() == pytest.approx(30.0) and axis.velocity() == 10.0
+    assert crossings == [(1.5, +1)]
+    axis.track(31.0, -20.0)
+    assert axis.final_position() == -math.inf
+    clock.advance(0.5)
+    assert axis.position() == pytest.approx(21.0) and crossings[-1] == (pytest.approx(2.3), -1)
+    axis.track(20.0, 0.0)  # the loop stands still: at rest where it says, no timers
+    assert not axis.moving and axis.position() == 20.0 and axis.velocity() == 0.0
+    assert axis.stopped_since() == 2.5 and clock.next_event() is None
+    assert axis.position(2.25) == pytest.approx(26.0)  # the past as it was extrapolated
+
+
+def test_construction(clock: VirtualClock) -> None:
+    for cpr in (0, -1):
+        with pytest.raises(ValueError, match="^counts_per_rev must be positive$"):
+            Axis(clock, counts_per_rev=cpr)
+    clock.advance(2.0)
+    axis = Axis(clock, position=7, counts_per_rev=1, name="X")
+    assert axis.position() == 7.0 and type(axis.position()) is float
+    assert (axis.name, axis.counts_per_rev, axis.moving, axis.stopped_since()) == ("X", 1, False, 2.0)
+    assert repr(axis) == "<Axis X x=7.000 v=0.000 idle>"
+    assert axis.segments() == [] and axis.final_position() == 7.0
+    assert (axis.position(0.0), axis.velocity(0.0), axis.acceleration(0.0)) == (7.0, 0.0, 0.0)  # before it was made
+    assert clock.next_event() is None
+
+
+def test_teleport_fires_point_watches_but_not_index_marks(clock: VirtualClock) -> None:
+    axis = Axis(clock, counts_per_rev=100)
+    points: list[int] = []
+    marks: list[int] = []
+    axis.watch(50.0, points.append)
+    axis.watch_index(marks.append)
+    generation = axis.plan_generation
+    axis.set_position(250.0)  # across the point and two index marks
+    assert points == [+1] and marks == []
+    assert axis.plan_generation != generation  # a watch armed under the old plan must re-arm
+    axis.set_position(10.0)
+    assert points == [+1, -1] and marks == []
+    axis.move_to(120.0, 1000.0, 1e6)  # a real move passes the mark at 100 and the point at 50
+    run_idle(clock, axis)
+    assert points == [+1, -1, +1] and marks == [+1]
+    axis.jog(1, 1.0, 1.0)
+    with pytest.raises(RuntimeError, match="^axis: set_position while moving$"):
+        axis.set_position(0.0)
+
+
+def test_region_switch_bounds_and_its_own_watch(clock: VirtualClock) -> None:
+    axis = Axis(clock, position=5.0)
+    with pytest.raises(ValueError, match="^low must not exceed high$"):
+        RegionSwitch(axis, 1.0, 0.0)
+    inside = RegionSwitch(axis, 0.0, 10.0)
+    assert inside.active and (inside.axis, inside.low, inside.high) == (axis, 0.0, 10.0)
+    point = RegionSwitch(axis, 5.0, 5.0)  # a region of one point is allowed
+    assert point.active
+    # a device that watches something else than the position (GMS96: set-point − v/Kv) gives
+    # its own watch; here one that watches the position shifted by 100
+    shifted: list[bool] = []
+    made: list[object] = []
+
+    def make_watch(rule: object, callback: object) -> object:
+        made.append(rule)
+        return axis._watches.add(rule, callback, True, axis.position() + 100.0)  # type: ignore[arg-type]
+
+    sw = RegionSwitch(axis, 100.0, 110.0, shifted.append, make_watch=make_watch)
+    assert sw.active and len(made) == 1
+    axis.set_position(20.0)  # its watch is told, and the switch calls back
+    assert shifted == [False] and not sw.active
+    assert (made[0].low, made[0].high) == (100.0, 110.0)  # type: ignore[attr-defined]
+
+
+class _Line:
+    """A path component at constant velocity (devsim.core.path gives real ones)."""
+
+    def __init__(self, x0: float, v: float) -> None:
+        self.x0, self.v = x0, v
+
+    def state(self, dt: float) -> tuple[float, float, float]:
+        return self.x0 + self.v * dt, self.v, 0.0
+
+
+def test_follow_pieces_then_a_profiled_stop(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    axis.jog(1, 50.0, 100.0)  # sets a reference speed of 50 ...
+    axis.quick_stop()
+    done: list[float] = []
+    end = axis.follow([(1.0, _Line(0.0, 10.0)), (2.0, _Line(10.0, 5.0)), (0.5, _Line(20.0, 4.0))],
+                      on_done=lambda: done.append(clock.now()))
+    assert end == 3.5 and axis.final_position() == 22.0
+    first = axis.segments()[0]
+    assert (first.t0, first.t1, first.x0, first.v0, first.a, first.shape, first.span) == (
+        0.0, 1.0, 0.0, 10.0, 0.0, "curve", 1.0)
+    clock.advance(2.0)
+    assert (axis.position(), axis.velocity(), axis.phase()) == (15.0, 5.0, "const")
+    assert axis.stopping_distance(10.0, MID) == pytest.approx((25 - 6.25) / 20 + 6.25 / 10)
+    # ... which a path forgets: the stop's profile sections are fractions of the current 5 inc/s
+    axis.stop(10.0, profile=MID)  # 5 -> 2.5 with 10, 2.5 -> 0 with 5: 0.25 s + 0.5 s
+    assert [s.a for s in axis.segments()] == [-10.0, -5.0]
+    run_idle(clock, axis)
+    assert done == [] and clock.now() == pytest.approx(2.75)
+
+
+def test_follow_nothing_stands_still_and_reports_done(clock: VirtualClock) -> None:
+    axis = Axis(clock, position=3.0)
+    clock.advance(1.0)
+    done: list[float] = []
+    assert axis.follow([], on_done=lambda: done.append(clock.now())) == 1.0
+    assert not axis.moving and axis.position() == 3.0
+    clock.advance(0.0)
+    assert done == [1.0]
+
+
+def test_state_at_segment_boundaries_and_beyond_the_plan(clock: VirtualClock) -> None:
+    """At the instant a segment ends, the next one holds (its acceleration); after the plan's end
+    the axis stands; before its start, the past."""
+    clock.advance(5.0)
+    axis = Axis(clock, position=10.0)
+    axis.move_to(1010.0, 100.0, 100.0)  # ramp 5 … 6, cruise 6 … 15, brake 15 … 16
+    assert axis.position(1.0) == 10.0  # before the plan, no history: where it started
+    assert (axis.velocity(1.0), axis.acceleration(1.0)) == (0.0, 0.0)
+    assert (axis.acceleration(6.0), axis.phase(6.0)) == (0.0, "const")
+    assert (axis.acceleration(15.0), axis.phase(15.0)) == (-100.0, "decel")
+    assert (axis.position(20.0), axis.velocity(20.0), axis.acceleration(20.0)) == (1010.0, 0.0, 0.0)
+    clock.advance(3.0)
+    axis.move_to(0.0, 100.0, 100.0)  # the old plan goes to the history, from its first segment
+    assert axis.position(1.0) == 10.0 and axis.acceleration(1.0) == 0.0
+    assert (axis.acceleration(5.0), axis.phase(5.0)) == (100.0, "accel")  # a past segment's start
+    assert (axis.acceleration(6.0), axis.phase(6.0)) == (0.0, "const")
+
+
+def test_plan_generation_changes_with_every_plan(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    seen = [axis.plan_generation]
+    axis.move_to(10.0, 10.0, 10.0)
+    seen.append(axis.plan_generation)
+    run_idle(clock, axis)  # the end of a plan is a change too
+    seen.append(axis.plan_generation)
+    axis.move_to(0.0, 10.0, 10.0)
+    seen.append(axis.plan_generation)
+    clock.advance(0.5)
+    axis.stop(10.0)
+    seen.append(axis.plan_generation)
+    run_idle(clock, axis)
+    seen.append(axis.plan_generation)
+    axis.set_position(0.0)
+    seen.append(axis.plan_generation)
+    assert len(set(seen)) == len(seen)
+
+
+def test_track_at_one_increment_per_second(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    axis.track(0.0, 1.0)
+    clock.advance(2.0)
+    assert axis.moving and axis.position() == 2.0
+
+
+def test_sine_ramps_of_unit_acceleration(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    axis.move_to(100.0, 2.0, 1.0, profile=RampProfile(shape="sine"))
+    shapes = [(s.shape, s.a) for s in axis.segments()]
+    assert shapes == [("sine", 1.0), ("linear", 0.0), ("sine", -1.0)]
+    assert axis.phase(10.0) == "const"
+
+
+def test_default_encoder_index_every_12800_increments(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    marks: list[float] = []
+    axis.watch_index(lambda d: marks.append(axis.position()))
+    axis.move_to(30000.0, 12800.0, 1e6)
+    run_idle(clock, axis)
+    assert marks == [pytest.approx(12800.0, abs=1e-6), pytest.approx(25600.0, abs=1e-6)]
+
+
+_SMALL = st.floats(0.01, 0.99)
+
+
+@settings(BOUNDARY, max_examples=40)
+@given(st.sampled_from(["speed", "accel", "decel"]), st.one_of(st.sampled_from([0.0, -0.0, -1.0, math.nan]), _SMALL))
+def test_rates_must_be_positive_and_may_be_below_one(which: str, value: float) -> None:
+    """Oracle: any speed, acceleration or deceleration > 0 is taken (also below 1); 0, negative
+    and NaN are refused with the message naming them, and nothing changes."""
+    clock = VirtualClock()
+    rates = {"speed": 2.0, "accel": 2.0, "decel": 2.0, which: value}
+    taken = value > 0
+    axis = Axis(clock)
+    if taken:
+        assert axis.move_to(1.0, rates["speed"], rates["accel"], rates["decel"]) > 0.0
+        axis.quick_stop()
+        assert axis.stop(rates["decel"]) == 0.0 and axis.stopping_distance(rates["decel"]) == 0.0
+        if which != "decel":
+            axis.jog(1, rates["speed"], rates["accel"])
+            assert axis.moving
+    else:
+        with pytest.raises(ValueError, match="^speed, accel and decel must be positive$"):
+            axis.move_to(1.0, rates["speed"], rates["accel"], rates["decel"])
+        if which == "decel":
+            with pytest.raises(ValueError, match="^decel must be positive$"):
+                axis.stop(value)
+            with pytest.raises(ValueError, match="^decel must be positive$"):
+                axis.stopping_distance(value)
+        else:
+            with pytest.raises(ValueError, match="^speed and accel must be positive$"):
+                axis.jog(1, rates["speed"], rates["accel"])
+        assert not axis.moving and axis.position() == 0.0
+
+
+def test_a_reference_speed_below_one_is_taken(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    axis.jog(1, 1.0, 10.0)
+    clock.advance(1.0)
+    # reference 0.5: section 1 is 0 … 0.25 with 5; from 1 down to 0.25 with 10
+    assert axis.stopping_distance(10.0, MID, speed=0.5) == pytest.approx((1 - 0.0625) / 20 + 0.0625 / 10)
+    # at exactly 1 inc/s a profile still applies: 1 -> 0.5 with 10, 0.5 -> 0 with 5
+    assert axis.stopping_distance(10.0, MID) == pytest.approx(0.75 / 20 + 0.25 / 10)
+
+
+def test_target_must_be_finite(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    for target in (math.inf, -math.inf, math.nan):
+        with pytest.raises(ValueError, match="^target must be finite$"):
+            axis.move_to(target, 1.0, 1.0)
+
+
+def test_a_standing_axis_needs_no_braking_distance_with_a_profile(clock: VirtualClock) -> None:
+    assert Axis(clock).stopping_distance(1.0, MID) == 0.0
+
+
+def test_profiled_stop_after_a_move_in_the_middle_of_a_ramp(clock: VirtualClock) -> None:
+    """The reference speed of a stop is the last move's speed too (not only a jog's)."""
+    axis = Axis(clock)
+    axis.move_to(10_000.0, 100.0, 100.0, profile=MID)
+    clock.advance(1.25)
+    assert axis.velocity() == pytest.approx(75.0)
+    assert axis.stop(100.0, profile=MID) == pytest.approx(2.5)
+
+
+def test_profiled_jog_stop_with_its_own_reference_speed(clock: VirtualClock) -> None:
+    """``jog(0, 200, …)`` brakes with the sections of 200: 75 inc/s lies in section 1 (below 100),
+    so 75 -> 0 with D/2 = 50 takes 1.5 s."""
+    axis = _mid_ramp(clock)
+    done: list[float] = []
+    axis.jog(0, 200.0, 100.0, on_done=lambda: done.append(clock.now()), profile=MID)
+    assert [s.a for s in axis.segments()] == [-50.0]
+    run_idle(clock, axis)
+    assert done == [pytest.approx(1.25 + 1.5)]
+
+
+def test_profiled_stop_of_a_tracked_axis_uses_its_speed(clock: VirtualClock) -> None:
+    """No move or jog gave a speed: the stop's sections are fractions of the current |v| (10)."""
+    axis = Axis(clock)
+    axis.track(0.0, 10.0)
+    assert axis.stop(10.0, profile=MID) == pytest.approx(0.5 + 1.0)  # 10 -> 5 with 10, 5 -> 0 with 5
+
+
+def test_many_commands_at_one_instant_keep_the_past(clock: VirtualClock) -> None:
+    """Re-planning again and again at the same instant adds nothing to the history (a plan that
+    starts now has no past), so the past stays answerable."""
+    axis = Axis(clock)
+    axis.move_to(1000.0, 100.0, 100.0)
+    clock.advance(1.0)
+    for k in range(70):
+        axis.move_to(1000.0 + k, 100.0, 100.0)
+    assert axis.position(0.5) == pytest.approx(12.5)
+    assert axis.velocity(0.5) == pytest.approx(50.0)
+
+
+def test_profiled_stop_from_exactly_one_increment_per_second(clock: VirtualClock) -> None:
+    axis = Axis(clock)
+    axis.jog(1, 1.0, 10.0)
+    clock.advance(1.0)
+    assert axis.stop(10.0, profile=MID) == pytest.approx(1.0 + 0.05 + 0.1)  # 1 -> 0.5 with 10, 0.5 -> 0 with 5

@@ -91,3 +91,15 @@ def test_points_over_sdo_with_the_device_validation(bus: Bus) -> None:
     bus.remote.sdo[bus.index("input.I1")].raw = True
     assert bus.device.read("input.I1") is True
     assert bus.remote.sdo[bus.index("input.I1")].raw is True
+
+
+def test_a_kind_that_is_no_drive_has_no_cia402_objects() -> None:
+    """Every shipped kind is a drive; the EDS of one that is not lists no 6040h … 6502h (issue 35)."""
+    from devsim.facades.canopen_od import DRIVE_OBJECTS
+    from devsim.facades.canopen_od import eds as make_eds
+
+    plain, drive = make_eds("x", "d", [], drive=False), make_eds("x", "d", [], drive=True)
+    for index, *_ in DRIVE_OBJECTS:
+        assert f"=0x{index:04X}" not in plain and f"[{index:04X}]" not in plain
+        assert f"=0x{index:04X}" in drive and f"[{index:04X}]" in drive
+    assert "SupportedObjects=18" in plain  # 1008h, 1017h and the 16 PDO records

@@ -8,10 +8,12 @@ import pytest
 from devsim.core.points import BadValue, Point
 from devsim.core.registry import device_class, kinds
 from devsim.facades.opcua_space import (
+    DEFAULT_ENDPOINT,
     RESERVED,
     TypeMismatch,
     Variable,
     data_type,
+    endpoint_url,
     eu_information,
     from_opcua,
     to_opcua,
@@ -88,3 +90,68 @@ def test_values_to_and_from_opcua() -> None:
     assert from_opcua(blob, "String", '{"a": [1, 2]}') == {"a": [1, 2]}
     with pytest.raises(BadValue):  # a String: the right type, a value the point refuses
         from_opcua(blob, "String", "{not json")
+
+
+# -- boundaries (issue 35: mutation run) ----------------------------------------------------------
+
+
+@pytest.mark.parametrize(("spec", "url"), [
+    (None, DEFAULT_ENDPOINT),
+    ("", DEFAULT_ENDPOINT),
+    ("4841", "opc.tcp://127.0.0.1:4841/devsim/"),
+    (":4841", "opc.tcp://127.0.0.1:4841/devsim/"),
+    ("0", "opc.tcp://127.0.0.1:0/devsim/"),
+    ("65535", "opc.tcp://127.0.0.1:65535/devsim/"),
+    ("0.0.0.0:4840", "opc.tcp://0.0.0.0:4840/devsim/"),
+    ("XBOX:4840", "opc.tcp://XBOX:4840/devsim/"),  # only the brackets of an IPv6 address come off
+    ("[::1]:4840", "opc.tcp://[::1]:4840/devsim/"),
+    ("::1:4840", "opc.tcp://[::1]:4840/devsim/"),
+    ("opc.tcp://h:1/x/", "opc.tcp://h:1/x/"),
+])
+def test_endpoint_urls(spec: str | None, url: str) -> None:
+    """Loopback unless a host is named; the port 0 … 65535; a whole URL as it is."""
+    assert endpoint_url(spec) == url
+    assert DEFAULT_ENDPOINT == "opc.tcp://127.0.0.1:4840/devsim/"
+
+
+@pytest.mark.parametrize("spec", ["65536", "-1", "h:", "h:x", "h:1.5"])
+def test_bad_endpoints(spec: str) -> None:
+    with pytest.raises(ValueError) as err:
+        endpoint_url(spec)
+    assert str(err.value) == f"--opcua: expected [HOST:]PORT, not {spec!r}"
+
+
+@pytest.mark.parametrize(("low", "high", "shown"), [
+    (-(2**31), 2**31 - 1, "Int32"), (-(2**31) - 1, 0, "Int64"), (0, 2**31, "Int64"), (None, 5, "Int64"),
+])
+def test_int32_only_when_the_whole_range_fits(low: int | None, high: int, shown: str) -> None:
+    point = Point("n", "int", "n", get=_get, minimum=low, maximum=high)
+    assert data_type(point) == shown
+
+
+def test_values_out_have_the_variables_type() -> None:
+    rows = {v.point: v for v in variables("d", [
+        Point("b", "bool", "b", get=_get), Point("n", "int", "n", get=_get), Point("x", "float", "x", get=_get),
+        Point("s", "str", "s", get=_get)])}
+    for name, value, out in [("b", 1, True), ("n", 3.0, 3), ("x", 2, 2.0), ("s", 5, "5")]:
+        got = to_opcua(rows[name], value)
+        assert got == out and type(got) is type(out)
+
+
+def test_variables_skip_hidden_points_anywhere_and_cite_sections() -> None:
+    hidden = Point("hidden", "int", "no get, no put")
+    rows = variables("d", [hidden, Point("a", "int", "a doc", "§1.2", get=_get), Point("b", "int", "b doc", get=_get)])
+    assert [(v.point, v.description) for v in rows] == [("a", "a doc (§1.2)"), ("b", "b doc")]
+    with pytest.raises(ValueError) as err:
+        variables("d", [Point("Kind", "int", "k", get=_get)])
+    assert str(err.value) == "point 'Kind' has a name the OPC UA device object uses itself"
+
+
+def test_messages_of_refused_writes() -> None:
+    json_var, = variables("d", [Point("j", "json", "j", get=_get, put=lambda m, v: None)])
+    with pytest.raises(TypeMismatch) as err:
+        from_opcua(json_var, "Double", 1.0)
+    assert str(err.value) == "j takes String, not Double"
+    with pytest.raises(BadValue) as err2:
+        from_opcua(json_var, "String", "{")
+    assert str(err2.value) == "j takes JSON text"
