@@ -6,6 +6,7 @@ bytes exactly; and ``devsim plot``'s reader taking the direction from the header
 from __future__ import annotations
 
 import os
+import signal
 import struct
 import subprocess
 import time
@@ -44,6 +45,20 @@ CASES: list[tuple[str, str, bytes, bool]] = [
 
 #: The protocol byte each kind's serial ports declare (docs/wireshark.md).
 KIND_PROTOCOLS = {"sers": 1, "gms96": 2, "poselesta": 3, "ip247": 4, "pcd4h3": 5, "modbus_rtu": 16}
+
+
+def end_session(proc: subprocess.Popen[str]) -> None:
+    """End a program started with ``start_new_session=True`` and all it started (tshark's dumpcap
+    and the extcap hold its pipes: killing tshark alone would leave ``communicate`` waiting for
+    them), then reap it."""
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass  # the whole session has ended already
+    if proc.stdout is not None and not proc.stdout.closed:
+        proc.communicate(timeout=30)
+    else:
+        proc.wait(timeout=30)
 
 
 def tshark_env(home: Path) -> dict[str, str]:

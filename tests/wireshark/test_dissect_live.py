@@ -17,7 +17,7 @@ from devsim.runtime.client import ControlClient
 from tests.support.process import ROOT, devsim_env
 from tests.support.programs import needs_program
 from tests.test_cli import Sim
-from tests.wireshark.test_capture import tshark_env
+from tests.wireshark.test_capture import end_session, tshark_env
 from tests.wireshark.test_dissect_gms96 import ADDRESS
 
 
@@ -30,11 +30,12 @@ def test_a_live_capture_decodes_with_the_installed_dissectors(tmp_path: Path) ->
     sim = Sim("gms96")
     try:
         seen = sim.read_until("control:")
+        sim.read_until("gms96: ready")  # booted: a frame before that gets no answer
         pty = seen["gms96"].split()[-1]
         capture = subprocess.Popen([tshark, "-l", "-i", f"devsim-{sim.proc.pid}-gms96", "-c", "2", "-T", "fields",
                                     "-e", "devsim.dir", "-e", "gms96.command", "-e", "gms96.n", "-e", "gms96.value"],
                                    env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                   text=True)
+                                   text=True, start_new_session=True)  # dumpcap and the extcap end with it
         try:
             with ControlClient(seen["control"]) as control:
                 deadline = time.monotonic() + 60
@@ -44,9 +45,7 @@ def test_a_live_capture_decodes_with_the_installed_dissectors(tmp_path: Path) ->
                 assert Gms96Client(port, ADDRESS, timeout=5).read(5, 15)[1] == 84  # N15's default
             stdout, stderr = capture.communicate(timeout=60)
         finally:
-            if capture.poll() is None:
-                capture.kill()
-                capture.communicate()
+            end_session(capture)
         assert capture.returncode == 0 and "Lua" not in stderr, stderr
     finally:
         code, err = sim.stop()

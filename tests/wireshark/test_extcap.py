@@ -29,7 +29,7 @@ from devsim.wireshark.installer import LAUNCHER, extcap_dir, launcher_text, pars
 from tests.support.process import ROOT, devsim_env
 from tests.support.programs import needs_program
 from tests.test_cli import Sim
-from tests.wireshark.test_capture import tshark_env, tshark_records
+from tests.wireshark.test_capture import end_session, tshark_env, tshark_records
 
 
 # -- the pure parts of the extcap ----------------------------------------------------------------
@@ -171,6 +171,7 @@ def test_tshark_captures_a_running_simulators_pty_live(tmp_path: Path) -> None:
     sim = Sim("sers")  # its control socket where devsim ps and the extcap find it
     try:
         seen = sim.read_until("control:")
+        sim.read_until("sers: ready")  # booted: a command before that gets no answer
         control_address = seen["control"]
         pty = seen["sers"].split()[-1]
         pid = sim.proc.pid
@@ -183,7 +184,8 @@ def test_tshark_captures_a_running_simulators_pty_live(tmp_path: Path) -> None:
 
         out = tmp_path / "live.pcap"
         capture = subprocess.Popen([tshark, "-i", f"devsim-{pid}-sers", "-c", "2", "-w", str(out)], env=env,
-                                   stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                                   stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                   start_new_session=True)  # dumpcap and the extcap end with it
         try:
             with ControlClient(control_address) as control:
                 _wait(lambda: control.line("sers")["capturing"] or capture.poll() is not None, "capture running")
@@ -194,9 +196,7 @@ def test_tshark_captures_a_running_simulators_pty_live(tmp_path: Path) -> None:
             assert answer.startswith(b"#RF\r")
             _stdout, stderr = capture.communicate(timeout=60)
         finally:
-            if capture.poll() is None:
-                capture.kill()
-                capture.communicate()
+            end_session(capture)
         assert capture.returncode == 0, stderr
     finally:
         code, err = sim.stop()
