@@ -69,6 +69,10 @@ MODULES: dict[str, tuple[str, ...]] = {
     "devsim/facades/modbus_map.py": (
         "tests/facades/test_modbus_map.py",
     ),
+    "devsim/facades/modbus_pdu.py": (
+        "tests/facades/test_modbus_conformance.py",
+        "tests/facades/test_modbus_differential.py",
+    ),
     "devsim/core/points.py": (
         "tests/core/test_points.py",
     ),
