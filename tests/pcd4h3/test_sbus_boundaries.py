@@ -22,6 +22,7 @@ from devsim.devices.pcd4h3.sbus import (
     Write,
     crc16,
     decode_command,
+    ether_ack,
     ether_frame,
     pack_bits,
     parse_ether,
@@ -226,3 +227,40 @@ def test_ether_stream_lengths(length: int, taken: bool) -> None:
     assert receiver.feed(frame) == ([frame] if taken else [])
     good = ether_frame(1, 1, 0, b"\x01\x1b")
     assert receiver.feed(good) == [good]
+
+
+@pytest.mark.parametrize("sequence", [0, 0x7FFF, 0x8000, 0xFFFF])
+def test_the_ether_sequence_number_is_16_bits_unsigned(sequence: int) -> None:
+    """§9.3: the sequence number is a 16-bit word the station copies into its answer; from
+    8000h on it is still a plain number (a signed reading would turn FFFFh into -1)."""
+    frame = _ether(1, 0, 0, b"\x01\x1b")
+    frame = frame[:6] + sequence.to_bytes(2, "big") + frame[8:-2]
+    frame += _crc_xmodem(frame).to_bytes(2, "big")
+    assert parse_ether(frame) == (1, sequence, Request(1, 0x1B, b""))
+    for answer in (ether_frame(1, sequence, 2, b"\x00\x01"), ether_ack(1, sequence, 1)):
+        assert answer[6:8] == sequence.to_bytes(2, "big")
+        assert int.from_bytes(answer[:4], "big") == len(answer) == 13
+
+
+def test_a_telegram_with_a_bad_crc_is_dropped_and_what_follows_until_the_next_b5h_is_noise() -> None:
+    """§9.2: a telegram whose CRC is wrong gets silence; the bytes after it, up to the next B5h,
+    belong to no telegram, and the next telegram is taken."""
+    receiver = SerialReceiver(1, telegram_of)
+    assert receiver.feed(_wire(1, 0x1B, b"", crc_error=1) + b"\x00\x01\x1b\x12\x34") == []
+    assert receiver.feed(_wire(1, 0x1D, b"")) == [Request(1, 0x1D, b"")]
+    assert receiver.errors == {"crc": 1, "framing": 0}
+
+
+def test_each_stuffing_error_is_counted() -> None:
+    receiver = SerialReceiver(1, telegram_of)
+    assert receiver.feed(b"\xb5\x00\x01\xc5\x02" * 2 + _wire(1, 0x1B, b"")) == [Request(1, 0x1B, b"")]
+    assert receiver.errors["framing"] == 2
+
+
+def test_a_host_that_goes_away_mid_telegram_leaves_nothing_behind() -> None:
+    """The face resets its receiver when the host disconnects (a half telegram and a pending
+    C5h are forgotten); the next host's first telegram is taken whole."""
+    receiver = SerialReceiver(1, telegram_of)
+    assert receiver.feed(_wire(1, 0x1B, b"")[:3] + b"\xc5") == []
+    receiver.reset()
+    assert receiver.feed(b"\x00" + _wire(1, 0x1B, b"")) == [Request(1, 0x1B, b"")]
