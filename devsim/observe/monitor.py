@@ -159,6 +159,8 @@ class DevicePanel(Vertical):
             self.last_event = f"{item.get('t', 0):.3f} {kind} {item.get('name') or item.get('text') or ''}".strip()
 
     def refresh_view(self) -> None:
+        if not self.query("#state"):
+            return  # not composed yet (items can arrive first): on_mount shows them
         shown = [f"{name}={_show(value)}" for name, value in self.values.items()
                  if not name.startswith(("input.", "output.", "axis.")) and not isinstance(value, dict | list)
                  and not is_display(name)]
