@@ -155,22 +155,29 @@ class ControlClient(ControlOps):
         try:
             watcher.call(rq.Watch(device, names or None, period))
             watcher._sock.settimeout(timeout)
-            while True:
-                try:
-                    line = watcher._file.readline()
-                except OSError as exc:
-                    if isinstance(exc, TimeoutError | socket.timeout):
-                        raise TimeoutError(f"no change of {device} within {timeout} s") from None
-                    return
-                if not line:
-                    return
-                item = json.loads(line)
-                if "watch" in item:
-                    item.pop("watch")
-                    yield item
+            yield from stream_items(watcher, "watch", f"no change of {device} within {timeout} s")
         finally:
             watcher.close()
 
+
+
+def stream_items(client: ControlClient, key: str, silence: str) -> Iterator[dict[str, Any]]:
+    """The items of a stream op (``watch``, ``capture``) on ``client``'s connection: each line
+    that carries ``key`` (taken out), until the simulator ends it; :class:`TimeoutError` with
+    ``silence`` when the connection's timeout passes without a line."""
+    while True:
+        try:
+            line = client._file.readline()
+        except OSError as exc:
+            if isinstance(exc, TimeoutError | socket.timeout):
+                raise TimeoutError(silence) from None
+            return
+        if not line:
+            return
+        item = json.loads(line)
+        if key in item:
+            del item[key]
+            yield item
 
 class CaptureSubscription:
     """A port's chunks as they cross (the ``capture`` op, :mod:`devsim.runtime.capture_stream`)
@@ -191,18 +198,7 @@ class CaptureSubscription:
         self.timeout = timeout
 
     def __iter__(self) -> Iterator[dict[str, Any]]:
-        while True:
-            try:
-                line = self._client._file.readline()
-            except OSError as exc:
-                if isinstance(exc, TimeoutError | socket.timeout):
-                    raise TimeoutError(f"no chunk within {self.timeout} s") from None
-                return
-            if not line:
-                return
-            item = json.loads(line)
-            if item.pop("capture", None) is not None:
-                yield item
+        return stream_items(self._client, "capture", f"no chunk within {self.timeout} s")
 
     def close(self) -> None:
         self._client.close()
