@@ -71,8 +71,6 @@ MODULES: dict[str, tuple[str, ...]] = {
     ),
     "devsim/facades/modbus_pdu.py": (
         "tests/facades/test_modbus_pdu.py",
-        "tests/facades/test_modbus_conformance.py",
-        "tests/facades/test_modbus_differential.py",
     ),
     "devsim/core/points.py": (
         "tests/core/test_points.py",
