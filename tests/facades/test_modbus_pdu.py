@@ -74,7 +74,7 @@ class Store:
     def _touch(self, address: int, count: int) -> None:
         assert 0 <= address and count >= 1 and address + count <= 0x10000, (address, count)
         if address < self.first or address + count - 1 > self.last:
-            raise modbus_pdu.Refused(ILLEGAL_ADDRESS)
+            raise Refused(ILLEGAL_ADDRESS)
         if self.failing:
             raise OSError("the device failed")
 
@@ -96,13 +96,16 @@ class Store:
     def write_words(self, address: int, values: Sequence[int]) -> None:
         self._touch(address, len(values))
         if REFUSED in values:
-            raise modbus_pdu.Refused(ILLEGAL_VALUE)
+            raise Refused(ILLEGAL_VALUE)
         self.holding.update((address + i, int(value)) for i, value in enumerate(values))
 
 
 # -- the standard's rule -----------------------------------------------------------------------------
-class Exception_(Exception):  # noqa: N801, N818 - the oracle's exception response
+class Refusal(Exception):
+    """The oracle's exception response (§7), with its exception code."""
+
     def __init__(self, code: int) -> None:
+        super().__init__(code)
         self.code = code
 
 
@@ -110,12 +113,12 @@ def _in_map(store: Store, address: int, count: int) -> None:
     """§6 diagrams: "Starting Address == OK AND Starting Address + Quantity == OK" (02), then
     the device: the store's map (02) and its failure (04)."""
     if address + count - 1 > 0xFFFF or address < store.first or address + count - 1 > store.last:
-        raise Exception_(ILLEGAL_ADDRESS)
+        raise Refusal(ILLEGAL_ADDRESS)
 
 
 def _device(store: Store) -> None:
     if store.failing:
-        raise Exception_(DEVICE_FAILURE)
+        raise Refusal(DEVICE_FAILURE)
 
 
 def _bits_of(data: bytes, count: int) -> list[bool]:
@@ -132,10 +135,10 @@ def _bytes_of(bits: list[bool]) -> bytes:
 def _oracle_read(function: int, data: bytes, store: Store) -> bytes:
     table, most, bits = READS[function]
     if len(data) != 4:
-        raise Exception_(ILLEGAL_VALUE)
+        raise Refusal(ILLEGAL_VALUE)
     address, quantity = int.from_bytes(data[:2], "big"), int.from_bytes(data[2:], "big")
     if quantity < 1 or quantity > most:
-        raise Exception_(ILLEGAL_VALUE)
+        raise Refusal(ILLEGAL_VALUE)
     _in_map(store, address, quantity)
     _device(store)
     if bits:
@@ -147,16 +150,16 @@ def _oracle_read(function: int, data: bytes, store: Store) -> bytes:
 
 def _oracle_write_single(function: int, data: bytes, store: Store) -> bytes:
     if len(data) != 4:
-        raise Exception_(ILLEGAL_VALUE)
+        raise Refusal(ILLEGAL_VALUE)
     address, value = int.from_bytes(data[:2], "big"), int.from_bytes(data[2:], "big")
     if function == 0x05 and value not in (0xFF00, 0x0000):  # §6.5
-        raise Exception_(ILLEGAL_VALUE)
+        raise Refusal(ILLEGAL_VALUE)
     _in_map(store, address, 1)
     _device(store)
     if function == 0x05:
         store.coils[address] = value == 0xFF00
     elif value == REFUSED:
-        raise Exception_(ILLEGAL_VALUE)
+        raise Refusal(ILLEGAL_VALUE)
     else:
         store.holding[address] = value
     return data  # §6.5, §6.6: the echo of the request
@@ -165,11 +168,11 @@ def _oracle_write_single(function: int, data: bytes, store: Store) -> bytes:
 def _oracle_write_multiple(function: int, data: bytes, store: Store) -> bytes:
     most, bits = WRITES[function]
     if len(data) < 5:
-        raise Exception_(ILLEGAL_VALUE)
+        raise Refusal(ILLEGAL_VALUE)
     address, quantity, count = int.from_bytes(data[:2], "big"), int.from_bytes(data[2:4], "big"), data[4]
     size = math.ceil(quantity / 8) if bits else 2 * quantity
     if not 1 <= quantity <= most or count != size or len(data) != 5 + count:
-        raise Exception_(ILLEGAL_VALUE)
+        raise Refusal(ILLEGAL_VALUE)
     _in_map(store, address, quantity)
     _device(store)
     if bits:
@@ -177,7 +180,7 @@ def _oracle_write_multiple(function: int, data: bytes, store: Store) -> bytes:
     else:
         values = [int.from_bytes(data[5 + 2 * i:7 + 2 * i], "big") for i in range(quantity)]
         if REFUSED in values:
-            raise Exception_(ILLEGAL_VALUE)
+            raise Refusal(ILLEGAL_VALUE)
         store.holding.update(zip(range(address, address + quantity), values, strict=True))
     return data[:4]  # §6.11, §6.12: the address and the quantity
 
@@ -185,19 +188,19 @@ def _oracle_write_multiple(function: int, data: bytes, store: Store) -> bytes:
 def _oracle_read_write(function: int, data: bytes, store: Store) -> bytes:
     """§6.17: both quantities and the byte count (03), both ranges (02), then the write, then the read."""
     if len(data) < 9:
-        raise Exception_(ILLEGAL_VALUE)
+        raise Refusal(ILLEGAL_VALUE)
     read_address, read_quantity, write_address, write_quantity = (
         int.from_bytes(data[i:i + 2], "big") for i in range(0, 8, 2))
     count = data[8]
     if (not 1 <= read_quantity <= RW_READ or not 1 <= write_quantity <= RW_WRITE
             or count != 2 * write_quantity or len(data) != 9 + count):
-        raise Exception_(ILLEGAL_VALUE)
+        raise Refusal(ILLEGAL_VALUE)
     _in_map(store, read_address, read_quantity)
     _in_map(store, write_address, write_quantity)
     _device(store)
     values = [int.from_bytes(data[9 + 2 * i:11 + 2 * i], "big") for i in range(write_quantity)]
     if REFUSED in values:
-        raise Exception_(ILLEGAL_VALUE)
+        raise Refusal(ILLEGAL_VALUE)
     store.holding.update(zip(range(write_address, write_address + write_quantity), values, strict=True))
     return bytes([2 * read_quantity]) + b"".join(
         store.word("holding", read_address + i).to_bytes(2, "big") for i in range(read_quantity))
@@ -215,7 +218,7 @@ def oracle(store: Store, pdu: bytes) -> tuple[bytes, Store]:
         return bytes([(pdu[0] if pdu else 0) | 0x80, ILLEGAL_FUNCTION]), store.copy()
     try:
         return pdu[:1] + ORACLE[pdu[0]](pdu[0], pdu[1:], after), after
-    except Exception_ as refused:
+    except Refusal as refused:
         return bytes([pdu[0] | 0x80, refused.code]), store.copy()
 
 
