@@ -70,8 +70,7 @@ MODULES: dict[str, tuple[str, ...]] = {
         "tests/facades/test_modbus_map.py",
     ),
     "devsim/facades/modbus_pdu.py": (
-        "tests/facades/test_modbus_conformance.py",
-        "tests/facades/test_modbus_differential.py",
+        "tests/facades/test_modbus_pdu.py",
     ),
     "devsim/core/points.py": (
         "tests/core/test_points.py",

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Callable, Sequence
+from functools import partial
 from typing import Protocol
 
 import msgspec
@@ -121,23 +122,21 @@ def _unpack(data: bytes, count: int) -> list[bool]:
 
 
 # -- the functions ---------------------------------------------------------------------------------
-def _read_bits(table: str) -> Callable[[Tables, bytes], bytes]:
-    def read(tables: Tables, data: bytes) -> bytes:
-        address, quantity = _fields(data, 2)
-        _quantity(quantity, MAX_READ_BITS)
-        _span(address, quantity)
-        packed = _pack(tables.read_bits(table, address, quantity))
-        return bytes((len(packed),)) + packed
-    return read
+# (The table's rows bind their arguments with functools.partial, not closures made at import:
+# the function that answers runs when the request comes.)
+def _read_bits(table: str, tables: Tables, data: bytes) -> bytes:
+    address, quantity = _fields(data, 2)
+    _quantity(quantity, MAX_READ_BITS)
+    _span(address, quantity)
+    packed = _pack(tables.read_bits(table, address, quantity))
+    return bytes((len(packed),)) + packed
 
 
-def _read_words(table: str) -> Callable[[Tables, bytes], bytes]:
-    def read(tables: Tables, data: bytes) -> bytes:
-        address, quantity = _fields(data, 2)
-        _quantity(quantity, MAX_READ_WORDS)
-        _span(address, quantity)
-        return _words(tables.read_words(table, address, quantity))
-    return read
+def _read_words(table: str, tables: Tables, data: bytes) -> bytes:
+    address, quantity = _fields(data, 2)
+    _quantity(quantity, MAX_READ_WORDS)
+    _span(address, quantity)
+    return _words(tables.read_words(table, address, quantity))
 
 
 def _words(words: Sequence[int]) -> bytes:
@@ -192,23 +191,23 @@ def _read_write_registers(tables: Tables, data: bytes) -> bytes:
     return _words(tables.read_words("holding", read_address, read_quantity))
 
 
-def _fixed(length: int) -> Callable[[bytes], int]:
-    return lambda frame: length
+def _fixed(length: int, frame: bytes) -> int:
+    return length
 
 
-def _counted(at: int) -> Callable[[bytes], int]:
+def _counted(at: int, frame: bytes) -> int:
     """An RTU request whose byte count is at ``at``: that many bytes follow it, then the CRC."""
-    return lambda frame: at + 1 + frame[at] + 2 if len(frame) > at else 0
+    return at + 1 + frame[at] + 2 if len(frame) > at else 0
 
 
 FUNCTIONS: dict[int, Function] = {
-    0x01: Function("Read Coils", "§6.1", _read_bits("coil"), _fixed(8)),
-    0x02: Function("Read Discrete Inputs", "§6.2", _read_bits("discrete"), _fixed(8)),
-    0x03: Function("Read Holding Registers", "§6.3", _read_words("holding"), _fixed(8)),
-    0x04: Function("Read Input Registers", "§6.4", _read_words("input"), _fixed(8)),
-    0x05: Function("Write Single Coil", "§6.5", _write_coil, _fixed(8)),
-    0x06: Function("Write Single Register", "§6.6", _write_register, _fixed(8)),
-    0x0F: Function("Write Multiple Coils", "§6.11", _write_coils, _counted(6)),
-    0x10: Function("Write Multiple Registers", "§6.12", _write_registers, _counted(6)),
-    0x17: Function("Read/Write Multiple Registers", "§6.17", _read_write_registers, _counted(10)),
+    0x01: Function("Read Coils", "§6.1", partial(_read_bits, "coil"), partial(_fixed, 8)),
+    0x02: Function("Read Discrete Inputs", "§6.2", partial(_read_bits, "discrete"), partial(_fixed, 8)),
+    0x03: Function("Read Holding Registers", "§6.3", partial(_read_words, "holding"), partial(_fixed, 8)),
+    0x04: Function("Read Input Registers", "§6.4", partial(_read_words, "input"), partial(_fixed, 8)),
+    0x05: Function("Write Single Coil", "§6.5", _write_coil, partial(_fixed, 8)),
+    0x06: Function("Write Single Register", "§6.6", _write_register, partial(_fixed, 8)),
+    0x0F: Function("Write Multiple Coils", "§6.11", _write_coils, partial(_counted, 6)),
+    0x10: Function("Write Multiple Registers", "§6.12", _write_registers, partial(_counted, 6)),
+    0x17: Function("Read/Write Multiple Registers", "§6.17", _read_write_registers, partial(_counted, 10)),
 }
