@@ -58,12 +58,16 @@ def test_a_word_at_the_edge_of_its_format(letter: str, data: hs.DataObject) -> N
     _check_word(letter, whole, fraction, zeros, negative)
 
 
-@pytest.mark.parametrize(("letter", "whole", "fraction", "zeros", "negative"), [
-    ("P", 5, 3, 0, True), ("P", 6, 0, 0, False), ("P", 0, 4, 1, True), ("P", 1, 0, 2, False),
-    ("X", 5, 0, 1, True), ("L", 2, 4, 0, False), ("N", 4, 0, 1, False), ("F", 4, 0, 2, False),
-])
-def test_a_word_at_its_edges(letter: str, whole: int, fraction: int, zeros: int, negative: bool) -> None:
-    _check_word(letter, whole, fraction, zeros, negative)
+@pytest.mark.parametrize("letter", sorted(FORMAT))
+def test_every_word_at_its_edges(letter: str) -> None:
+    """Each word with as many digits as its format holds and one more, before the point and
+    after, with leading and trailing zeros that do not count, with and without a sign."""
+    before, after = FORMAT[letter]
+    for whole in (before - 1, before, before + 1):
+        for fraction in sorted({0, after, after + 1}):
+            for zeros in (0, 2):
+                for negative in ({False, True} if letter in SIGNED else {False}):
+                    _check_word(letter, whole, fraction, zeros, negative)
 
 
 def _check_word(letter: str, whole: int, fraction: int, zeros: int, negative: bool) -> None:
