@@ -64,6 +64,7 @@ MODULES: dict[str, tuple[str, ...]] = {
     "devsim/devices/poselesta/tape.py": (
         "tests/poselesta/test_tape.py",
         "tests/poselesta/test_tape_boundaries.py",
+        "tests/poselesta/test_tape_text.py",
     ),
     # the facade maps and the kit (helper mut-core)
     "devsim/facades/modbus_map.py": (

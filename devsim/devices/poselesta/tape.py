@@ -311,23 +311,25 @@ class TapeReader:
 CharacterHandler = Callable[[TapeReader, str, list[Event]], None]
 
 
-def _characters(letters: str) -> Table[CharacterHandler]:
-    """What each character after ``%`` does (spec §3.5.2–§3.5.4, manual §2.6.3)."""
-    return Table([
-        *(Command(letter, TapeReader._letter, "§2.6.3", f"address {letter}: starts a word") for letter in letters),
-        *(Command(sign, TapeReader._sign, "§2.6.3", "sign of the word (X Y Z D I J K P only)") for sign in "-+"),
-        *(Command(digit, TapeReader._digit, "§2.6.3", "a digit or the decimal point of the word")
-          for digit in "0123456789."),
-        Command("C", TapeReader._clear, "§2.6.3", "clears the word being read"),
-        Command("#", TapeReader._skip_mark, "§2.3.13", "marks the block as skippable (/ on the screen)"),
-        Command("\r", TapeReader._end_of_block, "§2.6.3", "CR: end of block"),
-        *(Command(c, TapeReader._comment, "§2.6.3", "a comment character: noticed once, dropped") for c in "();:/"),
-    ])
-
-
-#: The characters of a program tape, and of the parameter catalogue P99 (with its value word P).
-CHARACTERS = _characters(ADDRESS_LETTERS_ORDER)
-CATALOGUE_CHARACTERS = _characters(ADDRESS_LETTERS_ORDER + CATALOGUE_VALUE)
+#: What each character after ``%`` does (spec §3.5.2–§3.5.4, manual §2.6.3).  Anything not in
+#: the table (LF, NUL, DEL, SP, lower case, a later ``%``, …) is dropped.
+CHARACTERS: Table[CharacterHandler] = Table([
+    *(Command(letter, TapeReader._letter, "§2.6.3", f"address {letter}: starts a word")
+      for letter in ADDRESS_LETTERS_ORDER),
+    *(Command(sign, TapeReader._sign, "§2.6.3", "sign of the word (X Y Z D I J K P only)") for sign in "-+"),
+    *(Command(digit, TapeReader._digit, "§2.6.3", "a digit or the decimal point of the word")
+      for digit in "0123456789."),
+    Command("C", TapeReader._clear, "§2.6.3", "clears the word being read"),
+    Command("#", TapeReader._skip_mark, "§2.3.13", "marks the block as skippable (/ on the screen)"),
+    Command("\r", TapeReader._end_of_block, "§2.6.3", "CR: end of block"),
+    *(Command(c, TapeReader._comment, "§2.6.3", "a comment character: noticed once, dropped") for c in "();:/"),
+])
+#: The characters of the parameter catalogue P99: those of a program and its value word P
+#: (spec §3.9, simulator-defined).
+CATALOGUE_CHARACTERS: Table[CharacterHandler] = Table([
+    *CHARACTERS,
+    Command(CATALOGUE_VALUE, TapeReader._letter, "§2.6.2.3", "the value word of a catalogue block (spec §3.9)"),
+])
 
 
 # -- output -----------------------------------------------------------------------------------
@@ -384,10 +386,13 @@ def render(
 
 def parse_blocks(text: str, formats: Formats | None = None) -> list[Block]:
     """Blocks typed as text (program entry, a plant file): the read-in rules of §3.5 on
-    ``% text M30``, in ASCII; raises ValueError with the screen message on an error."""
+    ``% text M30``, in ASCII, a line a block; raises ValueError with the screen message on an
+    error.  A character beyond ASCII is one the control does not know: skipped like any other
+    (manual §2.6.3: "Falsche oder nicht definierte Zeichen werden überlesen"), not read as the
+    byte of some 8-bit code (where bit 7 would end the read-in, or be masked into a letter)."""
     reader = TapeReader(iso=False, formats=formats)
     body = text.replace("\r\n", "\n").replace("\n", "\r")
-    events = reader.feed(("%\r" + body + "\rM30\r").encode("latin-1", errors="replace"))
+    events = reader.feed(("%\r" + body + "\rM30\r").encode("ascii", errors="replace"))
     blocks: dict[int, Block] = {}
     for event in events:
         if isinstance(event, Failed):
