@@ -99,6 +99,32 @@ MODULES: dict[str, tuple[str, ...]] = {
     "devsim/facades/canopen_od.py": (
         "tests/facades/test_canopen.py",
     ),
+    # the framings record, replay and the telegram tap take from a kind's ports, the member's MQTT
+    # packets and the pcap records (helper mut-framing)
+    "devsim/core/framing.py": (
+        "tests/core/test_framing.py",
+        "tests/replay/test_session.py",
+    ),
+    "devsim/devices/sers/framing.py": (
+        "tests/sers/test_framing.py",
+        "tests/replay/test_session.py",
+    ),
+    "devsim/devices/gms96/framing.py": (
+        "tests/gms96/test_framing.py",
+        "tests/replay/test_session.py",
+    ),
+    "devsim/devices/pcd4h3/framing.py": (
+        "tests/pcd4h3/test_framing.py",
+        "tests/replay/test_session.py",
+    ),
+    "devsim/facades/mqtt_wire.py": (
+        "tests/facades/test_mqtt_wire.py",
+        "tests/facades/test_mqtt_wire_boundaries.py",
+    ),
+    "devsim/transports/pcap.py": (
+        "tests/transports/test_pcap.py",
+        "tests/transports/test_pcap_boundaries.py",
+    ),
 }
 
 #: mutmut's exit-code meanings, folded into the columns printed.
