@@ -125,6 +125,14 @@ MODULES: dict[str, tuple[str, ...]] = {
         "tests/transports/test_pcap.py",
         "tests/transports/test_pcap_boundaries.py",
     ),
+    # pure codecs found beside them: the POSELESTA's ISO/ASCII and baud-rate codes, the IP247's
+    # BCD values and records to and from the PLC
+    "devsim/devices/poselesta/codes.py": (
+        "tests/poselesta/test_codes.py",
+    ),
+    "devsim/devices/ip247/values.py": (
+        "tests/ip247/test_values.py",
+    ),
 }
 
 #: mutmut's exit-code meanings, folded into the columns printed.

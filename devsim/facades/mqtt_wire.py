@@ -197,8 +197,10 @@ def _read_string(data: bytes, at: int) -> tuple[str, int]:
         raise MalformedPacket("a string that is not UTF-8") from None
 
 
-def _skip(width: int) -> Callable[[bytes, int], tuple[None, int]]:
-    return lambda data, at: (None, at + width)
+def _read_byte(data: bytes, at: int) -> tuple[int, int]:
+    if at >= len(data):
+        raise MalformedPacket("byte cut short")
+    return data[at], at + 1
 
 
 def _read_u32(data: bytes, at: int) -> tuple[int, int]:
@@ -213,14 +215,14 @@ def _read_pair(data: bytes, at: int) -> tuple[None, int]:
     return None, at
 
 
-#: property identifier -> reader of its value (2.2.2.2); values of the ones devsim ignores are skipped
+#: property identifier -> reader of its value (2.2.2.2)
 _PROPERTY_READERS: dict[int, Callable[[bytes, int], tuple[object, int]]] = {
-    0x01: _skip(1), MESSAGE_EXPIRY: _read_u32, 0x03: _read_string, RESPONSE_TOPIC: _read_string,
+    0x01: _read_byte, MESSAGE_EXPIRY: _read_u32, 0x03: _read_string, RESPONSE_TOPIC: _read_string,
     CORRELATION_DATA: _read_binary, 0x0B: _read_varint, 0x11: _read_u32, 0x12: _read_string,
-    SERVER_KEEP_ALIVE: _read_u16, 0x15: _read_string, 0x16: _read_binary, 0x17: _skip(1), 0x18: _read_u32,
-    0x19: _skip(1), 0x1A: _read_string, 0x1C: _read_string, 0x1F: _read_string, 0x21: _read_u16,
-    0x22: _read_u16, 0x23: _read_u16, 0x24: _skip(1), 0x25: _skip(1), 0x26: _read_pair, 0x27: _read_u32,
-    0x28: _skip(1), 0x29: _skip(1), 0x2A: _skip(1),
+    SERVER_KEEP_ALIVE: _read_u16, 0x15: _read_string, 0x16: _read_binary, 0x17: _read_byte, 0x18: _read_u32,
+    0x19: _read_byte, 0x1A: _read_string, 0x1C: _read_string, 0x1F: _read_string, 0x21: _read_u16,
+    0x22: _read_u16, 0x23: _read_u16, 0x24: _read_byte, 0x25: _read_byte, 0x26: _read_pair, 0x27: _read_u32,
+    0x28: _read_byte, 0x29: _read_byte, 0x2A: _read_byte,
 }
 
 

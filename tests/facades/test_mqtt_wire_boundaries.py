@@ -127,6 +127,11 @@ def test_a_packet_identifier_outside_1_to_65535_is_refused(packet_id: int) -> No
     assert wire.publish("t", b"", 0, packet_id=packet_id) == b"\x30\x04\x00\x01t\x00"  # QoS 0 has none
 
 
+def test_a_publish_at_qos_1_needs_its_packet_identifier() -> None:
+    with pytest.raises(ValueError, match="packet identifier"):
+        wire.publish("t", b"", qos=1)
+
+
 @pytest.mark.parametrize("qos", [-1, 3, 4])
 def test_a_qos_outside_0_to_2_is_refused(qos: int) -> None:
     with pytest.raises(ValueError, match="QoS"):
@@ -198,7 +203,7 @@ def property_lists(draw: hs.DrawFn) -> tuple[bytes, dict[int, object]]:
         kind = PROPERTY_TYPES[identifier]
         value = draw(VALUES[kind])
         out += bytes((identifier,)) + _value_bytes(kind, value)
-        found[identifier] = None if kind in ("byte", "pair") else value
+        found[identifier] = None if kind == "pair" else value
     return _varint_oracle(len(out)) + out, found
 
 
@@ -242,15 +247,17 @@ def test_the_properties_devsim_writes(expiry: int | None, response: str | None, 
     assert data == _varint_oracle(len(body)) + body
     kept = {k: v for k, v in ((2, expiry), (8, response), (9, correlation)) if v is not None}
     assert wire.parse_properties(data, 0) == (kept, len(data))
-    packet = wire.publish("t", b"p", props=data)
-    [(_kind, flags, rest)] = wire.PacketReader().feed(packet)
-    message = wire.parse_publish(flags, rest)
-    assert (message.payload, message.response_topic, message.correlation) == (b"p", response, correlation)
+    for retain in (False, True):
+        packet = wire.publish("t", b"p", retain=retain, props=data)
+        [(_kind, flags, rest)] = wire.PacketReader().feed(packet)
+        message = wire.parse_publish(flags, rest)
+        assert (message.payload, message.response_topic, message.correlation) == (b"p", response, correlation)
+        assert message.retain is retain
 
 
 @pytest.mark.parametrize("expiry", [-1, 0x1_0000_0000])
 def test_an_expiry_that_does_not_fit_four_bytes_is_refused(expiry: int) -> None:
-    with pytest.raises(ValueError, match="expiry"):
+    with pytest.raises(ValueError, match=f"^a message expiry interval is 0 … 4294967295 s, not {expiry}$"):
         wire.properties(expiry=expiry)
 
 
@@ -293,6 +300,8 @@ def test_a_keep_alive_that_does_not_fit_two_bytes_is_refused(keepalive: int) -> 
     (b"\x00\x00\x03\x21\x00\x0a", True, (0, {0x21: 10})),  # receive maximum
     (b"\x00\x00", False, (0, {})),
     (b"\x00\x01", False, (0x81, {})),  # 3.1.1: return code 1, unacceptable protocol version
+    (b"\x00\x02", False, (0x82, {})),
+    (b"\x00\x04", False, (0x84, {})),
     (b"\x00\x05", False, (0x85, {})),
     (b"\x00\x00\x03\x13\x00\x3c", False, (0, {})),  # 3.1.1 has no properties
 ])
@@ -342,6 +351,9 @@ def test_a_remaining_length_still_arriving_waits_and_one_of_five_bytes_is_malfor
         wire.PacketReader().feed(b"\x30\xff\xff\xff\xff")
     with pytest.raises(wire.MalformedPacket, match="longer than four"):
         wire.PacketReader().feed(b"\xd0\x00" + b"\x30\x80\x80\x80\x80")  # after a whole packet
+    reader = wire.PacketReader()
+    assert reader.feed(b"\xd0\x00" + b"\x30\x80\x80\x80") == [(13, 0, b"")]  # and one still arriving
+    assert reader.feed(b"\x01") == []
 
 
 @given(hs.lists(hs.tuples(hs.sampled_from([0x30, 0x31, 0x40, 0x90, 0xB0, 0xD0, 0xE0]), hs.binary(max_size=200)),
@@ -361,3 +373,29 @@ def test_a_stream_cut_anywhere_gives_its_packets(packets: list[tuple[int, bytes]
 def test_a_varint_packed_struct_agrees() -> None:
     """The two-byte fields written with struct are big-endian (1.5.2)."""
     assert struct.pack("!H", 258) == b"\x01\x02" == wire.puback(258)[2:]
+
+
+# -- what the user reads: "malformed packet from the broker: <this>" ----------------------------
+@pytest.mark.parametrize("parse, message", [
+    (lambda: wire._read_varint(b"\x80", 0), "variable byte integer cut short"),
+    (lambda: wire._read_varint(b"\x80\x80\x80\x80\x00", 0), "variable byte integer longer than four bytes"),
+    (lambda: wire._read_byte(b"\x01", 1), "byte cut short"),
+    (lambda: wire._read_u16(b"\x01", 0), "two-byte integer cut short"),
+    (lambda: wire._read_u32(b"\x00\x00\x00", 0), "four-byte integer cut short"),
+    (lambda: wire._read_u32(b"\x00\x00\x00\x00\x00", 2), "four-byte integer cut short"),
+    (lambda: wire._read_binary(b"\x00\x02a", 0), "string or binary data cut short"),
+    (lambda: wire._read_string(b"\x00\x01\xff", 0), "a string that is not UTF-8"),
+    (lambda: wire.parse_properties(b"\x02\x01", 0), "property list cut short"),
+    (lambda: wire.parse_properties(b"\x01\x02\x00\x00\x00\x00", 0), "property list overruns its length"),
+    (lambda: wire.parse_properties(b"\x01\x02\x00", 0), "four-byte integer cut short"),
+    (lambda: wire.parse_properties(b"\x02\x04\x00", 0), "unknown property 0x04"),
+    (lambda: wire.parse_publish(0b0110, b"\x00\x01t\x00\x01"), "a PUBLISH with both QoS bits set"),
+    (lambda: wire.parse_publish(0b0010, b"\x00\x01t\x00\x00"), "a PUBLISH at QoS 1 or 2 with packet identifier 0"),
+    (lambda: wire.parse_connack(b"\x00"), "CONNACK cut short"),
+    (lambda: wire.parse_connack(b"\x00\x00\x05"), "property list cut short"),  # three bytes, properties promised
+    (lambda: wire.suback_refused(b"\x00\x01\x00"), "SUBACK without a reason code"),
+])
+def test_each_malformed_packet_says_what_is_wrong(parse: object, message: str) -> None:
+    with pytest.raises(wire.MalformedPacket) as raised:
+        parse()  # type: ignore[operator]
+    assert str(raised.value) == message
