@@ -132,6 +132,7 @@ MODULES: dict[str, tuple[str, ...]] = {
     ),
     "devsim/devices/ip247/values.py": (
         "tests/ip247/test_values.py",
+        "tests/ip247/test_values_boundaries.py",
     ),
 }
 
