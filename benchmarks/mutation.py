@@ -134,6 +134,10 @@ MODULES: dict[str, tuple[str, ...]] = {
         "tests/ip247/test_values.py",
         "tests/ip247/test_values_boundaries.py",
     ),
+    "devsim/devices/ip247/pg_profile.py": (
+        "tests/ip247/test_pg_profile.py",
+        "tests/ip247/test_pg_profile_boundaries.py",
+    ),
 }
 
 #: mutmut's exit-code meanings, folded into the columns printed.
