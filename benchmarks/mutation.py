@@ -138,6 +138,9 @@ MODULES: dict[str, tuple[str, ...]] = {
         "tests/ip247/test_pg_profile.py",
         "tests/ip247/test_pg_profile_boundaries.py",
     ),
+    "devsim/devices/ip247/s5_services.py": (
+        "tests/ip247/test_s5_services.py",
+    ),
 }
 
 #: mutmut's exit-code meanings, folded into the columns printed.
