@@ -141,6 +141,9 @@ MODULES: dict[str, tuple[str, ...]] = {
     "devsim/devices/ip247/s5_services.py": (
         "tests/ip247/test_s5_services.py",
     ),
+    "devsim/core/words.py": (
+        "tests/core/test_words.py",
+    ),
 }
 
 #: mutmut's exit-code meanings, folded into the columns printed.
