@@ -144,6 +144,10 @@ MODULES: dict[str, tuple[str, ...]] = {
     "devsim/core/words.py": (
         "tests/core/test_words.py",
     ),
+    "devsim/fleet/topics.py": (  # the fleet URL and topic names
+        "tests/fleet/test_topics.py",
+        "tests/fleet/test_topics_boundaries.py",
+    ),
 }
 
 #: mutmut's exit-code meanings, folded into the columns printed.
