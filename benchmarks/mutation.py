@@ -99,6 +99,55 @@ MODULES: dict[str, tuple[str, ...]] = {
     "devsim/facades/canopen_od.py": (
         "tests/facades/test_canopen.py",
     ),
+    # the framings record, replay and the telegram tap take from a kind's ports, the member's MQTT
+    # packets and the pcap records (helper mut-framing)
+    "devsim/core/framing.py": (
+        "tests/core/test_framing.py",
+        "tests/replay/test_session.py",
+    ),
+    "devsim/devices/sers/framing.py": (
+        "tests/sers/test_framing.py",
+        "tests/replay/test_session.py",
+    ),
+    "devsim/devices/gms96/framing.py": (
+        "tests/gms96/test_framing.py",
+        "tests/replay/test_session.py",
+    ),
+    "devsim/devices/pcd4h3/framing.py": (
+        "tests/pcd4h3/test_framing.py",
+        "tests/replay/test_session.py",
+    ),
+    "devsim/facades/mqtt_wire.py": (
+        "tests/facades/test_mqtt_wire.py",
+        "tests/facades/test_mqtt_wire_boundaries.py",
+    ),
+    "devsim/transports/pcap.py": (
+        "tests/transports/test_pcap.py",
+        "tests/transports/test_pcap_boundaries.py",
+    ),
+    # pure codecs found beside them: the POSELESTA's ISO/ASCII and baud-rate codes, the IP247's
+    # BCD values and records to and from the PLC
+    "devsim/devices/poselesta/codes.py": (
+        "tests/poselesta/test_codes.py",
+    ),
+    "devsim/devices/ip247/values.py": (
+        "tests/ip247/test_values.py",
+        "tests/ip247/test_values_boundaries.py",
+    ),
+    "devsim/devices/ip247/pg_profile.py": (
+        "tests/ip247/test_pg_profile.py",
+        "tests/ip247/test_pg_profile_boundaries.py",
+    ),
+    "devsim/devices/ip247/s5_services.py": (
+        "tests/ip247/test_s5_services.py",
+    ),
+    "devsim/core/words.py": (
+        "tests/core/test_words.py",
+    ),
+    "devsim/fleet/topics.py": (  # the fleet URL and topic names
+        "tests/fleet/test_topics.py",
+        "tests/fleet/test_topics_boundaries.py",
+    ),
 }
 
 #: mutmut's exit-code meanings, folded into the columns printed.

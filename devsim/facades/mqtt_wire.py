@@ -9,7 +9,10 @@ expiry interval, the response topic and the correlation data, and reads every pr
 may send, keeping those three and the server keep alive.
 
 :class:`PacketReader` cuts a byte stream into packets (fixed header, 2.1); :func:`parse_publish`
-reads a PUBLISH.  A malformed stream raises :class:`MalformedPacket`.
+reads a PUBLISH.  A malformed stream raises :class:`MalformedPacket`; a packet that cannot be
+written (a string or binary of more than 65,535 bytes, a packet identifier outside 1 … 65,535, a
+QoS outside 0 … 2, a keep alive or expiry interval that does not fit its field, a remaining
+length beyond 268,435,455) raises ``ValueError`` instead of going out malformed.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ CONNACK, PUBLISH, PUBACK, SUBACK, UNSUBACK, PINGRESP, SERVER_DISCONNECT = 2, 3, 
 PINGREQ = b"\xc0\x00"
 DISCONNECT = b"\xe0\x00"  # reason 0, normal disconnection: the broker does not send the will (3.14.2.1)
 MAX_REMAINING = 268_435_455  # the largest remaining length (2.1.4)
+MAX_TWO_BYTE = 0xFFFF  # the longest string or binary data (1.5.4, 1.5.6), the largest packet identifier (2.2.1)
 
 # properties (2.2.2.2)
 MESSAGE_EXPIRY, RESPONSE_TOPIC, CORRELATION_DATA, SERVER_KEEP_ALIVE = 0x02, 0x08, 0x09, 0x13
@@ -61,7 +65,9 @@ class Publish(msgspec.Struct):
 
 # -- encoding ---------------------------------------------------------------------------------
 def _varint(value: int) -> bytes:
-    """A variable byte integer (1.5.5)."""
+    """A variable byte integer (1.5.5): 0 … 268,435,455 in one to four bytes."""
+    if not 0 <= value <= MAX_REMAINING:
+        raise ValueError(f"a variable byte integer is 0 … {MAX_REMAINING}, not {value}")
     out = bytearray()
     while True:
         value, byte = divmod(value, 128)
@@ -71,12 +77,25 @@ def _varint(value: int) -> bytes:
 
 
 def _string(text: str) -> bytes:
-    data = text.encode("utf-8")
-    return struct.pack("!H", len(data)) + data
+    return _binary(text.encode("utf-8"))
 
 
 def _binary(data: bytes) -> bytes:
+    if len(data) > MAX_TWO_BYTE:
+        raise ValueError(f"a string or binary data holds at most {MAX_TWO_BYTE} bytes, not {len(data)}")
     return struct.pack("!H", len(data)) + data
+
+
+def _packet_id(value: int) -> bytes:
+    if not 1 <= value <= MAX_TWO_BYTE:
+        raise ValueError(f"a packet identifier is 1 … {MAX_TWO_BYTE}, not {value}")
+    return struct.pack("!H", value)
+
+
+def _qos(value: int) -> int:
+    if value not in (0, 1, 2):
+        raise ValueError(f"QoS is 0, 1 or 2, not {value}")
+    return value
 
 
 def _packet(first: int, body: bytes) -> bytes:
@@ -87,6 +106,8 @@ def properties(expiry: int | None = None, response_topic: str | None = None, cor
     """A property list with its length (2.2.2.1)."""
     out = b""
     if expiry is not None:
+        if not 0 <= expiry <= 0xFFFF_FFFF:
+            raise ValueError(f"a message expiry interval is 0 … {0xFFFF_FFFF} s, not {expiry}")
         out += bytes((MESSAGE_EXPIRY,)) + struct.pack("!I", expiry)
     if response_topic is not None:
         out += bytes((RESPONSE_TOPIC,)) + _string(response_topic)
@@ -98,10 +119,12 @@ def properties(expiry: int | None = None, response_topic: str | None = None, cor
 def connect(identifier: str, keepalive: int, *, will: Will | None = None, username: str | None = None,
             password: str | None = None, v5: bool = True) -> bytes:
     """CONNECT with clean start (3.1; MQTT 3.1.1's clean session)."""
+    if not 0 <= keepalive <= MAX_TWO_BYTE:
+        raise ValueError(f"a keep alive is 0 … {MAX_TWO_BYTE} s, not {keepalive}")
     flags = 0x02
     payload = _string(identifier)
     if will is not None:
-        flags |= 0x04 | (will.qos << 3) | (0x20 if will.retain else 0)
+        flags |= 0x04 | (_qos(will.qos) << 3) | (0x20 if will.retain else 0)
         payload += (properties(expiry=will.expiry) if v5 else b"") + _string(will.topic) + _binary(will.payload)
     if username is not None:
         flags |= 0x80
@@ -119,23 +142,23 @@ _NO_PROPERTIES = b"\x00"
 def publish(topic: str, payload: bytes, qos: int = 0, retain: bool = False, packet_id: int = 0,
             props: bytes = _NO_PROPERTIES) -> bytes:
     """PUBLISH (3.3); ``props`` from :func:`properties` (``b""`` for MQTT 3.1.1)."""
-    head = _string(topic) + (struct.pack("!H", packet_id) if qos else b"") + props
+    head = _string(topic) + (_packet_id(packet_id) if _qos(qos) else b"") + props
     return _packet(0x30 | (qos << 1) | (1 if retain else 0), head + payload)
 
 
 def puback(packet_id: int) -> bytes:
     """PUBACK, success (3.4.2.1: the reason code may be left out)."""
-    return b"\x40\x02" + struct.pack("!H", packet_id)
+    return b"\x40\x02" + _packet_id(packet_id)
 
 
 def subscribe(packet_id: int, topic: str, qos: int, v5: bool = True) -> bytes:
     """SUBSCRIBE to one filter (3.8)."""
-    return _packet(0x82, struct.pack("!H", packet_id) + (b"\x00" if v5 else b"") + _string(topic) + bytes((qos,)))
+    return _packet(0x82, _packet_id(packet_id) + (b"\x00" if v5 else b"") + _string(topic) + bytes((_qos(qos),)))
 
 
 def unsubscribe(packet_id: int, topic: str, v5: bool = True) -> bytes:
     """UNSUBSCRIBE from one filter (3.10)."""
-    return _packet(0xA2, struct.pack("!H", packet_id) + (b"\x00" if v5 else b"") + _string(topic))
+    return _packet(0xA2, _packet_id(packet_id) + (b"\x00" if v5 else b"") + _string(topic))
 
 
 # -- decoding ---------------------------------------------------------------------------------
@@ -174,8 +197,10 @@ def _read_string(data: bytes, at: int) -> tuple[str, int]:
         raise MalformedPacket("a string that is not UTF-8") from None
 
 
-def _skip(width: int) -> Callable[[bytes, int], tuple[None, int]]:
-    return lambda data, at: (None, at + width)
+def _read_byte(data: bytes, at: int) -> tuple[int, int]:
+    if at >= len(data):
+        raise MalformedPacket("byte cut short")
+    return data[at], at + 1
 
 
 def _read_u32(data: bytes, at: int) -> tuple[int, int]:
@@ -190,14 +215,14 @@ def _read_pair(data: bytes, at: int) -> tuple[None, int]:
     return None, at
 
 
-#: property identifier -> reader of its value (2.2.2.2); values of the ones devsim ignores are skipped
+#: property identifier -> reader of its value (2.2.2.2)
 _PROPERTY_READERS: dict[int, Callable[[bytes, int], tuple[object, int]]] = {
-    0x01: _skip(1), MESSAGE_EXPIRY: _read_u32, 0x03: _read_string, RESPONSE_TOPIC: _read_string,
+    0x01: _read_byte, MESSAGE_EXPIRY: _read_u32, 0x03: _read_string, RESPONSE_TOPIC: _read_string,
     CORRELATION_DATA: _read_binary, 0x0B: _read_varint, 0x11: _read_u32, 0x12: _read_string,
-    SERVER_KEEP_ALIVE: _read_u16, 0x15: _read_string, 0x16: _read_binary, 0x17: _skip(1), 0x18: _read_u32,
-    0x19: _skip(1), 0x1A: _read_string, 0x1C: _read_string, 0x1F: _read_string, 0x21: _read_u16,
-    0x22: _read_u16, 0x23: _read_u16, 0x24: _skip(1), 0x25: _skip(1), 0x26: _read_pair, 0x27: _read_u32,
-    0x28: _skip(1), 0x29: _skip(1), 0x2A: _skip(1),
+    SERVER_KEEP_ALIVE: _read_u16, 0x15: _read_string, 0x16: _read_binary, 0x17: _read_byte, 0x18: _read_u32,
+    0x19: _read_byte, 0x1A: _read_string, 0x1C: _read_string, 0x1F: _read_string, 0x21: _read_u16,
+    0x22: _read_u16, 0x23: _read_u16, 0x24: _read_byte, 0x25: _read_byte, 0x26: _read_pair, 0x27: _read_u32,
+    0x28: _read_byte, 0x29: _read_byte, 0x2A: _read_byte,
 }
 
 
@@ -221,12 +246,17 @@ def parse_properties(data: bytes, at: int) -> tuple[dict[int, object], int]:
 
 
 def parse_publish(flags: int, body: bytes, v5: bool = True) -> Publish:
-    """A PUBLISH's variable header and payload (3.3.2, 3.3.3)."""
+    """A PUBLISH's variable header and payload (3.3.2, 3.3.3); both QoS bits set (3.3.1.2) or a
+    packet identifier of 0 (2.2.1) is malformed."""
     qos = (flags >> 1) & 3
+    if qos == 3:
+        raise MalformedPacket("a PUBLISH with both QoS bits set")
     topic, at = _read_string(body, 0)
     packet_id = 0
     if qos:
         packet_id, at = _read_u16(body, at)
+        if not packet_id:
+            raise MalformedPacket("a PUBLISH at QoS 1 or 2 with packet identifier 0")
     if not v5:
         return Publish(topic, body[at:], qos, bool(flags & 1), packet_id)
     if body[at:at + 1] == b"\x00":  # no properties: the common case
