@@ -140,6 +140,22 @@ def test_breakpoints_passed_at_top_velocity_and_across_the_wrap() -> None:
     check({}, script, 5_000, LENGTHS)
 
 
+def test_cruising_with_the_integrator_saturated_and_its_coefficients_changed() -> None:
+    """The loop for a generator only adding its velocity: the integral term computed again only
+    when the error sum changes (ki set, then raised with il so that Σe stays at its limit, then cleared by UDF
+    mid-cruise), the motor's goal-speed table by output level (both ports, a load, an encoder
+    counting backwards)."""
+    def load(chip: Lm628) -> None:
+        chip.motor.load = -0.4
+
+    for sign, port in ((1, 12), (-1, 8)):
+        script: Script = {0: move(400_000, 1_117_389, 2_000),
+                          900: [cmd("LFIL", 0x0104, 40), cmd("UDF")],
+                          1_700: [load, cmd("LFIL", 0x0105, 80, 400), cmd("UDF")],  # the same limit of Σe
+                          2_600: [cmd("LFIL", 0x0104, 0), cmd("UDF")]}
+        check({"pid": (30, 0, 300, 200, 1), "sign": sign, "port": port}, script, 3_500, LENGTHS)
+
+
 def test_wrap_around() -> None:
     def near_the_end(chip: Lm628) -> None:
         chip.set_actual(POSITION_RANGE - 3_000)
