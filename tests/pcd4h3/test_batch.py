@@ -2,7 +2,9 @@
 for sample, as the reference loop :meth:`Lm628.sample` (spec pcd4h3.md §5.1–§5.9; issue 31):
 position, velocity, following error, status and signals, breakpoints, errors, index capture,
 stops, velocity mode, a parameter change mid-move.  Compared once with a pass per sample (every
-sample) and once with passes of random lengths (the state carried between samples)."""
+sample), once with passes of random lengths (the state carried between samples), and once with
+passes that keep checkpoints at marks (what the PLC's look-ahead computes, ending at a change
+of status)."""
 
 from __future__ import annotations
 
@@ -72,6 +74,43 @@ def batched_trace(spec: dict[str, Any], script: Script, samples: int, lengths: l
     return seen
 
 
+def marked_trace(spec: dict[str, Any], script: Script, samples: int, lengths: list[int]) -> dict[int, tuple]:
+    """Passes of :func:`batch.run_to` from action to action, a mark every ``lengths`` samples
+    (in turn); returns each checkpoint's (state, quiet, status) by the number of samples done.
+    A pass ends at its last mark or at the first checkpoint whose status differs from the
+    chip's before it; the next pass goes on from there."""
+    chip, quiet, seen, n, i = chip_for(spec), 0, {}, 0, 0
+    stops = sorted(k for k in script if k > 0)
+    while n < samples:
+        for action in script.get(n, ()):
+            action(chip)
+        end, marks = min([samples, *(k for k in stops if k > n)]), []
+        while not marks or marks[-1] < end - n:
+            marks.append(min(end - n, (marks[-1] if marks else 0) + lengths[i % len(lengths)]))
+            i += 1
+        status = chip.status
+        checkpoints, quiet = batch.run_to(chip, marks, quiet)
+        assert [mark for mark, _, _ in checkpoints] == marks[:len(checkpoints)]
+        changed = [batch.status_of(state) != status for _, _, state in checkpoints]
+        assert changed == [False] * (len(marks) - 1) + [changed[-1]] if len(checkpoints) == len(marks) \
+            else changed == [False] * (len(checkpoints) - 1) + [True], "the pass ends at the first change"
+        assert batch.snapshot(chip) == checkpoints[-1][2] and quiet == checkpoints[-1][1]
+        for mark, kept, state in checkpoints:
+            seen[n + mark] = (state, kept, batch.status_of(state), batch.motion_of(state))
+        n += checkpoints[-1][0]
+    return seen
+
+
+def reference_snapshots(spec: dict[str, Any], script: Script, samples: int) -> list[tuple[Any, ...]]:
+    chip, quiet, trace = chip_for(spec), 0, []
+    for n in range(samples):
+        for action in script.get(n, ()):
+            action(chip)
+        quiet = batch.run_reference(chip, 1, quiet)
+        trace.append((batch.snapshot(chip), quiet, chip.status, (chip.motor.position, chip.motor.velocity)))
+    return trace
+
+
 def check(spec: dict[str, Any], script: Script, samples: int, lengths: list[int] | None = None) -> None:
     reference = reference_trace(spec, script, samples)
     for n, got in batched_trace(spec, script, samples, [1]).items():  # every sample
@@ -79,6 +118,9 @@ def check(spec: dict[str, Any], script: Script, samples: int, lengths: list[int]
     if lengths:
         for n, got in batched_trace(spec, script, samples, lengths).items():
             assert got == reference[n - 1], f"sample {n} (passes {lengths})"
+        snapshots = reference_snapshots(spec, script, samples)
+        for n, got in marked_trace(spec, script, samples, lengths).items():
+            assert got == snapshots[n - 1], f"sample {n} (checkpoints every {lengths})"
 
 
 def ltrj(control: int, *values: int) -> Action:

@@ -18,6 +18,7 @@ import math
 from devsim.devices.pcd4h3.lm628 import (
     BREAKPOINT,
     COMPLETE,
+    MOTOR_OFF,
     POSITION_ERROR,
     POSITION_RANGE,
     WRAPAROUND,
@@ -27,7 +28,7 @@ from devsim.devices.pcd4h3.lm628 import (
 from devsim.devices.pcd4h3.pid import _lag_terms
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
-__all__ = ["STILL", "restore", "run", "run_reference", "snapshot"]
+__all__ = ["STILL", "Checkpoint", "motion_of", "restore", "run", "run_reference", "run_to", "snapshot", "status_of"]
 
 STILL = 1e-3  # counts/s: a motor slower than this stands (for the settled count)
 ONE = 1 << 16
@@ -37,6 +38,7 @@ TWICE_RANGE = 2 * POSITION_RANGE
 
 
 State = tuple[int | bool | float, ...]
+Checkpoint = tuple[int, int, State]  # samples from a pass's start, samples without change, state
 
 
 def snapshot(chip: Lm628) -> State:
@@ -46,6 +48,16 @@ def snapshot(chip: Lm628) -> State:
             f.error_sum, f.derivative, f._previous, f._countdown, f.output, f.integral,
             m.position, m.velocity, chip.flags, chip.on_target, chip._raw, chip.udf_sample, chip.motor_off,
             chip.index_armed, chip.index_position)
+
+
+def status_of(state: State) -> int:
+    """RDSTAT of the chip in ``state`` (as :attr:`Lm628.status`)."""
+    return state[13] | (MOTOR_OFF | COMPLETE if state[17] else 0)  # type: ignore[operator]
+
+
+def motion_of(state: State) -> tuple[float, float]:
+    """The motor's position and velocity in ``state``."""
+    return state[11], state[12]  # type: ignore[return-value]
 
 
 def restore(chip: Lm628, state: State) -> None:
@@ -120,19 +132,43 @@ def _fast(chip: Lm628) -> bool:
 
 def run(chip: Lm628, count: int, quiet: int) -> int:
     """``count`` samples of ``chip``, exactly as :func:`run_reference` computes them."""
-    while count > 0:
-        if not _fast(chip):
+    return _run(chip, count, quiet, [], [])
+
+
+def run_to(chip: Lm628, marks: list[int], quiet: int) -> tuple[list[Checkpoint], int]:
+    """The samples up to each of ``marks`` (increasing counts of samples from now, the first at
+    least 1) in one pass, as :func:`run` computes them, with a checkpoint ``(samples, quiet,
+    state)`` at each (the state as :func:`snapshot` takes it); the pass ends at the first
+    checkpoint whose status (RDSTAT) differs from the chip's now: between commands the status
+    only gains bits, so the checkpoints before it all have the status of now."""
+    checkpoints: list[Checkpoint] = []
+    quiet = _run(chip, marks[-1], quiet, marks, checkpoints)
+    return checkpoints, quiet
+
+
+def _run(chip: Lm628, count: int, quiet: int, marks: list[int], checkpoints: list[Checkpoint]) -> int:
+    status = chip.status
+    done = 0
+    while done < count:
+        if _fast(chip):
+            n, quiet = _run_fast(chip, count - done, quiet, marks, done, status, checkpoints)
+            done += n
+        else:
             quiet = run_reference(chip, 1, quiet)
-            count -= 1
-            continue
-        done, quiet = _run_fast(chip, count, quiet)
-        count -= done
+            done += 1
+        at = len(checkpoints)
+        if at < len(marks) and marks[at] == done:  # reached by the reference or after a stop
+            checkpoints.append((done, quiet, snapshot(chip)))
+        if checkpoints and status_of(checkpoints[-1][2]) != status:
+            break
     return quiet
 
 
-def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: C901, PLR0912, PLR0915
+def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, status: int,  # noqa: C901, PLR0912, PLR0913, PLR0915
+              checkpoints: list[Checkpoint]) -> tuple[int, int]:
     """Samples while the motor is on; returns (samples done, quiet).  Stops early after a
-    sample that switched the motor off (a position error with LPES)."""
+    sample that switched the motor off (a position error with LPES), and at a mark (``marks``
+    counted from ``base`` samples before this call) whose status differs from ``status``."""
     profile, filt, motor = chip.profile, chip.filter, chip.motor
     floor = math.floor
     # the profile generator
@@ -170,7 +206,20 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
     goals = _goals(kv, load, scale, travelled, gained)
     unit = float(sign)  # (a float product: 1.0 · x and −1.0 · x are exact)
     sum_low, sum_high = max(I24_LOW, -limit), min(I24_HIGH, limit)  # the two limits of Σe in one
-    while done < count:
+    at = len(checkpoints)
+    mark = marks[at] - base if at < len(marks) else count  # the next sample that takes a checkpoint
+    while True:
+        if done == mark:
+            if at < len(marks):  # the state as snapshot() takes it once the locals are written back
+                checkpoints.append((base + done, quiet, (
+                    p, v, target, stopping, complete, error_sum, derivative, previous, countdown, output, integral,
+                    x, speed_now, flags, on_target, raw, False, False, chip.index_armed, chip.index_position)))
+                at += 1
+                if flags != status:
+                    break
+                mark = marks[at] - base if at < len(marks) else count
+            if done == count:
+                break
         if cruise and not index_watch and not bounded:
             # the generator only adds its velocity and no index is watched: the same operations
             # as below without the branches that cannot be taken; the integral term is computed
@@ -180,7 +229,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
             lo16, hi16 = I16_LOW, I16_HIGH
             first_count, end_count = segment
             bias = integral + kd * derivative  # (integral is error_sum's: a pass starts with a sample below)
-            for n in range(1, (cruise if cruise < count - done else count - done) + 1):  # noqa: B007
+            for n in range(1, (cruise if cruise < mark - done else mark - done) + 1):  # noqa: B007
                 p += v
                 desired = (p >> 16) + home  # in raw counts
                 e = desired - seen
