@@ -140,7 +140,8 @@ def test_the_skipped_cycles_change_nothing_a_host_sees(name: str, seed: int, mon
 
 
 def test_a_moving_axis_wakes_the_plc_only_for_its_events() -> None:
-    """FForw at constant velocity for 10 s: a few timer events a second instead of a hundred."""
+    """FForw at constant velocity for 10 s: about one timer event a second instead of a hundred
+    (the look-ahead doubles its reach, up to 0.8 s, while nothing ends it early)."""
     clock = VirtualClock()
     pcd = Pcd4(clock=clock, config={**EXAMPLE, "h3def": {**EXAMPLE["h3def"], "mna": 1}})
     command(1, "FLdAA", "FLdVA", "FForw", Accel=2_000, Veloc=500)(pcd)
@@ -148,5 +149,5 @@ def test_a_moving_axis_wakes_the_plc_only_for_its_events() -> None:
     events = clock.advance(10.0)
     pcd.catch_up()
     assert not pcd.drives[0].settled and pcd.drives[0].chip.actual > 500_000
-    assert events < 100
+    assert events < 20
     pcd.close()

@@ -21,9 +21,10 @@ from collections.abc import Sequence
 from devsim.devices.pcd4h3 import batch
 from devsim.devices.pcd4h3.drive import STILL, H3Drive
 
-__all__ = ["HORIZON", "quiet_cycles", "switch_near"]
+__all__ = ["FIRST_HORIZON", "HORIZON", "quiet_cycles", "switch_near"]
 
-HORIZON = 0.2  # seconds of device time computed ahead at most (one pass: about 600 samples)
+HORIZON = 0.8  # seconds of device time computed ahead at most (one pass: about 2,300 samples)
+FIRST_HORIZON = 0.05  # after a command or a host's write ended a look-ahead early: it doubles from here
 MARGIN = 1.0  # counts either side of a switch edge that count as near
 
 
