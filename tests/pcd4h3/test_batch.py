@@ -186,7 +186,7 @@ def test_cruising_with_the_integrator_saturated_and_its_coefficients_changed() -
     """The loop for a generator only adding its velocity: the integral term computed again only
     when the error sum changes (ki set, then raised with il so that Σe stays at its limit, then cleared by UDF
     mid-cruise), the motor's goal-speed table by output level (both ports, a load, an encoder
-    counting backwards)."""
+    counting backwards), and a following error beyond the loop's bound."""
     def load(chip: Lm628) -> None:
         chip.motor.load = -0.4
 
@@ -196,6 +196,20 @@ def test_cruising_with_the_integrator_saturated_and_its_coefficients_changed() -
                           1_700: [load, cmd("LFIL", 0x0105, 80, 400), cmd("UDF")],  # the same limit of Σe
                           2_600: [cmd("LFIL", 0x0104, 0), cmd("UDF")]}
         check({"pid": (30, 0, 300, 200, 1), "sign": sign, "port": port}, script, 3_500, LENGTHS)
+
+    def loaded(volts: float) -> Action:
+        def act(chip: Lm628) -> None:
+            chip.motor.load = volts
+        return act
+
+    # the following error grows past what e holds without its 16-bit clamp (and past the
+    # threshold, 7FFFh), and comes back once the load is gone
+    script = {0: [cmd("LPEI", 0x7FFF), *move(4_000_000, 1_117_389, 2_000)], 1_000: [loaded(9.5)],
+              3_600: [loaded(0.0)]}
+    check({"pid": (30, 4, 300, 2000, 1)}, script, 6_500, LENGTHS)
+    # a proportional filter alone, at a velocity the motor reaches only at full output: the
+    # error creeps through the last counts below 7FFFh, a derivative taken at every sample
+    check({"pid": (1, 0, 0, 0, 0)}, {0: [cmd("LPEI", 0x7FFF), *move(4_000_000, 2_240_000, 2_000)]}, 7_200, LENGTHS)
 
 
 def test_wrap_around() -> None:

@@ -125,6 +125,13 @@ def _goal(goals: Goals, level: int, kv: float, load: float, scale: int, travelle
     return pair
 
 
+def _unclamped(v: int, threshold: int) -> int:
+    """The following error up to which the next sample's e = err + Δdesired (|Δdesired| at most
+    |v| / 2^16 + 1 counts) fits 16 bits without its clamp, and no position error is flagged."""
+    bound = I16_HIGH - (abs(v) >> 16) - 1
+    return threshold if threshold < bound else bound
+
+
 def _fast(chip: Lm628) -> bool:
     motor = chip.motor
     return not chip.motor_off and not motor.blocked and motor.tau > 0
@@ -220,20 +227,21 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                 mark = marks[at] - base if at < len(marks) else count
             if done == count:
                 break
-        if cruise and not index_watch and not bounded:
-            # the generator only adds its velocity and no index is watched: the same operations
-            # as below without the branches that cannot be taken; the integral term is computed
-            # again only when the error sum changes, and the motor's two products of the goal
-            # speed come from a table by output level (the same floating-point operations)
+        if cruise and not index_watch and not bounded \
+                and -(bound := _unclamped(v, threshold)) <= (p >> 16) + home - seen <= bound:
+            # the generator only adds its velocity, no index is watched and the following error
+            # is within ±bound: the same operations as below without the branches that cannot
+            # be taken (e needs no 16-bit clamp); the integral term is computed again only when
+            # the error sum changes, and the motor's two products of the goal speed come from a
+            # table by output level (the same floating-point operations)
             n = 0
-            lo16, hi16 = I16_LOW, I16_HIGH
+            lo16, hi16, below = I16_LOW, I16_HIGH, -bound
             first_count, end_count = segment
             bias = integral + kd * derivative  # (integral is error_sum's: a pass starts with a sample below)
             for n in range(1, (cruise if cruise < mark - done else mark - done) + 1):  # noqa: B007
                 p += v
                 desired = (p >> 16) + home  # in raw counts
-                e = desired - seen
-                e = lo16 if e < lo16 else hi16 if e > hi16 else e
+                e = desired - seen  # within ±(bound + the step): no clamp
                 s = error_sum + e
                 s = sum_low if s < sum_low else sum_high if s > sum_high else s
                 if s != error_sum:
@@ -273,11 +281,11 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                     if was != now and was != 0 and now * was <= 0:
                         flags |= BREAKPOINT
                 err = desired - seen
-                if err > threshold or err < -threshold:
-                    flags |= POSITION_ERROR
-                    if stop_on_error:
-                        stopped = True
-                        break
+                if err > bound or err < below:  # the next sample's e may need its clamp: below
+                    if err > threshold or err < -threshold:
+                        flags |= POSITION_ERROR
+                        stopped = stop_on_error
+                    break
             done += n
             cruise -= n
             raw = seen
