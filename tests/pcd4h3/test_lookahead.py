@@ -18,7 +18,7 @@ from devsim.devices.pcd4h3.model import Pcd4
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
 Step = Callable[[Pcd4], None]
-CYCLE = 0.025  # two PLC cycles (10 ms) and their reads, s
+CYCLE = 0.0125  # one PLC cycle (10 ms) and its reads, s: the Deviations row of §6.4
 EXAMPLE = {"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 2}, "modules": 1, "variant": "H320",
            "response_delay_ms": 0}
 
@@ -64,8 +64,8 @@ def keys(*inputs: int, value: int = 1) -> Step:
 
 
 def shared_axes(pcd: Pcd4) -> tuple[tuple[float, float], ...]:
-    """Where the shared axes are now and how fast the motors move (the tolerance: two PLC
-    cycles' travel)."""
+    """Where the shared axes are now and how fast the motors move (the tolerance: one PLC
+    cycle's travel, its reads included)."""
     return tuple((d.axis.position(), abs(d.motor.velocity) * CYCLE + 1e-6) for d in pcd.drives)
 
 
