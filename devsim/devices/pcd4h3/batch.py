@@ -364,8 +364,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
         e = desired - (seen - home)
         e = I16_LOW if e < I16_LOW else I16_HIGH if e > I16_HIGH else e
         s = error_sum + e
-        s = I24_LOW if s < I24_LOW else I24_HIGH if s > I24_HIGH else s
-        error_sum = -limit if s < -limit else limit if s > limit else s
+        error_sum = sum_low if s < sum_low else sum_high if s > sum_high else s
         if ki:
             term = ki * (error_sum >> 8 if error_sum >= 0 else -(-error_sum >> 8))
             integral = -il if term < -il else il if term > il else term
@@ -377,16 +376,18 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
             countdown -= 1
         u = kp * e + integral + kd * derivative
         output = I16_LOW if u < I16_LOW else I16_HIGH if u > I16_HIGH else u
-        volts = (output >> 4) / 2048 * 10.0 if twelve else (output >> 8) / 128 * 10.0
-        # -- motor (Motor.step) --
-        goal_speed = kv * (volts - load)
-        x += speed_now * tau * gained + goal_speed * travelled
-        speed_now = speed_now * kept + goal_speed * gained
+        # -- motor (Motor.step), the goal speed kv · (volts − load) times the lag terms by level --
+        try:
+            travel, gain = goals[output >> shift]
+        except KeyError:
+            travel, gain = _goal(goals, output >> shift, kv, load, scale, travelled, gained)
+        x += speed_now * tau * gained + travel
+        speed_now = speed_now * kept + gain
         if bounded and not low <= x <= high:
             x = min(high, max(low, x))
             speed_now = 0.0
         # -- encoder and checks (Lm628._moved) --
-        raw = floor(sign * x)
+        raw = floor(unit * x)
         if not segment[0] <= raw < segment[1]:
             if not watch_moves:
                 flags |= WRAPAROUND
