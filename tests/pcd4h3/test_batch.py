@@ -240,6 +240,29 @@ def test_velocity_mode_both_ways_and_a_stop() -> None:
     check({}, script, 8_000, LENGTHS)
 
 
+def test_ramps_that_reach_their_goal_and_a_smooth_stop_to_rest() -> None:
+    """The samples in which the generator only adds its acceleration to its velocity (a ramp, in
+    the pass's loop for a generator that only adds): velocity-mode ramps up and down to goals
+    that are not a multiple of the acceleration, a reversal, and smooth stops that come to rest
+    (from a multiple of the acceleration and from between two)."""
+    for reverse in (-500_500, -500_000):
+        script: Script = {0: [ltrj(0x0028 | VELOCITY_MODE | FORWARD, 1_000, 1_117_389), cmd("STT")],
+                          2_000: [ltrj(0x0008 | VELOCITY_MODE | FORWARD, 300_001), cmd("STT")],
+                          3_500: [ltrj(0x0008 | VELOCITY_MODE, -reverse), cmd("STT")],
+                          5_000: [ltrj(SMOOTH), cmd("STT")]}
+        check({}, script, 6_000, LENGTHS)
+
+
+def test_ramps_that_end_at_the_edge_of_braking_or_of_the_target() -> None:
+    """A position-mode ramp is only added in one step while it can neither brake nor reach the
+    target: short moves with steep accelerations whose ramps end exactly where the remaining
+    distance equals the braking distance or the next step."""
+    script: Script = {0: move(3, 6_000_000, 1 << 16), 150: move(15, 6_000_000, 1 << 16),
+                      300: move(45, 6_000_000, 1 << 16), 450: move(54, 6_000_000, 3 << 16),
+                      600: move(102, 6_000_000, 1 << 20)}
+    check({"pid": (60, 0, 500, 0, 0)}, script, 800, LENGTHS)
+
+
 def test_parameters_changed_mid_move() -> None:
     script: Script = {0: move(80_000), 1_000: [ltrj(0x000A, 3_000_000, 80_000), cmd("STT")],
                       2_500: [cmd("LFIL", 0x000E, 60, 0, 600), cmd("UDF")], 3_000: [cmd("DFH")],

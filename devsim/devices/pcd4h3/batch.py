@@ -132,6 +132,28 @@ def _unclamped(v: int, threshold: int) -> int:
     return threshold if threshold < bound else bound
 
 
+def _ramp(distance: int, speed: int, acceleration: int, top: int) -> int:
+    """Samples from now in which a position-mode profile ramping up at ``speed`` (0 < speed <
+    top) only adds ``acceleration`` to it: the speed stays below ``top``, and the distance to
+    the target (``distance``, in the direction of motion) above both the braking distance and
+    one step.  Both only tighten from sample to sample, so the last sample that keeps them is
+    found by bisection."""
+    def keeps(m: int) -> bool:  # the m-th sample from now, and with it every one before
+        k = m - 1
+        before = speed + k * acceleration  # the speed that sample starts with
+        left = distance - k * speed - acceleration * k * (k + 1) // 2
+        return left > before * before // (2 * acceleration) + before // 2 and left > before + acceleration
+
+    low, high = 0, (top - speed - 1) // acceleration  # below top: speed + m · acceleration < top
+    while low < high:
+        middle = (low + high + 1) // 2
+        if keeps(middle):
+            low = middle
+        else:
+            high = middle - 1
+    return low
+
+
 def _fast(chip: Lm628) -> bool:
     motor = chip.motor
     return not chip.motor_off and not motor.blocked and motor.tau > 0
@@ -207,7 +229,8 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
     bounded = low > -math.inf or high < math.inf
     chip.udf_sample = False
     done = 0
-    cruise = 0  # samples ahead in which the generator only adds its velocity
+    cruise = 0  # samples ahead in which the generator only adds da to its velocity and that to the position
+    da = 0  # 0 at the top velocity; ±a while it ramps far from the target (or stops smoothly)
     stopped = False
     shift, scale = (4, 2048) if twelve else (8, 128)
     goals = _goals(kv, load, scale, travelled, gained)
@@ -228,8 +251,9 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
             if done == count:
                 break
         if cruise and not index_watch and not bounded \
-                and -(bound := _unclamped(v, threshold)) <= (p >> 16) + home - seen <= bound:
-            # the generator only adds its velocity, no index is watched and the following error
+                and -(bound := _unclamped(top if top > abs(v) else abs(v), threshold)) <= (p >> 16) + home - seen <= bound:
+            # the generator only adds its acceleration (or nothing) to its velocity and that to
+            # its position, no index is watched and the following error
             # is within ±bound: the same operations as below without the branches that cannot
             # be taken (e needs no 16-bit clamp); the integral term is computed again only when
             # the error sum changes, and the motor's two products of the goal speed come from a
@@ -239,6 +263,8 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
             first_count, end_count = segment
             bias = integral + kd * derivative  # (integral is error_sum's: a pass starts with a sample below)
             for n in range(1, (cruise if cruise < mark - done else mark - done) + 1):  # noqa: B007
+                if da:
+                    v += da
                 p += v
                 desired = (p >> 16) + home  # in raw counts
                 e = desired - seen  # within ±(bound + the step): no clamp
@@ -299,6 +325,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
         # -- profile generator (Profile.sample) --
         if cruise:
             cruise -= 1
+            v += da
             p += v
         elif not complete:
             if stopping:
@@ -310,6 +337,8 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                     stopping, complete = False, True
                     target = p
                 p += v
+                if v and a:  # the samples in which v only comes a nearer to 0
+                    cruise, da = (abs(v) - 1) // a, a if v < 0 else -a
             elif vmode:
                 goal = top if forward else -top
                 if v < goal:
@@ -317,8 +346,10 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                 elif v > goal:
                     v = v - a if v - a > goal else goal
                 p += v
-                if v == goal:
-                    cruise = count  # held until a command (none comes inside this pass)
+                if v == goal or not a:
+                    cruise, da = count, 0  # held until a command (none comes inside this pass)
+                else:  # the samples in which v only comes a nearer to the goal
+                    cruise, da = ((goal - v - 1) // a, a) if v < goal else ((v - goal - 1) // a, -a)
             else:
                 remaining = target - p
                 if remaining == 0 and v == 0:
@@ -326,6 +357,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                 else:
                     direction = 1 if remaining > 0 else -1
                     v0 = v
+                    ramping = False
                     if v * direction < 0:
                         if v < 0:
                             v = v + a if v + a < 0 else 0
@@ -348,6 +380,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                                 v = v + a if v + a < goal else goal
                             elif v > goal:
                                 v = v - a if v - a > goal else goal
+                            ramping = True
                     if v and (target - (p + v)) * direction <= 0 and v0 * direction >= 0:
                         p, v, complete = target, 0, True
                     elif v == 0 and abs(remaining) < ONE:
@@ -355,7 +388,9 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                     else:
                         p += v
                         if v and v == top * direction:
-                            cruise = _cruise(target, p, v, direction, a)
+                            cruise, da = _cruise(target, p, v, direction, a), 0
+                        elif ramping and 0 < v * direction < top:  # (a > 0: v moved) ramping up, far from the target
+                            cruise, da = _ramp((target - p) * direction, v * direction, a, top), a * direction
             if complete:
                 flags |= COMPLETE
                 on_target = True
