@@ -31,6 +31,9 @@ from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 __all__ = ["STILL", "Checkpoint", "motion_of", "restore", "run", "run_reference", "run_to", "snapshot", "status_of"]
 
 STILL = 1e-3  # counts/s: a motor slower than this stands (for the settled count)
+# counts a sample at most per count/s of the motor's speed: a sample of the lag moves it by at
+# most max(|v|, |goal|) · (τ·(1 − e^(−t/τ)) + t − τ·(1 − e^(−t/τ))) = … · t, with room for rounding
+STEP_SLACK = CHIP_SAMPLE * 1.001
 ONE = 1 << 16
 I16_LOW, I16_HIGH = -(1 << 15), (1 << 15) - 1
 I24_LOW, I24_HIGH = -(1 << 23), (1 << 23) - 1
@@ -154,6 +157,13 @@ def _ramp(distance: int, speed: int, acceleration: int, top: int) -> int:
     return low
 
 
+def _far(raw: int, home: int, breakpoint: int, segment: tuple[int, int], travel: float) -> bool:
+    """Whether the encoder, at ``raw`` counts, stays more than ``travel`` counts from the
+    breakpoint and from the ends of its segment (no wrap-around, no breakpoint passed)."""
+    position = (raw - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE
+    return abs(position - breakpoint) > travel and raw - segment[0] > travel and segment[1] - 1 - raw > travel
+
+
 def _fast(chip: Lm628) -> bool:
     motor = chip.motor
     return not chip.motor_off and not motor.blocked and motor.tau > 0
@@ -235,6 +245,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
     shift, scale = (4, 2048) if twelve else (8, 128)
     goals = _goals(kv, load, scale, travelled, gained)
     unit = float(sign)  # (a float product: 1.0 · x and −1.0 · x are exact)
+    fastest = abs(kv) * (10.0 + abs(load))  # counts/s: the motor's goal speed at most (±10 V)
     sum_low, sum_high = max(I24_LOW, -limit), min(I24_HIGH, limit)  # the two limits of Σe in one
     at = len(checkpoints)
     mark = marks[at] - base if at < len(marks) else count  # the next sample that takes a checkpoint
@@ -262,7 +273,11 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
             lo16, hi16, below = I16_LOW, I16_HIGH, -bound
             first_count, end_count = segment
             bias = integral + kd * derivative  # (integral is error_sum's: a pass starts with a sample below)
-            for n in range(1, (cruise if cruise < mark - done else mark - done) + 1):  # noqa: B007
+            length = cruise if cruise < mark - done else mark - done
+            # a breakpoint the motor cannot reach in these samples need not be checked in them
+            watching = watch_moves and not _far(seen, home, break_at, segment,
+                                                length * (max(abs(speed_now), fastest) * STEP_SLACK) + 2)
+            for n in range(1, length + 1):  # noqa: B007
                 if da:
                     v += da
                 p += v
@@ -294,10 +309,10 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                 before = seen
                 seen = floor(unit * x)
                 if not first_count <= seen < end_count:
-                    if not watch_moves:
+                    if not watching:
                         flags |= WRAPAROUND
                     first_count, end_count = segment = _segment(seen, home)
-                if watch_moves and before != seen:  # the breakpoint: as in the loop below
+                if watching and before != seen:  # the breakpoint: as in the loop below
                     if (before - home + POSITION_RANGE) >> 31 != (seen - home + POSITION_RANGE) >> 31:
                         flags |= WRAPAROUND
                     w = (before - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE - break_at
