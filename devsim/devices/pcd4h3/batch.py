@@ -9,6 +9,13 @@ on, free and has a time constant; anything else (motor off, a blocked motor, τm
 sample after a position-error stop take the reference :meth:`Lm628.sample`.  It also counts the
 samples in which nothing changed, as :class:`~devsim.devices.pcd4h3.stepper.ChipStepper` decides
 that the chip has settled.
+
+While the profile generator only adds its velocity (at the top velocity) or its acceleration to
+it (a ramp that cannot brake or reach the target, a smooth stop not yet at rest), and the
+following error stays within a bound, the pass runs a loop without the branches that cannot be
+taken; the motor's goal speed times its lag terms comes from a table by output level.
+:func:`run_to` keeps a checkpoint of the state at given samples (the PLC's look-ahead) and ends
+at the first whose status differs.
 """
 
 from __future__ import annotations

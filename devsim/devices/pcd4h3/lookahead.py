@@ -6,10 +6,12 @@ complete, a breakpoint, the index, a wrap-around, a position error, the motor of
 cyclic reads (registers, the display), which only a host sees; and the shared axis follows the
 motor, which only matters where a switch is near.
 
-:func:`quiet_cycles` computes the moving chips ahead, cycle by cycle, up to the first cycle
-that would see a change (or a horizon), and returns the cycles in between: the PLC does not wake
-for them.  A look in between sees the chip of the present (the stepper keeps a checkpoint at each
-cycle, :meth:`~devsim.devices.pcd4h3.stepper.ChipStepper.ahead`) and, where the skipped cycles
+:func:`quiet_cycles` computes each moving chip ahead in one pass, up to the first cycle that
+would see a change (or its reach, which the PLC doubles from :data:`FIRST_HORIZON` up to
+:data:`HORIZON` while nothing ends a look-ahead early), and returns the cycles in between: the PLC
+does not wake for them.  A look in between sees the chip of the present (the stepper keeps a
+checkpoint at each look of a cycle, :meth:`~devsim.devices.pcd4h3.stepper.ChipStepper.ahead`)
+and, where the skipped cycles
 read the chips, the PLC runs their reads first, each at its moment (``Pcd4._materialize``); a
 command or a host's write ends the skipping.
 """
