@@ -262,6 +262,11 @@ def test_ramps_that_end_at_the_edge_of_braking_or_of_the_target() -> None:
                       600: move(102, 6_000_000, 1 << 20)}
     check({"pid": (60, 0, 500, 0, 0)}, script, 800, LENGTHS)
 
+    def no_acceleration(chip: Lm628) -> None:  # (an injection: no command loads it while moving)
+        chip.profile.acceleration = 0
+
+    check({}, {0: move(40_000), 300: [no_acceleration]}, 1_000, LENGTHS)  # a ramp that stays where it is
+
 
 def test_parameters_changed_mid_move() -> None:
     script: Script = {0: move(80_000), 1_000: [ltrj(0x000A, 3_000_000, 80_000), cmd("STT")],

@@ -411,7 +411,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                         p += v
                         if v and v == top * direction:
                             cruise, da = _cruise(target, p, v, direction, a), 0
-                        elif ramping and 0 < v * direction < top:  # (a > 0: v moved) ramping up, far from the target
+                        elif ramping and a and 0 < v * direction < top:  # ramping up, far from the target
                             cruise, da = _ramp((target - p) * direction, v * direction, a, top), a * direction
             if complete:
                 flags |= COMPLETE
