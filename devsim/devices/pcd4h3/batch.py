@@ -118,7 +118,9 @@ _GOALS: dict[tuple[float, ...], Goals] = {}
 def _goals(kv: float, load: float, scale: int, travelled: float, gained: float) -> Goals:
     """The motor's goal speed times its two lag terms by output level (``output >> shift``), as
     :meth:`~devsim.devices.pcd4h3.pid.Motor.step` computes them; shared by every chip with the
-    same motor, filled as levels occur (at most 4096 each)."""
+    same motor, filled as levels occur (at most 4096 each).  A memo of a pure function of its
+    key, like :func:`functools.lru_cache` (at most 64 motors, then it starts anew): no state of
+    one device reaches another, and a table per device would cost each its memory."""
     key = (kv, load, math.copysign(1.0, kv), math.copysign(1.0, load), scale, travelled, gained)
     table = _GOALS.get(key)
     if table is None:
