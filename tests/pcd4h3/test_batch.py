@@ -2,7 +2,9 @@
 for sample, as the reference loop :meth:`Lm628.sample` (spec pcd4h3.md §5.1–§5.9; issue 31):
 position, velocity, following error, status and signals, breakpoints, errors, index capture,
 stops, velocity mode, a parameter change mid-move.  Compared once with a pass per sample (every
-sample) and once with passes of random lengths (the state carried between samples)."""
+sample), once with passes of random lengths (the state carried between samples), and once with
+passes that keep checkpoints at marks (what the PLC's look-ahead computes, ending at a change
+of status)."""
 
 from __future__ import annotations
 
@@ -72,6 +74,43 @@ def batched_trace(spec: dict[str, Any], script: Script, samples: int, lengths: l
     return seen
 
 
+def marked_trace(spec: dict[str, Any], script: Script, samples: int, lengths: list[int]) -> dict[int, tuple]:
+    """Passes of :func:`batch.run_to` from action to action, a mark every ``lengths`` samples
+    (in turn); returns each checkpoint's (state, quiet, status) by the number of samples done.
+    A pass ends at its last mark or at the first checkpoint whose status differs from the
+    chip's before it; the next pass goes on from there."""
+    chip, quiet, seen, n, i = chip_for(spec), 0, {}, 0, 0
+    stops = sorted(k for k in script if k > 0)
+    while n < samples:
+        for action in script.get(n, ()):
+            action(chip)
+        end, marks = min([samples, *(k for k in stops if k > n)]), []
+        while not marks or marks[-1] < end - n:
+            marks.append(min(end - n, (marks[-1] if marks else 0) + lengths[i % len(lengths)]))
+            i += 1
+        status = chip.status
+        checkpoints, quiet = batch.run_to(chip, marks, quiet)
+        assert [mark for mark, _, _ in checkpoints] == marks[:len(checkpoints)]
+        changed = [batch.status_of(state) != status for _, _, state in checkpoints]
+        assert changed == [False] * (len(marks) - 1) + [changed[-1]] if len(checkpoints) == len(marks) \
+            else changed == [False] * (len(checkpoints) - 1) + [True], "the pass ends at the first change"
+        assert batch.snapshot(chip) == checkpoints[-1][2] and quiet == checkpoints[-1][1]
+        for mark, kept, state in checkpoints:
+            seen[n + mark] = (state, kept, batch.status_of(state), batch.motion_of(state))
+        n += checkpoints[-1][0]
+    return seen
+
+
+def reference_snapshots(spec: dict[str, Any], script: Script, samples: int) -> list[tuple[Any, ...]]:
+    chip, quiet, trace = chip_for(spec), 0, []
+    for n in range(samples):
+        for action in script.get(n, ()):
+            action(chip)
+        quiet = batch.run_reference(chip, 1, quiet)
+        trace.append((batch.snapshot(chip), quiet, chip.status, (chip.motor.position, chip.motor.velocity)))
+    return trace
+
+
 def check(spec: dict[str, Any], script: Script, samples: int, lengths: list[int] | None = None) -> None:
     reference = reference_trace(spec, script, samples)
     for n, got in batched_trace(spec, script, samples, [1]).items():  # every sample
@@ -79,6 +118,9 @@ def check(spec: dict[str, Any], script: Script, samples: int, lengths: list[int]
     if lengths:
         for n, got in batched_trace(spec, script, samples, lengths).items():
             assert got == reference[n - 1], f"sample {n} (passes {lengths})"
+        snapshots = reference_snapshots(spec, script, samples)
+        for n, got in marked_trace(spec, script, samples, lengths).items():
+            assert got == snapshots[n - 1], f"sample {n} (checkpoints every {lengths})"
 
 
 def ltrj(control: int, *values: int) -> Action:
@@ -140,6 +182,36 @@ def test_breakpoints_passed_at_top_velocity_and_across_the_wrap() -> None:
     check({}, script, 5_000, LENGTHS)
 
 
+def test_cruising_with_the_integrator_saturated_and_its_coefficients_changed() -> None:
+    """The loop for a generator only adding its velocity: the integral term computed again only
+    when the error sum changes (ki set, then raised with il so that Σe stays at its limit, then cleared by UDF
+    mid-cruise), the motor's goal-speed table by output level (both ports, a load, an encoder
+    counting backwards), and a following error beyond the loop's bound."""
+    def load(chip: Lm628) -> None:
+        chip.motor.load = -0.4
+
+    for sign, port in ((1, 12), (-1, 8)):
+        script: Script = {0: move(400_000, 1_117_389, 2_000),
+                          900: [cmd("LFIL", 0x0104, 40), cmd("UDF")],
+                          1_700: [load, cmd("LFIL", 0x0105, 80, 400), cmd("UDF")],  # the same limit of Σe
+                          2_600: [cmd("LFIL", 0x0104, 0), cmd("UDF")]}
+        check({"pid": (30, 0, 300, 200, 1), "sign": sign, "port": port}, script, 3_500, LENGTHS)
+
+    def loaded(volts: float) -> Action:
+        def act(chip: Lm628) -> None:
+            chip.motor.load = volts
+        return act
+
+    # the following error grows past what e holds without its 16-bit clamp (and past the
+    # threshold, 7FFFh), and comes back once the load is gone
+    script = {0: [cmd("LPEI", 0x7FFF), *move(4_000_000, 1_117_389, 2_000)], 1_000: [loaded(9.5)],
+              3_600: [loaded(0.0)]}
+    check({"pid": (30, 4, 300, 2000, 1)}, script, 6_500, LENGTHS)
+    # a proportional filter alone, at a velocity the motor reaches only at full output: the
+    # error creeps through the last counts below 7FFFh, a derivative taken at every sample
+    check({"pid": (1, 0, 0, 0, 0)}, {0: [cmd("LPEI", 0x7FFF), *move(4_000_000, 2_240_000, 2_000)]}, 7_200, LENGTHS)
+
+
 def test_wrap_around() -> None:
     def near_the_end(chip: Lm628) -> None:
         chip.set_actual(POSITION_RANGE - 3_000)
@@ -166,6 +238,34 @@ def test_velocity_mode_both_ways_and_a_stop() -> None:
                       2_000: [ltrj(0x0008 | VELOCITY_MODE, 800_000), cmd("STT")],
                       5_000: [ltrj(SMOOTH), cmd("STT")]}
     check({}, script, 8_000, LENGTHS)
+
+
+def test_ramps_that_reach_their_goal_and_a_smooth_stop_to_rest() -> None:
+    """The samples in which the generator only adds its acceleration to its velocity (a ramp, in
+    the pass's loop for a generator that only adds): velocity-mode ramps up and down to goals
+    that are not a multiple of the acceleration, a reversal, and smooth stops that come to rest
+    (from a multiple of the acceleration and from between two)."""
+    for reverse in (-500_500, -500_000):
+        script: Script = {0: [ltrj(0x0028 | VELOCITY_MODE | FORWARD, 1_000, 1_117_389), cmd("STT")],
+                          2_000: [ltrj(0x0008 | VELOCITY_MODE | FORWARD, 300_001), cmd("STT")],
+                          3_500: [ltrj(0x0008 | VELOCITY_MODE, -reverse), cmd("STT")],
+                          5_000: [ltrj(SMOOTH), cmd("STT")]}
+        check({}, script, 6_000, LENGTHS)
+
+
+def test_ramps_that_end_at_the_edge_of_braking_or_of_the_target() -> None:
+    """A position-mode ramp is only added in one step while it can neither brake nor reach the
+    target: short moves with steep accelerations whose ramps end exactly where the remaining
+    distance equals the braking distance or the next step."""
+    script: Script = {0: move(3, 6_000_000, 1 << 16), 150: move(15, 6_000_000, 1 << 16),
+                      300: move(45, 6_000_000, 1 << 16), 450: move(54, 6_000_000, 3 << 16),
+                      600: move(102, 6_000_000, 1 << 20)}
+    check({"pid": (60, 0, 500, 0, 0)}, script, 800, LENGTHS)
+
+    def no_acceleration(chip: Lm628) -> None:  # (an injection: no command loads it while moving)
+        chip.profile.acceleration = 0
+
+    check({}, {0: move(40_000), 300: [no_acceleration]}, 1_000, LENGTHS)  # a ramp that stays where it is
 
 
 def test_parameters_changed_mid_move() -> None:

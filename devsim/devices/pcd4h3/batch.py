@@ -9,6 +9,13 @@ on, free and has a time constant; anything else (motor off, a blocked motor, τm
 sample after a position-error stop take the reference :meth:`Lm628.sample`.  It also counts the
 samples in which nothing changed, as :class:`~devsim.devices.pcd4h3.stepper.ChipStepper` decides
 that the chip has settled.
+
+While the profile generator only adds its velocity (at the top velocity) or its acceleration to
+it (a ramp that cannot brake or reach the target, a smooth stop not yet at rest), and the
+following error stays within a bound, the pass runs a loop without the branches that cannot be
+taken; the motor's goal speed times its lag terms comes from a table by output level.
+:func:`run_to` keeps a checkpoint of the state at given samples (the PLC's look-ahead) and ends
+at the first whose status differs.
 """
 
 from __future__ import annotations
@@ -18,6 +25,7 @@ import math
 from devsim.devices.pcd4h3.lm628 import (
     BREAKPOINT,
     COMPLETE,
+    MOTOR_OFF,
     POSITION_ERROR,
     POSITION_RANGE,
     WRAPAROUND,
@@ -27,9 +35,12 @@ from devsim.devices.pcd4h3.lm628 import (
 from devsim.devices.pcd4h3.pid import _lag_terms
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
-__all__ = ["STILL", "restore", "run", "run_reference", "snapshot"]
+__all__ = ["STILL", "Checkpoint", "motion_of", "restore", "run", "run_reference", "run_to", "snapshot", "status_of"]
 
 STILL = 1e-3  # counts/s: a motor slower than this stands (for the settled count)
+# counts a sample at most per count/s of the motor's speed: a sample of the lag moves it by at
+# most max(|v|, |goal|) · (τ·(1 − e^(−t/τ)) + t − τ·(1 − e^(−t/τ))) = … · t, with room for rounding
+STEP_SLACK = CHIP_SAMPLE * 1.001
 ONE = 1 << 16
 I16_LOW, I16_HIGH = -(1 << 15), (1 << 15) - 1
 I24_LOW, I24_HIGH = -(1 << 23), (1 << 23) - 1
@@ -37,6 +48,7 @@ TWICE_RANGE = 2 * POSITION_RANGE
 
 
 State = tuple[int | bool | float, ...]
+Checkpoint = tuple[int, int, State]  # samples from a pass's start, samples without change, state
 
 
 def snapshot(chip: Lm628) -> State:
@@ -46,6 +58,16 @@ def snapshot(chip: Lm628) -> State:
             f.error_sum, f.derivative, f._previous, f._countdown, f.output, f.integral,
             m.position, m.velocity, chip.flags, chip.on_target, chip._raw, chip.udf_sample, chip.motor_off,
             chip.index_armed, chip.index_position)
+
+
+def status_of(state: State) -> int:
+    """RDSTAT of the chip in ``state`` (as :attr:`Lm628.status`)."""
+    return state[13] | (MOTOR_OFF | COMPLETE if state[17] else 0)  # type: ignore[operator]
+
+
+def motion_of(state: State) -> tuple[float, float]:
+    """The motor's position and velocity in ``state``."""
+    return state[11], state[12]  # type: ignore[return-value]
 
 
 def restore(chip: Lm628, state: State) -> None:
@@ -89,6 +111,68 @@ def _cruise(target: int, position: int, velocity: int, direction: int, accelerat
     return (margin - 1) // speed + 1 if margin > 0 else 0
 
 
+Goals = dict[int, tuple[float, float]]
+_GOALS: dict[tuple[float, ...], Goals] = {}
+
+
+def _goals(kv: float, load: float, scale: int, travelled: float, gained: float) -> Goals:
+    """The motor's goal speed times its two lag terms by output level (``output >> shift``), as
+    :meth:`~devsim.devices.pcd4h3.pid.Motor.step` computes them; shared by every chip with the
+    same motor, filled as levels occur (at most 4096 each).  A memo of a pure function of its
+    key, like :func:`functools.lru_cache` (at most 64 motors, then it starts anew): no state of
+    one device reaches another, and a table per device would cost each its memory."""
+    key = (kv, load, math.copysign(1.0, kv), math.copysign(1.0, load), scale, travelled, gained)
+    table = _GOALS.get(key)
+    if table is None:
+        if len(_GOALS) >= 64:
+            _GOALS.clear()
+        table = _GOALS[key] = {}
+    return table
+
+
+def _goal(goals: Goals, level: int, kv: float, load: float, scale: int, travelled: float,
+          gained: float) -> tuple[float, float]:
+    goal_speed = kv * (level / scale * 10.0 - load)
+    pair = goals[level] = (goal_speed * travelled, goal_speed * gained)
+    return pair
+
+
+def _unclamped(v: int, threshold: int) -> int:
+    """The following error up to which the next sample's e = err + Δdesired (|Δdesired| at most
+    |v| / 2^16 + 1 counts) fits 16 bits without its clamp, and no position error is flagged."""
+    bound = I16_HIGH - (abs(v) >> 16) - 1
+    return threshold if threshold < bound else bound
+
+
+def _ramp(distance: int, speed: int, acceleration: int, top: int) -> int:
+    """Samples from now in which a position-mode profile ramping up at ``speed`` (0 < speed <
+    top) only adds ``acceleration`` to it: the speed stays below ``top``, and the distance to
+    the target (``distance``, in the direction of motion) above both the braking distance and
+    one step.  Both only tighten from sample to sample, so the last sample that keeps them is
+    found by bisection."""
+    def keeps(m: int) -> bool:  # the m-th sample from now, and with it every one before
+        k = m - 1
+        before = speed + k * acceleration  # the speed that sample starts with
+        left = distance - k * speed - acceleration * k * (k + 1) // 2
+        return left > before * before // (2 * acceleration) + before // 2 and left > before + acceleration
+
+    low, high = 0, (top - speed - 1) // acceleration  # below top: speed + m · acceleration < top
+    while low < high:
+        middle = (low + high + 1) // 2
+        if keeps(middle):
+            low = middle
+        else:
+            high = middle - 1
+    return low
+
+
+def _far(raw: int, home: int, breakpoint: int, segment: tuple[int, int], travel: float) -> bool:
+    """Whether the encoder, at ``raw`` counts, stays more than ``travel`` counts from the
+    breakpoint and from the ends of its segment (no wrap-around, no breakpoint passed)."""
+    position = (raw - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE
+    return abs(position - breakpoint) > travel and raw - segment[0] > travel and segment[1] - 1 - raw > travel
+
+
 def _fast(chip: Lm628) -> bool:
     motor = chip.motor
     return not chip.motor_off and not motor.blocked and motor.tau > 0
@@ -96,19 +180,43 @@ def _fast(chip: Lm628) -> bool:
 
 def run(chip: Lm628, count: int, quiet: int) -> int:
     """``count`` samples of ``chip``, exactly as :func:`run_reference` computes them."""
-    while count > 0:
-        if not _fast(chip):
+    return _run(chip, count, quiet, [], [])
+
+
+def run_to(chip: Lm628, marks: list[int], quiet: int) -> tuple[list[Checkpoint], int]:
+    """The samples up to each of ``marks`` (increasing counts of samples from now, the first at
+    least 1) in one pass, as :func:`run` computes them, with a checkpoint ``(samples, quiet,
+    state)`` at each (the state as :func:`snapshot` takes it); the pass ends at the first
+    checkpoint whose status (RDSTAT) differs from the chip's now: between commands the status
+    only gains bits, so the checkpoints before it all have the status of now."""
+    checkpoints: list[Checkpoint] = []
+    quiet = _run(chip, marks[-1], quiet, marks, checkpoints)
+    return checkpoints, quiet
+
+
+def _run(chip: Lm628, count: int, quiet: int, marks: list[int], checkpoints: list[Checkpoint]) -> int:
+    status = chip.status
+    done = 0
+    while done < count:
+        if _fast(chip):
+            n, quiet = _run_fast(chip, count - done, quiet, marks, done, status, checkpoints)
+            done += n
+        else:
             quiet = run_reference(chip, 1, quiet)
-            count -= 1
-            continue
-        done, quiet = _run_fast(chip, count, quiet)
-        count -= done
+            done += 1
+        at = len(checkpoints)
+        if at < len(marks) and marks[at] == done:  # reached by the reference or after a stop
+            checkpoints.append((done, quiet, snapshot(chip)))
+        if checkpoints and status_of(checkpoints[-1][2]) != status:
+            break
     return quiet
 
 
-def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: C901, PLR0912, PLR0915
+def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, status: int,  # noqa: C901, PLR0912, PLR0913, PLR0915
+              checkpoints: list[Checkpoint]) -> tuple[int, int]:
     """Samples while the motor is on; returns (samples done, quiet).  Stops early after a
-    sample that switched the motor off (a position error with LPES)."""
+    sample that switched the motor off (a position error with LPES), and at a mark (``marks``
+    counted from ``base`` samples before this call) whose status differs from ``status``."""
     profile, filt, motor = chip.profile, chip.filter, chip.motor
     floor = math.floor
     # the profile generator
@@ -140,45 +248,80 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
     bounded = low > -math.inf or high < math.inf
     chip.udf_sample = False
     done = 0
-    cruise = 0  # samples ahead in which the generator only adds its velocity
+    cruise = 0  # samples ahead in which the generator only adds da to its velocity and that to the position
+    da = 0  # 0 at the top velocity; ±a while it ramps far from the target (or stops smoothly)
     stopped = False
     shift, scale = (4, 2048) if twelve else (8, 128)
-    while done < count:
-        if cruise and not index_watch and not bounded:
-            # the generator only adds its velocity and no index is watched: the same operations
-            # as below without the branches that cannot be taken (about a sixth faster)
+    goals = _goals(kv, load, scale, travelled, gained)
+    unit = float(sign)  # (a float product: 1.0 · x and −1.0 · x are exact)
+    fastest = abs(kv) * (10.0 + abs(load))  # counts/s: the motor's goal speed at most (±10 V)
+    sum_low, sum_high = max(I24_LOW, -limit), min(I24_HIGH, limit)  # the two limits of Σe in one
+    at = len(checkpoints)
+    mark = marks[at] - base if at < len(marks) else count  # the next sample that takes a checkpoint
+    while True:
+        if done == mark:
+            if at < len(marks):  # the state as snapshot() takes it once the locals are written back
+                checkpoints.append((base + done, quiet, (
+                    p, v, target, stopping, complete, error_sum, derivative, previous, countdown, output, integral,
+                    x, speed_now, flags, on_target, raw, False, False, chip.index_armed, chip.index_position)))
+                at += 1
+                if flags != status:
+                    break
+                mark = marks[at] - base if at < len(marks) else count
+            if done == count:
+                break
+        if cruise and not index_watch and not bounded \
+                and -(bound := _unclamped(top if top > abs(v) else abs(v), threshold)) <= (p >> 16) + home - seen <= bound:
+            # the generator only adds its acceleration (or nothing) to its velocity and that to
+            # its position, no index is watched and the following error
+            # is within ±bound: the same operations as below without the branches that cannot
+            # be taken (e needs no 16-bit clamp); the integral term is computed again only when
+            # the error sum changes, and the motor's two products of the goal speed come from a
+            # table by output level (the same floating-point operations)
             n = 0
-            lo16, hi16, lo24, hi24 = I16_LOW, I16_HIGH, I24_LOW, I24_HIGH
+            lo16, hi16, below = I16_LOW, I16_HIGH, -bound
             first_count, end_count = segment
-            for n in range(1, (cruise if cruise < count - done else count - done) + 1):  # noqa: B007
+            bias = integral + kd * derivative  # (integral is error_sum's: a pass starts with a sample below)
+            length = cruise if cruise < mark - done else mark - done
+            # a breakpoint the motor cannot reach in these samples need not be checked in them
+            watching = watch_moves and not _far(seen, home, break_at, segment,
+                                                length * (max(abs(speed_now), fastest) * STEP_SLACK) + 2)
+            for n in range(1, length + 1):  # noqa: B007
+                if da:
+                    v += da
                 p += v
-                desired = p >> 16
-                e = desired - seen + home
-                e = lo16 if e < lo16 else hi16 if e > hi16 else e
+                desired = (p >> 16) + home  # in raw counts
+                e = desired - seen  # within ±(bound + the step): no clamp
                 s = error_sum + e
-                s = lo24 if s < lo24 else hi24 if s > hi24 else s
-                error_sum = -limit if s < -limit else limit if s > limit else s
-                if ki:  # Σe / 256 truncated: |Σe| < 2^24, so the quotient of the reference is exact
-                    term = ki * (error_sum >> 8 if error_sum >= 0 else -(-error_sum >> 8))
-                    integral = -il if term < -il else il if term > il else term
-                if countdown == 0:
+                s = sum_low if s < sum_low else sum_high if s > sum_high else s
+                if s != error_sum:
+                    error_sum = s
+                    if ki:  # Σe / 256 truncated: |Σe| < 2^24, so the quotient of the reference is exact
+                        term = ki * (s >> 8 if s >= 0 else -(-s >> 8))
+                        integral = -il if term < -il else il if term > il else term
+                        bias = integral + kd * derivative
+                if countdown:
+                    countdown -= 1
+                else:
                     derivative = e - previous
                     previous = e
                     countdown = ds
-                else:
-                    countdown -= 1
-                u = kp * e + integral + kd * derivative
+                    bias = integral + kd * derivative
+                u = kp * e + bias
                 output = lo16 if u < lo16 else hi16 if u > hi16 else u
-                goal_speed = kv * ((output >> shift) / scale * 10.0 - load)
-                x += speed_now * tau * gained + goal_speed * travelled
-                speed_now = speed_now * kept + goal_speed * gained
+                try:
+                    travel, gain = goals[output >> shift]
+                except KeyError:
+                    travel, gain = _goal(goals, output >> shift, kv, load, scale, travelled, gained)
+                x += speed_now * tau * gained + travel
+                speed_now = speed_now * kept + gain
                 before = seen
-                seen = floor(sign * x)
+                seen = floor(unit * x)
                 if not first_count <= seen < end_count:
-                    if not watch_moves:
+                    if not watching:
                         flags |= WRAPAROUND
                     first_count, end_count = segment = _segment(seen, home)
-                if watch_moves and before != seen:  # the breakpoint: as in the loop below
+                if watching and before != seen:  # the breakpoint: as in the loop below
                     if (before - home + POSITION_RANGE) >> 31 != (seen - home + POSITION_RANGE) >> 31:
                         flags |= WRAPAROUND
                     w = (before - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE - break_at
@@ -187,12 +330,12 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
                     now = (w > 0) - (w < 0)
                     if was != now and was != 0 and now * was <= 0:
                         flags |= BREAKPOINT
-                err = desired - seen + home
-                if err > threshold or err < -threshold:
-                    flags |= POSITION_ERROR
-                    if stop_on_error:
-                        stopped = True
-                        break
+                err = desired - seen
+                if err > bound or err < below:  # the next sample's e may need its clamp: below
+                    if err > threshold or err < -threshold:
+                        flags |= POSITION_ERROR
+                        stopped = stop_on_error
+                    break
             done += n
             cruise -= n
             raw = seen
@@ -206,6 +349,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
         # -- profile generator (Profile.sample) --
         if cruise:
             cruise -= 1
+            v += da
             p += v
         elif not complete:
             if stopping:
@@ -217,6 +361,8 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
                     stopping, complete = False, True
                     target = p
                 p += v
+                if v and a:  # the samples in which v only comes a nearer to 0
+                    cruise, da = (abs(v) - 1) // a, a if v < 0 else -a
             elif vmode:
                 goal = top if forward else -top
                 if v < goal:
@@ -224,8 +370,10 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
                 elif v > goal:
                     v = v - a if v - a > goal else goal
                 p += v
-                if v == goal:
-                    cruise = count  # held until a command (none comes inside this pass)
+                if v == goal or not a:
+                    cruise, da = count, 0  # held until a command (none comes inside this pass)
+                else:  # the samples in which v only comes a nearer to the goal
+                    cruise, da = ((goal - v - 1) // a, a) if v < goal else ((v - goal - 1) // a, -a)
             else:
                 remaining = target - p
                 if remaining == 0 and v == 0:
@@ -233,6 +381,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
                 else:
                     direction = 1 if remaining > 0 else -1
                     v0 = v
+                    ramping = False
                     if v * direction < 0:
                         if v < 0:
                             v = v + a if v + a < 0 else 0
@@ -255,6 +404,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
                                 v = v + a if v + a < goal else goal
                             elif v > goal:
                                 v = v - a if v - a > goal else goal
+                            ramping = True
                     if v and (target - (p + v)) * direction <= 0 and v0 * direction >= 0:
                         p, v, complete = target, 0, True
                     elif v == 0 and abs(remaining) < ONE:
@@ -262,7 +412,9 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
                     else:
                         p += v
                         if v and v == top * direction:
-                            cruise = _cruise(target, p, v, direction, a)
+                            cruise, da = _cruise(target, p, v, direction, a), 0
+                        elif ramping and a and 0 < v * direction < top:  # ramping up, far from the target
+                            cruise, da = _ramp((target - p) * direction, v * direction, a, top), a * direction
             if complete:
                 flags |= COMPLETE
                 on_target = True
@@ -271,8 +423,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
         e = desired - (seen - home)
         e = I16_LOW if e < I16_LOW else I16_HIGH if e > I16_HIGH else e
         s = error_sum + e
-        s = I24_LOW if s < I24_LOW else I24_HIGH if s > I24_HIGH else s
-        error_sum = -limit if s < -limit else limit if s > limit else s
+        error_sum = sum_low if s < sum_low else sum_high if s > sum_high else s
         if ki:
             term = ki * (error_sum >> 8 if error_sum >= 0 else -(-error_sum >> 8))
             integral = -il if term < -il else il if term > il else term
@@ -284,16 +435,18 @@ def _run_fast(chip: Lm628, count: int, quiet: int) -> tuple[int, int]:  # noqa: 
             countdown -= 1
         u = kp * e + integral + kd * derivative
         output = I16_LOW if u < I16_LOW else I16_HIGH if u > I16_HIGH else u
-        volts = (output >> 4) / 2048 * 10.0 if twelve else (output >> 8) / 128 * 10.0
-        # -- motor (Motor.step) --
-        goal_speed = kv * (volts - load)
-        x += speed_now * tau * gained + goal_speed * travelled
-        speed_now = speed_now * kept + goal_speed * gained
+        # -- motor (Motor.step), the goal speed kv · (volts − load) times the lag terms by level --
+        try:
+            travel, gain = goals[output >> shift]
+        except KeyError:
+            travel, gain = _goal(goals, output >> shift, kv, load, scale, travelled, gained)
+        x += speed_now * tau * gained + travel
+        speed_now = speed_now * kept + gain
         if bounded and not low <= x <= high:
             x = min(high, max(low, x))
             speed_now = 0.0
         # -- encoder and checks (Lm628._moved) --
-        raw = floor(sign * x)
+        raw = floor(unit * x)
         if not segment[0] <= raw < segment[1]:
             if not watch_moves:
                 flags |= WRAPAROUND

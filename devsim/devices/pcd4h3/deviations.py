@@ -44,6 +44,18 @@ DEVIATIONS: tuple[Deviation, ...] = (
         "G-18); the host never needs them.",
     ),
     Deviation(
+        "§6.4",
+        "The limit switches LS1, LS2 and the reference switch change their inputs where the axis is.",
+        "The switches sit on a shared axis that follows the motor from the LM628's batches of samples, "
+        "linear from one PLC cycle or host look to the next. While the PLC skips the cycles of an axis that "
+        "only moves, the shared axis starts anew only at the host's looks, and `axis.N.mechanical_position` "
+        "may differ by up to one PLC cycle's travel from what a PLC running every cycle shows; the skipping "
+        "ends before a switch edge comes within a cycle's travel, so the switches change at the same sample "
+        "(0.34 ms) as with every cycle.",
+        "The motor is computed in batches, not continuously, and a moving axis wakes the PLC only for its "
+        "events (issue 31); following it at every skipped cycle would cost the timer the skipping saves.",
+    ),
+    Deviation(
         "§6.6",
         "Jumper S/B per axis: the PWM output as SIGN and MAGNITUDE or through the logic for a bridge amplifier.",
         "The output is reported as a signed duty (`axis.N.output_volts` = duty · 10 V) either way; "

@@ -6,10 +6,12 @@ complete, a breakpoint, the index, a wrap-around, a position error, the motor of
 cyclic reads (registers, the display), which only a host sees; and the shared axis follows the
 motor, which only matters where a switch is near.
 
-:func:`quiet_cycles` computes the moving chips ahead, cycle by cycle, up to the first cycle
-that would see a change (or a horizon), and returns the cycles in between: the PLC does not wake
-for them.  A look in between sees the chip of the present (the stepper keeps a checkpoint at each
-cycle, :meth:`~devsim.devices.pcd4h3.stepper.ChipStepper.ahead`) and, where the skipped cycles
+:func:`quiet_cycles` computes each moving chip ahead in one pass, up to the first cycle that
+would see a change (or its reach, which the PLC doubles from :data:`FIRST_HORIZON` up to
+:data:`HORIZON` while nothing ends a look-ahead early), and returns the cycles in between: the PLC
+does not wake for them.  A look in between sees the chip of the present (the stepper keeps a
+checkpoint at each look of a cycle, :meth:`~devsim.devices.pcd4h3.stepper.ChipStepper.ahead`)
+and, where the skipped cycles
 read the chips, the PLC runs their reads first, each at its moment (``Pcd4._materialize``); a
 command or a host's write ends the skipping.
 """
@@ -18,11 +20,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from devsim.devices.pcd4h3 import batch
 from devsim.devices.pcd4h3.drive import STILL, H3Drive
 
-__all__ = ["HORIZON", "quiet_cycles", "switch_near"]
+__all__ = ["FIRST_HORIZON", "HORIZON", "quiet_cycles", "switch_near"]
 
-HORIZON = 0.2  # seconds of device time computed ahead at most (one pass: about 600 samples)
+HORIZON = 0.8  # seconds of device time computed ahead at most (one pass: about 2,300 samples)
+FIRST_HORIZON = 0.05  # after a command or a host's write ended a look-ahead early: it doubles from here
 MARGIN = 1.0  # counts either side of a switch edge that count as near
 
 
@@ -42,38 +46,47 @@ Moments = tuple[tuple[float, float], ...]
 
 
 def quiet_cycles(drives: Sequence[H3Drive], first: float, step: float,
-                 moments: Sequence[Moments] | None = None) -> list[float]:
-    """The cycles from ``first`` on (every ``step``) that would find the status of every chip
-    unchanged and no switch near: their chips computed ahead, the list of their times.  A cycle
-    looks at drive i's chip at ``moments[i]``, each ``(offset, ms)`` after its start as the PLC
-    cycle computes it (``offset + ms / 1000``: the reads act then, §10.1; the status is copied
-    at the last); without ``moments`` at the start only.  The chips keep a checkpoint at each."""
+                 moments: Sequence[Moments] | None = None, horizon: float = HORIZON) -> list[float]:
+    """The cycles from ``first`` on (every ``step``, for ``horizon`` seconds) that would find the
+    status of every chip unchanged and no switch near: their chips computed ahead, the list of
+    their times.  A cycle looks at drive i's chip at ``moments[i]``, each ``(offset, ms)`` after
+    its start as the PLC cycle computes it (``offset + ms / 1000``: the reads act then, §10.1;
+    the status is copied at the last); without ``moments`` at the start only.  Each chip is
+    computed in one pass, with a checkpoint at each look, up to the first cycle that sees its
+    status change (the status only gains bits while no command comes: the cycles before it see
+    the status of now)."""
     at_start: Moments = ((0.0, 0.0),)
     looks = {id(drive): (moments[index] if moments else at_start) for index, drive in enumerate(drives)}
     moving = [drive for drive in drives if not drive.settled]
     if not moving or not all(_may_look_ahead(drive) for drive in moving):
         return []
-    statuses = [drive.chip.status for drive in moving]
-    last = [drive.motor.position for drive in moving]
-    quiet: list[float] = []
-    t, end = first, first + HORIZON
+    times: list[float] = []
+    t, end = first, first + horizon
     while t <= end:
-        following = t + step
-        for index, drive in enumerate(moving):
-            seen = looks[id(drive)]
-            for offset, ms in seen:
-                drive.stepper.ahead(t + offset + ms / 1000)
-            reach = seen[-1][0] + seen[-1][1] / 1000
-            if drive.chip.status != statuses[index]:
-                return quiet
-            if drive.switches:
-                x, v = drive.motor.position, drive.motor.velocity
-                v = v if abs(v) > STILL else 0.0
-                margin = MARGIN + abs(v) * reach
-                if (switch_near(drive, last[index], x, margin) or switch_near(drive, x, x + v * step, margin)
-                        or switch_near(drive, drive.axis.position(t), drive.axis.position(following), margin)):
-                    return quiet
-                last[index] = x
-        quiet.append(t)
-        t = following
-    return quiet
+        times.append(t)
+        t += step
+    quiet = len(times)
+    ends: list[tuple[H3Drive, float, float, list[batch.State]]] = []
+    for drive in moving:
+        seen = looks[id(drive)]
+        status, position = drive.chip.status, drive.motor.position
+        states = drive.stepper.ahead([t + offset + ms / 1000 for t in times[:quiet] for offset, ms in seen])
+        last = states[len(seen) - 1::len(seen)]  # the chip at each cycle's last look
+        cycles = 0
+        while cycles < min(quiet, len(last)) and batch.status_of(last[cycles]) == status:
+            cycles += 1
+        quiet = cycles
+        if drive.switches:
+            ends.append((drive, position, seen[-1][0] + seen[-1][1] / 1000, last))
+    for drive, last_x, reach, last in ends:
+        for cycle in range(quiet):
+            x, v = batch.motion_of(last[cycle])
+            v = v if abs(v) > STILL else 0.0
+            margin = MARGIN + abs(v) * reach
+            t = times[cycle]
+            if (switch_near(drive, last_x, x, margin) or switch_near(drive, x, x + v * step, margin)
+                    or switch_near(drive, drive.axis.position(t), drive.axis.position(t + step), margin)):
+                quiet = cycle
+                break
+            last_x = x
+    return times[:quiet]

@@ -29,7 +29,7 @@ from devsim.devices.pcd4h3.config import AXIS, Pcd4h3Config
 from devsim.devices.pcd4h3.drive import H3Drive, axis_signals
 from devsim.devices.pcd4h3.layout import Layout
 from devsim.devices.pcd4h3.library import STATUS_FLAGS, TIMES, H3Axis
-from devsim.devices.pcd4h3.lookahead import Moments, quiet_cycles, switch_near
+from devsim.devices.pcd4h3.lookahead import FIRST_HORIZON, HORIZON, Moments, quiet_cycles, switch_near
 from devsim.devices.pcd4h3.programs import PROGRAMS, Sequence
 from devsim.devices.pcd4h3.registers import AxisRegisters, RegisterBlock
 from devsim.devices.pcd4h3.timers import Timers
@@ -98,6 +98,7 @@ class Pcd4(Model):
         self._skipped: list[float] = []  # the cycles the timer skips (issue 31), run late if they read
         self._coast_end: float | None = None  # the cycle after the skipped ones
         self._coast_reads = False  # the skipped cycles read the chips (run late, at the next look)
+        self._horizon = FIRST_HORIZON  # how far the next look-ahead reaches (doubles while nothing ends it early)
         self._seen: dict[tuple[int, str], int] = {}  # status flags at the last look (events)
         self._last_cycle = -math.inf
         self._calls_before, self._running_since = 0, clock.now()  # AxHndlg calls (one per axis per cycle)
@@ -180,6 +181,8 @@ class Pcd4(Model):
         now = self.clock.now()
         self._materialize(now)
         skipped, self._skipped, self._coast_end = self._skipped, [], None
+        if skipped:  # what was computed ahead is dropped: look less far ahead for a while
+            self._horizon = FIRST_HORIZON
         if skipped and self._timer is not None:  # (all after now)
             self._timer.cancel()
             self._timer = self.clock.call_at(skipped[0], self._cycle)
@@ -211,7 +214,8 @@ class Pcd4(Model):
             if self._only_moving():
                 moments, work = self._quiet_work()
                 step = max(self.cycle_time, work)
-                skipped = quiet_cycles(self.drives, due, step, moments)
+                skipped = quiet_cycles(self.drives, due, step, moments, self._horizon)
+                self._horizon = min(HORIZON, 2 * self._horizon)
                 if skipped:
                     self._skipped, due = skipped, skipped[-1] + step
                     self._coast_end = due

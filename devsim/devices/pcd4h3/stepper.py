@@ -18,7 +18,7 @@ chip of the present.  A command (:meth:`ChipStepper.poke`) drops what was comput
 from __future__ import annotations
 
 from bisect import bisect_right
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 from devsim.core.clock import Clock, Timer
 from devsim.devices.pcd4h3 import batch
@@ -100,18 +100,33 @@ class ChipStepper:
             batch.restore(self.chip, state)
             self._samples, self._quiet = samples, quiet
 
-    def ahead(self, until: float) -> None:
-        """Compute the chip's samples up to ``until`` (after the present) and keep a checkpoint
-        there; the present stays where it was for every look (:meth:`catch_up`)."""
-        due = int((until - self._epoch) / CHIP_SAMPLE + 1e-9)
+    def ahead(self, untils: Sequence[float]) -> list[batch.State]:
+        """Compute the chip's samples up to each of ``untils`` (in order, after the present) in
+        one pass, with a checkpoint at each; the pass ends at the first whose status differs
+        from the chip's now (:func:`~devsim.devices.pcd4h3.batch.run_to`).  Returns the chip's
+        state at each of ``untils`` the pass reached.  The present stays where it was for every
+        look (:meth:`catch_up`)."""
+        start = self._samples
         if not self._ahead:
-            self._present = self._samples
-            self._ahead.append((self._samples, self._quiet, batch.snapshot(self.chip)))
-        if due <= self._samples:
-            return
-        self._quiet = batch.run(self.chip, due - self._samples, self._quiet)
-        self._samples, self._unseen = due, True
-        self._ahead.append((due, self._quiet, batch.snapshot(self.chip)))
+            self._present = start
+            self._ahead.append((start, self._quiet, batch.snapshot(self.chip)))
+        now = self._ahead[-1][2] if self._ahead[-1][0] == start else batch.snapshot(self.chip)
+        dues = [int((until - self._epoch) / CHIP_SAMPLE + 1e-9) - start for until in untils]
+        marks = sorted({due for due in dues if due > 0})
+        reached: dict[int, batch.State] = {}
+        if marks:
+            checkpoints, self._quiet = batch.run_to(self.chip, marks, self._quiet)
+            for mark, quiet, state in checkpoints:
+                self._ahead.append((start + mark, quiet, state))
+                reached[mark] = state
+            self._samples, self._unseen = start + checkpoints[-1][0], True
+        states = []
+        for due in dues:
+            state = now if due <= 0 else reached.get(due)
+            if state is None:
+                break
+            states.append(state)
+        return states
 
     def present(self) -> None:
         """The chip is at the present (just caught up): forget what was computed ahead."""
