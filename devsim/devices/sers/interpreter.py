@@ -69,6 +69,9 @@ class Program(msgspec.Struct):
     texts: list[str] = msgspec.field(default_factory=list)
     labels: dict[int, int] = msgspec.field(default_factory=dict)  # label number -> statement index
     block_end: dict[int, int] = msgspec.field(default_factory=dict)  # IF..THEN index -> ELSE/END index; ELSE -> END
+    #: Per statement, what the program itself does with it (its row of :data:`FLOW`, looked up
+    #: once): ``_passed_over`` for a statement passed over, None for one the drive executes.
+    flow: list[Any] = msgspec.field(default_factory=list)
 
     @classmethod
     def compile(cls, texts: list[str]) -> Program:
@@ -83,6 +86,7 @@ class Program(msgspec.Struct):
             index = len(program.statements)
             program.statements.append(stmt)
             program.texts.append(text)
+            program.flow.append(_passed_over if isinstance(stmt, _PASSIVE) else _FLOW.get(_flow_token(stmt)))
             if isinstance(stmt, st.Label) and stmt.number not in program.labels:
                 program.labels[stmt.number] = index
             elif isinstance(stmt, st.If) and stmt.then:
@@ -323,7 +327,7 @@ class Interpreter:
         stmt = program.statements[self.pc]
         self.memory.position = self.pc + 1  # LIST . shows the line being executed
         try:
-            advance = self._execute(stmt)
+            advance = self._execute(stmt, program.flow[self.pc])
         except SersError as exc:
             self._program_error(exc.errno, exc.detail)
             return
@@ -335,16 +339,16 @@ class Interpreter:
             self._schedule(self.cycle)
 
     # -- statements -------------------------------------------------------------------------------------
-    def _execute(self, stmt: st.Statement) -> bool:
+    def _execute(self, stmt: st.Statement, flow: Callable[[Interpreter, Any], bool] | None) -> bool:
         """Run one statement; True if the program goes on with the next one.  The flow of the
-        program is :data:`FLOW`; the drive does the rest and says what the program waits for."""
-        if isinstance(stmt, _PASSIVE):
+        program is ``flow``, the statement's row of :data:`FLOW`; the drive does the rest and
+        says what the program waits for."""
+        if flow is _passed_over:
             return True
         host = self._host()
         target = host.master_target()
         if target is not None and self.remote.send(stmt, target):
             return False  # sent to a slave; the answer moves the program on
-        flow = _FLOW.get(_flow_token(stmt))
         if flow is not None:
             return flow(self, stmt)
         self.waiting = host.statement(stmt)
@@ -497,6 +501,11 @@ class Interpreter:
 
 
 def _going_on(interpreter: Interpreter, stmt: st.Statement) -> bool:
+    return True
+
+
+def _passed_over(interpreter: Interpreter, stmt: st.Statement) -> bool:
+    """A label, comment or text: the program passes over it (its own control cycle, §1.2)."""
     return True
 
 
