@@ -70,6 +70,10 @@ class Axis:
     stay continuous); a new command supersedes the previous plan, its ``on_done`` and its timers.
     """
 
+    #: Not the axis's state (a snapshot of a device leaves it out): the plan generation only
+    #: tells a plan's timers from an older plan's.
+    not_state = frozenset({"_gen"})
+
     def __init__(
         self,
         clock: Clock,

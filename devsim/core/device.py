@@ -300,6 +300,11 @@ class Device:
     def record_event(self, name: str) -> None:
         self.model.record_event(name)
 
+    def unobserved_until(self, when: float) -> None:
+        """Nobody looks at the device before simulated time ``when`` (``-inf``: someone may at
+        any moment): a scenario's runner says so while it waits for its next step."""
+        self.model.unobserved_until(when)
+
     def power_cycle(self, *, wipe: bool = False) -> None:
         """Switch the device off and on again; ``wipe`` erases non-volatile memory first."""
         self.model.power_cycle(wipe=wipe)

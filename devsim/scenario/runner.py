@@ -11,6 +11,7 @@ the real clock, scaled by the speed factor.
 from __future__ import annotations
 
 import asyncio
+import math
 import re
 import time
 from collections.abc import Awaitable, Callable
@@ -254,22 +255,36 @@ class Runner:
         return True
 
     async def _sleep_until(self, when: float) -> None:
-        """Move to ``when``; virtual time jumps from event to event (no polling needed)."""
+        """Move to ``when``; virtual time jumps from event to event (no polling needed).  With
+        nothing else attached (no facade, control API, log or player) nobody looks at a device
+        before ``when``, and the devices hear so (a looping program may run ahead, issue 31)."""
         if self.virtual:
             clock = self.clock
             assert isinstance(clock, VirtualClock)
-            while True:
-                if not self._quiet():
-                    await self._drain()
-                upcoming = clock.next_event()
-                if upcoming is None or upcoming > when:
-                    clock.advance_to(max(when, clock.now()))
-                    await self._drain()
-                    return
-                clock.advance_to(upcoming)
+            devices = list(self.plant.devices.values()) if self._unobserved() else []
+            for device in devices:
+                device.unobserved_until(when)
+            try:
+                while True:
+                    if not self._quiet():
+                        await self._drain()
+                    upcoming = clock.next_event()
+                    if upcoming is None or upcoming > when:
+                        clock.advance_to(max(when, clock.now()))
+                        await self._drain()
+                        return
+                    clock.advance_to(upcoming)
+            finally:
+                for device in devices:
+                    device.unobserved_until(-math.inf)
         remaining = when - self.clock.now()
         if remaining > 0:
             await self.clock.sleep(remaining)
+
+    def _unobserved(self) -> bool:
+        """Only the scripted host and the steps look at the plant: no facade or control API
+        serves it, nothing (a motion log, a player, a fleet member) was attached to the runtime."""
+        return not self.plant.facades and not self.runtime.closers
 
     def _moving(self) -> bool:
         """Whether any device moves (the shared ``motion`` name): conditions are then looked at

@@ -116,6 +116,7 @@ class Interpreter:
         render: Callable[[str], str],
         spontaneous: Callable[[str], None],
         address: Callable[[], int],
+        looped: Callable[[], None],
     ) -> None:
         self.clock = clock
         self.params = params
@@ -127,6 +128,7 @@ class Interpreter:
         self._render = render  # a statement as LIST shows it (TR)
         self._spontaneous = spontaneous
         self._address = address
+        self._looped = looped  # the program jumped back (a pass of a loop may have ended, §4.6.3)
         self.remote = RemoteStatements(master, operands, self)
         #: Trace mode (TRON, TR): one statement per TR (§4.5.4).
         self.trace_mode = False
@@ -210,13 +212,8 @@ class Interpreter:
     def end(self) -> None:
         """Normal end (PE, end of the program, RETURN of a dispatched subroutine)."""
         was = self.running
-        self._cancel()
-        self.running = False
-        self.waiting = None
-        self.stops = 0
-        self.resume_pc = None
         self.params.l65_flag = 0  # (the L65 error-handling flag is P1118)
-        self._host().state_changed()
+        self._halt()
         if was and self.params.report_program_end:
             self._spontaneous(f"@{self._address()}P0=0")
         self._host().ended()
@@ -257,7 +254,7 @@ class Interpreter:
         self._halt()
 
     def _halt(self) -> None:
-        """The program stops for good (an error): the next start begins at line 1."""
+        """The program stops for good (an error, or its end): the next start begins at line 1."""
         self._cancel()
         self.running = False
         self.waiting = None
@@ -326,8 +323,9 @@ class Interpreter:
             return
         stmt = program.statements[self.pc]
         self.memory.position = self.pc + 1  # LIST . shows the line being executed
+        flow, before = program.flow[self.pc], self.pc
         try:
-            advance = self._execute(stmt, program.flow[self.pc])
+            advance = self._execute(stmt, flow)
         except SersError as exc:
             self._program_error(exc.errno, exc.detail)
             return
@@ -337,12 +335,13 @@ class Interpreter:
             self.pc += 1
         if self.waiting is None:
             self._schedule(self.cycle)
+            if flow is _goto and self.pc <= before and self._timer is not None:
+                self._looped()  # (a pass of a loop may have ended: its next cycle is scheduled)
 
     # -- statements -------------------------------------------------------------------------------------
     def _execute(self, stmt: st.Statement, flow: Callable[[Interpreter, Any], bool] | None) -> bool:
-        """Run one statement; True if the program goes on with the next one.  The flow of the
-        program is ``flow``, the statement's row of :data:`FLOW`; the drive does the rest and
-        says what the program waits for."""
+        """Run one statement; True if the program goes on with the next one.  ``flow`` is its row
+        of :data:`FLOW`; the drive does the rest and says what the program waits for."""
         if flow is _passed_over:
             return True
         host = self._host()
@@ -385,7 +384,7 @@ class Interpreter:
     def master_failed(self) -> None:
         self._program_error(64)
 
-    def later(self, delay: float, action: Callable[[], None]) -> None:
+    def later(self, delay: float, action: Callable[[], None]) -> None:  # (the master's retries)
         self._timer = self.clock.call_later(delay, action)
 
     def label_index(self, label: int) -> int:

@@ -1,0 +1,129 @@
+"""A looping program run ahead while nobody looks is the program run step by step (issue 31).
+
+Two drives get the same program: one runs it statement by statement, the other is told that
+nobody looks before the next observation (as the scenario runner tells it while it waits) and
+jumps the passes of its loop.  At every observation the two are compared whole: every value the
+drive holds (:class:`~devsim.devices.sers.runahead._Walk` takes them all down: parameters,
+program position, motion, the axis's plan and history, pending timers and their times), the
+event log, and what a host reads.
+"""
+
+from __future__ import annotations
+
+import math
+import types
+from typing import Any
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from devsim.core.clock import VirtualClock
+from devsim.devices.sers import SersDevice
+from devsim.devices.sers.runahead import LOG_CUT, LOG_LIMIT, _extend_log, _Walk
+
+#: Statements of a loop's body: moves relative and absolute, speeds, accelerations, delays, a
+#: ramp shape, an output switched (a signal change: no jump over it), a counter (never the
+#: same twice: no jump).
+BODY = st.sampled_from([
+    "WR=180 E", "WR=-180 E", "WR=90 E", "WR=-45 E", "WA=0 E", "WA=270 E", "V=60", "V=300", "A=100",
+    "A=1000", "D=1", "D=3", "P1032=1", "P1032=0", "O1=1", "O1=0", "C1=C1+1", "X=X+1", "W=10 E",
+])
+READS = ["axis.position", "axis.velocity", "param.P51", "param.P0", "param.W", "param.P1032", "param.C1",
+         "motion.kind", "output.O1", "display"]
+
+
+def _drive(program: list[str], slow: bool) -> tuple[SersDevice, VirtualClock, bytearray]:
+    clock = VirtualClock()
+    device = SersDevice(clock=clock, config={"boot_time": 0})
+    out = bytearray()
+    device.attach(out.extend)
+    if slow:
+        device.feed(b"#P1127=1\r")
+    device.apply_state({"program": program})
+    device.feed(b"#RUN\r")
+    return device, clock, out
+
+
+def _plain(leaf: Any) -> Any:
+    """A leaf as two drives can share it: functions by name, shared objects without identity."""
+    if isinstance(leaf, tuple) and leaf:
+        if leaf[0] in ("fn", "method"):
+            return (leaf[0], getattr(leaf[1], "__qualname__", repr(leaf[1])))
+        if leaf[0] == "shared":
+            return "shared"
+    if isinstance(leaf, types.FunctionType):
+        return leaf.__qualname__
+    return leaf
+
+
+def _state(device: SersDevice, clock: VirtualClock) -> list[Any]:
+    walk = _Walk(clock)
+    walk.visit(device.model)
+    return [_plain(leaf) for leaf in walk.leaves]
+
+
+def _observe(device: SersDevice, clock: VirtualClock, out: bytearray) -> tuple[Any, ...]:
+    return (clock.now(), _state(device, clock), list(device.model.events), bytes(out),
+            [device.read(name) for name in READS])
+
+
+def _both(program: list[str], looks: list[float], slow: bool = False) -> int:
+    """Run ``program`` on two drives, one told nobody looks before each of ``looks``; compare
+    them at each look; the passes jumped."""
+    stepwise, clock_a, out_a = _drive(program, slow)
+    ahead, clock_b, out_b = _drive(program, slow)
+    for when in looks:
+        clock_a.advance_to(when)
+        ahead.unobserved_until(when)
+        clock_b.advance_to(when)
+        ahead.unobserved_until(-math.inf)
+        assert _observe(ahead, clock_b, out_b) == _observe(stepwise, clock_a, out_a)
+    return int(ahead.model.runahead.jumped)
+
+
+def test_the_benchmark_loop_run_ahead_for_an_hour_is_the_loop_step_by_step() -> None:
+    """The loop of ``benchmarks/virtual.py``, looked at after one hour and at three moments on
+    the way (each in another binade)."""
+    jumped = _both(["ON", "L1", "WR=180 E", "WR=-180 E", "GT1", "PE"], [100.5, 700.25, 2049.0, 3600.0])
+    assert jumped > 4000  # of about 4,400 passes
+
+
+def test_with_p1127_each_statement_takes_two_milliseconds() -> None:
+    assert _both(["ON", "L7", "V=120", "WR=30 E", "D=1", "WR=-30 E", "GT7"], [40.0, 333.3], slow=True) > 0
+
+
+def test_a_counter_never_repeats_so_nothing_is_jumped() -> None:
+    assert _both(["ON", "L1", "C1=C1+1", "WR=10 E", "GT1"], [90.0]) == 0
+
+
+def test_an_output_switched_in_the_loop_is_a_change_someone_may_see() -> None:
+    assert _both(["ON", "L1", "O1=1", "WR=10 E", "O1=0", "WR=-10 E", "GT1"], [90.0]) == 0
+
+
+def test_a_message_to_the_host_each_pass_is_never_jumped() -> None:
+    """P1121=1: ``@1POS=1`` after each move goes to the host (§4.8.6.11)."""
+    assert _both(["ON", "P1121=1", "L1", "WR=10 E", "WR=-10 E", "GT1"], [60.0]) == 0
+
+
+@settings(max_examples=25, deadline=None)
+@given(body=st.lists(BODY, min_size=1, max_size=4),
+       looks=st.lists(st.floats(min_value=0.5, max_value=300.0), min_size=1, max_size=3),
+       slow=st.booleans())
+def test_any_loop_looked_at_any_time_is_the_loop_step_by_step(body: list[str], looks: list[float], slow: bool) -> None:
+    _both(["ON", "L1", *body, "GT1", "PE"], sorted(looks), slow)
+
+
+@settings(max_examples=200, deadline=None)
+@given(length=st.integers(0, LOG_LIMIT), per=st.integers(1, 3), passes=st.integers(0, 7000))
+def test_the_log_of_the_passes_jumped_is_cut_as_the_drive_cuts_it(length: int, per: int, passes: int) -> None:
+    old = [(float(i), "old") for i in range(length)]
+    during = [(1000.0 + i, f"e{i}") for i in range(per)]
+    expected = list(old)
+    for j in range(passes):
+        for when, name in during:
+            expected.append((when + (j + 1) * 2.0, name))
+            if len(expected) > LOG_LIMIT:
+                del expected[:LOG_CUT]
+    log = list(old)
+    _extend_log(log, during, 2.0, passes)
+    assert log == expected
