@@ -10,6 +10,7 @@ event log, and what a host reads.
 
 from __future__ import annotations
 
+import asyncio
 import math
 import types
 from typing import Any
@@ -20,6 +21,10 @@ from hypothesis import strategies as st
 from devsim.core.clock import VirtualClock
 from devsim.devices.sers import SersDevice
 from devsim.devices.sers.runahead import LOG_CUT, LOG_LIMIT, _extend_log, _Walk
+from devsim.runtime import Runtime
+from devsim.scenario.report import format_report
+from devsim.scenario.runner import run_scenario_async
+from devsim.scenario.schema import scenario_from_dict
 
 #: Statements of a loop's body: moves relative and absolute, speeds, accelerations, delays, a
 #: ramp shape, an output switched (a signal change: no jump over it), a counter (never the
@@ -127,3 +132,37 @@ def test_the_log_of_the_passes_jumped_is_cut_as_the_drive_cuts_it(length: int, p
     log = list(old)
     _extend_log(log, during, 2.0, passes)
     assert log == expected
+
+
+def _scenario_run(observed: bool) -> tuple[Any, ...]:
+    """Three SERS on one bus looping different programs; the host waits, asks, waits and looks.
+    ``observed``: something else is attached to the runtime (as a facade or a log would be)."""
+    devices = [{"name": f"d{i}", "kind": "sers", "transport": {"bus": "line"}, "config": {"address": i},
+                "state": {"program": ["ON", "L1", f"WR={40 * i} E", f"WR=-{40 * i} E", "GT1", "PE"]}}
+               for i in (1, 2, 3)]
+    data = {"devices": devices, "buses": [{"name": "line"}], "host": {"port": "line"}, "timeout": "2000s",
+            "steps": [{"send": "#1 RUN\r#2 RUN\r#3 RUN\r"}, {"after": "700.3s"}, {"send": "#2 P51?\r"},
+                      {"expect": {"regex": "P51="}}, {"after": "333s"},
+                      {"expect_state": {"device": "d3", "name": "param.P0", "equals": 1}}]}
+
+    async def go() -> tuple[Any, ...]:
+        async with Runtime(clock=VirtualClock()) as runtime:
+            if observed:
+                runtime.add_closer(_nothing)
+            result = await run_scenario_async(scenario_from_dict(data, "loops"), runtime)
+            assert result.passed, format_report(result)
+            drives = [runtime.device(f"d{i}") for i in (1, 2, 3)]
+            return (runtime.clock.now(), [(_state(d, runtime.clock), list(d.model.events)) for d in drives],
+                    [int(d.model.runahead.jumped) for d in drives])
+
+    return asyncio.run(go())
+
+
+async def _nothing() -> None:
+    return None
+
+
+def test_a_scenario_waiting_runs_the_loops_ahead_and_ends_as_step_by_step() -> None:
+    ahead, stepwise = _scenario_run(observed=False), _scenario_run(observed=True)
+    assert ahead[:2] == stepwise[:2]
+    assert min(ahead[2]) > 500 and stepwise[2] == [0, 0, 0]
