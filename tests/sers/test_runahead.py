@@ -51,12 +51,9 @@ def _drive(program: list[str], slow: bool) -> tuple[SersDevice, VirtualClock, by
 
 def _plain(leaf: Any) -> Any:
     """A leaf as two drives can share it: functions by name, shared objects without identity."""
-    if isinstance(leaf, tuple) and leaf:
-        if leaf[0] in ("fn", "method"):
-            return (leaf[0], getattr(leaf[1], "__qualname__", repr(leaf[1])))
-        if leaf[0] == "shared":
-            return "shared"
-    if isinstance(leaf, types.FunctionType):
+    if isinstance(leaf, tuple) and leaf and leaf[0] == "shared":
+        return "shared"
+    if isinstance(leaf, (types.FunctionType, types.MethodType, types.BuiltinFunctionType)):
         return leaf.__qualname__
     return leaf
 

@@ -74,12 +74,6 @@ def _kind_of(t: type) -> int:
     return _OPAQUE
 
 
-def _name(fn: Any) -> Any:
-    if type(fn) is types.MethodType:
-        return ("method", fn.__func__, id(fn.__self__))
-    return ("fn", fn)
-
-
 class _Walk:
     """One pass over a drive's state in a fixed order: :attr:`leaves`, the flat list of what it
     holds (numbers, names, shapes); with ``times`` (indices into the leaves) and ``delta`` it
@@ -117,8 +111,8 @@ class _Walk:
             if self.times is not None and any(a is not b for a, b in zip(items, x, strict=True)):
                 return tuple(items)
             return x
-        if kind is _CALL:
-            leaves.append(_name(x))
+        if kind is _CALL:  # (a bound method equals one of the same function on the same object)
+            leaves.append(x)
             return x
         if kind is _SHARED_KIND:
             leaves.append(("shared", id(x)))
@@ -193,7 +187,7 @@ class _Walk:
 
     def _timer(self, timer: Timer, index: int) -> Any:
         self.leaves.append(("timer", timer.cancelled))
-        self.leaves.append(_name(timer.callback))
+        self.leaves.append(timer.callback)
         when = self.visit(timer.when)
         if when is timer.when or timer.cancelled:
             return timer
@@ -206,20 +200,25 @@ class _Walk:
         slots = _SLOTS.get(t)
         if slots is None:
             slots = _SLOTS[t] = _slots_of(t)
-        skip = getattr(t, "not_state", ())  # (what a class says is not its state)
         attrs = getattr(x, "__dict__", None)
-        pairs = [(name, value) for name, value in attrs.items() if name not in skip] if attrs else []
+        if attrs:
+            skip = getattr(t, "not_state", ())  # (what a class says is not its state)
+            names = [name for name in attrs if name not in skip] if skip else list(attrs)
+            values = [attrs[name] for name in names] if skip else list(attrs.values())
+        else:
+            names, values = [], []
         for name in slots:
             value = getattr(x, name, _UNSET)
             if value is not _UNSET:
-                pairs.append((name, value))
+                names.append(name)
+                values.append(value)
         leaves = self.leaves
-        leaves.append((t, tuple(name for name, _value in pairs)))
+        leaves.append((t, *names))
         visit = self.visit
         times = self.times
-        for name, value in pairs:
+        for name, value in zip(names, values, strict=True):
             kind = type(value)
-            if kind in _PLAIN or (kind is float and times is None):  # (the most of them)
+            if kind in _PLAIN or kind is types.MethodType or (kind is float and times is None):  # (the most)
                 leaves.append(value)
                 continue
             new = visit(value)
@@ -310,6 +309,10 @@ class RunAhead:
             self._wait -= 1
             return
         heads = self._heads
+        if heads and (high := math.ldexp(1.0, _binade(now))) - now < 24 * (now - heads[-1].now):
+            self._not_before = high  # too few passes left in this binade to jump any
+            heads.clear()
+            return
         log = self._log
         if heads and not heads[0].still(log, self.noticed):
             heads.clear()  # someone heard something, or the log was cut: start again
