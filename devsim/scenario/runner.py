@@ -21,7 +21,7 @@ from typing import Any
 import msgspec
 
 from devsim.core.clock import VirtualClock
-from devsim.core.device import SerialSettings
+from devsim.core.device import Device, SerialSettings
 from devsim.core.kit import Command, Table
 from devsim.runtime import Runtime
 from devsim.scenario.host import HostPort, open_host_port
@@ -261,7 +261,7 @@ class Runner:
         if self.virtual:
             clock = self.clock
             assert isinstance(clock, VirtualClock)
-            devices = list(self.plant.devices.values()) if self._unobserved() else []
+            devices = self._unobserved_devices()
             for device in devices:
                 device.unobserved_until(when)
             try:
@@ -281,10 +281,18 @@ class Runner:
         if remaining > 0:
             await self.clock.sleep(remaining)
 
-    def _unobserved(self) -> bool:
-        """Only the scripted host and the steps look at the plant: no facade or control API
-        serves it, nothing (a motion log, a player, a fleet member) was attached to the runtime."""
-        return not self.plant.facades and not self.runtime.closers
+    def _unobserved_devices(self) -> list[Device]:
+        """The devices only the scripted host and the steps look at: none if a facade or the
+        control API serves the plant or anything (a motion log, a player, a fleet member) was
+        attached to the runtime; not one that hears another on its bus that may talk to it."""
+        if self.plant.facades or self.runtime.closers:
+            return []
+        plant = self.plant
+        lines: dict[str, list[Device]] = {}
+        for name, device in plant.devices.items():
+            lines.setdefault(plant.port_of(name), []).append(device)
+        return [device for mates in lines.values() for device in mates
+                if not device.hears_others or not any(m.talks_to_others for m in mates if m is not device)]
 
     def _moving(self) -> bool:
         """Whether any device moves (the shared ``motion`` name): conditions are then looked at

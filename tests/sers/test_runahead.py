@@ -163,3 +163,21 @@ def test_a_scenario_waiting_runs_the_loops_ahead_and_ends_as_step_by_step() -> N
     ahead, stepwise = _scenario_run(observed=False), _scenario_run(observed=True)
     assert ahead[:2] == stepwise[:2]
     assert min(ahead[2]) > 500 and stepwise[2] == [0, 0, 0]
+
+
+def test_no_slave_runs_ahead_beside_a_master_that_may_talk_to_it() -> None:
+    """A master (address 0) on the bus may send statements to the slaves at any moment (§3.6.2)."""
+    data = {"devices": [{"name": "m", "kind": "sers", "transport": {"bus": "line"}, "config": {"address": 0}},
+                        {"name": "s", "kind": "sers", "transport": {"bus": "line"}, "config": {"address": 1},
+                         "state": {"program": ["ON", "L1", "WR=40 E", "WR=-40 E", "GT1"]}}],
+            "buses": [{"name": "line"}], "host": {"port": "line"},
+            "steps": [{"send": "#1 RUN\r"}, {"after": "200s"},
+                      {"expect_state": {"device": "s", "name": "param.P0", "equals": 1}}]}
+
+    async def go() -> int:
+        async with Runtime(clock=VirtualClock()) as runtime:
+            result = await run_scenario_async(scenario_from_dict(data, "master"), runtime)
+            assert result.passed, format_report(result)
+            return int(runtime.device("s").model.runahead.jumped)
+
+    assert asyncio.run(go()) == 0
