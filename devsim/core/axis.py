@@ -151,6 +151,14 @@ class Axis:
         """When the axis came to rest (the end of its last plan); None while it moves."""
         return None if self.moving else self._plan_end()
 
+    def remembered_since(self) -> float:
+        """The earliest instant the axis still answers for from its history (``position(t)``
+        of an instant before it gives where the history starts)."""
+        history, plan = self._history, self._plan
+        if history:
+            return history[0].t0
+        return plan[0].t0 if plan else self._idle_since
+
     def phase(self, t: float | None = None) -> Phase:
         """``idle``, ``accel`` (|v| increasing), ``const`` (cruising) or ``decel``."""
         _, v, a, seg = self._lookup(t)

@@ -140,7 +140,7 @@ class SersDrive(Model):
         self._timers: list[Timer] = []
         self._define_signals(thresholds)
         self.wiring = MotorWiring(self.axis, signals, self.cfg.axis)
-        self.runahead = RunAhead(clock, self, self.events)
+        self.runahead = RunAhead(clock, self, self.events, self.axis.remembered_since)
         signals.subscribe_all(self.runahead.notice)
         self._power_on()
 

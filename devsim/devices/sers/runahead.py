@@ -25,6 +25,7 @@ from __future__ import annotations
 import enum
 import math
 import types
+from collections.abc import Callable
 from typing import Any
 
 import msgspec
@@ -271,13 +272,14 @@ class RunAhead:
     a SERS that takes the drive's state down at each backward jump (``root``: the drive as a
     whole; a class's ``not_state`` names the attributes that are not) and moves it in time."""
 
-    __slots__ = ("clock", "_root", "_log", "_until", "_heads", "_wait", "_failed", "_not_before", "noticed",
+    __slots__ = ("clock", "_root", "_log", "_oldest", "_until", "_heads", "_wait", "_failed", "_not_before", "noticed",
                  "jumped")
 
-    def __init__(self, clock: Clock, root: Any, log: list[tuple[float, str]]) -> None:
+    def __init__(self, clock: Clock, root: Any, log: list[tuple[float, str]], oldest: Callable[[], float]) -> None:
         self.clock = clock
         self._root = root
         self._log = log  # the model's event log (same list)
+        self._oldest = oldest  # the earliest instant the drive remembers (the axis's history)
         self._until = -math.inf  # nobody looks before then
         self._heads: list[_Head] = []
         self._wait = 0  # passes not to take down (a pass that cannot lead to a jump yet)
@@ -309,8 +311,12 @@ class RunAhead:
             self._wait -= 1
             return
         heads = self._heads
-        if heads and (high := math.ldexp(1.0, _binade(now))) - now < 24 * (now - heads[-1].now):
-            self._not_before = high  # too few passes left in this binade to jump any
+        binade = _binade(now)
+        if self._oldest() < math.ldexp(0.5, binade):  # times from the binade before: not yet
+            heads.clear()
+            return
+        if heads and (high := math.ldexp(1.0, binade)) - now < 48 * (now - heads[-1].now):
+            self._not_before = high  # too few passes left in this binade for a jump to pay
             heads.clear()
             return
         log = self._log
