@@ -327,24 +327,27 @@ class RunAhead:
         heads.append(_Head(now, walk.leaves, log, self.noticed))
         if len(heads) > 3:
             del heads[0]
-        if len(heads) == 3:
+        if len(heads) == 3 or (len(heads) == 2 and _even(heads[1].now - heads[0].now, now)):
             self._jump(heads)
 
     def _jump(self, heads: list[_Head]) -> None:
-        first, second, third = heads
-        period = second.now - first.now
-        if period <= 0 or third.now - second.now != period:
+        """Compare the passes between ``heads`` (two passes; one if its period is an even
+        number of the binade's units: every pass of the binade then starts on the same last
+        bit) and jump if they are alike."""
+        first, third = heads[0], heads[-1]
+        period = heads[1].now - first.now
+        if period <= 0 or third.now - heads[-2].now != period:
             return
-        times = _moved(first.leaves, second.leaves, third.leaves, period)
-        if times is None:  # not the same: look again later, less often the more it failed
-            self._failed += 1
-            self._hold(min(64, 2 ** self._failed))
+        times = _moved([head.leaves for head in heads], period)
+        if times is None:
+            if len(heads) == 3:  # not the same: look again later, less often the more it failed
+                self._failed += 1
+                self._hold(min(64, 2 ** self._failed))
             return
-        self._failed = 0
         log = self._log
-        before = log[first.logged:second.logged]
-        during = log[second.logged:third.logged]
-        if len(before) != len(during) or any(a[1] != b[1] or b[0] - a[0] != period
+        before = log[first.logged:heads[1].logged]
+        during = log[heads[-2].logged:third.logged]
+        if len(before) != len(during) or any(a[1] != b[1] or (b is not a and b[0] - a[0] != period)
                                              for a, b in zip(before, during, strict=True)):
             return
         binade = _binade(third.now)
@@ -379,23 +382,31 @@ class RunAhead:
         self._heads.clear()
 
 
-def _moved(first: list[Any], second: list[Any], third: list[Any], period: float) -> list[int] | None:
-    """The indices of the leaves that moved by ``period`` from one pass to the next (times), or
-    None if anything else differs."""
-    if len(first) != len(second) or len(second) != len(third):
+def _moved(heads: list[list[Any]], period: float) -> list[int] | None:
+    """The indices of the leaves that moved by ``period`` from each head to the next (times),
+    or None if anything else differs."""
+    first = heads[0]
+    if any(len(leaves) != len(first) for leaves in heads):
         return None
     times = []
-    for index, (a, b, c) in enumerate(zip(first, second, third, strict=True)):
-        if type(a) is float and type(b) is float and type(c) is float:
-            if a == b == c:
+    for index, values in enumerate(zip(*heads, strict=True)):
+        a = values[0]
+        if all(type(v) is float for v in values):
+            if all(v == a for v in values):
                 continue
-            if b - a == period and c - b == period:
+            if all(b - v == period for v, b in zip(values, values[1:], strict=False)):
                 times.append(index)
                 continue
             return None
-        if not (a == b == c):
+        if not all(v == a for v in values):
             return None
     return times
+
+
+def _even(period: float, now: float) -> bool:
+    """``period`` is an even number of units of the binade of ``now`` (an exact multiple)."""
+    units = period / math.ulp(now)
+    return units == int(units) and int(units) % 2 == 0
 
 
 def _extend_log(log: list[tuple[float, str]], during: list[tuple[float, str]], period: float, passes: int) -> None:
