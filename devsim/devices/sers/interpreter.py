@@ -99,8 +99,16 @@ class Program(msgspec.Struct):
         return program
 
 
+class Passes(Protocol):
+    """What hears the passes of a loop (:class:`~.runahead.RunAhead`)."""
+
+    def looped(self) -> None: ...
+
+
 class Interpreter:
     """Runs the stored program of one SERS (§4.5, §4.6)."""
+
+    not_state = frozenset({"runahead"})  # (what it knows of the passes is not the drive's state)
 
     def __init__(
         self,
@@ -116,7 +124,7 @@ class Interpreter:
         render: Callable[[str], str],
         spontaneous: Callable[[str], None],
         address: Callable[[], int],
-        looped: Callable[[], None],
+        runahead: Passes,
     ) -> None:
         self.clock = clock
         self.params = params
@@ -128,7 +136,7 @@ class Interpreter:
         self._render = render  # a statement as LIST shows it (TR)
         self._spontaneous = spontaneous
         self._address = address
-        self._looped = looped  # the program jumped back (a pass of a loop may have ended, §4.6.3)
+        self.runahead = runahead  # hears each jump back (a pass of a loop may have ended, §4.6.3)
         self.remote = RemoteStatements(master, operands, self)
         #: Trace mode (TRON, TR): one statement per TR (§4.5.4).
         self.trace_mode = False
@@ -336,7 +344,7 @@ class Interpreter:
         if self.waiting is None:
             self._schedule(self.cycle)
             if flow is _goto and self.pc <= before and self._timer is not None:
-                self._looped()  # (a pass of a loop may have ended: its next cycle is scheduled)
+                self.runahead.looped()  # (a pass of a loop may have ended: its next cycle is scheduled)
 
     # -- statements -------------------------------------------------------------------------------------
     def _execute(self, stmt: st.Statement, flow: Callable[[Interpreter, Any], bool] | None) -> bool:

@@ -60,7 +60,7 @@ class SersDrive(Model):
 
     #: Not the drive's state (:class:`~.runahead.RunAhead` leaves them out): the event log
     #: (moved on its own), the listeners and the run-ahead itself.
-    not_state = frozenset({"events", "_listeners", "runahead"})
+    not_state = frozenset({"events", "_listeners"})
 
     def __init__(
         self,
@@ -125,7 +125,7 @@ class SersDrive(Model):
         self.interpreter = interpreter = Interpreter(
             clock, params, program, operands, power, motion, master,
             host=execution, render=self.answers.render_statement, spontaneous=self.spontaneous,
-            address=self._address, looped=self._looped,
+            address=self._address, runahead=RunAhead(clock, self, self.events, self.axis.remembered_since),
         )
         self.execution = Execution(
             params, memory, power, motion, inputs, program, interpreter, access, operands,
@@ -140,7 +140,6 @@ class SersDrive(Model):
         self._timers: list[Timer] = []
         self._define_signals(thresholds)
         self.wiring = MotorWiring(self.axis, signals, self.cfg.axis)
-        self.runahead = RunAhead(clock, self, self.events, self.axis.remembered_since)
         signals.subscribe_all(self.runahead.notice)
         self._power_on()
 
@@ -152,8 +151,11 @@ class SersDrive(Model):
     def unobserved_until(self, when: float) -> None:
         self.runahead.unobserved_until(when)
 
-    def _looped(self) -> None:
-        self.runahead.looped()
+    @property
+    def runahead(self) -> RunAhead:
+        """What runs the passes of a looping program ahead (held by the interpreter: one more
+        attribute here would cost every drive a dict of its own)."""
+        return self.interpreter.runahead  # type: ignore[return-value]
 
     def _poke(self, *_changed: Any) -> None:
         """A signal changed: a parked WAIT may go on."""
