@@ -153,11 +153,12 @@ class Axis:
 
     def remembered_since(self) -> float:
         """The earliest instant the axis still answers for from its history (``position(t)``
-        of an instant before it gives where the history starts)."""
+        of an instant before it gives where the history starts); ``inf`` for an axis that has
+        never moved (it has no past but its standing)."""
         history, plan = self._history, self._plan
         if history:
             return history[0].t0
-        return plan[0].t0 if plan else self._idle_since
+        return plan[0].t0 if plan else math.inf
 
     def phase(self, t: float | None = None) -> Phase:
         """``idle``, ``accel`` (|v| increasing), ``const`` (cruising) or ``decel``."""

@@ -27,11 +27,12 @@ from devsim.scenario.runner import run_scenario_async
 from devsim.scenario.schema import scenario_from_dict
 
 #: Statements of a loop's body: moves relative and absolute, speeds, accelerations, delays, a
-#: ramp shape, an output switched (a signal change: no jump over it), a counter (never the
-#: same twice: no jump).
+#: ramp shape, conditions, the non-blocking timer D2 and its bit, an output switched (a signal
+#: change: no jump over it), a counter (never the same twice: no jump).
 BODY = st.sampled_from([
     "WR=180 E", "WR=-180 E", "WR=90 E", "WR=-45 E", "WA=0 E", "WA=270 E", "V=60", "V=300", "A=100",
     "A=1000", "D=1", "D=3", "P1032=1", "P1032=0", "O1=1", "O1=0", "C1=C1+1", "X=X+1", "W=10 E",
+    "WAIT I1=0", "IF P12<>0 O1=1", "IF I5=0", "D2=3", "WAIT DB=1",
 ])
 READS = ["axis.position", "axis.velocity", "param.P51", "param.P0", "param.W", "param.P1032", "param.C1",
          "motion.kind", "output.O1", "display"]
@@ -92,6 +93,10 @@ def test_the_benchmark_loop_run_ahead_for_an_hour_is_the_loop_step_by_step() -> 
 
 def test_with_p1127_each_statement_takes_two_milliseconds() -> None:
     assert _both(["ON", "L7", "V=120", "WR=30 E", "D=1", "WR=-30 E", "GT7"], [40.0, 333.3], slow=True) > 0
+
+
+def test_a_loop_that_never_moves_the_axis() -> None:
+    assert _both(["L1", "P1032=1", "D=1", "P1032=0", "GT1"], [150.0, 700.0]) > 1000
 
 
 def test_a_counter_never_repeats_so_nothing_is_jumped() -> None:
