@@ -70,6 +70,10 @@ class Axis:
     stay continuous); a new command supersedes the previous plan, its ``on_done`` and its timers.
     """
 
+    #: Not the axis's state (a snapshot of a device leaves it out): the plan generation only
+    #: tells a plan's timers from an older plan's.
+    not_state = frozenset({"_gen"})
+
     def __init__(
         self,
         clock: Clock,
@@ -146,6 +150,15 @@ class Axis:
     def stopped_since(self) -> float | None:
         """When the axis came to rest (the end of its last plan); None while it moves."""
         return None if self.moving else self._plan_end()
+
+    def remembered_since(self) -> float:
+        """The earliest instant the axis still answers for from its history (``position(t)``
+        of an instant before it gives where the history starts); ``inf`` for an axis that has
+        never moved (it has no past but its standing)."""
+        history, plan = self._history, self._plan
+        if history:
+            return history[0].t0
+        return plan[0].t0 if plan else math.inf
 
     def phase(self, t: float | None = None) -> Phase:
         """``idle``, ``accel`` (|v| increasing), ``const`` (cruising) or ``decel``."""

@@ -72,6 +72,10 @@ class Watches:
     plan and its rest position are what the watches' timers were solved on.
     """
 
+    #: Not the watches' state (a snapshot of a device leaves it out): the epoch only tells a
+    #: settle loop that a callback re-planned.
+    not_state = frozenset({"_epoch"})
+
     def __init__(self, clock: Clock) -> None:
         self._clock = clock
         self._watches: list[Watch] = []

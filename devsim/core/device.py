@@ -300,6 +300,18 @@ class Device:
     def record_event(self, name: str) -> None:
         self.model.record_event(name)
 
+    @property
+    def talks_to_others(self) -> bool:
+        """On a multidrop bus, it may send on its own what another device that hears others
+        acts on (a SERS master's statements to its slaves): a scenario runner then lets none
+        of those run ahead.  By default every device may."""
+        return True
+
+    def unobserved_until(self, when: float) -> None:
+        """Nobody looks at the device before simulated time ``when`` (``-inf``: someone may at
+        any moment): a scenario's runner says so while it waits for its next step."""
+        self.model.unobserved_until(when)
+
     def power_cycle(self, *, wipe: bool = False) -> None:
         """Switch the device off and on again; ``wipe`` erases non-volatile memory first."""
         self.model.power_cycle(wipe=wipe)

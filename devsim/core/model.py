@@ -78,6 +78,10 @@ class Model:
         of the same moment, which the logs then leave out."""
         self.announce("device_error", str(code), refused)
 
+    def unobserved_until(self, when: float) -> None:
+        """Nobody looks at the model before simulated time ``when`` (``-inf``: someone may look
+        at any moment): a hint a model may use to compute ahead; the default ignores it."""
+
     # -- power ------------------------------------------------------------------------------
     def power_cycle(self, *, wipe: bool = False) -> None:
         """Switch the device off and on again; ``wipe`` erases non-volatile memory first."""

@@ -232,6 +232,9 @@ class ParameterValues(MutableMapping[Key, Any]):
     replaces: keys in the table's order, a row without a value is absent."""
 
     __slots__ = ("_positions", "_template", "cells", "_extra")
+    #: Not the values (a snapshot of a device leaves them out): the table's positions and its
+    #: factory values, shared by every device of the kind.
+    not_state = frozenset({"_positions", "_template"})
 
     #: The values by row position (:data:`MISSING` where a row has none): read it (a
     #: :meth:`ParameterTable.picker` does), never write into it.

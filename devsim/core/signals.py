@@ -75,6 +75,9 @@ class SignalBank:
     """A device's named signals; ``set`` fires listeners only when the value changes."""
 
     __slots__ = ("_layout", "_values", "_listeners", "_every")
+    #: Not the bank's state (a snapshot of a device leaves them out): which signals there are
+    #: and who listens to them.
+    not_state = frozenset({"_layout", "_listeners", "_every"})
 
     def __init__(self) -> None:
         self._layout = _EMPTY

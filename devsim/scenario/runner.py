@@ -11,6 +11,7 @@ the real clock, scaled by the speed factor.
 from __future__ import annotations
 
 import asyncio
+import math
 import re
 import time
 from collections.abc import Awaitable, Callable
@@ -20,7 +21,7 @@ from typing import Any
 import msgspec
 
 from devsim.core.clock import VirtualClock
-from devsim.core.device import SerialSettings
+from devsim.core.device import Device, SerialSettings
 from devsim.core.kit import Command, Table
 from devsim.runtime import Runtime
 from devsim.scenario.host import HostPort, open_host_port
@@ -254,22 +255,44 @@ class Runner:
         return True
 
     async def _sleep_until(self, when: float) -> None:
-        """Move to ``when``; virtual time jumps from event to event (no polling needed)."""
+        """Move to ``when``; virtual time jumps from event to event (no polling needed).  With
+        nothing else attached (no facade, control API, log or player) nobody looks at a device
+        before ``when``, and the devices hear so (a looping program may run ahead, issue 31)."""
         if self.virtual:
             clock = self.clock
             assert isinstance(clock, VirtualClock)
-            while True:
-                if not self._quiet():
-                    await self._drain()
-                upcoming = clock.next_event()
-                if upcoming is None or upcoming > when:
-                    clock.advance_to(max(when, clock.now()))
-                    await self._drain()
-                    return
-                clock.advance_to(upcoming)
+            devices = self._unobserved_devices()
+            for device in devices:
+                device.unobserved_until(when)
+            try:
+                while True:
+                    if not self._quiet():
+                        await self._drain()
+                    upcoming = clock.next_event()
+                    if upcoming is None or upcoming > when:
+                        clock.advance_to(max(when, clock.now()))
+                        await self._drain()
+                        return
+                    clock.advance_to(upcoming)
+            finally:
+                for device in devices:
+                    device.unobserved_until(-math.inf)
         remaining = when - self.clock.now()
         if remaining > 0:
             await self.clock.sleep(remaining)
+
+    def _unobserved_devices(self) -> list[Device]:
+        """The devices only the scripted host and the steps look at: none if a facade or the
+        control API serves the plant or anything (a motion log, a player, a fleet member) was
+        attached to the runtime; not one that hears another on its bus that may talk to it."""
+        if self.plant.facades or self.runtime.closers:
+            return []
+        plant = self.plant
+        lines: dict[str, list[Device]] = {}
+        for name, device in plant.devices.items():
+            lines.setdefault(plant.port_of(name), []).append(device)
+        return [device for mates in lines.values() for device in mates
+                if not device.hears_others or not any(m.talks_to_others for m in mates if m is not device)]
 
     def _moving(self) -> bool:
         """Whether any device moves (the shared ``motion`` name): conditions are then looked at

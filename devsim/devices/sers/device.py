@@ -42,6 +42,12 @@ class SersDevice(Device):
     faults = FAULTS
     drive = DRIVE
 
+    @property
+    def talks_to_others(self) -> bool:
+        """Only a master (address 0) sends statements of its own to the drives on its line; what
+        a slave sends on its own (``@nPOS=1``, ``@nP0=0``, §4.8.6.11) the others pass over."""
+        return bool(self.model.cfg.address == 0)
+
     @classmethod
     def reference(cls) -> Reference:
         return Reference(

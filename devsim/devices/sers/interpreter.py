@@ -69,6 +69,9 @@ class Program(msgspec.Struct):
     texts: list[str] = msgspec.field(default_factory=list)
     labels: dict[int, int] = msgspec.field(default_factory=dict)  # label number -> statement index
     block_end: dict[int, int] = msgspec.field(default_factory=dict)  # IF..THEN index -> ELSE/END index; ELSE -> END
+    #: Per statement, what the program itself does with it (its row of :data:`FLOW`, looked up
+    #: once): ``_passed_over`` for a statement passed over, None for one the drive executes.
+    flow: list[Any] = msgspec.field(default_factory=list)
 
     @classmethod
     def compile(cls, texts: list[str]) -> Program:
@@ -83,6 +86,7 @@ class Program(msgspec.Struct):
             index = len(program.statements)
             program.statements.append(stmt)
             program.texts.append(text)
+            program.flow.append(_passed_over if isinstance(stmt, _PASSIVE) else _FLOW.get(_flow_token(stmt)))
             if isinstance(stmt, st.Label) and stmt.number not in program.labels:
                 program.labels[stmt.number] = index
             elif isinstance(stmt, st.If) and stmt.then:
@@ -95,8 +99,16 @@ class Program(msgspec.Struct):
         return program
 
 
+class Passes(Protocol):
+    """What hears the passes of a loop (:class:`~.runahead.RunAhead`)."""
+
+    def looped(self) -> None: ...
+
+
 class Interpreter:
     """Runs the stored program of one SERS (§4.5, §4.6)."""
+
+    not_state = frozenset({"runahead"})  # (what it knows of the passes is not the drive's state)
 
     def __init__(
         self,
@@ -112,6 +124,7 @@ class Interpreter:
         render: Callable[[str], str],
         spontaneous: Callable[[str], None],
         address: Callable[[], int],
+        runahead: Passes,
     ) -> None:
         self.clock = clock
         self.params = params
@@ -123,6 +136,7 @@ class Interpreter:
         self._render = render  # a statement as LIST shows it (TR)
         self._spontaneous = spontaneous
         self._address = address
+        self.runahead = runahead  # hears each jump back (a pass of a loop may have ended, §4.6.3)
         self.remote = RemoteStatements(master, operands, self)
         #: Trace mode (TRON, TR): one statement per TR (§4.5.4).
         self.trace_mode = False
@@ -206,13 +220,8 @@ class Interpreter:
     def end(self) -> None:
         """Normal end (PE, end of the program, RETURN of a dispatched subroutine)."""
         was = self.running
-        self._cancel()
-        self.running = False
-        self.waiting = None
-        self.stops = 0
-        self.resume_pc = None
         self.params.l65_flag = 0  # (the L65 error-handling flag is P1118)
-        self._host().state_changed()
+        self._halt()
         if was and self.params.report_program_end:
             self._spontaneous(f"@{self._address()}P0=0")
         self._host().ended()
@@ -253,7 +262,7 @@ class Interpreter:
         self._halt()
 
     def _halt(self) -> None:
-        """The program stops for good (an error): the next start begins at line 1."""
+        """The program stops for good (an error, or its end): the next start begins at line 1."""
         self._cancel()
         self.running = False
         self.waiting = None
@@ -322,8 +331,9 @@ class Interpreter:
             return
         stmt = program.statements[self.pc]
         self.memory.position = self.pc + 1  # LIST . shows the line being executed
+        flow, before = program.flow[self.pc], self.pc
         try:
-            advance = self._execute(stmt)
+            advance = self._execute(stmt, flow)
         except SersError as exc:
             self._program_error(exc.errno, exc.detail)
             return
@@ -333,18 +343,19 @@ class Interpreter:
             self.pc += 1
         if self.waiting is None:
             self._schedule(self.cycle)
+            if flow is _goto and self.pc <= before and self._timer is not None:
+                self.runahead.looped()  # (a pass of a loop may have ended: its next cycle is scheduled)
 
     # -- statements -------------------------------------------------------------------------------------
-    def _execute(self, stmt: st.Statement) -> bool:
-        """Run one statement; True if the program goes on with the next one.  The flow of the
-        program is :data:`FLOW`; the drive does the rest and says what the program waits for."""
-        if isinstance(stmt, _PASSIVE):
+    def _execute(self, stmt: st.Statement, flow: Callable[[Interpreter, Any], bool] | None) -> bool:
+        """Run one statement; True if the program goes on with the next one.  ``flow`` is its row
+        of :data:`FLOW`; the drive does the rest and says what the program waits for."""
+        if flow is _passed_over:
             return True
         host = self._host()
         target = host.master_target()
         if target is not None and self.remote.send(stmt, target):
             return False  # sent to a slave; the answer moves the program on
-        flow = _FLOW.get(_flow_token(stmt))
         if flow is not None:
             return flow(self, stmt)
         self.waiting = host.statement(stmt)
@@ -381,7 +392,7 @@ class Interpreter:
     def master_failed(self) -> None:
         self._program_error(64)
 
-    def later(self, delay: float, action: Callable[[], None]) -> None:
+    def later(self, delay: float, action: Callable[[], None]) -> None:  # (the master's retries)
         self._timer = self.clock.call_later(delay, action)
 
     def label_index(self, label: int) -> int:
@@ -497,6 +508,11 @@ class Interpreter:
 
 
 def _going_on(interpreter: Interpreter, stmt: st.Statement) -> bool:
+    return True
+
+
+def _passed_over(interpreter: Interpreter, stmt: st.Statement) -> bool:
+    """A label, comment or text: the program passes over it (its own control cycle, §1.2)."""
     return True
 
 

@@ -46,6 +46,7 @@ from devsim.devices.sers.parameters import SUPPLY_THRESHOLDS
 from devsim.devices.sers.params import SersParameters
 from devsim.devices.sers.power import PowerStage
 from devsim.devices.sers.program import ProgramMemory
+from devsim.devices.sers.runahead import RunAhead
 from devsim.devices.sers.signals import SIGNALS
 from devsim.devices.sers.supply import SupplyMonitor
 from devsim.devices.sers.wiring import MotorWiring
@@ -53,8 +54,13 @@ from devsim.devices.sers.wiring import MotorWiring
 __all__ = ["SersDrive"]
 
 
+
 class SersDrive(Model):
     """One SERS: its parts, its power-on and the selection on the serial line (§3.5, §3.6.2)."""
+
+    #: Not the drive's state (:class:`~.runahead.RunAhead` leaves them out): the event log
+    #: (moved on its own), the listeners and the run-ahead itself.
+    not_state = frozenset({"events", "_listeners"})
 
     def __init__(
         self,
@@ -119,7 +125,7 @@ class SersDrive(Model):
         self.interpreter = interpreter = Interpreter(
             clock, params, program, operands, power, motion, master,
             host=execution, render=self.answers.render_statement, spontaneous=self.spontaneous,
-            address=self._address,
+            address=self._address, runahead=RunAhead(clock, self, self.events, self.axis.remembered_since),
         )
         self.execution = Execution(
             params, memory, power, motion, inputs, program, interpreter, access, operands,
@@ -134,7 +140,22 @@ class SersDrive(Model):
         self._timers: list[Timer] = []
         self._define_signals(thresholds)
         self.wiring = MotorWiring(self.axis, signals, self.cfg.axis)
+        signals.subscribe_all(self.runahead.notice)
         self._power_on()
+
+    def announce(self, topic: str, *args: Any) -> None:
+        if self._listeners.get(topic):  # someone hears it: a loop is not run ahead over it
+            self.runahead.notice()
+        super().announce(topic, *args)
+
+    def unobserved_until(self, when: float) -> None:
+        self.runahead.unobserved_until(when)
+
+    @property
+    def runahead(self) -> RunAhead:
+        """What runs the passes of a looping program ahead (held by the interpreter: one more
+        attribute here would cost every drive a dict of its own)."""
+        return self.interpreter.runahead  # type: ignore[return-value]
 
     def _poke(self, *_changed: Any) -> None:
         """A signal changed: a parked WAIT may go on."""

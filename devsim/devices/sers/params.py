@@ -21,6 +21,10 @@ __all__ = ["SersParameters"]
 _WEIGHTING = PARAMETER_TABLE.picker(76, 44, 160, 121, 122, 123)
 #: P1125, P1126, P1131, P1132, P1036: the outputs that show the drive's state (§4.8.1.2).
 _OUTPUT_SELECTORS = PARAMETER_TABLE.picker(1125, 1126, 1131, 1132, 1036)
+#: P1040, P1041, P1044, P1025, P1027: what a motion watches (§4.8.6.12, §4.8.6.8, §4.8.1.2).
+_WATCHED = PARAMETER_TABLE.picker(1040, 1041, 1044, 1025, 1027)
+#: P1032, P1005–P1008: the ramp shape and its sections (§4.8.4.4).
+_RAMP = PARAMETER_TABLE.picker(1032, 1005, 1006, 1007, 1008)
 
 
 class SersParameters(Parameters):
@@ -139,6 +143,16 @@ class SersParameters(Parameters):
         running P1126, error P1131, warning P1132, and the brake P1036 (read together: the
         outputs follow every error message)."""
         return _OUTPUT_SELECTORS(self.values.cells)  # type: ignore[attr-defined,no-any-return]
+
+    def watched(self) -> tuple[Any, Any, Any, Any, Any]:
+        """The software limits P1040/P1041, the standstill distance P1044 and the compare
+        outputs P1025/P1027 as they are now, read together (every motion start asks)."""
+        return _WATCHED(self.values.cells)  # type: ignore[attr-defined,no-any-return]
+
+    def ramp_settings(self) -> tuple[Any, Any, Any, Any, Any]:
+        """P1032 and P1005–P1008 as they are now (§4.8.4.4), read together: what a ramp
+        profile is made of (a missing value shows as the table's ``MISSING``)."""
+        return _RAMP(self.values.cells)  # type: ignore[attr-defined,no-any-return]
 
     def load(self, image: dict[int, object]) -> None:
         """Every value anew (power-on): ``image`` is the whole RAM image, nothing else is kept."""

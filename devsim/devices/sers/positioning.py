@@ -57,6 +57,7 @@ class Positioning:
         self._accel = 0.0
         self.overloaded = False  # SERVO: the load holds the rotor (§4.8.6.7)
         self._servo_resume = False
+        self._ramp: tuple[tuple[object, ...], RampProfile | None] | None = None  # (P1032, P1005–P1008), profile
 
     def power_on(self) -> None:
         self.w_updated = False
@@ -151,7 +152,17 @@ class Positioning:
         self.axis.move_to(target, speed, self._accel, on_done=done, profile=self.ramp_profile())
 
     def ramp_profile(self) -> RampProfile | None:
-        """P1032 ramp shape with the sections P1005–P1008 (§4.8.4.4, spec §5.2)."""
+        """P1032 ramp shape with the sections P1005–P1008 (§4.8.4.4, spec §5.2); made again
+        only when one of them changed (every E asks)."""
+        settings = self.params.ramp_settings()
+        made = self._ramp
+        if made is not None and made[0] == settings:
+            return made[1]
+        profile = self._make_ramp_profile()
+        self._ramp = (settings, profile)
+        return profile
+
+    def _make_ramp_profile(self) -> RampProfile | None:
         p = self.params
         shape = "sine" if int(p.ramp_shape) == 1 else "linear"
         fractions = [float(v) / 100 for v in (p.ramp_velocity1, p.ramp_acceleration1, p.ramp_velocity2,

@@ -236,11 +236,15 @@ class Scaling:
         translational ±167772.1599 mm (gear 1:1, P123=1).  For incremental weighting this gives
         ±2147483647; the manual prints ±2147483639.
         """
+        made = self.__dict__.get("_pos_range")
+        if made is not None:  # (a scaling never changes: P76 … P123 written make a new one)
+            return made
         d = self.pos_decimals
         scale = 10**d
         fixed = INT32_MAX / scale
         inc = INT32_MAX / self.pos_factor
         hi = math.floor(min(fixed, inc) * scale) / scale
+        self._pos_range = (-hi, hi)
         return -hi, hi
 
     def __repr__(self) -> str:

@@ -86,6 +86,12 @@ class PositionWatches:
             for watch in self._watches:
                 watch.cancel()
             self._watches.clear()
+        lower, upper, distance, action1, action2 = self.params.watched()
+        if not (float(lower) < float(upper) or float(distance) or int(action1) or int(action2)):
+            for watch in self._standstill:  # (nothing to watch, the factory setting)
+                watch.cancel()
+            self._standstill = []
+            return
         params, axis = self.params, self.axis
         offset = self._offset()
         limits = self.soft_limits()
