@@ -15,7 +15,12 @@ the same way in ``--runs`` interleaved runs, against the echo server answering e
 ends in 16h with a reply of the same length (target: p50 ratio ≤ 1.15 in every run). The last
 line is the p50 ratios of the last part measured.
 
-    python benchmarks/latency.py [--n 5000] [--runs 10] [--kind sers|stub] [--no-gms96]
+``--instructions`` counts instead the instructions each server process executes per GMS96 status
+poll (valgrind's cachegrind; a process polled N times against one polled none, the same warm-up
+before both, ``PYTHONHASHSEED=0``): what the machine's load does not move, the servers' own work
+without the kernel's.
+
+    python benchmarks/latency.py [--n 5000] [--runs 10] [--kind sers|stub] [--no-gms96] [--instructions]
 
 ``--kind stub`` uses a tiny stand-in device defined here (for checking the plumbing).
 """
@@ -292,6 +297,44 @@ def summary(name: str, times: list[float]) -> tuple[float, float]:
     return p50, p99
 
 
+def process_instructions(server: list[str], polls: int, warmup: int = 100) -> int:
+    """Instructions the process ``server`` (which prints its pty) executes in all, polled with
+    the GMS96 status poll ``warmup + polls`` times, then stopped."""
+    with tempfile.TemporaryDirectory() as tmp:
+        log = os.path.join(tmp, "valgrind.log")
+        proc, path = _spawn(["valgrind", "--tool=cachegrind", "--cache-sim=no", "--cachegrind-out-file=/dev/null",
+                             f"--log-file={log}", *server])
+        try:
+            round_trips(path, 9600, polls, warmup=warmup, query=GMS96_POLL, done=frame_complete)
+        finally:
+            _stop(proc)
+            proc.wait(60)
+        with open(log) as fh:
+            for line in fh:
+                if "I refs:" in line or "I   refs:" in line:
+                    return int(line.rsplit(":", 1)[1].replace(",", "").strip())
+    raise SystemExit(f"no instruction count from valgrind for {server}")
+
+
+def poll_instructions(n: int) -> int:
+    """Instructions per GMS96 status poll of ``devsim run gms96`` and of the echo server."""
+    os.environ["PYTHONHASHSEED"] = "0"
+    with tempfile.TemporaryDirectory() as tmp:
+        config = os.path.join(tmp, "gms96.yaml")
+        with open(config, "w") as fh:
+            fh.write("boot_time: 0\n")
+        servers = {
+            "devsim run gms96": [sys.executable, "-m", "devsim", "run", "gms96", "--pty", "--config", config],
+            "echo": [sys.executable, os.path.abspath(__file__), "--serve-echo", "5", "--binary"],
+        }
+        per_poll = {name: (process_instructions(server, n) - process_instructions(server, 0)) / n
+                    for name, server in servers.items()}
+    print(f"instructions per GMS96 status poll ({n} polls against none): "
+          + ", ".join(f"{name} {count / 1e3:.1f} k" for name, count in per_poll.items()))
+    print(f"instructions per poll, devsim / echo: {per_poll['devsim run gms96'] / per_poll['echo']:.2f}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=5000, help="timed queries per target (default 5000)")
@@ -300,11 +343,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-gms96", action="store_true", help="skip the GMS96 status poll")
     parser.add_argument("--serve-echo", type=int, metavar="LEN", help=argparse.SUPPRESS)
     parser.add_argument("--binary", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--instructions", action="store_true",
+                        help="count instructions per GMS96 status poll (valgrind) instead of timing")
     args = parser.parse_args(argv)
     if args.serve_echo is not None:
         signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
         serve_echo(args.serve_echo, binary=args.binary)
         return 0
+    if args.instructions:
+        return poll_instructions(args.n)
 
     device_proc, device_path = start_device(args.kind)
     try:

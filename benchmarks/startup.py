@@ -13,7 +13,11 @@ process's own CPU time up to its port line (``/proc/PID/task/*/schedstat``, nano
 floor's from ``wait4``) is printed too: on a machine loaded by others the wall-clock times wait for
 a CPU, and the ratio of CPU times says where the code stands.
 
-    python benchmarks/startup.py [--kind sers] [--runs 20]
+``--instructions`` counts instead the instructions each of the three executes up to its port
+line (valgrind's cachegrind, ``PYTHONHASHSEED=0``; each ends there with ``os._exit``): a count
+that does not depend on what else runs on the machine, stable to about 1 %.
+
+    python benchmarks/startup.py [--kind sers] [--runs 20] [--instructions]
 """
 
 from __future__ import annotations
@@ -109,13 +113,56 @@ def time_bare(env: dict[str, str]) -> tuple[float, float]:
     return elapsed, cpu
 
 
+#: The bare server, ended at its port line.
+BARE_TO_PORT_LINE = BARE_PTY_SERVER.replace("    await asyncio.Event().wait()\n", "    os._exit(0)\n")
+assert BARE_TO_PORT_LINE != BARE_PTY_SERVER
+
+#: ``devsim run KIND --pty`` as ``python -m devsim`` runs it, ended at its first port line.
+TO_PORT_LINE = """
+import os, sys, runpy
+import devsim.cli.serve as serve
+serve._say = lambda line: (print(line, flush=True), os._exit(0))
+sys.argv = ["devsim", "run", sys.argv[1], "--pty"]
+runpy.run_module("devsim", run_name="__main__", alter_sys=True)
+"""
+
+
+def instructions(args: list[str], env: dict[str, str]) -> int:
+    """Instructions ``python ARGS`` executes (valgrind's cachegrind, no cache simulation)."""
+    proc = subprocess.run(
+        ["valgrind", "--tool=cachegrind", "--cache-sim=no", "--cachegrind-out-file=/dev/null", sys.executable, *args],
+        cwd=ROOT, env={**env, "PYTHONHASHSEED": "0"}, stdin=subprocess.DEVNULL, capture_output=True, text=True,
+        timeout=600,
+    )
+    for line in proc.stderr.splitlines():
+        if "I refs:" in line or "I   refs:" in line:
+            return int(line.rsplit(":", 1)[1].replace(",", "").strip())
+    raise SystemExit(f"no instruction count from valgrind for {args}: {proc.stderr[-500:]}")
+
+
+def count_instructions(kind: str, env: dict[str, str]) -> int:
+    subprocess.run([sys.executable, "-c", TO_PORT_LINE, kind], cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL, timeout=60)  # compile once
+    floor = instructions(["-c", "import os; os._exit(0)"], env)
+    bare = instructions(["-c", BARE_TO_PORT_LINE], env)
+    devsim = instructions(["-c", TO_PORT_LINE, kind], env)
+    print(f"instructions to the port line: devsim run {kind} --pty {devsim / 1e6:.1f} M, "
+          f"bare asyncio pty server {bare / 1e6:.1f} M, interpreter floor {floor / 1e6:.1f} M")
+    print(f"start-up instructions, devsim / bare asyncio pty server: {devsim / bare:.2f} (target <= 1.4)")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--kind", default="sers")
     parser.add_argument("--runs", type=int, default=20)
+    parser.add_argument("--instructions", action="store_true",
+                        help="count instructions to the port line (valgrind) instead of timing")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as pycache:
         env = _env(pycache)
+        if args.instructions:
+            return count_instructions(args.kind, env)
         time_to_port(args.kind, env)  # warm the file cache and compile once
         time_bare(env)
         runs: dict[str, list[tuple[float, float]]] = {"devsim": [], "floor": [], "bare": []}

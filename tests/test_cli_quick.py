@@ -138,6 +138,31 @@ def test_a_plain_run_serves_without_ever_importing_click() -> None:
     assert line.startswith("sers: pty /dev/") and line.endswith(" click=False")
 
 
+#: What a plain `devsim run` (control on, as by default) has no use for before its port line: the
+#: control API's op table (imported by the first connection), pathlib and json (a state dir, a
+#: --link, a request need them), urllib and ipaddress (pathlib's), click.
+NOT_AT_START = ("click", "devsim.runtime.ops", "devsim.runtime.requests", "devsim.runtime.watch_stream", "pathlib",
+                "json", "urllib.parse", "ipaddress")
+
+
+def test_a_plain_run_reaches_its_port_line_without_what_it_does_not_use() -> None:
+    code = ("import sys, devsim.cli.serve as serve\n"
+            "say = serve._say\n"
+            f"serve._say = lambda line: say(f\"{{line}} {{sorted(m for m in {NOT_AT_START!r} if m in sys.modules)}}\")\n"
+            "from devsim.cli import main\n"
+            "main(['run', 'sers', '--pty'])\n")
+    proc = subprocess.Popen([sys.executable, "-c", code], cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL,
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        lines = collect_lines(proc.stdout)
+        port = next_match(lines, lambda line: True, 30, "the port line")
+        control = next_match(lines, lambda line: True, 30, "the control line")
+    finally:
+        assert stop(proc) == 0
+    assert port.startswith("sers: pty /dev/") and port.endswith(" []")
+    assert control.startswith("control: unix:") and control.endswith(" []")
+
+
 def test_a_mistake_found_by_the_plan_is_said_by_click() -> None:
     proc = subprocess.run([sys.executable, "-m", "devsim", "run", "sers", "--pty", "--speed", "0"], cwd=ROOT,
                           env=devsim_env(), capture_output=True, text=True, timeout=60)

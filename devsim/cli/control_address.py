@@ -25,10 +25,10 @@ def default_control(name: str) -> ControlAddress:
     """The control socket ``devsim run`` and ``devsim up`` open when not told otherwise:
     ``NAME-PID.sock`` in the runtime directory (a one-line error if that is not safe)."""
     from devsim.runtime.control import ControlAddress
-    from devsim.runtime.discovery import RuntimeDirError, control_path
+    from devsim.runtime.discovery import RuntimeDirError, control_file
 
     try:
-        return ControlAddress(path=str(control_path(name)))
+        return ControlAddress(path=control_file(name))
     except RuntimeDirError as exc:
         raise system_failure(f"{exc} (--control ADDR serves the control API elsewhere, --no-control"
                       " not at all)") from None

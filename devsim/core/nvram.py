@@ -17,11 +17,12 @@ from __future__ import annotations
 
 import copy
 import fcntl
-import json
 import os
 import re
-from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # imported where used: a device without a state dir needs neither
+    from pathlib import Path
 
 __all__ = ["MemoryInUse", "NonVolatileMemory", "PoisonedMemory", "check_name"]
 
@@ -56,7 +57,11 @@ class NonVolatileMemory:
     """
 
     def __init__(self, path: str | os.PathLike[str] | None = None) -> None:
-        self.path = Path(path) if path is not None else None
+        self.path: Path | None = None
+        if path is not None:
+            from pathlib import Path
+
+            self.path = Path(path)
         self._image: dict[str, Any] = {}
         self._lock: int | None = None
         if self.path is not None:
@@ -65,6 +70,8 @@ class NonVolatileMemory:
             for stale in self.path.parent.glob(self.path.name + ".*.tmp"):
                 stale.unlink(missing_ok=True)
         if self.path is not None and self.path.exists():
+            import json
+
             try:
                 self._image = json.loads(self.path.read_text("utf-8"), parse_constant=_reject_constant)
             except PoisonedMemory as exc:
@@ -106,6 +113,8 @@ class NonVolatileMemory:
         check_name(name)
         if state_dir is None:
             return cls(None)
+        from pathlib import Path
+
         directory = Path(state_dir)
         directory.mkdir(parents=True, exist_ok=True)
         return cls(directory / f"{name}.nvram.json")
@@ -133,6 +142,8 @@ class NonVolatileMemory:
     def _write(self) -> None:
         if self.path is None:
             return
+        import json
+
         try:
             data = json.dumps(self._image, sort_keys=True, indent=1, allow_nan=False).encode("utf-8")
         except ValueError as exc:

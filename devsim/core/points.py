@@ -22,7 +22,6 @@ A kind adds its own names beside them (``param.*``, ``display``, ``marker.*`` ..
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from typing import Any, Literal
@@ -131,6 +130,8 @@ def parse_as(kind: PointType, value: Any) -> Any:
             raise BadValue(f"expects text, not {_show(value)}")
         return value
     if isinstance(value, str):  # text from a command line: JSON if it parses
+        import json  # (not at import: a plain start reads no command line)
+
         try:
             value = json.loads(value)
         except (ValueError, RecursionError):

@@ -43,19 +43,16 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import ipaddress
-import json
 import os
 import socket
-from pathlib import Path
-from typing import Any
+import stat
+from typing import TYPE_CHECKING, Any
 
 import msgspec
 
-from devsim.runtime import ops
-from devsim.runtime.ops import CaptureStart, ErrorResponse, OkResponse, WatchStart
-from devsim.runtime.process import Runtime
-from devsim.runtime.watch_stream import WatchStream
+if TYPE_CHECKING:  # imported where used: `devsim run` serves its ports before anyone asks
+    from devsim.runtime.ops import ErrorResponse, OkResponse
+    from devsim.runtime.process import Runtime
 
 __all__ = [
     "ControlAddress",
@@ -96,6 +93,8 @@ class ControlAddress(msgspec.Struct, frozen=True):
             return True
         if self.host == "localhost":
             return True
+        import ipaddress
+
         try:
             return ipaddress.ip_address(self.host).is_loopback
         except ValueError:
@@ -164,12 +163,11 @@ class ControlServer:
         """Listen; returns the bound address (with the actual port when port 0 was asked for)."""
         req = self.requested
         if req.path is not None:
-            path = Path(req.path)
-            if path.is_socket():
+            if _is_socket(req.path):
                 if _unix_socket_alive(req.path):
                     raise ControlAddressError(f"{req}: another process is serving on this socket")
                 with contextlib.suppress(OSError):
-                    path.unlink()  # a stale socket from a killed run
+                    os.unlink(req.path)  # a stale socket from a killed run
             self._server = await asyncio.start_unix_server(self._serve, path=req.path, limit=MAX_LINE)
             with contextlib.suppress(OSError):
                 os.chmod(req.path, 0o600)
@@ -199,6 +197,11 @@ class ControlServer:
         self.runtime.run(self.close())
 
     async def _serve(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        # The op table is imported by the first connection, not by the start: a simulator
+        # serves its ports sooner (issue 31), and most runs are never asked anything.
+        from devsim.runtime import ops
+        from devsim.runtime.ops import CaptureStart, ErrorResponse, OkResponse, WatchStart
+
         task = asyncio.current_task()
         assert task is not None
         self._clients.add(task)
@@ -239,7 +242,11 @@ class ControlServer:
                        pumps: list[asyncio.Task[None]]) -> OkResponse | ErrorResponse:
         """Answer a ``capture`` request, then stream the port's chunks from a bounded queue,
         as fast as the reader takes them (the answer goes out first)."""
+        import json
+
+        from devsim.runtime import ops
         from devsim.runtime.capture_stream import CaptureStream
+        from devsim.runtime.ops import CaptureStart, ErrorResponse, OkResponse
 
         start: CaptureStart = response.result
         capture_id = response.id
@@ -268,6 +275,12 @@ class ControlServer:
     def _start_watch(self, response: OkResponse, writer: asyncio.StreamWriter,
                      streams: list[Any]) -> OkResponse | ErrorResponse:
         """Answer a ``watch`` request, then start its stream (the answer goes out first)."""
+        import json
+
+        from devsim.runtime import ops
+        from devsim.runtime.ops import ErrorResponse, OkResponse, WatchStart
+        from devsim.runtime.watch_stream import WatchStream
+
         start: WatchStart = response.result
         watch_id = response.id
 
@@ -294,11 +307,20 @@ class ControlServer:
 
     def handle_line(self, raw: bytes | str) -> OkResponse | ErrorResponse:
         """Answer one request line (runs in the loop thread)."""
+        from devsim.runtime import ops
+
         return ops.answer(self.runtime, raw)
 
 
-#: ``_start_watch`` wrote its answer itself.
-_ALREADY_SENT = ErrorResponse(error="", type="")
+#: ``_start_watch`` and ``_start_capture`` wrote their answers themselves.
+_ALREADY_SENT: Any = object()
+
+
+def _is_socket(path: str) -> bool:
+    try:
+        return stat.S_ISSOCK(os.stat(path).st_mode)
+    except (OSError, ValueError):
+        return False
 
 
 def _unix_socket_alive(path: str) -> bool:

@@ -20,18 +20,21 @@ import os
 import re
 import stat
 import time
-from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import msgspec
 
 from devsim.runtime.control import ControlAddressError, parse_address
+
+if TYPE_CHECKING:
+    from pathlib import Path
 
 __all__ = [
     "DiscoveryError",
     "RuntimeDirError",
     "Simulator",
     "choose",
+    "control_file",
     "control_path",
     "is_address",
     "listing",
@@ -84,14 +87,22 @@ def runtime_dir(*, create: bool = False) -> Path:
     """The user's runtime directory for control sockets (made when ``create``); a
     :class:`RuntimeDirError` when it is a symlink, not a directory, someone else's or open to
     others."""
+    from pathlib import Path
+
+    return Path(_runtime_dir(create))
+
+
+def _runtime_dir(create: bool) -> str:
+    """:func:`runtime_dir` as text, the way :class:`pathlib.Path` spells it (``devsim run``
+    finds its socket's place without importing pathlib)."""
     xdg = os.environ.get("XDG_RUNTIME_DIR", "")
     if os.path.isabs(xdg):
-        path = Path(xdg) / "devsim"
+        path = _posix_path(f"{xdg}/devsim")
     else:
-        path = Path(os.environ.get("TMPDIR") or "/tmp") / f"devsim-{os.getuid()}"
+        path = _posix_path(f"{os.environ.get('TMPDIR') or '/tmp'}/devsim-{os.getuid()}")
     if create:
         try:
-            path.mkdir(mode=0o700)
+            os.mkdir(path, 0o700)
             os.chmod(path, 0o700)  # whatever the umask
         except FileExistsError:
             pass
@@ -113,6 +124,14 @@ def runtime_dir(*, create: bool = False) -> Path:
     return path
 
 
+def _posix_path(text: str) -> str:
+    """``str(pathlib.PurePosixPath(text))``: empty and ``.`` parts dropped, ``..`` kept, a
+    leading ``//`` kept (POSIX leaves its meaning open), ``.`` for nothing."""
+    root = "//" if text.startswith("//") and not text.startswith("///") else "/" if text.startswith("/") else ""
+    parts = [part for part in text.split("/") if part and part != "."]
+    return root + "/".join(parts) if root or parts else "."
+
+
 def safe_name(name: str) -> str:
     """``name`` as a file name that stays in its directory: its words of letters, digits and
     ``-`` (single dots kept between them, ``line.cell-a``) joined by ``_``, at most 40
@@ -123,9 +142,17 @@ def safe_name(name: str) -> str:
 def control_path(name: str, pid: int | None = None) -> Path:
     """The control socket of the simulator ``name`` in this process (or ``pid``): the runtime
     directory (made if need be) / ``NAME-PID.sock``."""
-    directory = runtime_dir(create=True)
-    path = directory / f"{safe_name(name)}-{os.getpid() if pid is None else pid}.sock"
-    if path.parent != directory:  # safe_name keeps it there; say so loudly if that ever changes
+    from pathlib import Path
+
+    return Path(control_file(name, pid))
+
+
+def control_file(name: str, pid: int | None = None) -> str:
+    """:func:`control_path` as text (what ``devsim run`` serves on, without pathlib)."""
+    directory = _runtime_dir(True)
+    file = f"{safe_name(name)}-{os.getpid() if pid is None else pid}.sock"
+    path = _posix_path(f"{directory}/{file}")
+    if "/" in file or os.path.dirname(path) != directory:  # safe_name keeps it there; say so loudly if that ever changes
         raise RuntimeDirError(f"{name!r} leads out of {directory}")
     if len(os.fsencode(path)) > MAX_SOCKET_PATH:
         raise RuntimeDirError(f"the socket path {path} is longer than a Unix socket address holds"

@@ -14,8 +14,7 @@ import asyncio
 import threading
 import time
 from collections.abc import Awaitable, Callable, Coroutine, Mapping, Sequence
-from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from devsim.core.bus import Bus
 from devsim.core.clock import Clock, RealClock, VirtualClock
@@ -24,6 +23,9 @@ from devsim.core.kit import CaptureTag
 from devsim.core.nvram import NonVolatileMemory
 from devsim.core.registry import device_class
 from devsim.transports.fdlimit import loop_exception_handler
+
+if TYPE_CHECKING:  # imported where used: a runtime without a state dir needs no pathlib
+    from pathlib import Path
 
 __all__ = ["Runtime", "UnknownDevice", "port_key"]
 
@@ -63,7 +65,11 @@ class Runtime:
         self.started = time.time()
         self.started_monotonic = time.monotonic()
         self.clock: Clock = clock or (VirtualClock() if virtual else RealClock(speed))
-        self.state_dir = Path(state_dir) if state_dir is not None else None
+        self.state_dir: Path | None = None
+        if state_dir is not None:
+            from pathlib import Path
+
+            self.state_dir = Path(state_dir)
         self.devices: dict[str, Device] = {}
         self.lines: dict[str, Any] = {}  # port_key(device, port) -> Line serving it
         self.ports: dict[str, str] = {}  # port_key(device, port) -> URL/path a host opens

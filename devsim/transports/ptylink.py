@@ -21,11 +21,12 @@ and the command), written before the link and removed with it.  Starting on a li
 from __future__ import annotations
 
 import contextlib
-import json
 import os
 import sys
-from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # json and pathlib imported where used: a pty without --link needs neither
+    from pathlib import Path
 
 __all__ = ["LinkInUse", "claim_link", "owner_record_path", "release_link"]
 
@@ -36,6 +37,8 @@ class LinkInUse(FileExistsError):
 
 def owner_record_path(link: str) -> Path:
     """``DIR/.NAME.owner`` for the link ``DIR/NAME``."""
+    from pathlib import Path
+
     path = Path(link)
     return path.with_name(f".{path.name}.owner")
 
@@ -50,7 +53,8 @@ def _started(pid: int) -> int | None:
 def _stat_fields(pid: int) -> list[str] | None:
     """The fields of ``/proc/PID/stat`` after the command name (state first), or None."""
     try:
-        text = Path(f"/proc/{pid}/stat").read_text("ascii", "replace")
+        with open(f"/proc/{pid}/stat", encoding="ascii", errors="replace") as fh:
+            text = fh.read()
     except OSError:
         return None
     return text.rpartition(")")[2].split()
@@ -76,6 +80,8 @@ def _alive(pid: int, started: int | None) -> bool:
 
 
 def _read_record(link: str) -> dict[str, Any] | None:
+    import json
+
     try:
         data = json.loads(owner_record_path(link).read_text("utf-8"))
     except (OSError, ValueError):
@@ -133,6 +139,8 @@ def claim_link(target: str, link: str) -> None:
     record = {"pid": os.getpid(), "started": _started(os.getpid()), "pty": target, "command": _command()}
 
     def write_record(tmp: str) -> None:
+        import json
+
         fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
         with os.fdopen(fd, "w", encoding="utf-8") as out:
             json.dump(record, out)

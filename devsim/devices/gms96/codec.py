@@ -409,11 +409,22 @@ def k_frame(k: int, address: int, mb4: int | None) -> ShortFrame:
 
 
 def k_bytes(k: int, address: int, mb4: int | None) -> bytes:
-    """``encode(k_frame(k, address, mb4))`` in one step (the answer to every status poll)."""
-    if mb4 is not None or type(address) is not int or not 0 <= address <= 0xFF:
+    """``encode(k_frame(k, address, mb4))`` in one step (the answer to every status poll; the
+    answers without MB4 are kept, by K byte and address: at most 256 × 256 of 5 bytes)."""
+    if mb4 is None:
+        answer = _K_ANSWERS.get((k, address))
+        if answer is not None:
+            return answer
+    if mb4 is not None or type(address) is not int or not 0 <= address <= 0xFF or type(k) is not int:
         return encode(k_frame(k, address, mb4))
     control = k & ~AE_FLAG & 0xFF
-    return bytes((START_SHORT, control, address, (control + address) & 0xFF, END))
+    answer = bytes((START_SHORT, control, address, (control + address) & 0xFF, END))
+    if 0 <= k <= 0xFF:
+        _K_ANSWERS[(k, address)] = answer
+    return answer
+
+
+_K_ANSWERS: dict[tuple[int, int], bytes] = {}
 
 
 def t_reply(address: int, identifier: int, value: bytes, control: int = 0x08) -> LongFrame:

@@ -39,6 +39,7 @@ class LinkCard(Protocol):
     def e_version(self) -> bool: ...
     @property
     def silent(self) -> bool: ...
+    def silent_at(self, now: float) -> bool: ...
     def record_event(self, name: str) -> None: ...
 
 
@@ -104,7 +105,7 @@ class Link:
     # -- input ----------------------------------------------------------------------------------
     def feed(self, data: bytes) -> None:
         now = self.clock.now()
-        if self.card.silent:
+        if self.card.silent_at(now):
             self.decoder.reset()  # the frame is lost
             return
         if self.error_hold and data:

@@ -52,6 +52,7 @@ _ESTOP, _MOTION, _MONITORING, _IDXOFF, _BUSY, _I2T_ACTIVE, _I2T_LATCHED, _MESSAG
     tables.STATUS_BITS[name]
     for name in ("ESTOP", "MOTION", "MONITORING", "IDXOFF", "BUSY", "I2T_ACTIVE", "I2T_LATCHED", "MESSAGE")
 )
+_M1_5 = 1 << 5  #: marker M1.5 in its byte (one of the motion bit's causes, :meth:`Gms96Card.motion`)
 
 
 class Gms96Card(Model):
@@ -221,7 +222,11 @@ class Gms96Card(Model):
 
     @property
     def silent(self) -> bool:
-        return self.clock.now() < self.silent_until or not self.powered
+        return self.silent_at(self.clock.now())
+
+    def silent_at(self, now: float) -> bool:
+        """Whether the card does not listen at ``now`` (the link's clock reading of a chunk)."""
+        return now < self.silent_until or not self.powered
 
     def power_cycle(self, *, wipe: bool = False) -> None:
         self._power_off()
@@ -371,12 +376,14 @@ class Gms96Card(Model):
         )
 
     def status(self) -> int:
-        """The standard status byte of ``T3;0`` (spec §4.3.1; every status poll asks for it)."""
-        stage, i2t = self.stage, self.i2t
-        return ((_ESTOP if stage.estop else 0) | (_MOTION if self.motion() else 0)
-                | (_MONITORING if stage.monitoring_cause() else 0) | (_IDXOFF if stage.idxoff else 0)
-                | (_BUSY if self.busy() else 0) | (_I2T_ACTIVE if i2t.limiting else 0)
-                | (_I2T_LATCHED if i2t.latched else 0) | (_MESSAGE if self.image.markers[4] else 0))
+        """The standard status byte of ``T3;0`` (spec §4.3.1; every status poll asks for it).
+        (:meth:`motion`, :meth:`busy` and the monitoring cause read in place: a poll's path.)"""
+        stage, i2t, markers, executor = self.stage, self.i2t, self.image.markers, self.executor
+        motion = self.axis.moving or executor.reference is not None or self.spindle.on or markers[1] & _M1_5
+        return ((_ESTOP if stage.estop else 0) | (_MOTION if motion else 0)
+                | (_MONITORING if stage.signals.get("monitoring") else 0) | (_IDXOFF if stage.idxoff else 0)
+                | (_BUSY if executor.busy else 0) | (_I2T_ACTIVE if i2t.limiting else 0)
+                | (_I2T_LATCHED if i2t.latched else 0) | (_MESSAGE if markers[4] else 0))
 
     def memory_status(self) -> int:
         """The memory status byte of ``T3;4`` (spec §4.3.2)."""

@@ -6,7 +6,9 @@ follow the type code "SERS cc.vv" (§1.2).  Geometry is in motor increments (12,
 revolution) measured from the power-on position.
 """
 
-from __future__ import annotations
+# No ``from __future__ import annotations`` here: msgspec reads a configuration's field types when
+# the first one is parsed (every start), and types written as objects are read without the
+# compile and eval of each string (about 6 M instructions of `devsim run sers`, issue 31).
 
 import math
 from typing import Annotated, Any, Literal
