@@ -14,6 +14,7 @@ reads a PUBLISH.  A malformed stream raises :class:`MalformedPacket`.
 
 from __future__ import annotations
 
+import functools
 import struct
 from collections.abc import Callable
 
@@ -62,12 +63,17 @@ class Publish(msgspec.Struct):
 # -- encoding ---------------------------------------------------------------------------------
 def _varint(value: int) -> bytes:
     """A variable byte integer (1.5.5)."""
+    if value < 128:  # (one byte: a short packet's length, a property list's)
+        return _ONE_BYTE[value]
     out = bytearray()
     while True:
         value, byte = divmod(value, 128)
         out.append(byte | (128 if value else 0))
         if not value:
             return bytes(out)
+
+
+_ONE_BYTE = [bytes((value,)) for value in range(128)]
 
 
 def _string(text: str) -> bytes:
@@ -119,8 +125,15 @@ _NO_PROPERTIES = b"\x00"
 def publish(topic: str, payload: bytes, qos: int = 0, retain: bool = False, packet_id: int = 0,
             props: bytes = _NO_PROPERTIES) -> bytes:
     """PUBLISH (3.3); ``props`` from :func:`properties` (``b""`` for MQTT 3.1.1)."""
-    head = _string(topic) + (struct.pack("!H", packet_id) if qos else b"") + props
-    return _packet(0x30 | (qos << 1) | (1 if retain else 0), head + payload)
+    head = _topic(topic) + (struct.pack("!H", packet_id) if qos else b"") + props
+    body = len(head) + len(payload)
+    return b"".join((_ONE_BYTE[0x30 | (qos << 1) | (1 if retain else 0)], _varint(body), head, payload))
+
+
+@functools.lru_cache(maxsize=1024)
+def _topic(topic: str) -> bytes:
+    """A topic name as a PUBLISH carries it (a member answers on the same few reply topics)."""
+    return _string(topic)
 
 
 def puback(packet_id: int) -> bytes:
