@@ -108,7 +108,7 @@ class Port:
         self.name = spec.name
         self.face: Face | None = None
         self._write: ByteSink | None = None
-        self._batch: bytearray | None = None
+        self._batch: list[bytes] | None = None  # the answers to the chunk being fed
         #: True when other devices share the line (RS-485 multidrop); set by the bus.
         self.shared_line = False
 
@@ -125,26 +125,29 @@ class Port:
         on a receive-only port)."""
         if not data or self.spec.receive_only:
             return
-        if self._batch is not None:
-            self._batch += data
+        batch = self._batch
+        if batch is not None:
+            batch.append(data if type(data) is bytes else bytes(data))  # (a buffer may change after)
         elif self._write is not None:
             self._write(data)
 
     def feed(self, data: bytes) -> None:
         """Bytes from the host to the face.  What the face answers while it digests them leaves
         in one write (same bytes, same order, one syscall: what a UART's transmit FIFO does)."""
-        if self.face is None:
+        face = self.face
+        if face is None:
             return
         if self._batch is not None:  # re-entered (a bus handing on): the outer call flushes
-            self.face.feed(data)
+            face.feed(data)
             return
-        self._batch = bytearray()
+        self._batch = batch = []
         try:
-            self.face.feed(data)
+            face.feed(data)
         finally:
-            batch, self._batch = self._batch, None
+            self._batch = None
             if batch and self._write is not None:
-                self._write(bytes(batch))
+                # (one piece, the usual answer to a poll, leaves as it is: no copy into a buffer)
+                self._write(batch[0] if len(batch) == 1 else b"".join(batch))
 
     def host_disconnected(self) -> None:
         if self.face is not None:

@@ -17,6 +17,7 @@ length beyond 268,435,455) raises ``ValueError`` instead of going out malformed.
 
 from __future__ import annotations
 
+import functools
 import struct
 from collections.abc import Callable
 
@@ -66,6 +67,8 @@ class Publish(msgspec.Struct):
 # -- encoding ---------------------------------------------------------------------------------
 def _varint(value: int) -> bytes:
     """A variable byte integer (1.5.5): 0 … 268,435,455 in one to four bytes."""
+    if 0 <= value < 128:  # (one byte: a short packet's length, a property list's)
+        return _ONE_BYTE[value]
     if not 0 <= value <= MAX_REMAINING:
         raise ValueError(f"a variable byte integer is 0 … {MAX_REMAINING}, not {value}")
     out = bytearray()
@@ -74,6 +77,9 @@ def _varint(value: int) -> bytes:
         out.append(byte | (128 if value else 0))
         if not value:
             return bytes(out)
+
+
+_ONE_BYTE = [bytes((value,)) for value in range(128)]
 
 
 def _string(text: str) -> bytes:
@@ -142,8 +148,15 @@ _NO_PROPERTIES = b"\x00"
 def publish(topic: str, payload: bytes, qos: int = 0, retain: bool = False, packet_id: int = 0,
             props: bytes = _NO_PROPERTIES) -> bytes:
     """PUBLISH (3.3); ``props`` from :func:`properties` (``b""`` for MQTT 3.1.1)."""
-    head = _string(topic) + (_packet_id(packet_id) if _qos(qos) else b"") + props
-    return _packet(0x30 | (qos << 1) | (1 if retain else 0), head + payload)
+    head = _topic(topic) + (_packet_id(packet_id) if _qos(qos) else b"") + props
+    body = len(head) + len(payload)
+    return b"".join((_ONE_BYTE[0x30 | (qos << 1) | (1 if retain else 0)], _varint(body), head, payload))
+
+
+@functools.lru_cache(maxsize=1024)
+def _topic(topic: str) -> bytes:
+    """A topic name as a PUBLISH carries it (a member answers on the same few reply topics)."""
+    return _string(topic)
 
 
 def puback(packet_id: int) -> bytes:

@@ -259,7 +259,8 @@ class FleetMember:
         when the request names no usable reply topic (``reply_to``, ``correlation``: the MQTT 5
         response topic and correlation data it came with; a ``"reply_to"`` in the JSON wins)."""
         self.served += 1
-        raw = bytes(payload) if isinstance(payload, bytes | bytearray) else str(payload or "").encode()
+        raw = payload if type(payload) is bytes else (
+            bytes(payload) if isinstance(payload, (bytes, bytearray)) else str(payload or "").encode())
         response: OkResponse | ErrorResponse
         stream_to = None
         if len(raw) > MAX_LINE:

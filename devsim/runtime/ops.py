@@ -322,7 +322,7 @@ def answer_parsed(runtime: Runtime, payload: Any) -> OkResponse | ErrorResponse:
     if not isinstance(payload, dict):
         return ErrorResponse(error="request: a JSON object with an 'op'", type="BadRequest")
     req_id = payload.get("id")
-    if not isinstance(req_id, int | str) or isinstance(req_id, bool):
+    if not isinstance(req_id, (int, str)) or isinstance(req_id, bool):  # (a tuple: `int | str` is made per call)
         if req_id is not None:
             return ErrorResponse(error="id: a number or a string", type="BadRequest")
         req_id = None
@@ -347,7 +347,7 @@ def encode(response: OkResponse | ErrorResponse) -> bytes:
 
 def jsonable(value: Any) -> Any:
     """Make results JSON-safe (tuples, sets, bytes, enums, records, non-finite floats)."""
-    if value is None or isinstance(value, bool | int | str):
+    if value is None or isinstance(value, (bool, int, str)):  # (tuples: a union is made on each call)
         return value
     if isinstance(value, float):
         return value if math.isfinite(value) else str(value)
@@ -375,14 +375,14 @@ def clip(text: str, limit: int = 300) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
+_CONTAINERS = frozenset((dict, list))  # what msgspec's JSON decoder makes of an object and an array
+
+
 def _depth(value: Any) -> int:
     """Nesting depth of parsed JSON, iteratively (no recursion on hostile input)."""
-    if isinstance(value, dict):  # a plain request (no object or list inside) is the common case
-        for child in value.values():
-            if isinstance(child, dict | list):
-                break
-        else:
-            return 1
+    # a plain request (no object or list inside) is the common case (looked at without a loop in Python)
+    if isinstance(value, dict) and _CONTAINERS.isdisjoint(map(type, value.values())):
+        return 1
     deepest = 0
     stack = [(value, 1)]
     while stack:

@@ -85,6 +85,7 @@ class Runtime:
         self.scenario: dict[str, Any] | None = None
         self._line_faults: dict[tuple[str, str], list[Any]] = {}
         self._loop: asyncio.AbstractEventLoop | None = None
+        self._loop_thread: int | None = None  # the thread the loop runs in (threading.get_ident())
         self._thread: threading.Thread | None = None
         self._stopped = threading.Event()
 
@@ -105,7 +106,7 @@ class Runtime:
             loop = asyncio.new_event_loop()
             asyncio.set_event_loop(loop)
             loop.set_exception_handler(loop_exception_handler)
-            self._loop = loop
+            self._loop, self._loop_thread = loop, threading.get_ident()
             loop.call_soon(ready.set)
             try:
                 loop.run_forever()
@@ -133,7 +134,7 @@ class Runtime:
                 self._thread = None
 
     async def __aenter__(self) -> Runtime:
-        self._loop = asyncio.get_running_loop()
+        self._loop, self._loop_thread = asyncio.get_running_loop(), threading.get_ident()
         self._loop.set_exception_handler(loop_exception_handler)
         return self
 
@@ -159,10 +160,10 @@ class Runtime:
             self.clock.stop_auto()
 
     def _in_loop_thread(self) -> bool:
-        try:
-            return asyncio.get_running_loop() is self._loop
-        except RuntimeError:
-            return False
+        # (the loop's thread, and the loop running in it: what asyncio.get_running_loop() says,
+        # without the system call for the process id it makes each time, once per request)
+        loop = self._loop
+        return loop is not None and threading.get_ident() == self._loop_thread and loop.is_running()
 
     def call(self, fn: Callable[..., T], *args: Any, **kwargs: Any) -> T:
         """Run ``fn`` in the loop thread and return its result (directly if already there).

@@ -222,7 +222,8 @@ class Line:
         if not data:
             return
         self.bytes_in += len(data)
-        if not self._faults and self.tracer is None and not self._to_device.items and self._clean():
+        if (not self._faults and self.tracer is None and not self._to_device.items
+                and (self._host is None or self._clean())):
             self.target.feed(data)  # the fault-free path: nothing to garble, trace or delay
             return
         received = data

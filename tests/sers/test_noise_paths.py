@@ -35,7 +35,7 @@ def _run(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False)
     changes: list[tuple[int, str, object]] = []  # (bytes sent before it, the output, its value)
 
     def changed(name: str, _old: object, new: object) -> None:
-        changes.append((len(out) + len(device.main._batch or b""), name, new))
+        changes.append((len(out) + sum(map(len, device.main._batch or ())), name, new))
 
     for name in model.signals.names("output"):
         model.signals.subscribe(name, changed)

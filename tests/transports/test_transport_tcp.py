@@ -193,3 +193,37 @@ async def test_the_sessions_of_one_loop_share_one_read_buffer() -> None:
     thread.start()
     thread.join(timeout=30)
     assert holder and holder[0].obj is not first.obj
+
+
+async def test_output_a_client_does_not_read_is_dropped_beyond_max_buffer_until_it_reads_again(
+        echo: Recorder) -> None:
+    """The device's output piles up in the socket while the client reads nothing; beyond
+    ``max_buffer`` bytes waiting in the server, further output is dropped (counted), and once the
+    client has read what was accepted, output flows again."""
+    transport = TcpTransport(max_buffer=4096)
+    await transport.start(echo)
+    try:
+        reader, writer = await asyncio.open_connection("127.0.0.1", transport.port)
+        writer.write(b"A")
+        assert await _read_exactly(reader, 1) == b"A"
+        assert echo.write is not None
+        chunk = b"x" * 65536
+        accepted = 0
+        for _ in range(4000):  # the kernel's buffers fill first (a few MB), then the server's
+            echo.write(chunk)
+            if transport.dropped:
+                break
+            accepted += len(chunk)
+            await asyncio.sleep(0)
+        assert transport.dropped == len(chunk)
+        echo.write(b"lost")  # still beyond the limit: dropped too
+        assert transport.dropped == len(chunk) + 4
+        got = await asyncio.wait_for(reader.readexactly(accepted), 30)
+        assert got == b"x" * accepted  # whatever was accepted arrives whole, in order
+        await asyncio.sleep(0)
+        echo.write(b"again")
+        assert await _read_exactly(reader, 5) == b"again"
+        assert transport.dropped == len(chunk) + 4
+        writer.close()
+    finally:
+        await transport.close()

@@ -38,6 +38,12 @@ __all__ = ["SersFace"]
 _ACKS: dict[str, bytes] = {}
 
 
+#: The line of a host's poll while its answer is made (:meth:`SersFace._answer_poll`): between
+#: lines again when it is sent, so only ever compared with None, never changed; a poll's line
+#: that gets an error or a deferred answer is a line of its own.
+_ANSWERING = CommandLine(True, True)
+
+
 def _ack_bytes(ack: str) -> bytes:
     data = _ACKS[ack] = b"\n" + ack.encode("latin-1") + b"\n\r"
     return data
@@ -207,7 +213,9 @@ class SersFace(Face):
             return False
         model.note_address(address, True)
         self.framer.whole_line(poll.length, data[-1])
-        self.line = line = CommandLine(True, True)  # (what the query sets off waits for the line end)
+        # (what the query sets off waits for the line end: a line is being received; the
+        # shared one is only looked at, a line that gets an error or an answer is made below)
+        self.line = _ANSWERING
         mode = model.params.handshake_mode
         try:  # what the statements' progress does with the line's one statement, a query
             answers = model.answers
@@ -215,6 +223,7 @@ class SersFace(Face):
                     else answers.parameter_text(poll.query.target, poll.number))
             answer = (text + "\n\r").encode(model.cfg.encoding, errors="replace")
         except SersError as exc:
+            self.line = line = CommandLine(True, True)
             if mode in (0, 1):
                 self.send(data)  # the echo, then the error
             self._error(line, exc.errno, exc.detail)
@@ -228,6 +237,7 @@ class SersFace(Face):
             self._last_replied = True
             self.line = None
             return True
+        self.line = line = CommandLine(True, True)
         if mode in (0, 1):
             self.send(data)
         self._put(line, answer)
