@@ -99,6 +99,20 @@ MODULES: dict[str, tuple[str, ...]] = {
     "devsim/facades/canopen_od.py": (
         "tests/facades/test_canopen.py",
     ),
+    # the facade codecs (helper mut-facades)
+    "devsim/facades/canopen_sdo.py": (
+        "tests/facades/test_canopen_sdo.py",
+    ),
+    "devsim/facades/mqtt_sparkplug.py": (
+        "tests/facades/test_mqtt_sparkplug.py",
+    ),
+    "devsim/facades/cia402.py": (
+        "tests/facades/test_cia402_contract.py",
+        "tests/facades/test_canopen_conformance.py",
+    ),
+    "devsim/facades/mqtt_events.py": (
+        "tests/facades/test_mqtt_events.py",
+    ),
 }
 
 #: mutmut's exit-code meanings, folded into the columns printed.

@@ -120,8 +120,7 @@ class Cia402:
         before, self.controlword = self.controlword, word & 0xFFFF
         a = self.actions
         if self.state == "fault" or a.fault(self.model):
-            if self.state != "fault":
-                self.state = "fault"
+            self.state = "fault"
             if word & 0x80 and not before & 0x80:  # fault reset (rising bit 7)
                 a.reset_fault(self.model)
                 if not a.fault(self.model):

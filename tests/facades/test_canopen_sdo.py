@@ -37,7 +37,9 @@ NUMBERS = {(TIMER, 5): 2, (PULSES, 0): 4, (VOLTAGE, 0): 8}
 
 @functools.cache
 def _facade() -> CanopenFacade:
-    """One sers node for the module (its object dictionary takes a while to build)."""
+    """One sers node for the module (its object dictionary takes a while to build).  mutmut runs
+    every mutant in a process that imported this module before, cache and all: what a mutant
+    must reach is built in the test (each :class:`Server` is)."""
     return CanopenFacade(device_class("sers")(clock=VirtualClock(), config={}), NODE)
 
 
@@ -295,3 +297,33 @@ def test_abort_without_a_code_is_the_general_error(server: Server) -> None:
     server.sdo.abort()
     assert server.answers[-1] == abort(0x1008, 0, GENERAL)[0]
     assert server.sdo.transfer is None
+
+
+@given(index=st.integers(0, 0xFFFF), subindex=st.integers(0, 0xFF), ccs=st.sampled_from([5, 6, 7]))
+@example(index=0xFFFF, subindex=0xFF, ccs=5)
+@example(index=0x8000, subindex=0x80, ccs=6)
+@example(index=0x7FFF, subindex=0x7F, ccs=7)
+def test_an_abort_names_any_multiplexer_as_sent(index: int, subindex: int, ccs: int) -> None:
+    """The multiplexer is an UNSIGNED16 index and an UNSIGNED8 sub-index, little-endian, in
+    bytes 1 … 3 of the request and of its abort."""
+    s = Server()
+    try:
+        assert s.send(ccs << 5, mux(index, subindex), PAD) == abort(index, subindex, INVALID_COMMAND)
+        if index not in s.facade.od:
+            assert s.send(0x21, mux(index, subindex), PAD) == abort(index, subindex, NOT_IN_OD)
+    finally:
+        s.close()
+
+
+def test_a_fresh_server_listens_on_600h_answers_on_580h_and_has_no_transfer() -> None:
+    """CiA 301 §7.3.5 (the pre-defined connection set): SDO requests on 600h + node-ID, answers on
+    580h + node-ID; before any request there is no transfer and an abort names 0000h/00h."""
+    facade = CanopenFacade(_facade().device, NODE)  # (not the cached one: built by this test)
+    try:
+        assert (facade.sdo.rx_cobid, facade.sdo.tx_cobid) == (0x600 + NODE, 0x580 + NODE)
+    finally:
+        facade.close()
+    s = Server()
+    assert s.sdo.transfer is None
+    s.sdo.abort(TOGGLE)
+    assert s.answers == abort(0, 0, TOGGLE)
