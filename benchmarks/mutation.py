@@ -107,8 +107,7 @@ MODULES: dict[str, tuple[str, ...]] = {
         "tests/facades/test_mqtt_sparkplug.py",
     ),
     "devsim/facades/cia402.py": (
-        "tests/facades/test_cia402_contract.py",
-        "tests/facades/test_canopen_conformance.py",
+        "tests/facades/test_cia402_machine.py",
     ),
     "devsim/facades/mqtt_events.py": (
         "tests/facades/test_mqtt_events.py",

@@ -315,3 +315,16 @@ def test_power_on_values_and_the_reset_of_the_application() -> None:
     motor.calls.clear()
     machine.reset()  # disabled already: nothing to switch off
     assert motor.calls == []
+
+
+def test_a_fault_that_went_away_stays_the_fault_state_until_the_fault_reset() -> None:
+    """Fault is left by transition 15 alone (the fault reset), also when the drive's fault has
+    gone by itself."""
+    machine, motor = drive_in(FAULT)
+    motor.fault = False
+    assert state_of(machine) == FAULT
+    for word in (0x06, 0x07, 0x0F, 0x02, 0x00):
+        machine.write_controlword(word)
+        assert state_of(machine) == FAULT and motor.calls == []
+    machine.write_controlword(0x80)
+    assert motor.calls == [("reset_fault",)] and state_of(machine) == SOD
