@@ -104,7 +104,7 @@ MODULES: dict[str, tuple[str, ...]] = {
         "tests/facades/test_canopen_sdo.py",
     ),
     "devsim/facades/mqtt_sparkplug.py": (
-        "tests/facades/test_mqtt_sparkplug.py",
+        "tests/facades/test_sparkplug_payloads.py",
     ),
     "devsim/facades/cia402.py": (
         "tests/facades/test_cia402_machine.py",

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 import json
+import time
 from typing import Any
 
 import pytest
@@ -206,7 +207,8 @@ def test_ddata_carries_what_changed_a_str_that_is_none_or_not_text_as_json() -> 
     str_point = next(p.name for p in device.points if p.type == "str")
     json_point = next(p.name for p in device.points if p.type == "json")
     changes = {"axis.position": 1.5, "motion": True, "P11": -3, str_point: 7, json_point: {"a": [1, "b"]}}
-    data = SparkplugNode("p").device_data(device, changes)[1]
+    topic, data = SparkplugNode("p").device_data(device, changes)
+    assert topic == "spBv1.0/devsim/DDATA/p/sers"
     got = metrics(data)
     assert list(got) == list(changes)
     assert got["axis.position"].double_value == 1.5 and got["motion"].boolean_value is True
@@ -253,3 +255,14 @@ def test_command_requests() -> None:
     assert command_request(device, "Device Control/Fault/power", False) == rq.SwitchFault("sers", "power", False)
     assert command_request(device, "input.I1", True) == rq.Set("sers", "input.I1", True)
     assert command_request(device, "Device Control/Faultx", 1) == rq.Set("sers", "Device Control/Faultx", 1)
+
+
+def test_timestamps_are_utc_milliseconds_since_the_epoch() -> None:
+    """§6.4.1: a payload's and a metric's timestamp, UTC, in milliseconds since the epoch."""
+    node = SparkplugNode("p")
+    before = int(time.time() * 1000)
+    stamps = [parse(node.new_session()[1]).timestamp, parse(node.node_birth()[1]).timestamp]
+    data = parse(node.device_data(sers(), {"axis.position": 1.0})[1])
+    stamps += [data.timestamp, data.metrics[0].timestamp]
+    after = int(time.time() * 1000)
+    assert all(before <= stamp <= after for stamp in stamps), (before, stamps, after)
