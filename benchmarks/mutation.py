@@ -110,7 +110,7 @@ MODULES: dict[str, tuple[str, ...]] = {
         "tests/facades/test_cia402_machine.py",
     ),
     "devsim/facades/mqtt_events.py": (
-        "tests/facades/test_mqtt_events.py",
+        "tests/facades/test_sample_on_event.py",
     ),
 }
 
