@@ -12,7 +12,7 @@ import struct
 from collections.abc import Iterator
 
 import pytest
-from hypothesis import example, given
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from devsim.core.clock import VirtualClock
@@ -97,6 +97,7 @@ def test_a_request_is_eight_bytes_shorter_ones_are_ignored(server: Server) -> No
     assert server.send(frame + b"\xff") == [bytes((0x43,)) + mux(0x1000) + struct.pack("<L", DEVICE_TYPE)]
 
 
+@settings(deadline=None)  # (the first example may build the module's cached node)
 @given(command=st.integers(0, 255))
 @example(command=0x00)  # download segment
 @example(command=0x20)  # initiate download
@@ -206,6 +207,7 @@ def test_an_expedited_download_of_each_size(server: Server, size: int) -> None:
     assert server.send(0x00, bytes(7)) == abort(0, 0, INVALID_COMMAND)
 
 
+@settings(deadline=None)  # (the first example may build the module's cached node)
 @given(number=st.sampled_from(sorted(NUMBERS)), announced=st.integers(0, 16), sized=st.booleans())
 @example(number=(VOLTAGE, 0), announced=8, sized=True)
 @example(number=(VOLTAGE, 0), announced=7, sized=True)
@@ -233,6 +235,7 @@ def test_a_segmented_download_announces_the_size_of_its_number(number: tuple[int
         s.close()
 
 
+@settings(deadline=None)  # (the first example may build the module's cached node)
 @given(announced=st.integers(0, 16))
 def test_a_segmented_download_of_no_number_type_takes_any_size_announced(announced: int) -> None:
     s = Server()
@@ -299,6 +302,7 @@ def test_abort_without_a_code_is_the_general_error(server: Server) -> None:
     assert server.sdo.transfer is None
 
 
+@settings(deadline=None)  # (the first example may build the module's cached node)
 @given(index=st.integers(0, 0xFFFF), subindex=st.integers(0, 0xFF), ccs=st.sampled_from([5, 6, 7]))
 @example(index=0xFFFF, subindex=0xFF, ccs=5)
 @example(index=0x8000, subindex=0x80, ccs=6)

@@ -12,7 +12,7 @@ import time
 from typing import Any
 
 import pytest
-from hypothesis import example, given
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from tahutils.tahu import sparkplug_b as tahu
 
@@ -141,6 +141,7 @@ def test_a_session_bdseq_and_seq_from_birth_to_death() -> None:
     assert parse(node.death()[1]).metrics[0].long_value == 0
 
 
+@settings(deadline=None)  # (the first example may build the module's cached device)
 @given(births=st.integers(1, 600))
 @example(births=256)
 @example(births=257)
@@ -155,6 +156,7 @@ def test_seq_wraps_after_255_and_a_node_birth_starts_it_at_0(births: int) -> Non
     assert parse(node.device_data(device, {})[1]).seq == 1
 
 
+@settings(deadline=None)  # (the first example may build the module's cached device)
 @given(sessions=st.integers(1, 600))
 @example(sessions=256)
 @example(sessions=257)
