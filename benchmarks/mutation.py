@@ -148,6 +148,19 @@ MODULES: dict[str, tuple[str, ...]] = {
         "tests/fleet/test_topics.py",
         "tests/fleet/test_topics_boundaries.py",
     ),
+    # the facade codecs (helper mut-facades)
+    "devsim/facades/canopen_sdo.py": (
+        "tests/facades/test_canopen_sdo.py",
+    ),
+    "devsim/facades/mqtt_sparkplug.py": (
+        "tests/facades/test_sparkplug_payloads.py",
+    ),
+    "devsim/facades/cia402.py": (
+        "tests/facades/test_cia402_machine.py",
+    ),
+    "devsim/facades/mqtt_events.py": (
+        "tests/facades/test_sample_on_event.py",
+    ),
 }
 
 #: mutmut's exit-code meanings, folded into the columns printed.

@@ -20,10 +20,11 @@ from typing import Any
 
 from devsim.core.kit import DriveActions
 
-__all__ = ["Cia402", "DEFAULTS", "DriveActions", "MODES", "STATES"]
+__all__ = ["Cia402", "DEFAULTS", "DriveActions", "MODES", "STATES", "TRANSITIONS", "command"]
 
 
-#: State → statusword bits 0…6 (with bit 4 "voltage enabled" where the power stage may be on)
+#: State → statusword bits 0…6 (CiA 402-2 §8.4.1; bit 4 "voltage enabled" where the power stage may
+#: be on, bit 5 "quick stop" where it is not active, but in Switch on disabled)
 STATES = {
     "switch_on_disabled": 0x0040,
     "ready_to_switch_on": 0x0021,
@@ -42,6 +43,42 @@ MODES = {PROFILE_POSITION: ("move_to", 0), PROFILE_VELOCITY: ("jog", 2)}
 #: reset node restores the application objects' power-on values).
 DEFAULTS = {"controlword": 0, "mode": PROFILE_POSITION, "target_position": 0, "profile_velocity": 1000,
             "target_velocity": 0}
+
+
+def command(word: int) -> str:
+    """The command a controlword codes (CiA 402-2 §8.4.2, bits 0 … 3; bit 7, the fault reset, is
+    read in the Fault state alone)."""
+    if not word & 0x02:
+        return "disable_voltage"  # 0xxx xx0x
+    if not word & 0x04:
+        return "quick_stop"  # 0xxx x01x
+    if not word & 0x01:
+        return "shutdown"  # 0xxx x110
+    if not word & 0x08:
+        return "switch_on"  # 0xxx 0111 (in Operation enabled: disable operation)
+    return "enable_operation"  # 0xxx 1111
+
+
+#: (state, command) → the next state (CiA 402-2 §8.4.3, transitions 2 … 12 and 16; the fault's
+#: 13 … 15 are the drive's and the fault reset's).  A command not listed for a state changes
+#: nothing: Quick stop active, in particular, is left only by disable voltage, enable operation or
+#: the axis standing (:attr:`Cia402.statusword`).
+TRANSITIONS = {
+    ("switch_on_disabled", "shutdown"): "ready_to_switch_on",  # 2
+    ("ready_to_switch_on", "switch_on"): "switched_on",  # 3
+    ("switched_on", "enable_operation"): "operation_enabled",  # 4
+    ("operation_enabled", "switch_on"): "switched_on",  # 5 (disable operation)
+    ("switched_on", "shutdown"): "ready_to_switch_on",  # 6
+    ("ready_to_switch_on", "disable_voltage"): "switch_on_disabled",  # 7
+    ("ready_to_switch_on", "quick_stop"): "switch_on_disabled",  # 7
+    ("operation_enabled", "shutdown"): "ready_to_switch_on",  # 8
+    ("operation_enabled", "disable_voltage"): "switch_on_disabled",  # 9
+    ("switched_on", "disable_voltage"): "switch_on_disabled",  # 10
+    ("switched_on", "quick_stop"): "switch_on_disabled",  # 10
+    ("operation_enabled", "quick_stop"): "quick_stop_active",  # 11
+    ("quick_stop_active", "disable_voltage"): "switch_on_disabled",  # 12
+    ("quick_stop_active", "enable_operation"): "operation_enabled",  # 16
+}
 
 
 class Cia402:
@@ -83,30 +120,18 @@ class Cia402:
         before, self.controlword = self.controlword, word & 0xFFFF
         a = self.actions
         if self.state == "fault" or a.fault(self.model):
-            if self.state != "fault":
-                self.state = "fault"
+            self.state = "fault"
             if word & 0x80 and not before & 0x80:  # fault reset (rising bit 7)
                 a.reset_fault(self.model)
                 if not a.fault(self.model):
                     self.state = "switch_on_disabled"
             return
-        command = word & 0x8F
-        if not word & 0x02:  # disable voltage
-            self._go("switch_on_disabled")
-        elif not word & 0x04:  # quick stop
-            if self.state == "operation_enabled":
-                a.quick_stop(self.model)
-                self.state = "quick_stop_active"
-            else:
-                self._go("switch_on_disabled")
-        elif command & 0x0F == 0x06:  # shutdown
-            self._go("ready_to_switch_on")
-        elif command & 0x0F == 0x07:  # switch on / disable operation
-            if self.state in ("ready_to_switch_on", "operation_enabled", "switched_on"):
-                self._go("switched_on")
-        elif command & 0x0F == 0x0F:  # enable operation
-            if self.state in ("switched_on", "operation_enabled", "quick_stop_active"):
-                self._go("operation_enabled")
+        state = TRANSITIONS.get((self.state, command(word)), self.state)
+        if state == "quick_stop_active" and self.state != state:
+            a.quick_stop(self.model)
+            self.state = state
+        else:
+            self._go(state)
         if self.state == "operation_enabled":
             self._profile(before, word)
 
@@ -150,10 +175,6 @@ class Cia402:
             self.actions.enable(self.model, False)
             self.state = "switch_on_disabled"
         word = STATES[self.state] | 0x0200  # bit 9: remote
-        if self.state in ("switch_on_disabled", "ready_to_switch_on", "switched_on", "operation_enabled"):
-            word |= 0x0020  # bit 5: quick stop not active
-        if self.state == "switch_on_disabled":
-            word &= ~0x0020
         if not a.moving(self.model):
             word |= 0x0400  # bit 10: target reached
         if self.setpoint_ack:
