@@ -67,10 +67,10 @@ class Publish(msgspec.Struct):
 # -- encoding ---------------------------------------------------------------------------------
 def _varint(value: int) -> bytes:
     """A variable byte integer (1.5.5): 0 … 268,435,455 in one to four bytes."""
-    if 0 <= value < 128:  # (one byte: a short packet's length, a property list's)
-        return _ONE_BYTE[value]
     if not 0 <= value <= MAX_REMAINING:
         raise ValueError(f"a variable byte integer is 0 … {MAX_REMAINING}, not {value}")
+    if value < 128:  # (one byte: a short packet's length, a property list's)
+        return _ONE_BYTE[value]
     out = bytearray()
     while True:
         value, byte = divmod(value, 128)
