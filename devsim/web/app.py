@@ -106,6 +106,8 @@ async def _plant(request: web.Request) -> web.Response:
 
 
 async def _device(request: web.Request) -> web.Response:
+    if not await request.app[VIEW].known():
+        return _unreachable(ConnectionError("its devices are not known yet"))
     try:
         return web.json_response(request.app[VIEW].device(request.match_info["device"]))
     except KeyError:
@@ -178,6 +180,8 @@ async def _login(request: web.Request) -> web.Response:
 async def _ws(request: web.Request) -> web.StreamResponse:
     view = request.app[VIEW]
     device = request.query.get("device")
+    if device is not None and not await view.known():
+        return _unreachable(ConnectionError("its devices are not known yet"))
     if device is not None and device not in view.feeds:
         return web.json_response({"error": f"no device {device[:60]!r}", "type": "UnknownDevice"}, status=404)
     origin = request.headers.get("Origin")

@@ -30,6 +30,7 @@ TABLE_PERIOD = 0.25  # device seconds between two samples of every point
 SUMMARY_PERIOD = 0.25  # device seconds between two samples of what the plant page shows
 RETRY = 0.5  # wall seconds between two attempts to attach
 FRESH = 0.4  # wall seconds the plant page's answer serves every browser that asks
+FIRST_ATTACH = 10.0  # wall seconds a device's page waits for the first attachment to the simulator
 
 
 class PlantView:
@@ -139,6 +140,15 @@ class PlantView:
         await asyncio.gather(table(), *([chart()] if charted else []), return_exceptions=True)
 
     # -- what the pages show ----------------------------------------------------------------------
+    async def known(self, timeout: float = FIRST_ATTACH) -> bool:
+        """Whether the simulator's devices are known: once attached they stay known (across its
+        restarts); before the first attachment this waits for it, at most ``timeout`` seconds (a
+        page opened the moment the server started asks before the devices have been read)."""
+        if not self.infos:
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self.attached.wait(), timeout)
+        return bool(self.infos)
+
     async def plant(self) -> dict[str, Any]:
         """Every device: kind, ports (where a host connects, the line's settings and its host),
         ready, display, state words, faults; asked at most every :data:`FRESH` seconds, however

@@ -318,3 +318,26 @@ def test_a_web_port_in_use_is_a_system_failure(command: list[str], tmp_path: Pat
                               text=True, timeout=60, stdin=subprocess.DEVNULL)
     assert done.returncode == exits.SYSTEM, done.stderr
     assert "web page" in done.stderr and "in use" in done.stderr
+
+
+async def test_a_device_page_asked_before_the_simulator_is_attached_waits_for_it(tmp_path: Path) -> None:
+    """A browser may ask for a device the moment the server is up, before it has read the
+    simulator's devices: the answer waits for them (bounded), it does not say the device is unknown."""
+    from devsim.web.server import parse_listen, serve
+
+    control = f"unix:{tmp_path}/c.sock"
+    runner, view, port = await serve(control, parse_listen(f"127.0.0.1:{free_port()}"), None)
+    sim = None
+    try:
+        async with aiohttp.ClientSession(f"http://127.0.0.1:{port}") as http:
+            asked = asyncio.ensure_future(http.get("/api/devices/sers"))
+            assert not view.attached.is_set()  # no simulator at the address yet
+            sim = await asyncio.to_thread(DevsimProcess, "run", "sers", "--control", control)
+            response = await asked
+            assert response.status == 200, await response.text()
+            assert (await response.json())["info"]["name"] == "sers"
+    finally:
+        await runner.cleanup()
+        await view.close()
+        if sim is not None:
+            assert sim.interrupt() == 0
