@@ -51,6 +51,7 @@ MODULES: dict[str, tuple[str, ...]] = {
         "tests/gms96/test_codec.py",
         "tests/gms96/test_frame_limit.py",
         "tests/gms96/test_codec_boundaries.py",
+        "tests/gms96/test_poll_path.py",  # the poll fast path: the K answer bytes, the whole-frame chunks
     ),
     "devsim/devices/pcd4h3/sbus.py": (
         "tests/pcd4h3/test_sbus.py",
