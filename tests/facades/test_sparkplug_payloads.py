@@ -137,8 +137,11 @@ def test_a_session_bdseq_and_seq_from_birth_to_death() -> None:
     assert topic == "spBv1.0/devsim/DBIRTH/p/sers" and parse(dbirth).seq == 1
     topic, ddeath = node.device_death(device)
     assert topic == "spBv1.0/devsim/DDEATH/p/sers" and parse(ddeath).seq == 2 and not parse(ddeath).metrics
-    assert node.death() == node.death()[:1] + (node.death()[1],)
-    assert parse(node.death()[1]).metrics[0].long_value == 0
+    topic, final = node.death()  # the session's NDEATH as its will said: bdSeq, no seq
+    last = parse(final)
+    assert topic == "spBv1.0/devsim/NDEATH/p" and not last.HasField("seq")
+    assert [(m.name, m.datatype, m.long_value) for m in last.metrics] == [("bdSeq", T.Int64, 0)]
+    assert parse(node.device_birth(device, {})[1]).seq == 3  # an NDEATH takes no seq
 
 
 @settings(deadline=None)  # (the first example may build the module's cached device)
