@@ -23,13 +23,13 @@ from __future__ import annotations
 import math
 
 from devsim.devices.pcd4h3.lm628 import (
-    BREAKPOINT,
     COMPLETE,
     MOTOR_OFF,
     POSITION_ERROR,
     POSITION_RANGE,
     WRAPAROUND,
     Lm628,
+    moved_flags,
     wrap,
 )
 from devsim.devices.pcd4h3.pid import _lag_terms
@@ -322,14 +322,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                         flags |= WRAPAROUND
                     first_count, end_count = segment = _segment(seen, home)
                 if watching and before != seen:  # the breakpoint: as in the loop below
-                    if (before - home + POSITION_RANGE) >> 31 != (seen - home + POSITION_RANGE) >> 31:
-                        flags |= WRAPAROUND
-                    w = (before - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE - break_at
-                    was = (w > 0) - (w < 0)
-                    w = (seen - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE - break_at
-                    now = (w > 0) - (w < 0)
-                    if was != now and was != 0 and now * was <= 0:
-                        flags |= BREAKPOINT
+                    flags |= moved_flags(before, seen, home, break_at)
                 err = desired - seen
                 if err > bound or err < below:  # the next sample's e may need its clamp: below
                     if err > threshold or err < -threshold:
@@ -458,15 +451,8 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                 flags = chip.flags
                 index_watch = chip.index_armed and chip.index_period
                 watch_moves = chip.breakpoint is not None or index_watch
-            else:  # the breakpoint alone: Lm628._moved's wrap-around and breakpoint checks, inline
-                if (before - home + POSITION_RANGE) >> 31 != (raw - home + POSITION_RANGE) >> 31:
-                    flags |= WRAPAROUND
-                w = (before - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE - break_at
-                was = (w > 0) - (w < 0)
-                w = (raw - home + POSITION_RANGE) % TWICE_RANGE - POSITION_RANGE - break_at
-                now = (w > 0) - (w < 0)
-                if was != now and was != 0 and now * was <= 0:
-                    flags |= BREAKPOINT
+            else:  # the breakpoint alone: Lm628._moved's wrap-around and breakpoint checks
+                flags |= moved_flags(before, raw, home, break_at)
         err = desired - (raw - home)  # |err| > threshold ≤ 7FFFh, saturated to 32 bits or not
         if err > threshold or err < -threshold:
             flags |= POSITION_ERROR

@@ -42,6 +42,19 @@ def _sign(value: int) -> int:
     return (value > 0) - (value < 0)
 
 
+def moved_flags(before: int, after: int, home: int, breakpoint: int | None) -> int:
+    """WRAPAROUND and BREAKPOINT for an encoder that counted from ``before`` to ``after`` (raw
+    counts) in one sample (§5.7: the 31-bit counter wraps; the breakpoint is reached or passed)."""
+    flags = 0
+    if (before - home + POSITION_RANGE) >> 31 != (after - home + POSITION_RANGE) >> 31:
+        flags |= WRAPAROUND
+    if breakpoint is not None:
+        was, now = _sign(wrap(before - home) - breakpoint), _sign(wrap(after - home) - breakpoint)
+        if was != now and was != 0 and now * was <= 0:
+            flags |= BREAKPOINT
+    return flags
+
+
 class Lm628:
     """One chip: its buffers, working registers, flags, and the motor and encoder behind it."""
 
@@ -311,13 +324,7 @@ class Lm628:
     def _moved(self, before: int, after: int) -> None:
         """The encoder counted from ``before`` to ``after`` (raw counts) in this sample."""
         home = self.home
-        if (before - home + POSITION_RANGE) >> 31 != (after - home + POSITION_RANGE) >> 31:
-            self.flags |= WRAPAROUND
-        if self.breakpoint is not None:
-            b = self.breakpoint
-            was, now = _sign(wrap(before - home) - b), _sign(wrap(after - home) - b)
-            if was != now and was != 0 and now * was <= 0:
-                self.flags |= BREAKPOINT
+        self.flags |= moved_flags(before, after, home, self.breakpoint)
         if self.index_armed and self.index_period:
             period, offset = self.index_period, self.index_offset
             if after > before:  # the last mark at or below ``after``, passed if above ``before``
