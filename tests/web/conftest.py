@@ -14,8 +14,6 @@ import pytest
 
 from tests.support.process import DevsimProcess, free_port
 
-pytest.importorskip("aiohttp")
-
 
 @dataclass
 class WebSim:

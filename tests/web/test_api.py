@@ -10,6 +10,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+import aiohttp
 import pytest
 import serial
 
@@ -17,8 +18,6 @@ from devsim.cli import exits
 from devsim.runtime.client import ControlClient
 from tests.support.process import ROOT, DevsimProcess, devsim_env, free_port
 from tests.web.conftest import WebSim, answer, start_sers
-
-aiohttp = pytest.importorskip("aiohttp")
 
 JSON = {"Content-Type": "application/json"}
 

@@ -11,14 +11,12 @@ from typing import Any
 
 import pytest
 import serial
+from playwright.sync_api import expect
 
 from tests.support.process import DevsimProcess, free_port
 from tests.support.programs import needs_program
 from tests.web.conftest import WebSim, answer, chromium, start_sers
 from tests.web.test_api import SCENARIO, non_loopback_address
-
-pytest.importorskip("playwright.sync_api")
-from playwright.sync_api import expect  # noqa: E402
 
 
 @pytest.fixture
