@@ -50,6 +50,16 @@ def collect_lines(stream: IO[str] | None) -> queue.Queue[str | None]:
     return lines
 
 
+def wait_until(predicate: Callable[[], bool], what: str, timeout: float = 5.0, step: float = 0.01) -> None:
+    """Ask ``predicate`` every ``step`` seconds until it holds; an AssertionError naming ``what``
+    after ``timeout``.  For state another process or thread holds and announces nowhere (a
+    line's counters, a file being written): where an event or a line says it, wait for that."""
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        assert time.monotonic() < deadline, f"no {what} within {timeout} s"
+        time.sleep(step)
+
+
 class OutputEnded(AssertionError):
     """The lines ended before the one waited for."""
 

@@ -30,6 +30,7 @@ from devsim.transports.pcap import (
     serial_record,
 )
 from devsim.transports.pty import PtyTransport
+from tests.support.process import wait_until
 from tests.support.programs import needs_program
 
 #: Every serial port of every kind, what a host sends there, whether the device answers it.
@@ -137,13 +138,6 @@ def test_the_tracer_writes_one_record_per_chunk_with_the_settings_of_the_moment(
 
 
 # -- every kind, through a real pty ------------------------------------------------------------
-def _wait_for(predicate: Any, what: str, timeout: float = 5.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        assert time.monotonic() < deadline, f"no {what} within {timeout} s"
-        time.sleep(0.002)
-
-
 class Served:
     """One port of a device on a pty, traced as pcap, with a pyserial host."""
 
@@ -162,7 +156,7 @@ class Served:
         before = self.runtime.call(lambda: self.line.bytes_in)
         self.host.write(data)
         self.host.flush()
-        _wait_for(lambda: self.runtime.call(lambda: self.line.bytes_in) >= before + len(data), "bytes at the device")
+        wait_until(lambda: self.runtime.call(lambda: self.line.bytes_in) >= before + len(data), "bytes at the device")
 
     def answer(self, timeout: float = 2.0) -> bytes:
         """What the host reads until the line has delivered all the device sent."""
@@ -257,11 +251,11 @@ def test_over_rfc_2217_the_header_carries_all_four_settings(tmp_path: Path) -> N
         for parity in ("E", "N"):
             host = serial.serial_for_url(transport.url, baudrate=9600, parity=parity, timeout=2)
             try:
-                _wait_for(lambda p=parity: getattr(runtime.call(lambda: line.host), "parity", None) == p,
+                wait_until(lambda p=parity: getattr(runtime.call(lambda: line.host), "parity", None) == p,
                           "the host's settings at the device")
                 before = runtime.call(lambda: line.bytes_in)
                 host.write(b"\x02")
-                _wait_for(lambda b=before: runtime.call(lambda: line.bytes_in) > b, "the STX at the device")
+                wait_until(lambda b=before: runtime.call(lambda: line.bytes_in) > b, "the STX at the device")
             finally:
                 host.close()
     finally:

@@ -9,7 +9,6 @@ import io
 import os
 import subprocess
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
@@ -26,7 +25,7 @@ from devsim.transports.pcap import parse_serial_header
 from devsim.transports.pty import PtyTransport
 from devsim.wireshark.extcap import dlt_line, interface_lines, interfaces, main, parse_interface
 from devsim.wireshark.installer import LAUNCHER, extcap_dir, launcher_text, parse_folders
-from tests.support.process import ROOT, devsim_env
+from tests.support.process import ROOT, devsim_env, wait_until
 from tests.support.programs import needs_program
 from tests.test_cli import Sim
 from tests.wireshark.test_capture import end_session, tshark_env, tshark_records
@@ -119,11 +118,8 @@ def test_the_capture_op_streams_each_chunk_with_the_host_settings(served: Any) -
             host.close()
         assert item == {"type": "chunk", "device": "sers", "port": "main", "t": 2.5, "dir": "H>D", "data": "2352460d",
                         "settings": {**item["settings"], "baud": 4800, "stop": 1.0, "mismatch": True}}
-    deadline = time.monotonic() + 10
-    with ControlClient(address) as control:
-        while control.line("sers")["capturing"]:  # the server notices the closed connection
-            assert time.monotonic() < deadline, "the capture outlived its connection"
-            time.sleep(0.01)
+    with ControlClient(address) as control:  # the server notices the closed connection
+        wait_until(lambda: not control.line("sers")["capturing"], "end of the capture with its connection", 10.0)
     assert runtime.call(lambda: line.tracer) is None  # the line has its fast path back
 
 
@@ -150,13 +146,6 @@ def test_a_subscriber_that_does_not_read_loses_chunks_counted_and_the_device_goe
 
 
 # -- Wireshark's live capture through the installed extcap ----------------------------------------
-def _wait(predicate: Any, what: str, timeout: float = 30.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        assert time.monotonic() < deadline, f"no {what} within {timeout} s"
-        time.sleep(0.05)
-
-
 def test_tshark_captures_a_running_simulators_pty_live(tmp_path: Path) -> None:
     tshark = needs_program("tshark")
     home = tmp_path / "home"
@@ -188,7 +177,7 @@ def test_tshark_captures_a_running_simulators_pty_live(tmp_path: Path) -> None:
                                    start_new_session=True)  # dumpcap and the extcap end with it
         try:
             with ControlClient(control_address) as control:
-                _wait(lambda: control.line("sers")["capturing"] or capture.poll() is not None, "capture running")
+                wait_until(lambda: control.line("sers")["capturing"] or capture.poll() is not None, "capture running", 30.0)
             assert capture.poll() is None, capture.communicate()
             with serial.Serial(pty, 9600, timeout=5) as host:
                 host.write(b"#RF\r")
@@ -220,7 +209,7 @@ def test_devsim_ctl_capture_prints_the_chunks_as_trace_lines(tmp_path: Path) -> 
         try:
             lines = collect_lines(printer.stdout)
             with ControlClient(seen["control"]) as control:
-                _wait(lambda: control.line("sers")["capturing"] or printer.poll() is not None, "capture running")
+                wait_until(lambda: control.line("sers")["capturing"] or printer.poll() is not None, "capture running", 30.0)
             with serial.Serial(seen["sers"].split()[-1], 9600, timeout=1) as host:
                 host.write(b"#RF\r")
             assert next_match(lines, lambda line: "H>D" in line, 30, "the chunk") == '0.000000 H>D 23 52 46 0d "#RF\\r"'
@@ -256,12 +245,12 @@ def test_the_extcap_writes_a_network_port_as_ipv4(tmp_path: Path, monkeypatch: p
         writer = threading.Thread(target=lambda: done.append(capture(interface, str(out))), daemon=True)
         writer.start()
         with ControlClient(address) as control:
-            _wait(lambda: control.line("pcd", "ether")["capturing"], "capture running")
+            wait_until(lambda: control.line("pcd", "ether")["capturing"], "capture running", 30.0)
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
             sock.settimeout(5)
             sock.sendto(REQUEST, ("127.0.0.1", transport.port))
             assert sock.recv(100) == REPLY
-        _wait(lambda: out.exists() and len(read_pcap(out)) == 2, "both packets in the file")
+        wait_until(lambda: out.exists() and len(read_pcap(out)) == 2, "both packets in the file", 30.0)
     finally:
         server.close_sync()  # the stream ends: the extcap closes its file
         runtime.stop()
