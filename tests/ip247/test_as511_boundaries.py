@@ -74,7 +74,7 @@ def test_a_transaction_step_by_step_and_in_chunks(fn: int, parameters: bytes, re
     got = b"".join(b"".join(chunked.feed(wire[i : i + size])) for i in range(0, len(wire), size))
     assert got == b"".join(answer for _sent, answer in steps)
     assert chunked.events == ([] if executed and not isinstance(reply, Refused) else
-                              ["refused_function"] if not executed else ["refused_parameters"])
+                              ["refused_function"] if not executed else [f"refused_parameters: {reply.reason}"])
 
 
 @pytest.mark.manual("§3.6.5", "a parameter block longer than the device takes is refused with DLE NAK")

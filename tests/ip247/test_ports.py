@@ -132,6 +132,9 @@ def test_generic_s5_services_read_programs_and_machine_data(devsim_device) -> No
         assert port.read(3) == b"\x16\x10\x03"
         port.write(b"\x10\x06\x01\x09\x10\x04")  # DB 9 does not exist
         assert port.read(2) == b"\x10\x15"
+    # why it was refused is in the device's event log (what `devsim ctl watch` and the MQTT events show)
+    events = module.runtime.call(lambda: [name for _t, name in module.device.events])
+    assert events[-1] == "pg refused_parameters: no such block"
 
 
 @pytest.mark.manual("§2.5", "machine data from the PLC side are checked by the IP247 only: an axis can hold "

@@ -69,6 +69,10 @@ def test_status_station_v14_v15_and_nak_v17(pcd: Station) -> None:
 
     pcd.send_raw(body + crc16(body).to_bytes(2, "big"))
     assert pcd.serial.read(6) == hexbytes(NAK)
+    # why the station said NAK is in its event log (what `devsim ctl watch` and the MQTT events show)
+    assert pcd.sim.runtime.call(lambda: pcd.sim.device.events[-1][1]) == "nak: command 47h is not supported"
+    assert pcd.call(0x06, bytes((64,)) + (0).to_bytes(2, "big")) == b"\x00\x01"  # 65 registers: NAK
+    assert pcd.sim.runtime.call(lambda: pcd.sim.device.events[-1][1]) == "nak: at most 32 registers per telegram"
 
 
 def test_stuffing_in_the_crc_v19(pcd: Station) -> None:

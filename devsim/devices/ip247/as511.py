@@ -75,12 +75,14 @@ class As511Link:
     ``service(fn, parameters)`` carries it out once the parameters are complete; a parameter block
     longer than ``most`` bytes (after DLE removal) gets DLE NAK instead, at its DLE EOT, and
     nothing is executed (spec §3.6.5); the bytes beyond are not kept.  ``events``
-    collects what a host developer may want to know (``refused_function``, ``abandoned`` …): the
-    last :data:`EVENTS_KEPT`."""
+    collects what a host developer may want to know (``refused_function``, ``refused_parameters:
+    <why>``, ``abandoned: <why>``): the last :data:`EVENTS_KEPT`; ``noted`` (if given) hears each
+    as it happens."""
 
     def __init__(self, known: Callable[[int], bool], service: Callable[[int, bytes], Reply],
-                 most: int = 1 << 16) -> None:
+                 most: int = 1 << 16, noted: Callable[[str], None] | None = None) -> None:
         self.known, self.service, self.most = known, service, most
+        self.noted = noted
         self.state = "idle"
         self.events: list[str] = []
         self._fn = 0
@@ -180,7 +182,7 @@ class As511Link:
         reply = Refused("too long") if len(self._block) > self.most else self.service(self._fn, bytes(self._block))
         if isinstance(reply, Refused):
             out.append(DLE_NAK)
-            self._note("refused_parameters")
+            self._note(f"refused_parameters: {reply.reason}")
             self.state = "idle"
             return
         out.append(DLE_ACK)
@@ -192,6 +194,8 @@ class As511Link:
         self.events.append(event)
         if len(self.events) > 2 * EVENTS_KEPT:
             del self.events[:-EVENTS_KEPT]
+        if self.noted is not None:
+            self.noted(event)
 
     def _abandon(self, why: str) -> None:
         self._note(f"abandoned: {why}")

@@ -28,7 +28,9 @@ class PgFace(Face):
 
     def __init__(self, model: Ip247Module, port: Port) -> None:
         super().__init__(model, port)
-        self.link = As511Link(self._known, self._service, MAX_PARAMETERS)
+        # (what the link refuses or abandons, and why, goes to the device's event log: watch, MQTT)
+        self.link = As511Link(self._known, self._service, MAX_PARAMETERS,
+                              lambda event: model.record_event(f"pg {event}"))
         self._timer: Timer | None = None
 
     @property

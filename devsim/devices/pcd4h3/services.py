@@ -51,7 +51,11 @@ def serve(plc: Pcd4, request: Request) -> Answer:
     """The answer to one request addressed to this station (or broadcast: executed, no answer);
     a command the station does not know gets NAK (§9.2)."""
     service = SERVICES.get(_token(request.command))
-    answer = NAK if service is None else service(plc, request)
+    if service is None:
+        plc.record_event(f"nak: command {_token(request.command)} is not supported")
+        answer: Answer = NAK
+    else:
+        answer = service(plc, request)
     return None if request.station == BROADCAST else answer
 
 
@@ -237,7 +241,10 @@ class Service(msgspec.Struct, frozen=True):
 
     def __call__(self, plc: Pcd4, request: Request) -> Answer:
         command = self.telegram.decode(request.parameters)
-        return NAK if isinstance(command, Bad) else self.run(plc, command)
+        if isinstance(command, Bad):
+            plc.record_event(f"nak: {command.reason}")  # (why, for the watch and the logs)
+            return NAK
+        return self.run(plc, command)
 
 
 def _reads(code: str, medium: str, most: int) -> Command[Service]:
