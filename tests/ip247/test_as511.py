@@ -56,6 +56,16 @@ def test_no_data_phase_and_refusals() -> None:
     assert not device.busy
 
 
+def test_whoever_listens_hears_each_event_as_it_happens() -> None:
+    """``noted`` (the PG face passes the device's event log) hears what ``events`` keeps, when it happens."""
+    heard: list[str] = []
+    device = As511Link(lambda fn: fn == 0x65, lambda fn, parameters: Refused("no such record"), noted=heard.append)
+    exchange(device, [("02", "10 06"), ("18", "10 15")])
+    assert heard == ["refused_function"]
+    exchange(device, [("02", "10 06"), ("65", "02"), ("10 06", "16 10 03"), ("10 06", ""), ("10 04", "10 15")])
+    assert heard == device.events == ["refused_function", "refused_parameters: no such record"]
+
+
 def test_vector_d_dle_doubling_both_ways() -> None:
     """§3.6.7 (d): program number 16 in a request is sent as 10 10; 4112 (00001010H) as
     00 00 10 10 10 10 in a response."""

@@ -89,6 +89,7 @@ def test_the_parameter_block_at_its_length_limit(most: int, off: int, dles: bool
     for sent, answer in steps:
         assert b"".join(link.feed(sent)) == answer
     assert calls == ([(0x61, parameters)] if len(parameters) <= most else [])
+    assert link.events == ([] if len(parameters) <= most else ["refused_parameters: too long"])
     assert not link.busy
 
 
