@@ -384,6 +384,7 @@ def test_a_varint_packed_struct_agrees() -> None:
     (lambda: wire._read_u32(b"\x00\x00\x00", 0), "four-byte integer cut short"),
     (lambda: wire._read_u32(b"\x00\x00\x00\x00\x00", 2), "four-byte integer cut short"),
     (lambda: wire._read_binary(b"\x00\x02a", 0), "string or binary data cut short"),
+    (lambda: wire._read_binary(b"\x00", 0), "two-byte integer cut short"),  # its length cut short
     (lambda: wire._read_string(b"\x00\x01\xff", 0), "a string that is not UTF-8"),
     (lambda: wire.parse_properties(b"\x02\x01", 0), "property list cut short"),
     (lambda: wire.parse_properties(b"\x01\x02\x00\x00\x00\x00", 0), "property list overruns its length"),
