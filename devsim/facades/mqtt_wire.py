@@ -323,7 +323,10 @@ class PacketReader:
             first = buffer[at]
             length = buffer[at + 1]
             start = at + 2
-            if length & 0x80:
+            if length & 0x80 and size - at > 2 and buffer[at + 2] < 0x80:  # two bytes: 128 … 16,383
+                length = (length & 0x7F) | (buffer[at + 2] << 7)  # (a request's, and most answers')
+                start = at + 3
+            elif length & 0x80:
                 try:
                     length, start = _read_varint(buffer, at + 1)
                 except MalformedPacket:
