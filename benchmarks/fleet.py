@@ -22,6 +22,13 @@ Starts a mosquitto (``$SYS`` every second) and a plant of ``--devices`` SERS dev
   (``/proc/PID/stat``) over the requests they answered in it; printed last: devsim's, the bare
   responders', and their ratio (medians over the rounds).
 
+``--instructions`` counts instead the instructions one server process (``--devices /
+--processes`` devices) executes per request, devsim's member and the bare aiomqtt responder
+(valgrind's cachegrind, ``PYTHONHASHSEED=0``): ``--warmup + --requests`` reads against
+``--warmup`` alone, each request sent after the last one's answer, so that each is a loop turn of
+its own, as at the benchmark's rate (one request every 4 ms per process).  A count the load of
+the machine does not move; the timed figures on a shared two-core machine swing by a third.
+
 Reports: round trips answered per second and the broker's own count of messages sent per second
 (``$SYS/broker/messages/sent``), round-trip p50/p99/max, late requests (an answer that had not
 arrived when the device's next read was due), and the CPU of mosquitto, of each server process
@@ -29,6 +36,7 @@ and of the client (% of one core).
 
     python benchmarks/fleet.py [--devices 100] [--processes 4] [--rate 10] [--seconds 10]
                                [--measure states|requests|both] [--rounds 1]
+    python benchmarks/fleet.py --instructions [--requests 1000] [--warmup 200]
 """
 
 from __future__ import annotations
@@ -60,9 +68,10 @@ def cpu_seconds(pid: int) -> float:
 
 
 def start_members(url: str, devices: int, processes: int, tmp: Path, *, states: float | None = None,
-                  ) -> list[tuple[subprocess.Popen[str], str]]:
+                  wrapper: tuple[str, ...] = ()) -> list[tuple[subprocess.Popen[str], str]]:
     """The parts as ``devsim up`` processes: fleet members, or (``states``: the MQTT facade's
-    sampling period) publishing their devices on the broker."""
+    sampling period) publishing their devices on the broker; ``wrapper``: the command that runs
+    each (valgrind)."""
     plant = tmp / "plant.yaml"
     mqtt = f"mqtt: {{url: '{url}', rate: {states}}}\n" if states is not None else ""
     plant.write_text(f"name: bench\n{mqtt}devices:\n" + "".join(
@@ -71,7 +80,7 @@ def start_members(url: str, devices: int, processes: int, tmp: Path, *, states: 
     members = []
     for part in range(processes):
         extra = [] if states is not None else ["--fleet", url]
-        proc = subprocess.Popen([sys.executable, "-m", "devsim", "up", str(plant), "--part", f"p{part}", *extra],
+        proc = subprocess.Popen([*wrapper, sys.executable, "-m", "devsim", "up", str(plant), "--part", f"p{part}", *extra],
                                 cwd=ROOT, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                                 stderr=subprocess.DEVNULL, text=True)
         members.append(proc)
@@ -278,7 +287,7 @@ async def measure_states(url: str, devices: list[str], rate: float, seconds: flo
 
 
 def start_bare(broker: Broker, url: str, devices: int, processes: int, *, states: bool = False,
-               ) -> list[tuple[subprocess.Popen[str], str]]:
+               wrapper: tuple[str, ...] = ()) -> list[tuple[subprocess.Popen[str], str]]:
     """The bare reference: ``processes`` aiomqtt processes (``benchmarks/fleet_bare.py``), the
     devices dealt to them as the plant deals them to its parts."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
@@ -286,7 +295,7 @@ def start_bare(broker: Broker, url: str, devices: int, processes: int, *, states
     for part in range(processes):
         names = [f"d{i:03d}" for i in range(devices) if i % processes == part]
         where = ["states", "127.0.0.1", str(broker.port)] if states else ["requests", url, f"bare-p{part}"]
-        proc = subprocess.Popen([sys.executable, str(ROOT / "benchmarks" / "fleet_bare.py"), *where, *names],
+        proc = subprocess.Popen([*wrapper, sys.executable, str(ROOT / "benchmarks" / "fleet_bare.py"), *where, *names],
                                 cwd=ROOT, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                                 stderr=subprocess.DEVNULL, text=True)
         started.append(proc)
@@ -300,12 +309,12 @@ def start_bare(broker: Broker, url: str, devices: int, processes: int, *, states
     return joined
 
 
-def stop_all(members: list[tuple[subprocess.Popen[str], str]]) -> None:
+def stop_all(members: list[tuple[subprocess.Popen[str], str]], timeout: float = 10.0) -> None:
     for proc, _name in members:
         proc.terminate()
     for proc, _name in members:
         try:
-            proc.wait(10)
+            proc.wait(timeout)
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
@@ -390,6 +399,61 @@ def run_one(args: argparse.Namespace, measure_what: str) -> None:
           f" ratio devsim / bare {ours / theirs:.2f}")
 
 
+async def ask_in_turn(url: str, devices: list[str], count: int) -> None:
+    """Read ``input.I1`` ``count`` times, the devices in turn, each request after the last one's
+    answer: every request is a loop turn of its own in the member, as at the benchmark's rate."""
+    async with AsyncFleetClient(url, timeout=120.0) as fleet:
+        await fleet.wait_for_devices(devices, timeout=600)
+        where = {name: fleet.serving(name) for name in devices}
+        for index in range(count):
+            name = devices[index % len(devices)]
+            await fleet.ask(where[name], "read", device=name, name="input.I1")
+
+
+def process_instructions(broker: Broker, side: str, devices: int, requests: int, tmp: Path) -> int:
+    """Instructions the one server process of ``side`` (``devsim`` or ``bare``, serving
+    ``devices``) executes from its start to its stop, asked ``requests`` reads in turn."""
+    log = tmp / f"valgrind-{side}-{requests}.log"
+    wrapper = ("valgrind", "--tool=cachegrind", "--cache-sim=no", "--cachegrind-out-file=/dev/null",
+               f"--log-file={log}")
+    url = f"{broker.url}/{side}-{requests}"  # each run its own fleet: no announcement of an earlier one
+    members: list[tuple[subprocess.Popen[str], str]] = []
+    try:
+        if side == "bare":
+            members = start_bare(broker, url, devices, 1, wrapper=wrapper)
+        else:
+            members = start_members(url, devices, 1, tmp, wrapper=wrapper)
+        asyncio.run(ask_in_turn(url, [f"d{i:03d}" for i in range(devices)], requests))
+    finally:
+        stop_all(members, timeout=120.0)
+    for line in log.read_text().splitlines():
+        if "I refs:" in line or "I   refs:" in line:
+            return int(line.rsplit(":", 1)[1].replace(",", "").strip())
+    raise SystemExit(f"no instruction count from valgrind for the {side} process")
+
+
+def count_instructions(args: argparse.Namespace) -> None:
+    """``--instructions``: instructions per request in one server process (``--devices /
+    --processes`` devices), devsim's and the bare responder's: ``--warmup + --requests`` reads
+    against ``--warmup`` alone, the same start and stop in both."""
+    os.environ["PYTHONHASHSEED"] = "0"
+    devices = max(1, args.devices // args.processes)
+    broker = Broker().start()
+    per_request: dict[str, float] = {}
+    try:
+        with tempfile.TemporaryDirectory(prefix="devsim-fleet-bench-") as tmp:
+            for side in ("devsim", "bare"):
+                counts = [process_instructions(broker, side, devices, n, Path(tmp))
+                          for n in (args.warmup, args.warmup + args.requests)]
+                per_request[side] = (counts[1] - counts[0]) / args.requests
+    finally:
+        broker.stop()
+    print(f"instructions per request in one server process ({devices} devices, {args.requests} reads in turn"
+          f" against none, after {args.warmup}): devsim {per_request['devsim'] / 1e3:.1f} k,"
+          f" bare aiomqtt {per_request['bare'] / 1e3:.1f} k")
+    print(f"instructions per request, devsim / bare: {per_request['devsim'] / per_request['bare']:.2f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--devices", type=int, default=100)
@@ -400,7 +464,14 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=1,
                         help="requests: devsim and the bare responders measured alternately this many times each")
     parser.add_argument("--nodelay", action="store_true", help="mosquitto's set_tcp_nodelay true")
+    parser.add_argument("--instructions", action="store_true",
+                        help="count instructions per request in one server process (valgrind) instead of timing")
+    parser.add_argument("--requests", type=int, default=1000, help="--instructions: reads counted")
+    parser.add_argument("--warmup", type=int, default=200, help="--instructions: reads before them, in both runs")
     args = parser.parse_args()
+    if args.instructions:
+        count_instructions(args)
+        return
     for what in ("states", "requests") if args.measure == "both" else (args.measure,):
         run_one(args, what)
 

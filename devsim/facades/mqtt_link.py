@@ -17,6 +17,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import socket
+import time
 from collections.abc import Callable
 
 from devsim.facades import mqtt_wire as wire
@@ -58,7 +59,7 @@ class MqttLink(asyncio.BufferedProtocol):
     # -- asyncio.Protocol ------------------------------------------------------------------
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         self._transport = transport  # type: ignore[assignment]
-        self._heard = self._loop.time()
+        self._heard = time.monotonic()
         sock = transport.get_extra_info("socket")
         if sock is not None and sock.family in (socket.AF_INET, socket.AF_INET6):
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # requests are small and waited for
@@ -70,7 +71,7 @@ class MqttLink(asyncio.BufferedProtocol):
         self.data_received(bytes(self._view[:nbytes]))
 
     def data_received(self, data: bytes) -> None:
-        self._heard = self._loop.time()
+        self._heard = time.monotonic()  # (what the loop's time() returns, without its call)
         self._reading = True
         try:
             packets = self._reader.feed(data)
@@ -153,9 +154,10 @@ class MqttLink(asyncio.BufferedProtocol):
         if self._flush_soon is not None:
             self._flush_soon.cancel()
             self._flush_soon = None
-        if self._out and self._transport is not None and not self.closed.done():
-            self._transport.write(b"".join(self._out))
-        self._out.clear()
+        out = self._out
+        if out and self._transport is not None and not self.closed.done():
+            self._transport.write(out[0] if len(out) == 1 else b"".join(out))
+        out.clear()
 
     def abort(self) -> None:
         """Close without a DISCONNECT: the broker sends the will."""
@@ -173,7 +175,8 @@ class MqttLink(asyncio.BufferedProtocol):
 
     # -- inside ----------------------------------------------------------------------------
     def _send(self, packet: bytes) -> None:
-        self._raise_if_lost()
+        if self.closed.done():
+            self._raise_if_lost()
         self._out.append(packet)
         if self._flush_soon is None and not self._reading:
             self._flush_soon = self._loop.call_soon(self.flush)
@@ -216,7 +219,7 @@ class MqttLink(asyncio.BufferedProtocol):
 
     def _ping(self) -> None:
         loop = self._loop
-        if loop.time() - self._heard > 1.5 * self.keepalive:
+        if time.monotonic() - self._heard > 1.5 * self.keepalive:
             self._lose(LinkLost(f"the broker was silent for {1.5 * self.keepalive:g} s"))
             return
         with contextlib.suppress(LinkLost):

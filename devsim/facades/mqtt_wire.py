@@ -148,7 +148,7 @@ _NO_PROPERTIES = b"\x00"
 def publish(topic: str, payload: bytes, qos: int = 0, retain: bool = False, packet_id: int = 0,
             props: bytes = _NO_PROPERTIES) -> bytes:
     """PUBLISH (3.3); ``props`` from :func:`properties` (``b""`` for MQTT 3.1.1)."""
-    head = _topic(topic) + (_packet_id(packet_id) if _qos(qos) else b"") + props
+    head = _topic(topic) + (_packet_id(packet_id) if qos and _qos(qos) else b"") + props  # (QoS 0: nothing to check)
     body = len(head) + len(payload)
     return b"".join((_ONE_BYTE[0x30 | (qos << 1) | (1 if retain else 0)], _varint(body), head, payload))
 
@@ -195,17 +195,25 @@ def _read_u16(data: bytes, at: int) -> tuple[int, int]:
     return (data[at] << 8) | data[at + 1], at + 2
 
 
-def _read_binary(data: bytes, at: int) -> tuple[bytes, int]:
-    size, at = _read_u16(data, at)
-    if at + size > len(data):
+def _binary_end(data: bytes, at: int) -> int:
+    """Where the string or binary data at ``at`` (its two-byte length, then its bytes) ends."""
+    if at + 2 > len(data):
+        raise MalformedPacket("two-byte integer cut short")
+    end = at + 2 + ((data[at] << 8) | data[at + 1])
+    if end > len(data):
         raise MalformedPacket("string or binary data cut short")
-    return data[at:at + size], at + size
+    return end
+
+
+def _read_binary(data: bytes, at: int) -> tuple[bytes, int]:
+    end = _binary_end(data, at)
+    return data[at + 2:end], end
 
 
 def _read_string(data: bytes, at: int) -> tuple[str, int]:
-    raw, at = _read_binary(data, at)
+    end = _binary_end(data, at)
     try:
-        return raw.decode("utf-8"), at
+        return str(data[at + 2:end], "utf-8"), end
     except UnicodeDecodeError:
         raise MalformedPacket("a string that is not UTF-8") from None
 
@@ -315,7 +323,10 @@ class PacketReader:
             first = buffer[at]
             length = buffer[at + 1]
             start = at + 2
-            if length & 0x80:
+            if length & 0x80 and size - at > 2 and buffer[at + 2] < 0x80:  # two bytes: 128 … 16,383
+                length = (length & 0x7F) | (buffer[at + 2] << 7)  # (a request's, and most answers')
+                start = at + 3
+            elif length & 0x80:
                 try:
                     length, start = _read_varint(buffer, at + 1)
                 except MalformedPacket:

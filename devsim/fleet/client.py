@@ -38,6 +38,8 @@ import uuid
 from collections.abc import Iterable, Iterator
 from typing import Any
 
+import msgspec
+
 from devsim.facades.mqtt_link import LinkLost, MqttLink
 from devsim.facades.mqtt_wire import Publish, Will
 from devsim.fleet.member import connect, parse_announcement
@@ -50,6 +52,7 @@ __all__ = ["AsyncFleetClient", "FleetClient"]
 
 #: Ops whose ``device`` only routes them: every process, or the one serving ``device``.
 TIME_OPS = tuple(row.token for row in CONTROL if routed_by_device(row.token))
+_json_decode = msgspec.json.Decoder().decode
 
 
 class AsyncFleetClient:
@@ -63,6 +66,7 @@ class AsyncFleetClient:
         self.processes: dict[str, dict[str, Any]] = {}  # process -> its latest announcement
         self._client: MqttLink | None = None
         self._marker = self.topics.sync(self.id)
+        self._reply_topic = self.topics.reply(self.id)  # compared with every message's topic
         self._pending: dict[str, asyncio.Future[dict[str, Any]]] = {}
         self._asked: dict[str, tuple[str, str]] = {}  # request id -> (the process asked, the op)
         self._changed = asyncio.Event()
@@ -74,7 +78,7 @@ class AsyncFleetClient:
 
     @property
     def reply_topic(self) -> str:
-        return self.topics.reply(self.id)
+        return self._reply_topic
 
     async def open(self) -> AsyncFleetClient:
         gone = Will(self.topics.watching(self.id), b"", qos=1, retain=True)  # clears a presence
@@ -118,7 +122,7 @@ class AsyncFleetClient:
 
     def _received(self, message: Publish) -> None:
         topic = message.topic
-        if topic == self.reply_topic:
+        if topic == self._reply_topic:
             self._answer(message.payload)
         elif topic in self.watches:
             self._item(self.watches[topic], message.payload)
@@ -147,9 +151,12 @@ class AsyncFleetClient:
 
     def _answer(self, payload: Any) -> None:
         try:
-            data = json.loads(payload)
-        except (ValueError, RecursionError, TypeError):
-            return
+            data = _json_decode(payload)
+        except (msgspec.DecodeError, RecursionError, TypeError):
+            try:  # what msgspec refuses and json takes (NaN)
+                data = json.loads(payload)
+            except (ValueError, RecursionError, TypeError):
+                return
         if isinstance(data, dict):
             future = self._pending.pop(str(data.get("id")), None)
             if future is not None and not future.done():

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import functools
 import json
 import os
 import socket
@@ -148,10 +149,11 @@ class FleetMember:
         self._closing = False
         self._replies: set[str] = set()  # reply topics found allowed
         self.streams = StreamServer(runtime, self.topics, self.process)
+        self._request_topic = self.topics.request(self.process)  # compared with every message's topic
 
     @property
     def request_topic(self) -> str:
-        return self.topics.request(self.process)
+        return self._request_topic
 
     def announcement(self, online: bool = True) -> dict[str, Any]:
         devices = ops.run(self.runtime, Devices())
@@ -203,7 +205,7 @@ class FleetMember:
                 )
 
     async def _announce(self, link: MqttLink) -> None:
-        link.on_message = lambda message: self._received(link, message)
+        link.on_message = functools.partial(self._received, link)
         await link.subscribe(self.request_topic, qos=0)
         await self.streams.subscribe(link)
         await link.publish_acked(self.topics.announcement(self.process), _json_encode(self.announcement(True)),
@@ -244,14 +246,16 @@ class FleetMember:
     def _received(self, link: MqttLink, message: Publish) -> None:
         """A message from the broker, in the step that read it: a request is answered into the
         link's write of this loop turn."""
-        if message.topic != self.request_topic:
+        if message.topic != self._request_topic:
             self.streams.handle(message.topic, message.payload)
             return
         answer = self.answer(message.payload, message.response_topic, message.correlation)
         if answer is not None:
             topic, payload, correlation = answer
-            with contextlib.suppress(LinkLost):  # a lost connection shows in the serving loop
-                link.publish(topic, payload, correlation=correlation)
+            try:
+                link.publish(topic, payload, 0, False, correlation)
+            except LinkLost:  # a lost connection shows in the serving loop
+                pass
 
     def answer(self, payload: Any, reply_to: str | None = None,
                correlation: bytes | None = None) -> tuple[str, bytes, bytes | None] | None:
@@ -281,9 +285,11 @@ class FleetMember:
         return str(reply_to), encode_answer(response), correlation
 
     def _reply_allowed(self, topic: Any) -> bool:
+        if type(topic) is not str:  # (a list or an object from the JSON: no topic, and no set member)
+            return False
         if topic in self._replies:  # one reply topic per client, asked again and again
             return True
-        allowed = (isinstance(topic, str) and topic.startswith(f"{self.topics.root}/client/")
+        allowed = (topic.startswith(f"{self.topics.root}/client/")
                    and not any(c in topic for c in "+#\x00") and len(topic) < 1024)
         if allowed:
             if len(self._replies) >= 1024:

@@ -267,8 +267,10 @@ def decode(op: Any, fields: Mapping[str, Any]) -> rq.ControlRequest:
     """The typed request for ``op`` from the fields of a JSON request; :class:`BadRequest` when
     the op is unknown, a field unknown, of the wrong type, or a needed one missing.  Requests are
     records (frozen): one made from the same fields before is given again."""
-    try:
-        key: tuple[Any, ...] | None = (op, *((k, type(v), v) for k, v in fields.items() if k != "id"))
+    given = dict(fields)
+    given.pop("id", None)
+    try:  # (built in C: a generator here cost as much as the read)
+        key: tuple[Any, ...] | None = (op, tuple(given.items()), tuple(map(type, given.values())))
         found = _DECODED.get(key)  # type: ignore[arg-type]
     except TypeError:  # a list or an object among the values: made each time
         key, found = None, None

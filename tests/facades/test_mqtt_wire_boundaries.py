@@ -356,6 +356,13 @@ def test_a_remaining_length_still_arriving_waits_and_one_of_five_bytes_is_malfor
     assert reader.feed(b"\x01") == []
 
 
+def test_a_two_byte_remaining_length_cut_after_its_first_byte_waits_after_a_whole_packet() -> None:
+    body = bytes(range(128))
+    reader = wire.PacketReader()
+    assert reader.feed(b"\xd0\x00" + b"\x30\x80") == [(13, 0, b"")]  # 128: 0x80 0x01, the 0x01 still to come
+    assert reader.feed(b"\x01" + body) == [(3, 0, body)]
+
+
 @given(hs.lists(hs.tuples(hs.sampled_from([0x30, 0x31, 0x40, 0x90, 0xB0, 0xD0, 0xE0]), hs.binary(max_size=200)),
                 max_size=5), hs.lists(hs.integers(0, 1200), max_size=4))
 def test_a_stream_cut_anywhere_gives_its_packets(packets: list[tuple[int, bytes]], cuts: list[int]) -> None:
@@ -384,6 +391,7 @@ def test_a_varint_packed_struct_agrees() -> None:
     (lambda: wire._read_u32(b"\x00\x00\x00", 0), "four-byte integer cut short"),
     (lambda: wire._read_u32(b"\x00\x00\x00\x00\x00", 2), "four-byte integer cut short"),
     (lambda: wire._read_binary(b"\x00\x02a", 0), "string or binary data cut short"),
+    (lambda: wire._read_binary(b"\x00", 0), "two-byte integer cut short"),  # its length cut short
     (lambda: wire._read_string(b"\x00\x01\xff", 0), "a string that is not UTF-8"),
     (lambda: wire.parse_properties(b"\x02\x01", 0), "property list cut short"),
     (lambda: wire.parse_properties(b"\x01\x02\x00\x00\x00\x00", 0), "property list overruns its length"),

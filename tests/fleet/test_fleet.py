@@ -147,6 +147,22 @@ def test_mosquitto_pub_request_answered(fleet: dict[str, Member], broker: Broker
         assert correlation == "corr-7"
 
 
+def test_a_reply_topic_that_is_no_string_is_not_answered_and_keeps_the_connection(
+        fleet: dict[str, Member], broker: Broker, tmp_path: Path) -> None:
+    """A ``reply_to`` that is a list or an object names no topic: the request is executed and not
+    answered, and the member keeps its connection (it had raised out of the read and dropped it)."""
+    member = fleet["cell-c"]
+    topic = f"devsim-fleet/process/{member.process}/request"
+    for reply_to in (["devsim-fleet/client/x/reply"], {"topic": "devsim-fleet/client/x/reply"}):
+        request = {"id": "odd", "op": "read", "device": "robot", "name": "input.I1", "reply_to": reply_to}
+        pub = mosquitto("mosquitto_pub", "-p", str(broker.port), "-t", topic, "-m", json.dumps(request),
+                        log=tmp_path / "pub.log")
+        assert pub.proc.wait(20) == 0
+    with FleetClient(broker.url, timeout=20) as client:  # its request arrives after those, on the same connection
+        assert isinstance(client.read("robot", "input.I1"), bool)
+    assert "lost" not in member.log.read_text()
+
+
 def test_a_name_already_in_the_fleet_is_refused(fleet: dict[str, Member], broker: Broker, plant_file: Path,
                                                 tmp_path: Path) -> None:
     with pytest.raises(AssertionError, match="already in the fleet"):
