@@ -5,6 +5,7 @@ remembered poll in one step answers, counts and holds what one that does not wou
 
 from __future__ import annotations
 
+import msgspec
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -177,3 +178,15 @@ def test_a_remembered_poll_is_answered_without_the_decoder_and_forgotten_at_powe
 def test_the_answers_by_status_byte_are_the_k_answers(address: int) -> None:
     assert status_answers(address) == tuple(encode(k_frame(tables.k_from_status(status, False), address, None))
                                             for status in range(256))
+
+
+def test_the_line_settings_follow_the_dil_rate_at_power_on_and_stay_the_same_object() -> None:
+    device = Gms96Device(clock=VirtualClock(), config={"boot_time": 0})
+    settings = device.serial_settings
+    assert (settings.baudrate, settings.bytesize, settings.parity, settings.stopbits) == (9600, 8, "E", 1)
+    device.model.power_cycle()
+    assert device.serial_settings is settings  # (the line compares a host's settings with it once)
+    device.set("dil.baud", 38400)
+    assert device.serial_settings is settings  # read at the next power-on (manual §2.2)
+    device.model.power_cycle()
+    assert device.serial_settings == msgspec.structs.replace(settings, baudrate=38400)

@@ -49,6 +49,10 @@ class Gms96Face(Face):
     """One card's end of an RS422/485 line (DIN 19244 FT1.2, 8E1; manual §2.3, spec §3.7)."""
 
     model: Gms96Card
+    #: 8E1 at the DIL switches' rate, read at power-on: a plain attribute, the same object while
+    #: the rate stands (the line compares the host's settings with it once, not at every chunk,
+    #: and reads it twice per poll)
+    serial_settings: SerialSettings = SerialSettings(9600, 8, "E", 1)
 
     def __init__(self, model: Gms96Card, port: Port) -> None:
         super().__init__(model, port)
@@ -59,24 +63,23 @@ class Gms96Face(Face):
         )
         #: the host's bytes go straight to the link (no call of this face's own on a poll's path)
         self.feed = self.link.feed
-        #: the answers to #1 without a message, by status byte, for the card's address now
-        self._k_answers = status_answers(model.address)
+        self._k_answers: tuple[bytes, ...] = ()  # the answers to #1 without a message, by status byte
+        self._read_dil()
         model.listen("power_on", self._power_on)
-        self._settings: SerialSettings | None = None
 
     def _power_on(self) -> None:
-        """The link starts afresh; the address may be another (DIL switches read at power-on)."""
+        """The link starts afresh; the address and the rate may be others (DIL switches)."""
         self.link.reset()
-        self._k_answers = status_answers(self.model.address)
+        self._read_dil()
 
-    @property
-    def serial_settings(self) -> SerialSettings:
-        """8E1 at the DIL switches' rate; the same object while the rate stands, so that the line
-        compares the host's settings with it once, not at every chunk."""
-        settings, baud = self._settings, self.model.dil.baud
-        if settings is None or settings.baudrate != baud:
-            settings = self._settings = SerialSettings(baud, 8, "E", 1)
-        return settings
+    def _read_dil(self) -> None:
+        """What the DIL switches read at power-on set (manual §2.2): the answers to #1 without a
+        message for the card's address, by status byte, and the line settings at its rate."""
+        model = self.model
+        self._k_answers = status_answers(model.address)
+        baud = int(model.dil.baud)
+        if self.serial_settings.baudrate != baud:
+            self.serial_settings = SerialSettings(baud, 8, "E", 1)
 
     def close(self) -> None:
         self.link.close()
