@@ -85,6 +85,7 @@ class Gms96Face(Face):
         self.link.close()
 
     def feed(self, data: bytes) -> None:
+        """The host's bytes to the link (each face has the link's own ``feed`` in its place)."""
         self.link.feed(data)
 
     def host_disconnected(self) -> None:

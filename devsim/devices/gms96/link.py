@@ -35,7 +35,8 @@ from devsim.devices.gms96 import codec
 
 class LinkCard(Protocol):
     """What the link asks of its card (manual §2.2, §2.3): its address and protocol version (DIL switch, read at
-    power-on), whether it listens, and an event for the log."""
+    power-on), whether it listens (and until when it is silent, and whether it is powered), and an event for
+    the log."""
 
     @property
     def address(self) -> int: ...
