@@ -118,7 +118,7 @@ def link_run(steps: list[tuple[str, int | float]], protocol: str, remember: bool
             elif kind == "message":
                 model.image.post_message(int(value))
             else:
-                model._power_off()
+                model.power(False)  # (the supply off: the card hears nothing)
             out.append((link.frames, dict(link.errors), link.error_hold, link.last_fcb, link.decoder.pending))
         return out
 
