@@ -20,7 +20,11 @@ poll (valgrind's cachegrind; a process polled N times against one polled none, t
 before both, ``PYTHONHASHSEED=0``): what the machine's load does not move, the servers' own work
 without the kernel's.
 
-    python benchmarks/latency.py [--n 5000] [--runs 10] [--kind sers|stub] [--no-gms96] [--instructions]
+``--calls`` lists instead the functions each server process calls per GMS96 status poll (Python
+functions by file, line and name; C functions by name), counted with ``sys.setprofile`` the same
+way (N polls against none): where the instructions go, load-independent too.
+
+    python benchmarks/latency.py [--n 5000] [--runs 10] [--kind sers|stub] [--no-gms96] [--instructions|--calls]
 
 ``--kind stub`` uses a tiny stand-in device defined here (for checking the plumbing).
 """
@@ -335,6 +339,82 @@ def poll_instructions(n: int) -> int:
     return 0
 
 
+#: Run as ``python -c COUNTER FILE (-m MODULE | SCRIPT) ARGS``: the program with every call counted
+#: (``sys.setprofile``, in every thread), the counts written to FILE at exit (``count<TAB>name``).
+#: (``-c`` puts the working directory first on ``sys.path``, as ``-m`` does.)
+COUNTER = """
+import atexit, collections, os, runpy, sys, threading
+out, argv, root = sys.argv[1], sys.argv[2:], os.getcwd()
+calls = collections.Counter()
+
+def where(path):
+    path = os.path.abspath(path)
+    return os.path.relpath(path, root) if path.startswith(root + os.sep) else os.sep.join(path.split(os.sep)[-2:])
+
+def profile(frame, event, arg):
+    if event == "call":
+        code = frame.f_code
+        calls[f"{where(code.co_filename)}:{code.co_firstlineno} {code.co_name}"] += 1
+    elif event == "c_call":
+        calls[f"(C) {getattr(arg, '__qualname__', arg)}"] += 1
+
+def write():
+    sys.setprofile(None)
+    with open(out, "w") as fh:
+        fh.writelines(f"{count}\\t{name}\\n" for name, count in calls.items())
+
+atexit.register(write)
+sys.setprofile(profile)
+threading.setprofile(profile)
+if argv[0] == "-m":
+    sys.argv = [argv[1], *argv[2:]]
+    runpy.run_module(argv[1], run_name="__main__", alter_sys=True)
+else:
+    sys.argv = argv
+    runpy.run_path(argv[0], run_name="__main__")
+"""
+
+
+def process_calls(server: list[str], polls: int, warmup: int = 100) -> dict[str, int]:
+    """The calls the process ``server`` (``python ARGS``) makes in all, polled with the GMS96
+    status poll ``warmup + polls`` times, then stopped."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "calls.tsv")
+        proc, path = _spawn([sys.executable, "-c", COUNTER, out, *server[1:]])
+        try:
+            round_trips(path, 9600, polls, warmup=warmup, query=GMS96_POLL, done=frame_complete)
+        finally:
+            _stop(proc)
+            proc.wait(60)
+        counts: dict[str, int] = {}
+        with open(out) as fh:
+            for line in fh:
+                count, name = line.rstrip("\n").split("\t", 1)
+                counts[name] = int(count)
+        return counts
+
+
+def poll_calls(n: int) -> int:
+    """The calls per GMS96 status poll of ``devsim run gms96`` and of the echo server."""
+    with tempfile.TemporaryDirectory() as tmp:
+        config = os.path.join(tmp, "gms96.yaml")
+        with open(config, "w") as fh:
+            fh.write("boot_time: 0\n")
+        servers = {
+            "devsim run gms96": [sys.executable, "-m", "devsim", "run", "gms96", "--pty", "--config", config],
+            "echo": [sys.executable, os.path.abspath(__file__), "--serve-echo", "5", "--binary"],
+        }
+        for name, server in servers.items():
+            polled, idle = process_calls(server, n), process_calls(server, 0)
+            per_poll = {call: (count - idle.get(call, 0)) / n for call, count in polled.items()}
+            shown = sorted(((count, call) for call, count in per_poll.items() if count >= 0.5), reverse=True)
+            python = sum(count for count, call in shown if not call.startswith("(C)"))
+            print(f"calls per GMS96 status poll in {name} ({n} polls against none): {python:.0f} Python functions")
+            for count, call in shown:
+                print(f"  {count:5.2f}  {call}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=5000, help="timed queries per target (default 5000)")
@@ -345,6 +425,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--binary", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--instructions", action="store_true",
                         help="count instructions per GMS96 status poll (valgrind) instead of timing")
+    parser.add_argument("--calls", action="store_true",
+                        help="list the calls per GMS96 status poll in each server instead of timing")
     args = parser.parse_args(argv)
     if args.serve_echo is not None:
         signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
@@ -352,6 +434,8 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if args.instructions:
         return poll_instructions(args.n)
+    if args.calls:
+        return poll_calls(args.n)
 
     device_proc, device_path = start_device(args.kind)
     try:

@@ -327,7 +327,7 @@ class PtyTransport(Transport):
             return
         if not self._packet:
             self._check_settings()  # (in packet mode every change is signalled: see above)
-        self._checked_at = self._loop.time() if self._loop is not None else 0.0
+            self._checked_at = self._loop.time() if self._loop is not None else 0.0
         self._endpoint.feed(data)
 
     # -- device → host ----------------------------------------------------------------------
@@ -339,7 +339,10 @@ class PtyTransport(Transport):
             # an answer right after the host's bytes needs no second look at its termios
             self._check_settings()
         if not self._out and not self._writing:
-            n = _write_some(self._master, data)  # the common case: nothing queued – straight out
+            try:  # the common case: nothing queued – straight out (_write_some without its call)
+                n = os.write(self._master, data)
+            except OSError as exc:
+                n = _nothing_written(exc)
             if n == len(data):
                 return
             data = data[n:]
@@ -386,12 +389,15 @@ def _write_some(fd: int, data: bytes | bytearray) -> int:
     """Write what the pty master takes now; 0 when it takes nothing (full, or no slave)."""
     try:
         return os.write(fd, data)
-    except (BlockingIOError, InterruptedError):
-        return 0
     except OSError as exc:
-        if exc.errno in (errno.EIO, errno.EAGAIN):
-            return 0
-        raise
+        return _nothing_written(exc)
+
+
+def _nothing_written(exc: OSError) -> int:
+    """0 for a write the master refused for now (full, interrupted, no slave); else raises."""
+    if isinstance(exc, (BlockingIOError, InterruptedError)) or exc.errno in (errno.EIO, errno.EAGAIN):
+        return 0
+    raise exc
 
 
 def _packet_mode(master: int) -> bool:

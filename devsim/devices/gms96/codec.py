@@ -188,7 +188,8 @@ class FrameDecoder:
         self.accept_single = accept_single
         self._starts = frozenset({START_SHORT, START_LONG} | ({ACK, NACK_CHAR} if accept_single else set()))
         self._start_re: re.Pattern[bytes] | None = None
-        self._buf = bytearray()
+        #: the bytes of a partial frame held, waiting for the rest (:attr:`pending` of them)
+        self.partial = bytearray()
         self._last = 0.0
         #: chunks that were one whole frame and nothing else, with that frame (frames are frozen:
         #: a host's repeated poll is decoded once); at most :data:`_WHOLE_FRAMES` of them
@@ -197,31 +198,31 @@ class FrameDecoder:
     @property
     def pending(self) -> int:
         """Number of bytes of a partial frame held (waiting for the rest)."""
-        return len(self._buf)
+        return len(self.partial)
 
     def reset(self) -> bytes:
         """Forget a partial frame without reporting it; returns the bytes dropped."""
-        dropped = bytes(self._buf)
-        self._buf.clear()
+        dropped = bytes(self.partial)
+        self.partial.clear()
         return dropped
 
     def expire(self, now: float) -> list[FrameError]:
         """Discard a partial frame whose last byte is older than ``char_timeout``."""
-        if self._buf and now - self._last > self.char_timeout:
-            stale = bytes(self._buf)
-            self._buf.clear()
+        if self.partial and now - self._last > self.char_timeout:
+            stale = bytes(self.partial)
+            self.partial.clear()
             return [FrameError("timeout", stale)]
         return []
 
     def feed(self, data: bytes, now: float) -> list[Frame | FrameError]:
         """Bytes received at time ``now`` (seconds, any monotonic origin); returns the frames
         and errors they complete, in order.  Never raises on any input."""
-        if self._buf:
+        if self.partial:
             out: list[Frame | FrameError] = list(self.expire(now))
             if not data:
                 return out
-            work = bytes(self._buf) + bytes(data)
-            self._buf.clear()
+            work = bytes(self.partial) + bytes(data)
+            self.partial.clear()
         else:  # nothing pending (a host's whole frame): no copies
             if not data:
                 return []
@@ -247,7 +248,7 @@ class FrameDecoder:
                 continue
             result = self._parse(work, i)
             if result is _INCOMPLETE:
-                self._buf += work[i:]
+                self.partial += work[i:]
                 break
             if isinstance(result, str):  # an error at this start byte: resynchronise
                 j = self._next_start(work, i + 1)

@@ -13,6 +13,8 @@ itself: immediate commands, downloads), :data:`P_ON_RECEIPT` (``p`` downloads, `
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import lru_cache
+from types import MethodType
 
 import msgspec
 
@@ -21,7 +23,7 @@ from devsim.core.kit import Command, Table
 from devsim.devices.gms96 import codec, tables
 from devsim.devices.gms96.commands import QUEUED_COMMANDS
 from devsim.devices.gms96.executor import Cmd
-from devsim.devices.gms96.link import Link
+from devsim.devices.gms96.link import Link, ShortHandler
 from devsim.devices.gms96.model import Gms96Card
 
 __all__ = ["ON_RECEIPT", "P_ON_RECEIPT", "SHORT_COMMANDS", "T_QUERIES", "Gms96Face", "Letter"]
@@ -47,41 +49,57 @@ class Gms96Face(Face):
     """One card's end of an RS422/485 line (DIN 19244 FT1.2, 8E1; manual §2.3, spec §3.7)."""
 
     model: Gms96Card
+    #: 8E1 at the DIL switches' rate, read at power-on: a plain attribute, the same object while
+    #: the rate stands (the line compares the host's settings with it once, not at every chunk,
+    #: and reads it twice per poll)
+    serial_settings: SerialSettings = SerialSettings(9600, 8, "E", 1)
 
     def __init__(self, model: Gms96Card, port: Port) -> None:
         super().__init__(model, port)
         self.link = Link(
             card=model, clock=model.clock, options=model.cfg.link, baud=lambda: int(model.dil.baud),
-            errors=model.link_errors, short_command=self.short_command, letter_command=self.letter_command,
+            errors=model.link_errors, short_handler=self.short_handler, letter_command=self.letter_command,
             write=port.send,
         )
-        model.listen("power_on", self.link.reset)
-        self._settings: SerialSettings | None = None
+        #: the host's bytes go straight to the link (no call of this face's own on a poll's path)
+        self.feed = self.link.feed
+        self._k_answers: tuple[bytes, ...] = ()  # the answers to #1 without a message, by status byte
+        self._read_dil()
+        model.listen("power_on", self._power_on)
 
-    @property
-    def serial_settings(self) -> SerialSettings:
-        """8E1 at the DIL switches' rate; the same object while the rate stands, so that the line
-        compares the host's settings with it once, not at every chunk."""
-        settings, baud = self._settings, self.model.dil.baud
-        if settings is None or settings.baudrate != baud:
-            settings = self._settings = SerialSettings(baud, 8, "E", 1)
-        return settings
+    def _power_on(self) -> None:
+        """The link starts afresh; the address and the rate may be others (DIL switches)."""
+        self.link.reset()
+        self._read_dil()
+
+    def _read_dil(self) -> None:
+        """What the DIL switches read at power-on set (manual §2.2): the answers to #1 without a
+        message for the card's address, by status byte, and the line settings at its rate."""
+        model = self.model
+        self._k_answers = status_answers(model.address)
+        baud = int(model.dil.baud)
+        if self.serial_settings.baudrate != baud:
+            self.serial_settings = SerialSettings(baud, 8, "E", 1)
 
     def close(self) -> None:
         self.link.close()
 
     def feed(self, data: bytes) -> None:
+        """The host's bytes to the link (each face has the link's own ``feed`` in its place)."""
         self.link.feed(data)
 
     def host_disconnected(self) -> None:
         """A partial frame of a host that left is dropped by the character timeout."""
 
-    def short_command(self, number: int, ext: bytes) -> bytes | None:
-        """Kurzsatz #0, #1, #8, #9 (manual §2.3.2), looked up in :data:`SHORT_COMMANDS`."""
+    def short_handler(self, number: int) -> ShortHandler:
+        """The handler of Kurzsatz #0, #1, #8, #9 (manual §2.3.2), looked up in
+        :data:`SHORT_COMMANDS`; any other number: :meth:`unknown_short`."""
         handler = _SHORT_BY_NUMBER.get(number)
-        if handler is None:
-            return ACK if self.model.cfg.link.unknown_short_command_reply == "ack" else None
-        return handler(self, ext)
+        return self.unknown_short if handler is None else MethodType(handler, self)
+
+    def unknown_short(self, ext: bytes) -> bytes | None:
+        """A Kurzsatz number the card does not know: E5h or nothing (``link.unknown_short_command_reply``)."""
+        return ACK if self.model.cfg.link.unknown_short_command_reply == "ack" else None
 
     def letter_command(
         self, cmd: str, params: tuple[int, int, int], count: int, raw: bytes, *, deferred: Callable[[bytes], None]
@@ -276,8 +294,10 @@ class Gms96Face(Face):
     def status_frame(self, ext: bytes) -> bytes:
         """#1: the status Kurzsatz (K byte, and the MB4 message in the address extension)."""
         m = self.model
-        k = tables.k_from_status(m.status(), False)
-        return codec.k_bytes(k, m.address, m.image.take_message())
+        status = m.status()
+        if not status & _MESSAGE:  # (MB4 is 0: the K byte alone, looked up by the status byte)
+            return self._k_answers[status]
+        return codec.k_bytes(tables.k_from_status(status, False), m.address, m.image.take_message())
 
     def spindle_rpm(self, ext: bytes) -> bytes:
         """#8: the spindle speed for G95."""
@@ -291,6 +311,17 @@ class Gms96Face(Face):
         self.model.feed.o2_value = None
         self.model.speed_changed()
         return ACK
+
+
+_MESSAGE = tables.STATUS_BITS["MESSAGE"]
+
+
+@lru_cache(maxsize=32)
+def status_answers(address: int) -> tuple[bytes, ...]:
+    """The answer to #1 of a card at ``address`` with no message in MB4, by the status byte of
+    ``T3;0`` (spec §4.3.3): ``k_bytes(k_from_status(status, False), address, None)``, made once
+    per address and shared by every card there."""
+    return tuple(codec.k_bytes(tables.k_from_status(status, False), address, None) for status in range(256))
 
 
 #: Kurzsatz numbers (manual §2.3.2, spec §3.7).

@@ -17,6 +17,10 @@ arriving earlier — the rest of the chunk that held the error, and chunks back-
 it — is discarded without reply, and each such byte restarts the idle interval.  A partial frame
 dropped by the inter-character timeout arms nothing: the line has already been idle for the
 timeout.
+
+A host's poll is the same few bytes again and again: a chunk that was one whole Kurzsatz to this
+card is remembered, and when it comes again between frames (nothing pending, no error held, the
+card listening) it is answered in one step, without the decoder (what it would find is known).
 """
 
 from __future__ import annotations
@@ -31,7 +35,8 @@ from devsim.devices.gms96 import codec
 
 class LinkCard(Protocol):
     """What the link asks of its card (manual §2.2, §2.3): its address and protocol version (DIL switch, read at
-    power-on), whether it listens, and an event for the log."""
+    power-on), whether it listens (and until when it is silent, and whether it is powered), and an event for
+    the log."""
 
     @property
     def address(self) -> int: ...
@@ -39,14 +44,22 @@ class LinkCard(Protocol):
     def e_version(self) -> bool: ...
     @property
     def silent(self) -> bool: ...
+    @property
+    def silent_until(self) -> float: ...
+    @property
+    def powered(self) -> bool: ...
     def silent_at(self, now: float) -> bool: ...
     def record_event(self, name: str) -> None: ...
 
 
-__all__ = ["Link", "NO_REPLY"]
+__all__ = ["Link", "NO_REPLY", "ShortHandler"]
+
+#: What a Kurzsatz command does with its AE octets; returns the reply (``None``: no reply).
+ShortHandler = Callable[[bytes], "bytes | None"]
 
 NO_REPLY = b""
 IDLE_BITS = 33  #: FT1.2 R4 minimum line idle after an error, in bit times
+_POLLS = 16  #: distinct whole-Kurzsatz chunks a link remembers (a host polls with a few)
 
 
 class Link:
@@ -60,7 +73,7 @@ class Link:
         options: Settings,
         baud: Callable[[], int],
         errors: dict[str, int],
-        short_command: Callable[[int, bytes], bytes | None],
+        short_handler: Callable[[int], ShortHandler],
         letter_command: Callable[..., bytes | None],
         write: Callable[[bytes], None],
     ) -> None:
@@ -68,7 +81,7 @@ class Link:
         self.clock = clock
         self.options = options  # the configuration's ``link:``
         self.baud = baud  # the DIL switch's baud rate
-        self.short_command = short_command
+        self.short_handler = short_handler  # the handler of Kurzsatz #number
         self.letter_command = letter_command
         self.write = write
         self.decoder = codec.FrameDecoder(
@@ -81,6 +94,13 @@ class Link:
         self._expire: Timer | None = None
         self.error_hold = False  # R4: an error was detected, waiting for line idle
         self._last_byte = float("-inf")
+        #: chunks that were one whole Kurzsatz to this card, with its command number, AE octets
+        #: and handler: a host's poll, the same bytes again and again, answered in one step
+        #: (forgotten at power-on, which may bring another address); at most :data:`_POLLS` of them
+        self._polls: dict[bytes, tuple[int, bytes, ShortHandler]] = {}
+        #: a clock reading at which the card listened: a card whose silence ended by then still
+        #: listens (time only moves forward), so a poll need not read the clock to know it
+        self._listened_at = float("-inf")
 
     @property
     def idle_after_error(self) -> float:
@@ -89,6 +109,7 @@ class Link:
 
     def reset(self) -> None:
         self.decoder.reset()
+        self._polls.clear()
         self.error_hold = False
         self.last_fcb = None
         self.last_reply = NO_REPLY
@@ -104,10 +125,19 @@ class Link:
 
     # -- input ----------------------------------------------------------------------------------
     def feed(self, data: bytes) -> None:
+        poll = self._polls.get(data) if type(data) is bytes else None
+        if poll is not None and not self.error_hold and not self.decoder.partial:
+            card = self.card
+            if card.silent_until <= self._listened_at and card.powered:
+                # a whole Kurzsatz to this card between frames, as before: what the decoder and
+                # _short would make of it, without looking again (nothing pending, no error held)
+                self._short_command(*poll)
+                return
         now = self.clock.now()
         if self.card.silent_at(now):
             self.decoder.reset()  # the frame is lost
             return
+        self._listened_at = now
         if self.error_hold and data:
             if now - self._last_byte < self.idle_after_error:
                 self._last_byte = now  # the line is not idle: the bytes are lost (R4)
@@ -117,9 +147,18 @@ class Link:
             self.error_hold = False
         if data:
             self._last_byte = now
+        whole = not self.decoder.partial
         items = self.decoder.feed(data, now)
         if len(items) == 1 and type(items[0]) is codec.ShortFrame:
-            self._short(items[0])  # a whole Kurzsatz (a poll): the card listens, as just asked
+            frame = items[0]  # a whole Kurzsatz (a poll): the card listens, as just asked
+            if whole and not self.decoder.partial and frame.address == self.card.address:
+                number = codec.short_command_number(frame.control)
+                poll = number, frame.extension, self.short_handler(number)
+                if len(self._polls) < _POLLS:
+                    self._polls[bytes(data)] = poll
+                self._short_command(*poll)
+            else:
+                self._short(frame)
         else:
             for item in items:
                 if self.error_hold and not isinstance(item, codec.FrameError):
@@ -166,12 +205,15 @@ class Link:
     def _short(self, frame: codec.ShortFrame) -> None:
         if frame.address != self.card.address:
             return  # (a Kurzsatz to the broadcast address is not answered either)
-        self.frames += 1
         number = codec.short_command_number(frame.control)
+        self._short_command(number, frame.extension, self.short_handler(number))
+
+    def _short_command(self, number: int, extension: bytes, handler: ShortHandler) -> None:
+        """Kurzsatz #``number`` to this card (manual §2.3.2): #0 makes the FCB state unknown."""
+        self.frames += 1
         if number == 0 and self.card.e_version:
             self.last_fcb = None
-        reply = self.short_command(number, frame.extension)
-        self.send(reply)
+        self.send(handler(extension))
 
     def _long(self, frame: codec.LongFrame) -> None:
         mine = self._mine(frame.address)

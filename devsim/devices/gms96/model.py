@@ -377,12 +377,14 @@ class Gms96Card(Model):
 
     def status(self) -> int:
         """The standard status byte of ``T3;0`` (spec §4.3.1; every status poll asks for it).
-        (:meth:`motion`, :meth:`busy` and the monitoring cause read in place: a poll's path.)"""
+        (:meth:`motion`, :meth:`busy`, ``Executor.busy`` and the monitoring cause read in place: a
+        poll's path.)"""
         stage, i2t, markers, executor = self.stage, self.i2t, self.image.markers, self.executor
         motion = self.axis.moving or executor.reference is not None or self.spindle.on or markers[1] & _M1_5
         return ((_ESTOP if stage.estop else 0) | (_MOTION if motion else 0)
                 | (_MONITORING if stage.signals.get("monitoring") else 0) | (_IDXOFF if stage.idxoff else 0)
-                | (_BUSY if executor.busy else 0) | (_I2T_ACTIVE if i2t.limiting else 0)
+                | (_BUSY if executor.current is not None or executor.queue else 0)
+                | (_I2T_ACTIVE if i2t.limiting else 0)
                 | (_I2T_LATCHED if i2t.latched else 0) | (_MESSAGE if markers[4] else 0))
 
     def memory_status(self) -> int:
