@@ -18,6 +18,7 @@ BAD_BYTES = 100_000
 def test_a_repeated_line_is_written_once_then_counted_every_window() -> None:
     now = [0.0]
     limiter = RepeatLimiter(window=5.0, clock=lambda: now[0])
+    assert not limiter.pending
     assert limiter.offer("k", "bad byte") == ["bad byte"]
     assert limiter.offer("other", "other") == ["other"]
     for _ in range(12345):
@@ -26,8 +27,10 @@ def test_a_repeated_line_is_written_once_then_counted_every_window() -> None:
     assert limiter.due() == []
     now[0] = 5.0
     assert limiter.due() == ["bad byte ... repeated 12345 times in the last 5 s"]
+    assert limiter.pending  # (the log's timer stays armed while a line is remembered)
     now[0] = 10.0
     assert limiter.due() == []  # nothing counted: the key is forgotten, the next one is written
+    assert not limiter.pending  # (and then the log has no timer: an idle simulator does not wake up)
     assert limiter.offer("k", "bad byte") == ["bad byte"]
     limiter.offer("k", "bad byte")
     now[0] = 11.0

@@ -63,7 +63,8 @@ def repeat_key(item: dict[str, Any]) -> Hashable:
 
 
 class _Repeats:
-    """Counts written every :data:`~devsim.observe.repeats.WINDOW` seconds on the loop's timer."""
+    """Counts written every :data:`~devsim.observe.repeats.WINDOW` / 5 seconds on the loop's timer,
+    armed only while the limiter remembers a line (an idle simulator has no timer for its log)."""
 
     def __init__(self, limiter: Any, out: Callable[[str], None]) -> None:
         self.limiter, self.out = limiter, out
@@ -72,13 +73,18 @@ class _Repeats:
             self._loop: asyncio.AbstractEventLoop | None = asyncio.get_running_loop()
         except RuntimeError:
             self._loop = None  # (no loop: a count is written with the next line of its kind)
-        self._tick()
+
+    def arm(self) -> None:
+        """A line was written: its repeats are counted, and the count is due within a window."""
+        if self._handle is None and self._loop is not None:
+            self._handle = self._loop.call_later(self.limiter.window / 5, self._tick)
 
     def _tick(self) -> None:
+        self._handle = None
         for text in self.limiter.due():
             self.out(text)
-        if self._loop is not None:
-            self._handle = self._loop.call_later(self.limiter.window / 5, self._tick)
+        if self.limiter.pending:
+            self.arm()
 
     def stop(self) -> None:
         if self._handle is not None:
@@ -112,8 +118,10 @@ def attach_log(runtime: Any, level: int, write: Callable[[str], None] | None = N
                 return  # a repeat in its window (noise: most errors): no text made
             for text in limiter.offer(key, f"devsim: {describe(item)}"):
                 out(text)
+            repeats.arm()
 
-    streams: list[Any] = [_Repeats(limiter, out)]
+    repeats = _Repeats(limiter, out)
+    streams: list[Any] = [repeats]
     for device in runtime.devices.values():
         stream = WatchStream(runtime, device, send, values=False)
         stream.start()

@@ -6,7 +6,8 @@ A host sending garbage (a bad byte per character on the POSELESTA's V8) would ot
 line per byte.  The key is what the line says, not when: (device, port, message kind), given by
 the caller.  The window runs on a wall clock (injectable): the limit protects the reader and the
 disk, which live in real time whatever the device clock's speed or a virtual clock's jumps.  Pure:
-the caller calls :meth:`RepeatLimiter.due` now and then (every few seconds) to get the counts.
+the caller calls :meth:`RepeatLimiter.due` now and then (every few seconds) while
+:attr:`RepeatLimiter.pending` to get the counts.
 """
 
 from __future__ import annotations
@@ -54,6 +55,12 @@ class RepeatLimiter:
         out = [self._count_line(run, now)] if run is not None and run.count else []
         self._runs[key] = _Run(now, text)
         return [*out, text]
+
+    @property
+    def pending(self) -> bool:
+        """Lines of the last window are remembered (their repeats are counted): :meth:`due` has
+        something to do within a window."""
+        return bool(self._runs)
 
     def due(self) -> list[str]:
         """The counts of the windows that have ended; a key quiet for a whole window is forgotten
