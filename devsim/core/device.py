@@ -100,7 +100,9 @@ class Face:
 
 
 class Port:
-    """One serial port of a device, as a line or a bus sees it."""
+    """One serial port of a device, as a line or a bus sees it (slots: every poll passes through)."""
+
+    __slots__ = ("device", "spec", "name", "face", "_write", "_batch", "shared_line")
 
     def __init__(self, device: Device, spec: PortDef) -> None:
         self.device = device
