@@ -23,6 +23,10 @@ __all__ = ["Answers"]
 #: Address kinds that name a parameter (a query answers its value with the parameter's format).
 _PARAMETER_KINDS = ("P", "alias", "O")
 _READABLE = [n for n in sorted(PARAMETERS) if PARAMETERS[n].readable]
+#: A plain parameter's answer line as it leaves, by what makes it (the text as asked, the value and
+#: its type, the encoding): shared by every drive, made once per value (a poll asks again and again).
+_PLAIN_LINES: dict[tuple[str, type, object, str], bytes] = {}
+_PLAIN_LINES_MAX = 4096
 
 
 class Answers:
@@ -93,6 +97,24 @@ class Answers:
         if value == "*":
             raise SersError(19)  # as Operands.parameter: Z=* names a broadcast, not a number
         return f"{target.text}={access.format_value(number, value)}"
+
+    def parameter_line(self, target: st.Address, number: int, encoding: str) -> bytes:
+        """:meth:`parameter_text` with its line end, encoded, as a poll's answer leaves: a plain
+        parameter's (neither weighted nor ``fixed``: its value as it is) made once per value."""
+        kind = KIND.get(number)
+        if number == 1 or kind in WEIGHTED_KINDS or kind == "fixed":
+            return (self.parameter_text(target, number) + "\n\r").encode(encoding, errors="replace")
+        value = self.access.param_value(number)
+        key = (target.text, type(value), value, encoding)
+        line = _PLAIN_LINES.get(key)
+        if line is None:
+            if value == "*":
+                raise SersError(19)  # (what parameter_text says)
+            if len(_PLAIN_LINES) >= _PLAIN_LINES_MAX:
+                _PLAIN_LINES.clear()
+            text = f"{target.text}={self.access.format_value(number, value)}\n\r"
+            line = _PLAIN_LINES[key] = text.encode(encoding, errors="replace")
+        return line
 
     def list_parameters(self, arg: str) -> list[str]:
         """LISTP (G-LIST): ``P<n>=<value>`` in ascending order; P1028 bit 4 adds names."""

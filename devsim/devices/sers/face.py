@@ -218,10 +218,11 @@ class SersFace(Face):
         self.line = _ANSWERING
         mode = model.params.handshake_mode
         try:  # what the statements' progress does with the line's one statement, a query
-            answers = model.answers
-            text = (answers.query_text(poll.query) if poll.number is None
-                    else answers.parameter_text(poll.query.target, poll.number))
-            answer = (text + "\n\r").encode(model.cfg.encoding, errors="replace")
+            number = poll.number
+            if number is None:
+                answer = (model.answers.query_text(poll.query) + "\n\r").encode(model.cfg.encoding, errors="replace")
+            else:
+                answer = model.answers.parameter_line(poll.query.target, number, model.cfg.encoding)
         except SersError as exc:
             self.line = line = CommandLine(True, True)
             if mode in (0, 1):
