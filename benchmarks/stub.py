@@ -14,6 +14,8 @@ _ANSWER = b"\n0\nok1\n\r"
 
 
 class StubFace(Face):
+    __slots__ = ()
+
     def feed(self, data: bytes) -> None:
         """The echo, then an answer for every CR in it, in one piece (what the port would join
         anyway); nothing else depends on earlier bytes."""

@@ -54,6 +54,7 @@ class SersFace(Face):
     §3.2, §4.1, §4.8.6.9)."""
 
     model: SersDrive
+    __slots__ = ("framer", "line", "_last_replied", "_spontaneous", "_settings", "statements", "_noise_lines")
 
     def __init__(self, model: SersDrive, port: Port) -> None:
         super().__init__(model, port)
