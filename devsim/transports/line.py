@@ -489,7 +489,8 @@ class Line:
         if not data:
             return
         self.bytes_out += len(data)
-        if not self._faults and self.tracer is None and not self._to_host.items and self._clean():
+        if (not self._faults and self.tracer is None and not self._to_host.items
+                and (self._host is None or self._clean())):
             # the fault-free path: nothing to garble, trace or hold back (what _paced and _deliver do)
             if self._pacing_requested and not self.clock.virtual:  # (self.pacing)
                 self._paced(data, len(data))
