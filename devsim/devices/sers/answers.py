@@ -27,6 +27,9 @@ _READABLE = [n for n in sorted(PARAMETERS) if PARAMETERS[n].readable]
 #: its type, the encoding): shared by every drive, made once per value (a poll asks again and again).
 _PLAIN_LINES: dict[tuple[str, type, object, str], bytes] = {}
 _PLAIN_LINES_MAX = 4096
+#: The acknowledgements ``ok0`` … ``ok4`` and ``pgm`` as they leave (§4.1).
+_OK_LINES = tuple(b"\nok%d\n\r" % digit for digit in range(5))
+_PGM_LINE = b"\npgm\n\r"
 
 
 class Answers:
@@ -58,17 +61,15 @@ class Answers:
         """P1028 (§4.3)."""
         return int(self.params.list_option)
 
-    def ack_text(self) -> str:
-        """``ok<d>`` (§4.1): 4 error, 0/2 moving, 1/3 standing, +2 with a warning; ``pgm``."""
+    def ack_line(self) -> bytes:
+        """``ok<d>`` (§4.1) on its own line, as it leaves: 4 error, 0/2 moving, 1/3 standing, +2
+        with a warning; ``pgm`` in programming mode."""
         if self.program.editing:
-            return "pgm"
+            return _PGM_LINE
         power = self.power
         if power.errors:
-            return "ok4"
-        digit = 1 if self.motion.pos_ok else 0
-        if power.warnings:
-            digit += 2
-        return f"ok{digit}"
+            return _OK_LINES[4]
+        return _OK_LINES[(1 if self.motion.pos_ok else 0) + (2 if power.warnings else 0)]
 
     def query_text(self, stmt: st.Query) -> str:
         """``P<n>?`` / ``alias?``: ``<as asked>=<value>``; ``P<n>??``: the designation (§4.7)."""
