@@ -422,8 +422,8 @@ def _counted(server: list[str], tmp: str, kind: str, devices: int, rounds: int) 
                 _ask(sock, QUERY)
         for sock in socks:
             sock.close()
-    finally:
-        proc.send_signal(signal.SIGINT)
+    finally:  # devsim up ends cleanly on Ctrl-C; the echo dies of SIGTERM (valgrind still writes its counts)
+        proc.send_signal(signal.SIGINT if server[0] == "-m" else signal.SIGTERM)
         proc.wait(600)
     with open(log) as fh:
         text = fh.read()
