@@ -32,6 +32,17 @@ due.
     python benchmarks/scale.py --devices 2000 [--seconds 10] [--rounds 2]
     common: [--workers 2] [--rate 20] [--pollers N] [--poller c|python] [--kind sers|stub]
 
+``--instructions`` counts instead, under valgrind (cachegrind with its cache simulation), what one
+server process executes per poll: a plant of ``--devices`` (default 100) in one ``devsim up``
+process and as many echo endpoints in one process, each device polled ``--rounds`` times (default
+10) one after the other by a blocking client, against the same process polled no time (the same
+start, connections and moves). It prints instructions and simulated first-level cache misses
+(instruction and data) per poll for both and their ratios, devsim / echo last. The counts do not
+depend on the machine's load; each poll here wakes its server alone (no batching of polls per
+wake-up), unlike the timed phases.
+
+    python benchmarks/scale.py --instructions [--devices 100] [--rounds 10] [--kind sers|stub]
+
 Each phase prints the CPU each side used while it polled (share of one core, and server CPU
 seconds per poll): the pollers, devsim's processes, the echo processes, and how long the server
 processes were runnable but waited for a CPU (``/proc/PID/schedstat``, seconds per second of the
@@ -47,6 +58,7 @@ import os
 import resource
 import shutil
 import signal
+import socket
 import statistics
 import subprocess
 import sys
@@ -363,6 +375,91 @@ def _build_pollers(binary: str | None, count: int, tmp: str, rate: float,
     return pollers
 
 
+def _ask(sock: socket.socket, query: bytes) -> None:
+    """Send ``query`` and read until its answer is complete (``\nok`` and a CR after it)."""
+    sock.sendall(query)
+    got = b""
+    while True:
+        chunk = sock.recv(4096)
+        if not chunk:
+            raise SystemExit("the server closed a connection")
+        got += chunk
+        at = got.rfind(ACK)
+        if at >= 0 and got.find(b"\r", at + len(ACK)) >= 0:
+            return
+
+
+def _counted(server: list[str], tmp: str, kind: str, devices: int, rounds: int) -> dict[str, int]:
+    """Instructions and simulated L1 misses of the process ``server`` (a plant, or the echo
+    endpoints) in all, its ``devices`` endpoints polled ``rounds`` times each, then stopped."""
+    log = os.path.join(tmp, f"valgrind-{len(os.listdir(tmp))}.log")
+    env = dict(_env(), PYTHONHASHSEED="0")
+    proc = subprocess.Popen(["valgrind", "--tool=cachegrind", "--cache-sim=yes", "--cachegrind-out-file=/dev/null",
+                             f"--log-file={log}", sys.executable, *server], cwd=ROOT, env=env,
+                            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    assert proc.stdout is not None
+    try:
+        if server[0] == "-m":  # devsim up: its port lines, then every device ready
+            ports: dict[str, int] = {}
+            ready = 0
+            while ready < devices:
+                line = proc.stdout.readline()
+                if not line:
+                    raise SystemExit("devsim up ended early")
+                name, _, value = line.strip().partition(": ")
+                if value == "ready":
+                    ready += 1
+                elif value.startswith("tcp "):
+                    ports[name] = int(value.rsplit(":", 1)[1])
+            order = [ports[f"d{i}"] for i in range(devices)]
+        else:
+            order = json.loads(proc.stdout.readline())
+        socks = [socket.create_connection(("127.0.0.1", port)) for port in order]
+        for sock in socks:  # the same start on both sides: a move on devsim, a first poll on the echo
+            _ask(sock, MOVE if server[0] == "-m" and kind == "sers" else QUERY)
+        for _ in range(rounds):
+            for sock in socks:
+                _ask(sock, QUERY)
+        for sock in socks:
+            sock.close()
+    finally:  # devsim up ends cleanly on Ctrl-C; the echo dies of SIGTERM (valgrind still writes its counts)
+        proc.send_signal(signal.SIGINT if server[0] == "-m" else signal.SIGTERM)
+        proc.wait(600)
+    with open(log) as fh:
+        text = fh.read()
+    counts = {}
+    for key, label in (("I", "I   refs"), ("I1", "I1  misses"), ("D1", "D1  misses")):
+        at = text.find(label + ":")
+        if at < 0:
+            raise SystemExit(f"no {label} in valgrind's log for {server}")
+        counts[key] = int(text[at + len(label) + 1 :].split()[0].replace(",", ""))
+    return counts
+
+
+def _instructions(args: argparse.Namespace) -> None:
+    """Per poll, under cachegrind: instructions and L1 misses of devsim and of the echo."""
+    devices, rounds = args.devices or 100, args.rounds_given or 10
+    per_poll: dict[str, dict[str, float]] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        plant = os.path.join(tmp, "plant.yaml")
+        with open(plant, "w") as fh:
+            fh.write("devices:\n")
+            for i in range(devices):
+                fh.write(f"  - {{name: d{i}, kind: {args.kind}, transport: {{tcp: {{port: 0}}}}}}\n")
+        servers = {"devsim": ["-m", "devsim", "up", plant],
+                   "echo": [os.path.abspath(__file__), "--echo-servers", str(devices)]}
+        for label, server in servers.items():
+            idle = _counted(server, tmp, args.kind, devices, 0)
+            polled = _counted(server, tmp, args.kind, devices, rounds)
+            per_poll[label] = {key: (polled[key] - idle[key]) / (devices * rounds) for key in idle}
+            print(f"{label:>6}: {devices} endpoints polled {rounds} times each: "
+                  f"{per_poll[label]['I'] / 1e3:.1f} k instructions, {per_poll[label]['I1']:.0f} instruction "
+                  f"and {per_poll[label]['D1']:.0f} data L1 misses per poll", flush=True)
+    sim, ref = per_poll["devsim"], per_poll["echo"]
+    print(f"per poll devsim/echo: L1 misses instruction {sim['I1'] / ref['I1']:.2f}, data {sim['D1'] / ref['D1']:.2f}; "
+          f"instructions {sim['I'] / ref['I']:.2f}")
+
+
 def _fixed(args: argparse.Namespace, run: Callable[[str, int, bool], _Side]) -> None:
     """The old mode: one plant size, ``--rounds`` pairs of phases."""
     sim, ref = _Side(args.devices), _Side(args.devices)
@@ -416,7 +513,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--pollers", type=int, help="poller processes (default: 1 in C, 2 in Python)")
     parser.add_argument("--poller", choices=("c", "python"), help="default: c when a C compiler is found")
     parser.add_argument("--kind", default="sers")
-    parser.add_argument("--rounds", type=int, default=2, help="fixed mode: simulator/echo phase pairs (default 2)")
+    parser.add_argument("--rounds", type=int, help="fixed mode: simulator/echo phase pairs (default 2); "
+                        "--instructions: polls per device (default 10)")
+    parser.add_argument("--instructions", action="store_true",
+                        help="count instructions and L1 misses per poll under valgrind instead of timing")
     parser.add_argument("--start", type=int, default=500, help="search: the first size (default 500)")
     parser.add_argument("--most", type=int, default=4000, help="search: the plant's size, the largest tried")
     parser.add_argument("--resolution", type=int, default=250, help="search: sizes are multiples of it")
@@ -426,6 +526,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--echo-servers", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--poll", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    args.rounds_given, args.rounds = args.rounds, args.rounds or 2
+    if args.instructions:
+        _instructions(args)
+        return 0
     if args.seconds is None:
         args.seconds = 10.0 if args.devices else 3.0
     if args.echo_servers is not None:

@@ -76,7 +76,10 @@ class Face:
 
     Subclasses implement :meth:`feed` and, where the device has them, :attr:`serial_settings`
     (from its DIP switches), :meth:`host_disconnected` and :meth:`close`.  Answers leave through
-    ``self.port.send``."""
+    ``self.port.send``.  (A face that lists its attributes in ``__slots__`` has no instance
+    dictionary: one block of memory for a poll to touch instead of two.)"""
+
+    __slots__ = ("model", "port", "send")
 
     def __init__(self, model: Any, port: Port) -> None:
         self.model = model
@@ -100,7 +103,9 @@ class Face:
 
 
 class Port:
-    """One serial port of a device, as a line or a bus sees it."""
+    """One serial port of a device, as a line or a bus sees it (slots: every poll passes through)."""
+
+    __slots__ = ("device", "spec", "name", "face", "_write", "_batch", "shared_line")
 
     def __init__(self, device: Device, spec: PortDef) -> None:
         self.device = device

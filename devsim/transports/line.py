@@ -168,8 +168,11 @@ class Line:
     ``target`` is anything with ``attach``/``feed``/``host_disconnected``/``serial_settings``;
     the line attaches itself as the target's output.  ``pacing`` releases device output at the
     device's character time; it is ignored on a virtual clock (see :attr:`pacing`).  Faults are
-    injected with :meth:`inject` (see :class:`LineFault`).
+    injected with :meth:`inject` (see :class:`LineFault`).  (Slots: every poll passes through.)
     """
+
+    __slots__ = tuple("target clock _pacing_requested tracer _host _matched _write bytes_in bytes_out bytes_delivered"
+                      " _queue _tx_free_at _timer _faults _stages _to_device _to_host observers".split())
 
     def __init__(
         self,
@@ -369,9 +372,6 @@ class Line:
         if n < len(data):
             stage.put(now + latency, data[n:], len(data) - n, gap)
 
-    def _directions(self, fault: LineFault) -> list[str]:
-        return [d for d in ("to_device", "to_host") if fault.applies(d)]
-
     def _schedule_noise(self, active: _Active, k: int) -> None:
         assert active.fault.rate is not None
         interval = max(1.0 / active.fault.rate, _NOISE_TICK)
@@ -392,7 +392,7 @@ class Line:
         if fault.duration is not None:
             elapsed = min(elapsed, fault.duration)
         due = int(elapsed * fault.rate + 1e-9)
-        for direction in self._directions(fault):
+        for direction in [d for d in ("to_device", "to_host") if fault.applies(d)]:
             n = due - active.emitted[direction]
             if n <= 0:
                 continue

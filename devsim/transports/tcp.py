@@ -72,10 +72,19 @@ def _read_buffer() -> memoryview:
 
 
 class _Session(asyncio.BufferedProtocol):
-    """One TCP client; the owning transport decides whether it is served or refused."""
+    """One TCP client; the owning transport decides whether it is served or refused.
 
-    def __init__(self, owner: TcpTransport) -> None:
+    A poll touches a session, its asyncio transport and its socket: the attributes are slots
+    (one block of memory, not an object and its values array), and a plain session sends
+    through its socket directly while asyncio holds nothing unsent for it (:meth:`send`)."""
+
+    __slots__ = ("owner", "_view", "transport", "closed", "full", "state", "backlog", "peer", "since", "heard",
+                 "rest", "messages", "deliver", "sock")
+
+    def __init__(self, owner: TcpTransport, sock: socket.socket | None = None) -> None:
         self.owner = owner
+        #: The connection's socket, for :meth:`send`'s direct path (None: always through asyncio).
+        self.sock = sock
         self._view = _read_buffer()  # (a session is made in its loop's thread)
         self.transport: asyncio.Transport | None = None
         self.closed = False
@@ -135,6 +144,19 @@ class _Session(asyncio.BufferedProtocol):
         if self.full:
             self.owner.dropped += len(data)
             return
+        sock = self.sock
+        if sock is not None and not transport.get_write_buffer_size():
+            # what transport.write does first when nothing waits to be sent, without its checks;
+            # what the socket does not take now (or an error) goes the usual way
+            try:
+                sent = sock.send(data)
+            except (BlockingIOError, InterruptedError):
+                sent = 0
+            except OSError:
+                sent = 0  # (transport.write meets the error again and closes the connection)
+            if sent == len(data):
+                return
+            data = data[sent:]
         transport.write(data)
 
 
@@ -251,7 +273,7 @@ class TcpTransport(Transport):
 
     async def _adopt(self, loop: asyncio.AbstractEventLoop, conn: socket.socket) -> None:
         try:
-            await loop.connect_accepted_socket(lambda: _Session(self), conn)
+            await loop.connect_accepted_socket(lambda: _Session(self, conn), conn)
         except OSError:
             conn.close()
 

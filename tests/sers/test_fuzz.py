@@ -184,7 +184,8 @@ def test_random_noise_in_chunks_answers_as_bytes_do(data: list[bytes], cut: int)
 
 
 POLLS = [b"#P11?\r", b"#1P11?\r", b"#2P11?\r", b"#*P11?\r", b"#P11?\n", b"#1 P11?\r", b"#P11??\r", b"#P51?\r",
-         b"#V?\r", b"#O1?\r", b"#I3?\r", b"#P9999?\r", b"#P1?\r", b"#Z?\r", b"#TR?\r", b"#1" + b" " * 54 + b"P11?\r"]
+         b"#V?\r", b"#O1?\r", b"#I3?\r", b"#P9999?\r", b"#P1?\r", b"#Z?\r", b"#TR?\r", b"#1" + b" " * 54 + b"P11?\r",
+         b"#P1017?\r", b"#P265?\r", b"#P336?\r"]  # plain values that the states change (answers kept per value)
 STATES = [b"#P1017=0\r", b"#P1017=1\r", b"#P1017=2\r", b"#2\r", b"#1\r", b"#Q\r", b"#P1019=0\r", b"#PGM\r",
           b"#QUIT\r", b"#ON W=360 E\r", b"#P1=*\r", b"#P1=1\r", b"#P265=1\r", b"#P265=0\r", b"#RS\r", b"#OFF\r",
           b"\n", b"\r", b"#1P11?\r#"]  # the second half of a line end pair; a line begun in the chunk
@@ -212,6 +213,36 @@ def test_polls_line_by_line_answer_as_bytes_do(lines: list[bytes], pauses: list[
     programming mode, with errors and warnings pending and while the axis moves, exactly as the
     same line taken byte by byte."""
     assert _line_by_line(lines, False, pauses, shared) == _line_by_line(lines, True, pauses, shared)
+
+
+def test_a_polls_kept_answer_line_is_the_answer_made_anew_for_every_parameter_and_value() -> None:
+    """``Answers.parameter_line`` keeps a plain parameter's answer line per value: for every
+    readable parameter, in several states and asked twice, it is what ``parameter_text`` makes
+    (or the same error)."""
+    from devsim.devices.sers.errors import SersError
+    from devsim.devices.sers.parameters import PARAMETERS
+    from devsim.devices.sers.statements import Address
+
+    device, clock, _out, _nvram = _device()
+    answers = device.model.answers
+
+    def outcome(kept: bool, target: Address, number: int) -> str:
+        try:
+            if kept:
+                return answers.parameter_line(target, number, "latin-1").decode("latin-1")
+            return answers.parameter_text(target, number) + "\n\r"
+        except SersError as exc:
+            return f"error {exc.errno}"
+
+    numbers = [n for n in sorted(PARAMETERS) if PARAMETERS[n].readable]
+    for step in (b"", b"#P1017=1 P265=1 P1=*\r", b"#ON W=90 E\r", b"#P1017=0 P1=1 P11=0\r"):
+        device.feed(step)
+        clock.advance(0.05)
+        for number in numbers:
+            target = Address("P", number, f"P{number}")
+            made = outcome(False, target, number)
+            for _ in range(2):  # made, then kept
+                assert outcome(True, target, number) == made, number
 
 
 def test_the_poll_paths_are_taken() -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import socket
 import threading
 
 import pytest
@@ -224,6 +225,36 @@ async def test_output_a_client_does_not_read_is_dropped_beyond_max_buffer_until_
         echo.write(b"again")
         assert await _read_exactly(reader, 5) == b"again"
         assert transport.dropped == len(chunk) + 4
+        writer.close()
+    finally:
+        await transport.close()
+
+
+async def test_output_beyond_what_the_socket_takes_at_once_arrives_whole_and_in_order(echo: Recorder) -> None:
+    """A session sends through its socket directly while asyncio holds nothing unsent for it;
+    what the socket does not take goes to asyncio's buffer, and later output queues behind it
+    until that has left: numbered chunks written faster than the client reads (more than the
+    kernel's buffers hold) arrive whole and in their order."""
+    transport = TcpTransport(max_buffer=64 * 1024 * 1024)
+    await transport.start(echo)
+    try:
+        client = socket.socket()
+        client.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)  # a small window: the socket often full
+        client.connect(("127.0.0.1", transport.port))
+        reader, writer = await asyncio.open_connection(sock=client)
+        writer.write(b"A")
+        assert await _read_exactly(reader, 1) == b"A"
+        assert echo.write is not None
+        chunks = [(b"%06d|" % i) * 100 for i in range(3000)]  # 2.1 MB, each chunk different
+        expected = b"".join(chunks)
+        reading = asyncio.ensure_future(reader.readexactly(len(expected)))  # the client reads meanwhile
+        for i, chunk in enumerate(chunks):
+            echo.write(chunk)
+            if i % 3 == 0:
+                await asyncio.sleep(0)  # the client and asyncio's writer get a turn now and then
+        got = await asyncio.wait_for(reading, 60)
+        assert got == expected
+        assert transport.dropped == 0
         writer.close()
     finally:
         await transport.close()

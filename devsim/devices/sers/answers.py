@@ -23,6 +23,13 @@ __all__ = ["Answers"]
 #: Address kinds that name a parameter (a query answers its value with the parameter's format).
 _PARAMETER_KINDS = ("P", "alias", "O")
 _READABLE = [n for n in sorted(PARAMETERS) if PARAMETERS[n].readable]
+#: A plain parameter's answer line as it leaves, by what makes it (the text as asked, the value and
+#: its type, the encoding): shared by every drive, made once per value (a poll asks again and again).
+_PLAIN_LINES: dict[tuple[str, type, object, str], bytes] = {}
+_PLAIN_LINES_MAX = 4096
+#: The acknowledgements ``ok0`` … ``ok4`` and ``pgm`` as they leave (§4.1).
+_OK_LINES = tuple(b"\nok%d\n\r" % digit for digit in range(5))
+_PGM_LINE = b"\npgm\n\r"
 
 
 class Answers:
@@ -54,17 +61,15 @@ class Answers:
         """P1028 (§4.3)."""
         return int(self.params.list_option)
 
-    def ack_text(self) -> str:
-        """``ok<d>`` (§4.1): 4 error, 0/2 moving, 1/3 standing, +2 with a warning; ``pgm``."""
+    def ack_line(self) -> bytes:
+        """``ok<d>`` (§4.1) on its own line, as it leaves: 4 error, 0/2 moving, 1/3 standing, +2
+        with a warning; ``pgm`` in programming mode."""
         if self.program.editing:
-            return "pgm"
+            return _PGM_LINE
         power = self.power
         if power.errors:
-            return "ok4"
-        digit = 1 if self.motion.pos_ok else 0
-        if power.warnings:
-            digit += 2
-        return f"ok{digit}"
+            return _OK_LINES[4]
+        return _OK_LINES[(1 if self.motion.pos_ok else 0) + (2 if power.warnings else 0)]
 
     def query_text(self, stmt: st.Query) -> str:
         """``P<n>?`` / ``alias?``: ``<as asked>=<value>``; ``P<n>??``: the designation (§4.7)."""
@@ -93,6 +98,24 @@ class Answers:
         if value == "*":
             raise SersError(19)  # as Operands.parameter: Z=* names a broadcast, not a number
         return f"{target.text}={access.format_value(number, value)}"
+
+    def parameter_line(self, target: st.Address, number: int, encoding: str) -> bytes:
+        """:meth:`parameter_text` with its line end, encoded, as a poll's answer leaves: a plain
+        parameter's (neither weighted nor ``fixed``: its value as it is) made once per value."""
+        kind = KIND.get(number)
+        if number == 1 or kind in WEIGHTED_KINDS or kind == "fixed":
+            return (self.parameter_text(target, number) + "\n\r").encode(encoding, errors="replace")
+        value = self.access.param_value(number)
+        key = (target.text, type(value), value, encoding)
+        line = _PLAIN_LINES.get(key)
+        if line is None:
+            if value == "*":
+                raise SersError(19)  # (what parameter_text says)
+            if len(_PLAIN_LINES) >= _PLAIN_LINES_MAX:
+                _PLAIN_LINES.clear()
+            text = f"{target.text}={self.access.format_value(number, value)}\n\r"
+            line = _PLAIN_LINES[key] = text.encode(encoding, errors="replace")
+        return line
 
     def list_parameters(self, arg: str) -> list[str]:
         """LISTP (G-LIST): ``P<n>=<value>`` in ascending order; P1028 bit 4 adds names."""

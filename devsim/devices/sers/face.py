@@ -34,19 +34,10 @@ from devsim.devices.sers.noise import NoiseLines
 
 __all__ = ["SersFace"]
 
-#: An acknowledgement (§4.1) as it leaves, by its text (``ok0`` … ``ok4``, ``pgm``).
-_ACKS: dict[str, bytes] = {}
-
-
 #: The line of a host's poll while its answer is made (:meth:`SersFace._answer_poll`): between
 #: lines again when it is sent, so only ever compared with None, never changed; a poll's line
 #: that gets an error or a deferred answer is a line of its own.
 _ANSWERING = CommandLine(True, True)
-
-
-def _ack_bytes(ack: str) -> bytes:
-    data = _ACKS[ack] = b"\n" + ack.encode("latin-1") + b"\n\r"
-    return data
 
 
 class SersFace(Face):
@@ -54,6 +45,7 @@ class SersFace(Face):
     §3.2, §4.1, §4.8.6.9)."""
 
     model: SersDrive
+    __slots__ = ("framer", "line", "_last_replied", "_spontaneous", "_settings", "statements", "_noise_lines")
 
     def __init__(self, model: SersDrive, port: Port) -> None:
         super().__init__(model, port)
@@ -218,10 +210,11 @@ class SersFace(Face):
         self.line = _ANSWERING
         mode = model.params.handshake_mode
         try:  # what the statements' progress does with the line's one statement, a query
-            answers = model.answers
-            text = (answers.query_text(poll.query) if poll.number is None
-                    else answers.parameter_text(poll.query.target, poll.number))
-            answer = (text + "\n\r").encode(model.cfg.encoding, errors="replace")
+            number = poll.number
+            if number is None:
+                answer = (model.answers.query_text(poll.query) + "\n\r").encode(model.cfg.encoding, errors="replace")
+            else:
+                answer = model.answers.parameter_line(poll.query.target, number, model.cfg.encoding)
         except SersError as exc:
             self.line = line = CommandLine(True, True)
             if mode in (0, 1):
@@ -232,8 +225,7 @@ class SersFace(Face):
             return True
         model.interpreter.poke()
         if mode in (0, 1) and not self._spontaneous:  # echo, answer and acknowledgement in one piece
-            ack = model.answers.ack_text()
-            self.send(b"".join((data, answer, _ACKS.get(ack) or _ack_bytes(ack))))
+            self.send(b"".join((data, answer, model.answers.ack_line())))
             self._last_replied = True
             self.line = None
             return True
@@ -372,8 +364,7 @@ class SersFace(Face):
             if line.deferred:
                 self.send(bytes(line.deferred))
             if not line.error:
-                ack = self.model.answers.ack_text()
-                self.send(_ACKS.get(ack) or _ack_bytes(ack))
+                self.send(self.model.answers.ack_line())
         self._last_replied = line.reply
         self.line = None
         self._flush_spontaneous()
