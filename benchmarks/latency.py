@@ -320,17 +320,23 @@ def process_instructions(server: list[str], polls: int, warmup: int = 100) -> in
     raise SystemExit(f"no instruction count from valgrind for {server}")
 
 
+def _gms96_servers(tmp: str) -> dict[str, list[str]]:
+    """The two servers the instruction and call counts compare: ``devsim run gms96`` (booted at
+    once, its config written into ``tmp``) and the echo server answering a 5-byte frame."""
+    config = os.path.join(tmp, "gms96.yaml")
+    with open(config, "w") as fh:
+        fh.write("boot_time: 0\n")
+    return {
+        "devsim run gms96": [sys.executable, "-m", "devsim", "run", "gms96", "--pty", "--config", config],
+        "echo": [sys.executable, os.path.abspath(__file__), "--serve-echo", "5", "--binary"],
+    }
+
+
 def poll_instructions(n: int) -> int:
     """Instructions per GMS96 status poll of ``devsim run gms96`` and of the echo server."""
     os.environ["PYTHONHASHSEED"] = "0"
     with tempfile.TemporaryDirectory() as tmp:
-        config = os.path.join(tmp, "gms96.yaml")
-        with open(config, "w") as fh:
-            fh.write("boot_time: 0\n")
-        servers = {
-            "devsim run gms96": [sys.executable, "-m", "devsim", "run", "gms96", "--pty", "--config", config],
-            "echo": [sys.executable, os.path.abspath(__file__), "--serve-echo", "5", "--binary"],
-        }
+        servers = _gms96_servers(tmp)
         per_poll = {name: (process_instructions(server, n) - process_instructions(server, 0)) / n
                     for name, server in servers.items()}
     print(f"instructions per GMS96 status poll ({n} polls against none): "
@@ -397,13 +403,7 @@ def process_calls(server: list[str], polls: int, warmup: int = 100) -> dict[str,
 def poll_calls(n: int) -> int:
     """The calls per GMS96 status poll of ``devsim run gms96`` and of the echo server."""
     with tempfile.TemporaryDirectory() as tmp:
-        config = os.path.join(tmp, "gms96.yaml")
-        with open(config, "w") as fh:
-            fh.write("boot_time: 0\n")
-        servers = {
-            "devsim run gms96": [sys.executable, "-m", "devsim", "run", "gms96", "--pty", "--config", config],
-            "echo": [sys.executable, os.path.abspath(__file__), "--serve-echo", "5", "--binary"],
-        }
+        servers = _gms96_servers(tmp)
         for name, server in servers.items():
             polled, idle = process_calls(server, n), process_calls(server, 0)
             per_poll = {call: (count - idle.get(call, 0)) / n for call, count in polled.items()}

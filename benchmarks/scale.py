@@ -193,13 +193,9 @@ def _compile_poller(tmp: str) -> str | None:
     return binary
 
 
-def _start_plant(kind: str, devices: int, workers: int, tmp: str) -> tuple[subprocess.Popen[str], list[int]]:
-    plant = os.path.join(tmp, "plant.yaml")
-    with open(plant, "w") as fh:
-        fh.write("devices:\n")
-        for i in range(devices):
-            fh.write(f"  - {{name: d{i}, kind: {kind}, transport: {{tcp: {{port: 0}}}}}}\n")
-    proc = _spawn(["-m", "devsim", "up", plant, "--workers", str(workers)])
+def _plant_ports(proc: subprocess.Popen[str], devices: int) -> dict[str, int]:
+    """The TCP port of each device of a starting ``devsim up``, read from its lines until every
+    device is ready."""
     ports: dict[str, int] = {}
     ready = 0
     assert proc.stdout is not None
@@ -212,6 +208,17 @@ def _start_plant(kind: str, devices: int, workers: int, tmp: str) -> tuple[subpr
             ready += 1
         elif value.startswith("tcp "):
             ports[name] = int(value.rsplit(":", 1)[1])
+    return ports
+
+
+def _start_plant(kind: str, devices: int, workers: int, tmp: str) -> tuple[subprocess.Popen[str], list[int]]:
+    plant = os.path.join(tmp, "plant.yaml")
+    with open(plant, "w") as fh:
+        fh.write("devices:\n")
+        for i in range(devices):
+            fh.write(f"  - {{name: d{i}, kind: {kind}, transport: {{tcp: {{port: 0}}}}}}\n")
+    proc = _spawn(["-m", "devsim", "up", plant, "--workers", str(workers)])
+    ports = _plant_ports(proc, devices)
     # in the plant's order, device i at phase i: the workers print their ports one worker after
     # the other, and polling in that order would load each worker at twice the rate for half a period
     return proc, [ports[f"d{i}"] for i in range(devices)]
@@ -400,17 +407,7 @@ def _counted(server: list[str], tmp: str, kind: str, devices: int, rounds: int) 
     assert proc.stdout is not None
     try:
         if server[0] == "-m":  # devsim up: its port lines, then every device ready
-            ports: dict[str, int] = {}
-            ready = 0
-            while ready < devices:
-                line = proc.stdout.readline()
-                if not line:
-                    raise SystemExit("devsim up ended early")
-                name, _, value = line.strip().partition(": ")
-                if value == "ready":
-                    ready += 1
-                elif value.startswith("tcp "):
-                    ports[name] = int(value.rsplit(":", 1)[1])
+            ports = _plant_ports(proc, devices)
             order = [ports[f"d{i}"] for i in range(devices)]
         else:
             order = json.loads(proc.stdout.readline())
