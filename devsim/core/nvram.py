@@ -15,7 +15,6 @@ infinity is refused at load (:class:`PoisonedMemory`).
 
 from __future__ import annotations
 
-import copy
 import fcntl
 import os
 import re
@@ -121,11 +120,11 @@ class NonVolatileMemory:
 
     def get(self, section: str, default: Any = None) -> Any:
         if section not in self._image:
-            return copy.deepcopy(default)
-        return copy.deepcopy(self._image[section])
+            return _copied(default)
+        return _copied(self._image[section])
 
     def put(self, section: str, data: Any) -> None:
-        self._image[section] = copy.deepcopy(data)
+        self._image[section] = _copied(data)
         self._write()
 
     def delete(self, section: str) -> None:
@@ -169,3 +168,24 @@ class NonVolatileMemory:
             os.fsync(dfd)
         finally:
             os.close(dfd)
+
+
+_IMMUTABLE = frozenset({int, float, str, bool, type(None), bytes})
+
+
+def _copied(data: Any) -> Any:
+    """A deep copy of a section (what a JSON document holds: dicts, lists, numbers, text), so that
+    the image never shares a mutable value with a device; anything else through
+    :func:`copy.deepcopy` (the copy module is not imported by a start, issue 31)."""
+    kind = type(data)
+    if kind in _IMMUTABLE:
+        return data
+    if kind is dict:
+        return {key: _copied(value) for key, value in data.items()}
+    if kind is list:
+        return [_copied(value) for value in data]
+    if kind is tuple:
+        return tuple(_copied(value) for value in data)
+    import copy
+
+    return copy.deepcopy(data)

@@ -70,3 +70,21 @@ def test_names_stay_inside_the_state_dir(tmp_path: Path, name: str) -> None:
     with pytest.raises(ValueError):
         check_name(name)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_section_shares_no_mutable_value_with_what_was_put_or_got() -> None:
+    memory = NonVolatileMemory(None)
+    data = {"params": {"41": 100.0, "list": [1, [2, 3]], "pair": (4, [5])}, "odd": {6, 7}, "raw": bytearray(b"x")}
+    memory.put("image", data)
+    data["params"]["list"][1].append(99)
+    data["params"]["pair"][1].append(99)
+    data["odd"].add(8)
+    data["raw"] += b"y"
+    got = memory.get("image")
+    assert got == {"params": {"41": 100.0, "list": [1, [2, 3]], "pair": (4, [5])}, "odd": {6, 7}, "raw": bytearray(b"x")}
+    got["params"]["list"].append(0)
+    got["odd"].add(9)
+    assert memory.get("image") == {"params": {"41": 100.0, "list": [1, [2, 3]], "pair": (4, [5])}, "odd": {6, 7},
+                                   "raw": bytearray(b"x")}
+    default = {"a": [1]}
+    assert memory.get("missing", default) == default and memory.get("missing", default)["a"] is not default["a"]
