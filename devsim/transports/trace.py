@@ -30,7 +30,9 @@ import os
 import re
 from collections.abc import Sequence
 from types import TracebackType
-from typing import NamedTuple, Protocol
+from typing import Protocol
+
+import msgspec
 
 __all__ = ["Source", "TapSink", "TraceSink", "Tracer", "create_trace_file", "parse_source_note", "render",
            "source_note"]
@@ -51,7 +53,7 @@ def render(data: bytes) -> str:
     return '"' + "".join(parts) + '"'
 
 
-class Source(NamedTuple):
+class Source(msgspec.Struct, frozen=True):
     """What a trace traces: the devices on the line, their port, their kind."""
 
     devices: tuple[str, ...]
@@ -59,7 +61,8 @@ class Source(NamedTuple):
     kind: str
 
 
-_SOURCE = re.compile(r"^source (\S+) port (\S+) kind (\S+)$")
+#: A source note (compiled by :mod:`re` at the first note read, not by every start: issue 31).
+_SOURCE = r"^source (\S+) port (\S+) kind (\S+)$"
 
 
 def source_note(devices: Sequence[str], port: str, kind: str) -> str:
@@ -69,7 +72,7 @@ def source_note(devices: Sequence[str], port: str, kind: str) -> str:
 
 def parse_source_note(text: str) -> Source | None:
     """The :class:`Source` a note names, or None for any other note."""
-    match = _SOURCE.match(text)
+    match = re.match(_SOURCE, text)
     return None if match is None else Source(tuple(match[1].split(",")), match[2], match[3])
 
 
