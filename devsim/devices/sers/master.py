@@ -18,7 +18,8 @@ from devsim.core.clock import Clock, Timer
 __all__ = ["MasterLink", "REPLY_TIMEOUT"]
 
 REPLY_TIMEOUT = 0.1  # seconds (G-MASTER)
-_END = re.compile(rb"\n(?:ok\d|pgm)\n\r|\n\*([^\n]*)\n\r")
+#: (compiled by :mod:`re` at the first answer a master hears, not by every start: issue 31)
+_END = rb"\n(?:ok\d|pgm)\n\r|\n\*([^\n]*)\n\r"
 
 Done = Callable[[bool, float | None, str], None]
 
@@ -58,7 +59,7 @@ class MasterLink:
         if self._done is None:
             return
         self._buffer += data
-        end = _END.search(self._buffer)
+        end = re.search(_END, self._buffer)
         if end is None:
             return
         value = None

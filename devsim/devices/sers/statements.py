@@ -76,12 +76,18 @@ _LONGEST = len(ALL_WORDS[0])
 #: The label numbers a program may define (§4.6.2: "ein Wert von 1 bis 128").
 LABEL_MIN, LABEL_MAX = 1, 128
 
-_DIGITS = re.compile(r"[0-9]+")
-_NUMBER = re.compile(r"[0-9]*\.?[0-9]*")
-_SIGNED_NUMBER = re.compile(r"-?[0-9]*\.?[0-9]*")
+_DIGITS = r"[0-9]+"
+_NUMBER = r"[0-9]*\.?[0-9]*"
+_SIGNED_NUMBER = r"-?[0-9]*\.?[0-9]*"
 # The argument of LIST ('.', '-', '+', n, -n, n.m) and of LISTP (n, n.m), spec §4.2 grammar.
-_LIST_ARG = re.compile(r"-[0-9]+|[0-9]*\.[0-9]*|[0-9]+|[-+]")
-_LISTP_ARG = re.compile(r"[0-9]*\.[0-9]*|[0-9]+")
+_LIST_ARG = r"-[0-9]+|[0-9]*\.[0-9]*|[0-9]+|[-+]"
+_LISTP_ARG = r"[0-9]*\.[0-9]*|[0-9]+"
+
+
+@functools.cache
+def _pattern(text: str) -> re.Pattern[str]:
+    """One of the patterns above, compiled at its first use rather than by every start (issue 31)."""
+    return re.compile(text)
 
 
 def _digits(text: str) -> bool:
@@ -261,7 +267,7 @@ class _Cursor:
 
     def number(self, errno: int, signed: bool = False) -> Number:
         start = self.pos
-        match = (_SIGNED_NUMBER if signed else _NUMBER).match(self.text, self.pos)
+        match = _pattern(_SIGNED_NUMBER if signed else _NUMBER).match(self.text, self.pos)
         if match is not None and match.end() >= len(self.text) and not self.final:
             raise NeedMore
         if match is None or not any(_digits(ch) for ch in match.group()):
@@ -272,7 +278,7 @@ class _Cursor:
 
     def integer(self, errno: int) -> int:
         self.skip_spaces()
-        match = _DIGITS.match(self.text, self.pos)
+        match = _pattern(_DIGITS).match(self.text, self.pos)
         if match is None:
             if self.pos >= len(self.text) and not self.final:
                 raise NeedMore
@@ -463,7 +469,7 @@ def _run(cur: _Cursor, start: int, word: str) -> Statement:
 def _list(cur: _Cursor, start: int, word: str) -> Statement:
     save = cur.pos
     cur.skip_spaces()
-    found = (_LISTP_ARG if word == "LISTP" else _LIST_ARG).match(cur.text, cur.pos)
+    found = _pattern(_LISTP_ARG if word == "LISTP" else _LIST_ARG).match(cur.text, cur.pos)
     end = found.end() if found is not None else cur.pos
     if end == len(cur.text) and not cur.final:
         raise NeedMore  # the argument may go on

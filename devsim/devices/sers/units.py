@@ -255,7 +255,8 @@ class Scaling:
 
 
 # --- numbers ----------------------------------------------------------------------------------
-_NUMBER = re.compile(r"-?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)")
+#: (compiled by :mod:`re` at the first number parsed, not by every start: issue 31)
+_NUMBER = r"-?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)"
 
 
 def parse_number(text: str) -> float:
@@ -265,7 +266,7 @@ def parse_number(text: str) -> float:
     (``.5``), an optional leading ``-``.  No ``+``, no comma, no exponent, no whitespace:
     anything else raises ``ValueError``.
     """
-    if not isinstance(text, str) or _NUMBER.fullmatch(text) is None:
+    if not isinstance(text, str) or re.fullmatch(_NUMBER, text) is None:
         raise ValueError(f"not a SERS decimal constant: {text!r}")
     return float(text)
 
