@@ -16,7 +16,6 @@ import time
 from collections.abc import Awaitable, Callable, Coroutine, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from devsim.core.bus import Bus
 from devsim.core.clock import Clock, RealClock, VirtualClock
 from devsim.core.device import Device, UnknownName
 from devsim.core.kit import CaptureTag
@@ -226,7 +225,12 @@ class Runtime:
         as pcap (:mod:`devsim.transports.pcap`), anything else as the text trace."""
 
         group = [devices] if isinstance(devices, Device) else list(devices)
-        target: Any = group[0].port(port) if len(group) == 1 else Bus(group, port)
+        if len(group) == 1:
+            target: Any = group[0].port(port)
+        else:  # (a multidrop bus only when devices share a line: a plain run starts without it)
+            from devsim.core.bus import Bus
+
+            target = Bus(group, port)
         limit = getattr(transport, "limit_hosts", None)
         if limit is not None:  # how many hosts the port serves: the kind's declaration (PortDef.hosts)
             spec = group[0].port(port).spec
