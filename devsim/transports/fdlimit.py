@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import errno
 import os
-import resource
 import socket
 import sys
 import time
@@ -55,6 +54,8 @@ _RESERVE: list[int] = []
 
 def fd_limit() -> int:
     """The soft limit on open descriptors of this process."""
+    import resource  # (asked when ports run short or a plant is planned, not by every start)
+
     soft, _hard = resource.getrlimit(resource.RLIMIT_NOFILE)
     return soft if soft != resource.RLIM_INFINITY else 1 << 20
 
