@@ -571,3 +571,16 @@ def test_quantize():
     assert math.copysign(1, quantize(-0.00001, 3)) == 1.0
     with pytest.raises(ValueError):
         quantize(math.inf, 2)
+
+
+def test_each_accessor_reads_the_row_that_names_it() -> None:
+    """(Checked here rather than at every import of the parameters: issue 31.)"""
+    from devsim.devices.sers.params import SersParameters
+
+    probe = SersParameters()
+    named = [row for row in parameters.PARAMETER_TABLE if row.attr]
+    assert len(named) > 50
+    for row in named:
+        mark = object()
+        probe.values[row.key] = mark
+        assert getattr(probe, row.attr, None) is mark, f"P{row.key}: the accessor {row.attr!r} does not read it"

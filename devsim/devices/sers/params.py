@@ -158,17 +158,3 @@ class SersParameters(Parameters):
         """Every value anew (power-on): ``image`` is the whole RAM image, nothing else is kept."""
         self.values.clear()
         self.values.update(image)
-
-
-def _check_accessors() -> None:
-    """Each accessor reads the row that names it (``attr``), and each such row has one."""
-    probe = SersParameters()
-    for row in PARAMETER_TABLE:
-        if row.attr:
-            mark = object()
-            probe.values[row.key] = mark
-            if getattr(probe, row.attr, None) is not mark:  # pragma: no cover - table integrity
-                raise RuntimeError(f"P{row.key}: the accessor {row.attr!r} does not read it")
-
-
-_check_accessors()
