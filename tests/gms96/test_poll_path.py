@@ -69,6 +69,15 @@ def test_the_k_answer_bytes_are_the_encoded_k_frame(mb4: int | None, monkeypatch
                 assert k_bytes(k, address, mb4) == encode(k_frame(k, address, mb4))
 
 
+def test_a_kept_answer_without_mb4_is_not_taken_for_one_with_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(codec, "_K_ANSWERS", {})
+    for address in (0, 1, 0x10, 255):
+        for k in (0, 0x40, 0x7F, 0xFF):
+            assert k_bytes(k, address, None) == encode(k_frame(k, address, None))  # (now kept)
+            for mb4 in (0, 7, 255):
+                assert k_bytes(k, address, mb4) == encode(k_frame(k, address, mb4))
+
+
 @pytest.mark.parametrize("address", [-1, 256])
 def test_a_k_answer_to_an_impossible_address_fails_as_encode_does(address: int) -> None:
     with pytest.raises(ValueError, match="address"):
