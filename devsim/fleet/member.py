@@ -47,6 +47,7 @@ import msgspec
 from devsim.core.clock import VirtualClock
 from devsim.facades.mqtt_link import LinkLost, MqttLink, open_link
 from devsim.facades.mqtt_wire import Publish, Will
+from devsim.fleet.answers import ResolvedRequests, encode_answer
 from devsim.fleet.streams import StreamServer
 from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url, process_id
 from devsim.runtime import Runtime, ops
@@ -102,16 +103,6 @@ async def retained_announcements(link: MqttLink, topics: Topics, marker: str) ->
     return found
 
 
-def encode_answer(response: OkResponse | ErrorResponse) -> bytes:
-    """The control API's JSON line for ``response`` (:func:`devsim.runtime.ops.encode`), encoded
-    by msgspec (UTF-8 as it is, where :mod:`json` escapes it)."""
-    if isinstance(response, OkResponse):
-        data: dict[str, Any] = {"id": response.id, "ok": True, "result": ops.jsonable(response.result)}
-    else:
-        data = {"id": response.id, "ok": False, "error": response.error, "type": response.type}
-    return _json_encode(data) + b"\n"
-
-
 def _lenient(raw: bytes) -> Any:
     """What :mod:`json` makes of what msgspec refused (``NaN``, deep nesting), else ``raw``: the
     control API then says what is wrong with it."""
@@ -150,6 +141,7 @@ class FleetMember:
         self._replies: set[str] = set()  # reply topics found allowed
         self.streams = StreamServer(runtime, self.topics, self.process)
         self._request_topic = self.topics.request(self.process)  # compared with every message's topic
+        self.resolved = ResolvedRequests(runtime)  #: the fast path of reads and sets
 
     @property
     def request_topic(self) -> str:
@@ -269,6 +261,11 @@ class FleetMember:
         stream_to = None
         if len(raw) > MAX_LINE:
             response = ErrorResponse(error="request too long", type="BadRequest")
+        elif (fast := self.resolved.answer(raw)) is not None:  # a read or a set resolved before
+            asked_reply, body = fast
+            if asked_reply is not msgspec.UNSET:
+                reply_to = asked_reply
+            return (reply_to, body, correlation) if self._reply_allowed(reply_to) else None
         else:
             try:
                 data: Any = _json_decode(raw)
