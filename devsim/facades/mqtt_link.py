@@ -41,6 +41,7 @@ class MqttLink(asyncio.BufferedProtocol):
         self.keepalive = keepalive
         self.v5 = v5
         self.on_message: Callable[[Publish], None] = lambda message: None
+        self._route: tuple[bytes, Callable[[bytes], None]] | None = None  # (head of its PUBLISH, handler)
         self._loop = asyncio.get_running_loop()
         self.closed: asyncio.Future[None] = self._loop.create_future()
         self._transport: asyncio.Transport | None = None
@@ -75,8 +76,12 @@ class MqttLink(asyncio.BufferedProtocol):
         self._reading = True
         try:
             packets = self._reader.feed(data)
+            route = self._route
             for kind, flags, body in packets:
                 if kind == wire.PUBLISH:
+                    if route is not None and not flags and body.startswith(route[0]):  # QoS 0, not retained
+                        route[1](body[len(route[0]):])
+                        continue
                     message = wire.parse_publish(flags, body, self.v5)
                     if message.qos == 1:
                         self._out.append(wire.puback(message.packet_id))
@@ -121,6 +126,21 @@ class MqttLink(asyncio.BufferedProtocol):
         acked = self._expect(wire.PUBACK, packet_id)
         self._send(wire.publish(topic, payload, qos, retain, packet_id, props))
         return acked
+
+    def publish_headed(self, head: bytes, payload: bytes) -> None:
+        """Queue a PUBLISH at QoS 0, not retained, without properties, for this loop turn's write:
+        ``head`` from :meth:`head` (a topic answered again and again)."""
+        self._send(wire.publish_headed(head, payload))
+
+    def head(self, topic: str) -> bytes:
+        """What :meth:`publish_headed` puts before a payload on ``topic`` (:func:`mqtt_wire.publish_head`)."""
+        return wire.publish_head(topic, self.v5)
+
+    def route(self, topic: str, handler: Callable[[bytes], None]) -> None:
+        """Hand the payload of each PUBLISH on ``topic`` at QoS 0, not retained, without properties
+        straight to ``handler`` (a member's requests), in the step that read it; the other messages
+        on it, with properties or a QoS, go to :attr:`on_message` as :class:`Publish` records."""
+        self._route = (self.head(topic), handler)
 
     async def publish_acked(self, topic: str, payload: bytes, qos: int = 1, retain: bool = False,
                             timeout: float = 10.0) -> None:

@@ -46,7 +46,7 @@ import msgspec
 
 from devsim.core.clock import VirtualClock
 from devsim.facades.mqtt_link import LinkLost, MqttLink, open_link
-from devsim.facades.mqtt_wire import Publish, Will
+from devsim.facades.mqtt_wire import Publish, Will, publish_head
 from devsim.fleet.answers import ResolvedRequests, encode_answer
 from devsim.fleet.streams import StreamServer
 from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url, process_id
@@ -138,7 +138,7 @@ class FleetMember:
         self._link: MqttLink | None = None
         self._task: asyncio.Task[None] | None = None
         self._closing = False
-        self._replies: set[str] = set()  # reply topics found allowed
+        self._replies: dict[str, bytes] = {}  # reply topics found allowed -> the head of a PUBLISH on each
         self.streams = StreamServer(runtime, self.topics, self.process)
         self._request_topic = self.topics.request(self.process)  # compared with every message's topic
         self.resolved = ResolvedRequests(runtime)  #: the fast path of reads and sets
@@ -198,6 +198,7 @@ class FleetMember:
 
     async def _announce(self, link: MqttLink) -> None:
         link.on_message = functools.partial(self._received, link)
+        link.route(self.request_topic, functools.partial(self._requested, link))
         await link.subscribe(self.request_topic, qos=0)
         await self.streams.subscribe(link)
         await link.publish_acked(self.topics.announcement(self.process), _json_encode(self.announcement(True)),
@@ -241,11 +242,20 @@ class FleetMember:
         if message.topic != self._request_topic:
             self.streams.handle(message.topic, message.payload)
             return
-        answer = self.answer(message.payload, message.response_topic, message.correlation)
+        self._requested(link, message.payload, message.response_topic, message.correlation)
+
+    def _requested(self, link: MqttLink, payload: bytes, reply_to: str | None = None,
+                   correlation: bytes | None = None) -> None:
+        """A request (the link hands over one without properties straight from its read: the
+        common case), answered into the link's write of this loop turn."""
+        answer = self.answer(payload, reply_to, correlation)
         if answer is not None:
-            topic, payload, correlation = answer
+            topic, body, correlation = answer
             try:
-                link.publish(topic, payload, 0, False, correlation)
+                if correlation is None:
+                    link.publish_headed(self._replies[topic], body)
+                else:
+                    link.publish(topic, body, 0, False, correlation)
             except LinkLost:  # a lost connection shows in the serving loop
                 pass
 
@@ -291,7 +301,7 @@ class FleetMember:
         if allowed:
             if len(self._replies) >= 1024:
                 self._replies.clear()
-            self._replies.add(topic)
+            self._replies[topic] = publish_head(topic)  # (the member speaks MQTT 5)
         return allowed
 
     async def close(self) -> None:
