@@ -163,7 +163,8 @@ def publish_head(topic: str, v5: bool = True) -> bytes:
 
 def publish_headed(head: bytes, payload: bytes) -> bytes:
     """A PUBLISH at QoS 0, not retained, of ``payload`` after a ``head`` from :func:`publish_head`."""
-    return b"".join((b"\x30", _varint(len(head) + len(payload)), head, payload))
+    size = len(head) + len(payload)
+    return b"".join((b"\x30", _ONE_BYTE[size] if size < 128 else _varint(size), head, payload))
 
 
 @functools.lru_cache(maxsize=1024)

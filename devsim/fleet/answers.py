@@ -33,6 +33,7 @@ __all__ = ["ResolvedRequests", "encode_answer"]
 RESOLVED_MAX = 1024  # (op, device, name) kept at most; then the table starts again
 _json_encode = msgspec.json.Encoder().encode
 _SCALARS = frozenset((bool, int, float, str, type(None)))  # what a JSON value is when it is no list or object
+_PLAIN = frozenset((bool, int, str, type(None)))  # results that are JSON as they are (ops.jsonable's own test)
 
 
 def encode_answer(response: OkResponse | ErrorResponse) -> bytes:
@@ -74,7 +75,9 @@ def _read(asked: Asked, device: Device, point: Point) -> bytes | None:
         result = point.get(device.model)
     except Exception as exc:  # the error response of the generic way
         return _failed(asked, exc)
-    return _json_encode({"id": asked.id, "ok": True, "result": jsonable(result)}) + b"\n"
+    if type(result) not in _PLAIN:
+        result = jsonable(result)
+    return _json_encode({"id": asked.id, "ok": True, "result": result}) + b"\n"
 
 
 def _set(asked: Asked, device: Device, point: Point) -> bytes | None:

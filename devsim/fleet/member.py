@@ -275,7 +275,9 @@ class FleetMember:
             asked_reply, body = fast
             if asked_reply is not msgspec.UNSET:
                 reply_to = asked_reply
-            return (reply_to, body, correlation) if self._reply_allowed(reply_to) else None
+            if type(reply_to) is str and reply_to in self._replies or self._reply_allowed(reply_to):
+                return reply_to, body, correlation
+            return None
         else:
             try:
                 data: Any = _json_decode(raw)
