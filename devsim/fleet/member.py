@@ -26,8 +26,9 @@ A clean stop clears the retained announcement (the process leaves the listing); 
 connection is retried (after 0.5 s, 1 s, 2 s, then every 5 s) and the announcement renewed.
 
 A request costs the member its own work and little else: it is handed over in the step that read
-it (no queue, no task), parsed once with msgspec, and its answer joins the others of the same read
-in one write to the broker.
+it (no queue, no task, no record when it has no MQTT 5 properties), parsed once with msgspec, and
+its answer joins the others of the same read in one write to the broker.  A read or a set of a
+point resolved before is answered straight from the point (:mod:`devsim.fleet.answers`).
 """
 
 from __future__ import annotations

@@ -165,6 +165,10 @@ def test_a_publish_on_a_head_is_the_plain_publish(topic: str, payload: bytes, v5
     assert wire.publish_headed(head, payload) == b"\x30" + _varint_oracle(len(head) + len(payload)) + head + payload
 
 
+def test_a_head_is_of_mqtt_5_unless_told() -> None:
+    assert wire.publish_head("t") == b"\x00\x01t\x00"  # (the member speaks MQTT 5)
+
+
 def test_a_publish_with_both_qos_bits_or_identifier_0_is_malformed() -> None:
     with pytest.raises(wire.MalformedPacket, match="both QoS bits"):
         wire.parse_publish(0b0110, b"\x00\x01t\x00\x01\x00")
