@@ -53,7 +53,7 @@ class MqttLink(asyncio.BufferedProtocol):
         self._heard = 0.0
         self._pinger: asyncio.TimerHandle | None = None
         self._paused: asyncio.Future[None] | None = None
-        self._reading = False  # inside data_received: its end flushes
+        self._reading = False  # inside buffer_updated: its end flushes
         self._buffer = bytearray(READ_SIZE)
         self._view = memoryview(self._buffer)
 
@@ -69,9 +69,7 @@ class MqttLink(asyncio.BufferedProtocol):
         return self._view
 
     def buffer_updated(self, nbytes: int) -> None:
-        self.data_received(bytes(self._view[:nbytes]))
-
-    def data_received(self, data: bytes) -> None:
+        data = bytes(self._view[:nbytes])
         self._heard = time.monotonic()  # (what the loop's time() returns, without its call)
         self._reading = True
         try:
