@@ -41,6 +41,7 @@ class MqttLink(asyncio.BufferedProtocol):
         self.keepalive = keepalive
         self.v5 = v5
         self.on_message: Callable[[Publish], None] = lambda message: None
+        self._route: tuple[bytes, Callable[[bytes], None]] | None = None  # (head of its PUBLISH, handler)
         self._loop = asyncio.get_running_loop()
         self.closed: asyncio.Future[None] = self._loop.create_future()
         self._transport: asyncio.Transport | None = None
@@ -52,7 +53,7 @@ class MqttLink(asyncio.BufferedProtocol):
         self._heard = 0.0
         self._pinger: asyncio.TimerHandle | None = None
         self._paused: asyncio.Future[None] | None = None
-        self._reading = False  # inside data_received: its end flushes
+        self._reading = False  # inside buffer_updated: its end flushes
         self._buffer = bytearray(READ_SIZE)
         self._view = memoryview(self._buffer)
 
@@ -68,15 +69,17 @@ class MqttLink(asyncio.BufferedProtocol):
         return self._view
 
     def buffer_updated(self, nbytes: int) -> None:
-        self.data_received(bytes(self._view[:nbytes]))
-
-    def data_received(self, data: bytes) -> None:
+        data = bytes(self._view[:nbytes])
         self._heard = time.monotonic()  # (what the loop's time() returns, without its call)
         self._reading = True
         try:
             packets = self._reader.feed(data)
+            route = self._route
             for kind, flags, body in packets:
                 if kind == wire.PUBLISH:
+                    if route is not None and not flags and body.startswith(route[0]):  # QoS 0, not retained
+                        route[1](body[len(route[0]):])
+                        continue
                     message = wire.parse_publish(flags, body, self.v5)
                     if message.qos == 1:
                         self._out.append(wire.puback(message.packet_id))
@@ -121,6 +124,21 @@ class MqttLink(asyncio.BufferedProtocol):
         acked = self._expect(wire.PUBACK, packet_id)
         self._send(wire.publish(topic, payload, qos, retain, packet_id, props))
         return acked
+
+    def publish_headed(self, head: bytes, payload: bytes) -> None:
+        """Queue a PUBLISH at QoS 0, not retained, without properties, for this loop turn's write:
+        ``head`` from :meth:`head` (a topic answered again and again)."""
+        self._send(wire.publish_headed(head, payload))
+
+    def head(self, topic: str) -> bytes:
+        """What :meth:`publish_headed` puts before a payload on ``topic`` (:func:`mqtt_wire.publish_head`)."""
+        return wire.publish_head(topic, self.v5)
+
+    def route(self, topic: str, handler: Callable[[bytes], None]) -> None:
+        """Hand the payload of each PUBLISH on ``topic`` at QoS 0, not retained, without properties
+        straight to ``handler`` (a member's requests), in the step that read it; the other messages
+        on it, with properties or a QoS, go to :attr:`on_message` as :class:`Publish` records."""
+        self._route = (self.head(topic), handler)
 
     async def publish_acked(self, topic: str, payload: bytes, qos: int = 1, retain: bool = False,
                             timeout: float = 10.0) -> None:

@@ -24,7 +24,8 @@ from collections.abc import Callable
 import msgspec
 
 __all__ = ["DISCONNECT", "PINGREQ", "MalformedPacket", "PacketReader", "Publish", "Will", "connect", "parse_connack",
-           "parse_properties", "parse_publish", "properties", "puback", "publish", "suback_refused", "subscribe",
+           "parse_properties", "parse_publish", "properties", "puback", "publish", "publish_head", "publish_headed",
+           "suback_refused", "subscribe",
            "unsubscribe"]
 
 # packet types (2.1.2)
@@ -151,6 +152,19 @@ def publish(topic: str, payload: bytes, qos: int = 0, retain: bool = False, pack
     head = _topic(topic) + (_packet_id(packet_id) if qos and _qos(qos) else b"") + props  # (QoS 0: nothing to check)
     body = len(head) + len(payload)
     return b"".join((_ONE_BYTE[0x30 | (qos << 1) | (1 if retain else 0)], _varint(body), head, payload))
+
+
+def publish_head(topic: str, v5: bool = True) -> bytes:
+    """What a PUBLISH at QoS 0 without properties carries before its payload (3.3.2): the topic
+    name and, in MQTT 5, an empty property list.  A member's replies are built on it
+    (:func:`publish_headed`), its requests recognised by it."""
+    return _string(topic) + (_NO_PROPERTIES if v5 else b"")
+
+
+def publish_headed(head: bytes, payload: bytes) -> bytes:
+    """A PUBLISH at QoS 0, not retained, of ``payload`` after a ``head`` from :func:`publish_head`."""
+    size = len(head) + len(payload)
+    return b"".join((b"\x30", _ONE_BYTE[size] if size < 128 else _varint(size), head, payload))
 
 
 @functools.lru_cache(maxsize=1024)

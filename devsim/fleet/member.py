@@ -26,8 +26,9 @@ A clean stop clears the retained announcement (the process leaves the listing); 
 connection is retried (after 0.5 s, 1 s, 2 s, then every 5 s) and the announcement renewed.
 
 A request costs the member its own work and little else: it is handed over in the step that read
-it (no queue, no task), parsed once with msgspec, and its answer joins the others of the same read
-in one write to the broker.
+it (no queue, no task, no record when it has no MQTT 5 properties), parsed once with msgspec, and
+its answer joins the others of the same read in one write to the broker.  A read or a set of a
+point resolved before is answered straight from the point (:mod:`devsim.fleet.answers`).
 """
 
 from __future__ import annotations
@@ -46,7 +47,8 @@ import msgspec
 
 from devsim.core.clock import VirtualClock
 from devsim.facades.mqtt_link import LinkLost, MqttLink, open_link
-from devsim.facades.mqtt_wire import Publish, Will
+from devsim.facades.mqtt_wire import Publish, Will, publish_head
+from devsim.fleet.answers import ResolvedRequests, encode_answer
 from devsim.fleet.streams import StreamServer
 from devsim.fleet.topics import FleetUrl, Topics, parse_fleet_url, process_id
 from devsim.runtime import Runtime, ops
@@ -102,16 +104,6 @@ async def retained_announcements(link: MqttLink, topics: Topics, marker: str) ->
     return found
 
 
-def encode_answer(response: OkResponse | ErrorResponse) -> bytes:
-    """The control API's JSON line for ``response`` (:func:`devsim.runtime.ops.encode`), encoded
-    by msgspec (UTF-8 as it is, where :mod:`json` escapes it)."""
-    if isinstance(response, OkResponse):
-        data: dict[str, Any] = {"id": response.id, "ok": True, "result": ops.jsonable(response.result)}
-    else:
-        data = {"id": response.id, "ok": False, "error": response.error, "type": response.type}
-    return _json_encode(data) + b"\n"
-
-
 def _lenient(raw: bytes) -> Any:
     """What :mod:`json` makes of what msgspec refused (``NaN``, deep nesting), else ``raw``: the
     control API then says what is wrong with it."""
@@ -147,9 +139,10 @@ class FleetMember:
         self._link: MqttLink | None = None
         self._task: asyncio.Task[None] | None = None
         self._closing = False
-        self._replies: set[str] = set()  # reply topics found allowed
+        self._replies: dict[str, bytes] = {}  # reply topics found allowed -> the head of a PUBLISH on each
         self.streams = StreamServer(runtime, self.topics, self.process)
         self._request_topic = self.topics.request(self.process)  # compared with every message's topic
+        self.resolved = ResolvedRequests(runtime)  #: the fast path of reads and sets
 
     @property
     def request_topic(self) -> str:
@@ -206,6 +199,7 @@ class FleetMember:
 
     async def _announce(self, link: MqttLink) -> None:
         link.on_message = functools.partial(self._received, link)
+        link.route(self.request_topic, functools.partial(self._requested, link))
         await link.subscribe(self.request_topic, qos=0)
         await self.streams.subscribe(link)
         await link.publish_acked(self.topics.announcement(self.process), _json_encode(self.announcement(True)),
@@ -249,11 +243,20 @@ class FleetMember:
         if message.topic != self._request_topic:
             self.streams.handle(message.topic, message.payload)
             return
-        answer = self.answer(message.payload, message.response_topic, message.correlation)
+        self._requested(link, message.payload, message.response_topic, message.correlation)
+
+    def _requested(self, link: MqttLink, payload: bytes, reply_to: str | None = None,
+                   correlation: bytes | None = None) -> None:
+        """A request (the link hands over one without properties straight from its read: the
+        common case), answered into the link's write of this loop turn."""
+        answer = self.answer(payload, reply_to, correlation)
         if answer is not None:
-            topic, payload, correlation = answer
+            topic, body, correlation = answer
             try:
-                link.publish(topic, payload, 0, False, correlation)
+                if correlation is None:
+                    link.publish_headed(self._replies[topic], body)
+                else:
+                    link.publish(topic, body, 0, False, correlation)
             except LinkLost:  # a lost connection shows in the serving loop
                 pass
 
@@ -269,6 +272,13 @@ class FleetMember:
         stream_to = None
         if len(raw) > MAX_LINE:
             response = ErrorResponse(error="request too long", type="BadRequest")
+        elif (fast := self.resolved.answer(raw)) is not None:  # a read or a set resolved before
+            asked_reply, body = fast
+            if asked_reply is not msgspec.UNSET:
+                reply_to = asked_reply
+            if type(reply_to) is str and reply_to in self._replies or self._reply_allowed(reply_to):
+                return reply_to, body, correlation
+            return None
         else:
             try:
                 data: Any = _json_decode(raw)
@@ -294,7 +304,7 @@ class FleetMember:
         if allowed:
             if len(self._replies) >= 1024:
                 self._replies.clear()
-            self._replies.add(topic)
+            self._replies[topic] = publish_head(topic)  # (the member speaks MQTT 5)
         return allowed
 
     async def close(self) -> None:

@@ -75,3 +75,37 @@ def test_an_idle_link_keeps_alive(broker: Broker) -> None:
         await link.disconnect()
 
     asyncio.run(run())
+
+
+def test_a_routed_topic_hands_plain_payloads_to_its_handler_and_the_rest_to_on_message(broker: Broker) -> None:
+    async def run() -> None:
+        sender = await open_link("127.0.0.1", broker.port, "t-sender")
+        await sender.publish_acked("t/req", b"kept", qos=1, retain=True)
+        taker = await open_link("127.0.0.1", broker.port, "t-taker")
+        routed: list[bytes] = []
+        messages: list[Publish] = []
+        done = asyncio.Event()
+        taker.route("t/req", routed.append)
+        taker.on_message = lambda message: (messages.append(message), message.topic == "t/end" and done.set())
+        await taker.subscribe("t/#", qos=1)
+        sender.publish("t/req", b"plain")
+        sender.publish("t/req", b"with correlation", correlation=b"c1")
+        sender.publish("t/req", b"at qos 1", qos=1)
+        sender.publish("t/reqs", b"another topic")
+        sender.publish("t/req", b"")
+        sender.publish("t/end", b"")
+        await asyncio.wait_for(done.wait(), 10)
+        assert routed == [b"plain", b""]
+        assert [(m.topic, m.payload, m.retain, m.qos, m.correlation) for m in messages] == [
+            ("t/req", b"kept", True, 1, None), ("t/req", b"with correlation", False, 0, b"c1"),
+            ("t/req", b"at qos 1", False, 1, None), ("t/reqs", b"another topic", False, 0, None),
+            ("t/end", b"", False, 0, None)]
+        taker.publish_headed(taker.head("t/end"), b"headed")  # a PUBLISH on a head arrives as the plain one
+        done.clear()
+        await asyncio.wait_for(done.wait(), 10)
+        assert (messages[-1].topic, messages[-1].payload) == ("t/end", b"headed")
+        await sender.publish_acked("t/req", b"", qos=1, retain=True)
+        await taker.disconnect()
+        await sender.disconnect()
+
+    asyncio.run(run())

@@ -155,6 +155,20 @@ def test_publish_round_trips_at_every_qos(topic: str, payload: bytes, qos: int, 
     assert (message.response_topic, message.correlation) == (None, None)
 
 
+@given(topic=hs.text(max_size=8), payload=hs.binary(max_size=300), v5=hs.booleans())
+@example(topic="t", payload=b"p" * (127 - 4), v5=True)  # a remaining length of 127, the last of one byte
+@example(topic="t", payload=b"p" * (128 - 4), v5=True)  # 128, the first of two
+def test_a_publish_on_a_head_is_the_plain_publish(topic: str, payload: bytes, v5: bool) -> None:
+    head = wire.publish_head(topic, v5)
+    assert head == _string_oracle(topic.encode()) + (b"\x00" if v5 else b"")
+    assert wire.publish_headed(head, payload) == wire.publish(topic, payload, props=b"\x00" if v5 else b"")
+    assert wire.publish_headed(head, payload) == b"\x30" + _varint_oracle(len(head) + len(payload)) + head + payload
+
+
+def test_a_head_is_of_mqtt_5_unless_told() -> None:
+    assert wire.publish_head("t") == b"\x00\x01t\x00"  # (the member speaks MQTT 5)
+
+
 def test_a_publish_with_both_qos_bits_or_identifier_0_is_malformed() -> None:
     with pytest.raises(wire.MalformedPacket, match="both QoS bits"):
         wire.parse_publish(0b0110, b"\x00\x01t\x00\x01\x00")
