@@ -109,12 +109,10 @@ class Answers:
         key = (target.text, type(value), value, encoding)
         line = _PLAIN_LINES.get(key)
         if line is None:
-            if value == "*":
-                raise SersError(19)  # (what parameter_text says)
+            text = self.parameter_text(target, number)  # (its errors as they are: nothing kept)
             if len(_PLAIN_LINES) >= _PLAIN_LINES_MAX:
                 _PLAIN_LINES.clear()
-            text = f"{target.text}={self.access.format_value(number, value)}\n\r"
-            line = _PLAIN_LINES[key] = text.encode(encoding, errors="replace")
+            line = _PLAIN_LINES[key] = (text + "\n\r").encode(encoding, errors="replace")
         return line
 
     def list_parameters(self, arg: str) -> list[str]:
