@@ -216,6 +216,13 @@ class Point(msgspec.Struct, frozen=True):
             raise BadValue(f"{_show(value)} is above the maximum {self.maximum:g}{_unit(self.unit)}")
         return parsed
 
+    def checked(self, value: Any) -> Any:
+        """:meth:`parse` as a set reports it: a :class:`BadValue` names the point."""
+        try:
+            return self.parse(value)
+        except BadValue as exc:
+            raise BadValue(f"{self.name}: {exc}") from None
+
     def range_text(self) -> str:
         return range_text(self.minimum, self.maximum, self.choices)
 
@@ -335,11 +342,7 @@ class PointTable(msgspec.Struct):
         point = self.lookup(name, owner)
         if point.put is None:
             raise ReadOnlyName(f"{point.name} of {owner} is read-only")
-        try:
-            parsed = point.parse(value)
-        except BadValue as exc:
-            raise BadValue(f"{point.name}: {exc}") from None
-        return point, parsed
+        return point, point.checked(value)
 
     def set(self, model: Any, name: str, value: Any, owner: str = "the device") -> None:
         point, parsed = self.parse(name, value, owner, model)

@@ -24,7 +24,7 @@ from typing import Any, NamedTuple
 import msgspec
 
 from devsim.core.device import Device
-from devsim.core.points import BadValue, Point
+from devsim.core.points import Point
 from devsim.runtime import Runtime
 from devsim.runtime.ops import ErrorResponse, OkResponse, clip, error_text, jsonable
 
@@ -33,7 +33,6 @@ __all__ = ["ResolvedRequests", "encode_answer"]
 RESOLVED_MAX = 1024  # (op, device, name) kept at most; then the table starts again
 _json_encode = msgspec.json.Encoder().encode
 _SCALARS = frozenset((bool, int, float, str, type(None)))  # what a JSON value is when it is no list or object
-_PLAIN = frozenset((bool, int, str, type(None)))  # results that are JSON as they are (ops.jsonable's own test)
 
 
 def encode_answer(response: OkResponse | ErrorResponse) -> bytes:
@@ -75,9 +74,7 @@ def _read(asked: Asked, device: Device, point: Point) -> bytes | None:
         result = point.get(device.model)
     except Exception as exc:  # the error response of the generic way
         return _failed(asked, exc)
-    if type(result) not in _PLAIN:
-        result = jsonable(result)
-    return _json_encode({"id": asked.id, "ok": True, "result": result}) + b"\n"
+    return encode_answer(OkResponse(id=asked.id, result=result))
 
 
 def _set(asked: Asked, device: Device, point: Point) -> bytes | None:
@@ -87,14 +84,10 @@ def _set(asked: Asked, device: Device, point: Point) -> bytes | None:
         return None
     assert point.put is not None  # (resolved only when it has one)
     try:
-        try:
-            parsed = point.parse(value)
-        except BadValue as exc:
-            raise BadValue(f"{point.name}: {exc}") from None
-        point.put(device.model, parsed)
+        point.put(device.model, point.checked(value))  # (what PointTable.set does with the point)
     except Exception as exc:  # the error response of the generic way
         return _failed(asked, exc)
-    return _json_encode({"id": asked.id, "ok": True, "result": None}) + b"\n"
+    return encode_answer(OkResponse(id=asked.id, result=None))
 
 
 class FastOp(NamedTuple):

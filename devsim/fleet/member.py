@@ -276,7 +276,7 @@ class FleetMember:
             asked_reply, body = fast
             if asked_reply is not msgspec.UNSET:
                 reply_to = asked_reply
-            if type(reply_to) is str and reply_to in self._replies or self._reply_allowed(reply_to):
+            if self._reply_allowed(reply_to):
                 return reply_to, body, correlation
             return None
         else:
