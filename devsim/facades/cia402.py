@@ -60,12 +60,15 @@ def command(word: int) -> str:
 
 
 #: (state, command) → the next state (CiA 402-2 §8.4.3, transitions 2 … 12 and 16; the fault's
-#: 13 … 15 are the drive's and the fault reset's).  A command not listed for a state changes
+#: 13 … 15 are the drive's and the fault reset's).  Enable operation in Ready to switch on is the
+#: command coding's "switch on + enable operation" (§8.4.2, since DSP 402 V3.0): transitions 3 and
+#: 4 at once, the drive passing through Switched on.  A command not listed for a state changes
 #: nothing: Quick stop active, in particular, is left only by disable voltage, enable operation or
 #: the axis standing (:attr:`Cia402.statusword`).
 TRANSITIONS = {
     ("switch_on_disabled", "shutdown"): "ready_to_switch_on",  # 2
     ("ready_to_switch_on", "switch_on"): "switched_on",  # 3
+    ("ready_to_switch_on", "enable_operation"): "operation_enabled",  # 3 + 4
     ("switched_on", "enable_operation"): "operation_enabled",  # 4
     ("operation_enabled", "switch_on"): "switched_on",  # 5 (disable operation)
     ("switched_on", "shutdown"): "ready_to_switch_on",  # 6

@@ -163,6 +163,22 @@ def test_the_sers_as_a_402_drive() -> None:
         drive.close()
 
 
+def test_switch_on_and_enable_operation_in_one_controlword() -> None:
+    """CiA 402-2's command coding "switch on + enable operation": 0x0F sent in Ready to switch on
+    makes transitions 3 and 4 at once, over a real bus (the SERS's power stage on, as by 0x07,
+    0x0F)."""
+    drive = Drive("sers", 2, name="sers", ready=True)
+    runtime, node = drive.runtime, drive.node
+    try:
+        node.sdo[0x6040].raw = 0x06
+        assert node.sdo[0x6041].raw & 0x6F == 0x21 and runtime.read("sers", "energized") is False
+        node.sdo[0x6040].raw = 0x0F
+        assert node.sdo[0x6041].raw & 0x6F == 0x27  # Operation enabled
+        assert runtime.read("sers", "energized") is True
+    finally:
+        drive.close()
+
+
 def test_the_poselesta_x_axis_as_a_402_drive() -> None:
     """The CNC's X axis: enabled by the axis enable, a target as a Hand-Einzelsatz block started
     with NC-Start (G01 X10 F3000: 50 mm/s with 500 mm/s² ramps reach 10 mm after 10/50 + 50/500 =

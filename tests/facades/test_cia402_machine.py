@@ -39,9 +39,11 @@ def command(word: int) -> str:
 
 
 #: The transitions (CiA 402-2 §8.4.3): (state, command) -> next state; a pair not listed stays.
+#: The command coding's "switch on + enable operation" (0xxx 1111 in Ready to switch on) makes 3 + 4.
 TRANSITIONS = {
     (SOD, "shutdown"): READY,  # 2
     (READY, "switch on"): ON,  # 3
+    (READY, "enable operation"): ENABLED,  # 3 + 4
     (ON, "enable operation"): ENABLED,  # 4
     (ENABLED, "switch on"): ON,  # 5 (disable operation)
     (ON, "shutdown"): READY,  # 6
