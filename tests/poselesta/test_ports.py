@@ -207,13 +207,15 @@ def test_the_parameter_catalogue_p99_goes_out_and_comes_back_in(cnc: Any) -> Non
     lines = tape.decode("ascii").split("\r\n")
     assert lines[:3] == ["%", "N1P0", "N2P0"] and lines[-2:] == ["M30", ""]
     assert "N44P5000" in lines and "N70P3" in lines and "N72P20" in lines and not any(x.startswith("N79") for x in lines)
+    # the software limits (mm) keep their decimals, "as the parameter's unit requires" (N9 P250.000)
+    assert "N9P99999.000" in lines and "N16P-99999.000" in lines
     assert len(lines) == 1 + 97 + 2
     cnc.set("v7.transfer", "input")
     assert cnc.read("param.P44") == 0 and cnc.read("param.P71") == 0  # cleared at the start
     with open_port(cnc, "v7") as host:
-        host.write(b"%\r\nN44P4500\r\nN70P3\r\nN71P1\r\nN72P30\r\nN97P-12.5\r\nM30\r\n")  # still ASCII 1200
-        until(lambda: cnc.read("v7.state") == "done", "the catalogue is read")
-    assert [cnc.read(f"param.P{n}") for n in (44, 70, 71, 72, 97, 48)] == [4500, 3, 1, 30, -12.5, 0]
+        host.write(b"%\r\nN9P250.000\r\nN44P4500\r\nN70P3\r\nN71P1\r\nN72P30\r\nN97P-12.5\r\nM30\r\n")
+        until(lambda: cnc.read("v7.state") == "done", "the catalogue is read")  # (still ASCII 1200)
+    assert [cnc.read(f"param.P{n}") for n in (9, 44, 70, 71, 72, 97, 48)] == [250, 4500, 3, 1, 30, -12.5, 0]
 
 
 @pytest.mark.manual("§2.6.3", "Das Einlesen des Parameterkatalogs ist bei POS II nur im ISO-Code mit 110 Baud möglich, "

@@ -18,10 +18,10 @@ from devsim.core.kit import Command, Table
 from devsim.core.points import BadValue
 from devsim.core.signals import SignalBank
 from devsim.devices.poselesta.codes import BAUD_CODES, WERTBEREICHES_UEBERLAUF, baud_for_code
-from devsim.devices.poselesta.parameters import MachineParameters
+from devsim.devices.poselesta.parameters import CATALOGUE_FORMATS, MachineParameters
 from devsim.devices.poselesta.programs import CATALOGUE, DIAGNOSTICS, ProgramMemory
 from devsim.devices.poselesta.screen import Screen
-from devsim.devices.poselesta.tape import Block, TapeReader, block_words, render
+from devsim.devices.poselesta.tape import Block, Formats, TapeReader, block_words, render
 from devsim.devices.poselesta.transfers import FUNCTIONS, PRINTER_CR_PAUSE, Function, Output, ReadIn
 
 __all__ = ["PORT_MODE", "TRANSFERS", "LinkOptions", "SerialLinks"]
@@ -177,7 +177,7 @@ class SerialLinks:
         port = function.port
         blocks = self._blocks(program)
         eob = "\r\n" if self._options.eob == "CRLF" else "\r"
-        data = render(blocks, iso=self.iso(port), formatted=port == "v6", formats=self._memory.program_formats(program),
+        data = render(blocks, iso=self.iso(port), formatted=port == "v6", formats=self._formats(program),
                       eob=eob, leader_nul=self._nul[0], trailer_nul=self._nul[1])
         self._send_pieces(function, program, [(function.leader, data)], len(blocks))
 
@@ -185,7 +185,7 @@ class SerialLinks:
         """T1 (§2.6.2.1): one word per line, CR without LF, 820 ms after every CR; 7 bits with
         bit 7 = 0 whatever P69 says (the printer's parity is a ninth bit a byte cannot carry)."""
         blocks = self._blocks(program)
-        formats = self._memory.program_formats(program)
+        formats = self._formats(program)
         lines = ["%", "", ""]  # "%" CR CR CR
         for block in sorted(blocks, key=lambda b: b.number):
             lines += block_words(block, formats, formatted=True)
@@ -196,6 +196,10 @@ class SerialLinks:
             pieces.append((wait, (line + "\r").encode("ascii")))
             wait = PRINTER_CR_PAUSE
         self._send_pieces(function, program, pieces, len(blocks))
+
+    def _formats(self, program: int) -> Formats:
+        """The word formats a program leaves in: the catalogue's own, or those it was typed in."""
+        return CATALOGUE_FORMATS if program == CATALOGUE else self._memory.program_formats(program)
 
     def _blocks(self, program: int) -> list[Block]:
         if program == CATALOGUE:

@@ -16,9 +16,9 @@ from collections.abc import Mapping
 from devsim.core.nvram import NonVolatileMemory
 from devsim.core.parameters import Param, Parameters, ParameterTable, accessor
 from devsim.devices.poselesta.signals import AXES
-from devsim.devices.poselesta.tape import Block
+from devsim.devices.poselesta.tape import Block, Formats
 
-__all__ = ["CATALOGUE_SCALE", "PARAMETERS", "MachineParameters", "check_parameter"]
+__all__ = ["CATALOGUE_FORMATS", "CATALOGUE_SCALE", "PARAMETERS", "MachineParameters", "check_parameter"]
 
 #: The catalogue's value word P carries 3 decimals (spec §3.9, simulator-defined format).
 CATALOGUE_SCALE = 1000
@@ -71,6 +71,9 @@ _RANGED: list[Param] = [
             "§2.3.21", 0, 999, 0, "abort_block"),
 ]
 _RANGED_KEYS = {row.key for row in _RANGED}
+#: The catalogue's word formats on output: the parameters in mm (the software limits P9–P16) keep
+#: their three decimals (spec §3.9: ``N9 P250.000``).
+CATALOGUE_FORMATS = Formats(fractional=frozenset(row.key for row in _RANGED if row.type == "float"))
 
 #: P1 … P98 without P79, by number: the ranged rows, and every other number stored and answered
 #: without an effect (spec §4.8).

@@ -53,6 +53,10 @@ class Formats(msgspec.Struct, frozen=True):
     placed by each axis's resolution; N xxx, G/M/T xx, F/S xxxx, L xx.xxx)."""
 
     decimals: Mapping[str, int] = msgspec.field(default_factory=lambda: dict.fromkeys(COORDINATES, 3))
+    #: Catalogue parameters whose value word keeps its three decimals on output, whole or not
+    #: (``N9 P250.000``: "decimals as the parameter's unit requires", spec §3.9); the others' whole
+    #: values are written without them (``N44 P6000``).
+    fractional: frozenset[int] = frozenset()
 
     def of(self, letter: str) -> tuple[int, int]:
         if letter in COORDINATES:
@@ -333,14 +337,14 @@ CATALOGUE_CHARACTERS: Table[CharacterHandler] = Table([
 
 
 # -- output -----------------------------------------------------------------------------------
-def _value_text(letter: str, value: int, formats: Formats) -> tuple[str, str]:
-    """(sign, digits) of a word on output (spec §3.6)."""
+def _value_text(letter: str, value: int, formats: Formats, number: int) -> tuple[str, str]:
+    """(sign, digits) of a word of block ``number`` on output (spec §3.6)."""
     before, after = formats.of(letter)
     sign = "-" if value < 0 else ""
     value = abs(value)
     if letter in "GMT":
         return sign, f"{value:02d}"
-    if after == 0 or letter == CATALOGUE_VALUE and value % 10**after == 0:
+    if after == 0 or letter == CATALOGUE_VALUE and value % 10**after == 0 and number not in formats.fractional:
         return sign, str(value // 10**after)
     whole, fraction = divmod(value, 10**after)
     return sign, f"{whole}.{fraction:0{after}d}"
@@ -355,7 +359,7 @@ def block_words(block: Block, formats: Formats, *, formatted: bool) -> list[str]
     ordered = sorted(items, key=lambda kv: (rank[kv[0]], kv[1] if kv[0] in "GM" else 0))
     words = []
     for letter, value in ordered:
-        sign, digits = _value_text(letter, value, formats)
+        sign, digits = _value_text(letter, value, formats, block.number)
         words.append(f"{letter}{sign}{gap}{digits}")
     if block.skip:
         words.append("#")
