@@ -12,6 +12,7 @@ socket is readable (``add_reader``), it reads into a buffer of its own, and it s
 ``socket.send`` while nothing waits unsent.  What the socket does not take waits in order in
 the link's own buffer, sent when the socket is writable again (``add_writer``); beyond
 ``PAUSED_LIMIT`` bytes waiting, :meth:`MqttLink.drain` waits until they are down to a quarter.
+Its pings are kept by :mod:`devsim.facades.mqtt_keepalive`, not by a timer in the loop.
 
 A connection that is lost, a broker that sends a DISCONNECT, or one silent for 1.5 keep-alive
 intervals (3.1.2.10) ends :attr:`MqttLink.closed` with a :class:`LinkLost`; the caller reconnects
@@ -27,6 +28,7 @@ import time
 from collections.abc import Callable
 
 from devsim.facades import mqtt_wire as wire
+from devsim.facades.mqtt_keepalive import keepalive_clock
 from devsim.facades.mqtt_wire import Publish, Will
 
 __all__ = ["LinkLost", "MqttLink", "open_link"]
@@ -60,7 +62,6 @@ class MqttLink:
         self._waiting: dict[tuple[int, int], asyncio.Future[bytes]] = {}  # (ack type, packet id) -> ack body
         self._next_id = 0
         self._heard = time.monotonic()
-        self._pinger: asyncio.TimerHandle | None = None
         self._paused: asyncio.Future[None] | None = None
         self._reading = False  # inside _readable: its end flushes
         self._buffer = bytearray(READ_SIZE)
@@ -106,7 +107,10 @@ class MqttLink:
             return
         finally:
             self._reading = False
-        self.flush()  # the answers to everything read now, in one write
+        out = self._out  # the answers to everything read now, in one write (flush without its call)
+        if out and self._sock is not None and not self._closing:  # (else: lost meanwhile, nothing goes out)
+            self._out = []
+            self._write(out[0] if len(out) == 1 else b"".join(out))
 
     def _write(self, data: bytes) -> None:
         """Send ``data`` after what waits unsent; what the socket does not take waits for it."""
@@ -187,7 +191,11 @@ class MqttLink:
     def publish_headed(self, head: bytes, payload: bytes) -> None:
         """Queue a PUBLISH at QoS 0, not retained, without properties, for this loop turn's write:
         ``head`` from :meth:`head` (a topic answered again and again)."""
-        self._send(wire.publish_headed(head, payload))
+        if self.closed.done():  # (what _send does, without its call: a member's every answer)
+            self._raise_if_lost()
+        self._out.append(wire.publish_headed(head, payload))
+        if self._flush_soon is None and not self._reading:
+            self._flush_soon = self._loop.call_soon(self.flush)
 
     def head(self, topic: str) -> bytes:
         """What :meth:`publish_headed` puts before a payload on ``topic`` (:func:`mqtt_wire.publish_head`)."""
@@ -294,20 +302,20 @@ class MqttLink:
             raise LinkLost(str(why) if why is not None else "the connection is closed")
 
     def _ping(self) -> None:
-        loop = self._loop
+        if self.closed.done():  # (the last call the keep-alive clock had for it)
+            return
         if time.monotonic() - self._heard > 1.5 * self.keepalive:
             self._lose(LinkLost(f"the broker was silent for {1.5 * self.keepalive:g} s"))
             return
         with contextlib.suppress(LinkLost):
             self._send(wire.PINGREQ)
-        self._pinger = loop.call_later(self.keepalive * PING_SHARE, self._ping)
+        self._start_pinging()
 
     def _start_pinging(self) -> None:
-        self._pinger = self._loop.call_later(self.keepalive * PING_SHARE, self._ping)
+        """The next ping, on the keep-alive clock's thread (no timer in the loop)."""
+        keepalive_clock().call_at(time.monotonic() + self.keepalive * PING_SHARE, self._loop, self._ping)
 
     def _lose(self, exc: LinkLost) -> None:
-        if self._pinger is not None:
-            self._pinger.cancel()
         if self._flush_soon is not None:
             self._flush_soon.cancel()
             self._flush_soon = None

@@ -83,11 +83,23 @@ def test_a_dropped_link_leaves_its_will_and_a_stopped_broker_ends_the_link(broke
 def test_an_idle_link_keeps_alive(broker: Broker) -> None:
     async def run() -> None:
         link = await open_link("127.0.0.1", broker.port, "t-idle", keepalive=1, v5=False)
+        assert not asyncio.get_running_loop()._scheduled  # type: ignore[attr-defined]  (its pings: no timer in the loop)
         # mosquitto drops a client silent for 1.5 keep-alive intervals; the link's pings prevent it
         with pytest.raises(TimeoutError):
             await asyncio.wait_for(asyncio.shield(link.closed), 4)  # idle for four intervals
         await link.publish_acked("t/still", b"here", qos=1)
         await link.disconnect()
+
+    asyncio.run(run())
+
+
+def test_a_silent_broker_ends_the_link_after_one_and_a_half_keep_alive_intervals(broker: Broker) -> None:
+    async def run() -> None:
+        link = await open_link("127.0.0.1", broker.port, "t-silent", keepalive=1)
+        with _stopped(broker):  # it answers no PINGREQ
+            with pytest.raises(LinkLost, match="silent for 1.5 s"):
+                await asyncio.wait_for(link.closed, 10)
+        assert link._sock is None
 
     asyncio.run(run())
 
