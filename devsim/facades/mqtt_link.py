@@ -86,31 +86,43 @@ class MqttLink:
             self._lose(LinkLost("connection to the broker lost"))
             return
         self._heard = time.monotonic()  # (what the loop's time() returns, without its call)
+        data = bytes(self._view[:nbytes])
+        route = self._route
         self._reading = True
         try:
-            route = self._route
-            for kind, flags, body in self._reader.feed(bytes(self._view[:nbytes])):
-                if kind == wire.PUBLISH:
-                    if route is not None and not flags and body.startswith(route[0]):  # QoS 0, not retained
-                        route[1](body[len(route[0]):])
-                        continue
-                    message = wire.parse_publish(flags, body, self.v5)
-                    if message.qos == 1:
-                        self._out.append(wire.puback(message.packet_id))
-                    self.on_message(message)
-                elif kind == wire.SERVER_DISCONNECT:
-                    raise LinkLost(f"the broker disconnected (reason {body[0] if body else 0})")
-                else:
-                    self._acked(kind, body)
+            payload = None if route is None else self._reader.single_publish(data, route[0])
+            if payload is not None:  # one request, read whole: the common case of a member
+                route[1](payload)
+            else:
+                self._handle(data, route)
         except (wire.MalformedPacket, LinkLost) as exc:
             self._lose(exc if isinstance(exc, LinkLost) else LinkLost(f"malformed packet from the broker: {exc}"))
             return
+        except Exception as exc:  # a handler's own failure: the connection ends, as asyncio ended it
+            self._lose(LinkLost(f"a message's handler failed: {exc!r}"))
+            raise
         finally:
             self._reading = False
         out = self._out  # the answers to everything read now, in one write (flush without its call)
         if out and self._sock is not None and not self._closing:  # (else: lost meanwhile, nothing goes out)
             self._out = []
             self._write(out[0] if len(out) == 1 else b"".join(out))
+
+    def _handle(self, data: bytes, route: tuple[bytes, Callable[[bytes], None]] | None) -> None:
+        """Every packet of ``data`` (after what an earlier read left), in order."""
+        for kind, flags, body in self._reader.feed(data):
+            if kind == wire.PUBLISH:
+                if route is not None and not flags and body.startswith(route[0]):  # QoS 0, not retained
+                    route[1](body[len(route[0]):])
+                    continue
+                message = wire.parse_publish(flags, body, self.v5)
+                if message.qos == 1:
+                    self._out.append(wire.puback(message.packet_id))
+                self.on_message(message)
+            elif kind == wire.SERVER_DISCONNECT:
+                raise LinkLost(f"the broker disconnected (reason {body[0] if body else 0})")
+            else:
+                self._acked(kind, body)
 
     def _write(self, data: bytes) -> None:
         """Send ``data`` after what waits unsent; what the socket does not take waits for it."""

@@ -104,6 +104,23 @@ def test_a_silent_broker_ends_the_link_after_one_and_a_half_keep_alive_intervals
     asyncio.run(run())
 
 
+def test_a_handler_that_fails_ends_the_link_and_its_error_reaches_the_loop(broker: Broker) -> None:
+    async def run() -> None:
+        loop = asyncio.get_running_loop()
+        reported: list[BaseException | None] = []
+        loop.set_exception_handler(lambda _loop, context: reported.append(context.get("exception")))
+        link = await open_link("127.0.0.1", broker.port, "t-failing")
+        link.route("t/req", lambda payload: 1 / 0)  # type: ignore[func-returns-value]
+        await link.subscribe("t/req")
+        link.publish("t/req", b"x")
+        with pytest.raises(LinkLost, match="ZeroDivisionError"):
+            await asyncio.wait_for(link.closed, 10)
+        assert [type(exc) for exc in reported] == [ZeroDivisionError]
+        assert link._sock is None
+
+    asyncio.run(run())
+
+
 def test_a_routed_topic_hands_plain_payloads_to_its_handler_and_the_rest_to_on_message(broker: Broker) -> None:
     async def run() -> None:
         sender = await open_link("127.0.0.1", broker.port, "t-sender")
