@@ -18,6 +18,7 @@ import asyncio
 import contextlib
 import heapq
 import itertools
+import os
 import threading
 import time
 from collections.abc import Callable
@@ -65,6 +66,7 @@ def _call_each(callbacks: list[Callable[[], None]]) -> None:
 
 
 _CLOCK = KeepAliveClock()
+os.register_at_fork(after_in_child=_CLOCK.__init__)  # (a forked child has no thread: it starts its own)
 
 
 def keepalive_clock() -> KeepAliveClock:

@@ -43,7 +43,12 @@ class LinkLost(ConnectionError):
 
 
 class MqttLink:
-    """One MQTT session, clean start, on a connected socket of its own (see the module docstring)."""
+    """One MQTT session, clean start, on a connected socket of its own (see the module docstring).
+    Its attributes are slots: a request's read touches one block of them."""
+
+    __slots__ = ("keepalive", "v5", "on_message", "_route", "_loop", "closed", "_sock", "_fd", "_reader", "_out",
+                 "_unsent", "_closing", "_flush_soon", "_waiting", "_next_id", "_heard", "_paused", "_reading",
+                 "_buffer", "_view")
 
     def __init__(self, sock: socket.socket, keepalive: int, v5: bool = True) -> None:
         self.keepalive = keepalive

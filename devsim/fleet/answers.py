@@ -33,6 +33,7 @@ __all__ = ["ResolvedRequests", "encode_answer", "encode_result"]
 RESOLVED_MAX = 1024  # (op, device, name) kept at most; then the table starts again
 _json_encode = msgspec.json.Encoder().encode
 _SCALARS = frozenset((bool, int, float, str, type(None)))  # what a JSON value is when it is no list or object
+_UNSET = msgspec.UNSET
 _JSON_AS_IS = frozenset((bool, int, str, type(None)))  # results jsonable() returns unchanged
 
 
@@ -91,7 +92,7 @@ def _failed(asked: Asked, exc: Exception) -> bytes:
 
 def _read(asked: Asked, device: Device, point: Point) -> bytes | None:
     """``read``: :meth:`devsim.core.points.PointTable.read` with the point found."""
-    if asked.value is not msgspec.UNSET:
+    if asked.value is not _UNSET:
         return None
     assert point.get is not None  # (resolved only when it has one)
     try:

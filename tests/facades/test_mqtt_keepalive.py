@@ -1,14 +1,16 @@
 """The MQTT links' keep-alive clock (devsim.facades.mqtt_keepalive): calls come in their loop's
 thread, in the order of their moments, never before them; a call sooner than the one the thread
-waits for wakes it; a closed loop's call is dropped and the clock goes on."""
+waits for wakes it; a closed loop's call is dropped and the clock goes on; a forked child
+starts a thread of its own."""
 
 from __future__ import annotations
 
 import asyncio
+import os
 import threading
 import time
 
-from devsim.facades.mqtt_keepalive import KeepAliveClock
+from devsim.facades.mqtt_keepalive import KeepAliveClock, keepalive_clock
 
 
 def test_calls_come_in_their_loop_in_order_and_a_closed_loop_is_skipped() -> None:
@@ -38,3 +40,23 @@ def test_calls_come_in_their_loop_in_order_and_a_closed_loop_is_skipped() -> Non
         assert [at - start >= due for (_name, _thread, at), due in zip(got, (0.1, 0.2, 0.3), strict=True)] == [True] * 3
 
     asyncio.run(run())
+
+
+def test_a_forked_child_keeps_its_own_clock() -> None:
+    clock = keepalive_clock()
+
+    async def wait_for_a_call() -> None:
+        called = asyncio.Event()
+        clock.call_at(time.monotonic() + 0.01, asyncio.get_running_loop(), called.set)
+        await asyncio.wait_for(called.wait(), 5)
+
+    asyncio.run(wait_for_a_call())  # the process's clock thread runs
+    child = os.fork()
+    if child == 0:  # (the child: no thread but this one)
+        try:
+            asyncio.run(wait_for_a_call())
+        except BaseException:
+            os._exit(1)
+        os._exit(0)
+    _pid, status = os.waitpid(child, 0)
+    assert os.waitstatus_to_exitcode(status) == 0
