@@ -9,7 +9,7 @@ with no timeout at all.  A keep-alive counts the broker's real seconds, not the 
 
 The thread is the process's, not a device's: it holds only the due calls (a link's next ping,
 every 0.75 keep-alive intervals), each dropped once made; a call whose loop has closed is
-dropped too.  The calls due at one moment go to each loop together, in one wake-up.
+dropped too.
 """
 
 from __future__ import annotations
@@ -50,19 +50,11 @@ class KeepAliveClock:
         with self._changed:
             while True:
                 now = time.monotonic()
-                calls: dict[asyncio.AbstractEventLoop, list[Callable[[], None]]] = {}
                 while due and due[0][0] <= now:
                     _when, _order, loop, callback = heapq.heappop(due)
-                    calls.setdefault(loop, []).append(callback)
-                for loop, callbacks in calls.items():
                     with contextlib.suppress(RuntimeError):  # the loop has closed: its links are gone
-                        loop.call_soon_threadsafe(_call_each, callbacks)
+                        loop.call_soon_threadsafe(callback)
                 self._changed.wait(due[0][0] - now if due else None)
-
-
-def _call_each(callbacks: list[Callable[[], None]]) -> None:
-    for callback in callbacks:
-        callback()
 
 
 _CLOCK = KeepAliveClock()
