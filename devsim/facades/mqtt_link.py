@@ -24,6 +24,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import socket
+import threading
 import time
 from collections.abc import Callable
 
@@ -38,6 +39,19 @@ PING_SHARE = 0.75  # a PINGREQ every this share of the keep alive (a device's id
 READ_SIZE = 64 * 1024  # bytes a read takes at most (asyncio's plain protocol allocates 256 KiB per read)
 
 
+_per_thread = threading.local()
+
+
+def _read_buffer() -> memoryview:
+    """The read buffer of the links of this thread's loop: a read copies its bytes out at once
+    (as a TCP port's sessions do, :mod:`devsim.transports.tcp`), so the links share it – the
+    MQTT facade holds a link per device for its will, which would be 64 KiB each."""
+    view: memoryview | None = getattr(_per_thread, "view", None)
+    if view is None:
+        view = _per_thread.view = memoryview(bytearray(READ_SIZE))
+    return view
+
+
 class LinkLost(ConnectionError):
     """The broker connection is gone (or never came up)."""
 
@@ -48,7 +62,7 @@ class MqttLink:
 
     __slots__ = ("keepalive", "v5", "on_message", "_route", "_loop", "closed", "_sock", "_fd", "_reader", "_out",
                  "_unsent", "_closing", "_flush_soon", "_waiting", "_next_id", "_heard", "_paused", "_reading",
-                 "_buffer", "_view")
+                 "_view")
 
     def __init__(self, sock: socket.socket, keepalive: int, v5: bool = True) -> None:
         self.keepalive = keepalive
@@ -69,8 +83,7 @@ class MqttLink:
         self._heard = time.monotonic()
         self._paused: asyncio.Future[None] | None = None
         self._reading = False  # inside _readable: its end flushes
-        self._buffer = bytearray(READ_SIZE)
-        self._view = memoryview(self._buffer)
+        self._view = _read_buffer()
         sock.setblocking(False)
         if sock.family in (socket.AF_INET, socket.AF_INET6):
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # requests are small and waited for
@@ -81,7 +94,7 @@ class MqttLink:
         """The loop's call when the socket has bytes (or its end): every packet read is handled
         in this step, and the answers leave in one write at its end."""
         try:
-            nbytes = self._sock.recv_into(self._buffer)  # type: ignore[union-attr]  (read only while open)
+            nbytes = self._sock.recv_into(self._view)  # type: ignore[union-attr]  (read only while open)
         except (BlockingIOError, InterruptedError):
             return
         except OSError as exc:

@@ -228,7 +228,7 @@ def test_a_link_lost_while_bytes_wait_ends_and_its_drain_raises(broker: Broker) 
     asyncio.run(run())
 
 
-def test_a_packet_split_across_reads_arrives_whole(broker: Broker) -> None:
+def test_a_packet_split_across_reads_arrives_whole_through_a_shared_read_buffer(broker: Broker) -> None:
     async def run() -> None:
         receiver = await open_link("127.0.0.1", broker.port, "t-receiver")
         routed: list[bytes] = []
@@ -246,6 +246,7 @@ def test_a_packet_split_across_reads_arrives_whole(broker: Broker) -> None:
         await asyncio.wait_for(done.wait(), 30)
         assert routed == [b"%d" % index for index in range(300)] + [big]
         assert got == [big[::-1]]
+        assert receiver._view is sender._view  # (the links of a loop share one read buffer)
         await sender.disconnect()
         await receiver.disconnect()
 
