@@ -28,6 +28,9 @@ Starts a mosquitto (``$SYS`` every second) and a plant of ``--devices`` SERS dev
 ``--warmup`` alone, each request sent after the last one's answer, so that each is a loop turn of
 its own, as at the benchmark's rate (one request every 4 ms per process).  A count the load of
 the machine does not move; the timed figures on a shared two-core machine swing by a third.
+``--profile N`` runs the devsim member the same way under callgrind and prints its N costliest
+functions per request (C functions: the interpreter's, msgspec's, the socket's), self and
+inclusive; ``--profile-dir`` keeps callgrind's files for ``callgrind_annotate``.
 
 Reports: round trips answered per second and the broker's own count of messages sent per second
 (``$SYS/broker/messages/sent``), round-trip p50/p99/max, late requests (an answer that had not
@@ -36,7 +39,8 @@ and of the client (% of one core).
 
     python benchmarks/fleet.py [--devices 100] [--processes 4] [--rate 10] [--seconds 10]
                                [--measure states|requests|both] [--rounds 1]
-    python benchmarks/fleet.py --instructions [--requests 1000] [--warmup 200]
+    python benchmarks/fleet.py --instructions [--requests 5000] [--warmup 200]
+    python benchmarks/fleet.py --profile 40 [--requests 5000] [--warmup 200]
 """
 
 from __future__ import annotations
@@ -44,6 +48,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -410,12 +415,17 @@ async def ask_in_turn(url: str, devices: list[str], count: int) -> None:
             await fleet.ask(where[name], "read", device=name, name="input.I1")
 
 
-def process_instructions(broker: Broker, side: str, devices: int, requests: int, tmp: Path) -> int:
+def process_instructions(broker: Broker, side: str, devices: int, requests: int, tmp: Path,
+                         profile: Path | None = None) -> int:
     """Instructions the one server process of ``side`` (``devsim`` or ``bare``, serving
-    ``devices``) executes from its start to its stop, asked ``requests`` reads in turn."""
+    ``devices``) executes from its start to its stop, asked ``requests`` reads in turn;
+    ``profile``: run it under callgrind instead, its output written there."""
     log = tmp / f"valgrind-{side}-{requests}.log"
-    wrapper = ("valgrind", "--tool=cachegrind", "--cache-sim=no", "--cachegrind-out-file=/dev/null",
-               f"--log-file={log}")
+    if profile is None:
+        wrapper: tuple[str, ...] = ("valgrind", "--tool=cachegrind", "--cache-sim=no",
+                                    "--cachegrind-out-file=/dev/null", f"--log-file={log}")
+    else:
+        wrapper = ("valgrind", "--tool=callgrind", f"--callgrind-out-file={profile}", f"--log-file={log}")
     url = f"{broker.url}/{side}-{requests}"  # each run its own fleet: no announcement of an earlier one
     members: list[tuple[subprocess.Popen[str], str]] = []
     try:
@@ -427,9 +437,57 @@ def process_instructions(broker: Broker, side: str, devices: int, requests: int,
     finally:
         stop_all(members, timeout=120.0)
     for line in log.read_text().splitlines():
-        if "I refs:" in line or "I   refs:" in line:
+        if "I refs:" in line or "I   refs:" in line or "Collected :" in line:
             return int(line.rsplit(":", 1)[1].replace(",", "").strip())
     raise SystemExit(f"no instruction count from valgrind for the {side} process")
+
+
+#: What every Python call goes through (the interpreter's loop and calls, the program's start):
+#: left out of the inclusive table, where it would hide the functions that do the work.
+PLUMBING = re.compile(r"^(ceval|call|classobject|methodobject|funcobject|_functoolsmodule|import|pycore_\w+)\.[ch]:"
+                      r"|main|^\?\?\?:0x|PROGRAM TOTALS|builtin_exec")
+
+
+def function_costs(profile: Path, inclusive: bool) -> dict[str, int]:
+    """callgrind_annotate's instructions per function of ``profile`` (self, or ``inclusive``)."""
+    text = subprocess.run(["callgrind_annotate", f"--inclusive={'yes' if inclusive else 'no'}", "--threshold=100",
+                           str(profile)], capture_output=True, text=True, check=True).stdout
+    costs: dict[str, int] = {}
+    for line in text.splitlines():
+        head, _, name = line.strip().partition(" ")
+        if not head[:1].isdigit() or not name:
+            continue
+        name = name.split(")", 1)[1].strip() if name.startswith("(") else name.strip()
+        where, _, library = name.partition(" [")
+        name = where.rsplit("/", 1)[-1] + (f" [{library.rstrip(']').rsplit('/', 1)[-1]}]" if library else "")
+        costs[name] = costs.get(name, 0) + int(head.replace(",", ""))
+    return costs
+
+
+def profile_functions(args: argparse.Namespace) -> None:
+    """``--profile N``: the devsim member's N costliest functions per request (callgrind; C
+    functions, the interpreter's own included), self and inclusive, differenced as
+    ``--instructions`` does."""
+    os.environ["PYTHONHASHSEED"] = "0"
+    devices = max(1, args.devices // args.processes)
+    broker = Broker().start()
+    try:
+        with tempfile.TemporaryDirectory(prefix="devsim-fleet-bench-") as tmp:
+            keep = Path(args.profile_dir) if args.profile_dir else Path(tmp)
+            keep.mkdir(parents=True, exist_ok=True)
+            outs = [keep / f"callgrind-{n}.out" for n in (args.warmup, args.warmup + args.requests)]
+            totals = [process_instructions(broker, "devsim", devices, n, Path(tmp), out)
+                      for n, out in zip((args.warmup, args.warmup + args.requests), outs, strict=True)]
+            tables = {kind: [function_costs(out, kind == "inclusive") for out in outs] for kind in ("self", "inclusive")}
+    finally:
+        broker.stop()
+    print(f"instructions per request: {(totals[1] - totals[0]) / args.requests / 1e3:.1f} k (callgrind)")
+    for kind, (before, after) in tables.items():
+        rows = sorted(((after.get(name, 0) - before.get(name, 0)) / args.requests, name) for name in after
+                      if kind == "self" or not PLUMBING.search(name))
+        print(f"-- {kind} instructions per request, the {args.profile} costliest functions")
+        for cost, name in sorted(rows, reverse=True)[:args.profile]:
+            print(f"{cost:10.0f}  {name}")
 
 
 def count_instructions(args: argparse.Namespace) -> None:
@@ -466,9 +524,17 @@ def main() -> None:
     parser.add_argument("--nodelay", action="store_true", help="mosquitto's set_tcp_nodelay true")
     parser.add_argument("--instructions", action="store_true",
                         help="count instructions per request in one server process (valgrind) instead of timing")
-    parser.add_argument("--requests", type=int, default=1000, help="--instructions: reads counted")
+    parser.add_argument("--profile", type=int, default=0, metavar="N",
+                        help="print the devsim member's N costliest functions per request (callgrind) instead")
+    parser.add_argument("--profile-dir", help="--profile: keep callgrind's two output files in this directory")
+    parser.add_argument("--requests", type=int, default=5000,
+                        help="--instructions: reads counted (the start-up of the two runs differs by a few"
+                             " million instructions: at 1,000 reads that moved the figure by up to 3 k)")
     parser.add_argument("--warmup", type=int, default=200, help="--instructions: reads before them, in both runs")
     args = parser.parse_args()
+    if args.profile:
+        profile_functions(args)
+        return
     if args.instructions:
         count_instructions(args)
         return

@@ -16,7 +16,8 @@ declared points (:mod:`devsim.core.points`) and, for drive profiles, its declare
   amqtt broker and Sparkplug), and the embedded broker;
 * :mod:`devsim.facades.mqtt_wire` – MQTT 5 and 3.1.1 packets (pure);
 * :mod:`devsim.facades.mqtt_link` – devsim's own MQTT client connection over asyncio, one write per
-  loop turn (the MQTT facade, the fleet's members and clients).
+  loop turn (the MQTT facade, the fleet's members and clients);
+* :mod:`devsim.facades.mqtt_keepalive` – the links' pings, kept by a thread instead of a timer in the loop.
 * :mod:`devsim.facades.opcua_space` – the OPC UA address space a kind's points give (pure);
 * :mod:`devsim.facades.opcua` – a plant's devices on one asyncua OPC UA server (extra ``[opcua]``).
 """

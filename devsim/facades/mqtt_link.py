@@ -7,6 +7,13 @@ published is written to the socket once per loop turn – the answers to all the
 read leave in one write, with no task or future per message.  Only the rare exchanges wait for
 the broker: the CONNACK, a SUBACK, an UNSUBACK, the PUBACK of a QoS 1 publish that asks for it.
 
+The link holds its socket itself, without an asyncio transport: the loop calls it when the
+socket is readable (``add_reader``), it reads into a buffer of its own, and it sends with
+``socket.send`` while nothing waits unsent.  What the socket does not take waits in order in
+the link's own buffer, sent when the socket is writable again (``add_writer``); beyond
+``PAUSED_LIMIT`` bytes waiting, :meth:`MqttLink.drain` waits until they are down to a quarter.
+Its pings are kept by :mod:`devsim.facades.mqtt_keepalive`, not by a timer in the loop.
+
 A connection that is lost, a broker that sends a DISCONNECT, or one silent for 1.5 keep-alive
 intervals (3.1.2.10) ends :attr:`MqttLink.closed` with a :class:`LinkLost`; the caller reconnects
 with a new link.
@@ -17,10 +24,12 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import socket
+import threading
 import time
 from collections.abc import Callable
 
 from devsim.facades import mqtt_wire as wire
+from devsim.facades.mqtt_keepalive import keepalive_clock
 from devsim.facades.mqtt_wire import Publish, Will
 
 __all__ = ["LinkLost", "MqttLink", "open_link"]
@@ -30,79 +39,163 @@ PING_SHARE = 0.75  # a PINGREQ every this share of the keep alive (a device's id
 READ_SIZE = 64 * 1024  # bytes a read takes at most (asyncio's plain protocol allocates 256 KiB per read)
 
 
+_per_thread = threading.local()
+
+
+def _read_buffer() -> memoryview:
+    """The read buffer of the links of this thread's loop: a read copies its bytes out at once
+    (as a TCP port's sessions do, :mod:`devsim.transports.tcp`), so the links share it – the
+    MQTT facade holds a link per device for its will, which would be 64 KiB each."""
+    view: memoryview | None = getattr(_per_thread, "view", None)
+    if view is None:
+        view = _per_thread.view = memoryview(bytearray(READ_SIZE))
+    return view
+
+
 class LinkLost(ConnectionError):
     """The broker connection is gone (or never came up)."""
 
 
-class MqttLink(asyncio.BufferedProtocol):
-    """One MQTT session, clean start (see the module docstring).  Reads into a buffer of its own."""
+class MqttLink:
+    """One MQTT session, clean start, on a connected socket of its own (see the module docstring).
+    Its attributes are slots: a request's read touches one block of them."""
 
-    def __init__(self, keepalive: int, v5: bool = True) -> None:
+    __slots__ = ("keepalive", "v5", "on_message", "_route", "_loop", "closed", "_sock", "_fd", "_reader", "_out",
+                 "_unsent", "_closing", "_flush_soon", "_waiting", "_next_id", "_heard", "_paused", "_reading",
+                 "_view")
+
+    def __init__(self, sock: socket.socket, keepalive: int, v5: bool = True) -> None:
         self.keepalive = keepalive
         self.v5 = v5
         self.on_message: Callable[[Publish], None] = lambda message: None
         self._route: tuple[bytes, Callable[[bytes], None]] | None = None  # (head of its PUBLISH, handler)
         self._loop = asyncio.get_running_loop()
         self.closed: asyncio.Future[None] = self._loop.create_future()
-        self._transport: asyncio.Transport | None = None
+        self._sock: socket.socket | None = sock  # (None once closed)
+        self._fd = sock.fileno()
         self._reader = wire.PacketReader()
-        self._out: list[bytes] = []
+        self._out: list[bytes] = []  # this loop turn's packets
+        self._unsent = bytearray()  # what the socket did not take yet, in order
+        self._closing = False  # close the socket once the unsent bytes are out
         self._flush_soon: asyncio.Handle | None = None
         self._waiting: dict[tuple[int, int], asyncio.Future[bytes]] = {}  # (ack type, packet id) -> ack body
         self._next_id = 0
-        self._heard = 0.0
-        self._pinger: asyncio.TimerHandle | None = None
-        self._paused: asyncio.Future[None] | None = None
-        self._reading = False  # inside buffer_updated: its end flushes
-        self._buffer = bytearray(READ_SIZE)
-        self._view = memoryview(self._buffer)
-
-    # -- asyncio.Protocol ------------------------------------------------------------------
-    def connection_made(self, transport: asyncio.BaseTransport) -> None:
-        self._transport = transport  # type: ignore[assignment]
         self._heard = time.monotonic()
-        sock = transport.get_extra_info("socket")
-        if sock is not None and sock.family in (socket.AF_INET, socket.AF_INET6):
+        self._paused: asyncio.Future[None] | None = None
+        self._reading = False  # inside _readable: its end flushes
+        self._view = _read_buffer()
+        sock.setblocking(False)
+        if sock.family in (socket.AF_INET, socket.AF_INET6):
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # requests are small and waited for
+        self._loop.add_reader(self._fd, self._readable)
 
-    def get_buffer(self, sizehint: int) -> memoryview:
-        return self._view
-
-    def buffer_updated(self, nbytes: int) -> None:
-        data = bytes(self._view[:nbytes])
+    # -- the socket ------------------------------------------------------------------------
+    def _readable(self) -> None:
+        """The loop's call when the socket has bytes (or its end): every packet read is handled
+        in this step, and the answers leave in one write at its end."""
+        try:
+            nbytes = self._sock.recv_into(self._view)  # type: ignore[union-attr]  (read only while open)
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError as exc:
+            self._lose(LinkLost(f"connection to the broker lost: {exc}"))
+            return
+        if not nbytes:
+            self._lose(LinkLost("connection to the broker lost"))
+            return
         self._heard = time.monotonic()  # (what the loop's time() returns, without its call)
+        data = bytes(self._view[:nbytes])
+        route = self._route
         self._reading = True
         try:
-            packets = self._reader.feed(data)
-            route = self._route
-            for kind, flags, body in packets:
-                if kind == wire.PUBLISH:
-                    if route is not None and not flags and body.startswith(route[0]):  # QoS 0, not retained
-                        route[1](body[len(route[0]):])
-                        continue
-                    message = wire.parse_publish(flags, body, self.v5)
-                    if message.qos == 1:
-                        self._out.append(wire.puback(message.packet_id))
-                    self.on_message(message)
-                elif kind == wire.SERVER_DISCONNECT:
-                    raise LinkLost(f"the broker disconnected (reason {body[0] if body else 0})")
-                else:
-                    self._acked(kind, body)
+            payload = None if route is None else self._reader.single_publish(data, route[0])
+            if payload is not None:  # one request, read whole: the common case of a member
+                route[1](payload)
+            else:
+                self._handle(data, route)
         except (wire.MalformedPacket, LinkLost) as exc:
             self._lose(exc if isinstance(exc, LinkLost) else LinkLost(f"malformed packet from the broker: {exc}"))
             return
+        except Exception as exc:  # a handler's own failure: the connection ends, as asyncio ended it
+            self._lose(LinkLost(f"a message's handler failed: {exc!r}"))
+            raise
         finally:
             self._reading = False
-        self.flush()  # the answers to everything read now, in one write
+        out = self._out  # the answers to everything read now, in one write (flush without its call)
+        if out and self._sock is not None and not self._closing:  # (else: lost meanwhile, nothing goes out)
+            self._out = []
+            self._write(out[0] if len(out) == 1 else b"".join(out))
 
-    def connection_lost(self, exc: Exception | None) -> None:
-        self._lose(LinkLost(f"connection to the broker lost{f': {exc}' if exc else ''}"))
+    def _handle(self, data: bytes, route: tuple[bytes, Callable[[bytes], None]] | None) -> None:
+        """Every packet of ``data`` (after what an earlier read left), in order."""
+        for kind, flags, body in self._reader.feed(data):
+            if kind == wire.PUBLISH:
+                if route is not None and not flags and body.startswith(route[0]):  # QoS 0, not retained
+                    route[1](body[len(route[0]):])
+                    continue
+                message = wire.parse_publish(flags, body, self.v5)
+                if message.qos == 1:
+                    self._out.append(wire.puback(message.packet_id))
+                self.on_message(message)
+            elif kind == wire.SERVER_DISCONNECT:
+                raise LinkLost(f"the broker disconnected (reason {body[0] if body else 0})")
+            else:
+                self._acked(kind, body)
 
-    def pause_writing(self) -> None:
-        if self._paused is None:
+    def _write(self, data: bytes) -> None:
+        """Send ``data`` after what waits unsent; what the socket does not take waits for it."""
+        unsent = self._unsent
+        if not unsent:
+            try:
+                sent = self._sock.send(data)  # type: ignore[union-attr]  (written only while open)
+            except (BlockingIOError, InterruptedError):
+                sent = 0
+            except OSError as exc:
+                self._lose(LinkLost(f"connection to the broker lost: {exc}"))
+                return
+            if sent == len(data):
+                return
+            self._loop.add_writer(self._fd, self._writable)
+            data = data[sent:]
+        unsent += data
+        if len(unsent) > PAUSED_LIMIT and self._paused is None:
             self._paused = self._loop.create_future()
 
-    def resume_writing(self) -> None:
+    def _writable(self) -> None:
+        """The loop's call when the socket takes bytes again while some wait unsent."""
+        unsent = self._unsent
+        try:
+            sent = self._sock.send(unsent)  # type: ignore[union-attr]  (a writer only while open)
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError as exc:
+            unsent.clear()
+            self._close_socket()
+            self._lose(LinkLost(f"connection to the broker lost: {exc}"))
+            return
+        del unsent[:sent]
+        if len(unsent) <= PAUSED_LIMIT // 4:
+            self._resume()
+        if not unsent:
+            self._loop.remove_writer(self._fd)
+            if self._closing:
+                self._close_socket()
+
+    def _close_socket(self, now: bool = True) -> None:
+        """Stop reading; close the socket now, or (``now=False``) once the unsent bytes are out."""
+        sock = self._sock
+        if sock is None:
+            return
+        self._loop.remove_reader(self._fd)
+        if self._unsent and not now:
+            self._closing = True
+            return
+        self._loop.remove_writer(self._fd)
+        self._unsent.clear()
+        self._sock = None
+        sock.close()
+
+    def _resume(self) -> None:
         paused, self._paused = self._paused, None
         if paused is not None and not paused.done():
             paused.set_result(None)
@@ -128,7 +221,11 @@ class MqttLink(asyncio.BufferedProtocol):
     def publish_headed(self, head: bytes, payload: bytes) -> None:
         """Queue a PUBLISH at QoS 0, not retained, without properties, for this loop turn's write:
         ``head`` from :meth:`head` (a topic answered again and again)."""
-        self._send(wire.publish_headed(head, payload))
+        if self.closed.done():  # (what _send does, without its call: a member's every answer)
+            self._raise_if_lost()
+        self._out.append(wire.publish_headed(head, payload))
+        if self._flush_soon is None and not self._reading:
+            self._flush_soon = self._loop.call_soon(self.flush)
 
     def head(self, topic: str) -> bytes:
         """What :meth:`publish_headed` puts before a payload on ``topic`` (:func:`mqtt_wire.publish_head`)."""
@@ -173,22 +270,21 @@ class MqttLink(asyncio.BufferedProtocol):
             self._flush_soon.cancel()
             self._flush_soon = None
         out = self._out
-        if out and self._transport is not None and not self.closed.done():
-            self._transport.write(out[0] if len(out) == 1 else b"".join(out))
+        if out and self._sock is not None and not self.closed.done():
+            self._write(out[0] if len(out) == 1 else b"".join(out))
         out.clear()
 
     def abort(self) -> None:
         """Close without a DISCONNECT: the broker sends the will."""
-        if self._transport is not None:
-            self._transport.abort()
+        self._close_socket()
         self._lose(LinkLost("aborted"))
 
     async def disconnect(self) -> None:
         """A clean DISCONNECT (the broker drops the will) and close."""
-        if self._transport is not None and not self.closed.done():
+        if self._sock is not None and not self.closed.done():
             self._send(wire.DISCONNECT)
             self.flush()
-            self._transport.close()
+            self._close_socket(now=False)
         self._lose(LinkLost("disconnected"))
 
     # -- inside ----------------------------------------------------------------------------
@@ -236,33 +332,58 @@ class MqttLink(asyncio.BufferedProtocol):
             raise LinkLost(str(why) if why is not None else "the connection is closed")
 
     def _ping(self) -> None:
-        loop = self._loop
+        if self.closed.done():  # (the last call the keep-alive clock had for it)
+            return
         if time.monotonic() - self._heard > 1.5 * self.keepalive:
             self._lose(LinkLost(f"the broker was silent for {1.5 * self.keepalive:g} s"))
             return
         with contextlib.suppress(LinkLost):
             self._send(wire.PINGREQ)
-        self._pinger = loop.call_later(self.keepalive * PING_SHARE, self._ping)
+        self._start_pinging()
 
     def _start_pinging(self) -> None:
-        self._pinger = self._loop.call_later(self.keepalive * PING_SHARE, self._ping)
+        """The next ping, on the keep-alive clock's thread (no timer in the loop)."""
+        keepalive_clock().call_at(time.monotonic() + self.keepalive * PING_SHARE, self._loop, self._ping)
 
     def _lose(self, exc: LinkLost) -> None:
-        if self._pinger is not None:
-            self._pinger.cancel()
         if self._flush_soon is not None:
             self._flush_soon.cancel()
             self._flush_soon = None
         if not self.closed.done():
             self.closed.set_exception(exc)
             self.closed.exception()  # retrieved: nobody need await it
-        if self._transport is not None:
-            self._transport.close()
+        if not self._closing:  # (closing: the DISCONNECT still goes out)
+            self._close_socket()
         for future in self._waiting.values():
             if not future.done():
                 future.cancel()
         self._waiting.clear()
-        self.resume_writing()
+        self._resume()
+
+
+async def _connected(host: str, port: int) -> socket.socket:
+    """A TCP socket connected to ``host``:``port``, its addresses tried in turn (an address
+    given as numbers without a resolver's thread)."""
+    loop = asyncio.get_running_loop()
+    try:
+        addresses = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, flags=socket.AI_NUMERICHOST)
+    except socket.gaierror:
+        addresses = await loop.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    error: OSError = OSError(f"no address for {host}")
+    for family, kind, proto, _name, address in addresses:
+        sock = socket.socket(family, kind, proto)
+        try:
+            sock.setblocking(False)
+            await loop.sock_connect(sock, address)
+        except OSError as exc:
+            sock.close()
+            error = exc
+            continue
+        except BaseException:  # cancelled (a timeout)
+            sock.close()
+            raise
+        return sock
+    raise error
 
 
 async def open_link(host: str, port: int, identifier: str, *, keepalive: int = 15, will: Will | None = None,
@@ -270,13 +391,11 @@ async def open_link(host: str, port: int, identifier: str, *, keepalive: int = 1
                     v5: bool = True) -> MqttLink:
     """Connect and wait for the broker's CONNACK; :class:`LinkLost` when it cannot be reached
     or refuses.  ``v5=False``: MQTT 3.1.1 (for brokers such as amqtt that speak only that)."""
-    loop = asyncio.get_running_loop()
     try:
-        _transport, link = await asyncio.wait_for(
-            loop.create_connection(lambda: MqttLink(keepalive, v5), host, port), timeout)
+        sock = await asyncio.wait_for(_connected(host, port), timeout)
     except (OSError, TimeoutError) as exc:
         raise LinkLost(f"cannot connect to {host}:{port}: {exc or 'timed out'}") from None
-    link._transport.set_write_buffer_limits(high=PAUSED_LIMIT)  # type: ignore[union-attr]
+    link = MqttLink(sock, keepalive, v5)
     connack = link._expect(wire.CONNACK, 0)
     link._send(wire.connect(identifier, keepalive, will=will, username=username, password=password, v5=v5))
     try:

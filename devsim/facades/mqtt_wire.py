@@ -328,6 +328,27 @@ class PacketReader:
     def __init__(self) -> None:
         self._buffer = b""
 
+    def single_publish(self, data: bytes, head: bytes) -> bytes | None:
+        """The payload of ``data`` when it is one whole PUBLISH at QoS 0, not retained, on
+        ``head`` (:func:`publish_head`: the topic without properties), of a remaining length in
+        one or two bytes, and nothing is held from earlier reads; else None, nothing taken
+        (:meth:`feed` it).  A member's request, read in one piece, recognised in one step."""
+        if self._buffer:
+            return None
+        try:
+            if data[0] != 0x30:
+                return None
+            length = data[1]
+            start = 2
+            if length & 0x80:  # two bytes (of three or four, the length read is 16,384 too large to fit)
+                length = (length & 0x7F) | (data[2] << 7)
+                start = 3
+        except IndexError:  # cut short
+            return None
+        if start + length != len(data) or not data.startswith(head, start):
+            return None
+        return data[start + len(head):]
+
     def feed(self, data: bytes) -> list[tuple[int, int, bytes]]:
         buffer = self._buffer + data if self._buffer else data
         packets = []

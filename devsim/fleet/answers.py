@@ -28,24 +28,49 @@ from devsim.core.points import Point
 from devsim.runtime import Runtime
 from devsim.runtime.ops import ErrorResponse, OkResponse, clip, error_text, jsonable
 
-__all__ = ["ResolvedRequests", "encode_answer"]
+__all__ = ["ResolvedRequests", "encode_answer", "encode_result"]
 
 RESOLVED_MAX = 1024  # (op, device, name) kept at most; then the table starts again
 _json_encode = msgspec.json.Encoder().encode
 _SCALARS = frozenset((bool, int, float, str, type(None)))  # what a JSON value is when it is no list or object
+_UNSET = msgspec.UNSET
+_JSON_AS_IS = frozenset((bool, int, str, type(None)))  # results jsonable() returns unchanged
+
+
+class _Answered(msgspec.Struct, gc=False):
+    """An answer as the control API writes it (:func:`devsim.runtime.ops.encode`): its keys in
+    that order (a struct is encoded faster than a dict)."""
+
+    id: Any
+    ok: bool
+    result: Any
+
+
+class _Refused(msgspec.Struct, gc=False):
+    """An error answer as the control API writes it."""
+
+    id: Any
+    ok: bool
+    error: str
+    type: str
 
 
 def encode_answer(response: OkResponse | ErrorResponse) -> bytes:
     """The control API's JSON line for ``response`` (:func:`devsim.runtime.ops.encode`), encoded
     by msgspec (UTF-8 as it is, where :mod:`json` escapes it)."""
     if isinstance(response, OkResponse):
-        data: dict[str, Any] = {"id": response.id, "ok": True, "result": jsonable(response.result)}
-    else:
-        data = {"id": response.id, "ok": False, "error": response.error, "type": response.type}
-    return _json_encode(data) + b"\n"
+        return encode_result(response.id, response.result)
+    return _json_encode(_Refused(response.id, False, response.error, response.type)) + b"\n"
 
 
-class Asked(msgspec.Struct, forbid_unknown_fields=True):
+def encode_result(answer_id: Any, result: Any) -> bytes:
+    """:func:`encode_answer` of ``OkResponse(id=answer_id, result=result)``, without making it."""
+    if type(result) not in _JSON_AS_IS:
+        result = jsonable(result)
+    return _json_encode(_Answered(answer_id, True, result)) + b"\n"
+
+
+class Asked(msgspec.Struct, forbid_unknown_fields=True, gc=False):
     """The shape of a request the fast path takes (any other shape is declined): the control
     API's fields of ``read`` and ``set`` and the member's ``reply_to``."""
 
@@ -67,14 +92,14 @@ def _failed(asked: Asked, exc: Exception) -> bytes:
 
 def _read(asked: Asked, device: Device, point: Point) -> bytes | None:
     """``read``: :meth:`devsim.core.points.PointTable.read` with the point found."""
-    if asked.value is not msgspec.UNSET:
+    if asked.value is not _UNSET:
         return None
     assert point.get is not None  # (resolved only when it has one)
     try:
         result = point.get(device.model)
     except Exception as exc:  # the error response of the generic way
         return _failed(asked, exc)
-    return encode_answer(OkResponse(id=asked.id, result=result))
+    return encode_result(asked.id, result)
 
 
 def _set(asked: Asked, device: Device, point: Point) -> bytes | None:
@@ -87,7 +112,7 @@ def _set(asked: Asked, device: Device, point: Point) -> bytes | None:
         point.put(device.model, point.checked(value))  # (what PointTable.set does with the point)
     except Exception as exc:  # the error response of the generic way
         return _failed(asked, exc)
-    return encode_answer(OkResponse(id=asked.id, result=None))
+    return encode_result(asked.id, None)
 
 
 class FastOp(NamedTuple):

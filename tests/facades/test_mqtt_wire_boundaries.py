@@ -421,3 +421,54 @@ def test_each_malformed_packet_says_what_is_wrong(parse: object, message: str) -
     with pytest.raises(wire.MalformedPacket) as raised:
         parse()  # type: ignore[operator]
     assert str(raised.value) == message
+
+
+HEAD = wire.publish_head("f/p1/request")
+
+
+@pytest.mark.parametrize("payload", [b"", b"x", bytes(128 - len(HEAD) - 1), bytes(128 - len(HEAD)),
+                                     bytes(200), bytes(16383 - len(HEAD))],
+                         ids=["empty", "one byte", "remaining 127", "remaining 128", "200 bytes", "remaining 16383"])
+def test_a_single_publish_on_a_head_gives_its_payload_as_feed_does(payload: bytes) -> None:
+    packet = wire.publish_headed(HEAD, payload)
+    assert wire.PacketReader().single_publish(packet, HEAD) == payload
+    [(kind, flags, body)] = wire.PacketReader().feed(packet)
+    assert (kind, flags, body[len(HEAD):]) == (wire.PUBLISH, 0, payload)
+
+
+@pytest.mark.parametrize("data", [
+    b"", b"\x30", b"\x30\x80",  # cut short: a header, a length still arriving
+    wire.publish_headed(HEAD, bytes(16384 - len(HEAD))),  # a remaining length of three bytes
+    wire.publish_headed(HEAD, bytes(2_097_152 - len(HEAD))),  # of four
+    wire.publish_headed(HEAD, b"req")[:-1],  # the payload cut short
+    wire.publish_headed(HEAD, b"req") + b"\xc0",  # more than the one packet
+    wire.publish_headed(HEAD, b"req") * 2,
+    b"\x31" + wire.publish_headed(HEAD, b"req")[1:],  # retained
+    b"\x32" + wire.publish_headed(HEAD, b"req")[1:],  # QoS 1
+    b"\x20" + wire.publish_headed(HEAD, b"req")[1:],  # a CONNACK's type
+    wire.publish_headed(wire.publish_head("f/p1/requesT"), b"req"),  # another topic
+    wire.publish_headed(wire.publish_head("f/p1/request/x"), b"req"),
+    wire.publish("f/p1/request", b"req", props=wire.properties(correlation=b"c")),  # with properties
+], ids=["empty", "header", "length cut", "three-byte length", "four-byte length", "payload cut", "and a byte", "two packets",
+        "retained", "qos 1", "connack", "another topic", "a longer topic", "properties"])
+def test_anything_else_is_not_a_single_publish(data: bytes) -> None:
+    assert wire.PacketReader().single_publish(data, HEAD) is None
+
+
+def test_a_single_publish_after_bytes_held_from_a_read_is_not_taken() -> None:
+    packet = wire.publish_headed(HEAD, b"req")
+    reader = wire.PacketReader()
+    assert reader.feed(packet[:1]) == []
+    assert reader.single_publish(packet, HEAD) is None  # (it is the rest of the held packet's)
+    assert reader.feed(packet[1:]) == [(wire.PUBLISH, 0, packet[2:])]
+    assert reader.single_publish(packet, HEAD) == b"req"
+
+
+@given(hs.binary(max_size=300), hs.integers(-3, 3), hs.booleans())
+def test_a_single_publish_is_what_feed_cuts(payload: bytes, trim: int, headed: bool) -> None:
+    data = wire.publish_headed(HEAD, payload) if headed else payload
+    data = data[:len(data) + trim] if trim < 0 else data + bytes(trim)
+    taken = wire.PacketReader().single_publish(data, HEAD)
+    if taken is not None:
+        assert wire.PacketReader().feed(data) == [(wire.PUBLISH, 0, HEAD + taken)]
+    assert (taken == payload) == (headed and not trim)

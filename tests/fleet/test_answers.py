@@ -6,11 +6,14 @@ each (not connected), the second one's fast path switched off."""
 from __future__ import annotations
 
 import json
+import socket
 from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
 
+from devsim.facades.mqtt_link import MqttLink
+from devsim.facades.mqtt_wire import PacketReader, parse_publish
 from devsim.fleet.member import FleetMember
 from devsim.fleet.topics import parse_fleet_url
 from devsim.runtime import Runtime
@@ -139,6 +142,39 @@ def test_the_fast_path_answers_as_the_generic_way(pair: Any) -> None:
     assert ask(fast_rt, fast, TAKEN[0]) == (REPLY, b'{"id":"c1-1","ok":true,"result":true}\n', None)
     assert ask(fast_rt, fast, request(id="b1", **SET, value=9.9))[1] == (
         b'{"id":"b1","ok":false,"error":"quantity.adc_volts: 9.9 is above the maximum 5 V","type":"BadValue"}\n')
+
+
+def routed(rt: Runtime, member: FleetMember, raw: bytes) -> list[tuple[str, bytes]]:
+    """(topic, payload) of what the member publishes for a request its link hands over straight
+    from a read (no MQTT 5 properties: ``FleetMember._requested``), read back from the link's
+    socket (a real MqttLink on a socket pair, in the runtime's loop)."""
+    def run() -> list[tuple[str, bytes]]:
+        ours, theirs = socket.socketpair()
+        link = MqttLink(ours, 15)
+        try:
+            member._requested(link, raw)
+            link.flush()
+            theirs.setblocking(False)
+            try:
+                data = theirs.recv(1 << 20)
+            except BlockingIOError:
+                data = b""
+        finally:
+            link.abort()
+            theirs.close()
+        messages = [parse_publish(flags, body) for kind, flags, body in PacketReader().feed(data)]
+        return [(message.topic, message.payload) for message in messages]
+
+    return rt.call(run)
+
+
+def test_a_request_handed_over_by_the_link_is_answered_as_answer_answers_it(pair: Any) -> None:
+    fast_rt, fast, generic_rt, generic, taken = pair
+    for raw in TAKEN + DECLINED:
+        answer = ask(generic_rt, generic, raw)
+        assert routed(fast_rt, fast, raw) == ([] if answer is None else [answer[:2]]), raw
+    assert taken == TAKEN
+    assert fast.served == len(TAKEN + DECLINED)
 
 
 @pytest.mark.parametrize(("raw", "reply_to", "correlation"), [
