@@ -155,16 +155,17 @@ class _Session(asyncio.BufferedProtocol):
         if lane is not None:
             lane.bytes_out += len(data)
         transport = self.transport
-        if self.closed or transport is None or transport.is_closing():
+        if transport is None or self.closed or transport.is_closing():
             return
         if self.full:
             self.owner.dropped += len(data)
             return
         sock = self.sock
-        if sock is not None and (not self.queued or not transport.get_write_buffer_size()):
+        if self.queued and not transport.get_write_buffer_size():
+            self.queued = False  # what asyncio held has gone out
+        if sock is not None and not self.queued:
             # what transport.write does first when nothing waits to be sent, without its checks;
             # what the socket does not take now (or an error) goes the usual way
-            self.queued = False
             try:
                 sent = sock.send(data)
             except (BlockingIOError, InterruptedError):
