@@ -163,7 +163,7 @@ class Line:
     injected with :meth:`inject` (see :class:`LineFault`).  (Slots: every poll passes through.)
     """
 
-    __slots__ = tuple("target clock _pacing_requested _tracer _host _matched _write _in _out _delivered _pacer"
+    __slots__ = tuple("target clock _pacing_requested _tracer _host _matched_host _matched_device _quiet _write _in _out _delivered _pacer"
                       " _faults _stages _to_device _to_host observers _lane".split())
 
     def __init__(
@@ -179,7 +179,9 @@ class Line:
         self._pacing_requested = pacing
         self._tracer = tracer
         self._host: SerialSettings | None = None
-        self._matched: tuple[SerialSettings | None, SerialSettings | None] = (None, None)
+        self._matched_host: SerialSettings | None = None  # the settings last found matching (_clean)
+        self._matched_device: SerialSettings | None = None
+        self._quiet = tracer is None  # no fault, trace or delayed chunk: the fast paths' one look (_review)
         self._write: ByteSink | None = None
         self._in = self._out = self._delivered = 0  # (what the line carried itself; bytes_in ... add the lane's)
         self._pacer: Pacer | None = None  # made when pacing first holds output
@@ -212,8 +214,9 @@ class Line:
         """Open the lean lane while a host listens, and no fault, trace, tap, pacing, delayed
         chunk or reported host setting (a possible mismatch) needs the line; close it when one
         does.  Called whenever one of those changes."""
-        self._lane.set(self._write is not None and self._host is None and not self._faults and self._tracer is None
-                       and not self._to_device.items and not self._to_host.items and not self.pacing)
+        quiet = self._quiet = (not self._faults and self._tracer is None and not self._to_device.items
+                               and not self._to_host.items)
+        self._lane.set(quiet and self._write is not None and self._host is None and not self.pacing)
 
     @property
     def lean(self) -> bool:
@@ -260,8 +263,9 @@ class Line:
         if not data:
             return
         self._in += len(data)
-        if (not self._faults and self._tracer is None and not self._to_device.items
-                and (self._host is None or self._clean())):
+        host = self._host
+        if self._quiet and (host is None or (host is self._matched_host and self.target.serial_settings
+                                             is self._matched_device) or self._clean()):
             self.target.feed(data)  # the fault-free path: nothing to garble, trace or delay
             return
         received = data
@@ -351,19 +355,13 @@ class Line:
         self._tell("fault", text)
 
     def _clean(self) -> bool:
-        """No mismatch between the host's settings and the device's (remembered for the very
-        objects last compared, so that the fault-free path costs no comparison)."""
-        host = self._host
-        if host is None:
+        """The host's settings, known, match the device's (the objects compared are remembered:
+        the fast paths find them again with two identity checks)."""
+        host, device = self._host, self.target.serial_settings
+        if host is not None and settings_match(host, device):
+            self._matched_host, self._matched_device = host, device
             return True
-        device = self.target.serial_settings  # (what device_settings says, one call less)
-        matched = self._matched
-        if host is matched[0] and device is matched[1]:
-            return True
-        if settings_match(host, device):
-            self._matched = (host, device)
-            return True
-        return False
+        return host is None
 
     def _effective_host(self) -> SerialSettings | None:
         """The host's settings as the line sees them (a ``baud_mismatch`` fault overrides the
@@ -503,7 +501,9 @@ class Line:
         if not data:
             return
         self._out += len(data)
-        if not self._faults and self._tracer is None and not self._to_host.items and self._clean():
+        host = self._host
+        if self._quiet and (host is None or (host is self._matched_host and self.target.serial_settings
+                                             is self._matched_device) or self._clean()):
             # the fault-free path: nothing to garble, trace or hold back (what _paced and _deliver do)
             if self._pacing_requested and not self.clock.virtual:  # (self.pacing)
                 self._paced(data, len(data))
