@@ -15,6 +15,7 @@ import pytest
 from devsim.core.clock import RealClock
 from devsim.core.device import Device, Face
 from devsim.transports.line import Line, LineFault
+from devsim.transports.tap import chunk_tap, untap_chunks
 from devsim.transports.tcp import SLICE, TcpTransport
 
 ANSWER = b"<ok>"
@@ -161,6 +162,27 @@ async def test_a_trace_opened_mid_stream_sees_every_chunk_until_it_is_closed(pla
     writer.close()
 
 
+async def test_a_live_capture_closes_the_lane_while_it_listens(plant: _Plant) -> None:
+    """The capture path (Wireshark's extcap, the control op ``capture``): a chunk tap on the
+    line's trace; when its last listener leaves, the tap leaves and the lane opens again."""
+    reader, writer = await plant.connect()
+    assert await _poll(reader, writer, b"A\r") == b"A\r" + ANSWER
+    seen: list[tuple[str, bytes]] = []
+
+    def listener(direction: str, data: bytes, when: float) -> None:
+        seen.append((direction, data))
+
+    chunk_tap(plant.line).listeners.append(listener)
+    assert not plant.line.lean
+    assert await _poll(reader, writer, b"B\r") == b"B\r" + ANSWER
+    assert seen == [("H>D", b"B\r"), ("D>H", b"B\r" + ANSWER)]
+    untap_chunks(plant.line, listener)
+    assert plant.line.tracer is None and plant.line.lean
+    assert await _poll(reader, writer, b"C\r") == b"C\r" + ANSWER
+    assert len(seen) == 2
+    writer.close()
+
+
 async def test_the_lane_follows_the_host_a_second_host_after_the_first(plant: _Plant) -> None:
     r1, w1 = await plant.connect()
     assert await _poll(r1, w1, b"A\r") == b"A\r" + ANSWER
@@ -202,3 +224,21 @@ async def test_a_flood_beyond_a_slice_leaves_the_lane_and_arrives_whole(plant: _
     assert await _poll(reader, writer, b"A\r") == b"A\r" + ANSWER
     assert _counts(plant.line)[0] == len(flood) + 3
     writer.close()
+
+
+async def test_a_paced_line_never_opens_the_lane() -> None:
+    """Pacing holds each answer to the wire's speed: the line must see every byte."""
+    clock = RealClock()
+    device = _EchoDevice(clock=clock)
+    line = Line(device.port("main"), clock, pacing=True)
+    transport = TcpTransport()
+    await transport.start(line)
+    try:
+        reader, writer = await asyncio.open_connection("127.0.0.1", transport.port)
+        assert await _poll(reader, writer, b"A\r") == b"A\r" + ANSWER  # 6 characters at 9600 baud
+        assert not line.lean and line.bytes_delivered == 2 + len(ANSWER)
+        writer.close()
+    finally:
+        await transport.close()
+        line.close()
+        device.close()
