@@ -29,9 +29,10 @@ The bit-level UART model (:func:`garble`, :func:`settings_match`) is in
 :mod:`devsim.transports.uart`, the fault definitions (:class:`LineFault`, :class:`FaultHandle`)
 in :mod:`devsim.transports.faults`; both are re-exported here.
 
-While none of this is needed, a transport that offers to carries the bytes between the host and
-the target without the line (the lean lane, :mod:`devsim.transports.lane`); the line opens and
-closes the lane as its features are switched on and off (:meth:`Line.offer_lane`).
+While none of this is needed, a transport that offered to (:meth:`Line.offer_lane`) carries the
+bytes between the host and the target without the line: the lean lane
+(:mod:`devsim.transports.lane`), which the line opens and closes as its features are switched on
+and off.
 """
 
 from __future__ import annotations
@@ -163,8 +164,8 @@ class Line:
     injected with :meth:`inject` (see :class:`LineFault`).  (Slots: every poll passes through.)
     """
 
-    __slots__ = tuple("target clock _pacing_requested _tracer _host _matched_host _matched_device _quiet _write _in _out _delivered _pacer"
-                      " _faults _stages _to_device _to_host observers _lane".split())
+    __slots__ = tuple("target clock _pacing_requested _tracer _host _matched_host _matched_device _quiet _write"
+                      " _in _out _delivered _pacer _faults _stages _to_device _to_host observers _lane".split())
 
     def __init__(
         self,
