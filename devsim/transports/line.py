@@ -187,17 +187,19 @@ class Line:
         self._in = self._out = self._delivered = 0  # (what the line carried itself; bytes_in ... add the lane's)
         self._pacer: Pacer | None = None  # made when pacing first holds output
         self._faults: list[_Active] = []
+        review = self._review  # (one bound method for both stages: a line per port of a plant)
         self._stages = {
-            "to_device": _Stage(clock, self._to_target, self._review),
-            "to_host": _Stage(clock, self._paced, self._review),
+            "to_device": _Stage(clock, self._to_target, review),
+            "to_host": _Stage(clock, self._paced, review),
         }
         self._to_device, self._to_host = self._stages["to_device"], self._stages["to_host"]  # (the fast paths' look)
         #: ``fn(event, text)`` called on the line's rare moments (not on data): ``connect``,
         #: ``disconnect``, ``host_settings`` (text: the settings, `` (mismatch ...)`` when they
         #: differ), ``fault`` (a line fault started or ended) -- for watchers and logs.
         self.observers: list[Callable[[str, str], None]] = []
-        self._lane = LaneSwitch(target, self._from_device)
-        target.attach(self._from_device)
+        own = self._from_device
+        self._lane = LaneSwitch(target, own)
+        target.attach(own)
 
     def _tell(self, event: str, text: str) -> None:
         for observer in list(self.observers):
