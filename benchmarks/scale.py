@@ -43,6 +43,12 @@ wake-up), unlike the timed phases.
 
     python benchmarks/scale.py --instructions [--devices 100] [--rounds 10] [--kind sers|stub]
 
+``--calls`` lists instead the functions the server process calls per poll, the same way (Python
+functions by file, line and name; C functions by name; ``sys.setprofile``, as
+``benchmarks/latency.py --calls`` counts them): where the instructions go.
+
+    python benchmarks/scale.py --calls [--devices 20] [--rounds 20] [--kind sers|stub]
+
 Each phase prints the CPU each side used while it polled (share of one core, and server CPU
 seconds per poll): the pollers, devsim's processes, the echo processes, and how long the server
 processes were runnable but waited for a CPU (``/proc/PID/schedstat``, seconds per second of the
@@ -396,14 +402,12 @@ def _ask(sock: socket.socket, query: bytes) -> None:
             return
 
 
-def _counted(server: list[str], tmp: str, kind: str, devices: int, rounds: int) -> dict[str, int]:
-    """Instructions and simulated L1 misses of the process ``server`` (a plant, or the echo
-    endpoints) in all, its ``devices`` endpoints polled ``rounds`` times each, then stopped."""
-    log = os.path.join(tmp, f"valgrind-{len(os.listdir(tmp))}.log")
+def _polled(command: list[str], server: list[str], kind: str, devices: int, rounds: int) -> None:
+    """Run ``command`` (the process ``server``, a plant or the echo endpoints, under a counter), poll
+    each of its ``devices`` endpoints ``rounds`` times one after the other, then stop it."""
     env = dict(_env(), PYTHONHASHSEED="0")
-    proc = subprocess.Popen(["valgrind", "--tool=cachegrind", "--cache-sim=yes", "--cachegrind-out-file=/dev/null",
-                             f"--log-file={log}", sys.executable, *server], cwd=ROOT, env=env,
-                            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    proc = subprocess.Popen(command, cwd=ROOT, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                            stderr=subprocess.DEVNULL, text=True)
     assert proc.stdout is not None
     try:
         if server[0] == "-m":  # devsim up: its port lines, then every device ready
@@ -419,9 +423,18 @@ def _counted(server: list[str], tmp: str, kind: str, devices: int, rounds: int) 
                 _ask(sock, QUERY)
         for sock in socks:
             sock.close()
-    finally:  # devsim up ends cleanly on Ctrl-C; the echo dies of SIGTERM (valgrind still writes its counts)
-        proc.send_signal(signal.SIGINT if server[0] == "-m" else signal.SIGTERM)
+    finally:  # devsim up ends cleanly on Ctrl-C; the echo dies of SIGTERM (valgrind still writes its counts),
+        # or of Ctrl-C under the call counter (which writes its counts at exit)
+        proc.send_signal(signal.SIGINT if server[0] == "-m" or command[0] != "valgrind" else signal.SIGTERM)
         proc.wait(600)
+
+
+def _counted(server: list[str], tmp: str, kind: str, devices: int, rounds: int) -> dict[str, int]:
+    """Instructions and simulated L1 misses of the process ``server`` (a plant, or the echo
+    endpoints) in all, its ``devices`` endpoints polled ``rounds`` times each, then stopped."""
+    log = os.path.join(tmp, f"valgrind-{len(os.listdir(tmp))}.log")
+    _polled(["valgrind", "--tool=cachegrind", "--cache-sim=yes", "--cachegrind-out-file=/dev/null",
+             f"--log-file={log}", sys.executable, *server], server, kind, devices, rounds)
     with open(log) as fh:
         text = fh.read()
     counts = {}
@@ -433,18 +446,48 @@ def _counted(server: list[str], tmp: str, kind: str, devices: int, rounds: int) 
     return counts
 
 
+def _servers(tmp: str, kind: str, devices: int) -> dict[str, list[str]]:
+    """The two servers counted: a plant of ``devices`` in one ``devsim up``, as many echo endpoints."""
+    plant = os.path.join(tmp, "plant.yaml")
+    with open(plant, "w") as fh:
+        fh.write("devices:\n")
+        for i in range(devices):
+            fh.write(f"  - {{name: d{i}, kind: {kind}, transport: {{tcp: {{port: 0}}}}}}\n")
+    return {"devsim": ["-m", "devsim", "up", plant], "echo": [os.path.abspath(__file__), "--echo-servers", str(devices)]}
+
+
+def _calls(args: argparse.Namespace) -> None:
+    """Per poll, counted with sys.setprofile: the functions each server calls (N polls against none)."""
+    if ROOT not in sys.path:
+        sys.path.insert(0, ROOT)
+    from benchmarks.latency import COUNTER
+
+    devices, rounds = args.devices or 20, args.rounds_given or 20
+
+    def counts(server: list[str], tmp: str, polls: int) -> dict[str, int]:
+        out = os.path.join(tmp, f"calls-{len(os.listdir(tmp))}.tsv")
+        _polled([sys.executable, "-c", COUNTER, out, *server], server, args.kind, devices, polls)
+        with open(out) as fh:
+            return {name: int(count) for count, name in (line.rstrip("\n").split("\t", 1) for line in fh)}
+
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, server in _servers(tmp, args.kind, devices).items():
+            polled, idle = counts(server, tmp, rounds), counts(server, tmp, 0)
+            per_poll = {call: (count - idle.get(call, 0)) / (devices * rounds) for call, count in polled.items()}
+            shown = sorted(((count, call) for call, count in per_poll.items() if count >= 0.5), reverse=True)
+            python = sum(count for count, call in shown if not call.startswith("(C)"))
+            print(f"{label}: calls per poll ({devices} endpoints polled {rounds} times each, against none): "
+                  f"{python:.0f} Python functions")
+            for count, call in shown:
+                print(f"  {count:5.2f}  {call}")
+
+
 def _instructions(args: argparse.Namespace) -> None:
     """Per poll, under cachegrind: instructions and L1 misses of devsim and of the echo."""
     devices, rounds = args.devices or 100, args.rounds_given or 10
     per_poll: dict[str, dict[str, float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        plant = os.path.join(tmp, "plant.yaml")
-        with open(plant, "w") as fh:
-            fh.write("devices:\n")
-            for i in range(devices):
-                fh.write(f"  - {{name: d{i}, kind: {args.kind}, transport: {{tcp: {{port: 0}}}}}}\n")
-        servers = {"devsim": ["-m", "devsim", "up", plant],
-                   "echo": [os.path.abspath(__file__), "--echo-servers", str(devices)]}
+        servers = _servers(tmp, args.kind, devices)
         for label, server in servers.items():
             idle = _counted(server, tmp, args.kind, devices, 0)
             polled = _counted(server, tmp, args.kind, devices, rounds)
@@ -520,12 +563,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--steps", type=int, default=10, help="search: phases per side at most (default 10)")
     parser.add_argument("--confirm", type=int, default=1,
                         help="search: a size that missed is measured again this many times before it counts")
+    parser.add_argument("--calls", action="store_true",
+                        help="list the functions called per poll (sys.setprofile) instead of timing")
     parser.add_argument("--echo-servers", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--poll", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     args.rounds_given, args.rounds = args.rounds, args.rounds or 2
     if args.instructions:
         _instructions(args)
+        return 0
+    if args.calls:
+        _calls(args)
         return 0
     if args.seconds is None:
         args.seconds = 10.0 if args.devices else 3.0

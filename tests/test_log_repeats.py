@@ -21,21 +21,44 @@ def test_a_repeated_line_is_written_once_then_counted_every_window() -> None:
     assert not limiter.pending
     assert limiter.offer("k", "bad byte") == ["bad byte"]
     assert limiter.offer("other", "other") == ["other"]
+    assert not limiter.pending  # (lines that do not repeat need no timer in the log: a host's connect)
     for _ in range(12345):
         now[0] += 0.0001
         assert limiter.offer("k", "bad byte") == []
+    assert limiter.pending  # (the log's timer is armed while a count waits to be written)
     assert limiter.due() == []
     now[0] = 5.0
     assert limiter.due() == ["bad byte ... repeated 12345 times in the last 5 s"]
-    assert limiter.pending  # (the log's timer stays armed while a line is remembered)
+    assert not limiter.pending  # (and then the log has no timer: an idle simulator does not wake up)
     now[0] = 10.0
     assert limiter.due() == []  # nothing counted: the key is forgotten, the next one is written
-    assert not limiter.pending  # (and then the log has no timer: an idle simulator does not wake up)
+    assert not limiter.pending
     assert limiter.offer("k", "bad byte") == ["bad byte"]
     limiter.offer("k", "bad byte")
     now[0] = 11.0
     assert limiter.offer("k", "bad byte") == []
     assert limiter.flush() == ["bad byte ... repeated 2 times in the last 1 s"]
+
+
+def test_a_window_ends_by_itself_when_nothing_was_counted() -> None:
+    """No call of due() between (the log arms no timer for a line that did not repeat): the next
+    line of the key after its window is written; pruning ended windows forgets none that runs."""
+    now = [0.0]
+    limiter = RepeatLimiter(window=5.0, clock=lambda: now[0])
+    assert limiter.offer("k", "connect") == ["connect"]
+    now[0] = 4.9
+    assert limiter.offer("k", "connect") == []  # in its window: counted
+    assert limiter.pending
+    assert limiter.due() == []
+    now[0] = 5.0
+    assert limiter.due() == ["connect ... repeated 1 times in the last 5 s"]
+    now[0] = 10.0  # the window that began with the count ended with nothing counted: no due() needed
+    assert limiter.offer("k", "connect") == ["connect"]
+    for i in range(1000):  # (the table is pruned of ended windows on the way)
+        now[0] += 0.001
+        assert limiter.offer(i, "line") == ["line"]
+    assert limiter.offer(999, "line") == []  # still in its window after the prunes
+    assert limiter.offer("k", "connect") == []
 
 
 def test_a_repeat_is_counted_before_its_text_is_made() -> None:

@@ -105,7 +105,7 @@ class Face:
 class Port:
     """One serial port of a device, as a line or a bus sees it (slots: every poll passes through)."""
 
-    __slots__ = ("device", "spec", "name", "face", "_write", "_batch", "shared_line")
+    __slots__ = ("device", "spec", "name", "face", "_write", "_batch", "shared_line", "_mute")
 
     def __init__(self, device: Device, spec: PortDef) -> None:
         self.device = device
@@ -114,6 +114,7 @@ class Port:
         self.face: Face | None = None
         self._write: ByteSink | None = None
         self._batch: list[bytes] | None = None  # the answers to the chunk being fed
+        self._mute = spec.receive_only  # (what send asks at every answer)
         #: True when other devices share the line (RS-485 multidrop); set by the bus.
         self.shared_line = False
 
@@ -128,7 +129,7 @@ class Port:
     def send(self, data: bytes) -> None:
         """Emit bytes towards the host (dropped when nothing is attached, like a dead line, and
         on a receive-only port)."""
-        if not data or self.spec.receive_only:
+        if not data or self._mute:
             return
         batch = self._batch
         if batch is not None:
@@ -150,9 +151,11 @@ class Port:
             face.feed(data)
         finally:
             self._batch = None
-            if batch and self._write is not None:
-                # (one piece, the usual answer to a poll, leaves as it is: no copy into a buffer)
-                self._write(batch[0] if len(batch) == 1 else b"".join(batch))
+            if batch:
+                write = self._write
+                if write is not None:
+                    # (one piece, the usual answer to a poll, leaves as it is: no copy into a buffer)
+                    write(batch[0] if len(batch) == 1 else b"".join(batch))
 
     def host_disconnected(self) -> None:
         if self.face is not None:

@@ -64,7 +64,8 @@ def repeat_key(item: dict[str, Any]) -> Hashable:
 
 class _Repeats:
     """Counts written every :data:`~devsim.observe.repeats.WINDOW` / 5 seconds on the loop's timer,
-    armed only while the limiter remembers a line (an idle simulator has no timer for its log)."""
+    armed only while the limiter holds a count to write (an idle simulator, and one whose log
+    lines do not repeat, has no timer for its log: a timer in the loop costs every wake-up)."""
 
     def __init__(self, limiter: Any, out: Callable[[str], None]) -> None:
         self.limiter, self.out = limiter, out
@@ -75,7 +76,7 @@ class _Repeats:
             self._loop = None  # (no loop: a count is written with the next line of its kind)
 
     def arm(self) -> None:
-        """A line was written: its repeats are counted, and the count is due within a window."""
+        """A repeat was counted: the count is due when its window ends."""
         if self._handle is None and self._loop is not None:
             self._handle = self._loop.call_later(self.limiter.window / 5, self._tick)
 
@@ -115,10 +116,13 @@ def attach_log(runtime: Any, level: int, write: Callable[[str], None] | None = N
         if _level(item) <= level:
             key = repeat_key(item)
             if limiter.counted(key):
+                repeats.arm()
                 return  # a repeat in its window (noise: most errors): no text made
-            for text in limiter.offer(key, f"devsim: {describe(item)}"):
+            lines = limiter.offer(key, f"devsim: {describe(item)}")
+            for text in lines:
                 out(text)
-            repeats.arm()
+            if not lines:
+                repeats.arm()  # (a repeat after all: offer counted it)
 
     repeats = _Repeats(limiter, out)
     streams: list[Any] = [repeats]

@@ -7,7 +7,9 @@ line per byte.  The key is what the line says, not when: (device, port, message 
 the caller.  The window runs on a wall clock (injectable): the limit protects the reader and the
 disk, which live in real time whatever the device clock's speed or a virtual clock's jumps.  Pure:
 the caller calls :meth:`RepeatLimiter.due` now and then (every few seconds) while
-:attr:`RepeatLimiter.pending` to get the counts.
+:attr:`RepeatLimiter.pending` to get the counts.  A line nothing repeated needs no call: its window
+ends by itself (the next line of its key is written), so a log whose lines do not repeat (a host's
+connect) needs no timer.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ class RepeatLimiter:
     def __init__(self, window: float = WINDOW, clock: Callable[[], float] = time.monotonic) -> None:
         self.window, self.clock = window, clock
         self._runs: dict[Hashable, _Run] = {}
+        self._prune_at = 64  # (the table is pruned of ended windows when it grows past this)
 
     def counted(self, key: Hashable) -> bool:
         """A line of ``key`` now is a repeat inside its window: counted here, nothing to write
@@ -54,13 +57,23 @@ class RepeatLimiter:
             return []
         out = [self._count_line(run, now)] if run is not None and run.count else []
         self._runs[key] = _Run(now, text)
+        if len(self._runs) > self._prune_at:
+            self._prune(now)
         return [*out, text]
+
+    def _prune(self, now: float) -> None:
+        """Forget the keys whose window ended with nothing counted (amortised: the next prune
+        waits until the table has doubled)."""
+        for key, run in list(self._runs.items()):
+            if not run.count and now - run.start >= self.window:
+                del self._runs[key]
+        self._prune_at = max(64, 2 * len(self._runs))
 
     @property
     def pending(self) -> bool:
-        """Lines of the last window are remembered (their repeats are counted): :meth:`due` has
-        something to do within a window."""
-        return bool(self._runs)
+        """A repeat has been counted and its count is not written yet: :meth:`due` has something
+        to write when its window ends."""
+        return any(run.count for run in self._runs.values())
 
     def due(self) -> list[str]:
         """The counts of the windows that have ended; a key quiet for a whole window is forgotten

@@ -216,6 +216,41 @@ def mangle(faults: list[_Active], data: bytes, direction: str) -> bytes:
     return data
 
 
+
+def latency(faults: list[_Active], direction: str) -> float:
+    """The extra latency of a chunk going ``direction`` now: every ``delay``, and a draw of every
+    ``jitter`` (which uses up a draw of its random generator)."""
+    total = 0.0
+    for active in faults:
+        fault = active.fault
+        if not fault.applies(direction) or fault.delay is None:
+            continue
+        if fault.kind == "delay":
+            total += fault.delay
+        elif fault.kind == "jitter":
+            total += active.rng.uniform(0.0, fault.delay)
+    return total
+
+
+def noise_due(active: _Active, now: float) -> list[tuple[str, bytes]]:
+    """The noise bytes a ``noise`` fault owes each of its directions at ``now`` (drawn from its
+    random generator, counted as emitted)."""
+    fault = active.fault
+    assert fault.rate is not None
+    elapsed = now - active.started
+    if fault.duration is not None:
+        elapsed = min(elapsed, fault.duration)
+    due = int(elapsed * fault.rate + 1e-9)
+    out = []
+    for direction in [d for d in ("to_device", "to_host") if fault.applies(d)]:
+        n = due - active.emitted[direction]
+        if n <= 0:
+            continue
+        active.emitted[direction] = due
+        out.append((direction, bytes(active.rng.randrange(256) for _ in range(n))))
+    return out
+
+
 class FaultHandle:
     """Returned by :meth:`Line.inject`: lets the injector end the fault early.  ``end(active,
     how)`` is the line's own way of ending one of its faults."""

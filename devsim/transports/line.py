@@ -14,7 +14,8 @@ plain byte pipe does not have:
   match – a raw TCP client never reports any.
 * **Output pacing** (``pacing=True``).  The device's answer reaches the host at the speed of the
   wire: the k-th character is released ``k`` character times after the device started sending
-  (see :meth:`SerialSettings.char_time`), through the device clock's ``call_later``.
+  (see :meth:`SerialSettings.char_time`), through the device clock's ``call_later``
+  (:mod:`devsim.transports.pacing`).
 * **Tracing.**  Every chunk in either direction goes to a trace (:class:`~devsim.transports.trace.Tracer`,
   or a pcap file, :mod:`devsim.transports.pcap`).
 * **Injected faults** (:meth:`Line.inject` with a :class:`LineFault`): corrupted, dropped, split,
@@ -27,6 +28,11 @@ A line never sleeps; everything that waits goes through the device :class:`~devs
 The bit-level UART model (:func:`garble`, :func:`settings_match`) is in
 :mod:`devsim.transports.uart`, the fault definitions (:class:`LineFault`, :class:`FaultHandle`)
 in :mod:`devsim.transports.faults`; both are re-exported here.
+
+While none of this is needed, a transport that offered to (:meth:`Line.offer_lane`) carries the
+bytes between the host and the target without the line: the lean lane
+(:mod:`devsim.transports.lane`), which the line opens and closes as its features are switched on
+and off.
 """
 
 from __future__ import annotations
@@ -40,7 +46,7 @@ import msgspec
 
 from devsim.core.clock import Clock, Timer
 from devsim.core.device import ByteSink, SerialSettings
-from devsim.transports.faults import _NOISE_TICK, _Active, gate, mangle, of_kind, take
+from devsim.transports.faults import _NOISE_TICK, _Active, gate, mangle, noise_due, of_kind, take
 
 # LineFault, FaultHandle, garble and settings_match live in .faults and .uart; they stay
 # importable from here (explicit re-exports), as do the fault kind and direction types.
@@ -49,16 +55,15 @@ from devsim.transports.faults import FaultDirection as FaultDirection
 from devsim.transports.faults import FaultHandle as FaultHandle
 from devsim.transports.faults import FaultKind as FaultKind
 from devsim.transports.faults import LineFault as LineFault
+from devsim.transports.faults import latency as fault_latency
+from devsim.transports.lane import LaneSwitch, Take
+from devsim.transports.pacing import EPSILON as _EPSILON
+from devsim.transports.pacing import Pacer
 from devsim.transports.trace import TraceSink, render
 from devsim.transports.uart import garble as garble
 from devsim.transports.uart import settings_match as settings_match
 
 __all__ = ["FaultHandle", "Line", "LineFault", "LineTarget", "garble", "settings_match", "wire_settings"]
-
-
-# A real receiver accepts a byte that arrives a hair early or late; a timer may fire a few
-# nanoseconds before its nominal time.  Bytes due within this margin are released.
-_EPSILON = 1e-7
 
 
 class LineTarget(Protocol):
@@ -81,11 +86,12 @@ class _Stage:
     idle stage is handed on at once (the fault-free path stays synchronous).
     """
 
-    __slots__ = ("clock", "sink", "items", "last_due", "timer")
+    __slots__ = ("clock", "sink", "drained", "items", "last_due", "timer")
 
-    def __init__(self, clock: Clock, sink: Callable[[bytes, int], None]) -> None:
+    def __init__(self, clock: Clock, sink: Callable[[bytes, int], None], drained: Callable[[], None]) -> None:
         self.clock = clock
         self.sink = sink
+        self.drained = drained  # called when the last chunk waiting has been handed on
         #: Chunks waiting (a deque made when the first waits: most lines never delay one).
         self.items: deque[tuple[float, bytes, int]] | tuple[()] = ()
         self.last_due = -math.inf
@@ -126,6 +132,8 @@ class _Stage:
             self.sink(bytes(out), chars)
         if self.items and self.timer is None:
             self._schedule()
+        elif not self.items:
+            self.drained()
 
     def close(self) -> None:
         if self.timer is not None:
@@ -147,21 +155,6 @@ def _settings_dict(settings: SerialSettings) -> dict[str, Any]:
     }
 
 
-class _Burst:
-    """Device output on its way over the wire: ``data`` spread over ``duration`` seconds."""
-
-    __slots__ = ("data", "start", "per_byte", "sent")
-
-    def __init__(self, data: bytes, start: float, duration: float) -> None:
-        self.data = data
-        self.start = start
-        self.per_byte = duration / len(data)
-        self.sent = 0
-
-    def due(self, index: int) -> float:
-        return self.start + (index + 1) * self.per_byte
-
-
 class Line:
     """An :class:`~devsim.transports.base.Endpoint` in front of a device or a bus.
 
@@ -171,8 +164,8 @@ class Line:
     injected with :meth:`inject` (see :class:`LineFault`).  (Slots: every poll passes through.)
     """
 
-    __slots__ = tuple("target clock _pacing_requested tracer _host _matched _write bytes_in bytes_out bytes_delivered"
-                      " _queue _tx_free_at _timer _faults _stages _to_device _to_host observers".split())
+    __slots__ = tuple("target clock _pacing_requested _tracer _host _matched_host _matched_device _quiet _write"
+                      " _in _out _delivered _pacer _faults _stages _to_device _to_host observers _lane".split())
 
     def __init__(
         self,
@@ -185,48 +178,97 @@ class Line:
         self.target = target
         self.clock = clock
         self._pacing_requested = pacing
-        self.tracer = tracer
+        self._tracer = tracer
         self._host: SerialSettings | None = None
-        self._matched: tuple[SerialSettings | None, SerialSettings | None] = (None, None)
+        self._matched_host: SerialSettings | None = None  # the settings last found matching (_clean)
+        self._matched_device: SerialSettings | None = None
+        self._quiet = tracer is None  # no fault, trace or delayed chunk: the fast paths' one look (_review)
         self._write: ByteSink | None = None
-        self.bytes_in = 0
-        self.bytes_out = 0
-        #: bytes handed to the transport for the host (after garbling, faults and pacing)
-        self.bytes_delivered = 0
-        self._queue: deque[_Burst] | tuple[()] = ()  # a deque while pacing holds bursts
-        self._tx_free_at = 0.0
-        self._timer: Timer | None = None
+        self._in = self._out = self._delivered = 0  # (what the line carried itself; bytes_in ... add the lane's)
+        self._pacer: Pacer | None = None  # made when pacing first holds output
         self._faults: list[_Active] = []
+        review = self._review  # (one bound method for both stages: a line per port of a plant)
         self._stages = {
-            "to_device": _Stage(clock, self._to_target),
-            "to_host": _Stage(clock, self._paced),
+            "to_device": _Stage(clock, self._to_target, review),
+            "to_host": _Stage(clock, self._paced, review),
         }
         self._to_device, self._to_host = self._stages["to_device"], self._stages["to_host"]  # (the fast paths' look)
         #: ``fn(event, text)`` called on the line's rare moments (not on data): ``connect``,
         #: ``disconnect``, ``host_settings`` (text: the settings, `` (mismatch ...)`` when they
         #: differ), ``fault`` (a line fault started or ended) -- for watchers and logs.
         self.observers: list[Callable[[str, str], None]] = []
-        target.attach(self._from_device)
+        own = self._from_device
+        self._lane = LaneSwitch(target, own)
+        target.attach(own)
 
     def _tell(self, event: str, text: str) -> None:
         for observer in list(self.observers):
             observer(event, text)
+
+    # -- the lean lane ----------------------------------------------------------------------
+    def offer_lane(self, take: Take | None) -> None:
+        """A transport offers to carry the lean lane (:mod:`devsim.transports.lane`): the line
+        calls ``take(lane)`` whenever nothing on it needs to see the bytes, and ``take(None)``
+        when something does again.  ``None`` withdraws the offer."""
+        self._lane.offer(take)
+        self._review()
+
+    def _review(self) -> None:
+        """Open the lean lane while a host listens, and no fault, trace, tap, pacing, delayed
+        chunk or reported host setting (a possible mismatch) needs the line; close it when one
+        does.  Called whenever one of those changes."""
+        quiet = self._quiet = (not self._faults and self._tracer is None and not self._to_device.items
+                               and not self._to_host.items)
+        self._lane.set(quiet and self._write is not None and self._host is None and not self.pacing)
+
+    @property
+    def lean(self) -> bool:
+        """Whether the lean lane is open (the transport carries the bytes without the line)."""
+        return self._lane.open
+
+    @property
+    def tracer(self) -> TraceSink | None:
+        """Where every chunk in either direction is recorded (a trace file, a tap), or None."""
+        return self._tracer
+
+    @tracer.setter
+    def tracer(self, tracer: TraceSink | None) -> None:
+        self._tracer = tracer
+        self._review()
+
+    @property
+    def bytes_in(self) -> int:
+        """Bytes received from the host."""
+        return self._in + self._lane.bytes_in
+
+    @property
+    def bytes_out(self) -> int:
+        """Bytes the target sent towards the host."""
+        return self._out + self._lane.bytes_out
+
+    @property
+    def bytes_delivered(self) -> int:
+        """Bytes handed to the transport for the host (after garbling, faults and pacing)."""
+        return self._delivered + self._lane.bytes_out
 
     # -- Endpoint ---------------------------------------------------------------------------
     def attach(self, write: Callable[[bytes], None] | None) -> None:
         """The transport's sink towards the host (``None``: nobody listening)."""
         if write is not None and self.observers:
             self._tell("connect", "host connected")
+        self._lane.close()  # (a new writer: the transport is asked again)
         self._write = write
+        self._review()
 
     def feed(self, data: bytes) -> None:
         """Bytes from the host; garbled on the way when the line settings do not match, and
         subject to the active faults."""
         if not data:
             return
-        self.bytes_in += len(data)
-        if (not self._faults and self.tracer is None and not self._to_device.items
-                and (self._host is None or self._clean())):
+        self._in += len(data)
+        host = self._host
+        if self._quiet and (host is None or (host is self._matched_host and self.target.serial_settings
+                                             is self._matched_device) or self._clean()):
             self.target.feed(data)  # the fault-free path: nothing to garble, trace or delay
             return
         received = data
@@ -239,12 +281,12 @@ class Line:
                 received = garble(data, host, self.device_settings)
             if self._faults:
                 received = mangle(self._faults, received, "to_device")
-        if self.tracer is not None:
+        if self._tracer is not None:
             if lost is not None:
                 note: str | None = f"lost: {lost}"
             else:
                 note = None if received == data else f"device read {render(received)}"
-            self.tracer.record("H>D", data, self.clock.now(), note)
+            self._tracer.record("H>D", data, self.clock.now(), note)
         if received:
             self._timing(received, len(received), "to_device")
         if self._faults:
@@ -253,18 +295,20 @@ class Line:
     def host_settings(self, settings: SerialSettings) -> None:
         """The host (re)configured its port."""
         self._host = settings
-        if self.tracer is not None or self.observers:
+        self._review()
+        if self._tracer is not None or self.observers:
             text = (f"host settings {settings.describe()}"
                     + (" (mismatch, device " + self.device_settings.describe() + ")" if self.mismatch else ""))
-            if self.tracer is not None:
-                self.tracer.note(text, self.clock.now())
+            if self._tracer is not None:
+                self._tracer.note(text, self.clock.now())
             self._tell("host_settings", text)
 
     def host_disconnected(self) -> None:
         """The host went away: forget its settings (the next host brings its own)."""
         self._host = None
-        if self.tracer is not None:
-            self.tracer.note("host disconnected", self.clock.now())
+        self._review()
+        if self._tracer is not None:
+            self._tracer.note("host disconnected", self.clock.now())
         self._tell("disconnect", "host disconnected")
         self.target.host_disconnected()
 
@@ -273,6 +317,7 @@ class Line:
         """Start ``fault`` now; it ends by itself after its ``duration`` or ``count``."""
         active = _Active(fault, self.clock.now())
         self._faults.append(active)
+        self._review()
         handle = FaultHandle(active, self._end)
         self._note(f"fault start: {fault.describe()}")
         if fault.kind == "unplug":
@@ -304,27 +349,22 @@ class Line:
             timer.cancel()
         active.timers.clear()
         self._faults.remove(active)
+        self._review()
         self._note(f"fault {how}: {active.fault.describe()}")
 
     def _note(self, text: str) -> None:
-        if self.tracer is not None:
-            self.tracer.note(text, self.clock.now())
+        if self._tracer is not None:
+            self._tracer.note(text, self.clock.now())
         self._tell("fault", text)
 
     def _clean(self) -> bool:
-        """No mismatch between the host's settings and the device's (remembered for the very
-        objects last compared, so that the fault-free path costs no comparison)."""
-        host = self._host
-        if host is None:
+        """The host's settings, known, match the device's (the objects compared are remembered:
+        the fast paths find them again with two identity checks)."""
+        host, device = self._host, self.target.serial_settings
+        if host is not None and settings_match(host, device):
+            self._matched_host, self._matched_device = host, device
             return True
-        device = self.target.serial_settings  # (what device_settings says, one call less)
-        matched = self._matched
-        if host is matched[0] and device is matched[1]:
-            return True
-        if settings_match(host, device):
-            self._matched = (host, device)
-            return True
-        return False
+        return host is None
 
     def _effective_host(self) -> SerialSettings | None:
         """The host's settings as the line sees them (a ``baud_mismatch`` fault overrides the
@@ -351,15 +391,7 @@ class Line:
         if not self._faults:
             stage.put(now, data, chars)
             return
-        latency = 0.0
-        for active in self._faults:
-            fault = active.fault
-            if not fault.applies(direction) or fault.delay is None:
-                continue
-            if fault.kind == "delay":
-                latency += fault.delay
-            elif fault.kind == "jitter":
-                latency += active.rng.uniform(0.0, fault.delay)
+        latency = fault_latency(self._faults, direction)
         splits = of_kind(self._faults, "split", direction)
         if not splits:
             stage.put(now + latency, data, chars)
@@ -386,25 +418,14 @@ class Line:
         active.timers.append(self.clock.call_at(when, tick))
 
     def _noise_tick(self, active: _Active) -> None:
-        fault = active.fault
-        assert fault.rate is not None
-        elapsed = self.clock.now() - active.started
-        if fault.duration is not None:
-            elapsed = min(elapsed, fault.duration)
-        due = int(elapsed * fault.rate + 1e-9)
-        for direction in [d for d in ("to_device", "to_host") if fault.applies(d)]:
-            n = due - active.emitted[direction]
-            if n <= 0:
-                continue
-            active.emitted[direction] = due
-            noise = bytes(active.rng.randrange(256) for _ in range(n))
+        for direction, noise in noise_due(active, self.clock.now()):
             self._inject_noise(noise, direction)
 
     def _inject_noise(self, noise: bytes, direction: str) -> None:
         lost = gate(self._faults, direction, noise=True)
-        if self.tracer is not None:
+        if self._tracer is not None:
             note = "noise" if lost is None else f"noise, lost: {lost}"
-            self.tracer.record("H>D" if direction == "to_device" else "D>H", noise, self.clock.now(), note)
+            self._tracer.record("H>D" if direction == "to_device" else "D>H", noise, self.clock.now(), note)
         if lost is not None:
             return
         if direction == "to_device":
@@ -457,19 +478,18 @@ class Line:
             "pacing": self.pacing,
             "bytes_in": self.bytes_in,
             "bytes_out": self.bytes_out,
-            "pending_out": sum(len(b.data) - b.sent for b in self._queue) + self._stages["to_host"].pending,
+            "pending_out": (self._pacer.pending if self._pacer is not None else 0) + self._to_host.pending,
             "faults": [a.fault.kind for a in self._faults],
         }
 
     def close(self) -> None:
         """End the faults, detach from the target and drop output still on the wire."""
+        self.offer_lane(None)
         self.clear_faults()
         for stage in self._stages.values():
             stage.close()
-        if self._timer is not None:
-            self._timer.cancel()
-            self._timer = None
-        self._queue = ()
+        if self._pacer is not None:
+            self._pacer.close()
         self.target.attach(None)
         self._write = None
 
@@ -483,13 +503,15 @@ class Line:
     def _from_device(self, data: bytes) -> None:
         if not data:
             return
-        self.bytes_out += len(data)
-        if not self._faults and self.tracer is None and not self._to_host.items and self._clean():
+        self._out += len(data)
+        host = self._host
+        if self._quiet and (host is None or (host is self._matched_host and self.target.serial_settings
+                                             is self._matched_device) or self._clean()):
             # the fault-free path: nothing to garble, trace or hold back (what _paced and _deliver do)
             if self._pacing_requested and not self.clock.virtual:  # (self.pacing)
                 self._paced(data, len(data))
             elif self._write is not None:
-                self.bytes_delivered += len(data)
+                self._delivered += len(data)
                 self._write(data)
             return
         device = self.device_settings
@@ -503,12 +525,12 @@ class Line:
                 sent = garble(data, device, host)
             if self._faults:
                 sent = mangle(self._faults, sent, "to_host")
-        if self.tracer is not None:
+        if self._tracer is not None:
             if lost is not None:
                 note: str | None = f"lost: {lost}"
             else:
                 note = None if sent == data else f"host read {render(sent)}"
-            self.tracer.record("D>H", data, self.clock.now(), note)
+            self._tracer.record("D>H", data, self.clock.now(), note)
         if sent:
             self._timing(sent, len(data), "to_host")
         if self._faults:
@@ -520,48 +542,17 @@ class Line:
         if not self.pacing:
             self._deliver(sent)
             return
-        now = self.clock.now()
-        start = max(now, self._tx_free_at)
-        duration = chars * self.device_settings.char_time()
-        self._tx_free_at = start + duration
-        queue = self._queue
-        if not queue:
-            queue = self._queue = deque()
-        queue.append(_Burst(sent, start, duration))
-        if self._timer is None:
-            self._schedule()
+        pacer = self._pacer
+        if pacer is None:
+            pacer = self._pacer = Pacer(self.clock, lambda: self.device_settings.char_time(), self._deliver)
+        pacer.put(sent, chars)
 
     def _deliver(self, data: bytes) -> None:
         if self._faults and gate(self._faults, "to_host", noise=True) is not None:
             return  # in flight when the cable was pulled
         if self._write is not None:
-            self.bytes_delivered += len(data)
+            self._delivered += len(data)
             self._write(data)
-
-    def _schedule(self) -> None:
-        burst = self._queue[0]
-        due = burst.due(burst.sent)
-        self._timer = self.clock.call_later(due - self.clock.now(), self._release)
-
-    def _release(self) -> None:
-        self._timer = None
-        now = self.clock.now() + _EPSILON
-        out = bytearray()
-        while self._queue:
-            burst = self._queue[0]
-            n = len(burst.data)
-            k = burst.sent
-            while k < n and burst.due(k) <= now:
-                k += 1
-            out += burst.data[burst.sent : k]
-            burst.sent = k
-            if k < n:
-                break
-            self._queue.popleft()  # type: ignore[union-attr]
-        if out:
-            self._deliver(bytes(out))
-        if self._queue:
-            self._schedule()
 
 
 def wire_settings(line: Line) -> dict[str, Any]:

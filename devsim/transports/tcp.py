@@ -45,6 +45,7 @@ from collections.abc import Callable
 from devsim.transports import fdlimit
 from devsim.transports.base import Endpoint, Transport
 from devsim.transports.hosts import DEFAULT_IDLE_DROP, admit, dropped, listen_backlog, refuse
+from devsim.transports.lane import Lane
 
 __all__ = ["SLICE", "TURN_GRACE", "TcpTransport"]
 
@@ -76,10 +77,12 @@ class _Session(asyncio.BufferedProtocol):
 
     A poll touches a session, its asyncio transport and its socket: the attributes are slots
     (one block of memory, not an object and its values array), and a plain session sends
-    through its socket directly while asyncio holds nothing unsent for it (:meth:`send`)."""
+    through its socket directly while asyncio holds nothing unsent for it (:meth:`send`).  While
+    its line's lean lane is open (:mod:`devsim.transports.lane`) the session hands what it reads
+    to the line's target itself and counts what it carries."""
 
     __slots__ = ("owner", "_view", "transport", "closed", "full", "state", "backlog", "peer", "since", "heard",
-                 "rest", "messages", "deliver", "sock")
+                 "rest", "messages", "deliver", "sock", "lane", "queued")
 
     def __init__(self, owner: TcpTransport, sock: socket.socket | None = None) -> None:
         self.owner = owner
@@ -99,6 +102,10 @@ class _Session(asyncio.BufferedProtocol):
         #: The endpoint's ``feed`` while this client is the served host of a plain one-host port
         #: (what :meth:`TcpTransport._received` would call, one call and five checks less per read)
         self.deliver: Callable[[bytes], None] | None = None
+        #: The line's lean lane while this session carries it (the host of a plain one-host port)
+        self.lane: Lane | None = None
+        #: Output handed to asyncio's transport (it may hold some unsent): later output goes after it
+        self.queued = False
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         assert isinstance(transport, asyncio.Transport)
@@ -118,6 +125,11 @@ class _Session(asyncio.BufferedProtocol):
 
     def buffer_updated(self, nbytes: int) -> None:
         self.heard = time.monotonic()
+        lane = self.lane
+        if lane is not None and nbytes <= SLICE and not self.backlog:
+            lane.bytes_in += nbytes
+            lane.feed(bytes(self._view[:nbytes]))
+            return
         deliver = self.deliver
         if deliver is not None and nbytes <= SLICE and not self.backlog:
             deliver(bytes(self._view[:nbytes]))
@@ -138,14 +150,20 @@ class _Session(asyncio.BufferedProtocol):
         self.full = False
 
     def send(self, data: bytes) -> None:
+        """Bytes for the client (on the lean lane: the target's output, counted for the line)."""
+        lane = self.lane
+        if lane is not None:
+            lane.bytes_out += len(data)
         transport = self.transport
-        if self.closed or transport is None or transport.is_closing():
+        if transport is None or self.closed or transport.is_closing():
             return
         if self.full:
             self.owner.dropped += len(data)
             return
         sock = self.sock
-        if sock is not None and not transport.get_write_buffer_size():
+        if self.queued and not transport.get_write_buffer_size():
+            self.queued = False  # what asyncio held has gone out
+        if sock is not None and not self.queued:
             # what transport.write does first when nothing waits to be sent, without its checks;
             # what the socket does not take now (or an error) goes the usual way
             try:
@@ -157,6 +175,7 @@ class _Session(asyncio.BufferedProtocol):
             if sent == len(data):
                 return
             data = data[sent:]
+        self.queued = True
         transport.write(data)
 
 
@@ -246,6 +265,10 @@ class TcpTransport(Transport):
         self.address = f"{host}:{self.port}"
         fdlimit.keep_reserve()
         loop.add_reader(listener.fileno(), self._accept)
+        offer = getattr(endpoint, "offer_lane", None)  # (a line; other endpoints have no lean lane)
+        if offer is not None and self._plain and self.hosts == 1 and type(self)._send is TcpTransport._send:
+            offer(self._take_lane)
+
     def _accept(self) -> None:
         listener, loop = self._server, self._loop
         if listener is None or loop is None:
@@ -298,9 +321,12 @@ class TcpTransport(Transport):
         if self._loop is not None:
             self._loop.remove_reader(server.fileno())
         server.close()
+        offer = getattr(self._endpoint, "offer_lane", None)
+        if offer is not None:
+            offer(None)
         sessions, self._served, self._ready, self._turn = list(self._served), [], (), None
         for session in sessions:
-            session.deliver = None
+            session.deliver = session.lane = None
             if session.transport is not None:
                 session.transport.abort()
         if sessions:  # abort() reports connection_lost on the next loop turn
@@ -346,6 +372,17 @@ class TcpTransport(Transport):
         endpoint.attach(session.send if plain else functools.partial(self._send, session))
         if self._plain:
             session.deliver = endpoint.feed
+
+    def _take_lane(self, lane: Lane | None) -> Callable[[bytes], None] | None:
+        """The line's lean lane (:meth:`Line.offer_lane <devsim.transports.line.Line.offer_lane>`):
+        carried by the session of the host; ``None``: closed again."""
+        for served in self._served:
+            served.lane = None
+        session = self._active
+        if lane is None or session is None or session.closed or self._endpoint is None:
+            return None
+        session.lane = lane
+        return session.send
 
     def _detach(self) -> None:
         self._active = None
@@ -395,7 +432,7 @@ class TcpTransport(Transport):
             session.transport.resume_reading()
 
     def _lost(self, session: _Session) -> None:
-        session.deliver = None
+        session.deliver = session.lane = None
         if session not in self._served:
             return
         self._served.remove(session)
