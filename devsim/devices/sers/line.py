@@ -10,11 +10,14 @@ from __future__ import annotations
 
 import functools
 import re
+from collections.abc import Callable
+from typing import Any
 
 import msgspec
 
 from devsim.devices.sers import codec
 from devsim.devices.sers import statements as st
+from devsim.devices.sers.answers import Answers
 from devsim.devices.sers.errors import message
 
 __all__ = [
@@ -23,6 +26,7 @@ __all__ = [
     "LINE_ENDS",
     "TEXT_TO_END",
     "CommandLine",
+    "KeptPoll",
     "Poll",
     "answers",
     "ends_line",
@@ -124,6 +128,46 @@ def poll_line(data: bytes) -> Poll | None:
         except (SersError, KeyError):
             number = None
     return Poll(address, query, len(data) - 1, number)
+
+
+class KeptPoll:
+    """A host's poll that the face answered last, kept for the next chunk of the same bytes
+    (a host polls the same line again and again): the line's parse, and the answer last made
+    for a parameter shown as its value is (:func:`.access.plain_reader`), with the whole reply
+    it went out in.  The face drops it whenever anything but this poll reaches the line (its
+    framing and selection may have changed) and at power-on; what else a poll depends on
+    (echo mode P1017, programming mode, the value, the acknowledgement, the DIP switches in
+    ``cfg``) is looked at again every time."""
+
+    __slots__ = ("data", "poll", "cfg", "read", "value", "answer", "ack", "reply")
+
+    def __init__(self, data: bytes, poll: Poll, cfg: object, read: Callable[[Any], Any] | None) -> None:
+        self.data = data
+        self.poll = poll
+        self.cfg = cfg  # the configuration it was made under (address, encoding)
+        self.read = read  # the parameter's value (None: answered the general way)
+        self.value: Any = _NOTHING  # the value last answered, and its answer line
+        self.answer = b""
+        self.ack = b""  # the acknowledgement that went out with it, and the whole reply
+        self.reply = b""
+
+    def answer_line(self, answers: Answers, encoding: str) -> bytes:
+        """The poll's answer line as the drive stands now (a :class:`SersError` as the query's
+        own): a value shown as it is read, and its line made again only when it changed."""
+        poll = self.poll
+        read = self.read
+        if read is None:
+            if poll.number is None:
+                return (answers.query_text(poll.query) + "\n\r").encode(encoding, errors="replace")
+            return answers.parameter_line(poll.query.target, poll.number, encoding)
+        value = read(answers.access)
+        if value != self.value or type(value) is not type(self.value):
+            self.answer = answers.plain_line(poll.query.target, poll.number, value, encoding)
+            self.value, self.reply = value, b""
+        return self.answer
+
+
+_NOTHING = object()
 
 
 @functools.lru_cache(maxsize=512)
