@@ -60,8 +60,7 @@ class SersFace(Face):
         self._settings: SerialSettings | None = None
         self.statements = LineStatements(model, self._out, self._error)
         self._noise_lines = NoiseLines(model, self.framer, self.send, self).take  # (bound once: a hot path)
-        #: The poll answered last, while nothing else reached the line (:meth:`_answer_poll`).
-        self._kept: KeptPoll | None = None
+        self._kept: KeptPoll | None = None  # the poll answered last, if nothing came since
         model.listen("power_on", self._reset_serial)
         model.listen("spontaneous", self.spontaneous)
         model.listen("line_out", self.send)
@@ -87,14 +86,10 @@ class SersFace(Face):
         # (answers to one chunk of input leave in one write: the kit's port batches them)
         model = self.model
         model.shared_line = self.port.shared_line
-        kept = self._kept
-        if kept is not None:
-            # the poll answered last and nothing else since: the line as it left it, the drive
-            # selected and booted (only a line or a power-on change those; P0, a master may not)
+        if (kept := self._kept) is not None:  # (line, selection, boot: as that poll left them)
             if (data == kept.data and model.cfg is kept.cfg and model.logic_alive and not model.master.awaiting
-                    and not model.program.editing):
-                self._reply_poll(kept, data)
-                return
+                    and not model.program.editing):  # (P0 and a master's request change without a line)
+                return self._reply_poll(kept, data)
             self._kept = None  # (anything else: the framing and the selection may change)
         if model.master.awaiting and model.logic_alive:
             model.master.feed(data)  # a slave's answer to this master
@@ -210,32 +205,35 @@ class SersFace(Face):
         return end
 
     def _answer_poll(self, poll: Poll, data: bytes) -> bool:
-        """A chunk that is one whole query line (a host's poll, see :func:`poll_line`), between
-        lines: what :meth:`_begin_line` does with it, without framing and checking the line
-        again.  Only for a line this drive executes and answers, outside programming mode;
-        returns False (having done nothing) for any other.  Kept for the next chunk of the same
-        bytes (:class:`~.line.KeptPoll`)."""
+        """A chunk that is one whole query line (a host's poll, :func:`poll_line`) between lines,
+        for this drive outside programming mode (else False, nothing done): what :meth:`_begin_line`
+        does with it, without framing the line again; kept for the next one (:class:`KeptPoll`)."""
         model = self.model
         address = poll.address
         if not model.selection(address)[1] or model.program.editing:
             return False
         model.note_address(address, True)
         self.framer.whole_line(poll.length, data[-1])
-        number = poll.number
-        kept = self._kept = KeptPoll(data, poll, model.cfg, None if number is None else plain_reader(number))
+        kept = self._kept = KeptPoll(data, poll, model.cfg, None if poll.number is None else plain_reader(poll.number))
         self._reply_poll(kept, data)
         return True
 
     def _reply_poll(self, kept: KeptPoll, data: bytes) -> None:
-        """The echo, answer and acknowledgement of a poll taken whole (:meth:`_answer_poll`),
-        as the statements' progress and the line end make them for its one statement, a query."""
+        """The echo, answer and acknowledgement of a poll taken whole (:meth:`_answer_poll`), as
+        the statements' progress and the line end make them for its one statement, a query."""
         model = self.model
-        # (what the query sets off waits for the line end: a line is being received; the
-        # shared one is only looked at, a line that gets an error or an answer is made below)
-        self.line = _ANSWERING
+        self.line = _ANSWERING  # (what the query sets off waits for the line end)
         mode = HANDSHAKE_MODE(model.params.values.cells)
+        read = kept.read
         try:
-            answer = kept.answer_line(model.answers, model.cfg.encoding)
+            if read is None:
+                answer = kept.answer_line(model.answers, model.cfg.encoding)
+            else:  # a value shown as it is: its answer line made again only when it changed
+                value = read(model.access)
+                if value == kept.value and type(value) is type(kept.value):
+                    answer = kept.answer
+                else:
+                    answer = kept.remake(value, model.answers, model.cfg.encoding)
         except SersError as exc:
             self.line = line = CommandLine(True, True)
             if mode in (0, 1):

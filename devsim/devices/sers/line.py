@@ -153,18 +153,17 @@ class KeptPoll:
 
     def answer_line(self, answers: Answers, encoding: str) -> bytes:
         """The poll's answer line as the drive stands now (a :class:`SersError` as the query's
-        own): a value shown as it is read, and its line made again only when it changed."""
+        own), the general way: for a query that is no value shown as it is (:attr:`read` None)."""
         poll = self.poll
-        read = self.read
-        if read is None:
-            if poll.number is None:
-                return (answers.query_text(poll.query) + "\n\r").encode(encoding, errors="replace")
-            return answers.parameter_line(poll.query.target, poll.number, encoding)
-        value = read(answers.access)
-        if value != self.value or type(value) is not type(self.value):
-            self.answer = answers.plain_line(poll.query.target, poll.number, value, encoding)
-            self.value, self.reply = value, b""
-        return self.answer
+        if poll.number is None:
+            return (answers.query_text(poll.query) + "\n\r").encode(encoding, errors="replace")
+        return answers.parameter_line(poll.query.target, poll.number, encoding)
+
+    def remake(self, value: Any, answers: Answers, encoding: str) -> bytes:
+        """The answer line for ``value`` read now (:attr:`read`), other than the one kept: kept."""
+        line = answers.plain_line(self.poll.query.target, self.poll.number, value, encoding)  # type: ignore[arg-type]
+        self.value, self.answer, self.reply = value, line, b""
+        return line
 
 
 _NOTHING = object()
