@@ -12,11 +12,12 @@ from hypothesis import given, settings
 
 from devsim.core.clock import VirtualClock
 from devsim.core.nvram import NonVolatileMemory
-from devsim.devices.sers import SersDevice
+from devsim.devices.sers import SersDevice, codec
+from devsim.devices.sers.line import KeptPoll
 
 POLLS = [b"#P11?\r", b"#1P11?\r", b"#P12?\r", b"#P11?\n", b"#1 P11?\r", b"#P336?\r", b"#P1017?\r", b"#C1?\r",
          b"#P51?\r", b"#V?\r", b"#P1?\r", b"#Z?\r", b"#P9999?\r", b"#P11??\r", b"#O1?\r", b"#P0?\r", b"#2P11?\r",
-         b"#*P11?\r", b"#P1050?\r", b"#P1133?\r", b"#P265?\r", b"#200P11?\r"]
+         b"#*P11?\r", b"#P1050?\r", b"#P1133?\r", b"#P265?\r", b"#200P11?\r", b"#1P12?\n", b"#P12?\r\n"]
 LINES = [b"#P1017=0\r", b"#P1017=1\r", b"#P1017=2\r", b"#2\r", b"#1\r", b"#Q\r", b"#P1019=0\r", b"#PGM\r",
          b"#QUIT\r", b"#ON W=360 E\r", b"#P1=*\r", b"#P1=1\r", b"#P265=1\r", b"#P265=0\r", b"#RS\r", b"#OFF\r",
          b"\n", b"\r", b"#1P11?\r#", b"#C1=3\r", b"#P11=0 P12=0\r", b"#RUN\r", b"#S\r", b"#P76=2\r", b"#P1029=3\r"]
@@ -129,21 +130,28 @@ def test_a_kept_poll_jumps_over_nothing() -> None:
                 assert _run(steps, True, shared, setup) == _run(steps, False, shared, setup), (name, setup)
 
 
-def test_a_repeated_poll_is_answered_from_what_was_kept_and_forgotten_when_anything_else_comes() -> None:
+def test_repeated_polls_are_answered_from_what_was_kept_and_forgotten_when_anything_else_comes() -> None:
     clock = VirtualClock()
     device = SersDevice(clock=clock, config={"boot_time": 0}, nvram=NonVolatileMemory(None))
     out = bytearray()
     device.attach(out.extend)
     face = device.face()
     device.feed(b"#P11?\r")
-    kept = face._kept
-    assert kept is not None and bytes(out) == b"#P11?\rP11=0\n\r\nok1\n\r"
+    kept = face._polls[b"#P11?\r"]
+    assert bytes(out) == b"#P11?\rP11=0\n\r\nok1\n\r"
     reply = kept.reply
     device.feed(b"#P11?\r")
-    assert face._kept is kept and kept.reply is reply and bytes(out) == 2 * reply  # (sent as it was kept)
-    device.feed(b"\r")
-    assert face._kept is None
+    assert face._polls[b"#P11?\r"] is kept and kept.reply is reply and bytes(out) == 2 * reply  # (sent as kept)
+    device.feed(b"#1P12?\n")
     device.feed(b"#P11?\r")
-    assert face._kept is not None
+    assert list(face._polls) == [b"#P11?\r", b"#1P12?\n"] and face._polls[b"#P11?\r"] is kept
+    framer = codec.Framer()
+    framer.whole_line(5, 13)  # (as the line #P11? CR leaves it)
+    assert vars(face.framer) == vars(framer) and face._kept is kept
+    device.feed(b"\r")
+    assert face._polls is None
+    for n in range(20):  # (a bounded number)
+        device.feed(b"#P%d?\r" % n)
+    assert 0 < len(face._polls) <= KeptPoll.MOST
     device.model.power_cycle()
-    assert face._kept is None
+    assert face._polls is None

@@ -48,7 +48,8 @@ class SersFace(Face):
     §3.2, §4.1, §4.8.6.9)."""
 
     model: SersDrive
-    __slots__ = ("framer", "line", "_last_replied", "_spontaneous", "_settings", "statements", "_noise_lines", "_kept")
+    __slots__ = ("framer", "line", "_last_replied", "_spontaneous", "_settings", "statements", "_noise_lines", "_polls",
+                 "_kept")
 
     def __init__(self, model: SersDrive, port: Port) -> None:
         super().__init__(model, port)
@@ -60,7 +61,8 @@ class SersFace(Face):
         self._settings: SerialSettings | None = None
         self.statements = LineStatements(model, self._out, self._error)
         self._noise_lines = NoiseLines(model, self.framer, self.send, self).take  # (bound once: a hot path)
-        self._kept: KeptPoll | None = None  # the poll answered last, if nothing came since
+        self._polls: dict[bytes, KeptPoll] | None = None  # the polls answered since anything else came
+        self._kept: KeptPoll | None = None  # the last of them (None with the polls)
         model.listen("power_on", self._reset_serial)
         model.listen("spontaneous", self.spontaneous)
         model.listen("line_out", self.send)
@@ -79,18 +81,19 @@ class SersFace(Face):
         self.line = None
         self._last_replied = False
         self._spontaneous.clear()
-        self._kept = None
+        self._polls = self._kept = None
 
     # -- bytes from the host -------------------------------------------------------------
     def feed(self, data: bytes) -> None:
         # (answers to one chunk of input leave in one write: the kit's port batches them)
         model = self.model
         model.shared_line = self.port.shared_line
-        if (kept := self._kept) is not None:  # (line, selection, boot: as that poll left them)
-            if (data == kept.data and model.cfg is kept.cfg and model.logic_alive and not model.master.awaiting
-                    and not model.program.editing):  # (P0 and a master's request change without a line)
-                return self._reply_poll(kept, data)
-            self._kept = None  # (anything else: the framing and the selection may change)
+        if ((kept := self._kept) is not None and (data == kept.data or (kept := self._polls.get(data)) is not None)
+                and model.cfg is kept.cfg and model.logic_alive and not model.master.awaiting and not model.program.editing):
+            if kept is not self._kept:  # (line, selection, boot as the last left them; this one's framing)
+                self.framer.whole_line(kept.poll.length, data[-1])
+                self._kept = kept
+            return self._reply_poll(kept, data)
         if model.master.awaiting and model.logic_alive:
             model.master.feed(data)  # a slave's answer to this master
         if not model.logic_alive or model.booting:
@@ -101,6 +104,7 @@ class SersFace(Face):
             poll = poll_line(data)
             if poll is not None and self._answer_poll(poll, data):
                 return
+        self._polls = self._kept = None  # (anything else: the framing and the selection may change)
         index, end = 0, len(data)
         while index < end:
             line = self.line
@@ -215,6 +219,7 @@ class SersFace(Face):
         model.note_address(address, True)
         self.framer.whole_line(poll.length, data[-1])
         kept = self._kept = KeptPoll(data, poll, model.cfg, None if poll.number is None else plain_reader(poll.number))
+        self._polls = KeptPoll.add(self._polls, kept)
         self._reply_poll(kept, data)
         return True
 
@@ -228,12 +233,10 @@ class SersFace(Face):
         try:
             if read is None:
                 answer = kept.answer_line(model.answers, model.cfg.encoding)
-            else:  # a value shown as it is: its answer line made again only when it changed
-                value = read(model.access)
-                if value == kept.value and type(value) is type(kept.value):
-                    answer = kept.answer
-                else:
-                    answer = kept.remake(value, model.answers, model.cfg.encoding)
+            elif (value := read(model.access)) == kept.value and type(value) is type(kept.value):
+                answer = kept.answer  # (a value shown as it is: its line made again only when it changed)
+            else:
+                answer = kept.remake(value, model.answers, model.cfg.encoding)
         except SersError as exc:
             self.line = line = CommandLine(True, True)
             if mode in (0, 1):
@@ -242,14 +245,12 @@ class SersFace(Face):
             model.interpreter.poke()
             self._reply_end(line)
             return
-        interpreter = model.interpreter
-        if interpreter.waiting == "wait":  # (poke does nothing else)
+        if (interpreter := model.interpreter).waiting == "wait":  # (poke does nothing else)
             interpreter.poke()
         if mode in (0, 1) and not self._spontaneous:  # echo, answer and acknowledgement in one piece
             ack = model.answers.ack_line()
             if answer is not kept.answer or ack is not kept.ack or not kept.reply:
-                kept.reply = b"".join((data, answer, ack))
-                kept.ack = ack
+                kept.reply, kept.ack = b"".join((data, answer, ack)), ack
             self.send(kept.reply)
             self._last_replied = True
             self.line = None

@@ -131,18 +131,21 @@ def poll_line(data: bytes) -> Poll | None:
 
 
 class KeptPoll:
-    """A host's poll that the face answered last, kept for the next chunk of the same bytes
-    (a host polls the same line again and again): the line's parse, and the answer last made
-    for a parameter shown as its value is (:func:`.access.plain_reader`), with the whole reply
-    it went out in.  The face drops it whenever anything but this poll reaches the line (its
-    framing and selection may have changed) and at power-on; what else a poll depends on
+    """A host's poll that the face answered, kept for the next chunk of the same bytes (a host
+    polls the same lines again and again): the line's parse, and the answer last made for a
+    parameter shown as its value is (:func:`.access.plain_reader`), with the whole reply it went
+    out in.  The face drops its kept polls whenever anything but one of them reaches the line
+    (its framing and selection may have changed) and at power-on; what else a poll depends on
     (echo mode P1017, programming mode, the value, the acknowledgement, the DIP switches in
     ``cfg``) is looked at again every time."""
 
     __slots__ = ("data", "poll", "cfg", "read", "value", "answer", "ack", "reply")
 
+    #: Polls a face keeps at most (a host polls a few parameters in turn).
+    MOST = 8
+
     def __init__(self, data: bytes, poll: Poll, cfg: object, read: Callable[[Any], Any] | None) -> None:
-        self.data = data
+        self.data = data  # the chunk
         self.poll = poll
         self.cfg = cfg  # the configuration it was made under (address, encoding)
         self.read = read  # the parameter's value (None: answered the general way)
@@ -150,6 +153,14 @@ class KeptPoll:
         self.answer = b""
         self.ack = b""  # the acknowledgement that went out with it, and the whole reply
         self.reply = b""
+
+    @staticmethod
+    def add(polls: dict[bytes, KeptPoll] | None, kept: KeptPoll) -> dict[bytes, KeptPoll]:
+        """``polls`` (made when None, emptied when full) with ``kept``."""
+        if polls is None or len(polls) >= KeptPoll.MOST:
+            polls = {}
+        polls[kept.data] = kept
+        return polls
 
     def answer_line(self, answers: Answers, encoding: str) -> bytes:
         """The poll's answer line as the drive stands now (a :class:`SersError` as the query's
