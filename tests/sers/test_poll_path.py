@@ -90,7 +90,8 @@ def _run(steps: list[tuple[str, float, int]], whole: bool, shared: bool, setup: 
     face = device.face()
     line = face.line
     return (answers, device.state(), dict(model.params.values), model.power_stage.errno, model.power_stage.warnings,
-            model.addressed, model.interpreter.waiting, bytes(model.master._buffer), model.master.sent, model.interpreter.pc, face.framer.in_line,
+            model.addressed, model.interpreter.waiting, bytes(model.master._buffer), model.master.sent, model.interpreter.pc,
+            face.framer.in_line, face.framer.idle,
             face._last_replied, None if line is None else (line.execute, line.reply, line.error, bytes(line.held)))
 
 
@@ -117,6 +118,8 @@ HAZARDS = {
     "a line begun": [("line", 18, 1), ("poll", 0, 2)],
     "the supply off": [("poll", 0, 2), ("supply", 0, 1), ("poll", 0, 2), ("supply", 1, 1), ("poll", 0, 2)],
     "a master waiting": [("poll", 0, 2), ("advance", 0.001, 1), ("poll", 0, 2), ("advance", 0.5, 1), ("poll", 0, 2)],
+    "a line end pair after polls in turn": [("poll", 0, 1), ("poll", 22, 1), ("poll", 0, 1), ("line", 16, 1),
+                                            ("poll", 22, 1), ("poll", 0, 1), ("poll", 22, 1), ("line", 17, 1)],
     "a weighted value": [("poll", 8, 1), ("line", 23, 1), ("poll", 8, 1), ("line", 9, 1), ("advance", 0.05, 1),
                          ("poll", 8, 2)],
 }
