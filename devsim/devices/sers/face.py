@@ -33,7 +33,7 @@ from devsim.devices.sers.line import (
 )
 from devsim.devices.sers.model import SersDrive
 from devsim.devices.sers.noise import NoiseLines
-from devsim.devices.sers.params import HANDSHAKE_MODE
+from devsim.devices.sers.params import HANDSHAKE_CELL
 
 __all__ = ["SersFace"]
 
@@ -228,7 +228,7 @@ class SersFace(Face):
         the statements' progress and the line end make them for its one statement, a query."""
         model = self.model
         self.line = _ANSWERING  # (what the query sets off waits for the line end)
-        mode = HANDSHAKE_MODE(model.params.values.cells)
+        mode = model.params.values.cells[HANDSHAKE_CELL]
         read = kept.read
         try:
             if read is None:
