@@ -133,7 +133,7 @@ def test_a_kept_poll_jumps_over_nothing() -> None:
                 assert _run(steps, True, shared, setup) == _run(steps, False, shared, setup), (name, setup)
 
 
-def test_repeated_polls_are_answered_from_what_was_kept_and_forgotten_when_anything_else_comes() -> None:
+def test_repeated_polls_are_answered_from_what_was_kept_and_forgotten_at_power_on() -> None:
     clock = VirtualClock()
     device = SersDevice(clock=clock, config={"boot_time": 0}, nvram=NonVolatileMemory(None))
     out = bytearray()
@@ -152,7 +152,9 @@ def test_repeated_polls_are_answered_from_what_was_kept_and_forgotten_when_anyth
     framer.whole_line(5, 13)  # (as the line #P11? CR leaves it)
     assert vars(face.framer) == vars(framer) and face._kept is kept
     device.feed(b"\r")
-    assert face._polls is None
+    assert face._kept is None and face._polls[b"#P11?\r"] is kept  # (the line is checked again)
+    device.feed(b"#P11?\r")
+    assert face._kept is kept
     for n in range(20):  # (a bounded number)
         device.feed(b"#P%d?\r" % n)
     assert 0 < len(face._polls) <= KeptPoll.MOST

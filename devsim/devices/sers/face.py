@@ -13,7 +13,6 @@ from typing import Any, ClassVar
 
 from devsim.core.device import Face, Port, SerialSettings
 from devsim.devices.sers import codec
-from devsim.devices.sers.access import plain_reader
 from devsim.devices.sers.errors import SersError
 from devsim.devices.sers.interactive import LineStatements
 from devsim.devices.sers.line import (
@@ -61,8 +60,8 @@ class SersFace(Face):
         self._settings: SerialSettings | None = None
         self.statements = LineStatements(model, self._out, self._error)
         self._noise_lines = NoiseLines(model, self.framer, self.send, self).take  # (bound once: a hot path)
-        self._polls: dict[bytes, KeptPoll] | None = None  # the polls answered since anything else came
-        self._kept: KeptPoll | None = None  # the last of them (None with the polls)
+        self._polls: dict[bytes, KeptPoll] | None = None  # the polls answered (since power-on)
+        self._kept: KeptPoll | None = None  # the last one, if nothing else came since
         model.listen("power_on", self._reset_serial)
         model.listen("spontaneous", self.spontaneous)
         model.listen("line_out", self.send)
@@ -104,7 +103,7 @@ class SersFace(Face):
             poll = poll_line(data)
             if poll is not None and self._answer_poll(poll, data):
                 return
-        self._polls = self._kept = None  # (anything else: the framing and the selection may change)
+        self._kept = None  # (anything else: the framing and the selection may change)
         index, end = 0, len(data)
         while index < end:
             line = self.line
@@ -218,8 +217,8 @@ class SersFace(Face):
             return False
         model.note_address(address, True)
         self.framer.whole_line(poll.length, data[-1])
-        kept = self._kept = KeptPoll(data, poll, model.cfg, None if poll.number is None else plain_reader(poll.number))
-        self._polls = KeptPoll.add(self._polls, kept)
+        self._polls, kept = KeptPoll.keep(self._polls, data, poll, model.cfg)
+        self._kept = kept
         self._reply_poll(kept, data)
         return True
 

@@ -17,6 +17,7 @@ import msgspec
 
 from devsim.devices.sers import codec
 from devsim.devices.sers import statements as st
+from devsim.devices.sers.access import plain_reader
 from devsim.devices.sers.answers import Answers
 from devsim.devices.sers.errors import message
 
@@ -134,10 +135,12 @@ class KeptPoll:
     """A host's poll that the face answered, kept for the next chunk of the same bytes (a host
     polls the same lines again and again): the line's parse, and the answer last made for a
     parameter shown as its value is (:func:`.access.plain_reader`), with the whole reply it went
-    out in.  The face drops its kept polls whenever anything but one of them reaches the line
-    (its framing and selection may have changed) and at power-on; what else a poll depends on
-    (echo mode P1017, programming mode, the value, the acknowledgement, the DIP switches in
-    ``cfg``) is looked at again every time."""
+    out in.  The face answers a chunk of a kept poll's bytes at once while nothing else reached
+    the line since a poll was answered (so the line is between lines and the drive selected:
+    only a line or a power-on change that); after anything else the poll path checks the line
+    again and then takes the kept poll.  Power-on drops them.  What else a poll depends on (echo
+    mode P1017, programming mode, a master's request, the value, the acknowledgement, the DIP
+    switches in ``cfg``) is looked at again every time."""
 
     __slots__ = ("data", "poll", "cfg", "read", "value", "answer", "ack", "reply")
 
@@ -155,12 +158,17 @@ class KeptPoll:
         self.reply = b""
 
     @staticmethod
-    def add(polls: dict[bytes, KeptPoll] | None, kept: KeptPoll) -> dict[bytes, KeptPoll]:
-        """``polls`` (made when None, emptied when full) with ``kept``."""
-        if polls is None or len(polls) >= KeptPoll.MOST:
-            polls = {}
-        polls[kept.data] = kept
-        return polls
+    def keep(polls: dict[bytes, KeptPoll] | None, data: bytes, poll: Poll, cfg: object
+             ) -> tuple[dict[bytes, KeptPoll], KeptPoll]:
+        """The poll kept in ``polls`` for the chunk ``data`` under ``cfg``, or one made and added
+        (``polls`` made when None, emptied when full); returns ``polls`` and it."""
+        kept = polls.get(data) if polls else None
+        if kept is None or kept.cfg is not cfg:
+            kept = KeptPoll(data, poll, cfg, None if poll.number is None else plain_reader(poll.number))
+            if polls is None or len(polls) >= KeptPoll.MOST:
+                polls = {}
+            polls[data] = kept
+        return polls, kept  # type: ignore[return-value]
 
     def answer_line(self, answers: Answers, encoding: str) -> bytes:
         """The poll's answer line as the drive stands now (a :class:`SersError` as the query's
