@@ -17,9 +17,9 @@ import msgspec
 
 from devsim.devices.sers import codec
 from devsim.devices.sers import statements as st
-from devsim.devices.sers.access import plain_reader
+from devsim.devices.sers.access import address_number, plain_reader
 from devsim.devices.sers.answers import Answers
-from devsim.devices.sers.errors import message
+from devsim.devices.sers.errors import SersError, message
 
 __all__ = [
     "COMPLETES",
@@ -121,9 +121,6 @@ def poll_line(data: bytes) -> Poll | None:
     query = result.statements[0][0]
     number = None
     if not query.name and query.target.kind in ("P", "alias"):
-        from devsim.devices.sers.access import address_number  # (once per distinct poll: cached)
-        from devsim.devices.sers.errors import SersError
-
         try:
             number = address_number(query.target)
         except (SersError, KeyError):
@@ -162,13 +159,15 @@ class KeptPoll:
              ) -> tuple[dict[bytes, KeptPoll], KeptPoll]:
         """The poll kept in ``polls`` for the chunk ``data`` under ``cfg``, or one made and added
         (``polls`` made when None, emptied when full); returns ``polls`` and it."""
-        kept = polls.get(data) if polls else None
+        if polls is None:
+            polls = {}
+        kept = polls.get(data)
         if kept is None or kept.cfg is not cfg:
             kept = KeptPoll(data, poll, cfg, None if poll.number is None else plain_reader(poll.number))
-            if polls is None or len(polls) >= KeptPoll.MOST:
+            if len(polls) >= KeptPoll.MOST:
                 polls = {}
             polls[data] = kept
-        return polls, kept  # type: ignore[return-value]
+        return polls, kept
 
     def answer_line(self, answers: Answers, encoding: str) -> bytes:
         """The poll's answer line as the drive stands now (a :class:`SersError` as the query's
