@@ -29,7 +29,7 @@ from devsim.devices.sers.power import PowerStage
 from devsim.devices.sers.program import ProgramMemory
 from devsim.devices.sers.units import Scaling, format_query, quantize
 
-__all__ = ["READS", "WRITES", "ParameterAccess", "ProgramControl", "address_number"]
+__all__ = ["READS", "WRITES", "ParameterAccess", "ProgramControl", "address_number", "plain_reader"]
 
 
 class ProgramControl(Protocol):
@@ -411,3 +411,27 @@ WRITES: Table[Write] = Table(
 _READ: dict[int, Read] = {int(row.token[1:]): row.handler for row in READS}
 _WRITE: dict[int, Write] = {int(row.token[1:]): row.handler for row in WRITES}
 _WRITE_ONLY = frozenset(n for n, row in PARAMETERS.items() if not row.readable)
+
+
+def _stored(number: int) -> Read:
+    def read(access: ParameterAccess) -> Any:
+        return access.params.values.get(number, 0)
+
+    return read
+
+
+#: Parameters answered with their value as it is (neither weighted nor ``fixed``; not P1, whose
+#: ``Z=*`` answers ``*``) that can be read: what reads each, as :meth:`ParameterAccess.param_value`.
+_PLAIN_READERS: dict[int, Read] = {
+    n: _READ.get(n) or _stored(n)
+    for n in PARAMETERS
+    if n != 1 and KIND[n] not in WEIGHTED_KINDS and KIND[n] != "fixed" and (n in _READ or n not in _WRITE_ONLY)
+}
+
+
+def plain_reader(number: int) -> Read | None:
+    """What :meth:`ParameterAccess.param_value` does for parameter ``number`` when a query
+    answers its value as it is (a host's poll reads it again and again without looking the
+    number up): its reader, or one of the stored value.  None for any other number (weighted,
+    ``fixed``, P1, no row, write-only: its answer or error is made the general way)."""
+    return _PLAIN_READERS.get(number)

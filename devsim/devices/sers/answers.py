@@ -5,6 +5,7 @@ statements as LIST shows them (manual §4.1, §4.2, §4.3, §4.7; spec G-LIST, G
 from __future__ import annotations
 
 import re
+from typing import Any
 
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.access import ParameterAccess, address_number
@@ -105,11 +106,17 @@ class Answers:
         kind = KIND.get(number)
         if number == 1 or kind in WEIGHTED_KINDS or kind == "fixed":
             return (self.parameter_text(target, number) + "\n\r").encode(encoding, errors="replace")
-        value = self.access.param_value(number)
+        return self.plain_line(target, number, self.access.param_value(number), encoding)
+
+    def plain_line(self, target: st.Address, number: int, value: Any, encoding: str) -> bytes:
+        """The answer line of a plain parameter (neither weighted nor ``fixed``, not P1) that
+        holds ``value``, as :meth:`parameter_line` makes it: made once per value."""
         key = (target.text, type(value), value, encoding)
         line = _PLAIN_LINES.get(key)
         if line is None:
-            text = self.parameter_text(target, number)  # (its errors as they are: nothing kept)
+            if value == "*":
+                raise SersError(19)  # (as parameter_text: nothing kept)
+            text = f"{target.text}={self.access.format_value(number, value)}"
             if len(_PLAIN_LINES) >= _PLAIN_LINES_MAX:
                 _PLAIN_LINES.clear()
             line = _PLAIN_LINES[key] = (text + "\n\r").encode(encoding, errors="replace")

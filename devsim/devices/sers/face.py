@@ -21,6 +21,7 @@ from devsim.devices.sers.line import (
     LINE_ENDS,
     TEXT_TO_END,
     CommandLine,
+    KeptPoll,
     Poll,
     ends_line,
     error_text,
@@ -31,6 +32,7 @@ from devsim.devices.sers.line import (
 )
 from devsim.devices.sers.model import SersDrive
 from devsim.devices.sers.noise import NoiseLines
+from devsim.devices.sers.params import HANDSHAKE_CELL
 
 __all__ = ["SersFace"]
 
@@ -45,7 +47,8 @@ class SersFace(Face):
     §3.2, §4.1, §4.8.6.9)."""
 
     model: SersDrive
-    __slots__ = ("framer", "line", "_last_replied", "_spontaneous", "_settings", "statements", "_noise_lines")
+    __slots__ = ("framer", "line", "_last_replied", "_spontaneous", "_settings", "statements", "_noise_lines", "_polls",
+                 "_kept")
 
     def __init__(self, model: SersDrive, port: Port) -> None:
         super().__init__(model, port)
@@ -57,6 +60,8 @@ class SersFace(Face):
         self._settings: SerialSettings | None = None
         self.statements = LineStatements(model, self._out, self._error)
         self._noise_lines = NoiseLines(model, self.framer, self.send, self).take  # (bound once: a hot path)
+        self._polls: dict[bytes, KeptPoll] | None = None  # the polls answered (since power-on)
+        self._kept: KeptPoll | None = None  # the last one, if nothing else came since
         model.listen("power_on", self._reset_serial)
         model.listen("spontaneous", self.spontaneous)
         model.listen("line_out", self.send)
@@ -75,12 +80,19 @@ class SersFace(Face):
         self.line = None
         self._last_replied = False
         self._spontaneous.clear()
+        self._polls = self._kept = None
 
     # -- bytes from the host -------------------------------------------------------------
     def feed(self, data: bytes) -> None:
         # (answers to one chunk of input leave in one write: the kit's port batches them)
         model = self.model
         model.shared_line = self.port.shared_line
+        if ((kept := self._kept) is not None and (data == kept.data or (kept := self._polls.get(data)) is not None)
+                and model.cfg is kept.cfg and model.logic_alive and not model.master.awaiting and not model.program.editing):
+            if kept is not self._kept:  # (line, selection, boot as the last left them; this one's framing)
+                self.framer.whole_line(kept.poll.length, data[-1])
+                self._kept = kept
+            return self._reply_poll(kept, data)
         if model.master.awaiting and model.logic_alive:
             model.master.feed(data)  # a slave's answer to this master
         if not model.logic_alive or model.booting:
@@ -91,6 +103,7 @@ class SersFace(Face):
             poll = poll_line(data)
             if poll is not None and self._answer_poll(poll, data):
                 return
+        self._kept = None  # (anything else: the framing and the selection may change)
         index, end = 0, len(data)
         while index < end:
             line = self.line
@@ -195,26 +208,34 @@ class SersFace(Face):
         return end
 
     def _answer_poll(self, poll: Poll, data: bytes) -> bool:
-        """A chunk that is one whole query line (a host's poll, see :func:`poll_line`), between
-        lines: what :meth:`_begin_line` does with it, without framing and checking the line
-        again.  Only for a line this drive executes and answers, outside programming mode;
-        returns False (having done nothing) for any other."""
+        """A chunk that is one whole query line (a host's poll, :func:`poll_line`) between lines,
+        for this drive outside programming mode (else False, nothing done): what :meth:`_begin_line`
+        does with it, without framing the line again; kept for the next one (:class:`KeptPoll`)."""
         model = self.model
         address = poll.address
         if not model.selection(address)[1] or model.program.editing:
             return False
         model.note_address(address, True)
         self.framer.whole_line(poll.length, data[-1])
-        # (what the query sets off waits for the line end: a line is being received; the
-        # shared one is only looked at, a line that gets an error or an answer is made below)
-        self.line = _ANSWERING
-        mode = model.params.handshake_mode
-        try:  # what the statements' progress does with the line's one statement, a query
-            number = poll.number
-            if number is None:
-                answer = (model.answers.query_text(poll.query) + "\n\r").encode(model.cfg.encoding, errors="replace")
+        self._polls, kept = KeptPoll.keep(self._polls, data, poll, model.cfg)
+        self._kept = kept
+        self._reply_poll(kept, data)
+        return True
+
+    def _reply_poll(self, kept: KeptPoll, data: bytes) -> None:
+        """The echo, answer and acknowledgement of a poll taken whole (:meth:`_answer_poll`), as
+        the statements' progress and the line end make them for its one statement, a query."""
+        model = self.model
+        self.line = _ANSWERING  # (what the query sets off waits for the line end)
+        mode = model.params.values.cells[HANDSHAKE_CELL]
+        read = kept.read
+        try:
+            if read is None:
+                answer = kept.answer_line(model.answers, model.cfg.encoding)
+            elif (value := read(model.access)) == kept.value and type(value) is type(kept.value):
+                answer = kept.answer  # (a value shown as it is: its line made again only when it changed)
             else:
-                answer = model.answers.parameter_line(poll.query.target, number, model.cfg.encoding)
+                answer = kept.remake(value, model.answers, model.cfg.encoding)
         except SersError as exc:
             self.line = line = CommandLine(True, True)
             if mode in (0, 1):
@@ -222,19 +243,22 @@ class SersFace(Face):
             self._error(line, exc.errno, exc.detail)
             model.interpreter.poke()
             self._reply_end(line)
-            return True
-        model.interpreter.poke()
+            return
+        if (interpreter := model.interpreter).waiting == "wait":  # (poke does nothing else)
+            interpreter.poke()
         if mode in (0, 1) and not self._spontaneous:  # echo, answer and acknowledgement in one piece
-            self.send(b"".join((data, answer, model.answers.ack_line())))
+            ack = model.answers.ack_line()
+            if answer is not kept.answer or ack is not kept.ack or not kept.reply:
+                kept.reply, kept.ack = b"".join((data, answer, ack)), ack
+            self.send(kept.reply)
             self._last_replied = True
             self.line = None
-            return True
+            return
         self.line = line = CommandLine(True, True)
         if mode in (0, 1):
             self.send(data)
         self._put(line, answer)
         self._reply_end(line)
-        return True
 
     def _failing_line(self, line: CommandLine, data: bytes, stop: int, end: int) -> int:
         """The rest of a whole line in the chunk whose first statement is an error before any

@@ -10,12 +10,16 @@ from __future__ import annotations
 
 import functools
 import re
+from collections.abc import Callable
+from typing import Any
 
 import msgspec
 
 from devsim.devices.sers import codec
 from devsim.devices.sers import statements as st
-from devsim.devices.sers.errors import message
+from devsim.devices.sers.access import address_number, plain_reader
+from devsim.devices.sers.answers import Answers
+from devsim.devices.sers.errors import SersError, message
 
 __all__ = [
     "COMPLETES",
@@ -23,6 +27,7 @@ __all__ = [
     "LINE_ENDS",
     "TEXT_TO_END",
     "CommandLine",
+    "KeptPoll",
     "Poll",
     "answers",
     "ends_line",
@@ -116,14 +121,70 @@ def poll_line(data: bytes) -> Poll | None:
     query = result.statements[0][0]
     number = None
     if not query.name and query.target.kind in ("P", "alias"):
-        from devsim.devices.sers.access import address_number  # (once per distinct poll: cached)
-        from devsim.devices.sers.errors import SersError
-
         try:
             number = address_number(query.target)
         except (SersError, KeyError):
             number = None
     return Poll(address, query, len(data) - 1, number)
+
+
+class KeptPoll:
+    """A host's poll that the face answered, kept for the next chunk of the same bytes (a host
+    polls the same lines again and again): the line's parse, and the answer last made for a
+    parameter shown as its value is (:func:`.access.plain_reader`), with the whole reply it went
+    out in.  The face answers a chunk of a kept poll's bytes at once while nothing else reached
+    the line since a poll was answered (so the line is between lines and the drive selected:
+    only a line or a power-on change that); after anything else the poll path checks the line
+    again and then takes the kept poll.  Power-on drops them.  What else a poll depends on (echo
+    mode P1017, programming mode, a master's request, the value, the acknowledgement, the DIP
+    switches in ``cfg``) is looked at again every time."""
+
+    __slots__ = ("data", "poll", "cfg", "read", "value", "answer", "ack", "reply")
+
+    #: Polls a face keeps at most (a host polls a few parameters in turn).
+    MOST = 8
+
+    def __init__(self, data: bytes, poll: Poll, cfg: object, read: Callable[[Any], Any] | None) -> None:
+        self.data = data  # the chunk
+        self.poll = poll
+        self.cfg = cfg  # the configuration it was made under (address, encoding)
+        self.read = read  # the parameter's value (None: answered the general way)
+        self.value: Any = _NOTHING  # the value last answered, and its answer line
+        self.answer = b""
+        self.ack = b""  # the acknowledgement that went out with it, and the whole reply
+        self.reply = b""
+
+    @staticmethod
+    def keep(polls: dict[bytes, KeptPoll] | None, data: bytes, poll: Poll, cfg: object
+             ) -> tuple[dict[bytes, KeptPoll], KeptPoll]:
+        """The poll kept in ``polls`` for the chunk ``data`` under ``cfg``, or one made and added
+        (``polls`` made when None, emptied when full); returns ``polls`` and it."""
+        if polls is None:
+            polls = {}
+        kept = polls.get(data)
+        if kept is None or kept.cfg is not cfg:
+            kept = KeptPoll(data, poll, cfg, None if poll.number is None else plain_reader(poll.number))
+            if len(polls) >= KeptPoll.MOST:
+                polls = {}
+            polls[data] = kept
+        return polls, kept
+
+    def answer_line(self, answers: Answers, encoding: str) -> bytes:
+        """The poll's answer line as the drive stands now (a :class:`SersError` as the query's
+        own), the general way: for a query that is no value shown as it is (:attr:`read` None)."""
+        poll = self.poll
+        if poll.number is None:
+            return (answers.query_text(poll.query) + "\n\r").encode(encoding, errors="replace")
+        return answers.parameter_line(poll.query.target, poll.number, encoding)
+
+    def remake(self, value: Any, answers: Answers, encoding: str) -> bytes:
+        """The answer line for ``value`` read now (:attr:`read`), other than the one kept: kept."""
+        line = answers.plain_line(self.poll.query.target, self.poll.number, value, encoding)  # type: ignore[arg-type]
+        self.value, self.answer, self.reply = value, line, b""
+        return line
+
+
+_NOTHING = object()
 
 
 @functools.lru_cache(maxsize=512)

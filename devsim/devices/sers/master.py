@@ -33,12 +33,10 @@ class MasterLink:
         self._buffer = bytearray()
         self._want: bytes | None = None
         self._done: Done | None = None
+        #: A request waits for its answer (a plain attribute: every chunk from the host asks).
+        self.awaiting = False
         self._timer: Timer | None = None
         self.sent: list[bytes] = []  # for tests and traces: everything the master sent
-
-    @property
-    def awaiting(self) -> bool:
-        return self._done is not None
 
     def request(self, address: int | str, text: str, done: Done, want: str | None = None) -> None:
         """Send ``#<address><text>\\r``; ``done(ok, value, message)`` when answered or timed out."""
@@ -51,6 +49,7 @@ class MasterLink:
         self._buffer.clear()
         self._want = want.encode() if want else None
         self._done = done
+        self.awaiting = True
         self._timer = self.clock.call_later(REPLY_TIMEOUT, self._timeout)
         self.send(data)
 
@@ -76,6 +75,7 @@ class MasterLink:
 
     def _finish(self, ok: bool, value: float | None, message: str) -> None:
         done, self._done = self._done, None
+        self.awaiting = False
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
@@ -85,6 +85,7 @@ class MasterLink:
 
     def cancel(self) -> None:
         self._done = None
+        self.awaiting = False
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None

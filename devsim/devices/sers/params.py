@@ -15,7 +15,7 @@ from devsim.core.parameters import Parameters, accessor
 from devsim.devices.sers.parameters import PARAMETER_TABLE
 from devsim.devices.sers.units import Scaling
 
-__all__ = ["SersParameters"]
+__all__ = ["HANDSHAKE_CELL", "SersParameters"]
 
 #: P76, P44, P160, P121, P122, P123: what the unit conversion is made of (§4.8.4.6).
 _WEIGHTING = PARAMETER_TABLE.picker(76, 44, 160, 121, 122, 123)
@@ -23,6 +23,9 @@ _WEIGHTING = PARAMETER_TABLE.picker(76, 44, 160, 121, 122, 123)
 _OUTPUT_SELECTORS = PARAMETER_TABLE.picker(1125, 1126, 1131, 1132, 1036)
 #: P1040, P1041, P1044, P1025, P1027: what a motion watches (§4.8.6.12, §4.8.6.8, §4.8.1.2).
 _WATCHED = PARAMETER_TABLE.picker(1040, 1041, 1044, 1025, 1027)
+#: Where P1017, the handshake mode (§4.8.6.9), is among :attr:`SersParameters.values`' cells:
+#: ``params.values.cells[HANDSHAKE_CELL]`` (a host's poll reads it every time; no call).
+HANDSHAKE_CELL: int = PARAMETER_TABLE.positions[1017]
 #: P1032, P1005–P1008: the ramp shape and its sections (§4.8.4.4).
 _RAMP = PARAMETER_TABLE.picker(1032, 1005, 1006, 1007, 1008)
 
