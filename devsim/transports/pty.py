@@ -428,8 +428,15 @@ def _arm(fd: int, previous: list | None, attrs: list, *, extproc: bool) -> list:
       lands between its ``TCSETS`` and glibc's read-back, the read-back still differs).
 
     ``extproc`` also keeps EXTPROC set, so that a packet-mode master hears of the next change.
-    Only the transport's own descriptor is touched; the host's speed and framing are kept."""
-    attrs = list(attrs)
+    Only the transport's own descriptor is touched; the host's speed and framing are kept: the
+    termios are read again right before they are set, so that a host's change that landed after
+    the caller looked (a host that opens the port and at once sets another speed) is not set
+    back.  What stays possible is a host's change between that read and the set, two system
+    calls apart."""
+    try:
+        attrs = termios.tcgetattr(fd)
+    except termios.error:
+        attrs = list(attrs)
     avoid = {attrs[_CFLAG] & _ARM_MASK}
     if previous is not None:
         avoid.add(previous[_CFLAG] & _ARM_MASK)

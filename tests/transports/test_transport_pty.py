@@ -8,6 +8,7 @@ import os
 import select
 import subprocess
 import sys
+import termios
 
 import pytest
 import serial
@@ -15,7 +16,7 @@ import serial
 from devsim.core.clock import RealClock
 from devsim.core.device import SerialSettings
 from devsim.transports.line import Line, garble
-from devsim.transports.pty import PtyTransport
+from devsim.transports.pty import PtyTransport, _arm
 from devsim.transports.ptylink import owner_record_path
 from tests.transports.transport_helpers import EchoTarget, Recorder
 
@@ -331,6 +332,26 @@ async def test_arming_keeps_the_hosts_speed_and_stop_bits() -> None:
     finally:
         await transport.close()
         line.close()
+
+
+def test_arming_does_not_set_back_a_speed_the_host_set_after_the_look() -> None:
+    """The arm after a termios change is made from the termios as they are when it is set, not
+    as the transport read them before: a host that opens the port and at once sets another speed
+    (its change landing between the transport's look and its arm) keeps its speed.  The look is
+    made stale here on purpose: the host's 19200 baud comes after the 9600 the arm is given."""
+    master, slave = os.openpty()
+    try:
+        looked = termios.tcgetattr(slave)
+        looked[4] = looked[5] = termios.B9600
+        termios.tcsetattr(slave, termios.TCSANOW, looked)
+        host = termios.tcgetattr(slave)
+        host[4] = host[5] = termios.B19200
+        termios.tcsetattr(slave, termios.TCSANOW, host)  # the host's change, after the look
+        armed = _arm(slave, None, looked, extproc=True)
+        assert termios.tcgetattr(slave)[4:6] == [termios.B19200, termios.B19200] == armed[4:6]
+    finally:
+        os.close(master)
+        os.close(slave)
 
 
 @pytest.mark.parametrize("target", ["elsewhere", "live-pty"])
