@@ -246,27 +246,41 @@ async def test_output_beyond_what_the_socket_takes_at_once_arrives_whole_and_in_
     """A session sends through its socket directly while asyncio holds nothing unsent for it;
     what the socket does not take goes to asyncio's buffer, and later output queues behind it
     until that has left: numbered chunks written faster than the client reads (more than the
-    kernel's buffers hold) arrive whole and in their order."""
+    kernel's buffers hold) arrive whole and in their order.  The client reads in a thread of its
+    own, so the socket gains room while asyncio still holds bytes: output sent directly then
+    would overtake them."""
     transport = TcpTransport(max_buffer=64 * 1024 * 1024)
     await transport.start(echo)
     try:
         client = socket.socket()
         client.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)  # a small window: the socket often full
         client.connect(("127.0.0.1", transport.port))
-        reader, writer = await asyncio.open_connection(sock=client)
-        writer.write(b"A")
-        assert await _read_exactly(reader, 1) == b"A"
+        client.settimeout(60)
+        await asyncio.to_thread(client.sendall, b"A")
+        assert await asyncio.to_thread(client.recv, 1) == b"A"
         assert echo.write is not None
+        # (the session's send buffer small too, or the kernel takes the whole 2.1 MB at once)
+        transport._active.sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 4096)
         chunks = [(b"%06d|" % i) * 100 for i in range(3000)]  # 2.1 MB, each chunk different
         expected = b"".join(chunks)
-        reading = asyncio.ensure_future(reader.readexactly(len(expected)))  # the client reads meanwhile
+
+        def read_all() -> bytes:
+            got = bytearray()
+            while len(got) < len(expected):
+                piece = client.recv(4096)
+                if not piece:
+                    break
+                got += piece
+            return bytes(got)
+
+        reading = asyncio.ensure_future(asyncio.to_thread(read_all))  # the client reads meanwhile
         for i, chunk in enumerate(chunks):
             echo.write(chunk)
             if i % 3 == 0:
-                await asyncio.sleep(0)  # the client and asyncio's writer get a turn now and then
+                await asyncio.sleep(0)  # asyncio's writer gets a turn now and then
         got = await asyncio.wait_for(reading, 60)
         assert got == expected
         assert transport.dropped == 0
-        writer.close()
+        client.close()
     finally:
         await transport.close()
