@@ -216,7 +216,6 @@ def mangle(faults: list[_Active], data: bytes, direction: str) -> bytes:
     return data
 
 
-
 def latency(faults: list[_Active], direction: str) -> float:
     """The extra latency of a chunk going ``direction`` now: every ``delay``, and a draw of every
     ``jitter`` (which uses up a draw of its random generator)."""

@@ -33,7 +33,8 @@ class MasterLink:
         self._buffer = bytearray()
         self._want: bytes | None = None
         self._done: Done | None = None
-        #: A request waits for its answer (a plain attribute: every chunk from the host asks).
+        #: A request waits for its answer: ``_done`` is set (a plain attribute, set and cleared
+        #: with it in :meth:`request` and :meth:`cancel`: every chunk from the host asks).
         self.awaiting = False
         self._timer: Timer | None = None
         self.sent: list[bytes] = []  # for tests and traces: everything the master sent
@@ -55,7 +56,7 @@ class MasterLink:
 
     def feed(self, data: bytes) -> None:
         """Bytes the master hears on the line while it waits."""
-        if self._done is None:
+        if not self.awaiting:
             return
         self._buffer += data
         end = re.search(_END, self._buffer)
@@ -74,16 +75,13 @@ class MasterLink:
         self._finish(False, None, "no answer")
 
     def _finish(self, ok: bool, value: float | None, message: str) -> None:
-        done, self._done = self._done, None
-        self.awaiting = False
-        if self._timer is not None:
-            self._timer.cancel()
-            self._timer = None
-        self._buffer.clear()
+        done = self._done
+        self.cancel()
         if done is not None:
             done(ok, value, message)
 
     def cancel(self) -> None:
+        """Stop waiting (no answer is reported)."""
         self._done = None
         self.awaiting = False
         if self._timer is not None:
