@@ -23,7 +23,7 @@ def _oracle(stream: bytes, ends: bytes) -> tuple[list[str], bytes]:
     current = bytearray()
     for byte in stream:
         current.append(byte)
-        if byte in ends:
+        if byte in ends or len(current) > MAX_PARTIAL:
             lines.append(current.decode("latin-1"))
             current.clear()
     return lines, bytes(current)
@@ -72,6 +72,21 @@ def test_a_line_without_an_end_is_kept_up_to_max_partial_bytes(direction: str, l
     if length <= MAX_PARTIAL:  # kept: the line it starts ends with the next CR
         assert got == []
         assert decoder.feed(b"\r") == [garbage.decode("latin-1") + "\r"]
-    else:  # shown as it is, and forgotten: the next line stands alone
-        assert got == [garbage.decode("latin-1")]
-        assert decoder.feed(b"#1\r") == ["#1\r"]
+    else:  # the first MAX_PARTIAL + 1 bytes shown as they are, and forgotten; the rest starts a line
+        assert got == [garbage[: MAX_PARTIAL + 1].decode("latin-1")]
+        assert decoder.feed(b"#1\r") == [garbage[MAX_PARTIAL + 1 :].decode("latin-1") + "#1\r"]
+
+
+@given(hs.binary(max_size=1800).map(lambda noise: noise.replace(b"\r", b"").replace(b"\n", b"")),
+       hs.lists(hs.sampled_from([b"\r", b"\n", b"\r\n", b"#1P11?\r"]), max_size=4), hs.integers(0, 2000),
+       hs.sampled_from(["host", "device"]))
+@example(b"A" * 1100, [b"\r"], 513, "host")
+@example(b"A" * 514, [], 513, "host")
+@example(b"A" * 513, [b"\r"], 2000, "device")  # one byte more than the limit, then its end: two pieces
+def test_a_long_line_cut_anywhere_gives_what_bytes_give(noise: bytes, tail: list[bytes], cut: int, direction: str) -> None:
+    """Lines longer than MAX_PARTIAL, ended or not, give the pieces byte by byte gives (the
+    oracle), whatever the chunks."""
+    stream = noise + b"".join(tail)
+    ends = b"\r\n" if direction == "host" else b"\r"
+    lines, _rest = _oracle(stream, ends)
+    assert _fed(direction, [stream[:cut], stream[cut:]]) == lines

@@ -28,11 +28,22 @@ class LineDecoder:
         self._ends = (0x0D, 0x0A) if direction == "host" else (0x0D,)
 
     def feed(self, data: bytes) -> list[Any] | None:
-        lines, self._rest = split_at(self._rest + data, self._ends)
-        if len(self._rest) > MAX_PARTIAL:  # garbage without a line end: shown as it is, not kept
-            lines.append(self._rest)
-            self._rest = b""
-        return [line.decode("latin-1") for line in lines]
+        """The lines ``data`` completes.  Bytes without a line end are kept up to
+        :data:`MAX_PARTIAL`; the byte after that shows them, and itself, as a piece of their own
+        (garbage is not kept forever), wherever the chunks are cut: the pieces are the ones byte
+        by byte would give."""
+        lines, rest = split_at(self._rest + data, self._ends)
+        out = []
+        for line in lines:
+            while len(line) > MAX_PARTIAL + 1:  # (more than the limit before its end)
+                out.append(line[: MAX_PARTIAL + 1])
+                line = line[MAX_PARTIAL + 1 :]
+            out.append(line)
+        while len(rest) > MAX_PARTIAL:
+            out.append(rest[: MAX_PARTIAL + 1])
+            rest = rest[MAX_PARTIAL + 1 :]
+        self._rest = rest
+        return [line.decode("latin-1") for line in out]
 
 
 #: The SERS port's framing: ASCII lines.
