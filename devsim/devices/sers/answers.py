@@ -94,11 +94,13 @@ class Answers:
         ``alias``), its number already known (a host's poll, parsed once)."""
         if number == 1 and self.params.target_address == "*":
             return f"{target.text}=*"
-        access = self.access
-        value = access.param_value(number)
+        return self.value_text(target, number, self.access.param_value(number))
+
+    def value_text(self, target: st.Address, number: int, value: Any) -> str:
+        """:meth:`parameter_text` of parameter ``number`` holding ``value`` (read already)."""
         if value == "*":
             raise SersError(19)  # as Operands.parameter: Z=* names a broadcast, not a number
-        return f"{target.text}={access.format_value(number, value)}"
+        return f"{target.text}={self.access.format_value(number, value)}"
 
     def parameter_line(self, target: st.Address, number: int, encoding: str) -> bytes:
         """:meth:`parameter_text` with its line end, encoded, as a poll's answer leaves: a plain
@@ -114,9 +116,7 @@ class Answers:
         key = (target.text, type(value), value, encoding)
         line = _PLAIN_LINES.get(key)
         if line is None:
-            if value == "*":
-                raise SersError(19)  # (as parameter_text: nothing kept)
-            text = f"{target.text}={self.access.format_value(number, value)}"
+            text = self.value_text(target, number, value)  # (its errors as they are: nothing kept)
             if len(_PLAIN_LINES) >= _PLAIN_LINES_MAX:
                 _PLAIN_LINES.clear()
             line = _PLAIN_LINES[key] = (text + "\n\r").encode(encoding, errors="replace")
