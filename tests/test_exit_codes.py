@@ -23,6 +23,9 @@ SCENARIO_FAILS = (
     "devices:\n  - {name: x, kind: sers}\nsteps:\n"
     "  - expect_state: {device: x, name: energized, equals: true}\n"
 )
+#: A POSELESTA whose plant stores a program the control refuses: its type (text) passes the file's
+#: check, the block's value does not fit the format in force (spec §2.6.3), so the device says no.
+REFUSED_STATE = "devices:\n  - {name: cnc, kind: poselesta, state: {program.P20: \"L500\"}}\n"
 SESSION = '{"format": "devsim-session", "kind": "sers"}\n'
 TRACE = '12.345678 H>D 23 4f 0d "#O\\r"\n'
 
@@ -37,6 +40,8 @@ def files() -> Iterator[Path]:
         (path / "bad_config.yaml").write_text("address: 1\nbaud: 9601\n")
         (path / "bad_scenario.yaml").write_text(SCENARIO_FAILS.replace("equals: true", "equals: [1"))
         (path / "fails.yaml").write_text(SCENARIO_FAILS)
+        (path / "refused_state.yaml").write_text(REFUSED_STATE)
+        (path / "refused_state_scenario.yaml").write_text(REFUSED_STATE + "steps:\n  - after: 1s\n")
         (path / "session.devsim").write_text(SESSION)
         (path / "bad.devsim").write_text('{"hello": 1}\n')
         (path / "trace.txt").write_text(TRACE)
@@ -103,9 +108,12 @@ CASES: list[tuple[int, str, Case]] = [
     (exits.BAD_FILE, "run: no config", lambda f, a, b: ["run", "sers", "--config", str(f / "nope.yaml")]),
     (exits.BAD_FILE, "up: bad plant", lambda f, a, b: ["up", str(f / "bad_plant.yaml")]),
     (exits.BAD_FILE, "up: no plant", lambda f, a, b: ["up", str(f / "nope.yaml")]),
+    (exits.BAD_FILE, "up: a state the device refuses", lambda f, a, b: ["up", str(f / "refused_state.yaml")]),
     (exits.BAD_FILE, "check: bad plant", lambda f, a, b: ["check", str(f / "plant.yaml"), str(f / "bad_plant.yaml")]),
     (exits.BAD_FILE, "check: no file", lambda f, a, b: ["check", str(f / "nope.yaml")]),
     (exits.BAD_FILE, "scenario: bad scenario", lambda f, a, b: ["scenario", "run", str(f / "bad_scenario.yaml")]),
+    (exits.BAD_FILE, "scenario: a state the device refuses", lambda f, a, b: [
+        "scenario", "run", str(f / "refused_state_scenario.yaml")]),
     (exits.BAD_FILE, "scenario: no scenario", lambda f, a, b: ["scenario", "run", str(f / "nope.yaml")]),
     (exits.BAD_FILE, "plot: bad input", lambda f, a, b: ["plot", str(f / "bad.csv"), "-o", str(f / "x.png")]),
     (exits.BAD_FILE, "plot: no input", lambda f, a, b: ["plot", str(f / "nope.csv"), "-o", str(f / "x.png")]),
@@ -156,6 +164,9 @@ def test_each_kind_of_mistake_has_its_status(files: Path, sim: str, busy: int, s
     else:  # one error line, the last (after what a server logged while it started)
         errors = [line for line in done.stderr.splitlines() if line.startswith("Error: ")]
         assert len(errors) == 1 and done.stderr.endswith(errors[0] + "\n"), done.stderr
+        if "refuses" in what:  # the file, where in it, and the device's own message
+            assert errors[0].endswith(".yaml: devices.0.state.program.P20: WERTBEREICHES-UEBERLAUF: L500: beyond the "
+                                      "format"), errors[0]
 
 
 @pytest.mark.parametrize(("args", "extra"), [

@@ -159,6 +159,7 @@ def _run_files(scenarios: list[Any], files: tuple[str, ...], mode: str | None, s
                state_dir: str | None, trace_dir: str | None, pictures: Any, progress: Any,
                control: str | None) -> list[Any]:
     """Run each scenario file in turn, its report on stdout: the results."""
+    from devsim.scenario.plant import StateRefused
     from devsim.scenario.report import format_report
     from devsim.scenario.runner import run_scenario
 
@@ -183,6 +184,8 @@ def _run_files(scenarios: list[Any], files: tuple[str, ...], mode: str | None, s
             )
         except OSError as exc:  # a port in use, a directory that cannot be made
             raise exits.SystemFailure(f"{path}: cannot run the scenario: {exc}") from None
+        except StateRefused as exc:  # a device refused a value of its state: (a program's text)
+            raise exits.BadFile(f"{path}: {exc}") from None
         finally:
             progress.end()
         click.echo(format_report(results[-1]))
@@ -235,6 +238,7 @@ def up(
     NAME: ready when a device has booted, serve until Ctrl-C.  Host connects, disconnects, line
     mismatches and device errors are logged to stderr (-v: more, -q: less)."""
     from devsim.cli.running import control_option
+    from devsim.scenario.plant import StateRefused
     from devsim.scenario.schema import load_plant
 
     try:
@@ -300,6 +304,8 @@ def up(
         sys.exit(exits.INTERRUPTED)
     except OSError as exc:
         raise exits.failure(exits.start_status(exc), f"cannot start the plant: {exc}") from None
+    except StateRefused as exc:  # a device refused a value of its state: (a program's text)
+        raise exits.BadFile(f"{plant_file}: {exc}") from None
     except exits.StartFailure as exc:
         raise exits.failure(exc.status, str(exc)) from None
     finally:

@@ -289,11 +289,16 @@ class Device:
 
     def apply_state(self, state: Mapping[str, Any]) -> None:
         """Initial state from a plant or scenario file: settable names and their values, all
-        checked before the first takes effect."""
+        checked before the first takes effect.  A value the device itself refuses when it is put (a
+        program's text that does not fit the formats in force) raises :class:`BadValue` naming the
+        point; the values before it have taken effect."""
         checked = [self.points.parse(name, value, self.name) for name, value in state.items()]
         for point, value in checked:
             assert point.put is not None
-            point.put(self.model, value)
+            try:
+                point.put(self.model, value)
+            except BadValue as exc:  # one the device refuses although it parsed (a program's text)
+                raise BadValue(f"{point.name}: {exc}") from None
 
     def fault(self, kind: str, active: Any) -> None:
         """Start (or end) a declared device fault such as ``blocked_axis`` or ``emergency_stop``;

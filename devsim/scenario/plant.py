@@ -15,15 +15,22 @@ from typing import Any, Literal
 import msgspec
 
 from devsim.core.device import Device
+from devsim.core.points import BadValue
 from devsim.runtime import Runtime, port_key
 from devsim.scenario.schema import PlantSpec, TransportSpec
 from devsim.transports.fdlimit import is_out_of_fds, port_budget
 
-__all__ = ["Plant", "TraceFormat", "build_plant", "make_transport", "plant_running", "start_plant"]
+__all__ = ["Plant", "StateRefused", "TraceFormat", "build_plant", "make_transport", "plant_running", "start_plant"]
 
 #: How ``trace_dir`` traces are written: text (``NAME.trace``) or pcap (``NAME.pcap``).
 TraceFormat = Literal["text", "pcap"]
 _TRACE_SUFFIX = {"text": "trace", "pcap": "pcap"}
+
+
+class StateRefused(ValueError):
+    """A device refused a value of its ``state:`` that the file's check took: the point's type
+    fits, the device's own rule does not (a program's text beyond the formats in force).
+    ``str()`` is ``devices.N.state.NAME: message``."""
 
 
 def make_transport(spec: TransportSpec) -> Any:
@@ -139,9 +146,12 @@ async def build_plant(
         if dev.modbus is not None:
             await _serve_modbus(plant, dev, trace_dir, trace_format)
     await _serve_canopen(plant)
-    for dev in spec.devices:
+    for index, dev in enumerate(spec.devices):
         if dev.state:
-            plant.devices[dev.name].apply_state(dev.state)
+            try:
+                plant.devices[dev.name].apply_state(dev.state)
+            except BadValue as exc:  # the device refused a value its point's type took (the file's check)
+                raise StateRefused(f"devices.{index}.state.{exc}") from None
     if spec.mqtt is not None:
         await _serve_mqtt(plant)
     if spec.opcua is not None:
