@@ -247,7 +247,9 @@ class Plc:
     # -- process image access for rules and hooks ----------------------------------------------
     def bit(self, name: str) -> bool:
         """A bit as the PLC sees it: E from this cycle's PAE, A from the outputs, M markers."""
-        area, byte, bit = parse_bit(name)
+        return self._bit(*parse_bit(name))
+
+    def _bit(self, area: str, byte: int, bit: int) -> bool:
         if area == "E":
             return bool(self._pae[byte] >> bit & 1) if byte < len(self._pae) else False
         if area == "A":
@@ -304,7 +306,8 @@ class Plc:
     # -- one cycle -------------------------------------------------------------------------------
     def run_cycle(self) -> None:
         self.cycles += 1
-        self._pae = bytes(self.outputs.input_byte(b) for b in range(4))
+        if self._reads_inputs:  # (no rule or hook looks at the PAE: not taken, issue 31)
+            self._pae = bytes(self.outputs.input_byte(b) for b in range(4))
         self._paa_writes = {}
         self._auto_ack()
         self._limit_switches()
@@ -343,12 +346,21 @@ class Plc:
         self._prev_pae: bytes | None = None
         self._fe_pending = False
         self._controller_was_on = bool(self.stage.controller)
+        c = self.cfg
+        #: The copy rules with their bits parsed: ((area, byte, bit) read, invert, (area, byte, bit) written).
+        self._copies = [(parse_bit(rule.source), rule.invert, parse_bit(rule.to)) for rule in c.copy_bits]
+        #: Whether a cycle takes the inputs into the PAE: a rule or a hook reads them.
+        self._reads_inputs = bool(c.limit_switches or c.start_program_on_input or self.hooks
+                                  or any(source[0] == "E" for source, _invert, _to in self._copies))
 
     # -- rules -----------------------------------------------------------------------------------
     def _auto_ack(self) -> None:
         ms = self.cfg.auto_ack_m_functions_ms
         if ms is None:
             return
+        markers = self.image.markers
+        if not self._ack_seen and not (any(markers[6:11]) or (markers[15] | markers[18]) & 0x80):
+            return  # no M function bit set, none waiting (the loop below would do nothing)
         now = self.now
         for byte, bit in M_FUNCTION_BITS:
             key = (byte, bit)
@@ -409,14 +421,14 @@ class Plc:
 
     def _fault_messages(self) -> None:
         codes = self.cfg.message_on_fault
-        states = self._fault_states()
         query = self.image.marker(3, 1)
-        if codes is not None:
+        if codes is not None:  # (without codes the fault states matter to nothing: not taken)
+            states = self._fault_states()
             for name, active in states.items():
                 code = getattr(codes, name)
                 if code and active and (query or not self._faults[name]):
                     self.message(code)
-        self._faults = states
+            self._faults = states
         if query:
             self.set_marker_bit(3, 1, False)  # the PLC resets M3.1 after re-reporting (M §2.3.1 q)
 
@@ -436,9 +448,8 @@ class Plc:
             self.set_marker_bit(0, 2, True)
 
     def _copy_rules(self) -> None:
-        for rule in self.cfg.copy_bits:
-            value = self.bit(rule.source) != rule.invert
-            area, byte, bit = parse_bit(rule.to)
+        for source, invert, (area, byte, bit) in self._copies:
+            value = self._bit(*source) != invert
             if area == "A":
                 n = byte * 8 + bit
                 if n < OUTPUT_BITS and bool(self.image.outputs[byte] >> bit & 1) != value:
