@@ -53,6 +53,14 @@ def _pcd4h3(seconds: float) -> str:
             "  - when: {device: pcd, name: axis.1.OnDest, equals: true}\n    timeout: 30s\n")
 
 
+def _still_looping(device: str, event: str, seconds: float) -> str:
+    """The last steps: at the end, the loop's ``event`` last happened within its last 30 s (a
+    check of the event log, not a condition looked at every millisecond while the axis moves)."""
+    return (f"  - at: {seconds}s\n"
+            f"    expect_timing: {{device: {device}, event: {event}, between: [{max(0.0, seconds - 30)}s, {seconds}s], "
+            "occurrence: last}\n")
+
+
 def _gms96(seconds: float) -> str:
     """One GMS96 looping CNC program 0 (§2.5), stored as its download would store it: a move out,
     M50 with the PLC's acknowledge (M6.0 reset after 100 ms, §2.4.1), a dwell (WAIT), output A0.2
@@ -69,9 +77,7 @@ def _gms96(seconds: float) -> str:
             '  - expect: "\\xE5"\n'
             '  - send: "\\x68\\x0C\\x0C\\x68\\x53\\x03\\x70\\x03\\x00\\x00\\x01\\x00\\x00\\x00\\x00\\x00\\xCA\\x16"\n'
             '  - expect: "\\xE5"\n'  # p3;1;0
-            f"  - after: {max(0.0, seconds - 30)}s\n"
-            "  - when: {device: card, name: output.A0.2, equals: false}\n    timeout: 30s\n"
-            "  - when: {device: card, name: output.A0.2, equals: true}\n    timeout: 30s\n")
+            + _still_looping("card", "move_start", seconds))
 
 
 def _ip247(seconds: float) -> str:
@@ -90,9 +96,7 @@ def _ip247(seconds: float) -> str:
             "  - set: {device: ip, values: {ag.operate: {page: 0, ba: 5, cmd: Start, b: 1}}}\n"
             f'  - set: {{device: ip, values: {{program.1: "{program}"}}}}\n'
             "  - set: {device: ip, values: {ag.operate: {page: 0, ba: 8, cmd: Start, b: 1}}}\n"
-            f"  - after: {max(0.0, seconds - 30)}s\n"
-            "  - when: {device: ip, name: axis.1.m_function, equals: 20}\n    timeout: 30s\n"
-            "  - when: {device: ip, name: axis.1.m_function, equals: 21}\n    timeout: 30s\n")
+            + _still_looping("ip", "move_start", seconds))
 
 
 def _poselesta(seconds: float) -> str:
@@ -107,9 +111,7 @@ def _poselesta(seconds: float) -> str:
             f'    state: {{program.P20: "{program}", panel.program: 20}}\n'
             "steps:\n  - set: {device: cnc, values: {panel.mode: AUTO_CONTINUOUS}}\n"
             "  - after: 100ms\n    set: {device: cnc, values: {panel.nc_start: true}}\n"
-            f"  - after: {max(0.0, seconds - 30)}s\n"
-            "  - when: {device: cnc, name: program.block, equals: 100}\n    timeout: 30s\n"
-            "  - when: {device: cnc, name: program.block, equals: 102}\n    timeout: 30s\n")
+            + _still_looping("cnc", "position_reached", seconds))
 
 
 #: A scenario per kind, given the simulated seconds: each loops what a user would load into
