@@ -215,13 +215,13 @@ def main(argv: list[str] | None = None) -> int:
             cpu, ref_cpu = statistics.median(dev), statistics.median(ref)
             rows.append((kind, cpu, ref_cpu))
             print(f"{kind:10} {seconds:6.0f} s simulated: {cpu:6.2f} s CPU, {seconds / cpu:8.0f} simulated s per CPU s; "
-                  f"{events} timer events ({events / cpu:7.0f} per CPU s); bare clock {ref_cpu:5.2f} s", flush=True)
+                  f"{events} timer events ({events / cpu:7.0f} per CPU s); bare clock {ref_cpu:6.3f} s", flush=True)
             if args.profile:
                 _run("kind", path, seconds, args.profile)
     print("devsim CPU / bare virtual clock CPU for as many events:")
     for kind, cpu, ref_cpu in rows:
         target = "  (target < 0.5 s: " + ("met)" if cpu < 0.5 else "missed)") if kind == "sers" else ""
-        print(f"  {kind:10} {cpu:6.2f} s / {ref_cpu:5.2f} s = {cpu / ref_cpu:6.1f}{target}")
+        print(f"  {kind:10} {cpu:6.2f} s / {ref_cpu:6.3f} s = {cpu / ref_cpu:6.1f}{target}")
     return 0
 
 
