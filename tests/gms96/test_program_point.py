@@ -9,7 +9,7 @@ import pytest
 
 from devsim.core.points import BadValue
 from tests.gms96.conftest import Plant
-from tests.gms96.test_manual_programs import RESO, SETO, WAIT, download, output
+from tests.gms96.test_manual_programs import FLASH_ERASE, RESO, SETO, WAIT, download, output
 from tests.gms96.test_motion_reference import send
 
 #: Commands of every route a download records: moves, a wait, outputs, p11 (on receipt outside a
@@ -79,3 +79,18 @@ def test_the_cards_limits_hold(plant_factory: Any) -> None:
     with pytest.raises(BadValue, match="exceed 3 commands"):
         plant.set("program.2", ["A10", "A20"])
     assert plant.read("programs") == {1: 2}
+
+
+@pytest.mark.parametrize("command", [("T", 0), ("c", 5, 1), ("N", 20, 100), ("q",), ("o", 2, 50), ("p", 3, 100, 1),
+                                     ("p", 1, 100), ("p", 1, 101)])
+def test_what_the_point_refuses_a_download_does_not_record(referenced: Plant, command: tuple[Any, ...]) -> None:
+    c = referenced.client()
+    send(c, "p", 3, 100, 6)
+    referenced.advance(FLASH_ERASE)
+    send(c, "A", 10)
+    c.send_letter(*command)  # (T answers with its read-back, the others with E5h)
+    send(c, "A", 20)
+    send(c, "p", 3, 101)
+    assert referenced.read("program.6") == ["A10", "A20"]
+    with pytest.raises(BadValue, match="not a command of a CNC program"):
+        referenced.set("program.7", ["A10", text(command), "A20"])
