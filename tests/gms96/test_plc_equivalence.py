@@ -1,6 +1,6 @@
 """The PLC cycle that leaves out what no rule reads (issue 31: the inputs' PAE when no rule or
 hook looks at it, the fault states without message codes, the M function bits when none is set,
-the copy rules' bits parsed once) does what the cycle that takes everything every time does:
+the copy rules' bits parsed once, a marker bit read without its byte's other status bits) does what the cycle that takes everything every time does:
 two cards, one with that full cycle, fed the same random inputs, marker writes, faults and
 moves, show the same markers, outputs, messages, events and cycle count after every step."""
 
@@ -18,6 +18,19 @@ from devsim.devices.gms96.executor import Cmd
 from devsim.devices.gms96.image import parse_bit
 from devsim.devices.gms96.io import OUTPUT_BITS
 from devsim.devices.gms96.plc import _EPS, M_FUNCTION_BITS, Plc
+
+
+def whole_byte_bit(plc: Plc, name: str) -> bool:
+    """A bit as the PLC saw it before issue 31: a marker bit out of the whole byte with its status."""
+    area, byte, bit = parse_bit(name)
+    if area == "E":
+        return bool(plc._pae[byte] >> bit & 1) if byte < len(plc._pae) else False
+    if area == "A":
+        n = byte * 8 + bit
+        if n in plc._paa_writes:
+            return plc._paa_writes[n]
+        return n < OUTPUT_BITS and plc.outputs.output_bit(n)
+    return bool(plc.card.marker_byte(byte) >> bit & 1)
 
 
 def full_cycle(plc: Plc) -> None:
@@ -51,7 +64,7 @@ def full_cycle(plc: Plc) -> None:
         plc.set_marker_bit(3, 1, False)
     plc._start_rules()
     for rule in plc.cfg.copy_bits:
-        value = plc.bit(rule.source) != rule.invert
+        value = whole_byte_bit(plc, rule.source) != rule.invert
         area, byte, bit = parse_bit(rule.to)
         if area == "A":
             n = byte * 8 + bit
@@ -73,13 +86,16 @@ EVERY_RULE = {
     "message_on_fault": {"following_error": 41, "monitoring": 42, "emergency_stop": 43},
     "start_program_on_input": [{"input": "E0.2", "program": 1}],
     "copy_bits": [{"from": "E0.5", "to": "A0.3"}, {"from": "M7.1", "to": "A0.4", "invert": True},
-                  {"from": "A0.3", "to": "M20.0"}, {"from": "M1.0", "to": "M21.1"}],
+                  {"from": "A0.3", "to": "M20.0"}, {"from": "M1.0", "to": "M21.1"},
+                  {"from": "M0.3", "to": "M22.0"}, {"from": "M1.4", "to": "M22.1", "invert": True},
+                  {"from": "M1.2", "to": "A0.5"}, {"from": "M0.5", "to": "M22.2"}],
 }
 #: … and rules that read no input and have no message codes (the parts left out).
 NO_INPUTS = {
     "cycle_ms": 20, "auto_ack_m_functions_ms": 60,
     "copy_bits": [{"from": "M1.0", "to": "M0.2"}, {"from": "M7.1", "to": "A0.4", "invert": True},
-                  {"from": "A0.4", "to": "M20.0"}],
+                  {"from": "A0.4", "to": "M20.0"}, {"from": "M0.3", "to": "M22.0"}, {"from": "M1.4", "to": "A0.5"},
+                  {"from": "M0.7", "to": "M22.1"}],
 }
 
 

@@ -59,6 +59,7 @@ class PlcCard(Protocol):
     that it tells the rest of the card."""
 
     def marker_byte(self, byte: int) -> int: ...
+    def marker_bit(self, byte: int, bit: int) -> bool: ...
     def write_marker_byte(self, byte: int, value: int) -> None: ...
     def write_marker_bit(self, byte: int, bit: int, value: bool) -> None: ...
     def changed(self) -> None: ...
@@ -257,7 +258,7 @@ class Plc:
             if n in self._paa_writes:
                 return self._paa_writes[n]
             return n < OUTPUT_BITS and self.outputs.output_bit(n)
-        return bool(self.card.marker_byte(byte) >> bit & 1)
+        return self.card.marker_bit(byte, bit)
 
     def set_bit(self, name: str, value: bool) -> None:
         """Write an output (PAA, transferred at the end of the cycle) or a marker (at once)."""
