@@ -6,6 +6,7 @@ moves, show the same markers, outputs, messages, events and cycle count after ev
 
 from __future__ import annotations
 
+import math
 import random
 import types
 from typing import Any
@@ -99,12 +100,21 @@ NO_INPUTS = {
 }
 
 
-def card(plc: dict[str, Any], full: bool) -> Gms96Device:
+#: Every rule but the limit switches (which read the commanded direction: no cycle is skipped with them).
+NO_LIMITS = {key: value for key, value in EVERY_RULE.items() if key != "limit_switches"}
+#: The PLC starting the program again when it ended (the virtual-time benchmark's loop).
+LOOPING = {"cycle_ms": 20, "auto_ack_m_functions_ms": 100, "copy_bits": [{"from": "M1.0", "to": "M0.2"}]}
+
+
+PROGRAM = ["A3000", "m50", "p10;14;2", "p10;16;2", "A0", "m53", "p10;17;2"]
+
+
+def card(plc: dict[str, Any], full: bool, program: list[str] = PROGRAM) -> Gms96Device:
     device = Gms96Device(clock=VirtualClock(), config={"boot_time": 0, "plc": plc, "dil": {"address": 3}})
     if full:
         model = device.model
         model.plc.run_cycle = types.MethodType(full_cycle, model.plc)
-    device.set("program.1", ["A3000", "m50", "p10;14;2", "p10;16;2", "A0", "m53", "p10;17;2"])
+    device.set("program.1", program)
     device.model.executor.submit(Cmd("Q", 3, 0, 0, 1))
     return device
 
@@ -146,3 +156,55 @@ def test_the_lean_cycle_does_what_the_full_cycle_does(rules: dict[str, Any], see
             device.model.clock.advance(dt)
         assert seen(lean) == seen(full)
     assert lean.model.plc.cycles > 1000
+
+
+@pytest.mark.parametrize("rules", [EVERY_RULE, NO_LIMITS, NO_INPUTS, LOOPING],
+                         ids=["every_rule", "no_limits", "no_inputs", "looping"])
+@pytest.mark.parametrize("seed", range(8))
+def test_cycles_skipped_while_nobody_looks_change_nothing(rules: dict[str, Any], seed: int) -> None:
+    """While nobody looks (a scenario waits for its next step), the PLC skips the cycles that
+    would read what the last one read and change nothing (issue 31): between the looks and the
+    actions the card is the card that ran every cycle, the cycle count included."""
+    lean, full = card(rules, False), card(rules, True)
+    full.model.plc._schedule_next = full.model.plc._schedule  # (every cycle, one by one)
+    r = random.Random(seed)
+    skipped = 0
+    for _step in range(150):
+        if r.random() < 0.4:
+            action, value = r.choice(ACTIONS), r.random()
+            for device in (lean, full):
+                action(device, random.Random(value))
+        dt = r.choice((0.001, 0.02, 0.05, 0.3, 1.0, 4.0))
+        lean.unobserved_until(lean.model.clock.now() + dt)
+        events = lean.model.clock.advance(dt)
+        skipped += full.model.clock.advance(dt) - events
+        lean.unobserved_until(-math.inf)
+        assert seen(lean) == seen(full)
+    if rules is EVERY_RULE:
+        assert skipped == 0
+    else:
+        assert skipped > 1000  # (cycles the lean card did not run one by one)
+
+
+def test_a_cycle_at_the_instant_of_another_timer_still_runs_after_it() -> None:
+    """Times on a binary grid (a 250 ms cycle, 0.5 s waits, no moves): a wait of the program ends
+    at the very instant of a cycle, and the cycle (scheduled after the wait) runs after it and
+    sees its output, as the cycles one by one do; a skip that took that cycle too would not."""
+    rules = {"cycle_ms": 250, "auto_ack_m_functions_ms": 250,
+             "copy_bits": [{"from": "M1.0", "to": "M0.2"}, {"from": "A0.2", "to": "M20.0"}]}
+    program = ["m50", "p10;14;5", "p10;16;2", "m53", "p10;14;5", "p10;17;2", "p10;14;5"]
+    lean, full = card(rules, False, program), card(rules, True, program)
+    full.model.plc._schedule_next = full.model.plc._schedule
+    for device in (lean, full):
+        device.model.clock.advance(1.0)
+        device.set("marker.MB2", 1)
+        device.set("marker.M0.2", True)
+    marks = []
+    for _step in range(40):
+        lean.unobserved_until(lean.model.clock.now() + 1.0)
+        lean.model.clock.advance(1.0)
+        full.model.clock.advance(1.0)
+        lean.unobserved_until(-math.inf)
+        assert seen(lean) == seen(full)
+        marks.append(lean.read("marker.M20.0"))
+    assert True in marks and False in marks  # the loop ran, its output copied on and off

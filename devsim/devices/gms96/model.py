@@ -348,6 +348,10 @@ class Gms96Card(Model):
         cur = self.image.markers[byte]
         self.write_marker_byte(byte, (cur | (1 << bit)) if value else (cur & ~(1 << bit)))
 
+    def unobserved_until(self, when: float) -> None:
+        """Nobody looks before ``when``: the PLC skips the cycles that would change nothing."""
+        self.plc.unobserved = when
+
     def busy(self) -> bool:
         return self.executor.busy
 

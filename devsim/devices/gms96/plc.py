@@ -16,6 +16,9 @@ that runs *scripted rules* on the card's process image, cyclically on the device
   power-on if loaded (manual §2.4), `p1;1` starts and `p1;2` stops it; memory status
   ``T3;4`` I.1 = PLC not running, I.0 = program storage error (download longer than
   ``plc.flash_bytes``).  In interpolation mode (DIL 6) the PLC never runs (spec §4.11.6).
+* while nobody looks (a scenario waits for its next step, :attr:`Plc.unobserved`), the cycles
+  that would read what the last one read and change nothing are counted, not run
+  (:func:`cycle_after`); with limit switches or a hook every cycle runs.
 
 Built-in rules (spec §4.10.3, all optional):
 
@@ -39,6 +42,7 @@ Bit names are ``E<byte>.<bit>``, ``A<byte>.<bit>``, ``M<byte>.<bit>`` (:func:`.i
 from __future__ import annotations
 
 import importlib
+import math
 from collections.abc import Callable
 from typing import Any, Protocol
 
@@ -66,7 +70,7 @@ class PlcCard(Protocol):
     def record_event(self, name: str) -> None: ...
 
 
-__all__ = ["FB254_FUNCTIONS", "M_FUNCTION_BITS", "Plc"]
+__all__ = ["FB254_FUNCTIONS", "M_FUNCTION_BITS", "Plc", "cycle_after"]
 
 #: The handshake bits the CNC sets and the PLC resets (spec §3.8.9): M6.0..M10.7, M15.7, M18.7.
 M_FUNCTION_BITS: tuple[tuple[int, int], ...] = tuple((b, k) for b in range(6, 11) for k in range(8)) + (
@@ -90,6 +94,26 @@ def load_hook(spec: str) -> Hook:
     if not callable(fn):
         raise ValueError(f"PLC hook {spec!r} is not callable")
     return fn  # type: ignore[no-any-return]
+
+
+def _at(when: float | None) -> float:
+    return math.inf if when is None else when
+
+
+def cycle_after(now: float, cycle: float, horizon: float) -> tuple[float, int]:
+    """Sampled loops only while they matter (issue 31): after a cycle at ``now`` that changed
+    nothing, each cycle would read what it read and do what it did – nothing – until the
+    ``horizon``: the next timer of anything on the clock, the next boundary of the axis plan
+    (the motion's status bits, :meth:`Indexer.plan_changes_at`), the moment the scenario's
+    runner may look or act.  The cycle to run is the first at or after it (one at that very
+    instant was scheduled after the timer there, as the cycles one by one schedule it);
+    returns its time, on the grid the cycles one by one make (each time the last plus
+    ``cycle``), and how many cycle times come before it."""
+    when, skipped = now + cycle, 0
+    while when < horizon:
+        skipped += 1
+        when = when + cycle
+    return when, skipped
 
 
 class Plc:
@@ -130,6 +154,9 @@ class Plc:
         #: Why the PLC stopped by itself (a hook raised), or None.
         self.fault: str | None = None
         self._timer: Timer | None = None
+        #: Nobody looks at the card before this simulated time (the scenario runner's hint, issue 31).
+        self.unobserved = -math.inf
+        self._wrote = False  # the cycle running changed a marker, an output or a message
         self._pae = bytes(4)
         self._paa_writes: dict[int, bool] = {}
         self._reset_rule_state()
@@ -222,7 +249,20 @@ class Plc:
             self.card.record_event("plc_fault")
             return
         if self.running:
+            self._schedule_next()
+
+    def _schedule_next(self) -> None:
+        """The next cycle; after one that changed nothing, while nobody looks, the first that
+        may not (:func:`cycle_after`)."""
+        if self._wrote or self._ack_seen or self.hooks or self.cfg.limit_switches or self.unobserved == -math.inf:
             self._schedule()
+            return
+        upcoming = getattr(self.clock, "next_event", lambda: None)()
+        when, skipped = cycle_after(self.clock.now(), self.cycle_s, min(
+            self.unobserved, _at(upcoming), _at(self.indexer.plan_changes_at())))
+        self.cycles += skipped
+        self._cancel()
+        self._timer = self.clock.call_at(when, self._cycle)
 
     # -- download (spec §3.8.24) ---------------------------------------------------------------
     def begin_download(self) -> None:
@@ -277,14 +317,17 @@ class Plc:
 
     def set_marker_byte(self, byte: int, value: int) -> None:
         if self.image.markers[byte] != value & 0xFF:
+            self._wrote = True
             self.card.write_marker_byte(byte, value)
 
     def set_marker_bit(self, byte: int, bit: int, value: bool) -> None:
         if self.image.marker(byte, bit) != value:
+            self._wrote = True
             self.card.write_marker_bit(byte, bit, value)
 
     def message(self, code: int) -> None:
         """Like SNDM: the code into MB4, buffered behind a waiting one (spec §4.5.1)."""
+        self._wrote = True
         self.image.post_message(code)
         self.card.changed()
 
@@ -307,6 +350,7 @@ class Plc:
     # -- one cycle -------------------------------------------------------------------------------
     def run_cycle(self) -> None:
         self.cycles += 1
+        self._wrote = False
         if self._reads_inputs:  # (no rule or hook looks at the PAE: not taken, issue 31)
             self._pae = bytes(self.outputs.input_byte(b) for b in range(4))
         self._paa_writes = {}
@@ -333,6 +377,7 @@ class Plc:
                 changed = True
         self._paa_writes = {}
         if changed:
+            self._wrote = True
             self.card.changed()
 
     def _reset_rule_state(self) -> None:
