@@ -53,9 +53,72 @@ def _pcd4h3(seconds: float) -> str:
             "  - when: {device: pcd, name: axis.1.OnDest, equals: true}\n    timeout: 30s\n")
 
 
-#: A scenario per kind, given the simulated seconds.  The GMS96, IP247 and POSELESTA have no
-#: program a plant can preload yet (each is downloaded through its own telegrams).
-SCENARIOS = {"sers": _sers, "pcd4h3": _pcd4h3}
+def _still_looping(device: str, event: str, seconds: float) -> str:
+    """The last steps: at the end, the loop's ``event`` last happened within its last 30 s (a
+    check of the event log, not a condition looked at every millisecond while the axis moves)."""
+    return (f"  - at: {seconds}s\n"
+            f"    expect_timing: {{device: {device}, event: {event}, between: [{max(0.0, seconds - 30)}s, {seconds}s], "
+            "occurrence: last}\n")
+
+
+def _gms96(seconds: float) -> str:
+    """One GMS96 looping CNC program 0 (§2.5), stored as its download would store it: a move out,
+    M50 with the PLC's acknowledge (M6.0 reset after 100 ms, §2.4.1), a dwell (WAIT), output A0.2
+    on (SETO), the move back, A0.2 off (RESO), a dwell.  The PLC starts the program again when
+    it ended (M1.0 → M0.2, §2.4.1 MB0/MB1); the host switches the position controller on (Q3)
+    and starts it (p3;1;0)."""
+    program = '["A10000", "m50", "p10;14;5", "p10;16;2", "A0", "p10;17;2", "p10;14;5"]'
+    return (f"name: a GMS96 looping CNC program 0\ntimeout: {seconds + 60}s\ndevices:\n"
+            "  - name: card\n    kind: gms96\n"
+            "    config: {dil: {address: 3}, plc: {auto_ack_m_functions_ms: 100, copy_bits: [{from: M1.0, to: M0.2}]}}\n"
+            f"    state: {{program.0: {program}}}\n"
+            "steps:\n"
+            '  - send: "\\x68\\x06\\x06\\x68\\x53\\x03\\x51\\x03\\x00\\x00\\xAA\\x16"\n'  # Q3
+            '  - expect: "\\xE5"\n'
+            '  - send: "\\x68\\x0C\\x0C\\x68\\x53\\x03\\x70\\x03\\x00\\x00\\x01\\x00\\x00\\x00\\x00\\x00\\xCA\\x16"\n'
+            '  - expect: "\\xE5"\n'  # p3;1;0
+            + _still_looping("card", "move_start", seconds))
+
+
+def _ip247(seconds: float) -> str:
+    """One IP247 axis with the manual's machine data (§6.1) and its reference set (BA5), running
+    traverse program 1 (stored as BA22 would) from the PLC side (FB164 BA8 Start): an endless
+    loop (G24 F0 … G20, §2.6.6.4) of a 100 mm move out with M20, a 0.5 s dwell with M21 and the
+    move back with M22."""
+    md = ("0046 0044 4201 0001 0100 0000 1388 0000 00C8 0000 C350 001E 0040 0004 00C8 0000 07D0 0000 0BB8 0000 "
+          "0BB8 0000 0BB8 0000 0BB8 0000 0020 0000 0000 FFF9 E580 0007 A120 0001 0000 08FC 0000 0000 0000 2710 "
+          "0000 61A8 0000 0CB2 FFFE DB08" + " 0000" * 24)
+    program = r"%  1 LOOP\nN10 G24 F0\nN20 X100.000 F3000 M20\nN30 G04 F5 M21\nN40 X0.000 F3000 M22\nN50 G20\nN99 M02\n"
+    return (f"name: an IP247 looping a traverse program\ntime: virtual\ntimeout: {seconds + 60}s\ndevices:\n"
+            "  - name: ip\n    kind: ip247\nsteps:\n"
+            "  - set: {device: ip, values: {input.ANF1: true, input.END1: true}}\n"
+            f'  - set: {{device: ip, values: {{axis.1.machine_data: "{md}"}}}}\n'
+            "  - set: {device: ip, values: {ag.operate: {page: 0, ba: 5, cmd: Start, b: 1}}}\n"
+            f'  - set: {{device: ip, values: {{program.1: "{program}"}}}}\n'
+            "  - set: {device: ip, values: {ag.operate: {page: 0, ba: 8, cmd: Start, b: 1}}}\n"
+            + _still_looping("ip", "move_start", seconds))
+
+
+def _poselesta(seconds: float) -> str:
+    """One POSELESTA in AUTO_CONTINUOUS running P20 (preloaded as entered, §2.6.3): a subroutine
+    called 99 times (G12 L99.100) that repeats itself 99 more times (G13 L99.100, §2.4.2, spec
+    §6.6): rapid out with S1200 M03 M08 on the M/S/T bus (the PLC acknowledging after 35 ms),
+    back at F3000, a 0.5 s dwell with M09 – about ten hours of work."""
+    program = (r"N1 G12 L99.100\nN2 M02\nN100 G00 X100 S1200 M03 M08\nN101 G01 X0 F3000\n"
+               r"N102 G04 L0.500 M09\nN103 G13 L99.100\nN104 G11")
+    return (f"name: a POSELESTA looping an NC program\ntime: virtual\ntimeout: {seconds + 60}s\ndevices:\n"
+            "  - name: cnc\n    kind: poselesta\n    config: {plc: {mst_ack: delayed}}\n"
+            f'    state: {{program.P20: "{program}", panel.program: 20}}\n'
+            "steps:\n  - set: {device: cnc, values: {panel.mode: AUTO_CONTINUOUS}}\n"
+            "  - after: 100ms\n    set: {device: cnc, values: {panel.nc_start: true}}\n"
+            + _still_looping("cnc", "position_reached", seconds))
+
+
+#: A scenario per kind, given the simulated seconds: each loops what a user would load into
+#: that device – a program in a plant's ``state`` (SERS ``program``, GMS96 ``program.<n>``,
+#: POSELESTA ``program.P<nn>``), or set by a step (IP247 ``program.<n>``), or the configured
+#: user program (PCD4.H3).
+SCENARIOS = {"gms96": _gms96, "ip247": _ip247, "pcd4h3": _pcd4h3, "poselesta": _poselesta, "sers": _sers}
 
 CHILD = r"""
 import cProfile, json, pstats, sys, time
@@ -152,13 +215,13 @@ def main(argv: list[str] | None = None) -> int:
             cpu, ref_cpu = statistics.median(dev), statistics.median(ref)
             rows.append((kind, cpu, ref_cpu))
             print(f"{kind:10} {seconds:6.0f} s simulated: {cpu:6.2f} s CPU, {seconds / cpu:8.0f} simulated s per CPU s; "
-                  f"{events} timer events ({events / cpu:7.0f} per CPU s); bare clock {ref_cpu:5.2f} s", flush=True)
+                  f"{events} timer events ({events / cpu:7.0f} per CPU s); bare clock {ref_cpu:6.3f} s", flush=True)
             if args.profile:
                 _run("kind", path, seconds, args.profile)
     print("devsim CPU / bare virtual clock CPU for as many events:")
     for kind, cpu, ref_cpu in rows:
         target = "  (target < 0.5 s: " + ("met)" if cpu < 0.5 else "missed)") if kind == "sers" else ""
-        print(f"  {kind:10} {cpu:6.2f} s / {ref_cpu:5.2f} s = {cpu / ref_cpu:6.1f}{target}")
+        print(f"  {kind:10} {cpu:6.2f} s / {ref_cpu:6.3f} s = {cpu / ref_cpu:6.1f}{target}")
     return 0
 
 

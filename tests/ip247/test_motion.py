@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import math
+from typing import Any
+
 import pytest
 
 from devsim.core.axis import Axis
@@ -46,3 +49,36 @@ def test_short_moves_meet_at_the_peak_and_slow_moves_run_without_ramps() -> None
     assert axis.position() == pytest.approx(-10_000, abs=1e-6)
     slow = move_pieces(0.0, 1_000, 150, RAMP, R)  # below f_ss: constant
     assert [(d, p.kind) for d, p in slow] == [(pytest.approx(100 / 150), "constant")]
+
+
+def _state_from_the_ramp(piece: Any, dt: float) -> tuple[float, float, float]:
+    """A piece's state with every figure taken from its ramp at each look (before issue 31)."""
+    ramp = piece.ramp
+
+    def accel(t: float) -> tuple[float, float, float]:
+        decay = math.exp(-t / ramp.tau)
+        pulses = ramp.big_f * (t - ramp.tau * (1 - decay)) + ramp.f_ss * t
+        return pulses, ramp.f_ss + ramp.big_f * (1 - decay), ramp.big_f / ramp.tau * decay
+
+    if piece.kind == "accel":
+        n, f, df = accel(dt)
+    elif piece.kind == "decel":
+        n_back, f, df = accel(piece.t_v - dt)
+        n, df = accel(piece.t_v)[0] - n_back, -df
+    else:
+        n, f, df = piece.f_v * dt, piece.f_v, 0.0
+    s, r = piece.sign, piece.r
+    return piece.x0 + s * r * n, s * r * f, s * r * df
+
+
+@pytest.mark.parametrize("ramp", [RAMP, Ramp(10000, 500, 20), Ramp(2000, 100, 0.5)])
+@pytest.mark.parametrize("distance, f_v", [(100_000, 5000), (-3_000, 9000), (250, 1800), (-77_777, 150)])
+def test_a_piece_keeps_its_ramps_figures_with_the_same_states(ramp: Ramp, distance: float, f_v: float) -> None:
+    """The pieces take the ramp's τ, F, f_ss and a braking piece's whole ramp once (issue 31): the
+    same states, to the bit, as figures taken from the ramp at every look."""
+    pieces = move_pieces(1234.5, distance, f_v, ramp, R)
+    assert pieces
+    for duration, piece in pieces:
+        for k in range(101):
+            dt = duration * k / 100
+            assert piece.state(dt) == _state_from_the_ramp(piece, dt)

@@ -28,6 +28,8 @@ OUTPUT_BITS = 11  # A0.0..A1.2 (spec §4.11.1, G27)
 #: Inputs shown OR-ed with another on KSA cards and under an interpolation card (manual §2.4.2,
 #: §4.4, §5.2): E1.6 with E2.0, E1.7 with E2.1, both ways.
 ORED_INPUTS: dict[tuple[int, int], str] = {(1, 6): "E2.0", (2, 0): "E1.6", (1, 7): "E2.1", (2, 1): "E1.7"}
+#: The names of the input bits, by byte: E0.0 … E3.7.
+_INPUT_NAMES = tuple(tuple(f"E{byte}.{bit}" for bit in range(8)) for byte in range(INPUT_BYTES))
 #: The monitoring cause a resolver card shows at E2.3 (manual §2.4.2: "E2.3 = Ausfall Resolver").
 RESOLVER_LOSS = "resolver_loss"
 #: K1: its inputs E0.4 and E0.5 are also shown at E2.0 and E2.1 (manual §5.2).
@@ -113,9 +115,18 @@ class Outputs:
         return other is not None and bool(self.signals.get(other))
 
     def input_byte(self, byte: int) -> int:
+        """EB(byte) as the image shows it: :meth:`input_bit` of its eight bits."""
         if not 0 <= byte < INPUT_BYTES:
             return 0
-        value = sum(1 << b for b in range(8) if self.input_bit(byte, b))
+        get, shown = self.signals.get, self.shown_at()
+        value = 0
+        for bit, name in enumerate(_INPUT_NAMES[byte]):
+            if get(name):
+                value |= 1 << bit
+            else:
+                other = shown.get((byte, bit))
+                if other is not None and get(other):
+                    value |= 1 << bit
         if byte == 2 and self.stage.overload_latched:
             value |= 0x04  # E2.2: 24 V short circuit
         if byte == 2 and self.resolver and self.stage.monitoring_cause() == RESOLVER_LOSS:

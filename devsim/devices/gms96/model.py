@@ -313,16 +313,11 @@ class Gms96Card(Model):
     def marker_byte(self, byte: int) -> int:
         """MB(byte) as the PLC and the host read it: MB0/MB1/MB3 carry status bits the firmware
         keeps (:data:`STATUS_MARKERS`, spec §4.4) over the stored byte."""
-        m = self.image.markers
-        overlay = _STATUS_BYTES.get(byte)
-        if overlay is None:
-            return m[byte] if 0 <= byte < 256 else 0
-        live, bits = overlay
-        v = m[byte] & ~live
-        for mask, state in bits:
-            if state(self):
-                v |= mask
-        return v
+        return _marker_byte(self, byte)
+
+    def marker_bit(self, byte: int, bit: int) -> bool:
+        """Bit ``bit`` of :meth:`marker_byte`, the firmware's status looked at only for a live bit."""
+        return _marker_bit(self, byte, bit)
 
     def write_marker_byte(self, byte: int, value: int) -> None:
         """``p11`` / PLC: MB(byte) := value; the control bits of MB0/MB1 act (spec §4.4)."""
@@ -352,6 +347,10 @@ class Gms96Card(Model):
     def write_marker_bit(self, byte: int, bit: int, value: bool) -> None:
         cur = self.image.markers[byte]
         self.write_marker_byte(byte, (cur | (1 << bit)) if value else (cur & ~(1 << bit)))
+
+    def unobserved_until(self, when: float) -> None:
+        """Nobody looks before ``when``: the PLC skips the cycles that would change nothing."""
+        self.plc.unobserved = when
 
     def busy(self) -> bool:
         return self.executor.busy
@@ -481,3 +480,24 @@ def _status_bytes() -> dict[int, tuple[int, tuple[tuple[int, Callable[[Gms96Card
 
 
 _STATUS_BYTES = _status_bytes()
+
+
+def _marker_byte(card: Gms96Card, byte: int) -> int:
+    m = card.image.markers
+    overlay = _STATUS_BYTES.get(byte)
+    if overlay is None:
+        return m[byte] if 0 <= byte < 256 else 0
+    live, bits = overlay
+    v = m[byte] & ~live
+    for mask, state in bits:
+        if state(card):
+            v |= mask
+    return v
+
+
+def _marker_bit(card: Gms96Card, byte: int, bit: int) -> bool:
+    mask = 1 << bit
+    overlay = _STATUS_BYTES.get(byte)
+    if overlay is None or not overlay[0] & mask:
+        return 0 <= byte < 256 and bool(card.image.markers[byte] & mask)
+    return any(state(card) for live, state in overlay[1] if live == mask)

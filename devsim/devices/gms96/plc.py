@@ -16,6 +16,9 @@ that runs *scripted rules* on the card's process image, cyclically on the device
   power-on if loaded (manual §2.4), `p1;1` starts and `p1;2` stops it; memory status
   ``T3;4`` I.1 = PLC not running, I.0 = program storage error (download longer than
   ``plc.flash_bytes``).  In interpolation mode (DIL 6) the PLC never runs (spec §4.11.6).
+* while nobody looks (a scenario waits for its next step, :attr:`Plc.unobserved`), the cycles
+  that would read what the last one read and change nothing are counted, not run
+  (:func:`cycle_after`); with limit switches or a hook every cycle runs.
 
 Built-in rules (spec §4.10.3, all optional):
 
@@ -39,6 +42,7 @@ Bit names are ``E<byte>.<bit>``, ``A<byte>.<bit>``, ``M<byte>.<bit>`` (:func:`.i
 from __future__ import annotations
 
 import importlib
+import math
 from collections.abc import Callable
 from typing import Any, Protocol
 
@@ -59,13 +63,14 @@ class PlcCard(Protocol):
     that it tells the rest of the card."""
 
     def marker_byte(self, byte: int) -> int: ...
+    def marker_bit(self, byte: int, bit: int) -> bool: ...
     def write_marker_byte(self, byte: int, value: int) -> None: ...
     def write_marker_bit(self, byte: int, bit: int, value: bool) -> None: ...
     def changed(self) -> None: ...
     def record_event(self, name: str) -> None: ...
 
 
-__all__ = ["FB254_FUNCTIONS", "M_FUNCTION_BITS", "Plc"]
+__all__ = ["FB254_FUNCTIONS", "M_FUNCTION_BITS", "Plc", "cycle_after"]
 
 #: The handshake bits the CNC sets and the PLC resets (spec §3.8.9): M6.0..M10.7, M15.7, M18.7.
 M_FUNCTION_BITS: tuple[tuple[int, int], ...] = tuple((b, k) for b in range(6, 11) for k in range(8)) + (
@@ -89,6 +94,26 @@ def load_hook(spec: str) -> Hook:
     if not callable(fn):
         raise ValueError(f"PLC hook {spec!r} is not callable")
     return fn  # type: ignore[no-any-return]
+
+
+def _at(when: float | None) -> float:
+    return math.inf if when is None else when
+
+
+def cycle_after(now: float, cycle: float, horizon: float) -> tuple[float, int]:
+    """Sampled loops only while they matter (issue 31): after a cycle at ``now`` that changed
+    nothing, each cycle would read what it read and do what it did – nothing – until the
+    ``horizon``: the next timer of anything on the clock, the next boundary of the axis plan
+    (the motion's status bits, :meth:`Indexer.plan_changes_at`), the moment the scenario's
+    runner may look or act.  The cycle to run is the first at or after it (one at that very
+    instant was scheduled after the timer there, as the cycles one by one schedule it);
+    returns its time, on the grid the cycles one by one make (each time the last plus
+    ``cycle``), and how many cycle times come before it."""
+    when, skipped = now + cycle, 0
+    while when < horizon:
+        skipped += 1
+        when = when + cycle
+    return when, skipped
 
 
 class Plc:
@@ -129,6 +154,9 @@ class Plc:
         #: Why the PLC stopped by itself (a hook raised), or None.
         self.fault: str | None = None
         self._timer: Timer | None = None
+        #: Nobody looks at the card before this simulated time (the scenario runner's hint, issue 31).
+        self.unobserved = -math.inf
+        self._wrote = False  # the cycle running changed a marker, an output or a message
         self._pae = bytes(4)
         self._paa_writes: dict[int, bool] = {}
         self._reset_rule_state()
@@ -221,7 +249,20 @@ class Plc:
             self.card.record_event("plc_fault")
             return
         if self.running:
+            self._schedule_next()
+
+    def _schedule_next(self) -> None:
+        """The next cycle; after one that changed nothing, while nobody looks, the first that
+        may not (:func:`cycle_after`)."""
+        if self._wrote or self._ack_seen or self.hooks or self.cfg.limit_switches or self.unobserved == -math.inf:
             self._schedule()
+            return
+        upcoming = getattr(self.clock, "next_event", lambda: None)()
+        when, skipped = cycle_after(self.clock.now(), self.cycle_s, min(
+            self.unobserved, _at(upcoming), _at(self.indexer.plan_changes_at())))
+        self.cycles += skipped
+        self._cancel()
+        self._timer = self.clock.call_at(when, self._cycle)
 
     # -- download (spec §3.8.24) ---------------------------------------------------------------
     def begin_download(self) -> None:
@@ -247,7 +288,9 @@ class Plc:
     # -- process image access for rules and hooks ----------------------------------------------
     def bit(self, name: str) -> bool:
         """A bit as the PLC sees it: E from this cycle's PAE, A from the outputs, M markers."""
-        area, byte, bit = parse_bit(name)
+        return self._bit(*parse_bit(name))
+
+    def _bit(self, area: str, byte: int, bit: int) -> bool:
         if area == "E":
             return bool(self._pae[byte] >> bit & 1) if byte < len(self._pae) else False
         if area == "A":
@@ -255,7 +298,7 @@ class Plc:
             if n in self._paa_writes:
                 return self._paa_writes[n]
             return n < OUTPUT_BITS and self.outputs.output_bit(n)
-        return bool(self.card.marker_byte(byte) >> bit & 1)
+        return self.card.marker_bit(byte, bit)
 
     def set_bit(self, name: str, value: bool) -> None:
         """Write an output (PAA, transferred at the end of the cycle) or a marker (at once)."""
@@ -274,14 +317,17 @@ class Plc:
 
     def set_marker_byte(self, byte: int, value: int) -> None:
         if self.image.markers[byte] != value & 0xFF:
+            self._wrote = True
             self.card.write_marker_byte(byte, value)
 
     def set_marker_bit(self, byte: int, bit: int, value: bool) -> None:
         if self.image.marker(byte, bit) != value:
+            self._wrote = True
             self.card.write_marker_bit(byte, bit, value)
 
     def message(self, code: int) -> None:
         """Like SNDM: the code into MB4, buffered behind a waiting one (spec §4.5.1)."""
+        self._wrote = True
         self.image.post_message(code)
         self.card.changed()
 
@@ -304,7 +350,9 @@ class Plc:
     # -- one cycle -------------------------------------------------------------------------------
     def run_cycle(self) -> None:
         self.cycles += 1
-        self._pae = bytes(self.outputs.input_byte(b) for b in range(4))
+        self._wrote = False
+        if self._reads_inputs:  # (no rule or hook looks at the PAE: not taken, issue 31)
+            self._pae = bytes(self.outputs.input_byte(b) for b in range(4))
         self._paa_writes = {}
         self._auto_ack()
         self._limit_switches()
@@ -329,6 +377,7 @@ class Plc:
                 changed = True
         self._paa_writes = {}
         if changed:
+            self._wrote = True
             self.card.changed()
 
     def _reset_rule_state(self) -> None:
@@ -343,12 +392,21 @@ class Plc:
         self._prev_pae: bytes | None = None
         self._fe_pending = False
         self._controller_was_on = bool(self.stage.controller)
+        c = self.cfg
+        #: The copy rules with their bits parsed: ((area, byte, bit) read, invert, (area, byte, bit) written).
+        self._copies = [(parse_bit(rule.source), rule.invert, parse_bit(rule.to)) for rule in c.copy_bits]
+        #: Whether a cycle takes the inputs into the PAE: a rule or a hook reads them.
+        self._reads_inputs = bool(c.limit_switches or c.start_program_on_input or self.hooks
+                                  or any(source[0] == "E" for source, _invert, _to in self._copies))
 
     # -- rules -----------------------------------------------------------------------------------
     def _auto_ack(self) -> None:
         ms = self.cfg.auto_ack_m_functions_ms
         if ms is None:
             return
+        markers = self.image.markers
+        if not self._ack_seen and not (any(markers[6:11]) or (markers[15] | markers[18]) & 0x80):
+            return  # no M function bit set, none waiting (the loop below would do nothing)
         now = self.now
         for byte, bit in M_FUNCTION_BITS:
             key = (byte, bit)
@@ -409,14 +467,14 @@ class Plc:
 
     def _fault_messages(self) -> None:
         codes = self.cfg.message_on_fault
-        states = self._fault_states()
         query = self.image.marker(3, 1)
-        if codes is not None:
+        if codes is not None:  # (without codes the fault states matter to nothing: not taken)
+            states = self._fault_states()
             for name, active in states.items():
                 code = getattr(codes, name)
                 if code and active and (query or not self._faults[name]):
                     self.message(code)
-        self._faults = states
+            self._faults = states
         if query:
             self.set_marker_bit(3, 1, False)  # the PLC resets M3.1 after re-reporting (M §2.3.1 q)
 
@@ -436,9 +494,8 @@ class Plc:
             self.set_marker_bit(0, 2, True)
 
     def _copy_rules(self) -> None:
-        for rule in self.cfg.copy_bits:
-            value = self.bit(rule.source) != rule.invert
-            area, byte, bit = parse_bit(rule.to)
+        for source, invert, (area, byte, bit) in self._copies:
+            value = self._bit(*source) != invert
             if area == "A":
                 n = byte * 8 + bit
                 if n < OUTPUT_BITS and bool(self.image.outputs[byte] >> bit & 1) != value:

@@ -4,10 +4,13 @@
 bits from the process image's layout; spellings the card's documentation uses (``param.n15``,
 ``param.15``, ``marker.M7.0``) resolve through the alias hook.  Values are checked by type and
 range before they take effect; an N parameter also gets the card's own range rule.
+``program.<n>`` is a CNC program as the manual writes its commands (``A1000``, ``p10;16;2``);
+setting it stores the program as its download ``p3;100;n`` … ``p3;101`` would (§2.5).
 """
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import msgspec
@@ -17,12 +20,14 @@ from devsim.core.parameters import Param, alias_hook, parameter_points
 from devsim.core.points import BadValue, Family, Point, PointTable
 from devsim.core.settings import Invalid
 from devsim.devices.gms96 import tables
+from devsim.devices.gms96.codec import S24_MIN, wrap24
+from devsim.devices.gms96.commands import QUEUED_COMMANDS
 from devsim.devices.gms96.config import DilSwitch
 from devsim.devices.gms96.image import parse_bit
 from devsim.devices.gms96.io import INPUT_BYTES
 from devsim.devices.gms96.nparams import N_TABLE
 
-__all__ = ["FAULTS", "LEDS", "POINTS", "SIGNALS"]
+__all__ = ["FAULTS", "LEDS", "POINTS", "SIGNALS", "command_rows", "command_text"]
 
 LEDS = {"dc_overvoltage": "red", "dc_undervoltage": "yellow", "overtemperature": "green"}
 
@@ -124,6 +129,67 @@ def _message(card: Any, value: int) -> None:
 
 def _tool_offset(card: Any, value: int) -> None:
     card.coordinates.tool_offset = value
+
+
+#: Commands a CNC download does not record: carried out on receipt even then (the face's
+#: ``o2`` and the downloads of P_ON_RECEIPT, spec §3.8.13), by letter and the leading parameters.
+_NOT_RECORDED = (("o", (2,)), ("p", (1, 100)), ("p", (1, 101)), ("p", (3, 100)), ("p", (3, 101)))
+_COMMAND = re.compile(r"\s*(\S)\s*(-?\d+(?:\s*;\s*-?\d+){0,2})?\s*")
+
+
+def command_rows(program: Any) -> list[list[Any]]:
+    """A CNC program's commands as its download records them (manual §2.5): rows ``[letter,
+    P1, P2, P3, parameters sent]``; the commands are texts as the manual writes them
+    (``A1000``, ``+-500``, ``p10;16;2``), a list or one per line.  A command the download would
+    not record (``T``, ``c``, ``N``, ``q``, ``o2``, a download) is refused, as is a parameter
+    beyond 24 bits; one from 2^23 up is kept as its 24-bit pattern reads (``A16777215`` is
+    ``A-1``, as on the line)."""
+    lines = program.splitlines() if isinstance(program, str) else program
+    if not isinstance(lines, list) or not all(isinstance(text, str) for text in lines):
+        raise BadValue("a CNC program is its commands: a list of texts, or one per line")
+    rows = []
+    for text in (line for line in lines if line.strip()):
+        match = _COMMAND.fullmatch(text)
+        if match is None:
+            raise BadValue(f"{text!r}: a command is a letter and up to 3 numbers P1;P2;P3, e.g. A1000 or p10;16;2")
+        letter = match[1]
+        params = [int(p) for p in match[2].split(";")] if match[2] else []
+        if letter not in QUEUED_COMMANDS or any(
+            letter == cmd and tuple(params[: len(lead)]) == lead for cmd, lead in _NOT_RECORDED
+        ):
+            raise BadValue(f"{text!r}: not a command of a CNC program (carried out on receipt, §2.3.1)")
+        if not all(S24_MIN <= p <= 0xFFFFFF for p in params):
+            raise BadValue(f"{text!r}: a parameter has 24 bits (§2.3)")
+        rows.append([letter, *(wrap24(p) for p in params), *[0] * (3 - len(params)), len(params)])
+    return rows
+
+
+def command_text(row: list[Any]) -> str:
+    """A recorded row as the manual writes the command: ``A1000``, ``p10;16;2``."""
+    letter, *params, count = row
+    return letter + ";".join(str(p) for p in params[:count])
+
+
+def _store_program(card: Any, number: int, program: Any) -> None:
+    rows = command_rows(program)
+    if number >= card.cfg.max_programs:
+        raise BadValue(f"program {number}: the card keeps programs 0 … {card.cfg.max_programs - 1}")
+    if card.flash.download is not None:
+        raise BadValue("a download is running")
+    if not card.flash.store_program(number, rows, card.cfg.max_total_commands):
+        raise BadValue(f"program {number} not stored: the programs would exceed {card.cfg.max_total_commands} "
+                       "commands (T3;4 I.4)")
+
+
+def _program(name: str) -> Point | None:
+    match = re.fullmatch(r"program\.(\d{1,2})", name)
+    if match is None:
+        return None
+    number = int(match[1])
+    return Point(name, "json", f"CNC program {number}: its commands as texts (set: stored as by its download "
+                 "p3;100 … p3;101; program 0 replaces them all)", "§2.5",
+                 get=lambda c: [command_text(row) for row in c.flash.programs.get(number, [])],
+                 put=lambda c, v: _store_program(c, number, v))
 
 
 def _register(n: int) -> Point:
@@ -292,6 +358,8 @@ POINTS = PointTable.of(
         Family("data.<n>", "int", "data byte 0 … 255", "§4.6", _numbered("data.", 256, _data), "r"),
         Family("register.<n>", "int", "data register 0 … 19 (4 bytes, signed)", "§4.6",
                _numbered("register.", 20, _register), "r"),
+        Family("program.<n>", "json", "CNC program 0 … 99: its commands as texts, e.g. [A1000, p10;16;2] (set: "
+               "stored as by its download; program 0 replaces them all)", "§2.5", _program),
     ],
 )
 

@@ -23,23 +23,24 @@ class ExpPiece:
     def __init__(self, ramp: Ramp, resolution: float, x0: float, sign: int, kind: str, t_v: float,
                  f_v: float) -> None:
         self.ramp, self.r, self.x0, self.sign, self.kind, self.t_v, self.f_v = ramp, resolution, x0, sign, kind, t_v, f_v
+        # the ramp's figures, and a braking piece's whole ramp, taken once (a piece is read at every look)
+        self._tau, self._big_f, self._f_ss = ramp.tau, ramp.big_f, ramp.f_ss
+        self._total = self._accel(t_v)[0] if kind == "decel" else 0.0
 
     def _accel(self, t: float) -> tuple[float, float, float]:
         """Pulses, frequency and its slope ``t`` seconds into the acceleration."""
-        ramp = self.ramp
-        tau, big_f = ramp.tau, ramp.big_f
+        tau, big_f = self._tau, self._big_f
         decay = math.exp(-t / tau)
-        pulses = big_f * (t - tau * (1 - decay)) + ramp.f_ss * t
-        return pulses, ramp.f_ss + big_f * (1 - decay), big_f / tau * decay
+        pulses = big_f * (t - tau * (1 - decay)) + self._f_ss * t
+        return pulses, self._f_ss + big_f * (1 - decay), big_f / tau * decay
 
     def state(self, dt: float) -> tuple[float, float, float]:
         s, r = self.sign, self.r
         if self.kind == "accel":
             n, f, df = self._accel(dt)
         elif self.kind == "decel":
-            total = self._accel(self.t_v)[0]
             n_back, f, df = self._accel(self.t_v - dt)
-            n, df = total - n_back, -df
+            n, df = self._total - n_back, -df
         else:  # constant frequency
             n, f, df = self.f_v * dt, self.f_v, 0.0
         return self.x0 + s * r * n, s * r * f, s * r * df
