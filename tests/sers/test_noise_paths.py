@@ -1,7 +1,7 @@
 """Random noise with '#' (what ``benchmarks/noise.py --raw`` pours in), taken in chunks by the
 face's one-step paths, must leave exactly the bytes and the state that byte-by-byte handling
-leaves: the answers, every output change in order and where in the answers it happened, the
-parameters, errno and warnings, the drive's selection and the framing of the line in progress."""
+leaves: the answers, every output change and every error the logs hear, in order and where
+in the answers it happened, the parameters, errno and warnings, the drive's selection and the framing of the line in progress."""
 
 from __future__ import annotations
 
@@ -39,19 +39,23 @@ def _run(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False)
 
     for name in model.signals.names("output"):
         model.signals.subscribe(name, changed)
-    sent = {}  # bytes fed -> bytes sent by then (what the host has seen at each chunk's end)
+    errors: list[tuple[str, bool]] = []  # (the code, whether it refused a host's line)
+    model.listen("device_error", lambda code, refused=False: errors.append((code, refused)))
+    # bytes fed -> bytes sent and errors heard by then (what the host and the logs have seen at
+    # each chunk's end: a chunk's answers leave in one write, after it)
+    sent = {}
     start, turn = 0, 0
     while start < len(stream):
         size = cuts[turn % len(cuts)]
         device.feed(stream[start : start + size])
         start, turn = start + size, turn + 1
-        sent[min(start, len(stream))] = len(out)
+        sent[min(start, len(stream))] = len(out), len(errors)
     face = device.face()
     line = face.line
     framer = vars(face.framer)
     if not framer["in_line"]:  # (what counted the last line means nothing once it ended)
         framer = {name: framer[name] for name in ("in_line", "_last_end")}
-    return sent, (bytes(out), changes, device.state(), dict(model.params.values), model.power_stage.errno, model.power_stage.warnings, model.addressed,
+    return sent, (bytes(out), changes, errors, device.state(), dict(model.params.values), model.power_stage.errno, model.power_stage.warnings, model.addressed,
                   framer, face._last_replied,
                   None if line is None else (line.execute, line.reply, line.error, bytes(line.held),
                                              bytes(line.deferred)))
@@ -59,7 +63,7 @@ def _run(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False)
 
 def _check(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False) -> tuple[object, ...]:
     """``stream`` in chunks leaves what it leaves byte by byte, and at each chunk's end the
-    same bytes have been sent; returns what it leaves."""
+    same bytes have been sent and the same errors heard; returns what it leaves."""
     sent_bytewise, bytewise = _run(stream, [1], address, shared)
     sent, chunked = _run(stream, cuts, address, shared)
     assert chunked == bytewise
@@ -78,6 +82,29 @@ def test_noise_in_chunks_leaves_what_bytes_leave(data: list[bytes], cuts: list[i
     _check(b"".join(data), cuts, address, shared)
 
 
+# Lines of noise as they come one after the other: the first character of the text (most fail
+# at once, some do not; an address, a restart), the text with restarts, the line end, noise.
+FIRSTS = [b"\x00", b"!", b"\xff", b"K", b"A", b"P", b" ", b"1", b"*", b"#", b"\r", b""]
+RESTARTS = [b"#", b"#\x00", b"#1", b"#2", b"#*", b"##", b"#01", b"#1#"]
+ENDS = [b"\r", b"\n", b"\r\n", b"\n\r", b"\r\r", b"\n\n", b""]
+TEXT = hs.binary(max_size=12).map(lambda text: text.replace(b"#", b"").replace(b"\r", b"").replace(b"\n", b""))
+NOISE = hs.binary(max_size=12).map(lambda noise: noise.replace(b"#", b""))
+LINE = hs.tuples(hs.sampled_from(FIRSTS), hs.lists(hs.one_of(TEXT, hs.sampled_from(RESTARTS)), max_size=4),
+                 hs.sampled_from(ENDS), NOISE).map(lambda parts: b"#" + parts[0] + b"".join(parts[1]) + parts[2] + parts[3])
+
+
+@settings(max_examples=400, deadline=None)
+@given(lines=hs.lists(hs.one_of(LINE, LINE, LINE, hs.sampled_from(SETTINGS)), max_size=30),
+       cuts=hs.lists(hs.integers(min_value=1, max_value=120), min_size=1, max_size=8),
+       address=hs.sampled_from([1, 1, 0]), shared=hs.booleans())
+def test_lines_of_noise_in_chunks_leave_what_bytes_leave(lines: list[bytes], cuts: list[int], address: int,
+                                                         shared: bool) -> None:
+    """Lines of noise one after the other (most failing at their first character, with restarts
+    with and without addresses, CR/LF pairs and noise with line ends between them), echo
+    modes, English messages, programming mode and selections among them, cut anywhere."""
+    _check(b"".join(lines), cuts, address, shared)
+
+
 @pytest.mark.parametrize("seed", [1, 2, 3, 4])
 def test_the_benchmarks_noise_in_pty_reads_leaves_what_bytes_leave(seed: int) -> None:
     """The benchmark's own noise (seeds 1–3 of ``benchmarks/noise.py --raw``), in 4 KiB reads
@@ -94,6 +121,10 @@ def test_the_benchmarks_noise_in_pty_reads_leaves_what_bytes_leave(seed: int) ->
         # not the old one (a failed line's error does not carry over to it)
         b"#\x00#0\r#\x00#1P11?\r",
         b"#\x00#0\r#\x00#2\r#\x00\r#1P11?\r",
+        # a line that failed at once, noise after its end, the chunk's end, a line end in the
+        # next chunk: noise, not the other half of a pair
+        b"#\x00\rxy\n#\x00\r\n#1P11?\r",
+        b"#\x00\rx\r#\x00\n\r\n#1P11?\r",
         # lines failing at once, one after the other, with restarts, pairs and noise between
         b"#\x00\r\n\x8f#Q\n\r#\x01#\x02#*\x03\r#1\x04\r#P11?\r",
         b"#P1017=2\r#\x00#\x01\r#P1017=1\r#P265=1\r#\x00\r#P265=0\r#P11?\r",

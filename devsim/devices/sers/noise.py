@@ -36,6 +36,12 @@ class LineHost(Protocol):
         """One byte's framing event, handled byte by byte."""
 
 
+#: Bytes after a ``#`` that begin an address (or leave it to the byte-by-byte path: ``##``).
+_ADDRESS_START = frozenset(b"0123456789*#")
+#: Bytes that are no line's text.
+_NOT_TEXT = frozenset(b"\r\n#")
+
+
 class NoiseLines:
     """The lines of noise one SERS's face takes in one step (§3.2.4, §4.8.3.1)."""
 
@@ -66,6 +72,13 @@ class NoiseLines:
                 return index  # (the general path skips lines for other drives in one step)
             stop = index + 1
             if stop < end and data[stop] in no_address:  # (most noise: no address)
+                if fails[data[stop]] and model.selected:  # (most of that: lines failing at once)
+                    taken = self._failing_lines(data, index, fails[data[stop]])
+                    if taken > index:
+                        if taken == end:
+                            return end
+                        index = taken
+                        continue
                 address = None
             else:
                 complete, address, stop = codec.read_address(data, index)
@@ -94,7 +107,7 @@ class NoiseLines:
             line.reply = reply
             if reply and mode in (0, 1):
                 send(data[index:cut])
-            model.power_stage.record_error(errno)  # (what _error does, its message from a table)
+            model.power_stage.record_error(errno, refused=True)  # (what _error does, its message from a table)
             mode = model.params.handshake_mode
             echo = mode in (0, 1)
             text = error_text(errno, model.params.language == 1, model.cfg.encoding) if reply else b""
@@ -151,3 +164,59 @@ class NoiseLines:
                     index = framer.skip_noise(data, index)
             if index >= end:
                 return end
+
+    def _failing_lines(self, data: bytes, index: int, errno: int) -> int:
+        """From a ``#`` outside a line, while this drive is selected: the lines that follow one
+        another in the chunk each failing at its first character with ``errno``, without an
+        address and with none in their restarts, in one step: their echoes and error messages
+        in one piece (the first line's echo up to its error before the errors are recorded, as
+        :meth:`take` sends it), the errors recorded, the last line ended.  Each line is ``#``,
+        that character, the rest of its text (restarts in it only echoed), its end, the other
+        half of a CR/LF pair (echoed) and the noise up to the next ``#`` (not).  Returns where
+        the noise after the last one ends (a ``#`` or the chunk's end); ``index`` when the line
+        there is not one of them (or the chunk cuts it off)."""
+        fails, address_start, end, find = first_byte_errors(), _ADDRESS_START, len(data), data.find
+        echoes: list[bytes] = []  # each line's echo up to its error, and the rest of it
+        at, last_end = index, None
+        while True:  # data[at] is a '#' outside a line, followed by a byte
+            first = data[at + 1]
+            if fails[first] != errno or first in _NOT_TEXT:
+                break
+            stop = find(b"\r", at + 2)
+            feed = find(b"\n", at + 2, end if stop < 0 else stop)
+            if feed >= 0:
+                stop = feed
+            elif stop < 0:
+                break  # (the chunk ends inside the line)
+            restart = find(b"#", at + 2, stop)
+            while restart >= 0 and data[restart + 1] not in address_start:
+                restart = find(b"#", restart + 1, stop)
+            if restart >= 0:
+                break  # (a restart with an address)
+            byte, stop = data[stop], stop + 1
+            if stop < end and data[stop] in LINE_ENDS and data[stop] != byte:
+                stop += 1  # the other half of a CR/LF pair, echoed
+                byte = None
+            echoes += (data[at : at + 2], data[at + 2 : stop])
+            at = find(b"#", stop)
+            if at < 0 or at + 1 == end:  # (noise to the end, or a '#' that ends the chunk)
+                last_end = byte if stop == end else None
+                at = end if at < 0 else at
+                break
+        if not echoes:
+            return index
+        model = self.model
+        count = len(echoes) // 2
+        self.framer.lines_taken(last_end)
+        message = error_text(errno, model.params.language == 1, model.cfg.encoding)
+        if model.params.handshake_mode in (0, 1):
+            self.send(echoes[0])
+            model.power_stage.record_errors(errno, count)
+            echoes[0] = message
+            echoes[2::2] = [echo + message for echo in echoes[2::2]]
+            self.send(b"".join(echoes))
+        else:  # (no echo: the messages alone, at once or at the line ends)
+            model.power_stage.record_errors(errno, count)
+            self.send(message * count)
+        self.face.end_line(CommandLine(True, True, error=True), False)
+        return at

@@ -238,6 +238,15 @@ class PowerStage:
         self.errno = errno
         self.warn(16)
 
+    def record_errors(self, errno: int, count: int) -> None:
+        """``count`` error messages ``errno`` answering a host's lines one after the other, with
+        nothing else in between (lines of noise, :mod:`.noise`): what as many calls of
+        :meth:`record_error` leave (every one heard by the logs; the rest is the same each time)."""
+        self.record_error(errno, refused=True)
+        code, announce = str(errno), self._announce
+        for _ in range(count - 1):
+            announce("device_error", code, True)
+
     def write_p11(self, value: float) -> None:
         """``P11=0`` (spec G-P11CLEAR): only once the causes are gone."""
         if value != 0:
