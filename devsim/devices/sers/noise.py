@@ -68,10 +68,10 @@ class NoiseLines:
         mode = model.params.handshake_mode  # (only a statement changes it: none runs here)
         while True:
             # data[index] is a '#' outside a line
-            if model.addressed is False:
-                return index  # (the general path skips lines for other drives in one step)
             stop = index + 1
             if stop < end and data[stop] in no_address:  # (most noise: no address)
+                if model.addressed is False:
+                    return index  # (the general path skips lines for other drives in one step)
                 if fails[data[stop]] and model.selected:  # (most of that: lines failing at once)
                     taken = self._failing_lines(data, index, fails[data[stop]])
                     if taken > index:
