@@ -84,7 +84,7 @@ def test_noise_in_chunks_leaves_what_bytes_leave(data: list[bytes], cuts: list[i
 
 # Lines of noise as they come one after the other: the first character of the text (most fail
 # at once, some do not; an address, a restart), the text with restarts, the line end, noise.
-FIRSTS = [b"\x00", b"!", b"\xff", b"K", b"A", b"P", b" ", b"1", b"*", b"#", b"\r", b""]
+FIRSTS = [b"\x00", b"!", b"\xff", b"K", b"A", b"P", b"H", b"s", b"*H", b"1S", b" ", b"1", b"*", b"#", b"\r", b""]
 RESTARTS = [b"#", b"#\x00", b"#1", b"#2", b"#*", b"##", b"#01", b"#1#"]
 ENDS = [b"\r", b"\n", b"\r\n", b"\n\r", b"\r\r", b"\n\n", b""]
 TEXT = hs.binary(max_size=12).map(lambda text: text.replace(b"#", b"").replace(b"\r", b"").replace(b"\n", b""))
@@ -94,14 +94,15 @@ LINE = hs.tuples(hs.sampled_from(FIRSTS), hs.lists(hs.one_of(TEXT, hs.sampled_fr
 
 
 @settings(max_examples=400, deadline=None)
-@given(lines=hs.lists(hs.one_of(LINE, LINE, LINE, hs.sampled_from(SETTINGS)), max_size=30),
+@given(lines=hs.lists(hs.one_of(LINE, LINE, LINE, hs.sampled_from([*SETTINGS, b"#ON\r", b"#OFF\r"])), max_size=30),
        cuts=hs.lists(hs.integers(min_value=1, max_value=120), min_size=1, max_size=8),
        address=hs.sampled_from([1, 1, 0]), shared=hs.booleans())
 def test_lines_of_noise_in_chunks_leave_what_bytes_leave(lines: list[bytes], cuts: list[int], address: int,
                                                          shared: bool) -> None:
-    """Lines of noise one after the other (most failing at their first character, with restarts
-    with and without addresses, CR/LF pairs and noise with line ends between them), echo
-    modes, English messages, programming mode and selections among them, cut anywhere."""
+    """Lines of noise one after the other (most failing at their first character, some running
+    a statement first (``H``, ``S``: refused, or run once ``ON``), with restarts with and
+    without addresses, CR/LF pairs and noise with line ends between them), echo modes, English
+    messages, programming mode and selections among them, cut anywhere."""
     _check(b"".join(lines), cuts, address, shared)
 
 
@@ -125,6 +126,14 @@ def test_the_benchmarks_noise_in_pty_reads_leaves_what_bytes_leave(seed: int) ->
         # next chunk: noise, not the other half of a pair
         b"#\x00\rxy\n#\x00\r\n#1P11?\r",
         b"#\x00\rx\r#\x00\n\r\n#1P11?\r",
+        # lines whose first character runs a statement (refused while the drive is off; run
+        # once it is on) and whose next one fails; one cut by the chunk, one that goes on
+        b"#H\x9bxx\r#s\x01#\x02\r\n#Sx#1y\r#ON\r#H\x9bxx\r#sx\n\r#Hxx#2\r#1S\r#1P11?\r",
+        b"#ON\r#PGM\r#H\x00\r#S\r#QUIT\r#H" + b"S" * 70 + b"\r#P11?\r",
+        # ... a broadcast's (executed, not answered), in echo mode 2 (the message at the end)
+        b"#*H\x9bx\r#*Sx#1\r#P1017=2\r#Hxx\r#S\x00\r\n#P1017=1\r#P11?\r",
+        # ... run while the drive is on, and the text up to the 60th character kept, or not
+        b"#ON\r#H" + b" " * 57 + b"S\r#S" + b" " * 58 + b"H\r#P11?\r",
         # lines failing at once, one after the other, with restarts, pairs and noise between
         b"#\x00\r\n\x8f#Q\n\r#\x01#\x02#*\x03\r#1\x04\r#P11?\r",
         b"#P1017=2\r#\x00#\x01\r#P1017=1\r#P265=1\r#\x00\r#P265=0\r#P11?\r",

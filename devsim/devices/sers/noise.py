@@ -11,11 +11,19 @@ leaves behind is exactly what the byte-by-byte path of :class:`~.face.SersFace` 
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from typing import Protocol
 
 from devsim.devices.sers import codec
-from devsim.devices.sers.line import LINE_ENDS, CommandLine, error_text, first_byte_errors, first_failure
+from devsim.devices.sers.line import (
+    LINE_ENDS,
+    CommandLine,
+    error_text,
+    first_byte_errors,
+    first_failure,
+    runs_at_once,
+)
 from devsim.devices.sers.model import SersDrive
 
 __all__ = ["LineHost", "NoiseLines"]
@@ -32,14 +40,23 @@ class LineHost(Protocol):
     def end_line(self, line: CommandLine, overflow: bool) -> None:
         """The line has ended (its terminator echoed): its statements, answers and ack."""
 
+    def take_text(self, line: CommandLine, data: bytes, index: int) -> int:
+        """A run of the line's text, its statements run as the characters arrive; how many taken."""
+
     def on_event(self, event: object, byte: int) -> None:
         """One byte's framing event, handled byte by byte."""
 
 
 #: Bytes after a ``#`` that begin an address (or leave it to the byte-by-byte path: ``##``).
 _ADDRESS_START = frozenset(b"0123456789*#")
-#: Bytes that are no line's text.
-_NOT_TEXT = frozenset(b"\r\n#")
+
+
+@functools.cache
+def _failing_at_once(errno: int) -> frozenset[int]:
+    """The bytes that, as the first character of a line's text, are the error ``errno`` at once
+    (:func:`first_byte_errors`)."""
+    fails = first_byte_errors()
+    return frozenset(byte for byte in range(256) if fails[byte] == errno) - frozenset(b"\r\n#")
 
 
 class NoiseLines:
@@ -56,7 +73,10 @@ class NoiseLines:
         fails before any statement completes (what random noise mostly is), with the restarts
         of the failed line, its end and the noise up to the next ``#``, one line after the
         other, as the face's ``_begin_line``, ``_failing_line``, ``restart``, the line end
-        and the noise skip would do them.  Stops before a line it does not take (one for
+        and the noise skip would do them; runs of lines failing at their first character in
+        one step (:meth:`_failing_lines`); a line whose first character runs a statement (``H``,
+        ``S``) through the face's :meth:`~.face.SersFace.take_text`, and taken on the same way
+        when that fails.  Stops before a line it does not take (one for
         another drive, one that runs a statement, one whose text in the chunk does not fail)
         or inside one (a restart for another drive or whose address the chunk cuts off, the
         chunk's end), with the line and the framing as those paths leave them; returns where
@@ -65,6 +85,7 @@ class NoiseLines:
         is handled."""
         model, framer, send, face, end = self.model, self.framer, self.send, self.face, len(data)
         hash_, no_address, search, fails = codec.HASH, codec.NO_ADDRESS, codec.TEXT_END.search, first_byte_errors()
+        runs = runs_at_once()
         mode = model.params.handshake_mode  # (only a statement changes it: none runs here)
         while True:
             # data[index] is a '#' outside a line
@@ -94,33 +115,45 @@ class NoiseLines:
                 return index
             errno = fails[data[stop]]
             if errno:
-                cut = stop + 1
+                failure: tuple[int, int] | None = (1, errno)
             else:
                 failure = first_failure(data[stop:keep])
-                if failure is None:
+                if failure is None and data[stop] not in runs:
                     return index
-                cut, errno = stop + failure[0], failure[1]
-            # the line fails at data[cut - 1]: take it
             model.note_address(address, execute)
-            face.line = line = CommandLine()
-            line.execute = line.error = True
-            line.reply = reply
-            if reply and mode in (0, 1):
-                send(data[index:cut])
-            model.power_stage.record_error(errno, refused=True)  # (what _error does, its message from a table)
-            mode = model.params.handshake_mode
-            echo = mode in (0, 1)
-            text = error_text(errno, model.params.language == 1, model.cfg.encoding) if reply else b""
-            if mode == 2:
-                line.deferred += text
-                text = b""
-            if not model.logic_alive or model.booting:
-                framer.take_line(stop - index, cut - stop)
-                send(text)
-                return cut
-            framer.take_line(stop - index, finish - stop)
-            if reply and echo:
-                text += data[cut:finish]
+            if failure is not None:  # the line fails at data[cut - 1]: take it
+                cut, errno = stop + failure[0], failure[1]
+                face.line = line = CommandLine()
+                line.execute = line.error = True
+                line.reply = reply
+                if reply and mode in (0, 1):
+                    send(data[index:cut])
+                model.power_stage.record_error(errno, refused=True)  # (what _error does, its message from a table)
+                mode = model.params.handshake_mode
+                echo = mode in (0, 1)
+                text = error_text(errno, model.params.language == 1, model.cfg.encoding) if reply else b""
+                if mode == 2:
+                    line.deferred += text
+                    text = b""
+                if not model.logic_alive or model.booting:
+                    framer.take_line(stop - index, cut - stop)
+                    send(text)
+                    return cut
+                framer.take_line(stop - index, finish - stop)
+                if reply and echo:
+                    text += data[cut:finish]
+            else:  # its first character runs a statement (H, S): the face's text run does that
+                face.line = line = CommandLine(execute, reply)
+                framer.take_line(stop - index, 0)
+                if reply and mode in (0, 1):
+                    send(data[index:stop])
+                cut = stop + face.take_text(line, data, stop)
+                if not line.error or face.line is not line or not model.logic_alive or model.booting:
+                    return cut  # (it went on, or reset the drive: the general path goes on)
+                mode = model.params.handshake_mode  # (the statements may have changed it)
+                echo = mode in (0, 1)
+                finish = framer.skip_text(data, cut)  # the rest of the text, failed: only echoed
+                text = data[cut:finish] if line.reply and echo else b""
             if finish == end:  # (the line goes on in the next chunk)
                 send(text)
                 return end
@@ -175,13 +208,10 @@ class NoiseLines:
         half of a CR/LF pair (echoed) and the noise up to the next ``#`` (not).  Returns where
         the noise after the last one ends (a ``#`` or the chunk's end); ``index`` when the line
         there is not one of them (or the chunk cuts it off)."""
-        fails, address_start, end, find = first_byte_errors(), _ADDRESS_START, len(data), data.find
+        starts, address_start, end, find = _failing_at_once(errno), _ADDRESS_START, len(data), data.find
         echoes: list[bytes] = []  # each line's echo up to its error, and the rest of it
         at, last_end = index, None
-        while True:  # data[at] is a '#' outside a line, followed by a byte
-            first = data[at + 1]
-            if fails[first] != errno or first in _NOT_TEXT:
-                break
+        while data[at + 1] in starts:  # data[at] is a '#' outside a line, followed by a byte
             stop = find(b"\r", at + 2)
             feed = find(b"\n", at + 2, end if stop < 0 else stop)
             if feed >= 0:
