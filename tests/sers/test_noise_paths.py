@@ -143,6 +143,9 @@ def test_the_benchmarks_noise_in_pty_reads_leaves_what_bytes_leave(seed: int) ->
         b"#*\x00#1\x01\r#\x02\r#P11?\r",
         # echo mode 2: an error's message waits for the line end, even in a later chunk
         b"#P1017=2\r#\x00" + b"X" * 20 + b"#\x01\r#" + b"\x02" * 30 + b"\r#P1017=1\r#P11?\r",
+        # a text that fails at its 60th character, and one whose failing character is the
+        # 61st, dropped: no error but the overflow's at the line end
+        b"#" + b" " * 58 + b"\x00x\r#" + b" " * 59 + b"\x00x\r#A" + b"1" * 57 + b"\x00\r#A" + b"1" * 58 + b"\x00\r#P11?\r",
         # beyond 60 characters a line's text is dropped, only echoed (and an overflow)
         b"#1" + b" " * 70 + b"P11?\r#" + b" " * 57 + b"X=1\x00\r# " + b"1" * 65 + b"\r#1P11?\r",
         # not selected: other drives' addresses are skipped too; beyond 60 characters their

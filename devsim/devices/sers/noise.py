@@ -52,11 +52,14 @@ _ADDRESS_START = frozenset(b"0123456789*#")
 
 
 @functools.cache
-def _failing_at_once(errno: int) -> frozenset[int]:
-    """The bytes that, as the first character of a line's text, are the error ``errno`` at once
-    (:func:`first_byte_errors`)."""
+def _text_starts() -> tuple[frozenset[int], frozenset[int]]:
+    """The bytes that, as the first character of a line's text, are an error at once
+    (:func:`first_byte_errors`), and those that may begin a text that fails later (none of those,
+    no address, no line end, no ``#``, none that runs a statement by itself)."""
     fails = first_byte_errors()
-    return frozenset(byte for byte in range(256) if fails[byte] == errno) - frozenset(b"\r\n#")
+    text = frozenset(range(256)) - _ADDRESS_START - frozenset(LINE_ENDS)
+    at_once = frozenset(byte for byte in text if fails[byte])
+    return at_once, text - at_once - runs_at_once()
 
 
 class NoiseLines:
@@ -93,8 +96,8 @@ class NoiseLines:
             if stop < end and data[stop] in no_address:  # (most noise: no address)
                 if model.addressed is False:
                     return index  # (the general path skips lines for other drives in one step)
-                if fails[data[stop]] and model.selected:  # (most of that: lines failing at once)
-                    taken = self._failing_lines(data, index, fails[data[stop]])
+                if model.selected:  # (most of that: lines failing at once, or soon)
+                    taken = self._failing_lines(data, index)
                     if taken > index:
                         if taken == end:
                             return end
@@ -198,20 +201,26 @@ class NoiseLines:
             if index >= end:
                 return end
 
-    def _failing_lines(self, data: bytes, index: int, errno: int) -> int:
+    def _failing_lines(self, data: bytes, index: int) -> int:
         """From a ``#`` outside a line, while this drive is selected: the lines that follow one
-        another in the chunk each failing at its first character with ``errno``, without an
-        address and with none in their restarts, in one step: their echoes and error messages
-        in one piece (the first line's echo up to its error before the errors are recorded, as
+        another in the chunk each failing before any statement completes, without an address
+        and with none in their restarts, in one step: their echoes and error messages in one
+        piece (the first line's echo up to its error before the errors are recorded, as
         :meth:`take` sends it), the errors recorded, the last line ended.  Each line is ``#``,
-        that character, the rest of its text (restarts in it only echoed), its end, the other
-        half of a CR/LF pair (echoed) and the noise up to the next ``#`` (not).  Returns where
-        the noise after the last one ends (a ``#`` or the chunk's end); ``index`` when the line
-        there is not one of them (or the chunk cuts it off)."""
-        starts, address_start, end, find = _failing_at_once(errno), _ADDRESS_START, len(data), data.find
+        its text up to the character that fails (the first, what most noise is, or a later one:
+        :func:`first_failure`), the rest of its text (restarts in it only echoed), its end, the
+        other half of a CR/LF pair (echoed) and the noise up to the next ``#`` (not).  Returns
+        where the noise after the last one ends (a ``#`` or the chunk's end); ``index`` when the
+        line there is not one of them (or the chunk cuts it off)."""
+        fails, (at_once, later) = first_byte_errors(), _text_starts()
+        address_start, end, find = _ADDRESS_START, len(data), data.find
         echoes: list[bytes] = []  # each line's echo up to its error, and the rest of it
+        errnos: list[int] = []
         at, last_end = index, None
-        while data[at + 1] in starts:  # data[at] is a '#' outside a line, followed by a byte
+        while True:  # data[at] is a '#' outside a line, followed by a byte
+            first = data[at + 1]
+            if first not in at_once and first not in later:
+                break
             stop = find(b"\r", at + 2)
             feed = find(b"\n", at + 2, end if stop < 0 else stop)
             if feed >= 0:
@@ -219,6 +228,13 @@ class NoiseLines:
             elif stop < 0:
                 break  # (the chunk ends inside the line)
             restart = find(b"#", at + 2, stop)
+            if first in at_once:
+                cut, errno = at + 2, fails[first]
+            else:  # (the text kept: up to a restart, at most 60 characters from the '#')
+                failure = first_failure(data[at + 1 : min(stop if restart < 0 else restart, at + codec.MAX_LINE)])
+                if failure is None:
+                    break  # (a statement completes first, or nothing fails)
+                cut, errno = at + 1 + failure[0], failure[1]
             while restart >= 0 and data[restart + 1] not in address_start:
                 restart = find(b"#", restart + 1, stop)
             if restart >= 0:
@@ -227,7 +243,8 @@ class NoiseLines:
             if stop < end and data[stop] in LINE_ENDS and data[stop] != byte:
                 stop += 1  # the other half of a CR/LF pair, echoed
                 byte = None
-            echoes += (data[at : at + 2], data[at + 2 : stop])
+            echoes += (data[at:cut], data[cut:stop])
+            errnos.append(errno)
             at = find(b"#", stop)
             if at < 0 or at + 1 == end:  # (noise to the end, or a '#' that ends the chunk)
                 last_end = byte if stop == end else None
@@ -236,17 +253,17 @@ class NoiseLines:
         if not echoes:
             return index
         model = self.model
-        count = len(echoes) // 2
         self.framer.lines_taken(last_end)
-        message = error_text(errno, model.params.language == 1, model.cfg.encoding)
+        english, encoding = model.params.language == 1, model.cfg.encoding
         if model.params.handshake_mode in (0, 1):
             self.send(echoes[0])
-            model.power_stage.record_errors(errno, count)
-            echoes[0] = message
-            echoes[2::2] = [echo + message for echo in echoes[2::2]]
+            model.power_stage.record_errors(errnos)
+            messages = [error_text(errno, english, encoding) for errno in errnos]
+            echoes[0] = messages[0]
+            echoes[2::2] = [echo + message for echo, message in zip(echoes[2::2], messages[1:], strict=True)]
             self.send(b"".join(echoes))
         else:  # (no echo: the messages alone, at once or at the line ends)
-            model.power_stage.record_errors(errno, count)
-            self.send(message * count)
+            model.power_stage.record_errors(errnos)
+            self.send(b"".join([error_text(errno, english, encoding) for errno in errnos]))
         self.face.end_line(CommandLine(True, True, error=True), False)
         return at
