@@ -76,8 +76,8 @@ class NoiseLines:
         fails before any statement completes (what random noise mostly is), with the restarts
         of the failed line, its end and the noise up to the next ``#``, one line after the
         other, as the face's ``_begin_line``, ``_failing_line``, ``restart``, the line end
-        and the noise skip would do them; runs of lines failing at their first character in
-        one step (:meth:`_failing_lines`); a line whose first character runs a statement (``H``,
+        and the noise skip would do them; runs of lines failing before a statement completes
+        in one step (:meth:`_failing_lines`); a line whose first character runs a statement (``H``,
         ``S``) through the face's :meth:`~.face.SersFace.take_text`, and taken on the same way
         when that fails.  Stops before a line it does not take (one for
         another drive, one that runs a statement, one whose text in the chunk does not fail)
