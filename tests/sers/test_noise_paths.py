@@ -143,6 +143,10 @@ def test_the_benchmarks_noise_in_pty_reads_leaves_what_bytes_leave(seed: int) ->
         b"#*\x00#1\x01\r#\x02\r#P11?\r",
         # echo mode 2: an error's message waits for the line end, even in a later chunk
         b"#P1017=2\r#\x00" + b"X" * 20 + b"#\x01\r#" + b"\x02" * 30 + b"\r#P1017=1\r#P11?\r",
+        # a run of failed lines whose last one goes on: at a restart for another drive, at one
+        # for this drive, at the chunk's end (beyond 60 characters), in echo modes 1 and 2
+        b"#\x00a\r#\x01b#7c\r#1\r#\x02d#\x00#1e\r#\x03e" + b"f" * 70 + b"#\r#1P11?\r",
+        b"#P1017=2\r#\x00a\r#\x01b#7c\r#1\r#\x02d#1\x00\r#\x03" + b"f" * 70 + b"\r#P1017=1\r#1P11?\r",
         # a text that fails at its 60th character, and one whose failing character is the
         # 61st, dropped: no error but the overflow's at the line end
         b"#" + b" " * 58 + b"\x00x\r#" + b" " * 59 + b"\x00x\r#A" + b"1" * 57 + b"\x00\r#A" + b"1" * 58 + b"\x00\r#P11?\r",

@@ -97,10 +97,10 @@ class NoiseLines:
                 if model.addressed is False:
                     return index  # (the general path skips lines for other drives in one step)
                 if model.selected:  # (most of that: lines failing at once, or soon)
-                    taken = self._failing_lines(data, index)
+                    taken, going_on = self._failing_lines(data, index)
                     if taken > index:
-                        if taken == end:
-                            return end
+                        if going_on or taken == end:
+                            return taken
                         index = taken
                         continue
                 address = None
@@ -201,22 +201,25 @@ class NoiseLines:
             if index >= end:
                 return end
 
-    def _failing_lines(self, data: bytes, index: int) -> int:
+    def _failing_lines(self, data: bytes, index: int) -> tuple[int, bool]:
         """From a ``#`` outside a line, while this drive is selected: the lines that follow one
-        another in the chunk each failing before any statement completes, without an address
-        and with none in their restarts, in one step: their echoes and error messages in one
-        piece (the first line's echo up to its error before the errors are recorded, as
-        :meth:`take` sends it), the errors recorded, the last line ended.  Each line is ``#``,
-        its text up to the character that fails (the first, what most noise is, or a later one:
-        :func:`first_failure`), the rest of its text (restarts in it only echoed), its end, the
-        other half of a CR/LF pair (echoed) and the noise up to the next ``#`` (not).  Returns
-        where the noise after the last one ends (a ``#`` or the chunk's end); ``index`` when the
-        line there is not one of them (or the chunk cuts it off)."""
+        another in the chunk each failing before any statement completes, without an address,
+        in one step: their echoes and error messages in one piece (the first line's echo up to
+        its error before the errors are recorded, as :meth:`take` sends it), the errors
+        recorded, the lines ended.  Each line is ``#``, its text up to the character that fails
+        (the first, what most noise is, or a later one: :func:`first_failure`), the rest of its
+        text (restarts without an address in it only echoed), its end, the other half of a
+        CR/LF pair (echoed) and the noise up to the next ``#`` (not).  The last one may go on
+        instead: at a restart with an address (or one the chunk cuts off), handed to the face's
+        ``restart``, or at the chunk's end, the line and the framing left as :meth:`take`
+        leaves them.  Returns where it stopped and whether the line goes on there (else it is
+        the next ``#`` or the chunk's end); ``index`` when the line there is not one of them
+        (or the chunk cuts it off before it fails)."""
         fails, (at_once, later) = first_byte_errors(), _text_starts()
         address_start, end, find = _ADDRESS_START, len(data), data.find
         echoes: list[bytes] = []  # each line's echo up to its error, and the rest of it
         errnos: list[int] = []
-        at, last_end = index, None
+        at, last_end, going_on = index, None, False
         while True:  # data[at] is a '#' outside a line, followed by a byte
             first = data[at + 1]
             if first not in at_once and first not in later:
@@ -226,44 +229,57 @@ class NoiseLines:
             if feed >= 0:
                 stop = feed
             elif stop < 0:
-                break  # (the chunk ends inside the line)
+                stop = end  # (the chunk ends inside the line)
             restart = find(b"#", at + 2, stop)
             if first in at_once:
                 cut, errno = at + 2, fails[first]
             else:  # (the text kept: up to a restart, at most 60 characters from the '#')
                 failure = first_failure(data[at + 1 : min(stop if restart < 0 else restart, at + codec.MAX_LINE)])
                 if failure is None:
-                    break  # (a statement completes first, or nothing fails)
+                    break  # (a statement completes first, or nothing fails in the chunk)
                 cut, errno = at + 1 + failure[0], failure[1]
-            while restart >= 0 and data[restart + 1] not in address_start:
+            while restart >= 0 and restart + 1 < end and data[restart + 1] not in address_start:
                 restart = find(b"#", restart + 1, stop)
-            if restart >= 0:
-                break  # (a restart with an address)
+            errnos.append(errno)
+            if restart >= 0 or stop == end:  # the line goes on: a restart with an address, the chunk's end
+                stop = end if restart < 0 else restart
+                echoes += (data[at:cut], data[cut:stop])
+                going_on = True
+                break
             byte, stop = data[stop], stop + 1
             if stop < end and data[stop] in LINE_ENDS and data[stop] != byte:
                 stop += 1  # the other half of a CR/LF pair, echoed
                 byte = None
             echoes += (data[at:cut], data[cut:stop])
-            errnos.append(errno)
             at = find(b"#", stop)
             if at < 0 or at + 1 == end:  # (noise to the end, or a '#' that ends the chunk)
                 last_end = byte if stop == end else None
                 at = end if at < 0 else at
                 break
         if not echoes:
-            return index
-        model = self.model
+            return index, False
+        model, face = self.model, self.face
         self.framer.lines_taken(last_end)
+        if going_on:  # the '#' and the text so far, restarts without an address among them
+            self.framer.take_line(1, stop - at - 1)
         english, encoding = model.params.language == 1, model.cfg.encoding
+        messages = [error_text(errno, english, encoding) for errno in errnos]
+        deferred = b""
         if model.params.handshake_mode in (0, 1):
             self.send(echoes[0])
             model.power_stage.record_errors(errnos)
-            messages = [error_text(errno, english, encoding) for errno in errnos]
             echoes[0] = messages[0]
             echoes[2::2] = [echo + message for echo, message in zip(echoes[2::2], messages[1:], strict=True)]
             self.send(b"".join(echoes))
-        else:  # (no echo: the messages alone, at once or at the line ends)
+        else:  # (no echo: echo mode 2, each message at its line's end)
             model.power_stage.record_errors(errnos)
-            self.send(b"".join([error_text(errno, english, encoding) for errno in errnos]))
-        self.face.end_line(CommandLine(True, True, error=True), False)
-        return at
+            if going_on:
+                deferred = messages.pop()
+            self.send(b"".join(messages))
+        if len(errnos) > going_on:  # (the lines that ended, the last of them as the face ends it)
+            face.end_line(CommandLine(True, True, error=True), False)
+        if not going_on:
+            return at, False
+        face.line = line = CommandLine(True, True, error=True)
+        line.deferred += deferred
+        return (face.restart(line, data, stop) if stop < end else end), True
