@@ -23,9 +23,11 @@ PIECES = [b"#", b"#1", b"#2", b"#*", b"#01", b"#001", b"#0", b"#12", b"#012", b"
           b"\x8f", b"Q", b" ", b"1", b"5", b"?", b"P11?", b"A" * 70, b"A" * 57, b" " * 58, b"X=1", b"E", b"IF"]
 
 
-def _run(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False) -> tuple[object, ...]:
+def _run(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False,
+         cycles: frozenset[int] = frozenset()) -> tuple[object, ...]:
     """What a fresh drive (DIP address ``address``, on a ``shared`` RS-485 line or not) sends
-    and becomes when ``stream`` arrives cut at ``cuts`` (sizes, used in turn)."""
+    and becomes when ``stream`` arrives cut at ``cuts`` (sizes, used in turn), its power
+    cycled once the bytes up to each offset in ``cycles`` arrived (a chunk ends there)."""
     device = SersDevice(clock=VirtualClock(), config={"boot_time": 0, "address": address},
                         nvram=NonVolatileMemory(None))
     device.main.shared_line = shared
@@ -46,10 +48,12 @@ def _run(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False)
     sent = {}
     start, turn = 0, 0
     while start < len(stream):
-        size = cuts[turn % len(cuts)]
-        device.feed(stream[start : start + size])
-        start, turn = start + size, turn + 1
-        sent[min(start, len(stream))] = len(out), len(errors)
+        stop = min([start + cuts[turn % len(cuts)], len(stream), *(cycle for cycle in cycles if cycle > start)])
+        device.feed(stream[start:stop])
+        start, turn = stop, turn + 1
+        if start in cycles:
+            model.power_cycle()
+        sent[start] = len(out), len(errors)
     face = device.face()
     line = face.line
     framer = vars(face.framer)
@@ -61,11 +65,12 @@ def _run(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False)
                                              bytes(line.deferred)))
 
 
-def _check(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False) -> tuple[object, ...]:
+def _check(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False,
+           cycles: frozenset[int] = frozenset()) -> tuple[object, ...]:
     """``stream`` in chunks leaves what it leaves byte by byte, and at each chunk's end the
     same bytes have been sent and the same errors heard; returns what it leaves."""
-    sent_bytewise, bytewise = _run(stream, [1], address, shared)
-    sent, chunked = _run(stream, cuts, address, shared)
+    sent_bytewise, bytewise = _run(stream, [1], address, shared, cycles)
+    sent, chunked = _run(stream, cuts, address, shared, cycles)
     assert chunked == bytewise
     assert sent == {fed: sent_bytewise[fed] for fed in sent}
     return bytewise
@@ -104,6 +109,17 @@ def test_lines_of_noise_in_chunks_leave_what_bytes_leave(lines: list[bytes], cut
     without addresses, CR/LF pairs and noise with line ends between them), echo modes, English
     messages, programming mode and selections among them, cut anywhere."""
     _check(b"".join(lines), cuts, address, shared)
+
+
+@settings(max_examples=150, deadline=None)
+@given(lines=hs.lists(hs.one_of(LINE, LINE, hs.sampled_from([*SETTINGS, b"#ON\r"])), min_size=1, max_size=20),
+       cuts=hs.lists(hs.integers(min_value=1, max_value=120), min_size=1, max_size=4),
+       cycles=hs.frozensets(hs.integers(min_value=1, max_value=400), max_size=3), shared=hs.booleans())
+def test_lines_of_noise_across_power_cycles_leave_what_bytes_leave(lines: list[bytes], cuts: list[int],
+                                                                   cycles: frozenset[int], shared: bool) -> None:
+    """A power cycle in the middle of lines of noise (mid-line, between lines, in a run of
+    failed lines): what the drive sends and becomes after it, in chunks as byte by byte."""
+    _check(b"".join(lines), cuts, 1, shared, cycles)
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3, 4])
