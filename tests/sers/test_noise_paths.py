@@ -89,7 +89,8 @@ def test_noise_in_chunks_leaves_what_bytes_leave(data: list[bytes], cuts: list[i
 
 # Lines of noise as they come one after the other: the first character of the text (most fail
 # at once, some do not; an address, a restart), the text with restarts, the line end, noise.
-FIRSTS = [b"\x00", b"!", b"\xff", b"K", b"A", b"P", b"H", b"s", b"*H", b"1S", b" ", b"1", b"*", b"#", b"\r", b""]
+FIRSTS = [b"\x00", b"!", b"\xff", b"K", b"A", b"P", b"H", b"s", b"*H", b"1S", b" ", b"1", b"*", b"#", b"\r", b"",
+          b"1\x00", b"01!", b"*\x00", b"1A"]
 RESTARTS = [b"#", b"#\x00", b"#1", b"#2", b"#*", b"##", b"#01", b"#1#"]
 ENDS = [b"\r", b"\n", b"\r\n", b"\n\r", b"\r\r", b"\n\n", b""]
 TEXT = hs.binary(max_size=12).map(lambda text: text.replace(b"#", b"").replace(b"\r", b"").replace(b"\n", b""))
@@ -163,6 +164,10 @@ def test_the_benchmarks_noise_in_pty_reads_leaves_what_bytes_leave(seed: int) ->
         # for this drive, at the chunk's end (beyond 60 characters), in echo modes 1 and 2
         b"#\x00a\r#\x01b#7c\r#1\r#\x02d#\x00#1e\r#\x03e" + b"f" * 70 + b"#\r#1P11?\r",
         b"#P1017=2\r#\x00a\r#\x01b#7c\r#1\r#\x02d#1\x00\r#\x03" + b"f" * 70 + b"\r#P1017=1\r#1P11?\r",
+        # lines with this drive's address or the broadcast one that fail (taken one at a time),
+        # in echo modes 2 and 1, with restarts, pairs and noise after them
+        b"#P1017=2\r#1\x00a\r#1\x01b#2c\r#1\r#01\x02\n\r#1A\x00b#\x00c\r#1" + b"x" * 70 + b"\r#P1017=1\r#1P11?\r",
+        b"#*\x00a\r#*H\x00\r#1\x00#*b\r#1\x00\r\nxx\r#1\x00\n\n#1\x00\r\r\n#1\x00#1\r\n#P11?\r",
         # a text that fails at its 60th character, and one whose failing character is the
         # 61st, dropped: no error but the overflow's at the line end
         b"#" + b" " * 58 + b"\x00x\r#" + b" " * 59 + b"\x00x\r#A" + b"1" * 57 + b"\x00\r#A" + b"1" * 58 + b"\x00\r#P11?\r",
