@@ -47,6 +47,10 @@ MODULES: dict[str, tuple[str, ...]] = {
         "tests/sers/test_interface.py",
         "tests/sers/test_manual_syntax.py",
     ),
+    # the SERS face's one-step noise path, against the byte-by-byte path (helper s8-noise)
+    "devsim/devices/sers/noise.py": (
+        "tests/sers/test_noise_paths.py",
+    ),
     "devsim/devices/gms96/codec.py": (
         "tests/gms96/test_codec.py",
         "tests/gms96/test_frame_limit.py",

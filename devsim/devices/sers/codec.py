@@ -211,6 +211,14 @@ class Framer:
         self._overflow = False
         self._last_end = byte
 
+    def lines_taken(self, last_end: int | None) -> None:
+        """Outside a line: whole lines, each with its end (and the other half of a CR/LF pair
+        or noise after it), were taken at once; ``last_end`` is the last one's end when nothing
+        came after it (it may pair with the next byte), else None."""
+        self.in_line = False
+        self._addr = None
+        self._last_end = last_end
+
     def end_line(self, byte: int) -> bool:
         """When :attr:`in_text`: CR or LF ``byte`` ends the line, as :meth:`feed` would;
         returns whether characters were dropped (the ``overflow`` of :class:`LineEnd`)."""

@@ -143,7 +143,7 @@ class SersFace(Face):
                         return
                     continue
                 if line.execute and not line.error and framer.length < codec.MAX_LINE:
-                    taken = self._take_text(line, data, index)  # a run of text in one step
+                    taken = self.take_text(line, data, index)  # a run of text in one step
                     if taken:
                         index += taken
                         if not model.logic_alive or model.booting:
@@ -264,7 +264,7 @@ class SersFace(Face):
         """The rest of a whole line in the chunk whose first statement is an error before any
         statement completes (what noise mostly is): its echo up to the character that made
         the error, the error, the echo of the rest and of the line end, in one step, as
-        :meth:`_take_text`, :meth:`.interactive.LineStatements.progress` and the line end would
+        :meth:`take_text`, :meth:`.interactive.LineStatements.progress` and the line end would
         do it piece by piece.  Any other line goes on piece by piece (returns ``stop``)."""
         framer = self.framer
         window = max(0, codec.MAX_LINE - framer.length)  # characters kept (the rest are dropped)
@@ -294,7 +294,7 @@ class SersFace(Face):
             self._select(line, address)
         return stop
 
-    def _take_text(self, line: CommandLine, data: bytes, index: int) -> int:
+    def take_text(self, line: CommandLine, data: bytes, index: int) -> int:
         """A run of text characters from ``index`` taken at once: what :meth:`_on_text` does
         character by character.  Each piece up to a character that can complete a statement is
         echoed in one write, appended, and the line parsed once (a statement's answer so

@@ -37,6 +37,7 @@ __all__ = [
     "label_number",
     "poll_line",
     "quiet",
+    "runs_at_once",
 ]
 
 # Characters that only ever extend the statement in progress (a number, the '?' of a query):
@@ -209,6 +210,16 @@ def first_byte_errors() -> tuple[int, ...]:
         result = st.parse(char, False) if char not in EXTENDS_ONLY else None
         errors.append(result.errno or 0 if result is not None and not result.statements else 0)
     return tuple(errors)
+
+
+@functools.cache
+def runs_at_once() -> frozenset[int]:
+    """The bytes that, as the first character of a line's text, complete a statement by
+    themselves (``H``, ``S``: it runs as it arrives, before the next character).  Made at the
+    first use."""
+    return frozenset(byte for byte in range(256)
+                     if chr(byte) not in EXTENDS_ONLY and byte not in (codec.CR, codec.LF, codec.HASH)
+                     and st.parse(chr(byte), False).statements)
 
 
 @functools.lru_cache(maxsize=1024)

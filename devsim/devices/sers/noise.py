@@ -11,11 +11,19 @@ leaves behind is exactly what the byte-by-byte path of :class:`~.face.SersFace` 
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from typing import Protocol
 
 from devsim.devices.sers import codec
-from devsim.devices.sers.line import LINE_ENDS, CommandLine, error_text, first_byte_errors, first_failure
+from devsim.devices.sers.line import (
+    LINE_ENDS,
+    CommandLine,
+    error_text,
+    first_byte_errors,
+    first_failure,
+    runs_at_once,
+)
 from devsim.devices.sers.model import SersDrive
 
 __all__ = ["LineHost", "NoiseLines"]
@@ -32,8 +40,26 @@ class LineHost(Protocol):
     def end_line(self, line: CommandLine, overflow: bool) -> None:
         """The line has ended (its terminator echoed): its statements, answers and ack."""
 
+    def take_text(self, line: CommandLine, data: bytes, index: int) -> int:
+        """A run of the line's text, its statements run as the characters arrive; how many taken."""
+
     def on_event(self, event: object, byte: int) -> None:
         """One byte's framing event, handled byte by byte."""
+
+
+#: Bytes after a ``#`` that begin an address (or leave it to the byte-by-byte path: ``##``).
+_ADDRESS_START = frozenset(b"0123456789*#")
+
+
+@functools.cache
+def _text_starts() -> tuple[frozenset[int], frozenset[int]]:
+    """The bytes that, as the first character of a line's text, are an error at once
+    (:func:`first_byte_errors`), and those that may begin a text that fails later (none of those,
+    no address, no line end, no ``#``, none that runs a statement by itself)."""
+    fails = first_byte_errors()
+    text = frozenset(range(256)) - _ADDRESS_START - frozenset(LINE_ENDS)
+    at_once = frozenset(byte for byte in text if fails[byte])
+    return at_once, text - at_once - runs_at_once()
 
 
 class NoiseLines:
@@ -50,7 +76,10 @@ class NoiseLines:
         fails before any statement completes (what random noise mostly is), with the restarts
         of the failed line, its end and the noise up to the next ``#``, one line after the
         other, as the face's ``_begin_line``, ``_failing_line``, ``restart``, the line end
-        and the noise skip would do them.  Stops before a line it does not take (one for
+        and the noise skip would do them; runs of lines failing before a statement completes
+        in one step (:meth:`_failing_lines`); a line whose first character runs a statement (``H``,
+        ``S``) through the face's :meth:`~.face.SersFace.take_text`, and taken on the same way
+        when that fails.  Stops before a line it does not take (one for
         another drive, one that runs a statement, one whose text in the chunk does not fail)
         or inside one (a restart for another drive or whose address the chunk cuts off, the
         chunk's end), with the line and the framing as those paths leave them; returns where
@@ -59,13 +88,21 @@ class NoiseLines:
         is handled."""
         model, framer, send, face, end = self.model, self.framer, self.send, self.face, len(data)
         hash_, no_address, search, fails = codec.HASH, codec.NO_ADDRESS, codec.TEXT_END.search, first_byte_errors()
+        runs = runs_at_once()
         mode = model.params.handshake_mode  # (only a statement changes it: none runs here)
         while True:
             # data[index] is a '#' outside a line
-            if model.addressed is False:
-                return index  # (the general path skips lines for other drives in one step)
             stop = index + 1
             if stop < end and data[stop] in no_address:  # (most noise: no address)
+                if model.addressed is False:
+                    return index  # (the general path skips lines for other drives in one step)
+                if model.selected:  # (most of that: lines failing at once, or soon)
+                    taken, going_on = self._failing_lines(data, index)
+                    if taken > index:
+                        if going_on or taken == end:
+                            return taken
+                        index = taken
+                        continue
                 address = None
             else:
                 complete, address, stop = codec.read_address(data, index)
@@ -81,33 +118,45 @@ class NoiseLines:
                 return index
             errno = fails[data[stop]]
             if errno:
-                cut = stop + 1
+                failure: tuple[int, int] | None = (1, errno)
             else:
                 failure = first_failure(data[stop:keep])
-                if failure is None:
+                if failure is None and data[stop] not in runs:
                     return index
-                cut, errno = stop + failure[0], failure[1]
-            # the line fails at data[cut - 1]: take it
             model.note_address(address, execute)
-            face.line = line = CommandLine()
-            line.execute = line.error = True
-            line.reply = reply
-            if reply and mode in (0, 1):
-                send(data[index:cut])
-            model.power_stage.record_error(errno)  # (what _error does, its message from a table)
-            mode = model.params.handshake_mode
-            echo = mode in (0, 1)
-            text = error_text(errno, model.params.language == 1, model.cfg.encoding) if reply else b""
-            if mode == 2:
-                line.deferred += text
-                text = b""
-            if not model.logic_alive or model.booting:
-                framer.take_line(stop - index, cut - stop)
-                send(text)
-                return cut
-            framer.take_line(stop - index, finish - stop)
-            if reply and echo:
-                text += data[cut:finish]
+            if failure is not None:  # the line fails at data[cut - 1]: take it
+                cut, errno = stop + failure[0], failure[1]
+                face.line = line = CommandLine()
+                line.execute = line.error = True
+                line.reply = reply
+                if reply and mode in (0, 1):
+                    send(data[index:cut])
+                model.power_stage.record_error(errno, refused=True)  # (what _error does, its message from a table)
+                mode = model.params.handshake_mode
+                echo = mode in (0, 1)
+                text = error_text(errno, model.params.language == 1, model.cfg.encoding) if reply else b""
+                if mode == 2:
+                    line.deferred += text
+                    text = b""
+                if not model.logic_alive or model.booting:
+                    framer.take_line(stop - index, cut - stop)
+                    send(text)
+                    return cut
+                framer.take_line(stop - index, finish - stop)
+                if reply and echo:
+                    text += data[cut:finish]
+            else:  # its first character runs a statement (H, S): the face's text run does that
+                face.line = line = CommandLine(execute, reply)
+                framer.take_line(stop - index, 0)
+                if reply and mode in (0, 1):
+                    send(data[index:stop])
+                cut = stop + face.take_text(line, data, stop)
+                if not line.error or face.line is not line or not model.logic_alive or model.booting:
+                    return cut  # (it went on, or reset the drive: the general path goes on)
+                mode = model.params.handshake_mode  # (the statements may have changed it)
+                echo = mode in (0, 1)
+                finish = framer.skip_text(data, cut)  # the rest of the text, failed: only echoed
+                text = data[cut:finish] if line.reply and echo else b""
             if finish == end:  # (the line goes on in the next chunk)
                 send(text)
                 return end
@@ -151,3 +200,86 @@ class NoiseLines:
                     index = framer.skip_noise(data, index)
             if index >= end:
                 return end
+
+    def _failing_lines(self, data: bytes, index: int) -> tuple[int, bool]:
+        """From a ``#`` outside a line, while this drive is selected: the lines that follow one
+        another in the chunk each failing before any statement completes, without an address,
+        in one step: their echoes and error messages in one piece (the first line's echo up to
+        its error before the errors are recorded, as :meth:`take` sends it), the errors
+        recorded, the lines ended.  Each line is ``#``, its text up to the character that fails
+        (the first, what most noise is, or a later one: :func:`first_failure`), the rest of its
+        text (restarts without an address in it only echoed), its end, the other half of a
+        CR/LF pair (echoed) and the noise up to the next ``#`` (not).  The last one may go on
+        instead: at a restart with an address (or one the chunk cuts off), handed to the face's
+        ``restart``, or at the chunk's end, the line and the framing left as :meth:`take`
+        leaves them.  Returns where it stopped and whether the line goes on there (else it is
+        the next ``#`` or the chunk's end); ``index`` when the line there is not one of them
+        (or the chunk cuts it off before it fails)."""
+        fails, (at_once, later) = first_byte_errors(), _text_starts()
+        address_start, end, find = _ADDRESS_START, len(data), data.find
+        echoes: list[bytes] = []  # each line's echo up to its error, and the rest of it
+        errnos: list[int] = []
+        at, last_end, going_on = index, None, False
+        while True:  # data[at] is a '#' outside a line, followed by a byte
+            first = data[at + 1]
+            if first not in at_once and first not in later:
+                break
+            stop = find(b"\r", at + 2)
+            feed = find(b"\n", at + 2, end if stop < 0 else stop)
+            if feed >= 0:
+                stop = feed
+            elif stop < 0:
+                stop = end  # (the chunk ends inside the line)
+            restart = find(b"#", at + 2, stop)
+            if first in at_once:
+                cut, errno = at + 2, fails[first]
+            else:  # (the text kept: up to a restart, at most 60 characters from the '#')
+                failure = first_failure(data[at + 1 : min(stop if restart < 0 else restart, at + codec.MAX_LINE)])
+                if failure is None:
+                    break  # (a statement completes first, or nothing fails in the chunk)
+                cut, errno = at + 1 + failure[0], failure[1]
+            while restart >= 0 and restart + 1 < end and data[restart + 1] not in address_start:
+                restart = find(b"#", restart + 1, stop)
+            errnos.append(errno)
+            if restart >= 0 or stop == end:  # the line goes on: a restart with an address, the chunk's end
+                stop = end if restart < 0 else restart
+                echoes += (data[at:cut], data[cut:stop])
+                going_on = True
+                break
+            byte, stop = data[stop], stop + 1
+            if stop < end and data[stop] in LINE_ENDS and data[stop] != byte:
+                stop += 1  # the other half of a CR/LF pair, echoed
+                byte = None
+            echoes += (data[at:cut], data[cut:stop])
+            at = find(b"#", stop)
+            if at < 0 or at + 1 == end:  # (noise to the end, or a '#' that ends the chunk)
+                last_end = byte if stop == end else None
+                at = end if at < 0 else at
+                break
+        if not echoes:
+            return index, False
+        model, face = self.model, self.face
+        self.framer.lines_taken(last_end)
+        if going_on:  # the '#' and the text so far, restarts without an address among them
+            self.framer.take_line(1, stop - at - 1)
+        english, encoding = model.params.language == 1, model.cfg.encoding
+        messages = [error_text(errno, english, encoding) for errno in errnos]
+        deferred = b""
+        if model.params.handshake_mode in (0, 1):
+            self.send(echoes[0])
+            model.power_stage.record_errors(errnos)
+            echoes[0] = messages[0]
+            echoes[2::2] = [echo + message for echo, message in zip(echoes[2::2], messages[1:], strict=True)]
+            self.send(b"".join(echoes))
+        else:  # (no echo: echo mode 2, each message at its line's end)
+            model.power_stage.record_errors(errnos)
+            if going_on:
+                deferred = messages.pop()
+            self.send(b"".join(messages))
+        if len(errnos) > going_on:  # (the lines that ended, the last of them as the face ends it)
+            face.end_line(CommandLine(True, True, error=True), False)
+        if not going_on:
+            return at, False
+        face.line = line = CommandLine(True, True, error=True)
+        line.deferred += deferred
+        return (face.restart(line, data, stop) if stop < end else end), True

@@ -238,6 +238,17 @@ class PowerStage:
         self.errno = errno
         self.warn(16)
 
+    def record_errors(self, errnos: list[int]) -> None:
+        """Error messages answering a host's lines one after the other, with nothing else in
+        between (lines of noise, :mod:`.noise`): what a call of :meth:`record_error` for each
+        leaves (every one heard by the logs; P12 and the outputs follow at the first, the
+        rest is the same each time but P1137, the last one's)."""
+        self.record_error(errnos[0], refused=True)
+        announce = self._announce
+        for errno in errnos[1:]:
+            announce("device_error", str(errno), True)
+        self.errno = errnos[-1]
+
     def write_p11(self, value: float) -> None:
         """``P11=0`` (spec G-P11CLEAR): only once the causes are gone."""
         if value != 0:
