@@ -127,7 +127,7 @@ def attach_log(runtime: Any, level: int, write: Callable[[str], None] | None = N
     repeats = _Repeats(limiter, out)
     streams: list[Any] = [repeats]
     for device in runtime.devices.values():
-        stream = WatchStream(runtime, device, send, values=False)
+        stream = WatchStream(runtime, device, send, values=False, refused=_level({"type": "refused"}) <= level)
         stream.start()
         streams.append(stream)
     if level >= 3:

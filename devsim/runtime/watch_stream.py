@@ -63,7 +63,7 @@ class WatchStream:
     ``values=False`` only the events: nothing is sampled)."""
 
     def __init__(self, runtime: Any, device: Device, send: Send, *, names: Iterable[str] | None = None,
-                 period: float | None = None, values: bool = True) -> None:
+                 period: float | None = None, values: bool = True, refused: bool = True) -> None:
         period = DEFAULT_PERIOD if period is None else period
         if not period > 0:
             raise ValueError("a watch period is a positive number of seconds")
@@ -82,6 +82,9 @@ class WatchStream:
         self._undo: list[Callable[[], Any]] = []
         self._watch: PointWatch | None = None
         self._coded = False  # an error reported by its code, not yet followed by a bare ``error``
+        #: Whether the host's commands the device refused are sent (a log below -vv does not show
+        #: them: with False no item is made for them, which noise makes by the thousand).
+        self.refused = refused
 
     def _emit(self, kind: str, **fields: Any) -> None:
         self.send({"t": round(self.device.clock.now(), 6), "device": self.device.name, "type": kind, **fields})
@@ -120,6 +123,8 @@ class WatchStream:
 
     def _device_error(self, code: str, refused: bool = False) -> None:
         self._coded = True
+        if refused and not self.refused:
+            return
         self._emit("refused" if refused else "error", code=code, text=error_text(type(self.device), code))
 
     def _changes(self, changes: dict[str, Any]) -> None:

@@ -193,6 +193,35 @@ def test_log_levels_on_a_drive_error() -> None:
         runtime.stop()
 
 
+def test_a_log_below_v_makes_no_item_for_a_refused_command() -> None:
+    """A host's command the drive refuses (``P11=5``: error 3) is logged at -v only, and the lower
+    levels' streams make no item for it at all (raw noise has the drive refuse thousands a second);
+    the bare ``error`` event that follows the coded one stays unsaid either way."""
+    from devsim.observe.live_log import attach_log
+    from devsim.runtime import Runtime
+    from devsim.runtime.watch_stream import WatchStream
+
+    runtime = Runtime(virtual=True).start()
+    try:
+        device = runtime.add_device("sers")
+        runtime.advance(3)
+        logs: dict[int, list[str]] = {level: [] for level in (1, 2, 3)}
+        for level, lines in logs.items():
+            runtime.call(attach_log, runtime, level, lines.append)
+        items: dict[bool, list[dict]] = {True: [], False: []}
+        for refused, sent in items.items():
+            stream = WatchStream(runtime, device, sent.append, values=False, refused=refused)
+            runtime.call(stream.start)
+        runtime.call(device.feed, b"#P11=5\r")
+        runtime.advance(0.1)
+        assert logs[1] == logs[2] == []
+        assert logs[3] == ["devsim: 3.000 sers refused 3: ungültig — invalid"]
+        assert [(item["type"], item["code"]) for item in items[True]] == [("refused", "3")]
+        assert items[False] == []
+    finally:
+        runtime.stop()
+
+
 def test_watch_protocol_by_hand() -> None:
     """The documented wire form with a bare socket: the answer, then stream lines tagged with the
     request's id; errors are ordinary error answers; other requests still get answered."""
