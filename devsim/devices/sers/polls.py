@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 from devsim.core.device import Port
 from devsim.devices.sers import codec
+from devsim.devices.sers.answers import ack_line
 from devsim.devices.sers.errors import SersError
 from devsim.devices.sers.line import KeptPoll, Poll
 from devsim.devices.sers.params import HANDSHAKE_CELL
@@ -31,7 +32,7 @@ class KeptPolls:
     touches each object it reads: slots, one block of memory)."""
 
     __slots__ = ("polls", "kept", "model", "port", "framer", "master", "program", "interpreter", "access",
-                 "answers", "values")
+                 "answers", "values", "power", "motion")
 
     def __init__(self, model: SersDrive, port: Port, framer: codec.Framer) -> None:
         self.polls: dict[bytes, KeptPoll] | None = None
@@ -39,6 +40,7 @@ class KeptPolls:
         self.model, self.port, self.framer = model, port, framer
         self.master, self.program, self.interpreter = model.master, model.program, model.interpreter
         self.access, self.answers, self.values = model.access, model.answers, model.params.values
+        self.power, self.motion = model.power_stage, model.motion
 
     def forget(self) -> None:
         """Power-on: nothing kept."""
@@ -98,7 +100,7 @@ class KeptPolls:
                 answer = kept.remake(value, self.answers, self.model.cfg.encoding)
         except SersError:
             return None
-        ack = self.answers.ack_line()
+        ack = ack_line(self.program, self.power, self.motion)
         if answer is not kept.answer or ack is not kept.ack or not kept.reply:
             kept.reply, kept.ack = b"".join((data, answer, ack)), ack
         return kept.reply
