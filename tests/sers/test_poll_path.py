@@ -42,6 +42,7 @@ STEPS = hs.lists(hs.one_of(
     hs.tuples(hs.just("set"), hs.integers(0, len(SETS) - 1), hs.just(1)),
     hs.tuples(hs.just("power"), hs.sampled_from([0, 1]), hs.just(1)),  # a power cycle; the supply off and on
     hs.tuples(hs.just("supply"), hs.sampled_from([0, 1]), hs.just(1)),  # the supply off, or on
+    hs.tuples(hs.just("share"), hs.sampled_from([0, 1]), hs.just(1)),  # the line shared now, or not (a bus)
 ), max_size=40)
 #: (DIP address, program, boot time)
 SETUPS = hs.tuples(hs.sampled_from([1, 1, 0]), hs.sampled_from([None, PROGRAM, MASTER_PROGRAM, WAIT_PROGRAM]),
@@ -83,6 +84,8 @@ def _run(steps: list[tuple[str, float, int]], whole: bool, shared: bool, setup: 
                     answers.append(type(exc).__name__)
             elif kind == "supply":
                 model.switch_supply(bool(value))
+            elif kind == "share":
+                device.main.shared_line = bool(value)
             elif value:
                 model.switch_supply(False)
                 clock.advance(0.01)
@@ -127,6 +130,7 @@ HAZARDS = {
     "a line end pair after polls in turn": [("poll", 0, 1), ("poll", 22, 1), ("poll", 0, 1), ("line", 16, 1),
                                             ("poll", 22, 1), ("poll", 0, 1), ("poll", 22, 1), ("line", 17, 1)],
     "a WAIT the poll pokes": [("advance", 0.01, 1), ("poll", 0, 2), ("set", 3, 1), ("poll", 0, 2), ("advance", 0.05, 1), ("poll", 15, 2)],
+    "a bus after the polls": [("poll", 0, 2), ("share", 1, 1), ("poll", 0, 2), ("power", 0, 1)],
     "a weighted value": [("poll", 8, 1), ("line", 23, 1), ("poll", 8, 1), ("line", 9, 1), ("advance", 0.05, 1),
                          ("poll", 8, 2)],
 }
