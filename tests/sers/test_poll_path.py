@@ -20,7 +20,8 @@ POLLS = [b"#P11?\r", b"#1P11?\r", b"#P12?\r", b"#P11?\n", b"#1 P11?\r", b"#P336?
          b"#*P11?\r", b"#P1050?\r", b"#P1133?\r", b"#P265?\r", b"#200P11?\r", b"#1P12?\n", b"#P12?\r\n"]
 LINES = [b"#P1017=0\r", b"#P1017=1\r", b"#P1017=2\r", b"#2\r", b"#1\r", b"#Q\r", b"#P1019=0\r", b"#PGM\r",
          b"#QUIT\r", b"#ON W=360 E\r", b"#P1=*\r", b"#P1=1\r", b"#P265=1\r", b"#P265=0\r", b"#RS\r", b"#OFF\r",
-         b"\n", b"\r", b"#1P11?\r#", b"#C1=3\r", b"#P11=0 P12=0\r", b"#RUN\r", b"#S\r", b"#P76=2\r", b"#P1029=3\r"]
+         b"\n", b"\r", b"#1P11?\r#", b"#C1=3\r", b"#P11=0 P12=0\r", b"#RUN\r", b"#S\r", b"#P76=2\r", b"#P1029=3\r",
+         b"#P76=0\r"]
 #: A program that changes what a poll answers, and how, while no line arrives (I1 drives it).
 PROGRAM = ["L1", "WAIT I1=1", "P1017=2", "C1=1", "O1=1", "WAIT I1=0", "P1017=0", "C1=2", "WAIT I1=1",
            "P1017=1", "C1=3", "O1=0", "WAIT I1=0", "GT1"]
@@ -131,6 +132,11 @@ HAZARDS = {
                                             ("poll", 22, 1), ("poll", 0, 1), ("poll", 22, 1), ("line", 17, 1)],
     "a WAIT the poll pokes": [("advance", 0.01, 1), ("poll", 0, 2), ("set", 3, 1), ("poll", 0, 2), ("advance", 0.05, 1), ("poll", 15, 2)],
     "a bus after the polls": [("poll", 0, 2), ("share", 1, 1), ("poll", 0, 2), ("power", 0, 1)],
+    "a weighting changed under a kept position poll": [("poll", 8, 2), ("line", 25, 1), ("poll", 8, 2), ("line", 23, 1),
+                                                      ("poll", 8, 2)],
+    "a position polled while the axis moves": [("poll", 8, 1), ("line", 9, 1), ("advance", 0.05, 1), ("poll", 8, 1),
+                                               ("advance", 0.05, 1), ("poll", 8, 2), ("poll", 5, 1), ("advance", 0.05, 1),
+                                               ("poll", 8, 1)],
     "a weighted value": [("poll", 8, 1), ("line", 23, 1), ("poll", 8, 1), ("line", 9, 1), ("advance", 0.05, 1),
                          ("poll", 8, 2)],
 }

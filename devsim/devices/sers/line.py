@@ -17,7 +17,7 @@ import msgspec
 
 from devsim.devices.sers import codec
 from devsim.devices.sers import statements as st
-from devsim.devices.sers.access import address_number, plain_reader
+from devsim.devices.sers.access import address_number, plain_reader, weighted_reader
 from devsim.devices.sers.answers import Answers
 from devsim.devices.sers.errors import SersError, message
 
@@ -139,7 +139,7 @@ class KeptPoll:
     mode P1017, programming mode, a master's request, the value, the acknowledgement, the DIP
     switches in ``cfg``) is looked at again every time."""
 
-    __slots__ = ("data", "poll", "cfg", "read", "value", "answer", "ack", "reply")
+    __slots__ = ("data", "poll", "cfg", "read", "raw", "scaling", "value", "answer", "ack", "reply")
 
     #: Polls a face keeps at most (a host polls a few parameters in turn).
     MOST = 8
@@ -150,6 +150,10 @@ class KeptPoll:
         self.cfg = cfg  # the configuration it was made under (address, encoding)
         #: The parameter's value (None: answered the general way)
         self.read: Callable[[Any], Any] | None = None if poll.number is None else plain_reader(poll.number)
+        #: For a weighted parameter: what its answer is made of besides the weighting (and the
+        #: weighting it was last made with, :attr:`scaling`), :func:`.access.weighted_reader`
+        self.raw: Callable[[Any], Any] | None = None if poll.number is None else weighted_reader(poll.number)
+        self.scaling: object = None
         self.value: Any = _NOTHING  # the value last answered, and its answer line
         self.answer = b""
         self.ack = b""  # the acknowledgement that went out with it, and the whole reply

@@ -90,11 +90,13 @@ class KeptPolls:
         if self.kept is None or (kept := self.take(data)) is None:
             return None
         if (self.values.cells[HANDSHAKE_CELL] not in (0, 1) or self.interpreter.waiting == "wait"
-                or (read := kept.read) is None):
+                or (kept.read is None and kept.raw is None)):
             return None
-        # (what answer() and KeptPoll.reply_with do, inline: a call less each per poll)
+        # (what answer() and KeptPoll.reply_with do, inline for a plain value: a call less each per poll)
         try:  # (the readers and the answer lines only read: feed reads again and meets the error again)
-            if (value := read(self.access)) == kept.value and type(value) is type(kept.value):
+            if (read := kept.read) is None:
+                answer = self.answer(kept)  # (a weighted value)
+            elif (value := read(self.access)) == kept.value and type(value) is type(kept.value):
                 answer = kept.answer
             else:
                 answer = kept.remake(value, self.answers, self.model.cfg.encoding)
@@ -109,7 +111,14 @@ class KeptPolls:
         """The kept poll's answer line as the drive stands now (a :class:`SersError` as the
         query's own)."""
         if (read := kept.read) is None:
-            return kept.answer_line(self.answers, self.model.cfg.encoding)
+            if (raw := kept.raw) is None:
+                return kept.answer_line(self.answers, self.model.cfg.encoding)
+            value, scaling = raw(self.access), self.access.params.scaling
+            if value == kept.value and type(value) is type(kept.value) and scaling is kept.scaling:
+                return kept.answer  # (a weighted value: the same value under the same weighting)
+            answer = kept.answer_line(self.answers, self.model.cfg.encoding)
+            kept.value, kept.scaling, kept.answer, kept.reply = value, scaling, answer, b""
+            return answer
         if (value := read(self.access)) == kept.value and type(value) is type(kept.value):
             return kept.answer  # (a value shown as it is: its line made again only when it changed)
         return kept.remake(value, self.answers, self.model.cfg.encoding)
