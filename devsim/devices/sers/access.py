@@ -63,6 +63,10 @@ def address_number(address: st.Address) -> int:
 class ParameterAccess:
     """Reads and writes of one SERS's parameters by number (§4.7, §4.8)."""
 
+    #: (Slots: a host's repeated poll reads this part: one block of memory instead of an object and its values)
+    __slots__ = ("params", "memory", "power", "motion", "inputs", "program", "signals", "_config",
+                 "_programs", "_changed", "_recheck_warnings", "_rotation_changed", "firmware")
+
     def __init__(
         self,
         params: SersParameters,
