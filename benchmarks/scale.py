@@ -50,7 +50,7 @@ functions by file, line and name; C functions by name; ``sys.setprofile``, as
     python benchmarks/scale.py --calls [--devices 20] [--rounds 20] [--kind sers|stub]
 
 Each phase prints the CPU each side used while it polled (share of one core, and server CPU
-seconds per poll): the pollers, devsim's processes, the echo processes, and how long the server
+seconds per poll sent: a missed poll is not sent): the pollers, devsim's processes, the echo processes, and how long the server
 processes were runnable but waited for a CPU (``/proc/PID/schedstat``, seconds per second of the
 phase, summed over the processes): answers wait that long too.
 """
@@ -312,8 +312,11 @@ class _Side:
 
     @property
     def cpu_per_poll(self) -> float:
-        """Server CPU seconds per poll (the processes' CPU over the phase, polls included only)."""
-        return self.server_cpu / self.polls if self.polls else float("nan")
+        """Server CPU seconds per poll (the processes' CPU over the phase, polls included only),
+        per poll sent: a missed poll is not sent (the pollers wait for the last answer), so
+        dividing by every poll due would make a server that falls behind look cheaper."""
+        sent = self.polls - self.missed
+        return self.server_cpu / sent if sent > 0 else float("nan")
 
     def line(self, label: str, rate: float, seconds: float) -> str:
         self.rtts.sort()

@@ -91,6 +91,13 @@ class Face:
         """Bytes from the host, in arrival order, possibly split anywhere."""
         raise NotImplementedError
 
+    #: Optional, for a face whose usual chunk (a host's repeated poll) is answered with one piece of
+    #: output and nothing else: ``answer_at_once(data)`` returns that piece, sent by nothing (the
+    #: port writes it: no batch, no :meth:`Port.send`), having done to the face exactly what
+    #: :meth:`feed` would; or None, having done nothing that :meth:`feed` would not do the same way
+    #: again, and the port hands the chunk to :meth:`feed`.  None here: every chunk goes to ``feed``.
+    answer_at_once: Callable[[bytes], bytes | None] | None = None
+
     def host_disconnected(self) -> None:
         """The host closed the port (or its TCP connection dropped); default: nothing."""
 
@@ -105,13 +112,16 @@ class Face:
 class Port:
     """One serial port of a device, as a line or a bus sees it (slots: every poll passes through)."""
 
-    __slots__ = ("device", "spec", "name", "face", "_write", "_batch", "shared_line", "_mute")
+    __slots__ = ("device", "spec", "name", "face", "_write", "_batch", "shared_line", "_mute", "at_once")
 
     def __init__(self, device: Device, spec: PortDef) -> None:
         self.device = device
         self.spec = spec
         self.name = spec.name
         self.face: Face | None = None
+        #: The face's :attr:`~Face.answer_at_once` (None: the face has none, or the port is
+        #: receive-only); a lean lane calls it itself (:mod:`devsim.transports.lane`).
+        self.at_once: Callable[[bytes], bytes | None] | None = None
         self._write: ByteSink | None = None
         self._batch: list[bytes] | None = None  # the answers to the chunk being fed
         self._mute = spec.receive_only  # (what send asks at every answer)
@@ -139,12 +149,17 @@ class Port:
 
     def feed(self, data: bytes) -> None:
         """Bytes from the host to the face.  What the face answers while it digests them leaves
-        in one write (same bytes, same order, one syscall: what a UART's transmit FIFO does)."""
+        in one write (same bytes, same order, one syscall: what a UART's transmit FIFO does); a
+        chunk the face answers at once (:attr:`Face.answer_at_once`) leaves as the face made it."""
         face = self.face
         if face is None:
             return
         if self._batch is not None:  # re-entered (a bus handing on): the outer call flushes
             face.feed(data)
+            return
+        if (at_once := self.at_once) is not None and (reply := at_once(data)) is not None:
+            if reply and (write := self._write) is not None:
+                write(reply)  # (what send and the batch would make of one piece)
             return
         self._batch = batch = []
         try:
@@ -205,7 +220,8 @@ class Device:
         for port_name, port in self._ports.items():
             face_class = self.face_classes.get(port_name)
             if face_class is not None:
-                port.face = face_class(self.model, port)
+                port.face = face = face_class(self.model, port)
+                port.at_once = None if port._mute else face.answer_at_once
 
     # -- ports -----------------------------------------------------------------------------
     def port(self, name: str = "main") -> Port:

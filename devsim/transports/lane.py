@@ -21,12 +21,17 @@ __all__ = ["Lane", "LaneSwitch", "Take"]
 
 class Lane:
     """What a transport carries for a line while its lean lane is open: ``feed`` (the target's
-    input) and the bytes it carried each way.  (Slots: every poll on the lane touches it.)"""
+    input), ``at_once`` (a device port's :attr:`~devsim.core.device.Port.at_once`, else None: a
+    transport may hand a chunk to it first and write what it returns towards the host itself,
+    and hand the chunk to ``feed`` when it returns None) and the bytes it carried each way.
+    (Slots: every poll on the lane touches it.)"""
 
-    __slots__ = ("feed", "bytes_in", "bytes_out")
+    __slots__ = ("feed", "at_once", "bytes_in", "bytes_out")
 
-    def __init__(self, feed: Callable[[bytes], None]) -> None:
+    def __init__(self, feed: Callable[[bytes], None],
+                 at_once: Callable[[bytes], bytes | None] | None = None) -> None:
         self.feed = feed
+        self.at_once = at_once
         #: Bytes from the host handed to ``feed``.
         self.bytes_in = 0
         #: Bytes of the target's output taken towards the host.
@@ -69,7 +74,8 @@ class LaneSwitch:
             return
         lane = self.lane
         if lane is None:
-            lane = self.lane = Lane(self.target.feed)
+            target = self.target
+            lane = self.lane = Lane(target.feed, getattr(target, "at_once", None))  # (a bus has none)
         write = self.take(lane)
         if write is not None:
             self.open = True

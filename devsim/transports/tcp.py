@@ -128,7 +128,12 @@ class _Session(asyncio.BufferedProtocol):
         lane = self.lane
         if lane is not None and nbytes <= SLICE and not self.backlog:
             lane.bytes_in += nbytes
-            lane.feed(bytes(self._view[:nbytes]))
+            data = bytes(self._view[:nbytes])
+            if (at_once := lane.at_once) is not None and (reply := at_once(data)) is not None:
+                if reply:
+                    self.send(reply)  # (the port's writer while the lane is open)
+                return
+            lane.feed(data)
             return
         deliver = self.deliver
         if deliver is not None and nbytes <= SLICE and not self.backlog:

@@ -22,14 +22,25 @@ ANSWER = b"<ok>"
 
 
 class _EchoFace(Face):
-    """Echoes every byte, and answers each CR with ANSWER (two sends: the port joins them)."""
+    """Echoes every byte, and answers each CR with ANSWER (two sends: the port joins them); a
+    chunk ``Q`` CR (a host's poll) it answers at once, the same bytes (:attr:`Face.answer_at_once`)."""
 
-    __slots__ = ()
+    __slots__ = ("at_once",)
+
+    def __init__(self, model: Any, port: Any) -> None:
+        super().__init__(model, port)
+        self.at_once = 0  # chunks answered at once
 
     def feed(self, data: bytes) -> None:
         self.send(data)
         for _ in range(data.count(b"\r")):
             self.send(ANSWER)
+
+    def answer_at_once(self, data: bytes) -> bytes | None:
+        if data != b"Q\r":
+            return None
+        self.at_once += 1
+        return data + ANSWER
 
 
 class _EchoDevice(Device):
@@ -113,6 +124,27 @@ async def test_a_plain_session_rides_the_lean_lane_with_the_lines_counts(plant: 
     await writer.wait_closed()
     await plant.until(lambda: not plant.line.lean, "the lane closed with the host gone")
     assert _counts(plant.line) == (sent, sent + 4 * len(ANSWER), sent + 4 * len(ANSWER))
+
+
+async def test_a_chunk_the_face_answers_at_once_leaves_as_on_the_lines_path_with_its_counts(plant: _Plant) -> None:
+    reader, writer = await plant.connect()
+    face = plant.device.face()
+    assert plant.line.lean
+    for query in (b"Q\r", b"A\r", b"Q\r", b"Q\r"):
+        assert await _poll(reader, writer, query) == query + ANSWER
+    assert face.at_once == 3
+    sink = _Sink()
+    plant.line.tracer = sink  # (the line's own path: the port hands the chunk to the face)
+    assert not plant.line.lean
+    assert await _poll(reader, writer, b"Q\r") == b"Q\r" + ANSWER
+    assert sink.records == [("H>D", b"Q\r"), ("D>H", b"Q\r" + ANSWER)] and face.at_once == 4
+    plant.line.tracer = None
+    assert plant.line.lean
+    assert await _poll(reader, writer, b"Q\r") == b"Q\r" + ANSWER
+    assert face.at_once == 5
+    sent = 6 * 2
+    assert _counts(plant.line) == (sent, sent + 6 * len(ANSWER), sent + 6 * len(ANSWER))
+    writer.close()
 
 
 async def test_a_fault_injected_mid_stream_closes_the_lane_until_it_ends(plant: _Plant) -> None:

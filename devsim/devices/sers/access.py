@@ -29,7 +29,7 @@ from devsim.devices.sers.power import PowerStage
 from devsim.devices.sers.program import ProgramMemory
 from devsim.devices.sers.units import Scaling, format_query, quantize
 
-__all__ = ["READS", "WRITES", "ParameterAccess", "ProgramControl", "address_number", "plain_reader"]
+__all__ = ["READS", "WRITES", "ParameterAccess", "ProgramControl", "address_number", "plain_reader", "weighted_reader"]
 
 
 class ProgramControl(Protocol):
@@ -62,6 +62,10 @@ def address_number(address: st.Address) -> int:
 
 class ParameterAccess:
     """Reads and writes of one SERS's parameters by number (§4.7, §4.8)."""
+
+    #: (Slots: a host's repeated poll reads this part: one block of memory instead of an object and its values)
+    __slots__ = ("params", "memory", "power", "motion", "inputs", "program", "signals", "_config",
+                 "_programs", "_changed", "_recheck_warnings", "_rotation_changed", "firmware")
 
     def __init__(
         self,
@@ -427,6 +431,24 @@ _PLAIN_READERS: dict[int, Read] = {
     for n in PARAMETERS
     if n != 1 and KIND[n] not in WEIGHTED_KINDS and KIND[n] != "fixed" and (n in _READ or n not in _WRITE_ONLY)
 }
+
+
+#: Weighted parameters a query answers (readable; P51 the actual position): what their answer is
+#: made of besides the weighting (:attr:`SersParameters.scaling`), before :meth:`ParameterAccess.param_value`
+#: converts and rounds it: P51's increments (as :meth:`ParameterAccess.p51` rounds them), the others'
+#: stored values.
+_WEIGHTED_READERS: dict[int, Read] = {
+    51: lambda a: round(a.motion.p51_inc()),
+    **{n: _stored(n) for n in PARAMETERS if KIND[n] in WEIGHTED_KINDS and n not in _READ and n not in _WRITE_ONLY},
+}
+
+
+def weighted_reader(number: int) -> Read | None:
+    """For a weighted parameter ``number`` a query answers: a reader of what its answer depends
+    on besides the weighting (the same value and the same :class:`~.units.Scaling` object give
+    the same answer line, so a host's repeated poll of a standing axis's position is answered from
+    the line kept); None for any other number."""
+    return _WEIGHTED_READERS.get(number)
 
 
 def plain_reader(number: int) -> Read | None:

@@ -19,7 +19,7 @@ from devsim.devices.sers.power import PowerStage
 from devsim.devices.sers.program import ProgramMemory
 from devsim.devices.sers.units import format_fixed
 
-__all__ = ["Answers"]
+__all__ = ["Answers", "ack_line"]
 
 #: Address kinds that name a parameter (a query answers its value with the parameter's format).
 _PARAMETER_KINDS = ("P", "alias", "O")
@@ -64,13 +64,8 @@ class Answers:
 
     def ack_line(self) -> bytes:
         """``ok<d>`` (§4.1) on its own line, as it leaves: 4 error, 0/2 moving, 1/3 standing, +2
-        with a warning; ``pgm`` in programming mode."""
-        if self.program.editing:
-            return _PGM_LINE
-        power = self.power
-        if power.errors:
-            return _OK_LINES[4]
-        return _OK_LINES[(1 if self.motion.pos_ok else 0) + (2 if power.warnings else 0)]
+        with a warning; ``pgm`` in programming mode (:func:`ack_line`)."""
+        return ack_line(self.program, self.power, self.motion)
 
     def query_text(self, stmt: st.Query) -> str:
         """``P<n>?`` / ``alias?``: ``<as asked>=<value>``; ``P<n>??``: the designation (§4.7)."""
@@ -165,6 +160,16 @@ class Answers:
             then = " THEN" if isinstance(stmt, st.If) and stmt.then else ""
             return f"{keyword} {_new_syntax(stmt.cond)}{then}"
         return text.upper() if not isinstance(stmt, st.Text | st.Comment) else text
+
+
+def ack_line(program: ProgramMemory, power: PowerStage, motion: Motion) -> bytes:
+    """:meth:`Answers.ack_line` of the drive whose parts these are (a host's repeated poll asks
+    the parts it holds: no answers object to read)."""
+    if program.editing:
+        return _PGM_LINE
+    if power.errors:
+        return _OK_LINES[4]
+    return _OK_LINES[(1 if motion.pos_ok else 0) + (2 if power.warnings else 0)]
 
 
 _OPPOSITE = {"<": ">=", "<=": ">", "=": "<>", "<>": "=", ">": "<=", ">=": "<"}

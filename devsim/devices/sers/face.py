@@ -33,6 +33,7 @@ from devsim.devices.sers.line import (
 from devsim.devices.sers.model import SersDrive
 from devsim.devices.sers.noise import NoiseLines
 from devsim.devices.sers.params import HANDSHAKE_CELL
+from devsim.devices.sers.polls import KeptPolls
 
 __all__ = ["SersFace"]
 
@@ -47,8 +48,8 @@ class SersFace(Face):
     §3.2, §4.1, §4.8.6.9)."""
 
     model: SersDrive
-    __slots__ = ("framer", "line", "_last_replied", "_spontaneous", "_settings", "statements", "_noise_lines", "_polls",
-                 "_kept")
+    __slots__ = ("framer", "line", "_last_replied", "_spontaneous", "_settings", "statements", "_noise_lines", "polls",
+                 "answer_at_once")
 
     def __init__(self, model: SersDrive, port: Port) -> None:
         super().__init__(model, port)
@@ -60,8 +61,9 @@ class SersFace(Face):
         self._settings: SerialSettings | None = None
         self.statements = LineStatements(model, self._out, self._error)
         self._noise_lines = NoiseLines(model, self.framer, self.send, self).take  # (bound once: a hot path)
-        self._polls: dict[bytes, KeptPoll] | None = None  # the polls answered (since power-on)
-        self._kept: KeptPoll | None = None  # the last one, if nothing else came since
+        #: The polls answered since power-on (the last one while nothing else came since)
+        self.polls = KeptPolls(model, port, self.framer)
+        self.answer_at_once = self.polls.answer_at_once  # (a repeated poll: Face.answer_at_once)
         model.listen("power_on", self._reset_serial)
         model.listen("spontaneous", self.spontaneous)
         model.listen("line_out", self.send)
@@ -80,19 +82,15 @@ class SersFace(Face):
         self.line = None
         self._last_replied = False
         self._spontaneous.clear()
-        self._polls = self._kept = None
+        self.polls.forget()
 
     # -- bytes from the host -------------------------------------------------------------
     def feed(self, data: bytes) -> None:
         # (answers to one chunk of input leave in one write: the kit's port batches them)
         model = self.model
+        if self.polls.kept is not None and (kept := self.polls.take(data)) is not None:
+            return self._reply_poll(kept, data)  # (a repeated poll; its framing done)
         model.shared_line = self.port.shared_line
-        if ((kept := self._kept) is not None and (data == kept.data or (kept := self._polls.get(data)) is not None)
-                and model.cfg is kept.cfg and model.logic_alive and not model.master.awaiting and not model.program.editing):
-            if kept is not self._kept:  # (line, selection, boot as the last left them; this one's framing)
-                self.framer.whole_line(kept.poll.length, data[-1])
-                self._kept = kept
-            return self._reply_poll(kept, data)
         if model.master.awaiting and model.logic_alive:
             model.master.feed(data)  # a slave's answer to this master
         if not model.logic_alive or model.booting:
@@ -103,7 +101,7 @@ class SersFace(Face):
             poll = poll_line(data)
             if poll is not None and self._answer_poll(poll, data):
                 return
-        self._kept = None  # (anything else: the framing and the selection may change)
+        self.polls.kept = None  # (anything else: the framing and the selection may change)
         index, end = 0, len(data)
         while index < end:
             line = self.line
@@ -217,9 +215,7 @@ class SersFace(Face):
             return False
         model.note_address(address, True)
         self.framer.whole_line(poll.length, data[-1])
-        self._polls, kept = KeptPoll.keep(self._polls, data, poll, model.cfg)
-        self._kept = kept
-        self._reply_poll(kept, data)
+        self._reply_poll(self.polls.keep(data, poll, model.cfg), data)
         return True
 
     def _reply_poll(self, kept: KeptPoll, data: bytes) -> None:
@@ -228,14 +224,8 @@ class SersFace(Face):
         model = self.model
         self.line = _ANSWERING  # (what the query sets off waits for the line end)
         mode = model.params.values.cells[HANDSHAKE_CELL]
-        read = kept.read
         try:
-            if read is None:
-                answer = kept.answer_line(model.answers, model.cfg.encoding)
-            elif (value := read(model.access)) == kept.value and type(value) is type(kept.value):
-                answer = kept.answer  # (a value shown as it is: its line made again only when it changed)
-            else:
-                answer = kept.remake(value, model.answers, model.cfg.encoding)
+            answer = self.polls.answer(kept)
         except SersError as exc:
             self.line = line = CommandLine(True, True)
             if mode in (0, 1):
@@ -247,10 +237,7 @@ class SersFace(Face):
         if (interpreter := model.interpreter).waiting == "wait":  # (poke does nothing else)
             interpreter.poke()
         if mode in (0, 1) and not self._spontaneous:  # echo, answer and acknowledgement in one piece
-            ack = model.answers.ack_line()
-            if answer is not kept.answer or ack is not kept.ack or not kept.reply:
-                kept.reply, kept.ack = b"".join((data, answer, ack)), ack
-            self.send(kept.reply)
+            self.send(kept.reply_with(data, answer, model.answers.ack_line()))
             self._last_replied = True
             self.line = None
             return

@@ -17,7 +17,7 @@ import msgspec
 
 from devsim.devices.sers import codec
 from devsim.devices.sers import statements as st
-from devsim.devices.sers.access import address_number, plain_reader
+from devsim.devices.sers.access import address_number, plain_reader, weighted_reader
 from devsim.devices.sers.answers import Answers
 from devsim.devices.sers.errors import SersError, message
 
@@ -140,35 +140,32 @@ class KeptPoll:
     mode P1017, programming mode, a master's request, the value, the acknowledgement, the DIP
     switches in ``cfg``) is looked at again every time."""
 
-    __slots__ = ("data", "poll", "cfg", "read", "value", "answer", "ack", "reply")
+    __slots__ = ("data", "poll", "cfg", "read", "raw", "scaling", "value", "answer", "ack", "reply")
 
     #: Polls a face keeps at most (a host polls a few parameters in turn).
     MOST = 8
 
-    def __init__(self, data: bytes, poll: Poll, cfg: object, read: Callable[[Any], Any] | None) -> None:
+    def __init__(self, data: bytes, poll: Poll, cfg: object) -> None:
         self.data = data  # the chunk
         self.poll = poll
         self.cfg = cfg  # the configuration it was made under (address, encoding)
-        self.read = read  # the parameter's value (None: answered the general way)
+        #: The parameter's value (None: answered the general way)
+        self.read: Callable[[Any], Any] | None = None if poll.number is None else plain_reader(poll.number)
+        #: For a weighted parameter: what its answer is made of besides the weighting (and the
+        #: weighting it was last made with, :attr:`scaling`), :func:`.access.weighted_reader`
+        self.raw: Callable[[Any], Any] | None = None if poll.number is None else weighted_reader(poll.number)
+        self.scaling: object = None
         self.value: Any = _NOTHING  # the value last answered, and its answer line
         self.answer = b""
         self.ack = b""  # the acknowledgement that went out with it, and the whole reply
         self.reply = b""
 
-    @staticmethod
-    def keep(polls: dict[bytes, KeptPoll] | None, data: bytes, poll: Poll, cfg: object
-             ) -> tuple[dict[bytes, KeptPoll], KeptPoll]:
-        """The poll kept in ``polls`` for the chunk ``data`` under ``cfg``, or one made and added
-        (``polls`` made when None, emptied when full); returns ``polls`` and it."""
-        if polls is None:
-            polls = {}
-        kept = polls.get(data)
-        if kept is None or kept.cfg is not cfg:
-            kept = KeptPoll(data, poll, cfg, None if poll.number is None else plain_reader(poll.number))
-            if len(polls) >= KeptPoll.MOST:
-                polls = {}
-            polls[data] = kept
-        return polls, kept
+    def reply_with(self, data: bytes, answer: bytes, ack: bytes) -> bytes:
+        """The echo ``data``, ``answer`` and ``ack`` in one piece (the one kept when they are the
+        ones it was made of): what leaves for the poll in echo mode 0 or 1."""
+        if answer is not self.answer or ack is not self.ack or not self.reply:
+            self.reply, self.ack = b"".join((data, answer, ack)), ack
+        return self.reply
 
     def answer_line(self, answers: Answers, encoding: str) -> bytes:
         """The poll's answer line as the drive stands now (a :class:`SersError` as the query's

@@ -25,7 +25,10 @@ Done = Callable[[bool, float | None, str], None]
 
 
 class MasterLink:
-    """Requests to slaves, one at a time, and what comes back (§3.6.2, G-MASTER)."""
+    """Requests to slaves, one at a time, and what comes back (§3.6.2, G-MASTER).  (Slots: a
+    host's repeated poll reads :attr:`awaiting`, one block of memory.)"""
+
+    __slots__ = ("clock", "send", "_buffer", "_want", "_done", "awaiting", "_timer", "sent")
 
     def __init__(self, clock: Clock, send: Callable[[bytes], None]) -> None:
         self.clock = clock

@@ -32,6 +32,12 @@ __all__ = ["Motion"]
 class Motion:
     """What moves one SERS's motor, and how it stops (§4.6.6, §4.8.4)."""
 
+    #: (Slots: a host's repeated poll reads this part: one block of memory instead of an object and its values)
+    __slots__ = ("clock", "axis", "params", "signals", "power", "_i7_stop", "_ended", "_poke",
+                 "_in_position_message", "_has_option_e50", "_record_event", "_changed", "kind", "pos_ok",
+                 "offset", "_stop_decel", "_follow_target", "_stopped_at", "watches", "homing", "jog",
+                 "encoder", "positioning", "poly")
+
     def __init__(
         self,
         clock: Clock,

@@ -38,6 +38,11 @@ class Brakes(Protocol):
 class PowerStage:
     """Motor power, drive errors and warnings of one SERS (§2.1.3, §4.8.2.2, §4.8.3.1)."""
 
+    #: (Slots: a host's repeated poll reads this part: one block of memory instead of an object and its values)
+    __slots__ = ("clock", "params", "signals", "memory", "_brakes", "_changed", "_program_error", "_resync",
+                 "_record_event", "_announce", "undervoltage", "errors", "warnings", "errno", "energized",
+                 "relay", "servo_calibrated", "_stop_cycled", "_stop_opened", "_timers")
+
     def __init__(
         self,
         clock: Clock,

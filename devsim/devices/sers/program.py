@@ -37,7 +37,10 @@ def statement_cost(text: str) -> int:
 
 
 class ProgramMemory:
-    """The one stored program: statement texts, and where the user's lines begin (§4.3, §4.5.3)."""
+    """The one stored program: statement texts, and where the user's lines begin (§4.3, §4.5.3).
+    (Slots: a host's repeated poll reads :attr:`editing`, one block of memory.)"""
+
+    __slots__ = ("nvram", "capacity", "editing", "position", "_statements", "_starts")
 
     def __init__(self, nvram: NonVolatileMemory, capacity: int = 2048) -> None:
         self.nvram = nvram
