@@ -168,6 +168,13 @@ class H3Axis:
         self._status()
         return elapsed
 
+    def repeat(self, transfers: list[tuple[str, tuple[int, ...]]], times: int) -> None:
+        """Count and trace ``transfers`` ``times`` over, as AxHndlg calls that ran the same
+        functions with the same outcome would (skipped PLC cycles that only read, issue 31)."""
+        for _ in range(times):
+            for name, words in transfers:
+                self._log(name, words)
+
     def run(self, symbol: str) -> None:
         """Run one function now, as its flag would (tests, the PLC's cold start)."""
         self._run(symbol)
