@@ -286,6 +286,21 @@ def test_end_stops_a_load_and_a_blocked_motor() -> None:
     check({}, {0: move(20_000), 800: [block], 1_600: [free]}, 5_000, LENGTHS)
 
 
+def test_a_breakpoint_passed_by_a_motor_speeding_up_after_the_profile_ended() -> None:
+    """The breakpoint checked one sample at a time (the profile complete): a motor held until
+    the profile has reached its target, then let go, passes a breakpoint at a speed far above
+    the one it had when the pass began to check."""
+    def block(chip: Lm628) -> None:
+        chip.motor.blocked = True
+
+    def free(chip: Lm628) -> None:
+        chip.motor.blocked = False
+
+    for breakpoint in (1_500, 2_900, 6_000):
+        check({}, {0: [cmd("SBPA", breakpoint), block, *move(8_000, 4_000_000, 20_000)], 400: [free]}, 1_500,
+              LENGTHS)
+
+
 def test_a_motor_without_lag() -> None:
     check({"tau": 0.0, "kv": 2_000.0}, {0: move(5_000)}, 3_000, LENGTHS)
 

@@ -251,6 +251,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
     cruise = 0  # samples ahead in which the generator only adds da to its velocity and that to the position
     da = 0  # 0 at the top velocity; ±a while it ramps far from the target (or stops smoothly)
     stopped = False
+    far_until = check_at = 0  # the samples up to far_until need no breakpoint check (one sample at a time)
     shift, scale = (4, 2048) if twelve else (8, 128)
     goals = _goals(kv, load, scale, travelled, gained)
     unit = float(sign)  # (a float product: 1.0 · x and −1.0 · x are exact)
@@ -451,8 +452,14 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                 flags = chip.flags
                 index_watch = chip.index_armed and chip.index_period
                 watch_moves = chip.breakpoint is not None or index_watch
-            else:  # the breakpoint alone: Lm628._moved's wrap-around and breakpoint checks
+            elif done > far_until:  # the breakpoint alone: Lm628._moved's wrap-around and breakpoint checks
                 flags |= moved_flags(before, raw, home, break_at)
+                if done >= check_at:  # (not again for a while where the breakpoint is near)
+                    if _far(raw, home, break_at, segment,
+                            (count - done) * (max(abs(speed_now), fastest) * STEP_SLACK) + 2):
+                        far_until = count  # the motor cannot reach it, nor wrap, in this pass
+                    else:
+                        check_at = done + 16
         err = desired - (raw - home)  # |err| > threshold ≤ 7FFFh, saturated to 32 bits or not
         if err > threshold or err < -threshold:
             flags |= POSITION_ERROR
