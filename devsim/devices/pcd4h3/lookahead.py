@@ -70,14 +70,14 @@ def quiet_cycles(drives: Sequence[H3Drive], first: float, step: float,
     for drive in moving:
         seen = looks[id(drive)]
         status, position = drive.chip.status, drive.motor.position
-        states = drive.stepper.ahead([t + offset + ms / 1000 for t in times[:quiet] for offset, ms in seen])
-        last = states[len(seen) - 1::len(seen)]  # the chip at each cycle's last look
+        reach = seen[-1][0] + seen[-1][1] / 1000  # the cycle's last look: the status copied
+        last = drive.stepper.ahead([t + reach for t in times[:quiet]])  # the chip at each cycle's last look
         cycles = 0
         while cycles < min(quiet, len(last)) and batch.status_of(last[cycles]) == status:
             cycles += 1
         quiet = cycles
         if drive.switches:
-            ends.append((drive, position, seen[-1][0] + seen[-1][1] / 1000, last))
+            ends.append((drive, position, reach, last))
     for drive, last_x, reach, last in ends:
         for cycle in range(quiet):
             x, v = batch.motion_of(last[cycle])
