@@ -467,7 +467,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                 stopped = True
         seen = raw
         if complete and p == before_p and flags == before_flags and abs(speed_now) < STILL \
-                and wrap(raw - home) == wrap(before_actual - home):
+                and (raw == before_actual or wrap(raw - home) == wrap(before_actual - home)):
             quiet += 1
         else:
             quiet = 0

@@ -15,6 +15,8 @@ from devsim.devices.pcd4h3.units import ffp_encode
 
 __all__ = ["AxisRegisters", "RegisterBlock"]
 
+_KEYS: dict[str, Key] = {}  # register names (as spelled) → offsets, a memo of REGISTERS.lookup
+
 
 class RegisterBlock(MutableMapping[Key, int]):
     """The block of one axis in the register medium, by offset: offset n is register
@@ -74,7 +76,10 @@ class AxisRegisters(Parameters):
 
     def named(self, symbol: str) -> int:
         """The register ``symbol`` (a configured display value, §3.4 DP14)."""
-        return self.values[REGISTERS.lookup(symbol, "the register block").key]
+        key = _KEYS.get(symbol)
+        if key is None:  # (the display asks every PLC cycle: a name is looked up once)
+            key = _KEYS[symbol] = REGISTERS.lookup(symbol, "the register block").key
+        return self.values[key]
 
     def load(self, symbol: str, value: float) -> None:
         """``LD R symbol+RAi value`` from the configuration: MCFac as a number (stored as its
