@@ -296,7 +296,7 @@ def test_a_breakpoint_passed_by_a_motor_speeding_up_after_the_profile_ended() ->
     def free(chip: Lm628) -> None:
         chip.motor.blocked = False
 
-    for breakpoint in (1_500, 2_900, 6_000):
+    for breakpoint in (150, 400, 1_500, 6_000):
         check({}, {0: [cmd("SBPA", breakpoint), block, *move(8_000, 4_000_000, 20_000)], 400: [free]}, 1_500,
               LENGTHS)
 

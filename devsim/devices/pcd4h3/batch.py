@@ -42,6 +42,7 @@ STILL = 1e-3  # counts/s: a motor slower than this stands (for the settled count
 # most max(|v|, |goal|) · (τ·(1 − e^(−t/τ)) + t − τ·(1 − e^(−t/τ))) = … · t, with room for rounding
 STEP_SLACK = CHIP_SAMPLE * 1.001
 ONE = 1 << 16
+FAR_SPAN = 64  # samples one at a time that one look at the breakpoint's distance spares its checks
 I16_LOW, I16_HIGH = -(1 << 15), (1 << 15) - 1
 I24_LOW, I24_HIGH = -(1 << 23), (1 << 23) - 1
 TWICE_RANGE = 2 * POSITION_RANGE
@@ -455,11 +456,11 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
             elif done > far_until:  # the breakpoint alone: Lm628._moved's wrap-around and breakpoint checks
                 flags |= moved_flags(before, raw, home, break_at)
                 if done >= check_at:  # (not again for a while where the breakpoint is near)
-                    if _far(raw, home, break_at, segment,
-                            (count - done) * (max(abs(speed_now), fastest) * STEP_SLACK) + 2):
-                        far_until = count  # the motor cannot reach it, nor wrap, in this pass
+                    span = count - done if count - done < FAR_SPAN else FAR_SPAN
+                    if _far(raw, home, break_at, segment, span * (max(abs(speed_now), fastest) * STEP_SLACK) + 2):
+                        far_until = done + span  # the motor cannot reach it, nor wrap, in these samples
                     else:
-                        check_at = done + 16
+                        check_at = done + FAR_SPAN // 4
         err = desired - (raw - home)  # |err| > threshold ≤ 7FFFh, saturated to 32 bits or not
         if err > threshold or err < -threshold:
             flags |= POSITION_ERROR
