@@ -10,7 +10,8 @@ motor, which only matters where a switch is near.
 would see a change (or its reach, which the PLC doubles from :data:`FIRST_HORIZON` up to
 :data:`HORIZON` while nothing ends a look-ahead early), and returns the cycles in between: the PLC
 does not wake for them.  A look in between sees the chip of the present (the stepper keeps a
-checkpoint at each look of a cycle, :meth:`~devsim.devices.pcd4h3.stepper.ChipStepper.ahead`)
+checkpoint at each cycle's last look, :meth:`~devsim.devices.pcd4h3.stepper.ChipStepper.ahead`,
+and computes an earlier moment from the one before)
 and, where the skipped cycles
 read the chips, the PLC runs their reads first, each at its moment (``Pcd4._materialize``); a
 command or a host's write ends the skipping.
@@ -52,7 +53,7 @@ def quiet_cycles(drives: Sequence[H3Drive], first: float, step: float,
     their times.  A cycle looks at drive i's chip at ``moments[i]``, each ``(offset, ms)`` after
     its start as the PLC cycle computes it (``offset + ms / 1000``: the reads act then, §10.1;
     the status is copied at the last); without ``moments`` at the start only.  Each chip is
-    computed in one pass, with a checkpoint at each look, up to the first cycle that sees its
+    computed in one pass, with a checkpoint at each cycle's last look, up to the first cycle that sees its
     status change (the status only gains bits while no command comes: the cycles before it see
     the status of now)."""
     at_start: Moments = ((0.0, 0.0),)

@@ -192,7 +192,9 @@ class Pcd4(Model):
     def _materialize(self, until: float) -> None:
         """Run the skipped cycles up to ``until`` that read the chips (cyclic reads, the
         display), as they would have run: each chip back at that cycle's moments; the shared
-        axes follow at the next look, not in the past."""
+        axes follow at the next look, not in the past.  Only the first and the last run; those
+        between only count and trace the first one's transfers (the same reads, which cannot fail
+        and change no chip, of the same status: the last leaves registers and display as all would)."""
         skipped = self._skipped
         due = bisect_right(skipped, until)
         if not due:
