@@ -112,7 +112,10 @@ class KeptPolls:
             return None
         # (ack_line() inline: not in programming mode, as checked above and nothing read since changes)
         power = self.power
-        ack = OK_LINES[4] if power.errors else OK_LINES[(1 if self.motion.pos_ok else 0) + (2 if power.warnings else 0)]
+        if power.errors:
+            ack = OK_LINES[4]
+        else:
+            ack = OK_LINES[(1 if self.motion.pos_ok else 0) + (2 if power.warnings else 0)]
         if answer is not kept.answer or ack is not kept.ack or not kept.reply:
             kept.reply, kept.ack = b"".join((data, answer, ack)), ack
         return kept.reply
