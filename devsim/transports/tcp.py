@@ -90,7 +90,7 @@ class _Session(asyncio.BufferedProtocol):
         self.sock = sock
         self._view = _read_buffer()  # (a session is made in its loop's thread)
         #: The bytearray under it: the bytes read are copied out of a slice of it (a memoryview's
-        #: slice would be an object the garbage collector counts, one per read)
+        #: slice would be a garbage-collected object made and freed per read)
         self._buffer: bytearray = self._view.obj  # type: ignore[assignment]
         self.transport: asyncio.Transport | None = None
         self.closed = False
