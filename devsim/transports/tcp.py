@@ -81,14 +81,17 @@ class _Session(asyncio.BufferedProtocol):
     its line's lean lane is open (:mod:`devsim.transports.lane`) the session hands what it reads
     to the line's target itself and counts what it carries."""
 
-    __slots__ = ("owner", "_view", "transport", "closed", "full", "state", "backlog", "peer", "since", "heard",
-                 "rest", "messages", "deliver", "sock", "lane", "queued")
+    __slots__ = ("owner", "_view", "_buffer", "transport", "closed", "full", "state", "backlog", "peer", "since",
+                 "heard", "rest", "messages", "deliver", "sock", "lane", "queued")
 
     def __init__(self, owner: TcpTransport, sock: socket.socket | None = None) -> None:
         self.owner = owner
         #: The connection's socket, for :meth:`send`'s direct path (None: always through asyncio).
         self.sock = sock
         self._view = _read_buffer()  # (a session is made in its loop's thread)
+        #: The bytearray under it: the bytes read are copied out of a slice of it (a memoryview's
+        #: slice would be a garbage-collected object made and freed per read)
+        self._buffer: bytearray = self._view.obj  # type: ignore[assignment]
         self.transport: asyncio.Transport | None = None
         self.closed = False
         self.full = False  # output beyond the owner's max_buffer waits in the socket: dropped
@@ -128,7 +131,7 @@ class _Session(asyncio.BufferedProtocol):
         lane = self.lane
         if lane is not None and nbytes <= SLICE and not self.backlog:
             lane.bytes_in += nbytes
-            data = bytes(self._view[:nbytes])
+            data = bytes(self._buffer[:nbytes])
             if (at_once := lane.at_once) is not None and (reply := at_once(data)) is not None:
                 if reply:
                     self.send(reply)  # (the port's writer while the lane is open)
@@ -137,9 +140,9 @@ class _Session(asyncio.BufferedProtocol):
             return
         deliver = self.deliver
         if deliver is not None and nbytes <= SLICE and not self.backlog:
-            deliver(bytes(self._view[:nbytes]))
+            deliver(bytes(self._buffer[:nbytes]))
         else:
-            self.owner._received(self, bytes(self._view[:nbytes]))
+            self.owner._received(self, bytes(self._buffer[:nbytes]))
 
     def eof_received(self) -> bool:
         return False  # half-close ends the session

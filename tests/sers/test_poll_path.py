@@ -33,8 +33,8 @@ WAIT_PROGRAM = ["L1", "WAIT C1=9", "O1=1", "C1=0", "WAIT C1=9", "O1=0", "C1=0", 
 MASTER_PROGRAM = ["L1", "Z=1", "ON", "X=V", "Z=0", "WAIT I1=1", "GT1"]
 SETS = [("param.P1017", 0), ("param.P1017", 2), ("param.P1017", 1), ("param.P100", 9), ("input.I1", True),
         ("input.I1", False), ("dip.service_switch", True), ("dip.service_switch", False), ("param.P265", 1),
-        ("stop", True), ("stop", False), ("limit_right", True), ("limit_right", False), ("param.P0", 2),
-        ("param.P0", 0)]
+        ("input.stop", True), ("input.stop", False), ("input.limit_right", True), ("input.limit_right", False),
+        ("param.P0", 2), ("param.P0", 0)]
 
 STEPS = hs.lists(hs.one_of(
     hs.tuples(hs.just("poll"), hs.integers(0, len(POLLS) - 1), hs.integers(1, 4)),  # a poll, repeated

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from operator import attrgetter
 from typing import Any, Protocol
 
 from devsim.core.kit import Command, Table
@@ -352,8 +353,8 @@ def _output(n: int) -> Read:
 READS: Table[Read] = Table(
     [
         Command("P0", ParameterAccess.program_state, "§4.8.2.1", "EEPROM mode: programming 2, running 1"),
-        Command("P11", lambda a: a.power.errors, "§4.8.3.1", "drive errors"),
-        Command("P12", lambda a: a.power.warnings, "§4.8.3.1", "warnings"),
+        Command("P11", attrgetter("power.errors"), "§4.8.3.1", "drive errors"),
+        Command("P12", attrgetter("power.warnings"), "§4.8.3.1", "warnings"),
         Command("P51", ParameterAccess.p51, "§4.8.4.2", "actual position"),
         Command("P134", lambda a: 7 if a.power.energized else 0, "§4.8.2.2", "motor ON (7) or OFF (0)"),
         Command("P336", lambda a: int(a.motion.pos_ok), "§4.8.3.3", "in position"),
@@ -371,7 +372,7 @@ READS: Table[Read] = Table(
         Command("P1123", lambda a: int(a.motion.poly.slot_free), "§4.6.7", "a polynomial segment may be sent"),
         Command("P1124", lambda a: a.inputs.pulses_in_window(1124), "§4.8.6.14", "pulses in the window (I3)"),
         Command("P1133", lambda a: a.firmware, "§4.8.2.5", "firmware version"),
-        Command("P1137", lambda a: a.power.errno, "§4.8.3.1", "the last error message"),
+        Command("P1137", attrgetter("power.errno"), "§4.8.3.1", "the last error message"),
         Command("P1146", lambda a: a.inputs.pulses_in_window(1146), "§4.8.6.14", "pulses in the window (ENC)"),
         *(Command(f"P{1200 + n}", _output(n), "§4.8.1.2", f"output O{n}") for n in range(1, 17)),
         Command("P1300", lambda a: a.inputs.inputs_byte(1), "§4.8.1.1", "inputs I1..I8"),

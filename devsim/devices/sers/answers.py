@@ -29,7 +29,8 @@ _READABLE = [n for n in sorted(PARAMETERS) if PARAMETERS[n].readable]
 _PLAIN_LINES: dict[tuple[str, type, object, str], bytes] = {}
 _PLAIN_LINES_MAX = 4096
 #: The acknowledgements ``ok0`` … ``ok4`` and ``pgm`` as they leave (§4.1).
-_OK_LINES = tuple(b"\nok%d\n\r" % digit for digit in range(5))
+#: ``ok<d>`` on its own line for each digit (§4.1), as :func:`ack_line` answers outside programming mode.
+OK_LINES = tuple(b"\nok%d\n\r" % digit for digit in range(5))
 _PGM_LINE = b"\npgm\n\r"
 
 
@@ -168,8 +169,8 @@ def ack_line(program: ProgramMemory, power: PowerStage, motion: Motion) -> bytes
     if program.editing:
         return _PGM_LINE
     if power.errors:
-        return _OK_LINES[4]
-    return _OK_LINES[(1 if motion.pos_ok else 0) + (2 if power.warnings else 0)]
+        return OK_LINES[4]
+    return OK_LINES[(1 if motion.pos_ok else 0) + (2 if power.warnings else 0)]
 
 
 _OPPOSITE = {"<": ">=", "<=": ">", "=": "<>", "<>": "=", ">": "<=", ">=": "<"}

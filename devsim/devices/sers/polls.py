@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 from devsim.core.device import Port
 from devsim.devices.sers import codec
-from devsim.devices.sers.answers import ack_line
+from devsim.devices.sers.answers import OK_LINES
 from devsim.devices.sers.errors import SersError
 from devsim.devices.sers.line import KeptPoll, Poll
 from devsim.devices.sers.params import HANDSHAKE_CELL
@@ -87,7 +87,15 @@ class KeptPolls:
         with nothing done that the face's ``feed`` does not do the same way again.  (The face is
         then as its ``feed`` leaves it: while a poll is kept it is between lines, with no message
         waiting and the last line answered, ``tests/sers/test_poll_path.py``.)"""
-        if self.kept is None or (kept := self.take(data)) is None:
+        if (kept := self.kept) is None:
+            return None
+        if data == kept.data:  # (the same poll as the last: what take() checks of it, inline)
+            model = self.model
+            model.shared_line = self.port.shared_line
+            if (model.cfg is not kept.cfg or not model.logic_alive or self.master.awaiting
+                    or self.program.editing):
+                return None
+        elif (kept := self.take(data)) is None:
             return None
         if (self.values.cells[HANDSHAKE_CELL] not in (0, 1) or self.interpreter.waiting == "wait"
                 or (kept.read is None and kept.raw is None)):
@@ -102,7 +110,12 @@ class KeptPolls:
                 answer = kept.remake(value, self.answers, self.model.cfg.encoding)
         except SersError:
             return None
-        ack = ack_line(self.program, self.power, self.motion)
+        # (ack_line() inline: not in programming mode, as checked above and nothing read since changes)
+        power = self.power
+        if power.errors:
+            ack = OK_LINES[4]
+        else:
+            ack = OK_LINES[(1 if self.motion.pos_ok else 0) + (2 if power.warnings else 0)]
         if answer is not kept.answer or ack is not kept.ack or not kept.reply:
             kept.reply, kept.ack = b"".join((data, answer, ack)), ack
         return kept.reply
