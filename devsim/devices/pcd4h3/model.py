@@ -99,7 +99,6 @@ class Pcd4(Model):
         self._skipped: list[float] = []  # the cycles the timer skips (issue 31), run late if they read
         self._coast_end: float | None = None  # the cycle after the skipped ones
         self._coast_reads = False  # the skipped cycles read the chips (run late, at the next look)
-        self._transfers_before: list[int] = []  # each axis's transfers before the last cycle run late
         self._horizon = FIRST_HORIZON  # how far the next look-ahead reaches (doubles while nothing ends it early)
         self._seen: dict[tuple[int, str], int] = {}  # status flags at the last look (events)
         self._last_cycle = -math.inf
@@ -202,23 +201,25 @@ class Pcd4(Model):
         starts, self._skipped = skipped[:due], skipped[due:]
         if not self._coast_reads or self.status != RUN:  # (without reads they would change nothing)
             return
-        self._run_late(starts[0])
+        before = self._run_late(starts[0])
         if len(starts) > 1:
             # every skipped cycle sets the same flags, whose reads cannot fail and change no chip,
             # and finds the same status: the ones between transfer what the first did, and the
             # last leaves the registers and the display as they all would
-            transfers = [axis.trace[len(axis.trace) - (axis.transfers - before):]
-                         for axis, before in zip(self.axes, self._transfers_before, strict=True)]
+            transfers = [axis.trace[len(axis.trace) - (axis.transfers - count):]
+                         for axis, count in zip(self.axes, before, strict=True)]
             for axis, cycle in zip(self.axes, transfers, strict=True):
                 axis.repeat(cycle, len(starts) - 2)
             self._run_late(starts[-1])
 
-    def _run_late(self, start: float) -> None:
-        """A skipped cycle that reads, run late: each chip back at its moments."""
-        self._transfers_before = [axis.transfers for axis in self.axes]
+    def _run_late(self, start: float) -> list[int]:
+        """A skipped cycle that reads, run late: each chip back at its moments; returns each
+        axis's count of transfers before it."""
+        before = [axis.transfers for axis in self.axes]
         for drive in self.drives:
             drive.catch_up(start, follow=False)
         self._run_axes(start, follow=False)
+        return before
 
     def _cycle(self) -> None:
         self._timer = None
