@@ -46,7 +46,7 @@ import math
 from collections.abc import Callable
 from typing import Any, Protocol
 
-from devsim.core.clock import Clock, Timer
+from devsim.core.clock import Clock, Timer, VirtualClock
 from devsim.core.kit import Command, Table
 from devsim.core.settings import Settings
 from devsim.devices.gms96.counter import CounterInput
@@ -253,13 +253,15 @@ class Plc:
 
     def _schedule_next(self) -> None:
         """The next cycle; after one that changed nothing, while nobody looks, the first that
-        may not (:func:`cycle_after`)."""
-        if self._wrote or self._ack_seen or self.hooks or self.cfg.limit_switches or self.unobserved == -math.inf:
+        may not (:func:`cycle_after`).  Only a virtual clock knows its next timer (the runner gives
+        the hint only under virtual time)."""
+        clock = self.clock
+        if (self._wrote or self._ack_seen or self.hooks or self.cfg.limit_switches or self.unobserved == -math.inf
+                or not isinstance(clock, VirtualClock)):
             self._schedule()
             return
-        upcoming = getattr(self.clock, "next_event", lambda: None)()
-        when, skipped = cycle_after(self.clock.now(), self.cycle_s, min(
-            self.unobserved, _at(upcoming), _at(self.indexer.plan_changes_at())))
+        when, skipped = cycle_after(clock.now(), self.cycle_s, min(
+            self.unobserved, _at(clock.next_event()), _at(self.indexer.plan_changes_at())))
         self.cycles += skipped
         self._cancel()
         self._timer = self.clock.call_at(when, self._cycle)
