@@ -165,7 +165,9 @@ class Answers:
 
 def ack_line(program: ProgramMemory, power: PowerStage, motion: Motion) -> bytes:
     """:meth:`Answers.ack_line` of the drive whose parts these are (a host's repeated poll asks
-    the parts it holds: no answers object to read)."""
+    the parts it holds: no answers object to read).  :meth:`.polls.KeptPolls.answer_at_once`
+    repeats its last two lines inline (a call less per poll): change both, and
+    ``tests/sers/test_poll_path.py`` compares them."""
     if program.editing:
         return _PGM_LINE
     if power.errors:

@@ -162,7 +162,8 @@ class KeptPoll:
 
     def reply_with(self, data: bytes, answer: bytes, ack: bytes) -> bytes:
         """The echo ``data``, ``answer`` and ``ack`` in one piece (the one kept when they are the
-        ones it was made of): what leaves for the poll in echo mode 0 or 1."""
+        ones it was made of): what leaves for the poll in echo mode 0 or 1.  (Repeated inline in
+        :meth:`.polls.KeptPolls.answer_at_once`.)"""
         if answer is not self.answer or ack is not self.ack or not self.reply:
             self.reply, self.ack = b"".join((data, answer, ack)), ack
         return self.reply

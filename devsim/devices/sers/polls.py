@@ -67,7 +67,8 @@ class KeptPolls:
         or a power-on change that; the same configuration; the logic alive; no request of this
         drive as a master awaiting its slave's answer; not in programming mode), framed as the
         face's framer would frame it and the last one from now on; else None, nothing done.
-        (Call it only while :attr:`kept` is not None.)"""
+        (Call it only while :attr:`kept` is not None.  :meth:`answer_at_once` repeats these
+        checks inline for the same poll as the last.)"""
         model = self.model
         model.shared_line = self.port.shared_line
         kept = self.kept
@@ -122,7 +123,7 @@ class KeptPolls:
 
     def answer(self, kept: KeptPoll) -> bytes:
         """The kept poll's answer line as the drive stands now (a :class:`SersError` as the
-        query's own)."""
+        query's own).  (A plain value's branch is repeated inline in :meth:`answer_at_once`.)"""
         if (read := kept.read) is None:
             if (raw := kept.raw) is None:
                 return kept.answer_line(self.answers, self.model.cfg.encoding)
