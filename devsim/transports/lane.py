@@ -75,7 +75,7 @@ class LaneSwitch:
         lane = self.lane
         if lane is None:
             target = self.target
-            lane = self.lane = Lane(target.feed, getattr(target, "at_once", None))  # (a bus has none)
+            lane = self.lane = Lane(target.feed, getattr(target, "at_once", None))  # (optional: LineTarget)
         write = self.take(lane)
         if write is not None:
             self.open = True

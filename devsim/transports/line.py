@@ -67,7 +67,9 @@ __all__ = ["FaultHandle", "Line", "LineFault", "LineTarget", "garble", "settings
 
 
 class LineTarget(Protocol):
-    """What a line can sit in front of: a device or a multidrop bus."""
+    """What a line can sit in front of: a device or a multidrop bus (or a facade's endpoint).  A
+    target may also offer ``at_once`` (:attr:`~devsim.core.device.Port.at_once`), which a lean
+    lane calls before ``feed``; one without it is fed every chunk."""
 
     def attach(self, write: ByteSink | None) -> None: ...
 
