@@ -253,8 +253,7 @@ class Plc:
 
     def _schedule_next(self) -> None:
         """The next cycle; after one that changed nothing, while nobody looks, the first that
-        may not (:func:`cycle_after`).  Only a virtual clock knows its next timer (the runner gives
-        the hint only under virtual time)."""
+        may not (:func:`cycle_after`); only a virtual clock knows its next timer."""
         clock = self.clock
         if (self._wrote or self._ack_seen or self.hooks or self.cfg.limit_switches or self.unobserved == -math.inf
                 or not isinstance(clock, VirtualClock)):
