@@ -16,6 +16,7 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Sequence
 
+from devsim.core.changes import CHANGES
 from devsim.core.device import ByteSink, Device, Port, SerialSettings
 
 __all__ = ["Bus"]
@@ -31,6 +32,7 @@ class Bus:
         self._write: ByteSink | None = None
         self._queue: deque[tuple[Port | None, bytes]] = deque()
         self._busy = False
+        CHANGES.count += 1  # (a door: devsim.core.changes; the members' lines become shared)
         for member in self.devices:
             member.shared_line = len(self.devices) > 1
             member.attach(lambda data, source=member: self._emit(source, data))

@@ -23,6 +23,8 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable
 from typing import Any
 
+from devsim.core.changes import CHANGES
+
 __all__ = ["Clock", "RealClock", "Timer", "VirtualClock"]
 
 
@@ -117,6 +119,7 @@ class RealClock(Clock):
             timer._handle = None
             if not timer.cancelled:
                 timer.cancelled = True  # a timer fires once
+                CHANGES.count += 1  # (a door: devsim.core.changes)
                 callback()
 
         timer._handle = loop.call_at(self._origin + when / self.speed, fire)
@@ -179,6 +182,7 @@ class VirtualClock(Clock):
             if when > self._now:
                 self._now = when
             timer.cancelled = True
+            CHANGES.count += 1  # (a door: devsim.core.changes)
             timer.callback()
             ran += 1
         return ran

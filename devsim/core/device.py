@@ -25,6 +25,7 @@ from typing import Any, ClassVar
 
 import msgspec
 
+from devsim.core.changes import CHANGES
 from devsim.core.clock import Clock
 from devsim.core.kit import MAIN_PORT, DriveActions, FaultTable, PortDef, Reference
 from devsim.core.model import Model
@@ -155,12 +156,14 @@ class Port:
         if face is None:
             return
         if self._batch is not None:  # re-entered (a bus handing on): the outer call flushes
+            CHANGES.count += 1  # (a door: devsim.core.changes)
             face.feed(data)
             return
         if (at_once := self.at_once) is not None and (reply := at_once(data)) is not None:
             if reply and (write := self._write) is not None:
                 write(reply)  # (what send and the batch would make of one piece)
             return
+        CHANGES.count += 1  # (a door: devsim.core.changes; not for a chunk answered at once)
         self._batch = batch = []
         try:
             face.feed(data)
@@ -174,6 +177,7 @@ class Port:
 
     def host_disconnected(self) -> None:
         if self.face is not None:
+            CHANGES.count += 1  # (a door: devsim.core.changes)
             self.face.host_disconnected()
 
     @property
@@ -309,6 +313,7 @@ class Device:
         program's text that does not fit the formats in force) raises :class:`BadValue` naming the
         point; the values before it have taken effect."""
         checked = [self.points.parse(name, value, self.name) for name, value in state.items()]
+        CHANGES.count += 1  # (a door: devsim.core.changes)
         for point, value in checked:
             assert point.put is not None
             try:
@@ -319,6 +324,7 @@ class Device:
     def fault(self, kind: str, active: Any) -> None:
         """Start (or end) a declared device fault such as ``blocked_axis`` or ``emergency_stop``;
         then the model announces ``fault_switched(kind, active)`` (a facade's fault events)."""
+        CHANGES.count += 1  # (a door: devsim.core.changes)
         self.faults.apply(self.model, kind, active, self.name)
         on = parse_bool(active)
         self.active_faults = tuple(name for name in self.faults.names()
@@ -342,10 +348,12 @@ class Device:
     def unobserved_until(self, when: float) -> None:
         """Nobody looks at the device before simulated time ``when`` (``-inf``: someone may at
         any moment): a scenario's runner says so while it waits for its next step."""
+        CHANGES.count += 1  # (a door: devsim.core.changes)
         self.model.unobserved_until(when)
 
     def power_cycle(self, *, wipe: bool = False) -> None:
         """Switch the device off and on again; ``wipe`` erases non-volatile memory first."""
+        CHANGES.count += 1  # (a door: devsim.core.changes)
         self.model.power_cycle(wipe=wipe)
 
     def close(self) -> None:

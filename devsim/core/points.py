@@ -28,6 +28,8 @@ from typing import Any, Literal
 
 import msgspec
 
+from devsim.core.changes import CHANGES
+
 __all__ = [
     "BadValue",
     "Family",
@@ -347,6 +349,7 @@ class PointTable(msgspec.Struct):
     def set(self, model: Any, name: str, value: Any, owner: str = "the device") -> None:
         point, parsed = self.parse(name, value, owner, model)
         assert point.put is not None
+        CHANGES.count += 1  # (a door: devsim.core.changes)
         point.put(model, parsed)
 
     def state(self, model: Any) -> dict[str, Any]:

@@ -11,13 +11,15 @@ The modes a drive supports (6502h, CiA 402-2) are those whose drive action the k
 (:data:`MODES`); writing another mode into 6060h is refused (``ValueError``), so 6061h only ever
 shows a supported one.  :meth:`Cia402.reset` is the application part of an NMT reset node (CiA 301,
 the NMT state machine's "reset application" sub-state): the power-on values of :data:`DEFAULTS`, the drive disabled, Switch on disabled.
-Pure: the node calls it and it calls the actions.
+Pure but for the count of changes it keeps (:mod:`devsim.core.changes`): the node calls it and it calls
+the actions.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+from devsim.core.changes import CHANGES
 from devsim.core.kit import DriveActions
 
 __all__ = ["Cia402", "DEFAULTS", "DriveActions", "MODES", "STATES", "TRANSITIONS", "command"]
@@ -115,12 +117,14 @@ class Cia402:
     def reset(self) -> None:
         """The 402 objects back to their power-on values, the drive disabled, Switch on disabled."""
         if self.actions.enabled(self.model):
+            CHANGES.count += 1  # (the drive actions change the model: a door, devsim.core.changes)
             self.actions.enable(self.model, False)
         self._power_on()
 
     # -- controlword (6040h) ---------------------------------------------------------------------
     def write_controlword(self, word: int) -> None:
         before, self.controlword = self.controlword, word & 0xFFFF
+        CHANGES.count += 1  # (the drive actions change the model: a door, devsim.core.changes)
         a = self.actions
         if self.state == "fault" or a.fault(self.model):
             self.state = "fault"
@@ -164,6 +168,7 @@ class Cia402:
     def write_target_velocity(self, value: int) -> None:
         self.target_velocity = value
         if self.state == "operation_enabled" and self.mode == PROFILE_VELOCITY and not self.controlword & 0x100:
+            CHANGES.count += 1  # (the drive actions change the model: a door, devsim.core.changes)
             self.actions.jog(self.model, float(value))
 
     # -- statusword (6041h) ------------------------------------------------------------------------
@@ -175,6 +180,7 @@ class Cia402:
         elif self.state == "operation_enabled" and not a.enabled(self.model):
             self.state = "switched_on"  # the drive switched itself off
         elif self.state == "quick_stop_active" and not a.moving(self.model):
+            CHANGES.count += 1  # (the drive actions change the model: a door, devsim.core.changes)
             self.actions.enable(self.model, False)
             self.state = "switch_on_disabled"
         word = STATES[self.state] | 0x0200  # bit 9: remote

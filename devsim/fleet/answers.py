@@ -23,6 +23,7 @@ from typing import Any, NamedTuple
 
 import msgspec
 
+from devsim.core.changes import CHANGES
 from devsim.core.device import Device
 from devsim.core.points import Point
 from devsim.runtime import Runtime
@@ -109,7 +110,9 @@ def _set(asked: Asked, device: Device, point: Point) -> bytes | None:
         return None
     assert point.put is not None  # (resolved only when it has one)
     try:
-        point.put(device.model, point.checked(value))  # (what PointTable.set does with the point)
+        parsed = point.checked(value)
+        CHANGES.count += 1  # (what PointTable.set does with the point: a door, devsim.core.changes)
+        point.put(device.model, parsed)
     except Exception as exc:  # the error response of the generic way
         return _failed(asked, exc)
     return encode_result(asked.id, None)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import hypothesis.strategies as hs
 from hypothesis import given, settings
 
+from devsim.core.changes import CHANGES
 from devsim.core.clock import VirtualClock
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.sers import SersDevice, codec
@@ -83,16 +84,17 @@ def _run(steps: list[tuple[str, float, int]], whole: bool, shared: bool, setup: 
                     device.set(name, setting)
                 except Exception as exc:  # (a write the drive refuses: refused on both)
                     answers.append(type(exc).__name__)
-            elif kind == "supply":
-                model.switch_supply(bool(value))
+            elif kind == "supply":  # (the doors a plant's control goes through: devsim.core.changes)
+                device.fault("power", not value)
             elif kind == "share":
-                device.main.shared_line = bool(value)
+                device.main.shared_line = bool(value)  # (what a bus does, counted as a bus counts it)
+                CHANGES.count += 1
             elif value:
-                model.switch_supply(False)
+                device.fault("power", True)
                 clock.advance(0.01)
-                model.switch_supply(True)
+                device.fault("power", False)
             else:
-                model.power_cycle()
+                device.power_cycle()
             answers.append(bytes(out))
             out.clear()
             face = device.face()  # (what the kept poll answered at once relies on: no check of its own)

@@ -138,9 +138,11 @@ class KeptPoll:
     only a line or a power-on change that); after anything else the poll path checks the line
     again and then takes the kept poll.  Power-on drops them.  What else a poll depends on (echo
     mode P1017, programming mode, a master's request, the value, the acknowledgement, the DIP
-    switches in ``cfg``) is looked at again every time."""
+    switches in ``cfg``) is looked at again every time, unless nothing could have changed it since
+    the reply was last given (:attr:`stamp`); the value is read every time.  (Slots, the ones a
+    repeated poll reads first: it touches the object.)"""
 
-    __slots__ = ("data", "poll", "cfg", "read", "raw", "scaling", "value", "answer", "ack", "reply")
+    __slots__ = ("data", "stamp", "read", "value", "reply", "cfg", "raw", "answer", "ack", "scaling", "poll")
 
     #: Polls a face keeps at most (a host polls a few parameters in turn).
     MOST = 8
@@ -159,6 +161,9 @@ class KeptPoll:
         self.answer = b""
         self.ack = b""  # the acknowledgement that went out with it, and the whole reply
         self.reply = b""
+        #: The count of changes (:mod:`devsim.core.changes`) when :attr:`reply` was last given
+        #: at once, all checked (-1: not yet)
+        self.stamp = -1
 
     def reply_with(self, data: bytes, answer: bytes, ack: bytes) -> bytes:
         """The echo ``data``, ``answer`` and ``ack`` in one piece (the one kept when they are the
