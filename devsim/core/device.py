@@ -41,6 +41,7 @@ __all__ = [
     "Port",
     "ReadOnlyName",
     "SerialSettings",
+    "Standing",
     "UnknownName",
 ]
 
@@ -97,6 +98,8 @@ class Face:
     #: port writes it: no batch, no :meth:`Port.send`), having done to the face exactly what
     #: :meth:`feed` would; or None, having done nothing that :meth:`feed` would not do the same way
     #: again, and the port hands the chunk to :meth:`feed`.  None here: every chunk goes to ``feed``.
+    #: A face whose reply holds while nothing changes, whatever the time, may hold it standing too
+    #: (``port.standing``, :class:`Standing`): the port then gives it without asking.
     answer_at_once: Callable[[bytes], bytes | None] | None = None
 
     def host_disconnected(self) -> None:
@@ -110,10 +113,29 @@ class Face:
         """Cancel the face's timers; it is not used afterwards."""
 
 
+class Standing:
+    """A reply the face gave at once for a chunk, that holds for the same chunk while the count
+    of changes stands (:mod:`devsim.core.changes`), however the time goes on: the port gives it
+    again without asking the face, and so does a lean lane (:mod:`devsim.transports.lane`).  A face
+    holds one here only when nothing it answers in it changes with time alone (slots: a poll
+    reads it)."""
+
+    __slots__ = ("stamp", "data", "reply")
+
+    def __init__(self) -> None:
+        self.stamp = -1  # (never the count)
+        self.data = b""
+        self.reply = b""
+
+    def hold(self, data: bytes, reply: bytes) -> None:
+        """``reply`` stands for ``data`` from now until the next change."""
+        self.stamp, self.data, self.reply = CHANGES.count, data, reply
+
+
 class Port:
     """One serial port of a device, as a line or a bus sees it (slots: every poll passes through)."""
 
-    __slots__ = ("device", "spec", "name", "face", "_write", "_batch", "shared_line", "_mute", "at_once")
+    __slots__ = ("device", "spec", "name", "face", "_write", "_batch", "shared_line", "_mute", "at_once", "standing")
 
     def __init__(self, device: Device, spec: PortDef) -> None:
         self.device = device
@@ -126,6 +148,8 @@ class Port:
         self._write: ByteSink | None = None
         self._batch: list[bytes] | None = None  # the answers to the chunk being fed
         self._mute = spec.receive_only  # (what send asks at every answer)
+        #: The reply the face holds standing (:class:`Standing`; none until it holds one)
+        self.standing = Standing()
         #: True when other devices share the line (RS-485 multidrop); set by the bus.
         self.shared_line = False
 
@@ -151,13 +175,19 @@ class Port:
     def feed(self, data: bytes) -> None:
         """Bytes from the host to the face.  What the face answers while it digests them leaves
         in one write (same bytes, same order, one syscall: what a UART's transmit FIFO does); a
-        chunk the face answers at once (:attr:`Face.answer_at_once`) leaves as the face made it."""
+        chunk the face answers at once (:attr:`Face.answer_at_once`) leaves as the face made it,
+        and so does one whose reply the face holds standing (:class:`Standing`), without the face."""
         face = self.face
         if face is None:
             return
         if self._batch is not None:  # re-entered (a bus handing on): the outer call flushes
             CHANGES.count += 1  # (a door: devsim.core.changes)
             face.feed(data)
+            return
+        standing = self.standing
+        if standing.stamp == CHANGES.count and data == standing.data:
+            if (write := self._write) is not None:
+                write(standing.reply)  # (what the face would answer at once: nothing changed since)
             return
         if (at_once := self.at_once) is not None and (reply := at_once(data)) is not None:
             if reply and (write := self._write) is not None:

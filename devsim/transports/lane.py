@@ -16,6 +16,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from devsim.core.device import Standing
+
 __all__ = ["Lane", "LaneSwitch", "Take"]
 
 
@@ -23,15 +25,18 @@ class Lane:
     """What a transport carries for a line while its lean lane is open: ``feed`` (the target's
     input), ``at_once`` (a device port's :attr:`~devsim.core.device.Port.at_once`, else None: a
     transport may hand a chunk to it first and write what it returns towards the host itself,
-    and hand the chunk to ``feed`` when it returns None) and the bytes it carried each way.
-    (Slots: every poll on the lane touches it.)"""
+    and hand the chunk to ``feed`` when it returns None), ``standing`` (the port's
+    :class:`~devsim.core.device.Standing` reply, else None: a transport may write it for the same
+    chunk while the count of changes stands, before it asks ``at_once``) and the bytes it carried
+    each way.  (Slots: every poll on the lane touches it.)"""
 
-    __slots__ = ("feed", "at_once", "bytes_in", "bytes_out")
+    __slots__ = ("feed", "at_once", "standing", "bytes_in", "bytes_out")
 
     def __init__(self, feed: Callable[[bytes], None],
-                 at_once: Callable[[bytes], bytes | None] | None = None) -> None:
+                 at_once: Callable[[bytes], bytes | None] | None = None, standing: Standing | None = None) -> None:
         self.feed = feed
         self.at_once = at_once
+        self.standing = standing
         #: Bytes from the host handed to ``feed``.
         self.bytes_in = 0
         #: Bytes of the target's output taken towards the host.
@@ -75,7 +80,8 @@ class LaneSwitch:
         lane = self.lane
         if lane is None:
             target = self.target
-            lane = self.lane = Lane(target.feed, getattr(target, "at_once", None))  # (optional: LineTarget)
+            # (both optional: LineTarget)
+            lane = self.lane = Lane(target.feed, getattr(target, "at_once", None), getattr(target, "standing", None))
         write = self.take(lane)
         if write is not None:
             self.open = True

@@ -42,6 +42,7 @@ import time
 from collections import deque
 from collections.abc import Callable
 
+from devsim.core.changes import CHANGES
 from devsim.transports import fdlimit
 from devsim.transports.base import Endpoint, Transport
 from devsim.transports.hosts import DEFAULT_IDLE_DROP, admit, dropped, listen_backlog, refuse
@@ -132,6 +133,10 @@ class _Session(asyncio.BufferedProtocol):
         if lane is not None and nbytes <= SLICE and not self.backlog:
             lane.bytes_in += nbytes
             data = bytes(self._buffer[:nbytes])
+            standing = lane.standing
+            if standing is not None and standing.stamp == CHANGES.count and data == standing.data:
+                self.send(standing.reply)  # (what the port would write: nothing changed since)
+                return
             if (at_once := lane.at_once) is not None and (reply := at_once(data)) is not None:
                 if reply:
                     self.send(reply)  # (the port's writer while the lane is open)

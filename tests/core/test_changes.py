@@ -131,26 +131,48 @@ class _Untouchable:
         raise AssertionError(f"looked at {name}")
 
 
-def _kept_and_gated(device: SersDevice) -> Any:
+def _kept_and_gated(device: SersDevice, poll: bytes = POLL) -> Any:
     device.attach(lambda data: None)
-    device.feed(POLL)
-    device.feed(POLL)  # (answered at once, all checked: the reply stamped)
+    device.feed(poll)
+    device.feed(poll)  # (answered at once, all checked: the reply stamped)
     polls = device.face().polls  # type: ignore[attr-defined]
     assert polls.kept is not None and polls.kept.stamp == CHANGES.count
     return polls
 
 
-def test_while_the_count_stands_a_repeated_poll_reads_its_value_only() -> None:
+def test_while_the_count_stands_the_port_gives_a_timeless_reply_without_the_face() -> None:
+    """P11 changes only with the drive's state: its reply stands at the port (Standing) and the
+    face is not asked; P1016 changes with time: the face reads it every time."""
     device = _sers()
     polls = _kept_and_gated(device)
-    master, out = polls.master, bytearray()
-    polls.master = _Untouchable()
+    assert device.main.standing.data == POLL
+    access, out = polls.access, bytearray()
+    polls.access = _Untouchable()
     device.attach(out.extend)
     device.feed(POLL)
     assert bytes(out) == b"#P11?\rP11=0\n\r\nok1\n\r"
+    polls.access = access
+    device.feed(b"#P1016?\r")
+    device.feed(b"#P1016?\r")  # (answered at once: the standing reply no longer the face's last)
+    assert device.main.standing.stamp == -1
+    polls.access = _Untouchable()
+    with pytest.raises(AssertionError, match="looked at"):
+        device.feed(b"#P1016?\r")
+    polls.access = access
+
+
+def test_while_the_count_stands_a_repeated_poll_reads_its_value_only() -> None:
+    device = _sers()
+    poll = b"#P1016?\r"  # (a value that changes with time: read by the face every time)
+    polls = _kept_and_gated(device, poll)
+    master, out = polls.master, bytearray()
+    polls.master = _Untouchable()
+    device.attach(out.extend)
+    device.feed(poll)
+    assert bytes(out) == b"#P1016?\rP1016=0\n\r\nok1\n\r"
     CHANGES.count += 1  # (any door)
     with pytest.raises(AssertionError, match="looked at awaiting"):
-        device.feed(POLL)
+        device.feed(poll)
     polls.master = master
 
 

@@ -18,7 +18,8 @@ from devsim.devices.sers.line import KeptPoll
 
 POLLS = [b"#P11?\r", b"#1P11?\r", b"#P12?\r", b"#P11?\n", b"#1 P11?\r", b"#P336?\r", b"#P1017?\r", b"#C1?\r",
          b"#P51?\r", b"#V?\r", b"#P1?\r", b"#Z?\r", b"#P9999?\r", b"#P11??\r", b"#O1?\r", b"#P0?\r", b"#2P11?\r",
-         b"#*P11?\r", b"#P1050?\r", b"#P1133?\r", b"#P265?\r", b"#200P11?\r", b"#1P12?\n", b"#P12?\r\n"]
+         b"#*P11?\r", b"#P1050?\r", b"#P1133?\r", b"#P265?\r", b"#200P11?\r", b"#1P12?\n", b"#P12?\r\n",
+         b"#P1013?\n"]
 LINES = [b"#P1017=0\r", b"#P1017=1\r", b"#P1017=2\r", b"#2\r", b"#1\r", b"#Q\r", b"#P1019=0\r", b"#PGM\r",
          b"#QUIT\r", b"#ON W=360 E\r", b"#P1=*\r", b"#P1=1\r", b"#P265=1\r", b"#P265=0\r", b"#RS\r", b"#OFF\r",
          b"\n", b"\r", b"#1P11?\r#", b"#C1=3\r", b"#P11=0 P12=0\r", b"#RUN\r", b"#S\r", b"#P76=2\r", b"#P1029=3\r",
@@ -139,6 +140,8 @@ HAZARDS = {
     "a position polled while the axis moves": [("poll", 8, 1), ("line", 9, 1), ("advance", 0.05, 1), ("poll", 8, 1),
                                                ("advance", 0.05, 1), ("poll", 8, 2), ("poll", 5, 1), ("advance", 0.05, 1),
                                                ("poll", 8, 1)],
+    "a standing reply after another answered at once": [("poll", 0, 2), ("poll", 24, 2), ("poll", 0, 1),
+                                                        ("line", 16, 1), ("poll", 0, 1)],
     "a weighted value": [("poll", 8, 1), ("line", 23, 1), ("poll", 8, 1), ("line", 9, 1), ("advance", 0.05, 1),
                          ("poll", 8, 2)],
 }

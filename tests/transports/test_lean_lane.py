@@ -12,6 +12,7 @@ from typing import Any, ClassVar
 
 import pytest
 
+from devsim.core.changes import CHANGES
 from devsim.core.clock import RealClock
 from devsim.core.device import Device, Face
 from devsim.transports.line import Line, LineFault
@@ -37,6 +38,10 @@ class _EchoFace(Face):
             self.send(ANSWER)
 
     def answer_at_once(self, data: bytes) -> bytes | None:
+        if data == b"S\r":  # (a reply that stands while nothing changes: the port's to give again)
+            self.at_once += 1
+            self.port.standing.hold(data, data + ANSWER)
+            return data + ANSWER
         if data != b"Q\r":
             return None
         self.at_once += 1
@@ -142,6 +147,26 @@ async def test_a_chunk_the_face_answers_at_once_leaves_as_on_the_lines_path_with
     assert plant.line.lean
     assert await _poll(reader, writer, b"Q\r") == b"Q\r" + ANSWER
     assert face.at_once == 5
+    sent = 6 * 2
+    assert _counts(plant.line) == (sent, sent + 6 * len(ANSWER), sent + 6 * len(ANSWER))
+    writer.close()
+
+
+async def test_a_standing_reply_is_given_by_the_session_until_a_change_is_counted(plant: _Plant) -> None:
+    """A reply the face holds standing (devsim.core.device.Standing) is written by the session for
+    the same chunk without asking the face, with the line's counts, until any door counts a change
+    (devsim.core.changes); then the face is asked again."""
+    reader, writer = await plant.connect()
+    face = plant.device.face()
+    for _ in range(3):
+        assert await _poll(reader, writer, b"S\r") == b"S\r" + ANSWER
+    assert face.at_once == 1
+    CHANGES.count += 1  # (any door)
+    assert await _poll(reader, writer, b"S\r") == b"S\r" + ANSWER
+    assert face.at_once == 2
+    assert await _poll(reader, writer, b"A\r") == b"A\r" + ANSWER  # (the face's feed: a door)
+    assert await _poll(reader, writer, b"S\r") == b"S\r" + ANSWER
+    assert face.at_once == 3
     sent = 6 * 2
     assert _counts(plant.line) == (sent, sent + 6 * len(ANSWER), sent + 6 * len(ANSWER))
     writer.close()

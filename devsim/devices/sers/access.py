@@ -30,7 +30,8 @@ from devsim.devices.sers.power import PowerStage
 from devsim.devices.sers.program import ProgramMemory
 from devsim.devices.sers.units import Scaling, format_query, quantize
 
-__all__ = ["READS", "WRITES", "ParameterAccess", "ProgramControl", "address_number", "plain_reader", "weighted_reader"]
+__all__ = ["READS", "TIMELESS", "WRITES", "ParameterAccess", "ProgramControl", "address_number", "plain_reader",
+           "weighted_reader"]
 
 
 class ProgramControl(Protocol):
@@ -442,6 +443,19 @@ _WEIGHTED_READERS: dict[int, Read] = {
     51: lambda a: round(a.motion.p51_inc()),
     **{n: _stored(n) for n in PARAMETERS if KIND[n] in WEIGHTED_KINDS and n not in _READ and n not in _WRITE_ONLY},
 }
+
+
+#: Parameters a query answers as they are whose value changes only with the drive's state, never
+#: with time alone (devsim.core.changes: nothing changes it while the count of changes stands):
+#: every stored value, and of :data:`READS` the errors, warnings, error number, program state,
+#: motor ON, in position, homed, DIP address, free memory, firmware and outputs.  Not so: the
+#: ramp phase (P1015, P1016), the software limits (P1042), the analog input (P1046), the load
+#: angle (P1057), the polynomial slot (P1123), pulses in a window (P1124, P1146), the inputs
+#: (P1013, P1300, P1301: a limit switch the axis reaches).
+TIMELESS: frozenset[int] = frozenset(
+    n for n in _PLAIN_READERS
+    if n not in _READ or n in (0, 11, 12, 134, 336, 403, 1050, 1122, 1133, 1137, *range(1201, 1217))
+)
 
 
 def weighted_reader(number: int) -> Read | None:

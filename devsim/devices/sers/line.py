@@ -17,7 +17,7 @@ import msgspec
 
 from devsim.devices.sers import codec
 from devsim.devices.sers import statements as st
-from devsim.devices.sers.access import address_number, plain_reader, weighted_reader
+from devsim.devices.sers.access import TIMELESS, address_number, plain_reader, weighted_reader
 from devsim.devices.sers.answers import Answers
 from devsim.devices.sers.errors import SersError, message
 
@@ -142,7 +142,7 @@ class KeptPoll:
     the reply was last given (:attr:`stamp`); the value is read every time.  (Slots, the ones a
     repeated poll reads first: it touches the object.)"""
 
-    __slots__ = ("data", "stamp", "read", "value", "reply", "cfg", "raw", "answer", "ack", "scaling", "poll")
+    __slots__ = ("data", "stamp", "read", "value", "reply", "cfg", "raw", "answer", "ack", "scaling", "poll", "timeless")
 
     #: Polls a face keeps at most (a host polls a few parameters in turn).
     MOST = 8
@@ -164,6 +164,9 @@ class KeptPoll:
         #: The count of changes (:mod:`devsim.core.changes`) when :attr:`reply` was last given
         #: at once, all checked (-1: not yet)
         self.stamp = -1
+        #: The value changes only with the drive's state (:data:`.access.TIMELESS`): the reply
+        #: stands while the count does (:class:`devsim.core.device.Standing`)
+        self.timeless = poll.number in TIMELESS
 
     def reply_with(self, data: bytes, answer: bytes, ack: bytes) -> bytes:
         """The echo ``data``, ``answer`` and ``ack`` in one piece (the one kept when they are the

@@ -98,7 +98,7 @@ class KeptPolls:
             # (devsim.core.changes): only the value may have changed, with time alone
             try:
                 if (value := read(self.access)) == kept.value and type(value) is type(kept.value):
-                    return kept.reply
+                    return self._given(kept, data)
             except SersError:
                 pass  # (the checks below meet it again)
         if data == kept.data:  # (the same poll as the last: what take() checks of it, inline)
@@ -131,6 +131,16 @@ class KeptPolls:
         if answer is not kept.answer or ack is not kept.ack or not kept.reply:
             kept.reply, kept.ack = b"".join((data, answer, ack)), ack
         kept.stamp = CHANGES.count
+        return self._given(kept, data)
+
+    def _given(self, kept: KeptPoll, data: bytes) -> bytes:
+        """The kept poll's reply, given at once for ``data``: the port's standing reply while the
+        value changes only with the drive's state (the port then gives it itself while the count of
+        changes stands), else none (the port's standing reply follows the face's last answer)."""
+        if kept.timeless:
+            self.port.standing.hold(data, kept.reply)
+        else:
+            self.port.standing.stamp = -1
         return kept.reply
 
     def answer(self, kept: KeptPoll) -> bytes:
