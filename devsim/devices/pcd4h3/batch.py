@@ -32,10 +32,10 @@ from devsim.devices.pcd4h3.lm628 import (
     moved_flags,
     wrap,
 )
-from devsim.devices.pcd4h3.pid import _lag_terms
+from devsim.devices.pcd4h3.pid import _lag_terms, sat
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
-__all__ = ["STILL", "Checkpoint", "motion_of", "restore", "run", "run_reference", "run_to", "snapshot", "status_of"]
+__all__ = ["STILL", "Checkpoint", "motion_of", "rest", "restore", "run", "run_reference", "run_to", "snapshot", "status_of"]
 
 STILL = 1e-3  # counts/s: a motor slower than this stands (for the settled count)
 # counts a sample at most per count/s of the motor's speed: a sample of the lag moves it by at
@@ -80,18 +80,48 @@ def restore(chip: Lm628, state: State) -> None:
      chip.index_armed, chip.index_position) = state  # type: ignore[assignment]
 
 
-def _quiet_after(chip: Lm628, before: tuple[int, int, int], quiet: int) -> int:
-    if (chip.actual, chip.profile.position, chip.flags) == before and chip.profile.complete \
-            and abs(chip.motor.velocity) < STILL:
+def _still(chip: Lm628) -> tuple[int, int, int, int]:
+    """What a sample of a settled chip leaves as it was: the actual and desired positions, the
+    flags, and Σe where it feeds an integral term."""
+    f = chip.filter
+    return chip.actual, chip.profile.position, chip.flags, f.error_sum if f.working.ki else 0
+
+
+def _quiet_after(chip: Lm628, before: tuple[int, int, int, int], quiet: int) -> int:
+    """``quiet`` + 1 after a sample that changed nothing and leaves the filter at rest (the
+    error e is the one of the last derivative sample and the derivative 0: the next samples
+    change only the derivative's countdown and Σe without an integral term), else 0."""
+    f = chip.filter
+    if _still(chip) == before and chip.profile.complete and abs(chip.motor.velocity) < STILL \
+            and f.derivative == 0 and f._previous == sat(chip.profile.desired - chip.unwrapped_actual, 16):
         return quiet + 1
     return 0
+
+
+def rest(chip: Lm628, count: int) -> None:
+    """``count`` samples of a settled chip (:func:`run` counted the samples without change that
+    make it so, :func:`_quiet_after`): what they change, in closed form, as :meth:`Lm628.sample` would: the filter's
+    derivative countdown, Σe without an integral term (clamped as each sample clamps it, which
+    for a constant e is the sum's clamp), the UDF bit.  The motor, slower than
+    :data:`STILL`, stays where it is (a lag's rest of less than a thousandth of a count)."""
+    if count <= 0:
+        return
+    chip.udf_sample = False
+    if chip.motor_off:
+        return  # the filter is reset at every sample
+    f = chip.filter
+    countdown, ds = f._countdown, f.working.ds
+    f._countdown = countdown - count if count <= countdown else ds - (count - countdown - 1) % (ds + 1)
+    if not f.working.ki:
+        e = sat(chip.profile.desired - chip.unwrapped_actual, 16)
+        f.error_sum = max(I24_LOW, min(I24_HIGH, f.error_sum + count * e))
 
 
 def run_reference(chip: Lm628, count: int, quiet: int) -> int:
     """``count`` samples by :meth:`Lm628.sample`, one at a time; returns the samples in a row
     without any change (``quiet`` before)."""
     for _ in range(count):
-        before = (chip.actual, chip.profile.position, chip.flags)
+        before = _still(chip)
         chip.sample()
         quiet = _quiet_after(chip, before, quiet)
     return quiet
@@ -339,7 +369,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                 break
             continue
         done += 1
-        before_actual, before_p, before_flags = seen, p, flags
+        before_actual, before_p, before_flags, before_sum = seen, p, flags, error_sum
         before = raw
         # -- profile generator (Profile.sample) --
         if cruise:
@@ -468,7 +498,8 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                 stopped = True
         seen = raw
         if complete and p == before_p and flags == before_flags and abs(speed_now) < STILL \
-                and (raw == before_actual or wrap(raw - home) == wrap(before_actual - home)):
+                and (raw == before_actual or wrap(raw - home) == wrap(before_actual - home)) \
+                and derivative == 0 and previous == e and (error_sum == before_sum or not ki):  # (_quiet_after)
             quiet += 1
         else:
             quiet = 0

@@ -69,6 +69,7 @@ class H3Axis:
         self.last_comers = -1  # flag offset of the function that last called ComErS
         self.warnings = 0  # FStop with a doubtful MCW, a single step while moving (G-10, E10)
         self.transfers = 0  # chip transfers since start-up
+        self.writes = 0  # of them, the commands sent (a report command changes nothing in the chip, §3.5.3)
         self.ran: list[str] = []  # the functions the last AxHndlg call ran
         self._function = ""
         self._attempts = 1  # the most attempts one transfer of the running function took
@@ -95,6 +96,7 @@ class H3Axis:
         chip = self.chip
         for attempt in range(1, ATTEMPTS + 1):
             self._log(name, words)
+            self.writes += 1
             chip.command(name, *words)
             if not chip.status & COMMAND_ERROR:
                 self._attempts = max(self._attempts, attempt)
@@ -117,6 +119,7 @@ class H3Axis:
 
     def _clear_error(self) -> None:
         self._log("RSTI", (0xFFFD,))
+        self.writes += 1
         self.chip.command("RSTI", 0xFFFD)
         self.chip.flags &= ~COMMAND_ERROR  # the FB polls until the flag is gone
 

@@ -259,9 +259,9 @@ class Pcd4(Model):
                 def before(ms: float, drive: H3Drive = drive, offset: float = offset) -> None:
                     drive.catch_up(start + offset + ms / 1000, follow=follow)
 
-                transfers = axis.transfers
+                writes = axis.writes
                 elapsed += axis.handle(before) / 1000
-                if axis.transfers != transfers and follow:  # (a skipped cycle only reads a moving chip)
+                if axis.writes != writes and follow:  # a read changes no chip: a settled one stays settled
                     drive.poke()
                 self._note(axis)
             if self.sequence is not None:
@@ -336,6 +336,8 @@ class Pcd4(Model):
             return True
         if self.status != RUN:
             return False
+        if self._reading():  # the cyclic reads go on while the chips rest (each cycle transfers)
+            return True
         if self.sequence is not None and (self.sequence.busy or self.timers.running()):
             return True
         flags = self.flags

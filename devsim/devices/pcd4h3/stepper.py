@@ -74,9 +74,10 @@ class ChipStepper:
                 self._quiet = batch.run(self.chip, target - self._samples, self._quiet)
                 self._samples = target
             self._present = target
-        elif self.settled:
-            if now > self._epoch + self._samples * CHIP_SAMPLE:
-                self._epoch, self._samples = now, 0
+        elif self.settled:  # its samples change almost nothing: done in closed form, on the same grid
+            if self._samples < due:
+                batch.rest(self.chip, due - self._samples)
+                self._samples = due
             self._present = self._samples
         else:
             if self._samples < due:
@@ -147,12 +148,6 @@ class ChipStepper:
             self.on_tick()
         if self._quiet < QUIET:
             self._timer = self.clock.call_later(TICK, self._tick)
-        else:
-            self._rest()
-
-    def _rest(self) -> None:
-        """Settled: no ticks; the sample count restarts from now when the chip wakes."""
-        self._epoch, self._samples = self.clock.now(), 0
 
     def close(self) -> None:
         if self._timer is not None:
