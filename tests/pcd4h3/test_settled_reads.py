@@ -8,6 +8,8 @@ trace, the recorded events, at random looks; and far fewer samples are computed.
 
 from __future__ import annotations
 
+import copy
+import math
 import random
 from collections.abc import Callable
 from typing import Any
@@ -16,9 +18,12 @@ import pytest
 
 from devsim.core.clock import VirtualClock
 from devsim.devices.pcd4h3 import batch, model, stepper
+from devsim.devices.pcd4h3.batch import STILL
 from devsim.devices.pcd4h3.config import READ_FUNCTIONS
 from devsim.devices.pcd4h3.library import TIMES
+from devsim.devices.pcd4h3.lm628 import Lm628
 from devsim.devices.pcd4h3.model import Pcd4
+from devsim.devices.pcd4h3.pid import Motor
 from devsim.devices.pcd4h3.services import read
 
 Step = Callable[[Pcd4], None]
@@ -106,6 +111,10 @@ SCENARIOS: dict[str, tuple[dict[str, Any], dict[float, list[Step]], float]] = {
         {"cyclic_reads": ["FRdITS", "FRdAP", "FRdSR"]},
         {0.2: [blocked(True), command("FLdRP", "FUpDRP", "FLdDA", "FStart", KInt=1, DestP=1)],
          2.5: [blocked(False)]}, 5.0),
+    "a weak P-only loop rests off its target (Σe grows), then an integral term acts": (
+        {"cyclic_reads": ["FRdITS", "FRdAP", "FRdSP"]},
+        {0.2: [command("FLdRP", "FUpDRP", "FLdDA", "FStart", KProp=9, KInt=0, KDer=0, DestP=1)],
+         3.0: [command("FLdRP", "FUpDRP", KProp=150, KInt=50, KDer=50)]}, 5.0),
     "the manual's example 2 with I 8 held": (
         {"user_program": "example2"}, {0.1: [keys(8)]}, 12.0),
     "the manual's example 3 with I 8 held, then I 15": (
@@ -154,3 +163,67 @@ def test_a_standing_axis_read_every_cycle_computes_no_samples(monkeypatch: pytes
     assert axis.transfers - transfers == pytest.approx(10.0 / cycle * len(READ_FUNCTIONS), abs=len(READ_FUNCTIONS))
     assert axis.trace[-1][0] == "RDSIGS"
     pcd.close()
+
+
+def settled_chip(pid: tuple[int, int, int, int, int], target: int) -> tuple[Lm628, int]:
+    """An LM628 (the batch tests' motor) that moved to ``target`` and settled: its quiet count."""
+    chip = Lm628(Motor())
+    chip.reset()
+    chip.port(12)
+    kp, ki, kd, il, ds = pid
+    chip.load_filter(ds << 8 | 0x0F, [kp, ki, kd, il])
+    chip.update_filter()
+    chip.command("LTRJ", 0x002A, 76, 1_117_389, target)
+    chip.command("STT")
+    quiet = 0
+    for _ in range(200_000):
+        quiet = batch.run_reference(chip, 1, quiet)
+        if quiet >= stepper.QUIET:
+            return chip, quiet
+    raise AssertionError("the chip did not settle")
+
+
+def integers(chip: Lm628) -> tuple[Any, ...]:
+    """Everything of the chip but the motor's floating point."""
+    state = batch.snapshot(chip)
+    return (*state[:11], *state[13:], chip.actual, chip.status, chip.signals)
+
+
+@pytest.mark.parametrize(("pid", "target"), [
+    ((150, 50, 50, 500, 15), 3_000),  # the manual's registers (Example 1)
+    ((5, 0, 0, 0, 3), 2_000),  # a weak P-only loop: it rests two counts off, Σe grows without an integral term
+    ((150, 50, 50, 500, 255), -1_500),  # the longest derivative interval
+])
+@pytest.mark.parametrize("count", [1, 17, 256, 5_000])
+def test_a_settled_chips_samples_in_closed_form_are_those_one_by_one(pid: tuple[int, int, int, int, int],
+                                                                      target: int, count: int) -> None:
+    chip, quiet = settled_chip(pid, target)
+    reference = copy.deepcopy(chip)
+    assert batch.rest(chip, count)
+    assert batch.run_reference(reference, count, quiet) == quiet + count  # nothing changed
+    assert integers(chip) == integers(reference)
+    assert chip.motor.position == pytest.approx(reference.motor.position, rel=0, abs=1e-9)
+    assert chip.motor.velocity == pytest.approx(reference.motor.velocity, rel=1e-9, abs=1e-300)
+
+
+def test_a_weak_loop_rests_off_its_target() -> None:
+    """(The case the closed form's Σe is for.)"""
+    chip, _ = settled_chip((5, 0, 0, 0, 3), 2_000)
+    assert chip.desired - chip.actual == 2
+
+
+def test_the_closed_form_leaves_a_chip_it_cannot_rest_unchanged() -> None:
+    """A load the output does not hold exactly, a lag that would reach the next count: the
+    samples are the caller's to compute."""
+    chip, _ = settled_chip((150, 50, 50, 500, 15), 3_000)
+    chip.motor.load = 1e-6
+    before = batch.snapshot(chip)
+    assert not batch.rest(chip, 100)
+    assert batch.snapshot(chip) == before
+    chip.motor.load = 0.0
+    chip.motor.position = math.floor(chip.motor.position) + 5e-6  # the lag: τ·|v| = 1e-5 counts
+    chip.motor.velocity = -STILL / 2
+    before = batch.snapshot(chip)
+    assert not batch.rest(chip, 100)
+    assert batch.snapshot(chip) == before
+    assert batch.rest(chip, 1)  # one sample's lag stays within the count

@@ -98,23 +98,43 @@ def _quiet_after(chip: Lm628, before: tuple[int, int, int, int], quiet: int) -> 
     return 0
 
 
-def rest(chip: Lm628, count: int) -> None:
+def rest(chip: Lm628, count: int) -> bool:
     """``count`` samples of a settled chip (:func:`run` counted the samples without change that
-    make it so, :func:`_quiet_after`): what they change, in closed form, as :meth:`Lm628.sample` would: the filter's
-    derivative countdown, Σe without an integral term (clamped as each sample clamps it, which
-    for a constant e is the sum's clamp), the UDF bit.  The motor, slower than
-    :data:`STILL`, stays where it is (a lag's rest of less than a thousandth of a count)."""
+    make it so, :func:`_quiet_after`) in closed form: what :meth:`Lm628.sample` would change,
+    the filter's derivative countdown, Σe without an integral term (clamped as each sample
+    clamps it, which for a constant e is the sum's clamp), the UDF bit, and the motor's lag
+    dying away towards its goal speed 0 (v·e^(−nT/τ), the position v·τ·(1 − e^(−nT/τ)) further:
+    the floating-point sums of the samples one by one within their rounding).  Returns False,
+    having changed nothing, where that is not all: a goal speed that is not 0 (a load the
+    output does not hold exactly), a lag that would reach the next count or an end stop; the
+    caller computes those samples."""
     if count <= 0:
-        return
+        return True
+    motor, f = chip.motor, chip.filter
+    volts = f.volts if f.dac_bits == 12 else f.volts * 10.0  # (the filter's output, reset while the motor is off)
+    x, velocity = motor.position, motor.velocity
+    if not motor.blocked:
+        if motor.kv * (volts - motor.load) != 0.0:
+            return False
+        if motor.tau > 0:
+            if motor._decay[0] != CHIP_SAMPLE:
+                motor._decay = (CHIP_SAMPLE, *_lag_terms(CHIP_SAMPLE, motor.tau))
+            decay = motor._decay[1] ** count
+            x, velocity = x + velocity * motor.tau * (1.0 - decay), velocity * decay
+            if not motor.low <= x <= motor.high or math.floor(chip.encoder_sign * x) != chip._raw:
+                return False
+        else:
+            velocity = 0.0
+    motor.position, motor.velocity = x, velocity
     chip.udf_sample = False
     if chip.motor_off:
-        return  # the filter is reset at every sample
-    f = chip.filter
+        return True  # the filter is reset at every sample
     countdown, ds = f._countdown, f.working.ds
     f._countdown = countdown - count if count <= countdown else ds - (count - countdown - 1) % (ds + 1)
     if not f.working.ki:
         e = sat(chip.profile.desired - chip.unwrapped_actual, 16)
         f.error_sum = max(I24_LOW, min(I24_HIGH, f.error_sum + count * e))
+    return True
 
 
 def run_reference(chip: Lm628, count: int, quiet: int) -> int:

@@ -80,7 +80,7 @@ class Pcd4(Model):
             registers = AxisRegisters(RegisterBlock(self.registers, self.layout.block(n)))
             registers.reset()  # G-16: the registers start with Example 1's values
             axis = H3Axis(n, self.layout, drive.chip, registers, self.flags, on_comers=self._comers,
-                          rsigb_bit12_inverted=s["rsigb_bit12_inverted"])
+                          on_write=drive.poke, rsigb_bit12_inverted=s["rsigb_bit12_inverted"])
             self.drives.append(drive)
             self.axes.append(axis)
             self.signals.subscribe(f"LS1_{n}", lambda _n, old, new, n=n: self._limit(n, old, new))
@@ -259,10 +259,7 @@ class Pcd4(Model):
                 def before(ms: float, drive: H3Drive = drive, offset: float = offset) -> None:
                     drive.catch_up(start + offset + ms / 1000, follow=follow)
 
-                writes = axis.writes
-                elapsed += axis.handle(before) / 1000
-                if axis.writes != writes and follow:  # a read changes no chip: a settled one stays settled
-                    drive.poke()
+                elapsed += axis.handle(before) / 1000  # (a command pokes the drive at once; a read does not)
                 self._note(axis)
             if self.sequence is not None:
                 self.sequence.cycle()

@@ -1,7 +1,10 @@
 """Runs an LM628 on the device clock (spec pcd4h3.md §5.1; design principle: an idle simulator
 uses no CPU): the chip's samples are computed in batches, up to the present, whenever someone
 looks (:meth:`ChipStepper.catch_up`) and by a periodic tick while anything moves; once the
-trajectory is complete and the motor stands still on its position the ticks stop.
+trajectory is complete, the motor stands still on its position and the filter rests, the ticks
+stop, and a look computes what the samples since change in closed form
+(:func:`~devsim.devices.pcd4h3.batch.rest`), on the chip's own sample grid, which runs on.  Only a
+command wakes the chip (:meth:`ChipStepper.poke`); a read changes nothing in it (§3.5.3).
 
 A batch computes every sample (341.333 µs apart) in order, in one pass
 (:func:`~devsim.devices.pcd4h3.batch.run`, bit-exact with :meth:`Lm628.sample` one at a time), so
@@ -74,9 +77,11 @@ class ChipStepper:
                 self._quiet = batch.run(self.chip, target - self._samples, self._quiet)
                 self._samples = target
             self._present = target
-        elif self.settled:  # its samples change almost nothing: done in closed form, on the same grid
+        elif self.settled:  # its samples change almost nothing: in closed form, on the same grid
             if self._samples < due:
-                batch.rest(self.chip, due - self._samples)
+                if not batch.rest(self.chip, due - self._samples):
+                    self._quiet = batch.run(self.chip, due - self._samples, self._quiet)
+                    moved = True
                 self._samples = due
             self._present = self._samples
         else:
