@@ -229,7 +229,13 @@ def test_a_cycle_at_the_instant_of_another_timer_still_runs_after_it() -> None:
 
 def plan(target: float | None, *segments: Segment, jog: int = 0) -> Any:
     """An indexer as :func:`direction_changes_at` reads it: the target, the jog, the plan."""
-    return types.SimpleNamespace(target=target, jog_dir=jog, axis=types.SimpleNamespace(segments=lambda: list(segments)))
+    def state(t: float | None, part: str) -> float:
+        seg = next(seg for seg in segments if seg.t0 <= t <= seg.t1)
+        return getattr(seg, part)(t)
+
+    axis = types.SimpleNamespace(segments=lambda: list(segments), position=lambda t=None: state(t, "position"),
+                                 velocity=lambda t=None: state(t, "velocity"))
+    return types.SimpleNamespace(target=target, jog_dir=jog, axis=axis)
 
 
 @pytest.mark.parametrize(("indexer", "change"), [

@@ -71,7 +71,7 @@ class PlcCard(Protocol):
     def record_event(self, name: str) -> None: ...
 
 
-__all__ = ["FB254_FUNCTIONS", "M_FUNCTION_BITS", "Plc", "cycle_after", "direction_changes_at"]
+__all__ = ["FB254_FUNCTIONS", "M_FUNCTION_BITS", "Plc", "commanded_direction", "cycle_after", "direction_changes_at"]
 
 #: The handshake bits the CNC sets and the PLC resets (spec §3.8.9): M6.0..M10.7, M15.7, M18.7.
 M_FUNCTION_BITS: tuple[tuple[int, int], ...] = tuple((b, k) for b in range(6, 11) for k in range(8)) + (
@@ -117,9 +117,21 @@ def cycle_after(now: float, cycle: float, horizon: float) -> tuple[float, int]:
     return when, skipped
 
 
+def commanded_direction(ix: Indexer, t: float | None = None) -> int:
+    """Where the axis is commanded now (or at ``t`` of its plan; a limit rule's ``direction``,
+    spec §4.10.3): towards the target, else the jog's way, else the set-point velocity's (+1,
+    −1, 0)."""
+    if ix.target is not None:
+        d = ix.target - ix.axis.position(t)
+        return (d > 0) - (d < 0)
+    if ix.jog_dir:
+        return ix.jog_dir
+    v = ix.axis.velocity(t)
+    return (v > 0) - (v < 0)
+
+
 def direction_changes_at(indexer: Indexer, now: float, until: float) -> float:
-    """Where, before ``until``, the commanded direction a limit rule looks at (towards the
-    target, else the jog's, else the velocity's: :meth:`Plc._commanded_direction`) may change
+    """Where, before ``until``, the :func:`commanded_direction` may change
     within the axis plan's segment of ``now`` (its end is a boundary of the plan that the skip
     waits for anyway): the set-point passing the target, the velocity turning.  A moment at or
     before the change (bisection), or ``until``."""
@@ -131,8 +143,7 @@ def direction_changes_at(indexer: Indexer, now: float, until: float) -> float:
     target = indexer.target
 
     def direction(t: float) -> int:
-        d = target - segment.position(t) if target is not None else segment.velocity(t)
-        return (d > 0) - (d < 0)
+        return commanded_direction(indexer, t)
 
     end = min(segment.t1, until)
     if end == math.inf:  # an endless cruise
@@ -472,21 +483,11 @@ class Plc:
                 del self._ack_seen[key]
                 self.set_marker_bit(byte, bit, False)
 
-    def _commanded_direction(self) -> int:
-        ix = self.indexer
-        if ix.target is not None:
-            d = ix.target - ix.axis.position()
-            return (d > 0) - (d < 0)
-        if ix.jog_dir:
-            return ix.jog_dir
-        v = ix.axis.velocity()
-        return (v > 0) - (v < 0)
-
     def _limit_switches(self) -> None:
         rules = self.cfg.limit_switches
         if not rules:
             return
-        direction = self._commanded_direction()
+        direction = commanded_direction(self.indexer)
         want_stop = False
         for i, rule in enumerate(rules):
             active = self.bit(rule.input) != rule.active_low
