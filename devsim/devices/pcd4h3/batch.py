@@ -98,7 +98,7 @@ def _quiet_after(chip: Lm628, before: tuple[int, int, int, int], quiet: int) -> 
     return 0
 
 
-def rest(chip: Lm628, count: int) -> bool:
+def rest(chip: Lm628, count: int, lag: tuple[float, float, int] | None = None) -> bool:
     """``count`` samples of a settled chip (:func:`run` counted the samples without change that
     make it so, :func:`_quiet_after`) in closed form: what :meth:`Lm628.sample` would change,
     the filter's derivative countdown, Σe without an integral term (clamped as each sample
@@ -107,7 +107,9 @@ def rest(chip: Lm628, count: int) -> bool:
     the floating-point sums of the samples one by one within their rounding).  Returns False,
     having changed nothing, where that is not all: a goal speed that is not 0 (a load the
     output does not hold exactly), a lag that would reach the next count or an end stop; the
-    caller computes those samples."""
+    caller computes those samples.  ``lag``: the motor's position and velocity where its rest
+    began and the samples since, these included (rests in any pieces then give the same
+    floating point); by default the motor now and ``count``."""
     if count <= 0:
         return True
     motor, f = chip.motor, chip.filter
@@ -119,7 +121,8 @@ def rest(chip: Lm628, count: int) -> bool:
         if motor.tau > 0:
             if motor._decay[0] != CHIP_SAMPLE:
                 motor._decay = (CHIP_SAMPLE, *_lag_terms(CHIP_SAMPLE, motor.tau))
-            decay = motor._decay[1] ** count
+            x, velocity, since = lag if lag is not None else (x, velocity, count)
+            decay = motor._decay[1] ** since
             x, velocity = x + velocity * motor.tau * (1.0 - decay), velocity * decay
             if not motor.low <= x <= motor.high or math.floor(chip.encoder_sign * x) != chip._raw:
                 return False

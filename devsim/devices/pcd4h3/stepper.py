@@ -50,6 +50,8 @@ class ChipStepper:
         self._ahead: list[tuple[int, int, batch.State]] = []
         self._unseen = False  # the chip's state was computed ahead: on_batch has not followed it
         self._present = 0  # the sample the present has reached (while the chip is computed ahead)
+        #: (sample, motor position, velocity) where the settled chip's rest began (batch.rest's lag)
+        self._lag: tuple[int, float, float] | None = None
 
     @property
     def active(self) -> bool:
@@ -68,6 +70,7 @@ class ChipStepper:
         due = int((now - self._epoch) / CHIP_SAMPLE + 1e-9)
         moved, self._unseen = self._unseen, False
         if self._ahead:
+            self._lag = None
             # the chip as the present has it: never before what a catch-up already reached (a
             # function of the PLC cycle acts a little after the cycle's start)
             target = max(due, self._present)
@@ -79,12 +82,18 @@ class ChipStepper:
             self._present = target
         elif self.settled:  # its samples change almost nothing: in closed form, on the same grid
             if self._samples < due:
-                if not batch.rest(self.chip, due - self._samples):
+                motor = self.chip.motor
+                if self._lag is None:
+                    self._lag = (self._samples, motor.position, motor.velocity)
+                since, x, v = self._lag
+                if not batch.rest(self.chip, due - self._samples, (x, v, due - since)):
+                    self._lag = None
                     self._quiet = batch.run(self.chip, due - self._samples, self._quiet)
                     moved = True
                 self._samples = due
             self._present = self._samples
         else:
+            self._lag = None
             if self._samples < due:
                 self._quiet = batch.run(self.chip, due - self._samples, self._quiet)
                 self._samples = due
@@ -112,7 +121,7 @@ class ChipStepper:
         from the chip's now (:func:`~devsim.devices.pcd4h3.batch.run_to`).  Returns the chip's
         state at each of ``untils`` the pass reached.  The present stays where it was for every
         look (:meth:`catch_up`)."""
-        start = self._samples
+        start, self._lag = self._samples, None
         if not self._ahead:
             self._present = start
             self._ahead.append((start, self._quiet, batch.snapshot(self.chip)))
@@ -142,7 +151,7 @@ class ChipStepper:
         """A command changed the chip (call :meth:`catch_up` before the command, so it acts at
         the right sample): keep ticking until the chip settles."""
         self._ahead.clear()
-        self._quiet = 0
+        self._quiet, self._lag = 0, None
         if self._timer is None and self.own_timer:
             self._timer = self.clock.call_later(TICK, self._tick)
 
