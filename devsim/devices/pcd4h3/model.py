@@ -218,7 +218,11 @@ class Pcd4(Model):
         before = [axis.transfers for axis in self.axes]
         for drive in self.drives:
             drive.catch_up(start, follow=False)
-        self._run_axes(start, follow=False)
+        self.timers.moment = start  # (the user program reads them as that cycle did)
+        try:
+            self._run_axes(start, follow=False)
+        finally:
+            self.timers.moment = None
         return before
 
     def _cycle(self) -> None:
@@ -238,6 +242,8 @@ class Pcd4(Model):
                 step = max(self.cycle_time, work)
                 skipped = quiet_cycles(self.drives, due, step, moments, self._horizon)
                 self._horizon = min(HORIZON, 2 * self._horizon)
+                while skipped and not self.timers.none_runs_out(skipped[-1]):  # (that cycle would see it)
+                    skipped.pop()
                 if skipped:
                     self._skipped, due = skipped, skipped[-1] + step
                     self._coast_end = due
@@ -297,13 +303,14 @@ class Pcd4(Model):
 
     def _only_moving(self) -> bool:
         """The next cycles have nothing to do but copy the chips' status (while it stays) and
-        read the chips as configured: no command flag, no user program waiting on a condition
-        or a timer, and reads that cannot fail (every chip fitted, no disturbed transfer, a
-        ComErS that only counts)."""
+        read the chips as configured: no command flag, no step of the user program whose
+        condition holds (one waiting on a timer waits: the cycles skipped end before it runs
+        out), and reads that cannot fail (every chip fitted, no disturbed transfer, a ComErS
+        that only counts)."""
         if self.status != RUN:
             return True
         sequence = self.sequence
-        if sequence is not None and (sequence.busy or self.timers.running()):
+        if sequence is not None and sequence.busy:
             return False
         if self._reading() and (
                 self.settings["comers_action"] != "continue"
