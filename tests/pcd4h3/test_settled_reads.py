@@ -83,8 +83,8 @@ def play(config: dict[str, Any], script: dict[float, list[Step]], seconds: float
     computed = [0]
     run = batch._run
 
-    def counting(chip: Any, count: int, quiet: int, marks: list[int], checkpoints: list[Any]) -> int:
-        quiet = run(chip, count, quiet, marks, checkpoints)
+    def counting(chip: Any, count: int, quiet: int, marks: list[int], checkpoints: list[Any], *more: Any) -> int:
+        quiet = run(chip, count, quiet, marks, checkpoints, *more)
         computed[0] += checkpoints[-1][0] if marks and checkpoints else count
         return quiet
 
@@ -152,9 +152,9 @@ def test_a_standing_axis_read_every_cycle_computes_no_samples(monkeypatch: pytes
     axis, computed = pcd.axes[0], [0]
     run = batch._run
 
-    def counting(chip: Any, count: int, quiet: int, marks: list[int], checkpoints: list[Any]) -> int:
+    def counting(chip: Any, count: int, quiet: int, marks: list[int], checkpoints: list[Any], *more: Any) -> int:
         computed[0] += count
-        return run(chip, count, quiet, marks, checkpoints)
+        return run(chip, count, quiet, marks, checkpoints, *more)
 
     monkeypatch.setattr(batch, "_run", counting)
     transfers = axis.transfers
@@ -225,8 +225,8 @@ def test_the_closed_form_leaves_a_chip_it_cannot_rest_unchanged() -> None:
     assert not batch.rest(chip, 100)
     assert batch.snapshot(chip) == before
     chip.motor.load = 0.0
-    chip.motor.position = math.floor(chip.motor.position) + 5e-6  # the lag: τ·|v| = 1e-5 counts
-    chip.motor.velocity = -STILL / 2
+    chip.rest_x = math.floor(chip.motor.position) + 5e-6  # where its rest began; the lag: τ·|v| = 1e-5 counts
+    chip.rest_v, chip.rest_n = -STILL / 2, 0
     before = batch.snapshot(chip)
     assert not batch.rest(chip, 100)
     assert batch.snapshot(chip) == before

@@ -33,7 +33,7 @@ MARGIN = 1.0  # counts either side of a switch edge that count as near
 
 def _may_look_ahead(drive: H3Drive) -> bool:
     chip = drive.chip
-    return drive.settled or (not chip.profile.complete and not chip.motor_off)
+    return drive.settled or not chip.motor_off
 
 
 def switch_near(drive: H3Drive, first: float, second: float, margin: float = MARGIN) -> bool:

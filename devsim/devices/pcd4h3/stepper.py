@@ -31,7 +31,7 @@ from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 __all__ = ["ChipStepper"]
 
 TICK = 0.010  # seconds of device time between batches while the chip is active
-QUIET = 64  # samples without any change before the chip counts as settled
+QUIET = batch.SETTLE  # samples without any change before the chip counts as settled
 
 
 class ChipStepper:
@@ -50,8 +50,6 @@ class ChipStepper:
         self._ahead: list[tuple[int, int, batch.State]] = []
         self._unseen = False  # the chip's state was computed ahead: on_batch has not followed it
         self._present = 0  # the sample the present has reached (while the chip is computed ahead)
-        #: (sample, motor position, velocity) where the settled chip's rest began (batch.rest's lag)
-        self._lag: tuple[int, float, float] | None = None
 
     @property
     def active(self) -> bool:
@@ -59,8 +57,9 @@ class ChipStepper:
 
     @property
     def settled(self) -> bool:
-        """Nothing has changed for a while: no sample needs computing until a command."""
-        return self._quiet >= QUIET
+        """Nothing has changed for a while: no sample needs computing until a command (and none
+        was computed ahead of the present, whose count of samples without change a look finds)."""
+        return self._quiet >= QUIET and not self._ahead
 
     def catch_up(self, until: float | None = None, *, follow: bool = True) -> None:
         """Compute every sample due by now (or by ``until``); a settled chip just rests.
@@ -70,39 +69,37 @@ class ChipStepper:
         due = int((now - self._epoch) / CHIP_SAMPLE + 1e-9)
         moved, self._unseen = self._unseen, False
         if self._ahead:
-            self._lag = None
             # the chip as the present has it: never before what a catch-up already reached (a
             # function of the PLC cycle acts a little after the cycle's start)
             target = max(due, self._present)
             moved = moved or target > self._present
             self._rewind(target)
-            if self._samples < target:
-                self._quiet = batch.run(self.chip, target - self._samples, self._quiet)
-                self._samples = target
+            moved = self._advance(target) or moved
             self._present = target
-        elif self.settled:  # its samples change almost nothing: in closed form, on the same grid
-            if self._samples < due:
-                motor = self.chip.motor
-                if self._lag is None:
-                    self._lag = (self._samples, motor.position, motor.velocity)
-                since, x, v = self._lag
-                if not batch.rest(self.chip, due - self._samples, (x, v, due - since)):
-                    self._lag = None
-                    self._quiet = batch.run(self.chip, due - self._samples, self._quiet)
-                    moved = True
-                self._samples = due
-            self._present = self._samples
         else:
-            self._lag = None
-            if self._samples < due:
-                self._quiet = batch.run(self.chip, due - self._samples, self._quiet)
-                self._samples = due
-                moved = True
+            settled = self.settled
+            if self._samples < due or settled:
+                moved = self._advance(due) or moved
             self._present = self._samples
         if moved and not follow:
             self._unseen = True
         elif moved and self.on_batch is not None:
             self.on_batch()
+
+    def _advance(self, target: int) -> bool:
+        """Take the chip to sample ``target``: a settled one in closed form where it can
+        (:func:`~devsim.devices.pcd4h3.batch.rest`, which also puts its motor where its rest
+        puts it however its samples were taken), else sample by sample.  Returns whether the
+        motor moved."""
+        count = max(0, target - self._samples)
+        self._samples += count
+        motor = self.chip.motor
+        x = motor.position
+        if self._quiet >= QUIET and batch.rest(self.chip, count):
+            return motor.position != x  # (its lag's last thousandths of a count)
+        if count:
+            self._quiet = batch.run(self.chip, count, self._quiet)
+        return bool(count)
 
     def _rewind(self, target: int) -> None:
         """Take the chip from what was computed ahead to the last checkpoint at or before
@@ -121,7 +118,7 @@ class ChipStepper:
         from the chip's now (:func:`~devsim.devices.pcd4h3.batch.run_to`).  Returns the chip's
         state at each of ``untils`` the pass reached.  The present stays where it was for every
         look (:meth:`catch_up`)."""
-        start, self._lag = self._samples, None
+        start = self._samples
         if not self._ahead:
             self._present = start
             self._ahead.append((start, self._quiet, batch.snapshot(self.chip)))
@@ -130,7 +127,7 @@ class ChipStepper:
         marks = sorted({due for due in dues if due > 0})
         reached: dict[int, batch.State] = {}
         if marks:
-            checkpoints, self._quiet = batch.run_to(self.chip, marks, self._quiet)
+            checkpoints, self._quiet = batch.run_to(self.chip, marks, self._quiet, settle=True)
             for mark, quiet, state in checkpoints:
                 self._ahead.append((start + mark, quiet, state))
                 reached[mark] = state
@@ -151,7 +148,7 @@ class ChipStepper:
         """A command changed the chip (call :meth:`catch_up` before the command, so it acts at
         the right sample): keep ticking until the chip settles."""
         self._ahead.clear()
-        self._quiet, self._lag = 0, None
+        self._quiet = 0
         if self._timer is None and self.own_timer:
             self._timer = self.clock.call_later(TICK, self._tick)
 
