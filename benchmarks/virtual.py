@@ -12,7 +12,7 @@ costs the clock alone.  The ratio devsim CPU / reference CPU is printed last.
 The issue's reference case (issue 31): 1 h of 10 SERS each looping a program of two 180° moves
 took 4.0 s; target < 0.5 s.
 
-    python benchmarks/virtual.py [--kind sers ...] [--hours 1] [--rounds 1] [--profile N]
+    python benchmarks/virtual.py [--kind sers ...] [--hours 1] [--rounds 1] [--profile N] [--limit-switches]
 
 ``--profile N`` runs each kind once more under cProfile and prints its N costliest functions.
 """
@@ -61,16 +61,23 @@ def _still_looping(device: str, event: str, seconds: float) -> str:
             "occurrence: last}\n")
 
 
-def _gms96(seconds: float) -> str:
+def _gms96(seconds: float, limit_switches: bool = False) -> str:
     """One GMS96 looping CNC program 0 (§2.5), stored as its download would store it: a move out,
     M50 with the PLC's acknowledge (M6.0 reset after 100 ms, §2.4.1), a dwell (WAIT), output A0.2
     on (SETO), the move back, A0.2 off (RESO), a dwell.  The PLC starts the program again when
     it ended (M1.0 → M0.2, §2.4.1 MB0/MB1); the host switches the position controller on (Q3)
-    and starts it (p3;1;0)."""
+    and starts it (p3;1;0).  ``limit_switches``: the PLC has two limit rules (spec §4.10.3: a
+    stop towards −, an abort with a message towards +) on switches on the axis (§5.11) beyond
+    the moves' ends, as a machine has them."""
+    limits = ("limit_switches: [{input: E0.3, action: stop, direction: '-'}, "
+              "{input: E0.4, action: abort, direction: '+', message: 31}], ") if limit_switches else ""
+    axis = (", axis: {limit_switches: [{input: E0.3, high: -5000}, {input: E0.4, low: 15000}]}"
+            if limit_switches else "")
     program = '["A10000", "m50", "p10;14;5", "p10;16;2", "A0", "p10;17;2", "p10;14;5"]'
     return (f"name: a GMS96 looping CNC program 0\ntimeout: {seconds + 60}s\ndevices:\n"
             "  - name: card\n    kind: gms96\n"
-            "    config: {dil: {address: 3}, plc: {auto_ack_m_functions_ms: 100, copy_bits: [{from: M1.0, to: M0.2}]}}\n"
+            f"    config: {{dil: {{address: 3}}, plc: {{{limits}auto_ack_m_functions_ms: 100, "
+            f"copy_bits: [{{from: M1.0, to: M0.2}}]}}{axis}}}\n"
             f"    state: {{program.0: {program}}}\n"
             "steps:\n"
             '  - send: "\\x68\\x06\\x06\\x68\\x53\\x03\\x51\\x03\\x00\\x00\\xAA\\x16"\n'  # Q3
@@ -198,6 +205,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--hours", type=float, default=1.0, help="simulated time per run (default 1 h)")
     parser.add_argument("--rounds", type=int, default=1, help="runs of each side (median)")
     parser.add_argument("--profile", type=int, default=0, metavar="N", help="print N costliest functions")
+    parser.add_argument("--limit-switches", action="store_true",
+                        help="the GMS96 card with two limit rules on switches on its axis")
     args = parser.parse_args(argv)
     seconds = args.hours * 3600
     rows = []
@@ -205,7 +214,7 @@ def main(argv: list[str] | None = None) -> int:
         for kind in args.kind or sorted(SCENARIOS):
             path = os.path.join(tmp, f"{kind}.yaml")
             with open(path, "w") as f:
-                f.write(SCENARIOS[kind](seconds))
+                f.write(_gms96(seconds, True) if kind == "gms96" and args.limit_switches else SCENARIOS[kind](seconds))
             dev, ref, events = [], [], 0
             for _ in range(args.rounds):  # alternate: the kind, then the bare clock with as many events
                 run = _run("kind", path, seconds)

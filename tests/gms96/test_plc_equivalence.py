@@ -14,11 +14,12 @@ from typing import Any
 import pytest
 
 from devsim.core.clock import VirtualClock
+from devsim.core.profile import Segment
 from devsim.devices.gms96 import Gms96Device
 from devsim.devices.gms96.executor import Cmd
 from devsim.devices.gms96.image import parse_bit
 from devsim.devices.gms96.io import OUTPUT_BITS
-from devsim.devices.gms96.plc import _EPS, M_FUNCTION_BITS, Plc
+from devsim.devices.gms96.plc import _EPS, M_FUNCTION_BITS, Plc, direction_changes_at
 
 
 def whole_byte_bit(plc: Plc, name: str) -> bool:
@@ -100,8 +101,21 @@ NO_INPUTS = {
 }
 
 
-#: Every rule but the limit switches (which read the commanded direction: no cycle is skipped with them).
+#: Every rule but the limit switches.
 NO_LIMITS = {key: value for key, value in EVERY_RULE.items() if key != "limit_switches"}
+#: Limit rules of each kind (stop and abort, a direction or any, a message, normally closed)
+#: on inputs that switches on the axis drive (``AXIS_SWITCHES``) and the random actions set.
+LIMITS = {
+    "cycle_ms": 20,
+    "limit_switches": [{"input": "E0.3", "action": "stop", "message": 31, "direction": "-"},
+                       {"input": "E0.4", "action": "abort", "direction": "+"},
+                       {"input": "E0.6", "action": "stop", "active_low": True},
+                       {"input": "E0.7", "action": "abort", "direction": "-", "message": 32},
+                       {"input": "E1.1", "action": "stop", "direction": "+"}],
+    "copy_bits": [{"from": "M0.0", "to": "A0.3"}, {"from": "M1.0", "to": "M21.1"}],
+}
+AXIS_SWITCHES = {"limit_switches": [{"input": "E0.3", "high": -2500}, {"input": "E0.4", "low": 2500},
+                                    {"input": "E0.7", "high": -3500}, {"input": "E1.1", "low": 1000, "high": 1200}]}
 #: The PLC starting the program again when it ended (the virtual-time benchmark's loop).
 LOOPING = {"cycle_ms": 20, "auto_ack_m_functions_ms": 100, "copy_bits": [{"from": "M1.0", "to": "M0.2"}]}
 
@@ -110,7 +124,8 @@ PROGRAM = ["A3000", "m50", "p10;14;2", "p10;16;2", "A0", "m53", "p10;17;2"]
 
 
 def card(plc: dict[str, Any], full: bool, program: list[str] = PROGRAM) -> Gms96Device:
-    device = Gms96Device(clock=VirtualClock(), config={"boot_time": 0, "plc": plc, "dil": {"address": 3}})
+    axis = AXIS_SWITCHES if plc is LIMITS else {}
+    device = Gms96Device(clock=VirtualClock(), config={"boot_time": 0, "plc": plc, "dil": {"address": 3}, "axis": axis})
     if full:
         model = device.model
         model.plc.run_cycle = types.MethodType(full_cycle, model.plc)
@@ -138,6 +153,9 @@ ACTIONS = (
     lambda d, r: d.model.executor.submit(Cmd("Q", 3, 0, 0, 1)),
     lambda d, r: d.model.executor.submit(Cmd("A", r.randrange(-4000, 4000), 0, 0, 1)),
     lambda d, r: d.set("marker.M0.1", True),
+    lambda d, r: d.set(f"input.E{r.choice((0, 1))}.{r.choice((1, 3, 4, 6, 7))}", r.random() < 0.5),
+    lambda d, r: d.model.executor.submit(Cmd("v", r.randrange(-3000, 3000), 0, 0, 1)),
+    lambda d, r: d.set("marker.M0.0", r.random() < 0.3),
 )
 
 
@@ -158,13 +176,15 @@ def test_the_lean_cycle_does_what_the_full_cycle_does(rules: dict[str, Any], see
     assert lean.model.plc.cycles > 1000
 
 
-@pytest.mark.parametrize("rules", [EVERY_RULE, NO_LIMITS, NO_INPUTS, LOOPING],
-                         ids=["every_rule", "no_limits", "no_inputs", "looping"])
+@pytest.mark.parametrize("rules", [EVERY_RULE, NO_LIMITS, NO_INPUTS, LOOPING, LIMITS],
+                         ids=["every_rule", "no_limits", "no_inputs", "looping", "limits"])
 @pytest.mark.parametrize("seed", range(8))
 def test_cycles_skipped_while_nobody_looks_change_nothing(rules: dict[str, Any], seed: int) -> None:
     """While nobody looks (a scenario waits for its next step), the PLC skips the cycles that
     would read what the last one read and change nothing (issue 31): between the looks and the
-    actions the card is the card that ran every cycle, the cycle count included."""
+    actions the card is the card that ran every cycle, the cycle count included; limit rules
+    too, whose inputs switches on the axis drive at their solved instants (timers the skip
+    waits for) and whose direction changes at the plan's boundaries."""
     lean, full = card(rules, False), card(rules, True)
     full.model.plc._schedule_next = full.model.plc._schedule  # (every cycle, one by one)
     r = random.Random(seed)
@@ -180,10 +200,7 @@ def test_cycles_skipped_while_nobody_looks_change_nothing(rules: dict[str, Any],
         skipped += full.model.clock.advance(dt) - events
         lean.unobserved_until(-math.inf)
         assert seen(lean) == seen(full)
-    if rules is EVERY_RULE:
-        assert skipped == 0
-    else:
-        assert skipped > 1000  # (cycles the lean card did not run one by one)
+    assert skipped > 1000  # (cycles the lean card did not run one by one)
 
 
 def test_a_cycle_at_the_instant_of_another_timer_still_runs_after_it() -> None:
@@ -208,3 +225,35 @@ def test_a_cycle_at_the_instant_of_another_timer_still_runs_after_it() -> None:
         assert seen(lean) == seen(full)
         marks.append(lean.read("marker.M20.0"))
     assert True in marks and False in marks  # the loop ran, its output copied on and off
+
+
+def plan(target: float | None, *segments: Segment, jog: int = 0) -> Any:
+    """An indexer as :func:`direction_changes_at` reads it: the target, the jog, the plan."""
+    def state(t: float | None, part: str) -> float:
+        seg = next(seg for seg in segments if seg.t0 <= t <= seg.t1)
+        return getattr(seg, part)(t)
+
+    axis = types.SimpleNamespace(segments=lambda: list(segments), position=lambda t=None: state(t, "position"),
+                                 velocity=lambda t=None: state(t, "velocity"))
+    return types.SimpleNamespace(target=target, jog_dir=jog, axis=axis)
+
+
+@pytest.mark.parametrize(("indexer", "change"), [
+    # braking from 2000 inc/s at 4000 inc/s² over a target 400 inc ahead (it turns 500 inc on, at 0.5 s)
+    (plan(400.0, Segment(0.0, 1.0, 0.0, 2000.0, -4000.0)), (1 - math.sqrt(1 - 0.8)) / 2),  # 2000 t - 2000 t² = 400
+    (plan(None, Segment(0.0, 1.0, 0.0, 2000.0, -4000.0)), 0.5),  # no target: the velocity turns at 0.5 s
+    (plan(2000.0, Segment(0.0, math.inf, 0.0, 1000.0, 0.0)), 2.0),  # an endless cruise reaches the target
+    (plan(-50.0, Segment(0.0, 1.0, 0.0, 500.0, 0.0)), None),  # moving away from it
+    (plan(None, Segment(0.0, 1.0, 0.0, 2000.0, -4000.0), jog=-1), None),  # a jog: its direction
+    (plan(300.0), None),  # at rest
+])
+def test_the_skip_waits_for_the_commanded_direction_to_change(indexer: Any, change: float | None) -> None:
+    """A limit rule with a direction reads where the set-point goes: a skip ends at or just
+    before the moment that changes inside a segment (the set-point passing the target, the
+    velocity turning), and not before where it does not."""
+    until = math.inf  # (nobody looks for ever, no other timer)
+    at = direction_changes_at(indexer, 0.0, until)
+    if change is None:
+        assert at == until
+        return
+    assert change - 1e-8 <= at <= change

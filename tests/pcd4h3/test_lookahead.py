@@ -2,7 +2,8 @@
 issue 31, "schedule timers only for events"): with the chips computed ahead, a PCD gives the same
 chips, status flags, switch signals and recorded events as the PLC that runs every cycle, at every
 look of a host (random moments), through moves, breakpoints, a position error, a blocked motor,
-limit and reference switches and a second axis; and it runs far fewer timer events."""
+limit and reference switches, a second axis and one that stands while the cycles read it; and it
+runs far fewer timer events."""
 
 from __future__ import annotations
 
@@ -111,6 +112,9 @@ SCENARIOS: dict[str, tuple[dict[str, Any], dict[float, list[Step]], float]] = {
          "display": {1: {"reg1": "RActP", "reg2": "RSetV"}}},
         {0.2: [command(1, "FLdAA", "FLdVA", "FLdDA", "FStart", Accel=300, Veloc=120, DestP=180)],
          0.61: [command(1, RActP=7)], 1.1: [command(1, "FLdDA", "FStart", DestP=20)]}, 3.0),
+    "cyclic reads of a standing axis beside a moving one": (
+        {"cyclic_reads": ["FRdAP", "FRdSV", "FRdITS"], "display": {2: {"reg1": "RActP", "reg2": "RSetV"}}},
+        {0.2: [command(1, "FLdAA", "FLdVA", "FLdDA", "FStart", Accel=300, Veloc=150, DestP=250)]}, 4.0),
     "the manual's example 3 with I 8 held, then I 15": (
         {"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 1}, "user_program": "example3"},
         {0.1: [keys(8)], 4.0: [keys(15)]}, 6.0),

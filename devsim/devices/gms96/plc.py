@@ -18,7 +18,8 @@ that runs *scripted rules* on the card's process image, cyclically on the device
   ``plc.flash_bytes``).  In interpolation mode (DIL 6) the PLC never runs (spec §4.11.6).
 * while nobody looks (a scenario waits for its next step, :attr:`Plc.unobserved`), the cycles
   that would read what the last one read and change nothing are counted, not run
-  (:func:`cycle_after`); with limit switches or a hook every cycle runs.
+  (:func:`cycle_after`; with a limit rule that looks at the direction, up to where that may
+  change, :func:`direction_changes_at`); with a hook every cycle runs.
 
 Built-in rules (spec §4.10.3, all optional):
 
@@ -70,7 +71,7 @@ class PlcCard(Protocol):
     def record_event(self, name: str) -> None: ...
 
 
-__all__ = ["FB254_FUNCTIONS", "M_FUNCTION_BITS", "Plc", "cycle_after"]
+__all__ = ["FB254_FUNCTIONS", "M_FUNCTION_BITS", "Plc", "commanded_direction", "cycle_after", "direction_changes_at"]
 
 #: The handshake bits the CNC sets and the PLC resets (spec §3.8.9): M6.0..M10.7, M15.7, M18.7.
 M_FUNCTION_BITS: tuple[tuple[int, int], ...] = tuple((b, k) for b in range(6, 11) for k in range(8)) + (
@@ -114,6 +115,64 @@ def cycle_after(now: float, cycle: float, horizon: float) -> tuple[float, int]:
         skipped += 1
         when = when + cycle
     return when, skipped
+
+
+def commanded_direction(ix: Indexer, t: float | None = None) -> int:
+    """Where the axis is commanded now (or at ``t`` of its plan; a limit rule's ``direction``,
+    spec §4.10.3): towards the target, else the jog's way, else the set-point velocity's (+1,
+    −1, 0)."""
+    if ix.target is not None:
+        d = ix.target - ix.axis.position(t)
+        return (d > 0) - (d < 0)
+    if ix.jog_dir:
+        return ix.jog_dir
+    v = ix.axis.velocity(t)
+    return (v > 0) - (v < 0)
+
+
+def direction_changes_at(indexer: Indexer, now: float, until: float) -> float:
+    """Where, before ``until``, the :func:`commanded_direction` may change
+    within the axis plan's segment of ``now`` (its end is a boundary of the plan that the skip
+    waits for anyway): the set-point passing the target, the velocity turning.  A moment at or
+    before the change (bisection), or ``until``."""
+    if indexer.target is None and indexer.jog_dir:
+        return until
+    segment = next((seg for seg in indexer.axis.segments() if seg.t0 <= now < seg.t1), None)
+    if segment is None:
+        return until  # at rest: nothing moves the set-point
+    target = indexer.target
+
+    def direction(t: float) -> int:
+        return commanded_direction(indexer, t)
+
+    end = min(segment.t1, until)
+    if end == math.inf:  # an endless cruise
+        v = segment.velocity(now)
+        if target is None or v == 0.0:
+            return until
+        crossing = now + (target - segment.position(now)) / v
+        return max(now, crossing - 1e-9) if crossing >= now else until
+    first, pieces = direction(now), [now, end]
+    speed, last = segment.velocity(now), segment.velocity(end)
+    if (speed > 0) != (last > 0) or (speed < 0) != (last < 0):  # it turns: the pieces either side are monotonic
+        pieces.insert(1, _first_change(lambda t: (segment.velocity(t) > 0) - (segment.velocity(t) < 0), now, end))
+    for low, high in zip(pieces, pieces[1:], strict=False):
+        if direction(high) != first:
+            return _first_change(direction, low, high) if direction(low) == first else low
+    return until
+
+
+def _first_change(sign: Callable[[float], int], low: float, high: float) -> float:
+    """A moment at or before the first change of ``sign`` between ``low`` (where it is as at
+    the start) and ``high`` (where it differs), for a sign that changes once in between."""
+    start = sign(low)
+    while high - low > 1e-9:
+        middle = 0.5 * (low + high)
+        if sign(middle) == start:
+            low = middle
+        else:
+            high = middle
+    return low
 
 
 class Plc:
@@ -255,12 +314,15 @@ class Plc:
         """The next cycle; after one that changed nothing, while nobody looks, the first that
         may not (:func:`cycle_after`); only a virtual clock knows its next timer."""
         clock = self.clock
-        if (self._wrote or self._ack_seen or self.hooks or self.cfg.limit_switches or self.unobserved == -math.inf
+        if (self._wrote or self._ack_seen or self.hooks or self.unobserved == -math.inf
                 or not isinstance(clock, VirtualClock)):
             self._schedule()
             return
-        when, skipped = cycle_after(clock.now(), self.cycle_s, min(
-            self.unobserved, _at(clock.next_event()), _at(self.indexer.plan_changes_at())))
+        now = clock.now()
+        horizon = min(self.unobserved, _at(clock.next_event()), _at(self.indexer.plan_changes_at()))
+        if self._directed:  # (the inputs the limit rules read change only at events: the clock's, a step's)
+            horizon = direction_changes_at(self.indexer, now, horizon)
+        when, skipped = cycle_after(now, self.cycle_s, horizon)
         self.cycles += skipped
         self._cancel()
         self._timer = self.clock.call_at(when, self._cycle)
@@ -396,6 +458,8 @@ class Plc:
         c = self.cfg
         #: The copy rules with their bits parsed: ((area, byte, bit) read, invert, (area, byte, bit) written).
         self._copies = [(parse_bit(rule.source), rule.invert, parse_bit(rule.to)) for rule in c.copy_bits]
+        #: Whether a limit rule acts only on motion one way (it reads the commanded direction).
+        self._directed = any(rule.direction != "any" for rule in c.limit_switches)
         #: Whether a cycle takes the inputs into the PAE: a rule or a hook reads them.
         self._reads_inputs = bool(c.limit_switches or c.start_program_on_input or self.hooks
                                   or any(source[0] == "E" for source, _invert, _to in self._copies))
@@ -419,21 +483,11 @@ class Plc:
                 del self._ack_seen[key]
                 self.set_marker_bit(byte, bit, False)
 
-    def _commanded_direction(self) -> int:
-        ix = self.indexer
-        if ix.target is not None:
-            d = ix.target - ix.axis.position()
-            return (d > 0) - (d < 0)
-        if ix.jog_dir:
-            return ix.jog_dir
-        v = ix.axis.velocity()
-        return (v > 0) - (v < 0)
-
     def _limit_switches(self) -> None:
         rules = self.cfg.limit_switches
         if not rules:
             return
-        direction = self._commanded_direction()
+        direction = commanded_direction(self.indexer)
         want_stop = False
         for i, rule in enumerate(rules):
             active = self.bit(rule.input) != rule.active_low

@@ -32,12 +32,13 @@ from devsim.devices.pcd4h3.lm628 import (
     moved_flags,
     wrap,
 )
-from devsim.devices.pcd4h3.pid import _lag_terms
+from devsim.devices.pcd4h3.pid import _lag_terms, sat
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
-__all__ = ["STILL", "Checkpoint", "motion_of", "restore", "run", "run_reference", "run_to", "snapshot", "status_of"]
+__all__ = ["SETTLE", "STILL", "Checkpoint", "motion_of", "rest", "restore", "run", "run_reference", "run_to", "snapshot", "status_of"]
 
 STILL = 1e-3  # counts/s: a motor slower than this stands (for the settled count)
+SETTLE = 64  # samples without change after which a chip counts as settled (its rest begins)
 # counts a sample at most per count/s of the motor's speed: a sample of the lag moves it by at
 # most max(|v|, |goal|) · (τ·(1 − e^(−t/τ)) + t − τ·(1 − e^(−t/τ))) = … · t, with room for rounding
 STEP_SLACK = CHIP_SAMPLE * 1.001
@@ -58,7 +59,7 @@ def snapshot(chip: Lm628) -> State:
     return (p.position, p.velocity, p.target, p.stopping, p.complete,
             f.error_sum, f.derivative, f._previous, f._countdown, f.output, f.integral,
             m.position, m.velocity, chip.flags, chip.on_target, chip._raw, chip.udf_sample, chip.motor_off,
-            chip.index_armed, chip.index_position)
+            chip.index_armed, chip.index_position, chip.rest_x, chip.rest_v, chip.rest_n)
 
 
 def status_of(state: State) -> int:
@@ -77,21 +78,82 @@ def restore(chip: Lm628, state: State) -> None:
     (p.position, p.velocity, p.target, p.stopping, p.complete,
      f.error_sum, f.derivative, f._previous, f._countdown, f.output, f.integral,
      m.position, m.velocity, chip.flags, chip.on_target, chip._raw, chip.udf_sample, chip.motor_off,
-     chip.index_armed, chip.index_position) = state  # type: ignore[assignment]
+     chip.index_armed, chip.index_position, chip.rest_x, chip.rest_v, chip.rest_n) = state  # type: ignore[assignment]
 
 
-def _quiet_after(chip: Lm628, before: tuple[int, int, int], quiet: int) -> int:
-    if (chip.actual, chip.profile.position, chip.flags) == before and chip.profile.complete \
-            and abs(chip.motor.velocity) < STILL:
-        return quiet + 1
+def _still(chip: Lm628) -> tuple[int, int, int, int]:
+    """What a sample of a settled chip leaves as it was: the actual and desired positions, the
+    flags, and Σe where it feeds an integral term."""
+    f = chip.filter
+    return chip.actual, chip.profile.position, chip.flags, f.error_sum if f.working.ki else 0
+
+
+def _quiet_after(chip: Lm628, before: tuple[int, int, int, int], quiet: int) -> int:
+    """``quiet`` + 1 after a sample that changed nothing and leaves the filter at rest (the
+    error e is the one of the last derivative sample and the derivative 0: the next samples
+    change only the derivative's countdown and Σe without an integral term), else 0."""
+    f = chip.filter
+    if _still(chip) == before and chip.profile.complete and abs(chip.motor.velocity) < STILL \
+            and f.derivative == 0 and f._previous == sat(chip.profile.desired - chip.unwrapped_actual, 16):
+        quiet += 1
+        if quiet == SETTLE:
+            chip.rest_x, chip.rest_v, chip.rest_n = chip.motor.position, chip.motor.velocity, 0
+        elif quiet > SETTLE:
+            chip.rest_n += 1
+        return quiet
     return 0
+
+
+def rest(chip: Lm628, count: int) -> bool:
+    """``count`` samples of a settled chip (:func:`run` counted the samples without change that
+    make it so, :func:`_quiet_after`) in closed form: what :meth:`Lm628.sample` would change,
+    the filter's derivative countdown, Σe without an integral term (clamped as each sample
+    clamps it, which for a constant e is the sum's clamp), the UDF bit, and the motor's lag
+    dying away towards its goal speed 0 (v·e^(−nT/τ), the position v·τ·(1 − e^(−nT/τ)) further:
+    the floating-point sums of the samples one by one within their rounding).  Returns False,
+    having changed nothing, where that is not all: a goal speed that is not 0 (a load the
+    output does not hold exactly), a lag that would reach the next count or an end stop; the
+    caller computes those samples.  The lag is taken from where the rest began (``rest_x``,
+    ``rest_v``, ``rest_n`` + ``count`` samples), so that a settled chip's motor is the same
+    floating point however its samples were taken (``count`` 0: just that)."""
+    if count < 0:
+        return True
+    motor, f = chip.motor, chip.filter
+    volts = f.volts if f.dac_bits == 12 else f.volts * 10.0  # (the filter's output, reset while the motor is off)
+    x, velocity = motor.position, motor.velocity
+    if not motor.blocked:
+        if motor.kv * (volts - motor.load) != 0.0:
+            return False
+        if motor.tau > 0:
+            if motor._decay[0] != CHIP_SAMPLE:
+                motor._decay = (CHIP_SAMPLE, *_lag_terms(CHIP_SAMPLE, motor.tau))
+            since = chip.rest_n + count
+            decay = motor._decay[1] ** since
+            x, velocity = chip.rest_x + chip.rest_v * motor.tau * (1.0 - decay), chip.rest_v * decay
+            if not motor.low <= x <= motor.high or math.floor(chip.encoder_sign * x) != chip._raw:
+                return False
+        else:
+            velocity = 0.0
+    motor.position, motor.velocity = x, velocity
+    chip.rest_n += count
+    if not count:
+        return True
+    chip.udf_sample = False
+    if chip.motor_off:
+        return True  # the filter is reset at every sample
+    countdown, ds = f._countdown, f.working.ds
+    f._countdown = countdown - count if count <= countdown else ds - (count - countdown - 1) % (ds + 1)
+    if not f.working.ki:
+        e = sat(chip.profile.desired - chip.unwrapped_actual, 16)
+        f.error_sum = max(I24_LOW, min(I24_HIGH, f.error_sum + count * e))
+    return True
 
 
 def run_reference(chip: Lm628, count: int, quiet: int) -> int:
     """``count`` samples by :meth:`Lm628.sample`, one at a time; returns the samples in a row
     without any change (``quiet`` before)."""
     for _ in range(count):
-        before = (chip.actual, chip.profile.position, chip.flags)
+        before = _still(chip)
         chip.sample()
         quiet = _quiet_after(chip, before, quiet)
     return quiet
@@ -184,23 +246,25 @@ def run(chip: Lm628, count: int, quiet: int) -> int:
     return _run(chip, count, quiet, [], [])
 
 
-def run_to(chip: Lm628, marks: list[int], quiet: int) -> tuple[list[Checkpoint], int]:
+def run_to(chip: Lm628, marks: list[int], quiet: int, *, settle: bool = False) -> tuple[list[Checkpoint], int]:
     """The samples up to each of ``marks`` (increasing counts of samples from now, the first at
     least 1) in one pass, as :func:`run` computes them, with a checkpoint ``(samples, quiet,
     state)`` at each (the state as :func:`snapshot` takes it); the pass ends at the first
     checkpoint whose status (RDSTAT) differs from the chip's now: between commands the status
-    only gains bits, so the checkpoints before it all have the status of now."""
+    only gains bits, so the checkpoints before it all have the status of now.  ``settle``: also
+    at the first where the chip has settled (:data:`SETTLE`; :func:`rest` goes on from there)."""
     checkpoints: list[Checkpoint] = []
-    quiet = _run(chip, marks[-1], quiet, marks, checkpoints)
+    quiet = _run(chip, marks[-1], quiet, marks, checkpoints, SETTLE if settle else 1 << 62)
     return checkpoints, quiet
 
 
-def _run(chip: Lm628, count: int, quiet: int, marks: list[int], checkpoints: list[Checkpoint]) -> int:
+def _run(chip: Lm628, count: int, quiet: int, marks: list[int], checkpoints: list[Checkpoint],
+         settle: int = 1 << 62) -> int:
     status = chip.status
     done = 0
     while done < count:
         if _fast(chip):
-            n, quiet = _run_fast(chip, count - done, quiet, marks, done, status, checkpoints)
+            n, quiet = _run_fast(chip, count - done, quiet, marks, done, status, checkpoints, settle)
             done += n
         else:
             quiet = run_reference(chip, 1, quiet)
@@ -208,16 +272,17 @@ def _run(chip: Lm628, count: int, quiet: int, marks: list[int], checkpoints: lis
         at = len(checkpoints)
         if at < len(marks) and marks[at] == done:  # reached by the reference or after a stop
             checkpoints.append((done, quiet, snapshot(chip)))
-        if checkpoints and status_of(checkpoints[-1][2]) != status:
+        if checkpoints and (status_of(checkpoints[-1][2]) != status or checkpoints[-1][1] >= settle):
             break
     return quiet
 
 
 def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, status: int,  # noqa: C901, PLR0912, PLR0913, PLR0915
-              checkpoints: list[Checkpoint]) -> tuple[int, int]:
+              checkpoints: list[Checkpoint], settle: int = 1 << 62) -> tuple[int, int]:
     """Samples while the motor is on; returns (samples done, quiet).  Stops early after a
     sample that switched the motor off (a position error with LPES), and at a mark (``marks``
-    counted from ``base`` samples before this call) whose status differs from ``status``."""
+    counted from ``base`` samples before this call) whose status differs from ``status`` or
+    whose quiet count reached ``settle``."""
     profile, filt, motor = chip.profile, chip.filter, chip.motor
     floor = math.floor
     # the profile generator
@@ -243,6 +308,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
     index_watch = chip.index_armed and chip.index_period
     watch_moves = chip.breakpoint is not None or index_watch
     flags, on_target = chip.flags, chip.on_target
+    rest_x, rest_v, rest_n = chip.rest_x, chip.rest_v, chip.rest_n
     raw = chip._raw
     seen = floor(sign * x)  # the encoder before the first sample (the stepper's look)
     segment = _segment(raw, home)
@@ -265,9 +331,10 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
             if at < len(marks):  # the state as snapshot() takes it once the locals are written back
                 checkpoints.append((base + done, quiet, (
                     p, v, target, stopping, complete, error_sum, derivative, previous, countdown, output, integral,
-                    x, speed_now, flags, on_target, raw, False, False, chip.index_armed, chip.index_position)))
+                    x, speed_now, flags, on_target, raw, False, False, chip.index_armed, chip.index_position,
+                    rest_x, rest_v, rest_n)))
                 at += 1
-                if flags != status:
+                if flags != status or quiet >= settle:
                     break
                 mark = marks[at] - base if at < len(marks) else count
             if done == count:
@@ -339,7 +406,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                 break
             continue
         done += 1
-        before_actual, before_p, before_flags = seen, p, flags
+        before_actual, before_p, before_flags, before_sum = seen, p, flags, error_sum
         before = raw
         # -- profile generator (Profile.sample) --
         if cruise:
@@ -468,8 +535,13 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                 stopped = True
         seen = raw
         if complete and p == before_p and flags == before_flags and abs(speed_now) < STILL \
-                and (raw == before_actual or wrap(raw - home) == wrap(before_actual - home)):
+                and (raw == before_actual or wrap(raw - home) == wrap(before_actual - home)) \
+                and derivative == 0 and previous == e and (error_sum == before_sum or not ki):  # (_quiet_after)
             quiet += 1
+            if quiet == SETTLE:
+                rest_x, rest_v, rest_n = x, speed_now, 0
+            elif quiet > SETTLE:
+                rest_n += 1
         else:
             quiet = 0
         if stopped:
@@ -480,6 +552,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
     filt.output, filt.integral = output, integral
     motor.position, motor.velocity = x, speed_now
     chip.flags, chip.on_target, chip._raw = flags, on_target, raw
+    chip.rest_x, chip.rest_v, chip.rest_n = rest_x, rest_v, rest_n
     if stopped:
         chip.motor_off = True
     return done, quiet

@@ -51,17 +51,19 @@ class H3Axis:
     """Axis ``axis`` of an installation: its registers and flags in the media, its chip.
 
     ``on_comers`` is called with the function's flag offset when ComErS runs (the PLC's
-    reaction, §3.7); ``rsigb_bit12_inverted`` is the G-5 option."""
+    reaction, §3.7); ``on_write`` after each command sent to the chip (a report command, §3.5.3,
+    changes nothing in it: the drive keeps a settled chip at rest); ``rsigb_bit12_inverted`` is
+    the G-5 option."""
 
     def __init__(self, axis: int, layout: Layout, chip: Lm628, registers: AxisRegisters,
                  flags: MutableMapping[int, int], *, on_comers: Callable[[int], None] | None = None,
-                 rsigb_bit12_inverted: bool = False) -> None:
+                 on_write: Callable[[], None] | None = None, rsigb_bit12_inverted: bool = False) -> None:
         self.axis, self.layout, self.chip = axis, layout, chip
         self.registers, self.flags = registers, flags
         #: (symbol, flag address) of the command flags in AxHndlg's order, and the status flags' addresses
         self.command_flags = tuple((symbol, layout.flag(axis, symbol)) for symbol in layout.command_order)
         self.status_flags = tuple(layout.flag(axis, symbol) for symbol in STATUS_FLAGS)
-        self.on_comers = on_comers
+        self.on_comers, self.on_write = on_comers, on_write
         self.rsigb_bit12_inverted = rsigb_bit12_inverted
         self.mode = 0  # LTRJ bits 11/12 from the last FSelOM
         self.trace: list[tuple[str, tuple[int, ...]]] = []
@@ -96,12 +98,17 @@ class H3Axis:
         for attempt in range(1, ATTEMPTS + 1):
             self._log(name, words)
             chip.command(name, *words)
+            self._wrote()
             if not chip.status & COMMAND_ERROR:
                 self._attempts = max(self._attempts, attempt)
                 return True
             self._clear_error()
         self._comers()
         return False
+
+    def _wrote(self) -> None:
+        if self.on_write is not None:
+            self.on_write()
 
     def _read(self, name: str) -> int:
         chip = self.chip
@@ -118,6 +125,7 @@ class H3Axis:
     def _clear_error(self) -> None:
         self._log("RSTI", (0xFFFD,))
         self.chip.command("RSTI", 0xFFFD)
+        self._wrote()
         self.chip.flags &= ~COMMAND_ERROR  # the FB polls until the flag is gone
 
     def _comers(self) -> None:

@@ -85,6 +85,9 @@ class Lm628:
         self._stop = 0  # the stop bits (8 … 10) of the last LTRJ, acting at the next STT
         self.on_target = False  # signals bit 10: the generator finished a profile since the last STT
         self.udf_sample = False  # signals bit 13: for the sample after UDF
+        #: The motor's position and velocity where the chip settled (batch.SETTLE samples without
+        #: change) and the samples since: its lag dies away from there (batch.rest)
+        self.rest_x, self.rest_v, self.rest_n = 0.0, 0.0, 0
         self._raw = self._encoder()
 
     # -- the host port (§3.5.2, §3.7) ------------------------------------------------------------

@@ -33,7 +33,7 @@ MARGIN = 1.0  # counts either side of a switch edge that count as near
 
 def _may_look_ahead(drive: H3Drive) -> bool:
     chip = drive.chip
-    return drive.settled or (not chip.profile.complete and not chip.motor_off)
+    return drive.settled or not chip.motor_off
 
 
 def switch_near(drive: H3Drive, first: float, second: float, margin: float = MARGIN) -> bool:
@@ -55,17 +55,20 @@ def quiet_cycles(drives: Sequence[H3Drive], first: float, step: float,
     the status is copied at the last); without ``moments`` at the start only.  Each chip is
     computed in one pass, with a checkpoint at each cycle's last look, up to the first cycle that sees its
     status change (the status only gains bits while no command comes: the cycles before it see
-    the status of now)."""
+    the status of now).  With every chip settled, every cycle of the reach (a settled chip's
+    status and switches stay until a command)."""
     at_start: Moments = ((0.0, 0.0),)
     looks = {id(drive): (moments[index] if moments else at_start) for index, drive in enumerate(drives)}
     moving = [drive for drive in drives if not drive.settled]
-    if not moving or not all(_may_look_ahead(drive) for drive in moving):
+    if moving and not all(_may_look_ahead(drive) for drive in moving):
         return []
     times: list[float] = []
     t, end = first, first + horizon
     while t <= end:
         times.append(t)
         t += step
+    if not moving:  # every chip rests: its status stays, its switches too
+        return times
     quiet = len(times)
     ends: list[tuple[H3Drive, float, float, list[batch.State]]] = []
     for drive in moving:

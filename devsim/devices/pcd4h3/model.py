@@ -80,7 +80,7 @@ class Pcd4(Model):
             registers = AxisRegisters(RegisterBlock(self.registers, self.layout.block(n)))
             registers.reset()  # G-16: the registers start with Example 1's values
             axis = H3Axis(n, self.layout, drive.chip, registers, self.flags, on_comers=self._comers,
-                          rsigb_bit12_inverted=s["rsigb_bit12_inverted"])
+                          on_write=drive.poke, rsigb_bit12_inverted=s["rsigb_bit12_inverted"])
             self.drives.append(drive)
             self.axes.append(axis)
             self.signals.subscribe(f"LS1_{n}", lambda _n, old, new, n=n: self._limit(n, old, new))
@@ -218,7 +218,11 @@ class Pcd4(Model):
         before = [axis.transfers for axis in self.axes]
         for drive in self.drives:
             drive.catch_up(start, follow=False)
-        self._run_axes(start, follow=False)
+        self.timers.moment = start  # (the user program reads them as that cycle did)
+        try:
+            self._run_axes(start, follow=False)
+        finally:
+            self.timers.moment = None
         return before
 
     def _cycle(self) -> None:
@@ -238,6 +242,8 @@ class Pcd4(Model):
                 step = max(self.cycle_time, work)
                 skipped = quiet_cycles(self.drives, due, step, moments, self._horizon)
                 self._horizon = min(HORIZON, 2 * self._horizon)
+                while skipped and not self.timers.none_runs_out(skipped[-1]):  # (that cycle would see it)
+                    skipped.pop()
                 if skipped:
                     self._skipped, due = skipped, skipped[-1] + step
                     self._coast_end = due
@@ -259,10 +265,7 @@ class Pcd4(Model):
                 def before(ms: float, drive: H3Drive = drive, offset: float = offset) -> None:
                     drive.catch_up(start + offset + ms / 1000, follow=follow)
 
-                transfers = axis.transfers
-                elapsed += axis.handle(before) / 1000
-                if axis.transfers != transfers and follow:  # (a skipped cycle only reads a moving chip)
-                    drive.poke()
+                elapsed += axis.handle(before) / 1000  # (a command pokes the drive at once; a read does not)
                 self._note(axis)
             if self.sequence is not None:
                 self.sequence.cycle()
@@ -300,13 +303,14 @@ class Pcd4(Model):
 
     def _only_moving(self) -> bool:
         """The next cycles have nothing to do but copy the chips' status (while it stays) and
-        read the chips as configured: no command flag, no user program waiting on a condition
-        or a timer, and reads that cannot fail (every chip fitted, no disturbed transfer, a
-        ComErS that only counts)."""
+        read the chips as configured: no command flag, no step of the user program whose
+        condition holds (one waiting on a timer waits: the cycles skipped end before it runs
+        out), and reads that cannot fail (every chip fitted, no disturbed transfer, a ComErS
+        that only counts)."""
         if self.status != RUN:
             return True
         sequence = self.sequence
-        if sequence is not None and (sequence.busy or self.timers.running()):
+        if sequence is not None and sequence.busy:
             return False
         if self._reading() and (
                 self.settings["comers_action"] != "continue"
@@ -336,6 +340,8 @@ class Pcd4(Model):
             return True
         if self.status != RUN:
             return False
+        if self._reading():  # the cyclic reads go on while the chips rest (each cycle transfers)
+            return True
         if self.sequence is not None and (self.sequence.busy or self.timers.running()):
             return True
         flags = self.flags

@@ -1,7 +1,10 @@
 """Runs an LM628 on the device clock (spec pcd4h3.md §5.1; design principle: an idle simulator
 uses no CPU): the chip's samples are computed in batches, up to the present, whenever someone
 looks (:meth:`ChipStepper.catch_up`) and by a periodic tick while anything moves; once the
-trajectory is complete and the motor stands still on its position the ticks stop.
+trajectory is complete, the motor stands still on its position and the filter rests, the ticks
+stop, and a look computes what the samples since change in closed form
+(:func:`~devsim.devices.pcd4h3.batch.rest`), on the chip's own sample grid, which runs on.  Only a
+command wakes the chip (:meth:`ChipStepper.poke`); a read changes nothing in it (§3.5.3).
 
 A batch computes every sample (341.333 µs apart) in order, in one pass
 (:func:`~devsim.devices.pcd4h3.batch.run`, bit-exact with :meth:`Lm628.sample` one at a time), so
@@ -28,7 +31,7 @@ from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 __all__ = ["ChipStepper"]
 
 TICK = 0.010  # seconds of device time between batches while the chip is active
-QUIET = 64  # samples without any change before the chip counts as settled
+QUIET = batch.SETTLE  # samples without any change before the chip counts as settled
 
 
 class ChipStepper:
@@ -54,8 +57,9 @@ class ChipStepper:
 
     @property
     def settled(self) -> bool:
-        """Nothing has changed for a while: no sample needs computing until a command."""
-        return self._quiet >= QUIET
+        """Nothing has changed for a while: no sample needs computing until a command (and none
+        was computed ahead of the present, whose count of samples without change a look finds)."""
+        return self._quiet >= QUIET and not self._ahead
 
     def catch_up(self, until: float | None = None, *, follow: bool = True) -> None:
         """Compute every sample due by now (or by ``until``); a settled chip just rests.
@@ -70,24 +74,32 @@ class ChipStepper:
             target = max(due, self._present)
             moved = moved or target > self._present
             self._rewind(target)
-            if self._samples < target:
-                self._quiet = batch.run(self.chip, target - self._samples, self._quiet)
-                self._samples = target
+            moved = self._advance(target) or moved
             self._present = target
-        elif self.settled:
-            if now > self._epoch + self._samples * CHIP_SAMPLE:
-                self._epoch, self._samples = now, 0
-            self._present = self._samples
         else:
-            if self._samples < due:
-                self._quiet = batch.run(self.chip, due - self._samples, self._quiet)
-                self._samples = due
-                moved = True
+            settled = self.settled
+            if self._samples < due or settled:
+                moved = self._advance(due) or moved
             self._present = self._samples
         if moved and not follow:
             self._unseen = True
         elif moved and self.on_batch is not None:
             self.on_batch()
+
+    def _advance(self, target: int) -> bool:
+        """Take the chip to sample ``target``: a settled one in closed form where it can
+        (:func:`~devsim.devices.pcd4h3.batch.rest`, which also puts its motor where its rest
+        puts it however its samples were taken), else sample by sample.  Returns whether the
+        motor moved."""
+        count = max(0, target - self._samples)
+        self._samples += count
+        motor = self.chip.motor
+        x = motor.position
+        if self._quiet >= QUIET and batch.rest(self.chip, count):
+            return motor.position != x  # (its lag's last thousandths of a count)
+        if count:
+            self._quiet = batch.run(self.chip, count, self._quiet)
+        return bool(count)
 
     def _rewind(self, target: int) -> None:
         """Take the chip from what was computed ahead to the last checkpoint at or before
@@ -115,7 +127,7 @@ class ChipStepper:
         marks = sorted({due for due in dues if due > 0})
         reached: dict[int, batch.State] = {}
         if marks:
-            checkpoints, self._quiet = batch.run_to(self.chip, marks, self._quiet)
+            checkpoints, self._quiet = batch.run_to(self.chip, marks, self._quiet, settle=True)
             for mark, quiet, state in checkpoints:
                 self._ahead.append((start + mark, quiet, state))
                 reached[mark] = state
@@ -147,12 +159,6 @@ class ChipStepper:
             self.on_tick()
         if self._quiet < QUIET:
             self._timer = self.clock.call_later(TICK, self._tick)
-        else:
-            self._rest()
-
-    def _rest(self) -> None:
-        """Settled: no ticks; the sample count restarts from now when the chip wakes."""
-        self._epoch, self._samples = self.clock.now(), 0
 
     def close(self) -> None:
         if self._timer is not None:

@@ -16,18 +16,26 @@ class Timers:
     def __init__(self, clock: Clock) -> None:
         self.clock = clock
         self._ends: dict[int, float] = {}
+        #: The moment a PLC cycle run late reads the timers at (its own start), or None: now.
+        self.moment: float | None = None
 
     def load(self, n: int, tenths: int) -> None:
         """``LD T n tenths``."""
         self._ends[n] = self.clock.now() + tenths / 10
 
-    def value(self, n: int) -> int:
-        """Timer n's value in tenths of a second (0 once it ran out)."""
+    def value(self, n: int, at: float | None = None) -> int:
+        """Timer n's value in tenths of a second (0 once it ran out), now or ``at``."""
         end = self._ends.get(n)
         if end is None:
             return 0
-        return max(0, math.ceil((end - self.clock.now()) * 10 - 1e-9))
+        if at is None:
+            at = self.clock.now() if self.moment is None else self.moment
+        return max(0, math.ceil((end - at) * 10 - 1e-9))
 
     def running(self) -> bool:
         """Whether a loaded timer has not run out yet."""
         return any(self.value(n) for n in self._ends)
+
+    def none_runs_out(self, at: float) -> bool:
+        """Whether every timer running now still runs at ``at``."""
+        return all(self.value(n, at) for n in self._ends if self.value(n))
