@@ -3,10 +3,12 @@ data mode as a host would (spec pcd4h3.md §9.2), in virtual time."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import serial
 
+from devsim.devices.pcd4h3.model import Pcd4
 from devsim.devices.pcd4h3.sbus import FS, crc16, stuff, unstuff
 
 __all__ = ["EXAMPLE", "Station", "flag", "hexbytes", "load", "reg", "run"]
@@ -105,3 +107,40 @@ def run(pcd: Station, *functions: str, axis: int = 1, cycles: int = 1) -> None:
     names = [f"axis.{axis}.{symbol}" for symbol in functions]
     assert pcd.sim.run_until(lambda d: not any(d.read(name) for name in names), 1.0), functions
     pcd.sim.advance(0.010 * cycles)
+
+
+#: A step of a scripted run: what it does to the station at its moment.
+Step = Callable[[Pcd4], None]
+
+
+def keys(*inputs: int, value: int = 1) -> Step:
+    """A step: the inputs set to ``value`` (the station caught up to now first), the PLC woken."""
+    def act(pcd: Pcd4) -> None:
+        pcd.catch_up()
+        for n in inputs:
+            pcd.inputs[n] = value
+        pcd.wake()
+    return act
+
+
+def command(n: int, *flags: str, **registers: float) -> Step:
+    """A step: registers of axis ``n`` loaded and flags set (caught up first), the PLC woken."""
+    def act(pcd: Pcd4) -> None:
+        pcd.catch_up()
+        axis = pcd.axes[n - 1]
+        for symbol, value in registers.items():
+            axis.registers.load(symbol, value)
+        for symbol in flags:
+            axis.set_flag(symbol, 1)
+        pcd.wake()
+    return act
+
+
+def blocked(n: int, active: bool) -> Step:
+    """A step: axis ``n``'s motor blocked (or free again), its chip poked, the PLC woken."""
+    def act(pcd: Pcd4) -> None:
+        pcd.catch_up()
+        pcd.drives[n - 1].motor.blocked = active
+        pcd.drives[n - 1].poke()
+        pcd.wake()
+    return act

@@ -8,7 +8,6 @@ runs far fewer timer events."""
 from __future__ import annotations
 
 import random
-from collections.abc import Callable
 from typing import Any
 
 import pytest
@@ -17,32 +16,11 @@ from devsim.core.clock import VirtualClock
 from devsim.devices.pcd4h3 import batch, model
 from devsim.devices.pcd4h3.model import Pcd4
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
+from tests.pcd4h3.helpers import Step, blocked, command, keys
 
-Step = Callable[[Pcd4], None]
 CYCLE = 0.0125  # one PLC cycle (10 ms) and its reads, s: the Deviations row of §6.4
 EXAMPLE = {"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 2}, "modules": 1, "variant": "H320",
            "response_delay_ms": 0}
-
-
-def command(n: int, *flags: str, **registers: float) -> Step:
-    def act(pcd: Pcd4) -> None:
-        pcd.catch_up()
-        axis = pcd.axes[n - 1]
-        for symbol, value in registers.items():
-            axis.registers.load(symbol, value)
-        for symbol in flags:
-            axis.set_flag(symbol, 1)
-        pcd.wake()
-    return act
-
-
-def blocked(n: int, active: bool) -> Step:
-    def act(pcd: Pcd4) -> None:
-        pcd.catch_up()
-        pcd.drives[n - 1].motor.blocked = active
-        pcd.drives[n - 1].poke()
-        pcd.wake()
-    return act
 
 
 def look(pcd: Pcd4) -> tuple[Any, ...]:
@@ -53,15 +31,6 @@ def look(pcd: Pcd4) -> tuple[Any, ...]:
     library = tuple((a.transfers, a.comers_calls, tuple(a.trace[-40:])) for a in pcd.axes)
     return (pcd.clock.now(), chips, sorted(pcd.flags.items()), sorted(pcd.registers.items()), signals, library,
             sorted(pcd.screens.items()), pcd.status, pcd.handler_calls())
-
-
-def keys(*inputs: int, value: int = 1) -> Step:
-    def act(pcd: Pcd4) -> None:
-        pcd.catch_up()
-        for n in inputs:
-            pcd.inputs[n] = value
-        pcd.wake()
-    return act
 
 
 def shared_axes(pcd: Pcd4) -> tuple[tuple[float, float], ...]:

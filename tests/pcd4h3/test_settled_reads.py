@@ -11,7 +11,6 @@ from __future__ import annotations
 import copy
 import math
 import random
-from collections.abc import Callable
 from typing import Any
 
 import pytest
@@ -25,40 +24,10 @@ from devsim.devices.pcd4h3.lm628 import Lm628
 from devsim.devices.pcd4h3.model import Pcd4
 from devsim.devices.pcd4h3.pid import Motor
 from devsim.devices.pcd4h3.services import read
+from tests.pcd4h3.helpers import Step, blocked, command, keys
 
-Step = Callable[[Pcd4], None]
 ONE_AXIS = {"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 1}, "modules": 1, "variant": "H320",
             "response_delay_ms": 0}
-
-
-def command(*flags: str, **registers: float) -> Step:
-    def act(pcd: Pcd4) -> None:
-        pcd.catch_up()
-        axis = pcd.axes[0]
-        for symbol, value in registers.items():
-            axis.registers.load(symbol, value)
-        for symbol in flags:
-            axis.set_flag(symbol, 1)
-        pcd.wake()
-    return act
-
-
-def keys(*inputs: int, value: int = 1) -> Step:
-    def act(pcd: Pcd4) -> None:
-        pcd.catch_up()
-        for n in inputs:
-            pcd.inputs[n] = value
-        pcd.wake()
-    return act
-
-
-def blocked(active: bool) -> Step:
-    def act(pcd: Pcd4) -> None:
-        pcd.catch_up()
-        pcd.drives[0].motor.blocked = active
-        pcd.drives[0].poke()
-        pcd.wake()
-    return act
 
 
 def look(pcd: Pcd4) -> tuple[Any, ...]:
@@ -105,16 +74,16 @@ def play(config: dict[str, Any], script: dict[float, list[Step]], seconds: float
 SCENARIOS: dict[str, tuple[dict[str, Any], dict[float, list[Step]], float]] = {
     "every read function, a move, a stand, a move back": (
         {"cyclic_reads": list(READ_FUNCTIONS), "display": {1: {"reg1": "RActP", "reg2": "RSetV"}}},
-        {0.2: [command("FLdAA", "FLdVA", "FLdDA", "FSetIP", "FStart", Accel=300, Veloc=120, DestP=180)],
-         3.5: [command("FLdDA", "FStart", DestP=20)], 5.2: [command(RActP=7)]}, 9.0),
+        {0.2: [command(1, "FLdAA", "FLdVA", "FLdDA", "FSetIP", "FStart", Accel=300, Veloc=120, DestP=180)],
+         3.5: [command(1, "FLdDA", "FStart", DestP=20)], 5.2: [command(1, RActP=7)]}, 9.0),
     "a blocked motor's integral winds up slowly, read every cycle, then it turns": (
         {"cyclic_reads": ["FRdITS", "FRdAP", "FRdSR"]},
-        {0.2: [blocked(True), command("FLdRP", "FUpDRP", "FLdDA", "FStart", KInt=1, DestP=1)],
-         2.5: [blocked(False)]}, 5.0),
+        {0.2: [blocked(1, True), command(1, "FLdRP", "FUpDRP", "FLdDA", "FStart", KInt=1, DestP=1)],
+         2.5: [blocked(1, False)]}, 5.0),
     "a weak P-only loop rests off its target (Σe grows), then an integral term acts": (
         {"cyclic_reads": ["FRdITS", "FRdAP", "FRdSP"]},
-        {0.2: [command("FLdRP", "FUpDRP", "FLdDA", "FStart", KProp=9, KInt=0, KDer=0, DestP=1)],
-         3.0: [command("FLdRP", "FUpDRP", KProp=150, KInt=50, KDer=50)]}, 5.0),
+        {0.2: [command(1, "FLdRP", "FUpDRP", "FLdDA", "FStart", KProp=9, KInt=0, KDer=0, DestP=1)],
+         3.0: [command(1, "FLdRP", "FUpDRP", KProp=150, KInt=50, KDer=50)]}, 5.0),
     "the manual's example 2 with I 8 held": (
         {"user_program": "example2"}, {0.1: [keys(8)]}, 12.0),
     "the manual's example 3 with I 8 held, then I 15": (
@@ -145,7 +114,7 @@ def test_a_standing_axis_read_every_cycle_computes_no_samples(monkeypatch: pytes
     stays: they run when someone looks)."""
     clock = VirtualClock()
     pcd = Pcd4(clock=clock, config={**ONE_AXIS, "cyclic_reads": list(READ_FUNCTIONS)})
-    command("FLdDA", "FStart", DestP=30)(pcd)
+    command(1, "FLdDA", "FStart", DestP=30)(pcd)
     clock.advance(3.0)  # the move and the motor's last hunting
     pcd.catch_up()  # (a look: the cycles skipped so far run their reads)
     assert pcd.drives[0].settled
