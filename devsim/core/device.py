@@ -131,6 +131,10 @@ class Standing:
         """``reply`` stands for ``data`` from now until the next change."""
         self.stamp, self.data, self.reply = CHANGES.count, data, reply
 
+    def given(self, data: bytes) -> bytes | None:
+        """The reply standing for the chunk ``data``: nothing changed since it was held; else None."""
+        return self.reply if self.stamp == CHANGES.count and data == self.data else None
+
 
 class Port:
     """One serial port of a device, as a line or a bus sees it (slots: every poll passes through)."""
@@ -184,10 +188,9 @@ class Port:
             CHANGES.count += 1  # (a door: devsim.core.changes)
             face.feed(data)
             return
-        standing = self.standing
-        if standing.stamp == CHANGES.count and data == standing.data:
+        if (reply := self.standing.given(data)) is not None:
             if (write := self._write) is not None:
-                write(standing.reply)  # (what the face would answer at once: nothing changed since)
+                write(reply)  # (what the face would answer at once: nothing changed since)
             return
         if (at_once := self.at_once) is not None and (reply := at_once(data)) is not None:
             if reply and (write := self._write) is not None:

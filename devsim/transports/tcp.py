@@ -42,7 +42,6 @@ import time
 from collections import deque
 from collections.abc import Callable
 
-from devsim.core.changes import CHANGES
 from devsim.transports import fdlimit
 from devsim.transports.base import Endpoint, Transport
 from devsim.transports.hosts import DEFAULT_IDLE_DROP, admit, dropped, listen_backlog, refuse
@@ -133,9 +132,8 @@ class _Session(asyncio.BufferedProtocol):
         if lane is not None and nbytes <= SLICE and not self.backlog:
             lane.bytes_in += nbytes
             data = bytes(self._buffer[:nbytes])
-            standing = lane.standing
-            if standing is not None and standing.stamp == CHANGES.count and data == standing.data:
-                self.send(standing.reply)  # (what the port would write: nothing changed since)
+            if (standing := lane.standing) is not None and (reply := standing.given(data)) is not None:
+                self.send(reply)  # (what the port would write: nothing changed since)
                 return
             if (at_once := lane.at_once) is not None and (reply := at_once(data)) is not None:
                 if reply:
