@@ -81,17 +81,16 @@ class _Session(asyncio.BufferedProtocol):
     its line's lean lane is open (:mod:`devsim.transports.lane`) the session hands what it reads
     to the line's target itself and counts what it carries."""
 
-    __slots__ = ("owner", "_view", "_buffer", "transport", "closed", "full", "state", "backlog", "peer", "since",
+    __slots__ = ("owner", "_view", "transport", "closed", "full", "state", "backlog", "peer", "since",
                  "heard", "rest", "messages", "deliver", "sock", "lane", "queued")
 
     def __init__(self, owner: TcpTransport, sock: socket.socket | None = None) -> None:
         self.owner = owner
         #: The connection's socket, for :meth:`send`'s direct path (None: always through asyncio).
         self.sock = sock
+        #: The bytes read are copied out of a slice of it (``tobytes``: one copy, where
+        #: ``bytes()`` of a bytearray's slice makes two and parses its arguments)
         self._view = _read_buffer()  # (a session is made in its loop's thread)
-        #: The bytearray under it: the bytes read are copied out of a slice of it (a memoryview's
-        #: slice would be a garbage-collected object made and freed per read)
-        self._buffer: bytearray = self._view.obj  # type: ignore[assignment]
         self.transport: asyncio.Transport | None = None
         self.closed = False
         self.full = False  # output beyond the owner's max_buffer waits in the socket: dropped
@@ -122,6 +121,46 @@ class _Session(asyncio.BufferedProtocol):
             with contextlib.suppress(OSError):
                 sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.owner._connected(self)
+        if self.sock is not None and _reads_directly(transport):
+            # (after the transport's own reader, which asyncio adds in a callback of its own)
+            asyncio.get_running_loop().call_soon(self.read_directly)
+
+    def read_directly(self) -> None:
+        """Let the session's :meth:`_read` take the socket's reads from the transport's reader
+        (while the transport reads at all).  The transport puts its own back when it resumes
+        reading (after a flood, :meth:`TcpTransport._drain`), and takes either away when it
+        pauses or closes: both are the reader of the same descriptor."""
+        transport, sock = self.transport, self.sock
+        if transport is None or sock is None or self.closed or not transport.is_reading():
+            return
+        loop = asyncio.get_running_loop()
+        loop._remove_reader(sock.fileno())  # type: ignore[attr-defined]
+        loop._add_reader(sock.fileno(), self._read)  # type: ignore[attr-defined]
+
+    def _read(self) -> None:
+        """One read of the socket, as the transport's reader does it (asyncio's
+        ``_SelectorSocketTransport._read_ready__get_buffer``: into :meth:`get_buffer`, then
+        :meth:`buffer_updated`; the end of the stream and errors handed to the transport), in one
+        call instead of three: a poll passes here."""
+        transport = self.transport
+        try:
+            nbytes = self.sock.recv_into(self._view)  # type: ignore[union-attr]
+        except (BlockingIOError, InterruptedError):
+            return
+        except (SystemExit, KeyboardInterrupt):
+            raise
+        except BaseException as exc:
+            transport._fatal_error(exc, "Fatal read error on socket transport")  # type: ignore[union-attr]
+            return
+        if not nbytes:
+            transport._read_ready__on_eof()  # type: ignore[union-attr]
+            return
+        try:
+            self.buffer_updated(nbytes)
+        except (SystemExit, KeyboardInterrupt):
+            raise
+        except BaseException as exc:
+            transport._fatal_error(exc, "Fatal error: protocol.buffer_updated() call failed.")  # type: ignore[union-attr]
 
     def get_buffer(self, sizehint: int) -> memoryview:
         return self._view
@@ -131,7 +170,7 @@ class _Session(asyncio.BufferedProtocol):
         lane = self.lane
         if lane is not None and nbytes <= SLICE and not self.backlog:
             lane.bytes_in += nbytes
-            data = bytes(self._buffer[:nbytes])
+            data = self._view[:nbytes].tobytes()
             if (standing := lane.standing) is not None and (reply := standing.given(data)) is not None:
                 self.send(reply)  # (what the port would write: nothing changed since)
                 return
@@ -143,9 +182,9 @@ class _Session(asyncio.BufferedProtocol):
             return
         deliver = self.deliver
         if deliver is not None and nbytes <= SLICE and not self.backlog:
-            deliver(bytes(self._buffer[:nbytes]))
+            deliver(self._view[:nbytes].tobytes())
         else:
-            self.owner._received(self, bytes(self._buffer[:nbytes]))
+            self.owner._received(self, self._view[:nbytes].tobytes())
 
     def eof_received(self) -> bool:
         return False  # half-close ends the session
@@ -441,6 +480,7 @@ class TcpTransport(Transport):
             self._loop.call_soon(self._drain, session)
         elif session.transport is not None and not session.transport.is_closing():
             session.transport.resume_reading()
+            session.read_directly()
 
     def _lost(self, session: _Session) -> None:
         session.deliver = session.lane = None
@@ -538,6 +578,21 @@ class TcpTransport(Transport):
     def _send(self, session: _Session, data: bytes) -> None:
         """Device output to the serving client."""
         session.send(data)
+
+
+def _reads_directly(transport: asyncio.BaseTransport) -> bool:
+    """Whether a session may read its socket itself (:meth:`_Session.read_directly`): the
+    transport is asyncio's selector socket transport of this Python, with the parts the session's
+    reader hands the end of the stream and errors to, on a selector loop (not another loop's
+    transport, where the session reads through the transport as any protocol)."""
+    loop = asyncio.get_running_loop()
+    return (isinstance(transport, _SOCKET_TRANSPORT) and isinstance(loop, asyncio.selector_events.BaseSelectorEventLoop)
+            and all(hasattr(transport, name) for name in ("_fatal_error", "_read_ready__on_eof"))
+            and all(hasattr(loop, name) for name in ("_add_reader", "_remove_reader")))
+
+
+#: asyncio's socket transport of a selector loop (private to asyncio: what :func:`_reads_directly` checks)
+_SOCKET_TRANSPORT: type = getattr(asyncio.selector_events, "_SelectorSocketTransport", type(None))
 
 
 def _heard(session: _Session) -> float:

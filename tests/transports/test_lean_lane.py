@@ -283,6 +283,31 @@ async def test_a_flood_beyond_a_slice_leaves_the_lane_and_arrives_whole(plant: _
     writer.close()
 
 
+def _reader_of(session: Any) -> Any:
+    """What the loop calls when the session's socket is readable."""
+    key = asyncio.get_running_loop()._selector.get_key(session.sock.fileno())  # type: ignore[attr-defined]
+    return key.data[0]._callback
+
+
+async def test_a_session_reads_its_socket_itself_and_again_after_a_flood(plant: _Plant) -> None:
+    """A poll passes the session's own reader, not the transport's three calls
+    (:meth:`~devsim.transports.tcp._Session.read_directly`): from the first poll on, and again once
+    a flood has paused the transport's reading and its slices are fed; the host's bytes and the
+    answers are the same on either reader (the tests above)."""
+    reader, writer = await plant.connect()
+    assert await _poll(reader, writer, b"A\r") == b"A\r" + ANSWER
+    (session,) = plant.transport._served
+    assert _reader_of(session) == session._read
+    flood = b"x" * (3 * SLICE)
+    writer.write(flood + b"\r")
+    expected = flood + b"\r" + ANSWER
+    assert await asyncio.wait_for(reader.readexactly(len(expected)), 10) == expected
+    assert _reader_of(session) == session._read
+    assert await _poll(reader, writer, b"B\r") == b"B\r" + ANSWER
+    writer.close()
+    await plant.until(lambda: plant.transport.clients == 0)  # the end of the stream, through the session's reader
+
+
 async def test_a_paced_line_never_opens_the_lane() -> None:
     """Pacing holds each answer to the wire's speed: the line must see every byte."""
     clock = RealClock()
