@@ -121,7 +121,7 @@ class _Session(asyncio.BufferedProtocol):
             with contextlib.suppress(OSError):
                 sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.owner._connected(self)
-        if self.sock is not None and _reads_directly(transport):
+        if self.sock is not None:
             # (after the transport's own reader, which asyncio adds in a callback of its own)
             asyncio.get_running_loop().call_soon(self.read_directly)
 
@@ -131,7 +131,7 @@ class _Session(asyncio.BufferedProtocol):
         reading (after a flood, :meth:`TcpTransport._drain`), and takes either away when it
         pauses or closes: both are the reader of the same descriptor."""
         transport, sock = self.transport, self.sock
-        if transport is None or sock is None or self.closed or not transport.is_reading():
+        if transport is None or sock is None or self.closed or not transport.is_reading() or not _reads_directly(transport):
             return
         loop = asyncio.get_running_loop()
         loop._remove_reader(sock.fileno())  # type: ignore[attr-defined]
@@ -141,7 +141,9 @@ class _Session(asyncio.BufferedProtocol):
         """One read of the socket, as the transport's reader does it (asyncio's
         ``_SelectorSocketTransport._read_ready__get_buffer``: into :meth:`get_buffer`, then
         :meth:`buffer_updated`; the end of the stream and errors handed to the transport), in one
-        call instead of three: a poll passes here."""
+        call instead of four: a poll passes here.  On the lean lane a chunk whose reply stands
+        (:class:`~devsim.core.device.Standing`) or that the face answers at once goes back here
+        without the port (what :meth:`~devsim.core.device.Port.feed` would write)."""
         transport = self.transport
         try:
             nbytes = self.sock.recv_into(self._view)  # type: ignore[union-attr]
@@ -156,7 +158,20 @@ class _Session(asyncio.BufferedProtocol):
             transport._read_ready__on_eof()  # type: ignore[union-attr]
             return
         try:
-            self.buffer_updated(nbytes)
+            lane = self.lane
+            if lane is None or nbytes > SLICE or self.backlog:
+                self.buffer_updated(nbytes)
+                return
+            self.heard = time.monotonic()
+            lane.bytes_in += nbytes
+            data = self._view[:nbytes].tobytes()
+            if (standing := lane.standing) is not None and (reply := standing.given(data)) is not None:
+                self.send(reply)  # (nothing changed since it was held)
+            elif (at_once := lane.at_once) is not None and (reply := at_once(data)) is not None:
+                if reply:
+                    self.send(reply)
+            else:
+                lane.feed(data)
         except (SystemExit, KeyboardInterrupt):
             raise
         except BaseException as exc:
@@ -167,24 +182,17 @@ class _Session(asyncio.BufferedProtocol):
 
     def buffer_updated(self, nbytes: int) -> None:
         self.heard = time.monotonic()
+        data = self._view[:nbytes].tobytes()
         lane = self.lane
         if lane is not None and nbytes <= SLICE and not self.backlog:
             lane.bytes_in += nbytes
-            data = self._view[:nbytes].tobytes()
-            if (standing := lane.standing) is not None and (reply := standing.given(data)) is not None:
-                self.send(reply)  # (what the port would write: nothing changed since)
-                return
-            if (at_once := lane.at_once) is not None and (reply := at_once(data)) is not None:
-                if reply:
-                    self.send(reply)  # (the port's writer while the lane is open)
-                return
-            lane.feed(data)
+            lane.feed(data)  # (the port gives a standing reply, or one made at once, itself)
             return
         deliver = self.deliver
         if deliver is not None and nbytes <= SLICE and not self.backlog:
-            deliver(self._view[:nbytes].tobytes())
+            deliver(data)
         else:
-            self.owner._received(self, self._view[:nbytes].tobytes())
+            self.owner._received(self, data)
 
     def eof_received(self) -> bool:
         return False  # half-close ends the session
@@ -201,19 +209,23 @@ class _Session(asyncio.BufferedProtocol):
 
     def send(self, data: bytes) -> None:
         """Bytes for the client (on the lean lane: the target's output, counted for the line)."""
+        size = len(data)
         lane = self.lane
         if lane is not None:
-            lane.bytes_out += len(data)
+            lane.bytes_out += size
         transport = self.transport
         if transport is None or self.closed or transport.is_closing():
             return
         if self.full:
-            self.owner.dropped += len(data)
+            self.owner.dropped += size
             return
-        sock = self.sock
-        if self.queued and not transport.get_write_buffer_size():
+        if self.queued:
+            if transport.get_write_buffer_size():
+                transport.write(data)  # (after what asyncio holds unsent)
+                return
             self.queued = False  # what asyncio held has gone out
-        if sock is not None and not self.queued:
+        sock = self.sock
+        if sock is not None:
             # what transport.write does first when nothing waits to be sent, without its checks;
             # what the socket does not take now (or an error) goes the usual way
             try:
@@ -222,7 +234,7 @@ class _Session(asyncio.BufferedProtocol):
                 sent = 0
             except OSError:
                 sent = 0  # (transport.write meets the error again and closes the connection)
-            if sent == len(data):
+            if sent == size:
                 return
             data = data[sent:]
         self.queued = True

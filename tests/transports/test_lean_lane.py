@@ -15,6 +15,7 @@ import pytest
 from devsim.core.changes import CHANGES
 from devsim.core.clock import RealClock
 from devsim.core.device import Device, Face
+from devsim.transports import tcp
 from devsim.transports.line import Line, LineFault
 from devsim.transports.tap import chunk_tap, untap_chunks
 from devsim.transports.tcp import SLICE, TcpTransport
@@ -71,8 +72,9 @@ class _Sink:
 
 
 class _Plant:
-    def __init__(self, device: Device, line: Line, transport: TcpTransport) -> None:
+    def __init__(self, device: Device, line: Line, transport: TcpTransport, direct: bool = True) -> None:
         self.device, self.line, self.transport = device, line, transport
+        self.direct = direct  # (the sessions read their sockets themselves)
 
     async def connect(self) -> tuple[asyncio.StreamReader, asyncio.StreamWriter]:
         reader, writer = await asyncio.open_connection("127.0.0.1", self.transport.port)
@@ -90,15 +92,19 @@ class _Plant:
             raise AssertionError(f"timed out waiting for {what}") from None
 
 
-@pytest.fixture
-async def plant() -> AsyncIterator[_Plant]:
+@pytest.fixture(params=[True, False], ids=["own reader", "transport's reader"])
+async def plant(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> AsyncIterator[_Plant]:
+    """A device on a line served by TCP; its sessions read their sockets themselves, or (on a loop
+    where they cannot: :func:`devsim.transports.tcp._reads_directly`) through the transport."""
+    if not request.param:
+        monkeypatch.setattr(tcp, "_reads_directly", lambda transport: False)
     clock = RealClock()
     device = _EchoDevice(clock=clock)
     line = Line(device.port("main"), clock)
     transport = TcpTransport()
     await transport.start(line)
     try:
-        yield _Plant(device, line, transport)
+        yield _Plant(device, line, transport, direct=request.param)
     finally:
         await transport.close()
         line.close()
@@ -290,37 +296,21 @@ def _reader_of(session: Any) -> Any:
 
 
 async def test_a_session_reads_its_socket_itself_and_again_after_a_flood(plant: _Plant) -> None:
-    """A poll passes the session's own reader, not the transport's three calls
+    """A poll passes the session's own reader, not the transport's four calls
     (:meth:`~devsim.transports.tcp._Session.read_directly`): from the first poll on, and again once
-    a flood has paused the transport's reading and its slices are fed; the host's bytes and the
-    answers are the same on either reader (the tests above)."""
+    a flood has paused the transport's reading and its slices are fed (where the session cannot,
+    the transport's reader throughout); the host's bytes and the answers are the same on either
+    reader (the tests above run on both)."""
     reader, writer = await plant.connect()
     assert await _poll(reader, writer, b"A\r") == b"A\r" + ANSWER
     (session,) = plant.transport._served
-    assert _reader_of(session) == session._read
+    expected_reader = session._read if plant.direct else session.transport._read_ready
+    assert _reader_of(session) == expected_reader
     flood = b"x" * (3 * SLICE)
     writer.write(flood + b"\r")
     expected = flood + b"\r" + ANSWER
     assert await asyncio.wait_for(reader.readexactly(len(expected)), 10) == expected
-    assert _reader_of(session) == session._read
+    assert _reader_of(session) == expected_reader
     assert await _poll(reader, writer, b"B\r") == b"B\r" + ANSWER
     writer.close()
-    await plant.until(lambda: plant.transport.clients == 0)  # the end of the stream, through the session's reader
-
-
-async def test_a_paced_line_never_opens_the_lane() -> None:
-    """Pacing holds each answer to the wire's speed: the line must see every byte."""
-    clock = RealClock()
-    device = _EchoDevice(clock=clock)
-    line = Line(device.port("main"), clock, pacing=True)
-    transport = TcpTransport()
-    await transport.start(line)
-    try:
-        reader, writer = await asyncio.open_connection("127.0.0.1", transport.port)
-        assert await _poll(reader, writer, b"A\r") == b"A\r" + ANSWER  # 6 characters at 9600 baud
-        assert not line.lean and line.bytes_delivered == 2 + len(ANSWER)
-        writer.close()
-    finally:
-        await transport.close()
-        line.close()
-        device.close()
+    await plant.until(lambda: plant.transport.clients == 0)  # the end of the stream, on either reader
