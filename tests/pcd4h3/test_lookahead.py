@@ -2,7 +2,8 @@
 issue 31, "schedule timers only for events"): with the chips computed ahead, a PCD gives the same
 chips, status flags, switch signals and recorded events as the PLC that runs every cycle, at every
 look of a host (random moments), through moves, breakpoints, a position error, a blocked motor,
-limit and reference switches, a second axis and one that stands while the cycles read it; and it
+limit and reference switches, a second axis and one that stands while the cycles read it, a user
+program whose timers run out between cycles (a cycle run late reads them at its own start); and it
 runs far fewer timer events.  The shared axes (the switches' axis, ``axis.N.mechanical_position``)
 are the same too: each follows the motor through its position at the chip's last sample, which a
 cycle's functions compute up to the cycle's length ahead of the clock (§3.3.2, §10.1)."""
@@ -91,6 +92,10 @@ SCENARIOS: dict[str, tuple[dict[str, Any], dict[float, list[Step]], float]] = {
     "the manual's example 3 with I 8 held, then I 15": (
         {"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 1}, "user_program": "example3"},
         {0.1: [keys(8)], 4.0: [keys(15)]}, 6.0),
+    "the manual's example 3 reading RSigB too: a cycle of 10.3 ms, its dwells run out between cycles": (
+        {"h3def": {"fmah3": 48, "bar": 200, "baf": 200, "mna": 1}, "user_program": "example3",
+         "cyclic_reads": ["FRdSR"]},
+        {0.1: [keys(8)]}, 12.0),
 }
 
 
