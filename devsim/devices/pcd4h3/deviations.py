@@ -46,14 +46,15 @@ DEVIATIONS: tuple[Deviation, ...] = (
     Deviation(
         "§6.4",
         "The limit switches LS1, LS2 and the reference switch change their inputs where the axis is.",
-        "The switches sit on a shared axis that follows the motor from the LM628's batches of samples, "
-        "linear from one PLC cycle or host look to the next. While the PLC skips the cycles of an axis that "
-        "only moves, the shared axis starts anew only at the host's looks, and `axis.N.mechanical_position` "
-        "may differ by up to one PLC cycle's travel from what a PLC running every cycle shows; the skipping "
-        "ends before a switch edge comes within a cycle's travel, so the switches change at the same sample "
-        "(0.34 ms) as with every cycle.",
+        "The switches sit on a shared axis that follows the motor from the LM628's batches of samples: "
+        "through the motor's position at a batch's last sample, at its velocity, until the next batch (a PLC "
+        "cycle's function, which may compute the chip up to the cycle's length ahead of the clock, or a "
+        "host's look), so `axis.N.mechanical_position` and the switches are where the motor is within the "
+        "travel of a straight line over one batch. While the PLC skips the cycles of an axis that only "
+        "moves, a host finds the shared axis where it is with every cycle, and the skipping ends before a "
+        "switch edge comes within a cycle's travel.",
         "The motor is computed in batches, not continuously, and a moving axis wakes the PLC only for its "
-        "events (issue 31); following it at every skipped cycle would cost the timer the skipping saves.",
+        "events (issue 31).",
     ),
     Deviation(
         "§6.6",

@@ -3,8 +3,9 @@ LM628/LM629 with its motor and encoder on the device clock, the shared axis the 
 the limit and reference switches at their places on it.
 
 The chip's samples run in batches (:class:`~devsim.devices.pcd4h3.stepper.ChipStepper`); after
-each batch the shared :class:`~devsim.core.axis.Axis` takes the motor's position and velocity, so
-the switches (:class:`~devsim.core.axis.RegionSwitch`) change where the motor really is.  The
+each batch the shared :class:`~devsim.core.axis.Axis` passes through the motor's position at the
+moment of the batch's last sample, at its velocity, so the switches
+(:class:`~devsim.core.axis.RegionSwitch`) change where the motor really is.  The
 limit switches are normally closed (input 1 = 24 V, healthy; G-15), the reference switch closes
 on its region; the module only passes them to the PLC (§2.6).
 """
@@ -44,7 +45,7 @@ class H3Drive:
 
     def __init__(self, number: int, clock: Clock, signals: SignalBank, settings: Mapping[str, Any], *,
                  lm629: bool, rs422: bool, present: bool, jumpers: Mapping[str, Any] | None = None) -> None:
-        self.number, self.signals = number, signals
+        self.number, self.signals, self.clock = number, signals, clock
         stops = settings.get("hard_stops")
         low, high = (float(min(stops)), float(max(stops))) if stops else (-math.inf, math.inf)
         self.motor = Motor(kv=float(settings["kv"]), tau=float(settings["tau_ms"]) / 1000, low=low, high=high)
@@ -93,8 +94,12 @@ class H3Drive:
         self.signals.set(f"LED_STOP_{n}", not ls1 and not ls2)
 
     def _follow(self) -> None:
+        """The shared axis through the motor's position at the moment of the chip's last sample
+        (:attr:`ChipStepper.moment`, which a PLC function's look puts up to a cycle ahead of the
+        clock), at its velocity: a switch changes where the motor is, not where it will be."""
         velocity = self.motor.velocity
-        self.axis.track(self.motor.position, velocity if abs(velocity) > STILL else 0.0)
+        velocity = velocity if abs(velocity) > STILL else 0.0
+        self.axis.track(self.motor.position - velocity * (self.stepper.moment - self.clock.now()), velocity)
 
     def catch_up(self, until: float | None = None, *, follow: bool = True) -> None:
         self.stepper.catch_up(until, follow=follow)

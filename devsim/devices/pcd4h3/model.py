@@ -218,11 +218,7 @@ class Pcd4(Model):
         before = [axis.transfers for axis in self.axes]
         for drive in self.drives:
             drive.catch_up(start, follow=False)
-        self.timers.moment = start  # (the user program reads them as that cycle did)
-        try:
-            self._run_axes(start, follow=False)
-        finally:
-            self.timers.moment = None
+        self._run_axes(start, follow=False)
         return before
 
     def _cycle(self) -> None:
@@ -268,7 +264,7 @@ class Pcd4(Model):
                 elapsed += axis.handle(before) / 1000  # (a command pokes the drive at once; a read does not)
                 self._note(axis)
             if self.sequence is not None:
-                self.sequence.cycle()
+                self.sequence.cycle(start)  # (its timers as they count at the cycle's start)
         except Halted:
             pass
         self._display()

@@ -23,10 +23,10 @@ from devsim.core.kit import Command, Table
 from devsim.devices.pcd4h3.library import H3Axis
 from devsim.devices.pcd4h3.timers import Timers
 
-__all__ = ["ACTIONS", "PROGRAMS", "Sequence", "Step", "Transition"]
+__all__ = ["ACTIONS", "PROGRAMS", "Look", "Sequence", "Step", "Transition"]
 
 Action = tuple[Any, ...]  # ("load", register, value) / ("set", flag) / ("timer", n, tenths) / ("counter", n, v) / ("dec", n)
-Condition = Callable[["Sequence"], bool]  # of a :class:`Sequence`'s view of the PLC
+Condition = Callable[["Look"], bool]  # of the PLC as a cycle of the user program sees it
 
 
 class Step(msgspec.Struct, frozen=True):
@@ -60,7 +60,7 @@ def _input(n: int, level: bool = True) -> Condition:
     return lambda view: view.input(n) == level
 
 
-def _timer_done(view: Sequence) -> bool:
+def _timer_done(view: Look) -> bool:
     return view.timer(0) == 0
 
 
@@ -159,6 +159,29 @@ relative −30 mm moves, endlessly; manual jog ±20 mm/s on I 9 / I 10, zero on 
 PROGRAMS: dict[str, Program] = {"example1": EXAMPLE_1, "example2": EXAMPLE_2, "example3": EXAMPLE_3}
 
 
+class Look:
+    """The PLC as a transition's condition sees it in a cycle that starts ``at`` (None: now): the
+    flags of axis 1, the inputs, the counters, and the timers as they count at that start (spec
+    pcd4h3.md §6.3 `STL T`, §6.5; manual §9.1, §9.3)."""
+
+    __slots__ = ("at", "sequence")
+
+    def __init__(self, sequence: Sequence, at: float | None) -> None:
+        self.sequence, self.at = sequence, at
+
+    def flag(self, symbol: str) -> int:
+        return self.sequence.axis.flag(symbol)
+
+    def input(self, n: int) -> bool:
+        return self.sequence.input(n)
+
+    def timer(self, n: int) -> int:
+        return self.sequence.timers.value(n, self.at)
+
+    def counter(self, n: int) -> int:
+        return self.sequence.counters.get(n, 0)
+
+
 class Sequence:
     """A running sequential block on axis 1 of a PLC: the axis (its registers and flags), the
     PLC's inputs and counters, and its timers."""
@@ -179,18 +202,8 @@ class Sequence:
         """RSB: the initial step becomes the only active one."""
         self.active = {self.program.initial: False}
 
-    # -- the PLC seen by conditions ------------------------------------------------------------
-    def flag(self, symbol: str) -> int:
-        return self.axis.flag(symbol)
-
     def input(self, n: int) -> bool:
         return bool(self.inputs.get(n, 0))
-
-    def timer(self, n: int) -> int:
-        return self.timers.value(n)
-
-    def counter(self, n: int) -> int:
-        return self.counters.get(n, 0)
 
     # -- the statements of a step's actions ------------------------------------------------------
     def load_register(self, action: Action) -> None:
@@ -220,15 +233,17 @@ class Sequence:
         if self.program.display:
             self.axis.set_flag("DplM", 1)
 
-    def cycle(self) -> None:
-        """CSB 0, then (Example 3) the mode and stop keys."""
+    def cycle(self, at: float | None = None) -> None:
+        """CSB 0 in the PLC cycle that starts ``at`` (None: now; earlier for a cycle the PLC runs
+        late, whose timers count to its start), then (Example 3) the mode and stop keys."""
+        view = Look(self, at)
         for name, done in list(self.active.items()):
             if not done:
                 self._run(self.steps[name])
                 self.active[name] = True
                 continue
             for transition in self.leaving.get(name, ()):
-                if transition.condition is None or transition.condition(self):
+                if transition.condition is None or transition.condition(view):
                     del self.active[name]
                     for target in transition.targets:
                         self.active[target] = False
@@ -253,11 +268,12 @@ class Sequence:
     def busy(self) -> bool:
         """Something will happen at the next cycle without an outside event: a step's actions
         to run, or a transition that holds."""
+        view = Look(self, None)
         for name, done in self.active.items():
             if not done:
                 return True
             for transition in self.leaving.get(name, ()):
-                if transition.condition is None or transition.condition(self):
+                if transition.condition is None or transition.condition(view):
                     return True
         return False
 

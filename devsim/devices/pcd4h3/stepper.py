@@ -56,6 +56,14 @@ class ChipStepper:
         return self._timer is not None
 
     @property
+    def moment(self) -> float:
+        """The device time of the chip's last computed sample: after a catch-up, up to a PLC
+        cycle after the clock where a function of the cycle looked at the chip at its moment
+        (§10.1), a little before it after a look (further ahead only between :meth:`ahead` and
+        the next catch-up)."""
+        return self._epoch + self._samples * CHIP_SAMPLE
+
+    @property
     def settled(self) -> bool:
         """Nothing has changed for a while: no sample needs computing until a command (and none
         was computed ahead of the present, whose count of samples without change a look finds)."""

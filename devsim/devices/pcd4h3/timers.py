@@ -16,8 +16,6 @@ class Timers:
     def __init__(self, clock: Clock) -> None:
         self.clock = clock
         self._ends: dict[int, float] = {}
-        #: The moment a PLC cycle run late reads the timers at (its own start), or None: now.
-        self.moment: float | None = None
 
     def load(self, n: int, tenths: int) -> None:
         """``LD T n tenths``."""
@@ -29,7 +27,7 @@ class Timers:
         if end is None:
             return 0
         if at is None:
-            at = self.clock.now() if self.moment is None else self.moment
+            at = self.clock.now()
         return max(0, math.ceil((end - at) * 10 - 1e-9))
 
     def running(self) -> bool:
