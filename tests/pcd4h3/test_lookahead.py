@@ -117,7 +117,7 @@ def test_the_skipped_cycles_change_nothing_a_host_sees(name: str, seed: int, mon
         assert seen_axes == pytest.approx(reference_axes, rel=1e-12, abs=1e-9)
     assert [name for _, name, *_ in recorded] == [name for _, name, *_ in every_recorded]
     for (when, *what), (reference, *expected) in zip(recorded, every_recorded, strict=True):
-        assert what == expected and when == pytest.approx(reference, abs=CHIP_SAMPLE)
+        assert what == expected and when == pytest.approx(reference, rel=1e-12, abs=1e-9)
     assert events < every_events
 
 
