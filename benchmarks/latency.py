@@ -345,12 +345,16 @@ def poll_instructions(n: int) -> int:
     return 0
 
 
-#: Run as ``python -c COUNTER FILE (-m MODULE | SCRIPT) ARGS``: the program with every call counted
-#: (``sys.setprofile``, in every thread), the counts written to FILE at exit (``count<TAB>name``).
-#: (``-c`` puts the working directory first on ``sys.path``, as ``-m`` does.)
+#: Run as ``python -c COUNTER FILE [--opcodes] (-m MODULE | SCRIPT) ARGS``: the program with every
+#: call counted (``sys.setprofile``, in every thread), or with ``--opcodes`` every bytecode executed,
+#: per function (``sys.settrace`` with opcode events: much slower), the counts written to FILE at
+#: exit (``count<TAB>name``).  (``-c`` puts the working directory first on ``sys.path``, as ``-m`` does.)
 COUNTER = """
 import atexit, collections, os, runpy, sys, threading
 out, argv, root = sys.argv[1], sys.argv[2:], os.getcwd()
+opcodes = argv[0] == "--opcodes"
+if opcodes:
+    argv = argv[1:]
 calls = collections.Counter()
 
 def where(path):
@@ -364,14 +368,30 @@ def profile(frame, event, arg):
     elif event == "c_call":
         calls[f"(C) {getattr(arg, '__qualname__', arg)}"] += 1
 
+def trace(frame, event, arg):
+    frame.f_trace_opcodes = True
+    code = frame.f_code
+    name = f"{where(code.co_filename)}:{code.co_firstlineno} {code.co_name}"
+
+    def opcode(frame, event, arg):
+        if event == "opcode":
+            calls[name] += 1
+        return opcode
+    return opcode
+
 def write():
     sys.setprofile(None)
+    sys.settrace(None)
     with open(out, "w") as fh:
         fh.writelines(f"{count}\\t{name}\\n" for name, count in calls.items())
 
 atexit.register(write)
-sys.setprofile(profile)
-threading.setprofile(profile)
+if opcodes:
+    sys.settrace(trace)
+    threading.settrace(trace)
+else:
+    sys.setprofile(profile)
+    threading.setprofile(profile)
 if argv[0] == "-m":
     sys.argv = [argv[1], *argv[2:]]
     runpy.run_module(argv[1], run_name="__main__", alter_sys=True)

@@ -45,9 +45,12 @@ wake-up), unlike the timed phases.
 
 ``--calls`` lists instead the functions the server process calls per poll, the same way (Python
 functions by file, line and name; C functions by name; ``sys.setprofile``, as
-``benchmarks/latency.py --calls`` counts them): where the instructions go.
+``benchmarks/latency.py --calls`` counts them): where the instructions go.  ``--opcodes`` counts
+the bytecodes each Python function executes per poll (``sys.settrace`` with opcode events): how
+much Python a poll runs, a count that does not depend on the machine.
 
     python benchmarks/scale.py --calls [--devices 20] [--rounds 20] [--kind sers|stub]
+    python benchmarks/scale.py --opcodes [--devices 20] [--rounds 20] [--kind sers|stub]
 
 Each phase prints the CPU each side used while it polled (share of one core, and server CPU
 seconds per poll sent: a missed poll is not sent): the pollers, devsim's processes, the echo processes, and how long the server
@@ -460,16 +463,18 @@ def _servers(tmp: str, kind: str, devices: int) -> dict[str, list[str]]:
 
 
 def _calls(args: argparse.Namespace) -> None:
-    """Per poll, counted with sys.setprofile: the functions each server calls (N polls against none)."""
+    """Per poll, counted with sys.setprofile: the functions each server calls (N polls against none);
+    with ``--opcodes``, counted with sys.settrace: the bytecodes each function executes."""
     if ROOT not in sys.path:
         sys.path.insert(0, ROOT)
     from benchmarks.latency import COUNTER
 
     devices, rounds = args.devices or 20, args.rounds_given or 20
+    mode = ["--opcodes"] if args.opcodes else []
 
     def counts(server: list[str], tmp: str, polls: int) -> dict[str, int]:
         out = os.path.join(tmp, f"calls-{len(os.listdir(tmp))}.tsv")
-        _polled([sys.executable, "-c", COUNTER, out, *server], server, args.kind, devices, polls)
+        _polled([sys.executable, "-c", COUNTER, out, *mode, *server], server, args.kind, devices, polls)
         with open(out) as fh:
             return {name: int(count) for count, name in (line.rstrip("\n").split("\t", 1) for line in fh)}
 
@@ -479,10 +484,11 @@ def _calls(args: argparse.Namespace) -> None:
             per_poll = {call: (count - idle.get(call, 0)) / (devices * rounds) for call, count in polled.items()}
             shown = sorted(((count, call) for call, count in per_poll.items() if count >= 0.5), reverse=True)
             python = sum(count for count, call in shown if not call.startswith("(C)"))
-            print(f"{label}: calls per poll ({devices} endpoints polled {rounds} times each, against none): "
-                  f"{python:.0f} Python functions")
+            what = "opcodes per poll, by function" if args.opcodes else "calls per poll"
+            total = f"{python:.0f} opcodes" if args.opcodes else f"{python:.0f} Python functions"
+            print(f"{label}: {what} ({devices} endpoints polled {rounds} times each, against none): {total}")
             for count, call in shown:
-                print(f"  {count:5.2f}  {call}")
+                print(f"  {count:7.2f}  {call}")
 
 
 def _instructions(args: argparse.Namespace) -> None:
@@ -568,6 +574,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="search: a size that missed is measured again this many times before it counts")
     parser.add_argument("--calls", action="store_true",
                         help="list the functions called per poll (sys.setprofile) instead of timing")
+    parser.add_argument("--opcodes", action="store_true",
+                        help="count the bytecodes each function executes per poll (sys.settrace) instead of timing")
     parser.add_argument("--echo-servers", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--poll", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -575,7 +583,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.instructions:
         _instructions(args)
         return 0
-    if args.calls:
+    if args.calls or args.opcodes:
         _calls(args)
         return 0
     if args.seconds is None:
