@@ -121,9 +121,8 @@ class _Session(asyncio.BufferedProtocol):
             with contextlib.suppress(OSError):
                 sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.owner._connected(self)
-        if self.sock is not None:
-            # (after the transport's own reader, which asyncio adds in a callback of its own)
-            asyncio.get_running_loop().call_soon(self.read_directly)
+        # (after the transport's own reader, which asyncio adds in a callback of its own)
+        asyncio.get_running_loop().call_soon(self.read_directly)
 
     def read_directly(self) -> None:
         """Let the session's :meth:`_read` take the socket's reads from the transport's reader
