@@ -24,6 +24,7 @@ import click
 from devsim.cli import exits
 from devsim.cli.options import check_fleet
 from devsim.core.config import ConfigError
+from devsim.core.console import say, warn
 from devsim.observe.live_log import DEFAULT_LEVEL, attach_log, level_of, log_options
 from devsim.transports import fdlimit
 
@@ -334,8 +335,7 @@ async def _up(
         Path(trace_dir).mkdir(parents=True, exist_ok=True)
     limit = fdlimit.fd_limit()
     if log_level >= DEFAULT_LEVEL:  # (-q: warnings and errors only)
-        print(f"devsim: the file descriptor limit {limit} allows about {fdlimit.capacity(limit)} ports",
-              file=sys.stderr, flush=True)
+        warn(f"devsim: the file descriptor limit {limit} allows about {fdlimit.capacity(limit)} ports")
     async with Runtime(virtual=virtual, speed=speed, state_dir=state_dir, name=name) as runtime:
         runtime.idle_drop = idle_drop
         # (building a plant makes many objects and frees few: no collection until it serves, as
@@ -344,9 +344,8 @@ async def _up(
         plant = await build_plant(runtime, spec, trace_dir=trace_dir, keep_going=True)  # type: ignore[arg-type]
         if plant.refused and log_level >= 1:  # a warning (-qq: nothing but fatal errors)
             causes = sorted(set(plant.refused.values()))
-            print(f"devsim: {len(plant.refused)} ports not opened ({'; '.join(causes)}; ulimit -n {limit}):"
-                  f" {', '.join(list(plant.refused)[:5])}{' ...' if len(plant.refused) > 5 else ''}",
-                  file=sys.stderr, flush=True)
+            warn(f"devsim: {len(plant.refused)} ports not opened ({'; '.join(causes)}; ulimit -n {limit}):"
+                 f" {', '.join(list(plant.refused)[:5])}{' ...' if len(plant.refused) > 5 else ''}")
         if motion is not None:
             from devsim.observe.motion_log import start_motion_log
 
@@ -367,17 +366,17 @@ async def _up(
                     await server.close()
                 raise exits.StartFailure(f"cannot join the fleet {fleet}: {exc}", exits.start_status(exc)) from None
         for row in plant.describe():
-            print(row, flush=True)
+            say(row)
         if server is not None:
-            print(f"control: {shown}", flush=True)
+            say(f"control: {shown}")
         if member is not None:
-            print(f"fleet: {member.url} as {member.process}", flush=True)
+            say(f"fleet: {member.url} as {member.process}")
         for device in plant.devices.values():
-            device.on_ready(lambda name=device.name: print(f"{name}: ready", flush=True))
+            device.on_ready(lambda name=device.name: say(f"{name}: ready"))
         logs = attach_log(runtime, log_level)
         title = f"plant {spec.name!r} up" if getattr(spec, "name", None) else "plant up"
         if log_level >= DEFAULT_LEVEL:
-            print(f"devsim: {title} ({len(plant.devices)} devices); Ctrl-C to stop", file=sys.stderr, flush=True)
+            warn(f"devsim: {title} ({len(plant.devices)} devices); Ctrl-C to stop")
         # As `devsim run` does: what exists now lives as long as the process, so keep it out of
         # the garbage collector's scans.  Unfrozen, a full collection of a 1,000-device worker
         # takes about 70 ms, and every device of the worker misses a poll meanwhile.

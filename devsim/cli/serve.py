@@ -21,6 +21,8 @@ import msgspec
 from devsim.cli.control_address import control_option, default_control, system_failure
 from devsim.cli.statuses import INTERRUPTED, StartFailure, start_status
 from devsim.cli.usage import host_port, usage_error
+from devsim.core.console import say as _say  # (replaced by tests and benchmarks/startup.py)
+from devsim.core.console import warn
 from devsim.core.registry import UnknownKind, device_class
 
 if TYPE_CHECKING:  # imported where used: `devsim run` starts faster without them
@@ -314,10 +316,6 @@ def _make_transport(port: Port) -> Any:
     return PtyTransport(link=port.link)
 
 
-def _say(line: str) -> None:
-    print(line, flush=True)
-
-
 async def _serve(plan: Plan) -> None:
     from devsim.runtime import Runtime, port_key
 
@@ -438,7 +436,7 @@ async def _serve(plan: Plan) -> None:
 
             logs = attach_log(runtime, plan.log_level)
             if plan.log_level >= DEFAULT_LEVEL:  # (-q: warnings and errors only)
-                print(banner(runtime, devices), file=sys.stderr, flush=True)
+                warn(banner(runtime, devices))
             # What exists now (modules, tables, devices) lives as long as the process: keep it
             # out of the garbage collector's scans, so that a request's few objects are cheap.
             gc.freeze()

@@ -16,6 +16,7 @@ from typing import Any
 import click
 
 from devsim.cli import exits
+from devsim.core.console import say, warn
 
 __all__ = ["DEFAULT_PORT", "page_beside", "start_web", "web", "web_option"]
 
@@ -101,8 +102,8 @@ async def _serve(control: str, listen: Any) -> None:
         raise exits.SystemFailure(f"cannot serve the page on {listen}: {exc.strerror or exc}") from None
     try:
         for line in urls(listen, port, token):
-            print(line, flush=True)
-        print(f"devsim web: the plant at {control}; Ctrl-C to stop", file=sys.stderr, flush=True)
+            say(line)
+        warn(f"devsim web: the plant at {control}; Ctrl-C to stop")
         await stop.wait()
     finally:
         await runner.cleanup()
@@ -124,7 +125,7 @@ def page_beside(control: Any, listen: Any) -> Iterator[None]:
         raise exits.SystemFailure(f"cannot serve the web page on {listen}: {exc.strerror or exc}") from None
     try:
         for line in lines:
-            print(line, flush=True)
+            say(line)
         yield
     finally:
         server.stop()

@@ -39,13 +39,13 @@ import functools
 import json
 import os
 import socket
-import sys
 import time
 from typing import Any
 
 import msgspec
 
 from devsim.core.clock import VirtualClock
+from devsim.core.console import warn
 from devsim.facades.mqtt_link import LinkLost, MqttLink, open_link
 from devsim.facades.mqtt_wire import Publish, Will, publish_head
 from devsim.fleet.answers import ResolvedRequests, encode_answer
@@ -215,7 +215,7 @@ class FleetMember:
             if self._closing:
                 return
             why = link.closed.exception() if not link.closed.cancelled() else None
-            print(f"devsim: fleet broker {self.url} lost ({why}); reconnecting", file=sys.stderr, flush=True)
+            warn(f"devsim: fleet broker {self.url} lost ({why}); reconnecting")
             self._link = None
             link = await self._reconnect()
             self._link = link
@@ -234,7 +234,7 @@ class FleetMember:
             except LinkLost:
                 await link.disconnect()
                 continue
-            print(f"devsim: fleet broker {self.url} back; announced again", file=sys.stderr, flush=True)
+            warn(f"devsim: fleet broker {self.url} back; announced again")
             return link
 
     def _received(self, link: MqttLink, message: Publish) -> None:

@@ -2,7 +2,8 @@
 errors and (``-v``) the traffic as they happen, one line each (``-v``/``-q`` raise or lower how much).
 
 Two streams: **stdout** carries the output a user or a script needs to connect (``NAME: pty
-/dev/pts/5``, ``control: ...``, ``NAME: ready``): it is never silenced.  **stderr** carries the log,
+/dev/pts/5``, ``control: ...``, ``NAME: ready``): it is never silenced (a stream whose reader
+has gone goes to the null device: :mod:`devsim.core.console`).  **stderr** carries the log,
 at a level of ``2 + verbose - quiet`` (clamped):
 
 * 0 (``-qq``): nothing but fatal errors (``Error: ...`` and a non-zero exit status);
@@ -29,9 +30,10 @@ without point sampling: a quiet simulator stays idle.
 from __future__ import annotations
 
 import asyncio
-import sys
 from collections.abc import Callable, Hashable
 from typing import Any
+
+from devsim.core.console import warn
 
 __all__ = ["DEFAULT_LEVEL", "attach_log", "banner", "expects", "level_of", "log_options", "repeat_key"]
 
@@ -102,14 +104,10 @@ def attach_log(runtime: Any, level: int, write: Callable[[str], None] | None = N
     ``clock`` (seconds, default the monotonic wall clock) times the windows of repeated lines."""
     if level <= 0:
         return []
+    from devsim.observe.repeats import RepeatLimiter
     from devsim.runtime.watch_stream import WatchStream, describe
 
-    def emit(text: str) -> None:
-        print(text, file=sys.stderr, flush=True)
-
-    from devsim.observe.repeats import RepeatLimiter
-
-    out = write or emit
+    out = write or warn
     limiter = RepeatLimiter() if clock is None else RepeatLimiter(clock=clock)
 
     def send(item: dict[str, Any]) -> None:

@@ -32,6 +32,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from devsim.core.console import say, warn
 from devsim.observe.live_log import DEFAULT_LEVEL, level_of
 from devsim.scenario.schema import PlantSpec
 
@@ -135,8 +136,7 @@ async def _forward(stream: asyncio.StreamReader | None, control_seen: asyncio.Ev
         if text.startswith("control: "):
             control_seen.set()  # the worker's own control address is ours to hide
             continue
-        out.write(text)
-        out.flush()
+        say(text.rstrip("\n"), out)  # (a reader gone: the worker's lines are still taken)
 
 
 async def _proxy(workers: list[_Worker], about: dict[str, Any], reader: asyncio.StreamReader,
@@ -284,7 +284,7 @@ async def run_workers(
             done, _ = await asyncio.wait([*ended, asyncio.ensure_future(asyncio.gather(*waiting))],
                                          return_when=asyncio.FIRST_COMPLETED)
             if any(task in done for task in ended):
-                print("devsim: a worker ended while starting", file=sys.stderr, flush=True)
+                warn("devsim: a worker ended while starting")
                 return 1
             server = None
             if control is not None:
@@ -295,15 +295,15 @@ async def run_workers(
                 else:
                     server = await asyncio.start_server(lambda r, w: _proxy(running, about, r, w), control.host, control.port)
                     shown = f"{control.host}:{server.sockets[0].getsockname()[1]}"
-                print(f"control: {shown}", flush=True)
+                say(f"control: {shown}")
             if level_of(verbose, quiet) >= DEFAULT_LEVEL:  # (-q: warnings and errors only)
-                print(f"devsim: plant up in {len(running)} worker processes ({len(spec.devices)} devices);"
-                      " Ctrl-C to stop", file=sys.stderr, flush=True)
+                warn(f"devsim: plant up in {len(running)} worker processes ({len(spec.devices)} devices);"
+                     " Ctrl-C to stop")
             stopping = asyncio.ensure_future(stop.wait())
             done, _ = await asyncio.wait([stopping, *ended], return_when=asyncio.FIRST_COMPLETED)
             status = 0 if stopping in done else 1
             if status:
-                print("devsim: a worker ended; stopping the others", file=sys.stderr, flush=True)
+                warn("devsim: a worker ended; stopping the others")
             if server is not None:
                 server.close()
                 if control.path is not None:

@@ -24,6 +24,8 @@ import sys
 import time
 from typing import Any
 
+from devsim.core.console import say
+
 __all__ = [
     "OUT_OF_FDS",
     "REPORT_EVERY",
@@ -96,7 +98,7 @@ def report(cause: str, text: str, *, stream: Any = None) -> bool:
     repeats = _REPORTS.repeats.pop(cause, 0)
     _REPORTS.last[cause] = now
     extra = f" ({repeats} more since the last report)" if repeats else ""
-    print(f"devsim: {text}{extra}", file=stream or sys.stderr, flush=True)
+    say(f"devsim: {text}{extra}", stream or sys.stderr)
     return True
 
 

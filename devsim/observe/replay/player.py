@@ -25,13 +25,13 @@ from __future__ import annotations
 
 import asyncio
 import signal
-import sys
 from collections import deque
 from collections.abc import Callable
 from typing import Any
 
 import msgspec
 
+from devsim.core.console import say, warn
 from devsim.core.device import SerialSettings
 from devsim.core.registry import port_framing
 from devsim.observe.replay.live import HandoverClock, start_live
@@ -48,10 +48,6 @@ class ReplayPlan(msgspec.Struct):
     as_fast: bool = False
     fallback: str = "error"  # "error" | "live"
     config: dict[str, Any] = msgspec.field(default_factory=dict)  # the live model's configuration
-
-
-def _warn(text: str) -> None:
-    print(text, file=sys.stderr, flush=True)
 
 
 def _show(message: bytes) -> str:
@@ -191,12 +187,12 @@ class Replayer:
     def _unknown(self, message: bytes) -> None:
         self.counts["unknown"] = self.counts.get("unknown", 0) + 1
         if self.fallback == "live" and self.live is not None:
-            _warn(f"replay: request not in the recording: {_show(message)}; "
-                  f"the live {self.session.kind} model answers from now on")
+            warn(f"replay: request not in the recording: {_show(message)}; "
+                 f"the live {self.session.kind} model answers from now on")
             self.live_now = True
             self.live.feed(message)
             return
-        _warn(f"replay: request not in the recording: {_show(message)}; no answer (--fallback error)")
+        warn(f"replay: request not in the recording: {_show(message)}; no answer (--fallback error)")
 
 
 async def replay_session(plan: ReplayPlan) -> int:
@@ -223,7 +219,7 @@ async def replay_session(plan: ReplayPlan) -> int:
                     live, bridge = await start_live(runtime, clock, session.kind, session.port, plan.config,
                                                     session.exchanges)
                 except Exception as exc:
-                    _warn(f"Error: cannot start the live {session.kind} model: {type(exc).__name__}: {exc}")
+                    warn(f"Error: cannot start the live {session.kind} model: {type(exc).__name__}: {exc}")
                     return 1
                 clock.go_live(1.0 if plan.as_fast else plan.speed)
                 bridge.sink = lambda data: outbox.put(loop.time(), data)
@@ -232,22 +228,22 @@ async def replay_session(plan: ReplayPlan) -> int:
             try:
                 await transport.start(replayer)
             except OSError as exc:
-                _warn(f"Error: cannot open the {'pty' if plan.tcp is None else 'TCP port'}: {exc}")
+                warn(f"Error: cannot open the {'pty' if plan.tcp is None else 'TCP port'}: {exc}")
                 return 1
             try:
                 if plan.tcp is None:
-                    print(f"replay: pty {transport.address}", flush=True)
+                    say(f"replay: pty {transport.address}")
                 else:
-                    print(f"replay: tcp {transport.url}", flush=True)
+                    say(f"replay: tcp {transport.url}")
                 if plan.link:
-                    print(f"replay: link {plan.link}", flush=True)
-                _warn(f"replay: {len(plan.session.exchanges)} recorded requests of kind "
-                      f"{plan.session.kind or '(none)'}; --fallback {plan.fallback}")
+                    say(f"replay: link {plan.link}")
+                warn(f"replay: {len(plan.session.exchanges)} recorded requests of kind "
+                     f"{plan.session.kind or '(none)'}; --fallback {plan.fallback}")
                 await stop.wait()
             finally:
                 await transport.close()
             counts = ", ".join(f"{how} {n}" for how, n in sorted(replayer.counts.items())) or "none"
-            _warn(f"replay: requests answered: {counts}")
+            warn(f"replay: requests answered: {counts}")
     finally:
         await outbox.close()
         for signum in (signal.SIGINT, signal.SIGTERM):

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import asyncio
 import signal
-import sys
 import threading
 import time
 from collections.abc import Callable
@@ -27,6 +26,7 @@ from typing import Any
 import msgspec
 import serial
 
+from devsim.core.console import say, warn
 from devsim.core.device import SerialSettings
 from devsim.observe.replay.session import SessionWriter
 
@@ -41,14 +41,6 @@ class RecordPlan(msgspec.Struct):
     settings: SerialSettings
     tcp: tuple[str, int] | None = None  # host side on TCP instead of a pty
     link: str | None = None
-
-
-def _say(text: str) -> None:
-    print(text, flush=True)
-
-
-def _warn(text: str) -> None:
-    print(text, file=sys.stderr, flush=True)
 
 
 class _Recorder:
@@ -86,7 +78,7 @@ class _Recorder:
             self.device.apply_settings({"baudrate": settings.baudrate, "bytesize": settings.bytesize,
                                         "parity": settings.parity, "stopbits": settings.stopbits})
         except (serial.SerialException, OSError, ValueError) as exc:
-            _warn(f"record: the host's line settings {settings.describe()} cannot be set on the device's port: {exc}")
+            warn(f"record: the host's line settings {settings.describe()} cannot be set on the device's port: {exc}")
 
     def host_disconnected(self) -> None:
         pass
@@ -129,7 +121,7 @@ async def record_session(plan: RecordPlan) -> int:
     try:
         device = _open_device(plan)
     except (serial.SerialException, OSError, ValueError) as exc:
-        _warn(f"Error: cannot open the device port {plan.device_url}: {exc}")
+        warn(f"Error: cannot open the device port {plan.device_url}: {exc}")
         return 1
     loop = asyncio.get_running_loop()
     done = asyncio.Event()
@@ -158,13 +150,13 @@ async def record_session(plan: RecordPlan) -> int:
                                 daemon=True)
         pump.start()
         if plan.tcp is not None:
-            _say(f"record: tcp {transport.url}")
+            say(f"record: tcp {transport.url}")
         else:
-            _say(f"record: pty {transport.address}")
+            say(f"record: pty {transport.address}")
             if plan.link:
-                _say(f"record: link {plan.link}")
-        _say(f"record: device {plan.device_url}")
-        _say(f"record: out {plan.out}")
+                say(f"record: link {plan.link}")
+        say(f"record: device {plan.device_url}")
+        say(f"record: out {plan.out}")
         await done.wait()
     finally:
         stop.set()
@@ -176,7 +168,7 @@ async def record_session(plan: RecordPlan) -> int:
         for signum in (signal.SIGINT, signal.SIGTERM):
             loop.remove_signal_handler(signum)
     if recorder.failed:
-        _warn(recorder.failed)
+        warn(recorder.failed)
         return 1
-    _warn(f"record: {writer.chunks} chunks in {plan.out}")
+    warn(f"record: {writer.chunks} chunks in {plan.out}")
     return 0

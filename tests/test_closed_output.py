@@ -1,0 +1,98 @@
+"""A serving process whose output nobody reads any more (a supervisor that closed the pipe after
+the port line, ``devsim run sers --pty | head -1``) goes on serving as if it were read: its
+devices power on completely, its log lines go nowhere, and it ends with status 0.
+
+Before, the ``sers: ready`` line raised ``BrokenPipeError`` in the middle of the drive's power-on
+(the model announces ``ready`` to the line's printer), so the rest of it did not run: no
+autostart (§3.1.2), no jog function at power-on (§4.8.6.3); and the interpreter's flush at exit
+ended the process with status 120."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import TextIO
+
+import pytest
+
+from tests.support.process import ROOT, devsim_env, stop
+
+
+def ctl(address: str, *args: str) -> str:
+    done = subprocess.run([sys.executable, "-m", "devsim", "ctl", "--control", address, *args], cwd=ROOT,
+                          env=devsim_env(), capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+COMMANDS = {
+    "run": lambda config: ["run", "sers", "--pty", "--config", str(config)],
+    "up": lambda config: ["up", str(config.with_name("plant.yaml"))],
+    "up --workers 2": lambda config: ["up", str(config.with_name("plant.yaml")), "--workers", "2"],
+}
+PLANT = """\
+devices:
+  - {name: sers, kind: sers, config: {autostart: true}}
+  - {name: other, kind: sers, config: {address: 2}}
+"""
+
+
+@pytest.mark.manual("§3.1.2", "DIP switch 2 bit 8 ON: a valid EEPROM program starts automatically after a power-on reset")
+@pytest.mark.parametrize("command", list(COMMANDS))
+@pytest.mark.parametrize("closed", ["stdout", "stdout and stderr"])
+def test_a_drive_powers_on_completely_when_nobody_reads_the_output(tmp_path: Path, command: str, closed: str) -> None:
+    config = tmp_path / "sers.yaml"
+    config.write_text("autostart: true\n")
+    (tmp_path / "plant.yaml").write_text(PLANT)
+    address = f"unix:{tmp_path}/c.sock"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "devsim", *COMMANDS[command](config), "--virtual", "--control", address,
+         "-v"],  # -v: every event logged, from inside the model
+        cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE if closed == "stdout and stderr" else (tmp_path / "err.txt").open("w"), text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        while not (line := proc.stdout.readline()).startswith("control: "):  # the port lines first
+            assert ": pty /dev/" in line, line
+        assert line == f"control: {address}\n"
+        assert ctl(address, "set", "sers", "program", '["O3=1 PE"]') == "ok\n"  # stored while it boots
+        proc.stdout.close()  # nobody reads any more: `sers: ready` finds no reader
+        if proc.stderr is not None:
+            proc.stderr.close()
+        ctl(address, "advance", "2.1")  # the power-on ends (2 s)
+        assert ctl(address, "read", "sers", "booting", "output.O3").split() == [
+            "name", "value", "unit", "booting", "false", "output.O3", "true"]
+        assert ctl(address, "fault", "sers", "blocked_axis", "on") == "ok\n"  # logged (-v): to nobody
+        assert ctl(address, "--json", "read", "sers", "output.O3") == "true\n"
+    finally:
+        status = stop(proc, timeout=15)
+    assert status == 0
+    if closed == "stdout":
+        assert "Traceback" not in (tmp_path / "err.txt").read_text()
+
+
+def test_up_takes_its_workers_lines_when_nobody_reads_its_own() -> None:
+    """`devsim up --workers` passes each worker's lines on: with its own reader gone it still takes
+    them all, or a worker would block once its pipe is full."""
+    from devsim.scenario.workers import _forward
+
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+
+    async def forward_all(out: TextIO) -> asyncio.StreamReader:
+        lines = asyncio.StreamReader()
+        for n in range(5000):  # (more than a pipe holds)
+            lines.feed_data(f"w{n}: ready\n".encode())
+        lines.feed_data(b"control: unix:/worker.sock\n")
+        lines.feed_eof()
+        seen = asyncio.Event()
+        await _forward(lines, seen, out)
+        assert seen.is_set()
+        return lines
+
+    with open(write_end, "w") as out:
+        assert asyncio.run(forward_all(out)).at_eof()
