@@ -42,7 +42,7 @@ from typing import Any, TextIO
 
 from devsim.core.device import Device
 from devsim.core.watch import PointWatch
-from devsim.transports.trace import create_trace_file
+from devsim.transports.trace import TraceFile
 
 __all__ = [
     "AXIS_PATTERN",
@@ -211,7 +211,8 @@ class MotionLog:
         self.resolution = resolution
         if isinstance(target, str | Path):
             self.path: str | None = str(target)
-            self._file: TextIO = open(create_trace_file(target), "w", encoding="utf-8", newline="")  # noqa: SIM115
+            self._file: TextIO | TraceFile = TraceFile(target, encoding="utf-8", newline="", at_once=False,
+                                                               what="motion log")
         else:
             self.path = None
             self._file = target

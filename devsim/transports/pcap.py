@@ -64,7 +64,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from devsim.transports.trace import create_trace_file
+from devsim.transports.trace import TraceFile
 
 __all__ = [
     "HEADER_SIZE",
@@ -228,9 +228,7 @@ class PcapTracer:
         port = invented_port(name or Path(self.path).stem)
         self._invented: Peers = ((INVENTED_HOST, port), (INVENTED_DEVICE, port))
         self._ident = 0
-        self._file = open(create_trace_file(self.path), "wb")  # noqa: SIM115 - closed by close()
-        self._file.write(global_header())
-        self._file.flush()
+        self._file = TraceFile(self.path, text=False, head=global_header())
 
     @property
     def closed(self) -> bool:
@@ -259,7 +257,6 @@ class PcapTracer:
             self._ident = (self._ident + 1) & 0xFFFF
             out += packet_record(when, ipv4_udp_packet(src, dst, bytes(data[start : start + MAX_PAYLOAD]), self._ident))
         self._file.write(out)
-        self._file.flush()
 
     def note(self, text: str, when: float) -> None:
         """Events that are not data have no place in a pcap file."""
@@ -295,9 +292,7 @@ class SerialPcapTracer:
         self.protocol = protocol
         self.port = port
         self.settings = settings
-        self._file = open(create_trace_file(self.path), "wb")  # noqa: SIM115 - closed by close()
-        self._file.write(global_header(LINKTYPE_USER0))
-        self._file.flush()
+        self._file = TraceFile(self.path, text=False, head=global_header(LINKTYPE_USER0))
 
     @property
     def closed(self) -> bool:
@@ -318,7 +313,6 @@ class SerialPcapTracer:
         for start in range(0, len(data), MAX_SERIAL_CHUNK):
             out += serial_record(when, header, bytes(data[start : start + MAX_SERIAL_CHUNK]))
         self._file.write(out)
-        self._file.flush()
 
     def note(self, text: str, when: float) -> None:
         """Events that are not data have no place in a pcap file."""

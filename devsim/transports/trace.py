@@ -20,7 +20,9 @@ is flushed at once, so a trace survives a crash and can be followed with ``tail 
 
 A trace file is never written through a symlink (:func:`create_trace_file`, also used by the
 pcap trace of :mod:`devsim.transports.pcap`); :func:`devsim.transports.tracing.open_trace` picks
-the text or the pcap form by the file's suffix.
+the text or the pcap form by the file's suffix.  A trace the file system stops taking (a full
+disk, a medium removed) ends there with one line on stderr, and the line goes on
+(:class:`TraceFile`): a trace never stops a device from answering.
 """
 
 from __future__ import annotations
@@ -30,12 +32,14 @@ import os
 import re
 from collections.abc import Sequence
 from types import TracebackType
-from typing import Protocol
+from typing import IO, Any, Protocol
 
 import msgspec
 
-__all__ = ["Source", "TapSink", "TraceSink", "Tracer", "create_trace_file", "parse_source_note", "render",
-           "source_note"]
+from devsim.core.console import warn
+
+__all__ = ["Source", "TapSink", "TraceFile", "TraceSink", "Tracer", "create_trace_file", "parse_source_note",
+           "render", "source_note"]
 
 _ESCAPES = {0x0D: "\\r", 0x0A: "\\n", 0x09: "\\t", 0x22: '\\"', 0x5C: "\\\\"}
 
@@ -122,12 +126,73 @@ def create_trace_file(path: str | os.PathLike[str]) -> int:
         raise
 
 
+class TraceFile:
+    """A file a run writes as it goes (a trace, a motion log, a recorded session): created by
+    :func:`create_trace_file`, ``head`` written first (an error there is the caller's: the file
+    cannot be had), then every :meth:`write` flushed at once unless ``at_once`` is off.
+
+    A write, flush or close the file system refuses later (``ENOSPC``, ``EIO``) ends the file
+    there: it is closed, one line on stderr (``devsim: trace FILE: No space left on device; it
+    ends here``, ``what`` naming the file) says so, and the caller goes on as if the file had taken it, because what it
+    records (a line, a model) must not stop for it."""
+
+    def __init__(self, path: str | os.PathLike[str], *, text: bool = True, encoding: str = "ascii",
+                 newline: str | None = "\n", head: str | bytes = "", at_once: bool = True, what: str = "trace") -> None:
+        self.path = os.fspath(path)
+        self.what = what
+        self.at_once = at_once
+        fd = create_trace_file(self.path)
+        self._file: IO[Any] = open(fd, "w", encoding=encoding, newline=newline) if text else open(fd, "wb")  # noqa: SIM115
+        if head:
+            try:
+                self._file.write(head)
+                self._file.flush()
+            except OSError:
+                self._file.close()
+                raise
+
+    @property
+    def closed(self) -> bool:
+        return self._file.closed
+
+    def write(self, data: str | bytes) -> None:
+        if self._file.closed:
+            return
+        try:
+            self._file.write(data)
+            if self.at_once:
+                self._file.flush()
+        except OSError as exc:
+            self._end(exc)
+
+    def flush(self) -> None:
+        if not self._file.closed:
+            try:
+                self._file.flush()
+            except OSError as exc:
+                self._end(exc)
+
+    def close(self) -> None:
+        if not self._file.closed:
+            try:
+                self._file.close()
+            except OSError as exc:  # (what was left in the buffer: closed all the same)
+                self._end(exc)
+
+    def _end(self, exc: OSError) -> None:
+        warn(f"devsim: {self.what} {self.path}: {exc.strerror or exc}; it ends here")
+        try:
+            self._file.close()
+        except OSError:
+            pass  # (the buffer's rest again: the descriptor is closed all the same)
+
+
 class Tracer:
     """Writes a trace file (truncated when opened)."""
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = os.fspath(path)
-        self._file = open(create_trace_file(self.path), "w", encoding="ascii", newline="\n")
+        self._file = TraceFile(self.path)
 
     @property
     def closed(self) -> bool:
@@ -151,7 +216,6 @@ class Tracer:
 
     def _write(self, line: str) -> None:
         self._file.write(line + "\n")
-        self._file.flush()
 
     def close(self) -> None:
         self._file.close()

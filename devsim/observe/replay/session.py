@@ -33,12 +33,13 @@ from __future__ import annotations
 import json
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 import msgspec
 
 from devsim.core.device import SerialSettings
 from devsim.core.registry import port_framing
+from devsim.transports.trace import TraceFile
 
 __all__ = ["Exchange", "FORMAT", "Reply", "Session", "SessionError", "SessionWriter", "load_session"]
 
@@ -60,7 +61,7 @@ class SessionWriter:
 
     def __init__(self, path: str | Path, *, kind: str | None, port: str, device: str, settings: SerialSettings) -> None:
         self.path = Path(path)
-        self._file: IO[str] | None = self.path.open("w", encoding="utf-8")
+        self._file: TraceFile | None = TraceFile(self.path, encoding="utf-8", what="session")  # (no symlink)
         framing = port_framing(kind, port)
         self._decoders = {"host": framing.decoder("host"), "device": framing.decoder("device")}
         self.chunks = 0
@@ -88,7 +89,6 @@ class SessionWriter:
         if self._file is None:
             return
         self._file.write(json.dumps(entry, ensure_ascii=True) + "\n")
-        self._file.flush()
 
 
 class Reply(msgspec.Struct):
