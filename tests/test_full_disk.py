@@ -9,6 +9,7 @@ the drive never saw another byte and answered nothing."""
 
 from __future__ import annotations
 
+import resource
 import signal
 import subprocess
 import sys
@@ -22,12 +23,16 @@ from tests.support.process import ROOT, DevsimProcess, collect_lines, devsim_env
 
 LIMIT = 2048  # bytes a file of the simulator may grow to
 
-#: ``python -m devsim ARGS`` with every file it writes limited to LIMIT bytes.
-LIMITED = (
-    "import os, resource, sys\n"
-    f"resource.setrlimit(resource.RLIMIT_FSIZE, ({LIMIT}, {LIMIT}))\n"
-    "os.execv(sys.executable, [sys.executable, '-m', 'devsim', *sys.argv[1:]])\n"
-)
+
+
+def limited(limit: int = LIMIT) -> str:
+    """``python -c limited() ARGS``: ``python -m devsim ARGS`` with every file it writes limited to
+    ``limit`` bytes (a soft limit: the test may lift it while the simulator runs, as when space is
+    freed on a full disk)."""
+    return ("import os, resource, sys\n"
+            f"resource.setrlimit(resource.RLIMIT_FSIZE, ({limit}, resource.RLIM_INFINITY))\n"
+            "os.execv(sys.executable, [sys.executable, '-m', 'devsim', *sys.argv[1:]])\n")
+
 
 QUERY, ANSWER = b"#1 P1050?\r", b"#1 P1050?\rP1050=1\n\r\nok1\n\r"
 
@@ -38,7 +43,7 @@ def test_a_file_the_disk_stops_taking_ends_and_the_drive_goes_on(tmp_path: Path,
     address = f"unix:{tmp_path}/c.sock"
     written = tmp_path / name
     proc = subprocess.Popen(
-        [sys.executable, "-c", LIMITED, "run", "sers", "--pty", "--virtual", "--control", address,
+        [sys.executable, "-c", limited(), "run", "sers", "--pty", "--virtual", "--control", address,
          option, str(written), "--motion-resolution", "0.001"],
         cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
@@ -78,7 +83,7 @@ def test_a_recording_the_disk_stops_taking_ends_and_the_host_is_still_served(tmp
         device_pty = device.next_match(device.out, lambda line: line.startswith("sers: pty "), 30, "the port").split()[-1]
         device.next_match(device.out, lambda line: line == "sers: ready", 30, "ready")
         recorder = subprocess.Popen(
-            [sys.executable, "-c", LIMITED, "record", "--port", device_pty, "--out", str(session), "--kind", "sers"],
+            [sys.executable, "-c", limited(), "record", "--port", device_pty, "--out", str(session), "--kind", "sers"],
             cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
             text=True,
         )
@@ -98,3 +103,45 @@ def test_a_recording_the_disk_stops_taking_ends_and_the_host_is_still_served(tmp
     assert [line for line in lines if "it ends here" in line] == [
         f"devsim: session {session}: File too large; it ends here"], lines
     assert 0 < session.stat().st_size <= LIMIT
+
+
+MEMORY_LIMIT = 1024  # (the SERS's image of its parameters is about 1.6 kB)
+
+
+def test_a_save_the_disk_refuses_is_kept_and_written_once_the_disk_takes_it(tmp_path: Path) -> None:
+    """P1004=2 (RAM parameters to EEPROM, §4.8.2) on a full disk: the drive answers as having saved
+    and keeps the image; the state file gets it once the disk takes it again (here: at the end)."""
+    address, state = f"unix:{tmp_path}/c.sock", tmp_path / "state"
+    proc = subprocess.Popen(
+        [sys.executable, "-c", limited(MEMORY_LIMIT), "run", "sers", "--pty", "--virtual", "--control", address,
+         "--state-dir", str(state)],
+        cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    out, err = collect_lines(proc.stdout), collect_lines(proc.stderr)
+    memory = state / "sers.nvram.json"
+    try:
+        pty = next_match(out, lambda line: line.startswith("sers: pty "), 30, "the port line").split()[-1]
+        next_match(out, lambda line: line.startswith("control: "), 30, "the control line")
+        with ControlClient(address) as client, serial.Serial(pty, 9600, timeout=5) as port:
+            client.request("advance", seconds=3.0)  # the power-on
+            for request, answer in ((b"#1 P41=700\r", b"#1 P41=700\r\nok1\n\r"),
+                                    (b"#1 P1004=2\r", b"#1 P1004=2\r\nok1\n\r"),  # the save: refused
+                                    (b"#1 P41?\r", b"#1 P41?\rP41=700U/min\n\r\nok1\n\r")):
+                port.write(request)
+                assert port.read_until(answer) == answer
+        next_match(err, lambda line: line == f"devsim: memory {memory}: File too large; kept in memory until a write"
+                   " succeeds", 15, "the memory's line")
+        assert not memory.exists() or memory.stat().st_size <= MEMORY_LIMIT
+        resource.prlimit(proc.pid, resource.RLIMIT_FSIZE, (resource.RLIM_INFINITY, resource.RLIM_INFINITY))
+    finally:
+        status = stop(proc, signal.SIGINT, timeout=15)
+    assert status == 0
+    next_match(err, lambda line: line == f"devsim: memory {memory}: saved again", 15, "the save at the end")
+    again = DevsimProcess("run", "sers", "--pty", "--virtual", "--control", address, "--state-dir", str(state))
+    try:
+        again.next_match(again.out, lambda line: line.startswith("control: "), 30, "the control line")
+        with ControlClient(address) as client:
+            client.request("advance", seconds=3.0)
+            assert client.read("sers", "param.P41") == 700  # the EEPROM image the first run kept
+    finally:
+        assert again.interrupt() == 0

@@ -11,6 +11,11 @@ while the device lives) refuses a second owner with :class:`MemoryInUse`, so tha
 simulator on the same state dir can neither overwrite an acknowledged save nor delete the
 first one's temporary file.  Nothing non-finite is ever written, and an image holding NaN or
 infinity is refused at load (:class:`PoisonedMemory`).
+
+A write the file system refuses (a full disk, ``EIO``) does not reach the device: the image it
+holds is the simulated EEPROM, so the device answers as having saved, one line on stderr says
+the file is behind (``devsim: memory FILE: No space left on device; kept in memory until a
+write succeeds``), and the next write, or the close at the end, writes the whole image again.
 """
 
 from __future__ import annotations
@@ -19,6 +24,8 @@ import fcntl
 import os
 import re
 from typing import TYPE_CHECKING, Any
+
+from devsim.core.console import warn
 
 if TYPE_CHECKING:  # imported where used: a device without a state dir needs neither
     from pathlib import Path
@@ -63,6 +70,7 @@ class NonVolatileMemory:
             self.path = Path(path)
         self._image: dict[str, Any] = {}
         self._lock: int | None = None
+        self.behind = False  # the file lacks a change the file system refused
         if self.path is not None:
             self._take_lock()
             # temp files of a write that was killed half-way: the old image is intact
@@ -102,7 +110,13 @@ class NonVolatileMemory:
         self._lock = fd
 
     def close(self) -> None:
-        """Release the memory's lock (the device is gone); the image stays on disk."""
+        """Release the memory's lock (the device is gone); the image stays on disk (one the file
+        system refused before is written once more now)."""
+        if self.behind:
+            self._write()
+            if self.behind:
+                warn(f"devsim: memory {self.path}: its last changes are lost")
+                self.behind = False
         if self._lock is not None:
             os.close(self._lock)
             self._lock = None
@@ -147,6 +161,19 @@ class NonVolatileMemory:
             data = json.dumps(self._image, sort_keys=True, indent=1, allow_nan=False).encode("utf-8")
         except ValueError as exc:
             raise PoisonedMemory(f"{self.path}: refusing to save a non-finite number ({exc})") from None
+        try:
+            self._save(data)
+        except OSError as exc:
+            if not self.behind:
+                warn(f"devsim: memory {self.path}: {exc.strerror or exc}; kept in memory until a write succeeds")
+                self.behind = True
+            return
+        if self.behind:
+            warn(f"devsim: memory {self.path}: saved again")
+            self.behind = False
+
+    def _save(self, data: bytes) -> None:
+        assert self.path is not None
         directory = self.path.parent
         import tempfile  # only when memory is written: start-up does without it
 
