@@ -133,8 +133,10 @@ class TraceFile:
 
     A write, flush or close the file system refuses later (``ENOSPC``, ``EIO``) ends the file
     there: it is closed, one line on stderr (``devsim: trace FILE: No space left on device; it
-    ends here``, ``what`` naming the file) says so, and the caller goes on as if the file had taken it, because what it
-    records (a line, a model) must not stop for it."""
+    ends here``, ``what`` naming the file) says so, and the caller goes on as if the file had
+    taken it, because what it records (a line, a model) must not stop for it.  A fifo whose
+    reader has gone (``EPIPE``: Wireshark ends a capture) ends so too, without the line; the
+    writer learns it from :attr:`closed`."""
 
     def __init__(self, path: str | os.PathLike[str], *, text: bool = True, encoding: str = "ascii",
                  newline: str | None = "\n", head: str | bytes = "", at_once: bool = True, what: str = "trace") -> None:
@@ -180,7 +182,8 @@ class TraceFile:
                 self._end(exc)
 
     def _end(self, exc: OSError) -> None:
-        warn(f"devsim: {self.what} {self.path}: {exc.strerror or exc}; it ends here")
+        if not isinstance(exc, BrokenPipeError):  # (a fifo's reader gone: its end, and no news)
+            warn(f"devsim: {self.what} {self.path}: {exc.strerror or exc}; it ends here")
         try:
             self._file.close()
         except OSError:

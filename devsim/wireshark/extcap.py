@@ -140,13 +140,10 @@ def capture(interface: Interface, fifo: str) -> int:
                     continue  # "dropped": Wireshark read too slowly; a pcap has no place for it
                 settings = item.get("settings") or settings
                 tracer.record(item["dir"], bytes.fromhex(item["data"]), float(item["t"]))
-        except BrokenPipeError:
-            pass  # Wireshark closed the fifo: the capture is over
+                if tracer.closed:
+                    break  # Wireshark closed the fifo: the capture is over
         finally:
-            try:
-                tracer.close()
-            except BrokenPipeError:
-                pass
+            tracer.close()
     return 0
 
 

@@ -275,6 +275,45 @@ def test_the_extcap_writes_a_network_port_as_ipv4(tmp_path: Path, monkeypatch: p
                                                            ("127.0.0.1", "127.0.0.2", REPLY)]
 
 
+def test_the_extcap_ends_when_wireshark_closes_the_fifo(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                       capsys: pytest.CaptureFixture[str]) -> None:
+    """Wireshark ends a capture by closing the fifo: the extcap's next write fails (EPIPE), and it
+    ends at once, quietly, while the simulator goes on."""
+    import socket
+    import threading
+
+    from devsim.transports.udp import UdpTransport
+    from devsim.wireshark.extcap import Interface, capture
+    from tests.transports.test_pcap import ETHERBUS, REPLY, REQUEST
+
+    monkeypatch.setenv("DEVSIM_EXTRA_KINDS", ETHERBUS)
+    fifo = tmp_path / "wireshark.fifo"
+    os.mkfifo(fifo)
+    runtime = Runtime(virtual=True).start()
+    server = ControlServer(runtime, "127.0.0.1:0")
+    address = str(server.start_sync())
+    try:
+        runtime.serve_sync(runtime.add_device("etherbus", "pcd"), transport := UdpTransport(), port="ether")
+        interface = Interface(_simulator(address=address, devices=["pcd"]), "pcd.ether", {"link": 228})
+        done: list[int] = []
+        writer = threading.Thread(target=lambda: done.append(capture(interface, str(fifo))), daemon=True)
+        writer.start()
+        with open(fifo, "rb") as wireshark:  # (opens once the extcap has opened its end)
+            assert len(wireshark.read(24)) == 24  # the pcap header; then Wireshark stops the capture
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+            sock.settimeout(5)
+            sock.sendto(REQUEST, ("127.0.0.1", transport.port))  # a chunk the extcap cannot write
+            assert sock.recv(100) == REPLY
+            writer.join(10)
+            assert done == [0]
+            sock.sendto(REQUEST, ("127.0.0.1", transport.port))
+            assert sock.recv(100) == REPLY  # the simulator goes on
+    finally:
+        server.close_sync()
+        runtime.stop()
+    assert "devsim:" not in capsys.readouterr().err
+
+
 def test_taps_chain_in_front_of_the_trace_and_leave_it_intact(tmp_path: Path) -> None:
     """The monitor's telegram tap and a live capture on a traced line: every chunk reaches the
     trace file and both taps, in whichever order they came; the capture leaves, the rest stays."""
