@@ -102,6 +102,20 @@ def test_a_recording_the_disk_stops_taking_ends_and_the_host_is_still_served(tmp
         lines.append(line)
     assert [line for line in lines if "it ends here" in line] == [
         f"devsim: session {session}: File too large; it ends here"], lines
+    held = sum(1 for line in session.read_text().splitlines() if line.startswith('{"t"') and '"dir"' in line
+               and line.endswith("}"))  # the whole chunk lines (not the header, the settings, the last cut short)
+    assert lines[-1] == f"record: {held} chunks in {session}"  # what the file holds, not all 80
+    cut = len(session.read_text().splitlines())
+    replay = DevsimProcess("replay", str(session), "--pty")  # what was recorded replays
+    try:
+        replay.next_match(replay.err, lambda line: line == f"replay: {session}:{cut}: the last line is cut short"
+                          " (the recorder stopped writing there); the recording ends before it", 30, "the cut")
+        host_pty = replay.next_match(replay.out, lambda line: line.startswith("replay: pty "), 30, "the port").split()[-1]
+        with serial.Serial(host_pty, 9600, timeout=5) as port:
+            port.write(QUERY)
+            assert port.read_until(ANSWER) == ANSWER
+    finally:
+        assert replay.interrupt() == 0
     assert 0 < session.stat().st_size <= LIMIT
 
 

@@ -140,6 +140,9 @@ def replay(session_file: str, use_pty: bool, link: str | None, tcp: str | None, 
         session = load_session(session_file)
     except SessionError as exc:
         raise exits.BadFile(str(exc)) from None
+    if session.cut:
+        click.echo(f"replay: {session_file}:{session.cut}: the last line is cut short (the recorder stopped"
+                   " writing there); the recording ends before it", err=True)
     config: dict[str, Any] = {}
     if fallback == "live":
         if session.kind is None:

@@ -63,6 +63,9 @@ def test_gms96_tolerances_ignore_the_checksum_and_the_frame_count_bit() -> None:
     ("", "empty file"),
     ('{"hello": 1}\n', ":1: not a devsim session"),
     ('{"format": "devsim-session", "kind": "sers"}\n{"t": 1, "dir": "host", "hex": "zz"}\n', ":2: "),
+    # cut short, but not the last line: a damaged file, not a recording that ended
+    ('{"format": "devsim-session", "kind": "sers"}\n{"t": 1, "dir": "ho\n{"t": 2, "dir": "host", "hex": "00"}',
+     ":2: "),
 ])
 def test_a_bad_session_is_one_line_exit_bad_file(tmp_path: Path, content: str, message: str) -> None:
     path = tmp_path / "bad.devsim"
@@ -91,3 +94,16 @@ async def test_the_handover_clock_is_virtual_then_real() -> None:
     await asyncio.wait_for(done.wait(), 5)
     assert loop.time() - start >= 0.05 - 1e-3 and clock.now() >= 100.05 - 1e-3  # then real time, from there
     await clock.close()
+
+
+def test_a_last_line_cut_short_ends_the_recording_there(tmp_path: Path) -> None:
+    """The recorder's disk stopped taking the file in the middle of a line (tests/test_full_disk.py):
+    the lines before it are the recording."""
+    path = _write(tmp_path / "cut.devsim", "sers", [(0.0, "host", b"#1 P11?\r"), (0.01, "device", b"#1 P11?\rP11=0\n\r\nok1\n\r"),
+                                                    (0.5, "host", b"#1 P12?\r")])
+    whole = path.read_text()
+    path.write_text(whole[: whole.rindex('"hex"')])  # the third chunk's line cut short
+    session = load_session(path)
+    assert session.cut == 4
+    assert [(e.request, e.answer) for e in session.exchanges] == [(b"#1 P11?\r", b"#1 P11?\rP11=0\n\r\nok1\n\r")]
+    assert load_session(_write(tmp_path / "whole.devsim", "sers", [(0.0, "host", b"#1 P11?\r")])).cut == 0

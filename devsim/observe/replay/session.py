@@ -20,7 +20,9 @@ passed the recorder, in the order it passed::
 messages this chunk completed as the port's declared framing reads them
 (:attr:`devsim.core.kit.PortDef.framing`; absent for ports without one).  A ``settings`` line says the host changed its line settings
 (the recorder applied them to the device's port).  Lines of a newer version's unknown kinds
-are skipped; readers rely on ``dir`` and ``hex`` only.
+are skipped; readers rely on ``dir`` and ``hex`` only.  A last line cut short (the recorder's
+disk full, see :class:`~devsim.transports.trace.TraceFile`) ends the recording there: the lines
+before it are loaded, and :attr:`Session.cut` names the line.
 
 :func:`load_session` cuts the host's stream into requests (the kind's framing) and gives each
 the device's bytes that answered it (:class:`Exchange`): device bytes that came while a request
@@ -74,8 +76,8 @@ class SessionWriter:
         decoded = self._decoders[direction].feed(data)
         if decoded is not None:
             entry["decoded"] = decoded
-        self.chunks += 1
-        self._line(entry)
+        if self._line(entry):
+            self.chunks += 1  # (the chunks the file holds: none once the disk stopped taking it)
 
     def settings(self, t: float, settings: SerialSettings) -> None:
         self._line({"t": round(t, 6), "settings": settings_dict(settings)})
@@ -85,10 +87,12 @@ class SessionWriter:
             self._file.close()
             self._file = None
 
-    def _line(self, entry: dict[str, Any]) -> None:
-        if self._file is None:
-            return
+    def _line(self, entry: dict[str, Any]) -> bool:
+        """Write ``entry``; whether the file took it."""
+        if self._file is None or self._file.closed:
+            return False
         self._file.write(json.dumps(entry, ensure_ascii=True) + "\n")
+        return not self._file.closed
 
 
 class Reply(msgspec.Struct):
@@ -118,6 +122,7 @@ class Session(msgspec.Struct):
     exchanges: list[Exchange]
     preamble: bytes = b""  # device bytes before the host sent anything (not replayed)
     header: dict[str, Any] = msgspec.field(default_factory=dict)
+    cut: int = 0  # the number of a last line cut short (not loaded), else 0
 
 
 def _settings(raw: Any, where: str) -> SerialSettings:
@@ -180,9 +185,11 @@ def load_session(path: str | Path) -> Session:
     """Read a session file; :class:`SessionError` names the file and line of a problem."""
     path = Path(path)
     try:
-        lines = path.read_text(encoding="utf-8").splitlines()
+        text_all = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise SessionError(f"{path}: {exc}") from None
+    lines = text_all.splitlines()
+    cut = len(lines) if lines and not text_all.endswith("\n") else 0  # a last line without its end
     if not lines:
         raise SessionError(f"{path}: empty file (not a devsim session)")
     try:
@@ -193,6 +200,7 @@ def load_session(path: str | Path) -> Session:
         raise SessionError(f"{path}:1: not a devsim session (no {FORMAT!r} header)")
     kind = header.get("kind")
     cutter = _Cutter(kind if isinstance(kind, str) else None, str(header.get("port") or "main"))
+    torn = 0
     for number, text in enumerate(lines[1:], start=2):
         if not text.strip():
             continue
@@ -207,6 +215,9 @@ def load_session(path: str | Path) -> Session:
             t = float(entry["t"])
             data = bytes.fromhex(entry["hex"])
         except (ValueError, KeyError, TypeError) as exc:
+            if number == cut:
+                torn = number
+                break  # the recording ends before this line
             raise SessionError(f"{where}: {exc}") from None
         (cutter.host if direction == "host" else cutter.device)(t, data)
     cutter.finish()
@@ -217,4 +228,5 @@ def load_session(path: str | Path) -> Session:
         exchanges=cutter.exchanges,
         preamble=cutter.preamble,
         header=header,
+        cut=torn,
     )
