@@ -25,6 +25,7 @@ import io
 from collections.abc import Callable
 from typing import Any
 
+import can
 import canopen
 from canopen.sdo.exceptions import SdoAbortedError
 
@@ -70,6 +71,7 @@ class CanopenFacade:
         self._syncs = 0
         self._timers: dict[tuple[int, str], Any] = {}  # event-driven TPDOs: device-clock timers
         self._sent: dict[int, bytes] = {}  # event-driven TPDOs: the data they last carried
+        self.lost = 0  # TPDOs and EMCY messages the bus refused (see _send)
         self.node = canopen.LocalNode(node_id, self.od)
         self.node.sdo = self.sdo = DevsimSdoServer(0x600 + node_id, 0x580 + node_id, self.node)
         self.objects = {index: point for index, point in point_objects(device.points)}
@@ -202,7 +204,7 @@ class CanopenFacade:
                 data = self.node.get_data(variable.index, variable.subindex)
                 variable.set_data(data)
                 carried.append(data)
-        tpdo.transmit()
+        self._send(tpdo.transmit)
         if (tpdo.trans_type or 0) >= 254:
             self._sent[id(tpdo)] = b"".join(carried)
             self._arm(tpdo, "event")
@@ -228,7 +230,17 @@ class CanopenFacade:
     def _emergency(self, axis: int = 1, code: int = 0x1000) -> None:
         """A fault the model announces: an EMCY message (error register bit 0, generic error)."""
         if axis == 1 and self.node.has_network():
-            self.node.emcy.send(code, 0x01)
+            self._send(self.node.emcy.send, code, 0x01)
+
+    def _send(self, send: Callable[..., Any], *args: Any) -> None:
+        """A message of the node's own onto the bus.  One the bus refuses (python-can's
+        ``CanError``: a SocketCAN interface down, bus-off, a full transmit queue) is lost, as on a
+        node whose controller cannot transmit, and counted in :attr:`lost`: the device, the
+        fault it announces and the PDO timers go on, and the next message is tried again."""
+        try:
+            send(*args)
+        except can.CanError:
+            self.lost += 1
 
     def close(self) -> None:
         self._unlisten()
@@ -294,7 +306,7 @@ async def serve_nodes(runtime: Any, nodes: list[tuple[Device, int]], where: str 
         channel = where.removeprefix("socketcan:")
         try:
             network.connect(interface="socketcan", channel=channel)
-        except (OSError, ValueError, ImportError) as exc:  # python-can's CanError is an OSError
+        except (OSError, can.CanError, ValueError, ImportError) as exc:
             raise ValueError(f"--canopen: SocketCAN {channel!r} cannot be opened here: {exc}") from None
         _attach_all(runtime, nodes, network)
 

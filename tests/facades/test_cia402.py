@@ -305,6 +305,46 @@ def test_an_event_driven_tpdo_goes_out_every_event_timer_period(drive: Drive) ->
     assert arrived.empty()  # stopped with OPERATIONAL
 
 
+def test_a_bus_that_goes_down_loses_messages_and_the_drive_goes_on(drive: Drive) -> None:
+    """The node's CAN controller cannot transmit (a SocketCAN interface down, bus-off: python-can
+    raises ``CanError``; here its bus is shut): its TPDOs and the EMCY of a following error are
+    lost and counted, the drive goes into its fault all the same, and the event-driven TPDO goes
+    out again once the node is on a bus again."""
+    import queue
+
+    import can
+
+    node = drive.node
+    node.tpdo.read()
+    tpdo = node.tpdo[2]
+    tpdo.clear()
+    tpdo.add_variable(0x6041)
+    tpdo.trans_type, tpdo.event_timer, tpdo.enabled = 255, 100, True
+    node.tpdo.save()
+    arrived: queue.Queue[int] = queue.Queue()
+    tpdo.add_callback(lambda m: arrived.put(m["Statusword"].raw))
+    enable(drive)
+    node.sdo[0x607A].raw = 100_000
+    node.sdo[0x6081].raw = 50_000  # a move of 6.34 s (test_profile_position_move_at_the_closed_form_time)
+    drive.control(0x1F)
+    drive.control(0x0F)
+    node.nmt.state = "OPERATIONAL"
+    assert node.sdo[0x1017].raw == 0  # (a round trip: the NMT command was handled before it)
+    drive.runtime.advance(0.35)
+    moving = [arrived.get(timeout=5) for _ in range(3)]  # every 100 ms, the statusword standing
+    assert len(set(moving)) == 1 and moving[0] & 0x6F == 0x27
+    channel = drive.slave.bus.channel_id
+    drive.slave.bus.shutdown()  # the node's controller is off the bus
+    drive.runtime.advance(0.5)  # five TPDOs lost
+    drive.runtime.fault("pcd", "blocked_1", True)
+    assert drive.runtime.run_until(lambda: drive.runtime.read("pcd", "axis.1.ExcPEr"), 3.0)  # its EMCY: lost
+    assert drive.facade.lost >= 7 and arrived.empty()  # (and the statusword's change to Fault)
+    drive.slave.bus = can.Bus(interface="virtual", channel=channel)  # on a bus again (to send: enough here)
+    drive.runtime.advance(0.35)
+    fault = [arrived.get(timeout=5) for _ in range(3)]  # the event timer ran on
+    assert fault[0] & 0x4F == 0x08 and len(set(fault)) == 1
+
+
 def test_an_event_driven_tpdo_goes_out_when_its_values_change(drive: Drive) -> None:
     """TPDO3 with transmission type 254, no event timer and an inhibit time of 50 ms (500 × 100 µs):
     nothing while the drive stands, the statusword as soon as it changes, then the position at
