@@ -96,3 +96,24 @@ def test_up_takes_its_workers_lines_when_nobody_reads_its_own() -> None:
 
     with open(write_end, "w") as out:
         assert asyncio.run(forward_all(out)).at_eof()
+
+
+def test_a_slow_reader_of_a_non_blocking_pipe_keeps_its_stream() -> None:
+    """A full pipe someone set non-blocking (BlockingIOError) is a slow reader, not a gone one:
+    nothing raises, and the stream is kept for the lines after."""
+    from devsim.core.console import say
+
+    read_end, write_end = os.pipe()
+    os.set_blocking(write_end, False)
+    with open(write_end, "w") as out, open(read_end, "rb", buffering=0) as reader:
+        for _ in range(2000):  # (200 kB: more than the pipe and the stream's buffer hold)
+            say("x" * 99, out)
+        os.set_blocking(read_end, False)
+        while True:
+            try:
+                if not reader.read(1 << 16):
+                    break
+            except BlockingIOError:
+                break
+        say("after", out)
+        assert reader.read(1 << 16).endswith(b"after\n")

@@ -24,6 +24,8 @@ def say(line: str, stream: TextIO | None = None) -> None:
     out = sys.stdout if stream is None else stream
     try:
         print(line, file=out, flush=True)
+    except BlockingIOError:  # a full pipe set non-blocking by someone: the reader is slow, not gone
+        pass  # (what did not fit waits in the stream's buffer, or is dropped: the loop must not wait)
     except OSError:  # (BrokenPipeError: the reader has gone; EIO: its terminal has)
         _to_null(out)
 
