@@ -30,7 +30,7 @@ from __future__ import annotations
 import errno
 import os
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from types import TracebackType
 from typing import IO, Any, Protocol
 
@@ -168,17 +168,16 @@ class TraceFile:
             self._end(exc)
 
     def flush(self) -> None:
-        if not self._file.closed:
-            try:
-                self._file.flush()
-            except OSError as exc:
-                self._end(exc)
+        self._guarded(self._file.flush)
 
     def close(self) -> None:
+        self._guarded(self._file.close)  # (what was left in the buffer refused: closed all the same)
+
+    def _guarded(self, step: Callable[[], object]) -> None:
         if not self._file.closed:
             try:
-                self._file.close()
-            except OSError as exc:  # (what was left in the buffer: closed all the same)
+                step()
+            except OSError as exc:
                 self._end(exc)
 
     def _end(self, exc: OSError) -> None:

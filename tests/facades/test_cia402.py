@@ -6,6 +6,7 @@ sees EMCY and the Fault state, and resets it."""
 
 from __future__ import annotations
 
+import queue
 import time
 import uuid
 from collections.abc import Iterator
@@ -229,8 +230,6 @@ def test_the_poselesta_x_axis_as_a_402_drive() -> None:
 def test_pdos_carry_the_controlword_and_the_statusword(drive: Drive) -> None:
     """The master maps RPDO1 = controlword and TPDO1 = statusword + position actual value on every
     SYNC, starts the node, and drives the state machine by PDO alone."""
-    import queue
-
     node = drive.node
     node.tpdo.read()
     node.rpdo.read()
@@ -280,20 +279,26 @@ def test_a_gms96_following_error_is_an_emcy_and_the_fault_state() -> None:
         drive.close()
 
 
-def test_an_event_driven_tpdo_goes_out_every_event_timer_period(drive: Drive) -> None:
-    """TPDO2 with transmission type 255 and an event timer of 100 ms: one every 100 ms of device
-    time (virtual here), with the position as it moves."""
-    import queue
-
+def event_timer_tpdo(drive: Drive, index: int, name: str) -> queue.Queue[int]:
+    """TPDO2 mapping object ``index`` (``name`` in the EDS), transmission type 255 with an event
+    timer of 100 ms; the values the master receives."""
     node = drive.node
     node.tpdo.read()
     tpdo = node.tpdo[2]
     tpdo.clear()
-    tpdo.add_variable(0x6064)
+    tpdo.add_variable(index)
     tpdo.trans_type, tpdo.event_timer, tpdo.enabled = 255, 100, True
     node.tpdo.save()
     arrived: queue.Queue[int] = queue.Queue()
-    tpdo.add_callback(lambda m: arrived.put(m["Position actual value"].raw))
+    tpdo.add_callback(lambda m: arrived.put(m[name].raw))
+    return arrived
+
+
+def test_an_event_driven_tpdo_goes_out_every_event_timer_period(drive: Drive) -> None:
+    """TPDO2 with transmission type 255 and an event timer of 100 ms: one every 100 ms of device
+    time (virtual here), with the position as it moves."""
+    node = drive.node
+    arrived = event_timer_tpdo(drive, 0x6064, "Position actual value")
     node.nmt.state = "OPERATIONAL"
     assert drive.node.sdo[0x1017].raw == 0  # (an SDO round trip: the NMT command was handled before it)
     drive.runtime.advance(0.35)
@@ -310,19 +315,10 @@ def test_a_bus_that_goes_down_loses_messages_and_the_drive_goes_on(drive: Drive)
     raises ``CanError``; here its bus is shut): its TPDOs and the EMCY of a following error are
     lost and counted, the drive goes into its fault all the same, and the event-driven TPDO goes
     out again once the node is on a bus again."""
-    import queue
-
     import can
 
     node = drive.node
-    node.tpdo.read()
-    tpdo = node.tpdo[2]
-    tpdo.clear()
-    tpdo.add_variable(0x6041)
-    tpdo.trans_type, tpdo.event_timer, tpdo.enabled = 255, 100, True
-    node.tpdo.save()
-    arrived: queue.Queue[int] = queue.Queue()
-    tpdo.add_callback(lambda m: arrived.put(m["Statusword"].raw))
+    arrived = event_timer_tpdo(drive, 0x6041, "Statusword")
     enable(drive)
     node.sdo[0x607A].raw = 100_000
     node.sdo[0x6081].raw = 50_000  # a move of 6.34 s (test_profile_position_move_at_the_closed_form_time)
@@ -349,8 +345,6 @@ def test_an_event_driven_tpdo_goes_out_when_its_values_change(drive: Drive) -> N
     """TPDO3 with transmission type 254, no event timer and an inhibit time of 50 ms (500 × 100 µs):
     nothing while the drive stands, the statusword as soon as it changes, then the position at
     most every 50 ms of device time while the axis moves, and silence again after it stopped."""
-    import queue
-
     node = drive.node
     node.tpdo.read()
     tpdo = node.tpdo[3]
