@@ -5,20 +5,26 @@ devices power on completely, its log lines go nowhere, and it ends with status 0
 Before, the ``sers: ready`` line raised ``BrokenPipeError`` in the middle of the drive's power-on
 (the model announces ``ready`` to the line's printer), so the rest of it did not run: no
 autostart (§3.1.2), no jog function at power-on (§4.8.6.3); and the interpreter's flush at exit
-ended the process with status 120."""
+ended the process with status 120.
+
+The terminal that started a simulator closing (SIGHUP) stops it as Ctrl-C does, cleanly; under
+``nohup`` it goes on."""
 
 from __future__ import annotations
 
 import asyncio
 import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
 from typing import TextIO
 
 import pytest
+import serial
 
-from tests.support.process import ROOT, devsim_env, stop
+from tests.support.process import ROOT, collect_lines, devsim_env, next_match, stop
+from tests.test_motion_log import rows_of
 
 
 def ctl(address: str, *args: str) -> str:
@@ -117,3 +123,54 @@ def test_a_slow_reader_of_a_non_blocking_pipe_keeps_its_stream() -> None:
                 break
         say("after", out)
         assert reader.read(1 << 16).endswith(b"after\n")
+
+
+#: ``python -c NOHUP ARGS``: ``python -m devsim ARGS`` with SIGHUP ignored, as ``nohup`` starts it.
+NOHUP = ("import os, signal, sys\n"
+         "signal.signal(signal.SIGHUP, signal.SIG_IGN)\n"
+         "os.execv(sys.executable, [sys.executable, '-m', 'devsim', *sys.argv[1:]])\n")
+
+
+def catches_sighup(pid: int) -> bool:
+    """Whether process ``pid`` has a handler of its own for SIGHUP (``SigCgt`` of /proc/PID/status)."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("SigCgt:"):
+            return bool(int(line.split()[1], 16) >> (signal.SIGHUP - 1) & 1)
+    raise AssertionError("no SigCgt in /proc/PID/status")
+
+
+@pytest.mark.parametrize("nohup", [False, True])
+def test_the_terminal_closing_stops_a_simulator_cleanly_unless_nohup(tmp_path: Path, nohup: bool) -> None:
+    """SIGHUP: the motion log gets its last rows and the control socket goes, status 0, as with
+    Ctrl-C (before, SIGHUP killed the process: a log cut short in its buffer, a socket left).
+    Under nohup the simulator goes on, until Ctrl-C."""
+    address, log = f"unix:{tmp_path}/c.sock", tmp_path / "motion.csv"
+    command = ["run", "sers", "--pty", "--virtual", "--control", address, "--motion-log", str(log),
+               "--motion-resolution", "0.001"]
+    proc = subprocess.Popen([sys.executable, *(["-c", NOHUP] if nohup else ["-m", "devsim"]), *command], cwd=ROOT,
+                            env=devsim_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                            text=True)
+    out = collect_lines(proc.stdout)
+    try:
+        pty = next_match(out, lambda line: line.startswith("sers: pty "), 30, "the port line").split()[-1]
+        next_match(out, lambda line: line.startswith("control: "), 30, "the control line")
+        assert catches_sighup(proc.pid) is not nohup
+        ctl(address, "advance", "2.1")  # the power-on
+        with serial.Serial(pty, 9600, timeout=5) as port:
+            port.write(b"#1 ON V=60 A=100 WR=90 E\r")  # 3,200 steps, logged every millisecond
+            assert port.read_until(b"ok0\n\r").endswith(b"ok0\n\r")
+            ctl(address, "advance", "60")
+            proc.send_signal(signal.SIGHUP)
+            if nohup:
+                port.write(b"#1 P1050?\r")
+                assert port.read_until(b"ok1\n\r").endswith(b"P1050=1\n\r\nok1\n\r")
+                assert float(ctl(address, "--json", "now")) > 60  # still serving
+                proc.send_signal(signal.SIGINT)
+            status = proc.wait(timeout=15)
+    finally:
+        stop(proc)
+    assert status == 0
+    assert not Path(address.removeprefix("unix:")).exists()
+    rows = rows_of(log)
+    assert [row["event"] for row in rows if row["event"].startswith("move_")] == ["move_start", "move_end"]
+    assert float(rows[-1]["position"]) == 3200.0

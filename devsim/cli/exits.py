@@ -4,7 +4,7 @@ command meets it (docs/cli.md has the same table for users; a test runs each row
 =====  ===============  =================================================================================
  code   name             when
 =====  ===============  =================================================================================
- 0      ``OK``           it worked (a server stopped by Ctrl-C or SIGTERM ends with 0 too)
+ 0      ``OK``           it worked (a server stopped by Ctrl-C, SIGTERM or SIGHUP ends with 0 too)
  1      ``FAILED``       it ran and the result is "no": a scenario's expectation failed
  2      ``USAGE``        the command line is wrong: an unknown option or kind, a bad option value
  3      ``BAD_FILE``     a file named on the command line is missing, unreadable or wrong (YAML, schema,

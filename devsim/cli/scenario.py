@@ -14,7 +14,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import gc
-import signal
 import sys
 from pathlib import Path
 from typing import Any
@@ -24,7 +23,7 @@ import click
 from devsim.cli import exits
 from devsim.cli.options import check_fleet
 from devsim.core.config import ConfigError
-from devsim.core.console import say, warn
+from devsim.core.console import say, stop_on_signals, warn
 from devsim.observe.live_log import DEFAULT_LEVEL, attach_log, level_of, log_options
 from devsim.transports import fdlimit
 
@@ -324,8 +323,7 @@ async def _up(
 
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(signum, stop.set)
+    unsignal = stop_on_signals(loop, stop.set)
     from devsim.scenario.workers import end_with_parent
 
     end_with_parent(loop, stop.set)  # a worker of `devsim up --workers` ends with it
@@ -389,6 +387,5 @@ async def _up(
                 log.stop()
             if server is not None:
                 await server.close()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        loop.remove_signal_handler(signum)
+    unsignal()
 

@@ -1,5 +1,5 @@
 """``devsim run``'s plan and server, without click: :func:`plan_run` checks the options of
-:func:`devsim.cli.main.run` and :func:`serve` serves the plan until Ctrl-C / SIGTERM.
+:func:`devsim.cli.main.run` and :func:`serve` serves the plan until Ctrl-C / SIGTERM / SIGHUP.
 
 Nothing here imports click on the way to a served port (:mod:`devsim.cli.quick` runs a plain
 ``devsim run`` command line without it): a mistake imports click on the way to its error, and
@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import asyncio
 import gc
-import signal
 import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -22,7 +21,7 @@ from devsim.cli.control_address import control_option, default_control, system_f
 from devsim.cli.statuses import INTERRUPTED, StartFailure, start_status
 from devsim.cli.usage import host_port, usage_error
 from devsim.core.console import say as _say  # (replaced by tests and benchmarks/startup.py)
-from devsim.core.console import warn
+from devsim.core.console import stop_on_signals, warn
 from devsim.core.registry import UnknownKind, device_class
 
 if TYPE_CHECKING:  # imported where used: `devsim run` starts faster without them
@@ -290,7 +289,7 @@ def plan_run(
 
 
 def serve(plan: Plan) -> None:
-    """Serve ``plan`` until Ctrl-C or SIGTERM; a server that could not start raises
+    """Serve ``plan`` until Ctrl-C, SIGTERM or SIGHUP; a server that could not start raises
     :class:`~devsim.cli.statuses.StartFailure` (its one line and status)."""
     try:
         asyncio.run(_serve(plan))
@@ -324,8 +323,7 @@ async def _serve(plan: Plan) -> None:
 
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(signum, stop.set)
+    unsignal = stop_on_signals(loop, stop.set)
 
     runtime = Runtime(virtual=plan.virtual, speed=plan.speed, state_dir=plan.state_dir, name=plan.kind)
     runtime.idle_drop = plan.idle_drop
@@ -449,8 +447,7 @@ async def _serve(plan: Plan) -> None:
                 await asyncio.to_thread(page.stop)
             if server is not None:
                 await server.close()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        loop.remove_signal_handler(signum)
+    unsignal()
 
 
 def _plan_ports(plan: Plan, ports: Sequence[Any]) -> list[tuple[str, Port]]:

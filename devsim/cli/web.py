@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import signal
 import sys
 from collections.abc import Iterator
 from typing import Any
@@ -16,7 +15,7 @@ from typing import Any
 import click
 
 from devsim.cli import exits
-from devsim.core.console import say, warn
+from devsim.core.console import say, stop_on_signals, warn
 
 __all__ = ["DEFAULT_PORT", "page_beside", "start_web", "web", "web_option"]
 
@@ -93,8 +92,7 @@ async def _serve(control: str, listen: Any) -> None:
 
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(signum, stop.set)
+    stop_on_signals(loop, stop.set)
     token = None if listen.is_loopback() else new_token()
     try:
         runner, view, port = await serve(control, listen, token)

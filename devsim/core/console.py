@@ -1,4 +1,5 @@
-"""The lines a serving process prints for whoever started it: ports, ``ready``, its log.
+"""A serving process's face to whoever started it: the lines it prints (ports, ``ready``, its
+log) and the signals that stop it.
 
 A simulator keeps serving when the reader of its output goes away: a supervisor that closed the
 pipe after the port line, ``devsim run sers --pty | head -1``, a terminal that is gone.  Python
@@ -7,15 +8,22 @@ which may be a device announcing ``ready`` in the middle of its power-on (the re
 power-on would not run) or a log line from inside a model's step.  :func:`say` catches that,
 and points the stream's descriptor at the null device: later lines, and the interpreter's own
 flush at exit (which would otherwise end the process with status 120), go nowhere.
+
+:func:`stop_on_signals`: Ctrl-C (SIGINT), SIGTERM and SIGHUP (the terminal that started it has
+closed) stop a serving process the same clean way: its motion log gets its last rows, its
+control socket is removed.  Under ``nohup`` (SIGHUP ignored) the terminal's end is ignored still.
 """
 
 from __future__ import annotations
 
+import asyncio
 import os
+import signal
 import sys
+from collections.abc import Callable
 from typing import TextIO
 
-__all__ = ["say", "warn"]
+__all__ = ["say", "stop_on_signals", "warn"]
 
 
 def say(line: str, stream: TextIO | None = None) -> None:
@@ -45,3 +53,19 @@ def _to_null(stream: TextIO) -> None:
         os.dup2(null, fd)
     finally:
         os.close(null)
+
+
+def stop_on_signals(loop: asyncio.AbstractEventLoop, stop: Callable[[], object]) -> Callable[[], None]:
+    """Call ``stop`` in ``loop`` on SIGINT, SIGTERM and SIGHUP (not SIGHUP where it is ignored, as
+    ``nohup`` does); returns what removes the handlers again."""
+    signals = [signal.SIGINT, signal.SIGTERM]
+    if signal.getsignal(signal.SIGHUP) is not signal.SIG_IGN:
+        signals.append(signal.SIGHUP)
+    for signum in signals:
+        loop.add_signal_handler(signum, stop)
+
+    def undo() -> None:
+        for signum in signals:
+            loop.remove_signal_handler(signum)
+
+    return undo

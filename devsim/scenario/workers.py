@@ -32,7 +32,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from devsim.core.console import say, warn
+from devsim.core.console import say, stop_on_signals, warn
 from devsim.observe.live_log import DEFAULT_LEVEL, level_of
 from devsim.scenario.schema import PlantSpec
 
@@ -248,8 +248,7 @@ async def run_workers(
     """Serve ``spec`` from ``workers`` processes until Ctrl-C / SIGTERM; returns an exit status."""
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(signum, stop.set)
+    unsignal = stop_on_signals(loop, stop.set)
     shares = split_plant(spec, workers)
     about = {"name": name, "started": time.time(), "monotonic": time.monotonic()}
     with tempfile.TemporaryDirectory(prefix="devsim-workers-") as tmp:
@@ -323,5 +322,4 @@ async def run_workers(
                 if worker.proc.returncode is None:
                     worker.proc.kill()
                     await worker.proc.wait()
-            for signum in (signal.SIGINT, signal.SIGTERM):
-                loop.remove_signal_handler(signum)
+            unsignal()

@@ -24,14 +24,13 @@ A request the recording does not know:
 from __future__ import annotations
 
 import asyncio
-import signal
 from collections import deque
 from collections.abc import Callable
 from typing import Any
 
 import msgspec
 
-from devsim.core.console import say, warn
+from devsim.core.console import say, stop_on_signals, warn
 from devsim.core.device import SerialSettings
 from devsim.core.registry import port_framing
 from devsim.observe.replay.live import HandoverClock, start_live
@@ -203,8 +202,7 @@ async def replay_session(plan: ReplayPlan) -> int:
 
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(signum, stop.set)
+    unsignal = stop_on_signals(loop, stop.set)
     outbox = _Outbox()
     clock = HandoverClock()
     runtime = Runtime(clock=clock)
@@ -246,6 +244,5 @@ async def replay_session(plan: ReplayPlan) -> int:
             warn(f"replay: requests answered: {counts}")
     finally:
         await outbox.close()
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            loop.remove_signal_handler(signum)
+        unsignal()
     return 0

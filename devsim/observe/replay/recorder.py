@@ -17,7 +17,6 @@ passed the recorder.
 from __future__ import annotations
 
 import asyncio
-import signal
 import threading
 import time
 from collections.abc import Callable
@@ -26,7 +25,7 @@ from typing import Any
 import msgspec
 import serial
 
-from devsim.core.console import say, warn
+from devsim.core.console import say, stop_on_signals, warn
 from devsim.core.device import SerialSettings
 from devsim.observe.replay.session import SessionWriter
 
@@ -125,8 +124,7 @@ async def record_session(plan: RecordPlan) -> int:
         return 1
     loop = asyncio.get_running_loop()
     done = asyncio.Event()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(signum, done.set)
+    unsignal = stop_on_signals(loop, done.set)
     writer = SessionWriter(plan.out, kind=plan.kind, port=plan.port_name, device=plan.device_url,
                            settings=plan.settings)
     recorder = _Recorder(device, writer, plan.settings, done)
@@ -165,8 +163,7 @@ async def record_session(plan: RecordPlan) -> int:
             await asyncio.to_thread(pump.join, 2)
         device.close()
         writer.close()
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            loop.remove_signal_handler(signum)
+        unsignal()
     if recorder.failed:
         warn(recorder.failed)
         return 1
