@@ -29,6 +29,7 @@ import can
 import canopen
 from canopen.sdo.exceptions import SdoAbortedError
 
+from devsim.core.console import warn
 from devsim.core.device import Device
 from devsim.core.points import BadValue, ReadOnlyName
 from devsim.facades import library_log
@@ -72,6 +73,7 @@ class CanopenFacade:
         self._timers: dict[tuple[int, str], Any] = {}  # event-driven TPDOs: device-clock timers
         self._sent: dict[int, bytes] = {}  # event-driven TPDOs: the data they last carried
         self.lost = 0  # TPDOs and EMCY messages the bus refused (see _send)
+        self._refused = False  # the last message was refused
         self.node = canopen.LocalNode(node_id, self.od)
         self.node.sdo = self.sdo = DevsimSdoServer(0x600 + node_id, 0x580 + node_id, self.node)
         self.objects = {index: point for index, point in point_objects(device.points)}
@@ -236,11 +238,20 @@ class CanopenFacade:
         """A message of the node's own onto the bus.  One the bus refuses (python-can's
         ``CanError``: a SocketCAN interface down, bus-off, a full transmit queue) is lost, as on a
         node whose controller cannot transmit, and counted in :attr:`lost`: the device, the
-        fault it announces and the PDO timers go on, and the next message is tried again."""
+        fault it announces and the PDO timers go on, and the next message is tried again.  One
+        line on stderr when the bus starts refusing, one when it takes a message again."""
         try:
             send(*args)
-        except can.CanError:
+        except can.CanError as exc:
+            if not self._refused:
+                warn(f"devsim: {self.device.name}.canopen: the bus refused a message ({exc}); "
+                     "messages are lost until it takes them again")
+                self._refused = True
             self.lost += 1
+            return
+        if self._refused:
+            self._refused = False
+            warn(f"devsim: {self.device.name}.canopen: the bus takes messages again ({self.lost} lost so far)")
 
     def close(self) -> None:
         self._unlisten()

@@ -310,7 +310,8 @@ def test_an_event_driven_tpdo_goes_out_every_event_timer_period(drive: Drive) ->
     assert arrived.empty()  # stopped with OPERATIONAL
 
 
-def test_a_bus_that_goes_down_loses_messages_and_the_drive_goes_on(drive: Drive) -> None:
+def test_a_bus_that_goes_down_loses_messages_and_the_drive_goes_on(drive: Drive,
+                                                                  capsys: pytest.CaptureFixture[str]) -> None:
     """The node's CAN controller cannot transmit (a SocketCAN interface down, bus-off: python-can
     raises ``CanError``; here its bus is shut): its TPDOs and the EMCY of a following error are
     lost and counted, the drive goes into its fault all the same, and the event-driven TPDO goes
@@ -339,6 +340,9 @@ def test_a_bus_that_goes_down_loses_messages_and_the_drive_goes_on(drive: Drive)
     drive.runtime.advance(0.35)
     fault = [arrived.get(timeout=5) for _ in range(3)]  # the event timer ran on
     assert fault[0] & 0x4F == 0x08 and len(set(fault)) == 1
+    assert capsys.readouterr().err.splitlines() == [
+        "devsim: pcd.canopen: the bus refused a message (Cannot operate on a closed bus); messages are lost until"
+        " it takes them again", f"devsim: pcd.canopen: the bus takes messages again ({drive.facade.lost} lost so far)"]
 
 
 def test_an_event_driven_tpdo_goes_out_when_its_values_change(drive: Drive) -> None:
