@@ -346,9 +346,9 @@ async def _serve(plan: Plan) -> None:
             served: list[tuple[str, Any, Port]] = []  # port name, transport, spec
             plan_ports = _plan_ports(plan, devices[0].ports)
             for index, (port_name, spec) in enumerate(plan_ports):
-                stage = f"open the {spec.scheme} port"
-                transport = _make_transport(spec)
                 trace = _trace_for(plan.trace, port_name, index)
+                stage = f"open the {spec.scheme} port" + (f" with its trace {trace}" if trace else "")
+                transport = _make_transport(spec)
                 await runtime.serve(devices, transport, port=port_name, pacing=plan.pacing, trace=trace)
                 served.append((port_name, transport, spec))
             modbus_served: list[tuple[str, str]] = []
