@@ -174,3 +174,14 @@ def test_the_terminal_closing_stops_a_simulator_cleanly_unless_nohup(tmp_path: P
     rows = rows_of(log)
     assert [row["event"] for row in rows if row["event"].startswith("move_")] == ["move_start", "move_end"]
     assert float(rows[-1]["position"]) == 3200.0
+
+
+def test_a_command_whose_reader_goes_away_ends_quietly_with_1() -> None:
+    """`devsim list | head -1`: click ends a command on EPIPE with status 1 and nothing on stderr
+    (docs/cli.md, FAILED)."""
+    with subprocess.Popen([sys.executable, "-m", "devsim", "list"], cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL,
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE) as proc:
+        assert proc.stdout is not None and proc.stderr is not None
+        proc.stdout.close()  # (before the first line: every write finds no reader)
+        err = proc.stderr.read()
+    assert proc.returncode == 1 and err == b""

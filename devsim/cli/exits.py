@@ -5,7 +5,8 @@ command meets it (docs/cli.md has the same table for users; a test runs each row
  code   name             when
 =====  ===============  =================================================================================
  0      ``OK``           it worked (a server stopped by Ctrl-C, SIGTERM or SIGHUP ends with 0 too)
- 1      ``FAILED``       it ran and the result is "no": a scenario's expectation failed
+ 1      ``FAILED``       it ran and the result is "no": a scenario's expectation failed (and a command
+                         whose output's reader went away: click's convention for EPIPE)
  2      ``USAGE``        the command line is wrong: an unknown option or kind, a bad option value
  3      ``BAD_FILE``     a file named on the command line is missing, unreadable or wrong (YAML, schema,
                          misspelt names): a config, plant, scenario, session or motion log

@@ -83,8 +83,6 @@ class _Cli(click.Group):
             _fail(exc.format_message(), exc.exit_code)
         except click.Abort:
             _fail("aborted", exits.INTERRUPTED)
-        except BrokenPipeError:
-            sys.exit(exits.SYSTEM)
         sys.exit(rv if isinstance(rv, int) else 0)
 
 
