@@ -94,9 +94,9 @@ def test_a_recording_the_disk_stops_taking_ends_and_the_host_is_still_served(tmp
                 port.write(QUERY)
                 assert port.read_until(ANSWER) == ANSWER, f"poll {n}"
     finally:
-        if recorder is not None:
-            assert stop(recorder, signal.SIGINT, 15) == 0
-        assert device.interrupt() == 0
+        statuses = [stop(recorder, signal.SIGINT, 15)] if recorder is not None else []
+        statuses.append(device.interrupt())  # (both stopped before either is judged)
+    assert statuses == [0, 0]
     lines = []
     while (line := err.get(timeout=15)) is not None:
         lines.append(line)
