@@ -54,12 +54,13 @@ def test_a_drive_powers_on_completely_when_nobody_reads_the_output(tmp_path: Pat
     config.write_text("autostart: true\n")
     (tmp_path / "plant.yaml").write_text(PLANT)
     address = f"unix:{tmp_path}/c.sock"
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "devsim", *COMMANDS[command](config), "--virtual", "--control", address,
-         "-v"],  # -v: every event logged, from inside the model
-        cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE if closed == "stdout and stderr" else (tmp_path / "err.txt").open("w"), text=True,
-    )
+    with (tmp_path / "err.txt").open("w") as err_file:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "devsim", *COMMANDS[command](config), "--virtual", "--control", address,
+             "-v"],  # -v: every event logged, from inside the model
+            cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE if closed == "stdout and stderr" else err_file, text=True,
+        )
     try:
         assert proc.stdout is not None
         while not (line := proc.stdout.readline()).startswith("control: "):  # the port lines first
