@@ -4,8 +4,8 @@ devices power on completely, its log lines go nowhere, and it ends with status 0
 
 Before, the ``sers: ready`` line raised ``BrokenPipeError`` in the middle of the drive's power-on
 (the model announces ``ready`` to the line's printer), so the rest of it did not run: no
-autostart (§3.1.2), no jog function at power-on (§4.8.6.3); and the interpreter's flush at exit
-ended the process with status 120.
+autostart (§3.1.2), no jog function at power-on (§4.8.6.3), and ``ctl advance`` answered
+``BrokenPipeError``.
 
 The terminal that started a simulator closing (SIGHUP) stops it as Ctrl-C does, cleanly; under
 ``nohup`` it goes on."""

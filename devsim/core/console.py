@@ -7,7 +7,7 @@ ignores SIGPIPE, so such a write raises (``BrokenPipeError``, ``EIO``) in the co
 which may be a device announcing ``ready`` in the middle of its power-on (the rest of the
 power-on would not run) or a log line from inside a model's step.  :func:`say` catches that,
 and points the stream's descriptor at the null device: later lines, and the interpreter's own
-flush at exit (which would otherwise end the process with status 120), go nowhere.
+flush at exit, go nowhere.
 
 :func:`stop_on_signals`: Ctrl-C (SIGINT), SIGTERM and SIGHUP (the terminal that started it has
 closed) stop a serving process the same clean way: its motion log gets its last rows, its
