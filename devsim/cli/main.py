@@ -2,7 +2,7 @@
 
 * ``devsim list`` – the device kinds, one per line.
 * ``devsim run KIND [--pty | --link PATH | --tcp [HOST:]PORT | --rfc2217 [HOST:]PORT] ...`` – serve
-  one device (or several on one RS-485 line with ``--drives``, alias ``--addresses``) until Ctrl-C / SIGTERM.  Every
+  one device (or several on one RS-485 line with ``--drives``, alias ``--addresses``) until Ctrl-C / SIGTERM / SIGHUP.  Every
   port and the control address are printed on stdout, one per line, for scripts to parse::
 
       sers: pty /dev/pts/5

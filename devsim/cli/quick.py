@@ -147,7 +147,9 @@ def main(args: Sequence[str] | None = None, prog_name: str = "devsim") -> None:
 def _run(params: dict[str, Any]) -> bool:
     """Plan and serve ``devsim run`` without click; False (nothing started) when the plan finds a
     mistake, for click to say it.  Once planned, the outcome is the click command's: a server
-    that cannot start is one ``Error:`` line and its status, a broken stdout exits with 1."""
+    that cannot start is one ``Error:`` line and its status.  A stdout whose reader goes away is
+    handed to the null device where the server prints (:mod:`devsim.core.console`); an EPIPE
+    from anywhere else exits with 1, as click does."""
     gc.disable()  # start-up makes many objects and frees few: no collection until serving starts
     try:
         from devsim.cli.serve import plan_run, serve
@@ -169,8 +171,9 @@ def _run(params: dict[str, Any]) -> bool:
     except OSError as exc:  # what click does when stdout is a closed pipe: exit 1, no more output
         if exc.errno != errno.EPIPE:
             raise
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
+        from devsim.core.console import to_null
+
+        to_null(sys.stdout)
         sys.exit(1)
     return True
 

@@ -23,7 +23,7 @@ import sys
 from collections.abc import Callable
 from typing import TextIO
 
-__all__ = ["say", "stop_on_signals", "warn"]
+__all__ = ["say", "stop_on_signals", "to_null", "warn"]
 
 
 def say(line: str, stream: TextIO | None = None) -> None:
@@ -35,7 +35,7 @@ def say(line: str, stream: TextIO | None = None) -> None:
     except BlockingIOError:  # a full pipe set non-blocking by someone: the reader is slow, not gone
         pass  # (what did not fit waits in the stream's buffer, or is dropped: the loop must not wait)
     except OSError:  # (BrokenPipeError: the reader has gone; EIO: its terminal has)
-        _to_null(out)
+        to_null(out)
 
 
 def warn(line: str) -> None:
@@ -43,7 +43,8 @@ def warn(line: str) -> None:
     say(line, sys.stderr)
 
 
-def _to_null(stream: TextIO) -> None:
+def to_null(stream: TextIO) -> None:
+    """Point ``stream``'s descriptor at the null device (Python's recipe for a reader gone)."""
     try:
         fd = stream.fileno()
     except (OSError, ValueError):  # (a stream without a descriptor: nothing to point elsewhere)

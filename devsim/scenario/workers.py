@@ -8,7 +8,7 @@ staying whole with its devices), and this process
 * serves the control API on the address given with ``--control`` (or its default socket) and
   hands each request to the worker that holds the device (``devices`` gathers them from all,
   with a ``worker`` number; ``info`` says this process's name, pid and uptime, and all ports);
-* stops the workers on Ctrl-C / SIGTERM, and stops the others if one dies;
+* stops the workers on Ctrl-C / SIGTERM / SIGHUP, and stops the others if one dies;
 * holds each worker's stdin, a pipe: when this process dies, even by ``kill -9``, the worker
   reads its end and stops as on Ctrl-C (:func:`end_with_parent`), so no orphan keeps the
   plant's links, ports and state-dir locks, and the same ``devsim up`` can start again.
@@ -245,7 +245,7 @@ async def run_workers(
     quiet: int = 0,
     idle_drop: float | None = None,
 ) -> int:
-    """Serve ``spec`` from ``workers`` processes until Ctrl-C / SIGTERM; returns an exit status."""
+    """Serve ``spec`` from ``workers`` processes until Ctrl-C / SIGTERM / SIGHUP; returns an exit status."""
     loop = asyncio.get_running_loop()
     stop = asyncio.Event()
     unsignal = stop_on_signals(loop, stop.set)

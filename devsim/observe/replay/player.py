@@ -195,7 +195,7 @@ class Replayer:
 
 
 async def replay_session(plan: ReplayPlan) -> int:
-    """Serve the replay on a new pty until SIGINT/SIGTERM; returns the exit status."""
+    """Serve the replay on a new pty until SIGINT/SIGTERM/SIGHUP; returns the exit status."""
     from devsim.runtime import Runtime
     from devsim.transports.pty import PtyTransport
     from devsim.transports.tcp import TcpTransport

@@ -114,7 +114,7 @@ class HostPortError(Exception):
 
 
 async def record_session(plan: RecordPlan) -> int:
-    """Record until SIGINT/SIGTERM (or the device's port fails); returns 0, or 1 if the device's
+    """Record until SIGINT/SIGTERM/SIGHUP (or the device's port fails); returns 0, or 1 if the device's
     port could not be opened or failed (said on stderr).  Raises :class:`HostPortError` if the
     host's port cannot be opened, :class:`OSError` if the session file cannot be written."""
     try:

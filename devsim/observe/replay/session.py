@@ -63,7 +63,7 @@ class SessionWriter:
 
     def __init__(self, path: str | Path, *, kind: str | None, port: str, device: str, settings: SerialSettings) -> None:
         self.path = Path(path)
-        self._file: TraceFile | None = TraceFile(self.path, encoding="utf-8", what="session")  # (no symlink)
+        self._file = TraceFile(self.path, encoding="utf-8", what="session")  # (no symlink)
         framing = port_framing(kind, port)
         self._decoders = {"host": framing.decoder("host"), "device": framing.decoder("device")}
         self.chunks = 0
@@ -83,13 +83,11 @@ class SessionWriter:
         self._line({"t": round(t, 6), "settings": settings_dict(settings)})
 
     def close(self) -> None:
-        if self._file is not None:
-            self._file.close()
-            self._file = None
+        self._file.close()
 
     def _line(self, entry: dict[str, Any]) -> bool:
         """Write ``entry``; whether the file took it."""
-        if self._file is None or self._file.closed:
+        if self._file.closed:
             return False
         self._file.write(json.dumps(entry, ensure_ascii=True) + "\n")
         return not self._file.closed
