@@ -37,14 +37,17 @@ Three things make a pty behave like a serial port rather than a terminal (see th
   back differ from the request – which on a pty is every request for parity.  So a host asking
   for even parity succeeds only if its request changes something the pty keeps: the first
   open does (speed, CLOCAL, raw mode), a second open or pyserial's reconfiguration on a change
-  of ``timeout`` would not.  The transport therefore keeps the slave *armed*: PARODD and/or
-  CMSPAR (meaningless without PARENB) set to a pattern the host's last request did not leave,
-  so that the host's next request clears or changes them.  It re-arms after every change of the
-  slave's termios, and learns of one at once: the master is in packet mode and the slave has
-  EXTPROC set, so ``pty_set_termios`` signals ``TIOCPKT_IOCTL`` to the master.  Consecutive arms
-  differ, so an arm that lands between a host's ``TCSETS`` and glibc's read-back still leaves
-  it a change (see :func:`_arm`).  What stays impossible: two reconfigurations in a row faster
-  than the transport's event loop can run between them (it is a different process or thread).
+  of ``timeout`` would not.  The transport therefore keeps the slave *armed*: CLOCAL set the
+  other way than the host's last request left it, so that the host's next request (pyserial's,
+  and any that sets ``CLOCAL | CREAD`` as serial code does) changes it back.  The arm is the
+  ``TIOCSSOFTCAR`` ioctl, which changes that one bit under the kernel's termios lock: a host's
+  change that lands while the transport arms is never set back (a whole ``tcsetattr`` read
+  and written around it would).  The transport re-arms after every change of the slave's
+  termios, and learns of one at once: the master is in packet mode and the slave has EXTPROC
+  set, so ``pty_set_termios`` signals ``TIOCPKT_IOCTL`` to the master.  What stays impossible:
+  two reconfigurations in a row faster than the transport's event loop can run between them
+  (it is a different process or thread): the second one of a host asking for parity fails
+  (see :func:`_arm`).
 
 Writes towards the host never block the event loop: they are buffered and flushed when the
 master is writable.  If nobody reads (no host, or a host that does not read) and more than
@@ -93,10 +96,8 @@ _BITS_CSIZE = {bits: flag for flag, bits in _CSIZE_BITS.items()}
 _EXTPROC = 0o200000 if sys.platform.startswith("linux") else 0
 _TIOCPKT = getattr(termios, "TIOCPKT", None)
 _TIOCPKT_DATA = 0
-# The parity bits the transport arms the slave with, in order of preference (PARODD first: a
-# host asking for even parity clears it even when it leaves CMSPAR alone).
-_ARMS = (termios.PARODD | _CMSPAR, termios.PARODD, _CMSPAR, 0)
-_ARM_MASK = termios.PARODD | _CMSPAR
+# Linux: sets CLOCAL alone, under the tty's termios lock (the transport's arm).
+_TIOCSSOFTCAR = getattr(termios, "TIOCSSOFTCAR", 0x541A)
 
 _READ_SIZE = 4096
 # Device output within this many seconds of host input reuses the settings read with that input.
@@ -226,10 +227,11 @@ class PtyTransport(Transport):
             if isinstance(preset, SerialSettings):
                 self._preset = preset
                 attrs = apply_settings(attrs, preset)
+            attrs[_CFLAG] |= termios.CLOCAL  # (no modem lines; the arm below clears it, as hosts set it)
             termios.tcsetattr(slave, termios.TCSANOW, attrs)
             if not self._frame_visible:
                 self._packet = _packet_mode(master)
-                self._armed = _arm(slave, None, termios.tcgetattr(slave), extproc=self._packet)
+                self._armed = _arm(slave, termios.tcgetattr(slave), extproc=self._packet)
             self._baseline = termios.tcgetattr(slave)
             os.set_blocking(master, False)
             self.address = os.ttyname(slave)
@@ -297,7 +299,7 @@ class PtyTransport(Transport):
         if attrs is not None and attrs == self._last_attrs:
             return
         if attrs is not None and not self._frame_visible and self._slave is not None and attrs != self._armed:
-            self._armed = attrs = _arm(self._slave, self._armed, attrs, extproc=self._packet)
+            self._armed = attrs = _arm(self._slave, attrs, extproc=self._packet)
         self._last_attrs = attrs
         settings = self.host_settings()
         if settings is not None and settings != self._reported and self._endpoint is not None:
@@ -412,43 +414,39 @@ def _packet_mode(master: int) -> bool:
     return True
 
 
-def _arm(fd: int, previous: list | None, attrs: list, *, extproc: bool) -> list:
+def _arm(fd: int, attrs: list, *, extproc: bool) -> list:
     """Arm a Linux pty slave for the host's next ``tcsetattr``; returns the termios now set.
 
     glibc's ``tcsetattr`` fails with EINVAL when the termios read back after ``TCSETS`` equal
     those read before it (``c_cc`` is not compared) and the request's PARENB or CSIZE are not
     what was read back – always the case for parity on a pty, which drops PARENB.  A host that
     repeats its request (a second open at 8E1, pyserial applying a new ``timeout``) changes
-    nothing unless something differs from what its last request left.  The transport sets the
-    parity-kind bits, PARODD and CMSPAR, which mean nothing without PARENB, to a pattern that
+    nothing unless something differs from what its last request left.  The arm sets CLOCAL the
+    other way (hosts set it: pyserial always, and the ``c_cflag |= CLOCAL | CREAD`` of serial
+    code) with ``TIOCSSOFTCAR``, which changes that one bit under the tty's termios lock: a
+    host's change that lands while the transport arms – a new speed right after an open – is
+    kept.  (A whole ``tcsetattr`` made from a ``tcgetattr`` just before it set such a change
+    back: on a busy machine a host that opened at 9600 and at once asked for 19200 was left at
+    9600 about every other time.)
 
-    * differs from the one in ``attrs`` (what the host's last request left, so the same request
-      again changes them), and
-    * differs from the ``previous`` arm (the state the host's call started from: if this arm
-      lands between its ``TCSETS`` and glibc's read-back, the read-back still differs).
-
-    ``extproc`` also keeps EXTPROC set, so that a packet-mode master hears of the next change.
-    Only the transport's own descriptor is touched; the host's speed and framing are kept: the
-    termios are read again right before they are set, so that a host's change that landed after
-    the caller looked (a host that opens the port and at once sets another speed) is not set
-    back.  What stays possible is a host's change between that read and the set, two system
-    calls apart."""
+    The arm first yields the processor: a host whose ``tcsetattr`` woke the transport on the
+    host's own processor is preempted between its ``TCSETS`` and glibc's read-back, and an arm
+    landing there would make the read-back equal what the host's call started from.  Landing
+    there still happens when something else preempted the host at that point; a request that
+    repeats the host's last one then fails.  ``extproc`` keeps EXTPROC set, so that a
+    packet-mode master hears of the next change; only a request that dropped it (one made from
+    a zeroed ``termios``) needs a whole ``tcsetattr`` to set it again."""
+    os.sched_yield()
     try:
-        attrs = termios.tcgetattr(fd)
-    except termios.error:
-        attrs = list(attrs)
-    avoid = {attrs[_CFLAG] & _ARM_MASK}
-    if previous is not None:
-        avoid.add(previous[_CFLAG] & _ARM_MASK)
-    pattern = next(bits for bits in _ARMS if bits not in avoid)
-    attrs[_CFLAG] = (attrs[_CFLAG] & ~_ARM_MASK) | pattern
-    if extproc:
-        attrs[_LFLAG] |= _EXTPROC
-    try:
-        termios.tcsetattr(fd, termios.TCSANOW, attrs)
+        if extproc and not attrs[_LFLAG] & _EXTPROC:
+            whole = termios.tcgetattr(fd)
+            whole[_LFLAG] |= _EXTPROC
+            termios.tcsetattr(fd, termios.TCSANOW, whole)
+        local = termios.tcgetattr(fd)[_CFLAG] & termios.CLOCAL
+        fcntl.ioctl(fd, _TIOCSSOFTCAR, array.array("i", [0 if local else 1]))
         return termios.tcgetattr(fd)
-    except termios.error:
-        return attrs
+    except (termios.error, OSError):
+        return list(attrs)
 
 
 def _pty_keeps_frame_format(fd: int, attrs: list) -> bool:

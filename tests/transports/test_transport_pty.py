@@ -15,8 +15,9 @@ import serial
 
 from devsim.core.clock import RealClock
 from devsim.core.device import SerialSettings
+from devsim.transports import pty as pty_module
 from devsim.transports.line import Line, garble
-from devsim.transports.pty import PtyTransport, _arm
+from devsim.transports.pty import _EXTPROC, PtyTransport, _arm
 from devsim.transports.ptylink import owner_record_path
 from tests.transports.transport_helpers import EchoTarget, Recorder
 
@@ -312,7 +313,7 @@ async def test_a_quiet_host_reopens_and_reconfigures_at_any_parity(parity: str) 
 
 
 async def test_arming_keeps_the_hosts_speed_and_stop_bits() -> None:
-    """Re-arming touches only PARODD/CMSPAR (and EXTPROC): what the host set stays set."""
+    """Re-arming touches only CLOCAL (and EXTPROC): what the host set stays set."""
     transport = PtyTransport()
     target = EchoTarget(SerialSettings(4800, 8, "E", 2))
     line = Line(target, RealClock())
@@ -347,11 +348,57 @@ def test_arming_does_not_set_back_a_speed_the_host_set_after_the_look() -> None:
         host = termios.tcgetattr(slave)
         host[4] = host[5] = termios.B19200
         termios.tcsetattr(slave, termios.TCSANOW, host)  # the host's change, after the look
-        armed = _arm(slave, None, looked, extproc=True)
+        armed = _arm(slave, looked, extproc=True)
         assert termios.tcgetattr(slave)[4:6] == [termios.B19200, termios.B19200] == armed[4:6]
     finally:
         os.close(master)
         os.close(slave)
+
+
+class _HostAsksForNineteenTwoHundred:
+    """The pty module's ``termios``, but the first look the transport takes is followed at once
+    by a host's ``tcsetattr`` for 19200 baud: the worst moment a host's change can land."""
+
+    def __init__(self, host: int) -> None:
+        self.host = host
+        self.request: list | None = None
+
+    def __getattr__(self, name: str):
+        return getattr(termios, name)
+
+    def tcgetattr(self, fd: int) -> list:
+        attrs = termios.tcgetattr(fd)
+        if self.request is None:
+            self.request = termios.tcgetattr(self.host)
+            self.request[4] = self.request[5] = termios.B19200
+            termios.tcsetattr(self.host, termios.TCSANOW, self.request)
+        return attrs
+
+
+def test_a_host_change_that_lands_while_the_transport_arms_is_kept(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The arm changes one bit (CLOCAL) under the kernel's termios lock, so a host's new speed
+    that lands between the arm's look at the termios and its change is kept.  A whole
+    ``tcsetattr`` made from that look set it back (on a busy machine a host that opened at 9600
+    and at once asked for 19200 was left at 9600 about every other time).  The host's change is
+    put in at exactly that point here; the arm must still leave CLOCAL the other way than the
+    host's request, so that the same request again is a change."""
+    master, slave = os.openpty()
+    host = os.open(os.ttyname(slave), os.O_RDWR | os.O_NOCTTY)
+    try:
+        start = termios.tcgetattr(slave)
+        start[3] |= _EXTPROC
+        start[4] = start[5] = termios.B9600
+        termios.tcsetattr(slave, termios.TCSANOW, start)
+        middle = _HostAsksForNineteenTwoHundred(host)
+        monkeypatch.setattr(pty_module, "termios", middle)
+        armed = _arm(slave, termios.tcgetattr(slave), extproc=True)
+        monkeypatch.undo()
+        assert middle.request is not None
+        assert termios.tcgetattr(host)[4:6] == [termios.B19200, termios.B19200] == armed[4:6]
+        assert armed[2] & termios.CLOCAL != middle.request[2] & termios.CLOCAL
+    finally:
+        for fd in (host, master, slave):
+            os.close(fd)
 
 
 @pytest.mark.parametrize("target", ["elsewhere", "live-pty"])
