@@ -138,8 +138,19 @@ class NonVolatileMemory:
         return _copied(self._image[section])
 
     def put(self, section: str, data: Any) -> None:
+        """Store ``data`` as ``section`` and save the image; data the file cannot hold (NaN,
+        infinity) raises :class:`PoisonedMemory` and the section keeps what it held."""
+        had = section in self._image
+        before = self._image.get(section)
         self._image[section] = _copied(data)
-        self._write()
+        try:
+            self._write()
+        except PoisonedMemory:
+            if had:
+                self._image[section] = before
+            else:
+                del self._image[section]
+            raise
 
     def delete(self, section: str) -> None:
         if self._image.pop(section, None) is not None:
