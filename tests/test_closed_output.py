@@ -14,9 +14,11 @@ from __future__ import annotations
 
 import asyncio
 import os
+import select
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import TextIO
 
@@ -186,3 +188,59 @@ def test_a_command_whose_reader_goes_away_ends_quietly_with_1() -> None:
         proc.stdout.close()  # (before the first line: every write finds no reader)
         err = proc.stderr.read()
     assert proc.returncode == 1 and err == b""
+
+
+def test_a_simulator_whose_log_nobody_reads_keeps_answering(tmp_path: Path) -> None:
+    """A harness that starts a simulator with ``stderr=PIPE`` and never reads it: with ``-v`` every
+    telegram is logged, and once the pipe was full (64 KiB, about 400 SERS requests) the simulator
+    stopped in the middle of a log line: its host got no answer and SIGTERM did not stop it.  Now
+    a line the pipe does not take is dropped, and the next line that goes out counts the lost."""
+    address, link = f"unix:{tmp_path}/c.sock", str(tmp_path / "ttySERS")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "devsim", "run", "sers", "--link", link, "--virtual", "--control", address, "-v"],
+        cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    )
+    try:
+        assert proc.stdout is not None and proc.stderr is not None
+        while not (line := proc.stdout.readline()).startswith(b"control: "):
+            assert line, "the simulator ended before its control line"
+        ctl(address, "advance", "2.1")  # the power-on ends (2 s)
+        with serial.Serial(link, 9600, timeout=5) as host:
+            for n in range(2000):  # (two lines of log each, nobody reading them: far beyond a pipe's 64 KiB)
+                host.write(b"#P134?\r")
+                assert host.read_until(b"ok1\n\r") == b"#P134?\rP134=0\n\r\nok1\n\r", f"no answer to request {n}"
+            err = proc.stderr.fileno()
+            os.set_blocking(err, False)
+            held = b""
+            while chunk := _read_now(err):  # what the pipe took
+                held += chunk
+            assert b"P134" in held and b"dropped" not in held
+            host.write(b"#P134?\r")  # logged again: now the pipe has room
+            assert host.read_until(b"ok1\n\r").endswith(b"ok1\n\r")
+        after = _read_until(err, b"of output dropped here: nobody read them", timeout=10)
+        lost = int(after.split(b"devsim: ")[1].split()[0])
+        assert lost > 1000 and lost + held.count(b"\n") >= 4000
+    finally:
+        status = stop(proc, timeout=15)
+    assert status == 0
+
+
+def _read_now(fd: int) -> bytes:
+    try:
+        return os.read(fd, 1 << 16)
+    except BlockingIOError:
+        return b""
+
+
+def _read_until(fd: int, needle: bytes, timeout: float) -> bytes:
+    """What a non-blocking ``fd`` gives until ``needle`` is in it (an AssertionError after ``timeout``)."""
+    deadline = time.monotonic() + timeout
+    got = b""
+    while needle not in got:
+        left = deadline - time.monotonic()
+        assert left > 0, f"no {needle!r} within {timeout} s: {got[-300:]!r}"
+        if select.select([fd], [], [], left)[0]:
+            chunk = _read_now(fd)
+            assert chunk or got, "the output ended"
+            got += chunk
+    return got

@@ -9,6 +9,14 @@ power-on would not run) or a log line from inside a model's step.  :func:`say` c
 and points the stream's descriptor at the null device: later lines, and the interpreter's own
 flush at exit, go nowhere.
 
+Nor does a simulator wait for a reader that is there but does not read: a harness that started it
+with ``stderr=PIPE`` and never reads the pipe, a terminal stopped with Ctrl-S.  A write into a full
+pipe blocks, and the whole simulator with it, in the middle of a line from inside the model (with
+``-v`` every telegram is logged: a pipe's 64 KiB were full after about 400 SERS requests, the host
+got no answer after that, and SIGTERM could not stop the process).  So :func:`say` first asks the
+descriptor whether it takes a line now (``poll``); a line it would not take is dropped and counted,
+and the next line that goes out says how many were lost before it.
+
 :func:`stop_on_signals`: Ctrl-C (SIGINT), SIGTERM and SIGHUP (the terminal that started it has
 closed) stop a serving process the same clean way: its motion log gets its last rows, its
 control socket is removed.  Under ``nohup`` (SIGHUP ignored) the terminal's end is ignored still.
@@ -18,6 +26,7 @@ from __future__ import annotations
 
 import asyncio
 import os
+import select
 import signal
 import sys
 from collections.abc import Callable
@@ -26,16 +35,44 @@ from typing import TextIO
 __all__ = ["say", "stop_on_signals", "to_null", "warn"]
 
 
+#: Lines dropped since the last that went out, per descriptor (a reader that did not read).
+_dropped: dict[int, int] = {}
+
+
 def say(line: str, stream: TextIO | None = None) -> None:
     """Print ``line`` to ``stream`` (default stdout) and flush; a stream nobody reads any more
-    is handed to the null device and the line is dropped."""
+    is handed to the null device and the line is dropped, and so is a line a full pipe or a
+    stopped terminal would not take now (the next line that goes out counts them)."""
     out = sys.stdout if stream is None else stream
+    fd = _descriptor(out)
+    if fd is not None:
+        if not _takes_a_line(fd):
+            _dropped[fd] = _dropped.get(fd, 0) + 1
+            return
+        lost = _dropped.pop(fd, 0)
+        if lost:
+            line = f"devsim: {lost} line{'' if lost == 1 else 's'} of output dropped here: nobody read them\n{line}"
     try:
         print(line, file=out, flush=True)
     except BlockingIOError:  # a full pipe set non-blocking by someone: the reader is slow, not gone
         pass  # (what did not fit waits in the stream's buffer, or is dropped: the loop must not wait)
     except OSError:  # (BrokenPipeError: the reader has gone; EIO: its terminal has)
         to_null(out)
+
+
+def _descriptor(stream: TextIO) -> int | None:
+    try:
+        return stream.fileno()
+    except (OSError, ValueError):  # (a stream without a descriptor, or closed: print decides)
+        return None
+
+
+def _takes_a_line(fd: int) -> bool:
+    """Whether a write to ``fd`` would not block now (a pipe with a free page, a terminal not
+    stopped, any file); an error or hang-up counts as taking it: the write then says which."""
+    poller = select.poll()
+    poller.register(fd, select.POLLOUT)
+    return bool(poller.poll(0))
 
 
 def warn(line: str) -> None:
