@@ -103,8 +103,8 @@ class Gms96Client:
         try:
             port.timeout = min(_POLL, timeout) if timeout > 0 else 0
         except (OSError, termios.error, serial.SerialException):
-            # a Linux pty refuses the re-configuration with parity E (EINVAL); polling then
-            # simply uses the port's own timeout
+            # a Linux pty's glibc check fails a repeated request for parity E (EINVAL) after the
+            # kernel took it: pyserial keeps the new timeout all the same (docs/connect.md)
             pass
 
     # -- link ------------------------------------------------------------------------------
