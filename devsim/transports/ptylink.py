@@ -145,8 +145,11 @@ def claim_link(target: str, link: str) -> None:
         with os.fdopen(fd, "w", encoding="utf-8") as out:
             json.dump(record, out)
 
-    _replace(str(owner_record_path(link)), write_record)  # first: a crash after it leaves a record
-    _replace(link, lambda tmp: os.symlink(target, tmp))
+    try:
+        _replace(str(owner_record_path(link)), write_record)  # first: a crash after it leaves a record
+        _replace(link, lambda tmp: os.symlink(target, tmp))
+    except OSError as exc:  # (it named the temporary file it could not make beside the link)
+        raise OSError(exc.errno, f"cannot make the link {link}: {exc.strerror}") from None
 
 
 def release_link(target: str, link: str) -> None:

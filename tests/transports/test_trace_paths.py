@@ -37,6 +37,18 @@ def test_devsim_run_says_which_file_it_cannot_trace_to(tmp_path: Path) -> None:
     assert precious.read_text() == "keep me\n"
 
 
+def test_devsim_run_says_which_link_it_cannot_make(tmp_path: Path) -> None:
+    """A --link in a directory that is not there: the error names the link (it named a temporary
+    file beside it, ``.tty.owner.PID.tmp``)."""
+    link = tmp_path / "missing" / "ttySERS"
+    done = subprocess.run([sys.executable, "-m", "devsim", "run", "sers", "--link", str(link)],
+                          cwd=ROOT, env=devsim_env(), capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
+    assert done.returncode == exits.SYSTEM
+    assert done.stderr.splitlines()[-1] == (f"Error: cannot open the pty port: [Errno 2] cannot make the link {link}: "
+                                            "No such file or directory")
+    assert not (tmp_path / "missing").exists()
+
+
 def test_a_plain_trace_file_is_truncated(tmp_path: Path) -> None:
     old = tmp_path / "x.trace"
     old.write_text("old run\n")
