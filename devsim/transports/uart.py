@@ -64,7 +64,8 @@ def garble(data: bytes, sender: SerialSettings, receiver: SerialSettings) -> byt
     parity checks it and hands over a character with a parity error as NUL (what a POSIX port
     with ``INPCK`` delivers), so a 7E1 device never mistakes 8N1 ASCII for its own.  After the
     stop bit sample it looks for the next start bit (resynchronising at once after a framing
-    error, as a 16550 does).
+    error, as a 16550 does).  A side at 0 baud (a host that set B0, POSIX's hang-up) gets nothing
+    across either way.
 
     A faster sender squeezes several characters into one received character; a slower sender's
     single character is read as a character plus framing garbage.  With matching settings the
@@ -76,8 +77,8 @@ def garble(data: bytes, sender: SerialSettings, receiver: SerialSettings) -> byt
     if settings_match(sender, receiver):
         return bytes(data)
     tx_baud, rx_baud = int(sender.baudrate), int(receiver.baudrate)
-    if tx_baud <= 0 or rx_baud <= 0:
-        raise ValueError("baud rates must be positive")
+    if tx_baud <= 0 or rx_baud <= 0:  # B0: a hung-up port (or a rate a pty did not show): nothing gets across
+        return b""
     levels = _waveform(data, sender)
     half = 2 * rx_baud  # one sender half bit, in time units
     rx_bit = 4 * tx_baud  # one receiver bit, in time units

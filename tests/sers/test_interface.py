@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import logging
+import os
+import termios
+
 import pytest
 import serial
 
@@ -156,6 +160,31 @@ def test_baud_mismatch_garbles_and_is_reported(sers: Plant) -> None:
     host.ask("#\r")  # ends whatever half line the garbage left behind
     assert host.ask("#ON\r") == b"#ON\r\nok1\n\r"
     assert sers.runtime.state("sers")["line"]["mismatch"] is False
+
+
+def test_a_host_at_b0_hangs_up_and_gets_nothing_across(sers: Plant, caplog: pytest.LogCaptureFixture) -> None:
+    """B0, POSIX's hang-up, as the host's rate: the line reports 0 baud as a mismatch and the
+    device reads nothing; the simulator goes on.  (The host's bytes at 0 baud raised ValueError in
+    the pty's reader: asyncio logged the traceback and the chunk was lost to the trace too.)"""
+    port = sers.transport.address
+    sers.host.close()
+    fd = os.open(port, os.O_RDWR | os.O_NOCTTY)
+    try:
+        attrs = termios.tcgetattr(fd)
+        attrs[4] = attrs[5] = termios.B0
+        termios.tcsetattr(fd, termios.TCSANOW, attrs)
+        before = sers.runtime.state("sers")["line"]["bytes_in"]
+        with caplog.at_level(logging.ERROR):
+            os.write(fd, b"#ON\r")
+            sers.wait_received(before + 4)
+            line = sers.runtime.state("sers")["line"]  # (in the loop: after the chunk's callback ended)
+        assert line["mismatch"] is True and line["host"]["baudrate"] == 0
+        assert sers.read("energized") is False
+        assert [record.getMessage() for record in caplog.records if record.levelno >= logging.ERROR] == []
+    finally:
+        os.close(fd)
+    sers.host = Host(port)
+    assert sers.host.ask("#ON\r") == b"#ON\r\nok1\n\r"
 
 
 def test_raw_bytes_pass_the_pty_unchanged(sers: Plant) -> None:
