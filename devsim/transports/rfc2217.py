@@ -16,10 +16,11 @@ Open the port with pyserial as ``rfc2217://HOST:PORT`` (:attr:`Rfc2217Transport.
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Callable
 from typing import Any
 
-from serial.rfc2217 import PortManager
+from serial.rfc2217 import SET_BAUDRATE, SET_DATASIZE, SET_PARITY, SET_STOPSIZE, PortManager
 
 from devsim.core.device import SerialSettings
 from devsim.transports.base import Endpoint
@@ -109,6 +110,26 @@ class NegotiatedPort:
         """Purge request: nothing is buffered on this side."""
 
 
+#: RFC 2217's request for the current value of each line setting (the value 0), by command.
+_ASK_CURRENT = {SET_BAUDRATE: bytes(4), SET_DATASIZE: bytes(1), SET_PARITY: bytes(1), SET_STOPSIZE: bytes(1)}
+
+
+class _Manager(PortManager):
+    """pyserial's server side, safe from a client's malformed subnegotiation: a parity or stop
+    size code RFC 2217 does not define, a value cut short.  pyserial catches only ``ValueError``,
+    so these raised out of the telnet filter: the connection was dropped with a traceback, and
+    the filter's state was left inside the subnegotiation.  Such a setting is answered as RFC 2217
+    answers one the server does not take, with the current value; a mask cut short is ignored."""
+
+    def _telnet_process_subnegotiation(self, suboption: bytes) -> None:
+        try:
+            super()._telnet_process_subnegotiation(suboption)
+        except (KeyError, TypeError, struct.error):
+            current = _ASK_CURRENT.get(suboption[1:2])
+            if current is not None:
+                super()._telnet_process_subnegotiation(suboption[:2] + current)
+
+
 class _Client:
     """Per-client RFC 2217 state."""
 
@@ -119,7 +140,7 @@ class _Client:
         self.dirty = False
         self.reported: SerialSettings | None = None
         self.port = NegotiatedPort(initial, self._changed)
-        self.manager = PortManager(self.port, self)  # sends the initial option requests
+        self.manager = _Manager(self.port, self)  # sends the initial option requests
 
     def write(self, data: bytes) -> None:
         """PortManager's connection: Telnet replies go straight to the socket."""

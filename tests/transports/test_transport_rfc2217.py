@@ -76,3 +76,37 @@ async def test_frame_format_mismatch_reaches_the_line() -> None:
     finally:
         await transport.close()
         line.close()
+
+
+def _option(command: int, value: bytes) -> bytes:
+    """IAC SB COM-PORT-OPTION command value IAC SE (client to server)."""
+    return bytes([255, 250, 44, command]) + value.replace(b"\xff", b"\xff\xff") + bytes([255, 240])
+
+
+async def test_a_malformed_setting_is_answered_with_the_current_one(echo: Recorder) -> None:
+    """A parity or stop size code RFC 2217 does not define, values cut short, an empty mask: each
+    setting is answered with the current value and the connection goes on carrying data.  (pyserial's
+    server side raised KeyError or struct.error out of its telnet filter for these: the connection
+    was dropped with a traceback.)"""
+    transport = Rfc2217Transport()
+    await transport.start(echo)
+    try:
+        reader, writer = await asyncio.open_connection("127.0.0.1", transport.port)
+        writer.write(_option(3, b"\x09") + _option(4, b"\x09") + _option(1, b"\x00\x01") + _option(2, b"")
+                     + _option(10, b"") + _option(3, b"\x03") + b"#ON\r")  # (3: SET-PARITY 3, even: taken)
+        await writer.drain()
+        answers = b""
+        while b"#ON\r" not in answers:
+            chunk = await asyncio.wait_for(reader.read(4096), 5)
+            assert chunk, f"the server closed the connection after {answers!r}"
+            answers += chunk
+        # server replies (command + 100): parity 9 -> still none (1), stop size 9 -> still one (1),
+        # the baud rate cut short -> 9600, the data size cut short -> 8, then even parity (3)
+        replies = [answers[i + 3:answers.index(b"\xff\xf0", i)] for i in range(len(answers))
+                   if answers.startswith(b"\xff\xfa\x2c", i)]
+        assert replies == [b"\x67\x01", b"\x68\x01", b"\x65\x00\x00\x25\x80", b"\x66\x08", b"\x67\x03"]
+        assert echo.data == b"#ON\r" and echo.settings[-1] == SerialSettings(9600, 8, "E", 1)
+        writer.close()
+        await writer.wait_closed()
+    finally:
+        await transport.close()
