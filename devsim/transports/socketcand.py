@@ -16,7 +16,11 @@ import contextlib
 
 import can
 
-__all__ = ["SocketcandServer", "frame_text", "parse_send"]
+__all__ = ["SocketcandServer", "frame_text", "parse_send", "split_commands"]
+
+#: The longest text kept while a command's closing ``>`` has not come (a frame to send is about
+#: 40 characters): what came before it in a longer run is dropped, never stored or scanned again.
+_LONGEST = 4096
 
 
 def frame_text(message: can.Message) -> bytes:
@@ -39,6 +43,18 @@ def parse_send(text: str) -> can.Message | None:
     if len(data) != length or length > 8:
         return None
     return can.Message(arbitration_id=identifier, data=data, is_extended_id=len(parts[1]) > 3)
+
+
+def split_commands(buffer: str) -> tuple[list[str], str]:
+    """The whole ``< ... >`` commands in ``buffer`` (text before a ``<`` skipped) and the rest,
+    at most :data:`_LONGEST` characters of it."""
+    commands: list[str] = []
+    while ">" in buffer:
+        end = buffer.index(">") + 1
+        start = buffer.find("<")
+        commands.append(buffer[start:end] if 0 <= start < end else "")
+        buffer = buffer[end:]
+    return commands, buffer[-_LONGEST:]
 
 
 class SocketcandServer:
@@ -84,11 +100,8 @@ class SocketcandServer:
                 chunk = await reader.read(4096)
                 if not chunk:
                     return
-                buffer += chunk.decode("ascii", "replace")
-                while ">" in buffer:
-                    end = buffer.index(">") + 1
-                    start = buffer.find("<")
-                    command, buffer = buffer[start:end] if 0 <= start < end else "", buffer[end:]
+                commands, buffer = split_commands(buffer + chunk.decode("ascii", "replace"))
+                for command in commands:
                     words = command.strip("<> ").split()
                     if not raw:
                         if words[:1] == ["open"] and len(words) == 2:

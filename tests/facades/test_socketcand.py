@@ -15,7 +15,7 @@ import canopen
 
 from devsim.facades.canopen_node import CanopenFacade
 from devsim.runtime import Runtime
-from devsim.transports.socketcand import SocketcandServer, frame_text, parse_send
+from devsim.transports.socketcand import SocketcandServer, frame_text, parse_send, split_commands
 
 ROOT = Path(__file__).resolve().parents[2]
 MASTER = """
@@ -39,6 +39,16 @@ def test_the_protocol_texts() -> None:
     sent = parse_send("< send 605 4 40 0 10 0 >")
     assert sent is not None and sent.arbitration_id == 0x605 and bytes(sent.data) == bytes((0x40, 0, 0x10, 0))
     assert parse_send("< send 605 9 1 2 >") is None and parse_send("< hi >") is None
+
+
+def test_a_client_s_text_is_cut_into_commands_and_a_run_without_end_is_not_kept() -> None:
+    """A client that sends text without a closing ``>`` costs at most 4,096 characters (the server
+    kept all of it, and scanned all of it again for every chunk)."""
+    assert split_commands("junk< open can0 >< rawmode >< se") == (["< open can0 >", "< rawmode >"], "< se")
+    commands, rest = split_commands("x" * 1_000_000)
+    assert commands == [] and rest == "x" * 4096
+    assert split_commands(rest + "< send 605 0 >") == (["< send 605 0 >"], "")
+    assert split_commands("< open" + "x" * 5000) == ([], "x" * 4096)  # (a command that long is none)
 
 
 def test_canopen_master_in_another_process() -> None:
