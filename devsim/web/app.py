@@ -130,15 +130,21 @@ async def _telegrams(request: web.Request) -> web.Response:
     return web.json_response(found)
 
 
+async def _json_body(request: web.Request) -> Any:
+    """The request's JSON body, ``None`` when it is not JSON or nested too deep to decode (a
+    ``RecursionError``: it answered 500 with a traceback in the log)."""
+    try:
+        return await request.json()
+    except (ValueError, RecursionError):
+        return None
+
+
 async def _action(request: web.Request) -> web.Response:
     action = ACTIONS.get(request.match_info["action"])
     if action is None:
         return web.json_response({"error": f"no action {request.match_info['action'][:40]!r} (actions: "
                                   f"{', '.join(ACTIONS)})", "type": "BadRequest"}, status=404)
-    try:
-        body = await request.json()
-    except ValueError:
-        body = None
+    body = await _json_body(request)
     if not isinstance(body, dict):
         return web.json_response({"error": "the body: a JSON object", "type": "BadRequest"}, status=400)
     view = request.app[VIEW]
@@ -164,10 +170,7 @@ async def _scenario(request: web.Request) -> web.Response:
 
 async def _login(request: web.Request) -> web.Response:
     token = request.app[TOKEN]
-    try:
-        body = await request.json()
-    except ValueError:
-        body = {}
+    body = await _json_body(request)
     given = str(body.get("token", "")) if isinstance(body, dict) else ""
     if token is not None and not hmac.compare_digest(given.encode(), token.encode()):
         return web.json_response({"error": "wrong token", "type": "Unauthorized"}, status=401)

@@ -75,6 +75,18 @@ async def test_a_set_is_checked_as_ctl_set_checks_it_and_reaches_the_device(sim:
         assert answer(port, b"#1V?\r") == b"#1V?\rV=500U/min\n\r\nok1\n\r"
 
 
+async def test_a_body_that_is_no_json_object_is_a_bad_request(sim: WebSim) -> None:
+    """Not JSON, not an object, or nested deeper than the decoder goes (that one answered 500 and
+    logged a RecursionError's traceback): 400, and the page goes on."""
+    async with aiohttp.ClientSession(sim.url) as http:
+        for body in (b"{not json", b"[1]", b"[" * 100_000):
+            refused = await http.post("/api/devices/sers/set", data=body, headers={"Content-Type": "application/json"})
+            assert refused.status == 400, body[:10]
+            assert await refused.json() == {"error": "the body: a JSON object", "type": "BadRequest"}
+        assert (await http.post("/api/login", data=b"[" * 100_000, headers={"Content-Type": "application/json"})).status == 200
+        assert (await http.post("/api/devices/sers/set", json={"name": "param.V", "value": "500"})).status == 200
+
+
 async def test_faults_line_faults_and_power_cycle_go_to_the_device(sim: WebSim) -> None:
     async with aiohttp.ClientSession(sim.url) as http:
         assert (await http.post("/api/devices/sers/fault", json={"kind": "emergency_stop", "active": True})).status == 200
