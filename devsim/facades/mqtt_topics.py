@@ -86,7 +86,7 @@ def decode_value(payload: bytes, point_type: str | None = None) -> Any:
     text = payload.decode("utf-8", errors="replace").strip()
     try:
         value = json.loads(text)
-    except ValueError:
+    except (ValueError, RecursionError):  # (nested deeper than the decoder goes: text too)
         return text
     if point_type == "str" and not isinstance(value, str):
         return text

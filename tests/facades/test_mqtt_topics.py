@@ -61,6 +61,7 @@ def test_payloads_are_json_or_plain_text() -> None:
     assert decode_value(b"hello") == "hello"
     assert decode_value(b"42", "str") == "42"  # a text point gets the text it was sent
     assert decode_value(b'"42"', "str") == "42"
+    assert decode_value(b"[" * 100_000) == "[" * 100_000  # (a RecursionError went to the error topic)
 
 
 @pytest.mark.parametrize(("datatype", "value"), [

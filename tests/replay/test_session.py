@@ -66,6 +66,10 @@ def test_gms96_tolerances_ignore_the_checksum_and_the_frame_count_bit() -> None:
     # cut short, but not the last line: a damaged file, not a recording that ended
     ('{"format": "devsim-session", "kind": "sers"}\n{"t": 1, "dir": "ho\n{"t": 2, "dir": "host", "hex": "00"}',
      ":2: "),
+    # nested deeper than the decoder goes (a RecursionError's traceback before)
+    ("[" * 100_000 + "\n", ":1: not a devsim session"),
+    ('{"format": "devsim-session", "kind": "sers"}\n' + "[" * 100_000 + "\n" + '{"t": 2, "dir": "host", "hex": "00"}\n',
+     ":2: maximum recursion depth"),
 ])
 def test_a_bad_session_is_one_line_exit_bad_file(tmp_path: Path, content: str, message: str) -> None:
     path = tmp_path / "bad.devsim"

@@ -192,7 +192,7 @@ def load_session(path: str | Path) -> Session:
         raise SessionError(f"{path}: empty file (not a devsim session)")
     try:
         header = json.loads(lines[0])
-    except json.JSONDecodeError:
+    except (ValueError, RecursionError):
         header = None
     if not isinstance(header, dict) or header.get("format") != FORMAT:
         raise SessionError(f"{path}:1: not a devsim session (no {FORMAT!r} header)")
@@ -212,7 +212,7 @@ def load_session(path: str | Path) -> Session:
                 continue  # a settings line, or a newer version's record
             t = float(entry["t"])
             data = bytes.fromhex(entry["hex"])
-        except (ValueError, KeyError, TypeError) as exc:
+        except (ValueError, KeyError, TypeError, RecursionError) as exc:
             if number == cut:
                 torn = number
                 break  # the recording ends before this line
