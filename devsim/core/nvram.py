@@ -84,7 +84,7 @@ class NonVolatileMemory:
             except PoisonedMemory as exc:
                 self.close()
                 raise PoisonedMemory(f"{self.path}: {exc}; refusing to load it (fix or delete the file)") from None
-            except (OSError, ValueError):
+            except (OSError, ValueError, RecursionError):  # (nested deeper than the decoder goes)
                 # A file we cannot read is treated like an erased EEPROM; the device decides
                 # what that means (e.g. the SERS shows display '7').
                 self._image = {}

@@ -69,6 +69,18 @@ def test_nothing_non_finite_is_written(tmp_path: Path) -> None:
     assert json.loads((tmp_path / "drive.nvram.json").read_text()) == {"params": {"V": 1.5}, "speed": 7}
 
 
+@pytest.mark.parametrize("text", ["{not json", "[" * 100_000])
+def test_a_file_that_is_no_json_is_an_erased_memory(tmp_path: Path, text: str) -> None:
+    """Damaged or nested deeper than the decoder goes (that one raised RecursionError out of the
+    device's creation): the memory reads as erased, and the device decides what that means."""
+    (tmp_path / "drive.nvram.json").write_text(text)
+    memory = NonVolatileMemory.for_device(tmp_path, "drive")
+    try:
+        assert memory.corrupt and memory.sections() == []
+    finally:
+        memory.close()
+
+
 @pytest.mark.parametrize("name", ["../escaped", "a/b", ".hidden", "", "x" * 200])
 def test_names_stay_inside_the_state_dir(tmp_path: Path, name: str) -> None:
     with pytest.raises(ValueError, match="cannot name a file"):
