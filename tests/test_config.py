@@ -100,6 +100,14 @@ def test_yaml_syntax_error_line(tmp_path: Path) -> None:
     assert message.startswith(f"{path}:5: ")
 
 
+@pytest.mark.parametrize("text", ["autostart: " + "[" * 100_000, "autostart: " + "[" * 400 + "]" * 400,
+                                  "- " * 3000 + "x"])
+def test_yaml_nested_deeper_than_the_reader_goes(tmp_path: Path, text: str) -> None:
+    """PyYAML composes nested collections recursively: a RecursionError's traceback before."""
+    path = write(tmp_path, text + "\n")
+    assert error_of(path) == f"{path}: nested deeper than this reader goes"
+
+
 def test_unclosed_flow_sequence(tmp_path: Path) -> None:
     path = write(tmp_path, "options: [E50, IO\naddress: 2\n")
     assert error_of(path).startswith(f"{path}:2: ")

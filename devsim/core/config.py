@@ -140,6 +140,8 @@ def load_yaml(path: str | os.PathLike[str], text: str | None = None) -> Any:
         raise ConfigError(f"{name}:{line}: {problem}") from None
     except yaml.YAMLError as exc:
         raise ConfigError(f"{name}:1: {exc}") from None
+    except RecursionError:  # (PyYAML composes nested collections recursively)
+        raise ConfigError(f"{name}: nested deeper than this reader goes") from None
 
 
 def _locate(data: Any, loc: tuple[int | str, ...]) -> tuple[int, list[str]]:
