@@ -200,12 +200,12 @@ class PtyTransport(Transport):
         self._baseline: list | None = None
         self._touched = False
         self._reported: SerialSettings | None = None
+        #: The slave's termios as last seen or armed (an arm's own change signal is then no change).
         self._last_attrs: list | None = None
         self._checked_at = -1.0
         self._preset: SerialSettings | None = None
         self._frame_visible = True
         self._packet = False
-        self._armed: list | None = None
         #: Bytes dropped because nobody read them.
         self.dropped = 0
 
@@ -231,7 +231,7 @@ class PtyTransport(Transport):
             termios.tcsetattr(slave, termios.TCSANOW, attrs)
             if not self._frame_visible:
                 self._packet = _packet_mode(master)
-                self._armed = _arm(slave, termios.tcgetattr(slave), extproc=self._packet)
+                self._last_attrs = _arm(slave, termios.tcgetattr(slave), extproc=self._packet)
             self._baseline = termios.tcgetattr(slave)
             os.set_blocking(master, False)
             self.address = os.ttyname(slave)
@@ -298,8 +298,8 @@ class PtyTransport(Transport):
             attrs = None
         if attrs is not None and attrs == self._last_attrs:
             return
-        if attrs is not None and not self._frame_visible and self._slave is not None and attrs != self._armed:
-            self._armed = attrs = _arm(self._slave, attrs, extproc=self._packet)
+        if attrs is not None and not self._frame_visible and self._slave is not None:
+            attrs = _arm(self._slave, attrs, extproc=self._packet)
         self._last_attrs = attrs
         settings = self.host_settings()
         if settings is not None and settings != self._reported and self._endpoint is not None:
