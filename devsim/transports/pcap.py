@@ -214,7 +214,8 @@ class PcapTracer:
     :class:`~devsim.transports.trace.Tracer`.
 
     ``peers`` is asked, for every chunk, for the (host, device) addresses of the conversation
-    (``None``: not known, the invented ones are used); ``name`` picks the invented port."""
+    (``None``: not known, the invented ones are used); ``name`` picks the invented port; ``wait``:
+    a fifo's writes wait for its reader (:class:`~devsim.transports.trace.TraceFile`)."""
 
     def __init__(
         self,
@@ -222,13 +223,14 @@ class PcapTracer:
         *,
         peers: Callable[[], Peers | None] | None = None,
         name: str = "",
+        wait: bool = False,
     ) -> None:
         self.path = str(path)
         self._peers = peers
         port = invented_port(name or Path(self.path).stem)
         self._invented: Peers = ((INVENTED_HOST, port), (INVENTED_DEVICE, port))
         self._ident = 0
-        self._file = TraceFile(self.path, text=False, head=global_header())
+        self._file = TraceFile(self.path, text=False, head=global_header(), wait=wait)
 
     @property
     def closed(self) -> bool:
@@ -284,15 +286,16 @@ class SerialPcapTracer:
 
     ``protocol`` and ``port`` are the header's bytes (the port's capture tag); ``settings`` is
     asked, for every chunk, for the line settings of the moment (``None``: the trace has no line,
-    every setting "not known")."""
+    every setting "not known"); ``wait``: a fifo's writes wait for its reader
+    (:class:`~devsim.transports.trace.TraceFile`)."""
 
     def __init__(self, path: str | Path, *, protocol: int = 0, port: int = 0,
-                 settings: Callable[[], LineState] | None = None) -> None:
+                 settings: Callable[[], LineState] | None = None, wait: bool = False) -> None:
         self.path = str(path)
         self.protocol = protocol
         self.port = port
         self.settings = settings
-        self._file = TraceFile(self.path, text=False, head=global_header(LINKTYPE_USER0))
+        self._file = TraceFile(self.path, text=False, head=global_header(LINKTYPE_USER0), wait=wait)
 
     @property
     def closed(self) -> bool:

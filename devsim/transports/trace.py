@@ -30,12 +30,14 @@ from __future__ import annotations
 import errno
 import os
 import re
+import stat
 from collections.abc import Callable, Sequence
 from types import TracebackType
 from typing import IO, Any, Protocol
 
 import msgspec
 
+from devsim.core.backlog import Backlog
 from devsim.core.console import warn
 
 __all__ = ["Source", "TapSink", "TraceFile", "TraceSink", "Tracer", "create_trace_file", "parse_source_note",
@@ -136,36 +138,69 @@ class TraceFile:
     ends here``, ``what`` naming the file) says so, and the caller goes on as if the file had
     taken it, because what it records (a line, a model) must not stop for it.  A fifo whose
     reader has gone (``EPIPE``: Wireshark ends a capture) ends so too, without the line; the
-    writer learns it from :attr:`closed`."""
+    writer learns it from :attr:`closed`.
+
+    A fifo, pipe or terminal is written through a :class:`~devsim.core.backlog.Backlog`: a reader
+    that does not read (``less`` scrolled back, a terminal stopped with Ctrl-S) never makes a write
+    wait; what it has no room for is dropped whole, one line on stderr says so the first time, and
+    :attr:`dropped` tells the writer how many went (a text trace notes them).  A process whose only
+    job is to feed the reader (``devsim extcap`` feeding Wireshark) passes ``wait``: its writes wait."""
 
     def __init__(self, path: str | os.PathLike[str], *, text: bool = True, encoding: str = "ascii",
-                 newline: str | None = "\n", head: str | bytes = "", at_once: bool = True, what: str = "trace") -> None:
+                 newline: str | None = "\n", head: str | bytes = "", at_once: bool = True, what: str = "trace",
+                 wait: bool = False) -> None:
         self.path = os.fspath(path)
         self.what = what
         self.at_once = at_once
         fd = create_trace_file(self.path)
-        self._file: IO[Any] = open(fd, "w", encoding=encoding, newline=newline) if text else open(fd, "wb")  # noqa: SIM115
+        self._encoding = encoding if text else None
+        self._told = False
+        self._file: IO[Any] | Backlog
+        if wait or stat.S_ISREG(os.fstat(fd).st_mode):
+            self._file = open(fd, "w", encoding=encoding, newline=newline) if text else open(fd, "wb")  # noqa: SIM115
+        else:  # a fifo, a pipe, a terminal: its reader may not read (newline: "\n" on POSIX)
+            self._file = Backlog(fd, self._end)
         if head:
             try:
-                self._file.write(head)
-                self._file.flush()
+                self._put(head, flush=True)
             except OSError:
-                self._file.close()
+                self._close(patience=0)
                 raise
 
     @property
     def closed(self) -> bool:
         return self._file.closed
 
+    @property
+    def dropped(self) -> int:
+        """Writes dropped since the last one the file took: a fifo's, pipe's or terminal's reader did
+        not take them (always 0 for a regular file)."""
+        return self._file.dropped if isinstance(self._file, Backlog) else 0
+
     def write(self, data: str | bytes) -> None:
         if self._file.closed:
             return
         try:
-            self._file.write(data)
-            if self.at_once:
-                self._file.flush()
+            self._put(data, flush=self.at_once)
         except OSError as exc:
             self._end(exc)
+
+    def _put(self, data: str | bytes, flush: bool) -> None:
+        if not isinstance(self._file, Backlog):
+            self._file.write(data)
+            if flush:
+                self._file.flush()
+        elif not self._file.write(data.encode(self._encoding or "ascii") if isinstance(data, str) else data):
+            if not self._told:
+                self._told = True
+                warn(f"devsim: {self.what} {self.path}: its reader does not keep up; what it has no room for "
+                     "is dropped")
+
+    def _close(self, patience: float) -> None:
+        if isinstance(self._file, Backlog):
+            self._file.close(patience)
+        else:
+            self._file.close()
 
     def flush(self) -> None:
         self._guarded(self._file.flush)
@@ -184,7 +219,7 @@ class TraceFile:
         if not isinstance(exc, BrokenPipeError):  # (a fifo's reader gone: its end, and no news)
             warn(f"devsim: {self.what} {self.path}: {exc.strerror or exc}; it ends here")
         try:
-            self._file.close()
+            self._close(patience=0)
         except OSError:
             pass  # (the buffer's rest again: the descriptor is closed all the same)
 
@@ -209,14 +244,17 @@ class Tracer:
         line = f"{when:.6f} {direction} {data.hex(' ')} {render(data)}"
         if note:
             line += f"  ({note})"
-        self._write(line)
+        self._write(line, when)
 
     def note(self, text: str, when: float) -> None:
         """A non-data event."""
         if not self._file.closed:
-            self._write(f"{when:.6f} -- {text}")
+            self._write(f"{when:.6f} -- {text}", when)
 
-    def _write(self, line: str) -> None:
+    def _write(self, line: str, when: float) -> None:
+        lost = self._file.dropped  # (a fifo's reader that did not read: the trace says where)
+        if lost:
+            line = f"{when:.6f} -- {lost} line{'' if lost == 1 else 's'} dropped here: the trace's reader did not take them\n{line}"
         self._file.write(line + "\n")
 
     def close(self) -> None:

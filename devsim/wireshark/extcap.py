@@ -131,9 +131,9 @@ def capture(interface: Interface, fifo: str) -> int:
         tracer: Any
         if int(info["link"]) == LINKTYPE_USER0:
             tracer = SerialPcapTracer(fifo, protocol=int(info["protocol"]), port=int(info["port_byte"]),
-                                      settings=lambda: settings)
+                                      settings=lambda: settings, wait=True)
         else:
-            tracer = PcapTracer(fifo, name=interface.key)
+            tracer = PcapTracer(fifo, name=interface.key, wait=True)
         try:
             for item in stream:
                 if item.get("type") != "chunk":
