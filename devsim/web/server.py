@@ -12,10 +12,12 @@ simulator's process without its browsers ever holding up the simulator's loop.
 from __future__ import annotations
 
 import asyncio
+import logging
 import secrets
 import threading
 from typing import Any
 
+from devsim.core.console import warn
 from devsim.runtime.control import ControlAddress, ControlAddressError, parse_address
 
 __all__ = ["ListenAddress", "WebServer", "new_token", "parse_listen", "serve"]
@@ -45,9 +47,25 @@ def urls(address: ListenAddress, port: int, token: str | None) -> list[str]:
     return [f"web: {base}#token={token}", f"web token: {token}"]
 
 
+def _malformed_request(record: logging.LogRecord) -> bool:
+    """A request aiohttp cannot parse (a header it refuses, a port scanner's bytes) is answered 400
+    Bad Request, and aiohttp logs it with a traceback: one line says it instead."""
+    from aiohttp.http_exceptions import HttpProcessingError
+
+    exc = record.exc_info[1] if record.exc_info else None
+    if not isinstance(exc, HttpProcessingError) or exc.code != 400:
+        return True
+    what = (exc.message or "").strip().splitlines()[0].rstrip(":") if exc.message else "not HTTP"
+    remote = record.args[0] if isinstance(record.args, tuple) and record.args else "?"
+    warn(f"devsim web: a request from {remote} that is not HTTP as it should be ({what}): answered 400 Bad Request")
+    return False
+
+
 async def serve(control: str, listen: ListenAddress, token: str | None) -> tuple[Any, Any, int]:
     """Start the page's server in the running loop: its runner, the plant view and the bound port."""
     from aiohttp import web
+
+    logging.getLogger("aiohttp.server").addFilter(_malformed_request)
 
     from devsim.web.app import make_app
     from devsim.web.plant import PlantView

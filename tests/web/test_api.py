@@ -4,6 +4,7 @@ its WebSocket and its guards, driven by aiohttp's client; the device driven thro
 from __future__ import annotations
 
 import asyncio
+import socket
 import subprocess
 import sys
 import tempfile
@@ -85,6 +86,24 @@ async def test_a_body_that_is_no_json_object_is_a_bad_request(sim: WebSim) -> No
             assert await refused.json() == {"error": "the body: a JSON object", "type": "BadRequest"}
         assert (await http.post("/api/login", data=b"[" * 100_000, headers={"Content-Type": "application/json"})).status == 200
         assert (await http.post("/api/devices/sers/set", json={"name": "param.V", "value": "500"})).status == 200
+
+
+def test_a_request_that_is_not_http_is_refused_in_one_line(sim: WebSim) -> None:
+    """aiohttp answers a header it cannot parse with 400 and logged it with a traceback (a port
+    scanner's or a broken client's request filled the simulator's stderr): now one line says it."""
+    host, port = sim.url.split("//")[1].rstrip("/").rsplit(":", 1)
+    for _ in range(2):
+        with socket.create_connection((host, int(port)), timeout=10) as client:
+            client.sendall(b"GET / HTTP/1.1\r\nHost: x\r\nContent-Length: abc\r\n\r\n")
+            assert client.recv(4096).startswith(b"HTTP/1.0 400 Bad Request\r\n")
+    before: list[str] = []
+    told = sim.process.next_match(sim.process.err, lambda line: line.startswith("devsim web: "), 10, "the line",
+                                  keep=before)
+    assert told == ("devsim web: a request from 127.0.0.1 that is not HTTP as it should be (Invalid character in "
+                    "Content-Length): answered 400 Bad Request")
+    assert sim.process.next_match(sim.process.err, lambda line: line.startswith("devsim web: "), 10, "the line",
+                                  keep=before) == told
+    assert not any("Traceback" in line for line in before), before
 
 
 async def test_faults_line_faults_and_power_cycle_go_to_the_device(sim: WebSim) -> None:
