@@ -95,6 +95,7 @@ CASES: list[tuple[int, str, Case]] = [
     (exits.USAGE, "ctl: bad port", lambda f, a, b: ["ctl", "--control", "99999", "now"]),
     (exits.UNREACHABLE, "ctl: no simulator of that name", lambda f, a, b: ["ctl", "--control", "nowhere", "now"]),
     (exits.USAGE, "ctl: unknown command", lambda f, a, b: ["ctl", "--control", a, "jump"]),
+    (exits.USAGE, "monitor: output not a terminal", lambda f, a, b: ["monitor", "--control", a]),
     (exits.USAGE, "check: no argument", lambda f, a, b: ["check"]),
     (exits.USAGE, "scenario: bad option", lambda f, a, b: ["scenario", "run", str(f / "fails.yaml"), "--speed", "0"]),
     (exits.USAGE, "doc: unknown kind", lambda f, a, b: ["doc", "nokind"]),

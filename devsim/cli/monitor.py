@@ -3,6 +3,8 @@ control API of a running ``devsim run``, ``devsim up`` or real-time scenario."""
 
 from __future__ import annotations
 
+import sys
+
 import click
 
 from devsim.cli import exits
@@ -41,4 +43,7 @@ def monitor(addr: str | None, period: float) -> None:
         raise click.UsageError(f"--control: {exc}") from None
     except OSError as exc:
         raise exits.Unreachable(f"cannot connect to {addr}: {exc.strerror or exc}") from None
+    if not sys.stdout.isatty():  # (a pipe or a file would get the screen's escape codes)
+        raise click.UsageError("devsim monitor draws on a terminal, and its output is not one; "
+                               "'devsim ctl watch' prints the same changes and events as lines")
     app.run()
