@@ -1,14 +1,21 @@
-"""Output to a reader that may not read: a file a run writes as it goes (a trace, a motion log, a
-recorded session) that is a fifo, a pipe or a terminal (``--trace /dev/stdout | less``,
-``--trace >(grep ...)``, a fifo another program opened).
+"""Output to a reader that may not read, or not at once: a serving process's lines (its ports, its
+log) in a harness's pipe or on a terminal, and a file a run writes as it goes (a trace, a motion
+log, a recorded session) that is a fifo or a terminal.
 
-A write into a full pipe blocks, and the whole simulator with it: a trace fifo whose reader stopped
-reading froze ``devsim run sers`` after about 460 requests, and SIGTERM could not stop it.  So such
-a descriptor is written without waiting (:class:`Backlog`): what the reader has not taken yet waits,
-up to :data:`CAP` bytes, and goes out as the reader takes it (the running loop watches the
-descriptor while something waits, so a reader that reads late gets it without new traffic); a write
-that would overflow that is dropped whole and counted, so the reader gets whole writes only (whole
-trace lines, whole pcap records).  A regular file takes every write at once and never needs this.
+A write into a full pipe blocks, and the whole simulator with it: a harness that started
+``devsim run -v`` with ``stderr=PIPE`` and never read it stopped the simulator after about 400
+requests, a trace fifo whose reader stopped reading after about 460, and SIGTERM could not stop
+either.  Dropping what a full pipe does not take at once is no answer either: a harness that
+reads a big plant's port lines as they come is often a little behind, and lost some of them.
+
+So such a descriptor is written without waiting (:class:`Backlog`): what the reader has not taken
+yet waits, up to :data:`CAP` bytes, and goes out as the reader takes it (the running loop watches
+the descriptor while something waits, so a reader that reads late gets it without new output);
+only a write that would make more wait is dropped, whole and counted, so that the reader gets
+whole writes (whole lines, whole pcap records).  The descriptor is not made non-blocking (a
+terminal's or a pipe's is shared with the shell and the processes that started this one): a
+piece of at most ``PIPE_BUF`` bytes goes out only when ``poll`` says the descriptor takes it,
+which a pipe with a free page and a terminal not stopped (Ctrl-S) do without waiting.
 """
 
 from __future__ import annotations
@@ -21,27 +28,32 @@ from collections.abc import Callable
 
 __all__ = ["CAP", "Backlog"]
 
-#: Bytes that wait at most for a reader that does not read (a trace of a busy line: a few seconds).
+#: Bytes that wait at most for a reader (a 20,000-device plant's port lines; a busy line's trace
+#: for a few seconds).
 CAP = 1 << 20
+
+_PIECE = select.PIPE_BUF  # (a pipe's write of at most this much is atomic: it never waits for a part)
 
 
 class Backlog:
-    """Writes to descriptor ``fd`` (set non-blocking here) without ever waiting for its reader.
+    """Writes to descriptor ``fd`` without ever waiting for its reader.
 
     :meth:`write` sends what the reader takes now and keeps the rest; a write that would make more
     than ``cap`` bytes wait is dropped whole (:attr:`dropped` counts them since the last write that
     was taken).  An error of the descriptor (``EPIPE``: the reader has gone; ``EIO``) is raised by
-    :meth:`write`, or, for a write the loop finished later, handed to ``failed``."""
+    :meth:`write`, or, for a write the loop finished later, handed to ``failed``.  :meth:`settle`
+    gives the reader a last moment (the end of a run); :meth:`close` also closes ``fd``."""
 
     def __init__(self, fd: int, failed: Callable[[OSError], None], cap: int = CAP) -> None:
-        os.set_blocking(fd, False)
         self.fd = fd
         self.cap = cap
         self.dropped = 0
+        self.closed = False
         self._failed = failed
         self._waiting = bytearray()
+        self._poller = select.poll()
+        self._poller.register(fd, select.POLLOUT)
         self._loop: asyncio.AbstractEventLoop | None = None  # (watching fd while bytes wait)
-        self.closed = False
 
     @property
     def waiting(self) -> int:
@@ -69,30 +81,38 @@ class Backlog:
         """Send what waits and the reader takes now (never waits for it)."""
         if self._waiting:
             self._send_waiting()
+            self._watch()
 
-    def close(self, patience: float = 0.5) -> None:
-        """Give the reader up to ``patience`` seconds to take what waits, then close ``fd`` (what is
-        left is dropped; an error of the descriptor is raised after it is closed)."""
-        if self.closed:
-            return
-        self.closed = True
+    def settle(self, patience: float) -> None:
+        """Give the reader up to ``patience`` seconds to take what waits; what is left is dropped
+        (an error of the descriptor is raised)."""
         self._unwatch()
         try:
             deadline = time.monotonic() + patience
-            poller = select.poll()
-            poller.register(self.fd, select.POLLOUT)
             while self._waiting and (left := deadline - time.monotonic()) > 0:
-                if poller.poll(left * 1000):
+                if self._poller.poll(left * 1000):
                     self._send_waiting()
         finally:
             self._waiting.clear()
+
+    def close(self, patience: float = 0.5) -> None:
+        """:meth:`settle`, then close ``fd``."""
+        if self.closed:
+            return
+        self.closed = True
+        try:
+            self.settle(patience)
+        finally:
             os.close(self.fd)
 
     def _send(self, data: bytes | bytearray) -> int:
-        try:
-            return os.write(self.fd, data)
-        except BlockingIOError:
-            return 0
+        sent = 0
+        while sent < len(data) and self._poller.poll(0):
+            try:
+                sent += os.write(self.fd, data[sent:sent + _PIECE])
+            except BlockingIOError:  # (a descriptor someone else set non-blocking, filled meanwhile)
+                break
+        return sent
 
     def _send_waiting(self) -> None:
         del self._waiting[: self._send(self._waiting)]
@@ -103,9 +123,9 @@ class Backlog:
         elif self._loop is None:
             try:
                 loop = asyncio.get_running_loop()
-            except RuntimeError:  # (no loop in this thread: what waits goes with the next write)
-                return
-            loop.add_writer(self.fd, self._writable)
+                loop.add_writer(self.fd, self._writable)
+            except (RuntimeError, OSError):  # (no loop in this thread, or one that cannot watch
+                return  # this descriptor: what waits goes with the next write)
             self._loop = loop
 
     def _unwatch(self) -> None:

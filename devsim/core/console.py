@@ -13,9 +13,11 @@ Nor does a simulator wait for a reader that is there but does not read: a harnes
 with ``stderr=PIPE`` and never reads the pipe, a terminal stopped with Ctrl-S.  A write into a full
 pipe blocks, and the whole simulator with it, in the middle of a line from inside the model (with
 ``-v`` every telegram is logged: a pipe's 64 KiB were full after about 400 SERS requests, the host
-got no answer after that, and SIGTERM could not stop the process).  So :func:`say` first asks the
-descriptor whether it takes a line now (``poll``); a line it would not take is dropped and counted,
-and the next line that goes out says how many were lost before it.
+got no answer after that, and SIGTERM could not stop the process).  So :func:`say` writes
+through a :class:`~devsim.core.backlog.Backlog`: what the reader does not take now waits, up to
+1 MiB, and goes out as the reader takes it; only a line beyond that is dropped, and the next line
+that goes out says how many were lost before it.  (Dropping every line a full pipe did not take
+at once lost port lines of a 6,000-device plant to a harness that read them a little behind.)
 
 :func:`stop_on_signals`: Ctrl-C (SIGINT), SIGTERM and SIGHUP (the terminal that started it has
 closed) stop a serving process the same clean way: its motion log gets its last rows, its
@@ -25,6 +27,7 @@ control socket is removed.  Under ``nohup`` (SIGHUP ignored) the terminal's end 
 from __future__ import annotations
 
 import asyncio
+import atexit
 import os
 import select
 import signal
@@ -32,32 +35,81 @@ import sys
 from collections.abc import Callable
 from typing import TextIO
 
+from devsim.core.backlog import Backlog
+
 __all__ = ["say", "stop_on_signals", "to_null", "warn"]
 
 
-#: Lines dropped since the last that went out, per descriptor (a reader that did not read).
-_dropped: dict[int, int] = {}
+#: What waits for each descriptor's reader (:class:`~devsim.core.backlog.Backlog`), by descriptor,
+#: with the file it was made for (a descriptor closed and opened again is another file).
+_backlogs: dict[int, tuple[tuple[int, int], Backlog]] = {}
 
 
 def say(line: str, stream: TextIO | None = None) -> None:
-    """Print ``line`` to ``stream`` (default stdout) and flush; a stream nobody reads any more
-    is handed to the null device and the line is dropped, and so is a line a full pipe or a
-    stopped terminal would not take now (the next line that goes out counts them)."""
+    """Print ``line`` to ``stream`` (default stdout) without ever waiting for its reader: what a
+    full pipe or a stopped terminal does not take now waits, up to 1 MiB, and goes out as the
+    reader takes it; a line beyond that is dropped (the next line that goes out counts them).  A
+    stream nobody reads any more is handed to the null device."""
     out = sys.stdout if stream is None else stream
     fd = _descriptor(out)
-    if fd is not None:
-        if not _takes_a_line(fd):
-            _dropped[fd] = _dropped.get(fd, 0) + 1
-            return
-        lost = _dropped.pop(fd, 0)
-        if lost:
-            line = f"devsim: {lost} line{'' if lost == 1 else 's'} of output dropped here: nobody read them\n{line}"
+    if fd is None:
+        try:
+            print(line, file=out, flush=True)
+        except OSError:  # (BrokenPipeError: the reader has gone; EIO: its terminal has)
+            to_null(out)
+        return
+    backlog = _backlog(out, fd)
+    lost = backlog.dropped
+    if lost:
+        line = f"devsim: {lost} line{'' if lost == 1 else 's'} of output dropped here: nobody read them\n{line}"
     try:
-        print(line, file=out, flush=True)
-    except BlockingIOError:  # a full pipe set non-blocking by someone: the reader is slow, not gone
-        pass  # (what did not fit waits in the stream's buffer, or is dropped: the loop must not wait)
-    except OSError:  # (BrokenPipeError: the reader has gone; EIO: its terminal has)
-        to_null(out)
+        backlog.write((line + "\n").encode(out.encoding or "utf-8", "backslashreplace"))
+    except OSError:
+        _gone(out, fd)
+
+
+def _backlog(out: TextIO, fd: int) -> Backlog:
+    """The backlog of ``out``'s descriptor, made at its first line (what ``out`` holds goes first,
+    if it can go now)."""
+    try:
+        info = os.fstat(fd)
+        file = (info.st_dev, info.st_ino)
+    except OSError:
+        file = (-1, -1)
+    known = _backlogs.get(fd)
+    if known is not None:
+        if known[0] == file:
+            return known[1]
+        known[1].settle(0)  # (its file is gone: what waited for it too)
+    poller = select.poll()
+    poller.register(fd, select.POLLOUT)
+    if poller.poll(0):
+        try:
+            out.flush()
+        except OSError:
+            pass  # (the backlog's first write says which)
+    if not _backlogs:
+        atexit.register(_settle_all)
+    backlog = Backlog(fd, lambda _exc: _gone(out, fd))
+    _backlogs[fd] = (file, backlog)
+    return backlog
+
+
+def _gone(out: TextIO, fd: int) -> None:
+    """The reader has gone: later lines go to the null device, and what waited with them."""
+    known = _backlogs.pop(fd, None)
+    if known is not None:
+        known[1].settle(0)
+    to_null(out)
+
+
+def _settle_all(patience: float = 1.0) -> None:
+    """At the end of the run, each reader gets a moment to take what still waits for it."""
+    for fd, (_file, backlog) in list(_backlogs.items()):
+        try:
+            backlog.settle(patience)
+        except OSError:
+            _backlogs.pop(fd, None)
 
 
 def _descriptor(stream: TextIO) -> int | None:
@@ -65,14 +117,6 @@ def _descriptor(stream: TextIO) -> int | None:
         return stream.fileno()
     except (OSError, ValueError):  # (a stream without a descriptor, or closed: print decides)
         return None
-
-
-def _takes_a_line(fd: int) -> bool:
-    """Whether a write to ``fd`` would not block now (a pipe with a free page, a terminal not
-    stopped, any file); an error or hang-up counts as taking it: the write then says which."""
-    poller = select.poll()
-    poller.register(fd, select.POLLOUT)
-    return bool(poller.poll(0))
 
 
 def warn(line: str) -> None:

@@ -33,14 +33,12 @@ import re
 import stat
 from collections.abc import Callable, Sequence
 from types import TracebackType
-from typing import IO, TYPE_CHECKING, Any, Protocol
+from typing import IO, Any, Protocol
 
 import msgspec
 
+from devsim.core.backlog import Backlog
 from devsim.core.console import warn
-
-if TYPE_CHECKING:
-    from devsim.core.backlog import Backlog
 
 __all__ = ["Source", "TapSink", "TraceFile", "TraceSink", "Tracer", "create_trace_file", "parse_source_note",
            "render", "source_note"]
@@ -162,8 +160,6 @@ class TraceFile:
         if wait or stat.S_ISREG(os.fstat(fd).st_mode):
             self._file = open(fd, "w", encoding=encoding, newline=newline) if text else open(fd, "wb")  # noqa: SIM115
         else:  # a fifo, a pipe, a terminal: its reader may not read (newline: "\n" on POSIX)
-            from devsim.core.backlog import Backlog  # (at first use, not at every start: issue 31)
-
             self._file = self._pipe = Backlog(fd, self._end)
         if head:
             try:
