@@ -227,7 +227,12 @@ def _start_plant(kind: str, devices: int, workers: int, tmp: str) -> tuple[subpr
         for i in range(devices):
             fh.write(f"  - {{name: d{i}, kind: {kind}, transport: {{tcp: {{port: 0}}}}}}\n")
     proc = _spawn(["-m", "devsim", "up", plant, "--workers", str(workers)])
-    ports = _plant_ports(proc, devices)
+    try:
+        ports = _plant_ports(proc, devices)
+    except BaseException:
+        proc.kill()  # (its workers end with it: they watch their parent)
+        proc.wait()
+        raise
     # in the plant's order, device i at phase i: the workers print their ports one worker after
     # the other, and polling in that order would load each worker at twice the rate for half a period
     return proc, [ports[f"d{i}"] for i in range(devices)]
@@ -605,10 +610,15 @@ def main(argv: list[str] | None = None) -> int:
         print(f"pollers: {count} {'C (benchmarks/poller.c, cc -O2)' if binary else 'asyncio'} "
               f"process{'es' if count > 1 else ''}; plant of {size} {args.kind} devices", flush=True)
         plant, ports = _start_plant(args.kind, size, args.workers, tmp)
-        echoes = [_spawn([__file__, "--echo-servers", str(len(range(i, size, args.workers)))])
-                  for i in range(args.workers)]
-        # device i served by echo process i % workers, as devsim up deals devices out to its workers
-        shares = [json.loads(echo.stdout.readline()) for echo in echoes]  # type: ignore[union-attr]
+        echoes: list[subprocess.Popen[str]] = []
+        try:
+            echoes += [_spawn([__file__, "--echo-servers", str(len(range(i, size, args.workers)))])
+                       for i in range(args.workers)]
+            # device i served by echo process i % workers, as devsim up deals devices out to its workers
+            shares = [json.loads(echo.stdout.readline()) for echo in echoes]  # type: ignore[union-attr]
+        except BaseException:
+            _stop(plant, echoes)
+            raise
         echo_ports = [shares[i % args.workers][i // args.workers] for i in range(size)]
         pollers = _build_pollers(binary, count, tmp, args.rate, args.seconds)
 
@@ -625,12 +635,16 @@ def main(argv: list[str] | None = None) -> int:
         try:
             (_fixed if args.devices else _search)(args, run)
         finally:
-            plant.send_signal(signal.SIGINT)
-            for echo in echoes:
-                echo.kill()
-                echo.wait()
-            plant.wait(timeout=60)
+            _stop(plant, echoes)
     return 0
+
+
+def _stop(plant: subprocess.Popen[str], echoes: list[subprocess.Popen[str]]) -> None:
+    plant.send_signal(signal.SIGINT)
+    for echo in echoes:
+        echo.kill()
+        echo.wait()
+    plant.wait(timeout=60)
 
 
 if __name__ == "__main__":
