@@ -23,6 +23,7 @@ from __future__ import annotations
 import asyncio
 import os
 import select
+import threading
 import time
 from collections.abc import Callable
 
@@ -42,7 +43,8 @@ class Backlog:
     than ``cap`` bytes wait is dropped whole (:attr:`dropped` counts them since the last write that
     was taken).  An error of the descriptor (``EPIPE``: the reader has gone; ``EIO``) is raised by
     :meth:`write`, or, for a write the loop finished later, handed to ``failed``.  :meth:`settle`
-    gives the reader a last moment (the end of a run); :meth:`close` also closes ``fd``."""
+    gives the reader a last moment (the end of a run); :meth:`close` also closes ``fd``.  Threads
+    may share one (a log line from the web page's thread): each call holds its lock."""
 
     def __init__(self, fd: int, failed: Callable[[OSError], None], cap: int = CAP) -> None:
         self.fd = fd
@@ -54,6 +56,7 @@ class Backlog:
         self._poller = select.poll()
         self._poller.register(fd, select.POLLOUT)
         self._loop: asyncio.AbstractEventLoop | None = None  # (watching fd while bytes wait)
+        self._lock = threading.RLock()
 
     @property
     def waiting(self) -> int:
@@ -62,6 +65,10 @@ class Backlog:
 
     def write(self, data: bytes) -> bool:
         """Send ``data`` or keep it to send; False when it was dropped (no room) or ``fd`` is closed."""
+        with self._lock:
+            return self._write(data)
+
+    def _write(self, data: bytes) -> bool:
         if self.closed:
             return False
         if self._waiting:
@@ -79,21 +86,23 @@ class Backlog:
 
     def flush(self) -> None:
         """Send what waits and the reader takes now (never waits for it)."""
-        if self._waiting:
-            self._send_waiting()
-            self._watch()
+        with self._lock:
+            if self._waiting:
+                self._send_waiting()
+                self._watch()
 
     def settle(self, patience: float) -> None:
         """Give the reader up to ``patience`` seconds to take what waits; what is left is dropped
         (an error of the descriptor is raised)."""
-        self._unwatch()
-        try:
-            deadline = time.monotonic() + patience
-            while self._waiting and (left := deadline - time.monotonic()) > 0:
-                if self._poller.poll(left * 1000):
-                    self._send_waiting()
-        finally:
-            self._waiting.clear()
+        with self._lock:
+            self._unwatch()
+            try:
+                deadline = time.monotonic() + patience
+                while self._waiting and (left := deadline - time.monotonic()) > 0:
+                    if self._poller.poll(left * 1000):
+                        self._send_waiting()
+            finally:
+                self._waiting.clear()
 
     def close(self, patience: float = 0.5) -> None:
         """:meth:`settle`, then close ``fd``."""
@@ -129,15 +138,27 @@ class Backlog:
             self._loop = loop
 
     def _unwatch(self) -> None:
-        if self._loop is not None:
-            self._loop.remove_writer(self.fd)
-            self._loop = None
+        loop, self._loop = self._loop, None
+        if loop is None or loop.is_closed():
+            return
+        try:
+            here = asyncio.get_running_loop()
+        except RuntimeError:
+            here = None
+        if here is loop:
+            loop.remove_writer(self.fd)
+        else:  # (another thread's loop watches: it is told, not touched)
+            try:
+                loop.call_soon_threadsafe(loop.remove_writer, self.fd)
+            except RuntimeError:  # (it closed meanwhile)
+                pass
 
     def _writable(self) -> None:
-        try:
-            self._send_waiting()
-        except OSError as exc:
-            self._unwatch()
-            self._failed(exc)
-            return
-        self._watch()
+        with self._lock:
+            try:
+                self._send_waiting()
+            except OSError as exc:
+                self._unwatch()
+                self._failed(exc)
+                return
+            self._watch()
