@@ -226,6 +226,30 @@ def test_the_terminal_closing_stops_a_simulator_cleanly_unless_nohup(tmp_path: P
     assert float(rows[-1]["position"]) == 3200.0
 
 
+@pytest.mark.parametrize("closed", [1, 2])
+def test_a_simulator_started_with_its_output_closed_serves(tmp_path: Path, closed: int) -> None:
+    """`devsim run sers --pty >&-` (or `2>&-`): Python then has no sys.stdout (sys.stderr); the
+    port line raised AttributeError and the simulator ended with a traceback before it served."""
+    address = f"unix:{tmp_path}/c.sock"
+    start = (f"import os, sys\nos.close({closed})\n"
+             "os.execv(sys.executable, [sys.executable, '-m', 'devsim', *sys.argv[1:]])\n")
+    proc = subprocess.Popen([sys.executable, "-c", start, "run", "sers", "--pty", "--virtual", "--control", address],
+                            cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL,
+                            stdout=subprocess.PIPE if closed == 2 else None, stderr=subprocess.PIPE if closed == 1 else None)
+    try:
+        wait_until(lambda: Path(f"{tmp_path}/c.sock").exists() or proc.poll() is not None, "the control socket", 30)
+        assert proc.poll() is None, proc.communicate()
+        assert ctl(address, "advance", "2.1") == "ok, time 2.1 s\n"  # the power-on ends, "ready" to nobody
+        assert ctl(address, "read", "sers", "booting").split()[-1] == "false"
+    finally:
+        status = stop(proc, timeout=15)
+    assert status == 0
+    if closed == 2:  # what goes to stderr goes nowhere, not to stdout
+        assert proc.stdout is not None
+        lines = proc.stdout.read().decode().splitlines()
+        assert lines[0].startswith("sers: pty /dev/") and lines[1:] == [f"control: {address}", "sers: ready"]
+
+
 def test_a_command_whose_reader_goes_away_ends_quietly_with_1() -> None:
     """`devsim list | head -1`: click ends a command on EPIPE with status 1 and nothing on stderr
     (docs/cli.md, FAILED)."""

@@ -50,7 +50,12 @@ def say(line: str, stream: TextIO | None = None) -> None:
     full pipe or a stopped terminal does not take now waits, up to 1 MiB, and goes out as the
     reader takes it; a line beyond that is dropped (the next line that goes out counts them).  A
     stream nobody reads any more is handed to the null device."""
-    out = sys.stdout if stream is None else stream
+    _put(line, sys.stdout if stream is None else stream)
+
+
+def _put(line: str, out: TextIO | None) -> None:
+    if out is None:  # (started with the descriptor closed, `devsim run ... >&-`: nowhere to print)
+        return
     fd = _descriptor(out)
     if fd is None:
         try:
@@ -120,8 +125,8 @@ def _descriptor(stream: TextIO) -> int | None:
 
 
 def warn(line: str) -> None:
-    """:func:`say` on stderr."""
-    say(line, sys.stderr)
+    """:func:`say` on stderr (nowhere when the process has none: not on stdout)."""
+    _put(line, sys.stderr)
 
 
 def to_null(stream: TextIO) -> None:
