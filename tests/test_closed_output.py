@@ -250,6 +250,16 @@ def test_a_simulator_started_with_its_output_closed_serves(tmp_path: Path, close
         assert lines[0].startswith("sers: pty /dev/") and lines[1:] == [f"control: {address}", "sers: ready"]
 
 
+def test_a_scenario_run_with_stderr_closed_reports_its_result() -> None:
+    """`devsim scenario run FILE 2>&-`: the progress has no stderr to go to (it raised
+    AttributeError, and the run ended with 1 and no word)."""
+    start = "import os, sys\nos.close(2)\nos.execv(sys.executable, [sys.executable, '-m', 'devsim', *sys.argv[1:]])\n"
+    done = subprocess.run([sys.executable, "-c", start, "scenario", "run", "scenarios/gms96/power_on_status.yaml"],
+                          cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, text=True,
+                          timeout=60)
+    assert done.returncode == 0 and done.stdout.splitlines()[-1].startswith("PASSED: 14 of 14 checks passed")
+
+
 def test_a_command_whose_reader_goes_away_ends_quietly_with_1() -> None:
     """`devsim list | head -1`: click ends a command on EPIPE with status 1 and nothing on stderr
     (docs/cli.md, FAILED)."""

@@ -9,6 +9,7 @@ the step lines, and ``[2/5] FILE`` before each file of a run over several.
 
 from __future__ import annotations
 
+import os
 import sys
 import threading
 import time
@@ -29,7 +30,8 @@ class Progress:
     """Shows the run of ``files`` scenario files on ``stream`` (a terminal or not)."""
 
     def __init__(self, files: int, stream: TextIO | None = None, tty: bool | None = None) -> None:
-        self.stream = stream if stream is not None else sys.stderr
+        # (a process started with stderr closed, `2>&-`, has none: the progress goes nowhere)
+        self.stream = stream if stream is not None else sys.stderr or open(os.devnull, "w")  # noqa: SIM115
         self.tty = self.stream.isatty() if tty is None else tty
         self.files = files
         self.index = 0

@@ -20,11 +20,10 @@ from __future__ import annotations
 import errno
 import os
 import socket
-import sys
 import time
 from typing import Any
 
-from devsim.core.console import say
+from devsim.core.console import say, warn
 
 __all__ = [
     "OUT_OF_FDS",
@@ -98,7 +97,10 @@ def report(cause: str, text: str, *, stream: Any = None) -> bool:
     repeats = _REPORTS.repeats.pop(cause, 0)
     _REPORTS.last[cause] = now
     extra = f" ({repeats} more since the last report)" if repeats else ""
-    say(f"devsim: {text}{extra}", stream or sys.stderr)
+    if stream is None:
+        warn(f"devsim: {text}{extra}")
+    else:
+        say(f"devsim: {text}{extra}", stream)
     return True
 
 
