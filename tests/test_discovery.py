@@ -188,6 +188,32 @@ def test_without_xdg_the_runtime_dir_is_named_with_the_uid(monkeypatch: pytest.M
         shutil.rmtree(base, ignore_errors=True)
 
 
+@pytest.mark.parametrize("xdg", ["gone", "another user's"])
+def test_an_xdg_runtime_dir_not_yours_is_as_none(monkeypatch: pytest.MonkeyPatch, xdg: str) -> None:
+    """After `su` the variable may name the first user's directory, or one that is gone: the
+    simulator and its clients use devsim-UID in TMPDIR, as without it (before: status 6)."""
+    base = Path(tempfile.mkdtemp(prefix="ds"))
+    monkeypatch.setenv("TMPDIR", str(base))
+    if xdg == "gone":
+        monkeypatch.setenv("XDG_RUNTIME_DIR", "/nonexistent/run/user/1000")
+    elif os.getuid() != 0:
+        monkeypatch.setenv("XDG_RUNTIME_DIR", "/")  # (root's)
+    else:  # (root may enter every directory: one of nobody's)
+        (base / "other").mkdir(mode=0o700)
+        os.chown(base / "other", 65534, 65534)
+        monkeypatch.setenv("XDG_RUNTIME_DIR", str(base / "other"))
+    try:
+        sim, address, _ = start("run", "sers", "--pty")
+        try:
+            assert address == f"unix:{base}/devsim-{os.getuid()}/sers-{sim.proc.pid}.sock"
+            (info,) = json.loads(devsim("ps", "--json").stdout)  # the clients look there too
+            assert info["pid"] == sim.proc.pid
+        finally:
+            assert sim.interrupt() == 0
+    finally:
+        shutil.rmtree(base, ignore_errors=True)
+
+
 def test_up_names_its_socket_after_the_plant_inside_the_dir(runtime: Path, tmp_path: Path) -> None:
     plant = tmp_path / "plant.yaml"
     plant.write_text("name: ../../line 7\ndevices:\n  - {name: x, kind: sers, config: {boot_time: 0}}\n")

@@ -2,7 +2,9 @@
 the user's own (``devsim run`` and ``devsim up`` open one unless told otherwise), and what
 ``devsim ps``, ``devsim ctl`` and ``devsim monitor`` make of them.
 
-* The directory is ``$XDG_RUNTIME_DIR/devsim``, else ``devsim-UID`` in ``$TMPDIR`` (``/tmp``).
+* The directory is ``$XDG_RUNTIME_DIR/devsim``, else ``devsim-UID`` in ``$TMPDIR`` (``/tmp``);
+  also when ``$XDG_RUNTIME_DIR`` is no directory of the user's (one left from the session ``su``
+  came from).
   It is made with mode 0700 and used only while it is a real directory (not a symlink), owned
   by the user, that nobody else may enter: a control socket can move machinery.
 * A process's socket is ``NAME-PID.sock``, NAME the simulator's (the kind of ``devsim run``, the
@@ -96,7 +98,7 @@ def _runtime_dir(create: bool) -> str:
     """:func:`runtime_dir` as text, the way :class:`pathlib.Path` spells it (``devsim run``
     finds its socket's place without importing pathlib)."""
     xdg = os.environ.get("XDG_RUNTIME_DIR", "")
-    if os.path.isabs(xdg):
+    if os.path.isabs(xdg) and _yours(xdg):
         path = _posix_path(f"{xdg}/devsim")
     else:
         path = _posix_path(f"{os.environ.get('TMPDIR') or '/tmp'}/devsim-{os.getuid()}")
@@ -122,6 +124,17 @@ def _runtime_dir(create: bool) -> str:
         raise RuntimeDirError(f"the runtime directory {path} is open to others (mode "
                               f"{stat.S_IMODE(info.st_mode):o}); chmod 700 it")
     return path
+
+
+def _yours(directory: str) -> bool:
+    """Whether ``directory`` is a directory of this user's: a ``$XDG_RUNTIME_DIR`` that is gone
+    or another user's (left from the session ``su`` or ``sudo -u`` came from) is not used, as
+    if it were not set."""
+    try:
+        info = os.stat(directory)
+    except OSError:
+        return False
+    return stat.S_ISDIR(info.st_mode) and info.st_uid == os.getuid()
 
 
 def _posix_path(text: str) -> str:
