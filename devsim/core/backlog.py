@@ -58,6 +58,10 @@ class Backlog:
         self._loop: asyncio.AbstractEventLoop | None = None  # (watching fd while bytes wait)
         self._lock = threading.RLock()
 
+    def takes_now(self) -> bool:
+        """Whether the descriptor takes a write now (a pipe with a free page, a terminal not stopped)."""
+        return bool(self._poller.poll(0))
+
     @property
     def waiting(self) -> int:
         """Bytes written but not yet taken by the reader."""
@@ -116,7 +120,7 @@ class Backlog:
 
     def _send(self, data: bytes | bytearray) -> int:
         sent = 0
-        while sent < len(data) and self._poller.poll(0):
+        while sent < len(data) and self.takes_now():
             try:
                 sent += os.write(self.fd, data[sent:sent + _PIECE])
             except BlockingIOError:  # (a descriptor someone else set non-blocking, filled meanwhile)

@@ -29,7 +29,6 @@ from __future__ import annotations
 import asyncio
 import atexit
 import os
-import select
 import signal
 import sys
 from collections.abc import Callable
@@ -86,16 +85,14 @@ def _backlog(out: TextIO, fd: int) -> Backlog:
         if known[0] == file:
             return known[1]
         known[1].settle(0)  # (its file is gone: what waited for it too)
-    poller = select.poll()
-    poller.register(fd, select.POLLOUT)
-    if poller.poll(0):
+    backlog = Backlog(fd, lambda _exc: _gone(out, fd))
+    if backlog.takes_now():
         try:
             out.flush()
         except OSError:
             pass  # (the backlog's first write says which)
     if not _backlogs:
         atexit.register(_settle_all)
-    backlog = Backlog(fd, lambda _exc: _gone(out, fd))
     _backlogs[fd] = (file, backlog)
     return backlog
 

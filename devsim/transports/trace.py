@@ -156,11 +156,10 @@ class TraceFile:
         self._encoding = encoding if text else None
         self._told = False
         self._file: IO[Any] | Backlog
-        self._pipe: Backlog | None = None
         if wait or stat.S_ISREG(os.fstat(fd).st_mode):
             self._file = open(fd, "w", encoding=encoding, newline=newline) if text else open(fd, "wb")  # noqa: SIM115
         else:  # a fifo, a pipe, a terminal: its reader may not read (newline: "\n" on POSIX)
-            self._file = self._pipe = Backlog(fd, self._end)
+            self._file = Backlog(fd, self._end)
         if head:
             try:
                 self._put(head, flush=True)
@@ -176,7 +175,7 @@ class TraceFile:
     def dropped(self) -> int:
         """Writes dropped since the last one the file took: a fifo's, pipe's or terminal's reader did
         not take them (always 0 for a regular file)."""
-        return 0 if self._pipe is None else self._pipe.dropped
+        return self._file.dropped if isinstance(self._file, Backlog) else 0
 
     def write(self, data: str | bytes) -> None:
         if self._file.closed:
@@ -187,19 +186,19 @@ class TraceFile:
             self._end(exc)
 
     def _put(self, data: str | bytes, flush: bool) -> None:
-        if self._pipe is None:
+        if not isinstance(self._file, Backlog):
             self._file.write(data)
             if flush:
                 self._file.flush()
-        elif not self._pipe.write(data.encode(self._encoding or "ascii") if isinstance(data, str) else data):
+        elif not self._file.write(data.encode(self._encoding or "ascii") if isinstance(data, str) else data):
             if not self._told:
                 self._told = True
                 warn(f"devsim: {self.what} {self.path}: its reader does not keep up; what it has no room for "
                      "is dropped")
 
     def _close(self, patience: float) -> None:
-        if self._pipe is not None:
-            self._pipe.close(patience)
+        if isinstance(self._file, Backlog):
+            self._file.close(patience)
         else:
             self._file.close()
 
