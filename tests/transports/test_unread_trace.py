@@ -15,6 +15,7 @@ import select
 import struct
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import pytest
@@ -156,3 +157,38 @@ def test_a_backlog_whose_reader_goes_tells_its_owner() -> None:
 
     asyncio.run(write_then_close_the_reader())
     assert [type(f) for f in failures] == [BrokenPipeError]
+
+
+def test_threads_sharing_a_backlog_each_get_every_line_out_once_and_whole() -> None:
+    """A log line may come from the web page's thread while the loop's thread writes: with a
+    reader slower than the writers, bytes wait, and each thread's write sends what waits first.
+    Every line reaches the reader once, whole, and each thread's lines in their order."""
+    read_end, write_end = os.pipe()
+    failures: list[OSError] = []
+    backlog = Backlog(write_end, failures.append, cap=1 << 30)  # (nothing dropped: every line must arrive)
+    writers, lines = 4, 5_000
+    got = bytearray()
+
+    def reader() -> None:
+        while chunk := os.read(read_end, 1000):  # (small reads: the pipe stays nearly full)
+            got.extend(chunk)
+
+    def writer(number: int) -> None:
+        for line in range(lines):
+            assert backlog.write(f"{number} {line:05d} {'.' * 40}\n".encode())
+
+    reading = threading.Thread(target=reader)
+    reading.start()
+    threads = [threading.Thread(target=writer, args=(n,)) for n in range(writers)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    backlog.close(patience=30)
+    reading.join(30)
+    os.close(read_end)
+    received = got.decode().splitlines()
+    assert not failures and len(received) == writers * lines
+    for number in range(writers):
+        mine = [line for line in received if line.startswith(f"{number} ")]
+        assert mine == [f"{number} {line:05d} {'.' * 40}" for line in range(lines)]
