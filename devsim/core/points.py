@@ -90,8 +90,9 @@ def parse_bool(value: Any) -> bool:
 
 
 def finite(value: Any) -> float:
-    """A finite float from a number or a numeric string; NaN, ±inf and overflow are refused."""
-    if isinstance(value, bool):
+    """A finite float from a number or a numeric string in ASCII (Python's ``float`` also reads the
+    digits of other scripts, which no device's wire takes); NaN, ±inf and overflow are refused."""
+    if isinstance(value, bool) or (isinstance(value, str) and not value.isascii()):  # (digits of other scripts)
         raise BadValue(f"expects a number, not {_show(value)}")
     try:
         number = float(value)
@@ -105,7 +106,7 @@ def finite(value: Any) -> float:
 def _parse_int(value: Any) -> int:
     if isinstance(value, int) and not isinstance(value, bool):
         return value
-    if isinstance(value, str):
+    if isinstance(value, str) and value.isascii():
         text = value.strip()
         try:
             return int(text, 0)

@@ -74,6 +74,7 @@ def test_finite_numbers_and_refusals() -> None:
         ("nan", "expects a finite number, not 'nan'"),
         (math.inf, "expects a finite number, not inf"),
         ("-inf", "expects a finite number, not '-inf'"),
+        ("\u0663", "expects a number, not '\u0663'"),  # an Arabic-Indic three, which float() reads as 3
     ]:
         with pytest.raises(BadValue) as err:
             finite(value)
@@ -94,6 +95,8 @@ def test_whole_numbers() -> None:
     assert str(err.value) == "expects a whole number, not '3.5'"
     with pytest.raises(BadValue, match="expects a number, not True"):
         parse_as("int", True)
+    with pytest.raises(BadValue, match="expects a number"):
+        parse_as("int", "\u0661\u0662")  # Arabic-Indic digits, which int() reads as 12
 
 
 def test_each_kind() -> None:
