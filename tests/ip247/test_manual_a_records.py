@@ -191,3 +191,29 @@ def test_deleting_frees_memory_unless_a_program_runs(mod: Module) -> None:
     assert mod.client.delete_record(4, 23, 3)[4] == 0  # compacts, closing the gap too
     assert mod.store(200, big.format(200))[4] == 0
     assert mod.store(201, big.format(201))[4] == 0
+
+
+@pytest.mark.manual("§4.3.18", "the PG may overwrite a program after asking ('Verfahrprogramm überschreiben ?'): "
+                    "the old one is deleted and the new one stored in one step (spec §3.6.6)")
+def test_an_overwrite_that_does_not_fit_keeps_the_old_program(mod: Module) -> None:
+    def program(number: int) -> bytes:  # BA69 over the PG: the record as stored
+        return mod.client.read_record(1, 69, number)[8:]
+
+    def words(number: int, text: str) -> bytes:
+        record = lang.record_words(number, text)
+        return struct.pack(f">{len(record)}H", *record)
+
+    block = "N1 G04 F1" + " " * 39 + "\n"
+    big = "%{:3d}\n" + block * 19 + "N2 M02\n"
+    old, fits = "%  5\nN1 M02\n", "%  5\nN1 G04 F2\nN2 M02\n"
+    assert mod.store(5, old)[4] == 0
+    number = 10
+    while mod.store(number, big.format(number))[4] == 0:  # fill the 6000 characters
+        number += 1
+    assert mod.store(number, big.format(number))[4] == 24
+    directory = mod.client.read_record(0, 65)[8:]  # BA65: number and length of each, in storage order
+    larger = big.format(5) + block * 2  # more than program 5 and the room left together
+    assert mod.write(4, 22, 5, lang.record_words(5, larger), flags=1)[4] == 24
+    assert mod.client.read_record(0, 65)[8:] == directory and program(5) == words(5, old)  # as it was
+    assert mod.write(4, 22, 5, lang.record_words(5, fits), flags=1)[4] == 0
+    assert program(5) == words(5, fits)

@@ -159,8 +159,9 @@ class DataChannel:
         store = self.programs.store
         try:
             if overwrite and store.get(db) is not None:
-                store.delete(db, executing=self.programs.executing())
-            store.add(Stored(db, text, error, faulty), from_plc=from_plc)
+                store.replace(Stored(db, text, error, faulty), executing=self.programs.executing())
+            else:
+                store.add(Stored(db, text, error, faulty), from_plc=from_plc)
         except StoreError as exc:
             self.pages.set_error(None, exc.error)
             return ACK_ACCEPTED, [0, 0]

@@ -59,6 +59,18 @@ class ProgramStore:
             raise StoreError(24)
         self.programs.append(program)
 
+    def replace(self, program: Stored, *, executing: set[int]) -> None:
+        """BA22 from the PG with overwrite allowed (spec §3.6.6): the old program of that number is
+        deleted and the new one stored in one step; when the new one cannot be stored (no room:
+        24), neither happens and the old one stays."""
+        before = (list(self.programs), self.gaps)
+        try:
+            self.delete(program.number, executing=executing)
+            self.add(program, from_plc=False)
+        except StoreError:
+            self.programs, self.gaps = before
+            raise
+
     def delete(self, number: int, *, executing: set[int]) -> int:
         """BA23: 0, or 61 when the program only left the directory (another one executes)."""
         program = self.get(number)
