@@ -122,11 +122,15 @@ def test_anything_but_dle_ack_abandons_the_transaction(state: str, byte: int, af
 
 @settings(max_examples=100, deadline=None)
 @given(hs.integers(0, 255).filter(lambda b: b not in (DLE, EOT)))
-def test_a_single_dle_inside_the_parameters_abandons(byte: int) -> None:
+def test_a_single_dle_inside_the_parameters_is_refused_at_the_blocks_end(byte: int) -> None:
+    """Spec §3.6.5: an undoubled DLE followed by an unexpected byte gets DLE NAK at the next
+    acknowledgement point (the parameter block's DLE EOT); nothing is executed."""
     link, calls = _link(None)
     link.feed(b"\x02\x61\x10\x06\x10\x06AB")
-    assert link.feed(bytes((DLE, byte))) == [] and not link.busy and calls == []
-    assert link.events == ["abandoned: a single DLE inside the parameters"]
+    assert link.feed(bytes((DLE, byte))) == [] and link.busy
+    assert link.feed(b"CD\x10\x10E\x10\x04") == [b"\x10\x15"] and not link.busy and calls == []
+    assert link.events == ["refused_parameters: a single DLE inside the parameters"]
+    assert b"".join(link.feed(b"\x02")) == b"\x10\x06"  # the next transaction opens
 
 
 def test_the_timeout_abandons_only_a_transaction() -> None:

@@ -51,6 +51,19 @@ def test_vector_f_unknown_function_is_refused(module: Any) -> None:
         assert client.transaction(0x64, bytes((4, 0x46, 0, 0)))[8:14] == b"IP247 "  # type: ignore[index]
 
 
+def test_a_single_dle_inside_the_parameters_is_refused_at_dle_eot(module: Any) -> None:
+    """Spec §3.6.5: an undoubled DLE followed by an unexpected byte gets DLE NAK at the next
+    acknowledgement point, the block's DLE EOT; nothing is executed, and the next transaction works."""
+    with pg(module) as port:
+        for sent, expected in [("02", "10 06"), ("64", "02"), ("10 06", "16 10 03")]:
+            port.write(bytes.fromhex(sent))
+            assert port.read(len(bytes.fromhex(expected))) == bytes.fromhex(expected), f"after {sent}"
+        port.write(bytes.fromhex("10 06 04 46 10 41 00 10 04"))  # "10 41": neither a doubled DLE nor DLE EOT
+        assert port.read(2) == b"\x10\x15"
+        client = PgClient(port)
+        assert client.transaction(0x64, bytes((4, 0x46, 0, 0)))[8:14] == b"IP247 "  # type: ignore[index]
+
+
 def test_vector_b_and_a_program_through_the_client(module: Any) -> None:
     """§3.6.7 (b): machine data, reference set, program 5, then BA8 Start; the program runs on
     the device clock to its end."""

@@ -73,8 +73,9 @@ class As511Link:
 
     ``known(fn)`` says whether a function code exists (else DLE NAK right after it);
     ``service(fn, parameters)`` carries it out once the parameters are complete; a parameter block
-    longer than ``most`` bytes (after DLE removal) gets DLE NAK instead, at its DLE EOT, and
-    nothing is executed (spec §3.6.5); the bytes beyond are not kept.  ``events``
+    longer than ``most`` bytes (after DLE removal), or one with a single DLE followed by anything
+    but DLE or EOT, gets DLE NAK instead, at its DLE EOT, and nothing is executed (spec §3.6.5);
+    the bytes beyond are not kept.  ``events``
     collects what a host developer may want to know (``refused_function``, ``refused_parameters:
     <why>``, ``abandoned: <why>``): the last :data:`EVENTS_KEPT`; ``noted`` (if given) hears each
     as it happens."""
@@ -88,6 +89,7 @@ class As511Link:
         self._fn = 0
         self._block = bytearray()
         self._dle = False  # a DLE was the last byte (inside a block, or the first of DLE ACK)
+        self._broken = ""  # why the parameter block will be refused at its DLE EOT
         self._data: bytes | None = None
 
     @property
@@ -146,6 +148,7 @@ class As511Link:
 
     def _open_parameters(self, out: list[bytes]) -> None:
         self._block.clear()
+        self._broken = ""
         self.state = "parameters"
 
     def _send_data(self, out: list[bytes]) -> None:
@@ -176,10 +179,15 @@ class As511Link:
             if len(self._block) <= self.most:
                 self._block.append(DLE)  # a doubled DLE is one data byte
             return
-        if byte != EOT:
-            self._abandon("a single DLE inside the parameters")
+        if byte != EOT:  # refused at the block's end, the next acknowledgement point (spec §3.6.5)
+            self._broken = "a single DLE inside the parameters"
             return
-        reply = Refused("too long") if len(self._block) > self.most else self.service(self._fn, bytes(self._block))
+        if self._broken:
+            reply: Reply = Refused(self._broken)
+        elif len(self._block) > self.most:
+            reply = Refused("too long")
+        else:
+            reply = self.service(self._fn, bytes(self._block))
         if isinstance(reply, Refused):
             out.append(DLE_NAK)
             self._note(f"refused_parameters: {reply.reason}")
