@@ -180,17 +180,31 @@ def test_a_parity_error_before_percent_ends_the_read_in(cnc: Any) -> None:
     assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF"
 
 
-@pytest.mark.manual("§2.6", "falsche Baud-Rate: WERTBEREICHES-UEBERLAUF (on an ASCII port: control characters "
-                    "a tape does not carry, before %)")
-def test_control_characters_before_percent_on_an_ascii_port_end_the_read_in(cnc: Any) -> None:
+@pytest.mark.manual("§2.6.3", "Alle vorgängig eintreffenden Zeichen werden nicht berücksichtigt (on an ASCII port: "
+                    "control characters too, such as a DNC host's DC2 and DC4 for the tape)")
+def test_control_characters_before_percent_on_an_ascii_port_are_ignored(cnc: Any) -> None:
     cnc.set("param.P71", 1)
     cnc.set("panel.mode", "EXTERNAL_OPERATION")
     cnc.set("panel.program", 20)
     cnc.set("v7.transfer", "input")
     with open_port(cnc, "v7") as host:
-        host.write(b"\x00\x00\r\n\x7fTAPE\x18")
+        host.write(b"\x12\x14\x1b\x04\x00\r\n\x7fTAPE\x18" + b"%\r\nN1 X1\r\nM30\r\n")
+        until(lambda: cnc.read("v7.state") in ("done", "failed"), "the read-in ends")
+    assert cnc.read("v7.state") == "done" and cnc.read("panel.message") != "WERTBEREICHES-UEBERLAUF"
+    assert cnc.read("program.P20") == "N 1 X 1.000"
+
+
+@pytest.mark.manual("§2.6", "falsche Baud-Rate: WERTBEREICHES-UEBERLAUF (on an ASCII port: a byte with bit 7 set "
+                    "and odd parity before %, which no sender set to ASCII sends)")
+def test_a_byte_no_ascii_sender_sends_before_percent_ends_the_read_in(cnc: Any) -> None:
+    cnc.set("param.P71", 1)
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 20)
+    cnc.set("v7.transfer", "input")
+    with open_port(cnc, "v7") as host:
+        host.write(b"\x00\x00\r\n\x7fTAPE\x80")  # 80H: bit 7 set, odd parity
         until(lambda: bytes_in(cnc, "v7") == 10, "the line has taken the bytes")
-        until(lambda: cnc.read("v7.state") == "failed", "CAN is no tape character")
+        until(lambda: cnc.read("v7.state") == "failed", "80H is no ASCII character")
     assert cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF"
 
 

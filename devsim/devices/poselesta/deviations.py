@@ -21,8 +21,8 @@ DEVIATIONS: tuple[Deviation, ...] = (
         "a wrong baud rate or code before a read-in gives WERTBEREICHES-UEBERLAUF; a real UART sees framing "
         "errors at a wrong baud rate",
         "before % the read-in ends with WERTBEREICHES-UEBERLAUF at the first byte that no sender with the "
-        "control's settings sends: ISO a parity error; ASCII a byte with bit 7 set and odd parity, or a control "
-        "character other than NUL, LF, CR (DEL and all printable characters are ignored, as §2.6.3 says); after % "
+        "control's settings sends: ISO a parity error; ASCII a byte with bit 7 set and odd parity (every 7-bit "
+        "character, control characters such as a DNC host's DC2 and DC4 included, is ignored, as §2.6.3 says); after % "
         "an ASCII port stops as well at a byte with bit 7 set and odd parity (an ISO image's bit 7 is masked)",
         "the pty delivers what a UART samples but no framing-error flag; these bytes are what a garbled line "
         "delivers in their place",

@@ -180,19 +180,16 @@ class TapeReader:
         falscher Code gewählt, erscheint am Bildschirm: WERTBEREICHES-UEBERLAUF"), or None for a
         character of the code, which is ignored (§2.6.3: "Alle vorgängig eintreffenden Zeichen
         werden nicht berücksichtigt").  ISO: a parity error.  ASCII: a byte with bit 7 set that is
-        no ISO character either (odd parity; ``ascii_bit7="abort"``: any), or a control character
-        a tape does not carry (only NUL, LF, CR and DEL are): the pty cannot carry the framing
-        errors a real UART sees at a wrong baud rate, and these bytes are what such a line
-        delivers in their place (see the deviations)."""
+        no ISO character either (odd parity; ``ascii_bit7="abort"``: any).  Every 7-bit character
+        is one a sender set to ASCII sends (a DNC host's DC2 or DC4 for the tape, a label, CR LF)
+        and is ignored.  The pty cannot carry the framing errors a real UART sees at a wrong baud
+        rate, and these bytes are what such a line delivers in their place (see the deviations)."""
         if self.iso:
             if not parity_ok(byte) and self.parity_error == "abort":
                 return f"parity error in byte {byte:02X}"
             return None
         if byte & 0x80 and (self.ascii_bit7 == "abort" or not parity_ok(byte)):
             return f"byte {byte:02X} is no character of ASCII code"
-        char = byte & 0x7F
-        if char < 0x20 and char not in (NUL, LF, CR):
-            return f"control character {char:02X}"
         return None
 
     def _character(self, byte: int, events: list[Event]) -> int | None:
