@@ -33,6 +33,17 @@ def test_a_line_of_60_characters_is_carried_out_in_full(sers: Plant) -> None:
 def test_a_line_of_61_characters_is_reported_as_an_overflow(sers: Plant) -> None:
     line = _line(MAX_LINE + 1)
     assert len(line) == 61
+    before = sers.read("param.W")
     reply = sers.host.ask(line + "\r")
-    assert OVERFLOW in reply
-    assert sers.read("P12") & 1024
+    assert reply.endswith(b"\n" + OVERFLOW + b"\n\r")  # errno 124, and no other error before it
+    assert sers.read("P12") & 1024 and sers.read("param.P1137") == 124
+    assert sers.read("param.W") == before  # the statement the limit cut is not carried out with a cut value
+
+
+@pytest.mark.manual("§4.1", "several commands in a line, 'jedoch maximal 60 Zeichen in einer Zeile'")
+def test_a_statement_cut_by_the_limit_is_reported_as_the_overflow_not_as_its_syntax(sers: Plant) -> None:
+    line = "#1 " + "V=1 " * 14 + "V=2"  # 62 characters: the limit falls on the last V
+    reply = sers.host.ask(line + "\r")
+    assert reply.endswith(b"\n" + OVERFLOW + b"\n\r") and b"erwartet" not in reply  # not '*= oder ? erwartet'
+    assert sers.read("param.P1137") == 124
+    assert sers.read("param.V") == 1  # the statements within the 60 characters ran

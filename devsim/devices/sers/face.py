@@ -356,10 +356,11 @@ class SersFace(Face):
         """The line has ended (its terminator echoed): the rest of its statements run, then
         the deferred answers and the acknowledgement (§4.1)."""
         if line.execute and not line.error:
-            self.statements.progress(line, final=True)
-            if overflow and not line.error:
+            if overflow:  # the statement the limit cut is lost with what followed it (spec G-LINE)
                 self.model.power_stage.warn(1024)
                 self._error(line, 124)
+            else:
+                self.statements.progress(line, final=True)
             if line.store and not line.error:
                 try:
                     self.model.program.add_line(line.store, label_number)
