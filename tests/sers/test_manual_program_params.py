@@ -98,6 +98,17 @@ def test_list_option_user_line_breaks(sers: Plant) -> None:
     assert host.ask("#LIST\r") == b"#LIST\rO1=1 O2=1\n\rO3=1\n\r\nok1\n\r"
 
 
+@pytest.mark.manual("§4.2", "';' Strichkomma verhindert einen Zeilenumbruch bei Programmeingabe in der aktuellen "
+                    "Zeile")
+def test_a_semicolon_at_the_end_of_a_line_continues_it_with_the_next(sers: Plant) -> None:
+    host = sers.host
+    download(host, "O1=1;", "O2=1 ;", "O3=1", "O4=1; O5=1")  # a ';' between statements is a separator
+    host.ask("#P1028=9\r")
+    assert host.ask("#LIST\r") == b"#LIST\r1: O1=1 O2=1 O3=1\n\r4: O4=1 O5=1\n\r\nok1\n\r"
+    host.ask("#P1028=1\r")  # without bit 3 every statement has its row, as before
+    assert host.ask("#LIST\r") == b"#LIST\r1: O1=1\n\r2: O2=1\n\r3: O3=1\n\r4: O4=1\n\r5: O5=1\n\r\nok1\n\r"
+
+
 @pytest.mark.manual("§4.8.5.5", "P1110 is always 1 after switching on; it is not stored in the EEPROM")
 def test_p1110_after_power_on(plant_factory, tmp_path) -> None:
     plant = plant_factory({}, state_dir=tmp_path)

@@ -363,7 +363,8 @@ class SersFace(Face):
                 self.statements.progress(line, final=True)
             if line.store and not line.error:
                 try:
-                    self.model.program.add_line(line.store, label_number)
+                    self.model.program.add_line(line.store, label_number,
+                                                joins_next=line.text.rstrip(" \t").endswith(";"))
                 except SersError as exc:
                     self._error(line, exc.errno, exc.detail)
                 line.store = []

@@ -40,7 +40,7 @@ class ProgramMemory:
     """The one stored program: statement texts, and where the user's lines begin (§4.3, §4.5.3).
     (Slots: a host's repeated poll reads :attr:`editing`, one block of memory.)"""
 
-    __slots__ = ("nvram", "capacity", "editing", "position", "_statements", "_starts")
+    __slots__ = ("nvram", "capacity", "editing", "position", "_statements", "_starts", "_joined")
 
     def __init__(self, nvram: NonVolatileMemory, capacity: int = 2048) -> None:
         self.nvram = nvram
@@ -50,6 +50,7 @@ class ProgramMemory:
         self.position = 0
         self._statements: list[str] = []
         self._starts: list[bool] = []  # statement i begins a user line
+        self._joined = False  # the last line typed ended with ';': the next one continues it (§4.2)
         self.reload()
 
     # -- persistence -----------------------------------------------------------------------
@@ -64,6 +65,7 @@ class ProgramMemory:
                 self._statements.append(str(text))
                 self._starts.append(index == 0)
         self.editing = False
+        self._joined = False
         self.position = min(self.position, len(self._statements))
 
     # -- queries ---------------------------------------------------------------------------
@@ -92,6 +94,7 @@ class ProgramMemory:
     # -- editing ---------------------------------------------------------------------------
     def new(self) -> None:
         self._statements, self._starts = [], []
+        self._joined = False
         self.position = 0
         self.editing = True
         self._store()
@@ -102,8 +105,13 @@ class ProgramMemory:
     def quit(self) -> None:
         self.editing = False
 
-    def add_line(self, texts: Sequence[str], labels: Callable[[str], int | None] = lambda _t: None) -> None:
-        """Store a complete line typed in programming mode at the current position."""
+    def add_line(self, texts: Sequence[str], labels: Callable[[str], int | None] = lambda _t: None,
+                 *, joins_next: bool = False) -> None:
+        """Store a complete line typed in programming mode at the current position; it continues
+        the line before when that one ended with ';' ("Strichkomma verhindert einen
+        Zeilenumbruch bei Programmeingabe in der aktuellen Zeile", §4.2), and ``joins_next`` says
+        this one does."""
+        joined, self._joined = self._joined, joins_next
         if not texts:
             return
         if self.used_bytes() + sum(statement_cost(t) for t in texts) > self.capacity:
@@ -117,7 +125,7 @@ class ProgramMemory:
                 defined.add(number)
         at = self.position
         self._statements[at:at] = list(texts)
-        self._starts[at:at] = [True] + [False] * (len(texts) - 1)
+        self._starts[at:at] = [not (joined and at > 0)] + [False] * (len(texts) - 1)
         if at + len(texts) < len(self._starts):
             self._starts[at + len(texts)] = True  # what follows an inserted line starts a line
         self.position = at + len(texts)
