@@ -105,6 +105,23 @@ def test_a_set_and_a_change_by_the_device_are_published(served: Served) -> None:
         assert retained.retain and retained.json() == before + 11.5
 
 
+def test_a_set_at_qos_0_works_while_someone_watches_every_topic(served: Served) -> None:
+    """What the docs suggest, ``mosquitto_sub -t 'devsim/#'`` to watch and ``mosquitto_pub`` (QoS 0)
+    to command: amqtt 0.12.1 sent every connecting client the retained messages of every other
+    client's subscriptions, so a watcher of the retained state made each mosquitto_pub take the
+    whole state first, and its QoS 0 set was lost."""
+    state = f"{served.base}/state"
+    with Sub(served.port, "devsim/#") as watcher:
+        assert watcher.wait(f"{state}/input.I1").json() is False
+        with Sub(served.port, "elsewhere/#") as other:  # no retained message of ours is its business
+            pub(served.port, f"{served.base}/set/input.I1", "true", qos=0)
+            assert watcher.wait(f"{state}/input.I1", lambda m: m.json() is True)
+            assert served.runtime.read("x", "input.I1") is True
+            pub(served.port, "elsewhere/ping", "1", qos=0)
+            assert other.wait("elsewhere/ping").text == "1"
+            assert [m.topic for m in other.seen if m.topic.startswith("devsim/")] == []
+
+
 def test_fault_and_power_cycle_commands(served: Served) -> None:
     state = f"{served.base}/state"
     with served.sub() as sub:

@@ -98,10 +98,11 @@ class Sub:
         self.close()
 
 
-def pub(port: int, topic: str, payload: bytes | str, *, retain: bool = False) -> None:
-    """One message with ``mosquitto_pub`` (payload from stdin: any bytes), QoS 1."""
+def pub(port: int, topic: str, payload: bytes | str, *, retain: bool = False, qos: int = 1) -> None:
+    """One message with ``mosquitto_pub`` (payload from stdin: any bytes), QoS 1 unless told (at
+    QoS 0, mosquitto_pub's default, it sends and disconnects without waiting for the broker)."""
     data = payload.encode() if isinstance(payload, str) else payload
-    args = [_program("mosquitto_pub"), "-h", "127.0.0.1", "-p", str(port), "-q", "1", "-t", topic,
+    args = [_program("mosquitto_pub"), "-h", "127.0.0.1", "-p", str(port), "-q", str(qos), "-t", topic,
             "-s" if data else "-n"]
     if retain:
         args.append("-r")
