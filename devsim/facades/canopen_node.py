@@ -68,6 +68,7 @@ class CanopenFacade:
                           node_id)
         self.drive = Cia402(device.drive, device.model) if device.drive is not None else None
         self._unlisten = device.model.listen("fault", self._emergency)
+        self._unlisten_power = device.model.listen("power_cycled", self._power_on)
         self._pdos_on = False
         self._syncs = 0
         self._timers: dict[tuple[int, str], Any] = {}  # event-driven TPDOs: device-clock timers
@@ -132,6 +133,13 @@ class CanopenFacade:
             self.call(self.drive.reset)
         self._forget(0x2000, 0x9FFF)
         self._reset_communication()
+
+    def _power_on(self) -> None:
+        """The device was switched off and on, and the node with it: it starts as after an NMT
+        reset node, with its power-on values, Switch on disabled and a boot-up message (a drive
+        in Fault before is not in Fault now unless its device still is)."""
+        if self.node.has_network():
+            self._reset_node()
 
     def _forget(self, first: int, last: int) -> None:
         """Drop what masters wrote into objects ``first`` … ``last``: they read their EDS default."""
@@ -255,6 +263,7 @@ class CanopenFacade:
 
     def close(self) -> None:
         self._unlisten()
+        self._unlisten_power()
         self.call(self._cancel_timers)
 
     def _read(self, index: int, subindex: int, od: Any) -> Any:

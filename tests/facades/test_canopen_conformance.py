@@ -168,6 +168,31 @@ def test_reset_node_also_restores_the_402_objects_and_disables_the_drive(drive: 
     assert node.sdo[0x6041].raw & 0x4F == 0x40 and bootups.count() == 1
 
 
+def test_a_power_cycle_of_the_device_boots_the_node_out_of_its_fault() -> None:
+    """A drive switched off and on boots as a node does at power-on: one boot-up message, the
+    communication and 402 objects at their power-on values, Switch on disabled (not the Fault it
+    was in before: the device's fault went with the power), and the 402 flow enables it again."""
+    drive = Drive("sers", 3, name="sers", ready=True)
+    runtime, node = drive.runtime, drive.node
+    try:
+        bootups = Bootups(drive)
+        node.sdo[0x1017].raw = 20
+        runtime.set("sers", "quantity.supply_voltage", 40.0)  # below U_L: a drive error
+        runtime.advance(0.5)
+        assert node.sdo[0x6041].raw & 0x4F == 0x08  # Fault
+        runtime.set("sers", "quantity.supply_voltage", 68.0)
+        runtime.power_cycle("sers")
+        assert node.sdo[0x1017].raw == 0 and node.sdo[0x6041].raw & 0x4F == 0x40  # Switch on disabled
+        assert bootups.count() == 1  # (counted after the SDO round trips: it came before their answers)
+        runtime.advance(3.0)  # the SERS's 2 s power-on
+        runtime.call(drive.device.apply_state, drive.device.drive_setup)
+        for word, state in ((0x06, 0x21), (0x07, 0x23), (0x0F, 0x27)):
+            node.sdo[0x6040].raw = word
+            assert node.sdo[0x6041].raw & 0x6F == state, hex(word)
+    finally:
+        drive.close()
+
+
 def test_every_sdo_abort_names_the_request_it_answers(drive: Drive) -> None:
     """CiA 301: an abort transfer request carries the multiplexer (index, sub-index) of the
     transfer it ends.  Each case follows a successful upload of 1000h, so an abort that named the
