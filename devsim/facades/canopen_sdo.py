@@ -85,6 +85,8 @@ class DevsimSdoServer(SdoServer):
         self._multiplexer(request)
         self.transfer, self._buffer = None, None
         command = request[0]
+        if command & EXPEDITED and not command & SIZE_SPECIFIED:
+            request = self._sized(request)  # (CiA 301: "d contains unspecified number of bytes")
         if not command & EXPEDITED:
             variable = self._variable()
             if not variable.writable:
@@ -95,6 +97,15 @@ class DevsimSdoServer(SdoServer):
         self.init_download(request)
         if not command & EXPEDITED:
             self.transfer = "download"
+
+    def _sized(self, request: bytes) -> bytes:
+        """An expedited download that does not say its size (s = 0) as one that does: as many of
+        its 4 data bytes as the object's number type has (other objects take all 4)."""
+        variable = self._variable()
+        if variable.data_type not in NUMBER_TYPES or not 8 <= len(variable) <= 32:
+            return request
+        unused = 4 - len(variable) // 8
+        return bytes((request[0] | SIZE_SPECIFIED | unused << 2,)) + request[1:]
 
     def _download_segment(self, request: bytes) -> None:
         if self.transfer != "download":

@@ -207,6 +207,17 @@ def test_an_expedited_download_of_each_size(server: Server, size: int) -> None:
     assert server.send(0x00, bytes(7)) == abort(0, 0, INVALID_COMMAND)
 
 
+@pytest.mark.parametrize(("index", "subindex", "size"), [(TIMER, 5, 2), (0x607A, 0, 4)])  # (607Ah: target position)
+def test_an_expedited_download_that_does_not_say_its_size(server: Server, index: int, subindex: int,
+                                                         size: int) -> None:
+    """Initiate download request with e = 1, s = 0 (22h): "d contains unspecified number of bytes
+    to be downloaded" (§7.2.4.3.3): the object takes as many as its type has."""
+    value = 0x0102_0304 & (1 << 8 * size) - 1
+    data = value.to_bytes(size, "little").ljust(4, b"\xee")  # (the bytes beyond, whatever they are)
+    assert server.send(0x22, mux(index, subindex), data) == [bytes((0x60,)) + mux(index, subindex) + PAD]
+    assert server.send(0x40, mux(index, subindex), PAD)[0][4:4 + size] == value.to_bytes(size, "little")
+
+
 @settings(deadline=None)  # (the first example may build the module's cached node)
 @given(number=st.sampled_from(sorted(NUMBERS)), announced=st.integers(0, 16), sized=st.booleans())
 @example(number=(VOLTAGE, 0), announced=8, sized=True)
