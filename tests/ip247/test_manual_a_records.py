@@ -217,3 +217,12 @@ def test_an_overwrite_that_does_not_fit_keeps_the_old_program(mod: Module) -> No
     assert mod.client.read_record(0, 65)[8:] == directory and program(5) == words(5, old)  # as it was
     assert mod.write(4, 22, 5, lang.record_words(5, fits), flags=1)[4] == 0
     assert program(5) == words(5, fits)
+
+
+@pytest.mark.manual("§4.3.12", "a machine-data record can be transferred only over the page of its axis (46)")
+def test_setting_a_record_the_module_refuses_says_so_and_keeps_the_old_one(mod: Module) -> None:
+    assert mod.load_md(1)[8] == 0
+    stored = mod.device.read("axis.1.machine_data")
+    with pytest.raises(Exception, match="machine data not stored: module error 46"):
+        mod.device.set("axis.1.machine_data", md_for(2, 101))  # a record of axis 2 set on axis 1
+    assert mod.device.read("axis.1.machine_data") == stored

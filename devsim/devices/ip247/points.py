@@ -71,9 +71,11 @@ def _put_md(m: Any, axis: int, record: Any) -> None:
             raise BadValue("machine data in one string are hex words") from None
     if not isinstance(record, list) or len(record) != 70 or not all(isinstance(w, int) for w in record):
         raise BadValue("machine data are 70 words (a list of numbers, or hex words in one string)")
+    unit = m.units[axis - 1]
+    before = unit.md_words
     m.channel.write_record(axis, 20, record_db(record), [w & 0xFFFF for w in record], overwrite=True)
-    if m.units[axis - 1].md is None:
-        raise BadValue(f"machine data not stored: module error {m.units[axis - 1].error}")
+    if unit.md is None or unit.md_words is before:  # refused (a record stored with an MD error is stored)
+        raise BadValue(f"machine data not stored: module error {unit.error}")
 
 
 def _program(name: str) -> Point | None:
