@@ -118,7 +118,7 @@ def ctl_read(ctx: click.Context, device: str, names: tuple[str, ...]) -> None:
 @click.argument("value")
 @click.pass_context
 def ctl_set(ctx: click.Context, device: str, name: str, value: str) -> None:
-    """Set NAME of DEVICE to VALUE, read as NAME's declared type (true/false/on/off/1/0 for a
+    """Set NAME of DEVICE to VALUE, read as NAME's declared type (true/false/on/off/yes/no/1/0 for a
     boolean, a finite number, text, or JSON for structured values)."""
     _call(ctx, rq.Set(device, name, value))
 

@@ -73,7 +73,7 @@ _FALSE = frozenset({"false", "0", "off", "no"})
 
 
 def parse_bool(value: Any) -> bool:
-    """true/false/1/0/on/off (any case) or a real bool; anything else is a :class:`BadValue`."""
+    """true/false/1/0/on/off/yes/no (any case) or a real bool; anything else is a :class:`BadValue`."""
     if isinstance(value, bool):
         return value
     if isinstance(value, int) and value in (0, 1):
@@ -86,7 +86,7 @@ def parse_bool(value: Any) -> bool:
             return True
         if text in _FALSE:
             return False
-    raise BadValue(f"expects a boolean (true/false/1/0/on/off), not {_show(value)}")
+    raise BadValue(f"expects a boolean (true/false/1/0/on/off/yes/no), not {_show(value)}")
 
 
 def finite(value: Any) -> float:

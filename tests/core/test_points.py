@@ -61,7 +61,7 @@ def test_false_spellings(text: Any) -> None:
 def test_not_a_bool(value: Any) -> None:
     with pytest.raises(BadValue) as err:
         parse_bool(value)
-    assert str(err.value) == f"expects a boolean (true/false/1/0/on/off), not {value!r}"
+    assert str(err.value) == f"expects a boolean (true/false/1/0/on/off/yes/no), not {value!r}"
 
 
 def test_finite_numbers_and_refusals() -> None:
@@ -157,7 +157,7 @@ def test_shown_values_are_cut_at_40_characters(text: str) -> None:
         parse_bool(text + "?")
     shown = repr(text + "?")
     expected = shown if len(shown) <= 40 else shown[:37] + "..."
-    assert str(err.value) == f"expects a boolean (true/false/1/0/on/off), not {expected}"
+    assert str(err.value) == f"expects a boolean (true/false/1/0/on/off/yes/no), not {expected}"
 
 
 # -- a point: range, choices, access ----------------------------------------------------------

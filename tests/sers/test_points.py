@@ -36,7 +36,7 @@ def test_booleans_by_their_declared_type(sers: SersDevice, text: object, value: 
     sers.set("input.limit_right", not value)
     sers.set("input.limit_right", text)
     assert sers.read("input.limit_right") is value
-    with pytest.raises(BadValue, match="true/false/1/0/on/off"):
+    with pytest.raises(BadValue, match="true/false/1/0/on/off/yes/no"):
         sers.set("input.limit_right", "False!")
 
 
