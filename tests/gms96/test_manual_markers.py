@@ -190,6 +190,16 @@ def test_p11_writes_a_marker_byte_and_is_recorded(referenced: Plant) -> None:
     assert mb(c, 40) == 0x33
 
 
+@pytest.mark.manual("§2.3.1 p", "p11;P2;P3: the byte P3 into marker byte P2 (spec §3.10: a parameter out of range is "
+                    "clamped)")
+def test_p11_clamps_a_value_beyond_a_byte(referenced: Plant) -> None:
+    c = referenced.client()
+    send(c, "p", 11, 13, 300)
+    assert mb(c, 13) == 255  # not 300 mod 256 = 44
+    send(c, "p", 11, 14, -1)
+    assert mb(c, 14) == 0
+
+
 @pytest.mark.manual("§2.4.1", "M0.1 does not end a pending STOP situation (M0.0 = 1)")
 def test_m0_1_leaves_the_stop(referenced: Plant) -> None:
     c = referenced.client()

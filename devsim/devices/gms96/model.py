@@ -320,10 +320,14 @@ class Gms96Card(Model):
         return _marker_bit(self, byte, bit)
 
     def write_marker_byte(self, byte: int, value: int) -> None:
-        """``p11`` / PLC: MB(byte) := value; the control bits of MB0/MB1 act (spec §4.4)."""
+        """``p11`` / PLC: MB(byte) := value; the control bits of MB0/MB1 act (spec §4.4).  A value
+        beyond a byte is clamped to 0 … 255, or ignored with ``out_of_range: ignore`` (spec §3.10)."""
         if not 0 <= byte < 256:
             return
-        value &= 0xFF
+        if not 0 <= value <= 0xFF:
+            if self.cfg.out_of_range == "ignore":
+                return
+            value = min(max(value, 0), 0xFF)
         m = self.image.markers
         if byte == 0:
             old = m[0]
