@@ -87,12 +87,18 @@ def test_transfers_need_their_mode_and_input_while_idle_is_discarded(cnc: Any) -
         until(lambda: cnc.read("v6.discarded") == 10, "bytes on an idle port are counted and dropped")
     cnc.set("panel.mode", "EXTERNAL_MEDIUM")
     cnc.set("v6.transfer", "input")
-    with pytest.raises(ValueError, match="cancel it first"):
-        cnc.set("panel.mode", "MANUAL")
     with pytest.raises(ValueError, match="busy"):
         cnc.set("v6.transfer", "output")
     cnc.set("v6.transfer", "idle")
     assert cnc.read("v6.state") == "cancelled"
+    cnc.set("v6.transfer", "input")
+    cnc.set("panel.mode", "MANUAL")  # spec §3.5.1: a mode change cancels the transfer
+    assert cnc.read("v6.state") == "cancelled"
+    with open_port(cnc, "v6") as host:
+        tape, before = b"%\r\nN1 X1\r\nM30\r\n", cnc.read("v6.discarded")
+        host.write(tape)
+        until(lambda: cnc.read("v6.discarded") == before + len(tape), "the port is idle again: its bytes are dropped")
+    assert cnc.read("programs") == []
 
 
 @pytest.mark.manual("§2.6.2.3", "Die Daten werden formatiert ausgegeben, d.h. die Abstände zwischen den einzelnen Funktionen werden mit Leerzeichen ausgefüllt")

@@ -202,11 +202,9 @@ class PoselestaCnc(Model):
         return self.screen.message
 
     def select_mode(self, mode: str) -> None:
-        """A mode change (spec §4.1): refused while a transfer runs or a block executes; a stopped
+        """A mode change (spec §4.1): refused while a block executes; it cancels a transfer that
+        runs (spec §3.5.1: "any --panel.cancel_transfer / mode change--> CANCELLED"); a stopped
         program is abandoned (back to its first block); the mode code goes out (BA, §2.4.8)."""
-        busy = self.links.busy()
-        if busy and mode != self.mode:
-            raise BadValue(f"a transfer runs on {busy[0]}: cancel it first (v{busy[0][1]}.transfer idle)")
         if self.executor.running and mode != self.mode:
             raise BadValue(f"block N{self.executor.block_number} executes ({self.executor.state}): "
                            "stop the program first")
@@ -216,6 +214,8 @@ class PoselestaCnc(Model):
             raise BadValue("the output test P79 N6 runs or ran: stop it (C) and switch the control off and on")
         self.panel.mode_key()
         if mode != self.mode:
+            for port in self.links.busy():
+                self.links.stop(port, "cancelled")
             self.manual.reset()
             self.field.cancel()  # a homing search ends with the mode
             self.executor.reset()
