@@ -292,6 +292,8 @@ class CanopenFacade:
         if not point.settable:
             raise SdoAbortedError(READ_ONLY)
         value = od.decode_raw(data)
+        if point.type == "bool" and data[:1] not in (b"\x00", b"\x01"):
+            raise SdoAbortedError(VALUE_RANGE_EXCEEDED)  # (CiA 301's BOOLEAN: 0 false, 1 true)
         try:
             self.call(self.device.set, point.name, bool(value) if point.type == "bool" else value)
         except (BadValue, ReadOnlyName, ValueError):

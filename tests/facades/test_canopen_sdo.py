@@ -246,6 +246,17 @@ def test_a_segmented_download_announces_the_size_of_its_number(number: tuple[int
         s.close()
 
 
+@pytest.mark.parametrize("byte", [0, 1, 2, 0xFF])
+def test_a_boolean_takes_0_and_1_only(server: Server, byte: int) -> None:
+    """CiA 301's BOOLEAN is 0 (false) or 1 (true): another value is out of range (0609 0030h)."""
+    answers = server.send(0x2F, mux(INPUT), bytes((byte, 0, 0, 0)))
+    if byte > 1:
+        assert answers == abort(INPUT, 0, 0x06090030)
+    else:
+        assert answers == [bytes((0x60,)) + mux(INPUT) + PAD]
+        assert server.device.read("input.I1") is bool(byte)
+
+
 @settings(deadline=None)  # (the first example may build the module's cached node)
 @given(announced=st.integers(0, 16))
 def test_a_segmented_download_of_no_number_type_takes_any_size_announced(announced: int) -> None:
