@@ -385,12 +385,9 @@ class Device:
         self.model.unobserved_until(when)
 
     def power_cycle(self, *, wipe: bool = False) -> None:
-        """Switch the device off and on again; ``wipe`` erases non-volatile memory first.  Then
-        the model announces ``power_cycled``: what a facade's interface does when its device is
-        switched on (a CANopen node boots)."""
+        """Switch the device off and on again; ``wipe`` erases non-volatile memory first."""
         CHANGES.count += 1  # (a door: devsim.core.changes)
         self.model.power_cycle(wipe=wipe)
-        self.model.announce("power_cycled")
 
     def close(self) -> None:
         """Cancel timers; the device is not used afterwards."""

@@ -84,7 +84,9 @@ class Model:
 
     # -- power ------------------------------------------------------------------------------
     def power_cycle(self, *, wipe: bool = False) -> None:
-        """Switch the device off and on again; ``wipe`` erases non-volatile memory first."""
+        """Switch the device off and on again; ``wipe`` erases non-volatile memory first.  Every
+        kind announces topic ``power_on`` as it powers up (a power cycle, a ``power`` fault ending):
+        a face starts its link afresh, a facade's interface boots with it (a CANopen node)."""
         if wipe:
             self.nvram.wipe()
 

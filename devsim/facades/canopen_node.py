@@ -68,7 +68,7 @@ class CanopenFacade:
                           node_id)
         self.drive = Cia402(device.drive, device.model) if device.drive is not None else None
         self._unlisten = device.model.listen("fault", self._emergency)
-        self._unlisten_power = device.model.listen("power_cycled", self._power_on)
+        self._unlisten_power = device.model.listen("power_on", self._power_on)
         self._pdos_on = False
         self._syncs = 0
         self._timers: dict[tuple[int, str], Any] = {}  # event-driven TPDOs: device-clock timers
@@ -135,9 +135,9 @@ class CanopenFacade:
         self._reset_communication()
 
     def _power_on(self) -> None:
-        """The device was switched off and on, and the node with it: it starts as after an NMT
-        reset node, with its power-on values, Switch on disabled and a boot-up message (a drive
-        in Fault before is not in Fault now unless its device still is)."""
+        """The device powers up (a power cycle, its supply back on), and the node with it: it
+        starts as after an NMT reset node, with its power-on values, Switch on disabled and a
+        boot-up message (a drive in Fault before is not in Fault now unless its device still is)."""
         if self.node.has_network():
             self._reset_node()
 

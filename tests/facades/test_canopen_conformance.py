@@ -193,6 +193,26 @@ def test_a_power_cycle_of_the_device_boots_the_node_out_of_its_fault() -> None:
         drive.close()
 
 
+@pytest.mark.parametrize("kind", ["gms96", "ip247", "pcd4h3", "poselesta", "sers"])
+def test_every_kind_boots_its_node_when_it_powers_up(kind: str) -> None:
+    """The model announces its power-up (a power cycle; the end of a ``power`` fault, where the
+    kind declares one): the node sends one boot-up message each time and drops what the master
+    wrote into its communication objects."""
+    drive = Drive(kind, 3, name="dev")
+    try:
+        bootups = Bootups(drive)
+        drive.node.sdo[0x1017].raw = 20
+        drive.runtime.power_cycle("dev")
+        assert drive.node.sdo[0x1017].raw == 0 and bootups.count() == 1
+        if "power" in drive.device.faults.names():
+            drive.node.sdo[0x1017].raw = 20
+            drive.runtime.fault("dev", "power", True)
+            drive.runtime.fault("dev", "power", False)
+            assert drive.node.sdo[0x1017].raw == 0 and bootups.count() == 1
+    finally:
+        drive.close()
+
+
 def test_every_sdo_abort_names_the_request_it_answers(drive: Drive) -> None:
     """CiA 301: an abort transfer request carries the multiplexer (index, sub-index) of the
     transfer it ends.  Each case follows a successful upload of 1000h, so an abort that named the

@@ -99,6 +99,7 @@ class Ip247Module(Model):
         """Jobs and programs dropped, reference lost, error 8 everywhere; for ``boot_time`` (1 s)
         the module answers nothing while its LEDs blink alternately, then green stays on
         (spec §2.1, §5.16)."""
+        self.announce("power_on")
         for unit in self.units:
             unit.power_up()
         self.channel.error = 8

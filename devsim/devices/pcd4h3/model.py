@@ -165,6 +165,7 @@ class Pcd4(Model):
             drive.chip.reset()
             drive.poke()
         self.cold_start()
+        self.announce("power_on")
 
     # -- the cycle (§3.3.2, §9.6.1) ---------------------------------------------------------------
     def wake(self) -> None:

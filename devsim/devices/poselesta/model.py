@@ -150,6 +150,7 @@ class PoselestaCnc(Model):
     # -- power ----------------------------------------------------------------------------------
     def _power_on(self) -> None:
         """§2.4.5, spec §4.2: all outputs L, the axes where the encoders count from (0)."""
+        self.announce("power_on")
         self.terminals.settle()  # the inputs as they are at power-on
         self.mode = "MANUAL"
         self.screen.clear()
