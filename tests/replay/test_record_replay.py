@@ -21,6 +21,7 @@ import pytest
 import serial
 
 from devsim.devices.gms96.client import Gms96Client
+from devsim.devices.gms96.codec import LongFrame
 from tests import test_readme_example as readme
 from tests.support.process import DevsimProcess
 from tests.test_readme_example import ask, home_and_move
@@ -257,6 +258,40 @@ def test_gms96_replay_matches_frames_with_another_frame_count_bit(tmp_path: Path
     assert "requests answered: exact 4, fcb 2" in err
 
 
+def test_gms96_e_version_live_model_takes_the_hosts_frame_count_bit(tmp_path: Path, procs: list[Proc]) -> None:
+    """E-version: a frame with the frame count bit of the one before is a repetition, answered but
+    not carried out (spec gms96.md §3.9).  The host's N300;10 matched the recording's with the
+    other FCB; the live model, seeded with the host's own frame, takes its next one (N400;10, the
+    first not recorded) as new."""
+    config = tmp_path / "gms96.yaml"
+    config.write_text("boot_time: 0\ndil: {protocol: E}\n")
+    session = tmp_path / "gms96.devsim"
+    device = _start(procs, "run", "gms96", "--pty", "--config", str(config))
+    device_pty = device.value("gms96: pty")
+    device.line("gms96: ready")
+    recorder = _start(procs, "record", "--port", device_pty, "--out", str(session), "--kind", "gms96")
+    host_pty = recorder.value("record: pty")
+    recorder.line("record: out")
+
+    def host(url: str, first_fcb: int, *letters: tuple[int, ...]) -> list[object]:
+        with serial.Serial(url, 9600, parity="E", timeout=0.5) as port:
+            card = Gms96Client(port, address=3, timeout=2)
+            card.fcb = first_fcb ^ 1  # the next letter command goes out with first_fcb
+            return [card.send_letter(letter, *params) for letter, *params in letters]
+
+    recorded = host(host_pty, 0, ("N", 300, 10))  # the recording ends with a frame of FCB 0
+    assert recorder.stop()[0] == 0
+    (n10,) = host(device_pty, 1, ("T", 5, 10))  # N10 on the card: 300
+    replay = _start(procs, "replay", str(session), "--pty", "--as-fast", "--fallback", "live", "--config", str(config))
+    answers = host(replay.value("replay: pty"), 1, ("N", 300, 10), ("N", 400, 10), ("T", 5, 10))
+    assert answers[0] == recorded[0]  # (the recording's answer, by the FCB tolerance)
+    assert isinstance(n10, LongFrame) and (300).to_bytes(2, "little") in n10.data
+    assert answers[2] == LongFrame(n10.control, n10.address,
+                                   n10.data.replace((300).to_bytes(2, "little"), (400).to_bytes(2, "little")))
+    status, err = replay.stop()
+    assert status == 0, err
+
+
 # -- the example of docs/replay.md, as printed there ---------------------------------------------------------
 def _readme_host(tmp_path: Path) -> Path:
     text = (ROOT / "docs" / "replay.md").read_text(encoding="utf-8")
@@ -288,6 +323,23 @@ def test_the_readme_example(tmp_path: Path, procs: list[Proc]) -> None:
     assert _run(host, replay.value("replay: pty")) == recorded
     live = _start(procs, "replay", str(tmp_path / "drive.devsim"), "--pty", "--fallback", "live")
     assert _run(host, live.value("replay: pty"), "#P91?") == [*recorded, r"b'#P91?\rP91=2000U/min\n\r\nok1\n\r'"]
+
+
+def test_fallback_live_holds_what_this_host_wrote_not_the_whole_recording(tmp_path: Path, procs: list[Proc]) -> None:
+    """The recording went on (V=3000) after where this host leaves it (V=2000, then a request
+    never recorded): the live model holds what this host wrote."""
+    host = _readme_host(tmp_path)
+    config = tmp_path / "sers.yaml"
+    config.write_text("boot_time: 0\n")
+    device = _start(procs, "run", "sers", "--pty", "--config", str(config))
+    device_pty = device.value("sers: pty")
+    device.line("sers: ready")
+    recorder = _start(procs, "record", "--port", device_pty, "--out", str(tmp_path / "drive.devsim"), "--kind", "sers")
+    recorded = _run(host, recorder.value("record: pty"), "#V=3000", "#V?")
+    assert recorder.stop()[0] == 0
+    assert recorded[-1] == r"b'#V?\rV=3000U/min\n\r\nok1\n\r'"
+    live = _start(procs, "replay", str(tmp_path / "drive.devsim"), "--pty", "--fallback", "live")
+    assert _run(host, live.value("replay: pty"), "#P91?") == [*recorded[:4], r"b'#P91?\rP91=2000U/min\n\r\nok1\n\r'"]
 
 
 # -- PCD4.H3 Ether-S-Bus on TCP: another sequence number ---------------------------------------------

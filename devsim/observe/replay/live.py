@@ -4,24 +4,25 @@ seeded with the recording, that answers the host once the recording runs out.
 The device runs in a :class:`~devsim.runtime.Runtime` on the replay's event loop, behind a
 :class:`~devsim.transports.line.Line` served on a :class:`Bridge` (a transport with no port:
 the replay feeds it the host's bytes and takes the device's).  Its clock is a
-:class:`HandoverClock`: virtual while the model is seeded, so that it boots and receives every
-recorded request at the recorded instants (moves, timeouts and program steps in between take
-their simulated time, not wall time), its answers discarded; then real time, from where the
-seeding left off, once it is handed over.
+:class:`HandoverClock`: virtual while the model boots and, at the handover, while it is seeded
+with what the host wrote (:func:`seed`: each request the recording answered, as the host sent
+it, at the instant of the recorded exchange it matched; moves, timeouts and program steps in
+between take their simulated time, not wall time), its answers discarded; then real time, from
+where the seeding left off.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from devsim.core.clock import Timer, VirtualClock
 from devsim.observe.replay.session import Exchange
 from devsim.transports.base import Transport
 
-__all__ = ["Bridge", "HandoverClock", "start_live"]
+__all__ = ["Bridge", "HandoverClock", "seed", "start_live"]
 
 #: How long (simulated seconds) the live model may take to boot.
 BOOT_WAIT = 60.0
@@ -105,11 +106,11 @@ class Bridge(Transport):
             self.sink(data)
 
 
-async def start_live(runtime: Any, clock: HandoverClock, kind: str, port: str, config: Mapping[str, Any],
-                     exchanges: list[Exchange]) -> tuple[Any, Bridge]:
-    """Create the device in ``runtime`` (whose clock is ``clock``), boot it and seed it with the
-    recorded requests at their recorded times; returns its Line and Bridge (sink still ``None``).
-    The caller hands over with ``clock.go_live()`` and sets the sink."""
+async def start_live(runtime: Any, clock: HandoverClock, kind: str, port: str,
+                     config: Mapping[str, Any]) -> tuple[Any, Bridge]:
+    """Create the device in ``runtime`` (whose clock is ``clock``) and boot it; returns its Line
+    and Bridge (sink still ``None``).  At the handover the caller seeds it (:func:`seed`), goes
+    live (``clock.go_live()``) and sets the sink."""
     device = runtime.add_device(kind, kind, dict(config))
     bridge = Bridge()
     line = await runtime.serve(device, bridge, port=port)
@@ -117,12 +118,18 @@ async def start_live(runtime: Any, clock: HandoverClock, kind: str, port: str, c
     device.on_ready(lambda: ready.__setitem__(0, True))
     if not clock.run_until(lambda: ready[0], BOOT_WAIT):
         raise RuntimeError(f"the live {kind} model did not boot within {BOOT_WAIT:g} simulated seconds")
-    previous = exchanges[0].t if exchanges else 0.0
-    for exchange in exchanges:
-        clock.advance(max(0.0, exchange.t - previous))
-        previous = exchange.t
-        line.feed(exchange.request)
-    if exchanges:
-        last = exchanges[-1].replies
-        clock.advance((last[-1].delay if last else 0.0) + SETTLE)
     return line, bridge
+
+
+def seed(clock: HandoverClock, line: Any, heard: Sequence[tuple[Exchange, bytes]]) -> None:
+    """Send the model what the host wrote before the handover: each ``(exchange, request)`` the
+    recording answered, the host's own bytes (its frame count bit, its sequence number), at the
+    recorded instant of the exchange (in virtual time), and let the last answer finish."""
+    previous = heard[0][0].t if heard else 0.0
+    for exchange, request in heard:
+        clock.advance(max(0.0, exchange.t - previous))
+        previous = max(previous, exchange.t)
+        line.feed(request)
+    if heard:
+        last = heard[-1][0].replies
+        clock.advance((last[-1].delay if last else 0.0) + SETTLE)

@@ -15,10 +15,11 @@ A request the recording does not know:
 * ``fallback="error"`` – one line on stderr (``replay: request not in the recording: ...``) and
   silence on the line, as from a dead device; later known requests are answered again.
 * ``fallback="live"`` – the live model of the recorded kind takes over for good: a devsim device
-  (:mod:`devsim.observe.replay.live`).  Before the pty is offered, it booted and was sent every request
-  of the recording at its recorded time (in virtual time, so at once), its answers discarded, so
-  it holds what the host wrote (parameters, modes, positions); then its clock runs in real time
-  (times ``speed``) and the unknown request and all after it go to it.
+  (:mod:`devsim.observe.replay.live`), booted before the pty is offered.  At the handover it is
+  sent every request the host wrote that the recording answered, as the host wrote it, at the
+  recorded time of the exchange it matched (in virtual time, so at once), its answers discarded,
+  so it holds what the host wrote (parameters, modes, positions, a frame count bit); then its
+  clock runs in real time (times ``speed``) and the unknown request and all after it go to it.
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ import msgspec
 from devsim.core.console import say, stop_on_signals, warn
 from devsim.core.device import SerialSettings
 from devsim.core.registry import port_framing
-from devsim.observe.replay.live import HandoverClock, start_live
+from devsim.observe.replay.live import HandoverClock, seed, start_live
 from devsim.observe.replay.session import Exchange, Reply, Session
 
 __all__ = ["ReplayPlan", "Replayer", "replay_session"]
@@ -87,7 +88,8 @@ class _Outbox:
 class Replayer:
     """The pty's endpoint: matches the host's requests and answers them (see the module docstring)."""
 
-    def __init__(self, plan: ReplayPlan, outbox: _Outbox, live: Any = None) -> None:
+    def __init__(self, plan: ReplayPlan, outbox: _Outbox, live: Any = None,
+                 hand_over: Callable[[list[tuple[Exchange, bytes]]], None] | None = None) -> None:
         self.session = plan.session
         self.serial_settings: SerialSettings = plan.session.settings  # the pty is preset with them
         self.framing = port_framing(plan.session.kind, plan.session.port)
@@ -98,6 +100,9 @@ class Replayer:
         self.outbox = outbox
         self.live = live  # the live model's Line (fallback "live")
         self.live_now = False
+        self._hand_over = hand_over  # seeds the live model with what the host wrote, and starts it
+        #: the host's requests the recording answered, with the exchange each matched
+        self.heard: list[tuple[Exchange, bytes]] = []
         self._buffer = b""
         self._cursor = 0
         #: how requests were answered: "exact", a tolerance's name, or "unknown"
@@ -174,6 +179,8 @@ class Replayer:
     def _answer(self, message: bytes, exchange: Exchange, how: str) -> None:
         self.counts[how] = self.counts.get(how, 0) + 1
         self._cursor = (exchange.index + 1) % max(1, len(self.session.exchanges))
+        if self.live is not None:
+            self.heard.append((exchange, message))
         now = asyncio.get_running_loop().time()
         replies = exchange.replies
         adapt = self._adapt.get(how)
@@ -189,6 +196,9 @@ class Replayer:
             warn(f"replay: request not in the recording: {_show(message)}; "
                  f"the live {self.session.kind} model answers from now on")
             self.live_now = True
+            if self._hand_over is not None:
+                self._hand_over(self.heard)
+            self.heard = []
             self.live.feed(message)
             return
         warn(f"replay: request not in the recording: {_show(message)}; no answer (--fallback error)")
@@ -209,19 +219,22 @@ async def replay_session(plan: ReplayPlan) -> int:
     runtime.add_closer(clock.close)
     try:
         async with runtime:
-            live = None
+            live = hand_over = None
             if plan.fallback == "live":
                 session = plan.session
                 assert session.kind is not None
                 try:
-                    live, bridge = await start_live(runtime, clock, session.kind, session.port, plan.config,
-                                                    session.exchanges)
+                    live, bridge = await start_live(runtime, clock, session.kind, session.port, plan.config)
                 except Exception as exc:
                     warn(f"Error: cannot start the live {session.kind} model: {type(exc).__name__}: {exc}")
                     return 1
-                clock.go_live(1.0 if plan.as_fast else plan.speed)
-                bridge.sink = lambda data: outbox.put(loop.time(), data)
-            replayer = Replayer(plan, outbox, live)
+
+                def hand_over(heard: list[tuple[Exchange, bytes]]) -> None:
+                    seed(clock, live, heard)
+                    clock.go_live(1.0 if plan.as_fast else plan.speed)
+                    bridge.sink = lambda data: outbox.put(loop.time(), data)
+
+            replayer = Replayer(plan, outbox, live, hand_over)
             transport: Any = PtyTransport(link=plan.link) if plan.tcp is None else TcpTransport(*plan.tcp)
             try:
                 await transport.start(replayer)
