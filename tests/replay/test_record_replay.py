@@ -409,6 +409,35 @@ def test_ether_sbus_over_tcp_sequence_tolerance_and_live(tmp_path: Path, procs: 
     assert "requests answered: exact 2, sequence 2, unknown 1" in err
 
 
+def test_a_tolerated_match_keeps_the_recorded_order(tmp_path: Path, procs: list[Proc]) -> None:
+    """Recorded: write R 100 := 1000, read it, write 2000, read it (sequence numbers 1 … 4).  A
+    host counting from 3 writes 1000 (sequence 3: the recorded first write, by the tolerance) and
+    reads (sequence 4, byte for byte the recording's *second* read): it gets 1000, the answer in
+    order, not 2000."""
+    device = _start(procs, "run", "pcd4h3", "--pty", "--port", "ether_tcp=tcp:0", "--port", "ether_udp=udp:0")
+    device_url = device.value("pcd4h3.ether_tcp: tcp")
+    session = tmp_path / "ether.devsim"
+    recorder = _start(procs, "record", "--port", device_url, "--out", str(session), "--kind", "pcd4h3",
+                      "--device-port", "ether_tcp", "--tcp", "0")
+
+    def host(url: str, first: int, values: tuple[int, ...]) -> list[int]:
+        read = []
+        with _connect(url) as sock:
+            for n, value in enumerate(values):
+                _ether_ask(sock, first + 2 * n, bytes([1, 0x0E, 0]) + struct.pack(">Hi", 100, value))
+                reply = _ether_ask(sock, first + 2 * n + 1, bytes([1, 0x06, 0]) + struct.pack(">H", 100))
+                read.append(int.from_bytes(reply[9:-2], "big", signed=True))
+        return read
+
+    assert host(recorder.value("record: tcp"), 1, (1000, 2000)) == [1000, 2000]
+    assert recorder.stop()[0] == 0
+    replay = _start(procs, "replay", str(session), "--tcp", "0")
+    assert host(replay.value("replay: tcp"), 3, (1000,)) == [1000]
+    status, err = replay.stop()
+    assert status == 0, err
+    assert "requests answered: sequence 2" in err
+
+
 @pytest.mark.parametrize("args, earliest, latest", [([], 0.6, None), (["--speed", "4"], 0.15, 0.6)],
                          ids=["as-recorded", "speed-4"])
 def test_replay_keeps_the_recorded_delay(tmp_path: Path, procs: list[Proc], args: list[str], earliest: float,

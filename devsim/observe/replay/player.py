@@ -5,8 +5,8 @@ The host's bytes are cut into requests by the framing the kind declares on the p
 (:attr:`devsim.core.kit.PortDef.framing`; unframed ports: a request is complete when it equals a
 recorded one).  Each request is matched
 against the recording's requests (:mod:`devsim.observe.replay.session`), starting at the exchange after
-the last one matched and wrapping around, first byte-exact, then with each of the kind's
-port's tolerances in turn (GMS96: checksum, FCB; Ether-S-Bus: sequence number).  A match is answered with the recorded answer, each
+the last one matched and wrapping around: the first that matches byte-exact or by one of the
+kind's port's tolerances (GMS96: checksum, FCB; Ether-S-Bus: sequence number).  A match is answered with the recorded answer, each
 chunk after its recorded delay divided by ``speed`` (``as_fast``: no delay); answers leave in
 order through one queue.
 
@@ -144,16 +144,17 @@ class Replayer:
         return exchanges[self._cursor :] + exchanges[: self._cursor]
 
     def match(self, message: bytes) -> tuple[Exchange, str] | None:
-        """The recorded exchange answering ``message`` and how it matched, or ``None``."""
-        order = self._order()
-        for exchange in order:
+        """The recorded exchange answering ``message`` and how it matched, or ``None``: the first
+        from the cursor on that matches byte-exact or by a tolerance (an exact match further on
+        does not beat a tolerated one here: a host whose sequence numbers or FCBs differ would
+        get a later answer out of order)."""
+        keys = [(tolerance.name, tolerance.key, tolerance.key(message)) for tolerance in self.framing.tolerances]
+        for exchange in self._order():
             if exchange.request == message:
                 return exchange, "exact"
-        for tolerance in self.framing.tolerances:
-            key = tolerance.key(message)
-            for exchange in order:
-                if tolerance.key(exchange.request) == key:
-                    return exchange, tolerance.name
+            for name, key, mine in keys:
+                if key(exchange.request) == mine:
+                    return exchange, name
         return None
 
     def _unframed(self) -> None:
