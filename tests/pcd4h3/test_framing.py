@@ -76,6 +76,10 @@ def test_descriptions_at_the_limits() -> None:
     assert _describe("device", _frame(0x8000, 2, b"\x00\x00")) == [
         {"sequence": 0x8000, "attribute": "ack/nak", "payload": "00 00", "crc_ok": True}]  # no station
     assert _describe("host", _frame(1, 7, b"\x01\x06", good_crc=False))[0]["attribute"] == 7
+    ev14 = bytes.fromhex("00 00 00 0C 01 00 00 01 01 52 69 7D")  # 12 bytes: the station's 'R' (spec §9.4 EV14)
+    assert _describe("device", ev14, _frame(2, 1, b"\x00")) == [
+        {"sequence": 1, "attribute": "response", "payload": "52", "crc_ok": True},
+        {"sequence": 2, "attribute": "response", "payload": "00", "crc_ok": True}]  # and what follows it
 
 
 @given(hs.lists(telegrams().map(lambda t: t[0]), max_size=3), hs.binary(min_size=2, max_size=20))
@@ -87,8 +91,8 @@ def test_split_gives_the_whole_telegrams_and_keeps_the_unfinished_one(frames: li
     assert ETHER_TCP.split(b"".join(frames) + nxt) == ([*frames, nxt], b"")
 
 
-@pytest.mark.parametrize("length", [0, 12, 4097, 0xFFFFFFFF])
-def test_a_length_outside_13_to_4096_is_one_message_with_what_follows(length: int) -> None:
+@pytest.mark.parametrize("length", [0, 11, 4097, 0xFFFFFFFF])
+def test_a_length_outside_12_to_4096_is_one_message_with_what_follows(length: int) -> None:
     assert ETHER_TCP.split is not None
     good = _frame(1, 0, b"\x01\x1b")
     bad = struct.pack(">I", length) + b"\x01\x00\x00"
@@ -97,8 +101,8 @@ def test_a_length_outside_13_to_4096_is_one_message_with_what_follows(length: in
     assert ETHER_TCP.split(bad[:3]) == ([], bad[:3])  # three do not
 
 
-@pytest.mark.parametrize("length", [13, 4096])
-def test_a_length_of_13_or_4096_is_a_telegram_still_arriving(length: int) -> None:
+@pytest.mark.parametrize("length", [12, 13, 4096])
+def test_a_length_of_12_or_4096_is_a_telegram_still_arriving(length: int) -> None:
     assert ETHER_TCP.split is not None
     start = struct.pack(">I", length) + b"\x01\x00"
     assert ETHER_TCP.split(start) == ([], start)
@@ -114,9 +118,9 @@ def test_another_sequence_number_is_the_same_request(frame: bytes, sequence: int
 
 
 @pytest.mark.parametrize("message", [
-    b"", b"\x00\x00\x00\x0d", _frame(1, 0, b"\x01")[:-1] + b"\x00",  # 12 bytes saying 13
+    b"", b"\x00\x00\x00\x0d", _frame(1, 0, b"\x01")[:-1],  # 11 bytes saying 12
     _frame(1, 0, b"\x01\x1b") + b"\x00",  # one byte more than the length says
-    _frame(1, 0, b"\x01")])  # 12 bytes, saying so
+    _frame(1, 0, b"")])  # 11 bytes, saying so: shorter than any telegram
 def test_what_is_no_telegram_is_its_own_key(message: bytes) -> None:
     assert SEQUENCE.key(message) == message
     assert SEQUENCE.adapt is not None and SEQUENCE.adapt(message, b"recorded") == b"recorded"

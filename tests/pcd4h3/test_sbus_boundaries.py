@@ -225,10 +225,11 @@ def test_ether_frames_by_version_type_attribute_length_and_crc(
     assert parsed == ((version, 7, Request(payload[0], payload[1], payload[2:])) if good else None)
 
 
-@pytest.mark.parametrize(("length", "taken"), [(12, False), (13, True), (4096, True), (4097, False), (0, False)])
+@pytest.mark.parametrize(("length", "taken"), [(11, False), (12, True), (13, True), (4096, True), (4097, False),
+                                               (0, False)])
 def test_ether_stream_lengths(length: int, taken: bool) -> None:
-    """A TCP stream's length field outside 13…4096 is no frame: the receiver drops what it
-    holds and resynchronises on the next write."""
+    """A TCP stream's length field outside 12…4096 (12: a one-byte answer, spec EV14) is no
+    frame: the receiver drops what it holds and resynchronises on the next write."""
     frame = length.to_bytes(4, "big") + bytes(max(0, length - 4))
     receiver = EtherReceiver()
     assert receiver.feed(frame) == ([frame] if taken else [])

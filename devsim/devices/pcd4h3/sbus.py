@@ -264,9 +264,11 @@ def pack_bits(values: list[int]) -> bytes:
 
 
 # -- Ether-S-Bus (§9.3) ----------------------------------------------------------------------------
-#: The shortest Ether-S-Bus telegram (9-byte header, station and command, CRC) and the longest
-#: one taken (a length field outside them is not a frame).
-ETHER_MIN, ETHER_MAX = 13, 4096
+#: The shortest Ether-S-Bus telegram (9-byte header, one byte, CRC: the answer to "read PCD
+#: status" or "read station number", spec EV14) and the longest one taken (a length field outside
+#: them is not a frame); a request carries station and command at least.
+ETHER_MIN, ETHER_MAX = 12, 4096
+ETHER_REQUEST_MIN = 13
 
 
 def ether_length_ok(length: int) -> bool:
@@ -282,7 +284,7 @@ def ether_frame(version: int, sequence: int, attribute: int, payload: bytes) -> 
 def parse_ether(frame: bytes) -> tuple[int, int, Request] | None:
     """(version, sequence, request) of one Ether-S-Bus request frame, or None (bad length,
     type, attribute or CRC: dropped)."""
-    if len(frame) < ETHER_MIN:
+    if len(frame) < ETHER_REQUEST_MIN:
         return None
     length, version, kind, sequence, attribute = struct.unpack(">IBBHB", frame[:9])
     if length != len(frame) or version not in (0, 1) or kind != 0 or attribute != REQUEST:
