@@ -146,6 +146,8 @@ CASES: list[tuple[int, str, Case]] = [
     (exits.SYSTEM, "replay: port in use", lambda f, a, b: ["replay", str(f / "session.devsim"), "--tcp", str(b)]),
     (exits.SYSTEM, "scenario: cannot write", lambda f, a, b: ["scenario", "run", str(f / "fails.yaml"), "--trace-dir",
                                                              str(f / "trace.txt" / "dir")]),
+    (exits.SYSTEM, "scenario: junit cannot write", lambda f, a, b: ["scenario", "run", str(f / "fails.yaml"), "--junit",
+                                                                   str(f / "trace.txt" / "out.xml")]),
     (exits.SYSTEM, "plot: cannot write", lambda f, a, b: ["plot", str(f / "trace.txt"), "-o", str(f / "no/x.png")]),
     # -- a scenario that does not pass
     (exits.FAILED, "scenario: expectation", lambda f, a, b: ["scenario", "run", str(f / "fails.yaml")]),

@@ -138,7 +138,10 @@ def scenario_run(
     with _page(control, listen):
         results = _run_files(scenarios, files, mode, speed, state_dir, trace_dir, pictures, progress, control)
     if junit is not None:
-        write_junit(results, junit)
+        try:
+            write_junit(results, junit)
+        except OSError as exc:  # (the results are printed already: the file alone is missing)
+            raise exits.SystemFailure(f"--junit {junit}: {exc.strerror or exc}") from None
     failed = [r for r in results if not r.passed]
     if len(results) > 1:
         click.echo(f"{len(results) - len(failed)} of {len(results)} scenarios passed")
