@@ -167,6 +167,8 @@ class Runner:
         self.traffic: dict[str, _Traffic] = {}
         self.t0 = 0.0
         self._turned = -_QUIET_SPAN  # wall time of the last drain
+        #: (device, input) → its value before the pulses on it began, and when the last of them ends
+        self._pulses: dict[tuple[str, str], tuple[Any, float]] = {}
 
     # -- time ----------------------------------------------------------------------------------
     @property
@@ -455,11 +457,23 @@ class Runner:
         return False
 
     async def _do_pulse(self, action: Any, index: int) -> bool:
+        """Set the input, and put it back after ``width``; pulses on one input that overlap are
+        one pulse to their last end, which puts back the value from before the first."""
         device = self.plant.devices[action.device]
         name = action.input if "." in action.input else f"input.{action.input}"
-        before = device.read(name)
+        key = (action.device, name)
+        end = self.clock.now() + action.width
+        before, ends = self._pulses.get(key, (device.read(name), end))
+        self._pulses[key] = (before, max(ends, end))
         device.set(name, action.value)
-        self.clock.call_later(action.width, lambda: device.set(name, before))
+
+        def put_back() -> None:
+            base, last = self._pulses.get(key, (before, end))
+            if last <= self.clock.now():
+                del self._pulses[key]
+                device.set(name, base)
+
+        self.clock.call_later(action.width, put_back)
         return False
 
     async def _do_fault(self, action: Any, index: int) -> bool:

@@ -105,6 +105,21 @@ def test_set_pulse_and_expect_state() -> None:
     assert wrong.failures[0].message == "x.param.P1300 == 1: is 0"
 
 
+def test_overlapping_pulses_on_one_input_are_one_pulse_to_the_last_end() -> None:
+    """Two pulses on I2, 0 … 100 ms and 50 … 150 ms: I2 stays on to 150 ms (the first one's end
+    does not cut the second), then off (the second does not put back the first one's on)."""
+    result = run([
+        {"pulse": {"device": "x", "input": "I2", "width": "100ms"}},
+        {"after": "50ms", "pulse": {"device": "x", "input": "I2", "width": "100ms"}},
+        {"after": "75ms", "expect_state": {"device": "x", "name": "input.I2", "equals": True}},  # 125 ms
+        {"after": "50ms", "expect_state": {"device": "x", "name": "input.I2", "equals": False}},  # 175 ms
+        {"after": "1s", "expect_state": {"device": "x", "name": "input.I2", "equals": False}},
+        {"pulse": {"device": "x", "input": "I2", "width": "10ms"}},  # and a pulse after them as before
+        {"after": "20ms", "expect_state": {"device": "x", "name": "input.I2", "equals": False}},
+    ])
+    assert result.passed, format_report(result)
+
+
 def test_device_faults() -> None:
     result = run([
         {"send": "#1 ON V=60 W=360 E\r"},
