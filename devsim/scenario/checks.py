@@ -77,35 +77,41 @@ def _point_problem(points: Any, owner: str, name: str, value: Any) -> str | None
 
 
 def step_problems(index: int, step: Any, kinds: Mapping[str, str]) -> list[Problem]:
-    """Problems of the names in step ``index`` (a parsed ``Step``); ``kinds``: device → kind of
-    the devices that parsed (a step on another device is left to the reference check)."""
+    """Problems of the names in step ``index`` (a parsed ``Step``), each part against the kind of
+    the device it names (a step may wait on one device and act on another); ``kinds``: device →
+    kind of the devices that parsed (a part on another device is left to the reference check)."""
     at = ("steps", index)
-    target = step.set or step.pulse or step.when or step.expect_state
-    if target is None or target.device not in kinds:
-        return []
-    try:
-        points = device_class(kinds[target.device]).points
-    except UnknownKind:
-        return []  # reported at the device
     problems: list[Problem] = []
-    if step.set is not None:
+    if step.set is not None and (points := _points(step.set.device, kinds)) is not None:
         for name, value in step.set.values.items():
             text = _point_problem(points, step.set.device, name, value)
             if text is not None:
                 problems.append(((*at, "set", "values", name), text))
-    if step.pulse is not None:
+    if step.pulse is not None and (points := _points(step.pulse.device, kinds)) is not None:
         name = step.pulse.input if "." in step.pulse.input else f"input.{step.pulse.input}"
         text = _point_problem(points, step.pulse.device, name, step.pulse.value)
         if text is not None:
             problems.append(((*at, "pulse", "input"), text))
     for key in ("when", "expect_state"):
         cond = getattr(step, key)
-        if cond is not None and not cond.name.startswith("line."):
-            try:
-                points.lookup(cond.name, cond.device)
-            except UnknownName as exc:
-                problems.append(((*at, key, "name"), str(exc)))
+        if cond is None or cond.name.startswith("line.") or (points := _points(cond.device, kinds)) is None:
+            continue
+        try:
+            points.lookup(cond.name, cond.device)
+        except UnknownName as exc:
+            problems.append(((*at, key, "name"), str(exc)))
     return problems
+
+
+def _points(device: str, kinds: Mapping[str, str]) -> Any:
+    """The points of ``device``'s kind, or None (a device that did not parse, an unknown kind:
+    reported elsewhere)."""
+    if device not in kinds:
+        return None
+    try:
+        return device_class(kinds[device]).points
+    except UnknownKind:
+        return None
 
 
 def fault_problem(fault: str, kind: str) -> str | None:

@@ -127,3 +127,23 @@ def test_a_plant_given_as_data_counts_from_1_too() -> None:
     with pytest.raises(Invalid, match=r"^steps\.2\.fault\.device: no device named 'b'$"):
         scenario_from_dict({"devices": [{"name": "a", "kind": "sers"}],
                             "steps": [{"wait": "1s"}, {"fault": {"device": "b", "kind": "power_off"}}]})
+
+
+def test_each_part_of_a_step_is_checked_against_its_own_devices_kind(tmp_path: Path) -> None:
+    """A step that waits on a GMS96 and checks a SERS: each name against its own device's kind,
+    not both against the first's (which refused memory_status, a GMS96 name, and let input.I3
+    on the GMS96 through)."""
+    good = tmp_path / "good.yaml"
+    good.write_text("devices:\n  - {name: s, kind: sers}\n  - {name: g, kind: gms96}\nsteps:\n"
+                    "  - when: {device: s, name: energized, equals: false}\n"
+                    "    expect_state: {device: g, name: memory_status, equals: 0}\n")
+    done = check(good)
+    assert done.returncode == 0, done.stderr
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("devices:\n  - {name: s, kind: sers}\n  - {name: g, kind: gms96}\nsteps:\n"
+                   "  - when: {device: s, name: input.I3, equals: false}\n"
+                   "    expect_state: {device: g, name: input.I3, equals: true}\n")
+    done = check(bad)
+    assert done.returncode == exits.BAD_FILE
+    [line] = done.stderr.splitlines()
+    assert line.startswith(f"{bad}:6: steps.1.expect_state.name: g has no 'input.I3'"), line
