@@ -137,7 +137,8 @@ LABELS: Table[Callable[[Any], str]] = Table((
     Command("send", lambda v: f"send {_show(v.payload())}", _STEPS),
     Command("expect", _expect_label, _STEPS),
     Command("expect_state", lambda v: f"expect {v.describe()}", _STEPS),
-    Command("expect_traffic", lambda v: f"expect {v.direction} sent /{_escape(v.regex)}/", _STEPS),
+    Command("expect_traffic", lambda v: f"expect {v.direction} sent /{_escape(v.regex)}/"
+            + (f" {v.count} times" if v.count is not None else ""), _STEPS),
     Command("expect_timing", lambda v: f"expect {v.device} {v.event} between {v.between[0]:g}s and {v.between[1]:g}s",
             _STEPS),
     Command("set", lambda v: f"set {v.device} " + ", ".join(f"{k}={x!r}" for k, x in v.values.items()), _STEPS),

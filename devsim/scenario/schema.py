@@ -283,7 +283,7 @@ def _text_or_bytes(value: Any) -> bytes:
     if isinstance(value, bytes):
         return value
     if isinstance(value, str):
-        return value.encode("latin-1")
+        return _latin1(value)
     raise ValueError("must be a string")
 
 
@@ -315,11 +315,26 @@ class ExpectAction(Typed):
     def __post_init__(self) -> None:
         if (self.bytes is None) == (self.regex is None):
             raise ValueError("give either bytes or regex")
+        if self.bytes is not None:
+            _latin1(self.bytes)
         if self.regex is not None:
-            try:
-                re.compile(self.regex.encode("latin-1"))
-            except re.error as exc:
-                raise ValueError(f"bad regex: {exc}") from None
+            _byte_regex(self.regex)
+
+
+def _latin1(text: str) -> bytes:
+    """Text that stands for bytes on the line: latin-1, one byte per character."""
+    try:
+        return text.encode("latin-1")
+    except UnicodeEncodeError as exc:
+        raise ValueError(f"{text[exc.start:exc.end]!r} is no byte: the line's text is latin-1 "
+                         "(one character a byte, \\xNN for any byte)") from None
+
+
+def _byte_regex(regex: str) -> None:
+    try:
+        re.compile(_latin1(regex))
+    except re.error as exc:
+        raise ValueError(f"bad regex: {exc}") from None
 
 
 class SetAction(Typed):
@@ -373,6 +388,9 @@ class TrafficExpectation(Typed, kw_only=True):
     direction: Literal["host", "device"] = "host"
     regex: str
     count: Annotated[Annotated[int, Meta(ge=0)] | None, doc("exact number of matches")] = None
+
+    def __post_init__(self) -> None:
+        _byte_regex(self.regex)
 
 
 class TimingExpectation(Typed):

@@ -147,3 +147,18 @@ def test_each_part_of_a_step_is_checked_against_its_own_devices_kind(tmp_path: P
     assert done.returncode == exits.BAD_FILE
     [line] = done.stderr.splitlines()
     assert line.startswith(f"{bad}:6: steps.1.expect_state.name: g has no 'input.I3'"), line
+
+
+def test_a_traffic_regex_and_a_character_that_is_no_byte_are_mistakes_of_the_file(tmp_path: Path) -> None:
+    """Both passed `check` and then stopped the run with a traceback (re.error, UnicodeEncodeError)."""
+    bad = tmp_path / "bad.yaml"
+    bad.write_text('devices:\n  - {name: x, kind: sers}\nsteps:\n  - send: "#1\\r"\n'
+                   '  - expect_traffic: {regex: "P11=(", direction: device}\n  - expect: {bytes: "\u20ac"}\n'
+                   '  - send: "\u20ac"\n', encoding="utf-8")
+    done = check(bad)
+    assert done.returncode == exits.BAD_FILE
+    assert done.stderr.splitlines() == [
+        f"{bad}:5: steps.2.expect_traffic: bad regex: missing ), unterminated subpattern at position 4",
+        f"{bad}:6: steps.3.expect: '\u20ac' is no byte: the line's text is latin-1 (one character a byte, \\xNN for any byte)",
+        f"{bad}:7: steps.4.send: '\u20ac' is no byte: the line's text is latin-1 (one character a byte, \\xNN for any byte)",
+    ]
