@@ -102,7 +102,7 @@ class MqttUrl(str):
 
 # -- ports and facades ----------------------------------------------------------------------
 class PtySpec(Typed):
-    link: str | None = None
+    link: Annotated[str, Meta(min_length=1), doc("a path for a symlink to the pty")] | None = None
 
 
 class TcpSpec(Typed):

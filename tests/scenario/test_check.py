@@ -162,3 +162,12 @@ def test_a_traffic_regex_and_a_character_that_is_no_byte_are_mistakes_of_the_fil
         f"{bad}:6: steps.3.expect: '\u20ac' is no byte: the line's text is latin-1 (one character a byte, \\xNN for any byte)",
         f"{bad}:7: steps.4.send: '\u20ac' is no byte: the line's text is latin-1 (one character a byte, \\xNN for any byte)",
     ]
+
+
+def test_an_empty_link_is_a_mistake_of_the_file(tmp_path: Path) -> None:
+    """It passed `check`, and `up` and `scenario run` ended with a traceback."""
+    bad = tmp_path / "bad.yaml"
+    bad.write_text('devices:\n  - {name: x, kind: sers, transport: {pty: {link: ""}}}\n')
+    done = check(bad)
+    assert done.returncode == exits.BAD_FILE
+    assert done.stderr == f"{bad}:2: devices.1.transport.pty.link: String should have at least 1 character\n"
