@@ -349,13 +349,13 @@ class Runner:
                 self.on_step(None, 0.0)
             previous = self.t0
             for index, step in enumerate(scenario.steps, start=1):
-                if self.clock.now() - self.t0 > scenario.timeout:
-                    raise _Abort(f"the scenario ran longer than its timeout of {scenario.timeout:g}s")
                 outcome = await self._step(index, step, previous)
                 result.steps.append(outcome)
                 if self.on_step is not None:
                     self.on_step(outcome, self.now())
                 previous = self.clock.now()
+                if previous - self.t0 > scenario.timeout:  # (after each step: the last one too)
+                    raise _Abort(f"the scenario ran longer than its timeout of {scenario.timeout:g}s")
                 if outcome.status == "fail" and step.when is not None and outcome.message.startswith("condition"):
                     for rest_index, rest in enumerate(scenario.steps[index:], start=index + 1):
                         result.steps.append(StepResult(rest_index, rest.line, _label(rest), self.now(), "skipped"))

@@ -399,3 +399,10 @@ def test_every_step_action_of_the_schema_is_a_row_of_the_runners_table() -> None
     from devsim.scenario import runner, schema
 
     assert sorted(row.token for row in runner.ACTIONS) == sorted(schema.ACTIONS)
+
+
+@pytest.mark.parametrize("steps", [[{"wait": 50}], [{"wait": 50}, {"log": "after"}]], ids=["last", "not-last"])
+def test_the_scenarios_timeout_holds_for_its_last_step_too(steps: list[dict[str, Any]]) -> None:
+    """timeout: the limit on the whole run; a last step that ran past it passed before."""
+    result = run(steps, timeout="1s")
+    assert not result.passed and result.error == "the scenario ran longer than its timeout of 1s"
