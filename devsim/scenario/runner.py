@@ -612,8 +612,10 @@ def run_scenario(
     control: str | None = None,
 ) -> ScenarioResult:
     """Run a scenario in a fresh runtime (background thread); ``mode`` virtual or realtime
-    (default: the scenario's own choice)."""
+    (default: the scenario's own choice; anything else is a ``ValueError``)."""
     chosen = mode or scenario.mode()
+    if chosen not in ("virtual", "realtime"):
+        raise ValueError(f"a scenario's time mode is 'virtual' or 'realtime', not {chosen!r}")
     runtime = Runtime(
         virtual=chosen == "virtual", speed=speed if speed is not None else scenario.speed, state_dir=state_dir
     ).start()

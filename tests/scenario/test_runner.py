@@ -406,3 +406,9 @@ def test_the_scenarios_timeout_holds_for_its_last_step_too(steps: list[dict[str,
     """timeout: the limit on the whole run; a last step that ran past it passed before."""
     result = run(steps, timeout="1s")
     assert not result.passed and result.error == "the scenario ran longer than its timeout of 1s"
+
+
+def test_a_time_mode_that_is_neither_virtual_nor_realtime_is_refused() -> None:
+    """(The pytest marker's mode="Virtual" ran in real time.)"""
+    with pytest.raises(ValueError, match="'virtual' or 'realtime', not 'Virtual'"):
+        run([{"wait": 1}], mode="Virtual")
