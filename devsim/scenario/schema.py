@@ -247,9 +247,9 @@ class Condition(Typed):
                 raise ValueError(f"bad regex: {exc}") from None
 
     def test(self, value: Any) -> bool:
-        if self.has_equals and value != self.equals:
+        if self.has_equals and not _same(value, self.equals):
             return False
-        if self.has_not_equals and value == self.not_equals:
+        if self.has_not_equals and _same(value, self.not_equals):
             return False
         number = value if isinstance(value, int | float) and not isinstance(value, bool) else None
         for op, limit in (("lt", self.lt), ("le", self.le), ("gt", self.gt), ("ge", self.ge)):
@@ -275,6 +275,18 @@ class Condition(Typed):
         if self.approx is not None:
             tests.append(f"≈ {self.approx} ± {self.tolerance}")
         return f"{self.device}.{self.name} {' and '.join(tests)}"
+
+
+def _same(value: Any, wanted: Any) -> bool:
+    """``value == wanted``, but a boolean equals only a boolean (Python's ``False == 0``: a
+    ``equals: 0`` held for a switch that is off)."""
+    if isinstance(value, bool) != isinstance(wanted, bool):
+        return False
+    if isinstance(value, list | tuple) and isinstance(wanted, list | tuple):
+        return len(value) == len(wanted) and all(_same(a, b) for a, b in zip(value, wanted, strict=True))
+    if isinstance(value, dict) and isinstance(wanted, dict):
+        return value.keys() == wanted.keys() and all(_same(value[k], wanted[k]) for k in value)
+    return bool(value == wanted)
 
 
 # -- actions and expectations -------------------------------------------------------------------

@@ -412,3 +412,15 @@ def test_a_time_mode_that_is_neither_virtual_nor_realtime_is_refused() -> None:
     """(The pytest marker's mode="Virtual" ran in real time.)"""
     with pytest.raises(ValueError, match="'virtual' or 'realtime', not 'Virtual'"):
         run([{"wait": 1}], mode="Virtual")
+
+
+def test_a_boolean_equals_only_a_boolean() -> None:
+    """(Python's False == 0: ``equals: 0`` held for an input that is off, ``not_equals: 0`` failed.)"""
+    result = run([
+        {"expect_state": {"device": "x", "name": "input.I1", "equals": False}},
+        {"expect_state": {"device": "x", "name": "input.I1", "not_equals": 0}},
+        {"expect_state": {"device": "x", "name": "input.I1", "equals": 0}},
+        {"expect_state": {"device": "x", "name": "display", "equals": {"char": "4", "blinking": False}}},
+        {"expect_state": {"device": "x", "name": "display", "equals": {"char": "4", "blinking": 0}}},  # inside too
+    ])
+    assert statuses(result) == ["pass", "pass", "fail", "pass", "fail"]
