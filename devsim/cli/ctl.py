@@ -246,7 +246,7 @@ def ctl_scenario(ctx: click.Context) -> None:
 @click.argument("device", required=False)
 @click.argument("names", nargs=-1)
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per line instead of text.")
-@click.option("--period", type=float, metavar="SECONDS", help="Sampling period in device time (default 0.1).")
+@click.option("--period", type=float, metavar="SECONDS", help="Sampling period in device time (default 0.1, at least 0.001).")
 def ctl_watch(device: str | None, names: tuple[str, ...], as_json: bool, period: float | None) -> None:
     """Print changes of DEVICE's NAMEs (default: its state and axes) and its events (move start
     and end, faults, errors, host connects) as they happen, one line each, until Ctrl-C or the

@@ -157,8 +157,8 @@ def _telegrams(rt: Runtime, req: rq.Telegrams) -> list[dict[str, Any]]:
 
 
 def _watch(rt: Runtime, req: rq.Watch) -> WatchStart:
-    if req.period is not None and not (math.isfinite(req.period) and req.period > 0):
-        raise BadRequest("'period' must be a positive number of seconds")
+    if req.period is not None and not (math.isfinite(req.period) and req.period >= rq.MIN_WATCH_PERIOD):
+        raise BadRequest(f"'period' must be a number of seconds from {rq.MIN_WATCH_PERIOD:g} on")
     rt.device(req.device)
     return WatchStart(device=req.device, names=req.names, period=req.period)
 

@@ -16,6 +16,7 @@ from typing import Any
 import msgspec
 
 __all__ = [
+    "MIN_WATCH_PERIOD",
     "Advance",
     "Capture",
     "ControlRequest",
@@ -106,10 +107,15 @@ class Telegrams(ControlRequest, frozen=True):
     count: int = 20
 
 
+#: The shortest sampling period of a watch (device seconds): a shorter one samples millions of
+#: times per simulated second, and one client's watch would stop the simulator for every other.
+MIN_WATCH_PERIOD = 0.001
+
+
 class Watch(ControlRequest, frozen=True):
     device: str
     names: list[str] | None = None
-    period: float | None = None
+    period: float | None = None  # (MIN_WATCH_PERIOD at least)
 
 
 class Capture(ControlRequest, frozen=True):

@@ -244,6 +244,8 @@ def test_watch_protocol_by_hand() -> None:
             assert ask({"id": 1, "op": "watch", "device": "nope"})["type"] == "UnknownDevice"
             assert ask({"id": 2, "op": "watch", "device": "sers", "names": ["nope"]})["type"] == "UnknownName"
             assert ask({"id": 3, "op": "watch", "device": "sers", "period": 0})["type"] == "BadRequest"
+            tiny = ask({"id": 4, "op": "watch", "device": "sers", "period": 1e-9})  # (it sampled 1e9 times a second)
+            assert tiny["type"] == "BadRequest" and "from 0.001 on" in str(tiny["error"]), tiny
             answer = ask({"id": "w", "op": "watch", "device": "sers", "names": ["input.I2"], "period": 0.5})
             assert answer == {"id": "w", "ok": True,
                               "result": {"device": "sers", "names": ["input.I2"], "period": 0.5, "t": 0.0}}
