@@ -210,6 +210,10 @@ def test_run_pty_control_and_clean_sigint(sockdir: str) -> None:
         done = ctl(addr, "set", "echo", "input.mute", "false")
         assert (done.returncode, done.stdout) == (0, "ok\n"), done.stderr
         assert ctl(addr, "set", "echo", "value", "2.5").returncode == 0
+        done = ctl(addr, "set", "echo", "value", "-2.5")  # a negative number is a value, not an option
+        assert done.returncode == 0, done.stderr
+        assert json.loads(ctl(addr, "--json", "read", "echo", "value").stdout) == -2.5
+        assert ctl(addr, "set", "echo", "value", "2.5").returncode == 0
         done = ctl(addr, "set", "echo", "value", "hello")  # checked before it takes effect
         assert done.returncode == exits.REFUSED and "expects a number" in done.stderr
         assert json.loads(ctl(addr, "--json", "read", "echo", "value").stdout) == 2.5

@@ -112,7 +112,7 @@ def ctl_read(ctx: click.Context, device: str, names: tuple[str, ...]) -> None:
     _call(ctx, *(rq.Read(device, name) for name in names))
 
 
-@ctl.command(command_name("set"))
+@ctl.command(command_name("set"), context_settings={"ignore_unknown_options": True})  # (a VALUE of -5)
 @click.argument("device")
 @click.argument("name")
 @click.argument("value")
