@@ -53,9 +53,10 @@ LOOPBACK_NAMES = frozenset({"localhost", "127.0.0.1", "::1"})
 Action = Callable[[PlantView, str, dict[str, Any]], Awaitable[Any]]
 
 
-def _flag(body: dict[str, Any], name: str, default: bool = True) -> bool:
-    value = body.get(name, default)
-    return value if isinstance(value, bool) else str(value).lower() in ("1", "true", "on", "yes")
+def _flag(body: dict[str, Any], name: str, default: bool = True) -> Any:
+    """The flag as the page sent it: the control API checks it as it checks ``ctl``'s (a word
+    that is no boolean is refused there; read here as off, it switched a fault off)."""
+    return body.get(name, default)
 
 
 async def _set(view: PlantView, device: str, body: dict[str, Any]) -> Any:
@@ -71,7 +72,7 @@ async def _line_fault(view: PlantView, device: str, body: dict[str, Any]) -> Any
     kind = body.get("kind")
     params = body.get("params")
     if not isinstance(params, dict):
-        params = dict(LINE_FAULTS.get(str(kind), {})) if active else {}
+        params = dict(LINE_FAULTS.get(str(kind), {})) if active not in (False, "false", "off", "no", 0, "0") else {}
     return await view.link.request("line_fault", device=device, kind=kind, active=active,
                                    port=body.get("port") or "main", params=params)
 

@@ -115,6 +115,13 @@ async def test_faults_line_faults_and_power_cycle_go_to_the_device(sim: WebSim) 
                        5, "the fault on the plant page")
         wrong = await http.post("/api/devices/sers/fault", json={"kind": "flood"})
         assert wrong.status == 422 and "declared: blocked_axis" in (await wrong.json())["error"]
+        for typo in ("ture", 2):  # refused as by ctl (read as off, it switched the fault off)
+            refused = await http.post("/api/devices/sers/fault", json={"kind": "emergency_stop", "active": typo})
+            assert refused.status == 422, typo
+        with ControlClient(sim.control) as client:
+            assert client.read("sers", "input.stop") is True
+        refused = await http.post("/api/devices/sers/power_cycle", json={"wipe": "yes please"})
+        assert refused.status == 422  # (it wiped the memory)
         assert (await http.post("/api/devices/sers/line_fault", json={"kind": "noise", "port": "main"})).status == 200
         plant = await (await http.get("/api/plant")).json()
         assert plant["devices"][0]["ports"]["main"]["line"]["faults"] == ["noise"]
