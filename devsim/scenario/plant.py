@@ -59,7 +59,7 @@ class Plant(msgspec.Struct):
     devices: dict[str, Device] = msgspec.field(default_factory=dict)
     transports: dict[str, Any] = msgspec.field(default_factory=dict)  # port name -> transport
     lines: dict[str, Any] = msgspec.field(default_factory=dict)  # port name -> Line
-    kinds: dict[str, str] = msgspec.field(default_factory=dict)  # port name -> "pty" | "tcp" | "rfc2217" | "udp"
+    kinds: dict[str, str] = msgspec.field(default_factory=dict)  # port name -> "pty" | "tcp" | "rfc2217" | "udp" | ""
     refused: dict[str, str] = msgspec.field(default_factory=dict)  # port name -> why it is not served
     facades: list[str] = msgspec.field(default_factory=list)  # "NAME.canopen: ...", MQTT: lines devsim up prints
 
@@ -92,7 +92,8 @@ class Plant(msgspec.Struct):
         for name in self.transports:
             members = on_bus.get(name, [])
             who = f"{name} ({', '.join(members)})" if members else name
-            rows.append(f"{who}: {self.kinds[name]} {self.port(name)}")
+            kind = self.kinds[name]  # (none for the OPC UA server: its URL says it, as devsim run prints it)
+            rows.append(f"{who}: {kind} {self.port(name)}" if kind else f"{who}: {self.port(name)}")
         return rows + self.facades
 
 
@@ -211,7 +212,7 @@ async def _serve_opcua(plant: Plant) -> None:
     facade = await start_opcua(plant.runtime, list(plant.devices.values()), opcua.spec(), period=opcua.period,
                                name=plant.spec.name or "devsim")
     plant.transports["opcua"] = _Address(facade.url, facade.url)
-    plant.kinds["opcua"] = "opcua"
+    plant.kinds["opcua"] = ""
 
 
 class _Address(msgspec.Struct, frozen=True):

@@ -58,7 +58,7 @@ async def test_a_plant_serves_its_devices_on_one_opcua_server() -> None:
     assert spec.opcua is not None and spec.opcua.period == 0.05
     with plant_running(spec, virtual=True) as plant:
         url = plant.port("opcua")
-        assert f"opcua: opcua {url}" in plant.describe()
+        assert f"opcua: {url}" in plant.describe()  # as devsim run prints it (docs/facades/opcua.md)
         assert await _read(url, "x.quantity.heatsink_temperature") == 47.5
         assert await _read(url, "y.quantity.heatsink_temperature") == plant.runtime.read(
             "y", "quantity.heatsink_temperature")
