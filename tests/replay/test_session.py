@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
 from pathlib import Path
 
@@ -81,8 +82,6 @@ def test_a_bad_session_is_one_line_exit_bad_file(tmp_path: Path, content: str, m
 
 
 async def test_the_handover_clock_is_virtual_then_real() -> None:
-    import asyncio
-
     from devsim.observe.replay.live import HandoverClock
 
     clock = HandoverClock()
@@ -111,3 +110,41 @@ def test_a_last_line_cut_short_ends_the_recording_there(tmp_path: Path) -> None:
     assert session.cut == 4
     assert [(e.request, e.answer) for e in session.exchanges] == [(b"#1 P11?\r", b"#1 P11?\rP11=0\n\r\nok1\n\r")]
     assert load_session(_write(tmp_path / "whole.devsim", "sers", [(0.0, "host", b"#1 P11?\r")])).cut == 0
+
+
+def test_unframed_requests_follow_the_recording_at_the_cursor(tmp_path: Path) -> None:
+    """An IP247 PG transaction (spec ip247.md §3.5.2): the PG's DLE ACK and its parameter block
+    reach the recorder as one request (the device answers neither alone).  Replayed, the DLE ACK
+    may come on its own: it waits for the block instead of matching a later DLE ACK, and the
+    transaction gets its answers in order."""
+    from devsim.observe.replay.player import Replayer, ReplayPlan
+
+    steps = [("02", "10 06"), ("64", "02"), ("10 06", "16 10 03"), ("10 06 04 46 00 00 10 04", "10 06 02"),
+             ("10 06", "00 04 46 00 00 00 00 00 10 03"), ("10 06", "02"), ("10 06", "12 10 03")]
+    writer = SessionWriter(tmp_path / "pg.devsim", kind="ip247", port="pg", device="-", settings=SerialSettings())
+    for n, (host, device) in enumerate(steps):
+        writer.chunk(n + 0.0, "host", bytes.fromhex(host))
+        writer.chunk(n + 0.01, "device", bytes.fromhex(device))
+    writer.close()
+
+    class Outbox:
+        write = None
+
+        def __init__(self) -> None:
+            self.sent: list[bytes] = []
+
+        def put(self, due: float, data: bytes) -> None:
+            self.sent.append(data)
+
+    async def replay() -> list[bytes]:
+        outbox = Outbox()
+        replayer = Replayer(ReplayPlan(load_session(tmp_path / "pg.devsim"), as_fast=True), outbox)  # type: ignore[arg-type]
+        answers = []
+        for host in ("02", "64", "10 06", "10 06", "04 46 00 00 10 04", "10 06", "10 06", "10 06"):
+            replayer.feed(bytes.fromhex(host))  # each step on its own, the DLE ACK apart from its block
+            answers.append(b"".join(outbox.sent).hex(" "))
+            outbox.sent.clear()
+        return answers
+
+    assert asyncio.run(replay()) == ["10 06", "02", "16 10 03", "", "10 06 02", "00 04 46 00 00 00 00 00 10 03", "02",
+                                     "12 10 03"]
