@@ -66,6 +66,8 @@ class CaptureStream:
         self.line: Any = line
         self.limit = limit
         self.info = {"device": device, "port": port, **capture_info(runtime, key)}
+        #: an IPv4 capture's real addresses, where the transport knows them (as a --trace pcap has)
+        self._peers = runtime.trace_peers.get(key) if self.info["link"] == LINKTYPE_IPV4 else None
         self.items: deque[dict[str, Any]] = deque()
         #: Chunks dropped since the last batch (the queue was full).
         self.dropped = 0
@@ -89,8 +91,11 @@ class CaptureStream:
             self.dropped_total += 1
             self._ready.set()
             return
-        self.items.append({"type": "chunk", "device": self.device, "port": self.port, "t": round(when, 6),
-                           "dir": direction, "data": data.hex(), "settings": wire_settings(self.line)})
+        item = {"type": "chunk", "device": self.device, "port": self.port, "t": round(when, 6),
+                "dir": direction, "data": data.hex(), "settings": wire_settings(self.line)}
+        if self._peers is not None and (peers := self._peers()) is not None:
+            item["peers"] = peers
+        self.items.append(item)
         self._ready.set()
 
     def take(self) -> list[dict[str, Any]]:

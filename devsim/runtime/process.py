@@ -74,6 +74,9 @@ class Runtime:
         self.ports: dict[str, str] = {}  # port_key(device, port) -> URL/path a host opens
         #: port_key -> how a serial line's pcap records are tagged (None: captured as IPv4)
         self.capture_tags: dict[str, CaptureTag | None] = {}
+        #: port_key -> the transport's (host, device) addresses of the moment, where it knows them
+        #: (TCP, UDP: what a pcap of its packets carries, a trace's and a live capture's alike)
+        self.trace_peers: dict[str, Callable[[], Any]] = {}
         self.transports: list[Any] = []
         self.closers: list[Callable[[], Awaitable[Any]]] = []
         #: Seconds a TCP host may stay idle before a waiting client takes its place (``--idle-drop``;
@@ -153,6 +156,7 @@ class Runtime:
         self.lines.clear()
         self.ports.clear()
         self.capture_tags.clear()
+        self.trace_peers.clear()
         for device in self.devices.values():
             device.close()
         if isinstance(self.clock, VirtualClock):
@@ -260,9 +264,12 @@ class Runtime:
                                      settings=lambda: wire_settings(line))
         await transport.start(line)
         self.transports.append(transport)
+        peers = getattr(transport, "trace_peers", None)
         for key in keys:
             self.lines[key] = line
             self.capture_tags[key] = capture
+            if peers is not None:
+                self.trace_peers[key] = peers
             self.ports[key] = str(getattr(transport, "url", "") or getattr(transport, "address", ""))
         return line
 

@@ -132,13 +132,17 @@ def capture(interface: Interface, fifo: str) -> int:
         if int(info["link"]) == LINKTYPE_USER0:
             tracer = SerialPcapTracer(fifo, protocol=int(info["protocol"]), port=int(info["port_byte"]),
                                       settings=lambda: settings, wait=True)
-        else:
-            tracer = PcapTracer(fifo, name=interface.key, wait=True)
+        else:  # the transport's real addresses where it knows them (a UDP or TCP port), as a --trace pcap
+            peers: list[Any] = [None]
+            tracer = PcapTracer(fifo, name=interface.key, wait=True,
+                                peers=lambda: tuple(tuple(end) for end in peers[0]) if peers[0] else None)
         try:
             for item in stream:
                 if item.get("type") != "chunk":
                     continue  # "dropped": Wireshark read too slowly; a pcap has no place for it
                 settings = item.get("settings") or settings
+                if "peers" in item and not int(info["link"]) == LINKTYPE_USER0:
+                    peers[0] = item["peers"]
                 tracer.record(item["dir"], bytes.fromhex(item["data"]), float(item["t"]))
                 if tracer.closed:
                     break  # Wireshark closed the fifo: the capture is over

@@ -237,8 +237,9 @@ def _whole_packets(path: Path) -> int:
 
 
 def test_the_extcap_writes_a_network_port_as_ipv4(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """The PCD's Ether-S-Bus kind of port: raw IPv4 packets (invented addresses, 127.0.0.2 →
-    127.0.0.1), what a --trace FILE.pcap of a pty-served network port holds too."""
+    """The PCD's Ether-S-Bus kind of port: raw IPv4 packets with the real addresses and ports of
+    the UDP conversation, as a --trace FILE.pcap of the port has them (Wireshark's own Ether-S-Bus
+    dissector knows the packets by their port; invented ones it did not decode)."""
     import socket
     import threading
 
@@ -264,6 +265,7 @@ def test_the_extcap_writes_a_network_port_as_ipv4(tmp_path: Path, monkeypatch: p
             sock.settimeout(5)
             sock.sendto(REQUEST, ("127.0.0.1", transport.port))
             assert sock.recv(100) == REPLY
+            host = ("127.0.0.1", sock.getsockname()[1])
         wait_until(lambda: _whole_packets(out) == 2, "both packets in the file", 30.0)
     finally:
         server.close_sync()  # the stream ends: the extcap closes its file
@@ -271,8 +273,8 @@ def test_the_extcap_writes_a_network_port_as_ipv4(tmp_path: Path, monkeypatch: p
     writer.join(10)
     assert done == [0]
     packets = read_pcap(out)
-    assert [(p[1][0], p[2][0], p[3]) for p in packets] == [("127.0.0.2", "127.0.0.1", REQUEST),
-                                                           ("127.0.0.1", "127.0.0.2", REPLY)]
+    device = ("127.0.0.1", transport.port)
+    assert [(p[1], p[2], p[3]) for p in packets] == [(host, device, REQUEST), (device, host, REPLY)]
 
 
 def test_the_extcap_ends_when_wireshark_closes_the_fifo(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
