@@ -209,3 +209,7 @@ def test_a_fleet_answers_per_process() -> None:
     lines = render([(rq.Devices(), rows)], json_output=False, width=120).splitlines()
     assert lines[0].split() == ["name", "kind", "port", "faults", "process", "host", "pid", "online"]
     assert lines[1].split() == ["press", "sers", "/dev/pts/3", "-", "cell-a-12-ab12", "cell-a", "12", "true"]
+    record = {"name": "check", "done": 1, "total": 2, "now": 0.5, "end": 2.0, "running": True, "steps": []}
+    assert render([(rq.Scenario(), {"cell-b-13-cd34": None, "cell-a-12-ab12": record})], json_output=False,
+                  width=80).splitlines() == [  # (it printed "scenario None: step None of None, ... failed")
+        "cell-a-12-ab12: scenario check: step 1 of 2, 0.5 of 2 s, running", "cell-b-13-cd34: (no scenario runs)"]

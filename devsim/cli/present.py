@@ -261,9 +261,12 @@ def _names(result: Any, view: View) -> str:
 
 
 def _scenario(result: Any, view: View) -> str:
-    """``scenario NAME: step 3 of 7, 2.300 of 5.000 s, running`` and a row per step so far."""
+    """``scenario NAME: step 3 of 7, 2.300 of 5.000 s, running`` and a row per step so far (a
+    fleet: each process's, under its name)."""
     if not isinstance(result, dict):
         return "(no scenario runs)"
+    if "steps" not in result:  # a fleet: process → its record or null
+        return "\n".join(f"{process}: {_scenario(record, view)}" for process, record in sorted(result.items()))
     state = "running" if result.get("running") else ("passed" if result.get("passed") else "failed")
     head = (f"scenario {result.get('name')}: step {result.get('done')} of {result.get('total')}, "
             f"{value_text(result.get('now'))} of {value_text(result.get('end'))} s, {state}")
