@@ -204,6 +204,8 @@ def test_a_fleet_answers_per_process() -> None:
     assert render([(rq.Now(), clocks)], json_output=False, width=80).splitlines() == [
         "process         time", "cell-a-12-ab12  2.5 s", "cell-b-13-cd34  3 s"]
     assert render([(rq.Advance(1.0), clocks)], json_output=False, width=80).splitlines()[0] == "ok"
+    assert render([(rq.Advance(0.1), 6.800000000000001)], json_output=False) == "ok, time 6.8 s"  # to the µs
+    assert render([(rq.Now(), 0.1 + 0.2)], json_output=False) == "0.3 s"
     rows = [{"name": "press", "kind": "sers", "port": "/dev/pts/3", "ports": {"main": "/dev/pts/3"},
              "faults": [], "process": "cell-a-12-ab12", "host": "cell-a", "pid": 12, "online": True}]
     lines = render([(rq.Devices(), rows)], json_output=False, width=120).splitlines()

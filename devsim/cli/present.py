@@ -171,20 +171,27 @@ def _state(result: Any, view: View) -> str:
     return "\n".join(table(rows, width=view.width))
 
 
+def _seconds(value: Any) -> str:
+    """A clock's time to the microsecond (its sum of steps may be 6.800000000000001)."""
+    if isinstance(value, float):
+        return value_text(round(value, 6))
+    return value_text(value)
+
+
 def _advance(result: Any, view: View) -> str:
     if isinstance(result, dict):  # a fleet: each process's new time
         return "ok\n" + _per_process(result, view)
-    return f"ok, time {value_text(result)} s"
+    return f"ok, time {_seconds(result)} s"
 
 
 def _now(result: Any, view: View) -> str:
     if isinstance(result, dict):
         return _per_process(result, view)
-    return f"{value_text(result)} s"
+    return f"{_seconds(result)} s"
 
 
 def _per_process(result: dict[str, Any], view: View) -> str:
-    return "\n".join(table([(process, f"{value_text(t)} s") for process, t in result.items()],
+    return "\n".join(table([(process, f"{_seconds(t)} s") for process, t in result.items()],
                            ("process", "time"), width=view.width))
 
 
