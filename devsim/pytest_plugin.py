@@ -286,8 +286,13 @@ class DeviceFactory:
         boot: bool = True,
     ) -> SimDevice:
         from devsim.scenario.plant import make_transport
+        from devsim.scenario.schema import kind_port_defaults
+        from devsim.scenario.specs import TransportSpec
 
         spec = _transport_spec(transport)
+        #: a port that declares a network transport (the PCD's Ether-S-Bus on UDP and TCP) keeps
+        #: its scheme, on a free port, as in a plant; the others are served on ``transport``
+        declared = {port: TransportSpec.parse({scheme: {}}) for port, (scheme, _n) in kind_port_defaults(kind).items()}
         with self._lock:
             taken = {d.name for d in self.devices}
             if name is None:
@@ -301,7 +306,7 @@ class DeviceFactory:
             device = runtime.add_device(kind, name, dict(config or {}))
             transports = {}
             for port_name in device.port_names():
-                transports[port_name] = make_transport(spec)
+                transports[port_name] = make_transport(declared.get(port_name, spec))
                 runtime.serve_sync(device, transports[port_name], port=port_name)
             first = transports[device.port_names()[0]]
             sim = SimDevice(runtime, name, kind, first, spec.kind, transports)

@@ -128,6 +128,16 @@ def test_several_devices_each_with_its_own_port(devsim_device) -> None:
     assert a.read("energized") is True and b.read("energized") is False
 
 
+def test_ports_that_declare_a_network_transport_keep_it(devsim_device) -> None:  # noqa: ANN001
+    """The PCD4.H3's Ether-S-Bus ports are UDP and TCP, as in a plant (they were ptys), whatever
+    serves its serial S-Bus port."""
+    for transport in ("pty", "tcp"):
+        pcd = devsim_device("pcd4h3", transport=transport, name=f"pcd-{transport}")
+        assert pcd.port_url("ether_udp").startswith("udp://127.0.0.1:"), transport
+        assert pcd.port_url("ether_tcp").startswith("socket://127.0.0.1:"), transport
+        assert pcd.port_url("sbus").startswith("/dev/pts/" if transport == "pty" else "socket://"), transport
+
+
 def test_tcp_and_rfc2217_urls(devsim_device) -> None:
     tcp = devsim_device("sers", transport="tcp")
     rfc = devsim_device("sers", transport={"rfc2217": {"port": 0}}, name="rfc")
