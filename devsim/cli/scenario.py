@@ -15,6 +15,7 @@ import asyncio
 import contextlib
 import gc
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -135,8 +136,12 @@ def scenario_run(
     from devsim.scenario.progress import Progress
 
     progress = Progress(len(scenarios))
-    with _page(control, listen):
-        results = _run_files(scenarios, files, mode, speed, state_dir, trace_dir, pictures, progress, control)
+    try:
+        with _page(control, listen), _signals_interrupt():
+            results = _run_files(scenarios, files, mode, speed, state_dir, trace_dir, pictures, progress, control)
+    except KeyboardInterrupt:  # Ctrl-C, SIGTERM, SIGHUP: the plant is stopped (its ports, links) on the way out
+        warn("devsim: scenario run interrupted")
+        sys.exit(exits.INTERRUPTED)
     if junit is not None:
         try:
             write_junit(results, junit)
@@ -147,6 +152,23 @@ def scenario_run(
         click.echo(f"{len(results) - len(failed)} of {len(results)} scenarios passed")
     if failed:
         sys.exit(exits.FAILED)
+
+
+@contextlib.contextmanager
+def _signals_interrupt() -> Iterator[None]:
+    """SIGTERM and SIGHUP stop a scenario run as Ctrl-C does (they ended the process at once: no
+    word, a pty link left behind)."""
+    import signal
+
+    def interrupt(_signum: int, _frame: object) -> None:
+        raise KeyboardInterrupt
+
+    previous = {sig: signal.signal(sig, interrupt) for sig in (signal.SIGTERM, signal.SIGHUP)}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 def _page(control: str | None, listen: object) -> contextlib.AbstractContextManager[None]:

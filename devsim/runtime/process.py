@@ -196,8 +196,14 @@ class Runtime:
         return value
 
     def run(self, coro: Coroutine[Any, Any, T], timeout: float | None = None) -> T:
-        """Run a coroutine in the loop thread from another thread and wait for it."""
-        return asyncio.run_coroutine_threadsafe(coro, self.loop).result(timeout)
+        """Run a coroutine in the loop thread from another thread and wait for it (cancelled if
+        the wait ends otherwise: a timeout, Ctrl-C)."""
+        future = asyncio.run_coroutine_threadsafe(coro, self.loop)
+        try:
+            return future.result(timeout)
+        except BaseException:
+            future.cancel()
+            raise
 
     # -- building a plant ----------------------------------------------------------------
     def add_device(self, kind: str, name: str | None = None, config: Mapping[str, Any] | None = None) -> Device:

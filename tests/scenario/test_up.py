@@ -8,7 +8,11 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 import serial
+
+from devsim.cli import exits
+from tests.support.process import DevsimProcess, stop
 
 PLANT = """\
 devices:
@@ -60,3 +64,22 @@ def test_devsim_up_reports_a_bad_plant_file(tmp_path: Path) -> None:
     done = subprocess.run([sys.executable, "-m", "devsim", "up", str(plant)], capture_output=True, text=True)
     assert done.returncode != 0
     assert done.stderr.strip() == f"Error: {plant}:12: devices.3.config.address: Input should be less than or equal to 127"
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT], ids=["TERM", "HUP", "INT"])
+def test_a_scenario_run_stopped_by_a_signal_says_so_and_cleans_up(tmp_path: Path, sig: signal.Signals) -> None:
+    """SIGTERM and SIGHUP ended the process at once (status 143 or 129, no word, the pty link
+    left behind); Ctrl-C left a 'Task was destroyed but it is pending!' dump."""
+    link = tmp_path / "ttyX"
+    scenario = tmp_path / "long.yaml"
+    scenario.write_text(f"devices:\n  - {{name: x, kind: sers, transport: {{pty: {{link: {link}}}}}}}\n"
+                        "time: realtime\nsteps:\n  - wait: 60s\n")
+    sim = DevsimProcess("scenario", "run", str(scenario))
+    sim.next_match(sim.out, lambda line: line == f"x: pty {link}", 30, "the port line")
+    assert link.is_symlink()
+    assert stop(sim.proc, sig, 15) == exits.INTERRUPTED
+    err = []
+    while (line := sim.err.get(timeout=5)) is not None:
+        err.append(line)
+    assert err == ["devsim: scenario run interrupted"]
+    assert not link.exists() and not link.is_symlink()
