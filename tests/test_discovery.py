@@ -270,3 +270,25 @@ def test_monitor_without_an_address_attaches_to_the_one_running(runtime: Path) -
 def _capture(session: str) -> str:
     return subprocess.run(["tmux", "capture-pane", "-p", "-t", session], capture_output=True, text=True,
                           timeout=10, check=True).stdout
+
+
+def test_names_of_a_kind_while_a_simulator_of_another_runs(runtime: Path) -> None:
+    """`devsim ctl names KIND` where the running simulators serve no device of that name: the
+    kind's names (before: 'no device named gms96' with one running, 'choose one' with two)."""
+    sers, _address, _ = start("run", "sers", "--pty")
+    try:
+        done = devsim("ctl", "names", "gms96")
+        assert done.returncode == 0, done.stderr
+        assert done.stdout.splitlines()[-1].startswith("160 names in ")
+        done = devsim("ctl", "--json", "names", "sers")  # the running device's own
+        assert done.returncode == 0 and json.loads(done.stdout)[0]["name"] == "axis.position", done.stderr
+        gms, _address, _ = start("run", "gms96", "--pty")
+        try:
+            done = devsim("ctl", "names", "pcd4h3")
+            assert done.returncode == 0 and "names in " in done.stdout.splitlines()[-1], done.stderr
+            refused = devsim("ctl", "names", "nokind")
+            assert refused.returncode == 2 and "2 simulators are running" in refused.stderr
+        finally:
+            assert gms.interrupt() == 0
+    finally:
+        assert sers.interrupt() == 0

@@ -178,11 +178,11 @@ def ctl_line(ctx: click.Context, device: str, port: str) -> None:
 @click.pass_context
 def ctl_names(ctx: click.Context, device: str) -> None:
     """DEVICE's control names grouped by family (axis, input, param ...), with type, unit, access
-    (r, rw, w) and description (--json: with manual sections).  With no simulator to ask, KIND's
-    names (e.g. 'devsim ctl names sers')."""
+    (r, rw, w) and description (--json: with manual sections).  With no simulator to ask, or none
+    (of several) that serves a device of that name, KIND's names (e.g. 'devsim ctl names sers')."""
     try:
         _call(ctx, rq.Names(device))
-    except (click.UsageError, exits.Unreachable) as exc:  # no simulator to ask: a kind's names
+    except click.ClickException as exc:  # none to ask, several, or no such device: a kind's names
         from devsim.core.registry import UnknownKind, device_class
 
         if ctx.obj != (None, None):  # an address was given: its answer counts
