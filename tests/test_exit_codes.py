@@ -168,7 +168,7 @@ def test_each_kind_of_mistake_has_its_status(files: Path, sim: str, busy: int, s
         errors = [line for line in done.stderr.splitlines() if line.startswith("Error: ")]
         assert len(errors) == 1 and done.stderr.endswith(errors[0] + "\n"), done.stderr
         if "refuses" in what:  # the file, where in it, and the device's own message
-            assert errors[0].endswith(".yaml: devices.0.state.program.P20: WERTBEREICHES-UEBERLAUF: L500: beyond the "
+            assert errors[0].endswith(".yaml: devices.1.state.program.P20: WERTBEREICHES-UEBERLAUF: L500: beyond the "
                                       "format"), errors[0]
 
 

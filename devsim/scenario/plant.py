@@ -30,7 +30,7 @@ _TRACE_SUFFIX = {"text": "trace", "pcap": "pcap"}
 class StateRefused(ValueError):
     """A device refused a value of its ``state:`` that the file's check took: the point's type
     fits, the device's own rule does not (a program's text beyond the formats in force).
-    ``str()`` is ``devices.N.state.NAME: message``."""
+    ``str()`` is ``devices.N.state.NAME: message``, N counted from 1 as the file's check counts."""
 
 
 def make_transport(spec: TransportSpec) -> Any:
@@ -152,7 +152,7 @@ async def build_plant(
             try:
                 plant.devices[dev.name].apply_state(dev.state)
             except BadValue as exc:  # the device refused a value its point's type took (the file's check)
-                raise StateRefused(f"devices.{index}.state.{exc}") from None
+                raise StateRefused(f"devices.{index + 1}.state.{exc}") from None  # (counted from 1, as check counts)
     if spec.mqtt is not None:
         await _serve_mqtt(plant)
     if spec.opcua is not None:
