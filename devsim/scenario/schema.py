@@ -574,7 +574,46 @@ def plant_problems(parts: _Parts) -> list[Problem]:
         for port in sorted(set(device.ports) - set(device.port_names())):
             problems.append((("devices", i, "ports", port), f"device {device.name!r} ({device.kind}) has no port"
                              f" {port!r} (ports: {', '.join(device.port_names())})"))
-    return problems + _step_references(parts)
+    return problems + _shared_endpoints(parts) + _step_references(parts)
+
+
+def _endpoint(transport: TransportSpec) -> tuple[str, ...] | None:
+    """What two ports cannot both hold: a pty link's path, or a TCP or UDP port number (0: a
+    free one, never shared)."""
+    kind = transport.kind
+    if kind == "pty":
+        return ("link", transport.pty.link) if transport.pty is not None and transport.pty.link else None
+    if kind in ("tcp", "rfc2217", "udp"):
+        where = getattr(transport, kind)
+        if where is None or where.port == 0:
+            return None
+        return ("udp" if kind == "udp" else "tcp", where.host, str(where.port))
+    return None
+
+
+def _shared_endpoints(parts: _Parts) -> list[Problem]:
+    """Two ports of the plant on one pty link or one TCP/UDP port: the second could not open."""
+    owners: list[tuple[tuple[int | str, ...], TransportSpec]] = []
+    for i, device in enumerate(parts.devices):
+        if device is None:
+            continue
+        for port in device.port_names():
+            where = ("devices", i, "ports", port) if port in device.ports else ("devices", i, "transport")
+            owners.append((where, device.transport_of(port)))
+    owners += [(("buses", i, "transport"), bus.transport) for i, bus in enumerate(parts.buses) if bus is not None]
+    seen: dict[tuple[str, ...], tuple[int | str, ...]] = {}
+    problems: list[Problem] = []
+    for where, transport in owners:
+        endpoint = _endpoint(transport)
+        if endpoint is None:
+            continue
+        if endpoint in seen:
+            what = f"link {endpoint[1]}" if endpoint[0] == "link" else f"{endpoint[0]} port {endpoint[1]}:{endpoint[2]}"
+            first = ".".join(str(p + 1) if isinstance(p, int) else str(p) for p in seen[endpoint])
+            problems.append((where, f"{what} is taken by {first} already"))
+        else:
+            seen[endpoint] = where
+    return problems
 
 
 def _step_references(parts: _Parts) -> list[Problem]:

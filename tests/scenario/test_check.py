@@ -171,3 +171,22 @@ def test_an_empty_link_is_a_mistake_of_the_file(tmp_path: Path) -> None:
     done = check(bad)
     assert done.returncode == exits.BAD_FILE
     assert done.stderr == f"{bad}:2: devices.1.transport.pty.link: String should have at least 1 character\n"
+
+
+def test_two_ports_on_one_link_or_one_tcp_port_are_a_mistake_of_the_file(tmp_path: Path) -> None:
+    """They passed `check`; `up` then said the link was held by a live process (itself) and to
+    choose another --link (no option of up), or 'Address already in use' (status 6)."""
+    bad = tmp_path / "bad.yaml"
+    link = tmp_path / "tty1"
+    bad.write_text(f"devices:\n  - {{name: a, kind: sers, transport: {{tcp: {{port: 23456}}}}}}\n"
+                   f"  - {{name: b, kind: sers, transport: {{tcp: {{port: 23456}}}}}}\n"
+                   f"  - {{name: c, kind: sers, transport: {{pty: {{link: {link}}}}}}}\n"
+                   f"  - {{name: d, kind: sers, transport: {{pty: {{link: {link}}}}}}}\n"
+                   "  - {name: e, kind: sers, transport: {tcp: {port: 0}}}\n"
+                   "  - {name: f, kind: sers, transport: {tcp: {port: 0}}}\n")
+    done = check(bad)
+    assert done.returncode == exits.BAD_FILE
+    assert done.stderr.splitlines() == [
+        f"{bad}:3: devices.2.transport: tcp port 127.0.0.1:23456 is taken by devices.1.transport already",
+        f"{bad}:5: devices.4.transport: link {link} is taken by devices.3.transport already",
+    ]
