@@ -71,6 +71,11 @@ def test_gms96_tolerances_ignore_the_checksum_and_the_frame_count_bit() -> None:
     ("[" * 100_000 + "\n", ":1: not a devsim session"),
     ('{"format": "devsim-session", "kind": "sers"}\n' + "[" * 100_000 + "\n" + '{"t": 2, "dir": "host", "hex": "00"}\n',
      ":2: maximum recursion depth"),
+    # line settings no UART takes (edited by hand): a traceback at every byte of the host before
+    ('{"format": "devsim-session", "kind": "sers", "settings": {"parity": "EE"}}\n', ":1: settings: parity 'EE'"),
+    ('{"format": "devsim-session", "kind": "sers", "settings": {"bytesize": 9}}\n', ":1: settings: bytesize 9"),
+    ('{"format": "devsim-session", "kind": "sers", "settings": {"baudrate": 0}}\n', ":1: settings: baudrate 0"),
+    ('{"format": "devsim-session", "kind": "sers", "settings": {"stopbits": 3}}\n', ":1: settings: stopbits 3"),
 ])
 def test_a_bad_session_is_one_line_exit_bad_file(tmp_path: Path, content: str, message: str) -> None:
     path = tmp_path / "bad.devsim"

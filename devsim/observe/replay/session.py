@@ -127,10 +127,20 @@ def _settings(raw: Any, where: str) -> SerialSettings:
     if not isinstance(raw, dict):
         raise SessionError(f"{where}: settings: expected an object")
     try:
-        return SerialSettings(baudrate=int(raw.get("baudrate", 9600)), bytesize=int(raw.get("bytesize", 8)),
-                              parity=str(raw.get("parity", "N")), stopbits=float(raw.get("stopbits", 1)))
-    except (TypeError, ValueError) as exc:
+        settings = SerialSettings(baudrate=int(raw.get("baudrate", 9600)), bytesize=int(raw.get("bytesize", 8)),
+                                  parity=str(raw.get("parity", "N")), stopbits=float(raw.get("stopbits", 1)))
+    except (TypeError, ValueError, OverflowError) as exc:
         raise SessionError(f"{where}: settings: {exc}") from None
+    # (what a UART can be set to: a file edited by hand failed at every byte the host wrote)
+    if not 0 < settings.baudrate <= 10_000_000:
+        raise SessionError(f"{where}: settings: baudrate {settings.baudrate} is no baud rate")
+    if settings.bytesize not in (5, 6, 7, 8):
+        raise SessionError(f"{where}: settings: bytesize {settings.bytesize} is not 5, 6, 7 or 8")
+    if settings.parity not in ("N", "E", "O", "M", "S"):
+        raise SessionError(f"{where}: settings: parity {settings.parity!r} is not N, E, O, M or S")
+    if settings.stopbits not in (1, 1.5, 2):
+        raise SessionError(f"{where}: settings: stopbits {settings.stopbits:g} is not 1, 1.5 or 2")
+    return settings
 
 
 class _Cutter:
