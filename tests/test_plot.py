@@ -118,6 +118,21 @@ def test_a_servo_gets_its_set_point_and_following_error(gms96_dir: Path, tmp_pat
     assert "following error (inc)" in texts and "card axis set-point" in texts
 
 
+def test_a_motion_log_whose_last_line_is_cut_short_plots_the_lines_before(gms96_dir: Path, tmp_path: Path) -> None:
+    """(As a pcap's or a session's cut end: the writer killed or the disk full; it was refused.)"""
+    whole = (gms96_dir / "following_error_blocked_axis.csv").read_text()
+    cut = tmp_path / "cut.csv"
+    cut.write_text(whole[: whole.rindex("\n", 0, len(whole) - 1) + 20])  # the last line's first 19 characters
+    (series,) = read_motion_log(cut).axes
+    (complete,) = read_motion_log(gms96_dir / "following_error_blocked_axis.csv").axes
+    assert series.time == complete.time[:-1]
+    code, _, stderr = invoke("plot", str(cut), "-o", str(tmp_path / "cut.svg"))
+    assert code == 0, stderr
+    broken = tmp_path / "broken.csv"  # a short line that is not the last, or one with its line end: refused
+    broken.write_text(whole[: whole.rindex("\n", 0, len(whole) - 1) + 20] + "\n")
+    assert invoke("plot", str(broken), "-o", str(tmp_path / "b.svg"))[0] != 0
+
+
 def test_text_and_pcap_traces_read_back(tmp_path: Path) -> None:
     chunks = [(0.5, "H>D", b"#1 ON\r"), (0.502, "D>H", b"ok0\n\r"), (1.25, "H>D", bytes(range(0, 256, 17)))]
     with Tracer(tmp_path / "line.trace") as tracer:

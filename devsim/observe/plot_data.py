@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import csv
 import functools
+import io
 import math
 import re
 import struct
@@ -166,35 +167,39 @@ def axis_units(kind: str, axis: str) -> dict[str, str]:
 
 def read_motion_log(path: str | Path) -> MotionData:
     """Parse a motion log written by :class:`devsim.observe.motion_log.MotionLog` (one without the
-    ``kind`` column, from before it had one, too)."""
+    ``kind`` column, from before it had one, too).  A last line cut short (the writer killed, the
+    disk full) is left out, as a pcap's or a session's is."""
     data = MotionData(str(path))
     series: dict[tuple[str, str], AxisSeries] = {}
     seen: set[tuple[str, float, str]] = set()
     with open(path, encoding="utf-8", newline="") as stream:
-        reader = csv.reader(stream)
-        header = next(reader, None)
-        if header is None or tuple(header[: len(_FIRST)]) != _FIRST:
-            raise PlotInputError(f"{path}: not a motion log (expected the header {','.join(HEADER)})")
-        for number, row in enumerate(reader, start=2):
-            if len(row) < len(_FIRST):
-                raise PlotInputError(f"{path}:{number}: expected {len(HEADER)} columns, got {len(row)}")
-            when = _number(row[0])
-            if math.isnan(when):
-                raise PlotInputError(f"{path}:{number}: bad time {row[0]!r}")
-            device, axis = row[1], row[2]
-            item = series.get((device, axis))
-            if item is None:
-                kind = row[len(_FIRST)] if len(row) > len(_FIRST) else ""
-                item = series[(device, axis)] = AxisSeries(device, axis, kind, axis_units(kind, axis) if kind else {})
-            item.time.append(when)
-            item.setpoint.append(_number(row[3]))
-            item.position.append(_number(row[4]))
-            item.velocity.append(_number(row[5]))
-            item.following_error.append(_number(row[6]))
-            event = row[7]
-            if event and (device, when, event) not in seen:  # an event has a row per axis
-                seen.add((device, when, event))
-                data.events.setdefault(device, []).append((when, event))
+        text = stream.read()
+    rows = list(csv.reader(io.StringIO(text)))
+    header = rows[0] if rows else None
+    if header is None or tuple(header[: len(_FIRST)]) != _FIRST:
+        raise PlotInputError(f"{path}: not a motion log (expected the header {','.join(HEADER)})")
+    if len(rows) > 1 and not text.endswith("\n") and len(rows[-1]) < len(header):
+        rows.pop()  # (cut short: no line end, columns missing)
+    for number, row in enumerate(rows[1:], start=2):
+        if len(row) < len(_FIRST):
+            raise PlotInputError(f"{path}:{number}: expected {len(HEADER)} columns, got {len(row)}")
+        when = _number(row[0])
+        if math.isnan(when):
+            raise PlotInputError(f"{path}:{number}: bad time {row[0]!r}")
+        device, axis = row[1], row[2]
+        item = series.get((device, axis))
+        if item is None:
+            kind = row[len(_FIRST)] if len(row) > len(_FIRST) else ""
+            item = series[(device, axis)] = AxisSeries(device, axis, kind, axis_units(kind, axis) if kind else {})
+        item.time.append(when)
+        item.setpoint.append(_number(row[3]))
+        item.position.append(_number(row[4]))
+        item.velocity.append(_number(row[5]))
+        item.following_error.append(_number(row[6]))
+        event = row[7]
+        if event and (device, when, event) not in seen:  # an event has a row per axis
+            seen.add((device, when, event))
+            data.events.setdefault(device, []).append((when, event))
     for item in series.values():  # rows are near time order; a plot needs them exactly so
         order = sorted(range(len(item.time)), key=item.time.__getitem__)
         for column in ("time", "setpoint", "position", "velocity", "following_error"):
