@@ -180,9 +180,15 @@ class PlantView:
                     connected = line.get("host") is not None
                 ports[port] = {"address": where, "line": line, "connected": connected}
             values = feed.values
+            now = {}  # read as the page is made: the feed watches them only while the device's page is open
+            for point in ("ready", "booting"):
+                try:
+                    now[point] = await self.link.request("read", device=name, name=point)
+                except ControlError:
+                    now[point] = None  # (a kind without it)
             devices.append({
                 "name": name, "kind": info.get("kind"), "ports": ports,
-                "ready": values.get("ready"), "booting": values.get("booting"),
+                "ready": now["ready"], "booting": now["booting"],
                 "display": display_line(values), "message": message_line(values), "state": status_words(values),
                 "faults": sorted(feed.faults), "declared_faults": info.get("faults", []), "ended": feed.ended,
             })

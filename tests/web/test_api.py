@@ -56,6 +56,15 @@ async def test_the_plant_and_the_device_as_the_pages_show_them(sim: WebSim) -> N
         assert any(p["name"] == "param.P91" and "w" in p["access"] for p in page["points"])  # V
         missing = await http.get("/api/devices/nope")
         assert missing.status == 404 and (await missing.json())["type"] == "UnknownDevice"
+        with ControlClient(sim.control) as client:  # as the device is now, read anew (the device page's watch is over)
+            assert (device["ready"], device["booting"]) == (client.read("sers", "ready"), client.read("sers", "booting"))
+            client.set("sers", "quantity.supply_voltage", 40.0)  # below U_L: a drive error, not ready
+            assert await wait_for(lambda: _json(http.get("/api/plant")), lambda p: p["devices"][0]["ready"] is False,
+                                  5, "ready false on the plant page")
+            client.set("sers", "quantity.supply_voltage", 68.0)
+            client.power_cycle("sers")
+            assert await wait_for(lambda: _json(http.get("/api/plant")), lambda p: p["devices"][0]["booting"] is True,
+                                  5, "booting on the plant page")
 
 
 async def _json(request: Any) -> Any:
