@@ -215,3 +215,15 @@ def test_a_fleet_answers_per_process() -> None:
     assert render([(rq.Scenario(), {"cell-b-13-cd34": None, "cell-a-12-ab12": record})], json_output=False,
                   width=80).splitlines() == [  # (it printed "scenario None: step None of None, ... failed")
         "cell-a-12-ab12: scenario check: step 1 of 2, 0.5 of 2 s, running", "cell-b-13-cd34: (no scenario runs)"]
+
+
+def test_in_a_pipe_nothing_is_cut() -> None:
+    """A pipe has no width: rows whole (cut to 80 columns, `ctl --fleet devices | grep false`
+    found no offline device); COLUMNS still sets one."""
+    env = {k: v for k, v in devsim_env().items() if k != "COLUMNS"}
+    done = subprocess.run([sys.executable, "-m", "devsim", "ctl", "names", "sers"], cwd=ROOT, env=env,
+                          capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert not any(line.endswith("…") for line in lines) and max(map(len, lines)) > 100
+    assert any(line.endswith("…") for line in devsim("ctl", "names", "sers", columns=80).stdout.splitlines())

@@ -11,7 +11,9 @@ device's declared names (asked once, only when a formatter needs them)."""
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import sys
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
@@ -37,6 +39,7 @@ _JSON_KEY = "devsim.ctl.json"
 
 #: Narrowest and widest table we lay out (columns of a terminal).
 MIN_WIDTH, MAX_WIDTH = 40, 200
+PIPE_WIDTH = 10_000  # (no terminal: rows whole)
 
 
 # -- --json, on the group and on every command ------------------------------------------------
@@ -94,6 +97,10 @@ def value_text(value: Any) -> str:
 
 
 def terminal_width() -> int:
+    """The terminal's width (``COLUMNS`` where set); a pipe or a file has none: nothing is cut
+    there (a script that greps a row must find all of it)."""
+    if "COLUMNS" not in os.environ and (sys.stdout is None or not sys.stdout.isatty()):
+        return PIPE_WIDTH
     return max(MIN_WIDTH, min(MAX_WIDTH, shutil.get_terminal_size().columns))
 
 
