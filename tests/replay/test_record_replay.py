@@ -13,6 +13,7 @@ import socket
 import struct
 import subprocess
 import sys
+import termios
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -274,7 +275,15 @@ def test_gms96_e_version_live_model_takes_the_hosts_frame_count_bit(tmp_path: Pa
     recorder.line("record: out")
 
     def host(url: str, first_fcb: int, *letters: tuple[int, ...]) -> list[object]:
-        with serial.Serial(url, 9600, parity="E", timeout=0.5) as port:
+        deadline = time.monotonic() + 10
+        while True:  # (the device's pty, which the recorder has just let go, takes a moment to take a host again)
+            try:
+                port = serial.Serial(url, 9600, parity="E", timeout=0.5)
+                break
+            except (serial.SerialException, termios.error):
+                assert time.monotonic() < deadline, f"{url} did not open"
+                time.sleep(0.02)  # (the next try; the condition is the open itself)
+        with port:
             card = Gms96Client(port, address=3, timeout=2)
             card.fcb = first_fcb ^ 1  # the next letter command goes out with first_fcb
             return [card.send_letter(letter, *params) for letter, *params in letters]
