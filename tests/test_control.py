@@ -300,3 +300,26 @@ def test_typed_requests_run_in_process(runtime: Runtime) -> None:
     assert run(runtime, rq.Advance(1.0)) == 1.0
     with pytest.raises(BadRequest, match="finite"):
         run(runtime, rq.Advance(float("nan")))
+
+
+def test_a_line_fault_refused_is_typed_as_the_control_api_types_refusals(runtime: Runtime, sockdir: str) -> None:
+    """(They came as Python's ValueError and TypeError; an infinite count was taken.)"""
+    from devsim.transports.pty import PtyTransport
+
+    runtime.serve_sync(runtime.device("echo1"), PtyTransport())
+    server = ControlServer(runtime, f"unix:{sockdir}/ctl.sock")
+    address = str(server.start_sync())
+    try:
+        with ControlClient(address) as client:
+            for kind, params, kind_of_error, words in [
+                ("noise", {"rate": -5}, "BadValue", "rate must be positive"),
+                ("corrupt", {"count": float("inf")}, "BadValue", "count must be a whole number"),
+                ("delay", {"delay": float("inf")}, "BadValue", "delay must be a finite number"),
+                ("noise", {"rate": 5, "bogus": 1}, "BadRequest", "bogus"),
+            ]:
+                with pytest.raises(ControlError) as info:
+                    client.request("line_fault", device="echo1", kind=kind, active=True, params=params)
+                assert info.value.type == kind_of_error and words in info.value.args[0], (kind, params, info.value)
+            assert client.line("echo1")["faults"] == []
+    finally:
+        server.close_sync()

@@ -24,7 +24,7 @@ from typing import Any
 import msgspec
 
 from devsim.core.kit import Command, Table
-from devsim.core.points import parse_bool
+from devsim.core.points import BadValue, parse_bool
 from devsim.runtime import requests as rq
 from devsim.runtime.process import Runtime, port_key
 
@@ -143,7 +143,16 @@ def _fault(rt: Runtime, req: rq.SwitchFault) -> None:
 
 
 def _line_fault(rt: Runtime, req: rq.LineFault) -> None:
-    rt.line_fault(req.device, req.kind, parse_bool(req.active), port=req.port, **req.params)
+    """A value the fault refuses is a ``BadValue``, a parameter it does not take a ``BadRequest``
+    (they came as Python's ValueError and TypeError)."""
+    try:
+        rt.line_fault(req.device, req.kind, parse_bool(req.active), port=req.port, **req.params)
+    except TypeError as exc:
+        raise BadRequest(f"line fault {req.kind}: {exc}") from None
+    except ValueError as exc:
+        if isinstance(exc, BadValue):
+            raise
+        raise BadValue(f"line fault {req.kind}: {exc}") from None
 
 
 def _telegrams(rt: Runtime, req: rq.Telegrams) -> list[dict[str, Any]]:

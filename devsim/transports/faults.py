@@ -127,8 +127,9 @@ class LineFault(msgspec.Struct, frozen=True):
         if self.count is not None:
             if self.kind not in _COUNTED:
                 raise ValueError(f"count does not apply to a {self.kind} fault (only {', '.join(_COUNTED)})")
-            if self.count < 1:
-                raise ValueError("count must be at least 1")
+            if not (isinstance(self.count, int) or (isinstance(self.count, float) and self.count.is_integer())) \
+                    or self.count < 1:
+                raise ValueError("count must be a whole number from 1 on")
         if self.duration is not None and not (self.duration >= 0 and math.isfinite(self.duration)):
             raise ValueError("duration must be a finite number of seconds >= 0")
         for name in ("delay", "rate", "baudrate"):
@@ -139,8 +140,10 @@ class LineFault(msgspec.Struct, frozen=True):
                 continue
             if name not in _PARAMS[self.kind]:
                 raise ValueError(f"{name} does not apply to a {self.kind} fault")
-            if not math.isfinite(value) or value < 0 or (name != "delay" and value == 0):
-                raise ValueError(f"{name} must be positive")
+            if not math.isfinite(value):
+                raise ValueError(f"{name} must be a finite number")
+            if value < 0 or (name != "delay" and value == 0):
+                raise ValueError(f"{name} must be positive" if name != "delay" else "delay must be 0 or more")
 
     def applies(self, direction: str) -> bool:
         """Whether the fault acts on bytes going ``direction`` (``to_device``/``to_host``)."""
