@@ -42,6 +42,7 @@ from asyncua.server.event_generator import EventGenerator
 from devsim.core.device import Device
 from devsim.core.points import BadValue, ReadOnlyName, UnknownName
 from devsim.core.watch import PointWatch
+from devsim.facades import library_log
 from devsim.facades.opcua_services import DeviceMethods, NodeView, PointAttributes, call_result
 from devsim.facades.opcua_space import (
     DEFAULT_ENDPOINT,
@@ -386,6 +387,7 @@ async def start_opcua(runtime: Runtime, devices: Sequence[Device], spec: str | N
     """Serve ``devices`` on one OPC UA server in ``runtime``'s loop (call it there): ``spec`` is
     ``[[HOST:]PORT]`` or an ``opc.tcp://`` URL (default :data:`DEFAULT_ENDPOINT`, loopback unless
     a host is named).  The server stops with the runtime; its URL is ``runtime.ports["opcua"]``."""
+    library_log.limit("asyncua", "opcua")  # (a traceback for every request it cannot decode, a line for each bad one)
     facade = OpcuaFacade(devices, endpoint_url(spec), runtime=runtime, period=period, name=name)
     await facade.start()
     runtime.add_closer(facade.stop)

@@ -33,6 +33,26 @@ async def test_run_serves_opcua_beside_the_pty() -> None:
         sim.stop()
 
 
+async def test_what_asyncua_logs_about_bad_requests_is_rate_limited() -> None:
+    """A client that sends bad requests over and over (here a negative maxAge) does not fill the
+    simulator's stderr: one line a kind of message every ten seconds, headed devsim: opcua: (it
+    was a line per request, and a 23-line traceback per request asyncua cannot decode)."""
+    sim = Sim("sers", "--pty", "--virtual", "--opcua", "127.0.0.1:0")
+    try:
+        url = sim.read_until("opcua:")["opcua"]
+        async with Client(url) as client:
+            ns = await client.get_namespace_index(NAMESPACE)
+            for _ in range(30):
+                with pytest.raises(ua.uaerrors.BadMaxAgeInvalid):
+                    await client.uaclient.read(ua.ReadParameters(NodesToRead=[ua.ReadValueId(
+                        NodeId=ua.NodeId("sers.quantity.supply_voltage", ns), AttributeId=ua.AttributeIds.Value)],
+                        MaxAge=-1))
+    finally:
+        _status, err = sim.stop()
+    about = [line for line in err.splitlines() if "max age" in line.lower()]
+    assert len(about) == 1 and about[0].startswith("devsim: opcua: "), err
+
+
 @pytest.mark.parametrize(("spec", "url"), [
     ("", "opc.tcp://127.0.0.1:4840/devsim/"),
     ("4841", "opc.tcp://127.0.0.1:4841/devsim/"),
