@@ -12,6 +12,15 @@ from devsim.devices.poselesta.codes import encode, iso_byte
 from tests.poselesta.test_ports import open_port, until
 
 
+def await_tape(cnc: Any, p71: int | None = None) -> None:
+    """T7: EXT mode, program P20 pre-selected, V7 waiting for a tape (code P71 when given)."""
+    if p71 is not None:
+        cnc.set("param.P71", p71)
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 20)
+    cnc.set("v7.transfer", "input")
+
+
 @pytest.fixture
 def cnc(devsim_device):  # noqa: ANN001, ANN201
     return devsim_device("poselesta")
@@ -126,9 +135,7 @@ def test_an_output_is_done_when_its_last_character_has_left(cnc: Any) -> None:
 @pytest.mark.manual("§2.6.3", "Die Datenübertragung beginnt mit einem %-Zeichen. Alle vorgängig eintreffenden "
                     "Zeichen werden nicht berücksichtigt.")
 def test_a_leader_of_well_formed_characters_before_percent_is_ignored(cnc: Any) -> None:
-    cnc.set("panel.mode", "EXTERNAL_OPERATION")
-    cnc.set("panel.program", 20)
-    cnc.set("v7.transfer", "input")
+    await_tape(cnc)
     with open_port(cnc, "v7") as host:
         host.write(b"\x00" * 20 + encode("TAPE 7 N1 X9\r\n", True) + b"\xff" * 3 + encode("%\rN1 X1\rM30\r", True))
         until(lambda: cnc.read("v7.state") == "done", "the read-in ends with M30")
@@ -141,9 +148,7 @@ def test_a_leader_of_well_formed_characters_before_percent_is_ignored(cnc: Any) 
 @pytest.mark.parametrize("host_baud", [110, 300, 4800])
 def test_a_read_in_at_the_wrong_baud_rate_ends_with_the_overflow_message(cnc: Any, p71: int, host_baud: int) -> None:
     cnc.set("param.P71", p71)  # the control listens at 1200 baud (P70 = 3)
-    cnc.set("panel.mode", "EXTERNAL_OPERATION")
-    cnc.set("panel.program", 20)
-    cnc.set("v7.transfer", "input")
+    await_tape(cnc)
     tape = encode("%\r\nN1X10.5Y-3\r\nN2G00X0Y0M02\r\nM30\r\n", p71 == 0)
     with serial.serial_for_url(cnc.port_url("v7"), baudrate=host_baud, stopbits=2, timeout=5) as host:
         host.write(tape)
@@ -156,10 +161,7 @@ def test_a_read_in_at_the_wrong_baud_rate_ends_with_the_overflow_message(cnc: An
                     "Bildschirm: WERTBEREICHES-UEBERLAUF (on an ASCII port, after %: a byte that is neither ASCII nor "
                     "an ISO character)")
 def test_after_percent_an_ascii_port_stops_at_a_byte_of_no_code(cnc: Any) -> None:
-    cnc.set("param.P71", 1)
-    cnc.set("panel.mode", "EXTERNAL_OPERATION")
-    cnc.set("panel.program", 20)
-    cnc.set("v7.transfer", "input")
+    await_tape(cnc, p71=1)
     with open_port(cnc, "v7") as host:
         host.write(b"%\r\nN1 X1\r\n" + encode("N2 X2\r\n", True))  # an ISO image is taken (bit 7 masked)
         until(lambda: cnc.read("program.P20") == "N 1 X 1.000\nN 2 X 2.000", "ASCII and ISO characters")
@@ -171,9 +173,7 @@ def test_after_percent_an_ascii_port_stops_at_a_byte_of_no_code(cnc: Any) -> Non
 @pytest.mark.manual("§2.6", "Wird vor dem Einlesen eines Programmes ein falscher Code gewählt, erscheint am "
                     "Bildschirm: WERTBEREICHES-UEBERLAUF (characters with a parity error before %)")
 def test_a_parity_error_before_percent_ends_the_read_in(cnc: Any) -> None:
-    cnc.set("panel.mode", "EXTERNAL_OPERATION")
-    cnc.set("panel.program", 20)
-    cnc.set("v7.transfer", "input")
+    await_tape(cnc)
     with open_port(cnc, "v7") as host:
         host.write(bytes([iso_byte(ord("T")) ^ 0x80]))
         until(lambda: cnc.read("v7.state") == "failed", "a character with a parity error")
@@ -183,10 +183,7 @@ def test_a_parity_error_before_percent_ends_the_read_in(cnc: Any) -> None:
 @pytest.mark.manual("§2.6.3", "Alle vorgängig eintreffenden Zeichen werden nicht berücksichtigt (on an ASCII port: "
                     "control characters too, such as a DNC host's DC2 and DC4 for the tape)")
 def test_control_characters_before_percent_on_an_ascii_port_are_ignored(cnc: Any) -> None:
-    cnc.set("param.P71", 1)
-    cnc.set("panel.mode", "EXTERNAL_OPERATION")
-    cnc.set("panel.program", 20)
-    cnc.set("v7.transfer", "input")
+    await_tape(cnc, p71=1)
     with open_port(cnc, "v7") as host:
         host.write(b"\x12\x14\x1b\x04\x00\r\n\x7fTAPE\x18" + b"%\r\nN1 X1\r\nM30\r\n")
         until(lambda: cnc.read("v7.state") in ("done", "failed"), "the read-in ends")
@@ -197,10 +194,7 @@ def test_control_characters_before_percent_on_an_ascii_port_are_ignored(cnc: Any
 @pytest.mark.manual("§2.6", "falsche Baud-Rate: WERTBEREICHES-UEBERLAUF (on an ASCII port: a byte with bit 7 set "
                     "and odd parity before %, which no sender set to ASCII sends)")
 def test_a_byte_no_ascii_sender_sends_before_percent_ends_the_read_in(cnc: Any) -> None:
-    cnc.set("param.P71", 1)
-    cnc.set("panel.mode", "EXTERNAL_OPERATION")
-    cnc.set("panel.program", 20)
-    cnc.set("v7.transfer", "input")
+    await_tape(cnc, p71=1)
     with open_port(cnc, "v7") as host:
         host.write(b"\x00\x00\r\n\x7fTAPE\x80")  # 80H: bit 7 set, odd parity
         until(lambda: bytes_in(cnc, "v7") == 10, "the line has taken the bytes")
@@ -321,9 +315,7 @@ def test_the_punch_runs_at_p68_in_the_code_of_p69(cnc: Any, p68: int, p69: int, 
 # -- §2.6.3 the DNC protocol, through the V7 pty -------------------------------------------------------
 def _read_in(cnc: Any, text: bytes) -> None:
     cnc.set("param.P71", 1)  # ASCII, so the tapes below read as text
-    cnc.set("panel.mode", "EXTERNAL_OPERATION")
-    cnc.set("panel.program", 20)
-    cnc.set("v7.transfer", "input")
+    await_tape(cnc)
     with open_port(cnc, "v7") as host:
         host.write(text)
         until(lambda: bytes_in(cnc, "v7") == len(text), "the line has taken the tape")
@@ -417,9 +409,7 @@ def test_p67_switches_the_buzzer_off(cnc: Any, p67: int, buzzes: bool) -> None:
 @pytest.mark.manual("§2.6.1.1", "Jedes Zeichen beginnt mit einem Start-Bit und endet mit Stop-Bits; es können auch "
                     "mehrere Stop-Bits nacheinander eintreffen (pauses between characters)")
 def test_a_read_in_takes_pauses_between_characters(cnc: Any) -> None:
-    cnc.set("panel.mode", "EXTERNAL_OPERATION")
-    cnc.set("panel.program", 20)
-    cnc.set("v7.transfer", "input")
+    await_tape(cnc)
     tape = encode("%\rN1 X1\rM30\r", True)
     with open_port(cnc, "v7") as host:
         for k in range(len(tape)):

@@ -7,6 +7,7 @@ is then replayed to the same host code.  Every wait is bounded.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import queue
 import socket
@@ -17,6 +18,7 @@ import termios
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import NamedTuple
 
 import pytest
 import serial
@@ -225,9 +227,18 @@ def test_fallback_error_reports_the_unknown_request_and_stays_silent(
 
 
 # -- GMS96: FT1.2 frames, and the FCB tolerance ---------------------------------------------------
-def test_gms96_replay_matches_frames_with_another_frame_count_bit(tmp_path: Path, procs: list[Proc]) -> None:
+class _Gms96Recording(NamedTuple):
+    config: Path
+    session: Path
+    device_pty: str
+    host_pty: str
+    recorder: Proc
+
+
+def _gms96_recording(tmp_path: Path, procs: list[Proc], config_text: str) -> _Gms96Recording:
+    """A GMS96 (``config_text``) on a pty, and ``devsim record`` between it and a host pty."""
     config = tmp_path / "gms96.yaml"
-    config.write_text("boot_time: 0\n")
+    config.write_text(config_text)
     session = tmp_path / "gms96.devsim"
     device = _start(procs, "run", "gms96", "--pty", "--config", str(config))
     device_pty = device.value("gms96: pty")
@@ -235,22 +246,42 @@ def test_gms96_replay_matches_frames_with_another_frame_count_bit(tmp_path: Path
     recorder = _start(procs, "record", "--port", device_pty, "--out", str(session), "--kind", "gms96")
     host_pty = recorder.value("record: pty")
     recorder.line("record: out")
+    return _Gms96Recording(config, session, device_pty, host_pty, recorder)
+
+
+@contextlib.contextmanager
+def _card(url: str, first_fcb: int) -> Iterator[Gms96Client]:
+    """A host of the card at ``url`` whose next letter command goes out with ``first_fcb``."""
+    deadline = time.monotonic() + 10
+    while True:  # (a pty another host has just let go takes a moment to take one at 8E1 again)
+        try:
+            port = serial.Serial(url, 9600, parity="E", timeout=0.5)
+            break
+        except (serial.SerialException, termios.error):
+            assert time.monotonic() < deadline, f"{url} did not open"
+            time.sleep(0.02)  # (the next try; the condition is the open itself)
+    with port:
+        card = Gms96Client(port, address=3, timeout=2)
+        card.fcb = first_fcb ^ 1
+        yield card
+
+
+def test_gms96_replay_matches_frames_with_another_frame_count_bit(tmp_path: Path, procs: list[Proc]) -> None:
+    recording = _gms96_recording(tmp_path, procs, "boot_time: 0\n")
 
     def host(url: str, first_fcb: int) -> list[object]:
-        with serial.Serial(url, 9600, parity="E", timeout=0.5) as port:
-            card = Gms96Client(port, address=3, timeout=2)
-            card.fcb = first_fcb ^ 1  # the next letter command goes out with first_fcb
+        with _card(url, first_fcb) as card:
             return [card.send_letter("Q", 3), card.read(0), card.status()]
 
-    recorded = host(host_pty, 0)
-    status, err = recorder.stop()
+    recorded = host(recording.host_pty, 0)
+    status, err = recording.recorder.stop()
     assert status == 0, err
-    frames = [entry["decoded"] for entry in map(json.loads, session.read_text().splitlines()[1:])
+    frames = [entry["decoded"] for entry in map(json.loads, recording.session.read_text().splitlines()[1:])
               if entry.get("dir") == "host"]
     assert {"frame": "long", "C": "53", "A": 3, "data": "51 03 00 00", "letter": "Q", "params": [3],
             "fcb": 0} in [frame for chunk in frames for frame in chunk]
 
-    replay = _start(procs, "replay", str(session), "--pty", "--as-fast")
+    replay = _start(procs, "replay", str(recording.session), "--pty", "--as-fast")
     url = replay.value("replay: pty")
     assert host(url, 0) == recorded  # the same frames: exact
     assert host(url, 1) == recorded  # every FCB flipped (and so every checksum): tolerated
@@ -264,34 +295,17 @@ def test_gms96_e_version_live_model_takes_the_hosts_frame_count_bit(tmp_path: Pa
     not carried out (spec gms96.md §3.9).  The host's N300;10 matched the recording's with the
     other FCB; the live model, seeded with the host's own frame, takes its next one (N400;10, the
     first not recorded) as new."""
-    config = tmp_path / "gms96.yaml"
-    config.write_text("boot_time: 0\ndil: {protocol: E}\n")
-    session = tmp_path / "gms96.devsim"
-    device = _start(procs, "run", "gms96", "--pty", "--config", str(config))
-    device_pty = device.value("gms96: pty")
-    device.line("gms96: ready")
-    recorder = _start(procs, "record", "--port", device_pty, "--out", str(session), "--kind", "gms96")
-    host_pty = recorder.value("record: pty")
-    recorder.line("record: out")
+    recording = _gms96_recording(tmp_path, procs, "boot_time: 0\ndil: {protocol: E}\n")
 
     def host(url: str, first_fcb: int, *letters: tuple[int, ...]) -> list[object]:
-        deadline = time.monotonic() + 10
-        while True:  # (the device's pty, which the recorder has just let go, takes a moment to take a host again)
-            try:
-                port = serial.Serial(url, 9600, parity="E", timeout=0.5)
-                break
-            except (serial.SerialException, termios.error):
-                assert time.monotonic() < deadline, f"{url} did not open"
-                time.sleep(0.02)  # (the next try; the condition is the open itself)
-        with port:
-            card = Gms96Client(port, address=3, timeout=2)
-            card.fcb = first_fcb ^ 1  # the next letter command goes out with first_fcb
+        with _card(url, first_fcb) as card:
             return [card.send_letter(letter, *params) for letter, *params in letters]
 
-    recorded = host(host_pty, 0, ("N", 300, 10))  # the recording ends with a frame of FCB 0
-    assert recorder.stop()[0] == 0
-    (n10,) = host(device_pty, 1, ("T", 5, 10))  # N10 on the card: 300
-    replay = _start(procs, "replay", str(session), "--pty", "--as-fast", "--fallback", "live", "--config", str(config))
+    recorded = host(recording.host_pty, 0, ("N", 300, 10))  # the recording ends with a frame of FCB 0
+    assert recording.recorder.stop()[0] == 0
+    (n10,) = host(recording.device_pty, 1, ("T", 5, 10))  # N10 on the card: 300
+    replay = _start(procs, "replay", str(recording.session), "--pty", "--as-fast", "--fallback", "live",
+                    "--config", str(recording.config))
     answers = host(replay.value("replay: pty"), 1, ("N", 300, 10), ("N", 400, 10), ("T", 5, 10))
     assert answers[0] == recorded[0]  # (the recording's answer, by the FCB tolerance)
     assert isinstance(n10, LongFrame) and (300).to_bytes(2, "little") in n10.data
