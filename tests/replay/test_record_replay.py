@@ -331,37 +331,37 @@ def _run(host: Path, *args: str) -> list[str]:
     return done.stdout.splitlines()
 
 
-def test_the_readme_example(tmp_path: Path, procs: list[Proc]) -> None:
+def _readme_recording(tmp_path: Path, procs: list[Proc], *extra: str) -> tuple[Path, list[str], Path]:
+    """docs/replay.md's host (with ``extra`` lines) recorded against a SERS: the host, what it
+    printed, the session."""
     host = _readme_host(tmp_path)
     config = tmp_path / "sers.yaml"
     config.write_text("boot_time: 0\n")
     device = _start(procs, "run", "sers", "--pty", "--config", str(config))
     device_pty = device.value("sers: pty")
     device.line("sers: ready")
-    recorder = _start(procs, "record", "--port", device_pty, "--out", str(tmp_path / "drive.devsim"), "--kind", "sers")
-    recorded = _run(host, recorder.value("record: pty"))
+    session = tmp_path / "drive.devsim"
+    recorder = _start(procs, "record", "--port", device_pty, "--out", str(session), "--kind", "sers")
+    recorded = _run(host, recorder.value("record: pty"), *extra)
     assert recorder.stop()[0] == 0
+    return host, recorded, session
+
+
+def test_the_readme_example(tmp_path: Path, procs: list[Proc]) -> None:
+    host, recorded, session = _readme_recording(tmp_path, procs)
     assert recorded[2] == r"b'#V?\rV=2000U/min\n\r\nok1\n\r'"
-    replay = _start(procs, "replay", str(tmp_path / "drive.devsim"), "--pty", "--as-fast")
+    replay = _start(procs, "replay", str(session), "--pty", "--as-fast")
     assert _run(host, replay.value("replay: pty")) == recorded
-    live = _start(procs, "replay", str(tmp_path / "drive.devsim"), "--pty", "--fallback", "live")
+    live = _start(procs, "replay", str(session), "--pty", "--fallback", "live")
     assert _run(host, live.value("replay: pty"), "#P91?") == [*recorded, r"b'#P91?\rP91=2000U/min\n\r\nok1\n\r'"]
 
 
 def test_fallback_live_holds_what_this_host_wrote_not_the_whole_recording(tmp_path: Path, procs: list[Proc]) -> None:
     """The recording went on (V=3000) after where this host leaves it (V=2000, then a request
     never recorded): the live model holds what this host wrote."""
-    host = _readme_host(tmp_path)
-    config = tmp_path / "sers.yaml"
-    config.write_text("boot_time: 0\n")
-    device = _start(procs, "run", "sers", "--pty", "--config", str(config))
-    device_pty = device.value("sers: pty")
-    device.line("sers: ready")
-    recorder = _start(procs, "record", "--port", device_pty, "--out", str(tmp_path / "drive.devsim"), "--kind", "sers")
-    recorded = _run(host, recorder.value("record: pty"), "#V=3000", "#V?")
-    assert recorder.stop()[0] == 0
+    host, recorded, session = _readme_recording(tmp_path, procs, "#V=3000", "#V?")
     assert recorded[-1] == r"b'#V?\rV=3000U/min\n\r\nok1\n\r'"
-    live = _start(procs, "replay", str(tmp_path / "drive.devsim"), "--pty", "--fallback", "live")
+    live = _start(procs, "replay", str(session), "--pty", "--fallback", "live")
     assert _run(host, live.value("replay: pty"), "#P91?") == [*recorded[:4], r"b'#P91?\rP91=2000U/min\n\r\nok1\n\r'"]
 
 
