@@ -3,7 +3,7 @@ raw TCP port, for a session recorded on a network port such as Ether-S-Bus on TC
 
 The host's bytes are cut into requests by the framing the kind declares on the port
 (:attr:`devsim.core.kit.PortDef.framing`; unframed ports: a request is complete when it equals a
-recorded one).  Each request is matched
+recorded one and the recorded one at the cursor does not go on beyond it).  Each request is matched
 against the recording's requests (:mod:`devsim.observe.replay.session`), starting at the exchange after
 the last one matched and wrapping around: the first that matches byte-exact or by one of the
 kind's port's tolerances (GMS96: checksum, FCB; Ether-S-Bus: sequence number).  A match is answered with the recorded answer, each
