@@ -97,7 +97,8 @@ class AsyncFleetClient:
             await asyncio.wait_for(self._synced.wait(), self.timeout)
         except (TimeoutError, LinkLost):
             await self.close()
-            raise ConnectionError(f"the fleet broker {self.url} did not answer") from None
+            raise ConnectionError(f"the fleet broker {self.url} did not answer (or its ACL does not let this user"
+                                  f" publish on {self.topics.root}/client/#: docs, Fleet)") from None
         return self
 
     async def close(self) -> None:
