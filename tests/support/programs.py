@@ -25,6 +25,7 @@ PACKAGES = {
     "tshark": "tshark",
     "luacheck": "lua-check",
     "mosquitto": "mosquitto",
+    "mosquitto_passwd": "mosquitto",
     "mosquitto_sub": "mosquitto-clients",
     "mosquitto_pub": "mosquitto-clients",
     "node": "nodejs",
