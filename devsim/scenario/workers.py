@@ -280,9 +280,11 @@ async def run_workers(
             pumps = [asyncio.ensure_future(_forward(w.proc.stdout, seen[i], sys.stdout)) for i, w in enumerate(running)]
             ended = [asyncio.ensure_future(w.proc.wait()) for w in running]
             waiting = [asyncio.ensure_future(e.wait()) for e in seen]
-            done, _ = await asyncio.wait([*ended, asyncio.ensure_future(asyncio.gather(*waiting))],
-                                         return_when=asyncio.FIRST_COMPLETED)
+            all_seen = asyncio.ensure_future(asyncio.gather(*waiting))
+            done, _ = await asyncio.wait([*ended, all_seen], return_when=asyncio.FIRST_COMPLETED)
             if any(task in done for task in ended):
+                all_seen.cancel()  # (left pending, it was logged as never retrieved at the loop's end)
+                await asyncio.gather(all_seen, return_exceptions=True)
                 warn("devsim: a worker ended while starting")
                 return 1
             server = None

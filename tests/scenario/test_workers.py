@@ -124,3 +124,24 @@ def test_virtual_time_stays_in_one_process(tmp_path: Path) -> None:
         proc.send_signal(signal.SIGINT)
         proc.communicate(timeout=30)
     assert proc.returncode == 0
+
+
+def test_a_port_in_use_in_a_worker_is_one_error_and_no_traceback(tmp_path: Path) -> None:
+    """(The error and status 6 were right, but an asyncio traceback followed them: a future the
+    start waited on was left pending.)"""
+    from devsim.cli import exits
+
+    with socket.socket() as held:
+        held.bind(("127.0.0.1", 0))
+        held.listen()
+        port = held.getsockname()[1]
+        plant = tmp_path / "busy.yaml"
+        plant.write_text(f"devices:\n  - {{name: a, kind: echo, transport: {{tcp: {{port: {port}}}}}}}\n"
+                         "  - {name: b, kind: echo, transport: {tcp: {port: 0}}}\n")
+        env = dict(os.environ)
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
+        env["DEVSIM_EXTRA_KINDS"] = ECHO
+        done = subprocess.run([sys.executable, "-m", "devsim", "up", str(plant), "--workers", "2", "--no-control"],
+                              cwd=ROOT, env=env, stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=60)
+    assert done.returncode == exits.SYSTEM, done.stderr
+    assert "Address already in use" in done.stderr and "Traceback" not in done.stderr, done.stderr
