@@ -78,6 +78,7 @@ class Sub:
             if message is None:
                 raise AssertionError(f"mosquitto_sub ended: {self.close()}")
             if message.topic == topic and where(message):
+                self.seen = [m for m in self.seen if m.topic != topic]  # (the earlier ones on it: consumed too)
                 return message
             self.seen.append(message)
 
