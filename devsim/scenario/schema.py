@@ -156,6 +156,7 @@ def kind_port_defaults(kind: str) -> dict[str, tuple[str, int]]:
 
 class PlantSpec(Typed, kw_only=True):
     name: Annotated[str | None, doc("a name for the plant (shown by devsim up)")] = None
+    description: Annotated[str, doc("what the plant or scenario is, for its reader")] = ""
     devices: Annotated[list[DeviceSpec], Meta(min_length=1)]
     buses: list[BusSpec] = []
     mqtt: Annotated[MqttSpec | None, doc("also publish the devices over MQTT")] = None
@@ -470,7 +471,6 @@ class Step(Typed):
 
 class Scenario(PlantSpec, kw_only=True):
     name: str | None = None
-    description: str = ""
     time: Annotated[Literal["virtual", "realtime"] | None, doc(
         "default: virtual when the scenario scripts the host, else realtime")] = None
     speed: Annotated[float, Meta(gt=0)] = 1.0

@@ -190,3 +190,11 @@ def test_two_ports_on_one_link_or_one_tcp_port_are_a_mistake_of_the_file(tmp_pat
         f"{bad}:3: devices.2.transport: tcp port 127.0.0.1:23456 is taken by devices.1.transport already",
         f"{bad}:5: devices.4.transport: link {link} is taken by devices.3.transport already",
     ]
+
+
+def test_a_plant_file_may_say_what_it_is(tmp_path: Path) -> None:
+    """`description:`, which a scenario file takes, was an unknown field in a plant file."""
+    plant = tmp_path / "plant.yaml"
+    plant.write_text("name: cell\ndescription: two drives on a bench\ndevices:\n  - {name: x, kind: sers}\n")
+    done = check(plant)
+    assert done.returncode == 0 and done.stdout.strip() == f"{plant}: ok (plant, 1 devices)", done.stderr
