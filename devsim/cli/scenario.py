@@ -60,8 +60,8 @@ def scenario() -> None:
 
 @scenario.command("run")
 @click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
-@click.option("--virtual", "mode", flag_value="virtual", help="Virtual time (default when the host is scripted).")
-@click.option("--realtime", "mode", flag_value="realtime", help="Real time (default for an external host).")
+@click.option("--virtual", "virtual", is_flag=True, help="Virtual time (default when the host is scripted).")
+@click.option("--realtime", "realtime", is_flag=True, help="Real time (default for an external host).")
 @click.option("--speed", type=float, default=None, metavar="F", help="Real-time speed factor.")
 @click.option("--junit", metavar="OUT.xml", help="Also write the results as JUnit XML.")
 @click.option("--state-dir", metavar="DIR", help="Where the devices' non-volatile memory is kept.")
@@ -79,7 +79,8 @@ def scenario() -> None:
               " 127.0.0.1 unless named, another host gets a token).")
 def scenario_run(
     files: tuple[str, ...],
-    mode: str | None,
+    virtual: bool,
+    realtime: bool,
     speed: float | None,
     junit: str | None,
     state_dir: str | None,
@@ -97,6 +98,11 @@ def scenario_run(
 
     if speed is not None and speed <= 0:
         raise click.UsageError("--speed: must be positive")
+    if virtual and realtime:  # (the last one won)
+        raise click.UsageError("--virtual and --realtime exclude each other")
+    if virtual and speed is not None:  # (the speed was ignored, as devsim up refuses the pair)
+        raise click.UsageError("--speed and --virtual exclude each other")
+    mode = "virtual" if virtual else "realtime" if realtime else None
     pictures = None
     if motion_log is not None or plot_dir is not None:
         from devsim.observe.motion_log import motion_log_problem
