@@ -156,13 +156,16 @@ def _line_fault(rt: Runtime, req: rq.LineFault) -> None:
 
 
 def _telegrams(rt: Runtime, req: rq.Telegrams) -> list[dict[str, Any]]:
+    """The last ``count`` telegrams (0 … 200, as ``ctl telegrams --count`` takes)."""
     from devsim.transports.tap import tap
 
+    if not 0 <= req.count <= 200:
+        raise BadRequest(f"'count' must be 0 … 200, not {req.count}")
     line = rt.lines.get(port_key(req.device, req.port))
     if line is None:
         rt.line_status(req.device, req.port)  # the reason: no such device, port or line
     framing = rt.device(req.device).port(req.port).spec.framing
-    return tap(line, framing.decoder if framing is not None else None).last(max(0, min(req.count, 200)))
+    return tap(line, framing.decoder if framing is not None else None).last(req.count)
 
 
 def _watch(rt: Runtime, req: rq.Watch) -> WatchStart:

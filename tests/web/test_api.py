@@ -168,6 +168,9 @@ async def test_the_stream_carries_the_move_and_its_events(sim: WebSim) -> None:
         telegrams = await (await http.get("/api/devices/sers/telegrams?port=main&count=10")).json()
         assert [t["dir"] for t in telegrams[-2:]] == ["H>D", "D>H"]
         assert telegrams[-2]["text"] == '"#1ON W=36000 E\\r"' and telegrams[-2]["decoded"]
+        for count in ("-1", "201", "99999999999999999999"):  # as ctl telegrams --count refuses them
+            refused = await http.get(f"/api/devices/sers/telegrams?port=main&count={count}")
+            assert refused.status == 422 and (await refused.json())["type"] == "BadRequest", count
 
 
 async def test_requests_from_elsewhere_are_refused(sim: WebSim) -> None:
