@@ -169,6 +169,10 @@ def test_watch_lines_print_characters() -> None:
 
     line = describe({"type": "change", "t": 1.5, "device": "sers", "name": "display", "value": {"char": "°"}})
     assert line == '1.500 sers display {"char": "°"}'
+    assert describe({"type": "change", "t": 2, "device": "cnc", "name": "panel.message", "value": "ÜBERLAUF"}) == (
+        "2.000 cnc panel.message ÜBERLAUF")  # plain text as it is
+    forged = describe({"type": "change", "t": 2, "device": "cnc", "name": "program.P20", "value": "N1 X1\n2.000 cnc x 1"})
+    assert forged == '2.000 cnc program.P20 "N1 X1\\n2.000 cnc x 1"'  # one item, one line (it printed two)
 
 
 def test_telegrams_are_a_table(sim: tuple[str, str]) -> None:

@@ -177,7 +177,8 @@ def describe(item: dict[str, Any]) -> str:
     head = f"{float(item.get('t', 0.0)):.3f} {item.get('device')}"
     if kind == "change":
         value = item.get("value")
-        return f"{head} {item.get('name')} {value if isinstance(value, str) else json.dumps(value, ensure_ascii=False)}"
+        plain = isinstance(value, str) and value.isprintable()  # (text with a line end is quoted: one item, one line)
+        return f"{head} {item.get('name')} {value if plain else json.dumps(value, ensure_ascii=False)}"
     if kind in ("error", "refused") and "code" in item:  # an error by its code: "sers error P11 8192: drive error: limit switch"
         text = item.get("text")
         return f"{head} {kind} {item['code']}" + (f": {text}" if text else "")
