@@ -35,11 +35,16 @@ class Check:
 class Keys:
     """``Annotated[dict[Any, V], Keys(function, "text")]``: each key goes through
     ``function`` (which returns the key to keep or raises ``ValueError``); ``text`` names the
-    keys in the documentation (``{text: V}``)."""
+    keys in the documentation (``{text: V}``).  ``entry(key, value)`` (the key converted) returns
+    the entry's value or raises ``ValueError``: a rule on each entry (a parameter's range),
+    reported at its own key, every entry that breaks it (a ``Check`` on the whole mapping says
+    only the first, at the mapping)."""
 
-    def __init__(self, function: Callable[[Any], Any], text: str = "key") -> None:
+    def __init__(self, function: Callable[[Any], Any], text: str = "key",
+                 entry: Callable[[Any, Any], Any] | None = None) -> None:
         self.function = function
         self.text = text
+        self.entry = entry
 
 
 def _dec_hook(kind: type, value: Any) -> Any:
@@ -158,7 +163,14 @@ def _keyed(keys: Keys, item: Fixer | None, checks: list[Check]) -> Fixer:
             except ValueError as exc:
                 problems.append(((*loc, key), str(exc)))
                 continue
-            converted[new_key] = entry if item is None else item(entry, (*loc, key), problems)
+            value_now = entry if item is None else item(entry, (*loc, key), problems)
+            if keys.entry is not None:
+                try:
+                    value_now = keys.entry(new_key, value_now)
+                except ValueError as exc:
+                    problems.append(((*loc, key), str(exc)))
+                    continue
+            converted[new_key] = value_now
         return converted
 
     fix = _checked(convert_keys, checks)

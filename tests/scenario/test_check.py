@@ -198,3 +198,21 @@ def test_a_plant_file_may_say_what_it_is(tmp_path: Path) -> None:
     plant.write_text("name: cell\ndescription: two drives on a bench\ndevices:\n  - {name: x, kind: sers}\n")
     done = check(plant)
     assert done.returncode == 0 and done.stdout.strip() == f"{plant}: ok (plant, 1 devices)", done.stderr
+
+
+def test_every_bad_parameter_of_a_config_at_its_own_line(tmp_path: Path) -> None:
+    """A range rule on each entry of a mapping (Keys' entry): every parameter out of its range,
+    at its own line and name (only the first was named, at the params: line, and none while
+    another key was unknown)."""
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("devices:\n  - name: y\n    kind: sers\n    config:\n      params:\n        V: -5\n        A: -7\n"
+                   "        P9999: 1\n  - name: g\n    kind: gms96\n    config: {params: {N10: 99999999, N11: 1}}\n")
+    done = check(bad)
+    assert done.returncode == exits.BAD_FILE
+    assert done.stderr.splitlines() == [
+        f"{bad}:6: devices.1.config.params.V: -5 is below the minimum 0",
+        f"{bad}:7: devices.1.config.params.A: -7 is below the minimum 2",
+        f"{bad}:8: devices.1.config.params.P9999: no such parameter",
+        f"{bad}:11: devices.2.config.params.N10: 99999999 is outside 1 … 3000",
+        f"{bad}:11: devices.2.config.params.N11: 1 is outside 50 … 255",
+    ]

@@ -164,13 +164,12 @@ def _n_parameter(key: Any) -> int:
     return int(number)
 
 
-def _param_ranges(value: dict[int, int]) -> dict[int, int]:
-    """Each value within the parameter's own range, as the manual states it."""
-    for index, number in value.items():
-        low, high = n_range(N_TABLE[index])
-        if not low <= number <= high:
-            raise ValueError(f"N{index}: {number} is outside {low} … {high}")
-    return value
+def _param_range(index: int, number: int) -> int:
+    """A value within the parameter's own range, as the manual states it."""
+    low, high = n_range(N_TABLE[index])
+    if not low <= number <= high:
+        raise ValueError(f"{number} is outside {low} … {high}")
+    return number
 
 
 class Gms96Config(Settings):
@@ -178,7 +177,7 @@ class Gms96Config(Settings):
 
     dil: DilSwitch = field(default_factory=DilSwitch)
     variant: Annotated[str, doc("K1 | KSA15 | KSA15-2 | KS4 | KS8 | ... (+R)")] = "KSA15-2R"
-    params: Annotated[dict[Any, int], Keys(_n_parameter, "N parameter"), Check(_param_ranges), doc(
+    params: Annotated[dict[Any, int], Keys(_n_parameter, "N parameter", entry=_param_range), doc(
         "factory N parameters {index: value}")] = {}
     axis: AxisGeometry = field(default_factory=AxisGeometry)
     link: LinkOptions = field(default_factory=LinkOptions)

@@ -21,10 +21,13 @@ def _axis(key: Any) -> str:
     return str(key)
 
 
+def _decimal_count(_axis: str, decimals: int) -> int:
+    if not 0 <= decimals <= 6:
+        raise ValueError("decimals must be 0 … 6")
+    return decimals
+
+
 def _decimals(value: dict[str, int]) -> dict[str, int]:
-    for axis, decimals in value.items():
-        if not 0 <= decimals <= 6:
-            raise ValueError(f"{axis}: decimals must be 0 … 6")
     return {**dict.fromkeys(_AXES, 3), **value}
 
 
@@ -45,10 +48,9 @@ def _key_code(key: Any) -> int:
     return code
 
 
-def _params(value: dict[int, float]) -> dict[int, float]:
-    for number, setting in value.items():
-        check_parameter(number, setting)
-    return value
+def _param(number: int, setting: float) -> float:
+    check_parameter(number, setting)
+    return setting
 
 
 class Plc(Settings):
@@ -92,7 +94,7 @@ class PoselestaConfig(Settings):
     """What a user can set for one POSELESTA (--config FILE.yaml or a plant file)."""
 
     variant: Annotated[Literal["II", "III"], doc("POS II or POS III (§1.1 of the spec)")] = "III"
-    decimals: Annotated[dict[Any, int], Keys(_axis, "X | Y | Z | D"), Check(_decimals), doc(
+    decimals: Annotated[dict[Any, int], Keys(_axis, "X | Y | Z | D", entry=_decimal_count), Check(_decimals), doc(
         "decimals of each axis's resolution (3 = 0.001 mm); the word format is 7 digits")] = field(
         default_factory=lambda: dict.fromkeys(_AXES, 3))
     eob: Annotated[Literal["CRLF", "CR"], doc("end of block on output (spec G-EOB)")] = "CRLF"
@@ -105,7 +107,7 @@ class PoselestaConfig(Settings):
         "always aborts the read-in")] = "ignore"
     strict_block_numbers: Annotated[bool, doc("a block without N aborts the read-in")] = False
     max_blocks_total: Annotated[int, Meta(ge=1), doc("program memory, blocks over all programs")] = 2000
-    params: Annotated[dict[Any, float], Keys(_parameter_number, "parameter number"), Check(_params), doc(
+    params: Annotated[dict[Any, float], Keys(_parameter_number, "parameter number", entry=_param), doc(
         "initial machine parameters, e.g. {70: 3, 71: 0} (P1 … P98)")] = {}
     boot_time: Annotated[float, Meta(ge=0), doc("seconds after power-on until NC ready (§2.4.5: about 2 s)")] = 2.0
     input_rise_ms: Annotated[float, Meta(ge=0, le=1000), doc(

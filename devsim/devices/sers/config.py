@@ -28,21 +28,20 @@ def _known_parameter(key: Any) -> str:
     return str(key)
 
 
-def _param_ranges(value: dict[str, float | int]) -> dict[str, float | int]:
-    """Each value within the parameter's own range (§4.7), as the drive would check it."""
-    for key, number in value.items():
-        pdef = PARAMETER_TABLE.lookup(key)
-        if not math.isfinite(number):
-            raise ValueError(f"{key}: not a finite number")
-        if pdef.choices is not None and int(number) not in pdef.choices:
-            raise ValueError(f"{key}: {number:g} is not one of {', '.join(map(str, sorted(pdef.choices)))}")
-        if pdef.minimum is not None and number < pdef.minimum:
-            raise ValueError(f"{key}: {number:g} is below the minimum {pdef.minimum:g}")
-        if pdef.extra["min_exclusive"] and pdef.minimum is not None and number <= pdef.minimum:
-            raise ValueError(f"{key}: {number:g} must be above {pdef.minimum:g}")
-        if pdef.maximum is not None and number > pdef.maximum:
-            raise ValueError(f"{key}: {number:g} is above the maximum {pdef.maximum:g}")
-    return value
+def _param_range(key: str, number: float | int) -> float | int:
+    """A value within the parameter's own range (§4.7), as the drive would check it."""
+    pdef = PARAMETER_TABLE.lookup(key)
+    if not math.isfinite(number):
+        raise ValueError("not a finite number")
+    if pdef.choices is not None and int(number) not in pdef.choices:
+        raise ValueError(f"{number:g} is not one of {', '.join(map(str, sorted(pdef.choices)))}")
+    if pdef.minimum is not None and number < pdef.minimum:
+        raise ValueError(f"{number:g} is below the minimum {pdef.minimum:g}")
+    if pdef.extra["min_exclusive"] and pdef.minimum is not None and number <= pdef.minimum:
+        raise ValueError(f"{number:g} must be above {pdef.minimum:g}")
+    if pdef.maximum is not None and number > pdef.maximum:
+        raise ValueError(f"{number:g} is above the maximum {pdef.maximum:g}")
+    return number
 
 
 def _baud(value: int) -> int:
@@ -80,7 +79,7 @@ class SersConfig(Settings):
     current_class: Literal["01", "02", "03", "04", "06", "08", "12"] = "06"
     supply_class: Literal["24", "60", "85", "120", "240"] = "85"
     options: list[Literal["E50", "IO", "P8", "RS485", "SERVO", "U"]] = []
-    params: Annotated[dict[Any, float | int], Keys(_known_parameter, "parameter"), Check(_param_ranges),
+    params: Annotated[dict[Any, float | int], Keys(_known_parameter, "parameter", entry=_param_range),
                       doc("factory/EEPROM parameter values, e.g. {P1017: 2, V: 500}")] = {}
     axis: AxisGeometry = field(default_factory=AxisGeometry)
     supply_voltage: Annotated[float | None, doc("initial supply voltage (default nominal)")] = None
