@@ -67,6 +67,18 @@ class SerialSettings(msgspec.Struct, frozen=True):
             return f"{self.baudrate} baud, {stop} stop bit{'' if stop == 1 else 's'} (data bits and parity not visible)"
         return f"{self.baudrate} {self.bytesize}{self.parity}{stop}"
 
+    def problem(self) -> str | None:
+        """Why a UART cannot be set to these settings (a file edited by hand), or None."""
+        if not 0 < self.baudrate <= 10_000_000:
+            return f"baudrate {self.baudrate} is no baud rate"
+        if self.bytesize not in (5, 6, 7, 8):
+            return f"bytesize {self.bytesize} is not 5, 6, 7 or 8"
+        if self.parity not in ("N", "E", "O", "M", "S"):
+            return f"parity {self.parity!r} is not N, E, O, M or S"
+        if self.stopbits not in (1, 1.5, 2):
+            return f"stopbits {self.stopbits:g} is not 1, 1.5 or 2"
+        return None
+
     def char_time(self) -> float:
         """Seconds one character occupies on the wire (start + data + parity + stop bits)."""
         bits = 1 + self.bytesize + (0 if self.parity == "N" else 1) + float(self.stopbits)

@@ -38,10 +38,9 @@ from devsim.core.watch import PointWatch
 from devsim.runtime.process import port_key
 from devsim.runtime.requests import MIN_WATCH_PERIOD
 
-__all__ = ["DEFAULT_PERIOD", "MIN_PERIOD", "WatchStream", "axis_names", "default_names", "describe", "error_text"]
+__all__ = ["DEFAULT_PERIOD", "WatchStream", "axis_names", "default_names", "describe", "error_text"]
 
 DEFAULT_PERIOD = 0.1
-MIN_PERIOD = MIN_WATCH_PERIOD
 _AXIS_NAME = re.compile(r"^axis\.(?:[^.]+\.)?(position|velocity)$")
 
 Send = Callable[[dict[str, Any]], None]
@@ -67,8 +66,8 @@ class WatchStream:
     def __init__(self, runtime: Any, device: Device, send: Send, *, names: Iterable[str] | None = None,
                  period: float | None = None, values: bool = True, refused: bool = True) -> None:
         period = DEFAULT_PERIOD if period is None else period
-        if not period >= MIN_PERIOD:
-            raise ValueError(f"a watch period is at least {MIN_PERIOD:g} s")
+        if not period >= MIN_WATCH_PERIOD:
+            raise ValueError(f"a watch period is at least {MIN_WATCH_PERIOD:g} s")
         self.runtime = runtime
         self.device = device
         self.send = send

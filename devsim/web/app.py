@@ -33,6 +33,7 @@ from urllib.parse import urlsplit
 
 from aiohttp import WSMsgType, web
 
+from devsim.core.points import BadValue, parse_bool
 from devsim.observe.monitor_text import LINE_FAULTS
 from devsim.runtime.client import ControlError
 from devsim.web.feed import Subscriber
@@ -72,7 +73,11 @@ async def _line_fault(view: PlantView, device: str, body: dict[str, Any]) -> Any
     kind = body.get("kind")
     params = body.get("params")
     if not isinstance(params, dict):
-        params = dict(LINE_FAULTS.get(str(kind), {})) if active not in (False, "false", "off", "no", 0, "0") else {}
+        try:
+            on = parse_bool(active)
+        except BadValue:
+            on = True  # (the control API refuses the word itself, with its message)
+        params = dict(LINE_FAULTS.get(str(kind), {})) if on else {}
     return await view.link.request("line_fault", device=device, kind=kind, active=active,
                                    port=body.get("port") or "main", params=params)
 

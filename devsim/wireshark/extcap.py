@@ -141,7 +141,7 @@ def capture(interface: Interface, fifo: str) -> int:
                 if item.get("type") != "chunk":
                     continue  # "dropped": Wireshark read too slowly; a pcap has no place for it
                 settings = item.get("settings") or settings
-                if "peers" in item and not int(info["link"]) == LINKTYPE_USER0:
+                if "peers" in item:  # (only an IPv4 capture's chunks carry them)
                     peers[0] = item["peers"]
                 tracer.record(item["dir"], bytes.fromhex(item["data"]), float(item["t"]))
                 if tracer.closed:

@@ -227,7 +227,8 @@ async def replay_session(plan: ReplayPlan) -> int:
     runtime.add_closer(clock.close)
     try:
         async with runtime:
-            live = hand_over = None
+            live = None
+            hand_over: Callable[[list[tuple[Exchange, bytes]]], None] | None = None
             if plan.fallback == "live":
                 session = plan.session
                 assert session.kind is not None
@@ -237,11 +238,12 @@ async def replay_session(plan: ReplayPlan) -> int:
                     warn(f"Error: cannot start the live {session.kind} model: {type(exc).__name__}: {exc}")
                     return 1
 
-                def hand_over(heard: list[tuple[Exchange, bytes]]) -> None:
+                def go_live(heard: list[tuple[Exchange, bytes]]) -> None:
                     seed(clock, live, heard)
                     clock.go_live(1.0 if plan.as_fast else plan.speed)
                     bridge.sink = lambda data: outbox.put(loop.time(), data)
 
+                hand_over = go_live
             replayer = Replayer(plan, outbox, live, hand_over)
             transport: Any = PtyTransport(link=plan.link) if plan.tcp is None else TcpTransport(*plan.tcp)
             try:
