@@ -296,7 +296,9 @@ class PtyTransport(Transport):
             attrs = termios.tcgetattr(self._slave) if self._slave is not None else None
         except termios.error:
             attrs = None
-        if attrs is not None and attrs == self._last_attrs:
+        # (A host's request that lands just before an arm's last look equals that look, but may
+        # have cleared EXTPROC: then the slave is armed again, or no later change is heard.)
+        if attrs is not None and attrs == self._last_attrs and (not self._packet or attrs[_LFLAG] & _EXTPROC):
             return
         if attrs is not None and not self._frame_visible and self._slave is not None:
             attrs = _arm(self._slave, attrs, extproc=self._packet)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import fcntl
 import json
 import os
 import select
@@ -399,6 +400,63 @@ def test_a_host_change_that_lands_while_the_transport_arms_is_kept(monkeypatch: 
     finally:
         for fd in (host, master, slave):
             os.close(fd)
+
+
+def _raw(fd: int, speed: int) -> None:
+    """A host's raw mode from a zeroed ``c_lflag`` (as C code and the live-log tests set it):
+    EXTPROC goes with it."""
+    attrs = termios.tcgetattr(fd)
+    attrs[0] = attrs[1] = attrs[3] = 0
+    attrs[2] |= termios.CLOCAL | termios.CREAD
+    attrs[4] = attrs[5] = speed
+    termios.tcsetattr(fd, termios.TCSANOW, attrs)
+
+
+class _HostRepeatsItsRequestAsTheArmEnds:
+    """The pty module's ``fcntl``, but right after the arm's ``TIOCSSOFTCAR`` the host sets its
+    raw 4800 baud again (a second open, or a host that sets its port twice): its change lands
+    between the arm and the transport's last look, and it clears EXTPROC."""
+
+    def __init__(self, host: int) -> None:
+        self.host = host
+        self.fired = False
+
+    def __getattr__(self, name: str):
+        return getattr(fcntl, name)
+
+    def ioctl(self, fd: int, request: int, arg):
+        result = fcntl.ioctl(fd, request, arg)
+        if request == pty_module._TIOCSSOFTCAR and not self.fired:
+            self.fired = True
+            _raw(self.host, termios.B4800)
+        return result
+
+
+async def test_a_host_that_clears_extproc_as_the_arm_ends_is_still_heard(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The transport's last look after an arm is what its own change signal is compared with.
+    A raw host's request that lands just before that look (two opens in a row) clears EXTPROC
+    and is taken for the arm's own change: the transport must set EXTPROC again, or it hears of
+    no later change of the host's (CI saw a host's 19200 baud go unreported this way)."""
+    line = Line(EchoTarget(SerialSettings(9600, 8, "N", 1)), RealClock())
+    heard: asyncio.Queue[str] = asyncio.Queue()
+    line.observers.append(lambda event, text: heard.put_nowait(text) if event == "host_settings" else None)
+    transport = PtyTransport()
+    await transport.start(line)
+    host = os.open(transport.address, os.O_RDWR | os.O_NOCTTY)
+    try:
+        middle = _HostRepeatsItsRequestAsTheArmEnds(host)
+        monkeypatch.setattr(pty_module, "fcntl", middle)
+        _raw(host, termios.B4800)
+        assert "4800 baud" in await asyncio.wait_for(heard.get(), 5)
+        while not middle.fired:  # (the arm runs when the transport reads the change signal)
+            await asyncio.sleep(0)
+        monkeypatch.undo()
+        _raw(host, termios.B19200)
+        assert "19200 baud" in await asyncio.wait_for(heard.get(), 5)
+    finally:
+        os.close(host)
+        await transport.close()
+        line.close()
 
 
 @pytest.mark.parametrize("target", ["elsewhere", "live-pty"])
