@@ -262,23 +262,35 @@ async def test_a_host_reopens_at_8e1_five_times_and_changes_its_timeout() -> Non
 
 # A host in its own process (as a real one is: no GIL shared with the transport's loop) that
 # opens the port, changes its timeout and closes it without sending a byte, then talks once.
+# Between its requests it waits until the transport has armed the slave (CLOCAL the other way
+# than pyserial sets it): a real host cannot see that, and only a request that comes faster than
+# the transport's loop can run is refused (see devsim.transports.pty).
 _QUIET_HOST = r"""
-import sys, time, serial
-path, parity, gap = sys.argv[1], sys.argv[2], float(sys.argv[3])
+import sys, termios, time, serial
+path, parity = sys.argv[1], sys.argv[2]
 log = []
+
+def armed(port):
+    deadline = time.monotonic() + 10
+    while termios.tcgetattr(port.fd)[2] & termios.CLOCAL:
+        if time.monotonic() > deadline:
+            log.append("never armed")
+            return
+        time.sleep(0.001)
+
 for i in range(5):
     try:
         port = serial.Serial(path, 9600, parity=parity, timeout=2)
     except Exception as exc:
         log.append(f"open {i}: {exc}")
         continue
-    time.sleep(gap)
+    armed(port)
     try:
         port.timeout = 1
     except Exception as exc:
         log.append(f"timeout {i}: {exc}")
+    armed(port)
     port.close()
-    time.sleep(gap)
 with serial.Serial(path, 9600, parity=parity, timeout=2) as port:
     port.write(b"\x10\x7b\x16")
     if port.read(3) != b"\x10\x7b\x16":
@@ -302,7 +314,6 @@ async def test_a_quiet_host_reopens_and_reconfigures_at_any_parity(parity: str) 
             _QUIET_HOST,
             transport.address,
             parity,
-            "0.01",
             stdout=asyncio.subprocess.PIPE,
         )
         out, _ = await asyncio.wait_for(proc.communicate(), 30)
