@@ -179,7 +179,8 @@ def _pid_of(path: Path) -> int | None:
     return int(tail) if tail.isdigit() else None
 
 
-def _alive(pid: int | None) -> bool:
+def process_alive(pid: int | None) -> bool:
+    """Whether a process ``pid`` exists (someone else's counts; None does not)."""
     if pid is None:
         return False
     try:
@@ -204,7 +205,7 @@ def _ask(path: Path, timeout: float) -> Simulator | None:
         # Nobody listens: a process killed before it could remove its socket (unless one has
         # bound it this very moment and listens a moment later: its pid lives, the socket is new).
         with contextlib.suppress(OSError):
-            if not _alive(_pid_of(path)) or time.time() - path.lstat().st_mtime > STARTING:
+            if not process_alive(_pid_of(path)) or time.time() - path.lstat().st_mtime > STARTING:
                 path.unlink()
         return None
     except OSError:

@@ -24,6 +24,7 @@ import asyncio
 import contextlib
 import json
 import os
+import shutil
 import signal
 import sys
 import tempfile
@@ -37,6 +38,10 @@ from devsim.observe.live_log import DEFAULT_LEVEL, level_of
 from devsim.scenario.schema import PlantSpec
 
 __all__ = ["WORKER_ENV", "end_with_parent", "run_workers", "split_plant"]
+
+#: The start of the name of the directory (in the system's temporary directory) that holds the
+#: workers' plant files and control sockets; the pid of the ``devsim up --workers`` follows.
+_DIRECTORY = "devsim-workers-"
 
 #: Set in a worker's environment (to the pid of its ``devsim up --workers``): its stdin is the
 #: pipe whose end says that process is gone.
@@ -62,6 +67,18 @@ def end_with_parent(loop: asyncio.AbstractEventLoop, stop: Callable[[], None]) -
 
     os.set_blocking(0, False)
     loop.add_reader(0, readable)
+
+
+def sweep_stale(root: str | None = None) -> None:
+    """Remove the directories that ``devsim up --workers`` processes killed by ``kill -9`` left in
+    ``root`` (the system's temporary directory): their workers ended with them, and nothing else
+    removes them.  A directory whose process still runs, or is someone else's, stays."""
+    from devsim.runtime.discovery import process_alive
+
+    for path in Path(root or tempfile.gettempdir()).glob(f"{_DIRECTORY}*"):
+        pid, dash, _ = path.name.removeprefix(_DIRECTORY).partition("-")
+        if dash and pid.isdigit() and not process_alive(int(pid)):
+            shutil.rmtree(path, ignore_errors=True)
 
 
 def split_plant(spec: PlantSpec, workers: int) -> list[dict[str, Any]]:
@@ -251,7 +268,8 @@ async def run_workers(
     unsignal = stop_on_signals(loop, stop.set)
     shares = split_plant(spec, workers)
     about = {"name": name, "started": time.time(), "monotonic": time.monotonic()}
-    with tempfile.TemporaryDirectory(prefix="devsim-workers-") as tmp:
+    sweep_stale()
+    with tempfile.TemporaryDirectory(prefix=f"{_DIRECTORY}{os.getpid()}-") as tmp:
         running: list[_Worker] = []
         try:
             for number, share in enumerate(shares):

@@ -12,6 +12,7 @@ import json
 import os
 import select
 import signal
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -151,7 +152,10 @@ def test_up_with_workers_restarts_after_kill_9_of_its_process(tmp_path: Path) ->
         os.kill(pid, signal.SIGTERM)
     assert not outlived, "a worker outlived its devsim up"
     assert not any(os.path.lexists(link) for link in links)  # they stopped as on Ctrl-C
+    left = list(Path(tempfile.gettempdir()).glob(f"devsim-workers-{first.proc.pid}-*"))
+    assert left  # (the workers' plant files: nobody could remove them at the kill)
     again = serving(*command, ready=("axis0: ready", "axis1: ready"))
+    assert not any(path.exists() for path in left)  # the next start swept them
     try:
         for n, link in enumerate(links):
             assert ask(link, "#P1019?\r") == f"#P1019?\rP1019={60 + n}U/min\n\r\nok1\n\r".encode()
