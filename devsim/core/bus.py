@@ -33,8 +33,10 @@ class Bus:
         self._queue: deque[tuple[Port | None, bytes]] = deque()
         self._busy = False
         CHANGES.count += 1  # (a door: devsim.core.changes; the members' lines become shared)
+        peers = tuple(self.devices)
         for member in self.devices:
             member.shared_line = len(self.devices) > 1
+            member.peers = peers
             member.attach(lambda data, source=member: self._emit(source, data))
 
     def _emit(self, source: Port, data: bytes) -> None:

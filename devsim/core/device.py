@@ -151,7 +151,8 @@ class Standing:
 class Port:
     """One serial port of a device, as a line or a bus sees it (slots: every poll passes through)."""
 
-    __slots__ = ("device", "spec", "name", "face", "_write", "_batch", "shared_line", "_mute", "at_once", "standing")
+    __slots__ = ("device", "spec", "name", "face", "_write", "_batch", "shared_line", "peers", "_mute", "at_once",
+                 "standing")
 
     def __init__(self, device: Device, spec: PortDef) -> None:
         self.device = device
@@ -168,6 +169,8 @@ class Port:
         self.standing = Standing()
         #: True when other devices share the line (RS-485 multidrop); set by the bus.
         self.shared_line = False
+        #: The ports on this port's line, this one too (set by the bus; empty: a line of its own).
+        self.peers: tuple[Port, ...] = ()
 
     @property
     def hears_others(self) -> bool:

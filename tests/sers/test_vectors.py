@@ -290,6 +290,32 @@ def test_t30_broadcast_starts_both_without_reply(plant_factory) -> None:
     assert plant.read("motion.kind", "sers2") == "position"
 
 
+@pytest.mark.manual("§4.1", "after the address every following command is for the drive it names; a bare #* names every drive")
+def test_a_bare_broadcast_address_selects_every_drive_for_the_lines_after_it(plant_factory) -> None:
+    plant = plant_factory({"address": 1}, {"address": 2})
+    host = plant.host
+    for address in (1, 2):
+        assert host.ask(f"#{address} V={address}1\r") == f"#{address} V={address}1\r\nok1\n\r".encode()
+    host.send("#*\r")
+    host.send("#V=33\r")  # every drive takes it, none answers: the next reply is drive 1's
+    assert host.ask("#1 V?\r") == b"#1 V?\rV=33U/min\n\r\nok1\n\r"
+    assert plant.read("param.V", "sers2") == 33
+    assert host.ask("#V?\r") == b"#V?\rV=33U/min\n\r\nok1\n\r"  # drive 1 alone from #1 on
+
+
+def test_with_broadcast_reply_lowest_address_the_lowest_drive_answers_a_broadcast(plant_factory) -> None:
+    """G-ADDR ⚙ ``broadcast_reply: lowest_address``: one answer to a broadcast, whatever the
+    order of the drives on the line; the lines after a bare ``#*`` are answered the same way."""
+    config = {"broadcast_reply": "lowest_address"}
+    plant = plant_factory({"address": 3, **config}, {"address": 2, **config})
+    host = plant.host
+    assert host.ask("#*V=44\r") == b"#*V=44\r\nok1\n\r"  # drive 2's echo and answer, and no other
+    assert host.ask("#*\r") == b"#*\r\nok1\n\r"  # (a line with only an address: its answering drive acknowledges)
+    assert host.ask("#W=5\r") == b"#W=5\r\nok1\n\r"
+    assert host.ask("#3 V?\r") == b"#3 V?\rV=44U/min\n\r\nok1\n\r"
+    assert [plant.read("param.W", name) for name in ("sers3", "sers2")] == [5, 5]
+
+
 @pytest.mark.manual("§4.8.6.16", "P1099 executes an opcode: 63235 (0xF703) is E, 62213 (0xF305) is RUN 5")
 def test_t26_opcode_e_over_p1099(sers: Plant) -> None:
     sers.host.ask("#ON W=90\r")

@@ -86,6 +86,8 @@ class SersConfig(Settings):
     heatsink_temperature: float = 30.0
     initially_selected: Annotated[bool | None,
                                   doc("G-ADDR: selected after power-on (default: true unless on a shared line)")] = None
-    broadcast_reply: Literal["none", "lowest_address"] = "none"
+    broadcast_reply: Annotated[Literal["none", "lowest_address"],
+                               doc("G-ADDR: who answers a broadcast (#*) line: none, or the drive with the lowest "
+                                   "address on the line")] = "none"
     boot_time: Annotated[float, Meta(ge=0), doc("seconds of display '-' after power-on (§3.5)")] = 2.0
     encoding: Literal["latin-1", "cp437"] = "latin-1"

@@ -23,7 +23,8 @@ P121–P123) only matter at the serial interface.
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
+from typing import Any, Literal
 
 from devsim.core.axis import Axis
 from devsim.core.clock import Clock, Timer
@@ -131,10 +132,14 @@ class SersDrive(Model):
             params, memory, power, motion, inputs, program, interpreter, access, operands,
             config=cfg, changed=outputs.update,
         )
-        #: The drive was addressed last (True) or another one was (False); None: not yet.
-        self.addressed: bool | None = None
+        #: The drive was addressed last (True), another one was (False), every drive was (``"*"``,
+        #: a broadcast); None: not yet.
+        self.addressed: bool | Literal["*"] | None = None
         #: Other drives share the line (RS-485); the face tells.
         self.shared_line = False
+        #: The line addresses of the drives on this drive's line, this one's too (the face tells;
+        #: None: a line of its own).
+        self.line_addresses: Callable[[], list[int]] | None = None
         self.logic_alive = False
         self.booting = False
         self._timers: list[Timer] = []
@@ -351,26 +356,43 @@ class SersDrive(Model):
 
     @property
     def selected(self) -> bool:
-        """Whether statements without an address are for this drive (G-ADDR)."""
+        """Whether statements without an address are for this drive (G-ADDR): it was addressed
+        last, alone or with every drive (``#*``)."""
         if self.addressed is None:
             initially = self.cfg.initially_selected
             self.addressed = (not self.shared_line) if initially is None else initially
-        return self.addressed
+        return self.addressed is not False
 
     def selection(self, address: int | str | None) -> tuple[bool, bool]:
         """Whether this drive executes and answers a line with ``address`` after its ``#``
-        (G-ADDR), changing nothing: without one, if it is selected; ``*``, executed by all and
-        answered by none (a broadcast); its own address, both; another, neither."""
+        (G-ADDR), changing nothing: without one, if it is selected (after a broadcast, as a
+        broadcast); ``*``, executed by all and answered as :meth:`answers_broadcast` says; its
+        own address, both; another, neither."""
         if address is None:
+            if self.addressed == "*":
+                return True, self.answers_broadcast()
             selected = self.selected
             return selected, selected
         if address == "*":
-            return True, False
+            return True, self.answers_broadcast()
         mine = address == self.line_address
         return mine, mine
 
+    def answers_broadcast(self) -> bool:
+        """Whether this drive answers a broadcast line (G-ADDR ⚙ ``broadcast_reply``): none does,
+        or the drive with the lowest address on the line."""
+        if self.cfg.broadcast_reply == "none":
+            return False
+        others = self.line_addresses
+        return others is None or self.line_address <= min(others())
+
     def note_address(self, address: int | str | None, mine: bool) -> None:
-        """A line's address selects its drive and deselects the others (G-ADDR); a line
-        without one, or a broadcast, changes nothing.  ``mine``: the address is this drive's."""
-        if address is not None and address != "*":
+        """A line's address selects the drive it names for the lines after it and deselects the
+        others; ``*`` selects every drive (§4.1: „Nach dem Senden der Adresse sind alle folgenden
+        Kommandos und Parameter-Zuweisungen dem entsprechenden Antrieb zugeordnet“, §4.2: ``*``
+        „Adressiert alle Achsen“).  A line without one changes nothing.  ``mine``: the address is
+        this drive's."""
+        if address == "*":
+            self.addressed = "*"
+        elif address is not None:
             self.addressed = mine

@@ -96,7 +96,7 @@ class NoiseLines:
             if stop < end and data[stop] in no_address:  # (most noise: no address)
                 if model.addressed is False:
                     return index  # (the general path skips lines for other drives in one step)
-                if model.selected:  # (most of that: lines failing at once, or soon)
+                if model.selected and model.addressed is True:  # (most of that: lines failing at once, or soon)
                     taken, going_on = self._failing_lines(data, index)
                     if taken > index:
                         if going_on or taken == end:
