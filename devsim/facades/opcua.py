@@ -36,13 +36,14 @@ from datetime import UTC, datetime
 from typing import Any
 from urllib.parse import urlparse
 
-from asyncua import Server, ua
+from asyncua import ua
 from asyncua.server.event_generator import EventGenerator
 
 from devsim.core.device import Device
 from devsim.core.points import BadValue, ReadOnlyName, UnknownName
 from devsim.core.watch import PointWatch
 from devsim.facades import library_log
+from devsim.facades.opcua_decoding import FacadeServer
 from devsim.facades.opcua_services import DeviceMethods, NodeView, PointAttributes, call_result
 from devsim.facades.opcua_space import (
     DEFAULT_ENDPOINT,
@@ -233,7 +234,7 @@ class OpcuaFacade:
             raise ValueError("an OPC UA sampling period is a positive number of seconds")
         self.devices, self.endpoint, self.period, self.name = list(devices), endpoint, period, name
         self.runtime = runtime  # the Fault and PowerCycle methods run its control ops
-        self.server = Server()
+        self.server = FacadeServer()
         self.bound: dict[ua.NodeId, _Bound] = {}
         self.nodes: dict[str, _DeviceNode] = {}
         self.namespace = 0

@@ -1,0 +1,135 @@
+"""Requests the OPC UA facade cannot decode, answered with OPC UA Part 4's status codes.
+
+asyncua decodes a request's parameters just before it serves them; a value it cannot decode (an
+enumeration's value out of its range, a body cut short, text that is not UTF-8) escapes as an
+exception and is answered ``Bad_InternalError``, with a logged traceback.  :class:`FacadeServer`
+processes each connection with :class:`RequestDecoding`, which answers such a request with a
+ServiceFault whose status is Part 4's (v1.04):
+
+* ``Bad_TimestampsToReturnInvalid`` for a ``timestampsToReturn`` that is not one of the
+  TimestampsToReturn enumeration's (7.40: Source, Server, Both, Neither): the service result of
+  Read (5.10.2), HistoryRead (5.10.3), CreateMonitoredItems (5.12.2) and ModifyMonitoredItems
+  (5.12.3).  asyncua decodes 4 (its ``Invalid``) and nothing above; the Read service
+  (:class:`devsim.facades.opcua_services.PointAttributes`) refuses 4, this module 4 for the others;
+* ``Bad_MonitoringModeInvalid`` for SetMonitoringMode's ``monitoringMode`` (5.12.4, Table 76);
+* ``Bad_DecodingError`` for anything else that does not decode (7.34.2, the common service results:
+  "decoding halted because of invalid data in the stream"), an enumeration inside an operation's
+  item (a BrowseDescription's browseDirection, a MonitoredItemCreateRequest's monitoringMode)
+  included: asyncua decodes a request whole, so one bad item fails it all.
+
+What asyncua logs about it (``sending service fault response: …``) goes through
+:mod:`devsim.facades.library_log`, rate-limited, as any of its lines.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+from asyncua import Server, ua
+from asyncua.common.utils import Buffer, ServiceError
+from asyncua.server.binary_server_asyncio import BinaryServer, OPCUAProtocol
+from asyncua.server.uaprocessor import UaProcessor
+from asyncua.ua.ua_binary import from_binary, get_safe_type_hints, struct_from_binary
+
+__all__ = ["FacadeServer", "RequestDecoding", "undecodable"]
+
+_BAD = ua.StatusCodes
+_TIMESTAMPS = frozenset({ua.TimestampsToReturn.Source, ua.TimestampsToReturn.Server, ua.TimestampsToReturn.Both,
+                         ua.TimestampsToReturn.Neither})
+#: a parameter of an enumeration the request names a status for, when its value is not one of it
+_ENUMERATIONS: dict[Any, int] = {
+    ua.TimestampsToReturn: _BAD.BadTimestampsToReturnInvalid,
+    ua.MonitoringMode: _BAD.BadMonitoringModeInvalid,
+}
+#: the services asyncua serves whose timestampsToReturn it does not check (Read's: PointAttributes)
+_TIMESTAMPED = {ua.NodeId(getattr(ua.ObjectIds, f"{name}Request_Encoding_DefaultBinary")): getattr(ua, f"{name}Parameters")
+                for name in ("HistoryRead", "CreateMonitoredItems", "ModifyMonitoredItems")}
+
+
+def _decodes(kind: Any, body: Buffer) -> bool:
+    try:
+        from_binary(kind, body)
+    except Exception:  # noqa: BLE001 - whatever asyncua's decoders raise on bad data
+        return False
+    return True
+
+
+def undecodable(typeid: ua.NodeId, body: Buffer) -> int | None:
+    """The status code for a request of type ``typeid`` whose parameters (``body``, after its
+    RequestHeader) do not decode; None when they do (or the service is not one asyncua knows)."""
+    request = ua.extension_objects_by_typeid.get(typeid)
+    if request is None:
+        return None
+    hints = get_safe_type_hints(request, {"ua": ua})
+    for field in dataclasses.fields(request)[2:]:  # after TypeId and RequestHeader
+        kind = hints[field.name]
+        if not dataclasses.is_dataclass(kind) or any(f.name == "Encoding" for f in dataclasses.fields(kind)):
+            if not _decodes(kind, body):
+                return _BAD.BadDecodingError
+            continue
+        inner = get_safe_type_hints(kind, {"ua": ua})  # the Parameters: which of them fails
+        for parameter in dataclasses.fields(kind):
+            if not _decodes(inner[parameter.name], body):
+                return _ENUMERATIONS.get(inner[parameter.name], _BAD.BadDecodingError)
+    return None
+
+
+class RequestDecoding(UaProcessor):
+    """asyncua's processing of a connection's messages, with Part 4's status code for a request
+    whose parameters do not decode (asyncua: Bad_InternalError) and for a timestampsToReturn out of
+    the enumeration in the services that take one."""
+
+    async def _process_message(self, typeid: ua.NodeId, requesthdr: ua.RequestHeader, seqhdr: Any,
+                               body: Buffer) -> Any:
+        parameters = body.copy()
+        timestamped = _TIMESTAMPED.get(typeid)
+        if timestamped is not None and self.session is not None and self.session.is_activated():
+            try:  # (an undecodable one: answered below, as asyncua fails to decode it)
+                params = struct_from_binary(timestamped, parameters.copy())
+            except Exception:  # noqa: BLE001, S110 - asyncua's decoding fails the same way next
+                pass
+            else:
+                if params.TimestampsToReturn not in _TIMESTAMPS:
+                    raise ua.UaStatusCodeError(_BAD.BadTimestampsToReturnInvalid)
+        try:
+            return await super()._process_message(typeid, requesthdr, seqhdr, body)
+        except (ServiceError, ua.UaStatusCodeError):  # a status code already (Bad_UserAccessDenied among them)
+            raise
+        except Exception:
+            status = undecodable(typeid, parameters)
+            if status is None:  # it decodes: the failure is the server's own (Bad_InternalError)
+                raise
+            raise ua.UaStatusCodeError(status) from None
+
+
+class _Connection(OPCUAProtocol):
+    def connection_made(self, transport: Any) -> None:
+        super().connection_made(transport)
+        if self.processor is not None:  # (None: refused, at max_connections)
+            self.processor = RequestDecoding(self.iserver, self.transport, self.limits)
+            self.processor.set_policies(self.policies)
+
+
+class _Listener(BinaryServer):
+    def _make_protocol(self) -> OPCUAProtocol:
+        return _Connection(iserver=self.iserver, policies=self._policies, clients=self.clients,
+                           closing_tasks=self.closing_tasks, limits=self.limits)
+
+
+class FacadeServer(Server):
+    """asyncua's server, its connections processed by :class:`RequestDecoding`."""
+
+    async def start(self) -> None:
+        """asyncua's ``Server.start`` with :class:`_Listener` for its BinaryServer (and no
+        certificate to check: the facade serves without security)."""
+        await self._setup_server_nodes()
+        await self.iserver.start()
+        try:
+            host, port = self._get_bind_socket_info()
+            self.bserver = _Listener(self.iserver, host, port, self.limits)
+            self.bserver.set_policies(self._policies)
+            await self.bserver.start()
+        except Exception:
+            await self.iserver.stop()
+            raise
