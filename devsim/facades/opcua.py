@@ -15,6 +15,10 @@ variable per declared point, the properties ``Kind`` and ``FaultKinds``, and the
   replaced by :class:`devsim.facades.opcua_services.PointAttributes` (the point variables, and
   Part 4's status codes for what may not be written) and ``DeviceMethods`` (Part 4's checks of a
   call's object and arguments).
+* **Requests that do not decode** (an enumeration's value out of its range: a timestampsToReturn
+  of 5) are answered with Part 4's status (``Bad_TimestampsToReturnInvalid``,
+  ``Bad_MonitoringModeInvalid``, ``Bad_DecodingError``), not asyncua's ``Bad_InternalError``:
+  :class:`devsim.facades.opcua_decoding.FacadeServer`.
 * **Subscriptions**: a :class:`devsim.core.watch.PointWatch` per device samples the points every
   ``period`` seconds of device time (virtual time in tests) and writes what changed into the
   address space, so data-change monitored items see it; a write from a client is sampled at once.
