@@ -9,7 +9,7 @@ ServiceFault whose status is Part 4's (v1.04):
 * ``Bad_TimestampsToReturnInvalid`` for a ``timestampsToReturn`` that is not one of the
   TimestampsToReturn enumeration's (7.40: Source, Server, Both, Neither): the service result of
   Read (5.10.2), HistoryRead (5.10.3), CreateMonitoredItems (5.12.2) and ModifyMonitoredItems
-  (5.12.3).  asyncua decodes 4 (its ``Invalid``) and nothing above; the Read service
+  (5.12.3).  asyncua decodes 4 (its ``Invalid``) and no other value outside 0..3; the Read service
   (:class:`devsim.facades.opcua_services.PointAttributes`) refuses 4, this module 4 for the others;
 * ``Bad_MonitoringModeInvalid`` for SetMonitoringMode's ``monitoringMode`` (5.12.4, Table 76);
 * ``Bad_DecodingError`` for anything else that does not decode (7.34.2, the common service results:
