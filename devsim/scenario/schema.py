@@ -328,10 +328,14 @@ class ExpectAction(Typed):
     def __post_init__(self) -> None:
         if (self.bytes is None) == (self.regex is None):
             raise ValueError("give either bytes or regex")
-        if self.bytes is not None:
-            _latin1(self.bytes)
-        if self.regex is not None:
-            _byte_regex(self.regex)
+        if self.bytes is not None and not _latin1(self.bytes):
+            raise ValueError(f"an empty answer is there at once, whatever the device says {_SILENCE}")
+        if self.regex is not None and _byte_regex(self.regex).match(b""):
+            raise ValueError(f"the regex matches nothing at all, so it holds at once, whatever the device says {_SILENCE}")
+
+
+#: How a scenario says that a device does not answer (an empty ``expect`` cannot fail).
+_SILENCE = "(that it says nothing: expect_traffic with direction: device and count: 0)"
 
 
 def _latin1(text: str) -> bytes:
@@ -343,9 +347,9 @@ def _latin1(text: str) -> bytes:
                          "(one character a byte, \\xNN for any byte)") from None
 
 
-def _byte_regex(regex: str) -> None:
+def _byte_regex(regex: str) -> re.Pattern[bytes]:
     try:
-        re.compile(_latin1(regex))
+        return re.compile(_latin1(regex))
     except re.error as exc:
         raise ValueError(f"bad regex: {exc}") from None
 
@@ -403,7 +407,8 @@ class TrafficExpectation(Typed, kw_only=True):
     count: Annotated[Annotated[int, Meta(ge=0)] | None, doc("exact number of matches")] = None
 
     def __post_init__(self) -> None:
-        _byte_regex(self.regex)
+        if _byte_regex(self.regex).match(b""):
+            raise ValueError("the regex matches nothing at all: it would count the gaps between bytes")
 
 
 class TimingExpectation(Typed):
@@ -451,7 +456,10 @@ class Step(Typed):
             except ValueError as exc:
                 raise FieldError("send", str(exc)) from None
         if isinstance(self.expect, str):
-            self.expect = ExpectAction(bytes=self.expect)
+            try:
+                self.expect = ExpectAction(bytes=self.expect)
+            except ValueError as exc:
+                raise FieldError("expect", str(exc)) from None
         triggers = [k for k in ("at", "after", "when") if getattr(self, k) is not None]
         if len(triggers) > 1:
             raise ValueError(f"a step has one trigger, not {' and '.join(triggers)}")

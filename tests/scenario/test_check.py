@@ -164,6 +164,24 @@ def test_a_traffic_regex_and_a_character_that_is_no_byte_are_mistakes_of_the_fil
     ]
 
 
+def test_an_expectation_that_cannot_fail_is_a_mistake_of_the_file(tmp_path: Path) -> None:
+    """An empty answer, or a regex that matches nothing at all, passed whatever the device said (a
+    user's ``expect: ""`` for "no answer" passed after the drive had answered)."""
+    bad = tmp_path / "bad.yaml"
+    bad.write_text('devices:\n  - {name: x, kind: sers}\nsteps:\n  - send: "#1 ON\\r"\n  - expect: ""\n'
+                   '  - expect: {regex: "(ok)?"}\n  - expect_traffic: {regex: "", count: 0}\n'
+                   '  - expect_traffic: {regex: "ok", direction: device, count: 0}\n')
+    done = check(bad)
+    assert done.returncode == exits.BAD_FILE
+    silence = "(that it says nothing: expect_traffic with direction: device and count: 0)"
+    assert done.stderr.splitlines() == [
+        f"{bad}:5: steps.2.expect: an empty answer is there at once, whatever the device says {silence}",
+        f"{bad}:6: steps.3.expect: the regex matches nothing at all, so it holds at once, whatever the device says "
+        f"{silence}",
+        f"{bad}:7: steps.4.expect_traffic: the regex matches nothing at all: it would count the gaps between bytes",
+    ]
+
+
 def test_an_empty_link_is_a_mistake_of_the_file(tmp_path: Path) -> None:
     """It passed `check`, and `up` and `scenario run` ended with a traceback."""
     bad = tmp_path / "bad.yaml"
