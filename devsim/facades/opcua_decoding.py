@@ -23,7 +23,6 @@ What asyncua logs about it (``sending service fault response: …``) goes throug
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any
 
 from asyncua import Server, ua
@@ -55,6 +54,13 @@ def _decodes(kind: Any, body: Buffer) -> bool:
     return True
 
 
+def _fields(kind: Any) -> list[str]:
+    """The names of the fields of one of asyncua's ``ua`` structures, in their order on the wire
+    (its dataclass fields, as asyncua's own encoding reads them; a union's class variable, with its
+    underscore, is none)."""
+    return [name for name in kind.__dataclass_fields__ if not name.startswith("_")]
+
+
 def undecodable(typeid: ua.NodeId, body: Buffer) -> int | None:
     """The status code for a request of type ``typeid`` whose parameters (``body``, after its
     RequestHeader) do not decode; None when they do (or the service is not one asyncua knows)."""
@@ -62,16 +68,16 @@ def undecodable(typeid: ua.NodeId, body: Buffer) -> int | None:
     if request is None:
         return None
     hints = get_safe_type_hints(request, {"ua": ua})
-    for field in dataclasses.fields(request)[2:]:  # after TypeId and RequestHeader
-        kind = hints[field.name]
-        if not dataclasses.is_dataclass(kind) or any(f.name == "Encoding" for f in dataclasses.fields(kind)):
+    for field in _fields(request)[2:]:  # after TypeId and RequestHeader
+        kind = hints[field]
+        if not hasattr(kind, "__dataclass_fields__") or "Encoding" in _fields(kind):
             if not _decodes(kind, body):
                 return _BAD.BadDecodingError
             continue
         inner = get_safe_type_hints(kind, {"ua": ua})  # the Parameters: which of them fails
-        for parameter in dataclasses.fields(kind):
-            if not _decodes(inner[parameter.name], body):
-                return _ENUMERATIONS.get(inner[parameter.name], _BAD.BadDecodingError)
+        for parameter in _fields(kind):
+            if not _decodes(inner[parameter], body):
+                return _ENUMERATIONS.get(inner[parameter], _BAD.BadDecodingError)
     return None
 
 
