@@ -37,7 +37,7 @@ from __future__ import annotations
 import os
 import re
 from pathlib import Path
-from typing import Annotated, Any, Literal, NamedTuple
+from typing import Annotated, Any, ClassVar, Literal, NamedTuple
 
 from msgspec import UNSET, Meta, UnsetType, field
 
@@ -427,7 +427,7 @@ ACTIONS = (
 )
 
 
-class Step(Typed):
+class Step(Typed, dict=True):
     at: Duration | None = None
     after: Duration | None = None
     when: Condition | None = None
@@ -446,8 +446,8 @@ class Step(Typed):
     expect_timing: TimingExpectation | None = None
     log: str | None = None
 
-    #: line of the step in its file (filled in by the loader)
-    line: int = 0
+    #: line of the step in its file (filled in by the loader; not a key of the file)
+    line: ClassVar[int] = 0
 
     def __post_init__(self) -> None:
         if isinstance(self.send, str):
@@ -477,7 +477,7 @@ class Step(Typed):
         return next((k for k in ACTIONS if getattr(self, k) is not None), None)
 
 
-class Scenario(PlantSpec, kw_only=True):
+class Scenario(PlantSpec, kw_only=True, dict=True):
     name: str | None = None
     time: Annotated[Literal["virtual", "realtime"] | None, doc(
         "default: virtual when the scenario scripts the host, else realtime")] = None
@@ -487,8 +487,8 @@ class Scenario(PlantSpec, kw_only=True):
     host: Annotated[dict[str, Any], doc("{port: name} the default port of host actions")] = {}
     steps: list[Step] = []
 
-    #: the file it came from (filled in by the loader)
-    path: str = ""
+    #: the file it came from (filled in by the loader; not a key of the file)
+    path: ClassVar[str] = ""
 
     def problems(self) -> list[Problem]:
         """The plant's problems, and every step's reference to a device, port or fault that
