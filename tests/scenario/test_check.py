@@ -182,6 +182,18 @@ def test_an_expectation_that_cannot_fail_is_a_mistake_of_the_file(tmp_path: Path
     ]
 
 
+def test_what_the_loader_fills_in_is_no_key_of_the_file(tmp_path: Path) -> None:
+    """A step's ``line`` and a scenario's ``path`` (its place, filled in by the loader): a
+    ``- line: "#E"`` step was told to be an integer, a ``path:`` was taken and overwritten."""
+    bad = tmp_path / "bad.yaml"
+    bad.write_text('path: /etc/passwd\ndevices:\n  - {name: x, kind: sers}\nsteps:\n  - line: "#E"\n'
+                   '  - wait: 1s\n    line: 5\n')
+    done = check(bad)
+    assert done.returncode == exits.BAD_FILE
+    assert done.stderr.splitlines() == [f"{bad}:1: path: unknown field", f"{bad}:5: steps.1.line: unknown field",
+                                        f"{bad}:7: steps.2.line: unknown field"]
+
+
 def test_an_empty_link_is_a_mistake_of_the_file(tmp_path: Path) -> None:
     """It passed `check`, and `up` and `scenario run` ended with a traceback."""
     bad = tmp_path / "bad.yaml"
