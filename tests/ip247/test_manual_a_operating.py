@@ -69,10 +69,13 @@ def test_errors_stay_until_the_next_operator_command(mod: Module) -> None:
 
 @pytest.mark.manual("§4.1", "a command not meaningful in the mode (BA1 with Start) changes into the mode but "
                     "leaves the axis fertig, with an error")
-def test_a_wrong_combination_leaves_the_axis_fertig(mod: Module) -> None:
+@pytest.mark.parametrize(("ba", "cmd"), [(1, START), (7, START), (6, FORWARD), (12, FORWARD), (13, START),
+                                       (15, START), (16, FORWARD)])
+def test_a_wrong_combination_leaves_the_axis_fertig(mod: Module, ba: int, cmd: int) -> None:
+    """The answer's BTR is the new mode (it stayed at BA5 but for BA8/BA9 Übernahme)."""
     mod.ready()
-    answer = mod.operate(1, 1, START)
-    assert answer[4] == 2 and answer[6] & 0x80 and mod.device.read("axis.1.running") is False
+    answer = mod.operate(1, ba, cmd)
+    assert answer[4] == 2 and answer[5] == ba and answer[6] & 0x80 and mod.device.read("axis.1.running") is False
 
 
 @pytest.mark.manual("§4.1", "a velocity outside 1 … 65000 or above the maximum velocity is limited to the bound "

@@ -44,14 +44,22 @@ class AxisModes:
         if unit.running:
             return self._while_running(unit, ba, cmd, w)
         handler = AXIS_MODES.get(mode_token(ba))
-        unit.mode, unit.last_cmd = ba, cmd
-        if ba not in (8, 9):
-            unit.m_function = 2
+        self.select(unit, ba, cmd)
         if cmd == STOP and ba not in (8, 9):
             return None  # Stopp of a finished axis: nothing to do
         if cmd == TAKE_OVER and ba in (1, 2, 6, 7):
             return self.programs.teach_store(unit)  # store a teach-in block (spec §5.12)
         return handler(self, unit, cmd, b, w, dd) if handler is not None else 2
+
+    @staticmethod
+    def select(unit: AxisUnit, ba: int, cmd: int) -> None:
+        """A finished axis takes the job's mode, whether the job then runs or not (manual §4.1:
+        „Die Achse wechselt dann in die gewünschte Betriebsart. Eine Ausführung findet aber nur
+        dann statt, wenn die eingestellte Betriebsart und der Befehl zusammen eine sinnvolle
+        Kombination ergeben“)."""
+        unit.mode, unit.last_cmd = ba, cmd
+        if ba not in (8, 9):
+            unit.m_function = 2
 
     def _while_running(self, unit: AxisUnit, ba: int, cmd: int, w: int) -> int | None:
         if unit.automatic is not None and unit.mode in (8, 9):

@@ -278,6 +278,8 @@ class Ip247Module(Model):
             unit.automatic.abort()  # starting another mode aborts the program context
         error = refusal(unit.view(), job)
         if error is not None and not (unit.running and error == 2):
+            if error == 2 and unit.waiting_start is None:
+                self.modes.select(unit, job.ba, job.cmd)  # a senseless command: the mode all the same
             self.set_error(unit, error)
             return ACK_ACCEPTED
         error = self.modes.operate(unit, job.ba, job.cmd, b, w, dd)
