@@ -445,7 +445,7 @@ def test_messages_3_and_8(mod: Module) -> None:
 #: §7.2.1, each machine-data error at the edges the manual names (from COM247's record: f_max 100 kHz,
 #: f_ss 10 kHz, 1000 pulses and 1.1 mm per revolution, software limits −10 mm … +500 mm).
 MD_EDGES: list[tuple[dict[str, object], int]] = [
-    ({"pulse_us": 0}, 2), ({"pulse_us": 32}, 2), ({"pulse_us": 6}, 2), ({"pulse_us": 4}, 0),
+    ({"pulse_us": 0}, 2), ({"pulse_us": 32}, 2), ({"pulse_us": 5}, 2), ({"pulse_us": 4}, 0),
     ({"f_max": 100_001}, 3), ({"f_max": 100_000}, 0),
     ({"jog1": 6601}, 4), ({"step_velocity": 6601}, 4), ({"jog2": 6600}, 0),
     ({"pulses_per_rev": 11, "patterns": 11}, 5), ({"pulses_per_rev": 1001, "patterns": 7}, 5),

@@ -244,7 +244,8 @@ CHECKS: Table[Check] = Table([
     _check(3, lambda md, sys, lv, rt: not 40 <= md.f_max <= 100_000),
     _check(22, lambda md, sys, lv, rt: not 1 <= md.f_ss <= 10_000 or md.f_ss >= md.f_max),
     _check(6, lambda md, sys, lv, rt: _tau_bad(md)),
-    _check(2, lambda md, sys, lv, rt: not 1 <= md.pulse_us <= 31 or md.pulse_us > 500_000 / md.f_max),
+    # (the pulse "kleiner der halben Periodendauer" of f_max: t_p < 500 000 µs·Hz / f_max, strictly)
+    _check(2, lambda md, sys, lv, rt: not 1 <= md.pulse_us <= 31 or md.pulse_us * md.f_max >= 500_000),
     _check(18, lambda md, sys, lv, rt: md.pulse_polarity not in (0x00, 0x40)),
     _check(5, lambda md, sys, lv, rt: not 12 <= md.pulses_per_rev <= 1000),
     _check(10, lambda md, sys, lv, rt: not 4 <= md.patterns <= 40 or md.pulses_per_rev % md.patterns != 0),
