@@ -23,7 +23,11 @@ because it survives bridges that speak MQTT 3.1.1.  The ``id`` of the request is
 id: the answer carries it back.  A request without a reply topic is executed and not answered.
 
 A clean stop clears the retained announcement (the process leaves the listing); a lost broker
-connection is retried (after 0.5 s, 1 s, 2 s, then every 5 s) and the announcement renewed.
+connection is retried (after 0.5 s, 1 s, 2 s, then every 5 s) and the announcement renewed.  On
+rejoining, the member checks the names again as in 1.: while it was away (frozen, asleep, cut
+off) its last will marked it offline and another process may have joined serving one of its
+names.  Such a name is *withdrawn*: left out of its announcement (and its last will) for the rest
+of its run, said in one line on stderr; its ports keep serving here, outside the fleet.
 
 A request costs the member its own work and little else: it is handed over in the step that read
 it (no queue, no task, no record when it has no MQTT 5 properties), parsed once with msgspec, and
@@ -143,13 +147,18 @@ class FleetMember:
         self.streams = StreamServer(runtime, self.topics, self.process)
         self._request_topic = self.topics.request(self.process)  # compared with every message's topic
         self.resolved = ResolvedRequests(runtime)  #: the fast path of reads and sets
+        self.withdrawn: dict[str, str] = {}  #: names served by another process when we rejoined -> by whom
 
     @property
     def request_topic(self) -> str:
         return self._request_topic
 
+    def devices(self) -> list[dict[str, Any]]:
+        """The ``devices`` rows this process announces: every device but the withdrawn ones."""
+        return [row for row in ops.run(self.runtime, Devices()) if row["name"] not in self.withdrawn]
+
     def announcement(self, online: bool = True) -> dict[str, Any]:
-        devices = ops.run(self.runtime, Devices())
+        devices = self.devices()
         return {
             "process": self.process,
             "host": socket.gethostname(),
@@ -173,9 +182,11 @@ class FleetMember:
         except LinkLost as exc:
             raise ConnectionError(f"cannot reach the fleet broker {self.url}: {exc}") from None
         try:
-            others = await retained_announcements(link, self.topics, self.topics.sync(f"member-{self.process}"))
-            self._refuse_clashes(others)
-            await link.unsubscribe(self.topics.announcements)
+            taken = await self._taken(link)
+            if taken:
+                name, served = next(iter(taken.items()))
+                raise FleetClash(f"device {name!r} is already in the fleet {self.url}, served by {served};"
+                                 " device names are unique across a fleet")
             await self._announce(link)
         except BaseException:
             with contextlib.suppress(Exception):
@@ -184,18 +195,19 @@ class FleetMember:
         self._link = link
         self._task = asyncio.ensure_future(self._run(link))
 
-    def _refuse_clashes(self, others: dict[str, dict[str, Any]]) -> None:
-        mine = {row["name"] for row in ops.run(self.runtime, Devices())}
+    async def _taken(self, link: MqttLink) -> dict[str, str]:
+        """Which of the names we announce another *online* process serves (by the retained
+        announcements; offline marks do not count): name -> ``PROCESS (host H, pid P)``, sorted."""
+        others = await retained_announcements(link, self.topics, self.topics.sync(f"member-{self.process}"))
+        await link.unsubscribe(self.topics.announcements)
+        mine = {row["name"] for row in self.devices()}
+        taken: dict[str, str] = {}
         for process, announcement in sorted(others.items()):
             if process == self.process or not announcement.get("online"):
                 continue
-            taken = sorted(mine & {str(row.get("name")) for row in announcement["devices"]})
-            if taken:
-                raise FleetClash(
-                    f"device {taken[0]!r} is already in the fleet {self.url}, served by {process}"
-                    f" (host {announcement.get('host')}, pid {announcement.get('pid')}); device names"
-                    " are unique across a fleet"
-                )
+            for name in sorted(mine & {str(row.get("name")) for row in announcement["devices"]}):
+                taken.setdefault(name, f"{process} (host {announcement.get('host')}, pid {announcement.get('pid')})")
+        return dict(sorted(taken.items()))
 
     async def _announce(self, link: MqttLink) -> None:
         link.on_message = functools.partial(self._received, link)
@@ -230,11 +242,13 @@ class FleetMember:
             except LinkLost:
                 continue
             try:
+                taken = await self._taken(link)  # the name check of joining, again
+                self.withdrawn.update(taken)
                 await self._announce(link)
-            except LinkLost:
+            except (LinkLost, TimeoutError):
                 await link.disconnect()
                 continue
-            warn(f"devsim: fleet broker {self.url} back; announced again")
+            warn(f"devsim: fleet broker {self.url} back; announced again" + (_withdrawal(taken) if taken else ""))
             return link
 
     def _received(self, link: MqttLink, message: Publish) -> None:
@@ -341,6 +355,14 @@ class FleetMember:
                 await link.publish_acked(self.topics.announcement(self.process), b"", qos=1, retain=True, timeout=5)
             with contextlib.suppress(Exception):
                 await link.disconnect()
+
+
+def _withdrawal(taken: dict[str, str]) -> str:
+    """The rest of the rejoining line when names were withdrawn."""
+    names = ", ".join(repr(name) for name in taken)
+    whom = "; ".join(f"{name!r} by {served}" for name, served in taken.items())
+    return (f" without {names}: served meanwhile by another process ({whom}); device names are unique across a"
+            " fleet, so this process no longer announces them (their ports keep serving here)")
 
 
 async def join_fleet(runtime: Runtime, url: str | FleetUrl, *, about: dict[str, Any] | None = None) -> FleetMember:
