@@ -10,6 +10,7 @@ them and a test holds them to the table."""
 
 from __future__ import annotations
 
+import functools
 import json
 import sys
 from typing import Any
@@ -259,7 +260,9 @@ def ctl_watch(device: str | None, names: tuple[str, ...], as_json: bool, period:
     if device is None and ctx.obj[1] is None:
         raise click.UsageError("watch needs DEVICE (every device at once: with --fleet)")
     addr, client = _connect(ctx)
-    stream = client.watch(device, list(names) or None, period=period)
+    fleet = ctx.obj[1] is not None
+    told = {"on_offline": functools.partial(click.echo, err=True)} if fleet else {}  # a member went offline
+    stream = client.watch(device, list(names) or None, period=period, **told)
     try:
         for item in stream:
             click.echo(json.dumps(item, ensure_ascii=False) if as_json or present.wants_json(ctx) else describe(item))
@@ -267,8 +270,8 @@ def ctl_watch(device: str | None, names: tuple[str, ...], as_json: bool, period:
         sys.exit(0)
     except ControlError as exc:
         raise exits.control_error(exc) from None
-    except (OSError, ValueError) as exc:
-        raise exits.Unreachable(f"control connection to {addr} failed: {exc}") from None
+    except (OSError, ValueError) as exc:  # over a fleet: "fleet broker mqtt://… lost (…)"
+        raise exits.Unreachable(str(exc) if fleet else f"control connection to {addr} failed: {exc}") from None
     finally:
         stream.close()
         client.close()

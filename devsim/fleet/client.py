@@ -25,7 +25,11 @@ raised as :class:`devsim.runtime.client.ControlError`).  :class:`FleetClient` ha
 * **Watching.** ``watch(device)`` (``devsim ctl --fleet URL watch``) streams the device's changes
   and events as ``ControlClient.watch`` does, over the broker (:mod:`devsim.fleet.streams`), each
   item tagged with the ``process`` that serves it; without a device, every device online in the
-  fleet.  It ends when the watched processes leave.
+  fleet.  It ends when the watched processes leave, whether they stop or go offline (their last
+  will: killed, frozen, cut off; ``on_offline`` is told so, a line of ``devsim ctl``'s stderr).
+  Losing the broker is neither: it raises ConnectionError, also when the broker's shutdown sends
+  the members' last wills before it closes (an offline mark counts once the broker is seen alive
+  after it, by a round trip of the client's marker).
 """
 
 from __future__ import annotations
@@ -35,7 +39,7 @@ import contextlib
 import json
 import threading
 import uuid
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 import msgspec
@@ -53,6 +57,20 @@ __all__ = ["AsyncFleetClient", "FleetClient"]
 #: Ops whose ``device`` only routes them: every process, or the one serving ``device``.
 TIME_OPS = tuple(row.token for row in CONTROL if routed_by_device(row.token))
 _json_decode = msgspec.json.Decoder().decode
+
+
+class StreamsEnded(msgspec.Struct, frozen=True):
+    """The streams of ``devices`` ended: their ``process`` left (``offline`` False) or went offline."""
+
+    process: str
+    devices: tuple[str, ...]
+    offline: bool
+    where: str  # "host H, pid P" of the announcement
+
+    def describe(self) -> str:
+        names = ", ".join(self.devices)
+        return (f"devsim: {self.process} ({self.where}) went offline (its last will): no more items of {names}"
+                if self.offline else f"devsim: {self.process} ({self.where}) left: no more items of {names}")
 
 
 class AsyncFleetClient:
@@ -73,8 +91,11 @@ class AsyncFleetClient:
         self._synced = asyncio.Event()
         self._next = 0
         self.watches: dict[str, str] = {}  # stream topic -> the process that serves it
+        self._watched: dict[str, str] = {}  # stream topic -> its device
         self._present = False  # our `watching` is set
-        self._items: asyncio.Queue[dict[str, Any] | BaseException | None] = asyncio.Queue()
+        self._items: asyncio.Queue[dict[str, Any] | BaseException | StreamsEnded] = asyncio.Queue()
+        #: told (one line) when a watched process goes offline; its streams end
+        self.on_offline: Callable[[str], None] | None = None
 
     @property
     def reply_topic(self) -> str:
@@ -134,21 +155,44 @@ class AsyncFleetClient:
             if process is None:
                 return
             announcement = parse_announcement(message.payload)
+            was = self.processes.get(process, {})
             if announcement is None:
                 self.processes.pop(process, None)
             else:
                 self.processes[process] = announcement
             if announcement is None or not announcement.get("online"):
-                self._streams_end(process)
+                self._streams_end(process, announcement or was, offline=announcement is not None)
                 self._requests_fail(process)
             self._changed.set()
 
     def _lost(self, closed: asyncio.Future[None]) -> None:
-        exc = closed.exception()
-        self._items.put_nowait(ConnectionError(f"fleet broker connection lost: {exc}"))
+        why = None if closed.cancelled() else closed.exception()
+        lost = f"fleet broker {self.url} lost ({why or 'the connection closed'})"
+        self._items.put_nowait(ConnectionError(lost))
         for future in self._pending.values():
             if not future.done():
-                future.set_exception(ConnectionError(f"fleet broker connection lost: {exc}"))
+                future.set_exception(ConnectionError(lost))
+
+    async def _broker_answers(self) -> None:
+        """Return once the broker hands back a marker published now; ConnectionError when the
+        connection ends first (or nothing comes back within the client's timeout).  A broker that
+        shuts down sends the last wills of its clients and closes: after a will it answers no more."""
+        client = self._client
+        if client is None:
+            raise ConnectionError("fleet client closed")
+        self._synced.clear()
+        try:
+            client.publish(self._marker, b"sync", qos=0)
+        except LinkLost:
+            pass  # (closed: said below)
+        back = asyncio.ensure_future(self._synced.wait())
+        try:
+            await asyncio.wait({back, client.closed}, timeout=self.timeout, return_when=asyncio.FIRST_COMPLETED)
+        finally:
+            back.cancel()
+        if not self._synced.is_set():
+            why = "the connection closed" if client.closed.done() else f"no answer within {self.timeout:g} s"
+            raise ConnectionError(f"fleet broker {self.url} lost ({why})")
 
     def _answer(self, payload: Any) -> None:
         try:
@@ -190,10 +234,12 @@ class AsyncFleetClient:
         self._next += 1
         stream = self.topics.stream(self.id, self._next)
         self.watches[stream] = process
+        self._watched[stream] = device
         try:
             return await self.ask(process, "watch", device=device, names=names, period=period, stream_to=stream)
         except BaseException:
             self.watches.pop(stream, None)
+            self._watched.pop(stream, None)
             raise
 
     def _item(self, process: str, payload: Any) -> None:
@@ -205,15 +251,20 @@ class AsyncFleetClient:
             item.pop("watch", None)
             self._items.put_nowait({**item, "process": process})
 
-    def _streams_end(self, process: str) -> None:
-        for stream in [s for s, p in self.watches.items() if p == process]:
+    def _streams_end(self, process: str, announcement: dict[str, Any], *, offline: bool) -> None:
+        ended = [s for s, p in self.watches.items() if p == process]
+        for stream in ended:
             del self.watches[stream]
-            self._items.put_nowait(None)
+        if ended:
+            where = f"host {announcement.get('host')}, pid {announcement.get('pid')}"
+            devices = tuple(sorted({self._watched.pop(stream) for stream in ended}))
+            self._items.put_nowait(StreamsEnded(process, devices, offline, where))
 
     async def next_item(self, timeout: float | None = None) -> dict[str, Any] | None:
         """The next item of any stream of this client; None once every watched process has
-        left; TimeoutError after ``timeout`` seconds without one; ConnectionError when the broker
-        is lost."""
+        left or gone offline (:attr:`on_offline` is told of each that went offline);
+        TimeoutError after ``timeout`` seconds without one; ConnectionError when the broker is
+        lost."""
         while True:
             if not self.watches and self._items.empty():
                 return None
@@ -223,8 +274,12 @@ class AsyncFleetClient:
                 raise TimeoutError(f"nothing watched changed within {timeout:g} s") from None
             if isinstance(item, BaseException):
                 raise item
-            if item is not None:
+            if not isinstance(item, StreamsEnded):
                 return item
+            if item.offline:  # its will – or every will, sent by a broker that shuts down
+                await self._broker_answers()
+                if self.on_offline is not None:
+                    self.on_offline(item.describe())
 
     # -- the listing ---------------------------------------------------------------------
     def devices(self) -> list[dict[str, Any]]:
@@ -376,16 +431,20 @@ class FleetClient(ControlOps):
         return self._run(self.fleet.wait_for_devices(list(names), timeout, online=online))  # type: ignore[no-any-return]
 
     def watch(self, device: str | None, names: list[str] | None = None, *, period: float | None = None,
-              timeout: float | None = None) -> Iterator[dict[str, Any]]:
+              timeout: float | None = None,
+              on_offline: Callable[[str], None] | None = None) -> Iterator[dict[str, Any]]:
         """Changes and events of ``device`` (None: of every device online in the fleet) as they
         happen, as :meth:`devsim.runtime.client.ControlClient.watch` gives them plus ``process``,
-        on a connection of its own; ends when the watched processes leave.  ``timeout``: at most
-        that long without an item (TimeoutError).  Close the generator to stop watching."""
+        on a connection of its own; ends when the watched processes leave or go offline
+        (``on_offline`` gets a line for each that goes offline); ConnectionError when the broker
+        is lost.  ``timeout``: at most that long without an item (TimeoutError).  Close the
+        generator to stop watching."""
         devices = [device] if device is not None else [
             str(row["name"]) for row in self.devices() if row["online"] and not row.get("clash")]
         if not devices:
             raise ControlError(f"no device online in the fleet {self.fleet.url}", "UnknownDevice")
         watcher = FleetClient(self.fleet.url, timeout=self.fleet.timeout)
+        watcher.fleet.on_offline = on_offline
         try:
             for name in devices:
                 watcher._run(watcher.fleet.watch(name, names, period))

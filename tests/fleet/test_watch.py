@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import signal
+import socket
 import subprocess
 import sys
 from collections.abc import Callable, Iterator
@@ -16,7 +17,7 @@ import pytest
 from devsim.fleet.client import FleetClient
 from tests.fleet.conftest import Member, Program, mosquitto
 from tests.support.broker import Broker
-from tests.support.process import next_match
+from tests.support.process import next_match, wait_until
 from tests.support.process import stop as stop_process
 
 STREAMS = "devsim-fleet/client/+/watch/+"
@@ -182,3 +183,60 @@ def test_a_watch_of_an_empty_fleet_or_of_no_device_is_one_line(broker: Broker) -
     done = subprocess.run([sys.executable, "-m", "devsim", "ctl", "--control", "127.0.0.1:1", "watch"],
                           capture_output=True, text=True, timeout=60)
     assert done.returncode == 2 and "watch needs DEVICE" in done.stderr
+
+
+def stderr_lines(program: Program) -> list[str]:
+    return program.log.read_text().splitlines()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["broker-shuts-down", "broker-killed"])
+def test_a_watch_that_loses_the_broker_says_so_and_fails(sig: signal.Signals, plant_file: Path,
+                                                         tmp_path: Path) -> None:
+    """Losing the broker is neither the watched processes leaving nor Ctrl-C: one line names the
+    broker and the status is 5 (nothing answers).  mosquitto shutting down (SIGTERM) sends the
+    members' last wills before it closes: that must not pass for the members going offline."""
+    own = Broker().start()
+    started = [Member(["up", str(plant_file), "--part", part, "--virtual"], own.url, tmp_path / f"{part}.log")
+               for part in ("cell-a", "cell-b")]
+    watcher = watch(own.url, tmp_path / "watch.log")
+    try:
+        line_where(watcher, lambda _line: devices_in(watcher.seen) >= {"feeder", "press"},
+                   "a first line of feeder and of press")
+        assert own.process is not None
+        stop_process(own.process, sig)
+        assert watcher.proc.wait(30) == 5, stderr_lines(watcher)
+        assert stderr_lines(watcher) == [stderr_lines(watcher)[0]]  # one line
+        assert stderr_lines(watcher)[0].startswith(f"Error: fleet broker {own.url} lost (")
+        assert all(member.proc.poll() is None for member in started)  # they wait for the broker to return
+    finally:
+        watcher.stop()
+        for member in started:
+            member.stop()
+        own.stop()
+
+
+def test_a_fleet_watch_says_which_process_went_offline_and_watches_the_others_on(
+        members: dict[str, Member], tmp_path: Path, broker: Broker) -> None:
+    watcher = watch(broker.url, tmp_path / "watch.log")
+    try:
+        line_where(watcher, lambda _line: devices_in(watcher.seen) >= {"feeder", "press"},
+                   "a first line of feeder and of press")
+        press = members["cell-b"]
+        stop_process(press.proc, signal.SIGKILL)  # no goodbye: the broker publishes its last will
+
+        def offline() -> list[str]:
+            return [line for line in stderr_lines(watcher) if "went offline" in line]
+
+        wait_until(lambda: bool(offline()), "a line saying press's process went offline", timeout=30)
+        assert offline() == [f"devsim: {press.process} (host {socket.gethostname()}, pid {press.proc.pid})"
+                             " went offline (its last will): no more items of press"]
+        with FleetClient(broker.url) as fleet:  # the other process's device is still watched
+            fleet.fault("feeder", "emergency_stop", True)
+        line_where(watcher, lambda line: line.split()[1:] == ["feeder", "fault", "emergency_stop", "on"],
+                   "feeder's fault line")
+        assert watcher.proc.poll() is None
+        stop_process(members["cell-a"].proc, signal.SIGKILL)  # the last one: the watch ends, as it
+        assert watcher.proc.wait(30) == 0, stderr_lines(watcher)  # does when a simulator stops
+        assert len(offline()) == 2 and not any(line.startswith("Error") for line in stderr_lines(watcher))
+    finally:
+        watcher.stop()
