@@ -27,7 +27,9 @@ connection is retried (after 0.5 s, 1 s, 2 s, then every 5 s) and the announceme
 rejoining, the member checks the names again as in 1.: while it was away (frozen, asleep, cut
 off) its last will marked it offline and another process may have joined serving one of its
 names.  Such a name is *withdrawn*: left out of its announcement (and its last will) for the rest
-of its run, said in one line on stderr; its ports keep serving here, outside the fleet.
+of its run, said in one line on stderr; its ports keep serving here, outside the fleet (a
+request for it that reaches the member anyway is refused, ``FleetClash``; the fast path of
+:mod:`devsim.fleet.answers` is left out while a name is withdrawn).
 
 A request costs the member its own work and little else: it is handed over in the step that read
 it (no queue, no task, no record when it has no MQTT 5 properties), parsed once with msgspec, and
@@ -264,7 +266,7 @@ class FleetMember:
         (the common case): a read or a set resolved before is answered here in as few steps as
         it takes, as :meth:`answer` answers it; anything else goes the way of :meth:`answer`
         (which tries the resolved requests again: a request they declined costs more anyway)."""
-        fast = self.resolved.answer(payload) if len(payload) <= MAX_LINE else None
+        fast = self.resolved.answer(payload) if len(payload) <= MAX_LINE and not self.withdrawn else None
         if fast is None:
             self._answer_into(link, payload, None, None)
             return
@@ -306,7 +308,7 @@ class FleetMember:
         stream_to = None
         if len(raw) > MAX_LINE:
             response = ErrorResponse(error="request too long", type="BadRequest")
-        elif (fast := self.resolved.answer(raw)) is not None:  # a read or a set resolved before
+        elif not self.withdrawn and (fast := self.resolved.answer(raw)) is not None:  # resolved before
             asked_reply, body = fast
             if asked_reply is not msgspec.UNSET:
                 reply_to = asked_reply
@@ -321,12 +323,23 @@ class FleetMember:
             if isinstance(data, dict):
                 reply_to = data.pop("reply_to", reply_to)
                 stream_to = data.pop("stream_to", None)
-            response = ops.answer_parsed(self.runtime, data) if isinstance(data, dict) else ops.answer(self.runtime, raw)
+            if isinstance(data, dict) and isinstance(data.get("device"), str) and data["device"] in self.withdrawn:
+                response = self._withdrawn(data)
+            else:
+                response = (ops.answer_parsed(self.runtime, data) if isinstance(data, dict)
+                            else ops.answer(self.runtime, raw))
             if isinstance(response, OkResponse) and isinstance(response.result, WatchStart):
                 response = self.streams.start(response.result, response.id, stream_to)
         if not self._reply_allowed(reply_to):
             return None
         return str(reply_to), encode_answer(response), correlation
+
+    def _withdrawn(self, request: dict[str, Any]) -> ErrorResponse:
+        """The answer to a request over the broker for a device this process withdrew."""
+        name, req_id = request["device"], request.get("id")
+        return ErrorResponse(id=req_id if isinstance(req_id, int | str) else None, type="FleetClash", error=(
+            f"device {name!r} of {self.process} is out of the fleet: {self.withdrawn[name]} served it"
+            " when this process rejoined (its ports serve on, outside the fleet)"))
 
     def _reply_allowed(self, topic: Any) -> bool:
         if type(topic) is not str:  # (a list or an object from the JSON: no topic, and no set member)
@@ -360,9 +373,10 @@ class FleetMember:
 def _withdrawal(taken: dict[str, str]) -> str:
     """The rest of the rejoining line when names were withdrawn."""
     names = ", ".join(repr(name) for name in taken)
-    whom = "; ".join(f"{name!r} by {served}" for name, served in taken.items())
-    return (f" without {names}: served meanwhile by another process ({whom}); device names are unique across a"
-            " fleet, so this process no longer announces them (their ports keep serving here)")
+    whom = (next(iter(taken.values())) if len(taken) == 1
+            else "other processes (" + "; ".join(f"{name!r} by {served}" for name, served in taken.items()) + ")")
+    return (f" without {names}: served meanwhile by {whom} (device names are unique across a fleet; the ports"
+            " keep serving here, outside the fleet)")
 
 
 async def join_fleet(runtime: Runtime, url: str | FleetUrl, *, about: dict[str, Any] | None = None) -> FleetMember:

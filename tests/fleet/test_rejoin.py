@@ -4,12 +4,13 @@ of them.  It withdraws that name (says so on stderr) instead of clashing with th
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 from pathlib import Path
 
 from devsim.fleet.client import FleetClient
-from tests.fleet.conftest import Member, ctl
+from tests.fleet.conftest import Member, ctl, mosquitto
 from tests.support.broker import Broker
 from tests.support.process import wait_until
 
@@ -47,6 +48,20 @@ def test_a_member_back_from_a_lost_broker_withdraws_a_name_a_replacement_serves(
         assert line.startswith(f"devsim: fleet broker {second.url} back; announced again without 'robot': ")
         assert replacement.process in line and "robot2" not in line
         assert old.proc.poll() is None and replacement.proc.poll() is None  # both serve on
+        # a request for the withdrawn name sent to the old process anyway (by hand) is refused
+        reply = "devsim-fleet/client/by-hand/reply"
+        sub = mosquitto("mosquitto_sub", "-p", str(second.port), "-t", reply, "-C", "1", "-W", "20", "-d",
+                        log=tmp_path / "sub.log")
+        sub.wait_for("Subscribed")
+        request = {"id": "h-1", "op": "read", "device": "robot", "name": "input.I3", "reply_to": reply}
+        pub = mosquitto("mosquitto_pub", "-p", str(second.port), "-t", f"devsim-fleet/process/{old.process}/request",
+                        "-m", json.dumps(request), log=tmp_path / "pub.log")
+        assert pub.proc.wait(20) == 0
+        answer = json.loads(sub.wait_for("{"))
+        sub.stop()
+        pub.stop()
+        assert (answer["id"], answer["ok"], answer["type"]) == ("h-1", False, "FleetClash")
+        assert answer["error"].startswith(f"device 'robot' of {old.process} is out of the fleet: {replacement.process}")
     finally:
         if old.proc.poll() is None:
             os.kill(old.proc.pid, signal.SIGCONT)
