@@ -78,8 +78,8 @@ class ManualMotion:
             self._screen.record("handwheel_ignored")
             return
         step = int(self._params.handwheel_step) * self.handwheel_factor
-        for a in AXES:
-            if not self._signals.get(f"handwheel_{a}") or detents == 0:
+        for a in AXES:  # (P76 = 0, after a catalogue read-in without it: a detent moves nothing)
+            if not self._signals.get(f"handwheel_{a}") or detents == 0 or step <= 0:
                 continue
             if self._limits.refuses(a, detents):
                 continue

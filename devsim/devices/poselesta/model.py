@@ -253,10 +253,12 @@ class PoselestaCnc(Model):
     # -- the axes' outputs (spec §5.2, §5.9) -------------------------------------------------------
     def following_error(self, axis: str) -> float:
         """e = v / Kv in steady state (spec §5.2), in increments; 0 with Not-Stop, open loop or a
-        plotter (actual = command, spec §5.9)."""
+        plotter (actual = command, spec §5.9), and without a gain (P30–P33 = 0, as a catalogue
+        read-in that does not carry them leaves them, §2.6.2.3: no position loop either)."""
         if not self.signals.get("emergency_stop") or self.manual.in_open_loop(axis) or self.plotter:
             return 0.0
-        return self.axes[axis].velocity() / self.axes.kv(axis)
+        kv = self.axes.kv(axis)
+        return self.axes[axis].velocity() / kv if kv > 0 else 0.0
 
     def analog_out(self, axis: str) -> float:
         """The ±10 V set-point: the speed over the drive's speed at 10 V (spec §5.2); for an
