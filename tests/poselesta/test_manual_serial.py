@@ -44,8 +44,10 @@ def _output_on_v7(cnc: Any, program: str) -> None:
 
 # -- §2.6.2.1 the printer ---------------------------------------------------------------------
 @pytest.mark.manual("§2.6.2.1", "Drucker: Baud-Rate: 1200 fest programmiert (Parameter P 68 hat keinen Einfluss)")
-@pytest.mark.parametrize("p68", [0, 5])
-def test_the_printer_port_runs_at_1200_baud_whatever_p68_says(cnc: Any, p68: int) -> None:
+@pytest.mark.parametrize(("variant", "p68"), [("III", 0), ("III", 5), ("II", 4), ("II", 5)])
+def test_the_printer_port_runs_at_1200_baud_whatever_p68_says(devsim_device, variant: str, p68: int) -> None:  # noqa: ANN001
+    """On POS II too, where P68 = 4 and 5 are no rate of the tape devices (it refused the printer)."""
+    cnc = devsim_device("poselesta", {"variant": variant})
     cnc.set("param.P68", p68)  # 110 or 4800 baud for the tape devices
     cnc.set("program.P03", "N1 X1")
     cnc.set("panel.mode", "EXTERNAL_MEDIUM")
@@ -254,8 +256,8 @@ def test_the_printer_lines_are_high_while_printing_and_cts_is_ignored(cnc: Any) 
 # -- §2.6.2.2 the cassette ------------------------------------------------------------------------
 @pytest.mark.manual("§2.6.2.2", "Baud-Rate POS II: 300 fest programmiert (P 68 hat keinen Einfluss)")
 @pytest.mark.manual("§2.6.2.2", "Baud-Rate POS III: 300/1200/4800 mittels P 68 wählbar")
-@pytest.mark.parametrize(("variant", "p68", "baud"), [("II", 3, 300), ("II", 0, 300), ("III", 1, 300),
-                                                      ("III", 3, 1200), ("III", 5, 4800)])
+@pytest.mark.parametrize(("variant", "p68", "baud"), [("II", 3, 300), ("II", 0, 300), ("II", 4, 300), ("II", 5, 300),
+                                                      ("III", 1, 300), ("III", 3, 1200), ("III", 5, 4800)])
 def test_the_cassette_baud_rate(devsim_device, variant: str, p68: int, baud: int) -> None:  # noqa: ANN001
     cnc = devsim_device("poselesta", {"variant": variant, "params": {68: p68}})
     cnc.set("program.P03", "N1 X1")

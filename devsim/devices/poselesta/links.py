@@ -124,7 +124,8 @@ class SerialLinks:
         if catalogue and function.direction == "input" and not self._signals.get("key_switch"):
             self._screen.record("key_switch_locked")
             raise BadValue("the key switch is locked: the parameter catalogue cannot be read in")
-        if self.baud(port) is None:
+        if function.baud(self._params.baud_code(port), self._options.variant) is None:  # (its own rate:
+            # the printer's and POS II cassette's P68 does not set, §2.6.2.1, §2.6.2.2)
             self._screen.show(WERTBEREICHES_UEBERLAUF)
             raise BadValue(f"P{self._params.baud_code_key(port)}: baud rate code not available on "
                            f"POS {self._options.variant}")
@@ -148,7 +149,7 @@ class SerialLinks:
         catalogue = program == CATALOGUE
         if catalogue:
             if self._options.variant == "III":  # the line stays as it was at the start (spec §3.9)
-                line = (self.baud(port), self.iso(port))
+                line = (function.baud(self._params.baud_code(port), self._options.variant), self.iso(port))
                 if self._params.baud_code(port) > 3:
                     self._screen.show(WERTBEREICHES_UEBERLAUF)
                     raise BadValue("the catalogue is read at up to 1200 baud (P68/P70 ≤ 3)")
