@@ -83,7 +83,12 @@ class Link(Protocol):
 
 
 class ReadIn:
-    """A program read-in (spec §3.5): the leader wait (cassette), ``%``, blocks, ``M30``."""
+    """A program read-in (spec §3.5): the leader wait (cassette), ``%``, blocks, ``M30``.
+
+    Its :attr:`state` leaves ``receiving`` the moment the transfer ends (``done``, ``failed``,
+    ``cancelled``): a block that cannot be stored ends it there (spec §3.5.1 "any --error-->
+    FAILED", §3.5.3), so nothing after that block is stored or read, whether the host sent the
+    rest of the tape in the same write or later (what follows reaches no transfer: §2.6)."""
 
     def __init__(self, link: Link, function: Function, program: int, reader: TapeReader, leader: float = 0.0) -> None:
         self.link = link
@@ -100,6 +105,10 @@ class ReadIn:
         if self.state == "leader":
             self.state = "wait_start"
 
+    @property
+    def running(self) -> bool:
+        return self.state in ("leader", "wait_start", "receiving")
+
     def feed(self, data: bytes) -> None:
         if self.state == "leader":
             return  # the uncoated leader of the cassette: nothing counts yet (§2.6.2.2)
@@ -107,33 +116,52 @@ class ReadIn:
         if self.reader.started and self.state == "wait_start":
             self.state = "receiving"
         for event in events:
-            if self.state not in ("wait_start", "receiving"):
-                break
-            self._on(event)
+            if not self.running:
+                break  # the transfer ended at an earlier event of this chunk
+            _READ_IN_EVENTS[type(event)](self, event)
 
-    def _on(self, event: object) -> None:
-        port = self.function.port
-        if isinstance(event, BlockRead):
-            problem = self.link.store_block(self.program, event.block)
-            if problem is not None:
-                self.link.event(port, "failed", problem)
-                self.link.ended(port, "failed", problem)
-                return
-            self.blocks += 1
-            self.link.event(port, "block", event.block.number)
-        elif isinstance(event, Ended):
-            self.link.event(port, "transfer_done", (self.program, self.blocks))
-            self.link.ended(port, "done")
-        elif isinstance(event, Failed):
-            self.link.event(port, "failed", event.reason)
-            self.link.ended(port, "failed", event.reason)
-        elif isinstance(event, Notice):
-            self.link.event(port, event.what, event.detail)
+    def _block(self, event: BlockRead) -> None:
+        problem = self.link.store_block(self.program, event.block)
+        if problem is not None:
+            self._fail(problem)
+            return
+        self.blocks += 1
+        self.link.event(self.function.port, "block", event.block.number)
+
+    def _ended(self, _event: Ended) -> None:
+        self.link.event(self.function.port, "transfer_done", (self.program, self.blocks))
+        self._end("done")
+
+    def _failed(self, event: Failed) -> None:
+        self._fail(event.reason)
+
+    def _notice(self, event: Notice) -> None:
+        self.link.event(self.function.port, event.what, event.detail)
+
+    def _fail(self, reason: str) -> None:
+        """The transfer stops with WERTBEREICHES-UEBERLAUF (§2.6; spec §3.5.3, §3.12)."""
+        self.link.event(self.function.port, "failed", reason)
+        self._end("failed", reason)
+
+    def _end(self, state: str, message: str | None = None) -> None:
+        self.state = state
+        self.link.ended(self.function.port, state, message)
 
     def cancel(self) -> None:
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
+        if self.running:
+            self.state = "cancelled"
+
+
+#: What a read-in does with each event of its reader (:class:`~devsim.devices.poselesta.tape.TapeReader`).
+_READ_IN_EVENTS: dict[type, Callable[[ReadIn, Any], None]] = {
+    BlockRead: ReadIn._block,
+    Ended: ReadIn._ended,
+    Failed: ReadIn._failed,
+    Notice: ReadIn._notice,
+}
 
 
 class Output:

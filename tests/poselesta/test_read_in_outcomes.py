@@ -1,0 +1,66 @@
+"""How a DNC read-in (T7) ends and what it leaves in the program memory, through the real V7 pty
+(manual §2.6, §2.6.3; spec poselesta.md §3.5.1, §3.5.3, §4.9): a block that cannot be stored ends
+the transfer there whatever way the host's bytes were cut into writes, a program nothing could
+be stored in is not listed, and a tape's blocks reach the non-volatile memory together, not one
+whole-memory save per block."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from devsim.devices.poselesta.codes import encode
+from tests.poselesta.test_manual_serial import await_tape, bytes_in
+from tests.poselesta.test_ports import open_port, until
+
+FULL = "WERTBEREICHES-UEBERLAUF"
+
+
+@pytest.fixture
+def cnc(devsim_device: Any) -> Any:
+    return devsim_device("poselesta")
+
+
+def _send(cnc: Any, blocks: list[str], *, one_write: bool) -> None:
+    """The host sends ``%``, the blocks and M30 (ISO) on V7: the whole tape in one write, or
+    one block per write, each taken by the control before the next is sent."""
+    pieces = [encode(text + "\r\n", True) for text in ["%", *blocks, "M30"]]
+    with open_port(cnc, "v7") as host:
+        for piece in [b"".join(pieces)] if one_write else pieces:
+            expected = bytes_in(cnc, "v7") + len(piece)
+            host.write(piece)
+            until(lambda expected=expected: bytes_in(cnc, "v7") == expected, "the control has taken the bytes")
+
+
+# -- a block that cannot be stored ends the read-in there (F1) -------------------------------------------
+@pytest.mark.manual("§2.6", "Wird vor dem Einlesen eines Programmes eine falsche Baud-Rate oder ein falscher Code "
+                    "gewählt, erscheint am Bildschirm: WERTBEREICHES-UEBERLAUF (the transfer stops)")
+def test_memory_full_ends_the_read_in_at_that_block_however_the_tape_is_cut(devsim_device: Any) -> None:
+    """Spec §3.5.3 (memory full, §4.9 capacity 5 blocks; P01 holds 3): N3 does not fit, so the
+    read-in fails there; N1 and N2 stay, the N1 X9 after the failure is not stored and the M30
+    after it does not make the transfer ``done`` -- the same whether the host sends the tape
+    in one write or one block per write."""
+    outcomes = {}
+    for one_write in (True, False):
+        cnc = devsim_device("poselesta", {"max_blocks_total": 5})
+        cnc.set("program.P01", "N1 X1\nN2 X2\nN3 X3")
+        await_tape(cnc)
+        _send(cnc, ["N1X1", "N2X2", "N3X3", "N1X9"], one_write=one_write)
+        outcomes[one_write] = (cnc.read("v7.state"), cnc.read("panel.message"), cnc.read("program.P20"),
+                               cnc.read("v7.transfer"))
+    assert outcomes[True] == outcomes[False] == ("failed", FULL, "N 1 X 1.000\nN 2 X 2.000", "idle")
+
+
+@pytest.mark.manual("§2.6.2.3", "Parameterkatalog P 99: vor dem Einlesen wird der gesamte Parameterkatalog "
+                    "gelöscht (a value out of range stops the read-in)")
+def test_a_catalogue_value_out_of_range_ends_the_read_in_at_that_block(cnc: Any) -> None:
+    """Spec §3.9, §4.8 (P30 1 … 99): N30 P500 fails the catalogue read-in; N44 after it is not
+    taken and M30 does not make the transfer ``done`` (nor commit the catalogue)."""
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 99)
+    cnc.set("v7.transfer", "input")
+    _send(cnc, ["N30P500", "N44P1234", "N70P3"], one_write=True)
+    assert cnc.read("v7.state") == "failed"
+    assert cnc.read("panel.message") == FULL
+    assert cnc.read("param.P44") != 1234
