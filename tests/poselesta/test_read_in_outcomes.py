@@ -64,3 +64,18 @@ def test_a_catalogue_value_out_of_range_ends_the_read_in_at_that_block(cnc: Any)
     assert cnc.read("v7.state") == "failed"
     assert cnc.read("panel.message") == FULL
     assert cnc.read("param.P44") != 1234
+
+
+# -- nothing stored, nothing listed (F4) ---------------------------------------------------------------
+@pytest.mark.manual("§2.6", "Beim Einlesen eines neuen Programmes wird zuerst das vorgewählte Programm (Pxx) "
+                    "gelöscht!")
+def test_a_read_in_failing_at_its_first_block_lists_no_program(devsim_device: Any) -> None:
+    """Spec §3.5.3: the blocks committed before a failure remain, here none: P20 is not listed,
+    as after an empty tape ``% M30``."""
+    cnc = devsim_device("poselesta", {"max_blocks_total": 1})
+    cnc.set("program.P01", "N1 X1")
+    await_tape(cnc)
+    _send(cnc, ["N1X1", "N2X2"], one_write=True)
+    assert cnc.read("programs") == [1]
+    assert cnc.read("program.P20") == ""
+    assert cnc.read("v7.state") == "failed" and cnc.read("panel.message") == FULL

@@ -96,11 +96,14 @@ class ProgramMemory:
         self._typed(number, self._inch())
 
     def store_block(self, program: int, block: Block) -> str | None:
-        """A block read in; returns why it cannot be stored (the read-in fails), or None."""
-        blocks = self.programs.setdefault(program, {})
+        """A block read in; returns why it cannot be stored (the read-in fails), or None.  A
+        program the memory has no room for is not listed at all (spec §3.5.3: the blocks
+        committed before a failure remain; §2.6: the pre-selected program was deleted)."""
+        blocks = self.programs.get(program, {})
         total = sum(len(b) for b in self.programs.values())
         if block.number not in blocks and total >= self._max_blocks:
             return "memory full"
+        self.programs[program] = blocks
         blocks[block.number] = block
         self._save()
         return None
