@@ -6,11 +6,13 @@ whole-memory save per block."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from typing import Any
 
 import pytest
 
 from devsim.devices.poselesta.codes import encode
+from devsim.devices.poselesta.transfers import ReadIn
 from tests.poselesta.test_manual_serial import await_tape, bytes_in
 from tests.poselesta.test_ports import open_port, until
 
@@ -79,3 +81,42 @@ def test_a_read_in_failing_at_its_first_block_lists_no_program(devsim_device: An
     assert cnc.read("programs") == [1]
     assert cnc.read("program.P20") == ""
     assert cnc.read("v7.state") == "failed" and cnc.read("panel.message") == FULL
+
+
+# -- the tape's blocks are saved together (F3) -----------------------------------------------------------
+@pytest.fixture
+def saves(cnc: Any, monkeypatch: pytest.MonkeyPatch) -> Iterator[dict[str, int]]:
+    """Counts, in the runtime's thread, the saves of the stored programs to the non-volatile
+    memory (``programs``) and the pieces of input a read-in was given (``chunks``)."""
+    counts = {"programs": 0, "chunks": 0}
+    nvram = cnc.device.nvram
+    put, feed = nvram.put, ReadIn.feed
+
+    def counting_put(section: str, data: Any) -> None:
+        counts["programs"] += section == "programs"
+        put(section, data)
+
+    def counting_feed(self: ReadIn, data: bytes) -> None:
+        counts["chunks"] += 1
+        feed(self, data)
+
+    monkeypatch.setattr(nvram, "put", counting_put)
+    monkeypatch.setattr(ReadIn, "feed", counting_feed)
+    yield counts
+
+
+@pytest.mark.manual("§2.6", "drei voneinander unabhängige, serielle Schnittstellen (a long read-in does not stall "
+                    "the control)")
+def test_a_tape_is_saved_once_per_piece_the_host_sends_not_once_per_block(cnc: Any, saves: dict[str, int]) -> None:
+    """Spec §3.5.5, §4.9: 200 blocks in one write reach the memory in as many saves as pieces
+    of input carried them (a save writes every program: one per block made a read-in
+    quadratic); what was counted stored is in the non-volatile memory, and a power cycle keeps it."""
+    await_tape(cnc)
+    _send(cnc, [f"N{n}X1" for n in range(200)], one_write=True)
+    assert cnc.read("v7.state") == "done" and cnc.read("program.P20").count("\n") == 199
+    assert saves["chunks"] < 200  # (the tape came in pieces of many blocks)
+    assert 1 <= saves["programs"] <= 1 + saves["chunks"]  # (1: the program cleared at the start)
+    stored = cnc.runtime.call(lambda: cnc.device.nvram.get("programs"))
+    assert len(stored["20"]) == 200
+    cnc.power_cycle()
+    assert cnc.read("program.P20").count("\n") == 199
