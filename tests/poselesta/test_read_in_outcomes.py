@@ -120,3 +120,21 @@ def test_a_tape_is_saved_once_per_piece_the_host_sends_not_once_per_block(cnc: A
     assert len(stored["20"]) == 200
     cnc.power_cycle()
     assert cnc.read("program.P20").count("\n") == 199
+
+
+def test_a_wipe_in_the_turn_that_read_blocks_in_leaves_them_wiped(cnc: Any) -> None:
+    """The blocks of a write are saved at the end of the loop's turn; a power cycle with a wipe in
+    that same turn (a control request handled right after the bytes) must not write them back into
+    the wiped memory."""
+    await_tape(cnc)
+    tape = encode("%\r\nN1X1\r\nN2X2\r\n", True)
+    device = cnc.device
+
+    def read_in_then_wipe() -> None:
+        device.port("v7").feed(tape)
+        assert device.model.memory.blocks(20)  # stored, the save still to come
+        device.model.power_cycle(wipe=True)
+
+    cnc.runtime.call(read_in_then_wipe)
+    cnc.advance(5)  # (the boot)
+    assert 20 not in cnc.read("programs")
