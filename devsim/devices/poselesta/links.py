@@ -290,6 +290,7 @@ class SerialLinks:
             self.discarded[port] += len(data)  # no input function active (spec §2.6)
             return
         running.feed(data)
+        self._memory.flush()  # the chunk's blocks, saved together (devsim.devices.poselesta.programs)
 
 
 TransferHandler = Callable[[SerialLinks, Function, int], None]

@@ -2,17 +2,17 @@
 in, and the tool catalogue (manual §2.3.14, §2.3.21, §2.6, §2.6.3; spec poselesta.md §3.2.2,
 §4.5 G-LOCK, §4.9, §5.1).  Everything is kept in the control's non-volatile memory.
 
-The blocks a read-in stores one after another (what one write of the host carries: a whole
-tape, often) are written to that memory together, once, at the end of the event loop's turn
-that stored them: before the control handles anything else (the next bytes, a control
-request, a power cycle), so that a block counted (``v7.blocks``) is one a ``kill -9`` keeps.
-Each block written on its own rewrote every stored program, so a tape of n blocks cost
-O(n²) and stalled the simulator for seconds (spec §3.5.5: the ports work in parallel).
+The blocks a read-in stores from one chunk of the host's bytes (what one write carries: a whole
+tape, often) are written to that memory together, once, when the chunk has been taken
+(:meth:`ProgramMemory.flush`, called by the links): before the control handles anything else
+(the next bytes, a control request, a power cycle), so that a block counted (``v7.blocks``) is
+one a ``kill -9`` keeps.  Each block written on its own rewrote every stored program, so a tape
+of n blocks cost O(n²) and stalled the simulator for seconds (spec §3.5.5: the ports work in
+parallel).
 """
 
 from __future__ import annotations
 
-import asyncio
 import math
 from collections.abc import Callable
 from typing import Any
@@ -51,7 +51,7 @@ class ProgramMemory:
         self.inch_programs: set[int] = set()
         self.tools: dict[int, dict[str, float]] = {}
         self.mdi = ""  # the block entered for Hand-Einzelsatz (§2.4.7)
-        self._unsaved: asyncio.Handle | None = None  # the save of the blocks stored this turn
+        self._unsaved = False  # blocks stored since the last save (see flush)
         self.load()
 
     # -- memory -------------------------------------------------------------------------------
@@ -65,28 +65,15 @@ class ProgramMemory:
         self.tools = {int(t): dict(v) for t, v in (nvram.get("tools") or {}).items()}
 
     def _save(self) -> None:
-        if self._unsaved is not None:
-            self._unsaved.cancel()
-            self._unsaved = None
+        self._unsaved = False
         self._nvram.put(
             "programs", {str(p): [b.to_json() for _, b in sorted(bs.items())] for p, bs in self.programs.items()}
         )
 
-    def _save_soon(self) -> None:
-        """Save the programs at the end of this turn of the event loop, once for every block
-        stored in it (see the module's docstring); at once where no loop runs."""
-        if self._unsaved is not None:
-            return
-        try:
-            loop = asyncio.get_running_loop()
-        except RuntimeError:
-            self._save()
-            return
-        self._unsaved = loop.call_soon(self._save)
-
     def flush(self) -> None:
-        """Write blocks stored this turn now (the memory is read or handed over)."""
-        if self._unsaved is not None:
+        """Write the blocks stored since the last save (the end of a chunk of a read-in; the
+        memory read or handed over)."""
+        if self._unsaved:
             self._save()
 
     # -- programs -----------------------------------------------------------------------------------
@@ -136,7 +123,7 @@ class ProgramMemory:
             return "memory full"
         self.programs[program] = blocks
         blocks[block.number] = block
-        self._save_soon()
+        self._unsaved = True  # (saved with the chunk's other blocks: flush)
         return None
 
     def program_text(self, number: int) -> str:
