@@ -31,6 +31,11 @@ from devsim.transports import fdlimit
 __all__ = ["check", "scenario", "up"]
 
 
+def _count(number: int, thing: str) -> str:
+    """``1 device``, ``2 devices``."""
+    return f"{number} {thing}{'' if number == 1 else 's'}"
+
+
 @click.command("check")
 @click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
 def check(files: tuple[str, ...]) -> None:
@@ -47,8 +52,8 @@ def check(files: tuple[str, ...]) -> None:
                 click.echo(message, err=True)
             continue
         steps = getattr(spec, "steps", None)
-        what = f"scenario, {len(steps)} steps" if steps is not None else "plant"
-        click.echo(f"{path}: ok ({what}, {len(spec.devices)} devices)")  # type: ignore[attr-defined]
+        what = f"scenario, {_count(len(steps), 'step')}" if steps is not None else "plant"
+        click.echo(f"{path}: ok ({what}, {_count(len(spec.devices), 'device')})")  # type: ignore[attr-defined]
     if bad:
         sys.exit(exits.BAD_FILE)
 
@@ -405,7 +410,7 @@ async def _up(
         logs = attach_log(runtime, log_level)
         title = f"plant {spec.name!r} up" if getattr(spec, "name", None) else "plant up"
         if log_level >= DEFAULT_LEVEL:
-            warn(f"devsim: {title} ({len(plant.devices)} devices); Ctrl-C to stop")
+            warn(f"devsim: {title} ({_count(len(plant.devices), 'device')}); Ctrl-C to stop")
         # As `devsim run` does: what exists now lives as long as the process, so keep it out of
         # the garbage collector's scans.  Unfrozen, a full collection of a 1,000-device worker
         # takes about 70 ms, and every device of the worker misses a poll meanwhile.

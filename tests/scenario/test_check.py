@@ -58,7 +58,7 @@ def test_every_mistake_of_every_file_in_one_pass(tmp_path: Path) -> None:
     good.write_text(GOOD)
     done = check(scenario, good, plant)
     assert done.returncode == exits.BAD_FILE
-    assert done.stdout == f"{good}: ok (scenario, 1 steps, 1 devices)\n"
+    assert done.stdout == f"{good}: ok (scenario, 1 step, 1 device)\n"
     lines = [line.replace(str(tmp_path) + "/", "") for line in done.stderr.splitlines()]
     assert lines == [
         "s.yaml:4: devices.1.config.baud: baud must be one of 1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200",
@@ -227,7 +227,7 @@ def test_a_plant_file_may_say_what_it_is(tmp_path: Path) -> None:
     plant = tmp_path / "plant.yaml"
     plant.write_text("name: cell\ndescription: two drives on a bench\ndevices:\n  - {name: x, kind: sers}\n")
     done = check(plant)
-    assert done.returncode == 0 and done.stdout.strip() == f"{plant}: ok (plant, 1 devices)", done.stderr
+    assert done.returncode == 0 and done.stdout.strip() == f"{plant}: ok (plant, 1 device)", done.stderr
 
 
 def test_every_bad_parameter_of_a_config_at_its_own_line(tmp_path: Path) -> None:

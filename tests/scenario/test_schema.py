@@ -108,7 +108,7 @@ def test_devsim_check(tmp_path: Path) -> None:
     bad = write(tmp_path, GOOD.replace("timeout: 5s", "timeout: x"), "bad.yaml")
     result = CliRunner().invoke(cli, ["check", str(good)])
     assert result.exit_code == 0
-    assert "good.yaml: ok (scenario, 4 steps, 1 devices)" in result.output
+    assert "good.yaml: ok (scenario, 4 steps, 1 device)" in result.output
     result = CliRunner().invoke(cli, ["check", str(good), str(bad)])
     assert result.exit_code == exits.BAD_FILE
     assert "bad.yaml:11: steps.3.timeout: `timeout` must be a duration like 2s or 150ms" in result.output
