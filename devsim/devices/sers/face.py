@@ -64,15 +64,9 @@ class SersFace(Face):
         #: The polls answered since power-on (the last one while nothing else came since)
         self.polls = KeptPolls(model, port, self.framer)
         self.answer_at_once = self.polls.answer_at_once  # (a repeated poll: Face.answer_at_once)
-        model.line_addresses = self._line_addresses
         model.listen("power_on", self._reset_serial)
         model.listen("spontaneous", self.spontaneous)
         model.listen("line_out", self.send)
-
-    def _line_addresses(self) -> list[int]:
-        """The line addresses of the drives on this drive's line, this one's too (G-ADDR)."""
-        return [peer.device.model.line_address for peer in self.port.peers or (self.port,)
-                if isinstance(peer.device.model, SersDrive)]
 
     # -- line settings -------------------------------------------------------------------
     @property
@@ -96,7 +90,7 @@ class SersFace(Face):
         model = self.model
         if self.polls.kept is not None and (kept := self.polls.take(data)) is not None:
             return self._reply_poll(kept, data)  # (a repeated poll; its framing done)
-        model.shared_line = self.port.shared_line
+        model.peers = self.port.peers
         if model.master.awaiting and model.logic_alive:
             model.master.feed(data)  # a slave's answer to this master
         if not model.logic_alive or model.booting:

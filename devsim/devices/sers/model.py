@@ -23,11 +23,11 @@ P121–P123) only matter at the serial interface.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any, Literal
 
 from devsim.core.axis import Axis
 from devsim.core.clock import Clock, Timer
+from devsim.core.device import Port
 from devsim.core.kit import declare_signals
 from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
@@ -135,11 +135,10 @@ class SersDrive(Model):
         #: The drive was addressed last (True), another one was (False), every drive was (``"*"``,
         #: a broadcast); None: not yet.
         self.addressed: bool | Literal["*"] | None = None
-        #: Other drives share the line (RS-485); the face tells.
-        self.shared_line = False
-        #: The line addresses of the drives on this drive's line, this one's too (the face tells;
-        #: None: a line of its own).
-        self.line_addresses: Callable[[], list[int]] | None = None
+        #: The ports on this drive's line, its own too (RS-485; empty: a line of its own); the face
+        #: tells.  (One attribute for both uses: a 30th made every drive's __dict__ lose its shared
+        #: keys, 1.3 KB a drive.)
+        self.peers: tuple[Port, ...] = ()
         self.logic_alive = False
         self.booting = False
         self._timers: list[Timer] = []
@@ -360,7 +359,7 @@ class SersDrive(Model):
         last, alone or with every drive (``#*``)."""
         if self.addressed is None:
             initially = self.cfg.initially_selected
-            self.addressed = (not self.shared_line) if initially is None else initially
+            self.addressed = (len(self.peers) < 2) if initially is None else initially
         return self.addressed is not False
 
     def selection(self, address: int | str | None) -> tuple[bool, bool]:
@@ -383,8 +382,8 @@ class SersDrive(Model):
         or the drive with the lowest address on the line."""
         if self.cfg.broadcast_reply == "none":
             return False
-        others = self.line_addresses
-        return others is None or self.line_address <= min(others())
+        return all(self.line_address <= peer.device.model.line_address for peer in self.peers
+                   if isinstance(peer.device.model, SersDrive))
 
     def note_address(self, address: int | str | None, mine: bool) -> None:
         """A line's address selects the drive it names for the lines after it and deselects the

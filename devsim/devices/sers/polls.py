@@ -71,7 +71,7 @@ class KeptPolls:
         (Call it only while :attr:`kept` is not None.  :meth:`answer_at_once` repeats these
         checks inline for the same poll as the last.)"""
         model = self.model
-        model.shared_line = self.port.shared_line
+        model.peers = self.port.peers
         kept = self.kept
         if ((data == kept.data or (kept := self.polls.get(data)) is not None)  # type: ignore[union-attr]
                 and model.cfg is kept.cfg and model.logic_alive and not self.master.awaiting
@@ -103,7 +103,7 @@ class KeptPolls:
                 pass  # (the checks below meet it again)
         if data == kept.data:  # (the same poll as the last: what take() checks of it, inline)
             model = self.model
-            model.shared_line = self.port.shared_line
+            model.peers = self.port.peers
             if (model.cfg is not kept.cfg or not model.logic_alive or self.master.awaiting
                     or self.program.editing):
                 return None

@@ -31,6 +31,7 @@ from typing import Any
 import msgspec
 
 from devsim.core.clock import Clock, Timer
+from devsim.core.device import Port
 from devsim.core.parameters import Param, ParameterTable
 
 __all__ = ["RunAhead"]
@@ -40,8 +41,9 @@ _PLAIN = frozenset(_ATOMS)
 _FLAT = _PLAIN | {float}
 _CALLABLES = (types.FunctionType, types.BuiltinFunctionType, types.MethodType, types.BuiltinMethodType,
               types.MethodWrapperType, types.WrapperDescriptorType)
-#: Shared, never changed by a drive: taken down by identity only.
-_SHARED = (ParameterTable, Param, types.MappingProxyType, types.ModuleType, type)
+#: Shared, never changed by a drive: taken down by identity only (a Port: the drive's line and
+#: the other drives on it, which are not the drive's state).
+_SHARED = (ParameterTable, Param, types.MappingProxyType, types.ModuleType, type, Port)
 LOG_LIMIT, LOG_CUT = 10000, 5000  # the event log's length and what is cut off beyond it (core.model)
 
 
