@@ -21,7 +21,15 @@ Listener = Callable[..., None]
 
 
 class Model:
-    """Clock, configuration, memory, signals and the event log every model has."""
+    """Clock, configuration, memory, signals and the event log every model has.
+
+    These are slots, so that a kind's own attributes have the instance dictionary to themselves:
+    CPython 3.11 shares the keys of an instance dictionary among a class's instances only up to
+    29 of them, and past that every device carries a table of its own (1.3 KB a device).
+    """
+
+    __slots__ = ("clock", "config", "nvram", "name", "signals", "booting", "events", "_listeners", "__dict__",
+                 "__weakref__")
 
     def __init__(
         self,

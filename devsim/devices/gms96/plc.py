@@ -178,6 +178,11 @@ def _first_change(sign: Callable[[float], int], low: float, high: float) -> floa
 class Plc:
     """The scripted PLC of one card (manual §1.4, §2.4; spec §4.10): run state, download image, cycle and rules."""
 
+    #: The cycle's own bookkeeping in slots, the rest in the instance dictionary: that one shares
+    #: its keys among the cards while it holds 29 or fewer (see :class:`devsim.core.model.Model`).
+    __slots__ = ("_wrote", "_pae", "_prev_pae", "_fe_pending", "_controller_was_on", "_copies", "_directed",
+                 "_reads_inputs", "__dict__", "__weakref__")
+
     def __init__(
         self,
         *,

@@ -50,6 +50,11 @@ class Halted(Exception):
 class Pcd4(Model):
     """One PCD4 with ``modules`` H3 modules and ``mna`` axes."""
 
+    #: The cycle's own bookkeeping in slots, the rest in the instance dictionary: that one shares
+    #: its keys among the devices while it holds 29 or fewer (see :class:`devsim.core.model.Model`).
+    __slots__ = ("_skipped", "_coast_end", "_coast_reads", "_horizon", "_seen", "_last_cycle", "_calls_before",
+                 "_running_since")
+
     def __init__(self, *, clock: Clock, config: Mapping[str, Any] | None = None,
                  nvram: NonVolatileMemory | None = None, name: str = "") -> None:
         super().__init__(clock=clock, config=config, nvram=nvram, name=name)
