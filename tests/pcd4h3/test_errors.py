@@ -131,6 +131,26 @@ def test_e7_acceleration_during_a_move_switches_the_motor_off(pcd: Station) -> N
     assert abs(pcd.sim.read("axis.1.position") - 100_000) <= 3
 
 
+@pytest.mark.manual("§7.4 FLdRP", "KProp, KInt, KDer, IntL: Integer 0.. 32'767; ausserhalb ein Befehls-Error")
+@pytest.mark.manual("§7.4 FSetPE", "PosEr: Integer 0.. 32'767 Imp.")
+@pytest.mark.parametrize(("registers", "function"), [
+    ({"KProp": 65_636}, "FLdRP"), ({"KProp": -65_536}, "FLdRP"), ({"IntL": 98_303}, "FLdRP"),
+    ({"MCW": 0x041B, "PosEr": 65_546}, "FSetPE"),
+])
+def test_a_register_beyond_16_bits_is_a_command_error_not_its_low_word(pcd: Station, registers: dict[str, int],
+                                                                       function: str) -> None:
+    """The library took the low 16 bits (65 636 loaded a KProp of 100, 65 546 a following-error
+    limit of 10): only a value whose low word is above 7FFFh was refused."""
+    fresh(pcd)
+    chip = pcd.sim.device.model.drives[0].chip
+    loaded = (chip.filter.buffer.kp, chip.filter.buffer.il, chip.error_threshold)
+    load(pcd, **registers)
+    before = pcd.sim.read("axis.1.comers")
+    run(pcd, function)
+    assert pcd.sim.read("axis.1.comers") == before + 1 and transfers(pcd) == []  # refused by the FB itself
+    assert (chip.filter.buffer.kp, chip.filter.buffer.il, chip.error_threshold) == loaded
+
+
 @pytest.mark.manual("§7.4 FLdRP", "SampI 0 … 255: ein Wert ausserhalb erzeugt einen Befehls-Error")
 def test_e8_e9_mcw_reaction_and_sample_interval_out_of_range(pcd: Station) -> None:
     fresh(pcd)

@@ -205,6 +205,14 @@ class H3Axis:
         self._comers()
         raise Refused(self._function)
 
+    def _word16(self, value: int) -> int:
+        """A register as one data word of the chip, or a refusal when it is no 16-bit word (§7.4:
+        a value outside the range is a command error; 65 636 loaded 100, -65 536 loaded 0).  The
+        chip refuses what is above 7FFFh itself."""
+        if not 0 <= value <= 0xFFFF:
+            self._refuse()
+        return value
+
     def _word32(self, value: float) -> int:
         """A converted value as the FB's 32-bit result, or a refusal on overflow."""
         number = round_half_away(value)
@@ -284,8 +292,8 @@ class H3Axis:
         sample = registers.sample_interval
         if not 0 <= sample <= 255:
             self._refuse()
-        words = [value & 0xFFFF for value in (registers.proportional, registers.integral, registers.derivative,
-                                              registers.integration_limit)]
+        words = [self._word16(value) for value in (registers.proportional, registers.integral, registers.derivative,
+                                                   registers.integration_limit)]
         self._send("LFIL", sample << 8 | 0x000F, *words)
 
     def update_regulator(self) -> None:
@@ -302,7 +310,7 @@ class H3Axis:
         reaction = self.registers.control_word & 0xFF
         if reaction not in (0x1A, 0x1B):
             self._refuse()  # G-8
-        self._send("LPES" if reaction == 0x1A else "LPEI", self.registers.position_error_limit & 0xFFFF)
+        self._send("LPES" if reaction == 0x1A else "LPEI", self._word16(self.registers.position_error_limit))
 
     def reset_status_flags(self) -> None:
         """FResSF: RSTI with StaFRR."""
