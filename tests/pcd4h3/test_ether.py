@@ -75,6 +75,31 @@ def test_ev6_after_example_1_and_nak_over_udp(plant: Any) -> None:
     assert udp(url, unsupported + crc16(unsupported).to_bytes(2, "big")) == hexbytes(NAK)
 
 
+def _framed(body: str) -> bytes:
+    """An Ether-S-Bus request, sequence 1, station 1: its length field and CRC made here."""
+    from devsim.devices.pcd4h3.sbus import crc16
+
+    payload = hexbytes(body)
+    frame = (9 + len(payload) + 2).to_bytes(4, "big") + hexbytes("01 00 00 01 00") + payload
+    return frame + crc16(frame).to_bytes(2, "big")
+
+
+@pytest.mark.parametrize("body", [
+    "01 0E 05 00 CF 00 00 00 02 00 00 00 03",  # the count says one register, the data are two
+    "01 0E 09 00 CF 00 00 00 01",  # the count says two registers, the data are one
+    "01 0B 04 00 E4 00 01",  # the count says one more byte than the flag's
+    "01 43 00",  # stop, with a byte after it
+])
+def test_a_telegram_whose_count_disagrees_with_its_data_gets_nak_and_does_nothing(plant: Any, body: str) -> None:
+    """§9.2 (spec): a valid telegram with a bad count is NAK 0001h.  A write of one register that
+    carried two was acknowledged and wrote both; a stop with a byte after it stopped the PCD."""
+    url = plant.port("pcd.ether_udp")
+    before = [plant.runtime.read("pcd", name) for name in ("R.207", "R.208", "F.228")]
+    assert udp(url, _framed(body)) == hexbytes(NAK)
+    assert [plant.runtime.read("pcd", name) for name in ("R.207", "R.208", "F.228")] == before
+    assert udp(url, hexbytes(EV["EV14"][0])) == hexbytes(EV["EV14"][1])  # status: still running
+
+
 def test_broken_datagrams_get_silence_and_the_next_one_an_answer(plant: Any) -> None:
     url = plant.port("pcd.ether_udp")
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:

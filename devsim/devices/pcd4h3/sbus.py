@@ -217,6 +217,8 @@ class Writes(msgspec.Struct, frozen=True):
         p = parameters
         if len(p) < 4:
             return Bad("wrong parameter count")
+        if len(p) != p[0] + 2:  # (on Ether-S-Bus the frame's length bounds the data, not the count)
+            return Bad("the byte count does not match the data")
         address = p[1] << 8 | p[2]
         if self.medium == "register":
             data = p[3:]
@@ -242,7 +244,9 @@ class NoParameters(msgspec.Struct, frozen=True):
     def length(self, parameters: bytes) -> int | None:
         return 0
 
-    def decode(self, parameters: bytes) -> Simple:
+    def decode(self, parameters: bytes) -> Simple | Bad:
+        if parameters:  # (bytes after it in an Ether-S-Bus frame)
+            return Bad(f"{self.name} takes no parameters")
         return Simple(self.name)
 
 
