@@ -103,6 +103,35 @@ def test_flddr_is_relative_to_the_current_target(pcd: Station) -> None:
     assert pcd.sim.read("axis.1.position") == pytest.approx(40_000 - 80_000, abs=3)
 
 
+def test_flddr_after_a_pending_fldda_adds_to_it(pcd: Station) -> None:
+    """Spec G-30 (the manual's „momentane Zielposition“ does not say): a relative load adds to a
+    value loaded and not yet started.  1000, then 2000 loaded and +500 relative: 2500 (was 1500)."""
+    load(pcd, DestP=1000)
+    run(pcd, "FLdDA", "FStart")
+    settled(pcd)
+    load(pcd, DestP=2000)
+    run(pcd, "FLdDA")
+    load(pcd, DestP=500)
+    run(pcd, "FLdDR", "FStart")
+    settled(pcd)
+    assert read(pcd, "FRdAP", "RActP") == pytest.approx(2500, abs=1)
+
+
+@pytest.mark.manual("§7.4 FLdVR", "Relativ laden heisst, der Wert ist bezogen auf die momentane "
+                    "Sollgeschwindigkeit")
+def test_fldvr_at_rest_adds_to_the_momentary_set_velocity(pcd: Station) -> None:
+    """At rest the set velocity (FRdSV) is 0, so +100 cruises at 100, not at the last loaded
+    Veloc (500) + 100."""
+    load(pcd, DestP=1000)
+    run(pcd, "FLdDA", "FStart")
+    settled(pcd)
+    assert read(pcd, "FRdSV", "RSetV") == 0
+    load(pcd, Veloc=100, DestP=3000)
+    run(pcd, "FLdVR", "FLdDA", "FStart")
+    pcd.sim.advance(3.0)  # well into the cruise
+    assert read(pcd, "FRdSV", "RSetV") == pytest.approx(100, abs=1)
+
+
 @pytest.mark.manual("§7.4 FLdVA", "die neue geladene Geschwindigkeit wird erst beim nächsten Startbefehl ins "
                     "Arbeitsregister übernommen")
 def test_fldva_acts_at_the_next_start(pcd: Station) -> None:

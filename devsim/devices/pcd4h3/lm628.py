@@ -77,7 +77,9 @@ class Lm628:
         self.stop_on_error = False
         self.error_threshold = 0x7FFF
         self.breakpoint: int | None = None
-        self.accel_loaded = False
+        #: What LTRJ loaded since the last start (its control word's bits 5, 3, 1: acceleration,
+        #: velocity, position): the pending values a relative load adds to (G-30).
+        self.loaded = 0
         self.started = False  # a real trajectory start since RESET (relative loads need one, G-4)
         self.index_armed = False
         self.index_position = 0
@@ -128,7 +130,7 @@ class Lm628:
         self.filter = Filter(dac_bits=8)
         self.flags, self.mask, self.motor_off, self.stop_on_error = 0, INTERRUPTS & ~BREAKPOINT, True, False
         self.error_threshold = 0x7FFF
-        self.breakpoint, self.accel_loaded, self.on_target, self.started = None, False, False, False
+        self.breakpoint, self.loaded, self.on_target, self.started = None, 0, False, False
         self.index_armed, self._stop = False, 0
         self.define_home()
 
@@ -216,29 +218,31 @@ class Lm628:
             self.error()
             return
         items = iter(values)
-        b = self.buffer
+        b, profile, loaded = self.buffer, self.profile, self.loaded
         acceleration, velocity, position = b.acceleration, b.velocity, b.position
-        if control & 0x20:
+        if control & 0x20:  # relative: to a value loaded since the start, else the working one (G-30)
             value = next(items)
-            acceleration = acceleration + signed32(value) if control & 0x10 else value & 0xFFFF_FFFF
-        if control & 0x08:
+            base = acceleration if loaded & 0x20 else profile.acceleration
+            acceleration = base + signed32(value) if control & 0x10 else value & 0xFFFF_FFFF
+        if control & 0x08:  # (§7.4 FLdVR: "bezogen auf die momentane Sollgeschwindigkeit")
             value = next(items)
-            velocity = velocity + signed32(value) if control & 0x04 else value & 0xFFFF_FFFF
-        if control & 0x02:
+            base = velocity if loaded & 0x08 else abs(profile.velocity)
+            velocity = base + signed32(value) if control & 0x04 else value & 0xFFFF_FFFF
+        if control & 0x02:  # (§7.4 FLdDR: "bezogen auf die momentane Zielposition")
             value = signed32(next(items))
-            position = (self.profile.target >> 16) + value if control & 0x01 else value
+            base = position if loaded & 0x02 else profile.target >> 16
+            position = base + value if control & 0x01 else value
         if not (0 <= acceleration <= VALUE_MAX and 0 <= velocity <= VALUE_MAX and _in_range(position)):
             self.error()
             return
-        if control & 0x20:
-            self.accel_loaded = True
+        self.loaded = loaded | control & 0x2A
         self.buffer = Trajectory(acceleration, velocity, position, bool(control & 0x0800), bool(control & 0x1000))
         self._stop = control & 0x0700
 
     def start(self) -> None:
         """STT: take over the buffers; a stop in the control word acts now."""
         stop = self._stop
-        if self.accel_loaded and not self.profile.complete and not self.motor_off and self.profile.velocity:
+        if self.loaded & 0x20 and not self.profile.complete and not self.motor_off and self.profile.velocity:
             self.error()  # acceleration changed while moving (§3.5.3)
             return
         if stop & 0x0100:
@@ -254,7 +258,7 @@ class Lm628:
         if stop & 0x0400:
             self.profile.stop_smoothly()
             return
-        self.motor_off, self.accel_loaded, self.on_target, self.started = False, False, False, True
+        self.motor_off, self.loaded, self.on_target, self.started = False, 0, False, True
         self.flags &= ~COMPLETE
         self.profile.start(self.buffer)
         if self.profile.complete:
@@ -293,7 +297,7 @@ class Lm628:
         return ((self.status & INTERRUPTS) | int(self.index_armed) | int(self.motor_off) << 7
                 | int(self.filter.dac_bits == 8) << 8 | int(self.stop_on_error) << 9 | int(self.on_target) << 10
                 | int(p.velocity_mode) << 11 | int(p.forward) << 12 | int(self.udf_sample) << 13
-                | int(self.accel_loaded) << 14)
+                | int(bool(self.loaded & 0x20)) << 14)
 
     @property
     def real_velocity(self) -> int:
