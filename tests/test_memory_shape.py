@@ -18,12 +18,21 @@ from devsim.runtime import Runtime
 SHARED_KEYS = 29
 
 
-def _parts(model: Any) -> Iterator[tuple[str, Any]]:
-    """The model and the parts it holds (devsim objects with an instance dictionary)."""
-    yield "model", model
-    for name, value in vars(model).items():
-        if type(value).__module__.startswith("devsim.") and hasattr(value, "__dict__"):
-            yield f"model.{name}", value
+def _parts(x: Any, path: str = "model", depth: int = 3, seen: set[int] | None = None) -> Iterator[tuple[str, Any]]:
+    """The model and the parts it holds, and theirs, to ``depth`` (devsim objects with an instance
+    dictionary, also in lists: a PCD4.H3's drives and their LM628 chips)."""
+    seen = set() if seen is None else seen
+    if id(x) in seen:
+        return
+    seen.add(id(x))
+    yield path, x
+    if depth == 0:
+        return
+    for name, value in vars(x).items():
+        for index, item in enumerate(value if type(value) in (list, tuple) else [value]):
+            if type(item).__module__.startswith("devsim.") and hasattr(item, "__dict__"):
+                where = f"{path}.{name}" + (f"[{index}]" if item is not value else "")
+                yield from _parts(item, where, depth - 1, seen)
 
 
 @pytest.mark.parametrize("kind", sorted(set(kinds()) - {"stub"}))

@@ -87,6 +87,11 @@ class AxisUnit:
     """Axis page 1 … 3 (spec §4.1.1): the state FB164 shows, the motion primitives the modes and
     programs use (manual §2.8, spec §5.3–§5.8) and the limit switches (spec §5.7)."""
 
+    #: The motion bookkeeping in slots, the rest in the instance dictionary: that one shares its
+    #: keys among the axes while it holds 29 or fewer (see :class:`devsim.core.model.Model`).
+    __slots__ = ("_d", "_decel_at", "_done", "_follows", "_h0", "_mech0", "_previous_md", "_sense", "_switches",
+                 "_x0", "pattern_base", "sw_watch", "__dict__", "__weakref__")
+
     def __init__(self, number: int, geometry: dict[str, Any], *, clock: Clock, signals: SignalBank,
                  events: AxisEvents, basp: Basp, wiring_faults: Set[str]) -> None:
         self.number, self.clock, self.signals, self.events = number, clock, signals, events
