@@ -109,6 +109,22 @@ def test_a0_1_turns_on_exactly_n28_after_the_set_point_stops(referenced: Plant) 
     assert referenced.read("output.A0.1") is True
 
 
+@pytest.mark.manual("§2.3.1 N", "P2=27, positive Angabe: Ausgang A 0.1 repräsentiert In-Position")
+def test_a0_1_goes_off_when_a_move_starts(referenced: Plant) -> None:
+    """The output the machine sees, as the card's own T1;2 shows it: off while the axis moves
+    (it stayed on from the last standstill to the end of the move)."""
+    c = referenced.client()
+    send(c, "N", 5, 27)
+    send(c, "N", 50, 28)
+    referenced.advance(0.2)
+    assert referenced.read("output.A0.1") is True  # standing in the window
+    send(c, "A", 4000)
+    referenced.advance(0.3)
+    assert referenced.read("motion") is True and referenced.read("output.A0.1") is False
+    referenced.advance(5.0)
+    assert referenced.read("motion") is False and referenced.read("output.A0.1") is True
+
+
 def test_h2_without_window_completes_when_the_set_point_stops(referenced: Plant) -> None:
     c = referenced.client()
     dev = referenced.device()

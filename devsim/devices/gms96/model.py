@@ -288,9 +288,11 @@ class Gms96Card(Model):
         self.changed()
 
     def plan_changed(self) -> None:
-        """The indexer planned anew: H7 and in-position are solved again."""
+        """The indexer planned anew: H7 and in-position are solved again, and the outputs follow
+        (A0.1, in position, goes off as a move starts: manual §2.3.1 N, P2=27)."""
         self.torque.arm()
         self.outputs.arm_in_position()
+        self.changed()
 
     def arm_torque_abort(self) -> None:
         self.torque.arm()
