@@ -395,7 +395,7 @@ def _connect(url: str) -> socket.socket:
 def _ether_host(url: str, first_sequence: int) -> list[bytes]:
     """Write R 100 := 1234, read it back: the whole reply frames."""
     with _connect(url) as sock:
-        return [_ether_ask(sock, first_sequence, bytes([1, 0x0E, 0]) + struct.pack(">Hi", 100, 1234)),
+        return [_ether_ask(sock, first_sequence, bytes([1, 0x0E, 5]) + struct.pack(">Hi", 100, 1234)),
                 _ether_ask(sock, first_sequence + 1, bytes([1, 0x06, 0]) + struct.pack(">H", 100))]
 
 
@@ -447,7 +447,7 @@ def test_a_tolerated_match_keeps_the_recorded_order(tmp_path: Path, procs: list[
         read = []
         with _connect(url) as sock:
             for n, value in enumerate(values):
-                _ether_ask(sock, first + 2 * n, bytes([1, 0x0E, 0]) + struct.pack(">Hi", 100, value))
+                _ether_ask(sock, first + 2 * n, bytes([1, 0x0E, 5]) + struct.pack(">Hi", 100, value))
                 reply = _ether_ask(sock, first + 2 * n + 1, bytes([1, 0x06, 0]) + struct.pack(">H", 100))
                 read.append(int.from_bytes(reply[9:-2], "big", signed=True))
         return read

@@ -288,8 +288,7 @@ class Gms96Card(Model):
         self.changed()
 
     def plan_changed(self) -> None:
-        """The indexer planned anew: H7 and in-position are solved again, and the outputs follow
-        (A0.1, in position, goes off as a move starts: manual §2.3.1 N, P2=27)."""
+        """The indexer planned anew: H7 and in-position solved again, the outputs follow (A0.1)."""
         self.torque.arm()
         self.outputs.arm_in_position()
         self.changed()
@@ -367,8 +366,7 @@ class Gms96Card(Model):
         self.image.set_marker(0, 2, False)
 
     def speed_changed(self) -> None:
-        """An override or the G95 spindle speed changed on receipt: the running plan follows, waits
-        re-check (spec §5.2)."""
+        """An override or the G95 spindle speed changed: the plan follows, waits re-check (spec §5.2)."""
         self.indexer.replan()
         self.changed()
 

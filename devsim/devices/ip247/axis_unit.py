@@ -83,14 +83,17 @@ class ReferenceContext(Protocol):
     def cancel(self) -> None: ...
 
 
+#: An axis page's motion bookkeeping in slots, the rest in its instance dictionary: that one shares
+#: its keys among the axes while it holds 29 or fewer (see :class:`devsim.core.model.Model`).
+_SLOTS = ("_d", "_decel_at", "_done", "_follows", "_h0", "_mech0", "_previous_md", "_sense", "_switches", "_x0",
+          "pattern_base", "sw_watch", "__dict__", "__weakref__")
+
+
 class AxisUnit:
     """Axis page 1 … 3 (spec §4.1.1): the state FB164 shows, the motion primitives the modes and
     programs use (manual §2.8, spec §5.3–§5.8) and the limit switches (spec §5.7)."""
 
-    #: The motion bookkeeping in slots, the rest in the instance dictionary: that one shares its
-    #: keys among the axes while it holds 29 or fewer (see :class:`devsim.core.model.Model`).
-    __slots__ = ("_d", "_decel_at", "_done", "_follows", "_h0", "_mech0", "_previous_md", "_sense", "_switches",
-                 "_x0", "pattern_base", "sw_watch", "__dict__", "__weakref__")
+    __slots__ = _SLOTS
 
     def __init__(self, number: int, geometry: dict[str, Any], *, clock: Clock, signals: SignalBank,
                  events: AxisEvents, basp: Basp, wiring_faults: Set[str]) -> None:
@@ -411,8 +414,7 @@ class AxisUnit:
                                 lambda active, n=name: self._switch(n, active))
 
     def _switch(self, name: str, actuated: bool, polarity: int | None = None) -> None:
-        """A switch the axis geometry drives: its input's level as wired for the MD polarity
-        (an NC contact is at 24 V while not actuated)."""
+        """A switch the geometry drives: its level as wired for the MD polarity (NC: 24 V at rest)."""
         if polarity is None:
             polarity = self.md.limit_polarity if self.md is not None else 0
         level = actuated if name == "cam" or polarity == 0 else not actuated
