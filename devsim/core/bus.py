@@ -35,7 +35,6 @@ class Bus:
         CHANGES.count += 1  # (a door: devsim.core.changes; the members' lines become shared)
         peers = tuple(self.devices)
         for member in self.devices:
-            member.shared_line = len(self.devices) > 1
             member.peers = peers
             member.attach(lambda data, source=member: self._emit(source, data))
 

@@ -151,8 +151,7 @@ class Standing:
 class Port:
     """One serial port of a device, as a line or a bus sees it (slots: every poll passes through)."""
 
-    __slots__ = ("device", "spec", "name", "face", "_write", "_batch", "shared_line", "peers", "_mute", "at_once",
-                 "standing")
+    __slots__ = ("device", "spec", "name", "face", "_write", "_batch", "peers", "_mute", "at_once", "standing")
 
     def __init__(self, device: Device, spec: PortDef) -> None:
         self.device = device
@@ -167,10 +166,13 @@ class Port:
         self._mute = spec.receive_only  # (what send asks at every answer)
         #: The reply the face holds standing (:class:`Standing`; none until it holds one)
         self.standing = Standing()
-        #: True when other devices share the line (RS-485 multidrop); set by the bus.
-        self.shared_line = False
         #: The ports on this port's line, this one too (set by the bus; empty: a line of its own).
         self.peers: tuple[Port, ...] = ()
+
+    @property
+    def shared_line(self) -> bool:
+        """Other devices share the line (RS-485 multidrop)."""
+        return len(self.peers) > 1
 
     @property
     def hears_others(self) -> bool:

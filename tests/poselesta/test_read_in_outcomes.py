@@ -123,9 +123,9 @@ def test_a_tape_is_saved_once_per_piece_the_host_sends_not_once_per_block(cnc: A
 
 
 def test_a_wipe_in_the_turn_that_read_blocks_in_leaves_them_wiped(cnc: Any) -> None:
-    """The blocks of a write are saved at the end of the loop's turn; a power cycle with a wipe in
-    that same turn (a control request handled right after the bytes) must not write them back into
-    the wiped memory."""
+    """A power cycle with a wipe handled right after a chunk of a read-in, in the same turn of the
+    loop: the chunk's blocks are gone with the rest (a save deferred to the end of the turn wrote
+    them back into the wiped memory)."""
     await_tape(cnc)
     tape = encode("%\r\nN1X1\r\nN2X2\r\n", True)
     device = cnc.device

@@ -12,6 +12,7 @@ from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.sers import SersDevice, codec
 from devsim.devices.sers.statements import parse
 from tests.sers.framer_oracle import framer_events
+from tests.sers.lines import share_line
 
 ALPHABET = "#*?=<>!:.,;-+/&|^\" \t\r\n0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
 COMMANDS = ["#ON", "#OFF", "#E", "#S", "#H", "#W=360", "#V=1000", "#P11?", "#P12=0", "#RS", "#LS",
@@ -193,7 +194,7 @@ STATES = [b"#P1017=0\r", b"#P1017=1\r", b"#P1017=2\r", b"#2\r", b"#1\r", b"#Q\r"
 
 def _line_by_line(lines: list[bytes], bytewise: bool, pauses: list[float], shared: bool) -> tuple[object, ...]:
     device, clock, out, _nvram = _device()
-    device.main.shared_line = shared
+    share_line(device, shared)
     answers = []
     for i, line in enumerate(lines):
         for piece in ([line[k : k + 1] for k in range(len(line))] if bytewise else [line]):

@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from devsim.core.clock import VirtualClock
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.sers import SersDevice
+from tests.sers.lines import share_line
 
 # Lines that change how the drive answers noise: echo modes, English messages, outputs that
 # show errors and warnings, programming mode, selection, broadcast.
@@ -30,7 +31,7 @@ def _run(stream: bytes, cuts: list[int], address: int = 1, shared: bool = False,
     cycled once the bytes up to each offset in ``cycles`` arrived (a chunk ends there)."""
     device = SersDevice(clock=VirtualClock(), config={"boot_time": 0, "address": address},
                         nvram=NonVolatileMemory(None))
-    device.main.shared_line = shared
+    share_line(device, shared)
     model = device.model
     out = bytearray()
     device.attach(out.extend)

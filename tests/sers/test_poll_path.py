@@ -15,6 +15,7 @@ from devsim.core.clock import VirtualClock
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.sers import SersDevice, codec
 from devsim.devices.sers.line import KeptPoll
+from tests.sers.lines import share_line
 
 POLLS = [b"#P11?\r", b"#1P11?\r", b"#P12?\r", b"#P11?\n", b"#1 P11?\r", b"#P336?\r", b"#P1017?\r", b"#C1?\r",
          b"#P51?\r", b"#V?\r", b"#P1?\r", b"#Z?\r", b"#P9999?\r", b"#P11??\r", b"#O1?\r", b"#P0?\r", b"#2P11?\r",
@@ -62,7 +63,7 @@ def _run(steps: list[tuple[str, float, int]], whole: bool, shared: bool, setup: 
     clock = VirtualClock()
     device = SersDevice(clock=clock, config={"boot_time": boot_time, "address": address},
                         nvram=NonVolatileMemory(None))
-    device.main.shared_line = shared
+    share_line(device, shared)
     model = device.model
     out = bytearray()
     device.attach(out.extend)
@@ -88,7 +89,7 @@ def _run(steps: list[tuple[str, float, int]], whole: bool, shared: bool, setup: 
             elif kind == "supply":  # (the doors a plant's control goes through: devsim.core.changes)
                 device.fault("power", not value)
             elif kind == "share":
-                device.main.shared_line = bool(value)  # (what a bus does, counted as a bus counts it)
+                share_line(device, bool(value))  # (what a bus does, counted as a bus counts it)
                 CHANGES.count += 1
             elif value:
                 device.fault("power", True)

@@ -124,8 +124,7 @@ class SerialLinks:
         if catalogue and function.direction == "input" and not self._signals.get("key_switch"):
             self._screen.record("key_switch_locked")
             raise BadValue("the key switch is locked: the parameter catalogue cannot be read in")
-        if function.baud(self._params.baud_code(port), self._options.variant) is None:  # (its own rate:
-            # the printer's and POS II cassette's P68 does not set, §2.6.2.1, §2.6.2.2)
+        if self._rate(function) is None:
             self._screen.show(WERTBEREICHES_UEBERLAUF)
             raise BadValue(f"P{self._params.baud_code_key(port)}: baud rate code not available on "
                            f"POS {self._options.variant}")
@@ -149,7 +148,7 @@ class SerialLinks:
         catalogue = program == CATALOGUE
         if catalogue:
             if self._options.variant == "III":  # the line stays as it was at the start (spec §3.9)
-                line = (function.baud(self._params.baud_code(port), self._options.variant), self.iso(port))
+                line = (self._rate(function), self.iso(port))
                 if self._params.baud_code(port) > 3:
                     self._screen.show(WERTBEREICHES_UEBERLAUF)
                     raise BadValue("the catalogue is read at up to 1200 baud (P68/P70 ≤ 3)")
@@ -271,10 +270,14 @@ class SerialLinks:
         running = self.transfers.get(port)
         if isinstance(running, ReadIn) and running.line is not None:
             return running.line[0]  # the line of this read-in, captured at its start
-        code = self._params.baud_code(port)
         if running is not None:
-            return running.function.baud(code, self._options.variant)
-        return baud_for_code(code, self._options.variant)
+            return self._rate(running.function)
+        return baud_for_code(self._params.baud_code(port), self._options.variant)
+
+    def _rate(self, function: Function) -> int | None:
+        """The baud rate of a transfer function: its own rule on the port's code (the printer's and
+        the POS II cassette's, which P68 does not set, §2.6.2.1, §2.6.2.2), None when there is none."""
+        return function.baud(self._params.baud_code(function.port), self._options.variant)
 
     # -- V6 modem lines ---------------------------------------------------------------------------
     def _v6_lines(self, on: bool, record: bool = True) -> None:

@@ -183,7 +183,7 @@ class PoselestaCnc(Model):
         self._power_on()
 
     def close(self) -> None:
-        self.memory.flush()  # (blocks read in this turn of the loop: before a wipe, before the end)
+        self.memory.flush()  # (blocks stored and not yet saved: before a wipe, before the end)
         self.terminals.cancel()
         self.panel.cancel()
         for port in ("v6", "v7"):

@@ -56,7 +56,6 @@ class ProgramMemory:
 
     # -- memory -------------------------------------------------------------------------------
     def load(self) -> None:
-        self.flush()  # (a power cycle right after a chunk: its blocks were stored)
         nvram = self._nvram
         stored = nvram.get("programs") or {}
         self.programs = {int(p): {int(b["N"]): Block.from_json(b) for b in blocks} for p, blocks in stored.items()}
@@ -71,8 +70,8 @@ class ProgramMemory:
         )
 
     def flush(self) -> None:
-        """Write the blocks stored since the last save (the end of a chunk of a read-in; the
-        memory read or handed over)."""
+        """Write the blocks stored since the last save (the links, at the end of each chunk of a
+        read-in; the control, as it closes)."""
         if self._unsaved:
             self._save()
 
