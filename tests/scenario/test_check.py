@@ -51,6 +51,15 @@ def check(*paths: Path) -> subprocess.CompletedProcess[str]:
                           capture_output=True, text=True, timeout=60)
 
 
+def mistakes(tmp_path: Path, text: str) -> tuple[Path, list[str]]:
+    """``text`` as a file that `devsim check` refuses (status 3): the file and the lines it says."""
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(text, encoding="utf-8")
+    done = check(bad)
+    assert done.returncode == exits.BAD_FILE, done.stdout
+    return bad, done.stderr.splitlines()
+
+
 def test_every_mistake_of_every_file_in_one_pass(tmp_path: Path) -> None:
     scenario, plant, good = tmp_path / "s.yaml", tmp_path / "plant.yaml", tmp_path / "good.yaml"
     scenario.write_text(SCENARIO)
@@ -139,25 +148,18 @@ def test_each_part_of_a_step_is_checked_against_its_own_devices_kind(tmp_path: P
                     "    expect_state: {device: g, name: memory_status, equals: 0}\n")
     done = check(good)
     assert done.returncode == 0, done.stderr
-    bad = tmp_path / "bad.yaml"
-    bad.write_text("devices:\n  - {name: s, kind: sers}\n  - {name: g, kind: gms96}\nsteps:\n"
-                   "  - when: {device: s, name: input.I3, equals: false}\n"
-                   "    expect_state: {device: g, name: input.I3, equals: true}\n")
-    done = check(bad)
-    assert done.returncode == exits.BAD_FILE
-    [line] = done.stderr.splitlines()
+    bad, [line] = mistakes(tmp_path, "devices:\n  - {name: s, kind: sers}\n  - {name: g, kind: gms96}\nsteps:\n"
+                           "  - when: {device: s, name: input.I3, equals: false}\n"
+                           "    expect_state: {device: g, name: input.I3, equals: true}\n")
     assert line.startswith(f"{bad}:6: steps.1.expect_state.name: g has no 'input.I3'"), line
 
 
 def test_a_traffic_regex_and_a_character_that_is_no_byte_are_mistakes_of_the_file(tmp_path: Path) -> None:
     """Both passed `check` and then stopped the run with a traceback (re.error, UnicodeEncodeError)."""
-    bad = tmp_path / "bad.yaml"
-    bad.write_text('devices:\n  - {name: x, kind: sers}\nsteps:\n  - send: "#1\\r"\n'
-                   '  - expect_traffic: {regex: "P11=(", direction: device}\n  - expect: {bytes: "\u20ac"}\n'
-                   '  - send: "\u20ac"\n', encoding="utf-8")
-    done = check(bad)
-    assert done.returncode == exits.BAD_FILE
-    assert done.stderr.splitlines() == [
+    bad, lines = mistakes(tmp_path, 'devices:\n  - {name: x, kind: sers}\nsteps:\n  - send: "#1\\r"\n'
+                          '  - expect_traffic: {regex: "P11=(", direction: device}\n  - expect: {bytes: "\u20ac"}\n'
+                          '  - send: "\u20ac"\n')
+    assert lines == [
         f"{bad}:5: steps.2.expect_traffic: bad regex: missing ), unterminated subpattern at position 4",
         f"{bad}:6: steps.3.expect: '\u20ac' is no byte: the line's text is latin-1 (one character a byte, \\xNN for any byte)",
         f"{bad}:7: steps.4.send: '\u20ac' is no byte: the line's text is latin-1 (one character a byte, \\xNN for any byte)",
@@ -167,14 +169,11 @@ def test_a_traffic_regex_and_a_character_that_is_no_byte_are_mistakes_of_the_fil
 def test_an_expectation_that_cannot_fail_is_a_mistake_of_the_file(tmp_path: Path) -> None:
     """An empty answer, or a regex that matches nothing at all, passed whatever the device said (a
     user's ``expect: ""`` for "no answer" passed after the drive had answered)."""
-    bad = tmp_path / "bad.yaml"
-    bad.write_text('devices:\n  - {name: x, kind: sers}\nsteps:\n  - send: "#1 ON\\r"\n  - expect: ""\n'
-                   '  - expect: {regex: "(ok)?"}\n  - expect_traffic: {regex: "", count: 0}\n'
-                   '  - expect_traffic: {regex: "ok", direction: device, count: 0}\n')
-    done = check(bad)
-    assert done.returncode == exits.BAD_FILE
+    bad, lines = mistakes(tmp_path, 'devices:\n  - {name: x, kind: sers}\nsteps:\n  - send: "#1 ON\\r"\n'
+                          '  - expect: ""\n  - expect: {regex: "(ok)?"}\n  - expect_traffic: {regex: "", count: 0}\n'
+                          '  - expect_traffic: {regex: "ok", direction: device, count: 0}\n')
     silence = "(that it says nothing: expect_traffic with direction: device and count: 0)"
-    assert done.stderr.splitlines() == [
+    assert lines == [
         f"{bad}:5: steps.2.expect: an empty answer is there at once, whatever the device says {silence}",
         f"{bad}:6: steps.3.expect: the regex matches nothing at all, so it holds at once, whatever the device says "
         f"{silence}",
@@ -185,13 +184,10 @@ def test_an_expectation_that_cannot_fail_is_a_mistake_of_the_file(tmp_path: Path
 def test_what_the_loader_fills_in_is_no_key_of_the_file(tmp_path: Path) -> None:
     """A step's ``line`` and a scenario's ``path`` (its place, filled in by the loader): a
     ``- line: "#E"`` step was told to be an integer, a ``path:`` was taken and overwritten."""
-    bad = tmp_path / "bad.yaml"
-    bad.write_text('path: /etc/passwd\ndevices:\n  - {name: x, kind: sers}\nsteps:\n  - line: "#E"\n'
-                   '  - wait: 1s\n    line: 5\n')
-    done = check(bad)
-    assert done.returncode == exits.BAD_FILE
-    assert done.stderr.splitlines() == [f"{bad}:1: path: unknown field", f"{bad}:5: steps.1.line: unknown field",
-                                        f"{bad}:7: steps.2.line: unknown field"]
+    bad, lines = mistakes(tmp_path, 'path: /etc/passwd\ndevices:\n  - {name: x, kind: sers}\nsteps:\n'
+                          '  - line: "#E"\n  - wait: 1s\n    line: 5\n')
+    assert lines == [f"{bad}:1: path: unknown field", f"{bad}:5: steps.1.line: unknown field",
+                     f"{bad}:7: steps.2.line: unknown field"]
 
 
 def test_an_empty_link_is_a_mistake_of_the_file(tmp_path: Path) -> None:
@@ -206,17 +202,14 @@ def test_an_empty_link_is_a_mistake_of_the_file(tmp_path: Path) -> None:
 def test_two_ports_on_one_link_or_one_tcp_port_are_a_mistake_of_the_file(tmp_path: Path) -> None:
     """They passed `check`; `up` then said the link was held by a live process (itself) and to
     choose another --link (no option of up), or 'Address already in use' (status 6)."""
-    bad = tmp_path / "bad.yaml"
     link = tmp_path / "tty1"
-    bad.write_text(f"devices:\n  - {{name: a, kind: sers, transport: {{tcp: {{port: 23456}}}}}}\n"
-                   f"  - {{name: b, kind: sers, transport: {{tcp: {{port: 23456}}}}}}\n"
-                   f"  - {{name: c, kind: sers, transport: {{pty: {{link: {link}}}}}}}\n"
-                   f"  - {{name: d, kind: sers, transport: {{pty: {{link: {link}}}}}}}\n"
-                   "  - {name: e, kind: sers, transport: {tcp: {port: 0}}}\n"
-                   "  - {name: f, kind: sers, transport: {tcp: {port: 0}}}\n")
-    done = check(bad)
-    assert done.returncode == exits.BAD_FILE
-    assert done.stderr.splitlines() == [
+    bad, lines = mistakes(tmp_path, f"devices:\n  - {{name: a, kind: sers, transport: {{tcp: {{port: 23456}}}}}}\n"
+                          f"  - {{name: b, kind: sers, transport: {{tcp: {{port: 23456}}}}}}\n"
+                          f"  - {{name: c, kind: sers, transport: {{pty: {{link: {link}}}}}}}\n"
+                          f"  - {{name: d, kind: sers, transport: {{pty: {{link: {link}}}}}}}\n"
+                          "  - {name: e, kind: sers, transport: {tcp: {port: 0}}}\n"
+                          "  - {name: f, kind: sers, transport: {tcp: {port: 0}}}\n")
+    assert lines == [
         f"{bad}:3: devices.2.transport: tcp port 127.0.0.1:23456 is taken by devices.1.transport already",
         f"{bad}:5: devices.4.transport: link {link} is taken by devices.3.transport already",
     ]
@@ -234,12 +227,10 @@ def test_every_bad_parameter_of_a_config_at_its_own_line(tmp_path: Path) -> None
     """A range rule on each entry of a mapping (Keys' entry): every parameter out of its range,
     at its own line and name (only the first was named, at the params: line, and none while
     another key was unknown)."""
-    bad = tmp_path / "bad.yaml"
-    bad.write_text("devices:\n  - name: y\n    kind: sers\n    config:\n      params:\n        V: -5\n        A: -7\n"
-                   "        P9999: 1\n  - name: g\n    kind: gms96\n    config: {params: {N10: 99999999, N11: 1}}\n")
-    done = check(bad)
-    assert done.returncode == exits.BAD_FILE
-    assert done.stderr.splitlines() == [
+    bad, lines = mistakes(tmp_path, "devices:\n  - name: y\n    kind: sers\n    config:\n      params:\n"
+                          "        V: -5\n        A: -7\n        P9999: 1\n  - name: g\n    kind: gms96\n"
+                          "    config: {params: {N10: 99999999, N11: 1}}\n")
+    assert lines == [
         f"{bad}:6: devices.1.config.params.V: -5 is below the minimum 0",
         f"{bad}:7: devices.1.config.params.A: -7 is below the minimum 2",
         f"{bad}:8: devices.1.config.params.P9999: no such parameter",
