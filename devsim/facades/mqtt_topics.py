@@ -144,13 +144,26 @@ COMMANDS: dict[str, tuple[Command, bool]] = {
 
 
 def command_filters(plant: str, devices: Iterable[str]) -> list[str]:
-    """The subscriptions that bring a plant's commands."""
-    return [f"{prefix(plant, device)}/{verb}{'/+' if arg else ''}"
-            for device in devices for verb, (_fn, arg) in COMMANDS.items()]
+    """The subscriptions that bring a plant's commands: each verb with every level below it
+    (``…/set/#`` also brings ``…/set``), so that a command with a level too many or too few is
+    answered on ``…/error`` rather than lost at the broker."""
+    return [f"{prefix(plant, device)}/{verb}/#" for device in devices for verb in COMMANDS]
+
+
+def _misshapen(verb: str, takes_arg: bool) -> Command:
+    """The handler of a command topic of a known verb with the wrong number of levels: it refuses."""
+    shape = f"{verb}/<{'point' if verb == 'set' else 'kind'}>" if takes_arg else verb
+
+    def refuse(_device: Device, _arg: str, _payload: bytes) -> rq.ControlRequest:
+        raise ValueError(f"a {verb} command's topic ends in {shape}")
+
+    return refuse
 
 
 def parse_command(topic: str, plant: str) -> tuple[str, Command, str] | None:
-    """``devsim/<plant>/<device>/<verb>[/<arg>]`` → (device, handler, arg), or None."""
+    """``devsim/<plant>/<device>/<verb>[/<arg>]`` → (device, handler, arg), or None for a topic
+    that is no command of the plant; a known verb with a level too many or too few gets a
+    handler that refuses it (its error names the topic's shape)."""
     parts = topic.split("/")
     if len(parts) < 4 or parts[0] != ROOT or parts[1] != plant:
         return None
@@ -158,6 +171,6 @@ def parse_command(topic: str, plant: str) -> tuple[str, Command, str] | None:
     if entry is None:
         return None
     handler, takes_arg = entry
-    if len(parts) != (5 if takes_arg else 4):
-        return None
+    if len(parts) != (5 if takes_arg else 4) or (takes_arg and not parts[4]):
+        return parts[2], _misshapen(parts[3], takes_arg), ""
     return parts[2], handler, parts[4] if takes_arg else ""

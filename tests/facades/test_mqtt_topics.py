@@ -49,9 +49,19 @@ def test_command_topics() -> None:
     device, _handler, arg = parse_command("devsim/p/x/set/input.I1", "p") or ("", None, "")
     assert (device, arg) == ("x", "input.I1")
     assert parse_command("devsim/p/x/power_cycle", "p") is not None
-    for topic in ("devsim/q/x/set/a", "devsim/p/x/set", "devsim/p/x/power_cycle/now", "devsim/p/x/state/a",
-                  "other/p/x/set/a"):
+    for topic in ("devsim/q/x/set/a", "devsim/p/x/state/a", "other/p/x/set/a", "devsim/p/x"):
         assert parse_command(topic, "p") is None, topic
+
+
+@pytest.mark.parametrize(("topic", "shape"), [
+    ("devsim/p/x/set", "set/<point>"), ("devsim/p/x/set/", "set/<point>"), ("devsim/p/x/set/input/I1", "set/<point>"),
+    ("devsim/p/x/fault/a/b", "fault/<kind>"), ("devsim/p/x/power_cycle/now", "power_cycle"),
+])
+def test_a_command_with_levels_too_many_or_too_few_is_refused(topic: str, shape: str) -> None:
+    found = parse_command(topic, "p")
+    assert found is not None and found[0] == "x"
+    with pytest.raises(ValueError, match=f"topic ends in {shape}$"):
+        found[1](None, found[2], b"true")  # type: ignore[arg-type]
 
 
 def test_payloads_are_json_or_plain_text() -> None:
@@ -128,8 +138,8 @@ def test_topics_and_values() -> None:
     assert encode({"a": [1, 2.5, None, True]}) == b'{"a":[1,2.5,null,true]}'
     assert decode_value(b"\xff") == "\ufffd"  # broken UTF-8 is replaced, not refused
     assert command_filters("p", ["a", "b"]) == [
-        "devsim/p/a/set/+", "devsim/p/a/fault/+", "devsim/p/a/power_cycle",
-        "devsim/p/b/set/+", "devsim/p/b/fault/+", "devsim/p/b/power_cycle",
+        "devsim/p/a/set/#", "devsim/p/a/fault/#", "devsim/p/a/power_cycle/#",
+        "devsim/p/b/set/#", "devsim/p/b/fault/#", "devsim/p/b/power_cycle/#",
     ]
 
 
@@ -188,5 +198,7 @@ def test_command_topic_parts() -> None:
     assert found is not None and found[1] is COMMANDS["set"][0]
     assert parse_command("devsim/p/x/fault/power", "p")[1:] == (COMMANDS["fault"][0], "power")  # type: ignore[index]
     assert parse_command("devsim/p/x/power_cycle", "p") == ("x", COMMANDS["power_cycle"][0], "")
-    for topic in ("devsim/p/x", "devsim/p/x/fault/a/b", "devsim/p/x/nothing/a", "Devsim/p/x/set/a"):
+    for topic in ("devsim/p/x", "devsim/p/x/nothing/a", "Devsim/p/x/set/a"):
         assert parse_command(topic, "p") is None, topic
+    misshapen = parse_command("devsim/p/x/fault/a/b", "p")  # (refused: test above)
+    assert misshapen is not None and misshapen[1] is not COMMANDS["fault"][0]
