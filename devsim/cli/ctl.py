@@ -64,8 +64,14 @@ def _call(ctx: click.Context, *requests: rq.ControlRequest) -> None:
     except ControlError as exc:
         raise exits.control_error(exc) from None
     except (OSError, ValueError) as exc:
-        raise exits.Unreachable(f"control connection to {addr} failed: {exc}") from None
+        raise _broken(ctx, addr, exc) from None
     click.echo(text)
+
+
+def _broken(ctx: click.Context, addr: str, exc: Exception) -> exits.Unreachable:
+    """A connection that broke during a call: over a fleet the client's own words already name
+    the broker ("fleet broker mqtt://… lost (…)"), else the control address is named."""
+    return exits.Unreachable(str(exc) if ctx.obj[1] is not None else f"control connection to {addr} failed: {exc}")
 
 
 @click.group(cls=present.JsonGroup)
@@ -270,8 +276,8 @@ def ctl_watch(device: str | None, names: tuple[str, ...], as_json: bool, period:
         sys.exit(0)
     except ControlError as exc:
         raise exits.control_error(exc) from None
-    except (OSError, ValueError) as exc:  # over a fleet: "fleet broker mqtt://… lost (…)"
-        raise exits.Unreachable(str(exc) if fleet else f"control connection to {addr} failed: {exc}") from None
+    except (OSError, ValueError) as exc:
+        raise _broken(ctx, addr, exc) from None
     finally:
         stream.close()
         client.close()
