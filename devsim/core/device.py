@@ -58,6 +58,10 @@ class SerialSettings(msgspec.Struct, frozen=True):
     #: False when the data bits and parity were not visible (a Linux pty forces 8N1 whatever the
     #: host sets): ``bytesize`` and ``parity`` are then the device's own, assumed, not seen.
     frame_seen: bool = True
+    #: Bits one character takes on the wire where the device's code fills less of its frame than
+    #: the settings say (the POSELESTA's 7-bit ASCII code, start and 2 stop bits, on its 8N2 port:
+    #: 10, not 11); 0: what the settings make of it.  Only the character time uses it.
+    frame_bits: int = 0
 
     def describe(self) -> str:
         """``9600 8E1``; what was not seen is not claimed: ``9600 baud, 1 stop bit (data bits and
@@ -80,8 +84,9 @@ class SerialSettings(msgspec.Struct, frozen=True):
         return None
 
     def char_time(self) -> float:
-        """Seconds one character occupies on the wire (start + data + parity + stop bits)."""
-        bits = 1 + self.bytesize + (0 if self.parity == "N" else 1) + float(self.stopbits)
+        """Seconds one character occupies on the wire (start + data + parity + stop bits, or
+        :attr:`frame_bits`)."""
+        bits = self.frame_bits or 1 + self.bytesize + (0 if self.parity == "N" else 1) + float(self.stopbits)
         return bits / self.baudrate
 
 

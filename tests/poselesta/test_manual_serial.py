@@ -222,6 +222,17 @@ def test_in_real_time_an_output_takes_its_frames_at_the_baud_rate(devsim_device)
     assert took >= 0.9 * len(tape) * 11 / 300  # 19 characters of 11 bits at 300 baud: 0.70 s
 
 
+@pytest.mark.manual("§2.6.1.2", "ISO-Code: sxxxxxxxPSS; ASCII-Code: sxxxxxxxSS (what --pacing times a character "
+                    "at: 11 and 10 bits, on a port its host opens at 8N2)")
+@pytest.mark.parametrize(("p71", "bits"), [(0, 11), (1, 10)], ids=["iso", "ascii"])
+def test_a_character_takes_its_codes_frame_on_the_wire(cnc: Any, p71: int, bits: int) -> None:
+    cnc.set("param.P71", p71)
+    _output_on_v7(cnc, "N1 X1")
+    settings = cnc.device.face("v7").serial_settings
+    assert settings.describe() == "1200 8N2"  # what the host opens and the device reports
+    assert settings.char_time() == pytest.approx(bits / 1200)  # what pacing holds each character for
+
+
 # -- §2.6.2.1 the printout ------------------------------------------------------------------------
 @pytest.mark.manual("§2.6.2.1", "Nach jeder ausgedruckten Funktion erfolgt CR. Es wird kein LF generiert. "
                     "Beispiel: % CR CR CR, N 1 CR, X 100.000 CR, Y 20.123 CR, G 00 CR, # CR, N 2 …")

@@ -34,7 +34,12 @@ class PoselestaPortFace(Face):
 
     @property
     def serial_settings(self) -> SerialSettings:
-        baud = self.model.baud(self.name) or 110
-        if self._settings.baudrate != baud:
-            self._settings = SerialSettings(baud, 8, "N", 2)
-        return self._settings
+        """8N2 at the port's baud rate, which carries every code of the manual as its host reads
+        it (ISO's parity as the eighth bit); a character takes its frame's bits on the wire
+        (§2.6.1.2: ISO 11, ASCII 10, the printer 12 or 11), which is what pacing times."""
+        model = self.model
+        baud, bits = model.baud(self.name) or 110, model.links.frame_bits(self.name)
+        settings = self._settings
+        if settings.baudrate != baud or settings.frame_bits != bits:
+            settings = self._settings = SerialSettings(baud, 8, "N", 2, frame_bits=bits)
+        return settings
