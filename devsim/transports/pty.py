@@ -65,6 +65,7 @@ import fcntl
 import os
 import sys
 import termios
+import time
 
 import msgspec
 
@@ -94,6 +95,11 @@ _BITS_CSIZE = {bits: flag for flag, bits in _CSIZE_BITS.items()}
 
 # Linux: local-mode flag that makes the pty report every termios change to a packet-mode master.
 _EXTPROC = 0o200000 if sys.platform.startswith("linux") else 0
+#: Seconds an arm waits before it changes the slave (:func:`_arm`): long enough for a host to
+#: read its termios back after setting them, short enough to be over before the transport's
+#: loop takes the host's next bytes.  It blocks the loop, once per change of the host's settings.
+ARM_PAUSE = 0.0002
+
 _TIOCPKT = getattr(termios, "TIOCPKT", None)
 _TIOCPKT_DATA = 0
 # Linux: sets CLOCAL alone, under the tty's termios lock (the transport's arm).
@@ -431,14 +437,16 @@ def _arm(fd: int, attrs: list, *, extproc: bool) -> list:
     back: on a busy machine a host that opened at 9600 and at once asked for 19200 was left at
     9600 about every other time.)
 
-    The arm first yields the processor: a host whose ``tcsetattr`` woke the transport on the
-    host's own processor is preempted between its ``TCSETS`` and glibc's read-back, and an arm
-    landing there would make the read-back equal what the host's call started from.  Landing
-    there still happens when something else preempted the host at that point; a request that
+    An arm landing between the host's ``TCSETS`` and glibc's read-back would make the read-back
+    equal what the host's call started from.  The host's change wakes the transport, often on
+    the host's own processor, preempting the host right there: so the arm first sleeps
+    :data:`ARM_PAUSE`, which lets the host get to its read-back (yielding the processor did not:
+    on two idle processors three of four such arms still landed there).  Landing there still
+    happens when something else preempted the host at that point for longer; a request that
     repeats the host's last one then fails.  ``extproc`` keeps EXTPROC set, so that a
     packet-mode master hears of the next change; only a request that dropped it (one made from
     a zeroed ``termios``) needs a whole ``tcsetattr`` to set it again."""
-    os.sched_yield()
+    time.sleep(ARM_PAUSE)
     try:
         if extproc and not attrs[_LFLAG] & _EXTPROC:
             whole = termios.tcgetattr(fd)
