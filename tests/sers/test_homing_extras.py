@@ -226,3 +226,35 @@ def test_servo_positioning_before_calibration_warns(plant_factory) -> None:
     plant = plant_factory({"options": ["E50", "SERVO"], "params": {"P1152": 1}})
     plant.host.ask("#ON W=90 E\r")
     assert plant.read("P12") & 2048
+
+
+@pytest.mark.manual("§4.8.6.6", "P1054 'Intern werden nur 16 Bit abgespeichert. Bei Zahlen außerhalb -0.32768 bis "
+                    "0.32767 wird die Auflösung vermindert indem die letzten beiden Nachkommastellen 0 werden'")
+@pytest.mark.manual("§4.8.6.6", "P1144 'Definition wie P1054'")
+@pytest.mark.parametrize(
+    ("number", "written", "kept"),
+    [
+        (1054, "1.23456", "1.234"),
+        (1054, "-2.50099", "-2.5"),
+        (1054, "0.32769", "0.327"),
+        (1144, "12.34567", "12.345"),
+        (1054, "0.12345", "0.12345"),  # inside ±0.32768: all five decimals
+        (1144, "-0.32768", "-0.32768"),
+    ],
+)
+def test_pulse_weight_outside_16_bits_loses_its_last_two_decimals(sers, number, written, kept) -> None:
+    host = sers.host
+    assert host.ask(f"#P{number}={written}\r") == f"#P{number}={written}\r\nok1\n\r".encode()
+    assert host.ask(f"#P{number}?\r") == f"#P{number}?\rP{number}={kept}\n\r\nok1\n\r".encode()
+
+
+@pytest.mark.manual("§4.8.6.6", "P1054 (unit 1/200 rev) outside ±0.32768 keeps three decimals: the hand-wheel "
+                    "(P1053=3) moves by the pulses times the stored weight")
+def test_handwheel_follows_the_stored_pulse_weight(plant_factory) -> None:
+    plant = plant_factory({"params": {"P1053": 3}})
+    plant.host.ask("#P1054=1.23456\r")
+    plant.host.ask("#ON\r")
+    plant.set("encoder.pulses", 1000)
+    plant.settle()
+    assert plant.read("axis.position") == pytest.approx(1000 * 1.234 * 64)
+

@@ -290,6 +290,17 @@ class ParameterAccess:
             raise SersError(row.extra["write_errno"])
         self.params.values[1136] = int(value)
 
+    def write_pulse_weight(self, number: int, value: float) -> None:
+        """P1054 / P1144 (§4.8.6.6): "Intern werden nur 16 Bit abgespeichert. Bei Zahlen außerhalb
+        -0.32768 bis 0.32767 wird die Auflösung vermindert indem die letzten beiden
+        Nachkommastellen 0 werden" -- five decimals inside that range, three outside (cut off)."""
+        row = PARAMETERS[number]
+        self.check_range(row, value)
+        weight = quantize(float(value), row.decimals)
+        if not -0.32768 <= weight <= 0.32767:
+            weight = math.trunc(round(weight * 100000) / 100) / 1000
+        self.params.values[number] = weight
+
     def write_soft_limit(self, number: int, value: float) -> None:
         """P1040 / P1041 (§4.8.6.12): the lower limit may not lie above the upper one."""
         internal = self._position(number, value)
@@ -406,6 +417,8 @@ WRITES: Table[Write] = Table(
         Command("P1040", lambda a, v: a.write_soft_limit(1040, v), "§4.8.6.12", "lower software limit"),
         Command("P1041", lambda a, v: a.write_soft_limit(1041, v), "§4.8.6.12", "upper software limit"),
         Command("P1043", ParameterAccess.write_p1043, "§4.8.4.2", "POS0 / POSR"),
+        Command("P1054", lambda a, v: a.write_pulse_weight(1054, v), "§4.8.6.6", "pulse weight: 16 bit"),
+        Command("P1144", lambda a, v: a.write_pulse_weight(1144, v), "§4.8.6.6", "pulse weight: 16 bit"),
         Command("P1051", lambda a, v: a.write_w_mode(v, 0), "§4.6.6", "WR: W and relative mode"),
         Command("P1052", lambda a, v: a.write_w_mode(v, 2), "§4.6.6", "WA: W and absolute mode"),
         Command("P1099", ParameterAccess.write_opcode, "§4.8.6.16", "execute an opcode"),
