@@ -258,3 +258,22 @@ def test_handwheel_follows_the_stored_pulse_weight(plant_factory) -> None:
     plant.settle()
     assert plant.read("axis.position") == pytest.approx(1000 * 1.234 * 64)
 
+
+@pytest.mark.manual("§4.8.6.8", "P1044: 'ein Signal (Flanke 0 → 1 bei High-aktiven Eingangssignalen oder Flanke "
+                    "1 → 0 bei Low-aktiven Eingangssignalen)' -- the edge to the active state counts")
+@pytest.mark.manual("§3.1.5", "DIP 1 bits 4 and 5 ON: the inputs I1..I8 are low-active")
+@pytest.mark.parametrize("level", ["plc", "low_active"])
+def test_standstill_monitoring_counts_the_edges_to_active(plant_factory, level: str) -> None:
+    # input.I2 is the input's state as the drive reads it (P1300, the jog inputs): True = active
+    plant = plant_factory({"input_level": level, "params": {"P1044": 90, "P1045": 2}})
+    plant.host.ask("#ON A=100000 V=60 W=360 E\r")  # 360°/s, at full speed within 0.1°
+    # I2 active at 60°, 140°, 220° (never 90° apart); inactive at 70°, 200°, 230° (130° apart)
+    for seconds, active in ((60, True), (10, False), (70, True), (60, False), (20, True), (10, False)):
+        plant.advance(seconds / 360)
+        plant.set("input.I2", active)
+    plant.advance(60 / 360)  # 290°
+    assert plant.read("P11") == 0
+    plant.settle()
+    assert plant.read("P11") == 2048  # 90° after the last activation (220°)
+    assert plant.read("param.P51") == pytest.approx(311, abs=1)  # from 310°, braked with P1030
+

@@ -198,8 +198,10 @@ class Inputs:
         bit = 1 << (n - 1)
         params, motion = self.params, self.motion
         monitored = int(params.standstill_input) == n and params.standstill_distance
-        active_edge = bool(new) != (self._config().input_level == "low_active")
-        if monitored and active_edge and motion.kind is not None:
+        # P1044 (§4.8.6.8): "Flanke 0 → 1 bei High-aktiven ... oder Flanke 1 → 0 bei Low-aktiven
+        # Eingangssignalen" -- the edge to active; the input reads active when set, whatever the
+        # DIP level (as P1300 and the input functions read it)
+        if monitored and new and motion.kind is not None:
             motion.watches.arm_standstill()
         if params.reference_input == n:
             motion.homing.edge("reference", bool(new))
