@@ -448,6 +448,33 @@ def test_wraparound_in_velocity_mode(pcd: Station) -> None:
     assert pcd.sim.read("axis.1.position") < 0  # counted over to −2^30
 
 
+@pytest.mark.manual("§7.4 FLdDA", "absolut laden heisst, der Wert ist bezogen auf die Nullposition")
+@pytest.mark.manual("§7.4 FLdDR", "relativ laden heisst, der Wert ist bezogen auf die momentane Zielposition")
+@pytest.mark.manual("§7.4 FResSF", "WrapOc: einen Überlauf kann es im drehzahlgeregelten Betrieb geben")
+def test_after_a_wraparound_moves_count_from_the_wrapped_position(pcd: Station) -> None:
+    pcd.sim.set("axis.1.position", (1 << 30) - 20_000)
+    load(pcd, MCW=0x041B | 0x1800)
+    run(pcd, "FSelOM", "FStart")
+    assert pcd.sim.run_until(lambda d: d.read("axis.1.WrapOc"), 10.0)
+    load(pcd, MCW=0x041B, StaFRR=0)
+    run(pcd, "FStop")
+    settled(pcd)
+    run(pcd, "FResSF")
+    here = read(pcd, "FRdAP", "RActP")
+    assert here < -10_737_000  # just past −2^30 counts (k = 100)
+    load(pcd, DestP=here + 5)  # 500 counts forward
+    run(pcd, "FSelOM", "FLdDA", "FStart")
+    settled(pcd, 10.0)
+    assert read(pcd, "FRdAP", "RActP") == here + 5
+    load(pcd, DestP=3, BrkP=2)
+    run(pcd, "FLdBPR")  # 2 past the target reached
+    run(pcd, "FLdDR", "FStart")
+    settled(pcd, 10.0)
+    assert read(pcd, "FRdAP", "RActP") == here + 8
+    assert pcd.sim.read("axis.1.comers") == 0
+    assert pcd.read_flags(flag("OnDest"), 5) == [1, 0, 0, 0, 1]  # no second overflow; the break position passed
+
+
 @pytest.mark.manual("§7.4 FSetZP", "die Istposition wird als Nullposition definiert")
 @pytest.mark.manual("§7.4 FSetZP", "während einer Bewegung wird die momentane Zielposition nicht beeinflusst, wenn kein "
                     "FStart ausgeführt wird")

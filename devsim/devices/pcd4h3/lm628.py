@@ -171,7 +171,7 @@ class Lm628:
         if relative and not self.started:
             self.error()
             return
-        value = (self.profile.target >> 16 if relative else 0) + signed32(position)
+        value = (self.target if relative else 0) + signed32(position)
         if not _in_range(value):
             self.error()
             return
@@ -230,7 +230,7 @@ class Lm628:
             velocity = base + signed32(value) if control & 0x04 else value & 0xFFFF_FFFF
         if control & 0x02:  # (§7.4 FLdDR: "bezogen auf die momentane Zielposition")
             value = signed32(next(items))
-            base = position if loaded & 0x02 else profile.target >> 16
+            base = position if loaded & 0x02 else self.target
             position = base + value if control & 0x01 else value
         if not (0 <= acceleration <= VALUE_MAX and 0 <= velocity <= VALUE_MAX and _in_range(position)):
             self.error()
@@ -260,7 +260,7 @@ class Lm628:
             return
         self.motor_off, self.loaded, self.on_target, self.started = False, 0, False, True
         self.flags &= ~COMPLETE
-        self.profile.start(self.buffer)
+        self.profile.start(self.buffer, self.frame)
         if self.profile.complete:
             self.flags |= COMPLETE
             self.on_target = True
@@ -282,6 +282,19 @@ class Lm628:
     def desired(self) -> int:
         """RDDP: the generator's desired position."""
         return wrap(self.profile.desired)
+
+    @property
+    def frame(self) -> int:
+        """How far the generator's (unwrapped) counts lie from the chip's registers: a multiple of
+        2^31 after a wrap-around in velocity mode (§5.7).  The registers hold the wrapped values, so
+        a new target counts from the wrapped desired position (manual §7.4 FLdDA: "bezogen auf die
+        Nullposition"), not back across the overflow."""
+        return self.profile.desired - self.desired
+
+    @property
+    def target(self) -> int:
+        """The target position register (what FLdDR, FLdBPR add to), in the chip's range."""
+        return wrap(self.profile.target >> 16)
 
     @property
     def status(self) -> int:

@@ -47,11 +47,12 @@ class Profile:
         """The desired position in whole counts (RDDP)."""
         return self.position >> 16
 
-    def start(self, trajectory: Trajectory) -> None:
-        """STT: take over the buffers."""
+    def start(self, trajectory: Trajectory, frame: int = 0) -> None:
+        """STT: take over the buffers; ``frame`` (counts) places the target among the desired
+        position's counts when these have wrapped around (the chip's registers are the wrapped ones)."""
         self.acceleration, self.top = trajectory.acceleration, trajectory.velocity
         self.velocity_mode, self.forward = trajectory.velocity_mode, trajectory.forward
-        self.target = trajectory.position << 16
+        self.target = (trajectory.position + frame) << 16
         self.stopping = False
         self.complete = not self.velocity_mode and self.target == self.position and self.velocity == 0
 
