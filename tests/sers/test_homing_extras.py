@@ -277,3 +277,24 @@ def test_standstill_monitoring_counts_the_edges_to_active(plant_factory, level: 
     assert plant.read("P11") == 2048  # 90° after the last activation (220°)
     assert plant.read("param.P51") == pytest.approx(311, abs=1)  # from 310°, braked with P1030
 
+
+@pytest.mark.manual("§4.8.4.5", "P147 bit 4: '1 = invertiert, Eingang Öffner (kein Signal = Antrieb steht auf "
+                    "Referenzschalter)'")
+@pytest.mark.manual("§4.8.1.1", "P1130 '1 bis 8 : digitaler Eingang I1 bis I8 = Referenzschaltereingang'")
+def test_inverted_reference_input_on_a_digital_input(plant_factory) -> None:
+    # the reference switch is an NC contact on I3: I3 has a signal while the drive is off the switch
+    plant = plant_factory({"params": {"P1130": 3, "P147": 16}})
+    plant.set("input.I3", True)
+    host = plant.host
+    assert host.ask("#J1?\r") == b"#J1?\rJ1=0\n\r\nok1\n\r"  # not on the reference switch
+    host.ask("#ON H\r")
+    plant.advance(0.5)
+    assert plant.read("axis.velocity") > 0  # seeking in the positive homing direction
+    plant.set("input.I3", False)  # the NC contact opens: the drive reaches the switch
+    plant.advance(1.0)
+    assert plant.read("axis.velocity") < 0  # braked and creeping back at P1003
+    assert host.ask("#J1?\r") == b"#J1?\rJ1=1\n\r\nok0\n\r"
+    plant.set("input.I3", True)  # off the switch again: the falling edge of 'on the switch'
+    plant.settle()
+    assert plant.read("homed") is True
+    assert plant.read("param.P51") == 0

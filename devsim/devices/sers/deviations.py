@@ -69,6 +69,16 @@ DEVIATIONS: tuple[Deviation, ...] = (
         "which voltage means 'actuated', which the twin does not have",
     ),
     Deviation(
+        "§4.8.4.5",
+        "P147 bit 4 inverts the reference input (NC contact: no signal = the drive stands on the "
+        "reference switch)",
+        "input.reference means 'the drive stands on the reference switch' whatever bit 4 is; bit 4 "
+        "inverts only a digital input chosen as the reference input with P1130 (input.I1..I8 are "
+        "the inputs' signals)",
+        "as for P1038: the simulated reference input is the switch's logical state (the axis "
+        "geometry's cam sets it), not the wiring",
+    ),
+    Deviation(
         "§4.8.6.3",
         "P1093: a jog through a digital input while a program runs interrupts the program and "
         "resumes it afterwards (0) or aborts it (1)",

@@ -113,10 +113,14 @@ class Homing:
             self.motion.arm_watches(keep=True)
 
     def reference_active(self) -> bool:
-        """The reference switch (or the input P1130 names) is closed."""
+        """The drive stands on the reference switch: the reference input, or the digital input
+        P1130 names -- that one with a signal, or with P147 bit 4 ("invertiert, Eingang Öffner
+        (kein Signal = Antrieb steht auf Referenzschalter)", §4.8.4.5) without one.  (The
+        reference input itself is the switch's state, not its wiring: see the deviations.)"""
         selector = int(self.params.reference_input)
         if selector:
-            return bool(self.signals.get(f"I{selector}"))
+            signal = bool(self.signals.get(f"I{selector}"))
+            return not signal if int(self.params.homing_parameters) & 16 else signal
         return bool(self.signals.get("reference"))
 
     def edge(self, signal: str, active: bool) -> bool:

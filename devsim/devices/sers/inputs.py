@@ -204,7 +204,7 @@ class Inputs:
         if monitored and new and motion.kind is not None:
             motion.watches.arm_standstill()
         if params.reference_input == n:
-            motion.homing.edge("reference", bool(new))
+            motion.homing.edge("reference", motion.homing.reference_active())
         if self.functions_enabled(bit):
             try:
                 self._input_function(n, bool(new))
