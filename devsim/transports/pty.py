@@ -237,7 +237,7 @@ class PtyTransport(Transport):
             termios.tcsetattr(slave, termios.TCSANOW, attrs)
             if not self._frame_visible:
                 self._packet = _packet_mode(master)
-                self._last_attrs = _arm(slave, termios.tcgetattr(slave), extproc=self._packet)
+                self._last_attrs = _arm(slave, termios.tcgetattr(slave), extproc=self._packet, pause=0.0)  # (no host yet)
             self._baseline = termios.tcgetattr(slave)
             os.set_blocking(master, False)
             self.address = os.ttyname(slave)
@@ -422,7 +422,7 @@ def _packet_mode(master: int) -> bool:
     return True
 
 
-def _arm(fd: int, attrs: list, *, extproc: bool) -> list:
+def _arm(fd: int, attrs: list, *, extproc: bool, pause: float = ARM_PAUSE) -> list:
     """Arm a Linux pty slave for the host's next ``tcsetattr``; returns the termios now set.
 
     glibc's ``tcsetattr`` fails with EINVAL when the termios read back after ``TCSETS`` equal
@@ -446,7 +446,8 @@ def _arm(fd: int, attrs: list, *, extproc: bool) -> list:
     repeats the host's last one then fails.  ``extproc`` keeps EXTPROC set, so that a
     packet-mode master hears of the next change; only a request that dropped it (one made from
     a zeroed ``termios``) needs a whole ``tcsetattr`` to set it again."""
-    time.sleep(ARM_PAUSE)
+    if pause:
+        time.sleep(pause)
     try:
         if extproc and not attrs[_LFLAG] & _EXTPROC:
             whole = termios.tcgetattr(fd)
