@@ -137,6 +137,21 @@ def test_power_off_during_teach_in(plain: Module) -> None:
     assert not plain.call(0x62, b"\x01")[6] & 0x10
 
 
+@pytest.mark.manual("§2.6.1", "Pro Programm sind maximal 1023 ASCII-Zeichen zulässig, einschließlich Programmkopf")
+@pytest.mark.manual("§4.3.4", "at the memory's limit teach-in ends by itself, the last stored block becomes the end")
+def test_teach_in_ends_at_the_limit_of_one_program(plain: Module) -> None:
+    plain.store(5, "%  5\nN1 X2 F1000\nN2 M02\n")
+    assert plain.operate(1, 10, START, b=7)[4] == 0
+    errors = [plain.operate(1, 7, TAKE_OVER)[4] for _ in range(70)]  # 70 blocks of 17 characters: 1200
+    text = plain.device.read("program.7")
+    assert errors[0] == 3 and errors[-1] != 3 and text is not None and len(text) <= 1023
+    assert text.endswith(" M02\n") and not plain.call(0x62, b"\x01")[6] & 0x10  # teach-in is off
+    assert plain.operate(1, 8, START, b=5)[4] == 0  # the programs still run
+    plain.clock.advance(5)
+    assert actual(plain) == 2_000
+    assert plain.operate(1, 8, START, b=7)[4] == 0
+
+
 # -- §4.3.5 – §4.3.9 ----------------------------------------------------------------------------------
 @pytest.mark.manual("§4.3.5", "BA12 gives the current position a new coordinate without motion; the SW limits and "
                     "the reference coordinate move with it (150 mm → 400 mm: all 250 mm more positive)")

@@ -92,11 +92,14 @@ class ProgramJobs:
 
     def teach_store(self, unit: AxisUnit) -> int | None:
         """Übernahme in teach-in at standstill: the actual value becomes a block with the MD
-        step velocity, message 3 "Satz abgespeichert" (spec §5.12)."""
+        step velocity, message 3 "Satz abgespeichert" (spec §5.12).  A block that would take the
+        memory past its 6000 characters (§4.3.4) or the program past the 1023 one program may
+        have (§2.6.1: "Pro Programm sind maximal 1023 ASCII-Zeichen zulässig") ends teach-in."""
         if unit.teach_in is None or unit.md is None:
             return 2
         block = f"N{len(unit.taught) + 1} X{unit.actual() / 1000:.3f} F{unit.md.step_velocity}"
-        if self.store.used + len(self._teach_text(unit.teach_in, [*unit.taught, block])) > CAPACITY:
+        text = self._teach_text(unit.teach_in, [*unit.taught, block])
+        if self.store.used + len(text) > CAPACITY or len(text) > lang.MAX_TEXT:
             unit.taught[-1:] = []  # memory full: the last stored block makes way for the end block
             self._close_teach_in(unit)
             return 24
