@@ -356,6 +356,30 @@ def test_subroutine_calls_and_repeats_follow_g12_g11_g13(make) -> None:  # noqa:
     assert cnc.read("axis.x.position") == pytest.approx(13_000)  # 3 × 1 mm in the loop, then 10 mm
 
 
+@pytest.mark.parametrize("program", [
+    "\n".join(f"N{n} G91" for n in range(1, 400)) + "\nN400 X1",  # blocks of no motion and no function
+    "N1 G91\nN2 G13 L99.001\nN3 X1",  # a repeat of such a block
+])
+def test_a_long_run_of_blocks_without_motion(make, program: str) -> None:  # noqa: ANN001
+    """Blocks that end at once (no motion, no M, S or T) follow one another in the same instant;
+    300 or 400 of them in a row ran out of Python's stack (RecursionError through NC-Start)."""
+    cnc = make(program=program)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(2.0)
+    assert cnc.read("program.state") == "END" and cnc.read("axis.x.position") == pytest.approx(1_000)
+
+
+def test_a_subroutine_that_calls_itself_without_motion_ends_the_program(make) -> None:  # noqa: ANN001
+    """``N100 G12 L1.100`` never reaches its G11 and never moves: the program cannot go on (the
+    manual has no alarm for it); it ends with the event ``endless_loop`` instead of a
+    RecursionError or a control that never answers again."""
+    cnc = make(program="N1 G12 L1.100\nN2 X1\nN100 G12 L1.100\nN101 G11")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(1.0)
+    assert cnc.read("program.state") == "END" and cnc.read("axis.x.position") == 0
+    assert "endless_loop" in _events(cnc)
+
+
 def test_dwell_and_unknown_g_functions(make) -> None:  # noqa: ANN001
     """G04 waits L seconds at the end of its block; an unknown G runs as a no-op (spec §4.12.1)."""
     cnc = make(program="N1 G04 L1.500\nN2 G77 X1")

@@ -47,6 +47,35 @@ POSITION_REACHED_PULSE = 60e-6  # §2.4.2: with "Programm fortsetzen" already H
 Program = Callable[[], tuple[list[Block], bool]]
 
 
+class BlockChain:
+    """The next block, as a loop: blocks that end at once (no motion, no M, S or T to hand over)
+    follow one another in the same instant, each asking for the next while it still runs; as
+    nested calls a few hundred in a row ran out of Python's stack (RecursionError).  A program that
+    runs :data:`LIMIT` blocks in one instant can never go on (a subroutine that calls itself
+    without motion): the event ``endless_loop``, and the program ends."""
+
+    LIMIT = 100_000
+
+    def __init__(self, step: Callable[[], None], end: Callable[[], None], screen: Screen) -> None:
+        self.step, self.end, self.screen = step, end, screen
+        self.running = self.again = False
+
+    def __call__(self) -> None:
+        if self.running:
+            self.again = True  # (the step that runs now is followed by the next)
+            return
+        self.running, self.again, count = True, True, 0
+        try:
+            while self.again and count < self.LIMIT:
+                self.again, count = False, count + 1
+                self.step()
+        finally:
+            self.running = False
+        if self.again:
+            self.screen.record("endless_loop")
+            self.end()
+
+
 class ExecutionOptions(msgspec.Struct, frozen=True):
     """What the variant and the configuration change in the block cycle (spec §4.3.6, G-M06,
     §4.12.1): V22/10 block abort (POS III), M06 waiting for NC-Start, G25 as a full circle, the
@@ -93,6 +122,7 @@ class Executor:
         self._resume: Callable[[], None] | None = None
         self.abort_pending = False
         self._timer: Timer | None = None
+        self._next_block = BlockChain(self._block_start, self._program_end, screen)
         for name, handler in (("nc_start", self._nc_start_input), ("nc_stop", self._nc_stop_input),
                               ("emergency_stop", self._emergency_input), ("axis_enable", self._wait_input),
                               ("program_continue", self._wait_input), ("tool_change_ack", self._wait_input),
@@ -202,7 +232,7 @@ class Executor:
         self.reset()
 
     # -- the block cycle ----------------------------------------------------------------------------
-    def _next_block(self) -> None:
+    def _block_start(self) -> None:
         """BLOCK_START: the next block in ascending N; a block marked ``/`` is skipped while the
         block-skip input is L (sampled now, §2.3.13); past the last block is as M02."""
         block = self.flow.next_block()
