@@ -67,6 +67,19 @@ def test_errors_stay_until_the_next_operator_command(mod: Module) -> None:
     assert observed(mod)[4] == 0
 
 
+@pytest.mark.manual("§4.4", "Beobachtbetriebsarten sind: 66 Istwerte Lesen (FB165), 71, 73, 74")
+@pytest.mark.manual("§4.1", "Dazwischen können beliebige Beobachtkommandos erfolgen, bei denen die anstehende "
+                    "Fehlermeldung jeweils wieder mit ausgegeben wird")
+def test_reading_the_actual_values_leaves_the_error_pending(mod: Module) -> None:
+    """BA66 is an observe mode, not an operator command: it does not acknowledge the error; a data
+    transfer such as BA67 is an operator command and does."""
+    mod.ready()
+    assert mod.operate(1, 6, START, dd=900_000)[4] == 23  # beyond x_E
+    assert mod.call(0x64, bytes((1, 66, 0, 0)))[4] == 23
+    assert observed(mod)[4] == 23
+    assert mod.call(0x64, bytes((1, 67, 101, 0)))[4] == 0
+
+
 @pytest.mark.manual("§4.1", "a command not meaningful in the mode (BA1 with Start) changes into the mode but "
                     "leaves the axis fertig, with an error")
 @pytest.mark.parametrize(("ba", "cmd"), [(1, START), (7, START), (6, FORWARD), (12, FORWARD), (13, START),

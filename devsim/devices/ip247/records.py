@@ -22,7 +22,7 @@ from devsim.devices.ip247.axis_unit import AxisUnit
 from devsim.devices.ip247.pg_profile import ACK_ACCEPTED, ACK_NEGATIVE
 from devsim.devices.ip247.programs import ProgramJobs
 from devsim.devices.ip247.store import Stored, StoreError
-from devsim.devices.ip247.tables import MODES, mode_token, page_error
+from devsim.devices.ip247.tables import MODES, OBSERVE_MODES, mode_token, page_error
 
 __all__ = ["DELETE_RECORDS", "DataChannel", "Pages", "READ_RECORDS", "WRITE_RECORDS"]
 
@@ -92,7 +92,8 @@ class DataChannel:
         if self._refused(ba, page):
             return ACK_NEGATIVE, []
         unit = self.unit(page)
-        self.pages.set_error(unit, 0)  # a transfer is an operator job: it acknowledges the page's error
+        if ba not in OBSERVE_MODES:  # BA66 observes (manual §4.4): the pending error stays (§4.1)
+            self.pages.set_error(unit, 0)  # a transfer is an operator job: it acknowledges the page's error
         return handler(self, unit, db, bcd)
 
     def data_blocks(self) -> list[tuple[int, int, Words]]:

@@ -10,7 +10,7 @@ from devsim.core.kit import ErrorCode
 from devsim.core.parameters import Access, Param, ParameterTable
 
 __all__ = [
-    "DATA_CHANNEL", "MACHINE_DATA", "MD_ERRORS", "MODES", "MODULE_ERRORS", "NONEXISTENT", "SYNTAX_ERRORS", "Mode", "error_codes", "mode_token",
+    "DATA_CHANNEL", "MACHINE_DATA", "MD_ERRORS", "MODES", "MODULE_ERRORS", "NONEXISTENT", "OBSERVE_MODES", "SYNTAX_ERRORS", "Mode", "error_codes", "mode_token",
     "page_error", "pg_code",
 ]
 
@@ -167,6 +167,9 @@ MODES: dict[int, Mode] = {m.number: m for m in (
     Mode(71, "Lageistwert (Beobachten)", "observe actual position", "A"),
     Mode(73, "Restweg (Beobachten)", "observe residual distance", "A"),
 )}
+#: The observe modes (manual §4.4: "Beobachtbetriebsarten sind: 66 Istwerte Lesen, 71 Lage-Istwert,
+#: 73 Restweg, 74 Beobachtung ausschalten"): they leave the pending error as it is (§4.1).
+OBSERVE_MODES = frozenset((66, 71, 73, 74))
 #: Accepted by FB164 but not existing: negatively acknowledged on every page (spec §3.2).
 NONEXISTENT = frozenset((3, 18, 19, 72))
 
