@@ -198,9 +198,9 @@ class Axis:
             return math.inf * self._plan[-1].v0
         return self._rest
 
-    def segments(self) -> list[Segment]:
-        """The current plan (empty when idle)."""
-        return list(self._plan)
+    def segments(self, since: float | None = None) -> list[Segment]:
+        """The current plan (empty when idle); ``since``: with the remembered past, all running after it."""
+        return list(self._plan) if since is None else [s for s in (*self._history, *self._plan) if s.t1 > since]
 
     # -- commands ------------------------------------------------------------------------------
     def move_to(

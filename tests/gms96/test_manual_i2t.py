@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from devsim.devices.gms96.client import Gms96Client
-from devsim.devices.gms96.i2t import I_BASE
+from devsim.devices.gms96.i2t import A_REF, I_BASE, K_ACC
 from tests.gms96.conftest import Plant
 from tests.gms96.test_motion_reference import send
 
@@ -75,3 +75,26 @@ def test_the_current_is_held_at_the_n15_level(card: Plant) -> None:
     card.advance(5.0)
     assert status(c) & I2T_NOW
     assert c.read(1, 5)[1] == pytest.approx(252 * N15_DEFAULT / 255, abs=1)
+
+
+@pytest.mark.manual("§3.1", "I²t: the card checks the magnitude of the motor current all the time; at a 100 % "
+                    "excess (here the current that accelerates the axis) 2 seconds are allowed, then it is limited")
+def test_the_accelerating_current_counts_for_i2t(referenced: Plant) -> None:
+    c = referenced.client()
+    level = N15_DEFAULT / 255.0
+    b = 100  # linear ramp of 100 Hz/ms: the acceleration current K_ACC·1e5/A_REF = 60 % of Imax (spec §5.7)
+    accelerating = K_ACC * b * 1000.0 / A_REF
+    # a small load makes the current on the ramp exactly twice the N15 level (and leaves it far below at rest)
+    referenced.set("quantity.load_pct", load_for(2 * level - accelerating))
+    for command, *params in (("N", 15000, 20), ("N", 0, 24), ("M", 500000), ("G", 0), ("B", b)):
+        send(c, command, *params)
+    referenced.advance(5.0)
+    assert status(c) & (I2T_NOW | I2T_LATCHED) == 0
+    send(c, "A", 8000000)  # a 5 s ramp to 500 kHz
+    referenced.advance(0.5)
+    assert c.read(1, 5)[1] == round(252 * 2 * level)  # T1;5 shows the current that is integrated
+    referenced.advance(ALLOWED_AT_100_PCT - 0.5 - 0.01)
+    assert status(c) & (I2T_NOW | I2T_LATCHED) == 0
+    referenced.advance(0.02)
+    assert status(c) & (I2T_NOW | I2T_LATCHED) == I2T_NOW | I2T_LATCHED
+    assert c.read(1, 5)[1] == round(252 * level)  # held at the N15 level

@@ -102,9 +102,8 @@ class Gms96Card(Model):
             params=self.params, card=self, run=lambda cmd: self.commands.run(cmd),
             queue_capacity=self.cfg.queue_capacity,
         )
-        self.i2t = I2t(
-            clock, self.params, geo, lambda: float(signals.get("load_pct")), self._i2t_settled, self.record_event
-        )
+        load = lambda: float(signals.get("load_pct"))  # noqa: E731
+        self.i2t = I2t(clock, self.params, geo, self.axis, load, self._i2t_settled, self.record_event)
         self.torque = Torque(
             clock, self.axis, self.indexer, self.params, self.stage, self.i2t, self.executor,
             lambda: bool(signals.get("blocked")), self.record_event,
@@ -288,7 +287,8 @@ class Gms96Card(Model):
         self.changed()
 
     def plan_changed(self) -> None:
-        """The indexer planned anew: H7 and in-position solved again, the outputs follow (A0.1)."""
+        """The indexer planned anew: I²t, H7 and in-position solved again, the outputs follow (A0.1)."""
+        self.i2t.replan()
         self.torque.arm()
         self.outputs.arm_in_position()
         self.changed()

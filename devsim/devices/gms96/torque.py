@@ -13,14 +13,12 @@ from collections.abc import Callable
 from devsim.core.axis import Axis
 from devsim.core.clock import Clock, Timer
 from devsim.devices.gms96.executor import Executor
-from devsim.devices.gms96.i2t import I_BASE, I2t
+from devsim.devices.gms96.i2t import A_REF, I_BASE, K_ACC, I2t
 from devsim.devices.gms96.motion import Indexer
 from devsim.devices.gms96.params import NParameters
 from devsim.devices.gms96.stage import PowerStage
 
 __all__ = ["Torque"]
-
-K_ACC, A_REF = 0.3, 50000.0  # current per acceleration (spec §5.7)
 
 
 class Torque:
