@@ -226,3 +226,25 @@ def test_idxoff_set_when_a_reference_run_starts(referenced: Plant) -> None:
     assert mb(c, 0) & 0x80 and c.read(3, 0)[0] & 0x08
     referenced.idle()
     assert mb(c, 0) & 0x80 == 0
+
+
+@pytest.mark.manual("§2.4.1", "M0.3 [r.]: Fahrbewegung aktiv (0 = keine gesteuerte Motor-Bewegung); unlike I.1/K.4 "
+                    "it does not include the block marking M1.5")
+@pytest.mark.manual("§2.3.1 T", "T3;0 I.1: Fahrt läuft (Indexer- oder Referenzfahrt) oder Block-Kommandos (M 1.5)")
+def test_m0_3_is_motor_motion_only(referenced: Plant) -> None:
+    c = referenced.client()
+    send(c, "p", 11, 1, 0x20)  # M1.5 block marking, the axis at rest
+    referenced.advance(0.1)
+    assert status(c) & MOTION  # I.1 includes M1.5
+    assert mb(c, 0) & 0x08 == 0  # M0.3: no motor movement
+    send(c, "p", 11, 1, 0)
+    send(c, "Q", 0)  # a reference run held by STOP (M0.0): the run goes on, the motor stands
+    referenced.advance(1.0)
+    assert mb(c, 0) & 0x08
+    send(c, "p", 11, 0, 0x01)
+    referenced.advance(1.0)
+    assert velocity(referenced) == 0.0 and status(c) & MOTION
+    assert mb(c, 0) & 0x08 == 0
+    send(c, "p", 11, 0, 0x00)
+    referenced.advance(0.5)
+    assert mb(c, 0) & 0x08

@@ -461,7 +461,7 @@ class Gms96Card(Model):
 #: :data:`~devsim.devices.gms96.tables.MARKERS` (spec §4.4): read from the card, never from the
 #: stored byte.
 STATUS_MARKERS: dict[str, Callable[[Gms96Card], bool]] = {
-    "MOTION_ACTIVE": Gms96Card.motion,
+    "MOTION_ACTIVE": lambda card: card.axis.moving,  # motor motion only, not M1.5 (manual §2.4.1 M0.3)
     "ESTOP_OK": lambda card: not card.stage.estop,
     "POSITION_CONTROL": lambda card: card.stage.controller,
     "MONITORING_FAULT": lambda card: bool(card.stage.monitoring_cause()),
