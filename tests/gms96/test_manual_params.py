@@ -132,6 +132,26 @@ def test_n51_e0_0_enables_the_moves(referenced: Plant) -> None:
     assert c.read(0)[1] == 3000
 
 
+@pytest.mark.manual("§2.3.1 N", "N51 = 1: at 0 V on E0.0 alle Fahrten are blocked, the spindle simulation too")
+@pytest.mark.manual("§2.3.1 Q", "Q8: during the spindle simulation the status shows 'Fahrt läuft' = 1")
+def test_n51_e0_0_blocks_the_spindle_simulation(referenced: Plant) -> None:
+    c = referenced.client()
+    send(c, "N", 1, 51)
+    referenced.set("input.E0.0", False)
+    send(c, "Q", 8, 3, 1000)
+    referenced.advance(1.0)
+    assert velocity(referenced) == 0.0 and c.read(3, 0)[0] & 0x02  # blocked, 'Fahrt läuft'
+    referenced.set("input.E0.0", True)
+    referenced.advance(1.0)
+    assert velocity(referenced) == pytest.approx(1000)
+    referenced.set("input.E0.0", False)  # taken away while the spindle turns: it brakes and waits
+    referenced.advance(1.0)
+    assert velocity(referenced) == 0.0
+    referenced.set("input.E0.0", True)
+    referenced.advance(1.0)
+    assert velocity(referenced) == pytest.approx(1000)
+
+
 @pytest.mark.manual("§2.3.1 N", "N27 negative: A0.1 stays a free output")
 def test_n27_negative_leaves_a0_1_free(referenced: Plant) -> None:
     c = referenced.client()

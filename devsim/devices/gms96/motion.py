@@ -121,8 +121,8 @@ class Indexer:
         fd = self.feed
         if feed is None and self._junction_braking:
             feed = self.junction_feed
-        if self.image.marker(0, 0) or (self.kind != "spindle" and self.enable_blocked()):
-            return 0.0  # M0.0 STOP, or no enable
+        if self.image.marker(0, 0) or self.enable_blocked():
+            return 0.0  # M0.0 STOP, or no enable (N51: "alle Fahrten", the spindle simulation too)
         if self.kind == "search":
             v = float(fd.S)
         elif self.kind == "spindle":
