@@ -9,7 +9,7 @@ import pytest
 from devsim.devices.gms96.client import Gms96Client
 from devsim.devices.gms96.i2t import A_REF, I_BASE, K_ACC
 from tests.gms96.conftest import Plant
-from tests.gms96.test_motion_reference import send
+from tests.gms96.test_motion_reference import last, send
 
 I2T_NOW, I2T_LATCHED = 0x20, 0x40  # T3;0 I.5, I.6 (manual §2.3.1 T)
 K_I2T = 0x01  # #1 K.0 (manual §2.3.2)
@@ -98,3 +98,25 @@ def test_the_accelerating_current_counts_for_i2t(referenced: Plant) -> None:
     referenced.advance(0.02)
     assert status(c) & (I2T_NOW | I2T_LATCHED) == I2T_NOW | I2T_LATCHED
     assert c.read(1, 5)[1] == round(252 * level)  # held at the N15 level
+
+
+@pytest.mark.manual("§3.1", "I²t evaluates the motor current; the limitation usually brings a following error, "
+                    "after which the position and current control are off: no current flows, the I²t runs back")
+@pytest.mark.manual("§2.3.1 T", "T3;0 I.5: I²t limitation active (now); I.6 latched; T1;5 the motor current")
+def test_no_current_no_i2t_after_the_following_error(referenced: Plant) -> None:
+    c = referenced.client()
+    level = N15_DEFAULT / 255.0
+    referenced.set("quantity.load_pct", load_for(2 * level))  # the load stays on all the time
+    send(c, "A", 100000)
+    referenced.advance(ALLOWED_AT_100_PCT + 0.01)
+    assert status(c) & (I2T_NOW | I2T_LATCHED) == I2T_NOW | I2T_LATCHED
+    dev = referenced.device()
+    referenced.run_until(lambda d: d.stage.idxoff, 5.0)  # the limited current cannot carry the load
+    t_fe = last(dev, "following_error")
+    referenced.advance(0.1)
+    assert c.read(1, 5)[1] == 0  # controller off: no motor current
+    # the integral stood at its threshold 3·2 s while limited; with no current it runs back at 1 per second
+    referenced.advance(t_fe + 3 * ALLOWED_AT_100_PCT - 0.05 - referenced.now())
+    assert status(c) & I2T_NOW
+    referenced.advance(0.1)
+    assert status(c) & (I2T_NOW | I2T_LATCHED) == I2T_LATCHED

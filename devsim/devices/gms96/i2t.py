@@ -8,6 +8,8 @@ accelerates the axis (spec §5.7, as ``T1;5`` reports it) — starts the limitat
 level and the integral runs back; the limitation ends when it is 0 again.  The current follows the
 axis's segments (constant on a linear ramp, ``a·π/2·sin`` on a sin² ramp), so the integral is
 exact in closed form and the crossings are solved and scheduled on the device clock, never sampled.
+While the position and current control are off (manual §3.1: "wird die Lage- und Stromregelung
+abgeschaltet"; a following error, Notaus) no current flows and the integral runs back.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from devsim.core.clock import Clock, Timer
 from devsim.core.parameters import Param
 from devsim.core.settings import Settings
 from devsim.devices.gms96.params import NParameters
+from devsim.devices.gms96.stage import PowerStage
 
 __all__ = ["A_REF", "I_BASE", "K_ACC", "I2t"]
 
@@ -50,7 +53,7 @@ class I2t:
         params: NParameters,
         geometry: Settings,
         axis: Axis,
-        load_pct: Callable[[], float],
+        stage: PowerStage,
         settled: Callable[[], None],
         record_event: Callable[[str], None],
     ) -> None:
@@ -58,7 +61,7 @@ class I2t:
         self.params = params
         self.geometry = geometry  # the configured axis: i2t_t_allow_s
         self.axis = axis  # its segments give the accelerating current
-        self.load_pct = load_pct
+        self.stage = stage  # no current while the position and current control are off
         self.settled = settled  # the limitation may have changed: blockage, outputs, waits
         self.record_event = record_event
         self.q = 0.0
@@ -67,8 +70,8 @@ class I2t:
         self.latched = False
         self.powered = True
         self._timer: Timer | None = None
-        # what held since ``t``: the load (%), the N15 level and the N39 peak (fractions of Imax)
-        self._held = (0.0, self.level(), params.peak_current_pct / 100.0)  # (no load until one is set)
+        # what held since ``t``: the load (%), the N15 level and the N39 peak (fractions of Imax), control on
+        self._held = (0.0, self.level(), params.peak_current_pct / 100.0, False)  # (nothing until power-on)
         params.on_change(self._parameter_written)
 
     def _parameter_written(self, row: Param, value: int) -> None:
@@ -97,8 +100,12 @@ class I2t:
         """N15 as a fraction of Imax."""
         return self.params.i2t_level / 255.0
 
-    def _inputs(self) -> tuple[float, float, float]:
-        return self.load_pct(), self.level(), self.params.peak_current_pct / 100.0
+    def load_pct(self) -> float:
+        """The machine side's load (``quantity.load_pct``): current beyond rest, % of Imax."""
+        return float(self.stage.signals.get("load_pct"))
+
+    def _inputs(self) -> tuple[float, float, float, bool]:
+        return self.load_pct(), self.level(), self.params.peak_current_pct / 100.0, self.stage.controller
 
     def demand(self) -> float:
         """The current the load asks for (without acceleration), limited by N39."""
@@ -126,6 +133,9 @@ class I2t:
 
     def _pieces(self, start: float) -> Iterator[Piece]:
         """The current from ``start`` on, piece by piece, the rest after the last segment to inf."""
+        if not self._held[3]:  # the control is off (a fault, Notaus): no current flows
+            yield start, math.inf, 0.0, 0.0, 0.0, 0.0
+            return
         base = I_BASE + self._held[0] / 100.0
         t = start
         for seg in self.axis.segments(since=start):
@@ -145,7 +155,7 @@ class I2t:
         """Integrate from ``start`` toward ``until`` with the limitation ``limiting`` fixed; stop at
         the first crossing (q reaching the threshold, or 0 while limiting).  Returns q and the
         instant of that crossing (None: none before ``until``, q is then the value at ``until``)."""
-        _load, level, cap = self._held
+        _load, level, cap, _on = self._held
         if level <= 0 or until <= start:
             return q, None
         if limiting:
