@@ -120,3 +120,21 @@ def test_no_current_no_i2t_after_the_following_error(referenced: Plant) -> None:
     assert status(c) & I2T_NOW
     referenced.advance(0.1)
     assert status(c) & (I2T_NOW | I2T_LATCHED) == I2T_LATCHED
+
+
+@pytest.mark.manual("§3.1", "I²t: the current of an axis pressed against a blockage counts like any other; "
+                    "above the limit it is allowed for the I²t time, then held at the N15 level")
+def test_a_blocked_axis_trips_the_i2t(referenced: Plant) -> None:
+    c = referenced.client()
+    level = N15_DEFAULT / 255.0
+    send(c, "f", 100)  # slow: the following error (N20 = 1000) would take 10 s
+    send(c, "A", 100000)
+    referenced.advance(1.0)
+    referenced.set("quantity.blocked", True)
+    assert c.read(1, 5)[1] == 252  # the peak current (N39 = 100 %)
+    allowed = 3 * ALLOWED_AT_100_PCT / (1.0 / level**2 - 1.0)  # the integral's threshold at (i² - L²)/L²
+    referenced.advance(allowed - 0.01)
+    assert status(c) & (I2T_NOW | I2T_LATCHED) == 0
+    referenced.advance(0.02)
+    assert status(c) & (I2T_NOW | I2T_LATCHED) == I2T_NOW | I2T_LATCHED
+    assert c.read(1, 5)[1] == round(252 * level)

@@ -3,7 +3,8 @@
 Manual §3.1: "Die Motorelektronik prüft ständig, ob der angegebene Stromwert ... überschritten
 wird. Dabei wird der Betrag des Stromes bewertet": the integral ``q`` of ``(i² - level²) / level²``
 over time (never below 0) of the motor current ``i`` — the load's current and the current that
-accelerates the axis (spec §5.7, as ``T1;5`` reports it) — starts the limitation when it reaches
+accelerates the axis, the peak current while a blockage or an end stop holds it (spec §5.7, as
+``T1;5`` reports it) — starts the limitation when it reaches
 ``3 · i2t_t_allow_s`` (2 s at 100 % overload); while it limits, the current is held at the N15
 level and the integral runs back; the limitation ends when it is 0 again.  The current follows the
 axis's segments (constant on a linear ramp, ``a·π/2·sin`` on a sin² ramp), so the integral is
@@ -17,10 +18,10 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator
 
-from devsim.core.axis import Axis
 from devsim.core.clock import Clock, Timer
 from devsim.core.parameters import Param
 from devsim.core.settings import Settings
+from devsim.devices.gms96.motion import Indexer
 from devsim.devices.gms96.params import NParameters
 from devsim.devices.gms96.stage import PowerStage
 
@@ -52,7 +53,7 @@ class I2t:
         clock: Clock,
         params: NParameters,
         geometry: Settings,
-        axis: Axis,
+        indexer: Indexer,
         stage: PowerStage,
         settled: Callable[[], None],
         record_event: Callable[[str], None],
@@ -60,7 +61,7 @@ class I2t:
         self.clock = clock
         self.params = params
         self.geometry = geometry  # the configured axis: i2t_t_allow_s
-        self.axis = axis  # its segments give the accelerating current
+        self.indexer = indexer  # the axis's segments give the accelerating current; blockage, end stops
         self.stage = stage  # no current while the position and current control are off
         self.settled = settled  # the limitation may have changed: blockage, outputs, waits
         self.record_event = record_event
@@ -70,8 +71,9 @@ class I2t:
         self.latched = False
         self.powered = True
         self._timer: Timer | None = None
-        # what held since ``t``: the load (%), the N15 level and the N39 peak (fractions of Imax), control on
-        self._held = (0.0, self.level(), params.peak_current_pct / 100.0, False)  # (nothing until power-on)
+        # what held since ``t``: the load (%), the N15 level and the N39 peak (fractions of Imax), control
+        # on, and from when a blockage or an end stop holds the moving axis (inf: not in this plan)
+        self._held = (0.0, self.level(), params.peak_current_pct / 100.0, False, math.inf)  # until power-on
         params.on_change(self._parameter_written)
 
     def _parameter_written(self, row: Param, value: int) -> None:
@@ -104,8 +106,24 @@ class I2t:
         """The machine side's load (``quantity.load_pct``): current beyond rest, % of Imax."""
         return float(self.stage.signals.get("load_pct"))
 
-    def _inputs(self) -> tuple[float, float, float, bool]:
-        return self.load_pct(), self.level(), self.params.peak_current_pct / 100.0, self.stage.controller
+    def _inputs(self) -> tuple[float, float, float, bool, float]:
+        return (self.load_pct(), self.level(), self.params.peak_current_pct / 100.0, self.stage.controller,
+                self._held_from())
+
+    def _held_from(self) -> float:
+        """From when a blockage, or an end stop the set-point runs into, holds the moving axis
+        (inf: not under this plan; the lag of a move away from a stop it stands at is no contact)."""
+        ix = self.indexer
+        if ix.blocked_at is not None:
+            return self.clock.now()
+        contact = ix.end_stop_contact()
+        stops = ix.geometry.end_stops
+        if contact is None or stops is None:
+            return math.inf
+        axis = ix.axis
+        upper = axis.position(contact) > 0.5 * (stops[0] + stops[1])
+        v = axis.velocity(contact)
+        return contact if (v > 0 if upper else v < 0) else math.inf
 
     def demand(self) -> float:
         """The current the load asks for (without acceleration), limited by N39."""
@@ -132,22 +150,29 @@ class I2t:
             self._timer = None
 
     def _pieces(self, start: float) -> Iterator[Piece]:
-        """The current from ``start`` on, piece by piece, the rest after the last segment to inf."""
-        if not self._held[3]:  # the control is off (a fault, Notaus): no current flows
+        """The current from ``start`` on, piece by piece to inf (spec §5.7, as :class:`Torque`
+        reports it): none while the control is off; while a blockage or an end stop holds the
+        moving axis the peak current (N39); else rest, load and the accelerating current."""
+        load, _level, peak, on, held = self._held
+        if not on:
             yield start, math.inf, 0.0, 0.0, 0.0, 0.0
             return
-        base = I_BASE + self._held[0] / 100.0
+        base = I_BASE + load / 100.0
         t = start
-        for seg in self.axis.segments(since=start):
+        for seg in self.indexer.axis.segments(since=start):
             if seg.t0 > t:
                 yield t, seg.t0, base, 0.0, 0.0, 0.0  # at rest in between
-            t0 = max(seg.t0, t)
-            if seg.shape == "sine" and seg.span > 0:
-                yield t0, seg.t1, base, K_ACC * 0.5 * math.pi * abs(seg.a) / A_REF, seg.t0, math.pi / seg.span
-            else:
-                a = seg.acceleration(0.5 * (t0 + seg.t1)) if seg.t1 < math.inf else seg.acceleration(t0)
-                yield t0, seg.t1, base, K_ACC * abs(a) / A_REF, 0.0, 0.0
-            t = seg.t1
+            t0, t1 = max(seg.t0, t), seg.t1
+            if t0 < held:
+                end = min(t1, held)
+                if seg.shape == "sine" and seg.span > 0:
+                    yield t0, end, base, K_ACC * 0.5 * math.pi * abs(seg.a) / A_REF, seg.t0, math.pi / seg.span
+                else:
+                    a = seg.acceleration(0.5 * (t0 + end)) if end < math.inf else seg.acceleration(t0)
+                    yield t0, end, base, K_ACC * abs(a) / A_REF, 0.0, 0.0
+            if t1 > held:
+                yield max(t0, held), t1, peak, 0.0, 0.0, 0.0  # pressed against the blockage / end stop
+            t = t1
         if t < math.inf:
             yield t, math.inf, base, 0.0, 0.0, 0.0
 
@@ -155,7 +180,7 @@ class I2t:
         """Integrate from ``start`` toward ``until`` with the limitation ``limiting`` fixed; stop at
         the first crossing (q reaching the threshold, or 0 while limiting).  Returns q and the
         instant of that crossing (None: none before ``until``, q is then the value at ``until``)."""
-        _load, level, cap, _on = self._held
+        _load, level, cap, _on, _held = self._held
         if level <= 0 or until <= start:
             return q, None
         if limiting:

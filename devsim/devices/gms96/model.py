@@ -102,7 +102,7 @@ class Gms96Card(Model):
             params=self.params, card=self, run=lambda cmd: self.commands.run(cmd),
             queue_capacity=self.cfg.queue_capacity,
         )
-        self.i2t = I2t(clock, self.params, geo, self.axis, self.stage, self._i2t_settled, self.record_event)
+        self.i2t = I2t(clock, self.params, geo, self.indexer, self.stage, self._i2t_settled, self.record_event)
         self.torque = Torque(
             clock, self.axis, self.indexer, self.params, self.stage, self.i2t, self.executor,
             lambda: bool(signals.get("blocked")), self.record_event,
