@@ -652,6 +652,22 @@ def test_h7_at_the_end_stop(plant_factory: Any) -> None:
     assert c.read(0)[1] == 16384
 
 
+@pytest.mark.manual("§2.3.1 H", "H7: the following move is aborted when the current reaches P2 % of the maximum")
+def test_h7_moving_away_from_the_end_stop_is_no_contact(plant_factory: Any) -> None:
+    """Standing at an end stop, a move away from it does not press into it: its current stays low
+    (the lag of the actual position behind the set-point is no contact with the stop)."""
+    plant, c = referenced_plant(plant_factory, END)
+    send(c, "A", 16384)  # onto the upper stop
+    plant.idle()
+    send(c, "H", 7, 80)
+    send(c, "A", 0)
+    plant.advance(0.003)
+    assert c.read(1, 5)[1] < 252 * 0.8
+    plant.idle()
+    assert not any(e == "torque_abort" for _t, e in plant.device().events)
+    assert c.read(0)[1] == 0
+
+
 def test_h2_without_window_is_set_point_finished(referenced: Plant) -> None:
     c = referenced.client()
     send(c, "N", 200, 28)

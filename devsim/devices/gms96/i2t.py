@@ -111,19 +111,12 @@ class I2t:
                 self._held_from())
 
     def _held_from(self) -> float:
-        """From when a blockage, or an end stop the set-point runs into, holds the moving axis
-        (inf: not under this plan; the lag of a move away from a stop it stands at is no contact)."""
+        """From when a blockage or an end stop holds the moving axis (inf: not under this plan)."""
         ix = self.indexer
         if ix.blocked_at is not None:
             return self.clock.now()
         contact = ix.end_stop_contact()
-        stops = ix.geometry.end_stops
-        if contact is None or stops is None:
-            return math.inf
-        axis = ix.axis
-        upper = axis.position(contact) > 0.5 * (stops[0] + stops[1])
-        v = axis.velocity(contact)
-        return contact if (v > 0 if upper else v < 0) else math.inf
+        return math.inf if contact is None else contact
 
     def demand(self) -> float:
         """The current the load asks for (without acceleration), limited by N39."""

@@ -340,11 +340,12 @@ class Indexer:
         return self._end_stop(x) != x
 
     def at_end_stop(self) -> bool:
-        """The axis presses against an end stop: the set-point is past it (with the lag)."""
-        if self.blocked_at is not None or not self.stage.controller:
+        """The axis presses against an end stop: the set-point is past it (with the lag) — the
+        set-point itself too, or it only leaves a stop the axis stands at."""
+        stops = self.geometry.end_stops
+        if self.blocked_at is not None or not self.stage.controller or stops is None or self.stepper:
             return False
-        x = self.axis.position() - (0.0 if self.stepper else self.axis.velocity() / self.kv())
-        return self._end_stop(x) != x
+        return _pressing(self.axis.position(), self.axis.velocity(), stops, self.kv())
 
     def end_stop_contact(self) -> float | None:
         """The first instant >= now at which the actual position (set-point - v/Kv) reaches an end
@@ -587,14 +588,22 @@ class ActualSwitch(RegionSwitch):
         )
 
 
+def _pressing(x: float, v: float, stops: tuple[float, float], kv: float) -> bool:
+    """Set-point ``x`` at speed ``v`` presses into an end stop: the actual (x - v/Kv) and the
+    set-point are past the same stop (a set-point leaving a stop the axis stands at lags behind
+    it: the actual estimate x - v/Kv lies past the stop, but the controller pulls away)."""
+    lo, hi = stops
+    actual = x - v / kv
+    return (actual > hi and x > hi) or (actual < lo and x < lo)
+
+
 def _end_stop_contact(segments: list[Segment], now: float, stops: tuple[float, float], kv: float) -> float | None:
     """The first instant >= ``now`` at which set-point - v/Kv leaves ``stops`` under the plan
-    ``segments``: closed form while cruising, sign changes on a fine subdivision then bisection."""
-    lo, hi = stops
+    ``segments`` and the set-point presses into that stop (:func:`_pressing`): closed form while
+    cruising, sign changes on a fine subdivision then bisection."""
 
     def outside(seg: Segment, t: float) -> bool:
-        x = seg.position(t) - seg.velocity(t) / kv
-        return x > hi or x < lo
+        return _pressing(seg.position(t), seg.velocity(t), stops, kv)
 
     for seg in segments:
         if seg.t1 <= now:
@@ -604,7 +613,7 @@ def _end_stop_contact(segments: list[Segment], now: float, stops: tuple[float, f
             return t0
         if seg.t1 == math.inf:  # a cruise: the actual moves linearly
             v = seg.velocity(t0)
-            edge = hi if v > 0 else lo
+            edge = stops[1] if v > 0 else stops[0]
             if v == 0.0:
                 return None
             t = t0 + (edge - (seg.position(t0) - v / kv)) / v
