@@ -116,6 +116,23 @@ def test_queue_full_defer_e_version_repeat_gets_the_released_e5(plant_factory: A
     assert plant.read("position_setpoint") == 30000
 
 
+def test_queue_full_defer_e_version_a_released_e5_is_no_reply_to_a_later_frame(plant_factory: Any) -> None:
+    """E-version: the E5h released for a queued frame is not what a repetition of a frame the
+    host sent after it gets (spec §3.9: the previous reply, byte for byte)."""
+    plant = referenced(plant_factory({"dil": {"protocol": "E"}, "queue_capacity": 1}))
+    host = plant.host
+    assert host.ask(letter("A", 10000, control=0x73)) == "E5"
+    assert host.ask(letter("A", 20000, control=0x53)) == "E5"
+    assert host.silent(letter("A", 30000, control=0x73))  # the queue is full: its E5h waits
+    status = letter("T", 1, 0, control=0x53)  # answered at once, queue full or not
+    answer = host.ask(status)
+    assert answer.startswith("68")
+    plant.run_until(lambda d: not d.executor.deferred)
+    assert host.reply() == b"\xe5"  # A 30000's, released
+    assert host.ask(status) == answer  # the host missed T's answer and repeats: the same bytes
+    assert [e for _t, e in plant.device().events].count("duplicate") == 1
+
+
 def test_queue_full_drop_gives_no_reply_and_forgets_the_command(plant_factory: Any) -> None:
     plant = referenced(plant_factory({"queue_capacity": 1, "link": {"on_queue_full": "drop"}}))
     _fill_queue(plant)

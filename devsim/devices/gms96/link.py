@@ -25,6 +25,7 @@ card listening) it is answered in one step, without the decoder (what it would f
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from typing import Protocol
 
@@ -89,6 +90,7 @@ class Link:
         )
         self.last_fcb: int | None = None
         self.last_reply = NO_REPLY
+        self.accepted = 0  # E-version frames with FCV accepted: whose reply ``last_reply`` is
         self.errors = errors
         self.frames = 0
         self._expire: Timer | None = None
@@ -237,7 +239,13 @@ class Link:
                     return
                 self.last_fcb = fcb
         cmd, params, count = parsed
-        deferred = self._deferred_reply if mine else _no_reply
+        if not mine:
+            deferred: Callable[[bytes], None] = _no_reply
+        elif check and fcv:
+            self.accepted += 1
+            deferred = functools.partial(self._deferred_reply, self.accepted)
+        else:
+            deferred = self.send
         reply = self.letter_command(cmd, params, count, frame.data, deferred=deferred)
         if mine is None:
             return  # broadcast: executed, never answered (not even a deferred E5h)
@@ -246,9 +254,11 @@ class Link:
         if reply is not None:
             self.send(reply)
 
-    def _deferred_reply(self, reply: bytes) -> None:
-        """A queued command's E5h released when a queue slot frees (on_queue_full: defer)."""
-        if self.card.e_version:
+    def _deferred_reply(self, frame: int, reply: bytes) -> None:
+        """The E5h of the E-version's ``frame``-th frame with FCV, queued and released when a queue
+        slot frees (on_queue_full: defer): the reply a repetition gets, unless the host has sent
+        another frame with FCV since (spec §3.9: the previous reply, byte for byte)."""
+        if frame == self.accepted:
             self.last_reply = reply
         self.send(reply)
 
