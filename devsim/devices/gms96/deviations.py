@@ -9,8 +9,9 @@ DEVIATIONS: tuple[Deviation, ...] = (
     Deviation(
         "§2.1",
         "RS422 four-wire line used half duplex, DIN 19244 at 9600 or 38400 Bd, 8 data bits, even parity, 1 stop bit",
-        "the line is a pty or a socket: bytes arrive whole, without RS422 levels; baud rate and parity are what the "
-        "host's port is set to, the card neither checks them nor ever sees a parity error",
+        "the line is a pty or a socket: bytes arrive whole, without RS422 levels; a pty shows the host's baud rate "
+        "and stop bits but not its parity or data bits, RFC 2217 shows them all, and a host set otherwise than the "
+        "card gets the bytes garbled as a UART would (silence, as for a parity error)",
         "a pty carries bytes, not bits or line levels",
     ),
     Deviation(
