@@ -593,6 +593,38 @@ def test_the_output_test_counts_through_every_output(make) -> None:  # noqa: ANN
     assert cnc.read("output.nc_ready") is True and cnc.read("panel.mode") == "MANUAL"
 
 
+@pytest.mark.manual("§2.4.11", "Der Zyklus läuft unabhängig von der Stellung der Steuerungseingänge Not-Stop und NC-Stop ab")
+@pytest.mark.manual("§2.4.11", "bis er durch die Taste C abgebrochen wird; Abschluss: Aus-/Einschalten des Gerätes")
+def test_not_stop_pressed_and_released_leaves_the_output_test_alone(make) -> None:  # noqa: ANN001
+    """A Not-Stop pressed and released while P79 N6 runs neither clears its outputs (the bus, the
+    strobes, the travel commands) nor switches to MANUAL with the mode code on the bus; after C,
+    a Not-Stop released leaves every output L until the power cycle."""
+    cnc = make(mode="PROGRAM_ENTRY")
+    cnc.set("diagnostics.output_test", True)
+    cnc.advance(0.25 * 20 + 0.1)  # n = 20 = 0b10100: contacts 3 and 5 of each group
+    image = {name: cnc.read(f"output.{name}") for name in ("data_bus", "strobe_s2", "strobe_ba", "travel_z",
+                                                            "inside_working_field", "machine_standstill")}
+    assert image["data_bus"] == 20 and image["strobe_s2"] is True and image["travel_z"] is True
+    seen = []
+    cnc.set("input.emergency_stop", False)
+    seen.append({name: cnc.read(f"output.{name}") for name in image})
+    cnc.advance(0.01)
+    cnc.set("input.emergency_stop", True)
+    for _ in range(10):
+        seen.append({name: cnc.read(f"output.{name}") for name in image})
+        cnc.advance(0.005)
+    assert seen == [image] * len(seen)
+    assert cnc.read("panel.mode") == "PROGRAM_ENTRY" and cnc.read("diagnostics.output_test") is True
+    cnc.set("diagnostics.output_test", False)  # C
+    cnc.set("input.emergency_stop", False)
+    cnc.set("input.emergency_stop", True)
+    for _ in range(20):
+        cnc.advance(0.005)
+        assert cnc.read("output.data_bus") == 0 and cnc.read("output.strobe_ba") is False
+        assert cnc.read("output.machine_standstill") is False
+    assert cnc.read("panel.mode") == "PROGRAM_ENTRY"
+
+
 @pytest.mark.manual("§2.4.5", "sofort, wenn ein Fehler festgestellt wird, wird der Ausgang auf L-Level gesetzt. Am Bildschirm erscheint eine Fehlermeldung")
 def test_monitoring_alarms_drop_nc_ready_and_stop_the_axes(make) -> None:  # noqa: ANN001
     """S35, S36 (spec §4.10, §5.2, §5.7): an encoder loss or a following error beyond its limit

@@ -93,14 +93,13 @@ class Executor:
 
     ``mode()`` is the operating mode, ``booting()`` whether the control starts up,
     ``inside_field()`` whether every axis is inside the working field, ``program()`` the blocks to
-    run and whether they were typed in inch; ``released()`` is what Not-Stop's release does
-    (MANUAL), ``stop_manual()`` stops manual motion with Not-Stop."""
+    run and whether they were typed in inch; ``stop_manual()`` stops manual motion with Not-Stop
+    (the model hears the Not-Stop input and calls :meth:`emergency_stop`)."""
 
     def __init__(self, clock: Clock, signals: SignalBank, mst: MstBus, motion: BlockMotion,
                  functions: BlockFunctions, flow: ProgramFlow, params: MachineParameters, screen: Screen, *,
                  mode: Callable[[], str], booting: Callable[[], bool], inside_field: Callable[[], bool],
-                 program: Program, released: Callable[[], None], stop_manual: Callable[[], None],
-                 options: ExecutionOptions) -> None:
+                 program: Program, stop_manual: Callable[[], None], options: ExecutionOptions) -> None:
         self._clock = clock
         self.signals = signals
         self._mst = mst
@@ -112,7 +111,6 @@ class Executor:
         self._booting = booting
         self._inside_field = inside_field
         self._program = program
-        self._released = released
         self._stop_manual = stop_manual
         self._options = options
         self.state = "IDLE"
@@ -124,7 +122,7 @@ class Executor:
         self._timer: Timer | None = None
         self._next_block = BlockChain(self._block_start, self._program_end, screen)
         for name, handler in (("nc_start", self._nc_start_input), ("nc_stop", self._nc_stop_input),
-                              ("emergency_stop", self._emergency_input), ("axis_enable", self._wait_input),
+                              ("axis_enable", self._wait_input),
                               ("program_continue", self._wait_input), ("tool_change_ack", self._wait_input),
                               ("m10_ack", self._m10_ack_input), ("override_pot_v", self._override_input),
                               ("block_abort", self._block_abort_input)):
@@ -202,12 +200,6 @@ class Executor:
             self._brake("HOLD")
         elif self.state in RUNNING:
             self.stop_pending = True  # the output goes on; the motion waits for NC-Start (§2.3.1)
-
-    def _emergency_input(self, _name: str, _old: Any, new: Any) -> None:
-        if not new:
-            self.emergency_stop()
-        else:
-            self._released()
 
     def left_field(self) -> None:
         """An axis left the working field: all brake as with NC-Stop, the program stops (§2.4.4)."""

@@ -119,7 +119,7 @@ class PoselestaCnc(Model):
             self.params, self.screen, mode=mode,
             booting=booting, inside_field=lambda: self.field.inside,
             program=lambda: self.memory.to_run(self.program, self.mode == "MANUAL_SINGLE_BLOCK"),
-            released=self.emergency_released, stop_manual=lambda: self.manual.reset(),
+            stop_manual=lambda: self.manual.reset(),
             options=ExecutionOptions(cfg.variant == "III", cfg.m06_requires_nc_start, cfg.g25_full_circle,
                                      start_stop_status=cfg.variant == "III"))
         plc = cfg.plc
@@ -131,6 +131,7 @@ class PoselestaCnc(Model):
                                    feed_pot=lambda: feed_pot(signals))
         self.output_test = OutputTest(self.clock, signals, self.record_event, may_start=lambda: (
             self.mode == "PROGRAM_ENTRY" and not self.executor.running))
+        signals.subscribe("emergency_stop", self._not_stop)
         self.cassette: Cassette | None = None
         if cfg.v6_peer == "cassette":
             self.cassette = Cassette(self.clock, self.nvram, function=lambda: self.links.function("v6"),
@@ -225,6 +226,20 @@ class PoselestaCnc(Model):
             self.screen.clear()
             self.mst.mode(MODES[mode])
             self.record_event("mode")
+
+    def _not_stop(self, _name: str, _old: Any, new: Any) -> None:
+        """Not-Stop V19/2 (§2.3.2): L stops the axes at once and gives the program up, the release
+        switches to MANUAL.  The output test P79 N6 "läuft unabhängig von der Stellung der
+        Steuerungseingänge Not-Stop und NC-Stop ab" (§2.4.11): while it has the outputs (running,
+        or stopped by C until the power cycle) the axes stop, the outputs and the mode stay."""
+        if self.output_test.running or self.output_test.stopped:
+            if not new:
+                self.block_motion.quick_stop()
+                self.manual.reset()
+        elif not new:
+            self.executor.emergency_stop()
+        else:
+            self.emergency_released()
 
     def emergency_released(self) -> None:
         """Not-Stop released (§2.3.2): the control switches to MANUAL and outputs its code."""
