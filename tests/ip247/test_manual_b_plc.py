@@ -431,3 +431,24 @@ def test_tbit_in_single_block(plc: Plc) -> None:
         assert plc.module.read("axis.1.tbit") is False
         positions.append(plc.module.read("axis.1.position"))
     assert positions == [10_000, 10_000, 20_000]
+
+
+@pytest.mark.manual("§4.4", "Beobachtbetriebsarten sind: 66, 71, 73, 74 Beobachtung ausschalten (FB164); sie lassen "
+                    "die eingestellte Bedienbetriebsart unbeeinflusst und können jederzeit und unabhängig vom "
+                    "Zustand einer Achse ausgeführt werden")
+@pytest.mark.manual("§6.2.4", "BA 74 Beobachten ausschalten is a mode FB164 hands over; only 72 (all pages) and 71, 73 "
+                    "(data channel) are negatively acknowledged")
+def test_observation_off_leaves_the_axis_and_its_error_alone(plc: Plc) -> None:
+    plc.ready()
+    assert plc.ag.operate(0, 6, "Start", w=1000, dd=900_000)[4] == 23  # beyond the SW limit: pending
+    answer = plc.ag.operate(0, 74, "Start")
+    assert answer[0] == 0 and answer[4] == 23 and plc.ag.observe(0)[4] == 23
+    assert plc.ag.operate(0, 7, "Vorwärts", w=1000, dd=20_000)[4] == 0
+    plc.module.advance(0.5)
+    for cmd in ("Start", "Stopp"):
+        answer = plc.ag.operate(0, 74, cmd)
+        assert answer[0] == 0 and answer[4] == 0 and answer[5] == 7, cmd
+    assert plc.module.read("axis.1.running") is True
+    plc.module.advance(5)
+    assert plc.module.read("axis.1.position") == 21_000 and plc.ag.observe(0)[4] == 0
+    assert plc.ag.operate(DATA_CHANNEL, 74, "Start")[0] == 0

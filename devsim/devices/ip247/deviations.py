@@ -111,7 +111,8 @@ DEVIATIONS: tuple[Deviation, ...] = (
               "converted to BCD when the parameter BCD is 1; the module's negative acknowledgement shows at "
               "FB164 as PAFE with the SEND/RECEIVE error C1H",
               "OBSERVE (62H) returns actual value and residual distance (binary) at any time; a refused job "
-              "is ack 80H; there is no ANZG, BA74 or PAFE",
+              "is ack 80H; there is no ANZG or PAFE, and an OPERATE with BA74 is taken (ack 00H) and changes "
+              "nothing (there is no cyclic reading to stop)",
               "cyclic observation, the BCD output and PAFE are FB164's, not the module's"),
     Deviation("§6.2.6", "TBIT is FB164's output, set by the FB when it hands over a job and reset when the module "
               "reports the job finished, with a reliable edge even for jobs shorter than a PLC cycle",

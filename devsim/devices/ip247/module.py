@@ -30,7 +30,7 @@ from devsim.devices.ip247.programs import ProgramJobs
 from devsim.devices.ip247.records import DataChannel
 from devsim.devices.ip247.signals import SIGNALS
 from devsim.devices.ip247.store import ProgramStore
-from devsim.devices.ip247.tables import MODES, NONEXISTENT, mode_token, page_error
+from devsim.devices.ip247.tables import MODES, NONEXISTENT, OBSERVE_MODES, mode_token, page_error
 
 __all__ = ["Ip247Module", "OBSERVED", "OPERATOR_JOBS", "OPERATOR_MODES"]
 
@@ -239,6 +239,8 @@ class Ip247Module(Model):
         error 1 from the PG, 5 from the PLC)."""
         if ba in NONEXISTENT - {3} or (ba in MODES and ba not in OPERATOR_MODES):
             return ACK_NEGATIVE  # BA18/19/72 and the record modes: not an operator job here
+        if ba in OBSERVE_MODES:  # BA74 "Beobachtung ausschalten" (FB164's own): nothing changes (§4.4)
+            return ACK_ACCEPTED
         unit = self.unit(page)
         if unit is not None and unit.braking and ba in OPERATOR_MODES:
             queue = self.job_lists[source]
