@@ -452,3 +452,15 @@ def test_observation_off_leaves_the_axis_and_its_error_alone(plc: Plc) -> None:
     plc.module.advance(5)
     assert plc.module.read("axis.1.position") == 21_000 and plc.ag.observe(0)[4] == 0
     assert plc.ag.operate(DATA_CHANNEL, 74, "Start")[0] == 0
+
+
+@pytest.mark.manual("§6.2.4", "Auf dem Datenkanal werden zusätzlich auch die Betriebsarten 1-16 negativ quittiert")
+@pytest.mark.manual("§7.2.2", "error 46 also when one of the operator modes 1 … 17 other than 17 is tried on the "
+                    "data channel (axis 4)")
+def test_every_mode_1_to_16_is_refused_on_the_data_channel(plc: Plc) -> None:
+    """BA3 ("frei", an undefined mode, error 2 on an axis page) is one of them."""
+    assert plc.ag.operate(0, 3, "Start")[:1] + plc.ag.operate(0, 3, "Start")[4:5] == bytes((0, 2))
+    for ba in range(1, 17):
+        answer = plc.ag.operate(DATA_CHANNEL, ba, "Start")
+        assert answer[0] == 0x80 and answer[4] == 46, ba
+    assert plc.ag.operate(DATA_CHANNEL, 17, "Start")[0] == 0

@@ -26,12 +26,14 @@ def test_the_error_tables_are_complete() -> None:
 
 def test_page_rules() -> None:
     """§3.2: motion modes only on axis pages (46 on the data channel), programs only on the data
-    channel, MD only on axis pages; BA18/19/72 and BA3 are refused everywhere; BA67 on the data
-    channel only when the MD DB numbers differ."""
+    channel, MD only on axis pages; BA18/19/72 and BA3 are refused everywhere (BA3 with 46 on the
+    data channel, where §6.2.4 refuses every mode 1 … 16); BA67 on the data channel only when the MD
+    DB numbers differ."""
     assert page_error(1, 1) is None and page_error(1, DATA_CHANNEL) == 46
     assert page_error(22, DATA_CHANNEL) is None and page_error(22, 2) == 46
     assert page_error(20, 3) is None and page_error(20, DATA_CHANNEL) == 46
     assert page_error(17, DATA_CHANNEL) is None and page_error(70, 1) is None
-    assert {page_error(m, p) for m in (3, 18, 19, 72) for p in (1, 2, 3, DATA_CHANNEL)} == {2}
+    assert {page_error(m, p) for m in (3, 18, 19, 72) for p in (1, 2, 3)} == {2}
+    assert {page_error(m, DATA_CHANNEL) for m in (18, 19, 72)} == {2} and page_error(3, DATA_CHANNEL) == 46
     assert page_error(67, DATA_CHANNEL) == 46 and page_error(67, DATA_CHANNEL, md_numbers_differ=True) is None
     assert sorted(MODES)[:3] == [1, 2, 4] and MODES[68].name == "Maschinendatenübersicht"

@@ -249,6 +249,9 @@ class Ip247Module(Model):
                 return ACK_FULL
             queue.append((page, ba, cmd, b, w, dd))
             return ACK_QUEUED
+        if page_error(ba, page) == 46:
+            self.set_error(unit, 46)
+            return ACK_NEGATIVE
         job = OPERATOR_JOBS.get(mode_token(ba))
         if job is None:  # an undefined mode (3, 25 … 63, 75 …): error 2, and what runs is aborted
             error: int | None = 2
@@ -257,9 +260,6 @@ class Ip247Module(Model):
             if error is not None:
                 self.set_error(unit, error)
             return ACK_ACCEPTED
-        if page_error(ba, page) == 46:
-            self.set_error(unit, 46)
-            return ACK_NEGATIVE
         return job(self, unit, Job(page, ba, cmd), b, w, dd, source)
 
     def _clear_errors(self, unit: AxisUnit | None, job: Job, b: int, w: int, dd: int, source: str) -> int:

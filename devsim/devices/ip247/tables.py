@@ -177,6 +177,8 @@ NONEXISTENT = frozenset((3, 18, 19, 72))
 def page_error(mode: int, page: int, *, md_numbers_differ: bool = False) -> int | None:
     """The module error a mode gets on a page (spec §3.2 page rules): 2 for a mode that does not
     exist, 46 for a mode not permitted on this page, None when it may run there."""
+    if page == DATA_CHANNEL and 1 <= mode <= 16:
+        return 46  # §6.2.4 "Auf dem Datenkanal werden zusätzlich auch die Betriebsarten 1-16 negativ quittiert"
     if mode in NONEXISTENT or mode not in MODES:
         return 2
     pages = MODES[mode].pages
