@@ -464,3 +464,25 @@ def test_every_mode_1_to_16_is_refused_on_the_data_channel(plc: Plc) -> None:
         answer = plc.ag.operate(DATA_CHANNEL, ba, "Start")
         assert answer[0] == 0x80 and answer[4] == 46, ba
     assert plc.ag.operate(DATA_CHANNEL, 17, "Start")[0] == 0
+
+
+@pytest.mark.manual("§4.3.10", "Sie können im Achszustand 'fertig' einen anstehenden Fehler auf allen Achsen und dem "
+                    "Datenkanal mit dem Kommando 'Fehler löschen', 'Start' rücksetzen")
+@pytest.mark.manual("§6.2.7.2", "BA17 Fehler löschen: zulässiger Befehl Start")
+@pytest.mark.manual("§7.2.2", "error 2: the job was senseless at this point, e.g. starting an axis that runs; the "
+                    "running mode is aborted and the error shown")
+def test_clearing_errors_needs_a_finished_axis_and_start(plc: Plc) -> None:
+    plc.ready()
+    plc.ready(2)
+    assert plc.ag.operate(1, 6, "Start", w=1000, dd=900_000)[4] == 23  # axis 2: error pending
+    assert plc.ag.operate(0, 7, "Vorwärts", w=1000, dd=50_000)[4] == 0
+    plc.module.advance(0.3)
+    answer = plc.ag.operate(0, 17, "Start")  # on the page of the axis that runs
+    assert answer[4] == 2 and answer[5] == 7
+    plc.module.advance(3)
+    assert plc.module.read("axis.1.running") is False and plc.module.read("axis.1.position") < 51_000 - 10_000
+    assert plc.ag.observe(1)[4] == 23  # nothing cleared
+    for cmd in ("Stopp", "Vorwärts", "Übernahme"):
+        answer = plc.ag.operate(0, 17, cmd)
+        assert answer[4] == 2 and plc.ag.observe(1)[4] == 23, cmd
+    assert plc.ag.operate(0, 17, "Start")[4] == 0 and list(plc.ag.observe(1)[16:20]) == [0, 0, 0, 0]

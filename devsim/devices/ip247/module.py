@@ -23,7 +23,7 @@ from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.ip247 import machine_data
 from devsim.devices.ip247.axis_unit import AxisUnit
 from devsim.devices.ip247.basp import Basp
-from devsim.devices.ip247.jobs import STOP, TAKE_OVER, Job, refusal
+from devsim.devices.ip247.jobs import START, STOP, TAKE_OVER, Job, refusal
 from devsim.devices.ip247.modes import AxisModes
 from devsim.devices.ip247.pg_profile import ACK_ACCEPTED, ACK_FULL, ACK_NEGATIVE, ACK_QUEUED, Observation
 from devsim.devices.ip247.programs import ProgramJobs
@@ -263,7 +263,13 @@ class Ip247Module(Model):
         return job(self, unit, Job(page, ba, cmd), b, w, dd, source)
 
     def _clear_errors(self, unit: AxisUnit | None, job: Job, b: int, w: int, dd: int, source: str) -> int:
-        """BA17: the errors of every axis and the data channel (spec §3.2)."""
+        """BA17 "Start" in the axis state "fertig" (§4.3.10): the errors of every axis and the data
+        channel.  Another command, or an axis that runs or waits, is a job as any (error 2, §4.1)."""
+        if unit is not None and (job.cmd != START or unit.running or unit.waiting_start is not None):
+            return self._axis_job(unit, job, b, w, dd, source)
+        if job.cmd != START:
+            self.set_error(unit, 2)
+            return ACK_ACCEPTED
         for u in self.units:
             u.error = 0
         self.channel.error = 0
@@ -273,7 +279,7 @@ class Ip247Module(Model):
         return ACK_ACCEPTED
 
     def _axis_job(self, unit: AxisUnit | None, job: Job, b: int, w: int, dd: int, source: str) -> int:
-        """BA1 … BA16 on an axis page: the checks (:func:`.jobs.refusal`), then the mode."""
+        """BA1 … BA17 on an axis page: the checks (:func:`.jobs.refusal`), then the mode."""
         assert unit is not None
         unit.error = 0  # a new operator job acknowledges the page's pending error (spec §3.1)
         if unit.automatic is not None and job.ba not in (8, 9) and not unit.running:
