@@ -68,6 +68,26 @@ def test_power_up_outputs_the_mode_code_with_the_ba_strobe(devsim_device) -> Non
     assert cnc.read("output.nc_ready") is True
 
 
+@pytest.mark.manual("§2.4.8", "Der Uebernahmeimpuls Betriebsart hat einen festen Zeitablauf, welcher durch die M-, S- und T-Quittierung nicht beeinflusst wird")
+@pytest.mark.manual("§2.4.1", "Zu jeder Funktion wird ein separater Uebernahmeimpuls (STROBE) ausgegeben: M, S1, S2, T und Betriebsart")
+def test_a_program_started_at_once_waits_for_the_mode_code(make) -> None:  # noqa: ANN001
+    """NC-Start 5 ms after the switch to AUTO_CONTINUOUS: the mode code 0x0C still gets its strobe
+    for t1 (20 ms), and M03 goes on the bus only after it (t2 after the bus went back to 00)."""
+    cnc = make(program="N1 M03 X1", mode="MANUAL")
+    cnc.set("panel.mode", "AUTO_CONTINUOUS")
+    cnc.advance(0.005)
+    cnc.set("panel.nc_start", True)
+    seen = []
+    for _ in range(150):
+        cnc.advance(0.001)
+        seen.append(bus(cnc))
+    ba = [row for row in seen if row[5]]
+    assert len(ba) == 20 and {row[0] for row in ba} == {0x0C}
+    strobes = [(row[0], row[1], row[5]) for row in seen if row[1] or row[5]]
+    assert strobes == [(0x0C, False, True)] * 20 + [(0x03, True, False)] * 20
+    assert cnc.read("output.m03") is True
+
+
 @pytest.mark.manual("§2.4.8", "Ausgabereihenfolge innerhalb eines Satzes: M, (M*), S1, S2, T")
 @pytest.mark.manual("§2.4.1", "Zuerst erfolgt die Ausgabe der Einer- und Zehnerstellen (S 1) und danach die Ausgabe der Hunderter- und Tausenderstellen (S 2)")
 @pytest.mark.manual("§2.4.8", "nach Ablauf der programmierten Zeit T1 wird der entsprechende Uebernahmepuls mitausgegeben; die Länge des Uebernahmeimpulses entspricht dann der Zeit T1")

@@ -4,8 +4,9 @@ V22/7 (manual §2.4.1, §2.4.7, §2.4.8, §2.3.19; spec poselesta.md §4.4, the 
 For each function: the code goes on the bus; after t1 its strobe goes H; the strobe stays H
 until the acknowledge is H *and* t1 has passed; after the strobe falls the control waits for the
 acknowledge to go L, then t2, then the next code (or 00 after the last).  The mode code (BA) has
-a fixed timing that ignores the acknowledge: bus, t1, strobe H, t1, strobe L, t2, bus 00.
-t1 = t2 = P72 (1 … 99 ms; 0 is taken as 1 ms, spec §4.8).
+a fixed timing that ignores the acknowledge: bus, t1, strobe H, t1, strobe L, t2, bus 00; the
+functions of a block started meanwhile follow it.  t1 = t2 = P72 (1 … 99 ms; 0 is taken as 1 ms,
+spec §4.8).
 
 :class:`PlcHelper` is the plant side the manual describes: the acknowledge bridged to the strobes
 (the strobe is then t1 long), a PLC that answers after a delay, or nobody (``manual``); it can
@@ -58,10 +59,10 @@ class MstBus:
         if not functions:
             done()
             return
-        self._abandon_ba()
         self._queue = list(functions)
         self._done = done
-        self._next()
+        if self.phase != "ba":  # (a mode code on the bus keeps its fixed sequence: they follow it, §2.4.8)
+            self._next()
 
     def _next(self) -> None:
         if not self._queue:
@@ -128,6 +129,8 @@ class MstBus:
     def _ba_done(self) -> None:
         self.signals.set("data_bus", 0)
         self.phase = "idle"
+        if self._done is not None:
+            self._next()  # the functions of a block started while the mode code went out
 
     def _abandon_ba(self) -> None:
         if self.phase == "ba":
