@@ -3,8 +3,12 @@
 The bus gives every device every byte (as on a real two-wire bus, each receiver sees all
 traffic) and merges their outputs onto the one line.  What one device sends is also heard by
 the others that listen to the line (``Device.hears_others``) – that is how a SERS master
-(address 0) drives its slaves on the same line – but never by itself.  Which device answers is the devices' own business: each decides from its
-address whether a telegram is meant for it.
+(address 0) drives its slaves on the same line – but never by itself, and what a device that
+does not talk to others (``Device.talks_to_others``: a SERS slave's echo, answer or ``@1POS=1``)
+sends only by those that do (the master waiting for that answer): a slave's echo of a host's
+line is no command for the other slaves (SERS manual §3.6.2: a master commands its slaves).
+Which device answers is the devices' own business: each decides from its address whether a
+telegram is meant for it.
 
 Bytes a device sends while another is still digesting input are queued and handed on once that
 device has finished, so no device is ever fed re-entrantly; the order on the line is the order
@@ -54,8 +58,10 @@ class Bus:
         try:
             while self._queue:
                 source, data = self._queue.popleft()
+                talker = source is None or source.talks_to_others
                 for device in self.devices:
-                    if device is not source and (source is None or device.hears_others):
+                    if device is not source and (source is None or device.hears_others
+                                                 and (talker or device.talks_to_others)):
                         device.feed(data)
         finally:
             self._busy = False

@@ -183,6 +183,10 @@ class Port:
     def hears_others(self) -> bool:
         return self.device.hears_others
 
+    @property
+    def talks_to_others(self) -> bool:
+        return self.device.talks_to_others
+
     def attach(self, write: ByteSink | None) -> None:
         """Connect (or with ``None`` disconnect) the port's output to a line."""
         self._write = write

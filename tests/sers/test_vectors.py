@@ -6,6 +6,10 @@ import math
 
 import pytest
 
+from devsim.core.bus import Bus
+from devsim.core.clock import VirtualClock
+from devsim.core.nvram import NonVolatileMemory
+from devsim.devices.sers import SersDevice
 from tests.sers.conftest import Plant
 
 
@@ -314,6 +318,46 @@ def test_with_broadcast_reply_lowest_address_the_lowest_drive_answers_a_broadcas
     assert host.ask("#W=5\r") == b"#W=5\r\nok1\n\r"
     assert host.ask("#3 V?\r") == b"#3 V?\rV=44U/min\n\r\nok1\n\r"
     assert [plant.read("param.W", name) for name in ("sers3", "sers2")] == [5, 5]
+
+
+@pytest.mark.manual("§4.2", "Achsnummer '*' addresses all axes: each drive carries out a broadcast line once")
+def test_a_broadcast_line_echoed_by_the_answering_drive_runs_once_in_the_others(plant_factory) -> None:
+    """With ``broadcast_reply: lowest_address`` drive 1 echoes a broadcast line onto the line
+    (G-ADDR); drives 2 and 3 hear that echo, but what a slave sends is no command for the others
+    (only a master's statements are, §3.6.2): ``+1`` adds 1 to every accumulator, not 2."""
+    config = {"broadcast_reply": "lowest_address"}
+    plant = plant_factory({"address": 1, **config}, {"address": 2, **config}, {"address": 3, **config})
+    host = plant.host
+    assert host.ask("#*X=0\r") == b"#*X=0\r\nok1\n\r"
+    assert host.ask("#*+1\r") == b"#*+1\r\nok1\n\r"
+    assert [plant.read("param.P1047", f"sers{n}") for n in (1, 2, 3)] == [1, 1, 1]
+    assert host.ask("#*\r") == b"#*\r\nok1\n\r"  # a bare #*: the lines after it go to every drive
+    assert host.ask("#+1\r") == b"#+1\r\nok1\n\r"
+    assert [plant.read("param.P1047", f"sers{n}") for n in (1, 2, 3)] == [2, 2, 2]
+
+
+@pytest.mark.manual("§3.6.1", "127 different addresses (1 - 127) can be set: two drives given the same one both answer")
+def test_two_drives_with_the_same_address_answer_once_each(plant_factory) -> None:
+    """A plant with two drives at address 2 (a wiring mistake the manual does not describe):
+    both take ``#2`` and both answer, once; neither takes the other's echo of ``#2`` for a
+    command of its own, which answered again and again and held the whole simulator."""
+    clock = VirtualClock()
+    drives = [SersDevice(clock=clock, config={"address": a, "boot_time": 0}, nvram=NonVolatileMemory(None))
+              for a in (1, 2, 2)]
+    bus = Bus(drives)
+    line = bytearray()
+
+    def write(data: bytes) -> None:
+        line.extend(data)
+        assert len(line) < 4096, f"the drives keep answering each other: {bytes(line[:80])!r}..."
+
+    bus.attach(write)
+    clock.advance(0.1)
+    bus.feed(b"#2\r")
+    assert bytes(line) == b"#2\r\nok1\n\r" * 2
+    line.clear()
+    bus.feed(b"#1 V?\r")
+    assert bytes(line) == b"#1 V?\rV=100U/min\n\r\nok1\n\r"
 
 
 @pytest.mark.manual("§4.8.6.16", "P1099 executes an opcode: 63235 (0xF703) is E, 62213 (0xF305) is RUN 5")
