@@ -124,3 +124,15 @@ def test_host_sees_the_master_traffic_on_the_line(line: Plant) -> None:
     data = line.host.read_exact(len(b"#1ON\r#1ON\r\nok1\n\r"))
     # what the master sends, then slave 1's echo and acknowledgement: all on the one line
     assert data == b"#1ON\r#1ON\r\nok1\n\r"
+
+
+@pytest.mark.manual("§4.8.3.1", "errno 19: * nur bei P1 oder z erlaubt")
+@pytest.mark.parametrize("statement", ["X=*", "P1047=*"])
+def test_the_accumulator_takes_no_star(sers: Plant, statement: str) -> None:
+    """``*`` is a value only for P1/Z; the accumulator X (P1047) refuses it like V or W do,
+    and keeps its value (it was set to 0)."""
+    host = sers.host
+    host.ask("#X=5\r")
+    assert host.ask(f"#{statement}\r") == f"#{statement}\n** nur bei P1 oder z erlaubt\n\r\r".encode("latin-1")
+    assert sers.read("param.P1137") == 19
+    assert sers.read("param.P1047") == 5

@@ -74,8 +74,8 @@ class Execution:
             raise SersError(4)
         number = address_number(target)
         value = stmt.value
-        if number == 1047:
-            self.operands.set_x(self.operands.operand_value(value) if not isinstance(value, str) else 0.0)
+        if number == 1047 and not isinstance(value, str):  # (X=*: errno 19 in write_param, §4.8.3.1)
+            self.operands.set_x(self.operands.operand_value(value))
             return
         self.access.write_param(number, value if isinstance(value, str) else self.operands.operand_value(value))
 
