@@ -7,6 +7,8 @@ the others that listen to the line (``Device.hears_others``) – that is how a S
 does not talk to others (``Device.talks_to_others``: a SERS slave's echo, answer or ``@1POS=1``)
 sends only by those that do (the master waiting for that answer): a slave's echo of a host's
 line is no command for the other slaves (SERS manual §3.6.2: a master commands its slaves).
+A device hears another's bytes through ``Port.hear`` (the face's ``hear``; by default what
+the host sends), so a face can tell them from the host's.
 Which device answers is the devices' own business: each decides from its address whether a
 telegram is meant for it.
 
@@ -60,9 +62,10 @@ class Bus:
                 source, data = self._queue.popleft()
                 talker = source is None or source.talks_to_others
                 for device in self.devices:
-                    if device is not source and (source is None or device.hears_others
-                                                 and (talker or device.talks_to_others)):
+                    if source is None:
                         device.feed(data)
+                    elif device is not source and device.hears_others and (talker or device.talks_to_others):
+                        device.hear(data)
         finally:
             self._busy = False
 

@@ -110,6 +110,11 @@ class Face:
         """Bytes from the host, in arrival order, possibly split anywhere."""
         raise NotImplementedError
 
+    def hear(self, data: bytes) -> None:
+        """Bytes another device on a multidrop bus sent (see :mod:`devsim.core.bus`), not the
+        host; default: taken like the host's."""
+        self.feed(data)
+
     #: Optional, for a face whose usual chunk (a host's repeated poll) is answered with one piece of
     #: output and nothing else: ``answer_at_once(data)`` returns that piece, sent by nothing (the
     #: port writes it: no batch, no :meth:`Port.send`), having done to the face exactly what
@@ -233,6 +238,24 @@ class Port:
                 if write is not None:
                     # (one piece, the usual answer to a poll, leaves as it is: no copy into a buffer)
                     write(batch[0] if len(batch) == 1 else b"".join(batch))
+
+    def hear(self, data: bytes) -> None:
+        """Bytes another device on the bus sent, for the face's :meth:`Face.hear`; its answers
+        leave in one write, as :meth:`feed`'s do."""
+        face = self.face
+        if face is None:
+            return
+        CHANGES.count += 1  # (a door: devsim.core.changes)
+        if self._batch is not None:  # re-entered: the outer call flushes
+            face.hear(data)
+            return
+        self._batch = batch = []
+        try:
+            face.hear(data)
+        finally:
+            self._batch = None
+            if batch and (write := self._write) is not None:
+                write(batch[0] if len(batch) == 1 else b"".join(batch))
 
     def host_disconnected(self) -> None:
         if self.face is not None:

@@ -136,3 +136,37 @@ def test_the_accumulator_takes_no_star(sers: Plant, statement: str) -> None:
     assert host.ask(f"#{statement}\r") == f"#{statement}\n** nur bei P1 oder z erlaubt\n\r\r".encode("latin-1")
     assert sers.read("param.P1137") == 19
     assert sers.read("param.P1047") == 5
+
+
+@pytest.mark.manual("§4.5.2", "after Z=address every statement is sent to that axis; only Z=0 gives them to the master itself")
+@pytest.mark.manual("§4.2", "Achsnummer '*' addresses all axes: each drive carries out a broadcast line once")
+def test_a_slaves_echo_is_no_statement_for_the_master(plant_factory) -> None:
+    """With ``broadcast_reply: lowest_address`` slave 1 echoes what it answers: the master's own
+    ``Z=* V=55`` (``#*V=55``) and the host's ``#*+1``.  The master hears the echo on the line but
+    takes only its slave's answer from it: its own V stays, and the host's broadcast adds 1 to
+    every accumulator once (the master's went up by 2)."""
+    config = {"broadcast_reply": "lowest_address"}
+    plant = plant_factory({"address": 0, **config}, {"address": 1, **config}, {"address": 2, **config})
+    host = plant.host
+    download(plant, 200, ["Z=*", "V=55", "Z=0"])
+    assert host.ask("#200 RUN\r") == b"#200 RUN\r\nok1\n\r"
+    plant.advance(0.1)
+    host.expect(b"#*V=55\r#*V=55\r\nok1\n\r")  # the master's line, slave 1's echo and answer
+    assert [plant.read("param.V", f"sers{n}") for n in (0, 1, 2)] == [100, 55, 55]
+    assert host.ask("#*X=0\r") == b"#*X=0\r\nok1\n\r"
+    assert host.ask("#*+1\r") == b"#*+1\r\nok1\n\r"
+    assert [plant.read("param.P1047", f"sers{n}") for n in (0, 1, 2)] == [1, 1, 1]
+
+
+@pytest.mark.manual("§4.1", "after an address every following command is for the drive it names, the others ignore them")
+def test_the_master_takes_no_part_of_a_slaves_answer_for_a_line_of_its_own(plant_factory) -> None:
+    """A slave in RS-485 mode answers the master without an echo, ``\\nok1\\n\\r``: the master
+    heard that LF right after its own line and sent it on as the echo of a host's CR LF pair."""
+    plant = plant_factory({"address": 0}, {"address": 1, "params": {"P1017": 2}})
+    host = plant.host
+    download(plant, 200, ["Z=1", "V=11", "V=12", "Z=0"])
+    assert host.ask("#200 RUN\r") == b"#200 RUN\r\nok1\n\r"
+    plant.advance(0.1)
+    host.expect(b"#1V=11\r\nok1\n\r#1V=12\r\nok1\n\r")
+    assert host.ask("#V?\r") == b"V=12U/min\n\r\nok1\n\r"  # drive 1 (no echo) answers: the master sent #1
+    assert plant.read("param.V", "sers1") == 12

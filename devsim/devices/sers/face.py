@@ -66,7 +66,7 @@ class SersFace(Face):
         self.answer_at_once = self.polls.answer_at_once  # (a repeated poll: Face.answer_at_once)
         model.listen("power_on", self._reset_serial)
         model.listen("spontaneous", self.spontaneous)
-        model.listen("line_out", self.send)
+        model.listen("line_out", self._line_out)
 
     # -- line settings -------------------------------------------------------------------
     @property
@@ -158,6 +158,17 @@ class SersFace(Face):
                 self.on_event(event, byte)
             if not model.logic_alive or model.booting:
                 return
+
+    def _line_out(self, data: bytes) -> None:
+        """A master's statement to a slave: sent, and no poll kept (its ``#n`` changed the selection)."""
+        self.polls.kept = None
+        self.send(data)
+
+    def hear(self, data: bytes) -> None:
+        """Bytes another drive on the bus sent: a master's statements for a slave, a slave's
+        answer for a master (:meth:`SersDrive.hears_as_master`, §3.6.2)."""
+        if not self.model.hears_as_master(data):
+            self.feed(data)
 
     def _unconcerned(self, line: CommandLine | None) -> bool:
         """Whether nothing this drive does depends on the bytes until the next ``#`` with its

@@ -344,8 +344,24 @@ class SersDrive(Model):
         self.announce("spontaneous", text)
 
     def line_out(self, data: bytes) -> None:
-        """Bytes a master sends to its slaves on the serial line (G-MASTER)."""
+        """Bytes a master sends to its slaves on the serial line (G-MASTER).  Its ``#n`` is on
+        the line for every drive, the master too: the lines after it without an address are
+        for drive n, not for the master (§4.1), as the slaves that hear it take them."""
+        address = data[1:].split(b"\r", 1)[0]
+        digits = len(address) - len(address.lstrip(b"0123456789"))
+        self.note_address("*" if address[:1] == b"*" else int(address[:digits] or 0), False)
         self.announce("line_out", data)
+
+    def hears_as_master(self, data: bytes) -> bool:
+        """Bytes another drive on the line sent: for a master (address 0) only the answer it
+        may wait for, never a line to carry out (its statements go to slaves, §3.6.2: a slave's
+        echo of a broadcast is no broadcast for the master); False for a slave, which takes a
+        master's statements as a host's."""
+        if self.cfg.address != 0:
+            return False
+        if self.master.awaiting and self.logic_alive:
+            self.master.feed(data)
+        return True
 
     @property
     def line_address(self) -> int:
