@@ -228,16 +228,7 @@ class Port:
                 write(reply)  # (what send and the batch would make of one piece)
             return
         CHANGES.count += 1  # (a door: devsim.core.changes; not for a chunk answered at once)
-        self._batch = batch = []
-        try:
-            face.feed(data)
-        finally:
-            self._batch = None
-            if batch:
-                write = self._write
-                if write is not None:
-                    # (one piece, the usual answer to a poll, leaves as it is: no copy into a buffer)
-                    write(batch[0] if len(batch) == 1 else b"".join(batch))
+        self._batched(face.feed, data)
 
     def hear(self, data: bytes) -> None:
         """Bytes another device on the bus sent, for the face's :meth:`Face.hear`; its answers
@@ -249,12 +240,17 @@ class Port:
         if self._batch is not None:  # re-entered: the outer call flushes
             face.hear(data)
             return
+        self._batched(face.hear, data)
+
+    def _batched(self, take: Callable[[bytes], None], data: bytes) -> None:
+        """``take(data)``, what the face sends meanwhile gathered and written in one piece."""
         self._batch = batch = []
         try:
-            face.hear(data)
+            take(data)
         finally:
             self._batch = None
             if batch and (write := self._write) is not None:
+                # (one piece, the usual answer to a poll, leaves as it is: no copy into a buffer)
                 write(batch[0] if len(batch) == 1 else b"".join(batch))
 
     def host_disconnected(self) -> None:
