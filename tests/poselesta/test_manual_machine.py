@@ -231,6 +231,22 @@ def test_travel_commands_of_the_plane_in_a_program_of_the_axis_by_hand(make) -> 
     assert cnc.read("output.travel_x") is True and cnc.read("output.travel_y") is False
 
 
+@pytest.mark.manual("§2.4.2", "Ausser im Handbetrieb werden die beiden Fahrbefehle der gewählten Interpolationsebene "
+                    "bereits am Anfang ausgegeben, obwohl die erste Bahnbewegung gegebenenfalls nur in einer Achse "
+                    "(achsparallel) erfolgt")
+@pytest.mark.parametrize(("plane", "word", "expected"), [(17, "X10", "xy"), (18, "X10", "xz"), (18, "Z10", "xz"),
+                                                         (19, "Y10", "yz")])
+def test_the_travel_commands_of_the_chosen_plane_go_out_at_the_start(make, plane: int, word: str,
+                                                                     expected: str) -> None:  # noqa: ANN001
+    """A G01 block moving one axis of the plane G17 (XY), G18 (XZ) or G19 (YZ): the travel commands
+    of both axes of that plane, and of no other axis."""
+    cnc = make(program=f"N1 G{plane} G01 {word} F3000")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.1)
+    assert cnc.read("program.state") == "MOVING"
+    assert {a for a in "xyzd" if cnc.read(f"output.travel_{a}")} == set(expected)
+
+
 @pytest.mark.manual("§2.4.3", "Das Signal wird auch dann ausgegeben, wenn der nächste zu verfahrende Weg so klein oder "
                     "Null ist, dass das Zielfenster nicht verlassen wird")
 @pytest.mark.manual("§2.4.6", "Im Automatikbetrieb wird der Ausgang (Maschinenstillstand) gleichzeitig mit Position "

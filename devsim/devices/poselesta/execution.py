@@ -26,6 +26,7 @@ from devsim.core.clock import Clock, Timer
 from devsim.core.kit import Command, Table
 from devsim.core.signals import SignalBank
 from devsim.devices.poselesta.block_motion import BlockMotion
+from devsim.devices.poselesta.contour import PLANES
 from devsim.devices.poselesta.flow import ProgramFlow
 from devsim.devices.poselesta.functions import ADDRESSES, DECODED, BlockFunctions, block_end_function
 from devsim.devices.poselesta.mst import MstBus
@@ -308,7 +309,8 @@ class Executor:
         self.motion.targets = targets
         travel = set(targets)
         if self.functions.motion in (1, 2, 3) and self._mode() != "MANUAL":
-            travel |= {"x", "y"}  # both axes of the plane get a travel command (§2.4.2)
+            # both axes of the chosen plane (G17 XY, G18 XZ, G19 YZ) get a travel command (§2.4.2)
+            travel |= {axis for axis, _centre in PLANES[self.functions.plane]}
         for a in travel:
             self.signals.set(f"travel_{a}", True)
         if self.stop_pending:
