@@ -410,6 +410,48 @@ def test_dwell_and_unknown_g_functions(make) -> None:  # noqa: ANN001
     assert cnc.read("program.state") == "END" and cnc.read("axis.x.position") == pytest.approx(1_000)
 
 
+@pytest.mark.manual("§2.3.1", "Der NC-Stop wird jedoch intern abgespeichert, so dass eine nächste Achsbewegung erst nach "
+                    "erneutem Auslösen eines NC-Starts ausgeführt wird")
+@pytest.mark.manual("§2.3.22", "Der programmierte Vorschub kann mittels Override-Potentiometer erhöht bzw. verkleinert "
+                    "werden")
+def test_a_dwell_after_a_motion_keeps_nc_stop_and_its_time(make) -> None:  # noqa: ANN001
+    """N1 moves X to 5 mm, then dwells 3 s (G04 L3).  NC-Stop during the dwell: the next block's
+    motion waits for NC-Start; turning the override during the dwell neither restarts the dwell
+    nor shows "Position erreicht" again."""
+    cnc = make(program="N1 G01 X5 F6000 G04 L3\nN2 X6")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(1.0)  # X arrived after 0.25 s; the dwell runs until 3.25 s
+    assert cnc.read("axis.x.position") == pytest.approx(5_000) and cnc.read("program.block") == 1
+    reached = _events(cnc).count("position_reached")
+    for volts in (3.0, 4.0, 5.0):
+        cnc.set("input.override_pot_v", volts)
+        cnc.advance(0.5)  # 2.5 s
+    assert _events(cnc).count("position_reached") == reached
+    cnc.set("input.nc_stop", False)
+    cnc.advance(4.0)  # the dwell is over; N2 has started and waits for NC-Start
+    assert cnc.read("program.block") == 2 and cnc.read("program.state") == "HOLD"
+    assert cnc.read("axis.x.position") == pytest.approx(5_000)
+    cnc.set("input.nc_stop", True)
+    cnc.advance(0.1)
+    assert cnc.read("axis.x.position") == pytest.approx(5_000)  # still no NC-Start
+    cnc.set("panel.nc_start", True)
+    cnc.advance(1.0)
+    assert cnc.read("program.state") == "END" and cnc.read("axis.x.position") == pytest.approx(6_000)
+
+
+def test_the_override_during_a_dwell_does_not_restart_it(make) -> None:  # noqa: ANN001
+    """G04 L3 after a motion: the block ends 3 s after the axis arrived, however the override is
+    turned meanwhile (spec §5.3: L seconds)."""
+    cnc = make(program="N1 G01 X5 F6000 G04 L3\nN2 G91 X1")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.5)
+    for volts in (3.0, 4.0, 5.0, 6.0, 6.667):
+        cnc.set("input.override_pot_v", volts)
+        cnc.advance(0.5)  # 3.0 s
+    cnc.advance(1.0)  # 4.0 s: N2 ran (1 mm, 0.21 s)
+    assert cnc.read("program.state") == "END" and cnc.read("axis.x.position") == pytest.approx(6_000)
+
+
 @pytest.mark.manual("§2.3.21", "Satzabbruch: L-Level bewirkt, dass eine angefangene Positionierung abgebrochen wird; die Programmabarbeitung wird auf der Satznummer in P90 fortgesetzt")
 def test_block_abort_brakes_and_goes_on_at_p90(make) -> None:  # noqa: ANN001
     """S31 (§2.3.21, POS III): P90 = 50; V22/10 H→L during N20's motion: the axis brakes, the

@@ -120,6 +120,7 @@ class Executor:
         self.stop_pending = False  # NC-Stop during M/S/T output: the motion waits for NC-Start
         self._resume: Callable[[], None] | None = None
         self.abort_pending = False
+        self.dwelling = False  # G04: the block waits its L seconds, the axes stand (spec §5.3)
         self._timer: Timer | None = None
         self._next_block = BlockChain(self._block_start, self._program_end, screen)
         for name, handler in (("nc_start", self._nc_start_input), ("nc_stop", self._nc_stop_input),
@@ -197,10 +198,11 @@ class Executor:
     def _nc_stop_input(self, _name: str, _old: Any, new: Any) -> None:
         if new or self._mode() == "MANUAL":
             return  # NC-Stop is ineffective in MANUAL (§2.3.1)
-        if self.state == "MOVING":
+        if self.state == "MOVING" and not self.dwelling:
             self._brake("HOLD")
         elif self.state in RUNNING:
-            self.stop_pending = True  # the output goes on; the motion waits for NC-Start (§2.3.1)
+            # the output (or a dwell) goes on; the next motion waits for NC-Start (§2.3.1)
+            self.stop_pending = True
 
     def left_field(self) -> None:
         """An axis left the working field: all brake as with NC-Stop, the program stops (§2.4.4)."""
@@ -341,8 +343,8 @@ class Executor:
             self.abort()  # refused by a limit switch or the working field
 
     def _override_input(self, _name: str, _old: Any, _new: Any) -> None:
-        if self.state != "MOVING" or self._mode() not in EXECUTION_MODES:
-            return
+        if self.state != "MOVING" or self.dwelling or self._mode() not in EXECUTION_MODES:
+            return  # (a dwell keeps its time: the axes stand)
         if self.motion.contour is not None:
             self.motion.replan(self._arrived)
         elif self.motion.speeds() is None:
@@ -393,10 +395,12 @@ class Executor:
         dwell = block.value("L") if self.functions.dwell else None
         if dwell:
             self._after(dwell / 1000, self._block_end_output)  # G04: L seconds (spec §5.3)
+            self.dwelling = True
             return
         self._block_end_output()
 
     def _block_end_output(self) -> None:
+        self.dwelling = False
         block = self.block
         assert block is not None
         ms = sorted(block.values("M"))
@@ -442,7 +446,7 @@ class Executor:
             return
         if self.state == "MST_OUTPUT":
             self.abort_pending = True
-        elif self.state == "MOVING":
+        elif self.state == "MOVING" and not self.dwelling:
             self.motion.forget_arrivals()
             self._enter("BLOCK_START")  # (braking: no more arrivals, no override re-plan)
             self._brake(None, then=self._jump_p90)
@@ -477,6 +481,7 @@ class Executor:
         self._timer = self._clock.call_later(seconds, callback)
 
     def _cancel_timer(self) -> None:
+        self.dwelling = False
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
