@@ -566,6 +566,26 @@ def test_leaving_the_working_field_brakes_and_stops_the_program(make) -> None:  
     assert cnc.read("axis.x.position") == pytest.approx(50_000, abs=1)
 
 
+@pytest.mark.manual("§2.4.4", "Die Werte für den Software-Endschalter (Arbeitsfeldbegrenzung) beziehen sich immer auf die "
+                    "Referenzmarke der entsprechenden Achse")
+def test_the_software_limits_count_from_the_reference_mark(make) -> None:  # noqa: ANN001
+    """The actual value at X's mark is 5 mm (config reference_value): P9 = 20 and P13 = −3 put the
+    field from 2 mm to 25 mm of the actual value, 20 mm and 3 mm either side of the mark."""
+    cnc = make({"axes": {"x": {"reference_marks": [-1.0], "reference_value": 5.0}}, "params": {9: 20.0, 13: -3.0}},
+               program="N1 G01 X24 F600\nN2 X30", mode="MANUAL")
+    cnc.set("panel.reference", "x")
+    cnc.run_until(lambda d: "x" in d.model.field.referenced, 60.0)
+    assert cnc.read("output.inside_working_field") is True  # at about 5 mm: inside
+    cnc.set("panel.mode", "AUTO_CONTINUOUS")
+    cnc.advance(0.1)
+    cnc.set("panel.nc_start", True)
+    cnc.run_until(lambda d: d.model.executor.state in ("LIMIT_STOP", "END"), 10.0)
+    assert cnc.read("program.state") == "LIMIT_STOP" and cnc.read("program.block") == 2
+    cnc.advance(1.0)  # 10 mm/s braked at 500 mm/s²: 0.1 mm beyond the limit
+    assert cnc.read("axis.x.position") == pytest.approx(25_100, abs=1)
+    assert cnc.read("output.inside_working_field") is False
+
+
 @pytest.mark.manual("§2.2.3", "Steht P 76 auf 4, ist ein Rasterschritt 4 x so gross")
 @pytest.mark.manual("§2.4.6", "Maschinenstillstand: der Ausgang wird auf L-Level gesetzt, sobald eine Handradaktivierung erfolgt")
 @pytest.mark.manual("§3.4", "Handradverfahren mit Impulsvervielfachung, Faktor 10: bei jedem Handradschritt werden 10 Schritte generiert")

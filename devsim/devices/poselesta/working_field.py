@@ -146,9 +146,12 @@ class WorkingField:
 
     # -- the working field ---------------------------------------------------------------------------
     def limits(self, a: str) -> tuple[float, float]:
-        """(−, +) software limits of an axis in increments (P13–P16, P9–P12)."""
+        """(−, +) software limits of an axis in increments of its actual value (P13–P16,
+        P9–P12): they count from the reference mark (§2.4.4 "beziehen sich immer auf die
+        Referenzmarke der entsprechenden Achse"), whose actual value is ``reference_value``."""
         minus, plus = self._params.limits(a)
-        return self._axes.from_mm(a, minus), self._axes.from_mm(a, plus)
+        mark = self._settings(a).reference_value
+        return self._axes.from_mm(a, mark + minus), self._axes.from_mm(a, mark + plus)
 
     def rearm(self) -> None:
         """The limits changed (P9–P16): watch the new ones."""
