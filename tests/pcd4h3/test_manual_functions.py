@@ -253,6 +253,31 @@ def test_fstop_bit_8_and_fmotoff_switch_the_control_off(make: Callable[..., Stat
         assert pcd.sim.read("axis.1.velocity") < 40_000  # coasting down, not driven
 
 
+@pytest.mark.manual("§7.4 FStop", "das Statusflag OnDest wird nach einem ausgeführten Stop gesetzt (Stopart Bit 10, "
+                    "mit der definierten Verzögerung)")
+@pytest.mark.manual("§7.4 FResSF", "OnDest wird '1' gesetzt ... nach einem manuellen Stop (Funktion FStop)")
+@pytest.mark.manual("§7.4 FRdSR", "Bit 10: '1' wenn der Generator das errechnete Geschwindigkeitsprofil beendet hat")
+def test_a_smooth_stop_of_a_standing_axis_sets_ondest(pcd: Station) -> None:
+    """A smooth stop (MCW 41Bh) when the generator already stands: nothing to brake, the stop is
+    done at once and OnDest rises, as it does for the abrupt and the motor-off stop (it stayed 0:
+    in velocity mode at Veloc 0 a host waiting for OnDest after FStop waited for ever)."""
+    load(pcd, MCW=0x041B | VELOCITY_MODE | FORWARD, Veloc=0, StaFRR=0)
+    run(pcd, "FSelOM", "FLdVA", "FStart")  # velocity mode at 0: running, never on target by itself
+    pcd.sim.advance(1.0)
+    assert pcd.read_flags(200) == [0] and signal_register(pcd) & 0x0404 == 0
+    load(pcd, MCW=0x041B)
+    run(pcd, "FStop")
+    assert pcd.read_flags(200) == [1]
+    assert signal_register(pcd) & 0x0404 == 0x0404
+    load(pcd, DestP=100, Veloc=500)  # position mode, at rest on the target, OnDest reset by FResSF
+    run(pcd, "FSelOM", "FLdVA", "FLdDA", "FStart")
+    settled(pcd)
+    run(pcd, "FResSF")
+    assert pcd.read_flags(200) == [0]
+    run(pcd, "FStop")
+    assert pcd.read_flags(200) == [1]
+
+
 @pytest.mark.manual("§7.4 FStop", "nach einem Stop verliert der Controller die zuletzt geladene Zielposition nicht; bevor "
                     "die Bewegung ohne neuen Parameter fortgesetzt werden kann, muss zuerst FSelOM neu geladen werden")
 def test_resuming_after_a_stop_needs_fselom(pcd: Station) -> None:

@@ -240,7 +240,9 @@ class Lm628:
         self._stop = control & 0x0700
 
     def start(self) -> None:
-        """STT: take over the buffers; a stop in the control word acts now."""
+        """STT: take over the buffers; a stop in the control word acts now.  Every stop ends in
+        "trajectory complete" (manual §7.4 FStop: "Das Statusflag OnDest wird nach einem
+        ausgeführten Stop gesetzt"), a smooth one of a generator that already stands at once."""
         stop = self._stop
         if self.loaded & 0x20 and not self.profile.complete and not self.motor_off and self.profile.velocity:
             self.error()  # acceleration changed while moving (§3.5.3)
@@ -257,6 +259,9 @@ class Lm628:
             return
         if stop & 0x0400:
             self.profile.stop_smoothly()
+            if self.profile.complete:  # it stood already: the stop is done now, no sample will end it
+                self.on_target = True
+                self.flags |= COMPLETE
             return
         self.motor_off, self.loaded, self.on_target, self.started = False, 0, False, True
         self.flags &= ~COMPLETE
