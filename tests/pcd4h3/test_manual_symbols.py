@@ -4,10 +4,13 @@ live, checked over S-Bus on a real pty against the addresses the manual gives.""
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
+from devsim.core.config import ConfigError, load_config
 from devsim.core.points import BadValue
+from devsim.devices.pcd4h3.config import Pcd4h3Config
 from tests.pcd4h3.helpers import Station, flag, reg, run
 
 
@@ -89,3 +92,19 @@ def test_only_mna_axes_have_a_block(make: Callable[..., Station]) -> None:
     assert pcd.read_registers(220 + 7) == [999]
     with pytest.raises(BadValue, match="1 axes"):
         pcd.sim.read("axis.2.DestP")
+
+
+@pytest.mark.manual("§7.1.3", "MNA: Definiert die Anzahl der eingesetzten Achsen. Entsprechend dieser Angabe werden "
+                    "die benötigten Speichermedien (Register, Flag) reserviert (from BAR and BAF, within the PCD's "
+                    "R 0 … 4095 and F 0 … 8191)")
+def test_axis_blocks_that_leave_the_media_are_refused(tmp_path: Path) -> None:
+    path = tmp_path / "pcd.yaml"
+    path.write_text("h3def:\n  mna: 2\n  bar: 4090\n", encoding="utf-8")
+    with pytest.raises(ConfigError) as info:
+        load_config(path, Pcd4h3Config)
+    assert str(info.value) == f"{path}:1: h3def: BAR 4090 with MNA 2: the axis blocks R 4090 … 4129 pass R 4095"
+    path.write_text("h3def:\n  baf: 8180\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match="the axis fields F 8180 … 8249 pass F 8191"):
+        load_config(path, Pcd4h3Config)
+    path.write_text("h3def:\n  mna: 2\n  bar: 4056\n  baf: 8122\n", encoding="utf-8")  # the last that fit
+    assert load_config(path, Pcd4h3Config).h3def.bar == 4056

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from devsim.core.settings import Keys, Meta, Settings, doc, field
+from devsim.core.settings import Check, Keys, Meta, Settings, doc, field
 from devsim.devices.pcd4h3.tables import FLAG_FIELD, REGISTERS, load_registers
 
 __all__ = ["AXIS", "H3DEF", "JUMPERS", "Pcd4h3Config", "READ_FUNCTIONS", "VARIANTS"]
@@ -104,6 +104,18 @@ class Display(Settings):
     reg2: Annotated[_RegisterSymbol, doc("second value (bottom line)")] = "RSetV"
 
 
+def _blocks_fit(h3def: H3Def) -> H3Def:
+    """The axis blocks lie inside the PCD's media: registers R 0 … 4095, flags F 0 … 8191 (manual
+    §7.1.3: MNA blocks of NoRfeA registers from BAR and of NoFfeA flags from BAF)."""
+    for what, start, size, last in (("BAR", h3def.bar, len(REGISTERS), 4095), ("BAF", h3def.baf, len(FLAG_FIELD), 8191)):
+        end = start + h3def.mna * size - 1
+        if end > last:
+            media = "R" if what == "BAR" else "F"
+            raise ValueError(f"{what} {start} with MNA {h3def.mna}: the axis {'blocks' if media == 'R' else 'fields'} "
+                             f"{media} {start} … {end} pass {media} {last}")
+    return h3def
+
+
 #: The nested parts, by their table names.
 H3DEF, JUMPERS, AXIS = H3Def, Jumpers, Axis
 
@@ -118,7 +130,7 @@ class Pcd4h3Config(Settings):
     firmware: Annotated[str, doc("what S-Bus 'read firmware version' answers (3 characters)")] = "003"
     response_delay_ms: Annotated[float, Meta(ge=0, le=1000), doc(
         "the S-Bus answer leaves this long after the request")] = 2.0
-    h3def: Annotated[H3Def, doc("H3DEF.SRC symbols")] = field(default_factory=H3Def)
+    h3def: Annotated[H3Def, Check(_blocks_fit), doc("H3DEF.SRC symbols")] = field(default_factory=H3Def)
     jumpers: Annotated[Jumpers, doc("the jumpers common to both axes (per axis: in_rp under axes)")] = field(
         default_factory=Jumpers)
     flag_map: Annotated[dict[Any, Annotated[int, Meta(ge=0, le=34)]], Keys(_flag, "flag"), doc(
