@@ -238,8 +238,10 @@ class CanopenFacade:
                     continue
 
     def _emergency(self, axis: int = 1, code: int = 0x1000) -> None:
-        """A fault the model announces: an EMCY message (error register bit 0, generic error)."""
-        if axis == 1 and self.node.has_network():
+        """A fault the model announces: an EMCY message (error register bit 0, generic error);
+        none while the node is STOPPED (CiA 301 §7.3.2.2: EMCY is served in PRE-OPERATIONAL and
+        OPERATIONAL)."""
+        if axis == 1 and self.node.has_network() and self.node.nmt.state != "STOPPED":
             self._send(self.node.emcy.send, code, 0x01)
 
     def _send(self, send: Callable[..., Any], *args: Any) -> None:

@@ -6,7 +6,8 @@ specifier (and a block transfer, which this server does not offer) is aborted 05
 multiplexer in its own bytes 1 … 3; a segment with no transfer in progress likewise, naming
 0000h/00h (it carries no multiplexer).  A segmented download is checked at its initiation (the
 object, write access, the announced size), so it is refused before any segment.  A request
-shorter than the 8 bytes of an SDO frame is ignored."""
+shorter than the 8 bytes of an SDO frame is ignored, and so is every request while the node is
+STOPPED (CiA 301 §7.3.2.2: there only NMT and the error control are served)."""
 
 from __future__ import annotations
 
@@ -46,7 +47,7 @@ class DevsimSdoServer(SdoServer):
         self.transfer, self._buffer = None, None
 
     def on_request(self, can_id: int, data: bytes, timestamp: float) -> None:
-        if len(data) < 8:
+        if len(data) < 8 or self._node.nmt.state == "STOPPED":
             return
         request = bytes(data)
         try:

@@ -260,3 +260,38 @@ def test_every_sdo_abort_names_the_request_it_answers(drive: Drive) -> None:
     assert refused.value.code == 0x05030000
     assert struct.unpack("<BHBL", answers.get(timeout=5)) == (0x80, 0x1008, 0, 0x05030000)
     assert node.sdo[0x1008].raw == "devsim pcd4h3"  # and the server goes on
+
+
+def heartbeat(node: canopen.RemoteNode, state: str) -> bool:
+    """A heartbeat showing ``state`` comes within a few (one sent before the command may be on its way)."""
+    return any(node.nmt.wait_for_heartbeat(5) == state for _ in range(5))
+
+
+def test_a_stopped_node_answers_no_sdo_and_sends_no_emcy(drive: Drive) -> None:
+    """CiA 301 §7.3.2.2 (the NMT states and the communication objects each one serves): in
+    STOPPED only NMT and the error control (heartbeat) work; SDO and EMCY are served in
+    PRE-OPERATIONAL and OPERATIONAL.  A request sent while stopped gets no answer (the answers
+    counted after a round trip in PRE-OPERATIONAL, which frames on the bus are handled in order
+    before), and a fault announced while stopped sends no EMCY."""
+    node = drive.node
+    answers: queue.Queue[bytes] = queue.Queue()
+    emcys: queue.Queue[bytes] = queue.Queue()
+    drive.master.subscribe(0x583, lambda can_id, data, timestamp: answers.put(bytes(data)))
+    drive.master.subscribe(0x83, lambda can_id, data, timestamp: emcys.put(bytes(data)))
+    node.sdo[0x1017].raw = 20
+    assert answers.get(timeout=5)[0] == 0x60
+    node.nmt.state = "STOPPED"
+    assert heartbeat(node, "STOPPED")
+    drive.master.send_message(0x603, bytes((0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0)))  # upload 1000h
+    drive.master.send_message(0x603, bytes((0x2B, 0x17, 0x10, 0x00, 50, 0, 0, 0)))  # download 1017h
+    drive.runtime.call(drive.facade._emergency, 1, 0x8611)  # the model announces a fault
+    node.nmt.state = "PRE-OPERATIONAL"
+    assert heartbeat(node, "PRE-OPERATIONAL")
+    assert node.sdo[0x1017].raw == 20  # the download while stopped was not carried out
+    seen = []
+    while not answers.empty():
+        seen.append(answers.get())
+    assert [frame[0] for frame in seen] == [0x4B]  # the round trip's answer alone
+    assert emcys.empty()
+    drive.runtime.call(drive.facade._emergency, 1, 0x8611)  # in PRE-OPERATIONAL it goes out
+    assert drive.emcy(0x8611)
