@@ -241,6 +241,8 @@ class CanopenFacade:
         """A fault the model announces: an EMCY message (error register bit 0, generic error);
         none while the node is STOPPED (CiA 301 §7.3.2.2: EMCY is served in PRE-OPERATIONAL and
         OPERATIONAL)."""
+        if axis == 1 and self.drive is not None:
+            self.drive.error_code = code  # (603Fh shows it)
         if axis == 1 and self.node.has_network() and self.node.nmt.state != "STOPPED":
             self._send(self.node.emcy.send, code, 0x01)
 
@@ -373,7 +375,8 @@ RESETS: dict[int, Callable[[CanopenFacade], None]] = {
 """The NMT reset commands (CiA 301): reset node, reset communication."""
 
 DRIVE_READS: dict[int, Callable[[Cia402], int]] = {
-    0x603F: lambda d: 0x1000 if d.actions.fault(d.model) else 0,
+    0x1001: lambda d: d.error_register,
+    0x603F: lambda d: d.error_code_object,
     0x6040: lambda d: d.controlword,
     0x6041: lambda d: d.statusword,
     0x6060: lambda d: d.mode,
@@ -386,7 +389,8 @@ DRIVE_READS: dict[int, Callable[[Cia402], int]] = {
     0x60FF: lambda d: d.target_velocity,
     0x6502: lambda d: d.supported_modes,
 }
-"""The CiA 402 objects as the drive state shows them."""
+"""The CiA 402 objects as the drive state shows them, and the error register 1001h (CiA 301: bit 0
+while the drive has a fault, as its EMCY says)."""
 
 DRIVE_WRITES: dict[int, Callable[[Cia402, Any], None]] = {
     0x6040: Cia402.write_controlword,

@@ -99,6 +99,23 @@ class Cia402:
         self.target_position, self.profile_velocity = DEFAULTS["target_position"], DEFAULTS["profile_velocity"]
         self.target_velocity = DEFAULTS["target_velocity"]
         self.setpoint_ack = False
+        self.error_code = 0  # the EMCY code of the last fault the drive announced (603Fh)
+
+    # -- the error objects (603Fh, CiA 402-2; 1001h, CiA 301) -------------------------------------------
+    def in_fault(self) -> bool:
+        """The Fault state, or a fault the drive has now (the statusword's view)."""
+        return self.state == "fault" or bool(self.actions.fault(self.model))
+
+    @property
+    def error_code_object(self) -> int:
+        """603Fh: in a fault, the error code of the last EMCY (CiA 402-2: the lower 16 bits of the
+        EMCY's error code; 1000h, generic error, for a fault no EMCY named); 0 without one."""
+        return (self.error_code or 0x1000) if self.in_fault() else 0
+
+    @property
+    def error_register(self) -> int:
+        """1001h: bit 0, generic error, in any error situation (CiA 301), as the EMCY carries it."""
+        return 0x01 if self.in_fault() else 0x00
 
     # -- modes of operation (6060h, 6061h, 6502h) -------------------------------------------------------
     @property

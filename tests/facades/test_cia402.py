@@ -125,10 +125,13 @@ def test_a_following_error_is_an_emcy_and_the_fault_state_then_reset(drive: Driv
     received = drive.emcy(0x8611)
     assert received and received[0].register & 0x01
     assert drive.status & 0x4F == 0x08  # Fault
-    assert drive.node.sdo[0x603F].raw != 0
+    # CiA 402-2 603Fh: the EMCY's error code; CiA 301 1001h: bit 0 "at any error situation"
+    assert drive.node.sdo[0x603F].raw == 0x8611
+    assert drive.node.sdo[0x1001].raw & 0x01 == received[0].register & 0x01 == 0x01
     drive.runtime.fault("pcd", "blocked_1", False)
     drive.control(0x80)  # fault reset
     assert drive.status & 0x4F == 0x40  # Switch on disabled
+    assert drive.node.sdo[0x603F].raw == 0 and drive.node.sdo[0x1001].raw == 0
     enable(drive)
 
 
