@@ -6,7 +6,8 @@ stage, move to a position, run at a velocity, stop quickly and reset a fault, an
 position, velocity, enable, fault and motion.  :class:`Cia402` keeps the state the controlword
 (6040h) drives and composes the statusword (6041h); in profile position mode (6060h = 1) a rising
 "new set-point" bit (4) starts a move to the target position (607Ah, bit 6: relative) at the
-profile velocity (6081h), in profile velocity mode (3) the target velocity (60FFh) runs the axis.
+profile velocity (6081h), bit 8 (halt) stops it with the ramp and holds new set-points back; in
+profile velocity mode (3) the target velocity (60FFh) runs the axis.
 The modes a drive supports (6502h, CiA 402-2) are those whose drive action the kind declares
 (:data:`MODES`); writing another mode into 6060h is refused (``ValueError``), so 6061h only ever
 shows a supported one.  :meth:`Cia402.reset` is the application part of an NMT reset node (CiA 301,
@@ -171,6 +172,12 @@ class Cia402:
 
     def _profile(self, before: int, word: int) -> None:
         if self.mode == PROFILE_POSITION:
+            if word & 0x100:  # halt (§12: the axis is stopped, with the ramp); a new set-point waits
+                if not before & 0x100 and self.actions.moving(self.model):
+                    self.actions.jog(self.model, 0.0)
+                if not word & 0x10:
+                    self.setpoint_ack = False
+                return
             if word & 0x10 and not before & 0x10:  # new set-point
                 target = float(self.target_position)
                 if word & 0x40:  # relative

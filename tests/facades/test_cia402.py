@@ -389,3 +389,21 @@ def test_an_event_driven_tpdo_goes_out_when_its_values_change(drive: Drive) -> N
     drive.runtime.advance(1.0)
     assert node.sdo[0x1017].raw == 0
     assert arrived.empty()  # standing again: silent
+
+
+def test_halt_stops_a_profile_position_move_short_of_its_target(drive: Drive) -> None:
+    """CiA 402-2 §12, controlword bit 8 (halt) in profile position mode: the axis is stopped with
+    the ramp, in Operation enabled; the statusword's bit 10 then says it stands."""
+    enable(drive)
+    drive.node.sdo[0x607A].raw = 100_000
+    drive.node.sdo[0x6081].raw = 50_000
+    drive.control(0x1F)
+    drive.runtime.advance(1.0)
+    drive.control(0x11F)  # halt
+    assert drive.runtime.run_until(lambda: drive.device.read("axis.1.status") & 0x04, 5.0)  # trajectory complete
+    drive.runtime.advance(0.5)
+    stopped = drive.node.sdo[0x6064].raw
+    assert 0 < stopped < 60_000  # (1 s into the 6.34 s move; the triangle's half is 50 000)
+    assert drive.status & 0x6F == 0x27 and drive.status & 0x0400  # Operation enabled, standing
+    drive.runtime.advance(2.0)
+    assert drive.node.sdo[0x6064].raw == stopped

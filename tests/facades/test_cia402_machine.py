@@ -330,3 +330,27 @@ def test_a_fault_that_went_away_stays_the_fault_state_until_the_fault_reset() ->
         assert state_of(machine) == FAULT and motor.calls == []
     machine.write_controlword(0x80)
     assert motor.calls == [("reset_fault",)] and state_of(machine) == SOD
+
+
+def test_halt_stops_a_profile_position_move_with_the_ramp_and_holds_new_set_points() -> None:
+    """Profile position mode (CiA 402-2 §12, controlword bit 8 "halt": 0 positioning is executed,
+    1 the axis is stopped, with the profile deceleration): a rising halt stops a running move with
+    the ramp (the jog action at 0, which the actions define as a stop with the ramp); while it
+    is set a rising new set-point starts nothing and is not acknowledged; without a move there
+    is nothing to stop."""
+    machine, motor = drive_in(ENABLED)
+    machine.target_position = 1000
+    machine.write_controlword(0x1F)
+    motor.moving = True
+    machine.write_controlword(0x11F)  # halt
+    assert motor.calls == [("move_to", 1000.0, float(DEFAULTS["profile_velocity"])), ("jog", 0.0)]
+    machine.write_controlword(0x11F)  # (held: no second stop)
+    assert len(motor.calls) == 2
+    motor.moving = False
+    machine.write_controlword(0x10F)
+    machine.write_controlword(0x11F)  # a new set-point while halted
+    assert len(motor.calls) == 2 and not machine.statusword & 0x1000
+    assert machine.statusword & 0x0400  # target reached: halted, velocity 0
+    machine.write_controlword(0x0F)
+    machine.write_controlword(0x1F)  # halt released: the next set-point moves
+    assert motor.calls[2:] == [("move_to", 1000.0, float(DEFAULTS["profile_velocity"]))]
