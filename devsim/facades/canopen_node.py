@@ -246,6 +246,12 @@ class CanopenFacade:
         if axis == 1 and self.node.has_network() and self.node.nmt.state != "STOPPED":
             self._send(self.node.emcy.send, code, 0x01)
 
+    def _error_reset(self) -> None:
+        """The fault reset cleared the drive's fault: EMCY 0000h, "error reset or no error", with
+        the error register as it is now (CiA 301 §7.2.7, the EMCY producer back in error free)."""
+        if self.node.has_network() and self.node.nmt.state != "STOPPED":
+            self._send(self.node.emcy.send, 0x0000, 0x00)
+
     def _send(self, send: Callable[..., Any], *args: Any) -> None:
         """A message of the node's own onto the bus.  One the bus refuses (python-can's
         ``CanError``: a SocketCAN interface down, bus-off, a full transmit queue) is lost, as on a
@@ -285,10 +291,13 @@ class CanopenFacade:
 
     def _write(self, index: int, subindex: int, od: Any, data: bytes) -> None:
         if self.drive is not None and index in DRIVE_WRITES:
+            faulted = index == 0x6040 and self.call(self.drive.in_fault)
             try:
                 self.call(DRIVE_WRITES[index], self.drive, od.decode_raw(data))
             except (BadValue, ReadOnlyName, ValueError):
                 raise SdoAbortedError(VALUE_RANGE_EXCEEDED) from None
+            if faulted and not self.call(self.drive.in_fault):
+                self._error_reset()
             return
         point = self.objects.get(index)
         if point is None:

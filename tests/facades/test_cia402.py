@@ -407,3 +407,26 @@ def test_halt_stops_a_profile_position_move_short_of_its_target(drive: Drive) ->
     assert drive.status & 0x6F == 0x27 and drive.status & 0x0400  # Operation enabled, standing
     drive.runtime.advance(2.0)
     assert drive.node.sdo[0x6064].raw == stopped
+
+
+def test_a_fault_reset_that_clears_the_fault_sends_the_error_reset_emcy(drive: Drive) -> None:
+    """CiA 301 §7.2.7 (the EMCY producer's states error free / error occurred): when the errors
+    are gone the node sends an EMCY with error code 0000h ("error reset or no error") and the
+    error register as it is then; a fault reset that leaves the fault sends none."""
+    enable(drive)
+    drive.node.sdo[0x607A].raw = 100_000
+    drive.node.sdo[0x6081].raw = 50_000
+    drive.control(0x1F)
+    drive.runtime.advance(1.0)
+    drive.runtime.fault("pcd", "blocked_1", True)
+    assert drive.runtime.run_until(lambda: drive.runtime.read("pcd", "axis.1.ExcPEr"), 3.0)
+    assert drive.emcy(0x8611)
+    drive.control(0x0F)
+    drive.control(0x80)  # fault reset, the blockage still there: the fault is cleared by FResSF
+    assert drive.status & 0x4F == 0x40
+    resets = drive.emcy(0x0000)
+    assert len(resets) == 1 and resets[0].register == 0x00
+    assert [e.code for e in drive.node.emcy.log] == [0x8611, 0x0000]
+    drive.control(0x00)
+    drive.control(0x80)  # a fault reset with no fault: no EMCY
+    assert drive.node.sdo[0x6041].raw & 0x4F == 0x40 and len(drive.node.emcy.log) == 2
