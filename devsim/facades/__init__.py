@@ -10,6 +10,7 @@ declared points (:mod:`devsim.core.points`) and, for drive profiles, its declare
 * :mod:`devsim.facades.cia402` – the CiA 402 state machine and profile modes (pure);
 * :mod:`devsim.facades.canopen_node` – the device as canopen's local node (extra ``[can]``), reached
   from other processes through :mod:`devsim.transports.socketcand`;
+* :mod:`devsim.facades.canopen_mapping` – the checks on a PDO mapping a master writes (CiA 301);
 * :mod:`devsim.facades.mqtt_topics` – the devsim MQTT convention's topics and payloads (pure);
 * :mod:`devsim.facades.mqtt_sparkplug` – Sparkplug B payloads through the Tahu binding (pure);
 * :mod:`devsim.facades.mqtt` – publishing devices over MQTT (extra ``[mqtt]`` for the embedded

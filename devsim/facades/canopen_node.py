@@ -32,7 +32,7 @@ from canopen.sdo.exceptions import SdoAbortedError
 from devsim.core.console import warn
 from devsim.core.device import Device
 from devsim.core.points import BadValue, ReadOnlyName
-from devsim.facades import library_log
+from devsim.facades import canopen_mapping, library_log
 from devsim.facades.canopen_od import eds, point_objects
 from devsim.facades.canopen_sdo import DevsimSdoServer
 from devsim.facades.cia402 import Cia402
@@ -290,6 +290,9 @@ class CanopenFacade:
         return bool(value) if point.type == "bool" else value
 
     def _write(self, index: int, subindex: int, od: Any, data: bytes) -> None:
+        if canopen_mapping.is_mapping(index):
+            canopen_mapping.check(self.node, index, subindex, data)  # (CiA 301: what may be mapped)
+            return
         if self.drive is not None and index in DRIVE_WRITES:
             faulted = index == 0x6040 and self.call(self.drive.in_fault)
             try:

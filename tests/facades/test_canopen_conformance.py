@@ -295,3 +295,48 @@ def test_a_stopped_node_answers_no_sdo_and_sends_no_emcy(drive: Drive) -> None:
     assert emcys.empty()
     drive.runtime.call(drive.facade._emergency, 1, 0x8611)  # in PRE-OPERATIONAL it goes out
     assert drive.emcy(0x8611)
+
+
+MAPPING_ERRORS = {
+    "no object": 0x06020000,  # object does not exist in the object dictionary
+    "cannot be mapped": 0x06040041,  # object cannot be mapped to the PDO
+    "too long": 0x06040042,  # the number and length of the objects to be mapped would exceed PDO length
+}
+
+
+def test_a_pdo_mapping_takes_only_what_the_eds_lets_be_mapped(drive: Drive) -> None:
+    """CiA 301 §7.5.2.36 / §7.5.2.38 (RPDO / TPDO mapping parameter, the re-mapping procedure): an
+    entry naming an object that does not exist is aborted 0602 0000h, one that cannot be mapped
+    (PDOMapping=0 in the EDS, a length other than the object's, a read-only object in an RPDO)
+    0604 0041h, and enabling a mapping (sub-index 00h) whose objects exceed the PDO's 64 bits or its
+    8 entries 0604 0042h; nothing refused is kept, and a mapping that is accepted works."""
+    node = drive.node
+
+    def refused(index: int, subindex: int, value: int, size: int = 4) -> int:
+        with pytest.raises(canopen.SdoAbortedError) as aborted:
+            node.sdo.download(index, subindex, value.to_bytes(size, "little"))
+        return aborted.value.code
+
+    node.sdo[0x1800][1].raw = 0x80000183  # TPDO1 not valid
+    node.sdo[0x1A00][0].raw = 0  # mapping disabled
+    assert refused(0x1A00, 1, 0x5FFF0010) == MAPPING_ERRORS["no object"]
+    assert refused(0x1A00, 1, 0x10170010) == MAPPING_ERRORS["cannot be mapped"]  # heartbeat time: PDOMapping=0
+    assert refused(0x1A00, 1, 0x65020020) == MAPPING_ERRORS["cannot be mapped"]  # 6502h: PDOMapping=0
+    assert refused(0x1A00, 1, 0x60410020) == MAPPING_ERRORS["cannot be mapped"]  # statusword is 16 bits
+    assert refused(0x1600, 1, 0x60410010) == MAPPING_ERRORS["cannot be mapped"]  # read-only into an RPDO
+    assert node.sdo[0x1A00][1].raw == 0 and node.sdo[0x1600][1].raw == 0
+    for sub, entry in ((1, 0x60410010), (2, 0x60640020), (3, 0x606C0020)):
+        node.sdo[0x1A00][sub].raw = entry
+    assert refused(0x1A00, 0, 3, 1) == MAPPING_ERRORS["too long"]  # 80 bits
+    assert refused(0x1A00, 0, 9, 1) == MAPPING_ERRORS["too long"]  # 8 entries at most
+    assert node.sdo[0x1A00][0].raw == 0
+    node.sdo[0x1A00][0].raw = 2  # 48 bits
+    node.sdo[0x1800][2].raw = 1
+    node.sdo[0x1800][1].raw = 0x183
+    node.tpdo.read()
+    node.nmt.state = "OPERATIONAL"
+    assert [v.index for v in node.tpdo[1].map] == [0x6041, 0x6064]
+    frames: queue.Queue[bytes] = queue.Queue()
+    drive.master.subscribe(0x183, lambda can_id, data, timestamp: frames.put(bytes(data)))
+    drive.master.send_message(0x80, b"")  # SYNC
+    assert len(frames.get(timeout=5)) == 6

@@ -1,0 +1,67 @@
+"""The checks a node makes on a PDO mapping a master writes (CiA 301 §7.5.2.36, RPDO mapping
+parameter 1600h …, and §7.5.2.38, TPDO mapping parameter 1A00h …: the re-mapping procedure).
+A mapping entry (sub-index 01h … 08h) that names an object the dictionary does not have is
+aborted 0602 0000h; one naming an object that cannot be mapped (PDOMapping=0 in the EDS, a length
+other than the object's, into an RPDO an object that cannot be written, into a TPDO one that
+cannot be read) 0604 0041h; enabling the mapping (sub-index 00h = the number of entries) with
+more than 8 entries or more than the PDO's 64 bits 0604 0042h.  An entry of 0 (cleared) is
+taken.  The node calls :func:`check` before it stores the value, so nothing refused is kept."""
+
+from __future__ import annotations
+
+import struct
+from typing import Any
+
+from canopen.objectdictionary import ODVariable
+from canopen.sdo.exceptions import SdoAbortedError
+
+__all__ = ["CANNOT_BE_MAPPED", "ENTRIES", "NOT_IN_OD", "TOO_LONG", "check", "is_mapping"]
+
+NOT_IN_OD = 0x06020000  # object does not exist in the object dictionary
+CANNOT_BE_MAPPED = 0x06040041  # object cannot be mapped to the PDO
+TOO_LONG = 0x06040042  # the number and length of the objects to be mapped would exceed PDO length
+ENTRIES = 8  # mapping entries per PDO (the EDS's sub-indices 01h … 08h)
+PDO_BITS = 64
+
+
+def is_mapping(index: int) -> bool:
+    """An RPDO (1600h … 17FFh) or TPDO (1A00h … 1BFFh) mapping parameter."""
+    return 0x1600 <= index <= 0x17FF or 0x1A00 <= index <= 0x1BFF
+
+
+def check(node: Any, index: int, subindex: int, data: bytes) -> None:
+    """Raise the CiA 301 abort for writing ``data`` into sub-index ``subindex`` of mapping
+    parameter ``index`` of ``node`` (a canopen local node), if the write is one to refuse."""
+    if subindex == 0:
+        count = data[0] if data else 0
+        if count > ENTRIES:
+            raise SdoAbortedError(TOO_LONG)
+        bits = sum(_entry(node, index, sub)[2] for sub in range(1, count + 1))
+        if bits > PDO_BITS:
+            raise SdoAbortedError(TOO_LONG)
+        return
+    entry = int.from_bytes(data[:4].ljust(4, b"\0"), "little")
+    if entry == 0:
+        return
+    target, sub, bits = entry >> 16, entry >> 8 & 0xFF, entry & 0xFF
+    variable = _variable(node.object_dictionary, target, sub)
+    receive = index < 0x1800
+    if (not getattr(variable, "pdo_mappable", False) or bits != len(variable)
+            or not (variable.writable if receive else variable.readable)):
+        raise SdoAbortedError(CANNOT_BE_MAPPED)
+
+
+def _entry(node: Any, index: int, subindex: int) -> tuple[int, int, int]:
+    value, = struct.unpack("<L", node.get_data(index, subindex))
+    return value >> 16, value >> 8 & 0xFF, value & 0xFF
+
+
+def _variable(od: Any, index: int, subindex: int) -> ODVariable:
+    if index not in od:
+        raise SdoAbortedError(NOT_IN_OD)
+    entry = od[index]
+    if isinstance(entry, ODVariable):
+        return entry
+    if subindex not in entry:
+        raise SdoAbortedError(NOT_IN_OD)
+    return entry[subindex]
