@@ -283,6 +283,9 @@ class Device:
     #: point …), for tests and plants: ``device.apply_state(cls.drive_setup)``.
     drive_setup: ClassVar[Mapping[str, Any]] = {}
     face_classes: ClassVar[Mapping[str, Callable[[Any, Port], Face]]] = {}
+    #: The Modbus unit id of the kind's own Modbus layout (the ``mirror``), from its model: the
+    #: PCD's S-Bus station (spec pcd4h3 §9.8); None: unit 1, as the generated map's.
+    modbus_unit: ClassVar[Callable[[Any], int] | None] = None
 
     def __init__(
         self,

@@ -32,7 +32,7 @@ from devsim.facades.modbus_map import ModbusMap, from_words, to_words
 from devsim.facades.modbus_pdu import ILLEGAL_ADDRESS, ILLEGAL_VALUE, Refused
 from devsim.transports.hosts import DEFAULT_IDLE_DROP, admit, dropped, listen_backlog, refuse
 
-__all__ = ["ModbusFacade", "ModbusRtuEndpoint", "ModbusTcpServer", "device_map", "line_settings", "serve_tcp",
+__all__ = ["ModbusFacade", "ModbusRtuEndpoint", "ModbusTcpServer", "device_map", "device_unit", "line_settings", "serve_tcp",
            "start_modbus"]
 
 #: A Modbus RTU line's pcap records: protocol 16 (docs/wireshark.md; Wireshark's ``mbrtu`` decodes them).
@@ -357,15 +357,28 @@ def device_map(device: Device, layout: str = "points", overrides: dict[str, Any]
     return ModbusMap.generate(device.points, overrides)
 
 
-async def start_modbus(runtime: Any, device: Device, spec: str, *, unit: int = 1,
+def device_unit(device: Device, layout: str = "points") -> int:
+    """The unit id a device answers unless one is named: 1, or in the kind's own layout (the
+    mirror) the one the kind gives (``Device.modbus_unit``: the PCD's S-Bus station, spec pcd4h3
+    §9.8) where it is a Modbus unit id (1 … 247)."""
+    unit_of = type(device).modbus_unit
+    if layout == "mirror" and unit_of is not None:
+        unit = unit_of(device.model)
+        if 1 <= unit <= 247:
+            return unit
+    return 1
+
+
+async def start_modbus(runtime: Any, device: Device, spec: str, *, unit: int | None = None,
                        overrides: dict[str, Any] | None = None, trace: str | None = None,
                        line: str = "19200 8E1", layout: str = "points") -> tuple[str, Any]:
     """Serve ``device`` over Modbus in ``runtime`` (in its loop) as ``spec`` says: ``tcp:[HOST:]PORT``
     (Modbus TCP, loopback unless a host is named; pymodbus's own server, not traced), ``rtu`` (RTU
     on a new pty) or ``rtu:LINK`` (a pty with a stable symlink) at the ``line`` settings (Modbus's
-    default 19200 8E1).  The port key is ``NAME.modbus``; returns what a host opens and the pty
+    default 19200 8E1), answering ``unit`` (None: :func:`device_unit`).  The port key is ``NAME.modbus``; returns what a host opens and the pty
     transport (None for TCP)."""
-    facade = ModbusFacade(device, device_map(device, layout, overrides), unit)
+    facade = ModbusFacade(device, device_map(device, layout, overrides),
+                          unit if unit is not None else device_unit(device, layout))
     key = f"{device.name}.modbus"
     scheme, _, rest = spec.partition(":")
     if scheme == "tcp":

@@ -143,7 +143,8 @@ class ModbusSpec(Typed):
 
     tcp: TcpSpec | None = None
     rtu: PtySpec | None = None
-    unit: Annotated[int, Meta(ge=1, le=247)] = 1
+    unit: Annotated[Annotated[int, Meta(ge=1, le=247)] | None, doc(
+        "the unit id; none: 1, or with layout mirror the kind's own (PCD4.H3: its S-Bus station, spec §9.8)")] = None
     line: Annotated[str, doc("RTU line settings")] = "19200 8E1"
     layout: Annotated[Literal["points", "mirror"], doc(
         "the map: generated from the points, or the kind's own mirror (PCD4.H3: its media, spec §9.8)")] = "points"

@@ -47,3 +47,20 @@ def test_limits_of_the_mirror(pcd: tuple[Any, ModbusTcpClient]) -> None:
     assert beyond.isError() and beyond.exception_code == 2
     diagnostics = client.write_registers(2 * 4000, [0, 1], device_id=1)  # the read-only diagnostics block
     assert diagnostics.isError() and diagnostics.exception_code == 3
+
+
+def test_the_unit_id_is_the_s_bus_station() -> None:
+    """Spec §9.8: "Unit id = S-Bus station": a PCD configured as station 7 answers unit 7 (and
+    0xFF/0, which address a TCP server itself); unit 1 is another device, behind no gateway."""
+    spec = PlantSpec.parse({"devices": [
+        {"name": "pcd", "kind": "pcd4h3", "config": {"station": 7},
+         "modbus": {"tcp": {"port": 0}, "layout": "mirror"}}]})
+    with modbus_tcp(spec, "pcd") as (_plant, client):
+        assert client.read_holding_registers(2 * 2005, count=2, device_id=7).registers == [0xC800, 0x0047]
+        other = client.read_holding_registers(2 * 2005, count=2, device_id=1)
+        assert other.isError() and other.exception_code == 0x0B
+    spec = PlantSpec.parse({"devices": [
+        {"name": "pcd", "kind": "pcd4h3", "config": {"station": 7},
+         "modbus": {"tcp": {"port": 0}, "layout": "mirror", "unit": 9}}]})
+    with modbus_tcp(spec, "pcd") as (_plant, client):  # a unit the plant names wins
+        assert not client.read_holding_registers(2 * 2005, count=2, device_id=9).isError()

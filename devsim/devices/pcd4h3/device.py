@@ -48,6 +48,7 @@ class Pcd4h3Device(Device):
     points = POINTS
     faults = FAULTS
     drive = DRIVE
+    modbus_unit = staticmethod(lambda model: model.station)  # §9.8: "Unit id = S-Bus station"
 
     @classmethod
     def reference(cls) -> Reference:
