@@ -1,5 +1,8 @@
-"""The checks a node makes on a PDO mapping a master writes (CiA 301 §7.5.2.36, RPDO mapping
-parameter 1600h …, and §7.5.2.38, TPDO mapping parameter 1A00h …: the re-mapping procedure).
+"""The checks a node makes on the PDO parameters a master writes.  The transmission type
+(sub-index 02h of 1400h … / 1800h …, CiA 301 §7.5.2.35): 241 … 251 are reserved and 252/253 need
+remote frames the node does not serve, so they are aborted 0609 0030h.  The mapping
+(CiA 301 §7.5.2.36, RPDO mapping parameter 1600h …, and §7.5.2.38, TPDO mapping parameter 1A00h …:
+the re-mapping procedure).
 A mapping entry (sub-index 01h … 08h) that names an object the dictionary does not have is
 aborted 0602 0000h; one naming an object that cannot be mapped (PDOMapping=0 in the EDS, a length
 other than the object's, into an RPDO an object that cannot be written, into a TPDO one that
@@ -15,23 +18,32 @@ from typing import Any
 from canopen.objectdictionary import ODVariable
 from canopen.sdo.exceptions import SdoAbortedError
 
-__all__ = ["CANNOT_BE_MAPPED", "ENTRIES", "NOT_IN_OD", "TOO_LONG", "check", "is_mapping"]
+__all__ = ["CANNOT_BE_MAPPED", "ENTRIES", "NOT_IN_OD", "TOO_LONG", "VALUE_RANGE_EXCEEDED", "check", "is_pdo_parameter"]
 
 NOT_IN_OD = 0x06020000  # object does not exist in the object dictionary
 CANNOT_BE_MAPPED = 0x06040041  # object cannot be mapped to the PDO
 TOO_LONG = 0x06040042  # the number and length of the objects to be mapped would exceed PDO length
 ENTRIES = 8  # mapping entries per PDO (the EDS's sub-indices 01h … 08h)
+VALUE_RANGE_EXCEEDED = 0x06090030
 PDO_BITS = 64
+#: The transmission types a PDO's sub-index 02h takes (an RPDO is taken as it arrives; a TPDO goes
+#: out at SYNCs, type 0 after a change, 1 … 240 every that many, or on events, 254 and 255).
+TRANSMISSION_TYPES = frozenset((*range(241), 254, 255))
 
 
-def is_mapping(index: int) -> bool:
-    """An RPDO (1600h … 17FFh) or TPDO (1A00h … 1BFFh) mapping parameter."""
-    return 0x1600 <= index <= 0x17FF or 0x1A00 <= index <= 0x1BFF
+def is_pdo_parameter(index: int) -> bool:
+    """A PDO communication (1400h … 15FFh, 1800h … 19FFh) or mapping (1600h … 17FFh, 1A00h …
+    1BFFh) parameter."""
+    return 0x1400 <= index <= 0x1BFF
 
 
 def check(node: Any, index: int, subindex: int, data: bytes) -> None:
-    """Raise the CiA 301 abort for writing ``data`` into sub-index ``subindex`` of mapping
-    parameter ``index`` of ``node`` (a canopen local node), if the write is one to refuse."""
+    """Raise the CiA 301 abort for writing ``data`` into sub-index ``subindex`` of PDO parameter
+    ``index`` of ``node`` (a canopen local node), if the write is one to refuse."""
+    if index & 0x0200 == 0:  # communication parameter
+        if subindex == 2 and data and data[0] not in TRANSMISSION_TYPES:
+            raise SdoAbortedError(VALUE_RANGE_EXCEEDED)
+        return
     if subindex == 0:
         count = data[0] if data else 0
         if count > ENTRIES:

@@ -12,7 +12,7 @@ profile velocity modes, 6064h/606Ch/60F4h; a fault the model announces (topic ``
 EMCY message.  Hosts in other processes reach the nodes through
 :class:`devsim.transports.socketcand.SocketcandServer` (:func:`start_canopen`, ``devsim run
 --canopen``).  PDOs: what the master maps into 1600h/1A00h and enables; TPDOs go out on SYNC
-(transmission types 1 … 240); with types 254/255 when a mapped value changes (looked at every
+(transmission types 1 … 240; type 0 at the SYNC after a change); with types 254/255 when a mapped value changes (looked at every
 inhibit time, else every 10 ms of device time) and when the event timer runs out; RPDOs are
 written into their objects.  ``devsim run --canopen NODE@socketcan:vcan0`` puts the nodes on a
 SocketCAN interface instead, where the machine has one.  Callbacks come from
@@ -158,6 +158,8 @@ class CanopenFacade:
         for tpdo in self.node.tpdo.map.values():
             if tpdo.enabled and (tpdo.trans_type or 0) >= 254:
                 self.call(self._start_event_driven, tpdo)
+            elif tpdo.enabled and tpdo.trans_type == 0:  # synchronous acyclic: the values as of now
+                self._sent[id(tpdo)] = self._data(tpdo)
 
     def _stop_pdos(self) -> None:
         """Leaving OPERATIONAL: no TPDO goes out, no RPDO is taken."""
@@ -218,13 +220,20 @@ class CanopenFacade:
         if (tpdo.trans_type or 0) >= 254:
             self._sent[id(tpdo)] = b"".join(carried)
             self._arm(tpdo, "event")
+        elif tpdo.trans_type == 0:
+            self._sent[id(tpdo)] = b"".join(carried)
 
     def _sync(self, can_id: int, data: bytes, timestamp: float) -> None:
         if not self._pdos_on:
             return
         self._syncs += 1
         for tpdo in self.node.tpdo.map.values():
-            if tpdo.enabled and 1 <= (tpdo.trans_type or 0) <= 240 and self._syncs % tpdo.trans_type == 0:
+            if not tpdo.enabled or (tpdo.trans_type or 0) > 240:
+                continue
+            if tpdo.trans_type == 0:  # synchronous acyclic (CiA 301): at the SYNC after a change
+                if self._data(tpdo) != self._sent.get(id(tpdo)):
+                    self._transmit(tpdo)
+            elif self._syncs % tpdo.trans_type == 0:
                 self._transmit(tpdo)
 
     def _received(self, rpdo: Any) -> None:
@@ -290,8 +299,8 @@ class CanopenFacade:
         return bool(value) if point.type == "bool" else value
 
     def _write(self, index: int, subindex: int, od: Any, data: bytes) -> None:
-        if canopen_mapping.is_mapping(index):
-            canopen_mapping.check(self.node, index, subindex, data)  # (CiA 301: what may be mapped)
+        if canopen_mapping.is_pdo_parameter(index):
+            canopen_mapping.check(self.node, index, subindex, data)  # (CiA 301: what a PDO takes)
             return
         if self.drive is not None and index in DRIVE_WRITES:
             faulted = index == 0x6040 and self.call(self.drive.in_fault)

@@ -430,3 +430,46 @@ def test_a_fault_reset_that_clears_the_fault_sends_the_error_reset_emcy(drive: D
     drive.control(0x00)
     drive.control(0x80)  # a fault reset with no fault: no EMCY
     assert drive.node.sdo[0x6041].raw & 0x4F == 0x40 and len(drive.node.emcy.log) == 2
+
+
+def test_a_synchronous_acyclic_tpdo_goes_out_at_the_sync_after_a_change(drive: Drive) -> None:
+    """CiA 301 §7.5.2.35, TPDO transmission type 0 (synchronous, acyclic): sent at a SYNC when its
+    values changed since it was last sent, not at the SYNCs between."""
+    node = drive.node
+    node.tpdo.read()
+    tpdo = node.tpdo[1]
+    tpdo.clear()
+    tpdo.add_variable(0x6041)
+    tpdo.trans_type, tpdo.enabled = 0, True
+    node.tpdo.save()
+    arrived: queue.Queue[int] = queue.Queue()
+    tpdo.add_callback(lambda m: arrived.put(m["Statusword"].raw))
+    node.nmt.state = "OPERATIONAL"
+
+    def syncs(count: int) -> list[int]:
+        for _ in range(count):
+            drive.master.sync.transmit()
+        assert node.sdo[0x1017].raw == 0  # (a round trip: the SYNCs were handled before it)
+        seen = []
+        while not arrived.empty():
+            seen.append(arrived.get())
+        return seen
+
+    assert syncs(3) == []  # no change
+    drive.control(0x06)
+    assert [word & 0x6F for word in syncs(3)] == [0x21]  # once, at the first SYNC after the change
+    assert syncs(2) == []
+
+
+@pytest.mark.parametrize("trans_type", [241, 245, 251, 252, 253])
+def test_a_transmission_type_the_node_does_not_serve_is_refused(drive: Drive, trans_type: int) -> None:
+    """CiA 301 §7.5.2.35: 241 … 251 are reserved, 252/253 (RTR only) need remote frames the node does
+    not serve; writing one into a TPDO's sub-index 02h is aborted 0609 0030h (value range exceeded)
+    and the type stays, rather than a PDO that never goes out."""
+    with pytest.raises(canopen.SdoAbortedError) as refused:
+        drive.node.sdo[0x1800][2].raw = trans_type
+    assert refused.value.code == 0x06090030
+    assert drive.node.sdo[0x1800][2].raw == 0xFF
+    if trans_type <= 251:
+        with pytest.raises(canopen.SdoAbortedError):
+            drive.node.sdo[0x1400][2].raw = trans_type
