@@ -102,4 +102,15 @@ def test_a_kind_that_is_no_drive_has_no_cia402_objects() -> None:
     for index, *_ in DRIVE_OBJECTS:
         assert f"=0x{index:04X}" not in plain and f"[{index:04X}]" not in plain
         assert f"=0x{index:04X}" in drive and f"[{index:04X}]" in drive
-    assert "SupportedObjects=18" in plain  # 1008h, 1017h and the 16 PDO records
+    assert "SupportedObjects=19" in plain  # 1008h, 1014h, 1017h and the 16 PDO records
+
+
+def test_the_emcy_cob_id_object_names_the_emcy_it_sends(bus: Bus) -> None:
+    """CiA 301 1014h "COB-ID EMCY" (conditional: mandatory where EMCY is supported; here read-only,
+    80h + node id, 11-bit, valid): the EDS declares it and the node answers it."""
+    od = canopen.import_od(str(ROOT / "docs" / "eds" / "sers.eds"), 5)
+    assert 0x1014 in od and od[0x1014].default == 0x80 + 5 and not od[0x1014].writable
+    bus.facade.attach(bus.slave)
+    assert bus.remote.sdo[0x1014].raw == 0x85
+    bus.facade._emergency(1, 0x8611)
+    assert bus.remote.emcy.wait(0x8611, timeout=5) is not None  # on 85h: what canopen's consumer listens to
