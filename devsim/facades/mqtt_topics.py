@@ -25,6 +25,7 @@ from urllib.parse import urlsplit
 from devsim.core.device import Device
 from devsim.core.points import parse_bool
 from devsim.runtime import requests as rq
+from devsim.runtime.ops import BadRequest
 
 __all__ = [
     "COMMANDS",
@@ -130,7 +131,7 @@ def _fault(device: Device, kind: str, payload: bytes) -> rq.SwitchFault:
 def _power_cycle(device: Device, _arg: str, payload: bytes) -> rq.PowerCycle:
     value = decode_value(payload) if payload.strip() else {}
     if not isinstance(value, dict) or set(value) - {"wipe"}:
-        raise ValueError('power_cycle takes an empty payload or {"wipe": true}')
+        raise BadRequest('power_cycle takes an empty payload or {"wipe": true}')
     return rq.PowerCycle(device.name, parse_bool(value.get("wipe", False)))
 
 
@@ -155,7 +156,7 @@ def _misshapen(verb: str, takes_arg: bool) -> Command:
     shape = f"{verb}/<{'point' if verb == 'set' else 'kind'}>" if takes_arg else verb
 
     def refuse(_device: Device, _arg: str, _payload: bytes) -> rq.ControlRequest:
-        raise ValueError(f"a {verb} command's topic ends in {shape}")
+        raise BadRequest(f"a {verb} command's topic ends in {shape}")
 
     return refuse
 

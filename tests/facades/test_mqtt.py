@@ -144,12 +144,12 @@ REFUSED = [
     ("set/nope", "1", "UnknownName", "nope"),
     ("fault/nope", "true", "UnknownName", "no fault 'nope'"),
     ("fault/emergency_stop", "perhaps", "BadValue", "boolean"),
-    ("power_cycle", '{"now": 1}', "ValueError", "wipe"),
+    ("power_cycle", '{"now": 1}', "BadRequest", "wipe"),
     # a level too many or too few: answered, not lost at the broker's filter
-    ("set/input/I1", "true", "ValueError", "topic ends in set/<point>"),
-    ("set", "true", "ValueError", "topic ends in set/<point>"),
-    ("fault/emergency_stop/now", "true", "ValueError", "topic ends in fault/<kind>"),
-    ("power_cycle/now", "", "ValueError", "topic ends in power_cycle"),
+    ("set/input/I1", "true", "BadRequest", "topic ends in set/<point>"),
+    ("set", "true", "BadRequest", "topic ends in set/<point>"),
+    ("fault/emergency_stop/now", "true", "BadRequest", "topic ends in fault/<kind>"),
+    ("power_cycle/now", "", "BadRequest", "topic ends in power_cycle"),
 ]
 
 
