@@ -94,7 +94,9 @@ class Plant:
         # a second handle on the pty (re-configuring an 8E1 pty handle fails with EINVAL)
         port = serial.Serial(self.transport.address, baudrate=9600, timeout=0.02)
         self._ports.append(port)
-        return Gms96Client(port, address, e_version=e_version)
+        # (an answer comes at once; the bound only ends a wait for one that never comes, so it
+        # is wide enough for a loaded machine: 0.5 s once timed out in a full CI run)
+        return Gms96Client(port, address, e_version=e_version, timeout=2.0)
 
     def wait_received(self, count: int, timeout: float = 5.0) -> None:
         deadline = time.monotonic() + timeout
