@@ -114,7 +114,8 @@ def test_profile_velocity_mode(drive: Drive) -> None:
     assert abs(drive.node.sdo[0x606C].raw) < 50
 
 
-def test_a_following_error_is_an_emcy_and_the_fault_state_then_reset(drive: Drive) -> None:
+def into_a_following_error(drive: Drive) -> None:
+    """A move that a blockage stops until the PCD's following error (ExcPEr) ends it."""
     enable(drive)
     drive.node.sdo[0x607A].raw = 100_000
     drive.node.sdo[0x6081].raw = 50_000
@@ -122,6 +123,10 @@ def test_a_following_error_is_an_emcy_and_the_fault_state_then_reset(drive: Driv
     drive.runtime.advance(1.0)
     drive.runtime.fault("pcd", "blocked_1", True)
     assert drive.runtime.run_until(lambda: drive.runtime.read("pcd", "axis.1.ExcPEr"), 3.0)
+
+
+def test_a_following_error_is_an_emcy_and_the_fault_state_then_reset(drive: Drive) -> None:
+    into_a_following_error(drive)
     received = drive.emcy(0x8611)
     assert received and received[0].register & 0x01
     assert drive.status & 0x4F == 0x08  # Fault
@@ -413,13 +418,7 @@ def test_a_fault_reset_that_clears_the_fault_sends_the_error_reset_emcy(drive: D
     """CiA 301 §7.2.7 (the EMCY producer's states error free / error occurred): when the errors
     are gone the node sends an EMCY with error code 0000h ("error reset or no error") and the
     error register as it is then; a fault reset that leaves the fault sends none."""
-    enable(drive)
-    drive.node.sdo[0x607A].raw = 100_000
-    drive.node.sdo[0x6081].raw = 50_000
-    drive.control(0x1F)
-    drive.runtime.advance(1.0)
-    drive.runtime.fault("pcd", "blocked_1", True)
-    assert drive.runtime.run_until(lambda: drive.runtime.read("pcd", "axis.1.ExcPEr"), 3.0)
+    into_a_following_error(drive)
     assert drive.emcy(0x8611)
     drive.control(0x0F)
     drive.control(0x80)  # fault reset, the blockage still there: the fault is cleared by FResSF
