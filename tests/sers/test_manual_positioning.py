@@ -22,6 +22,19 @@ def test_w_range_rotational(sers: Plant) -> None:
     refused(host, "#W=-214748.3648\r", 2)
 
 
+@pytest.mark.manual("§4.8.4.2", "W range (incremental): -2147483639 to +2147483639 increments")
+@pytest.mark.parametrize("weighting", [0, 64])
+def test_w_range_incremental(sers: Plant, weighting: int) -> None:
+    host = sers.host
+    host.ask(f"#P76={weighting}\r")
+    assert host.ask("#W=2147483639\r").endswith(b"ok1\n\r")
+    assert host.ask("#W=-2147483639\r").endswith(b"ok1\n\r")
+    assert query(host, "W") == "-2147483639inkr"
+    refused(host, "#W=2147483640\r", 1)
+    refused(host, "#W=-2147483640\r", 2)
+    assert query(host, "W") == "-2147483639inkr"
+
+
 @pytest.mark.manual("§4.8.4.2", "WR (P1051) is W and sets P1014=0 (relative); WA (P1052) is W and sets P1014=2 "
                     "(absolute)")
 def test_wr_and_wa_set_the_positioning_mode(sers: Plant) -> None:

@@ -59,7 +59,7 @@ def test_limits_and_compare_outputs_set_after_a_move_watch_the_next(sers: Plant)
 def test_the_range_of_w_follows_the_weighting(sers: Plant) -> None:
     host = sers.host
     assert host.ask("#W=200000\r") == b"#W=200000\r\nok1\n\r"  # ±214748.3647° (§4.8.4.2)
-    host.ask("#P76=0\r")  # increments: ±2147483647
+    host.ask("#P76=0\r")  # increments: ±2147483639
     assert host.ask("#W=2000000000\r") == b"#W=2000000000\r\nok1\n\r"
     host.ask("#P76=2\r")
     assert host.ask("#W=2000000000\r").startswith(b"#W=2000000000\r\n*")

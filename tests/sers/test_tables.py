@@ -504,7 +504,7 @@ def test_scaling_rejects_invalid():
 def test_pos_range_matches_manual():
     assert Scaling(p76=2).pos_range() == (-214748.3647, 214748.3647)
     assert Scaling(p76=1).pos_range() == (-167772.1599, 167772.1599)
-    assert Scaling(p76=0).pos_range() == (-2147483647, 2147483647)
+    assert Scaling(p76=0).pos_range() == (-2147483639, 2147483639)  # §4.8.4.2
 
 
 @pytest.mark.parametrize(

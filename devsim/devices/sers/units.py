@@ -51,6 +51,9 @@ __all__ = [
 INCREMENTS_PER_REV = 12800
 INT32_MAX = 2**31 - 1
 INT32_MIN = -(2**31)
+#: Largest W at incremental weighting (§4.8.4.2 P47: "Inkremental : -2147483639 bis
+#: +2147483639 (Inkmente/Schritte)"), a little short of 2^31 - 1.
+INCREMENTAL_MAX = 2147483639
 
 #: P76 code -> (unit string as sent, decimals) (§4.8.4.6 table "Wichtungsart für Lagedaten").
 POSITION_WEIGHTINGS: dict[int, tuple[str, int]] = {
@@ -233,15 +236,16 @@ class Scaling:
 
         The tighter of the 32-bit fixed-point range (±(2^31-1)/10^decimals) and the 32-bit
         increment range.  Reproduces the manual's W ranges (§4.8.4.2): rotational ±214748.3647°,
-        translational ±167772.1599 mm (gear 1:1, P123=1).  For incremental weighting this gives
-        ±2147483647; the manual prints ±2147483639.
+        translational ±167772.1599 mm (gear 1:1, P123=1) and incremental ±2147483639 increments
+        ("Inkremental : -2147483639 bis +2147483639"; the fixed-point bound of the weightings
+        without decimals is that number, not 2^31 - 1).
         """
         made = self.__dict__.get("_pos_range")
         if made is not None:  # (a scaling never changes: P76 … P123 written make a new one)
             return made
         d = self.pos_decimals
         scale = 10**d
-        fixed = INT32_MAX / scale
+        fixed = (INT32_MAX if d else INCREMENTAL_MAX) / scale
         inc = INT32_MAX / self.pos_factor
         hi = math.floor(min(fixed, inc) * scale) / scale
         self._pos_range = (-hi, hi)
