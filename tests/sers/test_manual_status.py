@@ -32,6 +32,17 @@ def test_write_and_read_a_parameter(sers: Plant) -> None:
     assert query(host, "P41").endswith("U/min")
 
 
+@pytest.mark.manual("§4.7", "a query of a parameter with a unit, such as the feed constant P123, sends the unit "
+                    "with the value ('P123=150mm'); P123 is in the translational length unit (§4.8.4.7)")
+@pytest.mark.parametrize(("weighting", "unit"), [(1, "mm"), (17, "in"), (2, "mm")])
+def test_the_feed_constant_is_answered_with_its_unit(sers: Plant, weighting: int, unit: str) -> None:
+    host = sers.host
+    assert host.ask(f"#P76={weighting} P123=150\r").endswith(b"ok1\n\r")
+    assert query(host, "P123") == f"150{unit}"
+    assert host.ask("#P123=2.5\r").endswith(b"ok1\n\r")
+    assert query(host, "P123") == f"2.5{unit}"
+
+
 @pytest.mark.manual("§4.8.3.2", "P1013 bits: 1 right limit open (J3), 2 left limit open (J2), 4 STOP open (J4), "
                     "8 reference switch open (J1), 128 service switch open (J5)")
 @pytest.mark.parametrize(("signal", "bit"), [("limit_right", 1), ("limit_left", 2), ("stop", 4)])

@@ -1025,7 +1025,7 @@ def test_list_arguments_beyond_the_grammar_end_the_statement(sers: Plant) -> Non
     assert host.ask("#LIST +5\r") == b"#LIST +5\r2: O2=1\n\r\n*Anweisung erwartet\n\r"
     assert host.ask("#LIST-------\r") == b"#LIST--1: O1=1\n\r-\n*Datum oder Parameter erwartet\n\r----\r"
     answer = host.ask("#LISTP 1.2.3\r")
-    assert answer.startswith(b"#LISTP 1.2.3\rP1=0\n\r") and answer.endswith(b"P123=1\n\r\n*Anweisung erwartet\n\r")
+    assert answer.startswith(b"#LISTP 1.2.3\rP1=0\n\r") and answer.endswith(b"P123=1mm\n\r\n*Anweisung erwartet\n\r")
     assert answer.count(b"\n\rP") == 20 - 1  # 2 x 10 parameters from index 1
     assert host.ask("#LISTP 3\r").startswith(b"#LISTP 3\rP3=0\n\r\nok")
     assert host.ask("#P11?\r").startswith(b"#P11?\rP11=0\n\r\nok")

@@ -138,7 +138,11 @@ class ParameterAccess:
             scaling = self.params.scaling
             return format_query(value, scaling.decimals(kind), scaling.unit(kind))
         if kind == "fixed":
-            return format_query(value, PARAMETERS[number].decimals)
+            row = PARAMETERS[number]
+            # §4.7: "bei Parametern mit einer Einheit - Wichtung - wie z.B. die Vorschubkonstante
+            # wird die Einheit mitgesendet" (the example answer: 'P…=150mm')
+            unit = self.params.scaling.length_unit if row.extra["length_unit"] else ""
+            return format_query(value, row.decimals, unit)
         if isinstance(value, float) and value.is_integer():
             return str(int(value))
         return str(value)

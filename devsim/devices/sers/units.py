@@ -174,6 +174,13 @@ class Scaling:
         return ACCEL_WEIGHTINGS[self.p160][1]
 
     @property
+    def length_unit(self) -> str:
+        """The unit of the feed constant P123 (§4.8.4.7, §4.7 "wie z.B. die Vorschubkonstante wird
+        die Einheit mitgesendet"): inch with P76=17, else mm (the manual's example 'P…=150mm'
+        at the default weighting)."""
+        return "in" if self.p76 == 17 else "mm"
+
+    @property
     def translational(self) -> bool:
         """True if positions are weighted translationally (P76 = 1 or 17): P123 is then in pos_unit."""
         return self.p76 in _TRANSLATIONAL
