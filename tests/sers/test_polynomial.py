@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from tests.sers.conftest import Plant
@@ -78,3 +80,23 @@ def test_last_segment_too_short_to_brake(sers: Plant) -> None:
     sers.host.ask("#WPT=1 B=2 E\r")  # 1° left at 1000 rpm with B = 2 rad/s²
     sers.settle(timeout=60)
     assert sers.read("errno") == 118
+
+
+@pytest.mark.manual("§4.6.7", "in the last segment the drive changes to v6 with a6 and only then brakes with B "
+                    "(\"Der letzte Abschnitt X6 wird durch die Beschleunigung a6, die Geschwindigkeit v6 und die "
+                    "Bremsrampe B gebildet\")")
+def test_last_segment_slows_to_its_speed_with_a_and_brakes_with_b(sers: Plant) -> None:
+    host = sers.host
+    rad = 12800 / (2 * math.pi)  # increments per radian
+    host.ask("#ON WP=3600 V=600 A=100 E\r")  # 0 -> 20π rad/s with 100 rad/s², then 20π rad/s
+    host.ask("#WPT=3600 A=50 B=100 V=300 E\r")  # 20π -> 10π rad/s with 50 rad/s², brake with 100
+    dev = sers.runtime.device("sers")
+    assert sers.runtime.run_until(lambda: dev.read("param.P51") >= 3600, 10)
+    sers.advance(0.01)  # inside the change of speed of the last segment
+    assert dev.model.axis.acceleration() == pytest.approx(-50 * rad)
+    sers.settle()
+    assert sers.read("param.P51") == pytest.approx(7200)
+    v1, v2, x = 20 * math.pi, 10 * math.pi, 20 * math.pi  # rad/s, rad/s, rad per segment
+    first = v1 / 100 + (x - v1**2 / 200) / v1
+    last = (v1 - v2) / 50 + (x - (v1**2 - v2**2) / 100 - v2**2 / 200) / v2 + v2 / 100
+    assert sers.runtime.now() - 2.0 == pytest.approx(first + last, abs=2e-3)

@@ -149,13 +149,25 @@ class PolynomialMove:
                 self._record_error(118)
                 self._abort()
                 return
-            axis.move_to(segment.end, segment.speed, segment.accel, decel=segment.brake, on_done=self._finished)
+            velocity = axis.velocity()
+            slow = (v * v - segment.speed**2) / (2 * segment.accel)
+            if v > segment.speed and (velocity > 0) == (direction > 0) and (
+                slow + segment.speed**2 / (2 * segment.brake) <= abs(segment.end - here) + 1e-6
+            ):  # to v6 with a6 first; B is the brake ramp only (§4.6.7)
+                axis.jog(direction, segment.speed, segment.accel, on_done=lambda: self._brake_to_end(segment))
+                return
+            self._brake_to_end(segment)
             return
         if direction == 0:
             self._segment_end(0)
             return
         axis.jog(direction, segment.speed, segment.accel)
         self._watch = axis.watch(segment.end, self._segment_end)
+
+    def _brake_to_end(self, segment: Segment) -> None:
+        """The last segment (§4.6.7): on to its end at v6 and brake with B to stand there."""
+        if self.running is segment:
+            self.axis.move_to(segment.end, segment.speed, segment.accel, decel=segment.brake, on_done=self._finished)
 
     def _segment_end(self, _direction: int) -> None:
         if self._watch is not None:
