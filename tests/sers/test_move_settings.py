@@ -63,3 +63,25 @@ def test_the_range_of_w_follows_the_weighting(sers: Plant) -> None:
     assert host.ask("#W=2000000000\r") == b"#W=2000000000\r\nok1\n\r"
     host.ask("#P76=2\r")
     assert host.ask("#W=2000000000\r").startswith(b"#W=2000000000\r\n*")
+
+
+@pytest.mark.manual("§4.8.3.1", "P12 8 'Interner Lagegrenzwert - der intern berechnete Positionswert kann nicht auf den "
+                    "skalierten Wert abgebildet werden': a jog beyond the position range of the weighting (§4.8.4.2)")
+@pytest.mark.parametrize(("weighting", "start", "limit"), [(2, "214740", 214748.3647), (0, "2147480000", 2147483639)])
+def test_a_jog_beyond_the_position_range_warns_with_p12_8(sers: Plant, weighting: int, start: str,
+                                                             limit: float) -> None:
+    host = sers.host
+    host.ask(f"#P76={weighting} ON P1035=0 P1019=60 P1018=100000 P51={start}\r")
+    host.ask("#RS\r")  # 60 rpm: 360° or 12800 increments per second
+    sers.advance(0.01)
+    assert sers.read("param.P51") < limit
+    assert sers.read("P12") == 0
+    sers.advance(1.0)
+    assert sers.read("param.P51") > limit
+    assert sers.read("P12") & 8
+    host.ask("#S\r")
+    sers.settle()
+    assert host.ask("#P12=0\r").endswith(b"ok1\n\r")
+    host.ask(f"#P51={start} LS\r")  # inside the range the warning does not come again
+    sers.advance(0.5)
+    assert sers.read("P12") == 0

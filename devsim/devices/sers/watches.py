@@ -1,6 +1,6 @@
-"""What the SERS watches while it moves: the software limits P1040/P1041, the compare positions
-P1024/P1026 with their outputs P1025/P1027 and the standstill monitoring P1044/P1045 (manual
-§4.8.6.12, §4.8.1.2, §4.8.6.8; spec §5.6, §5.7).
+"""What the SERS watches while it moves: the software limits P1040/P1041, the range of P51 (P12 8),
+the compare positions P1024/P1026 with their outputs P1025/P1027 and the standstill monitoring
+P1044/P1045 (manual §4.8.6.12, §4.8.3.1, §4.8.1.2, §4.8.6.8; spec §5.6, §5.7).
 
 Each is a position on the axis whose crossing is solved for (:meth:`devsim.core.axis.Axis.watch`),
 not sampled.
@@ -86,6 +86,7 @@ class PositionWatches:
             for watch in self._watches:
                 watch.cancel()
             self._watches.clear()
+        self._arm_position_range()
         lower, upper, distance, action1, action2 = self.params.watched()
         if not (float(lower) < float(upper) or float(distance) or int(action1) or int(action2)):
             for watch in self._standstill:  # (nothing to watch, the factory setting)
@@ -111,6 +112,21 @@ class PositionWatches:
             if action:
                 where = float(position) + offset
                 self._watches.append(axis.watch(where, lambda _d, a=action: self._compare_action(a)))
+
+    def _arm_position_range(self) -> None:
+        """P12 8 (§4.8.3.1: "Interner Lagegrenzwert - der intern berechnete Positionswert kann
+        nicht auf den skalierten Wert abgebildet werden"): P51 leaves the range of the position
+        weighting (§4.8.4.2, e.g. ±214748.3647°).  A positioning cannot: its target is checked
+        at E (errno 85/86)."""
+        if self._kind() in (None, "position"):
+            return
+        scaling = self.params.scaling
+        lo, hi = (scaling.pos_to_inc(x) + self._offset() for x in scaling.pos_range())
+        here = self.axis.position()
+        if here > hi or here < lo:
+            self.power.warn(8)
+        self._watches.append(self.axis.watch(hi + 1e-6, lambda d: d > 0 and self.power.warn(8)))
+        self._watches.append(self.axis.watch(lo - 1e-6, lambda d: d < 0 and self.power.warn(8)))
 
     def _soft_limit_hit(self) -> None:
         self.power.warn(1)
