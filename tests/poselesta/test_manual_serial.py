@@ -457,6 +457,27 @@ def test_pos_ii_plays_the_catalogue_back_in_iso_only(devsim_device) -> None:  # 
     assert cnc.read("param.P70") == 3
 
 
+@pytest.mark.manual("§2.6.2.2", "Baud-Rate POS III: 300/1200/4800 mittels P 68 wählbar")
+@pytest.mark.manual("§2.6.2.2", "Der Parameterkatalog kann beim POS II nur mit dem ISO-Code auf Band aufgenommen werden "
+                    "... Diese Einschränkung gilt beim POS III nicht")
+@pytest.mark.parametrize("p68", [4, 5])  # the cassette at 300 and at 4800 baud
+def test_pos_iii_plays_back_the_catalogue_it_recorded_at_its_cassette_rate(devsim_device, p68: int) -> None:  # noqa: ANN001
+    """The limit of 1200 baud for reading the catalogue is that of the tape reader and of the DNC
+    port (§2.6.2.3, §2.6.3); the cassette section names none for POS III: what T2 recorded, T3
+    plays back (it was refused by P68's number: at P68 = 4 the cassette runs at 300 baud)."""
+    cnc = devsim_device("poselesta", {"v6_peer": "cassette", "params": {68: p68, 44: 5000}})
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 99)
+    cnc.set("v6.transfer", "cassette_out")
+    cnc.advance(13.0 + 120.0)  # the leader, then about 1500 characters at 300 baud
+    assert cnc.read("v6.state") == "done"
+    cnc.set("param.P44", 4000)
+    cnc.set("v6.transfer", "cassette_in")  # (the key switch is open)
+    cnc.advance(13.0 + 1.0)
+    assert cnc.read("v6.state") == "done" and cnc.read("panel.message") == ""
+    assert cnc.read("param.P44") == 5000 and cnc.read("param.P68") == p68
+
+
 @pytest.mark.manual("§2.6.2.3", "Beispiel: the manual's listing (N 1 … N 115, M 30) is a tape the reader takes (the "
                     "lost % restored)")
 @pytest.mark.manual("§2.6.2.3", "Das Einlese-Protokoll kann jedoch ohne die Leerzeichen eingegeben werden "

@@ -149,9 +149,10 @@ class SerialLinks:
         if catalogue:
             if self._options.variant == "III":  # the line stays as it was at the start (spec §3.9)
                 line = (self._rate(function), self.iso(port))
-                if self._params.baud_code(port) > 3:
+                limit = function.catalogue_baud
+                if limit and (line[0] or 0) > limit:
                     self._screen.show(WERTBEREICHES_UEBERLAUF)
-                    raise BadValue("the catalogue is read at up to 1200 baud (P68/P70 ≤ 3)")
+                    raise BadValue(f"the catalogue is read at up to {limit} baud (P68/P70 ≤ 3)")
             self._params.begin_catalogue()  # the whole catalogue is 0 first, P68–P71 too: POS II
             # so reads it at 110 baud ISO (§2.6.2.3)
         else:

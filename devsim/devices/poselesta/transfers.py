@@ -41,7 +41,11 @@ def _cassette_baud(code: int, variant: str) -> int:
 class Function(msgspec.Struct, frozen=True):
     """A transfer function of the table in spec §3.2.1, with its line: ``baud(code, variant)``
     from the port's baud rate code, ``printer`` for the printer's frame (§2.6.1.2: an eighth
-    data bit, the MSB, always 0), and the cassette's ``leader`` before the data."""
+    data bit, the MSB, always 0), the cassette's ``leader`` before the data, and the highest
+    baud rate at which POS III reads the parameter catalogue in (``catalogue_baud``, 0: no limit):
+    1200 for the tape reader and the DNC port (§2.6.2.3, §2.6.3: "Beim POS III ist das Einlesen
+    der Parameter mit Baud-Raten bis 1200 Baud ... möglich"); the cassette section names none
+    (§2.6.2.2: "Diese Einschränkung gilt beim POS III nicht")."""
 
     name: str  # T1 … T7
     port: str
@@ -53,6 +57,7 @@ class Function(msgspec.Struct, frozen=True):
     leader: float = 0.0
     printer: bool = False
     baud: Callable[[int, str], int | None] = baud_for_code
+    catalogue_baud: int = 0
 
 
 #: The transfer functions by the name a user selects them with (``v6.transfer`` / ``v7.transfer``).
@@ -64,9 +69,9 @@ FUNCTIONS: dict[tuple[str, str], Function] = {(f.port, f.choice): f for f in (
     Function("T3", "v6", "cassette_in", 3, "input", "cassette Z2 / ZPS 020", "§2.6.2.2", leader=CASSETTE_LEADER,
              baud=_cassette_baud),
     Function("T4", "v6", "output", 7, "output", "punch / TTY", "§2.6.2.3"),
-    Function("T5", "v6", "input", 8, "input", "tape reader / TTY", "§2.6.2.3"),
+    Function("T5", "v6", "input", 8, "input", "tape reader / TTY", "§2.6.2.3", catalogue_baud=1200),
     Function("T6", "v7", "output", 7, "output", "DNC host", "§2.6.3"),
-    Function("T7", "v7", "input", 8, "input", "DNC host", "§2.6.3"),
+    Function("T7", "v7", "input", 8, "input", "DNC host", "§2.6.3", catalogue_baud=1200),
 )}
 
 
