@@ -222,6 +222,25 @@ def test_in_real_time_an_output_takes_its_frames_at_the_baud_rate(devsim_device)
     assert took >= 0.9 * len(tape) * 11 / 300  # 19 characters of 11 bits at 300 baud: 0.70 s
 
 
+@pytest.mark.manual("§2.6.3", "Baud-Rate: Mit Parameter P 70 wählbar ... 5 = 4800 Baud (nur POS III)")
+@pytest.mark.manual("§2.6.1.1", "Die Baud-Rate gibt die Anzahl der pro Sekunde übertragenen Bits an (in real time: "
+                    "not fewer either)")
+def test_in_real_time_an_output_at_4800_baud_keeps_its_rate(devsim_device) -> None:  # noqa: ANN001
+    """A character is due a frame after the one before was due: timed from the moment its timer
+    fired (always a little late), 1161 characters at 4800 baud took 3.8 s instead of 2.7 s."""
+    import time
+
+    cnc = devsim_device("poselesta", {"boot_time": 0, "params": {70: 5}}, virtual=False)  # 4800 baud ISO
+    program = "\n".join(f"N{n} X{n}.123 Y-{n}.456" for n in range(1, 60))
+    tape = encode("%\r\n" + "".join(f"N{n}X{n}.123Y-{n}.456\r\n" for n in range(1, 60)) + "M30\r\n", True)
+    with serial.serial_for_url(cnc.port_url("v7"), baudrate=4800, stopbits=2, timeout=10) as host:
+        _output_on_v7(cnc, program)
+        started = time.monotonic()
+        assert host.read(len(tape)) == tape
+        took = time.monotonic() - started
+    assert 0.9 * len(tape) * 11 / 4800 <= took <= 1.2 * len(tape) * 11 / 4800  # 1161 characters: 2.66 s
+
+
 @pytest.mark.manual("§2.6.1.2", "ISO-Code: sxxxxxxxPSS; ASCII-Code: sxxxxxxxSS (what --pacing times a character "
                     "at: 11 and 10 bits, on a port its host opens at 8N2)")
 @pytest.mark.parametrize(("p71", "bits"), [(0, 11), (1, 10)], ids=["iso", "ascii"])
