@@ -115,3 +115,17 @@ def test_break_aborts_a_download(referenced: Plant) -> None:
     assert output(c, 5)
     send(c, "p", 3, 101)
     assert referenced.read("programs") == {}
+
+
+@pytest.mark.manual("§1.5", "up to 100 CNC programs are loaded into the FLASH; online and programmed operation may be mixed")
+@pytest.mark.manual("§2.5", "100 CNC programs can be loaded into the memory of the GMS and run")
+def test_a_long_running_program_does_not_fill_the_host_command_queue(referenced: Plant) -> None:
+    c = referenced.client()
+    download(referenced, c, 0, *[("p", 10, WAIT, 1)] * 100)  # 100 rows: more than the 64 queue slots
+    send(c, "p", 3, 1, 0)
+    referenced.advance(0.05)
+    send(c, "p", 10, SETO, 4)  # a host command is acknowledged at once and queued behind the program
+    referenced.advance(5.0)
+    assert not output(c, 4) and mb(c, 0) & 0x04  # the program still runs
+    referenced.idle()
+    assert output(c, 4) and mb(c, 1) & 0x01

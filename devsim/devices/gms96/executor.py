@@ -54,7 +54,7 @@ class Cmd(msgspec.Struct, frozen=True):
     p2: int = 0
     p3: int = 0
     n: int = 0
-    program: int | None = None  # "_end" marker: the program that ends here
+    program: int | None = None  # a program's row, or its "_end" marker: that program (None: the host's)
 
     def as_list(self) -> list[Any]:
         return [self.letter, self.p1, self.p2, self.p3, self.n]
@@ -121,7 +121,8 @@ class Executor:
 
     @property
     def full(self) -> bool:
-        return len(self.queue) >= self.queue_capacity
+        """The host's commands fill the queue; a running program's rows come from the FLASH (M §1.5)."""
+        return sum(c.program is None for c in self.queue) >= self.queue_capacity
 
     # -- input --------------------------------------------------------------------------------
     def submit(self, cmd: Cmd) -> None:

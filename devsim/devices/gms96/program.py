@@ -99,7 +99,7 @@ class ProgramControl:
         img.markers[2] = cmd.p3 & 0xFF
         img.set_marker(0, 2, True)
         img.set_marker(1, 0, False)
-        cmds = [Cmd(*row) for row in program] + [Cmd("_end", program=cmd.p3)]
+        cmds = [Cmd(*row, program=cmd.p3) for row in program] + [Cmd("_end", program=cmd.p3)]
         ex.queue.extendleft(reversed(cmds))
         return True
 
@@ -115,7 +115,7 @@ class ProgramControl:
 
     def _stop_all_programs(self) -> None:
         ex = self.executor
-        ex.queue = deque(c for c in ex.queue if c.program is None and c.letter != "_end")
+        ex.queue = deque(c for c in ex.queue if c.letter != "_end")  # (the programs' rows stay)
         ex.program_depth = 0
         self.image.set_marker(0, 2, False)
 
