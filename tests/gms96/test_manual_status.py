@@ -105,6 +105,21 @@ def test_message_in_mb4(card: Plant) -> None:
     assert status(c) & I_MESSAGE == 0
 
 
+@pytest.mark.manual("§2.4.3", "SNDF (28): Operand buffered into MB5 (the error byte)")
+def test_sndf_is_buffered_in_mb5(card: Plant) -> None:
+    c = card.client()
+    send(c, "p", 10, 28, 7)  # SNDF 7
+    send(c, "p", 10, 28, 9)  # SNDF 9: buffered while MB5 still holds 7
+    card.advance(0.01)
+    assert c.read(1, 3, 5)[2][0] == 7
+    send(c, "p", 11, 5, 0)  # the error byte is taken (cleared) ...
+    card.advance(0.01)
+    assert c.read(1, 3, 5)[2][0] == 9  # ... and the buffered one follows
+    send(c, "p", 11, 5, 0)
+    card.advance(0.01)
+    assert c.read(1, 3, 5)[2][0] == 0
+
+
 @pytest.mark.manual("§2.3.1 T", "T0: the momentary set-point position, 3 bytes, identifier '@'")
 @pytest.mark.manual("§2.3.1 T", "T1;0: identifier 'V', the software version times 100 (v4.04)")
 @pytest.mark.manual("§2.3.1 T", "T5;P2: identifier 'N', the stored N parameter P2 (e.g. T5;10 the P gain)")

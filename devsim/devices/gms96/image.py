@@ -1,6 +1,6 @@
 """Process image, PLC markers, data area and message buffer of a GMS96 (manual §2.4.1, §2.4.2).
 
-Spec §4.4 (special markers MB0..MB29), §4.5.1 (MB4 message code with a FIFO of buffered codes),
+Spec §4.4 (special markers MB0..MB29), §4.5.1 (MB4 message code with a FIFO of buffered codes), §4.5.2 (MB5),
 §4.11 (inputs EB0..EB3, outputs AB0..AB2), §3.8.3/§3.8.4 (data area: registers R0..R19 at byte
 4·n, DW0..DW79 static).  Bits are addressed ``Ebyte.bit`` / ``Abyte.bit`` / ``Mbyte.bit``.
 """
@@ -43,6 +43,7 @@ class ProcessImage:
         self.data = bytearray(256)
         self.outputs = bytearray(3)  # AB0, AB1, AB2 (analog out, 0..255)
         self.pending_messages: deque[int] = deque()
+        self.pending_errors: deque[int] = deque()  # SNDF codes behind the one in MB5
 
     def clear(self) -> None:
         """Power-on: everything 0, no buffered message (the static data is restored after)."""
@@ -50,6 +51,7 @@ class ProcessImage:
         self.data[:] = bytes(len(self.data))
         self.outputs[:] = bytes(len(self.outputs))
         self.pending_messages.clear()
+        self.pending_errors.clear()
 
     # -- markers ------------------------------------------------------------------------------
     def marker(self, byte: int, bit: int) -> bool:
@@ -79,6 +81,24 @@ class ProcessImage:
             return None
         self.markers[4] = self.pending_messages.popleft() if self.pending_messages else 0
         return code
+
+    # -- error byte (MB5, §4.5.2) ---------------------------------------------------------------
+    def post_error(self, code: int) -> None:
+        """SNDF: "Operand gebuffert in MB5 (Fehler-Byte) eintragen" (manual §2.4.3): into MB5, or
+        buffered behind the code waiting there (0 enters nothing)."""
+        code &= 0xFF
+        if not code:
+            return
+        if self.markers[5] == 0:
+            self.markers[5] = code
+        elif len(self.pending_errors) < MESSAGE_FIFO:
+            self.pending_errors.append(code)
+
+    def write_marker_byte(self, byte: int, value: int) -> None:
+        """MB(byte) written (PLC, ``p11``); once MB5 is cleared, the next buffered SNDF code moves up."""
+        self.markers[byte] = value & 0xFF
+        if byte == 5 and not self.markers[5] and self.pending_errors:
+            self.markers[5] = self.pending_errors.popleft()
 
     # -- data area ------------------------------------------------------------------------------
     def write_register(self, n: int, value: int) -> None:

@@ -345,7 +345,7 @@ class Gms96Card(Model):
             m[18] = value
             self.memory.save_static()
         else:
-            m[byte] = value
+            self.image.write_marker_byte(byte, value)  # (MB5: the buffered SNDF codes follow)
         self.changed()
 
     def write_marker_bit(self, byte: int, bit: int, value: bool) -> None:

@@ -195,7 +195,7 @@ class ProgramControl:
         return True
 
     def sndf(self, operand: int) -> bool:
-        self.image.markers[5] = operand & 0xFF
+        self.image.post_error(operand)
         return True
 
     def sndm(self, operand: int) -> bool:
@@ -240,7 +240,7 @@ DIRECT_COMMANDS: Table[Callable[[ProgramControl, int], bool]] = Table(
         Command("17", ProgramControl.reso, "§2.4.3", "RESO: output Operand off (keeps blending)"),
         Command("24", ProgramControl.invo, "§2.4.3", "INVO: invert output Operand"),
         Command("26", ProgramControl.clao, "§2.4.3", "CLAO: reset all outputs"),
-        Command("28", ProgramControl.sndf, "§2.4.3", "SNDF: Operand into MB5 (keeps blending)"),
+        Command("28", ProgramControl.sndf, "§2.4.3", "SNDF: Operand buffered into MB5 (keeps blending)"),
         Command("29", ProgramControl.sndm, "§2.4.3", "SNDM: Operand buffered into MB4 (keeps blending)"),
         Command("31", ProgramControl.stvo, "§2.4.3", "STVO: wait for a 0→1 edge on E0.1"),
     ]
