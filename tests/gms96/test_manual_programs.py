@@ -129,3 +129,14 @@ def test_a_long_running_program_does_not_fill_the_host_command_queue(referenced:
     assert not output(c, 4) and mb(c, 0) & 0x04  # the program still runs
     referenced.idle()
     assert output(c, 4) and mb(c, 1) & 0x01
+
+
+@pytest.mark.manual("§2.3.1 p", "p3;2 stops the program; it is meaningful only inside a sequence program")
+def test_p3_2_outside_a_program_drops_no_host_command(referenced: Plant) -> None:
+    c = referenced.client()
+    send(c, "p", 10, WAIT, 10)
+    send(c, "p", 3, 2)  # no program runs: nothing to stop
+    send(c, "p", 10, SETO, 3)
+    send(c, "A", 1000)
+    referenced.idle()
+    assert output(c, 3) and c.read(0)[1] == 1000

@@ -104,9 +104,11 @@ class ProgramControl:
         return True
 
     def program_stop(self, cmd: Cmd) -> bool:
-        """``p3;2`` inside a program: drop the rest of the running program."""
+        """``p3;2`` inside a program: drop the rest of the running program.  Outside one ("Kann
+        sinnvoller Weise nur innerhalb eines Ablauf-Programms vorkommen") there is nothing to stop:
+        the host's queued commands stay."""
         queue = self.executor.queue
-        while queue:
+        while queue and self.executor.program_depth:
             item = queue.popleft()
             if item.letter == "_end":
                 queue.appendleft(Cmd("_end", program=-1))
