@@ -52,3 +52,16 @@ def test_cnc_storage_error_ends_with_a_download_that_fits(plant_factory: Any) ->
     download(plant, c, 0, ("A", 1000), ("A", 0))
     assert plant.read("programs") == {0: 2}
     assert memory_status(c) & CNC_STORAGE_ERROR == 0
+
+
+@pytest.mark.manual("§2.3.1 p", "the download of program 0 rebuilds the program structure: all programs before are "
+                    "deleted (so they take no room from the new program 0)")
+def test_a_new_program_0_has_the_room_of_the_programs_it_deletes(plant_factory: Any) -> None:
+    plant = plant_factory({"max_total_commands": 3})
+    c = plant.client()
+    download(plant, c, 0, ("A", 1000))
+    download(plant, c, 1, ("A", 0), ("A", 500))  # the memory is full: 3 commands
+    assert plant.read("programs") == {0: 1, 1: 2}
+    download(plant, c, 0, ("A", 10), ("A", 20), ("A", 30))  # fits once 0 and 1 are gone
+    assert memory_status(c) & CNC_STORAGE_ERROR == 0
+    assert plant.read("programs") == {0: 3}

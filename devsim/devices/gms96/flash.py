@@ -48,8 +48,10 @@ class Flash:
 
     def store_program(self, number: int, rows: Program, max_total: int) -> bool:
         """The end of a CNC download: program ``number`` (0: all programs anew); False (and the
-        storage error) if the programs would exceed ``max_total`` commands."""
-        total = sum(len(p) for k, p in self.programs.items() if k != number) + len(rows)
+        storage error) if the programs would exceed ``max_total`` commands (the programs a new
+        program 0 deletes take no room: manual §2.3.1 p "alle zuvor vorhandenen Programme gelöscht")."""
+        kept = [] if number == 0 else [p for k, p in self.programs.items() if k != number]
+        total = sum(len(p) for p in kept) + len(rows)
         if total > max_total:
             self.cnc_storage_error = True
             return False
