@@ -66,13 +66,7 @@ class ProcessImage:
     # -- messages (MB4, §4.5.1) -----------------------------------------------------------------
     def post_message(self, code: int) -> None:
         """SNDM / firmware message: into MB4, or buffered behind the one waiting there."""
-        code &= 0xFF
-        if not code:
-            return
-        if self.markers[4] == 0:
-            self.markers[4] = code
-        elif len(self.pending_messages) < MESSAGE_FIFO:
-            self.pending_messages.append(code)
+        self._buffered(4, self.pending_messages, code)
 
     def take_message(self) -> int | None:
         """Kurzsatz #1: the code in MB4 (cleared; the next buffered code moves up) or None."""
@@ -86,13 +80,17 @@ class ProcessImage:
     def post_error(self, code: int) -> None:
         """SNDF: "Operand gebuffert in MB5 (Fehler-Byte) eintragen" (manual §2.4.3): into MB5, or
         buffered behind the code waiting there (0 enters nothing)."""
+        self._buffered(5, self.pending_errors, code)
+
+    def _buffered(self, byte: int, pending: deque[int], code: int) -> None:
+        """``code`` into MB(byte), or behind the codes waiting for it (at most :data:`MESSAGE_FIFO`)."""
         code &= 0xFF
         if not code:
             return
-        if self.markers[5] == 0:
-            self.markers[5] = code
-        elif len(self.pending_errors) < MESSAGE_FIFO:
-            self.pending_errors.append(code)
+        if self.markers[byte] == 0:
+            self.markers[byte] = code
+        elif len(pending) < MESSAGE_FIFO:
+            pending.append(code)
 
     def write_marker_byte(self, byte: int, value: int) -> None:
         """MB(byte) written (PLC, ``p11``); once MB5 is cleared, the next buffered SNDF code moves up."""

@@ -31,6 +31,7 @@ from devsim.core.device import Port
 from devsim.core.kit import declare_signals
 from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
+from devsim.devices.sers import codec
 from devsim.devices.sers.access import ParameterAccess
 from devsim.devices.sers.answers import Answers
 from devsim.devices.sers.config import SersConfig
@@ -347,9 +348,8 @@ class SersDrive(Model):
         """Bytes a master sends to its slaves on the serial line (G-MASTER).  Its ``#n`` is on
         the line for every drive, the master too: the lines after it without an address are
         for drive n, not for the master (§4.1), as the slaves that hear it take them."""
-        address = data[1:].split(b"\r", 1)[0]
-        digits = len(address) - len(address.lstrip(b"0123456789"))
-        self.note_address("*" if address[:1] == b"*" else int(address[:digits] or 0), False)
+        _complete, address, _stop = codec.read_address(data, 0)
+        self.note_address(address, False)
         self.announce("line_out", data)
 
     def hears_as_master(self, data: bytes) -> bool:
