@@ -12,7 +12,6 @@ taken.  The node calls :func:`check` before it stores the value, so nothing refu
 
 from __future__ import annotations
 
-import struct
 from typing import Any
 
 from canopen.objectdictionary import ODVariable
@@ -55,7 +54,7 @@ def check(node: Any, index: int, subindex: int, data: bytes) -> None:
     entry = int.from_bytes(data[:4].ljust(4, b"\0"), "little")
     if entry == 0:
         return
-    target, sub, bits = entry >> 16, entry >> 8 & 0xFF, entry & 0xFF
+    target, sub, bits = _fields(entry)
     variable = _variable(node.object_dictionary, target, sub)
     receive = index < 0x1800
     if (not getattr(variable, "pdo_mappable", False) or bits != len(variable)
@@ -64,8 +63,12 @@ def check(node: Any, index: int, subindex: int, data: bytes) -> None:
 
 
 def _entry(node: Any, index: int, subindex: int) -> tuple[int, int, int]:
-    value, = struct.unpack("<L", node.get_data(index, subindex))
-    return value >> 16, value >> 8 & 0xFF, value & 0xFF
+    return _fields(int.from_bytes(node.get_data(index, subindex)[:4].ljust(4, b"\0"), "little"))
+
+
+def _fields(entry: int) -> tuple[int, int, int]:
+    """A mapping entry's object index, sub-index and length in bits (CiA 301 §7.5.2.36)."""
+    return entry >> 16, entry >> 8 & 0xFF, entry & 0xFF
 
 
 def _variable(od: Any, index: int, subindex: int) -> ODVariable:

@@ -40,7 +40,7 @@ from devsim.facades.cia402 import Cia402
 __all__ = ["CHANGE_SAMPLE", "CanopenFacade", "READ_ONLY", "VALUE_RANGE_EXCEEDED", "WRITE_ONLY", "load_od",
            "serve_nodes", "start_canopen"]
 
-VALUE_RANGE_EXCEEDED = 0x06090030
+VALUE_RANGE_EXCEEDED = canopen_mapping.VALUE_RANGE_EXCEEDED  # (0609 0030h)
 CHANGE_SAMPLE = 0.010  # s of device time between looks for a change of an event-driven TPDO
 READ_ONLY = 0x06010002
 WRITE_ONLY = 0x06010001
