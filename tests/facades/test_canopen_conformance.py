@@ -13,7 +13,7 @@ from pathlib import Path
 import canopen
 import pytest
 
-from tests.facades.test_cia402 import Drive
+from tests.facades.test_cia402 import Drive, mapped
 
 ROOT = Path(__file__).resolve().parents[2]
 VALUE_RANGE_EXCEEDED = 0x06090030  # CiA 301 SDO abort: value range of parameter exceeded
@@ -50,10 +50,7 @@ def test_6060h_takes_only_the_modes_6502h_lists_and_6061h_shows_no_other(drive: 
     node.sdo[0x6060].raw = 1
     # an RPDO carrying an unsupported mode changes nothing either
     node.rpdo.read()
-    rpdo = node.rpdo[1]
-    rpdo.clear()
-    rpdo.add_variable(0x6060)
-    rpdo.trans_type, rpdo.enabled = 255, True
+    rpdo = mapped(node.rpdo[1], 0x6060, trans_type=255)
     node.rpdo.save()
     node.nmt.state = "OPERATIONAL"
     rpdo["Modes of operation"].raw = 3
@@ -90,16 +87,10 @@ def configure(drive: Drive) -> None:
     node = drive.node
     node.sdo[0x1017].raw = 20
     node.rpdo.read()
-    rpdo = node.rpdo[1]
-    rpdo.clear()
-    rpdo.add_variable(0x6040)
-    rpdo.trans_type, rpdo.enabled = 255, True
+    mapped(node.rpdo[1], 0x6040, trans_type=255)
     node.rpdo.save()
     node.tpdo.read()
-    tpdo = node.tpdo[1]
-    tpdo.clear()
-    tpdo.add_variable(0x6041)
-    tpdo.trans_type, tpdo.enabled = 1, True
+    mapped(node.tpdo[1], 0x6041, trans_type=1)
     node.tpdo.save()
     node.sdo[0x6060].raw = 3
     node.sdo[0x607A].raw = 1234

@@ -86,6 +86,18 @@ def enable(drive: Drive) -> None:
     assert drive.runtime.read("pcd", "axis.1.motor_off") is False
 
 
+def mapped(pdo: Any, *objects: int, **parameters: int) -> Any:
+    """``pdo`` mapping ``objects`` in order, with its transmission ``parameters``
+    (``trans_type``, ``event_timer``, ``inhibit_time``), enabled (saved by the caller)."""
+    pdo.clear()
+    for index in objects:
+        pdo.add_variable(index)
+    for name, value in parameters.items():
+        setattr(pdo, name, value)
+    pdo.enabled = True
+    return pdo
+
+
 def test_profile_position_move_at_the_closed_form_time(drive: Drive) -> None:
     enable(drive)
     drive.node.sdo[0x6060].raw = 1  # profile position
@@ -241,14 +253,8 @@ def test_pdos_carry_the_controlword_and_the_statusword(drive: Drive) -> None:
     node = drive.node
     node.tpdo.read()
     node.rpdo.read()
-    tpdo, rpdo = node.tpdo[1], node.rpdo[1]
-    tpdo.clear()
-    tpdo.add_variable(0x6041)
-    tpdo.add_variable(0x6064)
-    tpdo.trans_type, tpdo.enabled = 1, True
-    rpdo.clear()
-    rpdo.add_variable(0x6040)
-    rpdo.trans_type, rpdo.enabled = 255, True
+    tpdo = mapped(node.tpdo[1], 0x6041, 0x6064, trans_type=1)
+    rpdo = mapped(node.rpdo[1], 0x6040, trans_type=255)
     node.tpdo.save()
     node.rpdo.save()
     arrived: queue.Queue[tuple[int, int]] = queue.Queue()
@@ -292,10 +298,7 @@ def event_timer_tpdo(drive: Drive, index: int, name: str) -> queue.Queue[int]:
     timer of 100 ms; the values the master receives."""
     node = drive.node
     node.tpdo.read()
-    tpdo = node.tpdo[2]
-    tpdo.clear()
-    tpdo.add_variable(index)
-    tpdo.trans_type, tpdo.event_timer, tpdo.enabled = 255, 100, True
+    tpdo = mapped(node.tpdo[2], index, trans_type=255, event_timer=100)
     node.tpdo.save()
     arrived: queue.Queue[int] = queue.Queue()
     tpdo.add_callback(lambda m: arrived.put(m[name].raw))
@@ -359,11 +362,7 @@ def test_an_event_driven_tpdo_goes_out_when_its_values_change(drive: Drive) -> N
     most every 50 ms of device time while the axis moves, and silence again after it stopped."""
     node = drive.node
     node.tpdo.read()
-    tpdo = node.tpdo[3]
-    tpdo.clear()
-    tpdo.add_variable(0x6041)
-    tpdo.add_variable(0x6064)
-    tpdo.trans_type, tpdo.inhibit_time, tpdo.event_timer, tpdo.enabled = 254, 500, 0, True
+    tpdo = mapped(node.tpdo[3], 0x6041, 0x6064, trans_type=254, inhibit_time=500, event_timer=0)
     node.tpdo.save()
     arrived: queue.Queue[tuple[int, int]] = queue.Queue()
     tpdo.add_callback(lambda m: arrived.put((m["Statusword"].raw, m["Position actual value"].raw)))
@@ -436,10 +435,7 @@ def test_a_synchronous_acyclic_tpdo_goes_out_at_the_sync_after_a_change(drive: D
     values changed since it was last sent, not at the SYNCs between."""
     node = drive.node
     node.tpdo.read()
-    tpdo = node.tpdo[1]
-    tpdo.clear()
-    tpdo.add_variable(0x6041)
-    tpdo.trans_type, tpdo.enabled = 0, True
+    tpdo = mapped(node.tpdo[1], 0x6041, trans_type=0)
     node.tpdo.save()
     arrived: queue.Queue[int] = queue.Queue()
     tpdo.add_callback(lambda m: arrived.put(m["Statusword"].raw))
