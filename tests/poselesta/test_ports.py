@@ -101,6 +101,23 @@ def test_transfers_need_their_mode_and_input_while_idle_is_discarded(cnc: Any) -
     assert cnc.read("programs") == []
 
 
+def test_bytes_from_the_host_during_an_output_are_counted_as_discarded(cnc: Any) -> None:
+    """Spec §2.6: bytes arriving while no input function is active are discarded and counted;
+    ``v7.discarded`` is "bytes received while no input transfer ran", and an output is none."""
+    cnc.set("program.P20", "N1 X1\nN2 X2\nN3 X3")
+    cnc.set("panel.mode", "EXTERNAL_OPERATION")
+    cnc.set("panel.program", 20)
+    cnc.set("v7.transfer", "output")
+    with open_port(cnc, "v7") as host:
+        tape = b"%\r\nN9 X9\r\nM30\r\n"  # a host answering with a tape: no input transfer runs
+        host.write(tape)
+        until(lambda: cnc.read("v7.discarded") == len(tape), "the bytes are counted and dropped")
+        assert cnc.read("v7.state") == "sending"
+        cnc.advance(1.0)
+        assert cnc.read("v7.state") == "done"
+    assert cnc.read("program.P20") == "N 1 X 1.000\nN 2 X 2.000\nN 3 X 3.000"
+
+
 @pytest.mark.manual("§2.6.2.3", "Die Daten werden formatiert ausgegeben, d.h. die Abstände zwischen den einzelnen Funktionen werden mit Leerzeichen ausgefüllt")
 @pytest.mark.manual("§2.6.2.3", "Beim Einlesen wird zuerst das in der Steuerung vorgewählte Programm gelöscht")
 def test_tape_punch_output_is_formatted_and_reads_back(cnc: Any) -> None:

@@ -290,8 +290,8 @@ class SerialLinks:
     # -- bytes from the host ----------------------------------------------------------------------
     def feed(self, port: str, data: bytes) -> None:
         running = self.transfers[port]
-        if running is None:
-            self.discarded[port] += len(data)  # no input function active (spec §2.6)
+        if not isinstance(running, ReadIn):
+            self.discarded[port] += len(data)  # no input function active, an output included (spec §2.6)
             return
         running.feed(data)
         self._memory.flush()  # the chunk's blocks, saved together (devsim.devices.poselesta.programs)

@@ -234,9 +234,6 @@ class Output:
             self._at = 0
         self._schedule()
 
-    def feed(self, data: bytes) -> None:
-        """Input during an output is not read (no handshake, §3.6)."""
-
     def cancel(self) -> None:
         if self._timer is not None:
             self._timer.cancel()
