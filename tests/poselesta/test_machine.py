@@ -517,6 +517,25 @@ def test_a_full_circle_counter_clockwise_returns_to_its_start(make) -> None:  # 
     assert (cnc.read("axis.x.position"), cnc.read("axis.y.position")) == pytest.approx((10_000, 0), abs=1e-6)
 
 
+@pytest.mark.parametrize(("plane", "start", "end", "centre"), [(17, "Y10", "X10 Y0", "I0 J0"),
+                                                          (18, "X10", "X0 Z10", "I0 K0"),
+                                                          (19, "Z10", "Y10 Z0", "J0 K0")])
+def test_g02_turns_clockwise_seen_from_the_positive_third_axis_in_every_plane(
+        make, plane: int, start: str, end: str, centre: str) -> None:  # noqa: ANN001
+    """Spec §5.3, DIN 66025 (the manual has no G17/G18/G19): G02 is clockwise seen from the
+    positive third axis, that is in the right-handed plane XY (G17), ZX (G18), YZ (G19).  A
+    quarter circle from the plane's second axis at 10 to its first axis at 10 stays in the
+    quadrant where both are positive, not three quarters round the other way."""
+    cnc = make(program=f"N1 G00 {start}\nN2 G{plane} G02 {end} {centre} F3000")
+    cnc.set("panel.nc_start", True)
+    cnc.run_until(lambda d: d.model.executor.block_number == 2 and d.model.executor.state == "MOVING", 5.0)
+    cnc.advance(0.1)
+    a, b = (axis for axis in "xyz" if f"{axis.upper()}" in end)
+    assert cnc.read(f"axis.{a}.position") > 0 and cnc.read(f"axis.{b}.position") > 0
+    cnc.advance(1.0)
+    assert cnc.read("program.state") == "END"
+
+
 @pytest.mark.manual("§2.3.23", "Bei offenem Kontakt (H-Level) ist die Referenzmarke für die Steuerung wirksam")
 def test_homing_takes_the_first_mark_seen_with_its_activation_high(make) -> None:  # noqa: ANN001
     """S37 (§2.2.2, §2.3.23, spec §5.6): marks at −10 and −30 mm; with V24/1 L the first is

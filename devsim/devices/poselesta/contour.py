@@ -3,8 +3,10 @@ path between such blocks (manual §2.3.15, §2.4.2, §2.4.3; spec poselesta.md �
 §7.5 G-IJK).
 
 A G01 block is a straight line of its axes, a G02/G03 block an arc in the plane of two axes
-(G17 XY with I/J, G18 XZ with I/K, G19 YZ with J/K) around the centre I/J/K, taken as absolute
-coordinates, clockwise for G02 and counter-clockwise for G03 seen from the positive third axis.
+(G17 XY with I/J, G18 ZX with K/I, G19 YZ with J/K) around the centre I/J/K, taken as absolute
+coordinates, clockwise for G02 and counter-clockwise for G03 seen from the positive third axis
+(DIN 66025; the manual has no G17/G18/G19): each plane's two axes are listed in the right-handed
+order, so G18 is ZX, not XZ.
 The path speed is F × override; the axes follow the path in closed form
 (:mod:`devsim.core.path`).  A change of the override re-plans along the rest of the path,
 NC-Stop brakes along it, and a block the next one continues ends at its path speed instead of
@@ -22,8 +24,9 @@ from devsim.devices.poselesta.tape import Block
 
 __all__ = ["CIRCLE_TOLERANCE", "PLANES", "PathMotion"]
 
-#: G17/G18/G19: the axes of the plane and their centre words.
-PLANES = {17: (("x", "I"), ("y", "J")), 18: (("x", "I"), ("z", "K")), 19: (("y", "J"), ("z", "K"))}
+#: G17/G18/G19: the axes of the plane and their centre words, in the right-handed order (the first
+#: crossed with the second gives the positive third axis, from which G02 is clockwise).
+PLANES = {17: (("x", "I"), ("y", "J")), 18: (("z", "K"), ("x", "I")), 19: (("y", "J"), ("z", "K"))}
 CIRCLE_TOLERANCE = 0.01  # mm: start and end radius may differ this much (spec §5.3)
 FULL = 2 * math.pi
 

@@ -311,7 +311,7 @@ class Executor:
         self.motion.targets = targets
         travel = set(targets)
         if self.functions.motion in (1, 2, 3) and self._mode() != "MANUAL":
-            # both axes of the chosen plane (G17 XY, G18 XZ, G19 YZ) get a travel command (§2.4.2)
+            # both axes of the chosen plane (G17 XY, G18 ZX, G19 YZ) get a travel command (§2.4.2)
             travel |= {axis for axis, _centre in PLANES[self.functions.plane]}
         for a in travel:
             self.signals.set(f"travel_{a}", True)

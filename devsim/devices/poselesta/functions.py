@@ -181,7 +181,7 @@ G_CODES: Table[GHandler] = Table([
     Command("G12", BlockFunctions._flow, "§2.4.2", "subroutine call L a.bbb: the subroutine at N bbb, a times"),
     Command("G13", BlockFunctions._flow, "§2.4.2", "repeat L a.bbb: back to N bbb, a more times"),
     Command("G17", BlockFunctions._plane, "§2.3.15", "plane XY (I/J) (modal)"),
-    Command("G18", BlockFunctions._plane, "§2.3.15", "plane XZ (I/K) (modal)"),
+    Command("G18", BlockFunctions._plane, "§2.3.15", "plane ZX (K/I; G02 clockwise seen from +Y) (modal)"),
     Command("G19", BlockFunctions._plane, "§2.3.15", "plane YZ (J/K) (modal)"),
     Command("G25", BlockFunctions._full_circle, "§2.4.2", "unknown (I/J-only blocks): no motion, event "
             "unsupported_g; a full circle with g25_full_circle"),
