@@ -140,3 +140,16 @@ def test_p3_2_outside_a_program_drops_no_host_command(referenced: Plant) -> None
     send(c, "A", 1000)
     referenced.idle()
     assert output(c, 3) and c.read(0)[1] == 1000
+
+
+@pytest.mark.manual("§2.5", "subprogram calls: nesting up to 8 (deeper: the manual is silent; spec §4.9 [R] aborts the program)")
+def test_a_ninth_nested_call_aborts_the_programs(referenced: Plant) -> None:
+    c = referenced.client()
+    for k in range(9):  # program k calls k + 1, then sets output k + 1 (A0.0 is the brake output)
+        download(referenced, c, k, *([("p", 3, 1, k + 1)] if k < 8 else []), ("p", 10, SETO, k + 1))
+    send(c, "p", 3, 1, 0)
+    send(c, "p", 10, SETO, 10)  # the host's command queued behind the program
+    referenced.idle()
+    assert [n for n in range(1, 10) if output(c, n)] == []  # no row of any nested program runs on
+    assert output(c, 10)  # the host's own command is not part of the program
+    assert mb(c, 0) & 0x04 == 0 and mb(c, 1) & 0x01 == 0  # not running, not ended successfully

@@ -21,7 +21,8 @@ from devsim.devices.gms96.plc import Plc
 
 __all__ = ["DIRECT_COMMANDS", "P_FUNCTIONS", "ProgramControl", "input_name"]
 
-#: Program nesting: a program started from a program nests; more than this stops them all.
+#: Program nesting: a program started from a program nests ("Schachtelung bis 8 möglich", manual
+#: §2.5); a deeper call aborts the programs (the manual is silent; spec §4.9 [R]).
 MAX_PROGRAM_DEPTH = 8
 OUTPUT_OPERANDS = range(OUTPUT_BITS)  # A0.0..A1.2 (spec §4.10.4)
 
@@ -92,7 +93,7 @@ class ProgramControl:
                 self.image.set_marker(0, 2, False)  # M0.2 start request of a missing program ends
             return True
         if ex.program_depth >= MAX_PROGRAM_DEPTH:
-            self._stop_all_programs()
+            self._abort_programs()
             return True
         ex.program_depth += 1
         img = self.image
@@ -115,9 +116,13 @@ class ProgramControl:
                 return True
         return True
 
-    def _stop_all_programs(self) -> None:
+    def _abort_programs(self) -> None:
+        """A call deeper than :data:`MAX_PROGRAM_DEPTH`: the manual says only "Schachtelung bis 8
+        möglich" (§2.5); as spec §4.9 [R] has it, the program is aborted -- every nesting level's
+        rows and ends are dropped (the host's queued commands stay), M0.2 = 0 and M1.0 stays 0;
+        no message code (the spec defines none)."""
         ex = self.executor
-        ex.queue = deque(c for c in ex.queue if c.letter != "_end")  # (the programs' rows stay)
+        ex.queue = deque(c for c in ex.queue if c.program is None)
         ex.program_depth = 0
         self.image.set_marker(0, 2, False)
 
