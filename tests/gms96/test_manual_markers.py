@@ -39,6 +39,30 @@ def test_m0_0_stop_holds_and_resumes(referenced: Plant) -> None:
     assert c.read(0)[1] == 20000
 
 
+@pytest.mark.manual("§2.4.1", "M0.0 STOP in a CNC program: the move is braked, not aborted, and goes on when "
+                    "STOP is cleared; M0.2 r: the CNC program runs all the while")
+def test_stop_holds_a_running_program_which_still_runs(referenced: Plant) -> None:
+    c = referenced.client()
+    send(c, "p", 3, 100, 0)
+    referenced.advance(FLASH_ERASE)
+    send(c, "A", 20000)
+    send(c, "p", 10, 16, 3)  # SETO A0.3 once the move is done
+    send(c, "p", 3, 101)
+    send(c, "p", 3, 1, 0)
+    referenced.advance(1.0)
+    send(c, "p", 11, 0, 0x01)  # MB0 := STOP (the host writes the whole byte)
+    referenced.advance(5.0)
+    held = c.read(0)[1]
+    assert velocity(referenced) == 0.0 and 0 < held < 20000
+    assert mb(c, 0) & 0x05 == 0x05 and mb(c, 1) & 0x01 == 0  # stopped, the program interrupted, not ended
+    send(c, "p", 11, 0, 0x00)  # STOP cleared: the interrupted move and the program go on
+    referenced.advance(0.5)
+    assert mb(c, 0) & 0x04 and c.read(0)[1] > held
+    referenced.idle()
+    assert c.read(0)[1] == 20000 and c.read(1, 2, 0)[2][0] & 0x08
+    assert mb(c, 0) & 0x04 == 0 and mb(c, 1) & 0x01  # ended successfully
+
+
 @pytest.mark.manual("§2.4.1", "M0.1 [.w]: aborts the CNC command (move or program)")
 def test_m0_1_aborts_the_move(referenced: Plant) -> None:
     c = referenced.client()

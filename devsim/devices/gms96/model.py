@@ -320,7 +320,8 @@ class Gms96Card(Model):
         return _marker_bit(self, byte, bit)
 
     def write_marker_byte(self, byte: int, value: int) -> None:
-        """``p11`` / PLC: MB(byte) := value; the control bits of MB0/MB1 act (spec §4.4).  A value
+        """``p11`` / PLC: MB(byte) := value; the control bits of MB0/MB1 act (spec §4.4; M0.2 reads
+        "CNC-Programmausgabe läuft" until the program ends, manual §2.4.1, even held by STOP).  A value
         beyond a byte is clamped to 0 … 255, or ignored with ``out_of_range: ignore`` (spec §3.10)."""
         if not 0 <= byte < 256:
             return
@@ -331,7 +332,7 @@ class Gms96Card(Model):
         m = self.image.markers
         if byte == 0:
             old = m[0]
-            m[0] = value & 0x07
+            m[0] = (value & 0x07) | (old & 0x04)  # M0.2 w: 1 starts; 0 ends nothing (M §2.4.1)
             if (value & 0x02) and not (old & 0x02):
                 self.executor.abort()
                 m[0] &= ~0x02
