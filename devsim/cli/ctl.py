@@ -267,7 +267,8 @@ def ctl_watch(device: str | None, names: tuple[str, ...], as_json: bool, period:
         raise click.UsageError("watch needs DEVICE (every device at once: with --fleet)")
     addr, client = _connect(ctx)
     fleet = ctx.obj[1] is not None
-    told = {"on_offline": functools.partial(click.echo, err=True)} if fleet else {}  # a member went offline
+    say = functools.partial(click.echo, err=True)
+    told = {"on_offline": say, "on_back": say} if fleet else {}  # a member went offline, or is back
     stream = client.watch(device, list(names) or None, period=period, **told)
     try:
         for item in stream:

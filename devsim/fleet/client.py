@@ -27,6 +27,11 @@ raised as :class:`devsim.runtime.client.ControlError`).  :class:`FleetClient` ha
   item tagged with the ``process`` that serves it; without a device, every device online in the
   fleet.  It ends when the watched processes leave, whether they stop or go offline (their last
   will: killed, frozen, cut off; ``on_offline`` is told so, a line of ``devsim ctl``'s stderr).
+  One that went offline and comes back while another is still watched (a frozen process
+  continued: it rejoins, :mod:`devsim.fleet.member`) is asked again for the devices it still
+  announces, as ``tail -F`` follows a file that comes back: ``on_back`` is told so in a line, and
+  its items (its values first, as a new watch starts) follow that line.  One back without them
+  (withdrawn), or one that left, stays gone.
   Losing the broker is neither: it raises ConnectionError, also when the broker's shutdown sends
   the members' last wills before it closes (an offline mark counts once the broker is seen alive
   after it, by a round trip of the client's marker).
@@ -40,7 +45,7 @@ import json
 import threading
 import uuid
 from collections.abc import Callable, Iterable, Iterator
-from typing import Any
+from typing import Any, NamedTuple
 
 import msgspec
 
@@ -59,6 +64,15 @@ TIME_OPS = tuple(row.token for row in CONTROL if routed_by_device(row.token))
 _json_decode = msgspec.json.Decoder().decode
 
 
+class Watched(NamedTuple):
+    """What one stream watches: the ``watch`` request's device, names and period (asked again
+    as it was when its process comes back)."""
+
+    device: str
+    names: list[str] | None
+    period: float | None
+
+
 class StreamsEnded(msgspec.Struct, frozen=True):
     """The streams of ``devices`` ended: their ``process`` left (``offline`` False) or went offline."""
 
@@ -71,6 +85,21 @@ class StreamsEnded(msgspec.Struct, frozen=True):
         names = ", ".join(self.devices)
         return (f"devsim: {self.process} ({self.where}) went offline (its last will): no more items of {names}"
                 if self.offline else f"devsim: {self.process} ({self.where}) left: no more items of {names}")
+
+
+class StreamsBack:
+    """A process whose streams ended when it went offline is back: ``renewed`` (a task) asks it
+    for ``watched`` again and gives the devices it took again and the ones it refused (why)."""
+
+    def __init__(self, process: str, where: str, renewed: asyncio.Future[tuple[list[str], dict[str, str]]]) -> None:
+        self.process = process
+        self.where = where  # "host H, pid P" of its new announcement
+        self.renewed = renewed
+
+    def describe(self, devices: list[str], refused: dict[str, str]) -> list[str]:
+        lines = [f"devsim: {self.process} ({self.where}) is back: items of {', '.join(devices)} follow again"] if devices else []
+        return lines + [f"devsim: {self.process} ({self.where}) is back but refused the watch of {device} ({why}):"
+                        f" no more items of {device}" for device, why in refused.items()]
 
 
 class AsyncFleetClient:
@@ -91,11 +120,14 @@ class AsyncFleetClient:
         self._synced = asyncio.Event()
         self._next = 0
         self.watches: dict[str, str] = {}  # stream topic -> the process that serves it
-        self._watched: dict[str, str] = {}  # stream topic -> its device
+        self._watched: dict[str, Watched] = {}  # stream topic -> what it watches
+        self._away: dict[str, list[Watched]] = {}  # process gone offline -> what to ask again when it is back
         self._present = False  # our `watching` is set
         self._items: asyncio.Queue[dict[str, Any] | BaseException | StreamsEnded] = asyncio.Queue()
         #: told (one line) when a watched process goes offline; its streams end
         self.on_offline: Callable[[str], None] | None = None
+        #: told (one line) when such a process is back and watched again (while others are watched)
+        self.on_back: Callable[[str], None] | None = None
 
     @property
     def reply_topic(self) -> str:
@@ -163,6 +195,8 @@ class AsyncFleetClient:
             if announcement is None or not announcement.get("online"):
                 self._streams_end(process, announcement or was, offline=announcement is not None)
                 self._requests_fail(process)
+            elif process in self._away:
+                self._come_back(process, announcement)
             self._changed.set()
 
     def _lost(self, closed: asyncio.Future[None]) -> None:
@@ -224,9 +258,12 @@ class AsyncFleetClient:
     async def watch(self, device: str, names: list[str] | None = None, period: float | None = None) -> Any:
         """Start watching ``device`` (see :mod:`devsim.fleet.streams`); the answer of its process
         (device, names, period, t, stream).  The items come from :meth:`next_item`."""
+        return await self._watch_on(self.serving(device), Watched(device, names, period))
+
+    async def _watch_on(self, process: str, watched: Watched) -> Any:
+        """Ask ``process`` to stream what ``watched`` says (its answer)."""
         if self._client is None:
             raise ConnectionError("fleet client not open")
-        process = self.serving(device)
         if not self._present:
             await self._client.subscribe(self.topics.stream(self.id, "+"), qos=0)
             await self._client.publish_acked(self.topics.watching(self.id), b"1", qos=1, retain=True)
@@ -234,9 +271,10 @@ class AsyncFleetClient:
         self._next += 1
         stream = self.topics.stream(self.id, self._next)
         self.watches[stream] = process
-        self._watched[stream] = device
+        self._watched[stream] = watched
         try:
-            return await self.ask(process, "watch", device=device, names=names, period=period, stream_to=stream)
+            return await self.ask(process, "watch", device=watched.device, names=watched.names, period=watched.period,
+                                  stream_to=stream)
         except BaseException:
             self.watches.pop(stream, None)
             self._watched.pop(stream, None)
@@ -252,17 +290,52 @@ class AsyncFleetClient:
             self._items.put_nowait({**item, "process": process})
 
     def _streams_end(self, process: str, announcement: dict[str, Any], *, offline: bool) -> None:
+        """The streams of ``process`` end: it left (for good) or went offline (asked again when it
+        comes back, while another watched process is still there: else the watch ends)."""
         ended = [s for s, p in self.watches.items() if p == process]
         for stream in ended:
             del self.watches[stream]
+        watched = [self._watched.pop(stream) for stream in ended]
+        if not offline:
+            self._away.pop(process, None)
+        elif watched:
+            self._away.setdefault(process, []).extend(watched)
+        if not self.watches:
+            self._away.clear()  # nothing watched is left: the watch ends
         if ended:
-            where = f"host {announcement.get('host')}, pid {announcement.get('pid')}"
-            devices = tuple(sorted({self._watched.pop(stream) for stream in ended}))
-            self._items.put_nowait(StreamsEnded(process, devices, offline, where))
+            devices = tuple(sorted({w.device for w in watched}))
+            self._items.put_nowait(StreamsEnded(process, devices, offline, _where(announcement)))
+
+    def _come_back(self, process: str, announcement: dict[str, Any]) -> None:
+        """``process`` went offline with streams of ours and is back: ask it again for those of
+        its devices it still announces (none: it stays gone).  Told in the order of the items."""
+        listed = {row.get("name") for row in announcement["devices"] if isinstance(row, dict)}
+        again = [w for w in self._away.pop(process) if w.device in listed]
+        if not again:
+            return
+        renewed = asyncio.ensure_future(self._renew(process, again))
+        renewed.add_done_callback(lambda task: task.cancelled() or task.exception())  # (said by next_item, if asked)
+        self._items.put_nowait(StreamsBack(process, _where(announcement), renewed))
+
+    async def _renew(self, process: str, again: list[Watched]) -> tuple[list[str], dict[str, str]]:
+        """Ask ``process`` for each of ``again``: the devices it took, and the ones it refused
+        (why; one that went offline meanwhile is told as offline, and kept for its next return)."""
+        answers = await asyncio.gather(*(self._watch_on(process, watched) for watched in again), return_exceptions=True)
+        refused: dict[str, str] = {}
+        for watched, answer in zip(again, answers, strict=True):
+            if isinstance(answer, ControlError) and answer.type != "Offline":
+                refused[watched.device] = f"{answer.type}: {answer}"
+            elif isinstance(answer, BaseException) and not isinstance(answer, ControlError):
+                raise answer  # (the broker lost, the client closed)
+        took = {watched.device for watched, answer in zip(again, answers, strict=True)
+                if not isinstance(answer, BaseException)}
+        return sorted(took), refused
 
     async def next_item(self, timeout: float | None = None) -> dict[str, Any] | None:
         """The next item of any stream of this client; None once every watched process has
-        left or gone offline (:attr:`on_offline` is told of each that went offline);
+        left or gone offline (:attr:`on_offline` is told of each that went offline, and
+        :attr:`on_back` of each that came back while others were watched: asked again, its
+        items follow the line);
         TimeoutError after ``timeout`` seconds without one; ConnectionError when the broker is
         lost."""
         while True:
@@ -274,6 +347,11 @@ class AsyncFleetClient:
                 raise TimeoutError(f"nothing watched changed within {timeout:g} s") from None
             if isinstance(item, BaseException):
                 raise item
+            if isinstance(item, StreamsBack):  # the items of its new streams follow this
+                for line in item.describe(*await item.renewed):
+                    if self.on_back is not None:
+                        self.on_back(line)
+                continue
             if not isinstance(item, StreamsEnded):
                 return item
             if item.offline:  # its will – or every will, sent by a broker that shuts down
@@ -385,6 +463,10 @@ class AsyncFleetClient:
         return dict(zip(processes, results, strict=True))
 
 
+def _where(announcement: dict[str, Any]) -> str:
+    return f"host {announcement.get('host')}, pid {announcement.get('pid')}"
+
+
 class FleetClient(ControlOps):
     """Blocking fleet client with :class:`~devsim.runtime.client.ControlClient`'s methods (its
     asyncio loop runs in a daemon thread).  ``with FleetClient("mqtt://broker") as fleet: ...``."""
@@ -432,12 +514,14 @@ class FleetClient(ControlOps):
 
     def watch(self, device: str | None, names: list[str] | None = None, *, period: float | None = None,
               timeout: float | None = None,
-              on_offline: Callable[[str], None] | None = None) -> Iterator[dict[str, Any]]:
+              on_offline: Callable[[str], None] | None = None,
+              on_back: Callable[[str], None] | None = None) -> Iterator[dict[str, Any]]:
         """Changes and events of ``device`` (None: of every device online in the fleet) as they
         happen, as :meth:`devsim.runtime.client.ControlClient.watch` gives them plus ``process``,
         on a connection of its own; ends when the watched processes leave or go offline
-        (``on_offline`` gets a line for each that goes offline); ConnectionError when the broker
-        is lost.  ``timeout``: at most that long without an item (TimeoutError).  Close the
+        (``on_offline`` gets a line for each that goes offline; ``on_back`` one for each that
+        comes back while others are watched: its devices are watched again, their items follow
+        the line); ConnectionError when the broker is lost.  ``timeout``: at most that long without an item (TimeoutError).  Close the
         generator to stop watching."""
         devices = [device] if device is not None else [
             str(row["name"]) for row in self.devices() if row["online"] and not row.get("clash")]
@@ -445,6 +529,7 @@ class FleetClient(ControlOps):
             raise ControlError(f"no device online in the fleet {self.fleet.url}", "UnknownDevice")
         watcher = FleetClient(self.fleet.url, timeout=self.fleet.timeout)
         watcher.fleet.on_offline = on_offline
+        watcher.fleet.on_back = on_back
         try:
             for name in devices:
                 watcher._run(watcher.fleet.watch(name, names, period))

@@ -26,7 +26,9 @@ A clean stop clears the retained announcement (the process leaves the listing); 
 connection is retried (after 0.5 s, 1 s, 2 s, then every 5 s) and the announcement renewed.  On
 rejoining, the member checks the names again as in 1.: while it was away (frozen, asleep, cut
 off) its last will marked it offline and another process may have joined serving one of its
-names.  Such a name is *withdrawn*: left out of its announcement (and its last will) for the rest
+names.  Its watch streams end then unless its announcement is still there, online: its last
+will told every watcher they ended, and a watch that goes on asks again
+(:meth:`~devsim.fleet.streams.StreamServer.ended_by_will`).  Such a name is *withdrawn*: left out of its announcement (and its last will) for the rest
 of its run, said in one line on stderr; its ports keep serving here, outside the fleet (a
 request for it that reaches the member anyway is refused, ``FleetClash``; the fast path of
 :mod:`devsim.fleet.answers` is left out while a name is withdrawn).
@@ -184,7 +186,7 @@ class FleetMember:
         except LinkLost as exc:
             raise ConnectionError(f"cannot reach the fleet broker {self.url}: {exc}") from None
         try:
-            taken = await self._taken(link)
+            taken = self._taken(await self._others(link))
             if taken:
                 name, served = next(iter(taken.items()))
                 raise FleetClash(f"device {name!r} is already in the fleet {self.url}, served by {served};"
@@ -197,11 +199,16 @@ class FleetMember:
         self._link = link
         self._task = asyncio.ensure_future(self._run(link))
 
-    async def _taken(self, link: MqttLink) -> dict[str, str]:
-        """Which of the names we announce another *online* process serves (by the retained
-        announcements; offline marks do not count): name -> ``PROCESS (host H, pid P)``, sorted."""
+    async def _others(self, link: MqttLink) -> dict[str, dict[str, Any]]:
+        """The retained announcements (process -> announcement; ours among them, if any)."""
         others = await retained_announcements(link, self.topics, self.topics.sync(f"member-{self.process}"))
         await link.unsubscribe(self.topics.announcements)
+        return others
+
+    def _taken(self, others: dict[str, dict[str, Any]]) -> dict[str, str]:
+        """Which of the names we announce another *online* process serves (by the retained
+        announcements ``others``; offline marks do not count): name -> ``PROCESS (host H, pid P)``,
+        sorted."""
         mine = {row["name"] for row in self.devices()}
         taken: dict[str, str] = {}
         for process, announcement in sorted(others.items()):
@@ -244,8 +251,11 @@ class FleetMember:
             except LinkLost:
                 continue
             try:
-                taken = await self._taken(link)  # the name check of joining, again
+                others = await self._others(link)
+                taken = self._taken(others)  # the name check of joining, again
                 self.withdrawn.update(taken)
+                if not others.get(self.process, {}).get("online"):  # our will went out (or the broker is new)
+                    self.streams.ended_by_will()
                 await self._announce(link)
             except (LinkLost, TimeoutError):
                 await link.disconnect()

@@ -11,6 +11,9 @@ kept alive by topics (:class:`devsim.fleet.topics.Topics`):
   publishes every item of a :class:`~devsim.runtime.watch_stream.WatchStream` there as the
   control server's JSON line (``{"watch": ID, "t": …, "device": …, "type": …}``), QoS 0, in
   order;
+* the member's last will ends its streams: a client stops taking them when the offline mark
+  arrives, and the member, rejoining, stops them (:meth:`StreamServer.ended_by_will`); a client
+  that still watches other members asks it again then;
 * the member follows every client's ``watching`` and stops a client's streams when it is cleared
   (the client closed, or died: its will).  After a reconnection it takes the retained presences
   again and, at its own marker (``ROOT/client/PROCESS-streams/sync``, which the broker hands back
@@ -112,6 +115,14 @@ class StreamServer:
                                                  "t": self.runtime.clock.now(), "stream": stream_to})
         stream.start()  # its first items (every value) go to the outbox; the answer to the reply topic
         return answer
+
+    def ended_by_will(self) -> None:
+        """Our last will marked us offline, and every watcher ended our streams then (a watch that
+        goes on asks again when we are back): stop them all, and drop the items they left in
+        the outbox.  Called on rejoining unless our announcement was still there, online."""
+        self.close()
+        while not self.outbox.empty():
+            self.outbox.get_nowait()
 
     def drop(self, client: str) -> None:
         for stream in self.streams.pop(client, []):
