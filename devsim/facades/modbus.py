@@ -125,7 +125,8 @@ class ModbusFacade:
 
 class _TcpSession(asyncio.Protocol):
     """One Modbus TCP connection (Messaging on TCP/IP §4.4.2): every request of a segment is
-    answered, in order; a header that is not Modbus's closes the connection."""
+    answered, in order; one with a protocol identifier other than 0 is discarded unanswered
+    (§4.4.2.2), a length no PDU has closes the connection."""
 
     def __init__(self, facade: ModbusFacade, sessions: _Sessions) -> None:
         self.facade = facade
@@ -147,15 +148,19 @@ class _TcpSession(asyncio.Protocol):
         self.buffer += data
         while len(self.buffer) >= MBAP.size and self.transport is not None:
             transaction, protocol, length, unit = MBAP.unpack_from(self.buffer)
-            if protocol != 0 or not 2 <= length <= MAX_PDU + 1:
-                # §4.4.2.2: a protocol identifier other than 0 is not a Modbus indication; past it
-                # the stream cannot be framed any more: the connection is closed.
+            if not 2 <= length <= MAX_PDU + 1:
+                # No PDU has this length (1 … 253 bytes, Application Protocol §4.1): past it the
+                # stream cannot be framed any more: the connection is closed.
                 self.transport.close()
                 self.transport = None
                 return
             if len(self.buffer) < 6 + length:
                 return
             pdu, self.buffer = self.buffer[MBAP.size:6 + length], self.buffer[6 + length:]
+            if protocol != 0:
+                # §4.4.2.2: "If it is different from MODBUS protocol type, the indication is
+                # simply discarded": no answer; the requests after it are served.
+                continue
             response = self.answer(unit, pdu)
             self.transport.write(MBAP.pack(transaction, 0, len(response) + 1, unit) + response)
 

@@ -174,21 +174,30 @@ def test_several_requests_in_one_segment_are_each_answered_in_order(where: tuple
                        mbap(12, bytes.fromhex("03 02 09A0"), unit=0xFF)]
 
 
-def test_a_protocol_identifier_other_than_0_closes_the_connection(where: tuple[str, int]) -> None:
-    """Messaging on TCP/IP §4.4.2.2: a protocol identifier other than 0 is no Modbus indication;
-    what follows it cannot be framed, so the connection is closed.  A request before it in the
-    same segment is answered first; a new connection is served."""
+def test_a_protocol_identifier_other_than_0_is_discarded(where: tuple[str, int]) -> None:
+    """Messaging on TCP/IP §4.4.2.2: "The Protocol Identifier field has to be checked: If it is
+    different from MODBUS protocol type, the indication is simply discarded."  Discarded, framed
+    by its length: no answer to it, and the requests before and after it on the same connection
+    are answered (the connection was closed, so request 3 and 5 went unanswered)."""
     read = struct.pack(">BHH", 3, 2, 2)
+    answer = bytes.fromhex("03 04 0001 09A0")  # 68 000 = 0001 09A0h (§6.3)
     with socket.create_connection(where, timeout=5) as sock:
         sock.sendall(mbap(1, read) + mbap(2, read, protocol=1) + mbap(3, read))
-        assert receive(sock)[:2] == b"\x00\x01"
-        assert sock.recv(100) == b""  # closed, nothing for 2 or 3
-    with socket.create_connection(where, timeout=5) as sock:
+        assert receive(sock) == mbap(1, answer)
+        assert receive(sock) == mbap(3, answer)  # nothing for 2
         sock.sendall(mbap(4, read, protocol=0x1234))
-        assert sock.recv(100) == b""
-    with socket.create_connection(where, timeout=5) as sock:
         sock.sendall(mbap(5, read))
-        assert receive(sock)[:2] == b"\x00\x05"
+        assert receive(sock) == mbap(5, answer)
+
+
+@pytest.mark.parametrize("length", [0, 1, 255, 0xFFFF])
+def test_an_mbap_length_outside_2_to_254_closes_the_connection(where: tuple[str, int], length: int) -> None:
+    """Application Protocol §4.1: a PDU is at most 253 bytes, so the length field (§3.1.3 of the
+    guide: the unit identifier and the PDU) is 2 … 254; past one outside that the stream cannot be
+    framed: the indication is discarded (guide §4.4.2.2) and the connection closed."""
+    with socket.create_connection(where, timeout=5) as sock:
+        sock.sendall(struct.pack(">HHHB", 6, 0, length, 1) + struct.pack(">BHH", 3, 2, 2))
+        assert sock.recv(100) == b""
 
 
 @pytest.mark.parametrize("unit", [1, 0xFF, 0])
