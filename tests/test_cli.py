@@ -62,6 +62,8 @@ def test_list_shows_kinds_with_descriptions() -> None:
         (["run", "echo", "--drives", "1,a"], "--drives: expected addresses like 1,2,3"),
         (["run", "echo", "--drives", "1,2,1"], "--drives: address 1 given twice"),
         (["run", "echo", "--drives", "1,200"], "--drives: address: Input should be less than or equal to 127"),
+        (["run", "ip247", "--drives", "1,2"], "--drives: ip247 has no address on its port 'pg': one device per line"),
+        (["run", "gms96", "--drives", "3,32"], "--drives: dil.address: Input should be less than or equal to 31"),
         (["run", "echo", "--speed", "0"], "--speed: must be positive"),
         (["run", "echo", "--speed", "fast"], "'fast' is not a valid float"),
         (["run", "echo", "--control", "0.0.0.0:7000"], "--control: refusing non-loopback host '0.0.0.0'"),

@@ -45,11 +45,13 @@ def shared_vocabulary_markdown() -> list[str]:
     )
 
 
-def _port_doc(doc: str, default: str | None, hosts: int = 1) -> str:
-    """A port's description, with the network transport it is served on by default and, where
-    it serves more than one, how many hosts at once (over TCP; a serial port serves one)."""
+def _port_doc(doc: str, default: str | None, hosts: int = 1, address: str | None = None) -> str:
+    """A port's description, with the network transport it is served on by default, where it
+    serves more than one, how many hosts at once (over TCP; a serial port serves one), and the
+    configuration key of the device's address on a shared line (RS-485 multidrop)."""
     text = doc if default is None else f"{doc} (default transport: `{default}`)"
-    return text if hosts == 1 else f"{text}; up to {hosts} hosts at once over TCP"
+    text = text if hosts == 1 else f"{text}; up to {hosts} hosts at once over TCP"
+    return text if address is None else f"{text}; on a shared line (bus) addressed by config `{address}`"
 
 
 def reference_markdown(cls: type[Device]) -> str:
@@ -65,7 +67,8 @@ def reference_markdown(cls: type[Device]) -> str:
         *_table(
             ("port", "description", "manual", "direction"),
             (
-                (f"`{p.name}`", _port_doc(p.doc, p.default, p.hosts), p.section, "receive only" if p.receive_only else "both")
+                (f"`{p.name}`", _port_doc(p.doc, p.default, p.hosts, p.address), p.section,
+                 "receive only" if p.receive_only else "both")
                 for p in cls.ports
             ),
         ),

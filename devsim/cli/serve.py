@@ -153,15 +153,11 @@ def _device_configs(cls: type[Device], kind: str, config_file: str | None, drive
 
     if not drives:
         return [(kind, finish(base, config_file or "config"))]
+    line = cls.ports[0]  # where the kind's address comes from: its port's declaration (PortDef.address)
+    if line.address is None:
+        raise usage_error(f"--drives: {kind} has no address on its port {line.name!r}: one device per line")
     names = [kind] if len(drives) == 1 else [f"{kind}{n}" for n in drives]
-    def addressed(n: int) -> dict[str, Any]:
-        # the address is a DIL-switch setting on cards that have one (GMS96: dil.address)
-        keys = model.__struct_encode_fields__ if model is not None else ()
-        if "address" not in keys and "dil" in keys:
-            return {**base, "dil": {**(base.get("dil") or {}), "address": n}}
-        return {**base, "address": n}
-
-    return [(name, finish(addressed(n), "--drives")) for name, n in zip(names, drives, strict=True)]
+    return [(name, finish(line.addressed(base, n), "--drives")) for name, n in zip(names, drives, strict=True)]
 
 
 

@@ -8,7 +8,7 @@ kind are in :mod:`devsim.core.points`, its parameters in :mod:`devsim.core.param
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from typing import Any, Generic, Literal, Protocol, TypeVar
 
 import msgspec
@@ -79,7 +79,14 @@ class PortDef(msgspec.Struct, frozen=True):
 
     ``capture`` declares the port a serial line for pcap captures (:class:`CaptureTag`): its
     records carry the devsim serial header (link type USER0) with these protocol and port bytes;
-    ``None``: a port of the device's network interface, captured as IPv4/UDP."""
+    ``None``: a port of the device's network interface, captured as IPv4/UDP.
+
+    ``address`` declares where the device's address on a line shared with others (RS-485
+    multidrop) comes from: the key of its configuration that holds it, dotted for a nested one
+    (``"address"`` for the SERS's DIP switch 2, ``"dil.address"`` for the GMS96's DIL switch,
+    ``"station"`` for an S-Bus station).  ``devsim run --drives`` sets it, and a plant file with
+    two devices at one address on one bus is refused (:mod:`devsim.scenario.checks`).  ``None``:
+    the port's protocol addresses no device, one device per line."""
 
     name: str = "main"
     doc: str = "the device's serial port"
@@ -89,12 +96,37 @@ class PortDef(msgspec.Struct, frozen=True):
     framing: Framing | None = None
     hosts: int = 1
     capture: CaptureTag | None = None
+    address: str | None = None
 
     def __post_init__(self) -> None:
         if self.hosts < 1:
             raise ValueError(f"a port serves at least one host, not {self.hosts}")
         if self.default is not None:
             parse_port_default(self.default)
+
+    def address_in(self, config: Mapping[str, Any]) -> Any:
+        """The device's address in its configuration (parsed, defaults filled in), or ``None``
+        where the port declares no address (or the configuration lacks it)."""
+        value: Any = config
+        for key in self.address.split(".") if self.address is not None else ():
+            if not isinstance(value, Mapping) or key not in value:
+                return None
+            value = value[key]
+        return None if self.address is None else value
+
+    def addressed(self, config: Mapping[str, Any], address: int) -> dict[str, Any]:
+        """``config`` with the device's address set to ``address`` (the port must declare one)."""
+        if self.address is None:
+            raise ValueError(f"port {self.name!r} declares no address")
+        *outer, last = self.address.split(".")
+        top = dict(config)
+        level = top
+        for key in outer:  # (copies of the nested mappings on the way: ``config`` stays as it was)
+            inner = level.get(key)
+            level[key] = dict(inner) if isinstance(inner, Mapping) else {}
+            level = level[key]
+        level[last] = address
+        return top
 
     @property
     def default_transport(self) -> tuple[str, int] | None:

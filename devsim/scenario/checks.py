@@ -9,7 +9,8 @@ them all at once, with the schema's own problems:
   fits the kind's configuration; the initial ``state`` names points the kind has, with values
   of their type;
 * :func:`step_problems` – the names in ``set``, ``pulse``, ``when`` and ``expect_state`` are
-  points of the device's kind; a ``fault`` is one the kind declares.
+  points of the device's kind; a ``fault`` is one the kind declares;
+* :func:`bus_address_problems` – no two devices of a kind on one bus have the same address.
 
 They work on the parts of a file that parsed (a device or step that did not is left to the
 schema's message), and take the device and step objects by their attributes, so that this module
@@ -18,14 +19,14 @@ needs nothing of :mod:`devsim.scenario.schema`.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from typing import Any
 
 from devsim.core.points import BadValue, ReadOnlyName, UnknownName
 from devsim.core.registry import UnknownKind, device_class
 from devsim.core.typed import Invalid
 
-__all__ = ["POWER_FAULTS", "Problem", "device_problems", "fault_problem", "step_problems"]
+__all__ = ["POWER_FAULTS", "Problem", "bus_address_problems", "device_problems", "fault_problem", "step_problems"]
 
 Problem = tuple[tuple[int | str, ...], str]
 
@@ -126,3 +127,44 @@ def fault_problem(fault: str, kind: str) -> str | None:
     if fault in declared:
         return None
     return f"{kind} has no fault {fault!r} (declared: {', '.join([*declared, *POWER_FAULTS])})"
+
+
+def bus_address_problems(devices: Iterable[tuple[int, Any]]) -> list[Problem]:
+    """Devices of one kind at one address on one bus (an RS-485 multidrop line), each after the
+    first: both would take what is sent to that address and answer together (SERS manual §4.1:
+    "Nach dem Senden der Adresse sind alle folgenden Kommandos und Parameter-Zuweisungen dem
+    entsprechenden Antrieb zugeordnet. Alle anderen angeschlossenen Antriebe ignorieren die
+    Kommandos"; GMS96 manual §2.2, §2.3: the DIL switch's address, "<Adresszeichen><Befehlszeichen>").
+    The address is the one the kind's port declares (:attr:`devsim.core.kit.PortDef.address`), as
+    the device's configuration sets it or by its default.  ``devices``: (index in the file, parsed
+    ``DeviceSpec``); a device whose kind or configuration is wrong is reported elsewhere."""
+    first: dict[tuple[str, str, Any], str] = {}
+    problems: list[Problem] = []
+    for index, device in devices:
+        try:
+            cls = device_class(device.kind)
+        except UnknownKind:
+            continue
+        line = cls.ports[0]  # (the port a device has on a bus)
+        bus = device.transport_of(line.name).bus
+        if bus is None or line.address is None:
+            continue
+        address = line.address_in(_settings(cls, device.device_config()))
+        if address is None:
+            continue
+        seen = first.setdefault((bus, device.kind, address), device.name)
+        if seen != device.name:
+            problems.append((("devices", index, "config", *line.address.split(".")),
+                             f"devices {seen!r} and {device.name!r} are both at {line.address} {address} on bus {bus!r}"))
+    return problems
+
+
+def _settings(cls: Any, config: dict[str, Any]) -> Mapping[str, Any]:
+    """A device's configuration with the kind's defaults filled in (empty if it does not parse)."""
+    model = getattr(cls, "config_model", None)
+    if model is None:
+        return config
+    try:
+        return model.parse(config).dump()  # type: ignore[no-any-return]
+    except Invalid:
+        return {}

@@ -44,7 +44,13 @@ from msgspec import UNSET, Meta, UnsetType, field
 from devsim.core.config import ConfigError, LineDict, LineList, load_yaml, plain, report
 from devsim.core.typed import FieldError, Invalid, Typed, doc
 from devsim.runtime import port_key
-from devsim.scenario.checks import Problem, device_problems, fault_problem, step_problems
+from devsim.scenario.checks import (
+    Problem,
+    bus_address_problems,
+    device_problems,
+    fault_problem,
+    step_problems,
+)
 from devsim.scenario.specs import (
     Between,
     CanopenSpec,
@@ -169,7 +175,7 @@ class PlantSpec(Typed, kw_only=True):
 
     def problems(self) -> list[Problem]:
         """Every reference across the plant's parts that does not hold (names used twice, a
-        bus not defined …), located; a file reports them all (:func:`inspect_file`), a plant
+        bus not defined, two devices at one address on a bus …), located; a file reports them all (:func:`inspect_file`), a plant
         given as data raises the first."""
         return plant_problems(_Parts(self.devices, self.buses, [], {}, self.opcua is not None))
 
@@ -550,7 +556,8 @@ def dotted(loc: tuple[int | str, ...], text: str) -> str:
 
 
 def plant_problems(parts: _Parts) -> list[Problem]:
-    """References across a plant's (or scenario's) parts that do not hold, located."""
+    """References across a plant's (or scenario's) parts that do not hold, and devices at one
+    address on one bus (:func:`~devsim.scenario.checks.bus_address_problems`), located."""
     devices = [(i, d) for i, d in enumerate(parts.devices) if d is not None]
     named = [(("devices", i, "name"), d.name) for i, d in devices]
     named += [(("buses", i, "name"), b.name) for i, b in enumerate(parts.buses) if b is not None]
@@ -582,7 +589,7 @@ def plant_problems(parts: _Parts) -> list[Problem]:
         for port in sorted(set(device.ports) - set(device.port_names())):
             problems.append((("devices", i, "ports", port), f"device {device.name!r} ({device.kind}) has no port"
                              f" {port!r} (ports: {', '.join(device.port_names())})"))
-    return problems + _shared_endpoints(parts) + _step_references(parts)
+    return problems + bus_address_problems(devices) + _shared_endpoints(parts) + _step_references(parts)
 
 
 def _endpoint(transport: TransportSpec) -> tuple[str, ...] | None:

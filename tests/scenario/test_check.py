@@ -237,3 +237,49 @@ def test_every_bad_parameter_of_a_config_at_its_own_line(tmp_path: Path) -> None
         f"{bad}:11: devices.2.config.params.N10: 99999999 is outside 1 … 3000",
         f"{bad}:11: devices.2.config.params.N11: 1 is outside 50 … 255",
     ]
+
+
+BUS_PLANT = """\
+devices:
+  - {{name: a, kind: sers, transport: {{bus: line}}, config: {{address: {a}}}}}
+  - {{name: b, kind: sers, transport: {{bus: line}}, config: {{address: {b}}}}}
+  - {{name: c, kind: sers, transport: {{bus: other}}, config: {{address: {a}}}}}
+  - {{name: d, kind: sers, config: {{address: {a}}}}}
+  - {{name: g1, kind: gms96, transport: {{bus: cards}}, config: {{dil: {{address: {a}}}}}}}
+  - {{name: g2, kind: gms96, transport: {{bus: cards}}, config: {{dil: {{address: {b}}}}}}}
+  - {{name: p1, kind: pcd4h3, transport: {{bus: plcs}}, config: {{station: {a}}}}}
+  - {{name: p2, kind: pcd4h3, transport: {{bus: plcs}}, config: {{station: {b}}}}}
+buses:
+  - {{name: line}}
+  - {{name: other}}
+  - {{name: cards}}
+  - {{name: plcs}}
+"""
+
+
+def test_two_devices_at_one_address_on_one_bus_are_a_mistake_of_the_file(tmp_path: Path) -> None:
+    """Two stations set to one address on one RS-485 line both take the telegrams meant for it and
+    answer together (SERS manual §4.1: "Nach dem Senden der Adresse sind alle folgenden Kommandos
+    und Parameter-Zuweisungen dem entsprechenden Antrieb zugeordnet. Alle anderen angeschlossenen
+    Antriebe ignorieren die Kommandos"; GMS96 manual §2.2: "Die ersten 4 Steller ermöglichen die
+    Adresswahl zwischen 0 und 15", §2.3: "<Adresszeichen><Befehlszeichen>").  `devsim check` and
+    `devsim up` took such a plant; `devsim run --drives 1,1` refused it.  The address is where the kind's port declares it (SERS `address`, GMS96
+    `dil.address`, PCD4.H3 `station`), its default when the file gives none; the same address on
+    another bus, or on a device with a line of its own, is no mistake."""
+    bad, lines = mistakes(tmp_path, BUS_PLANT.format(a=3, b=3))
+    assert lines == [
+        f"{bad}:3: devices.2.config.address: devices 'a' and 'b' are both at address 3 on bus 'line'",
+        f"{bad}:7: devices.6.config.dil.address: devices 'g1' and 'g2' are both at dil.address 3 on bus 'cards'",
+        f"{bad}:9: devices.8.config.station: devices 'p1' and 'p2' are both at station 3 on bus 'plcs'",
+    ]
+    defaults = "devices:\n" + "".join(f"  - {{name: g{n}, kind: gms96, transport: {{bus: cards}}}}\n" for n in (1, 2, 3))
+    bad, lines = mistakes(tmp_path, defaults + "buses:\n  - {name: cards}\n")
+    assert lines == [f"{bad}:3: devices.2.config: devices 'g1' and 'g2' are both at dil.address 3 on bus 'cards'",
+                     f"{bad}:4: devices.3.config: devices 'g1' and 'g3' are both at dil.address 3 on bus 'cards'"]
+    good = tmp_path / "good.yaml"
+    good.write_text(BUS_PLANT.format(a=3, b=4), encoding="utf-8")
+    done = check(good)
+    assert done.returncode == 0 and done.stdout == f"{good}: ok (plant, 8 devices)\n", done.stderr
+    done = subprocess.run([sys.executable, "-m", "devsim", "up", str(bad)], cwd=ROOT, env=devsim_env(),
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == exits.BAD_FILE and "devices 'g1' and 'g2' are both at dil.address 3" in done.stderr

@@ -28,8 +28,8 @@ def _plant(tmp_path: Path) -> Path:
         "devices:\n"
         + "".join(f"  - {{name: e{i}, kind: echo, transport: {{tcp: {{port: 0}}}}, config: {{address: {i}}}}}\n"
                   for i in range(4))
-        + "  - {name: b1, kind: echo, transport: {bus: line}}\n"
-        "  - {name: b2, kind: echo, transport: {bus: line}}\n"
+        + "  - {name: b1, kind: echo, transport: {bus: line}, config: {address: 1}}\n"
+        "  - {name: b2, kind: echo, transport: {bus: line}, config: {address: 2}}\n"
         "buses:\n  - {name: line, transport: {tcp: {port: 0}}}\n"
     )
     return path
@@ -84,7 +84,7 @@ def test_workers_serve_ports_and_one_control_address(tmp_path: Path) -> None:
             assert sorted(r["name"] for r in rows) == ["b1", "b2", "e0", "e1", "e2", "e3"]
             assert {r["worker"] for r in rows} == {0, 1}
             for row in rows:
-                assert client.read(row["name"], "address") == (int(row["name"][1:]) if row["name"][0] == "e" else 1)
+                assert client.read(row["name"], "address") == int(row["name"][1:])  # (b1, b2 at 1, 2 on their bus)
             client.set("e3", "input.mute", True)
             assert client.read("e3", "input.mute") is True
             with pytest.raises(ControlError) as info:

@@ -18,7 +18,7 @@ from typing import Annotated, Any, ClassVar
 
 from devsim.core.clock import Timer
 from devsim.core.device import Device, Face, SerialSettings
-from devsim.core.kit import Reference, SignalDef, declare_signals, signal_points
+from devsim.core.kit import PortDef, Reference, SignalDef, declare_signals, signal_points
 from devsim.core.model import Model
 from devsim.core.parameters import Param, Parameters, ParameterTable, accessor, alias_hook, parameter_points
 from devsim.core.points import Point, PointTable
@@ -149,6 +149,7 @@ class EchoDevice(Device):
     kind: ClassVar[str] = "echo"
     description: ClassVar[str] = "Echoes every byte back (test device)"
     config_model = EchoConfig
+    ports = (PortDef(address="address"),)  # (several on one line: devsim run echo --drives 3,5)
     model_class = EchoModel
     face_classes: ClassVar[dict[str, Any]] = {"main": EchoFace}
     points = POINTS

@@ -53,7 +53,7 @@ class Gms96Device(Device):
     config_model = Gms96Config
     model_class = Gms96Card
     face_classes: ClassVar[dict[str, Any]] = {"main": Gms96Face}
-    ports = (PortDef(framing=FT12, capture=CaptureTag(2)),)
+    ports = (PortDef(framing=FT12, capture=CaptureTag(2), address="dil.address"),)  # the DIL switch (§2.2)
     points = POINTS
     drive = DRIVE
     faults = FAULTS

@@ -37,7 +37,7 @@ class Pcd4h3Device(Device):
     config_model = Pcd4h3Config
     ports = (
         PortDef("sbus", "S-Bus serial data mode (FS B5h, stuffing, CRC-16; 9600 8N1)", "§9.2",
-                capture=CaptureTag(5)),
+                capture=CaptureTag(5), address="station"),
         PortDef("ether_udp", "Ether-S-Bus on UDP, one telegram per datagram", "§9.3", default="udp:5050"),
         PortDef("ether_tcp", "Ether-S-Bus on TCP, telegrams back to back", "§9.3", default="tcp:5050", framing=ETHER_TCP,
                 hosts=ETHER_TCP_HOSTS),

@@ -37,7 +37,7 @@ class SersDevice(Device):
     hears_others: ClassVar[bool] = True  # a master's statements reach its slaves (§3.6.2)
     model_class = SersDrive
     face_classes: ClassVar[dict[str, Any]] = {"main": SersFace}
-    ports = (PortDef(framing=LINES, capture=CaptureTag(1)),)
+    ports = (PortDef(framing=LINES, capture=CaptureTag(1), address="address"),)  # DIP switch 2 (§3.1.1)
     points = POINTS
     faults = FAULTS
     drive = DRIVE
