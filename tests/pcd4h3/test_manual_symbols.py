@@ -108,3 +108,32 @@ def test_axis_blocks_that_leave_the_media_are_refused(tmp_path: Path) -> None:
         load_config(path, Pcd4h3Config)
     path.write_text("h3def:\n  mna: 2\n  bar: 4056\n  baf: 8122\n", encoding="utf-8")  # the last that fit
     assert load_config(path, Pcd4h3Config).h3def.bar == 4056
+
+
+@pytest.mark.manual("§7.1.3", "MNA: Entsprechend dieser Angabe werden die benötigten Speichermedien (Register, Flag) "
+                    "reserviert (the axes' own: the simulator's diagnostics block, spec §9.6.3, lies apart from them)")
+def test_axis_blocks_over_the_diagnostics_block_are_refused(tmp_path: Path) -> None:
+    """The simulator's read-only diagnostics block (16 registers and 8 flags per axis from
+    ``diagnostics``, default R 4000 and F 8000) over an axis block or flag field shadowed the axis's
+    registers or flags there (a read gave the diagnostics, a write got NAK); it was accepted."""
+    path = tmp_path / "pcd.yaml"
+    refused = {
+        "h3def:\n  mna: 2\n  bar: 3990\n":
+            "diagnostics: the diagnostics block R 4000 … 4031 overlaps the axis blocks R 3990 … 4029 (BAR 3990, MNA 2): move it",
+        "h3def:\n  baf: 7990\n":
+            "diagnostics: the diagnostics flags F 8000 … 8015 overlap the axis fields F 7990 … 8059 (BAF 7990, MNA 2): move it",
+        "diagnostics: [2039, 100]\n":
+            "diagnostics: the diagnostics block R 2039 … 2070 overlaps the axis blocks R 2000 … 2039 (BAR 2000, MNA 2): move it",
+        "diagnostics: [100, 1995]\nh3def: {mna: 1}\n":
+            "diagnostics: the diagnostics flags F 1995 … 2002 overlap the axis fields F 2000 … 2034 (BAF 2000, MNA 1): move it",
+    }
+    for text, message in refused.items():
+        path.write_text(text, encoding="utf-8")
+        with pytest.raises(ConfigError) as info:
+            load_config(path, Pcd4h3Config)
+        assert str(info.value) == f"{path}:1: {message}", text
+    for text in ("h3def:\n  mna: 2\n  bar: 3960\n  baf: 7930\n",  # the axes end where the diagnostics begin
+                 "diagnostics: [2040, 2070]\n",  # the diagnostics begin where the axes end
+                 "diagnostics: [1968, 1984]\n"):  # the diagnostics end where the axes begin
+        path.write_text(text, encoding="utf-8")
+        load_config(path, Pcd4h3Config)

@@ -10,6 +10,8 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 from devsim.core.settings import Check, Keys, Meta, Settings, doc, field
+from devsim.core.typed import FieldError
+from devsim.devices.pcd4h3.layout import DIAG_FLAGS, DIAG_REGISTERS, FLAGS_PER_AXIS, REGISTERS_PER_AXIS
 from devsim.devices.pcd4h3.tables import FLAG_FIELD, REGISTERS, load_registers
 
 __all__ = ["AXIS", "H3DEF", "JUMPERS", "Pcd4h3Config", "READ_FUNCTIONS", "VARIANTS"]
@@ -116,6 +118,24 @@ def _blocks_fit(h3def: H3Def) -> H3Def:
     return h3def
 
 
+def _diagnostics_apart(config: Pcd4h3Config) -> None:
+    """The simulator's diagnostics block (spec §9.6.3: 16 registers and 8 flags per axis from
+    ``diagnostics``) lies apart from the axis blocks and flag fields the library reserves (manual
+    §7.1.3, MNA: "Entsprechend dieser Angabe werden die benötigten Speichermedien (Register, Flag)
+    reserviert"): over them it would shadow the axes' registers and flags (a read gives the
+    diagnostics, a write is refused)."""
+    h3def, mna = config.h3def, config.h3def.mna
+    register, flag = config.diagnostics
+    for media, what, base, size, first, per_axis, (block, verb, axes) in (
+        ("R", "BAR", h3def.bar, REGISTERS_PER_AXIS, register, DIAG_REGISTERS, ("block", "overlaps", "blocks")),
+        ("F", "BAF", h3def.baf, FLAGS_PER_AXIS, flag, DIAG_FLAGS, ("flags", "overlap", "fields")),
+    ):
+        end, axes_end = first + mna * per_axis - 1, base + mna * size - 1
+        if first <= axes_end and base <= end:
+            raise FieldError("diagnostics", f"the diagnostics {block} {media} {first} … {end} {verb} the axis {axes} "
+                                            f"{media} {base} … {axes_end} ({what} {base}, MNA {mna}): move it")
+
+
 #: The nested parts, by their table names.
 H3DEF, JUMPERS, AXIS = H3Def, Jumpers, Axis
 
@@ -151,8 +171,12 @@ class Pcd4h3Config(Settings):
     rsigb_bit12_inverted: Annotated[bool, doc(
         "RSigB bit 12 as the manual's text has it (0 = forward), G-5")] = False
     diagnostics: Annotated[tuple[Annotated[int, Meta(ge=0, le=8191)], Annotated[int, Meta(ge=0, le=8191)]], doc(
-        "first register and first flag of the simulator's read-only diagnostics block")] = (4000, 8000)
+        "first register and first flag of the simulator's read-only diagnostics block (16 registers and 8 flags "
+        "per axis, apart from the axis blocks and fields)")] = (4000, 8000)
     init: Annotated[dict[Any, Annotated[dict[Any, float], Keys(_register, "register")]], Keys(_axis, "axis"), doc(
         "register contents loaded before AxInit at every cold start (MCFac as a number; others integers); unset "
         "registers keep theirs")] = {}
     axes: Annotated[dict[Any, Axis], Keys(_axis, "axis"), doc("per axis: motor, encoder, switches")] = {}
+
+    def __post_init__(self) -> None:
+        _diagnostics_apart(self)

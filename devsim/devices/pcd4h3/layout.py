@@ -12,9 +12,10 @@ from __future__ import annotations
 from devsim.core.parameters import Param
 from devsim.devices.pcd4h3.tables import FLAG_FIELD, REGISTERS, command_flags
 
-__all__ = ["FLAGS_PER_AXIS", "Layout", "REGISTERS_PER_AXIS"]
+__all__ = ["DIAG_FLAGS", "DIAG_REGISTERS", "FLAGS_PER_AXIS", "Layout", "REGISTERS_PER_AXIS"]
 
 REGISTERS_PER_AXIS, FLAGS_PER_AXIS = len(REGISTERS), len(FLAG_FIELD)  # NoRfeA 20, NoFfeA 35 (§4.1)
+DIAG_REGISTERS, DIAG_FLAGS = 16, 8  # the simulator's diagnostics block, per axis (spec §9.6.3)
 
 
 class Layout:

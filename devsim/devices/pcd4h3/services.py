@@ -21,6 +21,7 @@ import msgspec
 
 from devsim.core.kit import Command, Table
 from devsim.core.words import signed32
+from devsim.devices.pcd4h3.layout import DIAG_FLAGS, DIAG_REGISTERS
 from devsim.devices.pcd4h3.model import BUS_INPUTS, MEDIA_SIZE, Pcd4
 from devsim.devices.pcd4h3.sbus import (
     ACK,
@@ -44,7 +45,6 @@ __all__ = [
 ]
 
 Answer = bytes | int | None  # reply data, an ACK/NAK code, or no answer (broadcast)
-DIAG_REGISTERS, DIAG_FLAGS = 16, 8  # per axis (§9.6.3)
 
 
 def serve(plc: Pcd4, request: Request) -> Answer:
