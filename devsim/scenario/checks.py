@@ -10,7 +10,8 @@ them all at once, with the schema's own problems:
   of their type;
 * :func:`step_problems` – the names in ``set``, ``pulse``, ``when`` and ``expect_state`` are
   points of the device's kind; a ``fault`` is one the kind declares;
-* :func:`bus_address_problems` – no two devices of a kind on one bus have the same address.
+* :func:`bus_address_problems` – no two devices of a kind on one bus have the same address;
+* :func:`bus_port_problems` – the devices of a bus are on it by ports of one name.
 
 They work on the parts of a file that parsed (a device or step that did not is left to the
 schema's message), and take the device and step objects by their attributes, so that this module
@@ -26,7 +27,8 @@ from devsim.core.points import BadValue, ReadOnlyName, UnknownName
 from devsim.core.registry import UnknownKind, device_class
 from devsim.core.typed import Invalid
 
-__all__ = ["POWER_FAULTS", "Problem", "bus_address_problems", "device_problems", "fault_problem", "step_problems"]
+__all__ = ["POWER_FAULTS", "Problem", "bus_address_problems", "bus_port_problems", "device_problems", "fault_problem",
+           "step_problems"]
 
 Problem = tuple[tuple[int | str, ...], str]
 
@@ -145,8 +147,7 @@ def bus_address_problems(devices: Iterable[tuple[int, Any]]) -> list[Problem]:
             cls = device_class(device.kind)
         except UnknownKind:
             continue
-        line = cls.ports[0]  # (the port a device has on a bus)
-        bus = device.transport_of(line.name).bus
+        line, bus = cls.ports[0], device.bus()  # (a device is on a bus by its first port)
         if bus is None or line.address is None:
             continue
         address = line.address_in(_settings(cls, device.device_config()))
@@ -156,6 +157,23 @@ def bus_address_problems(devices: Iterable[tuple[int, Any]]) -> list[Problem]:
         if seen != device.name:
             problems.append((("devices", index, "config", *line.address.split(".")),
                              f"devices {seen!r} and {device.name!r} are both at {line.address} {address} on bus {bus!r}"))
+    return problems
+
+
+def bus_port_problems(devices: Iterable[tuple[int, Any]]) -> list[Problem]:
+    """Devices on one bus by ports of different names (a device is on a bus by its first port:
+    ``main``, a PCD4.H3's ``sbus``): a bus serves the one port of its devices, of one name.
+    ``devices``: (index in the file, parsed ``DeviceSpec``)."""
+    first: dict[str, tuple[str, str]] = {}
+    problems: list[Problem] = []
+    for index, device in devices:
+        bus, port = device.bus(), device.port_names()[0]
+        if bus is None:
+            continue
+        name, its = first.setdefault(bus, (device.name, port))
+        if its != port:
+            problems.append((("devices", index, "kind"), f"device {device.name!r} is on bus {bus!r} by its port {port!r},"
+                             f" device {name!r} by {its!r}: the devices of a bus share one port of one name"))
     return problems
 
 

@@ -2,7 +2,7 @@
 
 :func:`build_plant` runs inside a runtime's loop; :func:`start_plant` starts a runtime in a
 background thread and builds the plant there (what ``devsim up``, the pytest plugin and tests
-use).  Devices on a ``bus`` share that bus's port (RS-485 multidrop).
+use).  Devices on a ``bus`` share that bus's port (RS-485 multidrop), each by its first port.
 """
 
 from __future__ import annotations
@@ -86,7 +86,7 @@ class Plant(msgspec.Struct):
         rows = []
         on_bus: dict[str, list[str]] = {}
         for device in self.spec.devices:
-            bus = device.transport_of("main").bus
+            bus = device.bus()
             if bus is not None:
                 on_bus.setdefault(bus, []).append(device.name)
         for name in self.transports:
@@ -122,9 +122,9 @@ async def build_plant(
     for name, dev, port in spec.device_ports():
         groups[name] = (dev.transport_of(port), [plant.devices[dev.name]], port)
     for bus in spec.buses:
-        members = [plant.devices[d.name] for d in spec.devices if d.transport_of("main").bus == bus.name]
-        if members:
-            groups[bus.name] = (bus.transport, members, "main")
+        on_bus = [d for d in spec.devices if d.bus() == bus.name]
+        if on_bus:  # (each on the bus by its first port, of one name: plant_problems)
+            groups[bus.name] = (bus.transport, [plant.devices[d.name] for d in on_bus], on_bus[0].port_names()[0])
     budget = port_budget() if keep_going else len(groups)
     for name, (tspec, members, port) in groups.items():
         if budget <= 0:

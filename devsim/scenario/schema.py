@@ -14,6 +14,9 @@ A **plant** file lists devices (and optional multidrop buses) and how each is re
       - name: line1
         transport: {pty: {}}
 
+A device is on a bus by its first port (``main``; a PCD4.H3's ``sbus``), through ``transport``
+or ``ports``; the devices of a bus are on it by ports of one name, each at its own address.
+
 A port given no transport is a pty – unless its kind declares a default network transport
 (:attr:`devsim.core.kit.PortDef.default`, e.g. ``udp:5050`` for Ether-S-Bus): then it is served
 on that scheme at an *ephemeral* port number on loopback (``{udp: {}}``), so that many plants
@@ -47,6 +50,7 @@ from devsim.runtime import port_key
 from devsim.scenario.checks import (
     Problem,
     bus_address_problems,
+    bus_port_problems,
     device_problems,
     fault_problem,
     step_problems,
@@ -101,12 +105,17 @@ class DeviceSpec(Typed):
         if self.transport is not UNSET and self.ports:
             raise ValueError("give 'transport' (one port) or 'ports' (per port), not both")
         for port, spec in self.ports.items():
-            if spec.bus is not None and port != "main":
-                raise ValueError(f"ports.{port}: only the main port can be on a bus")
+            if spec.bus is not None and port != (first := self.port_names()[0]):
+                raise ValueError(f"ports.{port}: only the first port ({first}) can be on a bus")
 
     def port_names(self) -> list[str]:
         """The kind's declared serial ports (``main`` if the kind cannot be loaded)."""
         return kind_ports(self.kind)
+
+    def bus(self) -> str | None:
+        """The bus the device is on, by its first port (its serial line: ``main``, a PCD4.H3's
+        ``sbus``), or None."""
+        return self.transport_of(self.port_names()[0]).bus
 
     def transport_of(self, port: str) -> TransportSpec:
         """The transport serving one port: ``ports[port]``, else ``transport`` (when given) for
@@ -186,7 +195,7 @@ class PlantSpec(Typed, kw_only=True):
             parts = sorted({d.part for d in self.devices if d.part is not None})
             raise ValueError(f"no device has part {part!r}"
                              f" ({'parts: ' + ', '.join(parts) if parts else 'the plant names no parts'})")
-        buses = {d.transport_of("main").bus for d in devices}
+        buses = {d.bus() for d in devices}
         return self.replace(devices=devices, buses=[b for b in self.buses if b.name in buses])
 
     def device_ports(self) -> list[tuple[str, DeviceSpec, str]]:
@@ -580,8 +589,8 @@ def plant_problems(parts: _Parts) -> list[Problem]:
                 where = ("ports", port) if port in device.ports else ("transport",)
                 problems.append((("devices", i, *where, "bus"),
                                  f"device {device.name!r} is on bus {bus!r}, which is not defined"))
-        bus = device.transport_of("main").bus
-        others = {d.part for _j, d in devices if d.transport_of("main").bus == bus} if bus else set()
+        bus = device.bus()
+        others = {d.part for _j, d in devices if d.bus() == bus} if bus else set()
         if bus is not None and len(others) > 1 and bus not in mixed:
             mixed.add(bus)
             problems.append((("devices", i, "part"), f"bus {bus!r} has devices of different parts"
@@ -589,7 +598,8 @@ def plant_problems(parts: _Parts) -> list[Problem]:
         for port in sorted(set(device.ports) - set(device.port_names())):
             problems.append((("devices", i, "ports", port), f"device {device.name!r} ({device.kind}) has no port"
                              f" {port!r} (ports: {', '.join(device.port_names())})"))
-    return problems + bus_address_problems(devices) + _shared_endpoints(parts) + _step_references(parts)
+    return (problems + bus_port_problems(devices) + bus_address_problems(devices) + _shared_endpoints(parts)
+            + _step_references(parts))
 
 
 def _endpoint(transport: TransportSpec) -> tuple[str, ...] | None:

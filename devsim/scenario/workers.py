@@ -91,7 +91,7 @@ def split_plant(spec: PlantSpec, workers: int) -> list[dict[str, Any]]:
         by_bus[bus.name] = ([], [bus])
         units.append(by_bus[bus.name])
     for device in spec.devices:
-        bus = device.transport_of("main").bus
+        bus = device.bus()
         if bus is not None and bus in by_bus:
             by_bus[bus][0].append(device)
         elif device.canopen is not None:

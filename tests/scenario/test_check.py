@@ -283,3 +283,13 @@ def test_two_devices_at_one_address_on_one_bus_are_a_mistake_of_the_file(tmp_pat
     done = subprocess.run([sys.executable, "-m", "devsim", "up", str(bad)], cwd=ROOT, env=devsim_env(),
                           capture_output=True, text=True, timeout=60)
     assert done.returncode == exits.BAD_FILE and "devices 'g1' and 'g2' are both at dil.address 3" in done.stderr
+
+
+def test_devices_on_one_bus_by_ports_of_different_names_are_a_mistake_of_the_file(tmp_path: Path) -> None:
+    """A device is on a bus by its first port (a SERS's `main`, a PCD4.H3's `sbus`); a bus serves
+    one port of its devices, of one name: a PCD4.H3 on a bus with SERS drives was left out of the
+    bus without a word."""
+    bad, lines = mistakes(tmp_path, "devices:\n  - {name: a, kind: sers, transport: {bus: line}}\n"
+                          "  - {name: p, kind: pcd4h3, transport: {bus: line}}\nbuses:\n  - {name: line}\n")
+    assert lines == [f"{bad}:3: devices.2.kind: device 'p' is on bus 'line' by its port 'sbus', device 'a' by 'main':"
+                     " the devices of a bus share one port of one name"]
