@@ -8,7 +8,8 @@ aborted 0602 0000h; one naming an object that cannot be mapped (PDOMapping=0 in 
 other than the object's, into an RPDO an object that cannot be written, into a TPDO one that
 cannot be read) 0604 0041h; enabling the mapping (sub-index 00h = the number of entries) with
 more than 8 entries or more than the PDO's 64 bits 0604 0042h.  An entry of 0 (cleared) is
-taken.  The node calls :func:`check` before it stores the value, so nothing refused is kept."""
+taken.  The node calls :func:`check` before it stores the value, so nothing refused is kept.
+The COB-ID SYNC (1005h, CiA 301 §7.5.2.5) the node takes is :func:`sync_cob_id`'s."""
 
 from __future__ import annotations
 
@@ -17,7 +18,8 @@ from typing import Any
 from canopen.objectdictionary import ODVariable
 from canopen.sdo.exceptions import SdoAbortedError
 
-__all__ = ["CANNOT_BE_MAPPED", "ENTRIES", "NOT_IN_OD", "TOO_LONG", "VALUE_RANGE_EXCEEDED", "check", "is_pdo_parameter"]
+__all__ = ["CANNOT_BE_MAPPED", "ENTRIES", "NOT_IN_OD", "TOO_LONG", "VALUE_RANGE_EXCEEDED", "check", "is_pdo_parameter",
+           "sync_cob_id"]
 
 NOT_IN_OD = 0x06020000  # object does not exist in the object dictionary
 CANNOT_BE_MAPPED = 0x06040041  # object cannot be mapped to the PDO
@@ -80,3 +82,22 @@ def _variable(od: Any, index: int, subindex: int) -> ODVariable:
     if subindex not in entry:
         raise SdoAbortedError(NOT_IN_OD)
     return entry[subindex]
+
+
+#: The CAN-IDs CiA 301 §7.3.5 restricts (NMT, the reserved ones, the default SDOs, the
+#: NMT error control; first, last): no communication object may use them.
+RESTRICTED_CAN_IDS = ((0x000, 0x07F), (0x101, 0x180), (0x581, 0x5FF), (0x601, 0x67F), (0x6E0, 0x6FF),
+                      (0x701, 0x77F), (0x780, 0x7FF))
+SYNC_GEN, FRAME_29_BIT = 1 << 30, 1 << 29
+
+
+def sync_cob_id(data: bytes) -> int:
+    """The CAN-ID of the SYNC a node consumes after a master wrote ``data`` into 1005h (CiA 301
+    §7.5.2.5: bit 31 "do not care", bit 30 gen, bit 29 frame, bits 10 … 0 the 11-bit CAN-ID), or
+    the abort 0609 0030h: the node generates no SYNC (gen = 1), takes no 29-bit frame (frame = 1,
+    or bits 28 … 11 set), and no restricted CAN-ID."""
+    value = int.from_bytes(data[:4].ljust(4, b"\0"), "little")
+    can_id = value & 0x1FFF_FFFF
+    if value & (SYNC_GEN | FRAME_29_BIT) or can_id > 0x7FF or any(a <= can_id <= b for a, b in RESTRICTED_CAN_IDS):
+        raise SdoAbortedError(VALUE_RANGE_EXCEEDED)
+    return can_id

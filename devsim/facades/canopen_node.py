@@ -1,6 +1,6 @@
 """A device as a CANopen node (issue 13; canopen's local node over python-can; extra
 ``devsim-motion[can]``): the object dictionary of :mod:`devsim.facades.canopen_od`, NMT with the
-boot-up message, the heartbeat producer (1017h) and CiA 301's resets (issue 29: reset communication
+boot-up message, the heartbeat producer (1017h), the SYNC consumer (1005h) and CiA 301's resets (issue 29: reset communication
 restores 1000h … 1FFFh, reset node also the 402 objects), and SDO access to every point: an upload reads
 the point as the control API does, a download sets it with its validation (a refused value is
 aborted with 0609 0030h, value range exceeded; a read-only object 0601 0002h; every abort names the
@@ -12,7 +12,7 @@ profile velocity modes, 6064h/606Ch/60F4h; a fault the model announces (topic ``
 EMCY message.  Hosts in other processes reach the nodes through
 :class:`devsim.transports.socketcand.SocketcandServer` (:func:`start_canopen`, ``devsim run
 --canopen``).  PDOs: what the master maps into 1600h/1A00h and enables; TPDOs go out on SYNC
-(transmission types 1 … 240; type 0 at the SYNC after a change); with types 254/255 when a mapped value changes (looked at every
+(the CAN-ID 1005h names; transmission types 1 … 240; type 0 at the SYNC after a change); with types 254/255 when a mapped value changes (looked at every
 inhibit time, else every 10 ms of device time) and when the event timer runs out; RPDOs are
 written into their objects.  ``devsim run --canopen NODE@socketcan:vcan0`` puts the nodes on a
 SocketCAN interface instead, where the machine has one.  Callbacks come from
@@ -33,7 +33,7 @@ from devsim.core.console import warn
 from devsim.core.device import Device
 from devsim.core.points import BadValue, ReadOnlyName
 from devsim.facades import canopen_mapping, library_log
-from devsim.facades.canopen_od import eds, point_objects
+from devsim.facades.canopen_od import SYNC_COB_ID, eds, point_objects
 from devsim.facades.canopen_sdo import DevsimSdoServer
 from devsim.facades.cia402 import Cia402
 
@@ -71,6 +71,7 @@ class CanopenFacade:
         self._unlisten_power = device.model.listen("power_on", self._power_on)
         self._pdos_on = False
         self._syncs = 0
+        self._sync_id: int | None = None  # the CAN-ID of the SYNC consumed (1005h)
         self._timers: dict[tuple[int, str], Any] = {}  # event-driven TPDOs: device-clock timers
         self._sent: dict[int, bytes] = {}  # event-driven TPDOs: the data they last carried
         self.lost = 0  # TPDOs and EMCY messages the bus refused (see _send)
@@ -91,8 +92,16 @@ class CanopenFacade:
         network.add_node(self.node)
         network.unsubscribe(0, self.node.nmt.on_command)  # the NMT commands come to _nmt alone
         network.subscribe(0, self._nmt)
-        network.subscribe(0x80, self._sync)
+        self._consume_sync(SYNC_COB_ID)
         self._boot()
+
+    def _consume_sync(self, can_id: int) -> None:
+        """The SYNC consumer listens to ``can_id`` (1005h, CiA 301 §7.5.2.5), no longer to the one before."""
+        network = self.node.network
+        if self._sync_id is not None:
+            network.unsubscribe(self._sync_id, self._sync)
+        self._sync_id = can_id
+        network.subscribe(can_id, self._sync)
 
     # -- NMT (CiA 301: the NMT state machine) ---------------------------------------------------------
     def _nmt(self, can_id: int, data: bytes, timestamp: float) -> None:
@@ -121,6 +130,7 @@ class CanopenFacade:
         self.sdo.reset()
         self.node.nmt.stop_heartbeat()
         self._forget(0x1000, 0x1FFF)
+        self._consume_sync(SYNC_COB_ID)
         self._boot()
 
     def _reset_node(self) -> None:
@@ -301,6 +311,9 @@ class CanopenFacade:
     def _write(self, index: int, subindex: int, od: Any, data: bytes) -> None:
         if canopen_mapping.is_pdo_parameter(index):
             canopen_mapping.check(self.node, index, subindex, data)  # (CiA 301: what a PDO takes)
+            return
+        if index == 0x1005:
+            self._consume_sync(canopen_mapping.sync_cob_id(data))
             return
         if self.drive is not None and index in DRIVE_WRITES:
             faulted = index == 0x6040 and self.call(self.drive.in_fault)

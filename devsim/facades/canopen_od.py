@@ -1,6 +1,6 @@
 """The CANopen object dictionary of a device kind, as an EDS (CiA 306) generated from its declared
 points (issue 13): the communication objects every node has (device type, error register,
-heartbeat producer time, identity, the EMCY's COB-ID) and, from index 2000h on, one manufacturer object per
+the SYNC's COB-ID, heartbeat producer time, identity, the EMCY's COB-ID) and, from index 2000h on, one manufacturer object per
 ``bool``/``int``/``float`` point in table order (BOOLEAN, INTEGER32, REAL64; read-only where the
 point is), named after the point; 4 RPDOs and 4 TPDOs (communication and mapping records, the predefined connection set's
 COB-IDs); for a kind that is a drive (``Device.drive``) also the CiA 402 objects (controlword,
@@ -16,9 +16,10 @@ from collections.abc import Iterable
 from devsim.core.points import Point
 from devsim.facades.cia402 import DEFAULTS
 
-__all__ = ["DEVICE_TYPE", "DRIVE_OBJECTS", "FIRST_POINT_INDEX", "VENDOR_ID", "eds", "point_objects"]
+__all__ = ["DEVICE_TYPE", "DRIVE_OBJECTS", "FIRST_POINT_INDEX", "SYNC_COB_ID", "VENDOR_ID", "eds", "point_objects"]
 
 FIRST_POINT_INDEX = 0x2000
+SYNC_COB_ID = 0x80  # 1005h's power-on value: the predefined connection set's SYNC
 VENDOR_ID = 0x00000000  # no CiA vendor id: a simulator
 DEVICE_TYPE = 0x00020192  # CiA 402 drive profile (192h), additional information: servo drive (0002h)
 TYPES = {"bool": (0x0001, "BOOLEAN"), "int": (0x0004, "INTEGER32"), "float": (0x0011, "REAL64")}
@@ -123,9 +124,10 @@ def eds(kind: str, description: str, points: Iterable[Point], drive: bool = Fals
     lines += _var(0x1018, 2, "Product code", 0x0007, "ro", _product_code(kind))
     lines += _var(0x1018, 3, "Revision number", 0x0007, "ro", 1)
     lines += _var(0x1018, 4, "Serial number", 0x0007, "ro", 1)
-    optional = [0x1008, 0x1014, 0x1017, *_pdo_indices()] + ([index for index, *_ in DRIVE_OBJECTS] if drive else [])
+    optional = [0x1005, 0x1008, 0x1014, 0x1017, *_pdo_indices()] + ([index for index, *_ in DRIVE_OBJECTS] if drive else [])
     lines += ["[OptionalObjects]", f"SupportedObjects={len(optional)}"]
     lines += [f"{n}=0x{index:04X}" for n, index in enumerate(optional, start=1)] + [""]
+    lines += _var(0x1005, None, "COB-ID SYNC", 0x0007, "rw", SYNC_COB_ID)  # (CiA 301: the SYNC consumed)
     lines += _var(0x1008, None, "Manufacturer device name", 0x0009, "const", f"devsim {kind}")
     lines += _var(0x1014, None, "COB-ID EMCY", 0x0007, "ro", "$NODEID+0x80")  # (CiA 301: where EMCY is sent)
     lines += _var(0x1017, None, "Producer heartbeat time", 0x0006, "rw", 0)

@@ -102,7 +102,7 @@ def test_a_kind_that_is_no_drive_has_no_cia402_objects() -> None:
     for index, *_ in DRIVE_OBJECTS:
         assert f"=0x{index:04X}" not in plain and f"[{index:04X}]" not in plain
         assert f"=0x{index:04X}" in drive and f"[{index:04X}]" in drive
-    assert "SupportedObjects=19" in plain  # 1008h, 1014h, 1017h and the 16 PDO records
+    assert "SupportedObjects=20" in plain  # 1005h, 1008h, 1014h, 1017h and the 16 PDO records
 
 
 def test_the_emcy_cob_id_object_names_the_emcy_it_sends(bus: Bus) -> None:

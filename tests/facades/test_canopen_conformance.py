@@ -331,3 +331,51 @@ def test_a_pdo_mapping_takes_only_what_the_eds_lets_be_mapped(drive: Drive) -> N
     drive.master.subscribe(0x183, lambda can_id, data, timestamp: frames.put(bytes(data)))
     drive.master.send_message(0x80, b"")  # SYNC
     assert len(frames.get(timeout=5)) == 6
+
+
+def test_the_sync_cob_id_object_names_the_sync_the_node_consumes(drive: Drive) -> None:
+    """CiA 301, 1005h COB-ID SYNC (UNSIGNED32, rw, 80h as the predefined connection set has it):
+    the node, a SYNC consumer, sends its synchronous TPDOs at the SYNC with the CAN-ID 1005h names,
+    and after the master writes another, at that one alone.  The node produces no SYNC, so bit 30
+    (gen) is refused 0609 0030h, as are 29-bit frames (bit 29) and a CAN-ID CiA 301 restricts;
+    reset communication brings back 80h."""
+    node = drive.node
+    entry = node.object_dictionary[0x1005]
+    assert entry.data_type == 0x0007 and entry.writable and entry.default == 0x80
+    assert node.sdo[0x1005].raw == 0x80
+    node.tpdo.read()
+    tpdo = mapped(node.tpdo[1], 0x6041, trans_type=1)
+    node.tpdo.save()
+    arrived: queue.Queue[int] = queue.Queue()
+    tpdo.add_callback(lambda m: arrived.put(m["Statusword"].raw))
+    node.nmt.state = "OPERATIONAL"
+
+    def answered(can_id: int) -> int:
+        """The TPDOs a SYNC with ``can_id`` brought (counted after an SDO round trip)."""
+        drive.master.send_message(can_id, b"")
+        assert node.sdo[0x1017].raw == 0  # (frames on the bus are handled in order)
+        count = 0
+        while not arrived.empty():
+            arrived.get()
+            count += 1
+        return count
+
+    assert answered(0x80) == 1 and answered(0x90) == 0
+    node.sdo[0x1005].raw = 0x90
+    assert node.sdo[0x1005].raw == 0x90
+    assert answered(0x90) == 1 and answered(0x80) == 0
+    node.sdo[0x1005].raw = 0x80000091  # bit 31 is "do not care" for a consumer
+    assert answered(0x91) == 1 and answered(0x90) == 0
+    for refused in (0x40000092, 0x20000092, 0x601, 0x703, 0x0, 0x1092):
+        with pytest.raises(canopen.SdoAbortedError) as aborted:
+            node.sdo[0x1005].raw = refused
+        assert aborted.value.code == VALUE_RANGE_EXCEEDED, hex(refused)
+        assert node.sdo[0x1005].raw == 0x80000091
+    assert answered(0x91) == 1
+    node.nmt.send_command(0x82)  # reset communication
+    assert node.sdo[0x1005].raw == 0x80
+    node.tpdo.read()
+    mapped(node.tpdo[1], 0x6041, trans_type=1)
+    node.tpdo.save()
+    node.nmt.state = "OPERATIONAL"
+    assert answered(0x91) == 0 and answered(0x80) == 1
