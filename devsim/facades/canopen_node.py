@@ -8,7 +8,7 @@ request's multiplexer: :mod:`devsim.facades.canopen_sdo`).
 
 A kind that declares itself a drive (``Device.drive``) also gets the CiA 402 objects and state
 machine (:mod:`devsim.facades.cia402`): controlword 6040h, statusword 6041h, profile position and
-profile velocity modes, 6064h/606Ch/60F4h; a fault the model announces (topic ``fault``) sends an
+profile velocity modes (with 606Dh … 6070h, the velocity window and threshold), 6064h/606Ch/60F4h; a fault the model announces (topic ``fault``) sends an
 EMCY message.  Hosts in other processes reach the nodes through
 :class:`devsim.transports.socketcand.SocketcandServer` (:func:`start_canopen`, ``devsim run
 --canopen``).  PDOs: what the master maps into 1600h/1A00h and enables; TPDOs go out on SYNC
@@ -66,7 +66,7 @@ class CanopenFacade:
         self.device, self.call = device, call
         self.od = load_od(eds(device.kind, device.description, device.points, drive=device.drive is not None),
                           node_id)
-        self.drive = Cia402(device.drive, device.model) if device.drive is not None else None
+        self.drive = Cia402(device.drive, device.model, device.clock) if device.drive is not None else None
         self._unlisten = device.model.listen("fault", self._emergency)
         self._unlisten_power = device.model.listen("power_on", self._power_on)
         self._pdos_on = False
@@ -294,6 +294,8 @@ class CanopenFacade:
         self._unlisten()
         self._unlisten_power()
         self.call(self._cancel_timers)
+        if self.drive is not None:
+            self.call(self.drive.watch.cancel)
 
     def _read(self, index: int, subindex: int, od: Any) -> Any:
         if self.drive is not None and index in DRIVE_READS:
@@ -417,6 +419,10 @@ DRIVE_READS: dict[int, Callable[[Cia402], int]] = {
     0x6061: lambda d: d.mode,
     0x6064: lambda d: round(d.actions.position(d.model)),
     0x606C: lambda d: round(d.actions.velocity(d.model)),
+    0x606D: lambda d: d.watch.window,
+    0x606E: lambda d: d.watch.window_time,
+    0x606F: lambda d: d.watch.threshold,
+    0x6070: lambda d: d.watch.threshold_time,
     0x607A: lambda d: d.target_position,
     0x6081: lambda d: d.profile_velocity,
     0x60F4: lambda d: round(d.actions.following_error(d.model)),
@@ -431,6 +437,10 @@ DRIVE_WRITES: dict[int, Callable[[Cia402, Any], None]] = {
     0x6060: lambda d, v: d.write_mode(int(v)),
     0x607A: lambda d, v: setattr(d, "target_position", int(v)),
     0x6081: lambda d, v: setattr(d, "profile_velocity", int(v)),
+    0x606D: lambda d, v: d.watch.set("window", v),
+    0x606E: lambda d, v: d.watch.set("window_time", v),
+    0x606F: lambda d, v: d.watch.set("threshold", v),
+    0x6070: lambda d, v: d.watch.set("threshold_time", v),
     0x60FF: Cia402.write_target_velocity,
 }
 """Writing the CiA 402 objects."""

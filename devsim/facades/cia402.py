@@ -7,13 +7,15 @@ position, velocity, enable, fault and motion.  :class:`Cia402` keeps the state t
 (6040h) drives and composes the statusword (6041h); in profile position mode (6060h = 1) a rising
 "new set-point" bit (4) starts a move to the target position (607Ah, bit 6: relative) at the
 profile velocity (6081h), bit 8 (halt) stops it with the ramp and holds new set-points back; in
-profile velocity mode (3) the target velocity (60FFh) runs the axis.
+profile velocity mode (3) the target velocity (60FFh) runs the axis, and the statusword's bits 10
+(target reached) and 12 (speed) are the velocity supervision's of
+:mod:`devsim.facades.cia402_velocity` (606Dh … 6070h) over the drive's actual velocity.
 The modes a drive supports (6502h, CiA 402-2) are those whose drive action the kind declares
 (:data:`MODES`); writing another mode into 6060h is refused (``ValueError``), so 6061h only ever
 shows a supported one.  :meth:`Cia402.reset` is the application part of an NMT reset node (CiA 301,
 the NMT state machine's "reset application" sub-state): the power-on values of :data:`DEFAULTS`, the drive disabled, Switch on disabled.
-Pure but for the count of changes it keeps (:mod:`devsim.core.changes`): the node calls it and it calls
-the actions.
+Pure but for the count of changes it keeps (:mod:`devsim.core.changes`) and the velocity
+supervision's looks on the device ``clock``: the node calls it and it calls the actions.
 """
 
 from __future__ import annotations
@@ -21,7 +23,9 @@ from __future__ import annotations
 from typing import Any
 
 from devsim.core.changes import CHANGES
+from devsim.core.clock import VirtualClock
 from devsim.core.kit import DriveActions
+from devsim.facades.cia402_velocity import VelocityWatch
 
 __all__ = ["Cia402", "DEFAULTS", "DriveActions", "MODES", "STATES", "TRANSITIONS", "command"]
 
@@ -43,9 +47,11 @@ PROFILE_POSITION, PROFILE_VELOCITY = 1, 3
 MODES = {PROFILE_POSITION: ("move_to", 0), PROFILE_VELOCITY: ("jog", 2)}
 
 #: The power-on values of the 402 objects a master writes (the EDS's DefaultValue; CiA 301: an NMT
-#: reset node restores the application objects' power-on values).
+#: reset node restores the application objects' power-on values).  The velocity window and
+#: threshold (606Dh, 606Fh) are in the drive's velocity units, their times (606Eh, 6070h) in ms.
 DEFAULTS = {"controlword": 0, "mode": PROFILE_POSITION, "target_position": 0, "profile_velocity": 1000,
-            "target_velocity": 0}
+            "target_velocity": 0, "velocity_window": 100, "velocity_window_time": 0, "velocity_threshold": 10,
+            "velocity_threshold_time": 0}
 
 
 def command(word: int) -> str:
@@ -88,10 +94,12 @@ TRANSITIONS = {
 
 
 class Cia402:
-    """One axis's 402 state, driving ``actions`` on ``model``."""
+    """One axis's 402 state, driving ``actions`` on ``model``; the velocity supervision looks on
+    ``clock`` (the device's; without one, a clock that stands still)."""
 
-    def __init__(self, actions: DriveActions, model: Any) -> None:
+    def __init__(self, actions: DriveActions, model: Any, clock: Any = None) -> None:
         self.actions, self.model = actions, model
+        self.watch = VelocityWatch(clock if clock is not None else VirtualClock(), self._velocities, DEFAULTS)
         self._power_on()
 
     def _power_on(self) -> None:
@@ -101,6 +109,15 @@ class Cia402:
         self.target_velocity = DEFAULTS["target_velocity"]
         self.setpoint_ack = False
         self.error_code = 0  # the EMCY code of the last fault the drive announced (603Fh)
+        self.watch.reset()
+
+    def _velocities(self) -> tuple[float, float] | None:
+        """In profile velocity mode: the drive's velocity and the velocity demanded, the target
+        velocity in Operation enabled unless halted (bit 8), else 0 (the axis is stopped)."""
+        if self.mode != PROFILE_VELOCITY:
+            return None
+        running = self.state == "operation_enabled" and not self.controlword & 0x100
+        return self.actions.velocity(self.model), float(self.target_velocity if running else 0)
 
     # -- the error objects (603Fh, CiA 402-2; 1001h, CiA 301) -------------------------------------------
     def in_fault(self) -> bool:
@@ -130,6 +147,7 @@ class Cia402:
         if action_bit is None or not self.supported_modes >> action_bit[1] & 1:
             raise ValueError(f"mode of operation {mode} is not supported")
         self.mode = mode
+        self.watch.look(command=True)
 
     # -- NMT reset node (CiA 301, reset application) ----------------------------------------------------------
     def reset(self) -> None:
@@ -159,6 +177,7 @@ class Cia402:
             self._go(state)
         if self.state == "operation_enabled":
             self._profile(before, word)
+        self.watch.look(command=True)
 
     def _go(self, state: str) -> None:
         if state == self.state:
@@ -194,6 +213,7 @@ class Cia402:
         if self.state == "operation_enabled" and self.mode == PROFILE_VELOCITY and not self.controlword & 0x100:
             CHANGES.count += 1  # (the drive actions change the model: a door, devsim.core.changes)
             self.actions.jog(self.model, float(value))
+        self.watch.look(command=True)
 
     # -- statusword (6041h) ------------------------------------------------------------------------
     @property
@@ -208,8 +228,10 @@ class Cia402:
             self.actions.enable(self.model, False)
             self.state = "switch_on_disabled"
         word = STATES[self.state] | 0x0200  # bit 9: remote
+        if self.mode == PROFILE_VELOCITY:
+            return word | self.watch.bits()  # bits 10 (target reached) and 12 (speed)
         if not a.moving(self.model):
             word |= 0x0400  # bit 10: target reached
         if self.setpoint_ack:
-            word |= 0x1000
+            word |= 0x1000  # bit 12: set-point acknowledge
         return word

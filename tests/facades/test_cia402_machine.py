@@ -239,7 +239,8 @@ def test_a_new_set_point_outside_operation_enabled_or_in_another_mode_moves_noth
     machine.write_mode(PROFILE_VELOCITY)
     machine.target_velocity = 0
     machine.write_controlword(0x1F)
-    assert [c[0] for c in motor.calls] == ["jog"] and not machine.statusword & 0x1000
+    assert [c[0] for c in motor.calls] == ["jog"] and not machine.setpoint_ack
+    assert machine.statusword & 0x1000  # (bit 12 in profile velocity mode: speed is 0)
 
 
 def test_entering_operation_enabled_with_bit_4_set_starts_the_move() -> None:
@@ -303,13 +304,18 @@ def test_power_on_values_and_the_reset_of_the_application() -> None:
     assert (machine.controlword, machine.mode, machine.target_position, machine.profile_velocity,
             machine.target_velocity, machine.setpoint_ack) == (0, 1, 0, 1000, 0, False)
     assert DEFAULTS == {"controlword": 0, "mode": 1, "target_position": 0, "profile_velocity": 1000,
-                        "target_velocity": 0}
+                        "target_velocity": 0, "velocity_window": 100, "velocity_window_time": 0,
+                        "velocity_threshold": 10, "velocity_threshold_time": 0}
     machine, motor = drive_in(ENABLED)
     machine.target_position, machine.profile_velocity, machine.target_velocity = 5, 6, 7
     machine.write_controlword(0x1F)
     machine.write_mode(PROFILE_VELOCITY)
+    for name in ("window", "window_time", "threshold", "threshold_time"):
+        machine.watch.set(name, 7)
     assert machine.setpoint_ack
     machine.reset()
+    watch = machine.watch
+    assert (watch.window, watch.window_time, watch.threshold, watch.threshold_time) == (100, 0, 10, 0)
     assert ("enable", False) in motor.calls and not motor.enabled
     assert state_of(machine) == SOD
     assert (machine.controlword, machine.mode, machine.target_position, machine.profile_velocity,

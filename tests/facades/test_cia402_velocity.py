@@ -1,0 +1,190 @@
+"""The statusword in profile velocity mode (CiA 402-2, profile velocity mode: bit 10 "target
+reached", bit 12 "speed") and the objects that define it, 606Dh velocity window, 606Eh velocity
+window time, 606Fh velocity threshold and 6070h velocity threshold time, checked with canopen as
+the master on python-can's virtual bus (virtual time).  The standard's definitions, as the oracle
+here: bit 10 (halt = 0) is 1 once the velocity actual value (606Ch) has stayed within the velocity
+window of the target velocity (60FFh) for the velocity window time, (halt = 1) once the axis has
+stayed within the window of velocity 0 that long; bit 12 is 0 ("speed is not 0") once the velocity
+actual value has stayed above the velocity threshold for the velocity threshold time, else 1
+("speed is 0")."""
+
+from __future__ import annotations
+
+import math
+import queue
+from collections.abc import Callable, Iterator
+
+import pytest
+
+from tests.facades.test_cia402 import Drive, enable, mapped
+from tests.facades.test_cia402_contract import DRIVES
+
+TARGET_REACHED, SPEED_IS_0 = 0x0400, 0x1000
+STEP = 0.001  # s: the test's own look at the drive's velocity
+
+
+@pytest.fixture
+def drive() -> Iterator[Drive]:
+    d = Drive()
+    try:
+        yield d
+    finally:
+        d.close()
+
+
+def actual(drive: Drive) -> int:
+    """The velocity actual value as 606Ch shows it, read from the kind's model (no bus)."""
+    return round(drive.runtime.call(drive.device.drive.velocity, drive.device.model))
+
+
+def scan(drive: Drive, holds: Callable[[int], bool], timeout: float) -> float:
+    """Step virtual time by ``STEP`` until ``holds(velocity actual value)``; the time it first holds."""
+    end = drive.runtime.now() + timeout
+    while not holds(actual(drive)):
+        assert drive.runtime.now() < end, "the velocity never got there"
+        drive.runtime.advance(STEP)
+    return drive.runtime.now()
+
+
+def walk(drive: Drive, seconds: float, demand: int, windows: tuple[int, float, int, float],
+         read: Callable[[], int], slack: float = 0.002, running: bool = False) -> list[set[int]]:
+    """Step ``seconds`` of virtual time by ``STEP`` from a command that changed the ``demand`` (the
+    axis ``running`` above the threshold for long before it, or standing); at
+    every step compare bits 10 and 12 of ``read()`` with the standard's definition over the test's
+    own look at the velocity (``windows``: 606Dh, 606Eh in s, 606Fh, 6070h in s).  They may differ
+    only within ``slack`` of the command or of a change of the definition's value.  The values each
+    bit took."""
+    window, window_time, threshold, threshold_time = windows
+    inside: float | None = None
+    above: float | None = -math.inf if running else None
+    rows = []
+    for _ in range(round(seconds / STEP)):
+        now, velocity = drive.runtime.now(), actual(drive)
+        inside = (now if inside is None else inside) if abs(velocity - demand) <= window else None
+        above = (now if above is None else above) if abs(velocity) > threshold else None
+        expected = TARGET_REACHED if inside is not None and now - inside >= window_time - 1e-9 else 0
+        if above is None or now - above < threshold_time - 1e-9:
+            expected |= SPEED_IS_0
+        rows.append((now, expected, read() & (TARGET_REACHED | SPEED_IS_0)))
+        drive.runtime.advance(STEP)
+    for now, expected, seen in rows:
+        if seen != expected and now - rows[0][0] > slack + 1e-9:
+            near = {e for t, e, _ in rows if abs(t - now) <= slack + 1e-9}
+            assert len(near) > 1, (round(now, 4), hex(expected), hex(seen))
+    return [{e & bit for _, e, _ in rows} for bit in (TARGET_REACHED, SPEED_IS_0)]
+
+
+def test_the_velocity_objects_over_sdo(drive: Drive) -> None:
+    """606Dh … 6070h: UNSIGNED16, rw, their EDS default as power-on value, kept as written."""
+    node = drive.node
+    for index in (0x606D, 0x606E, 0x606F, 0x6070):
+        entry = node.object_dictionary[index]
+        assert entry.data_type == 0x0006 and entry.writable and entry.readable and entry.pdo_mappable
+        assert node.sdo[index].raw == entry.default
+    for index, value in ((0x606D, 50), (0x606E, 200), (0x606F, 30), (0x6070, 100)):
+        node.sdo[index].raw = value
+        assert node.sdo[index].raw == value
+
+
+def test_target_reached_and_speed_follow_the_windows_and_their_times(drive: Drive) -> None:
+    """The PCD4.H3's axis 1 runs up to 2 000 counts/s and stops again, its servo ringing around the
+    velocity (±75 counts/s): at every millisecond bit 10 is 1 when 606Ch has stayed within the
+    velocity window of the target for the window time, bit 12 is 0 when it has stayed above the
+    threshold for the threshold time, else 1 (at once, as soon as it is below it)."""
+    enable(drive)
+    node = drive.node
+    node.sdo[0x6060].raw = 3  # profile velocity
+    windows = (100, 0.200, 30, 0.100)
+    window, window_time, threshold, threshold_time = windows
+    node.sdo[0x606D].raw, node.sdo[0x606E].raw = window, round(window_time * 1000)
+    node.sdo[0x606F].raw, node.sdo[0x6070].raw = threshold, round(threshold_time * 1000)
+    drive.runtime.advance(window_time)
+    assert drive.status & (TARGET_REACHED | SPEED_IS_0) == TARGET_REACHED | SPEED_IS_0  # at 0, target 0
+    node.sdo[0x60FF].raw = 2000
+    assert walk(drive, 1.5, 2000, windows, lambda: drive.status) == [{0, TARGET_REACHED}, {0, SPEED_IS_0}]
+    assert drive.status & (TARGET_REACHED | SPEED_IS_0) == TARGET_REACHED  # running at the target velocity
+    node.sdo[0x60FF].raw = 0
+    assert drive.status & (TARGET_REACHED | SPEED_IS_0) == 0  # a new target: not reached, and still running
+    assert walk(drive, 1.0, 0, windows, lambda: drive.status, running=True) == [{0, TARGET_REACHED}, {0, SPEED_IS_0}]
+    assert drive.status & TARGET_REACHED
+
+
+def test_with_halt_target_reached_is_the_axis_standing(drive: Drive) -> None:
+    """Halt (controlword bit 8) in profile velocity mode: bit 10 is 0 while the axis decelerates and
+    1 once its velocity is 0 (within the velocity window of 0 for the window time)."""
+    enable(drive)
+    node = drive.node
+    node.sdo[0x6060].raw = 3
+    node.sdo[0x606D].raw, node.sdo[0x606E].raw = 20, 0
+    node.sdo[0x60FF].raw = 2000
+    drive.runtime.advance(2.0)
+    assert drive.status & TARGET_REACHED
+    drive.control(0x010F)  # halt
+    assert not drive.status & TARGET_REACHED  # the axis decelerates
+    scan(drive, lambda v: abs(v) <= 20, 5.0)
+    assert drive.status & TARGET_REACHED
+    drive.control(0x000F)  # halt released: the target velocity again
+    assert not drive.status & TARGET_REACHED
+
+
+def test_the_statusword_over_tpdos_shows_target_reached_when_it_is(drive: Drive) -> None:
+    """TPDO1 = statusword on every SYNC and TPDO2 = statusword on change (type 255, looked at every
+    10 ms): with no SDO read of the statusword, each carries bits 10 and 12 as the standard defines
+    them, run up and stop."""
+    enable(drive)
+    node = drive.node
+    node.sdo[0x6060].raw = 3
+    windows = (100, 0.300, 10, 0.050)
+    node.sdo[0x606D].raw, node.sdo[0x606E].raw, node.sdo[0x606F].raw, node.sdo[0x6070].raw = 100, 300, 10, 50
+    node.tpdo.read()
+    on_sync = mapped(node.tpdo[1], 0x6041, trans_type=1)
+    on_change = mapped(node.tpdo[2], 0x6041, trans_type=255)
+    node.tpdo.save()
+    synced: queue.Queue[int] = queue.Queue()
+    changed: list[int] = []
+    on_sync.add_callback(lambda m: synced.put(m["Statusword"].raw))
+    on_change.add_callback(lambda m: changed.append(m["Statusword"].raw))
+    node.nmt.state = "OPERATIONAL"
+
+    def sync() -> int:
+        drive.master.sync.transmit()
+        return synced.get(timeout=5)
+
+    def last_change() -> int:
+        assert node.sdo[0x1017].raw == 0  # (a round trip: the TPDOs sent before it have arrived)
+        return changed[-1]
+
+    for read, slack in ((sync, 0.002), (last_change, 0.012)):
+        for target in (2000, 0):
+            node.sdo[0x60FF].raw = target
+            assert walk(drive, 1.0, target, windows, read, slack, running=target == 0) == [
+                {0, TARGET_REACHED}, {0, SPEED_IS_0}]
+        drive.runtime.advance(1.0)
+
+
+@pytest.mark.parametrize("kind", DRIVES)
+def test_every_drive_shows_its_own_velocity_against_the_target(kind: str) -> None:
+    """For every kind that is a drive: in profile velocity mode, run up, run, stop, bits 10 and 12
+    are what 606Ch against 60FFh, 606Dh and 606Fh make them (the times 0), as the master reads them
+    (at one virtual instant, so 606Ch and 6041h see the same axis)."""
+    drive = Drive(kind, 9, name=kind, ready=True)
+    node = drive.node
+    try:
+        for word in (0x06, 0x07, 0x0F):
+            node.sdo[0x6040].raw = word
+        node.sdo[0x6060].raw = 3
+        node.sdo[0x606D].raw, node.sdo[0x606E].raw, node.sdo[0x606F].raw, node.sdo[0x6070].raw = 20, 0, 10, 0
+        assert node.sdo[0x6041].raw & (TARGET_REACHED | SPEED_IS_0) == TARGET_REACHED | SPEED_IS_0  # standing
+        seen = set()
+        for target in (2000, -1500, 0):
+            node.sdo[0x60FF].raw = target
+            for _ in range(12):
+                drive.runtime.advance(0.25)
+                velocity, status = node.sdo[0x606C].raw, node.sdo[0x6041].raw
+                reached, standing = abs(velocity - target) <= 20, abs(velocity) <= 10
+                assert bool(status & TARGET_REACHED) == reached, (kind, target, velocity, hex(status))
+                assert bool(status & SPEED_IS_0) == standing, (kind, target, velocity, hex(status))
+                seen.add(standing)
+        assert False in seen, kind  # (the axis ran)
+    finally:
+        drive.close()
