@@ -4,6 +4,7 @@ declared points (:mod:`devsim.core.points`) and, for drive profiles, its declare
 
 * :mod:`devsim.facades.modbus_map` – the Modbus register map a kind's points give (pure);
 * :mod:`devsim.facades.modbus_pdu` – the Modbus application layer: one table of function codes (pure);
+* :mod:`devsim.facades.modbus_ident` – Read Device Identification's objects and responses (pure);
 * :mod:`devsim.facades.modbus` – serving it (extra ``devsim-motion[modbus]``): Modbus TCP, and Modbus
   RTU on any devsim serial transport (a pty, raw TCP, RFC 2217);
 * :mod:`devsim.facades.canopen_od` – the CANopen EDS of a kind (pure);

@@ -24,10 +24,11 @@ from typing import Any
 
 from pymodbus.framer import FramerRTU
 
+import devsim
 from devsim.core.device import Device, SerialSettings
 from devsim.core.kit import CaptureTag
 from devsim.core.points import BadValue, ReadOnlyName
-from devsim.facades import modbus_pdu
+from devsim.facades import modbus_ident, modbus_pdu
 from devsim.facades.modbus_map import ModbusMap, from_words, to_words
 from devsim.facades.modbus_pdu import ILLEGAL_ADDRESS, ILLEGAL_VALUE, Refused
 from devsim.transports.hosts import DEFAULT_IDLE_DROP, admit, dropped, listen_backlog, refuse
@@ -66,6 +67,12 @@ class ModbusFacade:
     def answer(self, pdu: bytes) -> bytes:
         """The response PDU to a request PDU (Application Protocol §6, §7)."""
         return modbus_pdu.answer(self, pdu)
+
+    def identification(self) -> dict[int, bytes]:
+        """The Read Device Identification objects (Application Protocol §6.21): devsim, the
+        kind, devsim's version, the kind's description, the device's name (:mod:`modbus_ident`)."""
+        return modbus_ident.identification(self.device.kind, type(self.device).description, self.device.name,
+                                           devsim.__version__)
 
     def read_bits(self, table: str, address: int, count: int) -> list[bool]:
         entries = [self._entry(table, address + i) for i in range(count)]
@@ -297,11 +304,12 @@ class ModbusRtuEndpoint:
     @staticmethod
     def _frame_size(data: bytes) -> int | None:
         """How long the frame starting at ``data`` is (0: not known yet), or None if no request
-        starts here.  A function the table knows gives its length; for any other code the frame
-        ends where its CRC first holds (it is answered with exception 01)."""
+        starts here.  A function the table knows gives its length; for any other code (and
+        function 43 with another MEI type) the frame ends where its CRC first holds (it is
+        answered with exception 01)."""
         function = modbus_pdu.FUNCTIONS.get(data[1])
-        if function is not None:
-            return function.rtu_length(data)
+        if function is not None and (length := function.rtu_length(data)) != modbus_pdu.CRC_ENDED:
+            return length
         size = _crc_end(data[:MAX_PDU + 3])
         if size is None:
             return 0 if len(data) < MAX_PDU + 3 else None
@@ -317,7 +325,7 @@ class ModbusRtuEndpoint:
             if function is None:
                 continue
             size = function.rtu_length(data[start:])
-            if size and start + size <= len(data) and _crc_ok(data[start:start + size]):
+            if size > 0 and start + size <= len(data) and _crc_ok(data[start:start + size]):
                 return start
         return None
 

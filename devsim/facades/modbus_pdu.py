@@ -7,7 +7,8 @@ section, answers a request and says how long its RTU frame is.  A code not in th
 exception 01 (§7).  Every answer follows the state diagrams of §6: the quantity and the length the
 request implies are checked first (exception 03), then every address it touches (02), then the
 device acts (03 if it refuses a value, 04 if it fails).  An exception response repeats the
-request's function code with its high bit set (§7: ``83 02``, ``D5 01``).
+request's function code with its high bit set (§7: ``83 02``, ``D5 01``).  Function 43 answers
+Read Device Identification (§6.21, MEI type 14) from :mod:`devsim.facades.modbus_ident`'s objects.
 
 Pure: no I/O; the device is reached through a :class:`Tables` (the facade).
 """
@@ -15,13 +16,15 @@ Pure: no I/O; the device is reached through a :class:`Tables` (the facade).
 from __future__ import annotations
 
 import struct
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from functools import partial
 from typing import Protocol
 
 import msgspec
 
-__all__ = ["DEVICE_FAILURE", "FUNCTIONS", "ILLEGAL_ADDRESS", "ILLEGAL_FUNCTION", "ILLEGAL_VALUE", "Function",
+from devsim.facades import modbus_ident
+
+__all__ = ["CRC_ENDED", "DEVICE_FAILURE", "FUNCTIONS", "ILLEGAL_ADDRESS", "ILLEGAL_FUNCTION", "ILLEGAL_VALUE", "Function",
            "Refused", "Tables", "answer", "exception"]
 
 #: §7, the exception codes the facade answers with.
@@ -30,6 +33,9 @@ ILLEGAL_FUNCTION, ILLEGAL_ADDRESS, ILLEGAL_VALUE, DEVICE_FAILURE = 1, 2, 3, 4
 MAX_READ_BITS, MAX_READ_WORDS, MAX_WRITE_BITS, MAX_WRITE_WORDS, MAX_READ_WRITE_WORDS = 2000, 125, 1968, 123, 121
 #: §6.5: the only two values of Write Single Coil.
 COIL_ON, COIL_OFF = 0xFF00, 0x0000
+#: An RTU frame length that says: not this function's own frame (function 43 with an MEI type
+#: other than 14): it ends where its CRC first holds, as an unknown function's.
+CRC_ENDED = -1
 
 
 class Refused(Exception):
@@ -52,6 +58,10 @@ class Tables(Protocol):
 
     def write_words(self, address: int, values: Sequence[int]) -> None: ...
 
+    def identification(self) -> Mapping[int, bytes]:
+        """The Read Device Identification objects (§6.21): object id -> its value."""
+        ...
+
 
 class Function(msgspec.Struct, frozen=True):
     """One public function code (§6): its name, section, answer and RTU request length."""
@@ -59,7 +69,7 @@ class Function(msgspec.Struct, frozen=True):
     name: str
     section: str
     answer: Callable[[Tables, bytes], bytes]  # the request's data (after the code) -> the response's
-    rtu_length: Callable[[bytes], int]  # an RTU frame's first bytes -> its length (0: not known yet)
+    rtu_length: Callable[[bytes], int]  # an RTU frame's first bytes -> its length (0: not known yet; CRC_ENDED)
 
 
 def exception(function: int, code: int) -> bytes:
@@ -191,6 +201,34 @@ def _read_write_registers(tables: Tables, data: bytes) -> bytes:
     return _words(tables.read_words("holding", read_address, read_quantity))
 
 
+def _read_device_identification(tables: Tables, data: bytes) -> bytes:
+    """§6.21, function 43 with MEI type 14: ``0E code object``.  Another MEI type is a function
+    the facade does not have (01: 13 is the CANopen General Reference, §6.20, the others are
+    reserved); a request of another length 03; "an exception code 03 is sent back in the response
+    if the Read Device ID code is illegal"; with code 04, an object that is not there 02 ("if the
+    Object Id doesn't match to any known object, the server returns an exception response with
+    exception code = 02"); a stream from an object that is not there starts at object 0."""
+    if data[:1] and data[0] != modbus_ident.READ_DEVICE_ID:
+        raise Refused(ILLEGAL_FUNCTION)
+    if len(data) != 3 or data[1] not in modbus_ident.CODES:
+        raise Refused(ILLEGAL_VALUE)
+    code, first = data[1], data[2]
+    objects = tables.identification()
+    if code != modbus_ident.SPECIFIC:
+        return modbus_ident.stream(objects, code, first)
+    if first not in objects:
+        raise Refused(ILLEGAL_ADDRESS)
+    return modbus_ident.individual(objects, first)
+
+
+def _mei_length(frame: bytes) -> int:
+    """Function 43's RTU request: address, 2B, 0E, code, object, CRC; another MEI type's frame
+    is cut where its CRC holds."""
+    if len(frame) < 3:
+        return 0
+    return 7 if frame[2] == modbus_ident.READ_DEVICE_ID else CRC_ENDED
+
+
 def _fixed(length: int, frame: bytes) -> int:
     return length
 
@@ -210,4 +248,5 @@ FUNCTIONS: dict[int, Function] = {
     0x0F: Function("Write Multiple Coils", "§6.11", _write_coils, partial(_counted, 6)),
     0x10: Function("Write Multiple Registers", "§6.12", _write_registers, partial(_counted, 6)),
     0x17: Function("Read/Write Multiple Registers", "§6.17", _read_write_registers, partial(_counted, 10)),
+    0x2B: Function("Read Device Identification", "§6.21", _read_device_identification, _mei_length),
 }

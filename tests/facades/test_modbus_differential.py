@@ -48,7 +48,9 @@ QUANTITIES: dict[int, list[tuple[int, int]]] = {
 
 
 #: The functions the facade implements (docs/facades/modbus.md); every other code is unknown to it.
-FUNCTIONS = frozenset((1, 2, 3, 4, 5, 6, 15, 16, 23))
+#: (43, Read Device Identification, is not compared: the bare server has pymodbus's identity, not
+#: the device's; tests/facades/test_modbus_ident.py checks it against §6.21.)
+FUNCTIONS = frozenset((1, 2, 3, 4, 5, 6, 15, 16, 23, 43))
 
 
 def exception(pdu: bytes, code: int) -> bytes:
@@ -57,7 +59,7 @@ def exception(pdu: bytes, code: int) -> bytes:
 
 def unknown_function(pdu: bytes, sizes: dict[str, int]) -> bytes | None:
     """§7 code 01 with the function code plus 80h (§4.2): pymodbus answers ``80 01`` to a code it
-    does not know, and answers codes the facade does not implement (08, 2B …), which a server may
+    does not know, and answers codes the facade does not implement (08, 14h …), which a server may
     leave out (§6: "an implementation" supports a subset)."""
     return exception(pdu, 1) if pdu[0] not in FUNCTIONS else None
 
