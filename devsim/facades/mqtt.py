@@ -166,7 +166,14 @@ class _SparkplugPlant:
         """A DCMD or NCMD: a refusal (a payload that is not Sparkplug B, a metric the device
         refuses) goes to the device's ``…/error`` topic; the node's (NCMD, a device it does not
         have) to the plant's ``devsim/<plant>/error``."""
-        from devsim.facades.mqtt_sparkplug import REBIRTH, command_request, decode_command
+        from devsim.facades.mqtt_sparkplug import (
+            REBIRTH,
+            T,
+            birth_datatype,
+            command_request,
+            command_value,
+            decode_metrics,
+        )
 
         try:
             name = self.node.command_target(topic)
@@ -176,22 +183,25 @@ class _SparkplugPlant:
         try:
             if name is not None and device is None:
                 raise KeyError(f"node {self.plant!r} has no device {name!r}")
-            metrics = decode_command(payload)
+            metrics = decode_metrics(payload)
+            # an NCMD's Node Control/Rebirth is the NBIRTH's Boolean (read as one when it has no datatype)
+            rebirth = device is None and any(command_value(m, T.Boolean) for m in metrics if m.name == REBIRTH)
         except (KeyError, ValueError) as exc:
             self._refused(device, topic, exc)
             return
-        if device is None:  # NCMD
-            if any(metric == REBIRTH and value for metric, value in metrics):
+        if device is None:
+            if rebirth:
                 self.stop()
                 self._births()
             return
-        for metric, value in metrics:
+        for metric in metrics:
             try:
-                request = command_request(device, metric, value)
+                value = command_value(metric, birth_datatype(device, metric.name))
+                request = command_request(device, metric.name, value)
                 if request is not None:
                     run(self.runtime, request)
             except Exception as exc:
-                self._refused(device, f"{topic}#{metric}", exc)
+                self._refused(device, f"{topic}#{metric.name}", exc)
         self.watches[device.name].sample()
 
     def _refused(self, device: Device | None, topic: str, exc: BaseException) -> None:

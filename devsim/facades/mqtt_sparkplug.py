@@ -12,8 +12,13 @@ and json → String) and, as writable command metrics, ``Device Control/Power Cy
 ``seq`` (0 … 255, wrapping); NDEATH's ``bdSeq`` matches the NBIRTH of the same session.  DCMD
 metrics are set through the device's own validation (a command that is not a Sparkplug B
 payload is refused like a metric the device refuses); NCMD ``Node Control/Rebirth`` sends the
-births again.  Tahu's helper keeps sequence numbers in module globals; here they live in
-:class:`SparkplugNode`, one per session, and only its stateless ``addMetric`` is used.
+births again.  A command metric without a datatype (§6.4.6: "The datatype SHOULD NOT be included
+with metric definitions in NDATA, NCMD, DDATA, and DCMD messages") is read as its birth's; one
+whose datatype is not its birth's, or whose value is not in its datatype's field, is refused
+(§5, tck-id-operational-behavior-data-commands-dcmd-metric-value: "A DCMD message MUST include a
+compatible metric value for the metric name that it is writing to").  Tahu's helper keeps
+sequence numbers in module globals; here they live in :class:`SparkplugNode`, one per session,
+and only its stateless ``addMetric`` is used.
 """
 
 from __future__ import annotations
@@ -29,7 +34,8 @@ from devsim.core.device import Device
 from devsim.core.points import Point
 from devsim.runtime import requests as rq
 
-__all__ = ["DATATYPES", "GROUP", "NAMESPACE", "SparkplugNode", "command_request", "decode_command", "metric_value"]
+__all__ = ["DATATYPES", "GROUP", "NAMESPACE", "SparkplugNode", "birth_datatype", "command_request", "command_value",
+           "decode_command", "decode_metrics", "metric_value"]
 
 NAMESPACE = "spBv1.0"
 GROUP = "devsim"
@@ -46,17 +52,29 @@ _FIELD = {T.Int8: "int_value", T.Int16: "int_value", T.Int32: "int_value", T.UIn
           T.UInt16: "int_value", T.UInt32: "int_value", T.Int64: "long_value", T.UInt64: "long_value",
           T.DateTime: "long_value", T.Float: "float_value", T.Double: "double_value",
           T.Boolean: "boolean_value", T.String: "string_value", T.Text: "string_value", T.UUID: "string_value"}
+_NAMES = {getattr(T, name): name for name in dir(T) if not name.startswith("_")}
+#: A birth's datatype → the datatypes a command's value for it may have (the same kind of value).
+_COMPATIBLE = {T.Boolean: {T.Boolean}, T.Int64: {*_SIGNED, T.UInt8, T.UInt16, T.UInt32, T.UInt64},
+               T.Double: {T.Float, T.Double}, T.String: {T.String, T.Text}}
 
 
-def metric_value(metric: Any) -> Any:
-    """A received metric's value (signed integers from their two's complement), None when null."""
+def metric_value(metric: Any, datatype: int | None = None) -> Any:
+    """A received metric's value (signed integers from their two's complement), None when null;
+    read as ``datatype`` when given (a command metric without one), else as its own.  ValueError
+    when the value is not in the field its datatype names."""
+    if datatype is None:
+        datatype = metric.datatype
     if metric.is_null:
         return None
-    name = _FIELD.get(metric.datatype)
+    name = _FIELD.get(datatype)
     if name is None:
-        raise ValueError(f"metric {metric.name!r}: datatype {metric.datatype} is not supported")
+        raise ValueError(f"metric {metric.name!r}: datatype {datatype} is not supported")
+    held = metric.WhichOneof("value")
+    if held != name:
+        raise ValueError(f"metric {metric.name!r}: datatype {_NAMES[datatype]}, but its value is "
+                         f"{'a ' + held if held else 'missing'}")
     value = getattr(metric, name)
-    bits = _SIGNED.get(metric.datatype)
+    bits = _SIGNED.get(datatype)
     if bits is not None and value >= 1 << (bits - 1):
         value -= 1 << bits
     return value
@@ -147,9 +165,9 @@ class SparkplugNode:
         raise ValueError(f"not a command topic of node {self.plant!r}: {topic!r}")
 
 
-def decode_command(data: bytes) -> list[tuple[str, Any]]:
-    """The (metric, value) pairs of a DCMD/NCMD payload (Sparkplug B 3.0 ch. 6, Payloads: a
-    protobuf ``Payload``); ValueError when the bytes are not one (not protobuf, fields the Sparkplug B
+def decode_metrics(data: bytes) -> list[Any]:
+    """The metrics of a DCMD/NCMD payload (Sparkplug B 3.0 ch. 6, Payloads: a protobuf
+    ``Payload``); ValueError when the bytes are not one (not protobuf, fields the Sparkplug B
     schema does not have) or carry no metric."""
     payload = tahu.Payload()
     try:
@@ -162,7 +180,35 @@ def decode_command(data: bytes) -> list[tuple[str, Any]]:
         raise ValueError("not a Sparkplug B payload: fields its schema does not have")
     if not payload.metrics:
         raise ValueError("a Sparkplug B command without metrics")
-    return [(m.name, metric_value(m)) for m in payload.metrics]
+    return list(payload.metrics)
+
+
+def decode_command(data: bytes) -> list[tuple[str, Any]]:
+    """The (metric, value) pairs of a DCMD/NCMD payload whose metrics carry their datatypes."""
+    return [(m.name, metric_value(m)) for m in decode_metrics(data)]
+
+
+def birth_datatype(device: Device, name: str) -> int | None:
+    """The datatype the device's DBIRTH gives metric ``name``; None for a name it does not have."""
+    if name == POWER_CYCLE or (name.startswith(FAULT) and name[len(FAULT):] in device.faults.names()):
+        return T.Boolean
+    point = device.points.find(name)
+    return DATATYPES[point.type] if point is not None else None
+
+
+def command_value(metric: Any, birth: int | None) -> Any:
+    """A command metric's value, as its birth's datatype ``birth`` (None: a name no birth has)
+    when it carries none (§6.4.6); ValueError when it has neither, when its datatype is not of the
+    birth's kind (an integer for Int64, Float or Double for Double, String or Text for String),
+    or when its value is not in its datatype's field (§5,
+    tck-id-operational-behavior-data-commands-dcmd-metric-value)."""
+    datatype = metric.datatype if metric.HasField("datatype") else birth
+    if datatype is None:
+        raise ValueError(f"metric {metric.name!r}: no datatype, and no birth names one")
+    if birth is not None and datatype not in _COMPATIBLE[birth]:
+        raise ValueError(f"metric {metric.name!r}: datatype {_NAMES.get(datatype, datatype)}, "
+                         f"but its DBIRTH's is {_NAMES[birth]}")
+    return metric_value(metric, datatype)
 
 
 def command_request(device: Device, name: str, value: Any) -> rq.ControlRequest | None:

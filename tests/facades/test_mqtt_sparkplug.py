@@ -148,3 +148,79 @@ def test_a_command_that_is_not_sparkplug_is_refused_on_the_devices_error_topic(
             assert parse_payload_to_metric_dict(ddata)["input.I1"].value is True
     finally:
         runtime.stop()
+
+
+def bare(**values: Any) -> bytes:
+    """A command payload whose metrics carry a name and a value field but no datatype, as Sparkplug
+    3.0 §6.4.6 would have it ("The datatype SHOULD NOT be included with metric definitions in
+    NDATA, NCMD, DDATA, and DCMD messages", tck-id-payloads-metric-datatype-not-req); values are
+    ``name=(field, value)``."""
+    payload = tahu.Payload()
+    for name, (field, value) in values.items():
+        metric = payload.metrics.add()
+        metric.name = name
+        setattr(metric, field, value)
+    return bytes(payload.SerializeToString())
+
+
+def test_commands_without_a_datatype_take_the_births(broker_port: int) -> None:
+    """A DCMD metric without a datatype is read as its DBIRTH datatype, an NCMD ``Node
+    Control/Rebirth`` as the NBIRTH's Boolean (§6.4.6, tck-id-payloads-metric-datatype-not-req)."""
+    plant = f"b{next(_plants)}"
+    runtime = Runtime(virtual=True).start()
+    try:
+        device = runtime.add_device("sers", "x")
+        with Sub(broker_port, f"{SPB}/+/{plant}/#", f"{SPB}/+/{plant}", f"devsim/{plant}/#").sync() as sub:
+            runtime.run(start_mqtt(runtime, [device], f"mqtt://127.0.0.1:{broker_port}", plant=plant,
+                                   convention="sparkplug", rate=0.5), timeout=20)
+            sub.wait(f"{SPB}/DBIRTH/{plant}/x")
+            pub(broker_port, f"{SPB}/DCMD/{plant}/x", bare(**{"input.I1": ("boolean_value", True)}))
+            ddata = payload_from_string(sub.wait(f"{SPB}/DDATA/{plant}/x").payload)
+            assert parse_payload_to_metric_dict(ddata)["input.I1"].value is True
+            assert runtime.read("x", "input.I1") is True
+            pub(broker_port, f"{SPB}/NCMD/{plant}", bare(**{"Node Control/Rebirth": ("boolean_value", True)}))
+            again = payload_from_string(sub.wait(f"{SPB}/NBIRTH/{plant}").payload)
+            assert again.seq == 0
+            assert not [m for m in sub.seen if m.topic.endswith("/error")]
+    finally:
+        runtime.stop()
+
+
+INCOMPATIBLE = [
+    pytest.param(dcmd(("input.I1", T.Double, 1.0)), "datatype Double, but its DBIRTH's is Boolean", id="double-for-boolean"),
+    pytest.param(dcmd(("input.I1", T.String, "true")), "datatype String, but its DBIRTH's is Boolean",
+                 id="string-for-boolean"),
+    pytest.param(dcmd(("input.I1", T.Int64, 1)), "datatype Int64, but its DBIRTH's is Boolean", id="int64-for-boolean"),
+    pytest.param(bare(**{"input.I1": ("double_value", 1.0)}), "datatype Boolean, but its value is a double_value",
+                 id="bare-double-for-boolean"),
+    pytest.param(dcmd(("param.P0", T.String, "0")), "datatype String, but its DBIRTH's is Double", id="string-for-double"),
+    pytest.param(dcmd(("Device Control/Fault/emergency_stop", T.Int32, 1)), "datatype Int32, but its DBIRTH's is Boolean",
+                 id="int-for-fault"),
+]
+
+
+@pytest.mark.parametrize(("payload", "words"), INCOMPATIBLE)
+def test_a_dcmd_value_of_another_datatype_than_the_births_is_refused(
+        broker_port: int, payload: bytes, words: str) -> None:
+    """§5 tck-id-operational-behavior-data-commands-dcmd-metric-value: "A DCMD message MUST include a
+    compatible metric value for the metric name that it is writing to. In other words, if the metric
+    has a datatype of a boolean the value must be true or false."  An incompatible one changes
+    nothing and is answered on the device's error topic; the next DCMD is taken."""
+    plant = f"w{next(_plants)}"
+    runtime = Runtime(virtual=True).start()
+    try:
+        device = runtime.add_device("sers", "x")
+        before = {name: runtime.read("x", name) for name in ("input.I1", "param.P0", "input.stop")}
+        with Sub(broker_port, f"{SPB}/+/{plant}/#", f"devsim/{plant}/#").sync() as sub:
+            runtime.run(start_mqtt(runtime, [device], f"mqtt://127.0.0.1:{broker_port}", plant=plant,
+                                   convention="sparkplug", rate=0.5), timeout=20)
+            sub.wait(f"{SPB}/DBIRTH/{plant}/x")
+            pub(broker_port, f"{SPB}/DCMD/{plant}/x", payload)
+            error = sub.wait(f"devsim/{plant}/x/error").json()
+            assert error["topic"].startswith(f"{SPB}/DCMD/{plant}/x") and words in error["error"], error
+            assert {name: runtime.read("x", name) for name in before} == before
+            pub(broker_port, f"{SPB}/DCMD/{plant}/x", dcmd(("input.I2", T.Boolean, True)))
+            changed = parse_payload_to_metric_dict(payload_from_string(sub.wait(f"{SPB}/DDATA/{plant}/x").payload))
+            assert changed["input.I2"].value is True and "input.I1" not in changed
+    finally:
+        runtime.stop()

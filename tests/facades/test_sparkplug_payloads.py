@@ -23,7 +23,9 @@ from devsim.facades.mqtt_sparkplug import (
     GROUP,
     NAMESPACE,
     SparkplugNode,
+    birth_datatype,
     command_request,
+    command_value,
     decode_command,
     metric_value,
 )
@@ -271,3 +273,63 @@ def test_timestamps_are_utc_milliseconds_since_the_epoch() -> None:
     stamps += [data.timestamp, data.metrics[0].timestamp]
     after = int(time.time() * 1000)
     assert all(before <= stamp <= after for stamp in stamps), (before, stamps, after)
+
+
+def test_a_command_metrics_birth_datatype() -> None:
+    device = sers()
+    int_point = next(p.name for p in device.points if p.type == "int")
+    assert [birth_datatype(device, name) for name in ("input.I1", "param.P0", int_point, "program",
+                                                       "Device Control/Power Cycle", "Device Control/Fault/power")] \
+        == [T.Boolean, T.Double, T.Int64, T.String, T.Boolean, T.Boolean]
+    assert birth_datatype(device, "Device Control/Fault/nothing") is None and birth_datatype(device, "nothing") is None
+
+
+def bare_metric(field: str, value: Any) -> Any:
+    payload = tahu.Payload()
+    metric = payload.metrics.add()
+    metric.name = "m"
+    setattr(metric, field, value)
+    return parse(payload.SerializeToString()).metrics[0]
+
+
+@pytest.mark.parametrize(("metric", "birth", "value"), [
+    (bare_metric("boolean_value", True), T.Boolean, True),  # §6.4.6: no datatype in a DCMD
+    (bare_metric("long_value", (1 << 64) - 5), T.Int64, -5),
+    (bare_metric("double_value", 2.5), T.Double, 2.5),
+    (bare_metric("string_value", "x"), T.String, "x"),
+    (one_metric(T.Int32, -5), T.Int64, -5),  # an integer of another width for an Int64
+    (one_metric(T.UInt8, 200), T.Int64, 200),
+    (one_metric(T.Float, 0.5), T.Double, 0.5),
+    (one_metric(T.Text, "t"), T.String, "t"),
+    (one_metric(T.Double, 1.5), None, 1.5),  # a name no birth has: as its own datatype
+])
+def test_a_command_value_is_read_as_its_datatype_or_its_births(metric: Any, birth: int | None, value: Any) -> None:
+    assert command_value(metric, birth) == value
+
+
+@pytest.mark.parametrize(("metric", "birth", "why"), [
+    (one_metric(T.Double, 1.0), T.Boolean, "metric 'm': datatype Double, but its DBIRTH's is Boolean"),
+    (one_metric(T.String, "true"), T.Boolean, "metric 'm': datatype String, but its DBIRTH's is Boolean"),
+    (one_metric(T.Int64, 1), T.Boolean, "metric 'm': datatype Int64, but its DBIRTH's is Boolean"),
+    (one_metric(T.Double, 3.0), T.Int64, "metric 'm': datatype Double, but its DBIRTH's is Int64"),
+    (one_metric(T.Int64, 3), T.Double, "metric 'm': datatype Int64, but its DBIRTH's is Double"),
+    (one_metric(T.Boolean, True), T.String, "metric 'm': datatype Boolean, but its DBIRTH's is String"),
+    (bare_metric("double_value", 1.0), T.Boolean, "metric 'm': datatype Boolean, but its value is a double_value"),
+    (bare_metric("long_value", 1), None, "metric 'm': no datatype, and no birth names one"),
+])
+def test_a_command_value_of_another_kind_than_its_births_is_refused(metric: Any, birth: int | None, why: str) -> None:
+    """§5, tck-id-operational-behavior-data-commands-dcmd-metric-value: a compatible value only."""
+    with pytest.raises(ValueError) as refused:
+        command_value(metric, birth)
+    assert str(refused.value) == why
+
+
+def test_a_value_outside_its_datatypes_field_is_refused() -> None:
+    payload = tahu.Payload()
+    metric = payload.metrics.add()
+    metric.name, metric.datatype, metric.long_value = "m", T.Int32, 1  # Int32 lives in int_value
+    with pytest.raises(ValueError, match=r"^metric 'm': datatype Int32, but its value is a long_value$"):
+        metric_value(parse(payload.SerializeToString()).metrics[0])
+    metric.ClearField("long_value")
+    with pytest.raises(ValueError, match=r"^metric 'm': datatype Int32, but its value is missing$"):
+        metric_value(parse(payload.SerializeToString()).metrics[0])
