@@ -113,6 +113,28 @@ def test_ndeath_with_the_birth_bdseq_when_devsim_is_killed(broker_port: int) -> 
             sim.stop()
 
 
+def test_a_clean_stop_publishes_the_ndeath_itself(broker_port: int) -> None:
+    """Sparkplug 3.0 §5 (Edge Node Session Termination), tck-id-operational-behavior-edge-node-
+    intentional-disconnect-ndeath: "When an Edge Node disconnects intentionally, it MUST publish an
+    NDEATH before terminating the connection" (the DISCONNECT drops the will): the session's bdSeq,
+    no seq, not retained."""
+    plant = f"c{next(_plants)}"
+    runtime = Runtime(virtual=True).start()
+    try:
+        device = runtime.add_device("sers", "x")
+        with Sub(broker_port, f"{SPB}/+/{plant}").sync() as sub:
+            runtime.run(start_mqtt(runtime, [device], f"mqtt://127.0.0.1:{broker_port}", plant=plant,
+                                   convention="sparkplug", rate=0.5), timeout=20)
+            birth = parse_payload_to_metric_dict(payload_from_string(sub.wait(f"{SPB}/NBIRTH/{plant}").payload))
+            runtime.stop()
+            message = sub.wait(f"{SPB}/NDEATH/{plant}")
+            death = payload_from_string(message.payload)
+            assert not message.retain and not death.HasField("seq")
+            assert [(m.name, m.long_value) for m in death.metrics] == [("bdSeq", birth["bdSeq"].value)]
+    finally:
+        runtime.stop()
+
+
 NOT_SPARKPLUG = [
     pytest.param(b"not protobuf", "not a Sparkplug B payload", id="text"),
     pytest.param(b'{"input.I1": true}', "not a Sparkplug B payload", id="json"),
