@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import queue
 import struct
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import canopen
@@ -20,15 +20,6 @@ VALUE_RANGE_EXCEEDED = 0x06090030  # CiA 301 SDO abort: value range of parameter
 
 #: CiA 402-2, 6502h "supported drive modes": the bit of each mode of operation (6060h value).
 MODE_BITS = {1: 0, 2: 1, 3: 2, 4: 3, 6: 5, 7: 6, 8: 7, 9: 8, 10: 9}
-
-
-@pytest.fixture
-def drive() -> Iterator[Drive]:
-    d = Drive()
-    try:
-        yield d
-    finally:
-        d.close()
 
 
 def test_6060h_takes_only_the_modes_6502h_lists_and_6061h_shows_no_other(drive: Drive) -> None:

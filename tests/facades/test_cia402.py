@@ -9,7 +9,6 @@ from __future__ import annotations
 import queue
 import time
 import uuid
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -64,15 +63,6 @@ class Drive:
         self.slave.disconnect()
         self.master.disconnect()
         self.runtime.stop()
-
-
-@pytest.fixture
-def drive() -> Iterator[Drive]:
-    d = Drive()
-    try:
-        yield d
-    finally:
-        d.close()
 
 
 def enable(drive: Drive) -> None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 import queue
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
 import pytest
 
@@ -21,15 +21,6 @@ from tests.facades.test_cia402_contract import DRIVES
 
 TARGET_REACHED, SPEED_IS_0 = 0x0400, 0x1000
 STEP = 0.001  # s: the test's own look at the drive's velocity
-
-
-@pytest.fixture
-def drive() -> Iterator[Drive]:
-    d = Drive()
-    try:
-        yield d
-    finally:
-        d.close()
 
 
 def actual(drive: Drive) -> int:
