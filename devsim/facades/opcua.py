@@ -22,6 +22,8 @@ variable per declared point, the properties ``Kind`` and ``FaultKinds``, and the
 * **Subscriptions**: a :class:`devsim.core.watch.PointWatch` per device samples the points every
   ``period`` seconds of device time (virtual time in tests) and writes what changed into the
   address space, so data-change monitored items see it; a write from a client is sampled at once.
+  Each monitored item is checked as Part 4 5.12.2.4 asks before asyncua creates it (its node,
+  attribute, IndexRange, dataEncoding and filter; :mod:`devsim.facades.opcua_monitoring`).
 * **Events** (``DeviceFaultEventType``, with ``FaultKind``, ``Active``, ``Axis``, ``Code``):
   when a declared fault is switched on or off (the ``Fault`` method, the control API, a
   scenario: the model's ``fault_switched`` topic) and when the model announces ``fault(axis,

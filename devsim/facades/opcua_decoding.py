@@ -31,6 +31,8 @@ from asyncua.server.binary_server_asyncio import BinaryServer, OPCUAProtocol
 from asyncua.server.uaprocessor import UaProcessor
 from asyncua.ua.ua_binary import from_binary, get_safe_type_hints, struct_from_binary
 
+from devsim.facades.opcua_monitoring import Subscriptions
+
 __all__ = ["FacadeServer", "RequestDecoding", "undecodable"]
 
 _BAD = ua.StatusCodes
@@ -124,7 +126,13 @@ class _Listener(BinaryServer):
 
 
 class FacadeServer(Server):
-    """asyncua's server, its connections processed by :class:`RequestDecoding`."""
+    """asyncua's server, its connections processed by :class:`RequestDecoding`, its monitored items
+    checked by :class:`devsim.facades.opcua_monitoring.ItemChecks`."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        iserver = self.iserver  # (before init: nothing holds the service asyncua made but its session)
+        iserver.subscription_service = iserver.isession.subscription_service = Subscriptions(iserver.aspace, iserver)
 
     async def start(self) -> None:
         """asyncua's ``Server.start`` with :class:`_Listener` for its BinaryServer (and no

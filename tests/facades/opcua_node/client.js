@@ -9,14 +9,20 @@
 //     StatusCodes name) to write with the value
 //   {"op": "writes", "items": [["x.param.V", "Int32", 3], ...]}   one Write request, a status per item
 //   {"op": "monitor", "nodes": ["x.axis.position", ...]}   the status of each one's first notification
+//     (and its value, "values"); an "indexRange" for every item
+//   {"op": "items", "items": [ITEM, ...], "modify": [id, ...]}   CreateMonitoredItems, one request an item:
+//     the status of each ("fault:NAME" for a refused request), then ModifyMonitoredItems of those ids.
+//     ITEM: {"node": "x.axis.phase"} (or "nodeId") with "attribute" (default Value), "indexRange",
+//     "encoding" (a dataEncoding name), "filter" ({"type": "event"} or {"type": "datachange",
+//     "deadband": "Absolute", "value": 1})
 //   {"op": "call", "object": "x", "method": "x#Fault", "args": [["String", "power"], ["Boolean", true]]}
 // A step may name a node id in full ("nodeId": "ns=0;i=2253") instead of a devsim "node".
 // String node ids are in the namespace urn:devsim.  Prints one line "RESULT {json}" (node-opcua
 // writes its own warnings to stdout too).
 "use strict";
 const {
-    OPCUAClient, AttributeIds, ClientMonitoredItem, ClientSubscription, DataType, StatusCodes, TimestampsToReturn,
-    VariantArrayType,
+    OPCUAClient, AttributeIds, ClientMonitoredItem, ClientSubscription, DataChangeFilter, DataChangeTrigger, DataType,
+    DeadbandType, EventFilter, MonitoringMode, StatusCodes, TimestampsToReturn, VariantArrayType,
 } = require("node-opcua-client");
 
 function plain(value, dataType) {
@@ -34,6 +40,30 @@ function wire(dataType, value) {
         return [Math.floor(value / 4294967296), value >>> 0];  // node-opcua's [high, low] words
     }
     return value;
+}
+
+function filter(spec) {
+    if (!spec) {
+        return null;
+    }
+    if (spec.type === "event") {  // the Message of every event
+        return new EventFilter({ selectClauses: [{ typeDefinitionId: "i=2041", browsePath: [{ name: "Message" }],
+                                                   attributeId: AttributeIds.Value }] });
+    }
+    return new DataChangeFilter({ trigger: DataChangeTrigger.StatusValue, deadbandType: DeadbandType[spec.deadband],
+                                  deadbandValue: spec.value });
+}
+
+async function fault(request) {  // a status, or the service fault that refused the whole request
+    try {
+        return await request();
+    } catch (err) {
+        const header = err.response && err.response.responseHeader;
+        if (!header) {
+            throw err;
+        }
+        return { fault: header.serviceResult.name };
+    }
 }
 
 function variant(type, value) {
@@ -90,17 +120,51 @@ async function step(session, ns, s) {
         });
         const firsts = s.nodes.map((name) => new Promise((resolve, reject) => {
             const item = ClientMonitoredItem.create(subscription, {
-                nodeId: devsim(name), attributeId: AttributeIds.Value,
+                nodeId: devsim(name), attributeId: AttributeIds.Value, indexRange: s.indexRange,
             }, { samplingInterval: 0, queueSize: 1, discardOldest: true }, TimestampsToReturn.Both);
             const timer = setTimeout(() => reject(new Error(`no notification for ${name}`)), 10000);
             item.once("changed", (dv) => {
                 clearTimeout(timer);
-                resolve(dv.statusCode.name);
+                resolve([dv.statusCode.name, plain(dv.value.value, dv.value.dataType)]);
             });
         }));
-        const statuses = await Promise.all(firsts);
+        const firstValues = await Promise.all(firsts);
         await subscription.terminate();
-        return { statuses };
+        return { statuses: firstValues.map(([status]) => status), values: firstValues.map(([, value]) => value) };
+    }
+    if (s.op === "items") {
+        const subscription = await session.createSubscription2({
+            requestedPublishingInterval: 20, requestedLifetimeCount: 100, requestedMaxKeepAliveCount: 10,
+            publishingEnabled: true,
+        });
+        const statuses = [];
+        for (const [index, item] of s.items.entries()) {
+            const created = await fault(() => session.createMonitoredItems({
+                subscriptionId: subscription.subscriptionId, timestampsToReturn: TimestampsToReturn.Both,
+                itemsToCreate: [{
+                    itemToMonitor: {
+                        nodeId: item.node === undefined ? item.nodeId : devsim(item.node), attributeId: AttributeIds[item.attribute || "Value"],
+                        indexRange: item.indexRange, dataEncoding: item.encoding ? { name: item.encoding } : undefined,
+                    },
+                    monitoringMode: MonitoringMode.Reporting,
+                    requestedParameters: { clientHandle: index + 1, samplingInterval: 0, queueSize: 1,
+                                           discardOldest: true, filter: filter(item.filter) },
+                }],
+            }));
+            statuses.push(created.fault ? `fault:${created.fault}` : created.results[0].statusCode.name);
+        }
+        if (!s.modify) {
+            await subscription.terminate();
+            return { statuses };
+        }
+        const modified = await fault(() => session.modifyMonitoredItems({
+            subscriptionId: subscription.subscriptionId, timestampsToReturn: TimestampsToReturn.Both,
+            itemsToModify: s.modify.map((monitoredItemId) => ({
+                monitoredItemId, requestedParameters: { clientHandle: 99, samplingInterval: 0, queueSize: 1 },
+            })),
+        }));
+        await subscription.terminate();
+        return { statuses, modified: modified.fault ? `fault:${modified.fault}` : modified.results.map((r) => r.statusCode.name) };
     }
     if (s.op === "call") {
         const result = await session.call({

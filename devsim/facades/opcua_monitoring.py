@@ -1,0 +1,175 @@
+"""The MonitoredItem service set of the OPC UA facade (OPC UA Part 4, 5.12): asyncua's, with each
+item checked as Part 4 asks before asyncua creates or modifies it.
+
+asyncua creates an item for whatever it is given and answers some cases with codes Part 4 does
+not name: an event item (AttributeId EventNotifier) on a node the server does not have, or on a
+Variable, is ``Bad_ServiceUnsupported``; an event item without an EventFilter, or an EventFilter
+on a Value, fails the whole CreateMonitoredItems request with ``Bad_InternalError``, and so does a
+ModifyMonitoredItems naming an item that does not exist; a deadband on a String or a Boolean is
+taken and then raises inside asyncua at every change (the item never reports), a percent
+deadband is taken and ignored, an IndexRange is taken and ignored.  :class:`ItemChecks` answers
+each item as Part 4 5.12.2.4 (Table 71) and 5.12.3.4 (Table 74) do, per item:
+
+* ``Bad_NodeIdUnknown`` for a node the server does not have, ``Bad_AttributeIdInvalid`` for an
+  attribute the node does not have (the EventNotifier of a Variable);
+* ``Bad_IndexRangeInvalid`` for an IndexRange of invalid syntax (7.27), ``Bad_IndexRangeNoData``
+  for one on a scalar that is not a String or ByteString (its dimensions are fixed: Table 71); a
+  valid range on a String or an array reports that part only (``shaped``, as Read does);
+* ``Bad_DataEncodingInvalid`` for a dataEncoding on anything but the Value of a structure (7.34);
+* an event item: ``Bad_MonitoredItemFilterInvalid`` without an EventFilter (7.22.3: the
+  EventFilter selects the fields each notification carries);
+* a Value item: ``Bad_FilterNotAllowed`` for an EventFilter; ``Bad_MonitoredItemFilterUnsupported``
+  for a filter that is neither (an AggregateFilter); for a DataChangeFilter,
+  ``Bad_DeadbandFilterInvalid`` for a deadbandType that is not None, Absolute or Percent, and for
+  a percent deadband on a variable without an ``EURange`` property (Part 8, 6.2 and Table 28; no
+  variable of the facade has one), ``Bad_FilterNotAllowed`` for an absolute deadband on a
+  variable whose DataType is not a Number (7.22.2: it "applies only to Variables with any Number
+  data type");
+* any other attribute: ``Bad_FilterNotAllowed`` for a filter (5.12.1.1: those attributes are
+  monitored for a change in value only, the filter is not used for them);
+* ModifyMonitoredItems: ``Bad_MonitoredItemIdInvalid`` for an item the subscription does not
+  have, and the filter checks above against the item's node and attribute.
+
+:class:`Subscriptions` is asyncua's SubscriptionService giving each new subscription an
+:class:`ItemChecks` (:class:`devsim.facades.opcua_decoding.FacadeServer` installs it).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from asyncua import ua
+from asyncua.server.address_space import AddressSpace
+from asyncua.server.monitored_item_service import MonitoredItemService
+from asyncua.server.subscription_service import SubscriptionService
+from asyncua.ua import uaprotocol_auto
+
+from devsim.facades.opcua_services import index_range, shaped
+
+__all__ = ["ItemChecks", "Subscriptions", "refusal"]
+
+_BAD = ua.StatusCodes
+_VALUE, _EVENTS = ua.AttributeIds.Value, ua.AttributeIds.EventNotifier
+_SLICEABLE = (ua.NodeId(ua.ObjectIds.String), ua.NodeId(ua.ObjectIds.ByteString))
+_NUMBER = ua.NodeId(ua.ObjectIds.Number)
+_STRUCTURE = ua.NodeId(ua.ObjectIds.Structure)
+_HAS_SUBTYPE = ua.NodeId(ua.ObjectIds.HasSubtype)
+_HAS_PROPERTY = ua.NodeId(ua.ObjectIds.HasProperty)
+#: (a DataChangeFilter as asyncua decodes it; ``ua.DataChangeFilter`` is a subclass of it)
+_DATA_CHANGE = uaprotocol_auto.DataChangeFilter
+_DEADBANDS = {int(ua.DeadbandType.None_), int(ua.DeadbandType.Absolute), int(ua.DeadbandType.Percent)}
+
+
+def _attribute(aspace: AddressSpace, node_id: ua.NodeId, attribute: ua.AttributeIds) -> Any:
+    value = aspace.read_attribute_value(node_id, attribute)
+    return value.Value.Value if value.StatusCode.is_good() and value.Value is not None else None
+
+
+def _derives(aspace: AddressSpace, data_type: Any, ancestor: ua.NodeId) -> bool:
+    """Is ``data_type`` ``ancestor`` or one of its subtypes (inverse HasSubtype, Part 3, 7.10)?"""
+    seen = set()
+    while isinstance(data_type, ua.NodeId) and data_type not in seen and data_type in aspace:
+        if data_type == ancestor:
+            return True
+        seen.add(data_type)
+        data_type = next((ref.NodeId for ref in aspace[data_type].references
+                          if not ref.IsForward and ref.ReferenceTypeId == _HAS_SUBTYPE), None)
+    return False
+
+
+def _has_property(aspace: AddressSpace, node_id: ua.NodeId, name: str) -> bool:
+    return any(ref.IsForward and ref.ReferenceTypeId == _HAS_PROPERTY and ref.BrowseName.Name == name
+               for ref in aspace[node_id].references)
+
+
+def _filter_refusal(aspace: AddressSpace, item: ua.ReadValueId, flt: Any) -> int | None:
+    """The status a monitored item's filter is refused with (None: none)."""
+    if isinstance(flt, ua.ExtensionObject) and flt.Body is None:
+        flt = None  # no filter: a null ExtensionObject on the wire
+    if item.AttributeId == _EVENTS:
+        return None if isinstance(flt, ua.EventFilter) else _BAD.BadMonitoredItemFilterInvalid
+    if flt is None:
+        return None
+    if item.AttributeId != _VALUE or isinstance(flt, ua.EventFilter):
+        return _BAD.BadFilterNotAllowed
+    if not isinstance(flt, _DATA_CHANGE):
+        return _BAD.BadMonitoredItemFilterUnsupported
+    deadband = int(flt.DeadbandType)
+    if deadband not in _DEADBANDS:
+        return _BAD.BadDeadbandFilterInvalid
+    if deadband == ua.DeadbandType.Percent:
+        return (_BAD.BadMonitoredItemFilterUnsupported if _has_property(aspace, item.NodeId, "EURange")
+                else _BAD.BadDeadbandFilterInvalid)
+    data_type = _attribute(aspace, item.NodeId, ua.AttributeIds.DataType)
+    if deadband == ua.DeadbandType.Absolute and not _derives(aspace, data_type, _NUMBER):
+        return _BAD.BadFilterNotAllowed
+    return None
+
+
+def refusal(aspace: AddressSpace, item: ua.ReadValueId, flt: Any) -> int | None:
+    """The status code a monitored item of ``item`` with filter ``flt`` is refused with (Part 4,
+    5.12.2.4 Table 71), None when asyncua may create it."""
+    node_id, attribute = item.NodeId, item.AttributeId
+    if node_id not in aspace:
+        return _BAD.BadNodeIdUnknown
+    if attribute not in aspace[node_id].attributes:
+        return _BAD.BadAttributeIdInvalid
+    if item.IndexRange:
+        if index_range(item.IndexRange) is None:
+            return _BAD.BadIndexRangeInvalid
+        rank = _attribute(aspace, node_id, ua.AttributeIds.ValueRank)
+        if attribute == _VALUE and rank == ua.ValueRank.Scalar \
+                and _attribute(aspace, node_id, ua.AttributeIds.DataType) not in _SLICEABLE:
+            return _BAD.BadIndexRangeNoData  # a scalar number: fixed dimensions, nothing to select
+    encoding = item.DataEncoding
+    if encoding is not None and encoding.Name:
+        if attribute != _VALUE or not _derives(aspace, _attribute(aspace, node_id, ua.AttributeIds.DataType),
+                                               _STRUCTURE):
+            return _BAD.BadDataEncodingInvalid
+    return _filter_refusal(aspace, item, flt)
+
+
+class ItemChecks(MonitoredItemService):
+    """asyncua's monitored items of one subscription, each checked by :func:`refusal` first; an
+    item's IndexRange selects what it reports."""
+
+    async def create_monitored_items(self, params: ua.CreateMonitoredItemsParameters) -> list[ua.MonitoredItemCreateResult]:
+        results = []
+        for item in params.ItemsToCreate:
+            refused = refusal(self.aspace, item.ItemToMonitor, item.RequestedParameters.Filter)
+            if refused is not None:
+                results.append(ua.MonitoredItemCreateResult(StatusCode=ua.StatusCode(refused)))
+                continue
+            one = ua.CreateMonitoredItemsParameters(SubscriptionId=params.SubscriptionId,
+                                                    TimestampsToReturn=params.TimestampsToReturn, ItemsToCreate=[item])
+            results.extend(await super().create_monitored_items(one))
+        return results
+
+    def modify_monitored_items(self, params: ua.ModifyMonitoredItemsParameters) -> list[ua.MonitoredItemModifyResult]:
+        results = []
+        for item in params.ItemsToModify:
+            mdata = self._monitored_items.get(item.MonitoredItemId)
+            refused = (_BAD.BadMonitoredItemIdInvalid if mdata is None
+                       else _filter_refusal(self.aspace, mdata.read_value_id, item.RequestedParameters.Filter))
+            if refused is not None:
+                results.append(ua.MonitoredItemModifyResult(StatusCode=ua.StatusCode(refused)))
+            else:
+                results.append(self._modify_monitored_item(item))
+        return results
+
+    async def datachange_callback(self, handle: int, value: ua.DataValue, error: ua.StatusCode | None = None) -> None:
+        mdata = self._monitored_items.get(self._monitored_datachange.get(handle, -1))
+        if error is None and value is not None and mdata is not None and mdata.read_value_id.IndexRange:
+            value = shaped(value, ua.TimestampsToReturn.Both, mdata.read_value_id.IndexRange)
+        await super().datachange_callback(handle, value, error)
+
+
+class Subscriptions(SubscriptionService):
+    """asyncua's subscriptions, each with :class:`ItemChecks` for its monitored items."""
+
+    async def create_subscription(self, params: ua.CreateSubscriptionParameters, callback: Any, session_id: ua.NodeId,
+                                  request_callback: Any = None) -> ua.CreateSubscriptionResult:
+        result = await super().create_subscription(params, callback, session_id, request_callback)
+        subscription = self.subscriptions[result.SubscriptionId]
+        subscription.monitored_item_srv = ItemChecks(subscription, self.aspace)  # (no items yet)
+        return result

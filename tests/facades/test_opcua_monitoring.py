@@ -1,0 +1,164 @@
+"""The OPC UA facade's monitored items against OPC UA Part 4 (5.12.2.4 Table 71, 5.12.3.4 Table 74,
+7.22 filters; Part 8, 6.2 percent deadband), through asyncua's client and node-opcua's.
+
+Each item is refused on its own with the code Part 4 names, the rest of the request and the
+session serve on: a node the server does not have Bad_NodeIdUnknown (an event item too), the
+EventNotifier of a Variable Bad_AttributeIdInvalid, an event item without an EventFilter
+Bad_MonitoredItemFilterInvalid, an EventFilter on a Value or a filter on another attribute
+Bad_FilterNotAllowed, an absolute deadband on a String or a Boolean Bad_FilterNotAllowed, a percent
+deadband without an EURange Bad_DeadbandFilterInvalid, an IndexRange of invalid syntax
+Bad_IndexRangeInvalid and one on a scalar number Bad_IndexRangeNoData, a dataEncoding on a Double
+Bad_DataEncodingInvalid, a ModifyMonitoredItems of an item that does not exist
+Bad_MonitoredItemIdInvalid.  asyncua's server answered most of these Good (and then ignored the
+filter or range), Bad_ServiceUnsupported, or failed the whole request with Bad_InternalError.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+from asyncua import Client, ua
+
+from devsim.facades.opcua import OpcuaFacade, start_opcua
+from devsim.facades.opcua_space import NAMESPACE
+from devsim.runtime import Runtime
+from tests.facades.opcua_clients import node_client
+
+EVENT = {"type": "event"}
+ABSOLUTE = {"type": "datachange", "deadband": "Absolute", "value": 0.5}
+PERCENT = {"type": "datachange", "deadband": "Percent", "value": 10.0}
+SERVER_STATUS = "i=2256"  # ServerStatus, a ServerStatusDataType: a structure
+
+#: (node, attribute, filter, index range, data encoding) -> the Part 4 answer
+ITEMS = [
+    ("sers.nope", "Value", None, None, None, "BadNodeIdUnknown"),
+    ("sers.nope", "EventNotifier", EVENT, None, None, "BadNodeIdUnknown"),
+    ("sers.axis.position", "EventNotifier", EVENT, None, None, "BadAttributeIdInvalid"),  # a Variable's
+    ("sers", "EventNotifier", None, None, None, "BadMonitoredItemFilterInvalid"),  # events need an EventFilter
+    ("sers", "EventNotifier", ABSOLUTE, None, None, "BadMonitoredItemFilterInvalid"),
+    ("sers.axis.position", "Value", EVENT, None, None, "BadFilterNotAllowed"),
+    ("sers.axis.position", "DisplayName", ABSOLUTE, None, None, "BadFilterNotAllowed"),  # 5.12.1.1
+    ("sers.axis.phase", "Value", ABSOLUTE, None, None, "BadFilterNotAllowed"),  # a String: no Number
+    ("sers.axis.moving", "Value", ABSOLUTE, None, None, "BadFilterNotAllowed"),  # a Boolean
+    ("sers.axis.position", "Value", PERCENT, None, None, "BadDeadbandFilterInvalid"),  # no EURange
+    ("sers.axis.phase", "Value", None, "7:5", None, "BadIndexRangeInvalid"),
+    ("sers.axis.position", "Value", None, "0:1", None, "BadIndexRangeNoData"),  # a scalar Double
+    ("sers.axis.position", "Value", None, None, "Default Binary", "BadDataEncodingInvalid"),
+    # and what is taken
+    ("sers.axis.position", "Value", ABSOLUTE, None, None, "Good"),
+    ("sers.P11", "Value", ABSOLUTE, None, None, "Good"),  # an integer is a Number too
+    ("sers.axis.phase", "Value", None, "0:2", None, "Good"),
+    ("sers", "EventNotifier", EVENT, None, None, "Good"),
+    (SERVER_STATUS, "Value", None, None, "Default Binary", "Good"),
+]
+WANTED = [status for *_, status in ITEMS]
+
+
+@pytest.fixture(scope="module")
+def served() -> Iterator[tuple[Runtime, OpcuaFacade]]:
+    runtime = Runtime(virtual=True).start()
+    try:
+        devices = [runtime.add_device("sers", "sers")]
+        facade = runtime.run(start_opcua(runtime, devices, "127.0.0.1:0"), timeout=60)
+        yield runtime, facade
+    finally:
+        runtime.stop()
+
+
+def _node_id(ns: int, node: str) -> ua.NodeId:
+    return ua.NodeId.from_string(node) if node.startswith("i=") else ua.NodeId(node, ns)
+
+
+def _filter(spec: dict[str, Any] | None) -> Any:
+    if spec is None:
+        return None
+    if spec["type"] == "event":
+        return ua.EventFilter(SelectClauses=[ua.SimpleAttributeOperand(
+            TypeDefinitionId=ua.NodeId(ua.ObjectIds.BaseEventType), BrowsePath=[ua.QualifiedName("Message", 0)],
+            AttributeId=ua.AttributeIds.Value)])
+    return ua.DataChangeFilter(Trigger=ua.DataChangeTrigger.StatusValue, DeadbandType=ua.DeadbandType[spec["deadband"]],
+                               DeadbandValue=spec["value"])
+
+
+def _request(ns: int, handle: int, node: str, attribute: str, spec: dict[str, Any] | None, index_range: str | None,
+             encoding: str | None) -> ua.MonitoredItemCreateRequest:
+    item = ua.ReadValueId(NodeId=_node_id(ns, node), AttributeId=ua.AttributeIds[attribute], IndexRange=index_range)
+    if encoding is not None:
+        item.DataEncoding = ua.QualifiedName(encoding, 0)
+    parameters = ua.MonitoringParameters(ClientHandle=handle, SamplingInterval=0, QueueSize=1, DiscardOldest=True,
+                                         Filter=_filter(spec))
+    return ua.MonitoredItemCreateRequest(ItemToMonitor=item, MonitoringMode=ua.MonitoringMode.Reporting,
+                                         RequestedParameters=parameters)
+
+
+class _Quiet:
+    def datachange_notification(self, node: Any, value: Any, data: Any) -> None: ...
+
+    def event_notification(self, event: Any) -> None: ...
+
+
+async def test_asyncua_monitored_items_answer_with_part4_status_codes(served: tuple[Runtime, OpcuaFacade]) -> None:
+    _, facade = served
+    async with Client(facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        subscription = await client.create_subscription(20, _Quiet())
+        requests = [_request(ns, 1000 + index, *row[:-1]) for index, row in enumerate(ITEMS)]
+        params = ua.CreateMonitoredItemsParameters(SubscriptionId=subscription.subscription_id,
+                                                   TimestampsToReturn=ua.TimestampsToReturn.Both,
+                                                   ItemsToCreate=requests)
+        results = await client.uaclient.create_monitored_items(params)  # all in one request
+        assert [result.StatusCode.name for result in results] == WANTED
+        created = [result.MonitoredItemId for result in results if result.StatusCode.is_good()]
+        position = created[0]  # the absolute deadband on axis.position
+        modify = ua.ModifyMonitoredItemsParameters(
+            SubscriptionId=subscription.subscription_id, TimestampsToReturn=ua.TimestampsToReturn.Both,
+            ItemsToModify=[ua.MonitoredItemModifyRequest(MonitoredItemId=item, RequestedParameters=ua.MonitoringParameters(
+                ClientHandle=7, SamplingInterval=0, QueueSize=1, Filter=flt))
+                for item, flt in [(9999, None), (position, _filter(EVENT)), (position, _filter(PERCENT)),
+                                  (position, None)]])
+        modified = await client.uaclient.modify_monitored_items(modify)
+        assert [result.StatusCode.name for result in modified] == [
+            "BadMonitoredItemIdInvalid", "BadFilterNotAllowed", "BadDeadbandFilterInvalid", "Good"]
+        await subscription.delete()
+        assert await client.get_node(ua.NodeId("sers.quantity.supply_voltage", ns)).read_value() == 68.0  # serves on
+
+
+def test_node_opcua_monitored_items_answer_with_part4_status_codes(served: tuple[Runtime, OpcuaFacade]) -> None:
+    _, facade = served
+    items = [{"node" if not node.startswith("i=") else "nodeId": node, "attribute": attribute, "filter": spec,
+              "indexRange": index_range, "encoding": encoding}
+             for node, attribute, spec, index_range, encoding, _ in ITEMS]
+    [result, read] = node_client(facade.url, [{"op": "items", "items": items, "modify": [9999]},
+                                              {"op": "read", "node": "sers.quantity.supply_voltage"}])
+    assert result == {"statuses": WANTED, "modified": ["BadMonitoredItemIdInvalid"]}
+    assert read["status"] == "Good"
+
+
+async def test_asyncua_an_index_range_selects_what_an_item_reports(served: tuple[Runtime, OpcuaFacade]) -> None:
+    runtime, facade = served
+    phase = runtime.read("sers", "axis.phase")
+    assert isinstance(phase, str) and len(phase) > 2
+    seen: asyncio.Queue[Any] = asyncio.Queue()
+
+    class Changes:
+        def datachange_notification(self, node: Any, value: Any, data: Any) -> None:
+            seen.put_nowait(value)
+
+    async with Client(facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        subscription = await client.create_subscription(20, Changes())
+        [handle] = await subscription.create_monitored_items(  # asyncua's own call for an IndexRange
+            [_request(ns, 1, "sers.axis.phase", "Value", None, "0:1", None)])
+        assert isinstance(handle, int), handle
+        assert await asyncio.wait_for(seen.get(), 10) == phase[:2]
+        await subscription.delete()
+
+
+def test_node_opcua_an_index_range_selects_what_an_item_reports(served: tuple[Runtime, OpcuaFacade]) -> None:
+    runtime, facade = served
+    phase = runtime.read("sers", "axis.phase")
+    [result] = node_client(facade.url, [{"op": "monitor", "nodes": ["sers.axis.phase"], "indexRange": "0:1"}])
+    assert result == {"statuses": ["Good"], "values": [phase[:2]]}
