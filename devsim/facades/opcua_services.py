@@ -16,8 +16,9 @@ status codes Part 4 gives where asyncua answers otherwise.
   point's Value ``Bad_WriteNotSupported`` when an IndexRange or a status code is written with it
   (Table 61: the server does not support that combination).  asyncua answers
   ``Bad_UserAccessDenied`` for all of these.
-* :class:`NodeView` (Part 4, 5.8.2 Browse): ``Bad_NodeIdUnknown`` for a node the server does not
-  have (asyncua: ``Bad_NodeIdInvalid``, which Part 4 keeps for a NodeId of invalid syntax).
+* :class:`NodeView` (Part 4, 5.8.2 Browse, 5.8.4 TranslateBrowsePathsToNodeIds): ``Bad_NodeIdUnknown``
+  for a node (a path's startingNode) the server does not have (asyncua: ``Bad_NodeIdInvalid``, which
+  Part 4 keeps for a NodeId of invalid syntax).
 * :class:`DeviceMethods` (Part 4, 5.11.2 Call, Tables 67 and 68): ``Bad_NodeIdUnknown`` for an
   object the server does not have, ``Bad_NodeIdInvalid`` for a node that is not an object,
   ``Bad_MethodInvalid`` for a method that is not a component of that object,
@@ -179,7 +180,8 @@ def shaped(value: ua.DataValue, timestamps: ua.TimestampsToReturn, text: str | N
 
 
 class NodeView(ViewService):
-    """asyncua's view service, with Bad_NodeIdUnknown for a node it does not have."""
+    """asyncua's view service, with Bad_NodeIdUnknown for a node it does not have (Browse's node,
+    TranslateBrowsePathsToNodeIds' startingNode)."""
 
     def _browse(self, desc: ua.BrowseDescription) -> ua.BrowseResult:
         if desc.NodeId not in self._aspace:
@@ -187,6 +189,12 @@ class NodeView(ViewService):
             result.StatusCode = _status(_BAD.BadNodeIdUnknown)
             return result
         return super()._browse(desc)
+
+    def _translate_browsepath_to_nodeid(self, path: ua.BrowsePath) -> ua.BrowsePathResult:
+        result = super()._translate_browsepath_to_nodeid(path)
+        if result.StatusCode.value == _BAD.BadNodeIdInvalid and path.StartingNode not in self._aspace:
+            result.StatusCode = _status(_BAD.BadNodeIdUnknown)  # (asyncua's code for it: Bad_NodeIdInvalid)
+        return result
 
 
 def call_result(status: int, arguments: list[int] | None = None) -> ua.CallMethodResult:

@@ -10,6 +10,8 @@
 //   {"op": "writes", "items": [["x.param.V", "Int32", 3], ...]}   one Write request, a status per item
 //   {"op": "monitor", "nodes": ["x.axis.position", ...]}   the status of each one's first notification
 //     (and its value, "values"); an "indexRange" for every item
+//   {"op": "translate", "node": "x", "path": ["axis.position"]}   TranslateBrowsePathsToNodeIds along
+//     hierarchical references (names in urn:devsim): its status and the targets' node ids
 //   {"op": "items", "items": [ITEM, ...], "modify": [id, ...]}   CreateMonitoredItems, one request an item:
 //     the status of each ("fault:NAME" for a refused request), then ModifyMonitoredItems of those ids.
 //     ITEM: {"node": "x.axis.phase"} (or "nodeId") with "attribute" (default Value), "indexRange",
@@ -77,6 +79,15 @@ async function step(session, ns, s) {
     if (s.op === "browse") {
         const result = await session.browse(id(s.node));
         return { status: result.statusCode.name, names: result.references.map((r) => r.browseName.name) };
+    }
+    if (s.op === "translate") {
+        const result = await session.translateBrowsePath({
+            startingNode: id(s.node),
+            relativePath: { elements: s.path.map((name) => ({
+                referenceTypeId: "i=33", isInverse: false, includeSubtypes: true, targetName: { namespaceIndex: ns, name },
+            })) },
+        });
+        return { status: result.statusCode.name, targets: (result.targets || []).map((t) => t.targetId.toString()) };
     }
     if (s.op === "read") {
         let dv;
