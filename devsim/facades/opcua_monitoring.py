@@ -15,7 +15,9 @@ each item as Part 4 5.12.2.4 (Table 71) and 5.12.3.4 (Table 74) do, per item:
 * ``Bad_IndexRangeInvalid`` for an IndexRange of invalid syntax (7.27), ``Bad_IndexRangeNoData``
   for one on a scalar that is not a String or ByteString (its dimensions are fixed: Table 71); a
   valid range on a String or an array reports that part only (``shaped``, as Read does);
-* ``Bad_DataEncodingInvalid`` for a dataEncoding on anything but the Value of a structure (7.34);
+* ``Bad_DataEncodingInvalid`` for a dataEncoding on anything but the Value of a structure,
+  ``Bad_DataEncodingUnsupported`` for another than ``Default Binary`` (7.34, as Read:
+  :func:`devsim.facades.opcua_services.encoding_refusal`);
 * an event item: ``Bad_MonitoredItemFilterInvalid`` without an EventFilter (7.22.3: the
   EventFilter selects the fields each notification carries);
 * a Value item: ``Bad_FilterNotAllowed`` for an EventFilter; ``Bad_MonitoredItemFilterUnsupported``
@@ -44,7 +46,7 @@ from asyncua.server.monitored_item_service import MonitoredItemService
 from asyncua.server.subscription_service import SubscriptionService
 from asyncua.ua import uaprotocol_auto
 
-from devsim.facades.opcua_services import index_range, shaped
+from devsim.facades.opcua_services import derives, encoding_refusal, index_range, shaped
 
 __all__ = ["ItemChecks", "Subscriptions", "refusal"]
 
@@ -52,8 +54,6 @@ _BAD = ua.StatusCodes
 _VALUE, _EVENTS = ua.AttributeIds.Value, ua.AttributeIds.EventNotifier
 _SLICEABLE = (ua.NodeId(ua.ObjectIds.String), ua.NodeId(ua.ObjectIds.ByteString))
 _NUMBER = ua.NodeId(ua.ObjectIds.Number)
-_STRUCTURE = ua.NodeId(ua.ObjectIds.Structure)
-_HAS_SUBTYPE = ua.NodeId(ua.ObjectIds.HasSubtype)
 _HAS_PROPERTY = ua.NodeId(ua.ObjectIds.HasProperty)
 #: (a DataChangeFilter as asyncua decodes it; ``ua.DataChangeFilter`` is a subclass of it)
 _DATA_CHANGE = uaprotocol_auto.DataChangeFilter
@@ -63,18 +63,6 @@ _DEADBANDS = {int(ua.DeadbandType.None_), int(ua.DeadbandType.Absolute), int(ua.
 def _attribute(aspace: AddressSpace, node_id: ua.NodeId, attribute: ua.AttributeIds) -> Any:
     value = aspace.read_attribute_value(node_id, attribute)
     return value.Value.Value if value.StatusCode.is_good() and value.Value is not None else None
-
-
-def _derives(aspace: AddressSpace, data_type: Any, ancestor: ua.NodeId) -> bool:
-    """Is ``data_type`` ``ancestor`` or one of its subtypes (inverse HasSubtype, Part 3, 7.10)?"""
-    seen = set()
-    while isinstance(data_type, ua.NodeId) and data_type not in seen and data_type in aspace:
-        if data_type == ancestor:
-            return True
-        seen.add(data_type)
-        data_type = next((ref.NodeId for ref in aspace[data_type].references
-                          if not ref.IsForward and ref.ReferenceTypeId == _HAS_SUBTYPE), None)
-    return False
 
 
 def _has_property(aspace: AddressSpace, node_id: ua.NodeId, name: str) -> bool:
@@ -101,7 +89,7 @@ def _filter_refusal(aspace: AddressSpace, item: ua.ReadValueId, flt: Any) -> int
         return (_BAD.BadMonitoredItemFilterUnsupported if _has_property(aspace, item.NodeId, "EURange")
                 else _BAD.BadDeadbandFilterInvalid)
     data_type = _attribute(aspace, item.NodeId, ua.AttributeIds.DataType)
-    if deadband == ua.DeadbandType.Absolute and not _derives(aspace, data_type, _NUMBER):
+    if deadband == ua.DeadbandType.Absolute and not derives(aspace, data_type, _NUMBER):
         return _BAD.BadFilterNotAllowed
     return None
 
@@ -121,12 +109,8 @@ def refusal(aspace: AddressSpace, item: ua.ReadValueId, flt: Any) -> int | None:
         if attribute == _VALUE and rank == ua.ValueRank.Scalar \
                 and _attribute(aspace, node_id, ua.AttributeIds.DataType) not in _SLICEABLE:
             return _BAD.BadIndexRangeNoData  # a scalar number: fixed dimensions, nothing to select
-    encoding = item.DataEncoding
-    if encoding is not None and encoding.Name:
-        if attribute != _VALUE or not _derives(aspace, _attribute(aspace, node_id, ua.AttributeIds.DataType),
-                                               _STRUCTURE):
-            return _BAD.BadDataEncodingInvalid
-    return _filter_refusal(aspace, item, flt)
+    refused = encoding_refusal(aspace, item)
+    return refused if refused is not None else _filter_refusal(aspace, item, flt)
 
 
 class ItemChecks(MonitoredItemService):

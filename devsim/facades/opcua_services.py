@@ -8,7 +8,10 @@ status codes Part 4 gives where asyncua answers otherwise.
   substring of a String, a slice of an array; ``Bad_IndexRangeInvalid`` for a range of invalid
   syntax, ``Bad_IndexRangeNoData`` for one that selects nothing, as on a scalar number), and a
   request with a negative ``maxAge`` or an invalid ``timestampsToReturn`` is a service fault
-  (``Bad_MaxAgeInvalid``, ``Bad_TimestampsToReturnInvalid``).  asyncua ignores all three.  A write of any node by a client
+  (``Bad_MaxAgeInvalid``, ``Bad_TimestampsToReturnInvalid``).  asyncua ignores all three.  A
+  ``dataEncoding`` is refused unless it is ``Default Binary`` for the Value of a Structure
+  (:func:`encoding_refusal`: ``Bad_DataEncodingInvalid`` / ``Bad_DataEncodingUnsupported``, Part 4
+  7.34; asyncua ignored it).  A write of any node by a client
   answers, in this order: ``Bad_NodeIdUnknown`` for a node the server does not have,
   ``Bad_AttributeIdInvalid`` for an attribute the node does not have, ``Bad_NotWritable`` when
   the node's AccessLevel (Value) or WriteMask (any other attribute) does not allow writing,
@@ -39,12 +42,16 @@ from asyncua import ua
 from asyncua.crypto.permission_rules import User, UserRole
 from asyncua.server.address_space import AddressSpace, AttributeService, MethodService, ViewService
 
-__all__ = ["DeviceMethods", "NodeView", "PointAttributes", "PointNode", "call_result", "index_range", "shaped"]
+__all__ = ["DeviceMethods", "NodeView", "PointAttributes", "PointNode", "call_result", "derives", "encoding_refusal",
+           "index_range", "shaped"]
 
 _BAD = ua.StatusCodes
 _ADMIN = User(role=UserRole.Admin)  # asyncua's default for a write from inside the server
 _WRITE = ua.AccessLevel.CurrentWrite.mask
 _OBJECTS = (ua.NodeClass.Object, ua.NodeClass.ObjectType)
+_STRUCTURE = ua.NodeId(ua.ObjectIds.Structure)
+_HAS_SUBTYPE = ua.NodeId(ua.ObjectIds.HasSubtype)
+_DEFAULT_BINARY = ua.QualifiedName("Default Binary", 0)
 _BUILT_IN = range(1, 26)  # ns=0 DataType ids of the built-in types (Part 6, 5.1.2): a Variant's type
 
 
@@ -75,7 +82,9 @@ class PointAttributes(AttributeService):
             raise ua.UaStatusCodeError(_BAD.BadTimestampsToReturnInvalid)
         results = super().read(params)
         for index, item in enumerate(params.NodesToRead):
-            if item.AttributeId == ua.AttributeIds.Value:
+            if not results[index].StatusCode.is_bad() and (refused := encoding_refusal(self._aspace, item)) is not None:
+                results[index] = ua.DataValue(StatusCode=_status(refused))
+            elif item.AttributeId == ua.AttributeIds.Value:
                 point = self.points.get(item.NodeId)
                 value = point.read() if point is not None else results[index]
                 results[index] = shaped(value, params.TimestampsToReturn, item.IndexRange)
@@ -177,6 +186,39 @@ def shaped(value: ua.DataValue, timestamps: ua.TimestampsToReturn, text: str | N
     return ua.DataValue(variant, StatusCode=value.StatusCode, SourceTimestamp=source,
                         SourcePicoseconds=value.SourcePicoseconds if source is not None else None,
                         ServerTimestamp=server)
+
+
+def _value_of(aspace: AddressSpace, node_id: ua.NodeId, attribute: ua.AttributeIds) -> Any:
+    value = aspace.read_attribute_value(node_id, attribute)
+    return value.Value.Value if value.StatusCode.is_good() and value.Value is not None else None
+
+
+def derives(aspace: AddressSpace, data_type: Any, ancestor: ua.NodeId) -> bool:
+    """Is ``data_type`` ``ancestor`` or one of its subtypes (inverse HasSubtype, Part 3, 7.10)?"""
+    seen = set()
+    while isinstance(data_type, ua.NodeId) and data_type not in seen and data_type in aspace:
+        if data_type == ancestor:
+            return True
+        seen.add(data_type)
+        data_type = next((ref.NodeId for ref in aspace[data_type].references
+                          if not ref.IsForward and ref.ReferenceTypeId == _HAS_SUBTYPE), None)
+    return False
+
+
+def encoding_refusal(aspace: AddressSpace, item: ua.ReadValueId) -> int | None:
+    """The status a dataEncoding asked for ``item`` (Read, CreateMonitoredItems) is refused with
+    (Part 4, 7.34: Bad_DataEncodingInvalid unless it is the Value of a Structure;
+    Bad_DataEncodingUnsupported for another encoding than ``Default Binary``, the one the server
+    speaks), None when there is none to refuse.  The node and attribute exist."""
+    encoding = item.DataEncoding
+    if encoding is None or not encoding.Name:
+        return None
+    data_type = _value_of(aspace, item.NodeId, ua.AttributeIds.DataType)
+    if item.AttributeId != ua.AttributeIds.Value or not derives(aspace, data_type, _STRUCTURE):
+        return _BAD.BadDataEncodingInvalid
+    if encoding != _DEFAULT_BINARY:
+        return _BAD.BadDataEncodingUnsupported
+    return None
 
 
 class NodeView(ViewService):

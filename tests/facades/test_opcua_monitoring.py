@@ -47,6 +47,7 @@ ITEMS = [
     ("sers.axis.phase", "Value", None, "7:5", None, "BadIndexRangeInvalid"),
     ("sers.axis.position", "Value", None, "0:1", None, "BadIndexRangeNoData"),  # a scalar Double
     ("sers.axis.position", "Value", None, None, "Default Binary", "BadDataEncodingInvalid"),
+    (SERVER_STATUS, "Value", None, None, "Default XML", "BadDataEncodingUnsupported"),  # binary only
     # and what is taken
     ("sers.axis.position", "Value", ABSOLUTE, None, None, "Good"),
     ("sers.P11", "Value", ABSOLUTE, None, None, "Good"),  # an integer is a Number too

@@ -1,5 +1,5 @@
 """The OPC UA facade against OPC UA Part 4's status codes (issue 29), through asyncua and
-node-opcua: Read (5.10.2, Table 55), Write (5.10.4, Table 61), Call (5.11.2, Tables 67 and 68),
+node-opcua: Read (5.10.2, Table 55; a dataEncoding 7.34), Write (5.10.4, Table 61), Call (5.11.2, Tables 67 and 68),
 and the AccessLevel / UserAccessLevel of every point (Part 3, 5.6.2) from its declared access.
 
 Expected codes are the standard's: a node the server does not have is Bad_NodeIdUnknown; an
@@ -69,11 +69,16 @@ WRITES = [
     (TEMPERATURE, "Value", "Double", 40.0, "0", None, "BadWriteNotSupported"),  # a scalar: no IndexRange
     (TEMPERATURE, "Value", "Double", 40.0, None, "BadInternalError", "BadWriteNotSupported"),  # no status
 ]
+#: (node, attribute, data encoding) -> the Part 4 answer
 READS = [
-    ("sers.nope", "Value", "BadNodeIdUnknown"),
-    ("sers", "Value", "BadAttributeIdInvalid"),
-    ("sers.encoder.pulses", "Value", "BadNotReadable"),  # write-only: AccessLevel w
-    ("sers.axis.position", "EventNotifier", "BadAttributeIdInvalid"),
+    ("sers.nope", "Value", None, "BadNodeIdUnknown"),
+    ("sers", "Value", None, "BadAttributeIdInvalid"),
+    ("sers.encoder.pulses", "Value", None, "BadNotReadable"),  # write-only: AccessLevel w
+    ("sers.axis.position", "EventNotifier", None, "BadAttributeIdInvalid"),
+    ("sers.axis.position", "Value", "Default Binary", "BadDataEncodingInvalid"),  # a Double: no Structure
+    ("sers.axis.position", "DisplayName", "Default Binary", "BadDataEncodingInvalid"),  # not a Value
+    ("i=2256", "Value", "Default XML", "BadDataEncodingUnsupported"),  # ServerStatus: a Structure
+    ("i=2256", "Value", "Default Binary", "Good"),
 ]
 
 
@@ -106,8 +111,10 @@ async def test_asyncua_write_and_read_answer_with_part4_status_codes(served: Ser
         assert (await node.read_display_name()).Text == "quantity.heatsink_temperature"
         assert await client.get_node(ua.NodeId("sers#Kind", ns)).read_value() == "sers"
         results = await client.uaclient.read(ua.ReadParameters(NodesToRead=[
-            ua.ReadValueId(NodeId=ua.NodeId(node, ns), AttributeId=ua.AttributeIds[attribute])
-            for node, attribute, _ in READS]))
+            ua.ReadValueId(NodeId=ua.NodeId.from_string(node) if node.startswith("i=") else ua.NodeId(node, ns),
+                           AttributeId=ua.AttributeIds[attribute],
+                           DataEncoding=ua.QualifiedName(encoding, 0) if encoding else ua.QualifiedName())
+            for node, attribute, encoding, _ in READS]))
         assert [result.StatusCode.name for result in results] == [row[-1] for row in READS]
         new = _other_temperature(served.runtime)  # and a write that may be done still is
         await node.write_value(ua.Variant(new, ua.VariantType.Double))
@@ -127,7 +134,8 @@ def test_node_opcua_write_and_read_answer_with_part4_status_codes(served: Served
         if status is not None:
             step["statusCode"] = status
         plan.append(step)
-    plan += [{"op": "read", "node": node, "attribute": attribute} for node, attribute, _ in READS]
+    plan += [{"op": "read", "nodeId" if node.startswith("i=") else "node": node, "attribute": attribute,
+              "encoding": encoding} for node, attribute, encoding, _ in READS]
     results = node_client(served.facade.url, plan)
     assert [result["status"] for result in results] == [row[-1] for row in WRITES] + [row[-1] for row in READS]
     _unchanged(served, temperature, program)

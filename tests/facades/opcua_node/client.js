@@ -5,8 +5,8 @@
 //   {"op": "write", "node": "x.param.V", "type": "Double", "value": 12.5}   status
 //     both may name an "attribute" (AccessLevel, DisplayName ...; default Value) and an
 //     "indexRange" ("0:2"); a read a "maxAge" (a refused request: {"fault": name}; node-opcua
-//     asks for both timestamps, "timestamps" says which came), a write a "statusCode" (a
-//     StatusCodes name) to write with the value
+//     asks for both timestamps, "timestamps" says which came) and an "encoding" (a dataEncoding
+//     name), a write a "statusCode" (a StatusCodes name) to write with the value
 //   {"op": "writes", "items": [["x.param.V", "Int32", 3], ...]}   one Write request, a status per item
 //   {"op": "monitor", "nodes": ["x.axis.position", ...]}   the status of each one's first notification
 //     (and its value, "values"); an "indexRange" for every item
@@ -94,6 +94,7 @@ async function step(session, ns, s) {
         try {
             dv = await session.read({
                 nodeId: id(s.node), attributeId: AttributeIds[s.attribute || "Value"], indexRange: s.indexRange,
+                dataEncoding: s.encoding ? { name: s.encoding } : undefined,
             }, s.maxAge);
         } catch (err) {  // a service fault: the whole request refused
             const header = err.response && err.response.responseHeader;
