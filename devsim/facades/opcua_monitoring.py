@@ -15,6 +15,8 @@ each item as Part 4 5.12.2.4 (Table 71) and 5.12.3.4 (Table 74) do, per item:
 * ``Bad_IndexRangeInvalid`` for an IndexRange of invalid syntax (7.27), ``Bad_IndexRangeNoData``
   for one on a scalar that is not a String or ByteString (its dimensions are fixed: Table 71); a
   valid range on a String or an array reports that part only (``shaped``, as Read does);
+* every data change is reported with the timestamps its request's ``timestampsToReturn`` asked for
+  (Source, Server, Both, Neither: 5.12.2.2);
 * ``Bad_DataEncodingInvalid`` for a dataEncoding on anything but the Value of a structure,
   ``Bad_DataEncodingUnsupported`` for another than ``Default Binary`` (7.34, as Read:
   :func:`devsim.facades.opcua_services.encoding_refusal`);
@@ -115,7 +117,13 @@ def refusal(aspace: AddressSpace, item: ua.ReadValueId, flt: Any) -> int | None:
 
 class ItemChecks(MonitoredItemService):
     """asyncua's monitored items of one subscription, each checked by :func:`refusal` first; an
-    item's IndexRange selects what it reports."""
+    item reports the part its IndexRange selects, with the timestamps its request asked for
+    (timestampsToReturn, 5.12.2.2; asyncua sent the stored ones whatever was asked)."""
+
+    def __init__(self, isub: Any, aspace: AddressSpace) -> None:
+        super().__init__(isub, aspace)
+        self._timestamps: dict[int, ua.TimestampsToReturn] = {}  # per item id
+        self._asked = ua.TimestampsToReturn.Both  # (of the item being created)
 
     async def create_monitored_items(self, params: ua.CreateMonitoredItemsParameters) -> list[ua.MonitoredItemCreateResult]:
         results = []
@@ -126,8 +134,18 @@ class ItemChecks(MonitoredItemService):
                 continue
             one = ua.CreateMonitoredItemsParameters(SubscriptionId=params.SubscriptionId,
                                                     TimestampsToReturn=params.TimestampsToReturn, ItemsToCreate=[item])
+            self._asked = params.TimestampsToReturn
             results.extend(await super().create_monitored_items(one))
         return results
+
+    def _make_monitored_item_common(self, params: ua.MonitoredItemCreateRequest) -> tuple[ua.MonitoredItemCreateResult, Any]:
+        result, mdata = super()._make_monitored_item_common(params)
+        self._timestamps[result.MonitoredItemId] = self._asked  # before its first notification
+        return result, mdata
+
+    def _delete_monitored_items(self, mid: int) -> ua.StatusCode:
+        self._timestamps.pop(mid, None)
+        return super()._delete_monitored_items(mid)
 
     def modify_monitored_items(self, params: ua.ModifyMonitoredItemsParameters) -> list[ua.MonitoredItemModifyResult]:
         results = []
@@ -142,9 +160,10 @@ class ItemChecks(MonitoredItemService):
         return results
 
     async def datachange_callback(self, handle: int, value: ua.DataValue, error: ua.StatusCode | None = None) -> None:
-        mdata = self._monitored_items.get(self._monitored_datachange.get(handle, -1))
-        if error is None and value is not None and mdata is not None and mdata.read_value_id.IndexRange:
-            value = shaped(value, ua.TimestampsToReturn.Both, mdata.read_value_id.IndexRange)
+        mid = self._monitored_datachange.get(handle, -1)
+        mdata = self._monitored_items.get(mid)
+        if error is None and value is not None and mdata is not None:
+            value = shaped(value, self._timestamps.get(mid, ua.TimestampsToReturn.Both), mdata.read_value_id.IndexRange)
         await super().datachange_callback(handle, value, error)
 
 

@@ -11,6 +11,9 @@ Bad_IndexRangeInvalid and one on a scalar number Bad_IndexRangeNoData, a dataEnc
 Bad_DataEncodingInvalid, a ModifyMonitoredItems of an item that does not exist
 Bad_MonitoredItemIdInvalid.  asyncua's server answered most of these Good (and then ignored the
 filter or range), Bad_ServiceUnsupported, or failed the whole request with Bad_InternalError.
+
+An item reports the part of a String its IndexRange selects, and the timestamps its request's
+timestampsToReturn asks for (5.12.2.2; asyncua sent a SourceTimestamp only, whatever was asked).
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from typing import Any
 
 import pytest
 from asyncua import Client, ua
+from asyncua.common.subscription import SubscriptionItemData
 
 from devsim.facades.opcua import OpcuaFacade, start_opcua
 from devsim.facades.opcua_space import NAMESPACE
@@ -162,4 +166,43 @@ def test_node_opcua_an_index_range_selects_what_an_item_reports(served: tuple[Ru
     runtime, facade = served
     phase = runtime.read("sers", "axis.phase")
     [result] = node_client(facade.url, [{"op": "monitor", "nodes": ["sers.axis.phase"], "indexRange": "0:1"}])
-    assert result == {"statuses": ["Good"], "values": [phase[:2]]}
+    assert (result["statuses"], result["values"]) == (["Good"], [phase[:2]])
+
+
+#: timestampsToReturn -> (a SourceTimestamp, a ServerTimestamp) in each notification
+STAMPS = {"Source": [True, False], "Server": [False, True], "Both": [True, True], "Neither": [False, False]}
+
+
+async def test_asyncua_an_item_reports_the_timestamps_it_asked_for(served: tuple[Runtime, OpcuaFacade]) -> None:
+    _, facade = served
+    seen: asyncio.Queue[ua.DataValue] = asyncio.Queue()
+
+    class Changes:
+        def datachange_notification(self, node: Any, value: Any, data: Any) -> None:
+            seen.put_nowait(data.monitored_item.Value)
+
+    async with Client(facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        for name, wanted in STAMPS.items():
+            subscription = await client.create_subscription(20, Changes())
+            request = _request(ns, 1, "sers.quantity.supply_voltage", "Value", None, None, None)
+            known = SubscriptionItemData()  # (asyncua's Subscription asks for Both: its handler is told of the
+            known.client_handle, known.node = 1, client.get_node(request.ItemToMonitor.NodeId)  # item by hand)
+            known.attribute = ua.AttributeIds.Value
+            subscription._monitored_items[1] = known
+            [result] = await client.uaclient.create_monitored_items(ua.CreateMonitoredItemsParameters(
+                SubscriptionId=subscription.subscription_id, TimestampsToReturn=ua.TimestampsToReturn[name],
+                ItemsToCreate=[request]))
+            assert result.StatusCode.is_good()
+            value = await asyncio.wait_for(seen.get(), 10)
+            assert value.Value.Value == 68.0
+            assert [value.SourceTimestamp is not None, value.ServerTimestamp is not None] == wanted, name
+            await subscription.delete()
+
+
+def test_node_opcua_an_item_reports_the_timestamps_it_asked_for(served: tuple[Runtime, OpcuaFacade]) -> None:
+    _, facade = served
+    results = node_client(facade.url, [{"op": "monitor", "nodes": ["sers.quantity.supply_voltage"], "timestamps": name}
+                                       for name in STAMPS])
+    assert [result["timestamps"] for result in results] == [[wanted] for wanted in STAMPS.values()]
+    assert all(result["values"] == [68.0] for result in results)

@@ -9,7 +9,8 @@
 //     name), a write a "statusCode" (a StatusCodes name) to write with the value
 //   {"op": "writes", "items": [["x.param.V", "Int32", 3], ...]}   one Write request, a status per item
 //   {"op": "monitor", "nodes": ["x.axis.position", ...]}   the status of each one's first notification
-//     (and its value, "values"); an "indexRange" for every item
+//     (its value, "values", and which timestamps came, "timestamps": [source, server]); an
+//     "indexRange" for every item, "timestamps" the timestampsToReturn (default Both)
 //   {"op": "translate", "node": "x", "path": ["axis.position"]}   TranslateBrowsePathsToNodeIds along
 //     hierarchical references (names in urn:devsim): its status and the targets' node ids
 //   {"op": "items", "items": [ITEM, ...], "modify": [id, ...]}   CreateMonitoredItems, one request an item:
@@ -133,16 +134,18 @@ async function step(session, ns, s) {
         const firsts = s.nodes.map((name) => new Promise((resolve, reject) => {
             const item = ClientMonitoredItem.create(subscription, {
                 nodeId: devsim(name), attributeId: AttributeIds.Value, indexRange: s.indexRange,
-            }, { samplingInterval: 0, queueSize: 1, discardOldest: true }, TimestampsToReturn.Both);
+            }, { samplingInterval: 0, queueSize: 1, discardOldest: true }, TimestampsToReturn[s.timestamps || "Both"]);
             const timer = setTimeout(() => reject(new Error(`no notification for ${name}`)), 10000);
             item.once("changed", (dv) => {
                 clearTimeout(timer);
-                resolve([dv.statusCode.name, plain(dv.value.value, dv.value.dataType)]);
+                resolve([dv.statusCode.name, plain(dv.value.value, dv.value.dataType),
+                         [dv.sourceTimestamp !== null, dv.serverTimestamp !== null]]);
             });
         }));
         const firstValues = await Promise.all(firsts);
         await subscription.terminate();
-        return { statuses: firstValues.map(([status]) => status), values: firstValues.map(([, value]) => value) };
+        return { statuses: firstValues.map(([status]) => status), values: firstValues.map(([, value]) => value),
+                 timestamps: firstValues.map(([, , stamps]) => stamps) };
     }
     if (s.op === "items") {
         const subscription = await session.createSubscription2({
