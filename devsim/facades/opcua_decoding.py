@@ -23,15 +23,18 @@ What asyncua logs about it (``sending service fault response: …``) goes throug
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 from asyncua import Server, ua
 from asyncua.common.utils import Buffer, ServiceError
+from asyncua.crypto.permission_rules import ADMIN_TYPES, USER_TYPES
 from asyncua.server.binary_server_asyncio import BinaryServer, OPCUAProtocol
 from asyncua.server.uaprocessor import UaProcessor
 from asyncua.ua.ua_binary import from_binary, get_safe_type_hints, struct_from_binary
 
 from devsim.facades.opcua_monitoring import Subscriptions
+from devsim.facades.opcua_services import CONTINUATION, ContinuationPoints
 
 __all__ = ["FacadeServer", "RequestDecoding", "undecodable"]
 
@@ -43,6 +46,9 @@ _ENUMERATIONS: dict[Any, int] = {
     ua.TimestampsToReturn: _BAD.BadTimestampsToReturnInvalid,
     ua.MonitoringMode: _BAD.BadMonitoringModeInvalid,
 }
+#: the services asyncua serves (those its permission rules name), and BrowseNext, served here
+_SERVED = frozenset(ua.NodeId(typeid) for typeid in (*USER_TYPES, *ADMIN_TYPES))
+_BROWSE_NEXT = ua.NodeId(ua.ObjectIds.BrowseNextRequest_Encoding_DefaultBinary)
 #: the services asyncua serves whose timestampsToReturn it does not check (Read's: PointAttributes)
 _TIMESTAMPED = {ua.NodeId(getattr(ua.ObjectIds, f"{name}Request_Encoding_DefaultBinary")): getattr(ua, f"{name}Parameters")
                 for name in ("HistoryRead", "CreateMonitoredItems", "ModifyMonitoredItems")}
@@ -86,10 +92,44 @@ def undecodable(typeid: ua.NodeId, body: Buffer) -> int | None:
 class RequestDecoding(UaProcessor):
     """asyncua's processing of a connection's messages, with Part 4's status code for a request
     whose parameters do not decode (asyncua: Bad_InternalError) and for a timestampsToReturn out of
-    the enumeration in the services that take one."""
+    the enumeration in the services that take one; BrowseNext served from the connection's
+    continuation points (Part 4, 5.8.3), and Bad_ServiceUnsupported for a service asyncua does
+    not serve (asyncua: Bad_UserAccessDenied, as if the user were not allowed it)."""
+
+    def __init__(self, *args: Any) -> None:
+        super().__init__(*args)
+        self.continuation = ContinuationPoints()  # this connection's Browse continuation points
 
     async def _process_message(self, typeid: ua.NodeId, requesthdr: ua.RequestHeader, seqhdr: Any,
                                body: Buffer) -> Any:
+        session = self.session
+        if session is not None and session.is_activated():
+            if typeid == _BROWSE_NEXT:
+                return self._browse_next(requesthdr, seqhdr, body)
+            if typeid not in _SERVED:  # asyncua refused these as Bad_UserAccessDenied
+                raise ServiceError(_BAD.BadServiceUnsupported)
+        token = CONTINUATION.set(self.continuation)  # (Browse pages with them)
+        try:
+            return await self._decoded(typeid, requesthdr, seqhdr, body)
+        finally:
+            CONTINUATION.reset(token)
+
+    def _browse_next(self, requesthdr: ua.RequestHeader, seqhdr: Any, body: Buffer) -> bool:
+        """BrowseNext (Part 4, 5.8.3), which asyncua does not serve."""
+        try:
+            params = struct_from_binary(ua.BrowseNextParameters, body)
+        except Exception:  # noqa: BLE001 - whatever asyncua's decoders raise on bad data
+            raise ua.UaStatusCodeError(_BAD.BadDecodingError) from None
+        if not params.ContinuationPoints:
+            raise ServiceError(_BAD.BadNothingToDo)
+        self.session_last_activity = time.monotonic()  # as asyncua does for every request of a session
+        self.session.touch()
+        response = ua.BrowseNextResponse()
+        response.Parameters.Results = self.continuation.browse_next(params)
+        self.send_response(requesthdr.RequestHandle, seqhdr, response)
+        return True
+
+    async def _decoded(self, typeid: ua.NodeId, requesthdr: ua.RequestHeader, seqhdr: Any, body: Buffer) -> Any:
         parameters = body.copy()
         timestamped = _TIMESTAMPED.get(typeid)
         if timestamped is not None and self.session is not None and self.session.is_activated():
@@ -127,12 +167,20 @@ class _Listener(BinaryServer):
 
 class FacadeServer(Server):
     """asyncua's server, its connections processed by :class:`RequestDecoding`, its monitored items
-    checked by :class:`devsim.facades.opcua_monitoring.ItemChecks`."""
+    checked by :class:`devsim.facades.opcua_monitoring.ItemChecks`, its Browse paged with
+    continuation points (:class:`devsim.facades.opcua_services.ContinuationPoints`)."""
 
     def __init__(self) -> None:
         super().__init__()
         iserver = self.iserver  # (before init: nothing holds the service asyncua made but its session)
         iserver.subscription_service = iserver.isession.subscription_service = Subscriptions(iserver.aspace, iserver)
+
+    async def init(self, shelf_file: Any = None) -> None:
+        """asyncua's ``Server.init``, and the ServerCapabilities' MaxBrowseContinuationPoints: the
+        continuation points a connection keeps (Part 5, 6.3.2)."""
+        await super().init(shelf_file)
+        await self.write_attribute_value(ua.NodeId(ua.ObjectIds.Server_ServerCapabilities_MaxBrowseContinuationPoints),
+                                         ua.DataValue(ua.Variant(ContinuationPoints.MOST, ua.VariantType.UInt16)))
 
     async def start(self) -> None:
         """asyncua's ``Server.start`` with :class:`_Listener` for its BinaryServer (and no

@@ -21,7 +21,9 @@ status codes Part 4 gives where asyncua answers otherwise.
   ``Bad_UserAccessDenied`` for all of these.
 * :class:`NodeView` (Part 4, 5.8.2 Browse, 5.8.4 TranslateBrowsePathsToNodeIds): ``Bad_NodeIdUnknown``
   for a node (a path's startingNode) the server does not have (asyncua: ``Bad_NodeIdInvalid``, which
-  Part 4 keeps for a NodeId of invalid syntax).
+  Part 4 keeps for a NodeId of invalid syntax); no more references a node than the client's
+  ``requestedMaxReferencesPerNode``, the rest behind a continuation point for BrowseNext (5.8.3,
+  :class:`ContinuationPoints`; asyncua has no BrowseNext and sent every reference).
 * :class:`DeviceMethods` (Part 4, 5.11.2 Call, Tables 67 and 68): ``Bad_NodeIdUnknown`` for an
   object the server does not have, ``Bad_NodeIdInvalid`` for a node that is not an object,
   ``Bad_MethodInvalid`` for a method that is not a component of that object,
@@ -33,8 +35,10 @@ status codes Part 4 gives where asyncua answers otherwise.
 
 from __future__ import annotations
 
+import os
 import re
 from collections.abc import Mapping
+from contextvars import ContextVar
 from datetime import UTC, datetime
 from typing import Any, Protocol
 
@@ -42,7 +46,7 @@ from asyncua import ua
 from asyncua.crypto.permission_rules import User, UserRole
 from asyncua.server.address_space import AddressSpace, AttributeService, MethodService, ViewService
 
-__all__ = ["DeviceMethods", "NodeView", "PointAttributes", "PointNode", "call_result", "derives", "encoding_refusal",
+__all__ = ["CONTINUATION", "ContinuationPoints", "DeviceMethods", "NodeView", "PointAttributes", "PointNode", "call_result", "derives", "encoding_refusal",
            "index_range", "shaped"]
 
 _BAD = ua.StatusCodes
@@ -221,9 +225,67 @@ def encoding_refusal(aspace: AddressSpace, item: ua.ReadValueId) -> int | None:
     return None
 
 
+class ContinuationPoints:
+    """One connection's Browse continuation points (Part 4, 7.9 (v1.05; 7.6 in v1.04)): the
+    references a Browse or BrowseNext had no room for (``requestedMaxReferencesPerNode``), each
+    under an opaque 16-byte value until BrowseNext fetches or releases it.  At most :data:`MOST`
+    at a time: a new one frees the oldest ("a Server shall automatically free ContinuationPoints
+    from prior requests ... if they are needed to process a new request"), which is then
+    Bad_ContinuationPointInvalid, as one released or never given is."""
+
+    MOST = 16  # the ServerCapabilities' MaxBrowseContinuationPoints
+
+    def __init__(self) -> None:
+        self._kept: dict[bytes, tuple[list[ua.ReferenceDescription], int]] = {}
+
+    def page(self, result: ua.BrowseResult, limit: int) -> None:
+        """Cut ``result`` to ``limit`` references (0: no limit), keeping the rest under a new point."""
+        if not limit or len(result.References) <= limit:
+            return
+        rest, result.References = result.References[limit:], result.References[:limit]
+        while len(self._kept) >= self.MOST:
+            del self._kept[next(iter(self._kept))]  # the oldest
+        point = os.urandom(16)
+        self._kept[point] = (rest, limit)
+        result.ContinuationPoint = point
+
+    def browse_next(self, params: ua.BrowseNextParameters) -> list[ua.BrowseResult]:
+        """The BrowseNext results (Part 4, 5.8.3): the next references of each point, or, when the
+        points are released, a result without references for each (Good, or
+        Bad_ContinuationPointInvalid for one it did not have).  Part 4 says the results "are
+        empty" then; node-opcua's client and the OPC Foundation's .NET client both want one result
+        a point (node-opcua fails an assertion on an empty list), so each result is empty."""
+        results = []
+        for point in params.ContinuationPoints:
+            kept = self._kept.pop(point, None)
+            result = ua.BrowseResult()
+            if kept is None:
+                result.StatusCode = _status(_BAD.BadContinuationPointInvalid)
+            elif not params.ReleaseContinuationPoints:
+                result.References = kept[0]
+                self.page(result, kept[1])
+            results.append(result)
+        return results
+
+
+#: the continuation points of the connection whose request is served (set by
+#: :class:`devsim.facades.opcua_decoding.RequestDecoding`; None: the server's own browsing, unpaged)
+CONTINUATION: ContextVar[ContinuationPoints | None] = ContextVar("continuation", default=None)
+
+
 class NodeView(ViewService):
     """asyncua's view service, with Bad_NodeIdUnknown for a node it does not have (Browse's node,
-    TranslateBrowsePathsToNodeIds' startingNode)."""
+    TranslateBrowsePathsToNodeIds' startingNode), and a client's ``requestedMaxReferencesPerNode``
+    honoured with continuation points (:class:`ContinuationPoints`; asyncua returned every
+    reference whatever the client asked for)."""
+
+    def browse(self, params: ua.BrowseParameters) -> list[ua.BrowseResult]:
+        results = super().browse(params)
+        points = CONTINUATION.get()
+        if points is not None:
+            for result in results:
+                points.page(result, params.RequestedMaxReferencesPerNode)
+        return results
 
     def _browse(self, desc: ua.BrowseDescription) -> ua.BrowseResult:
         if desc.NodeId not in self._aspace:

@@ -1,11 +1,20 @@
 """The OPC UA facade's View service set against OPC UA Part 4 (5.8), through asyncua's client and
 node-opcua's: TranslateBrowsePathsToNodeIds (5.8.4) finds a point's variable by its browse name,
 dots and all, and answers a startingNode the server does not have with Bad_NodeIdUnknown (asyncua:
-Bad_NodeIdInvalid, which Part 4 keeps for a NodeId of invalid syntax)."""
+Bad_NodeIdInvalid, which Part 4 keeps for a NodeId of invalid syntax).
+
+Browse (5.8.2) returns no more references a node than requestedMaxReferencesPerNode, the rest
+behind a continuation point that BrowseNext (5.8.3) continues (page after page, the same
+references as one Browse without a limit) or releases (a result without references; the point is
+then Bad_ContinuationPointInvalid, as a made-up one is).  A connection keeps at most the
+ServerCapabilities' MaxBrowseContinuationPoints: a new one frees the oldest.  asyncua sent every
+reference whatever the limit, and refused BrowseNext, as any service it does not serve, with
+Bad_UserAccessDenied instead of Bad_ServiceUnsupported."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
 from asyncua import Client, ua
@@ -52,3 +61,59 @@ def test_node_opcua_translate_browse_paths(served: tuple[Runtime, OpcuaFacade]) 
     results = node_client(facade.url, [{"op": "translate", "node": start, "path": names} for start, names, *_ in PATHS])
     got = [(result["status"], [target.split(";s=", 1)[1] for target in result["targets"]]) for result in results]
     assert got == [(status, [target] if target else []) for *_, status, target in PATHS]
+
+
+def _browse(ns: int, limit: int) -> ua.BrowseParameters:
+    return ua.BrowseParameters(RequestedMaxReferencesPerNode=limit, NodesToBrowse=[ua.BrowseDescription(
+        NodeId=ua.NodeId("sers", ns), BrowseDirection=ua.BrowseDirection.Forward,
+        ReferenceTypeId=ua.NodeId(ua.ObjectIds.HierarchicalReferences), IncludeSubtypes=True,
+        ResultMask=ua.BrowseResultMask.All)])
+
+
+async def _next(client: Client, points: list[bytes], release: bool = False) -> list[ua.BrowseResult]:
+    return await client.uaclient.browse_next(ua.BrowseNextParameters(ReleaseContinuationPoints=release,
+                                                                      ContinuationPoints=points))
+
+
+async def test_asyncua_browse_pages_with_continuation_points(served: tuple[Runtime, OpcuaFacade]) -> None:
+    _, facade = served
+    async with Client(facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        [whole] = await client.uaclient.browse(_browse(ns, 0))
+        assert len(whole.References) > 40 and not whole.ContinuationPoint
+        [result] = await client.uaclient.browse(_browse(ns, 7))
+        pages, names = [len(result.References)], [ref.BrowseName.Name for ref in result.References]
+        while result.ContinuationPoint:
+            [result] = await _next(client, [result.ContinuationPoint])
+            assert result.StatusCode.is_good()
+            pages.append(len(result.References))
+            names += [ref.BrowseName.Name for ref in result.References]
+        assert names == [ref.BrowseName.Name for ref in whole.References]
+        assert set(pages[:-1]) == {7} and 0 < pages[-1] <= 7
+        [result] = await client.uaclient.browse(_browse(ns, 7))
+        [released] = await _next(client, [result.ContinuationPoint], release=True)  # released: no references
+        assert (released.StatusCode.name, released.References, released.ContinuationPoint) == ("Good", [], None)
+        [again, made_up] = await _next(client, [result.ContinuationPoint, b"\x00\xff"])
+        assert again.StatusCode.name == made_up.StatusCode.name == "BadContinuationPointInvalid"
+        most = await client.get_node(ua.ObjectIds.Server_ServerCapabilities_MaxBrowseContinuationPoints).read_value()
+        points = [(await client.uaclient.browse(_browse(ns, 1)))[0].ContinuationPoint for _ in range(most + 1)]
+        [oldest, newest] = await _next(client, [points[0], points[-1]])  # one more than it keeps: the oldest went
+        assert (oldest.StatusCode.name, newest.StatusCode.name) == ("BadContinuationPointInvalid", "Good")
+        with pytest.raises(ua.uaerrors.BadNothingToDo):
+            await _next(client, [])
+        with pytest.raises(ua.uaerrors.BadServiceUnsupported):  # a service asyncua's server does not serve
+            await client.uaclient.protocol.send_request(ua.QueryFirstRequest())
+        assert await client.get_node(ua.NodeId("sers.quantity.supply_voltage", ns)).read_value() == 68.0
+
+
+def test_node_opcua_browse_pages_with_continuation_points(served: tuple[Runtime, OpcuaFacade]) -> None:
+    _, facade = served
+    plan: list[dict[str, Any]] = [{"op": "paged", "node": "sers", "max": 0}, {"op": "paged", "node": "sers", "max": 7},
+                                  {"op": "paged", "node": "sers", "max": 7, "release": True},
+                                  {"op": "paged", "points": ["00ff"]}]
+    whole, paged, released, made_up = node_client(facade.url, plan)
+    assert len(whole["pages"]) == 1 and whole["pages"][0] > 40
+    assert paged["names"] == whole["names"] and paged["status"] == "Good"
+    assert set(paged["pages"][:-1]) == {7} and 0 < paged["pages"][-1] <= 7
+    assert released == {"pages": [7], "released": 1, "again": "BadContinuationPointInvalid"}
+    assert made_up == {"statuses": ["BadContinuationPointInvalid"]}

@@ -11,6 +11,10 @@
 //   {"op": "monitor", "nodes": ["x.axis.position", ...]}   the status of each one's first notification
 //     (its value, "values", and which timestamps came, "timestamps": [source, server]); an
 //     "indexRange" for every item, "timestamps" the timestampsToReturn (default Both)
+//   {"op": "paged", "node": "x", "max": 5}   Browse of at most "max" references a node, then BrowseNext
+//     while there is a continuation point: the size of each page and all the browse names; with
+//     "release": true the first point is released instead (the results' count), then used again
+//     (its status); {"op": "paged", "points": ["00ff"]}: BrowseNext of made-up points (the statuses)
 //   {"op": "translate", "node": "x", "path": ["axis.position"]}   TranslateBrowsePathsToNodeIds along
 //     hierarchical references (names in urn:devsim): its status and the targets' node ids
 //   {"op": "items", "items": [ITEM, ...], "modify": [id, ...]}   CreateMonitoredItems, one request an item:
@@ -80,6 +84,32 @@ async function step(session, ns, s) {
     if (s.op === "browse") {
         const result = await session.browse(id(s.node));
         return { status: result.statusCode.name, names: result.references.map((r) => r.browseName.name) };
+    }
+    if (s.op === "paged") {
+        if (s.points) {
+            const made = await fault(() => session.browseNext(s.points.map((hex) => Buffer.from(hex, "hex")), false));
+            return made.fault ? made : { statuses: made.map((r) => r.statusCode.name) };
+        }
+        const before = session.requestedMaxReferencesPerNode;
+        session.requestedMaxReferencesPerNode = s.max;
+        try {
+            let result = await session.browse(id(s.node));
+            const pages = [result.references.length];
+            const names = result.references.map((r) => r.browseName.name);
+            if (s.release) {
+                const released = await session.browseNext([result.continuationPoint], true);
+                const again = await session.browseNext(result.continuationPoint, false);
+                return { pages, released: released.length, again: again.statusCode.name };
+            }
+            while (result.continuationPoint && result.continuationPoint.length) {
+                result = await session.browseNext(result.continuationPoint, false);
+                pages.push(result.references.length);
+                names.push(...result.references.map((r) => r.browseName.name));
+            }
+            return { status: result.statusCode.name, pages, names };
+        } finally {
+            session.requestedMaxReferencesPerNode = before;
+        }
     }
     if (s.op === "translate") {
         const result = await session.translateBrowsePath({
