@@ -240,7 +240,7 @@ class OpcuaFacade:
             raise ValueError("an OPC UA sampling period is a positive number of seconds")
         self.devices, self.endpoint, self.period, self.name = list(devices), endpoint, period, name
         self.runtime = runtime  # the Fault and PowerCycle methods run its control ops
-        self.server = FacadeServer()
+        self.server = FacadeServer(runtime.clock)  # (monitored items' sampling intervals: device time)
         self.bound: dict[ua.NodeId, _Bound] = {}
         self.nodes: dict[str, _DeviceNode] = {}
         self.namespace = 0

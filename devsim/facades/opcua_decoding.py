@@ -33,6 +33,7 @@ from asyncua.server.binary_server_asyncio import BinaryServer, OPCUAProtocol
 from asyncua.server.uaprocessor import UaProcessor
 from asyncua.ua.ua_binary import from_binary, get_safe_type_hints, struct_from_binary
 
+from devsim.core.clock import Clock
 from devsim.facades.opcua_monitoring import Subscriptions
 from devsim.facades.opcua_services import CONTINUATION, ContinuationPoints
 
@@ -170,10 +171,11 @@ class FacadeServer(Server):
     checked by :class:`devsim.facades.opcua_monitoring.ItemChecks`, its Browse paged with
     continuation points (:class:`devsim.facades.opcua_services.ContinuationPoints`)."""
 
-    def __init__(self) -> None:
+    def __init__(self, clock: Clock | None = None) -> None:
         super().__init__()
         iserver = self.iserver  # (before init: nothing holds the service asyncua made but its session)
-        iserver.subscription_service = iserver.isession.subscription_service = Subscriptions(iserver.aspace, iserver)
+        iserver.subscription_service = iserver.isession.subscription_service = Subscriptions(
+            iserver.aspace, iserver, clock)
 
     async def init(self, shelf_file: Any = None) -> None:
         """asyncua's ``Server.init``, and the ServerCapabilities' MaxBrowseContinuationPoints: the

@@ -17,6 +17,9 @@ each item as Part 4 5.12.2.4 (Table 71) and 5.12.3.4 (Table 74) do, per item:
   valid range on a String or an array reports that part only (``shaped``, as Read does);
 * every data change is reported with the timestamps its request's ``timestampsToReturn`` asked for
   (Source, Server, Both, Neither: 5.12.2.2);
+* an item's revisedSamplingInterval is at least the one it asked for (5.12.2.2; asyncua answered
+  the publishing interval), and a Value item that asked for more than its subscription's publishing
+  interval reports its values no closer than that on the device clock (:class:`Spacing`);
 * ``Bad_DataEncodingInvalid`` for a dataEncoding on anything but the Value of a structure,
   ``Bad_DataEncodingUnsupported`` for another than ``Default Binary`` (7.34, as Read:
   :func:`devsim.facades.opcua_services.encoding_refusal`);
@@ -40,6 +43,8 @@ each item as Part 4 5.12.2.4 (Table 71) and 5.12.3.4 (Table 74) do, per item:
 
 from __future__ import annotations
 
+import asyncio
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from asyncua import ua
@@ -48,9 +53,10 @@ from asyncua.server.monitored_item_service import MonitoredItemService
 from asyncua.server.subscription_service import SubscriptionService
 from asyncua.ua import uaprotocol_auto
 
+from devsim.core.clock import Clock
 from devsim.facades.opcua_services import derives, encoding_refusal, index_range, shaped
 
-__all__ = ["ItemChecks", "Subscriptions", "refusal"]
+__all__ = ["ItemChecks", "Spacing", "Subscriptions", "refusal"]
 
 _BAD = ua.StatusCodes
 _VALUE, _EVENTS = ua.AttributeIds.Value, ua.AttributeIds.EventNotifier
@@ -120,10 +126,11 @@ class ItemChecks(MonitoredItemService):
     item reports the part its IndexRange selects, with the timestamps its request asked for
     (timestampsToReturn, 5.12.2.2; asyncua sent the stored ones whatever was asked)."""
 
-    def __init__(self, isub: Any, aspace: AddressSpace) -> None:
+    def __init__(self, isub: Any, aspace: AddressSpace, clock: Clock | None = None) -> None:
         super().__init__(isub, aspace)
         self._timestamps: dict[int, ua.TimestampsToReturn] = {}  # per item id
         self._asked = ua.TimestampsToReturn.Both  # (of the item being created)
+        self._spacing = Spacing(clock, self._deliver)
 
     async def create_monitored_items(self, params: ua.CreateMonitoredItemsParameters) -> list[ua.MonitoredItemCreateResult]:
         results = []
@@ -135,8 +142,19 @@ class ItemChecks(MonitoredItemService):
             one = ua.CreateMonitoredItemsParameters(SubscriptionId=params.SubscriptionId,
                                                     TimestampsToReturn=params.TimestampsToReturn, ItemsToCreate=[item])
             self._asked = params.TimestampsToReturn
-            results.extend(await super().create_monitored_items(one))
+            [result] = await super().create_monitored_items(one)
+            if result.StatusCode.is_good():
+                self._space(result.MonitoredItemId, result, item.ItemToMonitor, item.RequestedParameters.SamplingInterval)
+            results.append(result)
         return results
+
+    def _space(self, mid: int, result: Any, item: ua.ReadValueId, requested: float) -> None:
+        """An item's revisedSamplingInterval at least the one it asked for (5.12.2.2: asyncua gives
+        the subscription's publishing interval) and its values that far apart."""
+        if item.AttributeId == _VALUE and requested > result.RevisedSamplingInterval:
+            result.RevisedSamplingInterval = requested
+        self._spacing.set(mid, requested if item.AttributeId == _VALUE else 0.0,
+                          self.isub.data.RevisedPublishingInterval)
 
     def _make_monitored_item_common(self, params: ua.MonitoredItemCreateRequest) -> tuple[ua.MonitoredItemCreateResult, Any]:
         result, mdata = super()._make_monitored_item_common(params)
@@ -145,6 +163,7 @@ class ItemChecks(MonitoredItemService):
 
     def _delete_monitored_items(self, mid: int) -> ua.StatusCode:
         self._timestamps.pop(mid, None)
+        self._spacing.forget(mid)
         return super()._delete_monitored_items(mid)
 
     def modify_monitored_items(self, params: ua.ModifyMonitoredItemsParameters) -> list[ua.MonitoredItemModifyResult]:
@@ -156,7 +175,9 @@ class ItemChecks(MonitoredItemService):
             if refused is not None:
                 results.append(ua.MonitoredItemModifyResult(StatusCode=ua.StatusCode(refused)))
             else:
-                results.append(self._modify_monitored_item(item))
+                result = self._modify_monitored_item(item)
+                self._space(item.MonitoredItemId, result, mdata.read_value_id, item.RequestedParameters.SamplingInterval)
+                results.append(result)
         return results
 
     async def datachange_callback(self, handle: int, value: ua.DataValue, error: ua.StatusCode | None = None) -> None:
@@ -164,15 +185,80 @@ class ItemChecks(MonitoredItemService):
         mdata = self._monitored_items.get(mid)
         if error is None and value is not None and mdata is not None:
             value = shaped(value, self._timestamps.get(mid, ua.TimestampsToReturn.Both), mdata.read_value_id.IndexRange)
+            if self._spacing.hold(mid, handle, value):
+                return  # reported when its sampling interval has passed
         await super().datachange_callback(handle, value, error)
+
+    async def _deliver(self, mid: int, handle: int, value: ua.DataValue) -> None:
+        if mid in self._monitored_items:
+            await super().datachange_callback(handle, value)
+
+
+class Spacing:
+    """The values of the items that asked for a sampling interval longer than their
+    subscription's publishing interval, kept that far apart on the device clock ("the time
+    between values returned to the Client shall be greater or equal to the sampling interval",
+    Part 4 5.12.1.2): a value that comes sooner is held, replaced by a newer one, and reported
+    when the interval has passed (the latest, as a sample at that moment would see it).  Items
+    that asked for no more than the publishing interval (0, -1: the usual) report every sample
+    the facade makes, as asyncua did."""
+
+    def __init__(self, clock: Clock | None, deliver: Callable[[int, int, ua.DataValue], Awaitable[None]]) -> None:
+        self.clock, self.deliver = clock, deliver
+        self.apart: dict[int, float] = {}  # item id -> device seconds between its values
+        self.last: dict[int, float] = {}  # item id -> when its last value was reported
+        self.held: dict[int, tuple[int, ua.DataValue]] = {}
+        self.timers: dict[int, Any] = {}
+        self.sending: set[Any] = set()
+
+    def set(self, mid: int, requested_ms: float, publishing_ms: float) -> None:
+        if self.clock is not None and requested_ms > publishing_ms:
+            self.apart[mid] = requested_ms / 1000
+        else:
+            self.apart.pop(mid, None)
+
+    def hold(self, mid: int, handle: int, value: ua.DataValue) -> bool:
+        """Hold ``value`` for later (True) or let it be reported now (False)."""
+        if self.clock is None:
+            return False
+        now, apart, last = self.clock.now(), self.apart.get(mid), self.last.get(mid)
+        if apart is not None and last is not None and now - last < apart:
+            self.held[mid] = (handle, value)
+            if mid not in self.timers:
+                self.timers[mid] = self.clock.call_later(last + apart - now, lambda: self._release(mid))
+            return True
+        self.last[mid] = now
+        return False
+
+    def _release(self, mid: int) -> None:
+        self.timers.pop(mid, None)
+        held = self.held.pop(mid, None)
+        if held is None or self.clock is None:
+            return
+        self.last[mid] = self.clock.now()
+        sending = asyncio.ensure_future(self.deliver(mid, *held))  # (the clock fires in the server's loop)
+        self.sending.add(sending)
+        sending.add_done_callback(self.sending.discard)
+
+    def forget(self, mid: int) -> None:
+        for table in (self.apart, self.last, self.held):
+            table.pop(mid, None)
+        timer = self.timers.pop(mid, None)
+        if timer is not None:
+            timer.cancel()
 
 
 class Subscriptions(SubscriptionService):
-    """asyncua's subscriptions, each with :class:`ItemChecks` for its monitored items."""
+    """asyncua's subscriptions, each with :class:`ItemChecks` for its monitored items (sampling
+    intervals on ``clock``, the devices' clock)."""
+
+    def __init__(self, aspace: AddressSpace, iserver: Any, clock: Clock | None = None) -> None:
+        super().__init__(aspace, iserver)
+        self.clock = clock
 
     async def create_subscription(self, params: ua.CreateSubscriptionParameters, callback: Any, session_id: ua.NodeId,
                                   request_callback: Any = None) -> ua.CreateSubscriptionResult:
         result = await super().create_subscription(params, callback, session_id, request_callback)
         subscription = self.subscriptions[result.SubscriptionId]
-        subscription.monitored_item_srv = ItemChecks(subscription, self.aspace)  # (no items yet)
+        subscription.monitored_item_srv = ItemChecks(subscription, self.aspace, self.clock)  # (no items yet)
         return result

@@ -169,6 +169,19 @@ def test_node_opcua_an_index_range_selects_what_an_item_reports(served: tuple[Ru
     assert (result["statuses"], result["values"]) == (["Good"], [phase[:2]])
 
 
+async def _create(client: Client, subscription: Any, request: ua.MonitoredItemCreateRequest,
+                  timestamps: ua.TimestampsToReturn = ua.TimestampsToReturn.Both) -> ua.MonitoredItemCreateResult:
+    """One monitored item created as ``request`` says (asyncua's Subscription asks for Both
+    timestamps and hides the revised sampling interval: its handler is told of the item by hand)."""
+    known = SubscriptionItemData()
+    known.client_handle = request.RequestedParameters.ClientHandle
+    known.node, known.attribute = client.get_node(request.ItemToMonitor.NodeId), request.ItemToMonitor.AttributeId
+    subscription._monitored_items[known.client_handle] = known
+    [result] = await client.uaclient.create_monitored_items(ua.CreateMonitoredItemsParameters(
+        SubscriptionId=subscription.subscription_id, TimestampsToReturn=timestamps, ItemsToCreate=[request]))
+    return result
+
+
 #: timestampsToReturn -> (a SourceTimestamp, a ServerTimestamp) in each notification
 STAMPS = {"Source": [True, False], "Server": [False, True], "Both": [True, True], "Neither": [False, False]}
 
@@ -186,13 +199,7 @@ async def test_asyncua_an_item_reports_the_timestamps_it_asked_for(served: tuple
         for name, wanted in STAMPS.items():
             subscription = await client.create_subscription(20, Changes())
             request = _request(ns, 1, "sers.quantity.supply_voltage", "Value", None, None, None)
-            known = SubscriptionItemData()  # (asyncua's Subscription asks for Both: its handler is told of the
-            known.client_handle, known.node = 1, client.get_node(request.ItemToMonitor.NodeId)  # item by hand)
-            known.attribute = ua.AttributeIds.Value
-            subscription._monitored_items[1] = known
-            [result] = await client.uaclient.create_monitored_items(ua.CreateMonitoredItemsParameters(
-                SubscriptionId=subscription.subscription_id, TimestampsToReturn=ua.TimestampsToReturn[name],
-                ItemsToCreate=[request]))
+            result = await _create(client, subscription, request, ua.TimestampsToReturn[name])
             assert result.StatusCode.is_good()
             value = await asyncio.wait_for(seen.get(), 10)
             assert value.Value.Value == 68.0
@@ -206,3 +213,43 @@ def test_node_opcua_an_item_reports_the_timestamps_it_asked_for(served: tuple[Ru
                                        for name in STAMPS])
     assert [result["timestamps"] for result in results] == [[wanted] for wanted in STAMPS.values()]
     assert all(result["values"] == [68.0] for result in results)
+
+
+async def test_asyncua_an_item_keeps_the_sampling_interval_it_asked_for(served: tuple[Runtime, OpcuaFacade]) -> None:
+    """500 ms asked on a subscription publishing every 20 ms: revised 500 (asyncua: 20), and the
+    values sampled 0.15 and 0.3 s after the first one are held until 0.5 s have passed (device
+    time), then the latest is reported; an item that asked for 0 sees every sample."""
+    runtime, facade = served
+    seen: asyncio.Queue[tuple[int, Any]] = asyncio.Queue()
+
+    class Changes:
+        def datachange_notification(self, node: Any, value: Any, data: Any) -> None:
+            seen.put_nowait((data.monitored_item.ClientHandle, value))
+
+    name = "quantity.adc_volts"
+    old = runtime.read("sers", name)
+    async with Client(facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        subscription = await client.create_subscription(20, Changes())
+        slow = _request(ns, 1, f"sers.{name}", "Value", None, None, None)
+        slow.RequestedParameters.SamplingInterval = 500.0
+        fast = _request(ns, 2, f"sers.{name}", "Value", None, None, None)
+        assert (await _create(client, subscription, slow)).RevisedSamplingInterval == 500.0
+        assert (await _create(client, subscription, fast)).RevisedSamplingInterval <= 20.0
+        firsts = {await asyncio.wait_for(seen.get(), 10) for _ in range(2)}
+        assert firsts == {(1, old), (2, old)}
+        for value in (1.25, 1.5):  # two samples (every 0.1 s) within 0.5 s of the first value
+            runtime.set("sers", name, value)
+            runtime.advance(0.15)
+            assert await asyncio.wait_for(seen.get(), 10) == (2, value)  # the item that asked for 0
+        runtime.advance(0.25)  # 0.55 s after the first value
+        assert await asyncio.wait_for(seen.get(), 10) == (1, 1.5)  # the latest; 1.25 never
+        await subscription.delete()
+
+
+def test_node_opcua_an_item_keeps_the_sampling_interval_it_asked_for(served: tuple[Runtime, OpcuaFacade]) -> None:
+    _, facade = served  # (node-opcua's subscription publishes every 20 ms)
+    items = [{"node": "sers.quantity.adc_volts", "sampling": sampling} for sampling in (500, 0)]
+    [result] = node_client(facade.url, [{"op": "items", "items": items}])
+    assert result["statuses"] == ["Good", "Good"]
+    assert result["revised"][0] == 500 and result["revised"][1] <= 20

@@ -21,7 +21,7 @@
 //     the status of each ("fault:NAME" for a refused request), then ModifyMonitoredItems of those ids.
 //     ITEM: {"node": "x.axis.phase"} (or "nodeId") with "attribute" (default Value), "indexRange",
 //     "encoding" (a dataEncoding name), "filter" ({"type": "event"} or {"type": "datachange",
-//     "deadband": "Absolute", "value": 1})
+//     "deadband": "Absolute", "value": 1}), "sampling" (ms; then "revised": each revisedSamplingInterval)
 //   {"op": "call", "object": "x", "method": "x#Fault", "args": [["String", "power"], ["Boolean", true]]}
 // A step may name a node id in full ("nodeId": "ns=0;i=2253") instead of a devsim "node".
 // String node ids are in the namespace urn:devsim.  Prints one line "RESULT {json}" (node-opcua
@@ -183,6 +183,7 @@ async function step(session, ns, s) {
             publishingEnabled: true,
         });
         const statuses = [];
+        const revised = [];
         for (const [index, item] of s.items.entries()) {
             const created = await fault(() => session.createMonitoredItems({
                 subscriptionId: subscription.subscriptionId, timestampsToReturn: TimestampsToReturn.Both,
@@ -192,15 +193,16 @@ async function step(session, ns, s) {
                         indexRange: item.indexRange, dataEncoding: item.encoding ? { name: item.encoding } : undefined,
                     },
                     monitoringMode: MonitoringMode.Reporting,
-                    requestedParameters: { clientHandle: index + 1, samplingInterval: 0, queueSize: 1,
+                    requestedParameters: { clientHandle: index + 1, samplingInterval: item.sampling || 0, queueSize: 1,
                                            discardOldest: true, filter: filter(item.filter) },
                 }],
             }));
             statuses.push(created.fault ? `fault:${created.fault}` : created.results[0].statusCode.name);
+            revised.push(created.fault ? null : created.results[0].revisedSamplingInterval);
         }
         if (!s.modify) {
             await subscription.terminate();
-            return { statuses };
+            return s.items.some((item) => item.sampling !== undefined) ? { statuses, revised } : { statuses };
         }
         const modified = await fault(() => session.modifyMonitoredItems({
             subscriptionId: subscription.subscriptionId, timestampsToReturn: TimestampsToReturn.Both,
