@@ -35,7 +35,7 @@ from asyncua.ua.ua_binary import from_binary, get_safe_type_hints, struct_from_b
 
 from devsim.core.clock import Clock
 from devsim.facades.opcua_monitoring import Subscriptions
-from devsim.facades.opcua_services import CONTINUATION, ContinuationPoints
+from devsim.facades.opcua_services import CONTINUATION, ContinuationPoints, NodeHistory
 
 __all__ = ["FacadeServer", "RequestDecoding", "undecodable"]
 
@@ -176,6 +176,7 @@ class FacadeServer(Server):
         iserver = self.iserver  # (before init: nothing holds the service asyncua made but its session)
         iserver.subscription_service = iserver.isession.subscription_service = Subscriptions(
             iserver.aspace, iserver, clock)
+        iserver.history_manager = NodeHistory(iserver)
 
     async def init(self, shelf_file: Any = None) -> None:
         """asyncua's ``Server.init``, and the ServerCapabilities' MaxBrowseContinuationPoints: the

@@ -19,6 +19,9 @@ status codes Part 4 gives where asyncua answers otherwise.
   point's Value ``Bad_WriteNotSupported`` when an IndexRange or a status code is written with it
   (Table 61: the server does not support that combination).  asyncua answers
   ``Bad_UserAccessDenied`` for all of these.
+* :class:`NodeHistory` (Part 4, 5.10.3 HistoryRead): ``Bad_NodeIdUnknown`` for a node the server
+  does not have, ``Bad_HistoryOperationUnsupported`` for one that keeps no history (asyncua: Good,
+  no data).
 * :class:`NodeView` (Part 4, 5.8.2 Browse, 5.8.4 TranslateBrowsePathsToNodeIds): ``Bad_NodeIdUnknown``
   for a node (a path's startingNode) the server does not have (asyncua: ``Bad_NodeIdInvalid``, which
   Part 4 keeps for a NodeId of invalid syntax); no more references a node than the client's
@@ -45,8 +48,9 @@ from typing import Any, Protocol
 from asyncua import ua
 from asyncua.crypto.permission_rules import User, UserRole
 from asyncua.server.address_space import AddressSpace, AttributeService, MethodService, ViewService
+from asyncua.server.history import HistoryManager
 
-__all__ = ["CONTINUATION", "ContinuationPoints", "DeviceMethods", "NodeView", "PointAttributes", "PointNode", "call_result", "derives", "encoding_refusal",
+__all__ = ["CONTINUATION", "ContinuationPoints", "DeviceMethods", "NodeHistory", "NodeView", "PointAttributes", "PointNode", "call_result", "derives", "encoding_refusal",
            "index_range", "shaped"]
 
 _BAD = ua.StatusCodes
@@ -190,6 +194,30 @@ def shaped(value: ua.DataValue, timestamps: ua.TimestampsToReturn, text: str | N
     return ua.DataValue(variant, StatusCode=value.StatusCode, SourceTimestamp=source,
                         SourcePicoseconds=value.SourcePicoseconds if source is not None else None,
                         ServerTimestamp=server)
+
+
+class NodeHistory(HistoryManager):
+    """asyncua's HistoryRead (Part 4, 5.10.3) with Table 58's codes for what it answered Good with
+    no data: ``Bad_NodeIdUnknown`` for a node the server does not have, and
+    ``Bad_HistoryOperationUnsupported`` ("the requested history operation is not supported for the
+    requested node") for a node that keeps no history: a Variable whose AccessLevel lacks
+    HistoryRead (every point: the facade keeps no history) for a data history, a node whose
+    EventNotifier lacks HistoryRead for an event history (Part 3, 5.4 and 5.6.2).  A history
+    read asyncua does not implement (processed, at time) is that code too (asyncua:
+    Bad_NotImplemented)."""
+
+    async def _read_history(self, details: Any, rv: ua.HistoryReadValueId) -> ua.HistoryReadResult:
+        aspace = self.iserver.aspace
+        if rv.NodeId not in aspace:
+            return ua.HistoryReadResult(StatusCode=_status(_BAD.BadNodeIdUnknown))
+        events = isinstance(details, ua.ReadEventDetails)
+        if not events and not isinstance(details, ua.ReadRawModifiedDetails):
+            return ua.HistoryReadResult(StatusCode=_status(_BAD.BadHistoryOperationUnsupported))
+        attribute = ua.AttributeIds.EventNotifier if events else ua.AttributeIds.AccessLevel
+        bit = (ua.EventNotifier.HistoryRead if events else ua.AccessLevel.HistoryRead).mask
+        if not (_value_of(aspace, rv.NodeId, attribute) or 0) & bit:
+            return ua.HistoryReadResult(StatusCode=_status(_BAD.BadHistoryOperationUnsupported))
+        return await super()._read_history(details, rv)
 
 
 def _value_of(aspace: AddressSpace, node_id: ua.NodeId, attribute: ua.AttributeIds) -> Any:

@@ -1,6 +1,7 @@
 """The OPC UA facade against OPC UA Part 4's status codes (issue 29), through asyncua and
 node-opcua: Read (5.10.2, Table 55; a dataEncoding 7.34), Write (5.10.4, Table 61), Call (5.11.2, Tables 67 and 68),
-and the AccessLevel / UserAccessLevel of every point (Part 3, 5.6.2) from its declared access.
+and the AccessLevel / UserAccessLevel of every point (Part 3, 5.6.2) from its declared access;
+HistoryRead (5.10.3, Table 58) of a node the facade keeps no history for.
 
 Expected codes are the standard's: a node the server does not have is Bad_NodeIdUnknown; an
 attribute the node does not have Bad_AttributeIdInvalid; a Value whose AccessLevel has no
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Iterator
+from datetime import UTC, datetime, timedelta
 from typing import Any, NamedTuple
 
 import pytest
@@ -335,3 +337,41 @@ def test_node_opcua_calls_answer_with_part4_status_codes(served: Served) -> None
             for obj, method, args, *_ in CALLS]
     results = node_client(served.facade.url, plan)
     _check_calls(served, [(result["status"], result["inputs"]) for result in results])
+
+
+# -- HistoryRead -----------------------------------------------------------------------------------
+#: (node, history asked for) -> the Part 4 answer (5.10.3, Table 58): the facade keeps no history
+HISTORY = [
+    ("sers.nope", "raw", "BadNodeIdUnknown"),
+    ("sers.axis.position", "raw", "BadHistoryOperationUnsupported"),  # AccessLevel without HistoryRead
+    ("sers.axis.position", "processed", "BadHistoryOperationUnsupported"),
+    ("sers", "events", "BadHistoryOperationUnsupported"),  # EventNotifier without HistoryRead
+]
+
+
+def _history(kind: str) -> Any:
+    end = datetime.now(UTC)
+    start = end - timedelta(hours=1)
+    if kind == "raw":
+        return ua.ReadRawModifiedDetails(StartTime=start, EndTime=end, NumValuesPerNode=10)
+    if kind == "processed":
+        return ua.ReadProcessedDetails(StartTime=start, EndTime=end, ProcessingInterval=1000.0)
+    return ua.ReadEventDetails(StartTime=start, EndTime=end, NumValuesPerNode=10, Filter=ua.EventFilter())
+
+
+async def test_asyncua_history_reads_answer_with_part4_status_codes(served: Served) -> None:
+    async with Client(served.facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        got = []
+        for node, kind, _ in HISTORY:
+            [result] = await client.uaclient.history_read(ua.HistoryReadParameters(
+                HistoryReadDetails=_history(kind), TimestampsToReturn=ua.TimestampsToReturn.Both,
+                NodesToRead=[ua.HistoryReadValueId(NodeId=ua.NodeId(node, ns))]))
+            got.append(result.StatusCode.name)
+    assert got == [status for *_, status in HISTORY]
+
+
+def test_node_opcua_history_reads_answer_with_part4_status_codes(served: Served) -> None:
+    raw = [(node, status) for node, kind, status in HISTORY if kind == "raw"]
+    results = node_client(served.facade.url, [{"op": "history", "node": node} for node, _ in raw])
+    assert [result["status"] for result in results] == [status for _, status in raw]

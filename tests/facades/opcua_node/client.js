@@ -15,6 +15,7 @@
 //     while there is a continuation point: the size of each page and all the browse names; with
 //     "release": true the first point is released instead (the results' count), then used again
 //     (its status); {"op": "paged", "points": ["00ff"]}: BrowseNext of made-up points (the statuses)
+//   {"op": "history", "node": "x.axis.position"}   HistoryRead of its raw values of the last hour: the status
 //   {"op": "translate", "node": "x", "path": ["axis.position"]}   TranslateBrowsePathsToNodeIds along
 //     hierarchical references (names in urn:devsim): its status and the targets' node ids
 //   {"op": "items", "items": [ITEM, ...], "modify": [id, ...]}   CreateMonitoredItems, one request an item:
@@ -110,6 +111,11 @@ async function step(session, ns, s) {
         } finally {
             session.requestedMaxReferencesPerNode = before;
         }
+    }
+    if (s.op === "history") {
+        const end = new Date();
+        const result = await session.readHistoryValue(id(s.node), new Date(end.getTime() - 3600000), end);
+        return { status: result.statusCode.name };
     }
     if (s.op === "translate") {
         const result = await session.translateBrowsePath({
