@@ -50,7 +50,17 @@ _ENUMERATIONS: dict[Any, int] = {
 #: the services asyncua serves (those its permission rules name), and BrowseNext, served here
 _SERVED = frozenset(ua.NodeId(typeid) for typeid in (*USER_TYPES, *ADMIN_TYPES))
 _BROWSE_NEXT = ua.NodeId(ua.ObjectIds.BrowseNextRequest_Encoding_DefaultBinary)
-#: the services asyncua serves whose timestampsToReturn it does not check (Read's: PointAttributes)
+#: the services of a list of operations (Part 4: an empty list is Bad_NothingToDo, the whole request)
+_OPERATIONS = {ua.NodeId(getattr(ua.ObjectIds, f"{name}Request_Encoding_DefaultBinary")): getattr(ua, f"{name}Parameters")
+               for name in ("Read", "Write", "Browse", "TranslateBrowsePathsToNodeIds", "Call", "HistoryRead",
+                            "CreateMonitoredItems", "ModifyMonitoredItems", "DeleteMonitoredItems", "SetMonitoringMode",
+                            "SetPublishingMode", "DeleteSubscriptions", "TransferSubscriptions", "RegisterNodes",
+                            "UnregisterNodes")}
+#: each one's list of operations (its one list field)
+_LISTS = {kind: next(name for name, spec in kind.__dataclass_fields__.items() if spec.default_factory is list)
+          for kind in _OPERATIONS.values()}
+#: the services asyncua serves whose timestampsToReturn it does not check (Read's: PointAttributes; all
+#: of them in _OPERATIONS)
 _TIMESTAMPED = {ua.NodeId(getattr(ua.ObjectIds, f"{name}Request_Encoding_DefaultBinary")): getattr(ua, f"{name}Parameters")
                 for name in ("HistoryRead", "CreateMonitoredItems", "ModifyMonitoredItems")}
 
@@ -132,14 +142,16 @@ class RequestDecoding(UaProcessor):
 
     async def _decoded(self, typeid: ua.NodeId, requesthdr: ua.RequestHeader, seqhdr: Any, body: Buffer) -> Any:
         parameters = body.copy()
-        timestamped = _TIMESTAMPED.get(typeid)
-        if timestamped is not None and self.session is not None and self.session.is_activated():
+        kind = _OPERATIONS.get(typeid)
+        if kind is not None and self.session is not None and self.session.is_activated():
             try:  # (an undecodable one: answered below, as asyncua fails to decode it)
-                params = struct_from_binary(timestamped, parameters.copy())
+                params = struct_from_binary(kind, parameters.copy())
             except Exception:  # noqa: BLE001, S110 - asyncua's decoding fails the same way next
                 pass
             else:
-                if params.TimestampsToReturn not in _TIMESTAMPS:
+                if not getattr(params, _LISTS[kind]):  # no operation at all (asyncua: Good, no results)
+                    raise ua.UaStatusCodeError(_BAD.BadNothingToDo)
+                if typeid in _TIMESTAMPED and params.TimestampsToReturn not in _TIMESTAMPS:
                     raise ua.UaStatusCodeError(_BAD.BadTimestampsToReturnInvalid)
         try:
             return await super()._process_message(typeid, requesthdr, seqhdr, body)

@@ -1,7 +1,8 @@
 """The OPC UA facade against OPC UA Part 4's status codes (issue 29), through asyncua and
 node-opcua: Read (5.10.2, Table 55; a dataEncoding 7.34), Write (5.10.4, Table 61), Call (5.11.2, Tables 67 and 68),
 and the AccessLevel / UserAccessLevel of every point (Part 3, 5.6.2) from its declared access;
-HistoryRead (5.10.3, Table 58) of a node the facade keeps no history for.
+HistoryRead (5.10.3, Table 58) of a node the facade keeps no history for; Bad_NothingToDo for
+a request of any service with an empty list of operations (asyncua answered Good, no results).
 
 Expected codes are the standard's: a node the server does not have is Bad_NodeIdUnknown; an
 attribute the node does not have Bad_AttributeIdInvalid; a Value whose AccessLevel has no
@@ -16,7 +17,7 @@ is not an object Bad_NodeIdInvalid.  Nothing refused changes the device.
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from datetime import UTC, datetime, timedelta
 from typing import Any, NamedTuple
 
@@ -375,3 +376,48 @@ def test_node_opcua_history_reads_answer_with_part4_status_codes(served: Served)
     raw = [(node, status) for node, kind, status in HISTORY if kind == "raw"]
     results = node_client(served.facade.url, [{"op": "history", "node": node} for node, _ in raw])
     assert [result["status"] for result in results] == [status for _, status in raw]
+
+
+# -- a request of no operations ------------------------------------------------------------------
+#: service -> its request with an empty list of operations (Part 4: Bad_NothingToDo, the whole request)
+EMPTY: dict[str, Callable[[Any, int], Any]] = {
+    "Read": lambda u, sub: u.read(ua.ReadParameters(NodesToRead=[])),
+    "Write": lambda u, sub: u.write(ua.WriteParameters(NodesToWrite=[])),
+    "Browse": lambda u, sub: u.browse(ua.BrowseParameters(NodesToBrowse=[])),
+    "TranslateBrowsePathsToNodeIds": lambda u, sub: u.translate_browsepaths_to_nodeids([]),
+    "Call": lambda u, sub: u.call([]),
+    "HistoryRead": lambda u, sub: u.history_read(ua.HistoryReadParameters(
+        HistoryReadDetails=ua.ReadRawModifiedDetails(), NodesToRead=[])),
+    "CreateMonitoredItems": lambda u, sub: u.create_monitored_items(ua.CreateMonitoredItemsParameters(
+        SubscriptionId=sub, ItemsToCreate=[])),
+    "ModifyMonitoredItems": lambda u, sub: u.modify_monitored_items(ua.ModifyMonitoredItemsParameters(
+        SubscriptionId=sub, ItemsToModify=[])),
+    "DeleteMonitoredItems": lambda u, sub: u.delete_monitored_items(ua.DeleteMonitoredItemsParameters(
+        SubscriptionId=sub, MonitoredItemIds=[])),
+    "SetMonitoringMode": lambda u, sub: u.set_monitoring_mode(ua.SetMonitoringModeParameters(
+        SubscriptionId=sub, MonitoredItemIds=[])),
+    "SetPublishingMode": lambda u, sub: u.set_publishing_mode(ua.SetPublishingModeParameters(SubscriptionIds=[])),
+    "DeleteSubscriptions": lambda u, sub: u.delete_subscriptions([]),
+    "RegisterNodes": lambda u, sub: u.register_nodes([]),
+}
+
+
+async def test_asyncua_a_request_of_no_operations_is_nothing_to_do(served: Served) -> None:
+    async with Client(served.facade.url) as client:
+        subscription = await client.create_subscription(100, None)
+        got = {}
+        for service, send in EMPTY.items():
+            try:
+                await send(client.uaclient, subscription.subscription_id)
+                got[service] = "Good"
+            except ua.UaStatusCodeError as fault:
+                got[service] = ua.StatusCode(fault.code).name
+        assert got == dict.fromkeys(EMPTY, "BadNothingToDo")
+        ns = await client.get_namespace_index(NAMESPACE)
+        assert await client.get_node(ua.NodeId("sers.quantity.supply_voltage", ns)).read_value() == 68.0
+
+
+def test_node_opcua_a_request_of_no_operations_is_nothing_to_do(served: Served) -> None:
+    services = ["read", "write", "browse", "call"]
+    results = node_client(served.facade.url, [{"op": "empty", "service": service} for service in services])
+    assert results == [{"fault": "BadNothingToDo"}] * len(services)

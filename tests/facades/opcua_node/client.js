@@ -16,6 +16,8 @@
 //     "release": true the first point is released instead (the results' count), then used again
 //     (its status); {"op": "paged", "points": ["00ff"]}: BrowseNext of made-up points (the statuses)
 //   {"op": "history", "node": "x.axis.position"}   HistoryRead of its raw values of the last hour: the status
+//   {"op": "empty", "service": "read"}   a read, write, browse or call of no operations: {"fault": name}
+//     or {"status": "Good"}
 //   {"op": "translate", "node": "x", "path": ["axis.position"]}   TranslateBrowsePathsToNodeIds along
 //     hierarchical references (names in urn:devsim): its status and the targets' node ids
 //   {"op": "items", "items": [ITEM, ...], "modify": [id, ...]}   CreateMonitoredItems, one request an item:
@@ -116,6 +118,10 @@ async function step(session, ns, s) {
         const end = new Date();
         const result = await session.readHistoryValue(id(s.node), new Date(end.getTime() - 3600000), end);
         return { status: result.statusCode.name };
+    }
+    if (s.op === "empty") {
+        const sent = await fault(() => session[s.service]([]));
+        return sent.fault ? sent : { status: "Good" };
     }
     if (s.op === "translate") {
         const result = await session.translateBrowsePath({
