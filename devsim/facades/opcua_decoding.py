@@ -1,4 +1,5 @@
-"""Requests the OPC UA facade cannot decode, answered with OPC UA Part 4's status codes.
+"""Requests the OPC UA facade cannot decode (and a few it can), answered with OPC UA Part 4's
+status codes.
 
 asyncua decodes a request's parameters just before it serves them; a value it cannot decode (an
 enumeration's value out of its range, a body cut short, text that is not UTF-8) escapes as an
@@ -16,6 +17,19 @@ ServiceFault whose status is Part 4's (v1.04):
   "decoding halted because of invalid data in the stream"), an enumeration inside an operation's
   item (a BrowseDescription's browseDirection, a MonitoredItemCreateRequest's monitoringMode)
   included: asyncua decodes a request whole, so one bad item fails it all.
+
+Requests that decode but that asyncua answers otherwise than Part 4 are answered here too:
+
+* ``Bad_NothingToDo`` for a request whose list of operations is empty (NodesToRead, NodesToWrite,
+  MethodsToCall, ItemsToCreate ...: each service's service results; asyncua: Good, no results);
+* BrowseNext (5.8.3), which asyncua does not serve, from the connection's continuation points
+  (:class:`devsim.facades.opcua_services.ContinuationPoints`, which Browse fills);
+* ``Bad_ServiceUnsupported`` for a service asyncua does not serve (QueryFirst, HistoryUpdate,
+  Cancel ...; asyncua: Bad_UserAccessDenied, as if the user were not allowed it).
+
+:class:`FacadeServer` also gives asyncua's server the facade's subscriptions
+(:mod:`devsim.facades.opcua_monitoring`) and HistoryRead
+(:class:`devsim.facades.opcua_services.NodeHistory`).
 
 What asyncua logs about it (``sending service fault response: …``) goes through
 :mod:`devsim.facades.library_log`, rate-limited, as any of its lines.
