@@ -39,12 +39,14 @@ import asyncio
 import logging
 from collections.abc import Callable, Sequence
 from datetime import UTC, datetime
+from pathlib import Path
 from typing import Any
 from urllib.parse import urlparse
 
 from asyncua import ua
 from asyncua.server.event_generator import EventGenerator
 
+import devsim
 from devsim.core.device import Device
 from devsim.core.points import BadValue, ReadOnlyName, UnknownName
 from devsim.core.watch import PointWatch
@@ -253,6 +255,7 @@ class OpcuaFacade:
         server = self.server
         self.loop = asyncio.get_running_loop()
         await server.init()
+        await self._identify(server)
         server.set_endpoint(self.endpoint)
         server.set_server_name(f"devsim {self.name}")
         server.set_security_policy([ua.SecurityPolicyType.NoSecurity])  # a lab's simulator: no certificates
@@ -284,6 +287,17 @@ class OpcuaFacade:
             if node.watch is not None:
                 node.watch.start()
         return self.url
+
+    async def _identify(self, server: FacadeServer) -> None:
+        """The server says it is devsim (Part 5 6.3.1 ServerArray, NamespaceArray[1] = its
+        ApplicationUri; 12.4 BuildInfo), not asyncua's "FreeOpcUa Python Server" 1.0pre: a client's
+        server list and diagnostics name the simulator and its version."""
+        server.product_uri, server.manufacturer_name = NAMESPACE, "devsim"  # (its endpoints' description)
+        await server.set_application_uri(f"urn:devsim:server:{self.name}")
+        await server.get_node(ua.NodeId(ua.ObjectIds.Server_ServerArray)).write_value([server.get_application_uri()])
+        built = datetime.fromtimestamp(Path(devsim.__file__).stat().st_mtime, UTC)  # (the installed package)
+        await server.set_build_info(server.product_uri, server.manufacturer_name, f"devsim {self.name}", devsim.__version__,
+                                    devsim.__version__, built)
 
     async def _add_device(self, device: Device, event_type: Any) -> None:
         ns = self.namespace

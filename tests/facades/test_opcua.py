@@ -102,6 +102,24 @@ async def test_the_device_object_holds_its_points_kind_methods_and_units(served:
         assert await temperature.read_value() == runtime.read("sers", "quantity.heatsink_temperature")
 
 
+async def test_the_server_names_itself_devsim_and_its_version(served: tuple[Runtime, OpcuaFacade]) -> None:
+    """Part 5 6.3.1 (ServerArray[0] and NamespaceArray[1] are the server's ApplicationUri) and 12.4
+    (BuildInfo): a client's server list shows the simulator, not asyncua's default identity."""
+    import devsim
+
+    _, facade = served
+    async with Client(facade.url) as client:
+        build = await client.get_node(ua.ObjectIds.Server_ServerStatus_BuildInfo).read_value()
+        assert (build.ProductName, build.ManufacturerName, build.SoftwareVersion, build.ProductUri) == (
+            "devsim devsim", "devsim", devsim.__version__, NAMESPACE)
+        uri = "urn:devsim:server:devsim"
+        assert await client.get_node(ua.ObjectIds.Server_ServerArray).read_value() == [uri]
+        assert (await client.get_node(ua.ObjectIds.Server_NamespaceArray).read_value())[1:3] == [uri, NAMESPACE]
+        servers = await client.find_servers()
+        assert [(s.ApplicationUri, s.ProductUri, s.ApplicationName.Text) for s in servers] == [
+            (uri, NAMESPACE, "devsim devsim")]
+
+
 async def test_writes_go_through_the_device_with_its_validation(served: tuple[Runtime, OpcuaFacade]) -> None:
     runtime, facade = served
     async with Client(facade.url) as client:
