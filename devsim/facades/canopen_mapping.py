@@ -1,6 +1,8 @@
 """The checks a node makes on the PDO parameters a master writes.  The transmission type
 (sub-index 02h of 1400h … / 1800h …, CiA 301 §7.5.2.35): 241 … 251 are reserved and 252/253 need
-remote frames the node does not serve, so they are aborted 0609 0030h.  The mapping
+remote frames the node does not serve, so they are aborted 0609 0030h.  The COB-ID (sub-index
+01h, CiA 301 §7.5.2.35/§7.5.2.37): an 11-bit CAN-ID that CiA 301 §7.3.5 restricts
+(:data:`RESTRICTED_CAN_IDS`, as for 1005h) is aborted 0609 0030h, the PDO valid or not.  The mapping
 (CiA 301 §7.5.2.36, RPDO mapping parameter 1600h …, and §7.5.2.38, TPDO mapping parameter 1A00h …:
 the re-mapping procedure).
 A mapping entry (sub-index 01h … 08h) that names an object the dictionary does not have is
@@ -42,6 +44,8 @@ def check(node: Any, index: int, subindex: int, data: bytes) -> None:
     """Raise the CiA 301 abort for writing ``data`` into sub-index ``subindex`` of PDO parameter
     ``index`` of ``node`` (a canopen local node), if the write is one to refuse."""
     if index & 0x0200 == 0:  # communication parameter
+        if subindex == 1 and _restricted(int.from_bytes(data[:4].ljust(4, b"\0"), "little")):
+            raise SdoAbortedError(VALUE_RANGE_EXCEEDED)
         if subindex == 2 and data and data[0] not in TRANSMISSION_TYPES:
             raise SdoAbortedError(VALUE_RANGE_EXCEEDED)
         return
@@ -91,6 +95,11 @@ RESTRICTED_CAN_IDS = ((0x000, 0x07F), (0x101, 0x180), (0x581, 0x5FF), (0x601, 0x
 SYNC_GEN, FRAME_29_BIT = 1 << 30, 1 << 29
 
 
+def _restricted(cob_id: int) -> bool:
+    """A COB-ID with an 11-bit frame (bit 29 = 0) whose CAN-ID (bits 10 … 0) CiA 301 §7.3.5 restricts."""
+    return not cob_id & FRAME_29_BIT and any(a <= cob_id & 0x7FF <= b for a, b in RESTRICTED_CAN_IDS)
+
+
 def sync_cob_id(data: bytes) -> int:
     """The CAN-ID of the SYNC a node consumes after a master wrote ``data`` into 1005h (CiA 301
     §7.5.2.5: bit 31 "do not care", bit 30 gen, bit 29 frame, bits 10 … 0 the 11-bit CAN-ID), or
@@ -98,6 +107,6 @@ def sync_cob_id(data: bytes) -> int:
     or bits 28 … 11 set), and no restricted CAN-ID."""
     value = int.from_bytes(data[:4].ljust(4, b"\0"), "little")
     can_id = value & 0x1FFF_FFFF
-    if value & (SYNC_GEN | FRAME_29_BIT) or can_id > 0x7FF or any(a <= can_id <= b for a, b in RESTRICTED_CAN_IDS):
+    if value & (SYNC_GEN | FRAME_29_BIT) or can_id > 0x7FF or _restricted(can_id):
         raise SdoAbortedError(VALUE_RANGE_EXCEEDED)
     return can_id

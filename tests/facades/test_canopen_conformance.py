@@ -370,3 +370,33 @@ def test_the_sync_cob_id_object_names_the_sync_the_node_consumes(drive: Drive) -
     node.tpdo.save()
     node.nmt.state = "OPERATIONAL"
     assert answered(0x91) == 0 and answered(0x80) == 1
+
+
+def test_a_pdo_cob_id_takes_no_can_id_cia_301_restricts(drive: Drive) -> None:
+    """CiA 301 §7.3.5 (restricted CAN-IDs: NMT 000h, 001h … 07Fh, 101h … 180h, the default SDOs
+    581h … 5FFh and 601h … 67Fh, 6E0h … 6FFh, NMT error control 701h … 77Fh, 780h … 7FFh) holds for
+    every configurable COB-ID: an RPDO's or TPDO's sub-index 01h (1400h … 1403h, 1800h … 1803h)
+    naming one is aborted 0609 0030h, valid (bit 31 = 0) or not, as 1005h's is, and the COB-ID
+    stays what it was; CAN-IDs the table leaves free are taken."""
+    node = drive.node
+    for index in (0x1400, 0x1403, 0x1800, 0x1803):
+        before = node.sdo[index][1].raw
+        for can_id in (0x000, 0x07F, 0x101, 0x180, 0x581, 0x5FF, 0x601, 0x67F, 0x6E0, 0x703, 0x77F, 0x7FF):
+            for flags in (0x8000_0000, 0x0):
+                with pytest.raises(canopen.SdoAbortedError) as aborted:
+                    node.sdo[index][1].raw = flags | can_id
+                assert aborted.value.code == VALUE_RANGE_EXCEEDED, (hex(index), hex(flags | can_id))
+                assert node.sdo[index][1].raw == before
+        for free in (0x8000_0081, 0x8000_0100, 0x8000_0481, 0x8000_06DF):  # (EMCY, TIME, PDO, free ranges)
+            node.sdo[index][1].raw = free
+            assert node.sdo[index][1].raw == free
+        node.sdo[index][1].raw = before
+    node.tpdo.read()
+    mapped(node.tpdo[1], 0x6041, trans_type=1)
+    node.tpdo[1].cob_id = 0x1F3
+    node.tpdo.save()
+    frames: queue.Queue[bytes] = queue.Queue()
+    drive.master.subscribe(0x1F3, lambda can_id, data, timestamp: frames.put(bytes(data)))
+    node.nmt.state = "OPERATIONAL"
+    drive.master.send_message(0x80, b"")  # SYNC: the TPDO goes out with the CAN-ID written
+    assert len(frames.get(timeout=5)) == 2
