@@ -7,8 +7,11 @@ position, velocity, enable, fault and motion.  :class:`Cia402` keeps the state t
 (6040h) drives and composes the statusword (6041h); in profile position mode (6060h = 1) a rising
 "new set-point" bit (4) starts a move to the target position (607Ah, bit 6: relative) at the
 profile velocity (6081h), bit 8 (halt) stops it with the ramp and holds new set-points back; in
-profile velocity mode (3) the target velocity (60FFh) runs the axis, and the statusword's bits 10
-(target reached) and 12 (speed) are the velocity supervision's of
+profile velocity mode (3) the drive follows the target velocity (60FFh) in Operation enabled (0 with
+halt): the kind's jog is called when that demand changes (entering Operation enabled, halt set or
+released, a new 60FFh), not for a controlword or a 60FFh that repeats what is commanded (a master
+sends them in an RPDO every SYNC; the IP247 would answer a second jog with its error 2 and stop),
+and the statusword's bits 10 (target reached) and 12 (speed) are the velocity supervision's of
 :mod:`devsim.facades.cia402_velocity` (606Dh … 6070h) over the drive's actual velocity.
 The modes a drive supports (6502h, CiA 402-2) are those whose drive action the kind declares
 (:data:`MODES`); writing another mode into 6060h is refused (``ValueError``), so 6061h only ever
@@ -97,10 +100,22 @@ class Cia402:
     """One axis's 402 state, driving ``actions`` on ``model``; the velocity supervision looks on
     ``clock`` (the device's; without one, a clock that stands still)."""
 
+    _commanded: float | None  # profile velocity mode: the velocity the drive was commanded last
+
     def __init__(self, actions: DriveActions, model: Any, clock: Any = None) -> None:
         self.actions, self.model = actions, model
         self.watch = VelocityWatch(clock if clock is not None else VirtualClock(), self._velocities, DEFAULTS)
         self._power_on()
+
+    @property
+    def state(self) -> str:
+        return self._state
+
+    @state.setter
+    def state(self, state: str) -> None:
+        if state != "operation_enabled":
+            self._commanded = None  # (out of Operation enabled the drive follows nothing)
+        self._state = state
 
     def _power_on(self) -> None:
         self.state = "switch_on_disabled"
@@ -146,6 +161,8 @@ class Cia402:
         action_bit = MODES.get(mode)
         if action_bit is None or not self.supported_modes >> action_bit[1] & 1:
             raise ValueError(f"mode of operation {mode} is not supported")
+        if mode != self.mode:
+            self._commanded = None  # (the velocity the drive follows is the new mode's to command)
         self.mode = mode
         self.watch.look(command=True)
 
@@ -206,13 +223,21 @@ class Cia402:
             elif not word & 0x10:
                 self.setpoint_ack = False
         elif self.mode == PROFILE_VELOCITY:
-            self.actions.jog(self.model, float(self.target_velocity) if not word & 0x100 else 0.0)
+            self._follow()
+
+    def _follow(self) -> None:
+        """Profile velocity mode in Operation enabled: the drive runs at the target velocity (0 with
+        halt); it is commanded when that differs from what it was commanded last."""
+        demand = float(self.target_velocity) if not self.controlword & 0x100 else 0.0
+        if demand != self._commanded:
+            self.actions.jog(self.model, demand)
+            self._commanded = demand
 
     def write_target_velocity(self, value: int) -> None:
         self.target_velocity = value
-        if self.state == "operation_enabled" and self.mode == PROFILE_VELOCITY and not self.controlword & 0x100:
+        if self.state == "operation_enabled" and self.mode == PROFILE_VELOCITY:
             CHANGES.count += 1  # (the drive actions change the model: a door, devsim.core.changes)
-            self.actions.jog(self.model, float(value))
+            self._follow()
         self.watch.look(command=True)
 
     # -- statusword (6041h) ------------------------------------------------------------------------

@@ -253,7 +253,8 @@ def test_entering_operation_enabled_with_bit_4_set_starts_the_move() -> None:
 @given(velocity=st.integers(-(2**31), 2**31 - 1), halt=st.booleans())
 def test_profile_velocity_runs_at_the_target_unless_halted(velocity: int, halt: bool) -> None:
     """Profile velocity mode (6060h = 3, CiA 402-2 §14): the axis runs at 60FFh; bit 8 (halt)
-    stops it with the ramp; a new 60FFh takes effect at once unless halted."""
+    stops it with the ramp; a new 60FFh takes effect at once unless halted (the same value again
+    is no new one)."""
     machine, motor = drive_in(ENABLED)
     machine.write_mode(PROFILE_VELOCITY)
     machine.target_velocity = velocity
@@ -261,7 +262,35 @@ def test_profile_velocity_runs_at_the_target_unless_halted(velocity: int, halt: 
     assert motor.calls == [("jog", 0.0 if halt else float(velocity))]
     machine.write_target_velocity(velocity // 2)
     assert machine.target_velocity == velocity // 2
-    assert motor.calls[1:] == ([] if halt else [("jog", float(velocity // 2))])
+    assert motor.calls[1:] == ([] if halt or velocity // 2 == velocity else [("jog", float(velocity // 2))])
+
+
+@given(words=st.lists(st.sampled_from([0x0F, 0x010F, 0x0007, 0x000B, 0x0006, 0x001F, 0x004F]), max_size=12),
+       targets=st.lists(st.integers(-3, 3), min_size=12, max_size=12))
+@example(words=[0x0F, 0x0F, 0x010F, 0x010F, 0x0F], targets=[2, 2, 2, 2, 3] + [0] * 7)
+def test_profile_velocity_commands_the_drive_only_when_its_demand_changes(words: list[int],
+                                                                          targets: list[int]) -> None:
+    """Profile velocity mode (CiA 402-2): in Operation enabled the drive follows 60FFh (0 with
+    halt).  A master writing the controlword and 60FFh again and again (in an RPDO every SYNC)
+    commands the drive only when what it is to follow changes: after each pair of writes the jogs
+    called are those that change the demand since the last jog, or since the machine entered
+    Operation enabled (oracle: the demand, compared with the last one commanded, forgotten out of
+    Operation enabled)."""
+    machine, motor = drive_in(ENABLED)
+    machine.write_mode(PROFILE_VELOCITY)
+    commanded: float | None = None
+    for word, target in zip([0x0F, *words], targets, strict=False):
+        for write, value in ((machine.write_controlword, word), (machine.write_target_velocity, target)):
+            motor.calls.clear()
+            write(value)
+            expected = []
+            if state_of(machine) == ENABLED:
+                demand = 0.0 if machine.controlword & 0x100 else float(machine.target_velocity)
+                if demand != commanded:
+                    expected, commanded = [("jog", demand)], demand
+            else:
+                commanded = None
+            assert [c for c in motor.calls if c[0] == "jog"] == expected, (hex(word), target)
 
 
 def test_a_target_velocity_outside_operation_enabled_or_profile_velocity_is_kept_only() -> None:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import queue
 from collections.abc import Callable
+from typing import Any
 
 import pytest
 
@@ -177,5 +178,75 @@ def test_every_drive_shows_its_own_velocity_against_the_target(kind: str) -> Non
                 assert bool(status & SPEED_IS_0) == standing, (kind, target, velocity, hex(status))
                 seen.add(standing)
         assert False in seen, kind  # (the axis ran)
+    finally:
+        drive.close()
+
+
+def cyclic_master(kind: str) -> tuple[Drive, Any, Any]:
+    """A ``kind`` in profile velocity mode, Operation enabled, OPERATIONAL, with RPDO1 = controlword
+    and RPDO2 = controlword and target velocity (as a master maps them to send them every SYNC)."""
+    drive = Drive(kind, 9, name=kind, ready=True)
+    node = drive.node
+    try:
+        for word in (0x06, 0x07, 0x0F):
+            node.sdo[0x6040].raw = word
+        node.sdo[0x6060].raw = 3
+        node.rpdo.read()
+        control = mapped(node.rpdo[1], 0x6040, trans_type=255)
+        both = mapped(node.rpdo[2], 0x6040, 0x60FF, trans_type=255)
+        node.rpdo.save()
+        node.nmt.state = "OPERATIONAL"
+    except BaseException:
+        drive.close()
+        raise
+    return drive, control, both
+
+
+def cycles(drive: Drive, control: Any, both: Any, target: int, count: int) -> None:
+    """``count`` cycles of 50 ms, each with both RPDOs (controlword 0Fh, ``target``) and SDO writes
+    of 6040h and 60FFh with the same values, 12.5 ms apart; after every one the axis runs at
+    ``target`` (606Ch within 20 of it), Operation enabled, target reached."""
+    node = drive.node
+    control["Controlword"].raw = both["Controlword"].raw = 0x0F
+    both["Target velocity"].raw = target
+
+    def sdo_control() -> None:
+        node.sdo[0x6040].raw = 0x0F
+
+    def sdo_target() -> None:
+        node.sdo[0x60FF].raw = target
+
+    for cycle in range(count):
+        for write in (control.transmit, both.transmit, sdo_control, sdo_target):
+            write()
+            drive.runtime.advance(0.0125)
+            velocity = node.sdo[0x606C].raw  # (a round trip: an RPDO sent before it has been taken)
+            assert abs(velocity - target) <= 20, (drive.device.kind, target, cycle, write.__name__, velocity)
+            assert node.sdo[0x6041].raw & (0x6F | TARGET_REACHED) == 0x27 | TARGET_REACHED
+
+
+@pytest.mark.parametrize("kind", ["ip247", "sers"])
+def test_an_unchanged_controlword_or_target_velocity_is_no_new_command(kind: str) -> None:
+    """CiA 402-2, profile velocity mode: in Operation enabled the drive follows the target velocity
+    (60FFh); a controlword that commands what is commanded already, or the target velocity written
+    with the value it has, is no new command.  A master sending the controlword (RPDO1) and
+    controlword and target velocity (RPDO2) every cycle, as at every SYNC, or writing them again one
+    by one by SDO, leaves the axis running at the target at every cycle (the IP247 answers a second
+    jog while one runs with its error 2, "Nicht erlaubter Auftrag … Beispiel: Starten einer bereits
+    laufenden Achse.  Die laufende Betriebsart wird abgebrochen")."""
+    drive, control, both = cyclic_master(kind)
+    node = drive.node
+    try:
+        node.sdo[0x60FF].raw = 2000
+        drive.runtime.advance(1.0)  # (run up)
+        start = node.sdo[0x6064].raw
+        cycles(drive, control, both, 2000, 40)
+        assert node.sdo[0x6064].raw - start == pytest.approx(2000 * 2.0, abs=100), kind  # (ran all the time)
+        node.sdo[0x6040].raw = 0x010F  # halt: the demand is 0, the axis stops …
+        drive.runtime.advance(2.0)
+        assert abs(node.sdo[0x606C].raw) <= 20, kind
+        node.sdo[0x6040].raw = 0x000F  # … and runs at the target again as the halt is released
+        drive.runtime.advance(1.0)
+        cycles(drive, control, both, 2000, 10)
     finally:
         drive.close()
