@@ -250,3 +250,62 @@ def test_an_unchanged_controlword_or_target_velocity_is_no_new_command(kind: str
         cycles(drive, control, both, 2000, 10)
     finally:
         drive.close()
+
+
+@pytest.mark.parametrize("kind", DRIVES)
+def test_a_target_velocity_of_0_and_a_quick_stop_stop_every_drive(kind: str) -> None:
+    """Profile velocity mode (CiA 402-2): the drive follows 60FFh, so 60FFh = 0 brings the axis to
+    standstill (606Ch 0, 6064h no longer changing) and keeps it there; so does a quick stop
+    (controlword 0Bh), after which the drive is in Switch on disabled (CiA 402-2 §8.4.3,
+    transition 11 and the quick stop's end)."""
+    drive = Drive(kind, 9, name=kind, ready=True)
+    node = drive.node
+    try:
+        for word in (0x06, 0x07, 0x0F):
+            node.sdo[0x6040].raw = word
+        node.sdo[0x6060].raw = 3
+        for stop in ("60FFh = 0", "quick stop"):
+            node.sdo[0x60FF].raw = -2000
+            drive.runtime.advance(1.0)
+            assert node.sdo[0x606C].raw < -100, (kind, stop)
+            if stop == "quick stop":
+                node.sdo[0x6040].raw = 0x0B
+            else:
+                node.sdo[0x60FF].raw = 0
+            drive.runtime.advance(2.0)
+            position = node.sdo[0x6064].raw
+            assert node.sdo[0x606C].raw == 0, (kind, stop)
+            drive.runtime.advance(1.0)
+            assert node.sdo[0x6064].raw == position and node.sdo[0x606C].raw == 0, (kind, stop)
+        assert node.sdo[0x6041].raw & 0x4F == 0x40, kind  # the quick stop over: Switch on disabled
+    finally:
+        drive.close()
+
+
+def test_the_gms96_brakes_a_jog_to_0_with_its_own_ramp() -> None:
+    """The GMS96 in profile velocity mode: 60FFh = 0 is the card's #0 Abbruch (manual §2.3.2), and
+    the running jog brakes with the card's acceleration B, "Die Geschwindigkeit wird beim
+    Beschleunigen pro Millisekunde maximal um diesen Wert erhöht. Sinusquadrat-Rampen benötigen
+    (Faktor π/2) mehr Zeit" (manual §2.3.1 B): from v to standstill in v / B ms (× π/2 with N24's
+    sin² ramps)."""
+    drive = Drive("gms96", 9, name="gms96", ready=True)
+    node = drive.node
+    try:
+        for word in (0x06, 0x07, 0x0F):
+            node.sdo[0x6040].raw = word
+        node.sdo[0x6060].raw = 3
+        node.sdo[0x60FF].raw = -2000
+        drive.runtime.advance(1.0)
+        running = actual(drive)
+        assert running < -100
+        b = drive.runtime.read("gms96", "param.B")  # Hz/ms
+        sine = drive.runtime.call(lambda: drive.device.model.params.ramp_type) == 1
+        braking = abs(running) / b / 1000 * (math.pi / 2 if sine else 1.0)
+        node.sdo[0x60FF].raw = 0
+        start = drive.runtime.now()
+        assert scan(drive, lambda v: v == 0, 2.0) - start == pytest.approx(braking, abs=0.002)
+        position = node.sdo[0x6064].raw
+        drive.runtime.advance(1.0)
+        assert node.sdo[0x6064].raw == position and node.sdo[0x606C].raw == 0
+    finally:
+        drive.close()

@@ -2,9 +2,15 @@
 what a PLC or host does with the card's commands, done on the card (spec gms96.md §4.2.3, §5.4,
 §5.6): ``Q3`` switches the position controller on (set-point := actual, IDXOFF cleared), ``A``
 moves to an absolute target (work coordinates: the 402 target is the machine frame less the active
-offsets), ``#0`` aborts with the ramp, a jog runs the indexer in a direction.  The card moves at
-its own work speed and ramp (N parameters, the feed): the profile velocity of the facade does not
-change them.  Positions are increments in the machine frame (the ``axis.position`` point).
+offsets), a jog runs the indexer endlessly in a direction (as the spindle simulation ``Q8;3``/``Q8;4``
+does, at the work speed).  A jog to 0 and the quick stop are the card's ``#0`` Abbruch (manual
+§2.3.2: "Dieser Befehl bewirkt den Abbruch der gerade laufenden Operation … Dabei werden alle, bis
+dorthin anstehenden Kommandos, nicht mehr ausgeführt"), and the endless run brakes to standstill
+with the card's ramp (B, N24), as ``Q8;5`` "Stillstand" stops it (manual §2.3.1 Q; spec §3.8.23 [R]:
+"A running move decelerates with the programmed ramp to standstill"): ``#0`` alone ends only what
+the executor runs, so the jog ran on.  The card moves at its own work speed and ramp (N
+parameters, the feed): the profile velocity of the facade does not change them.  Positions are
+increments in the machine frame (the ``axis.position`` point).
 """
 
 from __future__ import annotations
@@ -39,9 +45,18 @@ def _move_to(c: Any, target: float, speed: float) -> None:
     c.executor.submit(Cmd("A", work, 0, 0, 1))
 
 
+def _abort(c: Any) -> None:
+    """``#0``: the queue and the running command given up, an endless run braked with the ramp."""
+    c.spindle.on = False
+    c.executor.abort()
+    if c.indexer.jog_dir:
+        c.indexer.halt()
+        c.changed()
+
+
 def _jog(c: Any, velocity: float) -> None:
     if velocity == 0:
-        c.executor.abort()
+        _abort(c)
         return
     c.indexer.run(1 if velocity > 0 else -1, "work")
     c.changed()
@@ -51,7 +66,7 @@ DRIVE = DriveActions(
     enable=_enable,
     move_to=_move_to,
     jog=_jog,
-    quick_stop=lambda c: c.executor.abort(),
+    quick_stop=_abort,
     reset_fault=lambda c: None,  # an emergency stop or a monitoring fault ends with its cause
     position=lambda c: c.coordinates.physical_to_machine(c.indexer.actual()),
     velocity=lambda c: c.axis.velocity(),
