@@ -309,3 +309,41 @@ def test_the_gms96_brakes_a_jog_to_0_with_its_own_ramp() -> None:
         assert node.sdo[0x6064].raw == position and node.sdo[0x606C].raw == 0
     finally:
         drive.close()
+
+
+@pytest.mark.parametrize("kind", ["ip247", "sers"])
+def test_a_changed_target_velocity_commands_the_drive(kind: str) -> None:
+    """CiA 402-2, profile velocity mode: the drive follows a new target velocity, sent in the RPDO
+    the master sends every cycle: another speed, the other way, another speed again while the
+    last change is still under way.  The IP247 cannot change the speed of a running jog ("Sie
+    können die Geschwindigkeit während der Fahrt nicht ändern") but switches between its jog modes
+    BA1 and BA2 while moving: "Die Achse hält dann an und führt anschließend ihre Bewegung in der
+    neuen Tippenbetriebsart aus" (manual §4.2.1); a second BA1 would be its error 2."""
+    drive, control, both = cyclic_master(kind)
+    node = drive.node
+    try:
+        cycles(drive, control, both, 0, 2)
+        both["Target velocity"].raw = 2000
+        both.transmit()
+        assert node.sdo[0x1017].raw == 0  # (a round trip: the RPDO has been taken)
+        drive.runtime.advance(2.0)
+        cycles(drive, control, both, 2000, 10)
+        for target in (1000, -1500, 2500):
+            both["Target velocity"].raw = target
+            both.transmit()
+            assert node.sdo[0x1017].raw == 0
+            drive.runtime.advance(2.0)
+            cycles(drive, control, both, target, 10)
+        both["Target velocity"].raw = -1000
+        both.transmit()
+        assert node.sdo[0x1017].raw == 0  # (a round trip: the RPDO has been taken)
+        drive.runtime.advance(0.0125)
+        both["Target velocity"].raw = 1200  # while the axis brakes for the last change
+        both.transmit()
+        assert node.sdo[0x1017].raw == 0  # (a round trip: the RPDO has been taken)
+        drive.runtime.advance(3.0)
+        cycles(drive, control, both, 1200, 10)
+        error = drive.runtime.call(lambda: drive.device.model.units[0].error) if kind == "ip247" else 0
+        assert error == 0, kind
+    finally:
+        drive.close()

@@ -1,6 +1,12 @@
 """The IP247's axis 1 as a drive for drive-profile facades such as CiA 402
 (:class:`devsim.core.kit.DriveActions`): what FB164 would ask of page 1 (spec ip247.md §4.1), done
 on the module: BA6 "Start" to an absolute target, BA1 Vorwärts/Rückwärts to jog, "Stopp" to stop.
+A jog at another velocity or the other way while one runs is the other jog mode (BA2 while BA1
+runs, BA1 while BA2 does): the module cannot change a running jog ("Sie können die
+Geschwindigkeit während der Fahrt nicht ändern"; a second BA1 is error 2, "Nicht erlaubter
+Auftrag … Starten einer bereits laufenden Achse") but "Sie können zwischen den
+Tippenbetriebsarten auch während der Bewegung umschalten. Die Achse hält dann an und führt
+anschließend ihre Bewegung in der neuen Tippenbetriebsart aus" (manual §4.2.1).
 The module has no power stage of its own to switch: enabled means machine data are loaded and the
 power unit is ready (BB); a fault is a pending error of 10 or more.  Positions are base units
 (the ``axis.1.position`` point), speeds base units per second, sent as the velocity word in
@@ -51,6 +57,15 @@ def _per_minute(speed: float) -> int:
     return max(1, min(65000, round(abs(speed) * 60 / 1000)))
 
 
+def _jog(m: Any, velocity: float) -> None:
+    if velocity == 0:
+        _operate(m, 1, STOP)
+        return
+    unit = _unit(m)
+    ba = 3 - unit.mode if unit.running and unit.mode in (1, 2) else 1
+    _operate(m, ba, FORWARD if velocity > 0 else BACKWARD, _per_minute(velocity))
+
+
 def _enable(m: Any, on: bool) -> None:
     if on and not _enabled(m):
         raise BadValue("no machine data on axis 1, or the power unit is not ready (BB)")
@@ -63,8 +78,7 @@ def _enabled(m: Any) -> bool:
 DRIVE = DriveActions(
     enable=_enable,
     move_to=lambda m, target, speed: _operate(m, 6, START, _per_minute(speed) if speed > 0 else 0, round(target)),
-    jog=lambda m, v: _operate(m, 1, STOP) if v == 0 else _operate(m, 1, FORWARD if v > 0 else BACKWARD,
-                                                                   _per_minute(v)),
+    jog=_jog,
     quick_stop=lambda m: _operate(m, _unit(m).mode, STOP),
     reset_fault=lambda m: m.operate(PAGE, 17, START, source="ag"),  # BA17: acknowledge the error
     position=lambda m: _unit(m).actual(),
