@@ -14,7 +14,8 @@ EMCY message.  Hosts in other processes reach the nodes through
 --canopen``).  PDOs: what the master maps into 1600h/1A00h and enables; TPDOs go out on SYNC
 (the CAN-ID 1005h names; transmission types 1 … 240; type 0 at the SYNC after a change); with types 254/255 when a mapped value changes (looked at every
 inhibit time, else every 10 ms of device time) and when the event timer runs out; RPDOs are
-written into their objects.  ``devsim run --canopen NODE@socketcan:vcan0`` puts the nodes on a
+written into their objects, those of types 254/255 as they arrive, synchronous ones (0 … 240) at
+the next SYNC (the last one received before it).  ``devsim run --canopen NODE@socketcan:vcan0`` puts the nodes on a
 SocketCAN interface instead, where the machine has one.  Callbacks come from
 python-can's notifier thread; ``call`` runs the device access where the device lives
 (``Runtime.call``)."""
@@ -74,6 +75,7 @@ class CanopenFacade:
         self._sync_id: int | None = None  # the CAN-ID of the SYNC consumed (1005h)
         self._timers: dict[tuple[int, str], Any] = {}  # event-driven TPDOs: device-clock timers
         self._sent: dict[int, bytes] = {}  # event-driven TPDOs: the data they last carried
+        self._actuate: dict[int, list[tuple[int, int, bytes]]] = {}  # synchronous RPDOs: for the next SYNC
         self.lost = 0  # TPDOs and EMCY messages the bus refused (see _send)
         self._refused = False  # the last message was refused
         self.node = canopen.LocalNode(node_id, self.od)
@@ -174,6 +176,7 @@ class CanopenFacade:
     def _stop_pdos(self) -> None:
         """Leaving OPERATIONAL: no TPDO goes out, no RPDO is taken."""
         self._pdos_on = False
+        self._actuate.clear()
         self.call(self._cancel_timers)
         for rpdo in self.node.rpdo.map.values():
             rpdo.callbacks.clear()
@@ -234,6 +237,8 @@ class CanopenFacade:
             self._sent[id(tpdo)] = b"".join(carried)
 
     def _sync(self, can_id: int, data: bytes, timestamp: float) -> None:
+        """A SYNC: the synchronous TPDOs due go out (with the values as of the SYNC), then the
+        synchronous RPDOs received since the last one are taken."""
         if not self._pdos_on:
             return
         self._syncs += 1
@@ -245,16 +250,29 @@ class CanopenFacade:
                     self._transmit(tpdo)
             elif self._syncs % tpdo.trans_type == 0:
                 self._transmit(tpdo)
+        actuate = list(self._actuate.values())
+        self._actuate.clear()
+        for values in actuate:
+            self._take(values)
 
     def _received(self, rpdo: Any) -> None:
-        """An RPDO's values into their objects; one the object refuses (an unsupported mode of
-        operation, a value out of range) is dropped: a PDO has no answer to carry a refusal."""
-        for variable in rpdo.map:
-            if variable.length:
-                try:
-                    self.node.set_data(variable.index, variable.subindex, variable.get_data(), check_writable=True)
-                except SdoAbortedError:
-                    continue
+        """An RPDO's values: into their objects at once (types 254/255), or at the next SYNC
+        (synchronous types 0 … 240, CiA 301 §7.5.2.35: the data a synchronous RPDO carries is
+        actuated at the SYNC that follows it; a later one before that SYNC replaces it)."""
+        values = [(v.index, v.subindex, v.get_data()) for v in rpdo.map if v.length]
+        if rpdo.trans_type is not None and rpdo.trans_type <= 240:
+            self._actuate[rpdo.cob_id] = values
+            return
+        self._take(values)
+
+    def _take(self, values: list[tuple[int, int, bytes]]) -> None:
+        """Values into their objects; one the object refuses (an unsupported mode of operation, a
+        value out of range) is dropped: a PDO has no answer to carry a refusal."""
+        for index, subindex, data in values:
+            try:
+                self.node.set_data(index, subindex, data, check_writable=True)
+            except SdoAbortedError:
+                continue
 
     def _emergency(self, axis: int = 1, code: int = 0x1000) -> None:
         """A fault the model announces: an EMCY message (error register bit 0, generic error);

@@ -400,3 +400,35 @@ def test_a_pdo_cob_id_takes_no_can_id_cia_301_restricts(drive: Drive) -> None:
     node.nmt.state = "OPERATIONAL"
     drive.master.send_message(0x80, b"")  # SYNC: the TPDO goes out with the CAN-ID written
     assert len(frames.get(timeout=5)) == 2
+
+
+def test_a_synchronous_rpdo_is_taken_at_the_next_sync(drive: Drive) -> None:
+    """CiA 301 (PDO transmission types, 1400h sub-index 02h): an RPDO with a synchronous type
+    (0 … 240) is taken at the next SYNC the node receives, not as it arrives; of two before one
+    SYNC, the later one's data is what the SYNC actuates.  An RPDO with type 254/255 is taken as it
+    arrives."""
+    node = drive.node
+    node.rpdo.read()
+    synchronous = mapped(node.rpdo[1], 0x6040, trans_type=1)
+    at_once = mapped(node.rpdo[2], 0x60FF, trans_type=255)
+    node.rpdo.save()
+    node.nmt.state = "OPERATIONAL"
+
+    def state() -> int:
+        return node.sdo[0x6041].raw & 0x6F  # (a round trip: the frames sent before it are handled)
+
+    synchronous["Controlword"].raw = 0x06  # shutdown
+    synchronous.transmit()
+    assert state() & 0x4F == 0x40  # Switch on disabled until the SYNC
+    drive.master.send_message(0x80, b"")
+    assert state() == 0x21  # Ready to switch on
+    for word in (0x00, 0x07):  # disable voltage, then switch on: the SYNC takes the switch on
+        synchronous["Controlword"].raw = word
+        synchronous.transmit()
+    assert state() == 0x21
+    drive.master.send_message(0x80, b"")
+    assert state() == 0x23  # Switched on
+    assert state() == 0x23  # (no second SYNC: nothing taken again)
+    at_once["Target velocity"].raw = 1234
+    at_once.transmit()
+    assert node.sdo[0x60FF].raw == 1234
