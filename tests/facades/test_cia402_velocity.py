@@ -184,7 +184,8 @@ def test_every_drive_shows_its_own_velocity_against_the_target(kind: str) -> Non
 
 def cyclic_master(kind: str) -> tuple[Drive, Any, Any]:
     """A ``kind`` in profile velocity mode, Operation enabled, OPERATIONAL, with RPDO1 = controlword
-    and RPDO2 = controlword and target velocity (as a master maps them to send them every SYNC)."""
+    (type 255, taken as it arrives) and RPDO2 = controlword and target velocity (type 1, taken at the
+    next SYNC), as a master maps them to send them every SYNC."""
     drive = Drive(kind, 9, name=kind, ready=True)
     node = drive.node
     try:
@@ -193,7 +194,7 @@ def cyclic_master(kind: str) -> tuple[Drive, Any, Any]:
         node.sdo[0x6060].raw = 3
         node.rpdo.read()
         control = mapped(node.rpdo[1], 0x6040, trans_type=255)
-        both = mapped(node.rpdo[2], 0x6040, 0x60FF, trans_type=255)
+        both = mapped(node.rpdo[2], 0x6040, 0x60FF, trans_type=1)
         node.rpdo.save()
         node.nmt.state = "OPERATIONAL"
     except BaseException:
@@ -203,9 +204,9 @@ def cyclic_master(kind: str) -> tuple[Drive, Any, Any]:
 
 
 def cycles(drive: Drive, control: Any, both: Any, target: int, count: int) -> None:
-    """``count`` cycles of 50 ms, each with both RPDOs (controlword 0Fh, ``target``) and SDO writes
-    of 6040h and 60FFh with the same values, 12.5 ms apart; after every one the axis runs at
-    ``target`` (606Ch within 20 of it), Operation enabled, target reached."""
+    """``count`` cycles of 50 ms, each with both RPDOs (controlword 0Fh, ``target``), the SYNC, and
+    SDO writes of 6040h and 60FFh with the same values, 10 ms apart; after every one the axis runs
+    at ``target`` (606Ch within 20 of it), Operation enabled, target reached."""
     node = drive.node
     control["Controlword"].raw = both["Controlword"].raw = 0x0F
     both["Target velocity"].raw = target
@@ -217,9 +218,9 @@ def cycles(drive: Drive, control: Any, both: Any, target: int, count: int) -> No
         node.sdo[0x60FF].raw = target
 
     for cycle in range(count):
-        for write in (control.transmit, both.transmit, sdo_control, sdo_target):
+        for write in (control.transmit, both.transmit, drive.master.sync.transmit, sdo_control, sdo_target):
             write()
-            drive.runtime.advance(0.0125)
+            drive.runtime.advance(0.010)
             velocity = node.sdo[0x606C].raw  # (a round trip: an RPDO sent before it has been taken)
             assert abs(velocity - target) <= 20, (drive.device.kind, target, cycle, write.__name__, velocity)
             assert node.sdo[0x6041].raw & (0x6F | TARGET_REACHED) == 0x27 | TARGET_REACHED
@@ -314,8 +315,8 @@ def test_the_gms96_brakes_a_jog_to_0_with_its_own_ramp() -> None:
 @pytest.mark.parametrize("kind", ["ip247", "sers"])
 def test_a_changed_target_velocity_commands_the_drive(kind: str) -> None:
     """CiA 402-2, profile velocity mode: the drive follows a new target velocity, sent in the RPDO
-    the master sends every cycle: another speed, the other way, another speed again while the
-    last change is still under way.  The IP247 cannot change the speed of a running jog ("Sie
+    the master sends every cycle (taken at the SYNC): another speed, the other way, another speed
+    again while the last change is still under way.  The IP247 cannot change the speed of a running jog ("Sie
     können die Geschwindigkeit während der Fahrt nicht ändern") but switches between its jog modes
     BA1 and BA2 while moving: "Die Achse hält dann an und führt anschließend ihre Bewegung in der
     neuen Tippenbetriebsart aus" (manual §4.2.1); a second BA1 would be its error 2."""
@@ -325,21 +326,25 @@ def test_a_changed_target_velocity_commands_the_drive(kind: str) -> None:
         cycles(drive, control, both, 0, 2)
         both["Target velocity"].raw = 2000
         both.transmit()
+        drive.master.sync.transmit()
         assert node.sdo[0x1017].raw == 0  # (a round trip: the RPDO has been taken)
         drive.runtime.advance(2.0)
         cycles(drive, control, both, 2000, 10)
         for target in (1000, -1500, 2500):
             both["Target velocity"].raw = target
             both.transmit()
+            drive.master.sync.transmit()
             assert node.sdo[0x1017].raw == 0
             drive.runtime.advance(2.0)
             cycles(drive, control, both, target, 10)
         both["Target velocity"].raw = -1000
         both.transmit()
+        drive.master.sync.transmit()
         assert node.sdo[0x1017].raw == 0  # (a round trip: the RPDO has been taken)
         drive.runtime.advance(0.0125)
         both["Target velocity"].raw = 1200  # while the axis brakes for the last change
         both.transmit()
+        drive.master.sync.transmit()
         assert node.sdo[0x1017].raw == 0  # (a round trip: the RPDO has been taken)
         drive.runtime.advance(3.0)
         cycles(drive, control, both, 1200, 10)
