@@ -1,8 +1,11 @@
 """The checks a node makes on the PDO parameters a master writes.  The transmission type
 (sub-index 02h of 1400h … / 1800h …, CiA 301 §7.5.2.35): 241 … 251 are reserved and 252/253 need
 remote frames the node does not serve, so they are aborted 0609 0030h.  The COB-ID (sub-index
-01h, CiA 301 §7.5.2.35/§7.5.2.37): an 11-bit CAN-ID that CiA 301 §7.3.5 restricts
-(:data:`RESTRICTED_CAN_IDS`, as for 1005h) is aborted 0609 0030h, the PDO valid or not.  The mapping
+01h, CiA 301 §7.5.2.35/§7.5.2.37) that makes the PDO valid (bit 31 = 0) is aborted 0609 0030h
+with an 11-bit CAN-ID CiA 301 §7.3.5 restricts (:data:`RESTRICTED_CAN_IDS`, as for 1005h), and
+when it would change bits 0 … 29 of a PDO that is valid (the way to another CAN-ID is to make the
+PDO not valid first); a COB-ID with bit 31 = 1 uses no CAN-ID and is taken (80000000h switches a
+PDO off, as CANopenNode takes it).  The mapping
 (CiA 301 §7.5.2.36, RPDO mapping parameter 1600h …, and §7.5.2.38, TPDO mapping parameter 1A00h …:
 the re-mapping procedure).
 A mapping entry (sub-index 01h … 08h) that names an object the dictionary does not have is
@@ -44,8 +47,8 @@ def check(node: Any, index: int, subindex: int, data: bytes) -> None:
     """Raise the CiA 301 abort for writing ``data`` into sub-index ``subindex`` of PDO parameter
     ``index`` of ``node`` (a canopen local node), if the write is one to refuse."""
     if index & 0x0200 == 0:  # communication parameter
-        if subindex == 1 and _restricted(int.from_bytes(data[:4].ljust(4, b"\0"), "little")):
-            raise SdoAbortedError(VALUE_RANGE_EXCEEDED)
+        if subindex == 1:
+            _check_cob_id(node, index, int.from_bytes(data[:4].ljust(4, b"\0"), "little"))
         if subindex == 2 and data and data[0] not in TRANSMISSION_TYPES:
             raise SdoAbortedError(VALUE_RANGE_EXCEEDED)
         return
@@ -66,6 +69,16 @@ def check(node: Any, index: int, subindex: int, data: bytes) -> None:
     if (not getattr(variable, "pdo_mappable", False) or bits != len(variable)
             or not (variable.writable if receive else variable.readable)):
         raise SdoAbortedError(CANNOT_BE_MAPPED)
+
+
+def _check_cob_id(node: Any, index: int, cob_id: int) -> None:
+    """A PDO's COB-ID: valid with a restricted CAN-ID, or another CAN-ID while the PDO is valid,
+    is aborted 0609 0030h."""
+    if cob_id & PDO_NOT_VALID:
+        return
+    stored = int.from_bytes(node.get_data(index, 1)[:4].ljust(4, b"\0"), "little")
+    if _restricted(cob_id) or (not stored & PDO_NOT_VALID and (stored ^ cob_id) & PDO_CAN_ID_BITS):
+        raise SdoAbortedError(VALUE_RANGE_EXCEEDED)
 
 
 def _entry(node: Any, index: int, subindex: int) -> tuple[int, int, int]:
@@ -93,6 +106,7 @@ def _variable(od: Any, index: int, subindex: int) -> ODVariable:
 RESTRICTED_CAN_IDS = ((0x000, 0x07F), (0x101, 0x180), (0x581, 0x5FF), (0x601, 0x67F), (0x6E0, 0x6FF),
                       (0x701, 0x77F), (0x780, 0x7FF))
 SYNC_GEN, FRAME_29_BIT = 1 << 30, 1 << 29
+PDO_NOT_VALID, PDO_CAN_ID_BITS = 1 << 31, (1 << 30) - 1  # (a PDO COB-ID's bit 31, and bits 0 … 29)
 
 
 def _restricted(cob_id: int) -> bool:

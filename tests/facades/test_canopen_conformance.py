@@ -374,22 +374,29 @@ def test_the_sync_cob_id_object_names_the_sync_the_node_consumes(drive: Drive) -
 
 def test_a_pdo_cob_id_takes_no_can_id_cia_301_restricts(drive: Drive) -> None:
     """CiA 301 §7.3.5 (restricted CAN-IDs: NMT 000h, 001h … 07Fh, 101h … 180h, the default SDOs
-    581h … 5FFh and 601h … 67Fh, 6E0h … 6FFh, NMT error control 701h … 77Fh, 780h … 7FFh) holds for
-    every configurable COB-ID: an RPDO's or TPDO's sub-index 01h (1400h … 1403h, 1800h … 1803h)
-    naming one is aborted 0609 0030h, valid (bit 31 = 0) or not, as 1005h's is, and the COB-ID
-    stays what it was; CAN-IDs the table leaves free are taken."""
+    581h … 5FFh and 601h … 67Fh, 6E0h … 6FFh, NMT error control 701h … 77Fh, 780h … 7FFh: no
+    configurable communication object uses them): an RPDO's or TPDO's COB-ID (sub-index 01h of
+    1400h … 1403h, 1800h … 1803h) that makes the PDO valid (bit 31 = 0) with one is aborted
+    0609 0030h, as 1005h's is, and the COB-ID stays what it was.  A PDO not valid uses no CAN-ID:
+    80000000h, as masters write to switch a PDO off, is taken (as CANopenNode takes it), and
+    making that PDO valid as it is is refused.  CAN-IDs the table leaves free are taken."""
     node = drive.node
     for index in (0x1400, 0x1403, 0x1800, 0x1803):
         before = node.sdo[index][1].raw
+        node.sdo[index][1].raw = 0x8000_0000 | before  # (not valid: a CAN-ID may be given)
         for can_id in (0x000, 0x07F, 0x101, 0x180, 0x581, 0x5FF, 0x601, 0x67F, 0x6E0, 0x703, 0x77F, 0x7FF):
-            for flags in (0x8000_0000, 0x0):
+            for flags in (0x0, 0x4000_0000):  # (bit 30: no RTR)
                 with pytest.raises(canopen.SdoAbortedError) as aborted:
                     node.sdo[index][1].raw = flags | can_id
                 assert aborted.value.code == VALUE_RANGE_EXCEEDED, (hex(index), hex(flags | can_id))
-                assert node.sdo[index][1].raw == before
-        for free in (0x8000_0081, 0x8000_0100, 0x8000_0481, 0x8000_06DF):  # (EMCY, TIME, PDO, free ranges)
+                assert node.sdo[index][1].raw == 0x8000_0000 | before
+        node.sdo[index][1].raw = 0x8000_0000  # switched off
+        with pytest.raises(canopen.SdoAbortedError):
+            node.sdo[index][1].raw = 0x0000_0000
+        for free in (0x0081, 0x0100, 0x0481, 0x06DF):  # (EMCY, TIME, PDO, free ranges)
             node.sdo[index][1].raw = free
             assert node.sdo[index][1].raw == free
+            node.sdo[index][1].raw = 0x8000_0000 | free
         node.sdo[index][1].raw = before
     node.tpdo.read()
     mapped(node.tpdo[1], 0x6041, trans_type=1)
@@ -400,6 +407,26 @@ def test_a_pdo_cob_id_takes_no_can_id_cia_301_restricts(drive: Drive) -> None:
     node.nmt.state = "OPERATIONAL"
     drive.master.send_message(0x80, b"")  # SYNC: the TPDO goes out with the CAN-ID written
     assert len(frames.get(timeout=5)) == 2
+
+
+def test_a_valid_pdo_keeps_its_can_id(drive: Drive) -> None:
+    """CiA 301 §7.5.2.35 / §7.5.2.37 (PDO communication parameter, sub-index 01h): bits 0 … 29 of
+    a PDO's COB-ID do not change while the PDO exists (bit 31 = 0); a write that would change them
+    is aborted 0609 0030h.  The way to another CAN-ID is to make the PDO not valid first, as
+    canopen's PdoMap.save() does."""
+    node = drive.node
+    for index, default in ((0x1400, 0x203), (0x1800, 0x183)):
+        assert node.sdo[index][1].raw == default
+        for changed in (default + 2, 0x4000_0000 | (default + 2)):
+            with pytest.raises(canopen.SdoAbortedError) as aborted:
+                node.sdo[index][1].raw = changed
+            assert aborted.value.code == VALUE_RANGE_EXCEEDED, hex(changed)
+            assert node.sdo[index][1].raw == default
+        node.sdo[index][1].raw = 0x4000_0000 | default  # (bit 30 is not one of them)
+        node.sdo[index][1].raw = default
+        node.sdo[index][1].raw = 0x8000_0000 | default  # not valid …
+        node.sdo[index][1].raw = default + 2  # … then valid with another CAN-ID
+        assert node.sdo[index][1].raw == default + 2
 
 
 def test_a_synchronous_rpdo_is_taken_at_the_next_sync(drive: Drive) -> None:
