@@ -41,7 +41,7 @@ from collections.abc import Callable, Sequence
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
-from urllib.parse import urlparse
+from urllib.parse import quote, urlparse
 
 from asyncua import ua
 from asyncua.server.event_generator import EventGenerator
@@ -293,7 +293,7 @@ class OpcuaFacade:
         ApplicationUri; 12.4 BuildInfo), not asyncua's "FreeOpcUa Python Server" 1.0pre: a client's
         server list and diagnostics name the simulator and its version."""
         server.product_uri, server.manufacturer_name = NAMESPACE, "devsim"  # (its endpoints' description)
-        await server.set_application_uri(f"urn:devsim:server:{self.name}")
+        await server.set_application_uri(f"urn:devsim:server:{quote(self.name)}")  # (a plant's name may hold spaces)
         await server.get_node(ua.NodeId(ua.ObjectIds.Server_ServerArray)).write_value([server.get_application_uri()])
         built = datetime.fromtimestamp(Path(devsim.__file__).stat().st_mtime, UTC)  # (the installed package)
         await server.set_build_info(server.product_uri, server.manufacturer_name, f"devsim {self.name}", devsim.__version__,
