@@ -2,7 +2,12 @@
 the "IP247-SIM/PG v1" profile, and the PLC-side endpoint "IP247-SIM/AG v1" (length-framed
 messages with the same services, absolute pages, BCD values per machine data).
 
-The AS511 link's 500 ms inter-character timeout runs on the device clock.
+The AS511 link's 500 ms inter-character timeout runs on the device clock, from the last character
+on the wire: spec §3.5.1 allows "no gap of 500 ms or more" inside a transaction, and while the
+device itself is still sending (a program read, manual §4.3.21 "Verfahrprogramm Lesen (Betriebsart
+69)": "Der COM247 benutzt diese Betriebsart", a thousand bytes take over a second at 9600 8E1)
+there is no gap.  The device's own characters are counted at its line settings whether or not
+the transport paces them.
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ class PgFace(Face):
         self.link = As511Link(self._known, self._service, MAX_PARAMETERS,
                               lambda event: model.record_event(f"pg {event}"))
         self._timer: Timer | None = None
+        self._line_free = 0.0  # when the device's last character sent has left the wire
 
     @property
     def serial_settings(self) -> SerialSettings:
@@ -65,13 +71,18 @@ class PgFace(Face):
     def feed(self, data: bytes) -> None:
         if self.model.config.get("powered", True) is False or self.model.booting:
             return  # a module without power, or still starting, answers nothing (spec §3.6.5, §5.16)
+        sent = 0
         for chunk in self.link.feed(data):
             self.send(chunk)
+            sent += len(chunk)
+        now = self.model.clock.now()
+        if sent:  # (the UART sends one character after the other: after what is still going out)
+            self._line_free = max(self._line_free, now) + sent * self.serial_settings.char_time()
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
-        if self.link.busy:
-            self._timer = self.model.clock.call_later(TIMEOUT, self._expired)
+        if self.link.busy:  # the gap begins when the line falls silent (spec §3.5.1)
+            self._timer = self.model.clock.call_later(max(self._line_free - now, 0.0) + TIMEOUT, self._expired)
 
     def _expired(self) -> None:
         self._timer = None
