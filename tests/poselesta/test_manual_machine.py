@@ -363,6 +363,41 @@ def test_decoded_m_functions_act_block_by_block_in_manual_single_block(make) -> 
     assert cnc.read("output.m03") is False  # the block is over: M03 was for this block only
 
 
+
+def _program_end_in_the_block(cnc: Any) -> None:
+    cnc.advance(3.0)  # M02 at the block end: the program end
+
+
+def _mode_key_while_held(cnc: Any) -> None:
+    cnc.set("input.nc_stop", False)  # HOLD, then the mode key gives the block up
+    cnc.advance(0.5)
+    assert cnc.read("program.state") == "HOLD" and cnc.read("output.m03") is True
+    cnc.set("panel.mode", "MANUAL")
+
+
+def _not_stop(cnc: Any) -> None:
+    cnc.set("input.emergency_stop", False)
+    cnc.advance(0.1)
+    cnc.set("input.emergency_stop", True)
+
+
+@pytest.mark.manual("§2.4.7", "In der Betriebsart Hand-Einzelsatz wirken alle dekodierten M-Funktionen satzweise")
+@pytest.mark.parametrize(("mdi", "end"), [("N1 M03 M02 G01 X10 F3000", _program_end_in_the_block),
+                                          ("N1 M03 M08 G01 X100 F1000", _mode_key_while_held),
+                                          ("N1 M03 M08 G01 X100 F1000", _not_stop)])
+def test_a_manual_single_block_ended_otherwise_ends_its_decoded_m_functions(make, mdi: str, end: Any) -> None:  # noqa: ANN001
+    """The block is over also when it ends the program (M02) or is given up (a mode key in HOLD,
+    Not-Stop): what it set on V15 was for this block only."""
+    cnc = make(mode="MANUAL_SINGLE_BLOCK")
+    cnc.set("panel.mdi", mdi)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.3)
+    assert cnc.read("output.m03") is True
+    end(cnc)
+    cnc.advance(0.1)
+    assert cnc.read("program.state") in ("END", "IDLE")
+    assert [cnc.read(f"output.m{m:02d}") for m in (0, 1, 2, 3, 4, 6, 8, 10)] == [False] * 8
+
 @pytest.mark.manual("§2.3.17", "Damit eine Werkzeugwechsel-Quittierung akzeptiert werden kann, müssen zuvor alle im "
                     "gleichen Satz programmierten S- und T-Funktionen übernommen und quittiert sein")
 def test_a_tool_change_acknowledge_before_s_and_t_are_taken_does_not_count(make) -> None:  # noqa: ANN001

@@ -28,7 +28,7 @@ from devsim.core.signals import SignalBank
 from devsim.devices.poselesta.block_motion import BlockMotion
 from devsim.devices.poselesta.contour import PLANES
 from devsim.devices.poselesta.flow import ProgramFlow
-from devsim.devices.poselesta.functions import ADDRESSES, DECODED, BlockFunctions, block_end_function
+from devsim.devices.poselesta.functions import ADDRESSES, BlockFunctions, block_end_function
 from devsim.devices.poselesta.mst import MstBus
 from devsim.devices.poselesta.parameters import MachineParameters
 from devsim.devices.poselesta.screen import Screen
@@ -150,6 +150,7 @@ class Executor:
         self._cancel_timer()
         if self.state != "IDLE":
             self._travel_off()
+            self.functions.block_over(self._mode() == "MANUAL_SINGLE_BLOCK")
         self.motion.reset()
         self._resume = None
         self.stop_pending = self.abort_pending = False
@@ -418,6 +419,7 @@ class Executor:
             return
         functions = self.functions
         mode = self._mode()
+        self.functions.block_over(mode == "MANUAL_SINGLE_BLOCK")
         if not self.flow.after_block(block, functions.flow):
             self._program_end()
             return
@@ -425,8 +427,6 @@ class Executor:
             self._program_end()
             return
         if mode == "MANUAL_SINGLE_BLOCK":
-            for output in DECODED:
-                self.signals.set(output, False)  # decoded M functions act block-wise (§2.4.7)
             self.block = None
             self._enter("IDLE")
             return

@@ -111,6 +111,14 @@ class BlockFunctions:
     def _full_circle(self, _g: int) -> None:
         self.full_circle = True
 
+    def block_over(self, manual_single_block: bool) -> None:
+        """The block is over: done, ended by M02, or given up (a mode key, Not-Stop).  §2.4.7: "In
+        der Betriebsart Hand-Einzelsatz wirken alle dekodierten M-Funktionen satzweise": there
+        what it set on V15 ends with it."""
+        if manual_single_block:
+            for output in DECODED:
+                self._signals.set(output, False)
+
     # -- M functions on the bus (spec §4.12.2) --------------------------------------------------------
     def put(self, kind: str, value: int) -> None:
         """A function goes on the data bus (:class:`~devsim.devices.poselesta.mst.MstBus`)."""
