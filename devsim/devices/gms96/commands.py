@@ -405,8 +405,10 @@ QUEUED_COMMANDS: Table[Handler] = Table(
         Command("r", QueuedCommands.reset, "§2.3.1 r", "defaults (r0) / erase the EEPROM (r1)"),
         Command("S", QueuedCommands.search_speed, "§2.3.1 S", "S function"),
         Command("s", QueuedCommands.save, "§2.3.1 s", "save to the EEPROM (s85;170)"),
-        Command("v", QueuedCommands.velocity_move, "§2.3.1 v", "velocity mode (jog)"),
-        Command("w", QueuedCommands.feed_move, "§2.3.1 w", "wait"),
+        Command("v", QueuedCommands.velocity_move, "§2.3.1 v", "positioning with velocity optimisation (the profile "
+                "planned before the move; not blended)"),
+        Command("w", QueuedCommands.feed_move, "§2.3.1 w", "feed (Vorschub): the position counter zeroed (O0), then "
+                "a v move by P1"),
         Command("+", QueuedCommands.move, "§2.3.1 +", "relative move"),
         Command("p", QueuedCommands.p, "§2.3.1 p", "program and PLC control (p1, p3)"),
         Command("a", QueuedCommands.other, "§2.3.1 a", "a PLC download line"),
