@@ -48,7 +48,7 @@ def check(node: Any, index: int, subindex: int, data: bytes) -> None:
     ``index`` of ``node`` (a canopen local node), if the write is one to refuse."""
     if index & 0x0200 == 0:  # communication parameter
         if subindex == 1:
-            _check_cob_id(node, index, int.from_bytes(data[:4].ljust(4, b"\0"), "little"))
+            _check_cob_id(node, index, _unsigned32(data))
         if subindex == 2 and data and data[0] not in TRANSMISSION_TYPES:
             raise SdoAbortedError(VALUE_RANGE_EXCEEDED)
         return
@@ -60,7 +60,7 @@ def check(node: Any, index: int, subindex: int, data: bytes) -> None:
         if bits > PDO_BITS:
             raise SdoAbortedError(TOO_LONG)
         return
-    entry = int.from_bytes(data[:4].ljust(4, b"\0"), "little")
+    entry = _unsigned32(data)
     if entry == 0:
         return
     target, sub, bits = _fields(entry)
@@ -76,13 +76,18 @@ def _check_cob_id(node: Any, index: int, cob_id: int) -> None:
     is aborted 0609 0030h."""
     if cob_id & PDO_NOT_VALID:
         return
-    stored = int.from_bytes(node.get_data(index, 1)[:4].ljust(4, b"\0"), "little")
+    stored = _unsigned32(node.get_data(index, 1))
     if _restricted(cob_id) or (not stored & PDO_NOT_VALID and (stored ^ cob_id) & PDO_CAN_ID_BITS):
         raise SdoAbortedError(VALUE_RANGE_EXCEEDED)
 
 
+def _unsigned32(data: bytes) -> int:
+    """An UNSIGNED32 as CANopen sends it (little-endian; a shorter download padded with zeros)."""
+    return int.from_bytes(data[:4].ljust(4, b"\0"), "little")
+
+
 def _entry(node: Any, index: int, subindex: int) -> tuple[int, int, int]:
-    return _fields(int.from_bytes(node.get_data(index, subindex)[:4].ljust(4, b"\0"), "little"))
+    return _fields(_unsigned32(node.get_data(index, subindex)))
 
 
 def _fields(entry: int) -> tuple[int, int, int]:
@@ -119,7 +124,7 @@ def sync_cob_id(data: bytes) -> int:
     §7.5.2.5: bit 31 "do not care", bit 30 gen, bit 29 frame, bits 10 … 0 the 11-bit CAN-ID), or
     the abort 0609 0030h: the node generates no SYNC (gen = 1), takes no 29-bit frame (frame = 1,
     or bits 28 … 11 set), and no restricted CAN-ID."""
-    value = int.from_bytes(data[:4].ljust(4, b"\0"), "little")
+    value = _unsigned32(data)
     can_id = value & 0x1FFF_FFFF
     if value & (SYNC_GEN | FRAME_29_BIT) or can_id > 0x7FF or _restricted(can_id):
         raise SdoAbortedError(VALUE_RANGE_EXCEEDED)
