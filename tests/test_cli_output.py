@@ -123,9 +123,11 @@ def test_unicode_is_printed_as_characters_in_both_modes(addr: str) -> None:
 def test_names_are_grouped_by_family_in_the_terminal_width(addr: str) -> None:
     data = json.loads(ok("ctl", "--control", addr, "--json", "names", "sers"))
     for columns in (60, 120):
-        lines = ok("ctl", "--control", addr, "names", "sers", columns=columns).splitlines()
+        text = ok("ctl", "--control", addr, "names", "sers", columns=columns)
+        lines = text.splitlines()
         assert max(len(line) for line in lines) <= columns
         assert any(line.endswith("…") for line in lines)  # long descriptions are cut
+        lines = lines[: len(lines) - len(_by_pattern(text))]  # (the aliases after the count)
         assert lines[-1].startswith(f"{len(data)} names in ")
         heads = [line for line in lines[:-1] if not line.startswith("  ")]
         assert "axis (5)" in heads and "input (21)" in heads and "param (188)" in heads
@@ -144,10 +146,98 @@ def test_names_are_grouped_by_family_in_the_terminal_width(addr: str) -> None:
 def test_names_of_a_kind_without_a_simulator() -> None:
     """`devsim ctl names KIND` with no simulator to ask: the kind's declared names."""
     text = ok("ctl", "names", "gms96")
-    assert "input (" in text and "output (" in text and text.splitlines()[-1].startswith("160 names in ")
+    assert "input (" in text and "output (" in text and "\n160 names in 9 groups" in text
     assert json.loads(ok("ctl", "names", "sers", "--json"))[0]["name"] == "axis.position"
     done = devsim("ctl", "names", "nokind")
     assert done.returncode == exits.UNREACHABLE and "no running simulator found" in done.stderr
+
+
+def _by_pattern(text: str) -> list[str]:
+    """The lines after the count of names ("262 names in 10 groups ..."): the kind's patterns
+    and aliases."""
+    lines = text.splitlines()
+    end = next(i for i, line in enumerate(lines) if re.match(r"\d+ names in \d+ groups", line))
+    return lines[end + 1:]
+
+
+def _kinds_own(kind: str) -> tuple[list[list[str]], list[list[str]]]:
+    """What `devsim doc KIND` shows of a kind's patterns (pattern, type, access) and of its
+    aliases a control name takes (alias, the name it stands for), from the kind's own tables."""
+    from devsim.core.registry import device_class
+
+    cls = device_class(kind)
+    patterns = [[f.pattern, f.type, f.access] for f in cls.points.families]
+    table = cls.reference().parameter_table
+    aliases = [] if table is None else [
+        [f"param.{alias}", "for", f"param.{table.spell(p.key)}"] for p in table for alias in p.aliases
+        if cls.points.find(f"param.{alias}") is not None]
+    return patterns, aliases
+
+
+def _assert_ends_with_the_kinds_own(text: str, kind: str) -> None:
+    patterns, aliases = _kinds_own(kind)
+    expected = (["also by pattern:", *(["  ", *p] for p in patterns)] if patterns else []) + (
+        ["also by alias:", *(["  ", *a] for a in aliases)] if aliases else [])
+    tail = _by_pattern(text)
+    assert [line if not line.startswith("  ") else ["  ", *line.split()[:3]] for line in tail] == expected, tail
+    assert patterns or aliases
+
+
+def test_names_end_with_the_patterns_a_running_gms96_takes() -> None:
+    """`devsim ctl names DEVICE` ends with the kind's patterns (GMS96 `marker.M<byte>.<bit>`,
+    `register.<n>`): names that read and set but were in no list (only `devsim doc` had them);
+    --json stays the list of declared names."""
+    with tempfile.TemporaryDirectory(prefix="dso") as path:
+        address = f"unix:{path}/c.sock"
+        proc = DevsimProcess("run", "gms96", "--tcp", "0", "--virtual", "--control", address)
+        try:
+            proc.next_match(proc.out, lambda line: line.startswith("control: "), 30, "the control line")
+            text = ok("ctl", "--control", address, "names", "gms96", columns=200)
+            _assert_ends_with_the_kinds_own(text, "gms96")
+            tail = _by_pattern(text)
+            assert tail[0] == "also by pattern:" and any(line.split()[0] == "register.<n>" for line in tail)
+            assert "  marker.M<byte>.<bit>  bool" in text and "marker bit, e.g. M7.0" in text
+            listed = [row["name"] for row in json.loads(ok("ctl", "--control", address, "--json", "names", "gms96"))]
+            assert "marker.M7.0" not in listed and not any("<" in name for name in listed)  # the op's list as it was
+            assert ok("ctl", "--control", address, "set", "gms96", "marker.M7.0", "on") == "ok\n"
+            assert json.loads(ok("ctl", "--control", address, "--json", "read", "gms96", "marker.M7.0",
+                                 "register.2")) == {"marker.M7.0": True, "register.2": 0}
+        finally:
+            assert proc.interrupt() == 0
+
+
+def test_names_end_with_the_aliases_a_running_sers_takes() -> None:
+    """A SERS drive named `sers2` (multidrop): its kind comes from the devices listing, and its
+    names end with the aliases (`param.V` for `param.P91`), each of which reads as its name."""
+    with tempfile.TemporaryDirectory(prefix="dso") as path:
+        address = f"unix:{path}/c.sock"
+        proc = DevsimProcess("run", "sers", "--tcp", "0", "--virtual", "--addresses", "1,2", "--control", address)
+        try:
+            proc.next_match(proc.out, lambda line: line.startswith("control: "), 30, "the control line")
+            text = ok("ctl", "--control", address, "names", "sers2", columns=200)
+            _assert_ends_with_the_kinds_own(text, "sers")
+            tail = _by_pattern(text)
+            assert tail[0] == "also by alias:" and "also by pattern:" not in tail
+            assert any(line.split()[:3] == ["param.V", "for", "param.P91"] for line in tail)
+            readable = [line.split() for line in tail[1:] if line.split()[3] in ("r", "rw")]
+            aliases, canonical = [words[0] for words in readable], [words[2] for words in readable]
+            assert "param.V" in aliases and len(readable) > 10
+            read = json.loads(ok("ctl", "--control", address, "--json", "read", "sers2", *aliases, *canonical))
+            assert [read[name] for name in aliases] == [read[name] for name in canonical]
+            assert isinstance(json.loads(ok("ctl", "--control", address, "--json", "names", "sers2")), list)
+        finally:
+            assert proc.interrupt() == 0
+
+
+def test_names_of_a_kind_end_with_its_patterns_and_aliases() -> None:
+    """Without a simulator, `devsim ctl names KIND` ends the same way (PCD4.H3 `R.<n>`, `F.<n>`;
+    POSELESTA `program.P<nn>`; SERS `param.V`); a width cuts those lines too."""
+    for kind in ("gms96", "pcd4h3", "poselesta", "sers", "ip247"):
+        _assert_ends_with_the_kinds_own(ok("ctl", "names", kind, columns=200), kind)
+    assert "  R.<n>" in ok("ctl", "names", "pcd4h3") and "  program.P<nn>" in ok("ctl", "names", "poselesta")
+    lines = ok("ctl", "names", "pcd4h3", columns=60).splitlines()
+    assert max(map(len, lines)) <= 60 and _by_pattern("\n".join(lines))[0] == "also by pattern:"
+    assert not any("<" in row["name"] for row in json.loads(ok("ctl", "names", "gms96", "--json")))
 
 
 def test_an_error_is_one_line_on_stderr(addr: str) -> None:

@@ -279,13 +279,14 @@ def test_names_of_a_kind_while_a_simulator_of_another_runs(runtime: Path) -> Non
     try:
         done = devsim("ctl", "names", "gms96")
         assert done.returncode == 0, done.stderr
-        assert done.stdout.splitlines()[-1].startswith("160 names in ")
+        assert "\n160 names in " in done.stdout and "\nalso by pattern:\n" in done.stdout
         done = devsim("ctl", "--json", "names", "sers")  # the running device's own
         assert done.returncode == 0 and json.loads(done.stdout)[0]["name"] == "axis.position", done.stderr
         gms, _address, _ = start("run", "gms96", "--pty")
         try:
             done = devsim("ctl", "names", "pcd4h3")
-            assert done.returncode == 0 and "names in " in done.stdout.splitlines()[-1], done.stderr
+            assert done.returncode == 0 and "\n42 names in " in done.stdout, done.stderr
+            assert done.stdout.splitlines()[-1].startswith("  O.<n>"), done.stdout  # its patterns last
             refused = devsim("ctl", "names", "nokind")
             assert refused.returncode == 2 and "2 simulators are running" in refused.stderr
         finally:

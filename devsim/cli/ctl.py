@@ -13,6 +13,7 @@ from __future__ import annotations
 import functools
 import json
 import sys
+from collections.abc import Callable
 from typing import Any
 
 import click
@@ -52,8 +53,9 @@ def _connect(ctx: click.Context) -> tuple[str, Any]:
         raise exits.Unreachable(f"cannot connect to {fleet or addr}: {exc.strerror or exc}") from None
 
 
-def _call(ctx: click.Context, *requests: rq.ControlRequest) -> None:
-    """Send the requests on one connection; print their results (:mod:`devsim.cli.present`)."""
+def _call(ctx: click.Context, *requests: rq.ControlRequest, tail: Callable[[Any], str] | None = None) -> None:
+    """Send the requests on one connection; print their results (:mod:`devsim.cli.present`) and,
+    as text, what ``tail(client)`` adds on the same connection (if anything)."""
     from devsim.runtime.client import ControlError
 
     addr, client = _connect(ctx)
@@ -61,6 +63,8 @@ def _call(ctx: click.Context, *requests: rq.ControlRequest) -> None:
         with client:
             answers = [(request, client.call(request)) for request in requests]
             text = present.render(answers, json_output=present.wants_json(ctx), names=client.names)
+            more = "" if tail is None or present.wants_json(ctx) else tail(client)
+            text = f"{text}\n{more}" if more else text
     except ControlError as exc:
         raise exits.control_error(exc) from None
     except (OSError, ValueError) as exc:
@@ -185,10 +189,12 @@ def ctl_line(ctx: click.Context, device: str, port: str) -> None:
 @click.pass_context
 def ctl_names(ctx: click.Context, device: str) -> None:
     """DEVICE's control names grouped by family (axis, input, param ...), with type, unit, access
-    (r, rw, w) and description (--json: with manual sections).  With no simulator to ask, or none
-    (of several) that serves a device of that name, KIND's names (e.g. 'devsim ctl names sers')."""
+    (r, rw, w) and description (--json: with manual sections), then its kind's names made from a
+    pattern (marker.M<byte>.<bit>) and its aliases (param.V), as 'devsim doc KIND' shows them (not
+    in --json).  With no simulator to ask, or none (of several) that serves a device of that
+    name, KIND's names (e.g. 'devsim ctl names sers')."""
     try:
-        _call(ctx, rq.Names(device))
+        _call(ctx, rq.Names(device), tail=lambda client: _by_pattern(_kind_of(client, device)))
     except click.ClickException as exc:  # none to ask, several, or no such device: a kind's names
         from devsim.core.registry import UnknownKind, device_class
 
@@ -198,7 +204,28 @@ def ctl_names(ctx: click.Context, device: str) -> None:
             rows = [point.describe() for point in device_class(device).points]
         except UnknownKind:
             raise exc from None
-        click.echo(present.render([(rq.Names(device), rows)], json_output=present.wants_json(ctx)))
+        text = present.render([(rq.Names(device), rows)], json_output=present.wants_json(ctx))
+        more = "" if present.wants_json(ctx) else _by_pattern(device)
+        click.echo(f"{text}\n{more}" if more else text)
+
+
+def _kind_of(client: Any, device: str) -> str | None:
+    """The kind of a running DEVICE, from the devices listing (of a process or a fleet)."""
+    return next((row.get("kind") for row in client.call(rq.Devices()) if row.get("name") == device), None)
+
+
+def _by_pattern(kind: str | None) -> str:
+    """The end of ``ctl names`` (not of its op's answer, which lists what every reader reads):
+    KIND's names made from a pattern and its aliases, as ``devsim doc KIND`` shows them; "" for
+    a kind unknown here (a fleet member's plugin)."""
+    from devsim.cli.docgen import alias_rows, pattern_rows
+    from devsim.core.registry import UnknownKind, device_class
+
+    try:
+        cls = device_class(kind or "")
+    except UnknownKind:
+        return ""
+    return present.by_pattern_text(pattern_rows(cls), alias_rows(cls), present.terminal_width())
 
 
 @ctl.command(command_name("fault"))

@@ -15,7 +15,14 @@ from devsim.core.device import Device
 from devsim.core.points import SHARED_VOCABULARY
 from devsim.core.settings import Settings, rows
 
-__all__ = ["config_rows", "modbus_markdown", "reference_markdown", "shared_vocabulary_markdown"]
+__all__ = [
+    "alias_rows",
+    "config_rows",
+    "modbus_markdown",
+    "pattern_rows",
+    "reference_markdown",
+    "shared_vocabulary_markdown",
+]
 
 
 def _cell(value: Any) -> str:
@@ -54,6 +61,29 @@ def _port_doc(doc: str, default: str | None, hosts: int = 1, address: str | None
     return text if address is None else f"{text}; on a shared line (bus) addressed by config `{address}`"
 
 
+def pattern_rows(cls: type[Device]) -> list[dict[str, Any]]:
+    """The names a kind makes on demand from a pattern (its points table's families: the GMS96's
+    ``marker.M<byte>.<bit>``), as the reference lists them under its control names and
+    ``devsim ctl names`` at its end: name (the pattern), type, unit, access, doc, section."""
+    return [{"name": f.pattern, "type": f.type, "unit": "", "access": f.access, "doc": f.doc, "section": f.section}
+            for f in cls.points.families]
+
+
+def alias_rows(cls: type[Device]) -> list[dict[str, Any]]:
+    """The aliases a kind's control names take: each parameter's other spellings in the
+    reference's parameter table (SERS ``P91`` ``V``) that the points table's alias hook takes as
+    a control name (``param.V`` for ``param.P91``; the ``param.`` section of
+    :func:`devsim.core.parameters.alias_hook`): name, for (the declared name), access, doc."""
+    table = cls.reference().parameter_table
+    rows: list[dict[str, Any]] = []
+    for row in table or ():
+        for alias in row.aliases:
+            point = cls.points.find(f"param.{alias}")
+            if point is not None:
+                rows.append({"name": f"param.{alias}", "for": point.name, "access": point.access, "doc": point.doc})
+    return rows
+
+
 def reference_markdown(cls: type[Device]) -> str:
     """The whole reference of one kind, as Markdown."""
     ref = cls.reference()
@@ -86,8 +116,8 @@ def reference_markdown(cls: type[Device]) -> str:
                 for p in cls.points
             ),
             (
-                (f"`{f.pattern}`", f.type, "", f.access, "", f.doc, f.section)
-                for f in cls.points.families
+                (f"`{row['name']}`", row["type"], row["unit"], row["access"], "", row["doc"], row["section"])
+                for row in pattern_rows(cls)
             ),
         ),
         "",

@@ -28,6 +28,7 @@ __all__ = [
     "JsonGroup",
     "View",
     "as_json",
+    "by_pattern_text",
     "names_text",
     "render",
     "table",
@@ -267,6 +268,24 @@ def names_text(rows: Sequence[dict[str, Any]], width: int) -> str:
                   row.get("doc") or "") for row in members]
         lines += table(cells, width=max(width, 40), indent="  ")
     lines.append(_cut(f"{len(rows)} names in {len(ordered)} groups (--json: every field)", max(width, 40)))
+    return "\n".join(lines)
+
+
+def by_pattern_text(patterns: Sequence[dict[str, Any]], aliases: Sequence[dict[str, Any]], width: int) -> str:
+    """What ``devsim ctl names`` adds after a device's names: the kind's names made from a pattern
+    (``marker.M<byte>.<bit>``, with type, access and description, as ``devsim doc KIND`` shows
+    them) and its aliases (``param.V  for  param.P91  rw ...``), one line each, cut to ``width``; ""
+    for a kind with neither."""
+    width = max(width, MIN_WIDTH)
+    lines: list[str] = []
+    if patterns:
+        lines.append("also by pattern:")
+        lines += table([(row["name"], row.get("type") or "", row.get("unit") or "", row.get("access") or "",
+                         row.get("doc") or "") for row in patterns], width=width, indent="  ")
+    if aliases:
+        lines.append("also by alias:")
+        lines += table([(row["name"], "for", row["for"], row.get("access") or "", row.get("doc") or "")
+                        for row in aliases], width=width, indent="  ")
     return "\n".join(lines)
 
 
