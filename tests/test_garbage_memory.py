@@ -18,7 +18,7 @@ from devsim.core.registry import device_class
 from devsim.devices.ip247 import Ip247Device
 from devsim.devices.ip247.as511 import EVENTS_KEPT
 from devsim.devices.sers.device import SersDevice
-from devsim.transports.tap import TelegramTap
+from devsim.transports.tap import MAX_BYTES, TelegramTap
 
 TELEGRAMS = 1_000_000
 BATCH = 1000
@@ -74,6 +74,23 @@ def test_a_line_tap_decoding_garbage_without_line_ends_keeps_bounded_memory() ->
 
     assert _growth(feed) < GROWTH
     assert len(tap.telegrams) <= 200 and len(tap.decoders["H>D"]._rest) <= 512
+
+
+def test_a_tap_keeps_no_telegram_longer_than_max_bytes_whatever_the_reads() -> None:
+    """A pty read brings up to 4096 bytes, a TCP read up to 64 KiB: the tap cuts such a chunk into
+    telegrams of at most :data:`MAX_BYTES`, as it cuts joined chunks (it kept each read whole, as
+    hex and text: 200 telegrams of 64 KiB reads are ~90 MB per line; the soak's PCD4.H3, its three
+    ports fed, grew 16 MB)."""
+    tap = TelegramTap(None, decoder=SersDevice.ports[0].framing.decoder)
+    rng = random.Random(32)
+    reads = [rng.randbytes(4096) for _ in range(60)] + [rng.randbytes(65536)]
+    for number, data in enumerate(reads):
+        tap.record("H>D", data, number * 1.0)
+    kept = [bytes.fromhex(telegram["hex"]) for telegram in tap.telegrams]
+    assert len(kept) == 200 and max(len(data) for data in kept) <= MAX_BYTES
+    assert max(len(telegram["text"]) for telegram in tap.telegrams) <= 4 * MAX_BYTES + 2
+    assert b"".join(kept[-128:]) == reads[-1]  # the last read, all of it, in order
+    assert b"".join(kept[:72]) == b"".join(reads[-10:-1])  # 8 telegrams each
 
 
 @pytest.mark.parametrize("kind", ["sers", "gms96", "poselesta", "ip247", "pcd4h3"])

@@ -9,9 +9,11 @@ fault-free fast path.
 
 A telegram is what one side sent in one go: consecutive chunks in the same direction less than
 :data:`GAP` seconds of device time apart are joined (a host's request that arrives split over
-several reads is one telegram), up to :data:`MAX_BYTES`.  With a decoder per direction (the
-framing the port declares, :attr:`devsim.core.kit.PortDef.framing`, as record and replay use
-it) a telegram also carries ``decoded``: the messages it completed, e.g. an FT1.2 frame's fields.
+several reads is one telegram), up to :data:`MAX_BYTES`; a longer read (a pty's 4 KiB, a TCP
+read's 64 KiB) is cut into telegrams of :data:`MAX_BYTES` too, so that a tap keeps at most
+``size`` × :data:`MAX_BYTES` bytes.  With a decoder per direction (the framing the port declares,
+:attr:`devsim.core.kit.PortDef.framing`, as record and replay use it) a telegram also carries
+``decoded``: the messages it completed, e.g. an FT1.2 frame's fields.
 
 A :class:`ChunkTap` (:func:`chunk_tap`) hands every chunk, as it crosses, to its listeners
 (``listener(direction, data, when)``): the control op ``capture`` streams them to Wireshark's
@@ -53,6 +55,22 @@ class TelegramTap(TapSink):
         super().record(direction, data, when, note)
         if not data:
             return
+        for start in range(0, len(data), MAX_BYTES):  # a long read (pty 4 KiB, TCP 64 KiB) is cut too
+            self._keep(direction, data[start:start + MAX_BYTES], when, note)
+        self._last_at = when
+        decoder = self.decoders.get(direction)
+        if decoder is not None:
+            try:
+                decoded = decoder.feed(data)
+            except Exception:  # a decoder must never break the line it watches
+                self.decoders.pop(direction, None)
+                decoded = None
+            if decoded:
+                target = self.telegrams[-1]
+                target["decoded"] = (target.get("decoded", []) + list(decoded))[-8:]
+
+    def _keep(self, direction: str, data: bytes, when: float, note: str | None) -> None:
+        """``data`` (at most :data:`MAX_BYTES`) joined to the last telegram or a new one."""
         last = self.telegrams[-1] if self.telegrams else None
         if (last is not None and last["dir"] == direction and when - self._last_at <= GAP
                 and len(self._data) + len(data) <= MAX_BYTES and not note and not last.get("note")):
@@ -67,17 +85,6 @@ class TelegramTap(TapSink):
             self.telegrams.append(telegram)
             for listener in list(self.listeners):
                 listener(telegram)
-        self._last_at = when
-        decoder = self.decoders.get(direction)
-        if decoder is not None:
-            try:
-                decoded = decoder.feed(data)
-            except Exception:  # a decoder must never break the line it watches
-                self.decoders.pop(direction, None)
-                decoded = None
-            if decoded:
-                target = self.telegrams[-1]
-                target["decoded"] = (target.get("decoded", []) + list(decoded))[-8:]
 
     def last(self, count: int) -> list[dict[str, Any]]:
         """The last ``count`` telegrams, oldest first (copies)."""
