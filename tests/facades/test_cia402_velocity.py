@@ -154,6 +154,13 @@ def test_the_statusword_over_tpdos_shows_target_reached_when_it_is(drive: Drive)
         drive.runtime.advance(1.0)
 
 
+def in_profile_velocity(node: Any) -> None:
+    """Operation enabled (shutdown, switch on, enable operation) in profile velocity mode (6060h = 3)."""
+    for word in (0x06, 0x07, 0x0F):
+        node.sdo[0x6040].raw = word
+    node.sdo[0x6060].raw = 3
+
+
 @pytest.mark.parametrize("kind", DRIVES)
 def test_every_drive_shows_its_own_velocity_against_the_target(kind: str) -> None:
     """For every kind that is a drive: in profile velocity mode, run up, run, stop, bits 10 and 12
@@ -162,9 +169,7 @@ def test_every_drive_shows_its_own_velocity_against_the_target(kind: str) -> Non
     drive = Drive(kind, 9, name=kind, ready=True)
     node = drive.node
     try:
-        for word in (0x06, 0x07, 0x0F):
-            node.sdo[0x6040].raw = word
-        node.sdo[0x6060].raw = 3
+        in_profile_velocity(node)
         node.sdo[0x606D].raw, node.sdo[0x606E].raw, node.sdo[0x606F].raw, node.sdo[0x6070].raw = 20, 0, 10, 0
         assert node.sdo[0x6041].raw & (TARGET_REACHED | SPEED_IS_0) == TARGET_REACHED | SPEED_IS_0  # standing
         seen = set()
@@ -189,9 +194,7 @@ def cyclic_master(kind: str) -> tuple[Drive, Any, Any]:
     drive = Drive(kind, 9, name=kind, ready=True)
     node = drive.node
     try:
-        for word in (0x06, 0x07, 0x0F):
-            node.sdo[0x6040].raw = word
-        node.sdo[0x6060].raw = 3
+        in_profile_velocity(node)
         node.rpdo.read()
         control = mapped(node.rpdo[1], 0x6040, trans_type=255)
         both = mapped(node.rpdo[2], 0x6040, 0x60FF, trans_type=1)
@@ -262,9 +265,7 @@ def test_a_target_velocity_of_0_and_a_quick_stop_stop_every_drive(kind: str) -> 
     drive = Drive(kind, 9, name=kind, ready=True)
     node = drive.node
     try:
-        for word in (0x06, 0x07, 0x0F):
-            node.sdo[0x6040].raw = word
-        node.sdo[0x6060].raw = 3
+        in_profile_velocity(node)
         for stop in ("60FFh = 0", "quick stop"):
             node.sdo[0x60FF].raw = -2000
             drive.runtime.advance(1.0)
@@ -292,9 +293,7 @@ def test_the_gms96_brakes_a_jog_to_0_with_its_own_ramp() -> None:
     drive = Drive("gms96", 9, name="gms96", ready=True)
     node = drive.node
     try:
-        for word in (0x06, 0x07, 0x0F):
-            node.sdo[0x6040].raw = word
-        node.sdo[0x6060].raw = 3
+        in_profile_velocity(node)
         node.sdo[0x60FF].raw = -2000
         drive.runtime.advance(1.0)
         running = actual(drive)
