@@ -4,10 +4,12 @@ an abort.  Every abort names the multiplexer (index, sub-index) of the request i
 initiate request's own, a segment's the transfer in progress; a request with an unknown command
 specifier (and a block transfer, which this server does not offer) is aborted 0504 0001h with the
 multiplexer in its own bytes 1 … 3; a segment with no transfer in progress likewise, naming
-0000h/00h (it carries no multiplexer).  A segmented download is checked at its initiation (the
-object, write access, the announced size), so it is refused before any segment.  A request
-shorter than the 8 bytes of an SDO frame is ignored, and so is every request while the node is
-STOPPED (CiA 301 §7.3.2.2: there only NMT and the error control are served)."""
+0000h/00h (it carries no multiplexer).  An object of one value (VAR) is its sub-index 00h
+alone: another sub-index of it is aborted 0609 0011h (canopen's own server answered for 00h).
+A segmented download is checked at its initiation (the object, write access, the announced
+size), so it is refused before any segment.  A request shorter than the 8 bytes of an SDO
+frame is ignored, and so is every request while the node is STOPPED (CiA 301 §7.3.2.2: there
+only NMT and the error control are served)."""
 
 from __future__ import annotations
 
@@ -70,6 +72,7 @@ class DevsimSdoServer(SdoServer):
     def _initiate_upload(self, request: bytes) -> None:
         self._multiplexer(request)
         self.transfer, self._buffer = None, None
+        self._variable()
         self.init_upload(request)
         if self._buffer is not None:
             self.transfer = "upload"
@@ -86,6 +89,7 @@ class DevsimSdoServer(SdoServer):
         self._multiplexer(request)
         self.transfer, self._buffer = None, None
         command = request[0]
+        self._variable()
         if command & EXPEDITED and not command & SIZE_SPECIFIED:
             request = self._sized(request)  # (CiA 301: "d contains unspecified number of bytes")
         if not command & EXPEDITED:
@@ -130,9 +134,9 @@ class DevsimSdoServer(SdoServer):
         if self._index not in od:
             raise SdoAbortedError(NOT_IN_OD)
         entry = od[self._index]
-        if isinstance(entry, ODVariable):
+        if isinstance(entry, ODVariable) and not self._subindex:
             return entry
-        if self._subindex not in entry:
+        if isinstance(entry, ODVariable) or self._subindex not in entry:
             raise SdoAbortedError(NO_SUBINDEX)
         return entry[self._subindex]
 

@@ -281,6 +281,23 @@ def test_a_segmented_download_is_refused_at_its_initiation(server: Server, frame
     assert server.send(0x00, bytes(7)) == abort(0, 0, INVALID_COMMAND)
 
 
+@pytest.mark.parametrize("frame", [
+    (0x40, mux(0x1000, 1), PAD),  # an expedited upload of the device type
+    (0x40, mux(0x1008, 1), PAD),  # a segmented upload of the device name
+    (0x2B, mux(0x6040, 1), struct.pack("<HH", 0x06, 0)),  # an expedited download, size given
+    (0x22, mux(0x6040, 1), struct.pack("<HH", 0x06, 0)),  # an expedited download, size not given
+    (0x21, mux(VOLTAGE, 1), struct.pack("<L", 8)),  # a segmented download
+])
+def test_an_object_of_one_value_has_no_sub_index_but_0(server: Server, frame: tuple[int | bytes, ...]) -> None:
+    """A VAR object is its sub-index 00h alone (CiA 301, object code VAR: a single value): a request to
+    another sub-index of it is aborted 0609 0011h, no such sub-index, and writes nothing."""
+    index, subindex = struct.unpack_from("<HB", frame[1])
+    controlword, voltage = server.facade.node.sdo[0x6040].raw, server.device.read("quantity.supply_voltage")
+    assert server.send(*frame) == abort(index, subindex, NO_SUBINDEX)
+    assert server.sdo.transfer is None
+    assert (server.facade.node.sdo[0x6040].raw, server.device.read("quantity.supply_voltage")) == (controlword, voltage)
+
+
 def test_a_segmented_download_into_a_record_entry(server: Server) -> None:
     """In a record the sub-index names the object whose size counts: 1400h/02h, RPDO1's
     transmission type, is an UNSIGNED8."""
