@@ -8,8 +8,8 @@ PDO not valid first); a COB-ID with bit 31 = 1 uses no CAN-ID and is taken (8000
 PDO off, as CANopenNode takes it).  The mapping
 (CiA 301 §7.5.2.36, RPDO mapping parameter 1600h …, and §7.5.2.38, TPDO mapping parameter 1A00h …:
 the re-mapping procedure).
-A mapping entry (sub-index 01h … 08h) that names an object the dictionary does not have is
-aborted 0602 0000h; one naming an object that cannot be mapped (PDOMapping=0 in the EDS, a length
+A mapping entry (sub-index 01h … 08h) that names an object the dictionary does not have (or a
+sub-index it does not have; a VAR has 00h alone) is aborted 0602 0000h; one naming an object that cannot be mapped (PDOMapping=0 in the EDS, a length
 other than the object's, into an RPDO an object that cannot be written, into a TPDO one that
 cannot be read) 0604 0041h; enabling the mapping (sub-index 00h = the number of entries) with
 more than 8 entries or more than the PDO's 64 bits 0604 0042h.  An entry of 0 (cleared) is
@@ -99,9 +99,9 @@ def _variable(od: Any, index: int, subindex: int) -> ODVariable:
     if index not in od:
         raise SdoAbortedError(NOT_IN_OD)
     entry = od[index]
-    if isinstance(entry, ODVariable):
+    if isinstance(entry, ODVariable) and not subindex:
         return entry
-    if subindex not in entry:
+    if isinstance(entry, ODVariable) or subindex not in entry:  # (a VAR is its sub-index 00h alone)
         raise SdoAbortedError(NOT_IN_OD)
     return entry[subindex]
 

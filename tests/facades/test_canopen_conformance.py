@@ -324,6 +324,22 @@ def test_a_pdo_mapping_takes_only_what_the_eds_lets_be_mapped(drive: Drive) -> N
     assert len(frames.get(timeout=5)) == 6
 
 
+def test_a_pdo_mapping_entry_names_a_sub_index_its_object_has(drive: Drive) -> None:
+    """An object of one value (VAR) is its sub-index 00h alone: a mapping entry naming another
+    sub-index of it names an object the node does not have (0602 0000h), as one naming a record's
+    missing sub-index does, and nothing refused is kept."""
+    node = drive.node
+    node.sdo[0x1800][1].raw = 0x80000183  # TPDO1 not valid
+    node.sdo[0x1A00][0].raw = 0  # mapping disabled
+    node.sdo[0x1400][1].raw = 0x80000203  # RPDO1 not valid
+    node.sdo[0x1600][0].raw = 0
+    for index, entry in ((0x1A00, 0x60410110), (0x1A00, 0x10180920), (0x1600, 0x60400110)):
+        with pytest.raises(canopen.SdoAbortedError) as aborted:
+            node.sdo.download(index, 1, entry.to_bytes(4, "little"))
+        assert aborted.value.code == MAPPING_ERRORS["no object"]
+    assert node.sdo[0x1A00][1].raw == 0 and node.sdo[0x1600][1].raw == 0
+
+
 def test_the_sync_cob_id_object_names_the_sync_the_node_consumes(drive: Drive) -> None:
     """CiA 301, 1005h COB-ID SYNC (UNSIGNED32, rw, 80h as the predefined connection set has it):
     the node, a SYNC consumer, sends its synchronous TPDOs at the SYNC with the CAN-ID 1005h names,
