@@ -86,7 +86,7 @@ def _broken(ctx: click.Context, addr: str, exc: Exception) -> exits.Unreachable:
 )
 @click.option(
     "--fleet", metavar="mqtt://BROKER[:PORT][/NAME]",
-    help="Instead: every device of every process in this fleet, reached by name (extra [fleet]).",
+    help="Instead: every device of every process in this fleet, reached by name.",
 )
 @click.pass_context
 def ctl(ctx: click.Context, addr: str | None, fleet: str | None) -> None:

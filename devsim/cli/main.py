@@ -218,7 +218,7 @@ def doc(kind: str, modbus_map: bool, eds_file: bool) -> None:
 @click.option(
     "--fleet",
     metavar="mqtt://BROKER[:PORT][/NAME]",
-    help="Join a fleet (extra [fleet]): announce the devices on the broker, take control requests from it.",
+    help="Join a fleet: announce the devices on the broker, take control requests from it.",
 )
 @click.option("--web", metavar="[HOST:]PORT", help="Also serve the plant's web page there (extra [web]; host"
               " 127.0.0.1 unless named, another host gets a token).")

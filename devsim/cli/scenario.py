@@ -242,7 +242,7 @@ def _run_files(scenarios: list[Any], files: tuple[str, ...], mode: str | None, s
 @click.option("--workers", type=click.IntRange(1, 64), default=1, show_default=True, metavar="N",
               help="Spread the plant's devices over N processes (real or sped-up time).")
 @click.option("--fleet", metavar="mqtt://BROKER[:PORT][/NAME]",
-              help="Join a fleet (extra [fleet]): announce the devices on the broker, take control requests from it.")
+              help="Join a fleet: announce the devices on the broker, take control requests from it.")
 @click.option("--part", metavar="NAME", help="Start only the devices with 'part: NAME' (one part of a fleet's plant).")
 @click.option("--motion-log", metavar="FILE.csv", help="Log every axis's motion as CSV, for 'devsim plot'.")
 @click.option("--motion-resolution", type=float, default=0.01, show_default=True, metavar="SECONDS",
