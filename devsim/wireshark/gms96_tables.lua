@@ -52,8 +52,8 @@ return {
     ["q"] = "acknowledge the message (M3.1)",
     ["r"] = "defaults (r0) / erase the EEPROM (r1)",
     ["s"] = "save to the EEPROM (s85;170)",
-    ["v"] = "velocity mode (jog)",
-    ["w"] = "wait",
+    ["v"] = "positioning with velocity optimisation (the profile planned before the move; not blended)",
+    ["w"] = "feed (Vorschub): the position counter zeroed (O0), then a v move by P1",
   },
   ["m"] = {
     ["100"] = "m100: S function (MB15, MW16, M15.7)",
