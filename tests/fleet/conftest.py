@@ -4,10 +4,13 @@ mosquitto's own clients as subprocesses, every wait bounded."""
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import signal
 import subprocess
 import sys
 from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -62,6 +65,24 @@ class Member(Program):
     def __init__(self, args: list[str], url: str, log: Path) -> None:
         super().__init__([sys.executable, "-m", "devsim", *args, "--fleet", url], log)
         self.process = self.wait_for("fleet: ").rsplit(" as ", 1)[1]
+
+
+@contextmanager
+def two_members(url: str, plant_file: Path, tmp_path: Path) -> Iterator[dict[str, Member]]:
+    """feeder (sers, part cell-a) in one process, press (gms96, cell-b) in another, both on
+    virtual time (nothing changes unless asked), members of the fleet at ``url``; stopped after,
+    a frozen one continued first (SIGSTOP'd, it would not stop)."""
+    started: dict[str, Member] = {}
+    try:
+        for part in ("cell-a", "cell-b"):
+            started[part] = Member(["up", str(plant_file), "--part", part, "--virtual"], url,
+                                   tmp_path / f"{part}.log")
+        yield started
+    finally:
+        for member in started.values():
+            if member.proc.poll() is None:
+                os.kill(member.proc.pid, signal.SIGCONT)
+            member.stop()
 
 
 def ctl(url: str, *args: str, ok: bool = True) -> Any:

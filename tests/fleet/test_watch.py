@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from devsim.fleet.client import FleetClient
-from tests.fleet.conftest import Member, Program, mosquitto
+from tests.fleet.conftest import Member, Program, mosquitto, two_members
 from tests.support.broker import Broker
 from tests.support.process import next_match, wait_until
 from tests.support.process import stop as stop_process
@@ -45,15 +45,8 @@ def watch(url: str, log: Path, *args: str) -> Program:
 def members(broker: Broker, plant_file: Path, tmp_path: Path) -> Iterator[dict[str, Member]]:
     """feeder (sers) in one process, press (gms96) in another, both on virtual time (nothing
     changes unless asked)."""
-    started: dict[str, Member] = {}
-    try:
-        for part in ("cell-a", "cell-b"):
-            started[part] = Member(["up", str(plant_file), "--part", part, "--virtual"], broker.url,
-                                   tmp_path / f"{part}.log")
+    with two_members(broker.url, plant_file, tmp_path) as started:
         yield started
-    finally:
-        for member in started.values():
-            member.stop()
 
 
 def test_a_fleet_watch_streams_every_device_of_two_processes(members: dict[str, Member], broker: Broker,

@@ -20,7 +20,7 @@ from typing import Any
 import pytest
 
 from devsim.fleet.client import FleetClient
-from tests.fleet.conftest import Member, Program, mosquitto
+from tests.fleet.conftest import Member, Program, mosquitto, two_members
 from tests.fleet.test_watch import STREAMS, devices_in, line_where, stderr_lines, watch
 from tests.support.broker import Broker
 from tests.support.process import stop as stop_process
@@ -40,17 +40,8 @@ def quick(tmp_path: Path) -> Iterator[Broker]:
 @pytest.fixture
 def members(quick: Broker, plant_file: Path, tmp_path: Path) -> Iterator[dict[str, Member]]:
     """feeder (sers) in one process, press (gms96) in another, both on virtual time."""
-    started: dict[str, Member] = {}
-    try:
-        for part in ("cell-a", "cell-b"):
-            started[part] = Member(["up", str(plant_file), "--part", part, "--virtual"], quick.url,
-                                   tmp_path / f"{part}.log")
+    with two_members(quick.url, plant_file, tmp_path) as started:
         yield started
-    finally:
-        for member in started.values():
-            if member.proc.poll() is None:
-                os.kill(member.proc.pid, signal.SIGCONT)  # (a frozen one would not stop)
-            member.stop()
 
 
 def said(program: Program, words: str) -> Callable[[], list[str]]:
