@@ -24,7 +24,6 @@ import pytest
 from tests.support.programs import install_line, missing_names
 
 SECTION = re.compile(r"§\d+(\.\d+)*[a-z]?( .+)?$")
-_walk: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
 
 
 _runtime_dir = tempfile.mkdtemp(prefix="devsim-rt-")  # short: a Unix socket path holds 107 bytes
@@ -44,8 +43,8 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
                     f"{item.nodeid}: @pytest.mark.manual takes (section, statement), "
                     f"section like '§2.6.2.1'; got {mark.args!r}"
                 )
-            kind = item.path.parent.name
-            _walk[kind][str(mark.args[0]).split()[0]] += 1
+            # (carried by the test's reports: under pytest-xdist the workers collect, not the controller)
+            item.user_properties.append(("manual", (item.path.parent.name, str(mark.args[0]).split()[0])))
 
 
 def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
@@ -72,10 +71,23 @@ def _missing_programs_summary(terminalreporter: pytest.TerminalReporter) -> None
 
 
 def _manual_summary(terminalreporter: pytest.TerminalReporter) -> None:
-    if not _walk:
+    """Per kind: how many manual statements the tests that ran check, in how many sections."""
+    walk: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
+    seen: set[str] = set()
+    for reports in terminalreporter.stats.values():
+        for report in reports:
+            nodeid = getattr(report, "nodeid", None)
+            if nodeid is None or nodeid in seen:
+                continue
+            marks = [value for name, value in getattr(report, "user_properties", ()) if name == "manual"]
+            if marks:
+                seen.add(nodeid)
+            for kind, section in marks:
+                walk[kind][section] += 1
+    if not walk:
         return
     terminalreporter.section("manual statements under test")
-    for kind, sections in sorted(_walk.items()):
+    for kind, sections in sorted(walk.items()):
         terminalreporter.write_line(
             f"{kind}: {sum(sections.values())} statements in {len(sections)} sections"
         )

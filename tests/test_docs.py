@@ -86,9 +86,9 @@ def test_the_quick_start_is_two_commands_in_a_virtualenv() -> None:
     venv = "python3 -m venv .venv && . .venv/bin/activate && "
     assert all(command.startswith(venv) for command in commands), commands
     assert commands[0].endswith("pip install . && devsim run sers --pty")
-    assert commands[1] == venv + "pip install '.[test]' && python -m pytest"
+    assert commands[1] == venv + "pip install '.[test]' && python -m pytest -n auto"
     ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
-    assert "python3 -m venv .venv" in ci and "pip install '.[test]'" in ci and "python -m pytest" in ci
+    assert "python3 -m venv .venv" in ci and "pip install '.[test]'" in ci and "python -m pytest -n auto" in ci
 
 
 def _python_snippets() -> list[tuple[str, int, str]]:

@@ -315,9 +315,10 @@ async def test_a_quiet_host_reopens_and_reconfigures_at_any_parity(parity: str) 
             transport.address,
             parity,
             stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.PIPE,
         )
-        out, _ = await asyncio.wait_for(proc.communicate(), 30)
-        assert out.decode().strip() == "ok"
+        out, err = await asyncio.wait_for(proc.communicate(), 30)
+        assert out.decode().strip() == "ok", err.decode()
         assert line.host is not None and line.host.baudrate == 9600
     finally:
         await transport.close()
