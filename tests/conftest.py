@@ -1,6 +1,8 @@
 """Suite-wide hooks: the ``manual`` marker's arguments are checked, and counted per kind; the
 simulators the tests start keep their control sockets in a runtime directory of the test run's
-own (``XDG_RUNTIME_DIR``), apart from the user's.
+own (``XDG_RUNTIME_DIR``), apart from the user's.  A run started in the background by a shell
+without job control (``pytest &`` in a script) inherits SIGINT ignored, and so would every
+simulator it starts, which the tests stop with Ctrl-C's signal: the run takes SIGINT back.
 
 A test marked ``@pytest.mark.manual("§2.6.2.1", "the printer port always runs at 1200 baud")``
 checks one statement of its kind's manual (the kind is the test's folder under tests/).  The
@@ -16,6 +18,7 @@ from __future__ import annotations
 import os
 import re
 import shutil
+import signal
 import tempfile
 from collections import defaultdict
 
@@ -29,6 +32,8 @@ SECTION = re.compile(r"§\d+(\.\d+)*[a-z]?( .+)?$")
 _runtime_dir = tempfile.mkdtemp(prefix="devsim-rt-")  # short: a Unix socket path holds 107 bytes
 os.environ["XDG_RUNTIME_DIR"] = _runtime_dir
 os.environ.pop("DEVSIM_CONTROL", None)
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:  # (inherited: see above)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def pytest_unconfigure() -> None:

@@ -175,10 +175,11 @@ def _in_pipe(fd: int) -> int:
     return struct.unpack("i", fcntl.ioctl(fd, termios.FIONREAD, b"\0\0\0\0"))[0]
 
 
-#: ``python -c NOHUP ARGS``: ``python -m devsim ARGS`` with SIGHUP ignored, as ``nohup`` starts it.
-NOHUP = ("import os, signal, sys\n"
-         "signal.signal(signal.SIGHUP, signal.SIG_IGN)\n"
-         "os.execv(sys.executable, [sys.executable, '-m', 'devsim', *sys.argv[1:]])\n")
+#: ``python -c HUP ARGS``: ``python -m devsim ARGS`` with SIGHUP ignored, as ``nohup`` starts it
+#: (HUP % "SIG_IGN"), or not (HUP % "SIG_DFL": also when the test run itself runs under nohup).
+HUP = ("import os, signal, sys\n"
+       "signal.signal(signal.SIGHUP, signal.%s)\n"
+       "os.execv(sys.executable, [sys.executable, '-m', 'devsim', *sys.argv[1:]])\n")
 
 
 def catches_sighup(pid: int) -> bool:
@@ -197,7 +198,7 @@ def test_the_terminal_closing_stops_a_simulator_cleanly_unless_nohup(tmp_path: P
     address, log = f"unix:{tmp_path}/c.sock", tmp_path / "motion.csv"
     command = ["run", "sers", "--pty", "--virtual", "--control", address, "--motion-log", str(log),
                "--motion-resolution", "0.001"]
-    proc = subprocess.Popen([sys.executable, *(["-c", NOHUP] if nohup else ["-m", "devsim"]), *command], cwd=ROOT,
+    proc = subprocess.Popen([sys.executable, "-c", HUP % ("SIG_IGN" if nohup else "SIG_DFL"), *command], cwd=ROOT,
                             env=devsim_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
                             text=True)
     out = collect_lines(proc.stdout)
