@@ -18,7 +18,7 @@ from tests.support.process import ROOT, collect_lines, devsim_env, next_match, s
 
 RUN = cli.commands["run"]
 FACADES = {"--modbus", "--canopen", "--opcua", "--opcua-period", "--modbus-map", "--mqtt", "--mqtt-convention",
-           "--mqtt-rate", "--mqtt-plant", "--fleet", "--web"}  # left to click
+           "--mqtt-rate", "--mqtt-plant", "--mqtt-primary-host", "--fleet", "--web"}  # left to click
 
 
 def click_params(args: list[str]) -> dict[str, object]:

@@ -215,6 +215,9 @@ def doc(kind: str, modbus_map: bool, eds_file: bool) -> None:
 @click.option("--mqtt-rate", type=float, default=1.0, show_default=True, metavar="SECONDS",
               help="How often (device time) the MQTT facade samples the points for changes.")
 @click.option("--mqtt-plant", metavar="NAME", help="The plant's name in MQTT topics (default: the kind).")
+@click.option("--mqtt-primary-host", metavar="HOST_ID",
+              help="Sparkplug: the Primary Host Application's id; the edge node sends its births only while"
+              " spBv1.0/STATE/HOST_ID says online, and reconnects when it says offline (default: no primary host).")
 @click.option(
     "--fleet",
     metavar="mqtt://BROKER[:PORT][/NAME]",

@@ -42,7 +42,7 @@ def check_canopen(spec: str) -> None:
         raise exits.MissingExtra(f"--canopen needs canopen and python-can: {install_command('can')}") from None
 
 
-def check_mqtt(url: str, convention: str, rate: float, plant: str | None) -> None:
+def check_mqtt(url: str, convention: str, rate: float, plant: str | None, primary_host: str | None = None) -> None:
     try:  # (devsim speaks MQTT itself: devsim.facades.mqtt_link)
         if not url:
             import amqtt  # noqa: F401
@@ -62,6 +62,14 @@ def check_mqtt(url: str, convention: str, rate: float, plant: str | None) -> Non
         raise click.UsageError(f"--mqtt: {exc}") from None
     if not rate > 0:
         raise click.UsageError("--mqtt-rate: must be a positive number of seconds")
+    if primary_host is not None:
+        if convention != "sparkplug":
+            raise click.UsageError("--mqtt-primary-host: a Sparkplug host application, only with"
+                                   " --mqtt-convention sparkplug")
+        try:
+            check_name("primary host", primary_host)
+        except ValueError as exc:
+            raise click.UsageError(f"--mqtt-primary-host: {exc}") from None
 
 
 def check_opcua(spec: str, period: float) -> None:

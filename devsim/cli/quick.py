@@ -76,7 +76,7 @@ DEFAULTS: dict[str, Any] = {
     "speed": 1.0, "virtual": False, "trace": None, "control": None, "no_control": False,
     "control_allow_remote": False, "drives": None, "pacing": False, "idle_drop": None, "port_options": (),
     "modbus": None, "canopen": None, "opcua": None, "opcua_period": 0.1, "modbus_map": "points", "mqtt": None,
-    "mqtt_convention": "devsim", "mqtt_rate": 1.0, "mqtt_plant": None, "fleet": None, "web": None, "motion_log": None,
+    "mqtt_convention": "devsim", "mqtt_rate": 1.0, "mqtt_plant": None, "mqtt_primary_host": None, "fleet": None, "web": None, "motion_log": None,
     "motion_resolution": 0.01, "verbose": 0, "quiet": 0,
 }
 

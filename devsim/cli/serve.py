@@ -65,6 +65,7 @@ class Plan(msgspec.Struct):
     mqtt_convention: str = "devsim"  # --mqtt-convention devsim | sparkplug
     mqtt_rate: float = 1.0  # --mqtt-rate SECONDS
     mqtt_plant: str | None = None  # --mqtt-plant NAME (default: the kind)
+    mqtt_primary_host: str | None = None  # --mqtt-primary-host HOST_ID (Sparkplug)
     opcua: str | None = None  # --opcua [[HOST:]PORT] ("": the default endpoint)
     opcua_period: float = 0.1  # --opcua-period SECONDS
     fleet: str | None = None  # --fleet mqtt://BROKER[:PORT][/NAME]
@@ -189,6 +190,7 @@ def plan_run(
     mqtt_convention: str = "devsim",
     mqtt_rate: float = 1.0,
     mqtt_plant: str | None = None,
+    mqtt_primary_host: str | None = None,
     fleet: str | None = None,
     web: str | None = None,
     motion_log: str | None = None,
@@ -228,7 +230,7 @@ def plan_run(
         if canopen is not None:
             check_canopen(canopen)
         if mqtt is not None:
-            check_mqtt(mqtt, mqtt_convention, mqtt_rate, mqtt_plant)
+            check_mqtt(mqtt, mqtt_convention, mqtt_rate, mqtt_plant, mqtt_primary_host)
         if opcua is not None:
             check_opcua(opcua, opcua_period)
         if fleet is not None:
@@ -274,6 +276,7 @@ def plan_run(
         mqtt_convention=mqtt_convention,
         mqtt_rate=mqtt_rate,
         mqtt_plant=mqtt_plant,
+        mqtt_primary_host=mqtt_primary_host,
         opcua=opcua,
         opcua_period=opcua_period,
         fleet=fleet,
@@ -373,7 +376,7 @@ async def _serve(plan: Plan) -> None:
 
                 mqtt_lines = await start_mqtt(runtime, devices, plan.mqtt or None, plant=plan.mqtt_plant or plan.kind,
                                               convention=plan.mqtt_convention,  # type: ignore[arg-type]
-                                              rate=plan.mqtt_rate)
+                                              rate=plan.mqtt_rate, primary_host=plan.mqtt_primary_host)
             opcua_url: str | None = None
             if plan.opcua is not None:
                 stage = "serve OPC UA"

@@ -13,7 +13,9 @@ Two conventions:
   ``fault/<kind>`` and ``power_cycle`` commands run the control ops of those names
   (:data:`devsim.runtime.ops.CONTROL`) and refusals are answered on ``error``.
 * ``sparkplug`` (:mod:`devsim.facades.mqtt_sparkplug`): **one connection per plant process**,
-  the plant being a Sparkplug edge node whose NDEATH will covers all its devices.
+  the plant being a Sparkplug edge node whose NDEATH will covers all its devices; with a
+  ``primary_host`` its births wait for that Primary Host Application's online STATE
+  (:mod:`devsim.facades.mqtt_sparkplug_host`).
 
 Changes are found by :class:`devsim.core.watch.PointWatch`, which samples the points every
 ``rate`` seconds of device time (virtual time in tests), right after each command, and right
@@ -46,7 +48,7 @@ from devsim.facades.mqtt_wire import Publish, Will
 from devsim.runtime import Runtime
 from devsim.runtime.ops import run
 
-__all__ = ["Convention", "PlantLink", "start_broker", "start_mqtt"]
+__all__ = ["Convention", "PlantLink", "check_options", "start_broker", "start_mqtt"]
 
 Convention = Literal["devsim", "sparkplug"]
 #: (topic, payload, qos, retain)
@@ -117,10 +119,17 @@ class _DevsimDevice:
 
 
 class _SparkplugPlant:
-    """The plant as one Sparkplug edge node with its devices."""
+    """The plant as one Sparkplug edge node with its devices.  With a Primary Host Application
+    (``primary_host``, :mod:`devsim.facades.mqtt_sparkplug_host`) the node subscribes to its
+    STATE and sends its births only once the host is online in this MQTT session; an offline
+    STATE that counts ends the session (NDEATH, DISCONNECT) and a new one starts at once, which
+    waits for the host again (Sparkplug 3.0 §5, tck-id-message-flow-edge-node-birth-publish-phid-wait,
+    tck-id-message-flow-edge-node-birth-publish-phid-offline)."""
 
-    def __init__(self, runtime: Runtime, devices: Sequence[Device], plant: str, rate: float) -> None:
+    def __init__(self, runtime: Runtime, devices: Sequence[Device], plant: str, rate: float,
+                 primary_host: str | None = None) -> None:
         from devsim.facades.mqtt_sparkplug import SparkplugNode
+        from devsim.facades.mqtt_sparkplug_host import PrimaryHost
 
         self.runtime = runtime
         self.devices = {device.name: device for device in devices}
@@ -129,24 +138,38 @@ class _SparkplugPlant:
         self.rate = rate
         self.route: str | None = None  # takes every message of its filters
         self.send: Callable[[Message], None] = lambda message: None
+        self.end_session: Callable[[], None] = lambda: None  # NDEATH, DISCONNECT, connect again (PlantLink's)
         self.watches: dict[str, PointWatch] = {}
         self.events: list[SampleOnEvent] = []
+        self.host = PrimaryHost(primary_host) if primary_host is not None else None
+        self.linked = False  # connected and subscribed in this MQTT session
+        self.born = False  # the births of this session are out
+        self.ended = 0  # the sessions it ended itself (its primary host offline)
 
     def identifier(self) -> str:
-        return f"devsim-spb-{self.plant}-{os.getpid()}"
+        """The MQTT client id; after a session the node ended itself, one of its own: the broker
+        would take a new connection with the old id for the old one before it read the old one's
+        DISCONNECT, and a takeover sends the will (a second NDEATH of the old bdSeq)."""
+        return f"devsim-spb-{self.plant}-{os.getpid()}" + (f"-{self.ended}" if self.ended else "")
 
     def new_session(self) -> Message:
+        self.linked = self.born = False
+        if self.host is not None:
+            self.host.new_session()
         topic, payload = self.node.new_session()
         return topic, payload, 1, False
 
     def filters(self) -> list[str]:
-        return self.node.filters()
+        return self.node.filters() + ([self.host.topic] if self.host is not None else [])
 
     def connected(self) -> None:
         self.stop()
-        self._births()
+        self.linked = True
+        if self.host is None or self.host.online:  # (its retained STATE may have come with the subscriptions)
+            self._births()
 
     def _births(self) -> None:
+        self.born = True
         self.send((*self.node.node_birth(), 0, False))
         for device in self.devices.values():
             watch = PointWatch(device, lambda changes, d=device: self._changed(d, changes), period=self.rate)
@@ -175,12 +198,18 @@ class _SparkplugPlant:
             decode_metrics,
         )
 
+        if self.host is not None and topic == self.host.topic:
+            self._host_state(payload)
+            return
         try:
             name = self.node.command_target(topic)
         except ValueError:  # not a command topic of ours (amqtt hands out retained messages of others)
             return
         device = self.devices.get(name) if name is not None else None
         try:
+            if not self.born:
+                waits = f": it waits for primary host {self.host.host_id!r} to be online" if self.host else ""
+                raise ValueError(f"node {self.plant!r} has not sent its births{waits}")
             if name is not None and device is None:
                 raise KeyError(f"node {self.plant!r} has no device {name!r}")
             metrics = decode_metrics(payload)
@@ -203,6 +232,25 @@ class _SparkplugPlant:
             except Exception as exc:
                 self._refused(device, f"{topic}#{metric.name}", exc)
         self.watches[device.name].sample()
+
+    def _host_state(self, payload: bytes) -> None:
+        """A STATE of the primary host: online → the births (once per session, once subscribed);
+        offline → the session ends and the next one waits (an offline STATE while still waiting
+        changes nothing: the node stays connected, unborn).  A payload that is not a STATE is
+        answered on the plant's error topic."""
+        assert self.host is not None
+        try:
+            online = self.host.take(payload)
+        except ValueError as exc:
+            self._refused(None, self.host.topic, exc)
+            return
+        if online and self.linked and not self.born:
+            self._births()
+        elif online is False and self.born:
+            self.stop()
+            self.born = False
+            self.ended += 1
+            self.end_session()
 
     def _refused(self, device: Device | None, topic: str, exc: BaseException) -> None:
         where = topics.prefix(self.plant, device.name) if device is not None else f"{topics.ROOT}/{self.plant}"
@@ -237,8 +285,12 @@ class PlantLink:
         self._everything = [side for side in self.sides if side.route is None]
         for side in self.sides:
             side.send = self._send
+            if hasattr(side, "end_session"):
+                side.end_session = self._end_session
         self._task: asyncio.Task[None] | None = None
         self._closing = False
+        self._again = False  # a side ended its session: connect again at once
+        self._ending: asyncio.Task[None] | None = None  # that session's DISCONNECT
 
     async def start(self) -> None:
         """Connect (a refused or unreachable broker raises here) and serve in the background."""
@@ -276,6 +328,21 @@ class PlantLink:
             with contextlib.suppress(LinkLost):  # the serving loop reconnects; the births follow
                 self.shared.publish(*message)
 
+    def _end_session(self) -> None:
+        """A side ends its session on purpose (Sparkplug: its primary host went offline): its
+        goodbye (:meth:`closing`, the NDEATH) and a clean DISCONNECT on the shared connection,
+        then the serving loop connects again at once (a new session, new births)."""
+        shared, self.shared = self.shared, None
+        if shared is None or self._closing:
+            self.shared = shared
+            return
+        self._again = True
+        with contextlib.suppress(LinkLost):
+            for side in self.sides:
+                for message in side.closing():
+                    shared.publish(*message)
+        self._ending = asyncio.get_running_loop().create_task(shared.disconnect())  # (the loop sees it closed)
+
     def _route(self, message: Publish) -> None:
         parts = message.topic.split("/", 3)
         side = self._routes.get(parts[2]) if len(parts) > 2 else None
@@ -291,8 +358,10 @@ class PlantLink:
             for side in self.sides:
                 side.stop()
             self._drop()
+            delay, self._again = (0.0 if self._again else RETRY), False
             while not self._closing:
-                await asyncio.sleep(RETRY)
+                await asyncio.sleep(delay)
+                delay = RETRY
                 try:
                     await self._connect()
                     break
@@ -373,16 +442,28 @@ async def start_broker(host: str = "127.0.0.1", port: int | None = None) -> tupl
     return broker, port
 
 
-async def start_mqtt(runtime: Runtime, devices: Sequence[Device], url: str | None, *, plant: str,
-                     convention: Convention = "devsim", rate: float = 1.0) -> list[str]:
-    """Serve ``devices`` over MQTT in ``runtime`` (in its loop): on the broker at ``url``
-    (``mqtt://HOST[:PORT]``), or on an embedded broker when ``url`` is None.  Returns the lines
-    ``devsim run``/``up`` print (where the broker is, and the topic root)."""
+def check_options(plant: str, convention: str, rate: float, primary_host: str | None) -> None:
+    """ValueError for a plant name or primary host id that is not one topic level, a rate that is
+    not positive, or a primary host without the Sparkplug convention."""
     topics.check_name("plant", plant)
-    for device in devices:
-        topics.check_name("device", device.name)
     if not rate > 0:
         raise ValueError(f"the MQTT rate is a positive number of seconds, not {rate!r}")
+    if primary_host is not None:
+        topics.check_name("primary host", primary_host)
+        if convention != "sparkplug":
+            raise ValueError("a primary host is a Sparkplug host application: only with the sparkplug convention")
+
+
+async def start_mqtt(runtime: Runtime, devices: Sequence[Device], url: str | None, *, plant: str,
+                     convention: Convention = "devsim", rate: float = 1.0,
+                     primary_host: str | None = None) -> list[str]:
+    """Serve ``devices`` over MQTT in ``runtime`` (in its loop): on the broker at ``url``
+    (``mqtt://HOST[:PORT]``), or on an embedded broker when ``url`` is None.  ``primary_host``:
+    the Sparkplug node's Primary Host Application id, whose STATE its births wait for (Sparkplug
+    only).  Returns the lines ``devsim run``/``up`` print (where the broker is, and the topic root)."""
+    check_options(plant, convention, rate, primary_host)
+    for device in devices:
+        topics.check_name("device", device.name)
     lines = []
     if url is None:
         broker, port = await start_broker()
@@ -395,8 +476,10 @@ async def start_mqtt(runtime: Runtime, devices: Sequence[Device], url: str | Non
     if convention == "sparkplug":
         from devsim.facades.mqtt_sparkplug import GROUP, NAMESPACE
 
-        sides: list[Any] = [_SparkplugPlant(runtime, devices, plant, rate)]
+        sides: list[Any] = [_SparkplugPlant(runtime, devices, plant, rate, primary_host)]
         lines.append(f"mqtt: sparkplug {NAMESPACE}/{GROUP}/+/{plant}")
+        if primary_host is not None:
+            lines.append(f"mqtt: primary host {NAMESPACE}/STATE/{primary_host} (the births wait for it online)")
     elif convention == "devsim":
         sides = [_DevsimDevice(runtime, device, plant, rate) for device in devices]
         lines.append(f"mqtt: topics {topics.ROOT}/{plant}/")

@@ -182,7 +182,7 @@ async def _serve_mqtt(plant: Plant) -> None:
     assert mqtt is not None
     plant.facades += await start_mqtt(plant.runtime, list(plant.devices.values()), mqtt.url,
                                       plant=mqtt.plant or plant.spec.name or "plant",
-                                      convention=mqtt.convention, rate=mqtt.rate)
+                                      convention=mqtt.convention, rate=mqtt.rate, primary_host=mqtt.primary_host)
 
 
 async def _serve_modbus(plant: Plant, dev: Any, trace_dir: str | Path | None, trace_format: TraceFormat) -> None:

@@ -176,12 +176,23 @@ class MqttSpec(Typed):
     """The plant's devices also over MQTT (issue 14, :mod:`devsim.facades.mqtt`): ``url``
     ``mqtt://HOST[:PORT]`` of the broker (none: an embedded broker on loopback), ``convention``
     ``devsim`` or ``sparkplug``, ``rate`` how often the points are sampled for changes (device
-    time), ``plant`` the plant's name in the topics (default: the plant's ``name``)."""
+    time), ``plant`` the plant's name in the topics (default: the plant's ``name``),
+    ``primary_host`` the Sparkplug Primary Host Application id whose STATE the births wait for."""
 
     url: MqttUrl | None = None
     convention: Literal["devsim", "sparkplug"] = "devsim"
     rate: Annotated[Rate, doc("seconds (or a duration like 500ms) between samples")] = Rate(1.0)
     plant: str | None = None
+    primary_host: Annotated[str | None, doc(
+        "sparkplug: the Primary Host Application id; births only while spBv1.0/STATE/<id> is online")] = None
+
+    def __post_init__(self) -> None:
+        if self.primary_host is not None:
+            from devsim.facades.mqtt_topics import check_name
+
+            check_name("primary host", self.primary_host)
+            if self.convention != "sparkplug":
+                raise ValueError("primary_host is a Sparkplug host application: only with convention: sparkplug")
 
 
 class OpcuaSpec(Typed):
