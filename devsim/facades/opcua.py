@@ -22,6 +22,9 @@ variable per declared point, the properties ``Kind`` and ``FaultKinds``, and the
 * **Subscriptions**: a :class:`devsim.core.watch.PointWatch` per device samples the points every
   ``period`` seconds of device time (virtual time in tests) and writes what changed into the
   address space, so data-change monitored items see it; a write from a client is sampled at once.
+  The period is each point variable's MinimumSamplingInterval (in ms; Part 3, 5.6.2: "how fast the
+  Server can reasonably sample the value for changes"), and no Value item of a point is revised to
+  a shorter samplingInterval (Part 4, 5.12.1.2).
   Each monitored item is checked as Part 4 5.12.2.4 asks before asyncua creates it (its node,
   attribute, IndexRange, dataEncoding and filter; :mod:`devsim.facades.opcua_monitoring`).
 * **Events** (``DeviceFaultEventType``, with ``FaultKind``, ``Active``, ``Axis``, ``Code``):
@@ -359,6 +362,8 @@ class OpcuaFacade:
         attrs.DataType = ua.NodeId(vtype.value)
         attrs.Value = ua.Variant(ua.get_default_value(vtype), vtype)
         attrs.ValueRank = ua.ValueRank.Scalar
+        # sampled every period for changes (PointWatch), not "continuously" (0; Part 3, 5.6.2)
+        attrs.MinimumSamplingInterval = 1000 * self.period
         access = (_READ if row.readable else 0) | (_WRITE if row.writable else 0)
         attrs.AccessLevel = attrs.UserAccessLevel = access
         attrs.WriteMask = attrs.UserWriteMask = 0

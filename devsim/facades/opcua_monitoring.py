@@ -18,7 +18,8 @@ each item as Part 4 5.12.2.4 (Table 71) and 5.12.3.4 (Table 74) do, per item:
 * every data change is reported with the timestamps its request's ``timestampsToReturn`` asked for
   (Source, Server, Both, Neither: 5.12.2.2);
 * an item's revisedSamplingInterval is at least the one it asked for (5.12.2.2; asyncua answered
-  the publishing interval), and a Value item that asked for more than its subscription's publishing
+  the publishing interval) and, for a Value, the node's MinimumSamplingInterval (5.12.1.2; a
+  point's: the period the facade samples it at), and a Value item that asked for more than its subscription's publishing
   interval reports its values no closer than that on the device clock (:class:`Spacing`);
 * ``Bad_DataEncodingInvalid`` for a dataEncoding on anything but the Value of a structure,
   ``Bad_DataEncodingUnsupported`` for another than ``Default Binary`` (7.34, as Read:
@@ -150,9 +151,13 @@ class ItemChecks(MonitoredItemService):
 
     def _space(self, mid: int, result: Any, item: ua.ReadValueId, requested: float) -> None:
         """An item's revisedSamplingInterval at least the one it asked for (5.12.2.2: asyncua gives
-        the subscription's publishing interval) and its values that far apart."""
-        if item.AttributeId == _VALUE and requested > result.RevisedSamplingInterval:
-            result.RevisedSamplingInterval = requested
+        the subscription's publishing interval) and the node's MinimumSamplingInterval (5.12.1.2:
+        "equal or higher than the MinimumSamplingInterval if the Client subscribes to the Value
+        Attribute"; a point's is the period its device is sampled at), and its values that far
+        apart."""
+        if item.AttributeId == _VALUE:
+            minimum = _attribute(self.aspace, item.NodeId, ua.AttributeIds.MinimumSamplingInterval) or 0.0
+            result.RevisedSamplingInterval = max(result.RevisedSamplingInterval, requested, minimum)
         self._spacing.set(mid, requested if item.AttributeId == _VALUE else 0.0,
                           self.isub.data.RevisedPublishingInterval)
 

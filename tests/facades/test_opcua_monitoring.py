@@ -215,10 +215,21 @@ def test_node_opcua_an_item_reports_the_timestamps_it_asked_for(served: tuple[Ru
     assert all(result["values"] == [68.0] for result in results)
 
 
+#: samplingInterval asked (ms) on a subscription publishing every 20 ms -> the revisedSamplingInterval of
+#: a point's Value: what it asked for (5.12.2.2: "equal or higher than the requested samplingInterval"),
+#: and never below the point's MinimumSamplingInterval, the facade's sampling period (100 ms: Part 3,
+#: 5.6.2, it "specifies how fast the Server can reasonably sample the value for changes"; Part 4,
+#: 5.12.1.2: "it shall always return a revisedSamplingInterval that is equal or higher than the
+#: MinimumSamplingInterval if the Client subscribes to the Value Attribute")
+SAMPLING = [(500.0, 500.0), (0.0, 100.0), (-1.0, 100.0), (50.0, 100.0), (150.0, 150.0)]
+
+
 async def test_asyncua_an_item_keeps_the_sampling_interval_it_asked_for(served: tuple[Runtime, OpcuaFacade]) -> None:
     """500 ms asked on a subscription publishing every 20 ms: revised 500 (asyncua: 20), and the
     values sampled 0.15 and 0.3 s after the first one are held until 0.5 s have passed (device
-    time), then the latest is reported; an item that asked for 0 sees every sample."""
+    time), then the latest is reported; an item that asked for 0 is revised to the 100 ms the
+    points are sampled at, their MinimumSamplingInterval (asyncua: 20, and the attribute said 0,
+    "continuously"), and sees every sample."""
     runtime, facade = served
     seen: asyncio.Queue[tuple[int, Any]] = asyncio.Queue()
 
@@ -235,7 +246,7 @@ async def test_asyncua_an_item_keeps_the_sampling_interval_it_asked_for(served: 
         slow.RequestedParameters.SamplingInterval = 500.0
         fast = _request(ns, 2, f"sers.{name}", "Value", None, None, None)
         assert (await _create(client, subscription, slow)).RevisedSamplingInterval == 500.0
-        assert (await _create(client, subscription, fast)).RevisedSamplingInterval <= 20.0
+        assert (await _create(client, subscription, fast)).RevisedSamplingInterval == 100.0
         firsts = {await asyncio.wait_for(seen.get(), 10) for _ in range(2)}
         assert firsts == {(1, old), (2, old)}
         for value in (1.25, 1.5):  # two samples (every 0.1 s) within 0.5 s of the first value
@@ -247,9 +258,43 @@ async def test_asyncua_an_item_keeps_the_sampling_interval_it_asked_for(served: 
         await subscription.delete()
 
 
+async def test_asyncua_no_item_samples_a_point_faster_than_its_minimum_sampling_interval(
+        served: tuple[Runtime, OpcuaFacade]) -> None:
+    """SAMPLING, created and modified; the MinimumSamplingInterval of a point is the period its
+    device is sampled at (asyncua: 0, "continuously"), that of a property 0 (it changes only when
+    written, and a notification goes out at once)."""
+    _, facade = served
+    name = "sers.quantity.adc_volts"
+    async with Client(facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        point, prop = client.get_node(ua.NodeId(name, ns)), client.get_node(ua.NodeId("sers#Kind", ns))
+        minimum = ua.AttributeIds.MinimumSamplingInterval
+        assert [(await node.read_attribute(minimum)).Value.Value for node in (point, prop)] == [1000 * facade.period, 0]
+        subscription = await client.create_subscription(20, _Quiet())
+        revised, created = [], []
+        for handle, (asked, _) in enumerate(SAMPLING, 1):
+            item = _request(ns, handle, name, "Value", None, None, None)
+            item.RequestedParameters.SamplingInterval = asked
+            result = await _create(client, subscription, item)
+            revised.append(result.RevisedSamplingInterval)
+            created.append(result.MonitoredItemId)
+        assert revised == [wanted for _, wanted in SAMPLING]
+        modified = await client.uaclient.modify_monitored_items(ua.ModifyMonitoredItemsParameters(
+            SubscriptionId=subscription.subscription_id, TimestampsToReturn=ua.TimestampsToReturn.Both,
+            ItemsToModify=[ua.MonitoredItemModifyRequest(MonitoredItemId=item, RequestedParameters=ua.MonitoringParameters(
+                ClientHandle=handle, SamplingInterval=asked, QueueSize=1))
+                for item, (handle, (asked, _)) in zip(created, enumerate(reversed(SAMPLING), 1), strict=True)]))
+        assert [result.RevisedSamplingInterval for result in modified] == [wanted for _, wanted in reversed(SAMPLING)]
+        await subscription.delete()
+
+
 def test_node_opcua_an_item_keeps_the_sampling_interval_it_asked_for(served: tuple[Runtime, OpcuaFacade]) -> None:
     _, facade = served  # (node-opcua's subscription publishes every 20 ms)
-    items = [{"node": "sers.quantity.adc_volts", "sampling": sampling} for sampling in (500, 0)]
-    [result] = node_client(facade.url, [{"op": "items", "items": items}])
-    assert result["statuses"] == ["Good", "Good"]
-    assert result["revised"][0] == 500 and result["revised"][1] <= 20
+    items = [{"node": "sers.quantity.adc_volts", "sampling": asked} for asked, _ in SAMPLING]
+    result, point, prop = node_client(facade.url, [
+        {"op": "items", "items": items},
+        {"op": "read", "node": "sers.quantity.adc_volts", "attribute": "MinimumSamplingInterval"},
+        {"op": "read", "node": "sers#Kind", "attribute": "MinimumSamplingInterval"}])
+    assert result["statuses"] == ["Good"] * len(SAMPLING)
+    assert result["revised"] == [wanted for _, wanted in SAMPLING]
+    assert (point["value"], prop["value"]) == (100, 0)  # the points are sampled; a property changes by writes
