@@ -305,9 +305,19 @@ class NodeView(ViewService):
     """asyncua's view service, with Bad_NodeIdUnknown for a node it does not have (Browse's node,
     TranslateBrowsePathsToNodeIds' startingNode), and a client's ``requestedMaxReferencesPerNode``
     honoured with continuation points (:class:`ContinuationPoints`; asyncua returned every
-    reference whatever the client asked for)."""
+    reference whatever the client asked for).  Part 4's codes where asyncua answered otherwise:
+    Bad_ViewIdUnknown for a Browse of a view that is not a View node of the server (5.8.2.3 Table
+    35, the whole request; the server has none: asyncua browsed the whole address space),
+    Bad_ReferenceTypeIdInvalid for a referenceTypeId that is not a ReferenceType (5.8.2.4 Table
+    36; asyncua: Good, no references); for a browse path, Bad_NothingToDo for an empty
+    relativePath (5.8.4.4 Table 42; asyncua failed the whole request with Bad_InternalError) and
+    Bad_BrowseNameInvalid for an element without a targetName (Table 42 and 5.8.4.2: "The Server
+    shall return Bad_BrowseNameInvalid if the targetName is missing"; asyncua: Bad_NoMatch)."""
 
     def browse(self, params: ua.BrowseParameters) -> list[ua.BrowseResult]:
+        view = params.View.ViewId if params.View is not None else None
+        if view is not None and not view.is_null() and not self._is(view, ua.NodeClass.View):
+            raise ua.UaStatusCodeError(_BAD.BadViewIdUnknown)
         results = super().browse(params)
         points = CONTINUATION.get()
         if points is not None:
@@ -320,9 +330,26 @@ class NodeView(ViewService):
             result = ua.BrowseResult()
             result.StatusCode = _status(_BAD.BadNodeIdUnknown)
             return result
+        reference = desc.ReferenceTypeId
+        if reference is not None and not reference.is_null() and not self._is(reference, ua.NodeClass.ReferenceType):
+            result = ua.BrowseResult()
+            result.StatusCode = _status(_BAD.BadReferenceTypeIdInvalid)
+            return result
         return super()._browse(desc)
 
+    def _is(self, node_id: ua.NodeId, node_class: ua.NodeClass) -> bool:
+        """Is ``node_id`` a node of the server of that NodeClass?"""
+        return node_id in self._aspace and _value_of(self._aspace, node_id, ua.AttributeIds.NodeClass) == node_class
+
     def _translate_browsepath_to_nodeid(self, path: ua.BrowsePath) -> ua.BrowsePathResult:
+        elements = path.RelativePath.Elements if path.RelativePath is not None else []
+        refused = (_BAD.BadNothingToDo if not elements
+                   else _BAD.BadBrowseNameInvalid if any(not (e.TargetName and e.TargetName.Name) for e in elements)
+                   else None)
+        if refused is not None:
+            result = ua.BrowsePathResult()
+            result.StatusCode = _status(refused)
+            return result
         result = super()._translate_browsepath_to_nodeid(path)
         if result.StatusCode.value == _BAD.BadNodeIdInvalid and path.StartingNode not in self._aspace:
             result.StatusCode = _status(_BAD.BadNodeIdUnknown)  # (asyncua's code for it: Bad_NodeIdInvalid)

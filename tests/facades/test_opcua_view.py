@@ -1,7 +1,12 @@
 """The OPC UA facade's View service set against OPC UA Part 4 (5.8), through asyncua's client and
 node-opcua's: TranslateBrowsePathsToNodeIds (5.8.4) finds a point's variable by its browse name,
 dots and all, and answers a startingNode the server does not have with Bad_NodeIdUnknown (asyncua:
-Bad_NodeIdInvalid, which Part 4 keeps for a NodeId of invalid syntax).
+Bad_NodeIdInvalid, which Part 4 keeps for a NodeId of invalid syntax), a path of no elements with
+Bad_NothingToDo (asyncua failed the whole request with Bad_InternalError) and one with an element
+without a targetName with Bad_BrowseNameInvalid (5.8.4.4 Table 42; asyncua: Bad_NoMatch).  A Browse
+of a referenceTypeId that is not a ReferenceType is Bad_ReferenceTypeIdInvalid (5.8.2.4 Table 36;
+asyncua: Good, no references), one of a view the server does not have Bad_ViewIdUnknown (5.8.2.3
+Table 35, the whole request; asyncua browsed the whole address space).
 
 Browse (5.8.2) returns no more references a node than requestedMaxReferencesPerNode, the rest
 behind a continuation point that BrowseNext (5.8.3) continues (page after page, the same
@@ -30,7 +35,20 @@ PATHS = [
     ("sers", ["Kind"], "Good", "sers#Kind"),
     ("sers", ["nope"], "BadNoMatch", None),
     ("nope", ["axis.position"], "BadNodeIdUnknown", None),
+    ("sers", [], "BadNothingToDo", None),  # 5.8.4.4 Table 42: "the relativePath contained an empty list"
+    ("sers", [""], "BadBrowseNameInvalid", None),  # "a TargetName was missing in a RelativePath"
+    ("sers", ["", "axis.position"], "BadBrowseNameInvalid", None),  # (7.26: shall be given but in the last)
 ]
+#: (node browsed, referenceTypeId) -> the status of its result, all in one Browse (5.8.2.4 Table 36)
+BROWSES = [
+    ("sers", "i=33", "Good"),  # HierarchicalReferences
+    ("sers", "i=85", "BadReferenceTypeIdInvalid"),  # the Objects folder: not a ReferenceType
+    ("sers", "i=999999", "BadReferenceTypeIdInvalid"),  # no such node
+    ("nope", "i=33", "BadNodeIdUnknown"),
+]
+#: ViewIds a Browse may not name (5.8.2.3 Table 35: Bad_ViewIdUnknown, the whole request): the
+#: server has no View but the whole address space (a null ViewId)
+VIEWS = ["i=85", "ns=1;s=nope"]
 
 
 @pytest.fixture(scope="module")
@@ -61,6 +79,41 @@ def test_node_opcua_translate_browse_paths(served: tuple[Runtime, OpcuaFacade]) 
     results = node_client(facade.url, [{"op": "translate", "node": start, "path": names} for start, names, *_ in PATHS])
     got = [(result["status"], [target.split(";s=", 1)[1] for target in result["targets"]]) for result in results]
     assert got == [(status, [target] if target else []) for *_, status, target in PATHS]
+
+
+def _descriptions(ns: int) -> list[ua.BrowseDescription]:
+    return [ua.BrowseDescription(NodeId=ua.NodeId(node, ns), BrowseDirection=ua.BrowseDirection.Forward,
+                                 ReferenceTypeId=ua.NodeId.from_string(reference), IncludeSubtypes=True,
+                                 ResultMask=ua.BrowseResultMask.All) for node, reference, _ in BROWSES]
+
+
+async def test_asyncua_a_browse_of_a_reference_type_or_view_the_server_does_not_have(
+        served: tuple[Runtime, OpcuaFacade]) -> None:
+    """asyncua answered Good with no references for the reference types, and browsed the whole
+    address space for any view."""
+    _, facade = served
+    async with Client(facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        results = await client.uaclient.browse(ua.BrowseParameters(NodesToBrowse=_descriptions(ns)))
+        assert [result.StatusCode.name for result in results] == [status for *_, status in BROWSES]
+        assert len(results[0].References) > 40
+        for view in VIEWS:
+            with pytest.raises(ua.uaerrors.BadViewIdUnknown):
+                await client.uaclient.browse(ua.BrowseParameters(
+                    View=ua.ViewDescription(ViewId=ua.NodeId.from_string(view)), NodesToBrowse=_descriptions(ns)[:1]))
+        [whole] = await client.uaclient.browse(ua.BrowseParameters(View=ua.ViewDescription(),
+                                                                   NodesToBrowse=_descriptions(ns)[:1]))
+        assert whole.References == results[0].References
+
+
+def test_node_opcua_a_browse_of_a_reference_type_or_view_the_server_does_not_have(
+        served: tuple[Runtime, OpcuaFacade]) -> None:
+    _, facade = served
+    items = [{"node": node, "referenceTypeId": reference} for node, reference, _ in BROWSES]
+    plan = [{"op": "browses", "items": items}] + [{"op": "browses", "items": items[:1], "view": view} for view in VIEWS]
+    browsed, *viewed = node_client(facade.url, plan)
+    assert browsed["statuses"] == [status for *_, status in BROWSES]
+    assert viewed == [{"fault": "BadViewIdUnknown"}] * len(VIEWS)
 
 
 def _browse(ns: int, limit: int) -> ua.BrowseParameters:

@@ -1,6 +1,8 @@
 // node-opcua's client, as an OPC UA client nobody on devsim wrote (tests/facades/test_opcua.py).
 // Usage: node client.js ENDPOINT 'PLAN'  -- PLAN is a JSON list of steps, each one of
 //   {"op": "browse", "node": "x"}                       browse names of the node's children
+//   {"op": "browses", "items": [{"node": "x", "referenceTypeId": "i=33"}, ...], "view": "i=85"}   one Browse
+//     request (forward, subtypes included; "view" a ViewId, default none): each result's status, or {"fault": name}
 //   {"op": "read", "node": "x.axis.position"}           value, data type name, status
 //   {"op": "write", "node": "x.param.V", "type": "Double", "value": 12.5}   status
 //     both may name an "attribute" (AccessLevel, DisplayName ...; default Value) and an
@@ -31,8 +33,9 @@
 // writes its own warnings to stdout too).
 "use strict";
 const {
-    OPCUAClient, AttributeIds, ClientMonitoredItem, ClientSubscription, DataChangeFilter, DataChangeTrigger, DataType,
-    DeadbandType, EventFilter, MonitoringMode, StatusCodes, TimestampsToReturn, VariantArrayType,
+    OPCUAClient, AttributeIds, BrowseDirection, BrowseRequest, ClientMonitoredItem, ClientSubscription, DataChangeFilter,
+    DataChangeTrigger, DataType, DeadbandType, EventFilter, MonitoringMode, StatusCodes, TimestampsToReturn,
+    VariantArrayType, ViewDescription,
 } = require("node-opcua-client");
 
 function plain(value, dataType) {
@@ -87,6 +90,19 @@ async function step(session, ns, s) {
     if (s.op === "browse") {
         const result = await session.browse(id(s.node));
         return { status: result.statusCode.name, names: result.references.map((r) => r.browseName.name) };
+    }
+    if (s.op === "browses") {
+        const request = new BrowseRequest({
+            view: new ViewDescription({ viewId: s.view }), requestedMaxReferencesPerNode: 0,
+            nodesToBrowse: s.items.map((item) => ({
+                nodeId: item.node === undefined ? item.nodeId : devsim(item.node), referenceTypeId: item.referenceTypeId,
+                browseDirection: BrowseDirection.Forward, includeSubtypes: true, nodeClassMask: 0, resultMask: 63,
+            })),
+        });
+        const response = await fault(() => new Promise((resolve, reject) => {
+            session.performMessageTransaction(request, (err, answer) => (err ? reject(err) : resolve(answer)));
+        }));
+        return response.fault ? response : { statuses: response.results.map((r) => r.statusCode.name) };
     }
     if (s.op === "paged") {
         if (s.points) {
