@@ -6,7 +6,8 @@ status codes Part 4 gives where asyncua answers otherwise.
   read from and written to its device (:class:`PointNode`).  A read of any Value honours the
   request's ``timestampsToReturn`` (Source, Server, Both, Neither) and ``indexRange`` (7.27: a
   substring of a String, a slice of an array; ``Bad_IndexRangeInvalid`` for a range of invalid
-  syntax, ``Bad_IndexRangeNoData`` for one that selects nothing, as on a scalar number), and a
+  syntax, ``Bad_IndexRangeNoData`` for one that selects nothing, as on a scalar number; the same
+  for any other attribute: a range on a DisplayName selects nothing), and a
   request with a negative ``maxAge`` or an invalid ``timestampsToReturn`` is a service fault
   (``Bad_MaxAgeInvalid``, ``Bad_TimestampsToReturnInvalid``).  asyncua ignores all three.  A
   ``dataEncoding`` is refused unless it is ``Default Binary`` for the Value of a Structure
@@ -96,6 +97,9 @@ class PointAttributes(AttributeService):
                 point = self.points.get(item.NodeId)
                 value = point.read() if point is not None else results[index]
                 results[index] = shaped(value, params.TimestampsToReturn, item.IndexRange)
+            elif item.IndexRange and results[index].StatusCode.is_good():
+                part = _range_of(results[index].Value, item.IndexRange)  # (asyncua ignored it)
+                results[index] = ua.DataValue(StatusCode=_status(part)) if isinstance(part, int) else ua.DataValue(part)
         return results
 
     async def write(self, params: ua.WriteParameters, user: User = _ADMIN) -> list[ua.StatusCode]:

@@ -183,6 +183,16 @@ RANGES = [
     (LEVEL, "7:5", "BadIndexRangeInvalid", None),  # first not below last: invalid syntax
     (LEVEL, "0:x", "BadIndexRangeInvalid", None),
 ]
+#: (node, attribute other than the Value, index range) -> the status code, and the part of the value:
+#: 7.27, "Bad_IndexRangeInvalid is only used for invalid syntax of the NumericRange.  All other invalid
+#: requests with a valid syntax shall result in Bad_IndexRangeNoData" (a LocalizedText, a QualifiedName)
+ATTRIBUTE_RANGES = [
+    (TEMPERATURE, "DisplayName", "0:1", "BadIndexRangeNoData", None),
+    (TEMPERATURE, "BrowseName", "0", "BadIndexRangeNoData", None),
+    (TEMPERATURE, "DisplayName", "7:5", "BadIndexRangeInvalid", None),
+    ("sers#FaultKinds", "ArrayDimensions", "0", "Good", [0]),  # an array: its part
+    ("sers#FaultKinds", "ArrayDimensions", "1", "BadIndexRangeNoData", None),  # past its end
+]
 TIMESTAMPS = {"Source": (True, False), "Server": (False, True), "Both": (True, True), "Neither": (False, False)}
 
 
@@ -214,6 +224,11 @@ async def test_asyncua_reads_honour_index_range_timestamps_and_max_age(served: S
                 result = await read(node, timestamps=timestamps)
                 assert (result.SourceTimestamp is not None, result.ServerTimestamp is not None) == wanted, (
                     node, timestamps)
+        results = await client.uaclient.read(ua.ReadParameters(NodesToRead=[
+            ua.ReadValueId(NodeId=ua.NodeId(node, ns), AttributeId=ua.AttributeIds[attribute], IndexRange=index_range)
+            for node, attribute, index_range, *_ in ATTRIBUTE_RANGES]))
+        assert [(result.StatusCode.name, result.Value.Value if result.StatusCode.is_good() else None)
+                for result in results] == [(status, part) for *_, status, part in ATTRIBUTE_RANGES]
         with pytest.raises(ua.uaerrors.BadMaxAgeInvalid):
             await read(TEMPERATURE, max_age=-1)
         with pytest.raises(ua.uaerrors.BadTimestampsToReturnInvalid):
@@ -231,8 +246,13 @@ def test_node_opcua_reads_honour_index_range_timestamps_and_max_age(served: Serv
              {"op": "read", "node": TEMPERATURE, "maxAge": -1},
              {"op": "read", "node": "sers#FaultKinds", "attribute": "ValueRank"},
              {"op": "browse", "node": "sers.nope"}]
+    plan += [{"op": "read", "node": node, "attribute": attribute, "indexRange": index_range}
+             for node, attribute, index_range, *_ in ATTRIBUTE_RANGES]
     results = node_client(served.facade.url, plan)
-    ranges, (point, prop, aged, rank, browsed) = results[:len(RANGES)], results[len(RANGES):]
+    ranges, (point, prop, aged, rank, browsed), attributes = (
+        results[:len(RANGES)], results[len(RANGES):len(RANGES) + 5], results[len(RANGES) + 5:])
+    assert [(r["status"], r["value"] if r["status"] == "Good" else None) for r in attributes] == [
+        (status, part) for *_, status, part in ATTRIBUTE_RANGES]
     assert [(r["status"], r["value"] if r["status"] == "Good" else None) for r in ranges] == _expected_ranges(served)
     assert point["timestamps"] == prop["timestamps"] == [True, True]
     assert aged == {"fault": "BadMaxAgeInvalid"}

@@ -42,7 +42,7 @@ function plain(value, dataType) {
     if ((dataType === DataType.Int64 || dataType === DataType.UInt64) && Array.isArray(value)) {
         return value[0] * 4294967296 + (value[1] >>> 0);  // node-opcua's [high, low] words
     }
-    return value;
+    return ArrayBuffer.isView(value) ? Array.from(value) : value;  // (a typed array: a JSON list)
 }
 
 function wire(dataType, value) {
