@@ -204,7 +204,8 @@ class Spacing:
     subscription's publishing interval, kept that far apart on the device clock ("the time
     between values returned to the Client shall be greater or equal to the sampling interval",
     Part 4 5.12.1.2): a value that comes sooner is held, replaced by a newer one, and reported
-    when the interval has passed (the latest, as a sample at that moment would see it).  Items
+    when the interval has passed (the latest, as a sample at that moment would see it; a newer
+    value reported first, at that very moment, drops it: never an older value after a newer).  Items
     that asked for no more than the publishing interval (0, -1: the usual) report every sample
     the facade makes, as asyncua did."""
 
@@ -233,6 +234,10 @@ class Spacing:
                 self.timers[mid] = self.clock.call_later(last + apart - now, lambda: self._release(mid))
             return True
         self.last[mid] = now
+        self.held.pop(mid, None)  # older than this one: never reported after it
+        timer = self.timers.pop(mid, None)
+        if timer is not None:
+            timer.cancel()
         return False
 
     def _release(self, mid: int) -> None:

@@ -26,7 +26,9 @@ import pytest
 from asyncua import Client, ua
 from asyncua.common.subscription import SubscriptionItemData
 
+from devsim.core.clock import VirtualClock
 from devsim.facades.opcua import OpcuaFacade, start_opcua
+from devsim.facades.opcua_monitoring import Spacing
 from devsim.facades.opcua_space import NAMESPACE
 from devsim.runtime import Runtime
 from tests.facades.opcua_clients import node_client
@@ -286,6 +288,34 @@ async def test_asyncua_no_item_samples_a_point_faster_than_its_minimum_sampling_
                 for item, (handle, (asked, _)) in zip(created, enumerate(reversed(SAMPLING), 1), strict=True)]))
         assert [result.RevisedSamplingInterval for result in modified] == [wanted for _, wanted in reversed(SAMPLING)]
         await subscription.delete()
+
+
+async def test_a_held_value_is_never_reported_after_a_newer_one() -> None:
+    """An item that asked for 500 ms: a value 0.45 s after its last one is held (until 0.5 s);
+    a newer value that comes at 0.5 s, before the timer that would release the held one (a
+    sample timer due at the same moment and armed earlier), is reported, and the held one,
+    older, is then dropped (5.12.1.2: the Client's value is the latest sample; Spacing reported
+    the older one after it, so the item ended with a value the device no longer had)."""
+    clock = VirtualClock()
+    reported: list[str] = []
+
+    async def deliver(mid: int, handle: int, value: ua.DataValue) -> None:
+        reported.append(value.Value.Value)
+
+    spacing = Spacing(clock, deliver)
+    spacing.set(1, 500.0, 20.0)
+
+    def offer(value: str) -> None:
+        if not spacing.hold(1, 7, ua.DataValue(ua.Variant(value))):
+            reported.append(value)
+
+    offer("first")  # at 0: reported
+    clock.call_later(0.5, lambda: offer("newest"))  # a sample at 0.5 s, armed before the hold's timer
+    clock.advance(0.45)
+    offer("held")  # at 0.45 s: held until 0.5 s
+    clock.advance(0.05)
+    await asyncio.sleep(0)  # (a released value is sent in a task)
+    assert reported == ["first", "newest"]
 
 
 def test_node_opcua_an_item_keeps_the_sampling_interval_it_asked_for(served: tuple[Runtime, OpcuaFacade]) -> None:
