@@ -21,7 +21,9 @@ variable per declared point, the properties ``Kind`` and ``FaultKinds``, and the
   :class:`devsim.facades.opcua_decoding.FacadeServer`.
 * **Subscriptions**: a :class:`devsim.core.watch.PointWatch` per device samples the points every
   ``period`` seconds of device time (virtual time in tests) and writes what changed into the
-  address space, so data-change monitored items see it; a write from a client is sampled at once.
+  address space, so data-change monitored items see it; a write from a client is sampled at once
+  (and reported at once to an item whose last value is older than the item's sampling interval:
+  :class:`devsim.facades.opcua_monitoring.Spacing`).
   The period is each point variable's MinimumSamplingInterval (in ms; Part 3, 5.6.2: "how fast the
   Server can reasonably sample the value for changes"), and no Value item of a point is revised to
   a shorter samplingInterval (Part 4, 5.12.1.2).

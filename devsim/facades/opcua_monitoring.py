@@ -154,12 +154,18 @@ class ItemChecks(MonitoredItemService):
         the subscription's publishing interval) and the node's MinimumSamplingInterval (5.12.1.2:
         "equal or higher than the MinimumSamplingInterval if the Client subscribes to the Value
         Attribute"; a point's is the period its device is sampled at), and its values that far
-        apart."""
+        apart: a point's (sampled on the device clock: a MinimumSamplingInterval) by its revised
+        interval, so that two writes in a row are not reported closer; another node's only when it
+        asked for more than the publishing interval."""
+        apart = 0.0
         if item.AttributeId == _VALUE:
             minimum = _attribute(self.aspace, item.NodeId, ua.AttributeIds.MinimumSamplingInterval) or 0.0
             result.RevisedSamplingInterval = max(result.RevisedSamplingInterval, requested, minimum)
-        self._spacing.set(mid, requested if item.AttributeId == _VALUE else 0.0,
-                          self.isub.data.RevisedPublishingInterval)
+            if minimum > 0:
+                apart = result.RevisedSamplingInterval
+            elif requested > self.isub.data.RevisedPublishingInterval:
+                apart = requested
+        self._spacing.set(mid, apart)
 
     def _make_monitored_item_common(self, params: ua.MonitoredItemCreateRequest) -> tuple[ua.MonitoredItemCreateResult, Any]:
         result, mdata = super()._make_monitored_item_common(params)
@@ -200,14 +206,17 @@ class ItemChecks(MonitoredItemService):
 
 
 class Spacing:
-    """The values of the items that asked for a sampling interval longer than their
-    subscription's publishing interval, kept that far apart on the device clock ("the time
-    between values returned to the Client shall be greater or equal to the sampling interval",
-    Part 4 5.12.1.2): a value that comes sooner is held, replaced by a newer one, and reported
-    when the interval has passed (the latest, as a sample at that moment would see it; a newer
-    value reported first, at that very moment, drops it: never an older value after a newer).  Items
-    that asked for no more than the publishing interval (0, -1: the usual) report every sample
-    the facade makes, as asyncua did."""
+    """The values of the items of the points (each at its revisedSamplingInterval: the sampling
+    period, or more if asked; the facade samples a point also right after a write) and of the
+    other items that asked for a sampling interval longer than their subscription's publishing
+    interval, kept that far apart on the device clock ("the time between values returned to the
+    Client shall be greater or equal to the sampling interval", Part 4 5.12.1.2): a value that
+    comes sooner is held, replaced by a newer one, and reported when the interval has passed (the
+    latest, as a sample at that moment would see it; a newer value reported first, at that very
+    moment, drops it: never an older value after a newer).  Other items report every change, as
+    asyncua did."""
+
+    SLACK = 1e-6  # seconds: periodic samples one interval apart are apart (float sums of periods)
 
     def __init__(self, clock: Clock | None, deliver: Callable[[int, int, ua.DataValue], Awaitable[None]]) -> None:
         self.clock, self.deliver = clock, deliver
@@ -217,9 +226,10 @@ class Spacing:
         self.timers: dict[int, Any] = {}
         self.sending: set[Any] = set()
 
-    def set(self, mid: int, requested_ms: float, publishing_ms: float) -> None:
-        if self.clock is not None and requested_ms > publishing_ms:
-            self.apart[mid] = requested_ms / 1000
+    def set(self, mid: int, apart_ms: float) -> None:
+        """Keep item ``mid``'s values ``apart_ms`` apart (0: report each at once)."""
+        if self.clock is not None and apart_ms > 0:
+            self.apart[mid] = apart_ms / 1000
         else:
             self.apart.pop(mid, None)
 
@@ -228,7 +238,7 @@ class Spacing:
         if self.clock is None:
             return False
         now, apart, last = self.clock.now(), self.apart.get(mid), self.last.get(mid)
-        if apart is not None and last is not None and now - last < apart:
+        if apart is not None and last is not None and now - last < apart - self.SLACK:
             self.held[mid] = (handle, value)
             if mid not in self.timers:
                 self.timers[mid] = self.clock.call_later(last + apart - now, lambda: self._release(mid))
