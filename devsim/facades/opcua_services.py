@@ -173,11 +173,25 @@ def _range_of(variant: ua.Variant | None, text: str) -> ua.Variant | int:
     if dimensions is None:
         return _BAD.BadIndexRangeInvalid
     value = variant.Value if variant is not None else None
+    if variant is not None and isinstance(value, list | tuple) and len(dimensions) == 2 \
+            and all(isinstance(item, str | bytes) for item in value):
+        return _substrings(variant, dimensions)
     if variant is None or not isinstance(value, list | tuple | str | bytes) or len(dimensions) != 1 \
             or dimensions[0][0] >= len(value):
         return _BAD.BadIndexRangeNoData  # a scalar, another number of dimensions, past the end
     first, last = dimensions[0]
     return ua.Variant(value[first:last + 1], variant.VariantType, is_array=isinstance(value, list | tuple))
+
+
+def _substrings(variant: ua.Variant, dimensions: list[tuple[int, int]]) -> ua.Variant | int:
+    """Part 4, 7.27: "Arrays of ByteString and String values are treated as two dimensional arrays
+    where the final index specifies the substring range": the elements the first range selects,
+    each cut to the second (an element too short for it is empty; none long enough: no data)."""
+    (first, last), (start, end) = dimensions
+    elements = variant.Value[first:last + 1]
+    if not elements or all(start >= len(element) for element in elements):
+        return _BAD.BadIndexRangeNoData
+    return ua.Variant([element[start:end + 1] for element in elements], variant.VariantType, is_array=True)
 
 
 def shaped(value: ua.DataValue, timestamps: ua.TimestampsToReturn, text: str | None) -> ua.DataValue:

@@ -179,7 +179,12 @@ RANGES = [
     ("sers#FaultKinds", "1:2", "Good", lambda text, kinds: kinds[1:3]),
     (TEMPERATURE, "0", "BadIndexRangeNoData", None),  # a scalar number has no elements
     (LEVEL, "1000:1001", "BadIndexRangeNoData", None),  # past the end
-    ("sers#FaultKinds", "0,0", "BadIndexRangeNoData", None),  # one dimension, not two
+    # 7.27: "Arrays of ByteString and String values are treated as two dimensional arrays where the
+    # final index specifies the substring range"
+    ("sers#FaultKinds", "0,0", "Good", lambda text, kinds: [kinds[0][0:1]]),
+    ("sers#FaultKinds", "0:1,1:2", "Good", lambda text, kinds: [kinds[0][1:3], kinds[1][1:3]]),
+    ("sers#FaultKinds", "0,1000", "BadIndexRangeNoData", None),  # no element that long
+    ("sers#FaultKinds", "0,0,0", "BadIndexRangeNoData", None),  # three dimensions
     (LEVEL, "7:5", "BadIndexRangeInvalid", None),  # first not below last: invalid syntax
     (LEVEL, "0:x", "BadIndexRangeInvalid", None),
 ]
