@@ -313,7 +313,7 @@ class CanopenFacade:
         self._unlisten_power()
         self.call(self._cancel_timers)
         if self.drive is not None:
-            self.call(self.drive.watch.cancel)
+            self.call(self.drive.cancel)
 
     def _read(self, index: int, subindex: int, od: Any) -> Any:
         if self.drive is not None and index in DRIVE_READS:

@@ -6,7 +6,9 @@ stage, move to a position, run at a velocity, stop quickly and reset a fault, an
 position, velocity, enable, fault and motion.  :class:`Cia402` keeps the state the controlword
 (6040h) drives and composes the statusword (6041h); in profile position mode (6060h = 1) a rising
 "new set-point" bit (4) starts a move to the target position (607Ah, bit 6: relative) at the
-profile velocity (6081h), bit 8 (halt) stops it with the ramp and holds new set-points back; in
+profile velocity (6081h), bit 8 (halt) stops it with the ramp and holds new set-points back (the
+set-points, their handshake with the statusword's bit 12 and bit 10 are
+:mod:`devsim.facades.cia402_position`'s: no set-point is in process outside Operation enabled); in
 profile velocity mode (3) the drive follows the target velocity (60FFh) in Operation enabled (0 with
 halt): the kind's jog is called when that demand changes (entering Operation enabled, halt set or
 released, a new 60FFh), not for a controlword or a 60FFh that repeats what is commanded (a master
@@ -28,6 +30,7 @@ from typing import Any
 from devsim.core.changes import CHANGES
 from devsim.core.clock import VirtualClock
 from devsim.core.kit import DriveActions
+from devsim.facades.cia402_position import SetPoints
 from devsim.facades.cia402_velocity import VelocityWatch
 
 __all__ = ["Cia402", "DEFAULTS", "DriveActions", "MODES", "STATES", "TRANSITIONS", "command"]
@@ -104,7 +107,9 @@ class Cia402:
 
     def __init__(self, actions: DriveActions, model: Any, clock: Any = None) -> None:
         self.actions, self.model = actions, model
-        self.watch = VelocityWatch(clock if clock is not None else VirtualClock(), self._velocities, DEFAULTS)
+        clock = clock if clock is not None else VirtualClock()
+        self.watch = VelocityWatch(clock, self._velocities, DEFAULTS)
+        self.setpoints = SetPoints(actions, model, clock)
         self._power_on()
 
     @property
@@ -115,6 +120,7 @@ class Cia402:
     def state(self, state: str) -> None:
         if state != "operation_enabled":
             self._commanded = None  # (out of Operation enabled the drive follows nothing)
+            self.setpoints.drop()  # (and no set-point is in process)
         self._state = state
 
     def _power_on(self) -> None:
@@ -122,7 +128,7 @@ class Cia402:
         self.controlword, self.mode = DEFAULTS["controlword"], DEFAULTS["mode"]
         self.target_position, self.profile_velocity = DEFAULTS["target_position"], DEFAULTS["profile_velocity"]
         self.target_velocity = DEFAULTS["target_velocity"]
-        self.setpoint_ack = False
+        self.setpoints.reset()
         self.error_code = 0  # the EMCY code of the last fault the drive announced (603Fh)
         self.watch.reset()
 
@@ -163,6 +169,7 @@ class Cia402:
             raise ValueError(f"mode of operation {mode} is not supported")
         if mode != self.mode:
             self._commanded = None  # (the velocity the drive follows is the new mode's to command)
+            self.setpoints.reset()  # (and the set-points in process end)
         self.mode = mode
         self.watch.look(command=True)
 
@@ -206,22 +213,19 @@ class Cia402:
         elif was_enabled:
             self.actions.enable(self.model, False)
 
+    @property
+    def setpoint_ack(self) -> bool:
+        """Profile position mode's set-point acknowledge (statusword bit 12)."""
+        return self.setpoints.ack
+
+    def cancel(self) -> None:
+        """No more looks on the clock (the node closes)."""
+        self.watch.cancel()
+        self.setpoints.cancel()
+
     def _profile(self, before: int, word: int) -> None:
-        if self.mode == PROFILE_POSITION:
-            if word & 0x100:  # halt (§12: the axis is stopped, with the ramp); a new set-point waits
-                if not before & 0x100 and self.actions.moving(self.model):
-                    self.actions.jog(self.model, 0.0)
-                if not word & 0x10:
-                    self.setpoint_ack = False
-                return
-            if word & 0x10 and not before & 0x10:  # new set-point
-                target = float(self.target_position)
-                if word & 0x40:  # relative
-                    target += self.actions.position(self.model)
-                self.actions.move_to(self.model, target, float(self.profile_velocity))
-                self.setpoint_ack = True
-            elif not word & 0x10:
-                self.setpoint_ack = False
+        if self.mode == PROFILE_POSITION:  # bits 4 … 8: :mod:`devsim.facades.cia402_position`
+            self.setpoints.control(before, word, self.target_position, self.profile_velocity)
         elif self.mode == PROFILE_VELOCITY:
             self._follow()
 
@@ -255,8 +259,4 @@ class Cia402:
         word = STATES[self.state] | 0x0200  # bit 9: remote
         if self.mode == PROFILE_VELOCITY:
             return word | self.watch.bits()  # bits 10 (target reached) and 12 (speed)
-        if not a.moving(self.model):
-            word |= 0x0400  # bit 10: target reached
-        if self.setpoint_ack:
-            word |= 0x1000  # bit 12: set-point acknowledge
-        return word
+        return word | self.setpoints.bits(bool(self.controlword & 0x100))  # bits 10 and 12 (set-point acknowledge)

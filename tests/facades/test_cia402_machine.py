@@ -338,10 +338,14 @@ def test_power_on_values_and_the_reset_of_the_application() -> None:
     machine, motor = drive_in(ENABLED)
     machine.target_position, machine.profile_velocity, machine.target_velocity = 5, 6, 7
     machine.write_controlword(0x1F)
+    assert machine.setpoint_ack
+    machine.reset()
+    assert not machine.setpoint_ack
+    machine, motor = drive_in(ENABLED)
+    machine.target_position, machine.profile_velocity, machine.target_velocity = 5, 6, 7
     machine.write_mode(PROFILE_VELOCITY)
     for name in ("window", "window_time", "threshold", "threshold_time"):
         machine.watch.set(name, 7)
-    assert machine.setpoint_ack
     machine.reset()
     watch = machine.watch
     assert (watch.window, watch.window_time, watch.threshold, watch.threshold_time) == (100, 0, 10, 0)

@@ -1,0 +1,93 @@
+"""The statusword in profile position mode (CiA 402-2, profile position mode: bit 10 "target
+reached", bit 12 "set-point acknowledge") and its handshake with the controlword's bits 4 (new
+set-point), 5 (change set immediately) and 8 (halt), checked on every kind that is a drive with
+canopen as the master on python-can's virtual bus (virtual time).  The standard's definitions, as
+the oracle here:
+
+* bit 12 = 1 "previous set-point still in process, set-point overwriting shall be accepted",
+  0 "previous set-point already processed, waiting for new set-point"; the drive sets it once it
+  has taken (buffered) the data a rising bit 4 validates, and resets it, after the master reset
+  bit 4, when it can take new data again (the figure "set-point transmission from a host
+  computer");
+* bit 5 = 0 "finish the actual positioning and then start the next positioning", 1 "interrupt
+  the actual positioning and start the next positioning";
+* bit 10 with halt = 0: 1 "target position reached", 0 "not reached"; with halt = 1: 1 "velocity
+  of axis is 0", 0 "axis decelerates".
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from tests.facades.test_cia402 import Drive
+from tests.facades.test_cia402_contract import DRIVES
+
+TARGET_REACHED, ACKNOWLEDGE = 0x0400, 0x1000
+NEW, IMMEDIATELY, RELATIVE, HALT = 0x10, 0x20, 0x40, 0x100
+
+
+def in_profile_position(node: Any, target: int, speed: int) -> int:
+    """Operation enabled in profile position mode, 607Ah = ``target``, 6081h = ``speed``; the
+    position actual value."""
+    for word in (0x06, 0x07, 0x0F):
+        node.sdo[0x6040].raw = word
+    node.sdo[0x6060].raw = 1
+    node.sdo[0x607A].raw = target
+    node.sdo[0x6081].raw = speed
+    return int(node.sdo[0x6064].raw)
+
+
+#: Controlwords that leave Operation enabled (CiA 402-2 §8.4.3): disable operation (5), shutdown
+#: (8), disable voltage (9), quick stop (11); each with bit 4 released and with it held.
+LEAVING = {"disable operation": 0x07, "shutdown": 0x06, "disable voltage": 0x00, "quick stop": 0x03}
+
+
+@pytest.mark.parametrize("held", [False, True], ids=["bit 4 released", "bit 4 held"])
+@pytest.mark.parametrize("leave", sorted(LEAVING))
+@pytest.mark.parametrize("kind", DRIVES)
+def test_set_point_acknowledge_is_no_set_point_in_process_outside_operation_enabled(kind: str, leave: str,
+                                                                                     held: bool) -> None:
+    """A set-point taken (bit 12 = 1) and then Operation enabled left: the positioning ends with
+    the state, no set-point is in process, so bit 12 is 0 in the state the drive is in (and after
+    a quick stop, in Switch on disabled)."""
+    drive = Drive(kind, 9, name=kind, ready=True)
+    node = drive.node
+    try:
+        in_profile_position(node, 1000, 2000)
+        node.sdo[0x6040].raw = 0x0F | NEW | IMMEDIATELY | RELATIVE
+        assert node.sdo[0x6041].raw & ACKNOWLEDGE
+        drive.runtime.advance(0.1)
+        node.sdo[0x6040].raw = LEAVING[leave] | (NEW | IMMEDIATELY | RELATIVE if held else 0)
+        assert not node.sdo[0x6041].raw & ACKNOWLEDGE, (kind, leave)
+        drive.runtime.advance(1.5)  # (the axis stands: a quick stop is over)
+        status = node.sdo[0x6041].raw
+        assert status & 0x0027 != 0x0027 and not status & ACKNOWLEDGE, (kind, leave, hex(status))
+    finally:
+        drive.close()
+
+
+def test_back_in_operation_enabled_the_handshake_starts_anew(drive: Drive) -> None:
+    """After disable operation with bit 4 held, Operation enabled again with bit 4 still held:
+    nothing in process, bit 12 = 0; bit 4 released and raised again is a new set-point, taken and
+    acknowledged, and bit 12 falls with bit 4."""
+    node = drive.node
+    in_profile_position(node, 1000, 2000)
+    node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
+    assert node.sdo[0x6041].raw & ACKNOWLEDGE
+    node.sdo[0x6040].raw = 0x07 | NEW | RELATIVE  # disable operation
+    drive.runtime.advance(1.0)
+    node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
+    assert node.sdo[0x6041].raw & (0x6F | ACKNOWLEDGE) == 0x27
+    node.sdo[0x6040].raw = 0x0F | RELATIVE
+    assert not node.sdo[0x6041].raw & ACKNOWLEDGE
+    start = node.sdo[0x6064].raw
+    node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
+    assert node.sdo[0x6041].raw & (ACKNOWLEDGE | TARGET_REACHED) == ACKNOWLEDGE
+    node.sdo[0x6040].raw = 0x0F | RELATIVE
+    assert not node.sdo[0x6041].raw & ACKNOWLEDGE
+    assert drive.runtime.run_until(lambda: not drive.device.drive.moving(drive.device.model), 5.0)
+    drive.runtime.advance(0.5)
+    assert abs(node.sdo[0x6064].raw - (start + 1000)) <= 3 and node.sdo[0x6041].raw & TARGET_REACHED
+
