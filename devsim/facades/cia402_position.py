@@ -1,59 +1,93 @@
 """The set-points of CiA 402's profile position mode (CiA 402-2, profile position mode: the
-controlword's bits 4 "new set-point", 6 "abs/rel", 8 "halt", the statusword's bits 10 "target
-reached" and 12 "set-point acknowledge", and the figure "set-point transmission from a host
-computer").
+controlword's bits 4 "new set-point", 5 "change set immediately", 6 "abs/rel", 8 "halt", the
+statusword's bits 10 "target reached" and 12 "set-point acknowledge", and the figure "set-point
+transmission from a host computer").
 
 A rising bit 4 in Operation enabled, not halted, validates a set-point: the target position
-(607Ah; with bit 6, relative to the position actual value) at the profile velocity (6081h); it
-starts at once.  Bit 12 rises when a set-point is taken and falls when bit 4 has fallen ("0:
-previous set-point already processed, waiting for new set-point; 1: previous set-point still in
-process, set-point overwriting shall be accepted").  Leaving Operation enabled or the mode ends
-the set-points in process: bit 12 is 0, in whatever state the drive is in then.
+(607Ah; with bit 6, relative to the position actual value when the positioning starts) at the
+profile velocity (6081h).  With bit 5 = 1 ("interrupt the actual positioning and start the next
+positioning") or with no positioning in process it starts at once; with bit 5 = 0 ("finish the
+actual positioning and then start the next positioning") while one is in process it waits in a
+buffer of one and starts when the axis has finished the one before (looked at every
+:data:`SAMPLE` of device time while it waits); a set-point validated while the buffer is full is
+not taken.  Bit 12 rises when a set-point is taken and falls when bit 4 has fallen and the buffer
+is empty ("0: previous set-point already processed, waiting for new set-point; 1: previous
+set-point still in process, set-point overwriting shall be accepted").  Leaving Operation enabled
+or the mode ends the set-points in process: the buffer is emptied and bit 12 is 0, in whatever
+state the drive is in then.
 
-Bit 10 is 1 while the axis stands.  Halt stops a running positioning with the ramp (the drive's
-jog at 0).
+Bit 10 with halt = 0 is "target position reached": the axis stands and no set-point waits; with
+halt = 1 it is "velocity of axis is 0".  Halt
+stops a running positioning with the ramp (the drive's jog at 0) and drops a waiting set-point.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["ACKNOWLEDGE", "SetPoints", "TARGET_REACHED"]
+from devsim.core.changes import CHANGES
 
+__all__ = ["ACKNOWLEDGE", "SAMPLE", "SetPoints", "TARGET_REACHED"]
+
+SAMPLE = 0.001  # s of device time between looks while a set-point waits for the one before to end
 TARGET_REACHED, ACKNOWLEDGE = 0x0400, 0x1000
-NEW_SET_POINT, RELATIVE, HALT = 0x0010, 0x0040, 0x0100
+NEW_SET_POINT, CHANGE_IMMEDIATELY, RELATIVE, HALT = 0x0010, 0x0020, 0x0040, 0x0100
 
 
 class SetPoints:
-    """Profile position mode's set-points over ``actions`` on ``model`` (``clock``: the device's)."""
+    """Profile position mode's set-points over ``actions`` on ``model``; a waiting set-point is
+    looked after on ``clock``."""
+
+    _waiting: tuple[float, bool, float] | None  # a set-point validated with bit 5 = 0: (607Ah, relative, 6081h)
 
     def __init__(self, actions: Any, model: Any, clock: Any) -> None:
         self.actions, self.model, self.clock = actions, model, clock
+        self._timer: Any = None
         self.reset()
 
     def reset(self) -> None:
-        """Nothing in process, bit 12 = 0."""
+        """Nothing in process, nothing waiting, bit 12 = 0."""
         self.drop()
 
     def drop(self) -> None:
         """The set-points in process end (Operation enabled left, another mode): bit 12 = 0."""
+        self.cancel()
         self.ack = False
+        self._waiting = None
+        self._held = False  # bit 4 as the last controlword in Operation enabled had it
 
     def cancel(self) -> None:
-        """(Nothing is looked after on the clock.)"""
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
 
     def control(self, before: int, word: int, target: int, speed: int) -> None:
         """A controlword in Operation enabled, profile position mode (``before``: the one it
         replaces; ``target``, ``speed``: 607Ah, 6081h as of now)."""
+        self._held = bool(word & NEW_SET_POINT)
         a = self.actions
         if word & HALT:  # the axis is stopped with the ramp; a new set-point waits for the release
-            if not before & HALT and a.moving(self.model):
-                a.jog(self.model, 0.0)
+            if not before & HALT:
+                self._waiting = None
+                self.cancel()
+                if a.moving(self.model):
+                    a.jog(self.model, 0.0)
         elif word & NEW_SET_POINT and not before & NEW_SET_POINT:
-            self._start((float(target), bool(word & RELATIVE), float(speed)))
-            self.ack = True
-        if not word & NEW_SET_POINT:
-            self.ack = False
+            self._validate((float(target), bool(word & RELATIVE), float(speed)), bool(word & CHANGE_IMMEDIATELY))
+        if not self._held:
+            self.ack = self._waiting is not None
+
+    def _validate(self, set_point: tuple[float, bool, float], immediately: bool) -> None:
+        if immediately or not self.actions.moving(self.model):
+            self._waiting = None
+            self.cancel()
+            self._start(set_point)
+        elif self._waiting is None:
+            self._waiting = set_point
+            self._timer = self.clock.call_later(SAMPLE, self._tick)
+        else:
+            return  # the buffer is full: not taken
+        self.ack = True
 
     def _start(self, set_point: tuple[float, bool, float]) -> None:
         target, relative, speed = set_point
@@ -61,9 +95,35 @@ class SetPoints:
             target += self.actions.position(self.model)
         self.actions.move_to(self.model, target, speed)
 
+    def _tick(self) -> None:
+        self._timer = None
+        self.look()
+
+    def look(self) -> None:
+        """The waiting set-point starts once the axis has finished the positioning before it."""
+        if self._waiting is None:
+            return
+        a = self.actions
+        if a.fault(self.model) or not a.enabled(self.model):
+            self.drop()
+            return
+        if a.moving(self.model):
+            if self._timer is None:
+                self._timer = self.clock.call_later(SAMPLE, self._tick)
+            return
+        CHANGES.count += 1  # (the drive actions change the model: a door, devsim.core.changes)
+        set_point, self._waiting = self._waiting, None
+        self.cancel()
+        self._start(set_point)
+        self.ack = self._held
+
     def bits(self, halted: bool) -> int:
         """Bits 10 and 12 of the statusword as of now (``halted``: controlword bit 8)."""
+        self.look()
         word = ACKNOWLEDGE if self.ack else 0
-        if not self.actions.moving(self.model):
+        a = self.actions
+        if a.moving(self.model):
+            return word
+        if halted or self._waiting is None:
             word |= TARGET_REACHED
         return word

@@ -91,3 +91,46 @@ def test_back_in_operation_enabled_the_handshake_starts_anew(drive: Drive) -> No
     drive.runtime.advance(0.5)
     assert abs(node.sdo[0x6064].raw - (start + 1000)) <= 3 and node.sdo[0x6041].raw & TARGET_REACHED
 
+
+@pytest.mark.parametrize("kind", DRIVES)
+def test_a_set_point_with_bit_5_at_0_waits_for_the_positioning_before_it(kind: str) -> None:
+    """Bit 5 = 0, "finish the actual positioning and then start the next positioning": a second
+    set-point (relative 1 000, validated while the first relative 1 000 runs) is taken into the
+    buffer, acknowledged, and bit 12 stays 1 after bit 4 falls while it waits (the drive cannot
+    take new data); the axis first arrives at the first target, then the second set-point starts
+    (bit 12 falls) and the axis ends at 2 000 from the start with bit 10 = 1; bit 10 is 0 all the
+    while a set-point waits."""
+    drive = Drive(kind, 9, name=kind, ready=True)
+    runtime, node = drive.runtime, drive.node
+    moving = lambda: runtime.call(drive.device.drive.moving, drive.device.model)  # noqa: E731
+    try:
+        start = in_profile_position(node, 1000, 2000)
+        node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
+        assert node.sdo[0x6041].raw & (ACKNOWLEDGE | TARGET_REACHED) == ACKNOWLEDGE, kind
+        node.sdo[0x6040].raw = 0x0F | RELATIVE
+        assert not node.sdo[0x6041].raw & ACKNOWLEDGE, kind  # nothing waits: it can take new data
+        runtime.advance(0.1)
+        assert moving(), kind
+        node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE  # the second set-point, validated mid-move
+        assert node.sdo[0x6041].raw & ACKNOWLEDGE, kind
+        node.sdo[0x6040].raw = 0x0F | RELATIVE
+        waited = []
+        for _ in range(1000):
+            status, position = node.sdo[0x6041].raw, node.sdo[0x6064].raw
+            if not status & ACKNOWLEDGE:
+                break
+            assert not status & TARGET_REACHED, (kind, position)
+            waited.append(position)
+            runtime.advance(0.002)
+        else:
+            raise AssertionError(f"{kind}: the second set-point never started")
+        assert waited, f"{kind}: bit 12 fell with bit 4 while the set-point waited"
+        assert abs(waited[-1] - (start + 1000)) <= 5, (kind, waited[-5:])  # it finished the first
+        assert max(waited) <= start + 1005, kind  # and did not head for the second before
+        assert runtime.run_until(lambda: not moving(), 5.0), kind
+        runtime.advance(1.0)
+        assert abs(node.sdo[0x6064].raw - (start + 2000)) <= 5, kind
+        assert node.sdo[0x6041].raw & (ACKNOWLEDGE | TARGET_REACHED) == TARGET_REACHED, kind
+    finally:
+        drive.close()
+
