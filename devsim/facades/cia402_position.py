@@ -16,8 +16,9 @@ set-point still in process, set-point overwriting shall be accepted").  Leaving 
 or the mode ends the set-points in process: the buffer is emptied and bit 12 is 0, in whatever
 state the drive is in then.
 
-Bit 10 with halt = 0 is "target position reached": the axis stands and no set-point waits; with
-halt = 1 it is "velocity of axis is 0".  Halt
+Bit 10 with halt = 0 is "target position reached": the axis stands, no set-point waits, and the
+last positioning ran to its end (a halt that stopped it short of its target leaves bit 10 at 0 once
+the halt is released: the positioning is not resumed); with halt = 1 it is "velocity of axis is 0".  Halt
 stops a running positioning with the ramp (the drive's jog at 0) and drops a waiting set-point.
 """
 
@@ -46,8 +47,10 @@ class SetPoints:
         self.reset()
 
     def reset(self) -> None:
-        """Nothing in process, nothing waiting, bit 12 = 0."""
+        """Nothing in process, nothing waiting, bit 12 = 0, bit 10 the axis standing."""
         self.drop()
+        self._goal = 0.0  # the absolute target of the last positioning started
+        self._short = False  # a halt stopped it (short of its goal, unless the axis stands there)
 
     def drop(self) -> None:
         """The set-points in process end (Operation enabled left, another mode): bit 12 = 0."""
@@ -72,6 +75,7 @@ class SetPoints:
                 self.cancel()
                 if a.moving(self.model):
                     a.jog(self.model, 0.0)
+                    self._short = True
         elif word & NEW_SET_POINT and not before & NEW_SET_POINT:
             self._validate((float(target), bool(word & RELATIVE), float(speed)), bool(word & CHANGE_IMMEDIATELY))
         if not self._held:
@@ -94,6 +98,7 @@ class SetPoints:
         if relative:
             target += self.actions.position(self.model)
         self.actions.move_to(self.model, target, speed)
+        self._goal, self._short = target, False
 
     def _tick(self) -> None:
         self._timer = None
@@ -124,6 +129,6 @@ class SetPoints:
         a = self.actions
         if a.moving(self.model):
             return word
-        if halted or self._waiting is None:
+        if halted or (self._waiting is None and (not self._short or round(a.position(self.model)) == round(self._goal))):
             word |= TARGET_REACHED
         return word

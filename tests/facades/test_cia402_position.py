@@ -134,3 +134,41 @@ def test_a_set_point_with_bit_5_at_0_waits_for_the_positioning_before_it(kind: s
     finally:
         drive.close()
 
+
+@pytest.mark.parametrize("kind", DRIVES)
+def test_target_reached_with_halt_and_after_it(kind: str) -> None:
+    """Bit 10 in profile position mode: 0 while the axis runs to its target; with halt set, 0 while
+    the axis decelerates and 1 once it stands ("velocity of axis is 0"); halt released, the axis
+    standing, 1 only if it stands at the target ("target position reached": a halt that stopped
+    the positioning short leaves it 0, the positioning is not resumed); a new set-point then runs
+    to its target and sets it again."""
+    drive = Drive(kind, 9, name=kind, ready=True)
+    runtime, node = drive.runtime, drive.node
+    moving = lambda: runtime.call(drive.device.drive.moving, drive.device.model)  # noqa: E731
+    try:
+        start = in_profile_position(node, 5000, 2000)
+        node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
+        runtime.advance(0.3)
+        assert not node.sdo[0x6041].raw & TARGET_REACHED, kind
+        node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE | HALT
+        deadline = runtime.now() + 5.0
+        while moving():
+            assert not node.sdo[0x6041].raw & TARGET_REACHED, kind  # (decelerates)
+            runtime.advance(0.05)
+            assert runtime.now() < deadline, kind
+        runtime.advance(0.5)
+        stood = node.sdo[0x6064].raw
+        assert node.sdo[0x6041].raw & TARGET_REACHED, kind  # halted: the axis stands
+        node.sdo[0x6040].raw = 0x0F | RELATIVE
+        runtime.advance(0.5)
+        assert not moving(), kind
+        at_target = abs(stood - (start + 5000)) <= 3
+        assert bool(node.sdo[0x6041].raw & TARGET_REACHED) == at_target, (kind, stood)
+        node.sdo[0x607A].raw = 500
+        node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
+        assert runtime.run_until(lambda: not moving(), 5.0), kind
+        runtime.advance(1.0)
+        assert abs(node.sdo[0x6064].raw - (stood + 500)) <= 5, kind
+        assert node.sdo[0x6041].raw & TARGET_REACHED, kind
+    finally:
+        drive.close()
