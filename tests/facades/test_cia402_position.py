@@ -21,7 +21,7 @@ from typing import Any
 
 import pytest
 
-from tests.facades.test_cia402 import Drive
+from tests.facades.test_cia402 import Drive, into_a_following_error
 from tests.facades.test_cia402_contract import DRIVES
 
 TARGET_REACHED, ACKNOWLEDGE = 0x0400, 0x1000
@@ -91,6 +91,18 @@ def test_back_in_operation_enabled_the_handshake_starts_anew(drive: Drive) -> No
     drive.runtime.advance(0.5)
     assert abs(node.sdo[0x6064].raw - (start + 1000)) <= 3 and node.sdo[0x6041].raw & TARGET_REACHED
 
+
+def test_no_set_point_is_in_process_in_the_fault_state(drive: Drive) -> None:
+    """A PCD4.H3 following error while a set-point runs with bit 4 held (transition 13, the drive's
+    fault): in Fault bit 12 is 0; after the fault reset and back in Operation enabled the held bit
+    4 is no new set-point."""
+    into_a_following_error(drive)
+    status = drive.status
+    assert status & 0x4F == 0x08 and not status & ACKNOWLEDGE, hex(status)
+    drive.runtime.fault("pcd", "blocked_1", False)
+    for word in (0x80, 0x06, 0x07, 0x0F):  # fault reset, shutdown, switch on, enable operation
+        drive.control(word | NEW)
+    assert drive.status & (0x6F | ACKNOWLEDGE) == 0x27
 
 @pytest.mark.parametrize("kind", DRIVES)
 def test_a_set_point_with_bit_5_at_0_waits_for_the_positioning_before_it(kind: str) -> None:
