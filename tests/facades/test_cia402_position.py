@@ -184,3 +184,26 @@ def test_target_reached_with_halt_and_after_it(kind: str) -> None:
         assert node.sdo[0x6041].raw & TARGET_REACHED, kind
     finally:
         drive.close()
+
+
+@pytest.mark.parametrize("kind", DRIVES)
+def test_halt_stops_a_positioning_short_of_its_target_on_every_drive(kind: str) -> None:
+    """Controlword bit 8 in profile position mode, "1: axis shall be stopped" (CiA 402-2 pp
+    controlword): a relative 50 000 at 20 000 units/s halted after 0.5 s stands well short of its
+    target and stays there, in Operation enabled."""
+    drive = Drive(kind, 9, name=kind, ready=True)
+    runtime, node = drive.runtime, drive.node
+    try:
+        start = in_profile_position(node, 50_000, 20_000)
+        node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
+        runtime.advance(0.5)
+        node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE | HALT
+        assert runtime.run_until(lambda: not runtime.call(drive.device.drive.moving, drive.device.model), 5.0), kind
+        runtime.advance(0.5)
+        stood = node.sdo[0x6064].raw
+        assert start < stood < start + 40_000, (kind, stood - start)
+        runtime.advance(2.0)
+        assert node.sdo[0x6064].raw == stood, kind
+        assert node.sdo[0x6041].raw & (0x6F | TARGET_REACHED) == 0x27 | TARGET_REACHED, kind
+    finally:
+        drive.close()

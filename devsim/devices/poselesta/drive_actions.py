@@ -8,7 +8,7 @@ rapid when no profile velocity is given) and started with NC-Start, so it runs w
 own ramps, override and working-field limits.  Enabling is the machine's axis enable (V19,
 Achsfreigabe); a jog is the X+/X− keys in MANUAL at the control's own manual feed (feed pot, or
 rapid): the profile velocity's sign picks the key.  The quick stop is NC-Stop: the axes brake on
-their ramp and the block is given up.  A fault is NC ready L (an internal alarm, §2.4.5/§4.10);
+their ramp and the block is given up; so does a jog at 0 while a block runs (a halt).  A fault is NC ready L (an internal alarm, §2.4.5/§4.10);
 it ends with its cause.  Positions are increments of X's resolution (the ``axis.x.position`` point).
 """
 
@@ -52,10 +52,15 @@ def _move_to(c: Any, target: float, speed: float) -> None:
 
 
 def _jog(c: Any, velocity: float) -> None:
+    """A run at ``velocity``; 0 stops what moves with the ramp (the kit's ``jog``): the keys
+    released, and a running block braked by NC-Stop and given up, as :func:`_quick_stop` does
+    (manual §2.3.1: "Ein NC-Stop bewirkt einen Halt der Achsbewegungen entlang der Bremsrampe";
+    CiA 402's halt in profile position mode is this)."""
+    if velocity == 0:
+        _quick_stop(c)
+        return
     for key in ("jog_pos_x", "jog_neg_x"):
         c.signals.set(key, False)
-    if velocity == 0:
-        return
     _ready(c)
     if c.mode != "MANUAL":
         c.select_mode("MANUAL")
