@@ -351,3 +351,29 @@ def test_a_changed_target_velocity_commands_the_drive(kind: str) -> None:
         assert error == 0, kind
     finally:
         drive.close()
+
+
+@pytest.mark.parametrize("leave", [0x07, 0x06, 0x00], ids=["disable operation", "shutdown", "disable voltage"])
+@pytest.mark.parametrize("kind", DRIVES)
+def test_out_of_operation_enabled_the_axis_does_not_run(kind: str, leave: int) -> None:
+    """CiA 402-2 §8.4.1: in Switched on, Ready to switch on and Switch on disabled the drive
+    function is disabled.  A jog in profile velocity mode, then disable operation (transition 5),
+    shutdown (8) or disable voltage (9): the axis comes to a standstill and stays there; the
+    statusword's bits 10 and 12 then say so (within the window of velocity 0, speed 0)."""
+    drive = Drive(kind, 9, name=kind, ready=True)
+    node = drive.node
+    try:
+        in_profile_velocity(node)
+        node.sdo[0x60FF].raw = 2000
+        drive.runtime.advance(1.5)
+        assert node.sdo[0x606C].raw > 100, kind
+        node.sdo[0x6040].raw = leave
+        drive.runtime.advance(2.0)
+        position = node.sdo[0x6064].raw
+        assert node.sdo[0x606C].raw == 0, (kind, hex(leave))
+        drive.runtime.advance(1.0)
+        assert node.sdo[0x6064].raw == position, (kind, hex(leave))
+        status = node.sdo[0x6041].raw
+        assert status & 0x0004 == 0 and status & (TARGET_REACHED | SPEED_IS_0) == TARGET_REACHED | SPEED_IS_0, kind
+    finally:
+        drive.close()

@@ -8,9 +8,10 @@ Auftrag … Starten einer bereits laufenden Achse") but "Sie können zwischen de
 Tippenbetriebsarten auch während der Bewegung umschalten. Die Achse hält dann an und führt
 anschließend ihre Bewegung in der neuen Tippenbetriebsart aus" (manual §4.2.1).
 The module has no power stage of its own to switch: enabled means machine data are loaded and the
-power unit is ready (BB); a fault is a pending error of 10 or more.  Positions are base units
-(the ``axis.1.position`` point), speeds base units per second, sent as the velocity word in
-units/min (the base unit × 1000, as the machine data count it).
+power unit is ready (BB), and switching off ends a running job with Stopp; a fault is a pending
+error of 10 or more.  Positions are base units (the ``axis.1.position`` point), speeds base units
+per second, sent as the velocity word in units/min (the base unit × 1000, as the machine data
+count it).
 
 ``SETUP`` is what a test or a plant must set first for the axis to move: the manual's example
 machine data (§6.1; r = 10 µm, 3000 mm/min) for module 0 (the SYS-ID of a fresh module), the NC limit
@@ -67,8 +68,14 @@ def _jog(m: Any, velocity: float) -> None:
 
 
 def _enable(m: Any, on: bool) -> None:
+    """On: the module must be ready.  Off: it has no power stage to switch off, so a running job
+    is ended with Stopp of its mode (manual §2.8.4: "Ein Stoppbefehl in Verbindung mit
+    irgendeiner Betriebsart führt zum fehlerfreien Abbruch"): a disabled drive function does not
+    run (CiA 402-2 §8.4.1)."""
     if on and not _enabled(m):
         raise BadValue("no machine data on axis 1, or the power unit is not ready (BB)")
+    if not on and _unit(m).running:
+        _operate(m, _unit(m).mode, STOP)
 
 
 def _enabled(m: Any) -> bool:

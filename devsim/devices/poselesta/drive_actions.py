@@ -32,8 +32,14 @@ def _ready(c: Any) -> None:
 
 
 def _enable(c: Any, on: bool) -> None:
+    """The axis enable (V22/3); off, the axis is also stopped as by the quick stop, since the
+    enable alone would not stop it (manual §2.3.15: "Nach Freigabe der Vorschübe ist es nicht mehr
+    möglich, durch Aenderung der Achsfreigabe von H-Level auf L-Level die Bewegung zu stoppen"),
+    and a disabled drive function does not run (CiA 402-2 §8.4.1)."""
     if on:
         _ready(c)
+    else:
+        _quick_stop(c)
     c.signals.set("axis_enable", on)
 
 
