@@ -207,3 +207,31 @@ def test_halt_stops_a_positioning_short_of_its_target_on_every_drive(kind: str) 
         assert node.sdo[0x6041].raw & (0x6F | TARGET_REACHED) == 0x27 | TARGET_REACHED, kind
     finally:
         drive.close()
+
+
+@pytest.mark.parametrize("kind", DRIVES)
+def test_disable_operation_mid_move_and_enable_operation_again(kind: str) -> None:
+    """Transition 5 (disable operation) while a positioning runs, then 4 (enable operation): the
+    drive is in Operation enabled again, with no set-point in process (bit 12 = 0), and a new
+    set-point runs to its target."""
+    drive = Drive(kind, 9, name=kind, ready=True)
+    runtime, node = drive.runtime, drive.node
+    moving = lambda: runtime.call(drive.device.drive.moving, drive.device.model)  # noqa: E731
+    try:
+        in_profile_position(node, 1000, 2000)
+        node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
+        runtime.advance(0.1)
+        node.sdo[0x6040].raw = 0x07
+        runtime.advance(1.5)
+        node.sdo[0x6040].raw = 0x0F
+        runtime.advance(0.1)
+        assert node.sdo[0x6041].raw & (0x6F | ACKNOWLEDGE) == 0x27, kind
+        start = node.sdo[0x6064].raw
+        node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
+        runtime.advance(0.1)
+        assert runtime.run_until(lambda: not moving(), 5.0), kind
+        runtime.advance(1.0)
+        assert abs(node.sdo[0x6064].raw - (start + 1000)) <= 5, kind
+        assert node.sdo[0x6041].raw & (0x6F | TARGET_REACHED) == 0x27 | TARGET_REACHED, kind
+    finally:
+        drive.close()

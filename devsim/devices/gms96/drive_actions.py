@@ -25,12 +25,14 @@ __all__ = ["DRIVE"]
 
 
 def _enable(c: Any, on: bool) -> None:
+    """On: ``Q3``.  Off: the position controller off as a following error switches it off (spec
+    §4.5.3: "motion aborted, queue flushed"), the executor idle at once, so the next ``Q3`` runs."""
     if on:
         if c.stage.faulted():
             raise BadValue("the card cannot switch on: emergency stop or a monitoring fault")
         c.executor.submit(Cmd("Q", 3, 0, 0, 1))
         return
-    c.executor.abort()
+    c.executor.flush()
     c.stage.controller = False
     c.indexer.power_off(brake=True)
     c.changed()
