@@ -13,20 +13,19 @@ from __future__ import annotations
 
 import itertools
 import json
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from tahutils.parse import parse_payload_to_metric_dict, payload_from_string
 from tahutils.tahu import sparkplug_b as tahu
 
-from devsim.facades.mqtt import start_broker, start_mqtt
+from devsim.facades.mqtt import start_mqtt
 from devsim.facades.mqtt_sparkplug_host import PrimaryHost, parse_state
 from devsim.runtime import Runtime
 from tests.facades.test_mqtt import mosquitto  # noqa: F401 - the module's broker fixture
+from tests.facades.test_mqtt_sparkplug import broker_port  # noqa: F401 - mosquitto or an amqtt broker
 from tests.support.broker import Broker
 from tests.support.mqtt import Sub, pub
-from tests.support.process import free_port
 from tests.test_cli import Sim
 
 _names = itertools.count()
@@ -68,21 +67,7 @@ def unborn(port: int, sub: Sub, plant: str, *, retained: bool = False) -> None:
     assert not [m for m in sub.seen if m.topic in (f"{SPB}/NBIRTH/{plant}", f"{SPB}/DBIRTH/{plant}/x")]
 
 
-@pytest.fixture(params=["mosquitto", "amqtt"])
-def broker_port(request: pytest.FixtureRequest, mosquitto: Broker) -> Iterator[int]:  # noqa: F811
-    if request.param == "mosquitto":
-        yield mosquitto.port
-        return
-    runtime = Runtime().start()
-    try:
-        broker, port = runtime.run(start_broker(port=free_port()), timeout=20)
-        runtime.add_closer(broker.shutdown)
-        yield port
-    finally:
-        runtime.stop()
-
-
-def test_the_births_wait_for_the_primary_host_online(broker_port: int) -> None:
+def test_the_births_wait_for_the_primary_host_online(broker_port: int) -> None:  # noqa: F811
     """tck-id-message-flow-edge-node-birth-publish-phid-wait ("MUST verify the Primary Host
     Application is online via the STATE topic before publishing NBIRTH and DBIRTH"), -phid-wait-id
     (another host's STATE does not count), -phid-wait-online (an offline STATE does not),
