@@ -68,14 +68,16 @@ class Member(Program):
 
 
 @contextmanager
-def two_members(url: str, plant_file: Path, tmp_path: Path) -> Iterator[dict[str, Member]]:
+def two_members(url: str, plant_file: Path, tmp_path: Path,
+                via: dict[str, str] | None = None) -> Iterator[dict[str, Member]]:
     """feeder (sers, part cell-a) in one process, press (gms96, cell-b) in another, both on
-    virtual time (nothing changes unless asked), members of the fleet at ``url``; stopped after,
-    a frozen one continued first (SIGSTOP'd, it would not stop)."""
+    virtual time (nothing changes unless asked), members of the fleet at ``url`` (a part in
+    ``via`` connects to the broker by the URL given there: a relay, tests/support/relay.py);
+    stopped after, a frozen one continued first (SIGSTOP'd, it would not stop)."""
     started: dict[str, Member] = {}
     try:
         for part in ("cell-a", "cell-b"):
-            started[part] = Member(["up", str(plant_file), "--part", part, "--virtual"], url,
+            started[part] = Member(["up", str(plant_file), "--part", part, "--virtual"], (via or {}).get(part, url),
                                    tmp_path / f"{part}.log")
         yield started
     finally:

@@ -1,16 +1,22 @@
 """A fleet watch follows a watched member that comes back (docs/fleet.md, the watch paragraph):
-two member processes on a real mosquitto, one frozen (SIGSTOP) until its last will marks it
-offline and continued (SIGCONT) so that it rejoins; while the other is still watched, the watch
-asks the returning one again, says so in one line, and its items follow again, as ``tail -F``
-follows a file that comes back.  A member back without the watched device stays gone.
+two member processes on a real mosquitto, one taken off the broker until its last will marks it
+offline and then let back so that it rejoins; while the other is still watched, the watch asks
+the returning one again, says so in one line, and its items follow again, as ``tail -F`` follows
+a file that comes back.  A member back without the watched device stays gone.
 
-The broker sets a server keep alive of 10 s (``max_keepalive``, which devsim's MQTT client
-obeys): the frozen member's will goes out after 15 s instead of 22.5 s."""
+press's process reaches the broker through a relay (tests/support/relay.py).  Cutting the relay
+is what a frozen process (a laptop asleep) comes to, without waiting for the broker's keep alive
+(15 s at mosquitto's least, ``max_keepalive 10``) to give up on it: the broker finds the member's
+connection lost without a DISCONNECT and sends its last will at once, while the member hears
+nothing (its side is held silent, as a frozen process hears nothing); let back, the member reads
+the end of its connection, as a frozen process does when continued after the broker dropped it,
+and reconnects, through the relay again.  SIGSTOP is not kept: what it adds is the broker's keep
+alive timing out (mosquitto's doing; the will it sends is the same) and a member that does
+nothing while away (nothing of what these tests watch changes meanwhile: virtual time)."""
 
 from __future__ import annotations
 
 import json
-import os
 import signal
 import socket
 from collections.abc import Callable, Iterator
@@ -25,22 +31,29 @@ from tests.fleet.test_watch import STREAMS, devices_in, line_where, stderr_lines
 from tests.support.broker import Broker
 from tests.support.process import stop as stop_process
 from tests.support.process import wait_until
-
-QUICK = "max_keepalive 10\n"  # a silent client is dropped (its will sent) after 15 s (mosquitto: at least 10)
+from tests.support.relay import Relay
 
 
 @pytest.fixture
-def quick(tmp_path: Path) -> Iterator[Broker]:
-    """A broker of its own (the offline marks stay out of the other tests) with a short keep alive."""
-    server = Broker(extra=QUICK).start()
+def own() -> Iterator[Broker]:
+    """A broker of its own: the offline marks stay out of the other tests."""
+    server = Broker().start()
     yield server
     server.stop()
 
 
 @pytest.fixture
-def members(quick: Broker, plant_file: Path, tmp_path: Path) -> Iterator[dict[str, Member]]:
-    """feeder (sers) in one process, press (gms96) in another, both on virtual time."""
-    with two_members(quick.url, plant_file, tmp_path) as started:
+def relay(own: Broker) -> Iterator[Relay]:
+    """The way of press's process to the broker: cut (:meth:`Relay.cut`), it is off the broker."""
+    between = Relay(own.port).start()
+    yield between
+    between.stop()
+
+
+@pytest.fixture
+def members(own: Broker, relay: Relay, plant_file: Path, tmp_path: Path) -> Iterator[dict[str, Member]]:
+    """feeder (sers) in one process, press (gms96) in another (through ``relay``), both on virtual time."""
+    with two_members(own.url, plant_file, tmp_path, via={"cell-b": relay.url}) as started:
         yield started
 
 
@@ -52,25 +65,25 @@ def where(member: Member) -> str:
     return f"{member.process} (host {socket.gethostname()}, pid {member.proc.pid})"
 
 
-def test_a_fleet_watch_watches_a_member_again_that_comes_back(members: dict[str, Member], quick: Broker,
-                                                               tmp_path: Path) -> None:
-    sub = mosquitto("mosquitto_sub", "-p", str(quick.port), "-t", STREAMS, "-F", "%t %p", "-d",
+def test_a_fleet_watch_watches_a_member_again_that_comes_back(members: dict[str, Member], own: Broker,
+                                                               relay: Relay, tmp_path: Path) -> None:
+    sub = mosquitto("mosquitto_sub", "-p", str(own.port), "-t", STREAMS, "-F", "%t %p", "-d",
                     log=tmp_path / "sub.log")
     sub.wait_for("Subscribed")
-    watcher = watch(quick.url, tmp_path / "watch.log")
+    watcher = watch(own.url, tmp_path / "watch.log")
     feeder, press = members["cell-a"], members["cell-b"]
     offline, back = said(watcher, " went offline "), said(watcher, " is back")
     try:
         line_where(watcher, lambda _line: devices_in(watcher.seen) >= {"feeder", "press"},
                    "a first line of feeder and of press")
-        os.kill(press.proc.pid, signal.SIGSTOP)  # frozen: the broker sends its last will
+        relay.cut()  # press's process is off the broker: the broker sends its last will
         wait_until(lambda: bool(offline()), "the line saying press's process went offline", timeout=30)
         assert offline() == [f"devsim: {where(press)} went offline (its last will): no more items of press"]
-        os.kill(press.proc.pid, signal.SIGCONT)  # it finds its connection gone and rejoins
+        relay.restore()  # it finds its connection gone and rejoins
         wait_until(lambda: bool(back()), "the line saying press's process is back", timeout=30)
         assert back() == [f"devsim: {where(press)} is back: items of press follow again"]
         assert watcher.proc.poll() is None
-        with FleetClient(quick.url) as fleet:  # asked again: its events are watched again
+        with FleetClient(own.url) as fleet:  # asked again: its events are watched again
             fleet.fault("press", "emergency_stop", True)
         line_where(watcher, lambda line: line.split()[1:] == ["press", "fault", "emergency_stop", "on"],
                    "press's fault line after it came back")
@@ -78,7 +91,7 @@ def test_a_fleet_watch_watches_a_member_again_that_comes_back(members: dict[str,
         assert len([line for line in watcher.seen if line.split()[1:3] == ["press", "estop"]]) == 2
         # the member serves the new stream only: the one its will ended is published on no more
         probe = "devsim-fleet/client/probe/watch/0"
-        sent = mosquitto("mosquitto_pub", "-p", str(quick.port), "-t", probe, "-m", "end", log=tmp_path / "pub.log")
+        sent = mosquitto("mosquitto_pub", "-p", str(own.port), "-t", probe, "-m", "end", log=tmp_path / "pub.log")
         assert sent.proc.wait(15) == 0
         sent.stop()
         sub.wait_for(probe)
@@ -113,21 +126,21 @@ def fault_of(device: str, active: bool) -> Callable[[dict[str, Any]], bool]:
 
 
 def test_fleet_client_watch_tells_on_back_and_yields_the_items_again(members: dict[str, Member],
-                                                                     quick: Broker) -> None:
+                                                                     own: Broker, relay: Relay) -> None:
     feeder, press = members["cell-a"], members["cell-b"]
     told: list[str] = []
     seen: list[dict[str, Any]] = []
-    with FleetClient(quick.url) as fleet:
+    with FleetClient(own.url) as fleet:
         items = fleet.watch(None, on_offline=told.append, on_back=lambda line: told.append(f"back: {line}"),
                             timeout=30)
         try:
             next_of(items, lambda _item: {item["device"] for item in seen} >= {"feeder", "press"}, seen)
-            os.kill(press.proc.pid, signal.SIGSTOP)
+            relay.cut()
             fleet.wait_for_devices(["press"], timeout=30, online=False)  # its will is out
             fleet.fault("feeder", "emergency_stop", True)  # an item after the will: the will is told first
             next_of(items, fault_of("feeder", True), seen)
             assert told == [f"devsim: {where(press)} went offline (its last will): no more items of press"]
-            os.kill(press.proc.pid, signal.SIGCONT)
+            relay.restore()
             fleet.wait_for_devices(["press"], timeout=30)  # back in the fleet
             fleet.fault("feeder", "emergency_stop", False)
             mark = len(seen)
@@ -144,25 +157,25 @@ def test_fleet_client_watch_tells_on_back_and_yields_the_items_again(members: di
     assert feeder.proc.poll() is None
 
 
-def test_a_member_back_without_the_watched_device_stays_gone(members: dict[str, Member], quick: Broker,
-                                                             tmp_path: Path) -> None:
-    """Frozen press's process is replaced meanwhile (another process serves press): it rejoins
+def test_a_member_back_without_the_watched_device_stays_gone(members: dict[str, Member], own: Broker,
+                                                             relay: Relay, tmp_path: Path) -> None:
+    """press's process, off the broker, is replaced meanwhile (another process serves press): it rejoins
     without press (withdrawn), so there is nothing of it to watch again; the watch goes on with
     feeder and ends when feeder's process goes, as before.  The replacement was not watched."""
     feeder, press = members["cell-a"], members["cell-b"]
     told: list[str] = []
     seen: list[dict[str, Any]] = []
     replacement: Member | None = None
-    with FleetClient(quick.url) as fleet:
+    with FleetClient(own.url) as fleet:
         items = fleet.watch(None, on_offline=told.append, on_back=told.append, timeout=30)
         try:
             next_of(items, lambda _item: {item["device"] for item in seen} >= {"feeder", "press"}, seen)
-            os.kill(press.proc.pid, signal.SIGSTOP)
+            relay.cut()
             fleet.wait_for_devices(["press"], timeout=30, online=False)
             only_press = tmp_path / "press.yaml"
             only_press.write_text("devices:\n  - {name: press, kind: gms96}\n")
-            replacement = Member(["up", str(only_press), "--virtual"], quick.url, tmp_path / "replacement.log")
-            os.kill(press.proc.pid, signal.SIGCONT)
+            replacement = Member(["up", str(only_press), "--virtual"], own.url, tmp_path / "replacement.log")
+            relay.restore()
             wait_until(lambda: " back; announced again without 'press'" in press.log.read_text(),
                        "the old press process rejoining without press", timeout=30)
             fleet.fault("feeder", "emergency_stop", True)  # after its new announcement
