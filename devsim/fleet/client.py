@@ -428,7 +428,9 @@ class AsyncFleetClient:
         self._pending[req_id] = future
         self._asked[req_id] = (process, op)
         try:
-            self._client.publish(self.topics.request(process), json.dumps(message).encode(), qos=0)
+            acked = self._client.publish(self.topics.request(process), json.dumps(message).encode(), qos=1)
+            if acked is not None:  # (a broker whose ACL refuses it says so in the PUBACK: MQTT 5)
+                acked.add_done_callback(lambda done: self._refused_by_broker(done, req_id))
             if not self.processes.get(process, {}).get("online"):  # it left while we published
                 self._requests_fail(process)
             reply = await asyncio.wait_for(future, self.timeout)
@@ -440,6 +442,22 @@ class AsyncFleetClient:
         if not reply.get("ok"):
             raise ControlError(str(reply.get("error")), str(reply.get("type", "Error")))
         return reply.get("result")
+
+    def _refused_by_broker(self, acked: asyncio.Future[bytes], req_id: str) -> None:
+        """A request's PUBACK with a reason code of 0x80 or more (MQTT 5, 3.4.2.1: mosquitto
+        answers 0x87 "Not authorized" for a topic its ACL does not let this client write) fails
+        the request at once: no process will hear it."""
+        if acked.cancelled() or acked.exception() is not None:
+            return  # (the link was lost: the request fails that way)
+        body = acked.result()
+        reason = body[2] if len(body) > 2 else 0
+        future = self._pending.get(req_id)
+        if reason < 0x80 or future is None or future.done():
+            return
+        process, op = self._asked[req_id]
+        why = ", not authorized: see the broker's ACL" if reason == 0x87 else ""
+        future.set_exception(ControlError(
+            f"the broker refused the request {op!r} to {process} (PUBACK reason 0x{reason:02x}{why})", "Refused"))
 
     async def request(self, op: str, **fields: Any) -> Any:
         """A control request routed by its ``device``; ``devices`` from the announcements;
