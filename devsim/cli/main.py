@@ -127,7 +127,8 @@ def doc(kind: str, modbus_map: bool, eds_file: bool) -> None:
     if eds_file:
         from devsim.facades.canopen_od import eds
 
-        click.echo(eds(cls.kind, cls.description, cls.points, drive=cls.drive is not None))
+        click.echo(eds(cls.kind, cls.description, cls.points, drive=cls.drive is not None,
+                       homing=cls.drive is not None and cls.drive.homing is not None))
         return
     click.echo(modbus_markdown(cls) if modbus_map else reference_markdown(cls))
 

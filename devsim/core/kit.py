@@ -26,6 +26,7 @@ __all__ = [
     "ErrorCode",
     "Fault",
     "FaultTable",
+    "Homing",
     "Framing",
     "PortDef",
     "SignalDef",
@@ -342,3 +343,20 @@ class DriveActions(msgspec.Struct, frozen=True):
     fault: Callable[[Any], bool]
     moving: Callable[[Any], bool]
     following_error: Callable[[Any], float] = lambda m: 0.0
+    #: The kind's own reference run as CiA 402 homing mode (6060h = 6); ``None``: the device has
+    #: no reference run of its own, so the mode is not supported.
+    homing: Homing | None = None
+
+
+class Homing(msgspec.Struct, frozen=True):
+    """A kind's own reference run as a drive profile's homing (CiA 402 homing mode,
+    :mod:`devsim.facades.cia402_homing`).  ``methods``: a row per homing method number (6098h,
+    CiA 402-2) the reference run performs, its handler starting that run on the model with
+    (speed during search for switch, speed during search for zero, acceleration) in the drive's
+    units (6099h sub 1, 2 and 609Ah; 0: the device's own parameter), raising
+    :class:`~devsim.core.points.BadValue` where the device refuses; each row cites the manual
+    section of the run.  ``state``: ``"running"`` while a reference run is under way, else
+    ``"attained"`` when the device has its reference point, ``"failed"`` when it has none."""
+
+    methods: Table[Callable[[Any, float, float, float], None]]
+    state: Callable[[Any], str]

@@ -8,7 +8,8 @@ request's multiplexer: :mod:`devsim.facades.canopen_sdo`).
 
 A kind that declares itself a drive (``Device.drive``) also gets the CiA 402 objects and state
 machine (:mod:`devsim.facades.cia402`): controlword 6040h, statusword 6041h, profile position and
-profile velocity modes (with 606Dh … 6070h, the velocity window and threshold), 6064h/606Ch/60F4h; a fault the model announces (topic ``fault``) sends an
+profile velocity modes (with 606Dh … 6070h, the velocity window and threshold), homing mode where the
+kind has a reference run of its own (607Ch, 6098h, 6099h, 609Ah: :mod:`devsim.facades.cia402_homing`), 6064h/606Ch/60F4h; a fault the model announces (topic ``fault``) sends an
 EMCY message.  Hosts in other processes reach the nodes through
 :class:`devsim.transports.socketcand.SocketcandServer` (:func:`start_canopen`, ``devsim run
 --canopen``).  PDOs: what the master maps into 1600h/1A00h and enables; TPDOs go out on SYNC
@@ -65,8 +66,8 @@ class CanopenFacade:
         if not 1 <= node_id <= 127:
             raise ValueError("a CANopen node id is 1 … 127")
         self.device, self.call = device, call
-        self.od = load_od(eds(device.kind, device.description, device.points, drive=device.drive is not None),
-                          node_id)
+        self.od = load_od(eds(device.kind, device.description, device.points, drive=device.drive is not None,
+                              homing=device.drive is not None and device.drive.homing is not None), node_id)
         self.drive = Cia402(device.drive, device.model, device.clock) if device.drive is not None else None
         self._unlisten = device.model.listen("fault", self._emergency)
         self._unlisten_power = device.model.listen("power_on", self._power_on)
@@ -316,6 +317,8 @@ class CanopenFacade:
             self.call(self.drive.cancel)
 
     def _read(self, index: int, subindex: int, od: Any) -> Any:
+        if self.drive is not None and (index, subindex) in HOMING_SPEEDS:
+            return self.call(lambda d: d.homing.speeds[subindex - 1], self.drive)
         if self.drive is not None and index in DRIVE_READS:
             return self.call(DRIVE_READS[index], self.drive)
         point = self.objects.get(index)
@@ -335,10 +338,11 @@ class CanopenFacade:
         if index == 0x1005:
             self._consume_sync(canopen_mapping.sync_cob_id(data))
             return
-        if self.drive is not None and index in DRIVE_WRITES:
+        if self.drive is not None and (index in DRIVE_WRITES or (index, subindex) in HOMING_SPEEDS):
+            write = DRIVE_WRITES.get(index) or (lambda d, v: d.homing.write_speed(subindex, int(v)))
             faulted = index == 0x6040 and self.call(self.drive.in_fault)
             try:
-                self.call(DRIVE_WRITES[index], self.drive, od.decode_raw(data))
+                self.call(write, self.drive, od.decode_raw(data))
             except (BadValue, ReadOnlyName, ValueError):
                 raise SdoAbortedError(VALUE_RANGE_EXCEEDED) from None
             if faulted and not self.call(self.drive.in_fault):
@@ -446,6 +450,9 @@ DRIVE_READS: dict[int, Callable[[Cia402], int]] = {
     0x60F4: lambda d: round(d.actions.following_error(d.model)),
     0x60FF: lambda d: d.target_velocity,
     0x6502: lambda d: d.supported_modes,
+    0x607C: lambda d: d.homing.offset,
+    0x6098: lambda d: d.homing.method,
+    0x609A: lambda d: d.homing.acceleration,
 }
 """The CiA 402 objects as the drive state shows them, and the error register 1001h (CiA 301: bit 0
 while the drive has a fault, as its EMCY says)."""
@@ -460,5 +467,10 @@ DRIVE_WRITES: dict[int, Callable[[Cia402, Any], None]] = {
     0x606F: lambda d, v: d.watch.set("threshold", v),
     0x6070: lambda d, v: d.watch.set("threshold_time", v),
     0x60FF: Cia402.write_target_velocity,
+    0x607C: lambda d, v: setattr(d.homing, "offset", int(v)),
+    0x6098: lambda d, v: d.homing.write_method(int(v)),
+    0x609A: lambda d, v: d.homing.write_acceleration(int(v)),
 }
+HOMING_SPEEDS = frozenset(((0x6099, 1), (0x6099, 2)))
+"""6099h's subs (homing speeds: during search for switch, for zero), read and written as such."""
 """Writing the CiA 402 objects."""

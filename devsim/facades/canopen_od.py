@@ -16,7 +16,7 @@ from collections.abc import Iterable
 from devsim.core.points import Point
 from devsim.facades.cia402 import DEFAULTS
 
-__all__ = ["DEVICE_TYPE", "DRIVE_OBJECTS", "FIRST_POINT_INDEX", "SYNC_COB_ID", "VENDOR_ID", "eds", "point_objects"]
+__all__ = ["DEVICE_TYPE", "DRIVE_OBJECTS", "HOMING_OBJECTS", "HOMING_SPEEDS", "FIRST_POINT_INDEX", "SYNC_COB_ID", "VENDOR_ID", "eds", "point_objects"]
 
 FIRST_POINT_INDEX = 0x2000
 SYNC_COB_ID = 0x80  # 1005h's power-on value: the predefined connection set's SYNC
@@ -68,6 +68,23 @@ DRIVE_OBJECTS: tuple[tuple[int, str, int, str, bool, int | str], ...] = (
     (0x6502, "Supported drive modes", 0x0007, "ro", False, ""),
 )
 
+#: The homing mode's objects (CiA 402-2, homing mode), for a drive whose kind declares its
+#: reference run (``DriveActions.homing``): 607Ch, 6098h and 609Ah here, the record 6099h apart.
+HOMING_OBJECTS: tuple[tuple[int, str, int, str, bool, int | str], ...] = (
+    (0x607C, "Home offset", 0x0004, "rw", True, DEFAULTS["home_offset"]),
+    (0x6098, "Homing method", 0x0002, "rw", True, DEFAULTS["homing_method"]),
+    (0x609A, "Homing acceleration", 0x0007, "rw", True, DEFAULTS["homing_acceleration"]),
+)
+HOMING_SPEEDS = 0x6099
+
+
+def _homing_speeds() -> list[str]:
+    """6099h, homing speeds (CiA 402-2): sub 1 during search for switch, sub 2 during search for zero."""
+    return _record(HOMING_SPEEDS, "Homing speeds", [
+        ("Highest sub-index supported", 0x0005, "const", 2),
+        ("Speed during search for switch", 0x0007, "rw", DEFAULTS["homing_speed_switch"]),
+        ("Speed during search for zero", 0x0007, "rw", DEFAULTS["homing_speed_zero"])])
+
 
 PDOS = 4  # RPDOs and TPDOs, each with a communication and a mapping record
 
@@ -105,8 +122,9 @@ def _pdo_indices() -> list[int]:
     return [base + n for base in (0x1400, 0x1600, 0x1800, 0x1A00) for n in range(PDOS)]
 
 
-def eds(kind: str, description: str, points: Iterable[Point], drive: bool = False) -> str:
-    """The EDS of a kind (with the CiA 402 objects when it is a ``drive``)."""
+def eds(kind: str, description: str, points: Iterable[Point], drive: bool = False, homing: bool = False) -> str:
+    """The EDS of a kind (with the CiA 402 objects when it is a ``drive``, and those of homing
+    mode when it has a reference run of its own: ``homing``)."""
     objects = point_objects(points)
     lines = [
         "[FileInfo]", f"FileName={kind}.eds", "FileVersion=1", "FileRevision=0", "EDSVersion=4.0",
@@ -128,7 +146,9 @@ def eds(kind: str, description: str, points: Iterable[Point], drive: bool = Fals
     lines += _var(0x1018, 2, "Product code", 0x0007, "ro", _product_code(kind))
     lines += _var(0x1018, 3, "Revision number", 0x0007, "ro", 1)
     lines += _var(0x1018, 4, "Serial number", 0x0007, "ro", 1)
+    homing_objects = [*HOMING_OBJECTS, (HOMING_SPEEDS,)] if drive and homing else []
     optional = [0x1005, 0x1008, 0x1014, 0x1017, *_pdo_indices()] + ([index for index, *_ in DRIVE_OBJECTS] if drive else [])
+    optional = sorted(optional + [index for index, *_ in homing_objects])
     lines += ["[OptionalObjects]", f"SupportedObjects={len(optional)}"]
     lines += [f"{n}=0x{index:04X}" for n, index in enumerate(optional, start=1)] + [""]
     lines += _var(0x1005, None, "COB-ID SYNC", 0x0007, "rw", SYNC_COB_ID)  # (CiA 301: the SYNC consumed)
@@ -137,8 +157,10 @@ def eds(kind: str, description: str, points: Iterable[Point], drive: bool = Fals
     lines += _var(0x1017, None, "Producer heartbeat time", 0x0006, "rw", 0)
     lines += _pdo_objects()
     if drive:  # the device profile area (CiA 402)
-        for index, name, code, access, pdo, default in DRIVE_OBJECTS:
+        for index, name, code, access, pdo, default in sorted(DRIVE_OBJECTS + (HOMING_OBJECTS if homing else ())):
             lines += _var(index, None, name, code, access, default, pdo=pdo)
+            if homing and index == HOMING_SPEEDS - 1:
+                lines += _homing_speeds()
     lines += ["[ManufacturerObjects]", f"SupportedObjects={len(objects)}"]
     lines += [f"{n}=0x{index:04X}" for n, (index, _p) in enumerate(objects, start=1)]
     lines.append("")

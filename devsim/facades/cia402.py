@@ -27,13 +27,16 @@ from __future__ import annotations
 
 from typing import Any
 
+import msgspec
+
 from devsim.core.changes import CHANGES
 from devsim.core.clock import VirtualClock
 from devsim.core.kit import DriveActions
+from devsim.facades.cia402_homing import HomingMode
 from devsim.facades.cia402_position import SetPoints
 from devsim.facades.cia402_velocity import VelocityWatch
 
-__all__ = ["Cia402", "DEFAULTS", "DriveActions", "MODES", "STATES", "TRANSITIONS", "command"]
+__all__ = ["Cia402", "DEFAULTS", "DriveActions", "HOMING", "MODES", "STATES", "TRANSITIONS", "command"]
 
 
 #: State → statusword bits 0…6 (CiA 402-2 §8.4.1; bit 4 "voltage enabled" where the power stage may
@@ -46,18 +49,21 @@ STATES = {
     "quick_stop_active": 0x0017,
     "fault": 0x0008,
 }
-PROFILE_POSITION, PROFILE_VELOCITY = 1, 3
+PROFILE_POSITION, PROFILE_VELOCITY, HOMING = 1, 3, 6
 
 #: Modes of operation (6060h value) → (the drive action the mode needs, its bit in 6502h "supported
-#: drive modes", CiA 402-2: bit 0 profile position, bit 2 profile velocity).
-MODES = {PROFILE_POSITION: ("move_to", 0), PROFILE_VELOCITY: ("jog", 2)}
+#: drive modes", CiA 402-2: bit 0 profile position, bit 2 profile velocity, bit 5 homing: the
+#: kind's own reference run, :mod:`devsim.facades.cia402_homing`).
+MODES = {PROFILE_POSITION: ("move_to", 0), PROFILE_VELOCITY: ("jog", 2), HOMING: ("homing", 5)}
 
 #: The power-on values of the 402 objects a master writes (the EDS's DefaultValue; CiA 301: an NMT
 #: reset node restores the application objects' power-on values).  The velocity window and
-#: threshold (606Dh, 606Fh) are in the drive's velocity units, their times (606Eh, 6070h) in ms.
+#: threshold (606Dh, 606Fh) are in the drive's velocity units, their times (606Eh, 6070h) in ms; the
+#: homing objects' 0 (6098h, 6099h, 609Ah) is "no method" and "the device's own speeds and ramp".
 DEFAULTS = {"controlword": 0, "mode": PROFILE_POSITION, "target_position": 0, "profile_velocity": 1000,
             "target_velocity": 0, "velocity_window": 100, "velocity_window_time": 0, "velocity_threshold": 10,
-            "velocity_threshold_time": 0}
+            "velocity_threshold_time": 0, "home_offset": 0, "homing_method": 0, "homing_speed_switch": 0,
+            "homing_speed_zero": 0, "homing_acceleration": 0}
 
 
 def command(word: int) -> str:
@@ -106,11 +112,20 @@ class Cia402:
     _commanded: float | None  # profile velocity mode: the velocity the drive was commanded last
 
     def __init__(self, actions: DriveActions, model: Any, clock: Any = None) -> None:
-        self.actions, self.model = actions, model
+        self.homing = HomingMode(actions, model, DEFAULTS)
+        self.actions, self.model = self._shifted(actions), model
         clock = clock if clock is not None else VirtualClock()
         self.watch = VelocityWatch(clock, self._velocities, DEFAULTS)
         self.setpoints = SetPoints(actions, model, clock)
         self._power_on()
+
+    def _shifted(self, actions: DriveActions) -> DriveActions:
+        """The drive's actions with positions in the zero position homing set (607Ch): 6064h, the
+        targets of 607Ah and the relative ones all count from there."""
+        homing = self.homing
+        return msgspec.structs.replace(
+            actions, position=lambda m: actions.position(m) + homing.shift,
+            move_to=lambda m, target, speed: actions.move_to(m, target - homing.shift, speed))
 
     @property
     def state(self) -> str:
@@ -121,6 +136,7 @@ class Cia402:
         if state != "operation_enabled":
             self._commanded = None  # (out of Operation enabled the drive follows nothing)
             self.setpoints.drop()  # (and no set-point is in process)
+            self.homing.interrupt(stop=False)  # (nor a homing: the state's own command stops the axis)
         self._state = state
 
     def _power_on(self) -> None:
@@ -129,6 +145,7 @@ class Cia402:
         self.target_position, self.profile_velocity = DEFAULTS["target_position"], DEFAULTS["profile_velocity"]
         self.target_velocity = DEFAULTS["target_velocity"]
         self.setpoints.reset()
+        self.homing.reset()
         self.error_code = 0  # the EMCY code of the last fault the drive announced (603Fh)
         self.watch.reset()
 
@@ -168,6 +185,7 @@ class Cia402:
         if action_bit is None or not self.supported_modes >> action_bit[1] & 1:
             raise ValueError(f"mode of operation {mode} is not supported")
         if mode != self.mode:
+            self.homing.interrupt()  # (a homing under way ends with its mode)
             self._commanded = None  # (the velocity the drive follows is the new mode's to command)
             self.setpoints.reset()  # (and the set-points in process end)
         self.mode = mode
@@ -226,6 +244,8 @@ class Cia402:
     def _profile(self, before: int, word: int) -> None:
         if self.mode == PROFILE_POSITION:  # bits 4 … 8: :mod:`devsim.facades.cia402_position`
             self.setpoints.control(before, word, self.target_position, self.profile_velocity)
+        elif self.mode == HOMING:  # bits 4 and 8: :mod:`devsim.facades.cia402_homing`
+            self.homing.control(before, word)
         elif self.mode == PROFILE_VELOCITY:
             self._follow()
 
@@ -259,4 +279,6 @@ class Cia402:
         word = STATES[self.state] | 0x0200  # bit 9: remote
         if self.mode == PROFILE_VELOCITY:
             return word | self.watch.bits()  # bits 10 (target reached) and 12 (speed)
+        if self.mode == HOMING:
+            return word | self.homing.bits()  # bits 10, 12 (homing attained) and 13 (homing error)
         return word | self.setpoints.bits(bool(self.controlword & 0x100))  # bits 10 and 12 (set-point acknowledge)

@@ -26,14 +26,15 @@ class Drive:
     remote node as the master, both on one python-can virtual bus.  ``ready`` first runs past the
     power-on initialisation and applies what the kind needs to move (``Device.drive_setup``)."""
 
-    def __init__(self, kind: str = "pcd4h3", node_id: int = 3, *, name: str = "pcd", ready: bool = False) -> None:
+    def __init__(self, kind: str = "pcd4h3", node_id: int = 3, *, name: str = "pcd", ready: bool = False,
+                 config: dict[str, Any] | None = None) -> None:
         channel = f"devsim-{uuid.uuid4().hex}"
         self.runtime = Runtime(virtual=True).start()
         self.slave, self.master = canopen.Network(), canopen.Network()
         self.slave.connect(interface="virtual", channel=channel)
         self.master.connect(interface="virtual", channel=channel)
         try:
-            self.device = self.runtime.add_device(kind, name, {})
+            self.device = self.runtime.add_device(kind, name, config or {})
             if ready:
                 self.runtime.advance(3.0)
                 self.runtime.call(self.device.apply_state, self.device.drive_setup)

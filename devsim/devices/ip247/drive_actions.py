@@ -17,13 +17,25 @@ count it).
 machine data (§6.1; r = 10 µm, 3000 mm/min) for module 0 (the SYS-ID of a fresh module), the NC limit
 switches closed, and the reference point
 set (BA5) at 0.
+
+Homing (CiA 402 homing mode) is the module's own reference run, BA5 "Referenzpunkt fahren" with
+B = 0 (manual §4.2.3 … §4.2.5; :mod:`devsim.devices.ip247.reference`): it searches the cam (BERO)
+against the reference direction R (MD n+26), leaves it in R in single steps and sets the reference
+point at the cam's edge, synchronous (MD n+25 = 0) at the next zero of the current pattern counter
+after it, the stepper's index.  The cam lies against R from the home position, so R forward is
+the negative home switch approached in the positive direction: method 21, and 5 with the
+synchronisation (the first "index" after the edge); R backward, the positive home switch: 19, and
+3.  The run's direction and synchronisation are machine data, so a method that does not match
+the loaded ones is refused at the start (a homing error); its speed is the reference velocity of
+the machine data (MD n+23) and f_ss: 6099h/609Ah do not change them.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
-from devsim.core.kit import DriveActions
+from devsim.core.kit import Command, DriveActions, Homing, Table
 from devsim.core.points import BadValue
 from devsim.devices.ip247.jobs import BACKWARD, FORWARD, START, STOP
 
@@ -82,6 +94,34 @@ def _enabled(m: Any) -> bool:
     return _unit(m).md is not None and bool(m.signals.get("BB1"))
 
 
+def _home(forward: bool, synchronous: bool) -> Callable[..., None]:
+    def start(m: Any, fast: float, slow: float, accel: float) -> None:
+        md = _unit(m).md
+        if md is None or (md.reference_direction == 0x00) != forward or (md.reference_sync == 0) != synchronous:
+            raise BadValue("the machine data's reference direction or synchronisation is another homing method")
+        _operate(m, 5, START)  # BA5, B = 0: Referenzpunkt fahren
+
+    return start
+
+
+def _homing_state(m: Any) -> str:
+    unit = _unit(m)
+    if unit.reference_run is not None:
+        return "running"
+    return "attained" if unit.reference_set else "failed"
+
+
+HOMING = Homing(
+    methods=Table([
+        Command("21", _home(True, False), "§4.2.4", "R forward, asynchronous: the cam's edge left in the positive direction"),
+        Command("5", _home(True, True), "§4.2.4", "R forward, synchronous: the next pattern zero after the cam"),
+        Command("19", _home(False, False), "§4.2.4", "R backward, asynchronous: the cam's edge left in the negative direction"),
+        Command("3", _home(False, True), "§4.2.4", "R backward, synchronous: the next pattern zero after the cam"),
+    ]),
+    state=_homing_state,
+)
+
+
 DRIVE = DriveActions(
     enable=_enable,
     move_to=lambda m, target, speed: _operate(m, 6, START, _per_minute(speed) if speed > 0 else 0, round(target)),
@@ -93,4 +133,5 @@ DRIVE = DriveActions(
     enabled=_enabled,
     fault=lambda m: _unit(m).error >= 10,
     moving=lambda m: bool(_unit(m).running),
+    homing=HOMING,
 )
