@@ -32,6 +32,8 @@ VALUE_RANGE_EXCEEDED = 0x06090030
 #: (``None``: not checked).
 HOMING: dict[str, tuple[dict[str, Any], int]] = {
     "sers": ({"axis": {"reference_low": 3000}}, 19),
+    "gms96": ({}, 21),  # (the card's default cam: [-20000, -15000], on the negative side)
+    "poselesta": ({}, 33),  # (the default mark of X at -10 mm, homing in the negative direction)
     "ip247": ({"axes": {1: {"cam": [3000.0, 6000.0]}}}, 19),  # (SETUP's machine data: R backward, asynchronous)
 }
 #: Methods no kind's reference run performs (the homing on a hard stop, -1; 35, the current

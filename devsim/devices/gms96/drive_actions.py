@@ -11,13 +11,25 @@ with the card's ramp (B, N24), as ``Q8;5`` "Stillstand" stops it (manual §2.3.1
 the executor runs, so the jog ran on.  The card moves at its own work speed and ramp (N
 parameters, the feed): the profile velocity of the facade does not change them.  Positions are
 increments in the machine frame (the ``axis.position`` point).
+
+Homing (CiA 402 homing mode) is the card's reference run ``Q`` (manual §2.3.1 Q;
+:mod:`devsim.devices.gms96.reference`): Q2 searches the cam in the "negative" direction, drives
+off it the other way and takes the point where it leaves it: the negative home switch approached
+in the positive direction, method 21; Q0 then searches the index mark in the "negative" direction,
+back over the cam's edge: method 6; Q1 the index mark alone, in the "negative" direction: method
+33.  P2.1 ("umgekehrte Richtung") mirrors them: 19, 4 and 34.  P2's other bits (the cam's input
+and polarity, the counter kept, the counter track) are the card's, from N19.  The runs go at the
+card's own speeds (its feed: the work speed, the search speed S), so 6099h/609Ah do not change
+them.  While a run is under way the card's IDXOFF is set (the run sets it): the drive counts as
+enabled then, since the position controller is on.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
-from devsim.core.kit import DriveActions
+from devsim.core.kit import Command, DriveActions, Homing, Table
 from devsim.core.points import BadValue
 from devsim.devices.gms96.executor import Cmd
 
@@ -64,6 +76,38 @@ def _jog(c: Any, velocity: float) -> None:
     c.changed()
 
 
+def _home(p1: int, reversed_direction: bool) -> Callable[..., None]:
+    def start(c: Any, fast: float, slow: float, accel: float) -> None:
+        p2 = (c.params.reference_type >> 8) & 0xFF & ~0x02 | (0x02 if reversed_direction else 0)
+        c.executor.submit(Cmd("Q", p1, p2, 0, 1))
+
+    return start
+
+
+def _reference_running(c: Any) -> bool:
+    run = c.executor.reference
+    return run is not None and not run.finished
+
+
+def _homing_state(c: Any) -> str:
+    if _reference_running(c) or (c.executor.current is not None and c.executor.current.letter == "Q"):
+        return "running"
+    return "attained" if not c.stage.idxoff else "failed"
+
+
+HOMING = Homing(
+    methods=Table([
+        Command("21", _home(2, False), "§2.3.1 Q", "Q2: the cam, left in the positive direction"),
+        Command("19", _home(2, True), "§2.3.1 Q", "Q2 with P2.1: the cam, left in the negative direction"),
+        Command("6", _home(0, False), "§2.3.1 Q", "Q0: the cam, then the index mark in the negative direction"),
+        Command("4", _home(0, True), "§2.3.1 Q", "Q0 with P2.1: the cam, then the index mark in the positive direction"),
+        Command("33", _home(1, False), "§2.3.1 Q", "Q1: the index mark in the negative direction"),
+        Command("34", _home(1, True), "§2.3.1 Q", "Q1 with P2.1: the index mark in the positive direction"),
+    ]),
+    state=_homing_state,
+)
+
+
 DRIVE = DriveActions(
     enable=_enable,
     move_to=_move_to,
@@ -72,8 +116,9 @@ DRIVE = DriveActions(
     reset_fault=lambda c: None,  # an emergency stop or a monitoring fault ends with its cause
     position=lambda c: c.coordinates.physical_to_machine(c.indexer.actual()),
     velocity=lambda c: c.axis.velocity(),
-    enabled=lambda c: bool(c.stage.controller and not c.stage.idxoff),
+    enabled=lambda c: bool(c.stage.controller and (not c.stage.idxoff or _reference_running(c))),
     fault=lambda c: bool(c.stage.estop or c.stage.monitoring_cause()),
     moving=lambda c: bool(c.motion()),
     following_error=lambda c: c.indexer.following_error(),
+    homing=HOMING,
 )

@@ -10,13 +10,23 @@ Achsfreigabe); a jog is the X+/X− keys in MANUAL at the control's own manual f
 rapid): the profile velocity's sign picks the key.  The quick stop is NC-Stop: the axes brake on
 their ramp and the block is given up; so does a jog at 0 while a block runs (a halt).  A fault is NC ready L (an internal alarm, §2.4.5/§4.10);
 it ends with its cause.  Positions are increments of X's resolution (the ``axis.x.position`` point).
+
+Homing (CiA 402 homing mode) is the control's homing of X onto its reference mark in MANUAL
+(``panel.reference``; manual §2.2.2: "Beim Ueberfahren der Referenzmarke muss der Pegel am Eingang
+RM auf "1" wechseln", §2.3.23, the RM activation V24; the search itself is not in the manual: spec
+§5.6's recommended one, in the configured ``home_direction`` at 10 % of the axis's maximum feed, up
+to the first accepted mark, the actual value set to ``reference_value`` there).  The mark is the
+encoder's index, so the run is method 33 (``home_direction`` −1) or 34 (+1); the other one is
+refused at the start (a homing error).  Its speed is the control's own: 6099h/609Ah do not change it.
+The quick stop (and a jog at 0, a halt) also ends a homing under way, braking the axis.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
-from devsim.core.kit import DriveActions
+from devsim.core.kit import Command, DriveActions, Homing, Table
 from devsim.core.points import BadValue
 
 __all__ = ["DRIVE"]
@@ -76,10 +86,39 @@ def _jog(c: Any, velocity: float) -> None:
 def _quick_stop(c: Any) -> None:
     for key in ("jog_pos_x", "jog_neg_x"):
         c.signals.set(key, False)
+    if c.field.homing is not None:
+        c.field.cancel()  # the search ends, the axis brakes
     if c.executor.running:
         c.signals.set("nc_stop", False)  # NC-Stop (active L): brake to HOLD
         c.signals.set("nc_stop", True)
         c.executor.reset()  # the held block is given up
+
+
+def _home(direction: int) -> Callable[..., None]:
+    def start(c: Any, fast: float, slow: float, accel: float) -> None:
+        _ready(c)
+        if c.cfg.axes.x.home_direction != direction:
+            raise BadValue(f"X homes in the direction {c.cfg.axes.x.home_direction}, not {direction}")
+        if c.mode != "MANUAL":
+            c.select_mode("MANUAL")
+        c.field.reference("x")
+
+    return start
+
+
+def _homing_state(c: Any) -> str:
+    if c.field.homing == "x":
+        return "running"
+    return "attained" if "x" in c.field.referenced else "failed"
+
+
+HOMING = Homing(
+    methods=Table([
+        Command("33", _home(-1), "§2.2.2", "the reference mark, searched in the negative direction"),
+        Command("34", _home(1), "§2.2.2", "the reference mark, searched in the positive direction"),
+    ]),
+    state=_homing_state,
+)
 
 
 DRIVE = DriveActions(
@@ -95,4 +134,5 @@ DRIVE = DriveActions(
     fault=lambda c: bool(not c.booting and not c.signals.get("nc_ready")),
     moving=lambda c: bool(c.signals.get("travel_x")),
     following_error=lambda c: c.following_error("x"),
+    homing=HOMING,
 )
