@@ -117,3 +117,110 @@ def test_a_homing_completes_at_the_home_position_less_the_home_offset(kind: str,
         assert node.sdo[0x6064].raw == -offset
     finally:
         drive.close()
+
+
+@pytest.mark.parametrize("how", ["halt", "bit 4 released"])
+@pytest.mark.parametrize("kind", sorted(HOMING))
+def test_a_halt_or_a_falling_bit_4_interrupts_the_homing(kind: str, how: str) -> None:
+    """Bit 8 = 1 or bit 4 1 → 0 during the run: the axis stops with the ramp, no home is
+    attained, and once it stands the statusword says "interrupted or not started" (0 0 1)."""
+    config, method = HOMING[kind]
+    drive = Drive(kind, 9, name=kind, ready=True, config=config)
+    try:
+        in_homing(drive, method)
+        drive.control(0x0F | START)
+        drive.runtime.advance(0.3)
+        assert drive.status & BITS == 0  # in progress
+        drive.control(0x0F | START | HALT if how == "halt" else 0x0F)
+        drive.runtime.advance(10.0)
+        status = drive.status
+        assert status & BITS == TARGET_REACHED, (kind, how, hex(status))
+        assert drive.runtime.call(lambda: not drive.device.drive.moving(drive.device.model))
+    finally:
+        drive.close()
+
+
+@pytest.mark.parametrize("kind", sorted(HOMING))
+def test_leaving_operation_enabled_interrupts_the_homing(kind: str) -> None:
+    config, method = HOMING[kind]
+    drive = Drive(kind, 9, name=kind, ready=True, config=config)
+    try:
+        in_homing(drive, method)
+        drive.control(0x0F | START)
+        drive.runtime.advance(0.3)
+        drive.control(0x07)  # disable operation
+        drive.runtime.advance(10.0)
+        drive.control(0x0F)  # back in Operation enabled: no home was attained
+        assert drive.status & BITS == TARGET_REACHED, hex(drive.status)
+    finally:
+        drive.close()
+
+
+def test_a_start_with_no_method_is_a_homing_error() -> None:
+    """6098h = 0, its power-on value, names no method: the start is a homing error (1 0 1)."""
+    drive = Drive("sers", 9, name="sers", ready=True)
+    try:
+        in_homing(drive, 0)
+        drive.control(0x0F | START)
+        assert drive.status & BITS == ERROR | TARGET_REACHED
+    finally:
+        drive.close()
+
+
+def test_a_method_the_machine_data_do_not_name_is_a_homing_error_on_the_ip247() -> None:
+    """The IP247's reference direction is machine data (MD n+26, here backward: 19): 21, the
+    forward run, is refused at the start, a homing error, and nothing moves."""
+    drive = Drive("ip247", 9, name="ip247", ready=True)
+    try:
+        in_homing(drive, 21)
+        here = drive.node.sdo[0x6064].raw
+        drive.control(0x0F | START)
+        drive.runtime.advance(0.5)
+        assert drive.status & BITS == ERROR | TARGET_REACHED
+        assert drive.node.sdo[0x6064].raw == here
+    finally:
+        drive.close()
+
+
+def test_a_drive_error_during_the_homing_is_a_homing_error() -> None:
+    """The SERS's limit switch in the search direction (a drive error: the right limit, no
+    reference cam before it) ends the run with bit 13, and the drive is in Fault."""
+    drive = Drive("sers", 9, name="sers", ready=True, config={"axis": {"limit_right": 2000}})
+    try:
+        in_homing(drive, 19)
+        status = run_home(drive, 20.0)
+        assert status & ERROR and not status & ATTAINED, hex(status)
+    finally:
+        drive.close()
+
+
+def test_the_sers_takes_the_homing_speeds_and_acceleration_into_its_parameters() -> None:
+    """6099h sub 1 → P41 (speed of the search), sub 2 → P1003 (the creep back), 609Ah → P42,
+    written when the run starts (manual §4.8.4.5); 0 leaves them as set."""
+    drive = Drive("sers", 9, name="sers", ready=True, config={"axis": {"reference_low": 3000}})
+    try:
+        node = drive.node
+        in_homing(drive, 19)
+        node.sdo[0x6099][1].raw = 4000
+        node.sdo[0x6099][2].raw = 500
+        node.sdo[0x609A].raw = 20000
+        assert (node.sdo[0x6099][1].raw, node.sdo[0x6099][2].raw) == (4000, 500)
+        drive.control(0x0F | START)
+        params = drive.device.model.params  # (P41, P1003 in inc/s, P42 in inc/s²)
+        assert drive.runtime.call(lambda: (round(float(params.homing_velocity)), round(float(params.homing_velocity_slow)),
+                                           round(float(params.homing_acceleration)))) == (4000, 500, 20000)
+        assert run_home(drive) & BITS == ATTAINED | TARGET_REACHED
+    finally:
+        drive.close()
+
+
+def test_a_drive_without_a_reference_run_has_no_homing_objects() -> None:
+    """The PCD4.H3 has no reference run of its own (the user program watches the switches):
+    its EDS and object dictionary have no 607Ch, 6098h, 6099h, 609Ah."""
+    drive = Drive("pcd4h3", 9, name="pcd4h3", ready=True)
+    try:
+        for index in (0x607C, 0x6098, 0x6099, 0x609A):
+            assert index not in drive.node.object_dictionary
+            assert index not in drive.facade.od
+    finally:
+        drive.close()
