@@ -122,10 +122,10 @@ class Cia402:
     def _shifted(self, actions: DriveActions) -> DriveActions:
         """The drive's actions with positions in the zero position homing set (607Ch): 6064h, the
         targets of 607Ah and the relative ones all count from there."""
-        homing = self.homing
+        homing, move_to = self.homing, actions.move_to
         return msgspec.structs.replace(
             actions, position=lambda m: actions.position(m) + homing.shift,
-            move_to=lambda m, target, speed: actions.move_to(m, target - homing.shift, speed))
+            move_to=None if move_to is None else lambda m, target, speed: move_to(m, target - homing.shift, speed))
 
     @property
     def state(self) -> str:

@@ -25,7 +25,8 @@ SHIPPED = tuple(sorted(kinds()))  # every registered kind ships its EDS under do
 @pytest.mark.parametrize("kind", SHIPPED)
 def test_the_shipped_eds_is_current_and_canopen_reads_it(kind: str) -> None:
     cls = device_class(kind)
-    text = eds(kind, cls.description, cls.points, drive=cls.drive is not None)
+    text = eds(kind, cls.description, cls.points, drive=cls.drive is not None,
+               homing=cls.drive is not None and cls.drive.homing is not None)
     assert (ROOT / "docs" / "eds" / f"{kind}.eds").read_text(encoding="utf-8") == text + "\n", (
         f"run `devsim doc {kind} --eds > docs/eds/{kind}.eds`")
     od = canopen.import_od(str(ROOT / "docs" / "eds" / f"{kind}.eds"))

@@ -334,7 +334,8 @@ def test_power_on_values_and_the_reset_of_the_application() -> None:
             machine.target_velocity, machine.setpoint_ack) == (0, 1, 0, 1000, 0, False)
     assert DEFAULTS == {"controlword": 0, "mode": 1, "target_position": 0, "profile_velocity": 1000,
                         "target_velocity": 0, "velocity_window": 100, "velocity_window_time": 0,
-                        "velocity_threshold": 10, "velocity_threshold_time": 0}
+                        "velocity_threshold": 10, "velocity_threshold_time": 0, "home_offset": 0, "homing_method": 0,
+                        "homing_speed_switch": 0, "homing_speed_zero": 0, "homing_acceleration": 0}
     machine, motor = drive_in(ENABLED)
     machine.target_position, machine.profile_velocity, machine.target_velocity = 5, 6, 7
     machine.write_controlword(0x1F)
