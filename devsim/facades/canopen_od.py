@@ -5,7 +5,9 @@ the SYNC's COB-ID, heartbeat producer time, identity, the EMCY's COB-ID) and, fr
 point is), named after the point; 4 RPDOs and 4 TPDOs (communication and mapping records, the predefined connection set's
 COB-IDs); for a kind that is a drive (``Device.drive``) also the CiA 402 objects (controlword,
 statusword, modes and the supported ones, actual and target values, the velocity window and
-threshold of profile velocity mode, with the power-on values of those a master writes).  ``devsim doc KIND --eds`` prints it,
+threshold of profile velocity mode, with the power-on values of those a master writes), and for
+a drive whose kind declares its own reference run (``DriveActions.homing``) those of homing mode
+(607Ch, 6098h, the record 6099h, 609Ah).  ``devsim doc KIND --eds`` prints it,
 ``docs/eds/KIND.eds`` holds it.  Pure text.
 """
 
