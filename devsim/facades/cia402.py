@@ -116,7 +116,7 @@ class Cia402:
         self.actions, self.model = self._shifted(actions), model
         clock = clock if clock is not None else VirtualClock()
         self.watch = VelocityWatch(clock, self._velocities, DEFAULTS)
-        self.setpoints = SetPoints(actions, model, clock)
+        self.setpoints = SetPoints(self.actions, model, clock)
         self._power_on()
 
     def _shifted(self, actions: DriveActions) -> DriveActions:

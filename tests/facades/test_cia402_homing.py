@@ -224,3 +224,30 @@ def test_a_drive_without_a_reference_run_has_no_homing_objects() -> None:
             assert index not in drive.facade.od
     finally:
         drive.close()
+
+
+@pytest.mark.parametrize("kind", sorted(HOMING))
+def test_after_homing_absolute_moves_count_from_the_new_zero(kind: str) -> None:
+    """607Ch = 400: the home position reads −400; a profile position move to 607Ah = 600 then
+    travels 1000 units from home and stands at 6064h = 600."""
+    config, method = HOMING[kind]
+    drive = Drive(kind, 9, name=kind, ready=True, config=config)
+    try:
+        node = drive.node
+        in_homing(drive, method)
+        node.sdo[0x607C].raw = 400
+        assert run_home(drive) & ATTAINED
+        drive.runtime.advance(1.0)
+        home = drive.runtime.call(lambda: drive.device.drive.position(drive.device.model))
+        assert node.sdo[0x6064].raw == -400
+        node.sdo[0x6060].raw = 1
+        node.sdo[0x607A].raw = 600
+        node.sdo[0x6081].raw = 2000
+        drive.control(0x0F)  # (bit 4 released: it was the homing's start)
+        drive.control(0x0F | 0x10 | 0x20)  # new set-point
+        drive.runtime.advance(30.0)
+        assert node.sdo[0x6064].raw == 600
+        moved = drive.runtime.call(lambda: drive.device.drive.position(drive.device.model)) - home
+        assert round(moved) == 1000, (kind, moved)
+    finally:
+        drive.close()
