@@ -251,3 +251,25 @@ def test_after_homing_absolute_moves_count_from_the_new_zero(kind: str) -> None:
         assert round(moved) == 1000, (kind, moved)
     finally:
         drive.close()
+
+
+def test_a_reset_node_restores_the_homing_objects_power_on_values() -> None:
+    """CiA 301 NMT reset node: 607Ch, 6098h, 6099h, 609Ah back to their power-on values (the
+    EDS's DefaultValue, 0) and no homing attained (bits 13, 12, 10 = 0 0 1 in homing mode)."""
+    drive = Drive("sers", 9, name="sers", ready=True, config={"axis": {"reference_low": 3000}})
+    try:
+        node = drive.node
+        in_homing(drive, 19)
+        node.sdo[0x607C].raw = 7
+        node.sdo[0x6099][1].raw = 3000
+        node.sdo[0x609A].raw = 9000
+        assert run_home(drive) & ATTAINED
+        node.nmt.send_command(0x81)
+        assert [node.sdo[i].raw for i in (0x607C, 0x6098, 0x609A)] == [0, 0, 0]
+        assert (node.sdo[0x6099][1].raw, node.sdo[0x6099][2].raw) == (0, 0)
+        for word in (0x06, 0x07, 0x0F):
+            node.sdo[0x6040].raw = word
+        node.sdo[0x6060].raw = 6
+        assert drive.status & BITS == TARGET_REACHED
+    finally:
+        drive.close()
