@@ -273,3 +273,28 @@ def test_a_reset_node_restores_the_homing_objects_power_on_values() -> None:
         assert drive.status & BITS == TARGET_REACHED
     finally:
         drive.close()
+
+
+#: More methods of the kinds' runs, each where its switch or mark is found: (kind, config, method).
+MORE = [
+    ("sers", {"axis": {"reference_low": -6000, "reference_high": -3000}}, 21),
+    ("sers", {"axis": {"limit_left": -2500}}, 17),
+    ("sers", {"axis": {"limit_right": 2500}}, 18),
+    ("sers", {}, 34),
+    ("sers", {}, 33),
+    ("gms96", {}, 33),
+    ("gms96", {}, 6),
+]
+
+
+@pytest.mark.parametrize(("kind", "config", "method"), MORE, ids=[f"{k}-{m}" for k, _c, m in MORE])
+def test_more_methods_complete(kind: str, config: dict[str, Any], method: int) -> None:
+    drive = Drive(kind, 9, name=kind, ready=True, config=config)
+    try:
+        in_homing(drive, method)
+        status = run_home(drive)
+        drive.runtime.advance(1.0)
+        assert drive.status & BITS == ATTAINED | TARGET_REACHED, hex(status)
+        assert drive.node.sdo[0x6064].raw == 0
+    finally:
+        drive.close()
