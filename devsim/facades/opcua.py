@@ -41,6 +41,7 @@ Everything runs as tasks in the runtime's event loop, beside the devices (``star
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 from collections.abc import Callable, Sequence
 from datetime import UTC, datetime
@@ -83,11 +84,14 @@ _NOT_READABLE = ua.DataValue(StatusCode=ua.StatusCode(_BAD.BadNotReadable))
 class _Bound:
     """One point variable of one device, as the server's node."""
 
-    __slots__ = ("device", "node_id", "variable", "vtype")
+    __slots__ = ("device", "node_id", "stamped", "variable", "vtype")
 
     def __init__(self, device: _DeviceNode, variable: Variable, node_id: ua.NodeId) -> None:
         self.device, self.variable, self.node_id = device, variable, node_id
         self.vtype = ua.VariantType[variable.data_type]
+        #: A write's timestamps (Part 4, 5.10.4.2 Table 59: "the Server shall use these values"):
+        #: (the device's value right after it, the written DataValue), until that value changes.
+        self.stamped: tuple[Any, ua.DataValue] | None = None
 
     def read(self) -> ua.DataValue:
         return self.device.read(self)
@@ -99,6 +103,15 @@ class _Bound:
         converted = to_opcua(self.variable, value)
         if converted is None and self.vtype != ua.VariantType.String:  # a number or Boolean with no value
             return ua.DataValue(StatusCode=ua.StatusCode(_BAD.BadNoData))
+        stamped = self.stamped
+        if stamped is not None:
+            if stamped[0] == value:
+                written = stamped[1]
+                return ua.DataValue(ua.Variant(converted, self.vtype),
+                                    SourceTimestamp=written.SourceTimestamp or datetime.now(UTC),
+                                    SourcePicoseconds=written.SourcePicoseconds if written.SourceTimestamp else None,
+                                    ServerTimestamp=written.ServerTimestamp, ServerPicoseconds=written.ServerPicoseconds)
+            self.stamped = None  # (the device's value has changed since: its own time again)
         return ua.DataValue(ua.Variant(converted, self.vtype), SourceTimestamp=datetime.now(UTC))
 
 
@@ -143,6 +156,11 @@ class _DeviceNode:
         except Exception:  # noqa: BLE001 - the device's failure, not the server's
             logging.getLogger(__name__).exception("%s: writing %s failed", self.device.name, variable.point)
             return ua.StatusCode(_BAD.BadInternalError)
+        bound.stamped = None
+        if value.SourceTimestamp or value.ServerTimestamp:  # the value's time is the writer's
+            with contextlib.suppress(Exception):  # (a write-only point: nothing is read back)
+                if variable.readable:
+                    bound.stamped = (self.device.read(variable.point), value)
         self.sample_soon()  # subscribers see the write (and what it moved) at once
         return ua.StatusCode()
 

@@ -16,6 +16,7 @@ import asyncio
 import json
 import time
 from collections.abc import Iterator
+from datetime import UTC, datetime
 from typing import Any
 
 import pytest
@@ -145,6 +146,38 @@ async def test_writes_go_through_the_device_with_its_validation(served: tuple[Ru
         wanted = not runtime.read("sers", "input.I1")
         await switch.write_value(ua.Variant(wanted, ua.VariantType.Boolean))
         assert runtime.read("sers", "input.I1") is wanted
+
+
+async def test_a_value_written_with_timestamps_is_read_back_with_them(served: tuple[Runtime, OpcuaFacade]) -> None:
+    """OPC UA Part 4, 5.10.4.2 Table 59: "If the SourceTimestamp or the ServerTimestamp is
+    specified, the Server shall use these values": the value written is read back (and reported
+    to a subscription) with the written timestamps until the device's value changes; then with
+    the time it is read again.  asyncua's write_value of a plain value sends a SourceTimestamp."""
+    runtime, facade = served
+    source, server = datetime(2020, 1, 2, 3, 4, 5, tzinfo=UTC), datetime(2021, 6, 7, 8, 9, 10, tzinfo=UTC)
+    async with Client(facade.url) as client:
+        volts = await _node(client, "sers.quantity.supply_voltage")
+        await volts.write_value(ua.DataValue(ua.Variant(47.0, ua.VariantType.Double), SourceTimestamp=source,
+                                             ServerTimestamp=server))
+        params = ua.ReadParameters()
+        params.TimestampsToReturn = ua.TimestampsToReturn.Both
+        params.NodesToRead = [ua.ReadValueId(NodeId=volts.nodeid, AttributeId=ua.AttributeIds.Value)]
+        [read] = await client.uaclient.read(params)
+        assert (read.Value.Value, read.SourceTimestamp, read.ServerTimestamp) == (47.0, source, server)
+        subscription = await client.create_subscription(50, handler := Collect())
+        try:
+            await subscription.subscribe_data_change(volts)
+            node, _value = await asyncio.wait_for(handler.changes.get(), TIMEOUT)
+            first = (await volts.read_data_value()).SourceTimestamp
+            assert first == source  # (the subscription's sample did not stamp it anew)
+        finally:
+            await subscription.delete()
+        await volts.write_value(ua.Variant(48.0, ua.VariantType.Double))  # asyncua stamps it now
+        stamped = await volts.read_data_value()
+        assert stamped.Value.Value == 48.0 and stamped.SourceTimestamp.year >= 2026
+        runtime.set("sers", "quantity.supply_voltage", 49.0)  # the device's own change: its time
+        again = await volts.read_data_value()
+        assert again.Value.Value == 49.0 and again.SourceTimestamp > stamped.SourceTimestamp
 
 
 async def test_a_subscription_sees_a_change_made_through_the_device(served: tuple[Runtime, OpcuaFacade]) -> None:
