@@ -68,6 +68,7 @@ class _DevsimDevice:
         self.rate = rate
         self.base = topics.prefix(plant, device.name)
         self.send: Callable[[Message], None] = lambda message: None
+        self.end_session: Callable[[], None] = lambda: None  # (PlantLink's; the devsim convention never ends a session)
         self.watch: PointWatch | None = None
         self.events: SampleOnEvent | None = None
 
@@ -284,9 +285,7 @@ class PlantLink:
         self._routes = {side.route: side for side in self.sides if side.route is not None}
         self._everything = [side for side in self.sides if side.route is None]
         for side in self.sides:
-            side.send = self._send
-            if hasattr(side, "end_session"):
-                side.end_session = self._end_session
+            side.send, side.end_session = self._send, self._end_session
         self._task: asyncio.Task[None] | None = None
         self._closing = False
         self._again = False  # a side ended its session: connect again at once

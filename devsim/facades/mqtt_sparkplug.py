@@ -32,12 +32,12 @@ from tahutils.tahu import sparkplug_b as tahu
 
 from devsim.core.device import Device
 from devsim.core.points import Point
+from devsim.facades.mqtt_sparkplug_host import NAMESPACE
 from devsim.runtime import requests as rq
 
 __all__ = ["DATATYPES", "GROUP", "NAMESPACE", "SparkplugNode", "birth_datatype", "command_request", "command_value",
            "decode_command", "decode_metrics", "metric_value"]
 
-NAMESPACE = "spBv1.0"
 GROUP = "devsim"
 T = tahu.MetricDataType
 #: A point's declared type → its Sparkplug metric datatype.

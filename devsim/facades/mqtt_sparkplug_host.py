@@ -33,7 +33,7 @@ import math
 
 __all__ = ["PrimaryHost", "parse_state", "state_topic"]
 
-NAMESPACE = "spBv1.0"
+NAMESPACE = "spBv1.0"  # (the Sparkplug B topic namespace: devsim.facades.mqtt_sparkplug takes it from here)
 
 
 def state_topic(host_id: str) -> str:

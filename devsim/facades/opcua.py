@@ -157,10 +157,9 @@ class _DeviceNode:
             logging.getLogger(__name__).exception("%s: writing %s failed", self.device.name, variable.point)
             return ua.StatusCode(_BAD.BadInternalError)
         bound.stamped = None
-        if value.SourceTimestamp or value.ServerTimestamp:  # the value's time is the writer's
-            with contextlib.suppress(Exception):  # (a write-only point: nothing is read back)
-                if variable.readable:
-                    bound.stamped = (self.device.read(variable.point), value)
+        if (value.SourceTimestamp or value.ServerTimestamp) and variable.readable:  # its time is the writer's
+            with contextlib.suppress(UnknownName, ValueError, LookupError, ArithmeticError):  # (as read: no data)
+                bound.stamped = (self.device.read(variable.point), value)
         self.sample_soon()  # subscribers see the write (and what it moved) at once
         return ua.StatusCode()
 
