@@ -7,7 +7,10 @@ quiet line and then while a writer process pours ``--megabytes`` of noise into t
 device's port.  It prints the neighbour's p50/p99 in each phase, the echo reference's, and how
 fast the noise was swallowed (bytes the noisy line received, from the control API, over time).
 The same noise is then poured into a bare asyncio pty reader (4 KiB per loop turn, as devsim
-reads a pty), while the echo is polled as before: its rate is the reference for the swallow rate.
+reads a pty) that answers a neighbour's polls on a second pty in the same process, as devsim's
+process answers the quiet device's: the neighbour and the echo are polled as before, and its rate
+is the reference for the swallow rate (so both processes do the same work; before 2026-11-30 the
+bare reader swallowed the noise alone while devsim's process also answered the neighbour).
 
 Noise: random bytes without ``#`` (the SERS line start) by default, so no command lines are
 started; ``--raw`` sends plain random bytes.  The noise is 64 KiB of pseudo-random bytes from
@@ -26,6 +29,7 @@ import argparse
 import json
 import os
 import random
+import select
 import signal
 import statistics
 import subprocess
@@ -41,6 +45,10 @@ sys.path.insert(0, ROOT)
 from benchmarks.latency import _spawn, _stop, complete  # noqa: E402
 
 QUERY = b"#P11?\r"
+#: What the echo server answers a poll (``latency.py --serve-echo`` with the length given it
+#: below), and so the bare reference's neighbour too.
+ECHO_LEN = len(QUERY) + 16
+ECHO_REPLY = b"x" * (ECHO_LEN - 6) + b"\nok1\n\r"
 
 
 def _env() -> dict[str, str]:
@@ -78,7 +86,7 @@ def writer(path: str, megabytes: float, raw: bool, seed: int) -> None:
 
 SINK = """
 import asyncio, os, sys, tty
-total = int(sys.argv[1])
+total, reply = int(sys.argv[1]), sys.argv[2].encode()
 async def main():
     master, slave = os.openpty()
     tty.setraw(slave)  # as devsim's pty: no output processing adds bytes
@@ -95,9 +103,24 @@ async def main():
         if got >= total:
             done.set()
     loop.add_reader(master, readable)
-    print(os.ttyname(slave), flush=True)
+    # the neighbour: a bare answer to every CR-terminated poll, on a pty of its own
+    neighbour, neighbour_slave = os.openpty()
+    tty.setraw(neighbour_slave)
+    os.set_blocking(neighbour, False)
+    pending = bytearray()
+    def poll():
+        try:
+            pending.extend(os.read(neighbour, 4096))
+        except BlockingIOError:
+            return
+        while (end := pending.find(13)) >= 0:
+            del pending[:end + 1]
+            os.write(neighbour, reply)
+    loop.add_reader(neighbour, poll)
+    print(os.ttyname(slave), os.ttyname(neighbour_slave), flush=True)
     await done.wait()
     print("done", flush=True)
+    await asyncio.Event().wait()  # (the neighbour answers until the benchmark ends the process)
 asyncio.run(main())
 """
 
@@ -107,18 +130,25 @@ def _writer(path: str, megabytes: float, raw: bool, seed: int) -> subprocess.Pop
                              *(["--raw"] if raw else [])], env=_env())
 
 
-def bare_rate(megabytes: float, raw: bool, seed: int, echo: serial.Serial) -> float:
-    """MB/s a bare asyncio pty reader swallows the same noise at, the echo polled meanwhile."""
-    sink = subprocess.Popen([sys.executable, "-c", SINK, str(int(megabytes * 1e6))], stdout=subprocess.PIPE,
-                            text=True)
+def bare_rate(megabytes: float, raw: bool, seed: int, echo: serial.Serial, reply: bytes) -> float:
+    """MB/s a bare asyncio pty reader swallows the same noise at while its neighbour (a bare
+    answer ``reply`` on a second pty in the same process) and the echo are polled in turn, as
+    devsim's quiet device and the echo are while devsim swallows it."""
+    sink = subprocess.Popen([sys.executable, "-c", SINK, str(int(megabytes * 1e6)), reply.decode()],
+                            stdout=subprocess.PIPE, text=True)
     assert sink.stdout is not None
-    path = sink.stdout.readline().strip()
-    started = time.perf_counter()
-    noise = _writer(path, megabytes, raw, seed)
-    while noise.poll() is None:
-        poll(echo, 50)
-    assert sink.stdout.readline().strip() == "done"
-    elapsed = time.perf_counter() - started
+    path, neighbour_path = sink.stdout.readline().split()
+    with serial.Serial(neighbour_path, 9600, timeout=2) as neighbour:
+        poll(neighbour, 200)
+        started = time.perf_counter()
+        noise = _writer(path, megabytes, raw, seed)
+        while not select.select([sink.stdout], [], [], 0)[0]:  # (until it has swallowed it all)
+            poll(neighbour, 50)
+            poll(echo, 50)
+        assert sink.stdout.readline().strip() == "done"
+        elapsed = time.perf_counter() - started
+    noise.wait(timeout=10)
+    sink.kill()
     sink.wait(timeout=10)
     return megabytes / elapsed
 
@@ -158,7 +188,7 @@ def main(argv: list[str] | None = None) -> int:
             elif value.startswith("pty "):
                 ports[name] = value.split()[1]
         echo_proc, echo_path = _spawn([sys.executable, os.path.join(ROOT, "benchmarks", "latency.py"), "--serve-echo",
-                                       str(len(QUERY) + 16)])
+                                       str(ECHO_LEN)])
         try:
             with serial.Serial(ports["quiet"], 9600, timeout=2) as quiet, serial.Serial(echo_path, 9600, timeout=2) as echo, \
                     ControlClient(sock) as control:
@@ -176,7 +206,7 @@ def main(argv: list[str] | None = None) -> int:
                 while control.line("noisy")["bytes_in"] < target:
                     noisy_times += poll(quiet, 10)
                 elapsed = time.perf_counter() - started
-                reference = bare_rate(args.megabytes, args.raw, args.seed, echo)
+                reference = bare_rate(args.megabytes, args.raw, args.seed, echo, ECHO_REPLY)
         finally:
             _stop(echo_proc)
             proc.send_signal(signal.SIGINT)
