@@ -52,6 +52,10 @@ class Drive:
     def control(self, word: int) -> None:
         self.node.sdo[0x6040].raw = word
 
+    def moving(self) -> bool:
+        """Whether the device's axis moves (asked in the runtime's thread)."""
+        return bool(self.runtime.call(self.device.drive.moving, self.device.model))
+
     def emcy(self, code: int) -> list[Any]:
         """The EMCY messages with ``code`` the master got, waiting (bounded) for the first: it
         crosses python-can's notifier thread."""

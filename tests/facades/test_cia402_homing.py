@@ -14,6 +14,8 @@ IEC 61800-7-201, homing mode):
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
 from typing import Any
 
 import pytest
@@ -39,6 +41,17 @@ HOMING: dict[str, tuple[dict[str, Any], int]] = {
 #: Methods no kind's reference run performs (the homing on a hard stop, -1; 35, the current
 #: position; an out-of-range number).
 FOREIGN = (35, 37, 1, 2, 7, 100)
+
+
+@contextlib.contextmanager
+def homing_drive(kind: str) -> Iterator[tuple[Drive, int]]:
+    """A ready drive of ``kind`` (node 9) configured for its reference run, and the run's method."""
+    config, method = HOMING[kind]
+    drive = Drive(kind, 9, name=kind, ready=True, config=config)
+    try:
+        yield drive, method
+    finally:
+        drive.close()
 
 
 def in_homing(drive: Drive, method: int) -> None:
@@ -81,9 +94,7 @@ def test_6502h_lists_homing_mode_exactly_for_the_kinds_with_a_reference_run(kind
 
 @pytest.mark.parametrize("kind", sorted(HOMING))
 def test_6098h_takes_the_methods_of_the_reference_run_and_refuses_others(kind: str) -> None:
-    config, method = HOMING[kind]
-    drive = Drive(kind, 9, name=kind, ready=True, config=config)
-    try:
+    with homing_drive(kind) as (drive, method):
         node = drive.node
         assert node.sdo[0x6098].raw == 0
         node.sdo[0x6098].raw = method
@@ -93,16 +104,12 @@ def test_6098h_takes_the_methods_of_the_reference_run_and_refuses_others(kind: s
                 node.sdo[0x6098].raw = other
             assert refused.value.code == VALUE_RANGE_EXCEEDED
             assert node.sdo[0x6098].raw == method
-    finally:
-        drive.close()
 
 
 @pytest.mark.parametrize("offset", [0, 250])
 @pytest.mark.parametrize("kind", sorted(HOMING))
 def test_a_homing_completes_at_the_home_position_less_the_home_offset(kind: str, offset: int) -> None:
-    config, method = HOMING[kind]
-    drive = Drive(kind, 9, name=kind, ready=True, config=config)
-    try:
+    with homing_drive(kind) as (drive, method):
         node = drive.node
         in_homing(drive, method)
         node.sdo[0x607C].raw = offset
@@ -115,8 +122,6 @@ def test_a_homing_completes_at_the_home_position_less_the_home_offset(kind: str,
         status = drive.status
         assert status & BITS == ATTAINED | TARGET_REACHED, hex(status)
         assert node.sdo[0x6064].raw == -offset
-    finally:
-        drive.close()
 
 
 @pytest.mark.parametrize("how", ["halt", "bit 4 released"])
@@ -124,9 +129,7 @@ def test_a_homing_completes_at_the_home_position_less_the_home_offset(kind: str,
 def test_a_halt_or_a_falling_bit_4_interrupts_the_homing(kind: str, how: str) -> None:
     """Bit 8 = 1 or bit 4 1 → 0 during the run: the axis stops with the ramp, no home is
     attained, and once it stands the statusword says "interrupted or not started" (0 0 1)."""
-    config, method = HOMING[kind]
-    drive = Drive(kind, 9, name=kind, ready=True, config=config)
-    try:
+    with homing_drive(kind) as (drive, method):
         in_homing(drive, method)
         drive.control(0x0F | START)
         drive.runtime.advance(0.3)
@@ -135,16 +138,12 @@ def test_a_halt_or_a_falling_bit_4_interrupts_the_homing(kind: str, how: str) ->
         drive.runtime.advance(10.0)
         status = drive.status
         assert status & BITS == TARGET_REACHED, (kind, how, hex(status))
-        assert drive.runtime.call(lambda: not drive.device.drive.moving(drive.device.model))
-    finally:
-        drive.close()
+        assert not drive.moving()
 
 
 @pytest.mark.parametrize("kind", sorted(HOMING))
 def test_leaving_operation_enabled_interrupts_the_homing(kind: str) -> None:
-    config, method = HOMING[kind]
-    drive = Drive(kind, 9, name=kind, ready=True, config=config)
-    try:
+    with homing_drive(kind) as (drive, method):
         in_homing(drive, method)
         drive.control(0x0F | START)
         drive.runtime.advance(0.3)
@@ -152,8 +151,6 @@ def test_leaving_operation_enabled_interrupts_the_homing(kind: str) -> None:
         drive.runtime.advance(10.0)
         drive.control(0x0F)  # back in Operation enabled: no home was attained
         assert drive.status & BITS == TARGET_REACHED, hex(drive.status)
-    finally:
-        drive.close()
 
 
 def test_a_start_with_no_method_is_a_homing_error() -> None:
@@ -230,9 +227,7 @@ def test_a_drive_without_a_reference_run_has_no_homing_objects() -> None:
 def test_after_homing_absolute_moves_count_from_the_new_zero(kind: str) -> None:
     """607Ch = 400: the home position reads −400; a profile position move to 607Ah = 600 then
     travels 1000 units from home and stands at 6064h = 600."""
-    config, method = HOMING[kind]
-    drive = Drive(kind, 9, name=kind, ready=True, config=config)
-    try:
+    with homing_drive(kind) as (drive, method):
         node = drive.node
         in_homing(drive, method)
         node.sdo[0x607C].raw = 400
@@ -249,8 +244,6 @@ def test_after_homing_absolute_moves_count_from_the_new_zero(kind: str) -> None:
         assert node.sdo[0x6064].raw == 600
         moved = drive.runtime.call(lambda: drive.device.drive.position(drive.device.model)) - home
         assert round(moved) == 1000, (kind, moved)
-    finally:
-        drive.close()
 
 
 def test_a_reset_node_restores_the_homing_objects_power_on_values() -> None:

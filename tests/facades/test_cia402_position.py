@@ -114,7 +114,7 @@ def test_a_set_point_with_bit_5_at_0_waits_for_the_positioning_before_it(kind: s
     while a set-point waits."""
     drive = Drive(kind, 9, name=kind, ready=True)
     runtime, node = drive.runtime, drive.node
-    moving = lambda: runtime.call(drive.device.drive.moving, drive.device.model)  # noqa: E731
+    moving = drive.moving
     try:
         start = in_profile_position(node, 1000, 2000)
         node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
@@ -156,7 +156,7 @@ def test_target_reached_with_halt_and_after_it(kind: str) -> None:
     to its target and sets it again."""
     drive = Drive(kind, 9, name=kind, ready=True)
     runtime, node = drive.runtime, drive.node
-    moving = lambda: runtime.call(drive.device.drive.moving, drive.device.model)  # noqa: E731
+    moving = drive.moving
     try:
         start = in_profile_position(node, 5000, 2000)
         node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
@@ -216,7 +216,7 @@ def test_disable_operation_mid_move_and_enable_operation_again(kind: str) -> Non
     set-point runs to its target."""
     drive = Drive(kind, 9, name=kind, ready=True)
     runtime, node = drive.runtime, drive.node
-    moving = lambda: runtime.call(drive.device.drive.moving, drive.device.model)  # noqa: E731
+    moving = drive.moving
     try:
         in_profile_position(node, 1000, 2000)
         node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
