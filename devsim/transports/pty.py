@@ -106,6 +106,9 @@ _TIOCPKT_DATA = 0
 _TIOCSSOFTCAR = getattr(termios, "TIOCSSOFTCAR", 0x541A)
 
 _READ_SIZE = 4096
+#: Reads in one turn of the loop while each comes full (a flood: the next 4 KiB is often in by
+#: the time the face has taken the last); a short read ends the turn, so a poll costs one read.
+_FULL_READS = 4
 # Device output within this many seconds of host input reuses the settings read with that input.
 _RECHECK = 0.001
 
@@ -316,29 +319,38 @@ class PtyTransport(Transport):
 
     # -- host → device ----------------------------------------------------------------------
     def _on_readable(self) -> None:
+        for _ in range(_FULL_READS):
+            if self._take() < _READ_SIZE:
+                return
+
+    def _take(self) -> int:
+        """Read once and hand on what came; returns how much was read (the line's discipline
+        gives at most its buffer, :data:`_READ_SIZE`: a full read means more may have come)."""
         if self._master is None:
-            return
+            return 0
         try:
             data = os.read(self._master, _READ_SIZE)
         except BlockingIOError:
-            return
+            return 0
         except OSError as exc:
             if exc.errno == errno.EIO:  # cannot happen while we hold the slave; be safe
-                return
+                return 0
             raise
+        read = len(data)
         if self._packet and data:
             status, data = data[0], data[1:]
             if status != _TIOCPKT_DATA:
                 # a change of the slave's termios (TIOCPKT_IOCTL) or a flush: look at once
                 if self._endpoint is not None:
                     self._check_settings()
-                return
+                return 0
         if not data or self._endpoint is None:
-            return
+            return 0
         if not self._packet:
             self._check_settings()  # (in packet mode every change is signalled: see above)
             self._checked_at = self._loop.time() if self._loop is not None else 0.0
         self._endpoint.feed(data)
+        return read
 
     # -- device → host ----------------------------------------------------------------------
     def _write(self, data: bytes) -> None:

@@ -6,6 +6,7 @@ import asyncio
 import fcntl
 import json
 import os
+import random
 import select
 import subprocess
 import sys
@@ -206,6 +207,33 @@ async def test_output_nobody_reads_never_blocks_and_is_bounded(recorder: Recorde
             recorder.write(chunk)
         assert transport.pending <= 64 * 1024
         assert transport.dropped > 0
+    finally:
+        await transport.close()
+
+
+def _pour(path: str, data: bytes) -> None:
+    """A host that writes ``data`` as fast as the pty takes it (plain fd, no termios)."""
+    fd = os.open(path, os.O_WRONLY | os.O_NOCTTY)
+    try:
+        view = memoryview(data)
+        while view:
+            view = view[os.write(fd, view):]
+    finally:
+        os.close(fd)
+
+
+async def test_a_flood_arrives_whole_and_in_order_a_buffer_at_a_time(recorder: Recorder) -> None:
+    """A host pouring far more than the line discipline's 4 KiB buffer: the device gets every
+    byte in order, in pieces no larger than one read, however many a turn of the loop takes."""
+    flood = random.Random(7).randbytes(300_000)
+    transport = PtyTransport()
+    await transport.start(recorder)
+    try:
+        await asyncio.to_thread(_pour, transport.address, flood)
+        await recorder.wait_for(lambda: len(recorder.data) >= len(flood), timeout=10)
+        assert bytes(recorder.data) == flood
+        assert max(map(len, recorder.chunks)) <= pty_module._READ_SIZE
+        assert len(recorder.chunks) >= len(flood) // pty_module._READ_SIZE
     finally:
         await transport.close()
 
