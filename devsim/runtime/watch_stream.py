@@ -27,7 +27,6 @@ Every item carries ``t`` (device time) and ``device``.
 
 from __future__ import annotations
 
-import json
 import re
 from collections.abc import Callable, Iterable
 from typing import Any
@@ -175,6 +174,8 @@ def describe(item: dict[str, Any]) -> str:
     kind = item.get("type")
     head = f"{float(item.get('t', 0.0)):.3f} {item.get('device')}"
     if kind == "change":
+        import json  # (a client's: the simulator that serves watches never renders one, nor imports json)
+
         value = item.get("value")
         plain = isinstance(value, str) and value.isprintable()  # (text with a line end is quoted: one item, one line)
         return f"{head} {item.get('name')} {value if plain else json.dumps(value, ensure_ascii=False)}"
