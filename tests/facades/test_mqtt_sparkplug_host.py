@@ -11,8 +11,10 @@ before that refusal has been seen once the refusal is."""
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import json
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -67,6 +69,23 @@ def unborn(port: int, sub: Sub, plant: str, *, retained: bool = False) -> None:
     assert not [m for m in sub.seen if m.topic in (f"{SPB}/NBIRTH/{plant}", f"{SPB}/DBIRTH/{plant}/x")]
 
 
+@contextlib.contextmanager
+def edge_node(broker: Broker, plant: str, host: str, *, errors: bool = False) -> Iterator[Sub]:
+    """A SERS ``x`` behind a Sparkplug edge node of ``plant`` on ``broker`` that waits for the
+    primary host ``host``, and a subscriber to the node's topics (and to the plant's error topic
+    with ``errors``), ready before the node starts."""
+    runtime = Runtime(virtual=True).start()
+    try:
+        device = runtime.add_device("sers", "x")
+        topics = [f"{SPB}/+/{plant}", f"{SPB}/+/{plant}/#", *([f"devsim/{plant}/#"] if errors else [])]
+        with Sub(broker.port, *topics).sync() as sub:
+            runtime.run(start_mqtt(runtime, [device], broker.url, plant=plant, convention="sparkplug",
+                                   rate=0.5, primary_host=host), timeout=20)
+            yield sub
+    finally:
+        runtime.stop()
+
+
 def test_the_births_wait_for_the_primary_host_online(broker_port: int) -> None:  # noqa: F811
     """tck-id-message-flow-edge-node-birth-publish-phid-wait ("MUST verify the Primary Host
     Application is online via the STATE topic before publishing NBIRTH and DBIRTH"), -phid-wait-id
@@ -108,16 +127,9 @@ def test_a_host_already_online_gets_the_births_at_once(mosquitto: Broker) -> Non
     n = next(_names)
     plant, host = f"o{n}", f"scada{n}"
     pub(mosquitto.port, f"spBv1.0/STATE/{host}", state(True, T0), retain=True)
-    runtime = Runtime(virtual=True).start()
-    try:
-        device = runtime.add_device("sers", "x")
-        with Sub(mosquitto.port, f"{SPB}/+/{plant}", f"{SPB}/+/{plant}/#").sync() as sub:
-            runtime.run(start_mqtt(runtime, [device], mosquitto.url, plant=plant, convention="sparkplug",
-                                   rate=0.5, primary_host=host), timeout=20)
-            assert payload_from_string(sub.wait(f"{SPB}/NBIRTH/{plant}").payload).seq == 0
-            sub.wait(f"{SPB}/DBIRTH/{plant}/x")
-    finally:
-        runtime.stop()
+    with edge_node(mosquitto, plant, host) as sub:
+        assert payload_from_string(sub.wait(f"{SPB}/NBIRTH/{plant}").payload).seq == 0
+        sub.wait(f"{SPB}/DBIRTH/{plant}/x")
 
 
 def test_an_offline_host_ends_the_session_and_the_next_one_waits(mosquitto: Broker) -> None:  # noqa: F811
@@ -129,27 +141,20 @@ def test_an_offline_host_ends_the_session_and_the_next_one_waits(mosquitto: Brok
     n = next(_names)
     plant, host = f"f{n}", f"scada{n}"
     pub(mosquitto.port, f"spBv1.0/STATE/{host}", state(True, T0), retain=True)
-    runtime = Runtime(virtual=True).start()
-    try:
-        device = runtime.add_device("sers", "x")
-        with Sub(mosquitto.port, f"{SPB}/+/{plant}", f"{SPB}/+/{plant}/#", f"devsim/{plant}/#").sync() as sub:
-            runtime.run(start_mqtt(runtime, [device], mosquitto.url, plant=plant, convention="sparkplug",
-                                   rate=0.5, primary_host=host), timeout=20)
-            first = bd_seq(sub.wait(f"{SPB}/NBIRTH/{plant}").payload)
-            sub.wait(f"{SPB}/DBIRTH/{plant}/x")
+    with edge_node(mosquitto, plant, host, errors=True) as sub:
+        first = bd_seq(sub.wait(f"{SPB}/NBIRTH/{plant}").payload)
+        sub.wait(f"{SPB}/DBIRTH/{plant}/x")
 
-            pub(mosquitto.port, f"spBv1.0/STATE/{host}", state(False, T0), retain=True)  # the host's will
-            death = sub.wait(f"{SPB}/NDEATH/{plant}")
-            assert not death.retain and bd_seq(death.payload) == first
-            unborn(mosquitto.port, sub, plant, retained=True)  # the next session: connected, unborn
-            assert not [m for m in sub.seen if m.topic == f"{SPB}/NDEATH/{plant}"]  # one NDEATH (no will too)
+        pub(mosquitto.port, f"spBv1.0/STATE/{host}", state(False, T0), retain=True)  # the host's will
+        death = sub.wait(f"{SPB}/NDEATH/{plant}")
+        assert not death.retain and bd_seq(death.payload) == first
+        unborn(mosquitto.port, sub, plant, retained=True)  # the next session: connected, unborn
+        assert not [m for m in sub.seen if m.topic == f"{SPB}/NDEATH/{plant}"]  # one NDEATH (no will too)
 
-            pub(mosquitto.port, f"spBv1.0/STATE/{host}", state(True, T0 + 5000), retain=True)  # back again
-            nbirth = sub.wait(f"{SPB}/NBIRTH/{plant}")
-            assert bd_seq(nbirth.payload) == first + 1 and payload_from_string(nbirth.payload).seq == 0
-            sub.wait(f"{SPB}/DBIRTH/{plant}/x")
-    finally:
-        runtime.stop()
+        pub(mosquitto.port, f"spBv1.0/STATE/{host}", state(True, T0 + 5000), retain=True)  # back again
+        nbirth = sub.wait(f"{SPB}/NBIRTH/{plant}")
+        assert bd_seq(nbirth.payload) == first + 1 and payload_from_string(nbirth.payload).seq == 0
+        sub.wait(f"{SPB}/DBIRTH/{plant}/x")
 
 
 def test_an_offline_state_older_than_the_online_one_is_ignored(mosquitto: Broker) -> None:  # noqa: F811
@@ -159,23 +164,16 @@ def test_an_offline_state_older_than_the_online_one_is_ignored(mosquitto: Broker
     n = next(_names)
     plant, host = f"t{n}", f"scada{n}"
     pub(mosquitto.port, f"spBv1.0/STATE/{host}", state(True, T0 + 2000), retain=True)
-    runtime = Runtime(virtual=True).start()
-    try:
-        device = runtime.add_device("sers", "x")
-        with Sub(mosquitto.port, f"{SPB}/+/{plant}", f"{SPB}/+/{plant}/#").sync() as sub:
-            runtime.run(start_mqtt(runtime, [device], mosquitto.url, plant=plant, convention="sparkplug",
-                                   rate=0.5, primary_host=host), timeout=20)
-            sub.wait(f"{SPB}/NBIRTH/{plant}")
-            assert payload_from_string(sub.wait(f"{SPB}/DBIRTH/{plant}/x").payload).seq == 1
-            pub(mosquitto.port, f"spBv1.0/STATE/{host}", state(False, T0 + 1999), retain=True)
-            pub(mosquitto.port, f"{SPB}/DCMD/{plant}/x", set_input("input.I2"))
-            ddata = payload_from_string(sub.wait(f"{SPB}/DDATA/{plant}/x").payload)
-            assert ddata.seq == 2 and parse_payload_to_metric_dict(ddata)["input.I2"].value is True
-            assert not [m for m in sub.seen if m.topic in (f"{SPB}/NDEATH/{plant}", f"{SPB}/NBIRTH/{plant}")]
-            pub(mosquitto.port, f"spBv1.0/STATE/{host}", state(False, T0 + 2000), retain=True)  # equal: it counts
-            sub.wait(f"{SPB}/NDEATH/{plant}")
-    finally:
-        runtime.stop()
+    with edge_node(mosquitto, plant, host) as sub:
+        sub.wait(f"{SPB}/NBIRTH/{plant}")
+        assert payload_from_string(sub.wait(f"{SPB}/DBIRTH/{plant}/x").payload).seq == 1
+        pub(mosquitto.port, f"spBv1.0/STATE/{host}", state(False, T0 + 1999), retain=True)
+        pub(mosquitto.port, f"{SPB}/DCMD/{plant}/x", set_input("input.I2"))
+        ddata = payload_from_string(sub.wait(f"{SPB}/DDATA/{plant}/x").payload)
+        assert ddata.seq == 2 and parse_payload_to_metric_dict(ddata)["input.I2"].value is True
+        assert not [m for m in sub.seen if m.topic in (f"{SPB}/NDEATH/{plant}", f"{SPB}/NBIRTH/{plant}")]
+        pub(mosquitto.port, f"spBv1.0/STATE/{host}", state(False, T0 + 2000), retain=True)  # equal: it counts
+        sub.wait(f"{SPB}/NDEATH/{plant}")
 
 
 def test_a_state_that_is_not_the_json_of_the_spec_is_refused(mosquitto: Broker) -> None:  # noqa: F811
@@ -183,18 +181,11 @@ def test_a_state_that_is_not_the_json_of_the_spec_is_refused(mosquitto: Broker) 
     answered on the plant's error topic and changes nothing (the node still waits)."""
     n = next(_names)
     plant, host = f"j{n}", f"scada{n}"
-    runtime = Runtime(virtual=True).start()
-    try:
-        device = runtime.add_device("sers", "x")
-        with Sub(mosquitto.port, f"{SPB}/+/{plant}", f"{SPB}/+/{plant}/#", f"devsim/{plant}/#").sync() as sub:
-            runtime.run(start_mqtt(runtime, [device], mosquitto.url, plant=plant, convention="sparkplug",
-                                   rate=0.5, primary_host=host), timeout=20)
-            pub(mosquitto.port, f"spBv1.0/STATE/{host}", "ONLINE", retain=True)  # Sparkplug 2.2's plain text
-            error = sub.wait(f"devsim/{plant}/error").json()
-            assert error["topic"] == f"spBv1.0/STATE/{host}" and "JSON" in error["error"]
-            unborn(mosquitto.port, sub, plant)
-    finally:
-        runtime.stop()
+    with edge_node(mosquitto, plant, host, errors=True) as sub:
+        pub(mosquitto.port, f"spBv1.0/STATE/{host}", "ONLINE", retain=True)  # Sparkplug 2.2's plain text
+        error = sub.wait(f"devsim/{plant}/error").json()
+        assert error["topic"] == f"spBv1.0/STATE/{host}" and "JSON" in error["error"]
+        unborn(mosquitto.port, sub, plant)
 
 
 def test_run_with_mqtt_primary_host(mosquitto: Broker) -> None:  # noqa: F811
