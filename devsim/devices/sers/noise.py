@@ -62,6 +62,30 @@ def _text_starts() -> tuple[frozenset[int], frozenset[int]]:
     return at_once, text - at_once - runs_at_once()
 
 
+#: A line this drive executed and answered that failed, as the face ends it (read only: its
+#: end looks at it, nothing changes it).
+_FAILED = CommandLine(True, True, error=True)
+
+
+class _Messages(dict[int, bytes]):
+    """The error messages (§4.8.3.1) in one language and encoding, by errno, each made once
+    (:func:`error_text`)."""
+
+    def __init__(self, english: bool, encoding: str) -> None:
+        super().__init__()
+        self.english, self.encoding = english, encoding
+
+    def __missing__(self, errno: int) -> bytes:
+        text = self[errno] = error_text(errno, self.english, self.encoding)
+        return text
+
+
+@functools.cache
+def _messages(english: bool, encoding: str) -> _Messages:
+    """The error messages in a language and an encoding (§4.8.3.1), by errno."""
+    return _Messages(english, encoding)
+
+
 class NoiseLines:
     """The lines of noise one SERS's face takes in one step (§3.2.4, §4.8.3.1)."""
 
@@ -70,6 +94,9 @@ class NoiseLines:
         self.framer = framer
         self.send = send
         self.face = face
+        #: :func:`first_byte_errors` and :func:`_text_starts`, looked up at the first line (not
+        #: at every run: two calls of a cache each)
+        self._starts: tuple[tuple[int, ...], frozenset[int], frozenset[int]] | None = None
 
     def take(self, data: bytes, index: int) -> int:
         """From a ``#`` outside a line: whole lines this drive executes whose first statement
@@ -215,7 +242,10 @@ class NoiseLines:
         leaves them.  Returns where it stopped and whether the line goes on there (else it is
         the next ``#`` or the chunk's end); ``index`` when the line there is not one of them
         (or the chunk cuts it off before it fails)."""
-        fails, (at_once, later) = first_byte_errors(), _text_starts()
+        starts = self._starts
+        if starts is None:
+            starts = self._starts = (first_byte_errors(), *_text_starts())
+        fails, at_once, later = starts
         address_start, end, find = _ADDRESS_START, len(data), data.find
         echoes: list[bytes] = []  # each line's echo up to its error, and the rest of it
         errnos: list[int] = []
@@ -262,8 +292,8 @@ class NoiseLines:
         self.framer.lines_taken(last_end)
         if going_on:  # the '#' and the text so far, restarts without an address among them
             self.framer.take_line(1, stop - at - 1)
-        english, encoding = model.params.language == 1, model.cfg.encoding
-        messages = [error_text(errno, english, encoding) for errno in errnos]
+        message = _messages(model.params.language == 1, model.cfg.encoding)
+        messages = [message[errno] for errno in errnos]
         deferred = b""
         if model.params.handshake_mode in (0, 1):
             self.send(echoes[0])
@@ -277,7 +307,7 @@ class NoiseLines:
                 deferred = messages.pop()
             self.send(b"".join(messages))
         if len(errnos) > going_on:  # (the lines that ended, the last of them as the face ends it)
-            face.end_line(CommandLine(True, True, error=True), False)
+            face.end_line(_FAILED, False)
         if not going_on:
             return at, False
         face.line = line = CommandLine(True, True, error=True)
