@@ -152,6 +152,8 @@ def test_the_benchmarks_noise_in_pty_reads_leaves_what_bytes_leave(seed: int) ->
         b"#*H\x9bx\r#*Sx#1\r#P1017=2\r#Hxx\r#S\x00\r\n#P1017=1\r#P11?\r",
         # ... run while the drive is on, and the text up to the 60th character kept, or not
         b"#ON\r#H" + b" " * 57 + b"S\r#S" + b" " * 58 + b"H\r#P11?\r",
+        # ... run, and the statements after it in the same text run (echoed with it, in mode 2 not)
+        b"#ON\r#HSP11?\r#1H P1017=2\r#Sx\r#HP11?\r#P1017=1\r#P11?\r",
         # lines failing at once, one after the other, with restarts, pairs and noise between
         b"#\x00\r\n\x8f#Q\n\r#\x01#\x02#*\x03\r#1\x04\r#P11?\r",
         b"#P1017=2\r#\x00#\x01\r#P1017=1\r#P265=1\r#\x00\r#P265=0\r#P11?\r",

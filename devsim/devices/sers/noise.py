@@ -16,6 +16,7 @@ from collections.abc import Callable
 from typing import Protocol
 
 from devsim.devices.sers import codec
+from devsim.devices.sers.interactive import LineStatements
 from devsim.devices.sers.line import (
     LINE_ENDS,
     CommandLine,
@@ -40,11 +41,12 @@ class LineHost(Protocol):
     def end_line(self, line: CommandLine, overflow: bool) -> None:
         """The line has ended (its terminator echoed): its statements, answers and ack."""
 
-    def take_text(self, line: CommandLine, data: bytes, index: int) -> int:
-        """A run of the line's text, its statements run as the characters arrive; how many taken."""
-
     def on_event(self, event: object, byte: int) -> None:
         """One byte's framing event, handled byte by byte."""
+
+    @property
+    def statements(self) -> LineStatements:
+        """What runs the statements of the lines the drive executes."""
 
 
 #: Bytes after a ``#`` that begin an address (or leave it to the byte-by-byte path: ``##``).
@@ -105,8 +107,9 @@ class NoiseLines:
         other, as the face's ``_begin_line``, ``_failing_line``, ``restart``, the line end
         and the noise skip would do them; runs of lines failing before a statement completes
         in one step (:meth:`_failing_lines`); a line whose first character runs a statement (``H``,
-        ``S``) through the face's :meth:`~.face.SersFace.take_text`, and taken on the same way
-        when that fails.  Stops before a line it does not take (one for
+        ``S``) run as the face's :meth:`~.face.SersFace.take_text` runs it (its echo with the
+        ``#``'s, its statement at once, the rest of the line left to the face when it goes on),
+        and taken on the same way when that fails.  Stops before a line it does not take (one for
         another drive, one that runs a statement, one whose text in the chunk does not fail)
         or inside one (a restart for another drive or whose address the chunk cuts off, the
         chunk's end), with the line and the framing as those paths leave them; returns where
@@ -114,8 +117,8 @@ class NoiseLines:
         error is recorded, the rest of the line's answers with its end, before the line's end
         is handled."""
         model, framer, send, face, end = self.model, self.framer, self.send, self.face, len(data)
-        hash_, no_address, search, fails = codec.HASH, codec.NO_ADDRESS, codec.TEXT_END.search, first_byte_errors()
-        runs = runs_at_once()
+        hash_, no_address, search, runs = codec.HASH, codec.NO_ADDRESS, codec.TEXT_END.search, runs_at_once()
+        fails = self._starts[0] if self._starts is not None else first_byte_errors()
         mode = model.params.handshake_mode  # (only a statement changes it: none runs here)
         while True:
             # data[index] is a '#' outside a line
@@ -138,18 +141,20 @@ class NoiseLines:
             execute, reply = model.selection(address)
             if not execute:
                 return index
-            found = search(data, stop)
-            finish = end if found is None else found.start()  # (the chunk may end the text)
-            keep = min(finish, index + codec.MAX_LINE)  # the text kept (60 characters from the '#')
-            if keep <= stop:
-                return index
-            errno = fails[data[stop]]
-            if errno:
-                failure: tuple[int, int] | None = (1, errno)
-            else:
-                failure = first_failure(data[stop:keep])
-                if failure is None and data[stop] not in runs:
+            failure: tuple[int, int] | None = None
+            if data[stop] not in runs or stop - index >= codec.MAX_LINE:  # (H, S kept: no failure first)
+                found = search(data, stop)
+                finish = end if found is None else found.start()  # (the chunk may end the text)
+                keep = min(finish, index + codec.MAX_LINE)  # the text kept (60 characters from the '#')
+                if keep <= stop:
                     return index
+                errno = fails[data[stop]]
+                if errno:
+                    failure = (1, errno)
+                else:
+                    failure = first_failure(data[stop:keep])
+                    if failure is None:
+                        return index  # (a statement completes first, or no error in the chunk)
             model.note_address(address, execute)
             if failure is not None:  # the line fails at data[cut - 1]: take it
                 cut, errno = stop + failure[0], failure[1]
@@ -172,12 +177,14 @@ class NoiseLines:
                 framer.take_line(stop - index, finish - stop)
                 if reply and echo:
                     text += data[cut:finish]
-            else:  # its first character runs a statement (H, S): the face's text run does that
+            else:  # its first character runs a statement (H, S) as it arrives (§3.2.4a)
                 face.line = line = CommandLine(execute, reply)
-                framer.take_line(stop - index, 0)
+                framer.take_line(stop - index, 1)  # ('#', the address and that character)
                 if reply and mode in (0, 1):
-                    send(data[index:stop])
-                cut = stop + face.take_text(line, data, stop)
+                    send(data[index : stop + 1])  # (their echo in one piece)
+                line.text = chr(data[stop])
+                face.statements.progress(line, False)
+                cut = stop + 1
                 if not line.error or face.line is not line or not model.logic_alive or model.booting:
                     return cut  # (it went on, or reset the drive: the general path goes on)
                 mode = model.params.handshake_mode  # (the statements may have changed it)
