@@ -32,7 +32,7 @@ from devsim.devices.sers.line import (
 )
 from devsim.devices.sers.model import SersDrive
 from devsim.devices.sers.noise import NoiseLines
-from devsim.devices.sers.params import HANDSHAKE_CELL
+from devsim.devices.sers.params import HANDSHAKE_CELL, LANGUAGE_CELL
 from devsim.devices.sers.polls import KeptPolls
 
 __all__ = ["SersFace"]
@@ -413,7 +413,7 @@ class SersFace(Face):
     # -- output ----------------------------------------------------------------------------
     @property
     def echo(self) -> bool:
-        return self.model.params.handshake_mode in (0, 1)
+        return self.model.params.values.cells[HANDSHAKE_CELL] in (0, 1)
 
     def _out(self, line: CommandLine, text: str) -> None:
         self._put(line, text.encode(self.model.cfg.encoding, errors="replace"))
@@ -422,15 +422,15 @@ class SersFace(Face):
         """An answer of the line: at once, or with RS-485 handshake (P1017 = 2) at its end."""
         if not line.reply:
             return
-        if self.model.params.handshake_mode == 2:
+        if self.model.params.values.cells[HANDSHAKE_CELL] == 2:
             line.deferred += data
         else:
             self.send(data)
 
     def _error(self, line: CommandLine, errno: int, detail: str = "") -> None:
-        line.error = True
-        self.model.power_stage.record_error(errno, refused=True)
-        self._put(line, error_text(errno, self.model.params.language == 1, self.model.cfg.encoding, detail))
+        line.error, model = True, self.model
+        model.power_stage.record_error(errno, refused=True)
+        self._put(line, error_text(errno, model.params.values.cells[LANGUAGE_CELL] == 1, model.cfg.encoding, detail))
 
     def spontaneous(self, text: str) -> None:
         """Messages such as ``@2POS=1`` go out between lines, never inside one (G-SPONT)."""

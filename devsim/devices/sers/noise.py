@@ -26,6 +26,7 @@ from devsim.devices.sers.line import (
     runs_at_once,
 )
 from devsim.devices.sers.model import SersDrive
+from devsim.devices.sers.params import HANDSHAKE_CELL, LANGUAGE_CELL
 
 __all__ = ["LineHost", "NoiseLines"]
 
@@ -119,7 +120,7 @@ class NoiseLines:
         model, framer, send, face, end = self.model, self.framer, self.send, self.face, len(data)
         hash_, no_address, search, runs = codec.HASH, codec.NO_ADDRESS, codec.TEXT_END.search, runs_at_once()
         fails = self._starts[0] if self._starts is not None else first_byte_errors()
-        mode = model.params.handshake_mode  # (only a statement changes it: none runs here)
+        mode = model.params.values.cells[HANDSHAKE_CELL]  # (only a statement changes it: none runs here)
         while True:
             # data[index] is a '#' outside a line
             stop = index + 1
@@ -164,9 +165,10 @@ class NoiseLines:
                 if reply and mode in (0, 1):
                     send(data[index:cut])
                 model.power_stage.record_error(errno, refused=True)  # (what _error does, its message from a table)
-                mode = model.params.handshake_mode
+                cells = model.params.values.cells
+                mode = cells[HANDSHAKE_CELL]
                 echo = mode in (0, 1)
-                text = error_text(errno, model.params.language == 1, model.cfg.encoding) if reply else b""
+                text = _messages(cells[LANGUAGE_CELL] == 1, model.cfg.encoding)[errno] if reply else b""
                 if mode == 2:
                     line.deferred += text
                     text = b""
@@ -187,7 +189,7 @@ class NoiseLines:
                 cut = stop + 1
                 if not line.error or face.line is not line or not model.logic_alive or model.booting:
                     return cut  # (it went on, or reset the drive: the general path goes on)
-                mode = model.params.handshake_mode  # (the statements may have changed it)
+                mode = model.params.values.cells[HANDSHAKE_CELL]  # (the statements may have changed it)
                 echo = mode in (0, 1)
                 finish = framer.skip_text(data, cut)  # the rest of the text, failed: only echoed
                 text = data[cut:finish] if line.reply and echo else b""
@@ -299,10 +301,11 @@ class NoiseLines:
         self.framer.lines_taken(last_end)
         if going_on:  # the '#' and the text so far, restarts without an address among them
             self.framer.take_line(1, stop - at - 1)
-        message = _messages(model.params.language == 1, model.cfg.encoding)
+        cells = model.params.values.cells
+        message = _messages(cells[LANGUAGE_CELL] == 1, model.cfg.encoding)
         messages = [message[errno] for errno in errnos]
         deferred = b""
-        if model.params.handshake_mode in (0, 1):
+        if cells[HANDSHAKE_CELL] in (0, 1):
             self.send(echoes[0])
             model.power_stage.record_errors(errnos)
             echoes[0] = messages[0]

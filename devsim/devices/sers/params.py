@@ -15,7 +15,7 @@ from devsim.core.parameters import Parameters, accessor
 from devsim.devices.sers.parameters import PARAMETER_TABLE
 from devsim.devices.sers.units import Scaling
 
-__all__ = ["HANDSHAKE_CELL", "SersParameters"]
+__all__ = ["HANDSHAKE_CELL", "LANGUAGE_CELL", "SersParameters"]
 
 #: P76, P44, P160, P121, P122, P123: what the unit conversion is made of (§4.8.4.6).
 _WEIGHTING = PARAMETER_TABLE.picker(76, 44, 160, 121, 122, 123)
@@ -26,6 +26,8 @@ _WATCHED = PARAMETER_TABLE.picker(1040, 1041, 1044, 1025, 1027)
 #: Where P1017, the handshake mode (§4.8.6.9), is among :attr:`SersParameters.values`' cells:
 #: ``params.values.cells[HANDSHAKE_CELL]`` (a host's poll reads it every time; no call).
 HANDSHAKE_CELL: int = PARAMETER_TABLE.positions[1017]
+#: Where P265, the language of the messages (§4.8.3.1), is: every error message reads it.
+LANGUAGE_CELL: int = PARAMETER_TABLE.positions[265]
 #: P1032, P1005–P1008: the ramp shape and its sections (§4.8.4.4).
 _RAMP = PARAMETER_TABLE.picker(1032, 1005, 1006, 1007, 1008)
 
