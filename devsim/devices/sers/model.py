@@ -151,7 +151,7 @@ class SersDrive(Model):
     def announce(self, topic: str, *args: Any) -> None:
         if self._listeners.get(topic):  # someone hears it: a loop is not run ahead over it
             self.runahead.notice()
-        super().announce(topic, *args)
+            super().announce(topic, *args)  # (nobody: nothing to do, no call; noise announces every error)
 
     def unobserved_until(self, when: float) -> None:
         self.runahead.unobserved_until(when)
