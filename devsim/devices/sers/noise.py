@@ -255,8 +255,15 @@ class NoiseLines:
         if starts is None:
             starts = self._starts = (first_byte_errors(), *_text_starts())
         fails, at_once, later = starts
+        first = data[index + 1]
+        if first not in at_once and first not in later:
+            return index, False
+        model, face = self.model, self.face
+        cells = model.params.values.cells
+        message = _messages(cells[LANGUAGE_CELL] == 1, model.cfg.encoding)
         address_start, end, find = _ADDRESS_START, len(data), data.find
-        echoes: list[bytes] = []  # each line's echo up to its error, and the rest of it
+        #: each line's echo up to its error, its error message and the rest of its echo
+        pieces: list[bytes] = []
         errnos: list[int] = []
         at, last_end, going_on = index, None, False
         while True:  # data[at] is a '#' outside a line, followed by a byte
@@ -269,7 +276,8 @@ class NoiseLines:
                 stop = feed
             elif stop < 0:
                 stop = end  # (the chunk ends inside the line)
-            restart = find(b"#", at + 2, stop)
+            after = find(b"#", at + 2)  # (a restart in the line, or the next line's '#')
+            restart = after if after < stop else -1
             if first in at_once:
                 cut, errno = at + 2, fails[first]
             else:  # (the text kept: up to a restart, at most 60 characters from the '#')
@@ -277,42 +285,40 @@ class NoiseLines:
                 if failure is None:
                     break  # (a statement completes first, or nothing fails in the chunk)
                 cut, errno = at + 1 + failure[0], failure[1]
-            while restart >= 0 and restart + 1 < end and data[restart + 1] not in address_start:
-                restart = find(b"#", restart + 1, stop)
+            if restart >= 0:
+                while restart >= 0 and restart + 1 < end and data[restart + 1] not in address_start:
+                    restart = find(b"#", restart + 1, stop)
+                after = -2  # (the next line's '#' is still to be found)
             errnos.append(errno)
             if restart >= 0 or stop == end:  # the line goes on: a restart with an address, the chunk's end
                 stop = end if restart < 0 else restart
-                echoes += (data[at:cut], data[cut:stop])
+                pieces += (data[at:cut], message[errno], data[cut:stop])
                 going_on = True
                 break
             byte, stop = data[stop], stop + 1
             if stop < end and data[stop] in LINE_ENDS and data[stop] != byte:
                 stop += 1  # the other half of a CR/LF pair, echoed
                 byte = None
-            echoes += (data[at:cut], data[cut:stop])
-            at = find(b"#", stop)
+            pieces += (data[at:cut], message[errno], data[cut:stop])
+            at = find(b"#", stop) if after == -2 else after
             if at < 0 or at + 1 == end:  # (noise to the end, or a '#' that ends the chunk)
                 last_end = byte if stop == end else None
                 at = end if at < 0 else at
                 break
-        if not echoes:
+        if not errnos:
             return index, False
-        model, face = self.model, self.face
         self.framer.lines_taken(last_end)
         if going_on:  # the '#' and the text so far, restarts without an address among them
             self.framer.take_line(1, stop - at - 1)
-        cells = model.params.values.cells
-        message = _messages(cells[LANGUAGE_CELL] == 1, model.cfg.encoding)
-        messages = [message[errno] for errno in errnos]
         deferred = b""
         if cells[HANDSHAKE_CELL] in (0, 1):
-            self.send(echoes[0])
+            self.send(pieces[0])
             model.power_stage.record_errors(errnos)
-            echoes[0] = messages[0]
-            echoes[2::2] = [echo + message for echo, message in zip(echoes[2::2], messages[1:], strict=True)]
-            self.send(b"".join(echoes))
+            pieces[0] = b""
+            self.send(b"".join(pieces))
         else:  # (no echo: echo mode 2, each message at its line's end)
             model.power_stage.record_errors(errnos)
+            messages = pieces[1::3]
             if going_on:
                 deferred = messages.pop()
             self.send(b"".join(messages))
