@@ -178,16 +178,17 @@ class Framer:
         last_end = max(data.rfind(b"\r", start, stop), data.rfind(b"\n", start, stop))
         tail = start
         if last_end >= 0:
-            previous = max(data.rfind(b"\r", start, last_end), data.rfind(b"\n", start, last_end))
-            if previous >= 0:
-                ended = data.find(b"#", previous + 1, last_end) >= 0
-            else:
-                ended = self.in_line or data.find(b"#", start, last_end) >= 0
-            self.in_line = False
             tail = last_end + 1
-            self._last_end = data[last_end] if ended and tail == stop else None
-        if tail == stop:
-            return stop
+            if tail == stop:  # (right before the '#': whether it ended a line matters, it may pair)
+                previous = max(data.rfind(b"\r", start, last_end), data.rfind(b"\n", start, last_end))
+                if previous >= 0:
+                    ended = data.find(b"#", previous + 1, last_end) >= 0
+                else:
+                    ended = self.in_line or data.find(b"#", start, last_end) >= 0
+                self.in_line = False
+                self._last_end = data[last_end] if ended else None
+                return stop
+            self.in_line = False  # (bytes follow the last line end: it pairs with none of them)
         self._last_end = None
         if not self.in_line:
             opened = data.find(b"#", tail, stop)
