@@ -154,7 +154,10 @@ def test_the_benchmarks_noise_in_pty_reads_leaves_what_bytes_leave(seed: int) ->
         b"#ON\r#H" + b" " * 57 + b"S\r#S" + b" " * 58 + b"H\r#P11?\r",
         # ... run, and the statements after it in the same text run (echoed with it, in mode 2 not)
         b"#ON\r#HSP11?\r#1H P1017=2\r#Sx\r#HP11?\r#P1017=1\r#P11?\r",
-        # lines failing at once, one after the other, with restarts, pairs and noise between
+        # while selected, lines the noise path begins for the face: another drive's (it is
+        # selected then; ended, or cut by a restart or the chunk), and this one's whose
+        # statement completes before anything fails (left to the text run), or that is quiet
+        b"#\x00\r#7ab\r#1\r#7x#1\x00\r#X=1\x00\r#P1\x00\r#P11?\r#\x00\n#12\r#1P11?\r",
         b"#\x00\r\n\x8f#Q\n\r#\x01#\x02#*\x03\r#1\x04\r#P11?\r",
         b"#P1017=2\r#\x00#\x01\r#P1017=1\r#P265=1\r#\x00\r#P265=0\r#P11?\r",
         # outputs showing warnings and errors change at the first error, after its echo

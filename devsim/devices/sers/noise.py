@@ -19,10 +19,12 @@ from devsim.devices.sers import codec
 from devsim.devices.sers.interactive import LineStatements
 from devsim.devices.sers.line import (
     LINE_ENDS,
+    TEXT_TO_END,
     CommandLine,
     error_text,
     first_byte_errors,
     first_failure,
+    quiet,
     runs_at_once,
 )
 from devsim.devices.sers.model import SersDrive
@@ -65,9 +67,10 @@ def _text_starts() -> tuple[frozenset[int], frozenset[int]]:
     return at_once, text - at_once - runs_at_once()
 
 
-#: A line this drive executed and answered that failed, as the face ends it (read only: its
-#: end looks at it, nothing changes it).
+#: A line this drive executed and answered that failed, and one for another drive, as the
+#: face ends them (read only: their end looks at them, nothing changes them).
 _FAILED = CommandLine(True, True, error=True)
+_OTHERS = CommandLine()
 
 
 class _Messages(dict[int, bytes]):
@@ -140,8 +143,8 @@ class NoiseLines:
                 if not complete:
                     return index
             execute, reply = model.selection(address)
-            if not execute:
-                return index
+            if not execute:  # (another drive's line, or none while this one is not selected)
+                return index if address is None else self._others_line(data, index, stop, address)
             failure: tuple[int, int] | None = None
             if data[stop] not in runs or stop - index >= codec.MAX_LINE:  # (H, S kept: no failure first)
                 found = search(data, stop)
@@ -154,8 +157,8 @@ class NoiseLines:
                     failure = (1, errno)
                 else:
                     failure = first_failure(data[stop:keep])
-                    if failure is None:
-                        return index  # (a statement completes first, or no error in the chunk)
+                    if failure is None:  # (a statement completes first, or no error in the chunk)
+                        return self._begun_line(data, index, stop, address, reply, mode)
             model.note_address(address, execute)
             if failure is not None:  # the line fails at data[cut - 1]: take it
                 cut, errno = stop + failure[0], failure[1]
@@ -236,6 +239,39 @@ class NoiseLines:
                     index = framer.skip_noise(data, index)
             if index >= end:
                 return end
+
+    def _others_line(self, data: bytes, index: int, stop: int, address: int | str) -> int:
+        """A line with another drive's address (``data[index:stop]``, complete): from now on
+        that drive is selected, not this one (G-ADDR, §4.1); the line is framed to its end, as
+        the face's ``_begin_line`` frames it, and ended there (nothing echoed, nothing run).
+        Returns where it ended (after its line end), or where its text stops (a restart, the
+        chunk's end), the line left in the face."""
+        framer, face = self.framer, self.face
+        self.model.note_address(address, False)
+        framer.take_line(stop - index, 0)
+        finish = framer.skip_text(data, stop)
+        if finish < len(data) and data[finish] in LINE_ENDS:
+            face.end_line(_OTHERS, framer.end_line(data[finish]))
+            return finish + 1
+        face.line = CommandLine()
+        return finish
+
+    def _begun_line(self, data: bytes, index: int, stop: int, address: int | str | None, reply: bool,
+                    mode: int) -> int:
+        """A line this drive executes whose text does not fail before a statement completes
+        (§3.2.4a): begun as the face's ``_begin_line`` begins it, the ``#`` and the address
+        echoed and the text left to the face's text run (returns ``stop``), unless its whole
+        text is in the chunk and runs nothing before its end (:func:`quiet`: the face takes
+        that line in one step; returns ``index``, nothing done)."""
+        whole = TEXT_TO_END.match(data, stop)
+        if whole is not None and whole.end() - index - 1 <= codec.MAX_LINE and quiet(whole[1]) is not None:
+            return index
+        self.model.note_address(address, True)
+        self.framer.take_line(stop - index, 0)
+        self.face.line = CommandLine(True, reply)
+        if reply and mode in (0, 1):
+            self.send(data[index:stop])
+        return stop
 
     def _failing_lines(self, data: bytes, index: int) -> tuple[int, bool]:
         """From a ``#`` outside a line, while this drive is selected: the lines that follow one
