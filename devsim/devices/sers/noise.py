@@ -100,9 +100,14 @@ class NoiseLines:
         self.framer = framer
         self.send = send
         self.face = face
-        #: :func:`first_byte_errors` and :func:`_text_starts`, looked up at the first line (not
-        #: at every run: two calls of a cache each)
-        self._starts: tuple[tuple[int, ...], frozenset[int], frozenset[int]] | None = None
+        #: :func:`first_byte_errors`, :func:`_text_starts` and the bytes that may begin a failing
+        #: line (either of those), looked up at the first line (not at every run)
+        self._starts: tuple[tuple[int, ...], frozenset[int], frozenset[int], frozenset[int]] | None = None
+
+    def _tables(self) -> tuple[tuple[int, ...], frozenset[int], frozenset[int], frozenset[int]]:
+        at_once, later = _text_starts()
+        self._starts = starts = (first_byte_errors(), at_once, later, at_once | later)
+        return starts
 
     def take(self, data: bytes, index: int) -> int:
         """From a ``#`` outside a line: whole lines this drive executes whose first statement
@@ -122,7 +127,7 @@ class NoiseLines:
         is handled."""
         model, framer, send, face, end = self.model, self.framer, self.send, self.face, len(data)
         hash_, no_address, search, runs = codec.HASH, codec.NO_ADDRESS, codec.TEXT_END.search, runs_at_once()
-        fails = self._starts[0] if self._starts is not None else first_byte_errors()
+        fails, _, _, starts = self._starts or self._tables()
         mode = model.params.values.cells[HANDSHAKE_CELL]  # (only a statement changes it: none runs here)
         while True:
             # data[index] is a '#' outside a line
@@ -130,7 +135,8 @@ class NoiseLines:
             if stop < end and data[stop] in no_address:  # (most noise: no address)
                 if model.addressed is False:
                     return index  # (the general path skips lines for other drives in one step)
-                if model.selected and model.addressed is True:  # (most of that: lines failing at once, or soon)
+                if (model.addressed is True or model.addressed is None and model.selected and model.addressed is True) \
+                        and data[stop] in starts:  # (most of that: lines failing at once, or soon)
                     taken, going_on = self._failing_lines(data, index)
                     if taken > index:
                         if going_on or taken == end:
@@ -287,12 +293,8 @@ class NoiseLines:
         leaves them.  Returns where it stopped and whether the line goes on there (else it is
         the next ``#`` or the chunk's end); ``index`` when the line there is not one of them
         (or the chunk cuts it off before it fails)."""
-        starts = self._starts
-        if starts is None:
-            starts = self._starts = (first_byte_errors(), *_text_starts())
-        fails, at_once, later = starts
-        first = data[index + 1]
-        if first not in at_once and first not in later:
+        fails, at_once, _, starts = self._starts or self._tables()
+        if data[index + 1] not in starts:
             return index, False
         model, face = self.model, self.face
         cells = model.params.values.cells
@@ -304,7 +306,7 @@ class NoiseLines:
         at, last_end, going_on = index, None, False
         while True:  # data[at] is a '#' outside a line, followed by a byte
             first = data[at + 1]
-            if first not in at_once and first not in later:
+            if first not in starts:
                 break
             stop = find(b"\r", at + 2)
             feed = find(b"\n", at + 2, end if stop < 0 else stop)
