@@ -158,6 +158,10 @@ def test_the_benchmarks_noise_in_pty_reads_leaves_what_bytes_leave(seed: int) ->
         # selected then; ended, or cut by a restart or the chunk), and this one's whose
         # statement completes before anything fails (left to the text run), or that is quiet
         b"#\x00\r#7ab\r#1\r#7x#1\x00\r#X=1\x00\r#P1\x00\r#P11?\r#\x00\n#12\r#1P11?\r",
+        # a failed line that a chunk cuts in its text, taken on in the next chunk: its restarts
+        # (another drive's address, this one's), its end, a pair, the lines after it
+        b"#\x00abcdefgh#\x00ij\r\n#\x00kl#7mn\r#1\x00opqrst#1uv\r\nw#\x00\r#P11?\r",
+        # lines failing at once, one after the other, with restarts, pairs and noise between
         b"#\x00\r\n\x8f#Q\n\r#\x01#\x02#*\x03\r#1\x04\r#P11?\r",
         b"#P1017=2\r#\x00#\x01\r#P1017=1\r#P265=1\r#\x00\r#P265=0\r#P11?\r",
         # outputs showing warnings and errors change at the first error, after its echo

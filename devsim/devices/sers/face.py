@@ -49,7 +49,7 @@ class SersFace(Face):
 
     model: SersDrive
     __slots__ = ("framer", "line", "_last_replied", "_spontaneous", "_settings", "statements", "_noise_lines", "polls",
-                 "answer_at_once")
+                 "answer_at_once", "_noise_rest")
 
     def __init__(self, model: SersDrive, port: Port) -> None:
         super().__init__(model, port)
@@ -60,7 +60,8 @@ class SersFace(Face):
         self._spontaneous: list[bytes] = []
         self._settings: SerialSettings | None = None
         self.statements = LineStatements(model, self._out, self._error)
-        self._noise_lines = NoiseLines(model, self.framer, self.send, self).take  # (bound once: a hot path)
+        noise = NoiseLines(model, self.framer, self.send, self)
+        self._noise_lines, self._noise_rest = noise.take, noise.rest  # (bound once: a hot path)
         #: The polls answered since power-on (the last one while nothing else came since)
         self.polls = KeptPolls(model, port, self.framer)
         self.answer_at_once = self.polls.answer_at_once  # (a repeated poll: Face.answer_at_once)
@@ -147,11 +148,10 @@ class SersFace(Face):
                         if not model.logic_alive or model.booting:
                             return
                         continue
-                else:  # text nobody executes, or beyond 60 characters (dropped): only echoed
-                    stop = framer.skip_text(data, index)
-                    if line.reply and self.echo:
-                        self.send(data[index:stop])
-                    index = stop
+                else:  # text nobody executes, beyond 60 characters (dropped) or failed: only echoed
+                    index = self._noise_rest(line, data, index)  # (a failed line's end and lines after it too)
+                    if not model.logic_alive or model.booting:
+                        return
                     continue
             index += 1
             for event in framer.feed(byte):

@@ -126,7 +126,7 @@ class NoiseLines:
         error is recorded, the rest of the line's answers with its end, before the line's end
         is handled."""
         model, framer, send, face, end = self.model, self.framer, self.send, self.face, len(data)
-        hash_, no_address, search, runs = codec.HASH, codec.NO_ADDRESS, codec.TEXT_END.search, runs_at_once()
+        no_address, search, runs = codec.NO_ADDRESS, codec.TEXT_END.search, runs_at_once()
         fails, _, _, starts = self._starts or self._tables()
         mode = model.params.values.cells[HANDSHAKE_CELL]  # (only a statement changes it: none runs here)
         while True:
@@ -202,49 +202,77 @@ class NoiseLines:
                 echo = mode in (0, 1)
                 finish = framer.skip_text(data, cut)  # the rest of the text, failed: only echoed
                 text = data[cut:finish] if line.reply and echo else b""
-            if finish == end:  # (the line goes on in the next chunk)
-                send(text)
-                return end
-            while data[finish] == hash_:  # a restart in the failed line: only echoed
-                complete, address, stop = codec.read_address(data, finish)
-                executes, answers = model.selection(address) if complete else (False, False)
-                if not executes:  # (another drive's address, or one the chunk cuts off)
-                    send(text)
-                    return face.restart(line, data, finish)
-                line.execute, line.reply = executes, answers
-                model.note_address(address, executes)
-                line.text, line.executed = "", 0
-                found = search(data, stop)
-                after = end if found is None else found.start()
-                framer.take_line(stop - finish, after - stop)
-                if line.reply and echo:
-                    text += data[finish:after]  # the address held until complete, and the text
-                finish = after
-                if finish == end:
-                    send(text)
-                    return end
-            byte = data[finish]
-            if line.reply and echo:
-                text += data[finish : finish + 1]
-            overflow = framer.end_line(byte)
-            send(text)
-            face.end_line(line, overflow)
-            index = finish + 1
-            if not model.logic_alive or model.booting or model.addressed is False:
+            index, more = self._rest(data, line, finish, text, echo)
+            if not more:
                 return index
-            if index < end:
+
+    def rest(self, line: CommandLine, data: bytes, index: int) -> int:
+        """From ``index`` in the text of a line whose text nobody executes (another drive's, one
+        beyond 60 characters, one that failed): the text up to its end or a restart echoed in
+        one piece, as the face's byte path echoes it, and returns where it stopped; of a failed
+        line (what noise mostly leaves at a chunk's start), its end too and the lines after it,
+        as :meth:`take` takes them (§3.2.4, §4.8.3.1).  ``data[index]`` is text."""
+        finish = self.framer.skip_text(data, index)
+        echo = self.model.params.values.cells[HANDSHAKE_CELL] in (0, 1)
+        text = data[index:finish] if line.reply and echo else b""
+        if not line.error:
+            self.send(text)
+            return finish
+        index, more = self._rest(data, line, finish, text, echo)
+        return self.take(data, index) if more else index
+
+    def _rest(self, data: bytes, line: CommandLine, finish: int, text: bytes, echo: bool) -> tuple[int, bool]:
+        """The rest of a failed line from ``finish``, where its text (``text`` its echo, not sent
+        yet) ends: its restarts (only echoed), its end, the other half of a CR/LF pair, the
+        noise up to the next ``#``.  Returns where it stopped, and whether that is a ``#``
+        outside a line (else: the chunk's end, the line going on, the drive reset or not
+        selected)."""
+        model, framer, send, face, end = self.model, self.framer, self.send, self.face, len(data)
+        hash_, search = codec.HASH, codec.TEXT_END.search
+        if finish == end:  # (the line goes on in the next chunk)
+            send(text)
+            return end, False
+        while data[finish] == hash_:  # a restart in the failed line: only echoed
+            complete, address, stop = codec.read_address(data, finish)
+            executes, answers = model.selection(address) if complete else (False, False)
+            if not executes:  # (another drive's address, or one the chunk cuts off)
+                send(text)
+                return face.restart(line, data, finish), False
+            line.execute, line.reply = executes, answers
+            model.note_address(address, executes)
+            line.text, line.executed = "", 0
+            found = search(data, stop)
+            after = end if found is None else found.start()
+            framer.take_line(stop - finish, after - stop)
+            if line.reply and echo:
+                text += data[finish:after]  # the address held until complete, and the text
+            finish = after
+            if finish == end:
+                send(text)
+                return end, False
+        byte = data[finish]
+        if line.reply and echo:
+            text += data[finish : finish + 1]
+        overflow = framer.end_line(byte)
+        send(text)
+        face.end_line(line, overflow)
+        index = finish + 1
+        if not model.logic_alive or model.booting or model.addressed is False:
+            return index, False
+        if index < end:
+            byte = data[index]
+            if byte in LINE_ENDS:  # the other half of a CR/LF pair, or noise
+                index += 1
+                for event in framer.feed(byte):
+                    face.on_event(event, byte)
+                if index == end:
+                    return end, False
                 byte = data[index]
-                if byte in LINE_ENDS:  # the other half of a CR/LF pair, or noise
-                    index += 1
-                    for event in framer.feed(byte):
-                        face.on_event(event, byte)
-                    if index == end:
-                        return end
-                    byte = data[index]
-                if byte != hash_:
-                    index = framer.skip_noise(data, index)
-            if index >= end:
-                return end
+            if byte != hash_:
+                index = framer.skip_noise(data, index)
+        if index >= end:
+            return end, False
+        return index, True  # (a '#' outside a line)
 
     def _others_line(self, data: bytes, index: int, stop: int, address: int | str) -> int:
         """A line with another drive's address (``data[index:stop]``, complete): from now on
