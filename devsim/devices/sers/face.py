@@ -391,7 +391,8 @@ class SersFace(Face):
                 self.send(self.model.answers.ack_line())
         self._last_replied = line.reply
         self.line = None
-        self._flush_spontaneous()
+        if self._spontaneous:  # (messages that waited for the line end; most lines: none)
+            self._flush_spontaneous()
 
     _handlers: ClassVar[dict[type, Any]] = {
         codec.TextChar: _on_text,
