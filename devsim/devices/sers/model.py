@@ -149,9 +149,11 @@ class SersDrive(Model):
         self._power_on()
 
     def announce(self, topic: str, *args: Any) -> None:
-        if self._listeners.get(topic):  # someone hears it: a loop is not run ahead over it
+        listeners = self._listeners.get(topic)
+        if listeners:  # someone hears it: a loop is not run ahead over it
             self.runahead.notice()
-            super().announce(topic, *args)  # (nobody: nothing to do, no call; noise announces every error)
+            for listener in list(listeners):  # (what Model.announce does, without the super() call:
+                listener(*args)  # noise announces every error it answers, a log hears each)
 
     def unobserved_until(self, when: float) -> None:
         self.runahead.unobserved_until(when)
