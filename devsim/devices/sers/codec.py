@@ -290,8 +290,10 @@ class Framer:
 @functools.cache
 def _concerning(mine: int) -> re.Pattern[bytes]:
     """A ``#`` that can concern drive ``mine`` while it is not selected: followed by ``*``, by
-    its address (leading zeros allowed), or by digits up to the chunk's end, or ending it."""
-    return re.compile(rb"#(?:\*|0*" + str(mine).encode() + rb"(?![0-9])|[0-9]*\Z)")
+    its address (leading zeros allowed), or by digits up to the chunk's end, or ending it.
+    (The lookahead first: at a ``#`` followed by anything else, what noise mostly has, the
+    search fails at once instead of trying each alternative: 5 k instructions per 4 KiB.)"""
+    return re.compile(rb"#(?![^*0-9])(?:\*|0*" + str(mine).encode() + rb"(?![0-9])|[0-9]*\Z)")
 
 
 def _holds_text(data: bytes, first: int, stop: int, line_start: int) -> bool:
