@@ -351,10 +351,9 @@ class NoiseLines:
                 if failure is None:
                     break  # (a statement completes first, or nothing fails in the chunk)
                 cut, errno = at + 1 + failure[0], failure[1]
-            if restart >= 0:
-                while restart >= 0 and restart + 1 < end and data[restart + 1] not in address_start:
-                    restart = find(b"#", restart + 1, stop)
-                after = -2  # (the next line's '#' is still to be found)
+            while restart >= 0 and restart + 1 < end and data[restart + 1] not in address_start:
+                after = find(b"#", restart + 1)  # (past the line's end: the next line's '#')
+                restart = after if after < stop else -1
             errnos.append(errno)
             if restart >= 0 or stop == end:  # the line goes on: a restart with an address, the chunk's end
                 stop = end if restart < 0 else restart
@@ -366,7 +365,7 @@ class NoiseLines:
                 stop += 1  # the other half of a CR/LF pair, echoed
                 byte = None
             pieces += (data[at:cut], message[errno], data[cut:stop])
-            at = find(b"#", stop) if after == -2 else after
+            at = after
             if at < 0 or at + 1 == end:  # (noise to the end, or a '#' that ends the chunk)
                 last_end = byte if stop == end else None
                 at = end if at < 0 else at
