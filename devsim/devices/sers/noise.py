@@ -135,8 +135,10 @@ class NoiseLines:
             if stop < end and data[stop] in no_address:  # (most noise: no address)
                 if model.addressed is False:
                     return index  # (the general path skips lines for other drives in one step)
-                if (model.addressed is True or model.addressed is None and model.selected and model.addressed is True) \
-                        and data[stop] in starts:  # (most of that: lines failing at once, or soon)
+                addressed = model.addressed
+                if addressed is None:  # (the first line: the initial selection, made by selected)
+                    addressed = model.addressed if model.selected else False
+                if addressed is True and data[stop] in starts:  # (most of that: lines failing at once, or soon)
                     taken, going_on = self._failing_lines(data, index)
                     if taken > index:
                         if going_on or taken == end:
