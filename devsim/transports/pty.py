@@ -108,7 +108,9 @@ _TIOCSSOFTCAR = getattr(termios, "TIOCSSOFTCAR", 0x541A)
 _READ_SIZE = 4096
 #: Reads in one turn of the loop while each comes full (a flood: the next 4 KiB is often in by
 #: the time the face has taken the last); a short read ends the turn, so a poll costs one read.
-_FULL_READS = 4
+#: Two, not more: in ``benchmarks/noise.py`` four took noise little faster than two (70-73
+#: against 65-71 MB/s) and held the neighbour's polls longer (p99 0.65-0.76 against 0.44-0.57 ms).
+_FULL_READS = 2
 # Device output within this many seconds of host input reuses the settings read with that input.
 _RECHECK = 0.001
 
