@@ -242,8 +242,12 @@ def main(argv: list[str] | None = None) -> int:
     p99 = sorted(noisy_times)[int(0.99 * (len(noisy_times) - 1))] if noisy_times else float("nan")
     met, bare_reaches = p99 < 0.001 and rate >= 50, reference >= 50
     # the rate target is absolute, so say whether this machine's bare reader reaches it at all
-    print(f"targets (neighbour p99 < 1 ms, noise at >= 50 MB/s): {'met' if met else 'missed'}; "
-          f"the bare reader {'reaches' if bare_reaches else 'does not reach'} 50 MB/s in this run")
+    if args.alone:
+        print(f"target noise at >= 50 MB/s: {'met' if rate >= 50 else 'missed'} (the neighbour's p99 < 1 ms: not "
+              f"measured, --alone); the bare reader {'reaches' if bare_reaches else 'does not reach'} 50 MB/s")
+    else:
+        print(f"targets (neighbour p99 < 1 ms, noise at >= 50 MB/s): {'met' if met else 'missed'}; "
+              f"the bare reader {'reaches' if bare_reaches else 'does not reach'} 50 MB/s in this run")
     print(json.dumps({"p99_ms": round(p99 * 1e3, 3) if noisy_times else None, "mb_per_s": round(rate, 1), "bare_mb_per_s": round(reference, 1),
                       "targets_met": met, "bare_reaches_rate": bare_reaches}))
     print(f"noise swallowed, devsim / bare pty reader: {ratio:.2f}"
