@@ -249,3 +249,17 @@ def test_skip_unaddressed_frames_other_drives_lines(before: bytes, chunk: bytes,
 @pytest.mark.parametrize(("digits", "value"), [("", None), ("*", "*"), ("0", 0), ("007", 7), ("255", 255)])
 def test_address_values(digits: str, value: int | str | None) -> None:
     assert codec.address_value(digits) == value
+
+
+@settings(max_examples=300, deadline=None)
+@given(STREAM, hs.integers(min_value=0, max_value=200))
+@example(b"", 0)
+@example(b"AB", 2)
+@example(b"A#B\rC\nD", 0)
+@example(b"A\nB\rC#D", 0)
+@example(b"#\r\n", 1)
+def test_text_end_finds_what_the_text_end_pattern_finds(data: bytes, start: int) -> None:
+    """``codec.text_end`` (three finds) stops where :data:`codec.TEXT_END` would, or at the end."""
+    start = min(start, len(data))
+    found = codec.TEXT_END.search(data, start)
+    assert codec.text_end(data, start) == (len(data) if found is None else found.start())

@@ -126,7 +126,7 @@ class NoiseLines:
         error is recorded, the rest of the line's answers with its end, before the line's end
         is handled."""
         model, framer, send, face, end = self.model, self.framer, self.send, self.face, len(data)
-        no_address, search, runs = codec.NO_ADDRESS, codec.TEXT_END.search, runs_at_once()
+        no_address, text_end, runs = codec.NO_ADDRESS, codec.text_end, runs_at_once()
         fails, _, _, starts = self._starts or self._tables()
         mode = model.params.values.cells[HANDSHAKE_CELL]  # (only a statement changes it: none runs here)
         while True:
@@ -155,8 +155,7 @@ class NoiseLines:
                 return index if address is None else self._others_line(data, index, stop, address)
             failure: tuple[int, int] | None = None
             if data[stop] not in runs or stop - index >= codec.MAX_LINE:  # (H, S kept: no failure first)
-                found = search(data, stop)
-                finish = end if found is None else found.start()  # (the chunk may end the text)
+                finish = text_end(data, stop)  # (the chunk may end the text)
                 keep = min(finish, index + codec.MAX_LINE)  # the text kept (60 characters from the '#')
                 if keep <= stop:
                     return index
@@ -230,7 +229,7 @@ class NoiseLines:
         outside a line (else: the chunk's end, the line going on, the drive reset or not
         selected)."""
         model, framer, send, face, end = self.model, self.framer, self.send, self.face, len(data)
-        hash_, search = codec.HASH, codec.TEXT_END.search
+        hash_, text_end = codec.HASH, codec.text_end
         if finish == end:  # (the line goes on in the next chunk)
             send(text)
             return end, False
@@ -243,8 +242,7 @@ class NoiseLines:
             line.execute, line.reply = executes, answers
             model.note_address(address, executes)
             line.text, line.executed = "", 0
-            found = search(data, stop)
-            after = end if found is None else found.start()
+            after = text_end(data, stop)
             framer.take_line(stop - finish, after - stop)
             if line.reply and echo:
                 text += data[finish:after]  # the address held until complete, and the text
