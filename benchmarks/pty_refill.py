@@ -1,4 +1,4 @@
-"""Does a pty refill while its reader works?  What stands between the raw-noise ratio and 0.9.
+"""Does a pty refill while its reader works?  (With this script's writer: no.)
 
 A writer process pours random bytes into a pty's slave as fast as the pty takes them; a bare
 asyncio reader empties the master 4 KiB per loop turn (as devsim reads a pty) and then works
@@ -7,6 +7,13 @@ reader works, a chunk's cycle would stay that of the bare reader until ``W`` exc
 refill waits for the next read, the cycle grows by ``W``: the reader's work adds to the pty's
 time instead of overlapping it. The script prints the cycle per chunk for each ``W`` (measured
 in one run, alternating) and the share of the work that overlapped the refill, last.
+
+The writer here is a forked child writing from the pty's own slave descriptor, and the bare reader
+is CPU-bound (about 28 µs and 146 MB/s per 4 KiB on 2026-11-30).  ``benchmarks/noise.py``'s writer
+is a separate process that opens the slave's path; there the bare reader waits for the refill
+about half the time, and a reader's work of up to about 20 µs per read hides in that wait
+(docs/performance-history.md, "Raw noise, the seventeenth session"): this script does not bound
+the raw-noise ratio.
 
     python benchmarks/pty_refill.py [--megabytes 20] [--work 0,20,40,80] [--rounds 3]
 """
