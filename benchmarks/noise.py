@@ -23,7 +23,9 @@ The last line is the ratio of the two rates, devsim / the bare reader (issue 31:
 bare reader's rate swings from run to run far more than devsim's (it waits on the writer and the
 kernel's refill, not on its own work): ``--rounds N`` alternates the two phases N times and prints
 each round and the medians (the rate target, p99 and the ratio).  ``--alone`` polls nobody while
-the noise flows, so that each process swallows it with nothing else to do (no p99 then).
+the noise flows, so that each process swallows it with nothing else to do (no p99 then).  Each
+process's CPU time per MB swallowed is printed too (``/proc``): it does not depend on how soon the
+machine wakes a sleeping reader, which moves the bare reader's rate most.
 
     python benchmarks/noise.py [--megabytes 100] [--kind sers] [--raw] [--seed 1] [--rounds 1] [--alone]
 """
@@ -48,6 +50,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
 from benchmarks.latency import _spawn, _stop, complete  # noqa: E402
+from benchmarks.startup import cpu_of  # noqa: E402
 
 QUERY = b"#P11?\r"
 #: What the echo server answers a poll (``latency.py --serve-echo`` with the length given it
@@ -135,17 +138,19 @@ def _writer(path: str, megabytes: float, raw: bool, seed: int) -> subprocess.Pop
                              *(["--raw"] if raw else [])], env=_env())
 
 
-def bare_rate(megabytes: float, raw: bool, seed: int, echo: serial.Serial, reply: bytes, alone: bool = False) -> float:
+def bare_rate(megabytes: float, raw: bool, seed: int, echo: serial.Serial, reply: bytes,
+              alone: bool = False) -> tuple[float, float]:
     """MB/s a bare asyncio pty reader swallows the same noise at while its neighbour (a bare
     answer ``reply`` on a second pty in the same process) and the echo are polled in turn, as
-    devsim's quiet device and the echo are while devsim swallows it (``alone``: not polled)."""
+    devsim's quiet device and the echo are while devsim swallows it (``alone``: not polled);
+    and its process's CPU seconds meanwhile."""
     sink = subprocess.Popen([sys.executable, "-c", SINK, str(int(megabytes * 1e6)), reply.decode()],
                             stdout=subprocess.PIPE, text=True)
     assert sink.stdout is not None
     path, neighbour_path = sink.stdout.readline().split()
     with serial.Serial(neighbour_path, 9600, timeout=2) as neighbour:
         poll(neighbour, 200)
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), cpu_of(sink.pid)
         noise = _writer(path, megabytes, raw, seed)
         while not select.select([sink.stdout], [], [], 1.0 if alone else 0)[0]:  # (until it has swallowed it all)
             if alone:
@@ -153,11 +158,11 @@ def bare_rate(megabytes: float, raw: bool, seed: int, echo: serial.Serial, reply
             poll(neighbour, 50)
             poll(echo, 50)
         assert sink.stdout.readline().strip() == "done"
-        elapsed = time.perf_counter() - started
+        elapsed, cpu = time.perf_counter() - started, cpu_of(sink.pid) - cpu
     noise.wait(timeout=10)
     sink.kill()
     sink.wait(timeout=10)
-    return megabytes / elapsed
+    return megabytes / elapsed, cpu
 
 
 def _percentiles(times: list[float]) -> str:
@@ -200,6 +205,8 @@ def main(argv: list[str] | None = None) -> int:
                 ports[name] = value.split()[1]
         rates: list[float] = []
         references: list[float] = []
+        cpus: list[float] = []  # each process's CPU seconds during its noise phase
+        bare_cpus: list[float] = []
         echo_proc, echo_path = _spawn([sys.executable, os.path.join(ROOT, "benchmarks", "latency.py"), "--serve-echo",
                                        str(ECHO_LEN)])
         try:
@@ -211,7 +218,7 @@ def main(argv: list[str] | None = None) -> int:
                 echo_noisy: list[float] = []
                 for _ in range(args.rounds):  # devsim, then the bare reader: alternating phases
                     before = control.line("noisy")["bytes_in"]
-                    started = time.perf_counter()
+                    started, cpu = time.perf_counter(), cpu_of(proc.pid)
                     noise = _writer(ports["noisy"], args.megabytes, args.raw, args.seed)
                     while noise.poll() is None and not args.alone:
                         noisy_times += poll(quiet, 50)
@@ -224,7 +231,10 @@ def main(argv: list[str] | None = None) -> int:
                         else:
                             noisy_times += poll(quiet, 10)
                     rates.append(args.megabytes / (time.perf_counter() - started))
-                    references.append(bare_rate(args.megabytes, args.raw, args.seed, echo, ECHO_REPLY, args.alone))
+                    cpus.append(cpu_of(proc.pid) - cpu)
+                    reference, bare_cpu = bare_rate(args.megabytes, args.raw, args.seed, echo, ECHO_REPLY, args.alone)
+                    references.append(reference)
+                    bare_cpus.append(bare_cpu)
         finally:
             _stop(echo_proc)
             proc.send_signal(signal.SIGINT)
@@ -239,6 +249,10 @@ def main(argv: list[str] | None = None) -> int:
     for devsim, bare in zip(rates, references, strict=True):
         print(f"noise swallowed: {args.megabytes:g} MB at {devsim:.0f} MB/s "
               f"(a bare asyncio pty reader: {bare:.0f} MB/s; ratio {devsim / bare:.2f})")
+    # CPU per MB swallowed: what each process spends, whatever the machine's wake-ups cost in time
+    devsim_ms, bare_ms = (statistics.median(c) / args.megabytes * 1e3 for c in (cpus, bare_cpus))
+    print(f"CPU per MB swallowed (medians): devsim {devsim_ms:.1f} ms, bare pty reader {bare_ms:.1f} ms; "
+          f"bare / devsim {bare_ms / devsim_ms:.2f} (information: the ratio of record is the rates', last)")
     p99 = sorted(noisy_times)[int(0.99 * (len(noisy_times) - 1))] if noisy_times else float("nan")
     met, bare_reaches = p99 < 0.001 and rate >= 50, reference >= 50
     # the rate target is absolute, so say whether this machine's bare reader reaches it at all
