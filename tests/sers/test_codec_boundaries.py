@@ -11,6 +11,8 @@ from the manual, not from the codec), for every byte that follows.
 
 from __future__ import annotations
 
+import re
+
 import hypothesis.strategies as hs
 import pytest
 from hypothesis import assume, example, given, settings
@@ -36,6 +38,8 @@ def _line(draw: hs.DrawFn) -> bytes:
 STREAM = hs.lists(hs.one_of(hs.sampled_from(TOKENS), hs.binary(max_size=12), _line()), max_size=8).map(b"".join)
 #: Bytes before the place a fast path starts at (a chunk is taken from the middle): every one
 #: that matters to the framer, none of which may be looked at again.
+#: What ends a run of a line's text (§3.2): its end or a ``#`` (a restart); the oracle of codec.text_end.
+TEXT_END = re.compile(rb"[\r\n#]")
 LEAD = b"#1 A\r\n#2\r#*"
 NOT_DIGITS = bytes(range(256)).translate(None, b"0123456789")
 TEXT = hs.binary(max_size=70).map(lambda b: bytes(0x41 + x % 26 for x in b))  # no '#', CR, LF, digit
@@ -259,7 +263,8 @@ def test_address_values(digits: str, value: int | str | None) -> None:
 @example(b"A\nB\rC#D", 0)
 @example(b"#\r\n", 1)
 def test_text_end_finds_what_the_text_end_pattern_finds(data: bytes, start: int) -> None:
-    """``codec.text_end`` (three finds) stops where :data:`codec.TEXT_END` would, or at the end."""
+    """``codec.text_end`` (three finds) stops where the pattern of a text's end (CR, LF or ``#``)
+    would, or at the end."""
     start = min(start, len(data))
-    found = codec.TEXT_END.search(data, start)
+    found = TEXT_END.search(data, start)
     assert codec.text_end(data, start) == (len(data) if found is None else found.start())

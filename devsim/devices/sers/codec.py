@@ -19,7 +19,7 @@ import re
 
 import msgspec
 
-__all__ = ["MAX_LINE", "NO_ADDRESS", "TEXT_END", "Address", "text_end", "address_value", "Framer", "Ignored", "LineEnd", "Noise", "read_address",
+__all__ = ["MAX_LINE", "NO_ADDRESS", "Address", "address_value", "text_end", "Framer", "Ignored", "LineEnd", "Noise", "read_address",
            "Restart", "TextChar"]
 
 MAX_LINE = 60
@@ -68,16 +68,19 @@ _ADDRESS_CHAR = AddressChar()
 _IGNORED = Ignored()
 
 
-#: What ends a run of a line's text: its end or a ``#`` (a restart).
-TEXT_END = re.compile(rb"[\r\n#]")
 _NOT_HASH_OR_DIGIT = re.compile(rb"[^#0-9]")
+_DIGITS = re.compile(rb"[0-9]+")
+_DIGIT_BYTES = frozenset(b"0123456789")
+_ADDRESS = re.compile(rb"\*|[0-9]*")
+#: Bytes after a '#' that cannot begin an address (a '#' is left to feed(), see begin_line).
+NO_ADDRESS = frozenset(range(256)) - frozenset(b"0123456789*#")
 
 
 def text_end(data: bytes, start: int) -> int:
-    """Where a line's text from ``start`` ends: the next CR, LF or ``#`` (what :data:`TEXT_END`
-    finds), or the chunk's end.  Three ``bytes.find`` (a ``memchr`` each, about 1.6 k
-    instructions a call whatever the length) instead of the regex, whose character set costs
-    about 50 instructions a byte (noise's texts are about 100 bytes long)."""
+    """Where a run of a line's text from ``start`` ends: its end (the next CR or LF) or a ``#``
+    (a restart), or the chunk's end.  Three ``bytes.find`` (a ``memchr`` each, about 1.6 k
+    instructions a call whatever the length) rather than a regex ``[\\r\\n#]``, whose character
+    set costs about 50 instructions a byte (noise's texts are about 100 bytes long)."""
     stop = data.find(b"#", start)
     if stop < 0:
         stop = len(data)
@@ -86,11 +89,6 @@ def text_end(data: bytes, start: int) -> int:
         stop = found
     found = data.find(b"\n", start, stop)
     return stop if found < 0 else found
-_DIGITS = re.compile(rb"[0-9]+")
-_DIGIT_BYTES = frozenset(b"0123456789")
-_ADDRESS = re.compile(rb"\*|[0-9]*")
-#: Bytes after a '#' that cannot begin an address (a '#' is left to feed(), see begin_line).
-NO_ADDRESS = frozenset(range(256)) - frozenset(b"0123456789*#")
 
 
 class Framer:

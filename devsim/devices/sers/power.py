@@ -241,19 +241,15 @@ class PowerStage:
         to a host's command (for the logs, topic ``device_error``)."""
         self._announce("device_error", str(errno), refused)
         self.errno = errno
-        self.warnings |= 16  # (what warn(16) does: every error message answers a host's line)
-        self._changed()
+        self.warn(16)  # (every error message answers a host's line)
 
     def record_errors(self, errnos: list[int]) -> None:
         """Error messages answering a host's lines one after the other, with nothing else in
         between (lines of noise, :mod:`.noise`): what a call of :meth:`record_error` for each
         leaves (every one heard by the logs; P12 and the outputs follow at the first, the
         rest is the same each time but P1137, the last one's)."""
+        self.record_error(errnos[0], refused=True)
         announce = self._announce
-        announce("device_error", str(errnos[0]), True)
-        self.errno = errnos[0]
-        self.warnings |= 16
-        self._changed()
         for errno in errnos[1:]:
             announce("device_error", str(errno), True)
         self.errno = errnos[-1]
