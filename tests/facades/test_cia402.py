@@ -45,6 +45,12 @@ class Drive:
             self.close()
             raise
 
+    def __enter__(self) -> Drive:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
     @property
     def status(self) -> int:
         return int(self.node.sdo[0x6041].raw)

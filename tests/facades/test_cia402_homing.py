@@ -47,11 +47,8 @@ FOREIGN = (35, 37, 1, 2, 7, 100)
 def homing_drive(kind: str) -> Iterator[tuple[Drive, int]]:
     """A ready drive of ``kind`` (node 9) configured for its reference run, and the run's method."""
     config, method = HOMING[kind]
-    drive = Drive(kind, 9, name=kind, ready=True, config=config)
-    try:
+    with Drive(kind, 9, name=kind, ready=True, config=config) as drive:
         yield drive, method
-    finally:
-        drive.close()
 
 
 def in_homing(drive: Drive, method: int) -> None:

@@ -52,9 +52,8 @@ def test_set_point_acknowledge_is_no_set_point_in_process_outside_operation_enab
     """A set-point taken (bit 12 = 1) and then Operation enabled left: the positioning ends with
     the state, no set-point is in process, so bit 12 is 0 in the state the drive is in (and after
     a quick stop, in Switch on disabled)."""
-    drive = Drive(kind, 9, name=kind, ready=True)
-    node = drive.node
-    try:
+    with Drive(kind, 9, name=kind, ready=True) as drive:
+        node = drive.node
         in_profile_position(node, 1000, 2000)
         node.sdo[0x6040].raw = 0x0F | NEW | IMMEDIATELY | RELATIVE
         assert node.sdo[0x6041].raw & ACKNOWLEDGE
@@ -64,8 +63,6 @@ def test_set_point_acknowledge_is_no_set_point_in_process_outside_operation_enab
         drive.runtime.advance(1.5)  # (the axis stands: a quick stop is over)
         status = node.sdo[0x6041].raw
         assert status & 0x0027 != 0x0027 and not status & ACKNOWLEDGE, (kind, leave, hex(status))
-    finally:
-        drive.close()
 
 
 def test_back_in_operation_enabled_the_handshake_starts_anew(drive: Drive) -> None:
@@ -112,10 +109,9 @@ def test_a_set_point_with_bit_5_at_0_waits_for_the_positioning_before_it(kind: s
     take new data); the axis first arrives at the first target, then the second set-point starts
     (bit 12 falls) and the axis ends at 2 000 from the start with bit 10 = 1; bit 10 is 0 all the
     while a set-point waits."""
-    drive = Drive(kind, 9, name=kind, ready=True)
-    runtime, node = drive.runtime, drive.node
-    moving = drive.moving
-    try:
+    with Drive(kind, 9, name=kind, ready=True) as drive:
+        runtime, node = drive.runtime, drive.node
+        moving = drive.moving
         start = in_profile_position(node, 1000, 2000)
         node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
         assert node.sdo[0x6041].raw & (ACKNOWLEDGE | TARGET_REACHED) == ACKNOWLEDGE, kind
@@ -143,8 +139,6 @@ def test_a_set_point_with_bit_5_at_0_waits_for_the_positioning_before_it(kind: s
         runtime.advance(1.0)
         assert abs(node.sdo[0x6064].raw - (start + 2000)) <= 5, kind
         assert node.sdo[0x6041].raw & (ACKNOWLEDGE | TARGET_REACHED) == TARGET_REACHED, kind
-    finally:
-        drive.close()
 
 
 @pytest.mark.parametrize("kind", DRIVES)
@@ -154,10 +148,9 @@ def test_target_reached_with_halt_and_after_it(kind: str) -> None:
     standing, 1 only if it stands at the target ("target position reached": a halt that stopped
     the positioning short leaves it 0, the positioning is not resumed); a new set-point then runs
     to its target and sets it again."""
-    drive = Drive(kind, 9, name=kind, ready=True)
-    runtime, node = drive.runtime, drive.node
-    moving = drive.moving
-    try:
+    with Drive(kind, 9, name=kind, ready=True) as drive:
+        runtime, node = drive.runtime, drive.node
+        moving = drive.moving
         start = in_profile_position(node, 5000, 2000)
         node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
         runtime.advance(0.3)
@@ -182,8 +175,6 @@ def test_target_reached_with_halt_and_after_it(kind: str) -> None:
         runtime.advance(1.0)
         assert abs(node.sdo[0x6064].raw - (stood + 500)) <= 5, kind
         assert node.sdo[0x6041].raw & TARGET_REACHED, kind
-    finally:
-        drive.close()
 
 
 @pytest.mark.parametrize("kind", DRIVES)
@@ -191,9 +182,8 @@ def test_halt_stops_a_positioning_short_of_its_target_on_every_drive(kind: str) 
     """Controlword bit 8 in profile position mode, "1: axis shall be stopped" (CiA 402-2 pp
     controlword): a relative 50 000 at 20 000 units/s halted after 0.5 s stands well short of its
     target and stays there, in Operation enabled."""
-    drive = Drive(kind, 9, name=kind, ready=True)
-    runtime, node = drive.runtime, drive.node
-    try:
+    with Drive(kind, 9, name=kind, ready=True) as drive:
+        runtime, node = drive.runtime, drive.node
         start = in_profile_position(node, 50_000, 20_000)
         node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
         runtime.advance(0.5)
@@ -205,8 +195,6 @@ def test_halt_stops_a_positioning_short_of_its_target_on_every_drive(kind: str) 
         runtime.advance(2.0)
         assert node.sdo[0x6064].raw == stood, kind
         assert node.sdo[0x6041].raw & (0x6F | TARGET_REACHED) == 0x27 | TARGET_REACHED, kind
-    finally:
-        drive.close()
 
 
 @pytest.mark.parametrize("kind", DRIVES)
@@ -214,10 +202,9 @@ def test_disable_operation_mid_move_and_enable_operation_again(kind: str) -> Non
     """Transition 5 (disable operation) while a positioning runs, then 4 (enable operation): the
     drive is in Operation enabled again, with no set-point in process (bit 12 = 0), and a new
     set-point runs to its target."""
-    drive = Drive(kind, 9, name=kind, ready=True)
-    runtime, node = drive.runtime, drive.node
-    moving = drive.moving
-    try:
+    with Drive(kind, 9, name=kind, ready=True) as drive:
+        runtime, node = drive.runtime, drive.node
+        moving = drive.moving
         in_profile_position(node, 1000, 2000)
         node.sdo[0x6040].raw = 0x0F | NEW | RELATIVE
         runtime.advance(0.1)
@@ -233,5 +220,3 @@ def test_disable_operation_mid_move_and_enable_operation_again(kind: str) -> Non
         runtime.advance(1.0)
         assert abs(node.sdo[0x6064].raw - (start + 1000)) <= 5, kind
         assert node.sdo[0x6041].raw & (0x6F | TARGET_REACHED) == 0x27 | TARGET_REACHED, kind
-    finally:
-        drive.close()
