@@ -319,39 +319,14 @@ class Gms96Card(Model):
         """Bit ``bit`` of :meth:`marker_byte`, the firmware's status looked at only for a live bit."""
         return _marker_bit(self, byte, bit)
 
-    def write_marker_byte(self, byte: int, value: int) -> None:
-        """``p11`` / PLC: MB(byte) := value; the control bits of MB0/MB1 act (spec §4.4; M0.2 reads
-        "CNC-Programmausgabe läuft" until the program ends, manual §2.4.1, even held by STOP).  A value
-        beyond a byte is clamped to 0 … 255, or ignored with ``out_of_range: ignore`` (spec §3.10)."""
-        if not 0 <= byte < 256:
-            return
-        if not 0 <= value <= 0xFF:
-            if self.cfg.out_of_range == "ignore":
-                return
-            value = min(max(value, 0), 0xFF)
-        m = self.image.markers
-        if byte == 0:
-            old = m[0]
-            m[0] = (value & 0x07) | (old & 0x04)  # M0.2 w: 1 starts; 0 ends nothing (M §2.4.1)
-            if (value & 0x02) and not (old & 0x02):
-                self.executor.abort()
-                m[0] &= ~0x02
-            if (value & 0x04) and not (old & 0x04):
-                self.executor.submit(Cmd("p", 3, 1, m[2], 3))
-            if (value ^ old) & 0x01:
-                self.indexer.replan()
-        elif byte == 1:
-            m[1] = (m[1] & 0x01) | (value & 0xE8)
-        elif byte == 18:
-            m[18] = value
-            self.memory.save_static()
-        else:
-            self.image.write_marker_byte(byte, value)  # (MB5: the buffered SNDF codes follow)
-        self.changed()
+    def write_marker_byte(self, byte: int, value: int) -> bool:
+        """``p11`` / PLC: MB(byte) := value (:func:`_write_marker_byte`); whether that changed anything."""
+        return _write_marker_byte(self, byte, value)
 
-    def write_marker_bit(self, byte: int, bit: int, value: bool) -> None:
+    def write_marker_bit(self, byte: int, bit: int, value: bool) -> bool:
+        """M(byte).(bit) := value, as :meth:`write_marker_byte` writes its byte; whether that changed anything."""
         cur = self.image.markers[byte]
-        self.write_marker_byte(byte, (cur | (1 << bit)) if value else (cur & ~(1 << bit)))
+        return self.write_marker_byte(byte, (cur | (1 << bit)) if value else (cur & ~(1 << bit)))
 
     def unobserved_until(self, when: float) -> None:
         """Nobody looks before ``when``: the PLC skips the cycles that would change nothing."""
@@ -505,3 +480,41 @@ def _marker_bit(card: Gms96Card, byte: int, bit: int) -> bool:
     if overlay is None or not overlay[0] & mask:
         return 0 <= byte < 256 and bool(card.image.markers[byte] & mask)
     return any(state(card) for live, state in overlay[1] if live == mask)
+
+
+def _write_marker_byte(card: Gms96Card, byte: int, value: int) -> bool:
+    """``p11`` / PLC: MB(byte) := value on ``card``; the control bits of MB0/MB1 act (spec §4.4; M0.2 reads
+    "CNC-Programmausgabe läuft" until the program ends, manual §2.4.1, even held by STOP).  A value
+    beyond a byte is clamped to 0 … 255, or ignored with ``out_of_range: ignore`` (spec §3.10).
+    Returns whether the write changed a marker or started, aborted or replanned anything (a 0
+    written to M0.2 of a running program, or to M1's read-only bits, changes nothing)."""
+    if not 0 <= byte < 256:
+        return False
+    if not 0 <= value <= 0xFF:
+        if card.cfg.out_of_range == "ignore":
+            return False
+        value = min(max(value, 0), 0xFF)
+    m = card.image.markers
+    old = m[byte]
+    acted = False
+    if byte == 0:
+        m[0] = (value & 0x07) | (old & 0x04)  # M0.2 w: 1 starts; 0 ends nothing (M §2.4.1)
+        if (value & 0x02) and not (old & 0x02):
+            card.executor.abort()
+            m[0] &= ~0x02
+            acted = True
+        if (value & 0x04) and not (old & 0x04):
+            card.executor.submit(Cmd("p", 3, 1, m[2], 3))
+            acted = True
+        if (value ^ old) & 0x01:
+            card.indexer.replan()
+    elif byte == 1:
+        m[1] = (m[1] & 0x01) | (value & 0xE8)
+    elif byte == 18:
+        m[18] = value
+        card.memory.save_static()
+    else:
+        card.image.write_marker_byte(byte, value)  # (MB5: the buffered SNDF codes follow)
+        acted = True
+    card.changed()
+    return acted or m[byte] != old

@@ -384,14 +384,13 @@ class Plc:
         return self.card.marker_byte(byte)
 
     def set_marker_byte(self, byte: int, value: int) -> None:
-        if self.image.markers[byte] != value & 0xFF:
+        if self.image.markers[byte] != value & 0xFF and self.card.write_marker_byte(byte, value):
             self._wrote = True
-            self.card.write_marker_byte(byte, value)
 
     def set_marker_bit(self, byte: int, bit: int, value: bool) -> None:
-        if self.image.marker(byte, bit) != value:
+        # (a write the card takes without a change, e.g. M0.2 := 0 while a program runs, is none)
+        if self.image.marker(byte, bit) != value and self.card.write_marker_bit(byte, bit, value):
             self._wrote = True
-            self.card.write_marker_bit(byte, bit, value)
 
     def message(self, code: int) -> None:
         """Like SNDM: the code into MB4, buffered behind a waiting one (spec §4.5.1)."""
