@@ -8,9 +8,11 @@ run and alternating with the kinds: a fresh process serving as many bare asyncio
 endpoints (a listening socket with a reader, a small object per endpoint) as the plant has
 ports, against one.  The ratio devsim / reference per port is printed last.
 
-Target (issue 31): a SERS device in a 1,000-device plant < 20 KB.
+Target (issue 31): a SERS device in a 1,000-device plant < 20 KB.  A single measurement swings
+by several per cent (a SERS device 19.0-20.5 KB on the same code, 2026-11-30), so each side is
+measured three times by default and the medians are printed.
 
-    python benchmarks/memory.py [--kind sers ...] [--n N] [--rounds 1] [--pty] [--top 0]
+    python benchmarks/memory.py [--kind sers ...] [--n N] [--rounds 3] [--pty] [--top 0]
 
 ``--top K`` prints, for the largest plant of each kind, the K source lines that allocated the
 most per device (tracemalloc, a separate process), to find what a device holds.
@@ -140,7 +142,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--kind", action="append", choices=KINDS, help="a kind (repeatable; default all)")
     parser.add_argument("--n", type=int, default=0, help="devices in the large plant (default per kind)")
-    parser.add_argument("--rounds", type=int, default=1, help="measurements of each side (median)")
+    parser.add_argument("--rounds", type=int, default=3, help="measurements of each side (median; default 3)")
     parser.add_argument("--pty", action="store_true", help="serve ptys instead of TCP ports")
     parser.add_argument("--top", type=int, default=0, help="print the K lines allocating most per device")
     args = parser.parse_args(argv)
