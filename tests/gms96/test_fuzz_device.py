@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import signal
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -106,3 +107,24 @@ def test_a_level_change_while_i2t_limits_at_the_level() -> None:
     device.set("param.N15", 100)
     clock.advance(1.0)
     assert device.read("i2t_active") is True
+
+
+@pytest.mark.manual("§2.4.3", "WOSO (6) / WORO (7): Operand 0..10 -- an operand beyond them waits for no output")
+@pytest.mark.parametrize("operand", [15363, 24, 11, -1])
+def test_woso_and_woro_with_an_operand_beyond_the_outputs_do_not_wait(operand: int) -> None:
+    """Found by fuzzing: ``p10;6;15363`` (WOSO, ``68 0C 0C 68 73 03 70 0A 00 00 06 00 00 03 3C 00 35 16``)
+    raised IndexError out of the port's feed.  Like WOSI/WORI beyond E2.1 and SETO beyond A1.2, the
+    command is done at once: the card acknowledges it and the next command runs."""
+    card, clock, _nvram, out = _card()
+    if operand == 15363:
+        frame = bytes.fromhex("68 0C 0C 68 73 03 70 0A 00 00 06 00 00 03 3C 00 35 16")
+        assert frame == encode(LongFrame(control_host(1), 3, letter("p", 10, 6, operand)))
+    for opcode, fcb in ((6, 1), (7, 0)):  # WOSO, WORO
+        out.clear()
+        card.feed(encode(LongFrame(control_host(fcb), 3, letter("p", 10, opcode, operand))))
+        clock.advance(0.01)
+        assert bytes(out) == b"\xe5"
+        assert card.read("busy") is False
+    card.feed(encode(LongFrame(control_host(1), 3, letter("p", 10, 16, 3))))  # SETO A0.3 runs next
+    clock.advance(0.01)
+    assert card.read("output.A0.3") is True

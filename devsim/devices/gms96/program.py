@@ -157,6 +157,10 @@ class ProgramControl:
         return self._wait_input(operand, False)
 
     def _wait_output(self, operand: int, want: bool) -> bool:
+        """WOSO/WORO: output ``operand`` 0..10 (manual §2.4.3); beyond them nothing to wait for,
+        as for WOSI/WORI beyond E2.1 and SETO beyond A1.2."""
+        if operand not in OUTPUT_OPERANDS:
+            return True
         return self.executor.wait("WOSO" if want else "WORO", lambda: self.outputs.output_bit(operand) == want)
 
     def woso(self, operand: int) -> bool:
