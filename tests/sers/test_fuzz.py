@@ -252,3 +252,20 @@ def test_the_poll_paths_are_taken() -> None:
     assert _poll_line(b"#1P11?\r") is not None and _poll_line(b"#P51??\n") is not None
     for line in (b"#1P11?", b"#1P11?P12?\r", b"#1V=1\r", b"#1P11?\r#", b"P11?\r", b"#1" + b" " * 58 + b"P11?\r"):
         assert _poll_line(line) is None, line
+
+
+@pytest.mark.manual("§4.2", "LIST: the program is listed (in pgm mode executed, not stored)")
+def test_a_stored_constant_beyond_28_digits_is_listed() -> None:
+    """Found by fuzzing: a program line ``W=2748332147483632147483639`` (stored as typed, range checks
+    come when it runs) made ``#LIST`` raise decimal.InvalidOperation out of the port's feed: its fixed
+    point rendering (4 decimals) needs 29 digits, more than the decimal module's default 28."""
+    device, clock, out, nvram = _device()
+    device.feed(b"#PGM")
+    device.feed(b"W=2748332147483632147483639\r")
+    clock.advance(0.01)
+    kept = nvram.get("program")
+    out.clear()
+    device.feed(b"#LIST\r")
+    clock.advance(0.01)
+    assert b"W=2748332147483632" in bytes(out) and bytes(out).endswith(b"pgm\n\r")
+    assert nvram.get("program") == kept

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 import re
-from decimal import ROUND_HALF_UP, Decimal, InvalidOperation
+from decimal import ROUND_HALF_UP, Context, Decimal, InvalidOperation
 
 __all__ = [
     "INCREMENTS_PER_REV",
@@ -282,6 +282,12 @@ def parse_number(text: str) -> float:
     return float(text)
 
 
+#: Room for every finite float on a fixed-point grid: up to 309 integer digits and the decimals (the
+#: default context's 28 digits are too few for a constant like W=2748332147483632147483639, stored as
+#: typed in a program and rendered with 4 decimals by LIST).
+_WIDE = Context(prec=360)
+
+
 def _to_decimal(value: float) -> Decimal:
     try:
         return Decimal(repr(float(value)))
@@ -293,7 +299,7 @@ def quantize(value: float, decimals: int) -> float:
     """Round *value* to the fixed-point grid of *decimals* places (half away from zero)."""
     if not math.isfinite(value):
         raise ValueError(f"not a finite number: {value!r}")
-    q = _to_decimal(value).quantize(Decimal(1).scaleb(-decimals), rounding=ROUND_HALF_UP)
+    q = _to_decimal(value).quantize(Decimal(1).scaleb(-decimals), rounding=ROUND_HALF_UP, context=_WIDE)
     result = float(q)
     return 0.0 if result == 0 else result
 
@@ -302,7 +308,7 @@ def format_fixed(value: float, decimals: int) -> str:
     """Fixed-point rendering with all decimals, e.g. ``format_fixed(500, 4) == "500.0000"``."""
     if not math.isfinite(value):
         raise ValueError(f"not a finite number: {value!r}")
-    q = _to_decimal(value).quantize(Decimal(1).scaleb(-decimals), rounding=ROUND_HALF_UP)
+    q = _to_decimal(value).quantize(Decimal(1).scaleb(-decimals), rounding=ROUND_HALF_UP, context=_WIDE)
     if q == 0:
         q = abs(q)  # no "-0.0000"
     return f"{q:f}"
