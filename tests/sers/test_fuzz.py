@@ -269,3 +269,24 @@ def test_a_stored_constant_beyond_28_digits_is_listed() -> None:
     clock.advance(0.01)
     assert b"W=2748332147483632" in bytes(out) and bytes(out).endswith(b"pgm\n\r")
     assert nvram.get("program") == kept
+
+
+@pytest.mark.manual("§4.7", "P123 Vorschubkonstante: > 0; an invalid value gives an error message (errno 2 'zu klein')")
+@pytest.mark.parametrize("value", [b".00001", b"0.00004"])
+def test_a_feed_constant_that_rounds_to_zero_is_too_small(value: bytes) -> None:
+    """Found by fuzzing: ``#P76=2P123=.00001=`` was taken (P123 > 0) and stored on the 4-decimal grid
+    as 0.0000; from then on every command that weighs a position (P123?, P51?, W=..., LISTP) raised
+    ValueError ("P121, P122 and P123 must be > 0") out of the port's feed.  The range is checked on
+    the value the drive keeps: errno 2, P123 unchanged, the drive answers on."""
+    device, clock, out, _nvram = _device()
+    out.clear()
+    device.feed(b"#P123=" + value + b"\r")
+    clock.advance(0.01)
+    assert b"*zu klein" in bytes(out)
+    out.clear()
+    device.feed(b"#P123?\r#P51?\r")
+    clock.advance(0.01)
+    assert b"P123=1mm" in bytes(out) and b"P51=" in bytes(out)
+    device.feed(b"#P123=0.00005\r")  # rounds half up to 0.0001: taken
+    clock.advance(0.01)
+    assert device.model.params.values[123] == 0.0001

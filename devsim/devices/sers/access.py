@@ -204,9 +204,12 @@ class ParameterAccess:
         extra = row.extra
         if row.choices is not None and value not in row.choices:
             raise SersError(extra["invalid_errno"])
-        if extra["min_exclusive"] and row.minimum is not None and value <= row.minimum:
-            raise SersError(extra["too_small_errno"])  # a range "> minimum" (V, P103, P123)
         kind = extra["kind"]
+        if extra["min_exclusive"] and row.minimum is not None:  # a range "> minimum" (V, P103, P123)
+            # a fixed-point value as the drive keeps it (§3.1.9 of the spec): P123=.00001 is 0.0000
+            kept = quantize(float(value), row.decimals) if kind == "fixed" else value
+            if kept <= row.minimum:
+                raise SersError(extra["too_small_errno"])
         scaling = self.params.scaling
         if kind == "velocity":
             rpm = scaling.vel_to_incps(float(value)) * 60 / INC_PER_REV
