@@ -128,3 +128,23 @@ def test_woso_and_woro_with_an_operand_beyond_the_outputs_do_not_wait(operand: i
     card.feed(encode(LongFrame(control_host(1), 3, letter("p", 10, 16, 3))))  # SETO A0.3 runs next
     clock.advance(0.01)
     assert card.read("output.A0.3") is True
+
+
+@pytest.mark.manual("§2.3.1 T", "T1;2;P3: 16 bits of the output process image from byte P3 -- bytes outside it read 0")
+@pytest.mark.parametrize("p3", [-65535, -1, 3])
+def test_t1_2_from_a_byte_outside_the_output_image_reads_0(p3: int) -> None:
+    """Found by fuzzing: ``T1;2;-65535`` (``68 0C 0C 68 73 03 54 01 00 00 02 00 00 01 00 FF CD 16``)
+    raised IndexError out of the port's feed; ``T1;2;-1`` read the analog byte AB2 as if it were the
+    byte before AB0.  As for T1;1 (inputs) and T1;3 (markers), bytes beyond the image read 0."""
+    card, clock, _nvram, out = _card()
+    if p3 == -65535:
+        frame = bytes.fromhex("68 0C 0C 68 73 03 54 01 00 00 02 00 00 01 00 FF CD 16")
+        assert frame == encode(LongFrame(control_host(1), 3, letter("T", 1, 2, p3)))
+    card.feed(encode(LongFrame(control_host(0), 3, letter("p", 12, 200))))  # AB2 := 200
+    clock.advance(0.01)
+    out.clear()
+    card.feed(encode(LongFrame(control_host(1), 3, letter("T", 1, 2, p3))))
+    clock.advance(0.01)
+    assert bytes(out[:7]) == bytes.fromhex("68 05 05 68 08 03 49") and out[7] == 0  # not AB2 = 200
+    if p3 != -1:
+        assert out[8] == 0  # (after T1;2;-1: AB0)

@@ -102,8 +102,8 @@ class Outputs:
     def output_byte(self, byte: int) -> int:
         if byte == 2:
             return 0 if self.stage.overload_latched else self.image.outputs[2]
-        if byte > 2:
-            return 0
+        if not 0 <= byte < 2:
+            return 0  # beyond the image (T1;2 from a negative byte too)
         return sum(1 << b for b in range(8) if byte * 8 + b < 16 and self.output_bit(byte * 8 + b))
 
     def input_bit(self, byte: int, bit: int) -> bool:
