@@ -290,3 +290,24 @@ def test_a_feed_constant_that_rounds_to_zero_is_too_small(value: bytes) -> None:
     device.feed(b"#P123=0.00005\r")  # rounds half up to 0.0001: taken
     clock.advance(0.01)
     assert device.model.params.values[123] == 0.0001
+
+
+@pytest.mark.manual("§4.6.9", "RS:expression: jog until the event occurs")
+@pytest.mark.parametrize(("until", "answer"), [(b"I0", b"*Parameter nicht vorhanden"), (b"O17=1", b"*ung\xfcltiger Ausgang"),
+                                               (b"P99999>1", b"*Parameter nicht vorhanden")])
+def test_a_jog_until_an_operand_that_does_not_exist_does_not_start(until: bytes, answer: bytes) -> None:
+    """Found by fuzzing: ``#ONP1035=0`` ``RS:I0`` ``\\r`` answered errno 13 but left the drive jogging
+    with the condition armed; the next change of any input evaluated it again and raised SersError out
+    of the input's point write (``input.I2``).  The condition is evaluated before the jog starts: the
+    statement's error, no jog."""
+    device, clock, out, _nvram = _device()
+    out.clear()
+    device.feed(b"#ONP1035=0")
+    device.feed(b"RS:" + until)
+    device.feed(b"\r")
+    clock.advance(0.2)
+    assert answer in bytes(out)
+    device.set("input.I2", True)
+    device.set("input.I2", False)
+    clock.advance(0.2)
+    assert device.model.motion.kind is None

@@ -86,6 +86,9 @@ class Jog:
         speed = float(jog_speed) * float(params.feedrate_override) / 100
         accel = float(params.jog_acceleration)
         can_move(speed, accel)
+        # the ':' condition first: one naming an operand that does not exist (I0, O17, P99999) is the
+        # statement's error and no jog starts (nor stays armed, to raise at the next input change)
+        held = until is not None and self._evaluate(until)
         if not (motion.kind == "jog" and self._direction == direction and self._speed == speed):
             self.power.servo_check()
             motion.begin("jog", accel)
@@ -98,7 +101,7 @@ class Jog:
         self.cancel_timer()
         if serial and until is None and params.jog_timeout == 1:
             self._timer = self.clock.call_later(0.5, self._timeout)
-        if until is not None and self._evaluate(until):
+        if held:
             self._until_reached()
 
     def write_p1031(self, value: float, home: Callable[[], None]) -> None:
