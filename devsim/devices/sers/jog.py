@@ -86,9 +86,8 @@ class Jog:
         speed = float(jog_speed) * float(params.feedrate_override) / 100
         accel = float(params.jog_acceleration)
         can_move(speed, accel)
-        # the ':' condition first: one naming an operand that does not exist (I0, O17, P99999) is the
-        # statement's error and no jog starts (nor stays armed, to raise at the next input change)
-        held = until is not None and self._evaluate(until)
+        if until is not None:  # (an operand that does not exist, I0, O17, P99999, is the statement's
+            self._evaluate(until)  # error before a jog starts or stays armed to raise at an input change)
         if not (motion.kind == "jog" and self._direction == direction and self._speed == speed):
             self.power.servo_check()
             motion.begin("jog", accel)
@@ -101,7 +100,7 @@ class Jog:
         self.cancel_timer()
         if serial and until is None and params.jog_timeout == 1:
             self._timer = self.clock.call_later(0.5, self._timeout)
-        if held:
+        if until is not None and self._evaluate(until):  # (as the jog, begun, sees it)
             self._until_reached()
 
     def write_p1031(self, value: float, home: Callable[[], None]) -> None:
