@@ -108,5 +108,8 @@ def test_config_parameters_are_checked_against_the_table(tmp_path: Path) -> None
     path.write_text("params:\n  P123: 0\n")
     with pytest.raises(ConfigError, match=r"P123: 0 must be above 0"):
         load_config(path, SersConfig)
+    path.write_text("params:\n  P123: 0.00001\n")  # (0.0000 on the drive's grid of four decimals)
+    with pytest.raises(ConfigError, match=r"P123: 1e-05 must be above 0"):
+        load_config(path, SersConfig)
     path.write_text("params:\n  P1017: 2\n  V: 500\n  '1028': 3\n")
     assert load_config(path, SersConfig).params == {"P1017": 2, "V": 500, "1028": 3}

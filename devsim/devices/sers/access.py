@@ -24,6 +24,7 @@ from devsim.devices.sers.errors import SersError
 from devsim.devices.sers.inputs import Inputs
 from devsim.devices.sers.memory import ParameterMemory
 from devsim.devices.sers.motion import Motion
+from devsim.devices.sers.paramdef import below_exclusive_minimum
 from devsim.devices.sers.parameters import ALIASES, KIND, PARAMETERS
 from devsim.devices.sers.params import SersParameters
 from devsim.devices.sers.power import PowerStage
@@ -205,11 +206,8 @@ class ParameterAccess:
         if row.choices is not None and value not in row.choices:
             raise SersError(extra["invalid_errno"])
         kind = extra["kind"]
-        if extra["min_exclusive"] and row.minimum is not None:  # a range "> minimum" (V, P103, P123)
-            # a fixed-point value as the drive keeps it (§3.1.9 of the spec): P123=.00001 is 0.0000
-            kept = quantize(float(value), row.decimals) if kind == "fixed" else value
-            if kept <= row.minimum:
-                raise SersError(extra["too_small_errno"])
+        if below_exclusive_minimum(row, value):  # a range "> minimum" (V, P103, P123), as kept
+            raise SersError(extra["too_small_errno"])
         scaling = self.params.scaling
         if kind == "velocity":
             rpm = scaling.vel_to_incps(float(value)) * 60 / INC_PER_REV

@@ -13,8 +13,9 @@ from types import MappingProxyType
 from typing import Any, Literal
 
 from devsim.core.parameters import Param
+from devsim.devices.sers.units import quantize
 
-__all__ = ["EXTRA", "POS_MAX", "POS_MIN", "RW_E", "Kind", "Number", "Rows", "UNITS"]
+__all__ = ["EXTRA", "POS_MAX", "POS_MIN", "RW_E", "Kind", "Number", "Rows", "UNITS", "below_exclusive_minimum"]
 
 #: How a value is kept and shown: a plain integer, a weighted quantity (converted with P76 /
 #: P44 / P160, §4.8.4.6) or a number with a fixed number of decimals.
@@ -42,6 +43,15 @@ EXTRA: dict[str, Any] = {
     "commands": (),
     "note": "",
 }
+
+
+def below_exclusive_minimum(row: Param, value: float) -> bool:
+    """A value written to a row whose range is "> minimum" (V, P103, P123) is not above it as the
+    drive keeps it: a fixed-point value on its grid (§4.7; ``P123=.00001`` is 0.0000)."""
+    if not row.extra["min_exclusive"] or row.minimum is None:
+        return False
+    kept = quantize(float(value), row.decimals) if row.extra["kind"] == "fixed" else value
+    return kept <= row.minimum
 
 
 def _access(readable: bool, writable: bool) -> Literal["rw", "r", "w"]:
