@@ -36,7 +36,7 @@ from devsim.core.device import Device
 from devsim.core.points import BadValue, ReadOnlyName
 from devsim.facades import canopen_mapping, library_log
 from devsim.facades.canopen_od import SYNC_COB_ID, eds, point_objects
-from devsim.facades.canopen_sdo import DevsimSdoServer
+from devsim.facades.canopen_sdo import DevsimSdoServer, check_length
 from devsim.facades.cia402 import Cia402
 
 __all__ = ["CHANGE_SAMPLE", "CanopenFacade", "READ_ONLY", "VALUE_RANGE_EXCEEDED", "WRITE_ONLY", "load_od",
@@ -332,6 +332,7 @@ class CanopenFacade:
         return bool(value) if point.type == "bool" else value
 
     def _write(self, index: int, subindex: int, od: Any, data: bytes) -> None:
+        check_length(od, data)  # (before anything decodes it: an SDO download's or an RPDO's bytes)
         if canopen_mapping.is_pdo_parameter(index):
             canopen_mapping.check(self.node, index, subindex, data)  # (CiA 301: what a PDO takes)
             return

@@ -19,12 +19,12 @@ from collections.abc import Callable
 from typing import Any
 
 from canopen.objectdictionary import ODVariable
-from canopen.objectdictionary.datatypes import NUMBER_TYPES
+from canopen.objectdictionary.datatypes import BOOLEAN, NUMBER_TYPES
 from canopen.sdo import SdoServer
 from canopen.sdo.constants import EXPEDITED, NO_MORE_DATA, SIZE_SPECIFIED
 from canopen.sdo.exceptions import SdoAbortedError
 
-__all__ = ["INVALID_COMMAND", "DevsimSdoServer"]
+__all__ = ["INVALID_COMMAND", "DevsimSdoServer", "check_length"]
 
 logger = logging.getLogger(__name__)
 
@@ -105,9 +105,10 @@ class DevsimSdoServer(SdoServer):
 
     def _sized(self, request: bytes) -> bytes:
         """An expedited download that does not say its size (s = 0) as one that does: as many of
-        its 4 data bytes as the object's number type has (other objects take all 4)."""
+        its 4 data bytes as the object's number type (or BOOLEAN, one byte) has (other objects
+        take all 4)."""
         variable = self._variable()
-        if variable.data_type not in NUMBER_TYPES or not 8 <= len(variable) <= 32:
+        if not _fixed_size(variable) or not 8 <= len(variable) <= 32:
             return request
         unused = 4 - len(variable) // 8
         return bytes((request[0] | SIZE_SPECIFIED | unused << 2,)) + request[1:]
@@ -139,6 +140,20 @@ class DevsimSdoServer(SdoServer):
         if isinstance(entry, ODVariable) or self._subindex not in entry:
             raise SdoAbortedError(NO_SUBINDEX)
         return entry[self._subindex]
+
+
+def _fixed_size(variable: ODVariable) -> bool:
+    """Whether ``variable``'s type has one size on the bus: the number types and BOOLEAN (one
+    byte, CiA 301 §7.1.4.2), not the strings and the DOMAIN."""
+    return variable.data_type in NUMBER_TYPES or variable.data_type == BOOLEAN
+
+
+def check_length(variable: ODVariable, data: bytes) -> None:
+    """The data a download brings for ``variable``, refused 0607 0010h if its type has a size and
+    this is not it.  canopen checks the number types only: a BOOLEAN of two bytes reached
+    ``decode_raw`` and was the server's own fault (0800 0000h)."""
+    if _fixed_size(variable) and 8 * len(data) != len(variable):
+        raise SdoAbortedError(LENGTH_MISMATCH)
 
 
 STEPS: dict[int, Callable[[DevsimSdoServer, bytes], None]] = {

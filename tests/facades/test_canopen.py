@@ -4,6 +4,9 @@ the device's validation; canopen's remote node as the master on python-can's vir
 
 from __future__ import annotations
 
+import logging
+import struct
+import time
 import uuid
 from collections.abc import Iterator
 from pathlib import Path
@@ -17,6 +20,7 @@ from devsim.core.clock import VirtualClock
 from devsim.core.registry import device_class, kinds
 from devsim.facades.canopen_node import READ_ONLY, VALUE_RANGE_EXCEEDED, CanopenFacade, load_od
 from devsim.facades.canopen_od import DEVICE_TYPE, eds
+from devsim.facades.canopen_sdo import LENGTH_MISMATCH
 
 ROOT = Path(__file__).resolve().parents[2]
 SHIPPED = tuple(sorted(kinds()))  # every registered kind ships its EDS under docs/eds/
@@ -115,3 +119,45 @@ def test_the_emcy_cob_id_object_names_the_emcy_it_sends(bus: Bus) -> None:
     assert bus.remote.sdo[0x1014].raw == 0x85
     bus.facade._emergency(1, 0x8611)
     assert bus.remote.emcy.wait(0x8611, timeout=5) is not None  # on 85h: what canopen's consumer listens to
+
+
+def _exchange(bus: Bus, request: bytes) -> bytes:
+    """One raw SDO request on the bus (the master's own client would not send it) and its answer."""
+    answers: list[bytes] = []
+
+    def heard(_id: int, data: bytes, _ts: float) -> None:
+        answers.append(bytes(data))
+
+    bus.master.subscribe(0x585, heard)
+    try:
+        bus.master.send_message(0x605, request)
+        deadline = time.monotonic() + 5
+        while not answers and time.monotonic() < deadline:
+            time.sleep(0.01)
+    finally:
+        bus.master.unsubscribe(0x585, heard)  # (the master's SDO client listens there too)
+    assert answers, f"no answer to {request.hex()}"
+    return answers[0]
+
+
+def test_a_boolean_object_takes_one_byte(bus: Bus, caplog: pytest.LogCaptureFixture) -> None:
+    """A BOOLEAN is one byte on the bus (CiA 301 §7.1.4.2); canopen checks the length of its number
+    types only.  Found by fuzzing: two bytes for input.I1 (expedited, or a segmented download that
+    ends with two) were the server's own fault, logged, answered 0800 0000h; they are a length that
+    does not match, 0607 0010h (§7.2.4.3.17), and the point keeps its value.  An expedited download
+    that does not say its size (e = 1, s = 0) takes the one byte the type has."""
+    bus.facade.attach(bus.slave)
+    i1 = bus.index("input.I1")
+    mux = struct.pack("<HB", i1, 0)
+    mismatch = bytes((0x80,)) + mux + struct.pack("<L", LENGTH_MISMATCH)
+    with caplog.at_level(logging.ERROR):
+        with pytest.raises(canopen.SdoAbortedError) as expedited:
+            bus.remote.sdo.download(i1, 0, b"\x01\x00")
+        assert expedited.value.code == LENGTH_MISMATCH
+        assert _exchange(bus, bytes((0x21,)) + mux + bytes(4)) == bytes((0x60,)) + mux + bytes(4)
+        assert _exchange(bus, bytes((0x0B,)) + b"\x01\x01" + bytes(5)) == mismatch  # the last segment: 2 bytes
+        assert bus.device.read("input.I1") is False
+        assert _exchange(bus, bytes((0x22,)) + mux + b"\x01\xee\xee\xee") == bytes((0x60,)) + mux + bytes(4)
+    assert bus.device.read("input.I1") is True
+    assert bus.remote.sdo[i1].raw is True
+    assert not [r for r in caplog.records if r.levelno >= logging.ERROR]
