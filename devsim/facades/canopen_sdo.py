@@ -144,7 +144,7 @@ class DevsimSdoServer(SdoServer):
 
 def _fixed_size(variable: ODVariable) -> bool:
     """Whether ``variable``'s type has one size on the bus: the number types and BOOLEAN (one
-    byte, CiA 301 §7.1.4.2), not the strings and the DOMAIN."""
+    byte: CiA 301's BOOLEAN), not the strings and the DOMAIN."""
     return variable.data_type in NUMBER_TYPES or variable.data_type == BOOLEAN
 
 
