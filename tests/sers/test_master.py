@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import pytest
 
+from devsim.core.clock import VirtualClock
+from devsim.core.nvram import NonVolatileMemory
+from devsim.devices.sers.device import SersDevice
 from tests.sers.conftest import Plant
 
 MASTER = [
@@ -170,3 +173,38 @@ def test_the_master_takes_no_part_of_a_slaves_answer_for_a_line_of_its_own(plant
     host.expect(b"#1V=11\r\nok1\n\r#1V=12\r\nok1\n\r")
     assert host.ask("#V?\r") == b"V=12U/min\n\r\nok1\n\r"  # drive 1 (no echo) answers: the master sent #1
     assert plant.read("param.V", "sers1") == 12
+
+
+def _lone_master(program: list[str]) -> tuple[SersDevice, VirtualClock, bytearray]:
+    """A master at address 0 on a line with no slave: the host may answer in a slave's place."""
+    clock = VirtualClock()
+    master = SersDevice(clock=clock, config={"address": 0, "boot_time": 0}, nvram=NonVolatileMemory(None))
+    out = bytearray()
+    master.main.attach(out.extend)
+    clock.advance(0.1)
+    for line in ["#200 NEW", *(f"#{s}" for s in program), "#QUIT", "#200 RUN"]:
+        master.main.feed(f"{line}\r".encode())
+        clock.advance(0.01)
+    assert master.model.master.awaiting
+    return master, clock, out
+
+
+@pytest.mark.manual("§3.6.2", "a master queries inputs and status of other SERS drives")
+@pytest.mark.parametrize("value", [b"1.2.3", b".", b"-.", b"9" * 400])
+@pytest.mark.parametrize(("program", "asked"), [(["Z=1", "X=V", "Z=0", "R0=X"], b"P3"),
+                                                (["Z=1", "WAIT I3=1", "Z=0", "O1=1"], b"P2")])
+def test_a_slave_answer_that_is_no_number_is_no_value(program: list[str], asked: bytes, value: bytes) -> None:
+    """What comes back in a slave's P3/P2 answer must be a number (G-MASTER): ``1.2.3`` or 400
+    digits from the line is no value, as no answer line is (X=V: X=0; WAIT/IF: the program
+    error of a failed request).  (Found by fuzzing: float() raised out of the port's feed.)"""
+    master, clock, out = _lone_master(program)
+    master.main.feed(b"\n" + asked + b"=" + value + b"\n\r\nok1\n\r")
+    clock.advance(0.2)
+    assert not master.model.master.awaiting
+    if asked == b"P3":
+        assert master.read("param.R0") == 0
+    else:
+        assert master.read("param.P0") == 0 and master.read("P12") & 128
+    out.clear()
+    master.main.feed(b"#200 VER\r")
+    assert b"P1133=120901" in bytes(out)

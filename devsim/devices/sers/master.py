@@ -10,6 +10,7 @@ for IF and WAIT, P2 (``#1P2=336\\r`` → ``P2=<value>``).  ``Z=*`` broadcasts an
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Callable
 
@@ -22,6 +23,16 @@ REPLY_TIMEOUT = 0.1  # seconds (G-MASTER)
 _END = rb"\n(?:ok\d|pgm)\n\r|\n\*([^\n]*)\n\r"
 
 Done = Callable[[bool, float | None, str], None]
+
+
+def _number(text: bytes) -> float | None:
+    """A slave's value as a decimal number, or None: what another device on the line sent in
+    its place (``1.2.3``, ``.``, 400 digits) is no value (G-MASTER: a slave answers a number)."""
+    try:
+        value = float(text)
+    except ValueError:
+        return None
+    return value if math.isfinite(value) else None
 
 
 class MasterLink:
@@ -69,7 +80,7 @@ class MasterLink:
         if self._want is not None:
             found = re.search(rb"(?:^|[\r\n])" + re.escape(self._want) + rb"=(-?[0-9.]+)", self._buffer)
             if found is not None:
-                value = float(found.group(1))
+                value = _number(found.group(1))
         error = end.group(1)
         self._finish(error is None, value, error.decode("latin-1") if error else "")
 
