@@ -311,3 +311,23 @@ def test_a_jog_until_an_operand_that_does_not_exist_does_not_start(until: bytes,
     device.set("input.I2", False)
     clock.advance(0.2)
     assert device.model.motion.kind is None
+
+
+@pytest.mark.manual("§4.8.3.1", "P11: a drive error brakes the drive with the acceleration of P1030, then the motor current is switched off")
+@pytest.mark.parametrize(("point", "value"), [("input.limit_right", True), ("quantity.heatsink_temperature", 150)])
+def test_a_drive_error_with_p1030_0_stops_the_axis_at_once(point: str, value: object) -> None:
+    """Found by fuzzing: ``#P1030=0`` is taken (§4.8.4.4 gives P1030 no minimum); a drive error while
+    the axis moved (the limit switch opening, overtemperature) then raised ValueError("decel must be
+    positive") out of the point write.  With no ramp to brake on the drive switches the torque off at
+    once, as on a short circuit [SIM-CHOICE], and reports the error as ever."""
+    device, clock, out, _nvram = _device()
+    device.feed(b"#P1030=0\r#ON\r#H\r")
+    clock.advance(0.2)
+    assert device.model.motion.kind is not None
+    device.set(point, value)
+    clock.advance(0.2)
+    assert device.model.motion.kind is None and not device.model.motion.moving
+    assert device.read("param.P11") != 0
+    out.clear()
+    device.feed(b"#VER\r")
+    assert b"P1133=120901" in bytes(out)

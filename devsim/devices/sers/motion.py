@@ -217,6 +217,9 @@ class Motion:
         if self.kind is None or not self.axis.moving:
             return False
         decel = self.params.error_deceleration
+        if not decel > 0:  # P1030 = 0 (§4.8.4.4 gives no minimum): no ramp to brake on, torque off at once
+            self.quick_end()  # [SIM-CHOICE, as a short circuit; the caller opens the relay now]
+            return False
         self._stop_decel = decel
         self.kind = "error-stop"
         self.jog.cancel_timer()
