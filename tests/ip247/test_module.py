@@ -7,6 +7,7 @@ import struct
 
 import pytest
 
+from devsim.core.points import BadValue
 from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.machine_data import Ramp
 from tests.ip247.helpers import BACKWARD, FORWARD, START, STOP, TAKE_OVER, Make, Module, record
@@ -382,6 +383,25 @@ def test_the_plc_record_point_never_overwrites(mod: Module) -> None:
     mod.operate(1, 5, START, b=1)
     mod.operate(1, 7, BACKWARD, w=1000, dd=1_000)
     assert mod.device.read("output.RP1") is False
+
+
+@pytest.mark.parametrize("job", [
+    ("ag.record", {"ba": "x"}), ("ag.record", {"ba": None}), ("ag.record", {"ba": 67, "page": "x"}),
+    ("ag.record", {"ba": 67, "page": None}), ("ag.record", {"ba": 20, "words": ["a"]}),
+    ("ag.record", {"ba": 20, "words": 5}), ("ag.record", {"ba": 67, "db": None}),
+    ("ag.operate", {"ba": "x"}), ("ag.operate", {"ba": None}), ("ag.operate", {"ba": 5, "page": "x"}),
+    ("ag.operate", {"ba": 5, "b": "q"}), ("ag.operate", {"ba": 7, "cmd": "Vorwärts", "dd": [1]}),
+], ids=lambda job: f"{job[0]}-{job[1]}")
+def test_a_plc_job_with_a_field_that_is_no_whole_number_is_refused(mod: Module, job: tuple[str, dict[str, object]]) -> None:
+    """Found by fuzzing: an FB164/FB165 job whose BA, page, DB, B, W, DD or words are no whole
+    numbers (``{"ba": "x"}``, ``{"page": None}``, ``{"words": 5}``) raised ValueError/TypeError out
+    of the point write; it is a bad value (BadValue), and nothing reaches the module."""
+    mod.load_md()
+    before = mod.device.read("ag.last"), mod.device.read("axis.1.machine_data")
+    name, value = job
+    with pytest.raises(BadValue):
+        mod.device.set(name, value)
+    assert (mod.device.read("ag.last"), mod.device.read("axis.1.machine_data")) == before
 
 
 def test_tbit_follows_jobs_from_the_plc_side(mod: Module) -> None:

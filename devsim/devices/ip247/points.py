@@ -13,7 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from devsim.core.kit import Command, Fault, FaultTable, Table, signal_points
-from devsim.core.points import BadValue, Family, Point, PointTable
+from devsim.core.points import BadValue, Family, Point, PointTable, parse_as
 from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.machine_data import record_db
 from devsim.devices.ip247.pg_profile import Operate, command_code
@@ -94,16 +94,33 @@ def _program(name: str) -> Point | None:
                  get=lambda m: (m.programs.store.get(number).text if m.programs.store.get(number) else None), put=put)
 
 
+def _whole(job: dict[str, Any], key: str, default: Any = None) -> int:
+    """A job's field as a whole number (the block's DB, DW, BA …), or BadValue."""
+    try:
+        return int(parse_as("int", job.get(key, default)))
+    except BadValue as exc:
+        raise BadValue(f"{key}: {exc}") from None
+
+
+def _page(m: Any, job: dict[str, Any]) -> int:
+    """The job's absolute page (default: S2's base page) as the module's page 1 … 4."""
+    base = int(m.config.get("base_page", 0))
+    return _whole(job, "page", base) - base + 1
+
+
 def _ag_record(m: Any, job: Any) -> None:
     """An FB165 job from the PLC: {ba, page (absolute), db, words, bcd} (spec §3.3.3)."""
     if not isinstance(job, dict) or "ba" not in job:
         raise BadValue("an FB165 job is a mapping {ba, page, db, words, bcd}")
-    ba, db = int(job["ba"]), int(job.get("db", 0)) & 0xFF
-    page = int(job.get("page", m.config.get("base_page", 0))) - int(m.config.get("base_page", 0)) + 1
+    ba, db = _whole(job, "ba"), _whole(job, "db", 0) & 0xFF
+    page = _page(m, job)
+    words = job.get("words", [])
+    if not isinstance(words, list):
+        raise BadValue("an FB165 job's words are a list of whole numbers")
+    words = [parse_as("int", w) & 0xFFFF for w in words]
     if not 1 <= page <= 4:
         m.ag_last = {"ack": 0x80, "err": 0, "words": []}
         return
-    words = [int(w) & 0xFFFF for w in job.get("words", [])]
     transfer = FB165_JOBS.get(mode_token(ba)) or _fb165_read  # (a mode no record has: read's 80H)
     ack, result = transfer(m, page, ba, db, words, bool(job.get("bcd", False)))
     m.ag_last = {"ack": ack, "err": m.error_of(page), "words": result}
@@ -137,11 +154,12 @@ def _ag_operate(m: Any, job: Any) -> None:
         raise BadValue("an FB164 job is a mapping {page, ba, cmd, b, w, dd}")
     cmd = job.get("cmd", "Start")
     code = command_code(cmd)
-    if code is None or int(job.get("ba", 0)) not in range(256):
+    ba = _whole(job, "ba", 0)
+    if code is None or ba not in range(256):
         raise BadValue(f"unknown command {cmd!r} (Start, Stopp, Vorwärts, Rückwärts, Übernahme)")
-    page = int(job.get("page", m.config.get("base_page", 0))) - int(m.config.get("base_page", 0)) + 1
-    request = Operate(page, int(job.get("ba", 0)), int(code), int(job.get("b", 0)) & 0xFF,
-                      int(job.get("w", 0)) & 0xFFFF, int(job.get("dd", 0)) & 0xFFFF_FFFF)
+    page = _page(m, job)
+    request = Operate(page, ba, int(code), _whole(job, "b", 0) & 0xFF,
+                      _whole(job, "w", 0) & 0xFFFF, _whole(job, "dd", 0) & 0xFFFF_FFFF)
     answer = serve(m, request, plc=True) if 1 <= page <= 4 else bytes((0x80,)) + bytes(7)
     m.ag_last = {"ack": answer[0], "err": answer[4], "btr": answer[5], "rmld": answer[6], "mfkt": answer[7]}
 
