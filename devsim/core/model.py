@@ -28,8 +28,8 @@ class Model:
     29 of them, and past that every device carries a table of its own (1.3 KB a device).
     """
 
-    __slots__ = ("clock", "config", "nvram", "name", "signals", "booting", "events", "_listeners", "__dict__",
-                 "__weakref__")
+    __slots__ = ("clock", "config", "nvram", "name", "signals", "booting", "events", "_listeners", "heard",
+                 "__dict__", "__weakref__")
 
     def __init__(
         self,
@@ -49,6 +49,9 @@ class Model:
         #: (simulated time, name) of notable moments, e.g. ``move_end``, for timing checks.
         self.events: list[tuple[float, str]] = []
         self._listeners: dict[str, list[Listener]] = {}
+        #: Called before an announcement reaches someone who hears it (a SERS drive does not run a
+        #: looping program ahead over a moment somebody hears); None: no kind needs to know.
+        self.heard: Callable[[], None] | None = None
 
     # -- notifications to faces and the runtime ---------------------------------------------
     def listen(self, topic: str, listener: Listener) -> Callable[[], None]:
@@ -60,6 +63,8 @@ class Model:
     def announce(self, topic: str, *args: Any) -> None:
         listeners = self._listeners.get(topic)
         if listeners:  # (most topics of most devices have nobody listening)
+            if (heard := self.heard) is not None:
+                heard()
             for listener in list(listeners):
                 listener(*args)
 

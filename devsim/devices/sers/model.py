@@ -146,14 +146,8 @@ class SersDrive(Model):
         self._define_signals(thresholds)
         self.wiring = MotorWiring(self.axis, signals, self.cfg.axis)
         signals.subscribe_all(self.runahead.notice)
+        self.heard = self.runahead.notice  # (an announcement someone hears: no loop is run ahead over it)
         self._power_on()
-
-    def announce(self, topic: str, *args: Any) -> None:
-        listeners = self._listeners.get(topic)
-        if listeners:  # someone hears it: a loop is not run ahead over it
-            self.runahead.notice()
-            for listener in list(listeners):  # (what Model.announce does, without the super() call:
-                listener(*args)  # noise announces every error it answers, a log hears each)
 
     def unobserved_until(self, when: float) -> None:
         self.runahead.unobserved_until(when)
