@@ -15,6 +15,7 @@ import re
 from collections.abc import Callable
 
 from devsim.core.clock import Clock, Timer
+from devsim.devices.sers.units import parse_number
 
 __all__ = ["MasterLink", "REPLY_TIMEOUT"]
 
@@ -26,10 +27,11 @@ Done = Callable[[bool, float | None, str], None]
 
 
 def _number(text: bytes) -> float | None:
-    """A slave's value as a decimal number, or None: what another device on the line sent in
-    its place (``1.2.3``, ``.``, 400 digits) is no value (G-MASTER: a slave answers a number)."""
+    """A slave's value as a finite decimal constant (:func:`~.units.parse_number`), or None: what
+    another device on the line sent in its place (``1.2.3``, ``.``, 400 digits) is no value
+    (G-MASTER: a slave answers a number)."""
     try:
-        value = float(text)
+        value = parse_number(text.decode("latin-1"))
     except ValueError:
         return None
     return value if math.isfinite(value) else None
