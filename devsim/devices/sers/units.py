@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 import re
-from decimal import ROUND_HALF_UP, Context, Decimal, InvalidOperation
+from decimal import ROUND_HALF_UP, Context, Decimal
 
 __all__ = [
     "INCREMENTS_PER_REV",
@@ -288,27 +288,22 @@ def parse_number(text: str) -> float:
 _WIDE = Context(prec=360)
 
 
-def _to_decimal(value: float) -> Decimal:
-    try:
-        return Decimal(repr(float(value)))
-    except (InvalidOperation, ValueError) as exc:  # nan/inf
-        raise ValueError(f"not a finite number: {value!r}") from exc
+def _on_grid(value: float, decimals: int) -> Decimal:
+    """*value* rounded to the fixed-point grid of *decimals* places (half away from zero), exactly."""
+    if not math.isfinite(value):
+        raise ValueError(f"not a finite number: {value!r}")
+    return Decimal(repr(float(value))).quantize(Decimal(1).scaleb(-decimals), rounding=ROUND_HALF_UP, context=_WIDE)
 
 
 def quantize(value: float, decimals: int) -> float:
     """Round *value* to the fixed-point grid of *decimals* places (half away from zero)."""
-    if not math.isfinite(value):
-        raise ValueError(f"not a finite number: {value!r}")
-    q = _to_decimal(value).quantize(Decimal(1).scaleb(-decimals), rounding=ROUND_HALF_UP, context=_WIDE)
-    result = float(q)
+    result = float(_on_grid(value, decimals))
     return 0.0 if result == 0 else result
 
 
 def format_fixed(value: float, decimals: int) -> str:
     """Fixed-point rendering with all decimals, e.g. ``format_fixed(500, 4) == "500.0000"``."""
-    if not math.isfinite(value):
-        raise ValueError(f"not a finite number: {value!r}")
-    q = _to_decimal(value).quantize(Decimal(1).scaleb(-decimals), rounding=ROUND_HALF_UP, context=_WIDE)
+    q = _on_grid(value, decimals)
     if q == 0:
         q = abs(q)  # no "-0.0000"
     return f"{q:f}"
