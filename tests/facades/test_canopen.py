@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import logging
 import struct
-import time
+import threading
 import uuid
 from collections.abc import Iterator
 from pathlib import Path
@@ -124,16 +124,16 @@ def test_the_emcy_cob_id_object_names_the_emcy_it_sends(bus: Bus) -> None:
 def _exchange(bus: Bus, request: bytes) -> bytes:
     """One raw SDO request on the bus (the master's own client would not send it) and its answer."""
     answers: list[bytes] = []
+    answered = threading.Event()
 
     def heard(_id: int, data: bytes, _ts: float) -> None:
         answers.append(bytes(data))
+        answered.set()
 
     bus.master.subscribe(0x585, heard)
     try:
         bus.master.send_message(0x605, request)
-        deadline = time.monotonic() + 5
-        while not answers and time.monotonic() < deadline:
-            time.sleep(0.01)
+        answered.wait(5)
     finally:
         bus.master.unsubscribe(0x585, heard)  # (the master's SDO client listens there too)
     assert answers, f"no answer to {request.hex()}"
@@ -141,10 +141,10 @@ def _exchange(bus: Bus, request: bytes) -> bytes:
 
 
 def test_a_boolean_object_takes_one_byte(bus: Bus, caplog: pytest.LogCaptureFixture) -> None:
-    """A BOOLEAN is one byte on the bus (CiA 301 §7.1.4.2); canopen checks the length of its number
+    """A BOOLEAN is one byte on the bus (CiA 301); canopen checks the length of its number
     types only.  Found by fuzzing: two bytes for input.I1 (expedited, or a segmented download that
     ends with two) were the server's own fault, logged, answered 0800 0000h; they are a length that
-    does not match, 0607 0010h (§7.2.4.3.17), and the point keeps its value.  An expedited download
+    does not match, 0607 0010h, and the point keeps its value.  An expedited download
     that does not say its size (e = 1, s = 0) takes the one byte the type has."""
     bus.facade.attach(bus.slave)
     i1 = bus.index("input.I1")
