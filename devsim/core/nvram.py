@@ -78,20 +78,33 @@ class NonVolatileMemory:
             # temp files of a write that was killed half-way: the old image is intact
             for stale in self.path.parent.glob(self.path.name + ".*.tmp"):
                 stale.unlink(missing_ok=True)
+        #: an unreadable file the first write moves aside instead of replacing (the user's data)
+        self._unreadable: Path | None = None
         if self.path is not None and self.path.exists():
             import json
 
             try:
-                self._image = json.loads(self.path.read_text("utf-8"), parse_constant=_reject_constant)
+                image = json.loads(self.path.read_text("utf-8"), parse_constant=_reject_constant)
+                if type(image) is not dict:  # (a list, a number, null: no memory image either)
+                    raise ValueError(f"holds a JSON {type(image).__name__}, not an object of sections")
             except PoisonedMemory as exc:
                 self.close()
                 raise PoisonedMemory(f"{self.path}: {exc}; refusing to load it (fix or delete the file)") from None
-            except (OSError, ValueError, RecursionError):  # (nested deeper than the decoder goes)
+            except (OSError, ValueError, RecursionError) as exc:  # (nested deeper than the decoder goes)
                 # A file we cannot read is treated like an erased EEPROM; the device decides
-                # what that means (e.g. the SERS shows display '7').
+                # what that means (e.g. the SERS shows display '7').  [SIM-CHOICE] The file is
+                # the user's, not the simulated chip: it stays as it is until the device first
+                # saves, which moves it aside to NAME.nvram.json.unreadable instead of losing it.
+                reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc) or type(exc).__name__
+                if isinstance(exc, RecursionError):
+                    reason = "nested deeper than the decoder goes"
+                warn(f"devsim: memory {self.path}: unreadable ({reason}); the device starts with an erased memory,"
+                     " and its first save moves the file aside instead of replacing it")
                 self._image = {}
                 self.corrupt = True
+                self._unreadable = self.path
                 return
+            self._image = image
         self.corrupt = False
 
     def _take_lock(self) -> None:
@@ -190,6 +203,8 @@ class NonVolatileMemory:
     def _save(self, data: bytes) -> None:
         assert self.path is not None
         directory = self.path.parent
+        if self._unreadable is not None:
+            self._keep_unreadable()
         import tempfile  # only when memory is written: start-up does without it
 
         fd, tmp = tempfile.mkstemp(prefix=self.path.name + ".", suffix=".tmp", dir=directory)
@@ -210,6 +225,23 @@ class NonVolatileMemory:
             os.fsync(dfd)
         finally:
             os.close(dfd)
+
+
+    def _keep_unreadable(self) -> None:
+        """Move the file load could not read to ``NAME.nvram.json.unreadable`` (``.unreadable.1``
+        ... when that exists), so that the save replacing it loses nothing of the user's."""
+        assert self.path is not None
+        if not self.path.is_file() or self.path.is_symlink():  # (a directory in its place: the save fails)
+            self._unreadable = None
+            return
+        aside = self.path.with_name(self.path.name + ".unreadable")
+        number = 0
+        while aside.exists() or aside.is_symlink():
+            number += 1
+            aside = self.path.with_name(f"{self.path.name}.unreadable.{number}")
+        os.rename(self.path, aside)  # (an OSError: the save is refused, the file stays where it is)
+        self._unreadable = None
+        warn(f"devsim: memory {self.path}: the unreadable file is kept as {aside}")
 
 
 _IMMUTABLE = frozenset({int, float, str, bool, type(None), bytes})

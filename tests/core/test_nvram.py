@@ -69,16 +69,56 @@ def test_nothing_non_finite_is_written(tmp_path: Path) -> None:
     assert json.loads((tmp_path / "drive.nvram.json").read_text()) == {"params": {"V": 1.5}, "speed": 7}
 
 
-@pytest.mark.parametrize("text", ["{not json", "[" * 100_000])
-def test_a_file_that_is_no_json_is_an_erased_memory(tmp_path: Path, text: str) -> None:
+@pytest.mark.parametrize("text", ["{not json", "[" * 100_000, "", "[]", "42", "null", '"params"'])
+def test_a_file_that_is_no_json_is_an_erased_memory(tmp_path: Path, text: str,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
     """Damaged or nested deeper than the decoder goes (that one raised RecursionError out of the
-    device's creation): the memory reads as erased, and the device decides what that means."""
+    device's creation), or JSON that is no object of sections (a number or null made every kind's
+    creation fail with ``TypeError: argument of type 'int' is not iterable``, a list made the
+    first save raise): the memory reads as erased, the device decides what that means, and one
+    line on stderr names the file."""
     (tmp_path / "drive.nvram.json").write_text(text)
     memory = NonVolatileMemory.for_device(tmp_path, "drive")
     try:
         assert memory.corrupt and memory.sections() == []
     finally:
         memory.close()
+    assert f"devsim: memory {tmp_path / 'drive.nvram.json'}: unreadable (" in capsys.readouterr().err
+
+
+def test_the_first_save_over_an_unreadable_file_keeps_it_aside(tmp_path: Path,
+                                                              capsys: pytest.CaptureFixture[str]) -> None:
+    """A truncated file (a disk that filled up, a hand edit) is the user's data: before the fix
+    the device's first save replaced it with the erased image plus that one section, so the
+    programs and parameters it held were gone."""
+    damaged = b'{"params": {"41": 100.0}, "programs": {"1": ["G1 X10"'
+    path = tmp_path / "drive.nvram.json"
+    path.write_bytes(damaged)
+    (tmp_path / "drive.nvram.json.unreadable").write_bytes(b"an older one")
+    memory = NonVolatileMemory.for_device(tmp_path, "drive")
+    assert path.read_bytes() == damaged  # nothing moves before a save
+    memory.put("params", {"41": 5})
+    memory.close()
+    assert (tmp_path / "drive.nvram.json.unreadable.1").read_bytes() == damaged
+    assert (tmp_path / "drive.nvram.json.unreadable").read_bytes() == b"an older one"
+    assert json.loads(path.read_text()) == {"params": {"41": 5}}
+    assert f"kept as {tmp_path / 'drive.nvram.json.unreadable.1'}" in capsys.readouterr().err
+    again = NonVolatileMemory.for_device(tmp_path, "drive")  # the saved image loads, nothing moves
+    again.put("params", {"41": 6})
+    again.close()
+    assert sorted(p.name for p in tmp_path.glob("*.unreadable*")) == ["drive.nvram.json.unreadable",
+                                                                       "drive.nvram.json.unreadable.1"]
+
+
+def test_a_directory_in_place_of_the_file_is_left_alone(tmp_path: Path) -> None:
+    (tmp_path / "drive.nvram.json").mkdir()
+    memory = NonVolatileMemory.for_device(tmp_path, "drive")
+    assert memory.corrupt
+    memory.put("params", {"41": 5})  # the file system refuses the save; the device goes on
+    assert memory.behind and memory.get("params") == {"41": 5}
+    memory.behind = False
+    memory.close()
+    assert (tmp_path / "drive.nvram.json").is_dir() and not list(tmp_path.glob("*.unreadable*"))
 
 
 @pytest.mark.parametrize("name", ["../escaped", "a/b", ".hidden", "", "x" * 200])
