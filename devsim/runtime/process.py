@@ -26,13 +26,17 @@ from devsim.transports.fdlimit import loop_exception_handler
 if TYPE_CHECKING:  # imported where used: a runtime without a state dir needs no pathlib
     from pathlib import Path
 
-__all__ = ["Runtime", "UnknownDevice", "port_key"]
+__all__ = ["Runtime", "UnfitMemory", "UnknownDevice", "port_key"]
 
 T = TypeVar("T")
 
 
 #: The longest step of virtual time one ``advance`` may take (about 116 days).
 MAX_ADVANCE = 1e7
+
+
+class UnfitMemory(ValueError):
+    """A device's stored memory image has sections of a shape its kind does not read."""
 
 
 class UnknownDevice(KeyError):
@@ -215,7 +219,20 @@ class Runtime:
             if dev_name in self.devices:
                 raise ValueError(f"a device named {dev_name!r} exists already")
             nvram = NonVolatileMemory.for_device(self.state_dir, dev_name)
-            device = cls(clock=self.clock, config=config, nvram=nvram, name=dev_name)
+            try:
+                device = cls(clock=self.clock, config=config, nvram=nvram, name=dev_name)
+            except BaseException as exc:
+                nvram.close()  # (the lock: a device that never lived owns no memory)
+                from devsim.core.config import ConfigError  # (only now: a start imports no yaml)
+
+                if nvram.path is None or not nvram.sections() or isinstance(exc, ConfigError):
+                    raise
+                if isinstance(exc, TypeError | AttributeError | KeyError | ValueError | IndexError):
+                    # a section of the wrong shape (hand-edited, another kind's file): the reader
+                    # trusted the JSON; say which file, and leave it as it is
+                    raise UnfitMemory(f"{nvram.path}: this memory image does not fit the kind {kind!r}"
+                                      f" ({type(exc).__name__}: {exc}); fix or delete the file") from exc
+                raise
             self.devices[dev_name] = device
             return device
 

@@ -146,3 +146,28 @@ def test_a_section_shares_no_mutable_value_with_what_was_put_or_got() -> None:
                                    "raw": bytearray(b"x")}
     default = {"a": [1]}
     assert memory.get("missing", default) == default and memory.get("missing", default)["a"] is not default["a"]
+
+
+@pytest.mark.parametrize("kind", ["sers", "gms96", "poselesta", "ip247"])
+def test_a_memory_image_of_the_wrong_shape_is_refused_naming_its_file(tmp_path: Path, kind: str) -> None:
+    """Sections of another shape than the kind stores (a hand edit, another kind's file): before
+    the fix ``devsim run`` stopped with ``cannot create the devices: AttributeError: 'str' object
+    has no attribute 'get'``, no file named.  Now the error names the file, which is left as it
+    was, and the memory's lock is released."""
+    from devsim.runtime import Runtime
+    from devsim.runtime.process import UnfitMemory
+
+    path = tmp_path / f"{kind}.nvram.json"
+    text = json.dumps({section: "x" for section in ("params", "eeprom", "md", "programs", "offsets")})
+    path.write_text(text)
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        with pytest.raises(UnfitMemory) as refused:
+            runtime.add_device(kind)
+    finally:
+        runtime.stop()
+    message = str(refused.value)
+    assert message.startswith(f"{path}: this memory image does not fit the kind '{kind}' (")
+    assert message.endswith("); fix or delete the file") and "Error: " in message
+    assert path.read_text() == text
+    NonVolatileMemory.for_device(tmp_path, kind).close()  # the refusal released the lock
