@@ -471,3 +471,35 @@ def test_t21_exact_rendering_with_full_decimals_and_units(sers: Plant) -> None:
     assert host.ask("#LIST\r").startswith(
         "#LIST\r1:    ON\n\r2:    V=1000.0000U/min\n\r3:    W=5000.0000°\n\r4:    E\n\r5: L1\n\r".encode("latin-1")
     )
+
+
+@pytest.mark.parametrize(("stored", "section"), [
+    ({"1003": "abc"}, "params"),  # a string where a number belongs: failed every P1003 query
+    ({"1011": 1.5}, "params"),  # a fraction in a bit mask: failed the device's creation
+    ({"1001": [1]}, "params"),  # a list: failed the line's settings on every query
+    ({"160": 99}, "params"),  # no weighting code: failed every weighted query
+    ({"123": 0}, "params"),  # the feed constant is > 0: failed every weighted query
+    ({"99999": 1}, "params"),  # no parameter at all
+    ({"47": "x"}, "registers"),  # W: failed arithmetic in a program
+])
+def test_a_stored_value_the_drive_never_stores_reads_as_a_checksum_error(
+        plant_factory, tmp_path, capfd, stored: dict, section: str) -> None:
+    """A hand-edited state file (fuzzed): before, the value went into RAM as it was and the
+    drive failed later, in a query, a motion or at its creation.  Now the EEPROM fails its
+    checksum as a damaged one does (display 7, factory values, spec §4.1) and stderr names the
+    file; the program stored beside it stays."""
+    image = {section: stored, "program": {"lines": [["V=100"], ["E"]]}}
+    (tmp_path / "sers.nvram.json").write_text(json.dumps(image))
+    plant = plant_factory({}, state_dir=tmp_path)
+    host = plant.host
+    assert plant.read("display") == {"char": "7", "blinking": False}
+    assert query(host, "P1003") == "10U/min" and query(host, "W") == "0°"  # (factory values)
+    assert query(host, "P51") == "0°"
+    assert listing(host) == [(1, "V=100"), (2, "E")]
+    assert f"devsim: memory {tmp_path / 'sers.nvram.json'}: " in capfd.readouterr().err
+
+
+def test_a_stored_position_that_is_no_number_is_no_position(plant_factory, tmp_path) -> None:
+    (tmp_path / "sers.nvram.json").write_text(json.dumps({"position": "nan"}))
+    plant = plant_factory({}, state_dir=tmp_path)
+    assert query(plant.host, "P51") == "0°"

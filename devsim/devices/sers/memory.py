@@ -12,8 +12,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from devsim.core.console import warn
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.sers.constants import WEIGHTED_KINDS, WEIGHTING_PARAMS
+from devsim.devices.sers.paramdef import below_exclusive_minimum
 from devsim.devices.sers.parameters import (
     CURRENT_MAX_MA,
     FACTORY_DEFAULTS,
@@ -29,6 +31,7 @@ __all__ = ["ParameterMemory"]
 
 #: W and the registers R0..R5: stored by P1004=5, and by PSAVE with P1117=1.
 REGISTERS = tuple(sorted(SAVED_WITH_P1117))
+_MAX_FLOAT = 1.7976931348623157e308
 
 
 class ParameterMemory:
@@ -54,21 +57,36 @@ class ParameterMemory:
         ram = self._factory_image()
         stored = self.nvram.get("params")
         if stored and not self.eeprom_checksum_error:
-            for key, value in stored.items():
-                ram[int(key)] = value
+            problem = _unfit(stored)
+            if problem is not None:
+                # [SIM-CHOICE] a stored value the drive never stores (a hand edit): the EEPROM
+                # fails its checksum as a damaged one does (display '7', factory values); before,
+                # the value went into RAM and failed later in a query, a motion or the line.
+                warn(f"devsim: memory {self.nvram.path or 'memory'}: {problem}; the EEPROM reads as failing"
+                     " its checksum (display 7, factory values)")
+                self.eeprom_checksum_error = True
+            else:
+                for key, value in stored.items():
+                    ram[int(key)] = value
         # not stored: power-on values (spec §4.1 step 4)
         ram.update({1110: 1, 1035: 1, 1: 0, 1047: 0, 1164: 0, 1165: 0, 1118: 0})
         for n in (100, 101, 102, 1101, 1102, 1103):
             ram[n] = 0
         extra = self.nvram.get("registers") or {}
+        if type(extra) is not dict or not all(_finite(extra.get(str(n), 0)) for n in REGISTERS):
+            warn(f"devsim: memory {self.nvram.path or 'memory'}: R0..R5 and W are not all finite numbers;"
+                 " the EEPROM reads as failing its checksum (display 7, registers 0)")  # [SIM-CHOICE] as above
+            self.eeprom_checksum_error = True
+            extra = {}
         for n in REGISTERS:
             ram[n] = extra.get(str(n), 0)
         self.params.load(ram)
 
     def saved_position(self) -> float | None:
-        """P51 as POSSAVE stored it (increments), or None."""
+        """P51 as POSSAVE stored it (increments), or None (also for a stored value that is no
+        finite number: P51 starts at 0 as without a POSSAVE)."""
         saved = self.nvram.get("position")
-        return float(saved) if saved is not None else None
+        return float(saved) if _finite(saved) else None
 
     def _factory_image(self) -> dict[int, Any]:
         """Factory defaults plus the configured EEPROM values, in internal units."""
@@ -119,3 +137,32 @@ class ParameterMemory:
     def possave(self) -> None:
         """P1004=4: actual position P51 → EEPROM, restored at the next power-on."""
         self.nvram.put("position", self._position())
+
+
+def _unfit(stored: Any) -> str | None:
+    """What makes a stored parameter image one PSAVE never writes, or None: a number that is no
+    saved parameter, a value that is no finite number, one outside its choices, a fractional
+    integer, or (unweighted, so kept in the unit its range is in) one outside the range."""
+    if type(stored) is not dict:
+        return f"the parameters are a {type(stored).__name__}, not a table"
+    for key, value in stored.items():
+        row = PARAMETERS.get(int(key)) if str(key).isdigit() else None
+        if row is None or not row.saved:
+            return f"P{key} is no parameter PSAVE stores"
+        if not _finite(value):
+            return f"P{key}={value!r} is no finite number"
+        if row.choices is not None and value not in row.choices:
+            return f"P{key}={value!r} is none of {', '.join(map(str, row.choices))}"
+        kind = KIND[row.key]  # type: ignore[index]
+        if kind == "int" and not float(value).is_integer():
+            return f"P{key}={value!r} is no integer"
+        if kind not in WEIGHTED_KINDS and ((row.minimum is not None and value < row.minimum)
+                                           or (row.maximum is not None and value > row.maximum)
+                                           or below_exclusive_minimum(row, value)):
+            return f"P{key}={value!r} is outside {row.range_text()}"
+    return None
+
+
+def _finite(value: Any) -> bool:
+    """A JSON number a float holds, finite (not a bool, a string, null, nor an int beyond floats)."""
+    return type(value) in (int, float) and value - value == 0 and -_MAX_FLOAT <= value <= _MAX_FLOAT
