@@ -227,7 +227,7 @@ class Runtime:
 
                 if nvram.path is None or not nvram.sections() or isinstance(exc, ConfigError):
                     raise
-                if isinstance(exc, TypeError | AttributeError | KeyError | ValueError | IndexError):
+                if isinstance(exc, TypeError | AttributeError | KeyError | ValueError | IndexError | ArithmeticError):
                     # a section of the wrong shape (hand-edited, another kind's file): the reader
                     # trusted the JSON; say which file, and leave it as it is
                     raise UnfitMemory(f"{nvram.path}: this memory image does not fit the kind {kind!r}"

@@ -158,7 +158,7 @@ def test_a_memory_image_of_the_wrong_shape_is_refused_naming_its_file(tmp_path: 
     from devsim.runtime.process import UnfitMemory
 
     path = tmp_path / f"{kind}.nvram.json"
-    text = json.dumps({section: "x" for section in ("params", "eeprom", "md", "programs", "offsets")})
+    text = json.dumps({section: "x" for section in ("program", "eeprom", "md", "programs", "offsets")})
     path.write_text(text)
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:
@@ -171,3 +171,19 @@ def test_a_memory_image_of_the_wrong_shape_is_refused_naming_its_file(tmp_path: 
     assert message.endswith("); fix or delete the file") and "Error: " in message
     assert path.read_text() == text
     NonVolatileMemory.for_device(tmp_path, kind).close()  # the refusal released the lock
+
+
+def test_a_stored_number_a_kind_cannot_compute_with_is_unfit_too(tmp_path: Path) -> None:
+    """A GMS96 EEPROM value of -1e300 (fuzzed) overflowed in the card's creation: the start
+    failed with a bare ``OverflowError: (34, 'Numerical result out of range')``."""
+    from devsim.runtime import Runtime
+    from devsim.runtime.process import UnfitMemory
+
+    path = tmp_path / "gms96.nvram.json"
+    path.write_text(json.dumps({"eeprom": {"B": 50, "M": 2000, "N": {"39": -1e300}, "N8": [0, 0], "S": 100, "o": 1}}))
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        with pytest.raises(UnfitMemory, match=r"gms96.nvram.json: .*\(OverflowError: "):
+            runtime.add_device("gms96")
+    finally:
+        runtime.stop()

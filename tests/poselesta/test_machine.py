@@ -1011,3 +1011,24 @@ def test_a_simulated_cassette_records_and_plays_back(make) -> None:  # noqa: ANN
     cnc.advance(1.0)
     assert cnc.read("v6.state") == "done"
     assert cnc.read("program.P21") == "N 1 X 10.000\nN 2 Y- 2.500 M 02"
+
+
+@pytest.mark.parametrize("value", ['"nan"', '"1e999"', "true", '"12"'])
+def test_a_stored_parameter_that_is_no_finite_number_refuses_the_memory(tmp_path, value: str) -> None:
+    """A hand-edited state file (fuzzed): ``float()`` took "nan" and "1e999" as parameters, and
+    the next save of the parameters (a write from the panel or the control API) raised
+    PoisonedMemory out of the control.  Now the start stops naming the file, which stays as it
+    was."""
+    from devsim.runtime import Runtime
+    from devsim.runtime.process import UnfitMemory
+
+    path = tmp_path / "poselesta.nvram.json"
+    text = f'{{"params": {{"5": {value}}}}}'
+    path.write_text(text)
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        with pytest.raises(UnfitMemory, match="this memory image does not fit the kind 'poselesta'"):
+            runtime.add_device("poselesta")
+    finally:
+        runtime.stop()
+    assert path.read_text() == text

@@ -179,7 +179,15 @@ class MachineParameters(Parameters):
         if stored is None:
             self.values.update({int(k): float(v) for k, v in self._initial.items()})
         else:
-            self.values.update({int(k): float(v) for k, v in stored.items() if int(k) in self.table})
+            kept = {int(k): v for k, v in stored.items() if int(k) in self.table}
+            for number, value in kept.items():
+                # a stored value that is no finite number (a hand edit: "nan", "1e999", true)
+                # refuses the memory at the start, the file named (UnfitMemory); before, float()
+                # took "nan" and the next save raised PoisonedMemory.  (No range check: a catalogue
+                # read-in that never reached its M30 leaves P30-P33 and P76 at 0 on purpose.)
+                if type(value) not in (int, float) or not math.isfinite(value):
+                    raise ValueError(f"P{number}: {value!r} is no finite number")
+            self.values.update({number: float(value) for number, value in kept.items()})
 
     def save(self) -> None:
         self._nvram.put("params", {str(n): v for n, v in sorted(self.values.items())})
