@@ -57,6 +57,15 @@ def _reject_constant(token: str) -> Any:
     raise PoisonedMemory(f"holds a non-finite number ({token})")
 
 
+def _finite_float(token: str) -> float:
+    """A JSON number as a float; one beyond the floats (``1e999``, which ``float`` makes
+    infinite) is refused as NaN and Infinity are."""
+    value = float(token)
+    if value - value != 0.0:
+        _reject_constant(token)
+    return value
+
+
 class NonVolatileMemory:
     """Sections of JSON-serialisable data, persisted together.
 
@@ -84,7 +93,8 @@ class NonVolatileMemory:
             import json
 
             try:
-                image = json.loads(self.path.read_text("utf-8"), parse_constant=_reject_constant)
+                image = json.loads(self.path.read_text("utf-8"), parse_constant=_reject_constant,
+                                   parse_float=_finite_float)
                 if type(image) is not dict:  # (a list, a number, null: no memory image either)
                     raise ValueError(f"holds a JSON {type(image).__name__}, not an object of sections")
             except PoisonedMemory as exc:
