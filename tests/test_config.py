@@ -179,3 +179,13 @@ def test_non_finite_numbers_are_refused_with_their_line(tmp_path: Path, value: s
     else:
         with pytest.raises(ConfigError, match=r"c.yaml:2: axis.extra.P51: not a finite number"):
             load_config(path, Model)
+
+
+def test_an_unknown_gms96_variant_is_refused_with_its_line(tmp_path: Path) -> None:
+    """(Fuzzed: ``variant: abc`` passed the file's checks and ``devsim run gms96`` stopped with
+    ``cannot create the devices: KeyError: 'ABC'``.)"""
+    from devsim.devices.gms96.config import Gms96Config
+
+    path = write(tmp_path, "dil: {}\nvariant: abc\n")
+    assert error_of(path, Gms96Config).startswith(f"{path}:2: variant: no such variant 'abc' (variants: K1, ")
+    assert load_config(write(tmp_path, "variant: g96-ksa15-2r\n"), Gms96Config).variant == "g96-ksa15-2r"

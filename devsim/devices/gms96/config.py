@@ -172,11 +172,23 @@ def _param_range(index: int, number: int) -> int:
     return number
 
 
+def _variant(name: str) -> str:
+    """A variant Appendix A lists (``KSA15-2R``, ``G96-KS8``, any case); before, an unknown one
+    passed the file's checks and failed the card's creation with ``KeyError: 'ABC'``."""
+    from devsim.devices.gms96.variants import VARIANTS, variant
+
+    try:
+        variant(name)
+    except KeyError:
+        raise ValueError(f"no such variant {name!r} (variants: {', '.join(VARIANTS)})") from None
+    return name
+
+
 class Gms96Config(Settings):
     """What a user can set for one GMS96 card (--config FILE.yaml or a plant file)."""
 
     dil: DilSwitch = field(default_factory=DilSwitch)
-    variant: Annotated[str, doc("K1 | KSA15 | KSA15-2 | KS4 | KS8 | ... (+R)")] = "KSA15-2R"
+    variant: Annotated[str, Check(_variant), doc("K1 | KSA15 | KSA15-2 | KS4 | KS8 | ... (+R)")] = "KSA15-2R"
     params: Annotated[dict[Any, int], Keys(_n_parameter, "N parameter", entry=_param_range), doc(
         "factory N parameters {index: value}")] = {}
     axis: AxisGeometry = field(default_factory=AxisGeometry)
