@@ -135,6 +135,25 @@ def test_kill_9_during_a_record_write_keeps_the_stored_records(tmp_path: Path) -
     assert code == 0 and "Traceback" not in err
 
 
+def test_a_long_boot_time_keeps_one_timer_not_one_per_blink() -> None:
+    """(Fuzzed: ``boot_time: 1e9`` in the configuration made one timer per 0.25 s blink of the
+    whole boot at power-up, 4·10^9 of them: ``devsim run ip247`` took all memory and was killed.)
+    The LEDs blink the same, the module runs at the end of the boot."""
+    clock = VirtualClock()
+    device = Ip247Device(clock=clock, config={"boot_time": 1000.0})
+    assert len(clock._heap) < 10
+    seen = []
+    for _ in range(4):
+        seen.append((device.read("output.led_green"), device.read("output.led_red")))
+        clock.advance(0.25)
+    assert seen == [(True, False), (False, True), (True, False), (False, True)]
+    clock.advance(1000.0 - 1.0 - 1e-6)
+    assert device.booting and len(clock._heap) < 10
+    clock.advance(2e-6)
+    assert not device.booting and device.read("output.led_green") is True
+    assert Ip247Device(clock=VirtualClock(), config={"boot_time": 1e308}).booting  # (int(inf) before)
+
+
 def test_the_pg_port_is_silent_for_the_first_second_while_the_leds_blink() -> None:
     """§2.1/§5.16: after power-up both LEDs blink alternately and the module answers nothing;
     after 1 s the green LED stays on and the PG port answers."""

@@ -110,10 +110,21 @@ class Ip247Module(Model):
         if not self.booting:
             self._running()
             return
-        blinks = int(boot / BLINK)
-        for k in range(blinks + 1):
-            self._boot_timers.append(self.clock.call_later(k * BLINK, lambda k=k: self._blink(k % 2 == 0)))
-        self._boot_timers.append(self.clock.call_later(boot, self._running))
+        self._blink_at(self.clock.now(), 0, boot)
+
+    def _blink_at(self, start: float, k: int, boot: float) -> None:
+        """The ``k``-th blink of a boot that started at ``start``, then the next (or the end of the
+        boot): one timer at a time, where one per blink of the whole boot made a ``boot_time`` of
+        10^9 s take all memory at the start (fuzzed), at the same instants and in the same order."""
+
+        def blink() -> None:
+            self._blink(k % 2 == 0)
+            if k < boot // BLINK:  # (the last blink: as many as fit in the boot)
+                self._blink_at(start, k + 1, boot)
+            else:
+                self._boot_timers[:] = [self.clock.call_at(start + boot, self._running)]
+
+        self._boot_timers[:] = [self.clock.call_at(start + k * BLINK, blink)]
 
     def _blink(self, green: bool) -> None:
         self.signals.set("led_green", green)
