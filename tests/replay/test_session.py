@@ -76,6 +76,11 @@ def test_gms96_tolerances_ignore_the_checksum_and_the_frame_count_bit() -> None:
     ('{"format": "devsim-session", "kind": "sers", "settings": {"bytesize": 9}}\n', ":1: settings: bytesize 9"),
     ('{"format": "devsim-session", "kind": "sers", "settings": {"baudrate": 0}}\n', ":1: settings: baudrate 0"),
     ('{"format": "devsim-session", "kind": "sers", "settings": {"stopbits": 3}}\n', ":1: settings: stopbits 3"),
+    # a time no clock reaches (fuzzed): the answer was due at infinity and the replay went silent
+    ('{"format": "devsim-session", "kind": "sers"}\n{"t": 0, "dir": "host", "hex": "00"}\n'
+     '{"t": "1e999", "dir": "device", "hex": "00"}\n', ":3: t: '1e999' is no finite time"),
+    ('{"format": "devsim-session", "kind": "sers"}\n{"t": 1e999, "dir": "host", "hex": "00"}\n', ":2: t: inf is no"),
+    ('{"format": "devsim-session", "kind": "sers"}\n{"t": "nan", "dir": "host", "hex": "00"}\n', ":2: t: 'nan' is no"),
 ])
 def test_a_bad_session_is_one_line_exit_bad_file(tmp_path: Path, content: str, message: str) -> None:
     path = tmp_path / "bad.devsim"

@@ -214,6 +214,8 @@ def load_session(path: str | Path) -> Session:
             if direction not in ("host", "device"):
                 continue  # a settings line, or a newer version's record
             t = float(entry["t"])
+            if t - t != 0.0:  # ("1e999", NaN: an answer due at infinity held every later one back)
+                raise ValueError(f"t: {entry['t']!r} is no finite time")
             data = bytes.fromhex(entry["hex"])
         except (ValueError, KeyError, TypeError, RecursionError) as exc:
             if number == cut:
