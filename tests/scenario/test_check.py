@@ -124,6 +124,15 @@ def test_a_device_that_fails_the_schema_still_counts_for_the_steps(tmp_path: Pat
         ["partial.yaml:5", "steps.1.set.values.input.I1"], ["partial.yaml:7", "steps.3.set.device"]]
 
 
+def test_devices_that_are_no_list_are_one_mistake(tmp_path: Path) -> None:
+    """(Fuzzed: ``devices: -1.0e+308`` made `devsim check` and `devsim scenario run` end in a
+    traceback, ``TypeError: 'float' object is not iterable``.)  The steps' devices are not called
+    missing: the file names none that could be read."""
+    for value in ("-1.0e+308", "true", "7"):
+        bad, lines = mistakes(tmp_path, f"devices: {value}\nsteps:\n  - set: {{device: x, values: {{input.I1: true}}}}\n")
+        assert lines == [f"{bad}:1: devices: Input should be a valid list"]
+
+
 def test_a_plant_given_as_data_counts_from_1_too() -> None:
     """The Python API (a plant or scenario as a dict) numbers list items as a file does."""
     import pytest
