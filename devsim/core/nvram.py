@@ -236,7 +236,6 @@ class NonVolatileMemory:
         finally:
             os.close(dfd)
 
-
     def _keep_unreadable(self) -> None:
         """Move the file load could not read to ``NAME.nvram.json.unreadable`` (``.unreadable.1``
         ... when that exists), so that the save replacing it loses nothing of the user's."""
