@@ -32,7 +32,7 @@ from devsim.core.console import warn
 if TYPE_CHECKING:  # imported where used: a device without a state dir needs neither
     from pathlib import Path
 
-__all__ = ["MemoryInUse", "NonVolatileMemory", "PoisonedMemory", "check_name"]
+__all__ = ["KIND_KEY", "MemoryInUse", "NonVolatileMemory", "OtherKindsMemory", "PoisonedMemory", "check_name"]
 
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,127}$")
 
@@ -43,6 +43,14 @@ class MemoryInUse(RuntimeError):
 
 class PoisonedMemory(ValueError):
     """The stored image holds a value no device accepts (NaN, infinity)."""
+
+
+class OtherKindsMemory(ValueError):
+    """The stored image is the memory of a device of another kind (the same name, another kind)."""
+
+
+#: The key under which an image written for a kind names it (not a section: ``get`` never sees it).
+KIND_KEY = "devsim-kind"
 
 
 def check_name(name: str, what: str = "device name") -> str:
@@ -73,8 +81,12 @@ class NonVolatileMemory:
     ``put(section, data)`` replaces a section and writes the image through at once.
     """
 
-    def __init__(self, path: str | os.PathLike[str] | None = None) -> None:
+    def __init__(self, path: str | os.PathLike[str] | None = None, kind: str | None = None) -> None:
         self.path: Path | None = None
+        #: the kind of the device that owns this memory: written with the image, and an image that
+        #: names another is refused (:class:`OtherKindsMemory`); an image without it (older
+        #: devsim, a hand-made file) is taken as it is
+        self.kind = kind
         if path is not None:
             from pathlib import Path
 
@@ -114,6 +126,12 @@ class NonVolatileMemory:
                 self.corrupt = True
                 self._unreadable = self.path
                 return
+            stored_kind = image.pop(KIND_KEY, None)
+            if kind is not None and stored_kind is not None and stored_kind != kind:
+                self.close()
+                raise OtherKindsMemory(
+                    f"{self.path}: holds the memory of a {stored_kind!r} device, not of a {kind!r};"
+                    " give this device another name or another --state-dir (the file is left as it is)")
             self._image = image
         self.corrupt = False
 
@@ -147,15 +165,16 @@ class NonVolatileMemory:
             self._lock = None
 
     @classmethod
-    def for_device(cls, state_dir: str | os.PathLike[str] | None, name: str) -> NonVolatileMemory:
+    def for_device(cls, state_dir: str | os.PathLike[str] | None, name: str,
+                   kind: str | None = None) -> NonVolatileMemory:
         check_name(name)
         if state_dir is None:
-            return cls(None)
+            return cls(None, kind)
         from pathlib import Path
 
         directory = Path(state_dir)
         directory.mkdir(parents=True, exist_ok=True)
-        return cls(directory / f"{name}.nvram.json")
+        return cls(directory / f"{name}.nvram.json", kind)
 
     def get(self, section: str, default: Any = None) -> Any:
         if section not in self._image:
@@ -198,7 +217,8 @@ class NonVolatileMemory:
         # (the image holds finite numbers only, put() sees to it; msgspec formats as json.dumps
         # with indent=1 and sorted keys does, in C: a whole-memory save of a full POSELESTA
         # program memory took 13 ms in json's pure-Python indenting encoder)
-        data = msgspec.json.format(msgspec.json.encode(self._image, order="sorted"), indent=1)
+        image = self._image if self.kind is None else {KIND_KEY: self.kind, **self._image}
+        data = msgspec.json.format(msgspec.json.encode(image, order="sorted"), indent=1)
         try:
             self._save(data)
         except OSError as exc:

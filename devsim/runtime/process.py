@@ -218,7 +218,7 @@ class Runtime:
             dev_name = name or kind
             if dev_name in self.devices:
                 raise ValueError(f"a device named {dev_name!r} exists already")
-            nvram = NonVolatileMemory.for_device(self.state_dir, dev_name)
+            nvram = NonVolatileMemory.for_device(self.state_dir, dev_name, kind)
             try:
                 device = cls(clock=self.clock, config=config, nvram=nvram, name=dev_name)
             except BaseException as exc:

@@ -189,3 +189,27 @@ def test_a_stored_number_a_kind_cannot_compute_with_is_unfit_too(tmp_path: Path)
             runtime.add_device("gms96")
     finally:
         runtime.stop()
+
+
+def test_the_memory_of_another_kind_is_refused_and_left_as_it_is(tmp_path: Path) -> None:
+    """(Fuzzed: a device named as one of another kind before, on the same state dir, read that
+    one's sections as its own: a POSELESTA took a SERS's P41, P44 ... as its parameters, and its
+    first save replaced the SERS's parameters.)  An image names the kind it was written for."""
+    from devsim.core.nvram import KIND_KEY, OtherKindsMemory
+
+    memory = NonVolatileMemory.for_device(tmp_path, "x", "sers")
+    memory.put("params", {"41": 100.0})
+    memory.close()
+    path = tmp_path / "x.nvram.json"
+    text = path.read_text()
+    assert json.loads(text) == {KIND_KEY: "sers", "params": {"41": 100.0}}
+    with pytest.raises(OtherKindsMemory, match=r"x.nvram.json: holds the memory of a 'sers' device, not of a 'poselesta'"):
+        NonVolatileMemory.for_device(tmp_path, "x", "poselesta")
+    assert path.read_text() == text
+    again = NonVolatileMemory.for_device(tmp_path, "x", "sers")  # the refusal released the lock
+    assert again.sections() == ["params"] and again.get(KIND_KEY) is None
+    again.close()
+    path.write_text('{"params": {"41": 5}}')  # written before images named their kind: taken as it is
+    old = NonVolatileMemory.for_device(tmp_path, "x", "poselesta")
+    assert old.get("params") == {"41": 5}
+    old.close()
