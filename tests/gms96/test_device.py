@@ -428,3 +428,39 @@ def test_monitoring(referenced: Plant) -> None:
     referenced.set("quantity.monitoring", "")
     assert host.ask("68 06 06 68 53 03 51 03 00 00 AA 16") == "E5"
     referenced.run_until(lambda d: d.status() == 0, 1)
+
+
+def _card_with_eeprom(tmp_path: Any, n: dict[str, Any], n8: Any) -> Any:
+    import json
+
+    from devsim.runtime import Runtime
+
+    (tmp_path / "gms96.nvram.json").write_text(json.dumps({"eeprom": {"B": 50, "M": 2000, "S": 100, "o": 1,
+                                                                        "N": n, "N8": n8}}))
+    return Runtime(virtual=True, state_dir=tmp_path).start()
+
+
+def test_a_stored_n_parameter_out_of_its_range_is_clamped_as_a_write_is(tmp_path: Any) -> None:
+    """(Fuzzed: a hand-edited EEPROM image loaded N39 = 10^30 and N8 = [-10^12, 10^12] as they
+    were; a write of them is clamped, spec §3.8.10.)"""
+    runtime = _card_with_eeprom(tmp_path, {"39": 10**30}, [-10**12, 10**12])
+    try:
+        runtime.add_device("gms96")
+        assert runtime.read("gms96", "param.N39") == 100
+        assert runtime.read("gms96", "param.N8") == -8388608
+    finally:
+        runtime.stop()
+
+
+@pytest.mark.parametrize(("n", "n8"), [({}, "ab"), ({}, [1.5, "x"]), ({}, [1, 2, 3]), ({"39": "50"}, [0, 0]),
+                                        ({"39": True}, [0, 0])])
+def test_a_stored_n_parameter_that_is_no_whole_number_refuses_the_memory(tmp_path: Any, n: Any, n8: Any) -> None:
+    """(Fuzzed: N8 "ab" loaded as ['a', 'b'] and every read of N8 failed with ValueError.)"""
+    from devsim.runtime.process import UnfitMemory
+
+    runtime = _card_with_eeprom(tmp_path, n, n8)
+    try:
+        with pytest.raises(UnfitMemory, match="this memory image does not fit the kind 'gms96'"):
+            runtime.add_device("gms96")
+    finally:
+        runtime.stop()

@@ -61,10 +61,14 @@ class NParameters(Parameters):
                 self.values[index] = clamp_n(index, value)
         self.n8 = [self.values[8], 0]
         if eeprom:
+            # what s85;170 saved is in range; a hand-edited value is clamped as a write is (spec
+            # §3.8.10), one that is no whole number refuses the memory (UnfitMemory at the start);
+            # before, N8 "ab" or [1.5, "x"] loaded as it was and failed every read of N8
             for key, value in (eeprom.get("N") or {}).items():
                 if int(key) in self.table:
-                    self.values[int(key)] = int(value)
-            self.n8 = list(eeprom.get("N8", self.n8))
+                    self.values[int(key)] = clamp_n(int(key), _whole(value), stepper=self.stepper)
+            lower, upper = eeprom.get("N8", self.n8)
+            self.n8 = [clamp_n(8, _whole(lower)), clamp_n(8, _whole(upper))]
 
     def defaults(self) -> None:
         """``r`` P3 = 0: the "Grundstellung" (the factory values, not the configured ones)."""
@@ -98,3 +102,10 @@ class NParameters(Parameters):
         else:
             self.set(index, value, check=False)  # the parts that listen act on it
         return True
+
+
+def _whole(value: Any) -> int:
+    """A stored N value: a JSON integer (not a bool, a string, a fraction)."""
+    if type(value) is not int:
+        raise ValueError(f"N parameter value {value!r} is no whole number")
+    return value
