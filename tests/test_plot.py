@@ -165,11 +165,16 @@ def test_a_trace_alone_is_a_traffic_timeline(tmp_path: Path, sers_files: tuple[P
         ("time,device,axis\n", "x.png", "not a motion log", exits.BAD_FILE),
         ("hello\n", "x.png", "not a trace line", exits.BAD_FILE),
         ("", "x.gif", "-o: the output must end in .png, .svg or .html", exits.USAGE),
+        # damaged motion logs (fuzzed): each was a traceback (UnicodeDecodeError, _csv.Error)
+        (b"time,device,axis,setpoint,position,velocity,following_error,event,kind\n1.0,sers,\xb3\n", "x.png",
+         "not a motion log (byte 80 is not UTF-8 text)", exits.BAD_FILE),
+        ("time,device,axis,setpoint,position,velocity,following_error,event,kind\n1.0,sers,axis," + "9" * 200_000,
+         "x.png", "not a motion log (field larger than field limit", exits.BAD_FILE),
     ],
 )
-def test_bad_input_is_one_line(tmp_path: Path, content: str, output: str, message: str, status: int) -> None:
+def test_bad_input_is_one_line(tmp_path: Path, content: str | bytes, output: str, message: str, status: int) -> None:
     source = tmp_path / "in.csv"
-    source.write_text(content)
+    source.write_bytes(content) if isinstance(content, bytes) else source.write_text(content)
     code, _, stderr = invoke("plot", str(source), "-o", str(tmp_path / output))
     assert code == status and message in stderr and stderr.count("\n") == 1, stderr
     assert not (tmp_path / output).exists()

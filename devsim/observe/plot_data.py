@@ -172,9 +172,14 @@ def read_motion_log(path: str | Path) -> MotionData:
     data = MotionData(str(path))
     series: dict[tuple[str, str], AxisSeries] = {}
     seen: set[tuple[str, float, str]] = set()
-    with open(path, encoding="utf-8", newline="") as stream:
-        text = stream.read()
-    rows = list(csv.reader(io.StringIO(text)))
+    try:
+        with open(path, encoding="utf-8", newline="") as stream:
+            text = stream.read()
+        rows = list(csv.reader(io.StringIO(text)))
+    except UnicodeDecodeError as exc:  # (damaged bytes: a traceback before)
+        raise PlotInputError(f"{path}: not a motion log (byte {exc.start} is not UTF-8 text)") from None
+    except csv.Error as exc:  # (a field of 128 KiB and more, an unclosed quote: a traceback before)
+        raise PlotInputError(f"{path}: not a motion log ({exc})") from None
     header = rows[0] if rows else None
     if header is None or tuple(header[: len(_FIRST)]) != _FIRST:
         raise PlotInputError(f"{path}: not a motion log (expected the header {','.join(HEADER)})")
