@@ -66,6 +66,28 @@ def test_devsim_up_reports_a_bad_plant_file(tmp_path: Path) -> None:
     assert done.stderr.strip() == f"Error: {plant}:12: devices.3.config.address: Input should be less than or equal to 127"
 
 
+@pytest.mark.parametrize("memory", ['{"program": "x"}', '{"params": {"41": NaN}}'])
+def test_up_and_scenario_run_refuse_a_state_file_they_cannot_use_in_one_line(tmp_path: Path, memory: str) -> None:
+    """(Fuzzed: a state file of the wrong shape or holding NaN ended `devsim up` and `devsim
+    scenario run` in a traceback, where `devsim run` says one line.)  The file stays as it was."""
+    from tests.support.process import ROOT, devsim_env
+
+    state = tmp_path / "state"
+    state.mkdir()
+    (state / "x.nvram.json").write_text(memory)
+    plant = tmp_path / "plant.yaml"
+    plant.write_text("devices:\n  - {name: x, kind: sers}\n")
+    scenario = tmp_path / "scenario.yaml"
+    scenario.write_text("devices:\n  - {name: x, kind: sers}\nsteps:\n  - wait: 1s\n")
+    for command, said in ((["up", str(plant), "--virtual", "--no-control", "-q"], "Error: cannot start the plant: "),
+                          (["scenario", "run", str(scenario)], f"Error: {scenario}: cannot run the scenario: ")):
+        done = subprocess.run([sys.executable, "-m", "devsim", *command, "--state-dir", str(state)], cwd=ROOT,
+                              env=devsim_env(), capture_output=True, text=True, timeout=60)
+        assert done.returncode == exits.SYSTEM, done.stderr
+        assert done.stderr.startswith(said + str(state / "x.nvram.json")) and done.stderr.count("\n") == 1, done.stderr
+    assert (state / "x.nvram.json").read_text() == memory
+
+
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT], ids=["TERM", "HUP", "INT"])
 def test_a_scenario_run_stopped_by_a_signal_says_so_and_cleans_up(tmp_path: Path, sig: signal.Signals) -> None:
     """SIGTERM and SIGHUP ended the process at once (status 143 or 129, no word, the pty link
