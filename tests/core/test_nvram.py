@@ -176,17 +176,19 @@ def test_a_memory_image_of_the_wrong_shape_is_refused_naming_its_file(tmp_path: 
 
 
 def test_a_stored_number_a_kind_cannot_compute_with_is_unfit_too(tmp_path: Path) -> None:
-    """A GMS96 EEPROM value of -1e300 (fuzzed) overflowed in the card's creation: the start
-    failed with a bare ``OverflowError: (34, 'Numerical result out of range')``."""
+    """A number that overflows in a kind's load names the file as well (fuzzed: a GMS96 EEPROM
+    value of -1e300 failed the start with a bare ``OverflowError: (34, 'Numerical result out of
+    range')``; since the GMS96 refuses a stored N value that is no integer, a POSELESTA parameter
+    of 400 digits is the one that overflows, in ``math.isfinite``)."""
     from devsim.runtime import Runtime
     from devsim.runtime.process import UnfitMemory
 
-    path = tmp_path / "gms96.nvram.json"
-    path.write_text(json.dumps({"eeprom": {"B": 50, "M": 2000, "N": {"39": -1e300}, "N8": [0, 0], "S": 100, "o": 1}}))
+    path = tmp_path / "poselesta.nvram.json"
+    path.write_text('{"params": {"5": 1' + "0" * 400 + "}}")
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:
-        with pytest.raises(UnfitMemory, match=r"gms96.nvram.json: .*\(OverflowError: "):
-            runtime.add_device("gms96")
+        with pytest.raises(UnfitMemory, match=r"poselesta.nvram.json: .*\(OverflowError: "):
+            runtime.add_device("poselesta")
     finally:
         runtime.stop()
 
