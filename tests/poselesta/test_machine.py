@@ -6,6 +6,7 @@ direction keys (§5.4)."""
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 import pytest
@@ -1032,3 +1033,30 @@ def test_a_stored_parameter_that_is_no_finite_number_refuses_the_memory(tmp_path
     finally:
         runtime.stop()
     assert path.read_text() == text
+
+
+def test_a_stored_block_with_a_word_no_block_has_refuses_the_memory(tmp_path) -> None:
+    """(Fuzzed: stored blocks with words 'W5', '%1' or '' loaded, and reading the program's text
+    through the control API failed with KeyError in tape.block_words, which every output of a
+    block goes through.)  A stored block of the letters a block has loads as before."""
+    import json
+
+    from devsim.runtime import Runtime
+    from devsim.runtime.process import UnfitMemory
+
+    path = tmp_path / "poselesta.nvram.json"
+    for letter in ("W", "%", ""):
+        path.write_text(json.dumps({"programs": {"20": [{"N": 1, "words": [["X", 5], [letter, 5]], "skip": False}]}}))
+        runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+        try:
+            with pytest.raises(UnfitMemory, match=rf"\(ValueError: block N1: '{re.escape(letter)}' is no address letter"):
+                runtime.add_device("poselesta")
+        finally:
+            runtime.stop()
+    path.write_text(json.dumps({"programs": {"20": [{"N": 1, "words": [["X", 5000], ["M", 30]], "skip": False}]}}))
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        runtime.add_device("poselesta")
+        assert "X" in runtime.read("poselesta", "program.P20")
+    finally:
+        runtime.stop()

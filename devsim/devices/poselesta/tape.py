@@ -45,6 +45,8 @@ SIGNED = frozenset(COORDINATES + CENTRES + "P")
 ORDER = "NPXYZDIJKFSTGML"
 #: The catalogue's value word: signed, 5 digits before the point and 3 after (spec §3.9).
 CATALOGUE_VALUE = "P"
+#: the letters a stored block's words may have (N is the block's number, not a word)
+_WORD_LETTERS = frozenset(ORDER[1:])
 CR, LF, NUL, DEL, SP = 0x0D, 0x0A, 0x00, 0x7F, 0x20
 
 
@@ -91,7 +93,13 @@ class Block(msgspec.Struct, frozen=True):
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> Block:
-        return cls(int(data["N"]), tuple((str(k), int(v)) for k, v in data["words"]), bool(data.get("skip")))
+        """A stored block; a word whose letter no block has (a hand-edited state file) is a
+        ValueError (the start refuses the memory), where it failed every output of the program."""
+        words = tuple((str(k), int(v)) for k, v in data["words"])
+        for letter, _value in words:
+            if letter not in _WORD_LETTERS:
+                raise ValueError(f"block N{data['N']}: {letter!r} is no address letter ({ORDER[1:]})")
+        return cls(int(data["N"]), words, bool(data.get("skip")))
 
 
 # -- what the reader reports ------------------------------------------------------------------
