@@ -464,3 +464,30 @@ def test_a_stored_n_parameter_that_is_no_whole_number_refuses_the_memory(tmp_pat
             runtime.add_device("gms96")
     finally:
         runtime.stop()
+
+
+@pytest.mark.parametrize("row", [None, 1.5, ["A"], ["A", "x", 0, 0, 1], ["#", 1, 0, 0, 1], [["A"], 1, 0, 0, 1],
+                                 ["A", 1, 0, 0, 1, 9], ["m", 50, [1], 0, 1]])
+def test_a_stored_program_row_no_download_makes_refuses_the_memory(tmp_path: Any, row: Any) -> None:
+    """(Fuzzed: stored CNC program rows are run as they are; a row of the wrong shape or types
+    loaded, and starting the program failed in the executor with TypeError: Cmd(*row), a move's
+    target compared with a string, an M function's marker.)"""
+    import json
+
+    from devsim.runtime import Runtime
+    from devsim.runtime.process import UnfitMemory
+
+    (tmp_path / "gms96.nvram.json").write_text(json.dumps({"flash": {"programs": {"0": [["A", 10000, 0, 0, 1], row]}}}))
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        with pytest.raises(UnfitMemory, match=r"\(ValueError: stored program row .* is no command the card queues\)"):
+            runtime.add_device("gms96")
+    finally:
+        runtime.stop()
+    (tmp_path / "gms96.nvram.json").write_text(json.dumps({"flash": {"programs": {"0": [["A", 10000, 0, 0, 1]]}}}))
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        runtime.add_device("gms96")
+        assert runtime.read("gms96", "programs") == {0: 1}
+    finally:
+        runtime.stop()

@@ -28,7 +28,7 @@ class Flash:
 
     def power_on(self) -> None:
         flash = self.nvram.get("flash", {}) or {}
-        self.programs = {int(k): v for k, v in (flash.get("programs") or {}).items()}
+        self.programs = {int(k): [_queued(row) for row in v] for k, v in (flash.get("programs") or {}).items()}
         self.plc_image = flash.get("plc")
         self.plc_frames = list(flash.get("plc_frames") or ([len(self.plc_image) // 2] if self.plc_image else []))
         self.download = None
@@ -74,3 +74,18 @@ class Flash:
             self.plc_image = b"".join(frames).hex()
             self.plc_frames = [len(f) for f in frames]
         self.save()
+
+
+def _queued(row: Any) -> list[Any]:
+    """A stored program row as a download records it: ``[letter, P1, P2, P3, count]`` of a queued
+    command.  Another (a hand-edited state file) is a ValueError, so that the start refuses the
+    memory naming its file; before, it loaded and the program's run failed in the executor
+    (``Cmd(*row)``, a move's target, an M function) with a TypeError."""
+    from devsim.devices.gms96.commands import (
+        QUEUED_COMMANDS,  # (here: commands imports program, which imports us)
+    )
+
+    if (type(row) is not list or len(row) != 5 or not isinstance(row[0], str) or row[0] not in QUEUED_COMMANDS
+            or any(type(value) is not int for value in row[1:])):
+        raise ValueError(f"stored program row {row!r} is no command the card queues")
+    return row
