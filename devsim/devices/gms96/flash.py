@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Container
 from typing import Any
 
 from devsim.core.nvram import NonVolatileMemory
@@ -16,8 +17,10 @@ Program = list[list[Any]]  # rows [letter, P1, P2, P3, count]
 class Flash:
     """Programs and the PLC image of one card, kept in its non-volatile memory (spec §4.8)."""
 
-    def __init__(self, nvram: NonVolatileMemory) -> None:
+    def __init__(self, nvram: NonVolatileMemory, queued: Container[str]) -> None:
         self.nvram = nvram
+        #: the letters of the queued commands: what a stored program's rows may be (power_on)
+        self.queued = queued
         self.programs: dict[int, Program] = {}
         self.plc_image: str | None = None  # hex of the downloaded ``a`` frames
         self.plc_frames: list[int] = []  # their lengths
@@ -28,7 +31,8 @@ class Flash:
 
     def power_on(self) -> None:
         flash = self.nvram.get("flash", {}) or {}
-        self.programs = {int(k): [_queued(row) for row in v] for k, v in (flash.get("programs") or {}).items()}
+        self.programs = {int(k): [_queued(row, self.queued) for row in v]
+                         for k, v in (flash.get("programs") or {}).items()}
         self.plc_image = flash.get("plc")
         self.plc_frames = list(flash.get("plc_frames") or ([len(self.plc_image) // 2] if self.plc_image else []))
         self.download = None
@@ -76,16 +80,13 @@ class Flash:
         self.save()
 
 
-def _queued(row: Any) -> list[Any]:
-    """A stored program row as a download records it: ``[letter, P1, P2, P3, count]`` of a queued
-    command.  Another (a hand-edited state file) is a ValueError, so that the start refuses the
-    memory naming its file; before, it loaded and the program's run failed in the executor
-    (``Cmd(*row)``, a move's target, an M function) with a TypeError."""
-    from devsim.devices.gms96.commands import (
-        QUEUED_COMMANDS,  # (here: commands imports program, which imports us)
-    )
 
-    if (type(row) is not list or len(row) != 5 or not isinstance(row[0], str) or row[0] not in QUEUED_COMMANDS
+def _queued(row: Any, letters: Container[str]) -> list[Any]:
+    """A stored program row as a download records it: ``[letter, P1, P2, P3, count]`` of a queued
+    command (``letters``).  Another (a hand-edited state file) is a ValueError, so that the start
+    refuses the memory naming its file; before, it loaded and the program's run failed in the
+    executor (``Cmd(*row)``, a move's target, an M function) with a TypeError."""
+    if (type(row) is not list or len(row) != 5 or not isinstance(row[0], str) or row[0] not in letters
             or any(type(value) is not int for value in row[1:])):
         raise ValueError(f"stored program row {row!r} is no command the card queues")
     return row

@@ -24,7 +24,7 @@ from devsim.core.kit import declare_signals
 from devsim.core.model import Model
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.gms96 import tables
-from devsim.devices.gms96.commands import QueuedCommands
+from devsim.devices.gms96.commands import QUEUED_COMMANDS, QueuedCommands
 from devsim.devices.gms96.config import DilSwitch, Gms96Config
 from devsim.devices.gms96.coordinates import Coordinates
 from devsim.devices.gms96.counter import CounterInput
@@ -85,7 +85,7 @@ class Gms96Card(Model):
         self.params = NParameters(factory=self.cfg.params, stepper=stepper, out_of_range=self.cfg.out_of_range)
         self.feed = Feed()
         self.coordinates = Coordinates(self.axis, self.nvram, int(self.cfg.tool_offset))
-        self.flash = Flash(self.nvram)
+        self.flash = Flash(self.nvram, QUEUED_COMMANDS)
         self.memory = Memory(self.nvram, self.params, self.feed, self.image, self.record_event)
         self.indexer = Indexer(
             clock=clock, axis=self.axis, feed=self.feed, params=self.params, stage=self.stage, image=self.image,
