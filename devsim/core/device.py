@@ -71,6 +71,19 @@ class SerialSettings(msgspec.Struct, frozen=True):
             return f"{self.baudrate} baud, {stop} stop bit{'' if stop == 1 else 's'} (data bits and parity not visible)"
         return f"{self.baudrate} {self.bytesize}{self.parity}{stop}"
 
+    @classmethod
+    def parse(cls, text: str) -> SerialSettings:
+        """``"19200 8E1"`` as line settings (baud rate, data bits, parity, stop bits); ValueError
+        for text of another shape or settings no UART has (:meth:`problem`)."""
+        try:
+            baud, frame = text.split()
+            settings = cls(int(baud), int(frame[0]), frame[1].upper(), float(frame[2:]))
+        except (ValueError, IndexError):
+            raise ValueError(f"line settings are like '19200 8E1', not {text!r}") from None
+        if (problem := settings.problem()) is not None:
+            raise ValueError(f"line settings {text!r}: {problem}")
+        return settings
+
     def problem(self) -> str | None:
         """Why a UART cannot be set to these settings (a file edited by hand), or None."""
         if not 0 < self.baudrate <= 10_000_000:

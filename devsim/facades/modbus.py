@@ -350,12 +350,8 @@ def _crc_end(data: bytes) -> int | None:
 
 
 def line_settings(text: str) -> SerialSettings:
-    """``"19200 8E1"`` as line settings (baud rate, data bits, parity N/E/O, stop bits)."""
-    try:
-        baud, frame = text.split()
-        return SerialSettings(int(baud), int(frame[0]), frame[1].upper(), float(frame[2:]))
-    except (ValueError, IndexError):
-        raise ValueError(f"line settings are like '19200 8E1', not {text!r}") from None
+    """``"19200 8E1"`` as line settings (:meth:`SerialSettings.parse <devsim.core.device.SerialSettings.parse>`)."""
+    return SerialSettings.parse(text)
 
 
 def device_map(device: Device, layout: str = "points", overrides: dict[str, Any] | None = None) -> ModbusMap:

@@ -153,6 +153,9 @@ class ModbusSpec(Typed):
     def __post_init__(self) -> None:
         if (self.tcp is None) == (self.rtu is None):
             raise ValueError("give tcp or rtu")
+        from devsim.core.device import SerialSettings
+
+        SerialSettings.parse(self.line)  # refused with the file, not when the line opens
 
     def spec(self) -> str:
         """The ``--modbus`` form: ``tcp:HOST:PORT``, ``rtu`` or ``rtu:LINK``."""

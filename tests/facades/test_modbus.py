@@ -5,6 +5,7 @@ standard exception codes."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
@@ -122,6 +123,22 @@ def test_rtu_on_a_pty() -> None:
             assert plant.runtime.read("drive", "quantity.supply_voltage") == 48.0
         finally:
             client.close()
+
+
+@pytest.mark.parametrize(("line", "message"), [
+    ("fast", "line settings are like '19200 8E1', not 'fast'"),
+    ("19200 8X1", "line settings '19200 8X1': parity 'X' is not N, E, O, M or S"),
+    ("0 8E1", "line settings '0 8E1': baudrate 0 is no baud rate"),
+    ("19200 9E1", "line settings '19200 9E1': bytesize 9 is not 5, 6, 7 or 8"),
+    ("19200 8E3", "line settings '19200 8E3': stopbits 3 is not 1, 1.5 or 2"),
+])
+def test_a_plant_file_with_bad_rtu_line_settings_is_refused(line: str, message: str) -> None:
+    """Found by fuzzing the RTU line's options: ``line: fast`` passed ``devsim check`` and ``devsim
+    up`` died with a traceback when it opened the line; ``19200 8X1`` and ``0 8E1`` were served.
+    The plant file is refused as it is read, naming the settings and what is wrong with them."""
+    with pytest.raises(ValueError, match=re.escape(message)):
+        spec({"rtu": {}, "line": line})
+    assert spec({"rtu": {}, "line": "9600 7o1.5"}).devices[0].modbus is not None  # (any case, 1.5 stop bits)
 
 
 def test_rtu_frames_back_to_back() -> None:
