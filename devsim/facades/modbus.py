@@ -357,13 +357,7 @@ def line_settings(text: str) -> SerialSettings:
 def device_map(device: Device, layout: str = "points", overrides: dict[str, Any] | None = None) -> ModbusMap:
     """The map a device is served with: generated from its points (``points``), or the kind's own
     mirror of its families (``mirror``, e.g. the PCD's registers and flags, spec pcd4h3 §9.8)."""
-    if layout == "mirror":
-        if overrides:
-            raise ValueError("the mirror layout takes no map overrides")
-        return ModbusMap.mirror(device.points)
-    if layout != "points":
-        raise ValueError(f"a Modbus layout is points or mirror, not {layout!r}")
-    return ModbusMap.generate(device.points, overrides)
+    return ModbusMap.layout(device.points, layout, overrides)
 
 
 def device_unit(device: Device, layout: str = "points") -> int:

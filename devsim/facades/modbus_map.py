@@ -104,6 +104,19 @@ class ModbusMap:
         return cls(entries)
 
     @classmethod
+    def layout(cls, points: PointTable, layout: str = "points", overrides: Mapping[str, Any] | None = None) -> ModbusMap:
+        """The map of ``layout``: generated from the points with a plant file's ``overrides``
+        (``points``), or the kind's own mirror (``mirror``, which takes no overrides); ValueError
+        for a map the kind cannot have (``devsim check`` asks it too)."""
+        if layout == "mirror":
+            if overrides:
+                raise ValueError("the mirror layout takes no map overrides")
+            return cls.mirror(points)
+        if layout != "points":
+            raise ValueError(f"a Modbus layout is points or mirror, not {layout!r}")
+        return cls.generate(points, overrides)
+
+    @classmethod
     def mirror(cls, points: PointTable) -> ModbusMap:
         """A kind's own layout from its families that declare one (``Family.modbus``): member
         ``<n>`` at address n (bits) or 2n (32-bit registers, raw, high word first)."""

@@ -7,7 +7,7 @@ them all at once, with the schema's own problems:
 
 * :func:`device_problems` – the kind exists; the device's ``config`` (with ``axis`` merged in)
   fits the kind's configuration; the initial ``state`` names points the kind has, with values
-  of their type;
+  of their type; the Modbus map's entries fit the kind's points;
 * :func:`step_problems` – the names in ``set``, ``pulse``, ``when`` and ``expect_state`` are
   points of the device's kind; a ``fault`` is one the kind declares;
 * :func:`bus_address_problems` – no two devices of a kind on one bus have the same address;
@@ -43,7 +43,7 @@ def device_problems(index: int, device: Any, raw: Any) -> list[Problem]:
         cls = device_class(device.kind)
     except UnknownKind as exc:
         return [((*at, "kind"), str(exc))]
-    return _config_problems(at, cls, device, raw) + _state_problems(at, cls, device)
+    return _config_problems(at, cls, device, raw) + _state_problems(at, cls, device) + _modbus_problems(at, cls, device)
 
 
 def _config_problems(at: tuple[int | str, ...], cls: Any, device: Any, raw: Any) -> list[Problem]:
@@ -69,6 +69,20 @@ def _state_problems(at: tuple[int | str, ...], cls: Any, device: Any) -> list[Pr
         if text is not None:
             problems.append(((*at, "state", name), text))
     return problems
+
+
+def _modbus_problems(at: tuple[int | str, ...], cls: Any, device: Any) -> list[Problem]:
+    """The Modbus map's entries (``modbus: {map: …}``), made as the facade makes them."""
+    modbus = getattr(device, "modbus", None)
+    if modbus is None or not modbus.map:
+        return []
+    from devsim.facades.modbus_map import ModbusMap
+
+    try:
+        ModbusMap.layout(cls.points, modbus.layout, modbus.map)
+    except ValueError as exc:
+        return [((*at, "modbus", "map"), str(exc))]
+    return []
 
 
 def _point_problem(points: Any, owner: str, name: str, value: Any) -> str | None:

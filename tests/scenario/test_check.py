@@ -302,3 +302,26 @@ def test_devices_on_one_bus_by_ports_of_different_names_are_a_mistake_of_the_fil
                           "  - {name: p, kind: pcd4h3, transport: {bus: line}}\nbuses:\n  - {name: line}\n")
     assert lines == [f"{bad}:3: devices.2.kind: device 'p' is on bus 'line' by its port 'sbus', device 'a' by 'main':"
                      " the devices of a bus share one port of one name"]
+
+
+def test_a_modbus_map_the_kind_cannot_serve_is_a_mistake_of_the_file(tmp_path: Path) -> None:
+    """Found fuzzing the Modbus facade's options: a map naming a point the kind does not have, an
+    address past 65535, a scale of 0, a table that does not fit the point, or entries for the
+    mirror layout passed `check`, and `up` ended with a ValueError traceback as it made the map."""
+    bad, lines = mistakes(tmp_path, "devices:\n"
+                          "  - {name: a, kind: sers, modbus: {rtu: {}, map: {nosuch.point: {address: 5}}}}\n"
+                          "  - {name: b, kind: sers, modbus: {rtu: {}, map: {quantity.supply_voltage: {address: 70000}}}}\n"
+                          "  - {name: c, kind: sers, modbus: {rtu: {}, map: {quantity.supply_voltage: {scale: 0}}}}\n"
+                          "  - {name: d, kind: sers, modbus: {rtu: {}, map: {quantity.supply_voltage: {table: coil}}}}\n"
+                          "  - {name: e, kind: pcd4h3, modbus: {rtu: {}, layout: mirror, map: {station: null}}}\n"
+                          "  - {name: f, kind: sers, modbus: {rtu: {}, map: {quantity.supply_voltage: {address: 100}}}}\n")
+    assert lines == [
+        f"{bad}:2: devices.1.modbus.map: modbus map: the device has no point 'nosuch.point'",
+        f"{bad}:3: devices.2.modbus.map: modbus map: quantity.supply_voltage: address 70000 is not 0 … 65535",
+        f"{bad}:4: devices.3.modbus.map: modbus map: quantity.supply_voltage: scale 0 must be a positive number",
+        f"{bad}:5: devices.4.modbus.map: modbus map: quantity.supply_voltage: table 'coil' does not fit a float point",
+        f"{bad}:6: devices.5.modbus.map: the mirror layout takes no map overrides",
+    ]
+    done = subprocess.run([sys.executable, "-m", "devsim", "up", str(bad)], cwd=ROOT, env=devsim_env(),
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == exits.BAD_FILE and "Traceback" not in done.stderr, done.stderr
