@@ -620,7 +620,8 @@ def _endpoint(transport: TransportSpec) -> tuple[str, ...] | None:
 
 
 def _shared_endpoints(parts: _Parts) -> list[Problem]:
-    """Two ports of the plant on one pty link or one TCP/UDP port: the second could not open."""
+    """Two ports of the plant (a device's Modbus facade's too) on one pty link or one TCP/UDP
+    port: the second could not open."""
     owners: list[tuple[tuple[int | str, ...], TransportSpec]] = []
     for i, device in enumerate(parts.devices):
         if device is None:
@@ -628,6 +629,8 @@ def _shared_endpoints(parts: _Parts) -> list[Problem]:
         for port in device.port_names():
             where = ("devices", i, "ports", port) if port in device.ports else ("devices", i, "transport")
             owners.append((where, device.transport_of(port)))
+        if device.modbus is not None:  # the facade's own pty link or TCP port
+            owners.append((("devices", i, "modbus"), TransportSpec(pty=device.modbus.rtu, tcp=device.modbus.tcp)))
     owners += [(("buses", i, "transport"), bus.transport) for i, bus in enumerate(parts.buses) if bus is not None]
     seen: dict[tuple[str, ...], tuple[int | str, ...]] = {}
     problems: list[Problem] = []

@@ -325,3 +325,23 @@ def test_a_modbus_map_the_kind_cannot_serve_is_a_mistake_of_the_file(tmp_path: P
     done = subprocess.run([sys.executable, "-m", "devsim", "up", str(bad)], cwd=ROOT, env=devsim_env(),
                           capture_output=True, text=True, timeout=60)
     assert done.returncode == exits.BAD_FILE and "Traceback" not in done.stderr, done.stderr
+
+
+def test_a_modbus_facade_on_a_link_or_tcp_port_taken_already_is_a_mistake_of_the_file(tmp_path: Path) -> None:
+    """Found fuzzing the Modbus facade's plant options: a device's ``modbus: {rtu: {link}}`` on its own
+    port's link or another facade's, or ``modbus: {tcp: {port}}`` on a device's TCP port, passed
+    `check`; `up` then said the link was held by a live process (itself) and to choose another
+    --link, or could not bind."""
+    one, two = tmp_path / "tty1", tmp_path / "tty2"
+    bad, lines = mistakes(tmp_path, f"devices:\n  - {{name: a, kind: gms96, transport: {{pty: {{link: {one}}}}},"
+                          f" modbus: {{rtu: {{link: {one}}}}}}}\n"
+                          f"  - {{name: b, kind: gms96, modbus: {{rtu: {{link: {two}}}}}}}\n"
+                          f"  - {{name: c, kind: gms96, modbus: {{rtu: {{link: {two}}}}}}}\n"
+                          "  - {name: d, kind: sers, transport: {tcp: {port: 23461}}, modbus: {tcp: {port: 23461}}}\n"
+                          "  - {name: e, kind: sers, modbus: {tcp: {port: 0}}}\n"
+                          "  - {name: f, kind: sers, modbus: {tcp: {port: 0}}}\n")
+    assert lines == [
+        f"{bad}:2: devices.1.modbus: link {one} is taken by devices.1.transport already",
+        f"{bad}:4: devices.3.modbus: link {two} is taken by devices.2.modbus already",
+        f"{bad}:5: devices.4.modbus: tcp port 127.0.0.1:23461 is taken by devices.4.transport already",
+    ]
