@@ -37,9 +37,12 @@ from devsim.core.watch import PointWatch
 from devsim.runtime.process import port_key
 from devsim.runtime.requests import MIN_WATCH_PERIOD
 
-__all__ = ["DEFAULT_PERIOD", "WatchStream", "axis_names", "default_names", "describe", "error_text"]
+__all__ = ["DEFAULT_PERIOD", "FACADE_PORTS", "WatchStream", "axis_names", "default_names", "describe", "error_text"]
 
 DEFAULT_PERIOD = 0.1
+#: Lines a facade serves for a device beside its own ports, by the port name ``ctl line`` and
+#: ``ctl capture --port`` take: the Modbus RTU line (``NAME.modbus``, :mod:`devsim.facades.modbus`).
+FACADE_PORTS = ("modbus",)
 _AXIS_NAME = re.compile(r"^axis\.(?:[^.]+\.)?(position|velocity)$")
 
 Send = Callable[[dict[str, Any]], None]
@@ -98,7 +101,7 @@ class WatchStream:
                                        lambda kind, active: self._emit("fault", name=kind, active=bool(active))))
         self._undo.append(model.listen("fault", lambda axis=None, code=None, *_: self._emit(
             "drive_fault", axis=axis, code=code)))
-        for port in self.device.port_names():
+        for port in self._line_ports():
             line = self.runtime.lines.get(port_key(self.device.name, port))
             if line is None:
                 continue
@@ -107,13 +110,17 @@ class WatchStream:
             self._undo.append(lambda line=line, observer=observer: _remove(line.observers, observer))
         for kind in self.device.active_faults:  # switched before this watch began
             self._emit("fault", name=kind, active=True)
-        for port in self.device.port_names():
+        for port in self._line_ports():
             line = self.runtime.lines.get(port_key(self.device.name, port))
             for fault in line.faults if line is not None else ():
                 self._emit("line_fault", port=port, text=f"fault start: {fault.describe()}")
         if self.names:
             self._watch = PointWatch(self.device, self._changes, names=self.names, period=self.period)
             self._watch.start()
+
+    def _line_ports(self) -> tuple[str, ...]:
+        """The device's ports and the lines a facade serves for it (:data:`FACADE_PORTS`)."""
+        return (*self.device.port_names(), *FACADE_PORTS)
 
     def _event(self, _time: float, name: str) -> None:
         if self._coded and name.split(" ", 1)[0] == "error":  # "error", "error 5"

@@ -132,6 +132,23 @@ def test_a_line_mismatch_is_logged_once_per_change(tmp_path: Path) -> None:
         sim.stop()
 
 
+def test_a_host_at_another_rate_on_the_modbus_rtu_line_is_logged_at_q(tmp_path: Path) -> None:
+    """Found fuzzing the Modbus RTU facade: a host at 9600 on the default 19200 8E1 RTU line got no
+    answer (the line garbles it, as a UART would) and the log said nothing, though a mismatch on
+    the device's own port is a warning (-q): the RTU line is the device's ``modbus`` port for
+    ``ctl line/capture`` and now for the log too."""
+    link = tmp_path / "mb"
+    sim = Proc("run", "sers", "-q", "--config", _quick_sers(tmp_path), "--modbus", f"rtu:{link}")
+    try:
+        sim.expect(lambda line: line.startswith("sers.modbus: "))
+        with _host(str(link), 9600) as fd:
+            os.write(fd, bytes.fromhex("010300000002c40b"))
+            _line(sim, re.escape("sers.modbus host_settings host settings 9600 baud, 1 stop bit") + ".*"
+                  + re.escape("(mismatch, device 19200 8E1)"))
+    finally:
+        sim.stop()
+
+
 def test_a_drive_error_has_its_number_and_text_at_q(tmp_path: Path) -> None:
     """-q: the limit-switch error with its P11 bit and text, the mismatch; no banner, no
     connect, no refused command (that is -v)."""
