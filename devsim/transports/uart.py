@@ -64,8 +64,11 @@ def garble(data: bytes, sender: SerialSettings, receiver: SerialSettings) -> byt
     parity checks it and hands over a character with a parity error as NUL (what a POSIX port
     with ``INPCK`` delivers), so a 7E1 device never mistakes 8N1 ASCII for its own.  After the
     stop bit sample it looks for the next start bit (resynchronising at once after a framing
-    error, as a 16550 does).  A side at 0 baud (a host that set B0, POSIX's hang-up) gets nothing
-    across either way.
+    error, as a 16550 does).  A break – the line low from the start bit through the stop bit
+    sample – reads as one NUL, however long it lasts, and then the character its end cuts (so a
+    sender far slower, or a receiver far faster, costs two characters per low stretch, not
+    thousands).
+    A side at 0 baud (a host that set B0, POSIX's hang-up) gets nothing across either way.
 
     A faster sender squeezes several characters into one received character; a slower sender's
     single character is read as a character plus framing garbage.  With matching settings the
@@ -87,6 +90,12 @@ def garble(data: bytes, sender: SerialSettings, receiver: SerialSettings) -> byt
     def level(t: int) -> int:
         h = t // half
         return levels[h] if 0 <= h < len(levels) else 1
+
+    def next_high(t: int) -> int:
+        h = t // half
+        while h < len(levels) and levels[h] == 0:
+            h += 1
+        return max(t, h * half)  # (after the waveform the line idles at mark)
 
     def next_low(t: int) -> int | None:
         h = t // half
@@ -122,4 +131,11 @@ def garble(data: bytes, sender: SerialSettings, receiver: SerialSettings) -> byt
         stop_sample = edge + (2 * cells + 1) * rx_bit // 2
         out.append(value)  # a framing error (low stop bit) still delivers what was sampled
         t = stop_sample
+        rise = next_high(edge)
+        if rise > stop_sample:
+            # A break (the line low from the start bit through the stop bit sample) is one NUL, as
+            # a 16550 reports it once (LSR BI), not one per frame time: the frames wholly inside
+            # it are skipped, up to the one the line's rise cuts.  [SIM-CHOICE] that one is still
+            # read as before (the framing garbage a slow sender's character leaves).
+            t = edge + (rise - edge - 1) // (stop_sample - edge) * (stop_sample - edge)
     return bytes(out)

@@ -46,6 +46,20 @@ def test_garble_faster_sender_collapses_and_slower_sender_multiplies() -> None:
     assert garble(b"#ON\r", S(9600), S(19200)) == slow_host
 
 
+def test_garble_a_break_reads_as_one_nul_however_long() -> None:
+    """A line held low from the start bit through the stop bit sample is a break: one NUL (a
+    16550 reports it once), then the character the line's rise cuts, as before.  Found by the
+    soak over a real ``devsim run``: a host at 1 baud (RFC 2217 SET-BAUDRATE, or a pty's BOTHER
+    rate) read by a 9600 Bd device came out as thousands of NULs per byte, and 256 bytes held the
+    simulator's event loop 4 s; a host at 4294967295 Bd got 1.9 million bytes of a 7-byte answer."""
+    assert garble(b"\x00", S(1), S(9600)) == b"\x00\xc0"  # start + 8 data bits low, then the stop bit
+    assert garble(b"\x00" * 256, S(1), S(9600)) == b"\x00\xc0" * 256
+    assert len(garble(b"#1P11?\r", S(9600), S(4_294_967_295))) < 50
+    # shorter than two of the receiver's frames: read as it always was
+    assert garble(b"#ON\r", S(1200), S(2400)) == b"\x1e\x86\xfe\x98\xf8\x98\xe6\x80"
+    assert garble(b"\x10", S(9600), S(19200)) == b"\x00\xe0"
+
+
 def test_garble_parity_error_reads_as_nul() -> None:
     # 8N1 ASCII read by a 7E1 UART: the 8th data bit (0) lands on the parity bit.
     out = garble(b"#", S(9600), S(9600, 7, "E"))  # '#' has three ones: even parity bit is 1
