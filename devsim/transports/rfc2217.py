@@ -17,10 +17,19 @@ Open the port with pyserial as ``rfc2217://HOST:PORT`` (:attr:`Rfc2217Transport.
 from __future__ import annotations
 
 import struct
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
-from serial.rfc2217 import SET_BAUDRATE, SET_DATASIZE, SET_PARITY, SET_STOPSIZE, PortManager
+from serial.rfc2217 import (
+    M_IAC_SEEN,
+    M_NORMAL,
+    SE,
+    SET_BAUDRATE,
+    SET_DATASIZE,
+    SET_PARITY,
+    SET_STOPSIZE,
+    PortManager,
+)
 
 from devsim.core.device import SerialSettings
 from devsim.transports.base import Endpoint
@@ -119,7 +128,21 @@ class _Manager(PortManager):
     size code RFC 2217 does not define, a value cut short.  pyserial catches only ``ValueError``,
     so these raised out of the telnet filter: the connection was dropped with a traceback, and
     the filter's state was left inside the subnegotiation.  Such a setting is answered as RFC 2217
-    answers one the server does not take, with the current value; a mask cut short is ignored."""
+    answers one the server does not take, with the current value; a mask cut short is ignored.
+    An IAC SE outside a subnegotiation ends nothing and is dropped (pyserial's filter made
+    ``bytes(None)`` of it, a TypeError out of the filter)."""
+
+    def filter(self, data: bytes) -> Iterator[bytes]:
+        start = 0
+        while (end := data.find(SE, start)) >= 0:
+            # (the filter's state before this SE decides: IAC seen, no subnegotiation open)
+            yield from super().filter(data[start:end])
+            if self.mode == M_IAC_SEEN and self.suboption is None:
+                self.mode = M_NORMAL
+            else:
+                yield from super().filter(SE)
+            start = end + 1
+        yield from super().filter(data[start:])
 
     def _telnet_process_subnegotiation(self, suboption: bytes) -> None:
         try:

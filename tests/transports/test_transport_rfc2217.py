@@ -83,6 +83,30 @@ def _option(command: int, value: bytes) -> bytes:
     return bytes([255, 250, 44, command]) + value.replace(b"\xff", b"\xff\xff") + bytes([255, 240])
 
 
+async def test_an_end_of_subnegotiation_outside_one_is_ignored(echo: Recorder) -> None:
+    """IAC SE with no IAC SB before it ends nothing (RFC 854): it is dropped and the data around it
+    goes on.  Found by the soak's raw Telnet garbage against ``devsim run sers --rfc2217``:
+    pyserial's filter called ``bytes(None)`` for it, the TypeError escaped into asyncio
+    ("Fatal error: protocol.buffer_updated() call failed", a traceback on stderr) and the
+    connection was dropped."""
+    transport = Rfc2217Transport()
+    await transport.start(echo)
+    try:
+        reader, writer = await asyncio.open_connection("127.0.0.1", transport.port)
+        writer.write(b"#O\xff\xf0N\r" + _option(3, b"\x03"))  # (then SET-PARITY even: its reply ends the wait)
+        await writer.drain()
+        answers = b""
+        while b"\xff\xfa\x2c\x67\x03\xff\xf0" not in answers:
+            chunk = await asyncio.wait_for(reader.read(4096), 5)
+            assert chunk, f"the server closed the connection after {answers!r}"
+            answers += chunk
+        assert echo.data == b"#ON\r"
+        writer.close()
+        await writer.wait_closed()
+    finally:
+        await transport.close()
+
+
 async def test_a_malformed_setting_is_answered_with_the_current_one(echo: Recorder) -> None:
     """A parity or stop size code RFC 2217 does not define, values cut short, an empty mask: each
     setting is answered with the current value and the connection goes on carrying data.  (pyserial's
