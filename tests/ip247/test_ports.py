@@ -197,3 +197,16 @@ def test_vector_6_5_the_manuals_example_program_in_the_directory(module: Any) ->
         assert client.write_record(4, 22, 1, record)[8:] == bytes(4)
         assert client.read_record(1, 65)[8:] == bytes.fromhex("0001 0019")
         assert client.read_record(2, 69, 1)[8:] == struct.pack(">25H", *record)
+
+
+def test_a_plc_message_without_a_page_is_malformed(devsim_device) -> None:  # noqa: ANN001
+    """§3.7 takes the layouts of §3.6: a message with no page byte has a wrong parameter length,
+    ack 82H, nothing executed.  Found by the soak of a real ``devsim run ip247 --tcp 0``: an OBSERVE
+    of nothing (length 1, function 62H alone) was taken as absolute page 0 and answered 00H with
+    axis 1's values (base page 0)."""
+    module = devsim_device("ip247", {"sys_id": {"module": 11}}, transport="tcp")
+    host, port = module.port_url("ag").removeprefix("socket://").rsplit(":", 1)
+    with AgClient(host, int(port)) as plc:
+        for function in (0x61, 0x62, 0x63, 0x64, 0x65):
+            assert plc.transaction(function, b"")[:4] == bytes((0x82, 0, 0, 0)), hex(function)
+        assert plc.observe(0)[0] == 0  # (page 0 named: axis 1, as before)

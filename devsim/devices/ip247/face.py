@@ -110,6 +110,10 @@ class AgFace(Face):
             return  # (the dual-port RAM is not served before the module runs)
         base = int(self.model.config.get("base_page", 0))
         for function, payload in self.framer.feed(data):
+            if not payload and function_token(function) in FUNCTIONS:
+                # no page byte: a wrong parameter length (ack 82H), not absolute page 0
+                self.send(ag_frame(function, serve(self.model, parse_request(function, b""), plc=True)))
+                continue
             asked = payload[0] if payload else 0
             page = asked - base + 1
             if function_token(function) not in FUNCTIONS or not 1 <= page <= 4:  # the PLC gets a handling-block error
