@@ -100,6 +100,9 @@ _EXTPROC = 0o200000 if sys.platform.startswith("linux") else 0
 #: loop takes the host's next bytes.  It blocks the loop, once per change of the host's settings.
 ARM_PAUSE = 0.0002
 
+#: Arms in a row at most while a host's requests keep landing between an arm and its last look.
+_ARM_TRIES = 3
+
 _TIOCPKT = getattr(termios, "TIOCPKT", None)
 _TIOCPKT_DATA = 0
 # Linux: sets CLOCAL alone, under the tty's termios lock (the transport's arm).
@@ -459,7 +462,10 @@ def _arm(fd: int, attrs: list, *, extproc: bool, pause: float = ARM_PAUSE) -> li
     happens when something else preempted the host at that point for longer; a request that
     repeats the host's last one then fails.  ``extproc`` keeps EXTPROC set, so that a
     packet-mode master hears of the next change; only a request that dropped it (one made from
-    a zeroed ``termios``) needs a whole ``tcsetattr`` to set it again."""
+    a zeroed ``termios``) needs a whole ``tcsetattr`` to set it again.  A request that lands
+    between the arm and its last look sets CLOCAL back: the arm is then made again (that look,
+    taken for an armed port, made the request's own change signal look like the arm's, and the
+    host's next request for parity failed, and every one after it)."""
     if pause:
         time.sleep(pause)
     try:
@@ -467,9 +473,15 @@ def _arm(fd: int, attrs: list, *, extproc: bool, pause: float = ARM_PAUSE) -> li
             whole = termios.tcgetattr(fd)
             whole[_LFLAG] |= _EXTPROC
             termios.tcsetattr(fd, termios.TCSANOW, whole)
-        local = termios.tcgetattr(fd)[_CFLAG] & termios.CLOCAL
-        fcntl.ioctl(fd, _TIOCSSOFTCAR, array.array("i", [0 if local else 1]))
-        return termios.tcgetattr(fd)
+        for _ in range(_ARM_TRIES):
+            local = termios.tcgetattr(fd)[_CFLAG] & termios.CLOCAL
+            fcntl.ioctl(fd, _TIOCSSOFTCAR, array.array("i", [0 if local else 1]))
+            looked = termios.tcgetattr(fd)
+            if looked[_CFLAG] & termios.CLOCAL != local:
+                break
+            # a host's request landed between the arm and this look and set CLOCAL back: the
+            # look is no armed port (and the request's own signal would look like the arm's)
+        return looked
     except (termios.error, OSError):
         return list(attrs)
 

@@ -504,6 +504,55 @@ class _HostRepeatsItsRequestAsTheArmEnds:
         return result
 
 
+class _HostRepeatsItsSerialRequestAsTheArmEnds(_HostRepeatsItsRequestAsTheArmEnds):
+    """The same, but the host's request is serial code's (pyserial's): read, CLOCAL | CREAD and
+    the speed set, written back; EXTPROC stays."""
+
+    def ioctl(self, fd: int, request: int, arg):
+        result = fcntl.ioctl(fd, request, arg)
+        if request == pty_module._TIOCSSOFTCAR and not self.fired:
+            self.fired = True
+            attrs = termios.tcgetattr(self.host)
+            attrs[2] |= termios.CLOCAL | termios.CREAD
+            attrs[4] = attrs[5] = termios.B4800
+            termios.tcsetattr(self.host, termios.TCSANOW, attrs)
+        return result
+
+
+async def test_a_host_that_repeats_its_request_as_the_arm_ends_finds_the_port_armed(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A host's request that lands between the arm and the transport's last look (a second open
+    at once, pyserial setting its port twice) sets CLOCAL back: that look is not an armed port,
+    and the host's next request asking for parity must still be a change.  Found by the soak of a
+    real ``devsim run ip247 --pty``: the transport took that look for its arm, the host's change
+    signal then looked like the arm's own, and every later open at 8E1 failed with EINVAL (the
+    slave stayed at ``clocal extproc``) until the host asked for something else."""
+    line = Line(EchoTarget(SerialSettings(9600, 8, "N", 1)), RealClock())
+    heard: asyncio.Queue[str] = asyncio.Queue()
+    line.observers.append(lambda event, text: heard.put_nowait(text) if event == "host_settings" else None)
+    transport = PtyTransport()
+    await transport.start(line)
+    host = os.open(transport.address, os.O_RDWR | os.O_NOCTTY)
+    try:
+        middle = _HostRepeatsItsSerialRequestAsTheArmEnds(host)
+        monkeypatch.setattr(pty_module, "fcntl", middle)
+        attrs = termios.tcgetattr(host)
+        attrs[2] |= termios.CLOCAL | termios.CREAD
+        attrs[4] = attrs[5] = termios.B4800
+        termios.tcsetattr(host, termios.TCSANOW, attrs)
+        assert "4800 baud" in await asyncio.wait_for(heard.get(), 5)
+        assert middle.fired
+        monkeypatch.undo()
+        assert not termios.tcgetattr(host)[2] & termios.CLOCAL  # armed: the other way than the host's request
+        attrs = termios.tcgetattr(host)
+        attrs[2] |= termios.CLOCAL | termios.CREAD | termios.PARENB
+        termios.tcsetattr(host, termios.TCSANOW, attrs)  # (8E1 again: a change, no EINVAL)
+    finally:
+        os.close(host)
+        await transport.close()
+        line.close()
+
+
 async def test_a_host_that_clears_extproc_as_the_arm_ends_is_still_heard(monkeypatch: pytest.MonkeyPatch) -> None:
     """The transport's last look after an arm is what its own change signal is compared with.
     A raw host's request that lands just before that look (two opens in a row) clears EXTPROC
