@@ -473,7 +473,9 @@ def _arm(fd: int, attrs: list, *, extproc: bool, pause: float = ARM_PAUSE) -> li
             whole = termios.tcgetattr(fd)
             whole[_LFLAG] |= _EXTPROC
             termios.tcsetattr(fd, termios.TCSANOW, whole)
-        for _ in range(_ARM_TRIES):
+        for attempt in range(_ARM_TRIES):
+            if attempt and pause:
+                time.sleep(pause)  # (that host is still in its call: let it read back first, as above)
             local = termios.tcgetattr(fd)[_CFLAG] & termios.CLOCAL
             fcntl.ioctl(fd, _TIOCSSOFTCAR, array.array("i", [0 if local else 1]))
             looked = termios.tcgetattr(fd)

@@ -80,7 +80,6 @@ class Flash:
         self.save()
 
 
-
 def _queued(row: Any, letters: Container[str]) -> list[Any]:
     """A stored program row as a download records it: ``[letter, P1, P2, P3, count]`` of a queued
     command (``letters``).  Another (a hand-edited state file) is a ValueError, so that the start

@@ -9,6 +9,7 @@ never stored; the program lives in the same memory but is :class:`~.program.Prog
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -31,7 +32,6 @@ __all__ = ["ParameterMemory"]
 
 #: W and the registers R0..R5: stored by P1004=5, and by PSAVE with P1117=1.
 REGISTERS = tuple(sorted(SAVED_WITH_P1117))
-_MAX_FLOAT = 1.7976931348623157e308
 
 
 class ParameterMemory:
@@ -165,4 +165,4 @@ def _unfit(stored: Any) -> str | None:
 
 def _finite(value: Any) -> bool:
     """A JSON number a float holds, finite (not a bool, a string, null, nor an int beyond floats)."""
-    return type(value) in (int, float) and value - value == 0 and -_MAX_FLOAT <= value <= _MAX_FLOAT
+    return type(value) in (int, float) and value - value == 0 and -sys.float_info.max <= value <= sys.float_info.max
