@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from devsim.core.nvram import MemoryInUse, NonVolatileMemory, PoisonedMemory, check_name
+from tests.support.memory import refused_memory
 
 
 def test_a_second_owner_is_refused_and_the_first_keeps_its_files(tmp_path: Path) -> None:
@@ -156,19 +157,10 @@ def test_a_memory_image_of_the_wrong_shape_is_refused_naming_its_file(tmp_path: 
     the fix ``devsim run`` stopped with ``cannot create the devices: AttributeError: 'str' object
     has no attribute 'get'``, no file named.  Now the error names the file, which is left as it
     was, and the memory's lock is released."""
-    from devsim.runtime import Runtime
-    from devsim.runtime.process import UnfitMemory
-
     path = tmp_path / f"{kind}.nvram.json"
     text = json.dumps({section: "x" for section in ("program", "eeprom", "md", "programs", "offsets")})
     path.write_text(text)
-    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
-    try:
-        with pytest.raises(UnfitMemory) as refused:
-            runtime.add_device(kind)
-    finally:
-        runtime.stop()
-    message = str(refused.value)
+    message = str(refused_memory(tmp_path, kind))
     assert message.startswith(f"{path}: this memory image does not fit the kind '{kind}' (")
     assert message.endswith("); fix or delete the file") and "Error: " in message
     assert path.read_text() == text
@@ -180,17 +172,9 @@ def test_a_stored_number_a_kind_cannot_compute_with_is_unfit_too(tmp_path: Path)
     value of -1e300 failed the start with a bare ``OverflowError: (34, 'Numerical result out of
     range')``; since the GMS96 refuses a stored N value that is no integer, a POSELESTA parameter
     of 400 digits is the one that overflows, in ``math.isfinite``)."""
-    from devsim.runtime import Runtime
-    from devsim.runtime.process import UnfitMemory
-
     path = tmp_path / "poselesta.nvram.json"
     path.write_text('{"params": {"5": 1' + "0" * 400 + "}}")
-    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
-    try:
-        with pytest.raises(UnfitMemory, match=r"poselesta.nvram.json: .*\(OverflowError: "):
-            runtime.add_device("poselesta")
-    finally:
-        runtime.stop()
+    refused_memory(tmp_path, "poselesta", match=r"poselesta.nvram.json: .*\(OverflowError: ")
 
 
 def test_the_memory_of_another_kind_is_refused_and_left_as_it_is(tmp_path: Path) -> None:

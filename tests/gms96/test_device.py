@@ -10,6 +10,7 @@ import pytest
 
 from devsim.devices.gms96 import codec
 from tests.gms96.conftest import Plant
+from tests.support.memory import refused_memory
 
 T0 = "68 06 06 68 53 03 54 00 00 00 AA 16"
 STATUS = "10 01 03 04 16"
@@ -475,15 +476,9 @@ def test_a_stored_program_row_no_download_makes_refuses_the_memory(tmp_path: Any
     import json
 
     from devsim.runtime import Runtime
-    from devsim.runtime.process import UnfitMemory
 
     (tmp_path / "gms96.nvram.json").write_text(json.dumps({"flash": {"programs": {"0": [["A", 10000, 0, 0, 1], row]}}}))
-    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
-    try:
-        with pytest.raises(UnfitMemory, match=r"\(ValueError: stored program row .* is no command the card queues\)"):
-            runtime.add_device("gms96")
-    finally:
-        runtime.stop()
+    refused_memory(tmp_path, "gms96", match=r"\(ValueError: stored program row .* is no command the card queues\)")
     (tmp_path / "gms96.nvram.json").write_text(json.dumps({"flash": {"programs": {"0": [["A", 10000, 0, 0, 1]]}}}))
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:

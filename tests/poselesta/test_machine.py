@@ -11,6 +11,8 @@ from typing import Any
 
 import pytest
 
+from tests.support.memory import refused_memory
+
 OUTPUTS = ("data_bus", "strobe_m", "strobe_s1", "strobe_s2", "strobe_t", "strobe_ba")
 #: These tests check the control's logic on the levels it sees; the input delay of manual §2.3
 #: has its own tests (test_manual_inputs.py), so here an input is seen as it is set.
@@ -1020,18 +1022,10 @@ def test_a_stored_parameter_that_is_no_finite_number_refuses_the_memory(tmp_path
     the next save of the parameters (a write from the panel or the control API) raised
     PoisonedMemory out of the control.  Now the start stops naming the file, which stays as it
     was."""
-    from devsim.runtime import Runtime
-    from devsim.runtime.process import UnfitMemory
-
     path = tmp_path / "poselesta.nvram.json"
     text = f'{{"params": {{"5": {value}}}}}'
     path.write_text(text)
-    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
-    try:
-        with pytest.raises(UnfitMemory, match="this memory image does not fit the kind 'poselesta'"):
-            runtime.add_device("poselesta")
-    finally:
-        runtime.stop()
+    refused_memory(tmp_path, "poselesta", match="this memory image does not fit the kind 'poselesta'")
     assert path.read_text() == text
 
 
@@ -1042,17 +1036,11 @@ def test_a_stored_block_with_a_word_no_block_has_refuses_the_memory(tmp_path) ->
     import json
 
     from devsim.runtime import Runtime
-    from devsim.runtime.process import UnfitMemory
 
     path = tmp_path / "poselesta.nvram.json"
     for letter in ("W", "%", ""):
         path.write_text(json.dumps({"programs": {"20": [{"N": 1, "words": [["X", 5], [letter, 5]], "skip": False}]}}))
-        runtime = Runtime(virtual=True, state_dir=tmp_path).start()
-        try:
-            with pytest.raises(UnfitMemory, match=rf"\(ValueError: block N1: '{re.escape(letter)}' is no address letter"):
-                runtime.add_device("poselesta")
-        finally:
-            runtime.stop()
+        refused_memory(tmp_path, "poselesta", match=rf"\(ValueError: block N1: '{re.escape(letter)}' is no address letter")
     path.write_text(json.dumps({"programs": {"20": [{"N": 1, "words": [["X", 5000], ["M", 30]], "skip": False}]}}))
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import fcntl
 import json
 import os
@@ -500,23 +501,39 @@ class _HostRepeatsItsRequestAsTheArmEnds:
         result = fcntl.ioctl(fd, request, arg)
         if request == pty_module._TIOCSSOFTCAR and not self.fired:
             self.fired = True
-            _raw(self.host, termios.B4800)
+            self.request()
         return result
+
+    def request(self) -> None:
+        _raw(self.host, termios.B4800)
 
 
 class _HostRepeatsItsSerialRequestAsTheArmEnds(_HostRepeatsItsRequestAsTheArmEnds):
     """The same, but the host's request is serial code's (pyserial's): read, CLOCAL | CREAD and
     the speed set, written back; EXTPROC stays."""
 
-    def ioctl(self, fd: int, request: int, arg):
-        result = fcntl.ioctl(fd, request, arg)
-        if request == pty_module._TIOCSSOFTCAR and not self.fired:
-            self.fired = True
-            attrs = termios.tcgetattr(self.host)
-            attrs[2] |= termios.CLOCAL | termios.CREAD
-            attrs[4] = attrs[5] = termios.B4800
-            termios.tcsetattr(self.host, termios.TCSANOW, attrs)
-        return result
+    def request(self) -> None:
+        attrs = termios.tcgetattr(self.host)
+        attrs[2] |= termios.CLOCAL | termios.CREAD
+        attrs[4] = attrs[5] = termios.B4800
+        termios.tcsetattr(self.host, termios.TCSANOW, attrs)
+
+
+@contextlib.asynccontextmanager
+async def _host_heard():
+    """A transport with a raw host on its slave, and a queue of the settings the line hears."""
+    line = Line(EchoTarget(SerialSettings(9600, 8, "N", 1)), RealClock())
+    heard: asyncio.Queue[str] = asyncio.Queue()
+    line.observers.append(lambda event, text: heard.put_nowait(text) if event == "host_settings" else None)
+    transport = PtyTransport()
+    await transport.start(line)
+    host = os.open(transport.address, os.O_RDWR | os.O_NOCTTY)
+    try:
+        yield host, heard
+    finally:
+        os.close(host)
+        await transport.close()
+        line.close()
 
 
 async def test_a_host_that_repeats_its_request_as_the_arm_ends_finds_the_port_armed(
@@ -527,13 +544,7 @@ async def test_a_host_that_repeats_its_request_as_the_arm_ends_finds_the_port_ar
     real ``devsim run ip247 --pty``: the transport took that look for its arm, the host's change
     signal then looked like the arm's own, and every later open at 8E1 failed with EINVAL (the
     slave stayed at ``clocal extproc``) until the host asked for something else."""
-    line = Line(EchoTarget(SerialSettings(9600, 8, "N", 1)), RealClock())
-    heard: asyncio.Queue[str] = asyncio.Queue()
-    line.observers.append(lambda event, text: heard.put_nowait(text) if event == "host_settings" else None)
-    transport = PtyTransport()
-    await transport.start(line)
-    host = os.open(transport.address, os.O_RDWR | os.O_NOCTTY)
-    try:
+    async with _host_heard() as (host, heard):
         middle = _HostRepeatsItsSerialRequestAsTheArmEnds(host)
         monkeypatch.setattr(pty_module, "fcntl", middle)
         attrs = termios.tcgetattr(host)
@@ -547,10 +558,6 @@ async def test_a_host_that_repeats_its_request_as_the_arm_ends_finds_the_port_ar
         attrs = termios.tcgetattr(host)
         attrs[2] |= termios.CLOCAL | termios.CREAD | termios.PARENB
         termios.tcsetattr(host, termios.TCSANOW, attrs)  # (8E1 again: a change, no EINVAL)
-    finally:
-        os.close(host)
-        await transport.close()
-        line.close()
 
 
 async def test_a_host_that_clears_extproc_as_the_arm_ends_is_still_heard(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -558,13 +565,7 @@ async def test_a_host_that_clears_extproc_as_the_arm_ends_is_still_heard(monkeyp
     A raw host's request that lands just before that look (two opens in a row) clears EXTPROC
     and is taken for the arm's own change: the transport must set EXTPROC again, or it hears of
     no later change of the host's (CI saw a host's 19200 baud go unreported this way)."""
-    line = Line(EchoTarget(SerialSettings(9600, 8, "N", 1)), RealClock())
-    heard: asyncio.Queue[str] = asyncio.Queue()
-    line.observers.append(lambda event, text: heard.put_nowait(text) if event == "host_settings" else None)
-    transport = PtyTransport()
-    await transport.start(line)
-    host = os.open(transport.address, os.O_RDWR | os.O_NOCTTY)
-    try:
+    async with _host_heard() as (host, heard):
         middle = _HostRepeatsItsRequestAsTheArmEnds(host)
         monkeypatch.setattr(pty_module, "fcntl", middle)
         _raw(host, termios.B4800)
@@ -573,10 +574,6 @@ async def test_a_host_that_clears_extproc_as_the_arm_ends_is_still_heard(monkeyp
         monkeypatch.undo()
         _raw(host, termios.B19200)
         assert "19200 baud" in await asyncio.wait_for(heard.get(), 5)
-    finally:
-        os.close(host)
-        await transport.close()
-        line.close()
 
 
 @pytest.mark.parametrize("target", ["elsewhere", "live-pty"])

@@ -78,6 +78,16 @@ async def test_frame_format_mismatch_reaches_the_line() -> None:
         line.close()
 
 
+async def _read_until(reader: asyncio.StreamReader, marker: bytes) -> bytes:
+    """What the server sends until ``marker`` has come (the test fails if it closes first)."""
+    answers = b""
+    while marker not in answers:
+        chunk = await asyncio.wait_for(reader.read(4096), 5)
+        assert chunk, f"the server closed the connection after {answers!r}"
+        answers += chunk
+    return answers
+
+
 def _option(command: int, value: bytes) -> bytes:
     """IAC SB COM-PORT-OPTION command value IAC SE (client to server)."""
     return bytes([255, 250, 44, command]) + value.replace(b"\xff", b"\xff\xff") + bytes([255, 240])
@@ -95,11 +105,7 @@ async def test_an_end_of_subnegotiation_outside_one_is_ignored(echo: Recorder) -
         reader, writer = await asyncio.open_connection("127.0.0.1", transport.port)
         writer.write(b"#O\xff\xf0N\r" + _option(3, b"\x03"))  # (then SET-PARITY even: its reply ends the wait)
         await writer.drain()
-        answers = b""
-        while b"\xff\xfa\x2c\x67\x03\xff\xf0" not in answers:
-            chunk = await asyncio.wait_for(reader.read(4096), 5)
-            assert chunk, f"the server closed the connection after {answers!r}"
-            answers += chunk
+        await _read_until(reader, b"\xff\xfa\x2c\x67\x03\xff\xf0")
         assert echo.data == b"#ON\r"
         writer.close()
         await writer.wait_closed()
@@ -119,11 +125,7 @@ async def test_a_malformed_setting_is_answered_with_the_current_one(echo: Record
         writer.write(_option(3, b"\x09") + _option(4, b"\x09") + _option(1, b"\x00\x01") + _option(2, b"")
                      + _option(10, b"") + _option(3, b"\x03") + b"#ON\r")  # (3: SET-PARITY 3, even: taken)
         await writer.drain()
-        answers = b""
-        while b"#ON\r" not in answers:
-            chunk = await asyncio.wait_for(reader.read(4096), 5)
-            assert chunk, f"the server closed the connection after {answers!r}"
-            answers += chunk
+        answers = await _read_until(reader, b"#ON\r")
         # server replies (command + 100): parity 9 -> still none (1), stop size 9 -> still one (1),
         # the baud rate cut short -> 9600, the data size cut short -> 8, then even parity (3)
         replies = [answers[i + 3:answers.index(b"\xff\xf0", i)] for i in range(len(answers))
