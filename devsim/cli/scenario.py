@@ -25,19 +25,11 @@ from devsim.cli import exits
 from devsim.cli.options import check_fleet
 from devsim.core.config import ConfigError
 from devsim.core.console import say, stop_on_signals, warn
-from devsim.core.nvram import MemoryInUse, OtherKindsMemory, PoisonedMemory
+from devsim.core.nvram import UNUSABLE as _UNUSABLE_MEMORY
 from devsim.observe.live_log import DEFAULT_LEVEL, attach_log, level_of, log_options
 from devsim.transports import fdlimit
 
 __all__ = ["check", "scenario", "up"]
-
-
-def _unusable_memory() -> tuple[type[Exception], ...]:
-    """A state file a device cannot use (another simulator's, NaN, another kind's, the wrong
-    shape): one line naming the file, as `devsim run` says it (a traceback before)."""
-    from devsim.runtime.process import UnfitMemory
-
-    return MemoryInUse, OtherKindsMemory, PoisonedMemory, UnfitMemory
 
 
 def _count(number: int, thing: str) -> str:
@@ -227,7 +219,7 @@ def _run_files(scenarios: list[Any], files: tuple[str, ...], mode: str | None, s
                 run_scenario(item, mode=chosen, speed=speed, state_dir=state_dir, trace_dir=item_trace_dir,
                              announce=announce, on_step=progress.step if realtime else None, control=control)
             )
-        except (OSError, *_unusable_memory()) as exc:  # a port in use, a directory that cannot be made
+        except (OSError, *_UNUSABLE_MEMORY) as exc:  # a port in use, a directory that cannot be made
             raise exits.SystemFailure(f"{path}: cannot run the scenario: {exc}") from None
         except StateRefused as exc:  # a device refused a value of its state: (a program's text)
             raise exits.BadFile(f"{path}: {exc}") from None
@@ -347,7 +339,7 @@ def up(
                             level_of(verbose, quiet), name, idle_drop))
     except KeyboardInterrupt:
         sys.exit(exits.INTERRUPTED)
-    except (OSError, *_unusable_memory()) as exc:
+    except (OSError, *_UNUSABLE_MEMORY) as exc:
         raise exits.failure(exits.start_status(exc), f"cannot start the plant: {exc}") from None
     except StateRefused as exc:  # a device refused a value of its state: (a program's text)
         raise exits.BadFile(f"{plant_file}: {exc}") from None

@@ -32,7 +32,10 @@ from devsim.core.console import warn
 if TYPE_CHECKING:  # imported where used: a device without a state dir needs neither
     from pathlib import Path
 
-__all__ = ["KIND_KEY", "MemoryInUse", "NonVolatileMemory", "OtherKindsMemory", "PoisonedMemory", "check_name"]
+__all__ = [
+    "KIND_KEY", "UNUSABLE", "MemoryInUse", "NonVolatileMemory", "OtherKindsMemory", "PoisonedMemory", "UnfitMemory",
+    "check_name",
+]
 
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,127}$")
 
@@ -47,6 +50,16 @@ class PoisonedMemory(ValueError):
 
 class OtherKindsMemory(ValueError):
     """The stored image is the memory of a device of another kind (the same name, another kind)."""
+
+
+class UnfitMemory(ValueError):
+    """A device's stored memory image has sections of a shape its kind does not read (raised by
+    :meth:`devsim.runtime.Runtime.add_device`, which names the file)."""
+
+
+#: What makes a state file one a device cannot start on: ``devsim run``, ``up`` and ``scenario
+#: run`` say so in one line naming the file.
+UNUSABLE = (MemoryInUse, PoisonedMemory, OtherKindsMemory, UnfitMemory)
 
 
 #: The key under which an image written for a kind names it (not a section: ``get`` never sees it).

@@ -19,24 +19,20 @@ from typing import TYPE_CHECKING, Any, TypeVar
 from devsim.core.clock import Clock, RealClock, VirtualClock
 from devsim.core.device import Device, UnknownName
 from devsim.core.kit import CaptureTag
-from devsim.core.nvram import NonVolatileMemory
+from devsim.core.nvram import NonVolatileMemory, UnfitMemory
 from devsim.core.registry import device_class
 from devsim.transports.fdlimit import loop_exception_handler
 
 if TYPE_CHECKING:  # imported where used: a runtime without a state dir needs no pathlib
     from pathlib import Path
 
-__all__ = ["Runtime", "UnfitMemory", "UnknownDevice", "port_key"]
+__all__ = ["Runtime", "UnknownDevice", "port_key"]
 
 T = TypeVar("T")
 
 
 #: The longest step of virtual time one ``advance`` may take (about 116 days).
 MAX_ADVANCE = 1e7
-
-
-class UnfitMemory(ValueError):
-    """A device's stored memory image has sections of a shape its kind does not read."""
 
 
 class UnknownDevice(KeyError):

@@ -457,7 +457,7 @@ def test_a_stored_n_parameter_out_of_its_range_is_clamped_as_a_write_is(tmp_path
                                         ({"39": True}, [0, 0])])
 def test_a_stored_n_parameter_that_is_no_whole_number_refuses_the_memory(tmp_path: Any, n: Any, n8: Any) -> None:
     """(Fuzzed: N8 "ab" loaded as ['a', 'b'] and every read of N8 failed with ValueError.)"""
-    from devsim.runtime.process import UnfitMemory
+    from devsim.core.nvram import UnfitMemory
 
     runtime = _card_with_eeprom(tmp_path, n, n8)
     try:

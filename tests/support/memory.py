@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
+from devsim.core.nvram import UnfitMemory
 from devsim.runtime import Runtime
-from devsim.runtime.process import UnfitMemory
 
 
 def refused_memory(state_dir: Path, kind: str, match: str | None = None) -> UnfitMemory:
