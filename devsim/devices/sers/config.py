@@ -14,7 +14,7 @@ import math
 from typing import Annotated, Any, Literal
 
 from devsim.core.settings import Check, Keys, Meta, Settings, doc, field
-from devsim.devices.sers.paramdef import below_exclusive_minimum
+from devsim.devices.sers.paramdef import range_problem
 from devsim.devices.sers.parameters import PARAMETER_TABLE
 
 __all__ = ["AXIS_GEOMETRY", "AxisGeometry", "BAUD_RATES", "SersConfig"]
@@ -34,14 +34,8 @@ def _param_range(key: str, number: float | int) -> float | int:
     pdef = PARAMETER_TABLE.lookup(key)
     if not math.isfinite(number):
         raise ValueError("not a finite number")
-    if pdef.choices is not None and int(number) not in pdef.choices:
-        raise ValueError(f"{number:g} is not one of {', '.join(map(str, sorted(pdef.choices)))}")
-    if pdef.minimum is not None and number < pdef.minimum:
-        raise ValueError(f"{number:g} is below the minimum {pdef.minimum:g}")
-    if below_exclusive_minimum(pdef, number):  # (as the drive keeps it: P123 0.00001 is 0.0000)
-        raise ValueError(f"{number:g} must be above {pdef.minimum:g}")
-    if pdef.maximum is not None and number > pdef.maximum:
-        raise ValueError(f"{number:g} is above the maximum {pdef.maximum:g}")
+    if (problem := range_problem(pdef, number)) is not None:
+        raise ValueError(problem)
     return number
 
 

@@ -16,7 +16,7 @@ from typing import Any
 from devsim.core.console import warn
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.sers.constants import WEIGHTED_KINDS, WEIGHTING_PARAMS
-from devsim.devices.sers.paramdef import below_exclusive_minimum
+from devsim.devices.sers.paramdef import range_problem
 from devsim.devices.sers.parameters import (
     CURRENT_MAX_MA,
     FACTORY_DEFAULTS,
@@ -141,8 +141,8 @@ class ParameterMemory:
 
 def _unfit(stored: Any) -> str | None:
     """What makes a stored parameter image one PSAVE never writes, or None: a number that is no
-    saved parameter, a value that is no finite number, one outside its choices, a fractional
-    integer, or (unweighted, so kept in the unit its range is in) one outside the range."""
+    saved parameter, a value that is no finite number, a fractional integer, or (unweighted, so
+    kept in the unit its range is in) one outside its choices or range (:func:`~.paramdef.range_problem`)."""
     if type(stored) is not dict:
         return f"the parameters are a {type(stored).__name__}, not a table"
     for key, value in stored.items():
@@ -151,15 +151,11 @@ def _unfit(stored: Any) -> str | None:
             return f"P{key} is no parameter PSAVE stores"
         if not _finite(value):
             return f"P{key}={value!r} is no finite number"
-        if row.choices is not None and value not in row.choices:
-            return f"P{key}={value!r} is none of {', '.join(map(str, row.choices))}"
         kind = KIND[row.key]  # type: ignore[index]
         if kind == "int" and not float(value).is_integer():
             return f"P{key}={value!r} is no integer"
-        if kind not in WEIGHTED_KINDS and ((row.minimum is not None and value < row.minimum)
-                                           or (row.maximum is not None and value > row.maximum)
-                                           or below_exclusive_minimum(row, value)):
-            return f"P{key}={value!r} is outside {row.range_text()}"
+        if kind not in WEIGHTED_KINDS and (problem := range_problem(row, value)) is not None:
+            return f"P{key}: {problem}"  # (the choices are on integer rows only, none weighted)
     return None
 
 

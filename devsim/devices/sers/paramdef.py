@@ -15,7 +15,8 @@ from typing import Any, Literal
 from devsim.core.parameters import Param
 from devsim.devices.sers.units import quantize
 
-__all__ = ["EXTRA", "POS_MAX", "POS_MIN", "RW_E", "Kind", "Number", "Rows", "UNITS", "below_exclusive_minimum"]
+__all__ = ["EXTRA", "POS_MAX", "POS_MIN", "RW_E", "Kind", "Number", "Rows", "UNITS", "below_exclusive_minimum",
+           "range_problem"]
 
 #: How a value is kept and shown: a plain integer, a weighted quantity (converted with P76 /
 #: P44 / P160, §4.8.4.6) or a number with a fixed number of decimals.
@@ -52,6 +53,21 @@ def below_exclusive_minimum(row: Param, value: float) -> bool:
         return False
     kept = quantize(float(value), row.decimals) if row.extra["kind"] == "fixed" else value
     return kept <= row.minimum
+
+
+def range_problem(row: Param, value: float) -> str | None:
+    """Why ``value`` (finite, in the unit the row's range is in) is outside the row's own range
+    (§4.7), or None: not one of its choices, below its minimum, not above a "> minimum" as the
+    drive keeps it, above its maximum.  (A configured value is checked with it, and a stored one.)"""
+    if row.choices is not None and int(value) not in row.choices:
+        return f"{value:g} is not one of {', '.join(map(str, sorted(row.choices)))}"
+    if row.minimum is not None and value < row.minimum:
+        return f"{value:g} is below the minimum {row.minimum:g}"
+    if below_exclusive_minimum(row, value):  # (as the drive keeps it: P123 0.00001 is 0.0000)
+        return f"{value:g} must be above {row.minimum:g}"
+    if row.maximum is not None and value > row.maximum:
+        return f"{value:g} is above the maximum {row.maximum:g}"
+    return None
 
 
 def _access(readable: bool, writable: bool) -> Literal["rw", "r", "w"]:
