@@ -544,12 +544,11 @@ class _Parts(NamedTuple):
 
         host = raw.get("host")
         devices = each(DeviceSpec, "devices")
-        items = raw.get("devices")  # (``devices: 5``, a number: zip() raised TypeError, a traceback)
+        items = raw.get("devices")
+        listed = items if isinstance(items, list) else []  # (``devices: 5``: zip() raised TypeError, a traceback)
         names = [item.get("name") if isinstance(item, dict) else None
-                 for item, device in zip(items if isinstance(items, list) else [], devices, strict=False)
-                 if device is None]
-        unparsed = tuple(names) if all(isinstance(name, str) for name in names) and isinstance(items, list | None) \
-            else None
+                 for item, device in zip(listed, devices, strict=False) if device is None]
+        unparsed = tuple(names) if isinstance(items, list | None) and all(isinstance(n, str) for n in names) else None
         return cls(devices, each(BusSpec, "buses"), each(Step, "steps"), dict(host) if isinstance(host, dict) else {},
                    raw.get("opcua") is not None, unparsed)  # type: ignore[arg-type]
 
