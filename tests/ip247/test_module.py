@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import json
 import struct
 
 import pytest
@@ -10,8 +11,10 @@ import pytest
 from devsim.core.points import BadValue
 from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.machine_data import Ramp
+from devsim.runtime import Runtime
 from tests.ip247.helpers import BACKWARD, FORWARD, START, STOP, TAKE_OVER, Make, Module, record
 from tests.ip247.test_machine_data import COM247, words
+from tests.support.memory import refused_memory
 
 
 def test_power_up_state(mod: Module) -> None:
@@ -453,3 +456,71 @@ def test_position_reached_drops_during_a_dwell(mod: Module) -> None:
     assert mod.device.read("output.PE1") is False and not mod.device.read("axis.1.attributes") & 0x04
     mod.clock.advance(3)
     assert mod.device.read("output.PE1") is True and mod.device.read("axis.1.attributes") & 0x04
+
+
+# -- battery RAM from a state file (a hand edit, a damaged file: fuzzed) --------------------------------
+def _image() -> dict:
+    """A battery RAM as a module saves it: SYS-ID module 11, COM247's MD on axis 1 (DB 101), a
+    program and a faulty one (syntax error 16 in block 1, as BA22 marks it), BA15 offset 2000."""
+    md = words(COM247)
+    md[2] = 0x4200 | 101
+    return {"devsim-kind": "ip247", "sys_id": [11, 2, 3], "md": {"1": md},
+            "offsets": {"1": [0, 2_000, 0], "2": [0, 0, 0], "3": [0, 0, 0]},
+            "programs": {"gaps": 0, "programs": [[7, "%  7\nN1 X30 F1000\nN2 M02\n", 0, 0],
+                                                 [12, "%  12\nN1 X1 F100 Q\nN2 M02\n", 16, 1]]}}
+
+
+def test_a_battery_ram_image_the_module_saves_loads_as_saved(tmp_path) -> None:  # noqa: ANN001
+    (tmp_path / "ip247.nvram.json").write_text(json.dumps(_image()))
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        m = runtime.add_device("ip247").model
+        assert m.channel.sys_id == (11, 2, 3) and m.units[0].md_valid and m.units[0].coords.to_ba15 == 2_000
+        assert m.programs.store.directory() == [(7, 18), (12, 18)]
+        assert m.channel.read_record(4, 69, 12)[1][3:5] == [16, 1]
+    finally:
+        runtime.stop()
+
+
+def _damaged(section: str, change: object) -> dict:
+    image = _image()
+    if callable(change):
+        change(image[section])
+    else:
+        image[section] = change
+    return image
+
+
+@pytest.mark.parametrize(("section", "change"), [
+    ("sys_id", "abc"), ("sys_id", [11, 2]), ("sys_id", [11, 2, "3"]), ("sys_id", [256, 0, 0]),
+    ("sys_id", [True, 2, 3]),
+    ("programs", lambda p: p["programs"][0].__setitem__(1, "%  7\nN1 X30 F1000 Q\nN2 M02\n")),  # marked 0
+    ("programs", lambda p: p["programs"][1].__setitem__(2, 0)),  # a faulty program marked fault-free
+    ("programs", lambda p: p["programs"][0].__setitem__(1, "%  7\nN1 X30 F1000\nN2 M02 €\n")),
+    ("programs", lambda p: p["programs"][0].__setitem__(0, 256)),
+    ("programs", lambda p: p["programs"][1].__setitem__(0, 7)),  # twice
+    ("programs", lambda p: p.__setitem__("gaps", -1)),
+    ("programs", lambda p: p.__setitem__("gaps", 6_000)),  # more characters than the memory holds
+    ("md", lambda md: md["1"].__setitem__(5, 65_536)),
+    ("md", lambda md: md["1"].__setitem__(46, True)),
+    ("md", lambda md: md["1"].__setitem__(47, 0x81)),  # a bit BA20 does not store
+    ("md", lambda md: md.__setitem__("2", md["1"])),  # axis 1's record on axis 2
+    ("md", lambda md: md["1"].__setitem__(14, 0)),  # error-free, yet 0 pulses per revolution
+    ("offsets", lambda o: o["1"].__setitem__(1, "5")),
+    ("offsets", lambda o: o["1"].__setitem__(1, 1.5)),
+    ("offsets", lambda o: o["1"].__setitem__(0, 2**40)),
+], ids=["sys-id-text", "sys-id-two", "sys-id-string-byte", "sys-id-256", "sys-id-bool", "program-fault-marked-0",
+        "faulty-marked-0", "program-euro", "program-256", "program-twice", "gaps-negative", "gaps-6000",
+        "md-word-65536", "md-word-bool", "md-bit-not-stored", "md-other-axis", "md-error-free-unchecked",
+        "offset-string", "offset-fraction", "offset-2**40"])
+def test_battery_ram_the_module_never_stores_refuses_the_memory(tmp_path, section: str, change: object) -> None:  # noqa: ANN001
+    """(Fuzzed, /tmp/probe_images/mut.py: 2071 damaged images.)  A SYS-ID of another shape loaded
+    and failed every BA70 with TypeError; a program marked fault-free whose text the check refuses
+    failed every program start (SyntaxFault out of the job); characters beyond latin-1 failed BA69; offsets
+    that are no whole numbers failed every observation, read and save; MD words beyond 16 bits,
+    program numbers beyond 255, duplicates and a negative gap were served to the host.  Now the
+    start stops naming the file, which stays as it was."""
+    text = json.dumps(_damaged(section, change))
+    (tmp_path / "ip247.nvram.json").write_text(text)
+    refused_memory(tmp_path, "ip247", match="this memory image does not fit the kind 'ip247'")
+    assert (tmp_path / "ip247.nvram.json").read_text() == text

@@ -19,7 +19,7 @@ from devsim.core.words import signed32
 from devsim.devices.ip247.tables import MD_ERRORS
 
 __all__ = [
-    "LIMIT", "RECORD_WORDS", "RESERVED", "MachineData", "Ramp", "check", "decode", "encode", "record_db",
+    "LIMIT", "RECORD_WORDS", "RESERVED", "MachineData", "Ramp", "check", "decode", "encode", "record_db", "stored",
 ]
 
 RECORD_WORDS = 70
@@ -262,3 +262,20 @@ CHECKS: Table[Check] = Table([
     _check(13, lambda md, sys, lv, rt: _zero_offsets_bad(md)),
     _check(16, lambda md, sys, lv, rt: rt),
 ])
+
+
+def stored(words: object, *, axis: int, sys_module: int) -> MachineData:
+    """The machine data of a record battery RAM holds for ``axis``: what BA20 stores there, 70
+    words of 16 bits with the items as :func:`encode` writes them, the reserve as the host wrote
+    it and an MD error the checks give (0 only when they pass with the limit inputs not actuated);
+    ValueError for anything else (a hand-edited or damaged state file)."""
+    if type(words) is not list or not all(type(w) is int and 0 <= w <= 0xFFFF for w in words):
+        raise ValueError(f"the machine data of axis {axis} are no record of 16-bit words")
+    md = decode(words)
+    if md.axis != axis or encode(md)[:RESERVED.start] != words[:RESERVED.start]:
+        raise ValueError(f"the machine data of axis {axis} are no record BA20 stores for it")
+    released = (md.limit_polarity == 1,) * 2  # (NC contacts at 24 V, NO contacts open)
+    if md.error not in (0, *CHECK_ORDER, 21) or (md.error == 0 and check(md, sys_module=sys_module,
+                                                                          limit_levels=released)):
+        raise ValueError(f"the machine data of axis {axis} hold MD error {md.error}, which their checks do not give")
+    return md

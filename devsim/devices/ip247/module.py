@@ -37,6 +37,9 @@ __all__ = ["Ip247Module", "OBSERVED", "OPERATOR_JOBS", "OPERATOR_MODES"]
 OPERATOR_MODES = frozenset(range(1, 18))
 AXES = (1, 2, 3)
 BOOT_TIME, BLINK = 1.0, 0.25  # seconds until the PG port is online; LED blink period (spec §5.16)
+#: [SIM-CHOICE] A stored offset is a whole number within the signed double word (DD) the records
+#: carry coordinates in: BA12 … BA16 keep every coordinate within ±100 m, a rotary range within 32 bits.
+OFFSET_BOUND = 2**31
 
 
 class Ip247Module(Model):
@@ -71,22 +74,31 @@ class Ip247Module(Model):
 
     # -- battery RAM (spec §4.14) -------------------------------------------------------------------
     def _load(self) -> None:
+        """Battery RAM as the module left it; a section holding what the module never stores (a
+        hand-edited or damaged state file) is a ValueError naming it, and the start stops with
+        UnfitMemory naming the file, as for the other kinds' memories."""
         if self.config.get("battery_ok", True) is False:
             self.nvram.wipe()
+        ident = self.nvram.get("sys_id")
+        default = self.config.get("sys_id") or {}
+        if ident and (type(ident) is not list or len(ident) != 3
+                      or not all(type(v) is int and 0 <= v <= 0xFF for v in ident)):
+            raise ValueError(f"the SYS-ID {ident!r} is no three bytes as BA24 stores them")
+        self.channel.sys_id = tuple(ident) if ident else (int(default.get("module", 0)), int(default.get("slot", 0)),
+                                                           int(default.get("page", 0)))
         mds = self.nvram.get("md") or {}
         for unit in self.units:
             words = mds.get(str(unit.number))
             if words:
-                unit.load_md(machine_data.decode(list(words)), list(words), first=False)
+                unit.load_md(machine_data.stored(words, axis=unit.number, sys_module=self.channel.sys_id[0]),
+                             list(words), first=False)
         offsets = self.nvram.get("offsets") or {}
         for unit in self.units:
             zo, to, tp = offsets.get(str(unit.number), (0, 0, 0))
+            if not all(type(v) is int and -OFFSET_BOUND <= v < OFFSET_BOUND for v in (zo, to, tp)):
+                raise ValueError(f"the offsets of axis {unit.number} {[zo, to, tp]!r} are no double words")
             unit.coords.zo_mode, unit.coords.to_ba15, unit.coords.to_prog = zo, to, tp
         self.programs.store = ProgramStore.from_json(self.nvram.get("programs"))
-        ident = self.nvram.get("sys_id")
-        default = self.config.get("sys_id") or {}
-        self.channel.sys_id = tuple(ident) if ident else (int(default.get("module", 0)), int(default.get("slot", 0)),
-                                                           int(default.get("page", 0)))
 
     def save(self) -> None:
         self.nvram.put("md", {str(u.number): u.md_words for u in self.units if u.md_words})

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import msgspec
 
+from devsim.devices.ip247 import program as lang
+
 __all__ = ["CAPACITY", "MAX_PROGRAMS", "ProgramStore", "Stored", "StoreError"]
 
 CAPACITY = 6000  # characters
@@ -94,7 +96,37 @@ class ProgramStore:
 
     @classmethod
     def from_json(cls, data: dict[str, object] | None) -> ProgramStore:
+        """The store battery RAM holds; ValueError for what BA22 and teach-in never store (a
+        hand-edited or damaged state file): a program number outside 0 … 255 or twice, a text no
+        record carries (latin-1) or marked with another syntax error or faulty block than its
+        check gives, more programs or characters than the memory holds."""
         if not data:
             return cls()
-        programs = [Stored(int(n), str(t), int(e), int(f)) for n, t, e, f in data.get("programs", [])]  # type: ignore[union-attr]
-        return cls(programs, int(data.get("gaps", 0)))  # type: ignore[arg-type]
+        rows, gaps = data.get("programs", []), data.get("gaps", 0)  # type: ignore[union-attr]
+        if type(rows) is not list or type(gaps) is not int or gaps < 0:
+            raise ValueError("the stored programs are no program memory")
+        programs = [_stored(row) for row in rows]
+        store = cls(programs, gaps)
+        numbers = [p.number for p in programs]
+        if len(set(numbers)) != len(numbers) or len(programs) > MAX_PROGRAMS or store.used > CAPACITY:
+            raise ValueError(f"the stored programs {numbers} are more than the memory holds, or one twice")
+        return store
+
+
+def _stored(row: object) -> Stored:
+    """One stored program ``[number, text, error, faulty]`` as BA22 or teach-in stores it."""
+    if type(row) is not list or [type(v) for v in row] != [int, str, int, int] or not 0 <= row[0] <= 255:  # (numbers 0 … 255)
+        raise ValueError(f"the stored program {row!r:.40} is no program BA22 stores")
+    program = Stored(*row)
+    try:
+        program.text.encode("latin-1")
+        lang.parse(program.text)
+        check = (0, 0)
+    except UnicodeEncodeError:
+        raise ValueError(f"the stored program {program.number} holds characters no record carries") from None
+    except lang.SyntaxFault as fault:
+        check = (fault.errno, fault.block)
+    if (program.error, program.faulty) != check:
+        raise ValueError(f"the stored program {program.number} is marked with syntax error {program.error} in block"
+                         f" {program.faulty}, which its text does not give")
+    return program
