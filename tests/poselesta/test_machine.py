@@ -5,12 +5,14 @@ direction keys (§5.4)."""
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from typing import Any
 
 import pytest
 
+from devsim.runtime import Runtime
 from tests.support.memory import refused_memory
 
 OUTPUTS = ("data_bus", "strobe_m", "strobe_s1", "strobe_s2", "strobe_t", "strobe_ba")
@@ -1033,10 +1035,6 @@ def test_a_stored_block_with_a_word_no_block_has_refuses_the_memory(tmp_path) ->
     """(Fuzzed: stored blocks with words 'W5', '%1' or '' loaded, and reading the program's text
     through the control API failed with KeyError in tape.block_words, which every output of a
     block goes through.)  A stored block of the letters a block has loads as before."""
-    import json
-
-    from devsim.runtime import Runtime
-
     path = tmp_path / "poselesta.nvram.json"
     for letter in ("W", "%", ""):
         path.write_text(json.dumps({"programs": {"20": [{"N": 1, "words": [["X", 5], [letter, 5]], "skip": False}]}}))
@@ -1046,5 +1044,46 @@ def test_a_stored_block_with_a_word_no_block_has_refuses_the_memory(tmp_path) ->
     try:
         runtime.add_device("poselesta")
         assert "X" in runtime.read("poselesta", "program.P20")
+    finally:
+        runtime.stop()
+
+
+_BLOCK = [{"N": 1, "words": [["X", 5000], ["M", 30]], "skip": False}]
+
+
+@pytest.mark.parametrize("sections", [
+    {"tools": {"1": {"radius": "abc", "length": 1.0}}}, {"tools": {"1": {"radius": True, "length": 1.0}}},
+    {"tools": {"1": {"radius": 2.5}}}, {"tools": {"1": {"radius": 2.5, "length": 1.0, "wear": 0.1}}},
+    {"tools": {"150": {"radius": 2.5, "length": 1.0}}},
+    {"protected": [-21]}, {"protected": [200]}, {"protected": [21.5]}, {"protected": ["21"]},
+    {"inch_programs": [79]}, {"inch_programs": [-1]},
+    {"programs": {"79": _BLOCK}}, {"programs": {"100": _BLOCK}}, {"programs": {"-1": _BLOCK}},
+], ids=["tool-text", "tool-bool", "tool-no-length", "tool-extra-item", "tool-T150",
+        "protected-negative", "protected-200", "protected-fraction", "protected-text", "inch-P79", "inch-negative",
+        "program-P79", "program-P100", "program-negative"])
+def test_a_stored_tool_or_program_number_the_control_never_stores_refuses_the_memory(tmp_path, sections) -> None:  # noqa: ANN001
+    """(Fuzzed, /tmp/probe_images/mut.py: 306 damaged tool, protected and inch-program lists.)  A
+    stored tool loaded as whatever the file held, and tool.Tnn served a text, true, a missing
+    length or an extra item to the host; protected and inch programs outside P00 … P98 (or
+    fractions, cut to whole numbers) and programs P79 or P100 loaded.  Now the start stops naming
+    the file, which stays as it was; a tool, protection and program as the control stores them load."""
+    path = tmp_path / "poselesta.nvram.json"
+    text = json.dumps(sections)
+    path.write_text(text)
+    refused_memory(tmp_path, "poselesta", match="this memory image does not fit the kind 'poselesta'")
+    assert path.read_text() == text
+
+
+def test_stored_tools_protection_and_programs_load_as_saved(tmp_path) -> None:  # noqa: ANN001
+    (tmp_path / "poselesta.nvram.json").write_text(json.dumps({
+        "tools": {"1": {"radius": 2.5, "length": 10}, "99": {"radius": 0.5, "length": -3.25}},
+        "protected": [0, 21, 98], "inch_programs": [22], "programs": {"0": _BLOCK, "98": _BLOCK}}))
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        runtime.add_device("poselesta")
+        assert runtime.read("poselesta", "tool.T01") == {"radius": 2.5, "length": 10.0}
+        assert runtime.read("poselesta", "tool.T99") == {"radius": 0.5, "length": -3.25}
+        assert runtime.read("poselesta", "protected") == [0, 21, 98]
+        assert "X" in runtime.read("poselesta", "program.P98")
     finally:
         runtime.stop()

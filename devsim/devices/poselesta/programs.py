@@ -26,6 +26,7 @@ __all__ = ["CATALOGUE", "DIAGNOSTICS", "RESERVED_PROGRAMS", "ProgramMemory"]
 
 DIAGNOSTICS, CATALOGUE = 79, 99
 RESERVED_PROGRAMS = (DIAGNOSTICS, CATALOGUE)  # the diagnostics and the parameter catalogue (spec §4.9)
+NC_PROGRAMS = frozenset(range(99)) - {DIAGNOSTICS}  # what a read-in or program entry stores
 
 
 class ProgramMemory:
@@ -56,12 +57,17 @@ class ProgramMemory:
 
     # -- memory -------------------------------------------------------------------------------
     def load(self) -> None:
+        """The memory as the control stored it; what it never stores (a hand-edited or damaged
+        state file: a program, protected or inch program outside P00 … P98, a tool outside
+        T01 … T99 or other than its radius and length as finite numbers) is a ValueError, and
+        the start refuses the memory naming the file."""
         nvram = self._nvram
         stored = nvram.get("programs") or {}
-        self.programs = {int(p): {int(b["N"]): Block.from_json(b) for b in blocks} for p, blocks in stored.items()}
-        self.protected = {int(p) for p in nvram.get("protected") or []}
-        self.inch_programs = {int(p) for p in nvram.get("inch_programs") or []}
-        self.tools = {int(t): dict(v) for t, v in (nvram.get("tools") or {}).items()}
+        self.programs = {_numbered(_key(p), "program", NC_PROGRAMS): {int(b["N"]): Block.from_json(b) for b in blocks}
+                         for p, blocks in stored.items()}
+        self.protected = {_numbered(p, "protected program", range(99)) for p in nvram.get("protected") or []}
+        self.inch_programs = {_numbered(p, "inch program", NC_PROGRAMS) for p in nvram.get("inch_programs") or []}
+        self.tools = {_numbered(_key(t), "tool", range(1, 100)): _tool(t, v) for t, v in (nvram.get("tools") or {}).items()}
 
     def _save(self) -> None:
         self._unsaved = False
@@ -198,3 +204,23 @@ class ProgramMemory:
             entry[key] = float(number_value)
         self.tools[number] = entry
         self._nvram.put("tools", {str(t): v for t, v in sorted(self.tools.items())})
+
+
+def _numbered(number: object, what: str, numbers: range | frozenset[int]) -> int:
+    """A stored program's or tool's number (a list's whole number, a key through :func:`_key`)."""
+    if type(number) is not int or number not in numbers:
+        raise ValueError(f"stored {what} {number!r} is none the control stores")
+    return number
+
+
+def _key(key: str) -> int | str:
+    """A JSON key's number (its digits), or the key as it is (which no number is)."""
+    return int(key) if key.isdecimal() and key.isascii() else key
+
+
+def _tool(key: object, value: object) -> dict[str, float]:
+    """A stored tool as :meth:`ProgramMemory.set_tool` stores it: its radius and length."""
+    if type(value) is not dict or set(value) != {"radius", "length"} or not all(
+            type(v) in (int, float) and math.isfinite(v) for v in value.values()):
+        raise ValueError(f"stored tool T{key} {value!r:.60} is no radius and length")
+    return {k: float(v) for k, v in value.items()}
