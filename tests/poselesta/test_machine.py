@@ -1039,7 +1039,7 @@ def test_a_stored_block_with_a_word_no_block_has_refuses_the_memory(tmp_path) ->
     for letter in ("W", "%", ""):
         path.write_text(json.dumps({"programs": {"20": [{"N": 1, "words": [["X", 5], [letter, 5]], "skip": False}]}}))
         refused_memory(tmp_path, "poselesta", match=rf"\(ValueError: block N1: '{re.escape(letter)}' is no address letter")
-    path.write_text(json.dumps({"programs": {"20": [{"N": 1, "words": [["X", 5000], ["M", 30]], "skip": False}]}}))
+    path.write_text(json.dumps({"programs": {"20": [{"N": 1, "words": [["X", 5000], ["M", 2]], "skip": False}]}}))
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:
         runtime.add_device("poselesta")
@@ -1048,7 +1048,7 @@ def test_a_stored_block_with_a_word_no_block_has_refuses_the_memory(tmp_path) ->
         runtime.stop()
 
 
-_BLOCK = [{"N": 1, "words": [["X", 5000], ["M", 30]], "skip": False}]
+_BLOCK = [{"N": 1, "words": [["X", 5000], ["M", 2]], "skip": False}]
 
 
 @pytest.mark.parametrize("sections", [
@@ -1087,3 +1087,24 @@ def test_stored_tools_protection_and_programs_load_as_saved(tmp_path) -> None:  
         assert "X" in runtime.read("poselesta", "program.P98")
     finally:
         runtime.stop()
+
+
+@pytest.mark.parametrize("block", [
+    {"N": 1, "words": [["X", 10**8]]}, {"N": 1, "words": [["G", 150]]}, {"N": 1, "words": [["F", -5]]},
+    {"N": 1, "words": [["X", 1], ["Y", 2], ["Z", 3]]}, {"N": 1, "words": [["T", 1], ["T", 2]]},
+    {"N": 1, "words": [["M", 30]]}, {"N": 1, "words": [["P", 5]]}, {"N": 1000, "words": [["X", 1]]},
+    {"N": -1, "words": [["X", 1]]}, {"N": 1, "words": [["X", 1.5]]}, {"N": 1, "words": [["X", "5"]]},
+    {"N": 1, "words": [["X", 1]], "skip": "no"},
+], ids=["X-8-digits", "G150", "F-signed", "three-coordinates", "T-twice", "M30", "P-word", "N1000", "N-1",
+        "X-fraction", "X-text", "skip-text"])
+def test_a_stored_block_no_read_in_stores_refuses_the_memory(tmp_path, block: dict) -> None:  # noqa: ANN001
+    """(Fuzzed.)  Such a block loaded, and the control served it as a program it cannot read back:
+    program.P20 read 'N 1 X 100000.000', 'G 150', 'F- 5', three coordinates, 'T 01 T 02' or an
+    'M 30' that ends the tape, which entered again are WERTBEREICHES-UEBERLAUF or a cut program
+    (a fraction or a text was cut to a whole number, any skip taken as yes).  Now the start stops
+    naming the file, which stays as it was."""
+    path = tmp_path / "poselesta.nvram.json"
+    text = json.dumps({"programs": {"20": [block]}})
+    path.write_text(text)
+    refused_memory(tmp_path, "poselesta", match=r"\(ValueError: block N-?\d+: ")
+    assert path.read_text() == text

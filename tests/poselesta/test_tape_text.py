@@ -74,10 +74,21 @@ def test_characters_beyond_ascii_are_skipped(inserted: list[tuple[int, str]]) ->
     assert parse_blocks(text) == BLOCKS
 
 
+#: the values a read-in stores for a word (spec §3.4: 7 digits signed for coordinates and centres)
+_VALUES = {**dict.fromkeys("XYZDIJK", (-9_999_999, 9_999_999)), "F": (0, 9_999), "S": (0, 9_999), "T": (0, 99),
+           "G": (0, 99), "M": (0, 99), "L": (0, 99_999)}
+
+
 @hs.composite
 def _blocks(draw: hs.DrawFn) -> Block:
-    words = draw(hs.lists(hs.tuples(hs.sampled_from("XYZDIJKFSTGML"), hs.integers(-9_999_999, 9_999_999)), max_size=8))
-    return Block(draw(hs.integers(0, 999)), tuple(words), draw(hs.booleans()))
+    """A block as a read-in stores it: at most 2 coordinates, 2 centres, 4 G and 2 M (not M30, which
+    ends the tape), N F S T L once each."""
+    letters = [*draw(hs.lists(hs.sampled_from("XYZD"), max_size=2, unique=True)),
+               *draw(hs.lists(hs.sampled_from("IJK"), max_size=2, unique=True)),
+               *draw(hs.lists(hs.sampled_from("FSTL"), unique=True)), *"G" * draw(hs.integers(0, 4)),
+               *"M" * draw(hs.integers(0, 2))]
+    words = [(k, draw(hs.integers(*_VALUES[k]).filter(lambda v, k=k: (k, v) != ("M", 30)))) for k in letters]
+    return Block(draw(hs.integers(0, 999)), tuple(draw(hs.permutations(words))), draw(hs.booleans()))
 
 
 @settings(max_examples=100, deadline=None)

@@ -45,8 +45,9 @@ SIGNED = frozenset(COORDINATES + CENTRES + "P")
 ORDER = "NPXYZDIJKFSTGML"
 #: The catalogue's value word: signed, 5 digits before the point and 3 after (spec §3.9).
 CATALOGUE_VALUE = "P"
-#: the letters a stored block's words may have (N is the block's number, not a word)
-_WORD_LETTERS = frozenset(ORDER[1:])
+#: the letters a stored block's words may have (N is the block's number, not a word; P only the
+#: catalogue's, which is no stored program)
+_WORD_LETTERS = frozenset(ORDER[2:])
 CR, LF, NUL, DEL, SP = 0x0D, 0x0A, 0x00, 0x7F, 0x20
 
 
@@ -71,6 +72,10 @@ class Formats(msgspec.Struct, frozen=True):
                 "P": (5, 3)}[letter]
 
 
+#: The digits of each word (a coordinate's seven, whatever its decimals): what a stored word may have.
+_DIGITS = Formats()
+
+
 class Block(msgspec.Struct, frozen=True):
     """One NC block: its number and its words.  Coordinates and L are integers in units of the
     last decimal (``X 10.500`` with 3 decimals is 10500); G and M keep their order of arrival."""
@@ -93,13 +98,26 @@ class Block(msgspec.Struct, frozen=True):
 
     @classmethod
     def from_json(cls, data: Mapping[str, Any]) -> Block:
-        """A stored block; a word whose letter no block has (a hand-edited state file) is a
-        ValueError (the start refuses the memory), where it failed every output of the program."""
-        words = tuple((str(k), int(v)) for k, v in data["words"])
-        for letter, _value in words:
-            if letter not in _WORD_LETTERS:
-                raise ValueError(f"block N{data['N']}: {letter!r} is no address letter ({ORDER[1:]})")
-        return cls(int(data["N"]), words, bool(data.get("skip")))
+        """A stored block; one a read-in or program entry never stores (a hand-edited state file)
+        is a ValueError (the start refuses the memory): a word whose letter no block has, which
+        failed every output of the program, or what the control served as a program it cannot
+        read back (a value beyond its word's digits, a sign where none is allowed, more words of
+        a kind than a block holds, a word twice but G and M, the M30 that ends a tape)."""
+        number, words = data["N"], tuple((str(k), v) for k, v in data["words"])
+        for letter, value in (("N", number), *words):
+            if letter not in _WORD_LETTERS | {"N"}:
+                raise ValueError(f"block N{number}: {letter!r} is no address letter ({ORDER[1:]})")
+            if type(value) is not int or abs(value) >= 10 ** sum(_DIGITS.of(letter)) or \
+                    value < 0 and letter not in SIGNED:
+                raise ValueError(f"block N{number}: {letter}{value!r} is beyond the format")
+        letters = [letter for letter, _ in words]
+        if any(letters.count(letter) > 1 for letter in letters if letter not in "GM") or ("M", 30) in words or any(
+                sum(letter in kinds for letter in letters) > most for kinds, most in BLOCK_FORMAT):
+            raise ValueError(f"block N{number}: {' '.join(letters)} is no block a read-in stores")
+        skip = data.get("skip", False)
+        if type(skip) is not bool:
+            raise ValueError(f"block N{number}: skip {skip!r} is no yes or no")
+        return cls(number, words, skip)
 
 
 # -- what the reader reports ------------------------------------------------------------------
