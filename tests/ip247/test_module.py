@@ -407,6 +407,15 @@ def test_a_plc_job_with_a_field_that_is_no_whole_number_is_refused(mod: Module, 
     assert (mod.device.read("ag.last"), mod.device.read("axis.1.machine_data")) == before
 
 
+def test_a_program_text_with_a_character_no_record_carries_is_refused(mod: Module) -> None:
+    """(Found with the battery RAM fuzz.)  program.N with a character beyond latin-1 raised
+    UnicodeEncodeError out of the point write (ctl: 'Error: UnicodeEncodeError: ...'); it is a bad
+    value, and nothing is stored."""
+    with pytest.raises(BadValue, match="'€' is no character a record carries"):
+        mod.device.set("program.7", "%  7\nN1 M02 €\n")
+    assert mod.device.read("programs") == []
+
+
 def test_tbit_follows_jobs_from_the_plc_side(mod: Module) -> None:
     """§3.7/§6.2.6: TBIT set while a job the PLC issued runs, cleared at "fertig"; a program the
     PG continues with Übernahme is the PG's (no TBIT)."""

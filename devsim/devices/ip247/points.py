@@ -85,7 +85,11 @@ def _program(name: str) -> Point | None:
     number = int(match[1])
 
     def put(m: Any, text: Any) -> None:
-        words = lang.record_words(number, str(text).replace("\r\n", "\n"))
+        try:
+            words = lang.record_words(number, str(text).replace("\r\n", "\n"))
+        except UnicodeEncodeError as exc:
+            raise BadValue(f"program {number}: {exc.object[exc.start:exc.end]!r} is no character a record carries"
+                           " (latin-1)") from None
         m.channel.write_record(4, 22, number, words, overwrite=True)
         if m.channel.error:
             raise BadValue(f"program {number} not stored: module error {m.channel.error}")
