@@ -1108,3 +1108,21 @@ def test_a_stored_block_no_read_in_stores_refuses_the_memory(tmp_path, block: di
     path.write_text(text)
     refused_memory(tmp_path, "poselesta", match=r"\(ValueError: block N-?\d+: ")
     assert path.read_text() == text
+
+
+def test_a_pos_iii_protection_in_the_memory_of_a_pos_ii_is_not_enforced(tmp_path) -> None:  # noqa: ANN001
+    """A POS II has no program lock (spec §1.1, V22/9 POS III only).  A memory a POS III protected
+    P21 in, started as a POS II, refused every change of P21 ('P21 is protected') and its release
+    ('program protection is a POS III function'), so P21 could never change again.  [SIM-CHOICE]
+    Now the POS II does not enforce it, and the file keeps it for the POS III."""
+    path = tmp_path / "poselesta.nvram.json"
+    path.write_text(json.dumps({"protected": [21], "programs": {"21": _BLOCK}}))
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        runtime.add_device("poselesta", config={"variant": "II"})
+        runtime.set("poselesta", "program.P21", "N1 X2")
+        assert runtime.read("poselesta", "protected") == []
+        assert runtime.read("poselesta", "program.P21") == "N 1 X 2.000"
+    finally:
+        runtime.stop()
+    assert json.loads(path.read_text())["protected"] == [21]

@@ -66,6 +66,8 @@ class ProgramMemory:
         self.programs = {_numbered(_key(p), "program", NC_PROGRAMS): {int(b["N"]): Block.from_json(b) for b in blocks}
                          for p, blocks in stored.items()}
         self.protected = {_numbered(p, "protected program", range(99)) for p in nvram.get("protected") or []}
+        if not self._protection:  # [SIM-CHOICE] a POS III's protection in the memory of a control now
+            self.protected = set()  # configured as a POS II (no program lock): stays stored, not enforced
         self.inch_programs = {_numbered(p, "inch program", NC_PROGRAMS) for p in nvram.get("inch_programs") or []}
         self.tools = {_numbered(_key(t), "tool", range(1, 100)): _tool(t, v) for t, v in (nvram.get("tools") or {}).items()}
 
