@@ -37,9 +37,6 @@ __all__ = ["Ip247Module", "OBSERVED", "OPERATOR_JOBS", "OPERATOR_MODES"]
 OPERATOR_MODES = frozenset(range(1, 18))
 AXES = (1, 2, 3)
 BOOT_TIME, BLINK = 1.0, 0.25  # seconds until the PG port is online; LED blink period (spec §5.16)
-#: [SIM-CHOICE] A stored offset is a whole number within the signed double word (DD) the records
-#: carry coordinates in: BA12 … BA16 keep every coordinate within ±100 m, a rotary range within 32 bits.
-OFFSET_BOUND = 2**31
 
 
 class Ip247Module(Model):
@@ -95,8 +92,8 @@ class Ip247Module(Model):
         offsets = self.nvram.get("offsets") or {}
         for unit in self.units:
             zo, to, tp = offsets.get(str(unit.number), (0, 0, 0))
-            if not all(type(v) is int and -OFFSET_BOUND <= v < OFFSET_BOUND for v in (zo, to, tp)):
-                raise ValueError(f"the offsets of axis {unit.number} {[zo, to, tp]!r} are no double words")
+            if not all(type(v) is int for v in (zo, to, tp)):  # (no bound: aborted programs' shifts add up)
+                raise ValueError(f"the offsets of axis {unit.number} {[zo, to, tp]!r} are no whole numbers")
             unit.coords.zo_mode, unit.coords.to_ba15, unit.coords.to_prog = zo, to, tp
         self.programs.store = ProgramStore.from_json(self.nvram.get("programs"))
 
