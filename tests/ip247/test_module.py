@@ -518,17 +518,19 @@ def _damaged(section: str, change: object) -> dict:
     ("offsets", lambda o: o["1"].__setitem__(1, "5")),
     ("offsets", lambda o: o["1"].__setitem__(1, 1.5)),
     ("offsets", lambda o: o["1"].__setitem__(0, None)),
+    ("offsets", lambda o: o["1"].__setitem__(0, 10**400)),
 ], ids=["sys-id-text", "sys-id-two", "sys-id-string-byte", "sys-id-256", "sys-id-bool", "program-fault-marked-0",
         "faulty-marked-0", "program-euro", "program-256", "program-twice", "gaps-negative", "gaps-6000",
         "md-word-65536", "md-word-bool", "md-bit-not-stored", "md-other-axis", "md-error-free-unchecked",
-        "offset-string", "offset-fraction", "offset-null"])
+        "offset-string", "offset-fraction", "offset-null",
+        "offset-10**400"])
 def test_battery_ram_the_module_never_stores_refuses_the_memory(tmp_path, section: str, change: object) -> None:  # noqa: ANN001
     """(Fuzzed, /tmp/probe_images/mut.py: 2071 damaged images.)  A SYS-ID of another shape loaded
     and failed every BA70 with TypeError; a program marked fault-free whose text the check refuses
-    failed every program start (SyntaxFault out of the job); characters beyond latin-1 failed BA69; offsets
-    that are no whole numbers failed every observation, read and save; MD words beyond 16 bits,
-    program numbers beyond 255, duplicates and a negative gap were served to the host.  Now the
-    start stops naming the file, which stays as it was."""
+    failed every program start (SyntaxFault out of the job); characters beyond latin-1 failed BA69;
+    offsets that are no whole numbers failed every observation, read and save (10^400: a program
+    start); MD words beyond 16 bits, program numbers beyond 255, duplicates and a negative gap were
+    served to the host.  Now the start stops naming the file, which stays as it was."""
     text = json.dumps(_damaged(section, change))
     (tmp_path / "ip247.nvram.json").write_text(text)
     refused_memory(tmp_path, "ip247", match="this memory image does not fit the kind 'ip247'")

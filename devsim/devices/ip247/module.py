@@ -37,6 +37,10 @@ __all__ = ["Ip247Module", "OBSERVED", "OPERATOR_JOBS", "OPERATOR_MODES"]
 OPERATOR_MODES = frozenset(range(1, 18))
 AXES = (1, 2, 3)
 BOOT_TIME, BLINK = 1.0, 0.25  # seconds until the PG port is online; LED blink period (spec §5.16)
+#: [SIM-CHOICE] The largest stored offset: 2^53, where the motion's float arithmetic stops being exact
+#: (10^400 failed a program start with OverflowError).  No tighter bound: an aborted program folds its
+#: G54 … G57 shift into BA12/13's unchecked, so shifts add up past the 32-bit double words.
+OFFSET_BOUND = 2**53
 
 
 class Ip247Module(Model):
@@ -92,8 +96,9 @@ class Ip247Module(Model):
         offsets = self.nvram.get("offsets") or {}
         for unit in self.units:
             zo, to, tp = offsets.get(str(unit.number), (0, 0, 0))
-            if not all(type(v) is int for v in (zo, to, tp)):  # (no bound: aborted programs' shifts add up)
-                raise ValueError(f"the offsets of axis {unit.number} {[zo, to, tp]!r} are no whole numbers")
+            if not all(type(v) is int and abs(v) < OFFSET_BOUND for v in (zo, to, tp)):
+                raise ValueError(f"the offsets of axis {unit.number} {[zo, to, tp]!r} are no whole numbers"
+                                 f" within ±2^53")
             unit.coords.zo_mode, unit.coords.to_ba15, unit.coords.to_prog = zo, to, tp
         self.programs.store = ProgramStore.from_json(self.nvram.get("programs"))
 
