@@ -8,7 +8,8 @@ request's multiplexer: :mod:`devsim.facades.canopen_sdo`).
 
 A kind that declares itself a drive (``Device.drive``) also gets the CiA 402 objects and state
 machine (:mod:`devsim.facades.cia402`): controlword 6040h, statusword 6041h, profile position and
-profile velocity modes (with 606Dh … 6070h, the velocity window and threshold), homing mode where the
+profile velocity modes (with 606Dh … 6070h, the velocity window and threshold; 6065h … 6068h,
+the following error and position windows, and 60F2h, the positioning option code), homing mode where the
 kind has a reference run of its own (607Ch, 6098h, 6099h, 609Ah: :mod:`devsim.facades.cia402_homing`), 6064h/606Ch/60F4h; a fault the model announces (topic ``fault``) sends an
 EMCY message.  Hosts in other processes reach the nodes through
 :class:`devsim.transports.socketcand.SocketcandServer` (:func:`start_canopen`, ``devsim run
@@ -441,6 +442,10 @@ DRIVE_READS: dict[int, Callable[[Cia402], int]] = {
     0x6060: lambda d: d.mode,
     0x6061: lambda d: d.mode,
     0x6064: lambda d: round(d.actions.position(d.model)),
+    0x6065: lambda d: d.position_watch.following_window,
+    0x6066: lambda d: d.position_watch.following_time,
+    0x6067: lambda d: d.position_watch.window,
+    0x6068: lambda d: d.position_watch.window_time,
     0x606C: lambda d: round(d.actions.velocity(d.model)),
     0x606D: lambda d: d.watch.window,
     0x606E: lambda d: d.watch.window_time,
@@ -448,6 +453,7 @@ DRIVE_READS: dict[int, Callable[[Cia402], int]] = {
     0x6070: lambda d: d.watch.threshold_time,
     0x607A: lambda d: d.target_position,
     0x6081: lambda d: d.profile_velocity,
+    0x60F2: lambda d: d.setpoints.option,
     0x60F4: lambda d: round(d.actions.following_error(d.model)),
     0x60FF: lambda d: d.target_velocity,
     0x6502: lambda d: d.supported_modes,
@@ -467,6 +473,11 @@ DRIVE_WRITES: dict[int, Callable[[Cia402, Any], None]] = {
     0x606E: lambda d, v: d.watch.set("window_time", v),
     0x606F: lambda d, v: d.watch.set("threshold", v),
     0x6070: lambda d, v: d.watch.set("threshold_time", v),
+    0x6065: lambda d, v: d.position_watch.set("following_window", v),
+    0x6066: lambda d, v: d.position_watch.set("following_time", v),
+    0x6067: lambda d, v: d.position_watch.set("window", v),
+    0x6068: lambda d, v: d.position_watch.set("window_time", v),
+    0x60F2: lambda d, v: d.setpoints.write_option(int(v)),
     0x60FF: Cia402.write_target_velocity,
     0x607C: lambda d, v: setattr(d.homing, "offset", int(v)),
     0x6098: lambda d, v: d.homing.write_method(int(v)),

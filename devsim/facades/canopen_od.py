@@ -4,7 +4,8 @@ the SYNC's COB-ID, heartbeat producer time, identity, the EMCY's COB-ID) and, fr
 ``bool``/``int``/``float`` point in table order (BOOLEAN, INTEGER32, REAL64; read-only where the
 point is), named after the point; 4 RPDOs and 4 TPDOs (communication and mapping records, the predefined connection set's
 COB-IDs); for a kind that is a drive (``Device.drive``) also the CiA 402 objects (controlword,
-statusword, modes and the supported ones, actual and target values, the velocity window and
+statusword, modes and the supported ones, actual and target values, the following error and
+position windows and the positioning option code of profile position mode, the velocity window and
 threshold of profile velocity mode, with the power-on values of those a master writes), and for
 a drive whose kind declares its own reference run (``DriveActions.homing``) those of homing mode
 (607Ch, 6098h, the record 6099h, 609Ah).  ``devsim doc KIND --eds`` prints it,
@@ -58,6 +59,10 @@ DRIVE_OBJECTS: tuple[tuple[int, str, int, str, bool, int | str], ...] = (
     (0x6060, "Modes of operation", 0x0002, "rw", True, DEFAULTS["mode"]),
     (0x6061, "Modes of operation display", 0x0002, "ro", True, ""),
     (0x6064, "Position actual value", 0x0004, "ro", True, ""),
+    (0x6065, "Following error window", 0x0007, "rw", True, DEFAULTS["following_error_window"]),
+    (0x6066, "Following error time out", 0x0006, "rw", True, DEFAULTS["following_error_time_out"]),
+    (0x6067, "Position window", 0x0007, "rw", True, DEFAULTS["position_window"]),
+    (0x6068, "Position window time", 0x0006, "rw", True, DEFAULTS["position_window_time"]),
     (0x606C, "Velocity actual value", 0x0004, "ro", True, ""),
     (0x606D, "Velocity window", 0x0006, "rw", True, DEFAULTS["velocity_window"]),
     (0x606E, "Velocity window time", 0x0006, "rw", True, DEFAULTS["velocity_window_time"]),
@@ -65,6 +70,7 @@ DRIVE_OBJECTS: tuple[tuple[int, str, int, str, bool, int | str], ...] = (
     (0x6070, "Velocity threshold time", 0x0006, "rw", True, DEFAULTS["velocity_threshold_time"]),
     (0x607A, "Target position", 0x0004, "rw", True, DEFAULTS["target_position"]),
     (0x6081, "Profile velocity", 0x0007, "rw", True, DEFAULTS["profile_velocity"]),
+    (0x60F2, "Positioning option code", 0x0006, "rw", True, DEFAULTS["positioning_option_code"]),
     (0x60F4, "Following error actual value", 0x0004, "ro", True, ""),
     (0x60FF, "Target velocity", 0x0004, "rw", True, DEFAULTS["target_velocity"]),
     (0x6502, "Supported drive modes", 0x0007, "ro", False, ""),

@@ -8,7 +8,12 @@ position, velocity, enable, fault and motion.  :class:`Cia402` keeps the state t
 "new set-point" bit (4) starts a move to the target position (607Ah, bit 6: relative) at the
 profile velocity (6081h), bit 8 (halt) stops it with the ramp and holds new set-points back (the
 set-points, their handshake with the statusword's bit 12 and bit 10 are
-:mod:`devsim.facades.cia402_position`'s: no set-point is in process outside Operation enabled); in
+:mod:`devsim.facades.cia402_position`'s: no set-point is in process outside Operation enabled; the
+positioning option code 60F2h says what a relative target counts from), and the position window
+(6067h, 6068h) and the following error window (6065h, 6066h) are
+:mod:`devsim.facades.cia402_position_watch`'s: bit 10 also needs the axis within the position
+window for its time, bit 13 (following error) is 1 once the following error has stayed outside
+its window for its time out (both switched off by their power-on value FFFFFFFFh); in
 profile velocity mode (3) the drive follows the target velocity (60FFh) in Operation enabled (0 with
 halt): the kind's jog is called when that demand changes (entering Operation enabled, halt set or
 released, a new 60FFh), not for a controlword or a 60FFh that repeats what is commanded (a master
@@ -34,6 +39,7 @@ from devsim.core.clock import VirtualClock
 from devsim.core.kit import DriveActions
 from devsim.facades.cia402_homing import HomingMode
 from devsim.facades.cia402_position import SetPoints
+from devsim.facades.cia402_position_watch import PositionWatch
 from devsim.facades.cia402_velocity import VelocityWatch
 
 __all__ = ["Cia402", "DEFAULTS", "DriveActions", "HOMING", "MODES", "STATES", "TRANSITIONS", "command"]
@@ -60,10 +66,16 @@ MODES = {PROFILE_POSITION: ("move_to", 0), PROFILE_VELOCITY: ("jog", 2), HOMING:
 #: reset node restores the application objects' power-on values).  The velocity window and
 #: threshold (606Dh, 606Fh) are in the drive's velocity units, their times (606Eh, 6070h) in ms; the
 #: homing objects' 0 (6098h, 6099h, 609Ah) is "no method" and "the device's own speeds and ramp".
+#: The following error window and the position window (6065h, 6067h) are FFFFFFFFh, switched off
+#: (CiA 402-2), their times (6066h, 6068h) 0 ms: bits 10 and 13 as the node had them before it had
+#: these objects; the positioning option code (60F2h) 0002h, relative moves from the position
+#: actual value, likewise ([SIM-CHOICE]: the standard leaves the power-on values to the device).
 DEFAULTS = {"controlword": 0, "mode": PROFILE_POSITION, "target_position": 0, "profile_velocity": 1000,
             "target_velocity": 0, "velocity_window": 100, "velocity_window_time": 0, "velocity_threshold": 10,
             "velocity_threshold_time": 0, "home_offset": 0, "homing_method": 0, "homing_speed_switch": 0,
-            "homing_speed_zero": 0, "homing_acceleration": 0}
+            "homing_speed_zero": 0, "homing_acceleration": 0, "following_error_window": 0xFFFF_FFFF,
+            "following_error_time_out": 0, "position_window": 0xFFFF_FFFF, "position_window_time": 0,
+            "positioning_option_code": 0x0002}
 
 
 def command(word: int) -> str:
@@ -116,7 +128,8 @@ class Cia402:
         self.actions, self.model = self._shifted(actions), model
         clock = clock if clock is not None else VirtualClock()
         self.watch = VelocityWatch(clock, self._velocities, DEFAULTS)
-        self.setpoints = SetPoints(self.actions, model, clock)
+        self.setpoints = SetPoints(self.actions, model, clock, DEFAULTS["positioning_option_code"])
+        self.position_watch = PositionWatch(clock, self._positions, DEFAULTS)
         self._power_on()
 
     def _shifted(self, actions: DriveActions) -> DriveActions:
@@ -145,9 +158,11 @@ class Cia402:
         self.target_position, self.profile_velocity = DEFAULTS["target_position"], DEFAULTS["profile_velocity"]
         self.target_velocity = DEFAULTS["target_velocity"]
         self.setpoints.reset()
+        self.setpoints.option = DEFAULTS["positioning_option_code"]
         self.homing.reset()
         self.error_code = 0  # the EMCY code of the last fault the drive announced (603Fh)
         self.watch.reset()
+        self.position_watch.reset()
 
     def _velocities(self) -> tuple[float, float] | None:
         """In profile velocity mode: the drive's velocity and the velocity demanded, the target
@@ -156,6 +171,16 @@ class Cia402:
             return None
         running = self.state == "operation_enabled" and not self.controlword & 0x100
         return self.actions.velocity(self.model), float(self.target_velocity if running else 0)
+
+    def _positions(self) -> tuple[int, float | None, int | None] | None:
+        """In profile position mode: the position actual value and the target of the last
+        positioning (as 6064h shows them), and in Operation enabled the following error (60F4h)."""
+        if self.mode != PROFILE_POSITION:
+            return None
+        a = self.actions
+        error = round(a.following_error(self.model)) if self.state == "operation_enabled" else None
+        goal = self.setpoints.goal
+        return round(a.position(self.model)), None if goal is None else round(goal), error
 
     # -- the error objects (603Fh, CiA 402-2; 1001h, CiA 301) -------------------------------------------
     def in_fault(self) -> bool:
@@ -190,6 +215,7 @@ class Cia402:
             self.setpoints.reset()  # (and the set-points in process end)
         self.mode = mode
         self.watch.look(command=True)
+        self.position_watch.look(command=True)
 
     # -- NMT reset node (CiA 301, reset application) ----------------------------------------------------------
     def reset(self) -> None:
@@ -220,6 +246,7 @@ class Cia402:
         if self.state == "operation_enabled":
             self._profile(before, word)
         self.watch.look(command=True)
+        self.position_watch.look(command=True)
 
     def _go(self, state: str) -> None:
         if state == self.state:
@@ -240,6 +267,7 @@ class Cia402:
         """No more looks on the clock (the node closes)."""
         self.watch.cancel()
         self.setpoints.cancel()
+        self.position_watch.cancel()
 
     def _profile(self, before: int, word: int) -> None:
         if self.mode == PROFILE_POSITION:  # bits 4 … 8: :mod:`devsim.facades.cia402_position`
@@ -281,4 +309,7 @@ class Cia402:
             return word | self.watch.bits()  # bits 10 (target reached) and 12 (speed)
         if self.mode == HOMING:
             return word | self.homing.bits()  # bits 10, 12 (homing attained) and 13 (homing error)
-        return word | self.setpoints.bits(bool(self.controlword & 0x100))  # bits 10 and 12 (set-point acknowledge)
+        self.setpoints.look()  # (a waiting set-point that starts now is the target the window looks at)
+        following = self.position_watch.bits()  # bit 13 (following error)
+        halted = bool(self.controlword & 0x100)
+        return word | following | self.setpoints.bits(halted, self.position_watch.reached())  # bits 10 and 12

@@ -66,6 +66,7 @@ class Motor:
     moving: bool = False
     position: float = 0.0
     velocity: float = 0.0
+    following_error: float = 0.0
     fault_stays: bool = False  # a fault reset that does not clear the fault
     calls: list[tuple[Any, ...]] = field(default_factory=list)
 
@@ -91,6 +92,7 @@ ACTIONS = DriveActions(
     enabled=lambda m: m.enabled,
     fault=lambda m: m.fault,
     moving=lambda m: m.moving,
+    following_error=lambda m: m.following_error,
 )
 
 
@@ -335,7 +337,9 @@ def test_power_on_values_and_the_reset_of_the_application() -> None:
     assert DEFAULTS == {"controlword": 0, "mode": 1, "target_position": 0, "profile_velocity": 1000,
                         "target_velocity": 0, "velocity_window": 100, "velocity_window_time": 0,
                         "velocity_threshold": 10, "velocity_threshold_time": 0, "home_offset": 0, "homing_method": 0,
-                        "homing_speed_switch": 0, "homing_speed_zero": 0, "homing_acceleration": 0}
+                        "homing_speed_switch": 0, "homing_speed_zero": 0, "homing_acceleration": 0,
+                        "following_error_window": 0xFFFF_FFFF, "following_error_time_out": 0,
+                        "position_window": 0xFFFF_FFFF, "position_window_time": 0, "positioning_option_code": 2}
     machine, motor = drive_in(ENABLED)
     machine.target_position, machine.profile_velocity, machine.target_velocity = 5, 6, 7
     machine.write_controlword(0x1F)
@@ -394,3 +398,30 @@ def test_halt_stops_a_profile_position_move_with_the_ramp_and_holds_new_set_poin
     machine.write_controlword(0x0F)
     machine.write_controlword(0x1F)  # halt released: the next set-point moves
     assert motor.calls[2:] == [("move_to", 1000.0, float(DEFAULTS["profile_velocity"]))]
+
+
+def test_what_a_relative_target_counts_from_is_the_positioning_option_code() -> None:
+    """60F2h bits 0 and 1 (CiA 402-2, relative option) for a relative set-point (controlword bit
+    6): 10b, the power-on value, from the position actual value; 01b from the position demand
+    value (actual value + following error); 00b from the preceding target (0 before the first
+    positioning of the mode); codes the node cannot honour are refused and change nothing."""
+    machine, motor = drive_in(ENABLED)
+    motor.position, motor.following_error = 100.0, 7.0
+    machine.target_position = 1000
+    speed = float(DEFAULTS["profile_velocity"])
+    for option, target in ((0x0002, 1100.0), (0x0001, 1107.0), (0x0000, 2107.0)):
+        machine.setpoints.write_option(option)
+        machine.write_controlword(0x4F)
+        machine.write_controlword(0x5F)  # new set-point, relative
+        assert motor.calls[-1] == ("move_to", target, speed), option
+    for code in (0x0003, 0x0004, 0x0040, 0x0100, 0x8000):
+        with pytest.raises(ValueError):
+            machine.setpoints.write_option(code)
+    assert machine.setpoints.option == 0x0000
+    machine.write_mode(PROFILE_VELOCITY)
+    machine.write_mode(PROFILE_POSITION)  # (the mode begins anew: no preceding target)
+    machine.write_controlword(0x4F)
+    machine.write_controlword(0x5F)
+    assert motor.calls[-1] == ("move_to", 1000.0, speed)
+    machine.reset()
+    assert machine.setpoints.option == DEFAULTS["positioning_option_code"] == 0x0002
