@@ -370,3 +370,25 @@ def test_a_fresh_server_listens_on_600h_answers_on_580h_and_has_no_transfer() ->
     assert s.sdo.transfer is None
     s.sdo.abort(TOGGLE)
     assert s.answers == abort(0, 0, TOGGLE)
+
+
+def test_a_generic_masters_start_up_list_of_position_objects(server: Server) -> None:
+    """The position objects of CiA 402-2 a master's start-up SDO list writes, frame by frame: 6065h
+    and 6067h (UNSIGNED32, 23h), 6066h and 6068h (UNSIGNED16, 2Bh), 60F2h (UNSIGNED16) each
+    answered 60h with their multiplexer and read back as written (4Bh/43h); a positioning option code
+    the node does not honour (a change immediately option, 0004h) is aborted 0609 0030h, naming
+    60F2h/00h, and an expedited download without its size (22h) gives 6068h its 2 bytes."""
+    server.facade.drive.reset()  # (the module's node: its power-on values)
+    writes = {0x6065: (0x23, struct.pack("<L", 1000)), 0x6066: (0x2B, struct.pack("<H", 50) + bytes(2)),
+              0x6067: (0x23, struct.pack("<L", 10)), 0x6068: (0x2B, struct.pack("<H", 20) + bytes(2)),
+              0x60F2: (0x2B, struct.pack("<H", 0x0000) + bytes(2))}
+    for index, (command, data) in writes.items():
+        assert server.send(command, mux(index), data) == [bytes((0x60,)) + mux(index) + PAD], hex(index)
+    for index, (command, data) in writes.items():
+        upload = 0x43 if command == 0x23 else 0x4B
+        assert server.send(0x40, mux(index), PAD) == [bytes((upload,)) + mux(index) + data], hex(index)
+    assert server.send(0x2B, mux(0x60F2), struct.pack("<H", 0x0004) + bytes(2)) == abort(0x60F2, 0, 0x06090030)
+    assert server.send(0x40, mux(0x60F2), PAD) == [bytes((0x4B,)) + mux(0x60F2) + PAD]
+    assert server.send(0x22, mux(0x6068), struct.pack("<L", 0xFFFF_0007)) == [bytes((0x60,)) + mux(0x6068) + PAD]
+    assert server.send(0x40, mux(0x6068), PAD) == [bytes((0x4B,)) + mux(0x6068) + struct.pack("<H", 7) + bytes(2)]
+    server.facade.drive.reset()
