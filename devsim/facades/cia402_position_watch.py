@@ -36,10 +36,6 @@ FOLLOWING_ERROR = 0x2000
 OFF = 0xFFFF_FFFF  # 6065h / 6067h: the control switched off (CiA 402-2)
 _EPSILON = 1e-9  # (sums of SAMPLE steps on the clock)
 
-#: The four objects: attribute → the key of its power-on value in :data:`devsim.facades.cia402.DEFAULTS`.
-OBJECTS = {"following_window": "following_error_window", "following_time": "following_error_time_out",
-           "window": "position_window", "window_time": "position_window_time"}
-
 
 class PositionWatch:
     """6065h … 6068h and the statusword bits 10 (its window part) and 13 they make.  ``sample``
@@ -56,8 +52,10 @@ class PositionWatch:
     def reset(self) -> None:
         """The power-on values of 6065h … 6068h, nothing looked at yet."""
         self.cancel()
-        for name, key in OBJECTS.items():
-            setattr(self, name, self._defaults[key])
+        self.following_window = self._defaults["following_error_window"]  # 6065h, position units
+        self.following_time = self._defaults["following_error_time_out"]  # 6066h, ms
+        self.window = self._defaults["position_window"]  # 6067h, position units
+        self.window_time = self._defaults["position_window_time"]  # 6068h, ms
         self._forget()
 
     def _forget(self) -> None:
