@@ -40,7 +40,7 @@ from devsim.facades.canopen_od import SYNC_COB_ID, eds, point_objects
 from devsim.facades.canopen_sdo import DevsimSdoServer, check_length
 from devsim.facades.cia402 import Cia402
 
-__all__ = ["CHANGE_SAMPLE", "CanopenFacade", "READ_ONLY", "VALUE_RANGE_EXCEEDED", "WRITE_ONLY", "load_od",
+__all__ = ["CHANGE_SAMPLE", "CanopenFacade", "READ_ONLY", "VALUE_RANGE_EXCEEDED", "WRITE_ONLY", "integer32", "load_od",
            "serve_nodes", "start_canopen"]
 
 VALUE_RANGE_EXCEEDED = canopen_mapping.VALUE_RANGE_EXCEEDED  # (0609 0030h)
@@ -428,6 +428,14 @@ def _attach_all(runtime: Any, nodes: list[tuple[Device, int]], network: canopen.
         CanopenFacade(device, node_id, call=runtime.call).attach(network)
 
 
+def integer32(value: float) -> int:
+    """An actual value (6064h, 606Ch, 60F4h: INTEGER32) as its object shows it: rounded, and past
+    the type's range rolled over, as a drive's 32-bit position counter rolls over.  [SIM-CHOICE]
+    CiA 402 gives these objects 32 bits and says nothing of a value beyond them; the drive's own
+    position is not bounded so (a home offset of -2^31 puts 6064h at 2^31 at the home position)."""
+    return (round(value) + 0x8000_0000) % 0x1_0000_0000 - 0x8000_0000
+
+
 RESETS: dict[int, Callable[[CanopenFacade], None]] = {
     0x81: CanopenFacade._reset_node,
     0x82: CanopenFacade._reset_communication,
@@ -441,12 +449,12 @@ DRIVE_READS: dict[int, Callable[[Cia402], int]] = {
     0x6041: lambda d: d.statusword,
     0x6060: lambda d: d.mode,
     0x6061: lambda d: d.mode,
-    0x6064: lambda d: round(d.actions.position(d.model)),
+    0x6064: lambda d: integer32(d.actions.position(d.model)),
     0x6065: lambda d: d.position_watch.following_window,
     0x6066: lambda d: d.position_watch.following_time,
     0x6067: lambda d: d.position_watch.window,
     0x6068: lambda d: d.position_watch.window_time,
-    0x606C: lambda d: round(d.actions.velocity(d.model)),
+    0x606C: lambda d: integer32(d.actions.velocity(d.model)),
     0x606D: lambda d: d.watch.window,
     0x606E: lambda d: d.watch.window_time,
     0x606F: lambda d: d.watch.threshold,
@@ -454,7 +462,7 @@ DRIVE_READS: dict[int, Callable[[Cia402], int]] = {
     0x607A: lambda d: d.target_position,
     0x6081: lambda d: d.profile_velocity,
     0x60F2: lambda d: d.setpoints.option,
-    0x60F4: lambda d: round(d.actions.following_error(d.model)),
+    0x60F4: lambda d: integer32(d.actions.following_error(d.model)),
     0x60FF: lambda d: d.target_velocity,
     0x6502: lambda d: d.supported_modes,
     0x607C: lambda d: d.homing.offset,

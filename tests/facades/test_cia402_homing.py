@@ -15,13 +15,14 @@ IEC 61800-7-201, homing mode):
 from __future__ import annotations
 
 import contextlib
+import queue
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
 from canopen.sdo.exceptions import SdoAbortedError
 
-from tests.facades.test_cia402 import Drive
+from tests.facades.test_cia402 import Drive, mapped
 from tests.facades.test_cia402_contract import DRIVES
 
 TARGET_REACHED, ATTAINED, ERROR = 0x0400, 0x1000, 0x2000
@@ -288,3 +289,25 @@ def test_more_methods_complete(kind: str, config: dict[str, Any], method: int) -
         assert drive.node.sdo[0x6064].raw == 0
     finally:
         drive.close()
+
+
+def test_a_home_offset_at_the_least_integer32_rolls_6064h_over() -> None:
+    """607Ch = -2^31 (INTEGER32's least value, taken like any other): after the homing the home
+    position is +2^31, one past 6064h's range, so the position actual value rolls over to -2^31
+    as a drive's 32-bit counter does ([SIM-CHOICE]); an SDO upload answers it (it was aborted 0800
+    0000h with a traceback in the log) and so does an event-driven TPDO that maps it."""
+    with homing_drive("gms96") as (drive, method):
+        node = drive.node
+        in_homing(drive, method)
+        node.sdo[0x607C].raw = -2**31
+        assert run_home(drive) & BITS == ATTAINED | TARGET_REACHED
+        assert node.sdo[0x6064].raw == -2**31
+        node.tpdo.read()
+        tpdo = mapped(node.tpdo[1], 0x6064, 0x60F4, trans_type=255, event_timer=10)
+        node.tpdo.save()
+        arrived: queue.Queue[int] = queue.Queue()
+        tpdo.add_callback(lambda m: arrived.put(m["Position actual value"].raw))
+        node.nmt.state = "OPERATIONAL"
+        assert node.sdo[0x1017].raw == 0  # (an SDO round trip: the NMT command was handled before it)
+        drive.runtime.advance(0.05)
+        assert arrived.get(timeout=5) == -2**31
