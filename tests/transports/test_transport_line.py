@@ -11,6 +11,7 @@ from devsim.core.bus import Bus
 from devsim.core.clock import RealClock, VirtualClock
 from devsim.core.device import Device, Face, SerialSettings
 from devsim.transports.line import Line, garble, settings_match
+from devsim.transports.pacing import MAX_PENDING
 from devsim.transports.trace import Tracer, render
 from tests.transports.transport_helpers import EchoTarget
 
@@ -201,6 +202,34 @@ async def test_pacing_queues_consecutive_telegrams_back_to_back() -> None:
     await asyncio.wait_for(done.wait(), 2.0)
     assert arrivals[-1][0] - t0 >= 10 * settings.char_time() - 1e-6
     assert b"".join(d for _, d in arrivals) == b"ABCDEFGHIJ"
+
+
+async def test_pacing_after_a_flood_holds_at_most_max_pending_and_answers_after_it() -> None:
+    """A host on a pty sends faster than the wire carries, so an echoing device's paced output
+    piles up: 1 MiB of garbage echoed at once.  The transmitter keeps the newest
+    ``MAX_PENDING`` bytes (the oldest dropped, the rest moved up), so the echo of the host's next
+    line leaves within ``MAX_PENDING`` character times, not behind the whole flood (before: every
+    byte queued, the line's answer 1 MiB of character times later, at 9600 baud three hours)."""
+    clock = RealClock()
+    settings = S(4_000_000)  # (2.5 µs a character: MAX_PENDING leaves in 0.16 s, the flood in 2.6 s)
+    target = EchoTarget(settings)
+    line = Line(target, clock, pacing=True)
+    arrived = bytearray()
+    answered = asyncio.Event()
+
+    def write(data: bytes) -> None:
+        arrived.extend(data)
+        if arrived.endswith(b"#1VER\r"):
+            answered.set()
+
+    line.attach(write)
+    for _ in range(256):
+        line.feed(bytes(4096))
+    line.feed(b"#1VER\r")
+    assert line.status()["pending_out"] <= MAX_PENDING
+    await asyncio.wait_for(answered.wait(), 1.0)
+    assert len(arrived) <= MAX_PENDING + 6
+    assert line.status()["pending_out"] == 0
 
 
 def test_pacing_is_off_on_a_virtual_clock() -> None:
