@@ -9,14 +9,19 @@ it got before the garbage (on every port that has one), the stored memory (``*.n
 what it was, and stderr holds no traceback.
 
     python -m tests.fuzz.soak [--seconds 60] [--kinds sers,gms96,...] [--rss-mb 20] [--transport pty]
+                              [--seed N] [--drives 1,2,3] [--pacing]
 
-``--transport`` serves the serial ports on ``pty`` (the default), ``tcp`` or ``rfc2217``.  Not
-part of the test suite's default run; exit status 1 when a check failed.
+``--transport`` serves the serial ports on ``pty`` (the default), ``tcp`` or ``rfc2217``;
+``--seed`` picks another garbage sequence (default: the kind's own); ``--drives`` puts one SERS per
+address on one RS-485 line (each address asked its known-good request); ``--pacing`` paces the
+device's output at its baud rate.  A port whose known-good answer changed is reported with the last
+bytes fed to it.  Not part of the test suite's default run; exit status 1 when a check failed.
 """
 
 from __future__ import annotations
 
 import argparse
+import collections
 import contextlib
 import glob
 import os
@@ -145,14 +150,22 @@ def _ask_poselesta(client: ControlClient, scheme: str, where: str) -> bytes:
     return repr(client.read("poselesta", "program.P20")).encode()
 
 
-def _known_good(kind: str, ports: dict[str, _Port], client: ControlClient) -> dict[str, bytes]:
-    """Each port's answer to its known-good request."""
+def _requests(kind: str, drives: list[int]) -> dict[str, tuple[str, dict[str, object], list[bytes]]]:
+    """The known-good requests by name: port, line settings, steps (SERS multidrop: each drive's
+    ``#<address>VER``, named ``main#<address>``)."""
+    if kind == "sers" and drives:
+        return {f"main#{a}": ("main", {}, [b"\r", b"#%dVER\r" % a]) for a in drives}
+    return {name: (name, settings, steps) for name, (settings, steps) in REQUESTS.get(kind, {}).items()}
+
+
+def _known_good(kind: str, ports: dict[str, _Port], client: ControlClient, drives: list[int]) -> dict[str, bytes]:
+    """Each port's (each drive's) answer to its known-good request."""
     if kind == "ip247":
         return {"pg": _ask_ip247(ports["pg"].scheme, ports["pg"].where)}
     if kind == "poselesta":
         return {"v7": _ask_poselesta(client, ports["v7"].scheme, ports["v7"].where)}
-    return {name: _SERS_STATE.sub(b"\nok\n", _ask(ports[name].scheme, ports[name].where, settings, steps))
-            for name, (settings, steps) in REQUESTS.get(kind, {}).items() if name in ports}
+    return {name: _SERS_STATE.sub(b"\nok\n", _ask(ports[port].scheme, ports[port].where, settings, steps))
+            for name, (port, settings, steps) in _requests(kind, drives).items() if port in ports}
 
 
 class _Port:
@@ -162,11 +175,17 @@ class _Port:
         self.port, self.scheme, self.where = port, scheme, where
         self.fd: int | None = None
         self.sock: socket.socket | None = None
+        self.recent: collections.deque[bytes] = collections.deque(maxlen=16)  # the last chunks fed
+
+    def last_fed(self, most: int = 512) -> bytes:
+        """The last (up to ``most``) bytes fed to the port, for a report."""
+        return b"".join(self.recent)[-most:]
 
     def feed(self, data: bytes, cut: bool = False) -> int:
         """Bytes the port took (a full pty buffer takes none); ``cut``: the connection is closed
         after them and opened again at once, as a host cut off mid-telegram."""
         taken = 0
+        self.recent.append(data)
         with contextlib.suppress(OSError):
             if self.scheme == "pty":
                 if self.fd is None:
@@ -217,32 +236,38 @@ def _tracebacks(lines: queue.Queue[str | None]) -> list[str]:
             if line.startswith("Traceback") or "Fatal error" in line]
 
 
-def soak(kind: str, seconds: float, rss_mb: float, directory: str, transport: str = "pty") -> list[str]:
-    """Run ``kind`` under garbage; the failed checks (none: it held)."""
+def soak(kind: str, seconds: float, rss_mb: float, directory: str, transport: str = "pty", *,
+         seed: int | None = None, drives: list[int] | None = None, pacing: bool = False) -> list[str]:
+    """Run ``kind`` under garbage; the failed checks (none: it held).  ``drives``: one device
+    per address on one line (``--drives``); ``pacing``: output paced (``--pacing``)."""
+    drives = drives or []
     control = f"unix:{directory}/{kind}.sock"
     state = os.path.join(directory, f"state-{kind}")
     sim = DevsimProcess("run", kind, f"--{transport}", *(["0"] if transport != "pty" else []), "-q",
-                        "--control", control, "--state-dir", state, *NETWORK.get(kind, []))
+                        "--control", control, "--state-dir", state, *NETWORK.get(kind, []),
+                        *(["--drives", ",".join(map(str, drives))] if drives else []), *(["--pacing"] if pacing else []))
+    devices = [f"{kind}{a}" for a in drives] or [kind]
     ports: dict[str, _Port] = {}
     problems: list[str] = []
     try:
-        while True:
+        waiting = set(devices)
+        while waiting:
             line = sim.next_match(sim.out, lambda text: True, 60, f"{kind}'s ports")
             name, _, rest = line.partition(": ")
             scheme, _, where = rest.partition(" ")
             if scheme in ("pty", "udp", "tcp", "rfc2217") and name.startswith(kind):
                 port = name.partition(".")[2] or "main"
-                ports[port] = _Port(port, scheme, where)
-            if line == f"{kind}: ready":
-                break
+                ports[port] = _Port(port, scheme, where)  # (a multidrop line: every drive names it)
+            if rest == "ready":
+                waiting.discard(name)
         client = ControlClient(control)
-        good = _known_good(kind, ports, client)
+        good = _known_good(kind, ports, client, drives)
         memory = _nvram(state)
         for port in ports.values():
-            client.telegrams(kind, port.port, count=0)  # the tap and its decoders from now on
+            client.telegrams(devices[0], port.port, count=0)  # the tap and its decoders from now on
         rss, fds = _rss_kb(sim.proc.pid), _fds(sim.proc.pid)
-        rng = random.Random(kind)
-        telegrams: list[bytes] = [step for _, steps in REQUESTS.get(kind, {}).values() for step in steps if len(step) > 1]
+        rng = random.Random(kind if seed is None else f"{kind}:{seed}")
+        telegrams: list[bytes] = [step for _, _, steps in _requests(kind, drives).values() for step in steps if len(step) > 1]
         fed, end = 0, time.monotonic() + seconds
         while time.monotonic() < end:
             port = rng.choice(list(ports.values()))
@@ -254,16 +279,20 @@ def soak(kind: str, seconds: float, rss_mb: float, directory: str, transport: st
         for port in ports.values():
             port.close()
         time.sleep(0.5)  # line idle, as the protocols ask after garbage (GMS96 FT1.2 R4: 33 bit times)
-        answers = client.state(kind)  # answered after the garbage
+        drained = time.monotonic() + 120  # paced: the echo of the garbage still on the wire (at most 64 KiB)
+        while pacing and time.monotonic() < drained and any(
+                client.line(devices[0], port.port)["pending_out"] for port in ports.values() if port.scheme != "udp"):
+            time.sleep(0.1)  # bounded wait for the paced output to leave, not a synchronisation
+        answers = [client.state(device) for device in devices]  # answered after the garbage
         settle = time.monotonic() + 5  # connections the soak just closed may still be closing
         while _fds(sim.proc.pid) > fds + 2 and time.monotonic() < settle:
-            client.state(kind)
+            client.state(devices[0])
             time.sleep(0.05)  # bounded wait for the server to see the closes, not a synchronisation
         after_rss, after_fds = _rss_kb(sim.proc.pid), _fds(sim.proc.pid)
-        after = _known_good(kind, ports, client)
+        after = _known_good(kind, ports, client, drives)
         client.close()
         print(f"{kind}: {fed} bytes on {len(ports)} ports in {seconds:g} s; resident {rss} -> {after_rss} kB, "
-              f"fds {fds} -> {after_fds}, state of {len(answers)} names, known-good answers on "
+              f"fds {fds} -> {after_fds}, state of {sum(map(len, answers))} names, known-good answers on "
               f"{', '.join(good) or 'no port'}", flush=True)
         if sim.proc.poll() is not None:
             problems.append(f"{kind}: the process ended ({sim.proc.returncode})")
@@ -271,7 +300,8 @@ def soak(kind: str, seconds: float, rss_mb: float, directory: str, transport: st
             problems.append(f"{kind}: resident memory grew {after_rss - rss} kB")
         if after_fds > fds + 2:
             problems.append(f"{kind}: open file descriptors {fds} -> {after_fds}")
-        problems += [f"{kind}.{name}: answered {after.get(name)!r}, before the garbage {answer!r}"
+        problems += [f"{kind}.{name}: answered {after.get(name)!r}, before the garbage {answer!r}; the last bytes "
+                     f"fed to it: {ports[name.partition('#')[0]].last_fed()!r}"
                      for name, answer in good.items() if after.get(name) != answer]
         if _nvram(state) != memory:
             problems.append(f"{kind}: the stored memory changed under garbage ({state})")
@@ -292,11 +322,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rss-mb", type=float, default=20.0, help="resident growth allowed (default 20 MB)")
     parser.add_argument("--transport", choices=("pty", "tcp", "rfc2217"), default="pty",
                         help="how the serial ports are served (default pty)")
+    parser.add_argument("--seed", type=int, default=None, help="another garbage sequence (default: the kind's own)")
+    parser.add_argument("--drives", default="", help="comma-separated SERS addresses on one RS-485 line")
+    parser.add_argument("--pacing", action="store_true", help="pace the device's output at its baud rate")
     args = parser.parse_args(argv)
+    drives = [int(a) for a in args.drives.split(",") if a]
     problems: list[str] = []
     with tempfile.TemporaryDirectory(prefix="devsim-soak-") as directory:
         for kind in args.kinds.split(","):
-            problems += soak(kind, args.seconds, args.rss_mb, directory, args.transport)
+            problems += soak(kind, args.seconds, args.rss_mb, directory, args.transport, seed=args.seed,
+                             drives=drives, pacing=args.pacing)
     for problem in problems:
         print(problem, file=sys.stderr)
     return 1 if problems else 0
