@@ -135,3 +135,19 @@ def test_e_and_s(sers: Plant) -> None:
     host.ask("#S\r")
     sers.settle()
     assert 0 < number(host, "P51") < 720
+
+
+@pytest.mark.manual("§4.1", "a faulty syntax is acknowledged at once with an error message introduced by '*'")
+def test_a_latin_1_letter_is_no_statement(sers: Plant) -> None:
+    """Byte DFh (``ß`` in latin-1) from garbage is no statement: the drive answers "Anweisung
+    erwartet" as it comes and keeps moving; in programming mode nothing is stored.  (Before,
+    Python's ``str.upper`` made it ``SS``: it ran as S, a stop, and NEW … QUIT stored it.)"""
+    host = sers.host
+    host.ask("#ON V=60 W=720 E\r")
+    sers.advance(0.5)
+    assert host.ask(b"#\xdf\r") == b"#\xdf\n*Anweisung erwartet\n\r\r"
+    assert sers.read("motion.kind") == "position"
+    host.ask("#NEW\r")
+    host.ask(b"#\xdf\r")
+    host.ask("#QUIT\r")
+    assert sers.read("program") == []

@@ -233,10 +233,16 @@ class ParseResult(msgspec.Struct):
 
 
 # -- the scanner --------------------------------------------------------------------------
+#: Upper case as the drive sees it: ASCII letters only, one character for one.  (``str.upper``
+#: made the latin-1 byte DFh, ``ß``, into ``SS``: garbage ran as the stop S, in programming mode
+#: it was stored as one, and every character after it was read one place off.)
+_ASCII_UPPER = str.maketrans("abcdefghijklmnopqrstuvwxyz", "ABCDEFGHIJKLMNOPQRSTUVWXYZ")
+
+
 class _Cursor:
     def __init__(self, text: str, final: bool) -> None:
         self.text = text
-        self.upper = text.upper()
+        self.upper = text.translate(_ASCII_UPPER)
         self.pos = 0
         self.final = final
 
