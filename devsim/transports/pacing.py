@@ -26,7 +26,9 @@ __all__ = ["Pacer"]
 # nanoseconds before its nominal time.  Bytes due within this margin are released.
 EPSILON = 1e-7
 #: Bytes a transmitter holds at most before it drops the oldest (a transport's ``max_buffer``; at
-#: 9600 baud a minute of output, more than any answer a host asks for).
+#: 9600 baud a minute of output, more than any answer a host asks for).  [SIM-CHOICE] no manual
+#: says what a device does with more output than its wire carries: on a real line it cannot
+#: receive faster than that wire either.
 MAX_PENDING = 64 * 1024
 
 
