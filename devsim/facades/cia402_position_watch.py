@@ -17,10 +17,11 @@ within ±6067h of the target of the last positioning for 6068h ms, one condition
 others).  A position window of FFFFFFFFh switches that control off, and the bit is the
 positioning's own end as before the node had the object (the power-on value).
 
-Looked at as :mod:`devsim.facades.cia402_velocity` looks at the velocity: on the device clock every
-:data:`SAMPLE` while the position or the following error changes and for :data:`QUIET` after it
-stopped changing or after any command, when a time (6066h, 6068h) is set; with both times 0 the
-bits are the comparison at the instant they are read.  Every read of the statusword looks again.
+Looked at as :mod:`devsim.facades.cia402_velocity` looks at the velocity
+(:mod:`devsim.facades.cia402_looks`): on the device clock every :data:`SAMPLE` while the position
+or the following error changes and for :data:`QUIET` after it stopped changing or after any
+command, when a time (6066h, 6068h) is set; with both times 0 the bits are the comparison at the
+instant they are read.  Every read of the statusword looks again.
 """
 
 from __future__ import annotations
@@ -28,13 +29,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from devsim.facades.cia402_looks import QUIET, SAMPLE, Looks, held, since
+
 __all__ = ["FOLLOWING_ERROR", "OFF", "PositionWatch", "QUIET", "SAMPLE"]
 
-SAMPLE = 0.001  # s of device time between looks while the position changes (the times are in ms)
-QUIET = 0.1  # s without a change after which the looks stop
 FOLLOWING_ERROR = 0x2000
 OFF = 0xFFFF_FFFF  # 6065h / 6067h: the control switched off (CiA 402-2)
-_EPSILON = 1e-9  # (sums of SAMPLE steps on the clock)
 
 
 class PositionWatch:
@@ -46,12 +46,11 @@ class PositionWatch:
     def __init__(self, clock: Any, sample: Callable[[], tuple[int, float | None, int | None] | None],
                  defaults: dict[str, int]) -> None:
         self.clock, self._sample, self._defaults = clock, sample, defaults
-        self._timer: Any = None
+        self._looks = Looks(clock, self.look)
         self.reset()
 
     def reset(self) -> None:
         """The power-on values of 6065h … 6068h, nothing looked at yet."""
-        self.cancel()
         self.following_window = self._defaults["following_error_window"]  # 6065h, position units
         self.following_time = self._defaults["following_error_time_out"]  # 6066h, ms
         self.window = self._defaults["position_window"]  # 6067h, position units
@@ -59,10 +58,10 @@ class PositionWatch:
         self._forget()
 
     def _forget(self) -> None:
+        self._looks.forget()
         self._in_window_since: float | None = None
         self._error_since: float | None = None
         self._goal: float | None = None  # the target the window time counts for
-        self._last: tuple[tuple[int, int | None], float] | None = None  # (the values looked at last, when they changed)
 
     def set(self, name: str, value: int) -> None:
         """Write one of the four objects (``following_window``, ``following_time``, ``window``,
@@ -76,46 +75,29 @@ class PositionWatch:
         now = self.clock.now()
         values = self._sample()
         if values is None:
-            self.cancel()
             self._forget()
             return
         position, goal, error = values
         if goal != self._goal:  # (another target: its window time counts from now)
             self._goal, self._in_window_since = goal, None
         inside = goal is not None and self.window != OFF and abs(position - goal) <= self.window
-        self._in_window_since = (self._in_window_since if self._in_window_since is not None else now) if inside \
-            else None
+        self._in_window_since = since(self._in_window_since, now, inside)
         outside = error is not None and self.following_window != OFF and abs(error) > self.following_window
-        self._error_since = (self._error_since if self._error_since is not None else now) if outside else None
-        if command or self._last is None or (position, error) != self._last[0]:
-            self._last = ((position, error), now)
-        if (self.window_time or self.following_time) and now - self._last[1] < QUIET:
-            if self._timer is None:
-                self._timer = self.clock.call_later(SAMPLE, self._tick)
-        else:
-            self.cancel()
-
-    def _tick(self) -> None:
-        self._timer = None
-        self.look()
+        self._error_since = since(self._error_since, now, outside)
+        self._looks.after((position, error), now, command=command,
+                          timed=bool(self.window_time or self.following_time))
 
     def cancel(self) -> None:
-        if self._timer is not None:
-            self._timer.cancel()
-            self._timer = None
+        self._looks.cancel()
 
     def reached(self) -> bool | None:
         """Whether the position actual value has stayed within the position window of the target
         for the position window time (as of the last look); ``None`` with the window switched off."""
         if self.window == OFF:
             return None
-        since = self._in_window_since
-        return since is not None and self.clock.now() - since >= self.window_time / 1000 - _EPSILON
+        return held(self._in_window_since, self.clock.now(), self.window_time)
 
     def bits(self) -> int:
         """Bit 13 of the statusword as of now (looking first)."""
         self.look()
-        since = self._error_since
-        if since is not None and self.clock.now() - since >= self.following_time / 1000 - _EPSILON:
-            return FOLLOWING_ERROR
-        return 0
+        return FOLLOWING_ERROR if held(self._error_since, self.clock.now(), self.following_time) else 0
