@@ -259,7 +259,7 @@ def ctl_line_fault(ctx: click.Context, device: str, kind: str, switch: str, port
 
 @ctl.command(command_name("telegrams"))
 @click.argument("device")
-@click.option("--port", default="main", show_default=True, help="Which serial port of DEVICE.")
+@click.option("--port", default="main", show_default=True, help="Which port of DEVICE (or 'modbus': its RTU line).")
 @click.option("--count", type=click.IntRange(0, 200), default=20, show_default=True, help="How many.")
 @click.pass_context
 def ctl_telegrams(ctx: click.Context, device: str, port: str, count: int) -> None:

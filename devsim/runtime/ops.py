@@ -156,7 +156,10 @@ def _line_fault(rt: Runtime, req: rq.LineFault) -> None:
 
 
 def _telegrams(rt: Runtime, req: rq.Telegrams) -> list[dict[str, Any]]:
-    """The last ``count`` telegrams (0 … 200, as ``ctl telegrams --count`` takes)."""
+    """The last ``count`` telegrams (0 … 200, as ``ctl telegrams --count`` takes), of a device's
+    port or of a line a facade serves for it (the Modbus RTU line ``modbus``, which declares no
+    framing: its telegrams carry no decoding)."""
+    from devsim.core.registry import port_framing
     from devsim.transports.tap import tap
 
     if not 0 <= req.count <= 200:
@@ -164,8 +167,8 @@ def _telegrams(rt: Runtime, req: rq.Telegrams) -> list[dict[str, Any]]:
     line = rt.lines.get(port_key(req.device, req.port))
     if line is None:
         rt.line_status(req.device, req.port)  # the reason: no such device, port or line
-    framing = rt.device(req.device).port(req.port).spec.framing
-    return tap(line, framing.decoder if framing is not None else None).last(req.count)
+    framing = port_framing(rt.device(req.device).kind, req.port)
+    return tap(line, framing.decoder).last(req.count)
 
 
 def _watch(rt: Runtime, req: rq.Watch) -> WatchStart:

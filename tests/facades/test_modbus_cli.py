@@ -3,12 +3,15 @@
 
 from __future__ import annotations
 
+import json
+import tempfile
+
 import pytest
 from click.testing import CliRunner
-from pymodbus.client import ModbusTcpClient
+from pymodbus.client import ModbusSerialClient, ModbusTcpClient
 
 from devsim.cli import cli
-from tests.test_cli import Sim
+from tests.test_cli import Sim, ctl
 
 
 def test_run_serves_modbus_tcp_beside_the_pty() -> None:
@@ -44,3 +47,35 @@ def test_doc_prints_the_modbus_map() -> None:
     assert result.exit_code == 0
     assert "| holding | 2–3 | quantity.supply_voltage | float | ×1000 | V |" in result.output
     assert "| coil | 6 | input.I1 | bool |" in result.output
+
+
+def test_ctl_telegrams_shows_the_modbus_rtu_line() -> None:
+    """``devsim ctl telegrams --port modbus``: the RTU line's frames, as ``ctl line`` and ``ctl
+    capture`` take that line (it was refused: 'sers has no port 'modbus'').  pymodbus's serial
+    client at 8N1 on the pty (docs/facades/modbus.md); the line declares no framing, so the
+    frames come undecoded."""
+    sockdir = tempfile.TemporaryDirectory(prefix="dsl")  # a unix socket's path is short
+    addr = f"unix:{sockdir.name}/ctl.sock"
+    sim = Sim("sers", "--pty", "--modbus", "rtu", "--control", addr)
+    try:
+        seen = sim.read_until("control:")
+        scheme, rtu = seen["sers.modbus"].split()
+        assert scheme == "rtu"
+        done = ctl(addr, "telegrams", "sers", "--port", "modbus")
+        assert (done.returncode, done.stdout) == (0, "(no telegrams yet: the tap starts with the first request)\n"), \
+            done.stderr
+        client = ModbusSerialClient(port=rtu, baudrate=19200, parity="N", timeout=5)
+        assert client.connect()
+        try:
+            assert client.read_holding_registers(2, count=2, device_id=1).registers == [1, 68000 - 65536]
+        finally:
+            client.close()
+        done = ctl(addr, "--json", "telegrams", "sers", "--port", "modbus")
+        assert done.returncode == 0, done.stderr
+        request, answer = json.loads(done.stdout)
+        assert (request["dir"], request["hex"][:-6]) == ("H>D", "01 03 00 02 00 02")  # (and the CRC)
+        assert (answer["dir"], answer["hex"][:-6]) == ("D>H", "01 03 04 00 01 09 a0")
+        assert "decoded" not in request
+    finally:
+        sim.stop()
+        sockdir.cleanup()
