@@ -11,7 +11,9 @@ them all at once, with the schema's own problems:
 * :func:`step_problems` – the names in ``set``, ``pulse``, ``when`` and ``expect_state`` are
   points of the device's kind; a ``fault`` is one the kind declares;
 * :func:`bus_address_problems` – no two devices of a kind on one bus have the same address;
-* :func:`bus_port_problems` – the devices of a bus are on it by ports of one name.
+* :func:`bus_port_problems` – the devices of a bus are on it by ports of one name;
+* :func:`canopen_node_problems` – no two devices of one process are one CANopen node id on
+  one network.
 
 They work on the parts of a file that parsed (a device or step that did not is left to the
 schema's message), and take the device and step objects by their attributes, so that this module
@@ -27,8 +29,8 @@ from devsim.core.points import BadValue, ReadOnlyName, UnknownName
 from devsim.core.registry import UnknownKind, device_class
 from devsim.core.typed import Invalid
 
-__all__ = ["POWER_FAULTS", "Problem", "bus_address_problems", "bus_port_problems", "device_problems", "fault_problem",
-           "step_problems"]
+__all__ = ["POWER_FAULTS", "Problem", "bus_address_problems", "bus_port_problems", "canopen_node_problems",
+           "device_problems", "fault_problem", "step_problems"]
 
 Problem = tuple[tuple[int | str, ...], str]
 
@@ -188,6 +190,25 @@ def bus_port_problems(devices: Iterable[tuple[int, Any]]) -> list[Problem]:
         if its != port:
             problems.append((("devices", index, "kind"), f"device {device.name!r} is on bus {bus!r} by its port {port!r},"
                              f" device {name!r} by {its!r}: the devices of a bus share one port of one name"))
+    return problems
+
+
+def canopen_node_problems(devices: Iterable[tuple[int, Any]]) -> list[Problem]:
+    """Two devices as one CANopen node id on one ``canopen.network`` (the network as written: the
+    plant serves one CAN bus per network it names), in one process (``part``; processes of a fleet
+    may run on different machines); ``devsim up`` failed with a ValueError traceback."""
+    seen: dict[tuple[Any, str, int], int] = {}
+    problems: list[Problem] = []
+    for i, device in devices:
+        canopen = device.canopen
+        if canopen is None:
+            continue
+        key = (device.part, canopen.network, canopen.node)
+        if key in seen:
+            problems.append((("devices", i, "canopen", "node"), f"CANopen node {canopen.node} on {canopen.network}"
+                             f" is taken by devices.{seen[key] + 1}.canopen already"))
+        else:
+            seen[key] = i
     return problems
 
 

@@ -51,6 +51,7 @@ from devsim.scenario.checks import (
     Problem,
     bus_address_problems,
     bus_port_problems,
+    canopen_node_problems,
     device_problems,
     fault_problem,
     step_problems,
@@ -62,6 +63,7 @@ from devsim.scenario.specs import (
     ModbusSpec,
     MqttSpec,
     OpcuaSpec,
+    TcpSpec,
     TransportSpec,
     parse_duration,
 )
@@ -186,7 +188,7 @@ class PlantSpec(Typed, kw_only=True):
         """Every reference across the plant's parts that does not hold (names used twice, a
         bus not defined, two devices at one address on a bus …), located; a file reports them all (:func:`inspect_file`), a plant
         given as data raises the first."""
-        return plant_problems(_Parts(self.devices, self.buses, [], {}, self.opcua is not None))
+        return plant_problems(_Parts.of(self))
 
     def only_part(self, part: str) -> PlantSpec:
         """The plant with only the devices of ``part`` (and their buses); ValueError if none."""
@@ -508,8 +510,7 @@ class Scenario(PlantSpec, kw_only=True, dict=True):
     def problems(self) -> list[Problem]:
         """The plant's problems, and every step's reference to a device, port or fault that
         does not exist."""
-        parts = _Parts(self.devices, self.buses, list(self.steps), self.host, self.opcua is not None)
-        return plant_problems(parts)
+        return plant_problems(_Parts.of(self))
 
     @property
     def scripts_host(self) -> bool:
@@ -532,6 +533,15 @@ class _Parts(NamedTuple):
     opcua: bool
     #: the names of the devices that did not parse (None if one has no name to read)
     unparsed: tuple[str, ...] | None = ()
+    #: the plant's OPC UA server and MQTT broker (None: none, or not parsed)
+    opcua_server: OpcuaSpec | None = None
+    mqtt: MqttSpec | None = None
+
+    @classmethod
+    def of(cls, spec: PlantSpec) -> _Parts:
+        """The parts of a plant or scenario that parsed whole."""
+        return cls(list(spec.devices), list(spec.buses), list(getattr(spec, "steps", [])), getattr(spec, "host", {}),
+                   spec.opcua is not None, opcua_server=spec.opcua, mqtt=spec.mqtt)
 
     @classmethod
     def salvage(cls, data: Any) -> _Parts:
@@ -550,7 +560,8 @@ class _Parts(NamedTuple):
                  for item, device in zip(listed, devices, strict=False) if device is None]
         unparsed = tuple(names) if isinstance(items, list | None) and all(isinstance(n, str) for n in names) else None
         return cls(devices, each(BusSpec, "buses"), each(Step, "steps"), dict(host) if isinstance(host, dict) else {},
-                   raw.get("opcua") is not None, unparsed)  # type: ignore[arg-type]
+                   raw.get("opcua") is not None, unparsed,  # type: ignore[arg-type]
+                   _parsed(OpcuaSpec, raw.get("opcua")), _parsed(MqttSpec, raw.get("mqtt")))
 
 
 def _parsed(kind: type[Typed], item: Any) -> Any:
@@ -600,8 +611,8 @@ def plant_problems(parts: _Parts) -> list[Problem]:
         for port in sorted(set(device.ports) - set(device.port_names())):
             problems.append((("devices", i, "ports", port), f"device {device.name!r} ({device.kind}) has no port"
                              f" {port!r} (ports: {', '.join(device.port_names())})"))
-    return (problems + bus_port_problems(devices) + bus_address_problems(devices) + _shared_endpoints(parts)
-            + _step_references(parts))
+    return (problems + bus_port_problems(devices) + bus_address_problems(devices) + canopen_node_problems(devices)
+            + _shared_endpoints(parts) + _step_references(parts))
 
 
 def _endpoint(transport: TransportSpec) -> tuple[str, ...] | None:
@@ -619,9 +630,11 @@ def _endpoint(transport: TransportSpec) -> tuple[str, ...] | None:
 
 
 def _shared_endpoints(parts: _Parts) -> list[Problem]:
-    """Two ports of the plant (a device's Modbus facade's too) on one pty link or one TCP/UDP
-    port: the second could not open."""
+    """Two ports of the plant (a device's Modbus facade's, a CANopen network's socketcand server,
+    the OPC UA server and the MQTT broker it connects to too) on one pty link or one TCP/UDP port:
+    the second could not open (or the plant would talk MQTT to its own port)."""
     owners: list[tuple[tuple[int | str, ...], TransportSpec]] = []
+    networks: set[tuple[str | None, str]] = set()  # (part, network): one socketcand server each
     for i, device in enumerate(parts.devices):
         if device is None:
             continue
@@ -630,7 +643,22 @@ def _shared_endpoints(parts: _Parts) -> list[Problem]:
             owners.append((where, device.transport_of(port)))
         if device.modbus is not None:  # the facade's own pty link or TCP port
             owners.append((("devices", i, "modbus"), TransportSpec(pty=device.modbus.rtu, tcp=device.modbus.tcp)))
+        canopen = device.canopen
+        if canopen is not None and not canopen.network.startswith("socketcan:") \
+                and (device.part, canopen.network) not in networks:
+            networks.add((device.part, canopen.network))
+            host, _, number = canopen.network.rpartition(":")
+            owners.append((("devices", i, "canopen", "network"),
+                           TransportSpec(tcp=TcpSpec(port=int(number), host=host or "127.0.0.1"))))
     owners += [(("buses", i, "transport"), bus.transport) for i, bus in enumerate(parts.buses) if bus is not None]
+    if parts.opcua_server is not None:
+        owners.append((("opcua", "port"), TransportSpec(tcp=TcpSpec(port=parts.opcua_server.port,
+                                                                     host=parts.opcua_server.host))))
+    if parts.mqtt is not None and parts.mqtt.url is not None:
+        from devsim.facades.mqtt_topics import parse_url
+
+        host, number = parse_url(parts.mqtt.url)
+        owners.append((("mqtt", "url"), TransportSpec(tcp=TcpSpec(port=number, host=host))))
     seen: dict[tuple[str, ...], tuple[int | str, ...]] = {}
     problems: list[Problem] = []
     for where, transport in owners:
@@ -717,9 +745,7 @@ def inspect_file(
     except Invalid as exc:
         shape = None
         problems += exc.problems
-    parts = _Parts.salvage(data) if shape is None else _Parts(
-        list(shape.devices), list(shape.buses), list(getattr(shape, "steps", [])),
-        getattr(shape, "host", {}), shape.opcua is not None)
+    parts = _Parts.salvage(data) if shape is None else _Parts.of(shape)
     problems += plant_problems(parts)
     raw_devices = data.get("devices") if isinstance(data, dict) else None
     for i, device in enumerate(parts.devices):

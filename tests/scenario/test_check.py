@@ -345,3 +345,49 @@ def test_a_modbus_facade_on_a_link_or_tcp_port_taken_already_is_a_mistake_of_the
         f"{bad}:4: devices.3.modbus: link {two} is taken by devices.2.modbus already",
         f"{bad}:5: devices.4.modbus: tcp port 127.0.0.1:23461 is taken by devices.4.transport already",
     ]
+
+
+def test_a_canopen_node_id_used_twice_on_one_network_is_a_mistake_of_the_file(tmp_path: Path) -> None:
+    """Found probing the facades' plant options: two devices as CANopen node 5 on one network (a
+    socketcand server's or a SocketCAN channel) passed `check`, and `up` ended with a ValueError
+    traceback; the same node on another network, or in another part (process), is no clash."""
+    bad, lines = mistakes(tmp_path, "devices:\n"
+                          "  - {name: a, kind: sers, canopen: {node: 5}}\n"
+                          "  - {name: b, kind: gms96, canopen: {node: 5}}\n"
+                          "  - {name: c, kind: sers, canopen: {node: 5, network: 'socketcan:vcan0'}}\n"
+                          "  - {name: d, kind: sers, canopen: {node: 5, network: 'socketcan:vcan0'}}\n"
+                          "  - {name: e, kind: sers, canopen: {node: 5, network: 'socketcan:vcan1'}}\n"
+                          "  - {name: f, kind: sers, part: two, canopen: {node: 5, network: 'socketcan:vcan0'}}\n")
+    assert lines == [
+        f"{bad}:3: devices.2.canopen.node: CANopen node 5 on 127.0.0.1:29536 is taken by devices.1.canopen already",
+        f"{bad}:5: devices.4.canopen.node: CANopen node 5 on socketcan:vcan0 is taken by devices.3.canopen already",
+    ]
+    done = subprocess.run([sys.executable, "-m", "devsim", "up", str(bad)], cwd=ROOT, env=devsim_env(),
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == exits.BAD_FILE and "Traceback" not in done.stderr, done.stderr
+
+
+def test_a_facade_server_on_a_tcp_port_taken_already_is_a_mistake_of_the_file(tmp_path: Path) -> None:
+    """Found probing the facades' plant options: a CANopen network's socketcand server, the OPC UA
+    server or the MQTT broker's url on a TCP port another port of the plant holds passed `check`;
+    `up` could not bind (or waited 10 s for its own device port to answer MQTT).  One network
+    written two ways is two socketcand servers on one port; devices sharing a network share its
+    server."""
+    bad, lines = mistakes(tmp_path, "devices:\n"
+                          "  - {name: a, kind: sers, transport: {tcp: {port: 23462}}, canopen: {node: 1, network: '23462'}}\n"
+                          "  - {name: b, kind: sers, modbus: {tcp: {port: 23463}}, canopen: {node: 1, network: '23464'}}\n"
+                          "  - {name: c, kind: sers, canopen: {node: 2, network: '23464'}}\n"
+                          "  - {name: d, kind: sers, canopen: {node: 3, network: '127.0.0.1:23464'}}\n"
+                          "  - {name: e, kind: sers, transport: {tcp: {port: 23465}}}\n"
+                          "opcua: {port: 23463}\n"
+                          "mqtt: {url: 'mqtt://127.0.0.1:23465'}\n")
+    assert lines == [
+        f"{bad}:2: devices.1.canopen.network: tcp port 127.0.0.1:23462 is taken by devices.1.transport already",
+        f"{bad}:5: devices.4.canopen.network: tcp port 127.0.0.1:23464 is taken by devices.2.canopen.network already",
+        f"{bad}:7: opcua.port: tcp port 127.0.0.1:23463 is taken by devices.2.modbus already",
+        f"{bad}:8: mqtt.url: tcp port 127.0.0.1:23465 is taken by devices.5.transport already",
+    ]
+    good = tmp_path / "good.yaml"
+    good.write_text("devices:\n  - {name: a, kind: sers, canopen: {node: 1}}\n  - {name: b, kind: sers, canopen: {node: 2}}\n"
+                    "opcua: {port: 0}\nmqtt: {url: 'mqtt://127.0.0.1:1883'}\n", encoding="utf-8")
+    assert check(good).returncode == 0, check(good).stderr
