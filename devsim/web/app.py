@@ -29,7 +29,7 @@ import hmac
 from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
-from urllib.parse import urlsplit
+from urllib.parse import SplitResult, urlsplit
 
 from aiohttp import WSMsgType, web
 
@@ -137,11 +137,13 @@ async def _telegrams(request: web.Request) -> web.Response:
 
 
 async def _json_body(request: web.Request) -> Any:
-    """The request's JSON body, ``None`` when it is not JSON or nested too deep to decode (a
-    ``RecursionError``: it answered 500 with a traceback in the log)."""
+    """The request's JSON body, ``None`` when it is not JSON, nested too deep to decode (a
+    ``RecursionError``), in a charset Python does not know (``charset=nope``: a ``LookupError``)
+    or cut off by a client that left mid-body (``ConnectionResetError``); each answered 500 with
+    a traceback in the log."""
     try:
         return await request.json()
-    except (ValueError, RecursionError):
+    except (ValueError, RecursionError, LookupError, ConnectionResetError):
         return None
 
 
@@ -194,7 +196,8 @@ async def _ws(request: web.Request) -> web.StreamResponse:
     if device is not None and device not in view.feeds:
         return web.json_response({"error": f"no device {device[:60]!r}", "type": "UnknownDevice"}, status=404)
     origin = request.headers.get("Origin")
-    if origin is not None and urlsplit(origin).netloc != request.host:
+    site = _split(origin) if origin is not None else None
+    if origin is not None and (site is None or site.netloc != request.host):
         return web.json_response({"error": "another site's page", "type": "Forbidden"}, status=403)
     ws = web.WebSocketResponse(heartbeat=20.0)
     await ws.prepare(request)
@@ -252,6 +255,15 @@ async def _close_sockets(app: web.Application) -> None:
         await ws.close(code=1001, message=b"the server stops")
 
 
+def _split(url: str) -> SplitResult | None:
+    """``url`` in its parts, None where it is no URL (``http://[``: urlsplit raised ValueError,
+    a 500 with a traceback, for an Origin or Host header a client sent)."""
+    try:
+        return urlsplit(url)
+    except ValueError:
+        return None
+
+
 @web.middleware
 async def _guard(request: web.Request, handler: Callable[[web.Request], Awaitable[web.StreamResponse]]
                  ) -> web.StreamResponse:
@@ -260,7 +272,8 @@ async def _guard(request: web.Request, handler: Callable[[web.Request], Awaitabl
     if request.path.startswith("/api/") and request.path != "/api/login":
         token = request.app[TOKEN]
         if token is None:
-            if (urlsplit(f"//{request.host}").hostname or "") not in LOOPBACK_NAMES:
+            addressed = _split(f"//{request.host}")
+            if addressed is None or (addressed.hostname or "") not in LOOPBACK_NAMES:
                 return web.json_response({"error": "served on loopback: address it as localhost or 127.0.0.1",
                                           "type": "Forbidden"}, status=403)
         else:

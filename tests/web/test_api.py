@@ -115,6 +115,54 @@ def test_a_request_that_is_not_http_is_refused_in_one_line(sim: WebSim) -> None:
     assert not any("Traceback" in line for line in before), before
 
 
+def exchange(sim: WebSim, request: bytes, *, leave: bool = False) -> bytes:
+    """``request`` sent raw to the page's server; its answer's status line (``b""`` if the client
+    ``leave``s at once, closing the connection mid-request)."""
+    host, port = sim.url.split("//")[1].rstrip("/").rsplit(":", 1)
+    with socket.create_connection((host, int(port)), timeout=10) as client:
+        client.sendall(request)
+        if leave:
+            return b""
+        return client.recv(4096).split(b"\r\n", 1)[0]
+
+
+def no_traceback_until_the_next_line(sim: WebSim) -> None:
+    """A request aiohttp cannot parse makes one ``devsim web:`` line: nothing before it is a traceback."""
+    assert exchange(sim, b"GET / HTTP/1.1\r\nHost: x\r\nContent-Length: abc\r\n\r\n").startswith(b"HTTP/1.0 400")
+    before: list[str] = []
+    sim.process.next_match(sim.process.err, lambda line: line.startswith("devsim web: a request"), 10, "the line",
+                           keep=before)
+    assert not any("Traceback" in line or "Error" in line for line in before), before
+
+
+def test_a_host_or_origin_that_is_no_address_is_refused(sim: WebSim) -> None:
+    """Found fuzzing a real devsim web: a Host header ``[`` (or ``[::1``), or a WebSocket's Origin
+    ``http://[``, made urlsplit raise ValueError in the guards: 500 and a traceback on stderr.
+    They are not the page's loopback name, nor its site: 403, and the page goes on."""
+    for host in (b"[", b"[::1", b"[x]]"):
+        assert exchange(sim, b"GET /api/plant HTTP/1.1\r\nHost: " + host + b"\r\n\r\n") == b"HTTP/1.1 403 Forbidden"
+    port = sim.url.rstrip("/").rsplit(":", 1)[1].encode()
+    upgrade = (b"GET /api/ws HTTP/1.1\r\nHost: 127.0.0.1:" + port + b"\r\nOrigin: http://[\r\nUpgrade: websocket\r\n"
+               b"Connection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n")
+    assert exchange(sim, upgrade) == b"HTTP/1.1 403 Forbidden"
+    no_traceback_until_the_next_line(sim)
+    assert exchange(sim, b"GET /api/plant HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n") == b"HTTP/1.1 200 OK"
+
+
+def test_a_body_in_an_unknown_charset_or_cut_off_is_a_bad_request(sim: WebSim) -> None:
+    """Found fuzzing a real devsim web: ``Content-Type: application/json; charset=nope`` made the
+    body's decoding raise LookupError (500, a traceback), and a client that left before its body
+    was all sent made ConnectionResetError's traceback ('Error handling request').  The first is
+    400 as any body that is no JSON object; the second answers nobody and logs nothing."""
+    post = b"POST /api/devices/sers/set HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json; charset="
+    assert exchange(sim, post + b"nope\r\nContent-Length: 2\r\n\r\n{}") == b"HTTP/1.1 400 Bad Request"
+    for _ in range(3):
+        exchange(sim, post + b"utf-8\r\nContent-Length: 100\r\n\r\n{\"name\"", leave=True)
+    no_traceback_until_the_next_line(sim)
+    body = b'{"name": "param.V", "value": "500"}'
+    assert exchange(sim, post + b"utf-8\r\nContent-Length: %d\r\n\r\n%s" % (len(body), body)) == b"HTTP/1.1 200 OK"
+
+
 async def test_faults_line_faults_and_power_cycle_go_to_the_device(sim: WebSim) -> None:
     async with aiohttp.ClientSession(sim.url) as http:
         assert (await http.post("/api/devices/sers/fault", json={"kind": "emergency_stop", "active": True})).status == 200
