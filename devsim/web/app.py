@@ -180,7 +180,7 @@ async def _login(request: web.Request) -> web.Response:
     token = request.app[TOKEN]
     body = await _json_body(request)
     given = str(body.get("token", "")) if isinstance(body, dict) else ""
-    if token is not None and not hmac.compare_digest(given.encode(), token.encode()):
+    if token is not None and not _is_token(given, token):
         return web.json_response({"error": "wrong token", "type": "Unauthorized"}, status=401)
     response = web.json_response({"ok": True})
     if token is not None:
@@ -255,6 +255,13 @@ async def _close_sockets(app: web.Application) -> None:
         await ws.close(code=1001, message=b"the server stops")
 
 
+def _is_token(given: str, token: str) -> bool:
+    """``given`` is the token (compared in constant time).  A header's bytes that are no UTF-8
+    (``\\xff``: aiohttp's surrogate escapes) or a JSON string's lone surrogate are compared as they
+    are; encoded strictly they raised UnicodeEncodeError, a 500 with a traceback."""
+    return hmac.compare_digest(given.encode("utf-8", "surrogatepass"), token.encode())
+
+
 def _split(url: str) -> SplitResult | None:
     """``url`` in its parts, None where it is no URL (``http://[``: urlsplit raised ValueError,
     a 500 with a traceback, for an Origin or Host header a client sent)."""
@@ -278,7 +285,7 @@ async def _guard(request: web.Request, handler: Callable[[web.Request], Awaitabl
                                           "type": "Forbidden"}, status=403)
         else:
             given = request.cookies.get(COOKIE) or request.headers.get(HEADER) or ""
-            if not hmac.compare_digest(given.encode(), token.encode()):
+            if not _is_token(given, token):
                 return web.json_response({"error": "the page needs the token devsim printed at start",
                                           "type": "Unauthorized"}, status=401)
     if request.method == "POST" and request.content_type != "application/json":

@@ -115,11 +115,12 @@ def test_a_request_that_is_not_http_is_refused_in_one_line(sim: WebSim) -> None:
     assert not any("Traceback" in line for line in before), before
 
 
-def exchange(sim: WebSim, request: bytes, *, leave: bool = False) -> bytes:
-    """``request`` sent raw to the page's server; its answer's status line (``b""`` if the client
-    ``leave``s at once, closing the connection mid-request)."""
-    host, port = sim.url.split("//")[1].rstrip("/").rsplit(":", 1)
-    with socket.create_connection((host, int(port)), timeout=10) as client:
+def exchange(sim: WebSim | str, request: bytes, *, leave: bool = False) -> bytes:
+    """``request`` sent raw to the page's server (of ``sim``, or at an ``http://HOST:PORT/``); its
+    answer's status line (``b""`` if the client ``leave``s at once, closing the connection mid-request)."""
+    url = sim if isinstance(sim, str) else sim.url
+    host, port = url.split("//")[1].split("#")[0].rstrip("/").rsplit(":", 1)
+    with socket.create_connection(("127.0.0.1" if host == "0.0.0.0" else host, int(port)), timeout=10) as client:
         client.sendall(request)
         if leave:
             return b""
@@ -283,6 +284,24 @@ async def test_a_non_loopback_bind_needs_the_token_it_printed(remote_sim: Any) -
         stream = await http.ws_connect("/api/ws?device=sers")
         assert "snapshot" in await stream.receive_json(timeout=5)
         await stream.close()
+
+
+def test_a_token_that_is_no_utf_8_is_a_wrong_token(remote_sim: Any) -> None:
+    """Found fuzzing a real devsim run --web on a non-loopback bind: a token header or cookie of
+    bytes that are no UTF-8 (aiohttp reads them as surrogate escapes), or a login's JSON token
+    with a lone surrogate, made the comparison's encode() raise UnicodeEncodeError: 500 and a
+    traceback.  It is a wrong token: 401."""
+    host, seen, _lines = remote_sim
+    url = seen["web"]
+    for header in (b"X-Devsim-Token: \xff\xfe", b"Cookie: devsim_token=\xff"):
+        assert exchange(url, b"GET /api/plant HTTP/1.1\r\nHost: " + host.encode() + b"\r\n" + header + b"\r\n\r\n") == \
+            b"HTTP/1.1 401 Unauthorized"
+    body = b'{"token": "\\udc80"}'
+    login = b"POST /api/login HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nContent-Length: %d\r\n\r\n" % len(body)
+    assert exchange(url, login + body) == b"HTTP/1.1 401 Unauthorized"
+    token = seen["web token"].encode()
+    assert exchange(url, b"GET /api/plant HTTP/1.1\r\nHost: " + host.encode() + b"\r\nX-Devsim-Token: " + token +
+                    b"\r\n\r\n") == b"HTTP/1.1 200 OK"
 
 
 def test_devsim_web_attaches_to_a_running_simulator_and_to_the_next_one(tmp_path: Path) -> None:
