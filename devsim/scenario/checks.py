@@ -13,7 +13,8 @@ them all at once, with the schema's own problems:
 * :func:`bus_address_problems` – no two devices of a kind on one bus have the same address;
 * :func:`bus_port_problems` – the devices of a bus are on it by ports of one name;
 * :func:`canopen_node_problems` – no two devices of one process are one CANopen node id on
-  one network.
+  one network;
+* :func:`endpoints_clash` – two pty links or TCP/UDP ports the plant's ports would hold at once.
 
 They work on the parts of a file that parsed (a device or step that did not is left to the
 schema's message), and take the device and step objects by their attributes, so that this module
@@ -30,7 +31,7 @@ from devsim.core.registry import UnknownKind, device_class
 from devsim.core.typed import Invalid
 
 __all__ = ["POWER_FAULTS", "Problem", "bus_address_problems", "bus_port_problems", "canopen_node_problems",
-           "device_problems", "fault_problem", "step_problems"]
+           "device_problems", "endpoints_clash", "fault_problem", "step_problems"]
 
 Problem = tuple[tuple[int | str, ...], str]
 
@@ -210,6 +211,28 @@ def canopen_node_problems(devices: Iterable[tuple[int, Any]]) -> list[Problem]:
         else:
             seen[key] = i
     return problems
+
+
+#: The loopback name a server binds on each of its addresses, and those addresses.
+_LOOPBACK = frozenset({"localhost", "127.0.0.1", "::1"})
+
+
+def endpoints_clash(one: tuple[str, ...], other: tuple[str, ...]) -> bool:
+    """Two endpoints (``("link", PATH)``, ``("tcp" | "udp", HOST, PORT)``) that cannot both be
+    held: the same link, or one protocol's port on the same host, on every address (``::``, or
+    ``""``) beside any, on every IPv4 address (``0.0.0.0``) beside one that is no IPv6 address, or
+    on ``localhost`` beside a loopback address (a bind on ``0.0.0.0:5020`` and one on
+    ``127.0.0.1:5020`` passed devsim check, and the second failed in devsim up)."""
+    if one == other:
+        return True
+    if one[0] != other[0] or one[0] == "link" or one[2] != other[2]:
+        return False
+    hosts = {one[1], other[1]}
+    if hosts & {"", "::"}:  # (Linux: a bind on :: takes the IPv4 addresses too)
+        return True
+    if "0.0.0.0" in hosts:
+        return not any(":" in host for host in hosts)
+    return "localhost" in hosts and hosts <= _LOOPBACK
 
 
 def _settings(cls: Any, config: dict[str, Any]) -> Mapping[str, Any]:

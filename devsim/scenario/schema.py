@@ -53,6 +53,7 @@ from devsim.scenario.checks import (
     bus_port_problems,
     canopen_node_problems,
     device_problems,
+    endpoints_clash,
     fault_problem,
     step_problems,
 )
@@ -665,10 +666,12 @@ def _shared_endpoints(parts: _Parts) -> list[Problem]:
         endpoint = _endpoint(transport)
         if endpoint is None:
             continue
-        if endpoint in seen:
+        held = next((other for other in seen if endpoints_clash(other, endpoint)), None)
+        if held is not None:
             what = f"link {endpoint[1]}" if endpoint[0] == "link" else f"{endpoint[0]} port {endpoint[1]}:{endpoint[2]}"
-            first = ".".join(str(p + 1) if isinstance(p, int) else str(p) for p in seen[endpoint])
-            problems.append((where, f"{what} is taken by {first} already"))
+            first = ".".join(str(p + 1) if isinstance(p, int) else str(p) for p in seen[held])
+            on = f" (on {held[1]}:{held[2]})" if held != endpoint else ""
+            problems.append((where, f"{what} is taken by {first}{on} already"))
         else:
             seen[endpoint] = where
     return problems

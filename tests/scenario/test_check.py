@@ -391,3 +391,22 @@ def test_a_facade_server_on_a_tcp_port_taken_already_is_a_mistake_of_the_file(tm
     good.write_text("devices:\n  - {name: a, kind: sers, canopen: {node: 1}}\n  - {name: b, kind: sers, canopen: {node: 2}}\n"
                     "opcua: {port: 0}\nmqtt: {url: 'mqtt://127.0.0.1:1883'}\n", encoding="utf-8")
     assert check(good).returncode == 0, check(good).stderr
+
+
+def test_a_port_on_every_address_takes_it_on_each_of_them(tmp_path: Path) -> None:
+    """Found probing the facades' plant options: a device's TCP port on 0.0.0.0 (or localhost) and
+    a Modbus facade or the OPC UA server on that port at 127.0.0.1 passed `check` (the hosts were
+    compared as words); `up` could not bind the second.  0.0.0.0 beside an IPv6 address, or two
+    other hosts, do not clash."""
+    bad, lines = mistakes(tmp_path, "devices:\n"
+                          "  - {name: a, kind: sers, transport: {tcp: {host: 0.0.0.0, port: 23466}},"
+                          " modbus: {tcp: {port: 23466}}}\n"
+                          "  - {name: b, kind: sers, transport: {tcp: {host: localhost, port: 23467}}}\n"
+                          "  - {name: c, kind: sers, transport: {tcp: {host: '::1', port: 23466}}}\n"
+                          "  - {name: d, kind: sers, transport: {tcp: {host: 10.0.0.1, port: 23467}}}\n"
+                          "opcua: {port: 23467}\n")
+    assert lines == [
+        f"{bad}:2: devices.1.modbus: tcp port 127.0.0.1:23466 is taken by devices.1.transport (on 0.0.0.0:23466)"
+        " already",
+        f"{bad}:6: opcua.port: tcp port 127.0.0.1:23467 is taken by devices.2.transport (on localhost:23467) already",
+    ]
