@@ -690,7 +690,7 @@ def _step_references(parts: _Parts) -> list[Problem]:
     ports_known = None not in parts.devices and None not in parts.buses
     problems: list[Problem] = []
     default_port = parts.host.get("port")
-    if default_port is not None and ports_known and default_port not in ports:
+    if default_port is not None and ports_known and (not isinstance(default_port, str) or default_port not in ports):
         problems.append((("host", "port"), f"{default_port!r} is not a device or bus with its own port"))
     for i, step in enumerate(parts.steps):
         if step is None:

@@ -410,3 +410,12 @@ def test_a_port_on_every_address_takes_it_on_each_of_them(tmp_path: Path) -> Non
         " already",
         f"{bad}:6: opcua.port: tcp port 127.0.0.1:23467 is taken by devices.2.transport (on localhost:23467) already",
     ]
+
+
+def test_a_default_port_that_is_no_name_is_a_mistake_of_the_file(tmp_path: Path) -> None:
+    """Found by mutating the shipped scenarios for `check`: ``host: {port: []}`` (or a mapping)
+    ended devsim check with a TypeError traceback (unhashable, looked up among the port names)."""
+    bad, lines = mistakes(tmp_path, "devices:\n  - {name: x, kind: sers}\nhost:\n  port: []\nsteps:\n  - wait: 1s\n")
+    assert lines == [f"{bad}:4: host.port: [] is not a device or bus with its own port"]
+    bad, lines = mistakes(tmp_path, "devices:\n  - {name: x, kind: sers}\nhost: {port: {a: 1}}\nsteps: []\n")
+    assert lines == [f"{bad}:3: host.port: {{'a': 1}} is not a device or bus with its own port"]
