@@ -5,14 +5,18 @@ from __future__ import annotations
 import json
 import os
 import socket
+import subprocess
+import sys
 import tempfile
 from collections.abc import Iterator
 
 import pytest
 
+from devsim.cli import exits
 from devsim.runtime import Runtime
 from devsim.runtime.client import ControlClient, ControlError
 from devsim.runtime.control import ControlAddress, ControlAddressError, ControlServer, parse_address
+from tests.support.process import ROOT, devsim_env
 
 ECHO = "echo=tests.support.echo:EchoDevice"
 
@@ -186,6 +190,21 @@ def test_parse_address() -> None:
     for bad in ("unix:", "x", "host:port", "99999", "[::1]7"):
         with pytest.raises(ControlAddressError):
             parse_address(bad)
+
+
+@pytest.mark.parametrize("host", ["x" * 64, "a..b", "."])
+def test_a_host_that_is_no_host_name_is_refused_in_one_line(host: str) -> None:
+    """Found fuzzing devsim web --listen: a label over 63 characters (or empty) made getaddrinfo's
+    IDNA encoding raise UnicodeError (not an OSError) in is_loopback or the connect:
+    `devsim web --listen`, `devsim ctl --control` and `devsim run --control` ended with a traceback."""
+    with pytest.raises(ControlAddressError, match="is no host name"):
+        parse_address(f"{host}:1")
+    for args in (["web", "--control", f"{host}:1"], ["ctl", "--control", f"{host}:1", "now"],
+                 ["run", "sers", "--control", f"{host}:1"], ["web", "--control", "1", "--listen", f"{host}:1"]):
+        done = subprocess.run([sys.executable, "-m", "devsim", *args], cwd=ROOT, env=devsim_env(), capture_output=True,
+                              text=True, timeout=30, stdin=subprocess.DEVNULL)
+        assert done.stderr.startswith("Error: ") and done.stderr.count("\n") == 1, done.stderr  # (not a simulator's name either)
+        assert done.returncode == (2 if "is no host name" in done.stderr else exits.UNREACHABLE), done.stderr
 
 
 def test_stale_socket_is_replaced_but_a_live_one_is_not(runtime: Runtime, sockdir: str) -> None:

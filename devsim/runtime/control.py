@@ -136,6 +136,11 @@ def parse_address(addr: str) -> ControlAddress:
         ) from None
     if not 0 <= port <= 65535:
         raise ControlAddressError(f"{addr!r}: port must be 0..65535")
+    try:
+        host.encode("idna")  # what getaddrinfo does first: a UnicodeError there was a traceback
+    except UnicodeError:
+        raise ControlAddressError(f"{addr!r}: {host!r} is no host name (a label empty or longer than 63 characters)"
+                                  ) from None
     return ControlAddress(host=host, port=port)
 
 
