@@ -58,6 +58,11 @@ def parse_url(url: str) -> tuple[str, int]:
         raise ValueError(f"expected mqtt://HOST[:PORT], not {url!r}") from None
     if not parts.hostname or parts.path not in ("", "/"):
         raise ValueError(f"expected mqtt://HOST[:PORT], not {url!r}")
+    from devsim.runtime.control import host_problem
+
+    problem = host_problem(parts.hostname)
+    if problem is not None:
+        raise ValueError(f"{url!r}: {problem}")
     return parts.hostname, port if port is not None else DEFAULT_PORT
 
 

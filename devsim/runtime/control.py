@@ -58,6 +58,7 @@ __all__ = [
     "ControlAddress",
     "ControlAddressError",
     "ControlServer",
+    "host_problem",
     "parse_address",
 ]
 
@@ -136,12 +137,21 @@ def parse_address(addr: str) -> ControlAddress:
         ) from None
     if not 0 <= port <= 65535:
         raise ControlAddressError(f"{addr!r}: port must be 0..65535")
-    try:
-        host.encode("idna")  # what getaddrinfo does first: a UnicodeError there was a traceback
-    except UnicodeError:
-        raise ControlAddressError(f"{addr!r}: {host!r} is no host name (a label empty or longer than 63 characters)"
-                                  ) from None
+    problem = host_problem(host)
+    if problem is not None:
+        raise ControlAddressError(f"{addr!r}: {problem}")
     return ControlAddress(host=host, port=port)
+
+
+def host_problem(host: str) -> str | None:
+    """Why ``host`` cannot be looked up at all (a label empty or longer than 63 characters:
+    getaddrinfo's IDNA encoding raises UnicodeError, which is no OSError and was a traceback
+    where an address is opened), or None."""
+    try:
+        host.encode("idna")
+    except UnicodeError:
+        return f"{host!r} is no host name (a label empty or longer than 63 characters)"
+    return None
 
 
 # -- server --------------------------------------------------------------------------------

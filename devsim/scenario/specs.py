@@ -109,6 +109,19 @@ class TcpSpec(Typed):
     port: Annotated[int, Meta(ge=0, le=65535)] = 0
     host: str = "127.0.0.1"
 
+    def __post_init__(self) -> None:
+        _check_host(self.host)
+
+
+def _check_host(host: str) -> None:
+    """A host that cannot be looked up at all is refused with the file (it was a UnicodeError's
+    traceback when devsim up opened it)."""
+    from devsim.runtime.control import host_problem
+
+    problem = host_problem(host)
+    if problem is not None:
+        raise ValueError(problem)
+
 
 _TRANSPORTS = ("pty", "tcp", "rfc2217", "udp", "bus")
 
@@ -174,6 +187,13 @@ class CanopenSpec(Typed):
     network: Annotated[str, Meta(pattern=r"^(socketcan:\S+|(\S+:)?\d+)$"), doc(
         "[HOST:]PORT of a socketcand server, or socketcan:CHANNEL")] = "127.0.0.1:29536"
 
+    def __post_init__(self) -> None:
+        if not self.network.startswith("socketcan:"):
+            host, _, port = self.network.rpartition(":")
+            _check_host(host)
+            if int(port) > 65535:  # (OverflowError's traceback from the bind in devsim up)
+                raise ValueError(f"the socketcand port is 0 … 65535, not {port}")
+
 
 class MqttSpec(Typed):
     """The plant's devices also over MQTT (issue 14, :mod:`devsim.facades.mqtt`): ``url``
@@ -206,6 +226,9 @@ class OpcuaSpec(Typed):
     host: str = "127.0.0.1"
     port: Annotated[int, Meta(ge=0, le=65535)] = 4840
     period: Annotated[PositiveDuration, doc("sampling period for subscriptions, e.g. 100ms")] = PositiveDuration(0.1)
+
+    def __post_init__(self) -> None:
+        _check_host(self.host)
 
     def spec(self) -> str:
         """The ``--opcua`` form: ``HOST:PORT``."""

@@ -419,3 +419,30 @@ def test_a_default_port_that_is_no_name_is_a_mistake_of_the_file(tmp_path: Path)
     assert lines == [f"{bad}:4: host.port: [] is not a device or bus with its own port"]
     bad, lines = mistakes(tmp_path, "devices:\n  - {name: x, kind: sers}\nhost: {port: {a: 1}}\nsteps: []\n")
     assert lines == [f"{bad}:3: host.port: {{'a': 1}} is not a device or bus with its own port"]
+
+
+def test_a_host_that_is_no_host_name_or_a_port_past_65535_is_a_mistake_of_the_file(tmp_path: Path) -> None:
+    """Found probing plant files with long host names: a host with a label over 63 characters in
+    a TCP transport, a Modbus TCP facade, a CANopen network, the OPC UA server or the MQTT url
+    passed `check`, and `up` ended with a UnicodeError traceback (getaddrinfo's IDNA encoding); a
+    CANopen network on port 99999 with an OverflowError traceback (the bind)."""
+    long = "x" * 64
+    bad, lines = mistakes(tmp_path, "devices:\n"
+                          f"  - {{name: a, kind: sers, transport: {{tcp: {{host: {long}, port: 1}}}}}}\n"
+                          f"  - {{name: b, kind: sers, modbus: {{tcp: {{host: {long}, port: 0}}}}}}\n"
+                          f"  - {{name: c, kind: sers, canopen: {{node: 1, network: '{long}:0'}}}}\n"
+                          "  - {name: d, kind: sers, canopen: {node: 2, network: '99999'}}\n"
+                          f"opcua: {{host: {long}, port: 0}}\n"
+                          f"mqtt: {{url: 'mqtt://{long}'}}\n")
+    name = f"{long!r} is no host name (a label empty or longer than 63 characters)"
+    assert lines == [
+        f"{bad}:2: devices.1.transport.tcp: {name}",
+        f"{bad}:3: devices.2.modbus.tcp: {name}",
+        f"{bad}:4: devices.3.canopen: {name}",
+        f"{bad}:5: devices.4.canopen: the socketcand port is 0 … 65535, not 99999",
+        f"{bad}:6: opcua: {name}",
+        f"{bad}:7: mqtt.url: 'mqtt://{long}': {name}",
+    ]
+    done = subprocess.run([sys.executable, "-m", "devsim", "up", str(bad)], cwd=ROOT, env=devsim_env(),
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == exits.BAD_FILE and "Traceback" not in done.stderr, done.stderr
