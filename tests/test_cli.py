@@ -66,6 +66,12 @@ def test_list_shows_kinds_with_descriptions() -> None:
         (["run", "gms96", "--drives", "3,32"], "--drives: dil.address: Input should be less than or equal to 31"),
         (["run", "echo", "--speed", "0"], "--speed: must be positive"),
         (["run", "echo", "--speed", "fast"], "'fast' is not a valid float"),
+        # (nan and inf passed 'speed <= 0': the device time was NaN, a real-time scenario ran past its timeout)
+        (["run", "echo", "--speed", "nan"], "--speed: must be positive"),
+        (["run", "echo", "--speed", "inf"], "--speed: must be finite"),
+        (["scenario", "run", "--realtime", "--speed", "nan", str(ROOT / "scenarios/sers/absolute_positioning.yaml")],
+         "--speed: must be positive"),
+        (["up", str(ROOT / "scenarios/sers/absolute_positioning.yaml"), "--speed", "inf"], "--speed: must be finite"),
         (["run", "echo", "--control", "0.0.0.0:7000"], "--control: refusing non-loopback host '0.0.0.0'"),
         (["run", "echo", "--control", "nowhere"], "--control: 'nowhere': expected unix:/path/to.sock"),
         (["run", "echo", "--bogus"], "No such option"),

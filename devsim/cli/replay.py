@@ -132,8 +132,10 @@ def replay(session_file: str, use_pty: bool, link: str | None, tcp: str | None, 
 
     if tcp is not None and (use_pty or link):
         raise click.UsageError("choose one port: --pty/--link or --tcp")
-    if speed <= 0:
-        raise click.UsageError("--speed: must be positive")
+    from devsim.core.clock import speed_problem
+
+    if (problem := speed_problem(speed)) is not None:
+        raise click.UsageError(f"--speed: {problem}")
     if as_fast and speed != 1.0:
         raise click.UsageError("--speed and --as-fast exclude each other")
     try:

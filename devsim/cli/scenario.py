@@ -99,11 +99,12 @@ def scenario_run(
     web: str | None,
 ) -> None:
     """Run scenario FILES; exit status 1 if any expectation failed (3: a file is wrong)."""
+    from devsim.core.clock import speed_problem
     from devsim.scenario.report import write_junit
     from devsim.scenario.schema import load_scenario
 
-    if speed is not None and speed <= 0:
-        raise click.UsageError("--speed: must be positive")
+    if speed is not None and (problem := speed_problem(speed)) is not None:
+        raise click.UsageError(f"--speed: {problem}")
     if virtual and realtime:  # (the last one won)
         raise click.UsageError("--virtual and --realtime exclude each other")
     if virtual and speed is not None:  # (the speed was ignored, as devsim up refuses the pair)
@@ -289,8 +290,10 @@ def up(
             raise click.UsageError(f"--part: {plant_file}: {exc}") from None
     if fleet is not None:
         check_fleet(fleet)
-    if speed <= 0:
-        raise click.UsageError("--speed: must be positive")
+    from devsim.core.clock import speed_problem
+
+    if (problem := speed_problem(speed)) is not None:
+        raise click.UsageError(f"--speed: {problem}")
     if virtual and speed != 1.0:
         raise click.UsageError("--speed and --virtual exclude each other")
     name = getattr(spec, "name", None) or Path(plant_file).stem

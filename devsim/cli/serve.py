@@ -240,8 +240,10 @@ def plan_run(
 
         if (problem := motion_log_problem(motion_resolution)) is not None:
             raise usage_error(problem)
-    if speed <= 0:
-        raise usage_error("--speed: must be positive")
+    from devsim.core.clock import speed_problem
+
+    if (problem := speed_problem(speed)) is not None:
+        raise usage_error(f"--speed: {problem}")
     if virtual and speed != 1.0:
         raise usage_error("--speed and --virtual exclude each other")
 

@@ -25,7 +25,7 @@ from typing import Any
 
 from devsim.core.changes import CHANGES
 
-__all__ = ["Clock", "RealClock", "Timer", "VirtualClock"]
+__all__ = ["Clock", "RealClock", "Timer", "VirtualClock", "speed_problem"]
 
 
 class Timer:
@@ -88,6 +88,17 @@ class Clock(ABC):
         return False
 
 
+def speed_problem(speed: float) -> str | None:
+    """What is wrong with ``speed`` as a speed factor (``must be positive``, ``must be finite``),
+    or None.  A NaN or infinite one passed ``speed <= 0``: the device time was NaN, and a
+    real-time scenario never reached its timeout."""
+    if not speed > 0:
+        return "must be positive"
+    if speed == float("inf"):
+        return "must be finite"
+    return None
+
+
 class RealClock(Clock):
     """Wall-clock time of the running asyncio loop times ``speed``.
 
@@ -95,8 +106,8 @@ class RealClock(Clock):
     """
 
     def __init__(self, speed: float = 1.0) -> None:
-        if speed <= 0:
-            raise ValueError("speed must be positive")
+        if (problem := speed_problem(speed)) is not None:
+            raise ValueError(f"speed {problem}")
         self.speed = speed
         self._loop: asyncio.AbstractEventLoop | None = None
         self._origin = 0.0
