@@ -153,6 +153,9 @@ CASES: list[tuple[int, str, Case]] = [
     (exits.SYSTEM, "scenario: junit cannot write", lambda f, a, b: ["scenario", "run", str(f / "fails.yaml"), "--junit",
                                                                    str(f / "trace.txt" / "out.xml")]),
     (exits.SYSTEM, "plot: cannot write", lambda f, a, b: ["plot", str(f / "trace.txt"), "-o", str(f / "no/x.png")]),
+    # (a FileExistsError's traceback: --plot's directory was made outside the scenario's own OSError guard)
+    (exits.SYSTEM, "scenario: plot dir cannot be made", lambda f, a, b: ["scenario", "run", str(f / "fails.yaml"),
+                                                                        "--plot", str(f / "trace.txt")]),
     # -- a scenario that does not pass
     (exits.FAILED, "scenario: expectation", lambda f, a, b: ["scenario", "run", str(f / "fails.yaml")]),
 ]

@@ -204,7 +204,6 @@ def _run_files(scenarios: list[Any], files: tuple[str, ...], mode: str | None, s
     results = []
     for item, path in zip(scenarios, files, strict=True):
         chosen = mode or item.mode()
-        item_trace_dir = pictures.begin(item.path) if pictures is not None else trace_dir
         realtime = chosen == "realtime"
         progress.begin(path, item, realtime=realtime, speed=speed if speed is not None else item.speed)
 
@@ -216,6 +215,7 @@ def _run_files(scenarios: list[Any], files: tuple[str, ...], mode: str | None, s
                     click.echo(row)
 
         try:
+            item_trace_dir = pictures.begin(item.path) if pictures is not None else trace_dir  # (makes --plot DIR)
             results.append(
                 run_scenario(item, mode=chosen, speed=speed, state_dir=state_dir, trace_dir=item_trace_dir,
                              announce=announce, on_step=progress.step if realtime else None, control=control)
