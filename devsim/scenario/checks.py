@@ -14,7 +14,8 @@ them all at once, with the schema's own problems:
 * :func:`bus_port_problems` – the devices of a bus are on it by ports of one name;
 * :func:`canopen_node_problems` – no two devices of one process are one CANopen node id on
   one network;
-* :func:`endpoints_clash` – two pty links or TCP/UDP ports the plant's ports would hold at once.
+* :func:`shared_endpoints` – two ports of the plant (its devices', buses', facades' and the
+  servers it connects to) on one pty link or TCP/UDP port (:func:`endpoints_clash`).
 
 They work on the parts of a file that parsed (a device or step that did not is left to the
 schema's message), and take the device and step objects by their attributes, so that this module
@@ -29,9 +30,10 @@ from typing import Any
 from devsim.core.points import BadValue, ReadOnlyName, UnknownName
 from devsim.core.registry import UnknownKind, device_class
 from devsim.core.typed import Invalid
+from devsim.scenario.specs import TcpSpec, TransportSpec
 
 __all__ = ["POWER_FAULTS", "Problem", "bus_address_problems", "bus_port_problems", "canopen_node_problems",
-           "device_problems", "endpoints_clash", "fault_problem", "step_problems"]
+           "device_problems", "endpoints_clash", "fault_problem", "shared_endpoints", "step_problems"]
 
 Problem = tuple[tuple[int | str, ...], str]
 
@@ -244,3 +246,64 @@ def _settings(cls: Any, config: dict[str, Any]) -> Mapping[str, Any]:
         return model.parse(config).dump()  # type: ignore[no-any-return]
     except Invalid:
         return {}
+
+
+def _endpoint(transport: TransportSpec) -> tuple[str, ...] | None:
+    """What two ports cannot both hold: a pty link's path, or a TCP or UDP port number (0: a
+    free one, never shared)."""
+    kind = transport.kind
+    if kind == "pty":
+        return ("link", transport.pty.link) if transport.pty is not None and transport.pty.link else None
+    if kind in ("tcp", "rfc2217", "udp"):
+        where = getattr(transport, kind)
+        if where is None or where.port == 0:
+            return None
+        return ("udp" if kind == "udp" else "tcp", where.host, str(where.port))
+    return None
+
+
+def shared_endpoints(parts: Any) -> list[Problem]:
+    """Two ports of the plant (``parts``: the parts of a plant file that parsed, :class:`devsim.scenario.schema._Parts`) (a device's Modbus facade's, a CANopen network's socketcand server,
+    the OPC UA server and the MQTT broker it connects to too) on one pty link or one TCP/UDP port:
+    the second could not open (or the plant would talk MQTT to its own port)."""
+    owners: list[tuple[tuple[int | str, ...], TransportSpec]] = []
+    networks: set[tuple[str | None, str]] = set()  # (part, network): one socketcand server each
+    for i, device in enumerate(parts.devices):
+        if device is None:
+            continue
+        for port in device.port_names():
+            where = ("devices", i, "ports", port) if port in device.ports else ("devices", i, "transport")
+            owners.append((where, device.transport_of(port)))
+        if device.modbus is not None:  # the facade's own pty link or TCP port
+            owners.append((("devices", i, "modbus"), TransportSpec(pty=device.modbus.rtu, tcp=device.modbus.tcp)))
+        canopen = device.canopen
+        if canopen is not None and not canopen.network.startswith("socketcan:") \
+                and (device.part, canopen.network) not in networks:
+            networks.add((device.part, canopen.network))
+            host, _, number = canopen.network.rpartition(":")
+            owners.append((("devices", i, "canopen", "network"),
+                           TransportSpec(tcp=TcpSpec(port=int(number), host=host or "127.0.0.1"))))
+    owners += [(("buses", i, "transport"), bus.transport) for i, bus in enumerate(parts.buses) if bus is not None]
+    if parts.opcua_server is not None:
+        owners.append((("opcua", "port"), TransportSpec(tcp=TcpSpec(port=parts.opcua_server.port,
+                                                                     host=parts.opcua_server.host))))
+    if parts.mqtt is not None and parts.mqtt.url is not None:
+        from devsim.facades.mqtt_topics import parse_url
+
+        host, number = parse_url(parts.mqtt.url)
+        owners.append((("mqtt", "url"), TransportSpec(tcp=TcpSpec(port=number, host=host))))
+    seen: dict[tuple[str, ...], tuple[int | str, ...]] = {}
+    problems: list[Problem] = []
+    for where, transport in owners:
+        endpoint = _endpoint(transport)
+        if endpoint is None:
+            continue
+        held = next((other for other in seen if endpoints_clash(other, endpoint)), None)
+        if held is not None:
+            what = f"link {endpoint[1]}" if endpoint[0] == "link" else f"{endpoint[0]} port {endpoint[1]}:{endpoint[2]}"
+            first = ".".join(str(p + 1) if isinstance(p, int) else str(p) for p in seen[held])
+            on = f" (on {held[1]}:{held[2]})" if held != endpoint else ""
+            problems.append((where, f"{what} is taken by {first}{on} already"))
+        else:
+            seen[endpoint] = where
+    return problems

@@ -53,8 +53,8 @@ from devsim.scenario.checks import (
     bus_port_problems,
     canopen_node_problems,
     device_problems,
-    endpoints_clash,
     fault_problem,
+    shared_endpoints,
     step_problems,
 )
 from devsim.scenario.specs import (
@@ -64,7 +64,6 @@ from devsim.scenario.specs import (
     ModbusSpec,
     MqttSpec,
     OpcuaSpec,
-    TcpSpec,
     TransportSpec,
     parse_duration,
 )
@@ -613,68 +612,7 @@ def plant_problems(parts: _Parts) -> list[Problem]:
             problems.append((("devices", i, "ports", port), f"device {device.name!r} ({device.kind}) has no port"
                              f" {port!r} (ports: {', '.join(device.port_names())})"))
     return (problems + bus_port_problems(devices) + bus_address_problems(devices) + canopen_node_problems(devices)
-            + _shared_endpoints(parts) + _step_references(parts))
-
-
-def _endpoint(transport: TransportSpec) -> tuple[str, ...] | None:
-    """What two ports cannot both hold: a pty link's path, or a TCP or UDP port number (0: a
-    free one, never shared)."""
-    kind = transport.kind
-    if kind == "pty":
-        return ("link", transport.pty.link) if transport.pty is not None and transport.pty.link else None
-    if kind in ("tcp", "rfc2217", "udp"):
-        where = getattr(transport, kind)
-        if where is None or where.port == 0:
-            return None
-        return ("udp" if kind == "udp" else "tcp", where.host, str(where.port))
-    return None
-
-
-def _shared_endpoints(parts: _Parts) -> list[Problem]:
-    """Two ports of the plant (a device's Modbus facade's, a CANopen network's socketcand server,
-    the OPC UA server and the MQTT broker it connects to too) on one pty link or one TCP/UDP port:
-    the second could not open (or the plant would talk MQTT to its own port)."""
-    owners: list[tuple[tuple[int | str, ...], TransportSpec]] = []
-    networks: set[tuple[str | None, str]] = set()  # (part, network): one socketcand server each
-    for i, device in enumerate(parts.devices):
-        if device is None:
-            continue
-        for port in device.port_names():
-            where = ("devices", i, "ports", port) if port in device.ports else ("devices", i, "transport")
-            owners.append((where, device.transport_of(port)))
-        if device.modbus is not None:  # the facade's own pty link or TCP port
-            owners.append((("devices", i, "modbus"), TransportSpec(pty=device.modbus.rtu, tcp=device.modbus.tcp)))
-        canopen = device.canopen
-        if canopen is not None and not canopen.network.startswith("socketcan:") \
-                and (device.part, canopen.network) not in networks:
-            networks.add((device.part, canopen.network))
-            host, _, number = canopen.network.rpartition(":")
-            owners.append((("devices", i, "canopen", "network"),
-                           TransportSpec(tcp=TcpSpec(port=int(number), host=host or "127.0.0.1"))))
-    owners += [(("buses", i, "transport"), bus.transport) for i, bus in enumerate(parts.buses) if bus is not None]
-    if parts.opcua_server is not None:
-        owners.append((("opcua", "port"), TransportSpec(tcp=TcpSpec(port=parts.opcua_server.port,
-                                                                     host=parts.opcua_server.host))))
-    if parts.mqtt is not None and parts.mqtt.url is not None:
-        from devsim.facades.mqtt_topics import parse_url
-
-        host, number = parse_url(parts.mqtt.url)
-        owners.append((("mqtt", "url"), TransportSpec(tcp=TcpSpec(port=number, host=host))))
-    seen: dict[tuple[str, ...], tuple[int | str, ...]] = {}
-    problems: list[Problem] = []
-    for where, transport in owners:
-        endpoint = _endpoint(transport)
-        if endpoint is None:
-            continue
-        held = next((other for other in seen if endpoints_clash(other, endpoint)), None)
-        if held is not None:
-            what = f"link {endpoint[1]}" if endpoint[0] == "link" else f"{endpoint[0]} port {endpoint[1]}:{endpoint[2]}"
-            first = ".".join(str(p + 1) if isinstance(p, int) else str(p) for p in seen[held])
-            on = f" (on {held[1]}:{held[2]})" if held != endpoint else ""
-            problems.append((where, f"{what} is taken by {first}{on} already"))
-        else:
-            seen[endpoint] = where
-    return problems
+            + shared_endpoints(parts) + _step_references(parts))
 
 
 def _step_references(parts: _Parts) -> list[Problem]:
