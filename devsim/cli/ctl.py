@@ -247,7 +247,7 @@ def ctl_fault(ctx: click.Context, device: str, kind: str, switch: str) -> None:
 @click.option("--count", type=int, help="Bytes affected (corrupt, drop, split).")
 @click.option("--duration", type=float, help="Seconds until the fault ends by itself.")
 @click.option("--delay", type=float, help="Seconds (delay, jitter, split).")
-@click.option("--rate", type=float, help="Noise bytes per second.")
+@click.option("--rate", type=float, help="Noise bytes per second (at most 1,000,000).")
 @click.option("--baudrate", type=int, help="The host's rate (baud_mismatch).")
 @click.pass_context
 def ctl_line_fault(ctx: click.Context, device: str, kind: str, switch: str, port: str, **params: Any) -> None:

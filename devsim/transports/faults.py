@@ -18,7 +18,7 @@ import msgspec
 
 from devsim.core.clock import Timer
 
-__all__ = ["DEFAULT_SPLIT_GAP", "FaultDirection", "FaultHandle", "FaultKind", "LineFault"]
+__all__ = ["DEFAULT_SPLIT_GAP", "FaultDirection", "FaultHandle", "FaultKind", "LineFault", "MAX_NOISE_RATE"]
 
 FaultKind = Literal[
     "corrupt", "drop", "split", "delay", "jitter", "noise", "baud_mismatch", "unplug", "hang", "silent"
@@ -47,6 +47,10 @@ _COUNTED = ("corrupt", "drop", "split")
 _UNDIRECTED = ("baud_mismatch", "unplug", "hang", "silent")
 # Noise is emitted in batches no closer than this (a timer per byte would be wasteful at high rates).
 _NOISE_TICK = 0.01
+#: The most noise bytes per second (``rate``): more than any serial line carries (4 Mbd at 10 bits a
+#: character is 400,000).  [SIM-CHOICE] a bound, where none was: 1e308 made the first tick draw more
+#: bytes than memory holds and the simulator answered nothing again.
+MAX_NOISE_RATE = 1_000_000.0
 
 
 class LineFault(msgspec.Struct, frozen=True):
@@ -76,7 +80,7 @@ class LineFault(msgspec.Struct, frozen=True):
     ``noise``
         ``rate`` random bytes per second appear on the line (towards the device, the host or
         both), regularly spaced in time: after ``t`` seconds ``floor(rate * t)`` bytes have been
-        emitted in each direction.
+        emitted in each direction; at most :data:`MAX_NOISE_RATE`.
     ``baud_mismatch``
         the host is treated as running at ``baudrate`` (its other frame settings unchanged), so
         both directions are garbled by :func:`garble`.  Always both directions.
@@ -144,6 +148,8 @@ class LineFault(msgspec.Struct, frozen=True):
                 raise ValueError(f"{name} must be a finite number")
             if value < 0 or (name != "delay" and value == 0):
                 raise ValueError(f"{name} must be positive" if name != "delay" else "delay must be 0 or more")
+            if name == "rate" and value > MAX_NOISE_RATE:
+                raise ValueError(f"rate must be at most {MAX_NOISE_RATE:,.0f} bytes per second")
 
     def applies(self, direction: str) -> bool:
         """Whether the fault acts on bytes going ``direction`` (``to_device``/``to_host``)."""
@@ -249,7 +255,7 @@ def noise_due(active: _Active, now: float) -> list[tuple[str, bytes]]:
         if n <= 0:
             continue
         active.emitted[direction] = due
-        out.append((direction, bytes(active.rng.randrange(256) for _ in range(n))))
+        out.append((direction, active.rng.randbytes(n)))  # (in C: a byte drawn in Python each held the loop)
     return out
 
 

@@ -12,6 +12,7 @@ import serial
 
 from devsim.core.clock import RealClock, VirtualClock
 from devsim.core.device import SerialSettings
+from devsim.transports.faults import MAX_NOISE_RATE
 from devsim.transports.line import FaultHandle, Line, LineFault, garble
 from devsim.transports.pty import PtyTransport
 from devsim.transports.trace import Tracer
@@ -275,6 +276,15 @@ def test_noise_is_deterministic_per_seed_and_goes_both_ways() -> None:
     assert run(5) != (to_device, to_host)
 
 
+def test_noise_at_the_most_a_line_allows() -> None:
+    """At :data:`MAX_NOISE_RATE` a second of the line's time brings exactly that many bytes."""
+    clock, target, host, line = make_line()
+    line.inject(LineFault("noise", direction="to_device", rate=MAX_NOISE_RATE, duration=1.0, seed=3))
+    clock.advance(1.0)
+    assert len(target.received) == MAX_NOISE_RATE
+    assert len(set(target.received)) == 256
+
+
 def test_noise_cancelled_midway_emits_what_was_due() -> None:
     clock, target, host, line = make_line()
     handle = line.inject(LineFault("noise", direction="to_host", rate=1000.0))
@@ -471,6 +481,8 @@ def test_close_ends_faults_and_timers() -> None:
         {"kind": "delay"},  # needs delay
         {"kind": "noise"},  # needs rate
         {"kind": "noise", "rate": 0.0},
+        {"kind": "noise", "rate": 1e308},  # (its first tick drew more bytes than memory holds)
+        {"kind": "noise", "rate": MAX_NOISE_RATE * 1.01},
         {"kind": "baud_mismatch"},  # needs baudrate
         {"kind": "unplug", "count": 3},  # count only for corrupt/drop/split
         {"kind": "hang", "delay": 1.0},
