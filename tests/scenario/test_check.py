@@ -60,6 +60,14 @@ def mistakes(tmp_path: Path, text: str) -> tuple[Path, list[str]]:
     return bad, done.stderr.splitlines()
 
 
+def up_refuses(bad: Path) -> str:
+    """`devsim up` refuses the file as `check` does (status 3, one line, no traceback): its stderr."""
+    done = subprocess.run([sys.executable, "-m", "devsim", "up", str(bad)], cwd=ROOT, env=devsim_env(),
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == exits.BAD_FILE and "Traceback" not in done.stderr, done.stderr
+    return done.stderr
+
+
 def test_every_mistake_of_every_file_in_one_pass(tmp_path: Path) -> None:
     scenario, plant, good = tmp_path / "s.yaml", tmp_path / "plant.yaml", tmp_path / "good.yaml"
     scenario.write_text(SCENARIO)
@@ -289,9 +297,7 @@ def test_two_devices_at_one_address_on_one_bus_are_a_mistake_of_the_file(tmp_pat
     good.write_text(BUS_PLANT.format(a=3, b=4), encoding="utf-8")
     done = check(good)
     assert done.returncode == 0 and done.stdout == f"{good}: ok (plant, 8 devices)\n", done.stderr
-    done = subprocess.run([sys.executable, "-m", "devsim", "up", str(bad)], cwd=ROOT, env=devsim_env(),
-                          capture_output=True, text=True, timeout=60)
-    assert done.returncode == exits.BAD_FILE and "devices 'g1' and 'g2' are both at dil.address 3" in done.stderr
+    assert "devices 'g1' and 'g2' are both at dil.address 3" in up_refuses(bad)
 
 
 def test_devices_on_one_bus_by_ports_of_different_names_are_a_mistake_of_the_file(tmp_path: Path) -> None:
@@ -322,9 +328,7 @@ def test_a_modbus_map_the_kind_cannot_serve_is_a_mistake_of_the_file(tmp_path: P
         f"{bad}:5: devices.4.modbus.map: modbus map: quantity.supply_voltage: table 'coil' does not fit a float point",
         f"{bad}:6: devices.5.modbus.map: the mirror layout takes no map overrides",
     ]
-    done = subprocess.run([sys.executable, "-m", "devsim", "up", str(bad)], cwd=ROOT, env=devsim_env(),
-                          capture_output=True, text=True, timeout=60)
-    assert done.returncode == exits.BAD_FILE and "Traceback" not in done.stderr, done.stderr
+    up_refuses(bad)
 
 
 def test_a_modbus_facade_on_a_link_or_tcp_port_taken_already_is_a_mistake_of_the_file(tmp_path: Path) -> None:
@@ -362,9 +366,7 @@ def test_a_canopen_node_id_used_twice_on_one_network_is_a_mistake_of_the_file(tm
         f"{bad}:3: devices.2.canopen.node: CANopen node 5 on 127.0.0.1:29536 is taken by devices.1.canopen already",
         f"{bad}:5: devices.4.canopen.node: CANopen node 5 on socketcan:vcan0 is taken by devices.3.canopen already",
     ]
-    done = subprocess.run([sys.executable, "-m", "devsim", "up", str(bad)], cwd=ROOT, env=devsim_env(),
-                          capture_output=True, text=True, timeout=60)
-    assert done.returncode == exits.BAD_FILE and "Traceback" not in done.stderr, done.stderr
+    up_refuses(bad)
 
 
 def test_a_facade_server_on_a_tcp_port_taken_already_is_a_mistake_of_the_file(tmp_path: Path) -> None:
@@ -443,6 +445,4 @@ def test_a_host_that_is_no_host_name_or_a_port_past_65535_is_a_mistake_of_the_fi
         f"{bad}:6: opcua: {name}",
         f"{bad}:7: mqtt.url: 'mqtt://{long}': {name}",
     ]
-    done = subprocess.run([sys.executable, "-m", "devsim", "up", str(bad)], cwd=ROOT, env=devsim_env(),
-                          capture_output=True, text=True, timeout=60)
-    assert done.returncode == exits.BAD_FILE and "Traceback" not in done.stderr, done.stderr
+    up_refuses(bad)
