@@ -76,7 +76,8 @@ class LineFault(msgspec.Struct, frozen=True):
         every chunk arrives ``delay`` seconds later, order preserved.
     ``jitter``
         every chunk is delayed by ``uniform(0, delay)``; a later chunk never overtakes an earlier
-        one (it waits for it).
+        one (it waits for it).  A delayed or split direction holds at most 64 KiB on its way
+        (:data:`devsim.transports.pacing.MAX_PENDING`); more is lost.
     ``noise``
         ``rate`` random bytes per second appear on the line (towards the device, the host or
         both), regularly spaced in time: after ``t`` seconds ``floor(rate * t)`` bytes have been

@@ -58,7 +58,7 @@ from devsim.transports.faults import LineFault as LineFault
 from devsim.transports.faults import latency as fault_latency
 from devsim.transports.lane import LaneSwitch, Take
 from devsim.transports.pacing import EPSILON as _EPSILON
-from devsim.transports.pacing import Pacer
+from devsim.transports.pacing import MAX_PENDING, Pacer
 from devsim.transports.trace import TraceSink, render
 from devsim.transports.uart import garble as garble
 from devsim.transports.uart import settings_match as settings_match
@@ -85,10 +85,14 @@ class _Stage:
     """Chunks on their way with extra latency, released in order through the clock.
 
     Due times never decrease, so a chunk never overtakes an earlier one.  A chunk due now on an
-    idle stage is handed on at once (the fault-free path stays synchronous).
+    idle stage is handed on at once (the fault-free path stays synchronous).  A stage holds at
+    most :data:`~devsim.transports.pacing.MAX_PENDING` bytes; what would go beyond is lost
+    (counted in ``dropped``), as bytes sent into a full receive buffer are.  [SIM-CHOICE] no
+    manual says how much a delayed line holds: without a bound a delay or split fault kept every
+    byte a host flooded it with, and a split flood's gaps put the next request hours away.
     """
 
-    __slots__ = ("clock", "sink", "drained", "items", "last_due", "timer")
+    __slots__ = ("clock", "sink", "drained", "items", "last_due", "timer", "held", "dropped")
 
     def __init__(self, clock: Clock, sink: Callable[[bytes, int], None], drained: Callable[[], None]) -> None:
         self.clock = clock
@@ -98,19 +102,31 @@ class _Stage:
         self.items: deque[tuple[float, bytes, int]] | tuple[()] = ()
         self.last_due = -math.inf
         self.timer: Timer | None = None
+        self.held = 0  # bytes in items
+        self.dropped = 0  # bytes lost because the stage held MAX_PENDING
 
     @property
     def pending(self) -> int:
-        return sum(len(data) for _, data, _ in self.items)
+        return self.held
 
     def put(self, earliest: float, data: bytes, chars: int, gap: float = 0.0) -> None:
         """Hand ``data`` on no earlier than ``earliest`` and at least ``gap`` after the previous
-        chunk; ``chars`` is what the chunk occupies on the wire (for pacing)."""
+        chunk; ``chars`` is what the chunk occupies on the wire (for pacing).  Beyond
+        ``MAX_PENDING`` bytes held, the chunk's rest is lost."""
         due = max(earliest, self.last_due + gap)
-        self.last_due = due
         if not self.items and due <= self.clock.now() + _EPSILON:
+            self.last_due = due
             self.sink(data, chars)
             return
+        room = MAX_PENDING - self.held
+        if room < len(data):
+            self.dropped += len(data) - max(room, 0)
+            if room <= 0:
+                return
+            chars = max(1, chars * room // len(data))
+            data = data[:room]
+        self.last_due = due
+        self.held += len(data)
         items = self.items
         if not items:
             items = self.items = deque()
@@ -128,6 +144,7 @@ class _Stage:
         chars = 0
         while self.items and self.items[0][0] <= now:
             _, data, n = self.items.popleft()  # type: ignore[union-attr]
+            self.held -= len(data)
             out += data
             chars += n
         if out:
@@ -142,6 +159,7 @@ class _Stage:
             self.timer.cancel()
             self.timer = None
         self.items = ()
+        self.held = 0
 
 
 # -- the line ---------------------------------------------------------------------------------
@@ -480,6 +498,7 @@ class Line:
             "pacing": self.pacing,
             "bytes_in": self.bytes_in,
             "bytes_out": self.bytes_out,
+            "pending_in": self._to_device.pending,
             "pending_out": (self._pacer.pending if self._pacer is not None else 0) + self._to_host.pending,
             "faults": [a.fault.kind for a in self._faults],
         }

@@ -13,7 +13,8 @@ import serial
 from devsim.core.clock import RealClock, VirtualClock
 from devsim.core.device import SerialSettings
 from devsim.transports.faults import MAX_NOISE_RATE
-from devsim.transports.line import FaultHandle, Line, LineFault, garble
+from devsim.transports.line import DEFAULT_SPLIT_GAP, FaultHandle, Line, LineFault, garble
+from devsim.transports.pacing import MAX_PENDING
 from devsim.transports.pty import PtyTransport
 from devsim.transports.trace import Tracer
 
@@ -221,6 +222,26 @@ def test_chunk_after_delay_ended_waits_for_the_one_still_in_flight() -> None:
     clock.advance(0.1)
     assert target.received == b"AB"
     assert target.chunks[0][0] == pytest.approx(0.1)
+
+
+def test_a_delay_or_split_holds_at_most_max_pending_bytes_and_answers_after_the_flood() -> None:
+    """A host that floods a delayed or split line: the stage holds at most ``MAX_PENDING``
+    bytes (the rest is lost, as in a full receive buffer), so a request sent once the held bytes
+    have passed arrives (before: every byte was queued, a split flood of 1 MB took 5,000 s of
+    gaps and the line's memory grew with the host's bytes)."""
+    for fault in (LineFault("delay", direction="to_device", delay=1.0),
+                  LineFault("split", direction="to_device")):
+        clock, target, host, line = make_line()
+        line.inject(fault)
+        for _ in range(64):
+            line.feed(b"x" * 16 * 1024)  # 1 MiB at once
+        assert line.status()["pending_in"] <= MAX_PENDING
+        line.clear_faults()
+        clock.advance(MAX_PENDING * DEFAULT_SPLIT_GAP + 1.0)
+        assert line.status()["pending_in"] == 0
+        assert 0 < len(target.received) <= MAX_PENDING + 1  # (a split hands its first byte on at once)
+        line.feed(b"#VER\r")
+        assert target.received.endswith(b"#VER\r")
 
 
 def test_jitter_delays_randomly_but_never_reorders() -> None:
