@@ -47,13 +47,20 @@ from devsim.transports.base import Endpoint, Transport
 from devsim.transports.hosts import DEFAULT_IDLE_DROP, admit, dropped, listen_backlog, refuse
 from devsim.transports.lane import Lane
 
-__all__ = ["SLICE", "TURN_GRACE", "TcpTransport"]
+__all__ = ["MAX_WAITING", "SLICE", "TURN_GRACE", "TcpTransport"]
 
 #: Seconds a host's message on a several-host port holds the turn when the device does not answer it.
 TURN_GRACE = 0.2
 
 #: Most host bytes handed to a device in one loop turn (the rest waits for the next turns).
 SLICE = 16 * 1024
+
+#: Messages a host of a several-host port may have waiting for the turn: with more, its socket is
+#: not read until the device has taken some, and TCP holds the host back, as a device's own stack
+#: does when its one communication task is behind.  [SIM-CHOICE] no manual gives the number:
+#: without a bound a host flooding unanswered messages (each holds the turn for TURN_GRACE) made
+#: the port keep every one of them (20 MB of Ether-S-Bus frames: 55 MB more resident).
+MAX_WAITING = 64
 #: Bytes one socket read takes at most.  A session reads into a buffer of its own: asyncio's plain
 #: protocols allocate a 256 KiB object for every read, which glibc serves with mmap/munmap when
 #: its dynamic threshold has not risen – a system call pair per poll, seen in 500-device plants.
@@ -300,6 +307,12 @@ class TcpTransport(Transport):
         """How many clients are being served."""
         return len(self._served)
 
+    @property
+    def waiting(self) -> int:
+        """Messages of a several-host port's hosts waiting for the turn (each host at most about
+        :data:`MAX_WAITING`, and what its last read brought)."""
+        return sum(len(session.messages) for session in self._served)
+
     def trace_peers(self) -> tuple[tuple[str, int], tuple[str, int]] | None:
         """The serving client's address and the listening address (``None`` with no client)."""
         session = self._active
@@ -524,6 +537,8 @@ class TcpTransport(Transport):
             session.messages = deque()
         was_waiting = bool(session.messages)
         session.messages.extend(messages)  # type: ignore[union-attr]
+        if len(session.messages) >= MAX_WAITING and session.transport is not None:
+            session.transport.pause_reading()  # (resumed by _next_turn as the device takes them)
         if not was_waiting and session is not self._turn:
             if not self._ready:
                 self._ready = deque()
@@ -549,6 +564,11 @@ class TcpTransport(Transport):
         self._owed += 1
         self._active = session  # the device's output goes to it (_turn_output)
         message = session.messages.popleft()  # type: ignore[union-attr]
+        transport = session.transport
+        if len(session.messages) < MAX_WAITING and transport is not None and not transport.is_reading() \
+                and not transport.is_closing():
+            transport.resume_reading()
+            session.read_directly()
         if session.messages and session not in self._ready and holder is None:
             self._ready.append(session)  # type: ignore[union-attr]
         assert self._loop is not None

@@ -12,7 +12,7 @@ from collections.abc import Callable
 import pytest
 
 from devsim.transports.hosts import listen_backlog
-from devsim.transports.tcp import TcpTransport
+from devsim.transports.tcp import MAX_WAITING, TcpTransport
 from tests.support.programs import needs_program
 from tests.transports.transport_helpers import Recorder
 
@@ -142,6 +142,28 @@ async def test_a_late_answer_goes_to_the_host_that_asked() -> None:
         assert later.attached == 1  # one connect for the line (a log line), not one per turn
         w1.close()
         w2.close()
+    finally:
+        await transport.close()
+
+
+async def test_a_host_flooding_a_several_host_port_is_held_back_not_queued_without_end() -> None:
+    """A host that sends messages faster than the device takes them (here: none answered, each
+    holds the turn for TURN_GRACE) has at most about MAX_WAITING of them waiting, plus what one
+    read brought; its socket is not read meanwhile, and TCP holds it back (before: every message
+    of the flood was kept, 4 M lines here)."""
+    later = _Later()
+    transport = TcpTransport()
+    transport.limit_hosts(2, split=_lines)
+    await transport.start(later)
+    try:
+        reader, writer = await asyncio.open_connection("127.0.0.1", transport.port)
+        writer.write(b"x\n" * 4_000_000)  # 8 MB: more than the sockets' buffers hold
+        await later.wait_for(lambda: bool(later.chunks))
+        session = transport._served[0]
+        assert session.transport is not None
+        await later.wait_for(lambda: not session.transport.is_reading() or transport.waiting > 100_000)
+        assert transport.waiting <= MAX_WAITING + 64 * 1024 // 2  # (one read: at most 64 KiB of 2-byte lines)
+        writer.transport.abort()
     finally:
         await transport.close()
 
