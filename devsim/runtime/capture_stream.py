@@ -10,8 +10,8 @@ in the runtime's loop thread and queues each chunk as it crosses:
   ``settings`` the host's line settings of the moment (:func:`devsim.transports.line.wire_settings`:
   0 / ``""`` where not known) and whether they differ from the device's;
 * ``{"type": "dropped", "device": D, "port": P, "t": T, "count": N}`` -- the subscriber read too
-  slowly: its queue (:data:`MAX_QUEUE` chunks) was full and N chunks were left out after the
-  ones before this item.
+  slowly: its queue (:data:`MAX_QUEUE` chunks, :data:`MAX_BYTES` bytes of them) was full and N
+  chunks were left out after the ones before this item.
 
 The queue is bounded per subscriber and filled without waiting, so a slow or stalled reader
 never holds the device back; the reader takes whole batches (:meth:`CaptureStream.batches`).
@@ -31,10 +31,14 @@ from devsim.transports.line import wire_settings
 from devsim.transports.pcap import LINKTYPE_IPV4, LINKTYPE_USER0
 from devsim.transports.tap import chunk_tap, untap_chunks
 
-__all__ = ["MAX_QUEUE", "CaptureStream", "capture_info", "captures"]
+__all__ = ["MAX_BYTES", "MAX_QUEUE", "CaptureStream", "capture_info", "captures"]
 
 #: Chunks a subscriber may have waiting; more are dropped (and counted) until it catches up.
 MAX_QUEUE = 4096
+#: Bytes of chunks a subscriber may have waiting (as many again go out in one batch): a flooded TCP
+#: port's chunks are 16 KiB each, and MAX_QUEUE of them held 130 MB for one reader that stalled.
+#: [SIM-CHOICE] the control API's own bound (a watch's ``MAX_BACKLOG``, 4 MiB); no manual has one.
+MAX_BYTES = 4 << 20
 
 
 def capture_info(runtime: Runtime, key: str) -> dict[str, Any]:
@@ -55,7 +59,8 @@ class CaptureStream:
     """Captures the line of ``device``'s ``port`` in ``runtime`` (made, started and stopped in
     the loop thread); :meth:`batches` hands the queued items to one reader."""
 
-    def __init__(self, runtime: Runtime, device: str, port: str = "main", *, limit: int = MAX_QUEUE) -> None:
+    def __init__(self, runtime: Runtime, device: str, port: str = "main", *, limit: int = MAX_QUEUE,
+                 max_bytes: int = MAX_BYTES) -> None:
         key = port_key(device, port)
         line = runtime.lines.get(key)
         if line is None:
@@ -65,6 +70,8 @@ class CaptureStream:
         self.port = port
         self.line: Any = line
         self.limit = limit
+        self.max_bytes = max_bytes
+        self._bytes = 0  # of the chunks queued
         self.info = {"device": device, "port": port, **capture_info(runtime, key)}
         #: an IPv4 capture's real addresses, where the transport knows them (as a --trace pcap has)
         self._peers = runtime.trace_peers.get(key) if self.info["link"] == LINKTYPE_IPV4 else None
@@ -86,7 +93,7 @@ class CaptureStream:
             self._ready.set()
 
     def _chunk(self, direction: str, data: bytes, when: float) -> None:
-        if len(self.items) >= self.limit:
+        if len(self.items) >= self.limit or self._bytes + len(data) > self.max_bytes:
             self.dropped += 1
             self.dropped_total += 1
             self._ready.set()
@@ -96,12 +103,14 @@ class CaptureStream:
         if self._peers is not None and (peers := self._peers()) is not None:
             item["peers"] = peers
         self.items.append(item)
+        self._bytes += len(data)
         self._ready.set()
 
     def take(self) -> list[dict[str, Any]]:
         """What is queued now (a ``dropped`` item after the chunks that came before the drops)."""
         batch = list(self.items)
         self.items.clear()
+        self._bytes = 0
         if self.dropped:
             batch.append({"type": "dropped", "device": self.device, "port": self.port,
                           "t": round(self.runtime.clock.now(), 6), "count": self.dropped})

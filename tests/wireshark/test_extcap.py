@@ -18,7 +18,7 @@ import serial
 
 from devsim.observe.plot_data import read_pcap_trace
 from devsim.runtime import Runtime
-from devsim.runtime.capture_stream import CaptureStream
+from devsim.runtime.capture_stream import MAX_BYTES, CaptureStream
 from devsim.runtime.client import CaptureSubscription, ControlClient, ControlError
 from devsim.runtime.control import ControlServer
 from devsim.runtime.discovery import Simulator
@@ -144,6 +144,23 @@ def test_a_subscriber_that_does_not_read_loses_chunks_counted_and_the_device_goe
     assert [i["dir"] for i in runtime.call(stream.take)] == ["H>D", "D>H"]  # caught up: the chunks again
     runtime.call(stream.stop)
     assert runtime.call(lambda: line.tracer) is None
+
+
+def test_a_subscriber_that_does_not_read_holds_at_most_max_bytes_of_chunks(served: Any) -> None:
+    """A flooded port's chunks are big (a TCP read's 16 KiB slices): the queue holds at most
+    MAX_BYTES of them, however few chunks that is (before: MAX_QUEUE chunks of any size, 130 MB
+    resident for one stalled reader of a flooded TCP port)."""
+    runtime, line, _transport, _address = served
+    stream = runtime.call(lambda: CaptureStream(runtime, "sers"))
+    runtime.call(stream.start)
+    for _ in range(2 * MAX_BYTES // (64 * 1024)):
+        runtime.call(lambda: line.feed(b"\x00" * 64 * 1024))
+    batch = runtime.call(stream.take)
+    assert sum(len(i["data"]) // 2 for i in batch if i["type"] == "chunk") <= MAX_BYTES
+    assert batch[-1]["type"] == "dropped" and batch[-1]["count"] > 0
+    runtime.call(lambda: line.feed(b"#P1?\r"))
+    assert [i["dir"] for i in runtime.call(stream.take)][:1] == ["H>D"]  # caught up: the chunks again
+    runtime.call(stream.stop)
 
 
 # -- Wireshark's live capture through the installed extcap ----------------------------------------
