@@ -9,12 +9,13 @@ it got before the garbage (on every port that has one), the stored memory (``*.n
 what it was, and stderr holds no traceback.
 
     python -m tests.fuzz.soak [--seconds 60] [--kinds sers,gms96,...] [--rss-mb 20] [--transport pty]
-                              [--seed N] [--drives 1,2,3] [--pacing]
+                              [--seed N] [--drives 1,2,3] [--pacing] [--speed F]
 
 ``--transport`` serves the serial ports on ``pty`` (the default), ``tcp`` or ``rfc2217``;
 ``--seed`` picks another garbage sequence (default: the kind's own); ``--drives`` puts one SERS per
 address on one RS-485 line (each address asked its known-good request); ``--pacing`` paces the
-device's output at its baud rate.  A port whose known-good answer changed is reported with the last
+device's output at its baud rate; ``--speed F`` runs the device's time F times as fast (timers,
+moves, response delays, timeouts).  A port whose known-good answer changed is reported with the last
 bytes fed to it.  Not part of the test suite's default run; exit status 1 when a check failed.
 """
 
@@ -237,15 +238,18 @@ def _tracebacks(lines: queue.Queue[str | None]) -> list[str]:
 
 
 def soak(kind: str, seconds: float, rss_mb: float, directory: str, transport: str = "pty", *,
-         seed: int | None = None, drives: list[int] | None = None, pacing: bool = False) -> list[str]:
+         seed: int | None = None, drives: list[int] | None = None, pacing: bool = False,
+         speed: float | None = None) -> list[str]:
     """Run ``kind`` under garbage; the failed checks (none: it held).  ``drives``: one device
-    per address on one line (``--drives``); ``pacing``: output paced (``--pacing``)."""
+    per address on one line (``--drives``); ``pacing``: output paced (``--pacing``); ``speed``:
+    the device's time factor (``--speed``)."""
     drives = drives or []
     control = f"unix:{directory}/{kind}.sock"
     state = os.path.join(directory, f"state-{kind}")
     sim = DevsimProcess("run", kind, f"--{transport}", *(["0"] if transport != "pty" else []), "-q",
                         "--control", control, "--state-dir", state, *NETWORK.get(kind, []),
-                        *(["--drives", ",".join(map(str, drives))] if drives else []), *(["--pacing"] if pacing else []))
+                        *(["--drives", ",".join(map(str, drives))] if drives else []), *(["--pacing"] if pacing else []),
+                        *(["--speed", str(speed)] if speed is not None else []))
     devices = [f"{kind}{a}" for a in drives] or [kind]
     ports: dict[str, _Port] = {}
     problems: list[str] = []
@@ -325,13 +329,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=None, help="another garbage sequence (default: the kind's own)")
     parser.add_argument("--drives", default="", help="comma-separated SERS addresses on one RS-485 line")
     parser.add_argument("--pacing", action="store_true", help="pace the device's output at its baud rate")
+    parser.add_argument("--speed", type=float, default=None, help="the device's time factor (devsim run --speed)")
     args = parser.parse_args(argv)
     drives = [int(a) for a in args.drives.split(",") if a]
     problems: list[str] = []
     with tempfile.TemporaryDirectory(prefix="devsim-soak-") as directory:
         for kind in args.kinds.split(","):
             problems += soak(kind, args.seconds, args.rss_mb, directory, args.transport, seed=args.seed,
-                             drives=drives, pacing=args.pacing)
+                             drives=drives, pacing=args.pacing, speed=args.speed)
     for problem in problems:
         print(problem, file=sys.stderr)
     return 1 if problems else 0
