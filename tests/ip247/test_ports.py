@@ -3,6 +3,7 @@ TCP socket (spec ip247.md §3.7, BCD values of §3.3.2)."""
 
 from __future__ import annotations
 
+import socket
 import struct
 from typing import Any
 
@@ -210,3 +211,23 @@ def test_a_plc_message_without_a_page_is_malformed(devsim_device) -> None:  # no
         for function in (0x61, 0x62, 0x63, 0x64, 0x65):
             assert plc.transaction(function, b"")[:4] == bytes((0x82, 0, 0, 0)), hex(function)
         assert plc.observe(0)[0] == 0  # (page 0 named: axis 1, as before)
+
+
+def test_a_plc_message_cut_short_takes_what_follows_until_the_connection_ends(devsim_device) -> None:  # noqa: ANN001
+    """§3.7 frames a message by its 2-byte length and says nothing of a gap (the real AG side is a
+    dual-port RAM: no framing to time out).  A message whose length promises more than was sent
+    waits for the rest, and the next message's bytes complete it; the bytes held are bounded by
+    the length (at most 65,535).  A new connection starts the framing anew, so a PLC client out of
+    step reconnects.  [SIM-CHOICE] no timeout."""
+    module = devsim_device("ip247", {"sys_id": {"module": 11}, "base_page": 8}, transport="tcp")
+    host, port = module.port_url("ag").removeprefix("socket://").rsplit(":", 1)
+    valid = struct.pack(">HBB", 2, 0x62, 8)  # OBSERVE page 8
+    with AgClient(host, int(port)) as plc:
+        plc.socket.sendall(struct.pack(">HBB", 2 + len(valid), 0x62, 0x99))  # page 99H, then less than promised
+        answer = plc.transaction(0x62, b"\x08")[:2]  # (the OBSERVE is the cut message's rest)
+        assert answer == bytes((0x80, 0x99))  # the cut message's answer: not this module's page
+        plc.socket.sendall(b"\x00\x10")  # a length, and nothing after it
+        plc.socket.shutdown(socket.SHUT_WR)  # the PLC leaves ...
+        assert plc.socket.recv(100) == b""  # ... and the endpoint has seen it go
+    with AgClient(host, int(port)) as plc:  # framing anew: the cut header is forgotten
+        assert plc.observe(8)[0] == 0

@@ -27,7 +27,11 @@ def ag_frame(function: int, payload: bytes) -> bytes:
 
 class AgFramer:
     """Messages out of a TCP byte stream (any cut): ``feed`` gives the complete ``(function,
-    payload)`` pairs; a zero length is skipped."""
+    payload)`` pairs; a zero length is skipped.  A message waits for all the bytes its length
+    promises, whatever follows them and however long: at most 65,535 are held.  [SIM-CHOICE] no
+    timeout: §3.7 says nothing of a gap (the real AG side is a dual-port RAM, nothing to frame),
+    TCP delivers a message whole, and a PLC client out of step reconnects (the face makes a new
+    framer when its host leaves)."""
 
     def __init__(self) -> None:
         self._buffer = bytearray()
