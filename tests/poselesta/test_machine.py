@@ -838,6 +838,19 @@ def test_panel_keys_blocks_and_diagnostics_as_operator_actions(make) -> None:  #
     assert cnc.read("diagnostics.keyboard_test") == ""
 
 
+@pytest.mark.parametrize("text", ["²0: N5 X10", "٢٠: N5 X10", "P²: N5 X10"])
+def test_a_program_number_is_ascii_digits(make, text: str) -> None:  # noqa: ANN001
+    """panel.edit_block's program number is digits as the keyboard types them: a superscript ²
+    (which str.isdigit takes and int() does not: a ValueError, not a refusal) or digits of
+    another script (which int() reads: '٢٠' stored P20) are refused."""
+    from devsim.core.points import BadValue
+
+    cnc = make(mode="PROGRAM_ENTRY")
+    with pytest.raises(BadValue, match="expected 'program: block'"):
+        cnc.set("panel.edit_block", text)
+    assert cnc.read("programs") == []
+
+
 def test_homing_turns_back_once_at_a_limit_switch(make) -> None:  # noqa: ANN001
     """Spec §5.6: the mark lies behind the start; the − limit switch turns the search back, the
     mark is then taken moving +; a second limit switch stops with the alarm."""

@@ -162,9 +162,10 @@ class ProgramMemory:
         """Program entry of one block (spec §3.2.2 ``panel.edit_block``): ``"20: N5 X10"`` stores
         (or replaces) block N5 of P20, by the rules of a read-in."""
         number_text, sep, block_text = text.partition(":")
-        if not sep or not number_text.strip().lstrip("Pp").isdigit():
+        digits = number_text.strip().lstrip("Pp")
+        if not sep or not (digits.isascii() and digits.isdigit()):  # (str.isdigit: also ² and other scripts)
             raise BadValue("expected 'program: block', e.g. '20: N5 X10'")
-        number = int(number_text.strip().lstrip("Pp"))
+        number = int(digits)
         if number in RESERVED_PROGRAMS or not 0 <= number <= 98:
             raise BadValue(f"P{number:02d} is not an NC program")
         self.refuse_protected(number)
