@@ -838,6 +838,18 @@ def test_panel_keys_blocks_and_diagnostics_as_operator_actions(make) -> None:  #
     assert cnc.read("diagnostics.keyboard_test") == ""
 
 
+@pytest.mark.parametrize("key", ["٤٨", "0x48", "4_8", "+48"])
+def test_a_key_code_is_ascii_hex_digits(make, key: str) -> None:  # noqa: ANN001
+    """panel.key's hex code is hex digits: int(key, 16) also took the Arabic-Indic '٤٨', '0x48',
+    '4_8' and '+48' as the key 48 (P)."""
+    from devsim.core.points import BadValue
+
+    cnc = make(mode="PROGRAM_ENTRY")
+    with pytest.raises(BadValue, match="no key"):
+        cnc.set("panel.key", key)
+    assert cnc.read("keyboard.last_key") == -1  # (none yet)
+
+
 @pytest.mark.parametrize("text", ["²0: N5 X10", "٢٠: N5 X10", "P²: N5 X10"])
 def test_a_program_number_is_ascii_digits(make, text: str) -> None:  # noqa: ANN001
     """panel.edit_block's program number is digits as the keyboard types them: a superscript ²

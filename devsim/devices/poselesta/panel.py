@@ -9,6 +9,7 @@ it + 1, and the buzzer sounds for 100 ms unless P67 = 1.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from string import hexdigits
 
 from devsim.core.clock import Clock, Timer
 from devsim.core.points import BadValue
@@ -41,13 +42,13 @@ class FrontPanel:
     def code_of(self, key: str) -> int:
         """A key by its name in ``v8_keymap`` or its two-digit hex code (spec §3.2.2 ``panel.key``)."""
         names = {name.upper(): code for code, name in self._keymap.items()}
-        code = names.get(key.strip().upper())
+        text = key.strip()
+        code = names.get(text.upper())
         if code is None:
-            try:
-                code = int(key, 16)
-            except ValueError:
-                raise BadValue(f"no key {key!r}: a name of v8_keymap ({', '.join(sorted(names))}) or a hex code")\
-                    from None
+            # hex digits only: int(key, 16) also read '0x48', '4_8', '+48' and the digits of other scripts
+            if not (text and text.isascii() and all(c in hexdigits for c in text)):
+                raise BadValue(f"no key {key!r}: a name of v8_keymap ({', '.join(sorted(names))}) or a hex code")
+            code = int(text, 16)
         if code not in KEY_CODES:
             raise BadValue(f"{code:02X} is not a key code of the keyboard (spec §3.10)")
         return code
