@@ -149,7 +149,7 @@ class PointAttributes(AttributeService):
 
 _TIMESTAMPS = (ua.TimestampsToReturn.Source, ua.TimestampsToReturn.Server, ua.TimestampsToReturn.Both,
                ua.TimestampsToReturn.Neither)
-_RANGE = re.compile(r"(\d+)(?::(\d+))?")
+_RANGE = re.compile(r"(\d+)(?::(\d+))?", re.ASCII)  # (without ASCII, \d is the digits of every script)
 
 
 def index_range(text: str) -> list[tuple[int, int]] | None:

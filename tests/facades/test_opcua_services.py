@@ -187,6 +187,8 @@ RANGES = [
     ("sers#FaultKinds", "0,0,0", "BadIndexRangeNoData", None),  # three dimensions
     (LEVEL, "7:5", "BadIndexRangeInvalid", None),  # first not below last: invalid syntax
     (LEVEL, "0:x", "BadIndexRangeInvalid", None),
+    (LEVEL, "\u0660:\u0661", "BadIndexRangeInvalid", None),  # 7.27's digits are ASCII, not Arabic-Indic ٠:١
+    (LEVEL, "\uff10", "BadIndexRangeInvalid", None),  # nor a fullwidth ０
 ]
 #: (node, attribute other than the Value, index range) -> the status code, and the part of the value:
 #: 7.27, "Bad_IndexRangeInvalid is only used for invalid syntax of the NumericRange.  All other invalid
