@@ -88,6 +88,9 @@ def test_the_manuals_loop_and_halt_examples_are_valid() -> None:
         ("%  1\nN1 X1 F10" + " " * 41 + "\nN2 M02\n", 19, 1),  # 51 characters with its LF
         ("%  1\nN1 G33\nN2 M02\n", 37, 1),
         ("%  1\nN1 G24 F3 M10\nN2 G20\nN3 M02\n", 9, 1),  # no M in a G24 block
+        # functions are separated by blanks (20H): any other character is one the module does not know
+        *((f"%  1\nN1 X1{c}F10\nN2 M02\n", 16, 1) for c in "\t\r\x1c\x1f\x85\xa0"),
+        ("%  1\nN1 X1 F10 M10\xa0\nN2 M02\n", 16, 1),
     ],
 )
 def test_syntax_errors_name_their_number_and_block(text: str, errno: int, block: int) -> None:

@@ -137,7 +137,9 @@ def _block(ordinal: int, line: str) -> Block:
     if rest and not rest.startswith(" "):
         raise SyntaxFault(9, ordinal)
     words: list[tuple[str, str]] = []
-    for token in rest.split():
+    for token in rest.split(" "):  # (blanks only: str.split() also splits at TAB, FS … US, NEL, NBSP)
+        if not token:
+            continue
         word = _WORD.fullmatch(token)
         if word is None:
             raise SyntaxFault(16, ordinal)
