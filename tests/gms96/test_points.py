@@ -84,3 +84,17 @@ def test_configuration_checked_against_the_tables(tmp_path: Path) -> None:
     path.write_text("address: 1\nbaud: 9600\n")
     with pytest.raises(ConfigError, match=r"looks like a SERS configuration \(address, baud\)"):
         load_config(path, Gms96Config)
+
+
+@pytest.mark.parametrize("name", ["marker.mb²", "marker.MB¹2", "marker.MB٣", "marker.M٣.1", "program.٣"])
+def test_a_name_s_numbers_are_ascii_digits(card: Gms96Device, name: str) -> None:
+    """A marker byte or program number is written in ASCII digits: 'marker.mb²' ended in a ValueError
+    (str.isdigit takes the superscript, int() does not) and digits of other scripts, which \\d and
+    int() read, named marker byte 3 and program 3."""
+    with pytest.raises(UnknownName):
+        card.read(name)
+
+
+def test_a_cnc_program_s_numbers_are_ascii_digits(card: Gms96Device) -> None:
+    with pytest.raises(BadValue, match="a command is a letter"):
+        card.set("program.1", ["A١٠٠٠"])

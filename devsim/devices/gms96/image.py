@@ -12,7 +12,7 @@ from collections import deque
 
 __all__ = ["STATIC_BYTES", "ProcessImage", "bit_name", "parse_bit"]
 
-_BIT = re.compile(r"^\s*([EAM])\s*(\d+)\.([0-7])\s*$", re.IGNORECASE)
+_BIT = re.compile(r"^\s*([EAM])\s*(\d+)\.([0-7])\s*$", re.IGNORECASE | re.ASCII)
 STATIC_BYTES = 160  # DW0..DW79 survive power-off (manual §2.3.1 d)
 MESSAGE_FIFO = 8
 

@@ -97,7 +97,7 @@ def _alias(name: str) -> str | None:
         return _param_alias(name)
     if section == "marker":
         upper = rest.upper()
-        if upper.startswith("MB") and upper[2:].isdigit():
+        if upper.startswith("MB") and upper[2:].isascii() and upper[2:].isdigit():  # (isdigit alone: also ²)
             return f"marker.MB{int(upper[2:])}"
         return f"marker.{upper}"
     return None
@@ -134,7 +134,7 @@ def _tool_offset(card: Any, value: int) -> None:
 #: Commands a CNC download does not record: carried out on receipt even then (the face's
 #: ``o2`` and the downloads of P_ON_RECEIPT, spec §3.8.13), by letter and the leading parameters.
 _NOT_RECORDED = (("o", (2,)), ("p", (1, 100)), ("p", (1, 101)), ("p", (3, 100)), ("p", (3, 101)))
-_COMMAND = re.compile(r"\s*(\S)\s*(-?\d+(?:\s*;\s*-?\d+){0,2})?\s*")
+_COMMAND = re.compile(r"\s*(\S)\s*(-?\d+(?:\s*;\s*-?\d+){0,2})?\s*", re.ASCII)
 
 
 def command_rows(program: Any) -> list[list[Any]]:
@@ -182,7 +182,7 @@ def _store_program(card: Any, number: int, program: Any) -> None:
 
 
 def _program(name: str) -> Point | None:
-    match = re.fullmatch(r"program\.(\d{1,2})", name)
+    match = re.fullmatch(r"program\.(\d{1,2})", name, re.ASCII)
     if match is None:
         return None
     number = int(match[1])
@@ -290,8 +290,9 @@ def _marker(name: str) -> Point | None:
     rest = name.removeprefix("marker.")
     if rest == name:
         return None
-    if rest.startswith("MB") and rest[2:].isdigit() and 0 <= int(rest[2:]) < tables.MARKER_BYTE_COUNT:
-        return _marker_byte(int(rest[2:]))
+    number = rest[2:]
+    if rest.startswith("MB") and number.isascii() and number.isdigit() and int(number) < tables.MARKER_BYTE_COUNT:
+        return _marker_byte(int(number))
     try:
         area, byte, bit = parse_bit(rest)
     except ValueError:
