@@ -9,6 +9,7 @@ import struct
 from pathlib import Path
 
 import hypothesis.strategies as hs
+import pytest
 import serial
 from hypothesis import example, given, settings
 
@@ -170,3 +171,12 @@ def test_the_pg_port_is_silent_for_the_first_second_while_the_leds_blink() -> No
     assert device.read("output.led_green") is True and device.read("output.led_red") is False
     device.port("pg").feed(b"\x02")
     assert out == b"\x10\x06"
+
+
+def test_a_program_name_s_number_is_ascii_digits() -> None:
+    """'program.٣' (Arabic-Indic digits, which \\d and int() take) is no name of program 3."""
+    from devsim.core.points import UnknownName
+
+    device = Ip247Device(clock=VirtualClock(), config={"boot_time": 0})
+    with pytest.raises(UnknownName):
+        device.read("program.\u0663")

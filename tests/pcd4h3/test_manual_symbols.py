@@ -137,3 +137,15 @@ def test_axis_blocks_over_the_diagnostics_block_are_refused(tmp_path: Path) -> N
                  "diagnostics: [1968, 1984]\n"):  # the diagnostics end where the axes begin
         path.write_text(text, encoding="utf-8")
         load_config(path, Pcd4h3Config)
+
+
+def test_a_symbol_in_any_case_is_in_ascii(make: Callable[..., Station]) -> None:
+    """Upper and lower case are the assembler's, ASCII: the Kelvin sign U+212A, which Python lower-cases
+    to k, does not spell KProp, and an axis is numbered in ASCII digits (not Arabic-Indic ١)."""
+    from devsim.core.points import UnknownName
+
+    pcd = make()
+    assert pcd.sim.read("axis.1.kprop") == pcd.sim.read("axis.1.KProp")
+    for name in ("axis.1.\u212aProp", "axis.\u0661.KProp"):
+        with pytest.raises(UnknownName):
+            pcd.sim.read(name)

@@ -838,6 +838,16 @@ def test_panel_keys_blocks_and_diagnostics_as_operator_actions(make) -> None:  #
     assert cnc.read("diagnostics.keyboard_test") == ""
 
 
+@pytest.mark.parametrize("name", ["program.P\u0662\u0660", "tool.T\u0660\u0661"])
+def test_a_program_or_tool_name_s_number_is_ascii_digits(make, name: str) -> None:  # noqa: ANN001
+    """'program.P٢٠' (Arabic-Indic digits, which \\d and int() take) is no name of P20, nor 'tool.T٠١' of T01."""
+    from devsim.core.points import UnknownName
+
+    cnc = make()
+    with pytest.raises(UnknownName):
+        cnc.read(name)
+
+
 @pytest.mark.parametrize("key", ["٤٨", "0x48", "4_8", "+48"])
 def test_a_key_code_is_ascii_hex_digits(make, key: str) -> None:  # noqa: ANN001
     """panel.key's hex code is hex digits: int(key, 16) also took the Arabic-Indic '٤٨', '0x48',

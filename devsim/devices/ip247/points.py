@@ -79,7 +79,7 @@ def _put_md(m: Any, axis: int, record: Any) -> None:
 
 
 def _program(name: str) -> Point | None:
-    match = re.fullmatch(r"program\.(\d{1,3})", name)
+    match = re.fullmatch(r"program\.(\d{1,3})", name, re.ASCII)
     if match is None or int(match[1]) > 255:
         return None
     number = int(match[1])

@@ -157,7 +157,7 @@ _SYMBOLS = ({r.name.lower(): (r.name, "register") for r in REGISTERS}
 
 
 def _axis_family(name: str) -> Point | None:
-    match = re.fullmatch(r"axis\.(\d{1,2})\.(\w+)", name)
+    match = re.fullmatch(r"axis\.(\d{1,2})\.(\w+)", name, re.ASCII)
     if match is None or not 1 <= int(match[1]) <= 32:
         return None
     n = int(match[1])

@@ -64,7 +64,7 @@ def _axis_points(a: str) -> list[Point]:
 
 
 def _program(name: str) -> Point | None:
-    match = re.fullmatch(r"program\.P(\d\d)", name)
+    match = re.fullmatch(r"program\.P(\d\d)", name, re.ASCII)
     if match is None:
         return None
     number = int(match[1])
@@ -73,7 +73,7 @@ def _program(name: str) -> Point | None:
 
 
 def _tool(name: str) -> Point | None:
-    match = re.fullmatch(r"tool\.T(\d\d)", name)
+    match = re.fullmatch(r"tool\.T(\d\d)", name, re.ASCII)
     if match is None or not 1 <= int(match[1]) <= 99:
         return None
     number = int(match[1])
