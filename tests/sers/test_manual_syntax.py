@@ -151,3 +151,21 @@ def test_a_latin_1_letter_is_no_statement(sers: Plant) -> None:
     host.ask(b"#\xdf\r")
     host.ask("#QUIT\r")
     assert sers.read("program") == []
+
+
+@pytest.mark.parametrize("line", ['"€"', '"\udcff"'])
+def test_a_program_line_the_serial_line_cannot_carry_is_refused(sers: Plant, line: str) -> None:
+    """The control API's program holds only what a host could type on the line, a byte a character:
+    '"€"' was stored (LIST showed '"?"'), and a lone surrogate (``devsim ctl set sers program`` with a
+    byte that is no UTF-8 in its argument) was stored too, and with a state directory it failed the
+    EEPROM file's write and left every later stored line raising UnicodeEncodeError on the port."""
+    from devsim.core.points import BadValue
+
+    with pytest.raises(BadValue, match="no character the drive's line carries"):
+        sers.set("program", ["W=1", line])
+    assert sers.read("program") == []
+    host = sers.host
+    assert host.ask("#PSAVE\r") == b"#PSAVE\r\nok1\n\r"
+    for line in ("#NEW\r", "#W=1\r", "#QUIT\r"):
+        host.ask(line)
+    assert sers.read("program") == [["W=1"]]

@@ -31,7 +31,12 @@ def load_program(model: Any, program: Any) -> None:
         raise BadValue("a program is its lines: text, or a list of texts")
     parsed = []
     for text in lines:
-        result = st.parse(str(text), final=True)
+        try:
+            text.encode("latin-1")  # (the characters a byte on the line carries; not '€', not a lone surrogate)
+        except UnicodeEncodeError as exc:
+            raise BadValue(f"program line {text!r}: {exc.object[exc.start:exc.end]!r} is no character the drive's "
+                           "line carries (latin-1)") from None
+        result = st.parse(text, final=True)
         if result.errno is not None:
             raise BadValue(f"program line {text!r}: {message(result.errno)}")
         parsed.append(result)
