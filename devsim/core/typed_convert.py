@@ -58,7 +58,10 @@ def convert(data: Any, kind: Any) -> Any:
     """``data`` (plain YAML or Python data) as ``kind``, the way :meth:`Typed.parse` converts
     (numbers and booleans from strings, custom field types); raises
     :class:`msgspec.ValidationError`."""
-    return msgspec.convert(data, kind, strict=False, dec_hook=_dec_hook)
+    try:
+        return msgspec.convert(data, kind, strict=False, dec_hook=_dec_hook)
+    except UnicodeEncodeError as exc:  # (text with a lone surrogate, which msgspec cannot compare as UTF-8)
+        raise msgspec.ValidationError(f"{exc.object!r} is no text (a lone surrogate)") from None
 
 
 def non_finite(data: Any, loc: Location = ()) -> Location | None:

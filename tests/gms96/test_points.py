@@ -98,3 +98,11 @@ def test_a_name_s_numbers_are_ascii_digits(card: Gms96Device, name: str) -> None
 def test_a_cnc_program_s_numbers_are_ascii_digits(card: Gms96Device) -> None:
     with pytest.raises(BadValue, match="a command is a letter"):
         card.set("program.1", ["A١٠٠٠"])
+
+
+def test_a_lone_surrogate_is_a_bad_value(card: Gms96Device) -> None:
+    """A choice written with a lone surrogate ('\\udcff': devsim ctl set with an argument byte that is
+    no UTF-8) is refused like any other wrong choice; msgspec's conversion raised UnicodeEncodeError."""
+    with pytest.raises(BadValue, match="dil.protocol"):
+        card.set("dil.protocol", "\udcff")
+    assert card.read("dil.protocol") == "S"
