@@ -86,10 +86,15 @@ def encode(value: Any) -> bytes:
     return json.dumps(value, separators=(",", ":")).encode()
 
 
+#: The blanks JSON allows around a value (str.strip() also takes FS … US, NEL, NBSP and the other
+#: Unicode spaces: '\xa012.5' was the number 12.5).
+_JSON_BLANKS = " \t\n\r"
+
+
 def decode_value(payload: bytes, point_type: str | None = None) -> Any:
     """A command's payload: JSON if it parses, else the plain text; for a text point, a JSON
     value that is not text is taken as the plain text it was sent as (``42`` → ``"42"``)."""
-    text = payload.decode("utf-8", errors="replace").strip()
+    text = payload.decode("utf-8", errors="replace").strip(_JSON_BLANKS)
     try:
         value = json.loads(text)
     except (ValueError, RecursionError):  # (nested deeper than the decoder goes: text too)

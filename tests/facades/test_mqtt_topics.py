@@ -72,6 +72,10 @@ def test_payloads_are_json_or_plain_text() -> None:
     assert decode_value(b"42", "str") == "42"  # a text point gets the text it was sent
     assert decode_value(b'"42"', "str") == "42"
     assert decode_value(b"[" * 100_000) == "[" * 100_000  # (a RecursionError went to the error topic)
+    # blanks are JSON's four: a number between other spaces is text (which a number point refuses)
+    assert decode_value("\u00a012.5".encode()) == "\u00a012.5"
+    assert decode_value(b"\x1c12\x1f") == "\x1c12\x1f"
+    assert decode_value("\u3000true\u0085".encode()) == "\u3000true\u0085"
 
 
 @pytest.mark.parametrize(("datatype", "value"), [
