@@ -68,6 +68,9 @@ class BadValue(ValueError):
     """A value that does not fit the point's declared type or range; nothing was changed."""
 
 
+#: The blanks a control value may have around it.  (``str.strip``, ``float`` and ``int`` also skip
+#: NBSP, U+3000, VT, FF and FS … US: '\u3000on' was true, '\x1c5' the number 5.)
+_BLANKS = " \t\n\r"
 _TRUE = frozenset({"true", "1", "on", "yes"})
 _FALSE = frozenset({"false", "0", "off", "no"})
 
@@ -81,7 +84,7 @@ def parse_bool(value: Any) -> bool:
     if isinstance(value, float) and value in (0.0, 1.0):
         return bool(value)
     if isinstance(value, str):
-        text = value.strip().lower()
+        text = value.strip(_BLANKS).lower()
         if text in _TRUE:
             return True
         if text in _FALSE:
@@ -89,10 +92,16 @@ def parse_bool(value: Any) -> bool:
     raise BadValue(f"expects a boolean (true/false/1/0/on/off/yes/no), not {_show(value)}")
 
 
+def _plain(text: str) -> bool:
+    """Text a number may be read from: ASCII (Python's ``float`` and ``int`` also read the digits of
+    other scripts, which no device's wire takes) with no blanks around it but :data:`_BLANKS`."""
+    return text.isascii() and text.strip(_BLANKS) == text.strip()
+
+
 def finite(value: Any) -> float:
-    """A finite float from a number or a numeric string in ASCII (Python's ``float`` also reads the
-    digits of other scripts, which no device's wire takes); NaN, ±inf and overflow are refused."""
-    if isinstance(value, bool) or (isinstance(value, str) and not value.isascii()):  # (digits of other scripts)
+    """A finite float from a number or a numeric string (:func:`_plain`); NaN, ±inf and overflow
+    are refused."""
+    if isinstance(value, bool) or (isinstance(value, str) and not _plain(value)):
         raise BadValue(f"expects a number, not {_show(value)}")
     try:
         number = float(value)
@@ -106,7 +115,7 @@ def finite(value: Any) -> float:
 def _parse_int(value: Any) -> int:
     if isinstance(value, int) and not isinstance(value, bool):
         return value
-    if isinstance(value, str) and value.isascii():
+    if isinstance(value, str) and _plain(value):
         text = value.strip()
         try:
             return int(text, 0)

@@ -57,7 +57,7 @@ def test_false_spellings(text: Any) -> None:
     assert parse_bool(text) is False
 
 
-@pytest.mark.parametrize("value", [2, -1, 0.5, "maybe", "", None, [1]])
+@pytest.mark.parametrize("value", [2, -1, 0.5, "maybe", "", None, [1], "\u3000true", "on\u00a0", "\x1cyes\x1f"])
 def test_not_a_bool(value: Any) -> None:
     with pytest.raises(BadValue) as err:
         parse_bool(value)
@@ -75,6 +75,8 @@ def test_finite_numbers_and_refusals() -> None:
         (math.inf, "expects a finite number, not inf"),
         ("-inf", "expects a finite number, not '-inf'"),
         ("\u0663", "expects a number, not '\u0663'"),  # an Arabic-Indic three, which float() reads as 3
+        ("\x1c2.5\x1f", "expects a number, not '\\x1c2.5\\x1f'"),  # FS … US, which float() skips
+        ("\x0b2.5", "expects a number, not '\\x0b2.5'"),
     ]:
         with pytest.raises(BadValue) as err:
             finite(value)
@@ -97,6 +99,8 @@ def test_whole_numbers() -> None:
         parse_as("int", True)
     with pytest.raises(BadValue, match="expects a number"):
         parse_as("int", "\u0661\u0662")  # Arabic-Indic digits, which int() reads as 12
+    with pytest.raises(BadValue, match="expects a number"):
+        parse_as("int", "\x1c12")  # FS, which int() skips as a blank
 
 
 def test_each_kind() -> None:
