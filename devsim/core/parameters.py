@@ -20,7 +20,7 @@ from typing import Any, Literal
 
 import msgspec
 
-from devsim.core.points import BadValue, Point, UnknownName, number_text, parse_as, range_text
+from devsim.core.points import BadValue, Point, UnknownName, ascii_upper, number_text, parse_as, range_text
 
 __all__ = [
     "EMPTY",
@@ -147,9 +147,9 @@ class ParameterTable:
             self.rows[row.key] = row
             self.positions[row.key] = len(self.positions)
             for alias in row.aliases:
-                if alias.upper() in self._aliases:
+                if ascii_upper(alias) in self._aliases:
                     raise ValueError(f"alias {alias!r} declared twice")
-                self._aliases[alias.upper()] = row.key
+                self._aliases[ascii_upper(alias)] = row.key
             if row.attr:
                 if row.attr in self._attrs:
                     raise ValueError(f"accessor {row.attr!r} declared twice")
@@ -185,7 +185,7 @@ class ParameterTable:
         row = self.rows.get(text)
         if row is not None:
             return row
-        upper = text.upper().replace(" ", "")
+        upper = ascii_upper(text).replace(" ", "")  # ('poſ' is no POS, 'ın' no IN)
         if upper in self._aliases:
             return self.rows[self._aliases[upper]]
         digits = upper[len(self.prefix):] if self.prefix and upper.startswith(self.prefix.upper()) else upper

@@ -39,6 +39,7 @@ __all__ = [
     "ReadOnlyName",
     "SHARED_VOCABULARY",
     "UnknownName",
+    "ascii_upper",
     "finite",
     "parse_as",
     "number_text",
@@ -72,6 +73,13 @@ class BadValue(ValueError):
 #: NBSP, U+3000, VT, FF and FS … US: '\u3000on' was true, '\x1c5' the number 5.)
 _BLANKS = " \t\n\r"
 _TRUE = frozenset({"true", "1", "on", "yes"})
+_ASCII_UPPER = str.maketrans("abcdefghijklmnopqrstuvwxyz", "ABCDEFGHIJKLMNOPQRSTUVWXYZ")
+
+
+def ascii_upper(text: str) -> str:
+    """``text`` with a-z in upper case, one character for one, as the controllers' firmware does:
+    ``str.upper`` also makes ß SS, ſ (U+017F) S, ı (U+0131) I and µ (latin-1 B5h) the Greek Μ."""
+    return text.translate(_ASCII_UPPER)
 _FALSE = frozenset({"false", "0", "off", "no"})
 
 

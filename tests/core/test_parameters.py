@@ -46,6 +46,15 @@ def test_a_row_is_found_by_number_spelling_and_alias() -> None:
     assert TABLE.by_attr("baud") is ROWS[1]
 
 
+def test_an_alias_is_matched_in_ascii_case_only() -> None:
+    """Upper case is a-z to A-Z: str.upper made 'poſ' (U+017F, the long s) POS and 'ın' (U+0131,
+    the dotless i) IN, so ctl read sers param.poſ read P51."""
+    row = Param(51, "Position", "§4.8.4", "position", aliases=("POS", "IN"))
+    table = ParameterTable((row,), prefix="P")
+    assert table.find("pos") is row and table.find("In") is row
+    assert table.find("po\u017f") is None and table.find("\u0131n") is None
+
+
 def test_a_table_refuses_a_key_or_alias_declared_twice() -> None:
     with pytest.raises(ValueError):
         ParameterTable((ROWS[0], ROWS[0]))
