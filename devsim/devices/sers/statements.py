@@ -22,6 +22,7 @@ import msgspec
 
 from devsim.core.kit import Command as KitCommand
 from devsim.core.kit import Table
+from devsim.core.points import ascii_upper
 
 __all__ = [
     "LABEL_MAX",
@@ -233,16 +234,13 @@ class ParseResult(msgspec.Struct):
 
 
 # -- the scanner --------------------------------------------------------------------------
-#: Upper case as the drive sees it: ASCII letters only, one character for one.  (``str.upper``
-#: made the latin-1 byte DFh, ``ß``, into ``SS``: garbage ran as the stop S, in programming mode
-#: it was stored as one, and every character after it was read one place off.)
-_ASCII_UPPER = str.maketrans("abcdefghijklmnopqrstuvwxyz", "ABCDEFGHIJKLMNOPQRSTUVWXYZ")
-
-
 class _Cursor:
     def __init__(self, text: str, final: bool) -> None:
         self.text = text
-        self.upper = text.translate(_ASCII_UPPER)
+        #: Upper case as the drive sees it, ASCII letters only, one character for one: ``str.upper``
+        #: made the latin-1 byte DFh, ``ß``, into ``SS`` (garbage ran as the stop S, in programming
+        #: mode it was stored as one, and every character after it was read one place off).
+        self.upper = ascii_upper(text)
         self.pos = 0
         self.final = final
 
