@@ -848,13 +848,14 @@ def test_a_program_or_tool_name_s_number_is_ascii_digits(make, name: str) -> Non
         cnc.read(name)
 
 
-@pytest.mark.parametrize("key", ["٤٨", "0x48", "4_8", "+48"])
+@pytest.mark.parametrize("key", ["٤٨", "0x48", "4_8", "+48", "ex\u0131t"])
 def test_a_key_code_is_ascii_hex_digits(make, key: str) -> None:  # noqa: ANN001
     """panel.key's hex code is hex digits: int(key, 16) also took the Arabic-Indic '٤٨', '0x48',
-    '4_8' and '+48' as the key 48 (P)."""
+    '4_8' and '+48' as the key 48 (P); a name is matched in ASCII case: str.upper made 'exıt' (the
+    dotless ı, U+0131) the key named exit."""
     from devsim.core.points import BadValue
 
-    cnc = make(mode="PROGRAM_ENTRY")
+    cnc = make({"v8_keymap": {"48": "P", "0x2D": "exit"}}, mode="PROGRAM_ENTRY")
     with pytest.raises(BadValue, match="no key"):
         cnc.set("panel.key", key)
     assert cnc.read("keyboard.last_key") == -1  # (none yet)

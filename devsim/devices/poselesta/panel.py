@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from string import hexdigits
 
 from devsim.core.clock import Clock, Timer
-from devsim.core.points import BadValue
+from devsim.core.points import BadValue, ascii_upper
 from devsim.core.signals import SignalBank
 from devsim.devices.poselesta.codes import KEY_CODES
 from devsim.devices.poselesta.parameters import MachineParameters
@@ -41,9 +41,9 @@ class FrontPanel:
 
     def code_of(self, key: str) -> int:
         """A key by its name in ``v8_keymap`` or its two-digit hex code (spec §3.2.2 ``panel.key``)."""
-        names = {name.upper(): code for code, name in self._keymap.items()}
+        names = {ascii_upper(name): code for code, name in self._keymap.items()}
         text = key.strip()
-        code = names.get(text.upper())
+        code = names.get(ascii_upper(text))  # (str.upper: 'exıt', with the dotless ı, was EXIT)
         if code is None:
             # hex digits only: int(key, 16) also read '0x48', '4_8', '+48' and the digits of other scripts
             if not (text and text.isascii() and all(c in hexdigits for c in text)):
