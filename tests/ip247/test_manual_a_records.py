@@ -226,3 +226,19 @@ def test_setting_a_record_the_module_refuses_says_so_and_keeps_the_old_one(mod: 
     with pytest.raises(Exception, match="machine data not stored: module error 46"):
         mod.device.set("axis.1.machine_data", md_for(2, 101))  # a record of axis 2 set on axis 1
     assert mod.device.read("axis.1.machine_data") == stored
+
+
+@pytest.mark.parametrize("change", [
+    lambda texts: ["0x" + texts[0], *texts[1:]],  # int(text, 16) read a prefix,
+    lambda texts: [*texts[:-1], "-1"],  # a sign (stored as FFFF),
+    lambda texts: ["\u0660" + texts[0], *texts[1:]],  # an Arabic-Indic digit,
+    lambda texts: ["\u00a0".join(texts)],  # and str.split() split at NBSP
+], ids=["prefix", "sign", "arabic-indic", "nbsp"])
+def test_machine_data_in_one_string_are_hex_words(mod: Module, change: Any) -> None:
+    """The machine-data point's one-string form is 70 words of 1 to 4 hex digits with blanks between."""
+    assert mod.load_md(1)[8] == 0
+    stored = mod.device.read("axis.1.machine_data")
+    with pytest.raises(Exception, match="are hex words"):
+        mod.device.set("axis.1.machine_data", " ".join(change(COM247.split())))
+    assert mod.device.read("axis.1.machine_data") == stored
+    mod.device.set("axis.1.machine_data", COM247)  # (lines and blanks between the words as they come)

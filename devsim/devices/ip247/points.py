@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
+from string import hexdigits
 from typing import Any
 
 from devsim.core.kit import Command, Fault, FaultTable, Table, signal_points
@@ -65,10 +66,11 @@ def _axis_points(n: int) -> list[Point]:
 
 def _put_md(m: Any, axis: int, record: Any) -> None:
     if isinstance(record, str):
-        try:
-            record = [int(word, 16) for word in record.split()]
-        except ValueError:
-            raise BadValue("machine data in one string are hex words") from None
+        texts = re.split(r"[ \t\r\n]+", record.strip(" \t\r\n"))  # (str.split(): also NBSP, NEL, FS … US)
+        if not all(0 < len(text) <= 4 and all(c in hexdigits for c in text) for text in texts):
+            # (int(text, 16) also read '0x10', '-1', '1_0' and the digits of other scripts)
+            raise BadValue("machine data in one string are hex words (1 to 4 digits, blanks between)")
+        record = [int(text, 16) for text in texts]
     if not isinstance(record, list) or len(record) != 70 or not all(isinstance(w, int) for w in record):
         raise BadValue("machine data are 70 words (a list of numbers, or hex words in one string)")
     unit = m.units[axis - 1]
