@@ -149,3 +149,13 @@ def test_a_symbol_in_any_case_is_in_ascii(make: Callable[..., Station]) -> None:
     for name in ("axis.1.\u212aProp", "axis.\u0661.KProp"):
         with pytest.raises(UnknownName):
             pcd.sim.read(name)
+
+
+@pytest.mark.parametrize("init", [{1: {"\u212aProp": 5}}, {"axis\u0661": {"KProp": 5}}, {" 1": {"KProp": 5}},
+                                  {"1_0": {"KProp": 5}}, {"\u00b2": {"KProp": 5}}])
+def test_the_configuration_s_symbols_and_axes_are_ascii(init: dict) -> None:
+    """The configuration reads symbols in ASCII case and axes in ASCII digits: the Kelvin sign (which
+    str.lower makes k) spelled KProp, 'axis١' (Arabic-Indic), ' 1' and '1_0' (which int() reads) were
+    axes 1 and 10, and '²' gave int()'s own message."""
+    with pytest.raises(Exception, match="not a load register|an axis is 1"):
+        Pcd4h3Config.parse({"init": init})

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
+from devsim.core.points import ascii_upper
 from devsim.core.settings import Check, Keys, Meta, Settings, doc, field
 from devsim.core.typed import FieldError
 from devsim.devices.pcd4h3.layout import DIAG_FLAGS, DIAG_REGISTERS, FLAGS_PER_AXIS, REGISTERS_PER_AXIS
@@ -23,15 +24,15 @@ LOAD_REGISTERS = tuple(r.name for r in load_registers())
 
 def _axis(key: object) -> int:
     text = str(key).removeprefix("axis")
-    number = int(text)
-    if not 1 <= number <= 32:
+    if not (text.isascii() and text.isdigit()) or not 1 <= int(text) <= 32:  # (int(): also ' 1', '1_0', '١')
         raise ValueError("an axis is 1 … 32 (or axis1 … axis32)")
-    return number
+    return int(text)
 
 
 def _register(key: object) -> str:
-    """A load register's symbol in any case (the PCD assembler ignores case, manual §7.1.5)."""
-    symbol = {name.lower(): name for name in LOAD_REGISTERS}.get(str(key).lower())
+    """A load register's symbol in any case (the PCD assembler ignores case, manual §7.1.5), ASCII:
+    str.lower made the Kelvin sign U+212A a k."""
+    symbol = {ascii_upper(name): name for name in LOAD_REGISTERS}.get(ascii_upper(str(key)))
     if symbol is None:
         raise ValueError(f"not a load register of an axis block ({', '.join(LOAD_REGISTERS)})")
     return symbol
@@ -39,7 +40,7 @@ def _register(key: object) -> str:
 
 def _flag(key: object) -> str:
     """A flag's symbol in any case (manual §7.1.5)."""
-    symbol = {f.name.lower(): f.name for f in FLAG_FIELD}.get(str(key).lower())
+    symbol = {ascii_upper(f.name): f.name for f in FLAG_FIELD}.get(ascii_upper(str(key)))
     if symbol is None:
         raise ValueError("not a flag of an axis field")
     return symbol
