@@ -1054,6 +1054,18 @@ def test_a_simulated_cassette_records_and_plays_back(make) -> None:  # noqa: ANN
     assert cnc.read("program.P21") == "N 1 X 10.000\nN 2 Y- 2.500 M 02"
 
 
+@pytest.mark.parametrize("key", ["\u0663", "+3", "1_0"])
+def test_a_configured_parameter_number_is_ascii_digits(key: str) -> None:
+    """A plant file's params key is a number in ASCII digits: int() also read the Arabic-Indic '٣'
+    as P3, '+3' and '1_0' as P3 and P10."""
+    from devsim.core.typed import Invalid
+    from devsim.devices.poselesta.config import PoselestaConfig
+
+    assert PoselestaConfig.parse({"params": {"3": 1.0, 13: -3.0}}).params[3] == 1.0
+    with pytest.raises(Invalid, match="valid integer"):
+        PoselestaConfig.parse({"params": {key: 1.0}})
+
+
 @pytest.mark.parametrize("value", ['"nan"', '"1e999"', "true", '"12"'])
 def test_a_stored_parameter_that_is_no_finite_number_refuses_the_memory(tmp_path, value: str) -> None:
     """A hand-edited state file (fuzzed): ``float()`` took "nan" and "1e999" as parameters, and

@@ -32,10 +32,12 @@ def _decimals(value: dict[str, int]) -> dict[str, int]:
 
 
 def _parameter_number(key: Any) -> int:
-    try:
-        return int(str(key).strip())
-    except ValueError:
-        raise ValueError("Input should be a valid integer, unable to parse string as an integer") from None
+    if isinstance(key, int) and not isinstance(key, bool):
+        return key
+    text = str(key).strip()
+    if not (text.isascii() and text.isdigit()):  # (int(): also '+3', '1_0' and the digits of other scripts)
+        raise ValueError("Input should be a valid integer, unable to parse string as an integer")
+    return int(text)
 
 
 def _key_code(key: Any) -> int:
