@@ -480,6 +480,8 @@ def test_t21_exact_rendering_with_full_decimals_and_units(sers: Plant) -> None:
     ({"160": 99}, "params"),  # no weighting code: failed every weighted query
     ({"123": 0}, "params"),  # the feed constant is > 0: failed every weighted query
     ({"99999": 1}, "params"),  # no parameter at all
+    ({"\u00b2": 1}, "params"),  # a superscript two, which str.isdigit takes: int() refused the whole file
+    ({"\u0664\u0661": 100}, "params"),  # Arabic-Indic 41, which int() reads: was P41
     ({"47": "x"}, "registers"),  # W: failed arithmetic in a program
 ])
 def test_a_stored_value_the_drive_never_stores_reads_as_a_checksum_error(

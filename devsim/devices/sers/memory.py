@@ -146,7 +146,8 @@ def _unfit(stored: Any) -> str | None:
     if type(stored) is not dict:
         return f"the parameters are a {type(stored).__name__}, not a table"
     for key, value in stored.items():
-        row = PARAMETERS.get(int(key)) if str(key).isdigit() else None
+        number = str(key)
+        row = PARAMETERS.get(int(number)) if number.isascii() and number.isdigit() else None  # (isdigit: also ²)
         if row is None or not row.saved:
             return f"P{key} is no parameter PSAVE stores"
         if not _finite(value):
