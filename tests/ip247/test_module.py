@@ -394,6 +394,8 @@ def test_the_plc_record_point_never_overwrites(mod: Module) -> None:
     ("ag.record", {"ba": 20, "words": 5}), ("ag.record", {"ba": 67, "db": None}),
     ("ag.operate", {"ba": "x"}), ("ag.operate", {"ba": None}), ("ag.operate", {"ba": 5, "page": "x"}),
     ("ag.operate", {"ba": 5, "b": "q"}), ("ag.operate", {"ba": 7, "cmd": "Vorwärts", "dd": [1]}),
+    ("ag.operate", {"ba": 5, "cmd": 300}), ("ag.operate", {"ba": 5, "cmd": -1}),  # no byte: ValueError (bytes())
+    ("ag.operate", {"ba": 5, "cmd": True}),  # no command: was Start
 ], ids=lambda job: f"{job[0]}-{job[1]}")
 def test_a_plc_job_with_a_field_that_is_no_whole_number_is_refused(mod: Module, job: tuple[str, dict[str, object]]) -> None:
     """Found by fuzzing: an FB164/FB165 job whose BA, page, DB, B, W, DD or words are no whole

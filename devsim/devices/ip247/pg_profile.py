@@ -178,7 +178,7 @@ class Observation(msgspec.Struct, frozen=True):
 
 def command_code(command: int | str) -> int | None:
     """A command as its code: 1 … 5 as they are, a name (Start, Stopp … or English) looked up."""
-    if isinstance(command, int):
+    if isinstance(command, int) and not isinstance(command, bool):  # (True is no command)
         return command
     return COMMAND_NAMES.get(str(command).lower())
 

@@ -161,7 +161,7 @@ def _ag_operate(m: Any, job: Any) -> None:
     cmd = job.get("cmd", "Start")
     code = command_code(cmd)
     ba = _whole(job, "ba", 0)
-    if code is None or ba not in range(256):
+    if code not in range(256) or ba not in range(256):  # (a code is a byte of the job)
         raise BadValue(f"unknown command {cmd!r} (Start, Stopp, Vorwärts, Rückwärts, Übernahme)")
     page = _page(m, job)
     request = Operate(page, ba, int(code), _whole(job, "b", 0) & 0xFF,
