@@ -91,6 +91,8 @@ def test_the_manuals_loop_and_halt_examples_are_valid() -> None:
         # functions are separated by blanks (20H): any other character is one the module does not know
         *((f"%  1\nN1 X1{c}F10\nN2 M02\n", 16, 1) for c in "\t\r\x1c\x1f\x85\xa0"),
         ("%  1\nN1 X1 F10 M10\xa0\nN2 M02\n", 16, 1),
+        ("%  1 " + "x" * 58 + "\x1c\nN1 M02\n", 1, 0),  # a comment of 59 characters, the last FS
+        ("%  1 " + "x" * 58 + "\xa0\nN1 M02\n", 1, 0),
     ],
 )
 def test_syntax_errors_name_their_number_and_block(text: str, errno: int, block: int) -> None:

@@ -93,7 +93,7 @@ def parse(text: str) -> Program:
         raise SyntaxFault(2, 0)
     if len(header[3]) > 3 or int(header[3]) > 255:
         raise SyntaxFault(4, 0)
-    if len(header[4].strip()) > 58 or (len(lines) == 1 and not terminated):
+    if len(header[4].strip(" ")) > 58 or (len(lines) == 1 and not terminated):  # (not strip(): FS, NBSP)
         raise SyntaxFault(1, 0)
     blocks: list[Block] = []
     loops = 0
@@ -122,7 +122,7 @@ def parse(text: str) -> Program:
         blocks.append(block)
     if not ended:
         raise SyntaxFault(15, len(lines) - 1)
-    return Program(int(header[3]), header[1] == "%", header[4].strip(), tuple(blocks))
+    return Program(int(header[3]), header[1] == "%", header[4].strip(" "), tuple(blocks))
 
 
 def _block(ordinal: int, line: str) -> Block:
