@@ -106,3 +106,12 @@ def test_a_lone_surrogate_is_a_bad_value(card: Gms96Device) -> None:
     with pytest.raises(BadValue, match="dil.protocol"):
         card.set("dil.protocol", "\udcff")
     assert card.read("dil.protocol") == "S"
+
+
+@pytest.mark.parametrize("name", ["k\u017fa15-2r", "KSA15-2R\u00a0"])
+def test_a_variant_is_named_in_ascii(name: str) -> None:
+    """A variant's name is matched in ASCII case: str.upper made 'kſa15-2r' (the long s U+017F)
+    KSA15-2R, and str.strip() took the NBSP off 'KSA15-2R\\xa0'."""
+    assert Gms96Config.parse({"variant": "g96-ksa15-2r"}).variant == "g96-ksa15-2r"
+    with pytest.raises(Exception, match="no such variant"):
+        Gms96Config.parse({"variant": name})

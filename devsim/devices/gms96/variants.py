@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import msgspec
 
+from devsim.core.points import ascii_upper
+
 __all__ = ["DEFAULT_VARIANT", "VARIANTS", "Variant", "variant"]
 
 # ---------------------------------------------------------------------------------------------
@@ -224,7 +226,7 @@ DEFAULT_VARIANT = "KSA15-2R"
 
 def variant(name: str) -> Variant:
     """Look up a variant tolerantly: "G96-KSA15-2R", "gms96-ksa15-2r", "KSA15-2R" are equal."""
-    key = name.strip().upper()
+    key = ascii_upper(name.strip(" "))  # (str.upper: 'kſa15' with the long s U+017F was KSA15)
     for prefix in ("GMS96-", "G96-"):
         if key.startswith(prefix):
             key = key[len(prefix) :]
