@@ -180,3 +180,15 @@ def test_a_program_name_s_number_is_ascii_digits() -> None:
     device = Ip247Device(clock=VirtualClock(), config={"boot_time": 0})
     with pytest.raises(UnknownName):
         device.read("program.\u0663")
+
+
+@pytest.mark.parametrize("key", ["\u0662", "+2", " 2", "\u00b2"])
+def test_a_configured_axis_is_1_2_or_3_in_ascii(key: str) -> None:
+    """The configuration's axes keys: int() also read the Arabic-Indic '٢', '+2' and ' 2' as axis 2,
+    and '²' gave int()'s own message."""
+    from devsim.core.typed import Invalid
+    from devsim.devices.ip247.config import Ip247Config
+
+    assert 2 in Ip247Config.parse({"axes": {2: {}}}).axes
+    with pytest.raises(Invalid, match="an axis is 1, 2 or 3"):
+        Ip247Config.parse({"axes": {key: {}}})

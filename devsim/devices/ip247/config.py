@@ -41,10 +41,10 @@ AXIS_GEOMETRY = AxisGeometry
 
 
 def _axis(key: object) -> int:
-    number = int(str(key))
-    if number not in (1, 2, 3):
+    text = str(key)
+    if text not in ("1", "2", "3"):  # (int(): also ' 2', '+2', '٢'; '²' gave its own message)
         raise ValueError("an axis is 1, 2 or 3")
-    return number
+    return int(text)
 
 
 class Ip247Config(Settings):
