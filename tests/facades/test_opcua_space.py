@@ -114,7 +114,8 @@ def test_endpoint_urls(spec: str | None, url: str) -> None:
     assert DEFAULT_ENDPOINT == "opc.tcp://127.0.0.1:4840/devsim/"
 
 
-@pytest.mark.parametrize("spec", ["65536", "-1", "h:", "h:x", "h:1.5"])
+@pytest.mark.parametrize("spec", ["65536", "-1", "h:", "h:x", "h:1.5",
+                                  "48\u00b2", "\u0664\u0668\u0664\u0660"])  # (int(): refused ², read ٤٨٤٠)
 def test_bad_endpoints(spec: str) -> None:
     with pytest.raises(ValueError) as err:
         endpoint_url(spec)
