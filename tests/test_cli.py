@@ -75,6 +75,9 @@ def test_list_shows_kinds_with_descriptions() -> None:
         (["run", "echo", "--control", "0.0.0.0:7000"], "--control: refusing non-loopback host '0.0.0.0'"),
         (["run", "echo", "--control", "nowhere"], "--control: 'nowhere': expected unix:/path/to.sock"),
         (["run", "echo", "--bogus"], "No such option"),
+        # (str.isdigit took the superscript, int() did not: a ValueError traceback; and int() read ٥)
+        (["run", "echo", "--canopen", "\u00b2"], "--canopen: expected NODE"),
+        (["run", "echo", "--canopen", "\u0665"], "--canopen: expected NODE"),
     ],
 )
 def test_option_errors_are_one_line_exit_2(args: list[str], expected: str) -> None:

@@ -28,7 +28,7 @@ def check_modbus(spec: str) -> None:
 
 def check_canopen(spec: str) -> None:
     node, _, where = spec.partition("@")
-    if not node.isdigit() or not 1 <= int(node) <= 127:
+    if not (node.isascii() and node.isdigit()) or not 1 <= int(node) <= 127:  # (isdigit alone: also ²)
         raise click.UsageError(f"--canopen: expected NODE[@[HOST:]PORT] or NODE@socketcan:CHANNEL with NODE 1 … 127, "
                                f"not {spec!r}")
     if where.startswith("socketcan:"):
