@@ -70,7 +70,8 @@ class BadValue(ValueError):
 
 
 #: The blanks a control value may have around it.  (``str.strip``, ``float`` and ``int`` also skip
-#: NBSP, U+3000, VT, FF and FS … US: '\u3000on' was true, '\x1c5' the number 5.)
+#: NBSP, U+3000, VT, FF and FS … US: '\u3000on' was true, '\x1c5' the number 5.)  [SIM-CHOICE] JSON's
+#: four blanks: no manual speaks of the control API.
 _BLANKS = " \t\n\r"
 _TRUE = frozenset({"true", "1", "on", "yes"})
 _ASCII_UPPER = str.maketrans("abcdefghijklmnopqrstuvwxyz", "ABCDEFGHIJKLMNOPQRSTUVWXYZ")

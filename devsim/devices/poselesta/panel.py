@@ -46,6 +46,7 @@ class FrontPanel:
         code = names.get(ascii_upper(text))  # (str.upper: 'exıt', with the dotless ı, was EXIT)
         if code is None:
             # hex digits only: int(key, 16) also read '0x48', '4_8', '+48' and the digits of other scripts
+            # ([SIM-CHOICE]: the spec gives the code as '48', hex digits; it says nothing of a prefix)
             if not (text and text.isascii() and all(c in hexdigits for c in text)):
                 raise BadValue(f"no key {key!r}: a name of v8_keymap ({', '.join(sorted(names))}) or a hex code")
             code = int(text, 16)
