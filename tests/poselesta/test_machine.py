@@ -836,6 +836,10 @@ def test_panel_keys_blocks_and_diagnostics_as_operator_actions(make) -> None:  #
     cnc.advance(0.2)
     cnc.set("panel.key", "exit")
     assert cnc.read("diagnostics.keyboard_test") == ""
+    cnc.set("diagnostics.keyboard_test", "\u3000true")  # (an ideographic space: no true spelling)
+    cnc.advance(0.2)
+    cnc.set("panel.key", "P")
+    assert cnc.read("diagnostics.keyboard_test") == ""
 
 
 @pytest.mark.parametrize("name", ["program.P\u0662\u0660", "tool.T\u0660\u0661"])

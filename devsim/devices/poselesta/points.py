@@ -12,7 +12,7 @@ import msgspec
 
 from devsim.core.kit import Command, Fault, FaultTable, Table, signal_points
 from devsim.core.parameters import alias_hook, parameter_points
-from devsim.core.points import BadValue, Family, Point, PointTable
+from devsim.core.points import BadValue, Family, Point, PointTable, parse_bool
 from devsim.devices.poselesta.diagnostics import input_image, input_screen, pots
 from devsim.devices.poselesta.execution import STATES
 from devsim.devices.poselesta.model import MODES, PoselestaCnc
@@ -173,7 +173,11 @@ DIAGNOSTIC_PROGRAMS: Table[Callable[[PoselestaCnc], None]] = Table([
 
 
 def _keyboard_test(model: PoselestaCnc, value: str) -> None:
-    if value.strip().lower() in ("true", "1", "on", "yes"):
+    try:
+        on = parse_bool(value)  # (value.strip().lower() took '\u3000true' as true)
+    except BadValue:
+        on = False  # anything else ends it, as before
+    if on:
         if model.mode != "PROGRAM_ENTRY":
             raise BadValue("the diagnostic programs P79 run in PROGRAM_ENTRY")
         model.panel.keyboard_test_on(True)
