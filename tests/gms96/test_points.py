@@ -98,6 +98,11 @@ def test_a_name_s_numbers_are_ascii_digits(card: Gms96Device, name: str) -> None
 def test_a_cnc_program_s_numbers_are_ascii_digits(card: Gms96Device) -> None:
     with pytest.raises(BadValue, match="a command is a letter"):
         card.set("program.1", ["A١٠٠٠"])
+    for separator in ("\x1c", "\x1e", "\x85", "\u2028"):  # (str.splitlines split there: two commands)
+        with pytest.raises(BadValue, match="a command is a letter"):
+            card.set("program.1", f"A1000{separator}A2000")
+    card.set("program.1", "A1000\r\nA2000\n")
+    assert card.read("program.1") == ["A1000", "A2000"]
 
 
 def test_a_lone_surrogate_is_a_bad_value(card: Gms96Device) -> None:

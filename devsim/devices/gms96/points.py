@@ -144,7 +144,8 @@ def command_rows(program: Any) -> list[list[Any]]:
     not record (``T``, ``c``, ``N``, ``q``, ``o2``, a download) is refused, as is a parameter
     beyond 24 bits; one from 2^23 up is kept as its 24-bit pattern reads (``A16777215`` is
     ``A-1``, as on the line)."""
-    lines = program.splitlines() if isinstance(program, str) else program
+    # (lines end at LF or CR LF: str.splitlines also ends them at FS, GS, RS, NEL and U+2028)
+    lines = program.replace("\r\n", "\n").split("\n") if isinstance(program, str) else program
     if not isinstance(lines, list) or not all(isinstance(text, str) for text in lines):
         raise BadValue("a CNC program is its commands: a list of texts, or one per line")
     rows = []
