@@ -74,6 +74,8 @@ class BadValue(ValueError):
 #: four blanks: no manual speaks of the control API.
 _BLANKS = " \t\n\r"
 _TRUE = frozenset({"true", "1", "on", "yes"})
+_FALSE = frozenset({"false", "0", "off", "no"})
+
 _ASCII_UPPER = str.maketrans("abcdefghijklmnopqrstuvwxyz", "ABCDEFGHIJKLMNOPQRSTUVWXYZ")
 
 
@@ -81,7 +83,6 @@ def ascii_upper(text: str) -> str:
     """``text`` with a-z in upper case, one character for one, as the controllers' firmware does:
     ``str.upper`` also makes ß SS, ſ (U+017F) S, ı (U+0131) I and µ (latin-1 B5h) the Greek Μ."""
     return text.translate(_ASCII_UPPER)
-_FALSE = frozenset({"false", "0", "off", "no"})
 
 
 def parse_bool(value: Any) -> bool:
