@@ -10,6 +10,7 @@ import click
 from devsim.cli import exits
 from devsim.cli.usage import host_port
 from devsim.core.extras import install_command
+from devsim.core.points import ascii_digits
 
 __all__ = ["check_canopen", "check_fleet", "check_modbus", "check_mqtt", "check_opcua", "host_port", "modbus_for"]
 
@@ -28,7 +29,7 @@ def check_modbus(spec: str) -> None:
 
 def check_canopen(spec: str) -> None:
     node, _, where = spec.partition("@")
-    if not (node.isascii() and node.isdigit()) or not 1 <= int(node) <= 127:  # (isdigit alone: also ²)
+    if not ascii_digits(node) or not 1 <= int(node) <= 127:
         raise click.UsageError(f"--canopen: expected NODE[@[HOST:]PORT] or NODE@socketcan:CHANNEL with NODE 1 … 127, "
                                f"not {spec!r}")
     if where.startswith("socketcan:"):

@@ -20,7 +20,16 @@ from typing import Any, Literal
 
 import msgspec
 
-from devsim.core.points import BadValue, Point, UnknownName, ascii_upper, number_text, parse_as, range_text
+from devsim.core.points import (
+    BadValue,
+    Point,
+    UnknownName,
+    ascii_digits,
+    ascii_upper,
+    number_text,
+    parse_as,
+    range_text,
+)
 
 __all__ = [
     "EMPTY",
@@ -189,7 +198,7 @@ class ParameterTable:
         if upper in self._aliases:
             return self.rows[self._aliases[upper]]
         digits = upper[len(self.prefix):] if self.prefix and upper.startswith(self.prefix.upper()) else upper
-        if digits.isascii() and digits.isdigit():
+        if ascii_digits(digits):
             return self.rows.get(int(digits))
         return None
 

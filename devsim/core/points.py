@@ -39,6 +39,7 @@ __all__ = [
     "ReadOnlyName",
     "SHARED_VOCABULARY",
     "UnknownName",
+    "ascii_digits",
     "ascii_upper",
     "finite",
     "parse_as",
@@ -77,6 +78,13 @@ _TRUE = frozenset({"true", "1", "on", "yes"})
 _FALSE = frozenset({"false", "0", "off", "no"})
 
 _ASCII_UPPER = str.maketrans("abcdefghijklmnopqrstuvwxyz", "ABCDEFGHIJKLMNOPQRSTUVWXYZ")
+
+
+def ascii_digits(text: str) -> bool:
+    """``text`` is one or more of the digits 0 … 9, the only ones a device's wire or syntax has:
+    ``str.isdigit`` also takes ² ³ ¹ (latin-1 B2h, B3h, B9h), which ``int`` then refuses with its
+    own message, and the digits of every other script, which ``int`` reads ('٢' is 2)."""
+    return text.isascii() and text.isdigit()
 
 
 def ascii_upper(text: str) -> str:

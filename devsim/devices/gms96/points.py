@@ -17,7 +17,7 @@ import msgspec
 
 from devsim.core.kit import Fault, FaultTable, SignalDef, signal_points
 from devsim.core.parameters import Param, alias_hook, parameter_points
-from devsim.core.points import BadValue, Family, Point, PointTable
+from devsim.core.points import BadValue, Family, Point, PointTable, ascii_digits
 from devsim.core.settings import Invalid
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.codec import S24_MIN, wrap24
@@ -97,7 +97,7 @@ def _alias(name: str) -> str | None:
         return _param_alias(name)
     if section == "marker":
         upper = rest.upper()
-        if upper.startswith("MB") and upper[2:].isascii() and upper[2:].isdigit():  # (isdigit alone: also ²)
+        if upper.startswith("MB") and ascii_digits(upper[2:]):
             return f"marker.MB{int(upper[2:])}"
         return f"marker.{upper}"
     return None
@@ -292,7 +292,7 @@ def _marker(name: str) -> Point | None:
     if rest == name:
         return None
     number = rest[2:]
-    if rest.startswith("MB") and number.isascii() and number.isdigit() and int(number) < tables.MARKER_BYTE_COUNT:
+    if rest.startswith("MB") and ascii_digits(number) and int(number) < tables.MARKER_BYTE_COUNT:
         return _marker_byte(int(number))
     try:
         area, byte, bit = parse_bit(rest)
@@ -306,7 +306,7 @@ def _marker(name: str) -> Point | None:
 def _numbered(prefix: str, count: int, make: Any) -> Any:
     def family(name: str) -> Point | None:
         rest = name.removeprefix(prefix)
-        if rest != name and rest.isascii() and rest.isdigit() and int(rest) < count:
+        if rest != name and ascii_digits(rest) and int(rest) < count:
             return make(int(rest))
         return None
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from devsim.core.points import ascii_upper
+from devsim.core.points import ascii_digits, ascii_upper
 from devsim.core.settings import Check, Keys, Meta, Settings, doc, field
 from devsim.core.typed import FieldError
 from devsim.devices.pcd4h3.layout import DIAG_FLAGS, DIAG_REGISTERS, FLAGS_PER_AXIS, REGISTERS_PER_AXIS
@@ -24,7 +24,7 @@ LOAD_REGISTERS = tuple(r.name for r in load_registers())
 
 def _axis(key: object) -> int:
     text = str(key).removeprefix("axis")
-    if not (text.isascii() and text.isdigit()) or not 1 <= int(text) <= 32:  # (int(): also ' 1', '1_0', '١')
+    if not ascii_digits(text) or not 1 <= int(text) <= 32:
         raise ValueError("an axis is 1 … 32 (or axis1 … axis32)")
     return int(text)
 

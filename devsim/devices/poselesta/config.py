@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
+from devsim.core.points import ascii_digits
 from devsim.core.settings import Check, Keys, Meta, Settings, doc, field
 from devsim.devices.poselesta.parameters import check_parameter
 
@@ -35,7 +36,7 @@ def _parameter_number(key: Any) -> int:
     if isinstance(key, int) and not isinstance(key, bool):
         return key
     text = str(key).strip()
-    if not (text.isascii() and text.isdigit()):  # (int(): also '+3', '1_0' and the digits of other scripts)
+    if not ascii_digits(text):
         raise ValueError("Input should be a valid integer, unable to parse string as an integer")
     return int(text)
 

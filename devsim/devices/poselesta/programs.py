@@ -18,7 +18,7 @@ from collections.abc import Callable
 from typing import Any
 
 from devsim.core.nvram import NonVolatileMemory
-from devsim.core.points import BadValue
+from devsim.core.points import BadValue, ascii_digits
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF
 from devsim.devices.poselesta.tape import Block, Formats, block_words, parse_blocks
 
@@ -163,7 +163,7 @@ class ProgramMemory:
         (or replaces) block N5 of P20, by the rules of a read-in."""
         number_text, sep, block_text = text.partition(":")
         digits = number_text.strip().lstrip("Pp")
-        if not sep or not (digits.isascii() and digits.isdigit()):  # (str.isdigit: also ² and other scripts)
+        if not sep or not ascii_digits(digits):
             raise BadValue("expected 'program: block', e.g. '20: N5 X10'")
         number = int(digits)
         if number in RESERVED_PROGRAMS or not 0 <= number <= 98:

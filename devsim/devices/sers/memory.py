@@ -15,6 +15,7 @@ from typing import Any
 
 from devsim.core.console import warn
 from devsim.core.nvram import NonVolatileMemory
+from devsim.core.points import ascii_digits
 from devsim.devices.sers.constants import WEIGHTED_KINDS, WEIGHTING_PARAMS
 from devsim.devices.sers.paramdef import range_problem
 from devsim.devices.sers.parameters import (
@@ -147,7 +148,7 @@ def _unfit(stored: Any) -> str | None:
         return f"the parameters are a {type(stored).__name__}, not a table"
     for key, value in stored.items():
         number = str(key)
-        row = PARAMETERS.get(int(number)) if number.isascii() and number.isdigit() else None  # (isdigit: also ²)
+        row = PARAMETERS.get(int(number)) if ascii_digits(number) else None
         if row is None or not row.saved:
             return f"P{key} is no parameter PSAVE stores"
         if not _finite(value):

@@ -22,7 +22,7 @@ import msgspec
 
 from devsim.core.kit import Command as KitCommand
 from devsim.core.kit import Table
-from devsim.core.points import ascii_upper
+from devsim.core.points import ascii_digits, ascii_upper
 
 __all__ = [
     "LABEL_MAX",
@@ -89,11 +89,6 @@ _LISTP_ARG = r"[0-9]*\.[0-9]*|[0-9]+"
 def _pattern(text: str) -> re.Pattern[str]:
     """One of the patterns above, compiled at its first use rather than by every start (issue 31)."""
     return re.compile(text)
-
-
-def _digits(text: str) -> bool:
-    """ASCII decimal digits only ('²' and other Unicode digits are not numbers here)."""
-    return text != "" and text.isascii() and text.isdigit()
 
 
 class NeedMore(Exception):
@@ -274,7 +269,7 @@ class _Cursor:
         match = _pattern(_SIGNED_NUMBER if signed else _NUMBER).match(self.text, self.pos)
         if match is not None and match.end() >= len(self.text) and not self.final:
             raise NeedMore
-        if match is None or not any(_digits(ch) for ch in match.group()):
+        if match is None or not any(ascii_digits(ch) for ch in match.group()):
             raise SyntaxFault(errno, start)
         self.pos = match.end()
         self.peek()  # a number at the end of the text may still grow
@@ -296,17 +291,17 @@ def _address(cur: _Cursor, errno: int = 61) -> Address:
     """An operand naming state (parameter, alias, input/output bit)."""
     start = cur.pos
     c = cur.peek()
-    if c == "P" and _digits(cur.peek(2)[1:]):
+    if c == "P" and ascii_digits(cur.peek(2)[1:]):
         cur.pos += 1
         number = cur.integer(13)
         return Address("P", number, cur.upper[start : cur.pos])
-    if c in ("I", "J", "O") and _digits(cur.peek(2)[1:]):
+    if c in ("I", "J", "O") and ascii_digits(cur.peek(2)[1:]):
         cur.pos += 1
         bit = cur.integer(errno)
         return Address(c, bit, cur.upper[start : cur.pos])
     word = cur.word()
     if word in ALIAS_WORDS:
-        if word == "IN" and _digits(cur.peek()):
+        if word == "IN" and ascii_digits(cur.peek()):
             value = cur.integer(errno)  # legacy IN0..IN255 means IN=value
             return Address("IN", value, cur.upper[start : cur.pos])
         return Address("alias", word, word)
@@ -316,7 +311,7 @@ def _address(cur: _Cursor, errno: int = 61) -> Address:
 
 def _operand(cur: _Cursor, errno: int = 61, signed: bool = True) -> Operand:
     c = cur.peek()
-    if _digits(c) or c == "." or (signed and c == "-"):
+    if ascii_digits(c) or c == "." or (signed and c == "-"):
         return cur.number(errno, signed=signed)
     return _address(cur, errno)
 
@@ -373,11 +368,11 @@ def _statement(cur: _Cursor) -> Statement:  # noqa: C901 - one branch per statem
         cur.skip_spaces()
         value = cur.number(49, signed=True)
         return Change(cur.text[start : cur.pos], value)
-    if c == "L" and (_digits(cur.peek(2)[1:]) or cur.peek(2) == "L "):
+    if c == "L" and (ascii_digits(cur.peek(2)[1:]) or cur.peek(2) == "L "):
         if cur.peek(2) == "L ":
             cur.pos += 1
             cur.skip_spaces()
-            if not _digits(cur.peek()):
+            if not ascii_digits(cur.peek()):
                 raise SyntaxFault(21, start)
         else:
             cur.pos += 1
@@ -391,7 +386,7 @@ def _statement(cur: _Cursor) -> Statement:  # noqa: C901 - one branch per statem
         cur.pos += 3
         return Trace(cur.text[start : cur.pos], query=True)
 
-    if c in ("P", "I", "J", "O") and _digits(cur.peek(2)[1:]):
+    if c in ("P", "I", "J", "O") and ascii_digits(cur.peek(2)[1:]):
         return _assign_or_query(cur, start, _address(cur))
     word = cur.word()
     if word is None:
@@ -463,7 +458,7 @@ def _gosub(cur: _Cursor, start: int, word: str) -> Statement:
 def _run(cur: _Cursor, start: int, word: str) -> Statement:
     save = cur.pos
     cur.skip_spaces()
-    if _digits(cur.peek()):
+    if ascii_digits(cur.peek()):
         label = cur.integer(37)
         return Run(cur.text[start : cur.pos], label)
     cur.pos = save
