@@ -157,6 +157,17 @@ def test_a_dead_process_socket_is_ignored_and_removed(runtime: Path) -> None:
         assert sim.interrupt() == 0
 
 
+def test_a_socket_whose_name_ends_in_no_ascii_number_is_no_simulator(runtime: Path) -> None:
+    """A stray socket ``x-².sock`` in the directory: ``str.isdigit`` takes '²' and ``int`` does
+    not, so ``devsim ps`` ended in a ValueError traceback."""
+    runtime.mkdir(mode=0o700)
+    with socket.socket(socket.AF_UNIX) as sock:
+        sock.bind(str(runtime / "x-\u00b2.sock"))
+        listed = devsim("ps", "--json")
+    assert listed.returncode == 0 and "Traceback" not in listed.stderr, listed.stderr
+    assert json.loads(listed.stdout) == []
+
+
 def test_an_unsafe_runtime_dir_is_refused(runtime: Path, tmp_path: Path) -> None:
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir(mode=0o700)

@@ -15,7 +15,7 @@ import msgspec
 
 from devsim.core.framing import Framing
 from devsim.core.parameters import ParameterTable
-from devsim.core.points import Point, PointType, UnknownName, parse_bool
+from devsim.core.points import Point, PointType, UnknownName, ascii_digits, parse_bool
 from devsim.core.signals import SignalBank, SignalKind
 
 __all__ = [
@@ -139,7 +139,7 @@ def parse_port_default(text: str) -> tuple[str, int]:
     """``"udp:5050"`` → ``("udp", 5050)``; the scheme one of :data:`DEFAULT_SCHEMES`, the port
     1 … 65535."""
     scheme, sep, number = text.partition(":")
-    if not sep or scheme not in DEFAULT_SCHEMES or not number.isdigit() or not 0 < int(number) <= 65535:
+    if not sep or scheme not in DEFAULT_SCHEMES or not ascii_digits(number) or not 0 < int(number) <= 65535:
         raise ValueError(f"a port default is udp:PORT or tcp:PORT (PORT 1..65535), not {text!r}")
     return scheme, int(number)
 

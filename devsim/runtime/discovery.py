@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 import msgspec
 
+from devsim.core.points import ascii_digits
 from devsim.runtime.control import ControlAddressError, parse_address
 
 if TYPE_CHECKING:
@@ -176,7 +177,7 @@ def control_file(name: str, pid: int | None = None) -> str:
 # -- the running simulators ---------------------------------------------------------------------
 def _pid_of(path: Path) -> int | None:
     _, _, tail = path.stem.rpartition("-")
-    return int(tail) if tail.isdigit() else None
+    return int(tail) if ascii_digits(tail) else None  # ('x-².sock': isdigit, not int)
 
 
 def process_alive(pid: int | None) -> bool:
@@ -249,7 +250,7 @@ def listing(simulators: list[Simulator]) -> str:
 
 def is_address(text: str) -> bool:
     """Whether ``text`` is a control address rather than a simulator's name."""
-    if text.startswith(("unix:", "tcp:", "/", "[")) or text.isdigit():  # a bare number is a port
+    if text.startswith(("unix:", "tcp:", "/", "[")) or ascii_digits(text):  # a bare number is a port
         return True
     try:
         parse_address(text)

@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from devsim.core.console import say, stop_on_signals, warn
+from devsim.core.points import ascii_digits
 from devsim.observe.live_log import DEFAULT_LEVEL, level_of
 from devsim.scenario.schema import PlantSpec
 
@@ -77,7 +78,7 @@ def sweep_stale(root: str | None = None) -> None:
 
     for path in Path(root or tempfile.gettempdir()).glob(f"{_DIRECTORY}*"):
         pid, dash, _ = path.name.removeprefix(_DIRECTORY).partition("-")
-        if dash and pid.isdigit() and not process_alive(int(pid)):
+        if dash and ascii_digits(pid) and not process_alive(int(pid)):
             shutil.rmtree(path, ignore_errors=True)
 
 

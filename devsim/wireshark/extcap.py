@@ -28,6 +28,7 @@ from collections.abc import Sequence
 from typing import Any, TextIO
 
 from devsim import __version__
+from devsim.core.points import ascii_digits
 from devsim.runtime.discovery import Simulator, running
 from devsim.transports.pcap import LINKTYPE_IPV4, LINKTYPE_USER0, PcapTracer, SerialPcapTracer
 
@@ -84,7 +85,7 @@ def parse_interface(name: str) -> tuple[int, str]:
     """``devsim-4242-cnc.v7`` → ``(4242, "cnc.v7")``; ``ValueError`` for any other name."""
     prefix, _, rest = name.partition("-")
     pid, _, key = rest.partition("-")
-    if prefix != PREFIX or not pid.isdigit() or not key:
+    if prefix != PREFIX or not ascii_digits(pid) or not key:
         raise ValueError(f"not a devsim capture interface: {name!r} (they are {PREFIX}-PID-PORT)")
     return int(pid), key
 
