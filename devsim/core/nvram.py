@@ -196,7 +196,8 @@ class NonVolatileMemory:
 
     def put(self, section: str, data: Any) -> None:
         """Store ``data`` as ``section`` and save the image; data the file cannot hold (NaN,
-        infinity) raises :class:`PoisonedMemory` and the section keeps what it held."""
+        infinity, text with a lone surrogate) raises :class:`PoisonedMemory` and the section keeps
+        what it held."""
         try:
             copied = _copied(data)
         except ValueError as exc:
@@ -231,7 +232,10 @@ class NonVolatileMemory:
         # with indent=1 and sorted keys does, in C: a whole-memory save of a full POSELESTA
         # program memory took 13 ms in json's pure-Python indenting encoder)
         image = self._image if self.kind is None else {KIND_KEY: self.kind, **self._image}
-        data = msgspec.json.format(msgspec.json.encode(image, order="sorted"), indent=1)
+        try:
+            data = msgspec.json.format(msgspec.json.encode(image, order="sorted"), indent=1)
+        except UnicodeEncodeError as exc:  # (a lone surrogate: once in the image, no write succeeded again)
+            raise PoisonedMemory(f"{self.path}: refusing to save text that is no text ({exc.object!r:.40})") from None
         try:
             self._save(data)
         except OSError as exc:

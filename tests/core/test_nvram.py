@@ -65,6 +65,8 @@ def test_nothing_non_finite_is_written(tmp_path: Path) -> None:
         memory.put("params", {"V": math.nan})
     with pytest.raises(PoisonedMemory):
         memory.put("program", [math.inf])
+    with pytest.raises(PoisonedMemory):  # (a lone surrogate: UnicodeEncodeError, and every later save failed)
+        memory.put("program", ["\udcff"])
     # the refused values are not kept either: later saves go on, and the sections hold what they held
     assert memory.get("params") == {"V": 1.5} and memory.sections() == ["params"]
     memory.put("speed", 7)
