@@ -54,11 +54,14 @@ _RESERVE: list[int] = []
 
 
 def fd_limit() -> int:
-    """The soft limit on open descriptors of this process."""
-    import resource  # (asked when ports run short or a plant is planned, not by every start)
+    """The soft limit on open descriptors of this process.
 
-    soft, _hard = resource.getrlimit(resource.RLIMIT_NOFILE)
-    return soft if soft != resource.RLIM_INFINITY else 1 << 20
+    Asked through ``sysconf`` (``getrlimit(RLIMIT_NOFILE)``'s soft limit), not the ``resource``
+    module: that is loaded from a file, and the limit is asked when the descriptors have run out
+    (an ``import resource`` there raised ImportError in the loop's exception handler, a traceback
+    for every accept that failed); nor at start (a plain run does not need it)."""
+    soft = os.sysconf("SC_OPEN_MAX")
+    return soft if soft > 0 else 1 << 20
 
 
 def capacity(limit: int | None = None) -> int:

@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from devsim.transports import fdlimit
+from tests.support.process import collect_lines, next_match, wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 pytestmark = pytest.mark.skipif(os.name != "posix", reason="rlimits")
@@ -82,3 +83,52 @@ def test_up_serves_what_fits_and_says_what_does_not(tmp_path: Path) -> None:
         proc.terminate()
         _out, err = proc.communicate(timeout=20)
     assert "Traceback" not in err and len(err) < 2000
+
+
+def test_a_run_out_of_descriptors_by_control_clients_says_so_in_one_line(tmp_path: Path) -> None:
+    """Idle control clients take every descriptor of a plain ``devsim run`` (which has not asked
+    its limit at start): the accept that fails is reported in one line, and when they leave the
+    port serves again.  Before, the report's ``import resource`` could not open its file either:
+    'Unhandled error in exception handler', an ImportError traceback for every failed accept
+    (1.4 MB of stderr in four seconds)."""
+    control = tmp_path / "c.sock"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "devsim", "run", "echo", "--tcp", "0", "--control", f"unix:{control}"],
+        cwd=ROOT, env=_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        text=True, preexec_fn=_limit(48),
+    )
+    out, err = collect_lines(proc.stdout), collect_lines(proc.stderr)
+    clients: list[socket.socket] = []
+    seen: list[str] = []
+    try:
+        line = next_match(out, lambda text: ": tcp " in text, 30, "the port line")
+        host, port = line.split()[-1].removeprefix("socket://").rsplit(":", 1)
+        for _ in range(60):  # more than the limit leaves (they wait in the listen backlog)
+            client = socket.socket(socket.AF_UNIX)
+            client.settimeout(5)
+            client.connect(str(control))
+            clients.append(client)
+        said = next_match(err, lambda text: "descriptors" in text or "Traceback" in text or "rror" in text, 10,
+                          "the report", seen)
+        assert said.startswith("devsim: out of file descriptors (limit 48)"), said
+        for client in clients:
+            client.close()
+
+        def echoes() -> bool:
+            with socket.create_connection((host, int(port)), timeout=5) as device:
+                try:
+                    device.sendall(b"ping")
+                    return device.recv(4) == b"ping"
+                except ConnectionResetError:
+                    return False  # refused (shed) while the closes are still being seen
+
+        wait_until(echoes, "the port serving again", 10.0, 0.1)
+    finally:
+        for client in clients:
+            client.close()
+        proc.terminate()
+        proc.wait(20)
+    while (rest := err.get(timeout=10)) is not None:
+        seen.append(rest)
+    assert not [text for text in seen if "Traceback" in text or "Unhandled" in text]
+    assert len("\n".join(seen)) < 2000
