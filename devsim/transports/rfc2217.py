@@ -35,7 +35,7 @@ from devsim.core.device import SerialSettings
 from devsim.transports.base import Endpoint
 from devsim.transports.tcp import TcpTransport, _Session
 
-__all__ = ["NegotiatedPort", "Rfc2217Transport"]
+__all__ = ["MAX_SUBOPTION", "NegotiatedPort", "Rfc2217Transport"]
 
 
 class NegotiatedPort:
@@ -123,6 +123,12 @@ class NegotiatedPort:
 _ASK_CURRENT = {SET_BAUDRATE: bytes(4), SET_DATASIZE: bytes(1), SET_PARITY: bytes(1), SET_STOPSIZE: bytes(1)}
 
 
+#: Bytes of one subnegotiation kept at most (RFC 2217's longest is a signature text; a setting is
+#: 2 + 4 bytes).  [SIM-CHOICE] a bound: a client's IAC SB with no IAC SE after it kept every byte
+#: it sent from then on.
+MAX_SUBOPTION = 256
+
+
 class _Manager(PortManager):
     """pyserial's server side, safe from a client's malformed subnegotiation: a parity or stop
     size code RFC 2217 does not define, a value cut short.  pyserial catches only ``ValueError``,
@@ -130,19 +136,25 @@ class _Manager(PortManager):
     the filter's state was left inside the subnegotiation.  Such a setting is answered as RFC 2217
     answers one the server does not take, with the current value; a mask cut short is ignored.
     An IAC SE outside a subnegotiation ends nothing and is dropped (pyserial's filter made
-    ``bytes(None)`` of it, a TypeError out of the filter)."""
+    ``bytes(None)`` of it, a TypeError out of the filter).  A subnegotiation keeps its first
+    :data:`MAX_SUBOPTION` bytes; the rest up to its IAC SE is dropped."""
 
     def filter(self, data: bytes) -> Iterator[bytes]:
         start = 0
         while (end := data.find(SE, start)) >= 0:
             # (the filter's state before this SE decides: IAC seen, no subnegotiation open)
-            yield from super().filter(data[start:end])
+            yield from self._bounded(data[start:end])
             if self.mode == M_IAC_SEEN and self.suboption is None:
                 self.mode = M_NORMAL
             else:
                 yield from super().filter(SE)
             start = end + 1
-        yield from super().filter(data[start:])
+        yield from self._bounded(data[start:])
+
+    def _bounded(self, data: bytes) -> Iterator[bytes]:
+        yield from super().filter(data)
+        if self.suboption is not None and len(self.suboption) > MAX_SUBOPTION:
+            del self.suboption[MAX_SUBOPTION:]
 
     def _telnet_process_subnegotiation(self, suboption: bytes) -> None:
         try:

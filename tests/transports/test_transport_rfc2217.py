@@ -10,7 +10,7 @@ import serial
 from devsim.core.clock import RealClock
 from devsim.core.device import SerialSettings
 from devsim.transports.line import Line, garble
-from devsim.transports.rfc2217 import Rfc2217Transport
+from devsim.transports.rfc2217 import MAX_SUBOPTION, NegotiatedPort, Rfc2217Transport, _Manager
 from tests.transports.transport_helpers import EchoTarget, Recorder
 
 # pyserial's own client thread uses deprecated threading setters.
@@ -136,3 +136,21 @@ async def test_a_malformed_setting_is_answered_with_the_current_one(echo: Record
         await writer.wait_closed()
     finally:
         await transport.close()
+
+
+def test_a_subnegotiation_that_does_not_end_keeps_at_most_max_suboption_bytes() -> None:
+    """IAC SB and then bytes with no IAC SE: the subnegotiation keeps its first MAX_SUBOPTION
+    bytes, and its IAC SE still ends it (before: every byte the client sent after the IAC SB was
+    kept, a megabyte here)."""
+    sent: list[bytes] = []
+
+    class Connection:
+        write = staticmethod(sent.append)
+
+    port = NegotiatedPort(SerialSettings(9600), lambda: None)
+    manager = _Manager(port, Connection())
+    set_baudrate = b"\xff\xfa\x2c\x01" + (19200).to_bytes(4, "big")
+    assert list(manager.filter(set_baudrate + b"x" * 1_000_000)) == []
+    assert manager.suboption is not None and len(manager.suboption) <= MAX_SUBOPTION
+    assert b"".join(manager.filter(b"\xff\xf0#ON\r")) == b"#ON\r"  # ended: data again
+    assert port.baudrate == 19200
