@@ -122,6 +122,9 @@ class SocketcandServer:
                         bus.send(message)
         except ConnectionError:
             return  # the client reset the connection: it is gone, as after an orderly close
+        except asyncio.CancelledError:
+            return  # the server closes (close()): the session ends, not cancelled (asyncio 3.11's
+            # stream callback asks a cancelled task for its exception: a traceback per client)
         finally:
             if forward is not None:
                 forward.cancel()

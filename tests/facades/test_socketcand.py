@@ -93,6 +93,30 @@ def test_devsim_run_serves_a_canopen_node() -> None:
         sim.stop()
 
 
+def test_a_client_still_connected_when_the_simulator_stops_leaves_no_traceback() -> None:
+    """The server's close cancels the sessions still open; a session ends quietly.  (Before:
+    asyncio's stream callback asked the cancelled task for its exception, and every client still
+    connected left an 'Exception in callback ... CancelledError' traceback on stderr.)"""
+    import socket
+
+    from tests.test_cli import Sim
+
+    sim = Sim("sers", "--pty", "--canopen", "7@127.0.0.1:0")
+    try:
+        seen = sim.read_until("sers.canopen:")
+        host, _, port = seen["sers.canopen"].split()[1].rpartition(":")
+        client = socket.create_connection((host, int(port)), timeout=5)
+        assert client.recv(100) == b"< hi >"
+        client.sendall(b"< open can0 >")
+        assert client.recv(100) == b"< ok >"
+        client.sendall(b"< rawmode >")
+        assert client.recv(100).startswith(b"< ok >")
+    finally:
+        status, err = sim.stop()
+    client.close()
+    assert "Traceback" not in err and status == 0, err
+
+
 def _vcan0() -> bool:
     """Whether this machine has a SocketCAN interface vcan0 (most CI machines have no PF_CAN)."""
     import socket
