@@ -89,8 +89,9 @@ def ascii_digits(text: str) -> bool:
 
 def ascii_upper(text: str) -> str:
     """``text`` with a-z in upper case, one character for one, as the controllers' firmware does:
-    ``str.upper`` also makes ß SS, ſ (U+017F) S, ı (U+0131) I and µ (latin-1 B5h) the Greek Μ."""
-    return text.translate(_ASCII_UPPER)
+    ``str.upper`` also makes ß SS, ſ (U+017F) S, ı (U+0131) I and µ (latin-1 B5h) the Greek Μ.
+    (ASCII text takes ``str.upper``, the same there and ten times as fast as the table.)"""
+    return text.upper() if text.isascii() else text.translate(_ASCII_UPPER)
 
 
 def parse_bool(value: Any) -> bool:
