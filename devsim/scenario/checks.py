@@ -276,21 +276,17 @@ def shared_endpoints(parts: Any) -> list[Problem]:
             owners.append((where, device.transport_of(port)))
         if device.modbus is not None:  # the facade's own pty link or TCP port
             owners.append((("devices", i, "modbus"), TransportSpec(pty=device.modbus.rtu, tcp=device.modbus.tcp)))
-        canopen = device.canopen
-        if canopen is not None and not canopen.network.startswith("socketcan:") \
-                and (device.part, canopen.network) not in networks:
-            networks.add((device.part, canopen.network))
-            host, _, number = canopen.network.rpartition(":")
-            owners.append((("devices", i, "canopen", "network"),
-                           TransportSpec(tcp=TcpSpec(port=int(number), host=host or "127.0.0.1"))))
+        server = device.canopen.server if device.canopen is not None else None
+        if server is not None and (device.part, device.canopen.network) not in networks:
+            networks.add((device.part, device.canopen.network))
+            owners.append((("devices", i, "canopen", "network"), TransportSpec(tcp=TcpSpec(port=server[1],
+                                                                                           host=server[0]))))
     owners += [(("buses", i, "transport"), bus.transport) for i, bus in enumerate(parts.buses) if bus is not None]
     if parts.opcua_server is not None:
         owners.append((("opcua", "port"), TransportSpec(tcp=TcpSpec(port=parts.opcua_server.port,
                                                                      host=parts.opcua_server.host))))
     if parts.mqtt is not None and parts.mqtt.url is not None:
-        from devsim.facades.mqtt_topics import parse_url
-
-        host, number = parse_url(parts.mqtt.url)
+        host, number = parts.mqtt.url.address
         owners.append((("mqtt", "url"), TransportSpec(tcp=TcpSpec(port=number, host=host))))
     seen: dict[tuple[str, ...], tuple[int | str, ...]] = {}
     problems: list[Problem] = []

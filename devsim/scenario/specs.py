@@ -99,6 +99,13 @@ class MqttUrl(str):
         parse_url(value)
         return cls(value)
 
+    @property
+    def address(self) -> tuple[str, int]:
+        """The broker's host and port."""
+        from devsim.facades.mqtt_topics import parse_url
+
+        return parse_url(self)
+
 
 # -- ports and facades ----------------------------------------------------------------------
 class PtySpec(Typed):
@@ -188,11 +195,19 @@ class CanopenSpec(Typed):
         "[HOST:]PORT of a socketcand server, or socketcan:CHANNEL")] = "127.0.0.1:29536"
 
     def __post_init__(self) -> None:
-        if not self.network.startswith("socketcan:"):
-            host, _, port = self.network.rpartition(":")
+        if self.server is not None:
+            host, port = self.server
             _check_host(host)
-            if int(port) > 65535:  # (OverflowError's traceback from the bind in devsim up)
+            if port > 65535:  # (OverflowError's traceback from the bind in devsim up)
                 raise ValueError(f"the socketcand port is 0 … 65535, not {port}")
+
+    @property
+    def server(self) -> tuple[str, int] | None:
+        """The socketcand server's host and port (``None`` on a SocketCAN channel)."""
+        if self.network.startswith("socketcan:"):
+            return None
+        host, _, port = self.network.rpartition(":")
+        return host or "127.0.0.1", int(port)
 
 
 class MqttSpec(Typed):
