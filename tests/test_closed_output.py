@@ -30,6 +30,7 @@ from typing import TextIO
 import pytest
 import serial
 
+from devsim.core.backlog import CAP
 from tests.support.process import ROOT, collect_lines, devsim_env, next_match, stop, wait_until
 from tests.test_motion_log import rows_of
 
@@ -295,6 +296,10 @@ def test_a_simulator_whose_log_nobody_reads_keeps_answering(tmp_path: Path) -> N
             log = bytearray()
             reader = threading.Thread(target=_read_into, args=(proc.stderr.fileno(), log), daemon=True)
             reader.start()  # someone reads at last: what waited goes out, then the lines after
+            # Until the reader has taken more than the pipe held, the backlog may still be full and
+            # the next request's log line dropped (its write first sends what waits, but only into
+            # room the reader made): a loaded machine ran the request before the reader's thread.
+            wait_until(lambda: len(log) >= CAP + select.PIPE_BUF, "the waiting lines going out", timeout=30)
             host.write(b"#P134!\r")
             assert host.read_until(b"\n\r").endswith(b"\n\r")
             wait_until(lambda: b'main \xe2\x86\x92 "#P134!\\r"' in log, "the last request's log line", timeout=30)
