@@ -7,20 +7,44 @@ The protocol (socketcand's ``doc/protocol.md``, as python-can's client uses it):
 ``< hi >``; the client asks ``< open CHANNEL >`` and ``< rawmode >``, each answered ``< ok >``;
 then the server sends every frame on the bus as ``< frame ID SECONDS.MICROS HEXDATA >`` and the
 client sends ``< send ID LENGTH B0 B1 … >``.  Loopback unless a host is named.  Extra ``[can]``.
+
+A client that does not read costs at most :data:`CLIENT_QUEUE` frames (:class:`ClientQueue`): the
+frames that come while its queue is full are dropped for it alone [SIM-CHOICE], as socketcand's
+``state_raw.c`` loses them (it blocks in ``send()`` to that client while its CAN_RAW socket's
+receive buffer fills, and the kernel drops what comes then); every other client and the nodes get
+every frame.  A client that sends faster than a receiver on the bus (a node) takes the frames is
+not read while that receiver has more than :data:`BUS_BACKLOG` frames waiting [SIM-CHOICE]: TCP's
+flow control holds it back, as a full transmit queue holds back a CAN controller, and no frame is
+lost.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import threading
+from collections import deque
 
 import can
+from can.interfaces import virtual
 
-__all__ = ["SocketcandServer", "frame_text", "parse_send", "split_commands"]
+__all__ = ["BUS_BACKLOG", "CLIENT_QUEUE", "ClientQueue", "SocketcandServer", "frame_text", "parse_send", "split_commands"]
 
 #: The longest text kept while a command's closing ``>`` has not come (a frame to send is about
 #: 40 characters): what came before it in a longer run is dropped, never stored or scanned again.
 _LONGEST = 4096
+
+#: The most frames kept for one raw-mode client that has not taken them yet [SIM-CHOICE]: more than
+#: a second of a 1 Mbit/s CAN bus at full load (about 8,000 frames), about 0.5 MB of text.
+CLIENT_QUEUE = 10_000
+
+#: The most frames a receiver on the virtual bus (a node's bus, a session's) may have waiting before
+#: the clients' sessions stop reading what their clients send [SIM-CHOICE].
+BUS_BACKLOG = 1_000
+
+#: How often a held-back session looks at the receivers' queues again (s): no device time, a thread's
+#: progress (python-can's virtual bus says nothing when a queue is read).
+_BACKLOG_POLL = 0.002
 
 
 def frame_text(message: can.Message) -> bytes:
@@ -57,13 +81,76 @@ def split_commands(buffer: str) -> tuple[list[str], str]:
     return commands, buffer[-_LONGEST:]
 
 
-class SocketcandServer:
-    """Serves the virtual bus ``channel`` to socketcand clients on ``host:port``."""
+class ClientQueue(can.Listener):
+    """The frames one raw-mode client has not been sent yet, as the server's text: filled in the
+    session's notifier thread, taken by its writer in the event loop.  At most ``limit`` frames:
+    one that comes while it is full is dropped (counted in :attr:`dropped`) [SIM-CHOICE] (see the
+    module's docstring).  The loop is woken once when the queue stops being empty, not once per
+    frame (a wake-up per frame filled asyncio's ready queue and its self-pipe)."""
 
-    def __init__(self, channel: str, host: str = "127.0.0.1", port: int = 29536) -> None:
+    def __init__(self, loop: asyncio.AbstractEventLoop, limit: int = CLIENT_QUEUE) -> None:
+        self.limit = limit
+        self.dropped = 0  #: frames dropped for this client
+        self.peak = 0  #: the most frames it held at once
+        self._loop = loop
+        self._frames: deque[bytes] = deque()
+        self._lock = threading.Lock()
+        self._ready = asyncio.Event()
+
+    def __len__(self) -> int:
+        return len(self._frames)
+
+    def on_message_received(self, msg: can.Message) -> None:
+        text = frame_text(msg)
+        with self._lock:
+            if len(self._frames) >= self.limit:
+                self.dropped += 1
+                return
+            self._frames.append(text)
+            self.peak = max(self.peak, len(self._frames))
+            first = len(self._frames) == 1
+        if first:
+            with contextlib.suppress(RuntimeError):  # (the loop closed: the session is gone)
+                self._loop.call_soon_threadsafe(self._ready.set)
+
+    async def take(self) -> bytes:
+        """Every frame queued, as one text (waits for one)."""
+        await self._ready.wait()
+        with self._lock:
+            self._ready.clear()
+            frames = b"".join(self._frames)
+            self._frames.clear()
+        return frames
+
+
+class SocketcandServer:
+    """Serves the virtual bus ``channel`` to socketcand clients on ``host:port``; each raw-mode
+    client's frames wait in a :class:`ClientQueue` of ``client_queue`` frames."""
+
+    def __init__(self, channel: str, host: str = "127.0.0.1", port: int = 29536,
+                 client_queue: int = CLIENT_QUEUE) -> None:
         self.channel, self.host, self.port = channel, host, port
+        self.client_queue = client_queue
         self._server: asyncio.AbstractServer | None = None
         self._sessions: set[asyncio.Task[None]] = set()
+        self._queues: list[ClientQueue] = []
+
+    def backlog(self) -> int:
+        """The most frames one receiver on the virtual bus (python-can keeps a queue per bus) has
+        not taken yet."""
+        with virtual.channels_lock:
+            queues = list(virtual.channels.get(self.channel, ()))
+        return max((queue.qsize() for queue in queues), default=0)
+
+    async def _bus_free(self) -> None:
+        """Wait while a receiver has more than :data:`BUS_BACKLOG` frames waiting."""
+        while self.backlog() > BUS_BACKLOG:
+            await asyncio.sleep(_BACKLOG_POLL)
+
+    @property
+    def queues(self) -> list[ClientQueue]:
+        """The queues of the clients in raw mode now, in the order they asked for it."""
+        return list(self._queues)
 
     @property
     def address(self) -> str:
@@ -90,6 +177,7 @@ class SocketcandServer:
         self._sessions.add(task)
         bus: can.BusABC | None = None
         notifier: can.Notifier | None = None
+        queue: ClientQueue | None = None
         forward: asyncio.Task[None] | None = None
         try:
             writer.write(b"< hi >")
@@ -108,8 +196,9 @@ class SocketcandServer:
                             writer.write(b"< ok >")
                         elif words == ["rawmode"]:
                             bus = can.Bus(interface="virtual", channel=self.channel, receive_own_messages=False)
-                            queue = can.AsyncBufferedReader()
-                            notifier = can.Notifier(bus, [queue], loop=asyncio.get_running_loop())
+                            queue = ClientQueue(asyncio.get_running_loop(), self.client_queue)
+                            self._queues.append(queue)
+                            notifier = can.Notifier(bus, [queue])
                             raw = True
                             writer.write(b"< ok >")
                             forward = asyncio.get_running_loop().create_task(self._forward(queue, writer))
@@ -120,6 +209,8 @@ class SocketcandServer:
                     message = parse_send(command)
                     if message is not None and bus is not None:
                         bus.send(message)
+                if raw:
+                    await self._bus_free()
         except ConnectionError:
             return  # the client reset the connection: it is gone, as after an orderly close
         except asyncio.CancelledError:
@@ -134,14 +225,15 @@ class SocketcandServer:
                 notifier.stop()
             if bus is not None:
                 bus.shutdown()
+            if queue is not None:
+                self._queues.remove(queue)
             writer.close()
             self._sessions.discard(task)
 
-    async def _forward(self, queue: can.AsyncBufferedReader, writer: asyncio.StreamWriter) -> None:
+    async def _forward(self, queue: ClientQueue, writer: asyncio.StreamWriter) -> None:
         try:
             while not writer.is_closing():
-                message = await queue.get_message()
-                writer.write(frame_text(message))
-                await writer.drain()
+                writer.write(await queue.take())  # (a client that does not read: drain() waits,
+                await writer.drain()  # and its queue fills up to its limit)
         except (ConnectionError, asyncio.CancelledError):
             return
