@@ -4,6 +4,7 @@ node's identity and a point over SDO, writes a point, and sees the heartbeat."""
 
 from __future__ import annotations
 
+import socket
 import subprocess
 import sys
 import time
@@ -262,3 +263,71 @@ def test_resets_and_short_sdo_requests_neither_stop_the_node_nor_flood_stderr() 
         errors.append(text)
     assert not any("Traceback" in text for text in errors), errors[:20]
     assert sum("canopen:" in text for text in errors) <= 4, errors
+
+
+def _raw_client(port: int, receive_buffer: int | None = None) -> socket.socket:
+    """A TCP client of the socketcand server in raw mode (``receive_buffer``: its SO_RCVBUF)."""
+    client = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    if receive_buffer is not None:
+        client.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, receive_buffer)
+    client.settimeout(10)
+    client.connect(("127.0.0.1", port))
+    received = b""
+    for command, reply in ((b"", b"< hi >"), (b"< open can0 >", b"< ok >"), (b"< rawmode >", b"< ok >")):
+        client.sendall(command)
+        while reply not in received:
+            received += client.recv(100)
+        received = b""
+    return client
+
+
+def test_a_client_that_does_not_read_costs_a_bounded_queue_and_a_reader_gets_every_frame() -> None:
+    """One raw-mode client never reads, another floods 20,000 frames, a third reads them: the
+    frames kept for the one that does not read never exceed its queue's limit (the rest are dropped
+    for it alone), and the reader receives every frame in order.  (Before: the session kept every
+    frame for a client that does not read, in an unbounded queue: devsim run sers --canopen grew
+    from 37 to 173 MB in 25 s.)  The flood goes in chunks of 100, each sent when the reader has the
+    one before, so the reader is never slow."""
+    import re
+
+    channel = f"devsim-{uuid.uuid4().hex}"
+    runtime = Runtime().start()
+    slave = canopen.Network()
+    slave.connect(interface="virtual", channel=channel)
+    server = SocketcandServer(channel, port=0, client_queue=100)
+    clients: list[socket.socket] = []
+    try:
+        CanopenFacade(runtime.add_device("sers", "sers", {}), 5, call=runtime.call).attach(slave)
+        runtime.run(server.start())
+        idle = _raw_client(server.port, receive_buffer=4096)
+        reader, flooder = _raw_client(server.port), _raw_client(server.port)
+        clients += [idle, reader, flooder]
+        idle_queue = server.queues[0]
+        frame = re.compile(rb"< frame 123 \d+\.\d+ ([0-9A-F]{8}) >")
+        seen: list[int] = []
+        text = b""
+        for start in range(0, 20_000, 100):
+            flooder.sendall(b"".join(b"< send 123 4 %X %X %X %X >" % tuple(n.to_bytes(4, "big"))
+                                     for n in range(start, start + 100)))
+            while len(seen) < start + 100:
+                chunk = reader.recv(65536)
+                assert chunk, "the server closed the reader's connection"
+                text += chunk
+                frames = frame.findall(text)
+                seen += [int(data, 16) for data in frames]
+                text = text[text.rfind(b">") + 1:] if frames else text
+        assert seen == list(range(20_000))
+        assert idle_queue.peak <= 100 and len(idle_queue) <= 100
+        assert idle_queue.dropped > 0  # (it did fill up: more came than the idle client's socket takes)
+        assert server.queues[1].dropped == 0, idle_queue.dropped
+        reader.sendall(b"< send 605 8 40 00 10 00 00 00 00 00 >")  # the node still answers: device type
+        while b"< frame 585 " not in text or b" 43001000" not in text:
+            chunk = reader.recv(65536)
+            assert chunk, "the server closed the reader's connection"
+            text += chunk
+    finally:
+        for client in clients:
+            client.close()
+        runtime.run(server.close())
+        slave.disconnect()
+        runtime.stop()
