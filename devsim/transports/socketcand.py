@@ -140,6 +140,7 @@ class SocketcandServer:
         self._server: asyncio.AbstractServer | None = None
         self._sessions: set[asyncio.Task[None]] = set()
         self._queues: list[ClientQueue] = []
+        self.backlog_peak = 0  #: the largest :meth:`backlog` a session saw after sending its frames
 
     def backlog(self) -> int:
         """The most frames one receiver on the virtual bus (python-can keeps a queue per bus) has
@@ -149,9 +150,14 @@ class SocketcandServer:
         return max((queue.qsize() for queue in queues), default=0)
 
     async def _bus_free(self) -> None:
-        """Wait while a receiver has more than :data:`BUS_BACKLOG` frames waiting."""
-        while self.backlog() > BUS_BACKLOG:
+        """Wait while a receiver has more than :data:`BUS_BACKLOG` frames waiting (called after a
+        session sent what it read: what clients send reaches the receivers' queues only then, so
+        :attr:`backlog_peak` is the most a node's queue held of it)."""
+        backlog = self.backlog()
+        self.backlog_peak = max(self.backlog_peak, backlog)
+        while backlog > BUS_BACKLOG:
             await asyncio.sleep(_BACKLOG_POLL)
+            backlog = self.backlog()
 
     @property
     def queues(self) -> list[ClientQueue]:

@@ -331,3 +331,53 @@ def test_a_client_that_does_not_read_costs_a_bounded_queue_and_a_reader_gets_eve
         runtime.run(server.close())
         slave.disconnect()
         runtime.stop()
+
+
+def test_a_client_that_sends_faster_than_the_node_answers_is_held_back_and_gets_every_answer() -> None:
+    """A raw-mode client sends 4,000 SDO uploads at once: the node's queue on the bus never holds
+    more than BUS_BACKLOG frames and one read's worth (the session stops reading the client while
+    it is longer), and the client gets an answer for every request, in order.  (Before: the
+    session put every frame on the bus as it came, and the node's queue grew without bound: 18,896
+    frames after 10 s of such a flood.)  4,000 answers fit the client's own queue even if it read
+    none of them before the last request."""
+    import re
+    import threading
+
+    from devsim.transports.socketcand import BUS_BACKLOG, CLIENT_QUEUE
+
+    requests = 4_000
+    assert requests <= CLIENT_QUEUE
+    channel = f"devsim-{uuid.uuid4().hex}"
+    runtime = Runtime().start()
+    slave = canopen.Network()
+    slave.connect(interface="virtual", channel=channel)
+    server = SocketcandServer(channel, port=0)
+    client: socket.socket | None = None
+    try:
+        CanopenFacade(runtime.add_device("sers", "sers", {}), 5, call=runtime.call).attach(slave)
+        runtime.run(server.start())
+        client = _raw_client(server.port)
+        request = b"< send 605 8 40 %X 10 00 00 00 00 00 >"  # upload 1000h (device type), then 1001h
+        flood = b"".join(request % (n % 2) for n in range(requests))
+        sender = threading.Thread(target=client.sendall, args=(flood,))
+        sender.start()
+        answer = re.compile(rb"< frame 585 \d+\.\d+ ([0-9A-F]+) >")
+        answers: list[bytes] = []
+        text = b""
+        while len(answers) < requests:
+            chunk = client.recv(65536)
+            assert chunk, "the server closed the connection"
+            text += chunk
+            found = answer.findall(text)
+            answers += found
+            text = text[text.rfind(b">") + 1:] if found else text
+        sender.join()
+        assert answers == [b"4300100092010200", b"4F01100000000000"] * (requests // 2)
+        read = 4096 // len(request % 0) + 1  # the requests in one read of the session (and one begun before)
+        assert server.backlog_peak <= BUS_BACKLOG + read, server.backlog_peak
+    finally:
+        if client is not None:
+            client.close()
+        runtime.run(server.close())
+        slave.disconnect()
+        runtime.stop()
