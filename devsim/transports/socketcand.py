@@ -131,7 +131,9 @@ class ClientQueue(can.Listener):
 
 class SocketcandServer:
     """Serves the virtual bus ``channel`` to socketcand clients on ``host:port``; each raw-mode
-    client's frames wait in a :class:`ClientQueue` of ``client_queue`` frames."""
+    client's frames wait in a :class:`ClientQueue` of ``client_queue`` frames.  Every bus on the
+    channel in this process must be read (a canopen network reads its own): one that is not holds
+    the clients' frames back once it has :data:`BUS_BACKLOG` of them (python-can would keep them all)."""
 
     def __init__(self, channel: str, host: str = "127.0.0.1", port: int = 29536,
                  client_queue: int = CLIENT_QUEUE) -> None:
