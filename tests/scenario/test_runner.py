@@ -254,7 +254,9 @@ def test_same_result_in_virtual_and_real_time() -> None:
     assert virtual.passed, format_report(virtual)
     assert real.passed, format_report(real)
     assert statuses(virtual) == statuses(real)
-    assert real.steps[2].time == pytest.approx(virtual.steps[2].time, abs=0.05)
+    # Real time notices the move's end when the loop gets to it (later on a loaded machine), never
+    # before the physics ends it; the step's 2 s timeout bounds it from above.
+    assert real.steps[2].time >= virtual.steps[2].time - 0.005
 
 
 def test_junit_output(tmp_path: Path) -> None:
