@@ -7,10 +7,12 @@ manual's too (``errors.message``).
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from tests.sers.conftest import Plant
-from tests.sers.test_programs import query, refused
+from tests.sers.test_programs import listing, query, refused
 
 
 @pytest.mark.manual("§4.8.6.1", "P1034 'Darf nicht geändert werden - wird werkseitig eingestellt': a write is "
@@ -63,3 +65,64 @@ def test_p1136_only_on_a_12_a_version(plant_factory) -> None:
     large = plant_factory({"current_class": "12", "supply_class": "120"})
     assert large.host.ask("#P1136=1\r").endswith(b"ok1\n\r")
     assert query(large.host, "P1136") == "1"
+
+
+# The manual's wording of errno 9 and 10 (§4.8.3.1), as the drive sends it (latin-1, spec G-ENC).
+TOO_LARGE_CONSTANT = "\n*Dezimalkonstante zu groß\n\r".encode("latin-1")
+RUN_TOO_SMALL = b"\n*run Dezimalkonstante zu klein\n\r"
+
+
+@pytest.mark.manual("§4.6.1", "festkommakonstante: - 2147483.639 bis +2147483.639 (IF, WAIT and ':' compare "
+                    "with it); §4.8.3.1 errno 10 'Dezimalkonstante zu groß'")
+@pytest.mark.parametrize("line", ["#IF X>2147483.64\r", "#IF X>-2147483.640\r", "#WAIT X<99999999999\r",
+                                  "#RS:X>3000000\r", "#IF V<>2147483640\r"])
+def test_a_condition_constant_beyond_the_fixed_point_range_is_decimal_constant_too_large(
+        sers: Plant, line: str) -> None:
+    host = sers.host
+    reply = host.ask(line)
+    assert reply == line.encode("ascii") + b"\n" + TOO_LARGE_CONSTANT[1:], reply  # echo, then only the error
+    assert query(host, "P1137") == "10"
+    assert int(query(host, "P12")) & 16
+    assert sers.read("motion.kind") is None  # the ':' jog did not start
+
+
+@pytest.mark.manual("§4.6.1", "festkommakonstante: - 2147483.639 bis +2147483.639: the bounds themselves are taken")
+@pytest.mark.parametrize("line", ["#IF X>2147483.639\r", "#IF X>-2147483.639\r", "#WAIT X<2147483.639\r"])
+def test_a_condition_constant_at_the_bound_is_taken(sers: Plant, line: str) -> None:
+    reply = sers.host.ask(line)
+    assert re.fullmatch(rb".*\nok\d\n\r", reply, re.S) and b"*" not in reply, reply
+
+
+@pytest.mark.manual("§4.6.10", "'Es können alle Parameter und 32-Bit Konstanten in Rechenoperationen verwendet "
+                    "werden'; §4.8.3.1 errno 10 'Dezimalkonstante zu groß'")
+@pytest.mark.parametrize("line", ["#X=1 -3000000\r", "#X=1 +2147483.64\r", "#X=1 /99999999999999\r"])
+def test_a_calculation_constant_beyond_32_bits_is_decimal_constant_too_large(sers: Plant, line: str) -> None:
+    host = sers.host
+    assert host.ask(line).endswith(TOO_LARGE_CONSTANT)
+    assert query(host, "P1137") == "10"
+    assert query(host, "X") == "1"  # X=1 ran, the calculation did not
+
+
+@pytest.mark.manual("§4.8.3.1", "errno 10 'Dezimalkonstante zu groß': a program line with such a constant is "
+                    "refused, not stored")
+def test_a_program_line_with_a_too_large_condition_constant_is_not_stored(sers: Plant) -> None:
+    host = sers.host
+    assert host.ask("#NEW\r").endswith(b"\npgm\n\r")
+    assert host.ask("#L1 IF X>3000000\r").endswith(TOO_LARGE_CONSTANT)
+    assert host.ask("#L1 IF X>300\r").endswith(b"\npgm\n\r")
+    host.ask("#QUIT\r")
+    assert listing(host) == ["L1", "IF X>300"]
+
+
+@pytest.mark.manual("§4.8.3.1", "errno 9 'run Dezimalkonstante zu klein': RUN n starts at label n, and labels "
+                    "run from L1 (§4.6.2: 'ein Wert von 1 bis 128')")
+def test_run_0_is_run_decimal_constant_too_small(sers: Plant) -> None:
+    host = sers.host
+    assert host.ask("#NEW\r").endswith(b"\npgm\n\r")
+    host.ask("#L1 X=5\r")
+    host.ask("#QUIT\r")
+    reply = host.ask("#RUN 0\r")
+    assert reply == b"#RUN 0\r\n" + RUN_TOO_SMALL[1:], reply
+    assert query(host, "P1137") == "9"
+    assert query(host, "P0") == "0" and query(host, "X") == "0"  # the program did not start
+    assert host.ask("#RUN 00\r").endswith(RUN_TOO_SMALL)

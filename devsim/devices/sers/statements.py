@@ -76,6 +76,12 @@ _LONGEST = len(ALL_WORDS[0])
 
 #: The label numbers a program may define (§4.6.2: "ein Wert von 1 bis 128").
 LABEL_MIN, LABEL_MAX = 1, 128
+#: The largest fixed-point constant a condition compares with (§4.6.1 "festkommakonstante:
+#: - 2147483.639 bis +2147483.639", the bound of IF, WAIT and ":") and a calculation takes
+#: (§4.6.10 "Es können alle Parameter und 32-Bit Konstanten in Rechenoperationen verwendet
+#: werden"; the same 32-bit fixed-point number [SIM-CHOICE]).  A larger one is refused when the
+#: statement is read: errno 10 "Dezimalkonstante zu groß" (§4.8.3.1).
+FIXED_CONSTANT_MAX = 2147483.639
 
 _DIGITS = r"[0-9]+"
 _NUMBER = r"[0-9]*\.?[0-9]*"
@@ -338,8 +344,16 @@ def _condition(cur: _Cursor) -> Condition:
         return Condition(left, None, None, negate)
     cur.pos += len(op)
     cur.skip_spaces()
-    right = _operand(cur, 24)
+    at = cur.pos
+    right = _fixed_constant(_operand(cur, 24), at)
     return Condition(left, op, right, negate)
+
+
+def _fixed_constant(operand: Operand, start: int) -> Operand:
+    """``operand``, unless it is a constant beyond :data:`FIXED_CONSTANT_MAX` (errno 10)."""
+    if isinstance(operand, Number) and abs(operand.value) > FIXED_CONSTANT_MAX:
+        raise SyntaxFault(10, start)
+    return operand
 
 
 def _statement(cur: _Cursor) -> Statement:  # noqa: C901 - one branch per statement form
@@ -361,7 +375,7 @@ def _statement(cur: _Cursor) -> Statement:  # noqa: C901 - one branch per statem
         return Text(cur.text[start : cur.pos], cur.text[start + 1 : end])
     if c in OPERATORS:
         cur.pos += 1
-        operand = _operand(cur, 61, signed=False)
+        operand = _fixed_constant(_operand(cur, 61, signed=False), start)
         return Arith(cur.text[start : cur.pos], c, operand)
     if c == "C" and cur.peek(2) in ("C ", "C\t"):
         cur.pos += 1
@@ -460,6 +474,8 @@ def _run(cur: _Cursor, start: int, word: str) -> Statement:
     cur.skip_spaces()
     if ascii_digits(cur.peek()):
         label = cur.integer(37)
+        if label < LABEL_MIN:
+            raise SyntaxFault(9, start)  # §4.8.3.1 errno 9 "run Dezimalkonstante zu klein": RUN 0
         return Run(cur.text[start : cur.pos], label)
     cur.pos = save
     return Run(cur.text[start : cur.pos], None)
