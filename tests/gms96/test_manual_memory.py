@@ -65,3 +65,37 @@ def test_a_new_program_0_has_the_room_of_the_programs_it_deletes(plant_factory: 
     download(plant, c, 0, ("A", 10), ("A", 20), ("A", 30))  # fits once 0 and 1 are gone
     assert memory_status(c) & CNC_STORAGE_ERROR == 0
     assert plant.read("programs") == {0: 3}
+
+
+FLASH_ERROR = 0x04  # T3;4 I.2 (manual §2.3.1 T)
+
+
+@pytest.mark.manual("§2.3.1 T", "T3;4 I.2: 'Programmier-/Löschfehler des Flash-Speichers (z.B. nach Download)'")
+def test_a_cnc_download_into_a_defective_flash_is_a_flash_error(plant_factory: Any) -> None:
+    plant = plant_factory({})
+    c = plant.client()
+    download(plant, c, 0, ("A", 1000))
+    assert plant.read("programs") == {0: 1} and memory_status(c) & FLASH_ERROR == 0
+    plant.runtime.fault(plant.name, "flash_error", True)
+    download(plant, c, 1, ("A", 0), ("A", 500))
+    assert memory_status(c) & FLASH_ERROR
+    assert memory_status(c) & CNC_STORAGE_ERROR == 0  # it would have fitted
+    assert plant.read("programs") == {0: 1}  # the FLASH stays as it was
+    plant.runtime.fault(plant.name, "flash_error", False)
+    assert memory_status(c) & FLASH_ERROR  # until a download succeeds
+    download(plant, c, 1, ("A", 0), ("A", 500))
+    assert plant.read("programs") == {0: 1, 1: 2}
+    assert memory_status(c) & FLASH_ERROR == 0
+
+
+@pytest.mark.manual("§2.3.1 T", "T3;4 I.2: FLASH programming/erase error (e.g. after a download)")
+def test_a_flash_error_is_gone_after_power_on(plant_factory: Any) -> None:
+    plant = plant_factory({})
+    c = plant.client()
+    plant.runtime.fault(plant.name, "flash_error", True)
+    download(plant, c, 0, ("A", 1000))
+    assert memory_status(c) & FLASH_ERROR and plant.read("programs") == {}
+    plant.runtime.fault(plant.name, "flash_error", False)
+    plant.runtime.power_cycle(plant.name)
+    plant.advance(0.6)
+    assert memory_status(c) & FLASH_ERROR == 0

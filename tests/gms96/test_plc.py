@@ -534,3 +534,28 @@ def test_a_hook_that_cannot_be_loaded_is_one_line(tmp_path: Any) -> None:
         info.value
     )
     assert "\n" not in str(info.value)
+
+
+@pytest.mark.manual("§2.3.1 T", "T3;4 I.2: 'Programmier-/Löschfehler des Flash-Speichers (z.B. nach Download)'")
+def test_a_plc_download_into_a_defective_flash_is_a_flash_error(plant_factory: Any) -> None:
+    plant = plant_factory({})
+    host = plant.host
+    assert host.ask(frame("p", 1, 100, 0)) == "E5"
+    plant.advance(3.1)
+    assert host.ask(raw_a(b"\x01\x02")) == "E5"
+    assert host.ask(frame("p", 1, 101, 0)) == "E5"
+    assert plant.read("plc.image") == "0102" and memory_status(plant) == 0x02
+    plant.runtime.fault(plant.name, "flash_error", True)
+    assert host.ask(frame("p", 1, 100, 0)) == "E5"  # the erase fails
+    plant.advance(3.1)
+    assert memory_status(plant) == 0x06  # I.2 FLASH error + I.1 PLC not running
+    assert host.ask(raw_a(b"\x03")) == "E5"
+    assert host.ask(frame("p", 1, 101, 0)) == "E5"  # and so does the write
+    assert memory_status(plant) == 0x06
+    assert plant.read("plc.image") == "0102"  # the FLASH stays as it was
+    plant.runtime.fault(plant.name, "flash_error", False)
+    assert host.ask(frame("p", 1, 100, 0)) == "E5"
+    plant.advance(3.1)
+    assert host.ask(raw_a(b"\x03")) == "E5"
+    assert host.ask(frame("p", 1, 101, 0)) == "E5"
+    assert plant.read("plc.image") == "03" and memory_status(plant) == 0x02

@@ -45,7 +45,7 @@ def test_names_read_only_and_suggestions(card: Gms96Device) -> None:
 
 
 def test_every_declared_fault(card: Gms96Device) -> None:
-    assert card.faults.names() == ["blocked_axis", "emergency_stop", "power", "monitoring"]
+    assert card.faults.names() == ["blocked_axis", "emergency_stop", "power", "monitoring", "flash_error"]
     card.fault("monitoring", True)
     assert card.read("monitoring") == "dc_undervoltage" and card.read("fault") is True
     card.fault("monitoring", False)
@@ -54,6 +54,8 @@ def test_every_declared_fault(card: Gms96Device) -> None:
     assert card.read("powered") is False
     card.fault("power", False)
     assert card.read("powered") is True
+    card.fault("flash_error", True)  # (what it does: tests/gms96/test_manual_memory.py, test_plc.py)
+    card.fault("flash_error", False)
 
 
 def test_the_monitoring_fault_from_a_scenario() -> None:

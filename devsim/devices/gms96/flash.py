@@ -28,6 +28,12 @@ class Flash:
         self.download: tuple[str, int, list[list[Any]]] | None = None
         #: T3;4 I.4: the last CNC download did not fit (until a download fits or the next power-on).
         self.cnc_storage_error = False
+        #: The ``flash_error`` fault: while set, no erase or write of the FLASH succeeds.
+        self.defective = False
+        #: T3;4 I.2 "Programmier-/Löschfehler des Flash-Speichers (z.B. nach Download)" (manual
+        #: §2.3.1 T): the last erase or write of the FLASH failed, until one succeeds or the next
+        #: power-on [SIM-CHOICE, as the storage error I.4].
+        self.write_error = False
 
     def power_on(self) -> None:
         flash = self.nvram.get("flash", {}) or {}
@@ -37,6 +43,13 @@ class Flash:
         self.plc_frames = list(flash.get("plc_frames") or ([len(self.plc_image) // 2] if self.plc_image else []))
         self.download = None
         self.cnc_storage_error = False  # the programs in the FLASH are the ones that fitted
+        self.write_error = False
+
+    def _writable(self) -> bool:
+        """Whether an erase or write of the FLASH succeeds now (not while the ``flash_error`` fault
+        is on); T3;4 I.2 tells how the last one went.  A failed one leaves the FLASH as it was."""
+        self.write_error = self.defective
+        return not self.defective
 
     def save(self) -> None:
         self.nvram.put(
@@ -60,6 +73,8 @@ class Flash:
             self.cnc_storage_error = True
             return False
         self.cnc_storage_error = False
+        if not self._writable():
+            return False
         if number == 0:
             self.programs = {}
         self.programs[number] = rows
@@ -67,17 +82,23 @@ class Flash:
         return True
 
     def erase_plc(self) -> None:
-        """``p1;100``: the PLC sector is erased."""
+        """``p1;100``: the PLC sector is erased (not while the FLASH is defective: T3;4 I.2)."""
+        if not self._writable():
+            return
         self.plc_image = None
         self.plc_frames = []
         self.save()
 
-    def store_plc(self, frames: list[bytes]) -> None:
-        """``p1;101``: the ``a`` frames' data in order (an empty download leaves no program)."""
+    def store_plc(self, frames: list[bytes]) -> bool:
+        """``p1;101``: the ``a`` frames' data in order (an empty download leaves no program);
+        False if the FLASH is defective (T3;4 I.2)."""
+        if not self._writable():
+            return False
         if frames:
             self.plc_image = b"".join(frames).hex()
             self.plc_frames = [len(f) for f in frames]
         self.save()
+        return True
 
 
 def _queued(row: Any, letters: Container[str]) -> list[Any]:

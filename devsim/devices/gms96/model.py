@@ -375,6 +375,8 @@ class Gms96Card(Model):
             v |= s["NV_ERROR"] | s["EEPROM_DEFECTIVE"]
         if self.flash.cnc_storage_error:
             v |= s["CNC_STORAGE_ERROR"]
+        if self.flash.write_error:
+            v |= s["FLASH_ERROR"]
         return v
 
     # ======================================================================================

@@ -350,8 +350,7 @@ class Plc:
             self.card.record_event("plc_storage_error")
             return
         self.storage_error = False
-        self.flash.store_plc(frames)
-        self.card.record_event("plc_download")
+        self.card.record_event("plc_download" if self.flash.store_plc(frames) else "flash_error")
 
     # -- process image access for rules and hooks ----------------------------------------------
     def bit(self, name: str) -> bool:

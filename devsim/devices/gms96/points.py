@@ -178,6 +178,8 @@ def _store_program(card: Any, number: int, program: Any) -> None:
     if card.flash.download is not None:
         raise BadValue("a download is running")
     if not card.flash.store_program(number, rows, card.cfg.max_total_commands):
+        if card.flash.write_error:
+            raise BadValue(f"program {number} not stored: the FLASH cannot be written (fault flash_error, T3;4 I.2)")
         raise BadValue(f"program {number} not stored: the programs would exceed {card.cfg.max_total_commands} "
                        "commands (T3;4 I.4)")
 
@@ -383,5 +385,8 @@ FAULTS = FaultTable(
               lambda card, active: card.power(not active)),
         Fault("monitoring", "power-stage monitoring trips (DC undervoltage) while active", "§4.5.3",
               _signal("monitoring", lambda active: "dc_undervoltage" if active else "")),
+        Fault("flash_error", "the FLASH cannot be erased or written while active: a CNC or PLC download fails "
+              "and leaves the FLASH as it was, T3;4 I.2 until one succeeds", "§2.3.1 T",
+              lambda card, active: setattr(card.flash, "defective", active)),
     ]
 )
