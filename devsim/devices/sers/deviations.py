@@ -138,4 +138,20 @@ DEVIATIONS: tuple[Deviation, ...] = (
         "the fieldbus variants are other products; P1099/P1097 opcodes documented in §4.8.6.16 "
         "are simulated over RS232",
     ),
+    Deviation(
+        "§4.8.3.1",
+        "the list of error numbers: 6-8 (EEPROM chip faults), 11, 14, 18, 20, 26, 27, 29, 31-33, 35, "
+        "36, 38-43, 45, 47, 50-53, 55-60, 63, 109-117 (what the keyword reader expected), 17 'Text zu "
+        "lang', 46 (the second 'Programmiermodus nicht aktiv'), 62 'Komma nicht erlaubt', 74, 76 "
+        "(stored opcodes), 84 'Die Wegdifferenz ist zu groß', 94 (solder bridge), 96/97 (exponent), "
+        "100/101 (too large/small to display), 103/104 and P11 4096 (fieldbus), 125 "
+        "'Schrittwinkelfehler'",
+        "never sent: an unknown or cut keyword is errno 21 'Anweisung erwartet', a text is bounded "
+        "by the 60-character line (124), a refused W change is 81/85/86/87, a step loss is P11/P12 "
+        "value 32",
+        "the manual lists only the texts; it names no input or situation that gives these, and the "
+        "statement language has no exponent, no opcodes a host could store and no value X or a "
+        "parameter could hold that is not displayable; a guessed trigger would mislead a host more "
+        "than the documented errno it gets instead",
+    ),
 )
