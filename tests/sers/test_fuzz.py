@@ -293,7 +293,7 @@ def test_a_feed_constant_that_rounds_to_zero_is_too_small(value: bytes) -> None:
 
 
 @pytest.mark.manual("§4.6.9", "RS:expression: jog until the event occurs")
-@pytest.mark.parametrize(("until", "answer"), [(b"I0", b"*Parameter nicht vorhanden"), (b"O17=1", b"*ung\xfcltiger Ausgang"),
+@pytest.mark.parametrize(("until", "answer"), [(b"I0", b"*unbekanntes if Ereignis"), (b"O17=1", b"*ung\xfcltiger Ausgang"),
                                                (b"P99999>1", b"*Parameter nicht vorhanden")])
 def test_a_jog_until_an_operand_that_does_not_exist_does_not_start(until: bytes, answer: bytes) -> None:
     """Found by fuzzing: ``#ONP1035=0`` ``RS:I0`` ``\\r`` answered errno 13 but left the drive jogging

@@ -126,3 +126,25 @@ def test_run_0_is_run_decimal_constant_too_small(sers: Plant) -> None:
     assert query(host, "P1137") == "9"
     assert query(host, "P0") == "0" and query(host, "X") == "0"  # the program did not start
     assert host.ask("#RUN 00\r").endswith(RUN_TOO_SMALL)
+
+
+@pytest.mark.manual("§4.6.1", "IF: 'Es sind alle SERS-Parameter und digitalen Eingänge (I1 bis I16, und J1 bis J5) "
+                    "erlaubt'; §4.8.3.1 errno 11 'unbekanntes if Ereignis'")
+@pytest.mark.parametrize("line", ["#IF I17\r", "#IF J6\r", "#IF I0\r", "#WAIT J9\r", "#IF X=I17\r", "#RS:I0\r",
+                                  "#IF J0=1\r"])
+def test_a_condition_on_an_input_the_drive_does_not_have_is_an_unknown_if_event(sers: Plant, line: str) -> None:
+    host = sers.host
+    refused(host, line, 11)
+    assert "\n*unbekanntes if Ereignis\n\r".encode("latin-1") in host.ask("#IF I20\r")  # the manual's wording
+    assert query(host, "P1137") == "11"
+    assert sers.read("motion.kind") is None  # the ':' jog did not start
+
+
+@pytest.mark.manual("§4.6.1", "I1 bis I16, und J1 bis J5 are events of IF; elsewhere a missing input is no "
+                    "parameter (errno 13 'Parameter nicht vorhanden')")
+def test_the_inputs_a_condition_knows_are_taken_and_others_elsewhere_stay_errno_13(sers: Plant) -> None:
+    host = sers.host
+    for line in ("#IF I16\r", "#IF J5\r", "#IF I1=0\r", "#WAIT J1<>2\r"):
+        reply = host.ask(line)
+        assert re.fullmatch(rb".*\nok\d\n\r", reply, re.S) and b"*" not in reply, reply
+    refused(host, "#X=I17\r", 13)

@@ -140,7 +140,7 @@ DEVIATIONS: tuple[Deviation, ...] = (
     ),
     Deviation(
         "§4.8.3.1",
-        "the list of error numbers: 6-8 (EEPROM chip faults), 11, 14, 18, 20, 26, 27, 29, 31-33, 35, "
+        "the list of error numbers: 6-8 (EEPROM chip faults), 14, 18, 20, 26, 27, 29, 31-33, 35, "
         "36, 38-43, 45, 47, 50-53, 55-60, 63, 109-117 (what the keyword reader expected), 17 'Text zu "
         "lang', 46 (the second 'Programmiermodus nicht aktiv'), 62 'Komma nicht erlaubt', 74, 76 "
         "(stored opcodes), 84 'Die Wegdifferenz ist zu groß', 94 (solder bridge), 96/97 (exponent), "

@@ -82,6 +82,11 @@ LABEL_MIN, LABEL_MAX = 1, 128
 #: werden"; the same 32-bit fixed-point number [SIM-CHOICE]).  A larger one is refused when the
 #: statement is read: errno 10 "Dezimalkonstante zu groß" (§4.8.3.1).
 FIXED_CONSTANT_MAX = 2147483.639
+#: The inputs a condition may name (§4.6.1: "Es sind alle SERS-Parameter und digitalen Eingänge
+#: (I1 bis I16, und J1 bis J5) erlaubt"); another input (``IF I17``, ``WAIT J6``, ``RS:I0``) is an
+#: event the drive does not know: errno 11 "unbekanntes if Ereignis" (§4.8.3.1) [SIM-CHOICE: the
+#: manual gives only the text; elsewhere such an input stays errno 13].
+EVENT_INPUTS = {"I": range(1, 17), "J": range(1, 6)}
 
 _DIGITS = r"[0-9]+"
 _NUMBER = r"[0-9]*\.?[0-9]*"
@@ -329,7 +334,7 @@ def _condition(cur: _Cursor) -> Condition:
         negate = True
         cur.pos += 1
         cur.skip_spaces()
-    left = _address(cur, 24)
+    left = _event(_address(cur, 24), cur.pos)
     if left.kind == "IN" and isinstance(left.ref, int) and left.text != "IN":
         # legacy "IF IN5" == "IF IN=5"
         return Condition(Address("alias", "IN", "IN"), "=", Number(str(left.ref)), negate)
@@ -345,8 +350,15 @@ def _condition(cur: _Cursor) -> Condition:
     cur.pos += len(op)
     cur.skip_spaces()
     at = cur.pos
-    right = _fixed_constant(_operand(cur, 24), at)
+    right = _fixed_constant(_event(_operand(cur, 24), at), at)
     return Condition(left, op, right, negate)
+
+
+def _event(operand: Operand, start: int) -> Operand:
+    """``operand``, unless it names an input a condition does not know (errno 11)."""
+    if isinstance(operand, Address) and operand.kind in EVENT_INPUTS and operand.ref not in EVENT_INPUTS[operand.kind]:
+        raise SyntaxFault(11, start)
+    return operand
 
 
 def _fixed_constant(operand: Operand, start: int) -> Operand:
