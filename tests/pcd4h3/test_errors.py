@@ -9,7 +9,7 @@ from collections.abc import Callable
 import pytest
 
 from devsim.devices.pcd4h3.units import ffp_encode
-from tests.pcd4h3.helpers import Station, flag, load, reg, run
+from tests.pcd4h3.helpers import EXAMPLE, Station, flag, load, reg, run
 
 
 def transfers(pcd: Station) -> list[str]:
@@ -237,3 +237,17 @@ def test_an_inverted_index_jumper_captures_at_the_next_line(make: Callable[..., 
         run(pcd, "FSetIP", "FLdVA", "FForw")
         assert pcd.sim.run_until(lambda d: d.read("axis.1.IPuls"), 5.0)
         assert pcd.sim.device.model.drives[0].chip.index_position == near
+
+
+@pytest.mark.manual("§7.1.3", "IMode: Module H310, 311, 320 u. 321: IMode = 6; Module H316, 317, 326 u. 327: IMode = 5")
+def test_g26_imode_5_on_an_analog_module_is_taken_with_a_warning(make: Callable[..., Station]) -> None:
+    """Spec G-26: IMode 5 in H3DEF on a ±10 V module (LM628) is accepted: AxInit sends PORT8, the
+    12-bit DAC gets the top 8 bits only (RSigB bit 8 = 1), no command error; the diagnostics flag
+    "warning pending" (F 8000 + 3, spec §9.6.3) says so.  The module's own IMode 6 gives none."""
+    analog = make({"variant": "H320"})
+    assert analog.read_flags(8000 + 3) == [0]
+    coarse = make({"variant": "H320", "h3def": {**EXAMPLE["h3def"], "imode": 5}})
+    assert coarse.read_flags(8000 + 3) == [1]
+    assert coarse.sim.read("axis.1.comers") == 0
+    run(coarse, "FRdSR")
+    assert coarse.read_registers(reg("RSigB"))[0] >> 8 & 1 == 1  # the 8-bit port

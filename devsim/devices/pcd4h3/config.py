@@ -51,7 +51,9 @@ class H3Def(Settings):
 
     fmah3: Annotated[int, Meta(ge=0, le=1008), doc(
         "FMAH3: bus address of the first H3 module (modules follow every 16)")] = 0
-    imode: Annotated[Literal[5, 6] | None, doc("IMode for AxInit: 6 ±10 V, 5 PWM (default: by the variant)")] = None
+    imode: Annotated[Literal[5, 6] | None, doc(
+        "IMode for AxInit: 6 ±10 V, 5 PWM (default: by the variant); 5 on a ±10 V variant gives an 8-bit "
+        "output and the diagnostics warning, 6 on a PWM variant a command error (spec G-26)")] = None
     mna: Annotated[int, Meta(ge=1, le=32), doc("MNA: number of axes with register blocks and flag fields")] = 2
     baf: Annotated[int, Meta(ge=0, le=8191), doc("BAF: first flag of the axis fields")] = 2000
     bar: Annotated[int, Meta(ge=0, le=4095), doc("BAR: first register of the axis blocks")] = 2000

@@ -69,7 +69,7 @@ class H3Axis:
         self.trace: list[tuple[str, tuple[int, ...]]] = []
         self.comers_calls = 0
         self.last_comers = -1  # flag offset of the function that last called ComErS
-        self.warnings = 0  # FStop with a doubtful MCW, a single step while moving (G-10, E10)
+        self.warnings = 0  # FStop with a doubtful MCW, a single step while moving, IMode 5 on a ±10 V module (G-10, E10, G-26)
         self.transfers = 0  # chip transfers since start-up
         self.ran: list[str] = []  # the functions the last AxHndlg call ran
         self._function = ""
@@ -144,10 +144,14 @@ class H3Axis:
     # -- AxInit, AxHndlg (§3.3) -----------------------------------------------------------------------
     def init(self, imode: int = 6) -> None:
         """AxInit: reset, output port, mode, position error, filter, acceleration (with motor
-        off), velocity, command flags cleared."""
+        off), velocity, command flags cleared.  IMode 5 on a ±10 V module (manual §7.1.3: H310,
+        311, 320 and 321 take 6) is sent as PORT8 and taken: the DAC gets 8 bits only, a warning
+        (spec G-26); IMode 6 on a PWM module is the LM629's command error."""
         self._function = "AxInit"
         self._send("RESET")
         self._send("PORT12" if imode == 6 else "PORT8")
+        if imode != 6 and not self.chip.lm629:
+            self.warnings += 1  # G-26: a coarse output
         self.mode = 0
         for symbol in ("FSelOM", "FSetPE", "FLdRP", "FUpDRP", "FLdAA", "FLdVA"):
             self._run(symbol)
