@@ -602,3 +602,23 @@ def test_fsetzp_then_fstart_takes_the_target_from_the_new_zero(pcd: Station) -> 
     assert read(pcd, "FRdAP", "RActP") == pytest.approx(1000, abs=1)
     assert pcd.sim.read("axis.1.mechanical_position") == pytest.approx(zero + 100_000, abs=3 + between_samples)
     assert zero > 30_000  # the new zero lies where the axis was, well past the old one
+
+
+@pytest.mark.manual("§7.4 FResSF", "OnDest wird durch folgende Ereignisse '1' gesetzt: ... die Regelung ist "
+                    "ausgeschaltet (z.B. nach der Funktion FMotOff)")
+@pytest.mark.manual("§7.4 FResSF", "das Flag wird zurückgesetzt, wenn das entsprechende Bit im Register "
+                    "StaFRR Null ist")
+def test_fressf_resets_ondest_also_while_the_control_is_off(pcd: Station) -> None:
+    """Switching the control off is an event that sets OnDest (LM628 status bit 2, "trajectory
+    complete" is an interrupt flag); FResSF resets it like any status flag, also while the motor
+    stays off: the chip's status byte reads 84h after the reset and 80h after RSTI 0000h (spec
+    §3.5.2, the AN-693 initialisation check), not 84h for as long as the motor is off."""
+    assert pcd.read_flags(flag("OnDest")) == [1]  # AxInit leaves the control off
+    assert pcd.read_registers(4000)[0] == 0x84  # the diagnostics' chip status byte (spec §9.6.3)
+    load(pcd, StaFRR=0)
+    run(pcd, "FResSF")
+    assert pcd.read_flags(flag("OnDest")) == [0]
+    assert pcd.read_registers(4000)[0] == 0x80
+    assert signal_register(pcd) & 0x84 == 0x80  # RSigB: control off (bit 7), OnDest (bit 2) reset
+    run(pcd, "FMotOff")  # the event again
+    assert pcd.read_flags(flag("OnDest")) == [1] and pcd.read_registers(4000)[0] == 0x84

@@ -64,7 +64,7 @@ def snapshot(chip: Lm628) -> State:
 
 def status_of(state: State) -> int:
     """RDSTAT of the chip in ``state`` (as :attr:`Lm628.status`)."""
-    return state[13] | (MOTOR_OFF | COMPLETE if state[17] else 0)  # type: ignore[operator]
+    return state[13] | (MOTOR_OFF if state[17] else 0)  # type: ignore[operator]
 
 
 def motion_of(state: State) -> tuple[float, float]:
@@ -555,4 +555,5 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
     chip.rest_x, chip.rest_v, chip.rest_n = rest_x, rest_v, rest_n
     if stopped:
         chip.motor_off = True
+        chip.flags |= COMPLETE  # (switching the motor off completes the trajectory, as Lm628.sample)
     return done, quiet

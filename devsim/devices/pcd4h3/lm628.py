@@ -71,7 +71,7 @@ class Lm628:
         self.profile = Profile()
         self.filter = Filter(dac_bits=8)
         self.buffer = Trajectory()
-        self.flags = 0  # interrupt flags (status bits 1 … 6)
+        self.flags = COMPLETE  # interrupt flags (status bits 1 … 6): 84h after power-on (§3.5.2)
         self.mask = 0
         self.motor_off = True
         self.stop_on_error = False
@@ -128,7 +128,7 @@ class Lm628:
         breakpoint interrupt stays masked."""
         self.profile, self.buffer = Profile(), Trajectory()
         self.filter = Filter(dac_bits=8)
-        self.flags, self.mask, self.motor_off, self.stop_on_error = 0, INTERRUPTS & ~BREAKPOINT, True, False
+        self.flags, self.mask, self.motor_off, self.stop_on_error = COMPLETE, INTERRUPTS & ~BREAKPOINT, True, False
         self.error_threshold = 0x7FFF
         self.breakpoint, self.loaded, self.on_target, self.started = None, 0, False, False
         self.index_armed, self._stop = False, 0
@@ -303,8 +303,12 @@ class Lm628:
 
     @property
     def status(self) -> int:
-        """RDSTAT (bit 0 busy is never seen: commands complete at once)."""
-        return self.flags | (MOTOR_OFF | COMPLETE if self.motor_off else 0)
+        """RDSTAT (bit 0 busy is never seen: commands complete at once).  Bit 2 "trajectory
+        complete" is an interrupt flag like bits 1 and 3 … 6: set when the generator finishes and
+        when the motor is switched off (RESET, a motor-off stop, an LPES trip), reset by RSTI also
+        while the motor stays off (84h after a reset, 80h after RSTI 0000h: §3.5.2; manual §7.4
+        FResSF: OnDest is set by these events)."""
+        return self.flags | (MOTOR_OFF if self.motor_off else 0)
 
     @property
     def signals(self) -> int:
@@ -345,6 +349,7 @@ class Lm628:
             self.flags |= POSITION_ERROR
             if self.stop_on_error:
                 self.motor_off = True
+                self.flags |= COMPLETE  # switching the motor off completes the trajectory
 
     def _moved(self, before: int, after: int) -> None:
         """The encoder counted from ``before`` to ``after`` (raw counts) in this sample."""
