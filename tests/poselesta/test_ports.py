@@ -276,6 +276,18 @@ def test_a_locked_key_switch_refuses_the_catalogue(cnc: Any) -> None:
     assert cnc.read("param.P70") == 3
 
 
+def test_a_locked_key_switch_refuses_a_parameter_entered_at_the_panel(cnc: Any) -> None:
+    """Spec §4.5 (V21/8, manual §2.3.10 lost): with the key switch locked the machine parameters
+    cannot be changed, by the keyboard as little as by a read-in; unlocked, the entry is taken."""
+    cnc.set("input.key_switch", False)
+    with pytest.raises(Exception, match="key switch"):
+        cnc.set("param.P72", 50)
+    assert cnc.read("param.P72") == 20
+    cnc.set("input.key_switch", True)
+    cnc.set("param.P72", 50)
+    assert cnc.read("param.P72") == 50
+
+
 @pytest.mark.manual("§2.3.21", "Programme lassen sich schützen und freigeben. Das Freigeben ist nur in Stellung offen möglich")
 def test_a_protected_program_is_not_overwritten_by_a_read_in(cnc: Any) -> None:
     """S32 (§2.3.21, spec §4.5 G-LOCK): protect P20; with the program lock closed (V22/9 L) it

@@ -261,6 +261,12 @@ class PoselestaCnc(Model):
         self.panel.key(code)
 
     def set_param(self, number: int, value: float) -> None:
+        """A machine parameter entered at the panel (the catalogue P99, spec §4.8).  With the key
+        switch locked (V21/8 L) it is refused, as a catalogue read-in is (spec §4.5: "machine
+        parameters cannot be changed, keyboard or read-in refused"; the manual's §2.3.10 is lost)."""
+        if not self.signals.get("key_switch"):
+            self.screen.record("key_switch_locked")
+            raise BadValue("the key switch is locked: machine parameters cannot be changed")
         try:
             self.params.write(number, value)
         except ValueError as exc:
