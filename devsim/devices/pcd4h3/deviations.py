@@ -108,4 +108,19 @@ DEVIATIONS: tuple[Deviation, ...] = (
         "ExcPEr is set when the error exceeds PosEr (strictly greater).",
         "The manual says both; the LM628 sets the flag on exceeding (spec G-9).",
     ),
+    Deviation(
+        "§8",
+        "The H3 controller sets its command error flag when it cannot interpret a command or its data; the "
+        "manual describes no S-Bus (the spec's host interface, §9.2, lists the PCD's NAK codes 0002h "
+        "password, 0003h PGU port in reduced protocol and 0004h PGU port already used), and the LM628 behind "
+        "the flag also reports busy (status bit 0) after each command byte and data word and a command error "
+        "for a read where a write was expected (spec §3.5.2, §3.7).",
+        "Never sent or set: a telegram the station cannot carry out is NAK 0001h; a chip command completes "
+        "at once, so status bit 0 and the diagnostics flag 'chip busy' (F 8000 + 1) read 0; the command error "
+        "comes from the manual's five causes (§8: a negative velocity, a conversion overflow, a factor above "
+        "32 767, a relative load before the first start, `axis.N.bus_errors`) and the spec's range checks.",
+        "The manual gives no situation for these codes: the simulated station has no password and no PGU port, "
+        "and the chips are reached only through the library's functions (the bus-level access of spec §9.7 "
+        "is not simulated), which wait for busy and never read where they write.",
+    ),
 )
