@@ -205,6 +205,8 @@ def test_keyboard_codes_buffer_and_overflow(cnc: Any) -> None:
         cnc.advance(0.2)
         assert cnc.read("keyboard.accepted") == 4
         assert keys.in_waiting == 0  # V8 never answers
+    events = {name for _, name in cnc.device.model.events}  # (spec §3.10: each dropped key is an event)
+    assert {"v8.v8_ignored_internal_selected", "v8.v8_overflow", "v8.v8_parity_error", "v8.v8_unknown_code"} <= events
 
 
 def test_programs_survive_a_power_cycle(cnc: Any) -> None:
@@ -283,6 +285,7 @@ def test_a_locked_key_switch_refuses_a_parameter_entered_at_the_panel(cnc: Any) 
     with pytest.raises(Exception, match="key switch"):
         cnc.set("param.P72", 50)
     assert cnc.read("param.P72") == 20
+    assert "key_switch_locked" in [name for _, name in cnc.device.model.events]
     cnc.set("input.key_switch", True)
     cnc.set("param.P72", 50)
     assert cnc.read("param.P72") == 50
