@@ -23,6 +23,7 @@ from __future__ import annotations
 import fcntl
 import os
 import re
+from collections.abc import Container
 from typing import TYPE_CHECKING, Any
 
 import msgspec
@@ -34,10 +35,11 @@ if TYPE_CHECKING:  # imported where used: a device without a state dir needs nei
 
 __all__ = [
     "KIND_KEY", "UNUSABLE", "MemoryInUse", "NonVolatileMemory", "OtherKindsMemory", "PoisonedMemory", "UnfitMemory",
-    "check_name",
+    "check_name", "numbered", "stored_key", "stored_whole",
 ]
 
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,127}$")
+_KEY = re.compile(r"0|-?[1-9][0-9]{0,18}", re.ASCII)  # str(n) of a 64-bit int (ASCII digits only)
 
 
 class MemoryInUse(RuntimeError):
@@ -72,6 +74,34 @@ def check_name(name: str, what: str = "device name") -> str:
     if not _NAME.match(name) or ".." in name:
         raise ValueError(f"{what} {name!r} cannot name a file (use letters, digits, _ . -; no leading dot)")
     return name
+
+
+def stored_whole(value: object, what: str, numbers: Container[int] | None = None) -> int:
+    """A number a device stored as a JSON integer (not a bool, a fraction, text), one of
+    ``numbers`` when given; anything else is a ValueError naming ``what``, so that the start
+    refuses the memory (:class:`UnfitMemory`, naming the file)."""
+    if type(value) is not int or numbers is not None and value not in numbers:
+        raise ValueError(f"stored {what} {value!r:.40} is none the device stores")
+    return value
+
+
+def stored_key(key: object, what: str, numbers: Container[int] | None = None) -> int:
+    """The number of a section's key as a device writes it (``str(n)``: ASCII digits, a ``-``
+    for a negative, no leading zero), one of ``numbers`` when given; anything else is a
+    ValueError naming ``what``.  ``int`` also reads other scripts' digits (``'٣'``), ``'1_0'``,
+    ``' 3'``, ``'+3'`` and ``'03'``: a hand-edited key the device never wrote, which could even
+    be a second entry for a number already stored."""
+    if type(key) is not str or _KEY.fullmatch(key) is None:
+        raise ValueError(f"stored {what} {key!r:.40} is no number the device writes")
+    return stored_whole(int(key), what, numbers)
+
+
+def numbered(section: object, what: str, numbers: Container[int] | None = None) -> dict[int, Any]:
+    """A stored section ``{str(n): value}`` by its numbers (:func:`stored_key`); a section that is
+    no JSON object is a ValueError too."""
+    if type(section) is not dict:
+        raise ValueError(f"stored {what}s {section!r:.40} are no numbered entries")
+    return {stored_key(key, what, numbers): value for key, value in section.items()}
 
 
 def _reject_constant(token: str) -> Any:

@@ -9,10 +9,16 @@ offset.  The zero-offset table and the machine zero are non-volatile.
 from __future__ import annotations
 
 from devsim.core.axis import Axis
-from devsim.core.nvram import NonVolatileMemory
+from devsim.core.nvram import NonVolatileMemory, numbered, stored_whole
 from devsim.devices.gms96 import tables
+from devsim.devices.gms96.codec import S24_MAX, S24_MIN
 
-__all__ = ["Coordinates"]
+__all__ = ["P2_VALUES", "ZERO_POINTS", "Coordinates"]
+
+#: the zero points G54 … G57 and the extended G54 … G69 (spec §3.8.6)
+ZERO_POINTS = range(54, 70)
+#: what a telegram's parameter carries (24 bits, signed, spec Appendix B): a stored offset
+P2_VALUES = range(S24_MIN, S24_MAX + 1)
 
 
 class Coordinates:
@@ -38,8 +44,12 @@ class Coordinates:
         if reset_origin:
             self.origin = self.axis.position()
         offs = self.nvram.get("offsets", {}) or {}
-        self.zero_table = {int(k): int(v) for k, v in (offs.get("table") or {}).items()}
-        self.machine_zero = int(offs.get("machine_zero", 0))
+        # what G54..G69 / G53 with P3 = 1 store: a zero point 54 … 69 (its key as str(n)) and a
+        # P2 of the 24-bit telegram; anything else refuses the memory at the start (UnfitMemory):
+        # int() took '٥٥', '+55', 1.5, true and "3" as they were, and the key '-55' or 10**30
+        self.zero_table = {zp: stored_whole(v, "zero offset", P2_VALUES)
+                           for zp, v in numbered(offs.get("table") or {}, "zero point", ZERO_POINTS).items()}
+        self.machine_zero = stored_whole(offs.get("machine_zero", 0), "machine zero", P2_VALUES)
         self.g_relative = False
         self.active_zero = None
         self.tool_active = True

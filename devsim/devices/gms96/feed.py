@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from devsim.core.nvram import stored_whole
 from devsim.devices.gms96 import tables
 
 __all__ = ["Feed"]
@@ -37,8 +38,11 @@ class Feed:
         """The defaults, or what ``s85;170`` saved; G0, G94, no host override."""
         self.defaults()
         if eeprom:
-            self.M, self.B, self.S = int(eeprom["M"]), int(eeprom["B"]), int(eeprom["S"])
-            self.override_on = bool(eeprom.get("o", 1))
+            # as s85;170 stores them: whole numbers, clamped as a write is (spec §3.8.1, §3.8.12,
+            # §3.8.16), the activity 0 or 1; else the start refuses the memory (UnfitMemory).
+            # int() took "٣", "3", 1.7 and true, and an M of 10**30 loaded unclamped.
+            self.M, self.B, self.S = (tables.clamp_setting(name, stored_whole(eeprom[name], name)) for name in "MBS")
+            self.override_on = bool(stored_whole(eeprom.get("o", 1), "override activity", (0, 1)))
         self.eeprom_M = self.M
         self.f = self.M
         self.f_frac = 0

@@ -7,11 +7,13 @@ from __future__ import annotations
 from collections.abc import Container
 from typing import Any
 
-from devsim.core.nvram import NonVolatileMemory
+from devsim.core.nvram import NonVolatileMemory, numbered
 
 __all__ = ["Flash"]
 
 Program = list[list[Any]]  # rows [letter, P1, P2, P3, count]
+#: the program numbers a card keeps (spec §3.8.13; config ``max_programs`` at most 100)
+PROGRAMS = range(100)
 
 
 class Flash:
@@ -36,9 +38,12 @@ class Flash:
         self.write_error = False
 
     def power_on(self) -> None:
+        """The programs as downloads stored them; a program number a download never gives (0 … 99,
+        written as ``str(n)``: not ``'٣'``, ``'03'``, ``'+3'``, ``'-3'``) is a ValueError, and the
+        start refuses the memory naming its file (spec §3.8.13: programs 0 … 99)."""
         flash = self.nvram.get("flash", {}) or {}
-        self.programs = {int(k): [_queued(row, self.queued) for row in v]
-                         for k, v in (flash.get("programs") or {}).items()}
+        self.programs = {number: [_queued(row, self.queued) for row in v]
+                         for number, v in numbered(flash.get("programs") or {}, "CNC program", PROGRAMS).items()}
         self.plc_image = flash.get("plc")
         self.plc_frames = list(flash.get("plc_frames") or ([len(self.plc_image) // 2] if self.plc_image else []))
         self.download = None

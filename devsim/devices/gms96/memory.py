@@ -8,12 +8,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from devsim.core.nvram import NonVolatileMemory
+from devsim.core.nvram import NonVolatileMemory, stored_whole
 from devsim.devices.gms96.feed import Feed
-from devsim.devices.gms96.image import ProcessImage
+from devsim.devices.gms96.image import STATIC_BYTES, ProcessImage
 from devsim.devices.gms96.params import NParameters
 
 __all__ = ["Memory"]
+
+BYTES = range(0x100)
 
 
 class Memory:
@@ -43,9 +45,15 @@ class Memory:
         return corrupt
 
     def load_static(self) -> None:
+        """DW0..DW79 and MB18 as :meth:`save_static` stores them: up to 160 bytes, a tool number
+        0 … 127; anything else refuses the memory at the start (UnfitMemory): ``int() & 0xFF``
+        took "٣", 1.5 and true, and made 300 or -5 another byte."""
         st = self.nvram.get("static", {}) or {}
-        self.image.restore_static(st.get("data"))
-        self.image.markers[18] = int(st.get("mb18", 0)) & 0xFF
+        data = st.get("data") or []
+        if type(data) is not list or len(data) > STATIC_BYTES:
+            raise ValueError(f"stored static data {data!r:.40} is no {STATIC_BYTES} bytes")
+        self.image.restore_static([stored_whole(value, "data byte", BYTES) for value in data])
+        self.image.markers[18] = stored_whole(st.get("mb18", 0), "tool number MB18", range(0x80))
 
     def save_eeprom(self) -> None:
         """``s85;170``: M, S, B, all N and the override activity (manual §2.3.1 s)."""

@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from devsim.core.nvram import numbered
 from devsim.core.parameters import Parameters, accessor
 from devsim.devices.gms96.nparams import N_TABLE, n_range
 from devsim.devices.gms96.tables import clamp_n
@@ -63,10 +64,13 @@ class NParameters(Parameters):
         if eeprom:
             # what s85;170 saved is in range; a hand-edited value is clamped as a write is (spec
             # §3.8.10), one that is no whole number refuses the memory (UnfitMemory at the start);
-            # before, N8 "ab" or [1.5, "x"] loaded as it was and failed every read of N8
-            for key, value in (eeprom.get("N") or {}).items():
-                if int(key) in self.table:
-                    self.values[int(key)] = clamp_n(int(key), _whole(value), stepper=self.stepper)
+            # before, N8 "ab" or [1.5, "x"] loaded as it was and failed every read of N8.  A key is
+            # the number as s85;170 writes it (str(n)), else the memory is refused: int() took
+            # '٣٩', '+39', ' 39', '039' and '3_9' for N39 (a second N39 beside "39").
+            # [SIM-CHOICE] A number no N parameter has is ignored, as before.
+            for index, value in numbered(eeprom.get("N") or {}, "N parameter").items():
+                if index in self.table:
+                    self.values[index] = clamp_n(index, _whole(value), stepper=self.stepper)
             lower, upper = eeprom.get("N8", self.n8)
             self.n8 = [clamp_n(8, _whole(lower)), clamp_n(8, _whole(upper))]
 

@@ -1,0 +1,160 @@
+"""The card's state file (``devsim run gms96 --state-dir``): a file the card wrote loads as it was
+written; a hand-edited key or value the card never writes (another script's digits, ``'+3'``,
+``'03'``, a fraction, text, a number beyond what its telegram or byte carries) stops the start
+with :class:`UnfitMemory` naming the file (manual §2.3.1 s, p, d, G; spec §3.8.6, §3.8.13, §4.8).
+
+The image is made by a real card through its own FT1.2 port (:class:`Gms96Client`)."""
+
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from devsim.cli import exits
+from devsim.runtime import Runtime
+from tests.gms96.conftest import start_plant
+from tests.gms96.test_motion_reference import send
+from tests.support.memory import refused_memory
+from tests.test_cli import Sim
+
+FLASH_ERASE = 5.0  # manual §2.3.1 p: the card does not answer for 2 to 5 s after p3;100
+
+
+@pytest.fixture(scope="module")
+def saved(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    """The image a card wrote: N39 = 7 and N8 = -1000/1000 saved with M, B, S (s85;170), G55 and
+    the machine zero entered (G P3 = 1), programs 0 and 3 downloaded, DW2 written (d 1234h;4)."""
+    state = tmp_path_factory.mktemp("gms96-saved")
+    plant = start_plant([{}], state_dir=state)
+    try:
+        c = plant.client()
+        for command in (("N", 7, 39), ("N", -1000, 8, 0), ("N", 1000, 8, 1), ("M", 30000), ("B", 80), ("S", 300),
+                        ("s", 85, 170), ("d", 0x1234, 4), ("G", 55, 1234, 1), ("G", 53, -55, 1)):
+            send(c, *command)
+        plant.advance(1.0)
+        for number, commands in ((0, [("A", 1000), ("A", 0)]), (3, [("A", 500), ("m", 50, 1, 0), ("A", -200)])):
+            send(c, "p", 3, 100, number)
+            plant.advance(FLASH_ERASE)
+            for command in commands:
+                send(c, *command)
+            send(c, "p", 3, 101)
+        plant.advance(1.0)
+        plant.runtime.power_cycle("gms96")  # (the static data is saved as the card goes off)
+        plant.advance(1.0)
+    finally:
+        plant.host.close()
+        for port in plant._ports:
+            port.close()
+        plant.runtime.stop()
+    image: dict[str, Any] = json.loads((state / "gms96.nvram.json").read_text())
+    return image
+
+
+def _write(state: Path, image: dict[str, Any]) -> Path:
+    path = state / "gms96.nvram.json"
+    path.write_text(json.dumps(image, ensure_ascii=False), "utf-8")
+    return path
+
+
+def test_the_image_a_card_saved_loads_as_it_was_saved(tmp_path: Path, saved: dict[str, Any]) -> None:
+    _write(tmp_path, saved)
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        runtime.add_device("gms96")
+        card = runtime.device("gms96").model
+        assert runtime.read("gms96", "param.N39") == 7 and runtime.read("gms96", "param.N8") == -1000
+        assert (runtime.read("gms96", "param.M"), card.feed.B, card.feed.S) == (30000, 80, 300)
+        assert runtime.read("gms96", "programs") == {0: 2, 3: 3}
+        assert (card.coordinates.zero_table, card.coordinates.machine_zero) == ({55: 1234}, -55)
+        assert card.image.data[4:6] == bytes((0x34, 0x12))
+    finally:
+        runtime.stop()
+
+
+# (section path, key the card writes, keys it never writes: another script's digits, superscripts,
+# '_', a blank or a sign, a leading zero (a second entry for the same number), hex, a fraction,
+# a number beyond what the card keeps)
+KEYS = [
+    (("eeprom", "N"), "39", ["٣٩", "³⁹", "３９", "3_9", " 39", "39 ", "+39", "039", "0x27", "39.0", "9" * 25]),
+    (("flash", "programs"), "3", ["٣", "²", "3_0", " 3", "+3", "03", "0x3", "3.0", "-3", "100", "-0"]),
+    (("offsets", "table"), "55", ["٥٥", "⁵⁵", "5_5", " 55", "+55", "055", "55.0", "53", "70"]),
+]
+
+
+@pytest.mark.parametrize(("where", "key", "edited"),
+                         [(where, key, edited) for where, key, keys in KEYS for edited in keys])
+def test_a_number_key_the_card_never_writes_refuses_the_memory(tmp_path: Path, saved: dict[str, Any],
+                                                               where: tuple[str, str], key: str, edited: str) -> None:
+    """(Before: ``int()`` read the key, so N '٣٩' or '+39' was N39, program '03' overwrote
+    program 3, '-3' and '1_0' were programs -3 and 10, zero point '+55' was G55.)"""
+    image = copy.deepcopy(saved)
+    section = image[where[0]][where[1]]
+    section[edited] = section.pop(key)
+    path = _write(tmp_path, image)
+    refused = refused_memory(tmp_path, "gms96", match=r"\(ValueError: stored .* (is no number the device writes"
+                                                      r"|is none the device stores)\)")
+    assert str(refused).startswith(f"{path}: ")
+
+
+@pytest.mark.parametrize(("where", "value"), [
+    (("eeprom", "M"), "٣"), (("eeprom", "M"), "3000"), (("eeprom", "B"), 1.5), (("eeprom", "S"), True),
+    (("eeprom", "o"), "0"), (("eeprom", "o"), 2),
+    (("offsets", "machine_zero"), "٣"), (("offsets", "machine_zero"), 2**23), (("offsets", "machine_zero"), 1.0),
+    (("static", "mb18"), 128), (("static", "mb18"), "5"),
+])
+def test_a_stored_value_the_card_never_writes_refuses_the_memory(tmp_path: Path, saved: dict[str, Any],
+                                                                 where: tuple[str, str], value: Any) -> None:
+    """(Before: ``int()`` took "٣", "3000", 1.5 and true as speeds and offsets, and ``& 0xFF``
+    made a tool number 128 another one; ``bool("0")`` switched the override on.)"""
+    image = copy.deepcopy(saved)
+    image.setdefault(where[0], {})[where[1]] = value
+    _write(tmp_path, image)
+    refused_memory(tmp_path, "gms96", match=r"\(ValueError: stored .* is none the device stores\)")
+
+
+@pytest.mark.parametrize(("table", "data"), [({"55": "٣"}, None), ({"55": 2**23}, None), ({"55": -2**23 - 1}, None),
+                                             ({}, [1, 2, 256]), ({}, [-1]), ({}, ["٣"]), ({}, [0] * 161)])
+def test_a_stored_offset_or_data_byte_the_card_never_writes_refuses_the_memory(
+        tmp_path: Path, saved: dict[str, Any], table: dict[str, Any], data: Any) -> None:
+    image = copy.deepcopy(saved)
+    image["offsets"]["table"] = table
+    if data is not None:
+        image["static"] = {"data": data, "mb18": 0}
+    _write(tmp_path, image)
+    refused_memory(tmp_path, "gms96", match=r"\(ValueError: stored .* (is none the device stores|is no 160 bytes)\)")
+
+
+def test_a_stored_speed_beyond_its_range_is_clamped_as_a_write_is(tmp_path: Path, saved: dict[str, Any]) -> None:
+    """What ``M``, ``B``, ``S`` store is clamped to their ranges (spec §3.8.12): so is a hand-edited
+    EEPROM (before: M 10**30 loaded as it was)."""
+    image = copy.deepcopy(saved)
+    image["eeprom"].update(M=10**30, B=-5, S=10**6)
+    _write(tmp_path, image)
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        runtime.add_device("gms96")
+        feed = runtime.device("gms96").model.feed
+        assert (feed.M, feed.B, feed.S) == (2_000_000, 1, 5_000)
+    finally:
+        runtime.stop()
+
+
+def test_devsim_run_on_a_state_file_with_another_scripts_digits_stops_naming_it(
+        tmp_path: Path, saved: dict[str, Any]) -> None:
+    """A real ``devsim run gms96 --pty --state-dir``: N '٣٩' stops the start in one line naming
+    the file, no traceback, the file left as it is (before: the card started with N39 = 50)."""
+    image = copy.deepcopy(saved)
+    image["eeprom"]["N"]["٣٩"] = 50
+    path = _write(tmp_path, image)
+    text = path.read_text("utf-8")
+    sim = Sim("gms96", "--pty", "--virtual", "--state-dir", str(tmp_path), "--no-control")
+    sim.proc.wait(timeout=60)  # (it ends by itself: the start fails)
+    code, err = sim.stop()
+    assert code == exits.SYSTEM
+    assert err == (f"Error: cannot create the devices: {path}: this memory image does not fit the kind 'gms96'"
+                   " (ValueError: stored N parameter '٣٩' is no number the device writes); fix or delete the file\n")
+    assert path.read_text("utf-8") == text
