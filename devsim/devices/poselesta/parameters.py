@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-from devsim.core.nvram import NonVolatileMemory
+from devsim.core.nvram import NonVolatileMemory, numbered
 from devsim.core.parameters import Param, Parameters, ParameterTable, accessor
 from devsim.devices.poselesta.signals import AXES
 from devsim.devices.poselesta.tape import Block, Formats
@@ -179,7 +179,10 @@ class MachineParameters(Parameters):
         if stored is None:
             self.values.update({int(k): float(v) for k, v in self._initial.items()})
         else:
-            kept = {int(k): v for k, v in stored.items() if int(k) in self.table}
+            # a key is the number as save writes it (str(n)), else the memory is refused: int() took
+            # '٤١', '４１', '+41', ' 41', '041' and '4_1' for P41 (a second P41 beside "41").
+            # [SIM-CHOICE] A number no parameter has is ignored, as before.
+            kept = {n: v for n, v in numbered(stored, "parameter").items() if n in self.table}
             for number, value in kept.items():
                 # a stored value that is no finite number (a hand edit: "nan", "1e999", true)
                 # refuses the memory at the start, the file named (UnfitMemory); before, float()

@@ -17,7 +17,7 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from devsim.core.nvram import NonVolatileMemory
+from devsim.core.nvram import NonVolatileMemory, numbered, stored_whole
 from devsim.core.points import BadValue, ascii_digits
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF
 from devsim.devices.poselesta.tape import Block, Formats, block_words, parse_blocks
@@ -59,17 +59,17 @@ class ProgramMemory:
     def load(self) -> None:
         """The memory as the control stored it; what it never stores (a hand-edited or damaged
         state file: a program, protected or inch program outside P00 … P98, a tool outside
-        T01 … T99 or other than its radius and length as finite numbers) is a ValueError, and
-        the start refuses the memory naming the file."""
+        T01 … T99 or other than its radius and length as finite numbers, a number key not written
+        as the control writes it (``str(n)``: not ``'٣'``, ``'03'``, ``'+3'``), a block number
+        twice in a program) is a ValueError, and the start refuses the memory naming the file."""
         nvram = self._nvram
-        stored = nvram.get("programs") or {}
-        self.programs = {_numbered(_key(p), "program", NC_PROGRAMS): {int(b["N"]): Block.from_json(b) for b in blocks}
-                         for p, blocks in stored.items()}
-        self.protected = {_numbered(p, "protected program", range(99)) for p in nvram.get("protected") or []}
+        self.programs = {number: _blocks(number, blocks)
+                         for number, blocks in numbered(nvram.get("programs") or {}, "program", NC_PROGRAMS).items()}
+        self.protected = {stored_whole(p, "protected program", range(99)) for p in nvram.get("protected") or []}
         if not self._protection:  # [SIM-CHOICE] a POS III's protection in the memory of a control now
             self.protected = set()  # configured as a POS II (no program lock): stays stored, not enforced
-        self.inch_programs = {_numbered(p, "inch program", NC_PROGRAMS) for p in nvram.get("inch_programs") or []}
-        self.tools = {_numbered(_key(t), "tool", range(1, 100)): _tool(t, v) for t, v in (nvram.get("tools") or {}).items()}
+        self.inch_programs = {stored_whole(p, "inch program", NC_PROGRAMS) for p in nvram.get("inch_programs") or []}
+        self.tools = {t: _tool(t, v) for t, v in numbered(nvram.get("tools") or {}, "tool", range(1, 100)).items()}
 
     def _save(self) -> None:
         self._unsaved = False
@@ -209,16 +209,16 @@ class ProgramMemory:
         self._nvram.put("tools", {str(t): v for t, v in sorted(self.tools.items())})
 
 
-def _numbered(number: object, what: str, numbers: range | frozenset[int]) -> int:
-    """A stored program's or tool's number (a list's whole number, a key through :func:`_key`)."""
-    if type(number) is not int or number not in numbers:
-        raise ValueError(f"stored {what} {number!r} is none the control stores")
-    return number
-
-
-def _key(key: str) -> int | str:
-    """A JSON key's number (its digits), or the key as it is (which no number is)."""
-    return int(key) if key.isdecimal() and key.isascii() else key
+def _blocks(program: int, stored: object) -> dict[int, Block]:
+    """A stored program's blocks by their numbers, as :meth:`ProgramMemory.store_block` keeps them:
+    a number once (a second block N5 replaces the first as it is read in or entered)."""
+    if type(stored) is not list:
+        raise ValueError(f"stored program P{program:02d} {stored!r:.40} is no list of blocks")
+    blocks = [Block.from_json(b) for b in stored]
+    numbers = {b.number: b for b in blocks}
+    if len(numbers) != len(blocks):
+        raise ValueError(f"stored program P{program:02d} holds a block number twice")
+    return numbers
 
 
 def _tool(key: object, value: object) -> dict[str, float]:

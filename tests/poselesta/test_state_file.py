@@ -1,0 +1,110 @@
+"""The control's state file (``devsim run poselesta --state-dir``): a file the control wrote loads
+as it was written; a hand-edited number key the control never writes (another script's digits,
+``'+41'``, ``'041'``: a second entry for a number already stored) or a block number twice stops the
+start with :class:`UnfitMemory` naming the file (manual §2.3.14, §2.3.21, §2.6.2.3, §2.6.3; spec §4.8).
+
+The image is made by a real control: programs entered, a tool and a parameter set, a program
+protected, through the control API."""
+
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from devsim.cli import exits
+from devsim.runtime import Runtime
+from tests.support.memory import refused_memory
+from tests.test_cli import Sim
+
+
+@pytest.fixture(scope="module")
+def saved(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    state = tmp_path_factory.mktemp("poselesta-saved")
+    runtime = Runtime(virtual=True, state_dir=state).start()
+    try:
+        runtime.add_device("poselesta")
+        runtime.advance(3.0)
+        runtime.set("poselesta", "program.P20", "N1 G01 X10 F500\nN2 X20 Y5\nN3 M02")
+        runtime.set("poselesta", "program.P03", "N5 X1\nN10 X2")
+        runtime.set("poselesta", "tool.T05", {"radius": 4.0, "length": 120.5})
+        runtime.set("poselesta", "param.P41", 3)
+        runtime.set("poselesta", "panel.protect", 3)
+    finally:
+        runtime.stop()
+    image: dict[str, Any] = json.loads((state / "poselesta.nvram.json").read_text())
+    return image
+
+
+def _write(state: Path, image: dict[str, Any]) -> Path:
+    path = state / "poselesta.nvram.json"
+    path.write_text(json.dumps(image, ensure_ascii=False), "utf-8")
+    return path
+
+
+def test_the_image_a_control_saved_loads_as_it_was_saved(tmp_path: Path, saved: dict[str, Any]) -> None:
+    _write(tmp_path, saved)
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        runtime.add_device("poselesta")
+        assert runtime.read("poselesta", "programs") == [3, 20]
+        assert runtime.read("poselesta", "program.P03") == "N 5 X 1.000\nN 10 X 2.000"
+        assert runtime.read("poselesta", "tool.T05") == {"radius": 4.0, "length": 120.5}
+        assert runtime.read("poselesta", "param.P41") == 3.0
+        assert runtime.read("poselesta", "protected") == [3]
+    finally:
+        runtime.stop()
+
+
+# (section, key the control writes, keys it never writes: another script's digits, superscripts,
+# full-width digits, '_', a blank or a sign, a leading zero (a second entry for the same number),
+# hex, a fraction, more digits than any number has)
+KEYS = [
+    ("params", "41", ["٤١", "⁴¹", "４１", "4_1", " 41", "+41", "041", "0x29", "41.0", "9" * 20]),
+    ("programs", "3", ["٣", "³", "３", "0_3", " 3", "+3", "03", "0x3", "3.0", "-0"]),
+    ("tools", "5", ["٥", "⁵", "0_5", " 5", "+5", "05", "5.0"]),
+]
+
+
+@pytest.mark.parametrize(("section", "key", "edited"),
+                         [(section, key, edited) for section, key, keys in KEYS for edited in keys])
+def test_a_number_key_the_control_never_writes_refuses_the_memory(tmp_path: Path, saved: dict[str, Any],
+                                                                  section: str, key: str, edited: str) -> None:
+    """(Before: ``int()`` read a parameter key, so '٤١', '４１', '+41', ' 41', '041' or '4_1' was
+    P41; a program or tool key '03' or '05' was P03 or T05, replacing the stored one.)"""
+    image = copy.deepcopy(saved)
+    image[section][edited] = image[section].pop(key)
+    path = _write(tmp_path, image)
+    refused = refused_memory(tmp_path, "poselesta",
+                             match=r"\(ValueError: stored (parameter|program|tool) .* is no number the device writes\)")
+    assert str(refused).startswith(f"{path}: ")
+
+
+def test_a_block_number_twice_in_a_program_refuses_the_memory(tmp_path: Path, saved: dict[str, Any]) -> None:
+    """A read-in or program entry replaces a block of the same number, so a program never holds
+    one twice (before: the second N5 of a hand-edited P03 silently replaced the first)."""
+    image = copy.deepcopy(saved)
+    image["programs"]["3"].append({"N": 5, "skip": False, "words": [["X", 9000]]})
+    _write(tmp_path, image)
+    refused_memory(tmp_path, "poselesta", match=r"\(ValueError: stored program P03 holds a block number twice\)")
+
+
+def test_devsim_run_on_a_state_file_with_another_scripts_digits_stops_naming_it(
+        tmp_path: Path, saved: dict[str, Any]) -> None:
+    """A real ``devsim run poselesta --pty --state-dir``: parameter '٤١' stops the start in one
+    line naming the file, no traceback, the file left as it is (before: the control started
+    with P41 = 7)."""
+    image = copy.deepcopy(saved)
+    image["params"]["٤١"] = 7
+    path = _write(tmp_path, image)
+    text = path.read_text("utf-8")
+    sim = Sim("poselesta", "--pty", "--virtual", "--state-dir", str(tmp_path), "--no-control")
+    sim.proc.wait(timeout=60)  # (it ends by itself: the start fails)
+    code, err = sim.stop()
+    assert code == exits.SYSTEM
+    assert err == (f"Error: cannot create the devices: {path}: this memory image does not fit the kind 'poselesta'"
+                   " (ValueError: stored parameter '٤١' is no number the device writes); fix or delete the file\n")
+    assert path.read_text("utf-8") == text
