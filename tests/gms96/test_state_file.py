@@ -27,7 +27,8 @@ FLASH_ERASE = 5.0  # manual §2.3.1 p: the card does not answer for 2 to 5 s aft
 @pytest.fixture(scope="module")
 def saved(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     """The image a card wrote: N39 = 7 and N8 = -1000/1000 saved with M, B, S (s85;170), G55 and
-    the machine zero entered (G P3 = 1), programs 0 and 3 downloaded, DW2 written (d 1234h;4)."""
+    the machine zero entered (G P3 = 1), programs 0 and 3 downloaded, DW2 written (d 1234h;4), a
+    PLC program of two frames downloaded."""
     state = tmp_path_factory.mktemp("gms96-saved")
     plant = start_plant([{}], state_dir=state)
     try:
@@ -42,6 +43,12 @@ def saved(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
             for command in commands:
                 send(c, *command)
             send(c, "p", 3, 101)
+        plant.advance(1.0)
+        send(c, "p", 1, 100)  # a PLC download of two a frames (manual §2.3.1 p, a)
+        plant.advance(FLASH_ERASE)
+        send(c, "a", 1, 2, 3)
+        send(c, "a", 0x10, 0x20)
+        send(c, "p", 1, 101)
         plant.advance(1.0)
         plant.runtime.power_cycle("gms96")  # (the static data is saved as the card goes off)
         plant.advance(1.0)
@@ -71,6 +78,8 @@ def test_the_image_a_card_saved_loads_as_it_was_saved(tmp_path: Path, saved: dic
         assert runtime.read("gms96", "programs") == {0: 2, 3: 3}
         assert (card.coordinates.zero_table, card.coordinates.machine_zero) == ({55: 1234}, -55)
         assert card.image.data[4:6] == bytes((0x34, 0x12))
+        assert runtime.read("gms96", "plc.image") == "010000020000030000100000200000"
+        assert runtime.read("gms96", "plc.frames") == [9, 6]
     finally:
         runtime.stop()
 
@@ -158,3 +167,47 @@ def test_devsim_run_on_a_state_file_with_another_scripts_digits_stops_naming_it(
     assert err == (f"Error: cannot create the devices: {path}: this memory image does not fit the kind 'gms96'"
                    " (ValueError: stored N parameter '٣٩' is no number the device writes); fix or delete the file\n")
     assert path.read_text("utf-8") == text
+
+
+@pytest.mark.parametrize("row", [["A", 2**23, 0, 0, 1], ["A", -2**23 - 1, 0, 0, 1], ["A", 10**30, 0, 0, 1],
+                                 ["m", 50, 1, 2**31, 3], ["A", 1000, 0, 0, 4], ["A", 1000, 0, 0, -1],
+                                 ["A", 1000, 5, 0, 1]])
+def test_a_stored_program_row_no_telegram_carries_refuses_the_memory(tmp_path: Path, saved: dict[str, Any],
+                                                                     row: list[Any]) -> None:
+    """(Mutating the card's image: P1 = 10**30, a count of 4 or -1 loaded, and program.3 served
+    'A1000000000000000000000000000000'; a telegram carries three 24-bit parameters, spec
+    Appendix B, and the ones not sent are 0.)"""
+    image = copy.deepcopy(saved)
+    image["flash"]["programs"]["3"][1] = row
+    _write(tmp_path, image)
+    refused_memory(tmp_path, "gms96", match=r"\(ValueError: stored program row .* is no command a 24-bit telegram")
+
+
+@pytest.mark.parametrize(("plc", "frames"), [
+    (True, [9, 6]), (5, [9, 6]), ([1], [9, 6]), ({}, [9, 6]), ("x", [9, 6]), ("٣٣", [1]), ("0A", [1]), ("0a0", [1]),
+    ("0a", [9, 6]), ("010000020000030000100000200000", [9, 7]), ("010000020000030000100000200000", "15"),
+    ("010000020000030000100000200000", [9.0, 6]), ("010000020000030000100000200000", [-1, 16]), (None, [9, 6]),
+])
+def test_a_stored_plc_image_no_download_makes_refuses_the_memory(tmp_path: Path, saved: dict[str, Any],
+                                                                 plc: Any, frames: Any) -> None:
+    """(Mutating the card's image: an image of true, 5, a list or an object loaded and every read of
+    plc, plc.running ... and state() failed with TypeError; "x", "0a" with frames of 15 bytes, or
+    frames that are no lengths loaded and were served as the downloaded program.)"""
+    image = copy.deepcopy(saved)
+    image["flash"].update(plc=plc, plc_frames=frames)
+    _write(tmp_path, image)
+    refused_memory(tmp_path, "gms96", match=r"\(ValueError: stored PLC (image|frame)")
+
+
+def test_a_plc_image_an_older_devsim_stored_without_its_frames_loads_as_one_frame(
+        tmp_path: Path, saved: dict[str, Any]) -> None:
+    image = copy.deepcopy(saved)
+    del image["flash"]["plc_frames"]
+    _write(tmp_path, image)
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        runtime.add_device("gms96")
+        assert runtime.read("gms96", "plc.frames") == [15]
+        assert runtime.state("gms96")["plc"]["image_bytes"] == 15
+    finally:
+        runtime.stop()

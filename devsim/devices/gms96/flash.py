@@ -7,7 +7,8 @@ from __future__ import annotations
 from collections.abc import Container
 from typing import Any
 
-from devsim.core.nvram import NonVolatileMemory, numbered
+from devsim.core.nvram import NonVolatileMemory, numbered, stored_whole
+from devsim.devices.gms96.codec import S24_MAX, S24_MIN
 
 __all__ = ["Flash"]
 
@@ -44,8 +45,7 @@ class Flash:
         flash = self.nvram.get("flash", {}) or {}
         self.programs = {number: [_queued(row, self.queued) for row in v]
                          for number, v in numbered(flash.get("programs") or {}, "CNC program", PROGRAMS).items()}
-        self.plc_image = flash.get("plc")
-        self.plc_frames = list(flash.get("plc_frames") or ([len(self.plc_image) // 2] if self.plc_image else []))
+        self.plc_image, self.plc_frames = _plc(flash.get("plc"), flash.get("plc_frames"))
         self.download = None
         self.cnc_storage_error = False  # the programs in the FLASH are the ones that fitted
         self.write_error = False
@@ -114,4 +114,32 @@ def _queued(row: Any, letters: Container[str]) -> list[Any]:
     if (type(row) is not list or len(row) != 5 or not isinstance(row[0], str) or row[0] not in letters
             or any(type(value) is not int for value in row[1:])):
         raise ValueError(f"stored program row {row!r} is no command the card queues")
+    # what a telegram carries (spec Appendix B): up to 3 parameters of 24 bits, signed, the ones not
+    # sent 0 (before, P1 = 10**30 or a count of -1 loaded, and program.n served 'A1000…000')
+    count, params = row[4], row[1:4]
+    if not 0 <= count <= 3 or any(not S24_MIN <= p <= S24_MAX for p in params) or any(params[count:]):
+        raise ValueError(f"stored program row {row!r:.60} is no command a 24-bit telegram carries")
     return row
+
+
+def _plc(image: Any, frames: Any) -> tuple[str | None, list[int]]:
+    """The stored PLC image and its frames as :meth:`Flash.store_plc` writes them: the ``a``
+    frames' bytes as hex text, and their lengths, which add up to it (none without an image).
+    Another (a hand-edited state file) is a ValueError, so that the start refuses the memory
+    naming its file; before, an image of true, 5 or a list failed every read of ``plc``
+    and ``state`` with TypeError, and "x" or frames that are not its bytes were served."""
+    if frames is None and image is not None and type(image) is str:  # (an older devsim wrote no frames)
+        frames = [len(image) // 2]
+    if image is None:
+        if frames not in (None, []):
+            raise ValueError(f"stored PLC frames {frames!r:.40} without a PLC image")
+        return None, []
+    if type(image) is not str or not image.isascii() or len(image) % 2 or any(c not in _HEX for c in image):
+        raise ValueError(f"stored PLC image {image!r:.40} is no bytes a download stores")
+    if type(frames) is not list or sum(stored_whole(f, "PLC frame length", _FRAME) for f in frames) != len(image) // 2:
+        raise ValueError(f"stored PLC frames {frames!r:.40} are not the {len(image) // 2} bytes of its image")
+    return image, frames
+
+
+_HEX = frozenset("0123456789abcdef")  # (bytes.hex writes these)
+_FRAME = range(256)  # a frame's bytes: the user data of one Langsatz (L < 256, spec §3.4)
