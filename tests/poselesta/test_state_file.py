@@ -108,3 +108,28 @@ def test_devsim_run_on_a_state_file_with_another_scripts_digits_stops_naming_it(
     assert err == (f"Error: cannot create the devices: {path}: this memory image does not fit the kind 'poselesta'"
                    " (ValueError: stored parameter '٤١' is no number the device writes); fix or delete the file\n")
     assert path.read_text("utf-8") == text
+
+
+@pytest.mark.parametrize(("number", "value"), [("68", 7), ("68", 2.5), ("30", 1e30), ("30", -5), ("72", 100)])
+def test_a_stored_parameter_value_the_control_never_takes_refuses_the_memory(
+        tmp_path: Path, saved: dict[str, Any], number: str, value: float) -> None:
+    """(Before: P68 = 7, no baud rate code, or P30 = 1e30 loaded and were served; an entry, a
+    catalogue block or the config refuses them, check_parameter.)"""
+    image = copy.deepcopy(saved)
+    image["params"][number] = value
+    _write(tmp_path, image)
+    refused_memory(tmp_path, "poselesta", match=rf"\(ValueError: P{number}: .* is not a whole number in")
+
+
+def test_a_stored_parameter_a_catalogue_read_in_left_at_0_loads(tmp_path: Path, saved: dict[str, Any]) -> None:
+    """A catalogue read-in first sets every parameter 0 (manual §2.6.2.3); one that never reached
+    its M30 leaves P30 at 0, below its range, and the control keeps it so."""
+    image = copy.deepcopy(saved)
+    image["params"]["30"] = 0
+    _write(tmp_path, image)
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        runtime.add_device("poselesta")
+        assert runtime.read("poselesta", "param.P30") == 0.0
+    finally:
+        runtime.stop()

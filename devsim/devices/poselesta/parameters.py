@@ -186,10 +186,14 @@ class MachineParameters(Parameters):
             for number, value in kept.items():
                 # a stored value that is no finite number (a hand edit: "nan", "1e999", true)
                 # refuses the memory at the start, the file named (UnfitMemory); before, float()
-                # took "nan" and the next save raised PoisonedMemory.  (No range check: a catalogue
-                # read-in that never reached its M30 leaves P30-P33 and P76 at 0 on purpose.)
+                # took "nan" and the next save raised PoisonedMemory.  A value is one the control
+                # takes (check_parameter: an entry, a catalogue block, the config), or 0, which a
+                # catalogue read-in that never reached its M30 leaves in P30-P33 and P76 on purpose;
+                # before, P68 = 7 (no baud rate code) or P30 = 1e30 loaded and were served.
                 if type(value) not in (int, float) or not math.isfinite(value):
                     raise ValueError(f"P{number}: {value!r} is no finite number")
+                if value != 0:
+                    check_parameter(number, value)
             self.values.update({number: float(value) for number, value in kept.items()})
 
     def save(self) -> None:
