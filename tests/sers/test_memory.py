@@ -482,6 +482,7 @@ def test_t21_exact_rendering_with_full_decimals_and_units(sers: Plant) -> None:
     ({"99999": 1}, "params"),  # no parameter at all
     ({"\u00b2": 1}, "params"),  # a superscript two, which str.isdigit takes: int() refused the whole file
     ({"\u0664\u0661": 100}, "params"),  # Arabic-Indic 41, which int() reads: was P41
+    ({"1028": 1, "01028": 7}, "params"),  # a leading zero, which PSAVE never writes: a second P1028 (7 won)
     ({"47": "x"}, "registers"),  # W: failed arithmetic in a program
 ])
 def test_a_stored_value_the_drive_never_stores_reads_as_a_checksum_error(

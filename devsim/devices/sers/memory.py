@@ -14,8 +14,7 @@ from collections.abc import Callable
 from typing import Any
 
 from devsim.core.console import warn
-from devsim.core.nvram import NonVolatileMemory
-from devsim.core.points import ascii_digits
+from devsim.core.nvram import NonVolatileMemory, stored_key
 from devsim.devices.sers.constants import WEIGHTED_KINDS, WEIGHTING_PARAMS
 from devsim.devices.sers.paramdef import range_problem
 from devsim.devices.sers.parameters import (
@@ -147,8 +146,10 @@ def _unfit(stored: Any) -> str | None:
     if type(stored) is not dict:
         return f"the parameters are a {type(stored).__name__}, not a table"
     for key, value in stored.items():
-        number = str(key)
-        row = PARAMETERS.get(int(number)) if ascii_digits(number) else None
+        try:  # (the number as PSAVE writes it, str(n): not '٤١', '+41' nor '041', a second P41)
+            row = PARAMETERS.get(stored_key(key, "parameter"))
+        except ValueError:
+            row = None
         if row is None or not row.saved:
             return f"P{key} is no parameter PSAVE stores"
         if not _finite(value):
