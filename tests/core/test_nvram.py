@@ -12,7 +12,15 @@ from pathlib import Path
 
 import pytest
 
-from devsim.core.nvram import MemoryInUse, NonVolatileMemory, PoisonedMemory, check_name
+from devsim.core.nvram import (
+    MemoryInUse,
+    NonVolatileMemory,
+    PoisonedMemory,
+    check_name,
+    numbered,
+    stored_key,
+    stored_whole,
+)
 from tests.support.memory import refused_memory
 
 
@@ -201,3 +209,27 @@ def test_the_memory_of_another_kind_is_refused_and_left_as_it_is(tmp_path: Path)
     old = NonVolatileMemory.for_device(tmp_path, "x", "poselesta")
     assert old.get("params") == {"41": 5}
     old.close()
+
+
+@pytest.mark.parametrize("key", ["0", "3", "-3", "99", "1234567890123456789"])
+def test_a_number_key_as_str_writes_it_is_its_number(key: str) -> None:
+    assert stored_key(key, "entry") == int(key)
+
+
+@pytest.mark.parametrize("key", ["٣", "²", "３", "1_0", " 3", "3 ", "+3", "03", "-0", "0x3", "3.0", "", "-",
+                                 "12345678901234567890", 3, None])
+def test_a_number_key_no_device_writes_is_refused(key: object) -> None:
+    """``int()`` reads other scripts' digits, ``_``, blanks, a sign and leading zeros: a key a
+    device never writes, and one that could be a second entry for a number already stored."""
+    with pytest.raises(ValueError, match="is no number the device writes"):
+        stored_key(key, "entry")
+
+
+def test_numbered_entries_are_checked_against_what_the_device_keeps() -> None:
+    assert numbered({"3": "a", "10": "b"}, "program", range(100)) == {3: "a", 10: "b"}
+    with pytest.raises(ValueError, match="stored program 100 is none the device stores"):
+        numbered({"100": "a"}, "program", range(100))
+    with pytest.raises(ValueError, match="are no numbered entries"):
+        numbered([1], "program")
+    with pytest.raises(ValueError, match="stored value True is none the device stores"):
+        stored_whole(True, "value")
