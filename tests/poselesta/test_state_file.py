@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import copy
 import json
+import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -102,8 +103,13 @@ def test_devsim_run_on_a_state_file_with_another_scripts_digits_stops_naming_it(
     path = _write(tmp_path, image)
     text = path.read_text("utf-8")
     sim = Sim("poselesta", "--pty", "--virtual", "--state-dir", str(tmp_path), "--no-control")
-    sim.proc.wait(timeout=60)  # (it ends by itself: the start fails)
-    code, err = sim.stop()
+    try:
+        ended: int | None = sim.proc.wait(timeout=60)  # (it ends by itself: the start fails)
+    except subprocess.TimeoutExpired:
+        ended = None  # (it started: the assertions below say so, and stop() ends it)
+    finally:
+        code, err = sim.stop()
+    assert ended is not None, f"the poselesta started on the edited state file: {err}"
     assert code == exits.SYSTEM
     assert err == (f"Error: cannot create the devices: {path}: this memory image does not fit the kind 'poselesta'"
                    " (ValueError: stored parameter '٤١' is no number the device writes); fix or delete the file\n")
