@@ -121,8 +121,11 @@ def _axis_points(n: int) -> list[Point]:
 
 
 def _medium(prefix: str, medium: str, settable: bool) -> Callable[[str], Point | None]:
+    """``R.<n>``, ``F.<n>``, ``I.<n>``, ``O.<n>``: n in ASCII digits, as the PCD's addresses are
+    written (§9.5; without re.ASCII, \\d also took the Arabic-Indic ٣ and the full-width ３ as 3)."""
+
     def make(name: str) -> Point | None:
-        match = re.fullmatch(rf"{prefix}\.(\d{{1,4}})", name)
+        match = re.fullmatch(rf"{prefix}\.(\d{{1,4}})", name, re.ASCII)
         if match is None or int(match[1]) >= MEDIA_SIZE[medium]:
             return None
         address = int(match[1])
