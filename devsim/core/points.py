@@ -46,6 +46,7 @@ __all__ = [
     "number_text",
     "parse_bool",
     "range_text",
+    "strip_blanks",
 ]
 
 PointType = Literal["bool", "int", "float", "str", "json"]
@@ -85,6 +86,12 @@ def ascii_digits(text: str) -> bool:
     ``str.isdigit`` also takes ² ³ ¹ (latin-1 B2h, B3h, B9h), which ``int`` then refuses with its
     own message, and the digits of every other script, which ``int`` reads ('٢' is 2)."""
     return text.isascii() and text.isdigit()
+
+
+def strip_blanks(text: str) -> str:
+    """``text`` without the blanks a control value may have around it (:data:`_BLANKS`: space, TAB,
+    LF, CR); ``str.strip`` also takes VT, FF, FS … US, NEL, NBSP, U+2028 and U+3000."""
+    return text.strip(_BLANKS)
 
 
 def ascii_upper(text: str) -> str:

@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from string import hexdigits
 
 from devsim.core.clock import Clock, Timer
-from devsim.core.points import BadValue, ascii_upper
+from devsim.core.points import BadValue, ascii_upper, strip_blanks
 from devsim.core.signals import SignalBank
 from devsim.devices.poselesta.codes import KEY_CODES
 from devsim.devices.poselesta.parameters import MachineParameters
@@ -42,7 +42,7 @@ class FrontPanel:
     def code_of(self, key: str) -> int:
         """A key by its name in ``v8_keymap`` or its two-digit hex code (spec §3.2.2 ``panel.key``)."""
         names = {ascii_upper(name): code for code, name in self._keymap.items()}
-        text = key.strip()
+        text = strip_blanks(key)  # (str.strip also took NBSP, U+3000, FS … US, NEL around the key)
         code = names.get(ascii_upper(text))  # (str.upper: 'exıt', with the dotless ı, was EXIT)
         if code is None:
             # hex digits only: int(key, 16) also read '0x48', '4_8', '+48' and the digits of other scripts

@@ -18,7 +18,7 @@ from collections.abc import Callable
 from typing import Any
 
 from devsim.core.nvram import NonVolatileMemory, numbered, stored_whole
-from devsim.core.points import BadValue, ascii_digits
+from devsim.core.points import BadValue, ascii_digits, strip_blanks
 from devsim.devices.poselesta.codes import WERTBEREICHES_UEBERLAUF
 from devsim.devices.poselesta.tape import Block, Formats, block_words, parse_blocks
 
@@ -162,7 +162,7 @@ class ProgramMemory:
         """Program entry of one block (spec §3.2.2 ``panel.edit_block``): ``"20: N5 X10"`` stores
         (or replaces) block N5 of P20, by the rules of a read-in."""
         number_text, sep, block_text = text.partition(":")
-        digits = number_text.strip().lstrip("Pp")
+        digits = strip_blanks(number_text).lstrip("Pp")  # (str.strip: NBSP, U+3000, FS … US too)
         if not sep or not ascii_digits(digits):
             raise BadValue("expected 'program: block', e.g. '20: N5 X10'")
         number = int(digits)
