@@ -29,6 +29,7 @@ from devsim.core.points import (
     number_text,
     parse_as,
     range_text,
+    strip_blanks,
 )
 
 __all__ = [
@@ -190,7 +191,7 @@ class ParameterTable:
         """The row for ``P41`` / ``p 41`` / ``41`` / an alias / a name, or None."""
         if isinstance(token, int):
             return self.rows.get(token)
-        text = str(token).strip()
+        text = strip_blanks(str(token))  # (str.strip: 'param.\u3000P41', 'param.P41\x1c' were P41)
         row = self.rows.get(text)
         if row is not None:
             return row

@@ -57,3 +57,16 @@ def test_a_program_number_has_only_the_control_blanks_around_it(cnc: Any, ctl: C
     assert ctl.read(D, "programs") == []
     ctl.set(D, "panel.edit_block", " 20 : N5 X10")
     assert ctl.read(D, "program.P20") == "N 5 X 10.000"
+
+
+@pytest.mark.parametrize("blank", UNICODE_BLANKS)
+def test_a_parameter_name_has_only_the_control_blanks_around_it(cnc: Any, ctl: ControlClient, blank: str) -> None:
+    """ParameterTable.find stripped the key with str.strip(): 'param.\\u3000P67' and 'param.67\\u2028'
+    read and set P67 (the buzzer switch) on every kind with parameters."""
+    for name in (f"param.{blank}P67", f"param.P67{blank}", f"param.{blank}67", f"param.67{blank}"):
+        with pytest.raises(ControlError, match="UnknownName"):
+            ctl.read(D, name)
+        with pytest.raises(ControlError, match="UnknownName"):
+            ctl.set(D, name, 1)
+    assert ctl.read(D, "param.P67") == 0
+    assert ctl.read(D, "param. P67\t") == ctl.read(D, "param.67") == 0  # the control blanks, the bare number
