@@ -17,7 +17,7 @@ import msgspec
 
 from devsim.core.kit import Fault, FaultTable, SignalDef, signal_points
 from devsim.core.parameters import Param, alias_hook, parameter_points
-from devsim.core.points import BadValue, Family, Point, PointTable, ascii_digits
+from devsim.core.points import BadValue, Family, Point, PointTable, ascii_digits, strip_blanks
 from devsim.core.settings import Invalid
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.codec import S24_MIN, wrap24
@@ -134,7 +134,9 @@ def _tool_offset(card: Any, value: int) -> None:
 #: Commands a CNC download does not record: carried out on receipt even then (the face's
 #: ``o2`` and the downloads of P_ON_RECEIPT, spec §3.8.13), by letter and the leading parameters.
 _NOT_RECORDED = (("o", (2,)), ("p", (1, 100)), ("p", (1, 101)), ("p", (3, 100)), ("p", (3, 101)))
-_COMMAND = re.compile(r"\s*(\S)\s*(-?\d+(?:\s*;\s*-?\d+){0,2})?\s*", re.ASCII)
+#: A command between the control blanks (:func:`~devsim.core.points.strip_blanks`; \s also took VT and FF):
+#: a letter, P1[;P2[;P3]].
+_COMMAND = re.compile(r"[ \t\r]*([^ \t\r])[ \t\r]*(-?\d+(?:[ \t\r]*;[ \t\r]*-?\d+){0,2})?[ \t\r]*", re.ASCII)
 
 
 def command_rows(program: Any) -> list[list[Any]]:
@@ -149,7 +151,7 @@ def command_rows(program: Any) -> list[list[Any]]:
     if not isinstance(lines, list) or not all(isinstance(text, str) for text in lines):
         raise BadValue("a CNC program is its commands: a list of texts, or one per line")
     rows = []
-    for text in (line for line in lines if line.strip()):
+    for text in (line for line in lines if strip_blanks(line)):  # (str.strip: a line of NBSP or FS was empty)
         match = _COMMAND.fullmatch(text)
         if match is None:
             raise BadValue(f"{text!r}: a command is a letter and up to 3 numbers P1;P2;P3, e.g. A1000 or p10;16;2")
