@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Annotated, Any, Literal
 
-from devsim.core.points import ascii_digits
+from devsim.core.points import ascii_digits, ascii_upper, strip_blanks
 from devsim.core.settings import Check, Keys, Meta, Settings, doc, field
 from devsim.devices.gms96.nparams import N_TABLE, n_range
 
@@ -158,7 +158,7 @@ def _not_a_sers_file(value: Mapping[Any, Any]) -> None:
 
 def _n_parameter(key: Any) -> int:
     """``N10`` or ``10``: each N parameter must exist (§2.3.1 N)."""
-    text = str(key).strip().upper()
+    text = ascii_upper(strip_blanks(str(key)))  # (str.strip also took NBSP, U+3000, FS … US)
     number = text[1:] if text.startswith("N") else text
     if not ascii_digits(number) or int(number) not in N_TABLE:
         raise ValueError("no such parameter")

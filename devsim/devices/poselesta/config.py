@@ -4,9 +4,10 @@ point of the word formats, the read-in and output options and the initial machin
 
 from __future__ import annotations
 
+from string import hexdigits
 from typing import Annotated, Any, Literal
 
-from devsim.core.points import ascii_digits
+from devsim.core.points import ascii_digits, strip_blanks
 from devsim.core.settings import Check, Keys, Meta, Settings, doc, field
 from devsim.devices.poselesta.parameters import check_parameter
 
@@ -35,17 +36,26 @@ def _decimals(value: dict[str, int]) -> dict[str, int]:
 def _parameter_number(key: Any) -> int:
     if isinstance(key, int) and not isinstance(key, bool):
         return key
-    text = str(key).strip()
+    text = strip_blanks(str(key))  # (str.strip also took NBSP, U+3000, FS … US: '\u30003' was P3)
     if not ascii_digits(text):
         raise ValueError("Input should be a valid integer, unable to parse string as an integer")
     return int(text)
 
 
 def _key_code(key: Any) -> int:
-    """A key code as a number (0x48, 72) or hex text ("48"); one of the 45 codes of §3.10."""
+    """A key code as a number (0x48, 72) or hex text ("48", "0x48") in ASCII hex digits (int(text, 16)
+    also read the Arabic-Indic '٤٨', '+48', '4_8' and NBSP or FS around them); one of the 45 codes of
+    §3.10."""
     from devsim.devices.poselesta.codes import KEY_CODES
 
-    code = key if isinstance(key, int) else int(str(key), 16)
+    if isinstance(key, int):
+        code = key
+    else:
+        text = strip_blanks(str(key))
+        digits = text[2:] if text[:2] in ("0x", "0X") else text
+        if not (digits and digits.isascii() and all(c in hexdigits for c in digits)):
+            raise ValueError(f"{text!r} is no key code in hex digits (48 or 0x48)")
+        code = int(digits, 16)
     if code not in KEY_CODES:
         raise ValueError(f"{code:02X} is not a key code of the keyboard (spec §3.10)")
     return code
