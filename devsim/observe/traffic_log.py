@@ -41,9 +41,18 @@ def message_text(message: Any) -> str:
         head = [str(fields.pop("frame"))] if "frame" in fields else []
         for key, value in fields.items():
             shown = ",".join(str(v) for v in value) if isinstance(value, list | tuple) else str(value)
-            head.append(f"{key}={shown}")
+            head.append(f"{key}={_escaped(shown)}")
         return " ".join(head)
     return str(message)
+
+
+def _escaped(text: str) -> str:
+    """A field's text with every character but printable ASCII escaped: an FT1.2 command byte 0Ah,
+    85h (NEL) or 1Bh (ESC) was written as it is (``letter=`` ended the line, or reached the
+    terminal as a control), DFh as ``ß``, which the card never sees."""
+    if text.isascii() and text.isprintable():
+        return text
+    return "".join(c if c.isascii() and c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in text)
 
 
 class TrafficLog(TapSink):

@@ -174,6 +174,15 @@ def _remove(items: list[Any], item: Any) -> None:
 
 
 
+def _quoted(value: Any) -> str:
+    """``value`` as JSON on one line: JSON escapes the C0 controls, not NEL (85h), U+2028 or U+2029,
+    which end a line too (str.splitlines, a terminal); text with one of them is written in ASCII."""
+    import json  # (a client's: the simulator that serves watches never renders one, nor imports json)
+
+    text = json.dumps(value, ensure_ascii=False)
+    return text if text.isprintable() else json.dumps(value)
+
+
 def describe(item: dict[str, Any]) -> str:
     """One item as a line: ``12.300 sers axis.position 1234.0``, ``12.310 sers event move_end``,
     ``12.400 sers fault blocked_axis on``, ``13.000 sers connect host connected`` (the port is
@@ -181,16 +190,16 @@ def describe(item: dict[str, Any]) -> str:
     kind = item.get("type")
     head = f"{float(item.get('t', 0.0)):.3f} {item.get('device')}"
     if kind == "change":
-        import json  # (a client's: the simulator that serves watches never renders one, nor imports json)
-
         value = item.get("value")
         plain = isinstance(value, str) and value.isprintable()  # (text with a line end is quoted: one item, one line)
-        return f"{head} {item.get('name')} {value if plain else json.dumps(value, ensure_ascii=False)}"
+        return f"{head} {item.get('name')} {value if plain else _quoted(value)}"
     if kind in ("error", "refused") and "code" in item:  # an error by its code: "sers error P11 8192: drive error: limit switch"
         text = item.get("text")
         return f"{head} {kind} {item['code']}" + (f": {text}" if text else "")
     if kind in ("event", "error"):
         name = str(item.get("name"))
+        if not name.isprintable():  # (an event naming a control byte, 'cmd_\x1b': one item, one line)
+            name = _quoted(name)
         return f"{head} {name}" if kind == "error" and name.lower().startswith("error") else f"{head} {kind} {name}"
     if kind == "fault":
         return f"{head} fault {item.get('name')} {'on' if item.get('active') else 'off'}"
