@@ -39,3 +39,16 @@ def test_a_program_has_only_the_control_blanks(ctl: tuple[ControlClient, str], p
     assert client.read(card, "program.1") == []
     client.set(card, "program.1", " A1000 \r\n\tp10 ; 16;2\n\n")
     assert client.read(card, "program.1") == ["A1000", "p10;16;2"]
+
+
+@pytest.mark.parametrize("name", ["marker.M7.0\x0b", "marker.\x0cM7.0", "marker.m7.0\x0c",
+                                  "marker.M7.0\n"])
+def test_a_marker_bit_is_named_with_only_space_or_tab(ctl: tuple[ControlClient, str], name: str) -> None:
+    """image.parse_bit's \\s took VT and FF around the parts of a bit address (and its $ a final LF):
+    'marker.M7.0\\x0b' was the marker bit M7.0, 'input.E2.1\\x0b' was refused."""
+    client, card = ctl
+    with pytest.raises(ControlError, match="UnknownName"):
+        client.read(card, name)
+    with pytest.raises(ControlError, match="UnknownName"):
+        client.set(card, name, True)
+    assert client.read(card, "marker.M7.0") is False and client.read(card, "marker.m 7.0") is False

@@ -12,14 +12,15 @@ from collections import deque
 
 __all__ = ["STATIC_BYTES", "ProcessImage", "bit_name", "parse_bit"]
 
-_BIT = re.compile(r"^\s*([EAM])\s*(\d+)\.([0-7])\s*$", re.IGNORECASE | re.ASCII)
+#: A bit address with space or TAB around its parts (\s also took VT, FF and LF, and ``$`` a line end).
+_BIT = re.compile(r"[ \t]*([EAM])[ \t]*(\d+)\.([0-7])[ \t]*", re.IGNORECASE | re.ASCII)
 STATIC_BYTES = 160  # DW0..DW79 survive power-off (manual §2.3.1 d)
 MESSAGE_FIFO = 8
 
 
 def parse_bit(name: str) -> tuple[str, int, int]:
     """``"E2.1"`` → ``("E", 2, 1)``; ``ValueError`` for anything else."""
-    m = _BIT.match(str(name))
+    m = _BIT.fullmatch(str(name))
     if not m:
         raise ValueError(f"not a bit address: {name!r} (e.g. E2.1, A0.2, M7.0)")
     return m.group(1).upper(), int(m.group(2)), int(m.group(3))
