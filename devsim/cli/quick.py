@@ -30,9 +30,10 @@ COMPLETE_VAR = "_DEVSIM_COMPLETE"
 
 
 def _non_negative(text: str) -> float:
-    """``click.FloatRange(min=0)``: a float not below 0 (NaN passes, as in click)."""
+    """``click.FloatRange(min=0)``: a float not below 0; NaN is left to click, which takes it, for
+    :func:`devsim.cli.serve.plan_run` to refuse (``--idle-drop: must be a number of seconds``)."""
     value = float(text)
-    if value < 0:
+    if not value >= 0:
         raise ValueError(text)
     return value
 

@@ -296,6 +296,11 @@ def up(
         raise click.UsageError(f"--speed: {problem}")
     if virtual and speed != 1.0:
         raise click.UsageError("--speed and --virtual exclude each other")
+    if idle_drop is not None:
+        from devsim.transports.hosts import idle_drop_problem
+
+        if (problem := idle_drop_problem(idle_drop)) is not None:
+            raise click.UsageError(f"--idle-drop: {problem}")
     name = getattr(spec, "name", None) or Path(plant_file).stem
     if part is not None:
         name = f"{name}.{part}"

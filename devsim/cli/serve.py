@@ -246,6 +246,11 @@ def plan_run(
         raise usage_error(f"--speed: {problem}")
     if virtual and speed != 1.0:
         raise usage_error("--speed and --virtual exclude each other")
+    if idle_drop is not None:
+        from devsim.transports.hosts import idle_drop_problem
+
+        if (problem := idle_drop_problem(idle_drop)) is not None:
+            raise usage_error(f"--idle-drop: {problem}")
 
     from devsim.observe.live_log import level_of
 

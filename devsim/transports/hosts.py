@@ -29,13 +29,26 @@ from typing import TypeVar
 
 from devsim.transports.fdlimit import report
 
-__all__ = ["DEFAULT_IDLE_DROP", "Admission", "admit", "dropped", "listen_backlog", "peer_text", "refuse", "since_text"]
+__all__ = ["DEFAULT_IDLE_DROP", "Admission", "admit", "dropped", "idle_drop_problem", "listen_backlog", "peer_text", "refuse", "since_text"]
 
 #: Seconds a host may stay idle before a waiting client takes its place (``--idle-drop``).
 DEFAULT_IDLE_DROP = 30.0
 _SOMAXCONN = Path("/proc/sys/net/core/somaxconn")
 
 H = TypeVar("H")
+
+
+def idle_drop_problem(seconds: float) -> str | None:
+    """What is wrong with ``seconds`` as an idle-drop time (``--idle-drop``), or None.
+
+    NaN is refused (it passed click's ``FloatRange(min=0)`` and ``admit`` never found a host idle
+    longer than NaN: it acted as "never" unsaid).  [SIM-CHOICE] Infinity is taken and means what
+    it says: no host is ever idle long enough to be dropped, a full port refuses every newcomer."""
+    if seconds != seconds:
+        return "must be a number of seconds, not nan"
+    if seconds < 0:
+        return "must not be negative"
+    return None
 
 
 def listen_backlog() -> int:

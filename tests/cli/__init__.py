@@ -1,0 +1,1 @@
+"""Command-line edges: odd option values, port lists, repeated requests (real subprocesses)."""

@@ -1,0 +1,39 @@
+"""Odd values of ``devsim run`` / ``up`` options: each is one ``Error:`` line naming the option,
+exit status 2, no traceback, nothing served (real subprocesses: the quick command line of
+:mod:`devsim.cli.quick` and click both read them)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from tests.support.process import ROOT, devsim_env
+
+PLANT = str(ROOT / "scenarios/sers/absolute_positioning.yaml")
+
+
+@pytest.mark.parametrize(
+    ("args", "expected"),
+    [
+        # (click's FloatRange(min=0) takes NaN, and no host was ever idle longer than NaN: "never", unsaid)
+        (["run", "sers", "--idle-drop", "nan"], "--idle-drop: must be a number of seconds, not nan"),
+        (["run", "sers", "--idle-drop=nan", "--no-control"], "--idle-drop: must be a number of seconds, not nan"),
+        (["up", PLANT, "--idle-drop", "nan"], "--idle-drop: must be a number of seconds, not nan"),
+        # (ascii_digits then int(): past 4300 digits int() raised, a ValueError traceback)
+        (["run", "sers", "--canopen", "9" * 5000], "--canopen: expected NODE"),
+        # (the same ValueError said without the option: 'Exceeds the limit (4300 digits) ...')
+        (["run", "sers", "--opcua", "9" * 5000], "--opcua: expected [HOST:]PORT"),
+        # (int() read the Arabic-Indic digit: the device was served on TCP port 3)
+        (["run", "sers", "--tcp", "\u0663"], "--tcp: expected [HOST:]PORT"),
+        (["run", "sers", "--rfc2217", "-0"], "--rfc2217: expected [HOST:]PORT"),
+    ],
+)
+def test_an_odd_option_value_is_one_error_line(args: list[str], expected: str) -> None:
+    done = subprocess.run([sys.executable, "-m", "devsim", *args], cwd=ROOT, env=devsim_env(), capture_output=True,
+                          text=True, timeout=60, stdin=subprocess.DEVNULL)
+    assert done.returncode == 2, done.stderr
+    assert done.stdout == ""
+    assert done.stderr.count("\n") == 1, done.stderr
+    assert done.stderr.startswith("Error: ") and expected in done.stderr
