@@ -29,7 +29,7 @@ def check_modbus(spec: str) -> None:
 
 def check_canopen(spec: str) -> None:
     node, _, where = spec.partition("@")
-    if not ascii_digits(node) or not 1 <= int(node) <= 127:
+    if not ascii_digits(node) or len(node) > 3 or not 1 <= int(node) <= 127:
         raise click.UsageError(f"--canopen: expected NODE[@[HOST:]PORT] or NODE@socketcan:CHANNEL with NODE 1 … 127, "
                                f"not {spec!r}")
     if where.startswith("socketcan:"):

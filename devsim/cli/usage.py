@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from devsim.core.points import ascii_digits
+
 __all__ = ["host_port", "usage_error"]
 
 
@@ -19,10 +21,9 @@ def host_port(option: str, text: str) -> tuple[str, int]:
     if not sep:
         host = "127.0.0.1"
     host = host.strip("[]") or "127.0.0.1"
-    try:
-        port = int(port_text)
-    except ValueError:
-        raise usage_error(f"{option}: expected [HOST:]PORT, got {text!r}") from None
+    if not ascii_digits(port_text) or len(port_text) > 5:  # (int() read '٣' and '-0', and raised past 4300 digits)
+        raise usage_error(f"{option}: expected [HOST:]PORT, got {text!r}")
+    port = int(port_text)
     if not 0 <= port <= 65535:
         raise usage_error(f"{option}: port {port} is not in 0..65535")
     return host, port

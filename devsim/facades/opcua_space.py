@@ -128,7 +128,7 @@ def endpoint_url(spec: str | None) -> str:
     if not sep:
         host = ""
     host = host.strip("[]") or "127.0.0.1"
-    if not ascii_digits(port_text) or not 0 <= int(port_text) <= 65535:
+    if not ascii_digits(port_text) or len(port_text) > 5 or not 0 <= int(port_text) <= 65535:
         raise ValueError(f"--opcua: expected [HOST:]PORT, not {spec!r}")
     shown = f"[{host}]" if ":" in host else host
     return f"opc.tcp://{shown}:{int(port_text)}/devsim/"
