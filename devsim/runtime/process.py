@@ -26,10 +26,15 @@ from devsim.transports.fdlimit import loop_exception_handler
 if TYPE_CHECKING:  # imported where used: a runtime without a state dir needs no pathlib
     from pathlib import Path
 
-__all__ = ["Runtime", "UnknownDevice", "port_key"]
+__all__ = ["FACADE_PORTS", "Runtime", "UnknownDevice", "port_key"]
 
 T = TypeVar("T")
 
+
+#: Lines a facade serves for a device beside its own ports, by the port name ``ctl line``,
+#: ``line-fault``, ``telegrams`` and ``capture --port`` take: the Modbus RTU line
+#: (``NAME.modbus``, :mod:`devsim.facades.modbus`).
+FACADE_PORTS = ("modbus",)
 
 #: The longest step of virtual time one ``advance`` may take (about 116 days).
 MAX_ADVANCE = 1e7
@@ -337,8 +342,7 @@ class Runtime:
             key = port_key(device, port)
             line = self.lines.get(key)
             if line is None:
-                self.device(device).port(port)
-                raise UnknownName(f"port {port!r} of device {device!r} is not on a line")
+                raise self._no_line(device, port)
             handles = self._line_faults.setdefault((key, kind), [])
             if active:
                 handles.append(line.inject(LineFault(kind=kind, **params)))  # type: ignore[arg-type]
@@ -394,7 +398,15 @@ class Runtime:
     def _line_status(self, device: str, port: str = "main") -> dict[str, Any]:
         line = self.lines.get(port_key(device, port))
         if line is None:
-            self.device(device).port(port)
-            raise UnknownName(f"port {port!r} of device {device!r} is not on a line")
+            raise self._no_line(device, port)
         status: dict[str, Any] = line.status()
         return status
+
+    def _no_line(self, device: str, port: str) -> UnknownName:
+        """Why no line serves ``port`` of ``device``: no such device (raised), no such port, the
+        ports it has being the device's own and the facade lines served for it (the Modbus RTU
+        line ``modbus``: it listed only the device's own), or a port on no line (UDP)."""
+        ports = [*self.device(device).port_names(), *(p for p in FACADE_PORTS if port_key(device, p) in self.lines)]
+        if port not in ports:
+            return UnknownName(f"{device} has no port {port!r} (ports: {', '.join(ports)})")
+        return UnknownName(f"port {port!r} of device {device!r} is not on a line")

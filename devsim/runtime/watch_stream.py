@@ -34,15 +34,12 @@ from typing import Any
 from devsim.core.device import Device
 from devsim.core.points import UnknownName
 from devsim.core.watch import PointWatch
-from devsim.runtime.process import port_key
+from devsim.runtime.process import FACADE_PORTS, port_key
 from devsim.runtime.requests import MIN_WATCH_PERIOD
 
 __all__ = ["DEFAULT_PERIOD", "FACADE_PORTS", "WatchStream", "axis_names", "default_names", "describe", "error_text"]
 
 DEFAULT_PERIOD = 0.1
-#: Lines a facade serves for a device beside its own ports, by the port name ``ctl line`` and
-#: ``ctl capture --port`` take: the Modbus RTU line (``NAME.modbus``, :mod:`devsim.facades.modbus`).
-FACADE_PORTS = ("modbus",)
 _AXIS_NAME = re.compile(r"^axis\.(?:[^.]+\.)?(position|velocity)$")
 
 Send = Callable[[dict[str, Any]], None]
