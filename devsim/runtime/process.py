@@ -335,7 +335,14 @@ class Runtime:
         """Start (``active``) or end a fault on the line serving a port of ``device``: any kind
         of :class:`~devsim.transports.line.LineFault` (``corrupt``, ``drop``, ``noise`` with
         ``rate``, ``unplug`` ...), with its parameters; ending it ends every fault of that kind
-        started here."""
+        started here.
+
+        [SIM-CHOICE] A fault started where one of the same kind and direction started here is
+        still kept replaces it (a switch turned on again, with the new parameters): ``noise on
+        --rate 200`` then ``--rate 500`` is 500 bytes/s, not 700.  They piled up: each request
+        added one, every byte and noise tick walked them all, and 800 ``noise on`` requests took
+        the simulator's whole CPU.  So a line holds at most three per kind from here (to_device,
+        to_host, both); a scenario's ``line_fault`` steps still add up (:meth:`Line.inject`)."""
         from devsim.transports.line import LineFault
 
         def apply() -> None:
@@ -345,7 +352,11 @@ class Runtime:
                 raise self._no_line(device, port)
             handles = self._line_faults.setdefault((key, kind), [])
             if active:
-                handles.append(line.inject(LineFault(kind=kind, **params)))  # type: ignore[arg-type]
+                fault = LineFault(kind=kind, **params)  # type: ignore[arg-type]
+                for handle in [h for h in handles if h.fault.direction == fault.direction]:
+                    handle.cancel()
+                    handles.remove(handle)
+                handles.append(line.inject(fault))
             else:
                 for handle in handles:
                     handle.cancel()
