@@ -101,7 +101,7 @@ def failure(status: int, message: str) -> click.ClickException:
 
 
 #: Errors of the control API (``ControlError.type``) that say the device was not reached.
-NOT_REACHED = frozenset({"Offline", "Timeout"})
+NOT_REACHED = frozenset({"Offline", "Timeout", "Busy"})
 
 
 def control_error(exc: Exception) -> click.ClickException:

@@ -139,6 +139,8 @@ class ControlClient(ControlOps):
         if not line:
             raise ConnectionError("control connection closed by the simulator")
         reply = json.loads(line)
+        if reply.get("id") is None and not reply.get("ok"):  # refused before it was read (Busy, a line too long)
+            raise ControlError(str(reply.get("error")), str(reply.get("type", "Error")))
         if reply.get("id") != req_id:
             raise ControlError(f"answer to request {reply.get('id')!r}, expected {req_id}", "ProtocolError")
         if not reply.get("ok"):

@@ -57,6 +57,7 @@ if TYPE_CHECKING:  # imported where used: `devsim run` serves its ports before a
 __all__ = [
     "ControlAddress",
     "ControlAddressError",
+    "MAX_CLIENTS",
     "ControlServer",
     "host_problem",
     "parse_address",
@@ -64,6 +65,12 @@ __all__ = [
 
 MAX_LINE = 1 << 20  # bytes in one request line
 MAX_BACKLOG = 4 << 20  # bytes of watch output a slow reader may leave unread before its watch ends
+#: [SIM-CHOICE] Control connections served at once; one more is answered with one ``Busy`` error
+#: line and closed.  Each costs a descriptor and about 4 KB (9,000 idle ones: 9,011 descriptors,
+#: +37 MB resident, kept after they closed), and the descriptors are those the device's ports,
+#: traces and state files need: about 1,000 idle clients of a loopback TCP control port (any
+#: local user) took the default limit of 1,024, and the device's hosts waited in the backlog.
+MAX_CLIENTS = 256
 
 
 class ControlAddressError(ValueError):
@@ -219,6 +226,10 @@ class ControlServer:
 
         task = asyncio.current_task()
         assert task is not None
+        if len(self._clients) >= MAX_CLIENTS:
+            await self._refuse(reader, writer, ops.encode(ErrorResponse(
+                error=f"the simulator serves at most {MAX_CLIENTS} control connections at once", type="Busy")))
+            return
         self._clients.add(task)
         streams: list[Any] = []  # the watch and capture streams of this connection
         pumps: list[asyncio.Task[None]] = []
@@ -251,6 +262,23 @@ class ControlServer:
             self._clients.discard(task)
             with contextlib.suppress(Exception):
                 writer.close()
+
+    async def _refuse(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter, line: bytes) -> None:
+        """One connection more than :data:`MAX_CLIENTS`: its one error line, and a line in the
+        log (at most one every few seconds, :func:`devsim.transports.fdlimit.report`).  What the
+        client sent is read for a second at most before the close, so that the close does not
+        reset the connection (and the error line with it) for a request left unread."""
+        from devsim.transports.fdlimit import report
+
+        report("control-full", f"control {self.address}: refused a connection, {MAX_CLIENTS} are open")
+        with contextlib.suppress(Exception, asyncio.CancelledError):  # (the simulator stopping meanwhile)
+            writer.write(line)
+            writer.write_eof()
+            async with asyncio.timeout(1.0):
+                while await reader.read(MAX_LINE):
+                    pass
+        with contextlib.suppress(Exception):
+            writer.close()
 
     def _start_capture(self, response: OkResponse, writer: asyncio.StreamWriter,
                        streams: list[Any],
