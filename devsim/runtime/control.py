@@ -50,6 +50,8 @@ from typing import TYPE_CHECKING, Any
 
 import msgspec
 
+from devsim.core.points import ascii_digits
+
 if TYPE_CHECKING:  # imported where used: `devsim run` serves its ports before anyone asks
     from devsim.runtime.ops import ErrorResponse, OkResponse
     from devsim.runtime.process import Runtime
@@ -136,12 +138,9 @@ def parse_address(addr: str) -> ControlAddress:
         host, _, port_text = text.rpartition(":")
         if not host:
             host = "127.0.0.1"
-    try:
-        port = int(port_text)
-    except ValueError:
-        raise ControlAddressError(
-            f"{addr!r}: expected unix:/path/to.sock or [HOST:]PORT"
-        ) from None
+    if not ascii_digits(port_text):  # (int() read '٣' as port 3, and '-0')
+        raise ControlAddressError(f"{addr!r}: expected unix:/path/to.sock or [HOST:]PORT")
+    port = int(port_text) if len(port_text) <= 5 else -1  # (int() raises past 4300 digits)
     if not 0 <= port <= 65535:
         raise ControlAddressError(f"{addr!r}: port must be 0..65535")
     problem = host_problem(host)

@@ -28,6 +28,12 @@ PLANT = str(ROOT / "scenarios/sers/absolute_positioning.yaml")
         # (int() read the Arabic-Indic digit: the device was served on TCP port 3)
         (["run", "sers", "--tcp", "\u0663"], "--tcp: expected [HOST:]PORT"),
         (["run", "sers", "--rfc2217", "-0"], "--rfc2217: expected [HOST:]PORT"),
+        # (parse_address's int() read '٣': the control API or the page was served on port 3)
+        (["run", "sers", "--control", "\u0663"], "--control: '\u0663': expected unix:/path/to.sock or [HOST:]PORT"),
+        (["scenario", "run", "--virtual", "--control", "\u0663", PLANT],
+         "--control: '\u0663': expected unix:/path/to.sock or [HOST:]PORT"),
+        (["web", "--listen", "\u0663"], "--listen: '\u0663': expected"),
+        (["up", PLANT, "--control", "9" * 5000], "--control: '99"),
     ],
 )
 def test_an_odd_option_value_is_one_error_line(args: list[str], expected: str) -> None:
