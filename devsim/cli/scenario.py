@@ -23,6 +23,7 @@ import click
 
 from devsim.cli import exits
 from devsim.cli.options import check_fleet
+from devsim.cli.usage import check_dirs
 from devsim.core.config import ConfigError
 from devsim.core.console import say, stop_on_signals, warn
 from devsim.core.nvram import UNUSABLE as _UNUSABLE_MEMORY
@@ -105,6 +106,7 @@ def scenario_run(
 
     if speed is not None and (problem := speed_problem(speed)) is not None:
         raise click.UsageError(f"--speed: {problem}")
+    check_dirs({"--state-dir": state_dir, "--trace-dir": trace_dir, "--plot": plot_dir})
     if virtual and realtime:  # (the last one won)
         raise click.UsageError("--virtual and --realtime exclude each other")
     if virtual and speed is not None:  # (the speed was ignored, as devsim up refuses the pair)
@@ -296,6 +298,7 @@ def up(
         raise click.UsageError(f"--speed: {problem}")
     if virtual and speed != 1.0:
         raise click.UsageError("--speed and --virtual exclude each other")
+    check_dirs({"--state-dir": state_dir, "--trace-dir": trace_dir})
     if idle_drop is not None:
         from devsim.transports.hosts import idle_drop_problem
 

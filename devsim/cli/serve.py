@@ -246,6 +246,10 @@ def plan_run(
         raise usage_error(f"--speed: {problem}")
     if virtual and speed != 1.0:
         raise usage_error("--speed and --virtual exclude each other")
+    if state_dir is not None:
+        from devsim.cli.usage import check_dirs
+
+        check_dirs({"--state-dir": state_dir})
     if idle_drop is not None:
         from devsim.transports.hosts import idle_drop_problem
 

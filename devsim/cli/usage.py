@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from devsim.core.points import ascii_digits
 
-__all__ = ["host_port", "usage_error"]
+__all__ = ["check_dirs", "host_port", "usage_error"]
 
 
 def usage_error(message: str) -> Exception:
@@ -27,3 +27,25 @@ def host_port(option: str, text: str) -> tuple[str, int]:
     if not 0 <= port <= 65535:
         raise usage_error(f"{option}: port {port} is not in 0..65535")
     return host, port
+
+
+def check_dirs(dirs: dict[str, str | None]) -> None:
+    """Directory options (option → the path given, or None) that
+    name something other than a directory, or nothing at all (''): one usage error naming the
+    option.  They were made at start with ``mkdir(parents=True)``, and a file of that name ended in
+    'cannot create the devices: [Errno 17] File exists: …' or, for scenario run, in an error that
+    named the scenario file (exit 6)."""
+    import os
+
+    for option, path in dirs.items():
+        if path is None:
+            continue
+        if not path:
+            raise usage_error(f"{option}: needs a directory")
+        if os.path.exists(path) and not os.path.isdir(path):
+            raise usage_error(f"{option}: {path}: not a directory")
+        parent = os.path.dirname(os.path.abspath(path))
+        while not os.path.exists(parent):
+            parent = os.path.dirname(parent)
+        if not os.path.isdir(parent):
+            raise usage_error(f"{option}: {path}: {parent} is not a directory")
