@@ -5,6 +5,8 @@ The libraries themselves are imported only to check that they are there."""
 
 from __future__ import annotations
 
+import math
+
 import click
 
 from devsim.cli import exits
@@ -54,15 +56,14 @@ def check_mqtt(url: str, convention: str, rate: float, plant: str | None, primar
                                  f" {install_command('mqtt')}") from None
     from devsim.facades.mqtt_topics import check_name, parse_url
 
-    try:
-        if url:
-            parse_url(url)
-        if plant is not None:
-            check_name("plant", plant)
-    except ValueError as exc:
-        raise click.UsageError(f"--mqtt: {exc}") from None
-    if not rate > 0:
-        raise click.UsageError("--mqtt-rate: must be a positive number of seconds")
+    for option, check in (("--mqtt", lambda: parse_url(url) if url else None),
+                          ("--mqtt-plant", lambda: check_name("plant", plant) if plant is not None else None)):
+        try:
+            check()
+        except ValueError as exc:  # (a bad plant name was said as '--mqtt: ...')
+            raise click.UsageError(f"{option}: {exc}") from None
+    if not 0 < rate < math.inf:  # (inf passed 'rate > 0': the points were never sampled)
+        raise click.UsageError("--mqtt-rate: must be a positive, finite number of seconds")
     if primary_host is not None:
         if convention != "sparkplug":
             raise click.UsageError("--mqtt-primary-host: a Sparkplug host application, only with"
@@ -80,8 +81,8 @@ def check_opcua(spec: str, period: float) -> None:
         endpoint_url(spec)
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None
-    if not period > 0:
-        raise click.UsageError("--opcua-period: must be positive")
+    if not 0 < period < math.inf:  # (inf passed 'period > 0': subscriptions never saw a change)
+        raise click.UsageError("--opcua-period: must be positive and finite")
     try:
         import asyncua  # noqa: F401
     except ImportError:

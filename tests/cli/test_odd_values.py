@@ -35,6 +35,11 @@ PLANT = str(ROOT / "scenarios/sers/absolute_positioning.yaml")
          "--control: '\u0663': expected unix:/path/to.sock or [HOST:]PORT"),
         (["web", "--listen", "\u0663"], "--listen: '\u0663': expected"),
         (["up", PLANT, "--control", "9" * 5000], "--control: '99"),
+        # (inf passed 'rate > 0' / 'period > 0': the facade never sampled the points)
+        (["run", "sers", "--mqtt", "mqtt://127.0.0.1:1", "--mqtt-rate", "inf"], "--mqtt-rate: must be a positive, finite"),
+        (["run", "sers", "--opcua", "0", "--opcua-period", "1e309"], "--opcua-period: must be positive and finite"),
+        # (said as '--mqtt: an MQTT plant name is one topic level ...')
+        (["run", "sers", "--mqtt", "mqtt://127.0.0.1:1", "--mqtt-plant", "a/b"], "--mqtt-plant: an MQTT plant name"),
     ],
 )
 def test_an_odd_option_value_is_one_error_line(args: list[str], expected: str) -> None:

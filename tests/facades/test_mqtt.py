@@ -216,7 +216,7 @@ def test_run_with_mqtt_and_no_url_starts_an_embedded_broker() -> None:
 
 @pytest.mark.parametrize(("args", "message"), [
     (["--mqtt", "http://x"], "--mqtt: expected mqtt://HOST[:PORT], not 'http://x'"),
-    (["--mqtt", "--mqtt-rate", "0"], "--mqtt-rate: must be a positive number of seconds"),
+    (["--mqtt", "--mqtt-rate", "0"], "--mqtt-rate: must be a positive, finite number of seconds"),
     (["--mqtt", "--mqtt-plant", "a/b"], "one topic level"),
 ])
 def test_bad_mqtt_options_are_one_line(args: list[str], message: str) -> None:
