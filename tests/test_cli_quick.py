@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from devsim.cli.main import cli
-from devsim.cli.quick import DEFAULTS, OPTIONS, _non_negative, run_params
+from devsim.cli.quick import DEFAULTS, OPTIONS, _float, _non_negative, run_params
 from tests.support.process import ROOT, collect_lines, devsim_env, next_match, stop
 
 RUN = cli.commands["run"]
@@ -52,7 +52,7 @@ def test_the_options_read_without_click_are_the_run_commands_own() -> None:
                 assert (param.type.min, param.type.max, param.type.min_open) == (0, None, False)
                 assert convert is _non_negative
             elif isinstance(param.type, click.types.FloatParamType):
-                assert convert is float
+                assert convert is _float
             else:
                 assert convert is None or param.type == click.STRING
             seen.add(name)

@@ -19,7 +19,7 @@ from typing import Any
 import click
 
 from devsim.cli import exits, present
-from devsim.cli.options import check_fleet
+from devsim.cli.options import FLOAT, INT, AsciiIntRange, check_fleet
 from devsim.runtime import requests as rq
 
 __all__ = ["command_name", "ctl"]
@@ -152,7 +152,7 @@ def ctl_power_cycle(ctx: click.Context, device: str, wipe: bool) -> None:
 
 
 @ctl.command(command_name("advance"))
-@click.argument("seconds", type=float)
+@click.argument("seconds", type=FLOAT)
 @click.option("--device", metavar="NAME", help="With --fleet: only the process serving NAME (default: every one).")
 @click.pass_context
 def ctl_advance(ctx: click.Context, seconds: float, device: str | None) -> None:
@@ -244,11 +244,11 @@ def ctl_fault(ctx: click.Context, device: str, kind: str, switch: str) -> None:
 @click.argument("switch", type=click.Choice(["on", "off"]))
 @click.option("--port", default="main", show_default=True, help="Which serial port of DEVICE.")
 @click.option("--direction", type=click.Choice(["to_device", "to_host", "both"]), help="Which way.")
-@click.option("--count", type=int, help="Bytes affected (corrupt, drop, split).")
-@click.option("--duration", type=float, help="Seconds until the fault ends by itself.")
-@click.option("--delay", type=float, help="Seconds (delay, jitter, split).")
-@click.option("--rate", type=float, help="Noise bytes per second (at most 1,000,000).")
-@click.option("--baudrate", type=int, help="The host's rate (baud_mismatch).")
+@click.option("--count", type=INT, help="Bytes affected (corrupt, drop, split).")
+@click.option("--duration", type=FLOAT, help="Seconds until the fault ends by itself.")
+@click.option("--delay", type=FLOAT, help="Seconds (delay, jitter, split).")
+@click.option("--rate", type=FLOAT, help="Noise bytes per second (at most 1,000,000).")
+@click.option("--baudrate", type=INT, help="The host's rate (baud_mismatch).")
 @click.pass_context
 def ctl_line_fault(ctx: click.Context, device: str, kind: str, switch: str, port: str, **params: Any) -> None:
     """Start or end a line fault KIND on a port of DEVICE: corrupt, drop, split, delay, jitter,
@@ -260,7 +260,7 @@ def ctl_line_fault(ctx: click.Context, device: str, kind: str, switch: str, port
 @ctl.command(command_name("telegrams"))
 @click.argument("device")
 @click.option("--port", default="main", show_default=True, help="Which port of DEVICE (or 'modbus': its RTU line).")
-@click.option("--count", type=click.IntRange(0, 200), default=20, show_default=True, help="How many.")
+@click.option("--count", type=AsciiIntRange(0, 200), default=20, show_default=True, help="How many.")
 @click.pass_context
 def ctl_telegrams(ctx: click.Context, device: str, port: str, count: int) -> None:
     """The last telegrams on the line of a port of DEVICE (time, direction, bytes and, where the
@@ -280,7 +280,7 @@ def ctl_scenario(ctx: click.Context) -> None:
 @click.argument("device", required=False)
 @click.argument("names", nargs=-1)
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per line instead of text.")
-@click.option("--period", type=float, metavar="SECONDS", help="Sampling period in device time (default 0.1, at least 0.001).")
+@click.option("--period", type=FLOAT, metavar="SECONDS", help="Sampling period in device time (default 0.1, at least 0.001).")
 def ctl_watch(device: str | None, names: tuple[str, ...], as_json: bool, period: float | None) -> None:
     """Print changes of DEVICE's NAMEs (default: its state and axes) and its events (move start
     and end, faults, errors, host connects) as they happen, one line each, until Ctrl-C or the

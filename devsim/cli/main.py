@@ -41,6 +41,7 @@ import click
 
 from devsim import __version__
 from devsim.cli import exits
+from devsim.cli.options import FLOAT, AsciiFloatRange
 from devsim.cli.serve import plan_run, serve
 from devsim.cli.statuses import StartFailure
 from devsim.core.registry import UnknownKind, device_class, kinds
@@ -143,7 +144,7 @@ def doc(kind: str, modbus_map: bool, eds_file: bool) -> None:
 @click.option("--rfc2217", metavar="[HOST:]PORT", help="RFC 2217 port: line settings travel with the data.")
 @click.option("--config", "config_file", metavar="FILE.yaml", help="DIP switches, parameters, axis geometry.")
 @click.option("--state-dir", metavar="DIR", help="Where non-volatile memory (EEPROM) is kept.")
-@click.option("--speed", type=float, default=1.0, show_default=True, metavar="F", help="Time speed factor.")
+@click.option("--speed", type=FLOAT, default=1.0, show_default=True, metavar="F", help="Time speed factor.")
 @click.option("--virtual", is_flag=True, help="Virtual time: it moves only through 'devsim ctl advance'.")
 @click.option(
     "--trace", metavar="FILE", help="Write a timestamped trace of the line traffic (FILE.pcap: a pcap file for Wireshark; "
@@ -161,7 +162,7 @@ def doc(kind: str, modbus_map: bool, eds_file: bool) -> None:
     help="RS-485 multidrop: one device per address on one line (--addresses is the same option).",
 )
 @click.option("--pacing", is_flag=True, help="Pace output at the configured baud rate.")
-@click.option("--idle-drop", type=click.FloatRange(min=0), default=None, metavar="SECONDS",
+@click.option("--idle-drop", type=AsciiFloatRange(min=0), default=None, metavar="SECONDS",
               help="Drop a TCP host idle this long when another client finds its port full (default 30).")
 @click.option(
     "--port",
@@ -188,7 +189,7 @@ def doc(kind: str, modbus_map: bool, eds_file: bool) -> None:
     default=None,
     help="Also serve the devices on an OPC UA server (extra [opcua]), default opc.tcp://127.0.0.1:4840/devsim/.",
 )
-@click.option("--opcua-period", type=float, default=0.1, show_default=True, metavar="SECONDS",
+@click.option("--opcua-period", type=FLOAT, default=0.1, show_default=True, metavar="SECONDS",
               help="How often the OPC UA server samples the points for subscriptions (device time).")
 @click.option(
     "--modbus-map",
@@ -213,7 +214,7 @@ def doc(kind: str, modbus_map: bool, eds_file: bool) -> None:
     show_default=True,
     help="MQTT topics: devsim/PLANT/DEVICE/... (JSON), or Sparkplug B.",
 )
-@click.option("--mqtt-rate", type=float, default=1.0, show_default=True, metavar="SECONDS",
+@click.option("--mqtt-rate", type=FLOAT, default=1.0, show_default=True, metavar="SECONDS",
               help="How often (device time) the MQTT facade samples the points for changes.")
 @click.option("--mqtt-plant", metavar="NAME", help="The plant's name in MQTT topics (default: the kind).")
 @click.option("--mqtt-primary-host", metavar="HOST_ID",
@@ -228,7 +229,7 @@ def doc(kind: str, modbus_map: bool, eds_file: bool) -> None:
               " 127.0.0.1 unless named, another host gets a token).")
 @click.option("--motion-log", metavar="FILE.csv", help="Write every axis's motion (set-point, position, velocity,"
               " following error, events) as CSV, for 'devsim plot'.")
-@click.option("--motion-resolution", type=float, default=0.01, show_default=True, metavar="SECONDS",
+@click.option("--motion-resolution", type=FLOAT, default=0.01, show_default=True, metavar="SECONDS",
               help="How often (device time) the motion log samples the axes, besides every event.")
 @log_options
 def run(**params: Any) -> None:

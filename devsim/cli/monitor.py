@@ -8,6 +8,7 @@ import sys
 import click
 
 from devsim.cli import exits
+from devsim.cli.options import FLOAT
 
 __all__ = ["monitor"]
 
@@ -18,7 +19,7 @@ __all__ = ["monitor"]
     help="Control address (unix:/path.sock or [HOST:]PORT) or name of the running plant; default: the only one"
     " running ('devsim ps'); env DEVSIM_CONTROL.",
 )
-@click.option("--period", type=float, default=0.1, show_default=True, metavar="SECONDS",
+@click.option("--period", type=FLOAT, default=0.1, show_default=True, metavar="SECONDS",
               help="How often values are sampled, in device time.")
 def monitor(addr: str | None, period: float) -> None:
     """A live view of every device: state, display, faults, axes with sparklines, inputs (press

@@ -14,7 +14,39 @@ from devsim.cli.usage import host_port
 from devsim.core.extras import install_command
 from devsim.core.points import ascii_digits
 
-__all__ = ["check_canopen", "check_fleet", "check_modbus", "check_mqtt", "check_opcua", "host_port", "modbus_for"]
+__all__ = ["FLOAT", "INT", "AsciiFloatRange", "AsciiIntRange", "check_canopen", "check_fleet", "check_modbus", "check_mqtt", "check_opcua", "host_port", "modbus_for"]
+
+
+class _AsciiNumber(click.ParamType):
+    """A number option written in ASCII: click's FLOAT and INT take what ``float`` and ``int``
+    take, the digits of every script too ('٣' is 3: ``--speed ٣`` ran at speed 3, ``--workers ٣``
+    started three), which :func:`~devsim.core.points.ascii_digits` refuses everywhere else."""
+
+    def convert(self, value: object, param: click.Parameter | None, ctx: click.Context | None) -> object:
+        if isinstance(value, str) and not value.isascii():
+            self.fail(f"{value!r} is not a number in ASCII digits", param, ctx)
+        return super().convert(value, param, ctx)  # type: ignore[safe-super]
+
+
+class _AsciiFloat(_AsciiNumber, click.types.FloatParamType):
+    pass
+
+
+class _AsciiInt(_AsciiNumber, click.types.IntParamType):
+    pass
+
+
+class AsciiFloatRange(_AsciiNumber, click.FloatRange):
+    """``click.FloatRange`` in ASCII digits."""
+
+
+class AsciiIntRange(_AsciiNumber, click.IntRange):
+    """``click.IntRange`` in ASCII digits."""
+
+
+#: ``type=float`` and ``type=int`` of a number option, in ASCII digits.
+FLOAT = _AsciiFloat()
+INT = _AsciiInt()
 
 
 def check_modbus(spec: str) -> None:

@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from devsim.cli import exits
+from devsim.cli.options import AsciiIntRange
 
 __all__ = ["plot", "require_matplotlib"]
 
@@ -29,7 +30,7 @@ def require_matplotlib() -> None:
 @click.option("-o", "--output", "output", required=True, metavar="OUT.png|svg|html",
               help="The picture to write; its suffix chooses the format.")
 @click.option("--title", metavar="TEXT", help="The picture's title (default: the files' names).")
-@click.option("--dpi", type=click.IntRange(30, 600), default=100, show_default=True, help="PNG resolution.")
+@click.option("--dpi", type=AsciiIntRange(30, 600), default=100, show_default=True, help="PNG resolution.")
 def plot(files: tuple[str, ...], output: str, title: str | None, dpi: int) -> None:
     """Draw motion logs (--motion-log) and wire traces (--trace, text or pcap) in FILES:
     position, velocity and following error against time with the events marked, and the line

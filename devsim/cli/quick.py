@@ -29,10 +29,17 @@ __all__ = ["DEFAULTS", "OPTIONS", "main", "run_params"]
 COMPLETE_VAR = "_DEVSIM_COMPLETE"
 
 
+def _float(text: str) -> float:
+    """``FLOAT`` (:mod:`devsim.cli.options`): ``float`` of ASCII text (``float`` reads '٣' as 3)."""
+    if not text.isascii():
+        raise ValueError(text)
+    return float(text)
+
+
 def _non_negative(text: str) -> float:
     """``click.FloatRange(min=0)``: a float not below 0; NaN is left to click, which takes it, for
     :func:`devsim.cli.serve.plan_run` to refuse (``--idle-drop: must be a number of seconds``)."""
-    value = float(text)
+    value = _float(text)
     if not value >= 0:
         raise ValueError(text)
     return value
@@ -56,14 +63,14 @@ OPTIONS: dict[str, tuple[str, str, Callable[[str], Any] | None]] = {
     "--rfc2217": ("rfc2217", "value", _text),
     "--config": ("config_file", "value", _text),
     "--state-dir": ("state_dir", "value", _text),
-    "--speed": ("speed", "value", float),
+    "--speed": ("speed", "value", _float),
     "--trace": ("trace", "value", _text),
     "--control": ("control", "value", _text),
     "--drives": ("drives", "value", _text),
     "--addresses": ("drives", "value", _text),
     "--idle-drop": ("idle_drop", "value", _non_negative),
     "--motion-log": ("motion_log", "value", _text),
-    "--motion-resolution": ("motion_resolution", "value", float),
+    "--motion-resolution": ("motion_resolution", "value", _float),
     "--port": ("port_options", "multiple", _text),
     "-v": ("verbose", "count", None),
     "--verbose": ("verbose", "count", None),

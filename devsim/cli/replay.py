@@ -20,6 +20,7 @@ from typing import Any
 import click
 
 from devsim.cli import exits
+from devsim.cli.options import FLOAT, INT
 from devsim.core.device import SerialSettings
 
 __all__ = ["record", "replay"]
@@ -72,7 +73,7 @@ def _load_config(kind: str, path: str | None) -> dict[str, Any]:
 @click.option("--device-port", "port_name", metavar="NAME", help="Which of the kind's ports (default: its first).")
 @click.option("--link", metavar="PATH", help="A stable symlink to the host's pty.")
 @click.option("--tcp", metavar="[HOST:]PORT", help="Give the host a raw TCP port instead of a pty (host 127.0.0.1).")
-@click.option("--baud", type=int, metavar="N", help="The device's baud rate (default: the kind's).")
+@click.option("--baud", type=INT, metavar="N", help="The device's baud rate (default: the kind's).")
 @click.option("--parity", type=click.Choice(["N", "E", "O", "M", "S"]), help="The device's parity (default: the kind's).")
 def record(device_url: str, out: str, kind: str | None, port_name: str | None, link: str | None, tcp: str | None,
            baud: int | None, parity: str | None) -> None:
@@ -113,7 +114,7 @@ def record(device_url: str, out: str, kind: str | None, port_name: str | None, l
 @click.option("--pty", "use_pty", is_flag=True, help="Serve on a new pseudo-terminal (the default).")
 @click.option("--link", metavar="PATH", help="A stable symlink to the pty.")
 @click.option("--tcp", metavar="[HOST:]PORT", help="Serve on a raw TCP port instead (host 127.0.0.1).")
-@click.option("--speed", type=float, default=1.0, show_default=True, metavar="F",
+@click.option("--speed", type=FLOAT, default=1.0, show_default=True, metavar="F",
               help="Answer F times faster than recorded.")
 @click.option("--as-fast", is_flag=True, help="Answer at once, without the recorded delays.")
 @click.option("--fallback", type=click.Choice(["error", "live"]), default="error", show_default=True,

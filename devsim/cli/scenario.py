@@ -22,7 +22,7 @@ from typing import Any
 import click
 
 from devsim.cli import exits
-from devsim.cli.options import check_fleet
+from devsim.cli.options import FLOAT, AsciiFloatRange, AsciiIntRange, check_fleet
 from devsim.cli.usage import check_dirs
 from devsim.core.config import ConfigError
 from devsim.core.console import say, stop_on_signals, warn
@@ -69,13 +69,13 @@ def scenario() -> None:
 @click.argument("files", nargs=-1, required=True, type=click.Path(dir_okay=False))
 @click.option("--virtual", "virtual", is_flag=True, help="Virtual time (default when the host is scripted).")
 @click.option("--realtime", "realtime", is_flag=True, help="Real time (default for an external host).")
-@click.option("--speed", type=float, default=None, metavar="F", help="Real-time speed factor.")
+@click.option("--speed", type=FLOAT, default=None, metavar="F", help="Real-time speed factor.")
 @click.option("--junit", metavar="OUT.xml", help="Also write the results as JUnit XML.")
 @click.option("--state-dir", metavar="DIR", help="Where the devices' non-volatile memory is kept.")
 @click.option("--trace-dir", metavar="DIR", help="Write a trace of every port's traffic here.")
 @click.option("--motion-log", metavar="FILE.csv", help="Log every axis's motion as CSV (several scenarios:"
               " FILE-SCENARIO.csv).")
-@click.option("--motion-resolution", type=float, default=0.01, show_default=True, metavar="SECONDS",
+@click.option("--motion-resolution", type=FLOAT, default=0.01, show_default=True, metavar="SECONDS",
               help="How often (device time) the motion log samples the axes, besides every event.")
 @click.option("--plot", "plot_dir", metavar="DIR", help="Draw one picture per scenario here (extra [plot]).")
 @click.option("--plot-format", type=click.Choice(["png", "svg", "html"]), default="png", show_default=True,
@@ -237,21 +237,21 @@ def _run_files(scenarios: list[Any], files: tuple[str, ...], mode: str | None, s
 @click.command("up")
 @click.argument("plant_file", type=click.Path(dir_okay=False))
 @click.option("--state-dir", metavar="DIR", help="Where the devices' non-volatile memory is kept.")
-@click.option("--speed", type=float, default=1.0, show_default=True, metavar="F", help="Time speed factor.")
+@click.option("--speed", type=FLOAT, default=1.0, show_default=True, metavar="F", help="Time speed factor.")
 @click.option("--control", metavar="ADDR", help="Serve the control API on unix:/path.sock or [HOST:]PORT (default:"
               " NAME-PID.sock in the runtime directory, see 'devsim ps').")
 @click.option("--no-control", is_flag=True, help="Serve no control API.")
 @click.option("--trace-dir", metavar="DIR", help="Write a trace of every port's traffic here.")
 @click.option("--virtual", is_flag=True, help="Virtual time: it moves only through 'devsim ctl advance'.")
-@click.option("--workers", type=click.IntRange(1, 64), default=1, show_default=True, metavar="N",
+@click.option("--workers", type=AsciiIntRange(1, 64), default=1, show_default=True, metavar="N",
               help="Spread the plant's devices over N processes (real or sped-up time).")
 @click.option("--fleet", metavar="mqtt://BROKER[:PORT][/NAME]",
               help="Join a fleet: announce the devices on the broker, take control requests from it.")
 @click.option("--part", metavar="NAME", help="Start only the devices with 'part: NAME' (one part of a fleet's plant).")
 @click.option("--motion-log", metavar="FILE.csv", help="Log every axis's motion as CSV, for 'devsim plot'.")
-@click.option("--motion-resolution", type=float, default=0.01, show_default=True, metavar="SECONDS",
+@click.option("--motion-resolution", type=FLOAT, default=0.01, show_default=True, metavar="SECONDS",
               help="How often (device time) the motion log samples the axes, besides every event.")
-@click.option("--idle-drop", type=click.FloatRange(min=0), default=None, metavar="SECONDS",
+@click.option("--idle-drop", type=AsciiFloatRange(min=0), default=None, metavar="SECONDS",
               help="Drop a TCP host idle this long when another client finds its port full (default 30).")
 @click.option("--web", metavar="[HOST:]PORT", help="Also serve the plant's web page there (extra [web]; host"
               " 127.0.0.1 unless named, another host gets a token).")

@@ -40,6 +40,14 @@ PLANT = str(ROOT / "scenarios/sers/absolute_positioning.yaml")
         (["run", "sers", "--opcua", "0", "--opcua-period", "1e309"], "--opcua-period: must be positive and finite"),
         # (said as '--mqtt: an MQTT plant name is one topic level ...')
         (["run", "sers", "--mqtt", "mqtt://127.0.0.1:1", "--mqtt-plant", "a/b"], "--mqtt-plant: an MQTT plant name"),
+        # (float() and int() read the digits of every script: ran at speed 3, with three workers ...)
+        (["run", "sers", "--speed", "\u0663"], "'--speed': '\u0663' is not a number in ASCII digits"),
+        (["run", "sers", "--idle-drop", "\u0663"], "'--idle-drop': '\u0663' is not a number in ASCII digits"),
+        (["up", PLANT, "--workers", "\u0663"], "'--workers': '\u0663' is not a number in ASCII digits"),
+        (["ctl", "--control", "unix:/nonexistent/ctl.sock", "telegrams", "sers", "--count", "\u0663"],
+         "'--count': '\u0663' is not a number in ASCII digits"),
+        (["ctl", "--control", "unix:/nonexistent/ctl.sock", "line-fault", "sers", "delay", "on", "--delay", "\u0663"],
+         "'--delay': '\u0663' is not a number in ASCII digits"),
     ],
 )
 def test_an_odd_option_value_is_one_error_line(args: list[str], expected: str) -> None:
