@@ -30,12 +30,14 @@ def host_port(option: str, text: str) -> tuple[str, int]:
 
 
 def check_dirs(dirs: dict[str, str | None]) -> None:
-    """Directory options (option → the path given, or None) that
-    name something other than a directory, or nothing at all (''): one usage error naming the
-    option.  They were made at start with ``mkdir(parents=True)``, and a file of that name ended in
-    'cannot create the devices: [Errno 17] File exists: …' or, for scenario run, in an error that
-    named the scenario file (exit 6)."""
+    """Directory options (option → the path given, or None), checked before anything starts:
+    an empty one is a usage error (it was the current directory); one that is a file, or lies
+    below one, is a file that cannot be written (status SYSTEM, as before) in one line naming the
+    option.  They were made at start with ``mkdir(parents=True)``: run said 'cannot create the
+    devices: [Errno 17] File exists: …', scenario run named the scenario file."""
     import os
+
+    from devsim.cli.exits import SystemFailure
 
     for option, path in dirs.items():
         if path is None:
@@ -43,9 +45,9 @@ def check_dirs(dirs: dict[str, str | None]) -> None:
         if not path:
             raise usage_error(f"{option}: needs a directory")
         if os.path.exists(path) and not os.path.isdir(path):
-            raise usage_error(f"{option}: {path}: not a directory")
+            raise SystemFailure(f"{option}: {path}: not a directory")
         parent = os.path.dirname(os.path.abspath(path))
         while not os.path.exists(parent):
             parent = os.path.dirname(parent)
         if not os.path.isdir(parent):
-            raise usage_error(f"{option}: {path}: {parent} is not a directory")
+            raise SystemFailure(f"{option}: {path}: {parent} is not a directory")

@@ -60,25 +60,28 @@ def test_an_odd_option_value_is_one_error_line(args: list[str], expected: str) -
 
 
 @pytest.mark.parametrize(
-    ("args", "expected"),
+    ("args", "status", "expected"),
     [
-        # (mkdir(parents=True) at start: 'cannot create the devices: [Errno 17] File exists', exit 6)
-        (["run", "sers", "--no-control", "--state-dir", "{file}"], "--state-dir: {file}: not a directory"),
-        (["run", "sers", "--no-control", "--state-dir", "{file}/sub"], "--state-dir: {file}/sub: {file} is not a directory"),
-        (["up", PLANT, "--trace-dir", "{file}"], "--trace-dir: {file}: not a directory"),
+        # (mkdir(parents=True) at start: 'cannot create the devices: [Errno 17] File exists', no option named)
+        (["run", "sers", "--no-control", "--state-dir", "{file}"], 6, "--state-dir: {file}: not a directory"),
+        (["run", "sers", "--no-control", "--state-dir", "{file}/sub"], 6,
+         "--state-dir: {file}/sub: {file} is not a directory"),
+        (["up", PLANT, "--trace-dir", "{file}"], 6, "--trace-dir: {file}: not a directory"),
         # (scenario run named the scenario file: 'cannot run the scenario: [Errno 17] File exists')
-        (["scenario", "run", "--virtual", "--plot", "{file}", PLANT], "--plot: {file}: not a directory"),
-        (["scenario", "run", "--virtual", "--state-dir", "{file}", PLANT], "--state-dir: {file}: not a directory"),
+        (["scenario", "run", "--virtual", "--plot", "{file}", PLANT], 6, "--plot: {file}: not a directory"),
+        (["scenario", "run", "--virtual", "--state-dir", "{file}", PLANT], 6, "--state-dir: {file}: not a directory"),
         # (an empty one was the current directory)
-        (["scenario", "run", "--virtual", "--trace-dir", "", PLANT], "--trace-dir: needs a directory"),
+        (["scenario", "run", "--virtual", "--trace-dir", "", PLANT], 2, "--trace-dir: needs a directory"),
     ],
 )
-def test_a_directory_option_naming_a_file_is_one_error_line(args: list[str], expected: str, tmp_path: Path) -> None:
+def test_a_directory_option_naming_a_file_is_one_error_line(args: list[str], status: int, expected: str,
+                                                            tmp_path: Path) -> None:
+    """A file in the way is a file that cannot be written (status 6, docs/cli.md), said naming the option."""
     file = tmp_path / "a file"
     file.write_text("")
     args = [arg.replace("{file}", str(file)) for arg in args]
     done = subprocess.run([sys.executable, "-m", "devsim", *args], cwd=tmp_path, env=devsim_env(), capture_output=True,
                           text=True, timeout=60, stdin=subprocess.DEVNULL)
-    assert done.returncode == 2, done.stderr
+    assert done.returncode == status, done.stderr
     assert done.stderr.count("\n") == 1, done.stderr
     assert done.stderr.startswith("Error: ") and expected.replace("{file}", str(file)) in done.stderr
