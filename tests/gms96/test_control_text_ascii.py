@@ -4,27 +4,20 @@ around and inside them."""
 
 from __future__ import annotations
 
-import tempfile
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
 
 from devsim.runtime.client import ControlClient, ControlError
-from devsim.runtime.control import ControlServer
+from tests.support.control import control_client
 
 
 @pytest.fixture
 def ctl(devsim_device: Any) -> Iterator[tuple[ControlClient, str]]:
     card = devsim_device("gms96", {})
-    with tempfile.TemporaryDirectory(prefix="dsc") as path:  # (Unix socket paths are short)
-        server = ControlServer(card.runtime, f"unix:{path}/ctl.sock")
-        bound = server.start_sync()
-        try:
-            with ControlClient(str(bound)) as client:
-                yield client, card.name
-        finally:
-            server.close_sync()
+    with control_client(card.runtime) as client:
+        yield client, card.name
 
 
 @pytest.mark.parametrize("program", ["A\x0b1000", "\x0cA1000", "A1000\x0b", "p10;\x0c16;2",

@@ -4,27 +4,20 @@ on the real pty."""
 
 from __future__ import annotations
 
-import tempfile
 from collections.abc import Iterator
 
 import pytest
 
 from devsim.runtime.client import ControlClient, ControlError
-from devsim.runtime.control import ControlServer
 from tests.pcd4h3.helpers import Station
+from tests.support.control import control_client
 
 
 @pytest.fixture
 def ctl(pcd: Station) -> Iterator[ControlClient]:
     """A client on a control socket served for the ``pcd`` fixture's runtime."""
-    with tempfile.TemporaryDirectory(prefix="dsc") as path:  # (Unix socket paths are short)
-        server = ControlServer(pcd.sim.runtime, f"unix:{path}/ctl.sock")
-        bound = server.start_sync()
-        try:
-            with ControlClient(str(bound)) as client:
-                yield client
-        finally:
-            server.close_sync()
+    with control_client(pcd.sim.runtime) as client:
+        yield client
 
 
 @pytest.mark.parametrize("name", ["R.\u0663\u0660\u0662", "R.\uff13\uff10\uff12", "F.\u0665", "I.\u0669", "O.\u0661"])

@@ -4,14 +4,13 @@ core.points.strip_blanks), not the Unicode ones str.strip() also takes."""
 
 from __future__ import annotations
 
-import tempfile
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
 
 from devsim.runtime.client import ControlClient, ControlError
-from devsim.runtime.control import ControlServer
+from tests.support.control import control_client
 
 D = "poselesta"
 UNICODE_BLANKS = ["\u3000", "\xa0", "\x1c", "\x1f", "\x85", "\u2028", "\x0b", "\x0c"]
@@ -27,14 +26,8 @@ def cnc(devsim_device: Any) -> Any:
 
 @pytest.fixture
 def ctl(cnc: Any) -> Iterator[ControlClient]:
-    with tempfile.TemporaryDirectory(prefix="dsc") as path:  # (Unix socket paths are short)
-        server = ControlServer(cnc.runtime, f"unix:{path}/ctl.sock")
-        bound = server.start_sync()
-        try:
-            with ControlClient(str(bound)) as client:
-                yield client
-        finally:
-            server.close_sync()
+    with control_client(cnc.runtime) as client:
+        yield client
 
 
 @pytest.mark.parametrize("blank", UNICODE_BLANKS)
