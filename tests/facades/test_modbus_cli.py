@@ -79,3 +79,38 @@ def test_ctl_telegrams_shows_the_modbus_rtu_line() -> None:
     finally:
         sim.stop()
         sockdir.cleanup()
+
+
+def test_sigterm_during_a_flood_of_pipelined_requests_stops_the_simulator() -> None:
+    """``devsim run --modbus tcp:0`` with four clients that each pipeline 300 KB of reads of 125
+    registers and read no answer: a SIGTERM sent then stops it, status 0, no traceback.  (Before:
+    each read of 256 KiB of requests was answered in one step of the event loop, 21,845 reads of
+    1.4 ms each into an unbounded write buffer, and the SIGTERM waited behind them: half a minute
+    for each client's read.)"""
+    import signal
+    import socket
+    import struct
+
+    from tests.support.process import DevsimProcess, stop
+
+    sim = DevsimProcess("run", "sers", "--pty", "--modbus", "tcp:0")
+    clients = [socket.socket() for _ in range(4)]
+    try:
+        line = sim.next_match(sim.out, lambda text: text.startswith("sers.modbus:"), 30, "the Modbus line")
+        chunk = b"".join(struct.pack(">HHHBBHH", n, 0, 6, 1, 3, 0, 125) for n in range(1000))
+        for client in clients:
+            client.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+            client.connect(("127.0.0.1", int(line.rpartition(":")[2])))
+        for _ in range(25):  # 300,000 bytes each: more than one read of the server's (256 KiB)
+            for client in clients:
+                client.sendall(chunk)
+        status = stop(sim.proc, signal.SIGTERM, 30)
+    finally:
+        stop(sim.proc, signal.SIGKILL)
+        for client in clients:
+            client.close()
+    errors: list[str] = []
+    while (text := sim.err.get(timeout=10)) is not None:
+        errors.append(text)
+    assert status == 0, errors[-10:]
+    assert not any("Traceback" in text for text in errors), errors[:20]

@@ -5,6 +5,7 @@ room for a newcomer.  Real sockets, the facade's own server."""
 from __future__ import annotations
 
 import asyncio
+import socket
 import struct
 
 import pytest
@@ -67,4 +68,42 @@ async def test_an_idle_client_makes_room_for_a_new_one(capsys: pytest.CaptureFix
         w1.close()
         w2.close()
     finally:
+        await server.shutdown()
+
+
+async def test_a_client_that_does_not_read_its_answers_is_not_read_either() -> None:
+    """A client pipelines 2,000 reads of 125 registers (24 KB of requests, 518 KB of answers)
+    and reads nothing until the server has stopped reading it (or took every request): the server
+    holds at most HELD bytes and one answer unsent ([SIM-CHOICE], docs/facades/modbus.md), and
+    then every answer comes, in order.  Before, every request was answered into asyncio's
+    unbounded write buffer (devsim run sers --modbus: 32 -> 40 MB in 24 s of such a flood, and a
+    SIGTERM not obeyed in 20 s)."""
+    from devsim.facades.modbus import HELD
+
+    count, answer = 2_000, 7 + 2 + 250
+    loop = asyncio.get_running_loop()
+    server, port = await serve_tcp(_facade(), port=0)
+    client = socket.socket()
+    client.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    client.setblocking(False)
+    try:
+        await loop.sock_connect(client, ("127.0.0.1", port))
+        requests = b"".join(struct.pack(">HHHBBHH", n, 0, 6, 1, 3, 0, 125) for n in range(count))
+        sending = loop.create_task(loop.sock_sendall(client, requests))
+        while not server.sessions:
+            await asyncio.sleep(0)  # (the loop accepts the connection)
+        [session] = server.sessions
+        while session.transport is not None and session.transport.is_reading() and not sending.done():
+            await asyncio.sleep(0)  # (the loop reads and answers)
+        answers = bytearray()
+        while len(answers) < count * answer:
+            chunk = await asyncio.wait_for(loop.sock_recv(client, 65536), 10)
+            assert chunk, "the server closed the connection"
+            answers += chunk
+        await sending
+        transactions = [struct.unpack_from(">HHHBBB", answers, n * answer) for n in range(count)]
+        assert transactions == [(n, 0, 253, 1, 3, 250) for n in range(count)]
+        assert HELD < session.held_peak <= HELD + answer  # (it reached the bound, and stopped there)
+    finally:
+        client.close()
         await server.shutdown()
