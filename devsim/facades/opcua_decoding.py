@@ -48,7 +48,7 @@ from asyncua.server.uaprocessor import UaProcessor
 from asyncua.ua.ua_binary import from_binary, get_safe_type_hints, struct_from_binary
 
 from devsim.core.clock import Clock
-from devsim.facades.opcua_monitoring import Subscriptions
+from devsim.facades.opcua_monitoring import QUEUE_SIZE, Subscriptions
 from devsim.facades.opcua_services import CONTINUATION, ContinuationPoints, NodeHistory
 
 __all__ = ["FacadeServer", "RequestDecoding", "undecodable"]
@@ -202,6 +202,7 @@ class FacadeServer(Server):
         iserver = self.iserver  # (before init: nothing holds the service asyncua made but its session)
         iserver.subscription_service = iserver.isession.subscription_service = Subscriptions(
             iserver.aspace, iserver, clock)
+        iserver.max_monitored_item_queue_size = QUEUE_SIZE  # (read by each subscription created)
         iserver.history_manager = NodeHistory(iserver)
 
     async def init(self, shelf_file: Any = None) -> None:

@@ -57,7 +57,13 @@ from asyncua.ua import uaprotocol_auto
 from devsim.core.clock import Clock
 from devsim.facades.opcua_services import derives, encoding_refusal, index_range, shaped
 
-__all__ = ["ItemChecks", "Spacing", "Subscriptions", "refusal"]
+__all__ = ["QUEUE_SIZE", "ItemChecks", "Spacing", "Subscriptions", "refusal"]
+
+#: [SIM-CHOICE] The most notifications a monitored item queues for a client that does not take
+#: them (Part 4 5.12.1.5: the server revises the queue size it is asked for; a queue size of 0 asks
+#: for the server's largest).  asyncua's own cap, 10,000, was not applied to a ModifyMonitoredItems:
+#: an item modified to QueueSize 0 queued every change for as long as its subscription lived.
+QUEUE_SIZE = 1000
 
 _BAD = ua.StatusCodes
 _VALUE, _EVENTS = ua.AttributeIds.Value, ua.AttributeIds.EventNotifier
@@ -187,6 +193,8 @@ class ItemChecks(MonitoredItemService):
                 results.append(ua.MonitoredItemModifyResult(StatusCode=ua.StatusCode(refused)))
             else:
                 result = self._modify_monitored_item(item)
+                # (asyncua takes the asked queue size as it is here, 0 too: no bound at all)
+                result.RevisedQueueSize = mdata.queue_size = self._revise_queue_size(item.RequestedParameters.QueueSize)
                 self._space(item.MonitoredItemId, result, mdata.read_value_id, item.RequestedParameters.SamplingInterval)
                 results.append(result)
         return results

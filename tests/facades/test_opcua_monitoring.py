@@ -360,3 +360,54 @@ def test_node_opcua_an_item_keeps_the_sampling_interval_it_asked_for(served: tup
     assert result["statuses"] == ["Good"] * len(SAMPLING)
     assert result["revised"] == [wanted for _, wanted in SAMPLING]
     assert (point["value"], prop["value"]) == (100, 0)  # the points are sampled; a property changes by writes
+
+
+async def test_an_item_queues_at_most_queue_size_notifications_for_a_client_that_takes_none(
+        served: tuple[Runtime, OpcuaFacade]) -> None:
+    """A subscription whose notifications are not taken (publishing disabled: the server's view
+    of a client that sends no Publish requests, or whose socket is not read) keeps
+    at most QUEUE_SIZE notifications per item, the newest ([SIM-CHOICE], docs/facades/opcua.md):
+    for an item created with QueueSize 0 (the server's largest) and for one modified to it.  (asyncua
+    took a modified item's QueueSize as it came: 0 queued every change for the subscription's whole
+    life, QUEUE_SIZE + 20 here.)"""
+    from devsim.facades.opcua_monitoring import QUEUE_SIZE
+    from tests.support.process import wait_until
+
+    runtime, facade = served
+    name = "quantity.heatsink_temperature"  # (changes only when set)
+    async with Client(facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        subscription = await client.create_subscription(ua.CreateSubscriptionParameters(
+            RequestedPublishingInterval=facade.period * 1000, RequestedLifetimeCount=10_000,
+            RequestedMaxKeepAliveCount=10, PublishingEnabled=False), _Quiet())
+        item = ua.ReadValueId(NodeId=ua.NodeId(f"sers.{name}", ns), AttributeId=ua.AttributeIds.Value)
+        created = await client.uaclient.create_monitored_items(ua.CreateMonitoredItemsParameters(
+            SubscriptionId=subscription.subscription_id, TimestampsToReturn=ua.TimestampsToReturn.Both,
+            ItemsToCreate=[ua.MonitoredItemCreateRequest(
+                ItemToMonitor=item, MonitoringMode=ua.MonitoringMode.Reporting,
+                RequestedParameters=ua.MonitoringParameters(ClientHandle=handle, SamplingInterval=0, QueueSize=size,
+                                                            DiscardOldest=True))
+                for handle, size in [(1, 0), (2, 1)]]))
+        assert [result.RevisedQueueSize for result in created] == [QUEUE_SIZE, 1]
+        modified = await client.uaclient.modify_monitored_items(ua.ModifyMonitoredItemsParameters(
+            SubscriptionId=subscription.subscription_id, TimestampsToReturn=ua.TimestampsToReturn.Both,
+            ItemsToModify=[ua.MonitoredItemModifyRequest(
+                MonitoredItemId=created[1].MonitoredItemId,
+                RequestedParameters=ua.MonitoringParameters(ClientHandle=2, SamplingInterval=0, QueueSize=0))]))
+        assert [result.RevisedQueueSize for result in modified] == [QUEUE_SIZE]
+        queues = facade.server.iserver.subscription_service.subscriptions[subscription.subscription_id]._triggered_datachanges
+        start = runtime.read("sers", name)
+        values = [round(start + 0.01 * n, 2) for n in range(1, QUEUE_SIZE + 21)]
+        for value in values:
+            runtime.set("sers", name, value)
+            runtime.advance(facade.period)  # (the facade samples the point)
+        mids = [result.MonitoredItemId for result in created]
+
+        def newest(mid: int) -> Any:
+            queue = queues.get(mid)
+            return queue[-1].Value.Value.Value if queue else None
+
+        wait_until(lambda: all(newest(mid) == values[-1] for mid in mids), "the last value in both queues", 30)
+        for mid in mids:
+            assert [n.Value.Value.Value for n in queues[mid]] == values[-QUEUE_SIZE:]
+        await subscription.delete()
