@@ -55,6 +55,7 @@ Convention = Literal["devsim", "sparkplug"]
 Message = tuple[str, bytes, int, bool]
 RETRY = 1.0  # seconds between reconnection attempts (network time, not device time)
 KEEPALIVE = 10  # seconds (MQTT keep alive)
+SUBSCRIBER_BACKLOG = 1000  # messages waiting for a subscriber of the embedded broker: it is disconnected ([SIM-CHOICE])
 
 
 class _DevsimDevice:
@@ -413,6 +414,7 @@ async def start_broker(host: str = "127.0.0.1", port: int | None = None) -> tupl
     when that is free, else on a free port.  Returns the broker (``await broker.shutdown()``) and
     its port."""
     from amqtt.broker import Broker
+    from amqtt.errors import ProtocolHandlerError
 
     class OwnRetained(Broker):
         """amqtt 0.12.1 sends a client, at every connect, the retained messages of every topic
@@ -425,6 +427,10 @@ async def start_broker(host: str = "127.0.0.1", port: int | None = None) -> tupl
             holders = self._subscriptions.get(subscription[0], ())
             if any(held.client_id == session.client_id for held, _qos in holders):
                 await super()._publish_retained_messages_for_subscription(subscription, session)
+
+        def _get_handler(self, session: Any) -> Any:
+            handler = super()._get_handler(session)
+            return None if handler is None else _BoundedHandler(handler, ProtocolHandlerError)
 
     if port is None:
         port = topics.DEFAULT_PORT
@@ -439,6 +445,40 @@ async def start_broker(host: str = "127.0.0.1", port: int | None = None) -> tupl
     broker = OwnRetained(config)
     await broker.start()
     return broker, port
+
+
+class _BoundedHandler:
+    """[SIM-CHOICE] A subscriber of the embedded broker as its broadcasts see it: one that lets
+    :data:`SUBSCRIBER_BACKLOG` messages wait for it (it does not read: ``mosquitto_sub`` stopped)
+    is disconnected, as the web page disconnects a browser that lets its events pile up (a client
+    that reconnects gets the retained state anew).  amqtt 0.12.1 starts a task per message and
+    subscriber, each waiting for the subscriber's write lock, and keeps every task, done or not,
+    behind the oldest one waiting: for such a subscriber they piled up without end, and a SIGTERM
+    then cancelled each one and logged its traceback, the simulator taking more than 20 s to
+    stop.  A publish cancelled at the broker's shutdown ends quietly here."""
+
+    def __init__(self, handler: Any, cancelled: type[Exception]) -> None:
+        self._handler, self._cancelled = handler, cancelled
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._handler, name)
+
+    async def mqtt_publish(self, topic: str, data: bytes, qos: int | None, retain: bool,
+                           ack_timeout: int | None = None) -> Any:
+        handler = self._handler
+        waiting = getattr(handler, "devsim_waiting", 0)
+        if waiting >= SUBSCRIBER_BACKLOG:
+            transport = getattr(getattr(handler.writer, "_writer", None), "transport", None)
+            if transport is not None and not transport.is_closing():
+                transport.abort()  # (its waiting publishes end with the connection)
+            return None
+        handler.devsim_waiting = waiting + 1
+        try:
+            return await handler.mqtt_publish(topic, data, qos, retain, ack_timeout)
+        except self._cancelled:  # (amqtt's word for a publish cancelled at its shutdown)
+            return None
+        finally:
+            handler.devsim_waiting -= 1
 
 
 def check_options(plant: str, convention: str, rate: float, primary_host: str | None) -> None:

@@ -293,3 +293,63 @@ def test_a_clean_stop_says_offline_too(mosquitto: Broker) -> None:
             assert late.wait(f"devsim/{plant}/sers/status").text == "offline"  # retained
     finally:
         sim.stop()
+
+
+async def test_a_subscriber_of_the_embedded_broker_that_does_not_read_is_disconnected() -> None:
+    """The embedded broker, a subscriber that reads its CONNACK and SUBACK and then nothing
+    (SO_RCVBUF 4096), one that reads, and 20 MB published in rounds of 100 messages of 1 KB, each
+    round once the reader has the one before: the reader gets every message, and the idle one is
+    disconnected once SUBSCRIBER_BACKLOG messages wait for it ([SIM-CHOICE], docs/facades/mqtt.md),
+    so the broker holds no more tasks than that; it then shuts down.  (Before: amqtt kept a task per
+    message for the idle subscriber, 34,442 of them after these 20,000 messages, and the idle one
+    stayed connected; devsim run --mqtt with three such subscribers did not stop within 20 s of a
+    SIGTERM, cancelling each task and logging its traceback.)"""
+    import asyncio
+    import socket
+
+    from devsim.facades import mqtt_wire as wire
+    from devsim.facades.mqtt import SUBSCRIBER_BACKLOG
+    from devsim.facades.mqtt_link import open_link
+
+    loop = asyncio.get_running_loop()
+    broker, port = await start_broker(port=free_port())
+    idle = socket.socket()
+    links = []
+    try:
+        idle.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+        idle.setblocking(False)
+        await loop.sock_connect(idle, ("127.0.0.1", port))
+        await loop.sock_sendall(idle, wire.connect("idle", 60, v5=False) + wire.subscribe(1, "flood/#", 0, v5=False))
+        acks = b""
+        while len(acks) < 4 + 5:  # CONNACK, SUBACK: then it reads no more
+            acks += await asyncio.wait_for(loop.sock_recv(idle, 9 - len(acks)), 10)
+        assert acks[0] == 0x20 and acks[4] == 0x90 and acks[8] == 0, acks
+        reader = await open_link("127.0.0.1", port, "reader", v5=False)
+        publisher = await open_link("127.0.0.1", port, "publisher", v5=False)
+        links += [reader, publisher]
+        got: list[bytes] = []
+        round_done: asyncio.Future[None] = loop.create_future()
+        reader.on_message = lambda message: (got.append(message.payload),
+                                             len(got) % 100 == 0 and not round_done.done() and round_done.set_result(None))
+        await reader.subscribe("flood/#")
+        payloads = [n.to_bytes(4, "big") * 256 for n in range(20_000)]
+        for start in range(0, len(payloads), 100):
+            for payload in payloads[start:start + 100]:
+                publisher.publish("flood/x", payload)
+            await publisher.drain()
+            await asyncio.wait_for(round_done, 30)
+            round_done = loop.create_future()
+        assert got == payloads
+        # (amqtt's publishing tasks, kept behind the oldest not done: 34,442 here before)
+        assert len(broker._tasks_queue) <= SUBSCRIBER_BACKLOG
+        closed = False
+        while not closed:  # what the kernel holds for it, then its end
+            try:
+                closed = not await asyncio.wait_for(loop.sock_recv(idle, 1 << 16), 10)
+            except ConnectionResetError:
+                closed = True
+    finally:
+        idle.close()
+        for link in links:
+            await link.disconnect()
+        await asyncio.wait_for(broker.shutdown(), 30)
