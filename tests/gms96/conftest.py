@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
@@ -22,9 +22,10 @@ def h(text: str) -> bytes:
 class Host:
     """Raw host: write frames, read the card's reply as the codec frames it."""
 
-    def __init__(self, port: str, baudrate: int = 9600) -> None:
+    def __init__(self, port: str, baudrate: int = 9600, received: Callable[[], int] | None = None) -> None:
         self.port = serial.Serial(port, baudrate=baudrate, parity="E", timeout=0.02)
         self.decoder = codec.FrameDecoder(short_extension=codec.short_extension_host, accept_single=True)
+        self.received = received  # the bytes the card's line has read so far (a Plant's host)
 
     def send(self, data: bytes | str) -> None:
         self.port.write(h(data) if isinstance(data, str) else data)
@@ -50,8 +51,16 @@ class Host:
         return self.reply(timeout).hex(" ").upper()
 
     def silent(self, data: str, wait: float = 0.15) -> bool:
-        """Send ``data``; True if nothing comes back within ``wait`` seconds."""
+        """Send ``data``; True if nothing comes back within ``wait`` seconds after the card has
+        read it (a Plant's host): on a loaded machine a silence also holds before the card read
+        the bytes, and a step of virtual time taken then came before them (R4's idle, a boot)."""
+        before = self.received() if self.received is not None else 0
         self.send(data)
+        if self.received is not None:
+            deadline = time.monotonic() + 5.0
+            while self.received() < before + len(h(data)):
+                assert time.monotonic() < deadline, "the card never read the bytes"
+                time.sleep(0.001)
         return self.reply(wait) == b""
 
     def close(self) -> None:
@@ -63,7 +72,7 @@ class Plant:
         self.runtime = runtime
         self.names = names
         self.transport = transport
-        self.host = Host(transport.address)
+        self.host = Host(transport.address, received=self.bytes_in)
         self._ports: list[serial.Serial] = []
 
     @property
