@@ -36,7 +36,9 @@ each item as Part 4 5.12.2.4 (Table 71) and 5.12.3.4 (Table 74) do, per item:
 * any other attribute: ``Bad_FilterNotAllowed`` for a filter (5.12.1.1: those attributes are
   monitored for a change in value only, the filter is not used for them);
 * ModifyMonitoredItems: ``Bad_MonitoredItemIdInvalid`` for an item the subscription does not
-  have, and the filter checks above against the item's node and attribute.
+  have, and the filter checks above against the item's node and attribute; an item modified takes
+  its new parameters as a created one does, revised by the same code (:meth:`ItemChecks._revise`:
+  samplingInterval, queueSize, filter, clientHandle, timestampsToReturn; 5.12.3.2).
 
 :class:`Subscriptions` is asyncua's SubscriptionService giving each new subscription an
 :class:`ItemChecks` (:class:`devsim.facades.opcua_decoding.FacadeServer` installs it).
@@ -50,7 +52,7 @@ from typing import Any
 
 from asyncua import ua
 from asyncua.server.address_space import AddressSpace
-from asyncua.server.monitored_item_service import MonitoredItemService
+from asyncua.server.monitored_item_service import MonitoredItemService, WhereClauseEvaluator
 from asyncua.server.subscription_service import SubscriptionService
 from asyncua.ua import uaprotocol_auto
 
@@ -150,20 +152,66 @@ class ItemChecks(MonitoredItemService):
                                                     TimestampsToReturn=params.TimestampsToReturn, ItemsToCreate=[item])
             self._asked = params.TimestampsToReturn
             [result] = await super().create_monitored_items(one)
-            if result.StatusCode.is_good():
-                self._space(result.MonitoredItemId, result, item.ItemToMonitor, item.RequestedParameters.SamplingInterval)
             results.append(result)
         return results
 
+    def _make_monitored_item_common(self, params: ua.MonitoredItemCreateRequest) -> tuple[ua.MonitoredItemCreateResult, Any]:
+        result, mdata = super()._make_monitored_item_common(params)
+        self._revise(mdata, result, params.RequestedParameters, self._asked)  # (before its first notification)
+        return result, mdata
+
+    def modify_monitored_items(self, params: ua.ModifyMonitoredItemsParameters) -> list[ua.MonitoredItemModifyResult]:
+        """Each item's new parameters revised and applied by :meth:`_revise`, as a create's (asyncua's
+        own took the asked samplingInterval and queueSize as they came, -1 and 0 too, kept the
+        item's timestampsToReturn and its event filter's whereClause)."""
+        results = []
+        for item in params.ItemsToModify:
+            mdata = self._monitored_items.get(item.MonitoredItemId)
+            refused = (_BAD.BadMonitoredItemIdInvalid if mdata is None
+                       else _filter_refusal(self.aspace, mdata.read_value_id, item.RequestedParameters.Filter))
+            result = ua.MonitoredItemModifyResult()
+            if refused is not None:
+                result.StatusCode = ua.StatusCode(refused)
+            elif mdata is not None:
+                self._revise(mdata, result, item.RequestedParameters, params.TimestampsToReturn)
+            results.append(result)
+        return results
+
+    def _revise(self, mdata: Any, result: Any, asked: ua.MonitoringParameters, timestamps: ua.TimestampsToReturn) -> None:
+        """Take the monitoring parameters ``asked`` for item ``mdata`` (7.21), revised into ``result``:
+        the one code of CreateMonitoredItems (5.12.2.2) and ModifyMonitoredItems (5.12.3.2: "the
+        requested values for the monitoring parameters"; "illegal request values for parameters
+        that can be revised do not generate errors", they are revised).
+
+        * its clientHandle, its filter (null: none; an event item's whereClause with it) and the
+          timestamps it reports (timestampsToReturn);
+        * its queueSize revised to 1..QUEUE_SIZE (0: QUEUE_SIZE), and a queue already longer cut
+          to it, the oldest notifications discarded (5.12.3.2: "the notifications exceeding the
+          size shall be discarded following the configured discard policy"; asyncua's drops one
+          a notification, so its queue stayed as long as it was);
+        * its samplingInterval revised by :meth:`_space`."""
+        mid = mdata.monitored_item_id
+        mdata.client_handle = asked.ClientHandle
+        mdata.filter = asked.Filter
+        if mdata.read_value_id.AttributeId == _EVENTS and isinstance(asked.Filter, ua.EventFilter):
+            mdata.where_clause_evaluator = WhereClauseEvaluator(self.logger, self.aspace, asked.Filter.WhereClause)
+        self._timestamps[mid] = timestamps
+        result.RevisedQueueSize = mdata.queue_size = self._revise_queue_size(asked.QueueSize)
+        for queue in (self.isub._triggered_datachanges, self.isub._triggered_events):
+            del queue.get(mid, [])[:-mdata.queue_size]
+        self._space(mid, result, mdata.read_value_id, asked.SamplingInterval)
+
     def _space(self, mid: int, result: Any, item: ua.ReadValueId, requested: float) -> None:
-        """An item's revisedSamplingInterval at least the one it asked for (5.12.2.2: asyncua gives
-        the subscription's publishing interval) and the node's MinimumSamplingInterval (5.12.1.2:
+        """An item's revisedSamplingInterval: the subscription's publishing interval (asyncua's; -1
+        asks for it, 7.21), for a Value at least the one it asked for (5.12.2.2) and the node's
+        MinimumSamplingInterval (5.12.1.2:
         "equal or higher than the MinimumSamplingInterval if the Client subscribes to the Value
         Attribute"; a point's is the period its device is sampled at), and its values that far
         apart: a point's (sampled on the device clock: a MinimumSamplingInterval) by its revised
         interval, so that two writes in a row are not reported closer; another node's only when it
         asked for more than the publishing interval."""
         apart = 0.0
+        result.RevisedSamplingInterval = self.isub.data.RevisedPublishingInterval
         if item.AttributeId == _VALUE:
             minimum = _attribute(self.aspace, item.NodeId, ua.AttributeIds.MinimumSamplingInterval) or 0.0
             result.RevisedSamplingInterval = max(result.RevisedSamplingInterval, requested, minimum)
@@ -173,31 +221,10 @@ class ItemChecks(MonitoredItemService):
                 apart = requested
         self._spacing.set(mid, apart)
 
-    def _make_monitored_item_common(self, params: ua.MonitoredItemCreateRequest) -> tuple[ua.MonitoredItemCreateResult, Any]:
-        result, mdata = super()._make_monitored_item_common(params)
-        self._timestamps[result.MonitoredItemId] = self._asked  # before its first notification
-        return result, mdata
-
     def _delete_monitored_items(self, mid: int) -> ua.StatusCode:
         self._timestamps.pop(mid, None)
         self._spacing.forget(mid)
         return super()._delete_monitored_items(mid)
-
-    def modify_monitored_items(self, params: ua.ModifyMonitoredItemsParameters) -> list[ua.MonitoredItemModifyResult]:
-        results = []
-        for item in params.ItemsToModify:
-            mdata = self._monitored_items.get(item.MonitoredItemId)
-            refused = (_BAD.BadMonitoredItemIdInvalid if mdata is None
-                       else _filter_refusal(self.aspace, mdata.read_value_id, item.RequestedParameters.Filter))
-            if refused is not None:
-                results.append(ua.MonitoredItemModifyResult(StatusCode=ua.StatusCode(refused)))
-            else:
-                result = self._modify_monitored_item(item)
-                # (asyncua takes the asked queue size as it is here, 0 too: no bound at all)
-                result.RevisedQueueSize = mdata.queue_size = self._revise_queue_size(item.RequestedParameters.QueueSize)
-                self._space(item.MonitoredItemId, result, mdata.read_value_id, item.RequestedParameters.SamplingInterval)
-                results.append(result)
-        return results
 
     async def datachange_callback(self, handle: int, value: ua.DataValue, error: ua.StatusCode | None = None) -> None:
         mid = self._monitored_datachange.get(handle, -1)

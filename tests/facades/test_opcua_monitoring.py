@@ -14,6 +14,9 @@ filter or range), Bad_ServiceUnsupported, or failed the whole request with Bad_I
 
 An item reports the part of a String its IndexRange selects, and the timestamps its request's
 timestampsToReturn asks for (5.12.2.2; asyncua sent a SourceTimestamp only, whatever was asked).
+A ModifyMonitoredItems revises and applies an item's parameters as a CreateMonitoredItems does
+(5.12.3.2): samplingInterval, queueSize (a longer queue cut at once), filter with its whereClause,
+clientHandle and timestampsToReturn.
 """
 
 from __future__ import annotations
@@ -410,4 +413,187 @@ async def test_an_item_queues_at_most_queue_size_notifications_for_a_client_that
         wait_until(lambda: all(newest(mid) == values[-1] for mid in mids), "the last value in both queues", 30)
         for mid in mids:
             assert [n.Value.Value.Value for n in queues[mid]] == values[-QUEUE_SIZE:]
+        await subscription.delete()
+
+
+#: (node, attribute, filter, samplingInterval, queueSize asked) -> (revisedSamplingInterval, revisedQueueSize)
+#: on a subscription publishing every 20 ms, the same from a CreateMonitoredItems and from a
+#: ModifyMonitoredItems (5.12.3.1: "illegal request values for parameters that can be revised do not
+#: generate errors. Instead the Server will choose default values and indicate them in the
+#: corresponding revised parameter"; 7.21: -1 asks for the publishing interval, a queueSize of 0
+#: for the server's largest, QUEUE_SIZE)
+REVISED = [
+    (("sers#Kind", "Value", None, -1.0, 0), (20.0, 1000)),  # a property: MinimumSamplingInterval 0
+    (("sers#Kind", "Value", None, 0.0, 1), (20.0, 1)),
+    (("sers#Kind", "Value", None, 500.0, 5), (500.0, 5)),
+    (("sers.quantity.adc_volts", "DisplayName", None, -1.0, 5000), (20.0, 1000)),  # not a Value
+    (("sers.quantity.adc_volts", "Value", None, -1.0, 2), (100.0, 2)),  # a point: sampled every 100 ms
+    (("sers", "EventNotifier", EVENT, -1.0, 0), (20.0, 1000)),
+]
+
+
+async def test_asyncua_a_modify_revises_each_parameter_as_a_create_does(served: tuple[Runtime, OpcuaFacade]) -> None:
+    """Each REVISED item created as asked, and each created asking 1000 ms and QueueSize 3 then
+    modified to what was asked: the same revised values.  (asyncua's ModifyMonitoredItems answered
+    the samplingInterval as it came, -1 and 0 too, where a create answered the publishing interval.)"""
+    _, facade = served
+    async with Client(facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        subscription = await client.create_subscription(20, _Quiet())
+        wanted = [revised for _, revised in REVISED]
+        asked, other = [], []
+        for handle, ((node, attribute, spec, sampling, size), _) in enumerate(REVISED, 1):
+            request = _request(ns, handle, node, attribute, spec, None, None)
+            request.RequestedParameters.SamplingInterval, request.RequestedParameters.QueueSize = sampling, size
+            asked.append(request)
+            request = _request(ns, 100 + handle, node, attribute, spec, None, None)
+            request.RequestedParameters.SamplingInterval, request.RequestedParameters.QueueSize = 1000.0, 3
+            other.append(request)
+        created = [await _create(client, subscription, request) for request in asked + other]
+        assert all(result.StatusCode.is_good() for result in created)
+        assert [(r.RevisedSamplingInterval, r.RevisedQueueSize) for r in created[:len(asked)]] == wanted
+        modified = await client.uaclient.modify_monitored_items(ua.ModifyMonitoredItemsParameters(
+            SubscriptionId=subscription.subscription_id, TimestampsToReturn=ua.TimestampsToReturn.Both,
+            ItemsToModify=[ua.MonitoredItemModifyRequest(MonitoredItemId=result.MonitoredItemId,
+                                                         RequestedParameters=request.RequestedParameters)
+                           for result, request in zip(created[len(asked):], asked, strict=True)]))
+        assert [result.StatusCode.name for result in modified] == ["Good"] * len(asked)
+        assert [(r.RevisedSamplingInterval, r.RevisedQueueSize) for r in modified] == wanted
+        await subscription.delete()
+
+
+def test_node_opcua_a_modify_revises_each_parameter_as_a_create_does(served: tuple[Runtime, OpcuaFacade]) -> None:
+    _, facade = served  # (node-opcua's subscription publishes every 20 ms)
+    items = [{"node": node, "attribute": attribute, "filter": spec, "sampling": 1000, "queueSize": 3}
+             for (node, attribute, spec, *_), _ in REVISED]
+    [result] = node_client(facade.url, [{"op": "items", "items": items, "modifyTo": [
+        {"sampling": sampling, "queueSize": size} for (*_, sampling, size), _ in REVISED]}])
+    assert result["statuses"] == ["Good"] * len(REVISED)
+    assert result["modified"] == [list(revised) for _, revised in REVISED]
+
+
+async def test_asyncua_a_modified_item_reports_with_its_new_client_handle_and_timestamps(
+        served: tuple[Runtime, OpcuaFacade]) -> None:
+    """An item created with ClientHandle 1 and timestampsToReturn Both, modified to ClientHandle 2
+    and Neither: the next value comes with handle 2 and no timestamp (5.12.3.2: the
+    timestampsToReturn "for each MonitoredItem to be modified", 7.21: the clientHandle "used in
+    Notifications"; asyncua kept both as the create had set them)."""
+    runtime, facade = served
+    seen: asyncio.Queue[tuple[int, ua.DataValue]] = asyncio.Queue()
+
+    class Changes:
+        def datachange_notification(self, node: Any, value: Any, data: Any) -> None:
+            seen.put_nowait((data.monitored_item.ClientHandle, data.monitored_item.Value))
+
+    name = "quantity.supply_voltage"  # (a value nothing but a write changes)
+    old = runtime.read("sers", name)
+    runtime.advance(0.2)  # (sampled since another test set it)
+    try:
+        async with Client(facade.url) as client:
+            ns = await client.get_namespace_index(NAMESPACE)
+            subscription = await client.create_subscription(20, Changes())
+            request = _request(ns, 1, f"sers.{name}", "Value", None, None, None)
+            created = await _create(client, subscription, request)
+            handle, first = await asyncio.wait_for(seen.get(), 10)
+            assert (handle, first.Value.Value) == (1, old)
+            assert (first.SourceTimestamp is not None, first.ServerTimestamp is not None) == (True, True)
+            subscription._monitored_items[2] = subscription._monitored_items[1]  # (asyncua's client routes by handle)
+            request.RequestedParameters.ClientHandle = 2
+            [modified] = await client.uaclient.modify_monitored_items(ua.ModifyMonitoredItemsParameters(
+                SubscriptionId=subscription.subscription_id, TimestampsToReturn=ua.TimestampsToReturn.Neither,
+                ItemsToModify=[ua.MonitoredItemModifyRequest(MonitoredItemId=created.MonitoredItemId,
+                                                             RequestedParameters=request.RequestedParameters)]))
+            assert modified.StatusCode.is_good()
+            runtime.advance(0.2)  # (the first value is a sampling interval old)
+            await client.get_node(ua.NodeId(f"sers.{name}", ns)).write_value(ua.DataValue(ua.Variant(45.0, ua.VariantType.Double)))
+            handle, value = await asyncio.wait_for(seen.get(), 10)
+            assert (handle, value.Value.Value, value.SourceTimestamp, value.ServerTimestamp) == (2, 45.0, None, None)
+            await subscription.delete()
+    finally:
+        runtime.set("sers", name, old)  # (for the tests after this one)
+
+
+async def test_asyncua_a_modified_event_item_filters_with_its_new_where_clause(
+        served: tuple[Runtime, OpcuaFacade]) -> None:
+    """An event item of the device created with a whereClause no fault event passes (OfType
+    BaseModelChangeEventType), modified to an EventFilter without one: the next fault is reported
+    (7.22.3: the EventFilter's whereClause selects the events; asyncua's modify took the new filter's
+    selectClauses and kept the old whereClause, and nothing was ever reported)."""
+    runtime, facade = served
+    events: asyncio.Queue[Any] = asyncio.Queue()
+
+    class Events:
+        def event_notification(self, event: Any) -> None:
+            events.put_nowait(event)
+
+    async with Client(facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        subscription = await client.create_subscription(20, Events())
+        request = _request(ns, 1, "sers", "EventNotifier", EVENT, None, None)
+        everything = request.RequestedParameters.Filter
+        request.RequestedParameters.Filter = ua.EventFilter(
+            SelectClauses=everything.SelectClauses, WhereClause=ua.ContentFilter(Elements=[ua.ContentFilterElement(
+                FilterOperator=ua.FilterOperator.OfType, FilterOperands=[ua.LiteralOperand(
+                    Value=ua.Variant(ua.NodeId(ua.ObjectIds.BaseModelChangeEventType)))])]))
+        created = await _create(client, subscription, request)
+        assert created.StatusCode.is_good()
+        subscription._monitored_items[1].mfilter = everything  # (the fields asyncua's client maps)
+        request.RequestedParameters.Filter = everything
+        [modified] = await client.uaclient.modify_monitored_items(ua.ModifyMonitoredItemsParameters(
+            SubscriptionId=subscription.subscription_id, TimestampsToReturn=ua.TimestampsToReturn.Both,
+            ItemsToModify=[ua.MonitoredItemModifyRequest(MonitoredItemId=created.MonitoredItemId,
+                                                         RequestedParameters=request.RequestedParameters)]))
+        assert modified.StatusCode.is_good()
+        runtime.fault("sers", "emergency_stop", True)
+        try:
+            event = await asyncio.wait_for(events.get(), 10)
+            assert "emergency_stop on" in event.Message.Text
+        finally:
+            runtime.fault("sers", "emergency_stop", False)  # (for the tests after this one)
+        await subscription.delete()
+
+
+async def test_a_modify_to_a_smaller_queue_discards_the_oldest_notifications(
+        served: tuple[Runtime, OpcuaFacade]) -> None:
+    """30 values queued for an item of a subscription with publishing disabled (QueueSize 0:
+    QUEUE_SIZE), then the item modified to QueueSize 5: its queue holds the newest 5 at once, and
+    5 after one more value (5.12.3.2: "If the number of notifications in the queue exceeds the new
+    queue size, the notifications exceeding the size shall be discarded following the configured
+    discard policy", discardOldest; asyncua dropped one a new notification, and kept 30)."""
+    from tests.support.process import wait_until
+
+    runtime, facade = served
+    name = "quantity.heatsink_temperature"  # (changes only when set)
+    async with Client(facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        subscription = await client.create_subscription(ua.CreateSubscriptionParameters(
+            RequestedPublishingInterval=facade.period * 1000, RequestedLifetimeCount=10_000,
+            RequestedMaxKeepAliveCount=10, PublishingEnabled=False), _Quiet())
+        request = _request(ns, 1, f"sers.{name}", "Value", None, None, None)
+        request.RequestedParameters.QueueSize = 0
+        created = await _create(client, subscription, request)
+        mid = created.MonitoredItemId
+        queues = facade.server.iserver.subscription_service.subscriptions[subscription.subscription_id]._triggered_datachanges
+        start = runtime.read("sers", name)
+        values = [round(start + 0.01 * n, 2) for n in range(1, 31)]
+        for value in values:
+            runtime.set("sers", name, value)
+            runtime.advance(facade.period)  # (the facade samples the point)
+
+        def queued() -> list[Any]:
+            return [n.Value.Value.Value for n in queues.get(mid, [])]
+
+        wait_until(lambda: queued()[-1:] == values[-1:], "the last value queued", 30)
+        assert queued()[-30:] == values
+        request.RequestedParameters.QueueSize = 5
+        [modified] = await client.uaclient.modify_monitored_items(ua.ModifyMonitoredItemsParameters(
+            SubscriptionId=subscription.subscription_id, TimestampsToReturn=ua.TimestampsToReturn.Both,
+            ItemsToModify=[ua.MonitoredItemModifyRequest(MonitoredItemId=mid,
+                                                         RequestedParameters=request.RequestedParameters)]))
+        assert modified.RevisedQueueSize == 5
+        assert queued() == values[-5:]
+        runtime.set("sers", name, start)
+        runtime.advance(facade.period)
+        wait_until(lambda: queued()[-1:] == [start], "one more value queued", 30)
+        assert queued() == [*values[-4:], start]
         await subscription.delete()

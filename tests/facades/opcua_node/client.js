@@ -27,6 +27,10 @@
 //     ITEM: {"node": "x.axis.phase"} (or "nodeId") with "attribute" (default Value), "indexRange",
 //     "encoding" (a dataEncoding name), "filter" ({"type": "event"} or {"type": "datachange",
 //     "deadband": "Absolute", "value": 1}), "sampling" (ms; then "revised": each revisedSamplingInterval)
+//     and "queueSize" (default 1; then "queues": each revisedQueueSize).  With "modifyTo": [{"sampling": ms,
+//     "queueSize": n}, ...] instead of "modify": one ModifyMonitoredItems of the created items, each to
+//     those parameters (its own clientHandle and filter): "modified", a [revisedSamplingInterval,
+//     revisedQueueSize] each
 //   {"op": "call", "object": "x", "method": "x#Fault", "args": [["String", "power"], ["Boolean", true]]}
 // A step may name a node id in full ("nodeId": "ns=0;i=2253") instead of a devsim "node".
 // String node ids are in the namespace urn:devsim.  Prints one line "RESULT {json}" (node-opcua
@@ -212,6 +216,8 @@ async function step(session, ns, s) {
         });
         const statuses = [];
         const revised = [];
+        const queues = [];
+        const ids = [];
         for (const [index, item] of s.items.entries()) {
             const created = await fault(() => session.createMonitoredItems({
                 subscriptionId: subscription.subscriptionId, timestampsToReturn: TimestampsToReturn.Both,
@@ -221,15 +227,34 @@ async function step(session, ns, s) {
                         indexRange: item.indexRange, dataEncoding: item.encoding ? { name: item.encoding } : undefined,
                     },
                     monitoringMode: MonitoringMode.Reporting,
-                    requestedParameters: { clientHandle: index + 1, samplingInterval: item.sampling || 0, queueSize: 1,
+                    requestedParameters: { clientHandle: index + 1, samplingInterval: item.sampling || 0,
+                                           queueSize: item.queueSize === undefined ? 1 : item.queueSize,
                                            discardOldest: true, filter: filter(item.filter) },
                 }],
             }));
             statuses.push(created.fault ? `fault:${created.fault}` : created.results[0].statusCode.name);
             revised.push(created.fault ? null : created.results[0].revisedSamplingInterval);
+            queues.push(created.fault ? null : created.results[0].revisedQueueSize);
+            ids.push(created.fault ? null : created.results[0].monitoredItemId);
+        }
+        if (s.modifyTo) {
+            const changed = await session.modifyMonitoredItems({
+                subscriptionId: subscription.subscriptionId, timestampsToReturn: TimestampsToReturn.Both,
+                itemsToModify: s.modifyTo.map((to, index) => ({
+                    monitoredItemId: ids[index],
+                    requestedParameters: { clientHandle: index + 1, samplingInterval: to.sampling, queueSize: to.queueSize,
+                                           discardOldest: true, filter: filter(s.items[index].filter) },
+                })),
+            });
+            await subscription.terminate();
+            return { statuses, revised, queues,
+                     modified: changed.results.map((r) => [r.revisedSamplingInterval, r.revisedQueueSize]) };
         }
         if (!s.modify) {
             await subscription.terminate();
+            if (s.items.some((item) => item.queueSize !== undefined)) {
+                return { statuses, revised, queues };
+            }
             return s.items.some((item) => item.sampling !== undefined) ? { statuses, revised } : { statuses };
         }
         const modified = await fault(() => session.modifyMonitoredItems({
