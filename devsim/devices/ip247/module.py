@@ -19,7 +19,7 @@ from typing import Any
 from devsim.core.clock import Clock
 from devsim.core.kit import Command, Table, declare_signals
 from devsim.core.model import Model
-from devsim.core.nvram import NonVolatileMemory
+from devsim.core.nvram import NonVolatileMemory, numbered
 from devsim.devices.ip247 import machine_data
 from devsim.devices.ip247.axis_unit import AxisUnit
 from devsim.devices.ip247.basp import Basp
@@ -82,20 +82,25 @@ class Ip247Module(Model):
             self.nvram.wipe()
         ident = self.nvram.get("sys_id")
         default = self.config.get("sys_id") or {}
-        if ident and (type(ident) is not list or len(ident) != 3
+        if ident is not None and (type(ident) is not list or len(ident) != 3
                       or not all(type(v) is int and 0 <= v <= 0xFF for v in ident)):
             raise ValueError(f"the SYS-ID {ident!r} is no three bytes as BA24 stores them")
-        self.channel.sys_id = tuple(ident) if ident else (int(default.get("module", 0)), int(default.get("slot", 0)),
+        self.channel.sys_id = tuple(ident) if ident is not None else (int(default.get("module", 0)), int(default.get("slot", 0)),
                                                            int(default.get("page", 0)))
-        mds = self.nvram.get("md") or {}
+        # the numbered sections by the keys save() writes (str(n) of an axis 1 … 3): '01', '+1' or '٣'
+        # was no key looked up, and that axis started without its MD or offsets, not a word said
+        mds = numbered(self.nvram.get("md", {}), "machine data of axis", AXES)
         for unit in self.units:
-            words = mds.get(str(unit.number))
-            if words:
+            words = mds.get(unit.number)
+            if words is not None:  # (save() writes no empty record: [] is machine_data.stored's to refuse)
                 unit.load_md(machine_data.stored(words, axis=unit.number, sys_module=self.channel.sys_id[0]),
                              list(words), first=False)
-        offsets = self.nvram.get("offsets") or {}
+        offsets = numbered(self.nvram.get("offsets", {}), "offsets of axis", AXES)
         for unit in self.units:
-            zo, to, tp = offsets.get(str(unit.number), (0, 0, 0))
+            stored = offsets.get(unit.number, [0, 0, 0])
+            if type(stored) is not list or len(stored) != 3:
+                raise ValueError(f"the offsets of axis {unit.number} {stored!r:.40} are no three as the module stores")
+            zo, to, tp = stored
             if not all(type(v) is int and abs(v) < OFFSET_BOUND for v in (zo, to, tp)):
                 raise ValueError(f"the offsets of axis {unit.number} {[zo, to, tp]!r} are no whole numbers"
                                  f" within ±2^53")

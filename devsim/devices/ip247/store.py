@@ -100,9 +100,12 @@ class ProgramStore:
         hand-edited or damaged state file): a program number outside 0 … 255 or twice, a text no
         record carries (latin-1) or marked with another syntax error or faulty block than its
         check gives, more programs or characters than the memory holds."""
-        if not data:
+        if data is None:  # (no section: a memory the module never saved to)
             return cls()
-        rows, gaps = data.get("programs", []), data.get("gaps", 0)  # type: ignore[union-attr]
+        # (only the two entries to_json writes: [], 0 or {} read as an empty memory before)
+        if type(data) is not dict or sorted(data) != ["gaps", "programs"]:
+            raise ValueError(f"the stored programs {data!r:.40} are no program memory")
+        rows, gaps = data["programs"], data["gaps"]
         if type(rows) is not list or type(gaps) is not int or gaps < 0:
             raise ValueError("the stored programs are no program memory")
         programs = [_stored(row) for row in rows]
