@@ -83,10 +83,10 @@ class Ip247Module(Model):
         ident = self.nvram.get("sys_id")
         default = self.config.get("sys_id") or {}
         if ident is not None and (type(ident) is not list or len(ident) != 3
-                      or not all(type(v) is int and 0 <= v <= 0xFF for v in ident)):
+                                  or not all(type(v) is int and 0 <= v <= 0xFF for v in ident)):
             raise ValueError(f"the SYS-ID {ident!r} is no three bytes as BA24 stores them")
-        self.channel.sys_id = tuple(ident) if ident is not None else (int(default.get("module", 0)), int(default.get("slot", 0)),
-                                                           int(default.get("page", 0)))
+        self.channel.sys_id = tuple(ident) if ident is not None else (
+            int(default.get("module", 0)), int(default.get("slot", 0)), int(default.get("page", 0)))
         # the numbered sections by the keys save() writes (str(n) of an axis 1 … 3): '01', '+1' or '٣'
         # was no key looked up, and that axis started without its MD or offsets, not a word said
         mds = numbered(self.nvram.get("md", {}), "machine data of axis", AXES)
