@@ -139,3 +139,67 @@ def test_a_stored_parameter_a_catalogue_read_in_left_at_0_loads(tmp_path: Path, 
         assert runtime.read("poselesta", "param.P30") == 0.0
     finally:
         runtime.stop()
+
+
+# -- the cassette recorder's tape (config v6_peer: cassette, manual §2.6.2.2) ---------------------------
+CASSETTE = {"v6_peer": "cassette"}
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    """The image a control with a cassette recorder on V6 wrote: P20 recorded with T2 (ISO)."""
+    state = tmp_path_factory.mktemp("poselesta-cassette")
+    runtime = Runtime(virtual=True, state_dir=state).start()
+    try:
+        runtime.add_device("poselesta", None, CASSETTE)
+        runtime.advance(3.0)
+        runtime.set("poselesta", "program.P20", "N1 X10\nN2 Y-2.5 M02")
+        runtime.set("poselesta", "panel.mode", "EXTERNAL_MEDIUM")
+        runtime.set("poselesta", "panel.program", 20)
+        runtime.set("poselesta", "v6.transfer", "cassette_out")
+        runtime.advance(20.0)  # the 13 s leader, then the program
+        assert runtime.read("poselesta", "v6.state") == "done"
+    finally:
+        runtime.stop()
+    image: dict[str, Any] = json.loads((state / "poselesta.nvram.json").read_text())
+    return image
+
+
+def test_the_tape_a_cassette_recorded_plays_back_after_a_restart(tmp_path: Path, recorded: dict[str, Any]) -> None:
+    assert recorded["cassette"].startswith("a58d0a")  # ISO "%" CR LF
+    _write(tmp_path, recorded)
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        runtime.add_device("poselesta", None, CASSETTE)
+        runtime.advance(3.0)
+        runtime.set("poselesta", "panel.mode", "EXTERNAL_MEDIUM")
+        runtime.set("poselesta", "panel.program", 21)
+        runtime.set("poselesta", "v6.transfer", "cassette_in")
+        runtime.advance(20.0)
+        assert runtime.read("poselesta", "v6.state") == "done"
+        assert runtime.read("poselesta", "program.P21") == "N 1 X 10.000\nN 2 Y- 2.500 M 02"
+    finally:
+        runtime.stop()
+
+
+TAPES = {  # what the recorder never keeps (bytes.hex(), "" when ejected)
+    "number": 5, "zero": 0, "false": False, "null": None, "list": [], "object": {}, "huge": 10**30,
+    "capitals": str.upper, "blanks": lambda t: " ".join(t[i:i + 2] for i in range(0, len(t), 2)),
+    "newline": lambda t: t[:4] + "\n" + t[4:], "odd-length": lambda t: t[:-1], "not-hex": lambda t: "zz" + t,
+    "arabic-indic-digits": lambda t: "\u0664\u0661" + t, "fullwidth-digits": lambda t: "\uff14\uff11" + t,
+}
+
+
+@pytest.mark.parametrize("edit", list(TAPES))
+def test_a_tape_the_recorder_never_keeps_refuses_the_memory(tmp_path: Path, recorded: dict[str, Any],
+                                                           edit: str) -> None:
+    """(Fuzzed through a real start: a number, null, [] or {} loaded as an empty tape, the
+    recording gone without a word; capitals, blanks and newlines were read by ``fromhex``.)"""
+    image = copy.deepcopy(recorded)
+    change = TAPES[edit]
+    image["cassette"] = change(image["cassette"]) if callable(change) else change
+    path = _write(tmp_path, image)
+    text = path.read_text("utf-8")
+    refused_memory(tmp_path, "poselesta", match=r"\(ValueError: the stored cassette .* is no tape the recorder keeps",
+                   config=CASSETTE)
+    assert path.read_text("utf-8") == text

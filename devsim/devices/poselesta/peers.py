@@ -25,7 +25,7 @@ class Cassette:
         self._nvram = nvram
         self._function = function
         self._play_in = play
-        self.tape = bytes.fromhex(nvram.get("cassette") or "")
+        self.tape = _stored_tape(nvram.get("cassette", ""))
         self._recording = b""
         self._timer: Timer | None = None
 
@@ -56,3 +56,20 @@ class Cassette:
     def eject(self) -> None:
         self.tape = b""
         self._nvram.put("cassette", "")
+
+
+def _stored_tape(stored: object) -> bytes:
+    """The tape as the recorder keeps it (``bytes.hex()``: lowercase hex pairs, ``""`` when
+    ejected or never recorded); anything else is a ValueError, so that the start refuses the
+    memory naming the file (UnfitMemory) as for the control's other sections.  Before, a number,
+    ``null``, ``[]`` or ``{}`` was ``or ""``'d into an empty tape (the recording gone, not a word
+    said), and ``fromhex`` read capitals, blanks and newlines no recording writes."""
+    if type(stored) is not str:
+        raise ValueError(f"the stored cassette {stored!r:.40} is no tape the recorder keeps")
+    try:
+        tape = bytes.fromhex(stored)
+    except ValueError:
+        tape = None
+    if tape is None or tape.hex() != stored:
+        raise ValueError(f"the stored cassette {stored!r:.40} is no tape the recorder keeps (lowercase hex bytes)")
+    return tape
