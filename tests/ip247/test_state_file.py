@@ -117,6 +117,8 @@ EDITS = {
     # (the SYS-ID without the MD, whose module number it would no longer match)
     "sys-id-empty": _without_md("sys_id", []),
     "sys-id-zero": _without_md("sys_id", 0),
+    "sys-id-null": _without_md("sys_id", None),
+    "programs-null": _set("programs", None),
     "programs-empty-object": _set("programs", {}),
     "programs-empty-list": _set("programs", []),
     "programs-extra-entry": lambda image: image["programs"].__setitem__("gaps2", 0),

@@ -80,12 +80,13 @@ class Ip247Module(Model):
         UnfitMemory naming the file, as for the other kinds' memories."""
         if self.config.get("battery_ok", True) is False:
             self.nvram.wipe()
+        stored = "sys_id" in self.nvram.sections()  # (absent: the config's; null is no SYS-ID the module writes)
         ident = self.nvram.get("sys_id")
         default = self.config.get("sys_id") or {}
-        if ident is not None and (type(ident) is not list or len(ident) != 3
-                                  or not all(type(v) is int and 0 <= v <= 0xFF for v in ident)):
+        if stored and (type(ident) is not list or len(ident) != 3
+                       or not all(type(v) is int and 0 <= v <= 0xFF for v in ident)):
             raise ValueError(f"the SYS-ID {ident!r} is no three bytes as BA24 stores them")
-        self.channel.sys_id = tuple(ident) if ident is not None else (
+        self.channel.sys_id = tuple(ident) if stored else (
             int(default.get("module", 0)), int(default.get("slot", 0)), int(default.get("page", 0)))
         # the numbered sections by the keys save() writes (str(n) of an axis 1 … 3): '01', '+1' or '٣'
         # was no key looked up, and that axis started without its MD or offsets, not a word said
@@ -105,7 +106,7 @@ class Ip247Module(Model):
                 raise ValueError(f"the offsets of axis {unit.number} {[zo, to, tp]!r} are no whole numbers"
                                  f" within ±2^53")
             unit.coords.zo_mode, unit.coords.to_ba15, unit.coords.to_prog = zo, to, tp
-        self.programs.store = ProgramStore.from_json(self.nvram.get("programs"))
+        self.programs.store = ProgramStore.from_json(self.nvram.get("programs", ProgramStore().to_json()))
 
     def save(self) -> None:
         self.nvram.put("md", {str(u.number): u.md_words for u in self.units if u.md_words})

@@ -95,14 +95,12 @@ class ProgramStore:
         return {"gaps": self.gaps, "programs": [[p.number, p.text, p.error, p.faulty] for p in self.programs]}
 
     @classmethod
-    def from_json(cls, data: dict[str, object] | None) -> ProgramStore:
+    def from_json(cls, data: object) -> ProgramStore:
         """The store battery RAM holds; ValueError for what BA22 and teach-in never store (a
         hand-edited or damaged state file): a program number outside 0 … 255 or twice, a text no
         record carries (latin-1) or marked with another syntax error or faulty block than its
         check gives, more programs or characters than the memory holds."""
-        if data is None:  # (no section: a memory the module never saved to)
-            return cls()
-        # (only the two entries to_json writes: [], 0 or {} read as an empty memory before)
+        # (only the two entries to_json writes: null, [], 0 or {} read as an empty memory before)
         if type(data) is not dict or sorted(data) != ["gaps", "programs"]:
             raise ValueError(f"the stored programs {data!r:.40} are no program memory")
         rows, gaps = data["programs"], data["gaps"]
