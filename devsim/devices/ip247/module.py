@@ -98,10 +98,10 @@ class Ip247Module(Model):
                              list(words), first=False)
         offsets = numbered(self.nvram.get("offsets", {}), "offsets of axis", AXES)
         for unit in self.units:
-            stored = offsets.get(unit.number, [0, 0, 0])
-            if type(stored) is not list or len(stored) != 3:
-                raise ValueError(f"the offsets of axis {unit.number} {stored!r:.40} are no three as the module stores")
-            zo, to, tp = stored
+            record = offsets.get(unit.number, [0, 0, 0])
+            if type(record) is not list or len(record) != 3:
+                raise ValueError(f"the offsets of axis {unit.number} {record!r:.40} are no three as the module stores")
+            zo, to, tp = record
             if not all(type(v) is int and abs(v) < OFFSET_BOUND for v in (zo, to, tp)):
                 raise ValueError(f"the offsets of axis {unit.number} {[zo, to, tp]!r} are no whole numbers"
                                  f" within ±2^53")
