@@ -12,7 +12,11 @@ executed; #0, power-on and a reset-of-remote-link frame (FC0, FCV = 0) make the 
 FT1.2 rule R4 (spec §3.2, §3.10; config ``link.error_line_idle``, default on): after a detected
 error (checksum, length, start/end byte, garbage outside a frame — what a parity or framing
 error leaves) the card accepts a new frame only after at least 33 bit times (at the DIL baud
-rate) of line idle, measured on the device clock from the last byte received.  Everything
+rate) of line idle, measured on the device clock from the last byte received.  [SIM-CHOICE] When
+the card has answered since that byte, a frame comes no earlier than the end of the answer on
+the line (response delay + 11 bit times per character at the DIL baud rate): the host hears the
+whole answer before it sends again (half duplex, spec §3.4), which a pty's instant answer would
+otherwise hide.  Everything
 arriving earlier — the rest of the chunk that held the error, and chunks back-to-back behind
 it — is discarded without reply, and each such byte restarts the idle interval.  A partial frame
 dropped by the inter-character timeout arms nothing: the line has already been idle for the
@@ -60,6 +64,7 @@ ShortHandler = Callable[[bytes], "bytes | None"]
 
 NO_REPLY = b""
 IDLE_BITS = 33  #: FT1.2 R4 minimum line idle after an error, in bit times
+CHAR_BITS = 11  #: one 8E1 character on the line: start, 8 data, parity, stop (manual §2.1)
 _POLLS = 16  #: distinct whole-Kurzsatz chunks a link remembers (a host polls with a few)
 
 
@@ -96,6 +101,9 @@ class Link:
         self._expire: Timer | None = None
         self.error_hold = False  # R4: an error was detected, waiting for line idle
         self._last_byte = float("-inf")
+        #: when the card's last answer was sent and when it ends on the line (device clock)
+        self._answered_at = float("-inf")
+        self._answer_end = float("-inf")
         #: chunks that were one whole Kurzsatz to this card, with its command number, AE octets
         #: and handler: a host's poll, the same bytes again and again, answered in one step
         #: (forgotten at power-on, which may bring another address); at most :data:`_POLLS` of them
@@ -141,7 +149,9 @@ class Link:
             return
         self._listened_at = now
         if self.error_hold and data:
-            if now - self._last_byte < self.idle_after_error:
+            # an answer sent since the error: the host heard all of it first (R4, [SIM-CHOICE])
+            start = max(now, self._answer_end) if self._answered_at >= self._last_byte else now
+            if start - self._last_byte < self.idle_after_error:
                 self._last_byte = now  # the line is not idle: the bytes are lost (R4)
                 self.decoder.reset()
                 self._count("not_idle")
@@ -267,6 +277,8 @@ class Link:
         if not data:
             return
         delay = self.options.response_delay
+        self._answered_at = now = self.clock.now()
+        self._answer_end = now + max(delay, 0) + len(data) * CHAR_BITS / self.baud()
         if delay > 0:
             self.clock.call_later(delay, lambda: self.write(data))
         else:
