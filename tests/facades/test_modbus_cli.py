@@ -109,8 +109,6 @@ def test_sigterm_during_a_flood_of_pipelined_requests_stops_the_simulator() -> N
         stop(sim.proc, signal.SIGKILL)
         for client in clients:
             client.close()
-    errors: list[str] = []
-    while (text := sim.err.get(timeout=10)) is not None:
-        errors.append(text)
+    errors = sim.rest_of_err()
     assert status == 0, errors[-10:]
     assert not any("Traceback" in text for text in errors), errors[:20]

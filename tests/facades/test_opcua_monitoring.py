@@ -174,6 +174,14 @@ def test_node_opcua_an_index_range_selects_what_an_item_reports(served: tuple[Ru
     assert (result["statuses"], result["values"]) == (["Good"], [phase[:2]])
 
 
+async def _unpublished(client: Client, facade: Any) -> Any:
+    """A subscription at the facade's period with publishing disabled: its items' notifications
+    stay queued (Part 4 5.13.2, publishingEnabled)."""
+    return await client.create_subscription(ua.CreateSubscriptionParameters(
+        RequestedPublishingInterval=facade.period * 1000, RequestedLifetimeCount=10_000,
+        RequestedMaxKeepAliveCount=10, PublishingEnabled=False), _Quiet())
+
+
 async def _create(client: Client, subscription: Any, request: ua.MonitoredItemCreateRequest,
                   timestamps: ua.TimestampsToReturn = ua.TimestampsToReturn.Both) -> ua.MonitoredItemCreateResult:
     """One monitored item created as ``request`` says (asyncua's Subscription asks for Both
@@ -380,9 +388,7 @@ async def test_an_item_queues_at_most_queue_size_notifications_for_a_client_that
     name = "quantity.heatsink_temperature"  # (changes only when set)
     async with Client(facade.url) as client:
         ns = await client.get_namespace_index(NAMESPACE)
-        subscription = await client.create_subscription(ua.CreateSubscriptionParameters(
-            RequestedPublishingInterval=facade.period * 1000, RequestedLifetimeCount=10_000,
-            RequestedMaxKeepAliveCount=10, PublishingEnabled=False), _Quiet())
+        subscription = await _unpublished(client, facade)
         item = ua.ReadValueId(NodeId=ua.NodeId(f"sers.{name}", ns), AttributeId=ua.AttributeIds.Value)
         created = await client.uaclient.create_monitored_items(ua.CreateMonitoredItemsParameters(
             SubscriptionId=subscription.subscription_id, TimestampsToReturn=ua.TimestampsToReturn.Both,
@@ -566,9 +572,7 @@ async def test_a_modify_to_a_smaller_queue_discards_the_oldest_notifications(
     name = "quantity.heatsink_temperature"  # (changes only when set)
     async with Client(facade.url) as client:
         ns = await client.get_namespace_index(NAMESPACE)
-        subscription = await client.create_subscription(ua.CreateSubscriptionParameters(
-            RequestedPublishingInterval=facade.period * 1000, RequestedLifetimeCount=10_000,
-            RequestedMaxKeepAliveCount=10, PublishingEnabled=False), _Quiet())
+        subscription = await _unpublished(client, facade)
         request = _request(ns, 1, f"sers.{name}", "Value", None, None, None)
         request.RequestedParameters.QueueSize = 0
         created = await _create(client, subscription, request)

@@ -260,9 +260,7 @@ def test_resets_and_short_sdo_requests_neither_stop_the_node_nor_flood_stderr() 
                 received += chunk
     finally:
         sim.interrupt()
-    errors: list[str] = []
-    while (text := sim.err.get(timeout=10)) is not None:
-        errors.append(text)
+    errors = sim.rest_of_err()
     assert not any("Traceback" in text for text in errors), errors[:20]
     assert sum("canopen:" in text for text in errors) <= 4, errors
 
@@ -421,8 +419,6 @@ def test_sigterm_during_a_flood_stops_the_simulator() -> None:
         stop(sim.proc, signal.SIGKILL)
         for client in clients:
             client.close()
-    errors: list[str] = []
-    while (text := sim.err.get(timeout=10)) is not None:
-        errors.append(text)
+    errors = sim.rest_of_err()
     assert status == 0, errors[-10:]
     assert not any("Traceback" in text or "Exception ignored" in text for text in errors), errors[:20]

@@ -100,8 +100,6 @@ def test_a_scenario_run_stopped_by_a_signal_says_so_and_cleans_up(tmp_path: Path
     sim.next_match(sim.out, lambda line: line == f"x: pty {link}", 30, "the port line")
     assert link.is_symlink()
     assert stop(sim.proc, sig, 15) == exits.INTERRUPTED
-    err = []
-    while (line := sim.err.get(timeout=5)) is not None:
-        err.append(line)
+    err = sim.rest_of_err(timeout=5)
     assert err == ["devsim: scenario run interrupted"]
     assert not link.exists() and not link.is_symlink()

@@ -115,3 +115,11 @@ class DevsimProcess:
     def interrupt(self) -> int:
         """SIGINT and a bounded wait (then SIGKILL); the exit status."""
         return stop(self.proc, signal.SIGINT, 15)
+
+    def rest_of_err(self, timeout: float = 10.0) -> list[str]:
+        """The stderr lines not taken yet, up to its end (the process stopped: ``timeout`` bounds
+        the wait for each line)."""
+        lines: list[str] = []
+        while (text := self.err.get(timeout=timeout)) is not None:
+            lines.append(text)
+        return lines
