@@ -35,7 +35,7 @@ if TYPE_CHECKING:  # imported where used: a device without a state dir needs nei
 
 __all__ = [
     "KIND_KEY", "UNUSABLE", "MemoryInUse", "NonVolatileMemory", "OtherKindsMemory", "PoisonedMemory", "UnfitMemory",
-    "check_name", "numbered", "stored_key", "stored_whole",
+    "check_name", "numbered", "stored_hex", "stored_key", "stored_whole",
 ]
 
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,127}$")
@@ -83,6 +83,19 @@ def stored_whole(value: object, what: str, numbers: Container[int] | None = None
     if type(value) is not int or numbers is not None and value not in numbers:
         raise ValueError(f"stored {what} {value!r:.40} is none the device stores")
     return value
+
+
+def stored_hex(value: object) -> bytes | None:
+    """The bytes of ``value`` if it is text as ``bytes.hex()`` writes them (lowercase hex pairs,
+    nothing between them), else None: ``bytes.fromhex`` also reads capitals, blanks and newlines,
+    which no device's save writes."""
+    if type(value) is not str:
+        return None
+    try:
+        data = bytes.fromhex(value)
+    except ValueError:
+        return None
+    return data if data.hex() == value else None
 
 
 def stored_key(key: object, what: str, numbers: Container[int] | None = None) -> int:

@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Container
 from typing import Any
 
-from devsim.core.nvram import NonVolatileMemory, numbered, stored_whole
+from devsim.core.nvram import NonVolatileMemory, numbered, stored_hex, stored_whole
 from devsim.devices.gms96.codec import S24_MAX, S24_MIN
 
 __all__ = ["Flash"]
@@ -134,12 +134,11 @@ def _plc(image: Any, frames: Any) -> tuple[str | None, list[int]]:
         if frames not in (None, []):
             raise ValueError(f"stored PLC frames {frames!r:.40} without a PLC image")
         return None, []
-    if type(image) is not str or not image.isascii() or len(image) % 2 or any(c not in _HEX for c in image):
+    if stored_hex(image) is None:
         raise ValueError(f"stored PLC image {image!r:.40} is no bytes a download stores")
     if type(frames) is not list or sum(stored_whole(f, "PLC frame length", _FRAME) for f in frames) != len(image) // 2:
         raise ValueError(f"stored PLC frames {frames!r:.40} are not the {len(image) // 2} bytes of its image")
     return image, frames
 
 
-_HEX = frozenset("0123456789abcdef")  # (bytes.hex writes these)
 _FRAME = range(256)  # a frame's bytes: the user data of one Langsatz (L < 256, spec §3.4)

@@ -8,7 +8,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from devsim.core.clock import Clock, Timer
-from devsim.core.nvram import NonVolatileMemory
+from devsim.core.nvram import NonVolatileMemory, stored_hex
 from devsim.devices.poselesta.transfers import CASSETTE_LEADER
 
 __all__ = ["Cassette"]
@@ -64,12 +64,7 @@ def _stored_tape(stored: object) -> bytes:
     memory naming the file (UnfitMemory) as for the control's other sections.  Before, a number,
     ``null``, ``[]`` or ``{}`` was ``or ""``'d into an empty tape (the recording gone, not a word
     said), and ``fromhex`` read capitals, blanks and newlines no recording writes."""
-    if type(stored) is not str:
-        raise ValueError(f"the stored cassette {stored!r:.40} is no tape the recorder keeps")
-    try:
-        tape = bytes.fromhex(stored)
-    except ValueError:
-        tape = None
-    if tape is None or tape.hex() != stored:
+    tape = stored_hex(stored)
+    if tape is None:
         raise ValueError(f"the stored cassette {stored!r:.40} is no tape the recorder keeps (lowercase hex bytes)")
     return tape
