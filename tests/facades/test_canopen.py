@@ -21,6 +21,7 @@ from devsim.core.registry import device_class, kinds
 from devsim.facades.canopen_node import READ_ONLY, VALUE_RANGE_EXCEEDED, CanopenFacade, load_od
 from devsim.facades.canopen_od import DEVICE_TYPE, eds
 from devsim.facades.canopen_sdo import LENGTH_MISMATCH
+from tests.support.can import network as can_network
 
 ROOT = Path(__file__).resolve().parents[2]
 SHIPPED = tuple(sorted(kinds()))  # every registered kind ships its EDS under docs/eds/
@@ -44,7 +45,7 @@ class Bus:
     def __init__(self) -> None:
         channel = f"devsim-{uuid.uuid4().hex}"
         self.device = device_class("sers")(clock=VirtualClock(), config={})
-        self.slave, self.master = canopen.Network(), canopen.Network()
+        self.slave, self.master = can_network(), can_network()
         self.slave.connect(interface="virtual", channel=channel)
         self.master.connect(interface="virtual", channel=channel)
         self.facade = CanopenFacade(self.device, 5)

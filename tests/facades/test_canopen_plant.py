@@ -6,12 +6,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import canopen
 import pytest
 
 from devsim.core.typed import Invalid
 from devsim.scenario.plant import plant_running
 from devsim.scenario.schema import PlantSpec
+from tests.support.can import network as can_network
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -32,7 +32,7 @@ def test_two_devices_of_a_plant_on_one_can_network() -> None:
         where = rows[0].split()[2]
         assert rows[1] == f"y.canopen: socketcand {where} can0 node 6"
         host, _, port = where.rpartition(":")
-        network = canopen.Network()
+        network = can_network()
         network.connect(interface="socketcand", host=host, port=int(port), channel="can0")
         try:
             x = network.add_node(5, str(ROOT / "docs" / "eds" / "sers.eds"))

@@ -17,6 +17,8 @@ import pytest
 
 from devsim.facades.canopen_node import CanopenFacade
 from devsim.runtime import Runtime
+from tests.support.can import NOTIFIER_CYCLE
+from tests.support.can import network as can_network
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -30,7 +32,7 @@ class Drive:
                  config: dict[str, Any] | None = None) -> None:
         channel = f"devsim-{uuid.uuid4().hex}"
         self.runtime = Runtime(virtual=True).start()
-        self.slave, self.master = canopen.Network(), canopen.Network()
+        self.slave, self.master = can_network(), can_network()
         self.slave.connect(interface="virtual", channel=channel)
         self.master.connect(interface="virtual", channel=channel)
         try:
@@ -348,7 +350,10 @@ def test_a_bus_that_goes_down_loses_messages_and_the_drive_goes_on(drive: Drive,
     drive.runtime.fault("pcd", "blocked_1", True)
     assert drive.runtime.run_until(lambda: drive.runtime.read("pcd", "axis.1.ExcPEr"), 3.0)  # its EMCY: lost
     assert drive.facade.lost >= 7 and arrived.empty()  # (and the statusword's change to Fault)
-    drive.slave.bus = can.Bus(interface="virtual", channel=channel)  # on a bus again (to send: enough here)
+    # On a bus again: a new bus and a new notifier (canopen refuses to send while the notifier
+    # that read the old bus has stopped with an error, as it has once it read the closed bus).
+    drive.slave.bus = can.Bus(interface="virtual", channel=channel)
+    drive.slave.notifier = can.Notifier(drive.slave.bus, drive.slave.listeners, NOTIFIER_CYCLE)
     drive.runtime.advance(0.35)
     fault = [arrived.get(timeout=5) for _ in range(3)]  # the event timer ran on
     assert fault[0] & 0x4F == 0x08 and len(set(fault)) == 1

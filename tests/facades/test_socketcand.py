@@ -19,11 +19,13 @@ import canopen
 from devsim.facades.canopen_node import CanopenFacade
 from devsim.runtime import Runtime
 from devsim.transports.socketcand import SocketcandServer, frame_text, parse_send, split_commands
+from tests.support.can import network as can_network
 
 ROOT = Path(__file__).resolve().parents[2]
 MASTER = """
 import sys, canopen
 net = canopen.Network()
+net.NOTIFIER_CYCLE = 0.01  # (disconnect returns within 10 ms: tests/support/can.py)
 net.connect(interface="socketcand", host="127.0.0.1", port=int(sys.argv[1]), channel="can0")
 node = net.add_node(5, sys.argv[2])
 print(hex(node.sdo[0x1000].raw))
@@ -57,7 +59,7 @@ def test_a_client_s_text_is_cut_into_commands_and_a_run_without_end_is_not_kept(
 def test_canopen_master_in_another_process() -> None:
     channel = f"devsim-{uuid.uuid4().hex}"
     runtime = Runtime().start()
-    slave = canopen.Network()
+    slave = can_network()
     slave.connect(interface="virtual", channel=channel)
     server = SocketcandServer(channel, port=0)
     try:
@@ -84,7 +86,7 @@ def test_devsim_run_serves_a_canopen_node() -> None:
         kind, where, interface, _node, number = seen["sers.canopen"].split()
         assert (kind, interface, number) == ("socketcand", "can0", "7")
         host, _, port = where.rpartition(":")
-        network = canopen.Network()
+        network = can_network()
         network.connect(interface="socketcand", host=host, port=int(port), channel="can0")
         try:
             node = network.add_node(7, str(ROOT / "docs" / "eds" / "sers.eds"))
@@ -151,7 +153,7 @@ def test_devsim_run_on_socketcan_serves_vcan0_or_says_why_not() -> None:
     sim = Sim("sers", "--pty", "--canopen", "8@socketcan:vcan0")
     try:
         assert sim.read_until("sers.canopen:")["sers.canopen"] == "socketcan vcan0 node 8"
-        network = canopen.Network()
+        network = can_network()
         network.connect(interface="socketcan", channel="vcan0")
         try:
             node = network.add_node(8, str(ROOT / "docs" / "eds" / "sers.eds"))
@@ -174,7 +176,7 @@ def test_the_402_flow_with_the_master_in_another_process_under_virtual_time() ->
 
     sim = Sim("pcd4h3", "--virtual", "--control", "127.0.0.1:0", "--canopen", "3@127.0.0.1:0",
               "--port", "ether_udp=udp:0", "--port", "ether_tcp=tcp:0")  # no fixed port 5050
-    network = canopen.Network()
+    network = can_network()
     try:
         seen = sim.read_until("control:")
         kind, where, _, _, number = seen["pcd4h3.canopen"].split()
@@ -292,7 +294,7 @@ def test_a_client_that_does_not_read_costs_a_bounded_queue_and_a_reader_gets_eve
 
     channel = f"devsim-{uuid.uuid4().hex}"
     runtime = Runtime().start()
-    slave = canopen.Network()
+    slave = can_network()
     slave.connect(interface="virtual", channel=channel)
     server = SocketcandServer(channel, port=0, client_queue=100)
     clients: list[socket.socket] = []
@@ -349,7 +351,7 @@ def test_a_client_that_sends_faster_than_the_node_answers_is_held_back_and_gets_
     assert requests <= CLIENT_QUEUE
     channel = f"devsim-{uuid.uuid4().hex}"
     runtime = Runtime().start()
-    slave = canopen.Network()
+    slave = can_network()
     slave.connect(interface="virtual", channel=channel)
     server = SocketcandServer(channel, port=0)
     client: socket.socket | None = None
