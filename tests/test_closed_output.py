@@ -143,26 +143,33 @@ def test_a_slow_reader_gets_every_line_in_order_without_the_writer_waiting() -> 
 
 
 def test_a_harness_a_little_behind_gets_every_port_line_of_a_big_plant(tmp_path: Path) -> None:
-    """`devsim up` of 3,000 devices in two workers prints 6,000 lines (145 kB); a harness that reads
-    them only once the pipe is full gets every one.  Before, a line the full pipe did not take at
-    once was dropped: benchmarks/scale.py lost port lines of its 6,000-device plant (KeyError)."""
-    devices = 3000
+    """`devsim up` of 300 devices in two workers prints 600 lines (about 14 kB) into a pipe of two
+    pages (``F_SETPIPE_SZ``: full, as the default 64 KiB pipe is, for a plant a tenth the size);
+    a harness that reads them only once the pipe is full gets every one.
+    Before, a line the full pipe did not take at once was dropped: benchmarks/scale.py lost port
+    lines of its 6,000-device plant (KeyError)."""
+    devices = 300
     plant = tmp_path / "plant.yaml"
     plant.write_text("devices:\n" + "".join(f"  - {{name: d{i}, kind: sers, transport: {{tcp: {{port: 0}}}}}}\n"
                                             for i in range(devices)))
-    proc = subprocess.Popen([sys.executable, "-m", "devsim", "up", str(plant), "--workers", "2", "--control",
-                             f"unix:{tmp_path}/c.sock"], cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL,
-                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+    out, into = os.pipe()
+    fcntl.fcntl(into, fcntl.F_SETPIPE_SZ, 8192)
+    full = fcntl.fcntl(into, fcntl.F_GETPIPE_SZ) - 4096  # (a write fills a page of the pipe's ring, or waits)
     try:
-        assert proc.stdout is not None
-        out = proc.stdout.fileno()
-        wait_until(lambda: _in_pipe(out) >= 60_000, "a full pipe", timeout=60)  # the plant writes on meanwhile
+        proc = subprocess.Popen([sys.executable, "-m", "devsim", "up", str(plant), "--workers", "2", "--control",
+                                 f"unix:{tmp_path}/c.sock"], cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL,
+                                stdout=into, stderr=subprocess.DEVNULL)
+    finally:
+        os.close(into)
+    try:
+        wait_until(lambda: _in_pipe(out) >= full, "a full pipe", timeout=60)  # the plant writes on meanwhile
         os.set_blocking(out, False)
-        text = _read_until(out, b"d2999: ready\n", timeout=60)  # (the workers print one after the other)
+        text = _read_until(out, f"d{devices - 1}: ready\n".encode(), timeout=60)  # (the workers print one after the other)
         while b"dropped" not in text and text.count(b": ready\n") < devices:
             text += _read_until(out, b": ready\n", timeout=60)
     finally:
         status = stop(proc, timeout=15)
+        os.close(out)
     assert status == 0
     lines = text.decode().splitlines()
     assert not [line for line in lines if "dropped" in line]
