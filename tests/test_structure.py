@@ -40,9 +40,16 @@ def _module_name(path: Path) -> str:
     return ".".join(parts)
 
 
+@functools.cache
+def _tree(path: Path) -> ast.Module:
+    """The file's syntax tree, parsed once in a test process (every test here walks all of devsim)."""
+    return ast.parse(path.read_text(encoding="utf-8"))
+
+
+@functools.cache
 def _imports(path: Path) -> list[tuple[str, list[str]]]:
     """(module, imported names) of every import statement anywhere in the file."""
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    tree = _tree(path)
     found: list[tuple[str, list[str]]] = []
     package = _module_name(path).rsplit(".", 1)[0] if path.name != "__init__.py" else _module_name(path)
     for node in ast.walk(tree):
@@ -171,7 +178,7 @@ def _classes() -> dict[str, tuple[ast.ClassDef, Path]]:
     """Every class of devsim by its dotted name (module.Class)."""
     found = {}
     for path in PACKAGE.rglob("*.py"):
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in ast.walk(_tree(path)):
             if isinstance(node, ast.ClassDef):
                 found[f"{_module_name(path)}.{node.name}"] = (node, path)
     return found
@@ -223,7 +230,7 @@ def test_every_kind_is_registered_once() -> None:
     for path in PACKAGE.rglob("*.py"):
         if path.is_relative_to(PACKAGE / "devices"):
             continue
-        tree = ast.parse(path.read_text(encoding="utf-8"))
+        tree = _tree(path)
         docstrings = {id(node.body[0].value) for node in ast.walk(tree)
                       if isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef)
                       and node.body and isinstance(node.body[0], ast.Expr) and isinstance(node.body[0].value, ast.Constant)}
@@ -239,7 +246,7 @@ def test_device_classes_cite_their_manual() -> None:
     for path in (PACKAGE / "devices").rglob("*.py"):
         if path.name == "__init__.py":
             continue
-        tree = ast.parse(path.read_text(encoding="utf-8"))
+        tree = _tree(path)
         doc = ast.get_docstring(tree) or ""
         if "§" not in doc and "manual" not in doc.lower() and "spec" not in doc.lower():
             missing.append(path.name)
