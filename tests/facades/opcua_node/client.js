@@ -1,5 +1,8 @@
 // node-opcua's client, as an OPC UA client nobody on devsim wrote (tests/facades/test_opcua.py).
-// Usage: node client.js ENDPOINT 'PLAN'  -- PLAN is a JSON list of steps, each one of
+// Usage: node client.js ENDPOINT 'PLAN'  -- PLAN is a JSON list of steps (below); or node client.js --serve,
+// which reads a plan a line from stdin as {"endpoint": ..., "plan": PLAN} and answers each with a
+// line "RESULT {json}" or "FAILED "stack"" (node-opcua's start-up costs seconds of CPU: the tests
+// keep one client process).  The steps, each one of
 //   {"op": "browse", "node": "x"}                       browse names of the node's children
 //   {"op": "browses", "items": [{"node": "x", "referenceTypeId": "i=33"}, ...], "view": "i=85"}   one Browse
 //     request (forward, subtypes included; "view" a ViewId, default none): each result's status, or {"fault": name}
@@ -277,8 +280,7 @@ async function step(session, ns, s) {
     throw new Error(`unknown step ${s.op}`);
 }
 
-async function main() {
-    const [endpoint, planText] = process.argv.slice(2);
+async function run(endpoint, plan) {  // one plan on a session of its own: { namespace, results }
     const client = OPCUAClient.create({ endpointMustExist: false, connectionStrategy: { maxRetry: 0 } });
     await client.connect(endpoint);
     try {
@@ -286,14 +288,37 @@ async function main() {
         const namespaces = await session.readNamespaceArray();
         const ns = namespaces.indexOf("urn:devsim");
         const results = [];
-        for (const s of JSON.parse(planText)) {
+        for (const s of plan) {
             results.push(await step(session, ns, s));
         }
         await session.close();
-        process.stdout.write(`RESULT ${JSON.stringify({ namespace: ns, results })}\n`);
+        return { namespace: ns, results };
     } finally {
         await client.disconnect();
     }
+}
+
+async function serve() {  // --serve: a line {"endpoint": ..., "plan": [...]} at a time on stdin
+    const lines = require("readline").createInterface({ input: process.stdin });
+    for await (const line of lines) {
+        let answer;
+        try {
+            const { endpoint, plan } = JSON.parse(line);
+            answer = `RESULT ${JSON.stringify(await run(endpoint, plan))}`;
+        } catch (err) {
+            answer = `FAILED ${JSON.stringify(String(err.stack || err))}`;
+        }
+        process.stdout.write(`${answer}\n`);
+    }
+}
+
+async function main() {
+    if (process.argv[2] === "--serve") {
+        return serve();
+    }
+    const [endpoint, planText] = process.argv.slice(2);
+    const result = await run(endpoint, JSON.parse(planText));
+    process.stdout.write(`RESULT ${JSON.stringify(result)}\n`);
 }
 
 main().catch((err) => {
