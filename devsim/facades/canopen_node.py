@@ -18,9 +18,10 @@ EMCY message.  Hosts in other processes reach the nodes through
 inhibit time, else every 10 ms of device time) and when the event timer runs out; RPDOs are
 written into their objects, those of types 254/255 as they arrive, synchronous ones (0 … 240) at
 the next SYNC (the last one received before it).  ``devsim run --canopen NODE@socketcan:vcan0`` puts the nodes on a
-SocketCAN interface instead, where the machine has one.  Callbacks come from
-python-can's notifier thread; ``call`` runs the device access where the device lives
-(``Runtime.call``)."""
+SocketCAN interface instead, where the machine has one.  Callbacks come from the thread that reads
+the bus (python-can's notifier; on the socketcand server's virtual bus devsim's
+:class:`~devsim.transports.can_reader.BusReader`, which stops without waiting for a frame); ``call``
+runs the device access where the device lives (``Runtime.call``)."""
 
 from __future__ import annotations
 
@@ -387,9 +388,9 @@ async def serve_nodes(runtime: Any, nodes: list[tuple[Device, int]], where: str 
     ids = [node_id for _, node_id in nodes]
     if len(set(ids)) != len(ids):
         raise ValueError(f"CANopen node ids on one network must differ: {sorted(ids)}")
-    network = canopen.Network()
     if where.startswith("socketcan:"):
         channel = where.removeprefix("socketcan:")
+        network = canopen.Network()
         try:
             network.connect(interface="socketcan", channel=channel)
         except (OSError, can.CanError, ValueError, ImportError) as exc:
@@ -402,13 +403,19 @@ async def serve_nodes(runtime: Any, nodes: list[tuple[Device, int]], where: str 
         runtime.add_closer(close_socketcan)
         return [f"{device.name}.canopen: socketcan {channel} node {node_id}" for device, node_id in nodes]
 
+    from can.interfaces.virtual import VirtualBus
+
+    from devsim.transports.can_reader import BusReader
     from devsim.transports.socketcand import SocketcandServer
 
     host, _, port_text = where.rpartition(":")
-    bus = f"devsim-{os.getpid()}-{id(runtime)}-{id(network)}"
-    network.connect(interface="virtual", channel=bus)
+    network = canopen.Network()
+    channel = f"devsim-{os.getpid()}-{id(runtime)}-{id(network)}"
+    network.bus = bus = VirtualBus(channel=channel)
+    network.notifier = BusReader(bus, network.listeners)  # type: ignore[assignment]  # (for connect()'s
+    # can.Notifier, whose stop waits up to NOTIFIER_CYCLE, 1 s, for a frame: see can_reader)
     _attach_all(runtime, nodes, network)
-    server = SocketcandServer(bus, host or "127.0.0.1", int(port_text or 29536))
+    server = SocketcandServer(channel, host or "127.0.0.1", int(port_text or 29536))
     try:
         await server.start()
     except BaseException:

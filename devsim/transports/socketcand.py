@@ -29,6 +29,8 @@ from collections import deque
 import can
 from can.interfaces import virtual
 
+from devsim.transports.can_reader import BusReader
+
 __all__ = ["BUS_BACKLOG", "CLIENT_QUEUE", "ClientQueue", "SocketcandServer", "frame_text", "parse_send", "split_commands"]
 
 #: The longest text kept while a command's closing ``>`` has not come (a frame to send is about
@@ -89,9 +91,9 @@ def split_commands(buffer: str) -> tuple[list[str], str]:
 
 class ClientQueue(can.Listener):
     """The frames one raw-mode client has not been sent yet, as the server's text: filled in the
-    session's notifier thread, taken by its writer in the event loop.  At most ``limit`` frames:
-    one that comes while it is full is dropped (counted in :attr:`dropped`) [SIM-CHOICE] (see the
-    module's docstring).  The loop is woken once when the queue stops being empty, not once per
+    session's reader thread (:class:`~devsim.transports.can_reader.BusReader`), taken by its writer
+    in the event loop.  At most ``limit`` frames: one that comes while it is full is dropped
+    (counted in :attr:`dropped`) [SIM-CHOICE] (see the module's docstring).  The loop is woken once when the queue stops being empty, not once per
     frame (a wake-up per frame filled asyncio's ready queue and its self-pipe)."""
 
     def __init__(self, loop: asyncio.AbstractEventLoop, limit: int = CLIENT_QUEUE) -> None:
@@ -189,8 +191,8 @@ class SocketcandServer:
         task = asyncio.current_task()
         assert task is not None
         self._sessions.add(task)
-        bus: can.BusABC | None = None
-        notifier: can.Notifier | None = None
+        bus: virtual.VirtualBus | None = None
+        bus_reader: BusReader | None = None
         queue: ClientQueue | None = None
         forward: asyncio.Task[None] | None = None
         try:
@@ -209,13 +211,13 @@ class SocketcandServer:
                         if words[:1] == ["open"] and len(words) == 2:
                             writer.write(b"< ok >")
                         elif words == ["rawmode"]:
-                            bus = can.Bus(interface="virtual", channel=self.channel, receive_own_messages=False)
+                            bus = virtual.VirtualBus(channel=self.channel, receive_own_messages=False)
                             with contextlib.suppress(OSError, AttributeError):
                                 writer.get_extra_info("socket").setsockopt(
                                     socket.SOL_SOCKET, socket.SO_SNDBUF, SEND_BUFFER)
                             queue = ClientQueue(asyncio.get_running_loop(), self.client_queue)
                             self._queues.append(queue)
-                            notifier = can.Notifier(bus, [queue])
+                            bus_reader = BusReader(bus, [queue])
                             raw = True
                             writer.write(b"< ok >")
                             forward = asyncio.get_running_loop().create_task(self._forward(queue, writer))
@@ -238,8 +240,8 @@ class SocketcandServer:
                 forward.cancel()
                 with contextlib.suppress(asyncio.CancelledError, Exception):
                     await forward
-            if notifier is not None:
-                notifier.stop()
+            if bus_reader is not None:
+                bus_reader.stop()
             if bus is not None:
                 bus.shutdown()
             if queue is not None:
