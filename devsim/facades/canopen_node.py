@@ -25,6 +25,7 @@ runs the device access where the device lives (``Runtime.call``)."""
 
 from __future__ import annotations
 
+import asyncio
 import io
 from collections.abc import Callable
 from typing import Any
@@ -398,7 +399,7 @@ async def serve_nodes(runtime: Any, nodes: list[tuple[Device, int]], where: str 
         _attach_all(runtime, nodes, network)
 
         async def close_socketcan() -> None:
-            network.disconnect()
+            await asyncio.to_thread(network.disconnect)  # (as close() below)
 
         runtime.add_closer(close_socketcan)
         return [f"{device.name}.canopen: socketcan {channel} node {node_id}" for device, node_id in nodes]
@@ -424,7 +425,8 @@ async def serve_nodes(runtime: Any, nodes: list[tuple[Device, int]], where: str 
 
     async def close() -> None:
         await server.close()
-        network.disconnect()
+        # (in a thread: the reader may be delivering a frame whose device access waits for the loop)
+        await asyncio.to_thread(network.disconnect)
 
     runtime.add_closer(close)
     return [f"{device.name}.canopen: socketcand {server.address} can0 node {node_id}" for device, node_id in nodes]

@@ -12,6 +12,7 @@ import asyncio
 import threading
 from typing import Any
 
+import canopen
 import pytest
 from can.interfaces import virtual
 
@@ -19,7 +20,9 @@ from devsim.core.clock import VirtualClock
 from devsim.facades.canopen_node import serve_nodes
 from devsim.runtime import Runtime
 
+VirtualBus = virtual.VirtualBus  # (python-can's own: the fixture ``buses`` puts a watched one in its place)
 UPLOAD_1000 = b"< send 605 8 40 00 10 00 00 00 00 00 >"  # SDO upload of 1000h (device type) from node 5
+UPLOAD_6041 = b"< send 605 8 40 41 60 00 00 00 00 00 >"  # the statusword (a device access: Runtime.call)
 
 
 async def _raw_client(port: int) -> tuple[asyncio.StreamReader, asyncio.StreamWriter]:
@@ -86,4 +89,49 @@ async def test_the_can_threads_wake_only_for_frames_and_the_stop_waits_for_none(
         assert len(buses["made"]) == 2  # the network's and the session's
     writer.close()
     assert buses["empty"] == []
+    assert _readers(buses["made"]) == []
+
+
+async def test_a_request_whose_device_access_is_underway_when_the_stop_begins_is_answered(
+        buses: dict[str, list[Any]], monkeypatch: pytest.MonkeyPatch) -> None:
+    """An SDO upload of the statusword reaches the node, and its device access (which runs in the event loop) is
+    held until the node's network begins to disconnect: the closing runtime still serves that
+    access, the answer goes out on the bus, and the close returns with the network's reader ended.
+    (Before: the network disconnected in the event loop itself, so the access waited for the loop
+    and the disconnect for the access: 5 s, canopen's NOTIFIER_SHUTDOWN_TIMEOUT, and the answer
+    was lost on the bus already shut.)"""
+    armed, entered, go = threading.Event(), threading.Event(), threading.Event()
+    disconnect = canopen.Network.disconnect
+
+    def disconnecting(network: canopen.Network) -> None:
+        go.set()
+        disconnect(network)
+
+    monkeypatch.setattr(canopen.Network, "disconnect", disconnecting)
+    writer: asyncio.StreamWriter | None = None
+    async with Runtime(clock=VirtualClock()) as runtime:
+        call = runtime.call
+
+        def held(fn: Any, *args: Any, **kwargs: Any) -> Any:
+            if armed.is_set() and threading.current_thread() is not threading.main_thread():
+                entered.set()
+                assert go.wait(30)
+            return call(fn, *args, **kwargs)
+
+        monkeypatch.setattr(runtime, "call", held)
+        device = runtime.add_device("sers", "sers", {})
+        (line,) = await serve_nodes(runtime, [(device, 5)], "127.0.0.1:0")
+        watcher = VirtualBus(channel=buses["made"][0].channel_id)  # the node's network's channel
+        _reader, writer = await _raw_client(_port(line))
+        armed.set()
+        writer.write(UPLOAD_6041)
+        assert await asyncio.to_thread(entered.wait, 30)
+    writer.close()  # (the runtime closed: its closers disconnected the network)
+    answers = []
+    while not watcher.queue.empty():
+        message = watcher.queue.get_nowait()
+        if message.arbitration_id == 0x585:
+            answers.append(bytes(message.data))
+    watcher.shutdown()
+    assert [answer[:4] for answer in answers] == [bytes.fromhex("4B416000")]  # (expedited, 2 bytes: UNSIGNED16)
     assert _readers(buses["made"]) == []
