@@ -230,6 +230,8 @@ class SocketcandServer:
                         bus.send(message)
                 if raw:
                     await self._bus_free()
+                await asyncio.sleep(0)  # (read() returns what is buffered without yielding: a client that
+                # floods would hold the loop, the other sessions and a stop, for its whole buffer)
         except ConnectionError:
             return  # the client reset the connection: it is gone, as after an orderly close
         except asyncio.CancelledError:

@@ -9,7 +9,9 @@ to exit after SIGTERM under floods of one to three clients.)"""
 from __future__ import annotations
 
 import asyncio
+import socket
 import threading
+import uuid
 from typing import Any
 
 import canopen
@@ -19,6 +21,7 @@ from can.interfaces import virtual
 from devsim.core.clock import VirtualClock
 from devsim.facades.canopen_node import serve_nodes
 from devsim.runtime import Runtime
+from devsim.transports.socketcand import BUS_BACKLOG, SocketcandServer
 
 VirtualBus = virtual.VirtualBus  # (python-can's own: the fixture ``buses`` puts a watched one in its place)
 UPLOAD_1000 = b"< send 605 8 40 00 10 00 00 00 00 00 >"  # SDO upload of 1000h (device type) from node 5
@@ -90,6 +93,36 @@ async def test_the_can_threads_wake_only_for_frames_and_the_stop_waits_for_none(
     writer.close()
     assert buses["empty"] == []
     assert _readers(buses["made"]) == []
+
+
+async def test_a_flooding_client_leaves_the_loop_a_turn_after_every_read() -> None:
+    """A raw-mode client whose 600 frames are all in the server's socket before the session reads
+    any: between two turns of another task the session puts at most one read's frames (4,096
+    characters) on the bus.  (Before: ``StreamReader.read`` returns what is buffered without
+    yielding, and the session put all 600 on the bus in one turn: under a flood the loop, the
+    other clients and a SIGTERM waited for a whole receive buffer per client, 1 to 3 s in
+    ``devsim run --canopen`` with three flooding clients.)"""
+    channel = f"devsim-{uuid.uuid4().hex}"
+    bus = VirtualBus(channel=channel)  # what the session sends (not read: 600 < BUS_BACKLOG)
+    server = SocketcandServer(channel, port=0)
+    frame = b"< send 123 8 01 02 03 04 05 06 07 08 >"
+    frames = 600
+    assert frames < BUS_BACKLOG  # (the session is not held back: a backlog waits)
+    await server.start()
+    client = socket.create_connection(("127.0.0.1", server.port))
+    try:
+        client.sendall(b"< open can0 >< rawmode >" + frame * frames)  # (the loop has not run since)
+        seen = [0]
+        while seen[-1] < frames:
+            await asyncio.sleep(0)  # one turn of the loop
+            seen.append(bus.queue.qsize())
+            assert len(seen) < 1_000_000, seen[-1]
+        steps = [after - before for before, after in zip(seen, seen[1:], strict=False)]
+        assert max(steps) <= 4096 // len(frame) + 1, max(steps)
+    finally:
+        client.close()
+        await server.close()
+        bus.shutdown()
 
 
 async def test_a_request_whose_device_access_is_underway_when_the_stop_begins_is_answered(
