@@ -40,11 +40,8 @@ class BusReader:
 
     @property
     def stopped(self) -> bool:
+        """:meth:`stop` was called (``can.Notifier.stopped``)."""
         return self._stopped
-
-    def alive(self) -> bool:
-        """The thread still runs (it ends in :meth:`stop`)."""
-        return self._thread.is_alive()
 
     def _run(self) -> None:
         try:

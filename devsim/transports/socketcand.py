@@ -93,8 +93,9 @@ class ClientQueue(can.Listener):
     """The frames one raw-mode client has not been sent yet, as the server's text: filled in the
     session's reader thread (:class:`~devsim.transports.can_reader.BusReader`), taken by its writer
     in the event loop.  At most ``limit`` frames: one that comes while it is full is dropped
-    (counted in :attr:`dropped`) [SIM-CHOICE] (see the module's docstring).  The loop is woken once when the queue stops being empty, not once per
-    frame (a wake-up per frame filled asyncio's ready queue and its self-pipe)."""
+    (counted in :attr:`dropped`) [SIM-CHOICE] (see the module's docstring).  The loop is woken once
+    when the queue stops being empty, not once per frame (a wake-up per frame filled asyncio's ready
+    queue and its self-pipe)."""
 
     def __init__(self, loop: asyncio.AbstractEventLoop, limit: int = CLIENT_QUEUE) -> None:
         self.limit = limit
