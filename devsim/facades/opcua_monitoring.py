@@ -38,7 +38,10 @@ each item as Part 4 5.12.2.4 (Table 71) and 5.12.3.4 (Table 74) do, per item:
 * ModifyMonitoredItems: ``Bad_MonitoredItemIdInvalid`` for an item the subscription does not
   have, and the filter checks above against the item's node and attribute; an item modified takes
   its new parameters as a created one does, revised by the same code (:meth:`ItemChecks._revise`:
-  samplingInterval, queueSize, filter, clientHandle, timestampsToReturn; 5.12.3.2).
+  samplingInterval, queueSize, discardOldest, filter, clientHandle, timestampsToReturn; 5.12.3.2);
+* a full queue discards as the item's discardOldest says (5.12.1.5; asyncua dropped the oldest
+  whatever was asked), and a data item's queue longer than one marks where values were lost with
+  the Overflow bit (:func:`discard`).
 
 :class:`Subscriptions` is asyncua's SubscriptionService giving each new subscription an
 :class:`ItemChecks` (:class:`devsim.facades.opcua_decoding.FacadeServer` installs it).
@@ -47,6 +50,7 @@ each item as Part 4 5.12.2.4 (Table 71) and 5.12.3.4 (Table 74) do, per item:
 from __future__ import annotations
 
 import asyncio
+import copy
 from collections.abc import Awaitable, Callable
 from typing import Any
 
@@ -59,13 +63,17 @@ from asyncua.ua import uaprotocol_auto
 from devsim.core.clock import Clock
 from devsim.facades.opcua_services import derives, encoding_refusal, index_range, shaped
 
-__all__ = ["QUEUE_SIZE", "ItemChecks", "Spacing", "Subscriptions", "refusal"]
+__all__ = ["OVERFLOW", "QUEUE_SIZE", "ItemChecks", "Spacing", "Subscriptions", "discard", "refusal"]
 
 #: [SIM-CHOICE] The most notifications a monitored item queues for a client that does not take
 #: them (Part 4 5.12.1.5: the server revises the queue size it is asked for; a queue size of 0 asks
 #: for the server's largest).  asyncua's own cap, 10,000, was not applied to a ModifyMonitoredItems:
 #: an item modified to QueueSize 0 queued every change for as long as its subscription lived.
 QUEUE_SIZE = 1000
+
+#: The InfoBits of a DataValue whose queue lost values before it: InfoType DataValue (bits 10:11 =
+#: 01) and Overflow (bit 7; Part 4 v1.05 7.39.1 Table 177, v1.04 7.34.1).
+OVERFLOW = 0x0400 | 0x0080
 
 _BAD = ua.StatusCodes
 _VALUE, _EVENTS = ua.AttributeIds.Value, ua.AttributeIds.EventNotifier
@@ -130,6 +138,31 @@ def refusal(aspace: AddressSpace, item: ua.ReadValueId, flt: Any) -> int | None:
     return refused if refused is not None else _filter_refusal(aspace, item, flt)
 
 
+def _overflowed(value: ua.DataValue) -> ua.DataValue:
+    flagged = copy.copy(value)  # (values may be shared)
+    flagged.StatusCode = ua.StatusCode((value.StatusCode.value if value.StatusCode is not None else 0) | OVERFLOW)
+    return flagged
+
+
+def discard(queue: list[Any], size: int, oldest: bool) -> None:
+    """Cut an item's ``queue`` of notifications (oldest first) to ``size`` as Part 4 5.12.1.5
+    (v1.05 5.13.1.5) says a full queue takes a new one: ``oldest`` (discardOldest TRUE) the oldest
+    are deleted and "the next value in the queue gets the flag set"; else "the last value added to
+    the queue gets replaced with the new value. The new value gets the flag set" (the first
+    ``size - 1`` stay, then the newest).  The flag is the Overflow bit of a DataValue, set only
+    where the queue is larger than one ("the discard policy is ignored if the queue size is one":
+    the newest stays).  An event carries no DataValue: its queue is cut the same way, unflagged."""
+    if len(queue) <= size:
+        return
+    if oldest or size == 1:
+        del queue[:-size]
+    else:
+        queue[size - 1:] = queue[-1:]
+    flagged = queue[0] if oldest else queue[-1]
+    if size > 1 and isinstance(flagged, ua.MonitoredItemNotification):
+        flagged.Value = _overflowed(flagged.Value)
+
+
 class ItemChecks(MonitoredItemService):
     """asyncua's monitored items of one subscription, each checked by :func:`refusal` first; an
     item reports the part its IndexRange selects, with the timestamps its request asked for
@@ -138,6 +171,7 @@ class ItemChecks(MonitoredItemService):
     def __init__(self, isub: Any, aspace: AddressSpace, clock: Clock | None = None) -> None:
         super().__init__(isub, aspace)
         self._timestamps: dict[int, ua.TimestampsToReturn] = {}  # per item id
+        self._queues: dict[int, tuple[int, bool]] = {}  # per item id: (queueSize, discardOldest)
         self._asked = ua.TimestampsToReturn.Both  # (of the item being created)
         self._spacing = Spacing(clock, self._deliver)
 
@@ -185,10 +219,12 @@ class ItemChecks(MonitoredItemService):
 
         * its clientHandle, its filter (null: none; an event item's whereClause with it) and the
           timestamps it reports (timestampsToReturn);
-        * its queueSize revised to 1..QUEUE_SIZE (0: QUEUE_SIZE), and a queue already longer cut
-          to it, the oldest notifications discarded (5.12.3.2: "the notifications exceeding the
-          size shall be discarded following the configured discard policy"; asyncua's drops one
-          a notification, so its queue stayed as long as it was);
+        * its queueSize revised to 1..QUEUE_SIZE (0: QUEUE_SIZE) and its discardOldest, the
+          policy :meth:`_bound` keeps its queue to (asyncua's queue is left unbounded: it dropped
+          the oldest whatever discardOldest said), and a queue already longer cut to it at once
+          (5.12.3.2: "the notifications exceeding the size shall be discarded following the
+          configured discard policy": the one this request configures; asyncua's dropped one a
+          notification, so its queue stayed as long as it was);
         * its samplingInterval revised by :meth:`_space`."""
         mid = mdata.monitored_item_id
         mdata.client_handle = asked.ClientHandle
@@ -196,10 +232,20 @@ class ItemChecks(MonitoredItemService):
         if mdata.read_value_id.AttributeId == _EVENTS and isinstance(asked.Filter, ua.EventFilter):
             mdata.where_clause_evaluator = WhereClauseEvaluator(self.logger, self.aspace, asked.Filter.WhereClause)
         self._timestamps[mid] = timestamps
-        result.RevisedQueueSize = mdata.queue_size = self._revise_queue_size(asked.QueueSize)
-        for queue in (self.isub._triggered_datachanges, self.isub._triggered_events):
-            del queue.get(mid, [])[:-mdata.queue_size]
+        result.RevisedQueueSize = self._revise_queue_size(asked.QueueSize)
+        mdata.queue_size = 0  # (asyncua's bound: none)
+        self._queues[mid] = (result.RevisedQueueSize, bool(asked.DiscardOldest))
+        self._bound(mid)
         self._space(mid, result, mdata.read_value_id, asked.SamplingInterval)
+
+    def _bound(self, mid: int) -> None:
+        """Item ``mid``'s queues of notifications not yet published kept to its queueSize by its
+        discardOldest (:func:`discard`); called right after each notification asyncua queues, with
+        no ``await`` between, so no publish sees a queue longer than the size."""
+        size, oldest = self._queues.get(mid, (0, True))
+        for queue in (self.isub._triggered_datachanges, self.isub._triggered_events):
+            if mid in queue and size:
+                discard(queue[mid], size, oldest)
 
     def _space(self, mid: int, result: Any, item: ua.ReadValueId, requested: float) -> None:
         """An item's revisedSamplingInterval: the subscription's publishing interval (asyncua's; -1
@@ -223,6 +269,7 @@ class ItemChecks(MonitoredItemService):
 
     def _delete_monitored_items(self, mid: int) -> ua.StatusCode:
         self._timestamps.pop(mid, None)
+        self._queues.pop(mid, None)
         self._spacing.forget(mid)
         return super()._delete_monitored_items(mid)
 
@@ -234,10 +281,16 @@ class ItemChecks(MonitoredItemService):
             if self._spacing.hold(mid, handle, value):
                 return  # reported when its sampling interval has passed
         await super().datachange_callback(handle, value, error)
+        self._bound(mid)
 
     async def _deliver(self, mid: int, handle: int, value: ua.DataValue) -> None:
         if mid in self._monitored_items:
             await super().datachange_callback(handle, value)
+            self._bound(mid)
+
+    async def _trigger_event(self, event: Any, mid: int) -> None:
+        await super()._trigger_event(event, mid)
+        self._bound(mid)
 
 
 class Spacing:

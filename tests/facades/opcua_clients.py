@@ -13,6 +13,7 @@ import json
 import queue
 import subprocess
 import threading
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -36,21 +37,31 @@ class _Served:
             self.lines.put(line)
         self.lines.put(None)
 
-    def ask(self, url: str, plan: list[dict[str, Any]], timeout: float) -> dict[str, Any]:
-        """The plan's result; an AssertionError if it failed, the client ended or took longer than ``timeout``."""
+    def ask(self, url: str, plan: list[dict[str, Any]], timeout: float,
+            paused: Callable[[], None] | None) -> dict[str, Any]:
+        """The plan's result; an AssertionError if it failed, the client ended or took longer than
+        ``timeout``.  A step that pauses goes on when ``paused()`` has returned."""
         assert self.proc.stdin is not None
-        self.proc.stdin.write(json.dumps({"endpoint": url, "plan": plan}) + "\n")
-        self.proc.stdin.flush()
+        self._say(json.dumps({"endpoint": url, "plan": plan}))
         while True:  # (node-opcua writes its own warnings to stdout too)
             try:
                 line = self.lines.get(timeout=timeout)
             except queue.Empty:
                 raise AssertionError(f"node-opcua's client gave no result within {timeout} s") from None
             assert line is not None, f"node-opcua's client ended (status {self.proc.wait()})"
-            if line.startswith("RESULT "):
+            if line.strip() == "PAUSE":
+                assert paused is not None, "a step paused with nothing to do meanwhile"
+                paused()
+                self._say("")
+            elif line.startswith("RESULT "):
                 return dict(json.loads(line[len("RESULT "):]))
-            if line.startswith("FAILED "):
+            elif line.startswith("FAILED "):
                 raise AssertionError(json.loads(line[len("FAILED "):]))
+
+    def _say(self, line: str) -> None:
+        assert self.proc.stdin is not None
+        self.proc.stdin.write(line + "\n")
+        self.proc.stdin.flush()
 
     def close(self) -> None:
         if self.proc.stdin is not None:
@@ -66,8 +77,10 @@ _served: _Served | None = None
 _lock = threading.Lock()
 
 
-def node_client(url: str, plan: list[dict[str, Any]], timeout: float = 120) -> list[dict[str, Any]]:
-    """Run ``plan`` (the steps client.js documents) against the server at ``url``; a result per step."""
+def node_client(url: str, plan: list[dict[str, Any]], timeout: float = 120,
+                paused: Callable[[], None] | None = None) -> list[dict[str, Any]]:
+    """Run ``plan`` (the steps client.js documents) against the server at ``url``; a result per step.
+    The one step of a plan that pauses (``queue``) goes on when ``paused()`` has returned."""
     global _served
     installed = (NODE_CLIENT / "node_modules" / "node-opcua-client").is_dir()
     node = needs_program("node", *(() if installed else ("npm",)))  # skipped here, a failure under CI
@@ -80,8 +93,9 @@ def node_client(url: str, plan: list[dict[str, Any]], timeout: float = 120) -> l
             _served = _Served(node)
             atexit.register(_served.close)
         try:
-            return list(_served.ask(url, plan, timeout)["results"])
-        except AssertionError:
+            return list(_served.ask(url, plan, timeout, paused)["results"])
+        except BaseException:  # (a failed plan, or a test's paused() that raised: not left waiting)
+            _served.proc.kill()
             _served.close()  # (the next plan gets a new client)
             _served = None
             raise

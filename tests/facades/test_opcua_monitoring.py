@@ -16,7 +16,9 @@ An item reports the part of a String its IndexRange selects, and the timestamps 
 timestampsToReturn asks for (5.12.2.2; asyncua sent a SourceTimestamp only, whatever was asked).
 A ModifyMonitoredItems revises and applies an item's parameters as a CreateMonitoredItems does
 (5.12.3.2): samplingInterval, queueSize (a longer queue cut at once), filter with its whereClause,
-clientHandle and timestampsToReturn.
+clientHandle and timestampsToReturn.  A full queue discards as the item's discardOldest asks, and
+marks where values were lost with the Overflow bit (5.12.1.5; asyncua dropped the oldest whatever
+was asked, and set no bit).
 """
 
 from __future__ import annotations
@@ -174,12 +176,12 @@ def test_node_opcua_an_index_range_selects_what_an_item_reports(served: tuple[Ru
     assert (result["statuses"], result["values"]) == (["Good"], [phase[:2]])
 
 
-async def _unpublished(client: Client, facade: Any) -> Any:
+async def _unpublished(client: Client, facade: Any, handler: Any = None) -> Any:
     """A subscription at the facade's period with publishing disabled: its items' notifications
     stay queued (Part 4 5.13.2, publishingEnabled)."""
     return await client.create_subscription(ua.CreateSubscriptionParameters(
         RequestedPublishingInterval=facade.period * 1000, RequestedLifetimeCount=10_000,
-        RequestedMaxKeepAliveCount=10, PublishingEnabled=False), _Quiet())
+        RequestedMaxKeepAliveCount=10, PublishingEnabled=False), handler or _Quiet())
 
 
 async def _create(client: Client, subscription: Any, request: ua.MonitoredItemCreateRequest,
@@ -601,3 +603,106 @@ async def test_a_modify_to_a_smaller_queue_discards_the_oldest_notifications(
         wait_until(lambda: queued()[-1:] == [start], "one more value queued", 30)
         assert queued() == [*values[-4:], start]
         await subscription.delete()
+
+
+#: (discardOldest created, discardOldest a ModifyMonitoredItems then asks (None: none), queueSize) ->
+#: what the client gets, as (value number, Overflow bit), of the value v0 queued when the item was
+#: created and v1..v4 queued after it while publishing was disabled (Part 4 v1.05 5.13.1.5, v1.04
+#: 5.12.1.5: discardOldest TRUE, "the oldest value gets deleted from the queue and the next value in
+#: the queue gets the flag set"; FALSE, "the last value added to the queue gets replaced with the new
+#: value. The new value gets the flag set"; "the discard policy is ignored if the queue size is one").
+#: asyncua dropped the oldest whatever was asked and set no bit: v2, v3, v4 unflagged each time.
+DISCARD = [
+    (True, None, 3, [(2, True), (3, False), (4, False)]),
+    (False, None, 3, [(0, False), (1, False), (4, True)]),
+    (True, False, 3, [(0, False), (1, False), (4, True)]),
+    (False, True, 3, [(2, True), (3, False), (4, False)]),
+    (False, None, 1, [(4, False)]),
+]
+
+
+async def test_asyncua_a_full_queue_discards_as_discard_oldest_asks_and_flags_the_overflow(
+        served: tuple[Runtime, OpcuaFacade]) -> None:
+    """DISCARD: an item per row on a subscription with publishing disabled, modified where the row
+    says; each of v1..v4 set and sampled (a second, published subscription's item tells when: its
+    notification comes after every item of the point has queued the value), then publishing
+    enabled: each item's notifications and their Overflow bits (InfoType DataValue, bit 7)."""
+    from devsim.facades.opcua_monitoring import OVERFLOW
+
+    runtime, facade = served
+    watched: asyncio.Queue[Any] = asyncio.Queue()
+    got: asyncio.Queue[tuple[int, Any, bool]] = asyncio.Queue()
+
+    class Watch:
+        def datachange_notification(self, node: Any, value: Any, data: Any) -> None:
+            watched.put_nowait(value)
+
+    class Got:
+        def datachange_notification(self, node: Any, value: Any, data: Any) -> None:
+            status = data.monitored_item.Value.StatusCode.value
+            got.put_nowait((data.monitored_item.ClientHandle, value, status & OVERFLOW == OVERFLOW))
+
+    name = "quantity.heatsink_temperature"  # (changes only when set)
+    async with Client(facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        node = client.get_node(ua.NodeId(f"sers.{name}", ns))
+        watch = await client.create_subscription(20, Watch())
+        await watch.subscribe_data_change(node)
+        values = [await asyncio.wait_for(watched.get(), 10)]
+        queued = await _unpublished(client, facade, Got())
+        modify = []
+        for handle, (oldest, modified, size, _) in enumerate(DISCARD, 1):
+            request = _request(ns, handle, f"sers.{name}", "Value", None, None, None)
+            request.RequestedParameters.QueueSize, request.RequestedParameters.DiscardOldest = size, oldest
+            created = await _create(client, queued, request)
+            assert created.RevisedQueueSize == size
+            if modified is not None:
+                modify.append(ua.MonitoredItemModifyRequest(MonitoredItemId=created.MonitoredItemId,
+                                                            RequestedParameters=ua.MonitoringParameters(
+                    ClientHandle=handle, SamplingInterval=0, QueueSize=size, DiscardOldest=modified)))
+        results = await client.uaclient.modify_monitored_items(ua.ModifyMonitoredItemsParameters(
+            SubscriptionId=queued.subscription_id, TimestampsToReturn=ua.TimestampsToReturn.Both, ItemsToModify=modify))
+        assert all(result.StatusCode.is_good() for result in results)
+        for n in range(1, 5):
+            values.append(round(values[0] + 0.5 * n, 2))
+            runtime.set("sers", name, values[-1])
+            runtime.advance(facade.period)  # (the facade samples the point)
+            assert await asyncio.wait_for(watched.get(), 10) == values[-1]
+        await queued.set_publishing_mode(True)
+        wanted = {handle: [(values[n], flag) for n, flag in reported]
+                  for handle, (*_, reported) in enumerate(DISCARD, 1)}
+        seen: dict[int, list[tuple[Any, bool]]] = {handle: [] for handle in wanted}
+        for _ in range(sum(len(reported) for reported in wanted.values())):
+            handle, value, flag = await asyncio.wait_for(got.get(), 10)
+            seen[handle].append((value, flag))
+        assert seen == wanted
+        await queued.delete()
+        await watch.delete()
+    runtime.set("sers", name, values[0])
+    runtime.advance(facade.period)
+
+
+def test_node_opcua_a_full_queue_discards_as_discard_oldest_asks_and_flags_the_overflow(
+        served: tuple[Runtime, OpcuaFacade]) -> None:
+    """DISCARD through node-opcua's client (its own item per row, its watch, its Overflow bit)."""
+    runtime, facade = served
+    name = "quantity.heatsink_temperature"  # (changes only when set)
+    runtime.advance(facade.period)  # (sampled since another test set it)
+    start = runtime.read("sers", name)
+    values = [start, *(round(start + 0.5 * n, 2) for n in range(1, 5))]
+
+    def change() -> None:
+        for value in values[1:]:
+            runtime.set("sers", name, value)
+            runtime.advance(facade.period)  # (the facade samples the point)
+
+    items = [{"queueSize": size, "discardOldest": oldest, **({} if modified is None else {"modifyTo": modified})}
+             for oldest, modified, size, _ in DISCARD]
+    try:
+        [result] = node_client(facade.url, [{"op": "queue", "node": f"sers.{name}", "items": items, "last": values[-1]}],
+                               paused=change)
+    finally:
+        runtime.set("sers", name, start)
+        runtime.advance(facade.period)
+    assert result["first"] == start
+    assert result["got"] == [[[values[n], flag] for n, flag in reported] for *_, reported in DISCARD]

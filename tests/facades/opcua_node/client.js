@@ -35,6 +35,13 @@
 //     those parameters (its own clientHandle and filter): "modified", a [revisedSamplingInterval,
 //     revisedQueueSize] each
 //   {"op": "call", "object": "x", "method": "x#Fault", "args": [["String", "power"], ["Boolean", true]]}
+//   {"op": "queue", "node": "x.quantity.t", "items": [{"queueSize": 3, "discardOldest": false, "modifyTo": true}, ...],
+//    "last": 32.0}   an item per ITEM of the node's Value on a subscription with publishing disabled
+//     (each then modified to discardOldest "modifyTo" where it is given) and one on a published
+//     subscription (the watch); prints "PAUSE" and waits for a line on stdin (the test changes the
+//     value meanwhile), then for the watch to report "last", then enables publishing: "first", the
+//     watch's first value, and "got", each item's notifications (as many as its queueSize) as [value, its
+//     Overflow bit]
 // A step may name a node id in full ("nodeId": "ns=0;i=2253") instead of a devsim "node".
 // String node ids are in the namespace urn:devsim.  Prints one line "RESULT {json}" (node-opcua
 // writes its own warnings to stdout too).
@@ -89,6 +96,68 @@ async function fault(request) {  // a status, or the service fault that refused 
 function variant(type, value) {
     const dataType = DataType[type];
     return { dataType, arrayType: VariantArrayType.Scalar, value: wire(dataType, value) };
+}
+
+function paused() {  // "PAUSE" out, then a line in
+    process.stdout.write("PAUSE\n");
+    return new Promise((resolve) => {
+        process.stdin.once("data", () => {
+            process.stdin.destroy();
+            resolve();
+        });
+    });
+}
+
+async function within(promise, what) {  // the promise, or an error after 10 s
+    let timer = null;
+    const late = new Promise((resolve, reject) => { timer = setTimeout(() => reject(new Error(what())), 10000); });
+    try {
+        return await Promise.race([promise, late]);
+    } finally {
+        clearTimeout(timer);
+    }
+}
+
+async function queued(session, devsim, s) {
+    const options = { requestedPublishingInterval: 20, requestedLifetimeCount: 1000, requestedMaxKeepAliveCount: 10 };
+    const watch = await session.createSubscription2({ ...options, publishingEnabled: true });
+    const held = await session.createSubscription2({ ...options, publishingEnabled: false });
+    const node = { nodeId: devsim(s.node), attributeId: AttributeIds.Value };
+    const watched = [];
+    let seen = null;
+    const last = new Promise((resolve) => { seen = resolve; });
+    const watcher = ClientMonitoredItem.create(watch, node, { samplingInterval: 0, queueSize: 10, discardOldest: true });
+    watcher.on("changed", (dv) => {
+        watched.push(dv.value.value);
+        if (dv.value.value === s.last) {
+            seen();
+        }
+    });
+    const got = s.items.map(() => []);
+    const total = s.items.reduce((sum, item) => sum + item.queueSize, 0);
+    let all = null;
+    const complete = new Promise((resolve) => { all = resolve; });
+    for (const [index, item] of s.items.entries()) {
+        const monitored = ClientMonitoredItem.create(held, node, {
+            samplingInterval: 0, queueSize: item.queueSize, discardOldest: item.discardOldest });
+        monitored.on("changed", (dv) => {
+            got[index].push([dv.value.value, dv.statusCode.hasOverflowBit]);
+            if (got.reduce((sum, values) => sum + values.length, 0) === total) {
+                all();
+            }
+        });
+        await new Promise((resolve) => monitored.once("initialized", resolve));
+        if (item.modifyTo !== undefined) {
+            await monitored.modify({ samplingInterval: 0, queueSize: item.queueSize, discardOldest: item.modifyTo });
+        }
+    }
+    await paused();
+    await within(last, () => `the watch never saw ${s.last}: ${watched}`);
+    await held.setPublishingMode(true);
+    await within(complete, () => `not every notification came: ${JSON.stringify(got)}`);
+    await held.terminate();
+    await watch.terminate();
+    return { first: watched[0], got };
 }
 
 async function step(session, ns, s) {
@@ -268,6 +337,9 @@ async function step(session, ns, s) {
         }));
         await subscription.terminate();
         return { statuses, modified: modified.fault ? `fault:${modified.fault}` : modified.results.map((r) => r.statusCode.name) };
+    }
+    if (s.op === "queue") {
+        return queued(session, devsim, s);
     }
     if (s.op === "call") {
         const result = await session.call({
