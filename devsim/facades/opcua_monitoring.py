@@ -17,10 +17,11 @@ each item as Part 4 5.12.2.4 (Table 71) and 5.12.3.4 (Table 74) do, per item:
   valid range on a String or an array reports that part only (``shaped``, as Read does);
 * every data change is reported with the timestamps its request's ``timestampsToReturn`` asked for
   (Source, Server, Both, Neither: 5.12.2.2);
-* an item's revisedSamplingInterval is at least the one it asked for (5.12.2.2; asyncua answered
-  the publishing interval) and, for a Value, the node's MinimumSamplingInterval (5.12.1.2; a
-  point's: the period the facade samples it at), and a Value item that asked for more than its subscription's publishing
-  interval reports its values no closer than that on the device clock (:class:`Spacing`);
+* a data item's revisedSamplingInterval is at least the one it asked for, whatever its attribute
+  (5.12.2.2; asyncua answered the publishing interval) and, for a Value, the node's
+  MinimumSamplingInterval (5.12.1.2; a point's: the period the facade samples it at), and an item
+  that asked for more than its subscription's publishing interval reports its values no closer
+  than that on the device clock (:class:`Spacing`);
 * ``Bad_DataEncodingInvalid`` for a dataEncoding on anything but the Value of a structure,
   ``Bad_DataEncodingUnsupported`` for another than ``Default Binary`` (7.34, as Read:
   :func:`devsim.facades.opcua_services.encoding_refusal`);
@@ -249,21 +250,27 @@ class ItemChecks(MonitoredItemService):
 
     def _space(self, mid: int, result: Any, item: ua.ReadValueId, requested: float) -> None:
         """An item's revisedSamplingInterval: the subscription's publishing interval (asyncua's; -1
-        asks for it, 7.21), for a Value at least the one it asked for (5.12.2.2) and the node's
-        MinimumSamplingInterval (5.12.1.2:
-        "equal or higher than the MinimumSamplingInterval if the Client subscribes to the Value
-        Attribute"; a point's is the period its device is sampled at), and its values that far
-        apart: a point's (sampled on the device clock: a MinimumSamplingInterval) by its revised
-        interval, so that two writes in a row are not reported closer; another node's only when it
-        asked for more than the publishing interval."""
+        asks for it, 0 for the fastest practical rate, 7.21) or more: the one it asked for (5.12.2.2,
+        7.21: "equal or higher than the requested samplingInterval"), for any attribute (5.12.1.1:
+        an attribute other than the Value is "only monitored for a change in value", sampled at
+        that interval all the same; asyncua answered the publishing interval), and for a Value the
+        node's MinimumSamplingInterval too (5.12.1.2: "equal or higher than the
+        MinimumSamplingInterval if the Client subscribes to the Value Attribute"; a point's is the
+        period its device is sampled at).  An event item gets the publishing interval (events are
+        not sampled: 5.12.1.2, "a sampling interval of 0 if it subscribes for Events").  Its values
+        that far apart: a point's (sampled on the device clock: a MinimumSamplingInterval) by its
+        revised interval, so that two writes in a row are not reported closer; another item's only
+        when it asked for more than the publishing interval."""
         apart = 0.0
-        result.RevisedSamplingInterval = self.isub.data.RevisedPublishingInterval
-        if item.AttributeId == _VALUE:
-            minimum = _attribute(self.aspace, item.NodeId, ua.AttributeIds.MinimumSamplingInterval) or 0.0
-            result.RevisedSamplingInterval = max(result.RevisedSamplingInterval, requested, minimum)
+        publishing = self.isub.data.RevisedPublishingInterval
+        result.RevisedSamplingInterval = publishing
+        if item.AttributeId != _EVENTS:
+            minimum = (_attribute(self.aspace, item.NodeId, ua.AttributeIds.MinimumSamplingInterval) or 0.0
+                       if item.AttributeId == _VALUE else 0.0)
+            result.RevisedSamplingInterval = max(publishing, requested, minimum)
             if minimum > 0:
                 apart = result.RevisedSamplingInterval
-            elif requested > self.isub.data.RevisedPublishingInterval:
+            elif requested > publishing:
                 apart = requested
         self._spacing.set(mid, apart)
 

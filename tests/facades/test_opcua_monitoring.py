@@ -429,20 +429,26 @@ async def test_an_item_queues_at_most_queue_size_notifications_for_a_client_that
 #: ModifyMonitoredItems (5.12.3.1: "illegal request values for parameters that can be revised do not
 #: generate errors. Instead the Server will choose default values and indicate them in the
 #: corresponding revised parameter"; 7.21: -1 asks for the publishing interval, a queueSize of 0
-#: for the server's largest, QUEUE_SIZE)
+#: for the server's largest, QUEUE_SIZE; 5.12.2.2: the revisedSamplingInterval "equal or higher than
+#: the requested samplingInterval" for an attribute that is not the Value too: it is "only monitored
+#: for a change in value", 5.12.1.1, asyncua revised it down to the publishing interval)
 REVISED = [
     (("sers#Kind", "Value", None, -1.0, 0), (20.0, 1000)),  # a property: MinimumSamplingInterval 0
     (("sers#Kind", "Value", None, 0.0, 1), (20.0, 1)),
     (("sers#Kind", "Value", None, 500.0, 5), (500.0, 5)),
     (("sers.quantity.adc_volts", "DisplayName", None, -1.0, 5000), (20.0, 1000)),  # not a Value
+    (("sers.quantity.adc_volts", "DisplayName", None, 500.0, 5), (500.0, 5)),
+    (("sers#Kind", "BrowseName", None, 0.0, 2), (20.0, 2)),
+    (("sers", "Description", None, 250.0, 2), (250.0, 2)),
     (("sers.quantity.adc_volts", "Value", None, -1.0, 2), (100.0, 2)),  # a point: sampled every 100 ms
     (("sers", "EventNotifier", EVENT, -1.0, 0), (20.0, 1000)),
 ]
 
 
 async def test_asyncua_a_modify_revises_each_parameter_as_a_create_does(served: tuple[Runtime, OpcuaFacade]) -> None:
-    """Each REVISED item created as asked, and each created asking 1000 ms and QueueSize 3 then
-    modified to what was asked: the same revised values.  (asyncua's ModifyMonitoredItems answered
+    """Each REVISED item created as asked, and each created asking 1000 ms and QueueSize 3 (each
+    data item revised to 1000 ms, whatever its attribute) then modified to what was asked: the same
+    revised values.  (asyncua's ModifyMonitoredItems answered
     the samplingInterval as it came, -1 and 0 too, where a create answered the publishing interval.)"""
     _, facade = served
     async with Client(facade.url) as client:
@@ -460,6 +466,8 @@ async def test_asyncua_a_modify_revises_each_parameter_as_a_create_does(served: 
         created = [await _create(client, subscription, request) for request in asked + other]
         assert all(result.StatusCode.is_good() for result in created)
         assert [(r.RevisedSamplingInterval, r.RevisedQueueSize) for r in created[:len(asked)]] == wanted
+        assert [r.RevisedSamplingInterval for r in created[len(asked):]] == [
+            20.0 if attribute == "EventNotifier" else 1000.0 for (_, attribute, *_), _ in REVISED]
         modified = await client.uaclient.modify_monitored_items(ua.ModifyMonitoredItemsParameters(
             SubscriptionId=subscription.subscription_id, TimestampsToReturn=ua.TimestampsToReturn.Both,
             ItemsToModify=[ua.MonitoredItemModifyRequest(MonitoredItemId=result.MonitoredItemId,
@@ -477,6 +485,8 @@ def test_node_opcua_a_modify_revises_each_parameter_as_a_create_does(served: tup
     [result] = node_client(facade.url, [{"op": "items", "items": items, "modifyTo": [
         {"sampling": sampling, "queueSize": size} for (*_, sampling, size), _ in REVISED]}])
     assert result["statuses"] == ["Good"] * len(REVISED)
+    assert result["revised"] == [20.0 if attribute == "EventNotifier" else 1000.0  # (events are not sampled)
+                                 for (_, attribute, *_), _ in REVISED]
     assert result["modified"] == [list(revised) for _, revised in REVISED]
 
 
