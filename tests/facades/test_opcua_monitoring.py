@@ -716,3 +716,71 @@ def test_node_opcua_a_full_queue_discards_as_discard_oldest_asks_and_flags_the_o
         runtime.advance(facade.period)
     assert result["first"] == start
     assert result["got"] == [[[values[n], flag] for n, flag in reported] for *_, reported in DISCARD]
+
+
+async def test_asyncua_a_full_event_queue_discards_as_discard_oldest_asks(served: tuple[Runtime, OpcuaFacade]) -> None:
+    """Three fault events (on, off, on) for event items of queueSize 2 on a subscription with
+    publishing disabled: discardOldest TRUE keeps the last two (off, on), FALSE replaces the last
+    one queued, keeping the first and the newest (on, on; 7.21: "the last Notification added to
+    the queue gets replaced with the new Notification"; asyncua kept off, on for both).  A second,
+    published subscription's event item tells when all three are queued."""
+    runtime, facade = served
+    watched: asyncio.Queue[str] = asyncio.Queue()
+    got: asyncio.Queue[tuple[int, str]] = asyncio.Queue()
+
+    class Watch:
+        def event_notification(self, event: Any) -> None:
+            watched.put_nowait(event.Message.Text)
+
+    class Got:
+        def event_notification(self, event: Any) -> None:
+            got.put_nowait((event.server_handle, event.Message.Text))
+
+    async def item(subscription: Any, request: ua.MonitoredItemCreateRequest) -> ua.MonitoredItemCreateResult:
+        created = await _create(client, subscription, request)
+        known = subscription._monitored_items[request.RequestedParameters.ClientHandle]
+        known.mfilter = request.RequestedParameters.Filter  # (the fields asyncua's client maps)
+        known.server_handle = request.RequestedParameters.ClientHandle  # (which item an event came for)
+        return created
+
+    async with Client(facade.url) as client:
+        ns = await client.get_namespace_index(NAMESPACE)
+        watch = await client.create_subscription(20, Watch())
+        queued = await _unpublished(client, facade, Got())
+        request = _request(ns, 1, "sers", "EventNotifier", EVENT, None, None)
+        request.RequestedParameters.QueueSize = 10
+        assert (await item(watch, request)).StatusCode.is_good()
+        for handle, oldest in ((1, True), (2, False)):
+            request = _request(ns, handle, "sers", "EventNotifier", EVENT, None, None)
+            request.RequestedParameters.QueueSize, request.RequestedParameters.DiscardOldest = 2, oldest
+            assert (await item(queued, request)).RevisedQueueSize == 2
+        try:
+            for active in (True, False, True):
+                runtime.fault("sers", "emergency_stop", active)
+            messages = [await asyncio.wait_for(watched.get(), 10) for _ in range(3)]
+            assert ["emergency_stop on" in m for m in messages] == [True, False, True]
+            await queued.set_publishing_mode(True)
+            seen = [await asyncio.wait_for(got.get(), 10) for _ in range(4)]
+        finally:
+            runtime.fault("sers", "emergency_stop", False)  # (for the tests after this one)
+        assert [message for handle, message in seen if handle == 1] == messages[1:]
+        assert [message for handle, message in seen if handle == 2] == [messages[0], messages[2]]
+        await queued.delete()
+        await watch.delete()
+
+
+def test_a_queue_cut_to_a_smaller_size_keeps_what_its_discard_policy_keeps() -> None:
+    """A ModifyMonitoredItems to a smaller queueSize cuts a queue of 30 values "following the
+    configured discard policy" (5.12.3.2) at once: discardOldest TRUE keeps the newest 5 and flags
+    the first of them, FALSE keeps the first 4 and the newest (as if each value after the 4th had
+    replaced the last one queued) and flags the newest; a queue of one keeps the newest, unflagged."""
+    from devsim.facades.opcua_monitoring import OVERFLOW, discard
+
+    def cut(size: int, oldest: bool) -> list[tuple[int, bool]]:
+        queue = [ua.MonitoredItemNotification(ClientHandle=1, Value=ua.DataValue(ua.Variant(n))) for n in range(30)]
+        discard(queue, size, oldest)
+        return [(n.Value.Value.Value, n.Value.StatusCode.value == OVERFLOW) for n in queue]
+
+    assert cut(5, True) == [(25, True), (26, False), (27, False), (28, False), (29, False)]
+    assert cut(5, False) == [(0, False), (1, False), (2, False), (3, False), (29, True)]
+    assert cut(1, False) == cut(1, True) == [(29, False)]
