@@ -393,7 +393,9 @@ async function main() {
     process.stdout.write(`RESULT ${JSON.stringify(result)}\n`);
 }
 
-main().catch((err) => {
+// (exit at once: node-opcua keeps the process alive some 2 s after its client disconnected; a
+// write to a pipe is synchronous on Linux, so the RESULT line is out)
+main().then(() => process.exit(0), (err) => {
     process.stderr.write(`${err.stack || err}\n`);
     process.exit(1);
 });
