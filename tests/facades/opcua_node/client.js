@@ -98,14 +98,18 @@ function variant(type, value) {
     return { dataType, arrayType: VariantArrayType.Scalar, value: wire(dataType, value) };
 }
 
-function paused() {  // "PAUSE" out, then a line in
+let input = null;  // the lines of stdin: the plans of --serve and the lines a pause waits for
+
+function nextLine() {  // the next line of stdin (undefined at its end)
+    if (input === null) {
+        input = require("readline").createInterface({ input: process.stdin })[Symbol.asyncIterator]();
+    }
+    return input.next().then((next) => (next.done ? undefined : next.value));
+}
+
+async function paused() {  // "PAUSE" out, then a line in
     process.stdout.write("PAUSE\n");
-    return new Promise((resolve) => {
-        process.stdin.once("data", () => {
-            process.stdin.destroy();
-            resolve();
-        });
-    });
+    await nextLine();
 }
 
 async function within(promise, what) {  // the promise, or an error after 10 s
@@ -371,8 +375,7 @@ async function run(endpoint, plan) {  // one plan on a session of its own: { nam
 }
 
 async function serve() {  // --serve: a line {"endpoint": ..., "plan": [...]} at a time on stdin
-    const lines = require("readline").createInterface({ input: process.stdin });
-    for await (const line of lines) {
+    for (let line = await nextLine(); line !== undefined; line = await nextLine()) {
         let answer;
         try {
             const { endpoint, plan } = JSON.parse(line);
