@@ -19,7 +19,7 @@ from typing import Any
 import click
 
 from devsim.cli import exits, present
-from devsim.cli.options import FLOAT, INT, AsciiIntRange, check_fleet
+from devsim.cli.options import FLOAT, INT, AsciiFloatRange, AsciiIntRange, check_fleet
 from devsim.runtime import requests as rq
 
 __all__ = ["command_name", "ctl"]
@@ -280,7 +280,8 @@ def ctl_scenario(ctx: click.Context) -> None:
 @click.argument("device", required=False)
 @click.argument("names", nargs=-1)
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per line instead of text.")
-@click.option("--period", type=FLOAT, metavar="SECONDS", help="Sampling period in device time (default 0.1, at least 0.001).")
+@click.option("--period", type=AsciiFloatRange(min=rq.MIN_WATCH_PERIOD, finite=True), metavar="SECONDS",
+              help=f"Sampling period in device time (default 0.1, at least {rq.MIN_WATCH_PERIOD:g}).")
 def ctl_watch(device: str | None, names: tuple[str, ...], as_json: bool, period: float | None) -> None:
     """Print changes of DEVICE's NAMEs (default: its state and axes) and its events (move start
     and end, faults, errors, host connects) as they happen, one line each, until Ctrl-C or the

@@ -6,6 +6,7 @@ The libraries themselves are imported only to check that they are there."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import click
 
@@ -37,7 +38,19 @@ class _AsciiInt(_AsciiNumber, click.types.IntParamType):
 
 
 class AsciiFloatRange(_AsciiNumber, click.FloatRange):
-    """``click.FloatRange`` in ASCII digits."""
+    """``click.FloatRange`` in ASCII digits; ``finite=True`` also refuses 'nan' and 'inf', which a
+    range lets through (NaN compares false with both bounds: ``--period nan`` reached the control
+    server, whose error named its field 'period', not the option)."""
+
+    def __init__(self, *args: Any, finite: bool = False, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.finite = finite
+
+    def convert(self, value: object, param: click.Parameter | None, ctx: click.Context | None) -> object:
+        number = super().convert(value, param, ctx)
+        if self.finite and not math.isfinite(number):  # type: ignore[arg-type]
+            self.fail(f"{number} is not a finite number", param, ctx)
+        return number
 
 
 class AsciiIntRange(_AsciiNumber, click.IntRange):

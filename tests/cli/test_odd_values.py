@@ -9,7 +9,9 @@ import sys
 from pathlib import Path
 
 import pytest
+from click.testing import CliRunner
 
+from devsim.cli import cli, exits
 from tests.support.process import ROOT, devsim_env
 
 PLANT = str(ROOT / "scenarios/sers/absolute_positioning.yaml")
@@ -85,3 +87,28 @@ def test_a_directory_option_naming_a_file_is_one_error_line(args: list[str], sta
     assert done.returncode == status, done.stderr
     assert done.stderr.count("\n") == 1, done.stderr
     assert done.stderr.startswith("Error: ") and expected.replace("{file}", str(file)) in done.stderr
+
+
+@pytest.mark.parametrize(
+    ("period", "expected"),
+    [
+        ("nan", "'--period': nan is not a finite number"),
+        ("inf", "'--period': inf is not a finite number"),
+        ("1e309", "'--period': inf is not a finite number"),
+        ("-1", "'--period': -1.0 is not in the range x>=0.001"),
+        ("0", "'--period': 0.0 is not in the range x>=0.001"),
+        ("0.0001", "'--period': 0.0001 is not in the range x>=0.001"),
+        ("\u0663", "'--period': '\u0663' is not a number in ASCII digits"),
+    ],
+)
+def test_ctl_watch_names_its_period_option(period: str, expected: str) -> None:
+    """``devsim ctl watch --period`` is checked as the option it is (in process: click reads it before
+    any connection; the address leads nowhere).  Before, click's FLOAT took nan, inf, 0 and -1 and
+    the control server refused them in its own words: "BadRequest: 'period' must be a number of
+    seconds from 0.001 on", status 4 (REFUSED) for a command-line mistake."""
+    result = CliRunner().invoke(cli, ["ctl", "--control", "unix:/nonexistent/ctl.sock", "watch", "sers",
+                                      "--period", period], prog_name="devsim")
+    assert result.exit_code == exits.USAGE, result.output
+    assert result.stdout == ""
+    assert result.stderr.count("\n") == 1, result.stderr
+    assert result.stderr.startswith("Error: ") and expected in result.stderr
