@@ -23,6 +23,7 @@ import click
 
 from devsim.cli import exits
 from devsim.cli.options import FLOAT, AsciiFloatRange, AsciiIntRange, check_fleet
+from devsim.cli.statuses import file_failure
 from devsim.cli.usage import check_dirs
 from devsim.core.config import ConfigError
 from devsim.core.console import say, stop_on_signals, warn
@@ -202,6 +203,7 @@ def _run_files(scenarios: list[Any], files: tuple[str, ...], mode: str | None, s
     from devsim.scenario.plant import StateRefused
     from devsim.scenario.report import format_report
     from devsim.scenario.runner import run_scenario
+    from devsim.transports.trace import TraceFileError
 
     results = []
     for item, path in zip(scenarios, files, strict=True):
@@ -222,6 +224,11 @@ def _run_files(scenarios: list[Any], files: tuple[str, ...], mode: str | None, s
                 run_scenario(item, mode=chosen, speed=speed, state_dir=state_dir, trace_dir=item_trace_dir,
                              announce=announce, on_step=progress.step if realtime else None, control=control)
             )
+        except TraceFileError as exc:  # (the motion log was said as the scenario's: '{path}: cannot run ...')
+            if pictures is None or exc.filename != str(pictures.log_path):
+                raise exits.SystemFailure(f"{path}: cannot run the scenario: {exc}") from None
+            failure = file_failure("--motion-log" if pictures.motion_log is not None else "--plot", exc)
+            raise exits.failure(failure.status, str(failure)) from None
         except (OSError, *_UNUSABLE_MEMORY) as exc:  # a port in use, a directory that cannot be made
             raise exits.SystemFailure(f"{path}: cannot run the scenario: {exc}") from None
         except StateRefused as exc:  # a device refused a value of its state: (a program's text)
@@ -375,10 +382,12 @@ async def _up(
     from devsim.scenario.workers import end_with_parent
 
     end_with_parent(loop, stop.set)  # a worker of `devsim up --workers` ends with it
-    if state_dir is not None:
-        Path(state_dir).mkdir(parents=True, exist_ok=True)
-    if trace_dir is not None:
-        Path(trace_dir).mkdir(parents=True, exist_ok=True)
+    for option, directory in (("--state-dir", state_dir), ("--trace-dir", trace_dir)):
+        if directory is not None:
+            try:
+                Path(directory).mkdir(parents=True, exist_ok=True)
+            except OSError as exc:  # (/proc/td: 'cannot start the plant: [Errno 2] ...', no option named)
+                raise file_failure(option, exc) from None
     limit = fdlimit.fd_limit()
     if log_level >= DEFAULT_LEVEL:  # (-q: warnings and errors only)
         warn(f"devsim: the file descriptor limit {limit} allows about {fdlimit.capacity(limit)} ports")
@@ -394,8 +403,12 @@ async def _up(
                  f" {', '.join(list(plant.refused)[:5])}{' ...' if len(plant.refused) > 5 else ''}")
         if motion is not None:
             from devsim.observe.motion_log import start_motion_log
+            from devsim.transports.trace import TraceFileError
 
-            start_motion_log(runtime, list(plant.devices.values()), *motion)
+            try:
+                start_motion_log(runtime, list(plant.devices.values()), *motion)
+            except TraceFileError as exc:  # (it was 'cannot start the plant: [Errno 21] ...')
+                raise file_failure("--motion-log", exc) from None
         server = None
         if address is not None:
             server = ControlServer(runtime, address)  # type: ignore[arg-type]

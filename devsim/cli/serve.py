@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import msgspec
 
 from devsim.cli.control_address import control_option, default_control, system_failure
-from devsim.cli.statuses import INTERRUPTED, StartFailure, start_status
+from devsim.cli.statuses import INTERRUPTED, StartFailure, file_failure, start_status
 from devsim.cli.usage import host_port, usage_error
 from devsim.core.console import say as _say  # (replaced by tests and benchmarks/startup.py)
 from devsim.core.console import stop_on_signals, warn
@@ -339,20 +339,26 @@ async def _serve(plan: Plan) -> None:
     runtime.idle_drop = plan.idle_drop
     async with runtime:
         stage = "create the devices"
+        file_option = "--trace"  # (what names a file that cannot be written: the motion log's, or a trace's)
         server: Any = None
         page: Any = None
         web_lines: list[str] = []
-        try:
-            if plan.state_dir is not None:
-                from pathlib import Path
+        if plan.state_dir is not None:
+            from pathlib import Path
 
+            try:
                 Path(plan.state_dir).mkdir(parents=True, exist_ok=True)
+            except OSError as exc:  # (/proc/sd: 'cannot create the devices: [Errno 2] ...')
+                raise file_failure("--state-dir", exc) from None
+        try:
             devices = [runtime.add_device(plan.kind, name, config) for name, config in plan.devices]
             if plan.motion_log is not None:
                 stage = f"write the motion log {plan.motion_log}"
                 from devsim.observe.motion_log import start_motion_log
 
+                file_option = "--motion-log"
                 start_motion_log(runtime, devices, plan.motion_log, plan.motion_resolution)
+                file_option = "--trace"
             served: list[tuple[str, Any, Port]] = []  # port name, transport, spec
             plan_ports = _plan_ports(plan, devices[0].ports)
             for index, (port_name, spec) in enumerate(plan_ports):
@@ -413,6 +419,10 @@ async def _serve(plan: Plan) -> None:
         except Exception as exc:  # one line, no traceback: a port in use, a bad path, ...
             if server is not None:
                 await server.close()
+            from devsim.transports.trace import TraceFileError
+
+            if isinstance(exc, TraceFileError):
+                raise file_failure(file_option, exc) from None
             detail = str(exc) if isinstance(exc, OSError | ValueError) else f"{type(exc).__name__}: {exc}"
             raise StartFailure(f"cannot {stage}: {detail}", start_status(exc)) from None
 

@@ -15,6 +15,7 @@ __all__ = [
     "StartFailure",
     "UNREACHABLE",
     "USAGE",
+    "file_failure",
     "start_status",
 ]
 
@@ -57,3 +58,11 @@ def start_status(exc: BaseException) -> int:
     if type(exc).__name__ == "FleetClash":
         return REFUSED
     return SYSTEM
+
+
+def file_failure(option: str, exc: OSError) -> StartFailure:
+    """A file that ``option`` names (``--trace``, ``--motion-log``) cannot be written
+    (:class:`~devsim.transports.trace.TraceFileError`): one line naming the option, the file and
+    why, ``--trace: adir: Is a directory``, status ``SYSTEM`` as a directory option's
+    (:func:`devsim.cli.usage.check_dirs`).  Said as the port being opened, it named no option."""
+    return StartFailure(f"{option}: {exc.filename}: {exc.strerror}", SYSTEM)

@@ -40,8 +40,8 @@ import msgspec
 from devsim.core.backlog import Backlog
 from devsim.core.console import warn
 
-__all__ = ["Source", "TapSink", "TraceFile", "TraceSink", "Tracer", "create_trace_file", "parse_source_note",
-           "render", "source_note"]
+__all__ = ["Source", "TapSink", "TraceFile", "TraceFileError", "TraceSink", "Tracer", "create_trace_file",
+           "parse_source_note", "render", "source_note"]
 
 _ESCAPES = {0x0D: "\\r", 0x0A: "\\n", 0x09: "\\t", 0x22: '\\"', 0x5C: "\\\\"}
 
@@ -115,17 +115,22 @@ class TapSink:
             self.inner.close()
 
 
+class TraceFileError(OSError):
+    """A file a run writes (a trace, a motion log, a recorded session) that cannot be had:
+    ``filename`` is its path, ``strerror`` why; the command line says them after the option that
+    named the file (``--trace: adir: Is a directory``), where a port's own errors name the port."""
+
+
 def create_trace_file(path: str | os.PathLike[str]) -> int:
     """Open ``path`` for writing, created or truncated, and return the descriptor; refuses a
-    symlink (``refusing to write a trace through the symlink ...``), so that a trace never
-    truncates a file someone linked to where the trace goes."""
+    symlink (``refusing to write a trace through the symlink``), so that a trace never
+    truncates a file someone linked to where the trace goes.  Raises :class:`TraceFileError`."""
     name = os.fspath(path)
     try:
         return os.open(name, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
     except OSError as exc:
-        if exc.errno == errno.ELOOP:
-            raise OSError(exc.errno, f"refusing to write a trace through the symlink {name}") from None
-        raise
+        reason = "refusing to write a trace through the symlink" if exc.errno == errno.ELOOP else exc.strerror
+        raise TraceFileError(exc.errno, reason, name) from None
 
 
 class TraceFile:
@@ -163,9 +168,9 @@ class TraceFile:
         if head:
             try:
                 self._put(head, flush=True)
-            except OSError:
+            except OSError as exc:
                 self._close(patience=0)
-                raise
+                raise TraceFileError(exc.errno, exc.strerror, self.path) from None
 
     @property
     def closed(self) -> bool:

@@ -90,6 +90,32 @@ def test_a_directory_option_naming_a_file_is_one_error_line(args: list[str], sta
 
 
 @pytest.mark.parametrize(
+    ("args", "expected"),
+    [
+        # (each named only what it was doing: 'cannot open the pty port with its trace {dir}: [Errno 21] ...',
+        # 'cannot write the motion log ...', 'cannot start the plant: ...', '{scenario}: cannot run the scenario: ...')
+        (["run", "sers", "--no-control", "--pty", "--trace", "{dir}"], "--trace: {dir}: Is a directory"),
+        (["run", "sers", "--no-control", "--motion-log", "{dir}/missing/m.csv"],
+         "--motion-log: {dir}/missing/m.csv: No such file or directory"),
+        (["up", PLANT, "--no-control", "--motion-log", "/proc/devsim-m.csv"],
+         "--motion-log: /proc/devsim-m.csv: No such file or directory"),
+        (["up", PLANT, "--no-control", "--trace-dir", "/proc/devsim-traces"],
+         "--trace-dir: /proc/devsim-traces: No such file or directory"),
+        (["scenario", "run", "--virtual", "--motion-log", "{dir}", PLANT], "--motion-log: {dir}: Is a directory"),
+    ],
+)
+def test_a_file_option_that_cannot_be_written_is_one_error_line(args: list[str], expected: str, tmp_path: Path) -> None:
+    """A file that cannot be made (a directory, a missing directory, a file in /proc) is said naming
+    the option, the file and why, in one line with status 6 (SYSTEM), as a directory option's."""
+    args = [arg.replace("{dir}", str(tmp_path)) for arg in args]
+    done = subprocess.run([sys.executable, "-m", "devsim", *args], cwd=tmp_path, env=devsim_env(), capture_output=True,
+                          text=True, timeout=60, stdin=subprocess.DEVNULL)
+    assert done.returncode == exits.SYSTEM, done.stderr
+    assert done.stdout == ""
+    assert done.stderr.splitlines()[-1] == "Error: " + expected.replace("{dir}", str(tmp_path)), done.stderr
+
+
+@pytest.mark.parametrize(
     ("period", "expected"),
     [
         ("nan", "'--period': nan is not a finite number"),
