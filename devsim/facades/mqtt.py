@@ -39,6 +39,7 @@ import socket
 from collections.abc import Callable, Sequence
 from typing import Any, Literal
 
+from devsim.core.console import warn
 from devsim.core.device import Device
 from devsim.core.watch import PointWatch
 from devsim.facades import mqtt_topics as topics
@@ -69,6 +70,7 @@ class _DevsimDevice:
         self.rate = rate
         self.base = topics.prefix(plant, device.name)
         self.send: Callable[[Message], None] = lambda message: None
+        self.send_sample: Callable[[Callable[[], Message]], None] = lambda make: None  # (PlantLink's)
         self.end_session: Callable[[], None] = lambda: None  # (PlantLink's; the devsim convention never ends a session)
         self.watch: PointWatch | None = None
         self.events: SampleOnEvent | None = None
@@ -93,7 +95,14 @@ class _DevsimDevice:
 
     def _changed(self, changes: dict[str, Any]) -> None:
         for name, value in changes.items():
-            self.send((topics.state_topic(self.plant, self.device.name, name), topics.encode(value), 0, True))
+            self.send_sample(lambda name=name, value=value: (topics.state_topic(self.plant, self.device.name, name),
+                                                             topics.encode(value), 0, True))
+
+    def resample(self) -> None:
+        """Every value again, as if none had been sent (samples were dropped: PlantLink)."""
+        if self.watch is not None:
+            self.watch.last = {}
+            self.watch.sample()
 
     def handle(self, topic: str, payload: bytes) -> None:
         found = topics.parse_command(topic, self.plant)
@@ -140,6 +149,7 @@ class _SparkplugPlant:
         self.rate = rate
         self.route: str | None = None  # takes every message of its filters
         self.send: Callable[[Message], None] = lambda message: None
+        self.send_sample: Callable[[Callable[[], Message]], None] = lambda make: None  # (PlantLink's)
         self.end_session: Callable[[], None] = lambda: None  # NDEATH, DISCONNECT, connect again (PlantLink's)
         self.watches: dict[str, PointWatch] = {}
         self.events: list[SampleOnEvent] = []
@@ -185,7 +195,14 @@ class _SparkplugPlant:
             self.events.append(events)
 
     def _changed(self, device: Device, changes: dict[str, Any]) -> None:
-        self.send((*self.node.device_data(device, changes), 0, False))
+        # (made only when sent: a DDATA takes the node's next sequence number, and a gap would be a lost message)
+        self.send_sample(lambda: (*self.node.device_data(device, changes), 0, False))
+
+    def resample(self) -> None:
+        """Every metric of every device again in a DDATA (samples were dropped: PlantLink)."""
+        for watch in self.watches.values():
+            watch.last = {}
+            watch.sample()
 
     def handle(self, topic: str, payload: bytes) -> None:
         """A DCMD or NCMD: a refusal (a payload that is not Sparkplug B, a metric the device
@@ -286,7 +303,9 @@ class PlantLink:
         self._routes = {side.route: side for side in self.sides if side.route is not None}
         self._everything = [side for side in self.sides if side.route is None]
         for side in self.sides:
-            side.send, side.end_session = self._send, self._end_session
+            side.send, side.send_sample, side.end_session = self._send, self._send_sample, self._end_session
+        self.dropped = 0  # samples dropped since the shared connection fell behind (PAUSED_LIMIT)
+        self._catching_up: asyncio.Task[None] | None = None
         self._task: asyncio.Task[None] | None = None
         self._closing = False
         self._again = False  # a side ended its session: connect again at once
@@ -327,6 +346,41 @@ class PlantLink:
         if self.shared is not None:
             with contextlib.suppress(LinkLost):  # the serving loop reconnects; the births follow
                 self.shared.publish(*message)
+
+    def _send_sample(self, make: Callable[[], Message]) -> None:
+        """[SIM-CHOICE] A sample (a state that changed, a DDATA) while the shared connection is
+        behind (more than ``PAUSED_LIMIT`` bytes wait unsent, beyond what the socket holds: a
+        broker that stopped reading) is dropped, so what waits stays bounded in bytes; once they
+        are down to a quarter, every side sends every value again (:meth:`_catch_up`), so that
+        the retained states are the device's.  Births, status, deaths and errors always wait
+        their turn (:meth:`_send`).  Dropping the newest keeps the bytes already queued whole;
+        the oldest samples of all sit in the kernel's socket buffers, beyond reach.  ``make``
+        makes the message, only if it is sent."""
+        shared = self.shared
+        if shared is None:
+            return
+        if shared.behind:
+            self.dropped += 1
+            if self._catching_up is None:
+                self._catching_up = asyncio.get_running_loop().create_task(self._catch_up(shared))
+            return
+        with contextlib.suppress(LinkLost):  # the serving loop reconnects; the births follow
+            shared.publish(*make())
+
+    async def _catch_up(self, shared: MqttLink) -> None:
+        """Once ``shared`` has caught up, every value again (a lost link: the new one's births)."""
+        try:
+            await shared.drain()
+        except LinkLost:
+            return
+        finally:
+            self._catching_up = None
+        if shared is self.shared and not self._closing:
+            warn(f"devsim: mqtt: the broker mqtt://{self.host}:{self.port} fell behind: {self.dropped} samples"
+                 " were dropped; every value is sent again")
+            self.dropped = 0
+            for side in self.sides:
+                side.resample()
 
     def _end_session(self) -> None:
         """A side ends its session on purpose (Sparkplug: its primary host went offline): its
@@ -381,6 +435,8 @@ class PlantLink:
         self._closing = True
         for side in self.sides:
             side.stop()
+        if self._catching_up is not None:
+            self._catching_up.cancel()
         if self._task is not None:
             self._task.cancel()
             with contextlib.suppress(asyncio.CancelledError, Exception):

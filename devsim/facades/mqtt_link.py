@@ -200,6 +200,12 @@ class MqttLink:
         if paused is not None and not paused.done():
             paused.set_result(None)
 
+    @property
+    def behind(self) -> bool:
+        """More than ``PAUSED_LIMIT`` bytes wait unsent (the socket took what it could: a broker
+        that does not read), and they are not yet down to a quarter; :meth:`drain` waits meanwhile."""
+        return self._paused is not None
+
     # -- sending ---------------------------------------------------------------------------
     def publish(self, topic: str, payload: bytes, qos: int = 0, retain: bool = False,
                 correlation: bytes | None = None, expiry: int | None = None) -> asyncio.Future[bytes] | None:
