@@ -61,6 +61,7 @@ __all__ = [
     "ControlAddressError",
     "MAX_CLIENTS",
     "ControlServer",
+    "client_bound",
     "host_problem",
     "parse_address",
 ]
@@ -73,6 +74,21 @@ MAX_BACKLOG = 4 << 20  # bytes of watch output a slow reader may leave unread be
 #: traces and state files need: about 1,000 idle clients of a loopback TCP control port (any
 #: local user) took the default limit of 1,024, and the device's hosts waited in the backlog.
 MAX_CLIENTS = 256
+#: [SIM-CHOICE] Nor more than this share of the process's descriptor limit (the soft
+#: ``RLIMIT_NOFILE``, ``ulimit -n``): under ``ulimit -n 128`` the bound of 256 let 119 idle clients
+#: take every descriptor (the next one was not even accepted); now 32 are served.
+CLIENT_SHARE = 0.25
+
+
+def client_bound(limit: int | None = None) -> int:
+    """How many control connections are served at once: :data:`MAX_CLIENTS`, or
+    :data:`CLIENT_SHARE` of the descriptor ``limit`` (the process's,
+    :func:`devsim.transports.fdlimit.fd_limit`) when that is fewer; at least one."""
+    if limit is None:
+        from devsim.transports.fdlimit import fd_limit
+
+        limit = fd_limit()
+    return max(1, min(MAX_CLIENTS, int(limit * CLIENT_SHARE)))
 
 
 class ControlAddressError(ValueError):
@@ -179,6 +195,7 @@ class ControlServer:
         self.address: ControlAddress = self.requested
         self._server: asyncio.AbstractServer | None = None
         self._clients: set[asyncio.Task[None]] = set()
+        self.max_clients = client_bound()
 
     async def start(self) -> ControlAddress:
         """Listen; returns the bound address (with the actual port when port 0 was asked for)."""
@@ -225,9 +242,9 @@ class ControlServer:
 
         task = asyncio.current_task()
         assert task is not None
-        if len(self._clients) >= MAX_CLIENTS:
+        if len(self._clients) >= self.max_clients:
             await self._refuse(reader, writer, ops.encode(ErrorResponse(
-                error=f"the simulator serves at most {MAX_CLIENTS} control connections at once", type="Busy")))
+                error=f"the simulator serves at most {self.max_clients} control connections at once", type="Busy")))
             return
         self._clients.add(task)
         streams: list[Any] = []  # the watch and capture streams of this connection
@@ -263,13 +280,13 @@ class ControlServer:
                 writer.close()
 
     async def _refuse(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter, line: bytes) -> None:
-        """One connection more than :data:`MAX_CLIENTS`: its one error line, and a line in the
+        """One connection more than :attr:`max_clients`: its one error line, and a line in the
         log (at most one every few seconds, :func:`devsim.transports.fdlimit.report`).  What the
         client sent is read for a second at most before the close, so that the close does not
         reset the connection (and the error line with it) for a request left unread."""
         from devsim.transports.fdlimit import report
 
-        report("control-full", f"control {self.address}: refused a connection, {MAX_CLIENTS} are open")
+        report("control-full", f"control {self.address}: refused a connection, {self.max_clients} are open")
         with contextlib.suppress(Exception, asyncio.CancelledError):  # (the simulator stopping meanwhile)
             writer.write(line)
             writer.write_eof()

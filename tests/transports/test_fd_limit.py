@@ -4,6 +4,7 @@ Each test runs devsim in a child process with a low ``ulimit -n`` (RLIMIT_NOFILE
 
 from __future__ import annotations
 
+import json
 import os
 import resource
 import select
@@ -132,3 +133,51 @@ def test_a_run_out_of_descriptors_by_control_clients_says_so_in_one_line(tmp_pat
         seen.append(rest)
     assert not [text for text in seen if "Traceback" in text or "Unhandled" in text]
     assert len("\n".join(seen)) < 2000
+
+
+def test_idle_control_clients_leave_the_device_its_descriptors(tmp_path: Path) -> None:
+    """Under ``ulimit -n 128`` the control server serves a quarter of the limit at once (32,
+    docs/control.md); the next client gets the one ``Busy`` line, and the device's TCP port still
+    serves a host.  Before, the bound was 256 whatever the limit: idle clients were served until
+    the descriptors ran out, and the device's hosts were refused."""
+    control = tmp_path / "c.sock"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "devsim", "run", "echo", "--tcp", "0", "--control", f"unix:{control}"],
+        cwd=ROOT, env=_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        text=True, preexec_fn=_limit(128),
+    )
+    out, err = collect_lines(proc.stdout), collect_lines(proc.stderr)
+    clients: list[socket.socket] = []
+    try:
+        line = next_match(out, lambda text: ": tcp " in text, 30, "the port line")
+        host, port = line.split()[-1].removeprefix("socket://").rsplit(":", 1)
+        next_match(out, lambda text: text.startswith("control: "), 30, "the control line")
+        answer = b""
+        while len(clients) <= 128:  # each client asks once and stays; until one is not served
+            client = socket.socket(socket.AF_UNIX)
+            client.settimeout(5)
+            client.connect(str(control))
+            clients.append(client)
+            client.sendall(b'{"id": 1, "op": "now"}\n')
+            try:
+                answer = client.makefile("rb").readline()
+            except TimeoutError:  # (not even accepted: the descriptors ran out)
+                answer = b""
+            if not answer or json.loads(answer)["ok"] is not True:
+                break
+        assert len(clients) == 33, answer
+        assert json.loads(answer) == {"id": None, "ok": False, "type": "Busy",
+                                      "error": "the simulator serves at most 32 control connections at once"}
+        with socket.create_connection((host, int(port)), timeout=10) as device:  # the port's host
+            device.sendall(b"ping")
+            assert device.recv(4) == b"ping"
+    finally:
+        for client in clients:
+            client.close()
+        proc.terminate()
+        proc.wait(20)
+    said = []
+    while (rest := err.get(timeout=10)) is not None:
+        said.append(rest)
+    assert [text for text in said if "control" in text] == [
+        f"devsim: control unix:{control}: refused a connection, 32 are open"], said
