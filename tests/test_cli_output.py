@@ -321,3 +321,23 @@ def test_in_a_pipe_nothing_is_cut() -> None:
     lines = done.stdout.splitlines()
     assert not any(line.endswith("…") for line in lines) and max(map(len, lines)) > 100
     assert any(line.endswith("…") for line in devsim("ctl", "names", "sers", columns=80).stdout.splitlines())
+
+
+def _reader_gone(*args: str) -> subprocess.Popen[bytes]:
+    """``devsim ctl ARGS`` whose stdout's reader has gone before the first line (``| head``)."""
+    proc = subprocess.Popen([sys.executable, "-m", "devsim", "ctl", *args], cwd=ROOT, env=devsim_env(),
+                            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdout is not None
+    proc.stdout.close()
+    return proc
+
+
+def test_a_watch_whose_reader_goes_away_ends_quietly_with_1(addr: str) -> None:
+    """`devsim ctl watch sers | head -3` ends as every command does when its reader goes (status 1,
+    nothing on stderr: docs/cli.md).  It said 'control connection to … failed: [Errno 32] Broken
+    pipe', status 5 (UNREACHABLE), the stdout's EPIPE taken for the connection's.  (`ctl capture`
+    prints through the same loop, ``devsim.cli.ctl._print_each``.)"""
+    with _reader_gone("--control", addr, "watch", "sers") as proc:  # (the first sample: every value at once)
+        err = proc.stderr.read() if proc.stderr is not None else b""
+    assert (proc.returncode, err) == (exits.FAILED, b"")
+

@@ -72,6 +72,30 @@ def _call(ctx: click.Context, *requests: rq.ControlRequest, tail: Callable[[Any]
     click.echo(text)
 
 
+def _print_each(stream: Any, line: Callable[[Any], str], broken: Callable[[Exception], click.ClickException]) -> None:
+    """Print ``line(item)`` for each item of a ``watch`` or ``capture`` stream until it ends or
+    Ctrl-C (status 0); an error of the stream is ``broken(exc)``.  A stdout whose reader went away
+    (``| head -3``) is left to click, status 1 and nothing on stderr as for every command
+    (docs/cli.md): printed inside the stream's ``try``, its EPIPE was said as the connection's,
+    'control connection to … failed: [Errno 32] Broken pipe', status 5."""
+    from devsim.runtime.client import ControlError
+
+    items = iter(stream)
+    try:
+        while True:
+            try:
+                item = next(items)
+            except StopIteration:
+                return
+            except ControlError as exc:
+                raise exits.control_error(exc) from None
+            except (OSError, ValueError) as exc:
+                raise broken(exc) from None
+            click.echo(line(item))
+    except KeyboardInterrupt:
+        sys.exit(0)
+
+
 def _broken(ctx: click.Context, addr: str, exc: Exception) -> exits.Unreachable:
     """A connection that broke during a call: over a fleet the client's own words already name
     the broker ("fleet broker mqtt://… lost (…)"), else the control address is named."""
@@ -287,7 +311,6 @@ def ctl_watch(device: str | None, names: tuple[str, ...], as_json: bool, period:
     and end, faults, errors, host connects) as they happen, one line each, until Ctrl-C or the
     simulator stops: '12.300 sers axis.position 1234.0'.  With --fleet, over the broker (JSON
     lines add the serving 'process'); without DEVICE, every device of the fleet."""
-    from devsim.runtime.client import ControlError
     from devsim.runtime.watch_stream import describe
 
     ctx = click.get_current_context()
@@ -298,15 +321,10 @@ def ctl_watch(device: str | None, names: tuple[str, ...], as_json: bool, period:
     say = functools.partial(click.echo, err=True)
     told = {"on_offline": say, "on_back": say} if fleet else {}  # a member went offline, or is back
     stream = client.watch(device, list(names) or None, period=period, **told)
+    as_json = as_json or present.wants_json(ctx)
     try:
-        for item in stream:
-            click.echo(json.dumps(item, ensure_ascii=False) if as_json or present.wants_json(ctx) else describe(item))
-    except KeyboardInterrupt:
-        sys.exit(0)
-    except ControlError as exc:
-        raise exits.control_error(exc) from None
-    except (OSError, ValueError) as exc:
-        raise _broken(ctx, addr, exc) from None
+        _print_each(stream, lambda item: json.dumps(item, ensure_ascii=False) if as_json else describe(item),
+                    lambda exc: _broken(ctx, addr, exc))
     finally:
         stream.close()
         client.close()
@@ -336,18 +354,17 @@ def ctl_capture(device: str, port: str, as_json: bool) -> None:
         raise exits.control_error(exc) from None
     except OSError as exc:
         raise exits.Unreachable(f"cannot connect to {addr}: {exc.strerror or exc}") from None
+    as_json = as_json or present.wants_json(ctx)
+
+    def line(item: dict[str, Any]) -> str:
+        if as_json:
+            return json.dumps(item)
+        if item["type"] == "dropped":
+            return f"{item['t']:.6f} -- {item['count']} chunks dropped (this reader was too slow)"
+        data = bytes.fromhex(item["data"])
+        return f"{item['t']:.6f} {item['dir']} {data.hex(' ')} {render(data)}"
+
     try:
-        for item in stream:
-            if as_json or present.wants_json(ctx):
-                click.echo(json.dumps(item))
-            elif item["type"] == "dropped":
-                click.echo(f"{item['t']:.6f} -- {item['count']} chunks dropped (this reader was too slow)")
-            else:
-                data = bytes.fromhex(item["data"])
-                click.echo(f"{item['t']:.6f} {item['dir']} {data.hex(' ')} {render(data)}")
-    except KeyboardInterrupt:
-        sys.exit(0)
-    except (OSError, ValueError) as exc:
-        raise exits.Unreachable(f"control connection to {addr} failed: {exc}") from None
+        _print_each(stream, line, lambda exc: exits.Unreachable(f"control connection to {addr} failed: {exc}"))
     finally:
         stream.close()
