@@ -8,7 +8,8 @@ import sys
 import click
 
 from devsim.cli import exits
-from devsim.cli.options import FLOAT
+from devsim.cli.options import AsciiFloatRange
+from devsim.runtime.requests import MIN_WATCH_PERIOD
 
 __all__ = ["monitor"]
 
@@ -19,16 +20,14 @@ __all__ = ["monitor"]
     help="Control address (unix:/path.sock or [HOST:]PORT) or name of the running plant; default: the only one"
     " running ('devsim ps'); env DEVSIM_CONTROL.",
 )
-@click.option("--period", type=FLOAT, default=0.1, show_default=True, metavar="SECONDS",
-              help="How often values are sampled, in device time.")
+@click.option("--period", type=AsciiFloatRange(min=MIN_WATCH_PERIOD, finite=True), default=0.1, show_default=True,
+              metavar="SECONDS", help=f"How often values are sampled, in device time (at least {MIN_WATCH_PERIOD:g}).")
 def monitor(addr: str | None, period: float) -> None:
     """A live view of every device: state, display, faults, axes with sparklines, inputs (press
     to flip) and outputs, the last telegrams per port; f: fault menu, a/A: advance virtual time,
     q: quit.  Needs the extra [monitor] (textual)."""
     from devsim.runtime.control import ControlAddressError
 
-    if not period > 0:
-        raise click.UsageError("--period: must be positive")
     try:
         from devsim.observe.monitor import MonitorApp
     except ImportError as exc:
