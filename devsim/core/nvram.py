@@ -232,6 +232,11 @@ class NonVolatileMemory:
         directory.mkdir(parents=True, exist_ok=True)
         return cls(directory / f"{name}.nvram.json", kind)
 
+    def __contains__(self, section: object) -> bool:
+        """Whether the image holds ``section`` (one stored as ``null`` too: ``get`` cannot tell it
+        from an absent one)."""
+        return section in self._image
+
     def get(self, section: str, default: Any = None) -> Any:
         if section not in self._image:
             return _copied(default)

@@ -66,6 +66,21 @@ def test_the_image_a_module_saved_loads_as_it_was_saved(tmp_path: Path, saved: d
         runtime.stop()
 
 
+def test_battery_ram_without_offsets_loads_them_as_zero(tmp_path: Path, saved: dict[str, Any]) -> None:
+    """No ``offsets`` section at all is battery RAM no save has written them to (a wiped one, or an
+    older devsim killed between the first save's writes of ``md`` and ``offsets``): all zero."""
+    image = copy.deepcopy(saved)
+    del image["offsets"]
+    _write(tmp_path, image)
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        m = runtime.add_device("ip247").model
+        assert [u.md_valid for u in m.units] == [True, True, False]
+        assert [(u.coords.zo_mode, u.coords.to_ba15, u.coords.to_prog) for u in m.units] == [(0, 0, 0)] * 3
+    finally:
+        runtime.stop()
+
+
 def _rekey(section: str, old: str, new: str) -> Callable[[dict[str, Any]], None]:
     def change(image: dict[str, Any]) -> None:
         image[section][new] = image[section].pop(old)
@@ -111,6 +126,10 @@ EDITS = {
     "md-null": _set("md", None),
     "offsets-list": _set("offsets", []),
     "offsets-false": _set("offsets", False),
+    # an axis missing from the offsets: every save() writes all three axes' (before: it loaded as 0)
+    "offsets-without-axis-1": lambda image: image["offsets"].pop("1"),
+    "offsets-without-axis-3": lambda image: image["offsets"].pop("3"),
+    "offsets-empty": _set("offsets", {}),
     "offsets-of-axis-as-object": _offsets_of_axis_1({"a": 0, "b": 2_000, "c": 0}),  # (refused before too)
     "offsets-of-axis-as-text": _offsets_of_axis_1("abc"),  # (refused before too)
     # an empty SYS-ID or program memory: the module always writes three bytes and both entries

@@ -80,7 +80,7 @@ class Ip247Module(Model):
         UnfitMemory naming the file, as for the other kinds' memories."""
         if self.config.get("battery_ok", True) is False:
             self.nvram.wipe()
-        stored = "sys_id" in self.nvram.sections()  # (absent: the config's; null is no SYS-ID the module writes)
+        stored = "sys_id" in self.nvram  # (absent: the config's; null is no SYS-ID the module writes)
         ident = self.nvram.get("sys_id")
         default = self.config.get("sys_id") or {}
         if stored and (type(ident) is not list or len(ident) != 3
@@ -96,9 +96,16 @@ class Ip247Module(Model):
             if words is not None:  # (save() writes no empty record: [] is machine_data.stored's to refuse)
                 unit.load_md(machine_data.stored(words, axis=unit.number, sys_module=self.channel.sys_id[0]),
                              list(words), first=False)
+        # every save() wrote the offsets of all three axes (git log -p since the kind was added), so
+        # an axis missing from a stored section is a hand-edited or damaged file: refused, where it
+        # loaded as 0 before; no section at all is battery RAM no save() has written yet (a wiped
+        # one, or an older devsim killed between the first save's writes of md and offsets)
         offsets = numbered(self.nvram.get("offsets", {}), "offsets of axis", AXES)
+        stored_offsets = "offsets" in self.nvram
         for unit in self.units:
-            record = offsets.get(unit.number, [0, 0, 0])
+            record = offsets.get(unit.number) if stored_offsets else [0, 0, 0]
+            if record is None:
+                raise ValueError(f"the offsets of axis {unit.number} are missing: the module stores all three axes'")
             if type(record) is not list or len(record) != 3:
                 raise ValueError(f"the offsets of axis {unit.number} {record!r:.40} are no three as the module stores")
             zo, to, tp = record
