@@ -23,7 +23,7 @@ from __future__ import annotations
 import fcntl
 import os
 import re
-from collections.abc import Container
+from collections.abc import Collection, Container
 from typing import TYPE_CHECKING, Any
 
 import msgspec
@@ -35,7 +35,7 @@ if TYPE_CHECKING:  # imported where used: a device without a state dir needs nei
 
 __all__ = [
     "KIND_KEY", "UNUSABLE", "MemoryInUse", "NonVolatileMemory", "OtherKindsMemory", "PoisonedMemory", "UnfitMemory",
-    "check_name", "numbered", "stored_hex", "stored_key", "stored_whole",
+    "check_name", "numbered", "stored_hex", "stored_key", "stored_object", "stored_whole",
 ]
 
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,127}$")
@@ -82,6 +82,16 @@ def stored_whole(value: object, what: str, numbers: Container[int] | None = None
     refuses the memory (:class:`UnfitMemory`, naming the file)."""
     if type(value) is not int or numbers is not None and value not in numbers:
         raise ValueError(f"stored {what} {value!r:.40} is none the device stores")
+    return value
+
+
+def stored_object(value: object, what: str, keys: Collection[str], optional: Collection[str] = ()) -> dict[str, Any]:
+    """``value`` if it is a JSON object of the entries a device's save writes: all of ``keys``, and
+    any of ``optional`` (one an older devsim did not write yet), nothing else.  Anything else is a
+    ValueError naming ``what``: null, ``[]``, ``0``, ``""`` or ``{}`` read as nothing stored, so a
+    damaged section loaded as the factory's data without a word."""
+    if type(value) is not dict or not set(keys) <= value.keys() or not value.keys() <= {*keys, *optional}:
+        raise ValueError(f"stored {what} {value!r:.40} is not what the device writes (an object of {', '.join(keys)})")
     return value
 
 

@@ -477,9 +477,12 @@ def test_a_stored_program_row_no_download_makes_refuses_the_memory(tmp_path: Any
 
     from devsim.runtime import Runtime
 
-    (tmp_path / "gms96.nvram.json").write_text(json.dumps({"flash": {"programs": {"0": [["A", 10000, 0, 0, 1], row]}}}))
+    def flash(rows: list[Any]) -> str:  # (as the card's save writes it: no PLC program)
+        return json.dumps({"flash": {"programs": {"0": rows}, "plc": None, "plc_frames": []}})
+
+    (tmp_path / "gms96.nvram.json").write_text(flash([["A", 10000, 0, 0, 1], row]))
     refused_memory(tmp_path, "gms96", match=r"\(ValueError: stored program row .* is no command the card queues\)")
-    (tmp_path / "gms96.nvram.json").write_text(json.dumps({"flash": {"programs": {"0": [["A", 10000, 0, 0, 1]]}}}))
+    (tmp_path / "gms96.nvram.json").write_text(flash([["A", 10000, 0, 0, 1]]))
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:
         runtime.add_device("gms96")

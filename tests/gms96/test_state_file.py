@@ -126,6 +126,70 @@ def test_a_stored_value_the_card_never_writes_refuses_the_memory(tmp_path: Path,
     refused_memory(tmp_path, "gms96", match=r"\(ValueError: stored .* is none the device stores\)")
 
 
+FALSY = [{}, [], None, 0, "", False]
+
+
+def _entry(section: str, key: str, value: Any) -> Any:
+    def change(image: dict[str, Any]) -> None:
+        image[section][key] = value
+    return change
+
+
+def _section(section: str, value: Any) -> Any:
+    return lambda image: image.__setitem__(section, value)
+
+
+def _without(section: str, key: str) -> Any:
+    return lambda image: image[section].pop(key)
+
+
+# what each save writes: eeprom (s85;170) M, B, S, o, every N and both N8; static all 160 data bytes
+# and MB18; offsets the table (maybe empty) and the machine zero; flash the programs (maybe none),
+# the PLC image (null without one) and its frames (an older devsim wrote no frames)
+SECTION_EDITS: dict[str, Any] = {
+    **{f"{section}-{value!r}": _section(section, value)
+       for section in ("eeprom", "static", "offsets", "flash") for value in FALSY},
+    **{f"eeprom-N-{value!r}": _entry("eeprom", "N", value) for value in FALSY},
+    **{f"eeprom-N8-{value!r}": _entry("eeprom", "N8", value) for value in FALSY},
+    **{f"static-data-{value!r}": _entry("static", "data", value) for value in FALSY},
+    "static-data-159-bytes": lambda image: image["static"]["data"].pop(),
+    **{f"offsets-table-{value!r}": _entry("offsets", "table", value) for value in FALSY if value != {}},
+    **{f"flash-programs-{value!r}": _entry("flash", "programs", value) for value in FALSY if value != {}},
+    "flash-plc-empty": lambda image: image["flash"].update(plc="", plc_frames=[]),
+    "flash-plc-frames-null": _entry("flash", "plc_frames", None),
+    **{f"{section}-without-{key}": _without(section, key) for section, keys in (
+        ("eeprom", "MBSoN"), ("static", ("data", "mb18")), ("offsets", ("table", "machine_zero")),
+        ("flash", ("programs", "plc"))) for key in ([*keys, "N8"] if section == "eeprom" else keys)},
+    **{f"{section}-extra-entry": _entry(section, "x", 0) for section in ("eeprom", "static", "offsets", "flash")},
+}
+
+
+@pytest.mark.parametrize("edit", list(SECTION_EDITS))
+def test_a_section_the_card_never_writes_refuses_the_memory(tmp_path: Path, saved: dict[str, Any], edit: str) -> None:
+    """(Before: an empty or falsy section or entry, ``{}``, ``[]``, null, ``0``, ``""``, read as none
+    stored, so a damaged file started the card on factory data without a word; a missing entry
+    took a default and an extra one was ignored.)"""
+    image = copy.deepcopy(saved)
+    SECTION_EDITS[edit](image)
+    path = _write(tmp_path, image)
+    text = path.read_text("utf-8")
+    refused_memory(tmp_path, "gms96", match="this memory image does not fit the kind 'gms96'")
+    assert path.read_text("utf-8") == text
+
+
+def test_a_memory_no_save_reached_starts_on_the_factory_data(tmp_path: Path, saved: dict[str, Any]) -> None:
+    """No section at all (a wiped memory, a card that never saved) is what the card writes: defaults."""
+    _write(tmp_path, {"devsim-kind": saved["devsim-kind"]})
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        runtime.add_device("gms96")
+        card = runtime.device("gms96").model
+        assert runtime.read("gms96", "programs") == {} and runtime.read("gms96", "plc.frames") == []
+        assert (card.coordinates.zero_table, card.coordinates.machine_zero, card.image.markers[18]) == ({}, 0, 0)
+    finally:
+        runtime.stop()
+
+
 @pytest.mark.parametrize(("table", "data"), [({"55": "٣"}, None), ({"55": 2**23}, None), ({"55": -2**23 - 1}, None),
                                              ({}, [1, 2, 256]), ({}, [-1]), ({}, ["٣"]), ({}, [0] * 161)])
 def test_a_stored_offset_or_data_byte_the_card_never_writes_refuses_the_memory(

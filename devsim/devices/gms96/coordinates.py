@@ -9,7 +9,7 @@ offset.  The zero-offset table and the machine zero are non-volatile.
 from __future__ import annotations
 
 from devsim.core.axis import Axis
-from devsim.core.nvram import NonVolatileMemory, numbered, stored_whole
+from devsim.core.nvram import NonVolatileMemory, numbered, stored_object, stored_whole
 from devsim.devices.gms96 import tables
 from devsim.devices.gms96.codec import S24_MAX, S24_MIN
 
@@ -43,13 +43,17 @@ class Coordinates:
         """The offsets from memory, G53 G90, no G92/G96; ``reset_origin``: machine 0 := here."""
         if reset_origin:
             self.origin = self.axis.position()
-        offs = self.nvram.get("offsets", {}) or {}
+        # what save() writes: the table (maybe empty) and the machine zero (null, {} or a table of
+        # null read as none stored before)
+        offs = {"table": {}, "machine_zero": 0}  # (no zero point entered yet, or a wiped memory)
+        if "offsets" in self.nvram:
+            offs = stored_object(self.nvram.get("offsets"), "offsets", offs)
         # what G54..G69 / G53 with P3 = 1 store: a zero point 54 … 69 (its key as str(n)) and a
         # P2 of the 24-bit telegram; anything else refuses the memory at the start (UnfitMemory):
         # int() took '٥٥', '+55', 1.5, true and "3" as they were, and the key '-55' or 10**30
         self.zero_table = {zp: stored_whole(v, "zero offset", P2_VALUES)
-                           for zp, v in numbered(offs.get("table") or {}, "zero point", ZERO_POINTS).items()}
-        self.machine_zero = stored_whole(offs.get("machine_zero", 0), "machine zero", P2_VALUES)
+                           for zp, v in numbered(offs["table"], "zero point", ZERO_POINTS).items()}
+        self.machine_zero = stored_whole(offs["machine_zero"], "machine zero", P2_VALUES)
         self.g_relative = False
         self.active_zero = None
         self.tool_active = True

@@ -42,7 +42,7 @@ class Feed:
             # §3.8.16), the activity 0 or 1; else the start refuses the memory (UnfitMemory).
             # int() took "٣", "3", 1.7 and true, and an M of 10**30 loaded unclamped.
             self.M, self.B, self.S = (tables.clamp_setting(name, stored_whole(eeprom[name], name)) for name in "MBS")
-            self.override_on = bool(stored_whole(eeprom.get("o", 1), "override activity", (0, 1)))
+            self.override_on = bool(stored_whole(eeprom["o"], "override activity", (0, 1)))
         self.eeprom_M = self.M
         self.f = self.M
         self.f_frac = 0

@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Container
 from typing import Any
 
-from devsim.core.nvram import NonVolatileMemory, numbered, stored_hex, stored_whole
+from devsim.core.nvram import NonVolatileMemory, numbered, stored_hex, stored_object, stored_whole
 from devsim.devices.gms96.codec import S24_MAX, S24_MIN
 
 __all__ = ["Flash"]
@@ -42,10 +42,13 @@ class Flash:
         """The programs as downloads stored them; a program number a download never gives (0 … 99,
         written as ``str(n)``: not ``'٣'``, ``'03'``, ``'+3'``, ``'-3'``) is a ValueError, and the
         start refuses the memory naming its file (spec §3.8.13: programs 0 … 99)."""
-        flash = self.nvram.get("flash", {}) or {}
+        flash: dict[str, Any] = {"programs": {}, "plc": None}  # (nothing downloaded yet, or a wiped memory)
+        if "flash" in self.nvram:  # what save() writes (null, {} or programs of null read as none before)
+            flash = stored_object(self.nvram.get("flash"), "FLASH", flash, optional=("plc_frames",))
         self.programs = {number: [_queued(row, self.queued) for row in v]
-                         for number, v in numbered(flash.get("programs") or {}, "CNC program", PROGRAMS).items()}
-        self.plc_image, self.plc_frames = _plc(flash.get("plc"), flash.get("plc_frames"))
+                         for number, v in numbered(flash["programs"], "CNC program", PROGRAMS).items()}
+        image = flash["plc"]  # (an older devsim wrote no frames: the image was one)
+        self.plc_image, self.plc_frames = _plc(image, flash.get("plc_frames", [len(image) // 2] if type(image) is str else []))
         self.download = None
         self.cnc_storage_error = False  # the programs in the FLASH are the ones that fitted
         self.write_error = False
@@ -128,13 +131,11 @@ def _plc(image: Any, frames: Any) -> tuple[str | None, list[int]]:
     Another (a hand-edited state file) is a ValueError, so that the start refuses the memory
     naming its file; before, an image of true, 5 or a list failed every read of ``plc``
     and ``state`` with TypeError, and "x" or frames that are not its bytes were served."""
-    if frames is None and image is not None and type(image) is str:  # (an older devsim wrote no frames)
-        frames = [len(image) // 2]
     if image is None:
-        if frames not in (None, []):
+        if frames != []:
             raise ValueError(f"stored PLC frames {frames!r:.40} without a PLC image")
         return None, []
-    if stored_hex(image) is None:
+    if not stored_hex(image):  # (nor "": an empty download leaves no program)
         raise ValueError(f"stored PLC image {image!r:.40} is no bytes a download stores")
     if type(frames) is not list or sum(stored_whole(f, "PLC frame length", _FRAME) for f in frames) != len(image) // 2:
         raise ValueError(f"stored PLC frames {frames!r:.40} are not the {len(image) // 2} bytes of its image")

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from devsim.core.nvram import NonVolatileMemory, stored_whole
+from devsim.core.nvram import NonVolatileMemory, stored_object, stored_whole
 from devsim.devices.gms96.feed import Feed
 from devsim.devices.gms96.image import STATIC_BYTES, ProcessImage
 from devsim.devices.gms96.params import NParameters
@@ -39,7 +39,10 @@ class Memory:
         """Power-on: the parameters and speeds from the EEPROM, the static data; True if the
         memory could not be read (the NV error of T3;4)."""
         corrupt = bool(self.nvram.corrupt)
-        eeprom = self.nvram.get("eeprom")
+        eeprom = None  # (none: r1 erased it, or s85;170 never ran)
+        if "eeprom" in self.nvram:  # what s85;170 writes, every entry (null, {} or 0 read as none before)
+            saved = {**self.feed.eeprom(), **self.params.eeprom()}
+            eeprom = stored_object(self.nvram.get("eeprom"), "EEPROM", saved)
         self.params.power_on(eeprom)
         self.feed.power_on(eeprom)
         return corrupt
@@ -47,13 +50,17 @@ class Memory:
     def load_static(self) -> None:
         """DW0..DW79 and MB18 as :meth:`save_static` stores them: up to 160 bytes, a tool number
         0 … 127; anything else refuses the memory at the start (UnfitMemory): ``int() & 0xFF``
-        took "٣", 1.5 and true, and made 300 or -5 another byte."""
-        st = self.nvram.get("static", {}) or {}
-        data = st.get("data") or []
-        if type(data) is not list or len(data) > STATIC_BYTES:
+        took "٣", 1.5 and true, and made 300 or -5 another byte.  A stored section has both entries
+        and all 160 bytes, as every save wrote them (null, {} or a data of [] read as none before)."""
+        if "static" not in self.nvram:  # (no save yet, or a wiped memory)
+            self.image.markers[18] = 0
+            return
+        st = stored_object(self.nvram.get("static"), "static data", ("data", "mb18"))
+        data = st["data"]
+        if type(data) is not list or len(data) != STATIC_BYTES:
             raise ValueError(f"stored static data {data!r:.40} is no {STATIC_BYTES} bytes")
         self.image.restore_static([stored_whole(value, "data byte", BYTES) for value in data])
-        self.image.markers[18] = stored_whole(st.get("mb18", 0), "tool number MB18", range(0x80))
+        self.image.markers[18] = stored_whole(st["mb18"], "tool number MB18", range(0x80))
 
     def save_eeprom(self) -> None:
         """``s85;170``: M, S, B, all N and the override activity (manual §2.3.1 s)."""

@@ -68,10 +68,16 @@ class NParameters(Parameters):
             # the number as s85;170 writes it (str(n)), else the memory is refused: int() took
             # '٣٩', '+39', ' 39', '039' and '3_9' for N39 (a second N39 beside "39").
             # [SIM-CHOICE] A number no N parameter has is ignored, as before.
-            for index, value in numbered(eeprom.get("N") or {}, "N parameter").items():
+            # s85;170 writes every N parameter and both limits of N8 (an empty N or N8, or null,
+            # read as none saved before)
+            stored = numbered(eeprom["N"], "N parameter")
+            if not stored or type(eeprom["N8"]) is not list or len(eeprom["N8"]) != 2:
+                raise ValueError(f"stored N parameters {eeprom['N']!r:.30} and N8 {eeprom['N8']!r:.30} are not"
+                                 " what s85;170 writes")
+            for index, value in stored.items():
                 if index in self.table:
                     self.values[index] = clamp_n(index, _whole(value), stepper=self.stepper)
-            lower, upper = eeprom.get("N8", self.n8)
+            lower, upper = eeprom["N8"]
             self.n8 = [clamp_n(8, _whole(lower)), clamp_n(8, _whole(upper))]
 
     def defaults(self) -> None:
