@@ -281,3 +281,25 @@ def test_a_plc_image_an_older_devsim_stored_without_its_frames_loads_as_one_fram
         assert runtime.state("gms96")["plc"]["image_bytes"] == 15
     finally:
         runtime.stop()
+
+
+@pytest.mark.parametrize("config", [{"max_programs": 3}, {"max_total_commands": 4}, {"plc": {"flash_bytes": 14}}])
+def test_a_flash_beyond_the_configured_memory_refuses_the_memory(tmp_path: Path, saved: dict[str, Any],
+                                                                config: dict[str, Any]) -> None:
+    """[SIM-CHOICE] The card's FLASH (programs 0 and 3, 5 commands, a PLC image of 15 bytes) on a card
+    configured to hold less: refused at the start (before: program 3 loaded on a card keeping programs
+    0 … 2, more commands or PLC bytes than any download could store there)."""
+    path = _write(tmp_path, saved)
+    text = path.read_text("utf-8")
+    refused_memory(tmp_path, "gms96", config=config, match=r"\(ValueError: the stored FLASH holds more than the configured")
+    assert path.read_text("utf-8") == text
+
+
+def test_a_flash_filling_the_configured_memory_loads(tmp_path: Path, saved: dict[str, Any]) -> None:
+    _write(tmp_path, saved)
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        runtime.add_device("gms96", None, {"max_programs": 4, "max_total_commands": 5, "plc": {"flash_bytes": 15}})
+        assert runtime.read("gms96", "programs") == {0: 2, 3: 3} and runtime.read("gms96", "plc.frames") == [9, 6]
+    finally:
+        runtime.stop()

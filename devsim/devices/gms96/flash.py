@@ -20,10 +20,14 @@ PROGRAMS = range(100)
 class Flash:
     """Programs and the PLC image of one card, kept in its non-volatile memory (spec §4.8)."""
 
-    def __init__(self, nvram: NonVolatileMemory, queued: Container[str]) -> None:
+    def __init__(self, nvram: NonVolatileMemory, queued: Container[str], *, max_programs: int = 100,
+                 max_commands: int = 8192, plc_bytes: int = 32768) -> None:
         self.nvram = nvram
         #: the letters of the queued commands: what a stored program's rows may be (power_on)
         self.queued = queued
+        #: what the configured FLASH holds (``max_programs``, ``max_total_commands``,
+        #: ``plc.flash_bytes``): no download stores more, and power_on refuses a memory holding more
+        self.max_programs, self.max_commands, self.plc_bytes = max_programs, max_commands, plc_bytes
         self.programs: dict[int, Program] = {}
         self.plc_image: str | None = None  # hex of the downloaded ``a`` frames
         self.plc_frames: list[int] = []  # their lengths
@@ -49,9 +53,24 @@ class Flash:
                          for number, v in numbered(flash["programs"], "CNC program", PROGRAMS).items()}
         image = flash["plc"]  # (an older devsim wrote no frames: the image was one)
         self.plc_image, self.plc_frames = _plc(image, flash.get("plc_frames", [len(image) // 2] if type(image) is str else []))
+        self._fits()
         self.download = None
         self.cnc_storage_error = False  # the programs in the FLASH are the ones that fitted
         self.write_error = False
+
+    def _fits(self) -> None:
+        """[SIM-CHOICE] Programs or a PLC image beyond what the configured FLASH holds (a state file
+        of a card configured larger, or hand-edited): what a card does at power-on with memory it
+        cannot hold is in no manual, so the start refuses the memory (UnfitMemory, naming the file)
+        rather than keep programs no download could have stored (spec §3.8.13, §3.8.24)."""
+        beyond = [number for number in self.programs if number >= self.max_programs]
+        commands = sum(len(rows) for rows in self.programs.values())
+        plc = sum(self.plc_frames)
+        if beyond or commands > self.max_commands or plc > self.plc_bytes:
+            raise ValueError(
+                f"the stored FLASH holds more than the configured card keeps: programs {sorted(self.programs)} of"
+                f" max_programs {self.max_programs}, {commands} commands of max_total_commands {self.max_commands},"
+                f" a PLC image of {plc} bytes of plc.flash_bytes {self.plc_bytes}")
 
     def _writable(self) -> bool:
         """Whether an erase or write of the FLASH succeeds now (not while the ``flash_error`` fault

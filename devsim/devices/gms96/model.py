@@ -85,7 +85,9 @@ class Gms96Card(Model):
         self.params = NParameters(factory=self.cfg.params, stepper=stepper, out_of_range=self.cfg.out_of_range)
         self.feed = Feed()
         self.coordinates = Coordinates(self.axis, self.nvram, int(self.cfg.tool_offset))
-        self.flash = Flash(self.nvram, QUEUED_COMMANDS)
+        cfg = self.cfg
+        self.flash = Flash(self.nvram, QUEUED_COMMANDS, max_programs=cfg.max_programs,
+                           max_commands=cfg.max_total_commands, plc_bytes=cfg.plc.flash_bytes)
         self.memory = Memory(self.nvram, self.params, self.feed, self.image, self.record_event)
         self.indexer = Indexer(
             clock=clock, axis=self.axis, feed=self.feed, params=self.params, stage=self.stage, image=self.image,
