@@ -93,6 +93,23 @@ def test_a_block_number_twice_in_a_program_refuses_the_memory(tmp_path: Path, sa
     refused_memory(tmp_path, "poselesta", match=r"\(ValueError: stored program P03 holds a block number twice\)")
 
 
+def test_programs_beyond_the_configured_memory_refuse_the_memory(tmp_path: Path, saved: dict[str, Any]) -> None:
+    """[SIM-CHOICE] The control's 5 stored blocks (P20: 3, P03: 2) on a control configured with
+    ``max_blocks_total`` 4 are refused at the start (before: they loaded, more than any read-in or
+    entry stores there); with 5 they load."""
+    path = _write(tmp_path, saved)
+    text = path.read_text("utf-8")
+    refused_memory(tmp_path, "poselesta", config={"max_blocks_total": 4},
+                   match=r"\(ValueError: the stored programs hold 5 blocks, more than the configured max_blocks_total 4\)")
+    assert path.read_text("utf-8") == text
+    runtime = Runtime(virtual=True, state_dir=tmp_path).start()
+    try:
+        runtime.add_device("poselesta", None, {"max_blocks_total": 5})
+        assert runtime.read("poselesta", "programs") == [3, 20]
+    finally:
+        runtime.stop()
+
+
 def test_devsim_run_on_a_state_file_with_another_scripts_digits_stops_naming_it(
         tmp_path: Path, saved: dict[str, Any]) -> None:
     """A real ``devsim run poselesta --pty --state-dir``: parameter '٤١' stops the start in one

@@ -65,6 +65,13 @@ class ProgramMemory:
         nvram = self._nvram
         self.programs = {number: _blocks(number, blocks)
                          for number, blocks in numbered(nvram.get("programs") or {}, "program", NC_PROGRAMS).items()}
+        # [SIM-CHOICE] more blocks than the configured memory holds (a file of a control configured
+        # larger, or hand-edited): no manual says what a control does at power-on with programs it
+        # cannot hold, and no read-in or entry stores them, so the start refuses the memory
+        total = sum(len(blocks) for blocks in self.programs.values())
+        if total > self._max_blocks:
+            raise ValueError(f"the stored programs hold {total} blocks, more than the configured"
+                             f" max_blocks_total {self._max_blocks}")
         self.protected = {stored_whole(p, "protected program", range(99)) for p in nvram.get("protected") or []}
         if not self._protection:  # [SIM-CHOICE] a POS III's protection in the memory of a control now
             self.protected = set()  # configured as a POS II (no program lock): stays stored, not enforced
