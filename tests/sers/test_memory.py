@@ -19,7 +19,8 @@ from pathlib import Path
 import pytest
 import serial
 
-from tests.sers.conftest import Host, Plant
+from tests.sers.conftest import Host, Plant, start_plant
+from tests.support.memory import refused_memory
 
 ROOT = Path(__file__).resolve().parents[2]
 DEG = 12800 / 360
@@ -278,6 +279,53 @@ def test_new_deletes_the_old_program(plant_factory, tmp_path) -> None:
     power_cycle(plant)
     assert listing(host) == [(1, "OFF")]
     assert query(host, "P1122") == "1023"
+
+
+def _stored_program(state_dir: Path, options: list[str], lines: int) -> dict:
+    """The state file of a drive (``options``) after ``lines`` lines of ten 6-byte statements typed
+    through its port (G-MEM)."""
+    plant = start_plant([{"options": options}], state_dir=state_dir)
+    host = plant.host
+    host.ask("#NEW\r")
+    for _ in range(lines):
+        assert host.ask("#" + " ".join(["O1=1"] * 10) + "\r").endswith(b"\npgm\n\r")
+    host.ask("#QUIT\r")
+    plant.host.close()
+    plant.runtime.stop()
+    return json.loads((state_dir / "sers.nvram.json").read_text("utf-8"))
+
+
+@pytest.mark.manual("§4.4", "program memory 2 KByte standard, 8 KByte with option P8")
+def test_a_program_longer_than_the_drives_memory_refuses_the_memory(plant_factory, tmp_path) -> None:
+    """[SIM-CHOICE] 35 lines of ten statements (2100 bytes) stored by a drive with option P8, then
+    a drive without it on that file: refused at the start, the file left as it is (before: option
+    P8 left the memory at 2 KB, so errno 5 refused the 35th line; and a program longer than the
+    memory loaded); with P8 it loads, 8 KB less the program free (P1122 in words)."""
+    _stored_program(tmp_path, ["P8"], 35)
+    text = (tmp_path / "sers.nvram.json").read_text("utf-8")
+    refused_memory(tmp_path, "sers", match=r"\(ValueError: the stored program of 2100 bytes is longer than the"
+                                           r" drive's 2048-byte program memory")
+    assert (tmp_path / "sers.nvram.json").read_text("utf-8") == text
+    plant = plant_factory({"options": ["P8"]}, state_dir=tmp_path)
+    assert query(plant.host, "P1122") == str((8192 - 2100) // 2)
+
+
+@pytest.fixture(scope="module")
+def typed(tmp_path_factory: pytest.TempPathFactory) -> dict:
+    """The state file of a drive with one program line typed through its port."""
+    return _stored_program(tmp_path_factory.mktemp("sers-typed"), [], 1)
+
+
+@pytest.mark.parametrize("program", [None, {}, [], 0, "", {"lines": None}, {"lines": {}}, {"lines": [[]]},
+                                     {"lines": [["O1=1"], [5]]}, {"lines": [["O1=1"], "E"]},
+                                     {"lines": [["O1=1"]], "x": 0}])
+def test_a_program_the_drive_never_stores_refuses_the_memory(tmp_path, typed: dict, program: object) -> None:
+    """(Before: null, ``{}``, ``[]``, 0 or ``""`` read as no program, a number as the statement
+    ``'5'``, the text ``"E"`` as its one statement; an empty line listed nothing.)"""
+    image = {**typed, "program": program}
+    (tmp_path / "sers.nvram.json").write_text(json.dumps(image), "utf-8")
+    refused_memory(tmp_path, "sers", match=r"\(ValueError: stored program .* is not what the device writes"
+                                           r"|\(ValueError: the stored program lines")
 
 
 # ======================================================================================

@@ -47,7 +47,7 @@ from devsim.devices.sers.outputs import Outputs
 from devsim.devices.sers.parameters import SUPPLY_THRESHOLDS
 from devsim.devices.sers.params import SersParameters
 from devsim.devices.sers.power import PowerStage
-from devsim.devices.sers.program import ProgramMemory
+from devsim.devices.sers.program import PROGRAM_BYTES, PROGRAM_BYTES_P8, ProgramMemory
 from devsim.devices.sers.runahead import RunAhead
 from devsim.devices.sers.signals import SIGNALS
 from devsim.devices.sers.supply import SupplyMonitor
@@ -80,7 +80,8 @@ class SersDrive(Model):
         alive, booting, execution, outputs_changed = self._alive, self._booting, self._execution, self._outputs_changed
         self.params = params = SersParameters()
         self.memory = memory = ParameterMemory(self.nvram, params, cfg, self._p51_inc)
-        self.program = program = ProgramMemory(self.nvram)
+        self.program = program = ProgramMemory(
+            self.nvram, PROGRAM_BYTES_P8 if "P8" in self.cfg.options else PROGRAM_BYTES)  # (§4.4)
         self.master = master = MasterLink(clock, self.line_out)
         thresholds = SUPPLY_THRESHOLDS[self.cfg.supply_class]
         self.axis = Axis(clock, counts_per_rev=INC_PER_REV, index_offset=self.cfg.axis.index_offset, name=self.name)

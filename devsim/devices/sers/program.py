@@ -16,12 +16,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
-from devsim.core.nvram import NonVolatileMemory
+from devsim.core.nvram import NonVolatileMemory, stored_object
 from devsim.devices.sers.errors import SersError
 
-__all__ = ["ProgramMemory", "statement_cost"]
+__all__ = ["PROGRAM_BYTES", "PROGRAM_BYTES_P8", "ProgramMemory", "statement_cost"]
 
 SECTION = "program"
+#: the program memory: 2 KB standard, 8 KB with option P8 (§4.4; spec §4.9 G-MEM)
+PROGRAM_BYTES, PROGRAM_BYTES_P8 = 2048, 8192
 
 
 def statement_cost(text: str) -> int:
@@ -42,7 +44,7 @@ class ProgramMemory:
 
     __slots__ = ("nvram", "capacity", "editing", "position", "_statements", "_starts", "_joined")
 
-    def __init__(self, nvram: NonVolatileMemory, capacity: int = 2048) -> None:
+    def __init__(self, nvram: NonVolatileMemory, capacity: int = PROGRAM_BYTES) -> None:
         self.nvram = nvram
         self.capacity = capacity
         self.editing = False
@@ -58,12 +60,26 @@ class ProgramMemory:
         self.nvram.put(SECTION, {"lines": self.lines()})
 
     def reload(self) -> None:
-        stored = self.nvram.get(SECTION, {"lines": []}) or {"lines": []}
+        """The program as the drive stored it: its lines, each of one or more statement texts,
+        within the memory (§4.4).  Anything else is a ValueError, and the start refuses the memory
+        naming the file (UnfitMemory): before, null, ``{}`` or ``[]`` read as no program, a
+        number as the statement ``'5'``, and a program longer than the memory loaded
+        [SIM-CHOICE: what a drive does at power-on with a program its memory cannot hold is in
+        no manual; a file of a drive with option P8 on one without it is refused]."""
+        lines: object = []  # (no program stored yet, or a wiped memory)
+        if SECTION in self.nvram:
+            lines = stored_object(self.nvram.get(SECTION), "program", ("lines",))["lines"]
+        if type(lines) is not list or not all(type(line) is list and line and all(type(t) is str for t in line)
+                                              for line in lines):
+            raise ValueError(f"the stored program lines {lines!r:.40} are no lines of statements the drive stores")
         self._statements, self._starts = [], []
-        for line in stored.get("lines", []):
+        for line in lines:
             for index, text in enumerate(line):
-                self._statements.append(str(text))
+                self._statements.append(text)
                 self._starts.append(index == 0)
+        if self.used_bytes() > self.capacity:
+            raise ValueError(f"the stored program of {self.used_bytes()} bytes is longer than the drive's"
+                             f" {self.capacity}-byte program memory (option P8: {PROGRAM_BYTES_P8})")
         self.editing = False
         self._joined = False
         self.position = min(self.position, len(self._statements))
