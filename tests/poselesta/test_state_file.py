@@ -93,6 +93,27 @@ def test_a_block_number_twice_in_a_program_refuses_the_memory(tmp_path: Path, sa
     refused_memory(tmp_path, "poselesta", match=r"\(ValueError: stored program P03 holds a block number twice\)")
 
 
+# what each section's save writes: an object of every parameter; objects of programs and tools and
+# lists of protected and inch programs, any of them maybe empty; the tape as text
+NEVER_WRITTEN = [("params", value) for value in (None, {}, [], 0, "", False)] + [
+    (section, value) for section in ("programs", "tools") for value in (None, [], 0, "", False)] + [
+    (section, value) for section in ("protected", "inch_programs") for value in (None, {}, 0, "", False)]
+
+
+@pytest.mark.parametrize(("section", "value"), NEVER_WRITTEN)
+def test_a_section_the_control_never_writes_refuses_the_memory(tmp_path: Path, saved: dict[str, Any],
+                                                               section: str, value: Any) -> None:
+    """(Before: ``or {}`` / ``or []`` read null, 0, "" and the other kind of empty container as an
+    empty memory, and null or {} parameters as nothing saved or no parameter: the programs, tools,
+    protection or parameters gone without a word.)"""
+    image = copy.deepcopy(saved)
+    image[section] = value
+    path = _write(tmp_path, image)
+    text = path.read_text("utf-8")
+    refused_memory(tmp_path, "poselesta", match="this memory image does not fit the kind 'poselesta'")
+    assert path.read_text("utf-8") == text
+
+
 def test_programs_beyond_the_configured_memory_refuse_the_memory(tmp_path: Path, saved: dict[str, Any]) -> None:
     """[SIM-CHOICE] The control's 5 stored blocks (P20: 3, P03: 2) on a control configured with
     ``max_blocks_total`` 4 are refused at the start (before: they loaded, more than any read-in or

@@ -176,8 +176,10 @@ class MachineParameters(Parameters):
         """Power-on: the stored values, or the configured ones before anything was stored."""
         self.reset()
         stored = self._nvram.get("params")
-        if stored is None:
+        if "params" not in self._nvram:  # (nothing saved yet, or a wiped memory)
             self.values.update({int(k): float(v) for k, v in self._initial.items()})
+        elif not stored:  # (null or {} read as nothing saved, or as no parameter, before)
+            raise ValueError(f"the stored parameters {stored!r:.40} are none: a save writes every parameter")
         else:
             # a key is the number as save writes it (str(n)), else the memory is refused: int() took
             # '٤١', '４１', '+41', ' 41', '041' and '4_1' for P41 (a second P41 beside "41").

@@ -63,8 +63,10 @@ class ProgramMemory:
         as the control writes it (``str(n)``: not ``'٣'``, ``'03'``, ``'+3'``), a block number
         twice in a program) is a ValueError, and the start refuses the memory naming the file."""
         nvram = self._nvram
+        # each section as its save writes it, an object or a list (maybe empty); absent: nothing
+        # stored yet.  (``or {}`` read null, 0 and "" as an empty memory, without a word.)
         self.programs = {number: _blocks(number, blocks)
-                         for number, blocks in numbered(nvram.get("programs") or {}, "program", NC_PROGRAMS).items()}
+                         for number, blocks in numbered(nvram.get("programs", {}), "program", NC_PROGRAMS).items()}
         # [SIM-CHOICE] more blocks than the configured memory holds (a file of a control configured
         # larger, or hand-edited): no manual says what a control does at power-on with programs it
         # cannot hold, and no read-in or entry stores them, so the start refuses the memory
@@ -72,11 +74,11 @@ class ProgramMemory:
         if total > self._max_blocks:
             raise ValueError(f"the stored programs hold {total} blocks, more than the configured"
                              f" max_blocks_total {self._max_blocks}")
-        self.protected = {stored_whole(p, "protected program", range(99)) for p in nvram.get("protected") or []}
+        self.protected = {stored_whole(p, "protected program", range(99)) for p in _listed(nvram, "protected")}
         if not self._protection:  # [SIM-CHOICE] a POS III's protection in the memory of a control now
             self.protected = set()  # configured as a POS II (no program lock): stays stored, not enforced
-        self.inch_programs = {stored_whole(p, "inch program", NC_PROGRAMS) for p in nvram.get("inch_programs") or []}
-        self.tools = {t: _tool(t, v) for t, v in numbered(nvram.get("tools") or {}, "tool", range(1, 100)).items()}
+        self.inch_programs = {stored_whole(p, "inch program", NC_PROGRAMS) for p in _listed(nvram, "inch_programs")}
+        self.tools = {t: _tool(t, v) for t, v in numbered(nvram.get("tools", {}), "tool", range(1, 100)).items()}
 
     def _save(self) -> None:
         self._unsaved = False
@@ -214,6 +216,14 @@ class ProgramMemory:
             entry[key] = float(number_value)
         self.tools[number] = entry
         self._nvram.put("tools", {str(t): v for t, v in sorted(self.tools.items())})
+
+
+def _listed(nvram: NonVolatileMemory, section: str) -> list[Any]:
+    """A section the control stores as a list of numbers (``sorted(set)``, maybe empty)."""
+    stored = nvram.get(section, [])
+    if type(stored) is not list:
+        raise ValueError(f"the stored {section} {stored!r:.40} are no list of programs the control writes")
+    return stored
 
 
 def _blocks(program: int, stored: object) -> dict[int, Block]:
