@@ -4,6 +4,7 @@ program storage (T-20), simulator restarts and `kill -9` during EEPROM writes
 
 from __future__ import annotations
 
+import copy
 import json
 import os
 import queue
@@ -283,13 +284,16 @@ def test_new_deletes_the_old_program(plant_factory, tmp_path) -> None:
 
 def _stored_program(state_dir: Path, options: list[str], lines: int) -> dict:
     """The state file of a drive (``options``) after ``lines`` lines of ten 6-byte statements typed
-    through its port (G-MEM)."""
+    through its port (G-MEM), the parameters with R0..R5 and W saved (PSAVE with P1117=1) and the
+    position (POSSAVE)."""
     plant = start_plant([{"options": options}], state_dir=state_dir)
     host = plant.host
     host.ask("#NEW\r")
     for _ in range(lines):
         assert host.ask("#" + " ".join(["O1=1"] * 10) + "\r").endswith(b"\npgm\n\r")
     host.ask("#QUIT\r")
+    for command in ("#P1019=45 P1117=1 W=500\r", "#PSAVE\r", "#P51=90\r", "#POSSAVE\r"):
+        assert host.ask(command).endswith(b"\nok1\n\r")
     plant.host.close()
     plant.runtime.stop()
     return json.loads((state_dir / "sers.nvram.json").read_text("utf-8"))
@@ -326,6 +330,38 @@ def test_a_program_the_drive_never_stores_refuses_the_memory(tmp_path, typed: di
     (tmp_path / "sers.nvram.json").write_text(json.dumps(image), "utf-8")
     refused_memory(tmp_path, "sers", match=r"\(ValueError: stored program .* is not what the device writes"
                                            r"|\(ValueError: the stored program lines")
+
+
+def test_the_eeprom_a_drive_saved_loads_as_it_was_saved(plant_factory, tmp_path, typed: dict) -> None:
+    (tmp_path / "sers.nvram.json").write_text(json.dumps(typed), "utf-8")
+    plant = plant_factory({}, state_dir=tmp_path)
+    assert plant.read("display")["char"] != "7"
+    assert (query(plant.host, "P1019"), query(plant.host, "W"), query(plant.host, "P51")) == ("45U/min", "500°", "90°")
+
+
+@pytest.mark.parametrize(("section", "value"), [
+    ("params", None), ("params", {}), ("registers", None), ("registers", {}), ("registers", []),
+    ("registers", {"47": 0}), ("registers", "without 1085"), ("registers", "with 1086"), ("position", None),
+    ("position", "90"),
+])
+def test_an_eeprom_section_the_drive_never_writes_reads_as_a_checksum_error(
+        plant_factory, tmp_path, capfd, typed: dict, section: str, value: object) -> None:
+    """[SIM-CHOICE, as for a stored value PSAVE never writes] The drive's own file with a section
+    PSAVE, P1004=5 or POSSAVE never writes (null, empty, R0..R5 and W not all seven, a position
+    that is no number): the EEPROM fails its checksum (display 7) and stderr names the file.
+    Before: params null or {} read as no PSAVE, missing registers as 0, a position "90" as none,
+    not a word said."""
+    image = copy.deepcopy(typed)
+    if value == "without 1085":
+        del image["registers"]["1085"]
+    elif value == "with 1086":
+        image["registers"]["1086"] = 0
+    else:
+        image[section] = value
+    (tmp_path / "sers.nvram.json").write_text(json.dumps(image), "utf-8")
+    plant = plant_factory({}, state_dir=tmp_path)
+    assert plant.read("display") == {"char": "7", "blinking": False}
+    assert f"devsim: memory {tmp_path / 'sers.nvram.json'}: " in capfd.readouterr().err
 
 
 # ======================================================================================

@@ -56,8 +56,9 @@ class ParameterMemory:
         self.eeprom_checksum_error = self.nvram.corrupt
         ram = self._factory_image()
         stored = self.nvram.get("params")
-        if stored and not self.eeprom_checksum_error:
-            problem = _unfit(stored)
+        if "params" in self.nvram and not self.eeprom_checksum_error:
+            # (PSAVE writes every saved parameter: null, {} or 0 read as no PSAVE before)
+            problem = _unfit(stored) or (None if stored else "it holds no parameter PSAVE writes")
             if problem is not None:
                 # [SIM-CHOICE] a stored value the drive never stores (a hand edit): the EEPROM
                 # fails its checksum as a damaged one does (display '7', factory values); before,
@@ -72,15 +73,23 @@ class ParameterMemory:
         ram.update({1110: 1, 1035: 1, 1: 0, 1047: 0, 1164: 0, 1165: 0, 1118: 0})
         for n in (100, 101, 102, 1101, 1102, 1103):
             ram[n] = 0
-        extra = self.nvram.get("registers") or {}
-        if type(extra) is not dict or not all(_finite(extra.get(str(n), 0)) for n in REGISTERS):
-            warn(f"devsim: memory {self.nvram.path or 'memory'}: R0..R5 and W are not all finite numbers;"
-                 " the EEPROM reads as failing its checksum (display 7, registers 0)")  # [SIM-CHOICE] as above
+        # P1004=5 (or PSAVE with P1117=1) writes all seven, R0..R5 and W: one missing, null or {}
+        # read as 0 before
+        extra = self.nvram.get("registers", {})
+        if "registers" in self.nvram and (type(extra) is not dict or sorted(extra) != sorted(map(str, REGISTERS))
+                                          or not all(_finite(extra[str(n)]) for n in REGISTERS)):
+            warn(f"devsim: memory {self.nvram.path or 'memory'}: R0..R5 and W are not the seven finite numbers"
+                 " P1004=5 stores; the EEPROM reads as failing its checksum (display 7, registers 0)")  # [SIM-CHOICE] as above
             self.eeprom_checksum_error = True
             extra = {}
         for n in REGISTERS:
             ram[n] = extra.get(str(n), 0)
         self.params.load(ram)
+        if "position" in self.nvram and not _finite(self.nvram.get("position")):
+            # [SIM-CHOICE] as above: POSSAVE writes a number (before: P51 started at 0 without a word)
+            warn(f"devsim: memory {self.nvram.path or 'memory'}: the position POSSAVE stored is no finite number;"
+                 " the EEPROM reads as failing its checksum (display 7, P51 0)")
+            self.eeprom_checksum_error = True
 
     def saved_position(self) -> float | None:
         """P51 as POSSAVE stored it (increments), or None (also for a stored value that is no
