@@ -23,7 +23,7 @@ from __future__ import annotations
 import fcntl
 import os
 import re
-from collections.abc import Collection, Container
+from collections.abc import Collection, Container, Mapping
 from typing import TYPE_CHECKING, Any
 
 import msgspec
@@ -256,20 +256,26 @@ class NonVolatileMemory:
         """Store ``data`` as ``section`` and save the image; data the file cannot hold (NaN,
         infinity, text with a lone surrogate) raises :class:`PoisonedMemory` and the section keeps
         what it held."""
+        self.put_sections({section: data})
+
+    def put_sections(self, sections: Mapping[str, Any]) -> None:
+        """Store several sections with one write of the image, so that a kill leaves all of them
+        or none (a save of one record over several sections, written one ``put`` each, left the
+        first without the rest); data the file cannot hold leaves each section as it was."""
         try:
-            copied = _copied(data)
+            copied = {section: _copied(data) for section, data in sections.items()}
         except ValueError as exc:
             raise PoisonedMemory(f"{self.path or 'memory'}: refusing to save a non-finite number ({exc})") from None
-        had = section in self._image
-        before = self._image.get(section)
-        self._image[section] = copied
+        before = {section: self._image[section] for section in copied if section in self._image}
+        self._image.update(copied)
         try:
             self._write()
         except PoisonedMemory:
-            if had:
-                self._image[section] = before
-            else:
-                del self._image[section]
+            for section in copied:
+                if section in before:
+                    self._image[section] = before[section]
+                else:
+                    del self._image[section]
             raise
 
     def delete(self, section: str) -> None:

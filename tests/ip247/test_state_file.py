@@ -152,3 +152,42 @@ def test_a_key_or_value_the_module_never_writes_refuses_the_memory(
     text = _write(tmp_path, image)
     refused_memory(tmp_path, "ip247", match="this memory image does not fit the kind 'ip247'")
     assert (tmp_path / "ip247.nvram.json").read_text("utf-8") == text
+
+
+class Killed(BaseException):
+    """The simulator killed (``kill -9``) as it writes its memory file."""
+
+
+@pytest.mark.parametrize("at", [1, 2, 3, 4])
+def test_a_save_killed_at_any_of_its_writes_leaves_all_of_battery_ram_or_none(tmp_path: Path, at: int) -> None:
+    """A module saving its battery RAM (an offset on axis 1, the SYS-ID from the configuration) is
+    killed as it writes the file for the ``at``-th time: the file holds every section a save
+    writes or none of them.  (Before: save() wrote md, offsets, programs and sys_id one write each,
+    so a kill after the first left md alone, which loads with the offsets at 0 and the
+    configuration's SYS-ID, not a word said.)"""
+    from devsim.core.clock import VirtualClock
+    from devsim.core.nvram import NonVolatileMemory
+    from devsim.devices.ip247.module import Ip247Module
+
+    nvram = NonVolatileMemory.for_device(tmp_path, "ip247", "ip247")
+    try:
+        module = Ip247Module(clock=VirtualClock(), config={"sys_id": {"module": 11}}, nvram=nvram)
+        module.units[0].coords.to_ba15 = 2_000
+        writes, write = [], nvram._save
+
+        def killed_at(data: bytes) -> None:
+            writes.append(data)
+            if len(writes) == at:
+                raise Killed
+            write(data)
+
+        nvram._save = killed_at  # type: ignore[method-assign]
+        try:
+            module.save()
+        except Killed:
+            pass
+    finally:
+        nvram.close()
+    path = tmp_path / "ip247.nvram.json"
+    sections = set(json.loads(path.read_text("utf-8"))) - {"devsim-kind"} if path.exists() else set()
+    assert sections in (set(), {"md", "offsets", "programs", "sys_id"})

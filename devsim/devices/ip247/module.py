@@ -116,11 +116,14 @@ class Ip247Module(Model):
         self.programs.store = ProgramStore.from_json(self.nvram.get("programs", ProgramStore().to_json()))
 
     def save(self) -> None:
-        self.nvram.put("md", {str(u.number): u.md_words for u in self.units if u.md_words})
-        self.nvram.put("offsets", {str(u.number): [u.coords.zo_mode, u.coords.to_ba15, u.coords.to_prog]
-                                   for u in self.units})
-        self.nvram.put("programs", self.programs.store.to_json())
-        self.nvram.put("sys_id", list(self.channel.sys_id))
+        """Battery RAM in one write: four writes (one per section) left, killed between them, a
+        file of machine data without the offsets, programs or SYS-ID they were saved with."""
+        self.nvram.put_sections({
+            "md": {str(u.number): u.md_words for u in self.units if u.md_words},
+            "offsets": {str(u.number): [u.coords.zo_mode, u.coords.to_ba15, u.coords.to_prog] for u in self.units},
+            "programs": self.programs.store.to_json(),
+            "sys_id": list(self.channel.sys_id),
+        })
 
     def power_up(self) -> None:
         """Jobs and programs dropped, reference lost, error 8 everywhere; for ``boot_time`` (1 s)
