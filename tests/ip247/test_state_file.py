@@ -19,7 +19,7 @@ import pytest
 from devsim.pytest_plugin import DeviceFactory
 from devsim.runtime import Runtime
 from tests.ip247.helpers import FORWARD, Module
-from tests.support.memory import refused_memory
+from tests.support.memory import killed_at_write, refused_memory
 
 PROGRAM = "%  9\nN1 X1 F100\nN2 M02\n"
 
@@ -154,10 +154,6 @@ def test_a_key_or_value_the_module_never_writes_refuses_the_memory(
     assert (tmp_path / "ip247.nvram.json").read_text("utf-8") == text
 
 
-class Killed(BaseException):
-    """The simulator killed (``kill -9``) as it writes its memory file."""
-
-
 @pytest.mark.parametrize("at", [1, 2, 3, 4])
 def test_a_save_killed_at_any_of_its_writes_leaves_all_of_battery_ram_or_none(tmp_path: Path, at: int) -> None:
     """A module saving its battery RAM (an offset on axis 1, the SYS-ID from the configuration) is
@@ -173,19 +169,8 @@ def test_a_save_killed_at_any_of_its_writes_leaves_all_of_battery_ram_or_none(tm
     try:
         module = Ip247Module(clock=VirtualClock(), config={"sys_id": {"module": 11}}, nvram=nvram)
         module.units[0].coords.to_ba15 = 2_000
-        writes, write = [], nvram._save
-
-        def killed_at(data: bytes) -> None:
-            writes.append(data)
-            if len(writes) == at:
-                raise Killed
-            write(data)
-
-        nvram._save = killed_at  # type: ignore[method-assign]
-        try:
+        with killed_at_write(nvram, at):
             module.save()
-        except Killed:
-            pass
     finally:
         nvram.close()
     path = tmp_path / "ip247.nvram.json"

@@ -90,17 +90,17 @@ def saves(cnc: Any, monkeypatch: pytest.MonkeyPatch) -> Iterator[dict[str, int]]
     memory (``programs``) and the pieces of input a read-in was given (``chunks``)."""
     counts = {"programs": 0, "chunks": 0}
     nvram = cnc.device.nvram
-    put, feed = nvram.put, ReadIn.feed
+    put, feed = nvram.put_sections, ReadIn.feed  # (every write: put is put_sections of one section)
 
-    def counting_put(section: str, data: Any) -> None:
-        counts["programs"] += section == "programs"
-        put(section, data)
+    def counting_put(sections: dict[str, Any]) -> None:
+        counts["programs"] += "programs" in sections
+        put(sections)
 
     def counting_feed(self: ReadIn, data: bytes) -> None:
         counts["chunks"] += 1
         feed(self, data)
 
-    monkeypatch.setattr(nvram, "put", counting_put)
+    monkeypatch.setattr(nvram, "put_sections", counting_put)
     monkeypatch.setattr(ReadIn, "feed", counting_feed)
     yield counts
 

@@ -18,7 +18,7 @@ import pytest
 
 from devsim.cli import exits
 from devsim.runtime import Runtime
-from tests.support.memory import refused_memory
+from tests.support.memory import killed_at_write, refused_memory
 from tests.test_cli import Sim
 
 
@@ -241,3 +241,27 @@ def test_a_tape_the_recorder_never_keeps_refuses_the_memory(tmp_path: Path, reco
     refused_memory(tmp_path, "poselesta", match=r"\(ValueError: the stored cassette .* is no tape the recorder keeps",
                    config=CASSETTE)
     assert path.read_text("utf-8") == text
+
+
+@pytest.mark.parametrize("at", [1, 2])
+def test_a_program_typed_in_inch_and_killed_while_saved_keeps_its_inch_mark(tmp_path: Path, at: int) -> None:
+    """P20 entered in inch (V22/2 H) on a control killed as it writes the file for the ``at``-th
+    time: the file holds the program with its inch mark, or neither.  (Before: the programs and
+    the inch mark were two writes, so a kill between them left P20's inch numbers marked as mm,
+    read with other decimals after the restart.)"""
+    from devsim.core.clock import VirtualClock
+    from devsim.core.nvram import NonVolatileMemory
+    from devsim.devices.poselesta.model import PoselestaCnc
+
+    nvram = NonVolatileMemory.for_device(tmp_path, "poselesta", "poselesta")
+    try:
+        cnc = PoselestaCnc(clock=VirtualClock(), config={}, nvram=nvram)
+        cnc.signals.set("inch", True)
+        with killed_at_write(nvram, at) as writes:
+            cnc.memory.set_program_text(20, "N1 X1.00001")
+    finally:
+        nvram.close()
+    path = tmp_path / "poselesta.nvram.json"
+    image = json.loads(path.read_text("utf-8")) if path.exists() else {}
+    assert ("20" in image.get("programs", {})) == (20 in image.get("inch_programs", []))
+    assert len(writes) == at or image["inch_programs"] == [20]  # (no kill: the save finished)

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from devsim.core.nvram import UnfitMemory
+from devsim.core.nvram import NonVolatileMemory, UnfitMemory
 from devsim.runtime import Runtime
 
 
@@ -22,3 +24,30 @@ def refused_memory(state_dir: Path, kind: str, match: str | None = None,
     finally:
         runtime.stop()
     return refused.value
+
+
+class Killed(BaseException):
+    """The simulator killed (``kill -9``) as it writes a memory file."""
+
+
+@contextmanager
+def killed_at_write(nvram: NonVolatileMemory, at: int) -> Iterator[list[bytes]]:
+    """Within the block, the ``at``-th write of ``nvram``'s file raises :class:`Killed` before it
+    replaces the file, as a kill at that instant would (the block ends there, nothing else is
+    caught); the writes are listed in what the block is given."""
+    writes: list[bytes] = []
+    write = nvram._save
+
+    def killed(data: bytes) -> None:
+        writes.append(data)
+        if len(writes) == at:
+            raise Killed
+        write(data)
+
+    nvram._save = killed  # type: ignore[method-assign]
+    try:
+        yield writes
+    except Killed:
+        pass
+    finally:
+        del nvram._save

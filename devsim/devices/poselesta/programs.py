@@ -80,11 +80,16 @@ class ProgramMemory:
         self.inch_programs = {stored_whole(p, "inch program", NC_PROGRAMS) for p in _listed(nvram, "inch_programs")}
         self.tools = {t: _tool(t, v) for t, v in numbered(nvram.get("tools", {}), "tool", range(1, 100)).items()}
 
-    def _save(self) -> None:
+    def _save(self, typed: tuple[int, bool] | None = None) -> None:
+        """The programs; with ``typed`` (a program entered or read in anew, and whether in inch) its
+        inch mark in the same write: written one after the other, a kill between them left a
+        program typed in inch marked as mm (its numbers read with other decimals)."""
         self._unsaved = False
-        self._nvram.put(
-            "programs", {str(p): [b.to_json() for _, b in sorted(bs.items())] for p, bs in self.programs.items()}
-        )
+        sections: dict[str, Any] = {
+            "programs": {str(p): [b.to_json() for _, b in sorted(bs.items())] for p, bs in self.programs.items()}}
+        if typed is not None and self._retyped(*typed):
+            sections["inch_programs"] = sorted(self.inch_programs)
+        self._nvram.put_sections(sections)
 
     def flush(self) -> None:
         """Write the blocks stored since the last save (the links, at the end of each chunk of a
@@ -114,9 +119,15 @@ class ProgramMemory:
 
     def _typed(self, number: int, inch: bool) -> None:
         """A program is (re)entered: in inch while V22/2 is H (stored as typed, spec §5.1)."""
-        if inch != (number in self.inch_programs):
-            (self.inch_programs.add if inch else self.inch_programs.discard)(number)
+        if self._retyped(number, inch):
             self._nvram.put("inch_programs", sorted(self.inch_programs))
+
+    def _retyped(self, number: int, inch: bool) -> bool:
+        """Mark program ``number`` as typed in inch or mm; whether its mark changed."""
+        if inch == (number in self.inch_programs):
+            return False
+        (self.inch_programs.add if inch else self.inch_programs.discard)(number)
+        return True
 
     def refuse_protected(self, number: int) -> None:
         if number in self.protected:
@@ -126,8 +137,7 @@ class ProgramMemory:
     def clear_for_read_in(self, number: int) -> None:
         """A read-in starts: "zuerst das vorgewählte Programm gelöscht" (§2.6)."""
         self.programs.pop(number, None)
-        self._save()
-        self._typed(number, self._inch())
+        self._save(typed=(number, self._inch()))
 
     def store_block(self, program: int, block: Block) -> str | None:
         """A block read in; returns why it cannot be stored (the read-in fails), or None.  A
@@ -164,8 +174,7 @@ class ProgramMemory:
             self.programs[number] = {b.number: b for b in blocks}
         else:
             self.programs.pop(number, None)
-        self._save()
-        self._typed(number, inch)
+        self._save(typed=(number, inch))
 
     def edit_block(self, text: str) -> None:
         """Program entry of one block (spec §3.2.2 ``panel.edit_block``): ``"20: N5 X10"`` stores
