@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import queue
 import resource
 import select
 import socket
@@ -86,6 +87,17 @@ def test_up_serves_what_fits_and_says_what_does_not(tmp_path: Path) -> None:
     assert "Traceback" not in err and len(err) < 2000
 
 
+def _echo_under_limit(control: Path, limit: int) -> tuple[subprocess.Popen[str], queue.Queue[str | None], queue.Queue[str | None]]:
+    """``devsim run echo --tcp 0`` with its control server at ``control`` and at most ``limit``
+    descriptors, and its stdout and stderr lines."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "devsim", "run", "echo", "--tcp", "0", "--control", f"unix:{control}"],
+        cwd=ROOT, env=_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        text=True, preexec_fn=_limit(limit),
+    )
+    return proc, collect_lines(proc.stdout), collect_lines(proc.stderr)
+
+
 def test_a_run_out_of_descriptors_by_control_clients_says_so_in_one_line(tmp_path: Path) -> None:
     """Idle control clients take every descriptor of a plain ``devsim run`` (which has not asked
     its limit at start): the accept that fails is reported in one line, and when they leave the
@@ -93,12 +105,7 @@ def test_a_run_out_of_descriptors_by_control_clients_says_so_in_one_line(tmp_pat
     'Unhandled error in exception handler', an ImportError traceback for every failed accept
     (1.4 MB of stderr in four seconds)."""
     control = tmp_path / "c.sock"
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "devsim", "run", "echo", "--tcp", "0", "--control", f"unix:{control}"],
-        cwd=ROOT, env=_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-        text=True, preexec_fn=_limit(48),
-    )
-    out, err = collect_lines(proc.stdout), collect_lines(proc.stderr)
+    proc, out, err = _echo_under_limit(control, 48)
     clients: list[socket.socket] = []
     seen: list[str] = []
     try:
@@ -141,12 +148,7 @@ def test_idle_control_clients_leave_the_device_its_descriptors(tmp_path: Path) -
     serves a host.  Before, the bound was 256 whatever the limit: idle clients were served until
     the descriptors ran out, and the device's hosts were refused."""
     control = tmp_path / "c.sock"
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "devsim", "run", "echo", "--tcp", "0", "--control", f"unix:{control}"],
-        cwd=ROOT, env=_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-        text=True, preexec_fn=_limit(128),
-    )
-    out, err = collect_lines(proc.stdout), collect_lines(proc.stderr)
+    proc, out, err = _echo_under_limit(control, 128)
     clients: list[socket.socket] = []
     try:
         line = next_match(out, lambda text: ": tcp " in text, 30, "the port line")
