@@ -42,7 +42,8 @@ each item as Part 4 5.12.2.4 (Table 71) and 5.12.3.4 (Table 74) do, per item:
   samplingInterval, queueSize, discardOldest, filter, clientHandle, timestampsToReturn; 5.12.3.2);
 * a full queue discards as the item's discardOldest says (5.12.1.5; asyncua dropped the oldest
   whatever was asked), and a data item's queue longer than one marks where values were lost with
-  the Overflow bit (:func:`discard`).
+  the Overflow bit (:func:`discard`), an event item's with an EventQueueOverflowEventType event
+  (:func:`discard_events`; asyncua generated none).
 
 :class:`Subscriptions` is asyncua's SubscriptionService giving each new subscription an
 :class:`ItemChecks` (:class:`devsim.facades.opcua_decoding.FacadeServer` installs it).
@@ -52,10 +53,13 @@ from __future__ import annotations
 
 import asyncio
 import copy
+import uuid
 from collections.abc import Awaitable, Callable
+from datetime import UTC, datetime
 from typing import Any
 
 from asyncua import ua
+from asyncua.common.event_objects import EventQueueOverflowEvent
 from asyncua.server.address_space import AddressSpace
 from asyncua.server.monitored_item_service import MonitoredItemService, WhereClauseEvaluator
 from asyncua.server.subscription_service import SubscriptionService
@@ -64,7 +68,8 @@ from asyncua.ua import uaprotocol_auto
 from devsim.core.clock import Clock
 from devsim.facades.opcua_services import derives, encoding_refusal, index_range, shaped
 
-__all__ = ["OVERFLOW", "QUEUE_SIZE", "ItemChecks", "Spacing", "Subscriptions", "discard", "refusal"]
+__all__ = ["OVERFLOW", "QUEUE_SIZE", "ItemChecks", "Spacing", "Subscriptions", "discard", "discard_events", "overflow_event",
+           "refusal"]
 
 #: [SIM-CHOICE] The most notifications a monitored item queues for a client that does not take
 #: them (Part 4 5.12.1.5: the server revises the queue size it is asked for; a queue size of 0 asks
@@ -152,7 +157,7 @@ def discard(queue: list[Any], size: int, oldest: bool) -> None:
     the queue gets replaced with the new value. The new value gets the flag set" (the first
     ``size - 1`` stay, then the newest).  The flag is the Overflow bit of a DataValue, set only
     where the queue is larger than one ("the discard policy is ignored if the queue size is one":
-    the newest stays).  An event carries no DataValue: its queue is cut the same way, unflagged."""
+    the newest stays).  An event item's queue: :func:`discard_events`."""
     if len(queue) <= size:
         return
     if oldest or size == 1:
@@ -164,6 +169,41 @@ def discard(queue: list[Any], size: int, oldest: bool) -> None:
         flagged.Value = _overflowed(flagged.Value)
 
 
+def discard_events(queue: list[Any], size: int, oldest: bool, queued: Any, overflow: Callable[[], Any]) -> Any:
+    """Cut an event item's ``queue`` of notifications (oldest first) to ``size`` events as
+    :func:`discard` does, and mark where events were lost with an EventQueueOverflowEventType event
+    (Part 4 v1.05 5.13.1.5, v1.04 5.12.1.5: "If Events are lost, an Event of the type
+    EventQueueOverflowEventType is placed in the queue"; 7.21): ``queued``, the one already in the
+    queue, or a new one from ``overflow()`` at the first event discarded.  It is queued "in addition
+    to the size of the Queue" and, with ``oldest`` (discardOldest TRUE), "put at the beginning of the
+    queue and is never discarded", else "at the end": where the replaced events were, before the
+    newest (a queue of one: before the newest either way).  One stays one until the queue is
+    published (its overflow period): a queue that loses more events keeps it, a queue published
+    and full again gets a new one.  Returns the overflow event in the queue (None: none)."""
+    events = [notification for notification in queue if notification is not queued]
+    if len(events) == len(queue):
+        queued = None  # (one from a queue already published)
+    if len(events) <= size:
+        return queued
+    if queued is None:
+        queued = overflow()
+    queue[:] = [queued, *events[-size:]] if oldest else [*events[:size - 1], queued, events[-1]]
+    return queued
+
+
+def overflow_event(select: list[ua.SimpleAttributeOperand], handle: int) -> ua.EventFieldList:
+    """The EventQueueOverflowEventType event (i=3035) of an item with ``select`` clauses and client
+    ``handle``: the Server object its SourceNode and "Internal/EventQueueOverflow" its SourceName
+    (Part 5 v1.05 6.4.34), a new EventId, Time and ReceiveTime now (as the facade's own events), a
+    field the type does not have null.  It is no node of the address space (the type is abstract)
+    and bypasses the whereClause (Part 4 7.22.3).  [SIM-CHOICE] Its Message says events were lost,
+    its Severity is BaseEventType's lowest, 1 (Part 5 gives neither)."""
+    event = EventQueueOverflowEvent(ua.NodeId(ua.ObjectIds.Server), "Events were lost: the event queue overflowed")
+    event.EventId, event.SourceName = uuid.uuid4().bytes, "Internal/EventQueueOverflow"
+    event.Time = event.ReceiveTime = datetime.now(UTC)
+    return ua.EventFieldList(ClientHandle=handle, EventFields=event.to_event_fields(select))
+
+
 class ItemChecks(MonitoredItemService):
     """asyncua's monitored items of one subscription, each checked by :func:`refusal` first; an
     item reports the part its IndexRange selects, with the timestamps its request asked for
@@ -173,6 +213,7 @@ class ItemChecks(MonitoredItemService):
         super().__init__(isub, aspace)
         self._timestamps: dict[int, ua.TimestampsToReturn] = {}  # per item id
         self._queues: dict[int, tuple[int, bool]] = {}  # per item id: (queueSize, discardOldest)
+        self._overflows: dict[int, ua.EventFieldList] = {}  # per event item id: its last overflow event
         self._asked = ua.TimestampsToReturn.Both  # (of the item being created)
         self._spacing = Spacing(clock, self._deliver)
 
@@ -241,12 +282,22 @@ class ItemChecks(MonitoredItemService):
 
     def _bound(self, mid: int) -> None:
         """Item ``mid``'s queues of notifications not yet published kept to its queueSize by its
-        discardOldest (:func:`discard`); called right after each notification asyncua queues, with
-        no ``await`` between, so no publish sees a queue longer than the size."""
+        discardOldest (:func:`discard`, an event item's :func:`discard_events`); called right after
+        each notification asyncua queues, with no ``await`` between, so no publish sees a queue
+        longer than the size."""
         size, oldest = self._queues.get(mid, (0, True))
-        for queue in (self.isub._triggered_datachanges, self.isub._triggered_events):
-            if mid in queue and size:
-                discard(queue[mid], size, oldest)
+        if not size:
+            return
+        if mid in self.isub._triggered_datachanges:
+            discard(self.isub._triggered_datachanges[mid], size, oldest)
+        mdata = self._monitored_items.get(mid)
+        if mid in self.isub._triggered_events and mdata is not None:
+            queued = discard_events(self.isub._triggered_events[mid], size, oldest, self._overflows.get(mid),
+                                    lambda: overflow_event(mdata.filter.SelectClauses, mdata.client_handle))
+            if queued is None:
+                self._overflows.pop(mid, None)
+            else:
+                self._overflows[mid] = queued
 
     def _space(self, mid: int, result: Any, item: ua.ReadValueId, requested: float) -> None:
         """An item's revisedSamplingInterval: the subscription's publishing interval (asyncua's; -1
@@ -277,6 +328,7 @@ class ItemChecks(MonitoredItemService):
     def _delete_monitored_items(self, mid: int) -> ua.StatusCode:
         self._timestamps.pop(mid, None)
         self._queues.pop(mid, None)
+        self._overflows.pop(mid, None)
         self._spacing.forget(mid)
         return super()._delete_monitored_items(mid)
 

@@ -17,8 +17,9 @@ timestampsToReturn asks for (5.12.2.2; asyncua sent a SourceTimestamp only, what
 A ModifyMonitoredItems revises and applies an item's parameters as a CreateMonitoredItems does
 (5.12.3.2): samplingInterval, queueSize (a longer queue cut at once), filter with its whereClause,
 clientHandle and timestampsToReturn.  A full queue discards as the item's discardOldest asks, and
-marks where values were lost with the Overflow bit (5.12.1.5; asyncua dropped the oldest whatever
-was asked, and set no bit).
+marks where values were lost with the Overflow bit, where events were lost with an
+EventQueueOverflowEventType event (5.12.1.5; asyncua dropped the oldest whatever was asked, set no
+bit and queued no overflow event).
 """
 
 from __future__ import annotations
@@ -718,55 +719,89 @@ def test_node_opcua_a_full_queue_discards_as_discard_oldest_asks_and_flags_the_o
     assert result["got"] == [[[values[n], flag] for n, flag in reported] for *_, reported in DISCARD]
 
 
-async def test_asyncua_a_full_event_queue_discards_as_discard_oldest_asks(served: tuple[Runtime, OpcuaFacade]) -> None:
-    """Three fault events (on, off, on) for event items of queueSize 2 on a subscription with
-    publishing disabled: discardOldest TRUE keeps the last two (off, on), FALSE replaces the last
-    one queued, keeping the first and the newest (on, on; 7.21: "the last Notification added to
-    the queue gets replaced with the new Notification"; asyncua kept off, on for both).  A second,
-    published subscription's event item tells when all three are queued."""
+#: The fields each event item selects (BaseEventType's), as asyncua's client names them.
+FIELDS = ["EventId", "EventType", "SourceNode", "SourceName", "Message"]
+OVERFLOWED = "overflow"  # (an EventQueueOverflowEventType event, in EVENT_QUEUES)
+
+#: (queueSize, discardOldest) -> what an event item reports of four fault events e0..e3 (on, off,
+#: on, off) queued while publishing was disabled (Part 4 v1.05 5.13.1.5, v1.04 5.12.1.5: "If Events
+#: are lost, an Event of the type EventQueueOverflowEventType is placed in the queue", "in addition
+#: to the size of the Queue"; discardOldest TRUE "put at the beginning of the queue and is never
+#: discarded", FALSE "at the end", where the last event queued was replaced; one for the two events
+#: lost).  asyncua dropped the oldest whatever was asked and queued no overflow event.
+EVENT_QUEUES = [
+    (2, True, [OVERFLOWED, 2, 3]),
+    (2, False, [0, OVERFLOWED, 3]),
+    (1, False, [OVERFLOWED, 3]),
+    (4, True, [0, 1, 2, 3]),  # (nothing lost)
+]
+
+
+async def test_asyncua_a_full_event_queue_discards_as_discard_oldest_asks_and_queues_an_overflow_event(
+        served: tuple[Runtime, OpcuaFacade]) -> None:
+    """EVENT_QUEUES: an event item of the device per row on a subscription with publishing disabled
+    (a second, published subscription's item tells when all four events are queued), then publishing
+    enabled: each item's events, up to a fifth event sent when all queued ones came (so an extra
+    overflow event would show).  The overflow event's fields are those of Part 5 v1.05 6.4.34:
+    EventType i=3035, SourceNode the Server object, SourceName "Internal/EventQueueOverflow", its
+    own EventId."""
     runtime, facade = served
-    watched: asyncio.Queue[str] = asyncio.Queue()
-    got: asyncio.Queue[tuple[int, str]] = asyncio.Queue()
+    watched: asyncio.Queue[Any] = asyncio.Queue()
+    got: asyncio.Queue[tuple[int, Any]] = asyncio.Queue()
 
     class Watch:
         def event_notification(self, event: Any) -> None:
-            watched.put_nowait(event.Message.Text)
+            watched.put_nowait(event)
 
     class Got:
         def event_notification(self, event: Any) -> None:
-            got.put_nowait((event.server_handle, event.Message.Text))
+            got.put_nowait((event.server_handle, event))
 
-    async def item(subscription: Any, request: ua.MonitoredItemCreateRequest) -> ua.MonitoredItemCreateResult:
+    select = ua.EventFilter(SelectClauses=[ua.SimpleAttributeOperand(
+        TypeDefinitionId=ua.NodeId(ua.ObjectIds.BaseEventType), BrowsePath=[ua.QualifiedName(name, 0)],
+        AttributeId=ua.AttributeIds.Value) for name in FIELDS])
+
+    async def item(subscription: Any, handle: int, size: int, oldest: bool) -> ua.MonitoredItemCreateResult:
+        request = _request(ns, handle, "sers", "EventNotifier", EVENT, None, None)
+        request.RequestedParameters.Filter = select
+        request.RequestedParameters.QueueSize, request.RequestedParameters.DiscardOldest = size, oldest
         created = await _create(client, subscription, request)
-        known = subscription._monitored_items[request.RequestedParameters.ClientHandle]
-        known.mfilter = request.RequestedParameters.Filter  # (the fields asyncua's client maps)
-        known.server_handle = request.RequestedParameters.ClientHandle  # (which item an event came for)
+        known = subscription._monitored_items[handle]
+        known.mfilter = select  # (the fields asyncua's client maps)
+        known.server_handle = handle  # (which item an event came for)
         return created
+
+    def seen(event: Any, ids: list[bytes]) -> Any:
+        if event.EventType == ua.NodeId(ua.ObjectIds.EventQueueOverflowEventType):
+            assert (event.SourceNode, event.SourceName) == (ua.NodeId(ua.ObjectIds.Server), "Internal/EventQueueOverflow")
+            assert event.EventId and event.EventId not in ids
+            return OVERFLOWED
+        return ids.index(event.EventId)
 
     async with Client(facade.url) as client:
         ns = await client.get_namespace_index(NAMESPACE)
         watch = await client.create_subscription(20, Watch())
         queued = await _unpublished(client, facade, Got())
-        request = _request(ns, 1, "sers", "EventNotifier", EVENT, None, None)
-        request.RequestedParameters.QueueSize = 10
-        assert (await item(watch, request)).StatusCode.is_good()
-        for handle, oldest in ((1, True), (2, False)):
-            request = _request(ns, handle, "sers", "EventNotifier", EVENT, None, None)
-            request.RequestedParameters.QueueSize, request.RequestedParameters.DiscardOldest = 2, oldest
-            assert (await item(queued, request)).RevisedQueueSize == 2
+        assert (await item(watch, 0, 10, True)).StatusCode.is_good()
+        for handle, (size, oldest, _) in enumerate(EVENT_QUEUES, 1):
+            assert (await item(queued, handle, size, oldest)).RevisedQueueSize == size
         try:
-            for active in (True, False, True):
+            for active in (True, False, True, False):
                 runtime.fault("sers", "emergency_stop", active)
-            messages = [await asyncio.wait_for(watched.get(), 10) for _ in range(3)]
-            assert ["emergency_stop on" in m for m in messages] == [True, False, True]
+            ids = [(await asyncio.wait_for(watched.get(), 10)).EventId for _ in range(4)]
             await queued.set_publishing_mode(True)
-            seen = [await asyncio.wait_for(got.get(), 10) for _ in range(4)]
+            events = [await asyncio.wait_for(got.get(), 10)]  # (the queues published: all in one message)
+            runtime.fault("sers", "emergency_stop", True)  # e4, reported after the queued ones
+            ids.append((await asyncio.wait_for(watched.get(), 10)).EventId)
+            while sum(event.EventId == ids[4] for _, event in events) < len(EVENT_QUEUES):
+                events.append(await asyncio.wait_for(got.get(), 10))
         finally:
             runtime.fault("sers", "emergency_stop", False)  # (for the tests after this one)
-        assert [message for handle, message in seen if handle == 1] == messages[1:]
-        assert [message for handle, message in seen if handle == 2] == [messages[0], messages[2]]
         await queued.delete()
         await watch.delete()
+    assert {handle: [seen(event, ids) for got_for, event in events if got_for == handle]
+            for handle in range(1, len(EVENT_QUEUES) + 1)} == {
+        handle: [*reported, 4] for handle, (*_, reported) in enumerate(EVENT_QUEUES, 1)}
 
 
 def test_a_queue_cut_to_a_smaller_size_keeps_what_its_discard_policy_keeps() -> None:
@@ -784,3 +819,44 @@ def test_a_queue_cut_to_a_smaller_size_keeps_what_its_discard_policy_keeps() -> 
     assert cut(5, True) == [(25, True), (26, False), (27, False), (28, False), (29, False)]
     assert cut(5, False) == [(0, False), (1, False), (2, False), (3, False), (29, True)]
     assert cut(1, False) == cut(1, True) == [(29, False)]
+
+
+def test_an_event_queue_holds_one_overflow_event_until_it_is_published() -> None:
+    """discard_events as events come one at a time to a queue of 3: seven events lose four, and the
+    queue holds one overflow event (M) where they were lost, never discarded (discardOldest TRUE:
+    first; FALSE: before the newest); a queue published (asyncua starts a new list) and full again
+    gets a new one (Part 4 v1.05 5.13.1.5: generated "when the first Event is discarded"); a queue
+    cut to 2 by a ModifyMonitoredItems keeps its overflow event where the discard policy asked now
+    puts it."""
+    from devsim.facades.opcua_monitoring import discard_events
+
+    made: list[str] = []
+
+    class Overflow:
+        def __init__(self) -> None:
+            made.append(f"M{len(made) + 1}")
+            self.name = made[-1]
+
+        def __repr__(self) -> str:
+            return self.name
+
+    def grow(queue: list[Any], events: range, size: int, oldest: bool, queued: Any = None) -> Any:
+        for n in events:
+            queue.append(n)
+            queued = discard_events(queue, size, oldest, queued, Overflow)
+        return queued
+
+    queue: list[Any] = []
+    queued = grow(queue, range(7), 3, True)
+    assert (repr(queue), made) == ("[M1, 4, 5, 6]", ["M1"])
+    published: list[Any] = []
+    assert grow(published, range(7, 10), 3, True, queued) is None and published == [7, 8, 9]  # (nothing lost)
+    grow(published, range(10, 12), 3, True, queued)
+    assert (repr(published), made) == ("[M2, 9, 10, 11]", ["M1", "M2"])
+    made.clear()
+    queue = []
+    queued = grow(queue, range(7), 3, False)
+    assert (repr(queue), made) == ("[0, 1, M1, 6]", ["M1"])
+    assert discard_events(queue, 2, False, queued, Overflow) is queued and repr(queue) == "[0, M1, 6]"
+    assert discard_events(queue, 1, True, queued, Overflow) is queued and repr(queue) == "[M1, 6]"
+    assert made == ["M1"]
