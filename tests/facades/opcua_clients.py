@@ -80,7 +80,7 @@ _lock = threading.Lock()
 def node_client(url: str, plan: list[dict[str, Any]], timeout: float = 120,
                 paused: Callable[[], None] | None = None) -> list[dict[str, Any]]:
     """Run ``plan`` (the steps client.js documents) against the server at ``url``; a result per step.
-    The one step of a plan that pauses (``queue``) goes on when ``paused()`` has returned."""
+    A step that pauses (``queue`` once, ``events`` twice) goes on each time ``paused()`` has returned."""
     global _served
     installed = (NODE_CLIENT / "node_modules" / "node-opcua-client").is_dir()
     node = needs_program("node", *(() if installed else ("npm",)))  # skipped here, a failure under CI

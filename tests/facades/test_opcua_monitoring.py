@@ -804,6 +804,33 @@ async def test_asyncua_a_full_event_queue_discards_as_discard_oldest_asks_and_qu
         handle: [*reported, 4] for handle, (*_, reported) in enumerate(EVENT_QUEUES, 1)}
 
 
+def test_node_opcua_a_full_event_queue_discards_as_discard_oldest_asks_and_queues_an_overflow_event(
+        served: tuple[Runtime, OpcuaFacade]) -> None:
+    """EVENT_QUEUES through node-opcua's client (its own items, its watch, the overflow event's
+    EventType, SourceNode and SourceName as it decodes them)."""
+    runtime, facade = served
+    faults = iter([(True, False, True, False), (True,)])  # e0..e3 while queued, then e4
+
+    def fault() -> None:
+        for active in next(faults):
+            runtime.fault("sers", "emergency_stop", active)
+
+    items = [{"queueSize": size, "discardOldest": oldest} for size, oldest, _ in EVENT_QUEUES]
+    try:
+        [result] = node_client(facade.url, [{"op": "events", "node": "sers", "items": items, "count": 4}], paused=fault)
+    finally:
+        runtime.fault("sers", "emergency_stop", False)  # (for the tests after this one)
+    ids = result["watched"]
+
+    def seen(event_id: str, event_type: str, source: str, name: str) -> Any:
+        if event_type == "ns=0;i=3035":  # (node-opcua writes the namespace 0 out)
+            assert (source, name) == ("ns=0;i=2253", "Internal/EventQueueOverflow") and event_id not in ids
+            return OVERFLOWED
+        return ids.index(event_id)
+
+    assert [[seen(*row) for row in got] for got in result["got"]] == [[*reported, 4] for *_, reported in EVENT_QUEUES]
+
+
 def test_a_queue_cut_to_a_smaller_size_keeps_what_its_discard_policy_keeps() -> None:
     """A ModifyMonitoredItems to a smaller queueSize cuts a queue of 30 values "following the
     configured discard policy" (5.12.3.2) at once: discardOldest TRUE keeps the newest 5 and flags

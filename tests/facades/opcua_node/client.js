@@ -42,6 +42,13 @@
 //     value meanwhile), then for the watch to report "last", then enables publishing: "first", the
 //     watch's first value, and "got", each item's notifications (as many as its queueSize) as [value, its
 //     Overflow bit]
+//   {"op": "events", "node": "x", "items": [{"queueSize": 2, "discardOldest": false}, ...], "count": 4}   an event
+//     item per ITEM of the node on a subscription with publishing disabled and one on a published
+//     subscription (the watch), each selecting EventId, EventType, SourceNode and SourceName;
+//     prints "PAUSE" (the test sends "count" events meanwhile), waits for the watch to report them,
+//     enables publishing and, when the first queued event came, prints "PAUSE" again (the test sends
+//     one more event): "watched", the watch's EventIds (hex), and "got", each item's events up to
+//     that last one as [EventId, EventType, SourceNode, SourceName]
 // A step may name a node id in full ("nodeId": "ns=0;i=2253") instead of a devsim "node".
 // String node ids are in the namespace urn:devsim.  Prints one line "RESULT {json}" (node-opcua
 // writes its own warnings to stdout too).
@@ -162,6 +169,62 @@ async function queued(session, devsim, s) {
     await held.terminate();
     await watch.terminate();
     return { first: watched[0], got };
+}
+
+function seen() {  // what came, and a promise of the moment a predicate of it holds
+    const items = [];
+    let wake = () => {};
+    return {
+        items,
+        push(item) {
+            items.push(item);
+            wake();
+        },
+        until(holds, what) {
+            return within(new Promise((resolve) => {
+                wake = () => { if (holds(items)) { resolve(); } };
+                wake();
+            }), () => `${what}: ${JSON.stringify(items)}`);
+        },
+    };
+}
+
+async function eventQueues(session, devsim, s) {
+    const options = { requestedPublishingInterval: 20, requestedLifetimeCount: 1000, requestedMaxKeepAliveCount: 10 };
+    const watch = await session.createSubscription2({ ...options, publishingEnabled: true });
+    const held = await session.createSubscription2({ ...options, publishingEnabled: false });
+    const node = { nodeId: devsim(s.node), attributeId: AttributeIds.EventNotifier };
+    const eventFilter = new EventFilter({ selectClauses: ["EventId", "EventType", "SourceNode", "SourceName"].map(
+        (name) => ({ typeDefinitionId: "i=2041", browsePath: [{ name }], attributeId: AttributeIds.Value })) });
+    const row = (fields) => [fields[0].value.toString("hex"), fields[1].value.toString(), fields[2].value.toString(),
+                             fields[3].value];
+    async function item(subscription, queueSize, discardOldest, got) {
+        const monitored = ClientMonitoredItem.create(subscription, node, {
+            samplingInterval: 0, queueSize, discardOldest, filter: eventFilter });
+        monitored.on("changed", (fields) => got(row(fields)));
+        await new Promise((resolve) => monitored.once("initialized", resolve));
+    }
+    const watched = seen();
+    await item(watch, 10, true, (fields) => watched.push(fields[0]));
+    const got = s.items.map(() => []);
+    const all = seen();
+    for (const [index, it] of s.items.entries()) {
+        await item(held, it.queueSize, it.discardOldest, (fields) => {
+            got[index].push(fields);
+            all.push(fields[0]);
+        });
+    }
+    await paused();
+    await watched.until((ids) => ids.length >= s.count, "the watch never saw them all");
+    await held.setPublishingMode(true);
+    await all.until((ids) => ids.length > 0, "nothing queued came");
+    await paused();
+    await watched.until((ids) => ids.length > s.count, "the watch never saw the last one");
+    const last = watched.items[s.count];
+    await all.until((ids) => ids.filter((id) => id === last).length === s.items.length, "the last one never came");
+    await held.terminate();
+    await watch.terminate();
+    return { watched: watched.items, got };
 }
 
 async function step(session, ns, s) {
@@ -344,6 +407,9 @@ async function step(session, ns, s) {
     }
     if (s.op === "queue") {
         return queued(session, devsim, s);
+    }
+    if (s.op === "events") {
+        return eventQueues(session, devsim, s);
     }
     if (s.op === "call") {
         const result = await session.call({
