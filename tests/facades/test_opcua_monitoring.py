@@ -744,7 +744,8 @@ async def test_asyncua_a_full_event_queue_discards_as_discard_oldest_asks_and_qu
     enabled: each item's events, up to a fifth event sent when all queued ones came (so an extra
     overflow event would show).  The overflow event's fields are those of Part 5 v1.05 6.4.34:
     EventType i=3035, SourceNode the Server object, SourceName "Internal/EventQueueOverflow", its
-    own EventId."""
+    own EventId.  An item of the first row's parameters whose whereClause passes fault events only
+    (OfType DeviceFaultEventType) gets it too (7.22.3: these events "bypass the whereClause")."""
     runtime, facade = served
     watched: asyncio.Queue[Any] = asyncio.Queue()
     got: asyncio.Queue[tuple[int, Any]] = asyncio.Queue()
@@ -761,9 +762,11 @@ async def test_asyncua_a_full_event_queue_discards_as_discard_oldest_asks_and_qu
         TypeDefinitionId=ua.NodeId(ua.ObjectIds.BaseEventType), BrowsePath=[ua.QualifiedName(name, 0)],
         AttributeId=ua.AttributeIds.Value) for name in FIELDS])
 
-    async def item(subscription: Any, handle: int, size: int, oldest: bool) -> ua.MonitoredItemCreateResult:
+    async def item(subscription: Any, handle: int, size: int, oldest: bool,
+                   where: ua.ContentFilter | None = None) -> ua.MonitoredItemCreateResult:
         request = _request(ns, handle, "sers", "EventNotifier", EVENT, None, None)
-        request.RequestedParameters.Filter = select
+        request.RequestedParameters.Filter = select if where is None else ua.EventFilter(
+            SelectClauses=select.SelectClauses, WhereClause=where)
         request.RequestedParameters.QueueSize, request.RequestedParameters.DiscardOldest = size, oldest
         created = await _create(client, subscription, request)
         known = subscription._monitored_items[handle]
@@ -785,6 +788,12 @@ async def test_asyncua_a_full_event_queue_discards_as_discard_oldest_asks_and_qu
         assert (await item(watch, 0, 10, True)).StatusCode.is_good()
         for handle, (size, oldest, _) in enumerate(EVENT_QUEUES, 1):
             assert (await item(queued, handle, size, oldest)).RevisedQueueSize == size
+        faults = (await client.nodes.base_event_type.get_child(f"{ns}:DeviceFaultEventType")).nodeid
+        where = ua.ContentFilter(Elements=[ua.ContentFilterElement(
+            FilterOperator=ua.FilterOperator.OfType, FilterOperands=[ua.LiteralOperand(Value=ua.Variant(faults))])])
+        size, oldest, reported = EVENT_QUEUES[0]
+        wanted = [*EVENT_QUEUES, (size, oldest, reported)]
+        assert (await item(queued, len(wanted), size, oldest, where)).StatusCode.is_good()
         try:
             for active in (True, False, True, False):
                 runtime.fault("sers", "emergency_stop", active)
@@ -793,15 +802,15 @@ async def test_asyncua_a_full_event_queue_discards_as_discard_oldest_asks_and_qu
             events = [await asyncio.wait_for(got.get(), 10)]  # (the queues published: all in one message)
             runtime.fault("sers", "emergency_stop", True)  # e4, reported after the queued ones
             ids.append((await asyncio.wait_for(watched.get(), 10)).EventId)
-            while sum(event.EventId == ids[4] for _, event in events) < len(EVENT_QUEUES):
+            while sum(event.EventId == ids[4] for _, event in events) < len(wanted):
                 events.append(await asyncio.wait_for(got.get(), 10))
         finally:
             runtime.fault("sers", "emergency_stop", False)  # (for the tests after this one)
         await queued.delete()
         await watch.delete()
     assert {handle: [seen(event, ids) for got_for, event in events if got_for == handle]
-            for handle in range(1, len(EVENT_QUEUES) + 1)} == {
-        handle: [*reported, 4] for handle, (*_, reported) in enumerate(EVENT_QUEUES, 1)}
+            for handle in range(1, len(wanted) + 1)} == {
+        handle: [*reported, 4] for handle, (*_, reported) in enumerate(wanted, 1)}
 
 
 def test_node_opcua_a_full_event_queue_discards_as_discard_oldest_asks_and_queues_an_overflow_event(
