@@ -278,8 +278,10 @@ class NonVolatileMemory:
                     del self._image[section]
             raise
 
-    def delete(self, section: str) -> None:
-        if self._image.pop(section, None) is not None:
+    def delete(self, *sections: str) -> None:
+        """Remove ``sections`` with one write of the image (a kill leaves all of them or none)."""
+        removed = [self._image.pop(section) for section in sections if section in self._image]
+        if removed:
             self._write()
 
     def wipe(self) -> None:

@@ -21,7 +21,7 @@ import pytest
 import serial
 
 from tests.sers.conftest import Host, Plant, start_plant
-from tests.support.memory import refused_memory
+from tests.support.memory import killed_at_write, refused_memory
 
 ROOT = Path(__file__).resolve().parents[2]
 DEG = 12800 / 360
@@ -590,3 +590,63 @@ def test_a_stored_position_that_is_no_number_is_no_position(plant_factory, tmp_p
     (tmp_path / "sers.nvram.json").write_text(json.dumps({"position": "nan"}))
     plant = plant_factory({}, state_dir=tmp_path)
     assert query(plant.host, "P51") == "0°"
+
+
+def _drive_on(state_dir: Path, save: bool = True):
+    """A drive on the memory file in ``state_dir`` (in-process, virtual time); with ``save`` its
+    R0..R5 and W saved with its parameters (P1117=1, PSAVE): P1019=45 and W=500 stored."""
+    from devsim.core.clock import VirtualClock
+    from devsim.core.nvram import NonVolatileMemory
+    from devsim.devices.sers.model import SersDrive
+
+    nvram = NonVolatileMemory.for_device(state_dir, "sers", "sers")
+    drive = SersDrive(clock=VirtualClock(), config={}, nvram=nvram)
+    for number, value in ((1117, 1), (1019, 45), (47, 500), (1004, 2)) if save else ():
+        drive.access.write_param(number, value)
+    return drive, nvram
+
+
+def _stored(state_dir: Path) -> tuple[float, float]:
+    """P1019 and W as a drive powered on with the memory file reads them."""
+    drive, nvram = _drive_on(state_dir, save=False)
+    try:
+        return drive.access.param_value(1019), drive.access.param_value(47)
+    finally:
+        nvram.close()
+
+
+@pytest.mark.manual("§4.8.6.10", "P1117=1: PSAVE also stores R0..R5 and W")
+@pytest.mark.parametrize("at", [1, 2])
+def test_a_psave_with_p1117_killed_as_it_writes_leaves_the_parameters_and_registers_of_one_save(
+        tmp_path: Path, at: int) -> None:
+    """P1019 and W changed and saved again (PSAVE, P1117=1); the simulator is killed as it writes
+    the file for the ``at``-th time: the file holds both values of the first save or both of the
+    second.  (Before: the parameters and the registers were two writes, so a kill between them
+    left P1019 of the second save with W of the first, an EEPROM no PSAVE wrote.)"""
+    drive, nvram = _drive_on(tmp_path)
+    try:
+        drive.access.write_param(1019, 60)
+        drive.access.write_param(47, 7)
+        with killed_at_write(nvram, at) as writes:
+            drive.access.write_param(1004, 2)
+    finally:
+        nvram.close()
+    assert _stored(tmp_path) in ((45, 500), (60, 7))
+    assert len(writes) == at or _stored(tmp_path) == (60, 7)  # (no kill: the save finished)
+
+
+@pytest.mark.manual("§4.8.6.10", "P1004=3: the EEPROM back to factory defaults")
+@pytest.mark.parametrize("at", [1, 2])
+def test_factory_defaults_killed_as_they_are_written_leave_the_whole_save_or_none(tmp_path: Path, at: int) -> None:
+    """P1004=3 after a PSAVE with P1117=1, the simulator killed as it writes the file for the
+    ``at``-th time: the file holds the parameters and the registers, or neither.  (Before: two
+    writes, the parameters deleted, then the registers: a kill between them left W of the save
+    without its parameters.)"""
+    drive, nvram = _drive_on(tmp_path)
+    try:
+        with killed_at_write(nvram, at) as writes:
+            drive.access.write_param(1004, 3)
+    finally:
+        nvram.close()
+    assert _stored(tmp_path) in ((45, 500), (30, 0))  # (30 U/min: P1019's factory value)
+    assert len(writes) == at or _stored(tmp_path) == (30, 0)

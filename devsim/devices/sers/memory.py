@@ -120,23 +120,28 @@ class ParameterMemory:
         return image
 
     def psave(self) -> None:
-        """P1004=2: RAM parameters → EEPROM (W and R0..R5 only with P1117=1)."""
+        """P1004=2: RAM parameters → EEPROM (W and R0..R5 only with P1117=1), in one write of
+        the file: written one after the other, a kill between them left the new parameters with
+        the registers of an earlier save, an EEPROM this PSAVE never wrote."""
         ram = self.params.values
-        data = {str(n): ram[n] for n, row in PARAMETERS.items() if row.saved and n in ram}
-        self.nvram.put("params", data)
-        self.eeprom_checksum_error = False
+        sections = {"params": {str(n): ram[n] for n, row in PARAMETERS.items() if row.saved and n in ram}}
         if self.params.save_registers_too:
-            self.save_registers()
+            sections["registers"] = self._registers()
+        self.nvram.put_sections(sections)
+        self.eeprom_checksum_error = False
 
     def save_registers(self) -> None:
         """P1004=5: R0..R5 and W."""
+        self.nvram.put("registers", self._registers())
+
+    def _registers(self) -> dict[str, Any]:
+        """R0..R5 and W as P1004=5 (or PSAVE with P1117=1) stores them."""
         ram = self.params.values
-        self.nvram.put("registers", {str(n): ram[n] for n in REGISTERS})
+        return {str(n): ram[n] for n in REGISTERS}
 
     def factory_defaults(self) -> None:
         """P1004=3: EEPROM and RAM parameters back to factory defaults."""
-        self.nvram.delete("params")
-        self.nvram.delete("registers")
+        self.nvram.delete("params", "registers")  # (one write: a kill leaves both or neither)
         ram = self.params.values
         keep = {n: ram[n] for n in REGISTERS}
         ram.update(self._factory_image())
