@@ -265,3 +265,28 @@ def test_a_program_typed_in_inch_and_killed_while_saved_keeps_its_inch_mark(tmp_
     image = json.loads(path.read_text("utf-8")) if path.exists() else {}
     assert ("20" in image.get("programs", {})) == (20 in image.get("inch_programs", []))
     assert len(writes) == at or image["inch_programs"] == [20]  # (no kill: the save finished)
+
+
+@pytest.mark.parametrize("at", [1, 2])
+def test_a_block_entered_in_inch_and_killed_while_saved_keeps_its_inch_mark(tmp_path: Path, at: int) -> None:
+    """One block of a new program P20 entered (``panel.edit_block``) in inch (V22/2 H) on a control
+    killed as it writes the file for the ``at``-th time: the file holds the block with P20's inch
+    mark, or neither.  (Before: the inch mark was written first, the block only at the next
+    read-in chunk or at the end, so a kill after the entry left the mark of a program never
+    stored and lost the block.)"""
+    from devsim.core.clock import VirtualClock
+    from devsim.core.nvram import NonVolatileMemory
+    from devsim.devices.poselesta.model import PoselestaCnc
+
+    nvram = NonVolatileMemory.for_device(tmp_path, "poselesta", "poselesta")
+    try:
+        cnc = PoselestaCnc(clock=VirtualClock(), config={}, nvram=nvram)
+        cnc.signals.set("inch", True)
+        with killed_at_write(nvram, at) as writes:
+            cnc.memory.edit_block("20: N5 X1.00001")  # (what panel.edit_block puts)
+    finally:
+        nvram.close()
+    path = tmp_path / "poselesta.nvram.json"
+    image = json.loads(path.read_text("utf-8")) if path.exists() else {}
+    assert ("20" in image.get("programs", {})) == (20 in image.get("inch_programs", []))
+    assert len(writes) == at or image["inch_programs"] == [20]  # (no kill: the entry is saved)

@@ -117,11 +117,6 @@ class ProgramMemory:
         """The word formats a program was typed in: mm, or inch with two more decimals."""
         return self._formats(number in self.inch_programs)
 
-    def _typed(self, number: int, inch: bool) -> None:
-        """A program is (re)entered: in inch while V22/2 is H (stored as typed, spec §5.1)."""
-        if self._retyped(number, inch):
-            self._nvram.put("inch_programs", sorted(self.inch_programs))
-
     def _retyped(self, number: int, inch: bool) -> bool:
         """Mark program ``number`` as typed in inch or mm; whether its mark changed."""
         if inch == (number in self.inch_programs):
@@ -178,7 +173,10 @@ class ProgramMemory:
 
     def edit_block(self, text: str) -> None:
         """Program entry of one block (spec §3.2.2 ``panel.edit_block``): ``"20: N5 X10"`` stores
-        (or replaces) block N5 of P20, by the rules of a read-in."""
+        (or replaces) block N5 of P20, by the rules of a read-in, and saves it at once with a new
+        program's inch mark (before, the mark was written first, and the block only at the next
+        read-in chunk or at the end: a kill lost the block and left the mark of a program not
+        stored)."""
         number_text, sep, block_text = text.partition(":")
         digits = strip_blanks(number_text).lstrip("Pp")  # (str.strip: NBSP, U+3000, FS … US too)
         if not sep or not ascii_digits(digits):
@@ -187,10 +185,10 @@ class ProgramMemory:
         if number in RESERVED_PROGRAMS or not 0 <= number <= 98:
             raise BadValue(f"P{number:02d} is not an NC program")
         self.refuse_protected(number)
-        if number not in self.programs:
-            self._typed(number, self._inch())
+        # a new program is typed in inch while V22/2 is H; a stored one keeps the unit it was typed in
+        inch = self._inch() if number not in self.programs else number in self.inch_programs
         try:
-            blocks = parse_blocks(block_text, self.program_formats(number))
+            blocks = parse_blocks(block_text, self._formats(inch))
         except ValueError as exc:
             raise BadValue(str(exc)) from None
         if len(blocks) != 1:
@@ -198,6 +196,7 @@ class ProgramMemory:
         problem = self.store_block(number, blocks[0])
         if problem is not None:
             raise BadValue(f"{WERTBEREICHES_UEBERLAUF}: {problem}")
+        self._save(typed=(number, inch))  # the block with a new program's inch mark, in one write
 
     # -- program lock (POS III, §2.3.21; spec §4.5 G-LOCK) ------------------------------------------
     def protect(self, number: int, on: bool) -> None:
