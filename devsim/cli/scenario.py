@@ -23,7 +23,7 @@ import click
 
 from devsim.cli import exits
 from devsim.cli.options import FLOAT, AsciiFloatRange, AsciiIntRange, check_fleet
-from devsim.cli.statuses import file_failure
+from devsim.cli.statuses import file_failure, make_dirs
 from devsim.cli.usage import check_dirs
 from devsim.core.config import ConfigError
 from devsim.core.console import say, stop_on_signals, warn
@@ -149,6 +149,10 @@ def scenario_run(
             scenarios.append(load_scenario(path))
         except ConfigError as exc:
             raise exits.BadFile("\n".join(exc.messages)) from None  # every mistake, one line each
+    try:  # (/proc/td: '{scenario}: cannot run the scenario: [Errno 2] ...', no option named)
+        make_dirs({"--state-dir": state_dir, "--trace-dir": trace_dir, "--plot": plot_dir})
+    except exits.StartFailure as exc:
+        raise exits.failure(exc.status, str(exc)) from None
     from devsim.scenario.progress import Progress
 
     progress = Progress(len(scenarios))
@@ -382,12 +386,7 @@ async def _up(
     from devsim.scenario.workers import end_with_parent
 
     end_with_parent(loop, stop.set)  # a worker of `devsim up --workers` ends with it
-    for option, directory in (("--state-dir", state_dir), ("--trace-dir", trace_dir)):
-        if directory is not None:
-            try:
-                Path(directory).mkdir(parents=True, exist_ok=True)
-            except OSError as exc:  # (/proc/td: 'cannot start the plant: [Errno 2] ...', no option named)
-                raise file_failure(option, exc) from None
+    make_dirs({"--state-dir": state_dir, "--trace-dir": trace_dir})  # (/proc/td: 'cannot start the plant: ...')
     limit = fdlimit.fd_limit()
     if log_level >= DEFAULT_LEVEL:  # (-q: warnings and errors only)
         warn(f"devsim: the file descriptor limit {limit} allows about {fdlimit.capacity(limit)} ports")

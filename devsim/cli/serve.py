@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import msgspec
 
 from devsim.cli.control_address import control_option, default_control, system_failure
-from devsim.cli.statuses import INTERRUPTED, StartFailure, file_failure, start_status
+from devsim.cli.statuses import INTERRUPTED, StartFailure, file_failure, make_dirs, start_status
 from devsim.cli.usage import host_port, usage_error
 from devsim.core.console import say as _say  # (replaced by tests and benchmarks/startup.py)
 from devsim.core.console import stop_on_signals, warn
@@ -343,13 +343,7 @@ async def _serve(plan: Plan) -> None:
         server: Any = None
         page: Any = None
         web_lines: list[str] = []
-        if plan.state_dir is not None:
-            from pathlib import Path
-
-            try:
-                Path(plan.state_dir).mkdir(parents=True, exist_ok=True)
-            except OSError as exc:  # (/proc/sd: 'cannot create the devices: [Errno 2] ...')
-                raise file_failure("--state-dir", exc) from None
+        make_dirs({"--state-dir": plan.state_dir})  # (/proc/sd: 'cannot create the devices: [Errno 2] ...')
         try:
             devices = [runtime.add_device(plan.kind, name, config) for name, config in plan.devices]
             if plan.motion_log is not None:

@@ -16,6 +16,7 @@ __all__ = [
     "UNREACHABLE",
     "USAGE",
     "file_failure",
+    "make_dirs",
     "start_status",
 ]
 
@@ -66,3 +67,18 @@ def file_failure(option: str, exc: OSError) -> StartFailure:
     why, ``--trace: adir: Is a directory``, status ``SYSTEM`` as a directory option's
     (:func:`devsim.cli.usage.check_dirs`).  Said as the port being opened, it named no option."""
     return StartFailure(f"{option}: {exc.filename}: {exc.strerror}", SYSTEM)
+
+
+def make_dirs(dirs: dict[str, str | None]) -> None:
+    """Make the directories that options name (option → the path given, or None) as a command
+    starts; one that cannot be made (``/proc/td``) is :func:`file_failure` naming its option (said
+    as the plant being started or the scenario run, it named none).  Without any, nothing is
+    imported (``devsim run``'s start imports no pathlib it does not use)."""
+    for option, directory in dirs.items():
+        if directory is not None:
+            from pathlib import Path
+
+            try:
+                Path(directory).mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                raise file_failure(option, exc) from None

@@ -16,8 +16,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import click
-
 from devsim.observe.motion_log import start_motion_log
 
 __all__ = ["ScenarioPictures"]
@@ -36,8 +34,6 @@ class ScenarioPictures:
         trace_dir: str | None,
         count: int,
     ) -> None:
-        if motion_log is not None and not Path(motion_log).resolve().parent.is_dir():
-            raise click.UsageError(f"--motion-log: no directory {str(Path(motion_log).parent)!r}")
         self.motion_log = motion_log
         self.resolution = resolution
         self.plot_dir = Path(plot_dir) if plot_dir is not None else None

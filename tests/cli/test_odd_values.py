@@ -102,6 +102,16 @@ def test_a_directory_option_naming_a_file_is_one_error_line(args: list[str], sta
         (["up", PLANT, "--no-control", "--trace-dir", "/proc/devsim-traces"],
          "--trace-dir: /proc/devsim-traces: No such file or directory"),
         (["scenario", "run", "--virtual", "--motion-log", "{dir}", PLANT], "--motion-log: {dir}: Is a directory"),
+        # (a usage error, status 2: "--motion-log: no directory '{dir}/missing'", where run and up give 6)
+        (["scenario", "run", "--virtual", "--motion-log", "{dir}/missing/m.csv", PLANT],
+         "--motion-log: {dir}/missing/m.csv: No such file or directory"),
+        # ('{scenario}: cannot run the scenario: [Errno 2] No such file or directory: ...', no option named)
+        (["scenario", "run", "--virtual", "--trace-dir", "/proc/devsim-traces", PLANT],
+         "--trace-dir: /proc/devsim-traces: No such file or directory"),
+        (["scenario", "run", "--virtual", "--state-dir", "/proc/devsim-state", PLANT],
+         "--state-dir: /proc/devsim-state: No such file or directory"),
+        (["scenario", "run", "--virtual", "--plot", "/proc/devsim-plots", PLANT],
+         "--plot: /proc/devsim-plots: No such file or directory"),
     ],
 )
 def test_a_file_option_that_cannot_be_written_is_one_error_line(args: list[str], expected: str, tmp_path: Path) -> None:
