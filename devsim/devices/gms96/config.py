@@ -68,7 +68,10 @@ class LinkOptions(Settings):
     unknown_short_command_reply: Literal["ack", "none"] = "ack"
     on_queue_full: Literal["defer", "drop", "nack"] = "defer"
     e_version_features: list[Literal["fcb", "acd", "dfc"]] = field(default_factory=lambda: ["fcb", "acd", "dfc"])
-    broadcast_address: Annotated[int | None, doc("e.g. 255; None = no broadcast")] = None
+    # (spec §2.3 [R]: the manual has no broadcast; IEC 60870-5-2's for a one-octet address field is
+    # 255, all ones.  Any integer passed before: 0..31 is a card's own address, >255 no octet at all.)
+    broadcast_address: Annotated[Literal[255] | None, doc(
+        "255, IEC 60870-5-2's broadcast address; None = no broadcast")] = None
     error_line_idle: Annotated[bool, doc(
         "FT1.2 rule R4: after a detected frame error accept a new frame only after >= 33 bit times of line idle "
         "(False: resynchronise at once)")] = True
