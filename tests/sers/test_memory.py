@@ -21,7 +21,7 @@ import pytest
 import serial
 
 from tests.sers.conftest import Host, Plant, start_plant
-from tests.support.memory import killed_at_write, refused_memory
+from tests.support.memory import killed_at_write
 
 ROOT = Path(__file__).resolve().parents[2]
 DEG = 12800 / 360
@@ -299,19 +299,43 @@ def _stored_program(state_dir: Path, options: list[str], lines: int) -> dict:
     return json.loads((state_dir / "sers.nvram.json").read_text("utf-8"))
 
 
+#: What a drive without a valid program answers ``RUN`` (errno 69, spec §4.4 "valid program").
+NO_VALID_PROGRAM = b"#RUN\r\n*kein g\xfcltiges Programm vorhanden\n\r"
+
+
+def _without_a_valid_program(plant: Plant, state_file: Path, text: str, capfd: pytest.CaptureFixture[str],
+                             why: str) -> None:
+    """The drive started on ``state_file`` (holding ``text``) has no valid program: ``RUN`` is
+    errno 69, LIST lists nothing, one stderr line names the file and ``why``, the file is as it
+    was, and the parameters are the ones stored."""
+    assert plant.host.ask("#RUN\r") == NO_VALID_PROGRAM
+    assert re.fullmatch(rb"#LIST\r\nok\d\n\r", plant.host.ask("#LIST\r"))  # (no statement listed)
+    err = capfd.readouterr().err
+    assert f"devsim: memory {state_file}: " in err and why in err and "the program fails its checksum" in err
+    assert state_file.read_text("utf-8") == text
+    assert query(plant.host, "P1019") == "45U/min"
+
+
 @pytest.mark.manual("§4.4", "program memory 2 KByte standard, 8 KByte with option P8")
-def test_a_program_longer_than_the_drives_memory_refuses_the_memory(plant_factory, tmp_path) -> None:
-    """[SIM-CHOICE] 35 lines of ten statements (2100 bytes) stored by a drive with option P8, then
-    a drive without it on that file: refused at the start, the file left as it is (before: option
-    P8 left the memory at 2 KB, so errno 5 refused the 35th line; and a program longer than the
-    memory loaded); with P8 it loads, 8 KB less the program free (P1122 in words)."""
+def test_a_program_longer_than_the_drives_memory_fails_its_checksum(plant_factory, tmp_path, capfd) -> None:
+    """[SIM-CHOICE, as the kind's parameters] 35 lines of ten statements (2100 bytes) stored by a
+    drive with option P8, then a drive without it on that file: it starts without a valid program
+    (before: option P8 left the memory at 2 KB, so errno 5 refused the 35th line; and a program
+    longer than the memory loaded); with P8 it loads, 8 KB less the program free (P1122 in words)."""
     _stored_program(tmp_path, ["P8"], 35)
-    text = (tmp_path / "sers.nvram.json").read_text("utf-8")
-    refused_memory(tmp_path, "sers", match=r"\(ValueError: the stored program of 2100 bytes is longer than the"
-                                           r" drive's 2048-byte program memory")
-    assert (tmp_path / "sers.nvram.json").read_text("utf-8") == text
+    state_file = tmp_path / "sers.nvram.json"
+    text = state_file.read_text("utf-8")
+    capfd.readouterr()
+    without_p8 = start_plant([{}], state_dir=tmp_path)
+    try:
+        _without_a_valid_program(without_p8, state_file, text, capfd,
+                                 "the stored program of 2100 bytes is longer than the drive's 2048-byte program memory")
+    finally:
+        without_p8.host.close()
+        without_p8.runtime.stop()  # (its memory is free for the next drive)
     plant = plant_factory({"options": ["P8"]}, state_dir=tmp_path)
     assert query(plant.host, "P1122") == str((8192 - 2100) // 2)
+    assert plant.host.ask("#RUN\r") != NO_VALID_PROGRAM
 
 
 @pytest.fixture(scope="module")
@@ -321,15 +345,17 @@ def typed(tmp_path_factory: pytest.TempPathFactory) -> dict:
 
 
 @pytest.mark.parametrize("program", [None, {}, [], 0, "", {"lines": None}, {"lines": {}}, {"lines": [[]]},
-                                     {"lines": [["O1=1"], [5]]}, {"lines": [["O1=1"], "E"]},
-                                     {"lines": [["O1=1"]], "x": 0}])
-def test_a_program_the_drive_never_stores_refuses_the_memory(tmp_path, typed: dict, program: object) -> None:
-    """(Before: null, ``{}``, ``[]``, 0 or ``""`` read as no program, a number as the statement
-    ``'5'``, the text ``"E"`` as its one statement; an empty line listed nothing.)"""
-    image = {**typed, "program": program}
-    (tmp_path / "sers.nvram.json").write_text(json.dumps(image), "utf-8")
-    refused_memory(tmp_path, "sers", match=r"\(ValueError: stored program .* is not what the device writes"
-                                           r"|\(ValueError: the stored program lines")
+                                     {"lines": [["O1=1"], [5]]}, {"lines": [["O1=1"]], "x": 0}])
+def test_a_program_the_drive_never_stores_fails_its_checksum(plant_factory, tmp_path, capfd, typed: dict,
+                                                              program: object) -> None:
+    """[SIM-CHOICE, as the kind's parameters] (Before: null, ``{}``, ``[]``, 0 or ``""`` read as
+    no program without a word, a number as the statement ``'5'``, an empty line listed nothing.)"""
+    state_file = tmp_path / "sers.nvram.json"
+    text = json.dumps({**typed, "program": program})
+    state_file.write_text(text, "utf-8")
+    _without_a_valid_program(plant_factory({}, state_dir=tmp_path), state_file, text, capfd,
+                             "not what the device writes" if type(program) is not dict or "x" in program
+                             or program == {} else "are no lines of statements the drive stores")
 
 
 def test_the_eeprom_a_drive_saved_loads_as_it_was_saved(plant_factory, tmp_path, typed: dict) -> None:

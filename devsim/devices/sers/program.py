@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
+from devsim.core.console import warn
 from devsim.core.nvram import NonVolatileMemory, stored_object
 from devsim.devices.sers.errors import SersError
 
@@ -24,6 +25,22 @@ __all__ = ["PROGRAM_BYTES", "PROGRAM_BYTES_P8", "ProgramMemory", "statement_cost
 SECTION = "program"
 #: the program memory: 2 KB standard, 8 KB with option P8 (§4.4; spec §4.9 G-MEM)
 PROGRAM_BYTES, PROGRAM_BYTES_P8 = 2048, 8192
+
+
+def _stored(section: object, capacity: int) -> tuple[list[str], list[bool]]:
+    """The statements of a stored program section and where its lines begin, if the drive could
+    have written it (``{"lines": [[text, ...], ...]}`` within ``capacity`` bytes); else ValueError."""
+    lines = stored_object(section, "program", ("lines",))["lines"]
+    if type(lines) is not list or not all(type(line) is list and line and all(type(t) is str for t in line)
+                                          for line in lines):
+        raise ValueError(f"the stored program lines {lines!r:.40} are no lines of statements the drive stores")
+    statements = [text for line in lines for text in line]
+    starts = [index == 0 for line in lines for index in range(len(line))]
+    used = sum(statement_cost(text) for text in statements)
+    if used > capacity:
+        raise ValueError(f"the stored program of {used} bytes is longer than the drive's {capacity}-byte"
+                         f" program memory (option P8: {PROGRAM_BYTES_P8})")
+    return statements, starts
 
 
 def statement_cost(text: str) -> int:
@@ -61,25 +78,21 @@ class ProgramMemory:
 
     def reload(self) -> None:
         """The program as the drive stored it: its lines, each of one or more statement texts,
-        within the memory (§4.4).  Anything else is a ValueError, and the start refuses the memory
-        naming the file (UnfitMemory): before, null, ``{}`` or ``[]`` read as no program, a
-        number as the statement ``'5'``, and a program longer than the memory loaded
-        [SIM-CHOICE: what a drive does at power-on with a program its memory cannot hold is in
-        no manual; a file of a drive with option P8 on one without it is refused]."""
-        lines: object = []  # (no program stored yet, or a wiped memory)
+        within the memory (§4.4).  [SIM-CHOICE, as the kind's parameters: a stored value the
+        drive never stores reads as a failed checksum, :class:`~devsim.devices.sers.memory.ParameterMemory`]
+        Anything else (null, ``{}``, a number for a statement, a program longer than the memory:
+        a file of a drive with option P8 on one without it) fails the program's checksum: the
+        drive starts without a valid program (``RUN``: errno 69, spec §4.4 "valid program"), one
+        line on stderr names the file, and the file keeps what it held until a program is
+        written.  Before, null, ``{}`` or ``[]`` read as no program without a word, a number as
+        the statement ``'5'``, and a program longer than the memory loaded."""
+        self._statements, self._starts = [], []  # (no program stored yet, or a wiped memory)
         if SECTION in self.nvram:
-            lines = stored_object(self.nvram.get(SECTION), "program", ("lines",))["lines"]
-        if type(lines) is not list or not all(type(line) is list and line and all(type(t) is str for t in line)
-                                              for line in lines):
-            raise ValueError(f"the stored program lines {lines!r:.40} are no lines of statements the drive stores")
-        self._statements, self._starts = [], []
-        for line in lines:
-            for index, text in enumerate(line):
-                self._statements.append(text)
-                self._starts.append(index == 0)
-        if self.used_bytes() > self.capacity:
-            raise ValueError(f"the stored program of {self.used_bytes()} bytes is longer than the drive's"
-                             f" {self.capacity}-byte program memory (option P8: {PROGRAM_BYTES_P8})")
+            try:
+                self._statements, self._starts = _stored(self.nvram.get(SECTION), self.capacity)
+            except ValueError as exc:
+                warn(f"devsim: memory {self.nvram.path or 'memory'}: {exc}; the program fails its checksum"
+                     " (no valid program)")
         self.editing = False
         self._joined = False
         self.position = min(self.position, len(self._statements))
