@@ -8,7 +8,6 @@ The image is made by a real card through its own FT1.2 port (:class:`Gms96Client
 from __future__ import annotations
 
 import copy
-import json
 import subprocess
 from pathlib import Path
 from typing import Any
@@ -19,7 +18,7 @@ from devsim.cli import exits
 from devsim.runtime import Runtime
 from tests.gms96.conftest import start_plant
 from tests.gms96.test_motion_reference import send
-from tests.support.memory import refused_memory
+from tests.support.memory import refused_memory, state_image, write_state_image
 from tests.test_cli import Sim
 
 FLASH_ERASE = 5.0  # manual §2.3.1 p: the card does not answer for 2 to 5 s after p3;100
@@ -58,18 +57,11 @@ def saved(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
         for port in plant._ports:
             port.close()
         plant.runtime.stop()
-    image: dict[str, Any] = json.loads((state / "gms96.nvram.json").read_text())
-    return image
-
-
-def _write(state: Path, image: dict[str, Any]) -> Path:
-    path = state / "gms96.nvram.json"
-    path.write_text(json.dumps(image, ensure_ascii=False), "utf-8")
-    return path
+    return state_image(state, "gms96")
 
 
 def test_the_image_a_card_saved_loads_as_it_was_saved(tmp_path: Path, saved: dict[str, Any]) -> None:
-    _write(tmp_path, saved)
+    write_state_image(tmp_path, "gms96", saved)
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:
         runtime.add_device("gms96")
@@ -104,7 +96,7 @@ def test_a_number_key_the_card_never_writes_refuses_the_memory(tmp_path: Path, s
     image = copy.deepcopy(saved)
     section = image[where[0]][where[1]]
     section[edited] = section.pop(key)
-    path = _write(tmp_path, image)
+    path = write_state_image(tmp_path, "gms96", image)
     refused = refused_memory(tmp_path, "gms96", match=r"\(ValueError: stored .* (is no number the device writes"
                                                       r"|is none the device stores)\)")
     assert str(refused).startswith(f"{path}: ")
@@ -122,7 +114,7 @@ def test_a_stored_value_the_card_never_writes_refuses_the_memory(tmp_path: Path,
     made a tool number 128 another one; ``bool("0")`` switched the override on.)"""
     image = copy.deepcopy(saved)
     image.setdefault(where[0], {})[where[1]] = value
-    _write(tmp_path, image)
+    write_state_image(tmp_path, "gms96", image)
     refused_memory(tmp_path, "gms96", match=r"\(ValueError: stored .* is none the device stores\)")
 
 
@@ -171,7 +163,7 @@ def test_a_section_the_card_never_writes_refuses_the_memory(tmp_path: Path, save
     took a default and an extra one was ignored.)"""
     image = copy.deepcopy(saved)
     SECTION_EDITS[edit](image)
-    path = _write(tmp_path, image)
+    path = write_state_image(tmp_path, "gms96", image)
     text = path.read_text("utf-8")
     refused_memory(tmp_path, "gms96", match="this memory image does not fit the kind 'gms96'")
     assert path.read_text("utf-8") == text
@@ -179,7 +171,7 @@ def test_a_section_the_card_never_writes_refuses_the_memory(tmp_path: Path, save
 
 def test_a_memory_no_save_reached_starts_on_the_factory_data(tmp_path: Path, saved: dict[str, Any]) -> None:
     """No section at all (a wiped memory, a card that never saved) is what the card writes: defaults."""
-    _write(tmp_path, {"devsim-kind": saved["devsim-kind"]})
+    write_state_image(tmp_path, "gms96", {"devsim-kind": saved["devsim-kind"]})
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:
         runtime.add_device("gms96")
@@ -198,7 +190,7 @@ def test_a_stored_offset_or_data_byte_the_card_never_writes_refuses_the_memory(
     image["offsets"]["table"] = table
     if data is not None:
         image["static"] = {"data": data, "mb18": 0}
-    _write(tmp_path, image)
+    write_state_image(tmp_path, "gms96", image)
     refused_memory(tmp_path, "gms96", match=r"\(ValueError: stored .* (is none the device stores|is no 160 bytes)\)")
 
 
@@ -207,7 +199,7 @@ def test_a_stored_speed_beyond_its_range_is_clamped_as_a_write_is(tmp_path: Path
     EEPROM (before: M 10**30 loaded as it was)."""
     image = copy.deepcopy(saved)
     image["eeprom"].update(M=10**30, B=-5, S=10**6)
-    _write(tmp_path, image)
+    write_state_image(tmp_path, "gms96", image)
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:
         runtime.add_device("gms96")
@@ -223,7 +215,7 @@ def test_devsim_run_on_a_state_file_with_another_scripts_digits_stops_naming_it(
     the file, no traceback, the file left as it is (before: the card started with N39 = 50)."""
     image = copy.deepcopy(saved)
     image["eeprom"]["N"]["٣٩"] = 50
-    path = _write(tmp_path, image)
+    path = write_state_image(tmp_path, "gms96", image)
     text = path.read_text("utf-8")
     sim = Sim("gms96", "--pty", "--virtual", "--state-dir", str(tmp_path), "--no-control")
     try:
@@ -249,7 +241,7 @@ def test_a_stored_program_row_no_telegram_carries_refuses_the_memory(tmp_path: P
     Appendix B, and the ones not sent are 0.)"""
     image = copy.deepcopy(saved)
     image["flash"]["programs"]["3"][1] = row
-    _write(tmp_path, image)
+    write_state_image(tmp_path, "gms96", image)
     refused_memory(tmp_path, "gms96", match=r"\(ValueError: stored program row .* is no command a 24-bit telegram")
 
 
@@ -265,7 +257,7 @@ def test_a_stored_plc_image_no_download_makes_refuses_the_memory(tmp_path: Path,
     frames that are no lengths loaded and were served as the downloaded program.)"""
     image = copy.deepcopy(saved)
     image["flash"].update(plc=plc, plc_frames=frames)
-    _write(tmp_path, image)
+    write_state_image(tmp_path, "gms96", image)
     refused_memory(tmp_path, "gms96", match=r"\(ValueError: stored PLC (image|frame)")
 
 
@@ -273,7 +265,7 @@ def test_a_plc_image_an_older_devsim_stored_without_its_frames_loads_as_one_fram
         tmp_path: Path, saved: dict[str, Any]) -> None:
     image = copy.deepcopy(saved)
     del image["flash"]["plc_frames"]
-    _write(tmp_path, image)
+    write_state_image(tmp_path, "gms96", image)
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:
         runtime.add_device("gms96")
@@ -289,14 +281,14 @@ def test_a_flash_beyond_the_configured_memory_refuses_the_memory(tmp_path: Path,
     """[SIM-CHOICE] The card's FLASH (programs 0 and 3, 5 commands, a PLC image of 15 bytes) on a card
     configured to hold less: refused at the start (before: program 3 loaded on a card keeping programs
     0 … 2, more commands or PLC bytes than any download could store there)."""
-    path = _write(tmp_path, saved)
+    path = write_state_image(tmp_path, "gms96", saved)
     text = path.read_text("utf-8")
     refused_memory(tmp_path, "gms96", config=config, match=r"\(ValueError: the stored FLASH holds more than the configured")
     assert path.read_text("utf-8") == text
 
 
 def test_a_flash_filling_the_configured_memory_loads(tmp_path: Path, saved: dict[str, Any]) -> None:
-    _write(tmp_path, saved)
+    write_state_image(tmp_path, "gms96", saved)
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:
         runtime.add_device("gms96", None, {"max_programs": 4, "max_total_commands": 5, "plc": {"flash_bytes": 15}})

@@ -19,7 +19,7 @@ import pytest
 from devsim.pytest_plugin import DeviceFactory
 from devsim.runtime import Runtime
 from tests.ip247.helpers import FORWARD, Module
-from tests.support.memory import killed_at_write, refused_memory
+from tests.support.memory import killed_at_write, refused_memory, state_image, write_state_image
 
 PROGRAM = "%  9\nN1 X1 F100\nN2 M02\n"
 
@@ -42,19 +42,12 @@ def saved(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
             mod.port.close()
     finally:
         factory.close()
-    image: dict[str, Any] = json.loads((state / "ip247.nvram.json").read_text("utf-8"))
-    return image
-
-
-def _write(state: Path, image: dict[str, Any]) -> str:
-    text = json.dumps(image, ensure_ascii=False)
-    (state / "ip247.nvram.json").write_text(text, "utf-8")
-    return text
+    return state_image(state, "ip247")
 
 
 def test_the_image_a_module_saved_loads_as_it_was_saved(tmp_path: Path, saved: dict[str, Any]) -> None:
     assert sorted(saved["md"]) == ["1", "2"] and sorted(saved["offsets"]) == ["1", "2", "3"]
-    _write(tmp_path, saved)
+    write_state_image(tmp_path, "ip247", saved)
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:
         m = runtime.add_device("ip247").model
@@ -71,7 +64,7 @@ def test_battery_ram_without_offsets_loads_them_as_zero(tmp_path: Path, saved: d
     older devsim killed between the first save's writes of ``md`` and ``offsets``): all zero."""
     image = copy.deepcopy(saved)
     del image["offsets"]
-    _write(tmp_path, image)
+    write_state_image(tmp_path, "ip247", image)
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:
         m = runtime.add_device("ip247").model
@@ -149,7 +142,7 @@ def test_a_key_or_value_the_module_never_writes_refuses_the_memory(
         tmp_path: Path, saved: dict[str, Any], edit: str) -> None:
     image = copy.deepcopy(saved)
     EDITS[edit](image)
-    text = _write(tmp_path, image)
+    text = write_state_image(tmp_path, "ip247", image).read_text("utf-8")
     refused_memory(tmp_path, "ip247", match="this memory image does not fit the kind 'ip247'")
     assert (tmp_path / "ip247.nvram.json").read_text("utf-8") == text
 

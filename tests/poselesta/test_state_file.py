@@ -18,7 +18,7 @@ import pytest
 
 from devsim.cli import exits
 from devsim.runtime import Runtime
-from tests.support.memory import killed_at_write, refused_memory
+from tests.support.memory import killed_at_write, refused_memory, state_image, write_state_image
 from tests.test_cli import Sim
 
 
@@ -36,18 +36,11 @@ def saved(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
         runtime.set("poselesta", "panel.protect", 3)
     finally:
         runtime.stop()
-    image: dict[str, Any] = json.loads((state / "poselesta.nvram.json").read_text())
-    return image
-
-
-def _write(state: Path, image: dict[str, Any]) -> Path:
-    path = state / "poselesta.nvram.json"
-    path.write_text(json.dumps(image, ensure_ascii=False), "utf-8")
-    return path
+    return state_image(state, "poselesta")
 
 
 def test_the_image_a_control_saved_loads_as_it_was_saved(tmp_path: Path, saved: dict[str, Any]) -> None:
-    _write(tmp_path, saved)
+    write_state_image(tmp_path, "poselesta", saved)
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:
         runtime.add_device("poselesta")
@@ -78,7 +71,7 @@ def test_a_number_key_the_control_never_writes_refuses_the_memory(tmp_path: Path
     P41; a program or tool key '03' or '05' was P03 or T05, replacing the stored one.)"""
     image = copy.deepcopy(saved)
     image[section][edited] = image[section].pop(key)
-    path = _write(tmp_path, image)
+    path = write_state_image(tmp_path, "poselesta", image)
     refused = refused_memory(tmp_path, "poselesta",
                              match=r"\(ValueError: stored (parameter|program|tool) .* is no number the device writes\)")
     assert str(refused).startswith(f"{path}: ")
@@ -89,7 +82,7 @@ def test_a_block_number_twice_in_a_program_refuses_the_memory(tmp_path: Path, sa
     one twice (before: the second N5 of a hand-edited P03 silently replaced the first)."""
     image = copy.deepcopy(saved)
     image["programs"]["3"].append({"N": 5, "skip": False, "words": [["X", 9000]]})
-    _write(tmp_path, image)
+    write_state_image(tmp_path, "poselesta", image)
     refused_memory(tmp_path, "poselesta", match=r"\(ValueError: stored program P03 holds a block number twice\)")
 
 
@@ -108,7 +101,7 @@ def test_a_section_the_control_never_writes_refuses_the_memory(tmp_path: Path, s
     protection or parameters gone without a word.)"""
     image = copy.deepcopy(saved)
     image[section] = value
-    path = _write(tmp_path, image)
+    path = write_state_image(tmp_path, "poselesta", image)
     text = path.read_text("utf-8")
     refused_memory(tmp_path, "poselesta", match="this memory image does not fit the kind 'poselesta'")
     assert path.read_text("utf-8") == text
@@ -118,7 +111,7 @@ def test_programs_beyond_the_configured_memory_refuse_the_memory(tmp_path: Path,
     """[SIM-CHOICE] The control's 5 stored blocks (P20: 3, P03: 2) on a control configured with
     ``max_blocks_total`` 4 are refused at the start (before: they loaded, more than any read-in or
     entry stores there); with 5 they load."""
-    path = _write(tmp_path, saved)
+    path = write_state_image(tmp_path, "poselesta", saved)
     text = path.read_text("utf-8")
     refused_memory(tmp_path, "poselesta", config={"max_blocks_total": 4},
                    match=r"\(ValueError: the stored programs hold 5 blocks, more than the configured max_blocks_total 4\)")
@@ -138,7 +131,7 @@ def test_devsim_run_on_a_state_file_with_another_scripts_digits_stops_naming_it(
     with P41 = 7)."""
     image = copy.deepcopy(saved)
     image["params"]["٤١"] = 7
-    path = _write(tmp_path, image)
+    path = write_state_image(tmp_path, "poselesta", image)
     text = path.read_text("utf-8")
     sim = Sim("poselesta", "--pty", "--virtual", "--state-dir", str(tmp_path), "--no-control")
     try:
@@ -161,7 +154,7 @@ def test_a_stored_parameter_value_the_control_never_takes_refuses_the_memory(
     catalogue block or the config refuses them, check_parameter.)"""
     image = copy.deepcopy(saved)
     image["params"][number] = value
-    _write(tmp_path, image)
+    write_state_image(tmp_path, "poselesta", image)
     refused_memory(tmp_path, "poselesta", match=rf"\(ValueError: P{number}: .* is not a whole number in")
 
 
@@ -170,7 +163,7 @@ def test_a_stored_parameter_a_catalogue_read_in_left_at_0_loads(tmp_path: Path, 
     its M30 leaves P30 at 0, below its range, and the control keeps it so."""
     image = copy.deepcopy(saved)
     image["params"]["30"] = 0
-    _write(tmp_path, image)
+    write_state_image(tmp_path, "poselesta", image)
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:
         runtime.add_device("poselesta")
@@ -199,13 +192,12 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
         assert runtime.read("poselesta", "v6.state") == "done"
     finally:
         runtime.stop()
-    image: dict[str, Any] = json.loads((state / "poselesta.nvram.json").read_text())
-    return image
+    return state_image(state, "poselesta")
 
 
 def test_the_tape_a_cassette_recorded_plays_back_after_a_restart(tmp_path: Path, recorded: dict[str, Any]) -> None:
     assert recorded["cassette"].startswith("a58d0a")  # ISO "%" CR LF
-    _write(tmp_path, recorded)
+    write_state_image(tmp_path, "poselesta", recorded)
     runtime = Runtime(virtual=True, state_dir=tmp_path).start()
     try:
         runtime.add_device("poselesta", None, CASSETTE)
@@ -236,7 +228,7 @@ def test_a_tape_the_recorder_never_keeps_refuses_the_memory(tmp_path: Path, reco
     image = copy.deepcopy(recorded)
     change = TAPES[edit]
     image["cassette"] = change(image["cassette"]) if callable(change) else change
-    path = _write(tmp_path, image)
+    path = write_state_image(tmp_path, "poselesta", image)
     text = path.read_text("utf-8")
     refused_memory(tmp_path, "poselesta", match=r"\(ValueError: the stored cassette .* is no tape the recorder keeps",
                    config=CASSETTE)

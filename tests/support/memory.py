@@ -1,7 +1,9 @@
-"""A device made on a state file as ``devsim run --state-dir`` makes it (``Runtime.add_device``)."""
+"""A device made on a state file as ``devsim run --state-dir`` makes it (``Runtime.add_device``),
+and the state file's image as a device wrote it, to edit."""
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -24,6 +26,19 @@ def refused_memory(state_dir: Path, kind: str, match: str | None = None,
     finally:
         runtime.stop()
     return refused.value
+
+
+def state_image(state_dir: Path, kind: str) -> dict[str, Any]:
+    """The image of the ``kind`` device's state file in ``state_dir`` (its name is the kind's)."""
+    image: dict[str, Any] = json.loads((state_dir / f"{kind}.nvram.json").read_text("utf-8"))
+    return image
+
+
+def write_state_image(state_dir: Path, kind: str, image: dict[str, Any]) -> Path:
+    """``image`` as the ``kind`` device's state file in ``state_dir`` (a hand edit); its path."""
+    path = state_dir / f"{kind}.nvram.json"
+    path.write_text(json.dumps(image, ensure_ascii=False), "utf-8")
+    return path
 
 
 class Killed(BaseException):
