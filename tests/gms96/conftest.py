@@ -13,6 +13,7 @@ from devsim.devices.gms96 import codec
 from devsim.devices.gms96.client import Gms96Client
 from devsim.runtime import Runtime
 from devsim.transports.pty import PtyTransport
+from tests.support.process import wait_until
 
 
 def h(text: str) -> bytes:
@@ -57,10 +58,8 @@ class Host:
         before = self.received() if self.received is not None else 0
         self.send(data)
         if self.received is not None:
-            deadline = time.monotonic() + 5.0
-            while self.received() < before + len(h(data)):
-                assert time.monotonic() < deadline, "the card never read the bytes"
-                time.sleep(0.001)
+            read = self.received
+            wait_until(lambda: read() >= before + len(h(data)), "read of the bytes by the card", step=0.001)
         return self.reply(wait) == b""
 
     def close(self) -> None:
@@ -108,11 +107,7 @@ class Plant:
         return Gms96Client(port, address, e_version=e_version, timeout=2.0)
 
     def wait_received(self, count: int, timeout: float = 5.0) -> None:
-        deadline = time.monotonic() + timeout
-        line = self.runtime.lines[self.name]
-        while self.runtime.call(lambda: line.status()["bytes_in"]) < count:
-            assert time.monotonic() < deadline, "the device never received the bytes"
-            time.sleep(0.001)
+        wait_until(lambda: self.bytes_in() >= count, "receipt of the bytes by the device", timeout, step=0.001)
 
     def bytes_in(self) -> int:
         line = self.runtime.lines[self.name]
