@@ -339,7 +339,6 @@ async def _serve(plan: Plan) -> None:
     runtime.idle_drop = plan.idle_drop
     async with runtime:
         stage = "create the devices"
-        file_option = "--trace"  # (what names a file that cannot be written: the motion log's, or a trace's)
         server: Any = None
         page: Any = None
         web_lines: list[str] = []
@@ -350,9 +349,7 @@ async def _serve(plan: Plan) -> None:
                 stage = f"write the motion log {plan.motion_log}"
                 from devsim.observe.motion_log import start_motion_log
 
-                file_option = "--motion-log"
                 start_motion_log(runtime, devices, plan.motion_log, plan.motion_resolution)
-                file_option = "--trace"
             served: list[tuple[str, Any, Port]] = []  # port name, transport, spec
             plan_ports = _plan_ports(plan, devices[0].ports)
             for index, (port_name, spec) in enumerate(plan_ports):
@@ -415,8 +412,9 @@ async def _serve(plan: Plan) -> None:
                 await server.close()
             from devsim.transports.trace import TraceFileError
 
-            if isinstance(exc, TraceFileError):
-                raise file_failure(file_option, exc) from None
+            if isinstance(exc, TraceFileError):  # (the file of --motion-log, or of a --trace)
+                motion_log = plan.motion_log is not None and exc.filename == str(plan.motion_log)
+                raise file_failure("--motion-log" if motion_log else "--trace", exc) from None
             detail = str(exc) if isinstance(exc, OSError | ValueError) else f"{type(exc).__name__}: {exc}"
             raise StartFailure(f"cannot {stage}: {detail}", start_status(exc)) from None
 
