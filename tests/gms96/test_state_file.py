@@ -8,7 +8,6 @@ The image is made by a real card through its own FT1.2 port (:class:`Gms96Client
 from __future__ import annotations
 
 import copy
-import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -18,8 +17,7 @@ from devsim.cli import exits
 from devsim.runtime import Runtime
 from tests.gms96.conftest import start_plant
 from tests.gms96.test_motion_reference import send
-from tests.support.memory import refused_memory, state_image, write_state_image
-from tests.test_cli import Sim
+from tests.support.memory import refused_memory, refused_run, state_image, write_state_image
 
 FLASH_ERASE = 5.0  # manual §2.3.1 p: the card does not answer for 2 to 5 s after p3;100
 
@@ -217,14 +215,7 @@ def test_devsim_run_on_a_state_file_with_another_scripts_digits_stops_naming_it(
     image["eeprom"]["N"]["٣٩"] = 50
     path = write_state_image(tmp_path, "gms96", image)
     text = path.read_text("utf-8")
-    sim = Sim("gms96", "--pty", "--virtual", "--state-dir", str(tmp_path), "--no-control")
-    try:
-        ended: int | None = sim.proc.wait(timeout=60)  # (it ends by itself: the start fails)
-    except subprocess.TimeoutExpired:
-        ended = None  # (it started: the assertions below say so, and stop() ends it)
-    finally:
-        code, err = sim.stop()
-    assert ended is not None, f"the gms96 started on the edited state file: {err}"
+    code, err = refused_run("gms96", tmp_path)
     assert code == exits.SYSTEM
     assert err == (f"Error: cannot create the devices: {path}: this memory image does not fit the kind 'gms96'"
                    " (ValueError: stored N parameter '٣٩' is no number the device writes); fix or delete the file\n")

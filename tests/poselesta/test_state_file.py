@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import copy
 import json
-import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -18,8 +17,7 @@ import pytest
 
 from devsim.cli import exits
 from devsim.runtime import Runtime
-from tests.support.memory import killed_at_write, refused_memory, state_image, write_state_image
-from tests.test_cli import Sim
+from tests.support.memory import killed_at_write, refused_memory, refused_run, state_image, write_state_image
 
 
 @pytest.fixture(scope="module")
@@ -133,14 +131,7 @@ def test_devsim_run_on_a_state_file_with_another_scripts_digits_stops_naming_it(
     image["params"]["٤١"] = 7
     path = write_state_image(tmp_path, "poselesta", image)
     text = path.read_text("utf-8")
-    sim = Sim("poselesta", "--pty", "--virtual", "--state-dir", str(tmp_path), "--no-control")
-    try:
-        ended: int | None = sim.proc.wait(timeout=60)  # (it ends by itself: the start fails)
-    except subprocess.TimeoutExpired:
-        ended = None  # (it started: the assertions below say so, and stop() ends it)
-    finally:
-        code, err = sim.stop()
-    assert ended is not None, f"the poselesta started on the edited state file: {err}"
+    code, err = refused_run("poselesta", tmp_path)
     assert code == exits.SYSTEM
     assert err == (f"Error: cannot create the devices: {path}: this memory image does not fit the kind 'poselesta'"
                    " (ValueError: stored parameter '٤١' is no number the device writes); fix or delete the file\n")

@@ -4,6 +4,8 @@ and the state file's image as a device wrote it, to edit."""
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -13,6 +15,7 @@ import pytest
 
 from devsim.core.nvram import NonVolatileMemory, UnfitMemory
 from devsim.runtime import Runtime
+from tests.support.process import ROOT, devsim_env
 
 
 def refused_memory(state_dir: Path, kind: str, match: str | None = None,
@@ -39,6 +42,19 @@ def write_state_image(state_dir: Path, kind: str, image: dict[str, Any]) -> Path
     path = state_dir / f"{kind}.nvram.json"
     path.write_text(json.dumps(image, ensure_ascii=False), "utf-8")
     return path
+
+
+def refused_run(kind: str, state_dir: Path) -> tuple[int, str]:
+    """A real ``devsim run KIND --pty --virtual --state-dir DIR --no-control`` on a memory it
+    refuses: its exit status and stderr once it ended by itself (an AssertionError if it started
+    and ran on)."""
+    try:
+        done = subprocess.run([sys.executable, "-m", "devsim", "run", kind, "--pty", "--virtual", "--state-dir",
+                               str(state_dir), "--no-control"], cwd=ROOT, env=devsim_env(), stdin=subprocess.DEVNULL,
+                              capture_output=True, text=True, timeout=60)
+    except subprocess.TimeoutExpired as exc:
+        raise AssertionError(f"the {kind} started on the edited state file: {exc.stderr!r}") from None
+    return done.returncode, done.stderr
 
 
 class Killed(BaseException):
