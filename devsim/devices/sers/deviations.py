@@ -79,14 +79,6 @@ DEVIATIONS: tuple[Deviation, ...] = (
         "geometry's cam sets it), not the wiring",
     ),
     Deviation(
-        "§4.8.6.3",
-        "P1093: a jog through a digital input while a program runs interrupts the program and "
-        "resumes it afterwards (0) or aborts it (1)",
-        "P1093 is stored only; the program keeps running (P0=1) and the jog takes over the motion "
-        "from the program's positioning",
-        "not simulated yet (named here so a host test does not rely on it)",
-    ),
-    Deviation(
         "§4.8.6.6",
         "hand-wheel / electric shaft (P1053=3/7): after a limit switch error the motor is energised "
         "again automatically by pulses in the other direction (P1094 0: at once, 1: once a counter "

@@ -17,6 +17,7 @@ from devsim.devices.sers.access import ParameterAccess, address_number
 from devsim.devices.sers.errors import SersError
 from devsim.devices.sers.inputs import Inputs
 from devsim.devices.sers.interpreter import Interpreter
+from devsim.devices.sers.interruption import JogInterruption
 from devsim.devices.sers.memory import ParameterMemory
 from devsim.devices.sers.motion import Motion
 from devsim.devices.sers.operands import Operands
@@ -56,6 +57,7 @@ class Execution:
         self.operands = operands
         self._config = config
         self._changed = changed  # the output P1126 follows the program
+        self.interruption = JogInterruption(interpreter, motion, params)  # P1093 (§4.8.6.3)
 
     # -- statements -------------------------------------------------------------------------------
     def execute(self, stmt: st.Statement) -> None:
@@ -143,6 +145,18 @@ class Execution:
     def ended(self) -> None:
         self.inputs.program_ended()
 
+    def motion_ended(self) -> None:
+        """The motion ended: a program waiting for it goes on, one a jog input interrupted may
+        continue (§4.8.6.3)."""
+        self.interpreter.on_motion_end()
+        self.interruption.motion_ended()
+
+    def jog_input_activated(self) -> None:
+        self.interruption.activated()
+
+    def jog_inputs_released(self) -> None:
+        self.interruption.released()
+
     # -- program control --------------------------------------------------------------------------
     @property
     def running(self) -> bool:
@@ -177,6 +191,7 @@ class Execution:
                 self.power.record_error(exc.errno)
 
     def stop_program(self) -> None:
+        self.interruption.restore()
         self.interpreter.stop()
 
     def new_program(self) -> None:
@@ -199,6 +214,7 @@ class Execution:
         raise SersError(22 if not self.program.editing else 21)
 
     def stop_all(self) -> None:
+        self.interruption.restore()
         self.interpreter.stop()
         self.motion.stop_motion()
 

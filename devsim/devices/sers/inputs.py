@@ -45,6 +45,12 @@ class ProgramStarts(Protocol):
 
     def run_subroutine(self, label: int) -> None: ...
 
+    def jog_input_activated(self) -> None:
+        """A manual function of I1..I6 was carried out (P1093, §4.8.6.3)."""
+
+    def jog_inputs_released(self) -> None:
+        """No input I1..I6 with its manual function is active any more (P1093, §4.8.6.3)."""
+
 
 class Inputs:
     """The inputs of one SERS and what they set off (§3.3, §4.8.1)."""
@@ -220,7 +226,18 @@ class Inputs:
         function = _INPUT_FUNCTION.get(n)
         if function is not None:
             function(self, active)
+            if n <= 6:
+                self._program_reacts(active)
         self._changed()
+
+    def _program_reacts(self, active: bool) -> None:
+        """A manual function of I1..I6 interrupts or aborts a running program (P1093, §4.8.6.3);
+        the program hears when the last of these inputs is released."""
+        programs = self._programs()
+        if active:
+            programs.jog_input_activated()
+        elif not any(self.signals.get(f"I{m}") and self.functions_enabled(1 << (m - 1)) for m in range(1, 7)):
+            programs.jog_inputs_released()
 
     def jog_input(self, n: int, active: bool) -> None:
         """I1–I4: jog while the input is active (LS, RS, LF, RF)."""

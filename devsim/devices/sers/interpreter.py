@@ -10,7 +10,9 @@ are looked at again whenever the drive's state changes and, while the axis moves
 Starting (``RUN``, ``P0=1``, autostart, start input I8, the parallel and event dispatchers),
 errors (program errors stop the program with P12 value 128; drive errors jump to L65 with
 P1033=2/3), stops and continuation (P1033), the non-blocking timer ``D2`` with its timed jump,
-trace mode and the ``@nP0=0`` message are handled here.
+trace mode and the ``@nP0=0`` message are handled here.  A jog input that interrupts the
+program (P1093=0, §4.8.6.3) parks it as waiting ``jog``, what it waited for kept in
+:attr:`Interpreter.held` (:mod:`.interruption` decides when it goes on).
 """
 
 from __future__ import annotations
@@ -98,6 +100,15 @@ class Program(msgspec.Struct):
                 program.block_end[open_blocks.pop()] = index
         return program
 
+    def label_index(self, label: int) -> int:
+        """The statement a jump to L``label`` goes to (errno 72: no label number, 71: not in the program)."""
+        if not st.LABEL_MIN <= label <= st.LABEL_MAX:
+            raise SersError(72)
+        index = self.labels.get(label)
+        if index is None:
+            raise SersError(71)
+        return index
+
 
 class Passes(Protocol):
     """What hears the passes of a loop (:class:`~.runahead.RunAhead`)."""
@@ -146,12 +157,13 @@ class Interpreter:
         self.stack: list[int] = []
         self.subroutine = False  # started at a label (RUN n, dispatchers): RETURN on empty stack ends it
         self.waiting: str | None = None  # what a parked program waits for
+        self.held: str | None = None  # ... when a jog input interrupted it (waiting "jog", P1093=0)
         self._wait_cond: st.Condition | None = None
         self._timer: Timer | None = None
         self._delay: Timer | None = None
         self._d2: Timer | None = None
         self._d2_jump: st.Goto | None = None
-        self._d2_pending = False
+        self.d2_pending = False
         self.stops = 0  # consecutive stops (P1033=1: the second one restarts)
         self.resume_pc: int | None = None
         self._resume_move = False
@@ -179,7 +191,7 @@ class Interpreter:
                 timer.cancel()
         self._timer = self._delay = self._d2 = self._poll = None
         self._d2_jump = None
-        self._d2_pending = False
+        self.d2_pending = False
 
     # -- starting and ending ------------------------------------------------------------------------
     def start(self, label: int | None = None, *, subroutine: bool | None = None) -> None:
@@ -212,7 +224,7 @@ class Interpreter:
             try:
                 self._host().continue_positioning()
             except SersError as exc:
-                self._program_error(exc.errno)
+                self.program_error(exc.errno)
                 return
             return
         self._schedule(self.cycle)
@@ -261,6 +273,10 @@ class Interpreter:
             return
         self._halt()
 
+    def abort(self) -> None:
+        """P1093=1 (§4.8.6.3): a jog input aborts the program; a start begins at line 1 again."""
+        self._halt()
+
     def _halt(self) -> None:
         """The program stops for good (an error, or its end): the next start begins at line 1."""
         self._cancel()
@@ -279,7 +295,7 @@ class Interpreter:
         self.subroutine = False
         self._schedule(self.cycle)
 
-    def _program_error(self, errno: int, detail: str = "") -> None:
+    def program_error(self, errno: int, detail: str = "") -> None:
         """Unknown jump target, stack overflow, arithmetic error …: the program stops with
         P12 value 128 (display 'H' blinking) and the errno (§4.8.3.1)."""
         self.power.record_error(errno)
@@ -302,7 +318,7 @@ class Interpreter:
         self._timer = None
         if not self.running or self.waiting is not None:
             return
-        if self._d2_pending and not self._position_blocks():
+        if self.d2_pending and not self._position_blocks():
             self._fire_d2_jump()
             return
         self.step()
@@ -335,7 +351,7 @@ class Interpreter:
         try:
             advance = self._execute(stmt, flow)
         except SersError as exc:
-            self._program_error(exc.errno, exc.detail)
+            self.program_error(exc.errno, exc.detail)
             return
         if not self.running:
             return
@@ -390,18 +406,10 @@ class Interpreter:
         self.resume("master")
 
     def master_failed(self) -> None:
-        self._program_error(64)
+        self.program_error(64)
 
     def later(self, delay: float, action: Callable[[], None]) -> None:  # (the master's retries)
         self._timer = self.clock.call_later(delay, action)
-
-    def label_index(self, label: int) -> int:
-        if not st.LABEL_MIN <= label <= st.LABEL_MAX:
-            raise SersError(72)
-        index = self.program.labels.get(label)
-        if index is None:
-            raise SersError(71)
-        return index
 
     # -- waiting ----------------------------------------------------------------------------------------
     def park(self, what: str, cond: st.Condition | None) -> None:
@@ -436,22 +444,23 @@ class Interpreter:
 
     def resume(self, what: str) -> None:
         """What the parked program waited for (``position``, ``segment``, ``master`` …) came."""
+        if self.waiting == "jog" and self.held == what:
+            self.held = None  # (it came while a jog input interrupted the program: it goes on then)
         if self.waiting != what or not self.running:
             return
         self.waiting = None
-        if self._d2_pending:
+        if self.d2_pending:
             self._fire_d2_jump()
             return
         self._schedule(self.cycle)
 
     def _delay_done(self) -> None:
         self._delay = None
-        if self.waiting == "delay" and self.running:
-            self.waiting = None
-            self._schedule(self.cycle)
+        self.resume("delay")
 
     def _position_blocks(self) -> bool:
-        return self.waiting == "position" and int(self.params.wait_until_positioned) == 1
+        """A D2 jump waits: for the position (P1110=1), or while a jog input interrupts (§4.8.6.3)."""
+        return self.waiting == "jog" or (self.waiting == "position" and int(self.params.wait_until_positioned) == 1)
 
     # -- D2 (§4.8.5.1) ---------------------------------------------------------------------------------
     def start_d2(self, stmt: st.Assign) -> None:
@@ -475,7 +484,7 @@ class Interpreter:
         self.params.d2_bit = 1
         if self._d2_jump is not None and self.running:
             if self._position_blocks():
-                self._d2_pending = True  # P1110=1: the jump waits until the drive is in position
+                self.d2_pending = True  # P1110=1: the jump waits until the drive is in position
             else:
                 self._fire_d2_jump()
         self.poke()
@@ -483,7 +492,7 @@ class Interpreter:
     def _fire_d2_jump(self) -> None:
         """The timed jump: aborts a running D, WAIT or ':' (§4.8.5.1)."""
         jump = self._d2_jump
-        self._d2_pending = False
+        self.d2_pending = False
         self._d2_jump = None
         if jump is None or not self.running:
             return
@@ -495,13 +504,13 @@ class Interpreter:
         self.waiting = None
         self._wait_cond = None
         try:
-            target = self.label_index(jump.label)
+            target = self.program.label_index(jump.label)
             if jump.sub:
                 if len(self.stack) >= MAX_NESTING:
                     raise SersError(73)
                 self.stack.append(self.pc)  # pc is the statement not yet executed
         except SersError as exc:
-            self._program_error(exc.errno)
+            self.program_error(exc.errno)
             return
         self.pc = target
         self._schedule(self.cycle)
@@ -528,7 +537,7 @@ def _else(interpreter: Interpreter, stmt: st.Else) -> bool:
 
 
 def _goto(interpreter: Interpreter, stmt: st.Goto) -> bool:
-    target = interpreter.label_index(stmt.label)
+    target = interpreter.program.label_index(stmt.label)
     if stmt.sub:
         if len(interpreter.stack) >= MAX_NESTING:
             raise SersError(73)

@@ -13,7 +13,8 @@ Implements (manual section → spec section) through its parts:
   §4.6.6, §4.8.4, §4.8.6 → §3.5, §5);
 * the inputs and their functions (:mod:`.inputs`, §3.3, §4.8.1 → §4.11);
 * statements, commands and the program (:mod:`.execution`, :mod:`.operands`, :mod:`.interpreter`,
-  :mod:`.remote`, :mod:`.program`, :mod:`.answers`) (§4.2–§4.6 → §3.3, §4.4).
+  :mod:`.remote`, :mod:`.program`, :mod:`.answers`, :mod:`.interruption`) (§4.2–§4.6, §4.8.6.3
+  → §3.3, §4.4).
 
 The model builds the parts and hands each the collaborators it needs; where two parts need
 each other, the one made first gets the other as a callable.  Internally positions are motor
@@ -200,7 +201,7 @@ class SersDrive(Model):
         return self.inputs.i7_stop_active()
 
     def _motion_ended(self) -> None:
-        self.interpreter.on_motion_end()
+        self.execution.motion_ended()
 
     def _segment_ended(self) -> None:
         self.interpreter.resume("segment")

@@ -83,7 +83,7 @@ __all__ = [
 #: others have one the manual describes and the simulator lacks (see the session notes).
 STORED_ONLY: frozenset[int] = frozenset(
     {
-        1009, 1034, 1038, 1056, 1059, *range(1060, 1069), *range(1070, 1074), 1093, 1094, 1097,
+        1009, 1034, 1038, 1056, 1059, *range(1060, 1069), *range(1070, 1074), 1094, 1097,
         1136, 1142, 1147, 1149, 1150, 1153, 1154, 1155, 1156, 1157, 1158, 1159, 1161,
     }
 )

@@ -94,6 +94,7 @@ class SersParameters(Parameters):
     frequency_window = accessor(1055, "P1055: time window for frequency measurement")
     save_position_on_undervoltage = accessor(1058, "P1058: save position on undervoltage")
     external_service_switch = accessor(1092, "P1092: external service switch")
+    stop_on_jog = accessor(1093, "P1093: a jog input interrupts (0) or aborts (1) a running program")
     jog_at_power_on = accessor(1095, "P1095: jog functions at power-on: 0 by level, 1 by edge")
     polynomial_deceleration = accessor(1096, "B, P1096: braking ramp polynomial end (inc/s²)")
     program_jump_enable = accessor(1098, "P1098: program jump enable")

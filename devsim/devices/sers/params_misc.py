@@ -232,6 +232,7 @@ _p(
     maximum=1,
     **_RW_E,
     doc="Jog via input while a program runs: 0 interrupt and resume; 1 abort.",
+    attr="stop_on_jog",
 )
 _p(
     1095,
