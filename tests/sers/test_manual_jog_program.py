@@ -128,3 +128,39 @@ def test_p1093_0_a_jog_until_condition_is_executed_again(sers: Plant) -> None:
     sers.set("input.I3", True)
     finish(sers, 2)
     assert out(sers, 1) is True
+
+
+@pytest.mark.manual("§4.8.6.3", "the manual functions of the inputs I1 to I6 interrupt the program, e.g. motor "
+                    "ON/OFF on I6")
+def test_p1093_0_the_on_off_input_interrupts_too(sers: Plant) -> None:
+    host = sers.host
+    host.ask("#P1021=32\r")  # I6: motor ON/OFF
+    download(host, "O1=1", "WAIT I3=1", "O2=1", "PE")
+    run(host)
+    sers.advance(0.01)
+    sers.set("input.I6", True)
+    sers.set("input.I3", True)
+    sers.advance(0.1)
+    assert sers.read("energized") is True
+    assert out(sers, 2) is False
+    assert running(sers)
+    sers.set("input.I6", False)
+    finish(sers, 1)
+    assert out(sers, 2) is True
+
+
+def test_p1093_0_a_d2_jump_due_during_the_interruption_comes_after_it(sers: Plant) -> None:
+    """The D2 timer runs on during the interruption; its jump waits until the program continues."""
+    host = sers.host
+    _jog_input_enabled(sers, 0)
+    download(host, "ON", "D2=2 GT60", "WAIT I3=1", "O1=1", "PE", "L60", "O2=1", "PE")
+    run(host)
+    sers.advance(0.1)
+    sers.set("input.I2", True)
+    sers.advance(0.5)  # the 200 ms of D2 are over
+    assert query(host, "DB") == "1"
+    assert out(sers, 2) is False  # the jump did not happen during the interruption
+    sers.set("input.I2", False)
+    finish(sers, 2)
+    assert out(sers, 2) is True  # it aborted the WAIT once the program continued
+    assert out(sers, 1) is False
