@@ -221,6 +221,31 @@ def test_servo_mode_loses_no_steps_and_catches_up(plant_factory) -> None:
     assert plant.read("P11") == 0 and plant.read("P12") == 0
 
 
+@pytest.mark.manual("§4.8.6.7", "P1156: the actual acceleration in SERVO mode, measured and averaged over the whole "
+                    "acceleration ramp (only in SERVO mode)")
+def test_servo_p1156_is_the_mean_acceleration_of_the_last_ramp(plant_factory) -> None:
+    # ramp sections (P1005..P1008): 0 → V/2 at A/2, then V/2 → V at A: 1.5 V/A long, mean A/1.5
+    params = {"P1152": 1, "P1005": 50, "P1007": 50, "P1006": 100, "P1008": 50}
+    plant = plant_factory({"options": ["E50", "SERVO"], "params": params})
+    host = plant.host
+    host.ask("#ON\r")
+    plant.advance(0.1)  # load-angle zero taken 100 ms after ON
+    host.ask("#V=600 A=100 W=3600 E\r")
+    ramp = 1.5 * 20 * math.pi / 100  # s
+    plant.advance(ramp * 0.9)
+    assert plant.read("param.P1156") == 0  # the ramp is not over: nothing measured yet
+    plant.advance(ramp * 0.2)
+    assert plant.read("param.P1156") == pytest.approx(100 / 1.5, abs=1e-3)
+    plant.settle()  # (the deceleration is no acceleration ramp)
+    assert plant.read("param.P1156") == pytest.approx(100 / 1.5, abs=1e-3)
+    host.ask("#A=200 W=-3600 E\r")  # back, ramping with twice the acceleration
+    plant.settle()
+    assert plant.read("param.P1156") == pytest.approx(200 / 1.5, abs=1e-3)
+    assert host.ask("#P1156?\r").startswith(b"#P1156?\rP1156=133.333")
+    host.ask("#P1152=0\r")
+    assert plant.read("param.P1156") == 0  # only in SERVO mode
+
+
 @pytest.mark.manual("§4.8.3.1", "P12 2048: SERVO not active - the load angle is not yet calibrated, but a positioning or jog was made")
 def test_servo_positioning_before_calibration_warns(plant_factory) -> None:
     plant = plant_factory({"options": ["E50", "SERVO"], "params": {"P1152": 1}})

@@ -116,11 +116,12 @@ class ParameterAccess:
         if number in _WRITE_ONLY:
             raise SersError(106)
         value = self.params.values.get(number, 0)
-        kind = KIND[number]
-        if kind in WEIGHTED_KINDS:
-            scaling = self.params.scaling
-            return quantize(scaling.from_internal(kind, float(value)), scaling.decimals(kind))
-        return value
+        return self.in_user_units(number, float(value)) if KIND[number] in WEIGHTED_KINDS else value
+
+    def in_user_units(self, number: int, value: float) -> float:
+        """An internal value (inc, inc/s, inc/s²) of weighted parameter ``number`` as a read gives it."""
+        scaling, kind = self.params.scaling, KIND[number]
+        return quantize(scaling.from_internal(kind, value), scaling.decimals(kind))
 
     def p51(self) -> float:
         """P51 in the user unit."""
@@ -391,6 +392,8 @@ READS: Table[Read] = Table(
         Command("P1133", lambda a: a.firmware, "§4.8.2.5", "firmware version"),
         Command("P1137", attrgetter("power.errno"), "§4.8.3.1", "the last error message"),
         Command("P1146", lambda a: a.inputs.pulses_in_window(1146), "§4.8.6.14", "pulses in the window (ENC)"),
+        Command("P1156", lambda a: a.in_user_units(1156, a.motion.ramp_acceleration()), "§4.8.6.7",
+                "SERVO: the mean acceleration of the last ramp"),
         *(Command(f"P{1200 + n}", _output(n), "§4.8.1.2", f"output O{n}") for n in range(1, 17)),
         Command("P1300", lambda a: a.inputs.inputs_byte(1), "§4.8.1.1", "inputs I1..I8"),
         Command("P1301", lambda a: a.inputs.inputs_byte(9) if "IO" in a._config().options else 0, "§4.8.1.1",

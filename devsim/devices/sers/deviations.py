@@ -100,13 +100,15 @@ DEVIATIONS: tuple[Deviation, ...] = (
     Deviation(
         "§4.8.6.7",
         "SERVO mode: P1153 corrects the load angle at speed; with P1152=1 POS=1 once the motor is "
-        "inside the window P1161; P1156 actual acceleration, P1158 deviation from the set profile; "
-        "P51 follows the encoder also when an external torque turns the shaft at standstill; a "
-        "sequence program runs about 43 % slower",
-        "P1153 and P1161 are stored only (POS=1 when the motion ends); P1156 and P1158 read 0; "
-        "the shaft cannot be turned at standstill; programs run at the normal cycle",
-        "the twin's rotor follows the set profile exactly unless stalled; there is no load-angle "
-        "dynamics for these to act on",
+        "inside the window P1161; P1158 deviation from the set profile; P51 follows the encoder "
+        "also when an external torque turns the shaft at standstill; a sequence program runs about "
+        "43 % slower",
+        "P1153 and P1161 are stored only (POS=1 when the motion ends); P1158 reads 0, also while "
+        "the load holds the rotor (quantity.stall); the shaft cannot be turned at standstill; "
+        "programs run at the normal cycle",
+        "the twin's rotor follows the set profile exactly unless stalled, so its deviation from it "
+        "is 0; there is no load-angle dynamics for these to act on (P1156, the mean acceleration "
+        "of the last ramp, is the set profile's)",
     ),
     Deviation(
         "§4.8.6.1",

@@ -13,6 +13,7 @@ from collections.abc import Callable
 
 from devsim.core.axis import Axis
 from devsim.core.clock import Clock
+from devsim.core.profile import Segment, sign
 from devsim.core.signals import SignalBank
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.constants import ELECTRICAL_PERIOD, INC_PER_REV, STEP_LOSS
@@ -35,7 +36,7 @@ class Motion:
     #: (Slots: a host's repeated poll reads this part: one block of memory instead of an object and its values)
     __slots__ = ("clock", "axis", "params", "signals", "power", "_i7_stop", "_ended", "_poke",
                  "_in_position_message", "_has_option_e50", "_record_event", "_changed", "kind", "pos_ok",
-                 "offset", "_stop_decel", "_follow_target", "_stopped_at", "watches", "homing", "jog",
+                 "offset", "_stop_decel", "_follow_target", "_stopped_at", "_ramp", "watches", "homing", "jog",
                  "encoder", "positioning", "poly")
 
     def __init__(
@@ -76,6 +77,8 @@ class Motion:
         self._stop_decel = 0.0  # the deceleration of S for the motion under way
         self._follow_target = 0.0  # hand-wheel
         self._stopped_at = 0.0  # when the last motion ended (phase current reduction)
+        #: P1156 (SERVO): the motion under way began after this instant; the last ramp measured before
+        self._ramp = (clock.now(), 0.0)
         self.watches = PositionWatches(clock, axis, params, signals, power, offset=lambda: self.offset,
                                        kind=lambda: self.kind, stop=self.stop_motion)
         self.homing = Homing(axis, params, signals, power, self)
@@ -94,6 +97,7 @@ class Motion:
         self._stop_decel = 0.0
         self._follow_target = 0.0
         self._stopped_at = 0.0
+        self._ramp = (self.clock.now(), 0.0)  # (no ramp measured since power-on)
         self.positioning.power_on()
         self.homing.homed = False
         self.homing.cancel()
@@ -174,6 +178,8 @@ class Motion:
     def finish(self) -> None:
         """The motion has ended (the axis stands)."""
         was_moving = self.kind is not None
+        now = self.clock.now()
+        self._ramp = (now, self.ramp_acceleration() if self.params.servo_mode == 1 else self._ramp[1])
         self.poly.cancel()
         if was_moving:
             self._record_event("move_end")
@@ -364,9 +370,49 @@ class Motion:
         self.axis.move_to(target, float(params.velocity), float(params.acceleration), on_done=self.finish)
 
     # -- the load (§4.8.6.6, §4.8.6.7) ------------------------------------------------------------
+    def ramp_acceleration(self) -> float:
+        """P1156 (§4.8.6.7) "Ist-Beschleunigung im SERVO-Modus, gemessen und gemittelt über die
+        gesamte Beschleunigungsrampe": with P1152=1 the speed the rotor gained in its last
+        acceleration ramp that has ended, divided by the ramp's time (inc/s², a magnitude), from
+        the axis's segments in closed form (the rotor follows the set profile unless the load holds
+        it); 0 before the first ramp after power-on, and with P1152=0."""
+        if self.params.servo_mode != 1:
+            return 0.0
+        since, measured = self._ramp
+        found = last_ramp(self.axis.segments(since=since), self.clock.now())
+        return measured if found is None else found
+
     def stall(self, stalled: bool) -> None:
         """The load stalls the rotor: a step loss, or in SERVO mode (P1152=1) the field waits."""
         if self.params.servo_mode == 1:
             self.positioning.servo_overload(stalled)
         else:
             self.encoder.stall(stalled)
+
+
+def _speeds_up(seg: Segment) -> bool:
+    """The segment is part of an acceleration ramp: its speed magnitude grows."""
+    if seg.shape == "curve" or seg.a == 0.0:
+        return False
+    return sign(seg.a) == seg.direction if seg.shape == "sine" else seg.v0 == 0.0 or sign(seg.a) == sign(seg.v0)
+
+
+def last_ramp(segments: list[Segment], now: float) -> float | None:
+    """The mean acceleration (speed gained / time, a magnitude) of the last acceleration ramp among
+    ``segments`` (in time order; consecutive speeding-up segments are one ramp) that has ended by
+    ``now``; None if none has."""
+    found: float | None = None
+    start: tuple[float, float] | None = None  # (t0, |v0|) of the ramp being followed
+    end = (0.0, 0.0)  # (t1, |v1|) of its last segment so far
+    for seg in [*segments, None]:
+        joins = seg is not None and _speeds_up(seg) and start is not None and seg.t0 == end[0]
+        if not joins and start is not None:
+            if start[0] < end[0] <= now:
+                found = (end[1] - start[1]) / (end[0] - start[0])
+            start = None
+        if seg is None or not _speeds_up(seg):
+            continue
+        if start is None:
+            start = (seg.t0, abs(seg.v0))
+        end = (seg.t1, abs(seg.velocity(seg.t1)))
+    return found
