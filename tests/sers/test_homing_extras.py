@@ -244,6 +244,12 @@ def test_servo_p1156_is_the_mean_acceleration_of_the_last_ramp(plant_factory) ->
     assert host.ask("#P1156?\r").startswith(b"#P1156?\rP1156=133.333")
     host.ask("#P1152=0\r")
     assert plant.read("param.P1156") == 0  # only in SERVO mode
+    host.ask("#P1152=1\r")
+    assert plant.read("param.P1156") == pytest.approx(200 / 1.5, abs=1e-3)
+    plant.runtime.power_cycle(plant.name)
+    plant.advance(2.0)
+    assert plant.read("param.P1152") == 1
+    assert plant.read("param.P1156") == 0  # nothing measured since power-on
 
 
 @pytest.mark.manual("§4.8.3.1", "P12 2048: SERVO not active - the load angle is not yet calibrated, but a positioning or jog was made")
