@@ -164,3 +164,19 @@ def test_p1093_0_a_d2_jump_due_during_the_interruption_comes_after_it(sers: Plan
     finish(sers, 2)
     assert out(sers, 2) is True  # it aborted the WAIT once the program continued
     assert out(sers, 1) is False
+
+
+def test_p1093_0_a_delay_runs_on_during_the_interruption(sers: Plant) -> None:
+    """[SIM-CHOICE] the time of a D runs on; a D over during the interruption is over after it."""
+    host = sers.host
+    _jog_input_enabled(sers, 0)
+    download(host, "ON", "D=2", "O1=1", "PE")  # 0.24 s (D × 0.1 s × 1.2)
+    run(host)
+    sers.advance(0.05)
+    sers.set("input.I2", True)
+    sers.advance(0.5)
+    assert out(sers, 1) is False
+    sers.set("input.I2", False)
+    until(sers, lambda d: d.read("motion.kind") is None, 1)
+    sers.advance(0.01)  # (a few control cycles)
+    assert out(sers, 1) is True
