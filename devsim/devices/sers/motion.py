@@ -178,8 +178,8 @@ class Motion:
     def finish(self) -> None:
         """The motion has ended (the axis stands)."""
         was_moving = self.kind is not None
-        now = self.clock.now()
-        self._ramp = (now, self.ramp_acceleration() if self.params.servo_mode == 1 else self._ramp[1])
+        # P1156: the ramps of this motion are measured now; the next motion's come after
+        self._ramp = (self.clock.now(), self.ramp_acceleration() if self.params.servo_mode == 1 else self._ramp[1])
         self.poly.cancel()
         if was_moving:
             self._record_event("move_end")
@@ -379,7 +379,7 @@ class Motion:
         if self.params.servo_mode != 1:
             return 0.0
         since, measured = self._ramp
-        found = last_ramp(self.axis.segments(since=since), self.clock.now())
+        found = _last_ramp(self.axis.segments(since=since), self.clock.now())
         return measured if found is None else found
 
     def stall(self, stalled: bool) -> None:
@@ -397,7 +397,7 @@ def _speeds_up(seg: Segment) -> bool:
     return sign(seg.a) == seg.direction if seg.shape == "sine" else seg.v0 == 0.0 or sign(seg.a) == sign(seg.v0)
 
 
-def last_ramp(segments: list[Segment], now: float) -> float | None:
+def _last_ramp(segments: list[Segment], now: float) -> float | None:
     """The mean acceleration (speed gained / time, a magnitude) of the last acceleration ramp among
     ``segments`` (in time order; consecutive speeding-up segments are one ramp) that has ended by
     ``now``; None if none has."""
