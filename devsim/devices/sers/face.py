@@ -26,7 +26,6 @@ from devsim.devices.sers.line import (
     ends_line,
     error_text,
     first_failure,
-    label_number,
     poll_line,
     quiet,
 )
@@ -374,7 +373,7 @@ class SersFace(Face):
                 self.statements.progress(line, final=True)
             if line.store and not line.error:
                 try:
-                    self.model.program.add_line(line.store, label_number,
+                    self.model.program.add_line(line.store,
                                                 joins_next=line.text.rstrip(" \t").endswith(";"))
                 except SersError as exc:
                     self._error(line, exc.errno, exc.detail)

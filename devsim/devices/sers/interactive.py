@@ -4,7 +4,7 @@
 A statement runs as soon as it is complete (one that answers, with the next character,
 §3.2.4a).  The line answers queries, listings and the version itself (:data:`INTERACTIVE`),
 steers its own IF … THEN … ELSE … END (:data:`SKIPPING`), and in programming mode stores what
-is typed (:data:`PROGRAMMING` names what runs instead); everything else the drive executes.
+is typed (:data:`~.program.PROGRAMMING` names what runs instead); everything else the drive executes.
 """
 
 from __future__ import annotations
@@ -18,8 +18,9 @@ from devsim.devices.sers.access import address_number
 from devsim.devices.sers.errors import SersError
 from devsim.devices.sers.line import CommandLine, answers
 from devsim.devices.sers.model import SersDrive
+from devsim.devices.sers.program import PROGRAMMING, editing_token
 
-__all__ = ["INTERACTIVE", "PROGRAMMING", "SKIPPING", "LineStatements"]
+__all__ = ["INTERACTIVE", "SKIPPING", "LineStatements"]
 
 Answer = Callable[[CommandLine, str], None]
 Error = Callable[[CommandLine, int, str], None]
@@ -53,13 +54,13 @@ class LineStatements:
             self._error(line, result.errno, "")
 
     def statement(self, line: CommandLine, stmt: st.Statement) -> None:
-        if self.model.program.editing:
-            instead = _PROGRAMMING.get(_editing_token(stmt))
+        program = self.model.program
+        if program.editing:
+            instead = PROGRAMMING.get(editing_token(stmt))
             if instead is None:
-                if not isinstance(stmt, st.Comment):
-                    line.store.append(stmt.text)  # stored when the line ends without an error
+                line.store.append(stmt.text)  # stored when the line ends without an error
                 return
-            if instead(self, line, stmt):
+            if instead(program, stmt):
                 return
         if line.skip_block:
             skip = _SKIPPING.get(type(stmt).__name__)
@@ -138,38 +139,6 @@ class LineStatements:
             self._answer(line, shown + "\n\r")
         return True
 
-    # -- programming mode (the table PROGRAMMING) -------------------------------------------------
-    def change(self, line: CommandLine, stmt: st.Change) -> bool:
-        """C n (§4.2): the assignment at the current position with the constant n."""
-        program = self.model.program
-        current = program.current()
-        parsed = st.parse(current, final=True) if current is not None else None
-        if parsed is None or parsed.errno is not None or len(parsed.statements) != 1:
-            raise SersError(49)
-        old = parsed.statements[0][0]
-        if not isinstance(old, st.Assign) or not isinstance(old.value, st.Number):
-            raise SersError(49)
-        program.change(f"{old.target.text}={stmt.value.text}")
-        return True
-
-    def delete(self, line: CommandLine, stmt: st.Command) -> bool:
-        self.model.program.delete()
-        return True
-
-
-def _editing_token(stmt: st.Statement) -> str:
-    """A statement's row in :data:`PROGRAMMING`: a command by its keyword, ``P0=`` for an
-    assignment to P0, anything else by its type."""
-    if isinstance(stmt, st.Command):
-        return stmt.name
-    if isinstance(stmt, st.Assign) and stmt.target.kind == "P" and stmt.target.ref == 0:
-        return "P0="
-    return type(stmt).__name__
-
-
-def _line_statement(statements: LineStatements, line: CommandLine, stmt: Any) -> bool:
-    return False  # (runs as outside programming mode)
-
 
 #: Statements the line answers itself (a value, a listing, the version) or that steer the line
 #: (IF/ELSE/END); a handler returning False leaves the statement to the drive.
@@ -186,20 +155,6 @@ INTERACTIVE: Table[Callable[[LineStatements, CommandLine, Any], bool]] = Table(
     ]
 )
 _INTERACTIVE = {row.token: row.handler for row in INTERACTIVE}
-
-#: Programming mode (§4.2): everything typed is stored in the program except these.
-PROGRAMMING: Table[Callable[[LineStatements, CommandLine, Any], bool]] = Table(
-    [
-        Command("Change", LineStatements.change, "§4.2", "C n: the constant of the current statement"),
-        Command("DEL", LineStatements.delete, "§4.2", "delete the current statement"),
-        Command("ListCmd", _line_statement, "§4.2", "LIST / LISTP run"),
-        Command("Trace", _line_statement, "§4.5.4", "TR / TR? run"),
-        Command("QUIT", _line_statement, "§4.2", "QUIT leaves programming mode"),
-        Command("P0=", _line_statement, "§4.8.2.1", "P0=0 leaves programming mode"),
-    ]
-)
-_PROGRAMMING = {row.token: row.handler for row in PROGRAMMING}
-
 
 def _skip_if(line: CommandLine, stmt: st.If) -> None:
     if stmt.then:

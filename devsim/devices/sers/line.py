@@ -34,7 +34,6 @@ __all__ = [
     "error_text",
     "first_byte_errors",
     "first_failure",
-    "label_number",
     "poll_line",
     "quiet",
     "runs_at_once",
@@ -242,13 +241,4 @@ def first_failure(text: bytes) -> tuple[int, int] | None:
             return None
         if result.errno is not None:
             return at + 1, result.errno
-    return None
-
-
-def label_number(text: str) -> int | None:
-    result = st.parse(text, final=True)
-    if result.errno is None and len(result.statements) == 1:
-        stmt = result.statements[0][0]
-        if isinstance(stmt, st.Label):
-            return stmt.number
     return None

@@ -15,12 +15,16 @@ position, ``C n`` changes the constant of the assignment there.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from typing import Any
 
 from devsim.core.console import warn
+from devsim.core.kit import Command, Table
 from devsim.core.nvram import NonVolatileMemory, stored_object
+from devsim.devices.sers import statements as st
 from devsim.devices.sers.errors import SersError
 
-__all__ = ["PROGRAM_BYTES", "PROGRAM_BYTES_P8", "ProgramMemory", "statement_cost"]
+__all__ = ["PROGRAMMING", "PROGRAM_BYTES", "PROGRAM_BYTES_P8", "ProgramMemory", "defined_once", "editing_token",
+           "statement_cost"]
 
 SECTION = "program"
 #: the program memory: 2 KB standard, 8 KB with option P8 (§4.4; spec §4.9 G-MEM)
@@ -41,6 +45,26 @@ def _stored(section: object, capacity: int) -> tuple[list[str], list[bool]]:
         raise ValueError(f"the stored program of {used} bytes is longer than the drive's {capacity}-byte"
                          f" program memory (option P8: {PROGRAM_BYTES_P8})")
     return statements, starts
+
+
+def label_of(text: str) -> int | None:
+    """The number of the label ``text`` defines (§4.6.2), or None."""
+    result = st.parse(text, final=True)
+    if result.errno is None and len(result.statements) == 1 and isinstance(result.statements[0][0], st.Label):
+        return result.statements[0][0].number
+    return None
+
+
+def defined_once(stored: Sequence[str], texts: Sequence[str]) -> None:
+    """errno 83 (§4.6.2 "Jede Labelnummer darf nur einmal im Programm definiert sein"): a label
+    of ``texts`` that ``stored`` or an earlier one of ``texts`` defines already."""
+    defined = {label_of(t) for t in stored} - {None}
+    for text in texts:
+        number = label_of(text)
+        if number is not None:
+            if number in defined:
+                raise SersError(83, str(number))
+            defined.add(number)
 
 
 def statement_cost(text: str) -> int:
@@ -134,8 +158,7 @@ class ProgramMemory:
     def quit(self) -> None:
         self.editing = False
 
-    def add_line(self, texts: Sequence[str], labels: Callable[[str], int | None] = lambda _t: None,
-                 *, joins_next: bool = False) -> None:
+    def add_line(self, texts: Sequence[str], *, joins_next: bool = False) -> None:
         """Store a complete line typed in programming mode at the current position; it continues
         the line before when that one ended with ';' ("Strichkomma verhindert einen
         Zeilenumbruch bei Programmeingabe in der aktuellen Zeile", §4.2), and ``joins_next`` says
@@ -145,13 +168,7 @@ class ProgramMemory:
             return
         if self.used_bytes() + sum(statement_cost(t) for t in texts) > self.capacity:
             raise SersError(5)
-        defined = {labels(t) for t in self._statements} - {None}
-        for text in texts:
-            number = labels(text)
-            if number is not None:
-                if number in defined:
-                    raise SersError(83, str(number))
-                defined.add(number)
+        defined_once(self._statements, texts)
         at = self.position
         self._statements[at:at] = list(texts)
         self._starts[at:at] = [not (joined and at > 0)] + [False] * (len(texts) - 1)
@@ -249,3 +266,56 @@ class ProgramMemory:
 def _is_label(text: str) -> bool:
     stripped = text.strip().upper()
     return stripped.startswith("L") and stripped[1:2].isdigit()
+
+
+# -- programming mode (the table PROGRAMMING) -----------------------------------------------------
+def editing_token(stmt: st.Statement) -> str:
+    """A statement's row in :data:`PROGRAMMING`: a command by its keyword, ``P0=`` for an
+    assignment to P0, anything else by its type."""
+    if isinstance(stmt, st.Command):
+        return stmt.name
+    if isinstance(stmt, st.Assign) and stmt.target.kind == "P" and stmt.target.ref == 0:
+        return "P0="
+    return type(stmt).__name__
+
+
+def _change(program: ProgramMemory, stmt: st.Change) -> bool:
+    """C n (§4.2): the assignment at the current position with the constant n."""
+    current = program.current()
+    parsed = st.parse(current, final=True) if current is not None else None
+    if parsed is None or parsed.errno is not None or len(parsed.statements) != 1:
+        raise SersError(49)
+    old = parsed.statements[0][0]
+    if not isinstance(old, st.Assign) or not isinstance(old.value, st.Number):
+        raise SersError(49)
+    program.change(f"{old.target.text}={stmt.value.text}")
+    return True
+
+
+def _delete(program: ProgramMemory, stmt: st.Command) -> bool:
+    program.delete()
+    return True
+
+
+def _runs(program: ProgramMemory, stmt: Any) -> bool:
+    return False  # (runs as outside programming mode)
+
+
+def _passed_over(program: ProgramMemory, stmt: Any) -> bool:
+    return True  # (neither stored nor run)
+
+
+#: Programming mode (§4.2 "Im Programmiermodus werden Anweisungen wie LIST, DEL, TR, C, nicht
+#: gespeichert, sondern ausgeführt"): everything typed is stored in the program except these; a
+#: handler returning False leaves the statement to run as outside programming mode.
+PROGRAMMING: Table[Callable[[ProgramMemory, Any], bool]] = Table(
+    [
+        Command("Change", _change, "§4.2", "C n: the constant of the current statement"),
+        Command("DEL", _delete, "§4.2", "delete the current statement"),
+        Command("ListCmd", _runs, "§4.2", "LIST / LISTP run"),
+        Command("Trace", _runs, "§4.5.4", "TR / TR? run"),
+        Command("QUIT", _runs, "§4.2", "QUIT leaves programming mode"),
+        Command("P0=", _runs, "§4.8.2.1", "P0=0 leaves programming mode"),
+        Command("Comment", _passed_over, "§4.2", "// a comment is not stored"),
+    ]
+)
