@@ -331,3 +331,28 @@ def test_a_drive_error_with_p1030_0_stops_the_axis_at_once(point: str, value: ob
     out.clear()
     device.feed(b"#VER\r")
     assert b"P1133=120901" in bytes(out)
+
+
+#: Pieces of lines typed in programming mode: statements of every kind, what programming mode
+#: runs instead of storing, and what it refuses.
+PROGRAM_PIECES = ["ON", "W=360", "E", "L5", "L 7", "GT5", "GOSUB 7", "RT", "IF I1", "IF P12<>0 THEN", "ELSE", "END",
+                  "WAIT !I2", "RS:I3", "\"Durchmesser\"", "// note", "LIST", "LIST0", "P12?", "V??", "C 5", "DEL",
+                  "X=V*ADC+100", "+3", "NOT", "PE", ";", "QUIT", "PGM", "NEW", "P0=0", "TR", "XYZ", "L200", "IF I17",
+                  " ", "O1=1"]
+#: The characters of a line's text (no line end, no ``#``).
+LINE_TEXT = "".join(ch for ch in ALPHABET if ch not in "#\r\n")
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.lists(st.one_of(st.sampled_from(PROGRAM_PIECES), st.text(alphabet=LINE_TEXT, max_size=6)),
+                         max_size=6).map(" ".join), max_size=12))
+def test_a_program_typed_in_programming_mode_always_loads_again(lines: list[str]) -> None:
+    """Whatever programming mode stored of the lines typed (spec §4.2), the stored program loads
+    again as the same statements: the check of a stored program (a statement the drive refuses
+    when typed fails the program's checksum) never refuses one the drive wrote itself."""
+    from devsim.devices.sers.program import PROGRAM_BYTES, ProgramMemory
+
+    device, clock, _out, nvram = _device()
+    device.feed(b"#NEW\r" + b"".join(b"#" + line.encode("latin-1") + b"\r" for line in lines) + b"#QUIT\r")
+    clock.advance(0.1)
+    assert ProgramMemory(nvram, PROGRAM_BYTES).lines() == device.read("program")

@@ -358,6 +358,85 @@ def test_a_program_the_drive_never_stores_fails_its_checksum(plant_factory, tmp_
                              or program == {} else "are no lines of statements the drive stores")
 
 
+@pytest.mark.manual("§4.2", "Im Programmiermodus werden Anweisungen wie LIST, DEL, TR, C, nicht gespeichert")
+@pytest.mark.parametrize(("lines", "why"), [
+    ([["O1=1"], ["XYZ 12"]], "'XYZ 12' is one the drive refuses when it is typed (errno 34: = oder ? erwartet)"),
+    ([["IF I17"]], "errno 11: unbekanntes if Ereignis"),
+    ([["L200"]], "errno 72"),
+    ([["+3000000"]], "errno 10"),
+    ([["O1=1 O2=1"]], "it is not one statement as the drive stores it"),
+    ([[" O1=1"]], "it is not one statement as the drive stores it"),
+    ([["O1=1", "LIST"]], "'LIST' is one the drive refuses when it is typed (programming mode does not store it)"),
+    ([["QUIT"]], "programming mode does not store it"),
+    ([["P0=0"]], "programming mode does not store it"),
+    ([["C 5"]], "programming mode does not store it"),
+    ([["// a note"]], "programming mode does not store it"),
+    ([['"a#b"']], "no line of 60 latin-1 characters carries it"),
+    ([['"' + "x" * 60 + '"']], "no line of 60 latin-1 characters carries it"),
+    ([["L5", "O1=1"], ["L5"]], "the stored program defines a label twice (errno 83: label bereits definiert: L5)"),
+])
+def test_a_program_with_a_statement_the_drive_refuses_when_typed_fails_its_checksum(
+        plant_factory, tmp_path, capfd, typed: dict, lines: list, why: str) -> None:
+    """[SIM-CHOICE, as the kind's parameters] A state file whose program holds a statement the
+    drive's programming mode refuses or does not store (read by the same statement reader and
+    the same table of what programming mode runs instead, §4.2; a label defined twice, errno 83
+    §4.6.2; a text no line carries): no valid program.  (Before: such a program loaded; ``XYZ 12``
+    and ``LIST`` were passed over when it ran, the second ``L5`` was never jumped to.)"""
+    state_file = tmp_path / "sers.nvram.json"
+    text = json.dumps({**typed, "program": {"lines": lines}})
+    state_file.write_text(text, "utf-8")
+    _without_a_valid_program(plant_factory({}, state_dir=tmp_path), state_file, text, capfd, why)
+
+
+#: One stored statement of every form the language has (§4.2 "Anweisung"), by its row of
+#: ``statements.KEYWORDS`` (an alias: an assignment and a query), or its form without a keyword.
+_EVERY_STATEMENT = {
+    **{word: f"{word}=1" for word in ("ADC", "A", "B", "C1", "C2", "C3", "D2", "DB", "D", "M1", "M2", "M3", "IN",
+                                      "POS", "V", "W", "WA", "WR", "WP", "WRP", "WAP", "WPT", "WRPT", "WAPT", "X",
+                                      "Z", "R0", "R1", "R2", "R3", "R4", "R5", "LP")},
+    "NOT": "NOT", "NEG": "NEG", "E": "E", "H": "H", "S": "S", "ON": "ON", "OFF": "OFF", "PSAVE": "PSAVE",
+    "POSSAVE": "POSSAVE", "POS0": "POS0", "POSR": "POSR", "NEW": "NEW", "PGM": "PGM", "PE": "PE", "VER": "VER",
+    "TRON": "TRON", "TROFF": "TROFF", "RETURN": "RETURN", "RT": "RT", "IF": "IF P12<>0 THEN", "ELSE": "ELSE",
+    "END": "END", "WAIT": "WAIT !I1", "GOTO": "GOTO 1", "GT": "GT1", "GOSUB": "GOSUB 2", "GS": "GS2",
+    "RUN": "RUN 2", "RS": "RS:I3", "RF": "RF", "LS": "LS:I4=0", "LF": "LF",
+    "label": "L 2", "text": '"Durchmesser"', "arithmetic": "+P1019", "parameter": "P1019=45", "output": "O2=1",
+    "query": "V?", "name query": "P12??", "legacy IF": "IF IN5", "star": "Z=*", "arithmetic constant": "-2147483.639",
+}
+#: The rows programming mode runs instead of storing (§4.2), and THEN (errno 23 without IF).
+_NEVER_STORED = {"TR", "QUIT", "DEL", "LIST", "LISTP", "THEN"}
+
+
+def test_every_statement_the_drive_stores_when_typed_loads_again(plant_factory, tmp_path, capfd) -> None:
+    """Every form of statement typed in programming mode (one per line, a line joined to the
+    next with ';', a line of several), saved in the state file, loads as it was saved: a valid
+    program (``RUN`` runs it: its first statement PE ends it), the same lines, nothing on stderr.
+    The table covers every keyword of the statement reader."""
+    from devsim.devices.sers.statements import KEYWORDS
+
+    assert {row.token for row in KEYWORDS} - _NEVER_STORED <= set(_EVERY_STATEMENT)
+    state_file = tmp_path / "sers.nvram.json"
+    typing = start_plant([{}], state_dir=tmp_path)
+    try:
+        assert typing.host.ask("#NEW\r") == b"#NEW\r\npgm\n\r"
+        for text in ["PE", *_EVERY_STATEMENT.values(), "L1 ON;", "W=360 E // a note", "L3"]:
+            assert typing.host.ask(f"#{text}\r").endswith(b"\npgm\n\r"), text
+        assert typing.host.ask("#QUIT\r").endswith(b"\nok1\n\r")
+        free = query(typing.host, "P1122")
+    finally:
+        typing.host.close()
+        typing.runtime.stop()
+    saved = state_file.read_text("utf-8")
+    lines = json.loads(saved)["program"]["lines"]
+    assert lines[0] == ["PE"] and lines[-2:] == [["L1", "ON", "W=360", "E"], ["L3"]]  # (no comment stored)
+    assert len(lines) == 1 + len(_EVERY_STATEMENT) + 2
+    capfd.readouterr()
+    plant = plant_factory({}, state_dir=tmp_path)
+    assert plant.host.ask("#RUN\r") == b"#RUN\r\nok1\n\r"
+    assert query(plant.host, "P1122") == free
+    assert "devsim: memory" not in capfd.readouterr().err
+    assert state_file.read_text("utf-8") == saved
+
+
 def test_the_eeprom_a_drive_saved_loads_as_it_was_saved(plant_factory, tmp_path, typed: dict) -> None:
     (tmp_path / "sers.nvram.json").write_text(json.dumps(typed), "utf-8")
     plant = plant_factory({}, state_dir=tmp_path)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -79,6 +80,24 @@ def test_a_program_in_the_initial_state_is_checked_first(sers: SersDevice) -> No
     with pytest.raises(BadValue, match="program line"):
         sers.apply_state({"program": ["ON", "GARBAGE?!"]})
     assert sers.read("program") == [["ON"], ["W=360", "E"]]  # nothing of the bad download was stored
+
+
+@pytest.mark.parametrize(("bad", "match"), [
+    (["ON", "LIST"], "'LIST': programming mode does not store it"),
+    (["ON", "QUIT"], "'QUIT': programming mode does not store it"),
+    (["L1 ON", "L1"], "label bereits definiert: L1"),
+])
+def test_a_program_in_the_initial_state_is_stored_as_programming_mode_stores_it(sers: SersDevice, bad: list,
+                                                                                 match: str) -> None:
+    """Typed in programming mode, a comment is not stored, ``LIST`` or ``QUIT`` runs instead and a
+    label is defined once (§4.2, §4.6.2): a program downloaded as the initial state is the same, so
+    the drive's next start loads it (before: ``// loop`` was stored as a statement, and so were
+    ``LIST`` and a second ``L1``: a program the drive could never have written)."""
+    sers.apply_state({"program": ["L1 O1=1 // loop", "GT1"]})
+    assert sers.read("program") == [["L1", "O1=1"], ["GT1"]]
+    with pytest.raises(BadValue, match=re.escape(match)):
+        sers.apply_state({"program": bad})
+    assert sers.read("program") == [["L1", "O1=1"], ["GT1"]]  # nothing of the bad download was stored
 
 
 @pytest.mark.parametrize("number", [123, 103])

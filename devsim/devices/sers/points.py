@@ -18,6 +18,7 @@ from devsim.core.points import BadValue, Point, PointTable
 from devsim.devices.sers import statements as st
 from devsim.devices.sers.errors import SersError, message
 from devsim.devices.sers.parameters import PARAMETER_TABLE
+from devsim.devices.sers.program import defined_once, refusal
 from devsim.devices.sers.signals import SIGNALS
 
 __all__ = ["FAULTS", "POINTS", "load_program"]
@@ -39,11 +40,20 @@ def load_program(model: Any, program: Any) -> None:
         result = st.parse(text, final=True)
         if result.errno is not None:
             raise BadValue(f"program line {text!r}: {message(result.errno)}")
-        parsed.append(result)
+        # what programming mode stores of the line (not its comments), or the statement it refuses
+        stored = [stmt.text for stmt, _end in result.statements if not isinstance(stmt, st.Comment)]
+        for statement in stored:
+            if (problem := refusal(statement)) is not None:
+                raise BadValue(f"program line {text!r}: {statement!r}: {problem}")
+        parsed.append(stored)
+    try:
+        defined_once([], [statement for stored in parsed for statement in stored])
+    except SersError as exc:
+        raise BadValue(f"program: {message(exc.errno, detail=exc.detail)}") from None
     model.program.new()
-    for result in parsed:
-        for index, (stmt, _end) in enumerate(result.statements):
-            model.program.add(stmt.text, new_line=index == 0)
+    for stored in parsed:
+        for index, statement in enumerate(stored):
+            model.program.add(statement, new_line=index == 0)
     model.program.quit()
 
 

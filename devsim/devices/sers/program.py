@@ -21,10 +21,11 @@ from devsim.core.console import warn
 from devsim.core.kit import Command, Table
 from devsim.core.nvram import NonVolatileMemory, stored_object
 from devsim.devices.sers import statements as st
-from devsim.devices.sers.errors import SersError
+from devsim.devices.sers.codec import MAX_LINE
+from devsim.devices.sers.errors import SersError, message
 
 __all__ = ["PROGRAMMING", "PROGRAM_BYTES", "PROGRAM_BYTES_P8", "ProgramMemory", "defined_once", "editing_token",
-           "statement_cost"]
+           "refusal", "statement_cost"]
 
 SECTION = "program"
 #: the program memory: 2 KB standard, 8 KB with option P8 (§4.4; spec §4.9 G-MEM)
@@ -44,7 +45,32 @@ def _stored(section: object, capacity: int) -> tuple[list[str], list[bool]]:
     if used > capacity:
         raise ValueError(f"the stored program of {used} bytes is longer than the drive's {capacity}-byte"
                          f" program memory (option P8: {PROGRAM_BYTES_P8})")
+    for text in statements:  # (each as programming mode took it when it was typed, §4.2)
+        if (problem := refusal(text)) is not None:
+            raise ValueError(f"the stored statement {text!r:.40} is one the drive refuses when it is typed ({problem})")
+    try:
+        defined_once([], statements)
+    except SersError as exc:
+        raise ValueError(f"the stored program defines a label twice (errno 83: {message(83, detail=exc.detail)})") from None
     return statements, starts
+
+
+def refusal(text: str) -> str | None:
+    """Why programming mode would not have stored ``text`` as one statement, or None (§4.2): a
+    line carries it (a byte of latin-1 each, no CR, LF or ``#``, within the 60-character line,
+    §4.1), the statement reader takes it whole as one statement without an errno, and it is no
+    statement programming mode runs instead of storing (:data:`PROGRAMMING`).  Label numbers
+    defined twice are :func:`defined_once`'s, the memory's size :meth:`ProgramMemory.add_line`'s."""
+    if len(text) >= MAX_LINE or max(text, default="") > "\xff" or "\r" in text or "\n" in text or "#" in text:
+        return f"no line of {MAX_LINE} latin-1 characters carries it"
+    result = st.parse(text, final=True)
+    if result.errno is not None:
+        return f"errno {result.errno}: {message(result.errno)}"
+    if len(result.statements) != 1 or result.statements[0][0].text != text:
+        return "it is not one statement as the drive stores it"
+    if editing_token(result.statements[0][0]) in PROGRAMMING:
+        return "programming mode does not store it"
+    return None
 
 
 def label_of(text: str) -> int | None:
@@ -101,15 +127,19 @@ class ProgramMemory:
         self.nvram.put(SECTION, {"lines": self.lines()})
 
     def reload(self) -> None:
-        """The program as the drive stored it: its lines, each of one or more statement texts,
+        """The program as the drive stored it: its lines, each of one or more statement texts
+        programming mode took when they were typed (:func:`refusal`, :func:`defined_once`),
         within the memory (§4.4).  [SIM-CHOICE, as the kind's parameters: a stored value the
         drive never stores reads as a failed checksum, :class:`~devsim.devices.sers.memory.ParameterMemory`]
-        Anything else (null, ``{}``, a number for a statement, a program longer than the memory:
-        a file of a drive with option P8 on one without it) fails the program's checksum: the
-        drive starts without a valid program (``RUN``: errno 69, spec §4.4 "valid program"), one
-        line on stderr names the file, and the file keeps what it held until a program is
-        written.  Before, null, ``{}`` or ``[]`` read as no program without a word, a number as
-        the statement ``'5'``, and a program longer than the memory loaded."""
+        Anything else (null, ``{}``, a number for a statement, a line the drive would refuse:
+        ``XYZ 12``, ``LIST``, a label defined twice; a program longer than the memory: a file of a
+        drive with option P8 on one without it) fails the program's checksum: the drive starts
+        without a valid program (``RUN``: errno 69, spec §4.4 "valid program"), one line on
+        stderr names the file, and the file keeps what it held until a program is written.
+        Before, null, ``{}`` or ``[]`` read as no program without a word, a number as the
+        statement ``'5'``, a program longer than the memory loaded, and so did a statement the
+        drive refuses (passed over when it ran: ``XYZ 12``, ``LIST``; a second ``L5`` never
+        jumped to)."""
         self._statements, self._starts = [], []  # (no program stored yet, or a wiped memory)
         if SECTION in self.nvram:
             try:
@@ -307,7 +337,8 @@ def _passed_over(program: ProgramMemory, stmt: Any) -> bool:
 
 #: Programming mode (§4.2 "Im Programmiermodus werden Anweisungen wie LIST, DEL, TR, C, nicht
 #: gespeichert, sondern ausgeführt"): everything typed is stored in the program except these; a
-#: handler returning False leaves the statement to run as outside programming mode.
+#: handler returning False leaves the statement to run as outside programming mode.  A stored
+#: program holding one of them is one the drive could not have written (:func:`refusal`).
 PROGRAMMING: Table[Callable[[ProgramMemory, Any], bool]] = Table(
     [
         Command("Change", _change, "§4.2", "C n: the constant of the current statement"),
