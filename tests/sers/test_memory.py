@@ -20,6 +20,7 @@ from pathlib import Path
 import pytest
 import serial
 
+from devsim.devices.sers.statements import ALIAS_WORDS, KEYWORDS
 from tests.sers.conftest import Host, Plant, start_plant
 from tests.support.memory import killed_at_write
 
@@ -391,9 +392,7 @@ def test_a_program_with_a_statement_the_drive_refuses_when_typed_fails_its_check
 #: One stored statement of every form the language has (§4.2 "Anweisung"), by its row of
 #: ``statements.KEYWORDS`` (an alias: an assignment and a query), or its form without a keyword.
 _EVERY_STATEMENT = {
-    **{word: f"{word}=1" for word in ("ADC", "A", "B", "C1", "C2", "C3", "D2", "DB", "D", "M1", "M2", "M3", "IN",
-                                      "POS", "V", "W", "WA", "WR", "WP", "WRP", "WAP", "WPT", "WRPT", "WAPT", "X",
-                                      "Z", "R0", "R1", "R2", "R3", "R4", "R5", "LP")},
+    **{word: f"{word}=1" for word in ALIAS_WORDS},
     "NOT": "NOT", "NEG": "NEG", "E": "E", "H": "H", "S": "S", "ON": "ON", "OFF": "OFF", "PSAVE": "PSAVE",
     "POSSAVE": "POSSAVE", "POS0": "POS0", "POSR": "POSR", "NEW": "NEW", "PGM": "PGM", "PE": "PE", "VER": "VER",
     "TRON": "TRON", "TROFF": "TROFF", "RETURN": "RETURN", "RT": "RT", "IF": "IF P12<>0 THEN", "ELSE": "ELSE",
@@ -411,8 +410,6 @@ def test_every_statement_the_drive_stores_when_typed_loads_again(plant_factory, 
     next with ';', a line of several), saved in the state file, loads as it was saved: a valid
     program (``RUN`` runs it: its first statement PE ends it), the same lines, nothing on stderr.
     The table covers every keyword of the statement reader."""
-    from devsim.devices.sers.statements import KEYWORDS
-
     assert {row.token for row in KEYWORDS} - _NEVER_STORED <= set(_EVERY_STATEMENT)
     state_file = tmp_path / "sers.nvram.json"
     typing = start_plant([{}], state_dir=tmp_path)
@@ -432,7 +429,7 @@ def test_every_statement_the_drive_stores_when_typed_loads_again(plant_factory, 
     capfd.readouterr()
     plant = plant_factory({}, state_dir=tmp_path)
     assert plant.host.ask("#RUN\r") == b"#RUN\r\nok1\n\r"
-    assert query(plant.host, "P1122") == free
+    assert plant.read("program") == lines and query(plant.host, "P1122") == free
     assert "devsim: memory" not in capfd.readouterr().err
     assert state_file.read_text("utf-8") == saved
 
