@@ -389,13 +389,14 @@ async def _up(
     make_dirs({"--state-dir": state_dir, "--trace-dir": trace_dir})  # (/proc/td: 'cannot start the plant: ...')
     limit = fdlimit.fd_limit()
     if log_level >= DEFAULT_LEVEL:  # (-q: warnings and errors only)
-        warn(f"devsim: the file descriptor limit {limit} allows about {fdlimit.capacity(limit)} ports")
+        warn(f"devsim: the file descriptor limit {limit} allows about {fdlimit.capacity(limit, control=address is not None)} ports")
     async with Runtime(virtual=virtual, speed=speed, state_dir=state_dir, name=name) as runtime:
         runtime.idle_drop = idle_drop
         # (building a plant makes many objects and frees few: no collection until it serves, as
         # `devsim run` does; a 1,000-device worker otherwise paused 60-180 ms in full collections)
         gc.disable()  # (enabled again once frozen, or by `up` whatever happens)
-        plant = await build_plant(runtime, spec, trace_dir=trace_dir, keep_going=True)  # type: ignore[arg-type]
+        plant = await build_plant(runtime, spec, trace_dir=trace_dir, keep_going=True,  # type: ignore[arg-type]
+                                  control=address is not None)
         if plant.refused and log_level >= 1:  # a warning (-qq: nothing but fatal errors)
             causes = sorted(set(plant.refused.values()))
             warn(f"devsim: {len(plant.refused)} ports not opened ({'; '.join(causes)}; ulimit -n {limit}):"

@@ -51,6 +51,7 @@ from typing import TYPE_CHECKING, Any
 import msgspec
 
 from devsim.core.points import ascii_digits
+from devsim.transports.fdlimit import CLIENT_SHARE, MAX_CLIENTS, client_bound  # (beside the ports' budget)
 
 if TYPE_CHECKING:  # imported where used: `devsim run` serves its ports before anyone asks
     from devsim.runtime.ops import ErrorResponse, OkResponse
@@ -59,6 +60,7 @@ if TYPE_CHECKING:  # imported where used: `devsim run` serves its ports before a
 __all__ = [
     "ControlAddress",
     "ControlAddressError",
+    "CLIENT_SHARE",
     "MAX_CLIENTS",
     "ControlServer",
     "client_bound",
@@ -68,29 +70,6 @@ __all__ = [
 
 MAX_LINE = 1 << 20  # bytes in one request line
 MAX_BACKLOG = 4 << 20  # bytes of watch output a slow reader may leave unread before its watch ends
-#: [SIM-CHOICE] Control connections served at once; one more is answered with one ``Busy`` error
-#: line and closed.  Each costs a descriptor and about 4 KB (9,000 idle ones: 9,011 descriptors,
-#: +37 MB resident, kept after they closed), and the descriptors are those the device's ports,
-#: traces and state files need: about 1,000 idle clients of a loopback TCP control port (any
-#: local user) took the default limit of 1,024, and the device's hosts waited in the backlog.
-MAX_CLIENTS = 256
-#: [SIM-CHOICE] Nor more than this share of the process's descriptor limit (the soft
-#: ``RLIMIT_NOFILE``, ``ulimit -n``): under ``ulimit -n 128`` the bound of 256 let 119 idle clients
-#: take every descriptor (the next one was not even accepted); now 32 are served.
-CLIENT_SHARE = 0.25
-
-
-def client_bound(limit: int | None = None) -> int:
-    """How many control connections are served at once: :data:`MAX_CLIENTS`, or
-    :data:`CLIENT_SHARE` of the descriptor ``limit`` (the process's,
-    :func:`devsim.transports.fdlimit.fd_limit`) when that is fewer; at least one."""
-    if limit is None:
-        from devsim.transports.fdlimit import fd_limit
-
-        limit = fd_limit()
-    return max(1, min(MAX_CLIENTS, int(limit * CLIENT_SHARE)))
-
-
 class ControlAddressError(ValueError):
     """A control address that cannot be parsed or must not be served."""
 

@@ -104,6 +104,7 @@ async def build_plant(
     trace_dir: str | Path | None = None,
     keep_going: bool = False,
     trace_format: TraceFormat = "text",
+    control: bool = True,
 ) -> Plant:
     """Create the devices of ``spec`` in ``runtime`` (running in this loop) and serve them.
 
@@ -111,7 +112,9 @@ async def build_plant(
     ``trace_format="pcap"``, as ``NAME.pcap`` (:mod:`devsim.transports.pcap`).
 
     With ``keep_going`` a port that cannot be opened because the process is out of file
-    descriptors is left out (listed in ``plant.refused``) and the others are served."""
+    descriptors is left out (listed in ``plant.refused``) and the others are served; so is a port
+    beyond the descriptors' budget (:func:`devsim.transports.fdlimit.port_budget`, which keeps the
+    control clients' share unless ``control`` is false: no control server)."""
     plant = Plant(runtime, spec)
     if trace_dir is not None:
         Path(trace_dir).mkdir(parents=True, exist_ok=True)
@@ -125,7 +128,7 @@ async def build_plant(
         on_bus = [d for d in spec.devices if d.bus() == bus.name]
         if on_bus:  # (each on the bus by its first port, of one name: plant_problems)
             groups[bus.name] = (bus.transport, [plant.devices[d.name] for d in on_bus], on_bus[0].port_names()[0])
-    budget = port_budget() if keep_going else len(groups)
+    budget = port_budget(control=control) if keep_going else len(groups)
     for name, (tspec, members, port) in groups.items():
         if budget <= 0:
             plant.refused[name] = "not enough file descriptors left"

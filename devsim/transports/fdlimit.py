@@ -1,7 +1,8 @@
 """Running out of file descriptors: say so once, refuse what cannot be served, serve the rest.
 
 Every port costs descriptors (a pty two: the master and the slave devsim holds open; a TCP or
-RFC 2217 port one to listen plus one per connected host; the control API one per client).
+RFC 2217 port one to listen plus one per connected host; the control API one per client, up to
+:func:`client_bound` of them).
 When the process reaches its limit (``ulimit -n``), accepting or opening fails with EMFILE.
 Then devsim
 
@@ -11,7 +12,8 @@ Then devsim
   (:func:`report`), instead of a traceback per attempt;
 * keeps serving the ports and hosts it has.
 
-:func:`capacity` tells at start-up how many ports the limit allows.  The reserve descriptor and
+:func:`capacity` tells at start-up how many ports the limit allows, with the control clients'
+share kept (:func:`client_bound`: the control server serves no more than that).  The reserve descriptor and
 the report counters are per process (they describe the process's descriptor table, not a device).
 """
 
@@ -28,7 +30,10 @@ from devsim.core.console import say, warn
 __all__ = [
     "OUT_OF_FDS",
     "REPORT_EVERY",
+    "CLIENT_SHARE",
+    "MAX_CLIENTS",
     "capacity",
+    "client_bound",
     "fd_limit",
     "in_use",
     "is_out_of_fds",
@@ -40,7 +45,18 @@ __all__ = [
 OUT_OF_FDS = frozenset({errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM})
 REPORT_EVERY = 10.0  # seconds between two lines about the same cause
 FDS_PER_PORT = 2
-BASE_FDS = 32  # the interpreter, the loop, stdio, the control server
+BASE_FDS = 32  # the interpreter, the loop, stdio, the control server's listener
+#: [SIM-CHOICE] Control connections served at once; one more is answered with one ``Busy`` error
+#: line and closed.  Each costs a descriptor and about 4 KB (9,000 idle ones: 9,011 descriptors,
+#: +37 MB resident, kept after they closed), and the descriptors are those the device's ports,
+#: traces and state files need: about 1,000 idle clients of a loopback TCP control port (any
+#: local user) took the default limit of 1,024, and the device's hosts waited in the backlog.
+#: (Here, below the control server, so that :func:`capacity` keeps their share.)
+MAX_CLIENTS = 256
+#: [SIM-CHOICE] Nor more than this share of the process's descriptor limit (the soft
+#: ``RLIMIT_NOFILE``, ``ulimit -n``): under ``ulimit -n 128`` the bound of 256 let 119 idle clients
+#: take every descriptor (the next one was not even accepted); now 32 are served.
+CLIENT_SHARE = 0.25
 
 
 class _Reports:
@@ -64,10 +80,25 @@ def fd_limit() -> int:
     return soft if soft > 0 else 1 << 20
 
 
-def capacity(limit: int | None = None) -> int:
-    """About how many ports (each with its host connected) fit under the descriptor limit."""
+def client_bound(limit: int | None = None) -> int:
+    """How many control connections are served at once (the control server's bound): :data:`MAX_CLIENTS`,
+    or :data:`CLIENT_SHARE` of the descriptor ``limit`` (the process's, :func:`fd_limit`) when
+    that is fewer; at least one."""
     limit = fd_limit() if limit is None else limit
-    return max(0, (limit - BASE_FDS) // FDS_PER_PORT)
+    return max(1, min(MAX_CLIENTS, int(limit * CLIENT_SHARE)))
+
+
+def _kept(limit: int, control: bool) -> int:
+    """Descriptors not for ports: the base, and the control clients' share when a control
+    server is served."""
+    return BASE_FDS + (client_bound(limit) if control else 0)
+
+
+def capacity(limit: int | None = None, *, control: bool = True) -> int:
+    """About how many ports (each with its host connected) fit under the descriptor limit, beside
+    a full set of control clients when ``control`` (a control server is served)."""
+    limit = fd_limit() if limit is None else limit
+    return max(0, (limit - _kept(limit, control)) // FDS_PER_PORT)
 
 
 def in_use() -> int:
@@ -78,10 +109,11 @@ def in_use() -> int:
         return 0
 
 
-def port_budget(limit: int | None = None) -> int:
-    """How many more ports can be opened with a host each, keeping room for the rest."""
+def port_budget(limit: int | None = None, *, control: bool = True) -> int:
+    """How many more ports can be opened with a host each, keeping room for the rest (and for
+    a full set of control clients when ``control``)."""
     limit = fd_limit() if limit is None else limit
-    return max(0, (limit - in_use() - BASE_FDS) // FDS_PER_PORT)
+    return max(0, (limit - in_use() - _kept(limit, control)) // FDS_PER_PORT)
 
 
 def is_out_of_fds(exc: BaseException) -> bool:

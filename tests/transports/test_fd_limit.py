@@ -39,7 +39,8 @@ def _env() -> dict[str, str]:
 
 
 def test_capacity_and_rate_limited_reports(capsys: pytest.CaptureFixture[str]) -> None:
-    assert fdlimit.capacity(1024) == (1024 - fdlimit.BASE_FDS) // 2
+    assert fdlimit.capacity(1024) == (1024 - fdlimit.BASE_FDS - 256) // 2  # (the control clients' share kept)
+    assert fdlimit.capacity(1024, control=False) == (1024 - fdlimit.BASE_FDS) // 2
     assert fdlimit.report("test-cause", "first")
     assert not fdlimit.report("test-cause", "second")  # within ten seconds: counted, not printed
     assert not fdlimit.report("test-cause", "third")
@@ -85,6 +86,64 @@ def test_up_serves_what_fits_and_says_what_does_not(tmp_path: Path) -> None:
         proc.terminate()
         _out, err = proc.communicate(timeout=20)
     assert "Traceback" not in err and len(err) < 2000
+
+
+def test_up_promises_no_port_that_the_control_clients_take(tmp_path: Path) -> None:
+    """Under ``ulimit -n 256`` ``devsim up`` serves the ports it says fit beside the control
+    server's bound of clients (a quarter of the limit, 64): with every one of those clients
+    connected, a host on every port is served.  Before, the port budget did not keep that share:
+    108 ports opened, and with 64 idle clients the hosts of 32 of them were refused (or, hosts
+    first, 32 clients)."""
+    limit = 256
+    plant = tmp_path / "plant.yaml"
+    plant.write_text(
+        "devices:\n" + "".join(f"  - {{name: e{i}, kind: echo, transport: {{tcp: {{port: 0}}}}}}\n" for i in range(120))
+    )
+    control = tmp_path / "c.sock"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "devsim", "up", str(plant), "--control", f"unix:{control}"],
+        cwd=ROOT, env=_env(), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        text=True, preexec_fn=_limit(limit),
+    )
+    out, err = collect_lines(proc.stdout), collect_lines(proc.stderr)
+    bound = fdlimit.client_bound(limit)
+    clients: list[socket.socket] = []
+    hosts: list[socket.socket] = []
+    try:
+        said = next_match(err, lambda text: "allows about" in text, 30, "the limit line")
+        assert said == f"devsim: the file descriptor limit {limit} allows about {fdlimit.capacity(limit)} ports"
+        ports: list[str] = []
+        while not (line := next_match(out, lambda text: ": tcp " in text or text.startswith("control: "), 30,
+                                      "the port lines")).startswith("control: "):
+            ports.append(line.split()[-1].removeprefix("socket://"))
+        assert 0 < len(ports) <= fdlimit.capacity(limit) < 120
+        for _ in range(bound):  # every control client the server serves, each answered and kept
+            client = socket.socket(socket.AF_UNIX)
+            client.settimeout(5)
+            client.connect(str(control))
+            clients.append(client)
+            client.sendall(b'{"id": 1, "op": "now"}\n')
+            assert json.loads(client.makefile("rb").readline())["ok"] is True
+        echoed = 0
+        for where in ports:  # and a host on every port it opened
+            host, port = where.rsplit(":", 1)
+            device = socket.create_connection((host, int(port)), timeout=5)
+            hosts.append(device)
+            try:
+                device.sendall(b"ping")
+                echoed += device.recv(4) == b"ping"
+            except ConnectionResetError:
+                pass  # (refused: out of descriptors)
+        assert echoed == len(ports)
+    finally:
+        for sock in clients + hosts:
+            sock.close()
+        proc.terminate()
+        proc.wait(20)
+    rest = []
+    while (text := err.get(timeout=10)) is not None:
+        rest.append(text)
+    assert not [text for text in rest if "descriptors" in text and "not opened" not in text], rest
 
 
 def _echo_under_limit(control: Path, limit: int) -> tuple[subprocess.Popen[str], queue.Queue[str | None], queue.Queue[str | None]]:
