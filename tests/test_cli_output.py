@@ -16,7 +16,7 @@ import pytest
 import serial
 
 from devsim.cli import exits
-from tests.support.process import ROOT, DevsimProcess, devsim_env
+from tests.support.process import ROOT, DevsimProcess, devsim_env, wait_until
 
 
 @pytest.fixture(scope="module")
@@ -338,6 +338,21 @@ def test_a_watch_whose_reader_goes_away_ends_quietly_with_1(addr: str) -> None:
     pipe', status 5 (UNREACHABLE), the stdout's EPIPE taken for the connection's.  (`ctl capture`
     prints through the same loop, ``devsim.cli.ctl._print_each``.)"""
     with _reader_gone("--control", addr, "watch", "sers") as proc:  # (the first sample: every value at once)
+        err = proc.stderr.read() if proc.stderr is not None else b""
+    assert (proc.returncode, err) == (exits.FAILED, b"")
+
+
+def test_a_capture_whose_reader_goes_away_ends_quietly_with_1(sim: tuple[str, str]) -> None:
+    """`devsim ctl capture sers | head -2` ends as `watch` does when its reader goes: status 1,
+    nothing on stderr (docs/cli.md), at the first chunk a host sends once the capture runs."""
+    from devsim.runtime.client import ControlClient
+
+    addr, url = sim
+    with _reader_gone("--control", addr, "capture", "sers") as proc:
+        with ControlClient(addr) as control:
+            wait_until(lambda: control.line("sers")["capturing"] or proc.poll() is not None, "capture running", 30.0)
+        with serial.serial_for_url(url, timeout=1) as port:
+            port.write(b"#1P11?\r")  # the chunk it prints
         err = proc.stderr.read() if proc.stderr is not None else b""
     assert (proc.returncode, err) == (exits.FAILED, b"")
 
