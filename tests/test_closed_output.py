@@ -269,6 +269,21 @@ def test_a_scenario_run_with_stderr_closed_reports_its_result() -> None:
     assert done.returncode == 0 and done.stdout.splitlines()[-1].startswith("PASSED: 14 of 14 checks passed")
 
 
+def test_a_real_time_scenario_whose_reader_goes_away_runs_to_its_result() -> None:
+    """`devsim scenario run --realtime FILE | head -1`: the plant's port lines are a serving
+    process's (docs/connect.md: a reader gone, what follows goes nowhere); the scenario runs and
+    its status is its result.  Before, the port line's EPIPE was said as the run's failure, 'Error:
+    FILE: cannot run the scenario: [Errno 32] Broken pipe', status 6, and no step ran."""
+    with subprocess.Popen([sys.executable, "-m", "devsim", "scenario", "run", "--realtime", "--speed", "100",
+                           "scenarios/gms96/power_on_status.yaml"], cwd=ROOT, env=devsim_env(),
+                          stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) as proc:
+        assert proc.stdout is not None and proc.stderr is not None
+        proc.stdout.close()  # (before the port line)
+        err = proc.stderr.read()
+    assert proc.returncode == 0, err
+    assert err.splitlines()[-1].endswith("line 36: expect card.plc.running == False  PASS")  # (the progress)
+
+
 def test_a_command_whose_reader_goes_away_ends_quietly_with_1() -> None:
     """`devsim list | head -1`: click ends a command on EPIPE with status 1 and nothing on stderr
     (docs/cli.md, FAILED)."""

@@ -220,7 +220,7 @@ def _run_files(scenarios: list[Any], files: tuple[str, ...], mode: str | None, s
                 pictures.start(plant)
             if chosen == "realtime":
                 for row in plant.describe():  # type: ignore[attr-defined]
-                    click.echo(row)
+                    say(row)  # (a serving process's line, as `devsim up` prints it: a reader gone is no failure)
 
         try:
             item_trace_dir = pictures.begin(item.path) if pictures is not None else trace_dir  # (makes --plot DIR)
