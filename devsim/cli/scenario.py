@@ -220,7 +220,7 @@ def _run_files(scenarios: list[Any], files: tuple[str, ...], mode: str | None, s
                 pictures.start(plant)
             if chosen == "realtime":
                 for row in plant.describe():  # type: ignore[attr-defined]
-                    say(row)  # (a serving process's line, as `devsim up` prints it: a reader gone is no failure)
+                    say(row)  # (a serving process's line, as `devsim up`'s: a reader gone is no failure)
 
         try:
             item_trace_dir = pictures.begin(item.path) if pictures is not None else trace_dir  # (makes --plot DIR)
@@ -388,15 +388,15 @@ async def _up(
     end_with_parent(loop, stop.set)  # a worker of `devsim up --workers` ends with it
     make_dirs({"--state-dir": state_dir, "--trace-dir": trace_dir})  # (/proc/td: 'cannot start the plant: ...')
     limit = fdlimit.fd_limit()
+    control = address is not None  # (its clients' share of the descriptors is kept from the ports)
     if log_level >= DEFAULT_LEVEL:  # (-q: warnings and errors only)
-        warn(f"devsim: the file descriptor limit {limit} allows about {fdlimit.capacity(limit, control=address is not None)} ports")
+        warn(f"devsim: the file descriptor limit {limit} allows about {fdlimit.capacity(limit, control=control)} ports")
     async with Runtime(virtual=virtual, speed=speed, state_dir=state_dir, name=name) as runtime:
         runtime.idle_drop = idle_drop
         # (building a plant makes many objects and frees few: no collection until it serves, as
         # `devsim run` does; a 1,000-device worker otherwise paused 60-180 ms in full collections)
         gc.disable()  # (enabled again once frozen, or by `up` whatever happens)
-        plant = await build_plant(runtime, spec, trace_dir=trace_dir, keep_going=True,  # type: ignore[arg-type]
-                                  control=address is not None)
+        plant = await build_plant(runtime, spec, trace_dir=trace_dir, keep_going=True, control=control)  # type: ignore[arg-type]
         if plant.refused and log_level >= 1:  # a warning (-qq: nothing but fatal errors)
             causes = sorted(set(plant.refused.values()))
             warn(f"devsim: {len(plant.refused)} ports not opened ({'; '.join(causes)}; ulimit -n {limit}):"

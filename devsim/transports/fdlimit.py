@@ -13,8 +13,9 @@ Then devsim
 * keeps serving the ports and hosts it has.
 
 :func:`capacity` tells at start-up how many ports the limit allows, with the control clients'
-share kept (:func:`client_bound`: the control server serves no more than that).  The reserve descriptor and
-the report counters are per process (they describe the process's descriptor table, not a device).
+share kept (:func:`client_bound`: the control server serves no more than that).  The reserve
+descriptor and the report counters are per process (they describe the process's descriptor
+table, not a device).
 """
 
 from __future__ import annotations
@@ -81,9 +82,9 @@ def fd_limit() -> int:
 
 
 def client_bound(limit: int | None = None) -> int:
-    """How many control connections are served at once (the control server's bound): :data:`MAX_CLIENTS`,
-    or :data:`CLIENT_SHARE` of the descriptor ``limit`` (the process's, :func:`fd_limit`) when
-    that is fewer; at least one."""
+    """How many control connections are served at once (the control server's bound):
+    :data:`MAX_CLIENTS`, or :data:`CLIENT_SHARE` of the descriptor ``limit`` (the process's,
+    :func:`fd_limit`) when that is fewer; at least one."""
     limit = fd_limit() if limit is None else limit
     return max(1, min(MAX_CLIENTS, int(limit * CLIENT_SHARE)))
 
