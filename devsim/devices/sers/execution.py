@@ -151,6 +151,9 @@ class Execution:
         self.interpreter.on_motion_end()
         self.interruption.motion_ended()
 
+    def came_while_interrupted(self, what: str) -> None:
+        self.interruption.came(what)
+
     def jog_input_activated(self) -> None:
         self.interruption.activated()
 

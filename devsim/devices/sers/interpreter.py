@@ -11,8 +11,8 @@ Starting (``RUN``, ``P0=1``, autostart, start input I8, the parallel and event d
 errors (program errors stop the program with P12 value 128; drive errors jump to L65 with
 P1033=2/3), stops and continuation (P1033), the non-blocking timer ``D2`` with its timed jump,
 trace mode and the ``@nP0=0`` message are handled here.  A jog input that interrupts the
-program (P1093=0, §4.8.6.3) parks it as waiting ``jog``, what it waited for kept in
-:attr:`Interpreter.held` (:mod:`.interruption` decides when it goes on).
+program (P1093=0, §4.8.6.3) parks it as waiting ``jog``; :mod:`.interruption` keeps what it
+waited for and decides when it goes on.
 """
 
 from __future__ import annotations
@@ -55,6 +55,9 @@ class ProgramHost(Protocol):
 
     def ended(self) -> None:
         """The program ended normally (the dispatchers may start the next one)."""
+
+    def came_while_interrupted(self, what: str) -> None:
+        """What the program waited for came while a jog input interrupted it (P1093=0, §4.8.6.3)."""
 
 
 __all__ = ["FLOW", "Interpreter", "Program", "ProgramHost"]
@@ -157,7 +160,6 @@ class Interpreter:
         self.stack: list[int] = []
         self.subroutine = False  # started at a label (RUN n, dispatchers): RETURN on empty stack ends it
         self.waiting: str | None = None  # what a parked program waits for
-        self.held: str | None = None  # ... when a jog input interrupted it (waiting "jog", P1093=0)
         self._wait_cond: st.Condition | None = None
         self._timer: Timer | None = None
         self._delay: Timer | None = None
@@ -444,8 +446,8 @@ class Interpreter:
 
     def resume(self, what: str) -> None:
         """What the parked program waited for (``position``, ``segment``, ``master`` …) came."""
-        if self.waiting == "jog" and self.held == what:
-            self.held = None  # (it came while a jog input interrupted the program: it goes on then)
+        if self.waiting == "jog":
+            self._host().came_while_interrupted(what)  # (it goes on once the interruption ends)
         if self.waiting != what or not self.running:
             return
         self.waiting = None

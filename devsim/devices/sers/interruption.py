@@ -40,10 +40,15 @@ class JogInterruption:
     the program alone [SIM-CHOICE: it was not "aktiviert"].
     """
 
+    __slots__ = ("interpreter", "motion", "params", "_released")  # (one per drive: no instance dictionary)
+
+    __slots__ = ("interpreter", "motion", "params", "held", "_released")  # (one per drive: no instance dictionary)
+
     def __init__(self, interpreter: Interpreter, motion: Motion, params: SersParameters) -> None:
         self.interpreter = interpreter
         self.motion = motion
         self.params = params
+        self.held: str | None = None  # what the interrupted program waited for (waiting "jog")
         self._released = False  # the inputs are released: continue once the drive stands
 
     def activated(self) -> None:
@@ -56,7 +61,7 @@ class JogInterruption:
             return
         self._released = False
         if interpreter.waiting != "jog":
-            interpreter.held, interpreter.waiting = interpreter.waiting, "jog"
+            self.held, interpreter.waiting = interpreter.waiting, "jog"
 
     def released(self) -> None:
         """No input I1..I6 with its manual function is active any more."""
@@ -65,6 +70,11 @@ class JogInterruption:
         self._released = True
         if self.motion.kind is None:
             self._continue()
+
+    def came(self, what: str) -> None:
+        """What the program waited for came during the interruption: it goes on when it continues."""
+        if self.held == what:
+            self.held = None
 
     def motion_ended(self) -> None:
         if self._released:
@@ -75,14 +85,14 @@ class JogInterruption:
         interpreter = self.interpreter
         self._released = False
         if interpreter.waiting == "jog":
-            interpreter.waiting, interpreter.held = interpreter.held, None
+            interpreter.waiting, self.held = self.held, None
 
     def _continue(self) -> None:
         interpreter = self.interpreter
         self._released = False
         if not interpreter.running or interpreter.waiting != "jog":
             return  # (ended, stopped or jumped to L65 meanwhile)
-        held, interpreter.held = interpreter.held, None
+        held, self.held = self.held, None
         blocks = held == "position" and int(self.params.wait_until_positioned) == 1
         if interpreter.d2_pending and not blocks:
             held = None  # the D2 jump due meanwhile aborts a D or WAIT (§4.8.5.1): at the next cycle
