@@ -122,3 +122,105 @@ def test_every_python_snippet_compiles_and_its_devsim_imports_exist(page: str, l
             for alias in node.names:
                 if alias.name.split(".")[0] == "devsim":
                     importlib.import_module(alias.name)
+
+
+def _pages() -> list[Path]:
+    """README.md and the hand-written docs pages (not the generated references)."""
+    return [ROOT / "README.md", *sorted(p for p in (ROOT / "docs").rglob("*.md") if p.parent.name != "devices")]
+
+
+def _command_lines() -> list[tuple[str, str]]:
+    """Every `devsim ...` line of a sh, console or text block (a `$ ` prompt dropped): (page, line)."""
+    import re
+
+    found = []
+    for path in _pages():
+        text = path.read_text(encoding="utf-8")
+        for block in re.findall(r"^```(?:sh|console|text)\n(.*?)^```", text, re.S | re.M):
+            for line in block.splitlines():
+                line = line.strip().removeprefix("$ ")
+                if line.startswith("devsim "):
+                    found.append((str(path.relative_to(ROOT)), line))
+    return found
+
+
+def test_every_devsim_command_of_a_code_block_has_its_commands_and_options() -> None:
+    """A user copies a command: each names a command and options devsim has, with values of their
+    type (a flag renamed in the code and not on the page fails here); what it needs at run time (a
+    running simulator, the file) is not asked."""
+    import shlex
+
+    import click
+
+    lines = _command_lines()
+    assert len(lines) > 40  # the pages' commands are found
+    for page, line in lines:
+        words = shlex.split(line.split(" #")[0].split(";")[0].split(" | ")[0].split(" > ")[0].rstrip(" &"))
+        command, name, parent, args = cli, "devsim", None, words[1:]
+        while True:
+            try:
+                context = command.make_context(name, list(args), parent=parent)
+            except click.MissingParameter:
+                break
+            except click.UsageError as error:
+                raise AssertionError(f"{page}: {line}: {error.format_message()}") from None
+            rest = [*context._protected_args, *context.args]
+            if not isinstance(command, click.Group) or not rest:
+                break
+            name, command, args = command.resolve_command(context, rest)
+            parent = context
+
+
+def test_the_docs_front_page_installs_as_the_readme_does() -> None:
+    """The site has no quick start of its own: its front page gives the README's first command."""
+    import re
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    first = re.findall(r"```sh\n(.*?)```", readme.split("## Quick start", 1)[1], re.S)[0].strip()
+    assert f"`{first}`" in (ROOT / "docs" / "index.md").read_text(encoding="utf-8").replace("\n", " ")
+
+
+def test_the_runtime_snippet_of_the_control_page_runs(capsys: pytest.CaptureFixture[str]) -> None:
+    """docs/control.md's in-process example, as a user pastes it: a SERS on a pty in virtual time."""
+    [code] = [code for page, _line, code in _python_snippets() if page == "docs/control.md" and "Runtime(" in code]
+    exec(compile(code, "docs/control.md", "exec"), {})
+    assert capsys.readouterr().out == "0.0\n"
+
+
+def test_the_console_session_of_the_cli_page_prints_what_it_shows() -> None:
+    """docs/cli.md's `devsim ctl` session against a simulator started as the page says (it used a
+    control socket it never said how to serve): each command prints the lines shown, numbers aside."""
+    import re
+    import shlex
+    import tempfile
+
+    from tests.support.process import DevsimProcess
+
+    page = (ROOT / "docs" / "cli.md").read_text(encoding="utf-8")
+    started = re.search(r"started as `devsim (run [^`]+)`", page)
+    assert started, "docs/cli.md says how the simulator of its examples is started"
+    address = "unix:/tmp/sers.sock"
+    assert address in started.group(1)
+    session = re.search(r"```console\n(.*?)```", page, re.S).group(1)
+    steps: list[tuple[list[str], list[str]]] = []  # (the command's words, the lines shown)
+    for line in session.splitlines():
+        if line.startswith("$ devsim "):
+            steps.append((shlex.split(line[2:].split(" #")[0])[1:], []))
+        else:
+            steps[-1][1].append(line)
+
+    def shape(lines: list[str]) -> list[str]:
+        return [" ".join(re.sub(r"\d+(\.\d+)?", "N", line).split()) for line in lines]
+
+    with tempfile.TemporaryDirectory(prefix="dsd") as folder:  # (Unix socket paths are short)
+        ours = f"unix:{folder}/c.sock"
+        proc = DevsimProcess(*shlex.split(started.group(1).replace(address, ours)))
+        try:
+            proc.next_match(proc.out, lambda line: line.startswith("control: "), 30, "the control line")
+            for args, shown in steps:
+                args = [ours if arg == address else arg for arg in args]
+                result = CliRunner().invoke(cli, args)
+                assert result.exit_code == 0, (args, result.output)
+                assert shape(result.output.splitlines()) == shape(shown), args
+        finally:
+            assert proc.interrupt() == 0
