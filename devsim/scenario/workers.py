@@ -317,8 +317,9 @@ async def run_workers(
                     shown = f"{control.host}:{server.sockets[0].getsockname()[1]}"
                 say(f"control: {shown}")
             if level_of(verbose, quiet) >= DEFAULT_LEVEL:  # (-q: warnings and errors only)
-                warn(f"devsim: plant up in {len(running)} worker processes ({len(spec.devices)} devices);"
-                     " Ctrl-C to stop")
+                processes, devices = len(running), len(spec.devices)
+                warn(f"devsim: plant up in {processes} worker process{'' if processes == 1 else 'es'}"
+                     f" ({devices} device{'' if devices == 1 else 's'}); Ctrl-C to stop")
             stopping = asyncio.ensure_future(stop.wait())
             done, _ = await asyncio.wait([stopping, *ended], return_when=asyncio.FIRST_COMPLETED)
             status = 0 if stopping in done else 1

@@ -145,3 +145,18 @@ def test_a_port_in_use_in_a_worker_is_one_error_and_no_traceback(tmp_path: Path)
                               cwd=ROOT, env=env, stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=60)
     assert done.returncode == exits.SYSTEM, done.stderr
     assert "Address already in use" in done.stderr and "Traceback" not in done.stderr, done.stderr
+
+
+def test_the_up_line_counts_one_worker_and_one_device_in_the_singular(tmp_path: Path) -> None:
+    """A plant of one device gets one worker, whatever --workers asks; stderr said `1 worker
+    processes (1 devices)` (`devsim up` alone says `(1 device)`)."""
+    from tests.support.process import DevsimProcess
+
+    plant = tmp_path / "one.yaml"
+    plant.write_text("devices:\n  - {name: a, kind: sers, config: {boot_time: 0}}\n")
+    proc = DevsimProcess("up", str(plant), "--workers", "2", "--no-control")
+    try:
+        line = proc.next_match(proc.err, lambda text: text.startswith("devsim: plant up in "), 30, "the up line")
+        assert line == "devsim: plant up in 1 worker process (1 device); Ctrl-C to stop"
+    finally:
+        assert proc.interrupt() == 0
