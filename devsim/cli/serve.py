@@ -415,7 +415,10 @@ async def _serve(plan: Plan) -> None:
             if isinstance(exc, TraceFileError):  # (the file of --motion-log, or of a --trace)
                 motion_log = plan.motion_log is not None and exc.filename == str(plan.motion_log)
                 raise file_failure("--motion-log" if motion_log else "--trace", exc) from None
-            detail = str(exc) if isinstance(exc, OSError | ValueError) else f"{type(exc).__name__}: {exc}"
+            from devsim.core.nvram import UNUSABLE  # (a state file the device cannot start on: its own words)
+
+            expected = isinstance(exc, (OSError, ValueError, *UNUSABLE))
+            detail = str(exc) if expected else f"{type(exc).__name__}: {exc}"
             raise StartFailure(f"cannot {stage}: {detail}", start_status(exc)) from None
 
         logs: list[Any] = []

@@ -56,6 +56,23 @@ def test_the_lock_holds_across_processes(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stdout + done.stderr
 
 
+def test_devsim_run_on_a_held_memory_says_so_as_devsim_up_does(tmp_path: Path) -> None:
+    """`devsim run` on a state dir another simulator holds: one line in the memory's own words and
+    status 6, as `devsim up` says it (it said `cannot create the devices: MemoryInUse: ...`)."""
+    from tests.support.process import devsim_env
+
+    held = NonVolatileMemory.for_device(tmp_path, "sers")
+    try:
+        done = subprocess.run([sys.executable, "-m", "devsim", "run", "sers", "--no-control", "--state-dir",
+                               str(tmp_path)], capture_output=True, text=True, timeout=60, env=devsim_env(),
+                              stdin=subprocess.DEVNULL)
+    finally:
+        held.close()
+    assert done.returncode == 6
+    assert done.stderr == (f"Error: cannot create the devices: {tmp_path}: the memory of 'sers' is in use by another"
+                           f" simulator (pid {os.getpid()}); give each simulator its own --state-dir\n")
+
+
 @pytest.mark.parametrize("token", ["NaN", "Infinity", "-Infinity", "1e999", "-2.5E+400"])
 def test_a_poisoned_image_is_refused_at_load(tmp_path: Path, token: str) -> None:
     """(``1e999``, a number beyond the floats, was read as infinity and loaded: fuzzed.)"""
