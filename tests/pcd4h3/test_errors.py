@@ -195,6 +195,30 @@ def test_e11_e12_a_blocked_rotor_trips_the_position_error(make: Callable[..., St
             assert pcd.sim.read("axis.1.set_position") > pcd.sim.read("axis.1.position") + 2000
 
 
+@pytest.mark.manual("§7.4 FSetPE", "erreicht die Differenz (Betrag) zwischen Soll- und Istposition den definierten "
+                    "Wert, so wird das Statusflag ExcPEr gesetzt: auch hinter einer Bewegung in negativer Richtung")
+@pytest.mark.manual("§7.4 FRdSR", "Bit 7: die Regelung wird bei einer Positionsfehlerüberschreitung (falls so "
+                    "definiert) ausgeschaltet; das Bit wird mit dem nächsten Startbefehl zurückgesetzt")
+def test_a_position_error_behind_a_backward_move_switches_off_until_the_next_start(pcd: Station) -> None:
+    """The error's magnitude counts (the set position leads a backward move below the actual
+    one); with 1Ah the control goes off, and FStart alone switches it on again towards the target
+    (the trip loads no stop into the trajectory).  ExcPEr stays until FResSF, a start does not reset it."""
+    load(pcd, MCW=0x041A, PosEr=500, DestP=-1000)
+    run(pcd, "FSetPE", "FLdDA", "FStart")
+    pcd.sim.advance(1.0)
+    pcd.sim.fault("blocked_1", True)
+    assert pcd.sim.run_until(lambda d: d.read("axis.1.ExcPEr"), 5.0)
+    run(pcd, "FRdSR")
+    assert pcd.read_registers(reg("RSigB"))[0] & 0x02A4 == 0x02A4  # OnDest, ExcPEr, control off, reaction
+    pcd.sim.fault("blocked_1", False)
+    run(pcd, "FStart")
+    run(pcd, "FRdSR")  # (in a call of its own: FRdSR's flag comes before FStart's)
+    assert pcd.read_registers(reg("RSigB"))[0] & 0x00A4 == 0x0020 and pcd.read_flags(flag("ExcPEr")) == [1]
+    assert pcd.sim.run_until(lambda d: d.read("axis.1.OnDest"), 20.0)
+    pcd.sim.advance(0.5)
+    assert pcd.sim.read("axis.1.position") == pytest.approx(-100_000, abs=3)
+
+
 @pytest.mark.manual("§8", "MCFac nicht im Fliesspunkt-Format kann bei der Umrechnung einen Überlauf des "
                     "Wertebereiches bewirken")
 def test_a_machine_factor_that_overflows_the_range(pcd: Station) -> None:

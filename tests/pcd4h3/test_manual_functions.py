@@ -61,6 +61,7 @@ def test_fselom_reads_only_the_mode_bits(pcd: Station) -> None:
                     "Arbeitsregister übernommen")
 @pytest.mark.manual("§7.4 FLdDA", "Beispiel: Spindel 3 mm, 1000 Imp./Umdr., k = 4 · 1000 / 3000 µm = 1,33333 Imp./µm: "
                     "DestP = 60000 µm fährt 60 mm an")
+@pytest.mark.manual("§7.4 FStart", "mit dieser Funktion kann eine Bewegung gestartet werden")
 def test_fldda_loads_and_fstart_takes_it_over(pcd: Station) -> None:
     load(pcd, MCFac=ffp_encode(4 * 1000 / 3000), DestP=60_000, Veloc=50_000, Accel=100_000)
     run(pcd, "FLdVA", "FLdAA", "FLdDA")
@@ -134,6 +135,8 @@ def test_fldvr_at_rest_adds_to_the_momentary_set_velocity(pcd: Station) -> None:
 
 @pytest.mark.manual("§7.4 FLdVA", "die neue geladene Geschwindigkeit wird erst beim nächsten Startbefehl ins "
                     "Arbeitsregister übernommen")
+@pytest.mark.manual("§7.4 FStart", "mit dieser Funktion kann der Controller veranlasst werden, mit einem neu geladenen "
+                    "Bewegungsparameter (z.B. einer Geschwindigkeit) zu arbeiten")
 def test_fldva_acts_at_the_next_start(pcd: Station) -> None:
     load(pcd, DestP=10_000)
     run(pcd, "FLdDA", "FStart")
@@ -280,18 +283,25 @@ def test_a_smooth_stop_of_a_standing_axis_sets_ondest(pcd: Station) -> None:
 
 @pytest.mark.manual("§7.4 FStop", "nach einem Stop verliert der Controller die zuletzt geladene Zielposition nicht; bevor "
                     "die Bewegung ohne neuen Parameter fortgesetzt werden kann, muss zuerst FSelOM neu geladen werden")
-def test_resuming_after_a_stop_needs_fselom(pcd: Station) -> None:
-    load(pcd, DestP=1000)
+@pytest.mark.manual("§7.4 FMotOff", "der Befehl FMotOff hat die gleiche Funktion wie der Befehl FStop, wenn das Bit 8 "
+                    "im Register MCW gesetzt ist")
+@pytest.mark.parametrize(("function", "mcw"), [("FStop", 0x041B), ("FStop", 0x011B), ("FMotOff", 0x041B)])
+def test_resuming_after_a_stop_needs_fselom(pcd: Station, function: str, mcw: int) -> None:
+    """Also after a motor-off stop and FMotOff: FStart alone repeats the stop, the control stays
+    off (RSigB bit 7) until FSelOM (docs/devices/pcd4h3.md, Deviations §7.4 FRdSR bit 7)."""
+    load(pcd, DestP=1000, MCW=mcw)
     run(pcd, "FLdDA", "FStart")
     pcd.sim.advance(2.0)
-    run(pcd, "FStop")
+    run(pcd, function)
     settled(pcd)
     stopped = pcd.sim.read("axis.1.position")
     assert stopped < 50_000  # 200 · 2 s, braking as long: about 400
     run(pcd, "FStart")  # the stop is still in the loaded control word: nothing
     pcd.sim.advance(2.0)
     assert pcd.sim.read("axis.1.position") == pytest.approx(stopped, abs=2)
+    assert signal_register(pcd) & 0x80 == (0 if mcw == 0x041B and function == "FStop" else 0x80)
     run(pcd, "FSelOM", "FStart")
+    assert signal_register(pcd) & 0x80 == 0
     settled(pcd)
     assert pcd.sim.read("axis.1.position") == pytest.approx(100_000, abs=3)
 
@@ -387,16 +397,24 @@ def test_index_capture(make: Callable[..., Station]) -> None:
 @pytest.mark.manual("§7.4 FRdSR", "Bit 14: eine neue Beschleunigung wurde mit FLdAA/R geladen; zurückgesetzt beim "
                     "nächsten Startbefehl")
 @pytest.mark.manual("§7.4 FRdSR", "Bit 2 bis 6: der Zustand der Statusflag")
+@pytest.mark.manual("§7.4 FResSF", "OnDest: das Flag wird bei einem Startbefehl (Funktion FStart) automatisch "
+                    "zurückgesetzt")
 def test_signal_register_bits(pcd: Station) -> None:
     after_axinit = read(pcd, "FRdSR", "RSigB")
-    assert after_axinit & 0x4080 == 0x4080  # off, acceleration loaded
+    assert after_axinit & 0x4080 == 0x4080 and pcd.read_flags(200) == [1]  # off, acceleration loaded; OnDest
     load(pcd, DestP=300)
     run(pcd, "FLdDA", "FStart")
     moving = read(pcd, "FRdSR", "RSigB")
     assert moving & 0x4480 == 0 and moving & 0x04 == 0  # on, not finished, taken over; OnDest 0
+    assert pcd.read_flags(200) == [0]
     settled(pcd)
     done = read(pcd, "FRdSR", "RSigB")
     assert done & 0x0404 == 0x0404 and pcd.read_flags(200) == [1]
+    load(pcd, Accel=10)
+    run(pcd, "FLdAR")  # the relative load sets bit 14 as the absolute one does (and switches the control off)
+    assert read(pcd, "FRdSR", "RSigB") & 0x4080 == 0x4080
+    run(pcd, "FStart")
+    assert read(pcd, "FRdSR", "RSigB") & 0x4080 == 0
 
 
 @pytest.mark.manual("§7.4 FRdSR", "Bit 9: die Massnahme bei Positionsfehler: 0 nur Statusflag, 1 Statusflag und Regelung "
@@ -531,12 +549,15 @@ def test_ondest_follows_the_generator_not_the_motor(pcd: Station) -> None:
 
 @pytest.mark.manual("§7.4 FSStepF", "die Funktion darf nicht ausgeführt werden, wenn die absolute Zielposition die positive "
                     "Grenze des Wertebereichs erreicht hat")
-def test_a_step_beyond_the_range_is_a_command_error(pcd: Station) -> None:
-    load(pcd, MCFac=0x80000041, DestP=(1 << 30) - 1)  # k = 1: the last count of the range
+@pytest.mark.manual("§7.4 FSStepB", "die Funktion darf nicht ausgeführt werden, wenn die absolute Zielposition die negative "
+                    "Grenze des Wertebereichs erreicht hat")
+@pytest.mark.parametrize(("function", "end"), [("FSStepF", (1 << 30) - 1), ("FSStepB", -(1 << 30))])
+def test_a_step_beyond_the_range_is_a_command_error(pcd: Station, function: str, end: int) -> None:
+    load(pcd, MCFac=0x80000041, DestP=end)  # k = 1: the last count of the range
     run(pcd, "FLdDA", "FStart")
     assert pcd.sim.read("axis.1.comers") == 0
-    run(pcd, "FSStepF")
-    assert pcd.sim.read("axis.1.comers") == 1  # the chip refuses the target 2^30: ComErS
+    run(pcd, function)
+    assert pcd.sim.read("axis.1.comers") == 1  # the chip refuses the target 2^30 / −2^30 − 1: ComErS
 
 
 @pytest.mark.manual("§7.2 AxHndlg", "Laderegister: soll ein Parameter geladen werden, muss die Funktion aktiviert werden, "
@@ -622,3 +643,55 @@ def test_fressf_resets_ondest_also_while_the_control_is_off(pcd: Station) -> Non
     assert signal_register(pcd) & 0x84 == 0x80  # RSigB: control off (bit 7), OnDest (bit 2) reset
     run(pcd, "FMotOff")  # the event again
     assert pcd.read_flags(flag("OnDest")) == [1] and pcd.read_registers(4000)[0] == 0x84
+
+
+@pytest.mark.manual("§7.4 FStop", "die Funktion liest nur Bit 8 bis 10 vom Register MCW")
+def test_fstop_reads_only_the_stop_bits(pcd: Station) -> None:
+    """At FStop the MCW also asks for velocity mode and for the control to go off at a position
+    error (1Ah): FStop takes only its smooth stop (bit 10) from it; the reaction stays the one
+    FSetPE loaded (RSigB bit 9), and the next load and start still run in position mode."""
+    load(pcd, DestP=1000)
+    run(pcd, "FLdDA", "FStart")
+    pcd.sim.advance(2.0)
+    load(pcd, MCW=0x041A | VELOCITY_MODE | FORWARD)
+    run(pcd, "FStop")
+    settled(pcd)
+    assert pcd.sim.read("axis.1.position") < 50_000  # stopped on the way (about 400 at 200 per s)
+    assert signal_register(pcd) & (0x0080 | 0x0200 | VELOCITY_MODE) == 0  # control on, flag only, position mode
+    load(pcd, DestP=500)
+    run(pcd, "FLdDA", "FStart")
+    settled(pcd)
+    assert pcd.sim.read("axis.1.position") == pytest.approx(50_000, abs=3)
+    assert pcd.sim.read("axis.1.comers") == 0
+
+
+@pytest.mark.manual("§7.4 FLdBPR", "die negative Breakposition addiert mit der Zielposition darf den gültigen "
+                    "Wertebereich für die Zielposition nicht überschreiten")
+@pytest.mark.manual("§8", "ein Wert ausserhalb seines erlaubten Wertebereiches: der H3-Controller ignoriert den "
+                    "Befehl und setzt das Befehls-Errorflag")
+@pytest.mark.parametrize(("function", "break_position"), [("FLdBPR", -100), ("FLdBPA", -(1 << 30) - 1)])
+def test_a_break_position_beyond_the_range_is_a_command_error(pcd: Station, function: str,
+                                                               break_position: int) -> None:
+    chip = pcd.sim.device.model.drives[0].chip
+    load(pcd, MCFac=0x80000041, DestP=-(1 << 30) + 10, BrkP=-5)  # k = 1; a target 10 counts inside the range
+    run(pcd, "FLdDA", "FStart", "FLdBPA")
+    assert pcd.sim.read("axis.1.comers") == 0 and chip.breakpoint == -5
+    load(pcd, BrkP=break_position)
+    run(pcd, function)
+    assert pcd.sim.read("axis.1.comers") == 1 and chip.breakpoint == -5  # ignored: ComErS
+
+
+@pytest.mark.manual("§7.4 FSetIP", "nachdem diese Funktion ausgeführt ist, wird beim nächsten Mal, wenn A, B und der "
+                    "Indexeingang Null sind, die Istposition ins Indexpositionsregister geschrieben: nur beim nächsten Mal")
+def test_fsetip_captures_only_the_next_index_mark(make: Callable[..., Station]) -> None:
+    """A move over three marks (every 2000 counts) after one FSetIP: RIndP keeps the first."""
+    pcd = make({"axes": {1: {"encoder_lines": 500, "index_offset": 0}}})
+    load(pcd, MCFac=0x80000041, DestP=500)  # k = 1: positions in counts
+    run(pcd, "FLdDA", "FStart")
+    settled(pcd)
+    load(pcd, Veloc=2000, DestP=7000)
+    run(pcd, "FSetIP", "FLdVA", "FLdDA", "FStart")
+    settled(pcd)
+    assert read(pcd, "FRdAP", "RActP") == pytest.approx(7000, abs=2)
+    assert read(pcd, "FRdIP", "RIndP") == 2000 and pcd.read_flags(flag("IPuls")) == [1]
+
