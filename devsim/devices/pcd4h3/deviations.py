@@ -96,11 +96,30 @@ DEVIATIONS: tuple[Deviation, ...] = (
         "Only the examples' user programs run inside the simulator, and they do not call DPB14.",
     ),
     Deviation(
+        "§7.4 FRdAV, FRdSV",
+        "RActV and RSetV range over [0 … 2^30 − 1] / k · 22348 · 10^−6: no sign.",
+        "[SIM-CHOICE] They carry the direction: negative while the axis moves backwards (FBackw, velocity mode "
+        "backwards, a move to a smaller target).",
+        "The LM628 reports its velocities in two's complement (RDRV, RDDV) and the FB divides them by k; the "
+        "printed range repeats FLdVA's load range (spec G-11).",
+    ),
+    Deviation(
         "§7.4 FRdSR",
         "RSigB bit 12: 0 = forward, 1 = backward.",
         "1 = forward, as MCW bit 12 (§7.4 FSelOM: 1 = vorwärts) and the LM628 have it; "
         "`rsigb_bit12_inverted: true` gives the FRdSR text's reading.",
         "The manual contradicts itself (FSelOM and FRdSR); the spec decides for the chip (G-5).",
+    ),
+    Deviation(
+        "§7.4 FRdSR, FMotOff",
+        "RSigB bit 7 (control off) is set by FMotOff and by FStop with MCW bit 8 among others, and reset with the "
+        "next FStart.",
+        "[SIM-CHOICE] A FStart right after FMotOff or a motor-off FStop repeats that stop: the control stays off "
+        "(bit 7 = 1) until FSelOM or a load of a target, velocity or acceleration has run before the FStart. After "
+        "AxInit, FLdAA/FLdAR or a position error trip, FStart alone switches the control on.",
+        "The manual says both: an interrupted move is resumed without a new parameter only after FSelOM (§7.4 "
+        "FStop), and FMotOff is FStop with bit 8 (§7.4 FMotOff); the chip keeps a stop in its trajectory control "
+        "word until the next LTRJ (spec G-3).",
     ),
     Deviation(
         "§7.4 FSetPE",

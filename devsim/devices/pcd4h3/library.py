@@ -264,6 +264,8 @@ class H3Axis:
         return self._to_user(self._read(report))
 
     def _read_velocity(self, report: str, scale: float) -> int:
+        """[SIM-CHOICE] Signed, as the chip reports it: negative backwards (§7.4 FRdAV, FRdSV print 0 … ;
+        docs Deviations)."""
         return self._to_user(self._read(report) / (scale * FB_SAMPLE))
 
     def load_destination_relative(self) -> None:

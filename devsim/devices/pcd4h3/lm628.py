@@ -242,7 +242,10 @@ class Lm628:
     def start(self) -> None:
         """STT: take over the buffers; a stop in the control word acts now.  Every stop ends in
         "trajectory complete" (manual §7.4 FStop: "Das Statusflag OnDest wird nach einem
-        ausgeführten Stop gesetzt"), a smooth one of a generator that already stands at once."""
+        ausgeführten Stop gesetzt"), a smooth one of a generator that already stands at once.
+        [SIM-CHOICE] The stop stays in the control word until the next LTRJ: a second STT repeats it
+        (§7.4 FStop: resume only after FSelOM; so FMotOff, FStart leaves the control off, docs
+        Deviations §7.4 FRdSR, FMotOff)."""
         stop = self._stop
         if self.loaded & 0x20 and not self.profile.complete and not self.motor_off and self.profile.velocity:
             self.error()  # acceleration changed while moving (§3.5.3)
