@@ -195,8 +195,8 @@ def test_e11_e12_a_blocked_rotor_trips_the_position_error(make: Callable[..., St
             assert pcd.sim.read("axis.1.set_position") > pcd.sim.read("axis.1.position") + 2000
 
 
-@pytest.mark.manual("§7.4 FSetPE", "erreicht die Differenz (Betrag) zwischen Soll- und Istposition den definierten "
-                    "Wert, so wird das Statusflag ExcPEr gesetzt: auch hinter einer Bewegung in negativer Richtung")
+@pytest.mark.manual("§7.4 FSetPE", "die Differenz (Betrag) zwischen Soll- und Istposition wird überwacht: ExcPEr "
+                    "auch hinter einer Bewegung in negativer Richtung")
 @pytest.mark.manual("§7.4 FRdSR", "Bit 7: die Regelung wird bei einer Positionsfehlerüberschreitung (falls so "
                     "definiert) ausgeschaltet; das Bit wird mit dem nächsten Startbefehl zurückgesetzt")
 def test_a_position_error_behind_a_backward_move_switches_off_until_the_next_start(pcd: Station) -> None:
