@@ -99,12 +99,68 @@ def test_two_direction_keys_move_two_axes(make) -> None:  # noqa: ANN001
 
 @pytest.mark.manual("§2.3.6", "Die Richtungstasten sind in den Betriebsarten Handbetrieb und Programmierung wirksam")
 @pytest.mark.parametrize(("mode", "moves"), [("MANUAL", True), ("PROGRAM_ENTRY", True), ("AUTO_CONTINUOUS", False),
-                                             ("EXTERNAL_OPERATION", False)])
+                                             ("EXTERNAL_OPERATION", False), ("AUTO_SINGLE_BLOCK", False),
+                                             ("MANUAL_SINGLE_BLOCK", False), ("EXTERNAL_MEDIUM", False)])
 def test_direction_keys_act_in_manual_and_program_entry_only(make, mode: str, moves: bool) -> None:  # noqa: ANN001
     cnc = make(mode=mode)
     cnc.set("input.jog_pos_x", True)
     cnc.advance(0.5)
     assert (cnc.read("axis.x.velocity") > 0) is moves
+
+
+@pytest.mark.manual("§2.4.2", "Nach Ausgabe der Fahrbefehle wartet die Steuerung die Achsfreigabe ab, bevor in den "
+                    "Achsen verfahren wird (a direction key in Handbetrieb and Programmierung as well)")
+@pytest.mark.manual("§2.3.15", "Bei L-Level wird der Vorschub nicht freigegeben; die Steuerung ist in Wartestellung. "
+                    "Steht die Achsfreigabe auf H-Level, wird der Vorschub derjenigen Achsen freigegeben, deren "
+                    "Fahrbefehle anstehen")
+@pytest.mark.manual("§2.3.15", "Nach Freigabe der Vorschübe ist es nicht mehr möglich, durch Aenderung der "
+                    "Achsfreigabe von H-Level auf L-Level die Bewegung zu stoppen")
+@pytest.mark.manual("§2.4.6", "Durch die nächste Achsfreigabe wird der Ausgang (Maschinenstillstand) wieder auf "
+                    "L-Level gesetzt")
+@pytest.mark.parametrize("mode", ["MANUAL", "PROGRAM_ENTRY"])
+def test_a_direction_key_waits_for_the_axis_enable(make, mode: str) -> None:  # noqa: ANN001
+    cnc = make(mode=mode)
+    cnc.set("input.axis_enable", False)
+    cnc.set("input.jog_pos_x", True)
+    cnc.advance(0.5)
+    assert cnc.read("output.travel_x") is True and cnc.read("axis.x.position") == 0
+    assert cnc.read("output.machine_standstill") is True
+    cnc.set("input.axis_enable", True)
+    assert cnc.read("output.machine_standstill") is False
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.velocity") == pytest.approx(2000 / 60 * 1000)  # P48 along the ramp
+    cnc.set("input.axis_enable", False)  # released: L no longer stops it
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.velocity") == pytest.approx(2000 / 60 * 1000)
+
+
+@pytest.mark.manual("§2.3.15", "Bei L-Level wird der Vorschub nicht freigegeben; die Steuerung ist in Wartestellung "
+                    "(die Wartestellung kann durch Not-Stop abgebrochen werden)")
+def test_a_jog_step_waits_for_the_axis_enable_and_not_stop_ends_the_wait(make) -> None:  # noqa: ANN001
+    cnc = make(mode="MANUAL")
+    cnc.set("input.axis_enable", False)
+    cnc.set("input.jog_pos_y", True)
+    cnc.set("input.jog_pos_y", False)  # a key let go before the feed is released: nothing to wait for
+    assert cnc.read("output.travel_y") is False
+    cnc.set("input.jog_step_100", True)
+    cnc.set("input.jog_pos_x", True)
+    cnc.set("input.jog_pos_x", False)
+    cnc.advance(0.5)
+    assert cnc.read("output.travel_x") is True and cnc.read("axis.x.position") == 0
+    cnc.set("input.axis_enable", True)
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.position") == pytest.approx(100) and cnc.read("output.travel_x") is False
+    assert cnc.read("axis.y.position") == 0
+    cnc.set("input.axis_enable", False)
+    cnc.set("input.jog_neg_x", True)
+    assert cnc.read("output.travel_x") is True
+    cnc.set("input.emergency_stop", False)  # ends the wait
+    assert cnc.read("output.travel_x") is False
+    cnc.set("input.emergency_stop", True)
+    cnc.set("input.jog_neg_x", False)
+    cnc.set("input.axis_enable", True)
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.position") == pytest.approx(100)
 
 
 @pytest.mark.manual("§2.3.8", "Der Eilgang wirkt nur bei gleichzeitiger Betätigung mit den Richtungstasten")

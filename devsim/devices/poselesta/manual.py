@@ -7,11 +7,18 @@ of the axis's maximum feed (P48–P51); rapid lifts that to P44–P47 along the 
 step selected a key press moves that many increments (the smallest selected step wins, a press
 during a step is ignored; rapid does not apply).  Only a moving axis has its travel command; the
 machine standstill output is L while any axis moves; position reached is never output here.
+As in a block, a key's travel command goes out first and the axis moves once the axis enable
+V22/3 is H (§2.4.2: "Nach Ausgabe der Fahrbefehle wartet die Steuerung die Achsfreigabe ab,
+bevor in den Achsen verfahren wird"; §2.3.15): while it is L the key waits, a continuous key let
+go or Not-Stop gives the wait up, and a feed once released is not stopped by the enable going L.
+The machine standstill output goes L with the release (§2.4.6: "Durch die nächste Achsfreigabe").
 
 The handwheel (``handwheel.turn``: detents, at ``handwheel.rate_hz``) moves every axis whose
 activation input is H by P76 increments per detent, times the hand panel's factor (×10 in
 selector position 1, ×1 in position 2), driving the position command directly (no ramp of its
-own).  Activating a handwheel makes the machine standstill output L at once.  With open loop
+own).  Activating a handwheel makes the machine standstill output L at once; [SIM-CHOICE] a
+detent is not held back by the axis enable (§2.4.6 treats the handwheel apart, and the manual
+says nothing of its travel commands).  With open loop
 (V21/7 H, switched only at standstill) the axes of P77 follow whatever moves them
 (``axis.<a>.push``): their following error and set-point are 0, the travel command still shows.
 """
@@ -54,6 +61,7 @@ class ManualMotion:
         self._program_moving = program_moving
         self._feed_pot = feed_pot
         self.moving: set[str] = set()
+        self._waiting: dict[str, Callable[[], None]] = {}  # travel command out, the axis enable L (§2.3.15)
         self.handwheel_factor = 1
         self.handwheel_rate = 10.0  # detents per second
         self.open_loop = False  # in effect (switched at standstill)
@@ -65,6 +73,7 @@ class ManualMotion:
         for name in ("rapid", "feed_pot_v"):
             signals.subscribe(name, speed)
         signals.subscribe("open_loop", self._open_loop_input)
+        signals.subscribe("axis_enable", self._axis_enable)
 
     # -- the handwheel (§2.2.3, spec §5.4) ------------------------------------------------------------
     def _handwheel_selected(self, _name: str, _old: Any, _new: Any) -> None:
@@ -128,14 +137,36 @@ class ManualMotion:
             if step is not None:
                 if a in self.moving:
                     return  # a press during a running step is ignored (spec §5.4)
-                self._start(a)
-                target = axis.position() + sign * step
-                axis.move_to(target, self._speed(a, rapid=False), accel, on_done=lambda: self._stopped(a))
+                self._travel(a, lambda: axis.move_to(axis.position() + sign * step, self._speed(a, rapid=False),
+                                                     accel, on_done=lambda: self._stopped(a)))
             else:
-                self._start(a)
-                axis.jog(sign, self._speed(a, rapid=True), accel)
+                self._travel(a, lambda: axis.jog(sign, self._speed(a, rapid=True), accel))
+        elif old and not new and step is None and a in self._waiting:
+            del self._waiting[a]  # let go before the feed was released
+            self._stopped(a)
         elif old and not new and step is None and a in self.moving:
             axis.stop(accel, on_done=lambda: self._stopped(a))
+
+    def _travel(self, a: str, motion: Callable[[], None]) -> None:
+        """The travel command goes out; the axis moves once the axis enable is H (§2.4.2, §2.3.15)."""
+        self.moving.add(a)
+        self._signals.set(f"travel_{a}", True)
+        if self._signals.get("axis_enable"):
+            self._release(motion)
+        else:
+            self._waiting[a] = motion
+
+    def _release(self, motion: Callable[[], None]) -> None:
+        self._signals.set("machine_standstill", False)  # by the axis enable (§2.4.6)
+        motion()
+
+    def _axis_enable(self, _name: str, _old: Any, new: Any) -> None:
+        """V22/3 H: the feed of every axis whose travel command waits is released."""
+        if not new:
+            return  # a released feed goes on (§2.3.15)
+        waiting, self._waiting = self._waiting, {}
+        for motion in waiting.values():
+            self._release(motion)
 
     def _possible(self) -> bool:
         """Manual motion: MANUAL or PROGRAM_ENTRY, the control ready, Not-Stop released."""
@@ -157,6 +188,8 @@ class ManualMotion:
         if self._step() is not None:
             return
         for a in list(self.moving):
+            if a in self._waiting:
+                continue  # not released yet: it starts at the speed of its release
             held = [d for d in (1, -1) if self._signals.get(f"jog_{'pos' if d > 0 else 'neg'}_{a}")]
             if held:
                 self._axes[a].jog(held[0], self._speed(a, rapid=True), self._axes.accel(a))
@@ -174,10 +207,18 @@ class ManualMotion:
 
     def left_field(self) -> None:
         """Outside the working field every moving axis brakes (§2.4.4)."""
+        self._give_up_waiting()
         for a in list(self.moving):
             self._axes[a].stop(self._axes.accel(a), on_done=lambda a=a: self._stopped(a))
 
+    def _give_up_waiting(self) -> None:
+        """The waits for the axis enable end (Not-Stop, a mode change: §2.3.15)."""
+        waiting, self._waiting = self._waiting, {}
+        for a in waiting:
+            self._stopped(a)
+
     def reset(self) -> None:
+        self._give_up_waiting()
         for a in list(self.moving):
             self._axes[a].stop(self._axes.accel(a))
             self._stopped(a)
