@@ -220,20 +220,29 @@ def test_nc_stop_brakes_to_hold_and_nc_start_resumes_to_the_same_end_point(make)
 @pytest.mark.manual("§2.3.2", "Ein Not-Stop bewirkt einen schlagartigen Halt der Achsbewegungen ohne Ausführung der Bremsrampe. Die Analogausgänge werden gleichzeitig auf Null gesetzt")
 @pytest.mark.manual("§2.3.2", "Die Steuerung wechselt beim Aufheben des Not-Stops automatisch auf Handbetrieb")
 @pytest.mark.manual("§2.4.1", "Dasselbe geschieht nach Not-Stop: Handbetrieb wird über den Data-Bus ausgegeben")
+@pytest.mark.manual("§2.3.2", "Ist ein Schleppfehler vorhanden, der nicht abgearbeitet werden konnte, wird dieser durch "
+                    "die Steuerung berücksichtigt und intern auf Null gesetzt, ohne die Istwerte zu verfälschen")
+@pytest.mark.manual("§2.3.2", "Nach dem Aufheben des Not-Stops werden die Antriebe ruckfrei eingeschaltet und die "
+                    "Lageregelkreise sind nun wieder aktiv")
 def test_not_stop_stops_at_once_and_its_release_returns_to_manual(make) -> None:  # noqa: ANN001
-    """S22 (§2.3.2): set-points 0 V at once, no ramp, the program aborted; release → MANUAL, 0x08."""
+    """S22 (§2.3.2): set-points 0 V at once, no ramp, the program aborted, the following error
+    cleared with the actual value kept; release → MANUAL, 0x08, the drive holds where it stood."""
     cnc = make(program="N1 G01 X50 F3000")
     cnc.set("panel.nc_start", True)
     cnc.advance(0.5)
     assert cnc.read("axis.x.analog_out") > 0 and cnc.read("axis.x.following_error") > 0
+    display = cnc.read("axis.x.display")
     cnc.set("input.emergency_stop", False)
     position = cnc.read("axis.x.position")
     assert cnc.read("axis.x.velocity") == 0 and cnc.read("axis.x.analog_out") == 0
+    assert cnc.read("axis.x.following_error") == 0 and cnc.read("axis.x.display") == display
     cnc.advance(1.0)
     assert cnc.read("axis.x.position") == position and cnc.read("program.state") == "IDLE"
     assert cnc.read("output.nc_ready") is True and cnc.read("panel.mode") == "AUTO_CONTINUOUS"
     cnc.set("input.emergency_stop", True)
     assert cnc.read("panel.mode") == "MANUAL" and cnc.read("output.data_bus") == 0x08
+    cnc.advance(0.5)  # the loop closed again on the actual value: no set-point jump, no motion
+    assert cnc.read("axis.x.analog_out") == 0 and cnc.read("axis.x.position") == position
 
 
 @pytest.mark.manual("§2.3.13", "Bei L-Level ist das Satzausblenden wirksam und der markierte Satz wird übersprungen; bei H-Level werden die markierten Sätze auch ausgeführt")
@@ -269,6 +278,7 @@ def test_single_block_and_programmed_stop_wait_for_nc_start(make) -> None:  # no
 
 @pytest.mark.manual("§2.3.17", "Wenn ein Werkzeugwechsel mit M 06 programmiert ist, muss dieser quittiert werden")
 @pytest.mark.manual("§2.3.18", "Bei H-Level wird M 10 als eine nicht selbsthaltende Funktion behandelt: die Steuerung wartet, bis ein negativer Impuls die Löschung und die Programmfortsetzung bewirkt")
+@pytest.mark.manual("§2.4.7", "M 10 wirkt am Satzanfang")
 def test_tool_change_and_m10_wait_for_their_acknowledges(make) -> None:  # noqa: ANN001
     """S17, S18 (§2.3.17, §2.3.18)."""
     cnc = make(program="N20 M06 T05 X1\nN30 M10 X2\nN40 M11")
@@ -281,6 +291,7 @@ def test_tool_change_and_m10_wait_for_their_acknowledges(make) -> None:  # noqa:
     cnc.set("input.m10_ack", True)  # H at output time: M10 waits for a negative pulse
     cnc.advance(1.0)
     assert cnc.read("program.state") == "WAIT_M10_PULSE" and cnc.read("output.m10") is True
+    assert cnc.read("axis.x.position") == pytest.approx(1_000)  # M10 acts at the block start: X2 waits
     cnc.set("input.m10_ack", False)
     assert cnc.read("output.m10") is False
     cnc.advance(1.0)

@@ -41,6 +41,19 @@ def bus_codes(cnc: Any, until_s: float, step_s: float = 0.005) -> list[int]:
     return codes
 
 
+def strobe_rises(cnc: Any, until_s: float, step_s: float = 0.005) -> list[tuple[int, float]]:
+    """(bus code, X position) each time the M strobe rises, over ``until_s`` seconds."""
+    seen: list[tuple[int, float]] = []
+    was = False
+    for _ in range(round(until_s / step_s)):
+        cnc.advance(step_s)
+        now = cnc.read("output.strobe_m")
+        if now and not was:
+            seen.append((cnc.read("output.data_bus"), cnc.read("axis.x.position")))
+        was = now
+    return seen
+
+
 # -- §2.3.1 NC-Stop, §2.3.3 NC-Start ----------------------------------------------------------------
 @pytest.mark.manual("§2.3.1", "NC-Stop ist im Handbetrieb unwirksam")
 def test_nc_stop_has_no_effect_in_manual(make) -> None:  # noqa: ANN001
@@ -81,6 +94,20 @@ def test_p75_selects_where_nc_start_comes_from(make, p75: int, panel: bool, exte
             cnc.set("input.nc_start", True)
         cnc.advance(0.5)
         assert (cnc.read("program.state") != "IDLE") is counts, source
+
+
+@pytest.mark.manual("§2.3.3", "In den Betriebsarten Automatik-Folgesatz, Automatik-Einzelsatz und Hand-Einzelsatz wird "
+                    "damit das Programm gestartet (and in no other)")
+@pytest.mark.parametrize(("mode", "starts"), [("AUTO_CONTINUOUS", True), ("AUTO_SINGLE_BLOCK", True),
+                                              ("MANUAL_SINGLE_BLOCK", True), ("MANUAL", False),
+                                              ("PROGRAM_ENTRY", False), ("EXTERNAL_OPERATION", False)])
+def test_nc_start_starts_a_program_in_the_program_modes_only(make, mode: str, starts: bool) -> None:  # noqa: ANN001
+    cnc = make(program="N1 G01 X10 F3000", mode=mode)
+    if mode == "MANUAL_SINGLE_BLOCK":
+        cnc.set("panel.mdi", "N1 G01 X10 F3000")
+    cnc.set("input.nc_start", True)
+    cnc.advance(1.0)
+    assert (cnc.read("axis.x.position") == pytest.approx(10_000)) is starts
 
 
 # -- §2.3.6–§2.3.9 manual motion ----------------------------------------------------------------------
@@ -239,6 +266,66 @@ def test_open_loop_is_not_taken_while_an_axis_moves(make) -> None:  # noqa: ANN0
         cnc.set("axis.x.push", 1.0)
 
 
+@pytest.mark.manual("§2.3.7", "Nach einem ausgeführten Jogging-Schritt wird in einer Achse erst weiterverfahren, wenn "
+                    "der nächste Impuls erfolgt")
+@pytest.mark.manual("§2.3.7", "Die Anfahr- und Bremsrampen werden ausgeführt")
+def test_a_jog_step_waits_for_the_next_press_and_runs_its_ramps(make) -> None:  # noqa: ANN001
+    cnc = make(mode="MANUAL")
+    cnc.set("input.jog_step_10000", True)
+    cnc.set("input.jog_pos_x", True)  # and held
+    cnc.advance(0.02)
+    assert 0 < cnc.read("axis.x.velocity") < 2000 / 60 * 1000  # on its way to P48 along the ramp
+    cnc.advance(3.0)
+    assert cnc.read("axis.x.position") == pytest.approx(10_000) and cnc.read("axis.x.velocity") == 0
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.position") == pytest.approx(10_000)  # held: still one step
+    cnc.set("input.jog_pos_x", False)
+    cnc.set("input.jog_pos_x", True)
+    cnc.advance(3.0)
+    assert cnc.read("axis.x.position") == pytest.approx(20_000)
+
+
+@pytest.mark.manual("§2.3.6", "Die Verfahrgeschwindigkeit der einzelnen Achsen ist von der Stellung des "
+                    "Vorschubpotentiometers und des pro Achse programmierten Vorschubs (P 44 - 51) abhängig")
+def test_each_axis_jogs_at_its_own_parameters(make) -> None:  # noqa: ANN001
+    cnc = make({"params": {48: 1200, 49: 600, 44: 6000, 45: 3000}}, mode="MANUAL")
+    cnc.set("input.feed_pot_v", 5.0)
+    cnc.set("input.jog_pos_x", True)
+    cnc.set("input.jog_pos_y", True)
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.velocity") == pytest.approx(10_000)  # 50 % of 1200 mm/min
+    assert cnc.read("axis.y.velocity") == pytest.approx(5_000)  # 50 % of 600 mm/min
+    cnc.set("input.rapid", True)
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.velocity") == pytest.approx(100_000) and cnc.read("axis.y.velocity") == pytest.approx(50_000)
+
+
+@pytest.mark.manual("§2.2.3", "Steht der Maschinenparameter P 76 auf 1 (Einflanken-Auswertung), ist ein Rasterschritt "
+                    "so gross wie die gewählte Auflösung. Steht er auf 2, ist ein Rasterschritt doppelt so gross")
+@pytest.mark.parametrize(("p76", "increments"), [(1, 1), (2, 2), (4, 4)])
+def test_a_handwheel_detent_is_p76_increments(make, p76: int, increments: int) -> None:  # noqa: ANN001
+    cnc = make({"params": {76: p76}}, mode="MANUAL")
+    cnc.set("handwheel.factor", 1)
+    cnc.set("input.handwheel_x", True)
+    cnc.set("handwheel.turn", 25)
+    cnc.advance(5.0)
+    assert cnc.read("axis.x.position") == pytest.approx(25 * increments)
+
+
+@pytest.mark.manual("§2.3.22", "Override-Potentiometer: Aktiv in den Betriebsarten Automatik-Folgesatz, "
+                    "- Einzelsatz und Hand-Einzelsatz")
+@pytest.mark.parametrize("mode", ["AUTO_CONTINUOUS", "AUTO_SINGLE_BLOCK", "MANUAL_SINGLE_BLOCK"])
+def test_the_override_acts_in_every_program_mode(make, mode: str) -> None:  # noqa: ANN001
+    cnc = make(program="N1 G01 X100 F1200", mode=mode)
+    if mode == "MANUAL_SINGLE_BLOCK":
+        cnc.set("panel.mdi", "N1 G01 X100 F1200")
+    cnc.set("input.override_pot_v", 10.0 / 3)  # 50 %
+    cnc.set("input.feed_pot_v", 2.0)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.velocity") == pytest.approx(10_000, rel=1e-3)
+
+
 # -- §2.3.12 M01 -------------------------------------------------------------------------------------
 @pytest.mark.manual("§2.3", "V 21/10: M 01 wahlweisen Halt aktivieren")
 @pytest.mark.parametrize(("optional_stop", "stops"), [(True, True), (False, False)])
@@ -249,6 +336,74 @@ def test_m01_stops_only_while_v21_10_is_high(make, optional_stop: bool, stops: b
     cnc.advance(2.0)
     assert (cnc.read("axis.x.position") == pytest.approx(1_000)) is stops
     assert (cnc.read("program.state") == "STOPPED") is stops
+
+
+# §2.3.2
+# -- §2.3.15, §2.3.16 the waits of a block, §2.3.25 the input page -------------------------------------
+@pytest.mark.manual("§2.3.15", "Bei L-Level wird der Vorschub nicht freigegeben; die Steuerung ist in Wartestellung "
+                    "(die Wartestellung kann durch Not-Stop abgebrochen werden)")
+def test_not_stop_ends_the_wait_for_the_axis_enable(make) -> None:  # noqa: ANN001
+    cnc = make(program="N1 X10\nN2 X20")
+    cnc.set("input.axis_enable", False)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(0.3)
+    assert cnc.read("program.state") == "WAIT_AXIS_ENABLE" and cnc.read("output.travel_x") is True
+    cnc.set("input.emergency_stop", False)
+    assert cnc.read("program.state") == "IDLE" and cnc.read("output.travel_x") is False
+    cnc.set("input.emergency_stop", True)
+    cnc.set("input.axis_enable", True)  # the wait is over: the enable now releases nothing
+    cnc.advance(1.0)
+    assert cnc.read("panel.mode") == "MANUAL" and cnc.read("axis.x.position") == 0
+
+
+@pytest.mark.manual("§2.3.16", "Anschliessend wird der Eingang Programm fortsetzen abgefragt. Steht dieser auf H-Level, "
+                    "wird die nächste Funktion im zu bearbeitenden Satz oder der nächste Satz ausgeführt")
+def test_the_block_end_functions_wait_for_program_continue(make) -> None:  # noqa: ANN001
+    cnc = make(program="N1 X1 M05\nN2 X2")
+    cnc.set("input.program_continue", False)
+    cnc.set("panel.nc_start", True)
+    cnc.advance(1.0)
+    assert cnc.read("output.position_reached") is True and cnc.read("program.state") == "WAIT_PROGRAM_CONTINUE"
+    assert strobe_rises(cnc, 0.5) == []  # M05 waits as well
+    cnc.set("input.program_continue", True)
+    assert strobe_rises(cnc, 0.1) == [(0x05, pytest.approx(1_000))]
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.position") == pytest.approx(2_000)
+
+
+#: §2.3.25: port and half → the terminal of bit 7 … bit 0 (None: "nicht verwendet" / "leer").
+INPUT_PAGE = {
+    "1A": ("open_loop", "key_switch", "keyboard_external", "optional_stop", "xy_plotter", "program_lock_open",
+           "block_abort", None),
+    "1B": ("jog_step_10000", "jog_step_1000", "jog_step_100", "jog_step_10", "jog_step_1", "m10_ack", "rapid",
+           "mst_ack"),
+    "2A": ("limit_pos_d", "limit_pos_z", "limit_pos_y", "limit_pos_x", "limit_neg_d", "limit_neg_z", "limit_neg_y",
+           "limit_neg_x"),
+    "2B": ("jog_pos_d", "jog_pos_z", "jog_pos_y", "jog_pos_x", "jog_neg_d", "jog_neg_z", "jog_neg_y", "jog_neg_x"),
+    "3A": (None, None, None, None, "handwheel_d", "handwheel_z", "handwheel_y", "handwheel_x"),
+    "4A": ("tool_change_ack", "program_continue", "axis_enable", "inch", None, "block_skip_cancel", None, None),
+    "4B": (None, None, "nc_start", "emergency_stop", "nc_stop", None, None, None),
+}
+
+
+@pytest.mark.manual("§2.3.25", "Bildschirm/Klemme/Belegung: the table of ports 1 … 4, A and B, bit 7 … 0")
+def test_each_input_shows_on_its_own_bit_of_the_input_page(make) -> None:  # noqa: ANN001
+    cnc = make({"plc": {"mst_ack": "manual"}}, mode="PROGRAM_ENTRY")
+    cnc.set("panel.diagnostic", 5)
+    for port, names in INPUT_PAGE.items():
+        for bit, name in zip(range(7, -1, -1), names, strict=True):
+            if name is None:
+                continue
+            if cnc.read("panel.mode") != "PROGRAM_ENTRY":  # Not-Stop's release switched to MANUAL
+                cnc.set("panel.mode", "PROGRAM_ENTRY")
+                cnc.set("panel.diagnostic", 5)
+            before = cnc.read("diagnostics.inputs")
+            level = cnc.read(f"input.{name}")
+            cnc.set(f"input.{name}", not level)
+            after = cnc.read("diagnostics.inputs")
+            cnc.set(f"input.{name}", level)
+            changed = {p: before[p] ^ after[p] for p in before if before[p] != after[p]}
+            assert changed == {port: 1 << bit}, name
 
 
 # -- §2.4 outputs --------------------------------------------------------------------------------------
@@ -380,6 +535,60 @@ def test_the_start_stop_status_is_high_while_the_program_runs(make) -> None:  # 
     assert cnc.read("output.start_stop_status") is True
     cnc.set("input.nc_stop", False)
     assert cnc.read("output.start_stop_status") is False
+
+
+DECODED = (0, 1, 2, 3, 4, 6, 8, 10)
+
+
+@pytest.mark.manual("§2.4.7", "Folgende 8 M-Funktionen werden zusätzlich dekodiert ausgegeben: M 00, M 01, M 02, M 03, "
+                    "M 04, M 06, M 08, M 10 (V 15/1-8)")
+@pytest.mark.parametrize("m", DECODED)
+def test_each_decoded_m_function_sets_its_own_output(make, m: int) -> None:  # noqa: ANN001
+    cnc = make(program=f"N1 M{m:02d} X1")
+    cnc.set("input.optional_stop", True)
+    cnc.set("panel.nc_start", True)
+    seen: set[int] = set()
+    for _ in range(100):
+        cnc.advance(0.01)
+        seen |= {n for n in DECODED if cnc.read(f"output.m{n:02d}")}
+    assert seen == {m}
+
+
+@pytest.mark.manual("§2.4.8", "M 00, M 01, M 02, M 05, M 09, M 11, M 15 sowie die ungeraden, frei programmierbaren "
+                    "M-Funktionen werden am Satzende ausgeführt")
+@pytest.mark.parametrize(("m", "at_end"), [(9, True), (11, True), (15, True), (21, True), (8, False), (20, False)])
+def test_an_m_function_goes_out_at_the_start_or_the_end_of_its_block(make, m: int, at_end: bool) -> None:  # noqa: ANN001
+    cnc = make(program=f"N1 M{m:02d} X1")
+    cnc.set("panel.nc_start", True)
+    code = m // 10 << 4 | m % 10
+    assert strobe_rises(cnc, 1.0) == [(code, pytest.approx(1_000) if at_end else 0)]
+
+
+@pytest.mark.manual("§2.4.4", "Wird das programmierte Arbeitsfeld verlassen, werden alle Achsen jeder Betriebsart "
+                    "entlang der Bremsrampen, wie bei NC-Stop, abgebremst (a direction key in Handbetrieb)")
+def test_a_direction_key_that_leaves_the_working_field_brakes_along_the_ramp(make) -> None:  # noqa: ANN001
+    cnc = make({"axes": {"x": {"reference_marks": [-1.0]}}, "params": {9: 5}}, mode="MANUAL")
+    cnc.set("panel.reference", "x")
+    cnc.run_until(lambda d: "x" in d.model.field.referenced, 60.0)
+    cnc.set("input.jog_pos_x", True)  # 2000 mm/min, 33.3 mm/s: 1.1 mm to brake at 500 mm/s²
+    cnc.run_until(lambda d: not d.model.signals.get("inside_working_field"), 10.0)
+    assert cnc.read("axis.x.position") == pytest.approx(5_000, abs=1)
+    cnc.advance(0.02)
+    assert 0 < cnc.read("axis.x.velocity") < 2000 / 60 * 1000  # braking, not stopped at once
+    cnc.advance(1.0)
+    assert cnc.read("axis.x.velocity") == 0
+    assert cnc.read("axis.x.position") == pytest.approx(5_000 + 1_111, abs=2)
+    assert cnc.read("output.inside_working_field") is False
+
+
+@pytest.mark.manual("§2.4.6", "Ausnahme: Betriebsarten Handbetrieb und Programm-Eingabe bei Anwahl eines Handrades: "
+                    "der Ausgang wird auf L-Level gesetzt, sobald eine Handradaktivierung erfolgt")
+@pytest.mark.parametrize("mode", ["MANUAL", "PROGRAM_ENTRY"])
+def test_a_handwheel_activation_drops_machine_standstill(make, mode: str) -> None:  # noqa: ANN001
+    cnc = make(mode=mode)
+    assert cnc.read("output.machine_standstill") is True
+    cnc.set("input.handwheel_y", True)
+    assert cnc.read("output.machine_standstill") is False and cnc.read("axis.y.velocity") == 0
 
 
 # -- §2.5 set-points ---------------------------------------------------------------------------------------
