@@ -64,6 +64,31 @@ def test_nc_stop_has_no_effect_in_manual(make) -> None:  # noqa: ANN001
     assert cnc.read("axis.x.velocity") > 0
 
 
+@pytest.mark.manual("§2.3.1", "Ein NC-Stop bewirkt einen Halt der Achsbewegungen entlang der Bremsrampe. NC-Stop ist "
+                    "im Handbetrieb unwirksam (so in Programmierung/Playback it stops the direction keys)")
+def test_nc_stop_brakes_a_direction_key_in_program_entry(make) -> None:  # noqa: ANN001
+    full = 2000 / 60 * 1000  # P48 at 100 % feed pot
+    cnc = make(mode="PROGRAM_ENTRY")
+    cnc.set("input.jog_pos_x", True)
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.velocity") == pytest.approx(full)
+    cnc.set("input.nc_stop", False)
+    cnc.advance(0.02)
+    assert 0 < cnc.read("axis.x.velocity") < full  # along the braking ramp
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.velocity") == 0 and cnc.read("output.travel_x") is False
+    held = cnc.read("axis.x.position")
+    cnc.set("input.jog_pos_x", False)
+    cnc.set("input.jog_pos_x", True)  # pressed again while NC-Stop is effective
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.position") == held
+    cnc.set("input.nc_stop", True)
+    cnc.set("input.jog_pos_x", False)
+    cnc.set("input.jog_pos_x", True)
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.velocity") == pytest.approx(full)
+
+
 @pytest.mark.manual("§2.3.1", "Falls ein NC-Stop während der Uebergabe der M-, S- oder T-Funktionen erfolgt, bleibt "
                     "dieser unwirksam, d. h. die Funktionen werden weiter ausgegeben. Der NC-Stop wird jedoch intern "
                     "abgespeichert, so dass eine nächste Achsbewegung erst nach erneutem NC-Start ausgeführt wird")

@@ -12,6 +12,13 @@ V22/3 is H (§2.4.2: "Nach Ausgabe der Fahrbefehle wartet die Steuerung die Achs
 bevor in den Achsen verfahren wird"; §2.3.15): while it is L the key waits, a continuous key let
 go or Not-Stop gives the wait up, and a feed once released is not stopped by the enable going L.
 The machine standstill output goes L with the release (§2.4.6: "Durch die nächste Achsfreigabe").
+In PROGRAM_ENTRY NC-Stop (V19/1 L) acts: every axis brakes along its ramp and the keys and the
+handwheel do not move while it is L (§2.3.1: "Ein NC-Stop bewirkt einen Halt der Achsbewegungen
+entlang der Bremsrampe … NC-Stop ist im Handbetrieb unwirksam"; only MANUAL is exempt).
+[SIM-CHOICE] the braked motion is given up, its travel command drops and NC-Start does not
+continue it: a key pressed again after NC-Stop moves again (the manual's NC-Start continues, and
+its "Bei NC-Stop werden die Fahrbefehle nicht zurückgesetzt" (§2.4.2) keeps, a program's
+positioning; for the keys of Programmierung/Playback it says neither).
 
 The handwheel (``handwheel.turn``: detents, at ``handwheel.rate_hz``) moves every axis whose
 activation input is H by P76 increments per detent, times the hand panel's factor (×10 in
@@ -74,6 +81,7 @@ class ManualMotion:
             signals.subscribe(name, speed)
         signals.subscribe("open_loop", self._open_loop_input)
         signals.subscribe("axis_enable", self._axis_enable)
+        signals.subscribe("nc_stop", self._nc_stop)
 
     # -- the handwheel (§2.2.3, spec §5.4) ------------------------------------------------------------
     def _handwheel_selected(self, _name: str, _old: Any, _new: Any) -> None:
@@ -168,9 +176,19 @@ class ManualMotion:
         for motion in waiting.values():
             self._release(motion)
 
+    def _nc_stop(self, _name: str, _old: Any, new: Any) -> None:
+        """V19/1 L: in PROGRAM_ENTRY the axes brake along their ramps (§2.3.1; not in MANUAL)."""
+        if not new and self._mode() in MANUAL_MODES and self._nc_stop_effective():
+            self.brake()
+
+    def _nc_stop_effective(self) -> bool:
+        return self._mode() != "MANUAL" and not self._signals.get("nc_stop")
+
     def _possible(self) -> bool:
-        """Manual motion: MANUAL or PROGRAM_ENTRY, the control ready, Not-Stop released."""
-        return self._mode() in MANUAL_MODES and not self._booting() and bool(self._signals.get("emergency_stop"))
+        """Manual motion: MANUAL or PROGRAM_ENTRY, the control ready, Not-Stop released, NC-Stop
+        not effective (§2.3.1)."""
+        return (self._mode() in MANUAL_MODES and not self._booting() and bool(self._signals.get("emergency_stop"))
+                and not self._nc_stop_effective())
 
     def _step(self) -> int | None:
         for n in JOG_STEPS:  # the smallest selected step wins
@@ -206,7 +224,11 @@ class ManualMotion:
             self._signals.set("machine_standstill", True)
 
     def left_field(self) -> None:
-        """Outside the working field every moving axis brakes (§2.4.4)."""
+        """Outside the working field every moving axis brakes (§2.4.4), as by NC-Stop."""
+        self.brake()
+
+    def brake(self) -> None:
+        """Every moving axis brakes along its ramp (NC-Stop in PROGRAM_ENTRY, §2.3.1; the field left)."""
         self._give_up_waiting()
         for a in list(self.moving):
             self._axes[a].stop(self._axes.accel(a), on_done=lambda a=a: self._stopped(a))
