@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -99,3 +100,48 @@ def test_a_flash_error_is_gone_after_power_on(plant_factory: Any) -> None:
     plant.runtime.power_cycle(plant.name)
     plant.advance(0.6)
     assert memory_status(c) & FLASH_ERROR == 0
+
+
+NV_ERROR = 0x60  # T3;4 I.5 NV memory (power-stage parameters), I.6 EEPROM defective (manual §2.3.1 T)
+IDXOFF, POSITION_CONTROL = 0x08, 0x20  # T3;0 I.3; M0.5 (manual §2.4.1)
+
+
+def unreadable_memory(plant_factory: Any, state_dir: Path) -> tuple[Plant, Gms96Client]:
+    """A card started on a state file it cannot read: its parameter memory failed at the start."""
+    (state_dir / "gms96.nvram.json").write_text("{not a memory image", "utf-8")
+    plant = plant_factory({}, state_dir=state_dir)
+    return plant, plant.client()
+
+
+@pytest.mark.manual("§2.3.1 T", "T3;4 I.5: error of the NV memory (power-stage parameters): the power stage does "
+                    "not go into control")
+@pytest.mark.manual("§2.3.1 T", "T3;0 I.3 IDXOFF: 0 = indexer ok (moves can be carried out)")
+@pytest.mark.parametrize("reference", [(0,), (3,), (8, 3, 1000)])
+def test_the_nv_error_keeps_the_power_stage_out_of_control(plant_factory: Any, tmp_path: Path,
+                                                           reference: tuple[int, ...]) -> None:
+    plant, c = unreadable_memory(plant_factory, tmp_path)
+    assert memory_status(c) & NV_ERROR == NV_ERROR
+    assert c.read(1, 3, 0)[2][0] & POSITION_CONTROL == 0
+    start = plant.read("axis.physical")
+    send(c, "Q", *reference)  # a reference run, Q3 (controller on), the spindle simulation Q8
+    plant.advance(30.0)
+    assert plant.read("axis.physical") == start  # no motor motion without control
+    assert c.read(3, 0)[0] & IDXOFF  # nor a ready indexer
+    assert c.read(1, 3, 0)[2][0] & POSITION_CONTROL == 0
+
+
+@pytest.mark.manual("§2.3.1 s", "s85;170 saves the parameters in the EEPROM; they are active at the next start "
+                    "(which clears the NV error of T3;4 I.5/I.6)")
+def test_the_nv_error_ends_with_the_parameters_saved_again(plant_factory: Any, tmp_path: Path) -> None:
+    plant, c = unreadable_memory(plant_factory, tmp_path)
+    plant.runtime.power_cycle(plant.name)  # (a start writes nothing to the EEPROM)
+    plant.advance(0.6)
+    assert memory_status(c) & NV_ERROR == NV_ERROR
+    send(c, "N", 300, 10)
+    send(c, "s", 85, 170)
+    plant.advance(0.5)
+    plant.runtime.power_cycle(plant.name)
+    plant.advance(0.6)
+    assert memory_status(c) & NV_ERROR == 0
+    assert c.read(1, 3, 0)[2][0] & POSITION_CONTROL  # in control after the start (manual §4.3)
+    assert int.from_bytes(c.read(5, 10)[2], "little") == 300

@@ -266,9 +266,10 @@ class QueuedCommands:
 
     # -- reference runs (spec §3.8.14, §5.6, §5.12) ----------------------------------------------------
     def reference(self, cmd: Cmd) -> bool:
-        """``Q``: not with an emergency stop or a monitoring fault, nor (but Q3) in counter-input
-        mode (spec §5.10); then :data:`Q_TYPES` by P1 (any other type: a run that fails)."""
-        if self.stage.estop or self.stage.monitoring_cause() or (self.counter.active and cmd.p1 != 3):
+        """``Q``: not while the power stage cannot go into control (emergency stop, monitoring, the
+        NV error of T3;4 I.5: "Endstufe geht nicht in Regelung", manual §2.3.1 T), nor (but Q3) in
+        counter-input mode (spec §5.10); then :data:`Q_TYPES` by P1 (any other type: a run that fails)."""
+        if self.stage.faulted() or (self.counter.active and cmd.p1 != 3):
             self.executor.rejected_moves += 1
             return True
         handler = Q_TYPES.get(str(cmd.p1)) or QueuedCommands.reference_run

@@ -34,18 +34,21 @@ class Memory:
         self.feed = feed
         self.image = image
         self.record_event = record_event
+        #: The memory could not be read at the start (an unreadable state file): the NV error of
+        #: T3;4 I.5/I.6 (manual §2.3.1 T).  It stands at every start until ``s85;170`` has written
+        #: the parameters again (spec §4.5.3: "reprogram + s85;170"), or the memory is wiped.
+        self.unreadable = bool(nvram.corrupt)
 
     def load(self) -> bool:
         """Power-on: the parameters and speeds from the EEPROM, the static data; True if the
         memory could not be read (the NV error of T3;4)."""
-        corrupt = bool(self.nvram.corrupt)
         eeprom = None  # (none: r1 erased it, or s85;170 never ran)
         if "eeprom" in self.nvram:  # what s85;170 writes, every entry (null, {} or 0 read as none before)
             saved = {**self.feed.eeprom(), **self.params.eeprom()}
             eeprom = stored_object(self.nvram.get("eeprom"), "EEPROM", saved)
         self.params.power_on(eeprom)
         self.feed.power_on(eeprom)
-        return corrupt
+        return self.unreadable
 
     def load_static(self) -> None:
         """DW0..DW79 and MB18 as :meth:`save_static` stores them: up to 160 bytes, a tool number
@@ -66,7 +69,13 @@ class Memory:
         """``s85;170``: M, S, B, all N and the override activity (manual §2.3.1 s)."""
         self.nvram.put("eeprom", {**self.feed.eeprom(), **self.params.eeprom()})
         self.feed.saved()
+        self.unreadable = False
         self.record_event("eeprom_saved")
+
+    def wipe(self) -> None:
+        """The whole memory erased (a power cycle with ``wipe``): nothing left that fails to read."""
+        self.nvram.wipe()
+        self.unreadable = False
 
     def erase_eeprom(self) -> None:
         """``r1``: the next start uses the defaults."""

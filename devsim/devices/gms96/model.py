@@ -231,7 +231,7 @@ class Gms96Card(Model):
     def power_cycle(self, *, wipe: bool = False) -> None:
         self._power_off()
         if wipe:
-            self.nvram.wipe()
+            self.memory.wipe()
         self._power_on()
 
     def _power_off(self) -> None:
