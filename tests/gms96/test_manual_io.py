@@ -65,6 +65,19 @@ def test_k1_shows_e0_4_e0_5_at_e2_0_e2_1(plant_factory: Any) -> None:
     assert eb(c, 2) & 0x03 == 0x03
 
 
+@pytest.mark.manual("§2.4.2", "digital outputs A0.0 .. A1.7; hardware fitted up to A0.5 on the K/K1")
+@pytest.mark.manual("§6", "G96-K1: 6 outputs (KSA and the others: 11)")
+@pytest.mark.parametrize(("variant", "fitted"), [("K1", 6), ("KSA15-2R", 11)])
+def test_only_the_fitted_outputs_switch(plant_factory: Any, variant: str, fitted: int) -> None:
+    plant = plant_factory({"variant": variant})
+    c = plant.client()
+    for n in range(2, 16):
+        send(c, "p", 10, SETO, n)
+    assert ab(c, 0) & 0xFC == 0xFC  # the process image holds them all (T1;2)
+    for n in range(2, 16):
+        assert plant.read(f"output.A{n // 8}.{n % 8}") is (n < fitted), f"A{n // 8}.{n % 8}"
+
+
 @pytest.mark.manual("§2.4.3", "WOSI (2): wait until input Operand (0..17) is set; WORI (3): until it is reset")
 def test_wosi_wori(card: Plant) -> None:
     c = card.client()

@@ -1,9 +1,10 @@
 """The card's 24 V inputs and outputs and the in-position signal (manual §2.4.2, §2.3.1 N21/N27/N28,
 T1;1/T1;2; spec §4.11, §5.5).
 
-Outputs A0.0..A1.2 come from the process image, except A0.0 as the brake output (N21 at the
-start: on while the position controller drives) and A0.1 as in-position (N27 > 0); an overload of
-the 24 V outputs switches them all off (E2.2 shows it).
+Outputs A0.0..A1.2 (A0.0..A0.5 on the K1, the outputs its hardware has: manual §2.4.2, §6) come
+from the process image, except A0.0 as the brake output (N21 at the start: on while the position
+controller drives) and A0.1 as in-position (N27 > 0); an overload of the 24 V outputs switches
+them all off (E2.2 shows it).
 """
 
 from __future__ import annotations
@@ -64,6 +65,7 @@ class Outputs:
         *,
         shown_at: Callable[[], dict[tuple[int, int], str]] = dict,
         resolver: bool = False,
+        fitted_outputs: int = OUTPUT_BITS,
     ) -> None:
         self.clock = clock
         self.axis = axis
@@ -77,6 +79,10 @@ class Outputs:
         #: The inputs the variant (and the DIL switch) also show at another bit: {(byte, bit): input}.
         self.shown_at = shown_at
         self.resolver = resolver  # the card has a resolver: its signal loss shows at E2.3
+        #: The outputs the variant's hardware has, from A0.0 (manual §2.4.2: "Hardware bestückt bis
+        #: A0.5 (K/K1)"; §6): the process image holds A0.0..A1.7 whatever the card, the 24 V outputs
+        #: beyond these never switch.
+        self.fitted_outputs = fitted_outputs
         self._inpos_timer: Timer | None = None
         self._inpos_fired = -math.inf
 
@@ -134,9 +140,10 @@ class Outputs:
         return value
 
     def follow(self) -> None:
-        """The output signals follow the state."""
+        """The output signals of the fitted outputs follow the state; the others stay off."""
+        fitted = self.fitted_outputs
         for n in range(16):
-            self.signals.set(f"A{n // 8}.{n % 8}", self.output_bit(n) if n < OUTPUT_BITS else False)
+            self.signals.set(f"A{n // 8}.{n % 8}", self.output_bit(n) if n < fitted else False)
 
     # -- in position (spec §5.5) ----------------------------------------------------------------
     def in_position(self) -> bool:

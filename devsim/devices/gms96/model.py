@@ -112,7 +112,7 @@ class Gms96Card(Model):
         self.outputs = Outputs(
             clock, self.axis, self.image, signals, self.params, self.stage, self.indexer, stepper, self.changed,
             shown_at=lambda: inputs_shown_at(self.hw.name, self.dil.interpolation),
-            resolver=self.hw.feedback == "resolver",
+            resolver=self.hw.feedback == "resolver", fitted_outputs=self.hw.output_bits,
         )
         self.plc = Plc(
             card=self, clock=clock, options=self.cfg.plc, ms_per_1000=self.hw.plc_ms_per_1000, flash=self.flash,
