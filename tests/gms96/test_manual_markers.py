@@ -169,6 +169,20 @@ def test_m_function_handshake(card: Plant, m: int, byte: int, bit: int) -> None:
     assert status(c) & BUSY == 0
 
 
+@pytest.mark.manual("§2.3.2 #0", "#0 aborts the running operation (... m command ...); the commands pending are not "
+                    "carried out")
+def test_break_aborts_a_waiting_m_command(card: Plant) -> None:
+    c = card.client()
+    send(c, "m", 50, 0)
+    send(c, "p", 10, 16, 3)  # SETO A0.3 behind it
+    card.advance(0.5)
+    assert status(c) & BUSY  # waits for the PLC
+    c.abort()
+    card.advance(0.01)
+    assert status(c) & BUSY == 0
+    assert c.read(1, 2, 0)[2][0] & 0x08 == 0  # the SETO never ran
+
+
 @pytest.mark.manual("§2.3.1 m", "m100;P2;P3 (S function): P2 into MB15, P3 into MW16, M15.7 set, wait for its reset")
 def test_m100_spindle_function(card: Plant) -> None:
     c = card.client()

@@ -200,6 +200,28 @@ def test_zero_offsets(referenced: Plant) -> None:
     assert t0() == -700
 
 
+@pytest.mark.manual("§2.3.1 G", "G53 (P2=0) deselects the zero point; G53;1 the zero point and the tool correction")
+@pytest.mark.manual("§2.3.1 G", "G54..57;1: reselect the zero point and, where it was active, the tool correction")
+def test_g53_1_deselects_the_tool_correction_too(referenced: Plant) -> None:
+    c = referenced.client()
+
+    def t0() -> int:
+        return int.from_bytes(c.read(0)[2], "little", signed=True)
+
+    referenced.set("tool_offset", 100)  # (no command sets it: the host's tool memory, spec §5.9)
+    send(c, "G", 55, 1000, 1)
+    send(c, "G", 55)
+    assert t0() == -1100
+    send(c, "G", 53)
+    assert t0() == -100  # the tool correction stays
+    send(c, "G", 55, 1)
+    assert t0() == -1100
+    send(c, "G", 53, 1)
+    assert t0() == 0
+    send(c, "G", 55, 1)
+    assert t0() == -1100
+
+
 @pytest.mark.manual("§2.3.1 O", "O P1: the actual position := P1, no move; active zero offsets are taken into account")
 def test_o_sets_the_position_counter(referenced: Plant) -> None:
     c = referenced.client()

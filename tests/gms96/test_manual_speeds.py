@@ -65,6 +65,17 @@ def test_linear_ramp_rises_b_per_millisecond(referenced: Plant) -> None:
     assert velocity(referenced) == pytest.approx(-5 * 200)
 
 
+@pytest.mark.manual("§2.3.1 B", "B P1: [1..30000]")
+@pytest.mark.parametrize(("b", "after_s"), [(1, 0.010), (30000, 0.00005)])
+def test_linear_ramp_at_the_ends_of_the_b_range(referenced: Plant, b: int, after_s: float) -> None:
+    c = referenced.client()
+    send(c, "N", 0, 24)
+    send(c, "B", b)
+    send(c, "A", 20000)
+    referenced.advance(after_s)
+    assert velocity(referenced) == pytest.approx(b * after_s * 1000)
+
+
 @pytest.mark.manual("§2.3.1 B", "sin² ramps take π/2 longer than linear ones to reach the end speed at the same B")
 def test_sin2_ramp_takes_pi_half_longer(referenced: Plant) -> None:
     c = referenced.client()
