@@ -202,6 +202,7 @@ def test_zero_offsets(referenced: Plant) -> None:
 
 @pytest.mark.manual("§2.3.1 G", "G53 (P2=0) deselects the zero point; G53;1 the zero point and the tool correction")
 @pytest.mark.manual("§2.3.1 G", "G54..57;1: reselect the zero point and, where it was active, the tool correction")
+@pytest.mark.manual("§2.3.1 G", "G53;P2;1: input of the machine zero, not used internally")
 def test_g53_1_deselects_the_tool_correction_too(referenced: Plant) -> None:
     c = referenced.client()
 
@@ -217,6 +218,8 @@ def test_g53_1_deselects_the_tool_correction_too(referenced: Plant) -> None:
     send(c, "G", 55, 1)
     assert t0() == -1100
     send(c, "G", 53, 1)
+    assert t0() == 0
+    send(c, "G", 53, 5000, 1)  # the machine zero entered: not used internally
     assert t0() == 0
     send(c, "G", 55, 1)
     assert t0() == -1100
@@ -244,6 +247,19 @@ def test_n39_lowers_the_peak_current(card: Plant) -> None:
     send(c, "N", 50, 39)
     card.advance(0.01)
     assert c.read(1, 5)[1] == pytest.approx(126, abs=1)
+
+
+@pytest.mark.manual("§2.3.1 N", "N34 [*..32000] (1200), N35 [0..*] (0): the P part of the current controller can be "
+                    "lowered to at least 150 % of the I part (and the other way round)")
+def test_n34_n35_couple(card: Plant) -> None:
+    c = card.client()
+    send(c, "N", 1000, 35)  # above N34 / 1.5 = 800
+    assert n(c, 35) == 800
+    send(c, "N", 100, 34)  # below 1.5 · N35 = 1200
+    assert n(c, 34) == 1200
+    send(c, "N", 200, 35)
+    send(c, "N", 100, 34)  # below 1.5 · 200: the value stops at 300
+    assert (n(c, 34), n(c, 35)) == (300, 200)
 
 
 @pytest.mark.manual("§2.3.1 N", "N28: time for in-position [1..255 ms]; N27: window [+/-1..255 inc]")
