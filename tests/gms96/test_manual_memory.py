@@ -122,6 +122,7 @@ def test_the_nv_error_keeps_the_power_stage_out_of_control(plant_factory: Any, t
     plant, c = unreadable_memory(plant_factory, tmp_path)
     assert memory_status(c) & NV_ERROR == NV_ERROR
     assert c.read(1, 3, 0)[2][0] & POSITION_CONTROL == 0
+    assert plant.read("fault") is True and plant.read("ready") is False  # (the machine side's view)
     start = plant.read("axis.physical")
     send(c, "Q", *reference)  # a reference run, Q3 (controller on), the spindle simulation Q8
     plant.advance(30.0)
@@ -144,4 +145,5 @@ def test_the_nv_error_ends_with_the_parameters_saved_again(plant_factory: Any, t
     plant.advance(0.6)
     assert memory_status(c) & NV_ERROR == 0
     assert c.read(1, 3, 0)[2][0] & POSITION_CONTROL  # in control after the start (manual §4.3)
+    assert plant.read("fault") is False and plant.read("ready") is True
     assert int.from_bytes(c.read(5, 10)[2], "little") == 300
