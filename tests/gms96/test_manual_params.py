@@ -68,16 +68,19 @@ def test_n_values_within_their_ranges(card: Plant) -> None:
 
 
 @pytest.mark.manual("§2.3.1 r", "r with P3 = 0 sets all defaults of position controller and indexer")
-def test_r0_restores_the_defaults(referenced: Plant) -> None:
+@pytest.mark.manual("§2.3.1 G", "G94: speeds in inc per second = Hz (Grundeinstellung)")
+@pytest.mark.parametrize("working", [[("M", 6000)], [("M", 6000), ("f", 500)], [("G", 95), ("f", 500)]])
+def test_r0_restores_the_defaults(referenced: Plant, working: list[tuple[str, int]]) -> None:
     c = referenced.client()
     send(c, "N", 300, 10)
     send(c, "N", 500, 20)
-    send(c, "M", 6000)
+    for command in working:
+        send(c, *command)
     send(c, "r", 0, 0, 0)
     assert n(c, 10) == 200 and n(c, 20) == 1000
     send(c, "A", 20000)
     referenced.advance(1.0)
-    assert velocity(referenced) == pytest.approx(2000)  # M back to 2000
+    assert velocity(referenced) == pytest.approx(2000)  # M back to 2000, f = M (the G0 state), G94
 
 
 @pytest.mark.manual("§2.3.1 r", "r with P3 = 1 erases the EEPROM: the next start uses the defaults")

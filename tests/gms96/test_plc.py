@@ -161,15 +161,17 @@ def test_download_stores_a_frames_opaquely(plant_factory: Any, tmp_path: Any) ->
 
 
 @pytest.mark.manual("§2.3.1 T", "T3;4 I.0: PLC program storage error (e.g. too long)")
-def test_download_too_long_is_a_storage_error(plant_factory: Any) -> None:
-    plant = plant_factory({"plc": {"flash_bytes": 8}})
+@pytest.mark.manual("§2.3.1 T", "T3;4 I.0: always 0 under interpolation")
+@pytest.mark.parametrize(("interpolation", "status"), [(False, 0x03), (True, 0x02)])
+def test_download_too_long_is_a_storage_error(plant_factory: Any, interpolation: bool, status: int) -> None:
+    plant = plant_factory({"plc": {"flash_bytes": 8}, "dil": {"interpolation": interpolation}})
     host = plant.host
     assert host.ask(frame("p", 1, 100, 0)) == "E5"
     plant.advance(3.1)
     assert host.ask(raw_a(bytes(6))) == "E5"
     assert host.ask(raw_a(bytes(6))) == "E5"
     assert host.ask(frame("p", 1, 101, 0)) == "E5"
-    assert memory_status(plant) == 0x03  # I.0 storage error + I.1 not running
+    assert memory_status(plant) == status  # I.0 storage error (not under interpolation) + I.1 not running
     assert plant.read("plc.image") is None
 
 

@@ -45,16 +45,18 @@ class Feed:
             self.override_on = bool(stored_whole(eeprom["o"], "override activity", (0, 1)))
         self.eeprom_M = self.M
         self.f = self.M
-        self.f_frac = 0
-        self.feed_mode = 94
         self.o2_value = None
         self.ext_override = None
         self.spindle_rpm = 0
 
     def defaults(self) -> None:
-        """``r0`` (and power-on): M, B, S and the override activity (manual §2.3.1 r)."""
+        """``r0`` (and power-on): the indexer's defaults (manual §2.3.1 r) - M, B, S, the override
+        activity, the working speed f = M (the G0 state, spec §3.8.5 [R]) and G94 (manual §2.3.1 G:
+        "Grundeinstellung")."""
         self.M, self.B, self.S = tables.DEFAULTS["M"], tables.DEFAULTS["B"], tables.DEFAULTS["S"]
         self.override_on = bool(tables.DEFAULTS["override_active"])
+        self.f, self.f_frac = self.M, tables.DEFAULTS["f_fraction"]
+        self.feed_mode = tables.DEFAULTS["feed_mode"]
 
     def eeprom(self) -> dict[str, int]:
         """What ``s85;170`` saves of the speeds (manual §2.3.1 s)."""
