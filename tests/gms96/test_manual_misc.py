@@ -171,3 +171,16 @@ def test_s_sets_the_index_mark_search_speed(plant_factory: Any) -> None:
     send(c, "Q", 1)
     plant.advance(1.0)
     assert plant.read("axis.velocity") == pytest.approx(-500)
+
+
+@pytest.mark.manual("§2.3.1 N", "N33: the drive-off position after the reference run (used only by the command Q-1)")
+def test_n33_drive_off_only_with_q_minus_1(card: Plant) -> None:
+    c = card.client()
+    send(c, "N", 3000, 33)
+    send(c, "Q", 0)
+    card.idle()
+    assert t0(c) == 0  # Q0 ends on the index mark
+    send(c, "N", 0, 19)  # reference type Q0
+    send(c, "Q", -1)
+    card.idle()
+    assert t0(c) == 3000
