@@ -88,6 +88,26 @@ def test_interruption_while_cruising(plain: Module) -> None:
     assert actual(plain) == 100_000 and plain.device.read("output.PE1") is True
 
 
+@pytest.mark.manual("§4.3.3", "a wrong operation interrupts a program as a Stopp does: the axis brakes, position "
+                    "reached is not set, the residual is shown and Übernahme continues the program")
+@pytest.mark.manual("§4.1.1", "a wrong operation (e.g. Übernahme with another mode) while the axis runs gives "
+                    "'Nicht erlaubter Auftrag' (2) and ends the running action")
+@pytest.mark.parametrize(("ba", "cmd"), [(9, TAKE_OVER), (6, START), (3, START)],
+                         ids=["BA9 Übernahme", "BA6 Start", "undefined BA3"])
+def test_a_wrong_operation_interrupts_a_program(plain: Module, ba: int, cmd: int) -> None:
+    assert plain.store(4, "%  4\nN1 X100 F1000 M10\nN2 X120 F1000 M20\nN3 M02\n")[4] == 0
+    plain.operate(1, 8, START, b=4)
+    plain.clock.advance(3)
+    assert plain.operate(1, ba, cmd, b=4, dd=5_000)[4] == 2
+    plain.clock.advance(5)
+    residual = plain.device.read("axis.1.residual")
+    assert plain.device.read("axis.1.running") is False and plain.device.read("output.PE1") is False
+    assert residual > 0 and residual + actual(plain) == 100_000
+    assert plain.operate(1, 8, TAKE_OVER, b=4)[4] == 0
+    plain.clock.advance(60)
+    assert (actual(plain), plain.device.read("axis.1.m_function"), plain.device.read("axis.1.error")) == (120_000, 2, 0)
+
+
 # -- §4.3.4 teach-in ----------------------------------------------------------------------------------
 @pytest.mark.manual("§4.3.4", "teach-in off without stored positions leaves an empty program")
 def test_teach_in_without_positions(plain: Module) -> None:

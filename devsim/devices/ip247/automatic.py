@@ -19,7 +19,7 @@ from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.axis_unit import AxisUnit
 from devsim.devices.ip247.flow import M_NONE, FlowError, steps
 from devsim.devices.ip247.flying import NotJoinable, chain_pieces
-from devsim.devices.ip247.jobs import START, STOP, TAKE_OVER
+from devsim.devices.ip247.jobs import STOP
 from devsim.devices.ip247.program import Block
 
 __all__ = ["CYCLE_BLOCKS", "SWITCHES", "ProgramRun", "g_token"]
@@ -82,19 +82,16 @@ class ProgramRun:
         return 65, False
 
     def command(self, ba: int, cmd: int) -> int | None:
-        """A job while the program moves (spec §4.2): Stopp interrupts (65); Übernahme is error 2
-        and interrupts; another mode aborts the context with error 2."""
-        unit = self.unit
-        unit.last_cmd = cmd
-        if cmd == STOP or ba == 4 or (ba == unit.mode and cmd == TAKE_OVER):
-            self._interrupt()
-            return 65 if cmd == STOP or ba == 4 else 2
-        if ba == unit.mode and cmd == START:
-            self._interrupt()
-            return 2
-        self.abort()
-        unit.brake()
-        return 2
+        """A job while the program moves (manual §4.3.3, §4.1.1; spec §4.2, §5.11.5): the axis
+        brakes and the program is interrupted, Übernahme continues it.  Stopp (or any command
+        with BA4) leaves 65; any other job is a wrong operation ("Fehlbedienung": §4.1.1 names
+        "Übernahmebefehl mit einer anderen Betriebsart"), which §4.3.3 names beside the Stopp as
+        a cause of the interruption; it is error 2 "Nicht erlaubter Auftrag" (§4.1.1, §7.2.2).
+        [SIM-CHOICE] §4.3.3 says 65 is output after such an interruption, §4.1.1 that the wrong
+        job gives 2: the simulator shows 2, the OBSERVE flag "interrupted" tells the wait."""
+        self.unit.last_cmd = cmd
+        self._interrupt()
+        return 65 if cmd == STOP or ba == 4 else 2
 
     def _cancel_m_timers(self) -> None:
         for timer in self._m_timers:
