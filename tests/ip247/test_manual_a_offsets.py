@@ -341,6 +341,25 @@ def test_interruption_inside_a_flying_change(plain: Module) -> None:
     assert actual(plain) == 100_000 and plain.device.read("output.PE1") is True
 
 
+@pytest.mark.manual("§4.3.3", "in a G10 chain the residual is that of the block's own (intermediate) target; braking "
+                    "past it gives a negative residual, and the interrupted block's M function stays output "
+                    "until the program goes on")
+def test_interruption_past_the_intermediate_target_of_a_flying_change(plain: Module) -> None:
+    assert plain.store(4, "%  4\nN1 G10 X50 F3000 M30\nN2 X100 F3000 M31\nN3 M02\n")[4] == 0
+    plain.operate(1, 8, START, b=4)
+    plain.clock.advance(0.5)
+    assert plain.device.read("axis.1.residual") == 50_000 - actual(plain)  # to N1's target, not the chain's
+    plain.clock.advance(0.5)  # at 43 mm: braking from 3000 mm/min takes 14 mm, past N1's 50 mm
+    assert plain.operate(1, 8, STOP)[4] == 65
+    plain.clock.advance(5)
+    assert actual(plain) > 50_000 and plain.device.read("axis.1.residual") == 50_000 - actual(plain)
+    assert plain.device.read("axis.1.m_function") == 30 and plain.device.read("output.PE1") is False
+    assert plain.operate(1, 8, TAKE_OVER, b=4)[4] == 0
+    assert plain.device.read("axis.1.m_function") == 31
+    plain.clock.advance(60)
+    assert actual(plain) == 100_000 and plain.device.read("output.PE1") is True
+
+
 def _rotary(make: Make) -> Module:
     """0 … 360° in m°, r = 4 m° (gear 1.6°, 400 pulses), reference 0° set."""
     mod = make()

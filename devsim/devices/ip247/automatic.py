@@ -331,10 +331,16 @@ class ProgramRun:
             return
         self._last = (chain[-1][0], chain[-1][1])
         self._move = (holders[-1], chain[-1][2][1])
-        for (_, m_block, _), at in zip(chain[1:], starts, strict=True):
-            self._m_timers.append(unit.clock.call_later(at, lambda m_block=m_block: setattr(unit, "m_function",
-                                                                                          m_block)))
+        for (_, m_block, _), holder, at in zip(chain[1:], holders[2:], starts, strict=True):
+            self._m_timers.append(unit.clock.call_later(at, lambda m=m_block, h=holder: self._joint(m, h)))
         unit.follow_path(pieces, holders[-1], ends[-1], self._done)
+        unit.target = holders[1]  # the residual runs to each block's own target (manual §4.3.3)
+
+    def _joint(self, m: int, holder: float) -> None:
+        """The next block of a G10 chain begins: its M function and its target, whose distance
+        is the residual (manual §4.3.3: braking past an intermediate target leaves a negative
+        residual, and the interrupted block's M function stays output)."""
+        self.unit.m_function, self.unit.target = m, holder
 
     def _convert(self, value: float) -> float:
         """A program value in the axis unit: G70 (0.1 inch) on a metric axis, G71 (mm) on an
