@@ -360,6 +360,31 @@ def test_interruption_past_the_intermediate_target_of_a_flying_change(plain: Mod
     assert actual(plain) == 100_000 and plain.device.read("output.PE1") is True
 
 
+@pytest.mark.manual("§4.3.3", "G10 chain interrupted before its intermediate target with path enough left to reach "
+                    "the programmed velocity: on Übernahme the flying change is carried out normally")
+@pytest.mark.manual("§4.3.3", "G10 chain interrupted before its intermediate target without path enough left to reach "
+                    "the velocity: the rest is added to the following traverse; the residual after Übernahme is "
+                    "the new target minus the actual value")
+@pytest.mark.parametrize(("stop_after", "m", "velocity", "target"), [(0.3, 30, 50_000, 50_000),
+                                                                      (0.6, 31, 25_000, 100_000)],
+                         ids=["path enough", "path too short"])
+def test_a_flying_change_goes_on_after_an_interruption(plain: Module, stop_after: float, m: int, velocity: int,
+                                                       target: int) -> None:
+    assert plain.store(4, "%  4\nN1 G10 X50 F3000 M30\nN2 G10 X100 F1500 M31\nN3 X150 F3000 M32\nN4 M02\n")[4] == 0
+    plain.operate(1, 8, START, b=4)
+    plain.clock.advance(stop_after)
+    assert plain.operate(1, 8, STOP)[4] == 65
+    plain.clock.advance(5)
+    assert actual(plain) < 50_000 and plain.device.read("axis.1.residual") == 50_000 - actual(plain)
+    assert plain.operate(1, 8, TAKE_OVER, b=4)[4] == 0
+    plain.clock.advance(0.7)  # N1 at 3000 mm/min again, or N2 at 1500 mm/min with N1's rest
+    read = plain.device.read
+    assert (read("axis.1.m_function"), read("axis.1.velocity")) == (m, pytest.approx(velocity))
+    assert read("axis.1.residual") == target - actual(plain)
+    plain.clock.advance(60)
+    assert actual(plain) == 150_000 and read("axis.1.m_function") == 2 and read("output.PE1") is True
+
+
 def _rotary(make: Make) -> Module:
     """0 … 360° in m°, r = 4 m° (gear 1.6°, 400 pulses), reference 0° set."""
     mod = make()

@@ -18,11 +18,11 @@ from devsim.core.kit import Command, Table
 from devsim.devices.ip247 import program as lang
 from devsim.devices.ip247.axis_unit import AxisUnit
 from devsim.devices.ip247.flow import M_NONE, FlowError, steps
-from devsim.devices.ip247.flying import NotJoinable, chain_pieces
+from devsim.devices.ip247.flying import NotJoinable, chain_pieces, resume_pieces
 from devsim.devices.ip247.jobs import STOP
 from devsim.devices.ip247.program import Block
 
-__all__ = ["CYCLE_BLOCKS", "SWITCHES", "ProgramRun", "g_token"]
+__all__ = ["CYCLE_BLOCKS", "SWITCHES", "ChainMotion", "ProgramRun", "g_token"]
 
 #: Blocks the module interprets without a traverse or dwell before it gives up with error 33
 #: "Zykluszeit überschritten" (manual §7.2; spec §4.11.5: an endless loop without motion).
@@ -45,7 +45,7 @@ class ProgramRun:
         self._timer = None
         self._last: tuple[Block, int] | None = None  # the traverse or dwell executing
         self._move: tuple[float, float] | None = None  # its holder target and frequency
-        self._m_timers: list[Any] = []  # M outputs at the joints of a G10 chain
+        self._chain = ChainMotion(unit, self._done)  # a G10 chain's blocks ahead
         self._advancing = self._again = False  # interpreting; a traverse ended at once meanwhile
 
     # -- from the module -------------------------------------------------------------------------
@@ -63,10 +63,9 @@ class ProgramRun:
         self.halted = self.interrupted = False
         if self._last is not None and self._move is not None:  # an interrupted traverse is completed first
             unit = self.unit
-            unit.m_function = self._last[1]
             target, f = self._move
             unit.running = True
-            if unit.held(lambda: unit.position_to(target, f, self._done)):
+            if unit.held(lambda: self._chain.go_on(target) or self._complete(target, f)):
                 unit.set_error(6)
             return None
         self._advance(skip_halt=True)
@@ -93,14 +92,9 @@ class ProgramRun:
         self._interrupt()
         return 65 if cmd == STOP or ba == 4 else 2
 
-    def _cancel_m_timers(self) -> None:
-        for timer in self._m_timers:
-            timer.cancel()
-        self._m_timers.clear()
-
     def abort(self) -> None:
         """The context ends without its M02: leftover program shifts fold into BA12/13's."""
-        self._cancel_m_timers()
+        self._chain.cancel()
         if self._timer is not None:
             self._timer.cancel()
         coords = self.unit.coords
@@ -221,6 +215,7 @@ class ProgramRun:
         assert md is not None
         unit.m_function = m
         self._last = (block, m)
+        self._chain.blocks.clear()
         unit.running = True
         unit.changed()
         if block.g == 4:
@@ -331,16 +326,13 @@ class ProgramRun:
             return
         self._last = (chain[-1][0], chain[-1][1])
         self._move = (holders[-1], chain[-1][2][1])
-        for (_, m_block, _), holder, at in zip(chain[1:], holders[2:], starts, strict=True):
-            self._m_timers.append(unit.clock.call_later(at, lambda m=m_block, h=holder: self._joint(m, h)))
-        unit.follow_path(pieces, holders[-1], ends[-1], self._done)
-        unit.target = holders[1]  # the residual runs to each block's own target (manual §4.3.3)
+        self._chain.blocks[:] = [(h, f, m_b) for h, (_, m_b, (_, f, _)) in zip(holders[1:], chain, strict=True)]
+        self._chain.follow(0, pieces, starts, ends[-1])
 
-    def _joint(self, m: int, holder: float) -> None:
-        """The next block of a G10 chain begins: its M function and its target, whose distance
-        is the residual (manual §4.3.3: braking past an intermediate target leaves a negative
-        residual, and the interrupted block's M function stays output)."""
-        self.unit.m_function, self.unit.target = m, holder
+    def _complete(self, target: float, f: float) -> None:
+        assert self._last is not None
+        self.unit.m_function = self._last[1]
+        self.unit.position_to(target, f, self._done)
 
     def _convert(self, value: float) -> float:
         """A program value in the axis unit: G70 (0.1 inch) on a metric axis, G71 (mm) on an
@@ -374,7 +366,7 @@ class ProgramRun:
     def _interrupt(self) -> None:
         """Brake; the traverse stays to be completed (the dwell counts as expired)."""
         unit = self.unit
-        self._cancel_m_timers()
+        self._chain.cancel()
         self.interrupted, self.halted = True, False
         if self._timer is not None:  # a dwell: expired
             self._timer.cancel()
@@ -421,6 +413,55 @@ class ProgramRun:
         self.abort()
         self._rest()
         unit.set_error(error)
+
+
+class ChainMotion:
+    """The blocks of a G10 chain ahead of the axis, as one motion (manual §2.6.6.3, §4.3.3):
+    at each joint the next block's M function and target, whose distance is the residual (so
+    braking past an intermediate target leaves a negative one), and the chain going on after
+    an interruption."""
+
+    def __init__(self, unit: AxisUnit, done: Callable[[bool], None]) -> None:
+        self.unit, self._done = unit, done
+        self.blocks: list[tuple[float, float, int]] = []  # holder target, frequency, M function
+        self._timers: list[Any] = []
+
+    def cancel(self) -> None:
+        for timer in self._timers:
+            timer.cancel()
+        self._timers.clear()
+
+    def follow(self, skip: int, pieces: list[tuple[float, Any]], starts: list[float], end: float) -> None:
+        """Along the blocks ahead less ``skip`` done ones, to motor position ``end``."""
+        del self.blocks[:skip]
+        unit = self.unit
+        for at in starts:
+            self._timers.append(unit.clock.call_later(at, self._joint))
+        unit.follow_path(pieces, self.blocks[-1][0], end, self._done)
+        unit.target, _, unit.m_function = self.blocks[0]
+
+    def _joint(self) -> None:
+        del self.blocks[0]
+        self.unit.target, _, self.unit.m_function = self.blocks[0]
+
+    def go_on(self, target: float) -> bool:
+        """Übernahme inside the chain (manual §4.3.3): the flying change goes on as programmed;
+        a block the braking passed is done, one too short to reach its velocity again gives
+        its rest to the next (:func:`.flying.resume_pieces`).  [SIM-CHOICE] Then the next
+        block's M function is output at once.  False: not inside a chain, or nothing joinable."""
+        unit, md = self.unit, self.unit.md
+        if len(self.blocks) < 2 or md is None:
+            return False
+        direction = 1 if target > unit.holder else -1
+        unit.begin(direction)
+        ends = [unit.machine(h, direction) for h, _, _ in self.blocks]
+        try:
+            skip, pieces, starts = resume_pieces(md.ramp, md.resolution, unit.axis.position(), direction, ends,
+                                                 [f for _, f, _ in self.blocks])
+        except NotJoinable:
+            return False
+        self.follow(skip, pieces, starts, ends[-1])
+        return True
 
 
 def _traverse(block: Block) -> bool:

@@ -15,7 +15,7 @@ from typing import Any
 from devsim.devices.ip247.machine_data import Ramp
 from devsim.devices.ip247.motion import ExpPiece
 
-__all__ = ["NotJoinable", "chain_pieces"]
+__all__ = ["NotJoinable", "chain_pieces", "resume_pieces"]
 
 
 class NotJoinable(ValueError):
@@ -85,3 +85,19 @@ def chain_pieces(ramp: Ramp, r: float, x0: float, direction: int, ends: list[flo
             t += t_v
         previous = f
     return [(d, p) for d, p in pieces if d > 0], starts
+
+
+def resume_pieces(ramp: Ramp, r: float, x0: float, direction: int, ends: list[float],
+                  frequencies: list[float]) -> tuple[int, list[tuple[float, Any]], list[float]]:
+    """An interrupted chain going on from ``x0`` through the rest of its blocks (manual §4.3.3):
+    how many leading blocks fall away, and :func:`chain_pieces` of the others.  A block whose
+    end the braking passed is done (case 3: its residual was negative); one whose rest is too
+    short to reach its velocity again gives that rest to the following block (case 2); else the
+    flying change runs as programmed (case 1).  NotJoinable when none of these can run."""
+    skip = 1 if len(ends) > 1 and (ends[0] - x0) * direction <= 0 else 0
+    try:
+        return (skip, *chain_pieces(ramp, r, x0, direction, ends[skip:], frequencies[skip:]))
+    except NotJoinable:
+        if skip or len(ends) < 2:
+            raise
+    return (1, *chain_pieces(ramp, r, x0, direction, ends[1:], frequencies[1:]))
