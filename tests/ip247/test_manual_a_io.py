@@ -129,9 +129,10 @@ def test_a_command_during_the_external_start_wait(mod: Module) -> None:
 
 @pytest.mark.manual("§2.8.4", "with 1 at the input before BA8 Start the program runs up to its first traverse or "
                     "dwell, which waits (Motor wartet auf externen Start); the falling edge releases it")
-def test_external_start_in_automatic(mod: Module) -> None:
+@pytest.mark.parametrize("g", ["", "G10 "], ids=["traverse", "flying change"])
+def test_external_start_in_automatic(mod: Module, g: str) -> None:
     mod.ready()
-    assert mod.store(3, "%  3\nN1 G91\nN2 X5 F1000 M10\nN3 X5 F1000\nN4 M02\n")[4] == 0
+    assert mod.store(3, f"%  3\nN1 G91\nN2 {g}X5 F1000 M10\nN3 X5 F1000\nN4 M02\n")[4] == 0
     mod.device.set("input.START1", True)
     assert mod.operate(1, 8, START, b=3)[4] == 6
     mod.clock.advance(2)
@@ -139,6 +140,19 @@ def test_external_start_in_automatic(mod: Module) -> None:
     mod.device.set("input.START1", False)
     mod.clock.advance(10)
     assert mod.device.read("axis.1.position") == 11_000 and mod.device.read("axis.1.error") == 0
+
+
+@pytest.mark.manual("§2.8.1", "without the power unit's ready signal BB a program's traverse is refused (53 "
+                    "'Leistungsteil einschalten'): the program ends and the axis is fertig")
+@pytest.mark.parametrize("g", ["", "G10 "], ids=["traverse", "flying change"])
+def test_a_program_without_the_ready_signal(mod: Module, g: str) -> None:
+    mod.ready()
+    assert mod.store(3, f"%  3\nN1 {g}X5 F1000 M10\nN2 X10 F1000\nN3 M02\n")[4] == 0
+    mod.device.set("input.BB1", False)
+    assert mod.operate(1, 8, START, b=3)[4] == 53
+    mod.clock.advance(2)
+    assert mod.device.read("axis.1.running") is False and mod.device.read("axis.1.position") == 1_000
+    assert mod.m.units[0].automatic is None
 
 
 @pytest.mark.manual("§2.8.4", "an external stop during a program interrupts the program: Übernahme continues it")

@@ -65,8 +65,7 @@ class ProgramRun:
             unit = self.unit
             target, f = self._move
             unit.running = True
-            if unit.held(lambda: self._chain.go_on(target) or self._complete(target, f)):
-                unit.set_error(6)
+            self._go(lambda: self._chain.go_on(target) or self._complete(target, f))
             return None
         self._advance(skip_halt=True)
         return None
@@ -225,8 +224,7 @@ class ProgramRun:
             def dwell() -> None:
                 self._timer = unit.clock.call_later((block.f or 0) * 0.1, lambda: self._done(True))
 
-            if unit.held(dwell):
-                unit.set_error(6)
+            self._go(dwell)
             return
         result = self._target(block, unit.actual(), unit.holder)
         if isinstance(result, int):
@@ -241,8 +239,17 @@ class ProgramRun:
             self._fail(refused)  # towards an actuated or locked limit switch (manual §2.5.3.10)
             return
         self._move = (target, f)
-        if unit.held(lambda: unit.position_to(target, f, self._done)):
-            unit.set_error(6)
+        self._go(lambda: unit.position_to(target, f, self._done))
+
+    def _go(self, start: Callable[[], None]) -> None:
+        """A traverse or dwell starts, or waits for the external start (6, manual §2.8.4); one
+        the module refuses ends the program: 53 without the power unit's BB (§2.8.1, §7.2.2),
+        55 under BASP (§2.9)."""
+        error = self.unit.held(start)
+        if error == 6:
+            self.unit.set_error(6)
+        elif error is not None:
+            self._fail(error)
 
     def _target(self, block: Block, tip: float, holder: float) -> tuple[float, float, float] | int:
         """Where a traverse takes the holder, at which frequency, and the tip coordinate there;
@@ -327,7 +334,7 @@ class ProgramRun:
         self._last = (chain[-1][0], chain[-1][1])
         self._move = (holders[-1], chain[-1][2][1])
         self._chain.blocks[:] = [(h, f, m_b) for h, (_, m_b, (_, f, _)) in zip(holders[1:], chain, strict=True)]
-        self._chain.follow(0, pieces, starts, ends[-1])
+        self._go(lambda: self._chain.follow(0, pieces, starts, ends[-1]))
 
     def _complete(self, target: float, f: float) -> None:
         assert self._last is not None
