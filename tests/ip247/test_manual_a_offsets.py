@@ -33,6 +33,18 @@ def test_a_running_program_cannot_be_deleted(plain: Module) -> None:
     assert plain.client.delete_record(4, 23, 4)[4] == 51
 
 
+@pytest.mark.manual("§4.3.1", "a program that is being executed cannot be changed or deleted (51): nor can a "
+                    "subprogram the running program is executing")
+def test_a_running_subprogram_cannot_be_deleted(plain: Module) -> None:
+    assert plain.store(5, "L  5\nN1 X50 F1000\nN2 M02\n")[4] == 0
+    assert plain.store(4, "%  4\nN1 L5\nN2 X10 F1000\nN3 M02\n")[4] == 0
+    plain.operate(1, 8, START, b=4)
+    plain.clock.advance(1)  # in L5's traverse
+    assert plain.client.delete_record(4, 23, 5)[4] == 51
+    plain.clock.advance(60)  # program 4 has ended
+    assert actual(plain) == 10_000 and plain.client.delete_record(4, 23, 5)[4] == 0
+
+
 @pytest.mark.manual("§4.3.1", "after an interruption Start begins the program again at its first block")
 @pytest.mark.manual("§4.3.1", "a further Stopp aborts an interrupted program")
 def test_restart_and_abort_after_an_interruption(plain: Module) -> None:

@@ -34,7 +34,8 @@ class ProgramRun:
 
     def __init__(self, unit: AxisUnit, number: int, single: bool, programs: dict[int, lang.Program]) -> None:
         self.unit, self.number, self.single = unit, number, single
-        self._steps: Iterator[tuple[int, Block, int]] = steps(programs, number)
+        self.calls: list[int] = []  # the programs being executed: this one and the subprograms it is in
+        self._steps: Iterator[tuple[int, Block, int]] = steps(programs, number, self.calls)
         self.absolute, self.direction = True, 25
         self.metric = unit.md is None or unit.md.unit != 2  # G71 on metric, G70 on inch axes
         self.feed: int | None = None

@@ -67,6 +67,7 @@ class ProgramContext(Protocol):
     """The program context of an axis in BA8/BA9 (:class:`.automatic.ProgramRun`)."""
 
     number: int
+    calls: list[int]
     halted: bool
     interrupted: bool
 

@@ -6,7 +6,7 @@ main program: error 38), ``L p`` runs program p up to its M02 and returns; loops
 at most 5 deep (error 39); a missing program is error 19.  The M function shown is M255 until a
 traverse (X, G74) or dwell (G04) block brings one, and then that one until the next such block
 with an M.  Pure: :func:`steps` yields ``(program, block, m)`` lazily (an endless loop never
-ends).
+ends) and keeps a caller's list of the programs it is inside (main program first).
 """
 
 from __future__ import annotations
@@ -31,18 +31,30 @@ def _moves(block: Block) -> bool:
     return block.x is not None or block.g in (74, 4)
 
 
-def steps(programs: dict[int, Program], number: int) -> Iterator[tuple[int, Block, int]]:
-    """The blocks of program ``number`` as they run, each with the M function shown then."""
-    state = {"m": M_NONE}
-    yield from _run(programs, number, 0, True, state)
-
-
-def _run(programs: dict[int, Program], number: int, depth: int, main: bool, state: dict[str, int]) -> Iterator[
+def steps(programs: dict[int, Program], number: int, calls: list[int] | None = None) -> Iterator[
     tuple[int, Block, int]
 ]:
+    """The blocks of program ``number`` as they run, each with the M function shown then;
+    ``calls`` holds meanwhile the programs being executed, the main program and the subprograms
+    it is in (manual §4.3.1: none of them can be changed or deleted)."""
+    state = {"m": M_NONE}
+    yield from _run(programs, number, 0, True, state, [] if calls is None else calls)
+
+
+def _run(programs: dict[int, Program], number: int, depth: int, main: bool, state: dict[str, int],
+         calls: list[int]) -> Iterator[tuple[int, Block, int]]:
     program = programs.get(number)
     if program is None:
         raise FlowError(19, number, 0)
+    calls.append(number)
+    try:
+        yield from _blocks(programs, program, number, depth, main, state, calls)
+    finally:
+        calls.pop()
+
+
+def _blocks(programs: dict[int, Program], program: Program, number: int, depth: int, main: bool,
+            state: dict[str, int], calls: list[int]) -> Iterator[tuple[int, Block, int]]:
     blocks = program.blocks
     loops: list[list[int]] = []  # [index of the G24 block, passes left (-1 endless)]
     index = 0
@@ -68,7 +80,7 @@ def _run(programs: dict[int, Program], number: int, depth: int, main: bool, stat
         elif block.call is not None:
             if depth + len(loops) + 1 > MAX_DEPTH:
                 raise FlowError(39, number, block.ordinal)
-            yield from _run(programs, block.call, depth + len(loops) + 1, False, state)
+            yield from _run(programs, block.call, depth + len(loops) + 1, False, state, calls)
         if block.m == 2:
             return
         index += 1

@@ -28,8 +28,9 @@ class ProgramJobs:
         self.store = ProgramStore()
 
     def executing(self) -> set[int]:
-        """The numbers of the programs the axes execute."""
-        return {u.automatic.number for u in self.units if u.automatic is not None}
+        """The numbers of the programs the axes execute: each one started and the subprograms
+        it is in (manual §4.3.1)."""
+        return {n for u in self.units if u.automatic is not None for n in (u.automatic.number, *u.automatic.calls)}
 
     def teach_in_active(self) -> bool:
         return any(u.teach_in is not None for u in self.units)
