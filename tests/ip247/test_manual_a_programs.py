@@ -8,6 +8,7 @@ import pytest
 
 from devsim.devices.ip247.client import As511Error
 from tests.ip247.helpers import START, TAKE_OVER, Make, Module, record
+from tests.ip247.test_vectors import rotary
 
 manual = pytest.mark.manual
 
@@ -208,6 +209,19 @@ def test_a_loop_runs_n_times(ready: Module) -> None:
 def test_rotary_direction_functions_on_a_linear_axis(ready: Module) -> None:
     run(ready, "%  1\nN1 G27\nN2 X5 F1000\nN3 G26\nN4 X2 F1000\nN5 M02\n")
     assert state(ready) == (0, 2_000, 2)
+
+
+@manual("§2.6.6.5", "the manual's example on a 0 … 360° axis: G27 X180 backward, G25 X0 forward on a tie, G26 X0 "
+        "standing at 0° one revolution forward, G25 X360 no motion")
+@pytest.mark.parametrize(("g", "turn"), [("G26", 360_000), ("G27", -360_000)], ids=["G26", "G27"])
+def test_the_rotary_direction_example(make: Make, g: str, turn: int) -> None:
+    mod = rotary(make)
+    run(mod, f"%  1\nN10 G74 M10\nN20 G27\nN30 X180 F1000 M30\nN40 G25 X0 F500\nN50 {g}\nN60 X0 F1000 M60\n"
+        "N70 G25 X360 F500\nN80 M02\n", seconds=40)  # (G27 in N50: the turn backward, by symmetry)
+    read = mod.device.read
+    assert read("axis.1.m_function") == 60 and read("axis.1.velocity") * turn > 0  # N60 turns
+    mod.clock.advance(60)
+    assert state(mod) == (0, 0, 2) and read("axis.1.machine_position") == pytest.approx(turn)
 
 
 @manual("§2.6.6.6", "each G43/G44 adds/subtracts the MD tool offset to the existing one; G40 removes the program's "

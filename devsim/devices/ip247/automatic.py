@@ -270,10 +270,10 @@ class ProgramRun:
                 begin, end = unit.coords.range()
                 span = end - begin
                 forward = (x - tip) % span
-                if self.direction == 26:
-                    step = forward
+                if self.direction == 26:  # standing on the target: one turn (manual §2.6.6.5's N60)
+                    step = forward or span
                 elif self.direction == 27:
-                    step = forward - span if forward else 0.0
+                    step = forward - span
                 else:  # G25: the shortest way, a tie forward
                     step = forward if forward <= span - forward else forward - span
                 target, end_tip = holder + step, x
