@@ -70,6 +70,20 @@ def test_counter_ranges(sers: Plant) -> None:
     refused(host, "#C3=4294967296\r", 1)
 
 
+@pytest.mark.manual("§4.8.5.2", "with P1014=3 (relative positioning with overflow counter) C1 is signed "
+                    "(-32768 bis 32768): a host writes a negative overflow count back")
+def test_c1_is_signed_in_overflow_mode(sers: Plant) -> None:
+    host = sers.host
+    assert host.ask("#P1014=3 C1=-32768\r").endswith(b"ok1\n\r")
+    assert query(host, "C1") == "-32768"
+    assert host.ask("#C1=32767\r").endswith(b"ok1\n\r")
+    refused(host, "#C1=32768\r", 1)  # 16 bits with a sign: the manual's 32768 is 32767 [SIM-CHOICE]
+    refused(host, "#C1=-32769\r", 2)
+    assert query(host, "C1") == "32767"
+    assert host.ask("#P1014=0 C1=0\r").endswith(b"ok3\n\r")  # (the warning of the refusals above)
+    refused(host, "#C1=-1\r", 2)  # unsigned again outside mode 3
+
+
 @pytest.mark.manual("§4.8.5.3", "markers M1..M3 can be set and cleared in a program and used in IF "
                     "(the block repeats while M1 is set)")
 def test_marker_loop(sers: Plant) -> None:

@@ -202,7 +202,9 @@ class ParameterAccess:
 
     def check_range(self, row: Param, value: float) -> None:
         """The drive's range check of a write (§4.7): choices, then the range, weighted ranges
-        after conversion (V ≤ 10000 rpm, A ≤ 100000 rad/s², positions within ±2^31 increments)."""
+        after conversion (V ≤ 10000 rpm, A ≤ 100000 rad/s², positions within ±2^31 increments);
+        C1 in positioning mode 3 is signed (§4.8.5.2: "Wenn P1014=3 ..., dann ist dieser Zähler
+        vorzeichenbehaftet", the row's ``mode3_range``)."""
         extra = row.extra
         if row.choices is not None and value not in row.choices:
             raise SersError(extra["invalid_errno"])
@@ -233,9 +235,12 @@ class ParameterAccess:
             if value < lo:
                 raise SersError(extra["too_small_errno"])
             return
-        if row.maximum is not None and value > row.maximum:
+        minimum, maximum = row.minimum, row.maximum
+        if extra["mode3_range"] is not None and int(self.params.positioning_mode) == 3:
+            minimum, maximum = extra["mode3_range"]  # C1 signed in mode 3 (§4.8.5.2)
+        if maximum is not None and value > maximum:
             raise SersError(extra["too_large_errno"])
-        if row.minimum is not None and value < row.minimum:
+        if minimum is not None and value < minimum:
             raise SersError(extra["too_small_errno"])
 
     def _position(self, number: int, value: float) -> float:

@@ -31,7 +31,9 @@ UNITS: dict[str, str] = {"position": "P123 unit", "velocity": "P121 unit", "acce
 #: of a write to a read-only parameter; ``min_exclusive`` for a range "> minimum" (V, P103, P123);
 #: ``saved_with_p1117`` for W and R0..R5 (stored by PSAVE only with P1117=1); ``length_unit``
 #: when the query answer carries the position length unit (P123); ``commands``, the command
-#: keywords and bit addresses acting on the parameter; ``note``, the manual's remarks.
+#: keywords and bit addresses acting on the parameter; ``mode3_range``, the range that replaces
+#: the row's own in positioning mode P1014=3 (C1, the signed overflow counter, §4.8.5.2);
+#: ``note``, the manual's remarks.
 EXTRA: dict[str, Any] = {
     "kind": "int",
     "too_large_errno": 1,
@@ -42,6 +44,7 @@ EXTRA: dict[str, Any] = {
     "saved_with_p1117": False,
     "length_unit": False,
     "commands": (),
+    "mode3_range": None,
     "note": "",
 }
 

@@ -66,6 +66,7 @@ _p(
     aliases=("C1",),
     minimum=0,
     maximum=65535,
+    mode3_range=(-32768, 32767),  # "vorzeichenbehaftet (-32768 bis 32768)": 16 bits [SIM-CHOICE: 32767]
     doc="Unsigned 16-bit (manual: 0..65536); signed -32768..32767 overflow counter when P1014=3.",
     attr="counter1",
 )
