@@ -35,6 +35,17 @@ def test_w_range_incremental(sers: Plant, weighting: int) -> None:
     assert query(host, "W") == "-2147483639inkr"
 
 
+@pytest.mark.manual("§4.8.3.1", "P12 64 'Lagegrenzwert Vorgabe - der vorgegebene Positionswert ist zu groß': a "
+                    "relative move whose target lies beyond the position range is refused (errno 85 / 86)")
+@pytest.mark.parametrize(("start", "w", "errno"), [("200000", "100000", 85), ("-200000", "-100000", 86)])
+def test_a_target_beyond_the_position_range_warns_with_p12_64(sers: Plant, start: str, w: str, errno: int) -> None:
+    host = sers.host
+    refused(host, f"#ON P51={start} W={w} E\r", errno)
+    assert int(query(host, "P12")) & 64
+    assert query(host, "POS") == "1"  # nothing moves
+    assert host.ask("#P12=0\r").endswith(b"ok1\n\r")
+
+
 @pytest.mark.manual("§4.8.4.2", "WR (P1051) is W and sets P1014=0 (relative); WA (P1052) is W and sets P1014=2 "
                     "(absolute)")
 def test_wr_and_wa_set_the_positioning_mode(sers: Plant) -> None:
