@@ -148,6 +148,19 @@ def test_software_limits(sers: Plant) -> None:
     )
 
 
+@pytest.mark.manual("§4.8.6.12", "P1040: when moving in the negative direction P51 gets below it, the drive stops, "
+                    "the bit 'Grenzwert' in P12 is set, P1042 becomes 1 and the display blinks 'L'")
+def test_the_negative_software_limit(sers: Plant) -> None:
+    host = sers.host
+    host.ask("#P1040=-100 P1041=100\r")
+    host.ask("#ON V=60 A=1000 W=-360 E\r")
+    sers.settle()
+    assert -110 < sers.read("param.P51") < -100
+    assert sers.read("P12") & 1
+    assert host.ask("#LP?\r") == b"#LP?\rLP=1\n\r\nok3\n\r"
+    assert sers.read("display") == {"char": "L", "blinking": True}
+
+
 @pytest.mark.manual("§4.8.1.2", "when P51 reaches compare position P1024 the action P1025 sets an output")
 def test_compare_position_sets_output(sers: Plant) -> None:
     sers.host.ask("#P1024=90 P1025=2\r")
