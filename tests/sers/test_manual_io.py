@@ -216,3 +216,20 @@ def test_stop_input_i7(plant_factory) -> None:
     plant.settle()
     assert plant.read("param.P0") == 0
     assert out(plant, 1) is False
+
+
+@pytest.mark.manual("§4.8.1.1", "P1135 ADC hysteresis: 0 gives P1046 its 10-bit resolution, the default 7 "
+                    "(3 bits) 7 bits, 255 (8 bits) 2 bits")
+@pytest.mark.manual("§4.8.1.1", "P1148 ADC offset (0..255 for 0..5 V) is subtracted from P1046 and the scale fits "
+                    "the rest: 0.06 V is '3', and with P1148=3 it reads 0")
+@pytest.mark.parametrize(("p1135", "p1148", "volts", "adc"), [
+    (0, 0, 0.06, "0.012"), (0, 0, 0.07, "0.014"),  # 10 bits: 1/1023 of 5 V apart
+    (7, 0, 0.06, "0.008"), (7, 0, 0.07, "0.008"),  # 7 bits: the same step of 8/1023
+    (255, 0, 3.0, "0.5"), (255, 0, 2.4, "0.25"),  # 2 bits: quarters
+    (7, 3, 0.06, "0"), (0, 3, 5.0, "1"), (0, 3, 2.53, "0.5"),  # the offset's example; the rest scaled
+])
+def test_adc_hysteresis_and_offset(sers: Plant, p1135: int, p1148: int, volts: float, adc: str) -> None:
+    host = sers.host
+    assert host.ask(f"#P1135={p1135} P1148={p1148}\r").endswith(b"ok1\n\r")
+    sers.set("quantity.adc_volts", volts)
+    assert query(host, "ADC") == adc
