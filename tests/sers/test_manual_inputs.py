@@ -6,6 +6,7 @@ from __future__ import annotations
 import pytest
 
 from tests.sers.conftest import Plant
+from tests.sers.test_programs import download
 
 
 def _boot_with(plant_factory, config: dict, inputs: tuple[str, ...]) -> Plant:  # type: ignore[no-untyped-def]
@@ -57,3 +58,16 @@ def test_service_switch_enables_the_jog_inputs(plant_factory) -> None:
     plant.advance(0.2)
     assert plant.read("motion.kind") == "jog"
     assert plant.read("axis.velocity") > 0
+
+
+@pytest.mark.manual("§4.8.1.1", "P1022: an input also set in P1021 is blocked for parallel mode (P1022=3, "
+                    "P1021=129: I1 jogs left and is no address bit, so I1 with the start edge calls L1)")
+def test_an_input_enabled_in_p1021_is_no_address_bit(plant_factory) -> None:
+    plant: Plant = plant_factory({"params": {"P1022": 3, "P1021": 129}})
+    download(plant.host, "L1 O1=1 RT", "L2 O2=1 RT")
+    assert plant.host.ask("#ON\r").endswith(b"ok1\n\r")
+    plant.set("input.I1", True)
+    plant.set("input.I8", True)  # the start edge
+    plant.advance(0.05)
+    assert (plant.read("output.O1"), plant.read("output.O2")) == (True, False)  # address 0, not 1
+    assert plant.read("motion.kind") == "jog"  # I1 is the jog input it is enabled as
