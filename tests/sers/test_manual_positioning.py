@@ -183,6 +183,24 @@ def test_rotational_weighting_at_the_load(plant_factory) -> None:
     assert plant.read("axis.position") == pytest.approx(12800)
 
 
+@pytest.mark.manual("§4.8.4.6", "P160 weighting of the acceleration data: 2 rad/s² at the motor, 66 rad/s² at the "
+                    "load, 1 mm/s² and 17 in/s² translational (gear and feed constant included); 3 decimals, "
+                    "in/s² 5")
+@pytest.mark.parametrize(("p160", "answer", "motor_rad_s2"), [
+    (2, "12.346rad/s²", 12.5), (66, "12.346rad/s²", 2 * 12.5),  # gear 2:1
+    (1, "12.346mm/s²", 12.5 / 5 * 2 * 2 * math.pi),  # 5 mm per spindle revolution = 2 motor revolutions
+    (17, "12.34568in/s²", 12.5 * 25.4 / 5 * 2 * 2 * math.pi),  # an inch is 25.4 mm, P123 in mm (P76 not 17)
+])
+def test_acceleration_weighting(plant_factory, p160: int, answer: str, motor_rad_s2: float) -> None:
+    plant = plant_factory({"params": {"P160": p160, "P121": 2, "P122": 1, "P123": 5}})
+    host = plant.host
+    assert host.ask("#A=12.3456789\r").endswith(b"ok1\n\r")
+    assert query(host, "A") == answer
+    host.ask("#ON P76=0 P44=0 V=1000 A=12.5 W=1000000 E\r")  # (increments and rpm at the motor: A alone weighted)
+    plant.advance(0.1)
+    assert plant.read("axis.velocity") / 12800 * 2 * math.pi / 0.1 == pytest.approx(motor_rad_s2, rel=1e-6)
+
+
 @pytest.mark.manual("§4.8.4.7", "feed constant P123: spindle pitch 5 mm per revolution -> P123=5 "
                     "(translational weighting P76=1)")
 def test_feed_constant(plant_factory) -> None:

@@ -472,13 +472,23 @@ def test_position_weightings_with_gear(p76, inc_per_unit):
         (64, 4 * 12800 / 60, 4 * 12800 / (2 * math.pi)),
         (66, 4 * 12800 / 60, 4 * 12800 / (2 * math.pi)),
         (1, 4 * 12800 / 60 / 2, 4 * 12800 / 2),
-        (17, 4 * 12800 / 60 / 2, 4 * 12800 / 2),
+        (17, 4 * 12800 / 60 / 2 * 25.4, 4 * 12800 / 2 * 25.4),  # inches; P123 in mm (P76=2): 1 in = 25.4 mm
     ],
 )
 def test_velocity_and_accel_weightings(code, vel, acc):
     s = Scaling(p44=code, p160=code, p121=4, p122=1, p123=2)
     assert s.vel_to_incps(1) == pytest.approx(vel)
     assert s.acc_to_incps2(1) == pytest.approx(acc)
+
+
+@pytest.mark.parametrize(("p76", "code", "mm_per_unit"), [(1, 1, 1), (17, 17, 1), (1, 17, 25.4), (17, 1, 1 / 25.4)])
+def test_speeds_in_the_other_length_unit_than_p123(p76, code, mm_per_unit):
+    """P123 is in the position length unit (G-UNITS); in/min and in/s² are inches also while it is
+    in mm (P76=1), and mm/min, mm/s² millimetres while it is in inches (P76=17) (§4.8.4.6)."""
+    s = Scaling(p76=p76, p44=code, p160=code, p121=2, p122=1, p123=5)
+    same = Scaling(p76=p76, p44=p76, p160=p76, p121=2, p122=1, p123=5)
+    assert s.vel_to_incps(1) == pytest.approx(same.vel_to_incps(1) * mm_per_unit)
+    assert s.acc_to_incps2(1) == pytest.approx(same.acc_to_incps2(1) * mm_per_unit)
 
 
 @pytest.mark.parametrize("code", sorted(units.WEIGHTING_CODES))

@@ -7,7 +7,10 @@ Vorschubkonstante" (P121, P122, P123), §1.2 (12800 micro-steps per motor revolu
 (query formatting).
 
 Conversion (g = P121/P122 motor revolutions per load revolution, f = P123 distance per load
-revolution, in mm or in according to the position weighting):
+revolution, in mm or in according to the position weighting, spec G-UNITS; a speed or an
+acceleration weighted in the other length unit -- in/min or in/s² while P123 is in mm, or mm/min
+or mm/s² while it is in inches -- takes f in its own unit, 1 in = 25.4 mm: §4.8.4.6 gives each
+weighting its unit):
 
 =====================  ==========================================
 position 0             inc = u
@@ -54,6 +57,8 @@ INT32_MIN = -(2**31)
 #: Largest W at incremental weighting (§4.8.4.2 P47: "Inkremental : -2147483639 bis
 #: +2147483639 (Inkmente/Schritte)"), a little short of 2^31 - 1.
 INCREMENTAL_MAX = 2147483639
+#: Millimetres per inch: the translational weightings 17 (in, in/min, in/s²) against 1 (mm ...).
+MM_PER_INCH = 25.4
 
 #: P76 code -> (unit string as sent, decimals) (§4.8.4.6 table "Wichtungsart für Lagedaten").
 POSITION_WEIGHTINGS: dict[int, tuple[str, int]] = {
@@ -92,6 +97,11 @@ _LOAD = frozenset({64, 66})  # rotational/incremental referred to the load: gear
 _TRANSLATIONAL = frozenset({1, 17})  # gear and feed constant always included
 
 
+def _mm_per(code: int) -> float:
+    """Millimetres in the length unit of a translational weighting code (§4.8.4.6: 17 is inch)."""
+    return MM_PER_INCH if code == 17 else 1.0
+
+
 class Scaling:
     """Unit conversion for one set of weighting parameters (P76, P44, P160, P121, P122, P123).
 
@@ -117,6 +127,7 @@ class Scaling:
         g = p121 / p122
         f = p123
         n = INCREMENTS_PER_REV
+        f_mm = f * (MM_PER_INCH if p76 == 17 else 1)  # P123 in the position length unit (G-UNITS)
         # increments per user unit
         if p76 == 0:
             self.pos_factor = 1.0
@@ -133,15 +144,15 @@ class Scaling:
             self.vel_factor = n / 60
         elif p44 in _LOAD:
             self.vel_factor = g * n / 60
-        else:
-            self.vel_factor = g * n / (60 * f)
+        else:  # 1 mm/min, 17 in/min: f in the speed's own length unit
+            self.vel_factor = g * n * _mm_per(p44) / (60 * f_mm)
         # (inc/s²) per user unit
         if p160 in (0, 2):
             self.acc_factor = n / (2 * math.pi)
         elif p160 in _LOAD:
             self.acc_factor = g * n / (2 * math.pi)
-        else:
-            self.acc_factor = g * n / f
+        else:  # 1 mm/s², 17 in/s²: f in the acceleration's own length unit
+            self.acc_factor = g * n * _mm_per(p160) / f_mm
 
     # --- units and decimals -------------------------------------------------------------------
     @property
