@@ -183,6 +183,23 @@ def test_handwheel_pulses_move_the_motor(plant_factory) -> None:
     assert plant.read("param.P1119") == 150
 
 
+@pytest.mark.manual("§4.8.6.6", "P1053=2 / P1143=2: pulses at I3 change the position, with the direction at the "
+                    "digital input I4 (aktiv = negativ)")
+@pytest.mark.parametrize(("params", "counter"), [({"P1053": 2, "P1054": 1}, "P1119"),
+                                                 ({"P1143": 2, "P1144": 1}, "P1120")])
+def test_pulse_and_direction_input(plant_factory, params: dict, counter: str) -> None:
+    plant = plant_factory({"params": params})
+    plant.host.ask("#ON\r")
+    plant.set("encoder.pulses", 100)  # I4 inactive: positive
+    plant.settle()
+    assert plant.read("axis.position") == pytest.approx(100 * 64)
+    plant.set("input.I4", True)
+    plant.set("encoder.pulses", 150)  # I4 active: negative
+    plant.settle()
+    assert plant.read("axis.position") == pytest.approx(-50 * 64)
+    assert plant.read(f"param.{counter}") == -50
+
+
 @pytest.mark.manual("§4.8.6.6", "P1053=9: pulses at I3 are measured as a frequency in P1124 per window P1055")
 def test_frequency_measurement(plant_factory) -> None:
     plant = plant_factory({"params": {"P1053": 9, "P1055": 50}})

@@ -56,7 +56,9 @@ DEVIATIONS: tuple[Deviation, ...] = (
     Deviation(
         "§3.4",
         "I3/I4 count encoder or clock signals up to 100 kHz (4-fold evaluation, direction detection)",
-        "pulses arrive as signed counts (encoder.pulses) already evaluated; no frequency limit",
+        "pulses arrive as signed counts (encoder.pulses) already evaluated; no frequency limit; with "
+        "pulse and direction at I3/I4 (P1053=2, P1143=2) input.I4 active turns the counts negative, at "
+        "ENC (P1053=6) the count's sign is the direction",
         "the simulator does not model the edge stream of a pulse input, only its counts",
     ),
     Deviation(

@@ -342,17 +342,22 @@ class Motion:
         """``count`` pulses (signed; 4× evaluated encoder counts) arrive at I3/I4 or ENC.
 
         With P1053 = 1/2/3 (I3/I4) or 5/6/7 (ENC), or P1143 = 1/2/3, the motor follows
-        by count × P1054 × 64 increments, limited by A and V (hand-wheel, electric shaft)."""
+        by count × P1054 × 64 increments, limited by A and V (hand-wheel, electric shaft).
+        P1053 = 2 and P1143 = 2 are pulse and direction: "wie 1, jedoch zusätzlich mit
+        Drehrichtung an digitalem Eingang I 4 (aktiv = negativ)" -- the pulses count backwards
+        while I4 is active."""
         params = self.params
         mode, alt = int(params.pulse_input), int(params.pulse_input2)
         if mode in (1, 2, 3, 5, 6, 7):
-            weight, counter = float(params.pulse_weight), 1119
+            weight, counter, with_direction = float(params.pulse_weight), 1119, mode == 2
         elif alt in (1, 2, 3):
-            weight, counter = float(params.pulse_weight2), 1120
+            weight, counter, with_direction = float(params.pulse_weight2), 1120, alt == 2
         else:
             return
         if mode in (5, 6, 7) and not self._has_option_e50():
             return
+        if with_direction and self.signals.get("I4"):
+            count = -count
         params.values[counter] = int(params.values.get(counter, 0)) + count
         if not self.power.energized or self.power.errors or self.kind not in (None, "follow"):
             return
