@@ -201,10 +201,14 @@ def test_pulse_and_direction_input(plant_factory, params: dict, counter: str) ->
 
 
 @pytest.mark.manual("§4.8.6.6", "P1053=9: pulses at I3 are measured as a frequency in P1124 per window P1055")
-def test_frequency_measurement(plant_factory) -> None:
-    plant = plant_factory({"params": {"P1053": 9, "P1055": 50}})
+@pytest.mark.manual("§4.8.6.6", "P1143=5: pulses at input 3 are measured as a frequency in P1146 per window P1145")
+@pytest.mark.parametrize(("params", "result"), [({"P1053": 9, "P1055": 50}, "P1124"),
+                                                ({"P1143": 5, "P1145": 50}, "P1146")])
+def test_frequency_measurement(plant_factory, params: dict, result: str) -> None:
+    plant = plant_factory({"params": params})
     plant.set("quantity.pulse_frequency", 1000.0)
-    assert plant.host.ask("#P1124?\r") == b"#P1124?\rP1124=100\n\r\nok1\n\r"  # 1 kHz × 100 ms
+    answer = f"#{result}?\r{result}=100\n\r\nok1\n\r".encode()  # 1 kHz × 100 ms
+    assert plant.host.ask(f"#{result}?\r") == answer
 
 
 @pytest.mark.manual("§4.8.6.1", "P1011 bit 0: at standstill the phase current falls to 50 % of P1010, 20 ms after the last motion")
