@@ -153,7 +153,7 @@ class Inputs:
         return round(max(0.0, min(1.0, (volts - offset) / (5 - offset))), 3)
 
     def pulses_in_window(self, n: int) -> int:
-        """P1124 / P1146 (§4.8.6.14): pulses counted in the window P1055 / P1145 (× 2 ms)."""
+        """P1124 / P1146 (§4.8.6.6): pulses counted in the window P1055 / P1145 (× 2 ms)."""
         params = self.params
         window = float(params.frequency_window if n == 1124 else params.frequency_window2) * 0.002
         measuring = int(params.pulse_input) in (9, 10) if n == 1124 else int(params.pulse_input2) == 5

@@ -133,7 +133,7 @@ _PLAIN: list[Point] = [
           get=lambda m: m.motion.homing.phase),
     Point("encoder.position", "float", "where the rotor physically is (encoder), motor increments", "§4.8.6.6", "inc",
           get=lambda m: m.wiring.physical(m.motion.encoder.encoder_position())),
-    Point("encoder.pulses", "int", "count pulses at the encoder / pulse input (as if they arrived)", "§4.8.6.14",
+    Point("encoder.pulses", "int", "count pulses at the encoder / pulse input (as if they arrived)", "§4.8.6.6",
           put=lambda m, v: m.motion.pulses(v), example=0),
     Point("phase_current", "float", "commanded phase current", "§4.8.6.1", "mA", get=lambda m: m.motion.phase_current()),
     Point("load_angle", "float", "stator field ahead of the rotor", "§4.8.6.6", "inc",

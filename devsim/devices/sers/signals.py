@@ -24,5 +24,5 @@ SIGNALS: tuple[SignalDef, ...] = (
     SignalDef("stall", "quantity", False, "load torque above motor torque: the rotor stands still", "§4.8.6.6",
               type="bool"),
     SignalDef("pulse_frequency", "quantity", 0.0, "frequency of the pulses at I3 / ENC (P1053=9/10, P1143=5)",
-              "§4.8.6.14", "Hz", minimum=0, maximum=1e6),
+              "§4.8.6.6", "Hz", minimum=0, maximum=1e6),
 )
