@@ -67,6 +67,16 @@ def test_p1136_only_on_a_12_a_version(plant_factory) -> None:
     assert query(large.host, "P1136") == "1"
 
 
+@pytest.mark.manual("§4.8.6.1", "P1010 phase current in mA: 'der max. einstellbare Phasenstrom hängt von der "
+                    "Version ab' - SERS 01 1400, 02 2800, 03 4200, 04 4000, 06 8400, 08 8400, 12 14500")
+@pytest.mark.parametrize(("current_class", "maximum"), [("01", 1400), ("03", 4200), ("06", 8400), ("12", 14500)])
+def test_the_phase_current_maximum_is_the_versions(plant_factory, current_class: str, maximum: int) -> None:
+    host = plant_factory({"current_class": current_class}).host
+    assert host.ask(f"#P1010={maximum}\r").endswith(b"ok1\n\r")
+    refused(host, f"#P1010={maximum + 1}\r", 1)
+    assert query(host, "P1010") == str(maximum)
+
+
 # The manual's wording of errno 9 and 10 (§4.8.3.1), as the drive sends it (latin-1, spec G-ENC).
 TOO_LARGE_CONSTANT = "\n*Dezimalkonstante zu groß\n\r".encode("latin-1")
 RUN_TOO_SMALL = b"\n*run Dezimalkonstante zu klein\n\r"

@@ -285,7 +285,7 @@ def test_paramdef_consistency():
         (1139, 0, 327.6, None),
         (1054, -32.768, 32.767, None),
         (1164, 0, 6553.5, None),
-        (1010, 0, 8400, None),
+        (1010, 0, 14500, None),  # the largest version (12 A); a drive refuses above its own (§4.8.6.1)
         (1, 0, 127, None),
         (138, 2, 100000, None),
         (91, 0, 10000, None),

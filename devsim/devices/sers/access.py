@@ -25,7 +25,7 @@ from devsim.devices.sers.inputs import Inputs
 from devsim.devices.sers.memory import ParameterMemory
 from devsim.devices.sers.motion import Motion
 from devsim.devices.sers.paramdef import below_exclusive_minimum
-from devsim.devices.sers.parameters import ALIASES, KIND, PARAMETERS
+from devsim.devices.sers.parameters import ALIASES, CURRENT_MAX_MA, KIND, PARAMETERS
 from devsim.devices.sers.params import SersParameters
 from devsim.devices.sers.power import PowerStage
 from devsim.devices.sers.program import ProgramMemory
@@ -301,6 +301,15 @@ class ParameterAccess:
             raise SersError(row.extra["write_errno"])
         self.params.values[1136] = int(value)
 
+    def write_phase_current(self, value: float) -> None:
+        """P1010 (§4.8.6.1): "Der gültige Wertebereich bzw. der max. einstellbare Phasenstrom hängt
+        von der Version ab" -- the version's maximum (CURRENT_MAX_MA), above it errno 1."""
+        row = PARAMETERS[1010]
+        self.check_range(row, value)
+        if value > CURRENT_MAX_MA[self._config().current_class]:
+            raise SersError(row.extra["too_large_errno"])
+        self.params.values[1010] = int(value) if float(value).is_integer() else value
+
     def write_pulse_weight(self, number: int, value: float) -> None:
         """P1054 / P1144 (§4.8.6.6): "Intern werden nur 16 Bit abgespeichert. Bei Zahlen außerhalb
         -0.32768 bis 0.32767 wird die Auflösung vermindert indem die letzten beiden
@@ -425,6 +434,7 @@ WRITES: Table[Write] = Table(
         Command("P1004", ParameterAccess.write_p1004, "§4.8.6.10", "PSAVE, factory defaults, POSSAVE"),
         Command("P1014", ParameterAccess.write_p1014, "§4.8.4.1", "positioning mode"),
         Command("P1031", lambda a, v: a.motion.jog.write_p1031(v, a.motion.home), "§4.8.6.3", "jog / home"),
+        Command("P1010", ParameterAccess.write_phase_current, "§4.8.6.1", "phase current: the version's maximum"),
         Command("P1136", ParameterAccess.write_p1136, "§4.8.2.4", "chopper frequency: 12 A versions only"),
         Command("P1134", ParameterAccess.write_p1134, "§4.8.2.3", "the motor's sense of rotation"),
         Command("P1040", lambda a, v: a.write_soft_limit(1040, v), "§4.8.6.12", "lower software limit"),

@@ -148,10 +148,11 @@ _p(
     "Phasenstrom",
     "phase current",
     minimum=0,
-    maximum=8400,
+    maximum=14500,
     default=4200,
     **_RW_E,
-    doc="Phase current in mA; maximum per version (CURRENT_MAX_MA); default 50 % of max [SIM].",
+    doc="Phase current in mA; maximum per version (CURRENT_MAX_MA, 14500 for a 12 A one); default 50 % of "
+    "max [SIM].",
     attr="phase_current",
 )
 _p(
