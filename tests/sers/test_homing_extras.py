@@ -211,6 +211,29 @@ def test_frequency_measurement(plant_factory, params: dict, result: str) -> None
     assert plant.host.ask(f"#{result}?\r") == answer
 
 
+@pytest.mark.manual("§4.8.6.1", "P1011 bit 1: while accelerating above the limit P1012 the phase current is raised by "
+                    "20 %; bit 2: at standstill it is raised by 20 %")
+@pytest.mark.parametrize(("p1011", "line", "after", "current"), [
+    (2, "#ON A=100 V=600 W=3600 E\r", 0.05, 6000),  # A=100 > P1012=50: boost while accelerating
+    (2, "#ON A=20 V=600 W=3600 E\r", 0.05, 5000),  # A below P1012: no boost
+    (2, "#ON A=100 V=600 W=36000 E\r", 1.0, 5000),  # constant speed: no boost
+    (4, "#ON\r", 0.1, 6000),  # standstill boost
+    (4, "#ON W=3600 E\r", 0.05, 5000),  # (not while moving)
+])
+def test_phase_current_boost(plant_factory, p1011: int, line: str, after: float, current: int) -> None:
+    plant = plant_factory({"params": {"P1010": 5000, "P1011": p1011, "P1012": 50}})
+    plant.host.ask(line)
+    plant.advance(after)
+    assert plant.read("phase_current") == current
+
+
+@pytest.mark.manual("§4.8.6.1", "P1011 bit 5: after power-on the motor phase current is switched on automatically (ON)")
+@pytest.mark.parametrize(("p1011", "p134"), [(32, "7"), (0, "0")])
+def test_automatic_on_after_power_on(plant_factory, p1011: int, p134: str) -> None:
+    plant = plant_factory({"params": {"P1011": p1011}})
+    assert plant.host.ask("#P134?\r") == f"#P134?\rP134={p134}\n\r\nok1\n\r".encode()
+
+
 @pytest.mark.manual("§4.8.6.1", "P1011 bit 0: at standstill the phase current falls to 50 % of P1010, 20 ms after the last motion")
 def test_phase_current_reduction_at_standstill(plant_factory) -> None:
     plant = plant_factory({"params": {"P1010": 6000, "P1011": 1}})
