@@ -20,6 +20,34 @@ def test_homing_to_the_next_electrical_zero(plant_factory) -> None:
     assert plant.read("param.P51") == 0
 
 
+@pytest.mark.manual("§4.8.4.5", "P147 bit 3: 0 = P1040 and P1041 are ignored while homing; 1 = they are respected")
+@pytest.mark.parametrize(("p147", "homed"), [(0, True), (8, False)])
+def test_homing_and_the_software_limits(plant_factory, p147: int, homed: bool) -> None:
+    plant = plant_factory({"axis": {"reference_low": 90 * DEG}, "params": {"P147": p147}})
+    plant.host.ask("#P1041=45 ON H\r")  # the reference switch lies beyond the upper software limit
+    plant.settle()
+    assert plant.read("homed") is homed
+    assert (plant.read("axis.position") == pytest.approx(90 * DEG)) is homed  # (else stopped after 45°)
+    assert bool(plant.read("P12") & 1) is not homed
+
+
+@pytest.mark.manual("§4.8.4.5", "a drive standing on the reference switch when homing starts runs at P1003 until the "
+                    "falling edge of the reference input")
+def test_homing_started_on_the_switch(plant_factory) -> None:
+    plant = plant_factory({"axis": {"reference_low": 3200, "reference_high": 5200}, "params": {"P1003": 10}})
+    plant.host.ask("#ON P1035=0 P1019=60 RS\r")
+    plant.advance(0.35)
+    plant.host.ask("#S\r")
+    plant.settle()
+    assert plant.read("input.reference") is True
+    plant.host.ask("#H\r")
+    plant.advance(0.05)
+    assert abs(plant.read("axis.velocity")) == pytest.approx(10 * 12800 / 60)  # no fast run at P41
+    plant.settle()
+    assert plant.read("axis.position") == pytest.approx(3200)
+    assert plant.read("homed") is True
+
+
 @pytest.mark.manual("§4.8.4.5", "P147 bit 6: homing on the zero pulse instead of the reference switch")
 def test_homing_on_the_encoder_zero_pulse(plant_factory) -> None:
     plant = plant_factory({"axis": {"index_offset": 5000}, "params": {"P147": 64}})
