@@ -22,6 +22,23 @@ def test_w_update_during_constant_phase_adds_to_relative_move(sers: Plant) -> No
     assert sers.read("param.P51") == pytest.approx(3960)
 
 
+@pytest.mark.manual("§4.6.6", "a W sent in the constant phase must not reverse the motor: it is answered with an "
+                    "error message and taken only by the next E after the positioning")
+@pytest.mark.parametrize(("line", "w", "after_next_e"), [("WR=3600", "-3600", 0.0), ("WA=3600", "100", 3556)])
+def test_a_w_that_would_reverse_waits_for_the_next_e(sers: Plant, line: str, w: str, after_next_e: float) -> None:
+    host = sers.host
+    host.ask(f"#ON V=100 A=1000 {line} E\r")
+    sers.advance(1.0)
+    assert sers.read("axis.phase") == "const"
+    assert host.ask(f"#W={w}\r") == f"#W={w}\r\n*neuer Restweg zu kurz\n\r".encode()  # errno 87
+    sers.settle()
+    assert sers.read("axis.position") == pytest.approx(3600 * DEG)  # the move went on to its target
+    assert host.ask("#W?\r").startswith(f"#W?\rW={w}°".encode("latin-1"))
+    host.ask("#E\r")
+    sers.settle()
+    assert sers.read("axis.position") == pytest.approx(after_next_e)  # (W in whole increments)
+
+
 @pytest.mark.manual("§4.6.6", "W may be overwritten only while standing (POS=1) or in the constant phase")
 def test_w_update_during_acceleration_is_refused(sers: Plant) -> None:
     host = sers.host
