@@ -137,8 +137,10 @@ def test_standstill_monitoring(plant_factory) -> None:
 @pytest.mark.manual("§4.8.6.6", "P1029=1: a load angle beyond P1002 is a drive error; P11=0 replaces P51 by the motor's real position (encoder)")
 @pytest.mark.manual("§4.8.3.1", "P11 32 step monitoring error (P1029)")
 @pytest.mark.manual("§3.5", "display 'F': load-angle monitoring error")
-def test_step_loss_drive_error_and_resync(plant_factory) -> None:
-    plant = plant_factory({"options": ["E50"], "params": {"P1053": 8, "P1029": 1}})
+@pytest.mark.manual("§4.8.6.6", "P1029=3: reported as a drive error (P11), but the motor stays energised")
+@pytest.mark.parametrize(("p1029", "energized"), [(1, False), (3, True)])
+def test_step_loss_drive_error_and_resync(plant_factory, p1029: int, energized: bool) -> None:
+    plant = plant_factory({"options": ["E50"], "params": {"P1053": 8, "P1029": p1029}})
     host = plant.host
     host.ask("#ON V=60 W=360 E\r")
     plant.advance(0.2)
@@ -151,6 +153,8 @@ def test_step_loss_drive_error_and_resync(plant_factory) -> None:
     assert plant.read("P11") == 32
     plant.settle()
     assert plant.read("display") == {"char": "F", "blinking": False}
+    plant.advance(0.1)  # (the phases go off 50 ms after the relay opens)
+    assert plant.read("energized") is energized
     plant.set("quantity.stall", False)
     # P11=0 takes the encoder position as P51 (§4.8.6.6)
     host.ask("#P11=0\r")
