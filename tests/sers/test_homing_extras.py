@@ -163,6 +163,7 @@ def test_step_loss_drive_error_and_resync(plant_factory, p1029: int, energized: 
 
 
 @pytest.mark.manual("§4.8.6.6", "P1029=2: a step loss is a warning; POSR travels at P41 to the original setpoint W")
+@pytest.mark.manual("§3.5", "'F' blinking: load-angle monitoring warning")
 def test_step_loss_warning_then_posr_reaches_the_setpoint(plant_factory) -> None:
     plant = plant_factory({"options": ["E50"], "params": {"P1053": 8, "P1029": 2}})
     host = plant.host
@@ -172,6 +173,7 @@ def test_step_loss_warning_then_posr_reaches_the_setpoint(plant_factory) -> None
     plant.settle()
     plant.set("quantity.stall", False)
     assert plant.read("P12") & 32
+    assert plant.read("display") == {"char": "F", "blinking": True}  # §3.5 'Warnung Lastwinkelüberwachung'
     assert host.ask("#\r") == b"#\r\nok3\n\r"
     assert host.ask("#POSR\r") == b"#POSR\r\nok0\n\r"
     plant.settle()

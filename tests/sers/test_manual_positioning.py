@@ -37,11 +37,13 @@ def test_w_range_incremental(sers: Plant, weighting: int) -> None:
 
 @pytest.mark.manual("§4.8.3.1", "P12 64 'Lagegrenzwert Vorgabe - der vorgegebene Positionswert ist zu groß': a "
                     "relative move whose target lies beyond the position range is refused (errno 85 / 86)")
+@pytest.mark.manual("§3.5", "'A' blinking: 'Warnung Positionsüberlauf' - W is too large for the position range")
 @pytest.mark.parametrize(("start", "w", "errno"), [("200000", "100000", 85), ("-200000", "-100000", 86)])
 def test_a_target_beyond_the_position_range_warns_with_p12_64(sers: Plant, start: str, w: str, errno: int) -> None:
     host = sers.host
     refused(host, f"#ON P51={start} W={w} E\r", errno)
     assert int(query(host, "P12")) & 64
+    assert sers.read("display") == {"char": "A", "blinking": True}  # §3.5 'Warnung Positionsüberlauf'
     assert query(host, "POS") == "1"  # nothing moves
     assert host.ask("#P12=0\r").endswith(b"ok1\n\r")
 
