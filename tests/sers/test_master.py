@@ -208,3 +208,18 @@ def test_a_slave_answer_that_is_no_number_is_no_value(program: list[str], asked:
     out.clear()
     master.main.feed(b"#200 VER\r")
     assert b"P1133=120901" in bytes(out)
+
+
+@pytest.mark.manual("§4.8.5.5", "P1110=0: the master does not wait for the end of its own positioning, so it can "
+                    "command other axes meanwhile; P1110=1: it waits before the next line")
+@pytest.mark.parametrize(("p1110", "at_once"), [(0, True), (1, False)])
+def test_p1110_master_waits_for_its_positioning(plant_factory, p1110: int, at_once: bool) -> None:
+    plant: Plant = plant_factory({"address": 0})
+    download(plant, 200, ["ON", "W=3600", "E", "O1=1", "PE"])
+    assert plant.host.ask(f"#200 P1110={p1110} RUN\r").endswith(b"ok1\n\r")
+    plant.advance(0.05)
+    assert plant.read("motion.kind") == "position"
+    assert plant.read("output.O1") is at_once
+    plant.settle()
+    plant.advance(0.01)
+    assert plant.read("output.O1") is True
