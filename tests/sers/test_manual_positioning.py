@@ -11,6 +11,7 @@ from tests.sers.conftest import Plant
 from tests.sers.test_programs import number, query, refused
 
 DEG = 12800 / 360  # increments per degree (§4.8.4.6: 12800 increments = 360° = one motor revolution)
+INC = 1 / DEG  # one increment in degrees
 
 
 @pytest.mark.manual("§4.8.4.2", "W range (rotational): -214748.3647 to +214748.3647 °")
@@ -46,6 +47,23 @@ def test_a_target_beyond_the_position_range_warns_with_p12_64(sers: Plant, start
     assert sers.read("display") == {"char": "A", "blinking": True}  # §3.5 'Warnung Positionsüberlauf'
     assert query(host, "POS") == "1"  # nothing moves
     assert host.ask("#P12=0\r").endswith(b"ok1\n\r")
+
+
+@pytest.mark.manual("§4.8.6.2", "P1033 after a single stop and a new start of a positioning: 0 travels the whole W "
+                    "anew (relative), 1 continues the interrupted positioning; after two stops 1 acts as 0")
+@pytest.mark.parametrize(("p1033", "stops", "continued"), [(0, 1, False), (1, 1, True), (1, 2, False)])
+def test_a_stopped_positioning_and_the_next_e(sers: Plant, p1033: int, stops: int, continued: bool) -> None:
+    host = sers.host
+    host.ask(f"#P1033={p1033} ON V=600 A=1000 WR=3600 E\r")
+    sers.advance(0.4)
+    for _ in range(stops):
+        host.ask("#S\r")  # (the second while the drive brakes)
+    sers.settle()
+    stopped_at = sers.read("param.P51")
+    assert 1000 < stopped_at < 3000
+    assert host.ask("#E\r").endswith(b"ok0\n\r")
+    sers.settle()
+    assert sers.read("param.P51") == pytest.approx(3600 if continued else stopped_at + 3600, abs=INC)
 
 
 @pytest.mark.manual("§4.8.4.2", "WR (P1051) is W and sets P1014=0 (relative); WA (P1052) is W and sets P1014=2 "

@@ -219,7 +219,7 @@ class Execution:
     def stop_all(self) -> None:
         self.interruption.restore()
         self.interpreter.stop()
-        self.motion.stop_motion()
+        self.motion.stop_command()
 
     def trace_on(self) -> None:
         self.interpreter.trace_mode = True

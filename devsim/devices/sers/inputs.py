@@ -176,8 +176,7 @@ class Inputs:
         self.power.stop_input(bool(new))
         if new:
             self._programs().stop_program()
-            if self.motion.kind is not None:
-                self.motion.stop_motion()
+            self.motion.stop_command()
         self.motion.check_until()
 
     def on_reference(self, name: str, old: Any, new: Any) -> None:
@@ -260,8 +259,7 @@ class Inputs:
     def stop_input(self, active: bool) -> None:
         if active:
             self._programs().stop_program()
-            if self.motion.kind is not None:
-                self.motion.stop_motion()
+            self.motion.stop_command()
 
     def start_input_edge(self, active: bool) -> None:
         if active:

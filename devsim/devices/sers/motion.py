@@ -196,6 +196,12 @@ class Motion:
     def arm_watches(self, keep: bool = False) -> None:
         self.watches.arm(keep)
 
+    def stop_command(self) -> None:
+        """A stop command (S) or signal (the STOP input, I7): the motion stops, and an interrupted
+        ``E`` is continued by the next with P1033=1 (§4.8.6.2)."""
+        self.positioning.stopped(self.kind == "position")
+        self.stop_motion()
+
     def stop_motion(self) -> None:
         """S (§4.2): decelerate with the active motion's deceleration (spec §5.4)."""
         if self.kind is None or self.kind == "error-stop":

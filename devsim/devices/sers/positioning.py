@@ -51,6 +51,7 @@ class Positioning:
         self.w_updated = False  # W was changed on the move: the next E is already done
         #: The target of the last E (POSR goes there, P1033=1 continues to it).
         self.setpoint: float | None = None
+        self._interrupted = False  # a stop interrupted the last E: with P1033=1 the next E continues it
         self._legs: list[tuple[float, float]] = []  # (target, speed) still to go, backlash
         self._target = 0.0  # physical target of the positioning under way
         self._speed = 0.0
@@ -63,6 +64,7 @@ class Positioning:
         self.w_updated = False
         self._legs = []
         self.setpoint = None
+        self._interrupted = False
         self.overloaded = False
         self._servo_resume = False
 
@@ -75,6 +77,11 @@ class Positioning:
         if motion.kind is not None:
             raise SersError(70)
         params = self.params
+        if self._interrupted and int(params.continuation_after_stop) == 1:
+            self._interrupted = False
+            self.resume()  # (standing at the setpoint already: nothing moves)
+            return
+        self._interrupted = False
         mode = int(params.positioning_mode)
         w = float(params.position_setpoint)
         p51 = self.axis.position() - motion.offset
@@ -109,6 +116,13 @@ class Positioning:
         self._legs = legs
         self._next_leg()
         motion.arm_watches()
+
+    def stopped(self, positioning: bool) -> None:
+        """A stop command or signal (S, the STOP input, I7) came, while an ``E`` ran
+        (``positioning``) or not (§4.8.6.2): "nach einem einmaligem Stop-Befehl ... und einem
+        erneutem Start-Befehl" P1033=1 continues the interrupted positioning, "Nach zweimaligem
+        Stop → Verfahren wie bei P1033=0" -- a second stop ends that."""
+        self._interrupted = positioning
 
     def resume(self) -> bool:
         """P1033=1: a program stopped during ``E`` continues the interrupted move; False if it
@@ -203,6 +217,7 @@ class Positioning:
         params = self.params
         if self.motion.kind != "position":
             params.position_setpoint = new
+            self._interrupted = False  # a new W is a new positioning [SIM-CHOICE]
             return
         if self.axis.phase() != "const":
             raise SersError(81)
