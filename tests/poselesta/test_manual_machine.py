@@ -353,9 +353,12 @@ def test_the_override_acts_in_every_program_mode(make, mode: str) -> None:  # no
 
 # -- §2.3.12 M01 -------------------------------------------------------------------------------------
 @pytest.mark.manual("§2.3", "V 21/10: M 01 wahlweisen Halt aktivieren")
-@pytest.mark.parametrize(("optional_stop", "stops"), [(True, True), (False, False)])
-def test_m01_stops_only_while_v21_10_is_high(make, optional_stop: bool, stops: bool) -> None:  # noqa: ANN001
-    cnc = make(program="N1 X1 M01\nN2 X2")
+@pytest.mark.parametrize(("invert", "optional_stop", "stops"), [
+    (False, True, True), (False, False, False),
+    (True, True, False), (True, False, True),  # invert_optional_stop (spec G-M01): L stops
+])
+def test_m01_stops_only_while_v21_10_is_high(make, invert: bool, optional_stop: bool, stops: bool) -> None:  # noqa: ANN001
+    cnc = make({"invert_optional_stop": True} if invert else None, program="N1 X1 M01\nN2 X2")
     cnc.set("input.optional_stop", optional_stop)
     cnc.set("panel.nc_start", True)
     cnc.advance(2.0)

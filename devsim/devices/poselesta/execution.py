@@ -79,13 +79,16 @@ class BlockChain:
 
 class ExecutionOptions(msgspec.Struct, frozen=True):
     """What the variant and the configuration change in the block cycle (spec §4.3.6, G-M06,
-    §4.12.1): V22/10 block abort (POS III), M06 waiting for NC-Start, G25 as a full circle, the
-    start/stop status output V16/8 (POS III, manual §2.4.10)."""
+    §4.12.1, G-M01): V22/10 block abort (POS III), M06 waiting for NC-Start, G25 as a full circle,
+    the start/stop status output V16/8 (POS III, manual §2.4.10), the level of V21/10 that makes
+    M01 stop (H by the pin list and the table of contents, "M 01 wahlweisen Halt aktivieren"; L
+    with ``invert_optional_stop``, the diagnostic table's "M 01 aufheben")."""
 
     block_abort: bool = True
     m06_requires_nc_start: bool = False
     g25_full_circle: bool = False
     start_stop_status: bool = True
+    invert_optional_stop: bool = False
 
 
 class Executor:
@@ -430,7 +433,8 @@ class Executor:
             self.block = None
             self._enter("IDLE")
             return
-        optional = functions.optional_stop and self.signals.get("optional_stop")
+        optional = functions.optional_stop and (
+            bool(self.signals.get("optional_stop")) != self._options.invert_optional_stop)
         if functions.optional_stop and not optional:
             self.signals.set("m01", False)  # spec G-M01RESET
         if functions.program_stop or optional or mode == "AUTO_SINGLE_BLOCK":

@@ -121,7 +121,8 @@ class PoselestaCnc(Model):
             program=lambda: self.memory.to_run(self.program, self.mode == "MANUAL_SINGLE_BLOCK"),
             stop_manual=lambda: self.manual.reset(),
             options=ExecutionOptions(cfg.variant == "III", cfg.m06_requires_nc_start, cfg.g25_full_circle,
-                                     start_stop_status=cfg.variant == "III"))
+                                     start_stop_status=cfg.variant == "III",
+                                     invert_optional_stop=cfg.invert_optional_stop))
         plc = cfg.plc
         self.plc = PlcHelper(self.clock, signals, plc.mst_ack, plc.rise_ms / 1000.0, plc.fall_ms / 1000.0,
                              None if plc.tool_change_ms is None else plc.tool_change_ms / 1000.0,
