@@ -382,14 +382,16 @@ def test_a_limit_switch_stops_at_once_and_lets_only_away(make) -> None:  # noqa:
     assert cnc.read("axis.x.position") < stopped_at
 
 
-def test_subroutine_calls_and_repeats_follow_g12_g11_g13(make) -> None:  # noqa: ANN001
+@pytest.mark.parametrize(("config", "passes"), [({}, 3), ({"g13_count_is_total": True}, 2)])
+def test_subroutine_calls_and_repeats_follow_g12_g11_g13(make, config: dict[str, Any], passes: int) -> None:  # noqa: ANN001
     """Spec §4.12.1 (INFERRED from the manual's example §6.6): G12 L1.100 calls N100 once, G13
-    L2.101 runs N101 two more times, G11 returns after the call; each pass of N101 moves +1."""
-    cnc = make(program="N1 G91\nN2 G12 L1.100\nN3 X10 M02\nN100 G10\nN101 X1\nN102 G13 L2.101\nN103 G11")
+    L2.101 runs N101 two more times (two in all with g13_count_is_total, spec G-LOOP), G11
+    returns after the call; each pass of N101 moves +1."""
+    cnc = make(config, program="N1 G91\nN2 G12 L1.100\nN3 X10 M02\nN100 G10\nN101 X1\nN102 G13 L2.101\nN103 G11")
     cnc.set("panel.nc_start", True)
     cnc.advance(5.0)
     assert cnc.read("program.state") == "END"
-    assert cnc.read("axis.x.position") == pytest.approx(13_000)  # 3 × 1 mm in the loop, then 10 mm
+    assert cnc.read("axis.x.position") == pytest.approx(passes * 1_000 + 10_000)  # the loop, then 10 mm
 
 
 @pytest.mark.parametrize("program", [

@@ -17,11 +17,14 @@ CONTOUR_BREAKS = frozenset((4, 9, 10, 11, 12, 13, 25, 60))
 
 
 class ProgramFlow:
-    """The blocks of the running program and the pointer to the next one (spec §4.3.2)."""
+    """The blocks of the running program and the pointer to the next one (spec §4.3.2);
+    ``g13_total``: the a of ``G13 L a.bbb`` counts the passes in all, not the jumps back (spec
+    G-LOOP: the manual's example does not decide)."""
 
-    def __init__(self, signals: SignalBank, screen: Screen) -> None:
+    def __init__(self, signals: SignalBank, screen: Screen, *, g13_total: bool = False) -> None:
         self._signals = signals
         self._screen = screen
+        self._g13_passes_before = 1 if g13_total else 0  # the pass already run counts towards a
         self.blocks: list[Block] = []
         self.pointer = 0
         self.calls: list[list[int]] = []  # [return index, calls left, subroutine index] (G12)
@@ -72,7 +75,8 @@ class ProgramFlow:
         """The block is done: on to the next, or where G11, G12 or G13 lead (spec §4.12.1,
         INFERRED from the manual's example §6.6): ``G12 L a.bbb`` calls the subroutine at N bbb
         a times, ``G11`` returns to the block after the call, ``G13 L a.bbb`` jumps back to N bbb
-        a more times.  False when a jump leads to a missing block (the program ends)."""
+        a more times (a − 1 with ``g13_total``).  False when a jump leads to a missing block (the
+        program ends)."""
         self.pointer += 1
         count, target = divmod(block.value("L") or 0, 1000)
         if 12 in flow:
@@ -92,7 +96,7 @@ class ProgramFlow:
                 self.pointer = call[0]
         elif 13 in flow:
             here = self.pointer - 1
-            left = self.loops.get(here, count)
+            left = self.loops.get(here, count - self._g13_passes_before)
             if left > 0:
                 index = self._index(target)
                 if index is None:

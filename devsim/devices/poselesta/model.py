@@ -115,7 +115,7 @@ class PoselestaCnc(Model):
         self.mst = MstBus(self.clock, signals, lambda: max(1.0, self.params.strobe_ms) / 1000.0,
                           self.functions.put)
         self.executor = Executor(
-            self.clock, signals, self.mst, self.block_motion, self.functions, ProgramFlow(signals, self.screen),
+            self.clock, signals, self.mst, self.block_motion, self.functions, ProgramFlow(signals, self.screen, g13_total=cfg.g13_count_is_total),
             self.params, self.screen, mode=mode,
             booting=booting, inside_field=lambda: self.field.inside,
             program=lambda: self.memory.to_run(self.program, self.mode == "MANUAL_SINGLE_BLOCK"),
