@@ -535,6 +535,22 @@ def test_a_full_circle_counter_clockwise_returns_to_its_start(make) -> None:  # 
     assert (cnc.read("axis.x.position"), cnc.read("axis.y.position")) == pytest.approx((10_000, 0), abs=1e-6)
 
 
+@pytest.mark.parametrize(("config", "centre", "state"), [
+    ({}, "I0 J0", "END"), ({}, "I0 J-10", "STOPPED"),
+    ({"ijk_incremental": True}, "I0 J-10", "END"), ({"ijk_incremental": True}, "I0 J0", "STOPPED"),
+])
+def test_the_circle_centre_is_absolute_or_with_ijk_incremental_from_the_start(
+        make, config: dict[str, Any], centre: str, state: str) -> None:  # noqa: ANN001
+    """Spec G-IJK: I/J are absolute (the manual's example §6.6), or counted from the arc's start
+    with ijk_incremental: from (0, 10) the centre (0, 0) is I0 J0 or I0 J-10; the other reading
+    puts the end off the circle and the program stops."""
+    cnc = make(config, program=f"N1 G00 Y10\nN2 G02 X10 Y0 {centre} F6000")
+    cnc.set("panel.nc_start", True)
+    cnc.advance(3.0)
+    assert cnc.read("program.state") == state
+    assert cnc.read("axis.x.position") == pytest.approx(10_000 if state == "END" else 0, abs=1e-6)
+
+
 @pytest.mark.parametrize(("plane", "start", "end", "centre"), [(17, "Y10", "X10 Y0", "I0 J0"),
                                                           (18, "X10", "X0 Z10", "I0 K0"),
                                                           (19, "Z10", "Y10 Z0", "J0 K0")])

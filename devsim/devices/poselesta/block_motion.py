@@ -27,10 +27,12 @@ Arrived = Callable[[str], None]
 
 class BlockMotion:
     """Plans and drives the motion of the running block on the axes (spec §5.3): the modal
-    functions come from ``functions``, the override from ``override()``."""
+    functions come from ``functions``, the override from ``override()``; ``ijk_incremental``:
+    an arc's centre I/J/K is relative to its start (spec G-IJK)."""
 
     def __init__(self, axes: Axes, functions: BlockFunctions, limits: LimitSwitches, params: MachineParameters,
-                 screen: Screen, *, override: Callable[[], float]) -> None:
+                 screen: Screen, *, override: Callable[[], float], ijk_incremental: bool = False) -> None:
+        self._ijk_incremental = ijk_incremental
         self._axes = axes
         self._functions = functions
         self._limits = limits
@@ -75,7 +77,7 @@ class BlockMotion:
         if functions.motion in (2, 3) or functions.full_circle:
             contour = PathMotion.arc(self._axes, block, functions.plane, functions.absolute,
                                      -1 if functions.motion == 2 else 1, self.unit,
-                                     full_circle=functions.full_circle)
+                                     full_circle=functions.full_circle, centre_incremental=self._ijk_incremental)
             if contour is None or isinstance(contour, str):
                 return contour
             self.contour = contour

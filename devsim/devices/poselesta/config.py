@@ -143,6 +143,8 @@ class PoselestaConfig(Settings):
         "M01 stops while V21/10 is L, not H (the diagnostic table's 'M 01 aufheben'; spec G-M01)")] = False
     g13_count_is_total: Annotated[bool, doc(
         "a in G13 L a.bbb counts the passes in all, not the jumps back (spec G-LOOP)")] = False
+    ijk_incremental: Annotated[bool, doc(
+        "the circle centre I/J/K is relative to the arc's start point, not absolute (spec G-IJK)")] = False
     v6_peer: Annotated[Literal["host", "cassette"], doc(
         "what V6's cassette transfers T2/T3 reach: the host on the pty, or a simulated cassette recorder")] = "host"
     plc: Plc = field(default_factory=Plc)

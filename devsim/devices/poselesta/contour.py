@@ -4,7 +4,7 @@ path between such blocks (manual §2.3.15, §2.4.2, §2.4.3; spec poselesta.md �
 
 A G01 block is a straight line of its axes, a G02/G03 block an arc in the plane of two axes
 (G17 XY with I/J, G18 ZX with K/I, G19 YZ with J/K) around the centre I/J/K, taken as absolute
-coordinates, clockwise for G02 and counter-clockwise for G03 seen from the positive third axis
+coordinates (relative to the arc's start with the option ``ijk_incremental``, spec G-IJK), clockwise for G02 and counter-clockwise for G03 seen from the positive third axis
 (DIN 66025; the manual has no G17/G18/G19): each plane's two axes are listed in the right-handed
 order, so G18 is ZX, not XZ.
 The path speed is F × override; the axes follow the path in closed form
@@ -52,10 +52,12 @@ class PathMotion:
 
     @classmethod
     def arc(cls, machine: Axes, block: Block, plane: int, absolute: bool, way: int,
-            unit: Callable[[str], float] = lambda _a: 1.0, *, full_circle: bool = False) -> PathMotion | str | None:
+            unit: Callable[[str], float] = lambda _a: 1.0, *, full_circle: bool = False,
+            centre_incremental: bool = False) -> PathMotion | str | None:
         """The arc a block programs, an error text (the radii differ), or None (no end point);
         ``unit(axis)`` converts program units (inch) to the machine's; ``full_circle`` (G25 with
-        ``g25_full_circle``): once round the centre, back to the start."""
+        ``g25_full_circle``): once round the centre, back to the start; ``centre_incremental``
+        (``ijk_incremental``, spec G-IJK): I/J/K count from the start point, not from zero."""
         (a, centre_a), (b, centre_b) = PLANES[plane]
         if block.value(a.upper()) is None and block.value(b.upper()) is None and not full_circle:
             return None
@@ -68,7 +70,8 @@ class PathMotion:
         centre = []
         for axis, word, s in zip((a, b), (centre_a, centre_b), start, strict=True):
             value = block.value(word)
-            centre.append(s if value is None else machine.to_mm(axis, value * unit(axis)))
+            centre.append(s if value is None
+                          else machine.to_mm(axis, value * unit(axis)) + (s if centre_incremental else 0.0))
         r_start = math.hypot(start[0] - centre[0], start[1] - centre[1])
         r_end = math.hypot(end[0] - centre[0], end[1] - centre[1])
         if abs(r_start - r_end) > CIRCLE_TOLERANCE or r_start == 0:

@@ -111,7 +111,7 @@ class PoselestaCnc(Model):
                                     stopped=lambda: (self.manual.reset(), self.executor.abort()))
         self.functions = BlockFunctions(signals, self.screen)
         self.block_motion = BlockMotion(self.axes, self.functions, self.limits, self.params, self.screen,
-                                        override=lambda: override(signals))
+                                        override=lambda: override(signals), ijk_incremental=cfg.ijk_incremental)
         self.mst = MstBus(self.clock, signals, lambda: max(1.0, self.params.strobe_ms) / 1000.0,
                           self.functions.put)
         self.executor = Executor(
