@@ -83,6 +83,25 @@ def test_the_printer_frame_has_an_msb_of_0_and_parity_by_p69(cnc: Any, p69: int,
         assert printer.read(2) == b"%\r"  # the MSB 0 whatever P69: 7-bit ASCII on the pty
 
 
+@pytest.mark.parametrize(("config", "printout"), [
+    ({}, b"%\r\r\rN 1\rX 1.000\rN 2\rY 2.000\r#\rM 30\r"),
+    ({"printer_block_separator": "#"}, b"%\r\r\rN 1\rX 1.000\r#\rN 2\rY 2.000\r#\r#\rM 30\r"),
+], ids=["skip_mark", "separator"])
+def test_the_printer_prints_the_skip_mark_or_a_block_separator(devsim_device, config: dict[str, Any],  # noqa: ANN001
+                                                               printout: bytes) -> None:
+    """Spec G-PRN-HASH: the '#' line after block 1 of the manual's printout is the skip mark of a
+    skipped block (default), or with printer_block_separator a line after every block."""
+    cnc = devsim_device("poselesta", config)
+    cnc.set("program.P03", "N1 X1\nN2 Y2 #")
+    cnc.set("panel.mode", "EXTERNAL_MEDIUM")
+    cnc.set("panel.program", 3)
+    with open_port(cnc, "v6") as printer:
+        cnc.set("v6.transfer", "printer")
+        cnc.advance(15.0)
+        assert cnc.read("v6.state") == "done"
+        assert printer.read(len(printout)) == printout and printer.in_waiting == 0
+
+
 # -- §2.6.1.2 the frames of the tape ports ----------------------------------------------------
 @pytest.mark.manual("§2.6.1.2", "ISO-Code: sxxxxxxxPSS (mit parity): 11 bits a character")
 @pytest.mark.manual("§2.6.1.2", "ASCII-Code: sxxxxxxxSS: 10 bits a character")

@@ -15,6 +15,7 @@ __all__ = ["PoselestaConfig"]
 
 _AXES = ("X", "Y", "Z", "D")
 _NonNegative = Annotated[float, Meta(ge=0)]
+_PrintedLine = Annotated[str, Meta(min_length=1, max_length=20, pattern="^[ -~]+$")]  # 7-bit printable ASCII
 
 
 def _axis(key: Any) -> str:
@@ -119,6 +120,9 @@ class PoselestaConfig(Settings):
         "ASCII code: a byte with bit 7 set is masked (an ISO character, even parity; odd parity aborts: §2.6) or "
         "always aborts the read-in")] = "ignore"
     strict_block_numbers: Annotated[bool, doc("a block without N aborts the read-in")] = False
+    printer_block_separator: Annotated[_PrintedLine | None, doc(
+        "a line the printer (T1) prints after every block, e.g. '#' (spec G-PRN-HASH); null: none, '#' is only "
+        "a skipped block's mark")] = None
     max_blocks_total: Annotated[int, Meta(ge=1), doc("program memory, blocks over all programs")] = 2000
     params: Annotated[dict[Any, float], Keys(_parameter_number, "parameter number", entry=_param), doc(
         "initial machine parameters, e.g. {70: 3, 71: 0} (P1 … P98)")] = {}

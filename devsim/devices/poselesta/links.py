@@ -51,6 +51,8 @@ class LinkOptions(Protocol):
     def ascii_bit7(self) -> Literal["ignore", "abort"]: ...
     @property
     def strict_block_numbers(self) -> bool: ...
+    @property
+    def printer_block_separator(self) -> str | None: ...
 
 
 class SerialLinks:
@@ -184,12 +186,15 @@ class SerialLinks:
 
     def _print(self, function: Function, program: int) -> None:
         """T1 (§2.6.2.1): one word per line, CR without LF, 820 ms after every CR; 7 bits with
-        bit 7 = 0 whatever P69 says (the printer's parity is a ninth bit a byte cannot carry)."""
+        bit 7 = 0 whatever P69 says (the printer's parity is a ninth bit a byte cannot carry).
+        With ``printer_block_separator`` a line of its own after every block (spec G-PRN-HASH: the
+        ``#`` line of the manual's printout read as a separator, not as the block's skip mark)."""
         blocks = self._blocks(program)
         formats = self._formats(program)
+        separator = [self._options.printer_block_separator] if self._options.printer_block_separator else []
         lines = ["%", "", ""]  # "%" CR CR CR
         for block in sorted(blocks, key=lambda b: b.number):
-            lines += block_words(block, formats, formatted=True)
+            lines += block_words(block, formats, formatted=True) + separator
         lines.append("M 30")
         pieces: list[tuple[float, bytes]] = []
         wait = 0.0
