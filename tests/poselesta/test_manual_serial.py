@@ -167,6 +167,25 @@ def test_a_leader_of_well_formed_characters_before_percent_is_ignored(cnc: Any) 
     assert cnc.read("program.P20") == "N 1 X 1.000"
 
 
+@pytest.mark.parametrize(("config", "after_pause"), [({}, "receiving"), ({"rx_timeout_s": 2.0}, "failed")])
+def test_a_read_in_waits_for_ever_unless_rx_timeout_s_is_set(devsim_device, config: dict[str, Any],  # noqa: ANN001
+                                                             after_pause: str) -> None:
+    """Spec G-TIMEOUT: the control has no read-in timeout; with rx_timeout_s a read-in that hears
+    nothing that long after its last byte fails as a read-in does, the blocks before kept."""
+    cnc = devsim_device("poselesta", config)
+    await_tape(cnc)
+    cnc.advance(1.5)  # the start counts as heard: 1.5 s of silence before the tape
+    with open_port(cnc, "v7") as host:
+        host.write(encode("%\rN1 X1\r", True))
+        until(lambda: cnc.read("v7.blocks") == 1, "the first block is stored")
+        cnc.advance(1.9)
+        assert cnc.read("v7.state") == "receiving"
+        cnc.advance(60.0)
+        assert cnc.read("v7.state") == after_pause
+    assert cnc.read("program.P20") == "N 1 X 1.000"
+    assert (cnc.read("panel.message") == "WERTBEREICHES-UEBERLAUF") is (after_pause == "failed")
+
+
 @pytest.mark.manual("§2.6", "Wird vor dem Einlesen eines Programmes eine falsche Baud-Rate gewählt, erscheint am "
                     "Bildschirm: WERTBEREICHES-UEBERLAUF")
 @pytest.mark.parametrize("p71", [0, 1])

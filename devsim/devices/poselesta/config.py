@@ -120,6 +120,9 @@ class PoselestaConfig(Settings):
         "ASCII code: a byte with bit 7 set is masked (an ISO character, even parity; odd parity aborts: §2.6) or "
         "always aborts the read-in")] = "ignore"
     strict_block_numbers: Annotated[bool, doc("a block without N aborts the read-in")] = False
+    rx_timeout_s: Annotated[Annotated[float, Meta(gt=0)] | None, doc(
+        "a read-in that hears nothing this long after its start or its last byte fails (spec G-TIMEOUT; the "
+        "control has no timeout: null)")] = None
     printer_block_separator: Annotated[_PrintedLine | None, doc(
         "a line the printer (T1) prints after every block, e.g. '#' (spec G-PRN-HASH); null: none, '#' is only "
         "a skipped block's mark")] = None

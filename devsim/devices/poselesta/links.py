@@ -53,6 +53,8 @@ class LinkOptions(Protocol):
     def strict_block_numbers(self) -> bool: ...
     @property
     def printer_block_separator(self) -> str | None: ...
+    @property
+    def rx_timeout_s(self) -> float | None: ...
 
 
 class SerialLinks:
@@ -167,7 +169,7 @@ class SerialLinks:
         )
         if port == "v6":
             self._v6_lines(True, record=record)
-        read_in = ReadIn(self, function, program, reader, function.leader)
+        read_in = ReadIn(self, function, program, reader, function.leader, timeout=options.rx_timeout_s)
         read_in.line = line
         self.transfers[port] = read_in
 

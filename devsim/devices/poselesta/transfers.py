@@ -93,9 +93,16 @@ class ReadIn:
     Its :attr:`state` leaves ``receiving`` the moment the transfer ends (``done``, ``failed``,
     ``cancelled``): a block that cannot be stored ends it there (spec §3.5.1 "any --error-->
     FAILED", §3.5.3), so nothing after that block is stored or read, whether the host sent the
-    rest of the tape in the same write or later (what follows reaches no transfer: §2.6)."""
+    rest of the tape in the same write or later (what follows reaches no transfer: §2.6).
 
-    def __init__(self, link: Link, function: Function, program: int, reader: TapeReader, leader: float = 0.0) -> None:
+    ``timeout`` (config ``rx_timeout_s``, spec G-TIMEOUT; the manual documents none, a tape reader
+    may pause at will): a read-in that hears no byte for that long after its start (the cassette's
+    leader over) or its last byte fails, event ``rx_timeout`` ([SIM-CHOICE] as a failed read-in
+    does: ``WERTBEREICHES-UEBERLAUF``, the blocks read so far kept).  A feed only notes its time;
+    the one timer looks again when it fires."""
+
+    def __init__(self, link: Link, function: Function, program: int, reader: TapeReader, leader: float = 0.0,
+                 *, timeout: float | None = None) -> None:
         self.link = link
         self.function = function
         self.program = program
@@ -104,11 +111,33 @@ class ReadIn:
         self.line: tuple[int | None, bool] | None = None  # baud and code fixed for this transfer
         self.state = "leader" if leader > 0 else "wait_start"
         self._timer: Timer | None = link.clock.call_later(leader, self._leader_over) if leader > 0 else None
+        self._timeout = timeout
+        self._heard = link.clock.now()  # the start, then the last byte (for ``timeout``)
+        self._quiet: Timer | None = None
+        if leader <= 0:
+            self._watch()
 
     def _leader_over(self) -> None:
         self._timer = None
         if self.state == "leader":
             self.state = "wait_start"
+            self._heard = self.link.clock.now()
+            self._watch()
+
+    def _watch(self) -> None:
+        if self._timeout is not None:
+            self._quiet = self.link.clock.call_at(self._heard + self._timeout, self._quiet_over)
+
+    def _quiet_over(self) -> None:
+        self._quiet = None
+        if not self.running:
+            return
+        assert self._timeout is not None
+        if self.link.clock.now() < self._heard + self._timeout:
+            self._watch()  # a byte came meanwhile: wait from it
+            return
+        self.link.event(self.function.port, "rx_timeout", self._timeout)
+        self._fail(f"nothing received for {self._timeout:g} s")
 
     @property
     def running(self) -> bool:
@@ -117,6 +146,7 @@ class ReadIn:
     def feed(self, data: bytes) -> None:
         if self.state == "leader":
             return  # the uncoated leader of the cassette: nothing counts yet (§2.6.2.2)
+        self._heard = self.link.clock.now()
         events = self.reader.feed(data)
         if self.reader.started and self.state == "wait_start":
             self.state = "receiving"
@@ -153,9 +183,10 @@ class ReadIn:
         self.link.ended(self.function.port, state, message)
 
     def cancel(self) -> None:
-        if self._timer is not None:
-            self._timer.cancel()
-            self._timer = None
+        for timer in (self._timer, self._quiet):
+            if timer is not None:
+                timer.cancel()
+        self._timer = self._quiet = None
         if self.running:
             self.state = "cancelled"
 
