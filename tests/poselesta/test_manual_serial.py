@@ -13,7 +13,7 @@ from devsim.core.clock import Timer, VirtualClock
 from devsim.core.nvram import NonVolatileMemory
 from devsim.devices.poselesta.codes import encode, iso_byte
 from devsim.devices.poselesta.device import PoselestaDevice
-from tests.poselesta.test_ports import open_port, until
+from tests.poselesta.test_ports import O1, open_port, until
 
 
 def await_tape(cnc: Any, p71: int | None = None) -> None:
@@ -165,6 +165,28 @@ def test_a_leader_of_well_formed_characters_before_percent_is_ignored(cnc: Any) 
         host.write(b"\x00" * 20 + encode("TAPE 7 N1 X9\r\n", True) + b"\xff" * 3 + encode("%\rN1 X1\rM30\r", True))
         until(lambda: cnc.read("v7.state") == "done", "the read-in ends with M30")
     assert cnc.read("program.P20") == "N 1 X 1.000"
+
+
+@pytest.mark.parametrize("honour_xoff", [False, True])
+def test_xoff_pauses_an_output_only_with_honour_xoff(devsim_device, honour_xoff: bool) -> None:  # noqa: ANN001
+    """Spec §3.6, G-FLOW: the control has no handshake, an output runs to its end whatever the host
+    sends (DC3 is discarded); with honour_xoff DC3 (either code) holds it after the character being
+    sent, DC1 lets it go on."""
+    cnc = devsim_device("poselesta", {"honour_xoff": honour_xoff})
+    char = 11 / 1200  # ISO: 11 bits a character
+    with open_port(cnc, "v7") as host:
+        _output_on_v7(cnc, "N1 X10.5 Y-3\nN2 G00 X0 Y0 M02")
+        cnc.advance(5.5 * char)
+        host.write(b"\x93")  # DC3 with its even parity (ISO)
+        until(lambda: bytes_in(cnc, "v7") == 1, "the line has taken the XOFF")
+        sent = bytes_out(cnc, "v7")
+        cnc.advance(1.0)
+        assert (bytes_out(cnc, "v7") == sent) is honour_xoff
+        host.write(b"\x11")  # DC1
+        until(lambda: bytes_in(cnc, "v7") == 2, "the line has taken the XON")
+        cnc.advance(1.0)
+        assert cnc.read("v7.state") == "done" and cnc.read("v7.discarded") == 2
+        assert host.read(len(O1)) == encode(O1.decode("ascii"), True)  # the whole tape, nothing lost
 
 
 @pytest.mark.parametrize(("config", "after_pause"), [({}, "receiving"), ({"rx_timeout_s": 2.0}, "failed")])

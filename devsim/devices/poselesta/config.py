@@ -120,6 +120,9 @@ class PoselestaConfig(Settings):
         "ASCII code: a byte with bit 7 set is masked (an ISO character, even parity; odd parity aborts: §2.6) or "
         "always aborts the read-in")] = "ignore"
     strict_block_numbers: Annotated[bool, doc("a block without N aborts the read-in")] = False
+    honour_xoff: Annotated[bool, doc(
+        "DC3 (XOFF) from the host pauses an output, DC1 (XON) resumes it; not the control's behaviour, which has "
+        "no flow control (spec G-FLOW, §3.6)")] = False
     rx_timeout_s: Annotated[Annotated[float, Meta(gt=0)] | None, doc(
         "a read-in that hears nothing this long after its start or its last byte fails (spec G-TIMEOUT; the "
         "control has no timeout: null)")] = None

@@ -55,6 +55,8 @@ class LinkOptions(Protocol):
     def printer_block_separator(self) -> str | None: ...
     @property
     def rx_timeout_s(self) -> float | None: ...
+    @property
+    def honour_xoff(self) -> bool: ...
 
 
 class SerialLinks:
@@ -81,6 +83,7 @@ class SerialLinks:
         self.transfers: dict[str, Transfer | None] = {"v6": None, "v7": None}
         self.last_state = {"v6": "idle", "v7": "idle"}
         self.discarded = {"v6": 0, "v7": 0}
+        self._xoff = options.honour_xoff  # read once: the feed path asks no config
 
     # -- the panel --------------------------------------------------------------------------------
     def name(self, port: str) -> str:
@@ -299,6 +302,8 @@ class SerialLinks:
         running = self.transfers[port]
         if not isinstance(running, ReadIn):
             self.discarded[port] += len(data)  # no input function active, an output included (spec §2.6)
+            if self._xoff and running is not None:
+                running.flow(data)  # honour_xoff (spec G-FLOW): DC3 / DC1 pause and resume the output
             return
         running.feed(data)
         self._memory.flush()  # the chunk's blocks, saved together (devsim.devices.poselesta.programs)

@@ -200,6 +200,10 @@ _READ_IN_EVENTS: dict[type, Callable[[ReadIn, Any], None]] = {
 }
 
 
+#: The flow-control characters of ``honour_xoff`` (7 bits): DC1 = XON, DC3 = XOFF.
+XON, XOFF = 0x11, 0x13
+
+
 class Output:
     """A program output: ``pieces`` of the tape image, each sent after the wait before it
     (the leader, the printer's CR pause), one character at a time on the device clock: a
@@ -211,7 +215,11 @@ class Output:
     its timer fired: in real time a timer fires a little late, and timing each character from the
     late moment made the output slower than its baud rate (at 4800 baud by about 40 %; §2.6.1.1
     "Die Baud-Rate gibt die Anzahl der pro Sekunde übertragenen Bits an").  After a stall the
-    output catches up by at most one character."""
+    output catches up by at most one character.
+
+    :meth:`flow` (config ``honour_xoff``, spec §3.6, G-FLOW: not the control's behaviour, which
+    has no handshake) takes the host's DC3 (XOFF) and DC1 (XON), in either code (bit 7 masked):
+    after DC3 the character being sent finishes and the next waits for DC1."""
 
     def __init__(self, link: Link, function: Function, program: int, pieces: list[tuple[float, bytes]],
                  blocks: int, on_end: Callable[[], None] | None = None) -> None:
@@ -225,6 +233,8 @@ class Output:
         self._on_end = on_end
         self._timer: Timer | None = None
         self._due = 0.0  # when the last character (or wait) was due on the device clock
+        self._paused = False  # XOFF heard (``honour_xoff``)
+        self._held = False  # a character waits for XON
 
     def begin(self) -> None:
         """Start sending (called once the transfer is the port's running one, so that the line
@@ -255,8 +265,22 @@ class Output:
             return
         self._timer = self._after(self.link.char_time(port), self._character)
 
+    def flow(self, data: bytes) -> None:
+        """The host's bytes while this output runs: the last DC3 or DC1 of them decides."""
+        last = next((c & 0x7F for c in reversed(data) if c & 0x7F in (XON, XOFF)), None)
+        if last is None:
+            return
+        self._paused = last == XOFF
+        if not self._paused and self._held:
+            self._held = False
+            self._due = self.link.clock.now()
+            self._timer = self._after(self.link.char_time(self.function.port), self._character)
+
     def _character(self) -> None:
         self._timer = None
+        if self._paused:
+            self._held = True  # XOFF: this character waits for XON
+            return
         _wait, data = self._pieces[0]
         self.link.send(self.function.port, data[self._at:self._at + 1])
         self._at += 1
