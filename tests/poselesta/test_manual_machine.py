@@ -281,12 +281,27 @@ def test_p64_lets_the_override_act_on_rapid(make, p64: int, speed: float) -> Non
 
 @pytest.mark.manual("§2.3.9", "Der Open-loop-Betrieb darf nur bei Stillstand ein- oder ausgeschaltet werden")
 def test_open_loop_is_not_taken_while_an_axis_moves(make) -> None:  # noqa: ANN001
+    """Spec §5.4: a change while not at standstill "is ignored until standstill": once the key is
+    let go and X stands, open loop takes effect; switched off during the push, it ends after it."""
     cnc = make({"params": {77: 1}}, mode="MANUAL")
     cnc.set("input.jog_pos_x", True)
     cnc.advance(0.5)
     cnc.set("input.open_loop", True)
     cnc.advance(0.1)
     assert cnc.read("axis.x.following_error") > 0  # still closed loop
+    with pytest.raises(ValueError, match="not in open loop"):
+        cnc.set("axis.x.push", 1.0)
+    cnc.set("input.jog_pos_x", False)
+    cnc.advance(1.0)
+    assert cnc.read("output.machine_standstill") is True
+    cnc.set("axis.x.push", 1.0)  # open loop now
+    cnc.advance(0.05)
+    assert cnc.read("axis.x.following_error") == 0 and cnc.read("output.travel_x") is True
+    cnc.set("input.open_loop", False)  # during the push: deferred again
+    cnc.advance(0.05)
+    assert cnc.read("axis.x.following_error") == 0
+    cnc.advance(0.5)
+    assert cnc.read("output.travel_x") is False
     with pytest.raises(ValueError, match="not in open loop"):
         cnc.set("axis.x.push", 1.0)
 

@@ -28,6 +28,9 @@ detent is not held back by the axis enable (§2.4.6 treats the handwheel apart, 
 says nothing of its travel commands).  With open loop
 (V21/7 H, switched only at standstill) the axes of P77 follow whatever moves them
 (``axis.<a>.push``): their following error and set-point are 0, the travel command still shows.
+A change of V21/7 while an axis moves is "ignored until standstill" (spec §5.4, event
+``open_loop_change_deferred``; §2.3.9 "darf nur bei Stillstand ein- oder ausgeschaltet werden"):
+the level V21/7 then has takes effect once the axes stand (no travel command, machine standstill).
 """
 
 from __future__ import annotations
@@ -72,6 +75,7 @@ class ManualMotion:
         self.handwheel_factor = 1
         self.handwheel_rate = 10.0  # detents per second
         self.open_loop = False  # in effect (switched at standstill)
+        self._open_loop_deferred = False  # V21/7 changed during motion: taken at standstill
         key, handwheel, speed = self._key, self._handwheel_selected, self._speed_changed  # one bound method each
         for a in AXES:
             for direction in ("pos", "neg"):
@@ -80,6 +84,7 @@ class ManualMotion:
         for name in ("rapid", "feed_pot_v"):
             signals.subscribe(name, speed)
         signals.subscribe("open_loop", self._open_loop_input)
+        signals.subscribe("machine_standstill", self._standstill)
         signals.subscribe("axis_enable", self._axis_enable)
         signals.subscribe("nc_stop", self._nc_stop)
 
@@ -115,8 +120,20 @@ class ManualMotion:
     def _open_loop_input(self, _name: str, _old: Any, new: Any) -> None:
         if self._program_moving() or self.moving:
             self._screen.record("open_loop_change_deferred")  # only at standstill (§2.3.9)
+            self._open_loop_deferred = True
             return
         self.open_loop = bool(new)
+
+    def _standstill(self, _name: str, _old: Any, new: Any) -> None:
+        if new:
+            self._take_deferred_open_loop()
+
+    def _take_deferred_open_loop(self) -> None:
+        """The axes stand (machine standstill H, or a wait for the enable given up): a V21/7 change
+        deferred during motion takes effect with the level V21/7 has now (spec §5.4)."""
+        if self._open_loop_deferred and not self.moving:
+            self._open_loop_deferred = False
+            self.open_loop = bool(self._signals.get("open_loop"))
 
     def in_open_loop(self, a: str) -> bool:
         return self.open_loop and self._params.is_open_loop(a)
@@ -222,6 +239,7 @@ class ManualMotion:
         self._signals.set(f"travel_{a}", False)
         if not self.moving:
             self._signals.set("machine_standstill", True)
+            self._take_deferred_open_loop()  # (standstill may have stayed H: a wait given up)
 
     def left_field(self) -> None:
         """Outside the working field every moving axis brakes (§2.4.4), as by NC-Stop."""
