@@ -588,6 +588,31 @@ def test_homing_takes_the_first_mark_seen_with_its_activation_high(make) -> None
     assert cnc.read("axis.x.velocity") == 0 and cnc.read("output.travel_x") is False
 
 
+@pytest.mark.manual("§2.4.2", "Nach Ausgabe der Fahrbefehle wartet die Steuerung die Achsfreigabe ab, bevor in den Achsen verfahren wird")
+def test_homing_waits_for_the_axis_enable_and_not_stop_ends_the_wait(make) -> None:  # noqa: ANN001
+    """§2.4.2, §2.3.15 (spec §5.6 leaves the procedure open): the search's travel command goes out,
+    X moves once V22/3 is H (machine standstill L then); Not-Stop ends a search still waiting."""
+    cnc = make({"axes": {"x": {"reference_marks": [-1.0]}}}, mode="MANUAL")
+    cnc.set("input.axis_enable", False)
+    cnc.set("panel.reference", "x")
+    cnc.advance(0.5)
+    assert cnc.read("output.travel_x") is True and cnc.read("axis.x.position") == 0
+    assert cnc.read("output.machine_standstill") is True
+    cnc.set("input.axis_enable", True)
+    cnc.advance(0.1)
+    assert cnc.read("axis.x.velocity") < 0 and cnc.read("output.machine_standstill") is False
+    cnc.run_until(lambda d: "x" in d.model.field.referenced, 60.0)
+    cnc.set("input.axis_enable", False)
+    cnc.set("panel.reference", "x")
+    cnc.set("input.emergency_stop", False)
+    cnc.advance(0.1)
+    assert cnc.read("output.travel_x") is False and cnc.device.model.field.homing is None
+    cnc.set("input.emergency_stop", True)
+    cnc.set("input.axis_enable", True)
+    cnc.advance(0.5)
+    assert cnc.read("axis.x.velocity") == 0
+
+
 @pytest.mark.manual("§2.4.4", "Wird das programmierte Arbeitsfeld verlassen, werden alle Achsen entlang der Bremsrampen, wie bei NC-Stop, abgebremst; Fahren ist im Handbetrieb dann nur in Richtung Arbeitsfeld möglich")
 @pytest.mark.manual("§2.4.4", "Die Werte für den Software-Endschalter beziehen sich immer auf die Referenzmarke der entsprechenden Achse")
 def test_leaving_the_working_field_brakes_and_stops_the_program(make) -> None:  # noqa: ANN001

@@ -4,7 +4,11 @@ poselesta.md §5.5, §5.6, G-HOME, G-SOFT).
 Homing (``panel.reference``, MANUAL) moves the axis towards ``home_direction`` at 10 % of its
 maximum feed until it passes a reference mark while its activation input V24 is H; the actual
 value there becomes ``reference_value``, the axis brakes to a stop and is referenced.  A limit
-switch reached first turns the search back once; reached again, it stops with its alarm.  The marks
+switch reached first turns the search back once; reached again, it stops with its alarm.  As for
+a block or a direction key, the search's travel command goes out first and the axis moves once
+the axis enable V22/3 is H (§2.4.2: "Nach Ausgabe der Fahrbefehle wartet die Steuerung die
+Achsfreigabe ab, bevor in den Achsen verfahren wird", §2.3.15; the manual has no homing procedure
+of its own, spec §5.6); Not-Stop ends that wait (§2.3.15).  The marks
 sit where the configuration puts them (``axes.<a>.reference_marks``, mm from the power-on
 position).  Once an axis is referenced the software limits P9–P12 (+) and P13–P16 (−) bound the
 working field: leaving it makes every axis brake as with NC-Stop, V18/6 goes L, a running
@@ -54,8 +58,11 @@ class WorkingField:
         self.offset = dict.fromkeys(AXES, 0.0)  # axis frame − power-on frame, increments
         self._marks: list[Watch] = []
         self._direction, self._reversed = -1, False
+        self._awaiting_enable = False  # the search's travel command is out, V22/3 L (§2.3.15)
         self._fields: dict[str, RegionSwitch] = {}
         params.on_change(lambda row, _value: self.rearm() if 9 <= int(row.key) <= 16 else None)
+        signals.subscribe("axis_enable", self._axis_enable)
+        signals.subscribe("emergency_stop", self._emergency_stop)
 
     # -- homing ------------------------------------------------------------------------------------
     def reference(self, a: str) -> None:
@@ -75,8 +82,25 @@ class WorkingField:
             position = self._axes.from_mm(a, mark) + self.offset[a]
             self._marks.append(axis.watch(position, lambda way, p=position: self._mark(a, p, way)))
         self._signals.set(f"travel_{a}", True)
-        self._signals.set("machine_standstill", False)
-        axis.jog(direction, max(self._axes.max_feed(a) * HOME_SPEED, 1e-9), self._axes.accel(a))
+        if self._signals.get("axis_enable"):
+            self._search(a)
+        else:
+            self._awaiting_enable = True
+
+    def _search(self, a: str) -> None:
+        self._signals.set("machine_standstill", False)  # by the axis enable (§2.4.6)
+        self._axes[a].jog(self._direction, max(self._axes.max_feed(a) * HOME_SPEED, 1e-9), self._axes.accel(a))
+
+    def _axis_enable(self, _name: str, _old: Any, new: Any) -> None:
+        """V22/3 H: a search waiting for the enable starts (a released search goes on when it
+        goes L, §2.3.15)."""
+        if new and self._awaiting_enable and self.homing is not None:
+            self._awaiting_enable = False
+            self._search(self.homing)
+
+    def _emergency_stop(self, _name: str, _old: Any, new: Any) -> None:
+        if not new and self._awaiting_enable:
+            self.cancel()  # "die Wartestellung kann durch Not-Stop abgebrochen werden" (§2.3.15)
 
     def turn_back(self, a: str) -> bool:
         """A limit switch of ``a`` was hit: True when the homing search of ``a`` turns back."""
@@ -123,6 +147,7 @@ class WorkingField:
         for watch in self._marks:
             watch.cancel()
         self._marks.clear()
+        self._awaiting_enable = False
         if self.homing is not None:
             a = self.homing
             self._axes[a].stop(self._axes.accel(a))
