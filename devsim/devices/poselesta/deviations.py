@@ -28,6 +28,15 @@ DEVIATIONS: tuple[Deviation, ...] = (
         "delivers in their place",
     ),
     Deviation(
+        "§2.6.4",
+        "'Ueber die Eingangsklemme V21/9 kann in jeder Betriebsart von der internen auf die externe Tastatur "
+        "umgeschaltet werden': one keyboard at a time",
+        "[SIM-CHOICE] panel.key (the front-panel keyboard) is accepted whichever keyboard V21/9 selects; V8 keys "
+        "count only while V21/9 selects the external keyboard",
+        "panel.key is the control API's operator at whichever keyboard is in use (there is no separate key "
+        "point for the external one); the manual's §2.3.11 on V21/9 is lost",
+    ),
+    Deviation(
         "§2.6.1.1",
         "V.24 levels (±3 … 15 V) or a 20 mA current loop (V7 only by current loop), cable lengths, potential "
         "separation by opto-couplers",

@@ -255,7 +255,9 @@ class PoselestaCnc(Model):
 
     def press_key(self, key: str) -> None:
         """A front-panel key (spec §3.2.2 ``panel.key``): by its name in ``v8_keymap`` or its
-        two-digit hex code; the same path as a key from V8, whichever keyboard V21/9 selects."""
+        two-digit hex code; the same path as a key from V8, whichever keyboard V21/9 selects
+        ([SIM-CHOICE]: manual §2.6.4 switches "von der internen auf die externe Tastatur"; the
+        deviation is in :mod:`~devsim.devices.poselesta.deviations`)."""
         code = self.panel.code_of(key)
         if self.booting:
             raise BadValue("the control is not ready yet")
