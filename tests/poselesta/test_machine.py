@@ -591,7 +591,8 @@ def test_homing_takes_the_first_mark_seen_with_its_activation_high(make) -> None
 @pytest.mark.manual("§2.4.2", "Nach Ausgabe der Fahrbefehle wartet die Steuerung die Achsfreigabe ab, bevor in den Achsen verfahren wird")
 def test_homing_waits_for_the_axis_enable_and_not_stop_ends_the_wait(make) -> None:  # noqa: ANN001
     """§2.4.2, §2.3.15 (spec §5.6 leaves the procedure open): the search's travel command goes out,
-    X moves once V22/3 is H (machine standstill L then); Not-Stop ends a search still waiting."""
+    X moves once V22/3 is H (machine standstill L then); Not-Stop ends a search still waiting, and
+    one under way, so that a new one can start."""
     cnc = make({"axes": {"x": {"reference_marks": [-1.0]}}}, mode="MANUAL")
     cnc.set("input.axis_enable", False)
     cnc.set("panel.reference", "x")
@@ -611,6 +612,16 @@ def test_homing_waits_for_the_axis_enable_and_not_stop_ends_the_wait(make) -> No
     cnc.set("input.axis_enable", True)
     cnc.advance(0.5)
     assert cnc.read("axis.x.velocity") == 0
+    cnc.set("panel.reference", "x")  # Not-Stop ends a moving search too: it can start again after
+    cnc.advance(0.1)
+    cnc.set("input.emergency_stop", False)
+    cnc.advance(0.1)
+    assert cnc.device.model.field.homing is None and cnc.read("axis.x.velocity") == 0
+    cnc.set("input.emergency_stop", True)
+    cnc.advance(0.1)
+    cnc.set("panel.reference", "x")
+    cnc.advance(0.1)
+    assert cnc.read("axis.x.velocity") < 0
 
 
 @pytest.mark.manual("§2.4.4", "Wird das programmierte Arbeitsfeld verlassen, werden alle Achsen entlang der Bremsrampen, wie bei NC-Stop, abgebremst; Fahren ist im Handbetrieb dann nur in Richtung Arbeitsfeld möglich")

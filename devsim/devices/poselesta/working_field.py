@@ -8,7 +8,7 @@ switch reached first turns the search back once; reached again, it stops with it
 a block or a direction key, the search's travel command goes out first and the axis moves once
 the axis enable V22/3 is H (§2.4.2: "Nach Ausgabe der Fahrbefehle wartet die Steuerung die
 Achsfreigabe ab, bevor in den Achsen verfahren wird", §2.3.15; the manual has no homing procedure
-of its own, spec §5.6); Not-Stop ends that wait (§2.3.15).  The marks
+of its own, spec §5.6); Not-Stop ends that wait (§2.3.15) and a moving search.  The marks
 sit where the configuration puts them (``axes.<a>.reference_marks``, mm from the power-on
 position).  Once an axis is referenced the software limits P9–P12 (+) and P13–P16 (−) bound the
 working field: leaving it makes every axis brake as with NC-Stop, V18/6 goes L, a running
@@ -99,8 +99,11 @@ class WorkingField:
             self._search(self.homing)
 
     def _emergency_stop(self, _name: str, _old: Any, new: Any) -> None:
-        if not new and self._awaiting_enable:
-            self.cancel()  # "die Wartestellung kann durch Not-Stop abgebrochen werden" (§2.3.15)
+        """Not-Stop ends the search, waiting ("die Wartestellung kann durch Not-Stop abgebrochen
+        werden", §2.3.15) or moving (the axes stop at once, §2.3.2: the model's quick stop follows
+        this brake): the axis is not referenced and a new ``panel.reference`` starts again."""
+        if not new and self.homing is not None:
+            self.cancel()
 
     def turn_back(self, a: str) -> bool:
         """A limit switch of ``a`` was hit: True when the homing search of ``a`` turns back."""
