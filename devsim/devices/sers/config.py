@@ -84,5 +84,9 @@ class SersConfig(Settings):
     broadcast_reply: Annotated[Literal["none", "lowest_address"],
                                doc("G-ADDR: who answers a broadcast (#*) line: none, or the drive with the lowest "
                                    "address on the line")] = "none"
+    error_trailing_star: Annotated[bool, doc("G-ERRFMT: an error message has a '*' after its text too "
+                                             "(*text*), as the manual's OCR example shows it")] = False
+    ok_after_error: Annotated[bool, doc("G-ERRFMT: a line with an error is acknowledged (ok<d>) after its "
+                                        "error message too")] = False
     boot_time: Annotated[float, Meta(ge=0), doc("seconds of display '-' after power-on (§3.5)")] = 2.0
     encoding: Literal["latin-1", "cp437"] = "latin-1"

@@ -48,7 +48,7 @@ class SersFace(Face):
 
     model: SersDrive
     __slots__ = ("framer", "line", "_last_replied", "_spontaneous", "_settings", "statements", "_noise_lines", "polls",
-                 "answer_at_once", "_noise_rest")
+                 "answer_at_once", "_noise_rest", "_star", "_ok_after_error")
 
     def __init__(self, model: SersDrive, port: Port) -> None:
         super().__init__(model, port)
@@ -58,6 +58,7 @@ class SersFace(Face):
         self._last_replied = False
         self._spontaneous: list[bytes] = []
         self._settings: SerialSettings | None = None
+        self._star, self._ok_after_error = model.cfg.error_trailing_star, model.cfg.ok_after_error  # G-ERRFMT ⚙
         self.statements = LineStatements(model, self._out, self._error)
         noise = NoiseLines(model, self.framer, self.send, self)
         self._noise_lines, self._noise_rest = noise.take, noise.rest  # (bound once: a hot path)
@@ -386,7 +387,7 @@ class SersFace(Face):
         if line.reply:
             if line.deferred:
                 self.send(bytes(line.deferred))
-            if not line.error:
+            if not line.error or self._ok_after_error:  # (G-ERRFMT ⚙ ``ok_after_error``)
                 self.send(self.model.answers.ack_line())
         self._last_replied = line.reply
         self.line = None
@@ -430,7 +431,7 @@ class SersFace(Face):
     def _error(self, line: CommandLine, errno: int, detail: str = "") -> None:
         line.error, model = True, self.model
         model.power_stage.record_error(errno, refused=True)
-        self._put(line, error_text(errno, model.params.values.cells[LANGUAGE_CELL] == 1, model.cfg.encoding, detail))
+        self._put(line, error_text(errno, model.params.values.cells[LANGUAGE_CELL] == 1, model.cfg.encoding, detail, self._star))
 
     def spontaneous(self, text: str) -> None:
         """Messages such as ``@2POS=1`` go out between lines, never inside one (G-SPONT)."""

@@ -194,9 +194,12 @@ _NOTHING = object()
 
 
 @functools.lru_cache(maxsize=512)
-def error_text(errno: int, english: bool, encoding: str, detail: str = "") -> bytes:
-    """An error message as the drive sends it (§4.8.3.1): ``*`` and its text on a line of its own."""
-    return ("\n*" + message(errno, english, detail) + "\n\r").encode(encoding, errors="replace")
+def error_text(errno: int, english: bool, encoding: str, detail: str = "", trailing_star: bool = False) -> bytes:
+    """An error message as the drive sends it (§4.8.3.1): ``*`` and its text on a line of its own;
+    with ``trailing_star`` (spec G-ERRFMT ⚙ ``error_trailing_star``, the manual's OCR example
+    ``*Endschalter Schalter offen*``) a ``*`` after the text too."""
+    text = message(errno, english, detail) + "*" if trailing_star else message(errno, english, detail)
+    return ("\n*" + text + "\n\r").encode(encoding, errors="replace")
 
 
 def ends_line(data: bytes, start: int, stop: int) -> bool:

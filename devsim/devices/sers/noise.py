@@ -74,22 +74,22 @@ _OTHERS = CommandLine()
 
 
 class _Messages(dict[int, bytes]):
-    """The error messages (§4.8.3.1) in one language and encoding, by errno, each made once
-    (:func:`error_text`)."""
+    """The error messages (§4.8.3.1) in one language, encoding and framing (G-ERRFMT ⚙
+    ``error_trailing_star``), by errno, each made once (:func:`error_text`)."""
 
-    def __init__(self, english: bool, encoding: str) -> None:
+    def __init__(self, english: bool, encoding: str, trailing_star: bool) -> None:
         super().__init__()
-        self.english, self.encoding = english, encoding
+        self.english, self.encoding, self.trailing_star = english, encoding, trailing_star
 
     def __missing__(self, errno: int) -> bytes:
-        text = self[errno] = error_text(errno, self.english, self.encoding)
+        text = self[errno] = error_text(errno, self.english, self.encoding, "", self.trailing_star)
         return text
 
 
 @functools.cache
-def _messages(english: bool, encoding: str) -> _Messages:
-    """The error messages in a language and an encoding (§4.8.3.1), by errno."""
-    return _Messages(english, encoding)
+def _messages(english: bool, encoding: str, trailing_star: bool = False) -> _Messages:
+    """The error messages in a language, an encoding and a framing (§4.8.3.1), by errno."""
+    return _Messages(english, encoding, trailing_star)
 
 
 class NoiseLines:
@@ -103,6 +103,9 @@ class NoiseLines:
         #: :func:`first_byte_errors`, :func:`_text_starts` and the bytes that may begin a failing
         #: line (either of those), looked up at the first line (not at every run)
         self._starts: tuple[tuple[int, ...], frozenset[int], frozenset[int], frozenset[int]] | None = None
+        #: G-ERRFMT ⚙ ``error_trailing_star``; ⚙ ``ok_after_error``: each failed line is acknowledged,
+        #: so runs of them are not taken in one piece (:meth:`_failing_lines` sends no acknowledgement)
+        self._star, self._runs = model.cfg.error_trailing_star, not model.cfg.ok_after_error
 
     def _tables(self) -> tuple[tuple[int, ...], frozenset[int], frozenset[int], frozenset[int]]:
         at_once, later = _text_starts()
@@ -138,7 +141,7 @@ class NoiseLines:
                 addressed = model.addressed
                 if addressed is None:  # (the first line: the initial selection, made by selected)
                     addressed = model.addressed if model.selected else False
-                if addressed is True and data[stop] in starts:  # (most of that: lines failing at once, or soon)
+                if addressed is True and self._runs and data[stop] in starts:  # (most of that: lines failing at once, or soon)
                     taken, going_on = self._failing_lines(data, index)
                     if taken > index:
                         if going_on or taken == end:
@@ -178,7 +181,7 @@ class NoiseLines:
                 cells = model.params.values.cells
                 mode = cells[HANDSHAKE_CELL]
                 echo = mode in (0, 1)
-                text = _messages(cells[LANGUAGE_CELL] == 1, model.cfg.encoding)[errno] if reply else b""
+                text = _messages(cells[LANGUAGE_CELL] == 1, model.cfg.encoding, self._star)[errno] if reply else b""
                 if mode == 2:
                     line.deferred += text
                     text = b""
@@ -326,7 +329,7 @@ class NoiseLines:
             return index, False
         model, face = self.model, self.face
         cells = model.params.values.cells
-        message = _messages(cells[LANGUAGE_CELL] == 1, model.cfg.encoding)
+        message = _messages(cells[LANGUAGE_CELL] == 1, model.cfg.encoding, self._star)
         address_start, end, find = _ADDRESS_START, len(data), data.find
         #: each line's echo up to its error, its error message and the rest of its echo
         pieces: list[bytes] = []

@@ -1,0 +1,27 @@
+"""The spec's configurable readings (⚙ in the gap table, sers.md G-rows) through a real pty:
+with the option set, the drive answers as the other reading has it; without, as before."""
+
+from __future__ import annotations
+
+import pytest
+
+
+@pytest.mark.parametrize("star", [False, True], ids=["no_star", "error_trailing_star"])
+@pytest.mark.parametrize("ok", [False, True], ids=["no_ok", "ok_after_error"])
+def test_error_message_framing_follows_the_g_errfmt_options(plant_factory, star: bool, ok: bool) -> None:
+    """G-ERRFMT: ``*text`` (⚙ ``error_trailing_star``: ``*text*``) and no ``ok`` for a line with
+    an error (⚙ ``ok_after_error``: its acknowledgement after the message); the rest of the
+    line is not executed either way.  Lines failing at their first character in one chunk (what
+    the noise path takes in one step) get the same."""
+    plant = plant_factory({"error_trailing_star": star, "ok_after_error": ok})
+    host = plant.host
+    end = b"*\n\r" if star else b"\n\r"
+    ack = b"\nok3\n\r" if ok else b""  # (the refusal leaves P12 value 16, a warning: ok3)
+    expected = b"#V=99999 \n*V zu gro\xdf" + end + b"W=5\r" + ack
+    host.send("#V=99999 W=5\r")
+    assert host.read_exact(len(expected)) == expected
+    assert plant.read("param.W") == 0
+    failed = b"#%\n*Anweisung erwartet" + end + b"\r" + ack
+    expected = failed * 3 + b"#V?\rV=100U/min\n\r\nok3\n\r"
+    host.send(b"#%\r#%\r#%\r#V?\r")
+    assert host.read_exact(len(expected)) == expected
