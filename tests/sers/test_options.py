@@ -25,3 +25,16 @@ def test_error_message_framing_follows_the_g_errfmt_options(plant_factory, star:
     expected = failed * 3 + b"#V?\rV=100U/min\n\r\nok3\n\r"
     host.send(b"#%\r#%\r#%\r#V?\r")
     assert host.read_exact(len(expected)) == expected
+
+
+@pytest.mark.parametrize(("config", "taken", "left"), [({}, True, 1), ({"counter_decrement_first": True}, False, 1)],
+                         ids=["compare_old", "counter_decrement_first"])
+def test_a_counter_in_if_is_compared_as_g_counter_says(plant_factory, config, taken: bool, left: int) -> None:
+    """G-COUNTER: ``IF C1>1`` compares the old value, then decrements (the manual's examples:
+    C1=10 gives 10 passes); ⚙ ``counter_decrement_first`` decrements first (its rule)."""
+    plant = plant_factory(config)
+    host = plant.host
+    assert host.ask("#C1=2 X=0\r").endswith(b"ok1\n\r")
+    assert host.ask("#IF C1>1 X=7\r").endswith(b"ok1\n\r")
+    assert plant.read("param.X") == (7 if taken else 0)
+    assert plant.read("param.C1") == left

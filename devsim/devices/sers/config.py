@@ -88,5 +88,7 @@ class SersConfig(Settings):
                                              "(*text*), as the manual's OCR example shows it")] = False
     ok_after_error: Annotated[bool, doc("G-ERRFMT: a line with an error is acknowledged (ok<d>) after its "
                                         "error message too")] = False
+    counter_decrement_first: Annotated[bool, doc("G-COUNTER: a counter C1..C3 in IF is decremented before the "
+                                                 "comparison (the manual's rule) instead of after it (its examples)")] = False
     boot_time: Annotated[float, Meta(ge=0), doc("seconds of display '-' after power-on (§3.5)")] = 2.0
     encoding: Literal["latin-1", "cp437"] = "latin-1"

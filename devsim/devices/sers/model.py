@@ -124,7 +124,7 @@ class SersDrive(Model):
             config=cfg, programs=execution, changed=outputs.update, recheck_warnings=supply.recheck,
             rotation_changed=self.apply_rotation_sense,
         )
-        self.operands = operands = Operands(access, inputs, params, power)
+        self.operands = operands = Operands(access, inputs, params, power, self.cfg.counter_decrement_first)
         self.answers = Answers(access, operands, params, power, motion, program)
         self.interpreter = interpreter = Interpreter(
             clock, params, program, operands, power, motion, master,

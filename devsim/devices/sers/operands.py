@@ -27,13 +27,18 @@ X_LIMIT = 2147483.647  # the accumulator's range (spec G-ARITH)
 
 
 class Operands:
-    """The values of operands and conditions, and the accumulator X (§4.6.1, §4.6.10)."""
+    """The values of operands and conditions, and the accumulator X (§4.6.1, §4.6.10).
+    ``decrement_first``: a counter in IF is decremented before it is compared, the manual's rule
+    in §4.6.1 (spec G-COUNTER ⚙ ``counter_decrement_first``); by default the old value is
+    compared, as the manual's loop examples (§4.6.1 example 3, §4.8.5.2, §4.6.12) count."""
 
-    def __init__(self, access: ParameterAccess, inputs: Inputs, params: SersParameters, power: PowerStage) -> None:
+    def __init__(self, access: ParameterAccess, inputs: Inputs, params: SersParameters, power: PowerStage,
+                 decrement_first: bool = False) -> None:
         self.access = access
         self.inputs = inputs
         self.params = params
         self.power = power
+        self.decrement_first = decrement_first
 
     def operand_value(self, operand: st.Operand) -> Any:
         if isinstance(operand, st.Number):
@@ -66,19 +71,25 @@ class Operands:
         if cond is None:
             return False
         left = cond.left
-        counter = left.kind == "alias" and left.ref in ("C1", "C2", "C3")
+        counter = counters and left.kind == "alias" and left.ref in ("C1", "C2", "C3")
+        if counter and self.decrement_first:  # G-COUNTER ⚙: decrement, then compare the new value
+            self._decrement(str(left.ref))
         value = self.operand_value(left)
         if cond.op is None:
             result = value != 0
         else:
             right = self.operand_value(cond.right) if cond.right is not None else 0
             result = st.compare(value, cond.op, right)
-        if counter and counters:  # G-COUNTER: compare the old value, then decrement (saturating at 0)
-            values = self.params.values
-            number = ALIASES[str(left.ref)]
-            old = int(values.get(number, 0))
-            values[number] = old - 1 if (old > 0 or (number == 100 and self.params.positioning_mode == 3)) else 0
+        if counter and not self.decrement_first:  # G-COUNTER: compare the old value, then decrement
+            self._decrement(str(left.ref))
         return result != cond.negate
+
+    def _decrement(self, alias: str) -> None:
+        """A counter C1..C3 one down, saturating at 0 (C1 in positioning mode 3 is signed, G-COUNTER)."""
+        values = self.params.values
+        number = ALIASES[alias]
+        old = int(values.get(number, 0))
+        values[number] = old - 1 if (old > 0 or (number == 100 and self.params.positioning_mode == 3)) else 0
 
     def arithmetic(self, op: str, operand: st.Operand | None) -> None:
         """X := X (op) operand, left to right (§4.6.10, spec G-ARITH): 3 decimals, ±2147483.647."""
