@@ -38,3 +38,19 @@ def test_a_counter_in_if_is_compared_as_g_counter_says(plant_factory, config, ta
     assert host.ask("#IF C1>1 X=7\r").endswith(b"ok1\n\r")
     assert plant.read("param.X") == (7 if taken else 0)
     assert plant.read("param.C1") == left
+
+
+@pytest.mark.parametrize(("mode", "after_release"), [("toggle", True), ("level", False)])
+def test_input_i6_switches_the_motor_as_i6_mode_says(plant_factory, mode: str, after_release: bool) -> None:
+    """G-INFUNC: I6 (P1021 bit 32) toggles ON/OFF at each rising edge; ⚙ ``i6_mode: level``
+    keeps the motor ON while it is active and switches it OFF at release.  Both clear P11 and
+    P12 as they switch ON (§4.8.1.1)."""
+    plant = plant_factory({"params": {"P1021": 32}, "i6_mode": mode})
+    assert plant.host.ask("#P1017=7\r").startswith(b"#P1017=7\r\n*")  # P12 value 16 (a refusal)
+    assert plant.read("P12") != 0
+    plant.set("input.I6", True)
+    assert (plant.read("energized"), plant.read("P12")) == (True, 0)
+    plant.set("input.I6", False)
+    assert plant.read("energized") is after_release
+    plant.set("input.I6", True)
+    assert plant.read("energized") is not after_release

@@ -90,5 +90,7 @@ class SersConfig(Settings):
                                         "error message too")] = False
     counter_decrement_first: Annotated[bool, doc("G-COUNTER: a counter C1..C3 in IF is decremented before the "
                                                  "comparison (the manual's rule) instead of after it (its examples)")] = False
+    i6_mode: Annotated[Literal["toggle", "level"], doc("G-INFUNC: input I6 switches the motor ON/OFF at each "
+                                                       "rising edge (toggle), or ON while active (level)")] = "toggle"
     boot_time: Annotated[float, Meta(ge=0), doc("seconds of display '-' after power-on (§3.5)")] = 2.0
     encoding: Literal["latin-1", "cp437"] = "latin-1"

@@ -22,6 +22,13 @@ from devsim.devices.sers.program import ProgramMemory
 
 __all__ = ["INPUT_FUNCTIONS", "Inputs", "ProgramStarts"]
 
+#: I6 by ``i6_mode`` (spec G-INFUNC): ``toggle``, a rising edge switches ON (clearing P11 and
+#: P12) or OFF; ``level``, ON (clearing them) at the rising edge and OFF at the falling one.
+_I6_MODES: dict[str, Callable[[PowerStage, bool], None]] = {
+    "toggle": lambda power, active: power.toggle() if active else None,
+    "level": PowerStage.follow,
+}
+
 #: The manual functions of I1..I4 (P1021 bits 0–3, §4.8.1.1).
 _JOGS = {1: "LS", 2: "RS", 3: "LF", 4: "RF"}
 #: J1..J5 (§4.6.1): the P1013 bit that is set while the switch is open.
@@ -253,8 +260,9 @@ class Inputs:
             self.motion.home()
 
     def power_input(self, active: bool) -> None:
-        if active:  # G-INFUNC: a rising edge toggles; ON clears P11 and P12
-            self.power.toggle()
+        """I6 „Motor ON/OFF, zusätzlich P11=0 und P12=0 bei Motor → ON“ (§4.8.1.1), as
+        :data:`_I6_MODES` reads it for the configured ``i6_mode`` (spec G-INFUNC)."""
+        _I6_MODES[self._config().i6_mode](self.power, active)
 
     def stop_input(self, active: bool) -> None:
         if active:

@@ -141,6 +141,12 @@ class PowerStage:
             self.warnings = 0
             self.switch_on()
 
+    def follow(self, on: bool) -> None:
+        """Input I6 with ``i6_mode: level`` (G-INFUNC): ON while active (P11 and P12 cleared as it
+        switches ON), OFF once released."""
+        if on != self.energized:
+            self.toggle()
+
     def switch_off(self) -> None:
         """OFF = P134=0: torque off at once (spec G-OFFMOVE), relay open."""
         self._brakes().quick_end()
