@@ -54,3 +54,16 @@ def test_input_i6_switches_the_motor_as_i6_mode_says(plant_factory, mode: str, a
     assert plant.read("energized") is after_release
     plant.set("input.I6", True)
     assert plant.read("energized") is not after_release
+
+
+@pytest.mark.parametrize(("config", "rows"), [
+    ({}, b"1: V=500.0000\n\r2: W=90.5000\n\r3: A=100.000\n\r"),
+    ({"list_decimals": 3}, b"1: V=500.000\n\r2: W=90.500\n\r3: A=100.000\n\r"),
+], ids=["weighting", "list_decimals"])
+def test_list_shows_weighted_constants_with_the_list_decimals(plant_factory, config, rows: bytes) -> None:
+    """G-LIST: a weighted constant in LIST with all the decimals of its weighting; ⚙
+    ``list_decimals: 3`` as the manual's example ``V=500.000`` (§4.3)."""
+    host = plant_factory({"params": {"P1028": 1}, **config}).host
+    for line in ("#NEW\r", "#V=500\r", "#W=90.5\r", "#A=100\r", "#QUIT\r"):
+        assert host.ask(line).endswith((b"pgm\n\r", b"ok1\n\r"))
+    assert host.ask("#LIST\r") == b"#LIST\r" + rows + b"\nok1\n\r"

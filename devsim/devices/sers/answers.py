@@ -35,7 +35,9 @@ _PGM_LINE = b"\npgm\n\r"
 
 
 class Answers:
-    """The texts one SERS answers with (§4.1, §4.7, G-LIST)."""
+    """The texts one SERS answers with (§4.1, §4.7, G-LIST).  ``list_decimals``: the decimals
+    LIST shows a weighted constant with (spec G-LIST ⚙ ``list_decimals``; the manual's §4.3
+    example ``V=500.000`` has 3), None: all of the weighting's."""
 
     def __init__(
         self,
@@ -45,7 +47,9 @@ class Answers:
         power: PowerStage,
         motion: Motion,
         program: ProgramMemory,
+        list_decimals: int | None = None,
     ) -> None:
+        self.list_decimals = list_decimals
         self.access = access
         self.operands = operands
         self.params = params
@@ -152,7 +156,8 @@ class Answers:
                 kind = None
             if kind in WEIGHTED_KINDS:
                 scaling = self.params.scaling
-                value = format_fixed(stmt.value.value, scaling.decimals(kind))
+                decimals = scaling.decimals(kind) if self.list_decimals is None else self.list_decimals
+                value = format_fixed(stmt.value.value, decimals)
                 unit = scaling.unit(kind) if self.list_options & 2 else ""
                 return f"{stmt.target.text}={value}{unit}"
         legacy_in = re.search(r"\bIN[0-9]", text.upper()) is not None

@@ -92,5 +92,8 @@ class SersConfig(Settings):
                                                  "comparison (the manual's rule) instead of after it (its examples)")] = False
     i6_mode: Annotated[Literal["toggle", "level"], doc("G-INFUNC: input I6 switches the motor ON/OFF at each "
                                                        "rising edge (toggle), or ON while active (level)")] = "toggle"
+    list_decimals: Annotated[Annotated[int, Meta(ge=0, le=6)] | None, doc(
+        "G-LIST: decimals of a weighted constant in LIST (the manual's example V=500.000 has 3); "
+        "None: all of the weighting's (V=500.0000)")] = None
     boot_time: Annotated[float, Meta(ge=0), doc("seconds of display '-' after power-on (§3.5)")] = 2.0
     encoding: Literal["latin-1", "cp437"] = "latin-1"

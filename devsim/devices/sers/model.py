@@ -125,7 +125,7 @@ class SersDrive(Model):
             rotation_changed=self.apply_rotation_sense,
         )
         self.operands = operands = Operands(access, inputs, params, power, self.cfg.counter_decrement_first)
-        self.answers = Answers(access, operands, params, power, motion, program)
+        self.answers = Answers(access, operands, params, power, motion, program, self.cfg.list_decimals)
         self.interpreter = interpreter = Interpreter(
             clock, params, program, operands, power, motion, master,
             host=execution, render=self.answers.render_statement, spontaneous=self.spontaneous,
