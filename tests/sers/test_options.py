@@ -67,3 +67,21 @@ def test_list_shows_weighted_constants_with_the_list_decimals(plant_factory, con
     for line in ("#NEW\r", "#V=500\r", "#W=90.5\r", "#A=100\r", "#QUIT\r"):
         assert host.ask(line).endswith((b"pgm\n\r", b"ok1\n\r"))
     assert host.ask("#LIST\r") == b"#LIST\r" + rows + b"\nok1\n\r"
+
+
+@pytest.mark.parametrize("messages", [False, True], ids=["silent", "spontaneous_fault_messages"])
+def test_faults_are_announced_on_the_line_as_g_faultmsg_says(plant_factory, messages: bool) -> None:
+    """G-FAULTMSG: no unsolicited text for a fault (the host polls P11/P12 and reads the ok
+    digit); ⚙ ``spontaneous_fault_messages`` sends ``*<text>`` between lines once as the bit gets
+    set (§2.1.4 „Vorwarnung Unterspannung“, „Fehler Unterspannung“; the P11 texts of §4.8.3.1)."""
+    plant = plant_factory({"spontaneous_fault_messages": messages})
+    host = plant.host
+    plant.set("quantity.supply_voltage", 45.0)  # below U_W, above U_B: P12 value 4
+    plant.set("quantity.supply_voltage", 44.0)  # (still: no second message)
+    expected = (b"\n*Vorwarnung Unterspannung\n\r" if messages else b"") + b"#P12?\rP12=4\n\r\nok3\n\r"
+    host.send("#P12?\r")
+    assert host.read_exact(len(expected)) == expected
+    plant.set("input.limit_right", True)  # P11 value 8192
+    expected = (b"\n*Fehler Lagegrenzwert\n\r" if messages else b"") + b"#P11?\rP11=8192\n\r\nok4\n\r"
+    host.send("#P11?\r")
+    assert host.read_exact(len(expected)) == expected

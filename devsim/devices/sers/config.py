@@ -95,5 +95,8 @@ class SersConfig(Settings):
     list_decimals: Annotated[Annotated[int, Meta(ge=0, le=6)] | None, doc(
         "G-LIST: decimals of a weighted constant in LIST (the manual's example V=500.000 has 3); "
         "None: all of the weighting's (V=500.0000)")] = None
+    spontaneous_fault_messages: Annotated[bool, doc(
+        "G-FAULTMSG: send '*<text>' (e.g. *Fehler Lagegrenzwert, *Vorwarnung Unterspannung) between lines "
+        "when a drive error or an undervoltage/overtemperature warning is set")] = False
     boot_time: Annotated[float, Meta(ge=0), doc("seconds of display '-' after power-on (§3.5)")] = 2.0
     encoding: Literal["latin-1", "cp437"] = "latin-1"

@@ -7,6 +7,7 @@ __all__ = [
     "ELECTRICAL_PERIOD",
     "EMCY_CODES",
     "ERROR_DISPLAY",
+    "FAULT_MESSAGES",
     "FIRMWARE",
     "INC_PER_REV",
     "INPUT_NAMES",
@@ -39,6 +40,12 @@ OVERTEMP, STEP_LOSS, SHORT, UNDERVOLTAGE, STANDSTILL, LIMIT = 2, 32, 128, 512, 2
 DRIVE_ERRORS = {OVERTEMP: "overtemperature", STEP_LOSS: "step monitoring", SHORT: "short circuit",
                 UNDERVOLTAGE: "undervoltage", STANDSTILL: "standstill monitoring", 4096: "communication",
                 LIMIT: "limit switch"}
+#: The message of a drive error (P11 bit) or warning (P12 bit) sent unsolicited with
+#: ``spontaneous_fault_messages`` (spec G-FAULTMSG; manual §2.1.4 „Vorwarnung Unterspannung“ …).
+FAULT_MESSAGES = ({OVERTEMP: "Fehler Übertemperatur", STEP_LOSS: "Fehler Schrittüberwachung",
+                   SHORT: "Kurzschluss Leistungsverstärkerkarte oder Motor", UNDERVOLTAGE: "Fehler Unterspannung",
+                   STANDSTILL: "Fehler Regelabweichung", LIMIT: "Fehler Lagegrenzwert"},
+                  {2: "Warnung Übertemperatur", 4: "Vorwarnung Unterspannung"})
 #: The CiA 301/402 emergency error code of each P11 drive error (an EMCY from a CANopen facade).
 EMCY_CODES = {OVERTEMP: 0x4310, STEP_LOSS: 0x8611, SHORT: 0x2320, UNDERVOLTAGE: 0x3220, STANDSTILL: 0x8611,
               LIMIT: 0x7320}

@@ -13,7 +13,8 @@ DEVIATIONS: tuple[Deviation, ...] = (
         "no unsolicited text is sent for a fault; the host sees P12 value 4 / P11 value 512, the "
         "acknowledgement digit (ok2/ok3/ok4) and the display ('9' blinking / '9')",
         "the manual gives neither the text nor when it would be sent on the line; the spec decides "
-        "G-FAULTMSG (no text), so a host parser is never surprised mid-answer",
+        "G-FAULTMSG (no text), so a host parser is never surprised mid-answer; "
+        "spontaneous_fault_messages: true sends '*<text>' between lines as the bit gets set",
     ),
     Deviation(
         "§2.1.4",

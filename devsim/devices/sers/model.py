@@ -94,6 +94,7 @@ class SersDrive(Model):
             resync=self._resync,
             record_event=self.record_event,
             announce=self.announce,
+            fault_message=self.spontaneous if self.cfg.spontaneous_fault_messages else None,
         )
         self.motion = motion = Motion(
             clock, self.axis, params, signals, power,

@@ -14,7 +14,7 @@ from typing import Protocol
 
 from devsim.core.clock import Clock, Timer
 from devsim.core.signals import SignalBank
-from devsim.devices.sers.constants import EMCY_CODES, OVERTEMP, SHORT, STEP_LOSS, UNDERVOLTAGE
+from devsim.devices.sers.constants import EMCY_CODES, FAULT_MESSAGES, OVERTEMP, SHORT, STEP_LOSS, UNDERVOLTAGE
 from devsim.devices.sers.errors import SersError
 from devsim.devices.sers.memory import ParameterMemory
 from devsim.devices.sers.params import SersParameters
@@ -41,7 +41,7 @@ class PowerStage:
     #: (Slots: a host's repeated poll reads this part: one block of memory instead of an object and its values)
     __slots__ = ("clock", "params", "signals", "memory", "_brakes", "_changed", "_program_error", "_resync",
                  "_record_event", "_announce", "undervoltage", "errors", "warnings", "errno", "energized",
-                 "relay", "servo_calibrated", "_stop_cycled", "_stop_opened", "_timers")
+                 "relay", "servo_calibrated", "_stop_cycled", "_stop_opened", "_timers", "_fault_message")
 
     def __init__(
         self,
@@ -57,6 +57,7 @@ class PowerStage:
         resync: Callable[[], None],
         record_event: Callable[[str], None],
         announce: Callable[..., None],
+        fault_message: Callable[[str], None] | None = None,
     ) -> None:
         self.clock = clock
         self.params = params
@@ -79,6 +80,9 @@ class PowerStage:
         self._stop_cycled = True  # the STOP input opened and closed again since a short circuit
         self._stop_opened = False
         self._timers: list[Timer] = []
+        #: G-FAULTMSG ⚙ ``spontaneous_fault_messages``: sends ``*<text>`` between lines when a
+        #: drive error or warning of :data:`FAULT_MESSAGES` is set (None: nothing is sent)
+        self._fault_message = fault_message
 
     def has_errors(self) -> bool:
         return self.errors != 0
@@ -183,6 +187,8 @@ class PowerStage:
         self.errors |= bit
         if first:
             self._announce("fault", 1, EMCY_CODES.get(bit, 0x1000))  # (a CANopen facade sends EMCY)
+            if self._fault_message is not None and bit in FAULT_MESSAGES[0]:
+                self._fault_message("\n*" + FAULT_MESSAGES[0][bit])
         self._brakes().abort_profiles()
         if first:
             self._program_error()
@@ -224,6 +230,8 @@ class PowerStage:
             self._stop_opened = True
 
     def warn(self, bit: int) -> None:
+        if self._fault_message is not None and not self.warnings & bit and bit in FAULT_MESSAGES[1]:
+            self._fault_message("\n*" + FAULT_MESSAGES[1][bit])  # (G-FAULTMSG ⚙)
         self.warnings |= bit
         self._changed()
 
