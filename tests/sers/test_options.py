@@ -85,3 +85,20 @@ def test_faults_are_announced_on_the_line_as_g_faultmsg_says(plant_factory, mess
     expected = (b"\n*Fehler Lagegrenzwert\n\r" if messages else b"") + b"#P11?\rP11=8192\n\r\nok4\n\r"
     host.send("#P11?\r")
     assert host.read_exact(len(expected)) == expected
+
+
+@pytest.mark.parametrize(("config", "v", "w", "c1"), [
+    ({}, b"V=100U/min", b"W=2.5\xb0", b"C1=3"),
+    ({"query_units": False}, b"V=100", b"W=2.5", b"C1=3"),
+    ({"query_fixed_decimals": True}, b"V=100.0000U/min", b"W=2.5000\xb0", b"C1=3"),
+    ({"query_name_style": "number"}, b"P91=100U/min", b"P47=2.5\xb0", b"P100=3"),
+], ids=["default", "query_units_false", "query_fixed_decimals", "query_name_style_number"])
+def test_query_answers_follow_the_g_queryfmt_options(plant_factory, config, v: bytes, w: bytes, c1: bytes) -> None:
+    """G-QUERYFMT: the name as asked, trailing zeros dropped, the unit appended (``V=100U/min``);
+    ⚙ ``query_units``, ``query_fixed_decimals``, ``query_name_style``.  Asked twice: a host's
+    repeated poll is answered from what the face kept (the same answer)."""
+    host = plant_factory(config).host
+    assert host.ask("#W=2.5 C1=3\r").endswith(b"ok1\n\r")
+    for _ in range(2):
+        for line, answer in (("#V?\r", v), ("#W?\r", w), ("#C1?\r", c1)):
+            assert host.ask(line) == line.encode() + answer + b"\n\r\nok1\n\r"

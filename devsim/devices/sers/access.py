@@ -68,7 +68,7 @@ class ParameterAccess:
 
     #: (Slots: a host's repeated poll reads this part: one block of memory instead of an object and its values)
     __slots__ = ("params", "memory", "power", "motion", "inputs", "program", "signals", "_config",
-                 "_programs", "_changed", "_recheck_warnings", "_rotation_changed", "firmware")
+                 "_programs", "_changed", "_recheck_warnings", "_rotation_changed", "firmware", "_format_query")
 
     def __init__(
         self,
@@ -85,6 +85,7 @@ class ParameterAccess:
         changed: Callable[[], None],
         recheck_warnings: Callable[[], None],
         rotation_changed: Callable[[], None],
+        query_format: Callable[[float, int, str], str] = format_query,
     ) -> None:
         self.params = params
         self.memory = memory
@@ -99,6 +100,7 @@ class ParameterAccess:
         self._recheck_warnings = recheck_warnings  # P12=0: the warnings whose causes remain
         self._rotation_changed = rotation_changed  # P1134: the motor turns the other way from now on
         self.firmware = FIRMWARE
+        self._format_query = query_format  # G-QUERYFMT ⚙ (:func:`.units.query_formatter`)
 
     @property
     def scaling(self) -> Scaling:
@@ -133,18 +135,19 @@ class ParameterAccess:
         return 2 if self.program.editing else 1 if self._programs().running else 0
 
     def format_value(self, number: int, value: Any) -> str:
-        """A value as a query answers it: weighted ones with the decimals and the unit of their
-        weighting, ``fixed`` ones with their decimals (G-QUERYFMT)."""
+        """A value as a query and LISTP answer it: weighted ones with the decimals and the unit of
+        their weighting, ``fixed`` ones with their decimals (G-QUERYFMT, as the configured
+        ``query_fixed_decimals`` / ``query_units`` render them)."""
         kind = KIND[number]
         if kind in WEIGHTED_KINDS:
             scaling = self.params.scaling
-            return format_query(value, scaling.decimals(kind), scaling.unit(kind))
+            return self._format_query(value, scaling.decimals(kind), scaling.unit(kind))
         if kind == "fixed":
             row = PARAMETERS[number]
             # §4.7: "bei Parametern mit einer Einheit - Wichtung - wie z.B. die Vorschubkonstante
             # wird die Einheit mitgesendet" (the example answer: 'P…=150mm')
             unit = self.params.scaling.length_unit if row.extra["length_unit"] else ""
-            return format_query(value, row.decimals, unit)
+            return self._format_query(value, row.decimals, unit)
         if isinstance(value, float) and value.is_integer():
             return str(int(value))
         return str(value)

@@ -5,6 +5,7 @@ statements as LIST shows them (manual §4.1, §4.2, §4.3, §4.7; spec G-LIST, G
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from typing import Any
 
 from devsim.devices.sers import statements as st
@@ -24,6 +25,12 @@ __all__ = ["Answers", "ack_line"]
 #: Address kinds that name a parameter (a query answers its value with the parameter's format).
 _PARAMETER_KINDS = ("P", "alias", "O")
 _READABLE = [n for n in sorted(PARAMETERS) if PARAMETERS[n].readable]
+#: How a query's answer names the parameter asked (G-QUERYFMT ⚙ ``query_name_style``): as asked
+#: (``V?`` → ``V=…``, ``P91?`` → ``P91=…``), or by its number (``V?`` → ``P91=…``; outputs as asked).
+_NAMES: dict[str, Callable[[st.Address, int], str]] = {
+    "as_asked": lambda target, number: target.text,
+    "number": lambda target, number: target.text if target.kind == "O" else f"P{number}",
+}
 #: A plain parameter's answer line as it leaves, by what makes it (the text as asked, the value and
 #: its type, the encoding): shared by every drive, made once per value (a poll asks again and again).
 _PLAIN_LINES: dict[tuple[str, type, object, str], bytes] = {}
@@ -37,7 +44,8 @@ _PGM_LINE = b"\npgm\n\r"
 class Answers:
     """The texts one SERS answers with (§4.1, §4.7, G-LIST).  ``list_decimals``: the decimals
     LIST shows a weighted constant with (spec G-LIST ⚙ ``list_decimals``; the manual's §4.3
-    example ``V=500.000`` has 3), None: all of the weighting's."""
+    example ``V=500.000`` has 3), None: all of the weighting's.  ``name_style``: how a query's
+    answer names the parameter (G-QUERYFMT ⚙ ``query_name_style``, :data:`_NAMES`)."""
 
     def __init__(
         self,
@@ -48,8 +56,10 @@ class Answers:
         motion: Motion,
         program: ProgramMemory,
         list_decimals: int | None = None,
+        name_style: str = "as_asked",
     ) -> None:
         self.list_decimals = list_decimals
+        self._name = _NAMES[name_style]
         self.access = access
         self.operands = operands
         self.params = params
@@ -85,22 +95,22 @@ class Answers:
         if target.kind in _PARAMETER_KINDS:
             number = address_number(target)
             if number == 1 and self.params.target_address == "*":
-                return f"{target.text}=*"
-            return f"{target.text}={self.access.format_value(number, self.operands.operand_value(target))}"
+                return f"{self._name(target, number)}=*"
+            return f"{self._name(target, number)}={self.access.format_value(number, self.operands.operand_value(target))}"
         return f"{target.text}={int(self.operands.operand_value(target))}"
 
     def parameter_text(self, target: st.Address, number: int) -> str:
         """What :meth:`query_text` answers for a parameter asked by number or alias (``P``,
         ``alias``), its number already known (a host's poll, parsed once)."""
         if number == 1 and self.params.target_address == "*":
-            return f"{target.text}=*"
+            return f"{self._name(target, number)}=*"
         return self.value_text(target, number, self.access.param_value(number))
 
     def value_text(self, target: st.Address, number: int, value: Any) -> str:
         """:meth:`parameter_text` of parameter ``number`` holding ``value`` (read already)."""
         if value == "*":
             raise SersError(19)  # as Operands.parameter: Z=* names a broadcast, not a number
-        return f"{target.text}={self.access.format_value(number, value)}"
+        return f"{self._name(target, number)}={self.access.format_value(number, value)}"
 
     def parameter_line(self, target: st.Address, number: int, encoding: str) -> bytes:
         """:meth:`parameter_text` with its line end, encoded, as a poll's answer leaves: a plain
@@ -113,7 +123,7 @@ class Answers:
     def plain_line(self, target: st.Address, number: int, value: Any, encoding: str) -> bytes:
         """The answer line of a plain parameter (neither weighted nor ``fixed``, not P1) that
         holds ``value``, as :meth:`parameter_line` makes it: made once per value."""
-        key = (target.text, type(value), value, encoding)
+        key = (self._name(target, number), type(value), value, encoding)
         line = _PLAIN_LINES.get(key)
         if line is None:
             text = self.value_text(target, number, value)  # (its errors as they are: nothing kept)

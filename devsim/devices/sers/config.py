@@ -98,5 +98,11 @@ class SersConfig(Settings):
     spontaneous_fault_messages: Annotated[bool, doc(
         "G-FAULTMSG: send '*<text>' (e.g. *Fehler Lagegrenzwert, *Vorwarnung Unterspannung) between lines "
         "when a drive error or an undervoltage/overtemperature warning is set")] = False
+    query_units: Annotated[bool, doc("G-QUERYFMT: a query answer carries the unit (P51=2.5mm); false: "
+                                     "the number alone (P51=2.5); also LISTP")] = True
+    query_fixed_decimals: Annotated[bool, doc("G-QUERYFMT: a query answer keeps all decimals of the weighting "
+                                              "(P51=2.500mm) instead of dropping trailing zeros; also LISTP")] = False
+    query_name_style: Annotated[Literal["as_asked", "number"], doc(
+        "G-QUERYFMT: a query answer names the parameter as asked (V?: V=...) or by number (V?: P91=...)")] = "as_asked"
     boot_time: Annotated[float, Meta(ge=0), doc("seconds of display '-' after power-on (§3.5)")] = 2.0
     encoding: Literal["latin-1", "cp437"] = "latin-1"

@@ -52,6 +52,7 @@ from devsim.devices.sers.program import PROGRAM_BYTES, PROGRAM_BYTES_P8, Program
 from devsim.devices.sers.runahead import RunAhead
 from devsim.devices.sers.signals import SIGNALS
 from devsim.devices.sers.supply import SupplyMonitor
+from devsim.devices.sers.units import query_formatter
 from devsim.devices.sers.wiring import MotorWiring
 
 __all__ = ["SersDrive"]
@@ -124,9 +125,11 @@ class SersDrive(Model):
             params, memory, power, motion, inputs, program, signals,
             config=cfg, programs=execution, changed=outputs.update, recheck_warnings=supply.recheck,
             rotation_changed=self.apply_rotation_sense,
+            query_format=query_formatter(self.cfg.query_fixed_decimals, self.cfg.query_units),
         )
         self.operands = operands = Operands(access, inputs, params, power, self.cfg.counter_decrement_first)
-        self.answers = Answers(access, operands, params, power, motion, program, self.cfg.list_decimals)
+        self.answers = Answers(access, operands, params, power, motion, program,
+                               self.cfg.list_decimals, self.cfg.query_name_style)
         self.interpreter = interpreter = Interpreter(
             clock, params, program, operands, power, motion, master,
             host=execution, render=self.answers.render_statement, spontaneous=self.spontaneous,

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable
 from decimal import ROUND_HALF_UP, Context, Decimal
 
 __all__ = [
@@ -45,6 +46,7 @@ __all__ = [
     "WEIGHTING_CODES",
     "Scaling",
     "format_query",
+    "query_formatter",
     "format_fixed",
     "parse_number",
     "quantize",
@@ -329,3 +331,24 @@ def format_query(value: float, decimals: int, unit: str = "") -> str:
     if text in ("-0", ""):
         text = "0"
     return text + unit
+
+
+def _format_query_fixed(value: float, decimals: int, unit: str = "") -> str:
+    """:func:`format_query` with all decimals kept (G-QUERYFMT ⚙ ``query_fixed_decimals``): ``2.5000mm``."""
+    return format_fixed(value, decimals) + unit
+
+
+#: The query renderings by (``query_fixed_decimals``, ``query_units``) (spec G-QUERYFMT ⚙).
+_QUERY_FORMATS: dict[tuple[bool, bool], Callable[[float, int, str], str]] = {
+    (False, True): format_query,
+    (True, True): _format_query_fixed,
+    (False, False): lambda value, decimals, unit="": format_query(value, decimals),
+    (True, False): lambda value, decimals, unit="": format_fixed(value, decimals),
+}
+
+
+def query_formatter(fixed_decimals: bool = False, units: bool = True) -> Callable[[float, int, str], str]:
+    """How a query answers a weighted or ``fixed`` value (G-QUERYFMT): trailing zeros dropped
+    and the unit appended (:func:`format_query`, the default); ⚙ ``query_fixed_decimals`` keeps
+    all decimals, ⚙ ``query_units: false`` leaves the unit off."""
+    return _QUERY_FORMATS[(fixed_decimals, units)]
