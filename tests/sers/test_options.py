@@ -102,3 +102,24 @@ def test_query_answers_follow_the_g_queryfmt_options(plant_factory, config, v: b
     for _ in range(2):
         for line, answer in (("#V?\r", v), ("#W?\r", w), ("#C1?\r", c1)):
             assert host.ask(line) == line.encode() + answer + b"\n\r\nok1\n\r"
+
+
+@pytest.mark.parametrize("each", [False, True], ids=["one_ack", "ack_each_terminator"])
+def test_a_cr_lf_pair_is_acknowledged_as_g_crlf_says(plant_factory, each: bool) -> None:
+    """G-CRLF: CR LF (or LF CR) after a line gives one acknowledgement, its second half only
+    echoed; ⚙ ``ack_each_terminator`` acknowledges that too.  Lines failing at once in one chunk
+    (the noise path), and a pair split over two writes, the same way."""
+    host = plant_factory({"ack_each_terminator": each}).host
+    again = b"\nok1\n\r" if each else b""
+    expected = b"#V?\rV=100U/min\n\r\nok1\n\r\n" + again
+    host.send("#V?\r\n")
+    assert host.read_exact(len(expected)) == expected
+    again = b"\nok3\n\r" if each else b""  # (after a refusal: P12 value 16, a warning)
+    failed = b"#%\n*Anweisung erwartet\n\r\r\n" + again
+    expected = failed * 2 + b"#W=1\n\nok3\n\r\r" + again
+    host.send("#%\r\n#%\r\n#W=1\n\r")
+    assert host.read_exact(len(expected)) == expected
+    expected = b"#V?\rV=100U/min\n\r\nok3\n\r\n" + again
+    host.send("#V?\r")
+    host.send("\n")
+    assert host.read_exact(len(expected)) == expected

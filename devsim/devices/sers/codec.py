@@ -8,7 +8,8 @@ means for the line being assembled.  The device decides what to echo, execute an
   broadcast address.  A ``#`` inside a line restarts statement parsing (and may carry a new
   address), like a separator.
 * CR or LF ends a line; the other terminator directly after it is the second half of a pair
-  and produces no second acknowledgement.
+  and produces no second acknowledgement (unless ``ack_each_terminator``, G-CRLF ⚙: the face
+  acknowledges it).
 * At most 60 characters per line are kept; the rest is dropped and reported at the line end.
 """
 

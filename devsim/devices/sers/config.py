@@ -104,5 +104,7 @@ class SersConfig(Settings):
                                               "(P51=2.500mm) instead of dropping trailing zeros; also LISTP")] = False
     query_name_style: Annotated[Literal["as_asked", "number"], doc(
         "G-QUERYFMT: a query answer names the parameter as asked (V?: V=...) or by number (V?: P91=...)")] = "as_asked"
+    ack_each_terminator: Annotated[bool, doc("G-CRLF: the second half of a CR/LF (or LF/CR) pair is acknowledged "
+                                             "too (two ok<d> for a line ending CR LF)")] = False
     boot_time: Annotated[float, Meta(ge=0), doc("seconds of display '-' after power-on (§3.5)")] = 2.0
     encoding: Literal["latin-1", "cp437"] = "latin-1"

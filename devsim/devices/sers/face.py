@@ -48,7 +48,7 @@ class SersFace(Face):
 
     model: SersDrive
     __slots__ = ("framer", "line", "_last_replied", "_spontaneous", "_settings", "statements", "_noise_lines", "polls",
-                 "answer_at_once", "_noise_rest", "_star", "_ok_after_error")
+                 "answer_at_once", "_noise_rest", "_star", "_ok_after_error", "_ack_each")
 
     def __init__(self, model: SersDrive, port: Port) -> None:
         super().__init__(model, port)
@@ -58,7 +58,8 @@ class SersFace(Face):
         self._last_replied = False
         self._spontaneous: list[bytes] = []
         self._settings: SerialSettings | None = None
-        self._star, self._ok_after_error = model.cfg.error_trailing_star, model.cfg.ok_after_error  # G-ERRFMT ⚙
+        cfg = model.cfg  # (read once) G-ERRFMT ⚙ error_trailing_star, ok_after_error; G-CRLF ⚙ ack_each_terminator
+        self._star, self._ok_after_error, self._ack_each = cfg.error_trailing_star, cfg.ok_after_error, cfg.ack_each_terminator
         self.statements = LineStatements(model, self._out, self._error)
         noise = NoiseLines(model, self.framer, self.send, self)
         self._noise_lines, self._noise_rest = noise.take, noise.rest  # (bound once: a hot path)
@@ -315,9 +316,6 @@ class SersFace(Face):
                     break
         return index - start
 
-    def host_disconnected(self) -> None:
-        """A host that leaves mid-line leaves a partial line; the next '#' restarts anyway."""
-
     def on_event(self, event: object, byte: int) -> None:
         self._handlers[type(event)](self, event, byte)
 
@@ -334,8 +332,10 @@ class SersFace(Face):
             self.statements.progress(line, final=False)
 
     def _on_ignored(self, event: codec.Ignored, byte: int) -> None:
-        if event.pair and self._last_replied and self.echo:
-            self.send(bytes((byte,)))
+        """The second half of a CR/LF pair after a line this drive answered: echoed, and with
+        ``ack_each_terminator`` (G-CRLF ⚙) acknowledged as a terminator of its own."""
+        if event.pair and self._last_replied:
+            self.send((bytes((byte,)) if self.echo else b"") + (self.model.answers.ack_line() if self._ack_each else b""))
 
     def _on_restart(self, event: codec.Restart, byte: int) -> None:
         line = self.line

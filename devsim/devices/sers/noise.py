@@ -103,9 +103,11 @@ class NoiseLines:
         #: :func:`first_byte_errors`, :func:`_text_starts` and the bytes that may begin a failing
         #: line (either of those), looked up at the first line (not at every run)
         self._starts: tuple[tuple[int, ...], frozenset[int], frozenset[int], frozenset[int]] | None = None
-        #: G-ERRFMT ⚙ ``error_trailing_star``; ⚙ ``ok_after_error``: each failed line is acknowledged,
-        #: so runs of them are not taken in one piece (:meth:`_failing_lines` sends no acknowledgement)
-        self._star, self._runs = model.cfg.error_trailing_star, not model.cfg.ok_after_error
+        #: G-ERRFMT ⚙ ``error_trailing_star``; with ⚙ ``ok_after_error`` (each failed line is
+        #: acknowledged) or G-CRLF ⚙ ``ack_each_terminator`` (the second half of a CR/LF pair is)
+        #: runs of failing lines are not taken in one piece (:meth:`_failing_lines` sends no acknowledgement)
+        self._star = model.cfg.error_trailing_star
+        self._runs = not (model.cfg.ok_after_error or model.cfg.ack_each_terminator)
 
     def _tables(self) -> tuple[tuple[int, ...], frozenset[int], frozenset[int], frozenset[int]]:
         at_once, later = _text_starts()
