@@ -86,6 +86,9 @@ def test_configuration_checked_against_the_tables(tmp_path: Path) -> None:
     path.write_text("address: 1\nbaud: 9600\n")
     with pytest.raises(ConfigError, match=r"looks like a SERS configuration \(address, baud\)"):
         load_config(path, Gms96Config)
+    path.write_text("i6_mode: level\nquery_units: false\n")  # (the readings a SERS has, G-INFUNC, G-QUERYFMT)
+    with pytest.raises(ConfigError, match=r"looks like a SERS configuration \(i6_mode, query_units\)"):
+        load_config(path, Gms96Config)
 
 
 @pytest.mark.parametrize("name", ["marker.mb²", "marker.MB¹2", "marker.MB٣", "marker.M٣.1", "program.٣"])

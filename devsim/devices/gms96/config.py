@@ -146,7 +146,9 @@ class PlcOptions(Settings):
 #: Keys only a SERS configuration has.
 _SERS_KEYS = frozenset({"address", "autostart", "baud", "input_level", "service_switch", "current_class",
                         "supply_class", "options", "supply_voltage", "heatsink_temperature", "initially_selected",
-                        "broadcast_reply", "encoding"})
+                        "broadcast_reply", "encoding", "ack_each_terminator", "error_trailing_star", "ok_after_error",
+                        "counter_decrement_first", "i6_mode", "list_decimals", "query_units", "query_fixed_decimals",
+                        "query_name_style", "spontaneous_fault_messages"})
 
 
 def _not_a_sers_file(value: Mapping[Any, Any]) -> None:
