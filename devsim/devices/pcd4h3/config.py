@@ -173,6 +173,19 @@ class Pcd4h3Config(Settings):
         "axes whose PCA2.D14 display the user program drives every cycle")] = {}
     rsigb_bit12_inverted: Annotated[bool, doc(
         "RSigB bit 12 as the manual's text has it (0 = forward), G-5")] = False
+    velocity_readback_unsigned: Annotated[bool, doc(
+        "FRdAV and FRdSV give the speed without its sign, as the manual's ranges (0 …) read, G-11")] = False
+    emulate_host_interrupt: Annotated[bool, doc(
+        "RSigB bit 15 is the chip's host interrupt: 1 while a status flag its mask enables (after RESET all "
+        "but the breakpoint's) is set, G-12")] = False
+    literal_mcw_command: Annotated[bool, doc(
+        "FSetPE sends an MCW low byte other than 1Ah/1Bh to the chip as its command byte (hazardous: 00h is "
+        "RESET), G-8")] = False
+    crc_excludes_fs: Annotated[bool, doc(
+        "serial S-Bus: also take a request whose CRC was computed without the leading FS byte (tolerance, spec "
+        "§9.2)")] = False
+    fb_sample_time_us: Annotated[float, Meta(gt=0, le=10_000), doc(
+        "the sample time the FBs' conversion constants assume (manual 22348·10⁻⁶ = 65536 · 341 µs), G-6")] = 341.0
     diagnostics: Annotated[tuple[Annotated[int, Meta(ge=0, le=8191)], Annotated[int, Meta(ge=0, le=8191)]], doc(
         "first register and first flag of the simulator's read-only diagnostics block (16 registers and 8 flags "
         "per axis, apart from the axis blocks and fields)")] = (4000, 8000)

@@ -31,7 +31,8 @@ DEVIATIONS: tuple[Deviation, ...] = (
         "Velocity and acceleration ranges printed as [−2^30 … 2^30 − 1] / k · 22348 · 10^−6 and "
         "… · 76206 · 10^−9.",
         "Veloc and Accel are converted as v · k · 65536 · 341 µs and a · k · 65536 · (341 µs)² and checked in "
-        "the chip's units (0 … 3FFFFFFFh); beyond that the chip reports a command error (§8).",
+        "the chip's units (0 … 3FFFFFFFh); beyond that the chip reports a command error (§8); "
+        "`fb_sample_time_us` sets the 341 µs.",
         "The printed formulas are garbled (spec G-6); the chip's own ranges decide what it accepts.",
     ),
     Deviation(
@@ -99,7 +100,7 @@ DEVIATIONS: tuple[Deviation, ...] = (
         "§7.4 FRdAV, FRdSV",
         "RActV and RSetV range over [0 … 2^30 − 1] / k · 22348 · 10^−6: no sign.",
         "[SIM-CHOICE] They carry the direction: negative while the axis moves backwards (FBackw, velocity mode "
-        "backwards, a move to a smaller target).",
+        "backwards, a move to a smaller target); `velocity_readback_unsigned: true` gives the printed reading.",
         "The LM628 reports its velocities in two's complement (RDRV, RDDV) and the FB divides them by k; the "
         "printed range repeats FLdVA's load range (spec G-11).",
     ),

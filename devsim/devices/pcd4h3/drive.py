@@ -44,7 +44,8 @@ class H3Drive:
     """Axis ``number``: chip, motor, encoder, the shared axis, the switches."""
 
     def __init__(self, number: int, clock: Clock, signals: SignalBank, settings: Mapping[str, Any], *,
-                 lm629: bool, rs422: bool, present: bool, jumpers: Mapping[str, Any] | None = None) -> None:
+                 lm629: bool, rs422: bool, present: bool, jumpers: Mapping[str, Any] | None = None,
+                 host_interrupt: bool = False) -> None:
         self.number, self.signals, self.clock = number, signals, clock
         stops = settings.get("hard_stops")
         low, high = (float(min(stops)), float(max(stops))) if stops else (-math.inf, math.inf)
@@ -60,7 +61,8 @@ class H3Drive:
             # index input rests at 0 through the inverter: the same malfunction (manual §6.4, "Wichtig")
             index_period = 4
         self.chip = Lm628(self.motor, lm629=lm629, present=present, encoder_sign=encoder_sign,
-                          index_period=index_period, index_offset=int(settings["index_offset"]))
+                          index_period=index_period, index_offset=int(settings["index_offset"]),
+                          host_interrupt=host_interrupt)
         self.stepper = ChipStepper(self.chip, clock, own_timer=False, on_batch=self._follow)
         self.axis = Axis(clock, counts_per_rev=4 * lines, index_offset=float(settings["index_offset"]),
                          name=f"axis{number}")

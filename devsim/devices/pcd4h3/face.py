@@ -56,7 +56,7 @@ class SbusFace(_Delayed):
 
     def __init__(self, model: Pcd4, port: Port) -> None:
         super().__init__(model, port)
-        self.receiver = SerialReceiver(model.station, telegram)
+        self.receiver = SerialReceiver(model.station, telegram, crc_excludes_fs=model.settings["crc_excludes_fs"])
 
     @property
     def serial_settings(self) -> SerialSettings:

@@ -22,7 +22,7 @@ from collections.abc import Callable, MutableMapping
 
 from devsim.core.kit import Command, Table
 from devsim.devices.pcd4h3.layout import Layout
-from devsim.devices.pcd4h3.lm628 import COMMAND_ERROR, Lm628
+from devsim.devices.pcd4h3.lm628 import COMMAND_ERROR, NO_DATA, WRITE_BYTES, Lm628
 from devsim.devices.pcd4h3.registers import AxisRegisters
 from devsim.devices.pcd4h3.tables import command_flags, flag_row
 from devsim.devices.pcd4h3.units import (
@@ -53,11 +53,14 @@ class H3Axis:
     ``on_comers`` is called with the function's flag offset when ComErS runs (the PLC's
     reaction, §3.7); ``on_write`` after each command sent to the chip (a report command, §3.5.3,
     changes nothing in it: the drive keeps a settled chip at rest); ``rsigb_bit12_inverted`` is
-    the G-5 option."""
+    the G-5 option, ``velocity_readback_unsigned`` G-11's, ``literal_mcw_command`` G-8's;
+    ``fb_sample`` (seconds) the sample time the conversions assume (G-6, §5.1)."""
 
     def __init__(self, axis: int, layout: Layout, chip: Lm628, registers: AxisRegisters,
                  flags: MutableMapping[int, int], *, on_comers: Callable[[int], None] | None = None,
-                 on_write: Callable[[], None] | None = None, rsigb_bit12_inverted: bool = False) -> None:
+                 on_write: Callable[[], None] | None = None, rsigb_bit12_inverted: bool = False,
+                 velocity_readback_unsigned: bool = False, literal_mcw_command: bool = False,
+                 fb_sample: float = FB_SAMPLE) -> None:
         self.axis, self.layout, self.chip = axis, layout, chip
         self.registers, self.flags = registers, flags
         #: (symbol, flag address) of the command flags in AxHndlg's order, and the status flags' addresses
@@ -65,6 +68,8 @@ class H3Axis:
         self.status_flags = tuple(layout.flag(axis, symbol) for symbol in STATUS_FLAGS)
         self.on_comers, self.on_write = on_comers, on_write
         self.rsigb_bit12_inverted = rsigb_bit12_inverted
+        self.velocity_readback = abs if velocity_readback_unsigned else int
+        self.literal_mcw_command, self.fb_sample = literal_mcw_command, fb_sample
         self.mode = 0  # LTRJ bits 11/12 from the last FSelOM
         self.trace: list[tuple[str, tuple[int, ...]]] = []
         self.comers_calls = 0
@@ -238,11 +243,11 @@ class H3Axis:
         self._ltrj(self.mode | (0x0003 if relative else 0x0002), self._word32(self.registers.destination * self.k))
 
     def _velocity(self, relative: bool) -> None:
-        word = self._word32(velocity_register(self.registers.velocity, self.k))
+        word = self._word32(velocity_register(self.registers.velocity, self.k, self.fb_sample))
         self._ltrj(self.mode | (0x000C if relative else 0x0008), word)
 
     def _acceleration(self, relative: bool) -> None:
-        word = self._word32(acceleration_register(self.registers.acceleration, self.k))
+        word = self._word32(acceleration_register(self.registers.acceleration, self.k, self.fb_sample))
         self._ltrj(self.mode | 0x0100)  # the acceleration changes only with the motor off
         self._stt()
         self._ltrj(self.mode | (0x0030 if relative else 0x0020), word)
@@ -265,8 +270,8 @@ class H3Axis:
 
     def _read_velocity(self, report: str, scale: float) -> int:
         """[SIM-CHOICE] Signed, as the chip reports it: negative backwards (§7.4 FRdAV, FRdSV print 0 … ;
-        docs Deviations)."""
-        return self._to_user(self._read(report) / (scale * FB_SAMPLE))
+        docs Deviations); without the sign with the G-11 option ``velocity_readback_unsigned``."""
+        return self.velocity_readback(self._to_user(self._read(report) / (scale * self.fb_sample)))
 
     def load_destination_relative(self) -> None:
         """FLdDR: LTRJ mode | 0003h with DestP · k."""
@@ -312,11 +317,20 @@ class H3Axis:
         self._ltrj(self.mode)
 
     def set_position_error(self) -> None:
-        """FSetPE: LPES (MCW low byte 1Ah) or LPEI (1Bh) with PosEr; anything else refused (G-8)."""
+        """FSetPE: LPES (MCW low byte 1Ah) or LPEI (1Bh) with PosEr; anything else refused (G-8), or
+        with ``literal_mcw_command`` (the G-8 option: the FB writes the byte as the chip's command
+        byte, spec §3.4 FSetPE "command byte = MCW & FFh") sent as that command: a write command with
+        data words gets PosEr, one without none (00h RESETs the chip); [SIM-CHOICE] a report
+        command's byte or one the chip does not know is still refused."""
         reaction = self.registers.control_word & 0xFF
-        if reaction not in (0x1A, 0x1B):
+        limit = self._word16(self.registers.position_error_limit)
+        if reaction in (0x1A, 0x1B):
+            self._send("LPES" if reaction == 0x1A else "LPEI", limit)
+            return
+        mnemonic = WRITE_BYTES.get(reaction) if self.literal_mcw_command else None
+        if mnemonic is None:
             self._refuse()  # G-8
-        self._send("LPES" if reaction == 0x1A else "LPEI", self._word16(self.registers.position_error_limit))
+        self._send(mnemonic, *(() if mnemonic in NO_DATA else (limit,)))
 
     def reset_status_flags(self) -> None:
         """FResSF: RSTI with StaFRR."""

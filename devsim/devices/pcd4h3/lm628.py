@@ -20,8 +20,8 @@ from devsim.devices.pcd4h3.pid import Coefficients, Filter, Motor, sat
 from devsim.devices.pcd4h3.trajectory import Profile, Trajectory
 from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
-__all__ = ["BREAKPOINT", "COMMAND_ERROR", "COMPLETE", "INDEX", "Lm628", "MOTOR_OFF", "POSITION_ERROR", "POSITION_RANGE",
-           "WRAPAROUND"]
+__all__ = ["BREAKPOINT", "COMMAND_ERROR", "COMPLETE", "INDEX", "Lm628", "MOTOR_OFF", "NO_DATA", "POSITION_ERROR",
+           "POSITION_RANGE", "WRAPAROUND", "WRITE_BYTES"]
 
 MOTOR_OFF, BREAKPOINT, POSITION_ERROR, WRAPAROUND, INDEX, COMPLETE, COMMAND_ERROR = 0x80, 0x40, 0x20, 0x10, 0x08, 0x04, 0x02
 INTERRUPTS = BREAKPOINT | POSITION_ERROR | WRAPAROUND | INDEX | COMPLETE | COMMAND_ERROR
@@ -59,8 +59,10 @@ class Lm628:
     """One chip: its buffers, working registers, flags, and the motor and encoder behind it."""
 
     def __init__(self, motor: Motor | None = None, *, lm629: bool = False, present: bool = True,
-                 encoder_sign: int = 1, index_period: int = 0, index_offset: int = 0) -> None:
+                 encoder_sign: int = 1, index_period: int = 0, index_offset: int = 0,
+                 host_interrupt: bool = False) -> None:
         self.motor = motor if motor is not None else Motor()
+        self.host_interrupt = host_interrupt  # RDSIGS bit 15 shows the HI output (spec G-12 option)
         self.lm629 = lm629  # the PWM types' chip: no 12-bit port (G-26)
         self.present = present  # False: a Y chip on a one-axis module, every transfer fails (G-27)
         self.bus_errors = 0  # transfers still to be disturbed on the PCD4 bus (§3.7 cause 5)
@@ -317,12 +319,14 @@ class Lm628:
     def signals(self) -> int:
         """RDSIGS (§4.5): bits 11 and 12 (velocity mode, forward) are the working trajectory's,
         taken over at STT, not the buffer's (manual §7.4 FSelOM, FRdSR: they change only with
-        the next start)."""
+        the next start).  Bit 15, the host interrupt (the HI pin is not wired on the H3, manual
+        §7.4 FRdSR: "ohne Bedeutung"), is 0 unless ``host_interrupt`` (spec G-12 option): then 1
+        while a flag MSKI's mask enables is set (RESET enables all but the breakpoint's)."""
         p = self.profile
         return ((self.status & INTERRUPTS) | int(self.index_armed) | int(self.motor_off) << 7
                 | int(self.filter.dac_bits == 8) << 8 | int(self.stop_on_error) << 9 | int(self.on_target) << 10
                 | int(p.velocity_mode) << 11 | int(p.forward) << 12 | int(self.udf_sample) << 13
-                | int(bool(self.loaded & 0x20)) << 14)
+                | int(bool(self.loaded & 0x20)) << 14 | int(self.host_interrupt and bool(self.flags & self.mask)) << 15)
 
     @property
     def real_velocity(self) -> int:
@@ -427,6 +431,10 @@ CODES = {"RESET": 0x00, "STT": 0x01, "DFH": 0x02, "SIP": 0x03, "UDF": 0x04, "POR
          "RDDV": 0x07, "RDDP": 0x08, "RDIP": 0x09, "RDRP": 0x0A, "RDRV": 0x0B, "RDSIGS": 0x0C, "RDSUM": 0x0D,
          "LPES": 0x1A, "LPEI": 0x1B, "MSKI": 0x1C, "RSTI": 0x1D, "LFIL": 0x1E, "LTRJ": 0x1F, "SBPA": 0x20, "SBPR": 0x21}
 """Command bytes (§3.5.3)."""
+WRITE_BYTES = {code: mnemonic for mnemonic, code in CODES.items() if mnemonic in COMMANDS}
+"""The write commands by their command byte (an FSetPE with the G-8 option sends MCW's low byte)."""
+NO_DATA = frozenset(("RESET", "STT", "DFH", "SIP", "UDF", "PORT8", "PORT12"))
+"""The write commands without data words (§3.5.3)."""
 READ_BYTES = {"RDDV": 4, "RDDP": 4, "RDIP": 4, "RDRP": 4, "RDRV": 2, "RDSIGS": 2, "RDSUM": 2}
 
 

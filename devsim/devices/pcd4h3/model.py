@@ -81,11 +81,14 @@ class Pcd4(Model):
             module, y = (n - 1) // 2, n % 2 == 0
             present = module < s["modules"] and (not y or self.per_module == 2)
             drive = H3Drive(n, clock, self.signals, s["axes"].get(n) or _axis_defaults(), lm629=self.pwm,
-                            rs422=self.rs422, present=present, jumpers=s["jumpers"])
+                            rs422=self.rs422, present=present, jumpers=s["jumpers"],
+                            host_interrupt=s["emulate_host_interrupt"])
             registers = AxisRegisters(RegisterBlock(self.registers, self.layout.block(n)))
             registers.reset()  # G-16: the registers start with Example 1's values
             axis = H3Axis(n, self.layout, drive.chip, registers, self.flags, on_comers=self._comers,
-                          on_write=drive.poke, rsigb_bit12_inverted=s["rsigb_bit12_inverted"])
+                          on_write=drive.poke, rsigb_bit12_inverted=s["rsigb_bit12_inverted"],
+                          velocity_readback_unsigned=s["velocity_readback_unsigned"],
+                          literal_mcw_command=s["literal_mcw_command"], fb_sample=s["fb_sample_time_us"] * 1e-6)
             self.drives.append(drive)
             self.axes.append(axis)
             self.signals.subscribe(f"LS1_{n}", lambda _n, old, new, n=n: self._limit(n, old, new))

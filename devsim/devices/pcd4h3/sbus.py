@@ -86,10 +86,13 @@ class Request(msgspec.Struct, frozen=True):
 
 class SerialReceiver:
     """Requests out of the serial byte stream for one station (§9.2): B5h always starts a new
-    telegram; a telegram ends when its command's parameters and the two CRC bytes are in."""
+    telegram; a telegram ends when its command's parameters and the two CRC bytes are in.
+    ``crc_excludes_fs`` is the spec's tolerance option (§9.2): a CRC computed without the leading
+    FS byte is taken too (the CRC over FS … data stays the one the station sends)."""
 
-    def __init__(self, station: int, telegrams: Telegrams) -> None:
+    def __init__(self, station: int, telegrams: Telegrams, *, crc_excludes_fs: bool = False) -> None:
         self.station, self.telegrams = station, telegrams
+        self.crc_excludes_fs = crc_excludes_fs
         self._raw: bytearray | None = None  # the telegram so far, unstuffed
         self._dle = False
         self.errors = {"crc": 0, "framing": 0}
@@ -139,7 +142,8 @@ class SerialReceiver:
         end = 4 + wanted + 2
         if len(raw) < end:
             return None
-        if crc16(bytes(raw[: end - 2])) != struct.unpack(">H", raw[end - 2 : end])[0]:
+        body, crc = bytes(raw[: end - 2]), struct.unpack(">H", raw[end - 2 : end])[0]
+        if crc16(body) != crc and not (self.crc_excludes_fs and crc16(body[1:]) == crc):
             self.errors["crc"] += 1
             self._raw = None
             return None
