@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 from devsim.devices.pcd4h3 import batch
 from devsim.devices.pcd4h3.lm628 import POSITION_RANGE, Lm628
 from devsim.devices.pcd4h3.pid import Motor
+from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
 Action = Callable[[Lm628], None]
 Script = dict[int, list[Action]]
@@ -38,7 +39,7 @@ def chip_for(spec: dict[str, Any]) -> Lm628:
     motor = Motor(kv=spec.get("kv", 10_000.0), tau=spec.get("tau", 0.020), low=spec.get("low", float("-inf")),
                   high=spec.get("high", float("inf")))
     chip = Lm628(motor, encoder_sign=spec.get("sign", 1), index_period=spec.get("index_period", 0),
-                 index_offset=spec.get("index_offset", 0))
+                 index_offset=spec.get("index_offset", 0), sample_time=spec.get("sample_time", CHIP_SAMPLE))
     chip.reset()
     chip.port(spec.get("port", 12))
     kp, ki, kd, il, ds = spec.get("pid", (40, 0, 400, 500, 3))
@@ -140,6 +141,12 @@ LENGTHS = [7, 64, 1, 300, 29]
 
 def test_a_plain_move_to_rest() -> None:
     check({}, {0: move(30_000)}, 12_000, LENGTHS)
+
+
+def test_a_move_and_a_breakpoint_at_another_sample_time() -> None:
+    """chip_sample_time_us: an 8 MHz chip samples every 256 µs; the pass takes its sample time too."""
+    check({"sample_time": 256e-6, "index_period": 2_000},
+          {0: [cmd("SBPA", 5_000), cmd("SIP"), *move(30_000)]}, 12_000, LENGTHS)
 
 
 def test_a_move_with_the_integrator_and_an_8_bit_port() -> None:

@@ -72,15 +72,18 @@ def test_crc_excludes_fs(make: Callable[..., Station], excludes: bool) -> None:
     assert pcd.read_registers(reg("Accel")) == [100]  # the next answer is this request's: the first got none
 
 
-@pytest.mark.parametrize(("sample_us", "counts_per_s"), [(341.0, 19_980.469), (2048 / 6, 20_000.0)])
-def test_fb_sample_time(make: Callable[..., Station], sample_us: float, counts_per_s: float) -> None:
-    """G-6, §5.1: the FBs convert with 341 µs by default, so 200 × k = 20 000 counts/s run 0.1 % slow on
-    the chip's 341.333 µs; with the chip's sample time as ``fb_sample_time_us`` they run exactly (the
-    chip's profile velocity, diagnostics R 4004, in counts/s × 1000); read back through the same
-    constants FRdSV gives the commanded 200 either way."""
-    pcd = make({"fb_sample_time_us": sample_us})
+@pytest.mark.parametrize(("config", "counts_per_s"), [
+    ({}, 19_980.469), ({"fb_sample_time_us": 2048 / 6}, 20_000.0), ({"chip_sample_time_us": 256.0}, 26_640.65)])
+def test_sample_times(make: Callable[..., Station], config: dict, counts_per_s: float) -> None:
+    """G-6, §5.1: the FBs convert with 341 µs (``fb_sample_time_us``), the chip samples every 341.333 µs
+    (``chip_sample_time_us``), so 200 × k = 20 000 counts/s run 0.1 % slow by default, exactly with the
+    chip's sample time in the FBs, a third faster on an 8 MHz chip (256 µs): the chip's profile velocity
+    (diagnostics R 4004, counts/s × 1000) and the motor's; read back through the FBs' constants, FRdSV
+    gives the commanded 200 in every case."""
+    pcd = make(config)
     load(pcd, Veloc=200)
     run(pcd, "FLdVA", "FForw")
     pcd.sim.advance(3.0)
     assert pcd.read_registers(4004)[0] / 1000 == pytest.approx(counts_per_s, abs=0.5)
+    assert pcd.sim.read("axis.1.velocity") == pytest.approx(counts_per_s, rel=0.01)
     assert read(pcd, "FRdSV", "RSetV") == 200

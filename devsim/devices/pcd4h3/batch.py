@@ -33,7 +33,6 @@ from devsim.devices.pcd4h3.lm628 import (
     wrap,
 )
 from devsim.devices.pcd4h3.pid import _lag_terms, sat
-from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
 __all__ = ["SETTLE", "STILL", "Checkpoint", "motion_of", "rest", "restore", "run", "run_reference", "run_to", "snapshot", "status_of"]
 
@@ -41,7 +40,7 @@ STILL = 1e-3  # counts/s: a motor slower than this stands (for the settled count
 SETTLE = 64  # samples without change after which a chip counts as settled (its rest begins)
 # counts a sample at most per count/s of the motor's speed: a sample of the lag moves it by at
 # most max(|v|, |goal|) · (τ·(1 − e^(−t/τ)) + t − τ·(1 − e^(−t/τ))) = … · t, with room for rounding
-STEP_SLACK = CHIP_SAMPLE * 1.001
+STEP_SLACK = 1.001  # per second of the sample time
 ONE = 1 << 16
 FAR_SPAN = 64  # samples one at a time that one look at the breakpoint's distance spares its checks
 I16_LOW, I16_HIGH = -(1 << 15), (1 << 15) - 1
@@ -125,8 +124,8 @@ def rest(chip: Lm628, count: int) -> bool:
         if motor.kv * (volts - motor.load) != 0.0:
             return False
         if motor.tau > 0:
-            if motor._decay[0] != CHIP_SAMPLE:
-                motor._decay = (CHIP_SAMPLE, *_lag_terms(CHIP_SAMPLE, motor.tau))
+            if motor._decay[0] != chip.sample_time:
+                motor._decay = (chip.sample_time, *_lag_terms(chip.sample_time, motor.tau))
             since = chip.rest_n + count
             decay = motor._decay[1] ** since
             x, velocity = chip.rest_x + chip.rest_v * motor.tau * (1.0 - decay), chip.rest_v * decay
@@ -297,8 +296,9 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
     output, integral = filt.output, filt.integral if ki else 0  # the term is 0 from the first sample
     twelve = filt.dac_bits == 12
     # the motor
-    if motor._decay[0] != CHIP_SAMPLE:
-        motor._decay = (CHIP_SAMPLE, *_lag_terms(CHIP_SAMPLE, motor.tau))
+    if motor._decay[0] != chip.sample_time:
+        motor._decay = (chip.sample_time, *_lag_terms(chip.sample_time, motor.tau))
+    step_slack = chip.sample_time * STEP_SLACK
     _, kept, gained, travelled = motor._decay
     kv, tau, load, low, high = motor.kv, motor.tau, motor.load, motor.low, motor.high
     x, speed_now = motor.position, motor.velocity
@@ -354,7 +354,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
             length = cruise if cruise < mark - done else mark - done
             # a breakpoint the motor cannot reach in these samples need not be checked in them
             watching = watch_moves and not _far(seen, home, break_at, segment,
-                                                length * (max(abs(speed_now), fastest) * STEP_SLACK) + 2)
+                                                length * (max(abs(speed_now), fastest) * step_slack) + 2)
             for n in range(1, length + 1):  # noqa: B007
                 if da:
                     v += da
@@ -524,7 +524,7 @@ def _run_fast(chip: Lm628, count: int, quiet: int, marks: list[int], base: int, 
                 flags |= moved_flags(before, raw, home, break_at)
                 if done >= check_at:  # (not again for a while where the breakpoint is near)
                     span = count - done if count - done < FAR_SPAN else FAR_SPAN
-                    if _far(raw, home, break_at, segment, span * (max(abs(speed_now), fastest) * STEP_SLACK) + 2):
+                    if _far(raw, home, break_at, segment, span * (max(abs(speed_now), fastest) * step_slack) + 2):
                         far_until = done + span  # the motor cannot reach it, nor wrap, in these samples
                     else:
                         check_at = done + FAR_SPAN // 4

@@ -14,6 +14,7 @@ from devsim.core.settings import Check, Keys, Meta, Settings, doc, field
 from devsim.core.typed import FieldError
 from devsim.devices.pcd4h3.layout import DIAG_FLAGS, DIAG_REGISTERS, FLAGS_PER_AXIS, REGISTERS_PER_AXIS
 from devsim.devices.pcd4h3.tables import FLAG_FIELD, REGISTERS, load_registers
+from devsim.devices.pcd4h3.units import CHIP_SAMPLE_US
 
 __all__ = ["AXIS", "H3DEF", "JUMPERS", "Pcd4h3Config", "READ_FUNCTIONS", "VARIANTS"]
 
@@ -186,6 +187,8 @@ class Pcd4h3Config(Settings):
         "§9.2)")] = False
     fb_sample_time_us: Annotated[float, Meta(gt=0, le=10_000), doc(
         "the sample time the FBs' conversion constants assume (manual 22348·10⁻⁶ = 65536 · 341 µs), G-6")] = 341.0
+    chip_sample_time_us: Annotated[float, Meta(ge=100, le=2000), doc(
+        "the LM628's sample period, 2048 clock periods (6 MHz: 341.333 µs; 8 MHz: 256 µs), §5.1")] = CHIP_SAMPLE_US
     diagnostics: Annotated[tuple[Annotated[int, Meta(ge=0, le=8191)], Annotated[int, Meta(ge=0, le=8191)]], doc(
         "first register and first flag of the simulator's read-only diagnostics block (16 registers and 8 flags "
         "per axis, apart from the axis blocks and fields)")] = (4000, 8000)

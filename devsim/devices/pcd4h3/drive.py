@@ -22,6 +22,7 @@ from devsim.core.signals import SignalBank
 from devsim.devices.pcd4h3.lm628 import Lm628
 from devsim.devices.pcd4h3.pid import Motor
 from devsim.devices.pcd4h3.stepper import ChipStepper
+from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
 __all__ = ["H3Drive", "axis_signals"]
 
@@ -45,7 +46,7 @@ class H3Drive:
 
     def __init__(self, number: int, clock: Clock, signals: SignalBank, settings: Mapping[str, Any], *,
                  lm629: bool, rs422: bool, present: bool, jumpers: Mapping[str, Any] | None = None,
-                 host_interrupt: bool = False) -> None:
+                 host_interrupt: bool = False, sample_time: float = CHIP_SAMPLE) -> None:
         self.number, self.signals, self.clock = number, signals, clock
         stops = settings.get("hard_stops")
         low, high = (float(min(stops)), float(max(stops))) if stops else (-math.inf, math.inf)
@@ -62,7 +63,7 @@ class H3Drive:
             index_period = 4
         self.chip = Lm628(self.motor, lm629=lm629, present=present, encoder_sign=encoder_sign,
                           index_period=index_period, index_offset=int(settings["index_offset"]),
-                          host_interrupt=host_interrupt)
+                          host_interrupt=host_interrupt, sample_time=sample_time)
         self.stepper = ChipStepper(self.chip, clock, own_timer=False, on_batch=self._follow)
         self.axis = Axis(clock, counts_per_rev=4 * lines, index_offset=float(settings["index_offset"]),
                          name=f"axis{number}")

@@ -60,8 +60,10 @@ class Lm628:
 
     def __init__(self, motor: Motor | None = None, *, lm629: bool = False, present: bool = True,
                  encoder_sign: int = 1, index_period: int = 0, index_offset: int = 0,
-                 host_interrupt: bool = False) -> None:
+                 host_interrupt: bool = False, sample_time: float = CHIP_SAMPLE) -> None:
         self.motor = motor if motor is not None else Motor()
+        #: seconds between samples: 2048 clock periods (341.333 µs at 6 MHz; ``chip_sample_time_us``)
+        self.sample_time = sample_time
         self.host_interrupt = host_interrupt  # RDSIGS bit 15 shows the HI output (spec G-12 option)
         self.lm629 = lm629  # the PWM types' chip: no 12-bit port (G-26)
         self.present = present  # False: a Y chip on a one-axis module, every transfer fails (G-27)
@@ -331,7 +333,7 @@ class Lm628:
     @property
     def real_velocity(self) -> int:
         """RDRV: whole counts per sample, the top 14 bits only (C000h … 3FFFh)."""
-        return max(-0x4000, min(0x3FFF, math.floor(self.encoder_sign * self.motor.velocity * CHIP_SAMPLE)))
+        return max(-0x4000, min(0x3FFF, math.floor(self.encoder_sign * self.motor.velocity * self.sample_time)))
 
     # -- one sample --------------------------------------------------------------------------------
     def sample(self) -> None:
@@ -348,7 +350,7 @@ class Lm628:
                 self.on_target = True
             self.filter.sample(self.profile.desired, self.unwrapped_actual)
         volts = self.filter.volts if self.filter.dac_bits == 12 else self.filter.volts * 10.0
-        self.motor.step(volts, CHIP_SAMPLE)
+        self.motor.step(volts, self.sample_time)
         after = self._raw = self._encoder()
         if before != after:
             self._moved(before, after)

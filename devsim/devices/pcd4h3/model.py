@@ -34,6 +34,7 @@ from devsim.devices.pcd4h3.lookahead import FIRST_HORIZON, HORIZON, Moments, qui
 from devsim.devices.pcd4h3.programs import PROGRAMS, Sequence
 from devsim.devices.pcd4h3.registers import AxisRegisters, RegisterBlock
 from devsim.devices.pcd4h3.timers import Timers
+from devsim.devices.pcd4h3.units import CHIP_SAMPLE, CHIP_SAMPLE_US
 
 __all__ = ["Halted", "Pcd4"]
 
@@ -77,18 +78,19 @@ class Pcd4(Model):
         self.axes: list[H3Axis] = []
         self.signals.declare(row for n in range(1, max(2, h["mna"]) + 1)  # one shared layout per kind
                              for row in axis_signals(n))  # type: ignore[arg-type]
+        chip_sample = CHIP_SAMPLE * (s["chip_sample_time_us"] / CHIP_SAMPLE_US)  # the default: CHIP_SAMPLE exactly
         for n in range(1, h["mna"] + 1):
             module, y = (n - 1) // 2, n % 2 == 0
             present = module < s["modules"] and (not y or self.per_module == 2)
             drive = H3Drive(n, clock, self.signals, s["axes"].get(n) or _axis_defaults(), lm629=self.pwm,
                             rs422=self.rs422, present=present, jumpers=s["jumpers"],
-                            host_interrupt=s["emulate_host_interrupt"])
+                            host_interrupt=s["emulate_host_interrupt"], sample_time=chip_sample)
             registers = AxisRegisters(RegisterBlock(self.registers, self.layout.block(n)))
             registers.reset()  # G-16: the registers start with Example 1's values
             axis = H3Axis(n, self.layout, drive.chip, registers, self.flags, on_comers=self._comers,
                           on_write=drive.poke, rsigb_bit12_inverted=s["rsigb_bit12_inverted"],
                           velocity_readback_unsigned=s["velocity_readback_unsigned"],
-                          literal_mcw_command=s["literal_mcw_command"], fb_sample=s["fb_sample_time_us"] * 1e-6)
+                          literal_mcw_command=s["literal_mcw_command"], fb_sample=s["fb_sample_time_us"] / 1e6)
             self.drives.append(drive)
             self.axes.append(axis)
             self.signals.subscribe(f"LS1_{n}", lambda _n, old, new, n=n: self._limit(n, old, new))

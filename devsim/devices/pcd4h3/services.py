@@ -38,7 +38,6 @@ from devsim.devices.pcd4h3.sbus import (
     Writes,
     pack_bits,
 )
-from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
 __all__ = [
     "DIAG_FLAGS", "DIAG_REGISTERS", "SERVICES", "Answer", "Service", "bus_input", "read", "serve", "telegram", "write",
@@ -183,7 +182,7 @@ DIAGNOSTICS: tuple[Callable[[Pcd4, int], int], ...] = (
     lambda p, n: p.drives[n].chip.signals,
     lambda p, n: p.drives[n].chip.actual,
     lambda p, n: p.drives[n].chip.desired,
-    lambda p, n: round(p.drives[n].chip.profile.velocity / 65536 / CHIP_SAMPLE * 1000),
+    lambda p, n: round(p.drives[n].chip.profile.velocity / 65536 / p.drives[n].chip.sample_time * 1000),
     lambda p, n: round(p.drives[n].chip.encoder_sign * p.drives[n].motor.velocity * 1000),
     lambda p, n: p.drives[n].chip.filter.dac,
     lambda p, n: round(_volts(p, n) * 1000),

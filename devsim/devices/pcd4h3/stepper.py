@@ -26,7 +26,6 @@ from collections.abc import Callable, Sequence
 from devsim.core.clock import Clock, Timer
 from devsim.devices.pcd4h3 import batch
 from devsim.devices.pcd4h3.lm628 import Lm628
-from devsim.devices.pcd4h3.units import CHIP_SAMPLE
 
 __all__ = ["ChipStepper"]
 
@@ -61,7 +60,7 @@ class ChipStepper:
         cycle after the clock where a function of the cycle looked at the chip at its moment
         (§10.1), a little before it after a look (further ahead only between :meth:`ahead` and
         the next catch-up)."""
-        return self._epoch + self._samples * CHIP_SAMPLE
+        return self._epoch + self._samples * self.chip.sample_time
 
     @property
     def settled(self) -> bool:
@@ -74,7 +73,7 @@ class ChipStepper:
         ``follow=False``: a moment of the past (a skipped PLC cycle): ``on_batch`` waits for the
         next look."""
         now = self.clock.now() if until is None else until
-        due = int((now - self._epoch) / CHIP_SAMPLE + 1e-9)
+        due = int((now - self._epoch) / self.chip.sample_time + 1e-9)
         moved, self._unseen = self._unseen, False
         if self._ahead:
             # the chip as the present has it: never before what a catch-up already reached (a
@@ -131,7 +130,7 @@ class ChipStepper:
             self._present = start
             self._ahead.append((start, self._quiet, batch.snapshot(self.chip)))
         now = self._ahead[-1][2] if self._ahead[-1][0] == start else batch.snapshot(self.chip)
-        dues = [int((until - self._epoch) / CHIP_SAMPLE + 1e-9) - start for until in untils]
+        dues = [int((until - self._epoch) / self.chip.sample_time + 1e-9) - start for until in untils]
         marks = sorted({due for due in dues if due > 0})
         reached: dict[int, batch.State] = {}
         if marks:

@@ -14,12 +14,13 @@ from __future__ import annotations
 import math
 
 __all__ = [
-    "CHIP_SAMPLE", "FB_SAMPLE", "FFP_MAX", "acceleration_register", "counts", "ffp_decode", "ffp_encode",
+    "CHIP_SAMPLE", "CHIP_SAMPLE_US", "FB_SAMPLE", "FFP_MAX", "acceleration_register", "counts", "ffp_decode", "ffp_encode",
     "round_half_away", "velocity_register",
 ]
 
 FB_SAMPLE = 341e-6  # seconds: what the function blocks' constants 22348e-6 and 76206e-9 assume
 CHIP_SAMPLE = 2048 / 6e6  # seconds: the LM628's sample period at 6 MHz
+CHIP_SAMPLE_US = 2048 / 6  # the same in µs (the configuration's chip_sample_time_us)
 FFP_MAX = 0xFFFFFF7F  # 9.2233715e18
 
 
