@@ -58,6 +58,13 @@ def moved_flags(before: int, after: int, home: int, breakpoint: int | None) -> i
 class Lm628:
     """One chip: its buffers, working registers, flags, and the motor and encoder behind it."""
 
+    #: (Slots: with the sample time and the interrupt option the chip has 31 attributes, and CPython
+    #: stops sharing the keys of a class's instance dictionaries at 30: each chip's grew)
+    __slots__ = ("motor", "sample_time", "host_interrupt", "lm629", "present", "bus_errors", "command_errors",
+                 "encoder_sign", "index_period", "index_offset", "profile", "filter", "buffer", "flags", "mask",
+                 "motor_off", "stop_on_error", "error_threshold", "breakpoint", "loaded", "started", "index_armed",
+                 "index_position", "home", "_stop", "on_target", "udf_sample", "_raw", "rest_x", "rest_v", "rest_n")
+
     def __init__(self, motor: Motor | None = None, *, lm629: bool = False, present: bool = True,
                  encoder_sign: int = 1, index_period: int = 0, index_offset: int = 0,
                  host_interrupt: bool = False, sample_time: float = CHIP_SAMPLE) -> None:
